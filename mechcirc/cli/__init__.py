@@ -1,0 +1,51 @@
+"""The ``mechcirc`` command line.
+
+Each sub-command lives in a module of this package that exposes
+``register(subparsers)``; handlers take the parsed arguments, make one API
+call, print or write, and return an exit status.  Only this package prints or
+exits.  Exit status: 0 success, 1 internal failure, 2 user error.
+
+Handlers import numpy, matplotlib and friends inside their bodies, so
+``mechcirc --help`` stays fast.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+__all__ = ["main", "build_parser"]
+
+#: Modules that contribute sub-commands, in the order ``--help`` lists them.
+COMMAND_MODULES: list[str] = [
+]
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """Build the argument parser with every sub-command registered."""
+    parser = argparse.ArgumentParser(
+        prog="mechcirc",
+        description="Dynamic analysis of mechanisms with mechanical circuits: "
+                    "netlists to K(ω) = v/Q and Q0 = V0/K, kinematics, sley dynamics.",
+        epilog="Example: mechcirc sweep netlists/stb_heald.mcir --omega-min 10 "
+               "--omega-max 1e4 --log -o K.csv --plot K.png",
+    )
+    parser.add_argument("--debug", action="store_true",
+                        help="show the full traceback of an internal error")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name in COMMAND_MODULES:
+        importlib.import_module(name).register(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the command line; return the exit status (also used by ``python -m mechcirc``)."""
+    from ._common import run_handler
+
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "func", None):
+        parser.print_help()
+        return 2
+    return run_handler(args)

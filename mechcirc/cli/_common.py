@@ -1,0 +1,74 @@
+"""Shared command-line plumbing: error reporting, exit codes, JSON and file output."""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+
+from ..errors import MechcircError, NetlistError
+
+EXIT_OK, EXIT_INTERNAL, EXIT_USER = 0, 1, 2
+
+
+def run_handler(args) -> int:
+    """Call ``args.func(args)`` and map errors to messages and exit codes."""
+    try:
+        status = args.func(args)
+        return EXIT_OK if status is None else status
+    except MechcircError as exc:
+        located = isinstance(exc, NetlistError)
+        print(str(exc) if located else f"mechcirc: error: {exc}", file=sys.stderr)
+        return EXIT_USER
+    except FileNotFoundError as exc:
+        print(f"{exc.filename}: error: no such file", file=sys.stderr)
+        return EXIT_USER
+    except IsADirectoryError as exc:
+        print(f"{exc.filename}: error: is a directory, expected a file", file=sys.stderr)
+        return EXIT_USER
+    except PermissionError as exc:
+        print(f"{exc.filename}: error: permission denied", file=sys.stderr)
+        return EXIT_USER
+    except KeyboardInterrupt:
+        print("mechcirc: interrupted", file=sys.stderr)
+        return 130
+    except BrokenPipeError:
+        return EXIT_OK
+    except Exception as exc:  # noqa: BLE001 - the last line of defence
+        if getattr(args, "debug", False):
+            raise
+        print(f"mechcirc: internal error: {type(exc).__name__}: {exc}\n"
+              "This is a bug in mechcirc; please report it with the input "
+              "(run again with --debug for the traceback).", file=sys.stderr)
+        return EXIT_INTERNAL
+
+
+def _jsonable(obj):
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None if math.isnan(obj) else ("inf" if obj > 0 else "-inf")
+    if isinstance(obj, dict):
+        return {str(k): _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_jsonable(v) for v in obj]
+    if hasattr(obj, "tolist"):
+        return _jsonable(obj.tolist())
+    if isinstance(obj, complex):
+        return {"re": _jsonable(obj.real), "im": _jsonable(obj.imag)}
+    return obj
+
+
+def print_json(document) -> None:
+    """Print one JSON document on stdout (non-finite floats as strings/null)."""
+    json.dump(_jsonable(document), sys.stdout, indent=2, allow_nan=False)
+    sys.stdout.write("\n")
+
+
+def save_figure(fig, path) -> None:
+    """Save a matplotlib figure atomically; the format follows the file's extension."""
+    from pathlib import Path
+
+    from ..outputs import atomic_path
+
+    fmt = Path(path).suffix.lstrip(".").lower() or "png"
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format=fmt, dpi=120, bbox_inches="tight")

@@ -1,0 +1,262 @@
+"""Safe arithmetic expressions for netlist values (no ``eval``).
+
+Grammar (``^`` is a synonym of ``**``; ``**`` binds tighter than unary minus
+on its left and is right-associative, as in Python)::
+
+    expr    := term (("+" | "-") term)*
+    term    := unary (("*" | "/") unary)*
+    unary   := ("-" | "+") unary | power
+    power   := atom (("**" | "^") unary)?
+    atom    := NUMBER | NAME | NAME "(" expr ")" | "(" expr ")"
+
+Numbers are decimal floats (``1e5``, ``.5``, ``2.``).  Names are parameters or
+the constant ``pi``; functions are ``sqrt sin cos tan exp log radians degrees``.
+
+The text is tokenised and parsed by hand into a small tree of tuples, so each
+error carries its column.  Work is bounded: at most :data:`MAX_LENGTH`
+characters and :data:`MAX_DEPTH` levels of nesting; overflow is an error.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+from typing import Callable, Mapping
+
+from .errors import NetlistError
+
+__all__ = ["Expr", "parse_expression", "evaluate", "FUNCTIONS", "CONSTANTS",
+           "MAX_LENGTH", "MAX_DEPTH"]
+
+#: Longest expression accepted [characters]; longer text is refused at once.
+MAX_LENGTH = 10_000
+#: Deepest nesting accepted (parentheses, unary signs, powers); deeper input
+#: would otherwise exhaust Python's recursion limit.
+MAX_DEPTH = 100
+
+FUNCTIONS: dict[str, Callable[[float], float]] = {
+    "sqrt": math.sqrt, "sin": math.sin, "cos": math.cos, "tan": math.tan,
+    "exp": math.exp, "log": math.log, "radians": math.radians,
+    "degrees": math.degrees,
+}
+CONSTANTS: dict[str, float] = {"pi": math.pi}
+
+_TOKEN = re.compile(r"""
+    (?P<ws>\s+)
+  | (?P<num>(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)
+  | (?P<name>[A-Za-z_][A-Za-z_0-9]*)
+  | (?P<op>\*\*|[-+*/^()])
+""", re.VERBOSE)
+
+
+@dataclass(frozen=True)
+class Expr:
+    """A parsed expression: a tree node with its column in the source line.
+
+    ``kind`` is ``"num"`` (``value`` a float), ``"name"`` (``value`` a str),
+    ``"neg"`` (``args`` one operand), ``"call"`` (``value`` the function name,
+    ``args`` one operand) or a binary operator ``"+" "-" "*" "/" "**"``.
+    """
+
+    kind: str
+    col: int
+    value: float | str | None = None
+    args: tuple["Expr", ...] = ()
+
+    def names(self) -> set[str]:
+        """Parameter names used in the expression."""
+        if self.kind == "name":
+            return {self.value}
+        out: set[str] = set()
+        for a in self.args:
+            out |= a.names()
+        return out
+
+
+class _Parser:
+    def __init__(self, text: str, source: str, line: int, col: int):
+        self.text, self.source, self.line, self.col0 = text, source, line, col
+        self.tokens = self._tokenise()
+        self.pos = 0
+
+    def error(self, message: str, col: int, expected: str | None = None):
+        raise NetlistError(message, self.source, self.line, self.col0 + col + 1, expected)
+
+    def _tokenise(self):
+        tokens = []
+        i, text = 0, self.text
+        while i < len(text):
+            m = _TOKEN.match(text, i)
+            if m is None:
+                self.error(f"unexpected character {text[i]!r} in expression", i,
+                           "a number, a name, an operator + - * / ** ^ or a parenthesis")
+            kind = m.lastgroup
+            if kind != "ws":
+                tok = m.group()
+                if kind == "op" and tok == "^":
+                    tok = "**"
+                tokens.append((kind, tok, i))
+            i = m.end()
+        tokens.append(("end", "", len(text)))
+        return tokens
+
+    def peek(self):
+        return self.tokens[self.pos]
+
+    def take(self):
+        tok = self.tokens[self.pos]
+        self.pos += 1
+        return tok
+
+    def parse(self) -> Expr:
+        if self.peek()[0] == "end":
+            self.error("empty expression", 0, "a number or an expression")
+        e = self.expr(0)
+        kind, tok, col = self.peek()
+        if kind != "end":
+            what = "')' without a matching '('" if tok == ")" else f"unexpected {tok!r}"
+            self.error(what, col, "an operator or the end of the expression")
+        return e
+
+    def _deeper(self, depth: int, col: int) -> int:
+        if depth >= MAX_DEPTH:
+            self.error(f"expression nested more than {MAX_DEPTH} levels deep", col)
+        return depth + 1
+
+    def expr(self, depth: int) -> Expr:
+        left = self.term(depth)
+        while self.peek()[1] in ("+", "-") and self.peek()[0] == "op":
+            _, op, col = self.take()
+            left = Expr(op, col, None, (left, self.term(depth)))
+        return left
+
+    def term(self, depth: int) -> Expr:
+        left = self.unary(depth)
+        while self.peek()[1] in ("*", "/") and self.peek()[0] == "op":
+            _, op, col = self.take()
+            left = Expr(op, col, None, (left, self.unary(depth)))
+        return left
+
+    def unary(self, depth: int) -> Expr:
+        kind, tok, col = self.peek()
+        if kind == "op" and tok in ("-", "+"):
+            self.take()
+            operand = self.unary(self._deeper(depth, col))
+            return Expr("neg", col, None, (operand,)) if tok == "-" else operand
+        return self.power(depth)
+
+    def power(self, depth: int) -> Expr:
+        base = self.atom(depth)
+        kind, tok, col = self.peek()
+        if kind == "op" and tok == "**":
+            self.take()
+            return Expr("**", col, None, (base, self.unary(self._deeper(depth, col))))
+        return base
+
+    def atom(self, depth: int) -> Expr:
+        kind, tok, col = self.take()
+        if kind == "num":
+            value = float(tok)
+            if math.isinf(value):
+                self.error(f"number {tok[:20]}{'...' if len(tok) > 20 else ''} is too "
+                           "large for float64", col, "a magnitude below 1.8e308")
+            return Expr("num", col, value)
+        if kind == "name":
+            if self.peek()[1] == "(" and self.peek()[0] == "op":
+                if tok not in FUNCTIONS:
+                    self.error(f"unknown function {tok!r}", col,
+                               "one of " + ", ".join(sorted(FUNCTIONS)))
+                self.take()
+                arg = self.expr(self._deeper(depth, col))
+                self._close(col)
+                return Expr("call", col, tok, (arg,))
+            if tok in FUNCTIONS:
+                self.error(f"function {tok!r} needs an argument in parentheses", col,
+                           f"{tok}(...)")
+            return Expr("name", col, tok)
+        if kind == "op" and tok == "(":
+            inner = self.expr(self._deeper(depth, col))
+            self._close(col)
+            return inner
+        if kind == "end":
+            self.error("expression ends too early", col, "a number, a name or '('")
+        self.error(f"unexpected {tok!r}", col, "a number, a name or '('")
+
+    def _close(self, open_col: int):
+        kind, tok, col = self.take()
+        if not (kind == "op" and tok == ")"):
+            self.error("'(' is never closed", open_col, "')'")
+
+
+def parse_expression(text: str, *, source: str = "<string>", line: int = 0,
+                     col: int = 1) -> Expr:
+    """Parse ``text`` into an :class:`Expr`; ``col`` is where ``text`` starts (1-based).
+
+    Raises
+    ------
+    NetlistError
+        With the column of the offending character, for any syntax problem
+        or input beyond the stated limits.
+    """
+    if len(text) > MAX_LENGTH:
+        raise NetlistError(f"expression is {len(text)} characters long, the limit is "
+                           f"{MAX_LENGTH}", source, line, col)
+    return _Parser(text, source, line, col - 1).parse()
+
+
+def evaluate(expr: Expr, params: Mapping[str, float], *, source: str = "<string>",
+             line: int = 0, col: int = 1) -> float:
+    """Evaluate ``expr`` in float64 with the parameter values ``params``.
+
+    ``col`` is the column where the expression text started, so errors
+    (undefined name, division by zero, overflow, domain error) point at the
+    offending operator or name.
+    """
+    base = col - 1
+
+    def fail(message: str, node: Expr, expected: str | None = None):
+        raise NetlistError(message, source, line, base + node.col + 1, expected)
+
+    def ev(node: Expr) -> float:
+        k = node.kind
+        if k == "num":
+            return node.value
+        if k == "name":
+            if node.value in params:
+                return params[node.value]
+            if node.value in CONSTANTS:
+                return CONSTANTS[node.value]
+            fail(f"undefined parameter {node.value!r}", node,
+                 "a parameter defined by an earlier .param line")
+        if k == "neg":
+            return -ev(node.args[0])
+        if k == "call":
+            x = ev(node.args[0])
+            try:
+                return FUNCTIONS[node.value](x)
+            except (ValueError, OverflowError):
+                fail(f"{node.value}({x!r}) is undefined or out of range", node)
+        a, b = ev(node.args[0]), ev(node.args[1])
+        try:
+            if k == "+":
+                r = a + b
+            elif k == "-":
+                r = a - b
+            elif k == "*":
+                r = a * b
+            elif k == "/":
+                r = a / b
+            else:
+                r = a ** b
+        except ZeroDivisionError:
+            fail("division by zero" if k == "/" else f"{a!r} ** {b!r} divides by zero", node)
+        except OverflowError:
+            fail(f"{a!r} {k} {b!r} overflows float64", node)
+        if isinstance(r, complex):
+            fail(f"{a!r} ** {b!r} is not a real number", node)
+        if math.isinf(r) and not (math.isinf(a) or math.isinf(b)):
+            fail(f"{a!r} {k} {b!r} overflows float64", node)
+        return r
+
+    return ev(expr)
