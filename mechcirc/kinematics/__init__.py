@@ -1,0 +1,10 @@
+"""Kinematics of loom mechanisms: four-bar transfer functions (DIGEST §2), the
+beat-up synthesis of patent CN104178888 (DIGEST §3), frame loading, and planar
+linkages with several driving cranks (DIGEST §4).
+
+numpy and scipy only; nothing here imports matplotlib (see :mod:`.plots`).
+"""
+
+from .fourbar import DeadCentre, FourBar, FourBarState, TransmissionRange
+
+__all__ = ["FourBar", "FourBarState", "DeadCentre", "TransmissionRange"]

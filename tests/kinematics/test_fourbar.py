@@ -1,0 +1,211 @@
+"""Tests of mechcirc.kinematics.fourbar against independent references.
+
+References: finite differences of positions, an independent circle-circle
+intersection for C, the law of cosines, and Mrázek's printed ε4T range.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from mechcirc.errors import GeometryError
+from mechcirc.kinematics import FourBar
+
+MRAZEK = (29.0, 37.0, 188.0, 189.0)
+
+GEOMETRIES = [
+    MRAZEK,
+    (35.0, 110.0, 120.0, 150.0),   # a patent-like beat-up crank-rocker
+    (10.0, 30.0, 25.0, 30.0),      # crank-rocker, rocker swinging across the frame line
+    (30.0, 50.0, 45.0, 15.0),      # double-crank (drag link)
+]
+
+
+def _circle_point(a, b, c, d, theta, branch):
+    """C by intersecting circle(B, b) with circle(D, c), written independently.
+
+    The branch picks the intersection on the clockwise (+1) side of the ray D→B.
+    """
+    B = np.array([a * math.cos(theta), a * math.sin(theta)])
+    D = np.array([d, 0.0])
+    v = B - D
+    e = np.hypot(*v)
+    x = (c * c - b * b + e * e) / (2 * e)        # along D→B
+    h = math.sqrt(c * c - x * x)                  # perpendicular
+    u = v / e
+    n_ccw = np.array([-u[1], u[0]])
+    C = D + x * u - branch * h * n_ccw
+    return B, C
+
+
+@pytest.mark.parametrize("geom", GEOMETRIES)
+@pytest.mark.parametrize("branch", [1, -1])
+def test_positions_close_the_loop_and_match_circle_intersection(geom, branch):
+    a, b, c, d = geom
+    fb = FourBar(a, b, c, d, branch=branch)
+    theta = np.linspace(0.0, 2 * math.pi, 97)
+    st = fb.evaluate(theta)
+    for k, th in enumerate(theta):
+        B, C = _circle_point(a, b, c, d, th, branch)
+        C_from_rocker = np.array([d + c * math.cos(st.phi4[k]), c * math.sin(st.phi4[k])])
+        C_from_coupler = B + b * np.array([math.cos(st.phi3[k]), math.sin(st.phi3[k])])
+        np.testing.assert_allclose(C_from_rocker, C, rtol=0, atol=1e-11 * d)
+        np.testing.assert_allclose(C_from_coupler, C, rtol=0, atol=1e-11 * d)
+
+
+@pytest.mark.parametrize("geom", GEOMETRIES)
+@pytest.mark.parametrize("branch", [1, -1])
+def test_mu_nu_against_finite_differences(geom, branch):
+    fb = FourBar(*geom, branch=branch)
+    theta = np.linspace(0.05, 2 * math.pi, 61)
+    h = 1e-4
+    p = {k: fb.rocker_angle(theta + k * h) for k in (-2, -1, 0, 1, 2)}
+    q = {k: fb.coupler_angle(theta + k * h) for k in (-2, -1, 0, 1, 2)}
+    # fourth-order central differences
+    d1 = lambda f: (f[-2] - 8 * f[-1] + 8 * f[1] - f[2]) / (12 * h)
+    d2 = lambda f: (-f[-2] + 16 * f[-1] - 30 * f[0] + 16 * f[1] - f[2]) / (12 * h * h)
+    scale_mu = np.max(np.abs(fb.mu(theta)))
+    scale_nu = np.max(np.abs(fb.nu(theta)))
+    np.testing.assert_allclose(fb.mu(theta), d1(p), rtol=0, atol=1e-8 * scale_mu)
+    np.testing.assert_allclose(fb.nu(theta), d2(p), rtol=0, atol=1e-5 * scale_nu)
+    np.testing.assert_allclose(fb.coupler_mu(theta), d1(q), rtol=0,
+                               atol=1e-8 * np.max(np.abs(fb.coupler_mu(theta))))
+    np.testing.assert_allclose(fb.coupler_nu(theta), d2(q), rtol=0,
+                               atol=1e-5 * np.max(np.abs(fb.coupler_nu(theta))))
+
+
+def test_mrazek_theoretical_rocker_acceleration():
+    """DIGEST §2, Table 1: ε4T ∈ [−2319, 2915] s⁻² at ω = 100, [−371, 466] at ω = 40."""
+    fb = FourBar(*MRAZEK)
+    lo, hi = fb.rocker_acceleration_range(100.0)
+    assert (round(lo), round(hi)) == (-2319, 2915)
+    lo, hi = fb.rocker_acceleration_range(40.0)
+    assert (round(lo), round(hi)) == (-371, 466)
+    # the refined extremum is no worse than a dense independent grid
+    th = np.linspace(0, 2 * math.pi, 200001)
+    eps = fb.rocker_acceleration(th, 100.0)
+    assert lo * (100 / 40) ** 2 <= eps.min() + 1e-6
+    assert hi * (100 / 40) ** 2 >= eps.max() - 1e-6
+    assert abs(eps.max() - hi * (100 / 40) ** 2) < 1e-3
+
+
+def test_mirror_branch_flips_the_acceleration_range():
+    lo, hi = FourBar(*MRAZEK, branch=-1).rocker_acceleration_range(100.0)
+    assert (round(lo), round(hi)) == (-2915, 2319)
+
+
+def test_scalar_fast_path_equals_vectorised():
+    fb = FourBar(*MRAZEK)
+    theta = np.linspace(-7.0, 13.0, 101)
+    st = fb.evaluate(theta)
+    for k, th in enumerate(theta):
+        phi4, mu, nu = fb.transfer(float(th))
+        assert phi4 == pytest.approx(st.phi4[k], rel=1e-14, abs=1e-14)
+        assert mu == pytest.approx(st.mu[k], rel=1e-12, abs=1e-15)
+        assert nu == pytest.approx(st.nu[k], rel=1e-12, abs=1e-15)
+    assert isinstance(fb.rocker_angle(0.5), float)
+    assert isinstance(fb.nu(0.5), float)
+
+
+@pytest.mark.parametrize("geom", GEOMETRIES)
+@pytest.mark.parametrize("branch", [1, -1])
+def test_branch_continuous_over_several_revolutions(geom, branch):
+    fb = FourBar(*geom, branch=branch)
+    theta = np.linspace(-2 * math.pi, 4 * math.pi, 60001)
+    st = fb.evaluate(theta)
+    dth = theta[1] - theta[0]
+    # a step of φ4 must be explained by μ: no 2π jumps, no branch flips
+    step = np.diff(st.phi4)
+    np.testing.assert_array_less(np.abs(step - st.mu[:-1] * dth),
+                                 2.0 * np.max(np.abs(st.nu)) * dth ** 2 + 1e-12)
+    # periodic (crank-rocker) or advancing by one turn per turn (double-crank)
+    n = 20000  # samples per revolution
+    shift = 2 * math.pi if fb.linkage_type == "double-crank" else 0.0
+    np.testing.assert_allclose(st.phi4[n:] - st.phi4[:-n], shift, atol=1e-10)
+
+
+def test_grashof_classification():
+    assert FourBar(*MRAZEK).grashof_class == "Grashof"
+    assert FourBar(*MRAZEK).linkage_type == "crank-rocker"
+    assert FourBar(30, 50, 45, 15).linkage_type == "double-crank"
+    assert FourBar(30, 10, 30, 25).linkage_type == "double-rocker"
+    assert FourBar(30, 40, 10, 35).linkage_type == "rocker-crank"
+    nong = FourBar(30, 40, 33, 45)        # 30 + 45 > 40 + 33
+    assert nong.grashof_class == "non-Grashof"
+    assert nong.linkage_type == "triple-rocker"
+    assert FourBar(20, 30, 40, 50).grashof_class == "change-point"
+
+
+def test_dead_centres_mrazek_by_law_of_cosines():
+    a, b, c, d = MRAZEK
+    fb = FourBar(a, b, c, d)
+    front, back = fb.dead_centres()
+    # at the dead centres A, B, C are collinear: |AC| = b ± a
+    for dc, ac in ((front, b + a), (back, b - a)):
+        C = np.array([d + c * math.cos(dc.phi4), c * math.sin(dc.phi4)])
+        assert np.hypot(*C) == pytest.approx(ac, rel=1e-12)
+        assert fb.mu(dc.theta) == pytest.approx(0.0, abs=1e-12)   # rocker at rest
+        # angle at D of triangle ACD by the law of cosines
+        ang_D = math.acos((c * c + d * d - ac * ac) / (2 * c * d))
+        assert abs(math.pi - abs(dc.phi4)) == pytest.approx(ang_D, rel=1e-12)
+        assert dc.nu == pytest.approx(fb.nu(dc.theta), rel=1e-14)
+    front_angle = math.acos((c * c + d * d - (a + b) ** 2) / (2 * c * d))
+    back_angle = math.acos((c * c + d * d - (b - a) ** 2) / (2 * c * d))
+    assert fb.swing() == pytest.approx(front_angle - back_angle, rel=1e-12)
+    assert math.degrees(fb.swing()) == pytest.approx(17.75, abs=0.01)
+    # the rocker's extremes found by brute force are the dead centres
+    th = np.linspace(0, 2 * math.pi, 100001)
+    phi4 = fb.rocker_angle(th)
+    assert phi4.max() - phi4.min() == pytest.approx(fb.swing(), rel=1e-8)
+
+
+def test_transmission_angle_range_against_grid():
+    for geom in ((35.0, 110.0, 120.0, 150.0), MRAZEK, (30.0, 50.0, 45.0, 15.0)):
+        fb = FourBar(*geom)
+        th = np.linspace(0, 2 * math.pi, 200001)
+        g = fb.transmission_angle(th)
+        tr = fb.transmission_range()
+        assert tr.gamma_min == pytest.approx(g.min(), abs=1e-9)
+        # γ has a kink at 90°, so the grid can miss the top by |dγ/dθ|·Δθ/2 (< 1e-4 here)
+        assert g.max() <= tr.gamma_max + 1e-12
+        assert tr.gamma_max - g.max() < 1e-4
+        for t in tr.theta_at_min:
+            assert fb.transmission_angle(t) == pytest.approx(tr.gamma_min, abs=1e-12)
+        for t in tr.theta_at_max:
+            assert fb.transmission_angle(t) == pytest.approx(tr.gamma_max, abs=1e-12)
+        # γ is the acute version of the interior angle BCD (law of cosines)
+        np.testing.assert_allclose(g, np.minimum(fb.interior_angle(th),
+                                                 math.pi - fb.interior_angle(th)), atol=1e-12)
+
+
+@pytest.mark.parametrize("lengths, word", [
+    ((10, 20, 30, 70), "frame"),
+    ((100, 20, 30, 40), "crank"),
+    ((0.0, 20, 30, 40), "crank"),
+    ((-1, 20, 30, 40), "crank"),
+    ((10, float("nan"), 30, 40), "coupler"),
+])
+def test_impossible_geometry(lengths, word):
+    with pytest.raises(GeometryError, match=word):
+        FourBar(*lengths)
+
+
+def test_bad_branch():
+    with pytest.raises(GeometryError, match="branch"):
+        FourBar(*MRAZEK, branch=0)
+
+
+def test_locking_names_the_crank_angle():
+    fb = FourBar(30, 10, 30, 25)               # double-rocker: crank cannot turn
+    lo, hi = fb.crank_range()
+    assert fb.rocker_angle(0.5 * (lo + hi)) == fb.rocker_angle(0.5 * (lo + hi))
+    with pytest.raises(GeometryError, match=r"locks.*θ = 0°"):
+        fb.rocker_angle(np.array([0.0, 0.5 * (lo + hi)]))
+    with pytest.raises(GeometryError, match="locks"):
+        fb.transfer(math.pi)
+    with pytest.raises(GeometryError, match="crank-rocker only"):
+        fb.dead_centres()
+    # the reachable window's ends are where the coupler and rocker line up (γ → 0)
+    assert fb.transmission_angle(lo + 1e-9) < 1e-3
+    assert fb.transmission_angle(hi - 1e-9) < 1e-3
