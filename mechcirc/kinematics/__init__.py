@@ -6,5 +6,7 @@ numpy and scipy only; nothing here imports matplotlib (see :mod:`.plots`).
 """
 
 from .fourbar import DeadCentre, FourBar, FourBarState, TransmissionRange
+from .synthesis import Design, SynthesisResult, evaluate_design, solve_eq10, synthesize
 
-__all__ = ["FourBar", "FourBarState", "DeadCentre", "TransmissionRange"]
+__all__ = ["FourBar", "FourBarState", "DeadCentre", "TransmissionRange",
+           "Design", "SynthesisResult", "evaluate_design", "solve_eq10", "synthesize"]

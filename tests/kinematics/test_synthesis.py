@@ -1,0 +1,164 @@
+"""Tests of the patent CN104178888 synthesis (DIGEST §3).
+
+References: direct four-bar computation (FourBar, checked separately against
+finite differences), dense grids, and the law of cosines.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from mechcirc.errors import GeometryError
+from mechcirc.kinematics import FourBar
+from mechcirc.kinematics.synthesis import (LOAD_CRANK_MM, acceleration_ratio_eq5,
+                                           dead_centre_angles, eq10_residual,
+                                           evaluate_design, solve_eq10, synthesize)
+
+
+def _random_crank_rockers(n, seed=1):
+    rng = np.random.default_rng(seed)
+    out = []
+    while len(out) < n:
+        b, c, d = rng.uniform(1.2, 8.0, 3)
+        fb = None
+        try:
+            fb = FourBar(1.0, b, c, d)
+        except GeometryError:
+            continue
+        if fb.linkage_type == "crank-rocker" and fb.grashof_class == "Grashof":
+            out.append(fb)
+    return out
+
+
+def test_eq5_identity_against_direct_dead_centre_accelerations():
+    """|Φ1''/Φ2''| = ((b/a+1)/(b/a−1))·sin μ2/sin μ1, first power (DIGEST §3)."""
+    for fb in _random_crank_rockers(40):
+        front, back = fb.dead_centres()
+        direct = abs(front.nu / back.nu)
+        mu1, mu2 = dead_centre_angles(fb.coupler, fb.rocker, fb.frame)
+        assert acceleration_ratio_eq5(fb.coupler, mu1, mu2) == pytest.approx(direct, rel=1e-9)
+    # and not the squared reading the OCR could have meant
+    fb = FourBar(1.0, 3.0, 4.5, 5.0)
+    front, back = fb.dead_centres()
+    mu1, mu2 = dead_centre_angles(3.0, 4.5, 5.0)
+    squared = ((3.0 + 1) / (3.0 - 1)) * (math.sin(mu2) / math.sin(mu1)) ** 2
+    assert abs(squared - abs(front.nu / back.nu)) > 1e-3
+
+
+def test_eq1_is_the_interior_angle_at_the_dead_centres():
+    for fb in _random_crank_rockers(20, seed=2):
+        front, back = fb.dead_centres()
+        mu1, mu2 = dead_centre_angles(fb.coupler, fb.rocker, fb.frame)
+        assert float(mu1) == pytest.approx(fb.interior_angle(front.theta), abs=1e-9)
+        assert float(mu2) == pytest.approx(fb.interior_angle(back.theta), abs=1e-9)
+
+
+def test_eq10_vanishes_at_the_linkage_swing_and_solves_back():
+    for fb in _random_crank_rockers(30, seed=3):
+        psi = fb.swing()
+        b, c, d = fb.coupler, fb.rocker, fb.frame
+        assert eq10_residual(psi, b, c, d) == pytest.approx(0.0, abs=1e-12)
+        assert abs(eq10_residual(psi + 0.05, b, c, d)) > 1e-6
+        assert any(math.isclose(r, c, rel_tol=1e-9) for r in solve_eq10(psi, b, d_a=d))
+        assert any(math.isclose(r, d, rel_tol=1e-9) for r in solve_eq10(psi, b, c_a=c))
+        for r in solve_eq10(psi, b, d_a=d):     # every returned root has the asked swing
+            assert FourBar(1.0, b, r, d).swing() == pytest.approx(psi, abs=1e-9)
+
+
+def test_eq10_rejects_roots_of_the_mirror_configuration():
+    # quartic roots whose linkage swings across the frame line (α_f + α_b) are dropped
+    psi, b, d = math.radians(60.0), 2.0, 3.0
+    from mechcirc.kinematics.synthesis import _eq10_roots_squared
+    all_roots = [math.sqrt(u) for u in _eq10_roots_squared(psi, b, d) if np.isfinite(u)]
+    kept = solve_eq10(psi, b, d_a=d)
+    assert len(all_roots) == 2
+    for r in all_roots:
+        swing = FourBar(1.0, b, r, d).swing()
+        assert (r in kept) == math.isclose(swing, psi, abs_tol=1e-9)
+
+
+def test_solve_eq10_bad_arguments():
+    with pytest.raises(GeometryError, match="exactly one"):
+        solve_eq10(0.4, 3.0)
+    with pytest.raises(GeometryError, match="b/a > 1"):
+        solve_eq10(0.4, 0.9, d_a=4.0)
+
+
+def _independent_check(des, load):
+    """Criteria recomputed from FourBar on dense grids and the law of cosines."""
+    a, b, c, d = des.a, des.b, des.c, des.d
+    fb = FourBar(a, b, c, d)
+    th = np.linspace(0, 2 * math.pi, 100001)
+    phi4 = fb.rocker_angle(th)
+    swing = math.degrees(phi4.max() - phi4.min())
+    gamma = fb.transmission_angle(th)
+    front, back = fb.dead_centres()
+    cos_front = (c * c + (a + b) ** 2 - d * d) / (2 * c * (a + b))
+    g1 = math.degrees(math.acos(abs(cos_front)))
+    lo, hi = LOAD_CRANK_MM[load]
+    assert lo <= a <= hi
+    assert 23 - 1e-6 <= swing <= 26 + 1e-6
+    assert g1 > 70
+    assert math.degrees(gamma.min()) > 45
+    assert abs(back.nu) / abs(front.nu) < 0.3
+    assert d < 180
+    assert c / a > (b / a) * (360 / swing) / (2 * math.pi)
+    assert des.swing_deg == pytest.approx(swing, abs=1e-4)
+    assert des.criteria["min_transmission"].value == pytest.approx(
+        math.degrees(gamma.min()), abs=1e-6)
+
+
+@pytest.mark.parametrize("load", ["light", "medium", "heavy"])
+def test_synthesize_returns_designs_meeting_every_criterion(load):
+    res = synthesize(load, limit=5)
+    assert len(res.designs) == 5
+    for des in res.designs:
+        assert des.feasible
+        _independent_check(des, load)
+        assert des.binding and set(des.binding) <= set(des.criteria)
+    scores = [des.objective for des in res.designs]
+    # best (largest margin) first; similar linkages (same ratios) tie to rounding
+    assert all(x >= y - 1e-12 for x, y in zip(scores, scores[1:]))
+    for des in res.designs:   # the objective is the smallest shape margin
+        shape = [des.criteria[n].margin for n in ("front_transmission", "min_transmission",
+                                                  "acceleration_ratio", "frame_length",
+                                                  "rocker_ratio")]
+        assert des.objective == pytest.approx(min(shape))
+        assert des.criteria[des.binding[0]].margin == pytest.approx(min(shape))
+
+
+def test_synthesize_fixed_swing_and_ratio_objective():
+    res = synthesize("medium", 24.0, objective="ratio", limit=4)
+    assert res.designs
+    for des in res.designs:
+        _independent_check(des, "medium")
+        assert des.swing_deg == pytest.approx(24.0, abs=1e-6)
+    ratios = [des.criteria["acceleration_ratio"].value for des in res.designs]
+    assert all(x <= y + 1e-12 for x, y in zip(ratios, ratios[1:]))
+
+
+def test_no_feasible_design_names_the_conflicts():
+    res = synthesize("medium", 20.0)
+    assert res.designs == ()
+    # at Ψ = 20° with a ≥ 35 mm no crank-rocker has d < 180 mm on the grid
+    assert ("frame_length",) in res.conflicts and ("swing",) in res.conflicts
+    assert "frame_length" in res.message
+    res = synthesize("medium", 60.0)
+    assert res.designs == ()
+    assert ("front_transmission", "acceleration_ratio") in res.conflicts
+    res = synthesize("medium", 10.0)
+    assert res.designs == () and "no crank-rocker" in res.message
+
+
+def test_evaluate_design_flags_mrazek():
+    # Mrázek's 29/37/188/189 mm: crank too short, swing 17.75° too small, frame too long
+    des = evaluate_design(29, 37, 188, 189)
+    failed = {n for n, c in des.criteria.items() if not c.passed}
+    assert failed >= {"crank_length", "swing", "frame_length"}
+    assert des.swing_deg == pytest.approx(17.75, abs=0.01)
+
+
+def test_bad_load():
+    with pytest.raises(GeometryError, match="unknown load"):
+        synthesize("enormous")
