@@ -92,6 +92,14 @@ class _Parser:
                 self.error(f"unexpected character {text[i]!r} in expression", i,
                            "a number, a name, an operator + - * / ** ^ or a parenthesis")
             kind = m.lastgroup
+            if kind == "num" and m.end() < len(text) and (text[m.end()].isalnum()
+                                                         or text[m.end()] in "._"):
+                end = m.end()
+                while end < len(text) and (text[end].isalnum() or text[end] in "._" or (
+                        text[end] in "+-" and text[end - 1] in "eE")):
+                    end += 1
+                self.error(f"malformed number {text[i:end]!r}", i,
+                           "a number such as 12, 1.5, .5, 2. or 1e-3")
             if kind != "ws":
                 tok = m.group()
                 if kind == "op" and tok == "^":

@@ -1,0 +1,218 @@
+"""Mechanical circuits: two-pole elements, levers, the drive, and the :class:`Circuit`.
+
+Conventions (DIGEST §1, Grigoriev et al. 2002):
+
+* Every element is a two-pole between nodes ``n1`` and ``n2``; ``v`` is the
+  difference of the nodes' velocities ``v(n1) - v(n2)`` [m/s] and ``Q`` the
+  force passing through it from ``n1`` to ``n2`` [N].
+* The complex kinematic characteristic (mobility) is ``K = v / Q`` [m/(N·s)];
+  its reciprocal ``S = Q / v`` is the force characteristic [N·s/m].
+* Element characteristics, with ``eta`` the product of lever ratios the seed
+  attaches to the element (its reflection factor, default 1):
+
+  ======  =============================  ===========
+  kind    K(ω)                           value unit
+  ======  =============================  ===========
+  mass    −j / (ω · m · η)               kg
+  spring  +j · ω / (k · η)               N/m
+  damper  1 / (c · η)                    N·s/m
+  ======  =============================  ===========
+
+* Series elements carry the same ``Q`` and their K add; parallel elements
+  share ``v`` and their 1/K add.
+* Rotational systems use the same elements: inertia [kg·m²] as mass,
+  torsional rigidity [N·m/rad] as spring, rotary damping [N·m·s/rad] as
+  damper; then v is an angular velocity [rad/s], Q a moment [N·m] and K is in
+  rad/(N·m·s).
+* Node ``"0"`` is the frame.  ``omega`` is the main shaft's angular frequency
+  [rad/s].
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import TYPE_CHECKING, Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .reduction import Node
+    from .sweep import Sweep
+
+__all__ = ["Element", "Lever", "Drive", "Circuit", "element_mobility", "FRAME",
+           "ELEMENT_UNITS"]
+
+FRAME = "0"
+
+ElementKind = Literal["mass", "spring", "damper"]
+
+#: SI unit of each element kind's value (translational reading).
+ELEMENT_UNITS: dict[str, str] = {"mass": "kg", "spring": "N/m", "damper": "N·s/m"}
+
+
+@dataclass(frozen=True)
+class Element:
+    """A two-pole: mass, spring or damper between nodes ``n1`` and ``n2``.
+
+    Attributes
+    ----------
+    kind : {"mass", "spring", "damper"}
+    name : str
+    n1, n2 : str
+        Node names; ``"0"`` is the frame.
+    value : float
+        Mass [kg], stiffness [N/m] or damping coefficient [N·s/m], > 0.
+    eta : float
+        Reflection factor η [1], > 0 (the seed's product of lever ratios).
+    line, col : int
+        Where the element was defined (0 when built in code).
+    """
+
+    kind: ElementKind
+    name: str
+    n1: str
+    n2: str
+    value: float
+    eta: float = 1.0
+    line: int = 0
+    col: int = 0
+
+    def mobility(self, omega: ArrayLike) -> NDArray[np.complex128]:
+        """Kinematic characteristic K(ω) [m/(N·s)] of this element."""
+        return element_mobility(self.kind, self.value * self.eta, omega)
+
+
+def element_mobility(kind: str, scaled_value: float, omega: ArrayLike) -> NDArray[np.complex128]:
+    """K(ω) [m/(N·s)] of one element kind with value·η = ``scaled_value``.
+
+    ω = 0 gives K = ∞ for a mass and 0 for a spring (no warnings are raised;
+    callers flag non-finite results).
+    """
+    omega = np.asarray(omega, dtype=float)
+    out = np.zeros(omega.shape, dtype=complex)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        # Fill the real and imaginary parts separately: a complex product such
+        # as 1j * inf would give nan + inf·j at ω = 0 instead of -j∞.
+        if kind == "mass":
+            out.imag = -1.0 / (omega * scaled_value)
+        elif kind == "spring":
+            out.imag = omega / scaled_value
+        elif kind == "damper":
+            out.real = 1.0 / scaled_value
+        else:
+            raise ValueError(f"unknown element kind {kind!r}")
+    return out
+
+
+@dataclass(frozen=True)
+class Lever:
+    """An ideal lossless lever (two-port): v_S = r · v_P and Q_P = r · Q_S.
+
+    ``v_P = v(p1) - v(p2)``, ``v_S = v(s1) - v(s2)``.  Seen from the primary,
+    a sub-network of characteristic K on the secondary appears as K / r²
+    (a mass m reflects as m · r²).  ``ratio`` r [1] is > 0.
+    """
+
+    name: str
+    p1: str
+    p2: str
+    s1: str
+    s2: str
+    ratio: float
+    line: int = 0
+    col: int = 0
+
+
+@dataclass(frozen=True)
+class Drive:
+    """The excitation between ``n1`` and ``n2``.
+
+    ``kind`` is ``"velocity"`` (kinematic excitation, amplitude V0 [m/s]) or
+    ``"force"`` (force excitation, amplitude F0 [N]).
+    """
+
+    name: str
+    n1: str
+    n2: str
+    kind: Literal["velocity", "force"]
+    amplitude: float
+    line: int = 0
+    col: int = 0
+
+
+@dataclass(frozen=True)
+class Circuit:
+    """A mechanical circuit: elements, levers and one drive.
+
+    Build one with :func:`mechcirc.parse` or :func:`mechcirc.load`, or
+    directly from :class:`Element`, :class:`Lever` and :class:`Drive`.
+
+    Attributes
+    ----------
+    elements : tuple of Element
+    drive : Drive
+    levers : tuple of Lever
+    name : str
+        A short name (the netlist's file stem), used in titles.
+    source : str
+        Where the circuit came from (file name or ``"<string>"``).
+    params : dict
+        The ``.param`` values [as written], for reference.
+    """
+
+    elements: tuple[Element, ...]
+    drive: Drive
+    levers: tuple[Lever, ...] = ()
+    name: str = "circuit"
+    source: str = "<string>"
+    params: dict = field(default_factory=dict, compare=False)
+
+    def element(self, name: str) -> Element | Lever:
+        """The element or lever called ``name`` (KeyError if none)."""
+        for e in self.elements + self.levers:
+            if e.name == name:
+                return e
+        raise KeyError(f"no element named {name!r}")
+
+    @property
+    def nodes(self) -> list[str]:
+        """All node names, frame first, then in order of appearance."""
+        seen = {FRAME: None}
+        for e in self.elements:
+            seen.setdefault(e.n1)
+            seen.setdefault(e.n2)
+        for lv in self.levers:
+            for n in (lv.p1, lv.p2, lv.s1, lv.s2):
+                seen.setdefault(n)
+        seen.setdefault(self.drive.n1)
+        seen.setdefault(self.drive.n2)
+        return list(seen)
+
+    @cached_property
+    def _reduction(self):
+        from .reduction import reduce_circuit
+
+        return reduce_circuit(self)
+
+    @property
+    def tree(self) -> "Node":
+        """The series-parallel reduction tree seen from the drive.
+
+        Prints as a nested expression, e.g. ``m1 + m2 + (k4 | (m5 + k5))``.
+        Raises :class:`~mechcirc.errors.TopologyError` if the network is not
+        series-parallel reducible.
+        """
+        return self._reduction.tree
+
+    @property
+    def unloaded(self) -> tuple[str, ...]:
+        """Names of elements on no path between the drive terminals (they carry no force)."""
+        return self._reduction.unloaded
+
+    def sweep(self, omega: ArrayLike) -> "Sweep":
+        """K(ω), Q0(ω) and per-element forces over ``omega`` [rad/s]; see :func:`mechcirc.sweep.sweep`."""
+        from .sweep import sweep
+
+        return sweep(self, omega)

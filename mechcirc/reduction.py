@@ -1,0 +1,525 @@
+"""Series–parallel reduction of a mechanical circuit to a tree, and its evaluation.
+
+The network between the drive's terminals is reduced by the two theorems of
+mechanical circuits (DIGEST §1): elements in series add their K, elements in
+parallel add their 1/K.  A lever whose secondary side closes on a sub-network
+that touches the rest only at the lever (and possibly at one shared node,
+such as the frame) reduces to that sub-network's K / r² on the primary.
+
+The result is a tree of :class:`Leaf`, :class:`Series`, :class:`Parallel`
+and :class:`Reflect` nodes, evaluated vectorised over ω by :func:`evaluate`;
+:func:`push_down` carries the drive's force and velocity back down the tree
+to every element.
+
+Cost: pruning, lever extraction and reduction are O(n) in the number of
+elements (O(n·L) with L levers); evaluation is O(n · n_omega).
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections import deque
+from dataclasses import dataclass
+from typing import Iterator, Union
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .circuit import Circuit, Element, Lever
+from .errors import TopologyError, UnloadedElementWarning
+
+__all__ = ["Leaf", "Series", "Parallel", "Reflect", "Node", "Reduction",
+           "reduce_circuit", "reduce_network", "evaluate", "push_down", "leaves"]
+
+
+@dataclass(frozen=True, eq=False)
+class Leaf:
+    """One element of the circuit."""
+
+    element: Element
+
+    def __str__(self) -> str:
+        return _format(self)
+
+
+@dataclass(frozen=True, eq=False)
+class Series:
+    """Children carrying the same force; ``signs[i]`` is +1 where child i's
+    orientation (n1 → n2) agrees with this node's, −1 where it is reversed."""
+
+    children: tuple["Node", ...]
+    signs: tuple[int, ...]
+
+    def __str__(self) -> str:
+        return _format(self)
+
+
+@dataclass(frozen=True, eq=False)
+class Parallel:
+    """Children sharing the same velocity difference; ``signs`` as in :class:`Series`."""
+
+    children: tuple["Node", ...]
+    signs: tuple[int, ...]
+
+    def __str__(self) -> str:
+        return _format(self)
+
+
+@dataclass(frozen=True, eq=False)
+class Reflect:
+    """A sub-network seen through a lever: K_primary = K_child / ratio².
+
+    ``sign`` is −1 when the child's orientation runs from the lever's ``s2``
+    to ``s1``.
+    """
+
+    child: "Node"
+    lever: Lever
+    sign: int = 1
+
+    def __str__(self) -> str:
+        return _format(self)
+
+
+Node = Union[Leaf, Series, Parallel, Reflect]
+
+
+@dataclass(frozen=True)
+class Reduction:
+    """Result of :func:`reduce_circuit`: the tree and the unloaded elements' names."""
+
+    tree: Node
+    unloaded: tuple[str, ...]
+
+
+def _format(root: Node) -> str:
+    """Nested expression: series ``a + b``, parallel ``a | b``, lever ``L[...]``.
+
+    Iterative, so trees deeper than Python's recursion limit still print.
+    """
+    out: list[str] = []
+    # Stack items: a node to print, or a literal string.
+    stack: list = [(root, None)]
+    while stack:
+        item, parent = stack.pop()
+        if isinstance(item, str):
+            out.append(item)
+            continue
+        if isinstance(item, Leaf):
+            out.append(item.element.name)
+            continue
+        if isinstance(item, Reflect):
+            stack.append(("]", None))
+            stack.append((item.child, None))
+            out.append(f"{item.lever.name}[")
+            continue
+        sep = " + " if isinstance(item, Series) else " | "
+        wrap = parent is not None
+        parts: list = []
+        if wrap:
+            parts.append(("(", None))
+        for i, child in enumerate(item.children):
+            if i:
+                parts.append((sep, None))
+            parts.append((child, item))
+        if wrap:
+            parts.append((")", None))
+        stack.extend(reversed(parts))
+    return "".join(out)
+
+
+def leaves(root: Node) -> Iterator[Element]:
+    """The elements under ``root``, left to right."""
+    stack = [root]
+    while stack:
+        node = stack.pop()
+        if isinstance(node, Leaf):
+            yield node.element
+        elif isinstance(node, Reflect):
+            stack.append(node.child)
+        else:
+            stack.extend(reversed(node.children))
+
+
+# --------------------------------------------------------------------------
+# Reduction
+# --------------------------------------------------------------------------
+
+@dataclass
+class _Edge:
+    n1: str
+    n2: str
+    node: Node
+
+
+class _Binary:
+    """Binary series/parallel node used while reducing (flattened afterwards)."""
+
+    __slots__ = ("kind", "a", "b", "sign_a", "sign_b")
+
+    def __init__(self, kind, a, sign_a, b, sign_b):
+        self.kind, self.a, self.sign_a, self.b, self.sign_b = kind, a, sign_a, b, sign_b
+
+
+def reduce_circuit(circuit: Circuit) -> Reduction:
+    """Reduce ``circuit`` between its drive's terminals.
+
+    Warns :class:`~mechcirc.errors.UnloadedElementWarning` naming elements on
+    no path between the terminals.
+
+    Raises
+    ------
+    TopologyError
+        If the terminals are not connected, or the network (or a lever) is
+        not series–parallel reducible; names the nodes and elements to blame.
+    """
+    d = circuit.drive
+    red = reduce_network(circuit.elements, circuit.levers, d.n1, d.n2,
+                         drive_line=d.line, source=circuit.source)
+    if red.unloaded:
+        warnings.warn(
+            f"{len(red.unloaded)} element(s) lie on no path between the drive's nodes "
+            f"{d.n1!r} and {d.n2!r} and carry no force: {', '.join(red.unloaded)}",
+            UnloadedElementWarning, stacklevel=3)
+    return red
+
+
+def reduce_network(elements, levers, a: str, b: str, *, drive_line: int = 0,
+                   source: str = "<string>") -> Reduction:
+    """Series–parallel reduction of ``elements`` and ``levers`` seen between nodes ``a`` and ``b``."""
+    edges = [_Edge(e.n1, e.n2, Leaf(e)) for e in elements]
+    unloaded: list[str] = []
+    tree = _reduce(edges, list(levers), a, b, unloaded, drive_line, source)
+    return Reduction(tree, tuple(unloaded))
+
+
+def _reduce(edges: list[_Edge], levers: list[Lever], a: str, b: str,
+            unloaded: list[str], drive_line: int, source: str) -> Node:
+    edges, levers = list(edges), list(levers)
+    changed = True
+    while levers and changed:
+        changed = False
+        for lv in levers:
+            part = _secondary_part(lv, edges, levers, a, b)
+            if part is None:
+                continue
+            sub_ids, sub_levers, t, s = part
+            sub_edges = [edges[i] for i in sub_ids]
+            if not sub_edges:
+                raise TopologyError(
+                    f"lever {lv.name!r} (line {lv.line}): its secondary side {lv.s1!r}–"
+                    f"{lv.s2!r} is left floating (no element closes it)",
+                    nodes=(lv.s1, lv.s2), elements=(lv.name,))
+            child = _reduce(sub_edges, sub_levers, t, s, unloaded, lv.line, source)
+            sign = 1 if (t, s) == (lv.s1, lv.s2) else -1
+            keep = set(range(len(edges))) - set(sub_ids)
+            edges = [edges[i] for i in sorted(keep)]
+            edges.append(_Edge(lv.p1, lv.p2, Reflect(_flatten(child), lv, sign)))
+            gone = {id(m) for m in sub_levers} | {id(lv)}
+            levers = [m for m in levers if id(m) not in gone]
+            changed = True
+            break
+    if levers:
+        names = [lv.name for lv in levers]
+        nodes = sorted({n for lv in levers for n in (lv.p1, lv.p2, lv.s1, lv.s2)})
+        raise TopologyError(
+            f"lever(s) {', '.join(names)} couple parts of the network that are not "
+            f"series–parallel reducible (secondary sides are not closed sub-networks); "
+            f"nodes {', '.join(nodes)}", nodes=nodes, elements=names)
+    edges = _prune(edges, a, b, unloaded, drive_line, source)
+    return _flatten(_series_parallel(edges, a, b))
+
+
+def _secondary_part(lv: Lever, edges: list[_Edge], levers: list[Lever], a: str, b: str):
+    """Find the sub-network closing ``lv``'s secondary, if it is separable.
+
+    Returns ``(edge indices, levers, t, s)`` where the sub-network lies between
+    ``t`` and ``s`` and touches the rest of the network at most at ``s``;
+    ``None`` if the secondary side is entangled with the primary side.
+    """
+    adj: dict[str, set[str]] = {}
+
+    def link(u, w):
+        adj.setdefault(u, set()).add(w)
+        adj.setdefault(w, set()).add(u)
+
+    for e in edges:
+        link(e.n1, e.n2)
+    for m in levers:
+        if m is lv:
+            link(m.p1, m.p2)
+        else:
+            link(m.p1, m.p2)
+            link(m.s1, m.s2)
+            link(m.p1, m.s1)
+    link(a, b)
+    for t, s in ((lv.s1, lv.s2), (lv.s2, lv.s1)):
+        comp = {t}
+        queue = deque([t])
+        while queue:
+            u = queue.popleft()
+            for w in adj.get(u, ()):
+                if w != s and w not in comp:
+                    comp.add(w)
+                    queue.append(w)
+        if comp & ({lv.p1, lv.p2, a, b} - {s}):
+            continue
+        ids = [i for i, e in enumerate(edges) if e.n1 in comp or e.n2 in comp]
+        subs = [m for m in levers if m is not lv and
+                ({m.p1, m.p2, m.s1, m.s2} & comp)]
+        return ids, subs, t, s
+    return None
+
+
+def _prune(edges: list[_Edge], a: str, b: str, unloaded: list[str], drive_line: int,
+           source: str) -> list[_Edge]:
+    """Keep only edges in the biconnected block that holds the drive (they carry force)."""
+    import networkx as nx
+
+    g = nx.MultiGraph()
+    for i, e in enumerate(edges):
+        g.add_edge(e.n1, e.n2, key=i)
+    if a not in g or b not in g or not nx.has_path(g, a, b):
+        where = f" (line {drive_line})" if drive_line else ""
+        raise TopologyError(
+            f"the drive's nodes {a!r} and {b!r}{where} are not connected by any path "
+            "of elements", nodes=(a, b))
+    simple = nx.Graph(g)
+    simple.add_edge(a, b)
+    block = None
+    for comp in nx.biconnected_component_edges(simple):
+        pairs = {frozenset(p) for p in comp}
+        if frozenset((a, b)) in pairs:
+            block = pairs
+            break
+    kept = []
+    for e in edges:
+        if frozenset((e.n1, e.n2)) in block:
+            kept.append(e)
+        else:
+            unloaded.extend(el.name for el in leaves(_flatten(e.node)))
+    return kept
+
+
+def _series_parallel(edges: list[_Edge], a: str, b: str):
+    """Worklist series/parallel reduction; returns the root node oriented a → b."""
+    store: dict[int, list] = {}     # id -> [n1, n2, node]
+    adj: dict[str, dict[int, None]] = {}
+    pair: dict[frozenset, int] = {}
+    next_id = 0
+    queue: deque[str] = deque()
+
+    def add(n1, n2, node):
+        nonlocal next_id
+        key = frozenset((n1, n2))
+        old = pair.get(key)
+        if old is not None:
+            o = store[old]
+            o[2] = _Binary("p", o[2], 1, node, 1 if o[0] == n1 else -1)
+            queue.append(n1)    # their degrees changed
+            queue.append(n2)
+            return
+        eid = next_id
+        next_id += 1
+        store[eid] = [n1, n2, node]
+        adj.setdefault(n1, {})[eid] = None
+        adj.setdefault(n2, {})[eid] = None
+        pair[key] = eid
+        queue.append(n1)
+        queue.append(n2)
+
+    def remove(eid):
+        n1, n2, _ = store.pop(eid)
+        del adj[n1][eid]
+        del adj[n2][eid]
+        del pair[frozenset((n1, n2))]
+
+    for e in edges:
+        add(e.n1, e.n2, e.node)
+    while queue:
+        n = queue.popleft()
+        if n in (a, b) or n not in adj or len(adj[n]) != 2:
+            continue
+        e1, e2 = adj[n]
+        u1, w1, node1 = store[e1]
+        u2, w2, node2 = store[e2]
+        u = w1 if u1 == n else u1          # far end of e1
+        w = w2 if u2 == n else u2          # far end of e2
+        s1 = 1 if w1 == n else -1          # e1 runs u -> n ?
+        s2 = 1 if u2 == n else -1          # e2 runs n -> w ?
+        remove(e1)
+        remove(e2)
+        del adj[n]
+        add(u, w, _Binary("s", node1, s1, node2, s2))
+    if len(store) != 1:
+        blocking_nodes = sorted(n for n, es in adj.items() if es and n not in (a, b))
+        names = sorted(el.name for _, _, node in store.values()
+                       for el in leaves(_flatten(node)))
+        raise TopologyError(
+            f"the network is not series–parallel reducible between {a!r} and {b!r}: "
+            f"nodes {_some(blocking_nodes)} and elements {_some(names)} form a "
+            "bridge (use nodal analysis)", nodes=blocking_nodes, elements=names)
+    (n1, n2, node), = store.values()
+    if n1 == a:
+        return node
+    # Root oriented b -> a: wrap so that the tree's orientation is a -> b.
+    return _Binary("s", node, -1, None, 0)
+
+
+def _some(names: list[str], limit: int = 12) -> str:
+    """Names for a message: all of them, or the first ``limit`` and a count."""
+    if len(names) <= limit:
+        return ", ".join(names)
+    return ", ".join(names[:limit]) + f" and {len(names) - limit} more"
+
+
+def _flatten(root) -> Node:
+    """Turn the binary reduction nodes into flat Series/Parallel tuples.
+
+    Iterative (ladders nest deeper than the recursion limit); nested nodes of
+    the same kind merge, keeping path order and orientation signs.
+    """
+    if not isinstance(root, _Binary):
+        return root
+    done: dict[int, Node] = {}
+    stack = [(root, False)]
+    while stack:
+        node, expanded = stack.pop()
+        if not isinstance(node, _Binary) or id(node) in done:
+            continue
+        if not expanded:
+            stack.append((node, True))
+            stack.extend((c, False) for c in _binary_children(node))
+            continue
+        children, signs = [], []
+        for child, sign in _binary_items(node):
+            if isinstance(child, _Binary):
+                child = done[id(child)]
+            if sign < 0 and isinstance(child, (Series, Parallel)):
+                # Flip the child instead of marking it reversed, so that only
+                # leaves and lever reflections carry orientation signs and series
+                # chains print in path order.
+                child, sign = _reversed(child), 1
+            same = (isinstance(child, Series) and node.kind == "s") or \
+                   (isinstance(child, Parallel) and node.kind == "p")
+            if same:
+                kids = list(zip(child.children, child.signs))
+                if sign < 0 and node.kind == "s":
+                    kids.reverse()
+                children.extend(k for k, _ in kids)
+                signs.extend(s * sign for _, s in kids)
+            else:
+                children.append(child)
+                signs.append(sign)
+        if len(children) == 1 and signs[0] == 1:
+            done[id(node)] = children[0]
+        else:
+            cls = Series if node.kind == "s" else Parallel
+            done[id(node)] = cls(tuple(children), tuple(signs))
+    return done[id(root)]
+
+
+def _reversed(node):
+    """The same two-pole with n1 and n2 exchanged."""
+    signs = tuple(-s for s in node.signs)
+    if isinstance(node, Series):
+        return Series(node.children[::-1], signs[::-1])
+    return Parallel(node.children, signs)
+
+
+def _binary_children(node: _Binary):
+    return [c for c, _ in _binary_items(node)]
+
+
+def _binary_items(node: _Binary):
+    items = [(node.a, node.sign_a)]
+    if node.b is not None:
+        items.append((node.b, node.sign_b))
+    return items
+
+
+# --------------------------------------------------------------------------
+# Evaluation
+# --------------------------------------------------------------------------
+
+def _postorder(root: Node) -> list[Node]:
+    order, stack = [], [root]
+    while stack:
+        node = stack.pop()
+        order.append(node)
+        if isinstance(node, (Series, Parallel)):
+            stack.extend(node.children)
+        elif isinstance(node, Reflect):
+            stack.append(node.child)
+    order.reverse()
+    return order
+
+
+def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False):
+    """K(ω) [m/(N·s)] of the tree at each ω [rad/s], vectorised.
+
+    With ``keep=True`` returns ``(K, values)`` where ``values`` maps
+    ``id(node)`` to each node's K, for :func:`push_down`.  Exact poles and
+    zeros give ±inf or 0 without warnings; ``inf - inf`` gives NaN (callers flag).
+    """
+    omega = np.asarray(omega, dtype=float)
+    values: dict[int, NDArray[np.complex128]] = {}
+    with np.errstate(all="ignore"):
+        for node in _postorder(root):
+            if isinstance(node, Leaf):
+                K = node.element.mobility(omega)
+            elif isinstance(node, Series):
+                K = values[id(node.children[0])].copy()
+                for c in node.children[1:]:
+                    K += values[id(c)]
+            elif isinstance(node, Parallel):
+                Y = _reciprocal(values[id(node.children[0])])
+                for c in node.children[1:]:
+                    Y += _reciprocal(values[id(c)])
+                K = _reciprocal(Y)
+            else:
+                K = values[id(node.child)] / node.lever.ratio ** 2
+            if not keep:
+                kids = node.children if isinstance(node, (Series, Parallel)) else \
+                    (node.child,) if isinstance(node, Reflect) else ()
+                for c in kids:
+                    del values[id(c)]
+            values[id(node)] = K
+    K = values[id(root)]
+    return (K, values) if keep else K
+
+
+def _reciprocal(K: NDArray[np.complex128]) -> NDArray[np.complex128]:
+    """1/K with 1/0 = ∞ and 1/∞ = 0 (numpy's complex division gives NaN for both)."""
+    Y = 1.0 / K
+    if not np.isfinite(Y).all():
+        Y[np.isinf(K)] = 0.0
+        Y[K == 0] = np.inf
+    return Y
+
+
+def push_down(root: Node, values: dict, Q: NDArray, v: NDArray) -> dict[str, tuple]:
+    """Carry the root's force ``Q`` [N] and velocity ``v`` [m/s] down to every element.
+
+    Series children share Q, parallel children share v, a lever scales
+    v by r and Q by 1/r.  Returns ``{element name: (Q, v)}`` arrays over ω.
+    """
+    out: dict[str, tuple] = {}
+    stack = [(root, Q, v)]
+    with np.errstate(all="ignore"):
+        while stack:
+            node, q, u = stack.pop()
+            if isinstance(node, Leaf):
+                out[node.element.name] = (q, u)
+            elif isinstance(node, Series):
+                for c, s in zip(node.children, node.signs):
+                    qc = q if s > 0 else -q
+                    stack.append((c, qc, values[id(c)] * qc))
+            elif isinstance(node, Parallel):
+                for c, s in zip(node.children, node.signs):
+                    uc = u if s > 0 else -u
+                    stack.append((c, uc / values[id(c)], uc))
+            else:
+                r = node.lever.ratio * node.sign
+                stack.append((node.child, q / r, u * r))
+    return out

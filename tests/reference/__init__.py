@@ -1,0 +1,1 @@
+"""Independent reference evaluators for the tests; they never import mechcirc."""

@@ -1,0 +1,176 @@
+"""Series–parallel reduction against independent evaluators."""
+
+import warnings
+
+import mpmath
+import numpy as np
+import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
+
+import mechcirc
+from mechcirc.errors import TopologyError, UnloadedElementWarning
+
+from reference import stb_eq7
+from strategies import count_leaves, networks, reference_K_and_cancellation, to_netlist
+
+
+def _random_stb_params(rng):
+    p = {f"m{i}": 10 ** rng.uniform(-1, 1) for i in range(1, 13)}
+    p.update(k0=10 ** rng.uniform(3, 6), k4=10 ** rng.uniform(5, 8), k5=10 ** rng.uniform(5, 8),
+             eta1=10 ** rng.uniform(-0.5, 0.5), eta2=10 ** rng.uniform(-0.5, 0.5),
+             eta3=10 ** rng.uniform(-0.5, 0.5), eta4=1.0)
+    return p
+
+
+def test_stb_tree_has_the_structure_of_eq_1():
+    c = mechcirc.load("netlists/stb_heald.mcir")
+    assert str(c.tree) == ("m1 + m2 + m3 + m4 + (k4 | (m5 + k5) | "
+                           "(m6 + m7 + m8 + m9 + m10 + m11 + m12 + k0))")
+
+
+def test_stb_reduction_matches_eq_7_at_random_parameters():
+    rng = np.random.default_rng(20021)
+    worst = 0.0
+    for _ in range(200):
+        p = _random_stb_params(rng)
+        omega = 10 ** rng.uniform(0, 4, size=50)
+        K = mechcirc.parse(stb_eq7.netlist(p)).sweep(omega).K
+        ref = stb_eq7.full_K(omega, p)
+        err = np.abs(K - ref) / np.abs(ref)
+        worst = max(worst, err.max())
+    assert worst <= 1e-12, worst
+
+
+def test_stb_eq_7_in_high_precision_agrees():
+    """Where eq. (7) in float64 loses digits near a pole, the mpmath value decides."""
+    rng = np.random.default_rng(7)
+    p = _random_stb_params(rng)
+    omega = 10 ** rng.uniform(0, 4, size=50)
+    K = mechcirc.parse(stb_eq7.netlist(p)).sweep(omega).K
+    with mpmath.workdps(50):
+        mp_p = {k: mpmath.mpf(v) for k, v in p.items()}
+        ref = [complex(stb_eq7.full_K(mpmath.mpf(w), mp_p).__complex__()) for w in omega]
+    np.testing.assert_allclose(K, ref, rtol=1e-13)
+
+
+@settings(max_examples=150, deadline=None)
+@given(net=networks(max_leaves=14), log_omega=st.floats(-2, 3))
+def test_random_series_parallel_networks(net, log_omega):
+    """Full accuracy wherever no sub-network sits within 1e-3 of its own pole or zero.
+
+    (Closer than that, float64 cannot hold 12 digits of the result at all; such
+    points are the flagged singular points of the sweep, tested elsewhere.)
+    """
+    omega = 10.0 ** log_omega
+    ref, cancellation = _mp_reference(net, omega)
+    assume(cancellation < 1e3)
+    c = mechcirc.parse(to_netlist(net))
+    K = c.sweep([omega]).K[0]
+    assert abs(K - ref) <= 1e-12 * abs(ref)
+    assert len(c.elements) == count_leaves(net)
+
+
+def _mp_reference(net, omega):
+    with mpmath.workdps(60):
+        K, cancellation = reference_K_and_cancellation(
+            net, mpmath.mpf(omega), j=mpmath.mpc(0, 1), convert=mpmath.mpf)
+        return complex(K), cancellation
+
+
+@settings(max_examples=25, deadline=None)
+@given(net=networks(max_leaves=160, min_exp=-6, max_exp=6),
+       log_omega=st.floats(-1, 3))
+def test_ill_conditioned_networks_against_mpmath(net, log_omega):
+    """Values over 12 decades, up to 160 elements, lightly damped (dampers are ~1/3 of the leaves)."""
+    omega = 10.0 ** log_omega
+    ref, cancellation = _mp_reference(net, omega)
+    assume(cancellation < 1e3)
+    K = mechcirc.parse(to_netlist(net)).sweep([omega]).K[0]
+    assert abs(K - ref) <= 1e-12 * abs(ref)
+
+
+def test_large_ill_conditioned_ladder_against_mpmath():
+    rng = np.random.default_rng(3)
+    net = ("leaf", "damper", 1e3)
+    for i in range(60):
+        kind = ["mass", "spring", "damper"][i % 3]
+        rung = ("leaf", kind, 10 ** rng.uniform(-6, 6))
+        other = ("leaf", ["spring", "mass"][i % 2], 10 ** rng.uniform(-6, 6))
+        net = ("s", [other, ("p", [rung, net])])
+    assert count_leaves(net) == 121
+    for omega in (0.37, 12.5, 980.0):
+        K = mechcirc.parse(to_netlist(net)).sweep([omega]).K[0]
+        ref, _ = _mp_reference(net, omega)
+        assert abs(K - ref) <= 1e-12 * abs(ref)
+
+
+def test_unloaded_elements_warn_and_are_named():
+    text = """drive V a 0 velocity=1
+mass m1 a 0 1
+spring dangling a x 10
+mass island1 p q 1
+spring island2 q p 5
+"""
+    with pytest.warns(UnloadedElementWarning, match="dangling, island1, island2"):
+        c = mechcirc.parse(text)
+        assert str(c.tree) == "m1"
+    assert c.unloaded == ("dangling", "island1", "island2")
+
+
+def test_bridge_is_not_series_parallel_and_names_the_culprits():
+    text = """drive V a 0 velocity=1
+spring k1 a b 1
+spring k2 a c 2
+spring k3 b c 3
+spring k4 b 0 4
+spring k5 c 0 5
+"""
+    c = mechcirc.parse(text)
+    with pytest.raises(TopologyError) as info:
+        c.tree
+    assert set(info.value.nodes) == {"b", "c"}
+    assert set(info.value.elements) == {"k1", "k2", "k3", "k4", "k5"}
+
+
+def test_disconnected_drive_is_an_error():
+    c = mechcirc.parse("drive V a b velocity=1\nmass m a 0 1\nmass n b 0 1\n".replace(
+        "mass n b 0 1", "mass n c 0 1"))
+    with pytest.raises(TopologyError, match="not connected"):
+        c.tree
+
+
+def test_force_and_velocity_pushed_down_obey_the_element_laws():
+    c = mechcirc.load("netlists/stb_heald.mcir")
+    omega = np.geomspace(5, 5e3, 40)
+    s = c.sweep(omega)
+    for e in c.elements:
+        np.testing.assert_allclose(s.velocity(e.name), e.mobility(omega) * s.force(e.name),
+                                   rtol=1e-12)
+    # Series chain m1..m4 carries the drive force; the parallel block splits it.
+    np.testing.assert_allclose(s.force("m1"), s.Q0, rtol=1e-12)
+    np.testing.assert_allclose(s.force("k4") + s.force("k5") + s.force("k0"), s.Q0, rtol=1e-9)
+    # Parallel branches share the velocity difference across the block D–0.
+    v_block = s.velocity("k4")
+    np.testing.assert_allclose(s.velocity("m5") + s.velocity("k5"), v_block, rtol=1e-9)
+    # Around the loop T-A-B-C-D-0 the velocity differences add up to V0.
+    total = sum(s.velocity(n) for n in ("m1", "m2", "m3", "m4", "k4"))
+    np.testing.assert_allclose(total, s.v0, rtol=1e-9)
+
+
+def test_orientation_signs_reach_the_elements():
+    # Element written 0 -> a: its velocity difference is -V0.
+    c = mechcirc.parse("drive V a 0 velocity=2\ndamper c1 0 a 4\n")
+    s = c.sweep([1.0])
+    assert s.velocity("c1")[0] == pytest.approx(-2.0)
+    assert s.force("c1")[0] == pytest.approx(-8.0)
+    assert s.Q0[0] == pytest.approx(8.0)
+
+
+def test_singular_points_do_not_crash():
+    c = mechcirc.parse("drive V a 0 velocity=1\nmass m a b 1\nspring k b 0 1\n")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")      # no RuntimeWarning from numpy either
+        s = c.sweep([0.0, 1.0, 2.0, np.inf])
+    assert s.flags.tolist() == [1, 1, 0, 1]
+    assert s.K[2] == pytest.approx(-0.5j + 2j)
