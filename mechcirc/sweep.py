@@ -81,7 +81,7 @@ class Sweep:
     def _elements(self) -> dict[str, tuple]:
         if "elements" not in self._cache:
             _, values = evaluate(self.tree, self.omega, keep=True)
-            self._cache["elements"] = push_down(self.tree, values, self.Q0, self.v0)
+            self._cache["elements"] = push_down(self.tree, values, self.Q0, self.v0, self.omega)
         return self._cache["elements"]
 
     def force(self, name: str) -> NDArray[np.complex128]:
