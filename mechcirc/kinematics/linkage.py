@@ -1,0 +1,557 @@
+"""Planar revolute-jointed linkages with any number of driving cranks (DIGEST §4).
+
+File format (TOML, lengths in any consistent unit, angular velocities in rad/s)::
+
+    name = "four-bar"                    # optional
+    [points]                             # every joint in one assembled pose
+    A = [0.0, 0.0]
+    B = [29.0, 0.0]
+    C = [...]
+    D = [189.0, 0.0]
+
+    [ground]
+    points = ["A", "D"]                  # pivots fixed to the frame
+
+    [links]                              # rigid moving links as point sets
+    crank = ["A", "B"]                   # binary link
+    coupler = ["B", "C"]
+    rocker = ["C", "D"]                  # (a ternary link lists three points)
+
+    [[cranks]]                           # one table per driving crank
+    link = "crank"
+    omega = 100.0                        # [rad/s], constant
+
+Each link's shape is read from the pose, so the pose is an exact assembly.
+A point shared by k bodies (links, and the ground if it is a pivot) is a
+revolute joint contributing k − 1 pairs.  The mobility is Grübler's
+W = 3·n − 2·p (n moving links, p revolute pairs) and must equal the number of
+cranks.  A crank must be a link with a ground pivot; its angle is driven.
+
+State and equations.  Each moving link i carries a frame with origin r_i at
+its first listed point and angle φ_i (0 in the pose); a point with pose
+offset s from that origin sits at ``r_i + R(φ_i) s``.  Constraints Φ(q, t) = 0:
+coincident points of the bodies meeting at each joint (2 rows per pair) and
+``φ_c − ω_c t = 0`` for each crank c.  Then
+
+* position: Newton on Φ = 0, continued from the previous position in crank
+  steps of at most ``max_step_deg`` (branch continuity); the sign of det J is
+  tracked, and a change (the linkage passed a singular position onto another
+  branch) is an error;
+* velocity: J q̇ = [0 … 0, ω_1 … ω_k];
+* acceleration: J q̈ = γ with γ = Σ (R(φ_i) s_i φ̇_i² − R(φ_j) s_j φ̇_j²) for
+  each joint row (constant crank speeds);
+* "conditional stop" (DIGEST §4, eq. (6)–(8)): the contribution of crank c
+  is J⁻¹ ω_c e_c, the velocity with every other crank stopped; the velocity is
+  their sum, exactly, because J q̇ is linear in (ω_1 … ω_k).
+
+The drive parameter θ is the rotation of the first crank from the pose
+[rad]; time is t = θ/ω_1.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import GeometryError, NetlistError
+
+__all__ = ["Crank", "Linkage", "LinkageState", "parse_linkage", "load_linkage"]
+
+
+@dataclass(frozen=True)
+class Crank:
+    """A driving crank: ``link`` turns about its ground ``pivot`` at ``omega`` [rad/s]."""
+
+    link: str
+    pivot: str
+    omega: float
+
+
+@dataclass(frozen=True)
+class LinkageState:
+    """Positions, velocities and accelerations at one drive position.
+
+    Attributes
+    ----------
+    theta : float
+        Rotation of the first crank from the pose [rad].
+    t : float
+        Time θ/ω_1 [s].
+    q, qdot, qddot : ndarray, shape (3n,)
+        (x, y, φ) of each moving link's frame and their time derivatives.
+    points, velocities, accelerations : dict[str, ndarray (2,)]
+        Every named point [length], [length/s], [length/s²].
+    angular_velocities : dict[str, float]
+        φ̇ of each moving link [rad/s].
+    contributions : dict[str, dict[str, ndarray (2,)]]
+        Crank name → point → velocity with every other crank stopped [length/s].
+    """
+
+    theta: float
+    t: float
+    q: NDArray[np.float64]
+    qdot: NDArray[np.float64]
+    qddot: NDArray[np.float64]
+    points: dict
+    velocities: dict
+    accelerations: dict
+    angular_velocities: dict
+    contributions: dict
+
+    def as_dict(self) -> dict:
+        """Plain data for JSON output."""
+        return {
+            "theta_deg": math.degrees(self.theta), "t": self.t,
+            "points": {k: v.tolist() for k, v in self.points.items()},
+            "velocities": {k: v.tolist() for k, v in self.velocities.items()},
+            "accelerations": {k: v.tolist() for k, v in self.accelerations.items()},
+            "angular_velocities": dict(self.angular_velocities),
+            "conditional_stop": {c: {k: v.tolist() for k, v in d.items()}
+                                 for c, d in self.contributions.items()},
+        }
+
+
+def _rot(phi):
+    c, s = math.cos(phi), math.sin(phi)
+    return np.array([[c, -s], [s, c]])
+
+
+_PERP = np.array([[0.0, -1.0], [1.0, 0.0]])
+
+
+@dataclass(frozen=True, eq=False)
+class Linkage:
+    """A parsed planar linkage; see the module docstring for the file format.
+
+    Use :func:`load_linkage` or :func:`parse_linkage` to build one.
+
+    Attributes
+    ----------
+    name : str
+    pose : dict[str, ndarray (2,)]
+        Every point in the assembled pose.
+    ground : tuple of str
+        Ground pivots.
+    links : dict[str, tuple of str]
+        Moving links as point lists (first point = the link frame's origin).
+    cranks : tuple of Crank
+    source : str
+        File name, for messages.
+    """
+
+    name: str
+    pose: dict
+    ground: tuple
+    links: dict
+    cranks: tuple
+    source: str = "<string>"
+
+    # ------------------------------------------------------------ structure
+    @property
+    def link_names(self) -> tuple[str, ...]:
+        return tuple(self.links)
+
+    def joints(self) -> dict[str, tuple[str, ...]]:
+        """Point → bodies meeting there (``"ground"`` first when it is a pivot), for shared points."""
+        out = {}
+        for p in self.pose:
+            members = (["ground"] if p in self.ground else []) + \
+                [l for l, pts in self.links.items() if p in pts]
+            if len(members) >= 2:
+                out[p] = tuple(members)
+        return out
+
+    @property
+    def revolute_pairs(self) -> int:
+        """Number of revolute pairs p (a joint of k bodies counts k − 1)."""
+        return sum(len(m) - 1 for m in self.joints().values())
+
+    @property
+    def mobility(self) -> int:
+        """Grübler's W = 3n − 2p."""
+        return 3 * len(self.links) - 2 * self.revolute_pairs
+
+    def _index(self):
+        names = self.link_names
+        return {n: i for i, n in enumerate(names)}
+
+    def _local(self):
+        """link → {point: pose offset from the link's first point}."""
+        return {l: {p: self.pose[p] - self.pose[pts[0]] for p in pts}
+                for l, pts in self.links.items()}
+
+    def _rows(self):
+        """Constraint rows: list of (point, body_a, body_b) with body_a possibly 'ground'."""
+        rows = []
+        for p, members in self.joints().items():
+            first = members[0]
+            for other in members[1:]:
+                rows.append((p, first, other))
+        return rows
+
+    # ----------------------------------------------------------- kinematics
+    def q0(self) -> NDArray[np.float64]:
+        """Generalised coordinates of the pose."""
+        q = np.zeros(3 * len(self.links))
+        for i, (l, pts) in enumerate(self.links.items()):
+            q[3 * i:3 * i + 2] = self.pose[pts[0]]
+        return q
+
+    def _point(self, q, link, p, local, idx):
+        i = idx[link]
+        return q[3 * i:3 * i + 2] + _rot(q[3 * i + 2]) @ local[link][p]
+
+    def _phi(self, q, angles, local, idx, rows):
+        """Constraint residual Φ(q) with the cranks driven to ``angles`` [rad] (crank order)."""
+        out = np.empty(len(q))
+        k = 0
+        for p, a, b in rows:
+            pa = self.pose[p] if a == "ground" else self._point(q, a, p, local, idx)
+            pb = self._point(q, b, p, local, idx)
+            out[k:k + 2] = pa - pb
+            k += 2
+        for c, ang in zip(self.cranks, angles):
+            out[k] = q[3 * idx[c.link] + 2] - ang
+            k += 1
+        return out
+
+    def _jac(self, q, local, idx, rows):
+        n = len(q)
+        J = np.zeros((n, n))
+        k = 0
+        for p, a, b in rows:
+            for body, sign in ((a, 1.0), (b, -1.0)):
+                if body == "ground":
+                    continue
+                i = idx[body]
+                J[k:k + 2, 3 * i:3 * i + 2] += sign * np.eye(2)
+                J[k:k + 2, 3 * i + 2] += sign * (_PERP @ _rot(q[3 * i + 2]) @ local[body][p])
+            k += 2
+        for c in self.cranks:
+            J[k, 3 * idx[c.link] + 2] = 1.0
+            k += 1
+        return J
+
+    def _gamma(self, q, qdot, local, idx, rows):
+        g = np.zeros(len(q))
+        k = 0
+        for p, a, b in rows:
+            for body, sign in ((a, 1.0), (b, -1.0)):
+                if body == "ground":
+                    continue
+                i = idx[body]
+                g[k:k + 2] += sign * (_rot(q[3 * i + 2]) @ local[body][p]) * qdot[3 * i + 2] ** 2
+            k += 2
+        return g
+
+    def _scale(self):
+        pts = np.array(list(self.pose.values()))
+        return float(np.max(np.ptp(pts, axis=0))) or 1.0
+
+    def _angles(self, t):
+        return [c.omega * t for c in self.cranks]
+
+    def _newton(self, q, angles, local, idx, rows, tol):
+        for _ in range(30):
+            r = self._phi(q, angles, local, idx, rows)
+            if np.max(np.abs(r)) < tol:
+                return q, True
+            J = self._jac(q, local, idx, rows)
+            try:
+                dq = np.linalg.solve(J, r)
+            except np.linalg.LinAlgError:
+                return q, False
+            q = q - dq
+            if not np.all(np.isfinite(q)):
+                return q, False
+        return q, np.max(np.abs(self._phi(q, angles, local, idx, rows))) < tol
+
+    def _derivatives(self, q, local, idx, rows):
+        J = self._jac(q, local, idx, rows)
+        n = len(q)
+        nc = len(self.cranks)
+        cond = np.linalg.cond(J)
+        if not np.isfinite(cond) or cond > 1e12:
+            return J, None, None, None
+        rhs = np.zeros((n, nc))
+        for j, c in enumerate(self.cranks):
+            rhs[n - nc + j, j] = c.omega
+        parts = np.linalg.solve(J, rhs)                  # one column per crank
+        qdot = parts.sum(axis=1)
+        qddot = np.linalg.solve(J, self._gamma(q, qdot, local, idx, rows))
+        return J, qdot, qddot, parts
+
+    def solve(self, theta: float | NDArray, *, max_step_deg: float = 2.0):
+        """Positions, velocities and accelerations at first-crank rotation(s) ``theta`` [rad].
+
+        Parameters
+        ----------
+        theta : float or array_like
+            Rotation of the first crank from the pose [rad].  An array is
+            traversed in order, each position continued from the previous one.
+        max_step_deg : float
+            Largest rotation of any crank in one continuation step [deg].
+
+        Returns
+        -------
+        LinkageState, or a list of them for an array.
+
+        Raises
+        ------
+        GeometryError
+            The linkage locks (no assembly, or a singular Jacobian) — the
+            message gives the first θ where it does — or the continuation
+            jumped to another branch.
+        """
+        scalar = np.ndim(theta) == 0
+        thetas = np.atleast_1d(np.asarray(theta, dtype=float))
+        local, idx, rows = self._local(), self._index(), self._rows()
+        w1 = self.cranks[0].omega
+        wmax = max(abs(c.omega) for c in self.cranks)
+        tol = 1e-12 * self._scale()
+        q, t_now = self.q0(), 0.0
+        J, qdot, qddot, parts = self._derivatives(q, local, idx, rows)
+        if qdot is None:
+            raise GeometryError(f"{self.source}: the linkage is singular in its pose "
+                                f"(constraint Jacobian not invertible)")
+        sign = np.sign(np.linalg.det(J))
+        out = []
+        for th in thetas:
+            t_target = th / w1
+            while t_now != t_target:
+                dt_max = math.radians(max_step_deg) / wmax
+                dt = max(-dt_max, min(dt_max, t_target - t_now))
+                while True:
+                    guess = q + qdot * dt + 0.5 * qddot * dt * dt
+                    q_new, ok = self._newton(guess, self._angles(t_now + dt), local, idx,
+                                             rows, tol)
+                    if ok:
+                        Jn, qd_n, qdd_n, parts_n = self._derivatives(q_new, local, idx, rows)
+                        if qd_n is not None:
+                            break
+                    dt *= 0.5
+                    if abs(dt) * wmax < 1e-9:
+                        th_lock = (t_now + 2 * dt) * w1
+                        raise GeometryError(
+                            f"{self.source}: the linkage locks near θ = "
+                            f"{math.degrees(th_lock):.6g}° (first crank rotation from the "
+                            f"pose): no assembly beyond it on this branch")
+                new_sign = np.sign(np.linalg.det(Jn))
+                if new_sign != sign:
+                    raise GeometryError(
+                        f"{self.source}: branch jump between θ = {math.degrees(t_now * w1):.6g}° "
+                        f"and {math.degrees((t_now + dt) * w1):.6g}°: the position passed a "
+                        f"singular configuration (det J changed sign); reduce max_step_deg "
+                        f"or the linkage reaches a change point there")
+                q, qdot, qddot, parts, t_now = q_new, qd_n, qdd_n, parts_n, t_now + dt
+            out.append(self._state(th, t_now, q, qdot, qddot, parts, local))
+        return out[0] if scalar else out
+
+    def assemble(self, crank_angles: dict, near: NDArray | None = None) -> dict:
+        """Point positions with each crank turned by ``crank_angles[link]`` [rad] from the pose.
+
+        One Newton solve from ``near`` (generalised coordinates, default the
+        pose), with no continuation: cranks may be set independently (e.g. one
+        stopped), which :meth:`solve` cannot do.
+
+        Raises
+        ------
+        GeometryError
+            Newton does not converge (no assembly near ``near``).
+        """
+        local, idx, rows = self._local(), self._index(), self._rows()
+        q = self.q0() if near is None else np.array(near, dtype=float)
+        angles = [float(crank_angles[c.link]) for c in self.cranks]
+        q, ok = self._newton(q, angles, local, idx, rows, 1e-12 * self._scale())
+        if not ok:
+            raise GeometryError(f"{self.source}: no assembly near the given coordinates for "
+                                f"crank angles {crank_angles}")
+        pts = {}
+        for p, x in self.pose.items():
+            owner = next((l for l, ps in self.links.items() if p in ps), None)
+            pts[p] = x.copy() if owner is None else self._point(q, owner, p, local, idx)
+        return {"q": q, "points": pts}
+
+    def _state(self, theta, t, q, qdot, qddot, parts, local):
+        idx = self._index()
+        pts, vel, acc, contrib = {}, {}, {}, {c.link: {} for c in self.cranks}
+        for p, x in self.pose.items():
+            owner = next((l for l, ps in self.links.items() if p in ps), None)
+            if owner is None:                      # a ground point
+                pts[p], vel[p], acc[p] = x.copy(), np.zeros(2), np.zeros(2)
+                for c in self.cranks:
+                    contrib[c.link][p] = np.zeros(2)
+                continue
+            i = idx[owner]
+            Rs = _rot(q[3 * i + 2]) @ local[owner][p]
+            w, al = qdot[3 * i + 2], qddot[3 * i + 2]
+            pts[p] = q[3 * i:3 * i + 2] + Rs
+            vel[p] = qdot[3 * i:3 * i + 2] + w * (_PERP @ Rs)
+            acc[p] = qddot[3 * i:3 * i + 2] + al * (_PERP @ Rs) - w * w * Rs
+            for j, c in enumerate(self.cranks):
+                col = parts[:, j]
+                contrib[c.link][p] = col[3 * i:3 * i + 2] + col[3 * i + 2] * (_PERP @ Rs)
+        omegas = {l: float(qdot[3 * idx[l] + 2]) for l in self.links}
+        return LinkageState(float(theta), float(t), q.copy(), qdot.copy(), qddot.copy(),
+                            pts, vel, acc, omegas, contrib)
+
+
+# ------------------------------------------------------------------ parsing
+def _locate(text: str, section: str | None, key: str, value: str | None = None,
+            occurrence: int = 0) -> tuple[int, int]:
+    """1-based (line, col) of ``key = …`` in ``[section]`` (or its n-th ``[[section]]``).
+
+    With ``value``, the column of that quoted string on the line.  (0, 0) when
+    not found.
+    """
+    lines = text.splitlines()
+    in_section = section is None
+    seen = -1
+    header = re.compile(r"^\s*\[\[?\s*([^\]]+?)\s*\]\]?\s*(#.*)?$")
+    key_re = re.compile(r'^\s*"?' + re.escape(key) + r'"?\s*=')
+    for n, line in enumerate(lines, start=1):
+        m = header.match(line)
+        if m:
+            in_section = False                     # top-level keys end at the first header
+            if section is not None and m.group(1) == section:
+                seen += 1
+                in_section = seen == occurrence
+            continue
+        if in_section and key_re.match(line):
+            col = line.index(key) + 1
+            if value is not None:
+                for quote in ('"', "'"):
+                    pos = line.find(f"{quote}{value}{quote}")
+                    if pos >= 0:
+                        col = pos + 1
+                        break
+            return n, col
+    return 0, 0
+
+
+def _err(text, source, message, section, key, value=None, occurrence=0, expected=None):
+    line, col = _locate(text, section, key, value, occurrence)
+    return NetlistError(message, source, line, col, expected)
+
+
+def parse_linkage(text: str, source: str = "<string>") -> Linkage:
+    """Parse the TOML text of a linkage (see the module docstring).
+
+    Raises
+    ------
+    NetlistError
+        TOML syntax, a missing table, an unknown point or link, a bad value —
+        located at file:line:col.
+    GeometryError
+        The mobility differs from the number of cranks (says W), or a link's
+        points coincide.
+    """
+    try:
+        doc = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        m = re.search(r"\(at line (\d+), column (\d+)\)", str(exc))
+        line, col = (int(m.group(1)), int(m.group(2))) if m else (0, 0)
+        msg = re.sub(r"\s*\(at line \d+, column \d+\)", "", str(exc))
+        raise NetlistError(f"TOML syntax: {msg}", source, line, col) from None
+
+    for table in ("points", "ground", "links", "cranks"):
+        if table not in doc:
+            raise NetlistError(f"missing [{'[' if table == 'cranks' else ''}{table}"
+                               f"{']' if table == 'cranks' else ''}] table", source, 0, 0,
+                               "points, ground, links and cranks")
+    allowed = {"name", "points", "ground", "links", "cranks", "units", "description"}
+    for key in doc:
+        if key not in allowed:
+            raise _err(text, source, f"unknown top-level key {key!r}", None, key,
+                       expected=", ".join(sorted(allowed)))
+
+    pose = {}
+    for name, xy in doc["points"].items():
+        ok = (isinstance(xy, list) and len(xy) == 2
+              and all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                      and math.isfinite(v) for v in xy))
+        if not ok:
+            raise _err(text, source, f"point {name!r} must be [x, y], got {xy!r}",
+                       "points", name, expected="two finite numbers")
+        pose[name] = np.array(xy, dtype=float)
+
+    ground_pts = doc["ground"].get("points")
+    if not isinstance(ground_pts, list) or not ground_pts:
+        raise _err(text, source, "[ground] needs points = [\"…\", …]", "ground", "points",
+                   expected="a list of ground pivot names")
+    for p in ground_pts:
+        if p not in pose:
+            raise _err(text, source, f"unknown point {p!r} in [ground]", "ground", "points",
+                       value=p, expected=f"one of {', '.join(pose)}")
+
+    links = {}
+    for lname, pts in doc["links"].items():
+        if not isinstance(pts, list) or len(pts) < 2 or not all(isinstance(p, str) for p in pts):
+            raise _err(text, source, f"link {lname!r} must list at least two point names",
+                       "links", lname, expected='["P1", "P2", …]')
+        for p in pts:
+            if p not in pose:
+                raise _err(text, source, f"unknown point {p!r} in link {lname!r}", "links",
+                           lname, value=p, expected=f"one of {', '.join(pose)}")
+        if len(set(pts)) != len(pts):
+            raise _err(text, source, f"link {lname!r} lists a point twice", "links", lname)
+        if lname == "ground":
+            raise _err(text, source, "'ground' is reserved for the frame", "links", lname)
+        xy = np.array([pose[p] for p in pts])
+        if np.max(np.ptp(xy, axis=0)) == 0.0:
+            raise GeometryError(f"{source}: link {lname!r} has all its points at the same "
+                                f"place {xy[0].tolist()}")
+        links[lname] = tuple(pts)
+
+    used = set(ground_pts).union(*map(set, links.values()))
+    for p in pose:
+        if p not in used:
+            raise _err(text, source, f"point {p!r} belongs to no link and is not a ground pivot",
+                       "points", p)
+
+    raw_cranks = doc["cranks"]
+    if not isinstance(raw_cranks, list) or not raw_cranks:
+        raise NetlistError("no [[cranks]]: at least one driving crank is needed", source)
+    cranks = []
+    for n, c in enumerate(raw_cranks):
+        lname = c.get("link")
+        if lname not in links:
+            raise _err(text, source, f"unknown link {lname!r} in [[cranks]] #{n + 1}", "cranks",
+                       "link", value=lname, occurrence=n,
+                       expected=f"one of {', '.join(links)}")
+        pivots = [p for p in links[lname] if p in ground_pts]
+        pivot = c.get("pivot", pivots[0] if len(pivots) == 1 else None)
+        if pivot not in pivots:
+            raise _err(text, source, f"crank {lname!r} needs exactly one ground pivot among its "
+                       f"points (found {pivots or 'none'}); name it with pivot = \"…\"",
+                       "cranks", "pivot" if "pivot" in c else "link", occurrence=n)
+        omega = c.get("omega")
+        if not isinstance(omega, (int, float)) or isinstance(omega, bool) \
+                or not math.isfinite(omega) or omega == 0:
+            raise _err(text, source, f"crank {lname!r}: omega must be a nonzero number "
+                       f"[rad/s], got {omega!r}", "cranks", "omega" if "omega" in c else "link",
+                       occurrence=n)
+        if any(k.link == lname for k in cranks):
+            raise _err(text, source, f"link {lname!r} is driven twice", "cranks", "link",
+                       value=lname, occurrence=n)
+        cranks.append(Crank(lname, pivot, float(omega)))
+
+    lk = Linkage(str(doc.get("name", Path(source).stem)), pose, tuple(ground_pts), links,
+                 tuple(cranks), source)
+    if lk.mobility != len(cranks):
+        raise GeometryError(
+            f"{source}: mobility W = 3·{len(links)} − 2·{lk.revolute_pairs} = {lk.mobility}, "
+            f"but {len(cranks)} crank(s) are driven; W must equal the number of cranks")
+    return lk
+
+
+def load_linkage(path: str | Path) -> Linkage:
+    """Read and parse a linkage TOML file (see :func:`parse_linkage`)."""
+    path = Path(path)
+    return parse_linkage(path.read_text(encoding="utf-8"), str(path))

@@ -1,0 +1,199 @@
+"""Tests of the planar multi-crank linkage solver (DIGEST §4).
+
+References: finite differences of positions (in time, and with one crank
+stopped), the closed-form FourBar, and hand-placed errors in TOML text.
+"""
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mechcirc.errors import GeometryError, NetlistError
+from mechcirc.kinematics import FourBar
+from mechcirc.kinematics.linkage import load_linkage, parse_linkage
+
+ROOT = Path(__file__).resolve().parents[2]
+FNF = ROOT / "examples" / "fnf_sixbar.toml"
+
+
+@pytest.fixture(scope="module")
+def fnf():
+    return load_linkage(FNF)
+
+
+def test_fnf_structure(fnf):
+    assert len(fnf.links) == 6
+    assert fnf.revolute_pairs == 8
+    assert fnf.mobility == 2 == len(fnf.cranks)
+    assert len(fnf.links["link4"]) == 3           # the ternary base link
+    w = [c.omega for c in fnf.cranks]
+    assert w[0] * w[1] < 0 and abs(w[0]) != abs(w[1])   # different speed and direction
+
+
+def test_velocity_is_the_sum_of_conditional_stop_contributions(fnf):
+    for state in fnf.solve(np.radians([0.0, 37.0, 141.0, 250.0, 333.0])):
+        for p, v in state.velocities.items():
+            total = sum(c[p] for c in state.contributions.values())
+            scale = max(1.0, np.max(np.abs(v)))
+            np.testing.assert_allclose(total, v, rtol=0, atol=1e-12 * scale)
+
+
+def test_conditional_stop_against_positions_with_one_crank_stopped(fnf):
+    """Contribution of crank c = ω_c · ∂(position)/∂(angle of c), the other crank held."""
+    state = fnf.solve(math.radians(100.0))
+    base = {c.link: c.omega * state.t for c in fnf.cranks}
+    h = 1e-5
+    for crank in fnf.cranks:
+        plus = dict(base, **{crank.link: base[crank.link] + h})
+        minus = dict(base, **{crank.link: base[crank.link] - h})
+        pp = fnf.assemble(plus, near=state.q)["points"]
+        pm = fnf.assemble(minus, near=state.q)["points"]
+        for p in fnf.pose:
+            fd = crank.omega * (pp[p] - pm[p]) / (2 * h)
+            np.testing.assert_allclose(state.contributions[crank.link][p], fd,
+                                       rtol=1e-6, atol=1e-6 * abs(crank.omega) * 100)
+    # each crank alone moves K: both contributions matter
+    k1, k2 = (np.linalg.norm(state.contributions[c.link]["K"]) for c in fnf.cranks)
+    assert k1 > 1 and k2 > 1
+
+
+def test_velocities_and_accelerations_against_finite_differences(fnf):
+    w1 = fnf.cranks[0].omega
+    h = 1e-4                                     # in θ [rad]
+    for theta in np.radians([10.0, 95.0, 200.0, 290.0]):
+        s = fnf.solve(np.array([theta - 2 * h, theta - h, theta, theta + h, theta + 2 * h]))
+        dt = h / w1
+        for p in fnf.pose:
+            x = [st.points[p] for st in s]
+            v = [st.velocities[p] for st in s]
+            fd_v = (x[0] - 8 * x[1] + 8 * x[3] - x[4]) / (12 * dt)
+            fd_a = (v[0] - 8 * v[1] + 8 * v[3] - v[4]) / (12 * dt)
+            sv = max(1.0, np.max(np.abs(s[2].velocities[p])))
+            sa = max(1.0, np.max(np.abs(s[2].accelerations[p])))
+            np.testing.assert_allclose(s[2].velocities[p], fd_v, rtol=0, atol=1e-7 * sv)
+            np.testing.assert_allclose(s[2].accelerations[p], fd_a, rtol=0, atol=1e-7 * sa)
+
+
+def test_fnf_full_cycle_is_periodic(fnf):
+    # crank 1 turns 2×, crank 2 turns 3× (ω = 20, −30): both back at the pose
+    states = fnf.solve(np.radians(np.arange(0.0, 720.0 + 1e-9, 4.0)))
+    for p, x in fnf.pose.items():
+        np.testing.assert_allclose(states[-1].points[p], x, atol=1e-9)
+
+
+FOURBAR_TOML = """
+name = "Mrázek beat-up four-bar"
+[points]
+A = [0.0, 0.0]
+B = [{bx!r}, {by!r}]
+C = [{cx!r}, {cy!r}]
+D = [189.0, 0.0]
+
+[ground]
+points = ["A", "D"]
+
+[links]
+crank = ["A", "B"]
+coupler = ["B", "C"]
+rocker = ["D", "C"]
+
+[[cranks]]
+link = "crank"
+omega = {omega!r}
+"""
+
+
+def _fourbar_text(theta0, omega=100.0):
+    fb = FourBar(29.0, 37.0, 188.0, 189.0)
+    phi4 = fb.rocker_angle(theta0)
+    return FOURBAR_TOML.format(bx=29 * math.cos(theta0), by=29 * math.sin(theta0),
+                               cx=189 + 188 * math.cos(phi4), cy=188 * math.sin(phi4),
+                               omega=omega), fb
+
+
+def test_fourbar_in_file_agrees_with_fourbar():
+    theta0 = 0.3
+    text, fb = _fourbar_text(theta0)
+    lk = parse_linkage(text)
+    assert lk.mobility == 1
+    thetas = np.radians(np.arange(0.0, 360.0, 15.0))
+    omega = 100.0
+    for th, st in zip(thetas, lk.solve(thetas)):
+        crank_angle = theta0 + th
+        C = st.points["C"]
+        phi4 = math.atan2(C[1], C[0] - 189.0)
+        assert (phi4 - fb.rocker_angle(crank_angle) + math.pi) % (2 * math.pi) - math.pi \
+            == pytest.approx(0.0, abs=1e-11)
+        assert st.angular_velocities["rocker"] == pytest.approx(
+            fb.mu(crank_angle) * omega, rel=1e-9, abs=1e-9)
+        # rocker angular acceleration from C's acceleration: a_C = α k×r − ω² r
+        r = C - np.array([189.0, 0.0])
+        w4 = st.angular_velocities["rocker"]
+        t = st.accelerations["C"] + w4 ** 2 * r
+        alpha = (r[0] * t[1] - r[1] * t[0]) / np.dot(r, r)
+        assert alpha == pytest.approx(fb.nu(crank_angle) * omega ** 2, rel=1e-8, abs=1e-6)
+
+
+# ------------------------------------------------------------------ bad input
+def test_unknown_point_in_link_is_located():
+    text = FNF.read_text().replace('coupler5 = ["B", "E"]', 'coupler5 = ["B", "Q"]')
+    with pytest.raises(NetlistError) as info:
+        parse_linkage(text, "fnf.toml")
+    err = info.value
+    line = text.splitlines()[err.line - 1]
+    assert line.startswith("coupler5") and line[err.col - 1:err.col + 2] == '"Q"'
+    assert "unknown point 'Q'" in str(err) and str(err).startswith(f"fnf.toml:{err.line}:")
+
+
+def test_unknown_link_in_crank_is_located():
+    text = FNF.read_text().replace('link = "crank2"', 'link = "crank9"')
+    with pytest.raises(NetlistError, match="unknown link 'crank9'") as info:
+        parse_linkage(text, "fnf.toml")
+    assert 'link = "crank9"' in text.splitlines()[info.value.line - 1]
+
+
+def test_toml_syntax_error_is_located():
+    text = FNF.read_text().replace("K  = [100.0, 130.0]", "K  = [100.0, 130.0")
+    with pytest.raises(NetlistError, match="TOML syntax") as info:
+        parse_linkage(text, "fnf.toml")
+    assert info.value.line > 0
+
+
+def test_mobility_mismatch_says_W():
+    # drop crank 2's drive: W = 2 but one crank
+    text = FNF.read_text()
+    text = text[:text.rindex("[[cranks]]")]
+    with pytest.raises(GeometryError, match=r"W = 3·6 − 2·8 = 2.*1 crank"):
+        parse_linkage(text)
+    # weld the output to the ground: W = 1 with two cranks
+    text = FNF.read_text().replace('points = ["O1", "O2", "O6"]', 'points = ["O1", "O2", "O6", "K"]')
+    with pytest.raises(GeometryError, match="W = .* = 0"):
+        parse_linkage(text)
+
+
+def test_locking_names_theta():
+    # a double-rocker written as a crank: it cannot turn fully
+    fb = FourBar(30.0, 10.0, 30.0, 25.0)
+    lo, hi = fb.crank_range()
+    th0 = 0.5 * (lo + hi)
+    phi4 = fb.rocker_angle(th0)
+    text = FOURBAR_TOML.format(bx=30 * math.cos(th0), by=30 * math.sin(th0),
+                               cx=25 + 30 * math.cos(phi4), cy=30 * math.sin(phi4),
+                               omega=1.0).replace("189.0", "25.0")
+    lk = parse_linkage(text)
+    lk.solve(0.5 * (hi - th0))                          # inside the range: fine
+    with pytest.raises(GeometryError, match=r"locks near θ = ([\d.]+)°") as info:
+        lk.solve(math.pi)
+    import re
+    got = float(re.search(r"θ = ([\d.]+)°", str(info.value)).group(1))
+    assert got == pytest.approx(math.degrees(hi - th0), abs=1e-3)
+
+
+def test_branch_jump_is_reported():
+    # with a huge step the predictor lands nearer the mirror assembly
+    text, _ = _fourbar_text(0.3)
+    lk = parse_linkage(text)
+    with pytest.raises(GeometryError, match="branch jump"):
+        lk.solve(math.radians(180.0), max_step_deg=180.0)
