@@ -20,6 +20,7 @@ __all__ = ["main", "build_parser"]
 #: Modules that contribute sub-commands, in the order ``--help`` lists them.
 COMMAND_MODULES: list[str] = [
     "mechcirc.cli.circuit_commands",
+    "mechcirc.cli.kinematics_commands",
 ]
 
 
