@@ -1,0 +1,261 @@
+"""Cross-checks of the time-domain sley model against the mechanical circuit (issue 5 §5).
+
+(a) :func:`resonance_check` -- the resonances (K = 0) of the netlist from
+    :func:`~mechcirc.sley.linear.to_netlist` against the eigenfrequencies of the
+    linearised equations of motion at a crank angle θ0.
+(b) :func:`ringing_check` -- the frequency of the sley's ringing after the
+    beat-up pulse, measured from a simulated ε4P, against the damped natural
+    frequency predicted at that crank angle.
+(c) :func:`harmonic_check` -- harmonic forcing of the linearised model integrated
+    in the time domain against |Q0(ω)| of the netlist.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .linear import eigenfrequencies, linearise, to_netlist
+from .models import SleyParameters
+
+__all__ = ["resonance_check", "ringing_check", "harmonic_check", "ResonanceCheck",
+           "RingingCheck", "HarmonicCheck", "circuit_resonances"]
+
+
+@dataclass(frozen=True)
+class ResonanceCheck:
+    """Eigenfrequencies of the linearised model against the circuit's resonances.
+
+    Attributes
+    ----------
+    theta0 : float
+        Crank angle [rad].
+    eigen : tuple of float
+        Undamped natural frequencies of M ẍ + K x = 0 [rad/s].
+    circuit : tuple of float
+        Frequencies where K(ω) = 0 of the undamped netlist [rad/s].
+    rel_error : float
+        Largest relative difference.
+    how : str
+        ``"Circuit.resonances"`` or ``"sweep + brentq"`` (fallback when the
+        circuit has no ``resonances`` method).
+    netlist : str
+        The netlist used.
+    """
+
+    theta0: float
+    eigen: tuple[float, ...]
+    circuit: tuple[float, ...]
+    rel_error: float
+    how: str
+    netlist: str
+
+
+def circuit_resonances(circuit, omega_max: float) -> tuple[tuple[float, ...], str]:
+    """Resonances (K = 0) of an undamped circuit below ``omega_max`` [rad/s], and how found.
+
+    Uses ``circuit.resonances()`` when the circuit offers it; otherwise brackets
+    sign changes of Im K(ω) on a log grid from ``circuit.sweep`` that are not
+    poles (|K| small on both sides) and refines them with ``scipy.optimize.brentq``.
+    """
+    if hasattr(circuit, "resonances"):
+        res = circuit.resonances(omega_max=omega_max)
+        found = []
+        for r in res:
+            kind = getattr(r, "kind", "resonance")
+            if kind != "resonance":
+                continue
+            found.append(float(getattr(r, "omega")))
+        return tuple(sorted(found)), "Circuit.resonances"
+    from scipy.optimize import brentq
+
+    def k_im(w):
+        return float(np.imag(circuit.sweep(np.array([w])).K[0]))
+
+    grid = np.geomspace(omega_max * 1e-4, omega_max, 20001)
+    k = np.imag(circuit.sweep(grid).K)
+    roots = []
+    for i in np.flatnonzero(np.sign(k[:-1]) != np.sign(k[1:])):
+        if abs(k[i]) + abs(k[i + 1]) > 1e3 * np.median(np.abs(k)):
+            continue                      # a pole (K -> infinity), not a zero
+        roots.append(brentq(k_im, grid[i], grid[i + 1], xtol=1e-14 * grid[i], rtol=4e-16))
+    return tuple(roots), "sweep + brentq"
+
+
+def resonance_check(params: SleyParameters, theta0: float) -> ResonanceCheck:
+    """(a): resonances of the undamped netlist at ``theta0`` [rad] vs the eigenfrequencies.
+
+    Raises
+    ------
+    ImportError
+        ``mechcirc.parse`` is not available (the netlist core is missing).
+    """
+    import mechcirc
+
+    eigen = tuple(m.omega_n for m in eigenfrequencies(params, theta0))
+    text = to_netlist(params, theta0, damping=False)
+    circuit = mechcirc.parse(text, source=f"<sley {params.label or params.drive}>")
+    found, how = circuit_resonances(circuit, 4.0 * max(eigen))
+    if len(found) != len(eigen):
+        rel = math.inf
+    else:
+        rel = max(abs(a - b) / b for a, b in zip(found, eigen))
+    return ResonanceCheck(float(theta0), eigen, found, rel, how, text)
+
+
+@dataclass(frozen=True)
+class RingingCheck:
+    """Measured ringing of ε4P after the beat-up against the predicted damped frequency.
+
+    Attributes
+    ----------
+    theta_mid : float
+        Crank angle at the middle of the fitted window [rad].
+    omega_measured : float
+        Angular frequency of the damped sinusoid fitted to ε4P − ε4T [rad/s].
+    omega_predicted : float
+        Damped natural frequency of the sley mode at ``theta_mid`` [rad/s].
+    rel_error : float
+    """
+
+    theta_mid: float
+    omega_measured: float
+    omega_predicted: float
+    rel_error: float
+
+
+def ringing_check(params: SleyParameters, *, half_periods: int = 4, revolutions: int = 2,
+                  method: str | None = None) -> RingingCheck:
+    """(b): frequency of the sley's ringing after the beat-up pulse of a simulation.
+
+    Two simulations, with the beat-up moment M0 and without it, differ by the
+    response to the pulse alone (exactly so without clearance, where the model
+    is linear in the sley's deformation); after the window closes that
+    difference of ε4P is a free, damped oscillation of the sley mode, whose zero
+    crossings are π/ω_d apart.  ω_d is measured over ``half_periods`` half
+    periods from the first crossing after the window, and compared with the
+    lowest damped natural frequency of the linearised model at the crank angle
+    in the middle of that stretch.
+
+    Raises
+    ------
+    ParameterError
+        ``params.M0`` is 0 (there is no pulse).
+    """
+    from .models import ParameterError
+    from .simulation import simulate_params
+
+    if params.M0 <= 0:
+        raise ParameterError("the ringing check needs a beat-up moment M0 > 0")
+    npts = 14400
+    a = simulate_params(params, revolutions, method, points_per_revolution=npts)
+    b = simulate_params(params.replace(M0=0.0), revolutions, method,
+                        points_per_revolution=npts)
+    end = a.phiP + params.alpha / 2
+    rel = (a.crank_angle - end) % (2 * math.pi)
+    order = np.argsort(rel)
+    rel = rel[order]
+    diff = (a.eps4P - b.eps4P)[order]
+    before_start = rel < (a.theta0 - end) % (2 * math.pi)       # stay inside one revolution
+    rel, diff = rel[before_start], diff[before_start]
+    idx = np.flatnonzero(np.sign(diff[:-1]) * np.sign(diff[1:]) < 0)
+    if idx.size < half_periods + 1:
+        raise ValueError("too few zero crossings after the beat-up window to measure ringing")
+    idx = idx[:half_periods + 1]
+    cross = rel[idx] - diff[idx] * (rel[idx + 1] - rel[idx]) / (diff[idx + 1] - diff[idx])
+    t = cross / params.omega
+    w_meas = math.pi * half_periods / (t[-1] - t[0])
+    theta_mid = (end + 0.5 * (cross[0] + cross[-1])) % (2 * math.pi)
+    w_pred = eigenfrequencies(params, theta_mid)[0].omega_d
+    return RingingCheck(theta_mid, w_meas, w_pred, abs(w_meas - w_pred) / w_pred)
+
+
+@dataclass(frozen=True)
+class HarmonicCheck:
+    """|Q0(ω)| from time-domain forcing of the linear model against the netlist.
+
+    Attributes
+    ----------
+    omega : ndarray
+        Forcing frequencies [rad/s].
+    q0_time : ndarray
+        Amplitude of the shaft moment in the time domain, per unit shaft-velocity
+        amplitude [N·m·s/rad].
+    q0_circuit : ndarray
+        |Q0/V0| = 1/|K| of the netlist (or of :meth:`LinearModel.drive_moment`
+        when the netlist core is missing) [N·m·s/rad].
+    rel_error : float
+    how : str
+    """
+
+    omega: np.ndarray
+    q0_time: np.ndarray
+    q0_circuit: np.ndarray
+    rel_error: float
+    how: str
+
+
+def forced_amplitude(lin, omega: float, cycles_settle: int | None = None,
+                     cycles_measure: int = 4) -> float:
+    """Shaft-moment amplitude of the linear model under φ̇2 = cos(ω t), integrated in time.
+
+    The moment is Σ_rods C (φ2 − φ_i) + k (φ̇2 − φ̇_i) over the rods the shaft
+    drives; the amplitude is the Fourier coefficient at ω over whole periods
+    after the transient has decayed.
+    """
+    from scipy.integrate import solve_ivp
+
+    n = lin.M.shape[0]
+    minv = 1.0 / np.diag(lin.M)
+    slow = min(abs(m.eigenvalue.real) for m in _modes(lin))
+    period = 2 * math.pi / omega
+    if cycles_settle is None:           # transient below e^-12 of its start
+        cycles_settle = int(math.ceil(12.0 / max(slow, 1e-9) / period))
+
+    def f(t, z):
+        x, v = z[:n], z[n:]
+        ph2 = math.sin(omega * t) / omega
+        w2 = math.cos(omega * t)
+        acc = minv * (lin.K_drive * ph2 + lin.C_drive * w2 - lin.K @ x - lin.C @ v)
+        return np.concatenate([v, acc])
+
+    t_end = (cycles_settle + cycles_measure) * period
+    t_eval = np.linspace(cycles_settle * period, t_end, cycles_measure * 400, endpoint=False)
+    sol = solve_ivp(f, (0.0, t_end), np.zeros(2 * n), method="DOP853", rtol=1e-9,
+                    atol=1e-13, t_eval=t_eval)
+    x, v = sol.y[:n], sol.y[n:]
+    ph2 = np.sin(omega * t_eval) / omega
+    w2 = np.cos(omega * t_eval)
+    q = np.zeros_like(t_eval)
+    for i in np.flatnonzero(lin.K_drive):
+        q += lin.K_drive[i] * (ph2 - x[i]) + lin.C_drive[i] * (w2 - v[i])
+    c = 2.0 * np.mean(q * np.exp(-1j * omega * t_eval))
+    return float(abs(c))
+
+
+def _modes(lin):
+    from .linear import Mode
+
+    lam = np.linalg.eigvals(lin.state_matrix())
+    lam = lam[lam.imag > 0]
+    return [Mode(abs(lm), lm.imag, -lm.real / abs(lm), complex(lm)) for lm in lam]
+
+
+def harmonic_check(params: SleyParameters, theta0: float, omegas) -> HarmonicCheck:
+    """(c): time-domain harmonic forcing of the linear model against |Q0| of the netlist."""
+    lin = linearise(params, theta0)
+    omegas = np.asarray(omegas, dtype=float)
+    q_time = np.array([forced_amplitude(lin, w) for w in omegas])
+    try:
+        import mechcirc
+
+        circuit = mechcirc.parse(to_netlist(params, theta0, velocity=1.0))
+        q_circ = np.abs(circuit.sweep(omegas).Q0)
+        how = "netlist sweep Q0"
+    except (ImportError, AttributeError):
+        q_circ = np.abs(lin.drive_moment(omegas))
+        how = "LinearModel.drive_moment (netlist core missing)"
+    rel = float(np.max(np.abs(q_time - q_circ) / q_circ))
+    return HarmonicCheck(omegas, q_time, q_circ, rel, how)

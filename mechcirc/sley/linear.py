@@ -1,0 +1,272 @@
+"""The sley models linearised at a crank angle θ0: matrices, eigenfrequencies, netlist.
+
+Frozen-coefficient linearisation of eqs. (4)/(9) about the rigid motion at crank
+angle θ0: μ = μ(θ0) is held fixed, the velocity-squared terms I4 μ ν ω2P² and
+the beat-up moment are dropped, the clearances are closed (ϕ = 0).  With the
+driven shaft φ2 held, the small motions x = (φ2P, [φ5P,] φ4P) obey
+M ẍ + C ẋ + K x = 0 with (one side)::
+
+    M = diag(I2P + I4 μ², I4P)
+    K = [[C2 + C4 μ², −C4 μ], [−C4 μ, C4]]
+    C = [[k2 + k4 μ², −k4 μ], [−k4 μ, k4]]
+
+and, both sides, a third coordinate φ5P with I5P + I7 μ², C5 + C7 μ², rod 7
+joining it to the sley like rod 4 (both cranks are at θ0).
+
+This is exactly the mechanical circuit of :func:`to_netlist`: crank inertia
+I2P + I4 μ² and the rod C2 ∥ k2 on the crank side, the lever μ (or the sley
+side reflected with η = μ²) and the rod C4 ∥ k4 and inertia I4P on the rocker
+side.  Its resonances (K = 0 with the drive held) are the eigenfrequencies.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .models import SleyParameters
+
+__all__ = ["LinearModel", "linearise", "eigenfrequencies", "to_netlist", "Mode"]
+
+
+@dataclass(frozen=True)
+class LinearModel:
+    """M ẍ + C ẋ + K x = b φ2(t) + d φ̇2(t): the linearised sley at crank angle θ0.
+
+    Attributes
+    ----------
+    theta0 : float
+        Crank angle of the linearisation [rad].
+    mu : float
+        μ(θ0) = dφ4/dθ [1].
+    M, C, K : ndarray, shape (n, n)
+        Inertia [kg·m²], damping [kg·m²/s] and stiffness [N·m/rad] matrices;
+        coordinates (φ2P, φ4P) or (φ2P, φ5P, φ4P).
+    K_drive, C_drive : ndarray, shape (n,)
+        Stiffness and damping coupling of the driven shaft φ2 into each equation
+        [N·m/rad], [kg·m²/s].
+    names : tuple of str
+        Coordinate names.
+    """
+
+    theta0: float
+    mu: float
+    M: NDArray[np.float64]
+    C: NDArray[np.float64]
+    K: NDArray[np.float64]
+    K_drive: NDArray[np.float64]
+    C_drive: NDArray[np.float64]
+    names: tuple[str, ...]
+
+    def state_matrix(self) -> NDArray[np.float64]:
+        """A of ż = A z for z = (x, ẋ) with the drive held [1/s]."""
+        return _state_matrices(self.M[None], self.C[None], self.K[None])[0]
+
+    def receptance(self, omega) -> NDArray[np.complex128]:
+        """Complex amplitude X(ω)/Φ2 of each coordinate for φ2 = Φ2 e^{jωt}, shape (len(omega), n)."""
+        omega = np.atleast_1d(np.asarray(omega, dtype=float))
+        out = np.empty((omega.size, self.M.shape[0]), dtype=complex)
+        for i, w in enumerate(omega):
+            dyn = -w * w * self.M + 1j * w * self.C + self.K
+            out[i] = np.linalg.solve(dyn, self.K_drive + 1j * w * self.C_drive)
+        return out
+
+    def drive_moment(self, omega) -> NDArray[np.complex128]:
+        """Moment the driven shaft must supply, per unit shaft *velocity* amplitude [N·m·s/rad].
+
+        Q0/V0 in the mechanical-circuit sense: for φ̇2 = V0 e^{jωt} the rod
+        C2 ∥ k2 carries Q = (C2/(jω) + k2)(V0 − jω X2P) (plus rod C5 ∥ k5 for
+        both sides); returns Q / V0 = 1/K.
+        """
+        omega = np.atleast_1d(np.asarray(omega, dtype=float))
+        x = self.receptance(omega)                # coordinates per unit φ2 amplitude
+        q = np.zeros(omega.size, dtype=complex)
+        for i in np.flatnonzero(self.K_drive):    # every rod that the shaft drives
+            q += (self.K_drive[i] / (1j * omega) + self.C_drive[i]) * (1.0 - x[:, i])
+        return q
+
+
+@dataclass(frozen=True)
+class Mode:
+    """One mode of the linearised model.
+
+    Attributes
+    ----------
+    omega_n : float
+        Undamped natural frequency [rad/s] (from M, K only).
+    omega_d : float
+        Damped natural frequency, imaginary part of the eigenvalue [rad/s].
+    zeta : float
+        Damping ratio −Re λ / |λ| [1].
+    eigenvalue : complex
+        λ of ż = A z [1/s].
+    """
+
+    omega_n: float
+    omega_d: float
+    zeta: float
+    eigenvalue: complex
+
+    @property
+    def f_hz(self) -> float:
+        """Undamped natural frequency [Hz]."""
+        return self.omega_n / (2 * math.pi)
+
+
+def _mck(p: SleyParameters, mu):
+    """Stacked M, C, K [kg·m², kg·m²/s, N·m/rad], shape (len(mu), n, n), and drive couplings."""
+    mu = np.atleast_1d(np.asarray(mu, dtype=float))
+    m2 = mu * mu
+    one = np.ones_like(mu)
+    if p.drive == "one-side":
+        n = 2
+        M = np.zeros((mu.size, n, n))
+        M[:, 0, 0], M[:, 1, 1] = p.I2P + p.I4 * m2, p.I4P
+        K = np.stack([np.stack([p.C2 + p.C4 * m2, -p.C4 * mu], -1),
+                      np.stack([-p.C4 * mu, p.C4 * one], -1)], -2)
+        C = np.stack([np.stack([p.k2 + p.k4 * m2, -p.k4 * mu], -1),
+                      np.stack([-p.k4 * mu, p.k4 * one], -1)], -2)
+        kd, cd = np.array([p.C2, 0.0]), np.array([p.k2, 0.0])
+    else:
+        n = 3
+        z = np.zeros_like(mu)
+        M = np.zeros((mu.size, n, n))
+        M[:, 0, 0], M[:, 1, 1], M[:, 2, 2] = p.I2P + p.I4 * m2, p.I5P + p.I7 * m2, p.I4P
+        K = np.stack([np.stack([p.C2 + p.C4 * m2, z, -p.C4 * mu], -1),
+                      np.stack([z, p.C5 + p.C7 * m2, -p.C7 * mu], -1),
+                      np.stack([-p.C4 * mu, -p.C7 * mu, (p.C4 + p.C7) * one], -1)], -2)
+        C = np.stack([np.stack([p.k2 + p.k4 * m2, z, -p.k4 * mu], -1),
+                      np.stack([z, p.k5 + p.k7 * m2, -p.k7 * mu], -1),
+                      np.stack([-p.k4 * mu, -p.k7 * mu, (p.k4 + p.k7) * one], -1)], -2)
+        kd, cd = np.array([p.C2, p.C5, 0.0]), np.array([p.k2, p.k5, 0.0])
+    return M, C, K, kd, cd
+
+
+def _state_matrices(M, C, K):
+    """Stacked A = [[0, I], [−M⁻¹K, −M⁻¹C]] for diagonal M, shape (m, 2n, 2n)."""
+    m, n, _ = M.shape
+    inv = 1.0 / np.diagonal(M, axis1=1, axis2=2)[:, :, None]
+    A = np.zeros((m, 2 * n, 2 * n))
+    A[:, :n, n:] = np.eye(n)
+    A[:, n:, :n] = -inv * K
+    A[:, n:, n:] = -inv * C
+    return A
+
+
+def linearise(params: SleyParameters, theta0: float, *, mu: float | None = None) -> LinearModel:
+    """The frozen-coefficient linear model of ``params`` at crank angle ``theta0`` [rad].
+
+    ``mu`` overrides μ(θ0).
+    """
+    if mu is None:
+        mu = float(params.fourbar().transfer(float(theta0))[1])
+    M, C, K, kd, cd = _mck(params, mu)
+    names = ("phi2P", "phi4P") if params.drive == "one-side" else ("phi2P", "phi5P", "phi4P")
+    return LinearModel(float(theta0), float(mu), M[0], C[0], K[0], kd, cd, names)
+
+
+def eigenfrequencies(params: SleyParameters, theta0: float) -> list[Mode]:
+    """Modes of the linearised model at ``theta0`` [rad], ascending in ω_n.
+
+    Undamped ω_n from the generalised symmetric eigenproblem K v = ω² M v; the
+    damped eigenvalues λ from the state matrix, paired with ω_n in order.
+    """
+    from scipy.linalg import eigh
+
+    lin = linearise(params, theta0)
+    w2 = eigh(lin.K, lin.M, eigvals_only=True)
+    omega_n = np.sqrt(np.clip(w2, 0.0, None))
+    lam = np.linalg.eigvals(lin.state_matrix())
+    lam = lam[lam.imag > 0] if np.count_nonzero(lam.imag > 0) == len(omega_n) else \
+        np.sort_complex(lam)[-len(omega_n):]
+    lam = lam[np.argsort(np.abs(lam))]
+    return [Mode(float(wn), float(lm.imag), float(-lm.real / abs(lm)), complex(lm))
+            for wn, lm in zip(np.sort(omega_n), lam)]
+
+
+def max_rate(params: SleyParameters, samples: int = 72) -> float:
+    """Largest |λ| of the linearised model over a revolution [1/s] (sets the RK4 step).
+
+    All ``samples`` crank angles in one batched eigenvalue call.
+    """
+    th = np.linspace(0.0, 2 * math.pi, samples, endpoint=False)
+    M, C, K, _, _ = _mck(params, params.fourbar().evaluate(th).mu)
+    return float(np.max(np.abs(np.linalg.eigvals(_state_matrices(M, C, K)))))
+
+
+def to_netlist(params: SleyParameters, theta0: float, *, lever: bool = False,
+               damping: bool = True, velocity: float | None = None) -> str:
+    """The mechanical-circuit netlist of the linearised sley at ``theta0`` [rad].
+
+    Mobility analogy, rotational reading (inertia [kg·m²] as ``mass``, torsional
+    rigidity [N·m/rad] as ``spring``, torsional damping [kg·m²/s] as ``damper``).
+    Node 0 is the frame, node ``shaft`` the driven crank shaft (the ``drive``,
+    velocity ω), ``crank`` the crank 2P beyond rod C2 ∥ k2 with inertia
+    I2P + I4 μ² to the frame.  The rocker side (rod C4 ∥ k4 to the sley
+    inertia I4P) hangs either behind an ideal ``lever`` of ratio μ(θ0)
+    (``lever=True``, issue 3 syntax) or directly on the crank node with every
+    element reflected through ``eta = μ²`` (default; series-parallel, no lever
+    needed).  Both sides adds ``shaft``→``crank5`` (C5 ∥ k5, I5P + I7 μ²) and rod
+    7 from crank 5 to the same sley.
+
+    Parameters
+    ----------
+    params : SleyParameters
+    theta0 : float
+        Crank angle [rad].
+    lever : bool
+        Use a ``lever`` element instead of η reflection.
+    damping : bool
+        Include the dampers k2, k4 (, k5, k7).
+    velocity : float, optional
+        Drive velocity amplitude [rad/s]; default ``params.omega``.
+
+    Returns
+    -------
+    str
+        Netlist text for :func:`mechcirc.parse`.
+
+    Notes
+    -----
+    With ``lever=False`` the two-sided circuit is a bridge (the sley joins two
+    branches), which needs nodal analysis; the one-sided one is series-parallel.
+    """
+    p = params
+    mu = float(p.fourbar().transfer(float(theta0))[1])
+    mu2 = mu * mu
+    v = p.omega if velocity is None else velocity
+    lines = [f"# Mrázek sley ({p.drive}), linearised at crank angle "
+             f"{math.degrees(theta0):.6g} deg; mu = {mu!r}",
+             f".param mu={mu!r}",
+             f"drive V shaft 0 velocity={v!r}",
+             f"spring C2 shaft crank {p.C2!r}"]
+    if damping and p.k2 > 0:
+        lines.append(f"damper k2 shaft crank {p.k2!r}")
+    lines.append(f"mass J2 crank 0 {p.I2P + p.I4 * mu2!r}")
+
+    def rocker_side(crank: str, rocker: str, c: float, k: float, tag: str):
+        out = []
+        if lever:
+            out.append(f"lever L{tag} {crank} 0 {rocker} 0 ratio={{abs(mu)}}")
+            eta = ""
+        else:
+            eta = " eta={mu^2}"
+            rocker = crank
+        out.append(f"spring C{tag} {rocker} sley {c!r}{eta}")
+        if damping and k > 0:
+            out.append(f"damper k{tag} {rocker} sley {k!r}{eta}")
+        return out
+
+    lines += rocker_side("crank", "rocker", p.C4, p.k4, "4")
+    if p.drive == "both-sides":
+        lines.append(f"spring C5 shaft crank5 {p.C5!r}")
+        if damping and p.k5 > 0:
+            lines.append(f"damper k5 shaft crank5 {p.k5!r}")
+        lines.append(f"mass J5 crank5 0 {p.I5P + p.I7 * mu2!r}")
+        lines += rocker_side("crank5", "rocker7", p.C7, p.k7, "7")
+    eta = "" if lever else " eta={mu^2}"
+    lines.append(f"mass I4P sley 0 {p.I4P!r}{eta}")
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,59 @@
+"""Plots of sley simulations: the curves of Mrázek's Figs. 4–9 (matplotlib imported inside)."""
+
+from __future__ import annotations
+
+import math
+
+__all__ = ["plot_result"]
+
+
+def plot_result(result, fig=None):
+    """ε2P, ε4P with ε4T, and M2V (M5V, ε5P for both sides) against crank angle.
+
+    Parameters
+    ----------
+    result : SleyResult
+    fig : matplotlib Figure, optional
+        Drawn into (cleared); a new one by default.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    import numpy as np
+    from matplotlib.figure import Figure
+
+    fig = fig or Figure(figsize=(8, 9))
+    fig.clf()
+    both = result.eps5P is not None
+    axes = fig.subplots(3, 1, sharex=True)
+    deg = np.degrees(result.crank_angle)
+    ax = axes[0]
+    ax.plot(deg, result.eps2P, lw=0.8, label="ε2P (crank 2P)")
+    if both:
+        ax.plot(deg, result.eps5P, lw=0.8, label="ε5P (crank 5P)")
+    ax.set_ylabel("crank acceleration [1/s²]")
+    ax.legend(loc="upper right", fontsize=8)
+    ax = axes[1]
+    ax.plot(deg, result.eps4P, lw=0.8, label="ε4P (sley)")
+    ax.plot(deg, result.eps4T, lw=1.2, ls="--", color="k", label="ε4T = ν ω² (rigid)")
+    ax.axvspan(math.degrees(result.phiP - result.params.alpha / 2),
+               math.degrees(result.phiP + result.params.alpha / 2), color="0.9",
+               label=f"beat-up window (α = {result.alpha_deg:g}°)")
+    ax.set_ylabel("sley acceleration [1/s²]")
+    ax.legend(loc="upper right", fontsize=8)
+    ax = axes[2]
+    ax.plot(deg, result.M2V, lw=0.8, label="M2V")
+    if both:
+        ax.plot(deg, result.M5V, lw=0.8, label="M5V")
+    ax.set_ylabel("driving moment [N·m]")
+    ax.set_xlabel("crank angle φ2 [deg]")
+    ax.set_xlim(0, 360)
+    ax.legend(loc="upper right", fontsize=8)
+    p = result.params
+    fig.suptitle(f"{p.label or p.drive}: revolution {result.revolution}, ω = {p.omega:g} 1/s, "
+                 f"ϕ = {p.clearance:g} rad, M0 = {p.M0:g} N·m, α = {result.alpha_deg:g}°",
+                 fontsize=10)
+    for a in axes:
+        a.grid(alpha=0.3)
+    return fig
