@@ -163,11 +163,15 @@ def cmd_linkage(args) -> int:
     print(f"at θ = {args.theta:g}° (t = {state.t:.6g} s):")
     cols = "".join(f" {('v from ' + c.link):>24s}" for c in lk.cranks)
     print(f"  {'point':6s} {'x':>10s} {'y':>10s} {'v (vx, vy)':>24s}{cols}")
+    vscale = max(float(np.max(np.abs(v))) for v in state.velocities.values()) or 1.0
+
+    def vec(v):   # rounding residue of a resting point prints as 0, not -0.000
+        v = np.where(np.abs(v) < 1e-12 * vscale, 0.0, v)
+        return f" {v[0]:11.3f},{v[1]:11.3f}"
+
     for p, x in state.points.items():
-        v = state.velocities[p]
-        parts = "".join(f" {state.contributions[c.link][p][0]:11.3f},{state.contributions[c.link][p][1]:11.3f}"
-                        for c in lk.cranks)
-        print(f"  {p:6s} {x[0]:10.3f} {x[1]:10.3f} {v[0]:11.3f},{v[1]:11.3f}{parts}")
+        parts = "".join(vec(state.contributions[c.link][p]) for c in lk.cranks)
+        print(f"  {p:6s} {x[0]:10.3f} {x[1]:10.3f}{vec(state.velocities[p])}{parts}")
     print("  link angular velocities [rad/s]: "
           + ", ".join(f"{k} {w:+.4f}" for k, w in state.angular_velocities.items()))
     return 0

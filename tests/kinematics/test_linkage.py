@@ -197,3 +197,15 @@ def test_branch_jump_is_reported():
     lk = parse_linkage(text)
     with pytest.raises(GeometryError, match="branch jump"):
         lk.solve(math.radians(180.0), max_step_deg=180.0)
+
+
+def test_the_format_example_in_the_docs_runs():
+    text = (ROOT / "docs" / "kinematics.md").read_text()
+    block = text.split("```toml\n", 1)[1].split("```", 1)[0]
+    lk = parse_linkage(block, "docs/kinematics.md")
+    assert lk.mobility == 1
+    st = lk.solve(math.radians(90.0))
+    C = st.points["C"]
+    phi4 = math.atan2(C[1], C[0] - 189.0)
+    # the pose is rounded to 1e-6 mm, so agreement is to that order
+    assert phi4 == pytest.approx(FourBar(29, 37, 188, 189).rocker_angle(math.pi / 2), abs=1e-6)
