@@ -32,42 +32,52 @@ class ResonanceCheck:
     ----------
     theta0 : float
         Crank angle [rad].
+    damping : bool
+        Whether the dampers were included.
     eigen : tuple of float
-        Undamped natural frequencies of M ẍ + K x = 0 [rad/s].
+        |λ| of the linearised model's modes, ascending [rad/s] (ω_n when undamped).
+    eigen_d : tuple of float
+        Im λ, the damped natural frequencies [rad/s].
     circuit : tuple of float
-        Frequencies where K(ω) = 0 of the undamped netlist [rad/s].
+        ω_n = |s| of the netlist's resonances (K = 0) [rad/s].
+    circuit_d : tuple of float
+        Their damped frequencies Im s [rad/s] (equal to ``circuit`` in the
+        fallback, which handles undamped circuits only).
     rel_error : float
-        Largest relative difference.
+        Largest relative difference over both.
     how : str
-        ``"Circuit.resonances"`` or ``"sweep + brentq"`` (fallback when the
-        circuit has no ``resonances`` method).
+        ``"Circuit.resonances"`` or ``"sweep + brentq"`` (fallback when
+        ``mechcirc.resonances`` is missing).
     netlist : str
         The netlist used.
     """
 
     theta0: float
+    damping: bool
     eigen: tuple[float, ...]
+    eigen_d: tuple[float, ...]
     circuit: tuple[float, ...]
+    circuit_d: tuple[float, ...]
     rel_error: float
     how: str
     netlist: str
 
 
-def circuit_resonances(circuit, omega_max: float) -> tuple[tuple[float, ...], str]:
-    """Resonances (K = 0) of an undamped circuit below ``omega_max`` [rad/s], and how found.
+def circuit_resonances(circuit, omega_max: float):
+    """Resonances (K = 0) of a circuit below ``omega_max`` [rad/s]: ((ω_n, ω_d), …), how.
 
-    Uses ``circuit.resonances()`` when the circuit offers it; otherwise brackets
-    sign changes of Im K(ω) on a log grid from ``circuit.sweep`` that are not
-    poles (|K| small on both sides) and refines them with ``scipy.optimize.brentq``.
+    Uses ``circuit.resonances()``; when that module is missing, brackets sign
+    changes of Im K(ω) of an *undamped* circuit on a log grid from
+    ``circuit.sweep`` that are not poles and refines them with
+    ``scipy.optimize.brentq``.
     """
-    if hasattr(circuit, "resonances"):
+    try:
         res = circuit.resonances(omega_max=omega_max)
-        found = []
-        for r in res:
-            kind = getattr(r, "kind", "resonance")
-            if kind != "resonance":
-                continue
-            found.append(float(getattr(r, "omega")))
+    except (ImportError, AttributeError):       # the resonances module has not landed
+        res = None
+    if res is not None:
+        found = [(float(r.omega), float(r.omega_d)) for r in res
+                 if getattr(r, "kind", "resonance") == "resonance"]
         return tuple(sorted(found)), "Circuit.resonances"
     from scipy.optimize import brentq
 
@@ -80,29 +90,37 @@ def circuit_resonances(circuit, omega_max: float) -> tuple[tuple[float, ...], st
     for i in np.flatnonzero(np.sign(k[:-1]) != np.sign(k[1:])):
         if abs(k[i]) + abs(k[i + 1]) > 1e3 * np.median(np.abs(k)):
             continue                      # a pole (K -> infinity), not a zero
-        roots.append(brentq(k_im, grid[i], grid[i + 1], xtol=1e-14 * grid[i], rtol=4e-16))
+        w = brentq(k_im, grid[i], grid[i + 1], xtol=1e-14 * grid[i], rtol=4e-16)
+        roots.append((w, w))
     return tuple(roots), "sweep + brentq"
 
 
-def resonance_check(params: SleyParameters, theta0: float) -> ResonanceCheck:
-    """(a): resonances of the undamped netlist at ``theta0`` [rad] vs the eigenfrequencies.
+def resonance_check(params: SleyParameters, theta0: float, *,
+                    damping: bool = False) -> ResonanceCheck:
+    """(a): resonances of the netlist at ``theta0`` [rad] against the eigenfrequencies.
 
-    Raises
-    ------
-    ImportError
-        ``mechcirc.parse`` is not available (the netlist core is missing).
+    Undamped (default): ω_n of K v = ω² M v against the zeros of K(ω).  Damped:
+    |λ| and Im λ of the state matrix against ω_n = |s| and ω_d of the circuit's
+    complex resonances.
     """
     import mechcirc
 
-    eigen = tuple(m.omega_n for m in eigenfrequencies(params, theta0))
-    text = to_netlist(params, theta0, damping=False)
+    modes = eigenfrequencies(params, theta0)
+    if damping:
+        eigen = tuple(abs(m.eigenvalue) for m in modes)
+        eigen_d = tuple(m.omega_d for m in modes)
+    else:
+        eigen = eigen_d = tuple(m.omega_n for m in modes)
+    text = to_netlist(params, theta0, damping=damping)
     circuit = mechcirc.parse(text, source=f"<sley {params.label or params.drive}>")
     found, how = circuit_resonances(circuit, 4.0 * max(eigen))
+    wn = tuple(w for w, _ in found)
+    wd = tuple(w for _, w in found)
     if len(found) != len(eigen):
         rel = math.inf
     else:
-        rel = max(abs(a - b) / b for a, b in zip(found, eigen))
-    return ResonanceCheck(float(theta0), eigen, found, rel, how, text)
+        rel = max(abs(a - b) / b for a, b in zip(wn + wd, eigen + eigen_d))
+    return ResonanceCheck(float(theta0), damping, eigen, eigen_d, wn, wd, rel, how, text)
 
 
 @dataclass(frozen=True)

@@ -240,7 +240,7 @@ def to_netlist(params: SleyParameters, theta0: float, *, lever: bool = False,
     v = p.omega if velocity is None else velocity
     lines = [f"# Mrázek sley ({p.drive}), linearised at crank angle "
              f"{math.degrees(theta0):.6g} deg; mu = {mu!r}",
-             f".param mu={mu!r}",
+             f".param mu={mu!r} r={abs(mu)!r}   # mu(theta0) and the lever ratio |mu|",
              f"drive V shaft 0 velocity={v!r}",
              f"spring C2 shaft crank {p.C2!r}"]
     if damping and p.k2 > 0:
@@ -250,7 +250,7 @@ def to_netlist(params: SleyParameters, theta0: float, *, lever: bool = False,
     def rocker_side(crank: str, rocker: str, c: float, k: float, tag: str):
         out = []
         if lever:
-            out.append(f"lever L{tag} {crank} 0 {rocker} 0 ratio={{abs(mu)}}")
+            out.append(f"lever L{tag} {crank} 0 {rocker} 0 ratio=r")
             eta = ""
         else:
             eta = " eta={mu^2}"

@@ -368,8 +368,8 @@ def simulate_params(params: SleyParameters, revolutions: int = 5, method: str | 
                                  "use steps_per_period")
         steps_per_period = DEFAULT_STEPS_PER_PERIOD if steps_per_period is None \
             else float(steps_per_period)
-        if not steps_per_period >= 4:
-            raise ParameterError(f"steps_per_period must be >= 4, got {steps_per_period!r}")
+        if not steps_per_period >= 1:
+            raise ParameterError(f"steps_per_period must be >= 1, got {steps_per_period!r}")
 
     npts = int(points_per_revolution)
     fb = params.fourbar()

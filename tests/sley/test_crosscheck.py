@@ -1,0 +1,58 @@
+"""Issue 5 §5: the linearised sley against the mechanical circuit."""
+
+import math
+
+import numpy as np
+import pytest
+
+import _sley_reference as ref
+import mechcirc
+from mechcirc.sley import eigenfrequencies, preset, to_netlist
+from mechcirc.sley.crosscheck import (circuit_resonances, harmonic_check, resonance_check,
+                                      ringing_check)
+
+
+@pytest.mark.parametrize("theta0", [0.3, 1.0, 4.0])
+def test_eigenfrequencies_closed_form(theta0):
+    p = preset("one-side", 3)
+    mu = ref.rocker(theta0)[1]
+    m1, m2 = p.I2P + p.I4 * mu * mu, p.I4P
+    k11, k22, k12 = p.C2 + p.C4 * mu * mu, p.C4, -p.C4 * mu
+    a, b, c = m1 * m2, -(k11 * m2 + k22 * m1), k11 * k22 - k12 * k12
+    disc = math.sqrt(b * b - 4 * a * c)
+    want = [math.sqrt(2 * c / (-b + disc)), math.sqrt((-b + disc) / (2 * a))]
+    got = [m.omega_n for m in eigenfrequencies(p, theta0)]
+    assert got == pytest.approx(sorted(want), rel=1e-12)
+
+
+@pytest.mark.parametrize("drive", ["one-side", "both-sides"])
+@pytest.mark.parametrize("damping", [False, True])
+@pytest.mark.parametrize("theta0", [0.3, 1.0, 4.0])
+def test_circuit_resonances_equal_eigenfrequencies(drive, damping, theta0):
+    chk = resonance_check(preset(drive, 3), theta0, damping=damping)
+    assert len(chk.circuit) == (2 if drive == "one-side" else 3)
+    assert chk.rel_error <= 1e-9, (chk.eigen, chk.circuit)
+
+
+def test_lever_netlist_same_resonances():
+    p = preset("one-side", 4)
+    a = mechcirc.parse(to_netlist(p, 2.0, lever=True, damping=False))
+    b = mechcirc.parse(to_netlist(p, 2.0, lever=False, damping=False))
+    ra, _ = circuit_resonances(a, 2e4)
+    rb, _ = circuit_resonances(b, 2e4)
+    assert np.allclose(ra, rb, rtol=1e-9, atol=0)
+    w = np.geomspace(10, 1e4, 50)
+    np.testing.assert_allclose(a.sweep(w).K, b.sweep(w).K, rtol=1e-9)
+
+
+@pytest.mark.parametrize("drive", ["one-side", "both-sides"])
+def test_ringing_after_beat_up(drive):
+    # no clearance: the pulse response is then exactly the difference of two runs
+    chk = ringing_check(preset(drive, 1, M0=500.0))
+    assert chk.rel_error < 0.02, chk
+
+
+def test_harmonic_forcing_reproduces_Q0():
+    chk = harmonic_check(preset("one-side", 3), 1.0, [150.0, 377.0, 2000.0])
+    assert chk.how == "netlist sweep Q0"
+    assert chk.rel_error < 0.01, chk
