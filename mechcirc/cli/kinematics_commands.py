@@ -150,8 +150,12 @@ def cmd_linkage(args) -> int:
         moving = [p for p in lk.pose if p not in lk.ground]
         paths = {p: np.array([s.points[p] for s in sweep]) for p in moving}
         save_figure(plot_linkage(lk, state, paths), args.plot)
+    groups = lk.assur_groups()
     doc = {"file": args.file, "name": lk.name, "links": len(lk.links),
            "revolute_pairs": lk.revolute_pairs, "mobility": lk.mobility,
+           "assur_groups": [{"links": list(g.links), "class": g.group_class, "order": g.order,
+                             "base": g.base, "external_pairs": list(g.external_pairs)}
+                            for g in groups],
            "cranks": [{"link": c.link, "pivot": c.pivot, "omega": c.omega} for c in lk.cranks],
            **state.as_dict()}
     if args.json:
@@ -160,6 +164,11 @@ def cmd_linkage(args) -> int:
     print(f"{lk.name}: {len(lk.links)} moving links, {lk.revolute_pairs} revolute pairs, "
           f"W = {lk.mobility}; cranks "
           + ", ".join(f"{c.link} (ω = {c.omega:g} rad/s)" for c in lk.cranks))
+    for g in groups:
+        cls = {2: "class-II dyad", 3: "class-III group"}.get(g.group_class, "group")
+        base = f" on base {g.base}" if g.base else ""
+        print(f"  {cls} ({', '.join(g.links)}){base}, order {g.order} "
+              f"(external pairs {', '.join(g.external_pairs)})")
     print(f"at θ = {args.theta:g}° (t = {state.t:.6g} s):")
     cols = "".join(f" {('v from ' + c.link):>24s}" for c in lk.cranks)
     print(f"  {'point':6s} {'x':>10s} {'y':>10s} {'v (vx, vy)':>24s}{cols}")

@@ -61,7 +61,7 @@ from numpy.typing import NDArray
 
 from ..errors import GeometryError, NetlistError
 
-__all__ = ["Crank", "Linkage", "LinkageState", "parse_linkage", "load_linkage"]
+__all__ = ["Crank", "AssurGroup", "Linkage", "LinkageState", "parse_linkage", "load_linkage"]
 
 
 @dataclass(frozen=True)
@@ -71,6 +71,39 @@ class Crank:
     link: str
     pivot: str
     omega: float
+
+
+@dataclass(frozen=True)
+class AssurGroup:
+    """A structural (Assur) group: links with zero mobility once their outer pairs are fixed.
+
+    Attributes
+    ----------
+    links : tuple of str
+        The group's links.
+    internal_pairs : tuple of str
+        Joints inside the group.
+    external_pairs : tuple of str
+        Joints attaching it to the ground, the cranks or earlier groups; their
+        number is the group's order.
+    group_class : int
+        Artobolevsky's class: 2 for a dyad; 3 for a triad (a ternary base link
+        carrying three binary links, each ending in an external pair); 0 when
+        a larger group is not classified here.
+    base : str or None
+        The ternary base link of a class-III group.
+    """
+
+    links: tuple
+    internal_pairs: tuple
+    external_pairs: tuple
+    group_class: int
+    base: str | None = None
+
+    @property
+    def order(self) -> int:
+        """Number of external pairs."""
+        return len(self.external_pairs)
 
 
 @dataclass(frozen=True)
@@ -176,6 +209,64 @@ class Linkage:
     def mobility(self) -> int:
         """Grübler's W = 3n − 2p."""
         return 3 * len(self.links) - 2 * self.revolute_pairs
+
+    def assur_groups(self) -> tuple[AssurGroup, ...]:
+        """Decompose the linkage into Assur groups, in the order they can be solved.
+
+        Starting from the ground and the cranks, repeatedly take the smallest
+        set S of remaining links with 3·|S| = 2·(pairs among S and the known
+        bodies); S is the next group.  Exhaustive over subsets, fine for the
+        handful of links of a loom mechanism.
+
+        Raises
+        ------
+        GeometryError
+            Some links form no group (the structure does not decompose).
+        """
+        import itertools
+
+        joints = self.joints()
+        known = {"ground"} | {c.link for c in self.cranks}
+        remaining = [l for l in self.links if l not in known]
+        groups = []
+        while remaining:
+            found = None
+            for size in range(2, len(remaining) + 1, 2):
+                for combo in itertools.combinations(remaining, size):
+                    S = set(combo)
+                    pairs = internal = external = 0
+                    ext, inner = [], []
+                    for p, members in joints.items():
+                        inside = [m for m in members if m in S]
+                        outside = [m for m in members if m in known]
+                        if not inside:
+                            continue
+                        m = len(inside) + len(outside)
+                        if m >= 2:
+                            pairs += m - 1
+                            (ext if outside else inner).append(p)
+                    if 3 * size == 2 * pairs:
+                        found = (combo, tuple(inner), tuple(ext))
+                        break
+                if found:
+                    break
+            if not found:
+                raise GeometryError(f"{self.source}: links {', '.join(remaining)} form no Assur "
+                                    f"group on the ground and cranks")
+            combo, inner, ext = found
+            cls, base = 0, None
+            if len(combo) == 2:
+                cls = 2
+            elif len(combo) == 4:
+                degree = {l: sum(1 for p in inner + ext if l in joints[p]) for l in combo}
+                ternary = [l for l in combo if degree[l] == 3]
+                if (len(ternary) == 1 and len(ext) == 3
+                        and all(degree[l] == 2 for l in combo if l != ternary[0])):
+                    cls, base = 3, ternary[0]
+            groups.append(AssurGroup(tuple(combo), inner, ext, cls, base))
+            known |= set(combo)
+            remaining = [l for l in remaining if l not in combo]
+        return tuple(groups)
 
     def _index(self):
         names = self.link_names

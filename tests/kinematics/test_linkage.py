@@ -209,3 +209,40 @@ def test_the_format_example_in_the_docs_runs():
     phi4 = math.atan2(C[1], C[0] - 189.0)
     # the pose is rounded to 1e-6 mm, so agreement is to that order
     assert phi4 == pytest.approx(FourBar(29, 37, 188, 189).rocker_angle(math.pi / 2), abs=1e-6)
+
+
+def test_structure_fnf_is_one_class_III_group_of_order_3(fnf):
+    (group,) = fnf.assur_groups()
+    assert group.group_class == 3 and group.base == "link4" and group.order == 3
+    assert set(group.links) == {"coupler3", "link4", "coupler5", "output6"}
+    assert set(group.external_pairs) == {"A", "B", "O6"}
+
+
+def test_structure_of_a_six_bar_of_two_dyads():
+    text = """
+[points]
+A = [0.0, 0.0]
+B = [10.0, 0.0]
+C = [40.0, 60.0]
+D = [100.0, 0.0]
+E = [90.0, 70.0]
+F = [140.0, 90.0]
+G = [160.0, 20.0]
+[ground]
+points = ["A", "D", "G"]
+[links]
+crank = ["A", "B"]
+coupler = ["B", "C"]
+rocker = ["D", "C", "E"]
+link5 = ["E", "F"]
+link6 = ["F", "G"]
+[[cranks]]
+link = "crank"
+omega = 1.0
+"""
+    lk = parse_linkage(text)
+    groups = lk.assur_groups()
+    assert [g.group_class for g in groups] == [2, 2]
+    assert set(groups[0].links) == {"coupler", "rocker"}
+    assert set(groups[1].links) == {"link5", "link6"}
+    assert set(groups[1].external_pairs) == {"E", "G"}
