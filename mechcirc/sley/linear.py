@@ -229,6 +229,11 @@ def to_netlist(params: SleyParameters, theta0: float, *, lever: bool = False,
     str
         Netlist text for :func:`mechcirc.parse`.
 
+    Raises
+    ------
+    ParameterError
+        ``theta0`` is a dead centre (μ = 0: the sley is decoupled from the drive).
+
     Notes
     -----
     With ``lever=False`` the two-sided circuit is a bridge (the sley joins two
@@ -236,6 +241,13 @@ def to_netlist(params: SleyParameters, theta0: float, *, lever: bool = False,
     """
     p = params
     mu = float(p.fourbar().transfer(float(theta0))[1])
+    if abs(mu) < 1e-9:
+        from .models import ParameterError
+
+        raise ParameterError(
+            f"at crank angle {math.degrees(theta0):.6g} deg the four-bar is at a dead centre "
+            f"(mu = {mu:.3g}): the sley is decoupled from the drive and the circuit would "
+            "be singular; choose a crank angle away from the dead centres")
     mu2 = mu * mu
     v = p.omega if velocity is None else velocity
     lines = [f"# Mrázek sley ({p.drive}), linearised at crank angle "

@@ -1,0 +1,259 @@
+"""Sub-commands on the sley (beat-up) model: ``simulate`` and ``crosscheck``."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+
+from ._common import print_json, save_figure
+
+_METHODS = ("rk4", "rk4-python", "DOP853", "RK45", "LSODA")   # = mechcirc.sley.METHODS
+_UNITS = {"eps4T": "1/s^2", "eps2P": "1/s^2", "eps4P": "1/s^2", "eps5P": "1/s^2",
+          "M2V": "N m", "M5V": "N m"}
+
+
+def register(sub) -> None:
+    p = sub.add_parser(
+        "simulate", help="sley beat-up dynamics (Mrázek, Tables 1 and 2) in the time domain",
+        description="Integrate the sley model (eq. 4 one-side, eq. 9 both-sides) from the "
+                    "crank angle of zero sley acceleration over R revolutions and print the "
+                    "min/max of the last one beside the paper's printed values. The beat-up "
+                    "interval alpha is not printed in the paper: default 40 deg (sigma = alpha).",
+        epilog="Example: mechcirc simulate --drive one-side --variant 3 --plot sley.png\n"
+               "         mechcirc simulate --variant all --json",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--drive", choices=("one-side", "both-sides"), default="one-side",
+                   help="Table 1 (one-side, default) or Table 2 (both-sides)")
+    p.add_argument("--variant", default="3", metavar="N",
+                   help="variant 1-7 (default 3), or 'all' for all 14 of both tables "
+                        "on every core")
+    p.add_argument("--revolutions", type=int, default=5, metavar="R",
+                   help="revolutions to integrate; the last is tabulated (default 5)")
+    p.add_argument("--alpha", type=float, default=40.0, metavar="DEG",
+                   help="beat-up interval alpha [deg] (default 40, not printed in the paper)")
+    p.add_argument("--beat-sign", type=int, choices=(-1, 1), default=-1,
+                   help="sign of M4 in the sley equation: -1 as eq. (4) prints it (default), "
+                        "+1 along the rigid acceleration at beat-up (see docs/sley.md)")
+    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                   help="override a parameter in SI units, e.g. --set clearance=0.002 "
+                        "(repeatable)")
+    p.add_argument("--method", choices=_METHODS, default="rk4",
+                   help="integrator (default rk4: numba if installed, else pure Python)")
+    p.add_argument("--rtol", type=float, metavar="TOL",
+                   help="relative tolerance of the scipy methods (default 1e-10)")
+    p.add_argument("--steps-per-period", type=float, metavar="N",
+                   help="rk4 steps per period of the fastest mode (default 50)")
+    p.add_argument("--points", type=int, default=7200, metavar="N",
+                   help="output points per revolution (default 7200, i.e. 0.05 deg)")
+    p.add_argument("-o", "--output", metavar="CSV", help="write the curves as CSV")
+    p.add_argument("--plot", metavar="IMAGE", help="plot eps2P, eps4P, eps4T, M2V (Figs. 4-9)")
+    p.add_argument("--json", action="store_true", help="print one JSON document")
+    p.set_defaults(func=cmd_simulate)
+
+    p = sub.add_parser(
+        "crosscheck", help="linearised sley against its mechanical circuit (resonances, Q0)",
+        description="(a) resonances (K = 0) of the sley's netlist at crank angle theta "
+                    "against the eigenfrequencies of the linearised equations; (b) ringing "
+                    "of the sley after the beat-up pulse against the predicted damped "
+                    "frequency; (c) harmonic forcing of the linear model against |Q0|.",
+        epilog="Example: mechcirc crosscheck --drive one-side --variant 3 --theta 60",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--drive", choices=("one-side", "both-sides"), default="one-side")
+    p.add_argument("--variant", type=int, default=3, choices=range(1, 8), metavar="N",
+                   help="variant 1-7 (default 3)")
+    p.add_argument("--theta", type=float, metavar="DEG",
+                   help="crank angle of the linearisation [deg] (default: the start angle, "
+                        "where the sley's rigid acceleration is zero)")
+    p.add_argument("--netlist", metavar="FILE", help="also write the netlist used")
+    p.add_argument("--json", action="store_true", help="print one JSON document")
+    p.set_defaults(func=cmd_crosscheck)
+
+
+# ------------------------------------------------------------------ helpers
+class _Progress:
+    """A one-line progress bar on stderr, only when stderr is a terminal."""
+
+    def __init__(self, label: str):
+        self.label = label
+        self.active = sys.stderr.isatty()
+
+    def __call__(self, done: int, total: int) -> None:
+        if not self.active:
+            return
+        width = 30
+        filled = int(width * done / total)
+        sys.stderr.write(f"\r{self.label} [{'#' * filled}{'.' * (width - filled)}] "
+                         f"{done}/{total}")
+        if done == total:
+            sys.stderr.write("\r" + " " * (len(self.label) + width + 16) + "\r")
+        sys.stderr.flush()
+
+
+def _overrides(args) -> dict:
+    from ..sley import ParameterError
+
+    out = {"alpha": math.radians(args.alpha), "beat_sign": args.beat_sign}
+    for item in args.set:
+        name, sep, value = item.partition("=")
+        if not sep:
+            raise ParameterError(f"--set expects NAME=VALUE, got {item!r}")
+        try:
+            out[name.strip()] = float(value)
+        except ValueError:
+            raise ParameterError(f"--set {name.strip()}: {value!r} is not a number") from None
+    return out
+
+
+def _options(args) -> dict:
+    opts = {"points_per_revolution": args.points}
+    if args.rtol is not None:
+        opts["rtol"] = args.rtol
+    if args.steps_per_period is not None:
+        opts["steps_per_period"] = args.steps_per_period
+    return opts
+
+
+def _table(result) -> str:
+    from ..sley import PAPER
+
+    p = result.params
+    variant = int(p.label.split()[-1]) if p.label.split()[-1:] and \
+        p.label.split()[-1].isdigit() else None
+    paper = PAPER.get(p.drive, {}).get(variant, {})
+    speed = f"{result.wall_time * 1e3:.1f} ms"
+    if result.compile_time:
+        speed += f" + {result.compile_time:.2f} s compile/cache load"
+    lines = [f"{p.label or p.drive}: revolution {result.revolution}, alpha = "
+             f"{result.alpha_deg:g} deg, method {result.method} ({result.backend}), {speed}",
+             f"{'quantity':<9} {'unit':<6} {'min':>10} {'max':>10}   {'paper min':>10} "
+             f"{'paper max':>10}"]
+    order = ["eps4T", "eps2P", "eps4P", "eps5P", "M2V", "M5V"]
+    for key in order:
+        if key not in result.extrema:
+            continue
+        lo, hi = result.extrema[key]
+        plo, phi = paper.get(key, ("-", "-"))
+        lines.append(f"{key:<9} {_UNITS[key]:<6} {lo:>10.0f} {hi:>10.0f}   {plo!s:>10} {phi!s:>10}")
+    lines.extend(f"note: {n}" for n in result.notes)
+    return "\n".join(lines)
+
+
+def _write_csv(result, path) -> None:
+    from ..outputs import atomic_open
+
+    cols = result.columns()
+    names = list(cols)
+    with atomic_open(path, "w", newline="") as fh:
+        fh.write(f"# {result.params.label}; revolution {result.revolution}; "
+                 f"alpha = {result.alpha_deg:g} deg; method {result.method}\n")
+        fh.write(",".join(names) + "\n")
+        for row in zip(*(cols[n] for n in names)):
+            fh.write(",".join(repr(float(v)) for v in row) + "\n")
+
+
+# ----------------------------------------------------------------- handlers
+def cmd_simulate(args) -> int:
+    from ..sley import (PAPER, ParameterError, all_presets, preset, simulate_batch,
+                        simulate_params)
+
+    over = _overrides(args)
+    opts = _options(args)
+    if args.variant == "all":
+        if args.output or args.plot:
+            raise ParameterError("-o/--plot need one variant, not --variant all")
+        results = simulate_batch(all_presets(**over), args.revolutions, args.method, **opts)
+        if args.json:
+            print_json({"results": [r.summary() for r in results]})
+        else:
+            print("\n\n".join(_table(r) for r in results))
+        return 0
+    try:
+        variant = int(args.variant)
+    except ValueError:
+        raise ParameterError(f"--variant must be 1-7 or 'all', got {args.variant!r}") from None
+    params = preset(args.drive, variant, **over)
+    progress = _Progress(f"{params.label}")
+    result = simulate_params(params, args.revolutions, args.method, progress=progress, **opts)
+    if args.output:
+        _write_csv(result, args.output)
+    if args.plot:
+        from ..sley.plots import plot_result
+
+        save_figure(plot_result(result), args.plot)
+    if args.json:
+        doc = result.summary()
+        doc["paper"] = {k: list(v) for k, v in PAPER[params.drive][variant].items()}
+        print_json(doc)
+    else:
+        print(_table(result))
+    return 0
+
+
+def cmd_crosscheck(args) -> int:
+    import numpy as np
+
+    from ..sley import preset
+    from ..sley.crosscheck import harmonic_check, resonance_check, ringing_check
+
+    params = preset(args.drive, args.variant)
+    if args.theta is None:
+        from ..sley.simulation import start_angle
+
+        theta0 = start_angle(params)
+    else:
+        theta0 = math.radians(args.theta)
+    checks = {False: resonance_check(params, theta0, damping=False),
+              True: resonance_check(params, theta0, damping=True)}
+    if args.netlist:
+        from ..outputs import atomic_open
+
+        with atomic_open(args.netlist) as fh:
+            fh.write(checks[True].netlist)
+    ring_params = params
+    ring_notes = []
+    if params.M0 <= 0:
+        ring_params = ring_params.replace(M0=500.0)
+        ring_notes.append("variant has M0 = 0; used M0 = 500 N m for the pulse")
+    if params.clearance > 0:
+        ring_notes.append(f"clearance {params.clearance:g} rad makes the model nonlinear; "
+                          "the ringing frequency drops below the linear prediction")
+    ring = ringing_check(ring_params)
+    omegas = np.array(sorted([0.5 * checks[False].eigen[0], checks[False].eigen[0],
+                              checks[False].eigen[-1]]))
+    harm = harmonic_check(params, theta0, omegas)
+    doc = {
+        "label": params.label, "theta_deg": math.degrees(theta0),
+        "resonances": [{"damping": d, "eigen_omega": list(c.eigen),
+                        "eigen_omega_d": list(c.eigen_d), "circuit_omega": list(c.circuit),
+                        "circuit_omega_d": list(c.circuit_d), "rel_error": c.rel_error,
+                        "how": c.how} for d, c in checks.items()],
+        "ringing": {"theta_mid_deg": math.degrees(ring.theta_mid),
+                    "omega_measured": ring.omega_measured,
+                    "omega_predicted": ring.omega_predicted, "rel_error": ring.rel_error,
+                    "notes": ring_notes},
+        "harmonic": {"omega": harm.omega, "q0_time": harm.q0_time,
+                     "q0_circuit": harm.q0_circuit, "rel_error": harm.rel_error,
+                     "how": harm.how},
+    }
+    if args.json:
+        print_json(doc)
+        return 0
+    print(f"{params.label}, linearised at crank angle {math.degrees(theta0):.4f} deg")
+    print("(a) resonances K = 0 of the netlist against the eigenfrequencies [rad/s]")
+    for d, c in checks.items():
+        tag = "damped  " if d else "undamped"
+        for e, ed, w, wd in zip(c.eigen, c.eigen_d, c.circuit, c.circuit_d):
+            print(f"    {tag} eigen {e:14.8f} (d {ed:12.6f})   circuit {w:14.8f} "
+                  f"(d {wd:12.6f})")
+        print(f"    {tag} largest relative difference {c.rel_error:.2e} ({c.how})")
+    print(f"(b) ringing after beat-up at {math.degrees(ring.theta_mid):.1f} deg: measured "
+          f"{ring.omega_measured:.3f} rad/s, predicted {ring.omega_predicted:.3f} rad/s, "
+          f"difference {100 * ring.rel_error:.2f} %")
+    for n in ring_notes:
+        print(f"    note: {n}")
+    print("(c) harmonic forcing of the linear model, |Q0|/V0 [N m s/rad]")
+    for w, qt, qc in zip(harm.omega, harm.q0_time, harm.q0_circuit):
+        print(f"    omega {w:10.3f}: time domain {qt:.6g}, circuit {qc:.6g}")
+    print(f"    largest relative difference {harm.rel_error:.2e} ({harm.how})")
+    return 0

@@ -1,0 +1,66 @@
+"""`mechcirc simulate` and `mechcirc crosscheck`."""
+
+import csv
+import json
+
+import numpy as np
+import pytest
+
+from mechcirc.cli import main
+from mechcirc.sley import simulate
+
+
+def test_simulate_table_beside_paper(capsys):
+    assert main(["simulate", "--variant", "7", "--revolutions", "1", "--points", "720"]) == 0
+    out = capsys.readouterr().out
+    assert "one-side variant 7" in out and "alpha = 40 deg" in out
+    line = next(l for l in out.splitlines() if l.startswith("eps4T"))
+    assert line.split()[2:] == ["-371", "466", "-371", "466"]
+
+
+def test_simulate_json_equals_api(capsys):
+    assert main(["simulate", "--drive", "both-sides", "--variant", "2", "--revolutions", "1",
+                 "--points", "720", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    api = simulate("both-sides", 2, revolutions=1, points_per_revolution=720)
+    for k, v in api.extrema.items():
+        assert doc["extrema"][k] == pytest.approx(list(v), rel=1e-12)
+    assert doc["alpha_deg"] == pytest.approx(40.0)
+    assert doc["paper"]["eps4P"] == [-4664, 6822]
+
+
+def test_simulate_csv_and_plot(tmp_path, capsys):
+    out_csv, out_png = tmp_path / "s.csv", tmp_path / "s.png"
+    assert main(["simulate", "--variant", "3", "--revolutions", "1", "--points", "360",
+                 "--alpha", "30", "--set", "clearance=0.002", "-o", str(out_csv),
+                 "--plot", str(out_png)]) == 0
+    assert "alpha = 30 deg" in capsys.readouterr().out
+    rows = list(csv.reader(l for l in out_csv.read_text().splitlines() if not l.startswith("#")))
+    assert rows[0] == ["crank_angle_deg", "eps2P", "eps4P", "eps4T", "M2V", "M4"]
+    data = np.array(rows[1:], dtype=float)
+    api = simulate("one-side", 3, revolutions=1, points_per_revolution=360,
+                   alpha=np.radians(30), clearance=0.002)
+    np.testing.assert_allclose(data[:, 2], api.eps4P, rtol=1e-12)
+    assert out_png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.csv", "s.png"]
+
+
+@pytest.mark.parametrize("argv, text", [
+    (["simulate", "--set", "omega=0"], "omega must be > 0"),
+    (["simulate", "--set", "l2P=0.5"], "cannot be assembled"),
+    (["simulate", "--set", "C2"], "NAME=VALUE"),
+    (["simulate", "--variant", "9"], "variant must be one of"),
+    (["crosscheck", "--theta", "79.0638705730987"], "dead centre"),
+])
+def test_user_errors_exit_2(argv, text, capsys, tmp_path):
+    assert main(argv + ["-o", str(tmp_path / "x.csv")] if argv[0] == "simulate" else argv) == 2
+    assert text in capsys.readouterr().err
+    assert not list(tmp_path.iterdir())
+
+
+def test_crosscheck_json(capsys):
+    assert main(["crosscheck", "--variant", "1", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert all(r["rel_error"] < 1e-9 for r in doc["resonances"])
+    assert doc["harmonic"]["rel_error"] < 0.01
+    assert doc["ringing"]["rel_error"] < 0.02          # variant 1: no clearance
