@@ -21,6 +21,7 @@ __all__ = ["main", "build_parser"]
 COMMAND_MODULES: list[str] = [
     "mechcirc.cli.circuit_commands",
     "mechcirc.cli.kinematics_commands",
+    "mechcirc.cli.sley_commands",
 ]
 
 
