@@ -11,11 +11,13 @@ prints; it asserts nothing.  Run from the repository root::
 
     python benchmarks/bench_sweep.py            # full run
     python benchmarks/bench_sweep.py --quick    # fewer repeats, up to 10,000 elements
+    python benchmarks/bench_sweep.py --gc-off   # (b) without the cyclic garbage collector
 """
 
 from __future__ import annotations
 
 import argparse
+import gc
 import os
 import platform
 import time
@@ -138,20 +140,26 @@ def ladder(n_elements):
     return "\n".join(lines) + "\n"
 
 
-def bench_ladders(sizes, repeats):
+def bench_ladders(sizes, repeats, gc_off=False):
     print(f"(b) parse + reduce ladder netlists (mass, spring to frame, …, damper), best of "
-          f"{repeats}")
+          f"{repeats}" + (", cyclic garbage collector off" if gc_off else ""))
     print(f"    {'elements':>9} {'parse':>10} {'reduce':>10} {'total':>10} {'per element':>13}")
     rows = []
     for n in sizes:
         text = ladder(n)
 
         def parse_and_reduce():
-            t0 = time.perf_counter()
-            c = mechcirc.parse(text, source=f"ladder{n}.mcir")
-            t1 = time.perf_counter()
-            c.tree
-            t2 = time.perf_counter()
+            gc.collect()
+            if gc_off:
+                gc.disable()
+            try:
+                t0 = time.perf_counter()
+                c = mechcirc.parse(text, source=f"ladder{n}.mcir")
+                t1 = time.perf_counter()
+                c.tree
+                t2 = time.perf_counter()
+            finally:
+                gc.enable()
             return t1 - t0, t2 - t1, c
 
         best = None
@@ -170,16 +178,18 @@ def bench_ladders(sizes, repeats):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="fewer repeats and sizes")
+    parser.add_argument("--gc-off", action="store_true",
+                        help="(b) with Python's cyclic garbage collector disabled while timing")
     args = parser.parse_args()
     print(f"mechcirc {mechcirc.__version__}, Python {platform.python_version()}, "
           f"numpy {np.__version__}, {platform.machine()}, {os.cpu_count()} CPUs, "
           f"{platform.processor() or platform.platform()}")
     if args.quick:
         bench_sweep(1_000_000, 2)
-        bench_ladders([100, 1_000, 10_000], 2)
+        bench_ladders([100, 1_000, 10_000], 2, args.gc_off)
     else:
         bench_sweep(1_000_000, 15)
-        bench_ladders([100, 1_000, 10_000, 100_000], 5)
+        bench_ladders([100, 1_000, 10_000, 100_000], 5, args.gc_off)
 
 
 if __name__ == "__main__":
