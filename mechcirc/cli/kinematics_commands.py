@@ -83,6 +83,11 @@ def cmd_fourbar(args) -> int:
         return 0
     print(f"four-bar a={fb.crank:g} b={fb.coupler:g} c={fb.rocker:g} d={fb.frame:g}, "
           f"branch {fb.branch:+d}: {fb.grashof_class} {fb.linkage_type}")
+    if not doc["crank_rotates_fully"]:
+        lo, hi = doc["crank_range_deg"]
+        print(f"  the input link cannot turn fully: it rocks in θ ∈ [{lo:.3f}°, {hi:.3f}°]"
+              + ("" if lo < 0 or hi > 180 else f" (and in [{360 - hi:.3f}°, {360 - lo:.3f}°])")
+              + "; μ and ν grow without bound at the ends, where it locks")
     if "dead_centres" in doc:
         for dc in doc["dead_centres"]:
             line = (f"  {dc['kind']:5s} dead centre: θ = {dc['theta_deg']:8.3f}°  "

@@ -536,6 +536,9 @@ class FourBar:
             "frame": self.frame, "branch": self.branch,
             "grashof_class": self.grashof_class, "linkage_type": self.linkage_type,
         }
+        lo, hi = self.crank_range()
+        doc["crank_rotates_fully"] = self.crank_rotates_fully
+        doc["crank_range_deg"] = [math.degrees(lo), math.degrees(hi)]
         tr = self.transmission_range()
         doc["gamma_min_deg"] = math.degrees(tr.gamma_min)
         doc["theta_at_gamma_min_deg"] = [math.degrees(t) for t in tr.theta_at_min]

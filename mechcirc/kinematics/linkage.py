@@ -611,6 +611,10 @@ def parse_linkage(text: str, source: str = "<string>") -> Linkage:
         raise NetlistError("no [[cranks]]: at least one driving crank is needed", source)
     cranks = []
     for n, c in enumerate(raw_cranks):
+        for key in c:
+            if key not in ("link", "pivot", "omega"):
+                raise _err(text, source, f"unknown key {key!r} in [[cranks]] #{n + 1}",
+                           "cranks", key, occurrence=n, expected="link, pivot, omega")
         lname = c.get("link")
         if lname not in links:
             raise _err(text, source, f"unknown link {lname!r} in [[cranks]] #{n + 1}", "cranks",

@@ -246,3 +246,11 @@ omega = 1.0
     assert set(groups[0].links) == {"coupler", "rocker"}
     assert set(groups[1].links) == {"link5", "link6"}
     assert set(groups[1].external_pairs) == {"E", "G"}
+
+
+def test_unknown_key_in_crank_is_located():
+    text = FNF.read_text().replace("omega = -30.0", "omgea = -30.0")
+    with pytest.raises(NetlistError, match="unknown key 'omgea'") as info:
+        parse_linkage(text, "fnf.toml")
+    assert text.splitlines()[info.value.line - 1].startswith("omgea")
+    assert info.value.col == 1
