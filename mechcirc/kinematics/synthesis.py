@@ -514,6 +514,9 @@ def _screen(A, PSI, BA, CA, DA):
         grashof = (1 + longest < BA + CA + DA - longest) & (BA > 1) & (CA > 1) & (DA > 1)
         alpha_f = np.arccos((CA ** 2 + DA ** 2 - (BA + 1) ** 2) / (2 * CA * DA))
         alpha_b = np.arccos((CA ** 2 + DA ** 2 - (BA - 1) ** 2) / (2 * CA * DA))
+        # the screen keeps roots with C on one side of the frame line at both dead
+        # centres; on the default grid (Ψ ≤ 26°) no crank-rocker root of the
+        # crossing configuration (swing α_f + α_b) exists, checked by brute force
         same_side_swing = np.abs(alpha_f - alpha_b)
         valid = (np.isfinite(CA) & grashof & np.isfinite(mu1) & np.isfinite(mu2)
                  & (np.abs(same_side_swing - PSI) < 1e-7))
