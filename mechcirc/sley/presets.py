@@ -9,8 +9,9 @@ Readings of cells the OCR lost (DIGEST §2), stated once here and in every prese
 * **α = σ = 40°** for the beat-up moment (neither is printed).
 * Table 1's ε4P of variants 6 and 7 lost the minus sign of the minimum (printed
   "5277", "598"); we take them as −5277 and −598.  Table 2 variant 1's ε2P min
-  likewise (−1292).  Table 1 variant 6's M2V "279 / 101" is printed without a
-  sign; we show it as printed.
+  likewise (−1292).  Table 1 variant 6's M2V is printed "279 / 101", impossible
+  as min / max; the minimal edit, a lost minus sign as in the other cells, gives
+  −279 / 101, which we use (``docs/sley.md`` discusses the alternative −101 / 279).
 * The four-bar is 29 / 37 / 188 / 189 mm, assembly ``branch=+1`` of
   :class:`~mechcirc.kinematics.FourBar`, the one whose ε4T = ν ω² spans the
   printed [−2319, 2915] s⁻² at ω = 100 s⁻¹.
@@ -107,7 +108,7 @@ def all_presets(**overrides) -> list[SleyParameters]:
 
 #: The paper's printed results: PAPER[drive][variant][quantity] = (min, max).
 #: Units: accelerations [1/s²], moments [N·m].  Lost minus signs restored as
-#: described in the module docstring; M2V of Table 1 variant 6 as printed.
+#: described in the module docstring (M2V of Table 1 variant 6 read as −279 / 101).
 PAPER = {
     "one-side": {
         1: {"eps4T": (-2319, 2915), "eps2P": (-1666, 938), "eps4P": (-2756, 5686), "M2V": (-194, 193)},
@@ -115,7 +116,7 @@ PAPER = {
         3: {"eps4T": (-2319, 2915), "eps2P": (-11837, 13954), "eps4P": (-2754, 7039), "M2V": (-182, 196)},
         4: {"eps4T": (-2319, 2915), "eps2P": (-13602, 15413), "eps4P": (-2767, 6472), "M2V": (-266, 232)},
         5: {"eps4T": (-2319, 2915), "eps2P": (-13586, 15398), "eps4P": (-2814, 6033), "M2V": (-271, 232)},
-        6: {"eps4T": (-2319, 2915), "eps2P": (-8501, 7945), "eps4P": (-5277, 4443), "M2V": (279, 101)},
+        6: {"eps4T": (-2319, 2915), "eps2P": (-8501, 7945), "eps4P": (-5277, 4443), "M2V": (-279, 101)},
         7: {"eps4T": (-371, 466), "eps2P": (-3563, 5696), "eps4P": (-598, 1760), "M2V": (-52, 50)},
     },
     "both-sides": {

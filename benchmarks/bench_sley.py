@@ -1,0 +1,154 @@
+"""Benchmark: the sley time-domain model, speed against error (issue 5 §4).
+
+Problem: one-side drive, Table 1 variant 3 (clearance 0.001 rad, beat-up moment
+500 N·m), 5 revolutions, 7200 output points per revolution.
+
+* Reference: ``solve_ivp`` DOP853 at rtol 1e-10 (Python right-hand side).
+* Baseline of the goal: ``solve_ivp`` DOP853 at rtol 1e-8, measured in the same
+  run.  Goal: the default method ≥ 50× faster at a peak error ≤ 0.1 %.
+* Every method and tolerance offered: wall time per simulated revolution (the
+  whole ``simulate`` call, best of several) and the relative error of the
+  extrema of ε4P and M2V (and ε2P) against the reference.
+* Cold time of the numba method in a fresh process: with numba's on-disk cache
+  present, and with an empty cache directory (full compilation).
+* Batch: the 14 presets with ``simulate_batch`` on every core against one by one.
+
+Run:  python benchmarks/bench_sley.py [--plot benchmarks/bench_sley.png]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+VARIANT = ("one-side", 3)
+REVS = 5
+
+
+def timed(fn, repeat):
+    best, out = float("inf"), None
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        out = fn()
+        best = min(best, time.perf_counter() - t0)
+    return best, out
+
+
+def errors(res, ref):
+    out = {}
+    for key in ("eps4P", "M2V", "eps2P"):
+        scale = max(abs(v) for v in ref.extrema[key])
+        out[key] = max(abs(a - b) for a, b in zip(res.extrema[key], ref.extrema[key])) / scale
+    return out
+
+
+def cold_call(env_extra: dict) -> float:
+    code = ("import time; t = time.perf_counter(); from mechcirc.sley import simulate; "
+            "r = simulate('one-side', 3, 5); print(time.perf_counter() - t, r.backend)")
+    env = dict(os.environ, **env_extra)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, env=env)
+    secs, backend = out.stdout.split()
+    return float(secs), backend
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--plot", default="benchmarks/bench_sley.png", help="speed-vs-error plot")
+    args = ap.parse_args()
+
+    import numba  # noqa: F401  (the benchmark is about the compiled method)
+    import scipy
+
+    from mechcirc.sley import simulate, simulate_batch
+    from mechcirc.sley.simulation import table_error
+
+    print(f"python {platform.python_version()}, numpy {np.__version__}, scipy "
+          f"{scipy.__version__}, numba {numba.__version__}, {platform.machine()}, "
+          f"{os.cpu_count()} cores")
+    cached, backend = cold_call({})
+    with tempfile.TemporaryDirectory() as empty:
+        compiled, _ = cold_call({"NUMBA_CACHE_DIR": empty})
+    print(f"cold first call in a fresh process ({backend}), 5 revolutions incl. imports: "
+          f"{cached:.2f} s with numba's cache, {compiled:.2f} s compiling from scratch")
+
+    drive, variant = VARIANT
+    simulate(drive, variant, 1)                      # warm: compile / load cache once
+    t_ref, ref = timed(lambda: simulate(drive, variant, REVS, method="DOP853", rtol=1e-10), 1)
+    t_base, base = timed(lambda: simulate(drive, variant, REVS, method="DOP853", rtol=1e-8), 3)
+    t_def, res = timed(lambda: simulate(drive, variant, REVS), 20)
+    e_def = errors(res, ref)
+    e_base = errors(base, ref)
+    print(f"\nreference DOP853 rtol 1e-10: {t_ref:.3f} s, nfev {ref.nfev}")
+    print(f"baseline  DOP853 rtol 1e-8 : {t_base * 1e3:.1f} ms (best of 3), nfev {base.nfev}")
+    print(f"default   rk4 ({res.backend}, 50 steps/period): {t_def * 1e3:.2f} ms (best of 20), "
+          f"{res.n_steps} steps")
+    ok = t_base / t_def >= 50 and max(e_def["eps4P"], e_def["M2V"]) <= 1e-3
+    print(f"speed-up default / baseline: {t_base / t_def:.0f}x; peak error eps4P "
+          f"{e_def['eps4P']:.1e}, M2V {e_def['M2V']:.1e} (eps2P {e_def['eps2P']:.1e}); "
+          f"goal >= 50x at <= 0.1 %: {'met' if ok else 'NOT met'}")
+    print(f"transfer-function table vs FourBar closed form: {table_error()}")
+
+    rows = []
+    for spp in (20, 30, 40, 50, 80, 120, 200):
+        t, r = timed(lambda: simulate(drive, variant, REVS, steps_per_period=spp), 10)
+        rows.append(("rk4 numba", f"{spp} steps/period", t, r.nfev, errors(r, ref)))
+    t, r = timed(lambda: simulate(drive, variant, REVS, method="rk4-python"), 1)
+    rows.append(("rk4 python", "50 steps/period", t, r.nfev, errors(r, ref)))
+    for method, tols in (("DOP853", (1e-6, 1e-8, 1e-10)), ("RK45", (1e-6, 1e-8)),
+                         ("LSODA", (1e-6, 1e-8))):
+        for tol in tols:
+            if method == "DOP853" and tol == 1e-10:
+                t, r = t_ref, ref
+            elif method == "DOP853" and tol == 1e-8:
+                t, r = t_base, base
+            else:
+                t, r = timed(lambda: simulate(drive, variant, REVS, method=method, rtol=tol), 1)
+            rows.append((method, f"rtol {tol:g}", t, r.nfev, errors(r, ref)))
+    print(f"\n{'method':<11} {'setting':<17} {'ms/rev':>9} {'vs base':>8} {'nfev':>8} "
+          f"{'err eps4P':>10} {'err M2V':>10} {'err eps2P':>10}")
+    for name, setting, t, nfev, e in rows:
+        print(f"{name:<11} {setting:<17} {t / REVS * 1e3:>9.3f} {t_base / t:>7.1f}x {nfev:>8d} "
+              f"{e['eps4P']:>10.1e} {e['M2V']:>10.1e} {e['eps2P']:>10.1e}")
+
+    for revs in (REVS, 100):
+        t_seq, _ = timed(lambda: simulate_batch(revolutions=revs, processes=1), 1)
+        t_par, _ = timed(lambda: simulate_batch(revolutions=revs), 1)
+        print(f"batch, 14 presets x {revs} revolutions: one by one {t_seq:.2f} s, "
+              f"simulate_batch on {os.cpu_count()} cores {t_par:.2f} s "
+              f"(process start-up and numba cache loads included)")
+
+    if args.plot:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        fig, ax = plt.subplots(figsize=(7, 5))
+        for name in dict.fromkeys(r[0] for r in rows):
+            sel = [r for r in rows if r[0] == name]
+            err = [max(r[4]["eps4P"], r[4]["M2V"]) for r in sel]
+            ax.plot([r[2] / REVS * 1e3 for r in sel], np.maximum(err, 1e-12), "o-", label=name)
+            for r, e in zip(sel, err):
+                ax.annotate(r[1], (r[2] / REVS * 1e3, max(e, 1e-12)), fontsize=6)
+        ax.axhline(1e-3, color="k", lw=0.6, ls="--", label="0.1 % goal")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("wall time per simulated revolution [ms]")
+        ax.set_ylabel("relative error of extrema of ε4P, M2V")
+        ax.set_title("sley one-side variant 3, 5 revolutions: speed vs error\n"
+                     "(reference solve_ivp DOP853 rtol 1e-10)")
+        ax.grid(alpha=0.3, which="both")
+        ax.legend(fontsize=8)
+        fig.savefig(args.plot, dpi=120, bbox_inches="tight")
+        print(f"plot: {args.plot}")
+
+
+if __name__ == "__main__":
+    main()
