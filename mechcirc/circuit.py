@@ -211,8 +211,23 @@ class Circuit:
         """Names of elements on no path between the drive terminals (they carry no force)."""
         return self._reduction.unloaded
 
-    def sweep(self, omega: ArrayLike) -> "Sweep":
+    @cached_property
+    def nodal(self):
+        """The :class:`~mechcirc.nodal.NodalSystem` of the loaded network (built on first use)."""
+        from .nodal import assemble, require_nonsingular
+
+        system = assemble(self)
+        require_nonsingular(system)
+        return system
+
+    def sweep(self, omega: ArrayLike, method: str = "auto") -> "Sweep":
         """K(ω), Q0(ω) and per-element forces over ``omega`` [rad/s]; see :func:`mechcirc.sweep.sweep`."""
         from .sweep import sweep
 
-        return sweep(self, omega)
+        return sweep(self, omega, method=method)
+
+    def resonances(self, omega_max: float | None = None) -> list:
+        """Zeros and poles of K(ω) up to ``omega_max`` [rad/s]; see :func:`mechcirc.resonances.find_resonances`."""
+        from .resonances import find_resonances
+
+        return find_resonances(self, omega_max=omega_max)

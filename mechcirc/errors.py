@@ -12,6 +12,7 @@ __all__ = [
     "MechcircError",
     "NetlistError",
     "TopologyError",
+    "NotSeriesParallelError",
     "GeometryError",
     "SolverError",
     "MechcircWarning",
@@ -66,6 +67,13 @@ class TopologyError(MechcircError, ValueError):
         self.nodes = tuple(nodes)
         self.elements = tuple(elements)
         super().__init__(message)
+
+
+class NotSeriesParallelError(TopologyError):
+    """The network (or a lever's secondary side) is not series–parallel reducible.
+
+    Nodal analysis handles it; ``method="auto"`` falls back to it.
+    """
 
 
 class GeometryError(MechcircError, ValueError):

@@ -11,7 +11,23 @@ import os
 import tempfile
 from pathlib import Path
 
-__all__ = ["atomic_path", "atomic_open"]
+__all__ = ["atomic_path", "atomic_open", "OutputSet"]
+
+
+def _temporary_beside(target: Path) -> str:
+    """Create an empty temporary file next to ``target``, with the suffix kept.
+
+    ``mkstemp`` makes it mode 0600; it gets the mode a newly created file
+    would have (0666 less the umask), since it becomes the output itself.
+    """
+    folder = target.parent if str(target.parent) else Path(".")
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=f".tmp{target.suffix}",
+                               dir=folder)
+    os.close(fd)
+    umask = os.umask(0)
+    os.umask(umask)
+    os.chmod(tmp, 0o666 & ~umask)
+    return tmp
 
 
 @contextlib.contextmanager
@@ -22,14 +38,10 @@ def atomic_path(path: str | os.PathLike):
     from the extension (matplotlib's ``savefig``) still work.  On any exception
     (``KeyboardInterrupt`` included) the temporary file is removed.
     """
-    target = Path(path)
-    folder = target.parent if str(target.parent) else Path(".")
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=f".tmp{target.suffix}",
-                               dir=folder)
-    os.close(fd)
+    tmp = _temporary_beside(Path(path))
     try:
         yield Path(tmp)
-        os.replace(tmp, target)
+        os.replace(tmp, path)
     except BaseException:
         with contextlib.suppress(OSError):
             os.unlink(tmp)
@@ -44,3 +56,35 @@ def atomic_open(path: str | os.PathLike, mode: str = "w", **kwargs):
             yield fh
             fh.flush()
             os.fsync(fh.fileno())
+
+
+class OutputSet:
+    """Several output files that appear together or not at all.
+
+    Use as a context manager; :meth:`path` gives a temporary path for each
+    target.  When the block ends cleanly every temporary file is renamed into
+    place; on any exception all of them are removed and no target changes.
+    """
+
+    def __init__(self):
+        self._pending: list[tuple[Path, Path]] = []
+
+    def path(self, target: str | os.PathLike) -> Path:
+        """A temporary path beside ``target`` (same suffix) to write it to."""
+        target = Path(target)
+        tmp = _temporary_beside(target)
+        self._pending.append((Path(tmp), target))
+        return Path(tmp)
+
+    def __enter__(self) -> "OutputSet":
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        if exc_type is None:
+            for tmp, target in self._pending:
+                os.replace(tmp, target)
+        else:
+            for tmp, _ in self._pending:
+                with contextlib.suppress(OSError):
+                    os.unlink(tmp)
+        self._pending.clear()

@@ -10,20 +10,30 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import cached_property
+from typing import Callable, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .circuit import Circuit, Drive
+from .errors import NotSeriesParallelError
 from .reduction import Node, evaluate, push_down
 
-__all__ = ["Sweep", "sweep", "FLAG_OK", "FLAG_SINGULAR"]
+__all__ = ["Sweep", "sweep", "FLAG_OK", "FLAG_SINGULAR", "FLAG_NEAR_SINGULAR",
+           "NEAR_SINGULAR_ERROR", "Method"]
+
+Method = Literal["auto", "sp", "nodal"]
 
 #: ``Sweep.flags`` value of a regular point.
 FLAG_OK = 0
-#: ``Sweep.flags`` value of a point on (or within rounding of) a pole or zero of K,
-#: where K, Q0 or v0 is 0, infinite or undefined.
+#: ``Sweep.flags`` value of a point exactly on a pole or zero of K: K, Q0 or
+#: v0 is 0, infinite or undefined there (NaN never appears unflagged).
 FLAG_SINGULAR = 1
+#: ``Sweep.flags`` value of a point within rounding of a pole or zero: the
+#: estimated relative error of K (``Sweep.error``) exceeds
+#: :data:`NEAR_SINGULAR_ERROR`, so K and Q0 have fewer than six correct digits.
+FLAG_NEAR_SINGULAR = 2
+NEAR_SINGULAR_ERROR = 1e-6
 
 
 @dataclass(frozen=True, eq=False)
@@ -37,17 +47,22 @@ class Sweep:
     K : ndarray of complex, shape (n,)
         Kinematic characteristic v/Q seen by the drive [m/(N·s)].
     drive : Drive
-    tree : Node
-        The reduction tree that produced K.
+    method : {"sp", "nodal"}
+        How K was computed: series–parallel reduction tree or nodal analysis.
     name : str
         The circuit's name.
+    tree : Node or None
+        The reduction tree (series–parallel method only).
     """
 
     omega: NDArray[np.float64]
     K: NDArray[np.complex128]
     drive: Drive
-    tree: Node
+    method: str
     name: str = "circuit"
+    tree: Node | None = None
+    _responses: Callable = field(default=None, repr=False)
+    _errors: Callable = field(default=None, repr=False)
     _cache: dict = field(default_factory=dict, repr=False)
 
     @property
@@ -73,16 +88,23 @@ class Sweep:
             return self.drive.amplitude * self.K
 
     @cached_property
-    def flags(self) -> NDArray[np.int8]:
-        """Per-point flag: :data:`FLAG_SINGULAR` where K is 0, infinite or NaN, else 0."""
-        bad = ~np.isfinite(self.K) | (self.K == 0) | ~np.isfinite(self.Q0) | ~np.isfinite(self.v0)
-        return np.where(bad, FLAG_SINGULAR, FLAG_OK).astype(np.int8)
+    def error(self) -> NDArray[np.float64]:
+        """Estimated relative rounding error of K at each point [1] (inf on a pole or zero).
 
-    def _elements(self) -> dict[str, tuple]:
-        if "elements" not in self._cache:
-            _, values = evaluate(self.tree, self.omega, keep=True)
-            self._cache["elements"] = push_down(self.tree, values, self.Q0, self.v0, self.omega)
-        return self._cache["elements"]
+        Series–parallel: condition of the tree's sums × machine epsilon × depth.
+        Nodal: machine epsilon × the 2-norm condition number of A(ω) (dense
+        systems), NaN where not estimated (large sparse systems).
+        """
+        return self._errors()
+
+    @cached_property
+    def flags(self) -> NDArray[np.int8]:
+        """Per-point flag: 0 regular, :data:`FLAG_SINGULAR`, :data:`FLAG_NEAR_SINGULAR`."""
+        exact = ~np.isfinite(self.K) | (self.K == 0) | ~np.isfinite(self.Q0) | \
+            ~np.isfinite(self.v0)
+        near = self.error > NEAR_SINGULAR_ERROR
+        return np.where(exact, FLAG_SINGULAR,
+                        np.where(near, FLAG_NEAR_SINGULAR, FLAG_OK)).astype(np.int8)
 
     def force(self, name: str) -> NDArray[np.complex128]:
         """Force amplitude Q [N] through element ``name`` (from its n1 to its n2)."""
@@ -93,14 +115,16 @@ class Sweep:
         return self._element(name)[1]
 
     def _element(self, name: str):
-        elements = self._elements()
+        if "elements" not in self._cache:
+            self._cache["elements"] = self._responses(self.Q0, self.v0)
+        elements = self._cache["elements"]
         if name not in elements:
             raise KeyError(f"no loaded element named {name!r}; elements: "
                            f"{', '.join(sorted(elements))}")
         return elements[name]
 
 
-def sweep(circuit: Circuit, omega: ArrayLike) -> Sweep:
+def sweep(circuit: Circuit, omega: ArrayLike, *, method: Method = "auto") -> Sweep:
     """Evaluate ``circuit`` at each angular frequency in ``omega`` [rad/s].
 
     Parameters
@@ -108,12 +132,17 @@ def sweep(circuit: Circuit, omega: ArrayLike) -> Sweep:
     circuit : Circuit
     omega : array_like of float
         Angular frequencies [rad/s], ≥ 0 (the seeds' main-shaft frequency).
+    method : {"auto", "sp", "nodal"}
+        ``"sp"``: series–parallel reduction tree (raises
+        :class:`~mechcirc.errors.NotSeriesParallelError` if the network is
+        not reducible); ``"nodal"``: nodal analysis; ``"auto"``: the tree
+        where it exists, nodal analysis otherwise.
 
     Returns
     -------
     Sweep
-        With ``omega``, ``K``, ``Q0``, ``v0``, ``flags`` and per-element
-        ``force(name)`` / ``velocity(name)``.
+        With ``omega``, ``K``, ``Q0``, ``v0``, ``flags``, ``error`` and
+        per-element ``force(name)`` / ``velocity(name)``.
 
     Examples
     --------
@@ -126,6 +155,53 @@ def sweep(circuit: Circuit, omega: ArrayLike) -> Sweep:
     omega = np.atleast_1d(np.asarray(omega, dtype=float))
     if omega.ndim != 1:
         raise ValueError(f"omega must be one-dimensional, got shape {omega.shape}")
-    tree = circuit.tree
-    K = evaluate(tree, omega)
-    return Sweep(omega=omega, K=K, drive=circuit.drive, tree=tree, name=circuit.name)
+    if method not in ("auto", "sp", "nodal"):
+        raise ValueError(f"method must be 'auto', 'sp' or 'nodal', got {method!r}")
+    if method != "nodal":
+        try:
+            tree = circuit.tree
+        except NotSeriesParallelError:
+            if method == "sp":
+                raise
+        else:
+            return _sweep_tree(circuit, tree, omega)
+    return _sweep_nodal(circuit, omega)
+
+
+def _sweep_tree(circuit: Circuit, tree: Node, omega) -> Sweep:
+    def responses(Q0, v0):
+        _, values = evaluate(tree, omega, keep=True)
+        return push_down(tree, values, Q0, v0, omega)
+
+    def errors():
+        _, cond = evaluate(tree, omega, condition=True)
+        return cond * (np.finfo(float).eps * _depth(tree))
+
+    return Sweep(omega=omega, K=evaluate(tree, omega), drive=circuit.drive, method="sp",
+                 name=circuit.name, tree=tree, _responses=responses, _errors=errors)
+
+
+def _depth(root: Node) -> int:
+    depth, stack = 1, [(root, 1)]
+    while stack:
+        node, d = stack.pop()
+        depth = max(depth, d)
+        kids = getattr(node, "children", None) or ((node.child,) if hasattr(node, "child") else ())
+        stack.extend((c, d + 1) for c in kids)
+    return depth
+
+
+def _sweep_nodal(circuit: Circuit, omega) -> Sweep:
+    from . import nodal
+
+    system = circuit.nodal
+    K = nodal.mobility(system, omega)
+
+    def responses(Q0, v0):
+        return nodal.element_response(system, omega, Q0)
+
+    def errors():
+        return nodal.condition_error(system, omega)
+
+    return Sweep(omega=omega, K=K, drive=circuit.drive, method="nodal", name=circuit.name,
+                 _responses=responses, _errors=errors)

@@ -87,3 +87,56 @@ def reference_K_and_cancellation(net, omega, j=1j, convert=float):
         return total, float("inf")
     worst = max(worst, float(size / abs(total)))
     return (total if net[0] == "s" else 1 / total), worst
+
+
+def networks_with_levers(max_leaves=10):
+    """Like :func:`networks`, but a sub-network may sit behind a lever:
+    ``("lever", ratio, child)`` has K = K_child / ratio²."""
+    ratio = st.floats(-1, 1).map(lambda x: 10.0 ** x)
+    return st.recursive(
+        leaf(),
+        lambda children: st.one_of(
+            st.tuples(st.sampled_from(["s", "p"]), st.lists(children, min_size=2, max_size=3)),
+            st.tuples(st.just("lever"), ratio, children)),
+        max_leaves=max_leaves)
+
+
+def to_netlist_with_levers(net, V0=1.0, drive="velocity"):
+    """Netlist of a network that may hold levers (secondaries close to the frame)."""
+    lines = [f"drive V a 0 {drive}={V0!r}"]
+    counter = {"n": 0, "e": 0}
+
+    def fresh():
+        counter["n"] += 1
+        return f"n{counter['n']}"
+
+    def emit(node, n1, n2):
+        counter["e"] += 1
+        if node[0] == "leaf":
+            lines.append(f"{node[1]} e{counter['e']} {n1} {n2} {node[2]!r}")
+        elif node[0] == "lever":
+            s1 = fresh()
+            lines.append(f"lever L{counter['e']} {n1} {n2} {s1} 0 ratio={node[1]!r}")
+            emit(node[2], s1, "0")
+        elif node[0] == "p":
+            for c in node[1]:
+                emit(c, n1, n2)
+        else:
+            nodes = [n1] + [fresh() for _ in node[1][:-1]] + [n2]
+            for c, u, w in zip(node[1], nodes, nodes[1:]):
+                emit(c, u, w)
+
+    emit(net, "a", "0")
+    return "\n".join(lines) + "\n"
+
+
+def reference_K_levers(net, omega):
+    """K of a network that may hold levers, by the connection rules (complex floats)."""
+    if net[0] == "lever":
+        return reference_K_levers(net[2], omega) / net[1] ** 2
+    if net[0] == "leaf":
+        return reference_K(net, omega)
+    parts = [reference_K_levers(c, omega) for c in net[1]]
+    if net[0] == "s":
+        return sum(parts)
+    return 1 / sum(1 / x for x in parts)

@@ -63,12 +63,38 @@ def print_json(document) -> None:
     sys.stdout.write("\n")
 
 
-def save_figure(fig, path) -> None:
-    """Save a matplotlib figure atomically; the format follows the file's extension."""
+#: Image formats the plots can be written in (by file extension).
+PLOT_FORMATS = ("png", "svg", "pdf", "eps", "ps", "jpg", "jpeg", "tif", "tiff", "webp")
+
+
+def check_output_paths(*paths, plots=()) -> None:
+    """Refuse, before any work, outputs into missing folders or plots in unknown formats."""
+    from pathlib import Path
+
+    for path in (*paths, *plots):
+        if path and not Path(path).resolve().parent.is_dir():
+            raise MechcircError(f"{path}: folder {str(Path(path).parent)!r} does not exist")
+    for path in plots:
+        if path and Path(path).suffix.lstrip(".").lower() not in PLOT_FORMATS:
+            raise MechcircError(
+                f"{path}: unsupported plot format {Path(path).suffix or '(none)'!r} "
+                f"(expected one of {', '.join('.' + f for f in PLOT_FORMATS)})")
+
+
+def save_figure(fig, path, into=None) -> None:
+    """Save a matplotlib figure; the format follows ``path``'s extension.
+
+    Without ``into`` the file is written atomically (temporary file, rename);
+    with ``into`` (a temporary path from an :class:`~mechcirc.outputs.OutputSet`)
+    it is written there and the set renames it.
+    """
     from pathlib import Path
 
     from ..outputs import atomic_path
 
     fmt = Path(path).suffix.lstrip(".").lower() or "png"
+    if into is not None:
+        fig.savefig(into, format=fmt, dpi=120, bbox_inches="tight")
+        return
     with atomic_path(path) as tmp:
         fig.savefig(tmp, format=fmt, dpi=120, bbox_inches="tight")

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ._common import print_json, save_figure
+from ._common import check_output_paths, print_json, save_figure
 
 
 def register(sub) -> None:
@@ -36,8 +36,29 @@ def register(sub) -> None:
     p.add_argument("-o", "--output", metavar="CSV",
                    help="write omega,K_re,K_im,Q0_re,Q0_im to this CSV file")
     p.add_argument("--plot", metavar="IMAGE", help="plot |K| and |Q0| (PNG, SVG or PDF)")
+    p.add_argument("--method", choices=("auto", "sp", "nodal"), default="auto",
+                   help="series–parallel tree, nodal analysis, or auto (tree where "
+                        "possible; default)")
+    p.add_argument("--adaptive", action="store_true",
+                   help="refine the grid around resonances and wherever |K| or |Q0| "
+                        "bends (--points is then the starting grid)")
+    p.add_argument("--tol", type=float, default=0.005,
+                   help="adaptive: largest relative midpoint deviation (default 0.005)")
     p.add_argument("--json", action="store_true", help="print one JSON document")
     p.set_defaults(func=cmd_sweep)
+
+    p = sub.add_parser(
+        "resonances", help="exact resonances (K = 0) and anti-resonances (K = ∞)",
+        description="Natural frequencies seen from the drive, from the network's "
+                    "matrices: resonances (K = 0, Q0 → ∞ under kinematic excitation; "
+                    "the drive held) and anti-resonances (K → ∞; the drive released). "
+                    "Damped networks also get the damping ratio.",
+        epilog="Example: mechcirc resonances netlists/stb_heald.mcir --omega-max 5000")
+    p.add_argument("file", help="netlist file (.mcir)")
+    p.add_argument("--omega-max", type=float, metavar="W",
+                   help="report only up to this angular frequency [rad/s]")
+    p.add_argument("--json", action="store_true", help="print one JSON document")
+    p.set_defaults(func=cmd_resonances)
 
 
 def _load_with_warnings(path):
@@ -106,49 +127,107 @@ def _omega_grid(args):
 
 
 def write_sweep_csv(result, path) -> None:
-    """Write ``omega,K_re,K_im,Q0_re,Q0_im`` rows atomically."""
+    """Write ``omega,K_re,K_im,Q0_re,Q0_im[,v0_re,v0_im],flag`` rows to ``path``.
+
+    The ``v0`` columns appear for a force drive.  ``flag`` is 0 for a regular
+    point, 1 on a pole or zero of K, 2 within rounding of one.
+    """
     import numpy as np
 
-    from ..outputs import atomic_open
+    columns = [result.omega, result.K.real, result.K.imag, result.Q0.real, result.Q0.imag]
+    header = "omega,K_re,K_im,Q0_re,Q0_im"
+    if result.drive.kind == "force":
+        columns += [result.v0.real, result.v0.imag]
+        header += ",v0_re,v0_im"
+    table = np.column_stack(columns + [result.flags])
+    with open(path, "w", newline="") as fh:
+        fh.write(header + ",flag\n")
+        fmt = ["%.17g"] * (table.shape[1] - 1) + ["%d"]
+        np.savetxt(fh, table, delimiter=",", fmt=fmt)
 
-    table = np.column_stack([result.omega, result.K.real, result.K.imag,
-                             result.Q0.real, result.Q0.imag])
-    with atomic_open(path, "w", newline="") as fh:
-        fh.write("omega,K_re,K_im,Q0_re,Q0_im\n")
-        np.savetxt(fh, table, delimiter=",", fmt="%.17g")
+
+def _resonance_rows(found) -> list[dict]:
+    return [{"kind": r.kind, "omega": r.omega, "f_hz": r.f_hz, "omega_d": r.omega_d,
+             "zeta": r.zeta, "error": r.error} for r in found]
 
 
 def cmd_sweep(args) -> int:
     import numpy as np
 
+    from ..outputs import OutputSet
+
+    check_output_paths(args.output, plots=(args.plot,))
     circuit, warns = _load_with_warnings(args.file)
     omega = _omega_grid(args)
-    result = circuit.sweep(omega)
+    if args.adaptive:
+        from ..adaptive import adaptive_sweep
+
+        if omega[0] <= 0:
+            from ..errors import MechcircError
+
+            raise MechcircError("--adaptive needs --omega-min > 0")
+        result = adaptive_sweep(circuit, omega[0], omega[-1], tol=args.tol,
+                                initial=max(2, args.points), method=args.method)
+    else:
+        result = circuit.sweep(omega, method=args.method)
+    found = circuit.resonances(omega_max=omega[-1]) if (args.plot or args.json) else []
+    found = [r for r in found if r.omega >= omega[0]]
     for w in warns:
         print(f"warning: {w}", file=sys.stderr)
-    if args.output:
-        write_sweep_csv(result, args.output)
-    if args.plot:
-        from ..plotting import plot_sweep
+    with OutputSet() as out:
+        if args.output:
+            write_sweep_csv(result, out.path(args.output))
+        if args.plot:
+            from ..plotting import plot_sweep
 
-        save_figure(plot_sweep(result), args.plot)
+            save_figure(plot_sweep(result, resonances=found), args.plot, out.path(args.plot))
     n_flag = int(np.count_nonzero(result.flags))
+    n_points = len(result.omega)
     if args.json:
-        print_json({
-            "file": args.file, "name": circuit.name, "omega": result.omega,
+        doc = {
+            "file": args.file, "name": circuit.name, "method": result.method,
+            "points": n_points, "omega": result.omega,
             "K": {"re": result.K.real, "im": result.K.imag},
             "Q0": {"re": result.Q0.real, "im": result.Q0.imag},
             "flags": result.flags, "n_flagged": n_flag, "warnings": warns,
-        })
+            "resonances": _resonance_rows(found),
+        }
+        if result.drive.kind == "force":
+            doc["v0"] = {"re": result.v0.real, "im": result.v0.imag}
+        print_json(doc)
         return 0
     absK = np.abs(result.K)
     absQ = np.abs(result.Q0)
-    print(f"{args.file}: {len(omega)} points, omega {omega[0]:g} .. {omega[-1]:g} rad/s")
-    print(f"  |K|  {np.nanmin(absK):.4g} .. {np.nanmax(absK):.4g} m/(N·s)")
-    print(f"  |Q0| {np.nanmin(absQ):.4g} .. {np.nanmax(absQ):.4g} N")
+    how = "adaptive grid" if args.adaptive else "points"
+    print(f"{args.file}: {n_points} {how}, omega {result.omega[0]:g} .. "
+          f"{result.omega[-1]:g} rad/s, method {result.method}")
+    with np.errstate(all="ignore"):
+        print(f"  |K|  {np.nanmin(absK):.4g} .. {np.nanmax(absK):.4g} m/(N·s)")
+        print(f"  |Q0| {np.nanmin(absQ):.4g} .. {np.nanmax(absQ):.4g} N")
     if n_flag:
-        print(f"  {n_flag} point(s) on a pole or zero of K (flagged)")
+        print(f"  {n_flag} point(s) on or within rounding of a pole or zero of K "
+              "(flagged; see the 'flag' column)")
     for label, path in (("CSV", args.output), ("plot", args.plot)):
         if path:
             print(f"  {label} written to {path}")
+    return 0
+
+
+def cmd_resonances(args) -> int:
+    circuit, warns = _load_with_warnings(args.file)
+    found = circuit.resonances(omega_max=args.omega_max)
+    for w in warns:
+        print(f"warning: {w}", file=sys.stderr)
+    if args.json:
+        print_json({"file": args.file, "name": circuit.name,
+                    "resonances": _resonance_rows(found)})
+        return 0
+    print(f"{args.file}: {sum(r.kind == 'resonance' for r in found)} resonances (K = 0), "
+          f"{sum(r.kind == 'antiresonance' for r in found)} anti-resonances (K = ∞)"
+          + (f" up to {args.omega_max:g} rad/s" if args.omega_max else ""))
+    print(f"  {'kind':<14} {'omega [rad/s]':>17} {'f [Hz]':>14} {'omega_d [rad/s]':>17} "
+          f"{'zeta':>10} {'rel. error':>10}")
+    for r in found:
+        print(f"  {r.kind:<14} {r.omega:>17.10g} {r.f_hz:>14.8g} {r.omega_d:>17.10g} "
+              f"{r.zeta:>10.4g} {r.error:>10.1e}")
     return 0

@@ -55,3 +55,33 @@ mass m11 J L {e['m11']}
 mass m12 L M {e['m12']}
 spring k0 M 0 {e['k0']}
 """
+
+
+def _parts(w, p):
+    m = [None] + [p[f"m{i}"] for i in range(1, 13)]
+    k0, k4, k5 = p["k0"], p["k4"], p["k5"]
+    eta1, eta2, eta3, eta4 = p["eta1"], p["eta2"], p["eta3"], p["eta4"]
+    eta_c = eta1**2 * eta2 * eta3**2
+    eta_B = eta1**2 * eta2
+    M_I = m[10] * m[11] * m[12] / (m[10] * m[12] + m[11] * m[12] + m[10] * m[11])
+    M_II = m[6] * m[7] * m[8] * m[9] / (m[7] * m[8] * m[9] + m[6] * m[8] * m[9]
+                                         + m[6] * m[7] * m[9] + m[6] * m[7] * m[8])
+    M_III = (m[1] * m[2] * m[3] * m[4] * eta1**2 * eta_B * eta_c
+             / (m[2] * m[3] * m[4] * eta1**2 * eta_B * eta_c + m[1] * m[3] * m[4] * eta_B * eta_c
+                + m[1] * m[2] * m[4] * eta1**2 * eta_c + m[1] * m[2] * m[3] * eta1**2 * eta_B))
+    A = m[5] * w**2 - k5
+    B = M_I * M_II * w**2 - k0 * (M_I * eta4 + M_II)
+    C = m[5] * w**2 * (k4 * eta_c + k5) - k4 * k5 * eta_c
+    return M_I, M_II, M_III, A, B, C, k0, eta4
+
+
+def numerator(w, p):
+    """Eq. (7)'s numerator: ω² A (M_III B − M_I M_II k0 η4) − B C (zeros of K)."""
+    M_I, M_II, M_III, A, B, C, k0, eta4 = _parts(w, p)
+    return w**2 * A * (M_III * B - M_I * M_II * k0 * eta4) - B * C
+
+
+def denominator(w, p):
+    """Eq. (7)'s denominator: ω M_III (A ω² M_I M_II k0 η4 + B C) (poles of K)."""
+    M_I, M_II, M_III, A, B, C, k0, eta4 = _parts(w, p)
+    return w * M_III * (A * w**2 * M_I * M_II * k0 * eta4 + B * C)

@@ -1,0 +1,108 @@
+"""Graph questions about a circuit, shared by the series–parallel and nodal methods.
+
+* which elements carry force at all (those in the biconnected block that holds
+  the drive; anything hanging off an articulation point carries none);
+* whether every node can be referred to the frame (a node reached only through
+  the far side of levers has no defined velocity: the network is singular).
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from typing import Sequence
+
+from .circuit import FRAME, Circuit
+from .errors import TopologyError
+
+__all__ = ["loaded_groups", "check_frame_paths"]
+
+
+def loaded_groups(groups: Sequence[Sequence[tuple[str, str]]], a: str, b: str,
+                  *, drive_line: int = 0) -> list[int]:
+    """Indices of the groups that lie in the block joining nodes ``a`` and ``b``.
+
+    Each group is a list of node pairs that belong together: one pair for a
+    two-pole, the pairs of a clique for a lever (its four terminals are coupled).
+
+    Raises
+    ------
+    TopologyError
+        If no path of groups joins ``a`` and ``b``.
+    """
+    import networkx as nx
+
+    g = nx.Graph()
+    for pairs in groups:
+        g.add_edges_from(pairs)
+    if a not in g or b not in g or not nx.has_path(g, a, b):
+        where = f" (line {drive_line})" if drive_line else ""
+        raise TopologyError(
+            f"the drive's nodes {a!r} and {b!r}{where} are not connected by any path "
+            "of elements", nodes=(a, b))
+    g.add_edge(a, b)
+    block: set[frozenset] = set()
+    for comp in nx.biconnected_component_edges(g):
+        pairs = {frozenset(p) for p in comp}
+        if frozenset((a, b)) in pairs:
+            block = pairs
+            break
+    return [i for i, pairs in enumerate(groups)
+            if all(frozenset(p) in block for p in pairs)]
+
+
+def check_frame_paths(circuit: Circuit) -> None:
+    """Raise if some node is joined to the frame only through a lever's other side.
+
+    Elements join their two nodes; a lever joins its primary nodes and its
+    secondary nodes but not the two sides.  The drive's nodes count as
+    referenced when the circuit has no frame node at all (a free-floating
+    network driven between two of its own nodes).
+    """
+    adj: dict[str, set[str]] = {}
+
+    def link(u, w):
+        adj.setdefault(u, set()).add(w)
+        adj.setdefault(w, set()).add(u)
+
+    for e in circuit.elements:
+        link(e.n1, e.n2)
+    for lv in circuit.levers:
+        link(lv.p1, lv.p2)
+        link(lv.s1, lv.s2)
+    d = circuit.drive
+    link(d.n1, d.n2)
+    start = FRAME if FRAME in adj else d.n1
+    seen = {start}
+    queue = deque([start])
+    while queue:
+        u = queue.popleft()
+        for w in adj[u] - seen:
+            seen.add(w)
+            queue.append(w)
+    lever_nodes = {n for lv in circuit.levers for n in (lv.p1, lv.p2, lv.s1, lv.s2)}
+    floating: list[str] = []
+    for n in adj:
+        if n in seen:
+            continue
+        # Collect this unreferenced component; islands without levers are merely
+        # unloaded (they carry no force), ones reached through a lever are singular.
+        comp = {n}
+        queue = deque([n])
+        while queue:
+            u = queue.popleft()
+            for w in adj[u] - comp:
+                comp.add(w)
+                queue.append(w)
+        seen |= comp
+        if comp & lever_nodes:
+            floating.extend(comp)
+    if floating:
+        via = [lv.name for lv in circuit.levers
+               if {lv.p1, lv.p2, lv.s1, lv.s2} & set(floating)]
+        line = next((lv.line for lv in circuit.levers if lv.name in via), 0)
+        raise TopologyError(
+            f"node(s) {', '.join(sorted(floating)[:12])} have no path to the frame "
+            f"(reached only through lever(s) {', '.join(via) or '—'}"
+            f"{f', line {line}' if line else ''}); the network is singular: "
+            "join the lever's secondary side to node 0",
+            nodes=sorted(floating), elements=via)

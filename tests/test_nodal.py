@@ -1,0 +1,145 @@
+"""Nodal analysis, levers and force excitation against closed forms and the reduction."""
+
+import numpy as np
+import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
+
+import mechcirc
+from mechcirc.errors import NotSeriesParallelError, TopologyError
+from strategies import networks_with_levers, reference_K_levers, to_netlist_with_levers
+
+BRIDGE = """drive V a 0 velocity=0.5
+spring k1 a b 1e4
+damper c2 a c 30
+mass   m3 b c 2
+spring k4 b 0 3e4
+mass   m5 c 0 5
+"""
+
+
+def _bridge_reference(w):
+    """Δ–Y transform of the triangle (a, b, c), then series–parallel (independent closed form)."""
+    Z1, Z2, Z3 = 1j * w / 1e4, 1 / 30, -1j / (w * 2)
+    Z4, Z5 = 1j * w / 3e4, -1j / (w * 5)
+    total = Z1 + Z2 + Z3
+    Za, Zb, Zc = Z1 * Z2 / total, Z1 * Z3 / total, Z2 * Z3 / total
+    left, right = Zb + Z4, Zc + Z5
+    return Za + left * right / (left + right)
+
+
+def test_bridge_is_solved_by_nodal_analysis_and_matches_its_closed_form():
+    c = mechcirc.parse(BRIDGE)
+    omega = np.geomspace(1, 1e4, 300)
+    with pytest.raises(NotSeriesParallelError):
+        c.sweep(omega, method="sp")
+    s = c.sweep(omega)                      # auto falls back to nodal
+    assert s.method == "nodal"
+    np.testing.assert_allclose(s.K, _bridge_reference(omega), rtol=1e-12)
+    np.testing.assert_allclose(s.Q0, 0.5 / s.K, rtol=1e-14)
+
+
+def test_bridge_element_forces_balance_at_every_node():
+    s = mechcirc.parse(BRIDGE).sweep(np.geomspace(1, 1e4, 50))
+    # KCL: force into a = through k1 and c2; node b: k1 = m3 + k4; node c: c2 + m3 = m5.
+    np.testing.assert_allclose(s.force("k1") + s.force("c2"), s.Q0, rtol=1e-9)
+    np.testing.assert_allclose(s.force("k1"), s.force("m3") + s.force("k4"), rtol=1e-9)
+    np.testing.assert_allclose(s.force("c2") + s.force("m3"), s.force("m5"), rtol=1e-9)
+    # KVL around a-b-c: v(k1) + v(m3) = v(c2).
+    np.testing.assert_allclose(s.velocity("k1") + s.velocity("m3"), s.velocity("c2"),
+                               rtol=1e-9)
+
+
+def test_lever_chain_reflects_as_product_of_ratios_squared():
+    text = """drive V p 0 velocity=1
+lever L1 p 0 q 0 ratio=2
+lever L2 q 0 r 0 ratio=0.5
+lever L3 r 0 t 0 ratio=3
+mass m t 0 1.5
+"""
+    c = mechcirc.parse(text)
+    omega = np.array([0.3, 7.0, 500.0])
+    expected = -1j / (omega * 1.5) / (2 * 0.5 * 3) ** 2      # mass m·r² on the primary
+    for method in ("sp", "nodal"):
+        np.testing.assert_allclose(c.sweep(omega, method=method).K, expected, rtol=1e-13)
+    assert str(c.tree) == "L1[L2[L3[m]]]"
+    s = c.sweep(omega)
+    # The secondary moves r times faster and carries 1/r of the force.
+    np.testing.assert_allclose(s.velocity("m"), 3.0 * s.v0, rtol=1e-13)
+    np.testing.assert_allclose(s.force("m"), s.Q0 / 3.0, rtol=1e-13)
+
+
+@settings(max_examples=120, deadline=None)
+@given(net=networks_with_levers(), log_omega=st.floats(-1, 2))
+def test_random_networks_with_levers_same_K_by_both_methods(net, log_omega):
+    omega = 10.0 ** log_omega
+    try:
+        ref = reference_K_levers(net, omega)
+    except ZeroDivisionError:
+        assume(False)
+    c = mechcirc.parse(to_netlist_with_levers(net))
+    sp = c.sweep([omega], method="sp")
+    # Compare where the point is not within rounding of a pole or zero of some
+    # sub-network (there neither method can hold 12 digits).
+    assume(sp.error[0] < 1e-13)
+    K_nodal = c.sweep([omega], method="nodal").K[0]
+    assert abs(sp.K[0] - ref) <= 1e-12 * abs(ref)
+    assert abs(K_nodal - ref) <= 1e-12 * abs(ref)
+
+
+def test_force_excitation_gives_velocity_and_force_characteristic():
+    c = mechcirc.parse("drive F a 0 force=20\nmass m a 0 4\nspring k a 0 1e4\n")
+    omega = np.array([10.0, 40.0, 100.0])
+    s = c.sweep(omega)
+    K = 1 / (1j * omega * 4 + 1e4 / (1j * omega))
+    np.testing.assert_allclose(s.K, K, rtol=1e-14)
+    np.testing.assert_allclose(s.v0, 20 * K, rtol=1e-14)
+    np.testing.assert_allclose(s.S, 1 / K, rtol=1e-14)
+    np.testing.assert_allclose(s.Q0, 20.0)
+    np.testing.assert_allclose(s.force("m") + s.force("k"), 20.0, rtol=1e-12)
+
+
+def test_floating_lever_side_is_an_error():
+    c = mechcirc.parse("drive V a 0 velocity=1\nmass m a 0 1\nlever L a 0 s1 s2 ratio=2\n")
+    with pytest.raises(TopologyError, match="no path to the frame"):
+        c.sweep([1.0])
+
+
+def test_node_reached_only_through_a_lever_is_an_error():
+    text = "drive V a 0 velocity=1\nmass m a 0 1\nlever L a 0 s1 s2 ratio=2\nmass n s1 s2 3\n"
+    c = mechcirc.parse(text)
+    for method in ("sp", "nodal"):
+        with pytest.raises(TopologyError, match=r"s1, s2 have no path to the frame.*L.*line 3"):
+            c.sweep([1.0], method=method)
+
+
+def test_secondary_side_left_open_is_an_error():
+    text = "drive V a 0 velocity=1\nmass m a 0 1\nlever L a 0 s1 0 ratio=2\n"
+    with pytest.raises(TopologyError, match="left floating"):
+        mechcirc.parse(text).sweep([1.0], method="sp")
+
+
+def test_network_singular_at_every_frequency_is_an_error_naming_the_levers():
+    text = """drive V a 0 velocity=1
+mass m a 0 1
+lever L1 a 0 s 0 ratio=2
+lever L2 a 0 s 0 ratio=2
+spring k s 0 5
+"""
+    c = mechcirc.parse(text)
+    with pytest.raises(TopologyError, match="singular at every frequency") as info:
+        c.sweep([1.0])
+    assert set(info.value.elements) == {"L1", "L2"}
+
+
+def test_large_networks_use_sparse_solves_and_agree_with_the_tree():
+    # A ladder with 400 nodes is reducible: compare the sparse nodal path with the tree.
+    lines = ["drive V n0 0 velocity=1"]
+    for i in range(400):
+        lines.append(f"mass m{i} n{i} n{i + 1} {1 + i % 7}")
+        lines.append(f"spring k{i} n{i + 1} 0 {1e4 * (1 + i % 5)}")
+        lines.append(f"damper c{i} n{i + 1} 0 {0.5 + i % 3}")
+    c = mechcirc.parse("\n".join(lines))
+    omega = np.geomspace(1, 1e3, 20)
+    np.testing.assert_allclose(c.sweep(omega, method="nodal").K, c.sweep(omega, method="sp").K,
+                               rtol=1e-10)
