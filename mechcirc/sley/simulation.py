@@ -500,7 +500,10 @@ def _assemble(params, kern, both, pvec, tab, ts, ys, theta0, phiP, revolutions, 
     out = np.empty((ts.size, 6))
     kern.outputs(both, pvec, tab, np.ascontiguousarray(ts), np.ascontiguousarray(ys), out)
     crank = (theta0 + params.omega * ts) % TWO_PI
-    order = np.argsort(crank, kind="stable")
+    # a uniform grid over one revolution: sorting by crank angle is one rotation
+    wrap = np.flatnonzero(np.diff(crank) < 0)
+    order = np.roll(np.arange(crank.size), -(int(wrap[0]) + 1)) if wrap.size == 1 \
+        else np.argsort(crank, kind="stable")
     crank = crank[order]
     out = out[order]
     fb = params.fourbar()
