@@ -67,12 +67,26 @@ def _load_with_warnings(path):
 
     from ..netlist import load
 
+    from ..errors import NotSeriesParallelError
+
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         circuit = load(path)
-        circuit.tree    # reduce now, so topology errors and warnings surface here
+        try:
+            circuit.tree    # reduce now, so topology errors and warnings surface here
+        except NotSeriesParallelError:
+            circuit.nodal   # nodal analysis takes over; its own errors surface here
     messages = [str(w.message) for w in caught]
     return circuit, messages
+
+
+def _tree_text(circuit) -> str:
+    from ..errors import NotSeriesParallelError
+
+    try:
+        return str(circuit.tree)
+    except NotSeriesParallelError as exc:
+        return f"(not series–parallel: {exc.message}; nodal analysis is used)"
 
 
 def cmd_check(args) -> int:
@@ -83,12 +97,14 @@ def cmd_check(args) -> int:
     levers = [{"name": lv.name, "p1": lv.p1, "p2": lv.p2, "s1": lv.s1, "s2": lv.s2,
                "ratio": lv.ratio, "line": lv.line} for lv in circuit.levers]
     d = circuit.drive
+    tree = _tree_text(circuit)
+    unloaded = circuit.nodal.unloaded if tree.startswith("(") else circuit.unloaded
     doc = {
         "file": args.file, "name": circuit.name,
         "drive": {"name": d.name, "n1": d.n1, "n2": d.n2, "kind": d.kind,
                   "amplitude": d.amplitude},
         "nodes": circuit.nodes, "elements": elements, "levers": levers,
-        "unloaded": list(circuit.unloaded), "warnings": warns, "tree": str(circuit.tree),
+        "unloaded": list(unloaded), "warnings": warns, "tree": tree,
     }
     if args.json:
         print_json(doc)
@@ -104,7 +120,7 @@ def cmd_check(args) -> int:
         print(f"  lever   {lv.name:<8} {lv.p1}-{lv.p2} -> {lv.s1}-{lv.s2}  ratio={lv.ratio:g}")
     for w in warns:
         print(f"warning: {w}", file=sys.stderr)
-    print(f"K = {circuit.tree}")
+    print(f"K = {tree}")
     return 0
 
 

@@ -1,0 +1,102 @@
+"""Honest singular points (flags) and adaptive sweeps."""
+
+import math
+import warnings
+
+import numpy as np
+import pytest
+from scipy.optimize import minimize_scalar
+
+import mechcirc
+from mechcirc.adaptive import adaptive_sweep
+from mechcirc.sweep import FLAG_NEAR_SINGULAR, FLAG_OK, FLAG_SINGULAR
+
+SERIES_LC = "drive V a 0 velocity=1\nmass m a b 1\nspring k b 0 1\n"   # K = j(ω − 1/ω)
+
+
+@pytest.mark.parametrize("method", ["sp", "nodal"])
+def test_exact_zero_is_flagged_and_never_nan_unflagged(method):
+    c = mechcirc.parse(SERIES_LC)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        s = c.sweep([0.0, 1.0, 2.0, np.inf], method=method)
+    assert s.flags[0] == FLAG_SINGULAR and s.flags[3] == FLAG_SINGULAR
+    assert s.flags[1] in (FLAG_SINGULAR, FLAG_NEAR_SINGULAR)
+    assert s.flags[2] == FLAG_OK
+    bad = ~np.isfinite(s.K) | ~np.isfinite(s.Q0)
+    assert np.all(s.flags[bad] != FLAG_OK)
+
+
+def test_point_within_rounding_of_a_zero_is_flagged_near():
+    c = mechcirc.parse(SERIES_LC)
+    s = c.sweep([1.0 + 2**-45, 1.0 + 1e-3, 3.0])
+    # |K| ≈ 2·(ω − 1): at 1 + 3e-14 only about two digits of K are right.
+    assert s.flags.tolist() == [FLAG_NEAR_SINGULAR, FLAG_OK, FLAG_OK]
+    assert s.error[0] > 1e-6 > s.error[1]
+    # The estimate is honest: the true relative error is below it.
+    w = 1.0 + 1e-3
+    exact = w - 1 / w
+    assert abs(s.K[1].imag - exact) / abs(exact) <= s.error[1]
+
+
+def test_pole_in_parallel_is_flagged():
+    c = mechcirc.parse("drive V a 0 velocity=1\nmass m a 0 1\nspring k a 0 4\n")   # pole at ω = 2
+    s = c.sweep([2.0, 2.5])
+    assert s.flags[0] == FLAG_SINGULAR and not np.isfinite(s.K[0])
+    assert s.Q0[0] == 0
+    assert s.flags[1] == FLAG_OK
+
+
+def _sdof(m=1.0, k=1e4, c=2.0):
+    return mechcirc.parse(f"drive V a 0 velocity=1\nspring k a b {k}\ndamper c a b {c}\n"
+                          f"mass m b 0 {m}\n")
+
+
+def _exact_peak(m, k, c, lo, hi):
+    """max |Q0| of the SDOF by its own closed form, maximised to 1e-12 in ω."""
+    def minus_q(w):
+        K = 1 / (k / (1j * w) + c) + 1 / (1j * w * m)
+        return -abs(1 / K)
+    r = minimize_scalar(minus_q, bounds=(lo, hi), method="bounded", options={"xatol": 1e-12})
+    return -r.fun
+
+
+def test_adaptive_sweep_resolves_damped_peaks_with_few_points():
+    cases = [(1.0, 1e4, 2.0), (2.0, 3e5, 0.5), (0.5, 80.0, 0.02)]
+    for m, k, c in cases:
+        circuit = _sdof(m, k, c)
+        wn = math.sqrt(k / m)
+        s = adaptive_sweep(circuit, 0.1, 1e4)
+        peak = _exact_peak(m, k, c, 0.9 * wn, 1.1 * wn)
+        assert np.abs(s.Q0).max() == pytest.approx(peak, rel=0.01)
+        # A logarithmic grid is sure to land within 1 % of the peak only if its step
+        # is below the width of the band where |Q0| > 0.99·peak; it then needs many
+        # times the adaptive grid's points.
+        w = np.linspace(0.9 * wn, 1.1 * wn, 2_000_001)
+        K = 1 / (k / (1j * w) + c) + 1 / (1j * w * m)
+        band = w[np.abs(1 / K) >= 0.99 * peak]
+        needed = math.log(1e4 / 0.1) / math.log(band[-1] / band[0])
+        assert len(s.omega) < needed / 3
+
+
+def test_adaptive_sweep_on_a_two_mode_network():
+    text = """drive V a 0 velocity=1
+spring k1 a b 2e4
+damper c1 a b 1.5
+mass m1 b 0 1
+spring k2 b c 5e4
+damper c2 b c 0.8
+mass m2 c 0 0.5
+"""
+    c = mechcirc.parse(text)
+    res = [r for r in c.resonances() if r.kind == "resonance"]
+    assert len(res) == 2
+    s = adaptive_sweep(c, 1, 1e4)
+    dense = c.sweep(np.concatenate([np.linspace(r.omega_d * 0.9, r.omega_d * 1.1, 400001)
+                                    for r in res]))
+    for r in res:
+        near = np.abs(dense.omega - r.omega_d) < 0.1 * r.omega_d
+        peak = np.abs(dense.Q0[near]).max()
+        near_s = np.abs(s.omega - r.omega_d) < 0.1 * r.omega_d
+        assert np.abs(s.Q0[near_s]).max() == pytest.approx(peak, rel=0.01)
+    assert len(s.omega) < 1000
