@@ -30,6 +30,8 @@ def register(sub) -> None:
                         "on every core")
     p.add_argument("--revolutions", type=int, default=5, metavar="R",
                    help="revolutions to integrate; the last is tabulated (default 5)")
+    p.add_argument("--revolution", type=int, metavar="K",
+                   help="tabulate revolution K (1..R) instead of the last")
     p.add_argument("--alpha", type=float, default=40.0, metavar="DEG",
                    help="beat-up interval alpha [deg] (default 40, not printed in the paper)")
     p.add_argument("--beat-sign", type=int, choices=(-1, 1), default=-1,
@@ -106,7 +108,7 @@ def _overrides(args) -> dict:
 
 
 def _options(args) -> dict:
-    opts = {"points_per_revolution": args.points}
+    opts = {"points_per_revolution": args.points, "revolution": args.revolution}
     if args.rtol is not None:
         opts["rtol"] = args.rtol
     if args.steps_per_period is not None:
@@ -135,6 +137,14 @@ def _table(result) -> str:
         lo, hi = result.extrema[key]
         plo, phi = paper.get(key, ("-", "-"))
         lines.append(f"{key:<9} {_UNITS[key]:<6} {lo:>10.0f} {hi:>10.0f}   {plo!s:>10} {phi!s:>10}")
+    total = result.M2V if result.M5V is None else result.M2V + result.M5V
+    name = "-M2V*" if result.M5V is None else "-(M2+M5)*"
+    plo, phi = paper.get("M2V", ("-", "-"))
+    lines.append(f"{name:<9} {'N m':<6} {-total.max():>10.0f} {-total.min():>10.0f}   "
+                 f"{plo!s:>10} {phi!s:>10}")
+    lines.append("* the paper's printed moments fit this sign"
+                 + (" and the sum of both cranks" if result.M5V is not None else "")
+                 + " (docs/sley.md)")
     lines.extend(f"note: {n}" for n in result.notes)
     return "\n".join(lines)
 

@@ -278,7 +278,7 @@ def simulate(drive: str = "one-side", variant: int = 3, revolutions: int = 5,
              method: str | None = None, *, params: SleyParameters | None = None,
              points_per_revolution: int = DEFAULT_POINTS,
              steps_per_period: float | None = None, rtol: float | None = None,
-             table_points: int = 1024,
+             table_points: int = 1024, revolution: int | None = None,
              progress: Callable[[int, int], None] | None = None,
              **overrides) -> SleyResult:
     """Simulate a preset variant (Table 1 or 2) or given parameters over R revolutions.
@@ -304,6 +304,9 @@ def simulate(drive: str = "one-side", variant: int = 3, revolutions: int = 5,
         Relative tolerance of the scipy methods (default 1e-10).
     table_points : int
         Intervals of the φ4/μ/ν table (default 1024).
+    revolution : int, optional
+        Tabulate this revolution (1 … R) instead of the last; the integration
+        stops after it (later revolutions cannot change it).
     progress : callable, optional
         ``progress(done, total)`` after each revolution.
     **overrides
@@ -339,13 +342,14 @@ def simulate(drive: str = "one-side", variant: int = 3, revolutions: int = 5,
     return simulate_params(params, revolutions, method,
                            points_per_revolution=points_per_revolution,
                            steps_per_period=steps_per_period, rtol=rtol,
-                           table_points=table_points, progress=progress)
+                           table_points=table_points, revolution=revolution,
+                           progress=progress)
 
 
 def simulate_params(params: SleyParameters, revolutions: int = 5, method: str | None = None,
                     *, points_per_revolution: int = DEFAULT_POINTS,
                     steps_per_period: float | None = None, rtol: float | None = None,
-                    table_points: int = 1024,
+                    table_points: int = 1024, revolution: int | None = None,
                     progress: Callable[[int, int], None] | None = None) -> SleyResult:
     """:func:`simulate` for explicit :class:`SleyParameters` (same options)."""
     method = "rk4" if method is None else method
@@ -354,6 +358,12 @@ def simulate_params(params: SleyParameters, revolutions: int = 5, method: str | 
     if isinstance(revolutions, bool) or not isinstance(revolutions, (int, np.integer)) \
             or revolutions < 1:
         raise ParameterError(f"revolutions must be an integer >= 1, got {revolutions!r}")
+    if revolution is not None:
+        if isinstance(revolution, bool) or not isinstance(revolution, (int, np.integer)) \
+                or not 1 <= revolution <= revolutions:
+            raise ParameterError(f"revolution must be an integer in 1..{revolutions}, "
+                                 f"got {revolution!r}")
+        revolutions = int(revolution)       # later revolutions cannot change this one
     if int(points_per_revolution) < 16:
         raise ParameterError(f"points_per_revolution must be >= 16, got {points_per_revolution!r}")
     if method in _SCIPY_METHODS:
@@ -479,14 +489,14 @@ def _run_scipy(method, rtol, both, pvec, tab, y0, period, revolutions, npts, par
     for r in range(revolutions):
         last = r == revolutions - 1
         sol = solve_ivp(f, (r * period, (r + 1) * period), y, method=method, rtol=rtol,
-                        atol=rtol * scale, t_eval=t_eval if last else None)
+                        atol=rtol * scale, dense_output=last)
         if sol.status != 0:
             raise SolverError(f"solve_ivp({method}) failed in revolution {r + 1}: "
                               f"{sol.message}", status=sol.status)
-        n_steps += len(sol.t) if not last else 0
+        n_steps += len(sol.t) - 1
         nfev += sol.nfev
         if last:
-            ys_parts.append(sol.y.T)
+            ys_parts.append(sol.sol(t_eval).T)
         else:
             y = sol.y[:, -1].copy()
         if progress is not None:

@@ -104,3 +104,27 @@ def eq4_rhs(p, phi_p, alpha, beat_sign=-1.0):
 def driving_moment(p, t, y):
     phi2 = p["theta0"] + p["omega"] * t
     return -p["C2"] * dead_zone(y[0] - phi2, p["clearance"]) - p["k2"] * (y[1] - p["omega"])
+
+
+def eq9_rhs(p, phi_p, alpha, beat_sign=-1.0):
+    """f(t, y) of eq. (9), y = [φ2P, ω2P, φ5P, ω5P, φ4P, ω4P] (absolute angles)."""
+    def f(t, y):
+        phi2 = p["theta0"] + p["omega"] * t
+        phi4, mu, nu = rocker(y[0])
+        phi7, mu7, nu7 = rocker(y[2])
+        w4, w7 = mu * y[1], mu7 * y[3]
+        cl = p["clearance"]
+        d2, d5 = dead_zone(y[0] - phi2, cl), dead_zone(y[2] - phi2, cl)
+        d4, d7 = dead_zone(y[4] - phi4, cl), dead_zone(y[4] - phi7, cl)
+        x = (y[0] - phi_p + alpha / 2) % (2 * math.pi)
+        m4 = p["M0"] * math.sin(math.pi * x / alpha) if x < alpha else 0.0
+        e2 = (-p["I4"] * mu * nu * y[1] ** 2 - p["C2"] * d2 + p["C4"] * mu * d4
+              - p["k2"] * (y[1] - p["omega"]) + p["k4"] * mu * (y[5] - w4)) \
+            / (p["I2P"] + p["I4"] * mu * mu)
+        e5 = (-p["I7"] * mu7 * nu7 * y[3] ** 2 - p["C5"] * d5 + p["C7"] * mu7 * d7
+              - p["k5"] * (y[3] - p["omega"]) + p["k7"] * mu7 * (y[5] - w7)) \
+            / (p["I5P"] + p["I7"] * mu7 * mu7)
+        e4 = (-p["C4"] * d4 - p["C7"] * d7 + beat_sign * m4 - p["k4"] * (y[5] - w4)
+              - p["k7"] * (y[5] - w7)) / p["I4P"]
+        return np.array([y[1], e2, y[3], e5, y[5], e4])
+    return f

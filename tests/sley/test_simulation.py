@@ -181,3 +181,46 @@ def test_digest_orientation_values(table_runs):
     for v in (1, 3):
         assert close(table_runs["one-side", v].extrema["M2V"], PAPER["one-side"][v]["M2V"], 0.15), v
     assert close(table_runs["one-side", 3].extrema["eps2P"], PAPER["one-side"][3]["eps2P"], 0.05)
+
+
+def test_chosen_revolution():
+    a = simulate("one-side", 3, revolutions=5, revolution=2, points_per_revolution=720)
+    b = simulate("one-side", 3, revolutions=2, points_per_revolution=720)
+    assert a.revolution == 2
+    np.testing.assert_array_equal(a.eps4P, b.eps4P)
+    c = simulate("one-side", 3, revolutions=1, points_per_revolution=720)
+    assert not np.allclose(a.eps4P, c.eps4P, rtol=1e-3)        # the start transient shows
+    with pytest.raises(Exception, match="revolution must be"):
+        simulate("one-side", 3, revolutions=2, revolution=3)
+
+
+@pytest.mark.parametrize("beat_sign", [-1, 1])
+def test_both_sides_rhs_matches_independent_eq9(beat_sign):
+    from mechcirc.sley import simulation as S
+
+    kp = _kernels.load_python()
+    rng = np.random.default_rng(9)
+    p = preset("both-sides", 4, clearance=0.002, beat_sign=beat_sign)
+    theta0, phiP = S.start_angle(p), p.fourbar().dead_centres()[0].theta
+    tab, offset = S._table(p, 1024)
+    pv = S._param_vector(p, theta0, phiP)
+    d = {k: getattr(p, k) for k in ("I2P", "I4", "I4P", "I5P", "I7", "C2", "C4", "C5", "C7",
+                                    "k2", "k4", "k5", "k7", "omega", "clearance", "M0")}
+    d["theta0"] = theta0
+    f = ref.eq9_rhs(d, ref.front_dead_centre(), p.alpha, beat_sign=beat_sign)
+    dy, aux = np.empty(6), np.empty(6)
+    in_window = 0
+    for _ in range(300):
+        t = rng.uniform(0, 0.07)
+        d2, d5 = rng.normal(0, 0.004, 2)
+        phi2 = theta0 + p.omega * t
+        y_abs = np.array([phi2 + d2, p.omega * (1 + rng.normal(0, 0.05)), phi2 + d5,
+                          p.omega * (1 + rng.normal(0, 0.05)),
+                          ref.rocker(phi2)[0] + rng.normal(0, 0.01), rng.normal(0, 40)])
+        y_k = np.array([d2, y_abs[1], d5, y_abs[3], y_abs[4] - offset, y_abs[5]])
+        kp.rhs(True, t, y_k, pv, tab, dy, aux)
+        want = f(t, y_abs)
+        in_window += aux[5] != 0
+        for i in (1, 3, 5):
+            assert dy[i] == pytest.approx(want[i], rel=1e-7, abs=1e-6), i
+    assert in_window > 10
