@@ -36,8 +36,8 @@ from __future__ import annotations
 import math
 import os
 import time
-from functools import lru_cache
 from dataclasses import dataclass, field
+from functools import lru_cache
 from typing import Callable
 
 import numpy as np
@@ -444,7 +444,7 @@ def simulate_params(params: SleyParameters, revolutions: int = 5, method: str | 
         wall = time.perf_counter() - t_start
         ts, ys = rec_t, rec_y
         n_steps = per_rev * revolutions
-        nfev = 4 * n_steps
+        nfev = 4 * n_steps + revolutions          # + the first stage of each call
         notes.append(f"RK4 step {h:.4g} s ({per_rev} steps per revolution)")
 
     return _assemble(params, kern, both, pvec, tab, ts, ys, theta0, phiP, revolutions,
