@@ -281,6 +281,14 @@ def mobility(system: NodalSystem, omega: ArrayLike) -> NDArray[np.complex128]:
     return system.difference(solve_unit(system, omega)).astype(complex)
 
 
+def mobility_unrefined(system: NodalSystem, omega: ArrayLike) -> NDArray[np.complex128]:
+    """K(ω) [m/(N·s)] by one plain solve per ω, without refinement (the fast path).
+
+    Its relative error is about eps × cond(A(ω)), see :func:`condition_error`.
+    """
+    return system.difference(solve_unit(system, omega, refine=False))
+
+
 def element_response(system: NodalSystem, omega: ArrayLike, scale: NDArray) -> dict[str, tuple]:
     """``{name: (Q, v)}`` for every loaded element, for a drive force ``scale`` [N] per ω."""
     omega = np.asarray(omega, dtype=float)

@@ -56,8 +56,11 @@ def _roots_in_omega_squared(poly, degree):
         V = mpmath.matrix([[x ** p for p in range(degree, -1, -1)] for x in xs])
         y = mpmath.matrix([poly(mpmath.sqrt(x)) for x in xs])
         coeffs = mpmath.lu_solve(V, y)
-        roots = mpmath.polyroots([coeffs[i] for i in range(degree, -1, -1)], maxsteps=200,
-                                 extraprec=200, asc=True)
+        descending = [coeffs[i] for i in range(degree + 1)]
+        try:        # mpmath >= 1.4 wants ascending order; 1.3 knows only descending
+            roots = mpmath.polyroots(descending[::-1], maxsteps=200, extraprec=200, asc=True)
+        except TypeError:
+            roots = mpmath.polyroots(descending, maxsteps=200, extraprec=200)
         return sorted(float(mpmath.sqrt(r.real)) for r in roots if r.real > 0)
 
 
