@@ -246,6 +246,26 @@ def test_sweep_of_a_single_element(tmp_path, capsys, element, output):
         assert (tmp_path / "K.png").read_bytes()[:8] == PNG_SIGNATURE
 
 
+def test_sweep_force_drive_adds_v0_columns(tmp_path, capsys):
+    """Force drive F0: Q0 = F0 everywhere and the velocity answer v0 = F0·K gets columns."""
+    text = GOOD.replace("velocity=0.1", "force=20")
+    path = write(tmp_path, "force.mcir", text)
+    out_csv = tmp_path / "F.csv"
+    status, out, err = run(["sweep", path, "--omega-min", 1, "--omega-max", 100,
+                            "--points", 9, "--log", "-o", out_csv, "--json"], capsys)
+    assert status == 0, err
+    header, table = read_csv(out_csv)
+    assert ",".join(header) == "omega,K_re,K_im,Q0_re,Q0_im,v0_re,v0_im,flag"
+    s = mechcirc.parse(text).sweep(np.geomspace(1, 100, 9))
+    np.testing.assert_array_equal(table[:, 1] + 1j * table[:, 2], s.K)
+    np.testing.assert_array_equal(table[:, 3] + 1j * table[:, 4], np.full(9, 20.0))
+    np.testing.assert_array_equal(table[:, 5] + 1j * table[:, 6], s.v0)
+    np.testing.assert_allclose(s.v0, 20 * s.K, rtol=1e-15)
+    doc = json.loads(out)
+    np.testing.assert_array_equal(np.array(doc["v0"]["re"]) + 1j * np.array(doc["v0"]["im"]),
+                                  s.v0)
+
+
 def test_sweep_plot_writes_a_png(tmp_path, capsys):
     png = tmp_path / "K.png"
     status, out, err = run(["sweep", STB, "--omega-min", 10, "--omega-max", 1e4,
@@ -472,6 +492,18 @@ def test_internal_error_in_check_exit_1(monkeypatch, capsys):
     status, _, err = run(["check", STB], capsys)
     assert status == 1
     assert "internal error" in err and "Traceback" not in err
+
+
+def test_interrupt_exit_130(monkeypatch, capsys, tmp_path):
+    def interrupted(args):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(circuit_commands, "cmd_sweep", interrupted)
+    status, out, err = run(["sweep", STB, "--omega-min", 1, "--omega-max", 2,
+                            "-o", tmp_path / "K.csv"], capsys)
+    assert status == 130
+    assert err == "mechcirc: interrupted\n"
+    assert not (tmp_path / "K.csv").exists()
 
 
 def test_debug_shows_the_exception(monkeypatch, capsys):
