@@ -1,0 +1,564 @@
+"""Scene files: a linkage (docs/kinematics.md) with lumped masses, elastic elements and a drive.
+
+A scene file is a linkage TOML file with ``units`` (required) and five more
+tables::
+
+    units = "mm"                 # length unit of [points]: "m", "cm" or "mm"
+
+    [[masses]]                   # a lumped mass at a point [kg] ...
+    name = "m2"
+    point = "A"
+    mass = 1.5
+    [[masses]]                   # ... or a link's rotary inertia [kg·m²]
+    name = "J1"
+    link = "lever1"
+    inertia = 0.02
+
+    [[elastic]]                  # a binary link of [links] made elastic (axial spring)
+    name = "k4"                  # default: the link's name
+    link = "rodCD"
+    stiffness = 2.0e6            # [N/m]
+    damping = 40.0               # optional [N·s/m]
+
+    [[torsion]]                  # a torsion rod at a ground pivot between a link
+    name = "C2"                  # and a new body that turns with it in the cycle
+    link = "crank"
+    body = "shaft"
+    pivot = "A"                  # optional when the link has one ground pivot
+    stiffness = 1.0e5            # [N·m/rad]
+    damping = 7.0                # optional [N·m·s/rad]
+
+    [[loads]]                    # a spring and/or damper from a point to the frame
+    name = "warp"
+    point = "M"
+    anchor = "W"                 # a ground point, or direction = [dx, dy]
+    stiffness = 4.0e4            # [N/m]
+    damping = 0.0                # optional [N·s/m]
+
+    [drive]
+    link = "shaft"               # a link or torsion body (rotational: rad/s, N·m) ...
+    # point = "T"                # ... or a point (its speed along its path: m/s, N)
+    velocity = 0.1               # kinematic excitation amplitude, or force = F0
+
+The linkage part is read by :func:`mechcirc.kinematics.linkage.parse_linkage`
+(the scene tables are hidden from it, line numbers kept), so its errors and
+checks are the linkage's.  Masses, stiffnesses and dampings are SI; lengths
+are converted from ``units`` to metres.  Exactly one crank.
+
+Structure.  Releasing the elastic links and torsion rods splits the moving
+bodies into *rigid parts* (bodies joined through joints other than ground
+pivots).  Each part must have one degree of freedom (Grübler 3n − 2p = 1
+counting its ground pivots); an elastic link pinned to the frame, whose
+release leaves a two-degree-of-freedom part, is refused.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..errors import GeometryError, NetlistError
+from ..kinematics.linkage import Linkage, _err, parse_linkage
+
+__all__ = ["Scene", "SceneMass", "ElasticLink", "Torsion", "Load", "SceneDrive",
+           "parse_scene", "load_scene", "LENGTH_UNITS", "SCENE_TABLES"]
+
+#: Length units accepted for ``units`` and their size [m].
+LENGTH_UNITS = {"m": 1.0, "cm": 1e-2, "mm": 1e-3}
+#: Tables a scene adds to the linkage format.
+SCENE_TABLES = ("masses", "elastic", "torsion", "loads", "drive")
+_IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+
+
+@dataclass(frozen=True)
+class SceneMass:
+    """A lumped mass at ``point`` [kg] (``kind="mass"``) or a link's inertia [kg·m²] (``"inertia"``)."""
+
+    name: str
+    kind: str
+    value: float
+    point: str | None = None
+    link: str | None = None
+
+
+@dataclass(frozen=True)
+class ElasticLink:
+    """A binary link of the linkage that is an axial spring ``stiffness`` [N/m] (∥ ``damping`` [N·s/m])."""
+
+    name: str
+    link: str
+    stiffness: float
+    damping: float = 0.0
+
+
+@dataclass(frozen=True)
+class Torsion:
+    """A torsion rod at ground pivot ``pivot`` between ``link`` and the new ``body``.
+
+    ``stiffness`` [N·m/rad], ``damping`` [N·m·s/rad].  In the rigid motion the
+    body turns with the link.
+    """
+
+    name: str
+    link: str
+    body: str
+    pivot: str
+    stiffness: float
+    damping: float = 0.0
+
+
+@dataclass(frozen=True)
+class Load:
+    """A spring ``stiffness`` [N/m] ∥ damper ``damping`` [N·s/m] from ``point`` to the frame.
+
+    It acts along the line to the ground point ``anchor`` or along ``direction``.
+    """
+
+    name: str
+    point: str
+    stiffness: float
+    damping: float
+    anchor: str | None = None
+    direction: tuple | None = None
+
+
+@dataclass(frozen=True)
+class SceneDrive:
+    """The excitation: on a ``link`` (rotational) or at a ``point`` (along its path).
+
+    ``kind`` is ``"velocity"`` [rad/s or m/s] or ``"force"`` [N·m or N].
+    """
+
+    name: str
+    kind: str
+    amplitude: float
+    link: str | None = None
+    point: str | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class Scene:
+    """A parsed scene; see the module docstring for the file format.
+
+    Attributes
+    ----------
+    name : str
+    linkage : Linkage
+        The rigid mechanism (every elastic element rigid).
+    units : str
+        Length unit of the points; ``length_scale`` is its size [m].
+    masses, elastic, torsions, loads : tuple
+    drive : SceneDrive
+    parts : tuple of tuple of str
+        The rigid parts left when the elastic elements are released (bodies:
+        links and torsion bodies); the part holding the drive comes first.
+    source : str
+    """
+
+    name: str
+    linkage: Linkage
+    units: str
+    length_scale: float
+    masses: tuple
+    elastic: tuple
+    torsions: tuple
+    loads: tuple
+    drive: SceneDrive
+    parts: tuple
+    source: str = "<string>"
+
+    @property
+    def omega_shaft(self) -> float:
+        """The crank's angular speed Ω [rad/s] (harmonics are multiples of it)."""
+        return self.linkage.cranks[0].omega
+
+    @property
+    def bodies(self) -> dict:
+        """Rigid body → its points: links that are not elastic, and torsion bodies."""
+        el = {e.link for e in self.elastic}
+        out = {l: pts for l, pts in self.linkage.links.items() if l not in el}
+        for t in self.torsions:
+            out[t.body] = (t.pivot,)
+        return out
+
+    def part_of_body(self) -> dict:
+        """Body → index of its rigid part."""
+        return {b: i for i, part in enumerate(self.parts) for b in part}
+
+    def part_of_point(self, point: str) -> int | None:
+        """Index of the rigid part a point moves with, None for a ground point."""
+        if point in self.linkage.ground:
+            return None
+        for b, pts in self.bodies.items():
+            if point in pts and b not in {t.body for t in self.torsions}:
+                return self.part_of_body()[b]
+        return None
+
+
+def _hide_scene_tables(text: str) -> str:
+    """The text with the scene tables blanked (line numbers kept), for the linkage parser."""
+    header = re.compile(r"^\s*\[\[?\s*([^\]]+?)\s*\]\]?\s*(#.*)?$")
+    key = re.compile(r'^\s*"?([A-Za-z0-9_-]+)"?\s*=')
+    out, hiding, top = [], False, True
+    for line in text.splitlines():
+        m = header.match(line)
+        if m:
+            top = False
+            hiding = m.group(1).split(".")[0].strip('"') in SCENE_TABLES
+        elif top:
+            k = key.match(line)
+            hiding = bool(k) and k.group(1) in SCENE_TABLES
+        out.append("" if hiding else line)
+    return "\n".join(out) + "\n"
+
+
+def _number(text, source, value, what, table, key, n, *, positive=True, allow_zero=False):
+    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+    if ok and positive:
+        ok = value > 0 or (allow_zero and value == 0)
+    if not ok:
+        need = "a finite number" + ("" if not positive else " ≥ 0" if allow_zero else " > 0")
+        raise _err(text, source, f"{what} must be {need}, got {value!r}", table, key,
+                   occurrence=n, expected=need)
+    return float(value)
+
+
+def parse_scene(text: str, source: str = "<string>") -> Scene:
+    """Parse the TOML text of a scene (see the module docstring).
+
+    Raises
+    ------
+    NetlistError
+        Anything wrong in the file (TOML syntax, an unknown point, link or
+        key, a bad value), at file:line:col.
+    GeometryError
+        The linkage's own geometry checks, or a rigid part that does not have
+        exactly one degree of freedom once the elastic elements are released.
+    """
+    try:
+        doc = tomllib.loads(text)
+    except tomllib.TOMLDecodeError:
+        parse_linkage(text, source)     # raises the located TOML error
+        raise
+    allowed = {"name", "points", "ground", "links", "cranks", "units", "description",
+               *SCENE_TABLES}
+    for k in doc:
+        if k not in allowed:
+            err = _err(text, source, f"unknown top-level key {k!r}", None, k,
+                       expected=", ".join(sorted(allowed)))
+            if not err.line:                  # a table: point at its header
+                for n, line in enumerate(text.splitlines(), start=1):
+                    if re.match(r"^\s*\[\[?\s*" + re.escape(k) + r"\s*[\].]", line):
+                        err = NetlistError(err.message, source, n, line.index(k) + 1,
+                                           err.expected)
+                        break
+            raise err
+    linkage = parse_linkage(_hide_scene_tables(text), source)
+    units = doc.get("units")
+    if units not in LENGTH_UNITS:
+        raise _err(text, source, f"a scene needs units = \"m\", \"cm\" or \"mm\" (the length "
+                   f"unit of [points]), got {units!r}", None, "units",
+                   expected="units = \"mm\" (masses and stiffnesses are SI)")
+    if len(linkage.cranks) != 1:
+        raise _err(text, source, f"a scene has one degree of freedom and one crank; this "
+                   f"linkage has {len(linkage.cranks)}", "cranks", "link", occurrence=1)
+    points, links = linkage.pose, linkage.links
+    names: dict[str, str] = {}
+
+    def new_name(name, table, key, n, default=None):
+        name = default if name is None else name
+        if not isinstance(name, str) or not _IDENT.fullmatch(name):
+            raise _err(text, source, f"[[{table}]] #{n + 1}: name {name!r} is not a valid "
+                       f"element name", table, key, occurrence=n,
+                       expected="letters, digits and '_', not starting with a digit")
+        if name in names:
+            raise _err(text, source, f"element name {name!r} is already used in "
+                       f"[[{names[name]}]]", table, key, occurrence=n, expected="a unique name")
+        names[name] = table
+        return name
+
+    def entries(table):
+        raw = doc.get(table, [])
+        if not isinstance(raw, list) or not all(isinstance(e, dict) for e in raw):
+            raise _err(text, source, f"{table} must be an array of tables [[{table}]]",
+                       None, table)
+        return raw
+
+    def check_keys(entry, table, n, allowed_keys):
+        for k in entry:
+            if k not in allowed_keys:
+                raise _err(text, source, f"unknown key {k!r} in [[{table}]] #{n + 1}", table,
+                           k, occurrence=n, expected=", ".join(allowed_keys))
+
+    def point_ref(entry, table, n, key="point"):
+        p = entry.get(key)
+        if p not in points:
+            raise _err(text, source, f"[[{table}]] #{n + 1}: {key} {p!r} does not exist in "
+                       f"[points]", table, key, value=p if isinstance(p, str) else None,
+                       occurrence=n, expected=f"one of {', '.join(points)}")
+        return p
+
+    # ---- elastic links
+    elastic = []
+    for n, e in enumerate(entries("elastic")):
+        check_keys(e, "elastic", n, ("name", "link", "stiffness", "damping"))
+        lname = e.get("link")
+        if lname not in links:
+            raise _err(text, source, f"elastic link {lname!r} is not in the linkage's [links]",
+                       "elastic", "link", value=lname if isinstance(lname, str) else None,
+                       occurrence=n, expected=f"one of {', '.join(links)}")
+        if len(links[lname]) != 2:
+            raise _err(text, source, f"elastic link {lname!r} has {len(links[lname])} points; "
+                       "only a binary link can be an axial spring", "elastic", "link",
+                       value=lname, occurrence=n, expected="a link of two points")
+        if any(x.link == lname for x in elastic):
+            raise _err(text, source, f"link {lname!r} is declared elastic twice", "elastic",
+                       "link", value=lname, occurrence=n)
+        if any(c.link == lname for c in linkage.cranks):
+            raise _err(text, source, f"the crank {lname!r} cannot be an axial spring",
+                       "elastic", "link", value=lname, occurrence=n)
+        name = new_name(e.get("name"), "elastic", "name" if "name" in e else "link", n, lname)
+        k = _number(text, source, e.get("stiffness"), f"stiffness of {name!r} [N/m]",
+                    "elastic", "stiffness" if "stiffness" in e else "link", n)
+        c = _number(text, source, e.get("damping", 0.0), f"damping of {name!r} [N·s/m]",
+                    "elastic", "damping", n, allow_zero=True)
+        elastic.append(ElasticLink(name, lname, k, c))
+    elastic_links = {x.link for x in elastic}
+
+    # ---- torsion rods
+    torsions = []
+    for n, t in enumerate(entries("torsion")):
+        check_keys(t, "torsion", n, ("name", "link", "body", "pivot", "stiffness", "damping"))
+        lname = t.get("link")
+        if lname not in links or lname in elastic_links:
+            raise _err(text, source, f"torsion rod #{n + 1}: link {lname!r} is not a rigid link "
+                       f"of [links]", "torsion", "link",
+                       value=lname if isinstance(lname, str) else None, occurrence=n,
+                       expected=f"one of {', '.join(l for l in links if l not in elastic_links)}")
+        pivots = [p for p in links[lname] if p in linkage.ground]
+        pivot = t.get("pivot", pivots[0] if len(pivots) == 1 else None)
+        if pivot not in pivots:
+            raise _err(text, source, f"torsion rod #{n + 1} must sit at a ground pivot of link "
+                       f"{lname!r} (its ground pivots: {pivots or 'none'})", "torsion",
+                       "pivot" if "pivot" in t else "link", occurrence=n,
+                       expected="pivot = one of the link's ground pivots")
+        body = t.get("body")
+        if not isinstance(body, str) or not _IDENT.fullmatch(body) or body in links \
+                or any(x.body == body for x in torsions) or body == "ground":
+            raise _err(text, source, f"torsion rod #{n + 1}: body {body!r} must be a new name "
+                       "(not a link, 'ground' or another rod's body)", "torsion",
+                       "body" if "body" in t else "link", occurrence=n,
+                       expected="an identifier for the body beyond the rod")
+        name = new_name(t.get("name"), "torsion", "name" if "name" in t else "body", n,
+                        f"C_{body}")
+        k = _number(text, source, t.get("stiffness"), f"stiffness of {name!r} [N·m/rad]",
+                    "torsion", "stiffness" if "stiffness" in t else "link", n)
+        c = _number(text, source, t.get("damping", 0.0), f"damping of {name!r} [N·m·s/rad]",
+                    "torsion", "damping", n, allow_zero=True)
+        torsions.append(Torsion(name, lname, body, pivot, k, c))
+    bodies = {l for l in links if l not in elastic_links} | {t.body for t in torsions}
+    rigid_points = set().union(*(set(links[l]) for l in links if l not in elastic_links))
+
+    # ---- masses
+    masses = []
+    for n, m in enumerate(entries("masses")):
+        check_keys(m, "masses", n, ("name", "point", "link", "mass", "inertia"))
+        if ("point" in m) == ("link" in m):
+            raise _err(text, source, f"[[masses]] #{n + 1} needs exactly one of point or link",
+                       "masses", next(iter(m), "name"), occurrence=n,
+                       expected='point = "P" with mass = …, or link = "L" with inertia = …')
+        if "point" in m:
+            p = point_ref(m, "masses", n)
+            if p not in rigid_points and p not in linkage.ground:
+                raise _err(text, source, f"mass at point {p!r}: the point is on elastic links "
+                           "only, so it belongs to no rigid part", "masses", "point", value=p,
+                           occurrence=n, expected="a point of a rigid link")
+            if "inertia" in m or "mass" not in m:
+                raise _err(text, source, f"[[masses]] #{n + 1} at a point takes mass = … [kg]",
+                           "masses", "point", occurrence=n)
+            name = new_name(m.get("name"), "masses", "name" if "name" in m else "point", n,
+                            f"m_{p}")
+            v = _number(text, source, m["mass"], f"mass {name!r} [kg]", "masses", "mass", n)
+            masses.append(SceneMass(name, "mass", v, point=p))
+        else:
+            lname = m.get("link")
+            if lname not in bodies:
+                hint = (" (an elastic link has no inertia of its own here: lump its mass at "
+                        "its end points)") if lname in elastic_links else ""
+                raise _err(text, source, f"[[masses]] #{n + 1}: link {lname!r} is not a rigid "
+                           f"link or torsion body{hint}", "masses", "link",
+                           value=lname if isinstance(lname, str) else None, occurrence=n,
+                           expected=f"one of {', '.join(sorted(bodies))}")
+            if "mass" in m or "inertia" not in m:
+                raise _err(text, source, f"[[masses]] #{n + 1} on a link takes inertia = … "
+                           "[kg·m²]", "masses", "link", occurrence=n)
+            name = new_name(m.get("name"), "masses", "name" if "name" in m else "link", n,
+                            f"J_{lname}")
+            v = _number(text, source, m["inertia"], f"inertia {name!r} [kg·m²]", "masses",
+                        "inertia", n)
+            masses.append(SceneMass(name, "inertia", v, link=lname))
+
+    # ---- loads
+    loads = []
+    for n, ld in enumerate(entries("loads")):
+        check_keys(ld, "loads", n, ("name", "point", "anchor", "direction", "stiffness",
+                                    "damping"))
+        p = point_ref(ld, "loads", n)
+        if ("anchor" in ld) == ("direction" in ld):
+            raise _err(text, source, f"load #{n + 1} needs exactly one of anchor or direction",
+                       "loads", "point", occurrence=n,
+                       expected='anchor = "GROUND_POINT" or direction = [dx, dy]')
+        anchor = direction = None
+        if "anchor" in ld:
+            anchor = ld["anchor"]
+            if anchor not in linkage.ground:
+                raise _err(text, source, f"load #{n + 1}: anchor {anchor!r} is not a ground "
+                           "point", "loads", "anchor", occurrence=n,
+                           value=anchor if isinstance(anchor, str) else None,
+                           expected=f"one of {', '.join(linkage.ground)}")
+        else:
+            d = ld["direction"]
+            ok = isinstance(d, list) and len(d) == 2 and all(
+                isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
+                for x in d) and any(x != 0 for x in d)
+            if not ok:
+                raise _err(text, source, f"load #{n + 1}: direction must be [dx, dy], not zero, "
+                           f"got {d!r}", "loads", "direction", occurrence=n)
+            direction = (float(d[0]), float(d[1]))
+        name = new_name(ld.get("name"), "loads", "name" if "name" in ld else "point", n,
+                        f"load_{p}")
+        k = _number(text, source, ld.get("stiffness", 0.0), f"stiffness of {name!r} [N/m]",
+                    "loads", "stiffness", n, allow_zero=True)
+        c = _number(text, source, ld.get("damping", 0.0), f"damping of {name!r} [N·s/m]",
+                    "loads", "damping", n, allow_zero=True)
+        if k == 0 and c == 0:
+            raise _err(text, source, f"load {name!r} needs stiffness > 0 or damping > 0",
+                       "loads", "point", occurrence=n)
+        loads.append(Load(name, p, k, c, anchor, direction))
+
+    # ---- drive
+    dr = doc.get("drive")
+    if not isinstance(dr, dict):
+        raise NetlistError("a scene needs a [drive] table", source, 0, 0,
+                           '[drive] with link = "…" (or point = "…") and velocity = V0')
+    for k in dr:
+        if k not in ("name", "link", "point", "velocity", "force"):
+            raise _err(text, source, f"unknown key {k!r} in [drive]", "drive", k,
+                       expected="name, link or point, velocity or force")
+    if ("link" in dr) == ("point" in dr):
+        raise _err(text, source, "[drive] needs exactly one of link or point", "drive",
+                   next(iter(dr), "link"), expected='link = "…" or point = "…"')
+    if "link" in dr and dr["link"] not in bodies:
+        raise _err(text, source, f"[drive] link {dr['link']!r} is not a rigid link or torsion "
+                   "body", "drive", "link", expected=f"one of {', '.join(sorted(bodies))}")
+    if "point" in dr:
+        if dr["point"] not in points:
+            raise _err(text, source, f"[drive] point {dr['point']!r} does not exist in [points]",
+                       "drive", "point", expected=f"one of {', '.join(points)}")
+        if dr["point"] not in rigid_points:
+            raise _err(text, source, f"[drive] point {dr['point']!r} is on no rigid link",
+                       "drive", "point")
+    if ("velocity" in dr) == ("force" in dr):
+        raise _err(text, source, "[drive] needs exactly one of velocity = V0 or force = F0",
+                   "drive", "force" if "force" in dr else next(iter(dr), "link"))
+    kind = "velocity" if "velocity" in dr else "force"
+    amp = _number(text, source, dr[kind], f"drive {kind} amplitude", "drive", kind, 0,
+                  positive=False)
+    dname = dr.get("name", "V")
+    if not isinstance(dname, str) or not _IDENT.fullmatch(dname) or dname in names:
+        raise _err(text, source, f"[drive] name {dname!r} is not a valid unused element name",
+                   "drive", "name")
+    drive = SceneDrive(dname, kind, amp, link=dr.get("link"), point=dr.get("point"))
+
+    scene = Scene(str(doc.get("name", linkage.name)), linkage, units, LENGTH_UNITS[units],
+                  tuple(masses), tuple(elastic), tuple(torsions), tuple(loads), drive, (),
+                  source)
+    object.__setattr__(scene, "parts", _parts(scene))
+    return scene
+
+
+def _parts(scene: Scene) -> tuple:
+    """Rigid parts after releasing the elastic elements; checks each has one DOF."""
+    lk = scene.linkage
+    bodies = scene.bodies
+    tbodies = {t.body for t in scene.torsions}
+    parent = {b: b for b in bodies}
+
+    def find(b):
+        while parent[b] != b:
+            parent[b] = parent[parent[b]]
+            b = parent[b]
+        return b
+
+    for p in lk.pose:
+        if p in lk.ground:
+            continue
+        on = [b for b, pts in bodies.items() if p in pts and b not in tbodies]
+        for b in on[1:]:
+            parent[find(b)] = find(on[0])
+    groups: dict[str, list] = {}
+    for b in bodies:
+        groups.setdefault(find(b), []).append(b)
+    parts = [tuple(g) for g in groups.values()]
+    for part in parts:
+        n = len(part)
+        pairs = 0
+        for p in {p for b in part for p in bodies[b]}:
+            k = sum(1 for b in part if p in bodies[b]) + (1 if p in lk.ground else 0)
+            pairs += max(k - 1, 0)
+        w = 3 * n - 2 * pairs
+        if w != 1:
+            near = [e.name for e in scene.elastic
+                    if any(p in bodies[b] for b in part for p in lk.links[e.link])]
+            raise GeometryError(
+                f"{scene.source}: once the elastic elements are released, the rigid part "
+                f"{{{', '.join(part)}}} has W = 3·{n} − 2·{pairs} = {w} degrees of freedom; "
+                f"each rigid part between elastic elements must have exactly one (elastic "
+                f"elements next to it: {', '.join(near) or 'none'}; an elastic link pinned to "
+                f"the frame is not supported: model it as a torsion rod or a load)")
+    part_of = {b: i for i, part in enumerate(parts) for b in part}
+    for e in scene.elastic:
+        ends = []
+        for p in lk.links[e.link]:
+            on = [b for b, pts in bodies.items() if p in pts and b not in tbodies]
+            if not on and p not in lk.ground:
+                raise GeometryError(f"{scene.source}: elastic link {e.link!r} ends at point "
+                                    f"{p!r}, which is on no rigid link and not a ground pivot")
+            ends.append(part_of[on[0]] if on else None)
+        if ends[0] is not None and ends[0] == ends[1]:
+            raise GeometryError(
+                f"{scene.source}: elastic link {e.link!r} joins the rigid part "
+                f"{{{', '.join(parts[ends[0]])}}} to itself (it is redundant in a rigid "
+                f"loop); only links between different rigid parts or to the frame are supported")
+    d = scene.drive
+    if d.link is not None:
+        first = d.link
+    else:
+        first = next(b for b, pts in bodies.items() if d.point in pts and b not in tbodies)
+    parts.sort(key=lambda part: first not in part)
+    return tuple(parts)
+
+
+def load_scene(path: str | Path) -> Scene:
+    """Read and parse a scene TOML file (see :func:`parse_scene`).
+
+    Raises
+    ------
+    NetlistError
+        The file is missing or unreadable, or has an error.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise NetlistError("no such file", str(path), 0, 0, "the path of a scene .toml") from None
+    except IsADirectoryError:
+        raise NetlistError("is a directory", str(path), 0, 0, "a scene .toml file") from None
+    except UnicodeDecodeError as exc:
+        raise NetlistError(f"not UTF-8 ({exc.reason})", str(path)) from None
+    except OSError as exc:
+        raise NetlistError(f"cannot read: {exc.strerror}", str(path)) from None
+    return parse_scene(text.removeprefix("\ufeff"), str(path))

@@ -1,0 +1,189 @@
+"""Bad scene input (issue 7 §5): each a clear error, located where a line is to blame."""
+
+import math
+
+import pytest
+
+import _scene_helpers as helpers
+from mechcirc.errors import GeometryError, NetlistError
+from mechcirc.kinematics.fourbar import FourBar
+from mechcirc.scene import build, parse_scene
+
+BASE = '''units = "m"
+[points]
+O1 = [0.0, 0.0]
+A  = [0.1, 0.25]
+B  = [0.55, 0.3]
+O2 = [0.6, 0.0]
+C  = [0.9, 0.2]
+[ground]
+points = ["O1", "O2"]
+[links]
+lever1 = ["O1", "A"]
+rod = ["A", "B"]
+lever2 = ["O2", "B", "C"]
+[[cranks]]
+link = "lever1"
+omega = 5.0
+[[elastic]]
+link = "rod"
+stiffness = 3.0e5
+[[masses]]
+point = "C"
+mass = 4.0
+[drive]
+link = "lever1"
+velocity = 1.0
+'''
+
+
+def _where(text, needle):
+    """1-based (line, col) of ``needle`` in ``text``, found by the test itself."""
+    for n, line in enumerate(text.splitlines(), start=1):
+        if needle in line:
+            return n, line.index(needle) + 1
+    raise AssertionError(needle)
+
+
+def test_the_base_scene_is_valid():
+    assert build(parse_scene(BASE), 0.1).circuit.resonances()
+
+
+def test_mass_at_a_point_that_does_not_exist():
+    text = BASE.replace('point = "C"', 'point = "Q"')
+    with pytest.raises(NetlistError) as e:
+        parse_scene(text, "s.toml")
+    assert "'Q' does not exist" in e.value.message
+    assert (e.value.line, e.value.col) == _where(text, '"Q"')
+    assert str(e.value).startswith(f"s.toml:{e.value.line}:")
+
+
+def test_elastic_link_not_in_the_linkage():
+    text = BASE.replace('link = "rod"', 'link = "rod9"')
+    with pytest.raises(NetlistError) as e:
+        parse_scene(text)
+    assert "elastic link 'rod9' is not in the linkage" in e.value.message
+    assert e.value.line == _where(text, 'link = "rod9"')[0]
+    assert "rod" in e.value.expected
+
+
+def test_crank_angle_where_the_mechanism_cannot_be_assembled():
+    # a non-Grashof four-bar: the input link rocks, it cannot reach 180° from the pose
+    fb = FourBar(60.0, 50.0, 70.0, 65.0)
+    assert not fb.crank_rotates_fully
+    P = helpers.fourbar_pose(fb, math.radians(80.0))
+    pts = "\n".join(f"{k} = [{x!r}, {y!r}]" for k, (x, y) in P.items())
+    scene = parse_scene(f'''units = "mm"
+[points]
+{pts}
+[ground]
+points = ["A", "D"]
+[links]
+crank = ["A", "B"]
+coupler = ["B", "C"]
+rocker = ["D", "C"]
+[[cranks]]
+link = "crank"
+omega = 1.0
+[[masses]]
+link = "rocker"
+inertia = 1.0
+[drive]
+link = "crank"
+velocity = 1.0
+''')
+    build(scene, 0.2)
+    with pytest.raises(GeometryError, match=r"cannot be assembled .* infinite"):
+        build(scene, math.pi)
+
+
+def test_dead_centre_names_the_singular_ratio():
+    from mechcirc.sley import preset
+
+    p = preset("one-side", 1)
+    theta_pose = 0.3
+    scene = parse_scene(helpers.sley_scene_text(p, theta_pose))
+    for dc in p.fourbar().dead_centres():
+        with pytest.raises(GeometryError) as e:
+            build(scene, dc.theta - theta_pose)
+        msg = str(e.value)
+        assert "dead centre" in msg and "{sley}" in msg and "ω_sley/ω_crank" in msg
+    build(scene, p.fourbar().dead_centres()[0].theta - theta_pose + 0.01)   # just beside it
+
+
+def test_point_drive_at_rest_is_a_dead_centre_of_the_drive():
+    fb = FourBar(29.0, 37.0, 188.0, 189.0)
+    P = helpers.fourbar_pose(fb, 0.0)
+    pts = "\n".join(f"{k} = [{x!r}, {y!r}]" for k, (x, y) in P.items())
+    scene = parse_scene(f'''units = "mm"
+[points]
+{pts}
+[ground]
+points = ["A", "D"]
+[links]
+crank = ["A", "B"]
+coupler = ["B", "C"]
+rocker = ["D", "C"]
+[[cranks]]
+link = "crank"
+omega = 1.0
+[[masses]]
+point = "B"
+mass = 1.0
+[drive]
+point = "C"
+force = 1.0
+''')
+    with pytest.raises(GeometryError, match=r"drive is at a dead centre: the velocity ratio "
+                                            r"\|v_C\|/ω_crank"):
+        build(scene, fb.dead_centres()[1].theta)
+
+
+@pytest.mark.parametrize("old,new,needle,match", [
+    ('units = "m"\n', '', None, "needs units"),
+    ('units = "m"', 'units = "furlong"', 'units', "needs units"),
+    ('stiffness = 3.0e5', 'stiffness = -3.0e5', 'stiffness', "must be a finite number > 0"),
+    ('[drive]\n', '[drive]\nlinkk = "x"\n', 'linkk', "unknown key 'linkk'"),
+    ('velocity = 1.0', 'velocity = 1.0\nforce = 2.0', 'force', "exactly one of velocity"),
+    ('mass = 4.0', 'inertia = 4.0', 'point = "C"', "takes mass"),
+    ('[[masses]]\npoint = "C"', '[[masses]]\nlink = "rod"  # here', 'link = "rod"  # here',
+     "elastic link has no"),
+    ('omega = 5.0\n', 'omega = 5.0\n[bogus]\nx = 1\n', 'bogus', "unknown top-level key"),
+])
+def test_bad_values_are_located(old, new, needle, match):
+    text = BASE.replace(old, new, 1)
+    assert text != BASE
+    with pytest.raises(NetlistError, match=match) as e:
+        parse_scene(text)
+    if needle is not None:
+        assert e.value.line == _where(text, needle)[0]
+
+
+def test_toml_syntax_error_is_located():
+    text = BASE.replace("mass = 4.0", "mass = = 4.0")
+    with pytest.raises(NetlistError, match="TOML syntax") as e:
+        parse_scene(text)
+    assert e.value.line == _where(text, "mass = =")[0]
+
+
+def test_elastic_link_pinned_to_the_frame_leaves_a_two_dof_part():
+    text = BASE.replace('rod = ["A", "B"]', 'rod = ["A", "B"]\nlever2b = ["O2", "B"]') \
+        .replace('lever2 = ["O2", "B", "C"]', 'lever2 = ["B", "C"]\nlink3 = ["C", "O3"]') \
+        .replace('points = ["O1", "O2"]', 'points = ["O1", "O2", "O3"]') \
+        .replace('C  = [0.9, 0.2]', 'C  = [0.9, 0.2]\nO3 = [1.0, -0.3]') \
+        .replace('link = "rod"', 'link = "lever2b"')
+    with pytest.raises(GeometryError, match=r"W = 3·3 − 2·4 = 1|degrees of freedom"):
+        parse_scene(text)
+
+
+def test_ternary_link_cannot_be_an_axial_spring():
+    text = BASE.replace('link = "rod"', 'link = "lever2"')
+    with pytest.raises(NetlistError, match="only a binary link"):
+        parse_scene(text)
+
+
+def test_duplicate_element_names():
+    text = BASE.replace('[[masses]]\npoint = "C"', '[[masses]]\nname = "rod"\npoint = "C"')
+    with pytest.raises(NetlistError, match="'rod' is already used") as e:
+        parse_scene(text)
+    assert e.value.line == _where(text, 'name = "rod"')[0]
