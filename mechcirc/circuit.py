@@ -231,3 +231,15 @@ class Circuit:
         from .resonances import find_resonances
 
         return find_resonances(self, omega_max=omega_max)
+
+    def two_port(self, P1: str, P2: str, S1: str, S2: str, omega: ArrayLike, **kwargs):
+        """Z parameters [m/(N·s)] between ports P1–P2 and S1–S2 as an ``skrf.Network``; see :func:`mechcirc.interop.skrf.two_port`."""
+        from .interop.skrf import two_port
+
+        return two_port(self, P1, P2, S1, S2, omega, **kwargs)
+
+    def formula(self, **kwargs):
+        """K(ω) as a SymPy expression nested as the reduction tree; see :func:`mechcirc.interop.formula.formula`."""
+        from .interop.formula import formula
+
+        return formula(self, **kwargs)

@@ -1,6 +1,9 @@
-"""Plots of sweep results; matplotlib is imported inside each function.
+"""Plots of sweep results, element forces and measurements; matplotlib is imported inside.
 
-Each ``plot_*`` function returns the matplotlib Figure it drew on.
+Each ``plot_*`` function returns the matplotlib Figure it drew on.  Every
+axis carries its unit, the title names the netlist, and the file format
+follows the extension given to :func:`mechcirc.cli._common.save_figure`
+(PNG, SVG, PDF, ...).
 """
 
 from __future__ import annotations
@@ -16,23 +19,44 @@ def _pyplot():
     return plt
 
 
+def _mark_resonances(axes, resonances, legend_ax):
+    labelled = set()
+    for r in resonances:
+        style = "-" if r.kind == "resonance" else "--"
+        label = None if r.kind in labelled else ("resonance (K = 0)" if r.kind == "resonance"
+                                                  else "anti-resonance (K = ∞)")
+        labelled.add(r.kind)
+        for ax in axes:
+            ax.axvline(r.omega_d or r.omega, color="0.5", lw=0.8, ls=style,
+                       label=label if ax is legend_ax else None)
+    if resonances:
+        legend_ax.legend(loc="best", fontsize="small")
+
+
 def plot_sweep(result, title: str | None = None, resonances=()):
-    """|K| [m/(N·s)] and |Q0| [N] against ω [rad/s] on log axes; returns the Figure.
+    """Bode-style |K| [m/(N·s)] and arg K [deg], and |Q0| [N], against ω [rad/s].
 
     ``resonances`` (from :func:`mechcirc.resonances.find_resonances`) are drawn
     as vertical lines: solid for K = 0, dashed for K = ∞.  Flagged points
     (on or within rounding of a pole or zero) are marked with crosses.
+    Returns the Figure.
     """
     import numpy as np
 
     plt = _pyplot()
-    fig, (ax_k, ax_q) = plt.subplots(2, 1, sharex=True, figsize=(7, 6))
+    fig, (ax_k, ax_p, ax_q) = plt.subplots(3, 1, sharex=True, figsize=(7, 8),
+                                           gridspec_kw={"height_ratios": [3, 2, 3]})
     omega = result.omega
     positive = omega > 0
     with np.errstate(all="ignore"):
         absK, absQ = np.abs(result.K), np.abs(result.Q0)
+        phase = np.degrees(np.angle(result.K))
     ax_k.loglog(omega[positive], absK[positive], color="C0")
     ax_k.set_ylabel("|K| [m/(N·s)]")
+    ax_p.semilogx(omega[positive], phase[positive], color="C2")
+    ax_p.set_ylabel("arg K [deg]")
+    ax_p.set_ylim(-190, 190)
+    ax_p.set_yticks([-180, -90, 0, 90, 180])
     ax_q.loglog(omega[positive], absQ[positive], color="C1")
     ax_q.set_ylabel("|Q0| [N]")
     ax_q.set_xlabel("ω [rad/s]")
@@ -40,19 +64,66 @@ def plot_sweep(result, title: str | None = None, resonances=()):
     if flagged.any():
         ax_k.loglog(omega[flagged], absK[flagged], "x", color="C3", label="flagged point")
         ax_k.legend(loc="best", fontsize="small")
-    labelled = set()
-    for r in resonances:
-        style = "-" if r.kind == "resonance" else "--"
-        label = None if r.kind in labelled else ("resonance (K = 0)" if r.kind == "resonance"
-                                                  else "anti-resonance (K = ∞)")
-        labelled.add(r.kind)
-        for ax in (ax_k, ax_q):
-            ax.axvline(r.omega_d or r.omega, color="0.5", lw=0.8, ls=style,
-                       label=label if ax is ax_q else None)
-    if resonances:
-        ax_q.legend(loc="best", fontsize="small")
-    for ax in (ax_k, ax_q):
+    _mark_resonances((ax_k, ax_p, ax_q), resonances, ax_q)
+    for ax in (ax_k, ax_p, ax_q):
         ax.grid(True, which="both", alpha=0.3)
     fig.suptitle(title or f"{result.name}: kinematic characteristic and force amplitude")
+    fig.tight_layout()
+    return fig
+
+
+def plot_forces(rows, omega: float, name: str = "circuit", title: str | None = None):
+    """Bars of |Q| [N] per element (from :func:`mechcirc.forces.element_forces`) at ``omega``.
+
+    Bars are coloured by element kind; the y axis is logarithmic when the
+    forces span more than two decades.  Returns the Figure.
+    """
+    import numpy as np
+
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(max(5.0, 0.45 * len(rows) + 2), 4))
+    colours = {"mass": "C0", "spring": "C1", "damper": "C2"}
+    values = np.array([r.Q_abs for r in rows], dtype=float)
+    ax.bar(range(len(rows)), values, color=[colours.get(r.kind, "C7") for r in rows])
+    ax.set_xticks(range(len(rows)), [r.name for r in rows], rotation=45, ha="right")
+    finite = values[np.isfinite(values) & (values > 0)]
+    if finite.size and finite.max() > 100 * finite.min():
+        ax.set_yscale("log")
+    ax.set_ylabel("|Q| [N]")
+    ax.set_xlabel("element")
+    for kind, colour in colours.items():
+        if any(r.kind == kind for r in rows):
+            ax.bar([], [], color=colour, label=kind)
+    ax.legend(loc="best", fontsize="small")
+    ax.grid(True, axis="y", which="both", alpha=0.3)
+    ax.set_title(title or f"{name}: element forces at ω = {omega:.6g} rad/s "
+                          f"({omega / (2 * np.pi):.4g} Hz)")
+    fig.tight_layout()
+    return fig
+
+
+def plot_comparison(comparison, name: str = "circuit", measured: str = "measured",
+                    title: str | None = None):
+    """A measured mobility over the model's: |K| [m/(N·s)] and arg K [deg] against ω [rad/s]."""
+    import numpy as np
+
+    plt = _pyplot()
+    fig, (ax_k, ax_p) = plt.subplots(2, 1, sharex=True, figsize=(7, 6),
+                                     gridspec_kw={"height_ratios": [3, 2]})
+    w = comparison.omega
+    with np.errstate(all="ignore"):
+        for K, label, style in ((comparison.K_model, "model", "-"),
+                                (comparison.K_measured, measured, "."),):
+            ax_k.loglog(w, np.abs(K), style, label=label, ms=3)
+            ax_p.semilogx(w, np.degrees(np.angle(K)), style, ms=3)
+    ax_k.set_ylabel("|K| [m/(N·s)]")
+    ax_p.set_ylabel("arg K [deg]")
+    ax_p.set_ylim(-190, 190)
+    ax_p.set_yticks([-180, -90, 0, 90, 180])
+    ax_p.set_xlabel("ω [rad/s]")
+    ax_k.legend(loc="best", fontsize="small")
+    for ax in (ax_k, ax_p):
+        ax.grid(True, which="both", alpha=0.3)
+    fig.suptitle(title or f"{name}: model against {measured}")
     fig.tight_layout()
     return fig

@@ -114,6 +114,12 @@ class Sweep:
         """Velocity difference amplitude v = v(n1) − v(n2) [m/s] across element ``name``."""
         return self._element(name)[1]
 
+    def to_skrf(self, **kwargs):
+        """K as a one-port ``skrf.Network`` (Z parameters, m/(N·s)); see :func:`mechcirc.interop.skrf.to_skrf`."""
+        from .interop.skrf import to_skrf
+
+        return to_skrf(self, **kwargs)
+
     def _element(self, name: str):
         if "elements" not in self._cache:
             self._cache["elements"] = self._responses(self.Q0, self.v0)

@@ -22,6 +22,7 @@ COMMAND_MODULES: list[str] = [
     "mechcirc.cli.circuit_commands",
     "mechcirc.cli.kinematics_commands",
     "mechcirc.cli.sley_commands",
+    "mechcirc.cli.ecosystem_commands",
 ]
 
 

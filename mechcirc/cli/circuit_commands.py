@@ -8,6 +8,16 @@ import sys
 from ._common import check_output_paths, print_json, save_figure
 
 
+def omega_value(text: str) -> float:
+    """argparse type: an angular frequency [rad/s], or with a unit (``50Hz``, ``3000rpm``)."""
+    from ..units import parse_omega
+
+    try:
+        return parse_omega(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
 def register(sub) -> None:
     p = sub.add_parser(
         "check", help="parse a netlist and show its elements and reduction tree",
@@ -17,6 +27,9 @@ def register(sub) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("file", help="netlist file (.mcir)")
     p.add_argument("--json", action="store_true", help="print one JSON document")
+    p.add_argument("--explain", action="store_true",
+                   help="write the series–parallel reduction out step by step, with the "
+                        "lever reflections (K/r², m·r²) and each element's value·η")
     p.set_defaults(func=cmd_check)
 
     p = sub.add_parser(
@@ -26,16 +39,19 @@ def register(sub) -> None:
         epilog="Example: mechcirc sweep netlists/stb_heald.mcir --omega-min 10 "
                "--omega-max 1e4 --points 400 --log -o K.csv --plot K.png")
     p.add_argument("file", help="netlist file (.mcir)")
-    p.add_argument("--omega-min", type=float, required=True, metavar="W1",
-                   help="lowest angular frequency [rad/s]")
-    p.add_argument("--omega-max", type=float, required=True, metavar="W2",
-                   help="highest angular frequency [rad/s]")
+    p.add_argument("--omega-min", type=omega_value, required=True, metavar="W1",
+                   help="lowest angular frequency [rad/s]; or with a unit: 5Hz, 300rpm")
+    p.add_argument("--omega-max", type=omega_value, required=True, metavar="W2",
+                   help="highest angular frequency [rad/s]; or with a unit: 50Hz, 3000rpm")
     p.add_argument("--points", type=int, default=200, metavar="N",
                    help="number of frequency points (default 200)")
     p.add_argument("--log", action="store_true", help="space the points logarithmically")
     p.add_argument("-o", "--output", metavar="CSV",
                    help="write omega,K_re,K_im,Q0_re,Q0_im to this CSV file")
     p.add_argument("--plot", metavar="IMAGE", help="plot |K| and |Q0| (PNG, SVG or PDF)")
+    p.add_argument("--touchstone", metavar="S1P",
+                   help="write K as Z parameters in a Touchstone file (.s1p) that scikit-rf "
+                        "reads; f = omega/(2 pi) in Hz, K in m/(N·s) (not ohms)")
     p.add_argument("--method", choices=("auto", "sp", "nodal"), default="auto",
                    help="series–parallel tree, nodal analysis, or auto (tree where "
                         "possible; default)")
@@ -55,8 +71,9 @@ def register(sub) -> None:
                     "Damped networks also get the damping ratio.",
         epilog="Example: mechcirc resonances netlists/stb_heald.mcir --omega-max 5000")
     p.add_argument("file", help="netlist file (.mcir)")
-    p.add_argument("--omega-max", type=float, metavar="W",
-                   help="report only up to this angular frequency [rad/s]")
+    p.add_argument("--omega-max", type=omega_value, metavar="W",
+                   help="report only up to this angular frequency [rad/s]; or with a unit: "
+                        "50Hz, 3000rpm")
     p.add_argument("--json", action="store_true", help="print one JSON document")
     p.set_defaults(func=cmd_resonances)
 
@@ -106,8 +123,24 @@ def cmd_check(args) -> int:
         "nodes": circuit.nodes, "elements": elements, "levers": levers,
         "unloaded": list(unloaded), "warnings": warns, "tree": tree,
     }
+    if getattr(args, "explain", False):
+        from ..explain import explain
+
+        steps, root = explain(circuit)
+        doc["steps"] = [{"label": s.label, "kind": s.kind, "operands": list(s.operands),
+                         "text": s.text, "reason": s.reason} for s in steps]
+        doc["root"] = root
     if args.json:
         print_json(doc)
+        return 0
+    if getattr(args, "explain", False):
+        from ..explain import explain_lines
+
+        for w in warns:
+            print(f"warning: {w}", file=sys.stderr)
+        print(f"{args.file}: {len(elements)} elements, {len(levers)} levers, "
+              f"{len(circuit.nodes)} nodes")
+        print("\n".join(explain_lines(circuit)))
         return 0
     print(f"{args.file}: {len(elements)} elements, {len(levers)} levers, "
           f"{len(circuit.nodes)} nodes")
@@ -172,7 +205,7 @@ def cmd_sweep(args) -> int:
 
     from ..outputs import OutputSet
 
-    check_output_paths(args.output, plots=(args.plot,))
+    check_output_paths(args.output, args.touchstone, plots=(args.plot,))
     circuit, warns = _load_with_warnings(args.file)
     omega = _omega_grid(args)
     if args.adaptive:
@@ -190,9 +223,15 @@ def cmd_sweep(args) -> int:
     found = [r for r in found if r.omega >= omega[0]]
     for w in warns:
         print(f"warning: {w}", file=sys.stderr)
+    dropped = 0
     with OutputSet() as out:
         if args.output:
             write_sweep_csv(result, out.path(args.output))
+        if args.touchstone:
+            from ..interop.skrf import write_touchstone
+
+            dropped = write_touchstone(out.path(args.touchstone), result.omega, result.K,
+                                       name=circuit.name)
         if args.plot:
             from ..plotting import plot_sweep
 
@@ -223,9 +262,13 @@ def cmd_sweep(args) -> int:
     if n_flag:
         print(f"  {n_flag} point(s) on or within rounding of a pole or zero of K "
               "(flagged; see the 'flag' column)")
-    for label, path in (("CSV", args.output), ("plot", args.plot)):
+    for label, path in (("CSV", args.output), ("plot", args.plot),
+                        ("Touchstone", args.touchstone)):
         if path:
             print(f"  {label} written to {path}")
+    if dropped:
+        print(f"  {dropped} point(s) with omega = 0 or a non-finite K left out of "
+              f"{args.touchstone}")
     return 0
 
 

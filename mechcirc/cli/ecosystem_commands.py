@@ -1,0 +1,118 @@
+"""Sub-commands that reach into the ecosystem: ``forces``, ``compare``, ``formula``, ``study``."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from ._common import check_output_paths, print_json, save_figure
+
+
+def register(sub) -> None:
+    from .circuit_commands import omega_value
+
+    p = sub.add_parser(
+        "forces", help="force and velocity of every element at one frequency",
+        description="How the drive's force splits through the mechanism: |Q| [N], |v| [m/s] "
+                    "and their phases [deg] (relative to the drive's amplitude) for every "
+                    "element carrying force, at one angular frequency.",
+        epilog="Example: mechcirc forces netlists/stb_heald.mcir --omega 300 --plot forces.png",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("file", help="netlist file (.mcir)")
+    p.add_argument("--omega", type=omega_value, required=True, metavar="W",
+                   help="angular frequency: rad/s, or with a unit: 50Hz, 3000rpm")
+    p.add_argument("--method", choices=("auto", "sp", "nodal"), default="auto",
+                   help="series–parallel tree, nodal analysis, or auto (default)")
+    p.add_argument("--plot", metavar="IMAGE", help="bar chart of |Q| per element (PNG, SVG, PDF)")
+    p.add_argument("--json", action="store_true", help="print one JSON document")
+    p.set_defaults(func=cmd_forces)
+
+    p = sub.add_parser(
+        "compare", help="a measured mobility (Touchstone .s1p) against the model's",
+        description="Read a measured one-port mobility from a Touchstone file (its Z "
+                    "parameter, read with scikit-rf, taken in m/(N·s)), evaluate the netlist "
+                    "at the same frequencies and print the error in the band.",
+        epilog="Example: mechcirc compare netlists/stb_heald.mcir measured.s1p --plot cmp.png")
+    p.add_argument("file", help="netlist file (.mcir)")
+    p.add_argument("measured", help="Touchstone one-port file (.s1p)")
+    p.add_argument("--method", choices=("auto", "sp", "nodal"), default="auto",
+                   help="series–parallel tree, nodal analysis, or auto (default)")
+    p.add_argument("--plot", metavar="IMAGE", help="overlay |K| and phase (PNG, SVG or PDF)")
+    p.add_argument("--json", action="store_true", help="print one JSON document")
+    p.set_defaults(func=cmd_compare)
+
+
+def cmd_forces(args) -> int:
+    from ..forces import element_forces
+    from .circuit_commands import _load_with_warnings
+
+    check_output_paths(plots=(args.plot,))
+    circuit, warns = _load_with_warnings(args.file)
+    rows, K, Q0, flag = element_forces(circuit, args.omega, method=args.method)
+    for w in warns:
+        print(f"warning: {w}", file=sys.stderr)
+    if args.plot:
+        from ..plotting import plot_forces
+
+        save_figure(plot_forces(rows, omega=args.omega, name=circuit.name), args.plot)
+    if args.json:
+        print_json({
+            "file": args.file, "name": circuit.name, "omega": args.omega, "K": K, "Q0": Q0,
+            "flag": flag,
+            "elements": [{"name": r.name, "kind": r.kind, "n1": r.n1, "n2": r.n2,
+                          "Q": r.Q, "Q_abs": r.Q_abs, "Q_phase_deg": r.Q_phase_deg,
+                          "v": r.v, "v_abs": r.v_abs, "v_phase_deg": r.v_phase_deg,
+                          "share": r.share} for r in rows]})
+        return 0
+    print(f"{args.file}: omega = {args.omega:.6g} rad/s ({args.omega / 6.283185307179586:.6g} Hz)"
+          f", K = {K.real:.6g}{K.imag:+.6g}j m/(N·s), |Q0| = {abs(Q0):.6g} N")
+    if flag:
+        print("  this omega is on or within rounding of a pole or zero of K (flagged)")
+    width = max([len(r.name) for r in rows] + [7])
+    print(f"  {'element':<{width}} {'kind':<6} {'|Q| [N]':>12} {'arg Q [deg]':>11} "
+          f"{'|Q|/|Q0|':>9} {'|v| [m/s]':>12} {'arg v [deg]':>11}")
+    for r in rows:
+        print(f"  {r.name:<{width}} {r.kind:<6} {r.Q_abs:>12.5g} {_deg(r.Q_phase_deg):>11.2f} "
+              f"{r.share:>9.4f} {r.v_abs:>12.5g} {_deg(r.v_phase_deg):>11.2f}")
+    if args.plot:
+        print(f"  plot written to {args.plot}")
+    return 0
+
+
+def _deg(x: float) -> float:
+    """A phase for printing with two decimals: never '-0.00'."""
+    return round(x, 2) + 0.0
+
+
+def cmd_compare(args) -> int:
+    from ..interop.skrf import compare
+    from .circuit_commands import _load_with_warnings
+
+    check_output_paths(plots=(args.plot,))
+    circuit, warns = _load_with_warnings(args.file)
+    result = compare(circuit, args.measured, method=args.method)
+    summary = result.summary()
+    for w in warns:
+        print(f"warning: {w}", file=sys.stderr)
+    if args.plot:
+        from ..plotting import plot_comparison
+
+        save_figure(plot_comparison(result, name=circuit.name, measured=args.measured),
+                    args.plot)
+    if args.json:
+        print_json({"file": args.file, "measured": args.measured, **summary})
+        return 0
+    print(f"{args.file} against {args.measured}: {summary['points']} measured points, "
+          f"omega {summary['omega_min']:.6g} .. {summary['omega_max']:.6g} rad/s")
+    if summary["compared"] < summary["points"]:
+        print(f"  {summary['points'] - summary['compared']} point(s) on or near a pole or zero "
+              "of the model's K not compared")
+    if summary["compared"]:
+        print(f"  relative error |K_meas - K_model|/|K_model|: max {summary['rel_max']:.3g} "
+              f"(at omega {summary['omega_at_rel_max']:.6g} rad/s), median "
+              f"{summary['rel_median']:.3g}")
+        print(f"  magnitude: RMS {summary['db_rms']:.3g} dB, max {summary['db_max']:.3g} dB; "
+              f"phase: max {summary['phase_max_deg']:.3g} deg")
+    if args.plot:
+        print(f"  plot written to {args.plot}")
+    return 0

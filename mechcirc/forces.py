@@ -1,0 +1,103 @@
+"""How the drive's force splits through the mechanism at one frequency.
+
+:func:`element_forces` gives, for every element that carries force, the
+complex amplitudes of the force Q through it [N] and of the velocity
+difference v across it [m/s] at one ω [rad/s].  Phases are measured against
+the drive's amplitude (V0 or F0, taken real and positive).
+"""
+
+from __future__ import annotations
+
+import cmath
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .circuit import Circuit
+
+__all__ = ["ElementForce", "element_forces"]
+
+
+@dataclass(frozen=True)
+class ElementForce:
+    """Force and velocity of one element at one ω.
+
+    Attributes
+    ----------
+    name, kind, n1, n2 : str
+    Q : complex
+        Force amplitude through the element from n1 to n2 [N].
+    v : complex
+        Velocity difference amplitude v(n1) − v(n2) [m/s].
+    share : float
+        |Q| / |Q0| [1], the part of the drive's force the element carries.
+    """
+
+    name: str
+    kind: str
+    n1: str
+    n2: str
+    Q: complex
+    v: complex
+    share: float
+
+    @property
+    def Q_abs(self) -> float:
+        """|Q| [N]."""
+        return abs(self.Q)
+
+    @property
+    def v_abs(self) -> float:
+        """|v| [m/s]."""
+        return abs(self.v)
+
+    @property
+    def Q_phase_deg(self) -> float:
+        """arg Q [deg] in (−180, 180], relative to the drive's amplitude."""
+        return _phase_deg(self.Q)
+
+    @property
+    def v_phase_deg(self) -> float:
+        """arg v [deg] in (−180, 180], relative to the drive's amplitude."""
+        return _phase_deg(self.v)
+
+
+def _phase_deg(z: complex) -> float:
+    if not math.isfinite(abs(z)):
+        return math.nan
+    deg = math.degrees(cmath.phase(z))
+    # Rounding can leave a real negative number a hair below the cut: -180 -> 180.
+    return 180.0 if deg <= -180.0 + 1e-9 else deg + 0.0
+
+
+def element_forces(circuit: Circuit, omega: float, *, method: str = "auto"
+                   ) -> tuple[list[ElementForce], complex, complex, int]:
+    """Q and v of every loaded element at ``omega`` [rad/s].
+
+    Returns
+    -------
+    rows : list of ElementForce
+        In the netlist's order (elements carrying no force are left out).
+    K : complex
+        The kinematic characteristic seen by the drive [m/(N·s)].
+    Q0 : complex
+        The drive's force amplitude [N].
+    flag : int
+        The sweep flag of this ω (0 regular, 1 on a pole/zero, 2 near one).
+    """
+    omega = float(omega)
+    if not (math.isfinite(omega) and omega > 0):
+        raise ValueError(f"omega must be finite and > 0 rad/s, got {omega!r}")
+    result = circuit.sweep(np.array([omega]), method=method)
+    Q0 = complex(result.Q0[0])
+    rows = []
+    for e in circuit.elements:
+        try:
+            Q, v = complex(result.force(e.name)[0]), complex(result.velocity(e.name)[0])
+        except KeyError:        # carries no force
+            continue
+        with np.errstate(all="ignore"):
+            share = abs(Q) / abs(Q0) if abs(Q0) > 0 else math.inf
+        rows.append(ElementForce(e.name, e.kind, e.n1, e.n2, Q, v, share))
+    return rows, complex(result.K[0]), Q0, int(result.flags[0])

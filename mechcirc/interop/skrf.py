@@ -1,0 +1,321 @@
+"""scikit-rf networks and Touchstone files for mechanical mobilities.
+
+A mechanical circuit's kinematic characteristic K = v/Q [m/(N·s)] is a
+*mobility*: in the mobility analogy (force ↔ current, velocity ↔ voltage) it
+plays the part of an impedance.  scikit-rf's Z parameters therefore carry K
+unchanged, but their unit is m/(N·s), **not ohms**: every network and file
+written here says so in its name and comments.
+
+Touchstone files are written as Z parameters (``# Hz Z RI R <R>``).  The
+reference R [m/(N·s)] is a power of two near the typical |K| of the data:
+dividing by it is exact, so the file holds K/R without rounding, and the S
+parameters scikit-rf stores internally ((Z − R)/(Z + R)) stay well
+conditioned, so that ``skrf.Network(path).z`` gives K back to about 1e-13
+relative.  With a reference of 1 (or scikit-rf's default 50 Ω) a mobility of
+1e-8 m/(N·s) would come back with only ~8 correct digits.
+
+Frequencies: Touchstone and scikit-rf work in hertz, f = ω/(2π); mechcirc's
+ω is in rad/s.  Points where K is not finite (ω = 0 for a mass, exact poles)
+cannot be written; they are left out and counted.
+
+scikit-rf is imported inside the functions, so ``import mechcirc`` stays fast.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..errors import MechcircError, TopologyError
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..circuit import Circuit
+    from ..sweep import Sweep
+
+__all__ = ["to_skrf", "two_port", "two_port_z", "write_touchstone", "read_mobility",
+           "compare", "Comparison", "reference_mobility", "MOBILITY_NOTE"]
+
+#: The sentence every network and file carries about its unit.
+MOBILITY_NOTE = ("mechanical mobility K = v/Q in m/(N*s) (mobility analogy: force ~ current, "
+                 "velocity ~ voltage), NOT ohms")
+
+
+def reference_mobility(Z: ArrayLike) -> float:
+    """A power of two [m/(N·s)] near the geometric mean of the finite nonzero |Z|.
+
+    Used as the Touchstone/S-parameter reference: division by it is exact.
+    """
+    mag = np.abs(np.asarray(Z))
+    mag = mag[np.isfinite(mag) & (mag > 0)]
+    if mag.size == 0:
+        return 1.0
+    return float(2.0 ** round(float(np.mean(np.log2(mag)))))
+
+
+def _finite_points(omega, Z):
+    keep = np.isfinite(omega) & (omega > 0)
+    keep &= np.isfinite(Z).reshape(Z.shape[0], -1).all(axis=1)
+    return keep
+
+
+def to_skrf(sweep: "Sweep", *, z0: float | None = None):
+    """The sweep's K(ω) as a one-port ``skrf.Network`` of Z parameters.
+
+    Parameters
+    ----------
+    sweep : Sweep
+    z0 : float, optional
+        Reference mobility [m/(N·s)] for scikit-rf's S parameters; by default
+        a power of two near the typical |K| (see the module docstring).
+
+    Returns
+    -------
+    skrf.Network
+        ``network.z[:, 0, 0]`` is K [m/(N·s)] at f = ω/(2π) [Hz].  Points
+        where K is not finite (or ω ≤ 0) are left out; ``network.comments``
+        states the unit and how many points were dropped.
+    """
+    import skrf
+
+    omega = np.asarray(sweep.omega, dtype=float)
+    Z = np.asarray(sweep.K, dtype=complex).reshape(-1, 1, 1)
+    keep = _finite_points(omega, Z)
+    if not keep.any():
+        raise MechcircError("no sweep point has ω > 0 and a finite K; nothing to convert")
+    R = reference_mobility(Z[keep]) if z0 is None else float(z0)
+    comments = _comments(sweep.name, int((~keep).sum()), R)
+    freq = skrf.Frequency.from_f(omega[keep] / (2 * math.pi), unit="hz")
+    return skrf.Network.from_z(Z[keep], frequency=freq, z0=R,
+                               name=f"{sweep.name} mobility K [m/(N*s)]",
+                               comments="\n".join(comments))
+
+
+def _comments(name: str, dropped: int, R: float) -> list[str]:
+    lines = [f"mechcirc: {name}", MOBILITY_NOTE,
+             f"reference R = {R!r} m/(N*s) (a power of two, for precision); "
+             "frequency f = omega/(2*pi) in Hz"]
+    if dropped:
+        lines.append(f"{dropped} point(s) with omega <= 0 or a non-finite K left out")
+    return lines
+
+
+def write_touchstone(path: str | os.PathLike, omega: ArrayLike, Z: ArrayLike, *,
+                     name: str = "circuit", R: float | None = None) -> int:
+    """Write Z parameters [m/(N·s)] over ``omega`` [rad/s] as a Touchstone v1 file.
+
+    ``Z`` has shape (n,) for a one-port or (n, p, p) for a p-port; the file
+    should be named ``.s1p``/``.s2p`` accordingly.  Values are written as K/R
+    with 17 significant digits (exact: R is a power of two).  Returns the
+    number of points left out because ω ≤ 0 or Z is not finite.
+
+    Written atomically (temporary file, then rename).
+    """
+    from ..outputs import atomic_open
+
+    omega = np.asarray(omega, dtype=float)
+    Z = np.asarray(Z, dtype=complex)
+    if Z.ndim == 1:
+        Z = Z.reshape(-1, 1, 1)
+    keep = _finite_points(omega, Z)
+    if not keep.any():
+        raise MechcircError("no point has ω > 0 and a finite K; nothing to write")
+    R = reference_mobility(Z[keep]) if R is None else float(R)
+    dropped = int((~keep).sum())
+    p = Z.shape[1]
+    with atomic_open(path, "w", encoding="ascii") as fh:
+        for line in _comments(name, dropped, R):
+            fh.write(f"! {line}\n")
+        fh.write(f"# Hz Z RI R {R!r}\n")
+        for w, z in zip(omega[keep], Z[keep] / R):
+            # Touchstone v1 order: two-ports N11 N21 N12 N22; larger: row by row.
+            entries = z.T.ravel() if p == 2 else z.ravel()
+            fields = [repr(float(w / (2 * math.pi)))]
+            for value in entries:
+                fields += [repr(float(value.real)), repr(float(value.imag))]
+            fh.write(" ".join(fields) + "\n")
+    return dropped
+
+
+def read_mobility(path: str | os.PathLike) -> tuple[NDArray[np.float64], NDArray[np.complex128], str]:
+    """Read a one-port Touchstone file with scikit-rf: ``(omega [rad/s], K [m/(N·s)], name)``.
+
+    The file's Z parameter is taken as the mobility (any Touchstone format
+    and reference scikit-rf understands: S, Y or Z; RI, MA or DB).
+    """
+    import skrf
+
+    source = os.fspath(path)
+    if not os.path.exists(source):
+        raise MechcircError(f"{source}: no such file")
+    try:
+        net = skrf.Network(source)
+    except Exception as exc:  # noqa: BLE001 - scikit-rf raises many kinds
+        raise MechcircError(f"{source}: cannot read as Touchstone: {exc}") from None
+    if net.nports != 1:
+        raise MechcircError(f"{source}: has {net.nports} ports, expected a one-port (.s1p)")
+    return 2 * math.pi * np.asarray(net.f, dtype=float), net.z[:, 0, 0].copy(), net.name
+
+
+# --------------------------------------------------------------------------
+# Two-ports
+# --------------------------------------------------------------------------
+
+def two_port_z(circuit: "Circuit", P1: str, P2: str, S1: str, S2: str,
+               omega: ArrayLike) -> NDArray[np.complex128]:
+    """Open-circuit Z parameters [m/(N·s)] of ``circuit`` between ports P1–P2 and S1–S2.
+
+    ``Z[k, i, j]`` is the velocity difference across port i per unit force
+    injected at port j (into its first node, out of its second), all other
+    ports unloaded (force 0), at ``omega[k]`` [rad/s].  The circuit's drive
+    is removed (an ideal force source of zero amplitude): the two-port is the
+    passive network of its elements and levers.  Nodal analysis, mobility
+    analogy (see :mod:`mechcirc.nodal`); levers enter as in
+    :func:`mechcirc.nodal.assemble`.
+
+    Raises
+    ------
+    TopologyError
+        If a port node is not in the circuit, the frame ``"0"`` is missing,
+        or the network is singular (a part not tied to the frame).
+    """
+    from ..circuit import FRAME
+    from ..nodal import _batched_solve, _stamp
+
+    omega = np.atleast_1d(np.asarray(omega, dtype=float))
+    names: dict[str, None] = {}
+    for e in circuit.elements:
+        names.setdefault(e.n1)
+        names.setdefault(e.n2)
+    for lv in circuit.levers:
+        for n in (lv.p1, lv.p2, lv.s1, lv.s2):
+            names.setdefault(n)
+    for port in (P1, P2, S1, S2):
+        if port not in names:
+            raise TopologyError(f"port node {port!r} is not a node of the circuit "
+                                f"(nodes: {', '.join(names)})", nodes=(port,))
+    if P1 == P2 or S1 == S2:
+        raise TopologyError("each port needs two different nodes", nodes=(P1, P2, S1, S2))
+    if FRAME not in names:
+        raise TopologyError("the circuit has no frame node '0' to refer velocities to")
+    nodes = [n for n in names if n != FRAME]
+    index = {n: i for i, n in enumerate(nodes)}
+    index[FRAME] = -1
+    n = len(nodes) + len(circuit.levers)
+    mats = {k: np.zeros((n, n)) for k in ("mass", "spring", "damper", "lever")}
+    for e in circuit.elements:
+        rows, cols, vals = [], [], []
+        _stamp((rows, cols, vals), index[e.n1], index[e.n2], e.value * e.eta)
+        np.add.at(mats[e.kind], (rows, cols), vals)
+    for k, lv in enumerate(circuit.levers):
+        col = len(nodes) + k
+        for node, coef in ((lv.p1, lv.ratio), (lv.p2, -lv.ratio), (lv.s1, -1.0), (lv.s2, 1.0)):
+            i = index[node]
+            if i >= 0:
+                mats["lever"][i, col] += coef
+                mats["lever"][col, i] += coef
+    rhs = np.zeros((2, n))
+    for j, (a, b) in enumerate(((P1, P2), (S1, S2))):
+        if index[a] >= 0:
+            rhs[j, index[a]] += 1.0
+        if index[b] >= 0:
+            rhs[j, index[b]] -= 1.0
+    Z = np.full((omega.size, 2, 2), np.nan, dtype=complex)
+    ok = np.isfinite(omega) & (omega > 0)
+    if ok.any():
+        w = omega[ok][:, None, None]
+        A = mats["damper"] + mats["lever"] + 1j * (w * mats["mass"] - mats["spring"] / w)
+        for j in range(2):
+            x = _batched_solve(A, rhs[j])
+            Z[ok, :, j] = x @ rhs.T          # rows of rhs pick v(a) − v(b) of each port
+        if np.isnan(Z[ok]).all():
+            raise TopologyError("the network is singular at every frequency asked (a part "
+                                "not tied to the frame, or levers in parallel)")
+    return Z
+
+
+def two_port(circuit: "Circuit", P1: str, P2: str, S1: str, S2: str, omega: ArrayLike, *,
+             z0: float | None = None):
+    """A two-port ``skrf.Network`` of the circuit's Z parameters [m/(N·s)].
+
+    See :func:`two_port_z` for the conventions; frequencies are f = ω/(2π)
+    [Hz].  ``z0`` is the reference mobility of the stored S parameters
+    (default: a power of two near the typical |Z|).
+    """
+    import skrf
+
+    omega = np.atleast_1d(np.asarray(omega, dtype=float))
+    Z = two_port_z(circuit, P1, P2, S1, S2, omega)
+    keep = _finite_points(omega, Z)
+    if not keep.any():
+        raise MechcircError("no frequency gives finite Z parameters")
+    R = reference_mobility(Z[keep]) if z0 is None else float(z0)
+    comments = _comments(circuit.name, int((~keep).sum()), R)
+    comments.append(f"port 1: {P1}-{P2}, port 2: {S1}-{S2}; drive removed")
+    freq = skrf.Frequency.from_f(omega[keep] / (2 * math.pi), unit="hz")
+    return skrf.Network.from_z(Z[keep], frequency=freq, z0=R,
+                               name=f"{circuit.name} two-port mobility [m/(N*s)]",
+                               comments="\n".join(comments))
+
+
+# --------------------------------------------------------------------------
+# Model against measurement
+# --------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Comparison:
+    """A measured mobility beside the model's, on the measurement's frequencies.
+
+    Attributes
+    ----------
+    omega : ndarray, shape (n,)
+        Angular frequency [rad/s] of the measured points.
+    K_model, K_measured : ndarray of complex, shape (n,)
+        Mobilities [m/(N·s)].
+    rel_error : ndarray, shape (n,)
+        |K_measured − K_model| / |K_model| [1] (inf where K_model = 0).
+    db_error : ndarray, shape (n,)
+        20·log10(|K_measured| / |K_model|) [dB].
+    phase_error_deg : ndarray, shape (n,)
+        arg(K_measured / K_model) [deg], in (−180, 180].
+    flags : ndarray of int8
+        The model sweep's flags (poles and zeros of K).
+    """
+
+    omega: NDArray[np.float64]
+    K_model: NDArray[np.complex128]
+    K_measured: NDArray[np.complex128]
+    rel_error: NDArray[np.float64]
+    db_error: NDArray[np.float64]
+    phase_error_deg: NDArray[np.float64]
+    flags: NDArray[np.int8]
+
+    def summary(self) -> dict:
+        """Largest, median and RMS errors over the regular (unflagged, finite) points."""
+        ok = (self.flags == 0) & np.isfinite(self.rel_error) & np.isfinite(self.db_error)
+        out = {"points": int(self.omega.size), "compared": int(ok.sum()),
+               "omega_min": float(self.omega.min()), "omega_max": float(self.omega.max())}
+        if ok.any():
+            rel, db, ph = self.rel_error[ok], self.db_error[ok], self.phase_error_deg[ok]
+            worst = int(np.argmax(rel))
+            out.update(rel_max=float(rel.max()), rel_median=float(np.median(rel)),
+                       omega_at_rel_max=float(self.omega[ok][worst]),
+                       db_rms=float(np.sqrt(np.mean(db ** 2))), db_max=float(np.abs(db).max()),
+                       phase_max_deg=float(np.abs(ph).max()))
+        return out
+
+
+def compare(circuit: "Circuit", path: str | os.PathLike, *, method: str = "auto") -> Comparison:
+    """Evaluate ``circuit`` at the frequencies of a measured one-port Touchstone file."""
+    omega, K_meas, _ = read_mobility(path)
+    result = circuit.sweep(omega, method=method)
+    K = result.K
+    with np.errstate(all="ignore"):
+        rel = np.abs(K_meas - K) / np.abs(K)
+        db = 20 * np.log10(np.abs(K_meas) / np.abs(K))
+        phase = np.degrees(np.angle(K_meas / K))
+    return Comparison(omega, K, K_meas, rel, db, phase, result.flags)
