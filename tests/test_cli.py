@@ -451,6 +451,38 @@ def test_unsupported_plot_format_is_a_user_error(tmp_path, capsys):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["ok.mcir"]
 
 
+def test_output_path_that_is_a_folder(tmp_path, capsys):
+    """``-o`` naming an existing folder: exit 2, the message names that folder, no temporary left.
+
+    (Bug at the time of writing: stderr names the hidden temporary file,
+    ``…/.outdir.XXXXXXXX.tmp: error: is a directory, expected a file``, and
+    that temporary file stays behind in the parent folder.)
+    """
+    path = write(tmp_path, "ok.mcir", GOOD)
+    (tmp_path / "outdir").mkdir()
+    status, out, err = run(["sweep", path, "--omega-min", 1, "--omega-max", 2,
+                            "-o", tmp_path / "outdir"], capsys)
+    assert status == 2
+    assert str(tmp_path / "outdir") in err and ".tmp" not in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["ok.mcir", "outdir"]
+    assert list((tmp_path / "outdir").iterdir()) == []
+
+
+def test_csv_and_plot_to_the_same_file_is_refused(tmp_path, capsys):
+    """``-o K.png --plot K.png`` would lose one of the two outputs: a user error, nothing written.
+
+    (Bug at the time of writing: exit 0, "CSV written to K.png" and "plot
+    written to K.png", and the CSV is silently replaced by the picture.)
+    """
+    path = write(tmp_path, "ok.mcir", GOOD)
+    same = tmp_path / "K.png"
+    status, out, err = run(["sweep", path, "--omega-min", 1, "--omega-max", 2,
+                            "-o", same, "--plot", same], capsys)
+    assert status == 2
+    assert "K.png" in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["ok.mcir"]
+
+
 def test_csv_gets_ordinary_file_permissions(tmp_path, capsys):
     """The atomic temporary file (mode 0600) must not hand its mode to the output.
 
