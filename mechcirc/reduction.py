@@ -27,7 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .circuit import Circuit, Element, Lever
 from .errors import NotSeriesParallelError, TopologyError, UnloadedElementWarning
-from .topology import check_frame_paths, loaded_groups
+from .topology import check_frame_paths, loaded_groups, reachable
 
 __all__ = ["Leaf", "Series", "Parallel", "Reflect", "Node", "Reduction",
            "reduce_circuit", "reduce_network", "evaluate", "push_down", "leaves"]
@@ -256,14 +256,7 @@ def _secondary_part(lv: Lever, edges: list[_Edge], levers: list[Lever], a: str, 
             link(m.p1, m.s1)
     link(a, b)
     for t, s in ((lv.s1, lv.s2), (lv.s2, lv.s1)):
-        comp = {t}
-        queue = deque([t])
-        while queue:
-            u = queue.popleft()
-            for w in adj.get(u, ()):
-                if w != s and w not in comp:
-                    comp.add(w)
-                    queue.append(w)
+        comp = reachable(adj, t, blocked=s)
         if comp & ({lv.p1, lv.p2, a, b} - {s}):
             continue
         ids = [i for i, e in enumerate(edges) if e.n1 in comp or e.n2 in comp]
@@ -467,7 +460,9 @@ def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: boo
                 continue
             if isinstance(node, Reflect):
                 child = _value_of(node.child, values, omega, inv_omega)
-                val = _Value(child.imaginary, child.array / node.lever.ratio ** 2, child.cond)
+                # Divide twice: ratio ** 2 overflows a Python float for ratio > 1.3e154.
+                r = node.lever.ratio
+                val = _Value(child.imaginary, child.array / r / r, child.cond)
             else:
                 val = _combine(node, values, omega, inv_omega, condition)
             if not keep:

@@ -14,7 +14,20 @@ from typing import Sequence
 from .circuit import FRAME, Circuit
 from .errors import TopologyError
 
-__all__ = ["loaded_groups", "check_frame_paths"]
+__all__ = ["loaded_groups", "check_frame_paths", "reachable"]
+
+
+def reachable(adj: dict[str, set[str]], start: str, blocked: str | None = None) -> set[str]:
+    """Nodes reachable from ``start`` in the adjacency map ``adj``, never entering ``blocked``."""
+    seen = {start}
+    queue = deque([start])
+    while queue:
+        u = queue.popleft()
+        for w in adj.get(u, ()):
+            if w != blocked and w not in seen:
+                seen.add(w)
+                queue.append(w)
+    return seen
 
 
 def loaded_groups(groups: Sequence[Sequence[tuple[str, str]]], a: str, b: str,
@@ -71,14 +84,7 @@ def check_frame_paths(circuit: Circuit) -> None:
         link(lv.s1, lv.s2)
     d = circuit.drive
     link(d.n1, d.n2)
-    start = FRAME if FRAME in adj else d.n1
-    seen = {start}
-    queue = deque([start])
-    while queue:
-        u = queue.popleft()
-        for w in adj[u] - seen:
-            seen.add(w)
-            queue.append(w)
+    seen = reachable(adj, FRAME if FRAME in adj else d.n1)
     lever_nodes = {n for lv in circuit.levers for n in (lv.p1, lv.p2, lv.s1, lv.s2)}
     floating: list[str] = []
     for n in adj:
@@ -86,13 +92,7 @@ def check_frame_paths(circuit: Circuit) -> None:
             continue
         # Collect this unreferenced component; islands without levers are merely
         # unloaded (they carry no force), ones reached through a lever are singular.
-        comp = {n}
-        queue = deque([n])
-        while queue:
-            u = queue.popleft()
-            for w in adj[u] - comp:
-                comp.add(w)
-                queue.append(w)
+        comp = reachable(adj, n)
         seen |= comp
         if comp & lever_nodes:
             floating.extend(comp)
