@@ -331,6 +331,22 @@ def test_bad_netlist_by_subprocess(tmp_path):
     assert "Traceback" not in proc.stderr
 
 
+@pytest.mark.parametrize("op, value", [("+", 2000.0), ("*", 1.0)])
+def test_long_flat_expression_within_the_limits(tmp_path, capsys, op, value):
+    """2,000 terms joined by one operator: ~4,000 characters (limit 10,000) and no nesting.
+
+    (Bug at the time of writing: ``expressions.evaluate`` and ``Expr.names``
+    recurse once per operator, so from about 1,000 terms a RecursionError
+    escapes: exit 1, "internal error".)
+    """
+    text = f"mass m a 0 {op.join(['1'] * 2000)}\ndrive V a 0 velocity=1\n"
+    path = write(tmp_path, "long.mcir", text)
+    status, out, err = run(["check", "--json", path], capsys)
+    assert "internal error" not in err
+    assert status == 0, err
+    assert json.loads(out)["elements"][0]["value"] == value
+
+
 def test_missing_file_exit_2(tmp_path, capsys):
     path = tmp_path / "nowhere.mcir"
     for argv in (["check", path], ["sweep", path, "--omega-min", 1, "--omega-max", 2]):
