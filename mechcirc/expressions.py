@@ -26,7 +26,7 @@ from typing import Callable, Mapping
 
 from .errors import NetlistError
 
-__all__ = ["Expr", "parse_expression", "evaluate", "FUNCTIONS", "CONSTANTS",
+__all__ = ["Expr", "parse_expression", "evaluate", "postorder", "FUNCTIONS", "CONSTANTS",
            "MAX_LENGTH", "MAX_DEPTH"]
 
 #: Longest expression accepted [characters]; longer text is refused at once.
@@ -66,12 +66,25 @@ class Expr:
 
     def names(self) -> set[str]:
         """Parameter names used in the expression."""
-        if self.kind == "name":
-            return {self.value}
-        out: set[str] = set()
-        for a in self.args:
-            out |= a.names()
-        return out
+        return {node.value for node in postorder(self) if node.kind == "name"}
+
+
+def postorder(root: Expr) -> list[Expr]:
+    """The nodes of ``root``, operands before their operator, left before right.
+
+    Iterative: a flat sum of thousands of terms nests as deep as it is long
+    (``((1 + 1) + 1) + ...``), beyond Python's recursion limit.
+    """
+    out: list[Expr] = []
+    stack: list[tuple[Expr, bool]] = [(root, False)]
+    while stack:
+        node, expanded = stack.pop()
+        if expanded or not node.args:
+            out.append(node)
+            continue
+        stack.append((node, True))
+        stack.extend((a, False) for a in reversed(node.args))
+    return out
 
 
 class _Parser:
@@ -99,7 +112,7 @@ class _Parser:
                         text[end] in "+-" and text[end - 1] in "eE")):
                     end += 1
                 self.error(f"malformed number {text[i:end]!r}", i,
-                           "a number such as 12, 1.5, .5, 2. or 1e-3")
+                           _number_hint(text[i:end], m.group()))
             if kind != "ws":
                 tok = m.group()
                 if kind == "op" and tok == "^":
@@ -226,6 +239,8 @@ def evaluate(expr: Expr, params: Mapping[str, float], *, source: str = "<string>
     def fail(message: str, node: Expr, expected: str | None = None):
         raise NetlistError(message, source, line, base + node.col + 1, expected)
 
+    values: dict[int, float] = {}
+
     def ev(node: Expr) -> float:
         k = node.kind
         if k == "num":
@@ -238,14 +253,14 @@ def evaluate(expr: Expr, params: Mapping[str, float], *, source: str = "<string>
             fail(f"undefined parameter {node.value!r}", node,
                  "a parameter defined by an earlier .param line")
         if k == "neg":
-            return -ev(node.args[0])
+            return -values.pop(id(node.args[0]))
         if k == "call":
-            x = ev(node.args[0])
+            x = values.pop(id(node.args[0]))
             try:
                 return FUNCTIONS[node.value](x)
             except (ValueError, OverflowError):
                 fail(f"{node.value}({x!r}) is undefined or out of range", node)
-        a, b = ev(node.args[0]), ev(node.args[1])
+        a, b = values.pop(id(node.args[0])), values.pop(id(node.args[1]))
         try:
             if k == "+":
                 r = a + b
@@ -267,4 +282,22 @@ def evaluate(expr: Expr, params: Mapping[str, float], *, source: str = "<string>
             fail(f"{a!r} {k} {b!r} overflows float64", node)
         return r
 
-    return ev(expr)
+    # Operands first (iteratively: see postorder), so errors come left to right.
+    for node in postorder(expr):
+        values[id(node)] = ev(node)
+    return values[id(expr)]
+
+
+def _number_hint(bad: str, number: str) -> str:
+    """What a malformed number should have been; a glued-on unit gets its own advice."""
+    from .units import UnitError, looks_like_unit, parse_unit
+
+    rest = bad[len(number):]
+    if looks_like_unit(rest):
+        try:
+            parse_unit(rest)
+        except UnitError:
+            pass
+        else:
+            return f"a space between the number and its unit: '{number} {rest}'"
+    return "a number such as 12, 1.5, .5, 2. or 1e-3"

@@ -11,6 +11,10 @@ short, one statement per line::
     lever  NAME P1 P2 S1 S2 ratio=EXPR
     drive  NAME N1 N2 velocity=EXPR      (or force=EXPR)
 
+A value (VALUE, a ``.param`` value, ``velocity=``/``force=``) may be followed,
+after a space, by its unit: ``spring k1 a 0 5 N/mm``.  The unit is checked
+against the element kind and the value converted to SI (:mod:`mechcirc.units`).
+
 Every rejected token raises :class:`~mechcirc.errors.NetlistError` with the
 file, line and column, what is wrong and what would be right.
 """
@@ -20,14 +24,17 @@ from __future__ import annotations
 import math
 import os
 import re
+import weakref
 from dataclasses import dataclass
+from typing import Mapping
 from pathlib import Path
 
 from .circuit import ELEMENT_UNITS, Circuit, Drive, Element, Lever
 from .errors import NetlistError
 from .expressions import CONSTANTS, FUNCTIONS, Expr, evaluate, parse_expression
+from .units import UnitError, convert, looks_like_unit, parse_unit
 
-__all__ = ["parse", "load", "MAX_LINE_LENGTH", "SYNTAX"]
+__all__ = ["parse", "load", "expressions_of", "MAX_LINE_LENGTH", "SYNTAX"]
 
 #: Longest line accepted [characters]; longer lines are refused at once.
 MAX_LINE_LENGTH = 100_000
@@ -37,13 +44,16 @@ _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 
 #: The form of each statement, quoted in error messages.
 SYNTAX = {
-    ".param": ".param NAME=EXPR [NAME=EXPR ...]",
-    "mass": "mass NAME N1 N2 VALUE [eta=EXPR]",
-    "spring": "spring NAME N1 N2 VALUE [eta=EXPR]",
-    "damper": "damper NAME N1 N2 VALUE [eta=EXPR]",
+    ".param": ".param NAME=EXPR [UNIT] [NAME=EXPR [UNIT] ...]",
+    "mass": "mass NAME N1 N2 VALUE [UNIT] [eta=EXPR]",
+    "spring": "spring NAME N1 N2 VALUE [UNIT] [eta=EXPR]",
+    "damper": "damper NAME N1 N2 VALUE [UNIT] [eta=EXPR]",
     "lever": "lever NAME P1 P2 S1 S2 ratio=EXPR",
-    "drive": "drive NAME N1 N2 velocity=EXPR  or  drive NAME N1 N2 force=EXPR",
+    "drive": "drive NAME N1 N2 velocity=EXPR [UNIT]  or  drive NAME N1 N2 force=EXPR [UNIT]",
 }
+
+#: Where the first positional field that carries a value is (elements: VALUE).
+_VALUE_INDEX = {"mass": 3, "spring": 3, "damper": 3}
 
 
 @dataclass(frozen=True)
@@ -103,17 +113,22 @@ def _unbrace(text: str, col: int) -> tuple[str, int]:
 
 
 class _Parser:
-    def __init__(self, text: str, source: str):
+    def __init__(self, text: str, source: str, overrides: Mapping[str, float] | None = None):
         self.text, self.source = text, source
+        self.overrides = dict(overrides or {})
         self.params: dict[str, float] = {}
         self.param_lines: dict[str, int] = {}
         self.elements: list[Element] = []
         self.levers: list[Lever] = []
         self.drives: list[Drive] = []
         self.names: dict[str, int] = {}
+        #: Parsed expressions and unit factors, for symbolic formulas:
+        #: ``("param", name)`` / ``(element, "value" | "eta")`` -> (Expr, factor).
+        self.expressions: dict[tuple[str, str], tuple[Expr, float]] = {}
 
     # -- expressions -----------------------------------------------------
-    def expr(self, line: _Line, text: str, col: int, *, defined: dict[str, float]) -> float:
+    def expr(self, line: _Line, text: str, col: int, *, defined: dict[str, float],
+             key: tuple[str, str] | None = None) -> float:
         text, col = _unbrace(text, col)
         if not text.strip():
             line.error("empty expression", col, "a number or an expression")
@@ -125,6 +140,8 @@ class _Parser:
                            f"(on line {self.param_lines[name]})", where,
                            "parameters defined on earlier .param lines or earlier on this line")
         value = evaluate(tree, defined, source=self.source, line=line.lineno, col=col)
+        if key is not None:
+            self.expressions[key] = (tree, 1.0)
         if not math.isfinite(value):
             line.error(f"expression evaluates to {value}", col, "a finite number")
         return value
@@ -150,6 +167,11 @@ class _Parser:
                 for tok in line.tokens[1:]:
                     name = tok.text.split("=", 1)[0]
                     self.param_lines.setdefault(name, lineno)
+        unknown = sorted(set(self.overrides) - set(self.param_lines))
+        if unknown:
+            raise NetlistError(f"no .param named {', '.join(map(repr, unknown))} to set",
+                               self.source, 0, 0,
+                               "one of " + (", ".join(self.param_lines) or "(none defined)"))
         for line in parsed:
             if line.tokens[0].text.lower() == ".param":
                 self.param(line)
@@ -173,15 +195,38 @@ class _Parser:
             raise NetlistError("the netlist has no elements", self.source, 0, 0,
                                "mass, spring or damper lines")
         name = Path(self.source).stem if self.source != "<string>" else "circuit"
-        return Circuit(elements=tuple(self.elements), drive=self.drives[0],
-                       levers=tuple(self.levers), name=name, source=self.source,
-                       params=dict(self.params))
+        circuit = Circuit(elements=tuple(self.elements), drive=self.drives[0],
+                          levers=tuple(self.levers), name=name, source=self.source,
+                          params=dict(self.params))
+        _remember(circuit, self.expressions)
+        return circuit
+
+    def with_unit(self, line: _Line, value: float, unit: _Token | None, role: str,
+                  key: tuple[str, str] | None = None) -> float:
+        """``value`` converted to SI by the unit token (if any), checked against ``role``."""
+        if unit is None:
+            return value
+        try:
+            u = parse_unit(unit.text)
+            out = convert(value, u, role)
+        except UnitError as exc:
+            line.error(exc.message, unit.col + exc.offset, exc.expected)
+        if key is not None and key in self.expressions:
+            self.expressions[key] = (self.expressions[key][0], u.factor)
+        return out
 
     def param(self, line: _Line):
         if len(line.tokens) == 1:
             line.error(".param needs at least one NAME=EXPR", line.tokens[0].col,
                        SYNTAX[".param"])
+        previous = None
         for tok in line.tokens[1:]:
+            if "=" not in tok.text and previous is not None and looks_like_unit(tok.text):
+                self.params[previous] = self.with_unit(line, self.params[previous], tok,
+                                                       "param", ("param", previous))
+                previous = None
+                continue
+            previous = None
             if "=" not in tok.text:
                 line.error(f"{tok.text!r} is not NAME=EXPR", tok.col, SYNTAX[".param"])
             name, rhs = tok.text.split("=", 1)
@@ -194,12 +239,32 @@ class _Parser:
                 line.error(f"parameter {name!r} is defined twice "
                            f"(first on line {self.param_lines[name]})", tok.col)
             self.params[name] = self.expr(line, rhs, tok.col + len(name) + 1,
-                                          defined=self.params)
+                                          defined=self.params, key=("param", name))
+            previous = name
+            if name in self.overrides:
+                value = float(self.overrides[name])
+                if not math.isfinite(value):
+                    line.error(f"parameter {name!r} set to {value!r}", tok.col,
+                               "a finite number")
+                self.params[name] = value
+                self.expressions[("param", name)] = (Expr("num", 0, value), 1.0)
+                previous = None       # the value is given in SI: a unit here is ignored
 
     def _fields(self, line: _Line, keyword: str, npos: int, allowed: tuple[str, ...]):
-        """Split a statement into ``npos`` positional tokens and ``key=value`` options."""
-        positional, options = [], {}
+        """Split a statement into ``npos`` positional tokens, ``key=value`` options and units.
+
+        A token right after a value (the VALUE field or an option) that looks
+        like a unit (``kg``, ``N/mm``) is that value's unit; ``units`` maps
+        ``"value"`` or the option's name to its token.
+        """
+        positional, options, units = [], {}, {}
+        previous = None
         for tok in line.tokens[1:]:
+            if previous is not None and "=" not in tok.text and looks_like_unit(tok.text):
+                units[previous] = tok
+                previous = None
+                continue
+            previous = None
             head = tok.text.split("=", 1)[0]
             if "=" in tok.text and _IDENT.fullmatch(head):
                 if head not in allowed:
@@ -209,10 +274,13 @@ class _Parser:
                 if head in options:
                     line.error(f"option {head!r} given twice", tok.col)
                 options[head] = _Token(tok.text[len(head) + 1:], tok.col + len(head) + 1)
+                previous = head
             else:
                 if options:
                     line.error(f"{tok.text!r} after the options", tok.col, SYNTAX[keyword])
                 positional.append(tok)
+                if len(positional) - 1 == _VALUE_INDEX.get(keyword):
+                    previous = "value"
         if len(positional) < npos:
             missing = SYNTAX[keyword].split()[1 + len(positional)]
             end = line.tokens[-1].col + len(line.tokens[-1].text)
@@ -221,7 +289,7 @@ class _Parser:
             extra = positional[npos]
             line.error(f"unexpected {extra.text!r}: {keyword} takes {npos} fields",
                        extra.col, SYNTAX[keyword])
-        return positional, options
+        return positional, options, units
 
     def _name(self, line: _Line, tok: _Token, what: str) -> str:
         if not _NAME.fullmatch(tok.text):
@@ -240,28 +308,35 @@ class _Parser:
         self.names[name] = line.lineno
         return name
 
-    def _positive(self, line: _Line, tok: _Token, what: str, unit: str) -> float:
-        value = self.expr(line, tok.text, tok.col, defined=self.params)
+    def _positive(self, line: _Line, tok: _Token, what: str, unit: str, *,
+                  unit_tok: _Token | None = None, role: str | None = None,
+                  key: tuple[str, str] | None = None) -> float:
+        value = self.expr(line, tok.text, tok.col, defined=self.params, key=key)
+        if role is not None:
+            value = self.with_unit(line, value, unit_tok, role, key)
         if not value > 0:
             line.error(f"{what} must be > 0{' ' + unit if unit else ''}, got {value:g}",
                        tok.col, "a positive value")
         return value
 
     def element(self, line: _Line, kind: str):
-        pos, opts = self._fields(line, kind, 4, ("eta",))
+        pos, opts, units = self._fields(line, kind, 4, ("eta",))
         name = self._new_name(line, pos[0])
         n1 = self._name(line, pos[1], "node name")
         n2 = self._name(line, pos[2], "node name")
         if n1 == n2:
             line.error(f"both ends of {kind} {name!r} are node {n1!r}", pos[2].col,
                        "two different nodes")
-        value = self._positive(line, pos[3], f"{kind} {name!r}", ELEMENT_UNITS[kind])
-        eta = self._positive(line, opts["eta"], f"eta of {name!r}", "") if "eta" in opts else 1.0
+        value = self._positive(line, pos[3], f"{kind} {name!r}", ELEMENT_UNITS[kind],
+                               unit_tok=units.get("value"), role=kind, key=(name, "value"))
+        eta = self._positive(line, opts["eta"], f"eta of {name!r}", "",
+                             unit_tok=units.get("eta"), role="eta", key=(name, "eta")) \
+            if "eta" in opts else 1.0
         self.elements.append(Element(kind, name, n1, n2, value, eta, line.lineno,
                                      line.tokens[0].col))
 
     def lever(self, line: _Line, kind: str):
-        pos, opts = self._fields(line, kind, 5, ("ratio",))
+        pos, opts, units = self._fields(line, kind, 5, ("ratio",))
         name = self._new_name(line, pos[0])
         nodes = [self._name(line, t, "node name") for t in pos[1:5]]
         if nodes[0] == nodes[1]:
@@ -272,11 +347,12 @@ class _Parser:
                        pos[4].col, "two different nodes")
         if "ratio" not in opts:
             line.error(f"lever {name!r} needs ratio=EXPR", line.tokens[-1].col, SYNTAX["lever"])
-        ratio = self._positive(line, opts["ratio"], f"ratio of lever {name!r}", "")
+        ratio = self._positive(line, opts["ratio"], f"ratio of lever {name!r}", "",
+                               unit_tok=units.get("ratio"), role="ratio", key=(name, "ratio"))
         self.levers.append(Lever(name, *nodes, ratio, line.lineno, line.tokens[0].col))
 
     def drive(self, line: _Line, kind: str):
-        pos, opts = self._fields(line, kind, 3, ("velocity", "force"))
+        pos, opts, units = self._fields(line, kind, 3, ("velocity", "force"))
         if self.drives:
             first = self.drives[0]
             line.error(f"a second drive; the netlist already has {first.name!r} on line "
@@ -296,12 +372,36 @@ class _Parser:
             line.error("a drive needs exactly one of velocity=EXPR or force=EXPR", where,
                        SYNTAX["drive"])
         (key, tok), = opts.items()
-        amplitude = self.expr(line, tok.text, tok.col, defined=self.params)
+        amplitude = self.expr(line, tok.text, tok.col, defined=self.params, key=(name, key))
+        amplitude = self.with_unit(line, amplitude, units.get(key), key, (name, key))
         self.drives.append(Drive(name, n1, n2, key, amplitude, line.lineno,
                                  line.tokens[0].col))
 
 
-def parse(text: str, source: str = "<string>") -> Circuit:
+# Parsed expressions of each circuit parse() made, for symbolic formulas
+# (mechcirc.interop.formula).  Circuit is a frozen dataclass without a field
+# for them; keyed by id() and dropped when the circuit is collected.
+_EXPRESSIONS: dict[int, dict] = {}
+
+
+def _remember(circuit: Circuit, expressions: dict) -> None:
+    key = id(circuit)
+    _EXPRESSIONS[key] = expressions
+    weakref.finalize(circuit, _EXPRESSIONS.pop, key, None)
+
+
+def expressions_of(circuit: Circuit) -> dict | None:
+    """The parsed expressions behind ``circuit``'s values, if :func:`parse` made it.
+
+    Maps ``("param", NAME)`` and ``(ELEMENT, "value" | "eta" | "ratio" |
+    "velocity" | "force")`` to ``(Expr, unit factor)``; the SI value is the
+    expression's value times the factor.  ``None`` for circuits built in code.
+    """
+    return _EXPRESSIONS.get(id(circuit))
+
+
+def parse(text: str, source: str = "<string>", *,
+          params: Mapping[str, float] | None = None) -> Circuit:
     """Parse netlist ``text`` into a :class:`~mechcirc.circuit.Circuit`.
 
     Parameters
@@ -310,6 +410,10 @@ def parse(text: str, source: str = "<string>") -> Circuit:
         The netlist.
     source : str
         Name used in error messages and as the circuit's name (its stem).
+    params : mapping of str to float, optional
+        Values [SI] that replace those of the named ``.param`` definitions
+        (parameter studies); later parameters and elements use them.  A name
+        the netlist does not define is an error.
 
     Raises
     ------
@@ -322,11 +426,11 @@ def parse(text: str, source: str = "<string>") -> Circuit:
     >>> str(c.tree)
     'm1 | k1'
     """
-    return _Parser(text, source).run()
+    return _Parser(text, source, params).run()
 
 
-def load(path: str | os.PathLike) -> Circuit:
-    """Read and parse the netlist file at ``path`` (UTF-8).
+def load(path: str | os.PathLike, *, params: Mapping[str, float] | None = None) -> Circuit:
+    """Read and parse the netlist file at ``path`` (UTF-8); ``params`` as in :func:`parse`.
 
     Raises
     ------
@@ -350,4 +454,4 @@ def load(path: str | os.PathLike) -> Circuit:
         col = exc.start - (before.rfind(b"\n") + 1) + 1
         raise NetlistError(f"byte 0x{data[exc.start]:02x} is not valid UTF-8", source,
                            lineno, col, "a UTF-8 text file") from None
-    return parse(text.removeprefix("\ufeff"), source=source)
+    return parse(text.removeprefix("\ufeff"), source=source, params=params)
