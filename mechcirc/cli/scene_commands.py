@@ -1,0 +1,210 @@
+"""Sub-commands of issue 7: ``scene`` (a linkage scene to its circuit) and ``reduce``."""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+from ._common import check_output_paths, print_json, save_figure
+
+
+def register(sub) -> None:
+    p = sub.add_parser(
+        "scene", help="a scene (linkage + masses + elastic links) to its mechanical circuit",
+        description="Linearise a scene file at a crank angle into a netlist (--theta), or "
+                    "map its resonances and |Q0| at the shaft harmonics over one revolution "
+                    "(--cycle).  See docs/scenes.md.",
+        epilog="Examples:\n  mechcirc scene examples/heald_scene.toml --theta 40 -o heald.mcir\n"
+               "  mechcirc scene examples/heald_scene.toml --cycle --points 72 "
+               "--harmonics 8 --plot cycle.png",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("file", help="scene file (.toml)")
+    what = p.add_mutually_exclusive_group(required=True)
+    what.add_argument("--theta", type=float, metavar="DEG",
+                      help="crank rotation from the pose [deg] to linearise at")
+    what.add_argument("--cycle", action="store_true",
+                      help="resonances and |Q0| at shaft harmonics over a revolution")
+    p.add_argument("-o", "--output", metavar="FILE",
+                   help="--theta: write the netlist (.mcir); --cycle: write a CSV table")
+    p.add_argument("--reflect", choices=("eta", "lever"), default="eta",
+                   help="reflect through eta = ratio² (default) or explicit ideal levers")
+    p.add_argument("--points", type=int, default=72, metavar="N",
+                   help="--cycle: crank angles over the revolution (default 72)")
+    p.add_argument("--harmonics", type=int, default=5, metavar="H",
+                   help="--cycle: shaft harmonics h = 1..H for |Q0| (default 5)")
+    p.add_argument("--plot", metavar="IMAGE", help="--cycle: plot the map (PNG, SVG or PDF)")
+    p.add_argument("--json", action="store_true", help="print one JSON document")
+    p.set_defaults(func=cmd_scene)
+
+    p = sub.add_parser(
+        "reduce", help="model only what the output needs in a frequency band",
+        description="Remove or merge elements of a netlist that do not matter for the "
+                    "output in the band [W1, W2] (rigid springs, negligible masses, chains "
+                    "that collapse); report the measured worst relative error of the output "
+                    "over the band (never above --tol) and the shift of each resonance.",
+        epilog="Example: mechcirc reduce netlists/stb_heald.mcir --band 10:2000 --tol 0.01 "
+               "-o reduced.mcir")
+    p.add_argument("file", help="netlist file (.mcir)")
+    p.add_argument("--band", required=True, metavar="W1:W2",
+                   help="angular frequency band [rad/s], W1 < W2")
+    p.add_argument("--tol", type=float, required=True, metavar="T",
+                   help="largest relative error of the output allowed over the band (> 0)")
+    p.add_argument("--output", dest="element", metavar="ELEMENT",
+                   help="the force in this element is the output (default: K at the drive)")
+    p.add_argument("-o", dest="out", metavar="FILE", help="write the reduced netlist here")
+    p.add_argument("--points", type=int, default=2000, metavar="N",
+                   help="check points over the band (default 2000, plus every resonance)")
+    p.add_argument("--json", action="store_true", help="print one JSON document")
+    p.set_defaults(func=cmd_reduce)
+
+
+def cmd_scene(args) -> int:
+    from ..errors import MechcircError
+
+    plots = (args.plot,) if args.plot else ()
+    check_output_paths(args.output, plots=plots)
+    if args.plot and not args.cycle:
+        raise MechcircError("--plot draws the --cycle map; with --theta use -o and "
+                            "'mechcirc sweep' on the netlist")
+    from ..scene import build, load_scene
+
+    scene = load_scene(args.file)
+    if args.cycle:
+        return _cycle(args, scene)
+    if not math.isfinite(args.theta):
+        raise MechcircError(f"--theta must be finite, got {args.theta}")
+    model = build(scene, math.radians(args.theta), reflect=args.reflect)
+    found = model.circuit.resonances()
+    if args.output:
+        from ..outputs import atomic_open
+
+        with atomic_open(args.output, "w", encoding="utf-8") as fh:
+            fh.write(model.netlist)
+    unit = "rad/s" if model.rotational else "m/s"
+    if args.json:
+        print_json({
+            "file": args.file, "theta_deg": args.theta, "drive_ratio": model.drive_ratio,
+            "rotational": model.rotational, "parts": {k: list(v) for k, v in model.parts.items()},
+            "ratios": model.ratios, "dropped": [{"name": n, "why": w} for n, w in model.dropped],
+            "resonances": [{"kind": r.kind, "omega": r.omega, "f_hz": r.f_hz, "zeta": r.zeta}
+                           for r in found],
+            "netlist": model.netlist, "output": args.output})
+        return 0
+    print(f"{args.file}: scene {scene.name!r} at θ = {args.theta:g}° "
+          f"(drive {unit}, drive ratio r0 = {model.drive_ratio:.6g})")
+    for node, part in model.parts.items():
+        print(f"  node {node}: {', '.join(part)}")
+    print("velocity ratios to the drive:")
+    for name, r in model.ratios.items():
+        print(f"  {name:<10} {r: .6g}")
+    for name, why in model.dropped:
+        print(f"  left out {name}: {why}")
+    print("resonances (K = 0) and anti-resonances (K = ∞):")
+    for r in found:
+        z = f"  zeta={r.zeta:.4g}" if r.zeta else ""
+        print(f"  {r.kind:<14} {r.omega:12.6g} rad/s  {r.f_hz:10.5g} Hz{z}")
+    if args.output:
+        print(f"wrote {args.output}")
+    return 0
+
+
+def _cycle(args, scene) -> int:
+    import numpy as np
+
+    from ..errors import MechcircError
+    from ..outputs import OutputSet
+    from ..scene.cycle import cycle_map, plot_cycle
+
+    if args.points < 2 or args.points > 100_000:
+        raise MechcircError(f"--points must be between 2 and 100000, got {args.points}")
+    if args.harmonics < 1 or args.harmonics > 1000:
+        raise MechcircError(f"--harmonics must be between 1 and 1000, got {args.harmonics}")
+    cmap = cycle_map(scene, points=args.points, harmonics=args.harmonics,
+                     reflect=args.reflect)
+    W = cmap.natural_frequencies()
+    with OutputSet() as out:
+        if args.output:
+            with open(out.path(args.output), "w", encoding="utf-8", newline="") as fh:
+                cols = ["theta_deg"] + [f"omega_res{k + 1}" for k in range(W.shape[1])] + \
+                    [f"abs_Q0_h{h}" for h in cmap.harmonics]
+                fh.write(",".join(cols) + "\n")
+                table = np.column_stack([np.degrees(cmap.theta), W, np.abs(cmap.Q0)])
+                np.savetxt(fh, table, delimiter=",", fmt="%.10g")
+        if args.plot:
+            import matplotlib.pyplot as plt
+
+            fig = plot_cycle(cmap)
+            save_figure(fig, args.plot, into=out.path(args.plot))
+            plt.close(fig)
+    if args.json:
+        doc = cmap.as_dict()
+        doc.update({"file": args.file, "output": args.output, "plot": args.plot})
+        print_json(doc)
+        return 0
+    unit = "N·m" if cmap.rotational else "N"
+    print(f"{args.file}: scene {scene.name!r}, {len(cmap.theta)} crank angles, shaft "
+          f"Ω = {cmap.omega_shaft:g} rad/s")
+    head = "  θ [deg]  " + " ".join(f"{'ω_r' + str(k + 1):>10}" for k in range(W.shape[1])) + \
+        "  " + " ".join(f"{'|Q0| h=' + str(h):>11}" for h in cmap.harmonics)
+    print(f"resonances [rad/s] and |Q0| [{unit}] at h·Ω:")
+    print(head)
+    for i, th in enumerate(cmap.theta):
+        if i in cmap.skipped:
+            print(f"  {math.degrees(th):7.2f}  skipped: {cmap.skipped[i]}")
+            continue
+        print(f"  {math.degrees(th):7.2f}  " + " ".join(f"{w:10.5g}" for w in W[i]) + "  "
+              + " ".join(f"{abs(q):11.4g}" for q in cmap.Q0[i]))
+    cross = cmap.crossings()
+    if cross:
+        print("a resonance meets a shaft harmonic at:")
+        for c in cross:
+            print(f"  θ ≈ {c['theta_deg']:7.2f}°: resonance {c['mode'] + 1} = "
+                  f"{c['harmonic']}·Ω = {c['omega']:g} rad/s")
+    else:
+        print("no resonance meets a harmonic h·Ω (h ≤ "
+              f"{cmap.harmonics[-1]}) over the cycle")
+    for path in (args.output, args.plot):
+        if path:
+            print(f"wrote {path}")
+    return 0
+
+
+def cmd_reduce(args) -> int:
+    from ..errors import MechcircError
+    from ..netlist import load
+    from ..simplify import parse_band, simplify
+
+    check_output_paths(args.out)
+    band = parse_band(args.band)
+    if not (math.isfinite(args.tol) and args.tol > 0):
+        raise MechcircError(f"--tol must be a positive number, got {args.tol:g}")
+    if args.points < 10 or args.points > 1_000_000:
+        raise MechcircError(f"--points must be between 10 and 1000000, got {args.points}")
+    circuit = load(args.file)
+    result = simplify(circuit, band, args.tol, output=args.element, points=args.points)
+    if args.out:
+        from ..outputs import atomic_open
+
+        with atomic_open(args.out, "w", encoding="utf-8") as fh:
+            fh.write(result.netlist)
+    if args.json:
+        doc = result.as_dict()
+        doc.update({"file": args.file, "written": args.out})
+        print_json(doc)
+        return 0
+    print(f"{args.file}: {result.elements_before} elements -> {result.elements_after} "
+          f"over ω ∈ [{band[0]:g}, {band[1]:g}] rad/s, output "
+          f"{'K at the drive' if args.element is None else 'force in ' + args.element}")
+    for step in result.steps:
+        print(f"  {step}")
+    print(f"measured worst relative error over the band: {result.error:.3g} "
+          f"(tolerance {args.tol:g}; {result.points} points and every resonance checked)")
+    if result.shifts:
+        print("resonances in the band (full -> reduced):")
+        for s in result.shifts:
+            red = f"{s['reduced']:.6g}" if s["reduced"] is not None else "gone"
+            rel = f"  ({s['relative_shift']:+.3g})" if s["relative_shift"] is not None else ""
+            print(f"  {s['kind']:<14} {s['full']:.6g} -> {red} rad/s{rel}")
+    if args.out:
+        print(f"wrote {args.out}")
+    return 0

@@ -1,0 +1,200 @@
+"""A scene over one revolution of its crank: resonances and |Q0| at the shaft harmonics (issue 7 §3).
+
+At each of ``points`` crank rotations θ (evenly spaced over 2π, continued
+from the pose by :meth:`Linkage.solve`), the scene is linearised
+(:func:`~mechcirc.scene.build`) and its circuit gives the natural
+frequencies seen from the drive (:meth:`Circuit.resonances`) and the drive's
+force amplitude Q0 at ω = h·|Ω| for h = 1 … ``harmonics`` (Ω the crank speed).
+The map a designer reads first: where in the cycle a resonance meets a
+harmonic of the shaft speed (:meth:`CycleMap.crossings`).
+
+A θ where the linearisation does not exist (a dead centre, see
+:func:`~mechcirc.scene.build`) is recorded in ``skipped`` with the reason and
+NaN values; the rest of the map is kept.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import GeometryError
+from .files import Scene
+from .model import build
+
+__all__ = ["CycleMap", "cycle_map"]
+
+
+@dataclass(frozen=True, eq=False)
+class CycleMap:
+    """Resonances and harmonic forces of a scene against crank angle.
+
+    Attributes
+    ----------
+    theta : ndarray, shape (n,)
+        Crank rotation from the pose [rad].
+    resonances : list of tuple of Resonance
+        Per θ, the zeros of K (drive held), ascending; empty where skipped.
+    antiresonances : list of tuple of Resonance
+        Per θ, the poles of K (drive released).
+    harmonics : ndarray of int, shape (H,)
+    omega_shaft : float
+        |Ω|, the crank speed [rad/s].
+    Q0 : ndarray of complex, shape (n, H)
+        Drive force amplitude at ω = h·|Ω| [N·m or N]; NaN where skipped.
+    skipped : dict[int, str]
+        Index of θ → why the scene could not be linearised there.
+    rotational : bool
+        Units of Q0: N·m (True) or N.
+    """
+
+    theta: NDArray[np.float64]
+    resonances: list
+    antiresonances: list
+    harmonics: NDArray[np.int64]
+    omega_shaft: float
+    Q0: NDArray[np.complex128]
+    skipped: dict
+    rotational: bool
+
+    def natural_frequencies(self, kind: str = "resonance") -> NDArray[np.float64]:
+        """Array (n, m) of ωₙ [rad/s] of the underdamped modes, NaN-padded (m the most at any θ)."""
+        rows = [[r.omega for r in row if r.zeta < 1.0]
+                for row in (self.resonances if kind == "resonance" else self.antiresonances)]
+        m = max((len(r) for r in rows), default=0)
+        out = np.full((len(rows), m), np.nan)
+        for i, r in enumerate(rows):
+            out[i, :len(r)] = r
+        return out
+
+    def crossings(self) -> list[dict]:
+        """Where the k-th underdamped resonance meets a harmonic h·|Ω| between two grid angles.
+
+        Returns dicts with ``mode`` k (0 = lowest), ``harmonic`` h,
+        ``theta_deg`` (linear interpolation between the bracketing grid
+        points, wrapping over the revolution) and ``omega`` [rad/s].
+        """
+        W = self.natural_frequencies()
+        out = []
+        n = len(self.theta)
+        for k in range(W.shape[1]):
+            for h in self.harmonics:
+                target = h * self.omega_shaft
+                for i in range(n):
+                    j = (i + 1) % n
+                    a, b = W[i, k] - target, W[j, k] - target
+                    if not (np.isfinite(a) and np.isfinite(b)) or a * b > 0 or a == b:
+                        continue
+                    if b == 0:
+                        continue                     # counted at the next interval
+                    t0 = self.theta[i]
+                    step = (self.theta[j] - t0) % (2 * math.pi)
+                    th = t0 + step * a / (a - b)
+                    out.append({"mode": k, "harmonic": int(h),
+                                "theta_deg": math.degrees(th) % 360.0, "omega": float(target)})
+        return sorted(out, key=lambda c: (c["theta_deg"], c["harmonic"]))
+
+    def as_dict(self) -> dict:
+        """Plain data for JSON output."""
+        def res(row):
+            return [{"omega": r.omega, "f_hz": r.f_hz, "zeta": r.zeta} for r in row]
+
+        return {
+            "omega_shaft": self.omega_shaft,
+            "harmonics": self.harmonics.tolist(),
+            "Q0_unit": "N·m" if self.rotational else "N",
+            "points": [
+                {"theta_deg": math.degrees(t), "resonances": res(r),
+                 "antiresonances": res(a), "abs_Q0": np.abs(q).tolist(),
+                 **({"skipped": self.skipped[i]} if i in self.skipped else {})}
+                for i, (t, r, a, q) in enumerate(zip(self.theta, self.resonances,
+                                                     self.antiresonances, self.Q0))],
+            "crossings": self.crossings(),
+        }
+
+
+def cycle_map(scene: Scene, *, points: int = 72, harmonics: int = 5,
+              reflect: str = "eta") -> CycleMap:
+    """Resonances and |Q0| at the first ``harmonics`` shaft harmonics at ``points`` crank angles.
+
+    Parameters
+    ----------
+    scene : Scene
+    points : int
+        Crank angles over one revolution (0 … 2π, end excluded), ≥ 2.
+    harmonics : int
+        Number of harmonics h = 1 … H of the crank speed, ≥ 1.
+    reflect : {"eta", "lever"}
+        Passed to :func:`~mechcirc.scene.build`.
+
+    Raises
+    ------
+    GeometryError
+        The crank cannot make a full revolution (the message says where it locks).
+    ValueError
+        ``points`` < 2 or ``harmonics`` < 1.
+    """
+    if isinstance(points, bool) or not isinstance(points, int) or points < 2:
+        raise ValueError(f"points must be an integer ≥ 2, got {points!r}")
+    if isinstance(harmonics, bool) or not isinstance(harmonics, int) or harmonics < 1:
+        raise ValueError(f"harmonics must be an integer ≥ 1, got {harmonics!r}")
+    theta = np.linspace(0.0, 2 * math.pi, points, endpoint=False)
+    try:
+        states = scene.linkage.solve(theta)
+    except GeometryError as exc:
+        raise GeometryError(f"{scene.source}: the crank cannot make a full revolution, so there "
+                            f"is no cycle to map ({exc})") from None
+    hs = np.arange(1, harmonics + 1)
+    omega_shaft = abs(scene.omega_shaft)
+    Q0 = np.full((points, harmonics), np.nan, dtype=complex)
+    res, anti, skipped = [], [], {}
+    rotational = scene.drive.link is not None
+    for i, (th, st) in enumerate(zip(theta, states)):
+        try:
+            model = build(scene, th, state=st, reflect=reflect)
+        except GeometryError as exc:
+            skipped[i] = str(exc)
+            res.append(())
+            anti.append(())
+            continue
+        found = model.circuit.resonances()
+        res.append(tuple(r for r in found if r.kind == "resonance"))
+        anti.append(tuple(r for r in found if r.kind == "antiresonance"))
+        with np.errstate(all="ignore"):
+            Q0[i] = model.circuit.sweep(hs * omega_shaft).Q0
+    return CycleMap(theta, res, anti, hs, omega_shaft, Q0, skipped, rotational)
+
+
+def plot_cycle(cmap: CycleMap, ax=None):
+    """Resonances against crank angle with the harmonic lines, and |Q0| at each harmonic.
+
+    Returns the figure (two stacked axes).  matplotlib is imported here.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(8, 7), sharex=True)
+    deg = np.degrees(cmap.theta)
+    W = cmap.natural_frequencies()
+    for k in range(W.shape[1]):
+        a1.plot(deg, W[:, k] / (2 * math.pi), ".-", ms=3, label=f"resonance {k + 1}")
+    for h in cmap.harmonics:
+        a1.axhline(h * cmap.omega_shaft / (2 * math.pi), color="0.6", lw=0.7, ls=":")
+    for c in cmap.crossings():
+        a1.plot(c["theta_deg"], c["omega"] / (2 * math.pi), "kx", ms=6)
+    a1.set_ylabel("natural frequency [Hz]  (dotted: h·Ω)")
+    a1.set_title("resonances (K = 0, drive held) over the cycle; × where one meets h·Ω")
+    a1.legend(fontsize=7, loc="upper right")
+    unit = "N·m" if cmap.rotational else "N"
+    for j, h in enumerate(cmap.harmonics):
+        a2.semilogy(deg, np.abs(cmap.Q0[:, j]), label=f"h = {h}")
+    a2.set_xlabel("crank rotation from the pose θ [deg]")
+    a2.set_ylabel(f"|Q0| at ω = h·Ω [{unit}]")
+    a2.legend(fontsize=7, ncol=3)
+    fig.tight_layout()
+    return fig

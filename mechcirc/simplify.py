@@ -1,0 +1,454 @@
+"""Model only what the output needs in a band (issue 7 §4): reduce a netlist, measure the error.
+
+Given a circuit, a band [W1, W2] [rad/s], a tolerance T and an output (K at
+the drive, or the force in one element), :func:`simplify` removes or merges
+what does not matter for that output in that band:
+
+* exact steps: elements on no path between the drive's nodes (they carry no
+  force) and elements whose two ends became one node are removed; same-kind
+  elements in parallel merge (S adds: Σ value·η); same-kind elements in series
+  through a node with nothing else on it merge (K adds: 1/Σ 1/(value·η));
+* approximate steps, each kept only if the *measured* error stays ≤ T: springs
+  stiff enough to act as rigid are shorted (their nodes merged, stiffest
+  first); masses small enough to neglect, springs soft enough to neglect and
+  dampers weak enough to neglect are removed (smallest admittance first).
+  Candidates of one kind are accepted as the longest prefix of that order
+  whose measured error is ≤ T (a bisection, so O(log n) trial circuits).
+
+The error is measured, never estimated: the output of the reduced and the
+full circuit are evaluated on the check grid — ``points`` log-spaced
+frequencies over the band plus, for each resonance and anti-resonance of the
+full circuit in the band, the frequencies ω₀(1 ± 10⁻³) beside it — and the
+worst relative error max |y_red − y_full| / |y_full| is reported.  Points
+where the full output is exactly 0 or infinite are left out (and counted).
+Between check points the error is not measured; near an undamped resonance
+the relative error is large for any shift of it, which is why resonance
+shifts are reported separately.
+
+The output element is never removed or merged.  Levers are kept as they are.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from .circuit import FRAME, Circuit, Element
+from .errors import MechcircError, TopologyError
+
+__all__ = ["BandError", "Simplified", "simplify", "parse_band", "write_netlist"]
+
+
+class BandError(MechcircError, ValueError):
+    """A frequency band or tolerance that cannot be used (names the values)."""
+
+
+def parse_band(text: str) -> tuple[float, float]:
+    """``"W1:W2"`` → (W1, W2) [rad/s], with 0 < W1 < W2 finite.
+
+    Raises
+    ------
+    BandError
+    """
+    parts = str(text).split(":")
+    if len(parts) != 2:
+        raise BandError(f"band {text!r} is not W1:W2 (two angular frequencies in rad/s)")
+    try:
+        w1, w2 = float(parts[0]), float(parts[1])
+    except ValueError:
+        raise BandError(f"band {text!r}: W1 and W2 must be numbers [rad/s]") from None
+    return _check_band((w1, w2))
+
+
+def _check_band(band) -> tuple[float, float]:
+    try:
+        w1, w2 = (float(x) for x in band)
+    except (TypeError, ValueError):
+        raise BandError(f"band must be two angular frequencies (W1, W2) [rad/s], got "
+                        f"{band!r}") from None
+    if not (math.isfinite(w1) and math.isfinite(w2)):
+        raise BandError(f"band limits must be finite, got {w1:g}:{w2:g}")
+    if w1 >= w2:
+        raise BandError(f"band W1 = {w1:g} rad/s is not below W2 = {w2:g} rad/s (need W1 < W2)")
+    if w1 <= 0:
+        raise BandError(f"band W1 = {w1:g} rad/s must be > 0 (masses have K = ∞ at ω = 0)")
+    return w1, w2
+
+
+@dataclass(frozen=True, eq=False)
+class Simplified:
+    """A reduced circuit with its measured error against the full one.
+
+    Attributes
+    ----------
+    circuit, full : Circuit
+        Reduced and full circuits.
+    band : tuple of float
+        (W1, W2) [rad/s].
+    tol : float
+        The tolerance asked for [1].
+    output : str or None
+        Element whose force is the output; None for K at the drive.
+    error : float
+        Measured worst relative error of the output over the check grid [1], ≤ tol.
+    points : int
+        Number of check points used (``skipped`` more were exactly on a zero or pole).
+    steps : tuple of str
+        What was removed or merged, in order.
+    shifts : list of dict
+        Each resonance/anti-resonance of the full circuit in the band: ``kind``,
+        ``full`` and ``reduced`` ωₙ [rad/s] (None if gone) and ``relative_shift``.
+    netlist : str
+        The reduced circuit as ``.mcir`` text.
+    seconds : float
+        Time spent [s].
+    """
+
+    circuit: Circuit
+    full: Circuit
+    band: tuple
+    tol: float
+    output: str | None
+    error: float
+    points: int
+    skipped: int
+    steps: tuple
+    shifts: list
+    netlist: str
+    seconds: float = 0.0
+    trials: int = 0
+
+    @property
+    def elements_before(self) -> int:
+        return len(self.full.elements)
+
+    @property
+    def elements_after(self) -> int:
+        return len(self.circuit.elements)
+
+    def as_dict(self) -> dict:
+        return {"band": list(self.band), "tol": self.tol, "output": self.output,
+                "error": self.error, "points": self.points, "skipped_points": self.skipped,
+                "elements_before": self.elements_before, "elements_after": self.elements_after,
+                "levers": len(self.circuit.levers), "steps": list(self.steps),
+                "resonances": self.shifts, "trials": self.trials, "seconds": self.seconds,
+                "netlist": self.netlist}
+
+
+# ----------------------------------------------------------------- helpers
+def write_netlist(circuit: Circuit, header: tuple[str, ...] = ()) -> str:
+    """``.mcir`` text of ``circuit`` (values written with full precision)."""
+    out = [f"# {h}" for h in header]
+    d = circuit.drive
+    out.append(f"drive {d.name} {d.n1} {d.n2} {d.kind}={d.amplitude!r}")
+    for e in circuit.elements:
+        eta = f" eta={e.eta!r}" if e.eta != 1.0 else ""
+        out.append(f"{e.kind} {e.name} {e.n1} {e.n2} {e.value!r}{eta}")
+    for lv in circuit.levers:
+        out.append(f"lever {lv.name} {lv.p1} {lv.p2} {lv.s1} {lv.s2} ratio={lv.ratio!r}")
+    return "\n".join(out) + "\n"
+
+
+def _output(circuit: Circuit, omega, output):
+    s = circuit.sweep(omega)
+    with np.errstate(all="ignore"):
+        return s.K if output is None else s.force(output)
+
+
+@dataclass
+class _Net:
+    elements: list
+    names: set = field(default_factory=set)
+
+
+def _loaded(elements, levers, drive) -> list[int]:
+    from .topology import loaded_groups
+
+    groups = [[(e.n1, e.n2)] for e in elements]
+    for lv in levers:
+        t = (lv.p1, lv.p2, lv.s1, lv.s2)
+        groups.append([(t[i], t[j]) for i in range(4) for j in range(i + 1, 4)])
+    kept = set(loaded_groups(groups, drive.n1, drive.n2))
+    return [i for i in range(len(elements)) if i in kept]
+
+
+def _unique(name, taken):
+    n, k = name, 1
+    while n in taken:
+        k += 1
+        n = f"{name}_{k}"
+    taken.add(n)
+    return n
+
+
+def _exact(elements, levers, drive, protect, steps, taken):
+    """Apply the exact clean-ups until none applies; returns the new element list."""
+    fixed = {FRAME, drive.n1, drive.n2} | {n for lv in levers
+                                          for n in (lv.p1, lv.p2, lv.s1, lv.s2)}
+    changed = True
+    while changed:
+        changed = False
+        keep = [e for e in elements if e.n1 != e.n2 or e.name in protect]
+        if len(keep) != len(elements):
+            gone = [e.name for e in elements if e not in keep]
+            steps.append(f"removed {_some(gone)}: both ends on one node")
+            elements, changed = keep, True
+        idx = set(_loaded(elements, levers, drive))
+        gone = [e.name for i, e in enumerate(elements) if i not in idx and e.name not in protect]
+        if gone:
+            steps.append(f"removed {_some(gone)}: on no path of the drive (carry no force)")
+            elements = [e for i, e in enumerate(elements) if i in idx or e.name in protect]
+            changed = True
+        # parallel: same kind, same node pair
+        groups: dict = {}
+        for e in elements:
+            if e.name not in protect:
+                groups.setdefault((e.kind, frozenset((e.n1, e.n2))), []).append(e)
+        merged_any = []
+        for (kind, _), es in groups.items():
+            if len(es) < 2:
+                continue
+            total = sum(e.value * e.eta for e in es)
+            name = _unique(f"{es[0].name}_par", taken)
+            new = Element(kind, name, es[0].n1, es[0].n2, total)
+            drop = {id(e) for e in es}
+            elements = [e for e in elements if id(e) not in drop] + [new]
+            merged_any.append(f"{'+'.join(_short([e.name for e in es]))} -> {name}")
+        if merged_any:
+            steps.append(f"merged in parallel: {'; '.join(_short(merged_any, 6))}")
+            changed = True
+        # series: a node with exactly two same-kind elements and nothing else
+        incident: dict = {}
+        for e in elements:
+            for n in (e.n1, e.n2):
+                incident.setdefault(n, []).append(e)
+        series = []
+        used = set()
+        for node, es in incident.items():
+            if node in fixed or len(es) != 2:
+                continue
+            a, b = es
+            if a.kind != b.kind or a.name in protect or b.name in protect \
+                    or id(a) in used or id(b) in used:
+                continue
+            ends = (a.n2 if a.n1 == node else a.n1, b.n2 if b.n1 == node else b.n1)
+            if ends[0] == ends[1]:
+                continue
+            value = 1.0 / (1.0 / (a.value * a.eta) + 1.0 / (b.value * b.eta))
+            name = _unique(f"{a.name}_ser", taken)
+            new = Element(a.kind, name, ends[0], ends[1], value)
+            used |= {id(a), id(b)}
+            elements = [e for e in elements if e is not a and e is not b] + [new]
+            series.append(f"{a.name}+{b.name} -> {name}")
+        if series:
+            steps.append(f"merged in series: {'; '.join(_short(series, 6))}")
+            changed = True
+    return elements
+
+
+def _short(items, limit=8):
+    items = list(items)
+    return items if len(items) <= limit else items[:limit] + [f"… ({len(items) - limit} more)"]
+
+
+def _some(names):
+    return ", ".join(_short(names))
+
+
+def _short_circuit(elements, levers, drive, el):
+    """Merge the nodes of ``el`` (a spring treated as rigid); None if not allowed."""
+    a, b = el.n1, el.n2
+    keep, gone = (a, b) if b != FRAME else (b, a)     # the frame absorbs the other node
+    if {gone, keep} == {drive.n1, drive.n2}:
+        return None                                    # would short the drive
+    ren = (lambda n: keep if n == gone else n)
+    for lv in levers:
+        if ren(lv.p1) == ren(lv.p2) or ren(lv.s1) == ren(lv.s2) or \
+                gone in (lv.p1, lv.p2, lv.s1, lv.s2):
+            return None
+    if gone in (drive.n1, drive.n2):
+        return None
+    return [replace(e, n1=ren(e.n1), n2=ren(e.n2)) for e in elements if e is not el]
+
+
+def _check_grid(full: Circuit, band, points, output):
+    w1, w2 = band
+    grid = np.geomspace(w1, w2, points)
+    extra = []
+    try:
+        found = full.resonances(omega_max=w2 * 1.001)
+    except MechcircError:
+        found = []
+    inband = [r for r in found if w1 <= r.omega <= w2]
+    for r in inband:
+        extra += [r.omega * (1 - 1e-3), r.omega * (1 + 1e-3)]
+    grid = np.unique(np.concatenate([grid, np.clip(extra, w1, w2)]))
+    y = _output(full, grid, output)
+    ok = np.isfinite(y) & (y != 0)
+    return grid[ok], y[ok], int(np.count_nonzero(~ok)), inband
+
+
+def simplify(circuit: Circuit, band, tol: float, *, output: str | None = None,
+             points: int = 2000) -> Simplified:
+    """Reduce ``circuit`` for ``output`` over ``band`` with measured relative error ≤ ``tol``.
+
+    Parameters
+    ----------
+    circuit : Circuit
+    band : (float, float)
+        (W1, W2) [rad/s], 0 < W1 < W2.
+    tol : float
+        Largest relative error of the output allowed at any check point [1], > 0.
+    output : str, optional
+        Name of the element whose force is the output; default K at the drive.
+    points : int
+        Log-spaced check points over the band (≥ 10); resonances add two each.
+
+    Returns
+    -------
+    Simplified
+
+    Raises
+    ------
+    BandError
+        W1 ≥ W2, a limit ≤ 0 or not finite, ``tol`` not positive.
+    MechcircError
+        ``output`` names no element of the circuit, or an element that carries
+        no force.
+    """
+    t0 = time.perf_counter()
+    band = _check_band(band)
+    if not (isinstance(tol, (int, float)) and math.isfinite(tol) and tol > 0):
+        raise BandError(f"tol must be a positive number, got {tol!r}")
+    if isinstance(points, bool) or not isinstance(points, int) or points < 10:
+        raise BandError(f"points must be an integer ≥ 10, got {points!r}")
+    protect = set()
+    if output is not None:
+        names = {e.name for e in circuit.elements}
+        if output not in names:
+            raise MechcircError(f"--output {output!r}: no element of that name "
+                                f"(elements: {_some(sorted(names))})")
+        protect.add(output)
+    grid, y_full, skipped, inband = _check_grid(circuit, band, points, output)
+    if grid.size == 0:
+        raise MechcircError("the output is zero or infinite at every check point of the band")
+    levers, drive = circuit.levers, circuit.drive
+    trials = 0
+
+    def measure(elements):
+        nonlocal trials
+        trials += 1
+        if output is not None and output not in {e.name for e in elements}:
+            return math.inf
+        try:
+            c = Circuit(tuple(elements), drive, levers, name=circuit.name, source=circuit.source)
+            y = _output(c, grid, output)
+        except (MechcircError, KeyError, np.linalg.LinAlgError):
+            return math.inf
+        with np.errstate(all="ignore"):
+            err = np.abs(y - y_full) / np.abs(y_full)
+        return float(np.max(err)) if np.all(np.isfinite(err)) else math.inf
+
+    taken = {e.name for e in circuit.elements} | {lv.name for lv in levers} | {drive.name}
+    steps: list[str] = []
+    current = list(circuit.elements)
+    trial_steps: list[str] = []
+    try:
+        reduced = _exact(current, levers, drive, protect, trial_steps, taken)
+    except TopologyError:
+        reduced = current
+    err = measure(reduced)
+    if err <= tol:
+        current, steps = reduced, trial_steps
+    error = err if err <= tol else measure(current)
+
+    def admittance(e):
+        # |S| at the band's geometric middle: how much the element lets through.
+        w = math.sqrt(band[0] * band[1])
+        s = e.value * e.eta
+        return {"mass": w * s, "spring": s / w, "damper": s}[e.kind]
+
+    categories = (
+        ("spring", "shorted as rigid", lambda e: -admittance(e), "short"),
+        ("mass", "removed as negligible", admittance, "open"),
+        ("spring", "removed as negligible (soft)", admittance, "open"),
+        ("damper", "removed as negligible", admittance, "open"),
+    )
+    for kind, verb, key, action in categories:
+        cands = sorted((e for e in current if e.kind == kind and e.name not in protect),
+                       key=key)
+        if not cands:
+            continue
+
+        def apply(k):
+            els = list(current)
+            for c in cands[:k]:
+                match = next((e for e in els if e.name == c.name), None)
+                if match is None:
+                    continue
+                if action == "open":
+                    els = [e for e in els if e is not match]
+                else:
+                    shorted = _short_circuit(els, levers, drive, match)
+                    if shorted is None:
+                        return None, []
+                    els = shorted
+            st: list[str] = []
+            try:
+                els = _exact(els, levers, drive, protect, st, set(taken))
+            except TopologyError:
+                return None, []
+            return els, st
+
+        best_k, best = 0, None
+        lo, hi = 0, len(cands)
+        # the longest prefix with a measured error ≤ tol (bisection)
+        while lo < hi:
+            mid = (lo + hi + 1) // 2
+            els, st = apply(mid)
+            e = measure(els) if els is not None else math.inf
+            if e <= tol:
+                lo, best_k, best = mid, mid, (els, st, e)
+            else:
+                hi = mid - 1
+        if best_k:
+            els, st, e = best
+            current, error = els, e
+            taken |= {e.name for e in current}
+            plural = "masses" if kind == "mass" else kind + "s"
+            steps.append(f"{plural} {verb}: {_some([c.name for c in cands[:best_k]])}")
+            steps += st
+    reduced_circuit = Circuit(tuple(current), drive, levers, name=circuit.name + "_reduced",
+                              source=circuit.source)
+    shifts = _shifts(inband, reduced_circuit, band)
+    header = (f"{circuit.name} reduced by mechcirc simplify for "
+              f"{'K at the drive' if output is None else 'the force in ' + output}",
+              f"band {band[0]!r}:{band[1]!r} rad/s, tol {tol!r}; measured worst relative error "
+              f"{error!r} on {grid.size} check points",
+              f"{len(circuit.elements)} elements -> {len(current)}") + tuple(steps)
+    return Simplified(reduced_circuit, circuit, band, float(tol), output, float(error),
+                      int(grid.size), skipped, tuple(steps), shifts,
+                      write_netlist(reduced_circuit, header), time.perf_counter() - t0, trials)
+
+
+def _shifts(inband, reduced: Circuit, band) -> list[dict]:
+    try:
+        found = [r for r in reduced.resonances(omega_max=band[1] * 1.5)]
+    except MechcircError:
+        found = []
+    out, used = [], set()
+    for r in inband:
+        cands = [(abs(q.omega - r.omega), i) for i, q in enumerate(found)
+                 if q.kind == r.kind and i not in used]
+        if cands:
+            d, i = min(cands)
+            if d <= 0.5 * r.omega:
+                used.add(i)
+                out.append({"kind": r.kind, "full": r.omega, "reduced": found[i].omega,
+                            "relative_shift": (found[i].omega - r.omega) / r.omega})
+                continue
+        out.append({"kind": r.kind, "full": r.omega, "reduced": None, "relative_shift": None})
+    return out
