@@ -80,11 +80,13 @@ class OutputSet:
         return self
 
     def __exit__(self, exc_type, exc, tb) -> None:
-        if exc_type is None:
-            for tmp, target in self._pending:
-                os.replace(tmp, target)
-        else:
+        try:
+            if exc_type is None:
+                for tmp, target in self._pending:
+                    os.replace(tmp, target)
+        finally:
+            # Whatever was not renamed (an error, or a rename that failed) goes.
             for tmp, _ in self._pending:
                 with contextlib.suppress(OSError):
                     os.unlink(tmp)
-        self._pending.clear()
+            self._pending.clear()

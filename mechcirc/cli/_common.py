@@ -71,9 +71,17 @@ def check_output_paths(*paths, plots=()) -> None:
     """Refuse, before any work, outputs into missing folders or plots in unknown formats."""
     from pathlib import Path
 
-    for path in (*paths, *plots):
-        if path and not Path(path).resolve().parent.is_dir():
+    given = [p for p in (*paths, *plots) if p]
+    for path in given:
+        if not Path(path).resolve().parent.is_dir():
             raise MechcircError(f"{path}: folder {str(Path(path).parent)!r} does not exist")
+        if Path(path).is_dir():
+            raise MechcircError(f"{path}: is a folder; give a file name for the output")
+    resolved = [Path(p).resolve() for p in given]
+    for i, path in enumerate(resolved):
+        if path in resolved[:i]:
+            raise MechcircError(f"{given[i]}: named for two outputs; each output needs "
+                                "its own file")
     for path in plots:
         if path and Path(path).suffix.lstrip(".").lower() not in PLOT_FORMATS:
             raise MechcircError(
