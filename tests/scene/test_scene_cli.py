@@ -1,0 +1,116 @@
+"""``mechcirc scene`` and ``mechcirc reduce``: outputs, JSON, exit statuses, no half-written files."""
+
+import csv
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import mechcirc
+from mechcirc import cli
+from mechcirc.scene import build, load_scene
+
+ROOT = Path(__file__).resolve().parents[2]
+HEALD = ROOT / "examples" / "heald_scene.toml"
+STB = ROOT / "netlists" / "stb_heald.mcir"
+
+
+def run(argv, capsys):
+    try:
+        status = cli.main([str(a) for a in argv])
+    except SystemExit as exc:
+        status = exc.code
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+def test_scene_theta_writes_the_netlist_of_the_api(tmp_path, capsys):
+    out = tmp_path / "h.mcir"
+    status, text, err = run(["scene", HEALD, "--theta", "40", "-o", out], capsys)
+    assert status == 0, err
+    api = build(load_scene(HEALD), math.radians(40.0))
+    assert out.read_text() == api.netlist
+    written = mechcirc.load(out)
+    w = np.geomspace(10.0, 3000.0, 50)
+    np.testing.assert_allclose(written.sweep(w).K, api.circuit.sweep(w).K, rtol=1e-14)
+    first = min(r.omega for r in api.circuit.resonances() if r.kind == "resonance")
+    assert f"{first:.6g}" in text and "node lever3: lever3" in text
+
+
+def test_scene_theta_json(capsys):
+    status, text, err = run(["scene", HEALD, "--theta", "40", "--json", "--reflect", "lever"],
+                            capsys)
+    assert status == 0, err
+    doc = json.loads(text)
+    assert doc["parts"]["lever3"] == ["lever3"]
+    assert "lever L_mframe" in doc["netlist"]
+    assert doc["ratios"]["J1"] == pytest.approx(
+        build(load_scene(HEALD), math.radians(40.0)).ratios["J1"], rel=1e-15)
+
+
+def test_scene_cycle_csv_plot_and_json(tmp_path, capsys):
+    csv_path, png = tmp_path / "c.csv", tmp_path / "c.png"
+    status, text, err = run(["scene", HEALD, "--cycle", "--points", "12", "--harmonics", "7",
+                             "-o", csv_path, "--plot", png, "--json"], capsys)
+    assert status == 0, err
+    doc = json.loads(text)
+    assert len(doc["points"]) == 12 and doc["harmonics"] == list(range(1, 8))
+    rows = list(csv.DictReader(csv_path.open()))
+    assert len(rows) == 12
+    assert float(rows[3]["abs_Q0_h2"]) == pytest.approx(doc["points"][3]["abs_Q0"][1], rel=1e-9)
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_scene_errors_exit_2_with_a_located_message(tmp_path, capsys):
+    bad = tmp_path / "bad.toml"
+    bad.write_text(HEALD.read_text().replace('point = "M"\nmass = 3.0', 'point = "Z"\nmass = 3.0'))
+    status, _, err = run(["scene", bad, "--theta", "10"], capsys)
+    assert status == 2
+    line = next(n for n, t in enumerate(bad.read_text().splitlines(), 1) if 'point = "Z"' in t)
+    assert err.startswith(f"{bad}:{line}:") and "'Z' does not exist" in err
+    status, _, err = run(["scene", tmp_path / "none.toml", "--theta", "10"], capsys)
+    assert status == 2 and "no such file" in err
+
+
+def test_scene_at_a_dead_centre_exits_2(capsys):
+    from scipy.optimize import brentq
+
+    scene = load_scene(HEALD)
+    # crank O0-P and rod P-T in line: lever 1, and everything behind it, stops
+    th = np.radians(np.arange(0.0, 360.0, 3.0))
+    w = np.array([s.angular_velocities["lever1"] for s in scene.linkage.solve(th)])
+    i = int(np.flatnonzero(np.sign(w) != np.sign(np.roll(w, -1)))[0])
+    t0 = brentq(lambda t: scene.linkage.solve(t).angular_velocities["lever1"],
+                th[i], th[i + 1], xtol=1e-15)
+    status, _, err = run(["scene", HEALD, "--theta", repr(math.degrees(t0))], capsys)
+    assert status == 2
+    assert "dead centre" in err and "at rest" in err
+
+
+def test_scene_bad_plot_format_writes_nothing(tmp_path, capsys):
+    csv_path = tmp_path / "c.csv"
+    status, _, err = run(["scene", HEALD, "--cycle", "--points", "4", "-o", csv_path,
+                          "--plot", tmp_path / "c.bmpx"], capsys)
+    assert status == 2 and "unsupported plot format" in err
+    assert not csv_path.exists()
+
+
+def test_reduce_cli_text_json_and_file(tmp_path, capsys):
+    out = tmp_path / "r.mcir"
+    status, text, err = run(["reduce", STB, "--band", "10:300", "--tol", "0.01", "-o", out],
+                            capsys)
+    assert status == 0, err
+    assert "measured worst relative error" in text and out.exists()
+    status, text, err = run(["reduce", STB, "--band", "10:300", "--tol", "0.01", "--json"],
+                            capsys)
+    doc = json.loads(text)
+    assert doc["error"] <= 0.01 and doc["elements_after"] < doc["elements_before"]
+    assert doc["netlist"] == out.read_text()
+
+
+@pytest.mark.parametrize("band", ["300:10", "10:10", "x:3"])
+def test_reduce_bad_band_exits_2(band, capsys):
+    status, _, err = run(["reduce", STB, "--band", band, "--tol", "0.01"], capsys)
+    assert status == 2 and "band" in err

@@ -1,0 +1,106 @@
+"""mechcirc.simplify (issue 7 §4): exact merges, measured approximate steps, bad bands."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import mechcirc
+from mechcirc.errors import MechcircError
+from mechcirc.simplify import BandError, parse_band, simplify
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _rel_err(full, reduced_text, omega, output=None):
+    red = mechcirc.parse(reduced_text)
+    a, b = full.sweep(omega), red.sweep(omega)
+    if output is None:
+        return np.max(np.abs(b.K - a.K) / np.abs(a.K))
+    return np.max(np.abs(b.force(output) - a.force(output)) / np.abs(a.force(output)))
+
+
+def test_stb_heald_mass_chain_collapses_exactly_to_eq6():
+    c = mechcirc.load(ROOT / "netlists" / "stb_heald.mcir")
+    r = simplify(c, (10.0, 3000.0), 1e-12)
+    assert r.error <= 1e-12
+    assert r.elements_after < r.elements_before
+    # DIGEST §1 eq. (6): K1..K4 in series is one mass M_III (η_B = η1²η2, η_C = η1²η2η3²)
+    e1, e2, e3 = 0.8, 1.25, 0.9
+    m1, m2, m3, m4 = 2.0, 1.5, 1.2, 0.9
+    eB, eC = e1 ** 2 * e2, e1 ** 2 * e2 * e3 ** 2
+    M3 = m1 * m2 * m3 * m4 * e1 ** 2 * eB * eC / (
+        m2 * m3 * m4 * e1 ** 2 * eB * eC + m1 * m3 * m4 * eB * eC
+        + m1 * m2 * m4 * e1 ** 2 * eC + m1 * m2 * m3 * e1 ** 2 * eB)
+    chain = [e for e in r.circuit.elements if e.kind == "mass" and {e.n1, e.n2} == {"T", "D"}]
+    assert len(chain) == 1 and chain[0].value * chain[0].eta == pytest.approx(M3, rel=1e-13)
+    w = np.geomspace(10.0, 3000.0, 3001)
+    assert _rel_err(c, r.netlist, w) <= 1e-12
+    assert all(s["relative_shift"] is not None and abs(s["relative_shift"]) < 1e-12
+               for s in r.shifts)
+
+
+def test_stiff_spring_is_shorted_exactly_when_the_closed_form_error_allows():
+    c = mechcirc.parse("drive V a 0 velocity=1\nspring ks a b 1e6\nmass m b 0 1.0\n")
+    x = 100.0 ** 2 * 1.0 / 1e6                 # ω²m/k at the band top
+    expected = x / (1 - x)                      # |K_rigid − K| / |K| there, the band's worst
+    r = simplify(c, (1.0, 100.0), 1.02 * expected)
+    assert [e.name for e in r.circuit.elements] == ["m"]
+    assert r.error == pytest.approx(expected, rel=1e-9)
+    kept = simplify(c, (1.0, 100.0), 0.98 * expected)
+    assert sorted(e.name for e in kept.circuit.elements) == ["ks", "m"]
+    assert kept.error <= 1e-15
+
+
+def _ladder(n, seed):
+    rng = np.random.default_rng(seed)
+    lines = ["drive V n0 0 velocity=1", f"mass m0 n0 0 {rng.uniform(0.5, 2)!r}"]
+    for i in range(1, n):
+        lines.append(f"spring k{i} n{i - 1} n{i} {rng.uniform(1e4, 1e7)!r}")
+        lines.append(f"damper c{i} n{i - 1} n{i} {rng.uniform(1, 50)!r}")
+        lines.append(f"mass m{i} n{i} 0 {rng.uniform(1e-3, 2)!r}")
+    return mechcirc.parse("\n".join(lines))
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_reported_error_is_measured_and_never_above_tol(seed):
+    c = _ladder(8, seed)
+    band = (5.0, 800.0)
+    previous = len(c.elements) + 1
+    for tol in (1e-6, 1e-3, 3e-2, 0.3):
+        r = simplify(c, band, tol, points=400)
+        assert r.error <= tol
+        # an independent re-evaluation on the log grid (a subset of the check points)
+        assert _rel_err(c, r.netlist, np.geomspace(*band, 400)) <= r.error * (1 + 1e-9) + 1e-15
+        assert r.elements_after <= previous or tol == 1e-6
+        previous = r.elements_after
+    assert previous < len(c.elements)
+
+
+def test_force_output_element_is_kept_and_its_force_checked():
+    c = _ladder(6, 3)
+    r = simplify(c, (5.0, 800.0), 0.05, output="k3", points=300)
+    assert "k3" in {e.name for e in r.circuit.elements}
+    assert r.error <= 0.05
+    assert _rel_err(c, r.netlist, np.geomspace(5.0, 800.0, 300), "k3") <= r.error * (1 + 1e-9)
+
+
+@pytest.mark.parametrize("band,match", [((100.0, 100.0), "not below"), ((300.0, 10.0), "not below"),
+                                        ((0.0, 10.0), "must be > 0"),
+                                        ((1.0, float("inf")), "finite")])
+def test_bad_bands(band, match):
+    c = _ladder(3, 0)
+    with pytest.raises(BandError, match=match):
+        simplify(c, band, 0.01)
+
+
+def test_band_text_and_tol_and_output_are_checked():
+    assert parse_band("10:2e3") == (10.0, 2000.0)
+    for text in ("10", "a:b", "5:5", "1:2:3"):
+        with pytest.raises(BandError):
+            parse_band(text)
+    c = _ladder(3, 0)
+    with pytest.raises(BandError, match="tol"):
+        simplify(c, (1.0, 10.0), 0.0)
+    with pytest.raises(MechcircError, match="no element of that name"):
+        simplify(c, (1.0, 10.0), 0.1, output="nope")
