@@ -41,6 +41,21 @@ def register(sub) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON document")
     p.set_defaults(func=cmd_compare)
 
+    p = sub.add_parser(
+        "formula", help="K(ω) in closed form (SymPy), nested as the reduction tree",
+        description="The kinematic characteristic K(ω) [m/(N·s)] as a formula built from "
+                    "the series–parallel reduction tree: elements written as plain numbers "
+                    "become symbols named after them, .param names stay symbols; the values "
+                    "are listed below. Needs SymPy (pip install 'mechcirc[formula]').",
+        epilog="Example: mechcirc formula netlists/stb_heald.mcir --latex")
+    p.add_argument("file", help="netlist file (.mcir)")
+    p.add_argument("--latex", action="store_true", help="print LaTeX instead of SymPy text")
+    p.add_argument("--expand", action="store_true",
+                   help="one fraction, numerator and denominator multiplied out")
+    p.add_argument("--numeric", action="store_true",
+                   help="substitute the values (exact rationals); only omega stays a symbol")
+    p.set_defaults(func=cmd_formula)
+
 
 def cmd_forces(args) -> int:
     from ..forces import element_forces
@@ -115,4 +130,27 @@ def cmd_compare(args) -> int:
               f"phase: max {summary['phase_max_deg']:.3g} deg")
     if args.plot:
         print(f"  plot written to {args.plot}")
+    return 0
+
+
+def cmd_formula(args) -> int:
+    from ..interop.formula import formula, symbol_values
+    from .circuit_commands import _load_with_warnings
+
+    circuit, warns = _load_with_warnings(args.file)
+    for w in warns:
+        print(f"warning: {w}", file=sys.stderr)
+    K = formula(circuit, expand=args.expand, numeric=args.numeric)
+    if args.latex:
+        import sympy
+
+        print(f"K(\\omega) = {sympy.latex(K)}")
+    else:
+        print(f"K(omega) = {K}")
+    if not args.numeric:
+        values = symbol_values(circuit)
+        if values:
+            print("where (SI values; K in m/(N·s), omega in rad/s):")
+            for sym in sorted(values, key=lambda s: s.name):
+                print(f"  {sym.name} = {values[sym]} ({float(values[sym]):g})")
     return 0

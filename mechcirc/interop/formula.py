@@ -1,0 +1,187 @@
+"""K(ω) in closed form, as a SymPy expression built from the reduction tree.
+
+Each element contributes its characteristic (see :mod:`mechcirc.circuit`)::
+
+    mass  −j/(ω·m·η)      spring  jω/(k·η)      damper  1/(c·η)
+
+series nodes add, parallel nodes add reciprocals, and a lever of ratio r
+divides its secondary's K by r².  The expression is nested exactly as the
+tree is (the factored form the seeds print); ``expand=True`` brings it over
+one common denominator with numerator and denominator multiplied out.
+
+Symbols.  ω is ``omega`` (positive).  An element whose value is written as a
+plain number becomes a positive symbol named after the element (``m1``,
+``k4``); a value written with ``.param`` names keeps that expression, and a
+parameter defined by a plain number is a symbol of its own name (``eta1``)
+while one defined by an expression (``etaB={eta1^2 * eta2}``) is replaced by
+it.  Numbers are taken as exact decimals (0.8 → 4/5).  :func:`symbol_values`
+gives every symbol's SI value, for ``expr.subs(...)`` or ``lambdify``.
+
+SymPy is an optional extra (``pip install mechcirc[formula]``), imported only
+inside these functions.
+"""
+
+from __future__ import annotations
+
+from fractions import Fraction
+from typing import TYPE_CHECKING
+
+from ..errors import MechcircError
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..circuit import Circuit
+
+__all__ = ["formula", "symbol_values", "OMEGA"]
+
+#: Name of the angular-frequency symbol [rad/s].
+OMEGA = "omega"
+
+
+def _sympy():
+    try:
+        import sympy
+    except ImportError:  # pragma: no cover - depends on the installation
+        raise MechcircError("closed-form formulas need SymPy: pip install 'mechcirc[formula]'"
+                            ) from None
+    return sympy
+
+
+def _number(sp, value: float):
+    """An exact rational from a float, read as the shortest decimal that gives it."""
+    return sp.Rational(str(Fraction(repr(float(value)))))
+
+
+class _Builder:
+    def __init__(self, circuit: "Circuit"):
+        from ..netlist import expressions_of
+
+        self.sp = _sympy()
+        self.circuit = circuit
+        self.exprs = expressions_of(circuit) or {}
+        self.omega = self.sp.Symbol(OMEGA, positive=True)
+        self.values: dict = {}          # Symbol -> SI value (Rational)
+        self.params: dict[str, object] = {}
+        self.taken = set(circuit.params)
+
+    def _symbol(self, name: str, value: float):
+        sym = self.sp.Symbol(name, positive=True)
+        self.values[sym] = _number(self.sp, value)
+        return sym
+
+    def _expr(self, tree):
+        """A netlist Expr as SymPy, parameters resolved (iterative: long sums)."""
+        from ..expressions import postorder
+
+        sp = self.sp
+        funcs = {"sqrt": sp.sqrt, "sin": sp.sin, "cos": sp.cos, "tan": sp.tan, "exp": sp.exp,
+                 "log": sp.log, "radians": lambda x: x * sp.pi / 180,
+                 "degrees": lambda x: x * 180 / sp.pi}
+        out: dict[int, object] = {}
+        for node in postorder(tree):
+            k = node.kind
+            if k == "num":
+                v = _number(sp, node.value)
+            elif k == "name":
+                v = sp.pi if node.value == "pi" and node.value not in self.circuit.params \
+                    else self.param(node.value)
+            elif k == "neg":
+                v = -out[id(node.args[0])]
+            elif k == "call":
+                v = funcs[node.value](out[id(node.args[0])])
+            else:
+                a, b = out[id(node.args[0])], out[id(node.args[1])]
+                v = {"+": a + b, "-": a - b, "*": a * b, "/": a / b}.get(k) if k != "**" \
+                    else a ** b
+            out[id(node)] = v
+        return out[id(tree)]
+
+    def param(self, name: str):
+        if name in self.params:
+            return self.params[name]
+        entry = self.exprs.get(("param", name))
+        if entry is None or entry[0].kind == "num":
+            v = self._symbol(name, self.circuit.params[name])
+        else:
+            tree, factor = entry
+            v = self._expr(tree) * _number(self.sp, factor)
+        self.params[name] = v
+        return v
+
+    def field(self, owner: str, field: str, value: float, symbol_name: str | None):
+        """A value of an element or lever: its symbol, or the expression written for it."""
+        entry = self.exprs.get((owner, field))
+        if entry is not None and entry[0].kind != "num":
+            tree, factor = entry
+            return self._expr(tree) * _number(self.sp, factor)
+        if symbol_name is None:
+            return _number(self.sp, value)
+        return self._symbol(symbol_name, value)
+
+    def element_name(self, name: str, kind: str) -> str:
+        base = name if not name.isdigit() else f"{kind[0]}{name}"
+        return base if base not in self.taken else f"{base}_{kind}"
+
+    def build(self):
+        from ..reduction import Leaf, Parallel, Reflect, Series, _postorder
+
+        sp = self.sp
+        w = self.omega
+        out: dict[int, object] = {}
+        for node in _postorder(self.circuit.tree):
+            if isinstance(node, Leaf):
+                e = node.element
+                value = self.field(e.name, "value", e.value, self.element_name(e.name, e.kind))
+                eta = self.field(e.name, "eta", e.eta, None) if e.eta != 1 or \
+                    (e.name, "eta") in self.exprs else sp.Integer(1)
+                scaled = value * eta
+                K = {"mass": -sp.I / (w * scaled), "spring": sp.I * w / scaled,
+                     "damper": 1 / scaled}[e.kind]
+            elif isinstance(node, Series):
+                K = sp.Add(*(out[id(c)] for c in node.children))
+            elif isinstance(node, Parallel):
+                K = 1 / sp.Add(*(1 / out[id(c)] for c in node.children))
+            else:
+                lv = node.lever
+                r = self.field(lv.name, "ratio", lv.ratio, f"r_{lv.name}")
+                K = out[id(node.child)] / r ** 2
+            out[id(node)] = K
+        return out[id(self.circuit.tree)]
+
+
+def formula(circuit: "Circuit", *, expand: bool = False, numeric: bool = False):
+    """K(ω) [m/(N·s)] of ``circuit`` as a SymPy expression.
+
+    Parameters
+    ----------
+    circuit : Circuit
+        A series–parallel reducible circuit (nodal-only networks have no tree
+        to follow: :class:`~mechcirc.errors.NotSeriesParallelError`).
+    expand : bool
+        Bring K over one denominator, numerator and denominator multiplied
+        out (``sympy.together`` then ``expand`` of each); by default K stays
+        nested as the reduction tree.
+    numeric : bool
+        Substitute every symbol but ω by its value (exact rationals).
+
+    Examples
+    --------
+    >>> import mechcirc
+    >>> c = mechcirc.parse("mass m a 0 2\\nspring k a 0 800\\ndrive V a 0 velocity=1")
+    >>> formula(c)
+    1/(-I*k/omega + I*m*omega)
+    """
+    b = _Builder(circuit)
+    K = b.build()
+    if numeric:
+        K = K.subs(b.values)
+    if expand:
+        num, den = b.sp.fraction(b.sp.together(K))
+        K = b.sp.expand(num) / b.sp.expand(den)
+    return K
+
+
+def symbol_values(circuit: "Circuit") -> dict:
+    """``{Symbol: value}`` of every symbol :func:`formula` uses except ω (SI, exact rationals)."""
+    b = _Builder(circuit)
+    b.build()
+    return dict(b.values)

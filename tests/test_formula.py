@@ -1,0 +1,105 @@
+"""Closed-form K(ω) from the reduction tree, against the seed's eq. (7) written independently."""
+
+import random
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import mechcirc
+from mechcirc import cli
+from reference.stb_eq7 import denominator, numerator
+
+sp = pytest.importorskip("sympy")
+
+from mechcirc.interop.formula import formula, symbol_values  # noqa: E402
+
+REPO = Path(__file__).resolve().parents[1]
+STB = REPO / "netlists" / "stb_heald.mcir"
+NAMES = [f"m{i}" for i in range(1, 13)] + ["k0", "k4", "k5", "eta1", "eta2", "eta3", "eta4"]
+
+
+@pytest.fixture(scope="module")
+def stb():
+    F = formula(mechcirc.load(STB))
+    S = {s.name: s for s in F.free_symbols}
+    assert set(S) == set(NAMES) | {"omega"}       # etaB, etaC resolved into eta1..eta3
+    p = {n: S[n] for n in NAMES}
+    K7 = sp.I * numerator(S["omega"], p) / denominator(S["omega"], p)
+    return F, K7, S
+
+
+def test_stb_formula_is_eq7_symbolically(stb):
+    """With η4 = 1 (the paper's value and the netlist's) the difference is identically 0.
+
+    All 18 other parameters and ω stay symbols: one fraction, numerator
+    multiplied out, must be the zero polynomial.
+    """
+    F, K7, S = stb
+    diff = (F - K7).subs(S["eta4"], 1)
+    num, _ = sp.fraction(sp.together(diff))
+    assert sp.expand(num) == 0
+
+
+def test_stb_formula_differs_from_eq7_when_eta4_is_not_1(stb):
+    # The netlist puts η4 on m9, m10, m12 and k0 (its reading of Fig. 3); eq. (7)
+    # has η4 only in k0·η4 terms.  They agree at the paper's η4 = 1, and the test
+    # must be able to see that they differ elsewhere, or the proof above proves
+    # nothing.  (sympy.factor of the difference's numerator has the factors η4,
+    # η4 − 1 and m9 − m11.)
+    F, K7, S = stb
+    rng = random.Random(1)
+    point = {S[n]: sp.Rational(rng.randint(2, 90), 7) for n in NAMES}
+    point[S["m9"]], point[S["m11"]] = sp.Rational(2, 5), sp.Rational(1, 2)   # must differ
+    point[S["eta4"]] = sp.Rational(3, 2)
+    point[S["omega"]] = sp.Rational(37)
+    assert sp.nsimplify(F.subs(point) - K7.subs(point)) != 0
+
+
+def test_stb_formula_equals_eq7_at_random_rational_points(stb):
+    F, K7, S = stb
+    rng = random.Random(6)
+    for _ in range(5):
+        point = {S[n]: sp.Rational(rng.randint(1, 400), rng.randint(1, 40)) for n in NAMES}
+        point[S["eta4"]] = 1
+        point[S["omega"]] = sp.Rational(rng.randint(1, 5000), rng.randint(1, 7))
+        assert sp.simplify(F.subs(point) - K7.subs(point)) == 0
+
+
+def test_formula_values_give_the_sweep():
+    c = mechcirc.load(STB)
+    F = formula(c, numeric=True)
+    f = sp.lambdify(sp.Symbol("omega", positive=True), F, "numpy")
+    omega = np.array([50.0, 500.0, 2500.0])
+    np.testing.assert_allclose(f(omega), c.sweep(omega).K, rtol=1e-12)
+    values = symbol_values(c)
+    assert values[sp.Symbol("eta1", positive=True)] == sp.Rational(4, 5)
+    assert values[sp.Symbol("k4", positive=True)] == 2_000_000
+
+
+def test_expand_is_the_same_function_as_one_fraction():
+    c = mechcirc.load(STB)
+    nested, flat = formula(c), formula(c, expand=True)
+    num, den = sp.fraction(flat)
+    omega = sp.Symbol("omega", positive=True)
+    assert num.is_polynomial(omega) and den.is_polynomial(omega)
+    assert sp.expand(sp.fraction(sp.together(nested - flat))[0]) == 0
+
+
+def test_lever_and_damper():
+    c = mechcirc.parse(".param r=0.5\nmass m a 0 2\nlever L a 0 b 0 ratio=r\n"
+                       "damper c b 0 30\ndrive V a 0 velocity=1\n")
+    F = formula(c)
+    w, m, r, cc = (sp.Symbol(n, positive=True) for n in ("omega", "m", "r", "c"))
+    # primary: mass m in parallel with the damper seen through the lever, K = (1/c)/r²
+    expected = 1 / (sp.I * w * m + cc * r**2)
+    assert sp.simplify(F - expected) == 0
+
+
+def test_formula_cli(capsys):
+    assert cli.main(["formula", str(STB), "--latex"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("K(\\omega) = ") and "\\eta_{1}^{2}" in out and "eta1 = 4/5" in out
+    assert cli.main(["formula", str(STB), "--numeric", "--expand"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("K(omega) = (") and "where" not in out
