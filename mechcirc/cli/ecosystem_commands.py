@@ -56,6 +56,26 @@ def register(sub) -> None:
                    help="substitute the values (exact rationals); only omega stays a symbol")
     p.set_defaults(func=cmd_formula)
 
+    p = sub.add_parser(
+        "study", help="a parameter grid or random sample, on local cores or a Dask cluster",
+        description="Run a parameter study described by a TOML file (see docs/ecosystem.md): "
+                    "each point re-parses the netlist with new .param values and records a "
+                    "sweep summary or a resonance table; failed points are rows with their "
+                    "error.  Rows are written as they finish (an interrupted study keeps "
+                    "them; --resume runs only the missing points).",
+        epilog="Example: mechcirc study examples/study_stb.toml -o results.csv")
+    p.add_argument("spec", help="study description (.toml)")
+    p.add_argument("-o", "--output", metavar="CSV", help="write the table to this CSV file")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="run on an existing Dask cluster (tcp://host:8786); needs "
+                        "'mechcirc[study]'")
+    p.add_argument("--workers", type=int, metavar="N",
+                   help="local processes (default: all cores; 1 = this process)")
+    p.add_argument("--resume", action="store_true",
+                   help="keep the rows already in -o and run only the missing points")
+    p.add_argument("--json", action="store_true", help="print one JSON document")
+    p.set_defaults(func=cmd_study)
+
 
 def cmd_forces(args) -> int:
     from ..forces import element_forces
@@ -153,4 +173,42 @@ def cmd_formula(args) -> int:
             print("where (SI values; K in m/(N·s), omega in rad/s):")
             for sym in sorted(values, key=lambda s: s.name):
                 print(f"  {sym.name} = {values[sym]} ({float(values[sym]):g})")
+    return 0
+
+
+def cmd_study(args) -> int:
+    from ..errors import MechcircError
+    from ..progress import Progress
+    from ..study import load_spec, run_study
+
+    check_output_paths(args.output)
+    if args.resume and not args.output:
+        raise MechcircError("--resume needs -o FILE (the table to continue)")
+    if args.workers is not None and args.workers < 1:
+        raise MechcircError(f"--workers must be at least 1, got {args.workers}")
+    spec = load_spec(args.spec)
+    with Progress(len(spec.points), "study") as bar:
+        result = run_study(spec, output=args.output, scheduler=args.scheduler,
+                           workers=args.workers, resume=args.resume, on_rows=bar.update)
+    if args.json:
+        print_json({"spec": args.spec, "netlist": spec.netlist_source,
+                    "analysis": spec.analysis, "executor": result.executor,
+                    "workers": result.workers, "points": len(result.rows),
+                    "resumed": result.skipped, "failed": result.failed,
+                    "columns": result.columns,
+                    "rows": [[r.get(c, None) for c in result.columns] for r in result.rows]})
+        return 0
+    where = {"dask": f"Dask cluster {args.scheduler} ({result.workers} threads)",
+             "local": f"{result.workers} local processes",
+             "inline": "this process"}[result.executor]
+    print(f"{args.spec}: {len(result.rows)} points of {spec.netlist_source} "
+          f"({spec.analysis}) on {where}")
+    if result.skipped:
+        print(f"  {result.skipped} point(s) kept from {args.output}")
+    if result.failed:
+        print(f"  {result.failed} point(s) failed (status 'error', message in column 'error')")
+        for r in [r for r in result.rows if r["status"] != "ok"][:3]:
+            print(f"    point {r['index']}: {r['error']}")
+    if args.output:
+        print(f"  table written to {args.output}")
     return 0

@@ -1,0 +1,480 @@
+"""Parameter studies: a grid or a random sample over a netlist's ``.param`` values.
+
+A study is described by a TOML file (``mechcirc study SPEC.toml``)::
+
+    netlist = "../netlists/stb_heald.mcir"   # relative to this file
+    analysis = "sweep"                       # or "resonances"
+
+    [omega]                  # the sweep at each point (analysis = "sweep")
+    min = 10                 # rad/s; or a string with a unit: "5Hz", "300rpm"
+    max = "1500Hz"
+    points = 400
+    log = true
+
+    [grid]                   # every combination (full factorial) ...
+    eta1 = [0.7, 0.8, 0.9]                    # listed values
+    eta2 = {min = 1.0, max = 1.5, num = 6}    # evenly spaced (log = true: geometric)
+
+    # ... or a random sample (uniform, or log-uniform with log = true)
+    # [random]
+    # n = 1000
+    # seed = 1
+    # [random.params]
+    # eta1 = {min = 0.6, max = 1.0}
+
+    # analysis = "resonances": how many of each kind to tabulate, and up to where
+    # resonances = 3
+    # omega_max = 5000
+
+Each point re-parses the netlist with the point's values in place of the
+``.param`` definitions (:func:`mechcirc.parse` ``params=``), so parameters
+defined from them follow.  Values are SI.  A point that fails (a negative
+mass, a singular network) is a row with ``status = "error"`` and the message,
+never dropped.
+
+Columns: ``index``, the parameters, ``status``, ``error``, then for a sweep
+``K_abs_min K_abs_max Q0_abs_max omega_at_Q0_max n_flagged`` [m/(N·s), N,
+rad/s], for resonances ``resonance_1..N`` and ``antiresonance_1..N`` [rad/s]
+(empty where there are fewer).
+
+Execution: all local cores (``concurrent.futures.ProcessPoolExecutor``) by
+default, or an existing Dask cluster (``scheduler="tcp://host:8786"``;
+``dask.distributed`` is imported only then).  Points go out in batches;
+finished rows are appended to the output as they arrive, so an interrupted
+study keeps them, and ``resume=True`` runs only the points the file lacks.
+At the end the file is rewritten in index order (atomically).  Local and
+cluster runs give identical tables: each point is computed the same way,
+whatever runs it.
+"""
+
+from __future__ import annotations
+
+import csv
+import itertools
+import math
+import os
+import random
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable, Iterable
+
+from .errors import MechcircError
+
+__all__ = ["StudySpec", "load_spec", "parse_spec", "study_points", "run_point", "run_batch",
+           "run_study", "StudyResult", "read_rows"]
+
+_SWEEP_COLUMNS = ["K_abs_min", "K_abs_max", "Q0_abs_max", "omega_at_Q0_max", "n_flagged"]
+
+
+@dataclass(frozen=True)
+class StudySpec:
+    """A parsed study: the netlist text, the analysis and the points' parameter values."""
+
+    netlist_text: str
+    netlist_source: str
+    analysis: str
+    params: tuple[str, ...]
+    points: tuple[tuple[float, ...], ...]
+    omega: tuple[float, float, int, bool] | None = None
+    n_resonances: int = 3
+    omega_max: float | None = None
+    spec_source: str = "<spec>"
+
+    @property
+    def columns(self) -> list[str]:
+        """The table's columns, in order."""
+        head = ["index", *self.params, "status", "error"]
+        if self.analysis == "sweep":
+            return head + _SWEEP_COLUMNS
+        n = self.n_resonances
+        return head + [f"resonance_{i}" for i in range(1, n + 1)] + \
+            [f"antiresonance_{i}" for i in range(1, n + 1)]
+
+
+def _fail(source: str, message: str):
+    raise MechcircError(f"{source}: {message}")
+
+
+def _omega(source, value, what) -> float:
+    from .units import parse_omega
+
+    if isinstance(value, bool):
+        _fail(source, f"{what} must be a number [rad/s] or a string such as '50Hz'")
+    if isinstance(value, (int, float)):
+        return float(value)
+    if isinstance(value, str):
+        try:
+            return parse_omega(value)
+        except ValueError as exc:
+            _fail(source, f"{what}: {exc}")
+    _fail(source, f"{what} must be a number [rad/s] or a string such as '50Hz', got {value!r}")
+
+
+def _number(source, value, what) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        _fail(source, f"{what} must be a finite number, got {value!r}")
+    return float(value)
+
+
+def _axis(source, name, value) -> list[float]:
+    if isinstance(value, list):
+        if not value:
+            _fail(source, f"grid.{name} is an empty list")
+        return [_number(source, v, f"grid.{name}") for v in value]
+    if isinstance(value, dict):
+        extra = set(value) - {"min", "max", "num", "log"}
+        if extra or not {"min", "max", "num"} <= set(value):
+            _fail(source, f"grid.{name} needs min, max and num (and optionally log), got "
+                          f"{', '.join(sorted(value))}")
+        lo, hi = _number(source, value["min"], f"grid.{name}.min"), \
+            _number(source, value["max"], f"grid.{name}.max")
+        num = value["num"]
+        if isinstance(num, bool) or not isinstance(num, int) or num < 1:
+            _fail(source, f"grid.{name}.num must be a positive integer, got {num!r}")
+        import numpy as np
+
+        if value.get("log", False):
+            if lo <= 0 or hi <= 0:
+                _fail(source, f"grid.{name}: log spacing needs min and max > 0")
+            return [float(x) for x in np.geomspace(lo, hi, num)]
+        return [float(x) for x in np.linspace(lo, hi, num)]
+    _fail(source, f"grid.{name} must be a list of values or {{min, max, num}}, got {value!r}")
+
+
+#: The largest number of points a study may have (a typo in num should not fill the disk).
+MAX_POINTS = 10_000_000
+
+
+def parse_spec(data: dict, *, source: str = "<spec>", base: Path | None = None) -> StudySpec:
+    """Check a study description (the TOML file's content) and build its points.
+
+    Raises
+    ------
+    MechcircError
+        Naming the key at fault and what would be right.
+    """
+    base = base or Path(".")
+    known = {"netlist", "analysis", "omega", "grid", "random", "resonances", "omega_max"}
+    unknown = sorted(set(data) - known)
+    if unknown:
+        _fail(source, f"unknown key(s) {', '.join(unknown)} (expected {', '.join(sorted(known))})")
+    if "netlist" not in data or not isinstance(data["netlist"], str):
+        _fail(source, "needs netlist = \"PATH\" (relative to the spec file)")
+    path = Path(os.path.normpath(base / data["netlist"]))
+    try:
+        path = path.relative_to(Path.cwd())
+    except ValueError:
+        pass
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        _fail(source, f"netlist {str(path)!r}: {exc.strerror or exc}")
+    analysis = data.get("analysis", "sweep")
+    if analysis not in ("sweep", "resonances"):
+        _fail(source, f"analysis must be 'sweep' or 'resonances', got {analysis!r}")
+    if ("grid" in data) == ("random" in data):
+        _fail(source, "needs exactly one of a [grid] table or a [random] table")
+    if "grid" in data:
+        grid = data["grid"]
+        if not isinstance(grid, dict) or not grid:
+            _fail(source, "[grid] must name at least one parameter")
+        names = tuple(grid)
+        axes = [_axis(source, n, grid[n]) for n in names]
+        count = math.prod(len(a) for a in axes)
+        if count > MAX_POINTS:
+            _fail(source, f"the grid has {count} points, the limit is {MAX_POINTS}")
+        points = tuple(itertools.product(*axes))
+    else:
+        rnd = data["random"]
+        extra = set(rnd) - {"n", "seed", "params"}
+        if extra:
+            _fail(source, f"unknown key(s) in [random]: {', '.join(sorted(extra))}")
+        n = rnd.get("n")
+        if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= MAX_POINTS:
+            _fail(source, f"random.n must be an integer from 1 to {MAX_POINTS}, got {n!r}")
+        ranges = rnd.get("params")
+        if not isinstance(ranges, dict) or not ranges:
+            _fail(source, "[random.params] must give {min, max} for at least one parameter")
+        names = tuple(ranges)
+        bounds = []
+        for name in names:
+            r = ranges[name]
+            if not isinstance(r, dict) or not {"min", "max"} <= set(r) or \
+                    set(r) - {"min", "max", "log"}:
+                _fail(source, f"random.params.{name} must be {{min, max[, log]}}")
+            lo = _number(source, r["min"], f"random.params.{name}.min")
+            hi = _number(source, r["max"], f"random.params.{name}.max")
+            if not lo <= hi or (r.get("log") and lo <= 0):
+                _fail(source, f"random.params.{name}: need min <= max (and > 0 with log)")
+            bounds.append((lo, hi, bool(r.get("log", False))))
+        rng = random.Random(rnd.get("seed", 0))
+        points = tuple(tuple(math.exp(rng.uniform(math.log(lo), math.log(hi))) if log
+                             else rng.uniform(lo, hi) for lo, hi, log in bounds)
+                       for _ in range(n))
+    omega = None
+    if analysis == "sweep":
+        o = data.get("omega")
+        if not isinstance(o, dict) or not {"min", "max"} <= set(o):
+            _fail(source, "analysis 'sweep' needs an [omega] table with min and max "
+                          "(and points, log)")
+        lo, hi = _omega(source, o["min"], "omega.min"), _omega(source, o["max"], "omega.max")
+        npts = o.get("points", 200)
+        if isinstance(npts, bool) or not isinstance(npts, int) or not 1 <= npts <= 1_000_000:
+            _fail(source, f"omega.points must be an integer from 1 to 1000000, got {npts!r}")
+        log = bool(o.get("log", False))
+        if not (0 <= lo < hi) or (log and lo <= 0):
+            _fail(source, f"need 0 <= omega.min < omega.max (and > 0 with log), got {lo}, {hi}")
+        omega = (lo, hi, npts, log)
+    n_res = data.get("resonances", 3)
+    if isinstance(n_res, bool) or not isinstance(n_res, int) or not 1 <= n_res <= 100:
+        _fail(source, f"resonances must be an integer from 1 to 100, got {n_res!r}")
+    omega_max = _omega(source, data["omega_max"], "omega_max") if "omega_max" in data else None
+    # Check the names against the netlist now, not once per point.
+    from .netlist import parse
+
+    base_circuit = parse(text, source=str(path))
+    missing = [n for n in names if n not in base_circuit.params]
+    if missing:
+        _fail(source, f"{', '.join(missing)} is not a .param of {path} (its parameters: "
+                      f"{', '.join(base_circuit.params) or 'none'})")
+    return StudySpec(text, str(path), analysis, names, points, omega, n_res, omega_max, source)
+
+
+def load_spec(path: str | os.PathLike) -> StudySpec:
+    """Read a study TOML file (see the module docstring)."""
+    import tomllib
+
+    source = os.fspath(path)
+    try:
+        with open(source, "rb") as fh:
+            data = tomllib.load(fh)
+    except FileNotFoundError:
+        raise MechcircError(f"{source}: no such file") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise MechcircError(f"{source}: not valid TOML: {exc}") from None
+    return parse_spec(data, source=source, base=Path(source).resolve().parent)
+
+
+def study_points(spec: StudySpec) -> list[tuple[int, dict[str, float]]]:
+    """``(index, {param: value})`` for every point, in order."""
+    return [(i, dict(zip(spec.params, p))) for i, p in enumerate(spec.points)]
+
+
+def run_point(spec: StudySpec, index: int, values: dict[str, float]) -> dict:
+    """One row of the table (errors caught and recorded, never raised)."""
+    import warnings
+
+    import numpy as np
+
+    row: dict = {"index": index, **values, "status": "ok", "error": ""}
+    try:
+        from .netlist import parse
+
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            circuit = parse(spec.netlist_text, source=spec.netlist_source, params=values)
+            if spec.analysis == "sweep":
+                lo, hi, n, log = spec.omega
+                omega = np.geomspace(lo, hi, n) if log else np.linspace(lo, hi, n)
+                result = circuit.sweep(omega)
+                with np.errstate(all="ignore"):
+                    absK, absQ = np.abs(result.K), np.abs(result.Q0)
+                ok = np.isfinite(absQ)
+                peak = int(np.argmax(np.where(ok, absQ, -1.0)))
+                row.update(K_abs_min=float(np.nanmin(absK)), K_abs_max=float(np.nanmax(absK)),
+                           Q0_abs_max=float(absQ[peak]) if ok.any() else math.inf,
+                           omega_at_Q0_max=float(omega[peak]) if ok.any() else math.nan,
+                           n_flagged=int(np.count_nonzero(result.flags)))
+            else:
+                found = circuit.resonances(omega_max=spec.omega_max)
+                for kind in ("resonance", "antiresonance"):
+                    ws = [r.omega for r in found if r.kind == kind][:spec.n_resonances]
+                    for i in range(spec.n_resonances):
+                        row[f"{kind}_{i + 1}"] = ws[i] if i < len(ws) else math.nan
+    except Exception as exc:  # noqa: BLE001 - a study records every failure
+        row["status"] = "error"
+        row["error"] = f"{type(exc).__name__}: {exc}".replace("\n", " ")
+    return row
+
+
+def run_batch(spec: StudySpec, batch: list[tuple[int, dict[str, float]]]) -> list[dict]:
+    """Rows of a batch of points (what each worker runs)."""
+    return [run_point(spec, i, v) for i, v in batch]
+
+
+@dataclass
+class StudyResult:
+    """The rows of a study in index order, and how it ran."""
+
+    columns: list[str]
+    rows: list[dict]
+    executor: str
+    workers: int
+    skipped: int = 0
+    failed: int = field(default=0)
+
+
+def _format(value) -> str:
+    if isinstance(value, float):
+        return repr(value) if math.isfinite(value) else ("nan" if math.isnan(value) else
+                                                         ("inf" if value > 0 else "-inf"))
+    return str(value)
+
+
+def read_rows(path: str | os.PathLike, columns: list[str]) -> list[dict]:
+    """Rows of a results CSV written by a study with these ``columns`` (for ``resume``)."""
+    with open(path, newline="", encoding="utf-8") as fh:
+        reader = csv.reader(fh)
+        header = next(reader, None)
+        if header is None:
+            return []
+        if header != columns:
+            raise MechcircError(f"{os.fspath(path)}: its columns ({', '.join(header)}) are not "
+                                "this study's; cannot resume (use another -o)")
+        rows = []
+        for rec in reader:
+            if len(rec) != len(columns):
+                continue        # a line cut short by an interruption: run that point again
+            row = {}
+            for name, text in zip(columns, rec):
+                if name in ("status", "error"):
+                    row[name] = text
+                elif name in ("index", "n_flagged"):
+                    row[name] = int(text) if text else ""
+                else:
+                    row[name] = float(text) if text else ""
+            rows.append(row)
+        return rows
+
+
+def _batches(points, size):
+    for start in range(0, len(points), size):
+        yield points[start:start + size]
+
+
+def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
+              scheduler: str | None = None, workers: int | None = None, resume: bool = False,
+              batch_size: int | None = None, connect_timeout: float = 10.0,
+              on_rows: Callable[[int], None] | None = None) -> StudyResult:
+    """Run every point of ``spec``; return the rows (and write them to ``output``).
+
+    Parameters
+    ----------
+    output : path, optional
+        CSV file; rows are appended as they finish, then the file is
+        rewritten in index order.
+    scheduler : str, optional
+        Address of a Dask scheduler (``tcp://host:8786``); by default the
+        local cores run the study.
+    workers : int, optional
+        Local processes (default: all cores); 1 runs in this process.
+    resume : bool
+        Keep the rows already in ``output`` and run only the missing points.
+    batch_size : int, optional
+        Points per task (default: about 8 tasks per worker, at most 500).
+    connect_timeout : float
+        Seconds to wait for the Dask scheduler before giving up.
+    on_rows : callable, optional
+        Called with the number of rows each time a batch finishes (progress).
+    """
+    columns = spec.columns
+    todo = study_points(spec)
+    done: list[dict] = []
+    if resume and output and Path(output).exists():
+        done = read_rows(output, columns)
+        have = {r["index"] for r in done}
+        todo = [(i, v) for i, v in todo if i not in have]
+    sink = None
+    if output:
+        fresh = not (resume and Path(output).exists() and done)
+        sink = open(output, "w" if fresh else "a", newline="", encoding="utf-8")
+        writer = csv.writer(sink)
+        if fresh:
+            writer.writerow(columns)
+            for r in done:
+                writer.writerow([_format(r.get(c, "")) for c in columns])
+            sink.flush()
+
+    rows = list(done)
+
+    def take(batch_rows: Iterable[dict]) -> None:
+        batch_rows = list(batch_rows)
+        rows.extend(batch_rows)
+        if sink is not None:
+            for r in batch_rows:
+                writer.writerow([_format(r.get(c, "")) for c in columns])
+            sink.flush()
+        if on_rows is not None:
+            on_rows(len(batch_rows))
+
+    try:
+        if scheduler:
+            executor, n_workers = "dask", _run_dask(spec, todo, scheduler, batch_size, take,
+                                                    connect_timeout)
+        else:
+            executor, n_workers = _run_local(spec, todo, workers or os.cpu_count() or 1,
+                                             batch_size, take)
+    finally:
+        if sink is not None:
+            sink.close()
+    rows.sort(key=lambda r: r["index"])
+    if output:
+        from .outputs import atomic_open
+
+        with atomic_open(output, "w", newline="", encoding="utf-8") as fh:
+            w = csv.writer(fh)
+            w.writerow(columns)
+            for r in rows:
+                w.writerow([_format(r.get(c, "")) for c in columns])
+    failed = sum(r["status"] != "ok" for r in rows)
+    return StudyResult(columns, rows, executor, n_workers, len(done), failed)
+
+
+def _size(n_points: int, n_workers: int, batch_size: int | None) -> int:
+    if batch_size:
+        return max(1, int(batch_size))
+    return max(1, min(500, math.ceil(n_points / (8 * max(1, n_workers)))))
+
+
+def _run_local(spec, todo, n_workers, batch_size, take) -> tuple[str, int]:
+    size = _size(len(todo), n_workers, batch_size)
+    if n_workers <= 1 or len(todo) <= size:
+        # One batch or one worker: starting processes would cost more than it saves.
+        for batch in _batches(todo, size):
+            take(run_batch(spec, batch))
+        return "inline", 1
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+
+    with ProcessPoolExecutor(max_workers=n_workers) as pool:
+        futures = [pool.submit(run_batch, spec, batch) for batch in _batches(todo, size)]
+        try:
+            for fut in as_completed(futures):
+                take(fut.result())
+        except BaseException:
+            for fut in futures:
+                fut.cancel()
+            raise
+    return "local", n_workers
+
+
+def _run_dask(spec, todo, scheduler, batch_size, take, connect_timeout) -> int:
+    try:
+        from distributed import Client, as_completed
+    except ImportError:
+        raise MechcircError("--scheduler needs Dask: pip install 'mechcirc[study]'") from None
+    try:
+        client = Client(scheduler, timeout=f"{connect_timeout}s")
+    except (OSError, TimeoutError) as exc:
+        raise MechcircError(f"cannot reach the Dask scheduler at {scheduler}: {exc}") from None
+    try:
+        n_workers = max(1, sum(w.get("nthreads", 1) for w in
+                               client.scheduler_info()["workers"].values()))
+        size = _size(len(todo), n_workers, batch_size)
+        spec_future = client.scatter(spec, broadcast=True)
+        futures = [client.submit(run_batch, spec_future, batch, pure=False)
+                   for batch in _batches(todo, size)]
+        for fut in as_completed(futures):
+            take(fut.result())
+        return n_workers
+    finally:
+        client.close()

@@ -1,0 +1,206 @@
+"""Parameter studies: points, per-point results, failures, local vs Dask, resume."""
+
+import csv
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import mechcirc
+from mechcirc import cli
+from mechcirc.errors import MechcircError
+from mechcirc.study import load_spec, parse_spec, run_study
+from reference.stb_eq7 import full_K
+
+REPO = Path(__file__).resolve().parents[1]
+STB = REPO / "netlists" / "stb_heald.mcir"
+STB_PARAMS = {"m1": 2.0, "m2": 1.5, "m3": 1.2, "m4": 0.9, "m5": 0.8, "m6": 0.6, "m7": 0.5,
+              "m8": 0.7, "m9": 0.4, "m10": 0.3, "m11": 0.5, "m12": 3.0, "k0": 4.0e4,
+              "k4": 2.0e6, "k5": 1.5e6, "eta1": 0.8, "eta2": 1.25, "eta3": 0.9, "eta4": 1.0}
+OMEGA = {"min": 10, "max": 2000, "points": 60, "log": True}
+
+
+def stb_spec(**extra):
+    data = {"netlist": str(STB), "analysis": "sweep", "omega": dict(OMEGA),
+            "grid": {"eta1": [0.7, 0.8], "eta3": {"min": 0.8, "max": 1.0, "num": 3}}}
+    data.update(extra)
+    return parse_spec(data, source="t.toml")
+
+
+def read(path):
+    with open(path, newline="") as fh:
+        return list(csv.reader(fh))
+
+
+def test_grid_points_and_results_match_eq7():
+    spec = stb_spec()
+    result = run_study(spec, workers=1)
+    assert len(result.rows) == 6 and result.failed == 0
+    assert [(r["eta1"], r["eta3"]) for r in result.rows] == [
+        (0.7, 0.8), (0.7, 0.9), (0.7, 1.0), (0.8, 0.8), (0.8, 0.9), (0.8, 1.0)]
+    omega = np.geomspace(10, 2000, 60)
+    for r in result.rows:
+        K = np.abs(full_K(omega, {**STB_PARAMS, "eta1": r["eta1"], "eta3": r["eta3"]}))
+        assert r["K_abs_max"] == pytest.approx(K.max(), rel=1e-9)
+        assert r["K_abs_min"] == pytest.approx(K.min(), rel=1e-9)
+        peak = np.argmax(0.1 / K)
+        assert r["omega_at_Q0_max"] == omega[peak]
+        assert r["Q0_abs_max"] == pytest.approx(0.1 / K[peak], rel=1e-9)
+
+
+def test_failed_points_are_recorded(tmp_path):
+    net = tmp_path / "n.mcir"
+    net.write_text(".param m=2\nmass m1 a 0 m\nspring k a 0 100\ndrive V a 0 velocity=1\n")
+    spec = parse_spec({"netlist": str(net), "analysis": "sweep",
+                       "omega": {"min": 1, "max": 10, "points": 5},
+                       "grid": {"m": [1.0, -1.0, 2.0]}}, source="t.toml")
+    result = run_study(spec, output=tmp_path / "r.csv", workers=1)
+    assert [r["status"] for r in result.rows] == ["ok", "error", "ok"]
+    assert "mass 'm1' must be > 0 kg, got -1" in result.rows[1]["error"]
+    table = read(tmp_path / "r.csv")
+    assert len(table) == 4 and table[2][2:4] == ["error", result.rows[1]["error"]]
+    assert table[2][4:] == ["", "", "", "", ""]
+
+
+def test_local_processes_give_the_same_table_as_one_process(tmp_path):
+    spec = stb_spec()
+    run_study(spec, output=tmp_path / "one.csv", workers=1)
+    r = run_study(spec, output=tmp_path / "many.csv", workers=2, batch_size=1)
+    assert r.executor == "local" and r.workers == 2
+    assert (tmp_path / "one.csv").read_bytes() == (tmp_path / "many.csv").read_bytes()
+
+
+def test_dask_local_cluster_gives_the_same_table(tmp_path):
+    distributed = pytest.importorskip(
+        "distributed", reason="dask.distributed is not installed (pip install 'mechcirc[study]')")
+    spec = stb_spec()
+    run_study(spec, output=tmp_path / "local.csv", workers=1)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
+                                  dashboard_address=None) as cluster:
+        r = run_study(spec, output=tmp_path / "dask.csv", scheduler=cluster.scheduler_address,
+                      batch_size=1)
+    assert r.executor == "dask" and r.workers == 2
+    assert (tmp_path / "local.csv").read_bytes() == (tmp_path / "dask.csv").read_bytes()
+
+
+def test_unreachable_scheduler_is_a_user_error():
+    pytest.importorskip("distributed", reason="dask.distributed is not installed")
+    with pytest.raises(MechcircError, match="cannot reach the Dask scheduler"):
+        run_study(stb_spec(), scheduler="tcp://127.0.0.1:9", connect_timeout=1)
+
+
+def test_an_interrupted_study_keeps_its_rows_and_resumes(tmp_path):
+    spec = stb_spec()
+    out = tmp_path / "r.csv"
+    full = tmp_path / "full.csv"
+    run_study(spec, output=full, workers=1)
+    seen = []
+
+    def stop_after_two_batches(n):
+        seen.append(n)
+        if len(seen) == 2:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run_study(spec, output=out, workers=1, batch_size=2, on_rows=stop_after_two_batches)
+    table = read(out)
+    assert len(table) == 1 + 4                 # header and the two finished batches
+    with open(out, "a") as fh:
+        fh.write("4,0.8,0.8,ok")               # a row cut short: must be run again
+    r = run_study(spec, output=out, workers=1, resume=True)
+    assert r.skipped == 4
+    assert out.read_bytes() == full.read_bytes()
+
+
+def test_resume_refuses_another_studys_table(tmp_path):
+    out = tmp_path / "r.csv"
+    out.write_text("index,x,status,error\n0,1,ok,\n")
+    with pytest.raises(MechcircError, match="cannot resume"):
+        run_study(stb_spec(), output=out, resume=True)
+
+
+def test_random_sample_is_reproducible_and_in_bounds():
+    data = {"random": {"n": 50, "seed": 3, "params": {"eta1": {"min": 0.6, "max": 1.0},
+                                                      "eta2": {"min": 1.0, "max": 2.0,
+                                                               "log": True}}}}
+    a = parse_spec({"netlist": str(STB), "omega": dict(OMEGA), **data})
+    b = parse_spec({"netlist": str(STB), "omega": dict(OMEGA), **data})
+    assert a.points == b.points and len(a.points) == 50
+    e1, e2 = np.array(a.points).T
+    assert e1.min() >= 0.6 and e1.max() <= 1.0 and e2.min() >= 1.0 and e2.max() <= 2.0
+    # log-uniform: about half the points below the geometric midpoint
+    assert 15 < np.sum(e2 < math.sqrt(2.0)) < 35
+
+
+def test_resonance_tables():
+    spec = parse_spec({"netlist": str(STB), "analysis": "resonances", "resonances": 2,
+                       "grid": {"eta1": [0.8, 0.9]}})
+    result = run_study(spec, workers=1)
+    assert spec.columns[-4:] == ["resonance_1", "resonance_2", "antiresonance_1",
+                                 "antiresonance_2"]
+    for r in result.rows:
+        found = mechcirc.load(STB, params={"eta1": r["eta1"]}).resonances()
+        res = [x.omega for x in found if x.kind == "resonance"]
+        assert [r["resonance_1"], r["resonance_2"]] == res[:2]
+        # a zero of K is a root of eq. (7)'s numerator: |K| tiny there, by an independent formula
+        K = full_K(np.array(res[:2]), {**STB_PARAMS, "eta1": r["eta1"]})
+        assert np.all(np.abs(K) < 1e-9)
+
+
+@pytest.mark.parametrize("data, fragment", [
+    ({"grid": {"nope": [1.0]}}, "nope is not a .param"),
+    ({"grid": {"eta1": [1.0]}, "random": {"n": 2}}, "exactly one of"),
+    ({"grid": {"eta1": {"min": 1, "max": 2}}}, "needs min, max and num"),
+    ({"grid": {"eta1": []}}, "empty list"),
+    ({"grid": {"eta1": [1.0]}, "colour": 1}, "unknown key(s) colour"),
+    ({"grid": {"eta1": [1.0]}, "analysis": "fft"}, "analysis must be"),
+])
+def test_bad_specs_name_the_key(data, fragment):
+    with pytest.raises(MechcircError, match=fragment.replace("(", r"\(").replace(")", r"\)")):
+        parse_spec({"netlist": str(STB), "omega": dict(OMEGA), **data}, source="t.toml")
+
+
+def test_study_cli(tmp_path, capsys):
+    spec = tmp_path / "s.toml"
+    spec.write_text(f'netlist = "{STB}"\n[omega]\nmin = "2Hz"\nmax = "300Hz"\npoints = 40\n'
+                    'log = true\n[grid]\neta2 = {min = 1.0, max = 1.4, num = 5}\n')
+    assert load_spec(spec).omega[0] == pytest.approx(4 * math.pi)
+    out = tmp_path / "r.csv"
+    assert cli.main(["study", str(spec), "-o", str(out), "--workers", "1"]) == 0
+    stdout = capsys.readouterr().out
+    assert "5 points of" in stdout and "on this process" in stdout
+    assert len(read(out)) == 6
+    assert cli.main(["study", str(spec), "--json", "--workers", "1"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["points"] == 5 and doc["failed"] == 0 and doc["columns"][1] == "eta2"
+    assert cli.main(["study", str(tmp_path / "none.toml")]) == 2
+    assert "no such file" in capsys.readouterr().err
+
+
+def test_progress_bar_only_on_a_terminal_and_after_the_delay():
+    import io
+
+    from mechcirc.progress import Progress
+
+    silent = io.StringIO()          # not a terminal
+    with Progress(10, "x", stream=silent, delay=0) as bar:
+        for _ in range(10):
+            bar.update()
+    assert silent.getvalue() == ""
+
+    class Tty(io.StringIO):
+        def isatty(self):
+            return True
+
+    quick = Tty()                   # a terminal, but the work ends before the delay
+    with Progress(10, "x", stream=quick, delay=60) as bar:
+        bar.update(10)
+    assert quick.getvalue() == ""
+    slow = Tty()
+    with Progress(4, "study", stream=slow, delay=0) as bar:
+        for _ in range(4):
+            bar.update()
+    assert slow.getvalue().startswith("\rstudy [") and "4/4" in slow.getvalue()
+    assert slow.getvalue().endswith("\n")
