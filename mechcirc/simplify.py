@@ -8,12 +8,14 @@ what does not matter for that output in that band:
   force) and elements whose two ends became one node are removed; same-kind
   elements in parallel merge (S adds: Σ value·η); same-kind elements in series
   through a node with nothing else on it merge (K adds: 1/Σ 1/(value·η));
-* approximate steps, each kept only if the *measured* error stays ≤ T: springs
-  stiff enough to act as rigid are shorted (their nodes merged, stiffest
-  first); masses small enough to neglect, springs soft enough to neglect and
-  dampers weak enough to neglect are removed (smallest admittance first).
-  Candidates of one kind are accepted as the longest prefix of that order
-  whose measured error is ≤ T (a bisection, so O(log n) trial circuits).
+* approximate steps, kept only while the *measured* error stays ≤ T: springs
+  stiff enough to act as rigid are shorted (their nodes merged; the masses
+  there then merge exactly), and masses, springs and dampers that matter too
+  little are removed.  Candidates are ordered by their share of the drive's
+  power over the band, max |v_e·Q_e| / |v0·Q0| (from one sweep of the
+  current circuit), and accepted as the longest prefix of that order whose
+  measured error is ≤ T (a bisection: O(log n) trial circuits); rounds repeat
+  on the reduced circuit until one accepts nothing.
 
 The error is measured, never estimated: the output of the reduced and the
 full circuit are evaluated on the check grid — ``points`` log-spaced
@@ -365,62 +367,81 @@ def simplify(circuit: Circuit, band, tol: float, *, output: str | None = None,
         current, steps = reduced, trial_steps
     error = err if err <= tol else measure(current)
 
-    def admittance(e):
-        # |S| at the band's geometric middle: how much the element lets through.
-        w = math.sqrt(band[0] * band[1])
-        s = e.value * e.eta
-        return {"mass": w * s, "spring": s / w, "damper": s}[e.kind]
+    def candidates(elements):
+        """(element, action) ordered by the element's share of the drive's power, smallest first.
 
-    categories = (
-        ("spring", "shorted as rigid", lambda e: -admittance(e), "short"),
-        ("mass", "removed as negligible", admittance, "open"),
-        ("spring", "removed as negligible (soft)", admittance, "open"),
-        ("damper", "removed as negligible", admittance, "open"),
-    )
-    for kind, verb, key, action in categories:
-        cands = sorted((e for e in current if e.kind == kind and e.name not in protect),
-                       key=key)
-        if not cands:
-            continue
-
-        def apply(k):
-            els = list(current)
-            for c in cands[:k]:
-                match = next((e for e in els if e.name == c.name), None)
-                if match is None:
+        share = max over the grid of |v_e·Q_e| / |v0·Q0|; a spring that deforms
+        little for the force it carries (|v_e|/|v0| < |Q_e|/|Q0|) is a candidate to
+        short, any other spring, mass or damper a candidate to remove.
+        """
+        try:
+            c = Circuit(tuple(elements), drive, levers)
+            sw = c.sweep(grid)
+            V, Q = np.abs(sw.v0), np.abs(sw.Q0)
+            out = []
+            for e in elements:
+                if e.name in protect:
                     continue
-                if action == "open":
-                    els = [e for e in els if e is not match]
-                else:
-                    shorted = _short_circuit(els, levers, drive, match)
-                    if shorted is None:
-                        return None, []
-                    els = shorted
-            st: list[str] = []
-            try:
-                els = _exact(els, levers, drive, protect, st, set(taken))
-            except TopologyError:
-                return None, []
-            return els, st
+                v, q = np.abs(sw.velocity(e.name)) / V, np.abs(sw.force(e.name)) / Q
+                share = float(np.max(v * q))
+                short = e.kind == "spring" and float(np.max(v)) < float(np.max(q))
+                out.append((share, e.name, "short" if short else "open"))
+        except (MechcircError, KeyError, np.linalg.LinAlgError):
+            return []
+        out.sort()
+        return [(name, action) for _, name, action in out]
 
+    def apply(base, cands):
+        els = list(base)
+        done = []
+        for name, action in cands:
+            match = next((e for e in els if e.name == name), None)
+            if match is None:
+                continue
+            if action == "open":
+                els = [e for e in els if e is not match]
+            else:
+                shorted = _short_circuit(els, levers, drive, match)
+                if shorted is None:
+                    continue
+                els = shorted
+            done.append((name, action, match.kind))
+        st: list[str] = []
+        try:
+            els = _exact(els, levers, drive, protect, st, set(taken))
+        except TopologyError:
+            return None, [], []
+        return els, st, done
+
+    for _round in range(8):
+        cands = candidates(current)
+        if not cands:
+            break
+        # the longest prefix of the candidates with a measured error ≤ tol (bisection)
         best_k, best = 0, None
         lo, hi = 0, len(cands)
-        # the longest prefix with a measured error ≤ tol (bisection)
         while lo < hi:
             mid = (lo + hi + 1) // 2
-            els, st = apply(mid)
+            els, st, done = apply(current, cands[:mid])
             e = measure(els) if els is not None else math.inf
             if e <= tol:
-                lo, best_k, best = mid, mid, (els, st, e)
+                lo, best_k, best = mid, mid, (els, st, done, e)
             else:
                 hi = mid - 1
-        if best_k:
-            els, st, e = best
-            current, error = els, e
-            taken |= {e.name for e in current}
-            plural = "masses" if kind == "mass" else kind + "s"
-            steps.append(f"{plural} {verb}: {_some([c.name for c in cands[:best_k]])}")
-            steps += st
+        if not best_k:
+            break
+        els, st, done, e = best
+        current, error = els, e
+        taken |= {x.name for x in current}
+        for kind, action, verb in (("spring", "short", "shorted as rigid"),
+                                   ("spring", "open", "removed as negligible"),
+                                   ("mass", "open", "removed as negligible"),
+                                   ("damper", "open", "removed as negligible")):
+            names = [n for n, a, k in done if k == kind and a == action]
+            if names:
+                plural = "masses" if kind == "mass" else kind + "s"
+                steps.append(f"{plural} {verb}: {_some(names)}")
+        steps += st
     reduced_circuit = Circuit(tuple(current), drive, levers, name=circuit.name + "_reduced",
                               source=circuit.source)
     shifts = _shifts(inband, reduced_circuit, band)
