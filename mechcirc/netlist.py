@@ -222,8 +222,12 @@ class _Parser:
         previous = None
         for tok in line.tokens[1:]:
             if "=" not in tok.text and previous is not None and looks_like_unit(tok.text):
-                self.params[previous] = self.with_unit(line, self.params[previous], tok,
-                                                       "param", ("param", previous))
+                if previous in self.overrides:
+                    # The override is already SI; the unit is still checked.
+                    self.with_unit(line, 1.0, tok, "param")
+                else:
+                    self.params[previous] = self.with_unit(line, self.params[previous], tok,
+                                                           "param", ("param", previous))
                 previous = None
                 continue
             previous = None
@@ -248,7 +252,6 @@ class _Parser:
                                "a finite number")
                 self.params[name] = value
                 self.expressions[("param", name)] = (Expr("num", 0, value), 1.0)
-                previous = None       # the value is given in SI: a unit here is ignored
 
     def _fields(self, line: _Line, keyword: str, npos: int, allowed: tuple[str, ...]):
         """Split a statement into ``npos`` positional tokens, ``key=value`` options and units.

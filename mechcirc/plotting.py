@@ -127,3 +127,56 @@ def plot_comparison(comparison, name: str = "circuit", measured: str = "measured
     fig.suptitle(title or f"{name}: model against {measured}")
     fig.tight_layout()
     return fig
+
+
+def plot_study(result, params, column: str, name: str = "study", title: str | None = None):
+    """A study's ``column`` against its parameters; returns the Figure.
+
+    One parameter: the column against it (points joined in order of the
+    parameter).  Two or more: a scatter of the first two parameters coloured
+    by the column (log colours when it spans more than two decades).  Failed
+    points are drawn as grey crosses.
+    """
+    import numpy as np
+
+    plt = _pyplot()
+    ok = [r for r in result.rows if r["status"] == "ok" and r.get(column, "") != ""]
+    bad = [r for r in result.rows if r["status"] != "ok"]
+    unit = {"K_abs_min": " [m/(N·s)]", "K_abs_max": " [m/(N·s)]", "Q0_abs_max": " [N]",
+            "omega_at_Q0_max": " [rad/s]", "n_flagged": ""}.get(
+        column, " [rad/s]" if "resonance" in column else "")
+    fig, ax = plt.subplots(figsize=(6.5, 4.5))
+    if len(params) == 1:
+        p = params[0]
+        pts = sorted((r[p], r[column]) for r in ok)
+        if pts:
+            x, y = np.array(pts, dtype=float).T
+            ax.plot(x, y, "o-", ms=3)
+            if np.all(y > 0) and y.max() > 100 * y.min():
+                ax.set_yscale("log")
+        for r in bad:
+            ax.axvline(r[p], color="0.6", lw=0.8, ls=":")
+        ax.set_xlabel(p)
+        ax.set_ylabel(column + unit)
+    else:
+        from matplotlib.colors import LogNorm
+
+        px, py = params[:2]
+        x = np.array([r[px] for r in ok], dtype=float)
+        y = np.array([r[py] for r in ok], dtype=float)
+        c = np.array([r[column] for r in ok], dtype=float)
+        finite = np.isfinite(c)
+        norm = LogNorm() if finite.any() and np.all(c[finite] > 0) and \
+            c[finite].max() > 100 * c[finite].min() else None
+        sc = ax.scatter(x[finite], y[finite], c=c[finite], norm=norm, s=18, cmap="viridis")
+        fig.colorbar(sc, ax=ax, label=column + unit)
+        if bad:
+            ax.plot([r[px] for r in bad], [r[py] for r in bad], "x", color="0.5",
+                    label="failed point")
+            ax.legend(loc="best", fontsize="small")
+        ax.set_xlabel(px)
+        ax.set_ylabel(py)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.set_title(title or f"{name}: {column} over {len(result.rows)} points")
+    fig.tight_layout()
+    return fig

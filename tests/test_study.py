@@ -204,3 +204,21 @@ def test_progress_bar_only_on_a_terminal_and_after_the_delay():
             bar.update()
     assert slow.getvalue().startswith("\rstudy [") and "4/4" in slow.getvalue()
     assert slow.getvalue().endswith("\n")
+
+
+def test_study_plot_one_and_two_parameters(tmp_path, capsys):
+    net = tmp_path / "n.mcir"
+    net.write_text(".param m=2 k=100\nmass m1 a 0 m\nspring s a 0 k\ndrive V a 0 velocity=1\n")
+    for grid, name in (('m = [1.0, -1.0, 2.0]', "one.png"),
+                       ('m = [1.0, 2.0]\nk = [50.0, 100.0]', "two.svg")):
+        spec = tmp_path / "s.toml"
+        spec.write_text(f'netlist = "{net}"\nanalysis = "resonances"\n[grid]\n{grid}\n')
+        assert cli.main(["study", str(spec), "--workers", "1", "--plot",
+                         str(tmp_path / name)]) == 0
+        out = capsys.readouterr().out
+        assert f"plot of resonance_1 written to {tmp_path / name}" in out
+    assert (tmp_path / "one.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert "<svg" in (tmp_path / "two.svg").read_text()
+    assert cli.main(["study", str(spec), "--plot", str(tmp_path / "x.png"),
+                     "--plot-column", "K_abs_max"]) == 2
+    assert "not a result column" in capsys.readouterr().err

@@ -119,3 +119,10 @@ def test_param_overrides_for_studies():
     assert c.params == {"a": 5.0, "b": 15.0} and c.element("m").value == 15.0
     with pytest.raises(NetlistError, match="no .param named 'z'"):
         mechcirc.parse(text, params={"z": 1.0})
+
+
+def test_override_of_a_parameter_with_a_unit_is_si():
+    text = ".param L=120 mm k=5\nspring s a 0 {k*L} N/mm\ndrive V a 0 velocity=1\n"
+    assert mechcirc.parse(text).element("s").value == pytest.approx(600.0, rel=1e-15)
+    c = mechcirc.parse(text, params={"L": 0.2})
+    assert c.params["L"] == 0.2 and c.element("s").value == pytest.approx(1000.0, rel=1e-15)

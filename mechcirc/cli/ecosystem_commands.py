@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 from ._common import check_output_paths, print_json, save_figure
 
@@ -73,6 +74,11 @@ def register(sub) -> None:
                    help="local processes (default: all cores; 1 = this process)")
     p.add_argument("--resume", action="store_true",
                    help="keep the rows already in -o and run only the missing points")
+    p.add_argument("--plot", metavar="IMAGE",
+                   help="plot a result column against the parameters (PNG, SVG or PDF)")
+    p.add_argument("--plot-column", metavar="NAME",
+                   help="the column to plot (default Q0_abs_max for sweeps, resonance_1 "
+                        "for resonance tables)")
     p.add_argument("--json", action="store_true", help="print one JSON document")
     p.set_defaults(func=cmd_study)
 
@@ -181,15 +187,24 @@ def cmd_study(args) -> int:
     from ..progress import Progress
     from ..study import load_spec, run_study
 
-    check_output_paths(args.output)
+    check_output_paths(args.output, plots=(args.plot,))
     if args.resume and not args.output:
         raise MechcircError("--resume needs -o FILE (the table to continue)")
     if args.workers is not None and args.workers < 1:
         raise MechcircError(f"--workers must be at least 1, got {args.workers}")
     spec = load_spec(args.spec)
+    column = args.plot_column or ("Q0_abs_max" if spec.analysis == "sweep" else "resonance_1")
+    if args.plot and column not in spec.columns[len(spec.params) + 3:]:
+        raise MechcircError(f"--plot-column {column!r} is not a result column (expected one of "
+                            f"{', '.join(spec.columns[len(spec.params) + 3:])})")
     with Progress(len(spec.points), "study") as bar:
         result = run_study(spec, output=args.output, scheduler=args.scheduler,
                            workers=args.workers, resume=args.resume, on_rows=bar.update)
+    if args.plot:
+        from ..plotting import plot_study
+
+        save_figure(plot_study(result, spec.params, column, name=Path(args.spec).stem),
+                    args.plot)
     if args.json:
         print_json({"spec": args.spec, "netlist": spec.netlist_source,
                     "analysis": spec.analysis, "executor": result.executor,
@@ -211,4 +226,6 @@ def cmd_study(args) -> int:
             print(f"    point {r['index']}: {r['error']}")
     if args.output:
         print(f"  table written to {args.output}")
+    if args.plot:
+        print(f"  plot of {column} written to {args.plot}")
     return 0
