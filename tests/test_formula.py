@@ -103,3 +103,17 @@ def test_formula_cli(capsys):
     assert cli.main(["formula", str(STB), "--numeric", "--expand"]) == 0
     out = capsys.readouterr().out
     assert out.startswith("K(omega) = (") and "where" not in out
+
+
+def test_bridge_without_a_tree_comes_from_the_nodal_equations():
+    c = mechcirc.parse("spring k1 a b 1\nspring k2 a c 2\nspring k3 b c 3\nspring k4 b 0 4\n"
+                       "spring k5 c 0 5\nmass m a 0 1\ndrive V a 0 velocity=1\n")
+    F = formula(c)
+    w, m, g1, g2, g3, g4, g5 = (sp.Symbol(n, positive=True)
+                                for n in ("omega", "m", "k1", "k2", "k3", "k4", "k5"))
+    # Equivalent stiffness of a bridge a-b (g1), a-c (g2), b-c (g3), b-0 (g4), c-0 (g5),
+    # the textbook formula for a bridge's conductance (Y-Δ free form).
+    k_eq = (g1 * g2 * (g4 + g5) + g4 * g5 * (g1 + g2) + g3 * (g1 + g2) * (g4 + g5)) / \
+        ((g1 + g4) * (g2 + g5) + g3 * (g1 + g2 + g4 + g5))
+    expected = 1 / (sp.I * w * m + k_eq / (sp.I * w))
+    assert sp.expand(sp.fraction(sp.together(F - expected))[0]) == 0

@@ -5,7 +5,9 @@ Each element contributes its characteristic (see :mod:`mechcirc.circuit`)::
     mass  −j/(ω·m·η)      spring  jω/(k·η)      damper  1/(c·η)
 
 series nodes add, parallel nodes add reciprocals, and a lever of ratio r
-divides its secondary's K by r².  The expression is nested exactly as the
+divides its secondary's K by r².  A network without a series–parallel tree
+(a bridge) is solved from its nodal equations instead (mobility analogy, as
+in :mod:`mechcirc.nodal`), giving one factored fraction.  The expression is nested exactly as the
 tree is (the factored form the seeds print); ``expand=True`` brings it over
 one common denominator with numerator and denominator multiplied out.
 
@@ -35,6 +37,8 @@ __all__ = ["formula", "symbol_values", "OMEGA"]
 
 #: Name of the angular-frequency symbol [rad/s].
 OMEGA = "omega"
+#: Largest nodal system solved symbolically for networks without a tree.
+MAX_NODAL_UNKNOWNS = 12
 
 
 def _sympy():
@@ -121,19 +125,66 @@ class _Builder:
         base = name if not name.isdigit() else f"{kind[0]}{name}"
         return base if base not in self.taken else f"{base}_{kind}"
 
+    def element_value(self, e):
+        value = self.field(e.name, "value", e.value, self.element_name(e.name, e.kind))
+        eta = self.field(e.name, "eta", e.eta, None) if e.eta != 1 or \
+            (e.name, "eta") in self.exprs else self.sp.Integer(1)
+        return value * eta
+
     def build(self):
+        from ..errors import NotSeriesParallelError
+
+        try:
+            tree = self.circuit.tree
+        except NotSeriesParallelError:
+            return self.build_nodal()
+        return self.build_tree(tree)
+
+    def build_nodal(self):
+        """K from the nodal equations, solved symbolically (networks without a tree)."""
+        from ..nodal import assemble
+
+        sp = self.sp
+        w = self.omega
+        system = assemble(self.circuit)
+        if system.size > MAX_NODAL_UNKNOWNS:
+            raise MechcircError(
+                f"the network has no series–parallel tree and {system.size} nodal unknowns; "
+                f"a symbolic solution is attempted up to {MAX_NODAL_UNKNOWNS}")
+        index = {n: i for i, n in enumerate(system.nodes)}
+        n = system.size
+        A = sp.zeros(n, n)
+        for e in system.elements:
+            scaled = self.element_value(e)
+            y = {"mass": sp.I * w * scaled, "spring": scaled / (sp.I * w),
+                 "damper": scaled}[e.kind]
+            i, j = index.get(e.n1, -1), index.get(e.n2, -1)
+            for r, c, v in ((i, i, y), (j, j, y), (i, j, -y), (j, i, -y)):
+                if r >= 0 and c >= 0:
+                    A[r, c] += v
+        for k, lv in enumerate(system.levers):
+            col = len(system.nodes) + k
+            r = self.field(lv.name, "ratio", lv.ratio, f"r_{lv.name}")
+            for node, coef in ((lv.p1, r), (lv.p2, -r), (lv.s1, -1), (lv.s2, 1)):
+                i = index.get(node, -1)
+                if i >= 0:
+                    A[i, col] += coef
+                    A[col, i] += coef
+        rhs = sp.Matrix(system.injection().astype(int).tolist())
+        x = A.LUsolve(rhs)
+        K = (x[system.a] if system.a >= 0 else 0) - (x[system.b] if system.b >= 0 else 0)
+        return sp.factor(sp.cancel(sp.together(K)))
+
+    def build_tree(self, tree):
         from ..reduction import Leaf, Parallel, Reflect, Series, _postorder
 
         sp = self.sp
         w = self.omega
         out: dict[int, object] = {}
-        for node in _postorder(self.circuit.tree):
+        for node in _postorder(tree):
             if isinstance(node, Leaf):
                 e = node.element
-                value = self.field(e.name, "value", e.value, self.element_name(e.name, e.kind))
-                eta = self.field(e.name, "eta", e.eta, None) if e.eta != 1 or \
-                    (e.name, "eta") in self.exprs else sp.Integer(1)
-                scaled = value * eta
+                scaled = self.element_value(e)
                 K = {"mass": -sp.I / (w * scaled), "spring": sp.I * w / scaled,
                      "damper": 1 / scaled}[e.kind]
             elif isinstance(node, Series):
@@ -145,7 +196,7 @@ class _Builder:
                 r = self.field(lv.name, "ratio", lv.ratio, f"r_{lv.name}")
                 K = out[id(node.child)] / r ** 2
             out[id(node)] = K
-        return out[id(self.circuit.tree)]
+        return out[id(tree)]
 
 
 def formula(circuit: "Circuit", *, expand: bool = False, numeric: bool = False):
@@ -154,8 +205,9 @@ def formula(circuit: "Circuit", *, expand: bool = False, numeric: bool = False):
     Parameters
     ----------
     circuit : Circuit
-        A series–parallel reducible circuit (nodal-only networks have no tree
-        to follow: :class:`~mechcirc.errors.NotSeriesParallelError`).
+        Any circuit.  Without a series–parallel tree (a bridge), K comes from
+        the nodal equations solved symbolically (up to
+        :data:`MAX_NODAL_UNKNOWNS` unknowns) as one factored fraction.
     expand : bool
         Bring K over one denominator, numerator and denominator multiplied
         out (``sympy.together`` then ``expand`` of each); by default K stays
