@@ -53,7 +53,8 @@ def register(sub) -> None:
                    help="the force in this element is the output (default: K at the drive)")
     p.add_argument("-o", dest="out", metavar="FILE", help="write the reduced netlist here")
     p.add_argument("--points", type=int, default=2000, metavar="N",
-                   help="check points over the band (default 2000, plus every resonance)")
+                   help="log-spaced check points over the band (default 2000; two more "
+                        "beside each resonance in the band)")
     p.add_argument("--json", action="store_true", help="print one JSON document")
     p.set_defaults(func=cmd_reduce)
 
@@ -198,7 +199,8 @@ def cmd_reduce(args) -> int:
     for step in result.steps:
         print(f"  {step}")
     print(f"measured worst relative error over the band: {result.error:.3g} "
-          f"(tolerance {args.tol:g}; {result.points} points and every resonance checked)")
+          f"(tolerance {args.tol:g}; on {result.points} check points: {args.points} "
+          f"log-spaced and two beside each resonance in the band)")
     if result.shifts:
         print("resonances in the band (full -> reduced):")
         for s in result.shifts:

@@ -9,7 +9,8 @@ Documented in ``docs/scenes.md``.
 
 from .files import (ElasticLink, Load, Scene, SceneDrive, SceneMass, Torsion, load_scene,
                     parse_scene)
+from .cycle import CycleMap, cycle_map
 from .model import SceneCircuit, build
 
 __all__ = ["Scene", "SceneMass", "ElasticLink", "Torsion", "Load", "SceneDrive", "load_scene",
-           "parse_scene", "build", "SceneCircuit"]
+           "parse_scene", "build", "SceneCircuit", "cycle_map", "CycleMap"]
