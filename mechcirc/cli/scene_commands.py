@@ -19,9 +19,10 @@ def register(sub) -> None:
                "--harmonics 8 --plot cycle.png",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("file", help="scene file (.toml)")
-    what = p.add_mutually_exclusive_group(required=True)
+    what = p.add_mutually_exclusive_group()
     what.add_argument("--theta", type=float, metavar="DEG",
-                      help="crank rotation from the pose [deg] to linearise at")
+                      help="crank rotation from the pose [deg] to linearise at (default: "
+                           "theta_deg of the file's [analysis])")
     what.add_argument("--cycle", action="store_true",
                       help="resonances and |Q0| at shaft harmonics over a revolution")
     p.add_argument("-o", "--output", metavar="FILE",
@@ -32,6 +33,9 @@ def register(sub) -> None:
                    help="--cycle: crank angles over the revolution (default 72)")
     p.add_argument("--harmonics", type=int, default=5, metavar="H",
                    help="--cycle: shaft harmonics h = 1..H for |Q0| (default 5)")
+    p.add_argument("--reduce", action="store_true",
+                   help="reduce the circuit to what the file's [analysis] output needs over "
+                        "its band, within its tol (-o then writes the reduced netlist)")
     p.add_argument("--plot", metavar="IMAGE", help="--cycle: plot the map (PNG, SVG or PDF)")
     p.add_argument("--json", action="store_true", help="print one JSON document")
     p.set_defaults(func=cmd_scene)
@@ -67,20 +71,35 @@ def cmd_scene(args) -> int:
     if args.plot and not args.cycle:
         raise MechcircError("--plot draws the --cycle map; with --theta use -o and "
                             "'mechcirc sweep' on the netlist")
-    from ..scene import build, load_scene
+    from ..scene import build_needed, load_scene
 
     scene = load_scene(args.file)
     if args.cycle:
+        if args.reduce:
+            raise MechcircError("--reduce applies to one crank angle, not to --cycle")
         return _cycle(args, scene)
-    if not math.isfinite(args.theta):
+    if args.theta is not None and not math.isfinite(args.theta):
         raise MechcircError(f"--theta must be finite, got {args.theta}")
-    model = build(scene, math.radians(args.theta), reflect=args.reflect)
+    if args.reduce and scene.analysis.band is None:
+        raise MechcircError(f"{args.file}: --reduce needs band = [W1, W2] and tol = T in the "
+                            "file's [analysis] table")
+    if args.theta is None and scene.analysis.theta_deg is None:
+        raise MechcircError(f"{args.file}: give --theta DEG or --cycle (the file has no "
+                            "[analysis] theta_deg)")
+    theta_deg = args.theta if args.theta is not None else scene.analysis.theta_deg
+    if args.reduce:
+        model, reduced = build_needed(scene, math.radians(theta_deg), reflect=args.reflect)
+    else:
+        from ..scene import build
+
+        model, reduced = build(scene, math.radians(theta_deg), reflect=args.reflect), None
+    args.theta = theta_deg
     found = model.circuit.resonances()
     if args.output:
         from ..outputs import atomic_open
 
         with atomic_open(args.output, "w", encoding="utf-8") as fh:
-            fh.write(model.netlist)
+            fh.write(model.netlist if reduced is None else reduced.netlist)
     unit = "rad/s" if model.rotational else "m/s"
     if args.json:
         print_json({
@@ -89,7 +108,8 @@ def cmd_scene(args) -> int:
             "ratios": model.ratios, "dropped": [{"name": n, "why": w} for n, w in model.dropped],
             "resonances": [{"kind": r.kind, "omega": r.omega, "f_hz": r.f_hz, "zeta": r.zeta}
                            for r in found],
-            "netlist": model.netlist, "output": args.output})
+            "netlist": model.netlist, "output": args.output,
+            "reduced": None if reduced is None else reduced.as_dict()})
         return 0
     print(f"{args.file}: scene {scene.name!r} at θ = {args.theta:g}° "
           f"(drive {unit}, drive ratio r0 = {model.drive_ratio:.6g})")
@@ -104,8 +124,15 @@ def cmd_scene(args) -> int:
     for r in found:
         z = f"  zeta={r.zeta:.4g}" if r.zeta else ""
         print(f"  {r.kind:<14} {r.omega:12.6g} rad/s  {r.f_hz:10.5g} Hz{z}")
+    if reduced is not None:
+        what = "K at the drive" if reduced.output is None else f"the force in {reduced.output}"
+        print(f"reduced for {what} over ω ∈ [{reduced.band[0]:g}, {reduced.band[1]:g}] rad/s: "
+              f"{reduced.elements_before} -> {reduced.elements_after} elements, measured worst "
+              f"relative error {reduced.error:.3g} (tol {reduced.tol:g})")
+        for step in reduced.steps:
+            print(f"  {step}")
     if args.output:
-        print(f"wrote {args.output}")
+        print(f"wrote {args.output}" + (" (reduced)" if reduced is not None else ""))
     return 0
 
 

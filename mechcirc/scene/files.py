@@ -40,6 +40,12 @@ tables::
     # point = "T"                # ... or a point (its speed along its path: m/s, N)
     velocity = 0.1               # kinematic excitation amplitude, or force = F0
 
+    [analysis]                   # optional: what the scene asks for
+    theta_deg = 40.0             # the moment of the cycle [deg from the pose]
+    output = "kEF"               # force in this circuit element (default K at the drive)
+    band = [30.0, 480.0]         # [rad/s], with tol: model only what the band needs
+    tol = 0.01
+
 The linkage part is read by :func:`mechcirc.kinematics.linkage.parse_linkage`
 (the scene tables are hidden from it, line numbers kept), so its errors and
 checks are the linkage's.  Masses, stiffnesses and dampings are SI; lengths
@@ -63,13 +69,13 @@ from pathlib import Path
 from ..errors import GeometryError, NetlistError
 from ..kinematics.linkage import Linkage, _err, parse_linkage
 
-__all__ = ["Scene", "SceneMass", "ElasticLink", "Torsion", "Load", "SceneDrive",
+__all__ = ["Scene", "Analysis", "SceneMass", "ElasticLink", "Torsion", "Load", "SceneDrive",
            "parse_scene", "load_scene", "LENGTH_UNITS", "SCENE_TABLES"]
 
 #: Length units accepted for ``units`` and their size [m].
 LENGTH_UNITS = {"m": 1.0, "cm": 1e-2, "mm": 1e-3}
 #: Tables a scene adds to the linkage format.
-SCENE_TABLES = ("masses", "elastic", "torsion", "loads", "drive")
+SCENE_TABLES = ("masses", "elastic", "torsion", "loads", "drive", "analysis")
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 
 
@@ -139,6 +145,21 @@ class SceneDrive:
     point: str | None = None
 
 
+@dataclass(frozen=True)
+class Analysis:
+    """What the scene asks for (the optional ``[analysis]`` table); None where not given.
+
+    ``theta_deg`` the crank rotation [deg], ``output`` the circuit element whose
+    force is the output (None: K at the drive), ``band`` (W1, W2) [rad/s] and
+    ``tol`` [1] for :func:`mechcirc.simplify.simplify`.
+    """
+
+    theta_deg: float | None = None
+    output: str | None = None
+    band: tuple | None = None
+    tol: float | None = None
+
+
 @dataclass(frozen=True, eq=False)
 class Scene:
     """A parsed scene; see the module docstring for the file format.
@@ -169,6 +190,7 @@ class Scene:
     drive: SceneDrive
     parts: tuple
     source: str = "<string>"
+    analysis: Analysis = Analysis()
 
     @property
     def omega_shaft(self) -> float:
@@ -473,11 +495,68 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
                    "drive", "name")
     drive = SceneDrive(dname, kind, amp, link=dr.get("link"), point=dr.get("point"))
 
+    # ---- circuit element names: a damper in parallel with a spring is NAME_d
+    circuit_names = {m.name for m in masses} | {dname}
+    for el, table in [(e, "elastic") for e in elastic] + [(t, "torsion") for t in torsions] \
+            + [(ld, "loads") for ld in loads]:
+        circuit_names.add(el.name)
+        if el.damping > 0 and el.stiffness > 0:
+            taken = el.name + "_d"
+            if taken in names:
+                where = next(((n, ln.index(f'"{taken}"') + 1) for n, ln in
+                              enumerate(text.splitlines(), start=1) if f'"{taken}"' in ln), (0, 0))
+                raise NetlistError(f"{el.name!r} has a damper, named {taken!r} in the circuit, "
+                                   "but that name is taken", source, *where, "another name")
+            circuit_names.add(el.name + "_d")
+    analysis = _analysis(text, source, doc.get("analysis"), circuit_names)
+
     scene = Scene(str(doc.get("name", linkage.name)), linkage, units, LENGTH_UNITS[units],
                   tuple(masses), tuple(elastic), tuple(torsions), tuple(loads), drive, (),
-                  source)
+                  source, analysis)
     object.__setattr__(scene, "parts", _parts(scene))
     return scene
+
+
+def _analysis(text, source, table, circuit_names) -> Analysis:
+    """The optional ``[analysis]`` table: theta_deg, output, band = [W1, W2], tol."""
+    if table is None:
+        return Analysis()
+    if not isinstance(table, dict):
+        raise _err(text, source, "analysis must be a table [analysis]", None, "analysis")
+    for k in table:
+        if k not in ("theta_deg", "output", "band", "tol"):
+            raise _err(text, source, f"unknown key {k!r} in [analysis]", "analysis", k,
+                       expected="theta_deg, output, band, tol")
+    theta = None
+    if "theta_deg" in table:
+        theta = _number(text, source, table["theta_deg"], "theta_deg [deg]", "analysis",
+                        "theta_deg", 0, positive=False)
+    output = table.get("output")
+    if output is not None and output not in circuit_names:
+        raise _err(text, source, f"[analysis] output {output!r} is not an element of the "
+                   "scene's circuit", "analysis", "output", value=output if isinstance(
+                       output, str) else None, expected=f"one of {', '.join(sorted(circuit_names))}")
+    band = None
+    if "band" in table:
+        from ..simplify import BandError, _check_band
+
+        raw = table["band"]
+        try:
+            if not (isinstance(raw, list) and len(raw) == 2 and all(
+                    isinstance(x, (int, float)) and not isinstance(x, bool) for x in raw)):
+                raise BandError(f"band must be [W1, W2] in rad/s, got {raw!r}")
+            band = _check_band(raw)
+        except BandError as exc:
+            raise _err(text, source, f"[analysis] {exc}", "analysis", "band",
+                       expected="band = [W1, W2] with 0 < W1 < W2 [rad/s]") from None
+    tol = None
+    if "tol" in table:
+        tol = _number(text, source, table["tol"], "tol", "analysis", "tol", 0)
+    if (band is None) != (tol is None):
+        raise _err(text, source, "[analysis] needs band and tol together", "analysis",
+                   "band" if band is not None else "tol",
+                   expected="band = [W1, W2] and tol = T")
+    return Analysis(theta, output, band, tol)
 
 
 def _parts(scene: Scene) -> tuple:

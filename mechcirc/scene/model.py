@@ -42,7 +42,7 @@ from ..circuit import Circuit
 from ..errors import GeometryError
 from .files import Scene
 
-__all__ = ["SceneCircuit", "build", "ZERO_RATIO"]
+__all__ = ["SceneCircuit", "build", "build_needed", "ZERO_RATIO"]
 
 #: A velocity ratio below this fraction of the scene's largest one counts as zero.
 ZERO_RATIO = 1e-9
@@ -359,3 +359,48 @@ def _check_connected(scene, node_of_part, edges, dropped, deg):
             f"{scene.source}: at θ = {deg:.6g}° the parts {', '.join(lost)} are not coupled "
             f"to the drive: the elastic elements that would couple them do not deform in the "
             f"rigid motion ({why or 'no element joins them'}); a dead centre")
+
+
+def build_needed(scene: Scene, theta: float | None = None, *,
+                 reflect: Literal["eta", "lever"] = "eta"):
+    """The model the scene asks for: built at θ and, with a band, reduced to what it needs.
+
+    Parameters
+    ----------
+    scene : Scene
+    theta : float, optional
+        Crank rotation from the pose [rad]; default the file's
+        ``[analysis] theta_deg``.
+    reflect : {"eta", "lever"}
+
+    Returns
+    -------
+    (SceneCircuit, Simplified or None)
+        The full model at θ, and its reduction for ``[analysis] output`` over
+        ``band`` to ``tol`` (:func:`mechcirc.simplify.simplify`), or None
+        when the file gives no band.
+
+    Raises
+    ------
+    MechcircError
+        No θ given here or in the file; the output element is left out at θ.
+    GeometryError
+        As :func:`build`.
+    """
+    from ..errors import MechcircError
+    from ..simplify import simplify
+
+    a = scene.analysis
+    if theta is None:
+        if a.theta_deg is None:
+            raise MechcircError(f"{scene.source}: no crank angle: give one, or theta_deg in "
+                                "[analysis]")
+        theta = math.radians(a.theta_deg)
+    model = build(scene, theta, reflect=reflect)
+    if a.band is None:
+        return model, None
+    if a.output is not None and a.output not in {e.name for e in model.circuit.elements}:
+        why = dict(model.dropped).get(a.output.removesuffix("_d"), "not in the circuit")
+        raise MechcircError(f"{scene.source}: the output element {a.output!r} is left out at "
+                            f"θ = {math.degrees(theta):.6g}° ({why})")
+    return model, simplify(model.circuit, a.band, a.tol, output=a.output)

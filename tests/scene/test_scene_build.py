@@ -284,3 +284,24 @@ def test_netlist_text_round_trips_and_names_every_ratio():
     np.testing.assert_allclose(again.sweep(w).K, model.circuit.sweep(w).K, rtol=1e-14)
     for name in ("J1", "mC", "k"):
         assert f"{model.ratios[name]!r}" in model.netlist
+
+
+def test_build_needed_reduces_for_the_files_output_and_band():
+    from mechcirc.scene import build_needed
+    from mechcirc.errors import MechcircError
+
+    text = CHAIN.replace("stiffness = 3.0e5", "stiffness = 3.0e5\ndamping = 20.0") + \
+        '[[masses]]\nname = "tiny"\npoint = "A"\nmass = 1e-9\n' + \
+        "[analysis]\ntheta_deg = 5.0\noutput = \"k\"\nband = [5.0, 500.0]\ntol = 1e-3\n"
+    scene = parse_scene(text)
+    model, reduced = build_needed(scene)
+    assert model.theta == pytest.approx(math.radians(5.0))
+    assert reduced.output == "k" and reduced.error <= 1e-3
+    assert "tiny" not in {e.name for e in reduced.circuit.elements}     # 1e-9 kg: negligible
+    w = np.geomspace(5.0, 500.0, 2000)
+    full = model.circuit.sweep(w).force("k")
+    red = mechcirc.parse(reduced.netlist).sweep(w).force("k")
+    assert np.max(np.abs(red - full) / np.abs(full)) <= reduced.error * (1 + 1e-9) + 1e-15
+    with pytest.raises(MechcircError, match="no crank angle"):
+        build_needed(parse_scene(CHAIN))
+    assert build_needed(parse_scene(CHAIN), 0.1)[1] is None

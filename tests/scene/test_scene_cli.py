@@ -114,3 +114,25 @@ def test_reduce_cli_text_json_and_file(tmp_path, capsys):
 def test_reduce_bad_band_exits_2(band, capsys):
     status, _, err = run(["reduce", STB, "--band", band, "--tol", "0.01"], capsys)
     assert status == 2 and "band" in err
+
+
+def test_scene_reduce_uses_the_analysis_table(tmp_path, capsys):
+    out = tmp_path / "r.mcir"
+    status, text, err = run(["scene", HEALD, "--reduce", "-o", out], capsys)   # θ from the file
+    assert status == 0, err
+    assert "reduced for the force in kEF" in text and "(reduced)" in text
+    reduced = mechcirc.load(out)
+    full = build(load_scene(HEALD), math.radians(40.0)).circuit
+    w = np.geomspace(30.0, 480.0, 2000)
+    a, b = full.sweep(w).force("kEF"), reduced.sweep(w).force("kEF")
+    assert np.max(np.abs(b - a) / np.abs(a)) <= 0.01
+    assert len(reduced.elements) < len(full.elements)
+
+
+def test_scene_reduce_without_a_band_exits_2(tmp_path, capsys):
+    bare = tmp_path / "bare.toml"
+    bare.write_text(HEALD.read_text().split("[analysis]")[0])
+    status, _, err = run(["scene", bare, "--theta", "10", "--reduce"], capsys)
+    assert status == 2 and "needs band" in err
+    status, _, err = run(["scene", bare], capsys)
+    assert status == 2 and "give --theta" in err

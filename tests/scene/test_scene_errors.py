@@ -187,3 +187,27 @@ def test_duplicate_element_names():
     with pytest.raises(NetlistError, match="'rod' is already used") as e:
         parse_scene(text)
     assert e.value.line == _where(text, 'name = "rod"')[0]
+
+
+@pytest.mark.parametrize("table,needle,match", [
+    ("[analysis]\nband = [480.0, 30.0]\ntol = 0.01\n", "band", "not below"),
+    ("[analysis]\nband = [0.0, 30.0]\ntol = 0.01\n", "band", "must be > 0"),
+    ("[analysis]\nband = [30.0]\ntol = 0.01\n", "band", r"band must be \[W1, W2\]"),
+    ("[analysis]\nband = [30.0, 300.0]\n", "band", "band and tol together"),
+    ("[analysis]\noutput = \"k9\"\n", "output", "not an element"),
+    ("[analysis]\ntol = -1.0\nband = [1.0, 2.0]\n", "tol", "must be a finite number > 0"),
+    ("[analysis]\nthetadeg = 3.0\n", "thetadeg", "unknown key"),
+])
+def test_analysis_table_errors_are_located(table, needle, match):
+    text = BASE + table
+    with pytest.raises(NetlistError, match=match) as e:
+        parse_scene(text)
+    assert e.value.line == _where(text, needle + " =")[0]
+
+
+def test_damper_name_clash_is_refused():
+    text = BASE.replace("stiffness = 3.0e5", "stiffness = 3.0e5\ndamping = 2.0") \
+        .replace('[[masses]]\npoint = "C"', '[[masses]]\nname = "rod_d"\npoint = "C"')
+    with pytest.raises(NetlistError, match="'rod_d' in the circuit, but that name is taken") as e:
+        parse_scene(text)
+    assert e.value.line == _where(text, '"rod_d"')[0]
