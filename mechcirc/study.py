@@ -42,7 +42,9 @@ default, or an existing Dask cluster (``scheduler="tcp://host:8786"``;
 ``dask.distributed`` is imported only then).  Points go out in batches;
 finished rows are appended to the output as they arrive, so an interrupted
 study keeps them, and ``resume=True`` runs only the points the file lacks.
-At the end the file is rewritten in index order (atomically).  Local and
+At the end the file is rewritten in index order (atomically); a ``.parquet``
+output is written then (pyarrow), the rows journalled to a CSV beside it
+meanwhile.  Local and
 cluster runs give identical tables: each point is computed the same way,
 whatever runs it.
 """
@@ -362,7 +364,8 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
     ----------
     output : path, optional
         CSV file; rows are appended as they finish, then the file is
-        rewritten in index order.
+        rewritten in index order.  A ``.parquet`` name writes Parquet at the
+        end (needs pyarrow), journalling rows to ``NAME.partial.csv`` meanwhile.
     scheduler : str, optional
         Address of a Dask scheduler (``tcp://host:8786``); by default the
         local cores run the study.
@@ -380,14 +383,23 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
     columns = spec.columns
     todo = study_points(spec)
     done: list[dict] = []
-    if resume and output and Path(output).exists():
-        done = read_rows(output, columns)
+    parquet = bool(output) and str(output).lower().endswith(".parquet")
+    if parquet:
+        _require_pyarrow()
+    # Rows are journalled to a CSV as they finish: the output itself, or for
+    # Parquet (written whole at the end) a CSV beside it.
+    journal = f"{os.fspath(output)}.partial.csv" if parquet else output
+    if resume and output:
+        if Path(journal).exists():
+            done = read_rows(journal, columns)
+        elif parquet and Path(output).exists():
+            done = _read_parquet(output, columns)
         have = {r["index"] for r in done}
         todo = [(i, v) for i, v in todo if i not in have]
     sink = None
     if output:
-        fresh = not (resume and Path(output).exists() and done)
-        sink = open(output, "w" if fresh else "a", newline="", encoding="utf-8")
+        fresh = not (resume and Path(journal).exists() and done)
+        sink = open(journal, "w" if fresh else "a", newline="", encoding="utf-8")
         writer = csv.writer(sink)
         if fresh:
             writer.writerow(columns)
@@ -418,7 +430,10 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
         if sink is not None:
             sink.close()
     rows.sort(key=lambda r: r["index"])
-    if output:
+    if parquet:
+        _write_parquet(output, columns, rows)
+        os.unlink(journal)
+    elif output:
         from .outputs import atomic_open
 
         with atomic_open(output, "w", newline="", encoding="utf-8") as fh:
@@ -428,6 +443,39 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
                 w.writerow([_format(r.get(c, "")) for c in columns])
     failed = sum(r["status"] != "ok" for r in rows)
     return StudyResult(columns, rows, executor, n_workers, len(done), failed)
+
+
+def _require_pyarrow():
+    try:
+        import pyarrow  # noqa: F401
+    except ImportError:
+        raise MechcircError("Parquet output needs pyarrow (pip install pyarrow); "
+                            "or write CSV (-o results.csv)") from None
+
+
+def _write_parquet(path, columns: list[str], rows: list[dict]) -> None:
+    """The table as Parquet (atomically); empty result cells are nulls."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    from .outputs import atomic_path
+
+    data = {c: [None if r.get(c, "") == "" else r.get(c) for r in rows] for c in columns}
+    types = {c: pa.string() if c in ("status", "error") else
+             pa.int64() if c in ("index", "n_flagged") else pa.float64() for c in columns}
+    table = pa.table({c: pa.array(data[c], type=types[c]) for c in columns})
+    with atomic_path(path) as tmp:
+        pq.write_table(table, tmp)
+
+
+def _read_parquet(path, columns: list[str]) -> list[dict]:
+    import pyarrow.parquet as pq
+
+    table = pq.read_table(path)
+    if table.column_names != columns:
+        raise MechcircError(f"{os.fspath(path)}: its columns ({', '.join(table.column_names)}) "
+                            "are not this study's; cannot resume (use another -o)")
+    return [{c: ("" if v is None else v) for c, v in row.items()} for row in table.to_pylist()]
 
 
 def _size(n_points: int, n_workers: int, batch_size: int | None) -> int:

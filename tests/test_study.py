@@ -222,3 +222,34 @@ def test_study_plot_one_and_two_parameters(tmp_path, capsys):
     assert cli.main(["study", str(spec), "--plot", str(tmp_path / "x.png"),
                      "--plot-column", "K_abs_max"]) == 2
     assert "not a result column" in capsys.readouterr().err
+
+
+def test_parquet_output_and_resume(tmp_path):
+    pq = pytest.importorskip("pyarrow.parquet", reason="pyarrow is not installed")
+    net = tmp_path / "n.mcir"
+    net.write_text(".param m=2\nmass m1 a 0 m\nspring k a 0 100\ndrive V a 0 velocity=1\n")
+    spec = parse_spec({"netlist": str(net), "analysis": "sweep",
+                       "omega": {"min": 1, "max": 10, "points": 5},
+                       "grid": {"m": [1.0, -1.0, 2.0, 3.0]}}, source="t.toml")
+    out = tmp_path / "r.parquet"
+    csv_rows = run_study(spec, output=tmp_path / "r.csv", workers=1).rows
+    seen = []
+
+    def stop(n):
+        seen.append(n)
+        if len(seen) == 2:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run_study(spec, output=out, workers=1, batch_size=1, on_rows=stop)
+    assert not out.exists() and len(read(str(out) + ".partial.csv")) == 3
+    r = run_study(spec, output=out, workers=1, resume=True)
+    assert r.skipped == 2 and not Path(str(out) + ".partial.csv").exists()
+    table = pq.read_table(out)
+    assert table.column_names == spec.columns
+    rows = table.to_pylist()
+    assert [x["status"] for x in rows] == ["ok", "error", "ok", "ok"]
+    assert rows[1]["K_abs_max"] is None and rows[1]["n_flagged"] is None
+    assert rows[2]["K_abs_max"] == csv_rows[2]["K_abs_max"]
+    again = run_study(spec, output=out, workers=1, resume=True)     # nothing left to run
+    assert again.skipped == 4 and pq.read_table(out).equals(table)
