@@ -188,7 +188,8 @@ def solve_unit(system: NodalSystem, omega: ArrayLike, *, refine: bool = True
         for start in range(0, idx.size, chunk):
             sel = idx[start:start + chunk]
             w = omega[sel][:, None, None]
-            A = base + 1j * (w * M - Ks / w)
+            with np.errstate(over="ignore", invalid="ignore"):   # ω·m beyond 1.8e308: flagged
+                A = base + 1j * (w * M - Ks / w)
             x = _batched_solve(A, rhs)
             if refine:
                 x = _refine(x, lambda r: _batched_solve(A, r), tri, omega[sel], rhs)
@@ -323,9 +324,16 @@ def condition_error(system: NodalSystem, omega: ArrayLike) -> NDArray[np.float64
     for start in range(0, idx.size, chunk):
         sel = idx[start:start + chunk]
         w = omega[sel][:, None, None]
-        sv = np.linalg.svd(base + 1j * (w * M - Ks / w), compute_uv=False)
-        with np.errstate(divide="ignore"):
-            out[sel] = np.finfo(float).eps * sv[:, 0] / sv[:, -1]
+        with np.errstate(over="ignore", invalid="ignore"):
+            A = base + 1j * (w * M - Ks / w)
+        # Entries beyond float64 (a huge ω·m or k/ω) leave the error unknown:
+        # inf, so the point is flagged rather than the SVD failing.
+        finite = np.isfinite(A).all(axis=(1, 2))
+        out[sel[~finite]] = np.inf
+        if finite.any():
+            sv = np.linalg.svd(A[finite], compute_uv=False)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                out[sel[finite]] = np.finfo(float).eps * sv[:, 0] / sv[:, -1]
     return out
 
 
@@ -335,6 +343,10 @@ def require_nonsingular(system: NodalSystem) -> None:
     Dense systems are judged by their smallest singular value, and the null
     vector names the undetermined unknowns; large ones by a sparse LU.
     """
+    if system.size == 0:
+        raise TopologyError(
+            "nothing between the drive's nodes carries force (no unknowns left; unloaded: "
+            f"{', '.join(system.unloaded[:12]) or 'none'})", elements=system.unloaded)
     scale = _frequency_scale(system)
     trial = [0.731 * scale, 1.913 * scale]
     if system.size > DENSE_LIMIT:
@@ -345,12 +357,19 @@ def require_nonsingular(system: NodalSystem) -> None:
                             f"ω = {trial[0]:.4g} and {trial[1]:.4g} rad/s)")
     base = (system.D + system.C).toarray()
     M, Ks = system.M.toarray(), system.Ks.toarray()
+    judged = None
     for w in trial:
-        A = base + 1j * (w * M - Ks / w)
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+            A = base + 1j * (w * M - Ks / w)
+        if not np.isfinite(A).all():
+            continue            # values at float64's edge: no verdict at this ω
         sv = np.linalg.svd(A, compute_uv=False)
         if sv[-1] > 1e-13 * sv[0]:
             return
-    _, _, vh = np.linalg.svd(A)
+        judged = A
+    if judged is None:
+        return                  # the sweep flags the non-finite points itself
+    _, _, vh = np.linalg.svd(judged)
     null = np.abs(vh[-1].conj())
     names = list(system.nodes) + [f"lever {lv.name}" for lv in system.levers]
     culprits = [names[i] for i in np.flatnonzero(null > 1e-6 * null.max())]
@@ -363,7 +382,12 @@ def require_nonsingular(system: NodalSystem) -> None:
 
 def _frequency_scale(system: NodalSystem) -> float:
     """A characteristic ω [rad/s] of the system: sqrt(trace Kₛ / trace M), or 1."""
-    tm, tk = system.M.diagonal().sum(), system.Ks.diagonal().sum()
-    if tm > 0 and tk > 0:
-        return float(np.sqrt(tk / tm))
+    # Sum after scaling by the largest entry: masses near 1e308 would overflow.
+    dm, dk = np.abs(system.M.diagonal()), np.abs(system.Ks.diagonal())
+    if dm.size and dm.max() > 0 and dk.max() > 0:
+        mm, mk = dm.max(), dk.max()
+        with np.errstate(all="ignore"):
+            scale = np.sqrt(mk) / np.sqrt(mm) * np.sqrt((dk / mk).sum() / (dm / mm).sum())
+        if np.isfinite(scale) and scale > 0:
+            return float(scale)
     return 1.0

@@ -36,6 +36,7 @@ import numpy as np
 import scipy.linalg as la
 
 from .circuit import Circuit
+from .errors import NetlistError, SolverError
 
 __all__ = ["Resonance", "find_resonances"]
 
@@ -87,6 +88,11 @@ def find_resonances(circuit: Circuit, omega_max: float | None = None) -> list[Re
     >>> [(r.kind, round(r.omega, 12)) for r in c.resonances()]
     [('resonance', 10.0)]
     """
+    for e in circuit.elements:
+        if not math.isfinite(e.value * e.eta):
+            raise NetlistError(f"{e.kind} {e.name!r}: value × eta = {e.value:g} × {e.eta:g} "
+                               "overflows float64", circuit.source, e.line, e.col,
+                               "a product below 1.8e308")
     system = circuit.nodal
     n_nodes = len(system.nodes)
     # Lever constraints are the rows of C below the node block; the lever forces
@@ -139,18 +145,37 @@ def _project(G: np.ndarray, n: int):
 
 
 def _modes(M, D, Ks, G, damped: bool) -> np.ndarray:
+    """:func:`_modes_unchecked`, with LAPACK's failures reported as :class:`SolverError`."""
+    try:
+        return _modes_unchecked(M, D, Ks, G, damped)
+    except np.linalg.LinAlgError as exc:
+        # Seen only for values spanning most of float64's range (1e-320 … 1e220).
+        raise SolverError(f"resonances: the eigenvalue solver failed ({exc}); element "
+                          "values span too many orders of magnitude", status="lapack") from None
+
+
+def _modes_unchecked(M, D, Ks, G, damped: bool) -> np.ndarray:
     """Eigenvalues s (Im s ≥ 0, |s| > 0) of the constrained network, with their error estimates.
 
     ``M``, ``D``, ``Ks`` are sparse; returns an array of shape (k, 2): column
     0 the complex s, column 1 the estimated relative error of |s|.
     """
     Z = _project(G, M.shape[0])
-    Mr, Dr, Kr = ((Z.T @ X @ Z).toarray() for X in (M, D, Ks))
+    with np.errstate(all="ignore"):
+        Mr, Dr, Kr = ((Z.T @ X @ Z).toarray() for X in (M, D, Ks))
     if Mr.shape[0] == 0:
         return np.zeros((0, 2), dtype=complex)
+    if not (np.isfinite(Mr).all() and np.isfinite(Dr).all() and np.isfinite(Kr).all()):
+        raise SolverError("resonances: the network's matrices overflow float64 (element "
+                          "values or lever ratios near 1e308 combine beyond it)",
+                          status="overflow")
     scale_m = np.abs(Mr).max() or 1.0
     scale_k = np.abs(Kr).max() or 1.0
-    w_ref = math.sqrt(scale_k / scale_m)
+    # sqrt of each: the quotient itself can leave float64 (1e-200 / 1e180).
+    w_ref = math.sqrt(scale_k) / math.sqrt(scale_m)
+    if not (math.isfinite(w_ref) and w_ref > 0):
+        raise SolverError(f"resonances: the stiffness and mass scales ({scale_k:.3g} N/m, "
+                          f"{scale_m:.3g} kg) are too far apart for float64", status="range")
     eps = np.finfo(float).eps
     if not damped:
         lam = _undamped(Mr / scale_m, Kr / scale_k)      # λ = (ω / w_ref)²
@@ -158,7 +183,12 @@ def _modes(M, D, Ks, G, damped: bool) -> np.ndarray:
         s = 1j * w_ref * np.sqrt(lam)
         err = eps * (lam.max(initial=1.0) / lam) * 4
     else:
-        s = _damped(Mr / scale_m, Dr / (scale_m * w_ref), Kr / scale_k) * w_ref
+        with np.errstate(all="ignore"):
+            scaled = (Mr / scale_m, Dr / (scale_m * w_ref), Kr / scale_k)
+        if not all(np.isfinite(X).all() for X in scaled):
+            raise SolverError("resonances: the damping, mass and stiffness scales are too far "
+                              "apart for float64", status="range")
+        s = _damped(*scaled) * w_ref
         # Rigid-body (zero) roots come out of QZ split by about sqrt(eps)·w_ref.
         s = s[(np.abs(s) > 1e-6 * w_ref) & (s.imag >= -1e-12 * np.abs(s))]
         s = np.where(np.abs(s.imag) <= 1e-12 * np.abs(s), s.real + 0j, s)

@@ -46,11 +46,12 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; return the exit status (also used by ``python -m mechcirc``)."""
-    from ._common import run_handler
+    from ._common import run_handler, sigterm_unwinds
 
     parser = build_parser()
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):
         parser.print_help()
         return 2
-    return run_handler(args)
+    with sigterm_unwinds():
+        return run_handler(args)

@@ -2,13 +2,43 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
+import signal
 import sys
+import threading
 
 from ..errors import MechcircError, NetlistError
 
 EXIT_OK, EXIT_INTERNAL, EXIT_USER = 0, 1, 2
+#: Exit status after SIGINT and SIGTERM (128 + the signal number, as shells report).
+EXIT_SIGINT, EXIT_SIGTERM = 128 + signal.SIGINT, 128 + signal.SIGTERM
+
+
+class Terminated(BaseException):
+    """SIGTERM arrived; raised so that ``finally`` blocks and temporary outputs unwind.
+
+    Python's default SIGTERM action ends the process at once, leaving the
+    temporary files of :mod:`mechcirc.outputs` behind.
+    """
+
+
+@contextlib.contextmanager
+def sigterm_unwinds():
+    """Within the block, SIGTERM raises :class:`Terminated` (main thread only)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def on_sigterm(signum, frame):
+        raise Terminated()
+
+    old = signal.signal(signal.SIGTERM, on_sigterm)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, old)
 
 
 def run_handler(args) -> int:
@@ -31,7 +61,10 @@ def run_handler(args) -> int:
         return EXIT_USER
     except KeyboardInterrupt:
         print("mechcirc: interrupted", file=sys.stderr)
-        return 130
+        return EXIT_SIGINT
+    except Terminated:
+        print("mechcirc: terminated", file=sys.stderr)
+        return EXIT_SIGTERM
     except BrokenPipeError:
         return EXIT_OK
     except Exception as exc:  # noqa: BLE001 - the last line of defence
@@ -101,6 +134,8 @@ def save_figure(fig, path, into=None) -> None:
     from ..outputs import atomic_path
 
     fmt = Path(path).suffix.lstrip(".").lower() or "png"
+    if fmt not in PLOT_FORMATS:     # commands check first; this guards any that forget
+        check_output_paths(plots=(path,))
     if into is not None:
         fig.savefig(into, format=fmt, dpi=120, bbox_inches="tight")
         return

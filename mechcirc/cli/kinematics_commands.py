@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import math
 
-from ._common import print_json, save_figure
+from ._common import check_output_paths, print_json, save_figure
 
 
 def register(sub) -> None:
@@ -73,6 +73,8 @@ def _deg(x):
 def cmd_fourbar(args) -> int:
     from ..kinematics import FourBar
 
+    check_output_paths(plots=(args.plot,))
+
     fb = FourBar(args.crank, args.coupler, args.rocker, args.frame, branch=args.branch)
     doc = fb.summary(args.omega)
     if args.plot:
@@ -111,7 +113,12 @@ def cmd_fourbar(args) -> int:
 def cmd_synth(args) -> int:
     import sys
 
+    from ..errors import MechcircError
     from ..kinematics import synthesize
+
+    check_output_paths(plots=(args.plot,))
+    if args.limit < 1:
+        raise MechcircError(f"--limit must be at least 1, got {args.limit}")
 
     res = synthesize(args.load, args.swing, objective=args.objective, limit=args.limit)
     if args.plot and res.designs:
@@ -143,6 +150,8 @@ def cmd_linkage(args) -> int:
     import numpy as np
 
     from ..kinematics import load_linkage
+
+    check_output_paths(plots=(args.plot,))
 
     lk = load_linkage(args.file)
     theta = math.radians(args.theta)

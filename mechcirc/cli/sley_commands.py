@@ -6,7 +6,7 @@ import argparse
 import math
 import sys
 
-from ._common import print_json, save_figure
+from ._common import check_output_paths, print_json, save_figure
 
 _METHODS = ("rk4", "rk4-python", "DOP853", "RK45", "LSODA")   # = mechcirc.sley.METHODS
 _UNITS = {"eps4T": "1/s^2", "eps2P": "1/s^2", "eps4P": "1/s^2", "eps5P": "1/s^2",
@@ -167,6 +167,7 @@ def cmd_simulate(args) -> int:
     from ..sley import (PAPER, ParameterError, all_presets, preset, simulate_batch,
                         simulate_params)
 
+    check_output_paths(args.output, plots=(args.plot,))
     over = _overrides(args)
     opts = _options(args)
     if args.variant == "all":
@@ -203,9 +204,11 @@ def cmd_simulate(args) -> int:
 def cmd_crosscheck(args) -> int:
     import numpy as np
 
+    from ..errors import SolverError
     from ..sley import preset
     from ..sley.crosscheck import harmonic_check, resonance_check, ringing_check
 
+    check_output_paths(args.netlist)
     params = preset(args.drive, args.variant)
     if args.theta is None:
         from ..sley.simulation import start_angle
@@ -228,7 +231,11 @@ def cmd_crosscheck(args) -> int:
     if params.clearance > 0:
         ring_notes.append(f"clearance {params.clearance:g} rad makes the model nonlinear; "
                           "the ringing frequency drops below the linear prediction")
-    ring = ringing_check(ring_params)
+    try:
+        ring = ringing_check(ring_params)
+    except SolverError as exc:      # (b) cannot be measured; (a) and (c) still stand
+        ring = None
+        ring_notes.append(str(exc))
     omegas = np.array(sorted([0.5 * checks[False].eigen[0], checks[False].eigen[0],
                               checks[False].eigen[-1]]))
     harm = harmonic_check(params, theta0, omegas)
@@ -238,9 +245,10 @@ def cmd_crosscheck(args) -> int:
                         "eigen_omega_d": list(c.eigen_d), "circuit_omega": list(c.circuit),
                         "circuit_omega_d": list(c.circuit_d), "rel_error": c.rel_error,
                         "how": c.how} for d, c in checks.items()],
-        "ringing": {"theta_mid_deg": math.degrees(ring.theta_mid),
-                    "omega_measured": ring.omega_measured,
-                    "omega_predicted": ring.omega_predicted, "rel_error": ring.rel_error,
+        "ringing": {"theta_mid_deg": math.degrees(ring.theta_mid) if ring else None,
+                    "omega_measured": ring.omega_measured if ring else None,
+                    "omega_predicted": ring.omega_predicted if ring else None,
+                    "rel_error": ring.rel_error if ring else None,
                     "notes": ring_notes},
         "harmonic": {"omega": harm.omega, "q0_time": harm.q0_time,
                      "q0_circuit": harm.q0_circuit, "rel_error": harm.rel_error,
@@ -257,9 +265,12 @@ def cmd_crosscheck(args) -> int:
             print(f"    {tag} eigen {e:14.8f} (d {ed:12.6f})   circuit {w:14.8f} "
                   f"(d {wd:12.6f})")
         print(f"    {tag} largest relative difference {c.rel_error:.2e} ({c.how})")
-    print(f"(b) ringing after beat-up at {math.degrees(ring.theta_mid):.1f} deg: measured "
-          f"{ring.omega_measured:.3f} rad/s, predicted {ring.omega_predicted:.3f} rad/s, "
-          f"difference {100 * ring.rel_error:.2f} %")
+    if ring is None:
+        print("(b) ringing after beat-up: not measured (see the note)")
+    else:
+        print(f"(b) ringing after beat-up at {math.degrees(ring.theta_mid):.1f} deg: measured "
+              f"{ring.omega_measured:.3f} rad/s, predicted {ring.omega_predicted:.3f} rad/s, "
+              f"difference {100 * ring.rel_error:.2f} %")
     for n in ring_notes:
         print(f"    note: {n}")
     print("(c) harmonic forcing of the linear model, |Q0|/V0 [N m s/rad]")

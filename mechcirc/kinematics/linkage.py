@@ -157,6 +157,10 @@ def _rot(phi):
 
 _PERP = np.array([[0.0, -1.0], [1.0, 0.0]])
 
+#: Most continuation steps :meth:`Linkage.solve` takes (about 20 s of work);
+#: more is refused at once with the number needed.
+MAX_CONTINUATION_STEPS = 100_000
+
 
 @dataclass(frozen=True, eq=False)
 class Linkage:
@@ -412,6 +416,19 @@ class Linkage:
             raise GeometryError(f"{self.source}: the linkage is singular in its pose "
                                 f"(constraint Jacobian not invertible)")
         sign = np.sign(np.linalg.det(J))
+        if not max_step_deg > 0:
+            raise ValueError(f"max_step_deg must be > 0, got {max_step_deg}")
+        # Each continuation step turns the fastest crank by at most max_step_deg;
+        # refuse at once what would take more than MAX_CONTINUATION_STEPS steps
+        # (a tiny first-crank omega makes t = theta / omega huge).
+        with np.errstate(all="ignore"):
+            times = np.concatenate(([0.0], thetas / w1))
+            steps = float(np.sum(np.abs(np.diff(times)))) * wmax / math.radians(max_step_deg)
+        if not steps <= MAX_CONTINUATION_STEPS:
+            raise GeometryError(
+                f"{self.source}: reaching θ needs about {steps:.3g} continuation steps of "
+                f"{max_step_deg:g}° of the fastest crank (|ω| = {wmax:g} rad/s against the "
+                f"first crank's {abs(w1):g} rad/s); the limit is {MAX_CONTINUATION_STEPS}")
         out = []
         for th in thetas:
             t_target = th / w1
@@ -531,6 +548,22 @@ def _err(text, source, message, section, key, value=None, occurrence=0, expected
     return NetlistError(message, source, line, col, expected)
 
 
+def _finite_number(v) -> bool:
+    """A TOML integer or float that is a finite float64 (not a bool, not 10**400)."""
+    if not isinstance(v, (int, float)) or isinstance(v, bool):
+        return False
+    try:
+        return math.isfinite(v)
+    except OverflowError:           # an integer beyond float64's range
+        return False
+
+
+def _brief(v) -> str:
+    """A value for a message, cut short."""
+    text = repr(v)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
 def parse_linkage(text: str, source: str = "<string>") -> Linkage:
     """Parse the TOML text of a linkage (see the module docstring).
 
@@ -550,12 +583,27 @@ def parse_linkage(text: str, source: str = "<string>") -> Linkage:
         line, col = (int(m.group(1)), int(m.group(2))) if m else (0, 0)
         msg = re.sub(r"\s*\(at line \d+, column \d+\)", "", str(exc))
         raise NetlistError(f"TOML syntax: {msg}", source, line, col) from None
+    except ValueError:
+        # tomllib converts integers with int(), which refuses more than
+        # sys.get_int_max_str_digits() (4300) digits.
+        m = re.search(r"\d{4000,}", text)
+        start = m.start() if m else 0
+        line = text.count("\n", 0, start) + 1
+        col = start - (text.rfind("\n", 0, start) + 1) + 1
+        raise NetlistError("integer with thousands of digits", source, line if m else 0,
+                           col if m else 0, "a number within float64's range") from None
 
     for table in ("points", "ground", "links", "cranks"):
+        header = "[[cranks]]" if table == "cranks" else f"[{table}]"
         if table not in doc:
-            raise NetlistError(f"missing [{'[' if table == 'cranks' else ''}{table}"
-                               f"{']' if table == 'cranks' else ''}] table", source, 0, 0,
+            raise NetlistError(f"missing {header} table", source, 0, 0,
                                "points, ground, links and cranks")
+        kind = list if table == "cranks" else dict
+        if not isinstance(doc[table], kind) or (
+                table == "cranks" and not all(isinstance(c, dict) for c in doc[table])):
+            line, col = _locate(text, None, table)
+            raise NetlistError(f"{table!r} must be a {header} table, got "
+                               f"{_brief(doc[table])}", source, line, col, header)
     allowed = {"name", "points", "ground", "links", "cranks", "units", "description"}
     for key in doc:
         if key not in allowed:
@@ -564,11 +612,9 @@ def parse_linkage(text: str, source: str = "<string>") -> Linkage:
 
     pose = {}
     for name, xy in doc["points"].items():
-        ok = (isinstance(xy, list) and len(xy) == 2
-              and all(isinstance(v, (int, float)) and not isinstance(v, bool)
-                      and math.isfinite(v) for v in xy))
+        ok = isinstance(xy, list) and len(xy) == 2 and all(map(_finite_number, xy))
         if not ok:
-            raise _err(text, source, f"point {name!r} must be [x, y], got {xy!r}",
+            raise _err(text, source, f"point {name!r} must be [x, y], got {_brief(xy)}",
                        "points", name, expected="two finite numbers")
         pose[name] = np.array(xy, dtype=float)
 
@@ -577,7 +623,7 @@ def parse_linkage(text: str, source: str = "<string>") -> Linkage:
         raise _err(text, source, "[ground] needs points = [\"…\", …]", "ground", "points",
                    expected="a list of ground pivot names")
     for p in ground_pts:
-        if p not in pose:
+        if not isinstance(p, str) or p not in pose:
             raise _err(text, source, f"unknown point {p!r} in [ground]", "ground", "points",
                        value=p, expected=f"one of {', '.join(pose)}")
 
@@ -616,7 +662,7 @@ def parse_linkage(text: str, source: str = "<string>") -> Linkage:
                 raise _err(text, source, f"unknown key {key!r} in [[cranks]] #{n + 1}",
                            "cranks", key, occurrence=n, expected="link, pivot, omega")
         lname = c.get("link")
-        if lname not in links:
+        if not isinstance(lname, str) or lname not in links:
             raise _err(text, source, f"unknown link {lname!r} in [[cranks]] #{n + 1}", "cranks",
                        "link", value=lname, occurrence=n,
                        expected=f"one of {', '.join(links)}")
@@ -627,10 +673,9 @@ def parse_linkage(text: str, source: str = "<string>") -> Linkage:
                        f"points (found {pivots or 'none'}); name it with pivot = \"…\"",
                        "cranks", "pivot" if "pivot" in c else "link", occurrence=n)
         omega = c.get("omega")
-        if not isinstance(omega, (int, float)) or isinstance(omega, bool) \
-                or not math.isfinite(omega) or omega == 0:
+        if not _finite_number(omega) or omega == 0:
             raise _err(text, source, f"crank {lname!r}: omega must be a nonzero number "
-                       f"[rad/s], got {omega!r}", "cranks", "omega" if "omega" in c else "link",
+                       f"[rad/s], got {_brief(omega)}", "cranks", "omega" if "omega" in c else "link",
                        occurrence=n)
         if any(k.link == lname for k in cranks):
             raise _err(text, source, f"link {lname!r} is driven twice", "cranks", "link",
@@ -649,4 +694,13 @@ def parse_linkage(text: str, source: str = "<string>") -> Linkage:
 def load_linkage(path: str | Path) -> Linkage:
     """Read and parse a linkage TOML file (see :func:`parse_linkage`)."""
     path = Path(path)
-    return parse_linkage(path.read_text(encoding="utf-8"), str(path))
+    data = path.read_bytes()
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        before = data[:exc.start]
+        line = before.count(b"\n") + 1
+        col = exc.start - (before.rfind(b"\n") + 1) + 1
+        raise NetlistError(f"byte 0x{data[exc.start]:02x} is not valid UTF-8", str(path),
+                           line, col, "a UTF-8 text file") from None
+    return parse_linkage(text, str(path))

@@ -161,7 +161,10 @@ def ringing_check(params: SleyParameters, *, half_periods: int = 4, revolutions:
     ------
     ParameterError
         ``params.M0`` is 0 (there is no pulse).
+    SolverError
+        Fewer than ``half_periods + 1`` zero crossings follow the window.
     """
+    from ..errors import SolverError
     from .models import ParameterError
     from .simulation import simulate_params
 
@@ -180,7 +183,10 @@ def ringing_check(params: SleyParameters, *, half_periods: int = 4, revolutions:
     rel, diff = rel[before_start], diff[before_start]
     idx = np.flatnonzero(np.sign(diff[:-1]) * np.sign(diff[1:]) < 0)
     if idx.size < half_periods + 1:
-        raise ValueError("too few zero crossings after the beat-up window to measure ringing")
+        raise SolverError(f"ringing: {idx.size} zero crossing(s) of the pulse response after "
+                          f"the beat-up window, {half_periods + 1} needed to measure its "
+                          "frequency (the ringing dies out or is too slow within one "
+                          "revolution)", status="too few crossings")
     idx = idx[:half_periods + 1]
     cross = rel[idx] - diff[idx] * (rel[idx + 1] - rel[idx]) / (diff[idx + 1] - diff[idx])
     t = cross / params.omega
