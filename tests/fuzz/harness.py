@@ -1,0 +1,522 @@
+"""Generators and properties for fuzzing mechcirc's inputs.
+
+Every generator takes a :class:`random.Random`, so one implementation serves
+both hypothesis (``st.randoms()``, which shrinks failing inputs) and the long
+run (plain seeded ``Random``, fast and reproducible).
+
+The property checked by :func:`run_target` is the one issue 8 states: every
+input ends in a result or in :class:`~mechcirc.errors.MechcircError` (with a
+line and column inside the text when one is given) — no other exception,
+and no hang (a per-input time bound enforced with ``SIGALRM``).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import copy
+import functools
+import io
+import math
+import os
+import random
+import signal
+import string
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+import mechcirc
+from mechcirc.errors import MechcircError, NetlistError
+
+ROOT = Path(__file__).resolve().parents[2]
+NETLIST_SEEDS = sorted((ROOT / "netlists").glob("*.mcir"))
+TOML_SEEDS = sorted((ROOT / "examples").glob("*.toml"))
+
+
+@functools.lru_cache(maxsize=None)
+def _read(path: Path) -> str:
+    return path.read_text(encoding="utf-8")
+
+
+def seed_texts(paths) -> list[str]:
+    return [_read(p) for p in paths]
+
+
+# ---------------------------------------------------------------- time bound
+class Hang(BaseException):
+    """Raised by the alarm when one input exceeds its time bound.
+
+    A ``BaseException`` so that no ``except Exception`` in the code under test
+    can swallow it.
+    """
+
+
+@contextlib.contextmanager
+def time_bound(seconds: float):
+    """Raise :class:`Hang` if the block runs longer than ``seconds`` (main thread only)."""
+    def on_alarm(signum, frame):
+        raise Hang(f"no result after {seconds} s")
+
+    old = signal.signal(signal.SIGALRM, on_alarm)
+    signal.setitimer(signal.ITIMER_REAL, seconds)
+    try:
+        yield
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, old)
+
+
+# ---------------------------------------------------------------- text mutation
+#: Tokens that stress the netlist and expression grammars.
+NETLIST_TOKENS = [
+    "mass", "spring", "damper", "lever", "drive", ".param", "0", "a", "b", "T", "M",
+    "velocity=", "force=", "ratio=", "eta=", "=", "{", "}", "(", ")", "**", "^", "*", "/",
+    "+", "-", "1e308", "1e-308", "1e309", "4.9e-324", "-0", "0.0", "nan", "inf", "pi",
+    "sqrt(", "log(", "exp(", "9**9**9", "1e999", "..", "1.2.3", "1e", "e5", "#", ";",
+    "\t", " ", "\n", "\r\n", "\x00", "\ufeff", "é", "\u2212", "kg", "N/mm", "g", "N*s/m",
+    "mm", "N", "rad/s", "deg", "1/0", "0**-1", "(-1)**0.5", "x" * 40, "9" * 400,
+]
+
+TOML_TOKENS = [
+    "[points]", "[ground]", "[links]", "[[cranks]]", "points", "link", "pivot", "omega",
+    "=", "[", "]", "\"", "'", ",", "1e400", "nan", "inf", "-inf", "0", "0.0", "true",
+    "{}", "[]", "[1, 2]", "[1, 2, 3]", "\"O1\"", "\"A\"", "\"ground\"", "crank1",
+    "name", "units", "\n", "#", "\x00", "é", "1979-05-27", "{a = 1}", "[[points]]",
+    "3", "-30.0", "[\"O1\", \"O1\"]", "[\"A\"]", "[[\"A\"]]",
+]
+
+
+def mutate(rng: random.Random, text: str, tokens: list[str], max_ops: int = 6) -> str:
+    """Apply 1..max_ops random edits to ``text`` (deletions, insertions, swaps, repeats)."""
+    s = text
+    for _ in range(rng.randint(1, max_ops)):
+        op = rng.randrange(8)
+        n = len(s)
+        i = rng.randint(0, n)
+        if op == 0 and n:                                   # delete a span
+            j = min(n, i + rng.randint(1, 12))
+            s = s[:i] + s[j:]
+        elif op == 1:                                        # insert a token
+            s = s[:i] + rng.choice(tokens) + s[i:]
+        elif op == 2:                                        # insert random characters
+            alphabet = string.printable + "\u00e9\u2212\u03c9\x00\ufeff"
+            s = s[:i] + "".join(rng.choice(alphabet) for _ in range(rng.randint(1, 5))) + s[i:]
+        elif op == 3 and n:                                  # replace one character
+            j = min(n - 1, i)
+            s = s[:j] + rng.choice(tokens + list("0123456789=.{}()-+ ")) + s[j + 1:]
+        elif op == 4:                                        # shuffle or repeat lines
+            lines = s.split("\n")
+            if rng.random() < 0.5:
+                rng.shuffle(lines)
+            else:
+                k = rng.randrange(len(lines))
+                lines.insert(k, lines[k])
+            s = "\n".join(lines)
+        elif op == 5:                                        # drop a line
+            lines = s.split("\n")
+            if len(lines) > 1:
+                del lines[rng.randrange(len(lines))]
+            s = "\n".join(lines)
+        elif op == 6:                                        # replace a number
+            nums = [m for m in _number_spans(s)]
+            if nums:
+                a, b = rng.choice(nums)
+                s = s[:a] + rng.choice(_WILD_NUMBERS) + s[b:]
+        else:                                                # truncate
+            s = s[:i]
+    return s
+
+
+_WILD_NUMBERS = ["0", "-1", "1e-300", "1e300", "1e308", "1e-320", "5e-324", "1e309",
+                 "nan", "inf", "-0.0", "1" + "0" * 400, "0." + "0" * 400 + "1", "2.5",
+                 "1e6", "1e-6", "0.999999999999", "{1/0}", "{-1}", "{sqrt(-1)}"]
+
+
+def _number_spans(s: str):
+    import re
+
+    return [(m.start(), m.end()) for m in re.finditer(r"\d+\.?\d*(?:[eE][+-]?\d+)?", s)]
+
+
+# ---------------------------------------------------------------- generated netlists
+def random_value(rng: random.Random) -> str:
+    """A value field: mostly sane, sometimes extreme or an expression."""
+    r = rng.random()
+    if r < 0.6:
+        return repr(10.0 ** rng.uniform(-3, 6))
+    if r < 0.75:
+        return rng.choice(_WILD_NUMBERS)
+    if r < 0.9:
+        return "{" + random_expression(rng, depth=3) + "}"
+    return repr(10.0 ** rng.uniform(-300, 300))
+
+
+def random_netlist(rng: random.Random) -> str:
+    """A netlist from the grammar: random topology (ladders, bridges, levers, floating parts)."""
+    n_nodes = rng.randint(1, 7)
+    nodes = ["0"] + [f"n{i}" for i in range(1, n_nodes + 1)]
+    lines = []
+    if rng.random() < 0.3:
+        lines.append(f".param p1={random_value(rng)} p2={{p1*2}}")
+    kinds = ["mass", "spring", "damper"]
+    for k in range(rng.randint(1, 12)):
+        a, b = rng.sample(nodes, 2) if len(nodes) > 1 else (nodes[0], nodes[0])
+        kind = rng.choice(kinds)
+        value = random_value(rng) if rng.random() < 0.9 else "p1"
+        eta = f" eta={random_value(rng)}" if rng.random() < 0.15 else ""
+        lines.append(f"{kind} e{k} {a} {b} {value}{eta}")
+    for k in range(rng.choice([0, 0, 0, 1, 1, 2])):
+        p = rng.sample(nodes, 2)
+        s = rng.sample(nodes + [f"s{k}a", f"s{k}b"], 2)
+        ratio = rng.choice(["1", "2.5", "0.5", "1e-9", "1e9", "1e-300", "1e300", "0", "-1"])
+        lines.append(f"lever L{k} {p[0]} {p[1]} {s[0]} {s[1]} ratio={ratio}")
+        if rng.random() < 0.7:
+            lines.append(f"mass ms{k} {s[0]} {s[1]} 1.0")
+    a, b = rng.sample(nodes, 2)
+    kind = rng.choice(["velocity", "force"])
+    lines.append(f"drive V {a} {b} {kind}={rng.choice(['0.1', '1', '1e-300', '1e300', '0'])}")
+    rng.shuffle(lines)
+    return "\n".join(lines) + "\n"
+
+
+def random_expression(rng: random.Random, depth: int = 4) -> str:
+    """An expression from the grammar, with hostile numbers and operators."""
+    if depth <= 0 or rng.random() < 0.3:
+        return rng.choice(["1", "2", "0", "9", "pi", "x", "y", "undefined", "1e308",
+                           "1e-308", "0.5", "1e999", "3.", ".5", "1e-400"])
+    r = rng.random()
+    if r < 0.5:
+        op = rng.choice(["+", "-", "*", "/", "**", "^"])
+        return f"{random_expression(rng, depth - 1)} {op} {random_expression(rng, depth - 1)}"
+    if r < 0.65:
+        return f"-{random_expression(rng, depth - 1)}"
+    if r < 0.85:
+        return f"({random_expression(rng, depth - 1)})"
+    fn = rng.choice(["sqrt", "sin", "cos", "tan", "exp", "log", "radians", "degrees", "nope"])
+    return f"{fn}({random_expression(rng, depth - 1)})"
+
+
+def expression_input(rng: random.Random) -> str:
+    r = rng.random()
+    if r < 0.5:
+        return random_expression(rng, depth=rng.randint(1, 6))
+    if r < 0.8:
+        return mutate(rng, random_expression(rng, depth=4),
+                      ["(", ")", "**", "^", "e", ".", "-", "+", "1e309", "9**9**9", " ", "_"])
+    return "".join(rng.choice("0123456789.eE+-*/^() pix") for _ in range(rng.randint(0, 40)))
+
+
+def netlist_input(rng: random.Random) -> str:
+    r = rng.random()
+    if r < 0.45:
+        return mutate(rng, rng.choice(seed_texts(NETLIST_SEEDS)), NETLIST_TOKENS)
+    if r < 0.9:
+        return random_netlist(rng)
+    return mutate(rng, random_netlist(rng), NETLIST_TOKENS, max_ops=3)
+
+
+def toml_input(rng: random.Random) -> str:
+    """Half text mutations (mostly TOML syntax errors), half structural changes
+    (valid TOML whose tables, lists and values have the wrong kinds or extremes)."""
+    if rng.random() < 0.5:
+        return mutate(rng, rng.choice(seed_texts(TOML_SEEDS)), TOML_TOKENS, max_ops=4)
+    import tomllib
+
+    doc = tomllib.loads(rng.choice(seed_texts(TOML_SEEDS)))
+    for _ in range(rng.randint(1, 3)):
+        _mutate_tree(rng, doc)
+    return dump_toml(doc)
+
+
+_TOML_VALUES = [0, -1, 3, 10**400, -(10**400), 1e-300, 1e300, 5e-324, float("nan"),
+                float("inf"), 0.0, True, "O1", "A", "crank1", "ground", "", "é", [], {},
+                [1.0], [1.0, 2.0, 3.0], ["O1"], ["O1", "O1"], [["A", "B"]], {"a": 1},
+                [{"link": "crank1"}], ["A", 1]]
+
+
+def _mutate_tree(rng: random.Random, node) -> None:
+    """Replace, delete or add one entry somewhere in the parsed TOML tree."""
+    path = []
+    while isinstance(node, (dict, list)) and node and rng.random() < 0.7:
+        key = rng.choice(list(node)) if isinstance(node, dict) else rng.randrange(len(node))
+        child = node[key]
+        if not isinstance(child, (dict, list)) or not child:
+            break
+        path.append(key)
+        node = child
+    if isinstance(node, dict):
+        keys = list(node)
+        r = rng.random()
+        if keys and r < 0.6:
+            node[rng.choice(keys)] = copy.deepcopy(rng.choice(_TOML_VALUES))
+        elif keys and r < 0.8:
+            del node[rng.choice(keys)]
+        else:
+            node[rng.choice(["omega", "pivot", "link", "X", "points", "name"])] = \
+                copy.deepcopy(rng.choice(_TOML_VALUES))
+    elif isinstance(node, list) and node:
+        node[rng.randrange(len(node))] = copy.deepcopy(rng.choice(_TOML_VALUES))
+
+
+def dump_toml(doc: dict) -> str:
+    """A small TOML writer (tables, arrays of tables, inline values) for the fuzz."""
+    def value(v):
+        if isinstance(v, bool):
+            return "true" if v else "false"
+        if isinstance(v, int):
+            return str(v)
+        if isinstance(v, float):
+            if math.isnan(v):
+                return "nan"
+            if math.isinf(v):
+                return "inf" if v > 0 else "-inf"
+            return repr(v)
+        if isinstance(v, str):
+            return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+        if isinstance(v, list):
+            return "[" + ", ".join(value(x) for x in v) + "]"
+        if isinstance(v, dict):
+            return "{" + ", ".join(f"{_key(k)} = {value(x)}" for k, x in v.items()) + "}"
+        raise TypeError(type(v))
+
+    out, tables = [], []
+    for k, v in doc.items():
+        if isinstance(v, dict):
+            tables.append((k, v, False))
+        elif isinstance(v, list) and v and all(isinstance(x, dict) for x in v):
+            tables.append((k, v, True))
+        else:
+            out.append(f"{_key(k)} = {value(v)}")
+    for k, v, many in tables:
+        for t in (v if many else [v]):
+            out.append(f"[[{_key(k)}]]" if many else f"[{_key(k)}]")
+            out.extend(f"{_key(kk)} = {value(vv)}" for kk, vv in t.items())
+    return "\n".join(out) + "\n"
+
+
+def _key(k: str) -> str:
+    import re
+
+    return k if re.fullmatch(r"[A-Za-z0-9_-]+", k) else '"' + k.replace('"', '\\"') + '"'
+
+
+# ---------------------------------------------------------------- properties
+@dataclass
+class Tally:
+    """Outcome counts of a fuzz run."""
+
+    results: int = 0
+    errors: int = 0
+    failures: list = field(default_factory=list)
+
+    @property
+    def total(self) -> int:
+        return self.results + self.errors + len(self.failures)
+
+
+class PropertyFailure(AssertionError):
+    pass
+
+
+def _check_location(exc: NetlistError, text: str | None, *, one_line: bool = False) -> None:
+    """A NetlistError that names a line must name one inside the text.
+
+    ``one_line``: the text is a single field (an expression), so the column
+    counts every character, line separators included.
+    """
+    if text is None or not exc.line:
+        return
+    lines = [text] if one_line else (text.splitlines() or [""])
+    if not 1 <= exc.line <= len(lines):
+        raise PropertyFailure(f"line {exc.line} outside the text ({len(lines)} lines): {exc}")
+    if not 1 <= exc.col <= len(lines[exc.line - 1]) + 2:
+        raise PropertyFailure(f"column {exc.col} outside line {exc.line} "
+                              f"(length {len(lines[exc.line - 1])}): {exc}")
+
+
+def run_target(fn, text: str | None, *, seconds: float = 5.0, one_line: bool = False):
+    """Run ``fn()``; return ``"result"`` or ``"error"``, or raise :class:`PropertyFailure`."""
+    try:
+        with time_bound(seconds), warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            fn()
+    except MechcircError as exc:
+        if isinstance(exc, NetlistError):
+            _check_location(exc, text, one_line=one_line)
+        if not str(exc).strip():
+            raise PropertyFailure(f"{type(exc).__name__} with an empty message") from exc
+        return "error"
+    except Hang as exc:
+        raise PropertyFailure(f"hang: {exc}") from None
+    except Exception as exc:  # noqa: BLE001 - this is what we look for
+        raise PropertyFailure(f"{type(exc).__name__}: {exc}") from exc
+    return "result"
+
+
+OMEGA_PROBE = np.array([0.0, 1e-3, 1.0, 37.0, 1e3, 1e6, 1e300])
+
+
+def netlist_property(text: str) -> str:
+    """Parse, reduce, sweep (ω = 0 and extremes included) and find resonances."""
+    def go():
+        c = mechcirc.parse(text)
+        s = c.sweep(OMEGA_PROBE)
+        flags = s.flags
+        bad = ~np.isfinite(s.K) | ~np.isfinite(s.Q0) | ~np.isfinite(s.v0)
+        if np.any(bad & (flags == 0)):
+            raise PropertyFailure(f"non-finite K/Q0/v0 without a flag at ω = "
+                                  f"{s.omega[bad & (flags == 0)]}")
+        _ = s.error
+        for r in c.resonances():
+            if not (math.isfinite(r.omega) and r.omega >= 0):
+                raise PropertyFailure(f"resonance at ω = {r.omega}")
+    return run_target(go, text)
+
+
+def expression_property(text: str) -> str:
+    from mechcirc.expressions import evaluate, parse_expression
+
+    def go():
+        tree = parse_expression(text, line=1)
+        value = evaluate(tree, {"x": 2.0, "y": -0.5}, line=1)
+        if not isinstance(value, float):
+            raise PropertyFailure(f"evaluate returned {type(value).__name__} {value!r}")
+    return run_target(go, text, one_line=True)
+
+
+def linkage_property(text: str) -> str:
+    from mechcirc.kinematics.linkage import parse_linkage
+
+    def go():
+        lk = parse_linkage(text, "fuzz.toml")
+        lk.solve(0.3)
+    return run_target(go, text)
+
+
+# ---------------------------------------------------------------- CLI argv
+def cli_commands():
+    """``{name: subparser}`` of every registered sub-command."""
+    import argparse
+
+    from mechcirc.cli import build_parser
+
+    parser = build_parser()
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            return dict(action.choices)
+    return {}
+
+
+#: Commands whose inputs the CLI fuzz drives (others are owned elsewhere and
+#: may be added by the long run's --all-commands).
+CLI_COMMANDS = ("check", "sweep", "resonances", "fourbar", "synth", "linkage", "simulate",
+                "crosscheck")
+
+_WILD_ARGS = ["0", "-1", "1", "2.5", "1e308", "1e-308", "nan", "inf", "-inf", "1e400",
+              "", "abc", "3", "7", "10", "100", "1e6", "-0", "all", "x=1", "clearance=0.002",
+              "clearance=nan", "=", "1e-300"]
+
+
+def _value_for(rng: random.Random, action, workdir: Path, files: list[str]) -> str:
+    meta = (action.metavar or action.dest or "").upper()
+    if action.choices is not None and rng.random() < 0.85:
+        return str(rng.choice(list(action.choices)))
+    if meta in ("CSV", "IMAGE", "S1P", "FILE", "OUT", "JSON") or "output" in action.dest \
+            or action.dest in ("plot", "netlist", "touchstone"):
+        ext = rng.choice([".csv", ".png", ".svg", ".txt", "", ".s1p", ".xyz", ".mcir"])
+        if rng.random() < 0.1:
+            return str(workdir / "missing" / f"out{ext}")
+        return str(workdir / f"out{rng.randrange(3)}{ext}")
+    if action.dest == "points":
+        return str(rng.choice([1, 2, 3, 10, 50, 0, -5, 20_000_001]))
+    if action.dest == "revolutions":
+        return str(rng.choice([1, 2, 0, -1, 10**9]))
+    if action.dest in ("limit",):
+        return str(rng.choice([1, 3, 0, -1]))
+    return rng.choice(_WILD_ARGS + files[:2])
+
+
+def cli_argv(rng: random.Random, workdir: Path, files: list[str],
+             commands=CLI_COMMANDS) -> list[str]:
+    """A random argv for one sub-command: its options with random (often bad) values."""
+    import argparse
+
+    subs = cli_commands()
+    name = rng.choice([c for c in commands if c in subs])
+    sub = subs[name]
+    argv = [name]
+    for action in sub._actions:
+        if isinstance(action, argparse._HelpAction):
+            continue
+        required = action.required or not action.option_strings
+        if not required and rng.random() < 0.6:
+            continue
+        if not action.option_strings:            # positional: a file
+            argv.append(rng.choice(files))
+            continue
+        argv.append(rng.choice(action.option_strings))
+        if action.nargs == 0:
+            continue
+        # Keep the costly knobs of the time-domain and synthesis commands small.
+        if name in ("simulate",) and action.dest == "points":
+            argv.append(rng.choice(["36", "0", "-1", "abc"]))
+        elif name == "simulate" and action.dest == "variant":
+            argv.append(rng.choice(["1", "3", "7", "0", "8", "x"]))
+        elif name == "simulate" and action.dest == "revolutions":
+            argv.append(rng.choice(["1", "2", "0", "-1"]))
+        elif name == "simulate" and action.dest in ("steps_per_period", "rtol"):
+            argv.append(rng.choice(["5", "50", "0", "-1", "nan", "1e-3", "inf"]))
+        else:
+            argv.append(_value_for(rng, action, workdir, files))
+    if rng.random() < 0.1:
+        argv.insert(rng.randrange(len(argv) + 1), rng.choice(["--bogus", "-x", "--", "--json"]))
+    if name == "simulate" and "--method" in argv:
+        i = argv.index("--method")
+        if i + 1 < len(argv) and argv[i + 1] in ("DOP853", "RK45", "LSODA"):
+            argv[i + 1] = "rk4"      # the scipy integrators take seconds per variant
+    return argv
+
+
+def cli_property(argv: list[str], *, seconds: float = 20.0) -> str:
+    """``main(argv)`` ends with exit 0 or 2 (argparse's own exits included), never 1 or a traceback."""
+    from mechcirc.cli import main
+
+    out, err = io.StringIO(), io.StringIO()
+    try:
+        with time_bound(seconds), warnings.catch_warnings(), \
+                contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+            warnings.simplefilter("ignore")
+            try:
+                status = main(argv)
+            except SystemExit as exc:        # argparse: usage errors (2) and --help (0)
+                status = exc.code if isinstance(exc.code, int) else 2
+    except Hang:
+        raise PropertyFailure(f"hang: {argv}") from None
+    except Exception as exc:  # noqa: BLE001
+        raise PropertyFailure(f"{type(exc).__name__} escaped main({argv}): {exc}") from exc
+    text = err.getvalue()
+    if status not in (0, 2) or "Traceback" in text or "internal error" in text:
+        raise PropertyFailure(f"main({argv}) -> {status}: {text.strip()[:500]}")
+    if status == 2 and not (text.strip() or out.getvalue().strip()):
+        raise PropertyFailure(f"main({argv}) -> 2 with no message")
+    return "result" if status == 0 else "error"
+
+
+def cli_files(workdir: Path, rng: random.Random | None = None) -> list[str]:
+    """Input files for the CLI fuzz: the bundled ones, mutated copies, and bad paths."""
+    rng = rng or random.Random(0)
+    files = [str(p) for p in NETLIST_SEEDS + TOML_SEEDS]
+    for k in range(4):
+        p = workdir / f"mut{k}.mcir"
+        p.write_text(netlist_input(rng), encoding="utf-8", errors="surrogatepass")
+        files.append(str(p))
+        q = workdir / f"mut{k}.toml"
+        q.write_text(toml_input(rng), encoding="utf-8", errors="surrogatepass")
+        files.append(str(q))
+    (workdir / "bad_utf8.mcir").write_bytes(b"mass m1 a 0 2\xff\ndrive V a 0 velocity=1\n")
+    (workdir / "bad_utf8.toml").write_bytes(b"name = \"\xff\"\n")
+    files += [str(workdir / "bad_utf8.mcir"), str(workdir / "bad_utf8.toml"),
+              str(workdir / "nope.mcir"), str(workdir), os.devnull]
+    return files

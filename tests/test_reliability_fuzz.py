@@ -1,0 +1,113 @@
+"""Short fuzz run (issue 8, §1): hostile input ends in a result or a MechcircError.
+
+The generators and the property live in ``tests/fuzz/harness.py``; the long
+run (≥ 100,000 inputs) is ``tests/fuzz/long_run.py`` and its numbers are in
+``docs/reliability.md``.  Two kinds of input here, derandomised so that a
+failure reproduces:
+
+* hypothesis text strategies over the grammars' alphabets (shrunk to a
+  minimal failing text by hypothesis);
+* the harness's generators (grammar-built netlists, mutations of the bundled
+  netlists and linkage files, random command lines), driven by a seed that
+  hypothesis draws — the failing seed is printed and reproduces the input.
+"""
+
+from __future__ import annotations
+
+import random
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from fuzz import harness as h
+
+
+def fast(n: int):
+    return settings(max_examples=n, deadline=None, derandomize=True, database=None,
+                    suppress_health_check=list(HealthCheck))
+
+
+seeds = st.integers(0, 2**32 - 1)
+
+EXPRESSION_ALPHABET = "0123456789.eE+-*/^() \t{}pixysqrtlogexp_,=#é\u2212"
+NETLIST_WORDS = st.sampled_from(
+    ["mass", "spring", "damper", "lever", "drive", ".param", "a", "b", "0", "m", "k",
+     "velocity=1", "force=2", "ratio=0.5", "eta=2", "1", "2.5", "1e308", "1e-320", "{1/0}",
+     "{-1}", "p=3", "p", "kg", "N/mm", "#", ";", "{", "}", "=", "9**9**9", "\u2212"])
+
+
+@fast(3000)
+@given(st.text(alphabet=EXPRESSION_ALPHABET, max_size=60))
+def test_fuzz_expression_text(text):
+    h.expression_property(text)
+
+
+@fast(5000)
+@given(seeds)
+def test_fuzz_expressions(seed):
+    h.expression_property(h.expression_input(random.Random(seed)))
+
+
+@fast(1500)
+@given(st.lists(st.lists(NETLIST_WORDS, max_size=8).map(" ".join), max_size=8)
+       .map("\n".join))
+def test_fuzz_netlist_words(text):
+    h.netlist_property(text)
+
+
+@fast(5000)
+@given(seeds)
+def test_fuzz_netlists(seed):
+    h.netlist_property(h.netlist_input(random.Random(seed)))
+
+
+@fast(3000)
+@given(seeds)
+def test_fuzz_linkage_files(seed):
+    h.linkage_property(h.toml_input(random.Random(seed)))
+
+
+@pytest.fixture(scope="module")
+def cli_workdir(tmp_path_factory):
+    work = tmp_path_factory.mktemp("cli_fuzz")
+    return work, h.cli_files(work, random.Random(8))
+
+
+@fast(60)
+@given(seed=seeds)
+def test_fuzz_cli_arguments(cli_workdir, seed):
+    work, files = cli_workdir
+    h.cli_property(h.cli_argv(random.Random(seed), work, files))
+
+
+# ------------------------------------------------------------- the harness itself
+def test_harness_reports_foreign_exceptions():
+    """The property fails on a non-mechcirc exception and on a hang (it could fail)."""
+    with pytest.raises(h.PropertyFailure, match="ZeroDivisionError"):
+        h.run_target(lambda: 1 / 0, None)
+    with pytest.raises(h.PropertyFailure, match="hang"):
+        h.run_target(lambda: [None for _ in iter(int, 1)], None, seconds=0.2)
+
+
+def test_harness_checks_error_locations():
+    from mechcirc.errors import NetlistError
+
+    def bad():
+        raise NetlistError("x", "<string>", 3, 1)
+
+    with pytest.raises(h.PropertyFailure, match="outside the text"):
+        h.run_target(bad, "one line\n")
+    assert h.run_target(bad, "a\nb\nc\n") == "error"
+
+
+def test_generators_reach_results_and_errors():
+    """The generators are not stuck in one corner: both outcomes occur often."""
+    seen = {"result": 0, "error": 0}
+    for i in range(300):
+        seen[h.netlist_property(h.netlist_input(random.Random(i)))] += 1
+    assert seen["result"] > 15 and seen["error"] > 30, seen
+    toml = {"result": 0, "error": 0}
+    for i in range(200):
+        toml[h.linkage_property(h.toml_input(random.Random(i)))] += 1
+    assert toml["result"] > 3 and toml["error"] > 100, toml
