@@ -34,6 +34,10 @@ FLAG_SINGULAR = 1
 #: :data:`NEAR_SINGULAR_ERROR`, so K and Q0 have fewer than six correct digits.
 FLAG_NEAR_SINGULAR = 2
 NEAR_SINGULAR_ERROR = 1e-6
+#: Points per chunk of a series–parallel evaluation: each temporary array then
+#: holds at most 2**18 complex values (4 MiB), so a sweep of 10⁷ points needs
+#: little more memory than its results (K alone is 160 MB there).
+CHUNK_POINTS = 2**18
 
 
 @dataclass(frozen=True, eq=False)
@@ -174,16 +178,27 @@ def sweep(circuit: Circuit, omega: ArrayLike, *, method: Method = "auto") -> Swe
     return _sweep_nodal(circuit, omega)
 
 
+def _chunked(fn: Callable, omega: NDArray, dtype) -> NDArray:
+    """``fn(omega)`` evaluated :data:`CHUNK_POINTS` points at a time into one array."""
+    if omega.size <= CHUNK_POINTS:
+        return fn(omega)
+    out = np.empty(omega.shape, dtype=dtype)
+    for start in range(0, omega.size, CHUNK_POINTS):
+        out[start:start + CHUNK_POINTS] = fn(omega[start:start + CHUNK_POINTS])
+    return out
+
+
 def _sweep_tree(circuit: Circuit, tree: Node, omega) -> Sweep:
     def responses(Q0, v0):
         _, values = evaluate(tree, omega, keep=True)
         return push_down(tree, values, Q0, v0, omega)
 
     def errors():
-        _, cond = evaluate(tree, omega, condition=True)
-        return cond * (np.finfo(float).eps * _depth(tree))
+        scale = np.finfo(float).eps * _depth(tree)
+        return _chunked(lambda w: evaluate(tree, w, condition=True)[1] * scale, omega, float)
 
-    return Sweep(omega=omega, K=evaluate(tree, omega), drive=circuit.drive, method="sp",
+    K = _chunked(lambda w: evaluate(tree, w), omega, complex)
+    return Sweep(omega=omega, K=K, drive=circuit.drive, method="sp",
                  name=circuit.name, tree=tree, _responses=responses, _errors=errors)
 
 

@@ -1,0 +1,124 @@
+"""Bounded work (issue 8, §2): hostile sizes finish within a bound or are refused quickly.
+
+The large cases (a 10⁶-element netlist, a 10⁷-point sweep) are measured in
+``benchmarks/bench_bounds.py``; here are the quick ones.  Time bounds are
+generous (a loaded CI machine) but far below what the unbounded work would
+take; the measured times are in ``docs/reliability.md``.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import mechcirc
+from mechcirc import sweep as sweep_module
+from mechcirc.cli import main
+from mechcirc.errors import NetlistError
+from mechcirc.expressions import MAX_DEPTH, MAX_LENGTH, evaluate, parse_expression
+from mechcirc.netlist import MAX_LINE_LENGTH
+
+STB = Path(__file__).resolve().parents[1] / "netlists" / "stb_heald.mcir"
+
+
+def _refused(text: str, seconds: float = 1.0) -> NetlistError:
+    t0 = time.perf_counter()
+    with pytest.raises(NetlistError) as err:
+        mechcirc.parse(text)
+    assert time.perf_counter() - t0 < seconds
+    return err.value
+
+
+def test_tower_of_powers_is_refused_at_its_operator():
+    err = _refused("drive V a 0 velocity=1\nmass m a 0 {9**9**9}\n")
+    assert err.message == "9.0 ** 387420489.0 overflows float64"
+    assert (err.line, err.col) == (2, 14)
+
+
+def test_nesting_beyond_the_depth_limit_is_refused_with_the_limit():
+    deep = "(" * (MAX_DEPTH + 1) + "1" + ")" * (MAX_DEPTH + 1)
+    err = _refused(f"drive V a 0 velocity=1\nmass m a 0 {{{deep}}}\n")
+    assert err.message == f"expression nested more than {MAX_DEPTH} levels deep"
+    assert (err.line, err.col) == (2, 13 + MAX_DEPTH)      # the first '(' too many
+    ok = "(" * (MAX_DEPTH - 1) + "2" + ")" * (MAX_DEPTH - 1)
+    assert evaluate(parse_expression(ok), {}) == 2.0
+    minus = "-" * (MAX_DEPTH + 1) + "1"
+    with pytest.raises(NetlistError, match=f"more than {MAX_DEPTH} levels"):
+        parse_expression(minus)
+
+
+def test_a_million_nested_parentheses_are_refused_by_length_at_once():
+    text = "(" * 10**6 + "1" + ")" * 10**6
+    t0 = time.perf_counter()
+    with pytest.raises(NetlistError, match=f"2000001 characters long, the limit is {MAX_LENGTH}"):
+        parse_expression(text)
+    assert time.perf_counter() - t0 < 0.5
+
+
+@pytest.mark.parametrize("literal", ["1" * 5000, "1e999999999", "9" * 309 + ".0"])
+def test_literals_beyond_float64_are_refused(literal):
+    err = _refused(f"drive V a 0 velocity=1\nmass m a 0 {literal}\n")
+    assert "is too large for float64" in err.message and err.expected == \
+        "a magnitude below 1.8e308"
+    assert (err.line, err.col) == (2, 12)
+
+
+def test_literal_below_float64_underflows_to_zero_and_is_refused_as_not_positive():
+    err = _refused("drive V a 0 velocity=1\nmass m a 0 1e-400\n")
+    assert err.message == "mass 'm' must be > 0 kg, got 0"
+
+
+def test_ten_megabyte_line_is_refused_quickly_with_the_limit():
+    line = "mass m a 0 " + "1" * (10 * 2**20)
+    err = _refused(f"drive V a 0 velocity=1\n{line}\n", seconds=1.0)
+    assert err.message == (f"line is {len(line)} characters long, the limit is "
+                           f"{MAX_LINE_LENGTH}")
+    assert (err.line, err.col) == (2, 1)
+
+
+def test_long_flat_expression_within_the_limit_evaluates():
+    text = "+".join(["1"] * 5000)                   # 9999 characters, a 5000-deep tree
+    assert len(text) < MAX_LENGTH
+    t0 = time.perf_counter()
+    assert evaluate(parse_expression(text), {}) == 5000.0
+    assert time.perf_counter() - t0 < 1.0
+
+
+def test_cli_refuses_more_than_ten_million_points(capsys, tmp_path):
+    assert main(["sweep", str(STB), "--omega-min", "1", "--omega-max", "2",
+                 "--points", "10000001"]) == 2
+    assert "--points must be between 1 and 10000000, got 10000001" in capsys.readouterr().err
+
+
+def test_chunked_sweep_equals_one_piece(monkeypatch):
+    """The series–parallel evaluation runs in chunks of CHUNK_POINTS; results are identical."""
+    c = mechcirc.load(str(STB))
+    omega = np.geomspace(1.0, 1e5, 1001)
+    whole = c.sweep(omega)
+    monkeypatch.setattr(sweep_module, "CHUNK_POINTS", 7)
+    parts = c.sweep(omega)
+    np.testing.assert_array_equal(parts.K, whole.K)
+    np.testing.assert_array_equal(parts.error, whole.error)
+    np.testing.assert_array_equal(parts.flags, whole.flags)
+
+
+def test_tree_sweep_evaluates_in_chunks(monkeypatch):
+    """No evaluation of the tree sees more than CHUNK_POINTS frequencies at once."""
+    from mechcirc import reduction
+
+    sizes = []
+    real = reduction.evaluate
+
+    def spy(tree, omega, **kw):
+        sizes.append(np.size(omega))
+        return real(tree, omega, **kw)
+
+    monkeypatch.setattr(sweep_module, "evaluate", spy)
+    monkeypatch.setattr(sweep_module, "CHUNK_POINTS", 1000)
+    c = mechcirc.load(str(STB))
+    s = c.sweep(np.linspace(1.0, 1e4, 4500))
+    _ = s.flags
+    assert max(sizes) == 1000 and sum(sizes) == 2 * 4500     # K, then the error estimate
