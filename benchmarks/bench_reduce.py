@@ -48,7 +48,7 @@ def ladder(n_sections: int, seed: int = 0):
 
 
 def interleaved(fa, fb, repeats=3):
-    """Best wall times [s] of ``fa`` and ``fb``, called alternately (a loaded machine slows both)."""
+    """Best wall times [s] of ``fa`` and ``fb``, called alternately (load slows both alike)."""
     ta = tb = math.inf
     for _ in range(repeats):
         t0 = time.perf_counter()

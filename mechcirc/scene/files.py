@@ -81,7 +81,7 @@ _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 
 @dataclass(frozen=True)
 class SceneMass:
-    """A lumped mass at ``point`` [kg] (``kind="mass"``) or a link's inertia [kg·m²] (``"inertia"``)."""
+    """A lumped mass at ``point`` [kg] (``kind="mass"``) or a link's inertia [kg·m²]."""
 
     name: str
     kind: str
@@ -92,7 +92,7 @@ class SceneMass:
 
 @dataclass(frozen=True)
 class ElasticLink:
-    """A binary link of the linkage that is an axial spring ``stiffness`` [N/m] (∥ ``damping`` [N·s/m])."""
+    """A binary link that is an axial spring ``stiffness`` [N/m] ∥ ``damping`` [N·s/m]."""
 
     name: str
     link: str
@@ -534,8 +534,9 @@ def _analysis(text, source, table, circuit_names) -> Analysis:
     output = table.get("output")
     if output is not None and output not in circuit_names:
         raise _err(text, source, f"[analysis] output {output!r} is not an element of the "
-                   "scene's circuit", "analysis", "output", value=output if isinstance(
-                       output, str) else None, expected=f"one of {', '.join(sorted(circuit_names))}")
+                   "scene's circuit", "analysis", "output",
+                   value=output if isinstance(output, str) else None,
+                   expected=f"one of {', '.join(sorted(circuit_names))}")
     band = None
     if "band" in table:
         from ..simplify import BandError, _check_band

@@ -181,7 +181,7 @@ def build(scene: Scene, theta: float, *, reflect: Literal["eta", "lever"] = "eta
         return "0" if i is None else node_of_part[i]
 
     lines, ratios, dropped = [], {}, []
-    names_used = {e for e in used}
+    names_used = set(used)
 
     def port(name, node, r):
         """Reflection through ``r``: (node, eta string) or a lever to a new node."""

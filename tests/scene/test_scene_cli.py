@@ -1,4 +1,4 @@
-"""``mechcirc scene`` and ``mechcirc reduce``: outputs, JSON, exit statuses, no half-written files."""
+"""``mechcirc scene`` and ``mechcirc reduce``: outputs, JSON, exit statuses, atomic files."""
 
 import csv
 import json
