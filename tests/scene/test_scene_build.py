@@ -305,3 +305,31 @@ def test_build_needed_reduces_for_the_files_output_and_band():
     with pytest.raises(MechcircError, match="no crank angle"):
         build_needed(parse_scene(CHAIN))
     assert build_needed(parse_scene(CHAIN), 0.1)[1] is None
+
+
+def test_heald_lever_form_equals_eta_form_and_force_drive_is_the_same_network():
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[2] / "examples" / "heald_scene.toml").read_text()
+    scene = parse_scene(text)
+    w = np.geomspace(20.0, 3000.0, 200)
+    for th in (0.2, 2.9):
+        eta = build(scene, th)
+        lever = build(scene, th, reflect="lever")
+        assert lever.circuit.levers and not eta.circuit.levers
+        np.testing.assert_allclose(lever.circuit.sweep(w).K, eta.circuit.sweep(w).K, rtol=1e-9)
+    forced = parse_scene(text.replace("velocity = 1.0", "force = 2.0"))
+    f, v = build(forced, 0.2).circuit.sweep(w), build(scene, 0.2).circuit.sweep(w)
+    np.testing.assert_allclose(f.v0, 2.0 * v.K, rtol=1e-12)
+
+
+def test_load_anchor_and_direction_agree_when_on_one_line():
+    base = CHAIN + '[[loads]]\nname = "w"\npoint = "C"\nstiffness = 5e3\n'
+    with_dir = parse_scene(base + "direction = [0.0, 1.0]\n")
+    with_anchor = parse_scene(base.replace("O2 = [0.6, 0.0]", "O2 = [0.6, 0.0]\nW = [0.9, 5.0]")
+                              .replace('points = ["O1", "O2"]', 'points = ["O1", "O2", "W"]')
+                              + 'anchor = "W"\n')
+    # at θ = 0 the line C→W is vertical, as the direction
+    a, b = build(with_dir, 0.0), build(with_anchor, 0.0)
+    assert abs(a.ratios["w"]) == pytest.approx(abs(b.ratios["w"]), rel=1e-12)
+    assert a.ratios["w"] != 0
