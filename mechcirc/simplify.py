@@ -27,14 +27,15 @@ Between check points the error is not measured; near an undamped resonance
 the relative error is large for any shift of it, which is why resonance
 shifts are reported separately.
 
-The output element is never removed or merged.  Levers are kept as they are.
+The output element is never removed or merged.  Levers follow merged nodes;
+a lever with nothing on one side carries no force and is removed (exact).
 """
 
 from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -160,13 +161,8 @@ def _output(circuit: Circuit, omega, output):
         return s.K if output is None else s.force(output)
 
 
-@dataclass
-class _Net:
-    elements: list
-    names: set = field(default_factory=set)
-
-
-def _loaded(elements, levers, drive) -> list[int]:
+def _loaded(elements, levers, drive) -> tuple[set, set]:
+    """Indices of the elements and of the levers that carry force."""
     from .topology import loaded_groups
 
     groups = [[(e.n1, e.n2)] for e in elements]
@@ -174,7 +170,8 @@ def _loaded(elements, levers, drive) -> list[int]:
         t = (lv.p1, lv.p2, lv.s1, lv.s2)
         groups.append([(t[i], t[j]) for i in range(4) for j in range(i + 1, 4)])
     kept = set(loaded_groups(groups, drive.n1, drive.n2))
-    return [i for i in range(len(elements)) if i in kept]
+    n = len(elements)
+    return {i for i in range(n) if i in kept}, {i - n for i in kept if i >= n}
 
 
 def _unique(name, taken):
@@ -187,22 +184,40 @@ def _unique(name, taken):
 
 
 def _exact(elements, levers, drive, protect, steps, taken):
-    """Apply the exact clean-ups until none applies; returns the new element list."""
-    fixed = {FRAME, drive.n1, drive.n2} | {n for lv in levers
-                                          for n in (lv.p1, lv.p2, lv.s1, lv.s2)}
+    """Apply the exact clean-ups until none applies; returns (elements, levers)."""
+    levers = list(levers)
     changed = True
     while changed:
         changed = False
+        fixed = {FRAME, drive.n1, drive.n2} | {n for lv in levers
+                                              for n in (lv.p1, lv.p2, lv.s1, lv.s2)}
         keep = [e for e in elements if e.n1 != e.n2 or e.name in protect]
         if len(keep) != len(elements):
             gone = [e.name for e in elements if e not in keep]
             steps.append(f"removed {_some(gone)}: both ends on one node")
             elements, changed = keep, True
-        idx = set(_loaded(elements, levers, drive))
+        # a lever with nothing on one side transmits no force (Q_P = r·Q_S = 0)
+        for lv in list(levers):
+            others = [x for x in levers if x is not lv]
+
+            def touched(n, others=others):
+                return n in (drive.n1, drive.n2) or any(n in (e.n1, e.n2) for e in elements) \
+                    or any(n in (x.p1, x.p2, x.s1, x.s2) for x in others)
+
+            for side, nodes in (("primary", (lv.p1, lv.p2)), ("secondary", (lv.s1, lv.s2))):
+                if not any(touched(n) for n in nodes if n != FRAME):
+                    steps.append(f"removed lever {lv.name}: nothing on its {side} side")
+                    levers.remove(lv)
+                    changed = True
+                    break
+        idx, lidx = _loaded(elements, levers, drive)
         gone = [e.name for i, e in enumerate(elements) if i not in idx and e.name not in protect]
-        if gone:
-            steps.append(f"removed {_some(gone)}: on no path of the drive (carry no force)")
+        gone_l = [lv.name for i, lv in enumerate(levers) if i not in lidx]
+        if gone or gone_l:
+            steps.append(f"removed {_some(gone + gone_l)}: on no path of the drive "
+                         "(carry no force)")
             elements = [e for i, e in enumerate(elements) if i in idx or e.name in protect]
+            levers = [lv for i, lv in enumerate(levers) if i in lidx]
             changed = True
         # parallel: same kind, same node pair
         groups: dict = {}
@@ -248,7 +263,7 @@ def _exact(elements, levers, drive, protect, steps, taken):
         if series:
             steps.append(f"merged in series: {'; '.join(_short(series, 6))}")
             changed = True
-    return elements
+    return elements, levers
 
 
 def _short(items, limit=8):
@@ -261,19 +276,26 @@ def _some(names):
 
 
 def _short_circuit(elements, levers, drive, el):
-    """Merge the nodes of ``el`` (a spring treated as rigid); None if not allowed."""
+    """Merge the nodes of ``el`` (a spring treated as rigid): (elements, levers), or None.
+
+    None when that would short the drive or make a lever's side a single node.
+    """
     a, b = el.n1, el.n2
     keep, gone = (a, b) if b != FRAME else (b, a)     # the frame absorbs the other node
-    if {gone, keep} == {drive.n1, drive.n2}:
-        return None                                    # would short the drive
-    ren = (lambda n: keep if n == gone else n)
-    for lv in levers:
-        if ren(lv.p1) == ren(lv.p2) or ren(lv.s1) == ren(lv.s2) or \
-                gone in (lv.p1, lv.p2, lv.s1, lv.s2):
-            return None
-    if gone in (drive.n1, drive.n2):
+    if {gone, keep} == {drive.n1, drive.n2} or gone in (drive.n1, drive.n2):
         return None
-    return [replace(e, n1=ren(e.n1), n2=ren(e.n2)) for e in elements if e is not el]
+
+    def ren(n):
+        return keep if n == gone else n
+
+    new_levers = []
+    for lv in levers:
+        if ren(lv.p1) == ren(lv.p2) or ren(lv.s1) == ren(lv.s2):
+            return None
+        new_levers.append(replace(lv, p1=ren(lv.p1), p2=ren(lv.p2), s1=ren(lv.s1),
+                                  s2=ren(lv.s2)))
+    return ([replace(e, n1=ren(e.n1), n2=ren(e.n2)) for e in elements if e is not el],
+            new_levers)
 
 
 def _check_grid(full: Circuit, band, points, output):
@@ -337,16 +359,18 @@ def simplify(circuit: Circuit, band, tol: float, *, output: str | None = None,
     grid, y_full, skipped, inband = _check_grid(circuit, band, points, output)
     if grid.size == 0:
         raise MechcircError("the output is zero or infinite at every check point of the band")
-    levers, drive = circuit.levers, circuit.drive
+    drive = circuit.drive
     trials = 0
 
-    def measure(elements):
+    def measure(state):
         nonlocal trials
         trials += 1
+        elements, levers = state
         if output is not None and output not in {e.name for e in elements}:
             return math.inf
         try:
-            c = Circuit(tuple(elements), drive, levers, name=circuit.name, source=circuit.source)
+            c = Circuit(tuple(elements), drive, tuple(levers), name=circuit.name,
+                        source=circuit.source)
             y = _output(c, grid, output)
         except (MechcircError, KeyError, np.linalg.LinAlgError):
             return math.inf
@@ -354,12 +378,13 @@ def simplify(circuit: Circuit, band, tol: float, *, output: str | None = None,
             err = np.abs(y - y_full) / np.abs(y_full)
         return float(np.max(err)) if np.all(np.isfinite(err)) else math.inf
 
-    taken = {e.name for e in circuit.elements} | {lv.name for lv in levers} | {drive.name}
+    taken = {e.name for e in circuit.elements} | {lv.name for lv in circuit.levers} | \
+        {drive.name}
     steps: list[str] = []
-    current = list(circuit.elements)
+    current = (list(circuit.elements), list(circuit.levers))
     trial_steps: list[str] = []
     try:
-        reduced = _exact(current, levers, drive, protect, trial_steps, taken)
+        reduced = _exact(*current, drive, protect, trial_steps, taken)
     except TopologyError:
         reduced = current
     err = measure(reduced)
@@ -367,15 +392,16 @@ def simplify(circuit: Circuit, band, tol: float, *, output: str | None = None,
         current, steps = reduced, trial_steps
     error = err if err <= tol else measure(current)
 
-    def candidates(elements):
+    def candidates(state):
         """(element, action) ordered by the element's share of the drive's power, smallest first.
 
         share = max over the grid of |v_e·Q_e| / |v0·Q0|; a spring that deforms
         little for the force it carries (|v_e|/|v0| < |Q_e|/|Q0|) is a candidate to
         short, any other spring, mass or damper a candidate to remove.
         """
+        elements, levers = state
         try:
-            c = Circuit(tuple(elements), drive, levers)
+            c = Circuit(tuple(elements), drive, tuple(levers))
             sw = c.sweep(grid)
             V, Q = np.abs(sw.v0), np.abs(sw.Q0)
             out = []
@@ -392,7 +418,7 @@ def simplify(circuit: Circuit, band, tol: float, *, output: str | None = None,
         return [(name, action) for _, name, action in out]
 
     def apply(base, cands):
-        els = list(base)
+        els, levers = list(base[0]), list(base[1])
         done = []
         for name, action in cands:
             match = next((e for e in els if e.name == name), None)
@@ -404,14 +430,14 @@ def simplify(circuit: Circuit, band, tol: float, *, output: str | None = None,
                 shorted = _short_circuit(els, levers, drive, match)
                 if shorted is None:
                     continue
-                els = shorted
+                els, levers = shorted
             done.append((name, action, match.kind))
         st: list[str] = []
         try:
-            els = _exact(els, levers, drive, protect, st, set(taken))
+            state = _exact(els, levers, drive, protect, st, set(taken))
         except TopologyError:
             return None, [], []
-        return els, st, done
+        return state, st, done
 
     for _round in range(8):
         cands = candidates(current)
@@ -432,7 +458,7 @@ def simplify(circuit: Circuit, band, tol: float, *, output: str | None = None,
             break
         els, st, done, e = best
         current, error = els, e
-        taken |= {x.name for x in current}
+        taken |= {x.name for x in current[0]}
         for kind, action, verb in (("spring", "short", "shorted as rigid"),
                                    ("spring", "open", "removed as negligible"),
                                    ("mass", "open", "removed as negligible"),
@@ -442,14 +468,15 @@ def simplify(circuit: Circuit, band, tol: float, *, output: str | None = None,
                 plural = "masses" if kind == "mass" else kind + "s"
                 steps.append(f"{plural} {verb}: {_some(names)}")
         steps += st
-    reduced_circuit = Circuit(tuple(current), drive, levers, name=circuit.name + "_reduced",
-                              source=circuit.source)
+    reduced_circuit = Circuit(tuple(current[0]), drive, tuple(current[1]),
+                              name=circuit.name + "_reduced", source=circuit.source)
     shifts = _shifts(inband, reduced_circuit, band)
     header = (f"{circuit.name} reduced by mechcirc simplify for "
               f"{'K at the drive' if output is None else 'the force in ' + output}",
               f"band {band[0]!r}:{band[1]!r} rad/s, tol {tol!r}; measured worst relative error "
               f"{error!r} on {grid.size} check points",
-              f"{len(circuit.elements)} elements -> {len(current)}") + tuple(steps)
+              f"{len(circuit.elements)} elements -> {len(current[0])}, "
+              f"{len(circuit.levers)} levers -> {len(current[1])}") + tuple(steps)
     return Simplified(reduced_circuit, circuit, band, float(tol), output, float(error),
                       int(grid.size), skipped, tuple(steps), shifts,
                       write_netlist(reduced_circuit, header), time.perf_counter() - t0, trials)

@@ -104,3 +104,18 @@ def test_band_text_and_tol_and_output_are_checked():
         simplify(c, (1.0, 10.0), 0.0)
     with pytest.raises(MechcircError, match="no element of that name"):
         simplify(c, (1.0, 10.0), 0.1, output="nope")
+
+
+def test_circuits_with_levers_reduce_and_drop_idle_levers():
+    import math
+
+    from mechcirc.scene import build, load_scene
+
+    model = build(load_scene(ROOT / "examples" / "heald_scene.toml"), math.radians(40.0),
+                  reflect="lever")
+    full = model.circuit
+    r = simplify(full, (30.0, 480.0), 0.05, points=500)
+    assert r.error <= 0.05
+    assert len(r.circuit.levers) < len(full.levers)
+    assert any("nothing on its secondary side" in s for s in r.steps)
+    assert _rel_err(full, r.netlist, np.geomspace(30.0, 480.0, 500)) <= r.error * (1 + 1e-9)
