@@ -26,6 +26,19 @@ A study is described by a TOML file (``mechcirc study SPEC.toml``)::
     # resonances = 3
     # omega_max = 5000
 
+A study of the sley model (:mod:`mechcirc.sley`) varies a preset's
+:class:`~mechcirc.sley.SleyParameters` fields instead, and needs no netlist::
+
+    analysis = "simulate"
+    [sley]
+    drive = "one-side"       # Table 1; "both-sides" for Table 2
+    variant = 3
+    revolutions = 3
+    points_per_revolution = 720
+    [grid]
+    C2 = {min = 2e4, max = 8e4, num = 4}     # N·m/rad
+    omega = [90.0, 100.0, 110.0]            # rad/s
+
 Each point re-parses the netlist with the point's values in place of the
 ``.param`` definitions (:func:`mechcirc.parse` ``params=``), so parameters
 defined from them follow.  Values are SI.  A point that fails (a negative
@@ -35,7 +48,9 @@ never dropped.
 Columns: ``index``, the parameters, ``status``, ``error``, then for a sweep
 ``K_abs_min K_abs_max Q0_abs_max omega_at_Q0_max n_flagged`` [m/(N·s), N,
 rad/s], for resonances ``resonance_1..N`` and ``antiresonance_1..N`` [rad/s]
-(empty where there are fewer).
+(empty where there are fewer), for a sley simulation the minimum and maximum
+over the tabulated revolution of ``eps2P eps4P eps4T`` [1/s²] and ``M2V``
+[N·m] (both-sides drive: also ``eps5P M5V``), e.g. ``eps4P_min``.
 
 Execution: all local cores (``concurrent.futures.ProcessPoolExecutor``) by
 default, or an existing Dask cluster (``scheduler="tcp://host:8786"``;
@@ -66,6 +81,8 @@ __all__ = ["StudySpec", "load_spec", "parse_spec", "study_points", "run_point", 
            "run_study", "StudyResult", "read_rows"]
 
 _SWEEP_COLUMNS = ["K_abs_min", "K_abs_max", "Q0_abs_max", "omega_at_Q0_max", "n_flagged"]
+_SLEY_QUANTITIES = {"one-side": ["eps2P", "eps4P", "eps4T", "M2V"],
+                    "both-sides": ["eps2P", "eps4P", "eps4T", "M2V", "eps5P", "M5V"]}
 
 
 @dataclass(frozen=True)
@@ -81,6 +98,8 @@ class StudySpec:
     n_resonances: int = 3
     omega_max: float | None = None
     spec_source: str = "<spec>"
+    #: ``analysis = "simulate"``: (drive, variant, revolutions, points_per_revolution).
+    sley: tuple | None = None
 
     @property
     def columns(self) -> list[str]:
@@ -88,6 +107,9 @@ class StudySpec:
         head = ["index", *self.params, "status", "error"]
         if self.analysis == "sweep":
             return head + _SWEEP_COLUMNS
+        if self.analysis == "simulate":
+            return head + [f"{q}_{end}" for q in _SLEY_QUANTITIES[self.sley[0]]
+                           for end in ("min", "max")]
         n = self.n_resonances
         return head + [f"resonance_{i}" for i in range(1, n + 1)] + \
             [f"antiresonance_{i}" for i in range(1, n + 1)]
@@ -156,24 +178,28 @@ def parse_spec(data: dict, *, source: str = "<spec>", base: Path | None = None) 
         Naming the key at fault and what would be right.
     """
     base = base or Path(".")
-    known = {"netlist", "analysis", "omega", "grid", "random", "resonances", "omega_max"}
+    known = {"netlist", "analysis", "omega", "grid", "random", "resonances", "omega_max",
+             "sley"}
     unknown = sorted(set(data) - known)
     if unknown:
         _fail(source, f"unknown key(s) {', '.join(unknown)} (expected {', '.join(sorted(known))})")
-    if "netlist" not in data or not isinstance(data["netlist"], str):
-        _fail(source, "needs netlist = \"PATH\" (relative to the spec file)")
-    path = Path(os.path.normpath(base / data["netlist"]))
-    try:
-        path = path.relative_to(Path.cwd())
-    except ValueError:
-        pass
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        _fail(source, f"netlist {str(path)!r}: {exc.strerror or exc}")
     analysis = data.get("analysis", "sweep")
-    if analysis not in ("sweep", "resonances"):
-        _fail(source, f"analysis must be 'sweep' or 'resonances', got {analysis!r}")
+    if analysis not in ("sweep", "resonances", "simulate"):
+        _fail(source, f"analysis must be 'sweep', 'resonances' or 'simulate', got {analysis!r}")
+    if analysis == "simulate":
+        text, path = "", ""
+    else:
+        if "netlist" not in data or not isinstance(data["netlist"], str):
+            _fail(source, "needs netlist = \"PATH\" (relative to the spec file)")
+        path = Path(os.path.normpath(base / data["netlist"]))
+        try:
+            path = path.relative_to(Path.cwd())
+        except ValueError:
+            pass
+        try:
+            text = path.read_text(encoding="utf-8")
+        except OSError as exc:
+            _fail(source, f"netlist {str(path)!r}: {exc.strerror or exc}")
     if ("grid" in data) == ("random" in data):
         _fail(source, "needs exactly one of a [grid] table or a [random] table")
     if "grid" in data:
@@ -231,15 +257,50 @@ def parse_spec(data: dict, *, source: str = "<spec>", base: Path | None = None) 
     if isinstance(n_res, bool) or not isinstance(n_res, int) or not 1 <= n_res <= 100:
         _fail(source, f"resonances must be an integer from 1 to 100, got {n_res!r}")
     omega_max = _omega(source, data["omega_max"], "omega_max") if "omega_max" in data else None
-    # Check the names against the netlist now, not once per point.
-    from .netlist import parse
+    sley = None
+    if analysis == "simulate":
+        sley = _sley_settings(source, data.get("sley", {}), names)
+    else:
+        # Check the names against the netlist now, not once per point.
+        from .netlist import parse
 
-    base_circuit = parse(text, source=str(path))
-    missing = [n for n in names if n not in base_circuit.params]
-    if missing:
-        _fail(source, f"{', '.join(missing)} is not a .param of {path} (its parameters: "
-                      f"{', '.join(base_circuit.params) or 'none'})")
-    return StudySpec(text, str(path), analysis, names, points, omega, n_res, omega_max, source)
+        base_circuit = parse(text, source=str(path))
+        missing = [n for n in names if n not in base_circuit.params]
+        if missing:
+            _fail(source, f"{', '.join(missing)} is not a .param of {path} (its parameters: "
+                          f"{', '.join(base_circuit.params) or 'none'})")
+    return StudySpec(text, str(path), analysis, names, points, omega, n_res, omega_max, source,
+                     sley)
+
+
+def _sley_settings(source, table, names) -> tuple:
+    if not isinstance(table, dict):
+        _fail(source, "[sley] must be a table (drive, variant, revolutions, "
+                      "points_per_revolution)")
+    extra = set(table) - {"drive", "variant", "revolutions", "points_per_revolution"}
+    if extra:
+        _fail(source, f"unknown key(s) in [sley]: {', '.join(sorted(extra))}")
+    drive = table.get("drive", "one-side")
+    if drive not in _SLEY_QUANTITIES:
+        _fail(source, f"sley.drive must be 'one-side' or 'both-sides', got {drive!r}")
+    settings = []
+    for key, default, lo, hi in (("variant", 3, 1, 7), ("revolutions", 5, 1, 1000),
+                                 ("points_per_revolution", 7200, 8, 10_000_000)):
+        v = table.get(key, default)
+        if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
+            _fail(source, f"sley.{key} must be an integer from {lo} to {hi}, got {v!r}")
+        settings.append(v)
+    from dataclasses import fields
+
+    from .sley import SleyParameters
+
+    known = {f.name for f in fields(SleyParameters)} - {"drive", "label", "branch",
+                                                        "beat_sign"}
+    bad = [n for n in names if n not in known]
+    if bad:
+        _fail(source, f"{', '.join(bad)} is not a sley parameter (expected some of "
+                      f"{', '.join(sorted(known))})")
+    return (drive, *settings)
 
 
 def load_spec(path: str | os.PathLike) -> StudySpec:
@@ -274,6 +335,16 @@ def run_point(spec: StudySpec, index: int, values: dict[str, float]) -> dict:
 
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
+            if spec.analysis == "simulate":
+                from .sley import simulate
+
+                drive, variant, revolutions, ppr = spec.sley
+                result = simulate(drive, variant, revolutions=revolutions,
+                                  points_per_revolution=ppr, **values)
+                for q in _SLEY_QUANTITIES[drive]:
+                    lo, hi = result.extrema[q]
+                    row[f"{q}_min"], row[f"{q}_max"] = float(lo), float(hi)
+                return row
             circuit = parse(spec.netlist_text, source=spec.netlist_source, params=values)
             if spec.analysis == "sweep":
                 lo, hi, n, log = spec.omega

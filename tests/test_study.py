@@ -253,3 +253,22 @@ def test_parquet_output_and_resume(tmp_path):
     assert rows[2]["K_abs_max"] == csv_rows[2]["K_abs_max"]
     again = run_study(spec, output=out, workers=1, resume=True)     # nothing left to run
     assert again.skipped == 4 and pq.read_table(out).equals(table)
+
+
+def test_sley_preset_study():
+    spec = parse_spec({"analysis": "simulate",
+                       "sley": {"drive": "one-side", "variant": 3, "revolutions": 2,
+                                "points_per_revolution": 360},
+                       "grid": {"omega": [90.0, 100.0], "C2": [5e4, -1.0]}}, source="t.toml")
+    assert spec.columns[-2:] == ["M2V_min", "M2V_max"]
+    rows = run_study(spec, workers=1).rows
+    assert [r["status"] for r in rows] == ["ok", "error", "ok", "error"]
+    assert "C2" in rows[1]["error"]
+    # The rigid rocker's acceleration is ν(φ2)·ω²: its extremes scale with ω²,
+    # whatever the elastic model does (and at ω = 100 the paper prints [-2319, 2915]).
+    slow, fast = rows[0], rows[2]
+    for end in ("min", "max"):
+        assert slow[f"eps4T_{end}"] == pytest.approx(0.81 * fast[f"eps4T_{end}"], rel=1e-9)
+    assert round(fast["eps4T_min"]) == -2319 and round(fast["eps4T_max"]) == 2915
+    with pytest.raises(MechcircError, match="not a sley parameter"):
+        parse_spec({"analysis": "simulate", "grid": {"k9": [1.0]}})

@@ -216,8 +216,9 @@ def cmd_study(args) -> int:
     where = {"dask": f"Dask cluster {args.scheduler} ({result.workers} threads)",
              "local": f"{result.workers} local processes",
              "inline": "this process"}[result.executor]
-    print(f"{args.spec}: {len(result.rows)} points of {spec.netlist_source} "
-          f"({spec.analysis}) on {where}")
+    model = spec.netlist_source if spec.analysis != "simulate" else \
+        f"the sley model, {spec.sley[0]} variant {spec.sley[1]}"
+    print(f"{args.spec}: {len(result.rows)} points of {model} ({spec.analysis}) on {where}")
     if result.skipped:
         print(f"  {result.skipped} point(s) kept from {args.output}")
     if result.failed:
