@@ -182,6 +182,9 @@ def build(scene: Scene, theta: float, *, reflect: Literal["eta", "lever"] = "eta
 
     lines, ratios, dropped = [], {}, []
     names_used = set(used)
+    element_names = {m.name for m in scene.masses} | {d.name} | {
+        x.name + suffix for x in (*scene.elastic, *scene.torsions, *scene.loads)
+        for suffix in ("", "_d")}
 
     def port(name, node, r):
         """Reflection through ``r``: (node, eta string) or a lever to a new node."""
@@ -191,7 +194,11 @@ def build(scene: Scene, theta: float, *, reflect: Literal["eta", "lever"] = "eta
         while port_node in names_used:
             port_node += "_"
         names_used.add(port_node)
-        lines.append(f"lever L_{name} {node} 0 {port_node} 0 ratio={abs(r)!r}")
+        lever = f"L_{name}"
+        while lever in element_names:
+            lever = "L" + lever
+        element_names.add(lever)
+        lines.append(f"lever {lever} {node} 0 {port_node} 0 ratio={abs(r)!r}")
         return port_node, ""
 
     lines.append("# masses and inertias (kinetic energy, reflected to the drive)")

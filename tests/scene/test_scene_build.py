@@ -333,3 +333,10 @@ def test_load_anchor_and_direction_agree_when_on_one_line():
     a, b = build(with_dir, 0.0), build(with_anchor, 0.0)
     assert abs(a.ratios["w"]) == pytest.approx(abs(b.ratios["w"]), rel=1e-12)
     assert a.ratios["w"] != 0
+
+
+def test_lever_names_never_clash_with_element_names():
+    text = CHAIN.replace('name = "mC"', 'name = "L_J1"')
+    model = build(parse_scene(text), 0.1, reflect="lever")
+    names = [lv.name for lv in model.circuit.levers] + [e.name for e in model.circuit.elements]
+    assert len(names) == len(set(names)) and "L_J1" in names and "LL_J1" in names
