@@ -186,6 +186,10 @@ def two_port_z(circuit: "Circuit", P1: str, P2: str, S1: str, S2: str,
     from ..circuit import FRAME
     from ..nodal import _batched_solve, _stamp
 
+    # Not nodal.assemble(): it keeps only the part of the network that the
+    # circuit's drive loads, while a two-port needs every element, including
+    # those reached only from the second port.  The stamps are the same.
+
     omega = np.atleast_1d(np.asarray(omega, dtype=float))
     names: dict[str, None] = {}
     for e in circuit.elements:
