@@ -188,11 +188,18 @@ def write_sweep_csv(result, path) -> None:
     if result.drive.kind == "force":
         columns += [result.v0.real, result.v0.imag]
         header += ",v0_re,v0_im"
+    from ..progress import Progress
+
     table = np.column_stack(columns + [result.flags])
-    with open(path, "w", newline="") as fh:
+    # Formatting 17 digits is the slow part (about 5 s per million rows): in
+    # blocks, so that a terminal shows progress on long sweeps.
+    block = 100_000
+    with open(path, "w", newline="") as fh, Progress(len(table), "CSV") as bar:
         fh.write(header + ",flag\n")
         fmt = ["%.17g"] * (table.shape[1] - 1) + ["%d"]
-        np.savetxt(fh, table, delimiter=",", fmt=fmt)
+        for start in range(0, len(table), block):
+            np.savetxt(fh, table[start:start + block], delimiter=",", fmt=fmt)
+            bar.update(min(block, len(table) - start))
 
 
 def _resonance_rows(found) -> list[dict]:
