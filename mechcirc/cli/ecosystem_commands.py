@@ -160,13 +160,13 @@ def cmd_compare(args) -> int:
 
 
 def cmd_formula(args) -> int:
-    from ..interop.formula import formula, symbol_values
+    from ..interop.formula import formula_and_values
     from .circuit_commands import _load_with_warnings
 
     circuit, warns = _load_with_warnings(args.file)
     for w in warns:
         print(f"warning: {w}", file=sys.stderr)
-    K = formula(circuit, expand=args.expand, numeric=args.numeric)
+    K, values = formula_and_values(circuit, expand=args.expand, numeric=args.numeric)
     if args.latex:
         import sympy
 
@@ -174,7 +174,6 @@ def cmd_formula(args) -> int:
     else:
         print(f"K(omega) = {K}")
     if not args.numeric:
-        values = symbol_values(circuit)
         if values:
             print("where (SI values; K in m/(N·s), omega in rad/s):")
             for sym in sorted(values, key=lambda s: s.name):

@@ -33,7 +33,7 @@ from ..errors import MechcircError
 if TYPE_CHECKING:  # pragma: no cover
     from ..circuit import Circuit
 
-__all__ = ["formula", "symbol_values", "OMEGA"]
+__all__ = ["formula", "formula_and_values", "symbol_values", "OMEGA", "MAX_NODAL_UNKNOWNS"]
 
 #: Name of the angular-frequency symbol [rad/s].
 OMEGA = "omega"
@@ -222,6 +222,11 @@ def formula(circuit: "Circuit", *, expand: bool = False, numeric: bool = False):
     >>> formula(c)
     1/(-I*k/omega + I*m*omega)
     """
+    return formula_and_values(circuit, expand=expand, numeric=numeric)[0]
+
+
+def formula_and_values(circuit: "Circuit", *, expand: bool = False, numeric: bool = False):
+    """``(formula(circuit, ...), symbol_values(circuit))`` built once."""
     b = _Builder(circuit)
     K = b.build()
     if numeric:
@@ -229,7 +234,7 @@ def formula(circuit: "Circuit", *, expand: bool = False, numeric: bool = False):
     if expand:
         num, den = b.sp.fraction(b.sp.together(K))
         K = b.sp.expand(num) / b.sp.expand(den)
-    return K
+    return K, dict(b.values)
 
 
 def symbol_values(circuit: "Circuit") -> dict:
