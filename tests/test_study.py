@@ -272,3 +272,19 @@ def test_sley_preset_study():
     assert round(fast["eps4T_min"]) == -2319 and round(fast["eps4T_max"]) == 2915
     with pytest.raises(MechcircError, match="not a sley parameter"):
         parse_spec({"analysis": "simulate", "grid": {"k9": [1.0]}})
+
+
+def test_study_cli_on_a_dask_scheduler(tmp_path, capsys):
+    distributed = pytest.importorskip(
+        "distributed", reason="dask.distributed is not installed (pip install 'mechcirc[study]')")
+    spec = tmp_path / "s.toml"
+    spec.write_text(f'netlist = "{STB}"\nanalysis = "resonances"\n[grid]\n'
+                    'eta1 = [0.7, 0.8, 0.9]\n')
+    assert cli.main(["study", str(spec), "-o", str(tmp_path / "one.csv"), "--workers", "1"]) == 0
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False,
+                                  dashboard_address=None) as cluster:
+        assert cli.main(["study", str(spec), "-o", str(tmp_path / "dask.csv"),
+                         "--scheduler", cluster.scheduler_address]) == 0
+    out = capsys.readouterr().out
+    assert f"on Dask cluster {cluster.scheduler_address} (2 threads)" in out
+    assert (tmp_path / "one.csv").read_bytes() == (tmp_path / "dask.csv").read_bytes()
