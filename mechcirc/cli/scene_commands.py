@@ -11,9 +11,9 @@ from ._common import check_output_paths, print_json, save_figure
 def register(sub) -> None:
     p = sub.add_parser(
         "scene", help="a scene (linkage + masses + elastic links) to its mechanical circuit",
-        description="Linearise a scene file at a crank angle into a netlist (--theta), or "
-                    "map its resonances and |Q0| at the shaft harmonics over one revolution "
-                    "(--cycle).  See docs/scenes.md.",
+        description="Linearise a scene file at a crank angle into a netlist (--theta),\n"
+                    "or map its resonances and |Q0| at the shaft harmonics over one\n"
+                    "revolution (--cycle).  See docs/scenes.md.",
         epilog="Examples:\n  mechcirc scene examples/heald_scene.toml --theta 40 -o heald.mcir\n"
                "  mechcirc scene examples/heald_scene.toml --cycle --points 72 "
                "--harmonics 8 --plot cycle.png",
