@@ -28,7 +28,6 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass
-from fractions import Fraction
 
 __all__ = ["Unit", "UnitError", "ATOMS", "ROLES", "parse_unit", "looks_like_unit",
            "convert", "parse_omega", "OMEGA_UNITS"]
@@ -39,14 +38,14 @@ _FORCE = (1, 1, -2)
 _NONE = (0, 0, 0)
 
 #: Known atoms: SI factor and dimension (kg, m, s exponents).  Factors are
-#: exact fractions (only ``deg`` is a float), so ``kg*mm^2`` is exactly 1e-6.
-ATOMS: dict[str, tuple[float, tuple[int, int, int]]] = {
-    "kg": (Fraction(1), _MASS), "g": (Fraction(1, 1000), _MASS), "t": (Fraction(1000), _MASS),
-    "N": (Fraction(1), _FORCE), "kN": (Fraction(1000), _FORCE),
-    "m": (Fraction(1), _LENGTH), "mm": (Fraction(1, 1000), _LENGTH),
-    "cm": (Fraction(1, 100), _LENGTH),
-    "s": (Fraction(1), _TIME), "ms": (Fraction(1, 1000), _TIME),
-    "rad": (Fraction(1), _NONE), "deg": (math.pi / 180, _NONE),
+#: exact ratios ``(numerator, denominator)`` combined as fractions (only
+#: ``deg`` is a float), so ``kg*mm^2`` is exactly 1e-6.
+ATOMS: dict[str, tuple[tuple[int, int] | float, tuple[int, int, int]]] = {
+    "kg": ((1, 1), _MASS), "g": ((1, 1000), _MASS), "t": ((1000, 1), _MASS),
+    "N": ((1, 1), _FORCE), "kN": ((1000, 1), _FORCE),
+    "m": ((1, 1), _LENGTH), "mm": ((1, 1000), _LENGTH), "cm": ((1, 100), _LENGTH),
+    "s": ((1, 1), _TIME), "ms": ((1, 1000), _TIME),
+    "rad": ((1, 1), _NONE), "deg": (math.pi / 180, _NONE),
 }
 
 #: What each kind of value may be given in: role -> (dimension -> description).
@@ -106,6 +105,8 @@ def parse_unit(text: str) -> Unit:
     UnitError
         With the offset of the unknown atom or stray character.
     """
+    from fractions import Fraction     # here: fractions imports decimal (~3 ms)
+
     factor, dim = Fraction(1), [0, 0, 0]
     i, sign = 0, 1
     known = ", ".join(ATOMS)
@@ -120,6 +121,7 @@ def parse_unit(text: str) -> Unit:
             raise UnitError(f"unknown unit {atom!r}", i, f"one of {known}")
         power = int(m.group(2)) if m.group(2) else 2 if m.group(3) else 3 if m.group(4) else 1
         f, d = ATOMS[atom]
+        f = Fraction(*f) if isinstance(f, tuple) else f
         factor *= f ** (sign * power)
         for k in range(3):
             dim[k] += sign * power * d[k]
