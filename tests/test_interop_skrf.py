@@ -151,6 +151,13 @@ def test_compare_reports_a_known_error(tmp_path, capsys):
     assert status == 0, err
     assert "max 0.01 " in out and "median 0.01" in out
     assert (tmp_path / "c.png").read_bytes()[:8] == PNG
+    status, out, err = run(["compare", STB, measured, "--omega-min", 100, "--omega-max",
+                            "50Hz", "--json"], capsys)
+    doc = __import__("json").loads(out)
+    assert status == 0 and doc["omega_min"] >= 100 and doc["omega_max"] <= 100 * math.pi
+    assert 0 < doc["points"] < 80
+    status, _, err = run(["compare", STB, measured, "--omega-min", "1000Hz"], capsys)
+    assert status == 2 and "no measured point" in err
 
 
 def test_compare_missing_or_bad_file_is_a_user_error(tmp_path, capsys):

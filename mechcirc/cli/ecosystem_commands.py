@@ -36,6 +36,10 @@ def register(sub) -> None:
         epilog="Example: mechcirc compare netlists/stb_heald.mcir measured.s1p --plot cmp.png")
     p.add_argument("file", help="netlist file (.mcir)")
     p.add_argument("measured", help="Touchstone one-port file (.s1p)")
+    p.add_argument("--omega-min", type=omega_value, metavar="W1",
+                   help="compare only from this angular frequency [rad/s] (or 5Hz, 300rpm)")
+    p.add_argument("--omega-max", type=omega_value, metavar="W2",
+                   help="compare only up to this angular frequency [rad/s] (or 50Hz, 3000rpm)")
     p.add_argument("--method", choices=("auto", "sp", "nodal"), default="auto",
                    help="series–parallel tree, nodal analysis, or auto (default)")
     p.add_argument("--plot", metavar="IMAGE", help="overlay |K| and phase (PNG, SVG or PDF)")
@@ -131,7 +135,8 @@ def cmd_compare(args) -> int:
 
     check_output_paths(plots=(args.plot,))
     circuit, warns = _load_with_warnings(args.file)
-    result = compare(circuit, args.measured, method=args.method)
+    result = compare(circuit, args.measured, method=args.method,
+                     omega_min=args.omega_min, omega_max=args.omega_max)
     summary = result.summary()
     for w in warns:
         print(f"warning: {w}", file=sys.stderr)

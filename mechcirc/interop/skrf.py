@@ -313,9 +313,25 @@ class Comparison:
         return out
 
 
-def compare(circuit: "Circuit", path: str | os.PathLike, *, method: str = "auto") -> Comparison:
-    """Evaluate ``circuit`` at the frequencies of a measured one-port Touchstone file."""
+def compare(circuit: "Circuit", path: str | os.PathLike, *, method: str = "auto",
+            omega_min: float | None = None, omega_max: float | None = None) -> Comparison:
+    """Evaluate ``circuit`` at the frequencies of a measured one-port Touchstone file.
+
+    ``omega_min`` / ``omega_max`` [rad/s] keep only the measured points in
+    that band (a band with no point is an error).
+    """
     omega, K_meas, _ = read_mobility(path)
+    keep = np.ones(omega.shape, dtype=bool)
+    if omega_min is not None:
+        keep &= omega >= omega_min
+    if omega_max is not None:
+        keep &= omega <= omega_max
+    if not keep.any():
+        raise MechcircError(f"{os.fspath(path)}: no measured point between "
+                            f"{omega_min if omega_min is not None else 0:g} and "
+                            f"{omega_max if omega_max is not None else math.inf:g} rad/s "
+                            f"(the file spans {omega.min():g} .. {omega.max():g} rad/s)")
+    omega, K_meas = omega[keep], K_meas[keep]
     result = circuit.sweep(omega, method=method)
     K = result.K
     with np.errstate(all="ignore"):
