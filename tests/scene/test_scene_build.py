@@ -340,3 +340,25 @@ def test_lever_names_never_clash_with_element_names():
     model = build(parse_scene(text), 0.1, reflect="lever")
     names = [lv.name for lv in model.circuit.levers] + [e.name for e in model.circuit.elements]
     assert len(names) == len(set(names)) and "L_J1" in names and "LL_J1" in names
+
+
+def test_random_crank_rockers_give_mu():
+    rng = np.random.default_rng(7)
+    done = 0
+    while done < 12:
+        a, b, c, d = rng.uniform(10, 40), rng.uniform(60, 200), rng.uniform(60, 200), \
+            rng.uniform(60, 200)
+        try:
+            fb = FourBar(a, b, c, d, branch=int(rng.choice([-1, 1])))
+        except Exception:
+            continue
+        if fb.linkage_type != "crank-rocker":
+            continue
+        pose = rng.uniform(0, 2 * math.pi)
+        scene = _fourbar_scene(fb, pose)
+        th = rng.uniform(-math.pi, math.pi)
+        mu = float(fb.mu(pose + th))
+        if abs(mu) < 1e-3:
+            continue
+        assert build(scene, th).ratios["J4"] == pytest.approx(mu, rel=1e-9)
+        done += 1

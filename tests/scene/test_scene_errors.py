@@ -211,3 +211,32 @@ def test_damper_name_clash_is_refused():
     with pytest.raises(NetlistError, match="'rod_d' in the circuit, but that name is taken") as e:
         parse_scene(text)
     assert e.value.line == _where(text, '"rod_d"')[0]
+
+
+def test_cycle_of_a_crank_that_cannot_turn_fully():
+    from mechcirc.scene.cycle import cycle_map
+
+    fb = FourBar(60.0, 50.0, 70.0, 65.0)
+    P = helpers.fourbar_pose(fb, math.radians(80.0))
+    pts = "\n".join(f"{k} = [{x!r}, {y!r}]" for k, (x, y) in P.items())
+    scene = parse_scene(f'''units = "mm"
+[points]
+{pts}
+[ground]
+points = ["A", "D"]
+[links]
+crank = ["A", "B"]
+coupler = ["B", "C"]
+rocker = ["D", "C"]
+[[cranks]]
+link = "crank"
+omega = 1.0
+[[masses]]
+link = "rocker"
+inertia = 1.0
+[drive]
+link = "crank"
+velocity = 1.0
+''')
+    with pytest.raises(GeometryError, match="cannot make a full revolution.*locks near"):
+        cycle_map(scene, points=8)
