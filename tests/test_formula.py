@@ -117,3 +117,20 @@ def test_bridge_without_a_tree_comes_from_the_nodal_equations():
         ((g1 + g4) * (g2 + g5) + g3 * (g1 + g2 + g4 + g5))
     expected = 1 / (sp.I * w * m + k_eq / (sp.I * w))
     assert sp.expand(sp.fraction(sp.together(F - expected))[0]) == 0
+
+
+def _ladder(n):
+    lines = ["drive V n0 0 velocity=1"]
+    for i in range(n):
+        lines += [f"mass m{i} n{i} n{i + 1} 1", f"spring k{i} n{i + 1} 0 100"]
+    return mechcirc.parse("\n".join(lines))
+
+
+def test_deep_trees_are_refused_with_a_reason(capsys):
+    from mechcirc.errors import MechcircError
+    from mechcirc.interop.formula import MAX_TREE_DEPTH
+
+    with pytest.raises(MechcircError, match=r"200 levels deep; formulas are built up to"):
+        formula(_ladder(100))
+    F = formula(_ladder(MAX_TREE_DEPTH // 2))        # depth 2n: the deepest accepted prints
+    assert str(F) and sp.latex(F)

@@ -33,12 +33,17 @@ from ..errors import MechcircError
 if TYPE_CHECKING:  # pragma: no cover
     from ..circuit import Circuit
 
-__all__ = ["formula", "formula_and_values", "symbol_values", "OMEGA", "MAX_NODAL_UNKNOWNS"]
+__all__ = ["formula", "formula_and_values", "symbol_values", "OMEGA", "MAX_NODAL_UNKNOWNS",
+           "MAX_TREE_DEPTH"]
 
 #: Name of the angular-frequency symbol [rad/s].
 OMEGA = "omega"
 #: Largest nodal system solved symbolically for networks without a tree.
 MAX_NODAL_UNKNOWNS = 12
+#: Deepest reduction tree turned into a formula: SymPy's constructors and
+#: printers recurse once per level and exhaust Python's recursion limit at
+#: about 150 levels (a 75-rung ladder); beyond that the error says so.
+MAX_TREE_DEPTH = 120
 
 
 def _sympy():
@@ -138,6 +143,13 @@ class _Builder:
             tree = self.circuit.tree
         except NotSeriesParallelError:
             return self.build_nodal()
+        from ..sweep import _depth
+
+        depth = _depth(tree)
+        if depth > MAX_TREE_DEPTH:
+            raise MechcircError(
+                f"the reduction tree is {depth} levels deep; formulas are built up to "
+                f"{MAX_TREE_DEPTH} levels (SymPy recurses once per level)")
         return self.build_tree(tree)
 
     def build_nodal(self):
