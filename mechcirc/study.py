@@ -549,6 +549,15 @@ def _read_parquet(path, columns: list[str]) -> list[dict]:
     return [{c: ("" if v is None else v) for c, v in row.items()} for row in table.to_pylist()]
 
 
+def _for_workers(spec: StudySpec) -> StudySpec:
+    """The spec without its point list: each batch carries its own points, and the
+    spec is pickled once per batch (a million points would otherwise travel with
+    every batch)."""
+    from dataclasses import replace
+
+    return replace(spec, points=())
+
+
 def _size(n_points: int, n_workers: int, batch_size: int | None) -> int:
     if batch_size:
         return max(1, int(batch_size))
@@ -565,7 +574,8 @@ def _run_local(spec, todo, n_workers, batch_size, take) -> tuple[str, int]:
     from concurrent.futures import ProcessPoolExecutor, as_completed
 
     with ProcessPoolExecutor(max_workers=n_workers) as pool:
-        futures = [pool.submit(run_batch, spec, batch) for batch in _batches(todo, size)]
+        light = _for_workers(spec)
+        futures = [pool.submit(run_batch, light, batch) for batch in _batches(todo, size)]
         try:
             for fut in as_completed(futures):
                 take(fut.result())
@@ -589,7 +599,7 @@ def _run_dask(spec, todo, scheduler, batch_size, take, connect_timeout) -> int:
         n_workers = max(1, sum(w.get("nthreads", 1) for w in
                                client.scheduler_info()["workers"].values()))
         size = _size(len(todo), n_workers, batch_size)
-        spec_future = client.scatter(spec, broadcast=True)
+        spec_future = client.scatter(_for_workers(spec), broadcast=True)
         futures = [client.submit(run_batch, spec_future, batch, pure=False)
                    for batch in _batches(todo, size)]
         for fut in as_completed(futures):
