@@ -565,6 +565,9 @@ def _combine(node, values: dict, omega, inv_omega, condition: bool = False) -> _
             cplx = v.array.copy() if cplx is None else cplx + v.array
     if real:
         cplx = np.full(omega.shape, real, dtype=complex) if cplx is None else cplx + real
+    if cplx is None and imag is None:
+        # Every term was exactly 0 (a value·η of ∞ gives 1/∞ = 0): the sum is 0.
+        imag = np.zeros(omega.shape)
     if cplx is None:
         total = _Value(True, imag)
     else:
