@@ -226,7 +226,14 @@ def cmd_sweep(args) -> int:
                                 initial=max(2, args.points), method=args.method)
     else:
         result = circuit.sweep(omega, method=args.method)
-    found = circuit.resonances(omega_max=omega[-1]) if (args.plot or args.json) else []
+    found = []
+    if args.plot or args.json:
+        from ..errors import SolverError
+
+        try:
+            found = circuit.resonances(omega_max=omega[-1])
+        except SolverError as exc:      # too large for the eigenproblem: sweep anyway
+            warns.append(f"resonance markers left out: {exc}")
     found = [r for r in found if r.omega >= omega[0]]
     for w in warns:
         print(f"warning: {w}", file=sys.stderr)
