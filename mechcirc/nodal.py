@@ -363,6 +363,9 @@ def require_nonsingular(system: NodalSystem) -> None:
             A = base + 1j * (w * M - Ks / w)
         if not np.isfinite(A).all():
             continue            # values at float64's edge: no verdict at this ω
+        # Judge the equilibrated matrix: a lever of ratio 1e-8 puts entries of
+        # 1e-8 beside 1, and the raw singular values then look singular.
+        A = _equilibrate(A)
         sv = np.linalg.svd(A, compute_uv=False)
         if sv[-1] > 1e-13 * sv[0]:
             return
@@ -378,6 +381,19 @@ def require_nonsingular(system: NodalSystem) -> None:
         f"are not determined): {', '.join(culprits[:12])}; check for levers in parallel "
         "or nodes tied only by levers", nodes=[c for c in culprits if not c.startswith("lever")],
         elements=[c[6:] for c in culprits if c.startswith("lever")])
+
+
+def _equilibrate(A: NDArray) -> NDArray:
+    """Rows and columns scaled to max-norm 1 (Ruiz iteration; singular stays singular)."""
+    A = A.copy()
+    for _ in range(8):
+        mag = np.abs(A)
+        r, c = np.sqrt(mag.max(axis=1)), np.sqrt(mag.max(axis=0))
+        r[r == 0] = 1.0
+        c[c == 0] = 1.0
+        A /= r[:, None]
+        A /= c[None, :]
+    return A
 
 
 def _frequency_scale(system: NodalSystem) -> float:

@@ -202,12 +202,23 @@ def _modes_unchecked(M, D, Ks, G, damped: bool) -> np.ndarray:
         if not all(np.isfinite(X).all() for X in scaled):
             raise SolverError("resonances: the damping, mass and stiffness scales are too far "
                               "apart for float64", status="range")
-        s = _damped(*scaled) * w_ref
+        s_all = _damped(*scaled) * w_ref
         # Rigid-body (zero) roots come out of QZ split by about sqrt(eps)·w_ref.
-        s = s[(np.abs(s) > 1e-6 * w_ref) & (s.imag >= -1e-12 * np.abs(s))]
-        s = np.where(np.abs(s.imag) <= 1e-12 * np.abs(s), s.real + 0j, s)
+        keep = np.flatnonzero((np.abs(s_all) > 1e-6 * w_ref)
+                              & (s_all.imag >= -1e-12 * np.abs(s_all)))
+        s = s_all[keep]
         mag = np.abs(s)
         err = eps * 1e2 * (mag.max(initial=1.0) / mag)
+        if s.size > 1 or s_all.size > 1:
+            # Coalescing roots (critical damping, ζ → 1): a root at relative
+            # distance δ from another moves by about eps/δ, and a double root
+            # by about sqrt(eps) — far more than the simple-root estimate.
+            gap = np.abs(s[:, None] - s_all[None, :])
+            gap[np.arange(s.size), keep] = np.inf
+            with np.errstate(divide="ignore"):
+                near = np.minimum(np.sqrt(eps), eps / (gap.min(axis=1) / mag))
+            err = np.maximum(err, 10 * near)
+        s = np.where(np.abs(s.imag) <= 1e-12 * np.abs(s), s.real + 0j, s)
     return np.column_stack([s, err]) if s.size else np.zeros((0, 2), dtype=complex)
 
 
@@ -313,10 +324,14 @@ def _polish(circuit: Circuit, found: list[Resonance]) -> list[Resonance]:
         side = np.where(left, -1, np.where(right, 1, side))
         if np.all(~ok | (hi - lo <= 4 * np.finfo(float).eps * hi)):
             break
+    with np.errstate(all="ignore"):
+        f_lo, f_hi = f(lo), f(hi)
     out = []
-    for r, good, a, b in zip(found, ok, lo, hi):
+    for r, good, a, b, fa, fb in zip(found, ok, lo, hi, f_lo, f_hi):
         if good:
-            w = float(0.5 * (a + b))
+            # An end on an exact zero of the computed f is the root itself (the
+            # midpoint of a one-ulp bracket [10 − ulp, 10] is not).
+            w = float(a if fa == 0 else b if fb == 0 else 0.5 * (a + b))
             out.append(Resonance(r.kind, w, w, 0.0, float(max((b - a) / (2 * w),
                                                                np.finfo(float).eps))))
         else:

@@ -1,0 +1,245 @@
+"""Numerical edge cases (issue 8, §3): results are correct or flagged, never NaN unflagged.
+
+The flag contract (``mechcirc.sweep``): 0 = regular (estimated relative error
+of K ≤ 1e-6), 1 = on a pole or zero (K, Q0 or v0 is 0, infinite or NaN),
+2 = within rounding of one.  Every case below checks both halves: where a
+point is not flagged its value matches a closed form, and every non-finite
+value carries a flag.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+import pytest
+
+import mechcirc
+from mechcirc.sweep import FLAG_NEAR_SINGULAR, FLAG_OK, FLAG_SINGULAR
+
+
+def _sweep(text: str, omega, method="auto"):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return mechcirc.parse(text).sweep(np.asarray(omega, dtype=float), method=method)
+
+
+def _contract(s, K_exact=None, rtol=1e-13):
+    """No unflagged non-finite value; unflagged points match ``K_exact`` to ``rtol``."""
+    bad = ~np.isfinite(s.K) | ~np.isfinite(s.Q0) | ~np.isfinite(s.v0)
+    assert np.all(s.flags[bad] != FLAG_OK), (s.omega[bad], s.flags[bad])
+    assert np.all(np.isin(s.flags, (FLAG_OK, FLAG_SINGULAR, FLAG_NEAR_SINGULAR)))
+    if K_exact is not None:
+        ok = s.flags == FLAG_OK
+        np.testing.assert_allclose(s.K[ok], K_exact[ok], rtol=rtol, atol=0)
+
+
+OMEGA_EDGES = [0.0, 5e-324, 1e-300, 1.0, 1e300, 1.7976931348623157e308, np.inf]
+
+
+def _exact(kind: str, value: float, omega):
+    """K of one element [m/(N·s)], in exact limits (ω = 0, ∞ included)."""
+    w = np.asarray(omega, dtype=float)
+    out = np.zeros(w.shape, dtype=complex)
+    with np.errstate(divide="ignore", over="ignore"):
+        if kind == "damper":
+            out.real = 1 / np.float64(value)
+        elif kind == "mass":
+            out.imag = -1 / (w * value)         # ω·m = 0 (ω = 0 or an underflow): -j∞
+        else:
+            out.imag = w / value
+    return out
+
+
+@pytest.mark.parametrize("method", ["sp", "nodal"])
+@pytest.mark.parametrize("kind", ["mass", "spring", "damper"])
+def test_each_element_at_omega_zero_and_infinity(kind, method):
+    s = _sweep(f"drive V a 0 velocity=2\n{kind} e a 0 4\n", OMEGA_EDGES, method)
+    exact = _exact(kind, 4.0, OMEGA_EDGES)
+    _contract(s, exact)
+    if method == "sp":
+        # The tree gives the exact limits: 1/(jω m) = -j∞ at ω = 0, jω/k = j∞ at ω = ∞.
+        finite = np.isfinite(exact)
+        np.testing.assert_array_equal(np.isinf(s.K), ~finite)
+        if kind == "mass":
+            assert s.K[0] == complex(0, -math.inf) and s.Q0[0] == 0
+            assert s.flags[0] == FLAG_SINGULAR and s.flags[-1] == FLAG_SINGULAR  # K = -0j
+        if kind == "spring":
+            assert s.K[0] == 0 and s.flags[0] == FLAG_SINGULAR and np.isinf(s.Q0[0])
+            assert s.K[-1] == complex(0, math.inf) and s.Q0[-1] == 0
+        if kind == "damper":
+            assert np.all(s.flags == FLAG_OK) and np.all(s.K == 0.25) and np.all(s.Q0 == 8)
+
+
+@pytest.mark.parametrize("method", ["sp", "nodal"])
+@pytest.mark.parametrize("kind", ["mass", "spring", "damper"])
+@pytest.mark.parametrize("value", [1e-300, 1e300, 5e-324, 1.7976931348623157e308])
+def test_element_values_at_the_extremes_of_float64(kind, value, method):
+    omega = [1e-3, 1.0, 1e3]
+    s = _sweep(f"drive V a 0 velocity=1\n{kind} e a 0 {value!r}\n", omega, method)
+    _contract(s, _exact(kind, value, omega))
+    if method == "sp" and value in (1e-300, 1e300):
+        assert np.all(s.flags == FLAG_OK)         # 1/1e-300 = 1e300 is exact enough
+
+
+def test_mass_and_spring_of_opposite_extremes_in_series():
+    s = _sweep("drive V a 0 velocity=1\nmass m a b 1e300\nspring k b 0 1e-300\n", [1.0, 2.0])
+    # K = -j/(ω·1e300) + jω·1e300: the spring term dominates completely.
+    np.testing.assert_allclose(s.K.imag, [1e300, 2e300], rtol=1e-15)
+    assert np.all(s.flags == FLAG_OK)
+
+
+# --------------------------------------------------------------- resonances in the sweep
+SERIES_MK = "drive V a 0 velocity=0.1\nmass m a b 1\nspring k b 0 100\n"      # K = 0 at ω = 10
+PARALLEL_MK = "drive V a 0 force=3\nmass m a 0 1\nspring k a 0 100\n"         # K = ∞ at ω = 10
+
+
+@pytest.mark.parametrize("method", ["sp", "nodal"])
+def test_exact_resonance_is_flagged_and_nearby_points_are_right(method):
+    (r,) = mechcirc.parse(SERIES_MK).resonances()
+    assert r.kind == "resonance" and r.omega == 10.0
+    omega = [10.0 * (1 - 1e-3), 10.0 * (1 - 1e-13), 10.0, 10.0 * (1 + 1e-13), 10.0 * (1 + 1e-3)]
+    s = _sweep(SERIES_MK, omega, method)
+    exact = np.array([1j * (w / 100 - 1 / w) for w in omega])
+    _contract(s, exact, rtol=1e-9)
+    assert s.flags[2] != FLAG_OK                     # on the zero of K: Q0 = V0/K infinite
+    assert s.flags[1] != FLAG_OK and s.flags[3] != FLAG_OK   # K within rounding of 0
+    assert s.flags[0] == FLAG_OK and s.flags[4] == FLAG_OK
+    if method == "sp":
+        assert s.K[2] == 0 and s.flags[2] == FLAG_SINGULAR and np.isinf(s.Q0[2])
+
+
+@pytest.mark.parametrize("method", ["sp", "nodal"])
+def test_exact_antiresonance_is_flagged(method):
+    (r,) = mechcirc.parse(PARALLEL_MK).resonances()
+    assert r.kind == "antiresonance" and r.omega == 10.0
+    omega = [9.0, 10.0, 11.0]
+    s = _sweep(PARALLEL_MK, omega, method)
+    exact = np.array([1 / (1j * w - 100j / w) if w != 10 else complex(0, math.inf)
+                      for w in omega])
+    _contract(s, exact, rtol=1e-12)
+    assert s.flags[1] == FLAG_SINGULAR and s.flags[0] == s.flags[2] == FLAG_OK
+    # Force drive: v0 = F0·K is what blows up at the anti-resonance.
+    assert not np.isfinite(s.v0[1]) or s.flags[1] != FLAG_OK
+
+
+BRIDGE = """drive V a 0 velocity=1
+mass m1 a b 1
+mass m2 a c 2
+spring k1 b 0 100
+spring k2 c 0 300
+spring k5 b c 50
+"""
+
+
+def test_bridge_singular_at_one_frequency_is_flagged_there_only():
+    """A non-series–parallel network (nodal analysis) swept across each of its exact roots."""
+    c = mechcirc.parse(BRIDGE)
+    found = c.resonances()
+    assert found, "the bridge has resonances"
+    omega = np.array(sorted([r.omega for r in found] + [0.5 * found[0].omega, 1.0, 123.0]))
+    s = c.sweep(omega)
+    assert s.method == "nodal"
+    _contract(s)
+    on_root = np.isin(omega, [r.omega for r in found])
+    assert np.all(s.flags[on_root] != FLAG_OK)
+    assert np.all(s.flags[~on_root] == FLAG_OK)
+    # Away from the roots K agrees with the tree-free reference: the same bridge by hand.
+    for w, K in zip(omega[~on_root], s.K[~on_root]):
+        assert K == pytest.approx(_bridge_K(w), rel=1e-12)
+
+
+def _bridge_K(w: float) -> complex:
+    """K of BRIDGE by direct nodal equations in complex arithmetic (independent of mechcirc)."""
+    y = {"m1": 1j * w * 1, "m2": 1j * w * 2, "k1": 100 / (1j * w), "k2": 300 / (1j * w),
+         "k5": 50 / (1j * w)}
+    # Unknowns v_a, v_b, v_c; unit force into a.
+    A = np.array([[y["m1"] + y["m2"], -y["m1"], -y["m2"]],
+                  [-y["m1"], y["m1"] + y["k1"] + y["k5"], -y["k5"]],
+                  [-y["m2"], -y["k5"], y["m2"] + y["k2"] + y["k5"]]])
+    return complex(np.linalg.solve(A, [1, 0, 0])[0])
+
+
+# --------------------------------------------------------------- levers
+@pytest.mark.parametrize("method", ["sp", "nodal"])
+@pytest.mark.parametrize("ratio", [1e-150, 1e-8, 1e-3, 1.0, 1e3, 1e8, 1e150])
+def test_lever_ratios_near_zero_and_very_large(ratio, method):
+    """A mass m behind a lever of ratio r is seen as m·r² from the primary."""
+    text = f"drive V a 0 velocity=1\nlever L a 0 b 0 ratio={ratio!r}\nmass m b 0 2\n"
+    omega = np.array([0.1, 1.0, 10.0])
+    s = _sweep(text, omega, method)
+    exact = -1j / (omega * 2 * ratio * ratio)
+    _contract(s, exact, rtol=1e-12)
+    if method == "sp":
+        assert np.all(s.flags == FLAG_OK)
+
+
+@pytest.mark.parametrize("ratio", [1e-200, 1e200])
+def test_lever_ratio_whose_square_leaves_float64_is_flagged(ratio):
+    text = f"drive V a 0 velocity=1\nlever L a 0 b 0 ratio={ratio!r}\nmass m b 0 2\n"
+    s = _sweep(text, [1.0])
+    _contract(s)
+    assert s.flags[0] == FLAG_SINGULAR                # m·r² = 0 or ∞: K = ∞ or 0
+
+
+# --------------------------------------------------------------- critical damping
+def _mck(zeta: float, m=2.0, k=800.0):
+    c = 2 * zeta * math.sqrt(k * m)
+    return mechcirc.parse(f"drive V a 0 velocity=1\nmass m a 0 {m!r}\n"
+                          f"damper c a 0 {c!r}\nspring k a 0 {k!r}\n")
+
+
+@pytest.mark.parametrize("zeta", [0.5, 1 - 1e-6, 1 - 1e-12, 1.0, 1 + 1e-12, 1 + 1e-6, 2.0])
+def test_coalescing_roots_at_critical_damping(zeta):
+    """m, c, k in parallel: anti-resonances at s = -ωn(ζ ∓ sqrt(ζ² − 1)), ωn = 20 rad/s.
+
+    At ζ = 1 the two roots coalesce; each reported ω is within its own error
+    estimate of the exact root (which must grow to about sqrt(eps) there).
+    """
+    wn = 20.0
+    found = _mck(zeta).resonances()
+    assert all(r.kind == "antiresonance" for r in found)
+    if zeta < 1:
+        exact = [wn]
+        wd = wn * math.sqrt((1 - zeta) * (1 + zeta))
+        (r,) = found
+        assert r.zeta == pytest.approx(zeta, rel=1e-12)
+        # Im s of a near-double root is ill-conditioned; its absolute error is
+        # that of s, ωn·error (ω_d = 2.8e-5 rad/s at ζ = 1 − 1e-12).
+        assert abs(r.omega_d - wd) <= wn * r.error
+    elif zeta == 1:
+        exact = [wn, wn]
+    else:
+        root = math.sqrt((zeta - 1) * (zeta + 1))
+        exact = [wn * (zeta - root), wn * (zeta + root)]
+    assert len(found) == len(exact)
+    for r, w in zip(sorted(found, key=lambda r: r.omega), sorted(exact)):
+        assert abs(r.omega - w) / w <= r.error, (r, w)
+        assert r.error < 1e-6
+        if zeta >= 1:
+            assert r.zeta == 1.0 and r.omega_d == 0.0
+
+
+def test_error_estimate_covers_coalesced_roots_for_many_networks():
+    """Before the fix, critically damped roots were off by 2e-8 with an estimate of 2e-14."""
+    import random
+
+    for i in range(60):
+        rng = random.Random(i)
+        m, k = 10 ** rng.uniform(-2, 2), 10 ** rng.uniform(1, 6)
+        wn = math.sqrt(k / m)
+        for r in _mck(1.0, m, k).resonances():
+            assert abs(r.omega - wn) / wn <= r.error
+
+
+@pytest.mark.parametrize("zeta", [1 - 1e-9, 1.0, 1 + 1e-9])
+def test_sweep_across_critical_damping_is_regular(zeta):
+    """Damped: K never reaches 0 or ∞ on the real ω axis, so nothing is flagged."""
+    m, k = 2.0, 800.0
+    c = 2 * zeta * math.sqrt(k * m)
+    omega = np.array([0.0, 10.0, 20.0, 30.0, 1e6])
+    s = _mck(zeta).sweep(omega)
+    exact = np.array([0j] + [1 / (1j * w * m + c + k / (1j * w)) for w in omega[1:]])
+    _contract(s, exact, rtol=1e-13)
+    assert list(s.flags) == [FLAG_SINGULAR, 0, 0, 0, 0]     # ω = 0: the spring shorts K to 0
