@@ -70,7 +70,8 @@ def run_handler(args) -> int:
     except Exception as exc:  # noqa: BLE001 - the last line of defence
         if getattr(args, "debug", False):
             raise
-        print(f"mechcirc: internal error: {type(exc).__name__}: {exc}\n"
+        first = (str(exc).splitlines() or [""])[0]     # one line, whatever the message
+        print(f"mechcirc: internal error: {type(exc).__name__}: {first}\n"
               "This is a bug in mechcirc; please report it with the input "
               "(run again with --debug for the traceback).", file=sys.stderr)
         return EXIT_INTERNAL
