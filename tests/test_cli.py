@@ -189,6 +189,26 @@ def test_sweep_linear_grid(tmp_path, capsys):
     np.testing.assert_allclose(table[:, 3] + 1j * table[:, 4], 0.1 / K, rtol=1e-13)
 
 
+@pytest.mark.parametrize("lo, hi, expect", [
+    ("1Hz", "3000rpm", (2 * np.pi, 100 * np.pi)),
+    ("10", "1e3rad/s", (10.0, 1e3)),
+    ("2 Hz", "50 1/s", (4 * np.pi, 50.0)),
+])
+def test_sweep_frequency_units(tmp_path, capsys, lo, hi, expect):
+    out_csv = tmp_path / "K.csv"
+    status, _, err = run(["sweep", STB, "--omega-min", lo, "--omega-max", hi,
+                          "--points", 5, "-o", out_csv], capsys)
+    assert status == 0, err
+    _, table = read_csv(out_csv)
+    np.testing.assert_allclose(table[:, 0], np.linspace(*expect, 5), rtol=1e-15)
+
+
+def test_sweep_unknown_frequency_unit_exit_2(capsys):
+    status, out, err = run(["sweep", STB, "--omega-min", "1", "--omega-max", "50x"], capsys)
+    assert status == 2
+    assert "unknown frequency unit 'x'" in err and out == ""
+
+
 def test_sweep_text_summary(capsys):
     status, out, err = run(["sweep", STB, "--omega-min", 10, "--omega-max", 1e4,
                             "--points", 50, "--log"], capsys)
