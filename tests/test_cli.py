@@ -342,6 +342,19 @@ def test_bad_netlist_gives_a_located_error_and_exit_2(tmp_path, capsys, text, me
     assert err == f"{path}:{message}\n"
 
 
+def test_glued_compound_unit_hint_names_the_whole_unit(tmp_path, capsys):
+    """``5N/mm`` should be advised as ``'5 N/mm'``; ``'5 N'`` would be a force, refused next.
+
+    (Bug at the time of writing: the hint reads "a space between the number
+    and its unit: '5 N'", because the malformed-number scan stops at '/'.)
+    """
+    path = write(tmp_path, "glued.mcir", "spring k1 a 0 5N/mm\ndrive V a 0 velocity=1\n")
+    status, _, err = run(["check", path], capsys)
+    assert status == 2
+    assert err.startswith(f"{path}:1:15: error: ")
+    assert "'5 N/mm'" in err
+
+
 def test_bad_netlist_by_subprocess(tmp_path):
     write(tmp_path, "bad.mcir", BAD[0][0])
     proc = run_subprocess("check", "bad.mcir", cwd=tmp_path)
