@@ -111,8 +111,9 @@ class _Parser:
                 while end < len(text) and (text[end].isalnum() or text[end] in "._" or (
                         text[end] in "+-" and text[end - 1] in "eE")):
                     end += 1
+                glued = text[m.end():].split(maxsplit=1)[0]     # e.g. "N/mm" of "5N/mm"
                 self.error(f"malformed number {text[i:end]!r}", i,
-                           _number_hint(text[i:end], m.group()))
+                           _number_hint(text[i:end], m.group(), glued))
             if kind != "ws":
                 tok = m.group()
                 if kind == "op" and tok == "^":
@@ -288,16 +289,19 @@ def evaluate(expr: Expr, params: Mapping[str, float], *, source: str = "<string>
     return values[id(expr)]
 
 
-def _number_hint(bad: str, number: str) -> str:
-    """What a malformed number should have been; a glued-on unit gets its own advice."""
+def _number_hint(bad: str, number: str, glued: str = "") -> str:
+    """What a malformed number should have been; a glued-on unit gets its own advice.
+
+    ``glued`` is everything after the number up to the next space, so that a
+    compound unit (``5N/mm``) is advised whole, not cut at its first operator.
+    """
     from .units import UnitError, looks_like_unit, parse_unit
 
-    rest = bad[len(number):]
-    if looks_like_unit(rest):
-        try:
-            parse_unit(rest)
-        except UnitError:
-            pass
-        else:
+    for rest in (glued, bad[len(number):]):
+        if rest and looks_like_unit(rest):
+            try:
+                parse_unit(rest)
+            except UnitError:
+                continue
             return f"a space between the number and its unit: '{number} {rest}'"
     return "a number such as 12, 1.5, .5, 2. or 1e-3"
