@@ -28,8 +28,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from fuzz import harness as h  # noqa: E402
 
-#: Inputs per target in a full run (120,000 in all).
-COUNTS = {"expression": 40_000, "netlist": 50_000, "linkage": 25_000, "cli": 5_000}
+#: Inputs per target in a full run (103,000 in all).
+COUNTS = {"expression": 40_000, "netlist": 40_000, "linkage": 20_000, "cli": 3_000}
 
 
 def run(target: str, n: int, first_seed: int, work: Path) -> dict:
