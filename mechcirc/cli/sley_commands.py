@@ -205,7 +205,7 @@ def cmd_crosscheck(args) -> int:
     import numpy as np
 
     from ..errors import SolverError
-    from ..sley import preset
+    from ..sley import ParameterError, preset
     from ..sley.crosscheck import harmonic_check, resonance_check, ringing_check
 
     check_output_paths(args.netlist)
@@ -215,6 +215,8 @@ def cmd_crosscheck(args) -> int:
 
         theta0 = start_angle(params)
     else:
+        if not math.isfinite(args.theta):
+            raise ParameterError(f"--theta must be a finite angle [deg], got {args.theta:g}")
         theta0 = math.radians(args.theta)
     checks = {False: resonance_check(params, theta0, damping=False),
               True: resonance_check(params, theta0, damping=True)}
