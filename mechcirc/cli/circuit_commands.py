@@ -190,16 +190,20 @@ def write_sweep_csv(result, path) -> None:
         header += ",v0_re,v0_im"
     from ..progress import Progress
 
-    table = np.column_stack(columns + [result.flags])
+    columns.append(result.flags)
+    n = len(result.omega)
     # Formatting 17 digits is the slow part (about 5 s per million rows): in
-    # blocks, so that a terminal shows progress on long sweeps.
+    # blocks, so that a terminal shows progress on long sweeps, and stacking the
+    # columns one block at a time keeps memory bounded (10^7 points would
+    # otherwise need a 640 MB table).
     block = 100_000
-    with open(path, "w", newline="") as fh, Progress(len(table), "CSV") as bar:
+    with open(path, "w", newline="") as fh, Progress(n, "CSV") as bar:
         fh.write(header + ",flag\n")
-        fmt = ["%.17g"] * (table.shape[1] - 1) + ["%d"]
-        for start in range(0, len(table), block):
-            np.savetxt(fh, table[start:start + block], delimiter=",", fmt=fmt)
-            bar.update(min(block, len(table) - start))
+        fmt = ["%.17g"] * (len(columns) - 1) + ["%d"]
+        for start in range(0, n, block):
+            table = np.column_stack([c[start:start + block] for c in columns])
+            np.savetxt(fh, table, delimiter=",", fmt=fmt)
+            bar.update(len(table))
 
 
 def _resonance_rows(found) -> list[dict]:
