@@ -34,10 +34,14 @@ from .errors import NetlistError
 from .expressions import CONSTANTS, FUNCTIONS, Expr, evaluate, parse_expression
 from .units import UnitError, convert, looks_like_unit, parse_unit
 
-__all__ = ["parse", "load", "expressions_of", "MAX_LINE_LENGTH", "SYNTAX"]
+__all__ = ["parse", "load", "expressions_of", "MAX_LINE_LENGTH", "MAX_STATEMENTS", "SYNTAX"]
 
 #: Longest line accepted [characters]; longer lines are refused at once.
 MAX_LINE_LENGTH = 100_000
+#: Most statements a netlist may hold.  A 10⁵-element netlist parses, reduces
+#: and sweeps in seconds; 10⁶ elements took six minutes and 4.7 GB
+#: (docs/reliability.md), so larger files are refused at once instead.
+MAX_STATEMENTS = 200_000
 
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*|[0-9]+")
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
@@ -152,6 +156,11 @@ class _Parser:
         if not any(ln.strip() for ln in lines):
             raise NetlistError("the file is empty", self.source, 0, 0,
                                "element lines such as 'mass m1 a 0 2.5' and one 'drive' line")
+        statements = sum(1 for ln in lines if ln.strip() and ln.lstrip()[0] not in "#;")
+        if statements > MAX_STATEMENTS:
+            raise NetlistError(f"the netlist has about {statements} statements, the limit is "
+                               f"{MAX_STATEMENTS}", self.source, 0, 0,
+                               "a smaller network (see 'mechcirc reduce')")
         parsed = []
         # First pass: split every line, and note where each parameter is defined
         # so a use-before-definition can name the line.

@@ -103,3 +103,12 @@ def test_not_utf8(tmp_path):
 def test_long_line_is_refused_quickly():
     with pytest.raises(NetlistError, match="limit"):
         mechcirc.parse("mass m a 0 " + "1" * 200_000 + "\n" + D)
+
+
+def test_too_many_statements_are_refused():
+    from mechcirc.netlist import MAX_STATEMENTS
+
+    text = "drive V n0 0 velocity=1\n" + "".join(
+        f"mass m{i} n{i} 0 1\n" for i in range(MAX_STATEMENTS))
+    with pytest.raises(NetlistError, match=f"the limit is {MAX_STATEMENTS}"):
+        mechcirc.parse(text)
