@@ -32,6 +32,7 @@ from pathlib import Path
 from .circuit import ELEMENT_UNITS, Circuit, Drive, Element, Lever
 from .errors import NetlistError
 from .expressions import CONSTANTS, FUNCTIONS, Expr, evaluate, parse_expression
+from .sources import read_source
 from .units import UnitError, convert, looks_like_unit, parse_unit
 
 __all__ = ["parse", "load", "expressions_of", "MAX_LINE_LENGTH", "MAX_STATEMENTS", "SYNTAX"]
@@ -450,20 +451,5 @@ def load(path: str | os.PathLike, *, params: Mapping[str, float] | None = None) 
         If the file is missing, unreadable, not UTF-8, or has an error.
     """
     source = os.fspath(path)
-    try:
-        data = Path(path).read_bytes()
-    except FileNotFoundError:
-        raise NetlistError("no such file", source, 0, 0, "the path of a .mcir netlist") from None
-    except IsADirectoryError:
-        raise NetlistError("is a directory", source, 0, 0, "a .mcir netlist file") from None
-    except OSError as exc:
-        raise NetlistError(f"cannot read: {exc.strerror}", source) from None
-    try:
-        text = data.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        before = data[:exc.start]
-        lineno = before.count(b"\n") + 1
-        col = exc.start - (before.rfind(b"\n") + 1) + 1
-        raise NetlistError(f"byte 0x{data[exc.start]:02x} is not valid UTF-8", source,
-                           lineno, col, "a UTF-8 text file") from None
-    return parse(text.removeprefix("\ufeff"), source=source, params=params)
+    text = read_source(path, "a .mcir netlist")
+    return parse(text, source=source, params=params)

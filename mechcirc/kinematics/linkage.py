@@ -51,6 +51,7 @@ The drive parameter θ is the rotation of the first crank from the pose
 from __future__ import annotations
 
 import math
+import os
 import re
 import tomllib
 from dataclasses import dataclass
@@ -702,14 +703,7 @@ def parse_linkage(text: str, source: str = "<string>") -> Linkage:
 
 def load_linkage(path: str | Path) -> Linkage:
     """Read and parse a linkage TOML file (see :func:`parse_linkage`)."""
-    path = Path(path)
-    data = path.read_bytes()
-    try:
-        text = data.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        before = data[:exc.start]
-        line = before.count(b"\n") + 1
-        col = exc.start - (before.rfind(b"\n") + 1) + 1
-        raise NetlistError(f"byte 0x{data[exc.start]:02x} is not valid UTF-8", str(path),
-                           line, col, "a UTF-8 text file") from None
-    return parse_linkage(text, str(path))
+    from ..sources import read_source
+
+    text = read_source(path, "a linkage .toml")
+    return parse_linkage(text, os.fspath(path))

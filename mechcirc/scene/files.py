@@ -61,6 +61,7 @@ release leaves a two-degree-of-freedom part, is refused.
 from __future__ import annotations
 
 import math
+import os
 import re
 import tomllib
 from dataclasses import dataclass
@@ -630,15 +631,7 @@ def load_scene(path: str | Path) -> Scene:
     NetlistError
         The file is missing or unreadable, or has an error.
     """
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise NetlistError("no such file", str(path), 0, 0, "the path of a scene .toml") from None
-    except IsADirectoryError:
-        raise NetlistError("is a directory", str(path), 0, 0, "a scene .toml file") from None
-    except UnicodeDecodeError as exc:
-        raise NetlistError(f"not UTF-8 ({exc.reason})", str(path)) from None
-    except OSError as exc:
-        raise NetlistError(f"cannot read: {exc.strerror}", str(path)) from None
-    return parse_scene(text.removeprefix("\ufeff"), str(path))
+    from ..sources import read_source
+
+    text = read_source(path, "a scene .toml")
+    return parse_scene(text, os.fspath(path))
