@@ -18,7 +18,6 @@ Run from the repository root: ``python benchmarks/bench_nodal.py``.
 
 from __future__ import annotations
 
-import math
 import time
 
 import numpy as np

@@ -14,7 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from .circuit import ELEMENT_UNITS, Circuit
-from .reduction import Leaf, Node, Parallel, Reflect, Series, _postorder
+from .reduction import Leaf, Node, Parallel, Series, _postorder
 
 __all__ = ["Step", "explain", "explain_lines"]
 

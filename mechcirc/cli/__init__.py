@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import argparse
 import importlib
-import sys
 
 __all__ = ["main", "build_parser"]
 

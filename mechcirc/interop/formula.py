@@ -188,7 +188,7 @@ class _Builder:
         return sp.factor(sp.cancel(sp.together(K)))
 
     def build_tree(self, tree):
-        from ..reduction import Leaf, Parallel, Reflect, Series, _postorder
+        from ..reduction import Leaf, Parallel, Series, _postorder
 
         sp = self.sp
         w = self.omega

@@ -239,7 +239,7 @@ class Linkage:
             for size in range(2, len(remaining) + 1, 2):
                 for combo in itertools.combinations(remaining, size):
                     S = set(combo)
-                    pairs = internal = external = 0
+                    pairs = 0
                     ext, inner = [], []
                     for p, members in joints.items():
                         inside = [m for m in members if m in S]

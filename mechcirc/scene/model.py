@@ -138,7 +138,6 @@ def build(scene: Scene, theta: float, *, reflect: Literal["eta", "lever"] = "eta
     L = scene.length_scale
     omega = lk.cranks[0].omega
     crank = lk.cranks[0].link
-    bodies = scene.bodies
     tbody_link = {t.body: t.link for t in scene.torsions}
     pos = {p: np.asarray(x, float) * L for p, x in state.points.items()}
     vel = {p: np.asarray(v, float) * L / omega for p, v in state.velocities.items()}
