@@ -65,6 +65,9 @@ def reference_K_and_cancellation(net, omega, j=1j, convert=float):
     pole or zero of a sub-network.  A float evaluation can lose about
     log10(c) digits, so tests only demand full accuracy where ``c`` is modest.
     """
+    if net[0] == "lever":           # a reflection scales K and adds no sum
+        K, worst = reference_K_and_cancellation(net[2], omega, j, convert)
+        return K / convert(net[1]) ** 2, worst
     if net[0] == "leaf":
         kind, value = net[1], convert(net[2])
         if kind == "mass":
@@ -128,15 +131,3 @@ def to_netlist_with_levers(net, V0=1.0, drive="velocity"):
 
     emit(net, "a", "0")
     return "\n".join(lines) + "\n"
-
-
-def reference_K_levers(net, omega):
-    """K of a network that may hold levers, by the connection rules (complex floats)."""
-    if net[0] == "lever":
-        return reference_K_levers(net[2], omega) / net[1] ** 2
-    if net[0] == "leaf":
-        return reference_K(net, omega)
-    parts = [reference_K_levers(c, omega) for c in net[1]]
-    if net[0] == "s":
-        return sum(parts)
-    return 1 / sum(1 / x for x in parts)
