@@ -42,7 +42,7 @@ CHUNK_POINTS = 2**18
 
 @dataclass(frozen=True, eq=False)
 class Sweep:
-    """The result of a frequency sweep.
+    """The result of a frequency sweep: plain data (it pickles).
 
     Attributes
     ----------
@@ -57,6 +57,9 @@ class Sweep:
         The circuit's name.
     tree : Node or None
         The reduction tree (series–parallel method only).
+    circuit : Circuit or None
+        The circuit swept (element forces and error estimates are computed
+        from it on first use).
     """
 
     omega: NDArray[np.float64]
@@ -65,9 +68,27 @@ class Sweep:
     method: str
     name: str = "circuit"
     tree: Node | None = None
-    _responses: Callable = field(default=None, repr=False)
-    _errors: Callable = field(default=None, repr=False)
+    circuit: Circuit | None = field(default=None, repr=False)
     _cache: dict = field(default_factory=dict, repr=False)
+
+    def __repr__(self) -> str:
+        n = self.omega.size
+        band = f"{self.omega.min():.4g}…{self.omega.max():.4g} rad/s" if n else "empty"
+        return f"Sweep({self.name!r}, {n} points, {band}, method={self.method!r})"
+
+    def __getstate__(self):
+        # The tree nests as deep as the network (a ladder of 10⁵ elements is
+        # 5·10⁴ levels), deeper than pickle's recursion: rebuild it from the
+        # circuit's flat element list instead.
+        state = dict(self.__dict__)
+        if state.get("circuit") is not None:
+            state["tree"] = None
+        return state
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
+        if self.method == "sp" and self.tree is None and self.circuit is not None:
+            object.__setattr__(self, "tree", self.circuit.tree)
 
     @property
     def S(self) -> NDArray[np.complex128]:
@@ -93,13 +114,20 @@ class Sweep:
 
     @cached_property
     def error(self) -> NDArray[np.float64]:
-        """Estimated relative rounding error of K at each point [1] (inf on a pole or zero).
+        """Bound of the relative rounding error of K at each point [1] (inf on a pole or zero).
 
-        Series–parallel: condition of the tree's sums × machine epsilon × depth.
-        Nodal: machine epsilon × the 2-norm condition number of A(ω) (dense
-        systems), NaN where not estimated (large sparse systems).
+        Series–parallel: a forward error bound carried through the tree's sums
+        (the cancellation at each node, see :func:`mechcirc.reduction.evaluate`);
+        calibrated against 40-digit references in ``docs/accuracy.md``.
+        Nodal: machine epsilon × the condition number of A(ω) (see
+        :mod:`mechcirc.nodal`).
         """
-        return self._errors()
+        if "error" in self._cache:
+            return self._cache["error"]
+        if self.method == "sp":
+            return _chunked(lambda w: evaluate(self.tree, w, error=True)[1],
+                            self.omega, float)
+        return _nodal_errors(self.circuit.nodal, self.omega)
 
     @cached_property
     def flags(self) -> NDArray[np.int8]:
@@ -118,6 +146,10 @@ class Sweep:
         """Velocity difference amplitude v = v(n1) − v(n2) [m/s] across element ``name``."""
         return self._element(name)[1]
 
+    def peak(self, quantity: str = "Q0"):
+        """The largest |``quantity``| over the band, located exactly; see :func:`peak`."""
+        return peak(self, quantity)
+
     def to_skrf(self, **kwargs):
         """K as a one-port ``skrf.Network`` (Z parameters, m/(N·s)); see :func:`mechcirc.interop.skrf.to_skrf`."""
         from .interop.skrf import to_skrf
@@ -126,12 +158,20 @@ class Sweep:
 
     def _element(self, name: str):
         if "elements" not in self._cache:
-            self._cache["elements"] = self._responses(self.Q0, self.v0)
+            self._cache["elements"] = self._element_responses()
         elements = self._cache["elements"]
         if name not in elements:
             raise KeyError(f"no loaded element named {name!r}; elements: "
                            f"{', '.join(sorted(elements))}")
         return elements[name]
+
+    def _element_responses(self) -> dict:
+        if self.method == "sp":
+            _, values = evaluate(self.tree, self.omega, keep=True)
+            return push_down(self.tree, values, self.Q0, self.v0, self.omega)
+        from . import nodal
+
+        return nodal.element_response(self.circuit.nodal, self.omega, self.Q0)
 
 
 def sweep(circuit: Circuit, omega: ArrayLike, *, method: Method = "auto") -> Sweep:
@@ -189,54 +229,38 @@ def _chunked(fn: Callable, omega: NDArray, dtype) -> NDArray:
 
 
 def _sweep_tree(circuit: Circuit, tree: Node, omega) -> Sweep:
-    def responses(Q0, v0):
-        _, values = evaluate(tree, omega, keep=True)
-        return push_down(tree, values, Q0, v0, omega)
-
-    def errors():
-        scale = np.finfo(float).eps * _depth(tree)
-        return _chunked(lambda w: evaluate(tree, w, condition=True)[1] * scale, omega, float)
-
     K = _chunked(lambda w: evaluate(tree, w), omega, complex)
     return Sweep(omega=omega, K=K, drive=circuit.drive, method="sp",
-                 name=circuit.name, tree=tree, _responses=responses, _errors=errors)
-
-
-def _depth(root: Node) -> int:
-    depth, stack = 1, [(root, 1)]
-    while stack:
-        node, d = stack.pop()
-        depth = max(depth, d)
-        kids = getattr(node, "children", None) or ((node.child,) if hasattr(node, "child") else ())
-        stack.extend((c, d + 1) for c in kids)
-    return depth
+                 name=circuit.name, tree=tree, circuit=circuit)
 
 
 def _sweep_nodal(circuit: Circuit, omega) -> Sweep:
     from . import nodal
 
-    system = circuit.nodal
-    K = nodal.mobility(system, omega)
-
-    def responses(Q0, v0):
-        return nodal.element_response(system, omega, Q0)
-
-    def errors():
-        # eps·cond(A) bounds the error of x relative to ‖x‖; K = x_a − x_b can be
-        # far smaller than ‖x‖ near a resonance (K → 0), and its relative error
-        # larger by ‖x‖/|K| (a series m–k at 1e-13 from its resonance: 2e-4).
-        err = nodal.condition_error(system, omega)
-        if system.size > nodal.DENSE_LIMIT:
-            return err                      # not estimated (NaN) for sparse systems
-
-        def cancellation(w):
-            x = nodal.solve_unit(system, w, refine=False)
-            with np.errstate(all="ignore"):
-                ratio = np.linalg.norm(x, axis=1) / np.abs(system.difference(x))
-            return np.where(np.isnan(ratio), np.inf, np.maximum(ratio, 1.0))
-
-        with np.errstate(invalid="ignore"):
-            return err * _chunked(cancellation, omega, float)
-
+    K = nodal.mobility(circuit.nodal, omega)
     return Sweep(omega=omega, K=K, drive=circuit.drive, method="nodal", name=circuit.name,
-                 _responses=responses, _errors=errors)
+                 circuit=circuit)
+
+
+def _nodal_errors(system, omega) -> NDArray[np.float64]:
+    from . import nodal
+
+    # eps·cond(A) bounds the error of x relative to ‖x‖; K = x_a − x_b can be
+    # far smaller than ‖x‖ near a resonance (K → 0), and its relative error
+    # larger by ‖x‖/|K| (a series m–k at 1e-13 from its resonance: 2e-4).
+    err = nodal.condition_error(system, omega)
+    if system.size > nodal.DENSE_LIMIT:
+        return err                      # not estimated (NaN) for sparse systems
+
+    def cancellation(w):
+        x = nodal.solve_unit(system, w, refine=False)
+        with np.errstate(all="ignore"):
+            ratio = np.linalg.norm(x, axis=1) / np.abs(system.difference(x))
+        return np.where(np.isnan(ratio), np.inf, np.maximum(ratio, 1.0))
+
+    with np.errstate(invalid="ignore"):
+        return err * _chunked(cancellation, omega, float)
+
+
+def peak(*a, **k):  # placeholder, replaced below
+    raise NotImplementedError
