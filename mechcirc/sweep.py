@@ -159,9 +159,9 @@ class Sweep:
         """Velocity difference amplitude v = v(n1) − v(n2) [m/s] across element ``name``."""
         return self._element(name)[1]
 
-    def peak(self, quantity: str = "Q0"):
+    def peak(self, quantity: str | None = None) -> "Peak":
         """The largest |``quantity``| over the band, located exactly; see :func:`peak`."""
-        return peak(self, quantity)
+        return peak(self, quantity=quantity)
 
     def to_skrf(self, **kwargs):
         """K as a one-port ``skrf.Network`` (Z parameters, m/(N·s)); see :func:`mechcirc.interop.skrf.to_skrf`."""
