@@ -209,9 +209,9 @@ def sweep(circuit: Circuit, omega: ArrayLike, *, method: Method = "auto") -> Swe
 
     Notes
     -----
-    Singular points: at a point exactly on a pole of K, ``K = +∞·j`` (the limit
-    from below: a lossless K = jX rises through its poles, Foster's reactance
-    theorem), ``Q0 = 0`` and ``v0 = +∞·j·F0``; exactly on a zero of K, ``K = 0``
+    Singular points: at a point ω > 0 exactly on a pole of K, ``K = +∞·j`` (the
+    limit from below: a lossless K = jX rises through its poles, Foster's
+    reactance theorem; at ω = 0 the limit from above, −∞·j for a mass), ``Q0 = 0`` and ``v0 = +∞·j·F0``; exactly on a zero of K, ``K = 0``
     and ``Q0 = +∞·j·V0``.  Such points get :data:`FLAG_SINGULAR`.  The library
     does not warn (the flags are the per-point report; a study would drown in
     warnings); the command line prints a note naming those ω.
@@ -250,16 +250,17 @@ def _chunked(fn: Callable, omega: NDArray, dtype) -> NDArray:
     return out
 
 
-def _singular_limits(K: NDArray[np.complex128]) -> NDArray[np.complex128]:
-    """K on an exact pole is +∞·j (see :func:`sweep`), whatever sign rounding gave."""
-    pole = np.isinf(K)
+def _singular_limits(K: NDArray[np.complex128], omega) -> NDArray[np.complex128]:
+    """K on an exact pole at ω > 0 is +∞·j (see :func:`sweep`), whatever sign
+    rounding gave; at ω = 0 the limit from above stands (−∞·j for a mass)."""
+    pole = np.isinf(K) & (omega > 0)
     if pole.any():
         K[pole] = complex(0.0, math.inf)
     return K
 
 
 def _sweep_tree(circuit: Circuit, tree: Node, omega) -> Sweep:
-    K = _singular_limits(_chunked(lambda w: evaluate(tree, w), omega, complex))
+    K = _singular_limits(_chunked(lambda w: evaluate(tree, w), omega, complex), omega)
     return Sweep(omega=omega, K=K, drive=circuit.drive, method="sp",
                  name=circuit.name, tree=tree, circuit=circuit)
 
