@@ -61,6 +61,8 @@ class Sweep:
     circuit : Circuit or None
         The circuit swept (element forces and error estimates are computed
         from it on first use).
+    notes : tuple of str
+        What the caller should know about the result (e.g. a point budget hit).
     """
 
     omega: NDArray[np.float64]
@@ -70,7 +72,13 @@ class Sweep:
     name: str = "circuit"
     tree: Node | None = None
     circuit: Circuit | None = field(default=None, repr=False)
+    notes: tuple[str, ...] = ()
     _cache: dict = field(default_factory=dict, repr=False)
+
+    def with_notes(self, notes: tuple[str, ...]) -> "Sweep":
+        """The same sweep with ``notes`` (e.g. an adaptive grid's budget) added."""
+        return Sweep(self.omega, self.K, self.drive, self.method, self.name, self.tree,
+                     self.circuit, self.notes + tuple(notes))
 
     def __repr__(self) -> str:
         n = self.omega.size

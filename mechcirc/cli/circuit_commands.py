@@ -304,7 +304,7 @@ def cmd_sweep(args) -> int:
         return 0
     absK = np.abs(result.K)
     absQ = np.abs(result.Q0)
-    how = "adaptive grid" if args.adaptive else "points"
+    how = "adaptive grid points" if args.adaptive else "points"
     print(f"{args.file}: {n_points} {how}, omega {result.omega[0]:g} .. "
           f"{result.omega[-1]:g} rad/s, method {result.method}")
     with np.errstate(all="ignore"):
