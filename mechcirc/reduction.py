@@ -362,22 +362,29 @@ def _flatten(root) -> Node:
     """Turn the binary reduction nodes into flat Series/Parallel tuples.
 
     Iterative (ladders nest deeper than the recursion limit); nested nodes of
-    the same kind merge, keeping path order and orientation signs.
+    the same kind merge, keeping path order and orientation signs.  Linear in
+    the number of nodes: each maximal run of binary nodes of one kind (a
+    "head" and everything it absorbs) is gathered once into one flat node, so
+    n elements in parallel or in series cost O(n), not O(n²) as merging the
+    flattened children pairwise would.
     """
     if not isinstance(root, _Binary):
         return root
     done: dict[int, Node] = {}
+    gathered: dict[int, list] = {}
     stack = [(root, False)]
     while stack:
-        node, expanded = stack.pop()
-        if not isinstance(node, _Binary) or id(node) in done:
+        head, expanded = stack.pop()
+        if id(head) in done:
             continue
         if not expanded:
-            stack.append((node, True))
-            stack.extend((c, False) for c in _binary_children(node))
+            items = gathered[id(head)] = _gather(head)
+            stack.append((head, True))
+            stack.extend((c, False) for c, _ in items
+                         if isinstance(c, _Binary) and id(c) not in done)
             continue
         children, signs = [], []
-        for child, sign in _binary_items(node):
+        for child, sign in gathered.pop(id(head)):
             if isinstance(child, _Binary):
                 child = done[id(child)]
             if sign < 0 and isinstance(child, (Series, Parallel)):
@@ -385,23 +392,38 @@ def _flatten(root) -> Node:
                 # leaves and lever reflections carry orientation signs and series
                 # chains print in path order.
                 child, sign = _reversed(child), 1
-            same = (isinstance(child, Series) and node.kind == "s") or \
-                   (isinstance(child, Parallel) and node.kind == "p")
-            if same:
-                kids = list(zip(child.children, child.signs))
-                if sign < 0 and node.kind == "s":
-                    kids.reverse()
-                children.extend(k for k, _ in kids)
-                signs.extend(s * sign for _, s in kids)
+            same = (isinstance(child, Series) and head.kind == "s") or \
+                   (isinstance(child, Parallel) and head.kind == "p")
+            if same:        # only when a head collapsed to a node of this kind
+                children.extend(child.children)
+                signs.extend(s * sign for s in child.signs)
             else:
                 children.append(child)
                 signs.append(sign)
         if len(children) == 1 and signs[0] == 1:
-            done[id(node)] = children[0]
+            done[id(head)] = children[0]
         else:
-            cls = Series if node.kind == "s" else Parallel
-            done[id(node)] = cls(tuple(children), tuple(signs))
+            cls = Series if head.kind == "s" else Parallel
+            done[id(head)] = cls(tuple(children), tuple(signs))
     return done[id(root)]
+
+
+def _gather(head: _Binary) -> list:
+    """The operands of the run of ``head.kind`` binary nodes under ``head``, in
+    path order with their signs; operands of the other kind stay binary."""
+    kind = head.kind
+    out = []
+    stack = [(head, 1)]
+    while stack:
+        node, sign = stack.pop()
+        if isinstance(node, _Binary) and node.kind == kind:
+            items = [(c, s * sign) for c, s in _binary_items(node)]
+            if kind == "s" and sign < 0:
+                items.reverse()
+            stack.extend(reversed(items))
+        else:
+            out.append((node, sign))
+    return out
 
 
 def _reversed(node):
