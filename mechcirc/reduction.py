@@ -484,7 +484,7 @@ _U_RECIP = 4 * _U
 
 
 def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: bool = False,
-             error: bool = False):
+             error: bool = False, _mode: str = "auto"):
     """K(ω) [m/(N·s)] of the tree at each ω [rad/s], vectorised.
 
     With ``keep=True`` returns ``(K, values)`` where ``values`` maps
@@ -521,6 +521,22 @@ def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: boo
     cancellation keeps a bound of a few hundred u.
     """
     omega = np.asarray(omega, dtype=float)
+    if not keep and _mode == "auto":
+        # Fast pass with numpy's reciprocal as is; it gives NaN for 1/0 where
+        # 1/0 = ∞ is wanted, and a NaN never disappears downstream: the points
+        # that end non-finite are evaluated again with the exact special cases.
+        out = evaluate(root, omega, error=error, condition=condition, _mode="fast")
+        K = out[0] if isinstance(out, tuple) else out
+        bad = ~np.isfinite(K)
+        if bad.any():
+            again = evaluate(root, omega[bad], error=error, condition=condition,
+                             _mode="checked")
+            if isinstance(out, tuple):
+                K[bad], out[1][bad] = again
+            else:
+                K[bad] = again
+        return out
+    checked = _mode != "fast"
     values: dict[int, _Value] = {}
     track = error or condition
     with np.errstate(all="ignore"):
@@ -537,7 +553,7 @@ def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: boo
                     val.mag = child.mag / r / r
                     val.rho = child.rho + 2 * _U
             else:
-                val = _combine(node, values, omega, inv_omega, track)
+                val = _combine(node, values, omega, inv_omega, track, keep, checked)
             if not keep:
                 kids = node.children if isinstance(node, (Series, Parallel)) else (node.child,)
                 for c in kids:
@@ -574,9 +590,11 @@ class _Value:
         out.imag = self.array
         return out
 
-    def reciprocal(self) -> "_Value":
+    def reciprocal(self, checked: bool = True) -> "_Value":
         if self.imaginary:
             return _Value(True, -1.0 / self.array)     # 1/(jX) = j(-1/X)
+        if not checked:
+            return _Value(False, np.reciprocal(self.array))
         return _Value(False, _reciprocal(self.array))
 
 
@@ -603,7 +621,8 @@ def _scaled(e: Element) -> np.float64:
     return np.float64(e.value) * np.float64(e.eta)
 
 
-def _combine(node, values: dict, omega, inv_omega, track: bool = False) -> _Value:
+def _combine(node, values: dict, omega, inv_omega, track: bool = False,
+             keep: bool = True, checked: bool = True) -> _Value:
     """Series: K = Σ K_i.  Parallel: 1/K = Σ 1/K_i.  Leaves are grouped by kind."""
     series = isinstance(node, Series)
     real = im_inv = im_omega = 0.0      # leaf terms: real + j(im_inv/ω + im_omega·ω)
@@ -632,7 +651,7 @@ def _combine(node, values: dict, omega, inv_omega, track: bool = False) -> _Valu
         else:
             parts.append(values[id(c)])
     if not series:
-        terms = [v.reciprocal() for v in parts]
+        terms = [v.reciprocal(checked) for v in parts]
     else:
         terms = parts
     imag = None
@@ -641,11 +660,21 @@ def _combine(node, values: dict, omega, inv_omega, track: bool = False) -> _Valu
     if im_omega:
         imag = omega * im_omega if imag is None else imag + omega * im_omega
     cplx = None
+    # A parallel node's terms are fresh reciprocals, and without ``keep`` a
+    # child's value is dropped after this sum: the first term's array is then
+    # reused in place instead of copied.
+    own = keep and series
     for v in terms:
         if v.imaginary:
-            imag = v.array.copy() if imag is None else imag + v.array
+            if imag is None:
+                imag = v.array.copy() if own else v.array
+            else:
+                imag += v.array
         else:
-            cplx = v.array.copy() if cplx is None else cplx + v.array
+            if cplx is None:
+                cplx = v.array.copy() if own else v.array
+            else:
+                cplx += v.array
     if real:
         cplx = np.full(omega.shape, real, dtype=complex) if cplx is None else cplx + real
     if cplx is None and imag is None:
@@ -662,36 +691,48 @@ def _combine(node, values: dict, omega, inv_omega, track: bool = False) -> _Valu
         mu = m * _U
         # Leaf groups: n same-signed scalars summed (n·u), value·η and 1/s (2u),
         # times ω or 1/ω (2u).
-        bound = abs(real) * ((n_real + 2) * _U + mu)
+        bound = np.full(omega.shape, abs(real) * ((n_real + 2) * _U + mu))
         if im_inv:
-            bound = bound + (abs(im_inv) * ((n_inv + 4) * _U + mu)) * inv_omega
+            bound += (abs(im_inv) * ((n_inv + 4) * _U + mu)) * inv_omega
         if im_omega:
-            bound = bound + (abs(im_omega) * ((n_omega + 4) * _U + mu)) * omega
+            bound += (abs(im_omega) * ((n_omega + 4) * _U + mu)) * omega
         for v in parts:
             if series:
-                bound = bound + v.mag * (v.rho + mu)
+                t = v.rho + mu
+                t *= v.mag
             else:
-                bound = bound + (_through_reciprocal(v.rho) + (_U_RECIP + mu)) / v.mag
+                t = _through_reciprocal(v.rho)
+                t += _U_RECIP + mu
+                t /= v.mag
+            bound += t
         mag = np.abs(total.array)
-        rho = bound / mag
+        bound /= mag
+        rho = bound
         if series:
             total.mag, total.rho = mag, rho
         else:
-            total = total.reciprocal()
-            total.mag, total.rho = 1.0 / mag, _through_reciprocal(rho) + _U_RECIP
+            total = total.reciprocal(checked)
+            rho = _through_reciprocal(rho)
+            rho += _U_RECIP
+            total.mag, total.rho = np.reciprocal(mag, out=mag), rho
         return total
-    return total if series else total.reciprocal()
+    return total if series else total.reciprocal(checked)
 
 
 def _through_reciprocal(rho):
     """Relative error of 1/x̂ given |x̂ − x| ≤ ρ|x̂|: ρ / (1 − ρ), ∞ from ρ ≥ 1 on."""
     with np.errstate(all="ignore"):
-        return np.where(rho < 1, rho / (1 - rho), np.inf)
+        # 1 / (1/ρ − 1) = ρ/(1 − ρ), with ρ ≥ 1 (and NaN) clipped to 1/0 = ∞.
+        r = np.reciprocal(rho) if isinstance(rho, np.ndarray) else np.float64(1.0) / rho
+        r -= 1.0
+        r = np.fmax(r, 0.0, out=r) if isinstance(r, np.ndarray) else max(r, 0.0)
+        return np.reciprocal(r, out=r) if isinstance(r, np.ndarray) else \
+            (np.float64(1.0) / np.float64(r))
 
 
 def _reciprocal(K: NDArray[np.complex128]) -> NDArray[np.complex128]:
     """1/K with 1/0 = ∞ and 1/∞ = 0 (numpy's complex division gives NaN for both)."""
-    Y = 1.0 / K
+    Y = np.reciprocal(K)       # as accurate as 1.0 / K (within 1.4e-16), twice as fast
     if not np.isfinite(Y).all():
         Y[np.isinf(K)] = 0.0
         Y[K == 0] = np.inf
