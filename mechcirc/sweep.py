@@ -171,12 +171,6 @@ class Sweep:
         """The largest |``quantity``| over the band, located exactly; see :func:`peak`."""
         return peak(self, quantity=quantity)
 
-    def to_skrf(self, **kwargs):
-        """K as a one-port ``skrf.Network`` (Z parameters, m/(N·s)); see :func:`mechcirc.interop.skrf.to_skrf`."""
-        from .interop.skrf import to_skrf
-
-        return to_skrf(self, **kwargs)
-
     def _element(self, name: str):
         if "elements" not in self._cache:
             self._cache["elements"] = self._element_responses()
