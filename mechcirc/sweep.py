@@ -223,7 +223,7 @@ def sweep(circuit: Circuit, omega: ArrayLike, *, method: Method = "auto") -> Swe
     >>> from mechcirc import parse
     >>> c = parse("mass m a 0 2\\ndrive V a 0 velocity=0.1")
     >>> s = c.sweep([10.0])
-    >>> float(s.Q0[0].imag), abs(s.Q0[0].real)   # V0 / K = V0 · jωm
+    >>> float(s.Q0[0].imag), float(abs(s.Q0[0].real))   # V0 / K = V0 · jωm
     (2.0, 0.0)
     """
     omega = np.atleast_1d(np.asarray(omega, dtype=float))
