@@ -5,12 +5,57 @@ from __future__ import annotations
 import math
 import os
 import re
-from pathlib import Path
+import stat
 
 from .errors import NetlistError
 
-__all__ = ["read_source", "split_lines", "line_col", "finite_number", "brief", "load_toml",
-           "locate", "locate_path", "located"]
+__all__ = ["read_source", "read_bytes", "MAX_INPUT_BYTES", "split_lines", "line_col",
+           "finite_number", "brief", "load_toml", "locate", "locate_path", "located"]
+
+#: The largest input file mechcirc reads [bytes].  A netlist of the statement
+#: limit is far below this; anything larger is refused before it is read.
+MAX_INPUT_BYTES = 64 * 2**20
+
+
+def read_bytes(path: str | os.PathLike, expected: str) -> bytes:
+    """The bytes of the regular file ``path``, at most :data:`MAX_INPUT_BYTES`.
+
+    Devices, pipes and sockets (``/dev/zero``, a FIFO) are refused before
+    anything is read, and so is a file larger than the bound; at most
+    ``MAX_INPUT_BYTES + 1`` bytes are ever read, so a file that grows while
+    it is read cannot exhaust memory either.
+
+    Raises
+    ------
+    NetlistError
+        If the file is missing, a folder, not a regular file, unreadable or
+        too large.
+    """
+    source = os.fspath(path)
+    try:
+        info = os.stat(source)
+    except FileNotFoundError:
+        raise NetlistError("no such file", source, 0, 0, f"the path of {expected}") from None
+    except OSError as exc:
+        raise NetlistError(f"cannot read: {exc.strerror}", source) from None
+    if stat.S_ISDIR(info.st_mode):
+        raise NetlistError("is a directory", source, 0, 0, f"{expected} file") from None
+    if not stat.S_ISREG(info.st_mode):
+        raise NetlistError("is not a regular file (a device, pipe or socket); nothing was read",
+                           source, 0, 0, f"{expected} file")
+    if info.st_size > MAX_INPUT_BYTES:
+        raise NetlistError(f"is {info.st_size:,} bytes, more than the limit of "
+                           f"{MAX_INPUT_BYTES:,} bytes; nothing was read", source, 0, 0,
+                           f"{expected} file")
+    try:
+        with open(source, "rb") as fh:
+            data = fh.read(MAX_INPUT_BYTES + 1)
+    except OSError as exc:
+        raise NetlistError(f"cannot read: {exc.strerror}", source) from None
+    if len(data) > MAX_INPUT_BYTES:
+        raise NetlistError(f"grew past the limit of {MAX_INPUT_BYTES:,} bytes while it was "
+                           "read", source, 0, 0, f"{expected} file")
+    return data
 
 
 def read_source(path: str | os.PathLike, expected: str) -> str:
@@ -22,18 +67,12 @@ def read_source(path: str | os.PathLike, expected: str) -> str:
     Raises
     ------
     NetlistError
-        If the file is missing, a folder, unreadable, or not UTF-8 (then with
-        the line and column of the first bad byte).
+        If the file is missing, a folder, not a regular file, larger than
+        :data:`MAX_INPUT_BYTES`, unreadable, or not UTF-8 (then with the line
+        and column of the first bad byte).
     """
     source = os.fspath(path)
-    try:
-        data = Path(path).read_bytes()
-    except FileNotFoundError:
-        raise NetlistError("no such file", source, 0, 0, f"the path of {expected}") from None
-    except IsADirectoryError:
-        raise NetlistError("is a directory", source, 0, 0, f"{expected} file") from None
-    except OSError as exc:
-        raise NetlistError(f"cannot read: {exc.strerror}", source) from None
+    data = read_bytes(path, expected)
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError as exc:
