@@ -32,7 +32,7 @@ from pathlib import Path
 from .circuit import ELEMENT_UNITS, Circuit, Drive, Element, Lever
 from .errors import NetlistError
 from .expressions import CONSTANTS, FUNCTIONS, Expr, evaluate, parse_expression
-from .sources import read_source
+from .sources import read_source, split_lines
 from .units import UnitError, convert, looks_like_unit, parse_unit
 
 __all__ = ["parse", "load", "expressions_of", "MAX_LINE_LENGTH", "MAX_STATEMENTS", "SYNTAX"]
@@ -153,7 +153,7 @@ class _Parser:
 
     # -- statements ------------------------------------------------------
     def run(self) -> Circuit:
-        lines = self.text.splitlines()
+        lines = split_lines(self.text)     # as editors and wc -l count them
         if not any(ln.strip() for ln in lines):
             raise NetlistError("the file is empty", self.source, 0, 0,
                                "element lines such as 'mass m1 a 0 2.5' and one 'drive' line")
