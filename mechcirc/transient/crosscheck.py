@@ -108,7 +108,12 @@ def crosscheck(circuit: Circuit, omega_max: float | None = None,
     if backlash_elements(circuit):
         out.notes.append("clearances (backlash=) taken as closed in both domains: the "
                          "frequency domain is linearised with contact closed")
-    res = circuit.resonances(None)
+    import warnings
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        res = circuit.resonances(None)
+    out.notes.extend(str(w.message) for w in caught)
     all_omega = [r.omega for r in res if r.omega > 0]
     if omega_max is None:
         omega_max = 1.5 * max(all_omega) if all_omega else 1.0
@@ -166,7 +171,9 @@ def crosscheck(circuit: Circuit, omega_max: float | None = None,
                 [r.omega for r in checked] or [omega_max / 3])
     omegas = sorted({0.5 * first, 0.97 * first, 1.6 * first, 0.8 * omega_max}
                     if n_steady >= 4 else {0.5 * first, 0.97 * first})
-    sweep = circuit.sweep(np.array(omegas))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")         # already reported above
+        sweep = circuit.sweep(np.array(omegas))
     expected = np.abs(sweep.Q0 if d.kind == "velocity" else sweep.v0)
     for w, exp in zip(omegas, expected):
         t_end, dt = _grid(min([w] + [r.omega for r in res if r.omega > 0] or [w]),

@@ -448,11 +448,6 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes
     clear = {e.name: (e, comp) for e, comp in backlash_elements(circuit)} if ss.extra is not None else {}
     comp_of = {comp.name: e.name for e, comp in clear.values() if comp is not None}
     index = {n: i for i, n in enumerate(ss.nodes)}
-    need_acc = any(e.kind == "mass" for e in circuit.elements) or ss.h is not None
-    if need_acc:
-        Zdot = Z @ ss.A.T + np.outer(u, ss.B)
-        Acc = Zdot @ ss.Cv.T + np.outer(udot, ss.Dv)
-
     def diff(Y, e):
         out = np.zeros(Y.shape[0])
         if e.n1 in index:
@@ -461,14 +456,21 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes
             out = out - Y[:, index[e.n2]]
         return out
 
-    names, forces, dvs = [], [], []
     law_cache = {}
+    for name, (e, comp) in clear.items():
+        law_cache[name] = _law_forces(e, comp, diff(X, e), diff(V, e))
+    need_acc = any(e.kind == "mass" for e in circuit.elements) or ss.h is not None
+    if need_acc:
+        Zdot = Z @ ss.A.T + np.outer(u, ss.B)
+        for j, name in enumerate(clear):        # the clearance forces drive the masses too
+            Zdot += np.outer(law_cache[name][0], ss.extra[:, j])
+        Acc = Zdot @ ss.Cv.T + np.outer(udot, ss.Dv)
+
+    names, forces, dvs = [], [], []
     for e in circuit.elements:
         dve = diff(V, e)
         if e.name in clear or e.name in comp_of:
             sp = clear[e.name][0] if e.name in clear else clear[comp_of[e.name]][0]
-            if sp.name not in law_cache:
-                law_cache[sp.name] = _law_forces(sp, clear[sp.name][1], diff(X, sp), diff(V, sp))
             total, spring = law_cache[sp.name]
             f = spring if e.name == sp.name else total - spring
         elif e.kind == "mass":
