@@ -299,19 +299,34 @@ def _initial(circuit, nodes, index, Cx, Cv, N, vel):
         if node in index:
             x0[index[node]] = x
             v0[index[node]] = v
-    # Position part: columns of Cx; velocity part: columns of Cv (with the
-    # drive at rest, u = 0).  Solve both for z at once.
+    # Rows x and v of every node (drive at rest, u = 0).  The named nodes'
+    # values are met first (least squares if not attainable); the freedom left
+    # keeps the other nodes as close to rest as it can.
     Mat = np.vstack([Cx, Cv])
     rhs = np.concatenate([x0, v0])
     cols = np.ones(N, bool)
     if vel:
         cols[-1] = False            # X(0) = 0: the drive starts from its reference
-    sol = la.lstsq(Mat[:, cols], rhs)[0]
-    z0[cols] = sol
+    named_idx = {index[nd] for nd, _, _ in circuit.initial if nd in index}
+    rows = np.array([i in named_idx for i in range(n)] * 2)
+    Mz = Mat[:, cols]
+    # Lexicographic least squares: named rows, then the other nodes' x, then their v
+    # (a massless damped node's velocity follows from the displacements).
+    is_x = np.arange(2 * n) < n
+    zp = np.zeros(Mz.shape[1])
+    Nn = np.eye(Mz.shape[1])
+    for group in (rows, ~rows & is_x, ~rows & ~is_x):
+        if not group.any() or Nn.shape[1] == 0:
+            continue
+        Ag = Mz[group] @ Nn
+        xi = la.lstsq(Ag, rhs[group] - Mz[group] @ zp)[0]
+        zp = zp + Nn @ xi
+        Nn = Nn @ la.null_space(Ag) if Ag.size else Nn
+    z0[cols] = zp
     resid = Mat @ z0 - rhs
     named = {nd for nd, _, _ in circuit.initial}
     bad = [nodes[i] for i in range(n)
-           if nodes[i] in named and (abs(resid[i]) > 1e-9 * (1 + abs(x0[i]))
+           if nodes[i] in named and i in named_idx and (abs(resid[i]) > 1e-9 * (1 + abs(x0[i]))
                                      or abs(resid[n + i]) > 1e-9 * (1 + abs(v0[i])))]
     if bad:
         notes.append("initial state of node(s) " + ", ".join(bad) + " is not attainable "

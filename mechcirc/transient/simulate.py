@@ -294,7 +294,7 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
     else:
         Z = _propagate(ss.A, ss.B, z0, u_in, h)
         method, err = "exact (matrix exponential, first-order hold of the drive)", 0.0
-    if interp > 0:
+    if interp > 1e-13 * float(np.abs(u).max()):      # not rounding of an exact ramp
         notes.append(f"drive interpolated linearly between samples: its error is at most "
                      f"{interp:.3g} (h²/8·max|ü|, from the samples' second differences)")
     return _outputs(ss, circuit, t, Z, u, u_in, h, drive, method, err, interp, notes)
