@@ -95,6 +95,9 @@ def _load_with_warnings(path):
         except NotSeriesParallelError:
             circuit.nodal   # nodal analysis takes over; its own errors surface here
     messages = [str(w.message) for w in caught]
+    messages += [f"spring {e.name!r} has backlash={e.backlash:g}: the frequency domain takes "
+                 "its contact as closed (linearised); 'mechcirc transient' integrates the gap"
+                 for e in circuit.elements if e.kind == "spring" and e.backlash >= 1e-10]
     return circuit, messages
 
 
