@@ -112,15 +112,20 @@ def test_an_interrupted_study_keeps_its_rows_and_resumes(tmp_path):
         if len(seen) == 2:
             raise KeyboardInterrupt
 
+    out.write_text("the previous table\n")
     with pytest.raises(KeyboardInterrupt):
         run_study(spec, output=out, workers=1, batch_size=2, on_rows=stop_after_two_batches)
-    table = read(out)
+    # The old output is untouched until the new table is complete (issue 16 §4);
+    # the finished rows are in the journal beside it.
+    assert out.read_text() == "the previous table\n"
+    journal = Path(str(out) + ".partial.csv")
+    table = read(journal)
     assert len(table) == 1 + 4                 # header and the two finished batches
-    with open(out, "a") as fh:
+    with open(journal, "a") as fh:
         fh.write("4,0.8,0.8,ok")               # a row cut short: must be run again
     r = run_study(spec, output=out, workers=1, resume=True)
     assert r.skipped == 4
-    assert out.read_bytes() == full.read_bytes()
+    assert out.read_bytes() == full.read_bytes() and not journal.exists()
 
 
 def test_resume_refuses_another_studys_table(tmp_path):

@@ -5,17 +5,18 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ._common import check_output_paths, print_json, save_figure
+from ..limits import (MAX_ADAPTIVE_NODAL_POINTS, MAX_JSON_POINTS, MAX_NODAL_POINTS,
+                      MAX_PLOT_POINTS, MAX_SWEEP_POINTS)
+from ._common import check_output_paths, count, print_json, real, save_figure
 
 
-def omega_value(text: str) -> float:
-    """argparse type: an angular frequency [rad/s], or with a unit (``50Hz``, ``3000rpm``)."""
-    from ..units import parse_omega
-
-    try:
-        return parse_omega(text)
-    except ValueError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
+#: argparse type: an angular frequency [rad/s], or with a unit (``50Hz``, ``3000rpm``); the
+#: command checks the range (a sweep's --omega-min/--omega-max together).
+omega_value = real(omega=True, finite=False)
+#: A finite angular frequency ≥ 0 (bounds of a band).
+band_omega = real(omega=True, least=0.0, unit="rad/s")
+#: The same, > 0 (one frequency at which to evaluate).
+positive_omega = real(omega=True, above=0.0, unit="rad/s")
 
 
 def register(sub) -> None:
@@ -58,7 +59,7 @@ def register(sub) -> None:
     p.add_argument("--adaptive", action="store_true",
                    help="refine the grid around resonances and wherever |K| or |Q0| "
                         "bends (--points is then the starting grid)")
-    p.add_argument("--tol", type=float, default=0.005,
+    p.add_argument("--tol", type=real(above=0.0, most=1.0), default=0.005,
                    help="adaptive: largest relative midpoint deviation (default 0.005)")
     p.add_argument("--json", action="store_true", help="print one JSON document")
     p.set_defaults(func=cmd_sweep)
@@ -71,7 +72,7 @@ def register(sub) -> None:
                     "Damped networks also get the damping ratio.",
         epilog="Example: mechcirc resonances netlists/stb_heald.mcir --omega-max 5000")
     p.add_argument("file", help="netlist file (.mcir)")
-    p.add_argument("--omega-max", type=omega_value, metavar="W",
+    p.add_argument("--omega-max", type=positive_omega, metavar="W",
                    help="report only up to this angular frequency [rad/s]; or with a unit: "
                         "50Hz, 3000rpm")
     p.add_argument("--json", action="store_true", help="print one JSON document")
@@ -94,6 +95,9 @@ def _load_with_warnings(path):
         except NotSeriesParallelError:
             circuit.nodal   # nodal analysis takes over; its own errors surface here
     messages = [str(w.message) for w in caught]
+    messages += [f"spring {e.name!r} has backlash={e.backlash:g}: the frequency domain takes "
+                 "its contact as closed (linearised); 'mechcirc transient' integrates the gap"
+                 for e in circuit.elements if e.kind == "spring" and e.backlash >= 1e-10]
     return circuit, messages
 
 
@@ -166,8 +170,14 @@ def _omega_grid(args):
     if not (np.isfinite(lo) and np.isfinite(hi)) or lo < 0 or hi <= lo:
         raise MechcircError(f"need 0 <= --omega-min < --omega-max (finite), got "
                             f"{lo:g} and {hi:g}")
-    if n < 1 or n > 10_000_000:
-        raise MechcircError(f"--points must be between 1 and 10000000, got {n}")
+    if n < 1 or n > MAX_SWEEP_POINTS:
+        raise MechcircError(f"--points must be between 1 and {MAX_SWEEP_POINTS}, got {n}")
+    for wanted, limit, what in ((args.plot, MAX_PLOT_POINTS, "--plot"),
+                                (args.json, MAX_JSON_POINTS, "--json"),
+                                (args.method == "nodal", MAX_NODAL_POINTS, "--method nodal")):
+        if wanted and n > limit:
+            raise MechcircError(f"--points {n} with {what}: the limit is {limit} points "
+                                "(write larger sweeps with -o CSV)")
     if args.log:
         if lo <= 0:
             raise MechcircError("--log needs --omega-min > 0")
@@ -248,8 +258,12 @@ def cmd_sweep(args) -> int:
             from ..errors import MechcircError
 
             raise MechcircError("--adaptive needs --omega-min > 0")
+        # Each refinement round re-evaluates every midpoint; by nodal analysis
+        # that is ~0.1 ms a point, so its budget is smaller (152 s at 20,000).
+        budget = MAX_ADAPTIVE_NODAL_POINTS if args.method == "nodal" else 20_000
         result = adaptive_sweep(circuit, omega[0], omega[-1], tol=args.tol,
-                                initial=max(2, args.points), method=args.method)
+                                initial=max(2, min(args.points, budget)), method=args.method,
+                                max_points=budget)
     else:
         result = circuit.sweep(omega, method=args.method)
     found = []
