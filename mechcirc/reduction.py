@@ -31,7 +31,8 @@ from .errors import NotSeriesParallelError, TopologyError, UnloadedElementWarnin
 from .topology import check_frame_paths, loaded_groups, reachable
 
 __all__ = ["Leaf", "Series", "Parallel", "Reflect", "Node", "Reduction",
-           "reduce_circuit", "reduce_network", "evaluate", "push_down", "leaves", "depth"]
+           "reduce_circuit", "reduce_network", "evaluate", "push_down", "leaves", "depth",
+           "postorder"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -462,7 +463,8 @@ def depth(root: Node) -> int:
     return deepest
 
 
-def _postorder(root: Node) -> list[Node]:
+def postorder(root: Node) -> list[Node]:
+    """Every node of the tree, children before their parent (iterative)."""
     order, stack = [], [root]
     while stack:
         node = stack.pop()
@@ -541,7 +543,7 @@ def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: boo
     track = error or condition
     with np.errstate(all="ignore"):
         inv_omega = 1.0 / omega
-        for node in _postorder(root):
+        for node in postorder(root):
             if isinstance(node, Leaf):
                 continue
             if isinstance(node, Reflect):
