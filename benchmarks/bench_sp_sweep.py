@@ -10,7 +10,12 @@ elements, at 1000 log points 0.1 Hz – 1 kHz, the script times in the same run:
 * ``sp+err``: the same with the error bound (``error=True``), which is what
   ``Sweep.flags`` needs.
 
-Goals: sp ≤ 1.2 × floor, sp+err ≤ 1.5 × sp.  Times are the median of
+Goals: sp ≤ 1.2 × floor, sp+err ≤ 1.5 × sp.
+
+With ``--reduce`` it also times the reduction (``circuit.tree``) of n springs in
+parallel between two nodes and of a series chain of n springs, n = 4,000 …
+64,000 (issue 14 §2: 16,000 in parallel took 264 s before the flattening was
+made linear; goal < 0.1 s), and prints the time per element.  Times are the median of
 ``--repeats`` runs (``time.perf_counter``); the tree is built once (reduction is
 timed elsewhere).  It prints; it asserts nothing.  Run from the repository root::
 
@@ -54,11 +59,34 @@ def median_time(fn, repeats):
     return float(np.median(times))
 
 
+def bench_reduce() -> int:
+    import mechcirc
+
+    print(f"# load {os.getloadavg()[0]:.1f}; reduction (circuit.tree) of runs of n springs")
+    print(f"{'run':>9} {'n':>7} {'reduce s':>9} {'µs/elem':>8}")
+    for kind in ("parallel", "series"):
+        for n in (4000, 16_000, 64_000):
+            if kind == "parallel":
+                lines = [f"spring k{i} a 0 {1e3 + i}" for i in range(n)]
+            else:
+                nodes = ["a"] + [f"n{i}" for i in range(1, n)] + ["0"]
+                lines = [f"spring k{i} {nodes[i]} {nodes[i + 1]} {1e3 + i}" for i in range(n)]
+            c = mechcirc.parse("drive V a 0 velocity=1\n" + "\n".join(lines))
+            t0 = time.perf_counter()
+            c.tree
+            t = time.perf_counter() - t0
+            print(f"{kind:>9} {n:>7} {t:>9.3f} {t / n * 1e6:>8.1f}")
+    return 0
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="up to 1e4 elements, 3 repeats")
     ap.add_argument("--points", type=int, default=1000)
+    ap.add_argument("--reduce", action="store_true", help="only time parallel/series runs")
     args = ap.parse_args()
+    if args.reduce:
+        return bench_reduce()
     sizes = [15, 45, 999, 10_000] + ([] if args.quick else [100_000])
     omega = np.geomspace(2 * np.pi * 0.1, 2 * np.pi * 1e3, args.points)
     print(f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
