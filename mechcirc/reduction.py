@@ -568,7 +568,9 @@ def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: boo
     if track:
         # ``rho`` bounds the error relative to the computed |K̂|; relative to the
         # true |K| ≥ |K̂|(1 − ρ) it is ρ / (1 − ρ).
-        rho = np.broadcast_to(_through_reciprocal(top.rho), omega.shape).astype(float)
+        with np.errstate(all="ignore"):
+            rho = _through_reciprocal(np.atleast_1d(np.asarray(top.rho, dtype=float)))
+        rho = np.broadcast_to(rho, omega.shape).astype(float)
         rho[np.isnan(rho)] = np.inf
         return K, (rho / _U if condition and not error else rho)
     return K
@@ -693,11 +695,12 @@ def _combine(node, values: dict, omega, inv_omega, track: bool = False,
         mu = m * _U
         # Leaf groups: n same-signed scalars summed (n·u), value·η and 1/s (2u),
         # times ω or 1/ω (2u).
-        bound = np.full(omega.shape, abs(real) * ((n_real + 2) * _U + mu))
+        bound = None
         if im_inv:
-            bound += (abs(im_inv) * ((n_inv + 4) * _U + mu)) * inv_omega
+            bound = (abs(im_inv) * ((n_inv + 4) * _U + mu)) * inv_omega
         if im_omega:
-            bound += (abs(im_omega) * ((n_omega + 4) * _U + mu)) * omega
+            t = (abs(im_omega) * ((n_omega + 4) * _U + mu)) * omega
+            bound = t if bound is None else np.add(bound, t, out=bound)
         for v in parts:
             if series:
                 t = v.rho + mu
@@ -706,7 +709,11 @@ def _combine(node, values: dict, omega, inv_omega, track: bool = False,
                 t = _through_reciprocal(v.rho)
                 t += _U_RECIP + mu
                 t /= v.mag
-            bound += t
+            bound = t if bound is None else np.add(bound, t, out=bound)
+        if bound is None:
+            bound = np.zeros(omega.shape)
+        if real:
+            bound += abs(real) * ((n_real + 2) * _U + mu)
         mag = np.abs(total.array)
         bound /= mag
         rho = bound
@@ -721,15 +728,16 @@ def _combine(node, values: dict, omega, inv_omega, track: bool = False,
     return total if series else total.reciprocal(checked)
 
 
-def _through_reciprocal(rho):
-    """Relative error of 1/x̂ given |x̂ − x| ≤ ρ|x̂|: ρ / (1 − ρ), ∞ from ρ ≥ 1 on."""
-    with np.errstate(all="ignore"):
-        # 1 / (1/ρ − 1) = ρ/(1 − ρ), with ρ ≥ 1 (and NaN) clipped to 1/0 = ∞.
-        r = np.reciprocal(rho) if isinstance(rho, np.ndarray) else np.float64(1.0) / rho
-        r -= 1.0
-        r = np.fmax(r, 0.0, out=r) if isinstance(r, np.ndarray) else max(r, 0.0)
-        return np.reciprocal(r, out=r) if isinstance(r, np.ndarray) else \
-            (np.float64(1.0) / np.float64(r))
+def _through_reciprocal(rho: NDArray) -> NDArray:
+    """Relative error of 1/x̂ given |x̂ − x| ≤ ρ|x̂|: ρ / (1 − ρ), ∞ from ρ ≥ 1 on.
+
+    Computed as 1 / max(1/ρ − 1, 0) in place (NaN → ∞); callers hold
+    ``np.errstate(all="ignore")``.
+    """
+    r = np.reciprocal(rho)
+    r -= 1.0
+    np.fmax(r, 0.0, out=r)
+    return np.reciprocal(r, out=r)
 
 
 def _reciprocal(K: NDArray[np.complex128]) -> NDArray[np.complex128]:
