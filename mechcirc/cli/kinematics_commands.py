@@ -19,9 +19,9 @@ def register(sub) -> None:
                "--omega 100 --plot fourbar.png",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     for name, what in (("crank", "AB"), ("coupler", "BC"), ("rocker", "CD"), ("frame", "AD")):
-        p.add_argument(f"--{name}", type=float, required=True, metavar="L",
-                       help=f"{name} length {what} (any unit)")
-    p.add_argument("--omega", type=float, metavar="W",
+        p.add_argument(f"--{name}", type=_number(f"--{name}", positive=True), required=True,
+                       metavar="L", help=f"{name} length {what} (any unit)")
+    p.add_argument("--omega", type=_number("--omega", square=True), metavar="W",
                    help="crank speed [rad/s] for ε4T = ν·ω²")
     p.add_argument("--branch", type=int, choices=(1, -1), default=1,
                    help="assembly mode (default +1; see docs/kinematics.md)")
@@ -66,6 +66,25 @@ def register(sub) -> None:
     p.set_defaults(func=cmd_linkage)
 
 
+def _number(option, *, positive=False, square=False):
+    """argparse type: a finite float (argparse turns the error into exit 2 with usage)."""
+    def parse(text):
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{option} wants a number, got {text!r}") from None
+        if not math.isfinite(value):
+            raise argparse.ArgumentTypeError(f"{option} must be a finite number, got {text!r}")
+        if positive and not value > 0:
+            raise argparse.ArgumentTypeError(f"{option} must be > 0, got {text!r}")
+        if square and not math.isfinite(value * value):
+            raise argparse.ArgumentTypeError(
+                f"{option} {text} is too large: its square overflows float64 "
+                f"(|value| must stay below 1e154)")
+        return value
+    return parse
+
+
 def _deg(x):
     return f"{math.degrees(x):.3f}°"
 
@@ -83,8 +102,14 @@ def cmd_fourbar(args) -> int:
     if args.json:
         print_json(doc)
         return 0
+    kind = (f"change-point (Grashof equality s + l = p + q): {fb.linkage_type}"
+            if fb.grashof_class == "change-point" else f"{fb.grashof_class} {fb.linkage_type}")
     print(f"four-bar a={fb.crank:g} b={fb.coupler:g} c={fb.rocker:g} d={fb.frame:g}, "
-          f"branch {fb.branch:+d}: {fb.grashof_class} {fb.linkage_type}")
+          f"branch {fb.branch:+d}: {kind}")
+    if doc["branch_crossings_deg"]:
+        print("  branches cross at θ = "
+              + ", ".join(f"{t:g}°" for t in doc["branch_crossings_deg"])
+              + " (all four joints in line: the motion beyond is not fixed by the geometry)")
     if not doc["crank_rotates_fully"]:
         lo, hi = doc["crank_range_deg"]
         print(f"  the input link cannot turn fully: it rocks in θ ∈ [{lo:.3f}°, {hi:.3f}°]"
@@ -102,11 +127,14 @@ def cmd_fourbar(args) -> int:
     tmax = ", ".join(f"{t:.2f}°" for t in doc["theta_at_gamma_max_deg"])
     print(f"  transmission angle γ: min {doc['gamma_min_deg']:.3f}° at θ = {tmin}; "
           f"max {doc['gamma_max_deg']:.3f}° at θ = {tmax}")
-    print(f"  ν range: [{doc['nu_min']:+.6f}, {doc['nu_max']:+.6f}] 1/rad at θ = "
-          f"{doc['theta_at_nu_min_deg']:.2f}°, {doc['theta_at_nu_max_deg']:.2f}°")
-    if args.omega is not None:
-        print(f"  ε4T = ν·ω² at ω = {args.omega:g} rad/s: "
-              f"[{doc['eps4T_min']:.1f}, {doc['eps4T_max']:.1f}] 1/s²")
+    if doc["nu_min"] is not None:
+        print(f"  ν range: [{doc['nu_min']:+.6f}, {doc['nu_max']:+.6f}] 1/rad at θ = "
+              f"{doc['theta_at_nu_min_deg']:.2f}°, {doc['theta_at_nu_max_deg']:.2f}°")
+        if args.omega is not None:
+            print(f"  ε4T = ν·ω² at ω = {args.omega:g} rad/s: "
+                  f"[{doc['eps4T_min']:.1f}, {doc['eps4T_max']:.1f}] 1/s²")
+    for note in doc["notes"]:
+        print(f"  note: {note}")
     return 0
 
 

@@ -33,10 +33,20 @@ def plot_fourbar(fourbar, omega: float | None = None, n: int = 721):
     th = np.linspace(lo, hi, n)
     if not fourbar.crank_rotates_fully:
         th = th[1:-1]
-    st = fourbar.evaluate(th)
+    with np.errstate(all="ignore"):             # 0/0 at a change point's branch crossing
+        st = fourbar.evaluate(th)
     deg = np.degrees(th)
     fig, ax = _figure(4, 1, (7, 9))
     acc = st.nu * omega ** 2 if omega else st.nu
+    crossings = fourbar.branch_crossings()
+    if crossings:
+        # the closed form switches branch at a crossing: μ and ν are not
+        # drawn within 1° of one (they would jump through ±1e15)
+        near = np.zeros(th.shape, dtype=bool)
+        for tc in crossings:
+            near |= np.abs((th - tc + math.pi) % (2 * math.pi) - math.pi) < math.radians(1.0)
+        st = type(st)(**{**st.__dict__, "mu": np.where(near, np.nan, st.mu)})
+        acc = np.where(near, np.nan, acc)
     panels = [(np.degrees(st.phi4), "φ4 [deg]"), (st.mu, "μ = dφ4/dθ [1]"),
               (acc, "ε4T = ν·ω² [1/s²]" if omega else "ν = d²φ4/dθ² [1/rad]"),
               (np.degrees(st.gamma), "γ [deg]")]
@@ -50,6 +60,12 @@ def plot_fourbar(fourbar, omega: float | None = None, n: int = 721):
                 a.axvline(math.degrees(dc.theta), color="k", ls=style, lw=0.8,
                           label=f"{dc.kind} dead centre")
         ax[0, 0].legend(loc="best", fontsize="small")
+    for k, tc in enumerate(crossings):
+        for a in ax[:, 0]:
+            a.axvline(math.degrees(tc), color="r", ls="-.", lw=0.8,
+                      label="branch crossing (μ, ν undefined)" if k == 0 else None)
+    if crossings:
+        ax[1, 0].legend(loc="best", fontsize="small")
     ax[-1, 0].set_xlabel("crank angle θ [deg]")
     fig.suptitle(f"four-bar a={fourbar.crank:g} b={fourbar.coupler:g} c={fourbar.rocker:g} "
                  f"d={fourbar.frame:g} ({fourbar.linkage_type}, branch {fourbar.branch:+d})")

@@ -103,3 +103,33 @@ def test_help_has_an_example(cmd, capsys):
     with pytest.raises(SystemExit):
         main([cmd, "--help"])
     assert f"Example: mechcirc {cmd}" in capsys.readouterr().out
+
+
+def test_fourbar_change_point_is_named_and_nu_withheld(capsys):
+    argv = ["fourbar", "--crank", "30", "--coupler", "100", "--rocker", "30", "--frame", "100",
+            "--omega", "100"]
+    assert main(argv) == 0
+    captured = capsys.readouterr()
+    out = captured.out
+    assert "change-point" in out and "parallelogram" in out and "crank-rocker" not in out
+    assert "branches cross at θ = 0°, 180°" in out
+    assert "ν range: [" not in out and "e+15" not in out and "e15" not in out
+    assert "RuntimeWarning" not in captured.err
+
+
+@pytest.mark.parametrize("extra,what", [(["--omega", "1e300"], "square overflows"),
+                                        (["--omega", "nan"], "finite"),
+                                        (["--omega", "inf"], "finite")])
+def test_fourbar_bad_omega_exit_2(capsys, extra, what):
+    with pytest.raises(SystemExit) as info:
+        main(MRAZEK + extra)
+    assert info.value.code == 2
+    assert what in capsys.readouterr().err
+
+
+def test_fourbar_huge_lengths_exit_2_without_warnings(capsys):
+    argv = ["fourbar", "--crank", "1e308", "--coupler", "37", "--rocker", "1e308",
+            "--frame", "189"]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "out of range" in err and "Warning" not in err and err.count("\n") == 1
