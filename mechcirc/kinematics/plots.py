@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-__all__ = ["plot_fourbar", "plot_synthesis", "plot_frame_loading", "plot_linkage"]
+__all__ = ["plot_fourbar", "plot_synthesis", "plot_frame_loading", "plot_shaking", "plot_linkage"]
 
 
 def _figure(rows, cols, size):
@@ -116,6 +116,58 @@ def plot_frame_loading(result):
     for a in ax[:, 0]:
         a.grid(alpha=0.3)
         a.legend(fontsize="small", loc="best")
+    return fig
+
+
+def plot_shaking(result, fig=None):
+    """The patent's Figs. 5–6 for a :class:`FrameLoading`, and the loads behind them.
+
+    Four panels: the shaking force S on the frame as a polar curve (the locus
+    of its tip, S_y against S_x, one point per crank angle), |S| against the
+    crank angle, the bearing forces |F_A| and |F_D|, and the driving torque
+    with the shaking moments T_a, T_d.  Draws on ``fig`` (a matplotlib
+    ``Figure``) when given, else on a new one; returns the figure.
+    """
+    if fig is None:
+        from matplotlib.figure import Figure
+
+        fig = Figure(figsize=(10, 8), layout="constrained")
+    ax = fig.subplots(2, 2, squeeze=False)
+    deg = np.degrees(result.theta)
+    S = result.shaking_force
+    mag = result.shaking_force_magnitude
+    a = ax[0, 0]
+    a.plot(S[:, 0], S[:, 1], lw=1.4)
+    a.plot([0], [0], "k+", ms=10)
+    k = int(np.argmax(mag))
+    a.plot([0, S[k, 0]], [0, S[k, 1]], "r-", lw=1,
+           label=f"max |S| = {mag[k]:.4g} N at θ = {deg[k]:.1f}°")
+    a.set_aspect("equal", adjustable="datalim")
+    a.set_xlabel("S_x [N]")
+    a.set_ylabel("S_y [N]")
+    a.set_title("shaking force on the frame, polar curve (Fig. 5)")
+    a.legend(fontsize="small", loc="best")
+    a = ax[0, 1]
+    a.plot(deg, mag, "k", lw=1.4)
+    a.set_ylabel("|S| [N]")
+    a.set_title("shaking force magnitude (Fig. 6)")
+    a = ax[1, 0]
+    a.plot(deg, np.hypot(*result.F_A.T), label="|F_A| (crankshaft bearing)")
+    a.plot(deg, np.hypot(*result.F_D.T), label="|F_D| (rocking-shaft bearing)")
+    a.set_ylabel("bearing force [N]")
+    a = ax[1, 1]
+    a.plot(deg, result.torque, label="T (driving torque)")
+    a.plot(deg, result.T_a, label="T_a (about A)")
+    a.plot(deg, result.T_d, label="T_d (about D)")
+    a.set_ylabel("moment [N·m]")
+    for a in (ax[0, 1], ax[1, 0], ax[1, 1]):
+        a.set_xlabel("crank angle θ [deg]")
+        a.grid(alpha=0.3)
+    ax[0, 0].grid(alpha=0.3)
+    for a in (ax[1, 0], ax[1, 1]):
+        a.legend(fontsize="small", loc="best")
+    fig.suptitle(f"frame loading at ω = {result.omega:.4g} rad/s "
+                 f"({result.omega * 60 / (2 * math.pi):.4g} rpm)")
     return fig
 
 
