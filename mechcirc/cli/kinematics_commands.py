@@ -333,7 +333,8 @@ def cmd_linkage(args) -> int:
         paths = {p: np.array([s.points[p] for s in sweep]) for p in moving}
         save_figure(plot_linkage(lk, state, paths), args.plot)
     groups = lk.assur_groups()
-    doc = {"file": args.file, "name": lk.name, "links": len(lk.links),
+    doc = {"file": args.file, "name": lk.name, "units": lk.units or None,
+           "links": len(lk.links),
            "revolute_pairs": lk.revolute_pairs, "mobility": lk.mobility,
            "assur_groups": [{"links": list(g.links), "class": g.group_class, "order": g.order,
                              "base": g.base, "external_pairs": list(g.external_pairs)}
@@ -351,9 +352,12 @@ def cmd_linkage(args) -> int:
         base = f" on base {g.base}" if g.base else ""
         print(f"  {cls} ({', '.join(g.links)}){base}, order {g.order} "
               f"(external pairs {', '.join(g.external_pairs)})")
-    print(f"at θ = {args.theta:g}° (t = {state.t:.6g} s):")
-    cols = "".join(f" {('v from ' + c.link):>24s}" for c in lk.cranks)
-    print(f"  {'point':6s} {'x':>10s} {'y':>10s} {'v (vx, vy)':>24s}{cols}")
+    length = lk.units or "length"       # the file's unit, or a neutral word without one
+    print(f"at θ = {args.theta:g}° (t = {state.t:.6g} s); positions in {length}, velocities "
+          f"in {length}/s:")
+    cols = "".join(f" {('v from ' + c.link + f' [{length}/s]'):>24s}" for c in lk.cranks)
+    print(f"  {'point':6s} {f'x [{length}]':>10s} {f'y [{length}]':>10s} "
+          f"{f'v (vx, vy) [{length}/s]':>24s}{cols}")
     vscale = max(float(np.max(np.abs(v))) for v in state.velocities.values()) or 1.0
 
     def vec(v):   # rounding residue of a resting point prints as 0, not -0.000

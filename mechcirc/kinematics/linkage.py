@@ -184,6 +184,8 @@ class Linkage:
     cranks : tuple of Crank
     source : str
         File name, for messages.
+    units : str
+        The file's ``units`` (the length unit of the pose, e.g. ``"mm"``), or ``""``.
     """
 
     name: str
@@ -192,6 +194,7 @@ class Linkage:
     links: dict
     cranks: tuple
     source: str = "<string>"
+    units: str = ""
 
     # ------------------------------------------------------------ structure
     @property
@@ -634,8 +637,12 @@ def parse_linkage(text: str, source: str = "<string>") -> Linkage:
                        value=lname, occurrence=n)
         cranks.append(Crank(lname, pivot, float(omega)))
 
+    units = doc.get("units", "")
+    if not isinstance(units, str) or len(units) > 20 or not re.fullmatch(r"[^\s\[\]]*", units):
+        raise _err(text, source, f"units must be a short length unit such as \"mm\", got "
+                   f"{_brief(units)}", None, "units", expected='"mm", "m", "in", …')
     lk = Linkage(str(doc.get("name", Path(source).stem)), pose, tuple(ground_pts), links,
-                 tuple(cranks), source)
+                 tuple(cranks), source, units)
     if lk.mobility != len(cranks):
         raise GeometryError(
             f"{source}: mobility W = 3·{len(links)} − 2·{lk.revolute_pairs} = {lk.mobility}, "

@@ -191,5 +191,8 @@ def plot_linkage(linkage, state, paths=None):
         a.annotate(p, x, textcoords="offset points", xytext=(4, 4), fontsize="x-small")
     a.set_aspect("equal")
     a.grid(alpha=0.3)
-    a.set_title(f"{linkage.name} at θ = {math.degrees(state.theta):.4g}°")
+    unit = getattr(linkage, "units", "") or "length"
+    a.set_xlabel(f"x [{unit}]")
+    a.set_ylabel(f"y [{unit}]")
+    a.set_title(f"{linkage.name} at θ = {math.degrees(state.theta):.4g}° (first crank)")
     return fig
