@@ -87,7 +87,9 @@ def register(sub) -> None:
         description="Explore crank-rockers meeting every criterion of the patent "
                     "(γ at the front dead centre > 70°, γmin > 45°, |Φ2''|/|Φ1''| < 0.3, "
                     "d < 180 mm, eq. (9), swing 23–26°) and rank them. Lengths in mm.",
-        epilog="Example: mechcirc synth --load medium --swing 24 --plot synth.png",
+        epilog="Example: mechcirc synth --load medium --swing 24 --plot synth.png\n"
+               "         mechcirc synth --load medium --frame 165 --swing-range 24:26 "
+               "--export designs/",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--load", choices=("light", "medium", "heavy"), default="medium",
                    help="loom class: crank 33–34, 35–36 or 37–38 mm (default medium)")
@@ -96,9 +98,48 @@ def register(sub) -> None:
     p.add_argument("--objective", choices=("margin", "ratio"), default="margin",
                    help="rank by the smallest criterion margin (default) or by |Φ2''|/|Φ1''|")
     p.add_argument("--limit", type=int, default=10, metavar="N",
-                   help="number of designs shown (default 10)")
+                   help="number of designs shown, distinct shapes (default 10)")
+    p.add_argument("--swing-range", type=_range("--swing-range"), metavar="LO:HI",
+                   help="admissible swing Ψ [deg] (default the patent's 23:26)")
+    for name in ("crank", "coupler", "rocker", "frame"):
+        p.add_argument(f"--{name}", type=_number(f"--{name}", positive=True), metavar="MM",
+                       help=f"hold the {name} length fixed [mm]"
+                       + (" (replaces the load's range)" if name == "crank" else "")
+                       + (" (not with --frame)" if name == "rocker" else ""))
+    p.add_argument("--b-a-range", type=_range("--b-a-range"), default=(1.5, 8.0),
+                   metavar="LO:HI", help="coupler/crank ratios explored (default 1.5:8)")
+    p.add_argument("--d-a-range", type=_range("--d-a-range"), default=(1.5, 8.0),
+                   metavar="LO:HI", help="frame/crank ratios explored (default 1.5:8)")
+    p.add_argument("--step", type=_number("--step", positive=True), default=0.05,
+                   metavar="S", help="grid step of b/a and d/a (default 0.05)")
+    p.add_argument("--crank-step", type=_number("--crank-step", positive=True), default=0.5,
+                   metavar="MM", help="grid step of the crank length (default 0.5 mm)")
+    p.add_argument("--swing-step", type=_number("--swing-step", positive=True), default=0.5,
+                   metavar="DEG", help="grid step of the swing (default 0.5°)")
+    p.add_argument("--no-refine", action="store_true",
+                   help="report the grid's designs without the continuous refinement")
+    p.add_argument("--export", metavar="DIR",
+                   help="write DIR/design_K.linkage.toml and DIR/design_K.scene.toml per design")
+    p.add_argument("--omega", type=_number("--omega", positive=True, square=True),
+                   default=100.0, metavar="W", help="crank speed in exported files [rad/s] "
+                   "(default 100)")
+    for name, what, default in (("sley-inertia", "I4P, sley [kg·m²]", 0.35),
+                                ("rocker-inertia", "I4, rocker [kg·m²]", 0.025),
+                                ("crank-inertia", "I2P, crank side [kg·m²]", 0.005),
+                                ("c2", "C2, torsion rod shaft–crank [N·m/rad]", 1e5),
+                                ("c4", "C4, torsion rod rocker–sley [N·m/rad]", 5e4),
+                                ("k2", "k2, damping of C2 [N·m·s/rad]", 7.0),
+                                ("k4", "k4, damping of C4 [N·m·s/rad]", 29.0),
+                                ("beat-moment", "M0, beat-up moment [N·m] (a comment today)",
+                                 0.0),
+                                ("beat-window", "α, beat-up window [deg] (a comment today)",
+                                 40.0)):
+        p.add_argument(f"--{name}", type=_number(f"--{name}", nonneg=True), default=default,
+                       metavar="X", help=f"exported scene: {what} (default {default:g}, "
+                       f"Mrázek's one-side variant 1)")
     p.add_argument("--plot", metavar="IMAGE",
-                   help="transmission angle and rocker acceleration against θ")
+                   help="the best design drawn at both dead centres with its swing, beside "
+                        "the transmission angle and rocker acceleration against θ")
     p.add_argument("--json", action="store_true", help="print one JSON document")
     p.set_defaults(func=cmd_synth)
 
@@ -150,6 +191,21 @@ def _vector(option, n, *, nonneg=False):
             raise argparse.ArgumentTypeError(
                 f"{option} wants {n} numbers separated by commas (no spaces), got {text!r}")
         return tuple(single(x.strip()) for x in parts)
+    return parse
+
+
+def _range(option):
+    """argparse type: ``LO:HI``, two finite numbers with LO ≤ HI."""
+    single = _number(option)
+
+    def parse(text):
+        parts = text.split(":")
+        if len(parts) != 2:
+            raise argparse.ArgumentTypeError(f"{option} wants LO:HI, got {text!r}")
+        lo, hi = (single(x.strip()) for x in parts)
+        if not lo <= hi:
+            raise argparse.ArgumentTypeError(f"{option}: LO must not exceed HI, got {text!r}")
+        return lo, hi
     return parse
 
 
@@ -280,20 +336,35 @@ def cmd_frame(args) -> int:
 
 def cmd_synth(args) -> int:
     import sys
+    from pathlib import Path
 
     from ..errors import MechcircError
     from ..kinematics import synthesize
+    from ..kinematics.synthesis_export import SceneOptions, export_designs
 
     check_output_paths(plots=(args.plot,))
     if args.limit < 1:
         raise MechcircError(f"--limit must be at least 1, got {args.limit}")
-
-    res = synthesize(args.load, args.swing, objective=args.objective, limit=args.limit)
+    if args.export and not Path(args.export).is_dir():
+        raise MechcircError(f"--export {args.export}: no such folder (create it first)")
+    fixed = {n: getattr(args, n) for n in ("crank", "coupler", "rocker", "frame")
+             if getattr(args, n) is not None}
+    scene = SceneOptions(args.omega, args.crank_inertia, args.rocker_inertia,
+                         args.sley_inertia, args.c2, args.c4, args.k2, args.k4,
+                         args.beat_moment, args.beat_window)
+    res = synthesize(args.load, args.swing, objective=args.objective, limit=args.limit,
+                     b_a_range=args.b_a_range, d_a_range=args.d_a_range, step=args.step,
+                     crank_step=args.crank_step, swing_step=args.swing_step,
+                     swing_range=args.swing_range, fixed=fixed, refine=not args.no_refine)
     if args.plot and res.designs:
         from ..kinematics.plots import plot_synthesis
         save_figure(plot_synthesis(res.designs[:5]), args.plot)
+    exported = export_designs(res.designs, args.export, scene) if args.export and \
+        res.designs else []
     if args.json:
-        print_json(res.as_dict())
+        doc = res.as_dict()
+        doc["exported"] = [{"linkage": str(lk), "scene": str(sc)} for lk, sc in exported]
+        print_json(doc)
         return 0 if res.designs else 2
     if not res.designs:
         print(f"mechcirc: error: {res.message}", file=sys.stderr)
@@ -301,16 +372,28 @@ def cmd_synth(args) -> int:
             print(f"  {name:20s} rejects {count} of {res.explored}", file=sys.stderr)
         return 2
     print(res.message + ".")
+    what = "margin" if args.objective == "margin" else "ratio"
     print(f"{'#':>2} {'a':>6} {'b':>7} {'c':>7} {'d':>7} {'Ψ°':>6} {'γ1°':>6} {'γmin°':>6} "
-          f"{'ratio':>6} {'c/a':>6} {'bound':>6}  binding")
+          f"{'ratio':>6} {'c/a':>6} {'bound':>6} {what + ' (grid)':>16}  binding")
     for k, des in enumerate(res.designs, 1):
         cr = des.criteria
         bound = float(cr["rocker_ratio"].limit.lstrip("> "))
         print(f"{k:2d} {des.a:6.2f} {des.b:7.2f} {des.c:7.2f} {des.d:7.2f} "
               f"{des.swing_deg:6.2f} {cr['front_transmission'].value:6.2f} "
               f"{cr['min_transmission'].value:6.2f} {cr['acceleration_ratio'].value:6.3f} "
-              f"{cr['rocker_ratio'].value:6.3f} {bound:6.3f}  {', '.join(des.binding)}")
-    print(f"({res.explored} crank-rockers explored; lengths in mm; ratio = |Φ2''|/|Φ1''|)")
+              f"{cr['rocker_ratio'].value:6.3f} {bound:6.3f} "
+              f"{des.objective:7.4f} ({des.grid_objective:6.4f})  {', '.join(des.binding)}")
+    lo, hi = res.swing_range
+    print(f"({res.explored} crank-rockers explored; lengths in mm; ratio = |Φ2''|/|Φ1''|; "
+          f"swing {lo:g}–{hi:g}°; one design per shape b/a, c/a, d/a; "
+          + ("each refined from its grid point (objective at the grid point in brackets)"
+             if res.refined else "grid points, not refined") + ")")
+    if exported:
+        print("exported:")
+        for lk, sc in exported:
+            print(f"  {lk}\n  {sc}")
+        print("  (the scene has the sley inertia and the torsion rods; the beat-up moment "
+              "is written as a comment, today's scene format has no crank-angle loads)")
     return 0
 
 

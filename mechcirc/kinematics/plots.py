@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-__all__ = ["plot_fourbar", "plot_synthesis", "plot_frame_loading", "plot_shaking", "plot_linkage"]
+__all__ = ["plot_fourbar", "plot_synthesis", "draw_design", "plot_frame_loading", "plot_shaking", "plot_linkage"]
 
 
 def _figure(rows, cols, size):
@@ -72,12 +72,51 @@ def plot_fourbar(fourbar, omega: float | None = None, n: int = 721):
     return fig
 
 
-def plot_synthesis(designs, n: int = 721):
-    """Patent-style figures: transmission angle and dimensionless rocker acceleration ν against θ.
+def draw_design(design, ax):
+    """The four-bar of ``design`` on ``ax``: both dead-centre positions and the swing arc.
 
-    θ is measured from the front dead centre of each design, so the curves line up.
+    Lengths in mm; A at the origin, D on the x axis.  Returns ``ax``.
     """
-    fig, ax = _figure(2, 1, (7, 7))
+    fb = design.fourbar()
+    front, back = fb.dead_centres()
+    a, c, d = fb.crank, fb.rocker, fb.frame
+    for dc, style, colour in ((front, "-", "C0"), (back, "--", "C1")):
+        B = (a * math.cos(dc.theta), a * math.sin(dc.theta))
+        C = (d + c * math.cos(dc.phi4), c * math.sin(dc.phi4))
+        ax.plot([0, B[0], C[0], d], [0, B[1], C[1], 0], style, color=colour, lw=2, marker="o",
+                ms=4, label=f"{dc.kind} dead centre (θ = {math.degrees(dc.theta):.1f}°)")
+    lo, hi = sorted((front.phi4, back.phi4))
+    arc = np.linspace(lo, hi, 60)
+    ax.plot(d + c * np.cos(arc), c * np.sin(arc), color="k", lw=1,
+            label=f"swing Ψ = {design.swing_deg:.2f}°")
+    th = np.linspace(0, 2 * math.pi, 121)
+    ax.plot(a * np.cos(th), a * np.sin(th), color="0.6", lw=0.8)
+    ax.plot([0, d], [0, 0], "k^", ms=9)
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("x [mm]")
+    ax.set_ylabel("y [mm]")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize="small", loc="best")
+    ax.set_title(f"#1: a={design.a:.2f} b={design.b:.2f} c={design.c:.2f} d={design.d:.2f} mm")
+    return ax
+
+
+def plot_synthesis(designs, n: int = 721, fig=None):
+    """Patent-style figures beside the best design drawn.
+
+    Left: ``designs[0]`` at both dead centres with its swing (:func:`draw_design`).
+    Right: transmission angle and dimensionless rocker acceleration ν against θ
+    for every design, θ measured from each design's front dead centre so the
+    curves line up.  Draws on ``fig`` when given; returns the figure.
+    """
+    if fig is None:
+        from matplotlib.figure import Figure
+
+        fig = Figure(figsize=(12, 7), layout="constrained")
+    grid = fig.add_gridspec(2, 2, width_ratios=(1, 1.3))
+    draw_design(designs[0], fig.add_subplot(grid[:, 0]))
+    ax = [fig.add_subplot(grid[0, 1]), None]
+    ax[1] = fig.add_subplot(grid[1, 1], sharex=ax[0])
     for k, des in enumerate(designs):
         fb = des.fourbar()
         front, _ = fb.dead_centres()
@@ -85,15 +124,15 @@ def plot_synthesis(designs, n: int = 721):
         st = fb.evaluate(th)
         label = f"#{k + 1}: {des.a:.1f}/{des.b:.1f}/{des.c:.1f}/{des.d:.1f} mm"
         deg = np.degrees(th - front.theta)
-        ax[0, 0].plot(deg, np.degrees(st.gamma), lw=1.2, label=label)
-        ax[1, 0].plot(deg, st.nu, lw=1.2, label=label)
-    ax[0, 0].axhline(45, color="r", ls="--", lw=0.8, label="γ = 45° (eq. 3)")
-    ax[0, 0].set_ylabel("transmission angle γ [deg]")
-    ax[1, 0].set_ylabel("rocker acceleration d²Φ/dθ² [1/rad]")
-    ax[1, 0].set_xlabel("crank angle from the front dead centre [deg]")
-    for a in ax[:, 0]:
+        ax[0].plot(deg, np.degrees(st.gamma), lw=1.2, label=label)
+        ax[1].plot(deg, st.nu, lw=1.2, label=label)
+    ax[0].axhline(45, color="r", ls="--", lw=0.8, label="γ = 45° (eq. 3)")
+    ax[0].set_ylabel("transmission angle γ [deg]")
+    ax[1].set_ylabel("rocker acceleration d²Φ/dθ² [1/rad]")
+    ax[1].set_xlabel("crank angle from the front dead centre [deg]")
+    for a in ax:
         a.grid(alpha=0.3)
-    ax[0, 0].legend(fontsize="small", loc="best")
+    ax[0].legend(fontsize="small", loc="best")
     fig.suptitle("beat-up four-bar synthesis (CN104178888)")
     return fig
 

@@ -204,3 +204,30 @@ def test_beat_up_force_is_a_half_sine_around_the_front_dead_centre():
                                rtol=1e-12)
     assert got[3, 1] == pytest.approx(-4 * math.cos(19.9 / 40 * math.pi), rel=1e-12)
     assert np.all(got[4:] == 0)
+
+
+def test_synth_export_lists_files_that_scene_and_linkage_run(capsys, tmp_path):
+    status, doc = _json(capsys, ["synth", "--load", "light", "--limit", "2", "--export",
+                                 str(tmp_path)])
+    assert status == 0
+    names = [Path(e[k]).name for e in doc["exported"] for k in ("linkage", "scene")]
+    assert names == ["design_1.linkage.toml", "design_1.scene.toml",
+                     "design_2.linkage.toml", "design_2.scene.toml"]
+    scene = doc["exported"][0]["scene"]
+    assert main(["scene", scene, "--theta", "100"]) == 0
+    assert "resonance" in capsys.readouterr().out
+    assert main(["linkage", doc["exported"][0]["linkage"], "--theta", "45"]) == 0
+
+
+def test_synth_export_to_a_missing_folder_is_a_user_error(capsys, tmp_path):
+    assert main(["synth", "--limit", "1", "--export", str(tmp_path / "nope")]) == 2
+    assert "no such folder" in capsys.readouterr().err
+
+
+def test_synth_fixed_frame_and_ranges_on_the_cli(capsys):
+    status, doc = _json(capsys, ["synth", "--load", "medium", "--frame", "165", "--limit", "2",
+                                 "--swing-range", "24:26", "--b-a-range", "1.5:2"])
+    assert status == 0 and doc["fixed_mm"] == {"frame": 165.0}
+    for des in doc["designs"]:
+        assert des["d"] == pytest.approx(165.0) and des["b"] / des["a"] <= 2 + 1e-9
+        assert 24 - 1e-9 <= des["swing_deg"] <= 26 + 1e-9
