@@ -5,7 +5,8 @@ from __future__ import annotations
 import argparse
 import math
 
-from ._common import check_output_paths, print_json, save_figure
+from ._common import (MAX_LENGTH, MAX_OMEGA, check_output_paths, count, print_json, real,
+                      save_figure)
 
 
 def register(sub) -> None:
@@ -19,9 +20,10 @@ def register(sub) -> None:
                "--omega 100 --plot fourbar.png",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     for name, what in (("crank", "AB"), ("coupler", "BC"), ("rocker", "CD"), ("frame", "AD")):
-        p.add_argument(f"--{name}", type=_number(f"--{name}", positive=True), required=True,
-                       metavar="L", help=f"{name} length {what} (any unit)")
-    p.add_argument("--omega", type=_number("--omega", square=True), metavar="W",
+        p.add_argument(f"--{name}", type=real(above=0.0, most=MAX_LENGTH), required=True,
+                       metavar="L",
+                       help=f"{name} length {what} (any unit)")
+    p.add_argument("--omega", type=real(most=MAX_OMEGA, unit="rad/s"), metavar="W",
                    help="crank speed [rad/s] for ε4T = ν·ω²")
     p.add_argument("--branch", type=int, choices=(1, -1), default=1,
                    help="assembly mode (default +1; see docs/kinematics.md)")
@@ -45,14 +47,14 @@ def register(sub) -> None:
                "(write a value that starts with a minus with '=', as --reed-force=-50,-500)",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     for name, what in (("crank", "AB"), ("coupler", "BC"), ("rocker", "CD"), ("frame", "AD")):
-        p.add_argument(f"--{name}", type=_number(f"--{name}", positive=True), required=True,
+        p.add_argument(f"--{name}", type=real(above=0.0, most=MAX_LENGTH), required=True,
                        metavar="L", help=f"{name} length {what} [--unit]")
     p.add_argument("--unit", choices=("mm", "m"), default="mm",
                    help="length unit of lengths, centres of mass and the reed point (default mm)")
     speed = p.add_mutually_exclusive_group(required=True)
-    speed.add_argument("--rpm", type=_number("--rpm", positive=True), metavar="N",
+    speed.add_argument("--rpm", type=real(above=0.0, most=1e9, unit="rpm"), metavar="N",
                        help="crank speed [rev/min]")
-    speed.add_argument("--omega", type=_number("--omega", positive=True, square=True),
+    speed.add_argument("--omega", type=real(above=0.0, most=MAX_OMEGA, unit="rad/s"),
                        metavar="W", help="crank speed [rad/s]")
     p.add_argument("--mass", type=_vector("--mass", 3, nonneg=True), default=(0.0, 0.0, 0.0),
                    metavar="M2,M3,M4", help="masses of crank, coupler, rocker (with sley and "
@@ -61,7 +63,7 @@ def register(sub) -> None:
         p.add_argument(f"--{link}-com", type=_vector(f"--{link}-com", 2), default=(0.0, 0.0),
                        metavar="X,Y", help=f"{link} centre of mass in its frame [--unit] "
                        f"(--{link}-com=-5,2 when it starts with a minus)")
-        p.add_argument(f"--{link}-inertia", type=_number(f"--{link}-inertia", nonneg=True),
+        p.add_argument(f"--{link}-inertia", type=real(least=0.0, most=1e30, unit="kg·m²"),
                        default=0.0, metavar="J", help=f"{link} inertia about its centre of "
                        f"mass [kg·m²]")
     p.add_argument("--reed-force", type=_vector("--reed-force", 2), default=(0.0, 0.0),
@@ -69,7 +71,7 @@ def register(sub) -> None:
                    "(--reed-force=-50,-500 when it starts with a minus)")
     p.add_argument("--reed-point", type=_vector("--reed-point", 2), default=(0.0, 0.0),
                    metavar="X,Y", help="where it acts, rocker frame [--unit]")
-    p.add_argument("--beat-window", type=_number("--beat-window", positive=True), default=40.0,
+    p.add_argument("--beat-window", type=real(above=0.0, most=360.0, unit="deg"), default=40.0,
                    metavar="DEG", help="crank window of the half-sine reed force [deg] "
                    "(default 40, centred on the front dead centre)")
     p.add_argument("--gravity", action="store_true", help="add gravity, 9.81 m/s² along −y")
@@ -93,16 +95,16 @@ def register(sub) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--load", choices=("light", "medium", "heavy"), default="medium",
                    help="loom class: crank 33–34, 35–36 or 37–38 mm (default medium)")
-    p.add_argument("--swing", type=float, metavar="DEG",
+    p.add_argument("--swing", type=real(above=0.0, most=180.0, unit="deg"), metavar="DEG",
                    help="swing Ψ [deg] (default: explore 23–26°)")
     p.add_argument("--objective", choices=("margin", "ratio"), default="margin",
                    help="rank by the smallest criterion margin (default) or by |Φ2''|/|Φ1''|")
-    p.add_argument("--limit", type=int, default=10, metavar="N",
+    p.add_argument("--limit", type=count(1, 100_000), default=10, metavar="N",
                    help="number of designs shown, distinct shapes (default 10)")
     p.add_argument("--swing-range", type=_range("--swing-range"), metavar="LO:HI",
                    help="admissible swing Ψ [deg] (default the patent's 23:26)")
     for name in ("crank", "coupler", "rocker", "frame"):
-        p.add_argument(f"--{name}", type=_number(f"--{name}", positive=True), metavar="MM",
+        p.add_argument(f"--{name}", type=real(above=0.0, most=MAX_LENGTH), metavar="MM",
                        help=f"hold the {name} length fixed [mm]"
                        + (" (replaces the load's range)" if name == "crank" else "")
                        + (" (not with --frame)" if name == "rocker" else ""))
@@ -110,17 +112,17 @@ def register(sub) -> None:
                    metavar="LO:HI", help="coupler/crank ratios explored (default 1.5:8)")
     p.add_argument("--d-a-range", type=_range("--d-a-range"), default=(1.5, 8.0),
                    metavar="LO:HI", help="frame/crank ratios explored (default 1.5:8)")
-    p.add_argument("--step", type=_number("--step", positive=True), default=0.05,
+    p.add_argument("--step", type=real(above=0.0, most=1e3), default=0.05,
                    metavar="S", help="grid step of b/a and d/a (default 0.05)")
-    p.add_argument("--crank-step", type=_number("--crank-step", positive=True), default=0.5,
+    p.add_argument("--crank-step", type=real(above=0.0, most=1e3, unit="mm"), default=0.5,
                    metavar="MM", help="grid step of the crank length (default 0.5 mm)")
-    p.add_argument("--swing-step", type=_number("--swing-step", positive=True), default=0.5,
+    p.add_argument("--swing-step", type=real(above=0.0, most=180.0, unit="deg"), default=0.5,
                    metavar="DEG", help="grid step of the swing (default 0.5°)")
     p.add_argument("--no-refine", action="store_true",
                    help="report the grid's designs without the continuous refinement")
     p.add_argument("--export", metavar="DIR",
                    help="write DIR/design_K.linkage.toml and DIR/design_K.scene.toml per design")
-    p.add_argument("--omega", type=_number("--omega", positive=True, square=True),
+    p.add_argument("--omega", type=real(above=0.0, most=MAX_OMEGA, unit="rad/s"),
                    default=100.0, metavar="W", help="crank speed in exported files [rad/s] "
                    "(default 100)")
     for name, what, default in (("sley-inertia", "I4P, sley [kg·m²]", 0.35),
@@ -134,7 +136,7 @@ def register(sub) -> None:
                                  0.0),
                                 ("beat-window", "α, beat-up window [deg] (a comment today)",
                                  40.0)):
-        p.add_argument(f"--{name}", type=_number(f"--{name}", nonneg=True), default=default,
+        p.add_argument(f"--{name}", type=real(least=0.0, most=1e30), default=default,
                        metavar="X", help=f"exported scene: {what} (default {default:g}, "
                        f"Mrázek's one-side variant 1)")
     p.add_argument("--plot", metavar="IMAGE",
@@ -152,7 +154,7 @@ def register(sub) -> None:
         epilog="Example: mechcirc linkage examples/fnf_sixbar.toml --theta 30 --plot fnf.png",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("file", help="linkage file (.toml)")
-    p.add_argument("--theta", type=float, default=0.0, metavar="DEG",
+    p.add_argument("--theta", type=real(most=1e9, unit="deg"), default=0.0, metavar="DEG",
                    help="rotation of the first crank from the pose [deg] (default 0)")
     p.add_argument("--plot", metavar="IMAGE",
                    help="draw the linkage at θ with the paths of its points")
@@ -160,30 +162,9 @@ def register(sub) -> None:
     p.set_defaults(func=cmd_linkage)
 
 
-def _number(option, *, positive=False, nonneg=False, square=False):
-    """argparse type: a finite float (argparse turns the error into exit 2 with usage)."""
-    def parse(text):
-        try:
-            value = float(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{option} wants a number, got {text!r}") from None
-        if not math.isfinite(value):
-            raise argparse.ArgumentTypeError(f"{option} must be a finite number, got {text!r}")
-        if positive and not value > 0:
-            raise argparse.ArgumentTypeError(f"{option} must be > 0, got {text!r}")
-        if nonneg and not value >= 0:
-            raise argparse.ArgumentTypeError(f"{option} must be ≥ 0, got {text!r}")
-        if square and not math.isfinite(value * value):
-            raise argparse.ArgumentTypeError(
-                f"{option} {text} is too large: its square overflows float64 "
-                f"(|value| must stay below 1e154)")
-        return value
-    return parse
-
-
 def _vector(option, n, *, nonneg=False):
-    """argparse type: ``n`` finite numbers separated by commas."""
-    single = _number(option, nonneg=nonneg)
+    """argparse type: ``n`` finite numbers separated by commas (each as :func:`real` checks)."""
+    single = real(least=0.0 if nonneg else None, most=1e30)
 
     def parse(text):
         parts = text.split(",")
@@ -196,7 +177,7 @@ def _vector(option, n, *, nonneg=False):
 
 def _range(option):
     """argparse type: ``LO:HI``, two finite numbers with LO ≤ HI."""
-    single = _number(option)
+    single = real(most=1e30)
 
     def parse(text):
         parts = text.split(":")
@@ -213,10 +194,26 @@ def _deg(x):
     return f"{math.degrees(x):.3f}°"
 
 
+#: The longest link may be at most this many times the shortest (float64 keeps ~16 digits).
+MAX_LENGTH_RATIO = 1e6
+
+
+def _check_length_ratio(args) -> None:
+    from ..errors import InputError
+
+    lengths = {n: getattr(args, n) for n in ("crank", "coupler", "rocker", "frame")}
+    lo, hi = min(lengths, key=lengths.get), max(lengths, key=lengths.get)
+    if lengths[hi] > MAX_LENGTH_RATIO * lengths[lo]:
+        raise InputError(f"--{hi} {lengths[hi]:g} is more than {MAX_LENGTH_RATIO:g} times "
+                         f"--{lo} {lengths[lo]:g}; the four-bar's angles would be lost to "
+                         "rounding (give the lengths in a unit that keeps them comparable)")
+
+
 def cmd_fourbar(args) -> int:
     from ..kinematics import FourBar
 
     check_output_paths(plots=(args.plot,))
+    _check_length_ratio(args)
 
     fb = FourBar(args.crank, args.coupler, args.rocker, args.frame, branch=args.branch)
     doc = fb.summary(args.omega)

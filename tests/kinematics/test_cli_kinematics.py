@@ -117,7 +117,7 @@ def test_fourbar_change_point_is_named_and_nu_withheld(capsys):
     assert "RuntimeWarning" not in captured.err
 
 
-@pytest.mark.parametrize("extra,what", [(["--omega", "1e300"], "square overflows"),
+@pytest.mark.parametrize("extra,what", [(["--omega", "1e300"], "at most"),
                                         (["--omega", "nan"], "finite"),
                                         (["--omega", "inf"], "finite")])
 def test_fourbar_bad_omega_exit_2(capsys, extra, what):
@@ -130,9 +130,11 @@ def test_fourbar_bad_omega_exit_2(capsys, extra, what):
 def test_fourbar_huge_lengths_exit_2_without_warnings(capsys):
     argv = ["fourbar", "--crank", "1e308", "--coupler", "37", "--rocker", "1e308",
             "--frame", "189"]
-    assert main(argv) == 2
+    with pytest.raises(SystemExit) as info:
+        main(argv)
+    assert info.value.code == 2
     err = capsys.readouterr().err
-    assert "out of range" in err and "Warning" not in err and err.count("\n") == 1
+    assert "--crank" in err and "at most" in err and "Warning" not in err
 
 
 # ------------------------------------------------------------------ frame
