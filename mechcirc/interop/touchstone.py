@@ -33,7 +33,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import NetlistError
-from ..sources import read_source
+from ..sources import read_source, split_lines
 
 __all__ = ["read_touchstone_one_port"]
 
@@ -113,8 +113,7 @@ def read_touchstone_one_port(path: str | os.PathLike) -> tuple[NDArray[np.float6
     freqs: list[float] = []
     values: list[complex] = []
     last_f = -math.inf
-    lines = re.split(r"\r\n|\n|\r", text)
-    for number, raw in enumerate(lines, start=1):
+    for number, raw in enumerate(split_lines(text), start=1):
         body = raw.split("!", 1)[0]
         stripped = body.strip()
         if not stripped:
