@@ -129,3 +129,15 @@ def test_motion_pickles_and_states_match():
     s = lk.solve(math.radians(20.0))
     for p, x in s.points.items():
         np.testing.assert_allclose(x, m.points[1, m.point_names.index(p)], atol=1e-12)
+
+
+def test_lock_is_located_by_the_newton_path():
+    fb = FourBar(30.0, 10.0, 30.0, 25.0)
+    lo, hi = fb.crank_range()
+    th0 = 0.5 * (lo + hi)
+    lk, _ = fourbar_linkage(30.0, 10.0, 30.0, 25.0, theta0=th0, omega=1.0)
+    with pytest.raises(GeometryError, match=r"locks near θ = ([\d.]+)°") as info:
+        lk.motion(np.array([0.1, math.pi]), method="newton")
+    import re
+    got = float(re.search(r"θ = ([\d.]+)°", str(info.value)).group(1))
+    assert got == pytest.approx(math.degrees(hi - th0), abs=1e-3)
