@@ -135,11 +135,11 @@ def old_solve(lk, thetas, max_step_deg=2.0, use_fsolve=False):
                 guess = q + qdot * dt + 0.5 * qddot * dt * dt
                 q_new, ok = newton(guess, [c.omega * (t_now + dt) for c in lk.cranks])
                 if ok:
-                    Jn, qd_n, qdd_n, parts_n = derivatives(q_new)
+                    _, qd_n, qdd_n, _ = derivatives(q_new)
                     if qd_n is not None:
                         break
                 dt *= 0.5
-            q, qdot, qddot, parts, t_now = q_new, qd_n, qdd_n, parts_n, t_now + dt
+            q, qdot, qddot, t_now = q_new, qd_n, qdd_n, t_now + dt
         # the old per-position LinkageState: one dict entry per point
         for p, x in lk.pose.items():
             owner = next((l for l, ps in lk.links.items() if p in ps), None)

@@ -76,7 +76,8 @@ def register(sub) -> None:
                    "(default 40, centred on the front dead centre)")
     p.add_argument("--gravity", action="store_true", help="add gravity, 9.81 m/s² along −y")
     p.add_argument("--branch", type=int, choices=(1, -1), default=1, help="assembly mode")
-    p.add_argument("--points", type=int, default=361, metavar="N",
+    p.add_argument("--points", type=count(3, 100_000, why="one 9×9 solve per angle"),
+                   default=361, metavar="N",
                    help="crank angles over one turn, 0…360° (default 361; 3…100000)")
     p.add_argument("-o", "--output", metavar="CSV", help="write every angle's loads as CSV")
     p.add_argument("--plot", metavar="IMAGE", help="shaking force polar curve and magnitude "
@@ -266,8 +267,6 @@ def cmd_frame(args) -> int:
     from ..kinematics import FourBar, LinkMass, beat_up_force, frame_loading
 
     check_output_paths(args.output, plots=(args.plot,))
-    if not 3 <= args.points <= 100_000:
-        raise MechcircError(f"--points must be between 3 and 100000, got {args.points}")
     k = 1e-3 if args.unit == "mm" else 1.0            # to metres
     fb = FourBar(args.crank * k, args.coupler * k, args.rocker * k, args.frame * k,
                  branch=args.branch)
@@ -365,8 +364,8 @@ def cmd_synth(args) -> int:
         return 0 if res.designs else 2
     if not res.designs:
         print(f"mechcirc: error: {res.message}", file=sys.stderr)
-        for name, count in res.rejected.items():
-            print(f"  {name:20s} rejects {count} of {res.explored}", file=sys.stderr)
+        for name, n_rejected in res.rejected.items():
+            print(f"  {name:20s} rejects {n_rejected} of {res.explored}", file=sys.stderr)
         return 2
     print(res.message + ".")
     what = "margin" if args.objective == "margin" else "ratio"

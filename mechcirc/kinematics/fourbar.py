@@ -622,7 +622,7 @@ class FourBar:
         if crossings:
             where = " and ".join(f"{math.degrees(t):g}°" for t in crossings)
             doc["notes"].append(
-                f"change-point linkage"
+                "change-point linkage"
                 + ("" if self.linkage_type == "change-point" else f" ({self.linkage_type})")
                 + f": all four joints fall on one line "
                 f"at θ = {where}, where its two assembly modes cross; μ and ν are 0/0 there and "

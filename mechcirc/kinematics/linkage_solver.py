@@ -747,6 +747,10 @@ def _solve_newton(lk, pl, t, dt_max):
     Qk = np.empty((len(keep), nw.n))
     Qdk, Qddk = np.empty_like(Qk), np.empty_like(Qk)
     Qk[0], Qdk[0], Qddk[0] = q, qdot, qddot
+    # nodes solved by a block are final (polished, with batched derivatives):
+    # a target on one is taken as it is
+    exact = np.zeros(len(keep), dtype=bool)
+    Pk = np.empty((len(keep), nw.n, len(pl.crank_idx)))
     t_now = 0.0
     j, block = 1, 16
     while j < len(keep):
@@ -760,7 +764,8 @@ def _solve_newton(lk, pl, t, dt_max):
             T = nodes[keep[j:jj]]
             got = _block(nw, q, qdot, qddot, t_now, T, sign, pl)
             if got is not None:
-                Qk[j:jj], Qdk[j:jj], Qddk[j:jj] = got
+                Qk[j:jj], Qdk[j:jj], Qddk[j:jj], Pk[j:jj] = got
+                exact[j:jj] = True
                 q, qdot, qddot, t_now = got[0][-1], got[1][-1], got[2][-1], T[-1]
                 j, block = jj, min(2 * block, 64)
                 continue
@@ -796,6 +801,12 @@ def _solve_newton(lk, pl, t, dt_max):
     # the size at the default spacing), then batched Newton — usually one
     # polishing step — and two batched solves for q̇, q̈.
     src = np.searchsorted(keep, at, side="right") - 1
+    done = exact[src] & (keep[src] == at)
+    if np.all(done):
+        return Qk[src], Qdk[src], Qddk[src], Pk[src]
+    final = (Qk[src[done]], Qdk[src[done]], Qddk[src[done]], Pk[src[done]])
+    rest = np.flatnonzero(~done)
+    src, at, t = src[rest], at[rest], t[rest]
     nxt = np.minimum(src + 1, len(keep) - 1)
     t0, t1 = nodes[keep[src]], nodes[keep[nxt]]
     h = t1 - t0
@@ -831,7 +842,12 @@ def _solve_newton(lk, pl, t, dt_max):
             raise GeometryError(f"{lk.source}: branch jump near θ = {th:.6g}°: the position "
                                 f"passed a singular configuration (det J changed sign); reduce "
                                 f"max_step_deg or the linkage reaches a change point there")
-    return Q, qd, qdd, parts
+    out = []
+    for a, b in zip(final, (Q, qd, qdd, parts)):
+        full = np.empty((len(done),) + a.shape[1:])
+        full[done], full[rest] = a, b
+        out.append(full)
+    return tuple(out)
 
 
 def _block(nw, q, qdot, qddot, t_now, T, sign, pl):
@@ -841,7 +857,7 @@ def _block(nw, q, qdot, qddot, t_now, T, sign, pl):
     Q, ok = nw.newton(guess, pl.omega[None, :] * T[:, None])
     if not ok.all():
         return None
-    J, qd, qdd, _ = nw.derivatives(Q)
+    J, qd, qdd, parts = nw.derivatives(Q)
     if not (np.all(np.isfinite(qd)) and np.all(np.isfinite(qdd))):
         return None
     with np.errstate(all="ignore"):
@@ -853,7 +869,7 @@ def _block(nw, q, qdot, qddot, t_now, T, sign, pl):
     pred = prev_q + prev_d * h + 0.5 * prev_dd * h * h
     if not np.max(np.abs(pred - Q)) <= 1e-2 * pl.scale:
         return None
-    return Q, qd, qdd
+    return Q, qd, qdd, parts
 
 
 def _continue(lk, nw, q, qdot, qddot, t_now, t_target, dt_max, sign):
