@@ -133,11 +133,11 @@ def register(sub) -> None:
                                 ("c4", "C4, torsion rod rocker–sley [N·m/rad]", 5e4),
                                 ("k2", "k2, damping of C2 [N·m·s/rad]", 7.0),
                                 ("k4", "k4, damping of C4 [N·m·s/rad]", 29.0),
-                                ("beat-moment", "M0, beat-up moment [N·m] (a comment today)",
-                                 0.0),
-                                ("beat-window", "α, beat-up window [deg] (a comment today)",
-                                 40.0)):
-        p.add_argument(f"--{name}", type=real(least=0.0, most=1e30), default=default,
+                                ("beat-moment", "M0, beat-up moment [N·m], + counter-clockwise "
+                                 "on the sley (--beat-moment=-500 for a negative one)", 0.0),
+                                ("beat-window", "α, beat-up window [deg]", 40.0)):
+        p.add_argument(f"--{name}", type=real(least=None if name == "beat-moment" else 0.0,
+                                              most=1e30), default=default,
                        metavar="X", help=f"exported scene: {what} (default {default:g}, "
                        f"Mrázek's one-side variant 1)")
     p.add_argument("--plot", metavar="IMAGE",
@@ -388,8 +388,11 @@ def cmd_synth(args) -> int:
         print("exported:")
         for lk, sc in exported:
             print(f"  {lk}\n  {sc}")
+        from ..kinematics.synthesis_export import _reader_takes_moments
+
         print("  (the scene has the sley inertia and the torsion rods; the beat-up moment "
-              "is written as a comment, today's scene format has no crank-angle loads)")
+              + ("is its [[moments]] table)" if args.beat_moment and _reader_takes_moments()
+                 else "is written as a comment: this scene format has no crank-angle loads)"))
     return 0
 
 

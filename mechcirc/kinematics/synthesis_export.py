@@ -45,7 +45,8 @@ class SceneOptions:
     k2, k4 : float
         Their dampings [N·m·s/rad].
     M0 : float
-        Beat-up moment amplitude [N·m] (written as a comment).
+        Beat-up moment amplitude [N·m], positive turning the sley counter-clockwise
+        (a ``[[moments]]`` table when the scene reader has one, else a comment).
     alpha_deg : float
         Beat-up window [deg of crank] (written as a comment).
     """
@@ -66,10 +67,15 @@ class SceneOptions:
             v = getattr(self, name)
             if not (math.isfinite(v) and v > 0):
                 raise GeometryError(f"scene {name} must be a positive finite number, got {v}")
-        for name in ("k2", "k4", "M0", "alpha_deg"):
+        for name in ("k2", "k4"):
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):
                 raise GeometryError(f"scene {name} must be a finite number ≥ 0, got {v}")
+        if not math.isfinite(self.M0):
+            raise GeometryError(f"scene M0 must be a finite number [N·m], got {self.M0}")
+        if not (math.isfinite(self.alpha_deg) and 0 < self.alpha_deg <= 360):
+            raise GeometryError(f"scene beat-up window must be in (0, 360] deg, got "
+                                f"{self.alpha_deg}")
 
 
 def _pose(design):
@@ -139,11 +145,7 @@ velocity = {o.omega!r}
 
 [analysis]
 theta_deg = {round((math.degrees(front.theta) + 90.0) % 360.0, 6)!r}   # 90° after beat-up
-
-# Beat-up moment (not read by today's scene format; for the time-domain reader):
-# a half sine of amplitude M0 = {o.M0!r} N·m over alpha = {o.alpha_deg!r}° of crank
-# centred on the front dead centre, theta = {math.degrees(front.theta):.6f}°.
-''')
+''' + _beat_up(o, front))
 
 
 def export_designs(designs, directory, opts: SceneOptions = SceneOptions()) -> list:
@@ -172,3 +174,35 @@ def export_designs(designs, directory, opts: SceneOptions = SceneOptions()) -> l
             files.path(sc_path).write_text(scene_toml(des, k, opts), encoding="utf-8")
             out.append((lk_path, sc_path))
     return out
+
+
+_MOMENTS = """
+[[moments]]            # the beat-up: a half sine on the sley around the front dead centre
+name = "beatup"
+body = "sley"
+amplitude = {M0!r}     # M0 [N·m], positive turning the sley counter-clockwise
+window_deg = {alpha!r}
+centre = "front-dead-centre"
+"""
+
+
+def _beat_up(o, front):
+    """The beat-up moment as a ``[[moments]]`` table if the scene reader has one, else a comment.
+
+    The table is the time-domain scene format's (``[[moments]]`` in
+    ``docs/scenes.md`` once it lands); whether the installed reader knows it is
+    read from :data:`mechcirc.scene.files.SCENE_TABLES`, so the export follows
+    the reader.  A zero moment is only a comment.
+    """
+    if o.M0 != 0 and _reader_takes_moments():
+        return _MOMENTS.format(M0=float(o.M0), alpha=float(o.alpha_deg))
+    return (f"\n# Beat-up moment (today's scene format has no crank-angle loads): a half sine "
+            f"of amplitude\n# M0 = {o.M0!r} N·m over alpha = {o.alpha_deg!r}° of crank, "
+            f"centred on the front dead centre\n# at theta = "
+            f"{math.degrees(front.theta):.6f}° from the pose.\n")
+
+
+def _reader_takes_moments() -> bool:
+    from ..scene.files import SCENE_TABLES
+
+    return "moments" in SCENE_TABLES
