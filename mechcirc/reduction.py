@@ -735,6 +735,8 @@ def _through_reciprocal(rho: NDArray) -> NDArray:
     ``np.errstate(all="ignore")``.
     """
     r = np.reciprocal(rho)
+    if not isinstance(r, np.ndarray):          # a scalar ρ (a leaf constant in ω)
+        return np.reciprocal(np.fmax(r - 1.0, 0.0))
     r -= 1.0
     np.fmax(r, 0.0, out=r)
     return np.reciprocal(r, out=r)
