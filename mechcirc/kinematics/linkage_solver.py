@@ -424,9 +424,11 @@ class _DyadSolver:
             sin_ = np.abs(_im_conj(r1, r2)) / (dy.l1 * dy.l2)
             m = np.where(h2 >= 0, sin_, -1.0)
             margin = np.minimum(margin, np.where(np.isfinite(m), m, -1.0))
-            for L, xp, rr, ang, arm in ((L1, x1, r1, ang1, arm1), (L2, x2, r2, ang2, arm2)):
+            for L, xp, rr, ang, arm, ln in ((L1, x1, r1, ang1, arm1, dy.l1),
+                                            (L2, x2, r2, ang2, arm2, dy.l2)):
                 phi[L] = np.angle(rr) - ang
-                E[L] = rr / np.abs(rr) * complex(math.cos(ang), -math.sin(ang))
+                # |rr| is the link's length by construction (to rounding)
+                E[L] = rr * (complex(math.cos(ang), -math.sin(ang)) / ln)
                 r[L] = xp + E[L] * arm
             inner.append((x1, x2, r1, r2))
         return phi, E, r, inner, margin
@@ -504,16 +506,17 @@ def _solve_dyads(lk, pl, t, dt_max):
         _lock_error(lk, ds, 0.0 if k == 0 else check_t[k - 1], check_t[k])
     nc = len(lk.cranks)
     N = len(t)
-    parts = np.empty((N, 3 * pl.nb, nc))
-    for j in range(nc):
-        wc = np.zeros(nc)
-        wc[j] = pl.omega[j]
-        wj, vj = ds.velocities(E, inner, wc)
-        parts[:, :, j] = _pack(vj, wj)
-    if nc == 1:
-        qd = parts[:, :, 0].copy()
-        w = qd[:, 2::3].T
+    if nc == 1:                     # one crank: its part is the whole velocity
+        w, v = ds.velocities(E, inner, pl.omega)
+        qd = _pack(v, w)
+        parts = qd[:, :, None]
     else:
+        parts = np.empty((N, 3 * pl.nb, nc))
+        for j in range(nc):
+            wc = np.zeros(nc)
+            wc[j] = pl.omega[j]
+            wj, vj = ds.velocities(E, inner, wc)
+            parts[:, :, j] = _pack(vj, wj)
         w, v = ds.velocities(E, inner, pl.omega)
         qd = _pack(v, w)
     al, a = ds.accelerations(E, inner, w)
