@@ -261,3 +261,8 @@ def test_beat_up_moment_follows_the_scene_reader(monkeypatch):
     doc = tomllib.loads(E.scene_toml(des, 1, opts))
     assert doc["moments"] == [{"name": "beatup", "body": "sley", "amplitude": -500.0,
                                "window_deg": 10.0, "centre": "front-dead-centre"}]
+
+
+def test_a_grid_too_fine_is_refused_before_it_is_built():
+    with pytest.raises(GeometryError, match="too large"):
+        synthesize("medium", crank_step=1e-9)
