@@ -348,10 +348,15 @@ def test_glued_compound_unit_hint_names_the_whole_unit(tmp_path, capsys):
     (Bug at the time of writing: the hint reads "a space between the number
     and its unit: '5 N'", because the malformed-number scan stops at '/'.)
     """
+    # Issue 17 §1: a plain glued value is now read (5N/mm == 5 N/mm); the hint
+    # remains for a glued unit inside an expression.
     path = write(tmp_path, "glued.mcir", "spring k1 a 0 5N/mm\ndrive V a 0 velocity=1\n")
+    status, out, err = run(["check", path], capsys)
+    assert status == 0 and "5000" in out
+    path = write(tmp_path, "glued.mcir", "spring k1 a 0 1+5N/mm\ndrive V a 0 velocity=1\n")
     status, _, err = run(["check", path], capsys)
     assert status == 2
-    assert err.startswith(f"{path}:1:15: error: ")
+    assert err.startswith(f"{path}:1:17: error: ")
     assert "'5 N/mm'" in err
 
 

@@ -77,6 +77,62 @@ def run_handler(args) -> int:
         return EXIT_INTERNAL
 
 
+def quantity_type(role: str, default_unit: str | None = None):
+    """An argparse ``type=`` that reads a quantity in the one unit grammar (:mod:`mechcirc.units`).
+
+    ``role`` is what the value is (``"omega"``, ``"angle"``, ...).  Without a
+    unit the number is taken in ``default_unit`` (SI when None); with one it
+    is converted to ``default_unit`` (``--theta 0.5rad`` → 28.6… when the
+    option is in degrees).
+    """
+    import argparse
+
+    def convert(text: str) -> float:
+        from ..units import UnitError, parse_quantity, parse_unit, split_quantity
+
+        try:
+            value = parse_quantity(text, role)
+            parts = split_quantity(text)
+            if default_unit and parts and parts[1]:
+                value /= parse_unit(default_unit).factor
+            return value
+        except UnitError as exc:
+            raise argparse.ArgumentTypeError(
+                f"{exc.message} (expected {exc.expected}"
+                + (f"; no unit means {default_unit}" if default_unit else "") + ")") from None
+
+    convert.__name__ = role     # argparse names the type in its messages
+    return convert
+
+
+def join_spaced_quantities(argv: list[str]) -> list[str]:
+    """Join ``--opt 50 Hz`` into ``--opt "50 Hz"`` so options take spaced units as netlists do.
+
+    A number right after an option, followed by a token that the unit grammar
+    reads as a unit, is one quantity; anything else is left alone.
+    """
+    from ..units import UnitError, parse_unit, split_quantity
+
+    out: list[str] = []
+    i = 0
+    while i < len(argv):
+        tok = argv[i]
+        out.append(tok)
+        if (i + 1 < len(argv) and out[:-1] and out[-2].startswith("--") and "=" not in out[-2]
+                and (split_quantity(tok) or ("", "x"))[1] == ""):
+            unit = argv[i + 1]
+            try:
+                ok = unit in ("1/s",) or (not unit.startswith("-") and parse_unit(unit) and
+                                          not unit.endswith((".mcir", ".toml")))
+            except UnitError:
+                ok = False
+            if ok:
+                out[-1] = f"{tok} {unit}"
+                i += 1
+        i += 1
+    return out
+
+
 def _jsonable(obj):
     if isinstance(obj, float) and not math.isfinite(obj):
         return None if math.isnan(obj) else ("inf" if obj > 0 else "-inf")

@@ -9,13 +9,16 @@ from ._common import check_output_paths, print_json, save_figure
 
 
 def omega_value(text: str) -> float:
-    """argparse type: an angular frequency [rad/s], or with a unit (``50Hz``, ``3000rpm``)."""
+    """argparse type: an angular frequency [rad/s], or with a unit (``50Hz``, ``50 Hz``, ``3000rpm``)."""
     from ..units import parse_omega
 
     try:
         return parse_omega(text)
     except ValueError as exc:
         raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+omega_value.__name__ = "frequency"
 
 
 def register(sub) -> None:

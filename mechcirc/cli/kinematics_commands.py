@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import math
 
-from ._common import check_output_paths, print_json, save_figure
+from ._common import check_output_paths, print_json, quantity_type, save_figure
 
 
 def register(sub) -> None:
@@ -21,7 +21,7 @@ def register(sub) -> None:
     for name, what in (("crank", "AB"), ("coupler", "BC"), ("rocker", "CD"), ("frame", "AD")):
         p.add_argument(f"--{name}", type=float, required=True, metavar="L",
                        help=f"{name} length {what} (any unit)")
-    p.add_argument("--omega", type=float, metavar="W",
+    p.add_argument("--omega", type=quantity_type("omega"), metavar="W",
                    help="crank speed [rad/s] for ε4T = ν·ω²")
     p.add_argument("--branch", type=int, choices=(1, -1), default=1,
                    help="assembly mode (default +1; see docs/kinematics.md)")
@@ -38,7 +38,7 @@ def register(sub) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--load", choices=("light", "medium", "heavy"), default="medium",
                    help="loom class: crank 33–34, 35–36 or 37–38 mm (default medium)")
-    p.add_argument("--swing", type=float, metavar="DEG",
+    p.add_argument("--swing", type=quantity_type("angle", "deg"), metavar="DEG",
                    help="swing Ψ [deg] (default: explore 23–26°)")
     p.add_argument("--objective", choices=("margin", "ratio"), default="margin",
                    help="rank by the smallest criterion margin (default) or by |Φ2''|/|Φ1''|")
@@ -58,7 +58,7 @@ def register(sub) -> None:
         epilog="Example: mechcirc linkage examples/fnf_sixbar.toml --theta 30 --plot fnf.png",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("file", help="linkage file (.toml)")
-    p.add_argument("--theta", type=float, default=0.0, metavar="DEG",
+    p.add_argument("--theta", type=quantity_type("angle", "deg"), default=0.0, metavar="DEG",
                    help="rotation of the first crank from the pose [deg] (default 0)")
     p.add_argument("--plot", metavar="IMAGE",
                    help="draw the linkage at θ with the paths of its points")

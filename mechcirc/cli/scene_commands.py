@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import math
 
-from ._common import check_output_paths, print_json, save_figure
+from ._common import check_output_paths, print_json, quantity_type, save_figure
 
 
 def register(sub) -> None:
@@ -20,7 +20,7 @@ def register(sub) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("file", help="scene file (.toml)")
     what = p.add_mutually_exclusive_group()
-    what.add_argument("--theta", type=float, metavar="DEG",
+    what.add_argument("--theta", type=quantity_type("angle", "deg"), metavar="DEG",
                       help="crank rotation from the pose [deg] to linearise at (default: "
                            "theta_deg of the file's [analysis])")
     what.add_argument("--cycle", action="store_true",

@@ -6,7 +6,7 @@ import argparse
 import math
 import sys
 
-from ._common import check_output_paths, print_json, save_figure
+from ._common import check_output_paths, print_json, quantity_type, save_figure
 
 _METHODS = ("rk4", "rk4-python", "DOP853", "RK45", "LSODA")   # = mechcirc.sley.METHODS
 _UNITS = {"eps4T": "1/s^2", "eps2P": "1/s^2", "eps4P": "1/s^2", "eps5P": "1/s^2",
@@ -32,7 +32,7 @@ def register(sub) -> None:
                    help="revolutions to integrate; the last is tabulated (default 5)")
     p.add_argument("--revolution", type=int, metavar="K",
                    help="tabulate revolution K (1..R) instead of the last")
-    p.add_argument("--alpha", type=float, default=40.0, metavar="DEG",
+    p.add_argument("--alpha", type=quantity_type("angle", "deg"), default=40.0, metavar="DEG",
                    help="beat-up interval alpha [deg] (default 40, not printed in the paper)")
     p.add_argument("--beat-sign", type=int, choices=(-1, 1), default=-1,
                    help="sign of M4 in the sley equation: -1 as eq. (4) prints it (default), "
@@ -64,7 +64,7 @@ def register(sub) -> None:
     p.add_argument("--drive", choices=("one-side", "both-sides"), default="one-side")
     p.add_argument("--variant", type=int, default=3, choices=range(1, 8), metavar="N",
                    help="variant 1-7 (default 3)")
-    p.add_argument("--theta", type=float, metavar="DEG",
+    p.add_argument("--theta", type=quantity_type("angle", "deg"), metavar="DEG",
                    help="crank angle of the linearisation [deg] (default: the start angle, "
                         "where the sley's rigid acceleration is zero)")
     p.add_argument("--netlist", metavar="FILE", help="also write the netlist used")
@@ -100,10 +100,13 @@ def _overrides(args) -> dict:
         name, sep, value = item.partition("=")
         if not sep:
             raise ParameterError(f"--set expects NAME=VALUE, got {item!r}")
+        from ..units import UnitError, parse_quantity
+
         try:
-            out[name.strip()] = float(value)
-        except ValueError:
-            raise ParameterError(f"--set {name.strip()}: {value!r} is not a number") from None
+            out[name.strip()] = parse_quantity(value)   # SI, any unit: omega=3000rpm
+        except UnitError as exc:
+            raise ParameterError(f"--set {name.strip()}: {exc.message} (expected "
+                                 f"{exc.expected})") from None
     return out
 
 
