@@ -279,7 +279,8 @@ def _secondary_part(lv: Lever, edges: list[_Edge], levers: list[Lever], a: str, 
 def _prune(edges: list[_Edge], a: str, b: str, unloaded: list[str], drive_line: int,
            source: str) -> list[_Edge]:
     """Keep only edges in the biconnected block that holds the drive (they carry force)."""
-    kept = set(loaded_groups([[(e.n1, e.n2)] for e in edges], a, b, drive_line=drive_line))
+    kept = set(loaded_groups([[(e.n1, e.n2)] for e in edges], a, b, drive_line=drive_line,
+                             source=source))
     for i, e in enumerate(edges):
         if i not in kept:
             unloaded.extend(el.name for el in leaves(_flatten(e.node)))

@@ -31,7 +31,7 @@ def reachable(adj: dict[str, set[str]], start: str, blocked: str | None = None) 
 
 
 def loaded_groups(groups: Sequence[Sequence[tuple[str, str]]], a: str, b: str,
-                  *, drive_line: int = 0) -> list[int]:
+                  *, drive_line: int = 0, source: str = "") -> list[int]:
     """Indices of the groups that lie in the block joining nodes ``a`` and ``b``.
 
     Each group is a list of node pairs that belong together: one pair for a
@@ -49,9 +49,12 @@ def loaded_groups(groups: Sequence[Sequence[tuple[str, str]]], a: str, b: str,
         g.add_edges_from(pairs)
     if a not in g or b not in g or not nx.has_path(g, a, b):
         where = f" (line {drive_line})" if drive_line else ""
-        raise TopologyError(
+        exc = TopologyError(
             f"the drive's nodes {a!r} and {b!r}{where} are not connected by any path "
             "of elements", nodes=(a, b))
+        if source and drive_line:
+            exc.location = f"{source}:{drive_line}:1"     # FILE:LINE:COL for the CLI
+        raise exc
     g.add_edge(a, b)
     block: set[frozenset] = set()
     for comp in nx.biconnected_component_edges(g):

@@ -134,3 +134,15 @@ def test_common_slips_name_the_fix(text, line, col, fragment, fix):
     assert fix in (err.expected or ""), err.expected
     assert (err.line, err.col) == (line, col)
     assert str(err).startswith(f"bad.mcir:{line}:{col}: error:")
+
+
+@pytest.mark.parametrize("method", ["sp", "nodal"])
+def test_statement_errors_from_analysis_name_file_line_col(tmp_path, capsys, method):
+    from mechcirc.cli import main
+
+    path = tmp_path / "nc.mcir"
+    path.write_text("mass m b 0 1\ndrive V a 0 velocity=1\n")
+    assert main(["sweep", str(path), "--omega-min", "1", "--omega-max", "2",
+                 "--method", method]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"{path}:2:1: error: the drive's nodes 'a' and '0'"), err

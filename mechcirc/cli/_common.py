@@ -48,7 +48,9 @@ def run_handler(args) -> int:
         return EXIT_OK if status is None else status
     except MechcircError as exc:
         located = isinstance(exc, NetlistError)
-        print(str(exc) if located else f"mechcirc: error: {exc}", file=sys.stderr)
+        where = getattr(exc, "location", None)      # FILE:LINE:COL of a statement error
+        print(str(exc) if located else f"{where}: error: {exc}" if where
+              else f"mechcirc: error: {exc}", file=sys.stderr)
         return EXIT_USER
     except FileNotFoundError as exc:
         print(f"{exc.filename}: error: no such file", file=sys.stderr)
