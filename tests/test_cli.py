@@ -398,7 +398,8 @@ def test_topology_error_exit_2(tmp_path, capsys):
     path = write(tmp_path, "apart.mcir", "mass m1 a 0 2\nmass m2 b c 1\ndrive V a b velocity=1\n")
     status, out, err = run(["check", path], capsys)
     assert status == 2
-    assert err.startswith("mechcirc: error: the drive's nodes 'a' and 'b'")
+    # issue 17 §5: a statement error names FILE:LINE:COL (was "mechcirc: error: ...")
+    assert err.startswith(f"{path}:3:1: error: the drive's nodes 'a' and 'b'")
     assert "not connected" in err
 
 

@@ -37,6 +37,9 @@ def register(sub) -> None:
                    help="reduce the circuit to what the file's [analysis] output needs over "
                         "its band, within its tol (-o then writes the reduced netlist)")
     p.add_argument("--plot", metavar="IMAGE", help="--cycle: plot the map (PNG, SVG or PDF)")
+    p.add_argument("--unit", choices=("rad/s", "Hz"), default="rad/s",
+                   help="--cycle --plot: frequency unit of the plot (default rad/s, as the "
+                        "table)")
     p.add_argument("--json", action="store_true", help="print one JSON document")
     p.set_defaults(func=cmd_scene)
 
@@ -147,8 +150,11 @@ def _cycle(args, scene) -> int:
         raise MechcircError(f"--points must be between 2 and 100000, got {args.points}")
     if args.harmonics < 1 or args.harmonics > 1000:
         raise MechcircError(f"--harmonics must be between 1 and 1000, got {args.harmonics}")
-    cmap = cycle_map(scene, points=args.points, harmonics=args.harmonics,
-                     reflect=args.reflect)
+    from ..progress import Progress
+
+    with Progress(args.points, "crank angles") as bar:
+        cmap = cycle_map(scene, points=args.points, harmonics=args.harmonics,
+                         reflect=args.reflect, progress=lambda done, total: bar.update(1))
     W = cmap.natural_frequencies()
     with OutputSet() as out:
         if args.output:
@@ -159,11 +165,8 @@ def _cycle(args, scene) -> int:
                 table = np.column_stack([np.degrees(cmap.theta), W, np.abs(cmap.Q0)])
                 np.savetxt(fh, table, delimiter=",", fmt="%.10g")
         if args.plot:
-            import matplotlib.pyplot as plt
-
-            fig = plot_cycle(cmap)
+            fig = plot_cycle(cmap, unit=args.unit)
             save_figure(fig, args.plot, into=out.path(args.plot))
-            plt.close(fig)
     if args.json:
         doc = cmap.as_dict()
         doc.update({"file": args.file, "output": args.output, "plot": args.plot})
