@@ -355,7 +355,7 @@ def simplify(circuit: Circuit, band, tol: float, *, output: str | None = None,
     if output is not None:
         names = {e.name for e in circuit.elements}
         if output not in names:
-            raise MechcircError(f"--output {output!r}: no element of that name "
+            raise MechcircError(f"output {output!r}: no element of that name "
                                 f"(elements: {_some(sorted(names))})")
         protect.add(output)
     grid, y_full, skipped, inband = _check_grid(circuit, band, points, output)

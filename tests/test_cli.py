@@ -237,15 +237,21 @@ def test_sweep_json(capsys):
     assert doc["warnings"] == []
 
 
-def test_sweep_json_at_a_pole_is_still_strict_json(tmp_path, capsys):
-    """ω = 0 makes a mass's K infinite: the point is flagged, the JSON has no NaN/Infinity tokens."""
+def test_sweep_json_at_a_pole_reads_as_numbers(tmp_path, capsys):
+    """ω = 0 makes a mass's K infinite: the point is flagged, and the value is the number
+    -Infinity for json.loads (issue 17 §2 changed the convention from strings "inf"/"-inf",
+    which made the numeric arrays mixed)."""
     path = write(tmp_path, "m.mcir", "mass m a 0 2\ndrive V a 0 velocity=0.1\n")
     status, out, err = run(["sweep", path, "--omega-min", 0, "--omega-max", 10,
                             "--points", 3, "--json"], capsys)
     assert status == 0, err
-    doc = json.loads(out, parse_constant=lambda c: pytest.fail(f"non-JSON token {c}"))
+    doc = json.loads(out)
     assert doc["flags"] == [1, 0, 0] and doc["n_flagged"] == 1
-    assert doc["K"]["im"][0] == "-inf"
+    assert doc["K"]["im"][0] == float("-inf")
+    pd = pytest.importorskip("pandas")
+    import io
+    col = pd.read_json(io.StringIO(json.dumps({"im": doc["K"]["im"]})))["im"]
+    assert col.dtype.kind == "f" and col.iloc[0] == float("-inf")
     assert doc["K"]["im"][1:] == [-1 / (5.0 * 2), -1 / (10.0 * 2)]
 
 

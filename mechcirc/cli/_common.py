@@ -135,9 +135,17 @@ def join_spaced_quantities(argv: list[str]) -> list[str]:
     return out
 
 
+#: The --json convention for non-finite numbers (docs/cli.md): the bare tokens
+#: ``Infinity``, ``-Infinity`` and ``NaN``, as Python's json module writes and
+#: reads them; ``json.loads`` and ``pandas.read_json`` give floats, so numeric
+#: arrays stay numeric.  (Strict RFC 8259 readers such as jq need
+#: ``sub("NaN"; "null")``-style preprocessing; the flags say which points these are.)
+JSON_NONFINITE = "Infinity/-Infinity/NaN tokens"
+
+
 def _jsonable(obj):
-    if isinstance(obj, float) and not math.isfinite(obj):
-        return None if math.isnan(obj) else ("inf" if obj > 0 else "-inf")
+    if isinstance(obj, float):
+        return obj
     if isinstance(obj, dict):
         return {str(k): _jsonable(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):
@@ -150,8 +158,8 @@ def _jsonable(obj):
 
 
 def print_json(document) -> None:
-    """Print one JSON document on stdout (non-finite floats as strings/null)."""
-    json.dump(_jsonable(document), sys.stdout, indent=2, allow_nan=False)
+    """Print one JSON document on stdout (non-finite floats as Infinity, -Infinity, NaN)."""
+    json.dump(_jsonable(document), sys.stdout, indent=2, allow_nan=True)
     sys.stdout.write("\n")
 
 

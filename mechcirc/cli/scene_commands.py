@@ -56,9 +56,12 @@ def register(sub) -> None:
                    help="angular frequency band [rad/s], W1 < W2")
     p.add_argument("--tol", type=float, required=True, metavar="T",
                    help="largest relative error of the output allowed over the band (> 0)")
-    p.add_argument("--output", dest="element", metavar="ELEMENT",
+    p.add_argument("--element", dest="element", metavar="ELEMENT",
                    help="the force in this element is the output (default: K at the drive)")
-    p.add_argument("-o", dest="out", metavar="FILE", help="write the reduced netlist here")
+    # --output used to name the element; everywhere else it is a file.  It stays
+    # a file here too (the reduced netlist, as -o), so the name means one thing.
+    p.add_argument("-o", "--output", dest="out", metavar="FILE",
+                   help="write the reduced netlist here")
     p.add_argument("--points", type=int, default=2000, metavar="N",
                    help="log-spaced check points over the band (default 2000; two more "
                         "beside each resonance in the band)")
