@@ -17,7 +17,9 @@ docs/tutorial.md under "Examples in these docs"):
 * ``<!-- file: PATH -->`` writes the block to PATH before the next blocks
   run, so a netlist shown in a page is the netlist its commands read; when
   PATH is shipped (``docs/examples/...``) the block must equal the file.
-* ``<!-- not-run: REASON -->`` skips a block (a synopsis, a long benchmark).
+* ``<!-- not-run: REASON -->`` skips a block (a synopsis, a long run);
+  ``$ python benchmarks/...`` commands are never run (they measure, and take
+  minutes).
 * Blocks without ``$`` lines (netlists, TOML, output, grammars) are text.
 
 Each document runs in a fresh temporary folder holding links to
@@ -121,7 +123,9 @@ def _commands(text: str):
 def _run_shell(text, marks, where, tmp, env):
     """Run a block's ``$`` commands as one bash session (``echo $?`` sees the last status)."""
     expected = int(marks.get("exit", "0") or 0)
-    cmds = _commands(text)
+    # Benchmarks measure time, they do not check anything, and take minutes: the
+    # pages show their command and output, the test does not run them.
+    cmds = [c for c in _commands(text) if not c.lstrip().startswith("python benchmarks/")]
     script = []
     for i, cmd in enumerate(cmds):
         script.append(f"{cmd}\n__rc=$?; echo \"@@rc {i} $__rc\" >&2; (exit $__rc)")
