@@ -175,3 +175,18 @@ def test_short_reprs(stb_sweep):
     big = c.sweep(np.geomspace(10, 1e4, 800))
     assert len(repr(big)) < 300 and "800 points" in repr(big)
     assert big._repr_html_().startswith("<pre>")
+
+
+def test_kinematics_plots_take_fig_and_ax():
+    from matplotlib.figure import Figure
+
+    from mechcirc.kinematics.fourbar import FourBar
+    from mechcirc.kinematics.linkage import load_linkage
+    from mechcirc.kinematics.plots import plot_fourbar, plot_linkage
+
+    fig = Figure()
+    assert plot_fourbar(FourBar(29, 37, 188, 189), 100, fig=fig) is fig and len(fig.axes) == 4
+    lk = load_linkage(REPO / "examples" / "fnf_sixbar.toml")
+    state = lk.solve(0.0)
+    fig, ax = _axes()
+    assert plot_linkage(lk, state, ax=ax) is ax and ax.lines
