@@ -79,3 +79,13 @@ def test_import_and_help_do_not_load_matplotlib():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          cwd=REPO, check=True).stdout.strip()
     assert out == "False"
+
+
+def test_cycle_map_reports_progress():
+    from mechcirc.scene import load_scene
+    from mechcirc.scene.cycle import cycle_map
+
+    calls = []
+    cycle_map(load_scene(REPO / "examples" / "heald_scene.toml"), points=5, harmonics=2,
+              progress=lambda done, total: calls.append((done, total)))
+    assert calls == [(i, 5) for i in range(1, 6)]

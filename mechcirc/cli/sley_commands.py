@@ -221,8 +221,13 @@ def cmd_crosscheck(args) -> int:
         if not math.isfinite(args.theta):
             raise ParameterError(f"--theta must be a finite angle [deg], got {args.theta:g}")
         theta0 = math.radians(args.theta)
-    checks = {False: resonance_check(params, theta0, damping=False),
-              True: resonance_check(params, theta0, damping=True)}
+    from ..progress import Progress
+
+    bar = Progress(4, "crosscheck").__enter__()      # drawn on a terminal after 1 s
+    checks = {False: resonance_check(params, theta0, damping=False)}
+    bar.update()
+    checks[True] = resonance_check(params, theta0, damping=True)
+    bar.update()
     if args.netlist:
         from ..outputs import atomic_open
 
@@ -241,9 +246,12 @@ def cmd_crosscheck(args) -> int:
     except SolverError as exc:      # (b) cannot be measured; (a) and (c) still stand
         ring = None
         ring_notes.append(str(exc))
+    bar.update()
     omegas = np.array(sorted([0.5 * checks[False].eigen[0], checks[False].eigen[0],
                               checks[False].eigen[-1]]))
     harm = harmonic_check(params, theta0, omegas)
+    bar.update()
+    bar.__exit__(None, None, None)
     doc = {
         "label": params.label, "theta_deg": math.degrees(theta0),
         "resonances": [{"damping": d, "eigen_omega": list(c.eigen),
