@@ -251,3 +251,17 @@ def test_scene_toml_values_take_units(tmp_path):
     with pytest.raises(NetlistError) as info:
         load_scene(p)
     assert "a spring value needs stiffness" in info.value.message and info.value.line == 65
+
+
+def test_study_toml_frequencies_take_the_same_grammar():
+    import tomllib
+
+    from mechcirc.study import parse_spec
+
+    root = __import__("pathlib").Path(__file__).resolve().parents[1]
+    doc = tomllib.loads((root / "examples" / "study_stb.toml").read_text())
+    for text, expected in (("1500Hz", 3000 * math.pi), ("1.5 kHz", 3000 * math.pi),
+                           ("90000 rpm", 3000 * math.pi), ("9424.777960769379", 9424.777960769379)):
+        doc["omega"]["max"] = text
+        spec = parse_spec(doc, source="s.toml", base=root / "examples")
+        assert spec.omega[1] == pytest.approx(expected, rel=1e-12), text   # (min, max, n, log)
