@@ -51,7 +51,24 @@ def _mark_resonances(axes, resonances, legend_ax):
         legend_ax.legend(loc="best", fontsize="small")
 
 
-def plot_sweep(result, title: str | None = None, resonances=(), *, ax=None, fig=None):
+def _mark_peak(ax, peak) -> None:
+    """The exact peak of |Q0| (a :class:`mechcirc.sweep.Peak`): a dot at the located
+    maximum, or a triangle at the top of the axis at every undamped resonance (∞)."""
+    if peak is None or peak.quantity != "Q0":
+        return
+    if peak.unbounded:
+        for i, w in enumerate(peak.poles):
+            ax.plot([w], [1.0], marker="^", color="C3", ls="none",
+                    transform=ax.get_xaxis_transform(), clip_on=False,
+                    label="|Q0| = ∞ (undamped)" if i == 0 else None)
+    else:
+        ax.plot([peak.omega], [peak.value], marker="o", color="C3", ls="none",
+                label=f"peak {peak.value:.4g} N at {peak.omega:.6g} rad/s")
+    ax.legend(loc="best", fontsize="small")
+
+
+def plot_sweep(result, title: str | None = None, resonances=(), peak=None, *, ax=None,
+               fig=None):
     """Bode-style |K| [m/(N·s)] and arg K [deg], and the drive's response, against ω [rad/s].
 
     The third panel is what the drive does not prescribe: |Q0| [N] for a
@@ -59,7 +76,9 @@ def plot_sweep(result, title: str | None = None, resonances=(), *, ax=None, fig=
     drive (its title says so).  ``resonances`` (from
     :meth:`mechcirc.circuit.Circuit.resonances`) are drawn as vertical lines:
     solid for K = 0, dashed for K = ∞.  Flagged points (on or within rounding
-    of a pole or zero) are marked with crosses.
+    of a pole or zero) are marked with crosses.  ``peak`` (from
+    :func:`mechcirc.sweep.peak`) marks the exact maximum of |Q0|, or ∞ at each
+    undamped resonance.
 
     Parameters
     ----------
@@ -101,6 +120,7 @@ def plot_sweep(result, title: str | None = None, resonances=(), *, ax=None, fig=
     ax_q.set_ylabel("|v0| = |F0·K| [m/s]" if force_drive else "|Q0| [N]")
     ax_q.set_xlabel("ω [rad/s]")
     _mark_resonances((ax_k, ax_p, ax_q), resonances, ax_q)
+    _mark_peak(ax_q, peak)
     for a in (ax_k, ax_p, ax_q):
         a.grid(True, which="both", alpha=0.3)
     what = ("velocity response v0 = F0·K to the force drive" if force_drive

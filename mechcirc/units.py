@@ -85,6 +85,7 @@ ROLES: dict[str, dict[tuple[int, int, int], str]] = {
     "length": {(0, 1, 0): "length (m, mm, cm)"},
     "angle": {(0, 0, 0): "angle (rad, deg)"},
     "time": {(0, 0, 1): "time (s, ms, min)"},
+    "displacement": {(0, 1, 0): "length (m, mm)", (0, 0, 0): "angle (rad, deg)"},
 }
 
 #: Dimensions of the rotational member of each translational/rotational pair
