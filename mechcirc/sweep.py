@@ -394,7 +394,7 @@ def peak(result: "Sweep | Circuit", omega_min: float | None = None,
     --------
     >>> from mechcirc import parse
     >>> from mechcirc.sweep import peak
-    >>> c = parse("drive V a 0 velocity=1\nmass m a b 1\nspring k b 0 1e4")
+    >>> c = parse("drive V a 0 velocity=1\\nmass m a b 1\\nspring k b 0 1e4")
     >>> print(peak(c, 10, 1000))
     max |Q0| = inf (undamped resonance at omega = 100 rad/s)
     """
