@@ -103,9 +103,13 @@ def check_frame_paths(circuit: Circuit) -> None:
         via = [lv.name for lv in circuit.levers
                if {lv.p1, lv.p2, lv.s1, lv.s2} & set(floating)]
         line = next((lv.line for lv in circuit.levers if lv.name in via), 0)
-        raise TopologyError(
+        exc = TopologyError(
             f"node(s) {', '.join(sorted(floating)[:12])} have no path to the frame "
             f"(reached only through lever(s) {', '.join(via) or '—'}"
             f"{f', line {line}' if line else ''}); the network is singular: "
             "join the lever's secondary side to node 0",
             nodes=sorted(floating), elements=via)
+        col = next((lv.col for lv in circuit.levers if lv.name in via), 1) or 1
+        if line and circuit.source != "<string>":
+            exc.location = f"{circuit.source}:{line}:{col}"     # FILE:LINE:COL for the CLI
+        raise exc

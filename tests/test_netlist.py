@@ -146,3 +146,14 @@ def test_statement_errors_from_analysis_name_file_line_col(tmp_path, capsys, met
                  "--method", method]) == 2
     err = capsys.readouterr().err
     assert err.startswith(f"{path}:2:1: error: the drive's nodes 'a' and '0'"), err
+
+
+def test_lever_topology_errors_name_file_line_col(tmp_path, capsys):
+    from mechcirc.cli import main
+
+    path = tmp_path / "lv.mcir"
+    path.write_text("mass m a 0 1\nlever L a 0 b c ratio=2\nmass m2 b c 1\n"
+                    "drive V a 0 velocity=1\n")
+    assert main(["check", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"{path}:2:1: error: node(s) b, c have no path to the frame"), err
