@@ -270,8 +270,8 @@ def parse_quantity(text: str, role: str | None = None, *, what: str = "value") -
             raise UnitError(f"{what} {text!r} has a decimal comma", 0,
                             f"a decimal point: {text.strip().replace(',', '.', 1)!r}")
         example = {"omega": "50Hz, 50 Hz, 3000rpm or 314 (rad/s)"}.get(role, "12, 1.5e3, 500 g")
-        raise UnitError(f"{what} {text!r} is not a number with an optional unit", 0,
-                        f"a quantity such as {example}")
+        noun = "a frequency" if role == "omega" else "a number with an optional unit"
+        raise UnitError(f"{what} {text!r} is not {noun}", 0, f"a quantity such as {example}")
     number, unit = parts
     value = float(number)
     if not unit:
