@@ -73,6 +73,9 @@ def test_study_plot_one_parameter():
     assert list(x) == [0.7, 0.8, 0.9]
     assert list(y) == [r["resonance_1"] for r in result.rows]
     assert ax.get_ylabel() == "resonance_1 [rad/s]" and ax.get_xlabel() == "eta1"
+    fig2, ax2 = _axes()
+    assert plot_study(result, spec.params, "resonance_1", ax=ax2) is ax2
+    assert list(ax2.lines[0].get_ydata()) == list(y)
 
 
 # ---------------------------------------------------------------------------
@@ -190,3 +193,16 @@ def test_kinematics_plots_take_fig_and_ax():
     state = lk.solve(0.0)
     fig, ax = _axes()
     assert plot_linkage(lk, state, ax=ax) is ax and ax.lines
+
+
+def test_comparison_plot_on_a_given_figure():
+    from matplotlib.figure import Figure
+
+    from mechcirc.interop.skrf import compare
+    from mechcirc.plotting import plot_comparison
+
+    c = mechcirc.load(STB)
+    result = compare(c, REPO / "docs" / "examples" / "measured.s1p")
+    fig = Figure()
+    assert plot_comparison(result, name=c.name, fig=fig) is fig and len(fig.axes) == 2
+    np.testing.assert_allclose(fig.axes[0].lines[0].get_xdata(), result.omega)
