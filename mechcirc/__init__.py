@@ -59,6 +59,7 @@ from .errors import (GeometryError, MechcircError, MechcircWarning, NetlistError
 from .netlist import load, parse
 from .sweep import Sweep
 from .sweep import sweep
+from . import _methods  # noqa: F401  (attaches Circuit.sweep, .tree, …; see there)
 
 __all__ = [
     "parse", "load", "Circuit", "Element", "Lever", "Drive", "Sweep", "sweep",
