@@ -5,6 +5,7 @@ from __future__ import annotations
 import contextlib
 import json
 import math
+import os
 import signal
 import sys
 import threading
@@ -125,7 +126,7 @@ def join_spaced_quantities(argv: list[str]) -> list[str]:
             unit = argv[i + 1]
             try:
                 ok = unit in ("1/s",) or (not unit.startswith("-") and parse_unit(unit) and
-                                          not unit.endswith((".mcir", ".toml")))
+                                          not os.path.exists(unit))   # a file named "m"
             except UnitError:
                 ok = False
             if ok:
