@@ -16,7 +16,8 @@ import numpy as np
 import pytest
 
 import mechcirc
-from mechcirc import sweep as sweep_module
+import importlib
+sweep_module = importlib.import_module("mechcirc.sweep")   # mechcirc.sweep is the function
 from mechcirc.cli import main
 from mechcirc.errors import NetlistError
 from mechcirc.expressions import MAX_DEPTH, MAX_LENGTH, evaluate, parse_expression
