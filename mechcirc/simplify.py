@@ -165,13 +165,9 @@ def _output(circuit: Circuit, omega, output):
 
 def _loaded(elements, levers, drive) -> tuple[set, set]:
     """Indices of the elements and of the levers that carry force."""
-    from .topology import loaded_groups
+    from .topology import force_groups, loaded_groups
 
-    groups = [[(e.n1, e.n2)] for e in elements]
-    for lv in levers:
-        t = (lv.p1, lv.p2, lv.s1, lv.s2)
-        groups.append([(t[i], t[j]) for i in range(4) for j in range(i + 1, 4)])
-    kept = set(loaded_groups(groups, drive.n1, drive.n2))
+    kept = set(loaded_groups(force_groups(elements, levers), drive.n1, drive.n2))
     n = len(elements)
     return {i for i in range(n) if i in kept}, {i - n for i in kept if i >= n}
 

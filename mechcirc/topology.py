@@ -14,7 +14,7 @@ from typing import Sequence
 from .circuit import FRAME, Circuit
 from .errors import TopologyError
 
-__all__ = ["loaded_groups", "check_frame_paths", "reachable"]
+__all__ = ["loaded_groups", "force_groups", "node_names", "check_frame_paths", "reachable"]
 
 
 def reachable(adj: dict[str, set[str]], start: str, blocked: str | None = None) -> set[str]:
@@ -28,6 +28,33 @@ def reachable(adj: dict[str, set[str]], start: str, blocked: str | None = None) 
                 seen.add(w)
                 queue.append(w)
     return seen
+
+
+def force_groups(elements, levers) -> list[list[tuple[str, str]]]:
+    """The groups of node pairs that carry force together, for :func:`loaded_groups`.
+
+    One group per two-pole element (its two nodes), then one per lever: the six
+    pairs of the clique of its four terminals, which a lever couples all together.
+    Group ``i < len(elements)`` is ``elements[i]``, group ``len(elements) + k`` is
+    ``levers[k]``.
+    """
+    groups = [[(e.n1, e.n2)] for e in elements]
+    for lv in levers:
+        t = (lv.p1, lv.p2, lv.s1, lv.s2)
+        groups.append([(t[i], t[j]) for i in range(4) for j in range(i + 1, 4)])
+    return groups
+
+
+def node_names(elements, levers) -> list[str]:
+    """The node names of ``elements`` and ``levers``, in order of first appearance."""
+    seen: dict[str, None] = {}
+    for e in elements:
+        seen.setdefault(e.n1)
+        seen.setdefault(e.n2)
+    for lv in levers:
+        for n in (lv.p1, lv.p2, lv.s1, lv.s2):
+            seen.setdefault(n)
+    return list(seen)
 
 
 def loaded_groups(groups: Sequence[Sequence[tuple[str, str]]], a: str, b: str,

@@ -179,19 +179,14 @@ def two_port_z(circuit: "Circuit", P1: str, P2: str, S1: str, S2: str,
     """
     from ..circuit import FRAME
     from ..nodal import _batched_solve, _stamp
+    from ..topology import node_names
 
     # Not nodal.assemble(): it keeps only the part of the network that the
     # circuit's drive loads, while a two-port needs every element, including
     # those reached only from the second port.  The stamps are the same.
 
     omega = np.atleast_1d(np.asarray(omega, dtype=float))
-    names: dict[str, None] = {}
-    for e in circuit.elements:
-        names.setdefault(e.n1)
-        names.setdefault(e.n2)
-    for lv in circuit.levers:
-        for n in (lv.p1, lv.p2, lv.s1, lv.s2):
-            names.setdefault(n)
+    names = node_names(circuit.elements, circuit.levers)
     for port in (P1, P2, S1, S2):
         if port not in names:
             raise TopologyError(f"port node {port!r} is not a node of the circuit "
