@@ -8,7 +8,6 @@
 
 from __future__ import annotations
 
-from collections import deque
 from typing import Sequence
 
 from .circuit import FRAME, Circuit
@@ -19,15 +18,15 @@ __all__ = ["loaded_groups", "force_groups", "node_names", "check_frame_paths", "
 
 def reachable(adj: dict[str, set[str]], start: str, blocked: str | None = None) -> set[str]:
     """Nodes reachable from ``start`` in the adjacency map ``adj``, never entering ``blocked``."""
-    seen = {start}
-    queue = deque([start])
-    while queue:
-        u = queue.popleft()
-        for w in adj.get(u, ()):
-            if w != blocked and w not in seen:
-                seen.add(w)
-                queue.append(w)
-    return seen
+    import networkx as nx
+
+    if blocked == start:        # the start itself is never blocked
+        blocked = None
+    g = nx.Graph()
+    g.add_node(start)
+    g.add_edges_from((u, w) for u, ws in adj.items() if u != blocked
+                     for w in ws if w != blocked)
+    return set(nx.node_connected_component(g, start))
 
 
 def force_groups(elements, levers) -> list[list[tuple[str, str]]]:
@@ -100,31 +99,20 @@ def check_frame_paths(circuit: Circuit) -> None:
     referenced when the circuit has no frame node at all (a free-floating
     network driven between two of its own nodes).
     """
-    adj: dict[str, set[str]] = {}
+    import networkx as nx
 
-    def link(u, w):
-        adj.setdefault(u, set()).add(w)
-        adj.setdefault(w, set()).add(u)
-
-    for e in circuit.elements:
-        link(e.n1, e.n2)
-    for lv in circuit.levers:
-        link(lv.p1, lv.p2)
-        link(lv.s1, lv.s2)
+    g = nx.Graph()
+    g.add_edges_from((e.n1, e.n2) for e in circuit.elements)
+    g.add_edges_from(p for lv in circuit.levers for p in ((lv.p1, lv.p2), (lv.s1, lv.s2)))
     d = circuit.drive
-    link(d.n1, d.n2)
-    seen = reachable(adj, FRAME if FRAME in adj else d.n1)
+    g.add_edge(d.n1, d.n2)
+    referenced = nx.node_connected_component(g, FRAME if FRAME in g else d.n1)
     lever_nodes = {n for lv in circuit.levers for n in (lv.p1, lv.p2, lv.s1, lv.s2)}
-    floating: list[str] = []
-    for n in adj:
-        if n in seen:
-            continue
-        # Collect this unreferenced component; islands without levers are merely
-        # unloaded (they carry no force), ones reached through a lever are singular.
-        comp = reachable(adj, n)
-        seen |= comp
-        if comp & lever_nodes:
-            floating.extend(comp)
+    # Islands without levers are merely unloaded (they carry no force); ones
+    # reached through a lever are singular.
+    floating = [n for comp in nx.connected_components(g)
+                if comp & lever_nodes and not comp & referenced
+                for n in comp]
     if floating:
         via = [lv.name for lv in circuit.levers
                if {lv.p1, lv.p2, lv.s1, lv.s2} & set(floating)]

@@ -66,3 +66,8 @@ def test_check_frame_paths_accepts_grounded_secondary_and_plain_islands():
                             "lever L 1 0 5 0 ratio=2\nspring k 5 0 3\n"))
     # an island without levers is unloaded, not singular
     check_frame_paths(parse("drive V 1 0 velocity=1\nmass m 1 0 1\nspring k 7 8 3\n"))
+
+
+def test_reachable_start_equal_to_blocked_is_not_blocked():
+    adj = {"a": {"b"}, "b": {"a"}}
+    assert reachable(adj, "a", blocked="a") == {"a", "b"}
