@@ -165,7 +165,7 @@ def _csv_peak(n: int, tmp_path, monkeypatch) -> int:
     """tracemalloc peak [bytes] of write_sweep_csv for an n-point sweep already computed."""
     import tracemalloc
 
-    from mechcirc.cli.circuit_commands import write_sweep_csv
+    from mechcirc.io_csv import write_sweep_csv
 
     # Formatting is not what is measured (and is slow under tracemalloc): savetxt
     # only records the block it is given; the buffers the writer builds are measured.

@@ -104,13 +104,15 @@ def _load_with_warnings(path):
     return circuit, messages
 
 
-def _tree_text(circuit) -> str:
+def _tree_and_unloaded(circuit) -> tuple[str, tuple[str, ...]]:
+    """The reduction tree as text and the unloaded elements, from the method that applies."""
     from ..errors import NotSeriesParallelError
 
     try:
-        return str(circuit.tree)
+        return str(circuit.tree), circuit.unloaded
     except NotSeriesParallelError as exc:
-        return f"(not series–parallel: {exc.message}; nodal analysis is used)"
+        return (f"(not series–parallel: {exc.message}; nodal analysis is used)",
+                circuit.nodal.unloaded)
 
 
 def cmd_check(args) -> int:
@@ -121,8 +123,7 @@ def cmd_check(args) -> int:
     levers = [{"name": lv.name, "p1": lv.p1, "p2": lv.p2, "s1": lv.s1, "s2": lv.s2,
                "ratio": lv.ratio, "line": lv.line} for lv in circuit.levers]
     d = circuit.drive
-    tree = _tree_text(circuit)
-    unloaded = circuit.nodal.unloaded if tree.startswith("(") else circuit.unloaded
+    tree, unloaded = _tree_and_unloaded(circuit)
     doc = {
         "file": args.file, "name": circuit.name,
         "drive": {"name": d.name, "n1": d.n1, "n2": d.n2, "kind": d.kind,
@@ -186,37 +187,6 @@ def _omega_grid(args):
             raise MechcircError("--log needs --omega-min > 0")
         return np.geomspace(lo, hi, n)
     return np.linspace(lo, hi, n)
-
-
-def write_sweep_csv(result, path) -> None:
-    """Write ``omega,K_re,K_im,Q0_re,Q0_im[,v0_re,v0_im],flag`` rows to ``path``.
-
-    The ``v0`` columns appear for a force drive.  ``flag`` is 0 for a regular
-    point, 1 on a pole or zero of K, 2 within rounding of one.
-    """
-    import numpy as np
-
-    columns = [result.omega, result.K.real, result.K.imag, result.Q0.real, result.Q0.imag]
-    header = "omega,K_re,K_im,Q0_re,Q0_im"
-    if result.drive.kind == "force":
-        columns += [result.v0.real, result.v0.imag]
-        header += ",v0_re,v0_im"
-    from ..progress import Progress
-
-    columns.append(result.flags)
-    n = len(result.omega)
-    # Formatting 17 digits is the slow part (about 5 s per million rows): in
-    # blocks, so that a terminal shows progress on long sweeps, and stacking the
-    # columns one block at a time keeps memory bounded (10^7 points would
-    # otherwise need a 640 MB table).
-    block = 100_000
-    with open(path, "w", newline="") as fh, Progress(n, "CSV") as bar:
-        fh.write(header + ",flag\n")
-        fmt = ["%.17g"] * (len(columns) - 1) + ["%d"]
-        for start in range(0, n, block):
-            table = np.column_stack([c[start:start + block] for c in columns])
-            np.savetxt(fh, table, delimiter=",", fmt=fmt)
-            bar.update(len(table))
 
 
 def _some_omega(values, limit: int = 5) -> str:
@@ -303,6 +273,8 @@ def cmd_sweep(args) -> int:
     dropped = 0
     with OutputSet() as out:
         if args.output:
+            from ..io_csv import write_sweep_csv
+
             write_sweep_csv(result, out.path(args.output))
         if args.touchstone:
             from ..interop.skrf import write_touchstone
