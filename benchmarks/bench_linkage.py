@@ -79,12 +79,12 @@ def old_solve(lk, thetas, max_step_deg=2.0, use_fsolve=False):
     """The pre-issue-14 continuation, verbatim in its numerics; returns q per position."""
     from scipy.optimize import fsolve
 
-    local, idx, rows = lk._local(), lk._index(), lk._rows()
+    local, idx, rows = lk.local_offsets(), lk._index(), lk.constraint_rows()
     n = 3 * len(lk.links)
     nc = len(lk.cranks)
     w1 = lk.cranks[0].omega
     wmax = max(abs(c.omega) for c in lk.cranks)
-    tol = 1e-12 * lk._scale()
+    tol = 1e-12 * lk.length_scale()
     PERP = np.array([[0.0, -1.0], [1.0, 0.0]])
 
     def rot(phi):

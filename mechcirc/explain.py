@@ -14,7 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from .circuit import ELEMENT_UNITS, Circuit
-from .reduction import Leaf, Node, Parallel, Series, postorder
+from .reduction import Leaf, Node, Parallel, Series, leaves, postorder
 
 __all__ = ["Step", "explain", "explain_lines"]
 
@@ -90,7 +90,7 @@ def explain_lines(circuit: Circuit) -> list[str]:
     d = circuit.drive
     lines = [f"K seen by drive {d.name} between {d.n1} and {d.n2}, "
              f"reduced in {len(steps)} step(s)"]
-    loaded = {e.name for e in _leaves(circuit.tree)}
+    loaded = {e.name for e in leaves(circuit.tree)}
     lines.append("elements (an element enters as value·η):")
     width = max((len(e.name) for e in circuit.elements), default=4)
     for e in circuit.elements:
@@ -107,9 +107,3 @@ def explain_lines(circuit: Circuit) -> list[str]:
         lines.append(f"        {'':<{lwidth}}   {s.reason}")
     lines.append(f"K = {root}")
     return lines
-
-
-def _leaves(tree):
-    from .reduction import leaves
-
-    return leaves(tree)

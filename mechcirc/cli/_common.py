@@ -293,3 +293,24 @@ def save_figure(fig, path, into=None) -> None:
         return
     with atomic_path(path) as tmp:
         fig.savefig(tmp, format=fmt, dpi=120, bbox_inches="tight")
+
+
+def load_with_warnings(path):
+    """Load and reduce a netlist, returning the circuit and the warnings raised."""
+    import warnings
+
+    from ..errors import NotSeriesParallelError
+    from ..netlist import load
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        circuit = load(path)
+        try:
+            circuit.tree    # reduce now, so topology errors and warnings surface here
+        except NotSeriesParallelError:
+            circuit.nodal   # nodal analysis takes over; its own errors surface here
+    messages = [str(w.message) for w in caught]
+    messages += [f"spring {e.name!r} has backlash={e.backlash:g}: the frequency domain takes "
+                 "its contact as closed (linearised); 'mechcirc transient' integrates the gap"
+                 for e in circuit.elements if e.kind == "spring" and e.backlash >= 1e-10]
+    return circuit, messages

@@ -7,7 +7,8 @@ import sys
 
 from ..limits import (MAX_ADAPTIVE_NODAL_POINTS, MAX_JSON_POINTS, MAX_NODAL_POINTS,
                       MAX_PLOT_POINTS, MAX_SWEEP_POINTS)
-from ._common import check_output_paths, count, print_json, real, save_figure
+from ._common import (check_output_paths, count, load_with_warnings, print_json, real,
+                      save_figure)
 
 
 #: argparse type: an angular frequency [rad/s], or with a unit (``50Hz``, ``3000rpm``); the
@@ -82,28 +83,6 @@ def register(sub) -> None:
     p.set_defaults(func=cmd_resonances)
 
 
-def _load_with_warnings(path):
-    """Load and reduce a netlist, returning the circuit and the warnings raised."""
-    import warnings
-
-    from ..netlist import load
-
-    from ..errors import NotSeriesParallelError
-
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        circuit = load(path)
-        try:
-            circuit.tree    # reduce now, so topology errors and warnings surface here
-        except NotSeriesParallelError:
-            circuit.nodal   # nodal analysis takes over; its own errors surface here
-    messages = [str(w.message) for w in caught]
-    messages += [f"spring {e.name!r} has backlash={e.backlash:g}: the frequency domain takes "
-                 "its contact as closed (linearised); 'mechcirc transient' integrates the gap"
-                 for e in circuit.elements if e.kind == "spring" and e.backlash >= 1e-10]
-    return circuit, messages
-
-
 def _tree_and_unloaded(circuit) -> tuple[str, tuple[str, ...]]:
     """The reduction tree as text and the unloaded elements, from the method that applies."""
     from ..errors import NotSeriesParallelError
@@ -116,7 +95,7 @@ def _tree_and_unloaded(circuit) -> tuple[str, tuple[str, ...]]:
 
 
 def cmd_check(args) -> int:
-    circuit, warns = _load_with_warnings(args.file)
+    circuit, warns = load_with_warnings(args.file)
     elements = [
         {"name": e.name, "kind": e.kind, "n1": e.n1, "n2": e.n2, "value": e.value,
          "eta": e.eta, "line": e.line} for e in circuit.elements]
@@ -233,7 +212,7 @@ def cmd_sweep(args) -> int:
             raise MechcircError(
                 f"{args.touchstone}: --touchstone writes K at the drive, a one-port: name "
                 "the file .s1p (a 2-port of two nodes is mechcirc.interop.skrf.two_port)")
-    circuit, warns = _load_with_warnings(args.file)
+    circuit, warns = load_with_warnings(args.file)
     omega = _omega_grid(args)
     if args.adaptive:
         from ..adaptive import adaptive_sweep
@@ -333,7 +312,7 @@ def cmd_sweep(args) -> int:
 
 
 def cmd_resonances(args) -> int:
-    circuit, warns = _load_with_warnings(args.file)
+    circuit, warns = load_with_warnings(args.file)
     found = circuit.resonances(omega_max=args.omega_max)
     for w in warns:
         print(f"warning: {w}", file=sys.stderr)

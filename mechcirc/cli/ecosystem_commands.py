@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from ._common import check_output_paths, count, print_json, save_figure
+from ._common import check_output_paths, count, load_with_warnings, print_json, save_figure
 
 
 def register(sub) -> None:
@@ -89,10 +89,8 @@ def register(sub) -> None:
 
 def cmd_forces(args) -> int:
     from ..forces import element_forces
-    from .circuit_commands import _load_with_warnings
-
     check_output_paths(plots=(args.plot,))
-    circuit, warns = _load_with_warnings(args.file)
+    circuit, warns = load_with_warnings(args.file)
     rows, K, Q0, flag = element_forces(circuit, args.omega, method=args.method)
     for w in warns:
         print(f"warning: {w}", file=sys.stderr)
@@ -131,10 +129,8 @@ def _deg(x: float) -> float:
 
 def cmd_compare(args) -> int:
     from ..interop.skrf import compare
-    from .circuit_commands import _load_with_warnings
-
     check_output_paths(plots=(args.plot,))
-    circuit, warns = _load_with_warnings(args.file)
+    circuit, warns = load_with_warnings(args.file)
     result = compare(circuit, args.measured, method=args.method,
                      omega_min=args.omega_min, omega_max=args.omega_max)
     summary = result.summary()
@@ -166,9 +162,7 @@ def cmd_compare(args) -> int:
 
 def cmd_formula(args) -> int:
     from ..interop.formula import formula_and_values
-    from .circuit_commands import _load_with_warnings
-
-    circuit, warns = _load_with_warnings(args.file)
+    circuit, warns = load_with_warnings(args.file)
     for w in warns:
         print(f"warning: {w}", file=sys.stderr)
     K, values = formula_and_values(circuit, expand=args.expand, numeric=args.numeric)

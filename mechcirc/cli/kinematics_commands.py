@@ -388,10 +388,10 @@ def cmd_synth(args) -> int:
         print("exported:")
         for lk, sc in exported:
             print(f"  {lk}\n  {sc}")
-        from ..kinematics.synthesis_export import _reader_takes_moments
+        from ..kinematics.synthesis_export import reader_takes_moments
 
         print("  (the scene has the sley inertia and the torsion rods; the beat-up moment "
-              + ("is its [[moments]] table)" if args.beat_moment and _reader_takes_moments()
+              + ("is its [[moments]] table)" if args.beat_moment and reader_takes_moments()
                  else "is written as a comment: this scene format has no crank-angle loads)"))
     return 0
 

@@ -340,9 +340,6 @@ class FourBar:
         un = np.unwrap(raw)
         return float(_wrap(0.5 * (un.max() + un.min())))
 
-    def _rocker_turns(self) -> bool:
-        return self._turns
-
     def evaluate(self, theta: ArrayLike) -> FourBarState:
         """All positions and transfer functions at crank angles ``theta`` [rad], in one pass.
 

@@ -234,12 +234,12 @@ class Linkage:
         names = self.link_names
         return {n: i for i, n in enumerate(names)}
 
-    def _local(self):
-        """link → {point: pose offset from the link's first point}."""
+    def local_offsets(self) -> dict[str, dict[str, NDArray[np.float64]]]:
+        """link → {point: pose offset from the link's first point} [m]."""
         return {l: {p: self.pose[p] - self.pose[pts[0]] for p in pts}
                 for l, pts in self.links.items()}
 
-    def _rows(self):
+    def constraint_rows(self) -> list[tuple[str, str, str]]:
         """Constraint rows: list of (point, body_a, body_b) with body_a possibly 'ground'."""
         rows = []
         for p, members in self.joints().items():
@@ -291,9 +291,12 @@ class Linkage:
             k += 1
         return J
 
-    def _scale(self):
+    def length_scale(self) -> float:
+        """The larger side of the pose's bounding box [m] (1 if all points coincide)."""
         pts = np.array(list(self.pose.values()))
         return float(np.max(np.ptp(pts, axis=0))) or 1.0
+
+    _scale = length_scale      # scene/model.py still calls lk._scale(); to go when it doesn't
 
     def _newton(self, q, angles, local, idx, rows, tol):
         previous = np.inf
@@ -402,10 +405,10 @@ class Linkage:
         GeometryError
             Newton does not converge (no assembly near ``near``).
         """
-        local, idx, rows = self._local(), self._index(), self._rows()
+        local, idx, rows = self.local_offsets(), self._index(), self.constraint_rows()
         q = self.q0() if near is None else np.array(near, dtype=float)
         angles = [float(crank_angles[c.link]) for c in self.cranks]
-        q, ok = self._newton(q, angles, local, idx, rows, 1e-12 * self._scale())
+        q, ok = self._newton(q, angles, local, idx, rows, 1e-12 * self.length_scale())
         if not ok:
             raise GeometryError(f"{self.source}: no assembly near the given coordinates for "
                                 f"crank angles {crank_angles}")

@@ -243,7 +243,7 @@ def plan(lk) -> _Plan:
     names = lk.link_names
     idx = {n: i for i, n in enumerate(names)}
     nb = len(names)
-    local = lk._local()
+    local = lk.local_offsets()
     points = tuple(lk.pose)
     owner, offsets = [], []
     for p in points:
@@ -253,7 +253,7 @@ def plan(lk) -> _Plan:
     crank_idx = np.array([idx[c.link] for c in lk.cranks])
     omega = np.array([c.omega for c in lk.cranks], dtype=float)
     pivot = np.array([lk.pose[c.pivot] for c in lk.cranks])
-    rows = lk._rows()
+    rows = lk.constraint_rows()
     m = len(rows)
 
     def body(b):
@@ -268,7 +268,7 @@ def plan(lk) -> _Plan:
                   ib=np.array([body(b) for _, _, b in rows], dtype=int).reshape(m),
                   sa=np.array([off(a, p) for p, a, _ in rows], dtype=float).reshape(m, 2),
                   sb=np.array([off(b, p) for p, _, b in rows], dtype=float).reshape(m, 2),
-                  q0=lk.q0(), scale=lk._scale())
+                  q0=lk.q0(), scale=lk.length_scale())
     dyads = _dyads(lk, idx)
     if dyads is None:
         return _Plan("newton", **common)
@@ -425,7 +425,7 @@ class _DyadSolver:
 
     def __init__(self, lk, pl):
         self.lk, self.pl = lk, pl
-        local = lk._local()
+        local = lk.local_offsets()
         self.local = [{p: complex(*x) for p, x in local[n].items()} for n in lk.link_names]
         self.pose = {p: complex(*x) for p, x in lk.pose.items()}
         self.crank_arm = [-self.local[pl.crank_idx[j]][c.pivot] for j, c in enumerate(lk.cranks)]

@@ -27,7 +27,7 @@ from pathlib import Path
 
 from ..errors import GeometryError
 
-__all__ = ["SceneOptions", "linkage_toml", "scene_toml", "export_designs"]
+__all__ = ["SceneOptions", "linkage_toml", "scene_toml", "export_designs", "reader_takes_moments"]
 
 
 @dataclass(frozen=True)
@@ -194,7 +194,7 @@ def _beat_up(o, front):
     read from :data:`mechcirc.scene.files.SCENE_TABLES`, so the export follows
     the reader.  A zero moment is only a comment.
     """
-    if o.M0 != 0 and _reader_takes_moments():
+    if o.M0 != 0 and reader_takes_moments():
         return _MOMENTS.format(M0=float(o.M0), alpha=float(o.alpha_deg))
     return (f"\n# Beat-up moment (today's scene format has no crank-angle loads): a half sine "
             f"of amplitude\n# M0 = {o.M0!r} N·m over alpha = {o.alpha_deg!r}° of crank, "
@@ -202,7 +202,7 @@ def _beat_up(o, front):
             f"{math.degrees(front.theta):.6f}° from the pose.\n")
 
 
-def _reader_takes_moments() -> bool:
+def reader_takes_moments() -> bool:
     from ..scene.files import SCENE_TABLES
 
     return "moments" in SCENE_TABLES
