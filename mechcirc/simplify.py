@@ -42,7 +42,7 @@ import numpy as np
 from .circuit import FRAME, Circuit, Element
 from .errors import MechcircError, TopologyError
 
-__all__ = ["BandError", "Simplified", "simplify", "parse_band", "write_netlist"]
+__all__ = ["BandError", "Simplified", "simplify", "parse_band", "check_band", "write_netlist"]
 
 
 class BandError(MechcircError, ValueError):
@@ -65,10 +65,16 @@ def parse_band(text: str) -> tuple[float, float]:
         w1, w2 = parse_omega(parts[0]), parse_omega(parts[1])     # 1Hz:50Hz as 10:2000
     except ValueError as exc:
         raise BandError(f"band {text!r}: {exc}") from None
-    return _check_band((w1, w2))
+    return check_band((w1, w2))
 
 
-def _check_band(band) -> tuple[float, float]:
+def check_band(band) -> tuple[float, float]:
+    """(W1, W2) as floats, checked: finite, 0 < W1 < W2 [rad/s].
+
+    Raises
+    ------
+    BandError
+    """
     try:
         w1, w2 = (float(x) for x in band)
     except (TypeError, ValueError):
@@ -81,6 +87,9 @@ def _check_band(band) -> tuple[float, float]:
     if w1 <= 0:
         raise BandError(f"band W1 = {w1:g} rad/s must be > 0 (masses have K = ∞ at ω = 0)")
     return w1, w2
+
+
+_check_band = check_band     # scene/files.py still imports the old name; to go when it doesn't
 
 
 @dataclass(frozen=True, eq=False)
@@ -186,82 +195,105 @@ def _exact(elements, levers, drive, protect, steps, taken):
     levers = list(levers)
     changed = True
     while changed:
-        changed = False
         fixed = {FRAME, drive.n1, drive.n2} | {n for lv in levers
                                               for n in (lv.p1, lv.p2, lv.s1, lv.s2)}
-        keep = [e for e in elements if e.n1 != e.n2 or e.name in protect]
-        if len(keep) != len(elements):
-            gone = [e.name for e in elements if e not in keep]
-            steps.append(f"removed {_some(gone)}: both ends on one node")
-            elements, changed = keep, True
-        # a lever with nothing on one side transmits no force (Q_P = r·Q_S = 0)
-        for lv in list(levers):
-            others = [x for x in levers if x is not lv]
-
-            def touched(n, others=others):
-                return n in (drive.n1, drive.n2) or any(n in (e.n1, e.n2) for e in elements) \
-                    or any(n in (x.p1, x.p2, x.s1, x.s2) for x in others)
-
-            for side, nodes in (("primary", (lv.p1, lv.p2)), ("secondary", (lv.s1, lv.s2))):
-                if not any(touched(n) for n in nodes if n != FRAME):
-                    steps.append(f"removed lever {lv.name}: nothing on its {side} side")
-                    levers.remove(lv)
-                    changed = True
-                    break
-        idx, lidx = _loaded(elements, levers, drive)
-        gone = [e.name for i, e in enumerate(elements) if i not in idx and e.name not in protect]
-        gone_l = [lv.name for i, lv in enumerate(levers) if i not in lidx]
-        if gone or gone_l:
-            steps.append(f"removed {_some(gone + gone_l)}: on no path of the drive "
-                         "(carry no force)")
-            elements = [e for i, e in enumerate(elements) if i in idx or e.name in protect]
-            levers = [lv for i, lv in enumerate(levers) if i in lidx]
-            changed = True
-        # parallel: same kind, same node pair
-        groups: dict = {}
-        for e in elements:
-            if e.name not in protect:
-                groups.setdefault((e.kind, frozenset((e.n1, e.n2))), []).append(e)
-        merged_any = []
-        for (kind, _), es in groups.items():
-            if len(es) < 2:
-                continue
-            total = sum(e.value * e.eta for e in es)
-            name = _unique(f"{es[0].name}_par", taken)
-            new = Element(kind, name, es[0].n1, es[0].n2, total)
-            drop = {id(e) for e in es}
-            elements = [e for e in elements if id(e) not in drop] + [new]
-            merged_any.append(f"{'+'.join(_short([e.name for e in es]))} -> {name}")
-        if merged_any:
-            steps.append(f"merged in parallel: {'; '.join(_short(merged_any, 6))}")
-            changed = True
-        # series: a node with exactly two same-kind elements and nothing else
-        incident: dict = {}
-        for e in elements:
-            for n in (e.n1, e.n2):
-                incident.setdefault(n, []).append(e)
-        series = []
-        used = set()
-        for node, es in incident.items():
-            if node in fixed or len(es) != 2:
-                continue
-            a, b = es
-            if a.kind != b.kind or a.name in protect or b.name in protect \
-                    or id(a) in used or id(b) in used:
-                continue
-            ends = (a.n2 if a.n1 == node else a.n1, b.n2 if b.n1 == node else b.n1)
-            if ends[0] == ends[1]:
-                continue
-            value = 1.0 / (1.0 / (a.value * a.eta) + 1.0 / (b.value * b.eta))
-            name = _unique(f"{a.name}_ser", taken)
-            new = Element(a.kind, name, ends[0], ends[1], value)
-            used |= {id(a), id(b)}
-            elements = [e for e in elements if e is not a and e is not b] + [new]
-            series.append(f"{a.name}+{b.name} -> {name}")
-        if series:
-            steps.append(f"merged in series: {'; '.join(_short(series, 6))}")
-            changed = True
+        elements, c1 = _drop_self_loops(elements, protect, steps)
+        levers, c2 = _drop_idle_levers(elements, levers, drive, steps)
+        elements, levers, c3 = _drop_unloaded(elements, levers, drive, protect, steps)
+        elements, c4 = _merge_parallel(elements, protect, steps, taken)
+        elements, c5 = _merge_series(elements, fixed, protect, steps, taken)
+        changed = c1 or c2 or c3 or c4 or c5
     return elements, levers
+
+
+def _drop_self_loops(elements, protect, steps):
+    """Remove elements whose two ends are one node (they carry no force)."""
+    keep = [e for e in elements if e.n1 != e.n2 or e.name in protect]
+    if len(keep) == len(elements):
+        return elements, False
+    gone = [e.name for e in elements if e not in keep]
+    steps.append(f"removed {_some(gone)}: both ends on one node")
+    return keep, True
+
+
+def _drop_idle_levers(elements, levers, drive, steps):
+    """Remove each lever with nothing on one side: it transmits no force (Q_P = r·Q_S = 0)."""
+    levers = list(levers)
+    changed = False
+    for lv in list(levers):
+        used = {drive.n1, drive.n2} | {n for e in elements for n in (e.n1, e.n2)} | \
+            {n for x in levers if x is not lv for n in (x.p1, x.p2, x.s1, x.s2)}
+        for side, nodes in (("primary", (lv.p1, lv.p2)), ("secondary", (lv.s1, lv.s2))):
+            if not any(n in used for n in nodes if n != FRAME):
+                steps.append(f"removed lever {lv.name}: nothing on its {side} side")
+                levers.remove(lv)
+                changed = True
+                break
+    return levers, changed
+
+
+def _drop_unloaded(elements, levers, drive, protect, steps):
+    """Remove the elements and levers on no path of the drive (they carry no force)."""
+    idx, lidx = _loaded(elements, levers, drive)
+    gone = [e.name for i, e in enumerate(elements) if i not in idx and e.name not in protect]
+    gone_l = [lv.name for i, lv in enumerate(levers) if i not in lidx]
+    if not (gone or gone_l):
+        return elements, levers, False
+    steps.append(f"removed {_some(gone + gone_l)}: on no path of the drive "
+                 "(carry no force)")
+    elements = [e for i, e in enumerate(elements) if i in idx or e.name in protect]
+    levers = [lv for i, lv in enumerate(levers) if i in lidx]
+    return elements, levers, True
+
+
+def _merge_parallel(elements, protect, steps, taken):
+    """Merge same-kind elements on the same node pair (value·η adds)."""
+    groups: dict = {}
+    for e in elements:
+        if e.name not in protect:
+            groups.setdefault((e.kind, frozenset((e.n1, e.n2))), []).append(e)
+    merged = []
+    for (kind, _), es in groups.items():
+        if len(es) < 2:
+            continue
+        total = sum(e.value * e.eta for e in es)
+        name = _unique(f"{es[0].name}_par", taken)
+        new = Element(kind, name, es[0].n1, es[0].n2, total)
+        drop = {id(e) for e in es}
+        elements = [e for e in elements if id(e) not in drop] + [new]
+        merged.append(f"{'+'.join(_short([e.name for e in es]))} -> {name}")
+    if merged:
+        steps.append(f"merged in parallel: {'; '.join(_short(merged, 6))}")
+    return elements, bool(merged)
+
+
+def _merge_series(elements, fixed, protect, steps, taken):
+    """Merge two same-kind elements through a node (not in ``fixed``) with nothing else on it."""
+    incident: dict = {}
+    for e in elements:
+        for n in (e.n1, e.n2):
+            incident.setdefault(n, []).append(e)
+    series = []
+    used = set()
+    for node, es in incident.items():
+        if node in fixed or len(es) != 2:
+            continue
+        a, b = es
+        if a.kind != b.kind or a.name in protect or b.name in protect \
+                or id(a) in used or id(b) in used:
+            continue
+        ends = (a.n2 if a.n1 == node else a.n1, b.n2 if b.n1 == node else b.n1)
+        if ends[0] == ends[1]:
+            continue
+        value = 1.0 / (1.0 / (a.value * a.eta) + 1.0 / (b.value * b.eta))
+        name = _unique(f"{a.name}_ser", taken)
+        new = Element(a.kind, name, ends[0], ends[1], value)
+        used |= {id(a), id(b)}
+        elements = [e for e in elements if e is not a and e is not b] + [new]
+        series.append(f"{a.name}+{b.name} -> {name}")
+    if series:
+        steps.append(f"merged in series: {'; '.join(_short(series, 6))}")
+    return elements, bool(series)
 
 
 def _short(items, limit=8):
@@ -342,7 +374,34 @@ def simplify(circuit: Circuit, band, tol: float, *, output: str | None = None,
         no force.
     """
     t0 = time.perf_counter()
-    band = _check_band(band)
+    band, protect = _check_arguments(circuit, band, tol, points, output)
+    grid, y_full, skipped, inband = _check_grid(circuit, band, points, output)
+    if grid.size == 0:
+        raise MechcircError("the output is zero or infinite at every check point of the band")
+    search = _Search(circuit, grid, y_full, output, protect)
+    drive = circuit.drive
+    taken = {e.name for e in circuit.elements} | {lv.name for lv in circuit.levers} | \
+        {drive.name}
+    current, steps, error = _exact_first(search, taken, tol)
+    current, error = _approximate(search, current, error, taken, tol, steps)
+    reduced_circuit = Circuit(tuple(current[0]), drive, tuple(current[1]),
+                              name=circuit.name + "_reduced", source=circuit.source)
+    shifts = _shifts(inband, reduced_circuit, band)
+    header = (f"{circuit.name} reduced by mechcirc simplify for "
+              f"{'K at the drive' if output is None else 'the force in ' + output}",
+              f"band {band[0]!r}:{band[1]!r} rad/s, tol {tol!r}; measured worst relative error "
+              f"{error!r} on {grid.size} check points",
+              f"{len(circuit.elements)} elements -> {len(current[0])}, "
+              f"{len(circuit.levers)} levers -> {len(current[1])}") + tuple(steps)
+    return Simplified(reduced_circuit, circuit, band, float(tol), output, float(error),
+                      int(grid.size), skipped, tuple(steps), shifts,
+                      write_netlist(reduced_circuit, header), time.perf_counter() - t0,
+                      search.trials)
+
+
+def _check_arguments(circuit: Circuit, band, tol, points, output) -> tuple[tuple, set]:
+    """The checked band and the names never to remove or merge (the output element)."""
+    band = check_band(band)
     if not (isinstance(tol, (int, float)) and math.isfinite(tol) and tol > 0):
         raise BandError(f"tol must be a positive number, got {tol!r}")
     if isinstance(points, bool) or not isinstance(points, int) or points < 10:
@@ -354,43 +413,37 @@ def simplify(circuit: Circuit, band, tol: float, *, output: str | None = None,
             raise MechcircError(f"output {output!r}: no element of that name "
                                 f"(elements: {_some(sorted(names))})")
         protect.add(output)
-    grid, y_full, skipped, inband = _check_grid(circuit, band, points, output)
-    if grid.size == 0:
-        raise MechcircError("the output is zero or infinite at every check point of the band")
-    drive = circuit.drive
-    trials = 0
+    return band, protect
 
-    def measure(state):
-        nonlocal trials
-        trials += 1
+
+@dataclass
+class _Search:
+    """The full circuit's output on the check grid, which every trial is measured against."""
+
+    circuit: Circuit
+    grid: np.ndarray
+    y_full: np.ndarray
+    output: str | None
+    protect: set
+    trials: int = 0
+
+    def measure(self, state) -> float:
+        """Worst relative error of the output of ``state`` = (elements, levers) on the grid."""
+        self.trials += 1
         elements, levers = state
-        if output is not None and output not in {e.name for e in elements}:
+        if self.output is not None and self.output not in {e.name for e in elements}:
             return math.inf
         try:
-            c = Circuit(tuple(elements), drive, tuple(levers), name=circuit.name,
-                        source=circuit.source)
-            y = _output(c, grid, output)
+            c = Circuit(tuple(elements), self.circuit.drive, tuple(levers),
+                        name=self.circuit.name, source=self.circuit.source)
+            y = _output(c, self.grid, self.output)
         except (MechcircError, KeyError, np.linalg.LinAlgError):
             return math.inf
         with np.errstate(all="ignore"):
-            err = np.abs(y - y_full) / np.abs(y_full)
+            err = np.abs(y - self.y_full) / np.abs(self.y_full)
         return float(np.max(err)) if np.all(np.isfinite(err)) else math.inf
 
-    taken = {e.name for e in circuit.elements} | {lv.name for lv in circuit.levers} | \
-        {drive.name}
-    steps: list[str] = []
-    current = (list(circuit.elements), list(circuit.levers))
-    trial_steps: list[str] = []
-    try:
-        reduced = _exact(*current, drive, protect, trial_steps, taken)
-    except TopologyError:
-        reduced = current
-    err = measure(reduced)
-    if err <= tol:
-        current, steps = reduced, trial_steps
-    error = err if err <= tol else measure(current)
-
-    def candidates(state):
+    def candidates(self, state) -> list[tuple[str, str]]:
         """(element, action) ordered by the element's share of the drive's power, smallest first.
 
         share = max over the grid of |v_e·Q_e| / |v0·Q0|; a spring that deforms
@@ -399,12 +452,12 @@ def simplify(circuit: Circuit, band, tol: float, *, output: str | None = None,
         """
         elements, levers = state
         try:
-            c = Circuit(tuple(elements), drive, tuple(levers))
-            sw = c.sweep(grid)
+            c = Circuit(tuple(elements), self.circuit.drive, tuple(levers))
+            sw = c.sweep(self.grid)
             V, Q = np.abs(sw.v0), np.abs(sw.Q0)
             out = []
             for e in elements:
-                if e.name in protect:
+                if e.name in self.protect:
                     continue
                 v, q = np.abs(sw.velocity(e.name)) / V, np.abs(sw.force(e.name)) / Q
                 share = float(np.max(v * q))
@@ -415,7 +468,13 @@ def simplify(circuit: Circuit, band, tol: float, *, output: str | None = None,
         out.sort()
         return [(name, action) for _, name, action in out]
 
-    def apply(base, cands):
+    def apply(self, base, cands, taken):
+        """``base`` with ``cands`` applied, then the exact clean-ups: (state, steps, done).
+
+        ``done`` lists (name, action, kind) of the candidates applied; (None, [], [])
+        when the result has no path for the drive.
+        """
+        drive = self.circuit.drive
         els, levers = list(base[0]), list(base[1])
         done = []
         for name, action in cands:
@@ -432,52 +491,74 @@ def simplify(circuit: Circuit, band, tol: float, *, output: str | None = None,
             done.append((name, action, match.kind))
         st: list[str] = []
         try:
-            state = _exact(els, levers, drive, protect, st, set(taken))
+            state = _exact(els, levers, drive, self.protect, st, set(taken))
         except TopologyError:
             return None, [], []
         return state, st, done
 
+
+def _exact_first(search: _Search, taken: set, tol: float):
+    """The exact clean-ups of the whole circuit if their error is ≤ tol: (state, steps, error)."""
+    circuit = search.circuit
+    current = (list(circuit.elements), list(circuit.levers))
+    trial_steps: list[str] = []
+    try:
+        reduced = _exact(*current, circuit.drive, search.protect, trial_steps, taken)
+    except TopologyError:
+        reduced = current
+    err = search.measure(reduced)
+    if err <= tol:
+        return reduced, trial_steps, err
+    return current, [], search.measure(current)
+
+
+def _approximate(search: _Search, current, error: float, taken: set, tol: float,
+                 steps: list[str]):
+    """Rounds of approximate steps until one accepts nothing: (state, error); appends to steps."""
     for _round in range(8):
-        cands = candidates(current)
+        cands = search.candidates(current)
         if not cands:
             break
-        # the longest prefix of the candidates with a measured error ≤ tol (bisection)
-        best_k, best = 0, None
-        lo, hi = 0, len(cands)
-        while lo < hi:
-            mid = (lo + hi + 1) // 2
-            els, st, done = apply(current, cands[:mid])
-            e = measure(els) if els is not None else math.inf
-            if e <= tol:
-                lo, best_k, best = mid, mid, (els, st, done, e)
-            else:
-                hi = mid - 1
-        if not best_k:
+        best = _longest_prefix(search, current, cands, taken, tol)
+        if best is None:
             break
-        els, st, done, e = best
-        current, error = els, e
+        current, st, done, error = best
         taken |= {x.name for x in current[0]}
-        for kind, action, verb in (("spring", "short", "shorted as rigid"),
-                                   ("spring", "open", "removed as negligible"),
-                                   ("mass", "open", "removed as negligible"),
-                                   ("damper", "open", "removed as negligible")):
-            names = [n for n, a, k in done if k == kind and a == action]
-            if names:
-                plural = "masses" if kind == "mass" else kind + "s"
-                steps.append(f"{plural} {verb}: {_some(names)}")
+        steps += _describe(done)
         steps += st
-    reduced_circuit = Circuit(tuple(current[0]), drive, tuple(current[1]),
-                              name=circuit.name + "_reduced", source=circuit.source)
-    shifts = _shifts(inband, reduced_circuit, band)
-    header = (f"{circuit.name} reduced by mechcirc simplify for "
-              f"{'K at the drive' if output is None else 'the force in ' + output}",
-              f"band {band[0]!r}:{band[1]!r} rad/s, tol {tol!r}; measured worst relative error "
-              f"{error!r} on {grid.size} check points",
-              f"{len(circuit.elements)} elements -> {len(current[0])}, "
-              f"{len(circuit.levers)} levers -> {len(current[1])}") + tuple(steps)
-    return Simplified(reduced_circuit, circuit, band, float(tol), output, float(error),
-                      int(grid.size), skipped, tuple(steps), shifts,
-                      write_netlist(reduced_circuit, header), time.perf_counter() - t0, trials)
+    return current, error
+
+
+def _longest_prefix(search: _Search, current, cands, taken: set, tol: float):
+    """The longest prefix of ``cands`` with a measured error ≤ tol (bisection), or None.
+
+    Returns (state, steps, done, error) of that prefix.
+    """
+    best = None
+    lo, hi = 0, len(cands)
+    while lo < hi:
+        mid = (lo + hi + 1) // 2
+        els, st, done = search.apply(current, cands[:mid], taken)
+        e = search.measure(els) if els is not None else math.inf
+        if e <= tol:
+            lo, best = mid, (els, st, done, e)
+        else:
+            hi = mid - 1
+    return best
+
+
+def _describe(done) -> list[str]:
+    """One step line per (kind, action) of the applied candidates (name, action, kind)."""
+    lines = []
+    for kind, action, verb in (("spring", "short", "shorted as rigid"),
+                               ("spring", "open", "removed as negligible"),
+                               ("mass", "open", "removed as negligible"),
+                               ("damper", "open", "removed as negligible")):
+        names = [n for n, a, k in done if k == kind and a == action]
+        if names:
+            plural = "masses" if kind == "mass" else kind + "s"
+            lines.append(f"{plural} {verb}: {_some(names)}")
+    return lines
 
 
 def _shifts(inband, reduced: Circuit, band) -> list[dict]:
