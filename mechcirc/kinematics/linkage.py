@@ -441,7 +441,24 @@ def parse_linkage(text: str, source: str = "<string>") -> Linkage:
         points coincide.
     """
     doc = load_toml(text, source)
+    _check_tables(doc, text, source)
+    pose = _read_points(doc["points"], text, source)
+    ground_pts = _read_ground(doc["ground"], pose, text, source)
+    links = _read_links(doc["links"], pose, text, source)
+    _check_every_point_used(pose, ground_pts, links, text, source)
+    cranks = _read_cranks(doc["cranks"], links, ground_pts, text, source)
+    units = _read_units(doc, text, source)
+    lk = Linkage(str(doc.get("name", Path(source).stem)), pose, tuple(ground_pts), links,
+                 tuple(cranks), source, units)
+    if lk.mobility != len(cranks):
+        raise GeometryError(
+            f"{source}: mobility W = 3·{len(links)} − 2·{lk.revolute_pairs} = {lk.mobility}, "
+            f"but {len(cranks)} crank(s) are driven; W must equal the number of cranks")
+    return lk
 
+
+def _check_tables(doc: dict, text: str, source: str) -> None:
+    """The four tables are there with the right shape, and no unknown top-level key."""
     for table in ("points", "ground", "links", "cranks"):
         header = "[[cranks]]" if table == "cranks" else f"[{table}]"
         if table not in doc:
@@ -459,15 +476,22 @@ def parse_linkage(text: str, source: str = "<string>") -> Linkage:
             raise _err(text, source, f"unknown top-level key {key!r}", None, key,
                        expected=", ".join(sorted(allowed)))
 
+
+def _read_points(table: dict, text: str, source: str) -> dict[str, NDArray[np.float64]]:
+    """[points]: name → [x, y] of two finite numbers."""
     pose = {}
-    for name, xy in doc["points"].items():
+    for name, xy in table.items():
         ok = isinstance(xy, list) and len(xy) == 2 and all(map(_finite_number, xy))
         if not ok:
             raise _err(text, source, f"point {name!r} must be [x, y], got {_brief(xy)}",
                        "points", name, expected="two finite numbers")
         pose[name] = np.array(xy, dtype=float)
+    return pose
 
-    ground_pts = doc["ground"].get("points")
+
+def _read_ground(table: dict, pose: dict, text: str, source: str) -> list[str]:
+    """[ground] points: a nonempty list of known point names."""
+    ground_pts = table.get("points")
     if not isinstance(ground_pts, list) or not ground_pts:
         raise _err(text, source, "[ground] needs points = [\"…\", …]", "ground", "points",
                    expected="a list of ground pivot names")
@@ -475,9 +499,13 @@ def parse_linkage(text: str, source: str = "<string>") -> Linkage:
         if not isinstance(p, str) or p not in pose:
             raise _err(text, source, f"unknown point {p!r} in [ground]", "ground", "points",
                        value=p, expected=f"one of {', '.join(pose)}")
+    return ground_pts
 
+
+def _read_links(table: dict, pose: dict, text: str, source: str) -> dict[str, tuple[str, ...]]:
+    """[links]: name → two or more distinct known points, not all at one place."""
     links = {}
-    for lname, pts in doc["links"].items():
+    for lname, pts in table.items():
         if not isinstance(pts, list) or len(pts) < 2 or not all(isinstance(p, str) for p in pts):
             raise _err(text, source, f"link {lname!r} must list at least two point names",
                        "links", lname, expected='["P1", "P2", …]')
@@ -494,14 +522,20 @@ def parse_linkage(text: str, source: str = "<string>") -> Linkage:
             raise GeometryError(f"{source}: link {lname!r} has all its points at the same "
                                 f"place {xy[0].tolist()}")
         links[lname] = tuple(pts)
+    return links
 
+
+def _check_every_point_used(pose, ground_pts, links, text: str, source: str) -> None:
+    """Every point is on a link or a ground pivot."""
     used = set(ground_pts).union(*map(set, links.values()))
     for p in pose:
         if p not in used:
             raise _err(text, source, f"point {p!r} belongs to no link and is not a ground pivot",
                        "points", p)
 
-    raw_cranks = doc["cranks"]
+
+def _read_cranks(raw_cranks: list, links, ground_pts, text: str, source: str) -> list[Crank]:
+    """[[cranks]]: each a known link, driven once, about one ground pivot, at omega ≠ 0."""
     if not isinstance(raw_cranks, list) or not raw_cranks:
         raise NetlistError("no [[cranks]]: at least one driving crank is needed", source)
     cranks = []
@@ -530,19 +564,17 @@ def parse_linkage(text: str, source: str = "<string>") -> Linkage:
             raise _err(text, source, f"link {lname!r} is driven twice", "cranks", "link",
                        value=lname, occurrence=n)
         cranks.append(Crank(lname, pivot, float(omega)))
+    return cranks
 
+
+def _read_units(doc: dict, text: str, source: str) -> str:
+    """units: a short length unit name (free text, no spaces or brackets)."""
     units = doc.get("units", "")
     if not isinstance(units, str) or len(units) > 20 or any(ch.isspace() or ch in "[]"
                                                             for ch in units):
         raise _err(text, source, f"units must be a short length unit such as \"mm\", got "
                    f"{_brief(units)}", None, "units", expected='"mm", "m", "in", …')
-    lk = Linkage(str(doc.get("name", Path(source).stem)), pose, tuple(ground_pts), links,
-                 tuple(cranks), source, units)
-    if lk.mobility != len(cranks):
-        raise GeometryError(
-            f"{source}: mobility W = 3·{len(links)} − 2·{lk.revolute_pairs} = {lk.mobility}, "
-            f"but {len(cranks)} crank(s) are driven; W must equal the number of cranks")
-    return lk
+    return units
 
 
 def load_linkage(path: str | Path) -> Linkage:
