@@ -154,16 +154,13 @@ class Simplified:
 
 # ----------------------------------------------------------------- helpers
 def write_netlist(circuit: Circuit, header: tuple[str, ...] = ()) -> str:
-    """``.mcir`` text of ``circuit`` (values written with full precision)."""
-    out = [f"# {h}" for h in header]
-    d = circuit.drive
-    out.append(f"drive {d.name} {d.n1} {d.n2} {d.kind}={d.amplitude!r}")
-    for e in circuit.elements:
-        eta = f" eta={e.eta!r}" if e.eta != 1.0 else ""
-        out.append(f"{e.kind} {e.name} {e.n1} {e.n2} {e.value!r}{eta}")
-    for lv in circuit.levers:
-        out.append(f"lever {lv.name} {lv.p1} {lv.p2} {lv.s1} {lv.s2} ratio={lv.ratio!r}")
-    return "\n".join(out) + "\n"
+    """``.mcir`` text of ``circuit`` (values written with full precision).
+
+    The package's one netlist writer, :func:`mechcirc.netlist_writer.write`.
+    """
+    from .netlist_writer import write
+
+    return write(circuit, header)
 
 
 def _output(circuit: Circuit, omega, output):

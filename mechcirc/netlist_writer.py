@@ -1,0 +1,111 @@
+"""A :class:`~mechcirc.circuit.Circuit` back to netlist (``.mcir``) text.
+
+:func:`write` is the inverse of :func:`mechcirc.parse` up to what text does not
+carry: ``parse(write(c))`` has the same drive, elements (in order, values to
+the last bit), levers and initial state as ``c``; the line and column numbers
+are those of the new text, the name comes from the source it is parsed as, and
+``.param`` definitions and expressions are not written (values are written
+evaluated, in SI, with ``repr`` so that they read back exactly).
+
+A spring with ``damping=D`` is written on one line with the damper
+``NAME_damping`` that the parser adds after it (the two come back as they
+were).  A spring whose ``damping`` field has lost that damper (a circuit
+edited in code, e.g. by :func:`mechcirc.simplify.simplify`) is written without
+``damping=``: every analysis sees the damper, not the field, so the text
+describes the circuit the analyses saw.
+
+Examples
+--------
+>>> from mechcirc import parse
+>>> c = parse("drive V a 0 velocity=1\\nmass m1 a 0 2\\nspring k1 a 0 800 eta=0.5")
+>>> print(write(c), end="")
+drive V a 0 velocity=1.0
+mass m1 a 0 2.0
+spring k1 a 0 800.0 eta=0.5
+"""
+
+from __future__ import annotations
+
+import math
+import re
+
+from .circuit import Circuit, Element
+
+__all__ = ["write"]
+
+# The parser's name grammar (mechcirc.netlist._NAME); integers are read in
+# canonical form ("007" → "7"), so only canonical integers round-trip.
+_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*|0|[1-9][0-9]*")
+
+
+def write(circuit: Circuit, header: tuple[str, ...] | list[str] | str = ()) -> str:
+    """The netlist text of ``circuit``, with ``header`` lines as ``#`` comments first.
+
+    Parameters
+    ----------
+    circuit : Circuit
+        The drive may be None (a free-vibration circuit).
+    header : str or sequence of str
+        Comment lines (newlines inside one start new comment lines).
+
+    Returns
+    -------
+    str
+        One statement per line, ending with a newline: the drive, the
+        elements and the levers in their order, then one ``.ic`` per initial state.
+
+    Raises
+    ------
+    ValueError
+        A name the netlist grammar cannot read back, or a value that is not a
+        finite number.
+    """
+    if isinstance(header, str):
+        header = (header,)
+    out = [f"# {line}".rstrip() for h in header for line in str(h).split("\n")]
+    d = circuit.drive
+    if d is not None:
+        out.append(f"drive {_names(d.name, d.n1, d.n2)} {d.kind}={_number(d.amplitude)}")
+    elements = circuit.elements
+    i = 0
+    while i < len(elements):
+        e = elements[i]
+        line = (f"{e.kind} {_names(e.name, e.n1, e.n2)} {_number(e.value)}"
+                + (f" eta={_number(e.eta)}" if e.eta != 1.0 else ""))
+        if e.backlash != 0.0:
+            line += f" backlash={_number(e.backlash)}"
+        if e.damping != 0.0 and _is_companion(e, elements[i + 1] if i + 1 < len(elements)
+                                              else None):
+            line += f" damping={_number(e.damping)}"
+            i += 1                       # the companion is written by damping=
+        out.append(line)
+        i += 1
+    for lv in circuit.levers:
+        out.append(f"lever {_names(lv.name, lv.p1, lv.p2, lv.s1, lv.s2)} "
+                   f"ratio={_number(lv.ratio)}")
+    for node, x0, v0 in circuit.initial:
+        out.append(f".ic {_names(node)} x={_number(x0)} v={_number(v0)}")
+    return "\n".join(out) + "\n"
+
+
+def _is_companion(spring: Element, e: Element | None) -> bool:
+    """Whether ``e`` is the damper the parser adds for ``spring``'s ``damping=``."""
+    return (e is not None and e.kind == "damper" and e.name == f"{spring.name}_damping"
+            and (e.n1, e.n2) == (spring.n1, spring.n2) and e.value == spring.damping
+            and e.eta == spring.eta and e.backlash == 0.0 and e.damping == 0.0)
+
+
+def _names(*names: str) -> str:
+    for n in names:
+        if not isinstance(n, str) or not _NAME.fullmatch(n):
+            raise ValueError(f"{n!r} is not a name a netlist can hold (letters, digits and "
+                             "'_' not starting with a digit, or an integer without leading "
+                             "zeros)")
+    return " ".join(names)
+
+
+def _number(x: float) -> str:
+    x = float(x)
+    if not math.isfinite(x):
+        raise ValueError(f"{x!r} is not a finite number; a netlist value must be one")
+    return repr(x)

@@ -1,0 +1,147 @@
+"""mechcirc.netlist_writer.write: parse(write(c)) is c, for shipped netlists and generated circuits."""
+
+from dataclasses import replace
+from pathlib import Path
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from mechcirc import load, parse
+from mechcirc.circuit import Circuit, Drive, Element, Lever
+from mechcirc.errors import NetlistError
+from mechcirc.netlist_writer import write
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def _shipped():
+    out = []
+    for folder in ("netlists", "examples", "docs/examples"):
+        for path in sorted((ROOT / folder).glob("*.mcir")):
+            try:
+                load(path)
+            except NetlistError:
+                continue         # the docs ship some broken netlists on purpose
+            out.append(path)
+    return out
+
+
+def _unlocated(c: Circuit):
+    """What text carries: everything but line/col, the name, the source and the .params."""
+    return (tuple(replace(e, line=0, col=0) for e in c.elements),
+            None if c.drive is None else replace(c.drive, line=0, col=0),
+            tuple(replace(lv, line=0, col=0) for lv in c.levers),
+            tuple(c.initial))
+
+
+SHIPPED = _shipped()
+
+
+def test_the_shipped_netlists_are_found():
+    names = {p.name for p in SHIPPED}
+    assert {"stb_heald.mcir", "msl_backlash.mcir"} <= names
+
+
+@pytest.mark.parametrize("path", SHIPPED, ids=lambda p: p.name)
+def test_shipped_netlist_round_trips(path):
+    c = load(path)
+    text = write(c, header=("written by the test", "two lines"))
+    back = parse(text, source=str(path))
+    assert _unlocated(back) == _unlocated(c)
+    assert back.name == c.name
+    assert write(back, header=("written by the test", "two lines")) == text
+
+
+# ----------------------------------------------------------------- generated circuits
+_names = st.from_regex(r"[A-Za-z_][A-Za-z0-9_]{0,6}|[1-9][0-9]{0,3}", fullmatch=True)
+_positive = st.floats(min_value=5e-324, max_value=1.7976931348623157e308,
+                      allow_nan=False, allow_infinity=False)
+_finite = st.floats(allow_nan=False, allow_infinity=False)
+
+
+@st.composite
+def circuits(draw):
+    nodes = draw(st.lists(_names, min_size=2, max_size=6, unique=True))
+    nodes = ["0"] + [n for n in nodes if n != "0"]
+    used: set[str] = set()
+
+    def fresh():
+        n = draw(_names.filter(lambda s: s not in used and s + "_damping" not in used))
+        used.add(n)
+        return n
+
+    def pair():
+        a, b = draw(st.lists(st.sampled_from(nodes), min_size=2, max_size=2, unique=True))
+        return a, b
+
+    elements = []
+    for _ in range(draw(st.integers(1, 8))):
+        kind = draw(st.sampled_from(["mass", "spring", "damper"]))
+        name = fresh()
+        n1, n2 = pair()
+        eta = draw(st.one_of(st.just(1.0), _positive))
+        e = Element(kind, name, n1, n2, draw(_positive), eta)
+        if kind == "spring":
+            e = replace(e, backlash=draw(st.one_of(st.just(0.0), _positive)))
+            damping = draw(st.one_of(st.just(0.0), _positive))
+            if damping and name + "_damping" not in used:
+                used.add(name + "_damping")
+                elements += [replace(e, damping=damping),
+                             Element("damper", name + "_damping", n1, n2, damping, eta)]
+                continue
+        elements.append(e)
+    levers = []
+    for _ in range(draw(st.integers(0, 2))):
+        p1, p2 = pair()
+        s1, s2 = pair()
+        levers.append(Lever(fresh(), p1, p2, s1, s2, draw(_positive)))
+    a, b = pair()
+    drive = Drive(fresh(), a, b, draw(st.sampled_from(["velocity", "force"])), draw(_finite))
+    ic_nodes = draw(st.lists(st.sampled_from(nodes[1:]), unique=True, max_size=3))
+    known = {n for e in elements for n in (e.n1, e.n2)} | \
+        {n for lv in levers for n in (lv.p1, lv.p2, lv.s1, lv.s2)} | {drive.n1, drive.n2}
+    initial = tuple((n, draw(_finite), draw(_finite)) for n in ic_nodes if n in known)
+    return Circuit(tuple(elements), drive, tuple(levers), initial=initial)
+
+
+@settings(max_examples=50, deadline=None)
+@given(c=circuits())
+def test_generated_circuit_round_trips(c):
+    assert _unlocated(parse(write(c))) == _unlocated(c)
+
+
+def test_free_vibration_circuit_without_drive_round_trips():
+    c = parse("mass m a 0 2\nspring k a 0 5\n.ic a x=0.1\n", require_drive=False)
+    text = write(c)
+    assert not text.startswith("drive")
+    assert _unlocated(parse(text, require_drive=False)) == _unlocated(c)
+
+
+def test_header_lines_are_comments():
+    c = parse("drive V a 0 velocity=1\nmass m a 0 2\n")
+    text = write(c, header="first\nsecond")
+    assert text.splitlines()[:2] == ["# first", "# second"]
+    assert _unlocated(parse(text)) == _unlocated(c)
+
+
+@pytest.mark.parametrize("bad, match", [
+    (Element("mass", "a b", "1", "0", 1.0), "not a name"),
+    (Element("mass", "m", "007", "0", 1.0), "not a name"),
+    (Element("mass", "m", "1", "0", float("inf")), "not a finite number"),
+])
+def test_what_text_cannot_hold_is_refused(bad, match):
+    c = Circuit((bad,), Drive("V", "1", "0", "velocity", 1.0))
+    with pytest.raises(ValueError, match=match):
+        write(c)
+
+
+def test_damping_without_its_damper_is_not_written():
+    # what the analyses see: the spring alone (the field names a damper that is gone)
+    c = Circuit((Element("spring", "k", "1", "0", 3.0, damping=2.0),),
+                Drive("V", "1", "0", "velocity", 1.0))
+    text = write(c)
+    assert "damping" not in text
+    back = parse(text)
+    assert [(e.kind, e.name, e.value, e.damping) for e in back.elements] == \
+        [("spring", "k", 3.0, 0.0)]
