@@ -266,19 +266,26 @@ def eq10_residual(psi, b_a, c_a, d_a):
     return (M - P) ** 2 + (N - P) ** 2 - 2 * cp * (M - P) * (N - P) + cp * cp - 1
 
 
-def _eq10_roots_squared(psi, b_a, other):
-    """Positive roots u = κ² (or δ²) of eq. (10) as a quadratic; vectorised, NaN if none.
+def _eq10_quadratic(cp, sp2, b_a, other):
+    """(A, B, B² − 4AC) of eq. (10) as a quadratic A·u² + B·u + C = 0 in u = κ² (or δ²).
 
-    Returns two arrays (larger root, smaller root).
+    ``cp`` = cos ψ and ``sp2`` = sin² ψ; floats or arrays alike.
     """
-    cp, sp2 = np.cos(psi), np.sin(psi) ** 2
     o2 = other * other
     k1 = o2 - (b_a + 1) ** 2
     k2 = o2 - (b_a - 1) ** 2
     A = 2 - 2 * cp
     B = 2 * (k1 + k2) * (1 - cp) - 4 * o2 * sp2
     C = k1 * k1 + k2 * k2 - 2 * cp * k1 * k2
-    disc = B * B - 4 * A * C
+    return A, B, B * B - 4 * A * C
+
+
+def _eq10_roots_squared(psi, b_a, other):
+    """Positive roots u = κ² (or δ²) of eq. (10) as a quadratic; vectorised, NaN if none.
+
+    Returns two arrays (larger root, smaller root).
+    """
+    A, B, disc = _eq10_quadratic(np.cos(psi), np.sin(psi) ** 2, b_a, other)
     with np.errstate(invalid="ignore"):
         sq = np.sqrt(disc)
         u1 = (-B + sq) / (2 * A)
@@ -722,14 +729,7 @@ class _Space:
 
 def _eq10_root_scalar(psi, b_a, other, which):
     """Root ``which`` (0 larger, 1 smaller) u > 0 of eq. (10) as in :func:`_eq10_roots_squared`."""
-    cp, sp2 = math.cos(psi), math.sin(psi) ** 2
-    o2 = other * other
-    k1 = o2 - (b_a + 1) ** 2
-    k2 = o2 - (b_a - 1) ** 2
-    A = 2 - 2 * cp
-    B = 2 * (k1 + k2) * (1 - cp) - 4 * o2 * sp2
-    C = k1 * k1 + k2 * k2 - 2 * cp * k1 * k2
-    disc = B * B - 4 * A * C
+    A, B, disc = _eq10_quadratic(math.cos(psi), math.sin(psi) ** 2, b_a, other)
     if not disc >= 0 or A == 0:
         return None
     sq = math.sqrt(disc)
