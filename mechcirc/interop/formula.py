@@ -157,7 +157,6 @@ class _Builder:
         from ..nodal import assemble
 
         sp = self.sp
-        w = self.omega
         system = assemble(self.circuit)
         if system.size > MAX_NODAL_UNKNOWNS:
             raise MechcircError(
@@ -167,9 +166,7 @@ class _Builder:
         n = system.size
         A = sp.zeros(n, n)
         for e in system.elements:
-            scaled = self.element_value(e)
-            y = {"mass": sp.I * w * scaled, "spring": scaled / (sp.I * w),
-                 "damper": scaled}[e.kind]
+            y = 1 / self.leaf(e)         # admittance Q/v = 1/K
             i, j = index.get(e.n1, -1), index.get(e.n2, -1)
             for r, c, v in ((i, i, y), (j, j, y), (i, j, -y), (j, i, -y)):
                 if r >= 0 and c >= 0:
@@ -187,18 +184,22 @@ class _Builder:
         K = (x[system.a] if system.a >= 0 else 0) - (x[system.b] if system.b >= 0 else 0)
         return sp.factor(sp.cancel(sp.together(K)))
 
+    def leaf(self, e):
+        """K(ω) of element ``e`` (the law of :func:`mechcirc.circuit.element_mobility`)."""
+        sp = self.sp
+        w = self.omega
+        scaled = self.element_value(e)
+        return {"mass": -sp.I / (w * scaled), "spring": sp.I * w / scaled,
+                "damper": 1 / scaled}[e.kind]
+
     def build_tree(self, tree):
         from ..reduction import Leaf, Parallel, Series, postorder
 
         sp = self.sp
-        w = self.omega
         out: dict[int, object] = {}
         for node in postorder(tree):
             if isinstance(node, Leaf):
-                e = node.element
-                scaled = self.element_value(e)
-                K = {"mass": -sp.I / (w * scaled), "spring": sp.I * w / scaled,
-                     "damper": 1 / scaled}[e.kind]
+                K = self.leaf(node.element)
             elif isinstance(node, Series):
                 K = sp.Add(*(out[id(c)] for c in node.children))
             elif isinstance(node, Parallel):
