@@ -553,7 +553,8 @@ def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: boo
                 val = _Value(child.imaginary, child.array / r / r)
                 if track:
                     val.mag = child.mag / r / r
-                    val.rho = child.rho + 2 * _U
+                    # (a full array even over a single leaf, whose ρ is a scalar)
+                    val.rho = np.broadcast_to(child.rho + 2 * _U, omega.shape).copy()
             else:
                 val = _combine(node, values, omega, inv_omega, track, keep, checked)
             if not keep:
@@ -734,6 +735,8 @@ def _through_reciprocal(rho: NDArray) -> NDArray:
     Computed as 1 / max(1/ρ − 1, 0) in place (NaN → ∞); callers hold
     ``np.errstate(all="ignore")``.
     """
+    if not (isinstance(rho, np.ndarray) and rho.ndim):
+        rho = np.atleast_1d(np.asarray(rho, dtype=float))   # a lever over one leaf
     r = np.reciprocal(rho)
     r -= 1.0
     np.fmax(r, 0.0, out=r)
