@@ -331,6 +331,12 @@ class Peak:
         return f"max |{self.quantity}| = {self.value:.7g} at omega = {self.omega:.10g} rad/s"
 
 
+#: Circuits with more elements are not handed to the eigen-solver by
+#: :func:`peak` (its dense solve is O(n³)): the peak is then searched around the
+#: grid's maximum only, and an exact pole shows as ``inf`` only if a point or
+#: the search lands on it.
+PEAK_RESONANCE_LIMIT = 500
+
 #: Damping ratio below which a zero or pole of K counts as undamped for
 #: :func:`peak` (the eigen-solver reports ζ = 0 for lossless modes).
 UNDAMPED_ZETA = 1e-12
@@ -359,7 +365,9 @@ def peak(result: "Sweep | Circuit", omega_min: float | None = None,
         holds an undamped zero of K (for Q0) or pole of K (for v0 and K),
         found exactly by :meth:`Circuit.resonances`; otherwise the maximum
         located by a bounded Brent search around the grid's largest value and
-        around every damped resonance of the right kind in the band.
+        around every damped resonance of the right kind in the band.  Above
+        :data:`PEAK_RESONANCE_LIMIT` elements the resonances are not computed
+        (grid search only).
 
     Examples
     --------
@@ -395,11 +403,13 @@ def peak(result: "Sweep | Circuit", omega_min: float | None = None,
     # Q0 = V0/K is unbounded at zeros of K ("resonance"); v0 = F0·K and K at
     # poles ("antiresonance").
     kind = "resonance" if quantity == "Q0" else "antiresonance"
-    try:
-        found = [r for r in circuit.resonances(omega_max=hi * (1 + 1e-9))
-                 if r.kind == kind and lo * (1 - 1e-12) <= r.omega]
-    except Exception:       # e.g. too large for the eigen-solver: grid search only
-        found = []
+    found = []
+    if len(circuit.elements) <= PEAK_RESONANCE_LIMIT:
+        try:
+            found = [r for r in circuit.resonances(omega_max=hi * (1 + 1e-9))
+                     if r.kind == kind and lo * (1 - 1e-12) <= r.omega]
+        except Exception:   # e.g. refused by the eigen-solver: grid search only
+            found = []
     undamped = tuple(r.omega for r in found if r.zeta <= UNDAMPED_ZETA)
 
     def magnitude(w):
