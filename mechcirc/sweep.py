@@ -146,9 +146,12 @@ class Sweep:
         if "error" in self._cache:
             return self._cache["error"]
         if self.method == "sp":
-            return _chunked(lambda w: evaluate(self.tree, w, error=True)[1],
-                            self.omega, float)
-        return _nodal_errors(self.circuit.nodal, self.omega)
+            err = _chunked(lambda w: evaluate(self.tree, w, error=True)[1], self.omega, float)
+        else:
+            err = _nodal_errors(self.circuit.nodal, self.omega)
+        # On a pole or zero (flag 1) no relative error exists: inf, never NaN.
+        err[~np.isfinite(self.K) | (self.K == 0)] = np.inf
+        return err
 
     @cached_property
     def flags(self) -> NDArray[np.int8]:
@@ -271,8 +274,36 @@ def _sweep_nodal(circuit: Circuit, omega) -> Sweep:
     from . import nodal
 
     K = nodal.mobility(circuit.nodal, omega)
+    K = _nodal_singular_limits(circuit.nodal, K, omega)
     return Sweep(omega=omega, K=K, drive=circuit.drive, method="nodal", name=circuit.name,
                  circuit=circuit)
+
+
+def _nodal_singular_limits(system, K, omega, delta: float = 1e-6):
+    """The singular-point convention of :func:`sweep` for nodal analysis.
+
+    Where A(ω) is singular the solve gives NaN.  K just below and above tells
+    what the point is: a pole (K changes sign through it, K(ω⁻) ≈ −K(ω⁺)) gets
+    K = +∞·j like the tree; otherwise the mode is not seen from the drive and K
+    is the mean of its two neighbours (flagged by its error estimate, which is
+    infinite there).
+    """
+    from . import nodal
+
+    bad = ~np.isfinite(K) & (omega > 0)
+    if not bad.any():
+        return K
+    w = omega[bad]
+    with np.errstate(all="ignore"):
+        below = nodal.mobility(system, w * (1 - delta))
+        above = nodal.mobility(system, w * (1 + delta))
+        pole = np.abs(below + above) < 0.5 * np.abs(below - above)
+    K = K.copy()
+    K[np.flatnonzero(bad)[pole]] = complex(0.0, math.inf)
+    mean = (below + above) / 2
+    keep = ~pole & np.isfinite(mean)
+    K[np.flatnonzero(bad)[keep]] = mean[keep]
+    return K
 
 
 def _nodal_errors(system, omega) -> NDArray[np.float64]:

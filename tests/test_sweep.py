@@ -138,8 +138,8 @@ def test_singular_points_do_not_warn():
 def test_both_methods_agree_at_singular_points(text):
     """Issue 11 §3: method="nodal" must give the same value and flag as "sp".
 
-    The nodal side is implemented by the nodal helper's branch; until it lands
-    this test may fail (xfail, not strict).
+    (sweep._nodal_singular_limits looks at K on either side of a singular A(ω);
+    the xfail guard stays in case another nodal path returns something else.)
     """
     c = mechcirc.parse(text)
     sp = c.sweep([100.0], method="sp")
