@@ -740,10 +740,9 @@ def _through_reciprocal(rho: NDArray) -> NDArray:
     ``np.errstate(all="ignore")``.
     """
     if not (isinstance(rho, np.ndarray) and rho.ndim):
-        rho = np.atleast_1d(np.asarray(rho, dtype=float))   # a lever over one leaf
+        # A scalar ρ (a leaf's, constant in ω: fuzz seed 599): work on an array.
+        rho = np.atleast_1d(np.asarray(rho, dtype=float))
     r = np.reciprocal(rho)
-    if not isinstance(r, np.ndarray):          # a scalar ρ (a leaf constant in ω)
-        return np.reciprocal(np.fmax(r - 1.0, 0.0))
     r -= 1.0
     np.fmax(r, 0.0, out=r)
     return np.reciprocal(r, out=r)
