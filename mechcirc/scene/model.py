@@ -144,6 +144,14 @@ def build(scene: Scene, theta: float, *, reflect: Literal["eta", "lever"] = "eta
     ang = {l: w / omega for l, w in state.angular_velocities.items()}
     for body, link in tbody_link.items():
         ang[body] = ang[link]
+    for t in scene.torsions:          # rods sharing a body: a redundant, consistent loop only
+        if abs(ang[t.link] - ang[t.body]) > 1e-9 * max(abs(ang[t.body]), 1e-300) \
+                and abs(ang[t.link] - ang[t.body]) > 1e-12:
+            raise GeometryError(
+                f"{scene.source}: at θ = {deg:.6g}° the links {t.link!r} and "
+                f"{tbody_link[t.body]!r} of the rods on body {t.body!r} turn at different "
+                f"rates ({ang[t.link]:.6g} and {ang[t.body]:.6g} per unit crank speed): the "
+                f"rigid mechanism's redundant constraint is not consistent")
     Lc = lk._scale() * L
     S_all = max(max(np.hypot(*v) for v in vel.values()),
                 max(abs(w) for w in ang.values()) * Lc)
