@@ -44,20 +44,25 @@ else:
 if HAVE_NUMBA:
     def _jit(fn):
         return _numba_njit(cache=True, error_model="numpy")(fn)
+
+    def _jit_inline(fn):
+        return _numba_njit(cache=True, error_model="numpy", inline="always")(fn)
 else:
     def _jit(fn):
         return fn
+
+    _jit_inline = _jit
 
 TWO_PI = 2.0 * math.pi
 # function columns: FI = [kind, part, table]; FF = [a, b, c, lo, h, w]
 # element columns: EI = [type, law, fa, fa2, fb, fb2, part_a, part_b]
 #                  EF = [k, d, clearance, l0, xa, ya, xb, yb, ux, uy]
 # moment columns:  MI = [window fn, body fn]; MF = [amplitude, alpha, sigma, centre]
-# PV = [Omega, theta_s, speed limit]
+# PV = [Omega, theta_s, speed limit, functions to evaluate (the dynamics' first)]
 
 
-@_jit
-def feval(kind, tab, a, b, c, lo, h, w, q):
+@_jit_inline
+def feval(kind, tabs, ti, a, b, c, lo, h, w, q):
     """(value, first, second derivative) of one function at coordinate q; flag out of range."""
     if kind == 2:
         return a + b * q, b, 0.0, 0
@@ -65,7 +70,7 @@ def feval(kind, tab, a, b, c, lo, h, w, q):
         cs = math.cos(q + c)
         sn = math.sin(q + c)
         return a + b * cs, -b * sn, -b * cs, 0
-    n = tab.shape[0]
+    n = tabs.shape[1]
     u = q - lo
     bad = 0
     if kind == 0:
@@ -83,19 +88,19 @@ def feval(kind, tab, a, b, c, lo, h, w, q):
             if u > n * h:
                 bad = 1
     s = u - i * h
-    c0 = tab[i, 0]
-    c1 = tab[i, 1]
-    c2 = tab[i, 2]
-    c3 = tab[i, 3]
-    c4 = tab[i, 4]
-    c5 = tab[i, 5]
+    c0 = tabs[ti, i, 0]
+    c1 = tabs[ti, i, 1]
+    c2 = tabs[ti, i, 2]
+    c3 = tabs[ti, i, 3]
+    c4 = tabs[ti, i, 4]
+    c5 = tabs[ti, i, 5]
     f = c0 + s * (c1 + s * (c2 + s * (c3 + s * (c4 + s * c5))))
     f1 = c1 + s * (2.0 * c2 + s * (3.0 * c3 + s * (4.0 * c4 + s * 5.0 * c5)))
     f2 = 2.0 * c2 + s * (6.0 * c3 + s * (12.0 * c4 + s * 20.0 * c5))
     return f + w * q, f1 + w, f2, bad
 
 
-@_jit
+@_jit_inline
 def force_law(law, k, d, cl, e, edot):
     """Force of a spring k ∥ damper d with deformation e, rate edot and clearance cl."""
     if law == 0:
@@ -127,7 +132,7 @@ def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, wo
     """
     npart = PRIG.shape[0]
     n = npart - 1
-    nf = FI.shape[0]
+    nf = int(PV[3])
     omega = PV[0]
     theta = PV[1] + omega * t
     # work rows: 0 q, 1 qd, 2 qdd, 3 m, 4 m', 5 Q, then fv, f1, f2 over functions
@@ -142,7 +147,7 @@ def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, wo
     f2 = work[8]
     bad = 0
     r = PRIG[0]
-    v0, d0, dd0, b0 = feval(FI[r, 0], tabs[FI[r, 2]], FF[r, 0], FF[r, 1], FF[r, 2], FF[r, 3],
+    v0, d0, dd0, b0 = feval(FI[r, 0], tabs, FI[r, 2], FF[r, 0], FF[r, 1], FF[r, 2], FF[r, 3],
                             FF[r, 4], FF[r, 5], theta)
     q[0] = v0
     qd[0] = d0 * omega
@@ -156,8 +161,10 @@ def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, wo
         Q[j] = 0.0
     for f in range(nf):
         p = FI[f, 1]
-        arg = theta if p < 0 else q[p]
-        a, b1, b2, bb = feval(FI[f, 0], tabs[FI[f, 2]], FF[f, 0], FF[f, 1], FF[f, 2],
+        if p < 0:           # a rigid-motion function of θ: evaluated where needed
+            continue
+        arg = q[p]
+        a, b1, b2, bb = feval(FI[f, 0], tabs, FI[f, 2], FF[f, 0], FF[f, 1], FF[f, 2],
                               FF[f, 3], FF[f, 4], FF[f, 5], arg)
         fv[f] = a
         f1[f] = b1
@@ -212,11 +219,11 @@ def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, wo
             fx = EI[e, 4]
             fy = EI[e, 5]
             rr = EI[e, 2]
-            qr, qr1, qr2, bb = feval(FI[rr, 0], tabs[FI[rr, 2]], FF[rr, 0], FF[rr, 1],
+            qr, qr1, qr2, bb = feval(FI[rr, 0], tabs, FI[rr, 2], FF[rr, 0], FF[rr, 1],
                                      FF[rr, 2], FF[rr, 3], FF[rr, 4], FF[rr, 5], theta)
-            xr, xr1, xr2, bb = feval(FI[fx, 0], tabs[FI[fx, 2]], FF[fx, 0], FF[fx, 1],
+            xr, xr1, xr2, bb = feval(FI[fx, 0], tabs, FI[fx, 2], FF[fx, 0], FF[fx, 1],
                                      FF[fx, 2], FF[fx, 3], FF[fx, 4], FF[fx, 5], qr)
-            yr, yr1, yr2, bb = feval(FI[fy, 0], tabs[FI[fy, 2]], FF[fy, 0], FF[fy, 1],
+            yr, yr1, yr2, bb = feval(FI[fy, 0], tabs, FI[fy, 2], FF[fy, 0], FF[fy, 1],
                                      FF[fy, 2], FF[fy, 3], FF[fy, 4], FF[fy, 5], qr)
             vxr = xr1 * qr1 * omega
             vyr = yr1 * qr1 * omega
@@ -264,7 +271,10 @@ def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, wo
     for k in range(nb):
         f = BI[k]
         p = FI[f, 1]
-        aux[k] = f1[f] * qdd[p] + f2[f] * qd[p] * qd[p]
+        if f < nf:
+            aux[k] = f1[f] * qdd[p] + f2[f] * qd[p] * qd[p]
+        else:
+            aux[k] = 0.0
     aux[nb + 2 * ne + 1 + nmo] = bad
 
 

@@ -87,9 +87,11 @@ class MotionModel:
     def naux(self) -> int:
         return len(self.bodies) + 2 * len(self.elements) + 2 + len(self.moments)
 
-    def kernel_args(self, theta_s: float, limit: float):
+    def kernel_args(self, theta_s: float, limit: float, *, outputs: bool = False):
+        """The kernel's array arguments; ``outputs``: evaluate the output-only functions too."""
         a = self.arrays
-        pv = np.array([self.omega, float(theta_s), float(limit)])
+        pv = np.array([self.omega, float(theta_s), float(limit),
+                       float(a["FI"].shape[0] if outputs else a["n_dyn"])])
         return (pv, a["FI"], a["FF"], a["tabs"], a["MI"], a["MW"], a["EI"], a["EF"], a["MOI"],
                 a["MOF"], a["PRIG"], a["BI"])
 
@@ -101,7 +103,7 @@ class MotionModel:
         a = self.arrays
         q, qd = [], []
         for r in a["PRIG"][1:]:
-            v, d, _, _ = kern.feval(a["FI"][r, 0], a["tabs"][a["FI"][r, 2]], *a["FF"][r], theta)
+            v, d, _, _ = kern.feval(a["FI"][r, 0], a["tabs"], a["FI"][r, 2], *a["FF"][r], theta)
             q.append(v)
             qd.append(d * self.omega)
         del km
@@ -128,6 +130,9 @@ class _Builder:
     def table(self, part, lo, h, f, f1, f2, periodic, w=0.0):
         f = np.asarray(f, float) - w * (lo + h * np.arange(len(f)))
         f1 = np.asarray(f1, float) - w
+        if periodic and max(np.max(np.abs(f)), np.max(np.abs(f1)),
+                            np.max(np.abs(f2))) < 1e-13:
+            return self.line(part, 0.0, w)          # turns exactly with the crank
         self.tabs.append(hermite_table(h, f, f1, f2))
         self.FI.append((0 if periodic else 1, part, len(self.tabs) - 1))
         self.FF.append((0.0, 0.0, 0.0, lo, h, w))
@@ -190,38 +195,40 @@ def motion_model(scene: Scene, omega: float | None = None, *,
     bodies = scene.bodies
     tbodies = set(tlink)
     cranks = [c.link for c in lk.cranks]
-    fn = {}            # (part, "angle"/"x"/"y", name) → function index
+    fn = {}            # (part, "angle"/"x"/"y", name) → function index, made on demand
+    makers = []        # part → maker(kind, name) → function index
     prig, coords = [], []
     for i, part in enumerate(scene.parts):
         crank = next((c for c in cranks if c in part), None)
         if crank is not None:
             coords.append(crank)
             prig.append(B.line(-1, 0.0, 1.0))
-            for b in part:
-                fn[(i, "angle", b)] = B.line(i, 0.0, 1.0) if b == crank else \
-                    B.table(i, 0.0, h, ang[b], ang1[b], ang2[b], True, _winding(ang[b]))
-            for p in {p for b in part for p in bodies[b] if b not in tbodies}:
-                if p in lk.ground:
-                    continue
-                for k, key in enumerate("xy"):
-                    fn[(i, key, p)] = B.table(i, 0.0, h, pos[p][:, k], vel[p][:, k],
-                                              acc[p][:, k], True)
+
+            def make(kind, name, i=i, crank=crank):
+                if kind == "angle":
+                    return B.line(i, 0.0, 1.0) if name == crank else B.table(
+                        i, 0.0, h, ang[name], ang1[name], ang2[name], True,
+                        _winding(ang[name]))
+                k = "xy".index(kind)
+                return B.table(i, 0.0, h, pos[name][:, k], vel[name][:, k], acc[name][:, k],
+                               True)
+            makers.append(make)
             continue
         if len(part) == 1:
             b = part[0]
             coords.append(b)
             prig.append(B.table(-1, 0.0, h, ang[b], ang1[b], ang2[b], True, _winding(ang[b])))
-            fn[(i, "angle", b)] = B.line(i, 0.0, 1.0)
-            if b not in tbodies:
-                piv = next(p for p in bodies[b] if p in lk.ground)
+            piv = next((p for p in bodies[b] if p in lk.ground), None)
+
+            def make(kind, name, i=i, piv=piv):
+                if kind == "angle":
+                    return B.line(i, 0.0, 1.0)
                 o = lk.pose[piv] * L
-                for p in bodies[b]:
-                    if p in lk.ground:
-                        continue
-                    r = lk.pose[p] * L - o
-                    rad, a0 = float(np.hypot(*r)), float(math.atan2(r[1], r[0]))
-                    fn[(i, "x", p)] = B.circle(i, float(o[0]), rad, a0)
-                    fn[(i, "y", p)] = B.circle(i, float(o[1]), rad, a0 - 0.5 * math.pi)
+                r = lk.pose[name] * L - o
+                rad, a0 = float(np.hypot(*r)), float(math.atan2(r[1], r[0]))
+                k = "xy".index(kind)
+                return B.circle(i, float(o[k]), rad, a0 - k * 0.5 * math.pi)
+            makers.append(make)
             continue
         # a part of several bodies without a crank: its own linkage, driven by a pinned link
         cb = next((b for b in part if b not in tbodies
@@ -252,39 +259,38 @@ def motion_model(scene: Scene, omega: float | None = None, *,
             raise GeometryError(f"{scene.source}: the rigid part {{{', '.join(part)}}} cannot "
                                 f"be tabulated against the rotation of {cb!r}")
         sh = (grid[-1] - grid[0]) / N
-        for b in part:
-            if b in tbodies:
-                continue
-            j = sidx[b]
-            fn[(i, "angle", b)] = B.line(i, 0.0, 1.0) if b == cb else B.table(
-                i, float(grid[0]), sh, [s.q[3 * j + 2] for s in sub_states],
-                [s.qdot[3 * j + 2] for s in sub_states], [s.qddot[3 * j + 2] for s in sub_states],
-                False)
-        for p in ppts:
-            if p in lk.ground:
-                continue
-            for k, key in enumerate("xy"):
-                fn[(i, key, p)] = B.table(
-                    i, float(grid[0]), sh, [s.points[p][k] * L for s in sub_states],
-                    [s.velocities[p][k] * L for s in sub_states],
-                    [s.accelerations[p][k] * L for s in sub_states], False)
-        for b in part:
-            if b in tbodies:
-                fn[(i, "angle", b)] = fn[(i, "angle", tlink[b])]
+
+        def make(kind, name, i=i, cb=cb, st=sub_states, g0=float(grid[0]), sh=sh, sidx=sidx):
+            if kind == "angle":
+                name = tlink.get(name, name)
+                if name == cb:
+                    return B.line(i, 0.0, 1.0)
+                j = sidx[name]
+                return B.table(i, g0, sh, [s.q[3 * j + 2] for s in st],
+                               [s.qdot[3 * j + 2] for s in st],
+                               [s.qddot[3 * j + 2] for s in st], False)
+            k = "xy".index(kind)
+            return B.table(i, g0, sh, [s.points[name][k] * L for s in st],
+                           [s.velocities[name][k] * L for s in st],
+                           [s.accelerations[name][k] * L for s in st], False)
+        makers.append(make)
+
+    def need(i, kind, name):
+        key = (i, kind, name)
+        if key not in fn:
+            fn[key] = makers[i](kind, name)
+        return fn[key]
+
     part_of = scene.part_of_body()
 
     def angle_fn(body):
-        i = part_of[body]
-        key = (i, "angle", body)
-        if key not in fn:          # a torsion body inside a multi-body part
-            fn[key] = fn[(i, "angle", tlink[body])]
-        return fn[key]
+        return need(part_of[body], "angle", body)
 
     def point_fns(p):
         i = scene.part_of_point(p)
         if i is None:
             return None
-        return fn[(i, "x", p)], fn[(i, "y", p)], i
+        return need(i, "x", p), need(i, "y", p), i
 
     # ---- kinetic energy
     MI, MW = [], []
@@ -350,6 +356,7 @@ def motion_model(scene: Scene, omega: float | None = None, *,
         MOF.append([m.amplitude, m.window, m.sigma, c])
         mnames.append(m.name)
     body_names = tuple(bodies)
+    n_dyn = len(B.FI)          # functions the dynamics need; the rest only for outputs
     BI = [angle_fn(b) for b in body_names]
     arrays = {
         "FI": np.array(B.FI, dtype=np.int64).reshape(-1, 3),
@@ -360,7 +367,8 @@ def motion_model(scene: Scene, omega: float | None = None, *,
         "EF": np.array(EF, dtype=float).reshape(-1, 10),
         "MOI": np.array(MOI, dtype=np.int64).reshape(-1, 2),
         "MOF": np.array(MOF, dtype=float).reshape(-1, 4),
-        "PRIG": np.array(prig, dtype=np.int64), "BI": np.array(BI, dtype=np.int64)}
+        "PRIG": np.array(prig, dtype=np.int64), "BI": np.array(BI, dtype=np.int64),
+        "n_dyn": n_dyn}
     return MotionModel(scene, omega, scene.parts, tuple(coords), body_names, tuple(enames),
                        tuple(mnames), arrays, {b: f for b, f in zip(body_names, BI)}, centres)
 
