@@ -23,12 +23,22 @@ def register(sub) -> None:
         epilog="Example: mechcirc simulate --drive one-side --variant 3 --plot sley.png\n"
                "         mechcirc simulate --variant all --json",
         formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("scene", nargs="?", metavar="SCENE.toml",
+                   help="simulate this scene file over whole revolutions (docs/scenes.md); "
+                        "without it, the sley presets (--drive, --variant)")
+    p.add_argument("--omega", type=float, metavar="W",
+                   help="scene: crank shaft speed [rad/s] (default the file's)")
+    p.add_argument("--start-deg", type=float, metavar="DEG",
+                   help="scene: crank rotation from the pose at t = 0 (default the file's, "
+                        "else 0)")
+    p.add_argument("--no-error-estimate", action="store_true",
+                   help="scene: skip the half-step rerun that estimates the error")
     p.add_argument("--drive", choices=("one-side", "both-sides"), default="one-side",
                    help="Table 1 (one-side, default) or Table 2 (both-sides)")
     p.add_argument("--variant", default="3", metavar="N",
                    help="variant 1-7 (default 3), or 'all' for all 14 of both tables "
                         "on every core")
-    p.add_argument("--revolutions", type=int, default=5, metavar="R",
+    p.add_argument("--revolutions", type=int, metavar="R",
                    help="revolutions to integrate; the last is tabulated (default 5)")
     p.add_argument("--revolution", type=int, metavar="K",
                    help="tabulate revolution K (1..R) instead of the last")
@@ -46,7 +56,7 @@ def register(sub) -> None:
                    help="relative tolerance of the scipy methods (default 1e-10)")
     p.add_argument("--steps-per-period", type=float, metavar="N",
                    help="rk4 steps per period of the fastest mode (default 50)")
-    p.add_argument("--points", type=int, default=7200, metavar="N",
+    p.add_argument("--points", type=int, metavar="N",
                    help="output points per revolution (default 7200, i.e. 0.05 deg)")
     p.add_argument("-o", "--output", metavar="CSV", help="write the curves as CSV")
     p.add_argument("--plot", metavar="IMAGE", help="plot eps2P, eps4P, eps4T, M2V (Figs. 4-9)")
@@ -164,9 +174,18 @@ def _write_csv(result, path) -> None:
 
 # ----------------------------------------------------------------- handlers
 def cmd_simulate(args) -> int:
+    if args.scene is not None:
+        from .scene_commands import cmd_simulate_scene
+
+        return cmd_simulate_scene(args)
     from ..sley import (PAPER, ParameterError, all_presets, preset, simulate_batch,
                         simulate_params)
 
+    if args.omega is not None or args.start_deg is not None or args.no_error_estimate:
+        raise ParameterError("--omega, --start-deg and --no-error-estimate apply to a scene "
+                             "file; for the presets use --set omega=W")
+    args.revolutions = 5 if args.revolutions is None else args.revolutions
+    args.points = 7200 if args.points is None else args.points
     check_output_paths(args.output, plots=(args.plot,))
     over = _overrides(args)
     opts = _options(args)

@@ -34,7 +34,8 @@ from dataclasses import dataclass, field
 
 from ..kinematics.linkage import _err
 
-__all__ = ["Moment", "SimulateSettings", "parse_moments", "parse_simulate", "OUTPUT_KINDS"]
+__all__ = ["Moment", "SimulateSettings", "parse_moments", "parse_simulate", "OUTPUT_KINDS",
+           "apply_overrides"]
 
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 #: Output quantities: BODY.acceleration, BODY.rigid_acceleration, ELEMENT.force,
@@ -160,3 +161,69 @@ def parse_simulate(text, source, table, scene) -> SimulateSettings:
                        expected="omega, revolutions, start_deg, steps_per_period, points, "
                        "aliases")
     return SimulateSettings(**kw)
+
+
+def apply_overrides(scene, overrides: dict):
+    """A copy of ``scene`` with ``NAME.FIELD = value`` overrides (``--set``); also ``omega``.
+
+    Fields: ``mass``/``inertia`` (or ``value``) of a mass; ``stiffness``,
+    ``damping``, ``clearance`` of an elastic link, torsion rod or load;
+    ``amplitude``, ``window_deg``, ``sigma_deg`` of a moment.  ``omega`` sets the
+    crank speed of the run.
+
+    Raises
+    ------
+    MechcircError
+        An unknown name or field, or a value out of range (named).
+    """
+    import dataclasses
+
+    from ..errors import MechcircError
+
+    masses = {m.name: m for m in scene.masses}
+    groups = {"elastic": {e.name: e for e in scene.elastic},
+              "torsions": {t.name: t for t in scene.torsions},
+              "loads": {ld.name: ld for ld in scene.loads}}
+    moments = {m.name: m for m in scene.moments}
+    sim = scene.simulate if scene.simulate is not None else SimulateSettings()
+    for key, value in overrides.items():
+        if not (isinstance(value, float) and math.isfinite(value)):
+            raise MechcircError(f"--set {key}: the value must be a finite number, got {value!r}")
+        if key == "omega":
+            if value <= 0:
+                raise MechcircError(f"--set omega must be > 0 rad/s, got {value!r}")
+            sim = dataclasses.replace(sim, omega=value)
+            continue
+        name, _, fld = key.partition(".")
+        if name in masses and fld in ("mass", "inertia", "value"):
+            if value <= 0:
+                raise MechcircError(f"--set {key} must be > 0, got {value!r}")
+            masses[name] = dataclasses.replace(masses[name], value=value)
+            continue
+        grp = next((g for g in groups.values() if name in g), None)
+        if grp is not None and fld in ("stiffness", "damping", "clearance"):
+            if value < 0 or (fld == "clearance" and not hasattr(grp[name], "clearance")):
+                raise MechcircError(f"--set {key}: must be ≥ 0 (and clearance applies to "
+                                    f"elastic links and torsion rods), got {value!r}")
+            grp[name] = dataclasses.replace(grp[name], **{fld: value})
+            continue
+        if name in moments and fld in ("amplitude", "window_deg", "sigma_deg"):
+            if fld == "amplitude":
+                moments[name] = dataclasses.replace(moments[name], amplitude=value)
+            else:
+                if not 0 < value < 360:
+                    raise MechcircError(f"--set {key} must be in (0, 360) deg, got {value!r}")
+                rad = math.radians(value)
+                old = moments[name]
+                moments[name] = dataclasses.replace(
+                    old, window=rad, sigma=rad if old.sigma == old.window else old.sigma) \
+                    if fld == "window_deg" else dataclasses.replace(old, sigma=rad)
+            continue
+        known = ["omega"] + [f"{n}.inertia/mass" for n in masses] + \
+            [f"{n}.stiffness/damping/clearance" for g in groups.values() for n in g] + \
+            [f"{n}.amplitude/window_deg/sigma_deg" for n in moments]
+        raise MechcircError(f"--set {key}: no such parameter; known: {', '.join(known)}")
+    return dataclasses.replace(
+        scene, masses=tuple(masses.values()), elastic=tuple(groups["elastic"].values()),
+        torsions=tuple(groups["torsions"].values()), loads=tuple(groups["loads"].values()),
+        moments=tuple(moments.values()), simulate=sim)
