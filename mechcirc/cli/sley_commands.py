@@ -70,8 +70,12 @@ def register(sub) -> None:
                     "against the eigenfrequencies of the linearised equations; (b) ringing "
                     "of the sley after the beat-up pulse against the predicted damped "
                     "frequency; (c) harmonic forcing of the linear model against |Q0|.",
-        epilog="Example: mechcirc crosscheck --drive one-side --variant 3 --theta 60",
+        epilog="Example: mechcirc crosscheck --drive one-side --variant 3 --theta 60\n"
+               "         mechcirc crosscheck examples/heald_scene.toml --theta 40",
         formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("file", nargs="?", metavar="SCENE.toml",
+                   help="cross-check this scene at --theta (circuit resonances against the "
+                        "ringing of its time-domain motion); without it, the sley presets")
     p.add_argument("--drive", choices=("one-side", "both-sides"), default="one-side")
     p.add_argument("--variant", type=int, default=3, choices=range(1, 8), metavar="N",
                    help="variant 1-7 (default 3)")
@@ -222,6 +226,10 @@ def cmd_simulate(args) -> int:
 
 
 def cmd_crosscheck(args) -> int:
+    if args.file is not None:
+        from .scene_commands import cmd_crosscheck_scene
+
+        return cmd_crosscheck_scene(args)
     import numpy as np
 
     from ..errors import SolverError
