@@ -123,7 +123,7 @@ def force_law(law, k, d, cl, e, edot):
     return fc + fd
 
 
-@_jit
+@_jit_inline
 def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, work):
     """Derivatives of y = [q_1..q_n, q̇_1..q̇_n] into dy; outputs into aux.
 
@@ -133,48 +133,40 @@ def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, wo
     npart = PRIG.shape[0]
     n = npart - 1
     nf = int(PV[3])
+    want = PV[4] != 0.0
     omega = PV[0]
     theta = PV[1] + omega * t
     # work rows: 0 q, 1 qd, 2 qdd, 3 m, 4 m', 5 Q, then fv, f1, f2 over functions
-    q = work[0]
-    qd = work[1]
-    qdd = work[2]
-    mm = work[3]
-    mp = work[4]
-    Q = work[5]
-    fv = work[6]
-    f1 = work[7]
-    f2 = work[8]
     bad = 0
     r = PRIG[0]
     v0, d0, dd0, b0 = feval(FI[r, 0], tabs, FI[r, 2], FF[r, 0], FF[r, 1], FF[r, 2], FF[r, 3],
                             FF[r, 4], FF[r, 5], theta)
-    q[0] = v0
-    qd[0] = d0 * omega
-    qdd[0] = dd0 * omega * omega
+    work[0, 0] = v0
+    work[1, 0] = d0 * omega
+    work[2, 0] = dd0 * omega * omega
     for i in range(n):
-        q[i + 1] = y[i]
-        qd[i + 1] = y[n + i]
+        work[0, i + 1] = y[i]
+        work[1, i + 1] = y[n + i]
     for j in range(npart):
-        mm[j] = 0.0
-        mp[j] = 0.0
-        Q[j] = 0.0
+        work[3, j] = 0.0
+        work[4, j] = 0.0
+        work[5, j] = 0.0
     for f in range(nf):
         p = FI[f, 1]
         if p < 0:           # a rigid-motion function of θ: evaluated where needed
             continue
-        arg = q[p]
+        arg = work[0, p]
         a, b1, b2, bb = feval(FI[f, 0], tabs, FI[f, 2], FF[f, 0], FF[f, 1], FF[f, 2],
                               FF[f, 3], FF[f, 4], FF[f, 5], arg)
-        fv[f] = a
-        f1[f] = b1
-        f2[f] = b2
+        work[6, f] = a
+        work[7, f] = b1
+        work[8, f] = b2
         bad = bad | bb
     for k in range(MI_.shape[0]):
         f = MI_[k]
         p = FI[f, 1]
-        mm[p] += MW[k] * f1[f] * f1[f]
-        mp[p] += 2.0 * MW[k] * f1[f] * f2[f]
+        work[3, p] += MW[k] * work[7, f] * work[7, f]
+        work[4, p] += 2.0 * MW[k] * work[7, f] * work[8, f]
     nb = BI.shape[0]
     ne = EI.shape[0]
     for e in range(ne):
@@ -187,19 +179,19 @@ def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, wo
         if typ == 0:
             fa = EI[e, 2]
             fb = EI[e, 4]
-            de = fv[fb] - fv[fa]
-            ga = -f1[fa]
-            gb = f1[fb]
+            de = work[6, fb] - work[6, fa]
+            ga = -work[7, fa]
+            gb = work[7, fb]
         elif typ == 1:
             if EI[e, 2] >= 0:
-                xa = fv[EI[e, 2]]
-                ya = fv[EI[e, 3]]
+                xa = work[6, EI[e, 2]]
+                ya = work[6, EI[e, 3]]
             else:
                 xa = EF[e, 4]
                 ya = EF[e, 5]
             if EI[e, 4] >= 0:
-                xb = fv[EI[e, 4]]
-                yb = fv[EI[e, 5]]
+                xb = work[6, EI[e, 4]]
+                yb = work[6, EI[e, 5]]
             else:
                 xb = EF[e, 6]
                 yb = EF[e, 7]
@@ -210,9 +202,9 @@ def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, wo
             uy = dyy / ln
             de = ln - EF[e, 3]
             if EI[e, 2] >= 0:
-                ga = -(ux * f1[EI[e, 2]] + uy * f1[EI[e, 3]])
+                ga = -(ux * work[7, EI[e, 2]] + uy * work[7, EI[e, 3]])
             if EI[e, 4] >= 0:
-                gb = ux * f1[EI[e, 4]] + uy * f1[EI[e, 5]]
+                gb = ux * work[7, EI[e, 4]] + uy * work[7, EI[e, 5]]
         else:
             # a load: P on part pb (functions fb, fb2); P_rig = same functions at the rigid
             # coordinate of that part (fa: the part's rigid-coordinate function of θ)
@@ -230,8 +222,8 @@ def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, wo
             if typ == 2:
                 ux = EF[e, 8]
                 uy = EF[e, 9]
-                de = ux * (fv[fx] - xr) + uy * (fv[fy] - yr)
-                gb = ux * f1[fx] + uy * f1[fy]
+                de = ux * (work[6, fx] - xr) + uy * (work[6, fy] - yr)
+                gb = ux * work[7, fx] + uy * work[7, fy]
                 rate_rig = -(ux * vxr + uy * vyr)
             else:
                 ax = EF[e, 4]
@@ -239,40 +231,44 @@ def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, wo
                 dxr = ax - xr
                 dyr = ay - yr
                 lr = math.sqrt(dxr * dxr + dyr * dyr)
-                dx = ax - fv[fx]
-                dyy = ay - fv[fy]
+                dx = ax - work[6, fx]
+                dyy = ay - work[6, fy]
                 ln = math.sqrt(dx * dx + dyy * dyy)
                 de = lr - ln
-                gb = (dx * f1[fx] + dyy * f1[fy]) / ln
+                gb = (dx * work[7, fx] + dyy * work[7, fy]) / ln
                 rate_rig = -(dxr * vxr + dyr * vyr) / lr
-        edot = ga * qd[pa] + gb * qd[pb] + rate_rig
+        edot = ga * work[1, pa] + gb * work[1, pb] + rate_rig
         fe = force_law(EI[e, 1], EF[e, 0], EF[e, 1], EF[e, 2], de, edot)
-        Q[pa] -= fe * ga
-        Q[pb] -= fe * gb
-        aux[nb + e] = fe
-        aux[nb + ne + e] = de
+        work[5, pa] -= fe * ga
+        work[5, pb] -= fe * gb
+        if want:
+            aux[nb + e] = fe
+            aux[nb + ne + e] = de
     nmo = MOI.shape[0]
     for k in range(nmo):
         fw = MOI[k, 0]
         fbd = MOI[k, 1]
         alpha = MOF[k, 1]
-        x = fv[fw] - MOF[k, 3] + 0.5 * alpha
+        x = work[6, fw] - MOF[k, 3] + 0.5 * alpha
         x = x - TWO_PI * math.floor(x / TWO_PI)
         mval = 0.0
         if x < alpha:
             mval = MOF[k, 0] * math.sin(math.pi * x / MOF[k, 2])
-        Q[FI[fbd, 1]] += mval * f1[fbd]
+        work[5, FI[fbd, 1]] += mval * work[7, fbd]
         aux[nb + 2 * ne + 1 + k] = mval
     for i in range(1, npart):
-        qdd[i] = (Q[i] - 0.5 * mp[i] * qd[i] * qd[i]) / mm[i]
-        dy[i - 1] = qd[i]
-        dy[n + i - 1] = qdd[i]
-    aux[nb + 2 * ne] = mm[0] * qdd[0] + 0.5 * mp[0] * qd[0] * qd[0] - Q[0]
+        work[2, i] = (work[5, i] - 0.5 * work[4, i] * work[1, i] * work[1, i]) / work[3, i]
+        dy[i - 1] = work[1, i]
+        dy[n + i - 1] = work[2, i]
+    if not want:
+        aux[nb + 2 * ne + 1 + nmo] = bad
+        return
+    aux[nb + 2 * ne] = work[3, 0] * work[2, 0] + 0.5 * work[4, 0] * work[1, 0] * work[1, 0] - work[5, 0]
     for k in range(nb):
         f = BI[k]
         p = FI[f, 1]
         if f < nf:
-            aux[k] = f1[f] * qdd[p] + f2[f] * qd[p] * qd[p]
+            aux[k] = work[7, f] * work[2, p] + work[8, f] * work[1, p] * work[1, p]
         else:
             aux[k] = 0.0
     aux[nb + 2 * ne + 1 + nmo] = bad
@@ -355,6 +351,16 @@ def outputs(ts, ys, out, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI):
         rhs(ts[i], ys[i], PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, work)
         for j in range(out.shape[1]):
             out[i, j] = aux[j]
+
+
+@_jit
+def eval_many(kind, tabs, ti, a, b, c, lo, h, w, qs, out):
+    """One function at many coordinates: out[i] = (value, first, second derivative)."""
+    for i in range(qs.shape[0]):
+        v, d1, d2, bad = feval(kind, tabs, ti, a, b, c, lo, h, w, qs[i])
+        out[i, 0] = v
+        out[i, 1] = d1
+        out[i, 2] = d2
 
 
 def load_python():

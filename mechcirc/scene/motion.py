@@ -91,7 +91,8 @@ class MotionModel:
         """The kernel's array arguments; ``outputs``: evaluate the output-only functions too."""
         a = self.arrays
         pv = np.array([self.omega, float(theta_s), float(limit),
-                       float(a["FI"].shape[0] if outputs else a["n_dyn"])])
+                       float(a["FI"].shape[0] if outputs else a["n_dyn"]),
+                       1.0 if outputs else 0.0])
         return (pv, a["FI"], a["FF"], a["tabs"], a["MI"], a["MW"], a["EI"], a["EF"], a["MOI"],
                 a["MOF"], a["PRIG"], a["BI"])
 
@@ -171,21 +172,7 @@ def motion_model(scene: Scene, omega: float | None = None, *,
         raise ValueError(f"omega must be a finite number > 0 rad/s, got {omega!r}")
     N = int(table_points)
     h = TWO_PI / N
-    th = np.linspace(0.0, TWO_PI, N + 1)
-    try:
-        states = lk.solve(th)
-    except GeometryError as exc:
-        raise GeometryError(f"{scene.source}: the rigid mechanism cannot turn a full "
-                            f"revolution, so the scene cannot be simulated over the cycle "
-                            f"({exc})") from None
-    idx = lk._index()
-    ang = {l: np.unwrap([s.q[3 * i + 2] for s in states]) for l, i in idx.items()}
-    ang1 = {l: np.array([s.qdot[3 * i + 2] for s in states]) / w1 for l, i in idx.items()}
-    ang2 = {l: np.array([s.qddot[3 * i + 2] for s in states]) / w1 ** 2
-            for l, i in idx.items()}
-    pos = {p: np.array([s.points[p] for s in states]) * L for p in lk.pose}
-    vel = {p: np.array([s.velocities[p] for s in states]) * L / w1 for p in lk.pose}
-    acc = {p: np.array([s.accelerations[p] for s in states]) * L / w1 ** 2 for p in lk.pose}
+    ang, ang1, ang2, pos, vel, acc = (dict(x) for x in _rigid_tables(scene, N))
     tlink = {}
     for t in scene.torsions:
         tlink.setdefault(t.body, t.link)
@@ -373,7 +360,66 @@ def motion_model(scene: Scene, omega: float | None = None, *,
                        tuple(mnames), arrays, {b: f for b, f in zip(body_names, BI)}, centres)
 
 
+_CACHE: dict = {}
+
+
+def _signature(scene: Scene, *extra):
+    lk = scene.linkage
+    return (tuple((p, float(x[0]), float(x[1])) for p, x in lk.pose.items()), tuple(lk.ground),
+            tuple((k, tuple(v)) for k, v in lk.links.items()),
+            tuple((c.link, c.pivot, float(c.omega)) for c in lk.cranks), scene.length_scale,
+            extra)
+
+
+def _memo(key, make):
+    if key not in _CACHE:
+        if len(_CACHE) > 32:
+            _CACHE.clear()
+        _CACHE[key] = make()
+    return _CACHE[key]
+
+
+def _rigid_tables(scene: Scene, N: int):
+    """Rotations, point positions and their first and second derivatives with respect to
+    the crank angle over one revolution (N + 1 nodes), memoised per linkage."""
+    def make():
+        lk = scene.linkage
+        L = scene.length_scale
+        w1 = lk.cranks[0].omega
+        th = np.linspace(0.0, TWO_PI, N + 1)
+        try:
+            states = lk.solve(th)
+        except GeometryError as exc:
+            raise GeometryError(f"{scene.source}: the rigid mechanism cannot turn a full "
+                                f"revolution, so the scene cannot be simulated over the cycle "
+                                f"({exc})") from None
+        idx = lk._index()
+        ang = {l: np.unwrap([s.q[3 * i + 2] for s in states]) for l, i in idx.items()}
+        ang1 = {l: np.array([s.qdot[3 * i + 2] for s in states]) / w1 for l, i in idx.items()}
+        ang2 = {l: np.array([s.qddot[3 * i + 2] for s in states]) / w1 ** 2
+                for l, i in idx.items()}
+        pos = {p: np.array([s.points[p] for s in states]) * L for p in lk.pose}
+        vel = {p: np.array([s.velocities[p] for s in states]) * L / w1 for p in lk.pose}
+        acc = {p: np.array([s.accelerations[p] for s in states]) * L / w1 ** 2
+               for p in lk.pose}
+        return tuple(tuple(d.items()) for d in (ang, ang1, ang2, pos, vel, acc))
+    return _memo(_signature(scene, "rigid", N), make)
+
+
 def dead_centre(scene: Scene, kind: str = "front") -> float:
+    """Crank rotation from the pose [rad, in [0, 2π)] where the crank and its coupler are
+    extended (``"front"``) or folded (``"back"``); memoised per linkage.
+
+    Raises
+    ------
+    GeometryError
+        The crank has no coupler (no other link at its moving point) or never
+        lines up with it.
+    """
+    return _memo(_signature(scene, "dead", kind), lambda: _dead_centre(scene, kind))
+
+
+def _dead_centre(scene: Scene, kind: str) -> float:
     """Crank rotation from the pose [rad, in [0, 2π)] where the crank and its coupler are
     extended (``"front"``) or folded (``"back"``).
 

@@ -129,10 +129,10 @@ def linear_matrices(model: MotionModel, theta: float):
     over the elastic elements with ∇δ by central differences of the kernel's
     deformations (pre-load and velocity-squared terms excluded, as in the circuit).
     """
-    kern = _kernels("rk4-python")[0]
+    kern = _kernels("rk4")[0]           # compiled when numba is importable
     n = model.n_free
     y0 = model.rigid_state(theta)
-    args = model.kernel_args(0.0, 1e300)
+    args = model.kernel_args(0.0, 1e300, outputs=True)
     args[0][1] = theta
     naux = model.naux()
     nb, ne = len(model.bodies), len(model.elements)
@@ -375,7 +375,11 @@ def _rigid_acceleration(model, body, crank):
         _, g1, g2, _ = kern.feval(*_fargs(a, g), q)
         return (g2 * q1 * q1 + g1 * q2) * w2
 
-    vals = np.array([acc(t) for t in crank])
+    fast = _kernels("rk4")[0]
+    qv, gv = np.empty((crank.size, 3)), np.empty((crank.size, 3))
+    fast.eval_many(*_fargs(a, r), np.ascontiguousarray(crank), qv)
+    fast.eval_many(*_fargs(a, g), np.ascontiguousarray(qv[:, 0]), gv)
+    vals = (gv[:, 2] * qv[:, 1] ** 2 + gv[:, 1] * qv[:, 2]) * w2
     ext = []
     for sgn, i in ((1.0, int(np.argmin(vals))), (-1.0, int(np.argmax(vals)))):
         lo, hi = crank[max(i - 1, 0)], crank[min(i + 1, crank.size - 1)]
