@@ -256,7 +256,7 @@ def cmd_simulate_scene(args) -> int:
     if args.rtol is not None or args.revolution is not None:
         raise MechcircError("--rtol and --revolution apply to the sley presets, not a scene")
     check_output_paths(args.output)
-    scene = load_scene(args.scene)
+    scene = getattr(args, "scene_object", None) or load_scene(args.scene)
     over = {}
     for item in args.set:
         name, sep, value = item.partition("=")

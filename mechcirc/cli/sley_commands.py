@@ -33,6 +33,9 @@ def register(sub) -> None:
                         "else 0)")
     p.add_argument("--no-error-estimate", action="store_true",
                    help="scene: skip the half-step rerun that estimates the error")
+    p.add_argument("--via-scene", action="store_true",
+                   help="run the preset as its scene (examples/mrazek_*.toml plus the "
+                        "variant's overrides) through the generic scene model")
     p.add_argument("--drive", choices=("one-side", "both-sides"), default="one-side",
                    help="Table 1 (one-side, default) or Table 2 (both-sides)")
     p.add_argument("--variant", default="3", metavar="N",
@@ -186,6 +189,20 @@ def cmd_simulate(args) -> int:
     from ..sley import (PAPER, ParameterError, all_presets, preset, simulate_batch,
                         simulate_params)
 
+    if args.via_scene:
+        from ..sley.scenes import preset_scene
+        from .scene_commands import cmd_simulate_scene
+
+        try:
+            variant = int(args.variant)
+        except ValueError:
+            raise ParameterError(f"--via-scene needs one variant 1-7, got {args.variant!r}") \
+                from None
+        over = _overrides(args)
+        args.scene_object = preset_scene(args.drive, variant, **over)
+        args.scene = f"<{args.drive} variant {variant} as a scene>"
+        args.set = []
+        return cmd_simulate_scene(args)
     if args.omega is not None or args.start_deg is not None or args.no_error_estimate:
         raise ParameterError("--omega, --start-deg and --no-error-estimate apply to a scene "
                              "file; for the presets use --set omega=W")

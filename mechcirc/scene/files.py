@@ -49,7 +49,9 @@ tables::
 The linkage part is read by :func:`mechcirc.kinematics.linkage.parse_linkage`
 (the scene tables are hidden from it, line numbers kept), so its errors and
 checks are the linkage's.  Masses, stiffnesses and dampings are SI; lengths
-are converted from ``units`` to metres.  Exactly one crank.
+are converted from ``units`` to metres.  One crank, or several on one shaft (the
+same ``omega``); the time-domain tables ``[[moments]]`` and ``[simulate]`` are
+read by :mod:`.simfile`.
 
 Structure.  Releasing the elastic links and torsion rods splits the moving
 bodies into *rigid parts* (bodies joined through joints other than ground

@@ -260,3 +260,24 @@ def test_cli_simulate_and_crosscheck_scene_json(capsys):
     doc = json.loads(capsys.readouterr().out)
     assert {"omega", "ringing_omega", "rel_error"} <= set(doc["resonances"][0])
     assert main(["simulate", "examples/mrazek_one_side.toml", "--set", "nope=1"]) == 2
+
+
+def test_cli_via_scene_matches_preset(capsys):
+    """`simulate --drive D --variant V --via-scene` = the sley preset, same output names."""
+    import json
+
+    from mechcirc.cli import main
+    from mechcirc.sley import simulate
+
+    assert main(["simulate", "--drive", "one-side", "--variant", "4", "--via-scene",
+                 "--revolutions", "2", "--points", "720", "--no-error-estimate",
+                 "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ref = simulate("one-side", 4, revolutions=2, points_per_revolution=720,
+                       error_estimate=False)
+    for k, (lo, hi) in ref.extrema.items():
+        scale = max(abs(lo), abs(hi))
+        assert abs(doc["extrema"][k][0] - lo) <= 1e-6 * scale, k
+        assert abs(doc["extrema"][k][1] - hi) <= 1e-6 * scale, k
