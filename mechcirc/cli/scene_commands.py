@@ -251,13 +251,11 @@ def cmd_simulate_scene(args) -> int:
     from ..scene.simfile import apply_overrides
     from ..scene.simulation import SceneAccuracyWarning, simulate_scene
 
-    if args.plot:
-        raise MechcircError("--plot is not available for a scene yet; use -o CSV")
     if args.method not in ("rk4", "rk4-python"):
         raise MechcircError(f"a scene runs with rk4 or rk4-python, not {args.method}")
     if args.rtol is not None or args.revolution is not None:
         raise MechcircError("--rtol and --revolution apply to the sley presets, not a scene")
-    check_output_paths(args.output)
+    check_output_paths(args.output, plots=(args.plot,) if args.plot else ())
     scene = getattr(args, "scene_object", None) or load_scene(args.scene)
     over = {}
     for item in args.set:
@@ -290,6 +288,10 @@ def cmd_simulate_scene(args) -> int:
             fh.write(",".join(cols) + "\n")
             for row in zip(*cols.values()):
                 fh.write(",".join(repr(float(v)) for v in row) + "\n")
+    if args.plot:
+        from ..scene.plots import plot_motion
+
+        save_figure(plot_motion(result), args.plot)
     if args.json:
         doc = result.summary()
         doc["file"] = args.scene

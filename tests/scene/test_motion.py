@@ -281,3 +281,19 @@ def test_cli_via_scene_matches_preset(capsys):
         scale = max(abs(lo), abs(hi))
         assert abs(doc["extrema"][k][0] - lo) <= 1e-6 * scale, k
         assert abs(doc["extrema"][k][1] - hi) <= 1e-6 * scale, k
+
+
+def test_plot_motion_draws_the_named_outputs():
+    from mechcirc.scene.plots import plot_motion
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        r = simulate_scene(load_scene("examples/mrazek_one_side.toml"), revolutions=1,
+                           points=360, error_estimate=False)
+    fig = plot_motion(r, ["sley.acceleration", "C2.force"])
+    top, bottom = fig.axes
+    assert [ln.get_label() for ln in top.lines] == ["sley.acceleration"]
+    assert [ln.get_label() for ln in bottom.lines] == ["C2.force"]
+    assert np.array_equal(top.lines[0].get_ydata(), r.values["sley.acceleration"])
+    with pytest.raises(ValueError, match="no output"):
+        plot_motion(r, ["nothing.force"])
