@@ -98,8 +98,6 @@ class MotionModel:
 
     def rigid_state(self, theta: float):
         """y = [q, q̇] of the free parts in the rigid motion at crank rotation θ."""
-        from . import _motion_kernels as km
-
         kern = _py()
         a = self.arrays
         q, qd = [], []
@@ -107,7 +105,6 @@ class MotionModel:
             v, d, _, _ = kern.feval(a["FI"][r, 0], a["tabs"], a["FI"][r, 2], *a["FF"][r], theta)
             q.append(v)
             qd.append(d * self.omega)
-        del km
         return np.array(q + qd)
 
 
