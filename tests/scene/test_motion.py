@@ -297,3 +297,20 @@ def test_plot_motion_draws_the_named_outputs():
     assert np.array_equal(top.lines[0].get_ydata(), r.values["sley.acceleration"])
     with pytest.raises(ValueError, match="no output"):
         plot_motion(r, ["nothing.force"])
+
+
+@pytest.mark.parametrize("path", SCENES)
+@pytest.mark.parametrize("reflect", ["eta", "lever"])
+def test_circuit_built_as_objects_equals_its_netlist(path, reflect):
+    """build() makes the Circuit from Element/Lever/Drive objects; its netlist text parses
+    to the same circuit (issue 15 §3)."""
+    import dataclasses
+
+    from mechcirc.netlist import parse
+
+    model = build(load_scene(path), math.radians(40.0), reflect=reflect)
+    parsed = parse(model.netlist)
+    strip = lambda x: dataclasses.replace(x, line=0, col=0)       # noqa: E731
+    assert [strip(e) for e in parsed.elements] == list(model.circuit.elements)
+    assert [strip(lv) for lv in parsed.levers] == list(model.circuit.levers)
+    assert strip(parsed.drive) == model.circuit.drive
