@@ -270,14 +270,28 @@ def cmd_simulate_scene(args) -> int:
         over["omega"] = args.omega
     if over:
         scene = apply_overrides(scene, over)
-    from .sley_commands import _Progress
+    from ..progress import Progress
+
+    bar = None
+
+    def progress(done, total):
+        nonlocal bar
+        if bar is None:
+            bar = Progress(total, scene.name)
+        bar.update(done - bar.done)
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SceneAccuracyWarning)   # kept in notes, printed below
-        result = simulate_scene(scene, revolutions=args.revolutions, start_deg=args.start_deg,
-                                steps_per_period=args.steps_per_period, points=args.points,
-                                method=args.method, error_estimate=not args.no_error_estimate,
-                                progress=_Progress(scene.name))
+        try:
+            result = simulate_scene(scene, revolutions=args.revolutions,
+                                    start_deg=args.start_deg,
+                                    steps_per_period=args.steps_per_period, points=args.points,
+                                    method=args.method,
+                                    error_estimate=not args.no_error_estimate,
+                                    progress=progress)
+        finally:
+            if bar is not None:
+                bar.__exit__(None, None, None)
     if args.output:
         from ..outputs import atomic_open
 
