@@ -171,6 +171,30 @@ class Sweep:
         """The largest |``quantity``| over the band, located exactly; see :func:`peak`."""
         return peak(self, quantity=quantity)
 
+    def __repr__(self) -> str:
+        """A one-line summary (the arrays are in the attributes, not in the repr)."""
+        n = len(self.omega)
+        band = f"omega {self.omega[0]:.4g}..{self.omega[-1]:.4g} rad/s" if n else "no points"
+        with np.errstate(all="ignore"):
+            absK = np.abs(self.K[np.isfinite(self.K)])
+            kr = f", |K| {absK.min():.3g}..{absK.max():.3g} m/(N·s)" if absK.size else ""
+        flagged = int(np.count_nonzero(self.flags)) if n else 0
+        return (f"<Sweep {self.name!r}: {n} points, {band}, method {self.method}, "
+                f"{self.drive.kind} drive{kr}, {flagged} flagged>")
+
+    def _repr_html_(self) -> str:
+        """The summary as a small table for notebooks."""
+        import html
+
+        return "<pre>" + html.escape(repr(self)) + "</pre>"
+
+    def plot(self, ax=None, *, resonances=(), fig=None, title: str | None = None):
+        """Plot this sweep: :func:`mechcirc.plotting.plot_sweep` (``ax=`` one panel of |K|,
+        else three panels on ``fig`` or a new Figure); returns what it drew on."""
+        from .plotting import plot_sweep
+
+        return plot_sweep(self, title, resonances, ax=ax, fig=fig)
+
     def _element(self, name: str):
         if "elements" not in self._cache:
             self._cache["elements"] = self._element_responses()

@@ -21,7 +21,7 @@ def register(sub) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("file", help="scene file (.toml)")
     what = p.add_mutually_exclusive_group()
-    what.add_argument("--theta", type=real(most=1e9, unit="deg"), metavar="DEG",
+    what.add_argument("--theta", type=real(most=1e9, unit="deg", role="angle"), metavar="DEG",
                       help="crank rotation from the pose [deg] to linearise at (default: "
                            "theta_deg of the file's [analysis])")
     what.add_argument("--cycle", action="store_true",
@@ -39,6 +39,9 @@ def register(sub) -> None:
                    help="reduce the circuit to what the file's [analysis] output needs over "
                         "its band, within its tol (-o then writes the reduced netlist)")
     p.add_argument("--plot", metavar="IMAGE", help="--cycle: plot the map (PNG, SVG or PDF)")
+    p.add_argument("--unit", choices=("rad/s", "Hz"), default="rad/s",
+                   help="--cycle --plot: frequency unit of the plot (default rad/s, as the "
+                        "table)")
     p.add_argument("--json", action="store_true", help="print one JSON document")
     p.set_defaults(func=cmd_scene)
 
@@ -55,9 +58,12 @@ def register(sub) -> None:
                    help="angular frequency band [rad/s], W1 < W2")
     p.add_argument("--tol", type=real(above=0.0, most=1.0), required=True, metavar="T",
                    help="largest relative error of the output allowed over the band (> 0)")
-    p.add_argument("--output", dest="element", metavar="ELEMENT",
+    p.add_argument("--element", dest="element", metavar="ELEMENT",
                    help="the force in this element is the output (default: K at the drive)")
-    p.add_argument("-o", dest="out", metavar="FILE", help="write the reduced netlist here")
+    # --output used to name the element; everywhere else it is a file.  It stays
+    # a file here too (the reduced netlist, as -o), so the name means one thing.
+    p.add_argument("-o", "--output", dest="out", metavar="FILE",
+                   help="write the reduced netlist here")
     p.add_argument("--points", type=int, default=2000, metavar="N",
                    help="log-spaced check points over the band (default 2000; two more "
                         "beside each resonance in the band)")
@@ -149,8 +155,11 @@ def _cycle(args, scene) -> int:
         raise MechcircError(f"--points must be between 2 and 100000, got {args.points}")
     if args.harmonics < 1 or args.harmonics > 1000:
         raise MechcircError(f"--harmonics must be between 1 and 1000, got {args.harmonics}")
-    cmap = cycle_map(scene, points=args.points, harmonics=args.harmonics,
-                     reflect=args.reflect)
+    from ..progress import Progress
+
+    with Progress(args.points, "crank angles") as bar:
+        cmap = cycle_map(scene, points=args.points, harmonics=args.harmonics,
+                         reflect=args.reflect, progress=lambda done, total: bar.update(1))
     W = cmap.natural_frequencies()
     with OutputSet() as out:
         if args.output:
@@ -161,11 +170,8 @@ def _cycle(args, scene) -> int:
                 table = np.column_stack([np.degrees(cmap.theta), W, np.abs(cmap.Q0)])
                 np.savetxt(fh, table, delimiter=",", fmt="%.10g")
         if args.plot:
-            import matplotlib.pyplot as plt
-
-            fig = plot_cycle(cmap)
+            fig = plot_cycle(cmap, unit=args.unit)
             save_figure(fig, args.plot, into=out.path(args.plot))
-            plt.close(fig)
     if args.json:
         doc = cmap.as_dict()
         doc.update({"file": args.file, "output": args.output, "plot": args.plot})

@@ -29,7 +29,7 @@ def register(sub) -> None:
                         "without it, the sley presets (--drive, --variant)")
     p.add_argument("--omega", type=real(above=0.0, unit="rad/s", omega=True), metavar="W",
                    help="scene: crank shaft speed [rad/s] (default the file's)")
-    p.add_argument("--start-deg", type=real(most=1e9, unit="deg"), metavar="DEG",
+    p.add_argument("--start-deg", type=real(most=1e9, unit="deg", role="angle"), metavar="DEG",
                    help="scene: crank rotation from the pose at t = 0 (default the file's, "
                         "else 0)")
     p.add_argument("--no-error-estimate", action="store_true",
@@ -46,7 +46,8 @@ def register(sub) -> None:
                    help="revolutions to integrate; the last is tabulated (default 5)")
     p.add_argument("--revolution", type=count(1, MAX_REVOLUTIONS), metavar="K",
                    help="tabulate revolution K (1..R) instead of the last")
-    p.add_argument("--alpha", type=real(above=0.0, most=360.0, unit="deg"), default=10.0,
+    p.add_argument("--alpha", type=real(above=0.0, most=360.0, unit="deg", role="angle"),
+                   default=10.0,
                    metavar="DEG",
                    help="beat-up interval alpha [deg] (default 10, the best fit to the "
                         "printed cells; not printed in the paper)")
@@ -91,7 +92,7 @@ def register(sub) -> None:
     p.add_argument("--drive", choices=("one-side", "both-sides"), default="one-side")
     p.add_argument("--variant", type=int, default=3, choices=range(1, 8), metavar="N",
                    help="variant 1-7 (default 3)")
-    p.add_argument("--theta", type=real(most=1e9, unit="deg"), metavar="DEG",
+    p.add_argument("--theta", type=real(most=1e9, unit="deg", role="angle"), metavar="DEG",
                    help="crank angle of the linearisation [deg] (default: the start angle, "
                         "where the sley's rigid acceleration is zero)")
     p.add_argument("--netlist", metavar="FILE", help="also write the netlist used")
@@ -127,10 +128,13 @@ def _overrides(args) -> dict:
         name, sep, value = item.partition("=")
         if not sep:
             raise ParameterError(f"--set expects NAME=VALUE, got {item!r}")
+        from ..units import UnitError, parse_quantity
+
         try:
-            out[name.strip()] = float(value)
-        except ValueError:
-            raise ParameterError(f"--set {name.strip()}: {value!r} is not a number") from None
+            out[name.strip()] = parse_quantity(value)   # SI, any unit: omega=3000rpm
+        except UnitError as exc:
+            raise ParameterError(f"--set {name.strip()}: {exc.message} (expected "
+                                 f"{exc.expected})") from None
     return out
 
 
@@ -276,8 +280,13 @@ def cmd_crosscheck(args) -> int:
         if not math.isfinite(args.theta):
             raise ParameterError(f"--theta must be a finite angle [deg], got {args.theta:g}")
         theta0 = math.radians(args.theta)
-    checks = {False: resonance_check(params, theta0, damping=False),
-              True: resonance_check(params, theta0, damping=True)}
+    from ..progress import Progress
+
+    bar = Progress(4, "crosscheck").__enter__()      # drawn on a terminal after 1 s
+    checks = {False: resonance_check(params, theta0, damping=False)}
+    bar.update()
+    checks[True] = resonance_check(params, theta0, damping=True)
+    bar.update()
     if args.netlist:
         from ..outputs import atomic_open
 
@@ -296,9 +305,12 @@ def cmd_crosscheck(args) -> int:
     except SolverError as exc:      # (b) cannot be measured; (a) and (c) still stand
         ring = None
         ring_notes.append(str(exc))
+    bar.update()
     omegas = np.array(sorted([0.5 * checks[False].eigen[0], checks[False].eigen[0],
                               checks[False].eigen[-1]]))
     harm = harmonic_check(params, theta0, omegas)
+    bar.update()
+    bar.__exit__(None, None, None)
     doc = {
         "label": params.label, "theta_deg": math.degrees(theta0),
         "resonances": [{"damping": d, "eigen_omega": list(c.eigen),

@@ -250,12 +250,30 @@ def _hide_scene_tables(text: str) -> str:
     return "\n".join(out) + "\n"
 
 
+#: The unit in brackets of a value's description -> its role in the unit grammar.
+_ROLE_OF = {"[N/m]": "spring", "[N·m/rad]": "spring", "[N·s/m]": "damper",
+            "[N·m·s/rad]": "damper", "[kg]": "mass", "[kg·m²]": "mass", "[deg]": "angle"}
+
+
 def _named(value, names) -> bool:
     """``value`` is a string among ``names`` (a list or a number in the file is no name)."""
     return isinstance(value, str) and value in names
 
 
 def _number(text, source, value, what, table, key, n, *, positive=True, allow_zero=False):
+    if isinstance(value, str):      # "2 kN/mm", "500 g", "30 deg": the one unit grammar
+        from ..units import UnitError, parse_quantity, split_quantity
+
+        role = next((r for u, r in _ROLE_OF.items() if what.endswith(u)), None)
+        try:
+            converted = parse_quantity(value, role, what=what)
+        except UnitError as exc:
+            raise _err(text, source, exc.message, table, key, occurrence=n,
+                       expected=exc.expected) from None
+        parts = split_quantity(value)
+        if role == "angle" and parts and parts[1]:
+            converted = math.degrees(converted)
+        value = converted
     ok = finite_number(value)
     if ok and positive:
         ok = value > 0 or (allow_zero and value == 0)
