@@ -11,12 +11,56 @@ Sub-packages (imported on use): ``mechcirc.kinematics`` (four-bar, synthesis,
 planar linkages), ``mechcirc.sley`` (time-domain beat-up model).
 """
 
-from .circuit import Circuit, Drive, Element, Lever
+def _starting_the_command_line() -> bool:
+    """This process is ``mechcirc ...`` or ``python -m mechcirc ...`` (not a library user)."""
+    import os
+    import sys
+
+    argv = getattr(sys, "orig_argv", sys.argv)
+    if any(a == "-m" and b == "mechcirc" for a, b in zip(argv, argv[1:])):
+        return True
+    return bool(sys.argv) and os.path.basename(sys.argv[0]) in ("mechcirc", "mechcirc.exe")
+
+
+if _starting_the_command_line():
+    # Ctrl-C while the command line is still starting (before its own handler
+    # is in place) ends it quietly, as after start-up: no traceback.
+    # cli.main() restores Python's default handler.
+    import signal as _signal
+
+    def _interrupted_while_starting(signum, frame):
+        import os
+        import sys
+
+        sys.stderr.write("mechcirc: interrupted\n")
+        os._exit(130)
+
+    _signal.signal(_signal.SIGINT, _interrupted_while_starting)
+
 from .errors import (GeometryError, MechcircError, MechcircWarning, NetlistError,
                      SingularPointWarning, SolverError, TopologyError,
                      UnloadedElementWarning)
-from .netlist import load, parse
-from .sweep import Sweep
+
+# The numerical names are imported on first use (PEP 562), so that importing
+# mechcirc — and starting its command line — does not load numpy at once:
+# start-up is short, and a Ctrl-C during it meets the CLI's handler.
+_LAZY = {"Circuit": "circuit", "Drive": "circuit", "Element": "circuit", "Lever": "circuit",
+         "load": "netlist", "parse": "netlist", "Sweep": "sweep"}
+
+
+def __getattr__(name):
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'mechcirc' has no attribute {name!r}")
+    import importlib
+
+    value = getattr(importlib.import_module(f".{module}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_LAZY))
 
 __all__ = [
     "parse", "load", "Circuit", "Element", "Lever", "Drive", "Sweep",

@@ -52,12 +52,24 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; return the exit status (also used by ``python -m mechcirc``)."""
-    from ._common import run_handler, sigterm_unwinds
+    import signal
+    import threading
 
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    if not getattr(args, "func", None):
-        parser.print_help()
-        return 2
-    with sigterm_unwinds():
-        return run_handler(args)
+    if threading.current_thread() is threading.main_thread():
+        # From here on Ctrl-C raises KeyboardInterrupt, which the handlers unwind.
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        from ._common import run_handler, sigterm_unwinds
+
+        parser = build_parser()
+        args = parser.parse_args(argv)
+        if not getattr(args, "func", None):
+            parser.print_help()
+            return 2
+        with sigterm_unwinds():
+            return run_handler(args)
+    except KeyboardInterrupt:       # Ctrl-C before the command's own handler took over
+        import sys
+
+        print("mechcirc: interrupted", file=sys.stderr)
+        return 130
