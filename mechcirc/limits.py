@@ -41,8 +41,9 @@ MAX_SCIPY_REVOLUTIONS = 100
 MAX_POINTS_PER_REVOLUTION = 1_000_000
 #: Crank angles of a scene's cycle map (~10 ms each).
 MAX_CYCLE_POINTS = 3_600
-#: Elements of a network that is not series–parallel for a symbolic formula.
-MAX_FORMULA_ELEMENTS = 8
+#: Elements (and levers) of a network without a series–parallel tree whose symbolic
+#: formula is attempted (its size grows with the number of spanning trees).
+MAX_FORMULA_ELEMENTS = 12
 #: Seconds a symbolic formula may take before it is abandoned.
 FORMULA_SECONDS = 20.0
 

@@ -41,6 +41,36 @@ def sigterm_unwinds():
         signal.signal(signal.SIGTERM, old)
 
 
+@contextlib.contextmanager
+def time_limit(seconds: float, what: str, instead: str):
+    """Raise :class:`MechcircError` if the block runs longer than ``seconds``.
+
+    For work whose time cannot be bounded beforehand (SymPy); uses SIGALRM,
+    so only in the main thread of a POSIX process (elsewhere: no limit).
+    """
+    if not hasattr(signal, "setitimer") or \
+            threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    class _Expired(BaseException):
+        pass
+
+    def on_alarm(signum, frame):
+        raise _Expired()
+
+    old = signal.signal(signal.SIGALRM, on_alarm)
+    signal.setitimer(signal.ITIMER_REAL, seconds)
+    try:
+        yield
+    except _Expired:
+        raise MechcircError(f"{what} took longer than the limit of {seconds:g} s; "
+                            f"{instead}") from None
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, old)
+
+
 def run_handler(args) -> int:
     """Call ``args.func(args)`` and map errors to messages and exit codes."""
     try:
