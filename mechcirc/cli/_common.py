@@ -72,7 +72,25 @@ def time_limit(seconds: float, what: str, instead: str):
 
 
 def run_handler(args) -> int:
-    """Call ``args.func(args)`` and map errors to messages and exit codes."""
+    """Call ``args.func(args)`` and map errors to messages and exit codes.
+
+    Warnings are held back while the command runs: when it ends in a user
+    error, numpy's ``RuntimeWarning`` lines (overflow, invalid value: symptoms
+    of the bad input the message names) are dropped, so the one-line message
+    stands alone; otherwise every warning is shown as usual.
+    """
+    import warnings
+
+    with warnings.catch_warnings(record=True) as caught:
+        status = _run(args)
+    for w in caught:
+        if status == EXIT_USER and issubclass(w.category, RuntimeWarning):
+            continue
+        warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+    return status
+
+
+def _run(args) -> int:
     try:
         status = args.func(args)
         return EXIT_OK if status is None else status

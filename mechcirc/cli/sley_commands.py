@@ -95,6 +95,10 @@ class _Progress:
         sys.stderr.flush()
 
 
+#: A value given with --set: finite, at most 1e100 in magnitude (C2 = 1e308 overflowed).
+_SET_VALUE = real(most=1e100)
+
+
 def _overrides(args) -> dict:
     from ..sley import ParameterError
 
@@ -104,9 +108,9 @@ def _overrides(args) -> dict:
         if not sep:
             raise ParameterError(f"--set expects NAME=VALUE, got {item!r}")
         try:
-            out[name.strip()] = float(value)
-        except ValueError:
-            raise ParameterError(f"--set {name.strip()}: {value!r} is not a number") from None
+            out[name.strip()] = _SET_VALUE(value)
+        except argparse.ArgumentTypeError as exc:
+            raise ParameterError(f"--set {name.strip()}: {exc}") from None
     return out
 
 
