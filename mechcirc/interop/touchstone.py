@@ -33,7 +33,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import NetlistError
-from ..sources import read_source
+from ..sources import read_source, split_lines
 
 __all__ = ["read_touchstone_one_port"]
 
@@ -85,7 +85,10 @@ def _parse_options(tokens: list[str], source: str, line: int, col: int) -> tuple
 def _complex(a: float, b: float, fmt: str) -> complex:
     if fmt == "ri":
         return complex(a, b)
-    mag = a if fmt == "ma" else 10.0 ** (a / 20.0)
+    try:
+        mag = a if fmt == "ma" else 10.0 ** (a / 20.0)
+    except OverflowError:       # dB beyond float64: refused below as a non-finite value
+        mag = math.inf
     phase = math.radians(b)
     return complex(mag * math.cos(phase), mag * math.sin(phase))
 
@@ -113,7 +116,7 @@ def read_touchstone_one_port(path: str | os.PathLike) -> tuple[NDArray[np.float6
     freqs: list[float] = []
     values: list[complex] = []
     last_f = -math.inf
-    lines = re.split(r"\r\n|\n|\r", text)
+    lines = split_lines(text)        # as editors and wc -l count lines
     for number, raw in enumerate(lines, start=1):
         body = raw.split("!", 1)[0]
         stripped = body.strip()
