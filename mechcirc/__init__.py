@@ -37,30 +37,13 @@ if _starting_the_command_line():
 
     _signal.signal(_signal.SIGINT, _interrupted_while_starting)
 
+from .circuit import Circuit, Drive, Element, Lever  # noqa: E402
 from .errors import (GeometryError, MechcircError, MechcircWarning, NetlistError,
                      SingularPointWarning, SolverError, TopologyError,
                      UnloadedElementWarning)
-
-# The numerical names are imported on first use (PEP 562), so that importing
-# mechcirc — and starting its command line — does not load numpy at once:
-# start-up is short, and a Ctrl-C during it meets the CLI's handler.
-_LAZY = {"Circuit": "circuit", "Drive": "circuit", "Element": "circuit", "Lever": "circuit",
-         "load": "netlist", "parse": "netlist", "Sweep": "sweep"}
-
-
-def __getattr__(name):
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module 'mechcirc' has no attribute {name!r}")
-    import importlib
-
-    value = getattr(importlib.import_module(f".{module}", __name__), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__():
-    return sorted(set(globals()) | set(_LAZY))
+from .netlist import load, parse
+from .sweep import Sweep
+from . import _methods  # noqa: F401  (attaches Circuit.sweep, .tree, …; see there)
 
 __all__ = [
     "parse", "load", "Circuit", "Element", "Lever", "Drive", "Sweep",

@@ -96,8 +96,11 @@ class NodalSystem:
         return out
 
 
-def assemble(circuit: Circuit) -> NodalSystem:
+def assemble(circuit: Circuit, whole: bool = False) -> NodalSystem:
     """Build the nodal matrices of the part of ``circuit`` that carries force.
+
+    With ``whole`` every element and lever is kept, and no drive is needed
+    (time-domain integration of the whole network, :mod:`mechcirc.transient`).
 
     Raises
     ------
@@ -105,13 +108,16 @@ def assemble(circuit: Circuit) -> NodalSystem:
         If the drive's nodes are not connected or a node is reached only
         through a lever's other side (singular at every frequency).
     """
-    check_frame_paths(circuit)
     d = circuit.drive
-    groups = [[(e.n1, e.n2)] for e in circuit.elements]
-    for lv in circuit.levers:
-        t = (lv.p1, lv.p2, lv.s1, lv.s2)
-        groups.append([(t[i], t[j]) for i in range(4) for j in range(i + 1, 4)])
-    kept = set(loaded_groups(groups, d.n1, d.n2, drive_line=d.line))
+    if whole:
+        kept = set(range(len(circuit.elements) + len(circuit.levers)))
+    else:
+        check_frame_paths(circuit)
+        groups = [[(e.n1, e.n2)] for e in circuit.elements]
+        for lv in circuit.levers:
+            t = (lv.p1, lv.p2, lv.s1, lv.s2)
+            groups.append([(t[i], t[j]) for i in range(4) for j in range(i + 1, 4)])
+        kept = set(loaded_groups(groups, d.n1, d.n2, drive_line=d.line))
     n_el = len(circuit.elements)
     elements = tuple(e for i, e in enumerate(circuit.elements) if i in kept)
     levers = tuple(lv for i, lv in enumerate(circuit.levers) if n_el + i in kept)
@@ -125,7 +131,7 @@ def assemble(circuit: Circuit) -> NodalSystem:
     for lv in levers:
         for n in (lv.p1, lv.p2, lv.s1, lv.s2):
             names.setdefault(n)
-    reference = FRAME if FRAME in names else d.n2
+    reference = FRAME if FRAME in names or d is None else d.n2
     nodes = tuple(n for n in names if n != reference)
     index = {n: i for i, n in enumerate(nodes)}
     index[reference] = -1
@@ -149,7 +155,8 @@ def assemble(circuit: Circuit) -> NodalSystem:
                    for r, c, v in (triplets[k] for k in ("mass", "damper", "spring", "lever")))
     stamps = {kind: tuple(np.asarray(a) for a in t) for kind, t in triplets.items()}
     return NodalSystem(nodes, levers, elements, unloaded, M, D, Ks, C,
-                       index.get(d.n1, -1), index.get(d.n2, -1), stamps)
+                       index.get(d.n1, -1) if d else -1, index.get(d.n2, -1) if d else -1,
+                       stamps)
 
 
 def _stamp(triplet, i: int, j: int, y: float) -> None:

@@ -47,7 +47,8 @@ never dropped.
 
 Columns: ``index``, the parameters, ``status``, ``error``, then for a sweep
 ``K_abs_min K_abs_max Q0_abs_max omega_at_Q0_max n_flagged`` [m/(N·s), N,
-rad/s], for resonances ``resonance_1..N`` and ``antiresonance_1..N`` [rad/s]
+rad/s] (``Q0_abs_max`` is the exact peak of :func:`mechcirc.sweep.peak`: ``inf``
+with ``omega_at_Q0_max`` the resonance when the band holds an undamped one), for resonances ``resonance_1..N`` and ``antiresonance_1..N`` [rad/s]
 (empty where there are fewer), for a sley simulation the minimum and maximum
 over the tabulated revolution of ``eps2P eps4P eps4T`` [1/s²] and ``M2V``
 [N·m] (both-sides drive: also ``eps5P M5V``), e.g. ``eps4P_min``.
@@ -422,11 +423,11 @@ def run_point(spec: StudySpec, index: int, values: dict[str, float]) -> dict:
                 result = circuit.sweep(omega)
                 with np.errstate(all="ignore"):
                     absK, absQ = np.abs(result.K), np.abs(result.Q0)
-                ok = np.isfinite(absQ)
-                peak = int(np.argmax(np.where(ok, absQ, -1.0)))
+                # The exact peak (∞ at an undamped resonance in the band, named by
+                # its ω), not the grid's largest value (issue 11 §4).
+                pk = result.peak(quantity="Q0")
                 row.update(K_abs_min=float(np.nanmin(absK)), K_abs_max=float(np.nanmax(absK)),
-                           Q0_abs_max=float(absQ[peak]) if ok.any() else math.inf,
-                           omega_at_Q0_max=float(omega[peak]) if ok.any() else math.nan,
+                           Q0_abs_max=pk.value, omega_at_Q0_max=pk.omega,
                            n_flagged=int(np.count_nonzero(result.flags)))
             else:
                 found = circuit.resonances(omega_max=spec.omega_max)

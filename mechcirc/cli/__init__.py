@@ -23,6 +23,7 @@ COMMAND_MODULES: list[str] = [
     "mechcirc.cli.sley_commands",
     "mechcirc.cli.ecosystem_commands",
     "mechcirc.cli.scene_commands",
+    "mechcirc.cli.transient_commands",
 ]
 
 

@@ -95,6 +95,9 @@ def _load_with_warnings(path):
         except NotSeriesParallelError:
             circuit.nodal   # nodal analysis takes over; its own errors surface here
     messages = [str(w.message) for w in caught]
+    messages += [f"spring {e.name!r} has backlash={e.backlash:g}: the frequency domain takes "
+                 "its contact as closed (linearised); 'mechcirc transient' integrates the gap"
+                 for e in circuit.elements if e.kind == "spring" and e.backlash >= 1e-10]
     return circuit, messages
 
 
@@ -213,6 +216,28 @@ def write_sweep_csv(result, path) -> None:
             bar.update(len(table))
 
 
+def _some_omega(values, limit: int = 5) -> str:
+    text = ", ".join(f"{w:.10g}" for w in values[:limit])
+    return text + (f" and {len(values) - limit} more" if len(values) > limit else "")
+
+
+def _peak_doc(pk) -> dict:
+    """The exact peak for ``--json``: value inf when unbounded (see mechcirc.sweep.peak)."""
+    return {"quantity": pk.quantity, "value": pk.value, "omega": pk.omega,
+            "unbounded": pk.unbounded, "unbounded_at": list(pk.poles),
+            "grid_value": pk.grid_value, "grid_omega": pk.grid_omega}
+
+
+def _peak_text(pk) -> str:
+    unit = {"Q0": "N", "v0": "m/s", "K": "m/(N·s)"}[pk.quantity]
+    if pk.unbounded:
+        return (f"max |{pk.quantity}| = inf: undamped resonance at omega = "
+                f"{_some_omega(list(pk.poles))} rad/s (the grid's largest, "
+                f"{pk.grid_value:.4g} {unit}, depends only on how close a point falls)")
+    return (f"max |{pk.quantity}| = {pk.value:.7g} {unit} at omega = {pk.omega:.9g} rad/s "
+            f"(located; the grid's largest is {pk.grid_value:.4g} {unit})")
+
+
 def _resonance_rows(found) -> list[dict]:
     return [{"kind": r.kind, "omega": r.omega, "f_hz": r.f_hz, "omega_d": r.omega_d,
              "zeta": r.zeta, "error": r.error} for r in found]
@@ -250,6 +275,15 @@ def cmd_sweep(args) -> int:
         except SolverError as exc:      # too large for the eigenproblem: sweep anyway
             warns.append(f"resonance markers left out: {exc}")
     found = [r for r in found if r.omega >= omega[0]]
+    from ..sweep import FLAG_SINGULAR
+
+    pk = result.peak()
+    singular = [float(w) for w in result.omega[result.flags == FLAG_SINGULAR]]
+    notes = list(getattr(result, "notes", ()))
+    if singular:
+        notes.append(f"{len(singular)} point(s) exactly on a pole or zero of K "
+                     f"(omega = {_some_omega(singular)} rad/s): there K is +inf·j or 0 and "
+                     "Q0 is 0 or +inf·j (flag 1)")
     for w in warns:
         print(f"warning: {w}", file=sys.stderr)
     dropped = 0
@@ -264,7 +298,8 @@ def cmd_sweep(args) -> int:
         if args.plot:
             from ..plotting import plot_sweep
 
-            save_figure(plot_sweep(result, resonances=found), args.plot, out.path(args.plot))
+            save_figure(plot_sweep(result, resonances=found, peak=pk), args.plot,
+                        out.path(args.plot))
     n_flag = int(np.count_nonzero(result.flags))
     n_points = len(result.omega)
     if args.json:
@@ -275,6 +310,7 @@ def cmd_sweep(args) -> int:
             "Q0": {"re": result.Q0.real, "im": result.Q0.imag},
             "flags": result.flags, "n_flagged": n_flag, "warnings": warns,
             "resonances": _resonance_rows(found),
+            "peak": _peak_doc(pk), "singular_omega": singular, "notes": notes,
         }
         if result.drive.kind == "force":
             doc["v0"] = {"re": result.v0.real, "im": result.v0.imag}
@@ -282,15 +318,18 @@ def cmd_sweep(args) -> int:
         return 0
     absK = np.abs(result.K)
     absQ = np.abs(result.Q0)
-    how = "adaptive grid" if args.adaptive else "points"
+    how = "adaptive grid points" if args.adaptive else "points"
     print(f"{args.file}: {n_points} {how}, omega {result.omega[0]:g} .. "
           f"{result.omega[-1]:g} rad/s, method {result.method}")
     with np.errstate(all="ignore"):
-        print(f"  |K|  {np.nanmin(absK):.4g} .. {np.nanmax(absK):.4g} m/(N·s)")
-        print(f"  |Q0| {np.nanmin(absQ):.4g} .. {np.nanmax(absQ):.4g} N")
+        print(f"  |K|  {np.nanmin(absK):.4g} .. {np.nanmax(absK):.4g} m/(N·s) on the grid")
+        print(f"  |Q0| {np.nanmin(absQ):.4g} .. {np.nanmax(absQ):.4g} N on the grid")
+    print(f"  {_peak_text(pk)}")
     if n_flag:
         print(f"  {n_flag} point(s) on or within rounding of a pole or zero of K "
               "(flagged; see the 'flag' column)")
+    for note in notes:
+        print(f"  note: {note}")
     for label, path in (("CSV", args.output), ("plot", args.plot),
                         ("Touchstone", args.touchstone)):
         if path:

@@ -62,8 +62,16 @@ def register(sub) -> None:
                     "against the eigenfrequencies of the linearised equations; (b) ringing "
                     "of the sley after the beat-up pulse against the predicted damped "
                     "frequency; (c) harmonic forcing of the linear model against |Q0|.",
-        epilog="Example: mechcirc crosscheck --drive one-side --variant 3 --theta 60",
+        epilog="Example: mechcirc crosscheck --drive one-side --variant 3 --theta 60\n"
+               "         mechcirc crosscheck netlists/stb_heald.mcir --omega-max 5000\n"
+               "(the second form takes any netlist; see the transient command)",
         formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("file", nargs="?", metavar="FILE.mcir",
+                   help="a netlist: cross-check its resonances and |Q0| against its "
+                        "transients (the sley options are then ignored)")
+    p.add_argument("--omega-max", metavar="W",
+                   help="with FILE: check resonances up to W [rad/s, or 50Hz] "
+                        "(default 1.5 x the highest)")
     p.add_argument("--drive", choices=("one-side", "both-sides"), default="one-side")
     p.add_argument("--variant", type=int, default=3, choices=range(1, 8), metavar="N",
                    help="variant 1-7 (default 3)")
@@ -209,6 +217,10 @@ def cmd_simulate(args) -> int:
 
 
 def cmd_crosscheck(args) -> int:
+    if args.file is not None:
+        from .transient_commands import cmd_crosscheck_netlist
+
+        return cmd_crosscheck_netlist(args)
     import numpy as np
 
     from ..errors import SolverError

@@ -143,7 +143,7 @@ class _Builder:
             tree = self.circuit.tree
         except NotSeriesParallelError:
             return self.build_nodal()
-        from ..sweep import _depth
+        from ..reduction import depth as _depth
 
         depth = _depth(tree)
         if depth > MAX_TREE_DEPTH:
@@ -210,12 +210,12 @@ class _Builder:
         return _lowest_terms(sp, sp.expand(num), sp.expand(den))
 
     def build_tree(self, tree):
-        from ..reduction import Leaf, Parallel, Series, _postorder
+        from ..reduction import Leaf, Parallel, Series, postorder
 
         sp = self.sp
         w = self.omega
         out: dict[int, object] = {}
-        for node in _postorder(tree):
+        for node in postorder(tree):
             if isinstance(node, Leaf):
                 e = node.element
                 scaled = self.element_value(e)

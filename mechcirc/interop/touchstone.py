@@ -116,8 +116,7 @@ def read_touchstone_one_port(path: str | os.PathLike) -> tuple[NDArray[np.float6
     freqs: list[float] = []
     values: list[complex] = []
     last_f = -math.inf
-    lines = split_lines(text)        # as editors and wc -l count lines
-    for number, raw in enumerate(lines, start=1):
+    for number, raw in enumerate(split_lines(text), start=1):
         body = raw.split("!", 1)[0]
         stripped = body.strip()
         if not stripped:

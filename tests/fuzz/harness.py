@@ -328,9 +328,8 @@ def _check_location(exc: NetlistError, text: str | None, *, one_line: bool = Fal
     """
     if text is None or not exc.line:
         return
-    from mechcirc.sources import split_lines
+    from mechcirc.sources import split_lines      # lines as editors and wc -l count them
 
-    # Lines as editors and wc -l count them (a form feed or U+2028 is no break).
     lines = [text] if one_line else (split_lines(text) or [""])
     if not 1 <= exc.line <= len(lines):
         raise PropertyFailure(f"line {exc.line} outside the text ({len(lines)} lines): {exc}")
