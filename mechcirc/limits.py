@@ -23,8 +23,8 @@ MAX_SWEEP_POINTS = 10_000_000
 MAX_PLOT_POINTS = 1_000_000
 #: Points a ``--json`` document may hold (JSON text is ~200 bytes a point).
 MAX_JSON_POINTS = 1_000_000
-#: Points of a sweep by nodal analysis (a matrix per point while solving).
-MAX_NODAL_POINTS = 1_000_000
+#: Points of a sweep by nodal analysis (~0.2 ms a point on the bundled netlist: 10⁶ took over 4 min).
+MAX_NODAL_POINTS = 100_000
 #: Points of an adaptive sweep by nodal analysis (its refinement re-solves every midpoint).
 MAX_ADAPTIVE_NODAL_POINTS = 2_000
 #: Points (rows) of a parameter study.
