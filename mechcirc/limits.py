@@ -35,7 +35,7 @@ MAX_STUDY_SWEEP_POINTS = 100_000
 MAX_STUDY_WORK = 1_000_000_000
 #: Revolutions a time-domain simulation integrates (compiled RK4).
 MAX_REVOLUTIONS = 1_000
-#: Revolutions with the scipy integrators (Python right-hand side, ~0.15 s each).
+#: Revolutions with the scipy integrators (Python right-hand side: 100 took 31 s here).
 MAX_SCIPY_REVOLUTIONS = 100
 #: Output points per revolution of a simulation.
 MAX_POINTS_PER_REVOLUTION = 1_000_000
