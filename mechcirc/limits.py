@@ -27,8 +27,8 @@ MAX_JSON_POINTS = 1_000_000
 MAX_NODAL_POINTS = 100_000
 #: Points of an adaptive sweep by nodal analysis (its refinement re-solves every midpoint).
 MAX_ADAPTIVE_NODAL_POINTS = 2_000
-#: Points (rows) of a parameter study.
-MAX_STUDY_POINTS = 1_000_000
+#: Points (rows) of a parameter study (about 1.1 kB each in memory while it runs).
+MAX_STUDY_POINTS = 500_000
 #: Frequency points of the sweep at each study point.
 MAX_STUDY_SWEEP_POINTS = 100_000
 #: Study points × sweep points (the whole study's frequency evaluations).
