@@ -285,7 +285,7 @@ def test_sweep_point_limits_per_output(extra, what, tmp_path, capsys):
 @pytest.mark.parametrize("argv, needle", [
     (["simulate", "--revolutions", "1000000"], "limit of 1,000"),
     (["simulate", "--points", "1000000000"], "limit of 1,000,000"),
-    (["scene", str(SCENE), "--cycle", "--points", "100000"], "limit of 3,600"),
+    (["scene", str(SCENE), "--cycle", "--points", "100000"], "limit of 1,440"),
 ])
 def test_time_domain_and_cycle_sizes_are_bounded(argv, needle, capsys):
     assert_user_error(argv, capsys, needle)
