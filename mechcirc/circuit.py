@@ -187,6 +187,25 @@ class Circuit:
         # as the network (deeper than pickle recurses) and is rebuilt on use.
         return {k: v for k, v in self.__dict__.items() if k not in ("_reduction", "nodal")}
 
+    def __repr__(self) -> str:
+        """A one-line summary; the elements are in ``.elements`` (a netlist of 10⁵ elements
+        would otherwise print megabytes)."""
+        kinds: dict[str, int] = {}
+        for e in self.elements:
+            kinds[e.kind] = kinds.get(e.kind, 0) + 1
+        parts = [f"{n} {k}{'es' if k == 'mass' and n != 1 else '' if n == 1 else 's'}"
+                 for k, n in kinds.items()]
+        if self.levers:
+            parts.append(f"{len(self.levers)} lever{'s' if len(self.levers) != 1 else ''}")
+        d = self.drive
+        return (f"<Circuit {self.name!r}: {', '.join(parts) or 'no elements'}; "
+                f"{d.kind} drive {d.name!r} {d.amplitude:g} between {d.n1!r} and {d.n2!r}>")
+
+    def _repr_html_(self) -> str:
+        import html
+
+        return "<pre>" + html.escape(repr(self)) + "</pre>"
+
     def element(self, name: str) -> Element | Lever:
         """The element or lever called ``name`` (KeyError if none)."""
         for e in self.elements + self.levers:

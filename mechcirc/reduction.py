@@ -219,10 +219,13 @@ def _reduce(edges: list[_Edge], levers: list[Lever], a: str, b: str,
             sub_ids, sub_levers, t, s = part
             sub_edges = [edges[i] for i in sub_ids]
             if not sub_edges:
-                raise TopologyError(
+                exc = TopologyError(
                     f"lever {lv.name!r} (line {lv.line}): its secondary side {lv.s1!r}–"
                     f"{lv.s2!r} is left floating (no element closes it)",
                     nodes=(lv.s1, lv.s2), elements=(lv.name,))
+                if lv.line and source != "<string>":
+                    exc.location = f"{source}:{lv.line}:{lv.col or 1}"
+                raise exc
             child = _reduce(sub_edges, sub_levers, t, s, unloaded, lv.line, source)
             sign = 1 if (t, s) == (lv.s1, lv.s2) else -1
             keep = set(range(len(edges))) - set(sub_ids)
@@ -280,7 +283,8 @@ def _secondary_part(lv: Lever, edges: list[_Edge], levers: list[Lever], a: str, 
 def _prune(edges: list[_Edge], a: str, b: str, unloaded: list[str], drive_line: int,
            source: str) -> list[_Edge]:
     """Keep only edges in the biconnected block that holds the drive (they carry force)."""
-    kept = set(loaded_groups([[(e.n1, e.n2)] for e in edges], a, b, drive_line=drive_line))
+    kept = set(loaded_groups([[(e.n1, e.n2)] for e in edges], a, b, drive_line=drive_line,
+                             source=source))
     for i, e in enumerate(edges):
         if i not in kept:
             unloaded.extend(el.name for el in leaves(_flatten(e.node)))
@@ -553,7 +557,8 @@ def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: boo
                 val = _Value(child.imaginary, child.array / r / r)
                 if track:
                     val.mag = child.mag / r / r
-                    val.rho = child.rho + 2 * _U
+                    # (a full array even over a single leaf, whose ρ is a scalar)
+                    val.rho = np.broadcast_to(child.rho + 2 * _U, omega.shape).copy()
             else:
                 val = _combine(node, values, omega, inv_omega, track, keep, checked)
             if not keep:
@@ -734,6 +739,9 @@ def _through_reciprocal(rho: NDArray) -> NDArray:
     Computed as 1 / max(1/ρ − 1, 0) in place (NaN → ∞); callers hold
     ``np.errstate(all="ignore")``.
     """
+    if not (isinstance(rho, np.ndarray) and rho.ndim):
+        # A scalar ρ (a leaf's, constant in ω: fuzz seed 599): work on an array.
+        rho = np.atleast_1d(np.asarray(rho, dtype=float))
     r = np.reciprocal(rho)
     r -= 1.0
     np.fmax(r, 0.0, out=r)

@@ -43,6 +43,9 @@ def build_parser() -> argparse.ArgumentParser:
         epilog="Example: mechcirc sweep netlists/stb_heald.mcir --omega-min 10 "
                "--omega-max 1e4 --log -o K.csv --plot K.png",
     )
+    from .. import __version__
+
+    parser.add_argument("--version", action="version", version=f"mechcirc {__version__}")
     parser.add_argument("--debug", action="store_true",
                         help="show the full traceback of an internal error")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
@@ -54,23 +57,23 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; return the exit status (also used by ``python -m mechcirc``)."""
     import signal
+    import sys
     import threading
 
     if threading.current_thread() is threading.main_thread():
         # From here on Ctrl-C raises KeyboardInterrupt, which the handlers unwind.
         signal.signal(signal.SIGINT, signal.default_int_handler)
     try:
-        from ._common import run_handler, sigterm_unwinds
+        from ._common import join_spaced_quantities, run_handler, sigterm_unwinds
 
         parser = build_parser()
-        args = parser.parse_args(argv)
+        args = parser.parse_args(join_spaced_quantities(sys.argv[1:] if argv is None
+                                                        else argv))
         if not getattr(args, "func", None):
             parser.print_help()
             return 2
         with sigterm_unwinds():
             return run_handler(args)
     except KeyboardInterrupt:       # Ctrl-C before the command's own handler took over
-        import sys
-
         print("mechcirc: interrupted", file=sys.stderr)
         return 130

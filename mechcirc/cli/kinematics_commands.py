@@ -23,7 +23,7 @@ def register(sub) -> None:
         p.add_argument(f"--{name}", type=real(above=0.0, most=MAX_LENGTH), required=True,
                        metavar="L",
                        help=f"{name} length {what} (any unit)")
-    p.add_argument("--omega", type=real(most=MAX_OMEGA, unit="rad/s"), metavar="W",
+    p.add_argument("--omega", type=real(most=MAX_OMEGA, unit="rad/s", omega=True), metavar="W",
                    help="crank speed [rad/s] for ε4T = ν·ω²")
     p.add_argument("--branch", type=int, choices=(1, -1), default=1,
                    help="assembly mode (default +1; see docs/kinematics.md)")
@@ -96,7 +96,7 @@ def register(sub) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--load", choices=("light", "medium", "heavy"), default="medium",
                    help="loom class: crank 33–34, 35–36 or 37–38 mm (default medium)")
-    p.add_argument("--swing", type=real(above=0.0, most=180.0, unit="deg"), metavar="DEG",
+    p.add_argument("--swing", type=real(above=0.0, most=180.0, unit="deg", role="angle"), metavar="DEG",
                    help="swing Ψ [deg] (default: explore 23–26°)")
     p.add_argument("--objective", choices=("margin", "ratio"), default="margin",
                    help="rank by the smallest criterion margin (default) or by |Φ2''|/|Φ1''|")
@@ -155,7 +155,7 @@ def register(sub) -> None:
         epilog="Example: mechcirc linkage examples/fnf_sixbar.toml --theta 30 --plot fnf.png",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("file", help="linkage file (.toml)")
-    p.add_argument("--theta", type=real(most=1e9, unit="deg"), default=0.0, metavar="DEG",
+    p.add_argument("--theta", type=real(most=1e9, unit="deg", role="angle"), default=0.0, metavar="DEG",
                    help="rotation of the first crank from the pose [deg] (default 0)")
     p.add_argument("--plot", metavar="IMAGE",
                    help="draw the linkage at θ with the paths of its points")

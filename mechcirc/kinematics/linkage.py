@@ -60,7 +60,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import GeometryError, NetlistError
-from .linkage_solver import LinkageMotion
+from .linkage_solver import MAX_CONTINUATION_STEPS, LinkageMotion, LinkageState  # noqa: F401
 
 __all__ = ["Crank", "AssurGroup", "Linkage", "LinkageState", "LinkageMotion", "parse_linkage",
            "load_linkage"]
@@ -108,50 +108,6 @@ class AssurGroup:
         return len(self.external_pairs)
 
 
-@dataclass(frozen=True)
-class LinkageState:
-    """Positions, velocities and accelerations at one drive position.
-
-    Attributes
-    ----------
-    theta : float
-        Rotation of the first crank from the pose [rad].
-    t : float
-        Time θ/ω_1 [s].
-    q, qdot, qddot : ndarray, shape (3n,)
-        (x, y, φ) of each moving link's frame and their time derivatives.
-    points, velocities, accelerations : dict[str, ndarray (2,)]
-        Every named point [length], [length/s], [length/s²].
-    angular_velocities : dict[str, float]
-        φ̇ of each moving link [rad/s].
-    contributions : dict[str, dict[str, ndarray (2,)]]
-        Crank name → point → velocity with every other crank stopped [length/s].
-    """
-
-    theta: float
-    t: float
-    q: NDArray[np.float64]
-    qdot: NDArray[np.float64]
-    qddot: NDArray[np.float64]
-    points: dict
-    velocities: dict
-    accelerations: dict
-    angular_velocities: dict
-    contributions: dict
-
-    def as_dict(self) -> dict:
-        """Plain data for JSON output."""
-        return {
-            "theta_deg": math.degrees(self.theta), "t": self.t,
-            "points": {k: v.tolist() for k, v in self.points.items()},
-            "velocities": {k: v.tolist() for k, v in self.velocities.items()},
-            "accelerations": {k: v.tolist() for k, v in self.accelerations.items()},
-            "angular_velocities": dict(self.angular_velocities),
-            "conditional_stop": {c: {k: v.tolist() for k, v in d.items()}
-                                 for c, d in self.contributions.items()},
-        }
-
-
 def _rot(phi):
     c, s = math.cos(phi), math.sin(phi)
     return np.array([[c, -s], [s, c]])
@@ -159,9 +115,6 @@ def _rot(phi):
 
 _PERP = np.array([[0.0, -1.0], [1.0, 0.0]])
 
-#: Most continuation steps :meth:`Linkage.solve` takes (about 20 s of work);
-#: more is refused at once with the number needed.
-MAX_CONTINUATION_STEPS = 100_000
 
 
 @dataclass(frozen=True, eq=False)

@@ -19,7 +19,9 @@ Two solvers, chosen per linkage once (:func:`plan`):
   started from the Taylor predictor of the node just before it, and their
   velocities and accelerations come from two batched linear solves.
 
-Both return a :class:`LinkageMotion` of plain arrays.
+Both return a :class:`LinkageMotion` of plain arrays.  The result types
+(:class:`LinkageState`, :class:`LinkageMotion`) live here, below
+:mod:`.linkage`, which re-exports them, so the two modules import one way.
 """
 
 from __future__ import annotations
@@ -33,7 +35,56 @@ from numpy.typing import NDArray
 
 from ..errors import GeometryError
 
-__all__ = ["LinkageMotion", "plan", "motion"]
+__all__ = ["LinkageMotion", "LinkageState", "MAX_CONTINUATION_STEPS", "plan", "motion"]
+
+
+#: Most continuation steps :meth:`Linkage.solve` takes (about 20 s of work);
+#: more is refused at once with the number needed.
+MAX_CONTINUATION_STEPS = 100_000
+
+
+@dataclass(frozen=True)
+class LinkageState:
+    """Positions, velocities and accelerations at one drive position.
+
+    Attributes
+    ----------
+    theta : float
+        Rotation of the first crank from the pose [rad].
+    t : float
+        Time θ/ω_1 [s].
+    q, qdot, qddot : ndarray, shape (3n,)
+        (x, y, φ) of each moving link's frame and their time derivatives.
+    points, velocities, accelerations : dict[str, ndarray (2,)]
+        Every named point [length], [length/s], [length/s²].
+    angular_velocities : dict[str, float]
+        φ̇ of each moving link [rad/s].
+    contributions : dict[str, dict[str, ndarray (2,)]]
+        Crank name → point → velocity with every other crank stopped [length/s].
+    """
+
+    theta: float
+    t: float
+    q: NDArray[np.float64]
+    qdot: NDArray[np.float64]
+    qddot: NDArray[np.float64]
+    points: dict
+    velocities: dict
+    accelerations: dict
+    angular_velocities: dict
+    contributions: dict
+
+    def as_dict(self) -> dict:
+        """Plain data for JSON output."""
+        return {
+            "theta_deg": math.degrees(self.theta), "t": self.t,
+            "points": {k: v.tolist() for k, v in self.points.items()},
+            "velocities": {k: v.tolist() for k, v in self.velocities.items()},
+            "accelerations": {k: v.tolist() for k, v in self.accelerations.items()},
+            "angular_velocities": dict(self.angular_velocities),
+            "conditional_stop": {c: {k: v.tolist() for k, v in d.items()}
+                                 for c, d in self.contributions.items()},
+        }
 
 
 @dataclass(frozen=True)
@@ -119,8 +170,6 @@ class LinkageMotion:
         The arrays are copied once; each state's vectors are disjoint views of
         that private copy.
         """
-        from .linkage import LinkageState
-
         names, links = self.point_names, self.link_names
         P, V, A = self.points.copy(), self.velocities.copy(), self.accelerations.copy()
         C = np.moveaxis(self.contributions, 0, 1).copy()
@@ -144,8 +193,6 @@ class LinkageMotion:
 
     def state(self, i: int):
         """The :class:`~.linkage.LinkageState` of position ``i``."""
-        from .linkage import LinkageState
-
         names = self.point_names
         # one copy per array, then per-point views into it
         pts = dict(zip(names, self.points[i].copy()))
@@ -276,8 +323,6 @@ def _dyads(lk, idx):
 # perpendicular (−y, x) of a vector is i times it.
 
 def _times(lk, thetas, max_step_deg):
-    from .linkage import MAX_CONTINUATION_STEPS
-
     if not max_step_deg > 0:
         raise ValueError(f"max_step_deg must be > 0, got {max_step_deg}")
     w1 = lk.cranks[0].omega
@@ -424,9 +469,11 @@ class _DyadSolver:
             sin_ = np.abs(_im_conj(r1, r2)) / (dy.l1 * dy.l2)
             m = np.where(h2 >= 0, sin_, -1.0)
             margin = np.minimum(margin, np.where(np.isfinite(m), m, -1.0))
-            for L, xp, rr, ang, arm in ((L1, x1, r1, ang1, arm1), (L2, x2, r2, ang2, arm2)):
+            for L, xp, rr, ang, arm, ln in ((L1, x1, r1, ang1, arm1, dy.l1),
+                                            (L2, x2, r2, ang2, arm2, dy.l2)):
                 phi[L] = np.angle(rr) - ang
-                E[L] = rr / np.abs(rr) * complex(math.cos(ang), -math.sin(ang))
+                # |rr| is the link's length by construction (to rounding)
+                E[L] = rr * (complex(math.cos(ang), -math.sin(ang)) / ln)
                 r[L] = xp + E[L] * arm
             inner.append((x1, x2, r1, r2))
         return phi, E, r, inner, margin
@@ -504,16 +551,17 @@ def _solve_dyads(lk, pl, t, dt_max):
         _lock_error(lk, ds, 0.0 if k == 0 else check_t[k - 1], check_t[k])
     nc = len(lk.cranks)
     N = len(t)
-    parts = np.empty((N, 3 * pl.nb, nc))
-    for j in range(nc):
-        wc = np.zeros(nc)
-        wc[j] = pl.omega[j]
-        wj, vj = ds.velocities(E, inner, wc)
-        parts[:, :, j] = _pack(vj, wj)
-    if nc == 1:
-        qd = parts[:, :, 0].copy()
-        w = qd[:, 2::3].T
+    if nc == 1:                     # one crank: its part is the whole velocity
+        w, v = ds.velocities(E, inner, pl.omega)
+        qd = _pack(v, w)
+        parts = qd[:, :, None]
     else:
+        parts = np.empty((N, 3 * pl.nb, nc))
+        for j in range(nc):
+            wc = np.zeros(nc)
+            wc[j] = pl.omega[j]
+            wj, vj = ds.velocities(E, inner, wc)
+            parts[:, :, j] = _pack(vj, wj)
         w, v = ds.velocities(E, inner, pl.omega)
         qd = _pack(v, w)
     al, a = ds.accelerations(E, inner, w)

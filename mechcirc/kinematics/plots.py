@@ -2,8 +2,10 @@
 
 matplotlib is imported inside each function (and only its object-oriented
 ``Figure``, never ``pyplot``), so importing this module is cheap and works on
-any backend, Agg included.  Each function returns a new
-``matplotlib.figure.Figure``; saving is the caller's business (the CLI uses
+any backend, Agg included.  Each function draws on ``fig`` when given (the
+convention of :mod:`mechcirc.plotting`: multi-panel plots take ``fig=``,
+single-panel ones also ``ax=``) or on a new ``matplotlib.figure.Figure``, and
+returns what it drew on; saving is the caller's business (the CLI uses
 :func:`mechcirc.cli._common.save_figure`).  Angles are plotted in degrees.
 """
 
@@ -16,15 +18,16 @@ import numpy as np
 __all__ = ["plot_fourbar", "plot_synthesis", "draw_design", "plot_frame_loading", "plot_shaking", "plot_linkage"]
 
 
-def _figure(rows, cols, size):
-    from matplotlib.figure import Figure
+def _figure(rows, cols, size, fig=None):
+    if fig is None:
+        from matplotlib.figure import Figure
 
-    fig = Figure(figsize=size, layout="constrained")
+        fig = Figure(figsize=size, layout="constrained")
     axes = fig.subplots(rows, cols, squeeze=False)
     return fig, axes
 
 
-def plot_fourbar(fourbar, omega: float | None = None, n: int = 721):
+def plot_fourbar(fourbar, omega: float | None = None, n: int = 721, *, fig=None):
     """φ4, μ, ν (or ε4T = ν ω² when ``omega`` [rad/s] is given) and γ against θ.
 
     Dead centres are marked on every panel when the linkage is a crank-rocker.
@@ -36,7 +39,7 @@ def plot_fourbar(fourbar, omega: float | None = None, n: int = 721):
     with np.errstate(all="ignore"):             # 0/0 at a change point's branch crossing
         st = fourbar.evaluate(th)
     deg = np.degrees(th)
-    fig, ax = _figure(4, 1, (7, 9))
+    fig, ax = _figure(4, 1, (7, 9), fig)
     acc = st.nu * omega ** 2 if omega else st.nu
     crossings = fourbar.branch_crossings()
     if crossings:
@@ -137,9 +140,9 @@ def plot_synthesis(designs, n: int = 721, fig=None):
     return fig
 
 
-def plot_frame_loading(result):
+def plot_frame_loading(result, *, fig=None):
     """Shaking force (components and magnitude), driving torque and shaking moments against θ."""
-    fig, ax = _figure(3, 1, (7, 8))
+    fig, ax = _figure(3, 1, (7, 8), fig)
     deg = np.degrees(result.theta)
     S = result.shaking_force
     ax[0, 0].plot(deg, S[:, 0], label="S_x")
@@ -210,10 +213,17 @@ def plot_shaking(result, fig=None):
     return fig
 
 
-def plot_linkage(linkage, state, paths=None):
-    """The linkage drawn at ``state``, with traced point paths ``{point: (n, 2) array}``."""
-    fig, ax = _figure(1, 1, (7, 7))
-    a = ax[0, 0]
+def plot_linkage(linkage, state, paths=None, *, ax=None, fig=None):
+    """The linkage drawn at ``state``, with traced point paths ``{point: (n, 2) array}``.
+
+    On ``ax`` when given (and then returns it), else on ``fig`` or a new Figure
+    (returned).
+    """
+    if ax is not None:
+        a = ax
+    else:
+        fig, axes = _figure(1, 1, (7, 7), fig)
+        a = axes[0, 0]
     if paths:
         for p, xy in paths.items():
             a.plot(xy[:, 0], xy[:, 1], lw=0.8, alpha=0.7)
@@ -234,4 +244,4 @@ def plot_linkage(linkage, state, paths=None):
     a.set_xlabel(f"x [{unit}]")
     a.set_ylabel(f"y [{unit}]")
     a.set_title(f"{linkage.name} at θ = {math.degrees(state.theta):.4g}° (first crank)")
-    return fig
+    return a if ax is not None else fig

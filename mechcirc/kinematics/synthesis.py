@@ -496,6 +496,17 @@ def synthesize(load: Literal["light", "medium", "heavy"] = "medium",
     if not (step > 0 and crank_step > 0 and swing_step > 0):
         raise GeometryError("step, crank_step and swing_step must be > 0")
     lo, hi = ((fixed["crank"],) * 2 if "crank" in fixed else LOAD_CRANK_MM[load])
+
+    def size(a, b, h):
+        return math.floor((b - a + 1e-9) / h) + 1
+
+    n_grid = size(lo, hi, crank_step) * \
+        (1 if swing is not None else size(s_range[0], s_range[1], swing_step)) * \
+        (1 if "coupler" in fixed else size(*b_a_range, step)) * \
+        (1 if {"rocker", "frame"} & set(fixed) else size(*d_a_range, step))
+    if n_grid > 20_000_000:          # counted before any array is made
+        raise GeometryError(f"synthesis grid of {n_grid:.3g} points is too large (limit 2e7); "
+                            f"use larger steps or narrower ranges")
     cranks = np.arange(lo, hi + 1e-9, crank_step)
     swings = (np.array([float(swing)]) if swing is not None else
               np.arange(s_range[0], s_range[1] + 1e-9, swing_step))

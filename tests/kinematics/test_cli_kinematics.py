@@ -163,10 +163,10 @@ def test_frame_json_matches_the_api_and_the_moment_transfer(capsys):
     np.testing.assert_allclose(cols["S_abs_N"], res.shaking_force_magnitude, rtol=1e-12)
     # moment transfer T_a − T_d = AD × S with AD = (d, 0): d·S_y
     np.testing.assert_allclose(cols["T_a_Nm"] - cols["T_d_Nm"], 0.16275 * cols["S_y_N"],
-                               rtol=0, atol=1e-9 * np.max(np.abs(cols["T_d_Nm"])))
+                               rtol=0, atol=1e-14 * np.max(np.abs(cols["T_d_Nm"])))  # 1e-16
     # eq. 7 as printed: F_Ax·AD_y − F_Ay·AD_x − T = −F_Ay·d − T
     np.testing.assert_allclose(cols["T_d_printed_Nm"], -cols["F_Ay_N"] * 0.16275 - cols["T_Nm"],
-                               rtol=0, atol=1e-9 * np.max(np.abs(cols["T_Nm"])))
+                               rtol=0, atol=2e-14 * np.max(np.abs(cols["T_Nm"])))  # 1.6e-15
     assert doc["summary"]["T_d_printed_minus_T_d_max_abs_Nm"] > 100
     assert "T_d = AD_x·F_Ay − AD_y·F_Ax − T" in doc["convention"]
 
