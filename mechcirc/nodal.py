@@ -29,7 +29,9 @@ from .circuit import FRAME, Circuit, Element, Lever
 from .errors import TopologyError
 from .topology import check_frame_paths, loaded_groups
 
-__all__ = ["NodalSystem", "assemble", "solve_unit", "DENSE_LIMIT"]
+__all__ = ["NodalSystem", "Solution", "assemble", "stamps", "combine", "matrix",
+           "dense_matrices", "solve", "solve_unit", "mobility", "mobility_and_error",
+           "KINDS", "DENSE_LIMIT"]
 
 #: Systems with at most this many unknowns use batched dense solves.
 DENSE_LIMIT = 60
@@ -96,27 +98,38 @@ class NodalSystem:
         return out
 
 
-def assemble(circuit: Circuit) -> NodalSystem:
+def assemble(circuit: Circuit, *, whole: bool = False) -> NodalSystem:
     """Build the nodal matrices of the part of ``circuit`` that carries force.
+
+    With ``whole=True`` every element and lever is kept, loaded by the drive
+    or not, and nothing is checked: the matrices of M ẍ + D ẋ + Kₛ x = f for
+    the whole network (velocities referred to the frame ``"0"``, or to the
+    drive's second node where there is no frame), as the time-domain and
+    two-port analyses need them.  ``a`` and ``b`` still index the drive's
+    nodes (−1 where a node is the reference).
 
     Raises
     ------
     TopologyError
         If the drive's nodes are not connected or a node is reached only
-        through a lever's other side (singular at every frequency).
+        through a lever's other side (singular at every frequency); not
+        with ``whole=True``.
     """
-    check_frame_paths(circuit)
     d = circuit.drive
-    groups = [[(e.n1, e.n2)] for e in circuit.elements]
-    for lv in circuit.levers:
-        t = (lv.p1, lv.p2, lv.s1, lv.s2)
-        groups.append([(t[i], t[j]) for i in range(4) for j in range(i + 1, 4)])
-    kept = set(loaded_groups(groups, d.n1, d.n2, drive_line=d.line))
-    n_el = len(circuit.elements)
-    elements = tuple(e for i, e in enumerate(circuit.elements) if i in kept)
-    levers = tuple(lv for i, lv in enumerate(circuit.levers) if n_el + i in kept)
-    unloaded = tuple(e.name for i, e in enumerate(circuit.elements) if i not in kept) + \
-        tuple(lv.name for i, lv in enumerate(circuit.levers) if n_el + i not in kept)
+    if whole:
+        elements, levers, unloaded = tuple(circuit.elements), tuple(circuit.levers), ()
+    else:
+        check_frame_paths(circuit)
+        groups = [[(e.n1, e.n2)] for e in circuit.elements]
+        for lv in circuit.levers:
+            t = (lv.p1, lv.p2, lv.s1, lv.s2)
+            groups.append([(t[i], t[j]) for i in range(4) for j in range(i + 1, 4)])
+        kept = set(loaded_groups(groups, d.n1, d.n2, drive_line=d.line))
+        n_el = len(circuit.elements)
+        elements = tuple(e for i, e in enumerate(circuit.elements) if i in kept)
+        levers = tuple(lv for i, lv in enumerate(circuit.levers) if n_el + i in kept)
+        unloaded = tuple(e.name for i, e in enumerate(circuit.elements) if i not in kept) + \
+            tuple(lv.name for i, lv in enumerate(circuit.levers) if n_el + i not in kept)
 
     names: dict[str, None] = {}
     for e in elements:
@@ -125,161 +138,412 @@ def assemble(circuit: Circuit) -> NodalSystem:
     for lv in levers:
         for n in (lv.p1, lv.p2, lv.s1, lv.s2):
             names.setdefault(n)
-    reference = FRAME if FRAME in names else d.n2
+    reference = FRAME if FRAME in names or not names else d.n2
     nodes = tuple(n for n in names if n != reference)
     index = {n: i for i, n in enumerate(nodes)}
     index[reference] = -1
     import scipy.sparse as sp
 
     n = len(nodes) + len(levers)
-    triplets = {"mass": ([], [], []), "damper": ([], [], []), "spring": ([], [], []),
-                "lever": ([], [], [])}
+    triplets: dict[str, tuple[list, list, list]] = {k: ([], [], []) for k in KINDS}
+    for kind, row, col, sign, source, ratio in stamps(elements, levers, index):
+        rows, cols, vals = triplets[kind]
+        rows.append(row)
+        cols.append(col)
+        vals.append(sign * (source.ratio if ratio else 1.0) if kind == "lever"
+                    else sign * source.value * source.eta)
+    M, D, Ks, C = (sp.csr_matrix((v, (r, c)), shape=(n, n))
+                   for r, c, v in (triplets[k] for k in KINDS))
+    stamped = {kind: tuple(np.asarray(a) for a in t) for kind, t in triplets.items()}
+    return NodalSystem(nodes, levers, elements, unloaded, M, D, Ks, C,
+                       index.get(d.n1, -1), index.get(d.n2, -1), stamped)
+
+
+#: The four matrices of a nodal system, in the order of :class:`NodalSystem`.
+KINDS = ("mass", "damper", "spring", "lever")
+
+
+def stamps(elements, levers, index: dict[str, int]):
+    """Every unsummed entry of the nodal matrices — the one place elements are stamped.
+
+    Yields ``(kind, row, col, sign, source, ratio)``: ``kind`` one of
+    :data:`KINDS`; ``source`` the :class:`Element` or :class:`Lever`; the entry
+    is ``sign × value × eta`` of an element, and ``sign × ratio`` (``ratio``
+    true) or ``sign × 1`` of a lever.  ``index`` maps node names to rows (−1
+    for the reference node, whose rows are dropped); lever force unknowns
+    follow the ``max(index) + 1`` node rows, in order.  The numeric matrices
+    (:func:`assemble`) and the symbolic ones (:mod:`mechcirc.interop.formula`)
+    are both built from these entries.
+    """
+    n_nodes = sum(1 for i in index.values() if i >= 0)
     for e in elements:
-        _stamp(triplets[e.kind], index[e.n1], index[e.n2], e.value * e.eta)
-    rows, cols, vals = triplets["lever"]
+        i, j = index[e.n1], index[e.n2]
+        for r, c, s in ((i, i, 1.0), (j, j, 1.0), (i, j, -1.0), (j, i, -1.0)):
+            if r >= 0 and c >= 0:
+                yield e.kind, r, c, s, e, False
     for k, lv in enumerate(levers):
-        col = len(nodes) + k
-        for node, coef in ((lv.p1, lv.ratio), (lv.p2, -lv.ratio), (lv.s1, -1.0), (lv.s2, 1.0)):
+        col = n_nodes + k
+        for node, s, ratio in ((lv.p1, 1.0, True), (lv.p2, -1.0, True),
+                               (lv.s1, -1.0, False), (lv.s2, 1.0, False)):
             i = index[node]
             if i >= 0:
-                rows += [i, col]
-                cols += [col, i]
-                vals += [coef, coef]
-    M, D, Ks, C = (sp.csr_matrix((v, (r, c)), shape=(n, n))
-                   for r, c, v in (triplets[k] for k in ("mass", "damper", "spring", "lever")))
-    stamps = {kind: tuple(np.asarray(a) for a in t) for kind, t in triplets.items()}
-    return NodalSystem(nodes, levers, elements, unloaded, M, D, Ks, C,
-                       index.get(d.n1, -1), index.get(d.n2, -1), stamps)
+                yield "lever", i, col, s, lv, ratio
+                yield "lever", col, i, s, lv, ratio
 
 
-def _stamp(triplet, i: int, j: int, y: float) -> None:
-    rows, cols, vals = triplet
-    for r, c, v in ((i, i, y), (j, j, y), (i, j, -y), (j, i, -y)):
-        if r >= 0 and c >= 0:
-            rows.append(r)
-            cols.append(c)
-            vals.append(v)
+def combine(dc, m, k, omega):
+    """A(ω) = D + C + j(ωM − Kₛ/ω) from its parts — the one place A(ω) is formed.
+
+    ``dc``, ``m``, ``k`` are arrays of one shape (dense matrices, or the
+    aligned nonzeros of a sparse pattern, in any float precision) and
+    ``omega`` broadcasts against them.  Entries beyond float64 (ω·m above
+    1.8e308) come out non-finite; callers flag them.
+    """
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        return dc + 1j * (omega * m - k / omega)
+
+
+class _Pattern:
+    """The sparsity pattern of A(ω), fixed over ω, with the parts' values aligned to it.
+
+    ``dc``, ``m``, ``k`` are the summed nonzeros (CSC order) of D + C, M and
+    Kₛ; the unsummed stamps are kept sorted by row for residuals in extended
+    precision (a summed diagonal is already rounded).
+    """
+
+    def __init__(self, system: NodalSystem):
+        n = system.size
+        r = [np.asarray(system.stamps[k][0], dtype=np.int64) for k in KINDS]
+        c = [np.asarray(system.stamps[k][1], dtype=np.int64) for k in KINDS]
+        v = [np.asarray(system.stamps[k][2], dtype=float) for k in KINDS]
+        rows, cols, vals = np.concatenate(r), np.concatenate(c), np.concatenate(v)
+        kind = np.concatenate([np.full(len(x), i) for i, x in enumerate(r)])
+        self.n = n
+        key = cols * n + rows
+        uniq, inv = np.unique(key, return_inverse=True)
+        self.indices = (uniq % n).astype(np.int32)
+        self.indptr = np.searchsorted(uniq // n, np.arange(n + 1)).astype(np.int32)
+        nnz = uniq.size
+        parts = [np.bincount(inv, weights=np.where(kind == i, vals, 0.0), minlength=nnz)
+                 for i in range(4)]
+        self.m, self.k, self.dc = parts[0], parts[2], parts[1] + parts[3]
+        # Unsummed, row-sorted, in extended precision, for b − A x.
+        order = np.argsort(rows, kind="stable")
+        ext = np.longdouble
+        self.r_rows, self.r_cols = rows[order], cols[order]
+        kv = kind[order]
+        vv = vals[order].astype(ext)
+        zero = np.zeros_like(vv)
+        self.r_m = np.where(kv == 0, vv, zero)
+        self.r_k = np.where(kv == 2, vv, zero)
+        self.r_dc = np.where((kv == 1) | (kv == 3), vv, zero)
+        self.r_starts = np.flatnonzero(np.r_[True, self.r_rows[1:] != self.r_rows[:-1]]) \
+            if rows.size else np.zeros(0, dtype=np.int64)
+        self.r_which = self.r_rows[self.r_starts] if rows.size else np.zeros(0, np.int64)
+
+    def csc(self, omega: float):
+        """A(ω) as a ``scipy.sparse.csc_matrix`` on the fixed pattern."""
+        import scipy.sparse as sp
+
+        data = combine(self.dc, self.m, self.k, omega)
+        return sp.csc_matrix((data, self.indices, self.indptr), shape=(self.n, self.n))
+
+    def residual(self, omega: NDArray, x: NDArray, rhs: NDArray) -> NDArray[np.complex128]:
+        """b − A(ω) x for each ω (rows of ``x``), accumulated in extended precision."""
+        ext = np.longdouble
+        w = np.asarray(omega).astype(ext)[:, None]
+        prod = combine(self.r_dc, self.r_m, self.r_k, w) * x[:, self.r_cols]
+        Ax = np.zeros((w.shape[0], self.n), dtype=np.clongdouble)
+        if prod.shape[1]:
+            Ax[:, self.r_which] = np.add.reduceat(prod, self.r_starts, axis=1)
+        r = rhs.astype(ext)[None, :] - Ax
+        return r.astype(complex)
+
+
+    def sensitivity(self, omega: NDArray, x: NDArray) -> NDArray[np.float64]:
+        """Σ |x_r · a_rc · x_c| over the unsummed stamps, for each ω.
+
+        A is complex symmetric, so the adjoint solution of K = cᵀ A⁻¹ c is x
+        itself and a relative change ε of every stamp moves K by at most ε
+        times this sum: the sensitivity of K to rounding the data.
+        """
+        w = np.asarray(omega, dtype=float)[:, None]
+        xa = np.abs(x).astype(float)
+        a = np.abs(combine(self.r_dc.astype(float), self.r_m.astype(float),
+                           self.r_k.astype(float), w))
+        with np.errstate(all="ignore"):
+            return np.sum(xa[:, self.r_rows] * a * xa[:, self.r_cols], axis=1)
+
+
+def _pattern(system: NodalSystem) -> _Pattern:
+    cached = system.__dict__.get("_pattern")
+    if cached is None:
+        cached = _Pattern(system)
+        object.__setattr__(system, "_pattern", cached)
+    return cached
+
+
+def matrix(system: NodalSystem, omega: float):
+    """A(ω) = D + C + j(ωM − Kₛ/ω) of ``system`` as a sparse CSC matrix."""
+    return _pattern(system).csc(float(omega))
+
+
+def dense_matrices(system: NodalSystem, omega: ArrayLike) -> NDArray[np.complex128]:
+    """A(ω) for each ω as one dense array of shape (n_ω, n, n)."""
+    omega = np.asarray(omega, dtype=float).reshape(-1, 1, 1)
+    dc = (system.D + system.C).toarray()
+    return combine(dc, system.M.toarray(), system.Ks.toarray(), omega)
+
+
+@dataclass(frozen=True)
+class Solution:
+    """Solutions of A(ω) x = b over ω, with their error estimates.
+
+    Attributes
+    ----------
+    x : ndarray, shape (n_ω, n)
+        ``clongdouble`` if refined, NaN rows where A(ω) could not be solved.
+    K : ndarray of complex, shape (n_ω,)
+        x_a − x_b (the drive's velocity difference per unit force).
+    error : ndarray of float, shape (n_ω,)
+        Estimated relative error of K: the drive component of the last
+        correction of the iterative refinement, plus its own uncertainty
+        (the observed contraction × the correction's size), floored at the
+        rounding to float64; ``inf`` where the refinement does not contract
+        (A(ω) numerically singular) or A(ω) is not finite.
+    singular : ndarray of bool, shape (n_ω,)
+        Points on a singularity of A(ω) (exact, or within rounding).
+    """
+
+    x: NDArray
+    K: NDArray[np.complex128]
+    error: NDArray[np.float64]
+    singular: NDArray[np.bool_]
+
+
+def solve(system: NodalSystem, omega: ArrayLike, *, refine: bool = True,
+          steps: int = 4, limits: bool = True) -> Solution:
+    """Solve A(ω) x = e_a − e_b at each ω, refined, with an error estimate of K.
+
+    Small systems (≤ :data:`DENSE_LIMIT` unknowns) are solved as batched dense
+    systems; large ones by a sparse LU per ω whose column ordering is computed
+    once and reused.  Refinement reuses the factors: each step is one
+    residual in extended precision and one triangular solve.
+    """
+    omega = np.asarray(omega, dtype=float).reshape(-1)
+    n = system.size
+    m = omega.size
+    dtype = np.clongdouble if refine else complex
+    x = np.full((m, n), np.nan, dtype=dtype)
+    err = np.full(m, np.inf)
+    ok = np.isfinite(omega) & (omega > 0)
+    idx = np.flatnonzero(ok)
+    rhs = system.injection()
+    pat = _pattern(system)
+    if n <= DENSE_LIMIT:
+        chunk = max(1, _CHUNK_BYTES // (16 * n * n))
+        for start in range(0, idx.size, chunk):
+            sel = idx[start:start + chunk]
+            A = dense_matrices(system, omega[sel])
+            finite = np.isfinite(A).all(axis=(1, 2))
+            sel, A = sel[finite], A[finite]
+            if not sel.size:
+                continue
+            lu = _DenseLU(A)
+            xs, es = _refined(lu.solve, pat, omega[sel], rhs, system, refine, steps)
+            x[sel], err[sel] = xs, es
+    else:
+        solver = _SparseSolver(pat)
+        for i in idx:
+            lu = solver.factor(omega[i])
+            if lu is None:
+                continue
+            xs, es = _refined(lambda r: lu(r[0])[None, :], pat, omega[i:i + 1], rhs,
+                              system, refine, steps)
+            x[i], err[i] = xs[0], es[0]
+    K = system.difference(x).astype(complex)
+    # No correct digit from the solve itself: A(ω) is numerically singular.
+    singular = ok & (~np.isfinite(K) | (err >= 1.0))
+    with np.errstate(all="ignore"):
+        err = np.where(ok, _total(system, pat, omega, x, err), np.inf)
+    if limits:
+        K, err = _singular_points(system, omega, x, K, err, singular, steps)
+    return Solution(x, K, err, singular)
+
+
+def _refined(solve_fn, pat: _Pattern, omega, rhs, system, refine: bool, steps: int):
+    """x from one solve and up to ``steps`` refinement steps; returns (x, relative error of K)."""
+    eps = np.finfo(float).eps
+    b = np.broadcast_to(rhs.astype(complex), (omega.size, rhs.size))
+    x0 = solve_fn(b)
+    if not refine:
+        # No refinement: the first correction is still the error estimate.
+        d = solve_fn(pat.residual(omega, x0.astype(np.clongdouble), rhs))
+        return x0, _estimate(system, x0, d, x0)
+    x = x0.astype(np.clongdouble)
+    prev = x0
+    est = np.full(omega.size, np.inf)
+    for _ in range(steps):
+        d = solve_fn(pat.residual(omega, x, rhs))
+        est = _estimate(system, x, d, prev)
+        x = x + d
+        prev = d
+        if not np.any(est > eps / 8):
+            break
+    return x, est
+
+
+def _total(system, pat, omega, x, est):
+    """The solve's error ``est`` plus the sensitivity of K to rounding its data.
+
+    Each stamp (ω·m, k/ω, c, r) carries a rounding of up to eps relative, and
+    near a zero of K (far from it never) that moves K far more than the solve:
+    a point within rounding of a zero is then flagged, as the series–parallel
+    method flags it.  The result is rounded to float64 at the end: at least eps.
+    """
+    eps = np.finfo(float).eps
+    with np.errstate(all="ignore"):
+        K = np.abs(system.difference(x)).astype(float)
+        data = eps * pat.sensitivity(omega, x) / K
+        total = est + np.where(np.isnan(data), np.inf, data)
+    return np.maximum(total, eps)
+
+
+def _estimate(system, x, d, prev):
+    """Relative error of K = x_a − x_b before applying the correction ``d``.
+
+    |d_a − d_b| estimates the error of K; ``d`` itself is wrong by about the
+    contraction ρ = ‖d‖/‖prev‖ times its size, which is added.  A correction
+    as large as x itself that does not contract means A is numerically
+    singular: inf.
+    """
+    tiny = np.finfo(np.longdouble).eps
+    with np.errstate(all="ignore"):
+        nd = np.max(np.abs(d), axis=-1).astype(float)
+        nx = np.max(np.abs(x), axis=-1).astype(float)
+        npv = np.maximum(np.max(np.abs(prev), axis=-1).astype(float), tiny * nx)
+        rho = np.where(npv > 0, nd / npv, 0.0)
+        K = np.abs(system.difference(x)).astype(float)
+        dK = np.abs(system.difference(d)).astype(float)
+        est = (dK + np.minimum(rho, 1.0) * nd) / K
+        diverged = (rho >= 0.5) & (nd > 1e-8 * nx)
+        est = np.where(diverged | np.isnan(est), np.inf, est)
+    return est
+
+
+class _DenseLU:
+    """The inverses of a batch of small dense matrices, reused for every right-hand side.
+
+    An explicit inverse is no less accurate here than LU factors: every
+    solution is refined with residuals in extended precision, and the batch
+    is applied as one matrix product (small systems, many ω).
+    """
+
+    def __init__(self, A: NDArray):
+        try:
+            self.inv = np.linalg.inv(A)
+        except np.linalg.LinAlgError:
+            # Some matrix of the batch is exactly singular: invert one by one and
+            # leave that frequency as NaN (rare; only on the failure path).
+            self.inv = np.full(A.shape, np.nan, dtype=complex)
+            for k in range(A.shape[0]):
+                try:
+                    self.inv[k] = np.linalg.inv(A[k])
+                except np.linalg.LinAlgError:
+                    pass
+
+    def solve(self, r: NDArray) -> NDArray:
+        return np.einsum("kij,kj->ki", self.inv, r)
+
+
+class _SparseSolver:
+    """Sparse LU of A(ω) on a fixed pattern; the fill-reducing ordering is found once."""
+
+    def __init__(self, pat: _Pattern):
+        self.pat = pat
+        self.perm = None
+
+    def factor(self, omega: float):
+        from scipy.sparse.linalg import splu
+
+        A = self.pat.csc(omega)
+        if not np.isfinite(A.data).all():
+            return None
+        try:
+            if self.perm is None:
+                lu = splu(A)
+                self.perm = lu.perm_c
+                self.iperm = np.argsort(self.perm)
+                return lu.solve
+            lu = splu(A[:, self.perm], permc_spec="NATURAL")
+        except RuntimeError:            # exactly singular at this frequency
+            return None
+        iperm = self.iperm
+
+        def solve(b):
+            return lu.solve(np.ascontiguousarray(b, dtype=complex))[iperm]
+        return solve
+
+
+def _singular_points(system, omega, x, K, err, singular, steps):
+    """Apply the singular-point convention where A(ω) is (numerically) singular.
+
+    Where the solution blows up along a mode seen from the drive (a pole of
+    K), K = ±∞·j (the sign of the computed Im K; from just above ω where A is
+    exactly singular); where K carries no correct digit otherwise, K = 0 (a
+    zero of K within rounding).  The estimate there is inf; ``Sweep.flags``
+    marks both as singular (flag 1).
+    """
+    K = K.copy()
+    err = err.copy()
+    for i in np.flatnonzero(singular):
+        xi, Ki = x[i], K[i]
+        if not np.isfinite(Ki):
+            # Exactly singular: look just above ω, where the solution is the mode.
+            w = omega[i] * (1 + 2.0 ** -40)
+            s = solve(system, [w], refine=False, steps=steps, limits=False) \
+                if np.isfinite(w) else None
+            if s is None or not np.isfinite(s.K[0]):
+                continue                    # undetermined: NaN, flagged singular
+            xi, Ki = s.x[0], s.K[0]
+        scale = float(np.max(np.abs(xi)))
+        if abs(Ki) >= 1e-3 * scale:
+            K[i] = complex(0.0, -np.inf if Ki.imag < 0 else np.inf)
+        else:
+            K[i] = 0.0
+        err[i] = np.inf
+    return K, err
 
 
 def solve_unit(system: NodalSystem, omega: ArrayLike, *, refine: bool = True
                ) -> NDArray[np.complex128]:
     """Solutions x(ω) of A(ω) x = e_a − e_b, shape (n_omega, n) (``clongdouble`` if refined).
 
-    With ``refine`` (the default) each solution gets up to two steps of
-    iterative refinement with the residual b − A x computed in extended
-    precision (``numpy.longdouble``): the forward error then no longer grows
-    with the condition number of A (masses and springs of very different
-    size in series), at about twice the cost of one solve.
+    With ``refine`` (the default) each solution gets iterative refinement
+    with the residual b − A x computed in extended precision
+    (``numpy.longdouble``), reusing the LU factors: the forward error then no
+    longer grows with the condition number of A (masses and springs of very
+    different size in series).  See :func:`solve` for the error estimate.
 
     Frequencies where A is exactly singular, or ω is 0 or ∞ (where A is not
     finite), give rows of NaN; callers flag them.
     """
-    omega = np.asarray(omega, dtype=float)
-    n = system.size
-    out = np.full((omega.size, n), np.nan, dtype=np.clongdouble if refine else complex)
-    ok = np.isfinite(omega) & (omega > 0)
-    idx = np.flatnonzero(ok)
-    rhs = system.injection()
-    tri = _Triplets(system) if refine else None
-    if n <= DENSE_LIMIT:
-        base = (system.D + system.C).toarray()
-        M, Ks = system.M.toarray(), system.Ks.toarray()
-        chunk = max(1, _CHUNK_BYTES // (16 * n * n))
-        for start in range(0, idx.size, chunk):
-            sel = idx[start:start + chunk]
-            w = omega[sel][:, None, None]
-            with np.errstate(over="ignore", invalid="ignore"):   # ω·m beyond 1.8e308: flagged
-                A = base + 1j * (w * M - Ks / w)
-            x = _batched_solve(A, rhs)
-            if refine:
-                x = _refine(x, lambda r: _batched_solve(A, r), tri, omega[sel], rhs)
-            out[sel] = x
-        return out
-    from scipy.sparse.linalg import splu
-
-    base = (system.D + system.C).tocsc()
-    Ms, Kss = system.M.tocsc(), system.Ks.tocsc()
-    b = rhs.astype(complex)
-    for i in idx:     # one sparse LU per frequency: each is far costlier than the loop
-        w = omega[i]
-        try:
-            lu = splu((base + 1j * (w * Ms - Kss / w)).tocsc())
-        except RuntimeError:            # exactly singular at this frequency
-            continue
-        x = lu.solve(b)
-        if refine:
-            x = _refine(x[None, :], lambda r: lu.solve(r[0])[None, :], tri,
-                        omega[i:i + 1], rhs)[0]
-        out[i] = x
-    return out
-
-
-def _refine(x, solve, tri: "_Triplets", omega, rhs, steps: int = 3):
-    """Iterative refinement with x and the residual held in extended precision.
-
-    Keeping x itself in ``longdouble`` matters: the solution's components can
-    be far larger than the velocity difference wanted from them, and a
-    double-precision x cannot carry it to full accuracy.
-    """
-    x = x.astype(np.clongdouble)
-    for _ in range(steps):
-        dx = solve(tri.residual(omega, x, rhs))
-        x = x + dx
-        if not np.any(np.abs(dx) > 1e-18 * np.abs(x)):
-            break
-    return x
-
-
-class _Triplets:
-    """The nonzeros of A(ω) = D + C + j(ωM − Kₛ/ω), for residuals in extended precision."""
-
-    def __init__(self, system: NodalSystem):
-        ext = np.longdouble
-        rows, cols, m, k, dc = [], [], [], [], []
-        for kind, (r, c, v) in system.stamps.items():
-            v = np.asarray(v, dtype=ext)
-            zero = np.zeros_like(v)
-            rows.append(np.asarray(r, dtype=int))
-            cols.append(np.asarray(c, dtype=int))
-            m.append(v if kind == "mass" else zero)
-            k.append(v if kind == "spring" else zero)
-            dc.append(v if kind in ("damper", "lever") else zero)
-        self.rows, self.cols = np.concatenate(rows), np.concatenate(cols)
-        self.m, self.k, self.dc = np.concatenate(m), np.concatenate(k), np.concatenate(dc)
-        self.n = system.size
-
-    def residual(self, omega: NDArray, x: NDArray, rhs: NDArray) -> NDArray[np.complex128]:
-        """b − A(ω) x for each ω (rows of ``x``), accumulated in extended precision."""
-        ext = np.longdouble
-        w = omega.astype(ext)[:, None]
-        a = self.dc + 1j * (w * self.m - self.k / w)          # clongdouble, (n_ω, nnz)
-        prod = a * x[:, self.cols]
-        Ax = np.zeros((omega.size, self.n), dtype=np.clongdouble)
-        np.add.at(Ax, (np.arange(omega.size)[:, None], self.rows[None, :]), prod)
-        r = rhs.astype(ext)[None, :] - Ax
-        return r.astype(complex)
-
-
-def _batched_solve(A: NDArray, rhs: NDArray) -> NDArray:
-    """Solve A[k] x[k] = rhs (or rhs[k]) for a batch; exactly singular members give NaN."""
-    b = np.broadcast_to(rhs.astype(complex), A.shape[:-1])[..., None]
-    try:
-        return np.linalg.solve(A, b)[..., 0]
-    except np.linalg.LinAlgError:
-        # Some matrix of the batch is exactly singular: solve one by one and leave
-        # that frequency as NaN (rare; only on the failure path).
-        x = np.full(A.shape[:-1], np.nan, dtype=complex)
-        for k in range(A.shape[0]):
-            try:
-                x[k] = np.linalg.solve(A[k], b[k])[..., 0]
-            except np.linalg.LinAlgError:
-                pass
-        return x
+    return solve(system, omega, refine=refine).x
 
 
 def mobility(system: NodalSystem, omega: ArrayLike) -> NDArray[np.complex128]:
     """K(ω) [m/(N·s)] seen by the drive, by nodal analysis."""
-    return system.difference(solve_unit(system, omega)).astype(complex)
+    return solve(system, omega).K
+
+
+def mobility_and_error(system: NodalSystem, omega: ArrayLike
+                       ) -> tuple[NDArray[np.complex128], NDArray[np.float64]]:
+    """K(ω) [m/(N·s)] and its estimated relative error, from one refined solve.
+
+    See :class:`Solution` for the estimate and the singular-point convention.
+    """
+    s = solve(system, omega)
+    return s.K, s.error
 
 
 def mobility_unrefined(system: NodalSystem, omega: ArrayLike) -> NDArray[np.complex128]:
@@ -287,7 +551,7 @@ def mobility_unrefined(system: NodalSystem, omega: ArrayLike) -> NDArray[np.comp
 
     Its relative error is about eps × cond(A(ω)), see :func:`condition_error`.
     """
-    return system.difference(solve_unit(system, omega, refine=False))
+    return system.difference(solve(system, omega, refine=False).x)
 
 
 def element_response(system: NodalSystem, omega: ArrayLike, scale: NDArray) -> dict[str, tuple]:
@@ -316,16 +580,12 @@ def condition_error(system: NodalSystem, omega: ArrayLike) -> NDArray[np.float64
     out[~ok] = np.inf
     if system.size > DENSE_LIMIT:
         return out
-    base = (system.D + system.C).toarray()
-    M, Ks = system.M.toarray(), system.Ks.toarray()
     n = system.size
     idx = np.flatnonzero(ok)
     chunk = max(1, _CHUNK_BYTES // (16 * n * n))
     for start in range(0, idx.size, chunk):
         sel = idx[start:start + chunk]
-        w = omega[sel][:, None, None]
-        with np.errstate(over="ignore", invalid="ignore"):
-            A = base + 1j * (w * M - Ks / w)
+        A = dense_matrices(system, omega[sel])
         # Entries beyond float64 (a huge ω·m or k/ω) leave the error unknown:
         # inf, so the point is flagged rather than the SVD failing.
         finite = np.isfinite(A).all(axis=(1, 2))
@@ -355,12 +615,8 @@ def require_nonsingular(system: NodalSystem) -> None:
             return
         raise TopologyError("the network is singular at every frequency (tried "
                             f"ω = {trial[0]:.4g} and {trial[1]:.4g} rad/s)")
-    base = (system.D + system.C).toarray()
-    M, Ks = system.M.toarray(), system.Ks.toarray()
     judged = None
-    for w in trial:
-        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-            A = base + 1j * (w * M - Ks / w)
+    for A in dense_matrices(system, trial):
         if not np.isfinite(A).all():
             continue            # values at float64's edge: no verdict at this ω
         # Judge the equilibrated matrix: a lever of ratio 1e-8 puts entries of
