@@ -96,8 +96,8 @@ class Sweep:
         """Estimated relative rounding error of K at each point [1] (inf on a pole or zero).
 
         Series–parallel: condition of the tree's sums × machine epsilon × depth.
-        Nodal: machine epsilon × the 2-norm condition number of A(ω) (dense
-        systems), NaN where not estimated (large sparse systems).
+        Nodal: the drive component of the last iterative-refinement
+        correction (:class:`mechcirc.nodal.Solution`), dense and sparse alike.
         """
         return self._errors()
 
@@ -216,27 +216,15 @@ def _sweep_nodal(circuit: Circuit, omega) -> Sweep:
     from . import nodal
 
     system = circuit.nodal
-    K = nodal.mobility(system, omega)
+    # One refined solve gives K and its error estimate (the last refinement
+    # correction, see nodal.Solution), dense and sparse alike.
+    K, err = nodal.mobility_and_error(system, omega)
 
     def responses(Q0, v0):
         return nodal.element_response(system, omega, Q0)
 
     def errors():
-        # eps·cond(A) bounds the error of x relative to ‖x‖; K = x_a − x_b can be
-        # far smaller than ‖x‖ near a resonance (K → 0), and its relative error
-        # larger by ‖x‖/|K| (a series m–k at 1e-13 from its resonance: 2e-4).
-        err = nodal.condition_error(system, omega)
-        if system.size > nodal.DENSE_LIMIT:
-            return err                      # not estimated (NaN) for sparse systems
-
-        def cancellation(w):
-            x = nodal.solve_unit(system, w, refine=False)
-            with np.errstate(all="ignore"):
-                ratio = np.linalg.norm(x, axis=1) / np.abs(system.difference(x))
-            return np.where(np.isnan(ratio), np.inf, np.maximum(ratio, 1.0))
-
-        with np.errstate(invalid="ignore"):
-            return err * _chunked(cancellation, omega, float)
+        return err
 
     return Sweep(omega=omega, K=K, drive=circuit.drive, method="nodal", name=circuit.name,
                  _responses=responses, _errors=errors)
