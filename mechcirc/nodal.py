@@ -31,6 +31,7 @@ from .topology import check_frame_paths, loaded_groups
 
 __all__ = ["NodalSystem", "Solution", "assemble", "stamps", "combine", "matrix",
            "dense_matrices", "solve", "solve_unit", "mobility", "mobility_and_error",
+           "evaluate_complex", "held",
            "KINDS", "DENSE_LIMIT"]
 
 #: Systems with at most this many unknowns use batched dense solves.
@@ -199,7 +200,8 @@ def combine(dc, m, k, omega):
     ``omega`` broadcasts against them.  Entries beyond float64 (ω·m above
     1.8e308) come out non-finite; callers flag them.
     """
-    return dc + 1j * susceptance(m, k, omega)
+    with np.errstate(over="ignore", invalid="ignore"):
+        return dc + 1j * susceptance(m, k, omega)
 
 
 def susceptance(m, k, omega):
@@ -265,8 +267,13 @@ class _Pattern:
         times faster than complex.
         """
         ext = np.longdouble
-        w = np.asarray(omega).astype(ext)[:, None]
-        re, im = self.l_dc, susceptance(self.l_m, self.l_k, w)
+        if np.iscomplexobj(omega):          # complex frequency (resonance polishing)
+            w = np.asarray(omega).astype(np.clongdouble)[:, None]
+            sus = susceptance(self.l_m, self.l_k, w)
+            re, im = self.l_dc - sus.imag, sus.real
+        else:
+            w = np.asarray(omega).astype(ext)[:, None]
+            re, im = self.l_dc, susceptance(self.l_m, self.l_k, w)
         xc = x[:, self.indices]
         xr, xi = xc.real.astype(ext), xc.imag.astype(ext)
         Ax = np.zeros((w.shape[0], self.n), dtype=np.clongdouble)
@@ -285,7 +292,7 @@ class _Pattern:
         itself and a relative change ε of every stamp moves K by at most ε
         times this sum: the sensitivity of K to rounding the data.
         """
-        w = np.asarray(omega, dtype=float)[:, None]
+        w = np.asarray(omega)[:, None]
         xa = np.abs(x).astype(float)
         with np.errstate(all="ignore"):
             a = np.abs(combine(self.u_dc, self.u_m, self.u_k, w))
@@ -307,7 +314,8 @@ def matrix(system: NodalSystem, omega: float):
 
 def dense_matrices(system: NodalSystem, omega: ArrayLike) -> NDArray[np.complex128]:
     """A(ω) for each ω as one dense array of shape (n_ω, n, n)."""
-    omega = np.asarray(omega, dtype=float).reshape(-1, 1, 1)
+    omega = np.asarray(omega)
+    omega = omega.astype(complex if np.iscomplexobj(omega) else float).reshape(-1, 1, 1)
     dc = (system.D + system.C).toarray()
     return combine(dc, system.M.toarray(), system.Ks.toarray(), omega)
 
@@ -379,10 +387,13 @@ def solve(system: NodalSystem, omega: ArrayLike, *, refine: bool = True,
                               system, refine, steps)
             x[i], err[i] = xs[0], es[0]
     K = system.difference(x).astype(complex)
+    S = pat.sensitivity(omega, x)
+    with np.errstate(all="ignore"):
+        err = err + _residual_rounding(K, S)
     # No correct digit from the solve itself: A(ω) is numerically singular.
     singular = ok & (~np.isfinite(K) | (err >= 1.0))
     with np.errstate(all="ignore"):
-        err = np.where(ok, _total(system, pat, omega, x, err), np.inf)
+        err = np.where(ok, _total(K, S, err), np.inf)
     if limits:
         K, err = _singular_points(system, omega, x, K, err, singular, steps)
     return Solution(x, K, err, singular)
@@ -412,7 +423,20 @@ def _refined(solve_fn, pat: _Pattern, omega, rhs, system, refine: bool, steps: i
     return x, est
 
 
-def _total(system, pat, omega, x, est):
+def _residual_rounding(K, S):
+    """Relative error of K left by residuals rounded in extended precision.
+
+    Each residual row is rounded by about eps_ld × Σ_c |a_rc x_c|, which K
+    (through the adjoint solution, x itself) feels as eps_ld × S; the
+    refinement cannot see it.  Four times that, for the accumulation.
+    """
+    eps_ld = float(np.finfo(np.longdouble).eps)
+    with np.errstate(all="ignore"):
+        out = 4 * eps_ld * S / np.abs(K)
+    return np.where(np.isnan(out), np.inf, out)
+
+
+def _total(K, S, est):
     """The solve's error ``est`` plus the sensitivity of K to rounding its data.
 
     Each stamp (ω·m, k/ω, c, r) carries a rounding of up to eps relative, and
@@ -422,8 +446,7 @@ def _total(system, pat, omega, x, est):
     """
     eps = np.finfo(float).eps
     with np.errstate(all="ignore"):
-        K = np.abs(system.difference(x)).astype(float)
-        data = eps * pat.sensitivity(omega, x) / K
+        data = eps * S / np.abs(K)
         total = est + np.where(np.isnan(data), np.inf, data)
     return np.maximum(total, eps)
 
@@ -626,6 +649,79 @@ def solve_unit(system: NodalSystem, omega: ArrayLike, *, refine: bool = True
     finite), give rows of NaN; callers flag them.
     """
     return solve(system, omega, refine=refine).x
+
+
+def held(system: NodalSystem) -> NodalSystem:
+    """The system with the drive held: one more unknown q and the row v_a − v_b = 1.
+
+    [[A, c], [cᵀ, 0]] [x; q] = [0; 1] with c = e_a − e_b gives q = −1/K (the
+    force through the drive per unit velocity difference, negated), computed
+    without the near-singular A at an anti-resonance.  Like a lever, the
+    constraint goes into the symmetric C block; the drive of the returned
+    system points at q (``a = n``, ``b = −1``).
+    """
+    import scipy.sparse as sp
+
+    n = system.size
+    rows, cols, vals = (list(v) for v in system.stamps["lever"])
+    for i, s in ((system.a, 1.0), (system.b, -1.0)):
+        if i >= 0:
+            rows += [i, n]
+            cols += [n, i]
+            vals += [s, s]
+    stamped = dict(system.stamps)
+    stamped["lever"] = (np.asarray(rows, dtype=int), np.asarray(cols, dtype=int),
+                        np.asarray(vals, dtype=float))
+    grow = [sp.csr_matrix((v, (r, c)), shape=(n + 1, n + 1))
+            for r, c, v in (stamped[k] for k in KINDS)]
+    return NodalSystem(system.nodes, system.levers, system.elements, system.unloaded,
+                       *grow, n, -1, stamped)
+
+
+def evaluate_complex(system: NodalSystem, s: ArrayLike
+                     ) -> tuple[NDArray[np.complex128], NDArray[np.float64]]:
+    """K(s) at complex frequencies s (jω on the axis) and its estimated absolute error.
+
+    A(s) = D + C + sM + Kₛ/s is :func:`combine` at ω = −js.  Each solution is
+    refined with residuals in extended precision as in :func:`solve`, and the
+    error is the same estimate (the last correction, the residual's own
+    rounding and the sensitivity to rounding the data, eps × Σ|x_r a_rc x_c|):
+    used to polish resonances on the circuit's own K.  NaN where A(s) is
+    singular.
+    """
+    s = np.asarray(s, dtype=complex).reshape(-1)
+    omega = -1j * s
+    pat = _pattern(system)
+    rhs = system.injection()
+    x = np.full((s.size, system.size), np.nan, dtype=np.clongdouble)
+    est = np.full(s.size, np.inf)
+    if system.size <= DENSE_LIMIT:
+        for start in range(0, s.size, 4096):
+            sel = np.arange(start, min(start + 4096, s.size))
+            A = dense_matrices(system, omega[sel])
+            sel = sel[np.isfinite(A).all(axis=(1, 2))]
+            if sel.size:
+                lu = _DenseLU(dense_matrices(system, omega[sel]))
+                x[sel], est[sel] = _refined(lu.solve, pat, omega[sel], rhs, system, True, 4)
+    else:
+        from scipy.sparse.linalg import splu
+
+        for i, w in enumerate(omega):
+            A = pat.csc(w)
+            if not np.isfinite(A.data).all():
+                continue
+            try:
+                lu = splu(A, permc_spec="MMD_AT_PLUS_A")
+            except RuntimeError:
+                continue
+            x[i], est[i] = (v[0] for v in _refined(
+                lambda r: lu.solve(np.ascontiguousarray(r[0]))[None, :], pat,
+                omega[i:i + 1], rhs, system, True, 4))
+    K = system.difference(x).astype(complex)
+    S = pat.sensitivity(omega, x)
+    est = _total(K, S, est + _residual_rounding(K, S))
+    with np.errstate(all="ignore"):
+        return K, est * np.abs(K)
 
 
 def mobility(system: NodalSystem, omega: ArrayLike) -> NDArray[np.complex128]:
