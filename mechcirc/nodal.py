@@ -436,18 +436,28 @@ def _residual_rounding(K, S):
     return np.where(np.isnan(out), np.inf, out)
 
 
-def _total(K, S, est):
-    """The solve's error ``est`` plus the sensitivity of K to rounding its data.
+def _total(K, S, est, *, data: str = "flag"):
+    """The solve's error ``est``, and the sensitivity of K to rounding its data.
 
-    Each stamp (ω·m, k/ω, c, r) carries a rounding of up to eps relative, and
-    near a zero of K (far from it never) that moves K far more than the solve:
-    a point within rounding of a zero is then flagged, as the series–parallel
-    method flags it.  The result is rounded to float64 at the end: at least eps.
+    Each stamp (ω·m, k/ω, c, r) carries a rounding of up to eps relative;
+    that moves K by eps × S / |K|, far more than the solve near a zero of K.
+    With ``data="flag"`` (sweeps) that figure replaces the estimate only where
+    it exceeds :data:`~mechcirc.sweep.NEAR_SINGULAR_ERROR` (1e-6): a point
+    within rounding of a zero is flagged, as the series–parallel method flags
+    it, while everywhere else the estimate stays that of the computation
+    (K exact for the binary inputs, as mpmath would compute it).  With
+    ``data="add"`` (resonances) it is always added: the error then bounds
+    the distance to the root of the values as written, before rounding.
+    The result is rounded to float64 at the end: at least eps.
     """
     eps = np.finfo(float).eps
     with np.errstate(all="ignore"):
-        data = eps * S / np.abs(K)
-        total = est + np.where(np.isnan(data), np.inf, data)
+        rounding = eps * S / np.abs(K)
+        rounding = np.where(np.isnan(rounding), np.inf, rounding)
+        if data == "add":
+            total = est + rounding
+        else:
+            total = np.where(rounding > 1e-6, np.maximum(est, rounding), est)
     return np.maximum(total, eps)
 
 
@@ -719,7 +729,7 @@ def evaluate_complex(system: NodalSystem, s: ArrayLike
                 omega[i:i + 1], rhs, system, True, 4))
     K = system.difference(x).astype(complex)
     S = pat.sensitivity(omega, x)
-    est = _total(K, S, est + _residual_rounding(K, S))
+    est = _total(K, S, est + _residual_rounding(K, S), data="add")
     with np.errstate(all="ignore"):
         return K, est * np.abs(K)
 
