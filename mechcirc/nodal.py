@@ -251,6 +251,7 @@ class _Pattern:
         self.u_rows, self.u_cols = rows, cols
         self.u_m, self.u_k = np.where(kind == 0, vals, 0.0), np.where(kind == 2, vals, 0.0)
         self.u_dc = np.where((kind == 1) | (kind == 3), vals, 0.0)
+        self._elements(system)
 
     def csc(self, omega: float):
         """A(ω) as a ``scipy.sparse.csc_matrix`` on the fixed pattern."""
@@ -297,6 +298,50 @@ class _Pattern:
         with np.errstate(all="ignore"):
             a = np.abs(combine(self.u_dc, self.u_m, self.u_k, w))
             return np.einsum("ij,ij,ij->i", xa[:, self.u_rows], a, xa[:, self.u_cols])
+
+
+    def _elements(self, system: NodalSystem) -> None:
+        index = {n: i for i, n in enumerate(system.nodes)}
+        n = self.n
+
+        def at(node):
+            return index.get(node, n)         # the reference: a zero column at n
+        els = system.elements
+        self.e_i = np.array([at(e.n1) for e in els], dtype=np.int64)
+        self.e_j = np.array([at(e.n2) for e in els], dtype=np.int64)
+        val = np.array([e.value * e.eta for e in els], dtype=float)
+        kind = np.array([e.kind for e in els])
+        self.e_m = np.where(kind == "mass", val, 0.0)
+        self.e_k = np.where(kind == "spring", val, 0.0)
+        self.e_c = np.where(kind == "damper", val, 0.0)
+        n_nodes = len(system.nodes)
+        lv = system.levers
+        self.l_p1 = np.array([at(v.p1) for v in lv], dtype=np.int64)
+        self.l_p2 = np.array([at(v.p2) for v in lv], dtype=np.int64)
+        self.l_col = n_nodes + np.arange(len(lv), dtype=np.int64)
+        self.l_r = np.array([abs(v.ratio) for v in lv], dtype=float)
+
+    def data_sensitivity(self, omega: NDArray, x: NDArray) -> NDArray[np.float64]:
+        """Σ_e |y_e| |x_n1 − x_n2|² + Σ_levers 2|r| |x_p1 − x_p2| |q|, for each ω.
+
+        Rounding an element's value by a relative ε changes its four stamps
+        together, δA = ε·y·(e_i − e_j)(e_i − e_j)ᵀ, and K by ε·y·(x_i − x_j)²
+        (the adjoint of the complex symmetric A is x itself); a lever's ratio
+        enters its two primary stamps.  This sum times eps bounds the change
+        of K when every value is rounded, without the cancellation that a
+        bound stamp by stamp would count many times over.
+        """
+        w = np.asarray(omega)[:, None]
+        xe = np.concatenate([np.asarray(x), np.zeros((x.shape[0], 1), x.dtype)], axis=1)
+        with np.errstate(all="ignore"):
+            y = np.abs(combine(self.e_c, self.e_m, self.e_k, w))
+            d = np.abs(xe[:, self.e_i] - xe[:, self.e_j]).astype(float)
+            out = np.sum(y * d * d, axis=1)
+            if self.l_r.size:
+                dl = np.abs(xe[:, self.l_p1] - xe[:, self.l_p2]).astype(float)
+                out = out + np.sum(2 * self.l_r * dl * np.abs(xe[:, self.l_col]).astype(float),
+                                   axis=1)
+        return out
 
 
 def _pattern(system: NodalSystem) -> _Pattern:
@@ -393,7 +438,7 @@ def solve(system: NodalSystem, omega: ArrayLike, *, refine: bool = True,
     # No correct digit from the solve itself: A(ω) is numerically singular.
     singular = ok & (~np.isfinite(K) | (err >= 1.0))
     with np.errstate(all="ignore"):
-        err = np.where(ok, _total(K, S, err), np.inf)
+        err = np.where(ok, _total(K, pat.data_sensitivity(omega, x), err), np.inf)
     if limits:
         K, err = _singular_points(system, omega, x, K, err, singular, steps)
     return Solution(x, K, err, singular)
@@ -439,8 +484,8 @@ def _residual_rounding(K, S):
 def _total(K, S, est, *, data: str = "flag"):
     """The solve's error ``est``, and the sensitivity of K to rounding its data.
 
-    Each stamp (ω·m, k/ω, c, r) carries a rounding of up to eps relative;
-    that moves K by eps × S / |K|, far more than the solve near a zero of K.
+    Each value (m, k, c, r) carries a rounding of up to eps relative; that
+    moves K by eps × S / |K| (S from :meth:`_Pattern.data_sensitivity`), far more than the solve near a zero of K.
     With ``data="flag"`` (sweeps) that figure replaces the estimate only where
     it exceeds :data:`~mechcirc.sweep.NEAR_SINGULAR_ERROR` (1e-6): a point
     within rounding of a zero is flagged, as the series–parallel method flags
@@ -729,7 +774,8 @@ def evaluate_complex(system: NodalSystem, s: ArrayLike
                 omega[i:i + 1], rhs, system, True, 4))
     K = system.difference(x).astype(complex)
     S = pat.sensitivity(omega, x)
-    est = _total(K, S, est + _residual_rounding(K, S), data="add")
+    est = _total(K, pat.data_sensitivity(omega, x), est + _residual_rounding(K, S),
+                 data="add")
     with np.errstate(all="ignore"):
         return K, est * np.abs(K)
 

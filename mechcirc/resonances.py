@@ -342,7 +342,7 @@ def _make(kind: str, s: complex, err: float) -> Resonance:
     s = complex(s)
     wn = abs(s)
     return Resonance(kind, float(wn), float(abs(s.imag)),
-                     float(-s.real / wn) if wn else 0.0, float(err))
+                     float(-s.real / wn) + 0.0 if wn else 0.0, float(err))
 
 
 #: Roots whose eigen-solver bound is below this are not polished on K (undamped).

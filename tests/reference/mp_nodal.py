@@ -134,4 +134,4 @@ def root(spec, s0, pole: bool, dps: int = 40) -> complex:
     """The zero of K (or of 1/K if ``pole``) nearest the start s0, by mpmath.findroot."""
     with mpmath.workdps(dps):
         f = (lambda s: inverse_K(spec, s, dps)) if pole else (lambda s: K(spec, s, dps))
-        return complex(mpmath.findroot(f, mpmath.mpc(s0), tol=mpmath.mpf(10) ** (10 - 2 * dps)))
+        return complex(mpmath.findroot(f, mpmath.mpc(s0), tol=mpmath.mpf(10) ** (-dps)))
