@@ -13,9 +13,19 @@ Q_S with KCL entries (r at p1, −r at p2, −1 at s1, +1 at s2) and the
 constraint row r(v_p1 − v_p2) − (v_s1 − v_s2) = 0; C is symmetric.
 
 K seen by the drive is the velocity difference between its nodes for a unit
-force injected at n1 and taken out at n2.  Small systems are solved as one
-batched dense solve over ω (in chunks of bounded memory); large ones with a
-sparse LU per frequency.
+force injected at n1 and taken out at n2.
+
+This module is the one place the nodal equations are written:
+:func:`stamps` stamps every element and lever, :func:`assemble` builds the
+matrices (of the loaded part, or with ``whole=True`` of the whole network,
+as the time domain and two-ports need them), and :func:`combine` forms
+A(ω) from them.  :func:`solve` solves A(ω) x = e_a − e_b: small systems as
+batched dense solves, large ones by a sparse LU per ω on a fixed pattern
+(ordering found once; LAPACK's banded LU where the band is narrow).  Each
+solution is refined with residuals in extended precision reusing the
+factors, and the last correction gives the error estimate of K
+(:class:`Solution`).  At a singular point K is +∞·j (a pole) or 0 (a zero),
+with an infinite error, as the series–parallel method gives it.
 """
 
 from __future__ import annotations
@@ -664,8 +674,7 @@ def _singular_points(system, omega, x, K, err, singular, steps):
     """Apply the singular-point convention where A(ω) is (numerically) singular.
 
     Where the solution blows up along a mode seen from the drive (a pole of
-    K), K = ±∞·j (the sign of the computed Im K; from just above ω where A is
-    exactly singular); where K carries no correct digit otherwise, K = 0 (a
+    K), K = +∞·j (the series–parallel method's convention); where K carries no correct digit otherwise, K = 0 (a
     zero of K within rounding).  The estimate there is inf; ``Sweep.flags``
     marks both as singular (flag 1).
     """
@@ -683,7 +692,7 @@ def _singular_points(system, omega, x, K, err, singular, steps):
             xi, Ki = s.x[0], s.K[0]
         scale = float(np.max(np.abs(xi)))
         if abs(Ki) >= 1e-3 * scale:
-            K[i] = complex(0.0, -np.inf if Ki.imag < 0 else np.inf)
+            K[i] = complex(0.0, np.inf)     # the tree's convention: +∞·j at a pole
         else:
             K[i] = 0.0
         err[i] = np.inf

@@ -11,19 +11,23 @@ Method.  The nodal matrices give the quadratic eigenproblem
 (s² M + s D + Kₛ) v = 0 with the lever constraints (and, for resonances, the
 drive constraint v_a = v_b) imposed exactly by projecting onto their null
 space.  Undamped networks: massless directions are condensed out statically
-(exact) and the symmetric definite problem Kₛ v = ω² M v is solved by
-``scipy.linalg.eigh``; each root is then polished to full precision on the
-circuit's own K(ω) (a bracketed root search on Im K, which is monotone in ω
-for a lossless network by Foster's reactance theorem).  Damped networks: the
-problem is linearised to a 2n generalised eigenproblem solved by QZ
-(``scipy.linalg.eig``); s = −ζωₙ ± jωₙ√(1 − ζ²).
+(exact) and the symmetric problem Kₛ v = ω² M v is solved by
+``scipy.linalg.eigvalsh`` (error bound eps·λ_max/λ, Weyl).  Damped networks:
+the problem is linearised to a 2n generalised eigenproblem solved by QZ
+(``scipy.linalg.eig``); s = −ζωₙ ± jωₙ√(1 − ζ²).  Networks above the dense
+limits are solved in a band ``omega_max`` by shift-invert Arnoldi on the
+same linearisation (``scipy.sparse.linalg.eigs``).
+
+Every damped root, and every undamped root whose eigenvalue bound is not
+already at rounding level, is then polished on the circuit's own K(s) at
+complex s (a complex secant; anti-resonances on the held system, which is
+regular where A is singular), K being refined in extended precision; the
+reported ``error`` is the uncertainty of K there over its slope, plus the
+last step, including the effect of rounding the element values.
 
 A mode that appears in both problems at the same frequency is not seen from
 the drive (it cancels in K) and is not reported.  Zero-frequency (rigid-body)
 modes are not reported.
-
-Cost: O(n³) in the number of unknowns n; polishing costs about ten
-evaluations of K at all roots at once.
 """
 
 from __future__ import annotations
