@@ -68,6 +68,13 @@ class Element:
         Reflection factor η [1], > 0 (the seed's product of lever ratios).
     line, col : int
         Where the element was defined (0 when built in code).
+    backlash : float
+        Springs only: total clearance B [m or rad] in series with the spring
+        (Modelica ``ElastoBacklash`` law, see :mod:`mechcirc.transient.backlash`);
+        0 for none.  The frequency domain takes the contact as closed.
+    damping : float
+        Springs only: damping coefficient [N·s/m] in parallel with the spring
+        (same η), 0 for none.
     """
 
     kind: ElementKind
@@ -78,6 +85,8 @@ class Element:
     eta: float = 1.0
     line: int = 0
     col: int = 0
+    backlash: float = 0.0
+    damping: float = 0.0
 
     def mobility(self, omega: ArrayLike) -> NDArray[np.complex128]:
         """Kinematic characteristic K(ω) [m/(N·s)] of this element."""
@@ -160,6 +169,9 @@ class Circuit:
         Where the circuit came from (file name or ``"<string>"``).
     params : dict
         The ``.param`` values [as written], for reference.
+    initial : tuple of (str, float, float)
+        Initial conditions ``(node, x0, v0)`` [m, m/s] from ``.ic`` lines
+        (transients only; unnamed nodes start at rest).
     """
 
     elements: tuple[Element, ...]
@@ -168,6 +180,12 @@ class Circuit:
     name: str = "circuit"
     source: str = "<string>"
     params: dict = field(default_factory=dict, compare=False)
+    initial: tuple = ()
+
+    def __getstate__(self):
+        # Pickle the description only: the cached reduction tree nests as deep
+        # as the network (deeper than pickle recurses) and is rebuilt on use.
+        return {k: v for k, v in self.__dict__.items() if k not in ("_reduction", "nodal")}
 
     def element(self, name: str) -> Element | Lever:
         """The element or lever called ``name`` (KeyError if none)."""

@@ -6,10 +6,16 @@ short, one statement per line::
     # comment to end of line; ';' also starts a comment
     .param NAME=EXPR [NAME=EXPR ...]
     mass   NAME N1 N2 VALUE [eta=EXPR]
-    spring NAME N1 N2 VALUE [eta=EXPR]
+    spring NAME N1 N2 VALUE [eta=EXPR] [backlash=EXPR] [damping=EXPR]
     damper NAME N1 N2 VALUE [eta=EXPR]
     lever  NAME P1 P2 S1 S2 ratio=EXPR
     drive  NAME N1 N2 velocity=EXPR      (or force=EXPR)
+    .ic    NODE [x=EXPR] [v=EXPR]        (initial state, for transients)
+
+``spring ... damping=D`` adds a damper of coefficient D in parallel, as the
+element ``NAME_damping``; ``backlash=B`` puts a total clearance B in series
+with the pair (Modelica ``ElastoBacklash``).  The frequency domain sees the
+contact closed; :mod:`mechcirc.transient` integrates the clearance.
 
 A value (VALUE, a ``.param`` value, ``velocity=``/``force=``) may be followed,
 after a space, by its unit: ``spring k1 a 0 5 N/mm``.  The unit is checked
@@ -32,7 +38,7 @@ from pathlib import Path
 from .circuit import ELEMENT_UNITS, Circuit, Drive, Element, Lever
 from .errors import NetlistError
 from .expressions import CONSTANTS, FUNCTIONS, Expr, evaluate, parse_expression
-from .sources import read_source
+from .sources import read_source, split_lines
 from .units import UnitError, convert, looks_like_unit, parse_unit
 
 __all__ = ["parse", "load", "expressions_of", "MAX_LINE_LENGTH", "MAX_STATEMENTS", "SYNTAX"]
@@ -51,10 +57,12 @@ _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 SYNTAX = {
     ".param": ".param NAME=EXPR [UNIT] [NAME=EXPR [UNIT] ...]",
     "mass": "mass NAME N1 N2 VALUE [UNIT] [eta=EXPR]",
-    "spring": "spring NAME N1 N2 VALUE [UNIT] [eta=EXPR]",
+    "spring": "spring NAME N1 N2 VALUE [UNIT] [eta=EXPR] [backlash=EXPR [UNIT]] "
+              "[damping=EXPR [UNIT]]",
     "damper": "damper NAME N1 N2 VALUE [UNIT] [eta=EXPR]",
     "lever": "lever NAME P1 P2 S1 S2 ratio=EXPR",
     "drive": "drive NAME N1 N2 velocity=EXPR [UNIT]  or  drive NAME N1 N2 force=EXPR [UNIT]",
+    ".ic": ".ic NODE [x=EXPR [UNIT]] [v=EXPR [UNIT]]",
 }
 
 #: Where the first positional field that carries a value is (elements: VALUE).
@@ -118,8 +126,11 @@ def _unbrace(text: str, col: int) -> tuple[str, int]:
 
 
 class _Parser:
-    def __init__(self, text: str, source: str, overrides: Mapping[str, float] | None = None):
+    def __init__(self, text: str, source: str, overrides: Mapping[str, float] | None = None,
+                 require_drive: bool = True):
         self.text, self.source = text, source
+        self.require_drive = require_drive
+        self.initial: list[tuple[str, float, float, int, int]] = []
         self.overrides = dict(overrides or {})
         self.params: dict[str, float] = {}
         self.param_lines: dict[str, int] = {}
@@ -153,7 +164,7 @@ class _Parser:
 
     # -- statements ------------------------------------------------------
     def run(self) -> Circuit:
-        lines = self.text.splitlines()
+        lines = split_lines(self.text)     # as editors and wc -l count them
         if not any(ln.strip() for ln in lines):
             raise NetlistError("the file is empty", self.source, 0, 0,
                                "element lines such as 'mass m1 a 0 2.5' and one 'drive' line")
@@ -190,24 +201,44 @@ class _Parser:
             if keyword == ".param":
                 continue
             handler = {"mass": self.element, "spring": self.element, "damper": self.element,
-                       "lever": self.lever, "drive": self.drive}.get(keyword)
+                       "lever": self.lever, "drive": self.drive, ".ic": self.ic}.get(keyword)
             if handler is None:
                 line.error(f"unknown keyword {line.tokens[0].text!r}", line.tokens[0].col,
-                           "one of .param, mass, spring, damper, lever, drive")
+                           "one of .param, .ic, mass, spring, damper, lever, drive")
             handler(line, keyword)
         if not parsed:
             raise NetlistError("the file has no statements, only comments and blank lines",
                                self.source, 0, 0, "element lines and one 'drive' line")
-        if not self.drives:
+        if not self.drives and self.require_drive:
             raise NetlistError("the netlist has no drive", self.source, 0, 0,
-                               "one line 'drive NAME N1 N2 velocity=V0'")
+                               "one line 'drive NAME N1 N2 velocity=V0' (a netlist without "
+                               "a drive can only be integrated: 'mechcirc transient')")
         if not self.elements:
             raise NetlistError("the netlist has no elements", self.source, 0, 0,
                                "mass, spring or damper lines")
+        known = {n for e in self.elements for n in (e.n1, e.n2)}
+        known |= {n for lv in self.levers for n in (lv.p1, lv.p2, lv.s1, lv.s2)}
+        known |= {n for d in self.drives for n in (d.n1, d.n2)}
+        seen_ic: dict[str, int] = {}
+        for node, _, _, lineno, col in self.initial:
+            if node == "0":
+                raise NetlistError("the frame '0' cannot have an initial state", self.source,
+                                   lineno, col, "a node other than 0")
+            if node not in known:
+                raise NetlistError(f".ic names node {node!r}, which no element uses",
+                                   self.source, lineno, col,
+                                   "one of " + ", ".join(sorted(known - {"0"})[:20]))
+            if node in seen_ic:
+                raise NetlistError(f"node {node!r} has a second .ic (first on line "
+                                   f"{seen_ic[node]})", self.source, lineno, col,
+                                   "one .ic line per node")
+            seen_ic[node] = lineno
         name = Path(self.source).stem if self.source != "<string>" else "circuit"
-        circuit = Circuit(elements=tuple(self.elements), drive=self.drives[0],
+        circuit = Circuit(elements=tuple(self.elements),
+                          drive=self.drives[0] if self.drives else None,
                           levers=tuple(self.levers), name=name, source=self.source,
-                          params=dict(self.params))
+                          params=dict(self.params),
+                          initial=tuple((n, x, v) for n, x, v, _, _ in self.initial))
         _remember(circuit, self.expressions)
         return circuit
 
@@ -333,7 +364,8 @@ class _Parser:
         return value
 
     def element(self, line: _Line, kind: str):
-        pos, opts, units = self._fields(line, kind, 4, ("eta",))
+        allowed = ("eta", "backlash", "damping") if kind == "spring" else ("eta",)
+        pos, opts, units = self._fields(line, kind, 4, allowed)
         name = self._new_name(line, pos[0])
         n1 = self._name(line, pos[1], "node name")
         n2 = self._name(line, pos[2], "node name")
@@ -345,8 +377,53 @@ class _Parser:
         eta = self._positive(line, opts["eta"], f"eta of {name!r}", "",
                              unit_tok=units.get("eta"), role="eta", key=(name, "eta")) \
             if "eta" in opts else 1.0
+        backlash = damping = 0.0
+        if "backlash" in opts:
+            tok = opts["backlash"]
+            backlash = self.expr(line, tok.text, tok.col, defined=self.params,
+                                 key=(name, "backlash"))
+            backlash = self.with_unit(line, backlash, units.get("backlash"), "displacement",
+                                      (name, "backlash"))
+            if not backlash >= 0:
+                line.error(f"backlash of {name!r} must be >= 0, got {backlash:g}", tok.col,
+                           "a total clearance >= 0 (length or angle)")
+        if "damping" in opts:
+            tok = opts["damping"]
+            damping = self.expr(line, tok.text, tok.col, defined=self.params,
+                                key=(name, "damping"))
+            damping = self.with_unit(line, damping, units.get("damping"), "damper",
+                                     (name, "damping"))
+            if not damping >= 0:
+                line.error(f"damping of {name!r} must be >= 0 N·s/m, got {damping:g}",
+                           tok.col, "a damping coefficient >= 0")
         self.elements.append(Element(kind, name, n1, n2, value, eta, line.lineno,
-                                     line.tokens[0].col))
+                                     line.tokens[0].col, backlash, damping))
+        if damping > 0:
+            # The parallel damper is an ordinary element, so every frequency-domain
+            # path (reduction, nodal, resonances) sees the linearised spring ∥ damper.
+            companion = f"{name}_damping"
+            if companion in self.names:
+                line.error(f"damping={damping:g} adds the damper {companion!r}, but that "
+                           f"name is already used on line {self.names[companion]}",
+                           opts["damping"].col, "a different name for one of them")
+            self.names[companion] = line.lineno
+            self.elements.append(Element("damper", companion, n1, n2, damping, eta,
+                                         line.lineno, line.tokens[0].col))
+
+    def ic(self, line: _Line, kind: str):
+        pos, opts, units = self._fields(line, kind, 1, ("x", "v"))
+        node = self._name(line, pos[0], "node name")
+        values = {}
+        for key, role in (("x", "displacement"), ("v", "velocity")):
+            if key in opts:
+                tok = opts[key]
+                value = self.expr(line, tok.text, tok.col, defined=self.params)
+                values[key] = self.with_unit(line, value, units.get(key), role)
+        if not values:
+            line.error(f".ic for node {node!r} gives neither x= nor v=",
+                       line.tokens[-1].col + len(line.tokens[-1].text), SYNTAX[".ic"])
+        self.initial.append((node, values.get("x", 0.0), values.get("v", 0.0), line.lineno,
+                             pos[0].col))
 
     def lever(self, line: _Line, kind: str):
         pos, opts, units = self._fields(line, kind, 5, ("ratio",))
@@ -414,7 +491,7 @@ def expressions_of(circuit: Circuit) -> dict | None:
 
 
 def parse(text: str, source: str = "<string>", *,
-          params: Mapping[str, float] | None = None) -> Circuit:
+          params: Mapping[str, float] | None = None, require_drive: bool = True) -> Circuit:
     """Parse netlist ``text`` into a :class:`~mechcirc.circuit.Circuit`.
 
     Parameters
@@ -427,6 +504,9 @@ def parse(text: str, source: str = "<string>", *,
         Values [SI] that replace those of the named ``.param`` definitions
         (parameter studies); later parameters and elements use them.  A name
         the netlist does not define is an error.
+    require_drive : bool
+        If false, a netlist without a ``drive`` line is accepted and the
+        circuit's ``drive`` is ``None`` (free vibration, :mod:`mechcirc.transient`).
 
     Raises
     ------
@@ -439,10 +519,11 @@ def parse(text: str, source: str = "<string>", *,
     >>> str(c.tree)
     'm1 | k1'
     """
-    return _Parser(text, source, params).run()
+    return _Parser(text, source, params, require_drive).run()
 
 
-def load(path: str | os.PathLike, *, params: Mapping[str, float] | None = None) -> Circuit:
+def load(path: str | os.PathLike, *, params: Mapping[str, float] | None = None,
+         require_drive: bool = True) -> Circuit:
     """Read and parse the netlist file at ``path`` (UTF-8); ``params`` as in :func:`parse`.
 
     Raises
@@ -452,4 +533,4 @@ def load(path: str | os.PathLike, *, params: Mapping[str, float] | None = None) 
     """
     source = os.fspath(path)
     text = read_source(path, "a .mcir netlist")
-    return parse(text, source=source, params=params)
+    return parse(text, source=source, params=params, require_drive=require_drive)

@@ -109,15 +109,16 @@ class NodalSystem:
         return out
 
 
-def assemble(circuit: Circuit, *, whole: bool = False) -> NodalSystem:
+def assemble(circuit: Circuit, whole: bool = False) -> NodalSystem:
     """Build the nodal matrices of the part of ``circuit`` that carries force.
 
     With ``whole=True`` every element and lever is kept, loaded by the drive
-    or not, and nothing is checked: the matrices of M ẍ + D ẋ + Kₛ x = f for
-    the whole network (velocities referred to the frame ``"0"``, or to the
-    drive's second node where there is no frame), as the time-domain and
-    two-port analyses need them.  ``a`` and ``b`` still index the drive's
-    nodes (−1 where a node is the reference).
+    or not, no drive is needed, and nothing is checked: the matrices of
+    M ẍ + D ẋ + Kₛ x = f for the whole network (velocities referred to the
+    frame ``"0"``, or to the drive's second node where there is no frame), as
+    the time-domain (:mod:`mechcirc.transient`) and two-port analyses need
+    them.  ``a`` and ``b`` index the drive's nodes (−1 where a node is the
+    reference or there is no drive).
 
     Raises
     ------
@@ -149,7 +150,7 @@ def assemble(circuit: Circuit, *, whole: bool = False) -> NodalSystem:
     for lv in levers:
         for n in (lv.p1, lv.p2, lv.s1, lv.s2):
             names.setdefault(n)
-    reference = FRAME if FRAME in names or not names else d.n2
+    reference = FRAME if FRAME in names or d is None or not names else d.n2
     nodes = tuple(n for n in names if n != reference)
     index = {n: i for i, n in enumerate(nodes)}
     index[reference] = -1
@@ -167,7 +168,8 @@ def assemble(circuit: Circuit, *, whole: bool = False) -> NodalSystem:
                    for r, c, v in (triplets[k] for k in KINDS))
     stamped = {kind: tuple(np.asarray(a) for a in t) for kind, t in triplets.items()}
     return NodalSystem(nodes, levers, elements, unloaded, M, D, Ks, C,
-                       index.get(d.n1, -1), index.get(d.n2, -1), stamped)
+                       index.get(d.n1, -1) if d else -1, index.get(d.n2, -1) if d else -1,
+                       stamped)
 
 
 #: The four matrices of a nodal system, in the order of :class:`NodalSystem`.

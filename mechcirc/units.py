@@ -58,6 +58,7 @@ ROLES: dict[str, dict[tuple[int, int, int], str]] = {
     "force": {(1, 1, -2): "force (N, kN)", (1, 2, -2): "moment (N*m)"},
     "eta": {(0, 0, 0): "a ratio (dimensionless)"},
     "ratio": {(0, 0, 0): "a ratio (dimensionless)"},
+    "displacement": {(0, 1, 0): "length (m, mm)", (0, 0, 0): "angle (rad, deg)"},
 }
 
 _DIM_NAMES = {(1, 0, 0): "a mass", (1, 2, 0): "a moment of inertia",

@@ -1,0 +1,140 @@
+"""Sub-command ``transient`` (time domain of any netlist) and the netlist branch of ``crosscheck``."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+
+from ._common import check_output_paths, print_json, save_figure
+
+
+def register(sub) -> None:
+    p = sub.add_parser(
+        "transient", help="time response of a netlist (exact for linear circuits; backlash)",
+        description="Integrate a netlist from its .ic state: node displacements and "
+                    "velocities, every element's force and the drive's force (velocity "
+                    "drive) or velocity (force drive) on the grid 0, dt, ..., t_end. Linear "
+                    "circuits are propagated exactly between drive samples (matrix "
+                    "exponential); springs with backlash= use the Modelica ElastoBacklash law "
+                    "and an adaptive Dormand-Prince 5(4) integrator.",
+        epilog="Examples:\n"
+               "  mechcirc transient examples/msl_backlash.mcir --t-end 1 --dt 1e-3 -o msl.csv\n"
+               "  mechcirc transient netlists/stb_heald.mcir --t-end 0.05 --drive harmonic:300 "
+               "--json",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("file", help="netlist (.mcir); a drive line is optional")
+    p.add_argument("--t-end", type=float, required=True, metavar="T", help="end time [s]")
+    p.add_argument("--dt", type=float, metavar="DT",
+                   help="output step [s] (default t_end/2000; 40 per period of a harmonic "
+                        "drive)")
+    p.add_argument("--drive", metavar="WAVE",
+                   help="harmonic:OMEGA (rad/s, or with a unit: 50Hz), step, impulse, "
+                        "csv:PATH (time,value samples, interpolated linearly) or rest "
+                        "(default: the drive stays at rest)")
+    p.add_argument("--amplitude", type=float, metavar="A",
+                   help="amplitude of harmonic/step/impulse (default: the netlist's)")
+    p.add_argument("--rtol", type=float, default=1e-9, metavar="TOL",
+                   help="relative tolerance with clearances (default 1e-9)")
+    p.add_argument("-o", "--output", metavar="CSV", help="write the time series as CSV")
+    p.add_argument("--plot", metavar="IMAGE", help="plot node displacements")
+    p.add_argument("--json", action="store_true", help="print one JSON document")
+    p.set_defaults(func=cmd_transient)
+
+
+def _positive(name, value):
+    from ..errors import MechcircError
+
+    if value is not None and not (math.isfinite(value) and value > 0):
+        raise MechcircError(f"{name} must be a finite number > 0, got {value:g}")
+
+
+def cmd_transient(args) -> int:
+    from ..netlist import load
+    from ..outputs import OutputSet
+    from ..transient import transient
+
+    check_output_paths(args.output, plots=(args.plot,))
+    _positive("--t-end", args.t_end)
+    _positive("--dt", args.dt)
+    _positive("--rtol", args.rtol)
+    if args.amplitude is not None and not math.isfinite(args.amplitude):
+        from ..errors import MechcircError
+
+        raise MechcircError(f"--amplitude must be finite, got {args.amplitude:g}")
+    circuit = load(args.file, require_drive=False)
+    result = transient(circuit, args.t_end, args.dt, args.drive, amplitude=args.amplitude,
+                       rtol=args.rtol)
+    with OutputSet() as out:
+        if args.output:
+            with open(out.path(args.output), "w", encoding="utf-8") as fh:
+                result.write_csv(fh)
+        if args.plot:
+            import matplotlib.pyplot as plt
+
+            fig, ax = plt.subplots(figsize=(8, 4.5))
+            try:
+                result.plot(ax=ax)
+                save_figure(fig, args.plot, into=out.path(args.plot))
+            finally:
+                plt.close(fig)
+    if args.json:
+        print_json(result.to_json())
+        return 0
+    for n in result.notes:
+        print(f"note: {n}", file=sys.stderr)
+    print(f"{circuit.name}: {result.time.size} samples, t = 0 .. {result.time[-1]:.6g} s; "
+          f"{result.method}; estimated error of x {result.error:.3g}")
+    print(f"{'node':>10} {'x(end)':>14} {'v(end)':>14} {'max|x|':>14}")
+    for i, n in enumerate(result.nodes):
+        print(f"{n:>10} {result.x[-1, i]:14.6g} {result.v[-1, i]:14.6g} "
+              f"{abs(result.x[:, i]).max():14.6g}")
+    print(f"{'element':>10} {'max|F|':>14}")
+    for j, e in enumerate(result.elements):
+        print(f"{e:>10} {abs(result.force[:, j]).max():14.6g}")
+    if result.drive_force is not None:
+        print(f"drive force: max |F| = {abs(result.drive_force).max():.6g}")
+    if result.drive_velocity is not None:
+        print(f"drive velocity: max |v| = {abs(result.drive_velocity).max():.6g}")
+    return 0
+
+
+def cmd_crosscheck_netlist(args) -> int:
+    """``mechcirc crosscheck FILE.mcir``: frequency domain vs transients of any netlist."""
+    from ..netlist import load
+    from ..transient.crosscheck import crosscheck
+
+    omega_max = None
+    if args.omega_max is not None:
+        from ..units import parse_omega
+
+        try:
+            omega_max = parse_omega(args.omega_max)
+        except Exception as exc:  # noqa: BLE001 - a user error, reported as such
+            from ..errors import MechcircError
+
+            raise MechcircError(f"--omega-max {args.omega_max!r}: {exc}") from None
+        _positive("--omega-max", omega_max)
+    circuit = load(args.file)
+    result = crosscheck(circuit, omega_max=omega_max)
+    if args.json:
+        print_json(result.to_json())
+        return 0
+    for n in result.notes:
+        print(f"note: {n}")
+    print(f"{circuit.name}: {result.drive_kind} drive")
+    print("(a) resonances / anti-resonances vs ringing of the impulse response [rad/s]")
+    for r in result.resonances:
+        if r["ringing_omega"] is None:
+            print(f"    {r['kind']:>13} {r['omega']:12.6g}: {r['status']} ({r['note']})")
+            continue
+        extra = f"  [{r['status']}]" if r["status"] != "ok" else \
+            f"  decay {r['decay']:.5g} 1/s (expected {r['decay_expected']:.5g})"
+        print(f"    {r['kind']:>13} ω_d {r['omega_d']:12.6g}  ringing {r['ringing_omega']:12.6g}"
+              f"  rel. diff {r['rel_error']:.2e}{extra}")
+    label = "|Q0|" if result.drive_kind == "velocity" else "|v0|"
+    print(f"(b) {label} from the sweep vs steady-state amplitude of the harmonic transient")
+    for s in result.steady_state:
+        print(f"    ω {s['omega']:12.6g}: sweep {s['expected']:.8g}  transient "
+              f"{s['measured']:.8g}  rel. diff {s['rel_error']:.2e}")
+    return 0

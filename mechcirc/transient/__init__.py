@@ -1,0 +1,20 @@
+"""Time domain of any circuit: transients, clearances (backlash) and the frequency-domain cross-check.
+
+* :func:`transient` integrates a :class:`~mechcirc.circuit.Circuit` built from
+  the same nodal assembly as the frequency domain (:mod:`.model`), exactly
+  between drive samples when linear, with the ElastoBacklash clearance law
+  (:mod:`._kernels`) otherwise.
+* :func:`crosscheck` compares resonances and |Q0| of the sweep with ringing
+  and steady-state amplitudes measured on transients (:mod:`.crosscheck`).
+"""
+
+from .simulate import TransientResult, Waveform, parse_drive, transient
+
+__all__ = ["transient", "TransientResult", "Waveform", "parse_drive", "crosscheck"]
+
+
+def crosscheck(*args, **kwargs):
+    """See :func:`mechcirc.transient.crosscheck.crosscheck`."""
+    from .crosscheck import crosscheck as _cc
+
+    return _cc(*args, **kwargs)

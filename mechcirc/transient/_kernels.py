@@ -1,0 +1,201 @@
+"""The clearance (ElastoBacklash) law and an embedded Dormand–Prince 5(4) loop, on plain arrays.
+
+One source, two backends, as :mod:`mechcirc.sley._kernels`: compiled with
+numba's ``@njit(cache=True)`` when numba is importable (the ``fast`` extra),
+ordinary Python otherwise or through :func:`load_python`.  Imported only when a
+transient with clearances runs, so ``import mechcirc`` never imports numba.
+
+The law (Modelica ``Rotational.Components.ElastoBacklash``), for relative
+displacement e, relative velocity w, stiffness c, damping d, total gap b:
+
+* b < 1e-10: f = c e + d w (plain spring ∥ damper);
+* |e| ≤ b/2: f = 0 (in the gap);
+* e > b/2: f_c = c (e − b/2), f_d = d w; f = 0 if f_c + f_d ≤ 0, else f_c + min(f_c, f_d);
+* e < −b/2: mirror image (f_c = c (e + b/2); f = 0 if f_c + f_d ≥ 0, else f_c + max(f_c, f_d)).
+
+So the contact never pulls and the damping part never exceeds the spring part:
+the force is continuous at first contact (f_c = 0 there).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+if globals().get("_FORCE_PYTHON"):
+    HAVE_NUMBA = False
+else:
+    try:
+        from numba import njit as _numba_njit
+        HAVE_NUMBA = True
+    except ImportError:          # the "fast" extra is not installed
+        HAVE_NUMBA = False
+
+if HAVE_NUMBA:
+    def _jit(fn):
+        return _numba_njit(cache=True, error_model="numpy")(fn)
+else:
+    def _jit(fn):
+        return fn
+
+B_EPS = 1e-10
+
+
+@_jit
+def elasto_backlash(e, w, c, d, b):
+    """(total force, spring part) of one clearance element; see the module docstring."""
+    if abs(b) <= B_EPS:
+        fc = c * e
+        return fc + d * w, fc
+    half = 0.5 * b
+    if e > half:
+        fc = c * (e - half)
+        fd = d * w
+        if fc + fd <= 0.0:
+            return 0.0, 0.0
+        return fc + min(fc, fd), fc
+    if e < -half:
+        fc = c * (e + half)
+        fd = d * w
+        if fc + fd >= 0.0:
+            return 0.0, 0.0
+        return fc + max(fc, fd), fc
+    return 0.0, 0.0
+
+
+@_jit
+def law_many(e, w, c, d, b, total, spring):
+    """:func:`elasto_backlash` on arrays (outputs written into ``total`` and ``spring``)."""
+    for i in range(e.shape[0]):
+        total[i], spring[i] = elasto_backlash(e[i], w[i], c, d, b)
+
+
+@_jit
+def drive_at(t, t0, dt, u):
+    """Linear interpolation of the drive samples ``u`` on the grid t0 + k dt (held beyond)."""
+    s = (t - t0) / dt
+    n = u.shape[0]
+    if s <= 0.0:
+        return u[0]
+    k = int(math.floor(s))
+    if k >= n - 1:
+        return u[n - 1]
+    f = s - k
+    return u[k] + f * (u[k + 1] - u[k])
+
+
+@_jit
+def rhs(t, z, A, B, cx, dx, cv, dv, extra, prm, t0, dt, u, dz):
+    """dz = A z + B u(t) + Σ_e extra[:, e] · f_e(cx_e·z + dx_e u, cv_e·z + dv_e u)."""
+    ut = drive_at(t, t0, dt, u)
+    N = z.shape[0]
+    for i in range(N):
+        acc = B[i] * ut
+        for j in range(N):
+            acc += A[i, j] * z[j]
+        dz[i] = acc
+    E = prm.shape[0]
+    for k in range(E):
+        e = dx[k] * ut
+        w = dv[k] * ut
+        for j in range(N):
+            e += cx[k, j] * z[j]
+            w += cv[k, j] * z[j]
+        f, fc = elasto_backlash(e, w, prm[k, 0], prm[k, 1], prm[k, 2])
+        if f != 0.0:
+            for i in range(N):
+                dz[i] += extra[i, k] * f
+
+
+# Dormand–Prince 5(4) coefficients.
+_C = np.array([0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0, 1.0])
+_A = np.array([
+    [0, 0, 0, 0, 0, 0],
+    [1 / 5, 0, 0, 0, 0, 0],
+    [3 / 40, 9 / 40, 0, 0, 0, 0],
+    [44 / 45, -56 / 15, 32 / 9, 0, 0, 0],
+    [19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729, 0, 0],
+    [9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656, 0],
+    [35 / 384, 0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84]])
+_B5 = np.array([35 / 384, 0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84, 0])
+_B4 = np.array([5179 / 57600, 0, 7571 / 16695, 393 / 640, -92097 / 339200, 187 / 2100, 1 / 40])
+
+
+@_jit
+def dopri_run(z, t0, dt, nout, A, B, cx, dx, cv, dv, extra, prm, u, rtol, atol, hmax,
+              coefA, coefB5, coefB4, coefC, out):
+    """Integrate from t0 and store z at t0 + k dt (k < nout) in ``out``; returns the step count.
+
+    Steps never cross an output time (nor so a sample of the piecewise-linear
+    drive), so the drive's kinks are always at step boundaries.  A step is
+    accepted when the embedded error, scaled by atol + rtol |z|, is ≤ 1 (RMS).
+    """
+    N = z.shape[0]
+    K = np.zeros((7, N))
+    ytmp = np.zeros(N)
+    y5 = np.zeros(N)
+    t = t0
+    for i in range(N):
+        out[0, i] = z[i]
+    h = min(hmax, dt)
+    steps = 0
+    rhs(t, z, A, B, cx, dx, cv, dv, extra, prm, t0, dt, u, K[0])
+    for k in range(1, nout):
+        t_target = t0 + k * dt
+        while t < t_target:
+            last = False
+            if t + h >= t_target - 1e-14 * abs(t_target):
+                hh = t_target - t
+                last = True
+            else:
+                hh = h
+            for s in range(1, 7):
+                for i in range(N):
+                    acc = z[i]
+                    for r in range(s):
+                        acc += hh * coefA[s, r] * K[r, i]
+                    ytmp[i] = acc
+                rhs(t + coefC[s] * hh, ytmp, A, B, cx, dx, cv, dv, extra, prm, t0, dt, u, K[s])
+            err = 0.0
+            for i in range(N):
+                a5 = z[i]
+                a4 = z[i]
+                for r in range(7):
+                    a5 += hh * coefB5[r] * K[r, i]
+                    a4 += hh * coefB4[r] * K[r, i]
+                y5[i] = a5
+                sc = atol + rtol * max(abs(z[i]), abs(a5))
+                q = (a5 - a4) / sc
+                err += q * q
+            err = math.sqrt(err / N)
+            steps += 1
+            if err <= 1.0:
+                t = t_target if last else t + hh
+                for i in range(N):
+                    z[i] = y5[i]
+                rhs(t, z, A, B, cx, dx, cv, dv, extra, prm, t0, dt, u, K[0])
+                fac = 5.0 if err == 0.0 else min(5.0, 0.9 * err ** -0.2)
+                if not last:
+                    h = min(hmax, hh * fac)
+                # after a step cut short by an output time, keep the previous h
+            else:
+                h = hh * max(0.1, 0.9 * err ** -0.2)
+                if h < 1e-14 * max(1.0, abs(t)):
+                    return -steps
+        for i in range(N):
+            out[k, i] = z[i]
+    return steps
+
+
+def load_python():
+    """A fresh copy of this module that never uses numba (the pure-Python backend)."""
+    import importlib.util
+    import sys
+
+    spec = importlib.util.find_spec(__name__)
+    module = importlib.util.module_from_spec(spec)
+    module._FORCE_PYTHON = True
+    sys.modules.setdefault(__name__ + "_python", module)
+    spec.loader.exec_module(module)
+    return module

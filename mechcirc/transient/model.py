@@ -1,0 +1,335 @@
+"""State-space form of a circuit for the time domain, from the nodal assembly.
+
+The nodal matrices of :func:`mechcirc.nodal.assemble` (``whole=True``) give,
+for node displacements x (frame = 0) and lever forces λ,
+
+    M ẍ + D ẋ + Kₛ x + Gᵀ λ = f,      G x = 0   (levers: r (x_p1 − x_p2) = x_s1 − x_s2)
+
+No element law is written here: M, D and Kₛ are the frequency-domain stamps
+read as ``s² M + s D + Kₛ``.  The constraints are eliminated exactly:
+
+* levers (and, for a velocity drive, the drive constraint x_a − x_b = X(t))
+  by a null-space basis T: x = T q + p X, where p is the minimum-kinetic-energy
+  particular solution (Tᵀ M p = 0, so the drive's acceleration never enters);
+  X = ∫V is carried as one more state, so a piecewise-linear V stays exact;
+* massless coordinates: directions without mass but with damping become
+  first-order states; directions with neither are condensed statically
+  (exact: M and D vanish on them since both are positive semidefinite).
+
+The result is ż = A z + B u with the drive value u (velocity V or force F)
+and output maps x = Cx z + Dx u, v = Cv z + Dv u + Ev u̇.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg as la
+
+from ..circuit import Circuit, Element
+from ..errors import MechcircError, TopologyError
+
+__all__ = ["StateSpace", "state_space", "backlash_elements"]
+
+
+@dataclass(frozen=True, eq=False)
+class StateSpace:
+    """ż = A z + B u; x = Cx z + Dx u; v = Cv z + Dv u + Ev u̇ (node-space, ``nodes`` order).
+
+    ``kind`` is the drive's kind (``"velocity"``, ``"force"`` or ``None``); ``g``
+    the drive's incidence (e_a − e_b), ``h`` the row giving the drive's force
+    from the nodal residual M a + D v + Kₛ x.  ``massive`` is true when every
+    coordinate carries mass (required with clearances).  ``z0`` maps the
+    circuit's initial conditions into the state.
+    """
+
+    nodes: tuple
+    elements: tuple
+    kind: str | None
+    A: np.ndarray
+    B: np.ndarray
+    Cx: np.ndarray
+    Dx: np.ndarray
+    Cv: np.ndarray
+    Dv: np.ndarray
+    Ev: np.ndarray
+    M: np.ndarray
+    D: np.ndarray
+    K: np.ndarray
+    g: np.ndarray
+    h: np.ndarray | None
+    massive: bool
+    inject: np.ndarray          # state change per unit force impulse through the drive
+    initial: tuple              # (z0, notes)
+    drop: tuple                 # element names left out of M, D, K (clearance elements)
+    extra: np.ndarray | None    # (N, E): state rate per unit force of each clearance element
+
+    @property
+    def size(self) -> int:
+        return self.A.shape[0]
+
+
+def backlash_elements(circuit: Circuit) -> list[tuple[Element, Element | None]]:
+    """(spring, companion damper or None) for every spring with a clearance ≥ 1e-10."""
+    by_name = {e.name: e for e in circuit.elements}
+    out = []
+    for e in circuit.elements:
+        if e.kind == "spring" and e.backlash >= 1e-10:
+            comp = by_name.get(f"{e.name}_damping")
+            if comp is not None and (comp.kind != "damper" or {comp.n1, comp.n2} != {e.n1, e.n2}):
+                comp = None
+            out.append((e, comp))
+    return out
+
+
+def _null(G: np.ndarray, n: int) -> np.ndarray:
+    if G.shape[0] == 0:
+        return np.eye(n)
+    return la.null_space(G, rcond=1e-12)
+
+
+def _split(S: np.ndarray, basis: np.ndarray, rel: float = 1e-11):
+    """Orthonormal bases of the range and null space of a PSD matrix restricted to ``basis``."""
+    if basis.shape[1] == 0:
+        return basis, basis
+    R = basis.T @ S @ basis
+    R = 0.5 * (R + R.T)
+    w, U = la.eigh(R)
+    scale = max(np.abs(w).max(), 0.0)
+    big = w > rel * scale if scale > 0 else np.zeros(w.shape, bool)
+    return basis @ U[:, big], basis @ U[:, ~big]
+
+
+def state_space(circuit: Circuit, *, linearise: bool = False) -> StateSpace:
+    """The state-space model of ``circuit`` (clearance elements left out unless ``linearise``).
+
+    With ``linearise`` the clearances are taken closed (the frequency domain's
+    reading); otherwise the clearance springs and their companion dampers are
+    left out of A and their forces enter through ``extra``.
+    """
+    from ..nodal import assemble
+
+    clear = [] if linearise else backlash_elements(circuit)
+    drop = {e.name for e, _ in clear} | {c.name for _, c in clear if c is not None}
+    if drop:
+        import dataclasses
+
+        kept = tuple(e for e in circuit.elements if e.name not in drop)
+        work = dataclasses.replace(circuit, elements=kept) if kept else None
+    else:
+        work = circuit
+    if work is None:
+        raise MechcircError("the circuit has only clearance elements; add a mass")
+    system = assemble(work, whole=True)
+    nodes = list(system.nodes)
+    for e, _ in clear:                      # clearance-only nodes still need a coordinate
+        for nd in (e.n1, e.n2):
+            if nd != "0" and nd not in nodes:
+                nodes.append(nd)
+    n = len(nodes)
+    nn = len(system.nodes)
+    M = np.zeros((n, n))
+    D = np.zeros((n, n))
+    K = np.zeros((n, n))
+    M[:nn, :nn] = system.M[:nn, :nn].toarray()
+    D[:nn, :nn] = system.D[:nn, :nn].toarray()
+    K[:nn, :nn] = system.Ks[:nn, :nn].toarray()
+    G = np.zeros((len(system.levers), n))
+    if system.levers:
+        G[:, :nn] = system.C[nn:, :nn].toarray()
+    index = {nd: i for i, nd in enumerate(nodes)}
+    d = circuit.drive
+    g = np.zeros(n)
+    if d is not None:
+        if d.n1 in index:
+            g[index[d.n1]] += 1.0
+        if d.n2 in index:
+            g[index[d.n2]] -= 1.0
+        if not g.any():
+            raise TopologyError(f"drive {d.name!r} connects nodes no element uses")
+    kind = d.kind if d is not None else None
+    vel = kind == "velocity"
+    Cons = np.vstack([G, g[None, :]]) if vel else G
+    T = _null(Cons, n)
+    nq = T.shape[1]
+    if vel:
+        # Minimum-kinetic-energy particular solution: [M Cᵀ; C 0][p; μ] = [0; e].
+        nc = Cons.shape[0]
+        KKT = np.block([[M, Cons.T], [Cons, np.zeros((nc, nc))]])
+        rhs = np.zeros(n + nc)
+        rhs[-1] = 1.0
+        sol = la.lstsq(KKT, rhs)[0]
+        p = sol[:n]
+        if np.abs(Cons @ p - rhs[n:]).max() > 1e-8 * max(1.0, np.abs(p).max()):
+            raise TopologyError(f"the velocity drive {d.name!r} contradicts the levers "
+                                "(its nodes' relative motion is fixed by them)")
+        # remove any part of p that T could carry and that has mass (keeps TᵀMp = 0)
+    else:
+        p = np.zeros(n)
+    Mq, Dq, Kq = (T.T @ X @ T for X in (M, D, K))
+    # Generalised force per unit drive value u and per unit drive displacement X.
+    if kind == "force":
+        Fu, Fx = T.T @ g, np.zeros(nq)
+    elif vel:
+        Fu, Fx = -(T.T @ D @ p), -(T.T @ K @ p)
+    else:
+        Fu, Fx = np.zeros(nq), np.zeros(nq)
+    I = np.eye(nq)
+    B1, B0 = _split(Mq, I)
+    Bd, Bs = _split(Dq, B0)
+    n1, n0, ns = B1.shape[1], Bd.shape[1], Bs.shape[1]
+    # Static condensation of the coordinates with neither mass nor damping.
+    Y = np.hstack([B1, Bd])
+    if ns:
+        Kss = Bs.T @ Kq @ Bs
+        try:
+            Kss_inv = la.inv(Kss)
+            if not np.all(np.isfinite(Kss_inv)) or np.linalg.cond(Kss) > 1e13:
+                raise la.LinAlgError
+        except la.LinAlgError:
+            raise TopologyError("some nodes carry neither mass nor damping and are not held "
+                                "by springs (their motion is undetermined)") from None
+        S_y = -Kss_inv @ (Bs.T @ Kq @ Y)          # s = S_y y + S_u u + S_x X
+        S_u = Kss_inv @ (Bs.T @ Fu)
+        S_x = Kss_inv @ (Bs.T @ Fx)
+    else:
+        S_y = np.zeros((0, n1 + n0))
+        S_u = S_x = np.zeros(0)
+    Ky = Y.T @ Kq @ Y + (Y.T @ Kq @ Bs) @ S_y
+    Fyu = Y.T @ Fu - (Y.T @ Kq @ Bs) @ S_u
+    Fyx = Y.T @ Fx - (Y.T @ Kq @ Bs) @ S_x
+    My = Y.T @ Mq @ Y
+    Dy = Y.T @ Dq @ Y
+    # z = [y1, v1, y0, (X)]
+    N = 2 * n1 + n0 + (1 if vel else 0)
+    A = np.zeros((N, N))
+    Bv = np.zeros(N)
+    i_y1, i_v1, i_y0 = slice(0, n1), slice(n1, 2 * n1), slice(2 * n1, 2 * n1 + n0)
+    iX = N - 1
+    # ẏ0 = D00⁻¹ (F0 − D01 v1 − K0 y)  as  rows over z and u
+    dy0_z = np.zeros((n0, N))
+    dy0_u = np.zeros(n0)
+    if n0:
+        D00_inv = la.inv(Dy[n1:, n1:])
+        dy0_z[:, i_v1] = -D00_inv @ Dy[n1:, :n1]
+        dy0_z[:, i_y1] = -D00_inv @ Ky[n1:, :n1]
+        dy0_z[:, i_y0] = -D00_inv @ Ky[n1:, n1:]
+        if vel:
+            dy0_z[:, iX] = D00_inv @ Fyx[n1:]
+        dy0_u = D00_inv @ Fyu[n1:]
+    A[i_y1, i_v1] = np.eye(n1)
+    A[i_y0] = dy0_z
+    Bv[i_y0] = dy0_u
+    extra = None
+    if n1:
+        M11_inv = la.inv(My[:n1, :n1])
+        acc_z = np.zeros((n1, N))
+        acc_z[:, i_v1] = -Dy[:n1, :n1]
+        acc_z[:, i_y1] = -Ky[:n1, :n1]
+        acc_z[:, i_y0] = -Ky[:n1, n1:]
+        acc_u = Fyu[:n1].copy()
+        if vel:
+            acc_z[:, iX] = Fyx[:n1]
+        acc_z -= Dy[:n1, n1:] @ dy0_z
+        acc_u -= Dy[:n1, n1:] @ dy0_u
+        A[i_v1] = M11_inv @ acc_z
+        Bv[i_v1] = M11_inv @ acc_u
+    if vel:
+        Bv[iX] = 1.0
+    # Outputs.  q = B1 y1 + Bd y0 + Bs s.
+    Qz = np.zeros((nq, N))
+    Qz[:, i_y1] = B1
+    Qz[:, i_y0] = Bd
+    Qu = np.zeros(nq)
+    if ns:
+        Qz[:, i_y1] += Bs @ S_y[:, :n1]
+        Qz[:, i_y0] += Bs @ S_y[:, n1:]
+        if vel:
+            Qz[:, iX] += Bs @ S_x
+        Qu = Bs @ S_u
+    Cx = T @ Qz
+    Dx = T @ Qu
+    if vel:
+        Cx[:, iX] += p
+    # v = d/dt x = Cx ż + Dx u̇ = Cx A z + Cx B u + Dx u̇
+    Cv = Cx @ A
+    Dv = Cx @ Bv
+    Ev = Dx
+    h = None
+    if kind is not None:
+        # Q from the residual r = M a + D v + K x = Gᵀ μ + g Q (consistent, exact).
+        W = np.hstack([G.T, g[:, None]])
+        h = la.pinv(W)[-1]
+    # Clearance elements: their force f_e (n1 → n2) acts as −g_e f_e on the left side.
+    massive = n0 == 0 and ns == 0
+    if clear:
+        if not massive:
+            raise MechcircError(
+                "clearances (backlash=) need mass at every node of the network "
+                "(this one has massless nodes); add small masses or remove the clearance")
+        extra = np.zeros((N, len(clear)))
+        for j, (e, _) in enumerate(clear):
+            ge = np.zeros(n)
+            if e.n1 in index:
+                ge[index[e.n1]] += 1.0
+            if e.n2 in index:
+                ge[index[e.n2]] -= 1.0
+            extra[i_v1, j] = M11_inv @ (Y[:, :n1].T @ (T.T @ (-ge)))
+    # Impulse through the drive (force J into n1, out of n2): momentum jump.
+    inject = np.zeros(N)
+    if kind == "force" and n1:
+        inject[i_v1] = M11_inv @ (B1.T @ (T.T @ g))
+    z0, notes = _initial(circuit, nodes, index, Cx, Cv, N, vel)
+    return StateSpace(tuple(nodes), tuple(work.elements), kind, A, Bv, Cx, Dx, Cv, Dv, Ev,
+                      M, D, K, g, h, massive, inject, (z0, tuple(notes)), tuple(sorted(drop)),
+                      extra)
+
+
+def _initial(circuit, nodes, index, Cx, Cv, N, vel):
+    """State z0 matching the ``.ic`` lines (least squares; a warning if not attainable)."""
+    notes = []
+    z0 = np.zeros(N)
+    if not circuit.initial:
+        return z0, notes
+    n = len(nodes)
+    x0 = np.zeros(n)
+    v0 = np.zeros(n)
+    for node, x, v in circuit.initial:
+        if node in index:
+            x0[index[node]] = x
+            v0[index[node]] = v
+    # Rows x and v of every node (drive at rest, u = 0).  The named nodes'
+    # values are met first (least squares if not attainable); the freedom left
+    # keeps the other nodes as close to rest as it can.
+    Mat = np.vstack([Cx, Cv])
+    rhs = np.concatenate([x0, v0])
+    cols = np.ones(N, bool)
+    if vel:
+        cols[-1] = False            # X(0) = 0: the drive starts from its reference
+    named_idx = {index[nd] for nd, _, _ in circuit.initial if nd in index}
+    rows = np.array([i in named_idx for i in range(n)] * 2)
+    Mz = Mat[:, cols]
+    # Lexicographic least squares: named rows, then the other nodes' x, then their v
+    # (a massless damped node's velocity follows from the displacements).
+    is_x = np.arange(2 * n) < n
+    zp = np.zeros(Mz.shape[1])
+    Nn = np.eye(Mz.shape[1])
+    for group in (rows, ~rows & is_x, ~rows & ~is_x):
+        if not group.any() or Nn.shape[1] == 0:
+            continue
+        Ag = Mz[group] @ Nn
+        xi = la.lstsq(Ag, rhs[group] - Mz[group] @ zp)[0]
+        zp = zp + Nn @ xi
+        Nn = Nn @ la.null_space(Ag) if Ag.size else Nn
+    z0[cols] = zp
+    resid = Mat @ z0 - rhs
+    named = {nd for nd, _, _ in circuit.initial}
+    bad = [nodes[i] for i in range(n)
+           if nodes[i] in named and i in named_idx and (abs(resid[i]) > 1e-9 * (1 + abs(x0[i]))
+                                     or abs(resid[n + i]) > 1e-9 * (1 + abs(v0[i])))]
+    if bad:
+        notes.append("initial state of node(s) " + ", ".join(bad) + " is not attainable "
+                     "(levers, the drive or massless nodes fix it); the closest attainable "
+                     "state was used")
+    return z0, notes

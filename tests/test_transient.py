@@ -1,0 +1,280 @@
+"""mechcirc.transient against closed forms and independent solvers (issue 12).
+
+References: SDOF step/impulse responses (textbook closed forms), the exact
+period of a dead-zone (backlash) oscillator, |Q0| / |v0| of the sweep (the
+frequency domain, a different code path: complex solves, no time stepping),
+and scipy's solve_ivp on equations written here by hand.
+"""
+
+import math
+import pickle
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+import mechcirc
+from mechcirc.errors import MechcircError, NetlistError
+from mechcirc.transient import crosscheck, transient
+
+SDOF_F = "mass m a 0 2\nspring k a 0 800\ndamper c a 0 8\ndrive F a 0 force=3\n"
+
+
+def _sdof():
+    m, k, c, F = 2.0, 800.0, 8.0, 3.0
+    wn = math.sqrt(k / m)
+    z = c / (2 * math.sqrt(k * m))
+    return m, k, c, F, wn, z, wn * math.sqrt(1 - z * z)
+
+
+def test_sdof_step_response_closed_form():
+    m, k, c, F, wn, z, wd = _sdof()
+    r = transient(mechcirc.parse(SDOF_F), 2.0, 1e-3, "step")
+    t = r.time
+    x_ref = F / k * (1 - np.exp(-z * wn * t) * (np.cos(wd * t) + z * wn / wd * np.sin(wd * t)))
+    v_ref = F / (m * wd) * np.exp(-z * wn * t) * np.sin(wd * t)
+    x, v = r.node("a")
+    assert np.abs(x - x_ref).max() <= 1e-12 * np.abs(x_ref).max()
+    assert np.abs(v - v_ref).max() <= 1e-12 * np.abs(v_ref).max()
+    # element forces: spring k x, damper c v, mass m a; they balance the drive force
+    total = r.element_force("k") + r.element_force("c") + r.element_force("m")
+    assert np.abs(total[1:] - F).max() <= 1e-9 * F
+    assert np.allclose(r.drive_velocity, v, atol=1e-15)
+
+
+def test_sdof_impulse_response_closed_form():
+    m, k, c, F, wn, z, wd = _sdof()
+    r = transient(mechcirc.parse(SDOF_F), 2.0, 1e-3, "impulse")
+    t = r.time
+    x_ref = F / (m * wd) * np.exp(-z * wn * t) * np.sin(wd * t)
+    assert np.abs(r.node("a")[0] - x_ref).max() <= 1e-12 * np.abs(x_ref).max()
+
+
+def test_velocity_step_base_excitation_closed_form():
+    # drive V at node b (velocity step V0): spring k from b to a, mass m on a.
+    # Relative to the ramp x_b = V0 t, the mass follows x_a = V0 (t − sin(ωt)/ω).
+    net = "drive V b 0 velocity=0.2\nspring k b a 900\nmass m a 0 4\n"
+    r = transient(mechcirc.parse(net), 1.0, 1e-3, "step")
+    w = math.sqrt(900 / 4)
+    t = r.time
+    xa = 0.2 * (t - np.sin(w * t) / w)
+    assert np.abs(r.node("a")[0] - xa).max() <= 1e-12
+    assert np.abs(r.node("b")[0] - 0.2 * t).max() <= 1e-13
+    # drive force = spring force k (x_b − x_a) = m ẍ_a
+    f_ref = 900 * (0.2 * np.sin(w * t) / w)
+    assert np.abs(r.drive_force - f_ref).max() <= 1e-9 * np.abs(f_ref).max()
+
+
+def test_harmonic_steady_state_matches_sweep_amplitude():
+    # Reference |Q0| from the frequency domain (complex solve), transient from
+    # the exact propagation: both fitted at the drive's frequency by crosscheck.
+    for src in (SDOF_F, "drive V a 0 velocity=1\nmass m a b 1\nspring k b 0 100\n"
+                        "damper c b 0 0.5\n"):
+        cc = crosscheck(mechcirc.parse(src))
+        assert len(cc.steady_state) == 4
+        for row in cc.steady_state:
+            assert row["rel_error"] < 1e-8, row            # achieved ~1e-13
+        for row in cc.resonances:
+            if row["status"] == "ok":
+                assert row["rel_error"] < 1e-9              # achieved ~1e-15
+                assert row["decay_rel_error"] < 1e-8
+
+
+def test_harmonic_peak_amplitude_after_ring_down_is_q0():
+    # Independent of the pencil fit: run long (damped), read the last period's peak.
+    c = mechcirc.parse("drive V a 0 velocity=1\nmass m a b 1\nspring k b 0 100\n"
+                       "damper c b 0 4\n")
+    w = 9.0
+    r = transient(c, 40.0, 2 * math.pi / w / 2000, f"harmonic:{w}")
+    last = r.time > 40.0 - 2 * 2 * math.pi / w
+    expected = abs(c.sweep(np.array([w])).Q0[0])
+    assert abs(np.abs(r.drive_force[last]).max() - expected) <= 2e-6 * expected
+
+
+def test_lever_reflects_mass_as_r_squared():
+    # Spring k at the primary, mass m at the secondary of a lever of ratio r:
+    # ω = sqrt(k / (m r²)).  Released from x_a = 0.01.
+    r_, k, m = 2.0, 400.0, 0.5
+    net = f"spring k a 0 {k}\nlever L a 0 b 0 ratio={r_}\nmass m b 0 {m}\n.ic a x=0.01\n"
+    c = mechcirc.parse(net, require_drive=False)
+    res = transient(c, 1.0, 1e-3)
+    w = math.sqrt(k / (m * r_ ** 2))
+    assert np.abs(res.node("a")[0] - 0.01 * np.cos(w * res.time)).max() <= 1e-13
+    assert np.abs(res.node("b")[0] - r_ * res.node("a")[0]).max() <= 1e-14
+
+
+def test_massless_maxwell_node_against_solve_ivp():
+    # mass m on a (to frame via spring k1), and a Maxwell arm a -k2- b -c- 0 with a
+    # massless node b: x_b obeys c ẋ_b = k2 (x_a − x_b).
+    m, k1, k2, c = 1.5, 300.0, 200.0, 6.0
+    net = (f"mass m a 0 {m}\nspring k1 a 0 {k1}\nspring k2 a b {k2}\ndamper c b 0 {c}\n"
+           ".ic a x=0.02 v=0.3\n")
+    res = transient(mechcirc.parse(net, require_drive=False), 2.0, 1e-3)
+
+    def f(t, y):
+        xa, va, xb = y
+        return [va, (-k1 * xa - k2 * (xa - xb)) / m, k2 * (xa - xb) / c]
+
+    sol = solve_ivp(f, (0, 2), [0.02, 0.3, 0.0], method="DOP853", rtol=1e-12, atol=1e-15,
+                    t_eval=res.time)
+    assert np.abs(res.node("a")[0] - sol.y[0]).max() <= 1e-10
+    assert np.abs(res.node("b")[0] - sol.y[2]).max() <= 1e-10
+
+
+def test_static_condensation_series_springs():
+    # two springs in series (massless middle node) = one spring k1 k2/(k1 + k2)
+    net = "mass m a 0 2\nspring k1 a b 300\nspring k2 b 0 600\n.ic a x=0.05\n"
+    res = transient(mechcirc.parse(net, require_drive=False), 1.0, 1e-3)
+    w = math.sqrt(200.0 / 2)
+    assert np.abs(res.node("a")[0] - 0.05 * np.cos(w * res.time)).max() <= 1e-13
+    assert np.abs(res.node("b")[0] - 0.05 * np.cos(w * res.time) / 3).max() <= 1e-13
+
+
+# ------------------------------------------------------------ clearances
+def test_dead_zone_oscillator_exact_period():
+    # Mass m between two stops (spring k with total gap B, no damping), starting at
+    # the gap's centre with speed v0: it flies across the gap (B / v0), stays in
+    # contact for half a period of the spring (π/ω), and returns.
+    # T = 2 B / v0 + 2 π / ω.
+    m, k, B, v0 = 1.0, 1e4, 0.02, 0.5
+    net = f"mass m a 0 {m}\nspring k a 0 {k} backlash={B}\n.ic a v={v0}\n"
+    res = transient(mechcirc.parse(net, require_drive=False), 1.0, 1e-5)
+    T = 2 * B / v0 + 2 * math.pi / math.sqrt(k / m)
+    x = res.node("a")[0]
+    i = np.flatnonzero((x[:-1] < 0) & (x[1:] >= 0))       # upward crossings of the centre
+    t_cross = res.time[i] - x[i] * (res.time[i + 1] - res.time[i]) / (x[i + 1] - x[i])
+    periods = np.diff(t_cross)
+    assert periods.size >= 5
+    assert np.abs(periods - T).max() <= 1e-9 * T           # achieved ~1e-12
+    assert abs(np.abs(res.node("a")[1]).max() - v0) <= 1e-8  # energy conserved
+
+
+def test_elasto_backlash_law_properties():
+    from mechcirc.transient import _kernels as kern
+
+    c, d, b = 100.0, 10.0, 0.2
+    rng = np.random.default_rng(1)
+    for e, w in rng.normal(0, 0.3, (2000, 2)) * [1, 20]:
+        f, fc = kern.elasto_backlash(e, w, c, d, b)
+        if abs(e) <= b / 2:
+            assert f == 0.0
+        else:
+            assert f * np.sign(e) >= 0                      # never pulls
+            assert abs(f - fc) <= abs(fc) + 1e-12           # |f_d| ≤ |f_c|
+    # tiny gap: plain spring-damper
+    assert kern.elasto_backlash(0.3, 2.0, c, d, 1e-11) == (c * 0.3 + d * 2.0, c * 0.3)
+    # continuous at first contact: f → 0 as e → b/2 from outside
+    assert kern.elasto_backlash(b / 2 + 1e-12, 50.0, c, d, b)[0] <= 2.01 * c * 1e-12
+
+
+def test_python_backend_matches_compiled():
+    from mechcirc.transient import _kernels as kern
+
+    py = kern.load_python()
+    assert not py.HAVE_NUMBA
+    c = mechcirc.load("examples/msl_backlash.mcir")
+    from mechcirc.transient.model import state_space
+    ss = state_space(c)
+    z0 = ss.initial[0]
+    for mod in (kern, py):
+        pass
+    args = _kernel_args(c, ss)
+    outs = []
+    for mod in (kern, py):
+        out = np.empty((51, ss.size))
+        steps = mod.dopri_run(z0.copy(), 0.0, 2e-3, 51, *args, 1e-9, 1e-9, 2e-3,
+                              mod._A, mod._B5, mod._B4, mod._C, out)
+        assert steps > 0
+        outs.append(out)
+    assert np.abs(outs[0] - outs[1]).max() <= 1e-12
+
+
+def _kernel_args(c, ss):
+    from mechcirc.transient.model import backlash_elements
+    idx = {n: i for i, n in enumerate(ss.nodes)}
+    rows = []
+    for e, comp in backlash_elements(c):
+        ge = np.zeros(len(ss.nodes))
+        ge[idx[e.n1]] = 1.0
+        rows.append((ge @ ss.Cx, ge @ ss.Dx, ge @ ss.Cv, ge @ ss.Dv,
+                     (e.value, comp.value, e.backlash)))
+    cx = np.array([r[0] for r in rows])
+    dx = np.array([r[1] for r in rows])
+    cv = np.array([r[2] for r in rows])
+    dv = np.array([r[3] for r in rows])
+    prm = np.array([r[4] for r in rows])
+    return (ss.A, ss.B, cx, dx, cv, dv, np.ascontiguousarray(ss.extra), prm, np.zeros(51))
+
+
+def test_msl_backlash_example_agrees():
+    import runpy
+    import sys
+
+    mod = runpy.run_path("examples/msl_backlash.py")
+    assert mod["main"]() == 0
+
+
+def test_backlash_zero_is_plain_spring_damper():
+    a = mechcirc.parse("mass m a 0 1\nspring k a 0 100 damping=2\n.ic a x=0.1\n",
+                       require_drive=False)
+    b = mechcirc.parse("mass m a 0 1\nspring k a 0 100 backlash=1e-12 damping=2\n.ic a x=0.1\n",
+                       require_drive=False)
+    ra, rb = transient(a, 1, 1e-3), transient(b, 1, 1e-3)
+    assert np.abs(ra.x - rb.x).max() == 0.0
+
+
+# ------------------------------------------------------------ grammar, API
+def test_netlist_grammar_backlash_ic_and_no_drive():
+    c = mechcirc.parse("mass J a 0 5 kg*m^2\nspring k a 0 2e4 backlash=45 deg damping=50\n"
+                       ".ic a x=90 deg v=1\n", require_drive=False)
+    sp = c.element("k")
+    assert sp.backlash == pytest.approx(math.pi / 4) and sp.damping == 50
+    assert c.element("k_damping").kind == "damper"
+    assert c.initial == (("a", pytest.approx(math.pi / 2), 1.0),)
+    assert c.drive is None
+    with pytest.raises(NetlistError, match="no drive"):
+        mechcirc.parse("mass m a 0 1\nspring k a 0 1\n")
+    for bad, what in (("spring k a 0 1 backlash=-1", "backlash"),
+                      ("spring k a 0 1 backlash=2 kg", "unit"),
+                      ("mass m a 0 1 backlash=1", "unknown option"),
+                      (".ic q x=1", "no element uses"),
+                      (".ic a", "neither"),
+                      (".ic a x=1\n.ic a v=2", "second .ic"),
+                      ("spring k_damping a 0 3\nspring k a 0 1 damping=2", "already used")):
+        with pytest.raises(NetlistError, match=what):
+            mechcirc.parse("mass m a 0 1\n" + bad + "\n", require_drive=False)
+
+
+def test_result_is_picklable_and_json_shaped():
+    r = transient(mechcirc.parse(SDOF_F), 0.1, 1e-3, "step")
+    r2 = pickle.loads(pickle.dumps(r))
+    assert np.array_equal(r2.x, r.x)
+    doc = r.to_json()
+    assert set(doc) >= {"time", "nodes", "elements", "drive", "notes"}
+    assert set(doc["nodes"]["a"]) == {"x", "v"} and "force" in doc["elements"]["k"]
+    assert "velocity" in doc["drive"]
+
+
+def test_callable_and_csv_drives(tmp_path):
+    c = mechcirc.parse(SDOF_F)
+    # a ramp is piecewise linear: exact (no interpolation error)
+    r1 = transient(c, 0.5, 1e-3, lambda t: 2.0 * t)
+    p = tmp_path / "d.csv"
+    p.write_text("time,value\n0,0\n0.5,1\n")
+    r2 = transient(c, 0.5, 1e-3, f"csv:{p}")
+    assert np.abs(r1.x - r2.x).max() <= 1e-15
+    assert not any("interpolated" in n for n in r1.notes)
+    bad = tmp_path / "bad.csv"
+    bad.write_text("0,1\n0,2\n")
+    with pytest.raises(MechcircError, match="increase"):
+        transient(c, 0.5, 1e-3, f"csv:{bad}")
+
+
+def test_drive_needed_for_waveform_and_bad_grid():
+    c = mechcirc.parse("mass m a 0 1\nspring k a 0 1\n", require_drive=False)
+    with pytest.raises(MechcircError, match="no drive"):
+        transient(c, 1.0, 0.1, "step")
+    with pytest.raises(MechcircError, match="t-end"):
+        transient(c, -1.0)
+    with pytest.raises(MechcircError, match="limit"):
+        transient(c, 1.0, 1e-9)
