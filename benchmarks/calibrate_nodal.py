@@ -54,10 +54,12 @@ def summarize(name, true, est, flag):
     miss = np.sum((true > 1e-6) & (flag == 0))
     covered = np.mean(est >= true)
     finite = ratio[np.isfinite(ratio)]
+    n_inf = int(np.sum(~np.isfinite(true)))
     p50, p99 = (np.percentile(finite, q) if finite.size else np.nan for q in (50, 99))
     print(f"| {name} | {true.size} | {fa} ({100 * fa / max(true.size, 1):.2f} %) | {miss} | "
           f"{100 * covered:.2f} % | {p50:.1e} | {p99:.1e} | {np.max(finite, initial=np.nan):.1e} | "
-          f"{np.max(true):.1e} |")
+          f"{np.max(true[np.isfinite(true)], initial=0):.1e} |" +
+          (f" ({n_inf} points where mechcirc or mpmath is not finite)" if n_inf else ""))
     return fa, miss, covered
 
 
@@ -121,13 +123,16 @@ def main() -> None:
                 except (ValueError, ZeroDivisionError, TypeError):
                     skipped += 1         # reference did not converge: not counted
                     continue
+                if abs(sr - s0) > 1e-3 * abs(s0):
+                    skipped += 1         # findroot went to another root: not this one's reference
+                    continue
                 true = abs(abs(sr) - r.omega) / abs(sr)
                 t, e, f = rows["resonances"]
                 t.append(true)
                 e.append(r.error)
                 f.append(2 if r.error > 1e-6 else 0)
     print(f"{n_used} networks, seed {args.seed}, {time.time() - t0:.0f} s; {skipped} roots "
-          "where mpmath.findroot did not converge (not counted)\n")
+          "where mpmath.findroot did not converge or went to another root (not counted)\n")
     print("| path | points | false alarms | misses | estimate ≥ true | "
           "est/true median | est/true 99 % | est/true max | true error max |")
     print("|---|---|---|---|---|---|---|---|---|")

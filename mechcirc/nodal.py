@@ -444,11 +444,13 @@ def solve(system: NodalSystem, omega: ArrayLike, *, refine: bool = True,
                               system, refine, steps)
             x[i], err[i] = xs[0], es[0]
     K = system.difference(x).astype(complex)
+    # No correct digit from the refinement itself (it did not contract): A(ω)
+    # is numerically singular.  The residual-rounding bound below is a worst
+    # case and is not used for this verdict.
+    singular = ok & (~np.isfinite(K) | (err >= 1.0))
     S = pat.sensitivity(omega, x)
     with np.errstate(all="ignore"):
         err = err + _residual_rounding(K, S)
-    # No correct digit from the solve itself: A(ω) is numerically singular.
-    singular = ok & (~np.isfinite(K) | (err >= 1.0))
     with np.errstate(all="ignore"):
         err = np.where(ok, _total(K, pat.data_sensitivity(omega, x), err), np.inf)
     if limits:

@@ -130,8 +130,8 @@ def find_resonances(circuit: Circuit, omega_max: float | None = None) -> list[Re
     released = _modes(M, D, Ks, G_levers, damped, omega_max)
     held = _modes(M, D, Ks, np.vstack([G_levers, drive_row]), damped, omega_max)
     held, released = _cancel(held, released)
-    roots = [("resonance", s, e) for s, e in held] + \
-        [("antiresonance", s, e) for s, e in released]
+    roots = [("resonance", s, e, f) for s, e, f in held] + \
+        [("antiresonance", s, e, f) for s, e, f in released]
     if omega_max is not None:
         # A little beyond the band: polishing may move a root across its edge.
         roots = [t for t in roots if abs(t[1]) <= omega_max * (1 + 1e-6)]
@@ -202,7 +202,7 @@ def _modes_unchecked(M, D, Ks, G, damped: bool, omega_max=None) -> np.ndarray:
     with np.errstate(all="ignore"):
         Mr, Dr, Kr = ((Z.T @ X @ Z).toarray() for X in (M, D, Ks))
     if Mr.shape[0] == 0:
-        return np.zeros((0, 2), dtype=complex)
+        return np.zeros((0, 3), dtype=complex)
     if not (np.isfinite(Mr).all() and np.isfinite(Dr).all() and np.isfinite(Kr).all()):
         raise SolverError("resonances: the network's matrices overflow float64 (element "
                           "values or lever ratios near 1e308 combine beyond it)",
@@ -216,10 +216,15 @@ def _modes_unchecked(M, D, Ks, G, damped: bool, omega_max=None) -> np.ndarray:
                           f"{scale_m:.3g} kg) are too far apart for float64", status="range")
     eps = np.finfo(float).eps
     if not damped:
-        lam = _undamped(Mr / scale_m, Kr / scale_k)      # λ = (ω / w_ref)²
+        lam, direct = _undamped(Mr / scale_m, Kr / scale_k)      # λ = (ω / w_ref)²
         lam = lam[lam > 1e-11 * max(1.0, lam.max(initial=0.0))]
         s = 1j * w_ref * np.sqrt(lam)
         err = eps * (lam.max(initial=1.0) / lam) * 4
+        # Weyl's bound holds for the scaled matrix, not through a static
+        # condensation or an eigen-decomposition of M (their rounding is
+        # amplified by the condition of the condensed block): not a bound
+        # then, and these roots are always polished on K (column 2).
+        must = np.full(s.size, 0.0 if direct else 1.0)
     else:
         with np.errstate(all="ignore"):
             scaled = (Mr / scale_m, Dr / (scale_m * w_ref), Kr / scale_k)
@@ -243,7 +248,9 @@ def _modes_unchecked(M, D, Ks, G, damped: bool, omega_max=None) -> np.ndarray:
                 near = np.minimum(np.sqrt(eps), eps / (gap.min(axis=1) / mag))
             err = np.maximum(err, 10 * near)
         s = np.where(np.abs(s.imag) <= 1e-12 * np.abs(s), s.real + 0j, s)
-    return np.column_stack([s, err]) if s.size else np.zeros((0, 2), dtype=complex)
+    if damped:
+        must = np.ones(s.size)
+    return np.column_stack([s, err, must]) if s.size else np.zeros((0, 3), dtype=complex)
 
 
 def _band_modes(M, D, K, omega_max: float) -> np.ndarray:
@@ -281,11 +288,15 @@ def _band_modes(M, D, K, omega_max: float) -> np.ndarray:
     s = s_all[keep]
     s = np.where(np.abs(s.imag) <= 1e-9 * np.abs(s), s.real + 0j, s)
     err = np.full(s.size, 1e-8)
-    return np.column_stack([s, err]) if s.size else np.zeros((0, 2), dtype=complex)
+    must = np.ones(s.size)
+    return np.column_stack([s, err, must]) if s.size else np.zeros((0, 3), dtype=complex)
 
 
 def _undamped(M: np.ndarray, K: np.ndarray) -> np.ndarray:
     """λ with K v = λ M v, M positive semi-definite; massless directions condensed out.
+
+    Returns ``(λ, direct)``: ``direct`` when M was diagonal and every
+    direction had mass (no condensation), where eps·λ_max/λ bounds the error.
 
     A diagonal M (every mass to the frame, the usual mobility-analogy layout)
     is handled without an eigen-decomposition of M.
@@ -296,8 +307,9 @@ def _undamped(M: np.ndarray, K: np.ndarray) -> np.ndarray:
     else:
         mu, V = la.eigh(M)
     massive = mu > 1e-13 * max(mu.max(initial=0.0), 1e-300)
+    direct = V is None and bool(massive.all())
     if not massive.any():
-        return np.zeros(0)          # no inertia: no oscillation
+        return np.zeros(0), direct  # no inertia: no oscillation
     if V is None:
         Krr = K[np.ix_(massive, massive)]
         Knn = K[np.ix_(~massive, ~massive)]
@@ -307,11 +319,11 @@ def _undamped(M: np.ndarray, K: np.ndarray) -> np.ndarray:
         Krr, Knn, Knr = R.T @ K @ R, N.T @ K @ N, N.T @ K @ R
     Kc = Krr - Knr.T @ la.lstsq(Knn, Knr)[0] if Knn.size else Krr
     if Kc.shape[0] == 0:
-        return np.zeros(0)
+        return np.zeros(0), direct
     # Symmetric scaling by the masses gives a standard symmetric eigenproblem.
     d = 1.0 / np.sqrt(mu[massive])
     A = Kc * d[:, None] * d[None, :]
-    return la.eigvalsh((A + A.T) / 2)
+    return la.eigvalsh((A + A.T) / 2), direct
 
 
 def _damped(M, D, K) -> np.ndarray:
@@ -329,7 +341,7 @@ def _cancel(held: np.ndarray, released: np.ndarray):
     """Drop modes present in both problems (they do not appear in K)."""
     keep_h = np.ones(len(held), bool)
     keep_r = np.ones(len(released), bool)
-    for i, (s, err) in enumerate(held):
+    for i, (s, err, _) in enumerate(held):
         if not len(released):
             break
         d = np.abs(released[:, 0] - s) / abs(s)
@@ -367,10 +379,11 @@ def _polish(system, roots: list, damped: bool) -> list[Resonance]:
     eigen-solver value and estimate.
     """
     eps = np.finfo(float).eps
-    kinds = [k for k, _, _ in roots]
-    s0 = np.array([complex(s) for _, s, _ in roots])
-    e0 = np.array([float(np.real(e)) for _, _, e in roots])
-    todo = np.flatnonzero(e0 > _POLISH_BELOW) if not damped else np.arange(s0.size)
+    kinds = [k for k, _, _, _ in roots]
+    s0 = np.array([complex(s) for _, s, _, _ in roots])
+    e0 = np.array([float(np.real(e)) for _, _, e, _ in roots])
+    must = np.array([float(np.real(f)) > 0 for _, _, _, f in roots])
+    todo = np.flatnonzero((e0 > _POLISH_BELOW) | must) if not damped else np.arange(s0.size)
     s_new, e_new = s0.copy(), e0.copy()
     if todo.size:
         pole = np.array([kinds[i] == "antiresonance" for i in todo])
@@ -440,6 +453,9 @@ def _secant(system, s0: np.ndarray, pole: np.ndarray, e0: np.ndarray, damped: bo
         ok = active & np.isfinite(c)
         gc, dc = _g_and_delta(system, np.where(ok, c, b), pole)
         ok &= np.isfinite(gc)
+        # On an exact zero of g its relative estimate says nothing (0·inf):
+        # the uncertainty at the previous iterate, a step away, stands.
+        dc = np.where(np.isfinite(dc), dc, db)
         step = np.where(ok, np.abs(c - b), step)
         slope = np.where(ok, sl, slope)
         a, ga = np.where(ok, b, a), np.where(ok, gb, ga)
@@ -453,12 +469,12 @@ def _secant(system, s0: np.ndarray, pole: np.ndarray, e0: np.ndarray, damped: bo
     # Keep the eigen-solver's root where the secant wandered off (to another root,
     # or nowhere): farther than 1e-3 relative, or no estimate.
     moved = np.abs(b - s0) / np.abs(s0)
-    bad = ~np.isfinite(err) | ~np.isfinite(b) | (moved > 1e-3) | (moved > 1e3 * e0 + 1e-8)
+    bad = ~np.isfinite(err) | ~np.isfinite(b) | (moved > 1e-3)
     s = np.where(bad, s0, b)
     # Unconfirmed: the eigen-solver's estimate, but never below the Newton
     # step |g/g'| at its root (how far the circuit's own K says the root is).
     with np.errstate(all="ignore"):
         newton = np.abs(g0 / slope0) / np.abs(s0)
-    newton = np.where(np.isfinite(newton), 2 * newton, 0.0)
+    newton = np.where(np.isfinite(newton), 10 * newton, 0.0)
     err = np.where(bad, np.maximum(e0, newton), np.maximum(err, eps))
     return s, err
