@@ -49,7 +49,8 @@ def case_sweep_1e7(chunked: bool = True) -> dict:
     import numpy as np
 
     import mechcirc
-    from mechcirc import sweep as sweep_module
+    import importlib
+    sweep_module = importlib.import_module("mechcirc.sweep")
 
     if not chunked:
         sweep_module.CHUNK_POINTS = 10**9

@@ -57,7 +57,7 @@ def summarize(name, true, est, flag):
     n_inf = int(np.sum(~np.isfinite(true)))
     p50, p99 = (np.percentile(finite, q) if finite.size else np.nan for q in (50, 99))
     print(f"| {name} | {true.size} | {fa} ({100 * fa / max(true.size, 1):.2f} %) | {miss} | "
-          f"{100 * covered:.2f} % | {p50:.1e} | {p99:.1e} | {np.max(finite, initial=np.nan):.1e} | "
+          f"{100 * covered:.2f} % | {p50:.1e} | {p99:.1e} | {(np.max(finite) if finite.size else np.nan):.1e} | "
           f"{np.max(true[np.isfinite(true)], initial=0):.1e} |" +
           (f" ({n_inf} points where mechcirc or mpmath is not finite)" if n_inf else ""))
     return fa, miss, covered

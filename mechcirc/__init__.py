@@ -1,27 +1,106 @@
 """mechcirc: dynamic analysis of mechanisms with mechanical circuits.
 
-Main entry points
------------------
-parse(text, source)   netlist text -> Circuit
-load(path)            netlist file -> Circuit
-Circuit.sweep(omega)  K(ω) = v/Q [m/(N·s)], Q0 = V0/K [N], per-element Q and v
-Circuit.tree          the series–parallel reduction tree
+The method (K = v/Q, the element laws, series and parallel, levers) is in
+``docs/theory.md``; a first session in ``docs/tutorial.md``.
 
-Sub-packages (imported on use): ``mechcirc.kinematics`` (four-bar, synthesis,
-planar linkages), ``mechcirc.sley`` (time-domain beat-up model).
+Netlists and circuits
+=====================
+
+.. autosummary::
+
+   parse            -- netlist text -> Circuit
+   load             -- netlist file (.mcir) -> Circuit
+   Circuit          -- elements, levers and one drive; .tree, .sweep(), .resonances()
+   Element, Lever, Drive
+
+Frequency domain
+================
+
+   sweep            -- K(ω) = v/Q [m/(N·s)], Q0 = V0/K [N] over ω: a Sweep
+   Sweep            -- the result: .omega .K .Q0 .v0 .flags .error .force() .velocity() .plot()
+   adaptive_sweep   -- a grid refined around resonances and bends of |K|, |Q0|
+   find_resonances  -- exact resonances (K = 0) and antiresonances (K = ∞)
+   Resonance        -- one of them: kind, omega, omega_d, zeta, error
+   simplify         -- model reduction over a band, with the measured error
+
+Sub-packages and modules (imported on use)
+==========================================
+
+   mechcirc.plotting     -- plot_sweep, plot_forces, plot_comparison, plot_study (ax=/fig=)
+   mechcirc.forces       -- element_forces: the force table at one ω
+   mechcirc.units        -- parse_quantity: the one unit grammar (docs/units.md)
+   mechcirc.kinematics   -- four-bar, beat-up synthesis, frame loading, planar linkages
+   mechcirc.scene        -- linkage + masses + elastic links -> circuit at any crank angle
+   mechcirc.sley         -- time-domain beat-up model (Mrázek)
+   mechcirc.study        -- parameter studies (local cores or Dask)
+   mechcirc.interop      -- scikit-rf / Touchstone, SymPy formulas
+
+Errors and warnings
+===================
+
+   MechcircError, NetlistError (file:line:col), TopologyError,
+   NotSeriesParallelError, GeometryError, SolverError,
+   MechcircWarning, UnloadedElementWarning, SingularPointWarning, UnitMixWarning
+
+``mechcirc.sweep`` and ``mechcirc.simplify`` are the functions; their modules
+stay importable as ``importlib.import_module("mechcirc.sweep")`` and by
+``from mechcirc.sweep import ...``.  ``find_resonances``, ``adaptive_sweep``
+and ``simplify`` are loaded on first use, so ``import mechcirc`` stays fast.
 """
+
+import importlib as _importlib
+import types as _types
+import sys as _sys
 
 from .circuit import Circuit, Drive, Element, Lever
 from .errors import (GeometryError, MechcircError, MechcircWarning, NetlistError,
-                     SingularPointWarning, SolverError, TopologyError,
-                     UnloadedElementWarning)
+                     NotSeriesParallelError, SingularPointWarning, SolverError, TopologyError,
+                     UnitMixWarning, UnloadedElementWarning)
 from .netlist import load, parse
 from .sweep import Sweep
+from .sweep import sweep
+from . import _methods  # noqa: F401  (attaches Circuit.sweep, .tree, …; see there)
 
 __all__ = [
-    "parse", "load", "Circuit", "Element", "Lever", "Drive", "Sweep",
-    "MechcircError", "NetlistError", "TopologyError", "GeometryError", "SolverError",
-    "MechcircWarning", "UnloadedElementWarning", "SingularPointWarning",
+    "parse", "load", "Circuit", "Element", "Lever", "Drive", "Sweep", "sweep",
+    "adaptive_sweep", "find_resonances", "Resonance", "simplify",
+    "MechcircError", "NetlistError", "TopologyError", "NotSeriesParallelError",
+    "GeometryError", "SolverError", "MechcircWarning", "UnloadedElementWarning",
+    "SingularPointWarning", "UnitMixWarning",
 ]
 
 __version__ = "0.1.0"
+
+#: Public names loaded on first use: name -> (module, attribute).
+_LAZY = {"find_resonances": ("resonances", "find_resonances"),
+         "Resonance": ("resonances", "Resonance"),
+         "adaptive_sweep": ("adaptive", "adaptive_sweep"),
+         "simplify": ("simplify", "simplify")}
+#: Names that are both a function here and a submodule: the package attribute
+#: is the function, whatever order the submodule is imported in.
+_FUNCTIONS_OVER_MODULES = ("sweep", "simplify")
+
+
+class _Package(_types.ModuleType):
+    def __getattr__(self, name):
+        if name in _LAZY:
+            module, attr = _LAZY[name]
+            value = getattr(_importlib.import_module(f"{__name__}.{module}"), attr)
+            _types.ModuleType.__setattr__(self, name, value)
+            return value
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+    def __setattr__(self, name, value):
+        # The import system binds a submodule on its parent when it is first
+        # loaded; keep the function bound under that name instead.
+        if name in _FUNCTIONS_OVER_MODULES and isinstance(value, _types.ModuleType):
+            if name == "simplify":      # the function is not loaded yet: load it now
+                _types.ModuleType.__setattr__(self, name, value.simplify)
+            return
+        _types.ModuleType.__setattr__(self, name, value)
+
+    def __dir__(self):
+        return sorted(set(super().__dir__()) | set(_LAZY))
+
+
+_sys.modules[__name__].__class__ = _Package

@@ -101,5 +101,10 @@ class UnloadedElementWarning(MechcircWarning):
     """Elements lie on no path between the drive terminals and carry no force."""
 
 
+class UnitMixWarning(MechcircWarning):
+    """A node carries both translational and rotational quantities (kg with kg·m², N/m with
+    N·m/rad): one node is one coordinate, a length or an angle, not both."""
+
+
 class SingularPointWarning(MechcircWarning):
     """A sweep point falls on (or within rounding of) a pole or zero of K."""

@@ -102,8 +102,12 @@ class _Parser:
         while i < len(text):
             m = _TOKEN.match(text, i)
             if m is None:
-                self.error(f"unexpected character {text[i]!r} in expression", i,
-                           "a number, a name, an operator + - * / ** ^ or a parenthesis")
+                hint = "a number, a name, an operator + - * / ** ^ or a parenthesis"
+                if text[i] == ",":
+                    hint = "a decimal point, e.g. 1.5 (not 1,5)"
+                elif text[i] in "\u2212\u2013\u2014\u2012\u2010":
+                    hint = "the ASCII hyphen-minus '-', e.g. 2e-6"
+                self.error(f"unexpected character {text[i]!r} in expression", i, hint)
             kind = m.lastgroup
             if kind == "num" and m.end() < len(text) and (text[m.end()].isalnum()
                                                          or text[m.end()] in "._"):
@@ -304,4 +308,11 @@ def _number_hint(bad: str, number: str, glued: str = "") -> str:
             except UnitError:
                 continue
             return f"a space between the number and its unit: '{number} {rest}'"
+    from .units import SPICE_SUFFIXES
+
+    rest = bad[len(number):]
+    if rest.lower() in SPICE_SUFFIXES:
+        return (f"no SPICE suffixes in mechcirc: write {number}e3 for {number}k, "
+                f"{number}e-3 for {number}m, or give a unit after the number "
+                f"(e.g. {number} kN/m)")
     return "a number such as 12, 1.5, .5, 2. or 1e-3"

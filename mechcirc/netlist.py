@@ -39,7 +39,8 @@ from .circuit import ELEMENT_UNITS, Circuit, Drive, Element, Lever
 from .errors import NetlistError
 from .expressions import CONSTANTS, FUNCTIONS, Expr, evaluate, parse_expression
 from .sources import read_source, split_lines
-from .units import UnitError, convert, looks_like_unit, parse_unit
+from .units import (UnitError, convert, is_rotational, looks_like_unit, parse_unit,
+                    split_quantity)
 
 __all__ = ["parse", "load", "expressions_of", "MAX_LINE_LENGTH", "MAX_STATEMENTS", "SYNTAX"]
 
@@ -118,6 +119,48 @@ class _Line:
         return tokens
 
 
+def _glued(tok: _Token) -> tuple[_Token, _Token | None]:
+    """Split a value glued to its unit (``500g``, ``5N/mm``) into value and unit tokens.
+
+    The one unit grammar (:mod:`mechcirc.units`) lets the space go, as pint
+    does; only a plain number followed by a known unit is split, so
+    expressions and malformed numbers are left to the expression parser.
+    """
+    parts = split_quantity(tok.text)
+    if parts is None or not parts[1] or parts[1] == "1/s" or tok.text[len(parts[0])].isspace():
+        return tok, None
+    try:
+        parse_unit(parts[1])
+    except UnitError:
+        return tok, None
+    return _Token(parts[0], tok.col), _Token(parts[1], tok.col + len(parts[0]))
+
+
+#: SPICE and spreadsheet habits, checked on each line before parsing it.
+_DASHES = "\u2212\u2013\u2014\u2012\u2010"
+
+
+def _check_slips(line: "_Line", raw: str) -> None:
+    """Name the common slips (spaces around '=', Unicode minus, decimal comma, '*' comments)."""
+    toks = line.tokens
+    if toks and toks[0].text.startswith("*"):
+        line.error("'*' does not start a comment in mechcirc (it does in SPICE)", toks[0].col,
+                   "'#' or ';' to start a comment")
+    for i, tok in enumerate(toks):
+        if tok.text == "=" or (tok.text.startswith("=") and i > 0) or \
+                (tok.text.endswith("=") and i + 1 < len(toks)):
+            line.error("spaces around '=': options are written without spaces", tok.col,
+                       "NAME=VALUE with no spaces, e.g. velocity=0.1 or eta=0.5")
+    for j, c in enumerate(raw):
+        if c in "#;":
+            break
+        if c in _DASHES:
+            line.error(f"a Unicode minus or dash {c!r} (U+{ord(c):04X}), as typed by word "
+                       "processors", j + 1, "the ASCII hyphen-minus '-', e.g. 2e-6")
+        if c == "," and 0 < j < len(raw) - 1 and raw[j - 1].isdigit() and raw[j + 1].isdigit():
+            line.error("a decimal comma", j + 1, "a decimal point, e.g. 1.5 (not 1,5)")
+
+
 def _unbrace(text: str, col: int) -> tuple[str, int]:
     """Strip one pair of enclosing braces, moving the column past the '{'."""
     if text.startswith("{") and text.endswith("}"):
@@ -141,6 +184,8 @@ class _Parser:
         #: Parsed expressions and unit factors, for symbolic formulas:
         #: ``("param", name)`` / ``(element, "value" | "eta")`` -> (Expr, factor).
         self.expressions: dict[tuple[str, str], tuple[Expr, float]] = {}
+        #: node -> {True: (element, unit), False: ...}: rotational / translational units seen.
+        self.node_kinds: dict[str, dict[bool, tuple[str, str, int]]] = {}
 
     # -- expressions -----------------------------------------------------
     def expr(self, line: _Line, text: str, col: int, *, defined: dict[str, float],
@@ -183,6 +228,7 @@ class _Parser:
             line = _Line(raw, self.source, lineno)
             if not line.tokens:
                 continue
+            _check_slips(line, raw)
             parsed.append(line)
             if line.tokens[0].text.lower() == ".param":
                 for tok in line.tokens[1:]:
@@ -251,7 +297,11 @@ class _Parser:
             u = parse_unit(unit.text)
             out = convert(value, u, role)
         except UnitError as exc:
-            line.error(exc.message, unit.col + exc.offset, exc.expected)
+            expected = exc.expected
+            if unit.text in ("m", "k", "u", "n", "p", "f", "t", "g"):
+                expected = (f"{expected}; note: mechcirc has no SPICE suffixes, "
+                            f"'{unit.text}' is read as a unit")
+            line.error(exc.message, unit.col + exc.offset, expected)
         if key is not None and key in self.expressions:
             self.expressions[key] = (self.expressions[key][0], u.factor)
         return out
@@ -283,9 +333,14 @@ class _Parser:
             if name in self.params:
                 line.error(f"parameter {name!r} is defined twice "
                            f"(first on line {self.param_lines[name]})", tok.col)
-            self.params[name] = self.expr(line, rhs, tok.col + len(name) + 1,
+            value_tok, unit_tok = _glued(_Token(rhs, tok.col + len(name) + 1))
+            self.params[name] = self.expr(line, value_tok.text, value_tok.col,
                                           defined=self.params, key=("param", name))
             previous = name
+            if unit_tok is not None:
+                self.params[name] = self.with_unit(line, self.params[name], unit_tok, "param",
+                                                   ("param", name))
+                previous = None
             if name in self.overrides:
                 value = float(self.overrides[name])
                 if not math.isfinite(value):
@@ -317,13 +372,22 @@ class _Parser:
                                else f"no options: {SYNTAX[keyword]}")
                 if head in options:
                     line.error(f"option {head!r} given twice", tok.col)
-                options[head] = _Token(tok.text[len(head) + 1:], tok.col + len(head) + 1)
+                value_tok, unit_tok = _glued(_Token(tok.text[len(head) + 1:],
+                                                    tok.col + len(head) + 1))
+                options[head] = value_tok
                 previous = head
+                if unit_tok is not None:
+                    units[head] = unit_tok
+                    previous = None
             else:
                 if options:
                     line.error(f"{tok.text!r} after the options", tok.col, SYNTAX[keyword])
+                if len(positional) == _VALUE_INDEX.get(keyword):
+                    tok, unit_tok = _glued(tok)
+                    if unit_tok is not None:
+                        units["value"] = unit_tok
                 positional.append(tok)
-                if len(positional) - 1 == _VALUE_INDEX.get(keyword):
+                if len(positional) - 1 == _VALUE_INDEX.get(keyword) and "value" not in units:
                     previous = "value"
         if len(positional) < npos:
             missing = SYNTAX[keyword].split()[1 + len(positional)]
@@ -374,6 +438,8 @@ class _Parser:
                        "two different nodes")
         value = self._positive(line, pos[3], f"{kind} {name!r}", ELEMENT_UNITS[kind],
                                unit_tok=units.get("value"), role=kind, key=(name, "value"))
+        if "value" in units:
+            self._note_kind(line, name, units["value"], (n1, n2))
         eta = self._positive(line, opts["eta"], f"eta of {name!r}", "",
                              unit_tok=units.get("eta"), role="eta", key=(name, "eta")) \
             if "eta" in opts else 1.0
@@ -424,6 +490,31 @@ class _Parser:
                        line.tokens[-1].col + len(line.tokens[-1].text), SYNTAX[".ic"])
         self.initial.append((node, values.get("x", 0.0), values.get("v", 0.0), line.lineno,
                              pos[0].col))
+
+    def _note_kind(self, line: _Line, name: str, unit_tok: _Token, nodes) -> None:
+        """Warn once per node that carries both translational and rotational units."""
+        rot = is_rotational(parse_unit(unit_tok.text))
+        if rot is None:
+            return
+        for node in nodes:
+            if node == "0":
+                continue
+            seen = self.node_kinds.setdefault(node, {})
+            other = seen.get(not rot)
+            if other is not None and rot not in seen:
+                import warnings
+
+                from .errors import UnitMixWarning
+
+                kinds = ("rotational", "translational") if rot else ("translational",
+                                                                   "rotational")
+                warnings.warn(UnitMixWarning(
+                    f"{self.source}:{line.lineno}:{unit_tok.col}: node {node!r} gets a "
+                    f"{kinds[0]} unit ({unit_tok.text!r} of {name!r}) and a {kinds[1]} one "
+                    f"({other[1]!r} of {other[0]!r}, line {other[2]}); one node is one "
+                    "coordinate, a length or an angle: reflect the rotational part through "
+                    "a lever (J/r², c_t/r²) or use separate nodes"), stacklevel=4)
+            seen.setdefault(rot, (name, unit_tok.text, line.lineno))
 
     def lever(self, line: _Line, kind: str):
         pos, opts, units = self._fields(line, kind, 5, ("ratio",))

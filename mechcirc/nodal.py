@@ -136,7 +136,8 @@ def assemble(circuit: Circuit, whole: bool = False) -> NodalSystem:
         for lv in circuit.levers:
             t = (lv.p1, lv.p2, lv.s1, lv.s2)
             groups.append([(t[i], t[j]) for i in range(4) for j in range(i + 1, 4)])
-        kept = set(loaded_groups(groups, d.n1, d.n2, drive_line=d.line))
+        kept = set(loaded_groups(groups, d.n1, d.n2, drive_line=d.line,
+                                 source=circuit.source))
         n_el = len(circuit.elements)
         elements = tuple(e for i, e in enumerate(circuit.elements) if i in kept)
         levers = tuple(lv for i, lv in enumerate(circuit.levers) if n_el + i in kept)

@@ -1,22 +1,40 @@
 """Plots of sweep results, element forces and measurements; matplotlib is imported inside.
 
-Each ``plot_*`` function returns the matplotlib Figure it drew on.  Every
-axis carries its unit, the title names the netlist, and the file format
+One convention for every plot function of mechcirc:
+
+* a single-panel plot takes ``ax=None`` — given an Axes it draws there and
+  returns that Axes (for notebooks: ``fig, ax = plt.subplots(); plot_forces(rows, 300,
+  ax=ax)``); without one it makes a new ``matplotlib.figure.Figure`` and
+  returns it;
+* a multi-panel plot takes ``fig=None`` (and returns the Figure it drew on);
+* nothing here touches pyplot's state or calls ``matplotlib.use``: figures
+  are built with the object-oriented ``Figure``, so a notebook's backend is
+  left alone and the CLI saves with ``fig.savefig``.
+
+Every axis carries its unit, the title names the netlist, and the file format
 follows the extension given to :func:`mechcirc.cli._common.save_figure`
-(PNG, SVG, PDF, ...).
+(PNG, SVG, PDF, ...).  Objects that plot have a ``.plot()`` delegate
+(:meth:`mechcirc.sweep.Sweep.plot`).
 """
 
 from __future__ import annotations
 
+__all__ = ["plot_sweep", "plot_forces", "plot_comparison", "plot_study"]
 
-def _pyplot():
-    import matplotlib
 
-    if matplotlib.get_backend().lower() not in ("agg", "pdf", "svg"):
-        matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+def _figure(figsize):
+    """A new pyplot-free Figure (works on any backend, never switches it)."""
+    from matplotlib.figure import Figure
 
-    return plt
+    return Figure(figsize=figsize)
+
+
+def _axes(ax, figsize):
+    """``(fig, ax, made)``: the given Axes, or one on a new Figure."""
+    if ax is not None:
+        return ax.figure, ax, False
+    fig = _figure(figsize)
+    return fig, fig.add_subplot(), True
 
 
 def _mark_resonances(axes, resonances, legend_ax):
@@ -49,85 +67,126 @@ def _mark_peak(ax, peak) -> None:
     ax.legend(loc="best", fontsize="small")
 
 
-def plot_sweep(result, title: str | None = None, resonances=(), peak=None):
-    """Bode-style |K| [m/(N·s)] and arg K [deg], and |Q0| [N], against ω [rad/s].
+def plot_sweep(result, title: str | None = None, resonances=(), peak=None, *, ax=None,
+               fig=None):
+    """Bode-style |K| [m/(N·s)] and arg K [deg], and the drive's response, against ω [rad/s].
 
-    ``resonances`` (from :func:`mechcirc.resonances.find_resonances`) are drawn
-    as vertical lines: solid for K = 0, dashed for K = ∞.  Flagged points
-    (on or within rounding of a pole or zero) are marked with crosses.
-    ``peak`` (from :func:`mechcirc.sweep.peak`) marks the exact maximum of |Q0|,
-    or ∞ at each undamped resonance.  Returns the Figure.
+    The third panel is what the drive does not prescribe: |Q0| [N] for a
+    velocity drive, the velocity response |v0| = |F0·K| [m/s] for a force
+    drive (its title says so).  ``resonances`` (from
+    :meth:`mechcirc.circuit.Circuit.resonances`) are drawn as vertical lines:
+    solid for K = 0, dashed for K = ∞.  Flagged points (on or within rounding
+    of a pole or zero) are marked with crosses.  ``peak`` (from
+    :func:`mechcirc.sweep.peak`) marks the exact maximum of |Q0|, or ∞ at each
+    undamped resonance.
+
+    Parameters
+    ----------
+    ax : matplotlib Axes, optional
+        Draw only |K| (with the flags and resonance lines) on this Axes and
+        return it.
+    fig : matplotlib Figure, optional
+        Draw the three panels on this (empty) Figure; a new one by default.
+
+    Returns
+    -------
+    The Axes given as ``ax``, or the Figure of the three panels.
     """
     import numpy as np
 
-    plt = _pyplot()
-    fig, (ax_k, ax_p, ax_q) = plt.subplots(3, 1, sharex=True, figsize=(7, 8),
-                                           gridspec_kw={"height_ratios": [3, 2, 3]})
     omega = result.omega
     positive = omega > 0
+    force_drive = getattr(result.drive, "kind", "velocity") == "force"
     with np.errstate(all="ignore"):
-        absK, absQ = np.abs(result.K), np.abs(result.Q0)
+        absK = np.abs(result.K)
+        absR = np.abs(result.v0 if force_drive else result.Q0)
         phase = np.degrees(np.angle(result.K))
-    ax_k.loglog(omega[positive], absK[positive], color="C0")
-    ax_k.set_ylabel("|K| [m/(N·s)]")
+    if ax is not None:
+        _draw_K(ax, omega, absK, positive, result)
+        _mark_resonances((ax,), resonances, ax)
+        ax.set_xlabel("ω [rad/s]")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.set_title(title or f"{result.name}: kinematic characteristic K = v/Q")
+        return ax
+    fig = fig if fig is not None else _figure((7, 8))
+    ax_k, ax_p, ax_q = fig.subplots(3, 1, sharex=True,
+                                    gridspec_kw={"height_ratios": [3, 2, 3]})
+    _draw_K(ax_k, omega, absK, positive, result)
     ax_p.semilogx(omega[positive], phase[positive], color="C2")
     ax_p.set_ylabel("arg K [deg]")
     ax_p.set_ylim(-190, 190)
     ax_p.set_yticks([-180, -90, 0, 90, 180])
-    ax_q.loglog(omega[positive], absQ[positive], color="C1")
-    ax_q.set_ylabel("|Q0| [N]")
+    ax_q.loglog(omega[positive], absR[positive], color="C1")
+    ax_q.set_ylabel("|v0| = |F0·K| [m/s]" if force_drive else "|Q0| [N]")
     ax_q.set_xlabel("ω [rad/s]")
-    flagged = positive & (result.flags != 0) & np.isfinite(absK) & (absK > 0)
-    if flagged.any():
-        ax_k.loglog(omega[flagged], absK[flagged], "x", color="C3", label="flagged point")
-        ax_k.legend(loc="best", fontsize="small")
     _mark_resonances((ax_k, ax_p, ax_q), resonances, ax_q)
     _mark_peak(ax_q, peak)
-    for ax in (ax_k, ax_p, ax_q):
-        ax.grid(True, which="both", alpha=0.3)
-    fig.suptitle(title or f"{result.name}: kinematic characteristic and force amplitude")
+    for a in (ax_k, ax_p, ax_q):
+        a.grid(True, which="both", alpha=0.3)
+    what = ("velocity response v0 = F0·K to the force drive" if force_drive
+            else "force amplitude Q0 = V0/K")
+    fig.suptitle(title or f"{result.name}: kinematic characteristic and {what}")
     fig.tight_layout()
     return fig
 
 
-def plot_forces(rows, omega: float, name: str = "circuit", title: str | None = None):
-    """Bars of |Q| [N] per element (from :func:`mechcirc.forces.element_forces`) at ``omega``.
-
-    Bars are coloured by element kind; the y axis is logarithmic when the
-    forces span more than two decades.  Returns the Figure.
-    """
+def _draw_K(ax, omega, absK, positive, result):
     import numpy as np
 
-    plt = _pyplot()
-    fig, ax = plt.subplots(figsize=(max(5.0, 0.45 * len(rows) + 2), 4))
-    colours = {"mass": "C0", "spring": "C1", "damper": "C2"}
+    ax.loglog(omega[positive], absK[positive], color="C0")
+    ax.set_ylabel("|K| [m/(N·s)]")
+    flagged = positive & (result.flags != 0) & np.isfinite(absK) & (absK > 0)
+    if flagged.any():
+        ax.loglog(omega[flagged], absK[flagged], "x", color="C3", label="flagged point")
+        ax.legend(loc="best", fontsize="small")
+
+
+#: Colour of each element kind in force plots (bars and legend swatches alike).
+KIND_COLOURS = {"mass": "C0", "spring": "C1", "damper": "C2"}
+
+
+def plot_forces(rows, omega: float, name: str = "circuit", title: str | None = None, *,
+                ax=None):
+    """Bars of |Q| [N] per element (from :func:`mechcirc.forces.element_forces`) at ``omega``.
+
+    Bars are coloured by element kind, and so are the legend's swatches; the
+    y axis is logarithmic when the forces span more than two decades.
+    Returns ``ax`` when given, else the new Figure.
+    """
+    import numpy as np
+    from matplotlib.patches import Patch
+
+    fig, ax, made = _axes(ax, (max(5.0, 0.45 * len(rows) + 2), 4))
     values = np.array([r.Q_abs for r in rows], dtype=float)
-    ax.bar(range(len(rows)), values, color=[colours.get(r.kind, "C7") for r in rows])
+    ax.bar(range(len(rows)), values, color=[KIND_COLOURS.get(r.kind, "C7") for r in rows])
     ax.set_xticks(range(len(rows)), [r.name for r in rows], rotation=45, ha="right")
     finite = values[np.isfinite(values) & (values > 0)]
     if finite.size and finite.max() > 100 * finite.min():
         ax.set_yscale("log")
     ax.set_ylabel("|Q| [N]")
     ax.set_xlabel("element")
-    for kind, colour in colours.items():
-        if any(r.kind == kind for r in rows):
-            ax.bar([], [], color=colour, label=kind)
-    ax.legend(loc="best", fontsize="small")
+    handles = [Patch(facecolor=colour, label=kind) for kind, colour in KIND_COLOURS.items()
+               if any(r.kind == kind for r in rows)]
+    ax.legend(handles=handles, loc="best", fontsize="small")
     ax.grid(True, axis="y", which="both", alpha=0.3)
     ax.set_title(title or f"{name}: element forces at ω = {omega:.6g} rad/s "
                           f"({omega / (2 * np.pi):.4g} Hz)")
-    fig.tight_layout()
-    return fig
+    if made:
+        fig.tight_layout()
+        return fig
+    return ax
 
 
 def plot_comparison(comparison, name: str = "circuit", measured: str = "measured",
-                    title: str | None = None):
-    """A measured mobility over the model's: |K| [m/(N·s)] and arg K [deg] against ω [rad/s]."""
+                    title: str | None = None, *, fig=None):
+    """A measured mobility over the model's: |K| [m/(N·s)] and arg K [deg] against ω [rad/s].
+
+    Two panels, on ``fig`` when given (else a new Figure); returns the Figure.
+    """
     import numpy as np
 
-    plt = _pyplot()
-    fig, (ax_k, ax_p) = plt.subplots(2, 1, sharex=True, figsize=(7, 6),
-                                     gridspec_kw={"height_ratios": [3, 2]})
+    fig = fig if fig is not None else _figure((7, 6))
+    ax_k, ax_p = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [3, 2]})
     w = comparison.omega
     with np.errstate(all="ignore"):
         for K, label, style in ((comparison.K_model, "model", "-"),
@@ -147,8 +206,9 @@ def plot_comparison(comparison, name: str = "circuit", measured: str = "measured
     return fig
 
 
-def plot_study(result, params, column: str, name: str = "study", title: str | None = None):
-    """A study's ``column`` against its parameters; returns the Figure.
+def plot_study(result, params, column: str, name: str = "study", title: str | None = None, *,
+               ax=None):
+    """A study's ``column`` against its parameters; returns ``ax`` when given, else the Figure.
 
     One parameter: the column against it (points joined in order of the
     parameter).  Two or more: a scatter of the first two parameters coloured
@@ -157,13 +217,12 @@ def plot_study(result, params, column: str, name: str = "study", title: str | No
     """
     import numpy as np
 
-    plt = _pyplot()
     ok = [r for r in result.rows if r["status"] == "ok" and r.get(column, "") != ""]
     bad = [r for r in result.rows if r["status"] != "ok"]
     unit = {"K_abs_min": " [m/(N·s)]", "K_abs_max": " [m/(N·s)]", "Q0_abs_max": " [N]",
             "omega_at_Q0_max": " [rad/s]", "n_flagged": ""}.get(
         column, " [rad/s]" if "resonance" in column else "")
-    fig, ax = plt.subplots(figsize=(6.5, 4.5))
+    fig, ax, made = _axes(ax, (6.5, 4.5))
     if len(params) == 1:
         p = params[0]
         pts = sorted((r[p], r[column]) for r in ok)
@@ -196,5 +255,7 @@ def plot_study(result, params, column: str, name: str = "study", title: str | No
         ax.set_ylabel(py)
     ax.grid(True, which="both", alpha=0.3)
     ax.set_title(title or f"{name}: {column} over {len(result.rows)} points")
-    fig.tight_layout()
-    return fig
+    if made:
+        fig.tight_layout()
+        return fig
+    return ax

@@ -59,10 +59,12 @@ def parse_band(text: str) -> tuple[float, float]:
     parts = str(text).split(":")
     if len(parts) != 2:
         raise BandError(f"band {text!r} is not W1:W2 (two angular frequencies in rad/s)")
+    from .units import parse_omega
+
     try:
-        w1, w2 = float(parts[0]), float(parts[1])
-    except ValueError:
-        raise BandError(f"band {text!r}: W1 and W2 must be numbers [rad/s]") from None
+        w1, w2 = parse_omega(parts[0]), parse_omega(parts[1])     # 1Hz:50Hz as 10:2000
+    except ValueError as exc:
+        raise BandError(f"band {text!r}: {exc}") from None
     return _check_band((w1, w2))
 
 
@@ -353,7 +355,7 @@ def simplify(circuit: Circuit, band, tol: float, *, output: str | None = None,
     if output is not None:
         names = {e.name for e in circuit.elements}
         if output not in names:
-            raise MechcircError(f"--output {output!r}: no element of that name "
+            raise MechcircError(f"output {output!r}: no element of that name "
                                 f"(elements: {_some(sorted(names))})")
         protect.add(output)
     grid, y_full, skipped, inband = _check_grid(circuit, band, points, output)

@@ -146,9 +146,12 @@ class Sweep:
         if "error" in self._cache:
             return self._cache["error"]
         if self.method == "sp":
-            return _chunked(lambda w: evaluate(self.tree, w, error=True)[1],
-                            self.omega, float)
-        return _nodal_errors(self.circuit.nodal, self.omega)
+            err = _chunked(lambda w: evaluate(self.tree, w, error=True)[1], self.omega, float)
+        else:
+            err = _nodal_errors(self.circuit.nodal, self.omega)
+        # On a pole or zero (flag 1) no relative error exists: inf, never NaN.
+        err[~np.isfinite(self.K) | (self.K == 0)] = np.inf
+        return err
 
     @cached_property
     def flags(self) -> NDArray[np.int8]:
@@ -171,11 +174,29 @@ class Sweep:
         """The largest |``quantity``| over the band, located exactly; see :func:`peak`."""
         return peak(self, quantity=quantity)
 
-    def to_skrf(self, **kwargs):
-        """K as a one-port ``skrf.Network`` (Z parameters, m/(N·s)); see :func:`mechcirc.interop.skrf.to_skrf`."""
-        from .interop.skrf import to_skrf
+    def __repr__(self) -> str:
+        """A one-line summary (the arrays are in the attributes, not in the repr)."""
+        n = len(self.omega)
+        band = f"omega {self.omega[0]:.4g}..{self.omega[-1]:.4g} rad/s" if n else "no points"
+        with np.errstate(all="ignore"):
+            absK = np.abs(self.K[np.isfinite(self.K)])
+            kr = f", |K| {absK.min():.3g}..{absK.max():.3g} m/(N·s)" if absK.size else ""
+        flagged = int(np.count_nonzero(self.flags)) if n else 0
+        return (f"<Sweep {self.name!r}: {n} points, {band}, method {self.method}, "
+                f"{self.drive.kind} drive{kr}, {flagged} flagged>")
 
-        return to_skrf(self, **kwargs)
+    def _repr_html_(self) -> str:
+        """The summary as a small table for notebooks."""
+        import html
+
+        return "<pre>" + html.escape(repr(self)) + "</pre>"
+
+    def plot(self, ax=None, *, resonances=(), fig=None, title: str | None = None):
+        """Plot this sweep: :func:`mechcirc.plotting.plot_sweep` (``ax=`` one panel of |K|,
+        else three panels on ``fig`` or a new Figure); returns what it drew on."""
+        from .plotting import plot_sweep
+
+        return plot_sweep(self, title, resonances, ax=ax, fig=fig)
 
     def _element(self, name: str):
         if "elements" not in self._cache:
@@ -229,8 +250,8 @@ def sweep(circuit: Circuit, omega: ArrayLike, *, method: Method = "auto") -> Swe
     >>> from mechcirc import parse
     >>> c = parse("mass m a 0 2\\ndrive V a 0 velocity=0.1")
     >>> s = c.sweep([10.0])
-    >>> complex(s.Q0[0])            # V0 / K = V0 · jωm
-    2j
+    >>> float(s.Q0[0].imag), float(abs(s.Q0[0].real))   # V0 / K = V0 · jωm
+    (2.0, 0.0)
     """
     omega = np.atleast_1d(np.asarray(omega, dtype=float))
     if omega.ndim != 1:
@@ -277,12 +298,44 @@ def _sweep_nodal(circuit: Circuit, omega) -> Sweep:
     from . import nodal
 
     # One refined solve gives K and its error estimate (the last refinement
-    # correction, see nodal.Solution), dense and sparse alike.
+    # correction, see nodal.Solution), dense and sparse alike; nodal.solve
+    # already applies the singular-point convention, and the neighbours decide
+    # any point it left undetermined.
     K, err = nodal.mobility_and_error(circuit.nodal, omega)
+    singular = ~np.isfinite(K) & (omega > 0)
+    K = _nodal_singular_limits(circuit.nodal, K, omega)
+    err = np.where(singular, np.inf, err)
     result = Sweep(omega=omega, K=K, drive=circuit.drive, method="nodal", name=circuit.name,
                    circuit=circuit)
     result._cache["error"] = err
     return result
+
+
+def _nodal_singular_limits(system, K, omega, delta: float = 1e-6):
+    """The singular-point convention of :func:`sweep` for nodal analysis.
+
+    Where A(ω) is singular the solve gives NaN.  K just below and above tells
+    what the point is: a pole (K changes sign through it, K(ω⁻) ≈ −K(ω⁺)) gets
+    K = +∞·j like the tree; otherwise the mode is not seen from the drive and K
+    is the mean of its two neighbours (flagged by its error estimate, which is
+    infinite there).
+    """
+    from . import nodal
+
+    bad = ~np.isfinite(K) & (omega > 0)
+    if not bad.any():
+        return K
+    w = omega[bad]
+    with np.errstate(all="ignore"):
+        below = nodal.mobility(system, w * (1 - delta))
+        above = nodal.mobility(system, w * (1 + delta))
+        pole = np.abs(below + above) < 0.5 * np.abs(below - above)
+    K = K.copy()
+    K[np.flatnonzero(bad)[pole]] = complex(0.0, math.inf)
+    mean = (below + above) / 2
+    keep = ~pole & np.isfinite(mean)
+    K[np.flatnonzero(bad)[keep]] = mean[keep]
+    return K
 
 
 def _nodal_errors(system, omega) -> NDArray[np.float64]:
@@ -328,6 +381,12 @@ class Peak:
         return f"max |{self.quantity}| = {self.value:.7g} at omega = {self.omega:.10g} rad/s"
 
 
+#: Circuits with more elements are not handed to the eigen-solver by
+#: :func:`peak` (its dense solve is O(n³)): the peak is then searched around the
+#: grid's maximum only, and an exact pole shows as ``inf`` only if a point or
+#: the search lands on it.
+PEAK_RESONANCE_LIMIT = 500
+
 #: Damping ratio below which a zero or pole of K counts as undamped for
 #: :func:`peak` (the eigen-solver reports ζ = 0 for lossless modes).
 UNDAMPED_ZETA = 1e-12
@@ -345,8 +404,9 @@ def peak(result: "Sweep | Circuit", omega_min: float | None = None,
     quantity : {"Q0", "v0", "K"}, optional
         Default: ``"Q0"`` for a velocity drive, ``"v0"`` for a force drive.
     xtol : float
-        Relative tolerance in ω of the located maximum (the value is then
-        right to far better than 1e-6: |q| is flat at its maximum).
+        Relative tolerance in ω asked of the Brent search.  |q| is flat at its
+        maximum, so the value is right to about machine precision while ω is
+        located to about √eps ≈ 1e-8 relative (the rounding of |q| hides it).
 
     Returns
     -------
@@ -355,14 +415,16 @@ def peak(result: "Sweep | Circuit", omega_min: float | None = None,
         holds an undamped zero of K (for Q0) or pole of K (for v0 and K),
         found exactly by :meth:`Circuit.resonances`; otherwise the maximum
         located by a bounded Brent search around the grid's largest value and
-        around every damped resonance of the right kind in the band.
+        around every damped resonance of the right kind in the band.  Above
+        :data:`PEAK_RESONANCE_LIMIT` elements the resonances are not computed
+        (grid search only).
 
     Examples
     --------
     >>> from mechcirc import parse
     >>> from mechcirc.sweep import peak
-    >>> c = parse("drive V a 0 velocity=1\nmass m a b 1\nspring k b 0 1e4")
-    >>> print(peak(c, 10, 1000))
+    >>> c = parse("drive V a 0 velocity=1\\nmass m a b 1\\nspring k b 0 1e4")
+    >>> print(peak(c, 10, 1000))   # doctest: +NORMALIZE_WHITESPACE
     max |Q0| = inf (undamped resonance at omega = 100 rad/s)
     """
     from scipy.optimize import minimize_scalar
@@ -391,11 +453,13 @@ def peak(result: "Sweep | Circuit", omega_min: float | None = None,
     # Q0 = V0/K is unbounded at zeros of K ("resonance"); v0 = F0·K and K at
     # poles ("antiresonance").
     kind = "resonance" if quantity == "Q0" else "antiresonance"
-    try:
-        found = [r for r in circuit.resonances(omega_max=hi * (1 + 1e-9))
-                 if r.kind == kind and lo * (1 - 1e-12) <= r.omega]
-    except Exception:       # e.g. too large for the eigen-solver: grid search only
-        found = []
+    found = []
+    if len(circuit.elements) <= PEAK_RESONANCE_LIMIT:
+        try:
+            found = [r for r in circuit.resonances(omega_max=hi * (1 + 1e-9))
+                     if r.kind == kind and lo * (1 - 1e-12) <= r.omega]
+        except Exception:   # e.g. refused by the eigen-solver: grid search only
+            found = []
     undamped = tuple(r.omega for r in found if r.zeta <= UNDAMPED_ZETA)
 
     def magnitude(w):

@@ -1,26 +1,33 @@
-"""Units of netlist values and of command-line frequencies: a small table, parsed by hand.
+"""One unit grammar for every value mechcirc reads: netlists, command-line options, TOML.
 
-A netlist value may be followed, after a space, by its unit: ``mass m1 a 0
-250 g``, ``spring k1 a 0 5 N/mm``, ``drive V a 0 velocity=0.1 m/s``.  The
-unit is checked against what the value is (a stiffness in kg is an error,
-located at the unit) and the value converted to SI.
+A quantity is a number, an optional space and an optional unit::
 
-Grammar (no spaces inside a unit; ``·`` may replace ``*``)::
-
-    unit   := factor (("*" | "·" | "/") factor)*
-    factor := ATOM ("^" ["-"] DIGITS | "²" | "³")?
+    quantity := NUMBER [" "] [unit]          e.g. 500g  500 g  2 kN/mm  50Hz  3000 rpm
+    unit     := factor (("*" | "·" | "/") factor)*
+    factor   := ATOM ("^" ["-"] DIGITS | "²" | "³")?
+    ATOM     := a name of :data:`ATOMS`, or an SI prefix (G M k c m u µ n) and a
+                base of :data:`PREFIXABLE` (kHz, kN, mm, ms, g, mrad, ...)
 
 Each ``/`` divides by the one factor after it (``N*s/m`` is N·s·m⁻¹,
-``kg/m/s`` is kg·m⁻¹·s⁻¹).  ATOM is one of :data:`ATOMS`.
+``kg/m/s`` is kg·m⁻¹·s⁻¹).  :func:`parse_quantity` is the one place that
+reads a quantity; the netlist (:mod:`mechcirc.netlist`), every command-line
+option that takes a frequency or a parameter, and the study and scene TOML
+readers call it.  The page ``docs/units.md`` documents the grammar.
+
+The unit is checked against what the value is (a stiffness in kg is an
+error, located at the unit) and the value converted to SI.
 
 Why a table and not pint: pint is well kept and would parse more, but
 importing it and building its registry takes about 0.64 s on the reference
 machine, five times the 0.13 s of ``import mechcirc``; the netlist needs a
 dozen units, so a table of exact SI factors (checked against pint in
-``tests/test_units.py`` when pint is installed) costs nothing at import.
+``tests/test_units.py``) costs nothing at import.
 
 Angles: the radian is dimensionless, as in SI (so N·m/rad is a torque per
-radian and kg·m² an inertia); ``deg`` is π/180.
+radian and kg·m² an inertia); ``deg`` is π/180.  Frequencies: ``Hz`` and
+``rpm`` count revolutions, so as an angular frequency 1 Hz is 2π rad/s and
+1 rpm is 2π/60 rad/s (pint, which treats Hz as 1/s, would say 1 rad/s: the
+one place where mechcirc departs from it, on purpose — ω = 2πf).
 """
 
 from __future__ import annotations
@@ -29,13 +36,15 @@ import math
 import re
 from dataclasses import dataclass
 
-__all__ = ["Unit", "UnitError", "ATOMS", "ROLES", "parse_unit", "looks_like_unit",
-           "convert", "parse_omega", "OMEGA_UNITS"]
+__all__ = ["Unit", "UnitError", "ATOMS", "PREFIXES", "PREFIXABLE", "ROLES", "parse_unit",
+           "looks_like_unit", "convert", "parse_quantity", "split_quantity", "parse_omega",
+           "OMEGA_UNITS", "is_rotational", "SPICE_SUFFIXES"]
 
 # Dimensions are exponents of (kg, m, s).
 _MASS, _LENGTH, _TIME = (1, 0, 0), (0, 1, 0), (0, 0, 1)
 _FORCE = (1, 1, -2)
 _NONE = (0, 0, 0)
+_FREQ = (0, 0, -1)
 
 #: Known atoms: SI factor and dimension (kg, m, s exponents).  Factors are
 #: exact ratios ``(numerator, denominator)`` combined as fractions (only
@@ -46,7 +55,21 @@ ATOMS: dict[str, tuple[tuple[int, int] | float, tuple[int, int, int]]] = {
     "m": ((1, 1), _LENGTH), "mm": ((1, 1000), _LENGTH), "cm": ((1, 100), _LENGTH),
     "s": ((1, 1), _TIME), "ms": ((1, 1000), _TIME),
     "rad": ((1, 1), _NONE), "deg": (math.pi / 180, _NONE),
+    "Hz": (2 * math.pi, _FREQ), "rpm": (2 * math.pi / 60, _FREQ),
+    "min": ((60, 1), _TIME), "h": ((3600, 1), _TIME),
 }
+
+#: SI prefixes and their exact factors.
+PREFIXES: dict[str, tuple[int, int]] = {
+    "G": (10**9, 1), "M": (10**6, 1), "k": (1000, 1), "c": (1, 100), "m": (1, 1000),
+    "u": (1, 10**6), "µ": (1, 10**6), "μ": (1, 10**6), "n": (1, 10**9),
+}
+#: Base units that take an SI prefix (kg, mm, ms, kN, kHz, mrad, µm, ...).
+PREFIXABLE = ("g", "m", "s", "N", "Hz", "rad")
+
+#: SPICE's value suffixes: mechcirc does not read them (``3k`` is an error
+#: with a hint; ``3m`` is three metres, a unit, not 3e-3).
+SPICE_SUFFIXES = ("f", "p", "n", "u", "m", "k", "meg", "g", "t", "mil")
 
 #: What each kind of value may be given in: role -> (dimension -> description).
 ROLES: dict[str, dict[tuple[int, int, int], str]] = {
@@ -58,8 +81,18 @@ ROLES: dict[str, dict[tuple[int, int, int], str]] = {
     "force": {(1, 1, -2): "force (N, kN)", (1, 2, -2): "moment (N*m)"},
     "eta": {(0, 0, 0): "a ratio (dimensionless)"},
     "ratio": {(0, 0, 0): "a ratio (dimensionless)"},
+    "omega": {(0, 0, -1): "angular frequency (rad/s, Hz, kHz, rpm)"},
+    "length": {(0, 1, 0): "length (m, mm, cm)"},
+    "angle": {(0, 0, 0): "angle (rad, deg)"},
+    "time": {(0, 0, 1): "time (s, ms, min)"},
     "displacement": {(0, 1, 0): "length (m, mm)", (0, 0, 0): "angle (rad, deg)"},
 }
+
+#: Dimensions of the rotational member of each translational/rotational pair
+#: (inertia, torsional rigidity, rotary damping, moment): a node that carries
+#: both kinds gets a warning from the netlist.
+_ROTATIONAL = {(1, 2, 0), (1, 2, -2), (1, 2, -1)}
+_TRANSLATIONAL = {(1, 0, 0), (1, 0, -2), (1, 0, -1)}
 
 _DIM_NAMES = {(1, 0, 0): "a mass", (1, 2, 0): "a moment of inertia",
               (1, 0, -2): "a stiffness", (1, 2, -2): "a moment or torsional rigidity",
@@ -68,7 +101,7 @@ _DIM_NAMES = {(1, 0, 0): "a mass", (1, 2, 0): "a moment of inertia",
               (1, 1, -2): "a force", (0, 1, 0): "a length", (0, 0, 1): "a time",
               (0, 0, 0): "dimensionless"}
 
-_FACTOR = re.compile(r"([A-Za-z]+)(?:\^(-?\d+)|(²)|(³))?")
+_FACTOR = re.compile(r"([A-Za-zµμ]+)(?:\^(-?\d+)|(²)|(³))?")
 
 
 class UnitError(ValueError):
@@ -94,8 +127,30 @@ class Unit:
 
 def looks_like_unit(text: str) -> bool:
     """True if ``text`` is meant as a unit (starts with a letter; only unit characters)."""
-    return bool(text) and text[0].isascii() and text[0].isalpha() and \
-        all(c.isascii() and (c.isalnum() or c in "*/^-") or c in "·²³" for c in text)
+    return bool(text) and (text[0].isascii() and text[0].isalpha() or text[0] in "µμ") and \
+        all(c.isascii() and (c.isalnum() or c in "*/^-") or c in "·²³µμ" for c in text)
+
+
+def _atom(name: str):
+    """``(factor, dim)`` of an atom or a prefixed base, or None if unknown."""
+    if name in ATOMS:
+        return ATOMS[name]
+    for prefix, pf in PREFIXES.items():
+        base = name[len(prefix):]
+        if name.startswith(prefix) and base in PREFIXABLE:
+            bf, dim = ATOMS["kg" if base == "g" else base]
+            if base == "g":
+                bf = (1, 1000)
+            if isinstance(bf, tuple):
+                return (pf[0] * bf[0], pf[1] * bf[1]), dim
+            return pf[0] / pf[1] * bf, dim
+    return None
+
+
+def is_rotational(unit: "Unit") -> bool | None:
+    """True for an inertia, torsional rigidity or rotary damping; False for the
+    translational mass, stiffness or damping; None for anything else."""
+    return True if unit.dim in _ROTATIONAL else False if unit.dim in _TRANSLATIONAL else None
 
 
 def parse_unit(text: str) -> Unit:
@@ -110,7 +165,7 @@ def parse_unit(text: str) -> Unit:
 
     factor, dim = Fraction(1), [0, 0, 0]
     i, sign = 0, 1
-    known = ", ".join(ATOMS)
+    known = ", ".join(ATOMS) + " and prefixed " + "/".join(PREFIXABLE)
     while True:
         m = _FACTOR.match(text, i)
         if m is None:
@@ -118,10 +173,11 @@ def parse_unit(text: str) -> Unit:
                             else f"unit {text!r} ends after an operator", i,
                             f"units built from {known} with * / ^")
         atom = m.group(1)
-        if atom not in ATOMS:
+        found = _atom(atom)
+        if found is None:
             raise UnitError(f"unknown unit {atom!r}", i, f"one of {known}")
         power = int(m.group(2)) if m.group(2) else 2 if m.group(3) else 3 if m.group(4) else 1
-        f, d = ATOMS[atom]
+        f, d = found
         f = Fraction(*f) if isinstance(f, tuple) else f
         factor *= f ** (sign * power)
         for k in range(3):
@@ -147,35 +203,111 @@ def convert(value: float, unit: Unit, role: str) -> float:
     allowed = ROLES.get(role)
     if allowed is not None and unit.dim not in allowed:
         what = " or ".join(v.split(" (")[0] for v in allowed.values())
-        raise UnitError(f"unit {unit.text!r} is {unit.describe()}; a {role} value needs {what}",
+        noun = {"omega": "an angular frequency", "eta": "an eta"}.get(role, f"a {role}")
+        raise UnitError(f"unit {unit.text!r} is {unit.describe()}; {noun} value needs {what}",
                         0, " or ".join(allowed.values()))
     return value * unit.factor
 
 
-#: Units accepted for angular frequencies on the command line: factor to rad/s.
-OMEGA_UNITS = {"rad/s": 1.0, "Hz": 2 * math.pi, "rpm": 2 * math.pi / 60, "1/s": 1.0}
+#: Units accepted for angular frequencies (a subset of the grammar, quoted in messages).
+OMEGA_UNITS = {"rad/s": 1.0, "Hz": 2 * math.pi, "kHz": 2000 * math.pi,
+               "rpm": 2 * math.pi / 60, "1/s": 1.0}
 
-_OMEGA = re.compile(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|[-+]?inf|nan)\s*"
-                    r"([A-Za-z/1]*)\s*")
+_NUMBER = r"[-+]?(?:(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|inf|nan)"
+_QUANTITY = re.compile(r"\s*(" + _NUMBER + r")\s*(\S.*?)?\s*", re.IGNORECASE)
+
+
+def split_quantity(text: str) -> tuple[str, str] | None:
+    """``(number, unit)`` texts of a quantity (``unit`` may be ""), or None if it is not one.
+
+    ``"500g"`` and ``"500 g"`` both give ``("500", "g")``.  Only the shape is
+    checked here; :func:`parse_quantity` checks the unit.
+    """
+    m = _QUANTITY.fullmatch(text)
+    if m is None:
+        return None
+    number, unit = m.group(1), m.group(2) or ""
+    if unit and not (looks_like_unit(unit) or unit == "1/s"):
+        return None
+    return number, unit
+
+
+def parse_quantity(text: str, role: str | None = None, *, what: str = "value") -> float:
+    """The SI value of a quantity ``text`` such as ``"500g"``, ``"2 kN/mm"``, ``"50 Hz"``.
+
+    Parameters
+    ----------
+    text : str
+        A number, an optional space and an optional unit (see the module
+        docstring).  No unit means the value is already SI.
+    role : str, optional
+        A key of :data:`ROLES` the unit must fit (``"omega"``, ``"spring"``,
+        ``"mass"``, ...); None accepts any unit and converts it to SI.
+    what : str
+        What the value is, for messages.
+
+    Raises
+    ------
+    UnitError
+        Saying what is wrong and what is accepted (``offset`` into ``text``).
+
+    Examples
+    --------
+    >>> parse_quantity("500g", "mass") == parse_quantity("500 g", "mass") == 0.5
+    True
+    >>> parse_quantity("2 kN/mm", "spring")
+    2000000.0
+    >>> round(parse_quantity("3000rpm", "omega"), 6)
+    314.159265
+    """
+    text = str(text)
+    parts = split_quantity(text)
+    if parts is None:
+        if any(c in text for c in _MINUS_SIGNS):
+            raise UnitError(f"{what} {text!r} has a Unicode minus or dash", 0,
+                            "the ASCII hyphen-minus '-', e.g. 2e-6")
+        if re.fullmatch(r"\s*[-+]?\d+,\d+\s*\S*\s*", text):
+            raise UnitError(f"{what} {text!r} has a decimal comma", 0,
+                            f"a decimal point: {text.strip().replace(',', '.', 1)!r}")
+        example = {"omega": "50Hz, 50 Hz, 3000rpm or 314 (rad/s)"}.get(role, "12, 1.5e3, 500 g")
+        noun = "a frequency" if role == "omega" else "a number with an optional unit"
+        raise UnitError(f"{what} {text!r} is not {noun}", 0, f"a quantity such as {example}")
+    number, unit = parts
+    value = float(number)
+    if not unit:
+        return value
+    if role == "omega":     # frequencies keep their historic case-insensitive names (HZ, RPM)
+        unit = next((n for n in OMEGA_UNITS if n.lower() == unit.lower()), unit)
+    if unit == "1/s":
+        u = Unit("1/s", 1.0, (0, 0, -1))
+    else:
+        try:
+            u = parse_unit(unit)
+        except UnitError as exc:
+            hint = exc.expected
+            if unit.lower() in SPICE_SUFFIXES:
+                hint = (f"no SPICE suffixes in mechcirc: write {number}e3 for {number}k, "
+                        f"or a unit such as {number} kN/m")
+            raise UnitError(exc.message, text.index(unit) + exc.offset, hint) from None
+    try:
+        return convert(value, u, role) if role else value * u.factor
+    except UnitError as exc:
+        raise UnitError(exc.message, text.index(unit), exc.expected) from None
+
+
+_MINUS_SIGNS = "\u2212\u2013\u2014\u2012\u2010"
 
 
 def parse_omega(text: str) -> float:
-    """An angular frequency [rad/s] from ``"314"``, ``"314rad/s"``, ``"50Hz"`` or ``"3000rpm"``.
+    """An angular frequency [rad/s] from ``"314"``, ``"314 rad/s"``, ``"50Hz"``, ``"3000 rpm"``.
 
     Raises
     ------
     ValueError
         Saying which units are accepted.
     """
-    m = _OMEGA.fullmatch(text)
-    if m is None:
-        raise ValueError(f"{text!r} is not a frequency (expected a number with an optional "
-                         f"unit: {', '.join(OMEGA_UNITS)}, e.g. 50Hz or 3000rpm)")
-    number, unit = m.groups()
-    if not unit:
-        return float(number)
-    for name, factor in OMEGA_UNITS.items():
-        if unit.lower() == name.lower():
-            return float(number) * factor
-    raise ValueError(f"unknown frequency unit {unit!r} in {text!r} (expected "
-                     f"{', '.join(OMEGA_UNITS)}; no unit means rad/s)")
+    try:
+        return parse_quantity(text, "omega", what="frequency")
+    except UnitError as exc:
+        message = exc.message.replace("unknown unit", "unknown frequency unit")
+        raise ValueError(f"{message} (expected {exc.expected}; no unit means rad/s)") from None

@@ -249,15 +249,21 @@ def test_sweep_json(capsys):
     assert doc["peak"]["unbounded"] is True and doc["peak"]["value"] in ("inf", math.inf)
 
 
-def test_sweep_json_at_a_pole_is_still_strict_json(tmp_path, capsys):
-    """ω = 0 makes a mass's K infinite: the point is flagged, the JSON has no NaN/Infinity tokens."""
+def test_sweep_json_at_a_pole_reads_as_numbers(tmp_path, capsys):
+    """ω = 0 makes a mass's K infinite: the point is flagged, and the value is the number
+    -Infinity for json.loads (issue 17 §2 changed the convention from strings "inf"/"-inf",
+    which made the numeric arrays mixed)."""
     path = write(tmp_path, "m.mcir", "mass m a 0 2\ndrive V a 0 velocity=0.1\n")
     status, out, err = run(["sweep", path, "--omega-min", 0, "--omega-max", 10,
                             "--points", 3, "--json"], capsys)
     assert status == 0, err
-    doc = json.loads(out, parse_constant=lambda c: pytest.fail(f"non-JSON token {c}"))
+    doc = json.loads(out)
     assert doc["flags"] == [1, 0, 0] and doc["n_flagged"] == 1
-    assert doc["K"]["im"][0] == "-inf"
+    assert doc["K"]["im"][0] == float("-inf")
+    pd = pytest.importorskip("pandas")
+    import io
+    col = pd.read_json(io.StringIO(json.dumps({"im": doc["K"]["im"]})))["im"]
+    assert col.dtype.kind == "f" and col.iloc[0] == float("-inf")
     assert doc["K"]["im"][1:] == [-1 / (5.0 * 2), -1 / (10.0 * 2)]
 
 
@@ -360,10 +366,15 @@ def test_glued_compound_unit_hint_names_the_whole_unit(tmp_path, capsys):
     (Bug at the time of writing: the hint reads "a space between the number
     and its unit: '5 N'", because the malformed-number scan stops at '/'.)
     """
+    # Issue 17 §1: a plain glued value is now read (5N/mm == 5 N/mm); the hint
+    # remains for a glued unit inside an expression.
     path = write(tmp_path, "glued.mcir", "spring k1 a 0 5N/mm\ndrive V a 0 velocity=1\n")
+    status, out, err = run(["check", path], capsys)
+    assert status == 0 and "5000" in out
+    path = write(tmp_path, "glued.mcir", "spring k1 a 0 1+5N/mm\ndrive V a 0 velocity=1\n")
     status, _, err = run(["check", path], capsys)
     assert status == 2
-    assert err.startswith(f"{path}:1:15: error: ")
+    assert err.startswith(f"{path}:1:17: error: ")
     assert "'5 N/mm'" in err
 
 
@@ -405,7 +416,8 @@ def test_topology_error_exit_2(tmp_path, capsys):
     path = write(tmp_path, "apart.mcir", "mass m1 a 0 2\nmass m2 b c 1\ndrive V a b velocity=1\n")
     status, out, err = run(["check", path], capsys)
     assert status == 2
-    assert err.startswith("mechcirc: error: the drive's nodes 'a' and 'b'")
+    # issue 17 §5: a statement error names FILE:LINE:COL (was "mechcirc: error: ...")
+    assert err.startswith(f"{path}:3:1: error: the drive's nodes 'a' and 'b'")
     assert "not connected" in err
 
 

@@ -46,7 +46,7 @@ D = "drive V a 0 velocity=1\n"
     ("mass m a\n" + D, 1, 9, "missing N2"),
     ("mass m a 0 1.2.3\n" + D, 1, 12, "malformed number '1.2.3'"),
     ("mass m a 0 1e\n" + D, 1, 12, "malformed number '1e'"),
-    ("mass m a 0 2kg\n" + D, 1, 12, "malformed number '2kg'"),
+    ("mass m a 0 2kgx\n" + D, 1, 12, "malformed number '2kgx'"),   # 2kg is 2 kg now
     ("mass m a 0 mm\n" + D, 1, 12, "undefined parameter 'mm'"),
     (".param a={b+1} b=2\nmass m a 0 a\n" + D, 1, 11, "used before it is defined"),
     (".param a={1/0}\n" + D, 1, 12, "division by zero"),
@@ -112,3 +112,48 @@ def test_too_many_statements_are_refused():
         f"mass m{i} n{i} 0 1\n" for i in range(MAX_STATEMENTS))
     with pytest.raises(NetlistError, match=f"the limit is {MAX_STATEMENTS}"):
         mechcirc.parse(text)
+
+
+# Common slips (issue 17 §5): each names the slip and the fix, at FILE:LINE:COL.
+@pytest.mark.parametrize("text, line, col, fragment, fix", [
+    ("mass m a 0 1\ndrive V a 0 velocity = 0.1\n", 2, 22, "spaces around '='",
+     "velocity=0.1"),
+    ("mass m a 0 1 eta = 0.5\n" + D, 1, 18, "spaces around '='", "eta=0.5"),
+    ("mass m a 0 1 eta= 0.5\n" + D, 1, 14, "spaces around '='", "NAME=VALUE"),
+    (".param k =5\nmass m a 0 1\n" + D, 1, 10, "spaces around '='", "NAME=VALUE"),
+    ("damper c a 0 2e\u22126\n" + D, 1, 16, "Unicode minus", "2e-6"),
+    ("mass m a 0 1,5\n" + D, 1, 13, "decimal comma", "1.5"),
+    ("spring k a 0 3k\n" + D, 1, 14, "malformed number '3k'", "3e3"),
+    ("spring k a 0 2meg\n" + D, 1, 14, "malformed number '2meg'", "no SPICE suffixes"),
+    ("* a SPICE comment\nmass m a 0 1\n" + D, 1, 1, "'*' does not start a comment", "'#'"),
+    ("spring k a 0 3m\n" + D, 1, 15, "unit 'm' is a length", "no SPICE suffixes"),
+])
+def test_common_slips_name_the_fix(text, line, col, fragment, fix):
+    err = _error(text)
+    assert fragment in err.message, err.message
+    assert fix in (err.expected or ""), err.expected
+    assert (err.line, err.col) == (line, col)
+    assert str(err).startswith(f"bad.mcir:{line}:{col}: error:")
+
+
+@pytest.mark.parametrize("method", ["sp", "nodal"])
+def test_statement_errors_from_analysis_name_file_line_col(tmp_path, capsys, method):
+    from mechcirc.cli import main
+
+    path = tmp_path / "nc.mcir"
+    path.write_text("mass m b 0 1\ndrive V a 0 velocity=1\n")
+    assert main(["sweep", str(path), "--omega-min", "1", "--omega-max", "2",
+                 "--method", method]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"{path}:2:1: error: the drive's nodes 'a' and '0'"), err
+
+
+def test_lever_topology_errors_name_file_line_col(tmp_path, capsys):
+    from mechcirc.cli import main
+
+    path = tmp_path / "lv.mcir"
+    path.write_text("mass m a 0 1\nlever L a 0 b c ratio=2\nmass m2 b c 1\n"
+                    "drive V a 0 velocity=1\n")
+    assert main(["check", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"{path}:2:1: error: node(s) b, c have no path to the frame"), err

@@ -73,3 +73,136 @@ def test_study_plot_one_parameter():
     assert list(x) == [0.7, 0.8, 0.9]
     assert list(y) == [r["resonance_1"] for r in result.rows]
     assert ax.get_ylabel() == "resonance_1 [rad/s]" and ax.get_xlabel() == "eta1"
+    fig2, ax2 = _axes()
+    assert plot_study(result, spec.params, "resonance_1", ax=ax2) is ax2
+    assert list(ax2.lines[0].get_ydata()) == list(y)
+
+
+# ---------------------------------------------------------------------------
+# One plotting convention (issue 15 §6, issue 17 §3): ax= / fig=, return what was
+# drawn on, never switch the backend.
+
+def _axes():
+    from matplotlib.figure import Figure
+
+    fig = Figure()
+    return fig, fig.add_subplot()
+
+
+def test_plot_sweep_on_a_given_axes(stb_sweep):
+    c, s, found = stb_sweep
+    fig, ax = _axes()
+    assert plot_sweep(s, ax=ax, resonances=found) is ax
+    np.testing.assert_array_equal(ax.lines[0].get_ydata(), np.abs(s.K))
+    marks = sorted(line.get_xdata()[0] for line in ax.lines[1:]
+                   if len(set(line.get_xdata())) == 1)
+    assert marks == pytest.approx(sorted(r.omega_d or r.omega for r in found))
+    assert s.plot(ax=_axes()[1]) is not None
+
+
+def test_sweep_plot_delegate_and_fig(stb_sweep):
+    from matplotlib.figure import Figure
+
+    _, s, _ = stb_sweep
+    fig = Figure()
+    assert s.plot(fig=fig) is fig and len(fig.axes) == 3
+    assert isinstance(s.plot(), Figure)
+
+
+def test_force_drive_plots_the_velocity_response():
+    c = mechcirc.parse("mass m a 0 2\nspring k a 0 800\ndamper d a 0 4\n"
+                       "drive F a 0 force=3\n")
+    w = np.geomspace(1, 100, 50)
+    s = c.sweep(w)
+    fig = plot_sweep(s)
+    ax_q = fig.axes[2]
+    # independent: v0 = F0 / (r + jωm + k/(jω)) for the parallel m, k, r
+    expected = np.abs(3 / (4 + 1j * w * 2 + 800 / (1j * w)))
+    np.testing.assert_allclose(ax_q.lines[0].get_ydata(), expected, rtol=1e-12)
+    assert ax_q.get_ylabel().startswith("|v0|")
+    assert "velocity response" in fig._suptitle.get_text()
+
+
+def test_forces_on_axes_and_legend_swatches_match_bars(stb_sweep):
+    from matplotlib.colors import to_rgba
+
+    c, _, _ = stb_sweep
+    rows, *_ = element_forces(c, 300.0)
+    fig, ax = _axes()
+    assert plot_forces(rows, omega=300.0, ax=ax) is ax
+    legend = ax.get_legend()
+    colour_of = {t.get_text(): h.get_facecolor() for t, h in
+                 zip(legend.get_texts(), legend.legend_handles)}
+    for row, bar in zip(rows, ax.patches):
+        assert to_rgba(colour_of[row.kind]) == to_rgba(bar.get_facecolor())
+    assert len(set(colour_of.values())) == len(colour_of) >= 2
+
+
+def test_plots_never_switch_the_backend(stb_sweep):
+    import matplotlib
+
+    _, s, _ = stb_sweep
+    before = matplotlib.get_backend()
+    src = (REPO / "mechcirc" / "plotting.py").read_text() + \
+        (REPO / "mechcirc" / "scene" / "cycle.py").read_text()
+    assert "matplotlib.use(" not in src and "import matplotlib.pyplot" not in src
+    plot_sweep(s)
+    assert matplotlib.get_backend() == before
+
+
+def test_cycle_plot_unit_and_labels():
+    from matplotlib.figure import Figure
+
+    from mechcirc.scene import load_scene
+    from mechcirc.scene.cycle import cycle_map, plot_cycle
+
+    scene = load_scene(REPO / "examples" / "heald_scene.toml")
+    cmap = cycle_map(scene, points=6, harmonics=3)
+    W = cmap.natural_frequencies()
+    for unit, scale in (("rad/s", 1.0), ("Hz", 1 / (2 * np.pi))):
+        fig = plot_cycle(cmap, fig=Figure(), unit=unit)
+        a1 = fig.axes[0]
+        assert f"[{unit}]" in a1.get_ylabel()
+        np.testing.assert_allclose(a1.lines[0].get_ydata(), W[:, 0] * scale, rtol=1e-12)
+        labels = [t.get_text() for t in a1.texts]
+        assert labels == [f"{h}·Ω" for h in cmap.harmonics]
+        named = [ln.get_label() for ln in a1.get_legend().get_lines()]
+        assert all(f"resonance {k + 1}" in named for k in range(W.shape[1]))
+    with pytest.raises(ValueError):
+        plot_cycle(cmap, unit="rpm")
+
+
+def test_short_reprs(stb_sweep):
+    c, s, _ = stb_sweep
+    assert len(repr(c)) < 200 and "stb_heald" in repr(c) and "12 masses" in repr(c)
+    big = c.sweep(np.geomspace(10, 1e4, 800))
+    assert len(repr(big)) < 300 and "800 points" in repr(big)
+    assert big._repr_html_().startswith("<pre>")
+
+
+def test_kinematics_plots_take_fig_and_ax():
+    from matplotlib.figure import Figure
+
+    from mechcirc.kinematics.fourbar import FourBar
+    from mechcirc.kinematics.linkage import load_linkage
+    from mechcirc.kinematics.plots import plot_fourbar, plot_linkage
+
+    fig = Figure()
+    assert plot_fourbar(FourBar(29, 37, 188, 189), 100, fig=fig) is fig and len(fig.axes) == 4
+    lk = load_linkage(REPO / "examples" / "fnf_sixbar.toml")
+    state = lk.solve(0.0)
+    fig, ax = _axes()
+    assert plot_linkage(lk, state, ax=ax) is ax and ax.lines
+
+
+def test_comparison_plot_on_a_given_figure():
+    from matplotlib.figure import Figure
+
+    from mechcirc.interop.skrf import compare
+    from mechcirc.plotting import plot_comparison
+
+    c = mechcirc.load(STB)
+    result = compare(c, REPO / "docs" / "examples" / "measured.s1p")
+    fig = Figure()
+    assert plot_comparison(result, name=c.name, fig=fig) is fig and len(fig.axes) == 2
+    np.testing.assert_allclose(fig.axes[0].lines[0].get_xdata(), result.omega)

@@ -16,7 +16,8 @@ import numpy as np
 import pytest
 
 import mechcirc
-from mechcirc import sweep as sweep_module
+import importlib
+sweep_module = importlib.import_module("mechcirc.sweep")   # mechcirc.sweep is the function
 from mechcirc.cli import main
 from mechcirc.errors import NetlistError
 from mechcirc.expressions import MAX_DEPTH, MAX_LENGTH, evaluate, parse_expression
@@ -85,7 +86,9 @@ def test_long_flat_expression_within_the_limit_evaluates():
     assert len(text) < MAX_LENGTH
     t0 = time.perf_counter()
     assert evaluate(parse_expression(text), {}) == 5000.0
-    assert time.perf_counter() - t0 < 1.0
+    # A guard against quadratic or worse behaviour (0.1 s when measured), not a speed
+    # test: 1 s failed once at load 9 on 2 cores.
+    assert time.perf_counter() - t0 < 10.0
 
 
 def test_cli_refuses_more_than_ten_million_points(capsys, tmp_path):

@@ -44,9 +44,10 @@ def test_netlist_with_units_equals_the_si_netlist():
     si = mechcirc.parse(".param L=0.12 a={pi/6}\nmass m a 0 0.25\nspring k a 0 5000\n"
                         "damper c a 0 30\nspring kt a b 12\nmass J b 0 0.00004\n"
                         "drive V a 0 velocity=0.1\n")
-    units = mechcirc.parse(".param L=120 mm a=30 deg\nmass m a 0 250 g\nspring k a 0 5 N/mm\n"
+    with pytest.warns(mechcirc.errors.UnitMixWarning):     # kt on node a with m: a slip
+        units = mechcirc.parse(".param L=120 mm a=30 deg\nmass m a 0 250 g\nspring k a 0 5 N/mm\n"
                            "damper c a 0 30 N*s/m\nspring kt a b 12 N*m/rad\n"
-                           "mass J b 0 400 g*cm^2\ndrive V a 0 velocity=100 mm/s\n")
+                               "mass J b 0 400 g*cm^2\ndrive V a 0 velocity=100 mm/s\n")
     assert units.elements[:4] == si.elements[:4]
     # 400 g·cm² = 0.4 kg · 1e-4 m²; 1e-7 is not a binary fraction, so within rounding
     assert units.element("J").value == pytest.approx(0.00004, rel=1e-15)
@@ -68,10 +69,10 @@ def _error(text):
     ("mass m a 0 5 kgs\n" + D, 1, 14, "unknown unit 'kgs'"),
     ("spring k a 0 5 N/mmm\n" + D, 1, 18, "unknown unit 'mmm'"),
     ("spring k a 0 5 N//m\n" + D, 1, 18, "unexpected '/'"),
-    ("mass m a 0 1 eta=2 mm\n" + D, 1, 20, "a eta value needs a ratio"),
+    ("mass m a 0 1 eta=2 mm\n" + D, 1, 20, "an eta value needs a ratio"),
     ("mass m a 0 1\ndrive V a 0 velocity=1 N\n", 2, 24, "is a force; a velocity value"),
     ("mass m a 0 1\ndrive V a 0 force=1 m/s\n", 2, 21, "is a velocity; a force value"),
-    ("mass m a 0 2kg\n" + D, 1, 12, "malformed number '2kg'"),
+    ("mass m a 0 2kgs\n" + D, 1, 12, "malformed number '2kgs'"),
     ("mass m a 0 1 2\n" + D, 1, 14, "takes 4 fields"),
 ])
 def test_unit_errors_are_located(text, line, col, fragment):
@@ -81,8 +82,11 @@ def test_unit_errors_are_located(text, line, col, fragment):
 
 
 def test_glued_unit_gets_advice():
-    err = _error("mass m a 0 2kg\n" + D)
-    assert err.expected == "a space between the number and its unit: '2 kg'"
+    # A plain number glued to its unit is now read as pint reads it (issue 17 §1);
+    # inside an expression the unit still needs the space.
+    assert mechcirc.parse("mass m a 0 2kg\n" + D).element("m").value == 2.0
+    err = _error("mass m a 0 2*3kg\n" + D)
+    assert err.expected == "a space between the number and its unit: '3 kg'"
     err = _error("mass m a 0 1.2.3\n" + D)
     assert "a number such as" in err.expected
 
@@ -107,7 +111,7 @@ def test_parse_omega(text, omega):
     assert parse_omega(text) == pytest.approx(omega, rel=1e-15)
 
 
-@pytest.mark.parametrize("text", ["50 kHz", "fast", "50Hz3", ""])
+@pytest.mark.parametrize("text", ["50 kg", "fast", "50Hz3", ""])  # kHz is now accepted (issue 17)
 def test_parse_omega_rejects(text):
     with pytest.raises(ValueError, match="rad/s"):
         parse_omega(text)
@@ -126,3 +130,138 @@ def test_override_of_a_parameter_with_a_unit_is_si():
     assert mechcirc.parse(text).element("s").value == pytest.approx(600.0, rel=1e-15)
     c = mechcirc.parse(text, params={"L": 0.2})
     assert c.params["L"] == 0.2 and c.element("s").value == pytest.approx(1000.0, rel=1e-15)
+
+
+# ---------------------------------------------------------------------------
+# One grammar on every surface (issue 17 §1): pint is the independent reference.
+
+from mechcirc.units import parse_quantity, UnitError as _UE   # noqa: E402
+
+QUANTITIES = [
+    # (text, role, pint expression of the same quantity, SI unit in pint)
+    ("500g", "mass", "500 g", "kg"), ("500 g", "mass", "500 g", "kg"),
+    ("2 kN/mm", "spring", "2 kN/mm", "N/m"), ("2kN/mm", "spring", "2 kN/mm", "N/m"),
+    ("1.5e3 N/m", "spring", "1.5e3 N/m", "N/m"), ("3 mg", "mass", "3 mg", "kg"),
+    ("250 µm", "length", "250 um", "m"), ("12 mrad", "angle", "12 mrad", "rad"),
+    ("30 deg", "angle", "30 deg", "rad"), ("5 ms", "time", "5 ms", "s"),
+    ("2 min", "time", "2 min", "s"), ("0.4 g*cm^2", "mass", "0.4 g*cm**2", "kg*m**2"),
+    ("3000rpm", "omega", "3000 rpm", "rad/s"), ("3000 rpm", "omega", "3000 rpm", "rad/s"),
+    # Hz counts revolutions (ω = 2πf): compared with pint's revolution/second, since
+    # pint's own Hz -> rad/s gives 1 rad/s per Hz (documented in docs/units.md)
+    ("50Hz", "omega", "50 revolution/s", "rad/s"), ("50 Hz", "omega", "50 revolution/s", "rad/s"),
+    ("1.2 kHz", "omega", "1200 revolution/s", "rad/s"), ("314 rad/s", "omega", "314 rad/s", "rad/s"),
+    ("0.1 m/s", "velocity", "0.1 m/s", "m/s"), ("100mm/s", "velocity", "100 mm/s", "m/s"),
+    ("2 kN", "force", "2 kN", "N"), ("3 N*m", "force", "3 N*m", "N*m"),
+]
+
+
+@pytest.mark.parametrize("text, role, pint_text, si", QUANTITIES)
+def test_quantities_agree_with_pint(ureg, text, role, pint_text, si):
+    expected = ureg.Quantity(pint_text).to(si).magnitude
+    assert parse_quantity(text, role) == pytest.approx(expected, rel=1e-14)
+
+
+def test_glued_and_spaced_netlist_values_are_the_same():
+    glued = mechcirc.parse(".param v=100mm/s\nmass m a 0 500g\nspring k a 0 5kN/m eta=0.5\n"
+                           "damper c a 0 30N*s/m\ndrive V a 0 velocity=v\n")
+    spaced = mechcirc.parse(".param v=100 mm/s\nmass m a 0 500 g\nspring k a 0 5 kN/m eta=0.5\n"
+                            "damper c a 0 30 N*s/m\ndrive V a 0 velocity=v\n")
+    assert glued.elements == spaced.elements
+    assert glued.drive.amplitude == spaced.drive.amplitude == pytest.approx(0.1, rel=1e-15)
+    assert glued.element("m").value == 0.5 and glued.element("k").value == 5000.0
+
+
+def test_glued_drive_value():
+    c = mechcirc.parse("mass m a 0 1\ndrive F a 0 force=2kN\n")
+    assert c.drive.amplitude == 2000.0
+
+
+@pytest.mark.parametrize("text", ["5 kg", "abc", "50 Hzz", "", "1 2 Hz"])
+def test_frequency_errors_say_what_is_accepted(text):
+    with pytest.raises(_UE) as info:
+        parse_quantity(text, "omega")
+    assert info.value.expected
+
+
+def test_mixed_translational_and_rotational_units_on_a_node_warn():
+    with pytest.warns(mechcirc.errors.UnitMixWarning, match="node 'a'.*kg\\*m\\^2.*'kg'"):
+        mechcirc.parse("mass m a 0 2 kg\nmass J a 0 0.1 kg*m^2\ndrive V a 0 velocity=1\n")
+    with pytest.warns(mechcirc.errors.UnitMixWarning, match="node 'b'"):
+        mechcirc.parse("spring k a b 5 N/m\nspring kt b 0 3 N*m/rad\nmass m a 0 1\n"
+                       "drive V a 0 velocity=1\n")
+
+
+def test_separate_nodes_do_not_warn(recwarn):
+    mechcirc.parse("mass m a 0 2 kg\nspring k a b 5 N/m\nmass J c 0 0.1 kg*m^2\n"
+                   "spring kt c b 3 N*m/rad\ndrive V a 0 velocity=1\n")
+    # b joins a translational spring and a rotational one: that is a warning; a, c are clean
+    assert all("node 'a'" not in str(w.message) and "node 'c'" not in str(w.message)
+               for w in recwarn.list)
+
+
+# The command line reads the same grammar, glued or spaced.
+@pytest.mark.parametrize("w1, w2", [("1Hz", "50Hz"), ("1 Hz", "50 Hz"), ("6.283185307179586",
+                                                                        "0.05 kHz"),
+                                    ("60 rpm", "3000rpm")])
+def test_cli_frequencies_glued_or_spaced(capsys, w1, w2):
+    from mechcirc.cli import main
+
+    argv = ["sweep", "netlists/stb_heald.mcir", "--points", "3", "--json"]
+    argv[2:2] = ["--omega-min", *w1.split(" ", 1)] if " " in w1 else ["--omega-min", w1]
+    argv[2:2] = ["--omega-max", *w2.split(" ", 1)] if " " in w2 else ["--omega-max", w2]
+    assert main(argv) == 0
+    import json
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["omega"][0] == pytest.approx(2 * math.pi, rel=1e-12)
+    assert doc["omega"][-1] == pytest.approx(100 * math.pi, rel=1e-12)
+
+
+def test_cli_band_and_set_take_units(capsys):
+    from mechcirc.cli import main
+    from mechcirc.simplify import parse_band
+
+    assert parse_band("1Hz:50Hz") == pytest.approx((2 * math.pi, 100 * math.pi), rel=1e-15)
+    assert parse_band("10:2000") == (10.0, 2000.0)
+    from mechcirc.cli.sley_commands import _overrides
+    import argparse
+    ns = argparse.Namespace(alpha=40.0, beat_sign=-1, set=["omega=3000rpm", "clearance=2 mm"])
+    out = _overrides(ns)
+    assert out["omega"] == pytest.approx(100 * math.pi, rel=1e-15)
+    assert out["clearance"] == pytest.approx(0.002, rel=1e-15)
+
+
+def test_cli_spaced_unit_is_not_taken_from_a_file_name():
+    from mechcirc.cli._common import join_spaced_quantities as j
+
+    assert j(["--omega-max", "50", "Hz"]) == ["--omega-max", "50 Hz"]
+    assert j(["--points", "5", "netlists/stb_heald.mcir"]) == ["--points", "5",
+                                                               "netlists/stb_heald.mcir"]
+    assert j(["sweep", "50", "Hz"]) == ["sweep", "50", "Hz"]
+
+
+def test_scene_toml_values_take_units(tmp_path):
+    from mechcirc.scene.files import load_scene
+
+    text = open("examples/heald_scene.toml").read()
+    assert "\nstiffness = 2.0e6\n" in text
+    p = tmp_path / "s.toml"
+    p.write_text(text.replace("\nstiffness = 2.0e6\n", '\nstiffness = "2 kN/mm"\n', 1))
+    assert load_scene(p).elastic[0].stiffness == 2.0e6
+    p.write_text(text.replace("\nstiffness = 2.0e6\n", '\nstiffness = "2 kg"\n', 1))
+    with pytest.raises(NetlistError) as info:
+        load_scene(p)
+    assert "a spring value needs stiffness" in info.value.message and info.value.line == 65
+
+
+def test_study_toml_frequencies_take_the_same_grammar():
+    import tomllib
+
+    from mechcirc.study import parse_spec
+
+    root = __import__("pathlib").Path(__file__).resolve().parents[1]
+    doc = tomllib.loads((root / "examples" / "study_stb.toml").read_text())
+    for text, expected in (("1500Hz", 3000 * math.pi), ("1.5 kHz", 3000 * math.pi),
+                           ("90000 rpm", 3000 * math.pi), ("9424.777960769379", 9424.777960769379)):
+        doc["omega"]["max"] = text
+        spec = parse_spec(doc, source="s.toml", base=root / "examples")
+        assert spec.omega[1] == pytest.approx(expected, rel=1e-12), text   # (min, max, n, log)

@@ -43,6 +43,9 @@ def build_parser() -> argparse.ArgumentParser:
         epilog="Example: mechcirc sweep netlists/stb_heald.mcir --omega-min 10 "
                "--omega-max 1e4 --log -o K.csv --plot K.png",
     )
+    from .. import __version__
+
+    parser.add_argument("--version", action="version", version=f"mechcirc {__version__}")
     parser.add_argument("--debug", action="store_true",
                         help="show the full traceback of an internal error")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
@@ -53,10 +56,12 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; return the exit status (also used by ``python -m mechcirc``)."""
-    from ._common import run_handler, sigterm_unwinds
+    import sys
+
+    from ._common import join_spaced_quantities, run_handler, sigterm_unwinds
 
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args = parser.parse_args(join_spaced_quantities(sys.argv[1:] if argv is None else argv))
     if not getattr(args, "func", None):
         parser.print_help()
         return 2

@@ -5,6 +5,7 @@ from __future__ import annotations
 import contextlib
 import json
 import math
+import os
 import signal
 import sys
 import threading
@@ -48,7 +49,9 @@ def run_handler(args) -> int:
         return EXIT_OK if status is None else status
     except MechcircError as exc:
         located = isinstance(exc, NetlistError)
-        print(str(exc) if located else f"mechcirc: error: {exc}", file=sys.stderr)
+        where = getattr(exc, "location", None)      # FILE:LINE:COL of a statement error
+        print(str(exc) if located else f"{where}: error: {exc}" if where
+              else f"mechcirc: error: {exc}", file=sys.stderr)
         return EXIT_USER
     except FileNotFoundError as exc:
         print(f"{exc.filename}: error: no such file", file=sys.stderr)
@@ -77,17 +80,84 @@ def run_handler(args) -> int:
         return EXIT_INTERNAL
 
 
+def quantity_type(role: str, default_unit: str | None = None):
+    """An argparse ``type=`` that reads a quantity in the one unit grammar (:mod:`mechcirc.units`).
+
+    ``role`` is what the value is (``"omega"``, ``"angle"``, ...).  Without a
+    unit the number is taken in ``default_unit`` (SI when None); with one it
+    is converted to ``default_unit`` (``--theta 0.5rad`` → 28.6… when the
+    option is in degrees).
+    """
+    import argparse
+
+    def convert(text: str) -> float:
+        from ..units import UnitError, parse_quantity, parse_unit, split_quantity
+
+        try:
+            value = parse_quantity(text, role)
+            parts = split_quantity(text)
+            if default_unit and parts and parts[1]:
+                value /= parse_unit(default_unit).factor
+            return value
+        except UnitError as exc:
+            raise argparse.ArgumentTypeError(
+                f"{exc.message} (expected {exc.expected}"
+                + (f"; no unit means {default_unit}" if default_unit else "") + ")") from None
+
+    convert.__name__ = role     # argparse names the type in its messages
+    return convert
+
+
+def join_spaced_quantities(argv: list[str]) -> list[str]:
+    """Join ``--opt 50 Hz`` into ``--opt "50 Hz"`` so options take spaced units as netlists do.
+
+    A number right after an option, followed by a token that the unit grammar
+    reads as a unit, is one quantity; anything else is left alone.
+    """
+    from ..units import UnitError, parse_unit, split_quantity
+
+    out: list[str] = []
+    i = 0
+    while i < len(argv):
+        tok = argv[i]
+        out.append(tok)
+        if (i + 1 < len(argv) and out[:-1] and out[-2].startswith("--") and "=" not in out[-2]
+                and (split_quantity(tok) or ("", "x"))[1] == ""):
+            unit = argv[i + 1]
+            try:
+                ok = unit in ("1/s",) or (not unit.startswith("-") and parse_unit(unit) and
+                                          not os.path.exists(unit))   # a file named "m"
+            except UnitError:
+                ok = False
+            if ok:
+                out[-1] = f"{tok} {unit}"
+                i += 1
+        i += 1
+    return out
+
+
+#: The --json convention for non-finite numbers (docs/cli.md): the bare tokens
+#: ``Infinity``, ``-Infinity`` and ``NaN``, as Python's json module writes and
+#: reads them; ``json.loads`` and ``pandas.read_json`` give floats, so numeric
+#: arrays stay numeric.  (Strict RFC 8259 readers such as jq need
+#: ``sub("NaN"; "null")``-style preprocessing; the flags say which points these are.)
+JSON_NONFINITE = "Infinity/-Infinity/NaN tokens"
+
+
 # ------------------------------------------------------------------ option values
 # One validator for every number the command line takes: argparse calls it,
 # so a bad value is a usage error (exit 2) naming the option, before any work.
 def real(*, least: float | None = None, above: float | None = None,
          most: float | None = None, unit: str = "", omega: bool = False,
-         finite: bool = True):
+         finite: bool = True, role: str | None = None):
     """argparse type: a finite number (``omega``: also ``50Hz``, ``3000rpm``) in range.
 
     ``least`` ≤ x, ``above`` < x, x ≤ ``most``; ``nan``, ``inf`` and
     overflowing literals such as ``1e400`` are refused (``finite=False``: let
-    the command check the range itself, with its own message).
+    the command check the range itself, with its own message).  ``role``
+    (``"angle"``, ``"length"``, ...): the value may carry a unit of the one
+    grammar (:mod:`mechcirc.units`), converted to ``unit`` (``--theta 0.5rad``
+    is 28.6… when ``unit="deg"``).
     """
     import argparse
 
@@ -99,6 +169,8 @@ def real(*, least: float | None = None, above: float | None = None,
                 value = parse_omega(text)
             except ValueError as exc:
                 raise argparse.ArgumentTypeError(str(exc)) from None
+        elif role is not None:
+            value = quantity_type(role, unit or None)(text)
         else:
             try:
                 value = float(text)
@@ -157,8 +229,8 @@ MAX_LENGTH = 1e50
 
 
 def _jsonable(obj):
-    if isinstance(obj, float) and not math.isfinite(obj):
-        return None if math.isnan(obj) else ("inf" if obj > 0 else "-inf")
+    if isinstance(obj, float):
+        return obj
     if isinstance(obj, dict):
         return {str(k): _jsonable(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):
@@ -171,8 +243,8 @@ def _jsonable(obj):
 
 
 def print_json(document) -> None:
-    """Print one JSON document on stdout (non-finite floats as strings/null)."""
-    json.dump(_jsonable(document), sys.stdout, indent=2, allow_nan=False)
+    """Print one JSON document on stdout (non-finite floats as Infinity, -Infinity, NaN)."""
+    json.dump(_jsonable(document), sys.stdout, indent=2, allow_nan=True)
     sys.stdout.write("\n")
 
 

@@ -19,6 +19,9 @@ band_omega = real(omega=True, least=0.0, unit="rad/s")
 positive_omega = real(omega=True, above=0.0, unit="rad/s")
 
 
+omega_value.__name__ = "frequency"
+
+
 def register(sub) -> None:
     p = sub.add_parser(
         "check", help="parse a netlist and show its elements and reduction tree",
@@ -249,6 +252,17 @@ def cmd_sweep(args) -> int:
     from ..outputs import OutputSet
 
     check_output_paths(args.output, args.touchstone, plots=(args.plot,))
+    if args.touchstone:
+        from pathlib import Path
+
+        from ..errors import MechcircError
+
+        if Path(args.touchstone).suffix.lower() != ".s1p":
+            # K seen by one drive is a one-port: a .s2p name would promise a
+            # 2-port file that scikit-rf then cannot read.
+            raise MechcircError(
+                f"{args.touchstone}: --touchstone writes K at the drive, a one-port: name "
+                "the file .s1p (a 2-port of two nodes is mechcirc.interop.skrf.two_port)")
     circuit, warns = _load_with_warnings(args.file)
     omega = _omega_grid(args)
     if args.adaptive:
@@ -323,7 +337,13 @@ def cmd_sweep(args) -> int:
           f"{result.omega[-1]:g} rad/s, method {result.method}")
     with np.errstate(all="ignore"):
         print(f"  |K|  {np.nanmin(absK):.4g} .. {np.nanmax(absK):.4g} m/(N·s) on the grid")
-        print(f"  |Q0| {np.nanmin(absQ):.4g} .. {np.nanmax(absQ):.4g} N on the grid")
+        if result.drive.kind == "force":    # Q0 is the prescribed F0: show the response
+            absV = np.abs(result.v0)
+            print(f"  |v0| {np.nanmin(absV):.4g} .. {np.nanmax(absV):.4g} m/s on the grid "
+                  f"(velocity response v0 = F0·K to the force drive F0 = "
+                  f"{result.drive.amplitude:g} N)")
+        else:
+            print(f"  |Q0| {np.nanmin(absQ):.4g} .. {np.nanmax(absQ):.4g} N on the grid")
     print(f"  {_peak_text(pk)}")
     if n_flag:
         print(f"  {n_flag} point(s) on or within rounding of a pole or zero of K "

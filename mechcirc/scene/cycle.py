@@ -117,7 +117,7 @@ class CycleMap:
 
 
 def cycle_map(scene: Scene, *, points: int = 72, harmonics: int = 5,
-              reflect: str = "eta") -> CycleMap:
+              reflect: str = "eta", progress=None) -> CycleMap:
     """Resonances and |Q0| at the first ``harmonics`` shaft harmonics at ``points`` crank angles.
 
     Parameters
@@ -129,6 +129,8 @@ def cycle_map(scene: Scene, *, points: int = 72, harmonics: int = 5,
         Number of harmonics h = 1 … H of the crank speed, ≥ 1.
     reflect : {"eta", "lever"}
         Passed to :func:`~mechcirc.scene.build`.
+    progress : callable, optional
+        ``progress(done, total)`` after each crank angle (the CLI's progress bar).
 
     Raises
     ------
@@ -159,42 +161,61 @@ def cycle_map(scene: Scene, *, points: int = 72, harmonics: int = 5,
             skipped[i] = str(exc)
             res.append(())
             anti.append(())
+            if progress is not None:
+                progress(i + 1, points)
             continue
         found = model.circuit.resonances()
         res.append(tuple(r for r in found if r.kind == "resonance"))
         anti.append(tuple(r for r in found if r.kind == "antiresonance"))
         with np.errstate(all="ignore"):
             Q0[i] = model.circuit.sweep(hs * omega_shaft).Q0
+        if progress is not None:
+            progress(i + 1, points)
     return CycleMap(theta, res, anti, hs, omega_shaft, Q0, skipped, rotational)
 
 
-def plot_cycle(cmap: CycleMap, ax=None):
+def plot_cycle(cmap: CycleMap, ax=None, *, fig=None, unit: str = "rad/s"):
     """Resonances against crank angle with the harmonic lines, and |Q0| at each harmonic.
 
-    Returns the figure (two stacked axes).  matplotlib is imported here.
+    Two stacked panels on ``fig`` (a new ``matplotlib.figure.Figure`` by
+    default; pyplot and the backend are left alone); returns the Figure.
+    ``unit`` is the frequency unit of the upper panel, ``"rad/s"`` (as the
+    table) or ``"Hz"``.  Every line is labelled: each resonance branch, each
+    harmonic line h·Ω and the crossings.  ``ax`` is accepted for the common
+    convention but the plot needs two panels: pass ``fig=`` instead.
     """
-    import matplotlib
+    if unit not in ("rad/s", "Hz"):
+        raise ValueError(f"unit must be 'rad/s' or 'Hz', got {unit!r}")
+    if ax is not None and fig is None:
+        fig = ax.figure
+        fig.delaxes(ax)
+    if fig is None:
+        from matplotlib.figure import Figure
 
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
-
-    fig, (a1, a2) = plt.subplots(2, 1, figsize=(8, 7), sharex=True)
+        fig = Figure(figsize=(8, 7))
+    a1, a2 = fig.subplots(2, 1, sharex=True)
+    scale = 1.0 if unit == "rad/s" else 1 / (2 * math.pi)
     deg = np.degrees(cmap.theta)
     W = cmap.natural_frequencies()
     for k in range(W.shape[1]):
-        a1.plot(deg, W[:, k] / (2 * math.pi), ".-", ms=3, label=f"resonance {k + 1}")
+        a1.plot(deg, W[:, k] * scale, ".-", ms=3, label=f"resonance {k + 1}")
     for h in cmap.harmonics:
-        a1.axhline(h * cmap.omega_shaft / (2 * math.pi), color="0.6", lw=0.7, ls=":")
-    for c in cmap.crossings():
-        a1.plot(c["theta_deg"], c["omega"] / (2 * math.pi), "kx", ms=6)
-    a1.set_ylabel("natural frequency [Hz]  (dotted: h·Ω)")
+        a1.axhline(h * cmap.omega_shaft * scale, color="0.6", lw=0.7, ls=":")
+        a1.annotate(f"{h}·Ω", (1.0, h * cmap.omega_shaft * scale), xycoords=("axes fraction",
+                    "data"), xytext=(2, 0), textcoords="offset points", fontsize=7,
+                    va="center", color="0.4")
+    crossings = cmap.crossings()
+    for n, c in enumerate(crossings):
+        a1.plot(c["theta_deg"], c["omega"] * scale, "kx", ms=6,
+                label="resonance = h·Ω" if n == 0 else None)
+    a1.set_ylabel(f"natural frequency [{unit}]  (dotted: h·Ω)")
     a1.set_title("resonances (K = 0, drive held) over the cycle; × where one meets h·Ω")
-    a1.legend(fontsize=7, loc="upper right")
-    unit = "N·m" if cmap.rotational else "N"
+    a1.legend(fontsize=7, loc="upper left")
+    runit = "N·m" if cmap.rotational else "N"
     for j, h in enumerate(cmap.harmonics):
         a2.semilogy(deg, np.abs(cmap.Q0[:, j]), label=f"h = {h}")
     a2.set_xlabel("crank rotation from the pose θ [deg]")
-    a2.set_ylabel(f"|Q0| at ω = h·Ω [{unit}]")
+    a2.set_ylabel(f"|Q0| at ω = h·Ω [{runit}]")
     a2.legend(fontsize=7, ncol=3)
     fig.tight_layout()
     return fig
