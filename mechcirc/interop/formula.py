@@ -173,25 +173,30 @@ class _Builder:
             raise MechcircError(
                 f"the network has no series–parallel tree and {system.size} nodal unknowns; "
                 f"a symbolic solution is attempted up to {MAX_NODAL_UNKNOWNS}")
+        from ..nodal import stamps
+
         index = {n: i for i, n in enumerate(system.nodes)}
+        index.update({node: -1 for e in system.elements for node in (e.n1, e.n2)
+                      if node not in index})
+        index.update({node: -1 for lv in system.levers
+                      for node in (lv.p1, lv.p2, lv.s1, lv.s2) if node not in index})
         n = system.size
         A = sp.zeros(n, n)
-        for e in system.elements:
-            scaled = self.element_value(e)
-            y = {"mass": sp.I * w * scaled, "spring": scaled / (sp.I * w),
-                 "damper": scaled}[e.kind]
-            i, j = index.get(e.n1, -1), index.get(e.n2, -1)
-            for r, c, v in ((i, i, y), (j, j, y), (i, j, -y), (j, i, -y)):
-                if r >= 0 and c >= 0:
-                    A[r, c] += v
-        for k, lv in enumerate(system.levers):
-            col = len(system.nodes) + k
-            r = self.field(lv.name, "ratio", lv.ratio, f"r_{lv.name}")
-            for node, coef in ((lv.p1, r), (lv.p2, -r), (lv.s1, -1), (lv.s2, 1)):
-                i = index.get(node, -1)
-                if i >= 0:
-                    A[i, col] += coef
-                    A[col, i] += coef
+        admittance, ratio = {}, {}
+        for kind, i, j, sign, source, uses_ratio in stamps(system.elements, system.levers, index):
+            if kind == "lever":
+                if source.name not in ratio:
+                    ratio[source.name] = self.field(source.name, "ratio", source.ratio,
+                                                    f"r_{source.name}")
+                y = ratio[source.name] if uses_ratio else 1
+            else:
+                if source.name not in admittance:
+                    scaled = self.element_value(source)
+                    admittance[source.name] = {"mass": sp.I * w * scaled,
+                                               "spring": scaled / (sp.I * w),
+                                               "damper": scaled}[kind]
+                y = admittance[source.name]
+            A[i, j] += y if sign > 0 else -y
         rhs = sp.Matrix(system.injection().astype(int).tolist())
         # Cramer's rule on B = jω·A, whose entries are polynomials (no 1/ω):
         # K = x_a − x_b = (det B_a − det B_b) / det B, with B_i the matrix B whose
