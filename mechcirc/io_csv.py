@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from .outputs import atomic_path
 from .progress import Progress
 
 __all__ = ["write_sweep_csv"]
@@ -14,8 +13,10 @@ def write_sweep_csv(result, path) -> None:
     """Write ``omega,K_re,K_im,Q0_re,Q0_im[,v0_re,v0_im],flag`` rows to ``path``.
 
     The ``v0`` columns appear for a force drive.  ``flag`` is 0 for a regular
-    point, 1 on a pole or zero of K, 2 within rounding of one.  The file
-    appears whole or not at all (written beside ``path``, then renamed).
+    point, 1 on a pole or zero of K, 2 within rounding of one.  ``path`` is
+    written in place: for a file that appears whole or not at all, pass a
+    temporary path from :func:`mechcirc.outputs.atomic_path` or
+    :class:`mechcirc.outputs.OutputSet` (as ``mechcirc sweep -o`` does).
     """
     columns = [result.omega, result.K.real, result.K.imag, result.Q0.real, result.Q0.imag]
     header = "omega,K_re,K_im,Q0_re,Q0_im"
@@ -29,8 +30,7 @@ def write_sweep_csv(result, path) -> None:
     # columns one block at a time keeps memory bounded (10^7 points would
     # otherwise need a 640 MB table).
     block = 100_000
-    with atomic_path(path) as tmp, open(tmp, "w", newline="") as fh, \
-            Progress(n, "CSV") as bar:
+    with open(path, "w", newline="") as fh, Progress(n, "CSV") as bar:
         fh.write(header + ",flag\n")
         fmt = ["%.17g"] * (len(columns) - 1) + ["%d"]
         for start in range(0, n, block):
