@@ -204,7 +204,7 @@ class _Parser:
                        "lever": self.lever, "drive": self.drive, ".ic": self.ic}.get(keyword)
             if handler is None:
                 line.error(f"unknown keyword {line.tokens[0].text!r}", line.tokens[0].col,
-                           "one of .param, .ic, mass, spring, damper, lever, drive")
+                           "one of .param, mass, spring, damper, lever, drive, .ic")
             handler(line, keyword)
         if not parsed:
             raise NetlistError("the file has no statements, only comments and blank lines",

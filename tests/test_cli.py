@@ -318,7 +318,7 @@ def test_sweep_by_subprocess_writes_csv_and_png(tmp_path):
 BAD = [
     ("mass m1 a 0 2\nmas k1 a 0 100\ndrive V a 0 velocity=1\n",
      "2:1: error: unknown keyword 'mas' (expected one of .param, mass, spring, damper, "
-     "lever, drive)"),
+     "lever, drive, .ic)"),
     ("mass m1 a 0 2\nspring k1 a 0 {2e5 * }\ndrive V a 0 velocity=1\n",
      "2:22: error: expression ends too early (expected a number, a name or '(')"),
     ("mass m1 a 0 -2\ndrive V a 0 velocity=1\n",
