@@ -60,8 +60,8 @@ def register(sub) -> None:
                     "of the sley after the beat-up pulse against the predicted damped "
                     "frequency; (c) harmonic forcing of the linear model against |Q0|.",
         epilog="Example: mechcirc crosscheck --drive one-side --variant 3 --theta 60\n"
-               "         mechcirc crosscheck netlists/stb_heald.mcir --omega-max 5000  "
-               "(any netlist: see 'mechcirc transient')",
+               "         mechcirc crosscheck netlists/stb_heald.mcir --omega-max 5000\n"
+               "(a netlist FILE: its resonances and |Q0| against its transients)",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("file", nargs="?", metavar="FILE.mcir",
                    help="a netlist: cross-check its resonances and |Q0| against its "
