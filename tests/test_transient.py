@@ -307,3 +307,12 @@ def test_clearance_under_harmonic_velocity_drive_against_solve_ivp():
     # the drive carries exactly the clearance element's force
     total = r.element_force("k") + r.element_force("k_damping")
     assert np.abs(r.drive_force - total).max() <= 1e-9 * np.abs(total).max()
+
+
+def test_nodes_only_outputs_match_full_run():
+    c = mechcirc.parse("drive V b 0 velocity=0.2\nspring k b a 900\nmass m a 0 4\n"
+                       "damper c a 0 1\n")
+    full = transient(c, 0.5, 1e-3, "harmonic:7")
+    lean = transient(c, 0.5, 1e-3, "harmonic:7", elements=False)
+    assert lean.elements == () and lean.force.shape == (full.time.size, 0)
+    assert np.array_equal(lean.x, full.x) and np.array_equal(lean.drive_force, full.drive_force)

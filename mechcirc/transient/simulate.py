@@ -235,6 +235,7 @@ def _grid(t_end: float, dt: float | None, waveform: Waveform) -> np.ndarray:
 def transient(circuit: Circuit, t_end: float, dt: float | None = None,
               drive: Waveform | str | Callable | None = None, *,
               amplitude: float | None = None, linearise: bool = False,
+              elements: bool = True,
               rtol: float = 1e-10) -> TransientResult:
     """Integrate ``circuit`` from its ``.ic`` state over [0, t_end] on a grid of step ``dt``.
 
@@ -255,6 +256,9 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
         Take every clearance as closed (the frequency domain's reading).
     rtol : float
         Relative tolerance of the clearance integrator (ignored when linear).
+    elements : bool
+        Compute every element's force and velocity difference (default); if
+        false only node and drive outputs (faster for long runs of large networks).
     """
     if callable(drive) and not isinstance(drive, Waveform):
         drive = Waveform("callable", func=drive)
@@ -297,7 +301,8 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
     if interp > 1e-13 * float(np.abs(u).max()):      # not rounding of an exact ramp
         notes.append(f"drive interpolated linearly between samples: its error is at most "
                      f"{interp:.3g} (h²/8·max|ü|, from the samples' second differences)")
-    return _outputs(ss, circuit, t, Z, u, u_in, h, drive, method, err, interp, notes)
+    return _outputs(ss, circuit, t, Z, u, u_in, h, drive, method, err, interp, notes,
+                    elements)
 
 
 def _with_oscillator(ss: StateSpace, z0, omega: float, amp: float):
@@ -446,7 +451,7 @@ def _nonlinear(ss: StateSpace, circuit, z0, t, u, rtol):
     return Z, f"Dormand-Prince 5(4), rtol {rtol:g} ({backend}); clearances in the RHS", err
 
 
-def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes
+def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes, want=True
              ) -> TransientResult:
     udot = np.gradient(u, h) if u.size > 1 else np.zeros_like(u)
     X = Z @ ss.Cx.T + np.outer(u, ss.Dx)
@@ -465,7 +470,8 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes
     law_cache = {}
     for name, (e, comp) in clear.items():
         law_cache[name] = _law_forces(e, comp, diff(X, e), diff(V, e))
-    need_acc = any(e.kind == "mass" for e in circuit.elements) or ss.h is not None
+    need_acc = (want and any(e.kind == "mass" for e in circuit.elements)) or \
+        ss.kind == "velocity"
     if need_acc:
         # a = C_v ż + D_v u̇, with ż = A z + B u (+ the clearance forces): C_v A is
         # formed once, so the cost is one (n_t × N) · (N × n) product.
@@ -474,7 +480,7 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes
             Acc += np.outer(law_cache[name][0], ss.Cv @ ss.extra[:, j])
 
     # Differences across every element at once: two column gathers.
-    els = circuit.elements
+    els = circuit.elements if want else ()
     i1 = np.array([index.get(e.n1, -1) for e in els], dtype=int)
     i2 = np.array([index.get(e.n2, -1) for e in els], dtype=int)
 
@@ -505,7 +511,7 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes
             total, spring = law_cache[sp.name]
             force[:, j] = spring if e.name == sp.name else total - spring
     drive_force = drive_velocity = None
-    if ss.kind is not None:
+    if ss.kind == "velocity":
         # Q = h·(M a + D v + K x + Σ g_e f_e): contract with h first (vectors only).
         Q = Acc @ (ss.M.T @ ss.h) + V @ (ss.D.T @ ss.h) + X @ (ss.K.T @ ss.h)
         for name, (e, comp) in clear.items():
@@ -515,10 +521,9 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes
             if e.n2 in index:
                 ge[index[e.n2]] -= 1.0
             Q = Q + law_cache[name][0] * (ge @ ss.h)
-        if ss.kind == "velocity":
-            drive_force = Q
-        else:
-            drive_velocity = V @ ss.g
+        drive_force = Q
+    elif ss.kind == "force":
+        drive_velocity = V @ ss.g
     if ss.Ev.any() and drive.kind not in ("rest", "impulse"):
         notes.append("some nodes carry neither mass nor damping: their velocities use the "
                      "drive's derivative estimated from the samples")
