@@ -182,6 +182,11 @@ class Circuit:
     params: dict = field(default_factory=dict, compare=False)
     initial: tuple = ()
 
+    def __getstate__(self):
+        # Pickle the description only: the cached reduction tree nests as deep
+        # as the network (deeper than pickle recurses) and is rebuilt on use.
+        return {k: v for k, v in self.__dict__.items() if k not in ("_reduction", "nodal")}
+
     def element(self, name: str) -> Element | Lever:
         """The element or lever called ``name`` (KeyError if none)."""
         for e in self.elements + self.levers:

@@ -11,6 +11,7 @@ from __future__ import annotations
 __all__ = [
     "MechcircError",
     "NetlistError",
+    "InputError",
     "TopologyError",
     "NotSeriesParallelError",
     "GeometryError",
@@ -57,6 +58,10 @@ class NetlistError(MechcircError, ValueError):
         if self.expected:
             text += f" (expected {self.expected})"
         return text
+
+
+class InputError(MechcircError, ValueError):
+    """An argument out of its domain (a non-finite ω, a negative count): the caller's mistake."""
 
 
 class TopologyError(MechcircError, ValueError):

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .circuit import Circuit
+from .errors import InputError
 
 __all__ = ["ElementForce", "element_forces"]
 
@@ -88,7 +89,7 @@ def element_forces(circuit: Circuit, omega: float, *, method: str = "auto"
     """
     omega = float(omega)
     if not (math.isfinite(omega) and omega > 0):
-        raise ValueError(f"omega must be finite and > 0 rad/s, got {omega!r}")
+        raise InputError(f"omega must be finite and > 0 rad/s, got {omega!r}")
     result = circuit.sweep(np.array([omega]), method=method)
     Q0 = complex(result.Q0[0])
     rows = []

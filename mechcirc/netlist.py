@@ -38,7 +38,7 @@ from pathlib import Path
 from .circuit import ELEMENT_UNITS, Circuit, Drive, Element, Lever
 from .errors import NetlistError
 from .expressions import CONSTANTS, FUNCTIONS, Expr, evaluate, parse_expression
-from .sources import read_source
+from .sources import read_source, split_lines
 from .units import UnitError, convert, looks_like_unit, parse_unit
 
 __all__ = ["parse", "load", "expressions_of", "MAX_LINE_LENGTH", "MAX_STATEMENTS", "SYNTAX"]
@@ -164,7 +164,7 @@ class _Parser:
 
     # -- statements ------------------------------------------------------
     def run(self) -> Circuit:
-        lines = self.text.splitlines()
+        lines = split_lines(self.text)     # as editors and wc -l count them
         if not any(ln.strip() for ln in lines):
             raise NetlistError("the file is empty", self.source, 0, 0,
                                "element lines such as 'mass m1 a 0 2.5' and one 'drive' line")
@@ -204,7 +204,7 @@ class _Parser:
                        "lever": self.lever, "drive": self.drive, ".ic": self.ic}.get(keyword)
             if handler is None:
                 line.error(f"unknown keyword {line.tokens[0].text!r}", line.tokens[0].col,
-                           "one of .param, mass, spring, damper, lever, drive, .ic")
+                           "one of .param, .ic, mass, spring, damper, lever, drive")
             handler(line, keyword)
         if not parsed:
             raise NetlistError("the file has no statements, only comments and blank lines",

@@ -33,13 +33,30 @@ def _mark_resonances(axes, resonances, legend_ax):
         legend_ax.legend(loc="best", fontsize="small")
 
 
-def plot_sweep(result, title: str | None = None, resonances=()):
+def _mark_peak(ax, peak) -> None:
+    """The exact peak of |Q0| (a :class:`mechcirc.sweep.Peak`): a dot at the located
+    maximum, or a triangle at the top of the axis at every undamped resonance (∞)."""
+    if peak is None or peak.quantity != "Q0":
+        return
+    if peak.unbounded:
+        for i, w in enumerate(peak.poles):
+            ax.plot([w], [1.0], marker="^", color="C3", ls="none",
+                    transform=ax.get_xaxis_transform(), clip_on=False,
+                    label="|Q0| = ∞ (undamped)" if i == 0 else None)
+    else:
+        ax.plot([peak.omega], [peak.value], marker="o", color="C3", ls="none",
+                label=f"peak {peak.value:.4g} N at {peak.omega:.6g} rad/s")
+    ax.legend(loc="best", fontsize="small")
+
+
+def plot_sweep(result, title: str | None = None, resonances=(), peak=None):
     """Bode-style |K| [m/(N·s)] and arg K [deg], and |Q0| [N], against ω [rad/s].
 
     ``resonances`` (from :func:`mechcirc.resonances.find_resonances`) are drawn
     as vertical lines: solid for K = 0, dashed for K = ∞.  Flagged points
     (on or within rounding of a pole or zero) are marked with crosses.
-    Returns the Figure.
+    ``peak`` (from :func:`mechcirc.sweep.peak`) marks the exact maximum of |Q0|,
+    or ∞ at each undamped resonance.  Returns the Figure.
     """
     import numpy as np
 
@@ -65,6 +82,7 @@ def plot_sweep(result, title: str | None = None, resonances=()):
         ax_k.loglog(omega[flagged], absK[flagged], "x", color="C3", label="flagged point")
         ax_k.legend(loc="best", fontsize="small")
     _mark_resonances((ax_k, ax_p, ax_q), resonances, ax_q)
+    _mark_peak(ax_q, peak)
     for ax in (ax_k, ax_p, ax_q):
         ax.grid(True, which="both", alpha=0.3)
     fig.suptitle(title or f"{result.name}: kinematic characteristic and force amplitude")

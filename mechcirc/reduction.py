@@ -31,7 +31,7 @@ from .errors import NotSeriesParallelError, TopologyError, UnloadedElementWarnin
 from .topology import check_frame_paths, loaded_groups, reachable
 
 __all__ = ["Leaf", "Series", "Parallel", "Reflect", "Node", "Reduction",
-           "reduce_circuit", "reduce_network", "evaluate", "push_down", "leaves"]
+           "reduce_circuit", "reduce_network", "evaluate", "push_down", "leaves", "depth"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -427,6 +427,19 @@ def _binary_items(node: _Binary):
 # Evaluation
 # --------------------------------------------------------------------------
 
+def depth(root: Node) -> int:
+    """Number of levels of the tree (a leaf alone: 1)."""
+    deepest, stack = 1, [(root, 1)]
+    while stack:
+        node, d = stack.pop()
+        deepest = max(deepest, d)
+        if isinstance(node, (Series, Parallel)):
+            stack.extend((c, d + 1) for c in node.children)
+        elif isinstance(node, Reflect):
+            stack.append((node.child, d + 1))
+    return deepest
+
+
 def _postorder(root: Node) -> list[Node]:
     order, stack = [], [root]
     while stack:
@@ -440,17 +453,26 @@ def _postorder(root: Node) -> list[Node]:
     return order
 
 
-def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: bool = False):
+#: Unit roundoff of float64 (half the machine epsilon): the relative error of
+#: one correctly rounded operation.
+_U = np.finfo(float).eps / 2
+#: Relative error of a reciprocal 1/z: ≤ u for a real z; a complex division in
+#: numpy (Smith's algorithm) stays within a few u, bounded here by 4u.
+_U_RECIP = 4 * _U
+
+
+def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: bool = False,
+             error: bool = False):
     """K(ω) [m/(N·s)] of the tree at each ω [rad/s], vectorised.
 
     With ``keep=True`` returns ``(K, values)`` where ``values`` maps
     ``id(node)`` to the K of every series, parallel and lever node, for
-    :func:`push_down`.  With ``condition=True`` returns ``(K, cond)``, the
-    relative condition number of the evaluation at each ω: the product, down
-    the worst path of the tree, of Σ|xᵢ| / |Σxᵢ| over each sum formed (of K
-    in series, of 1/K in parallel).  The relative rounding error of K is
-    about ``cond`` × 1.1e-16 × (tree depth).  Exact poles and zeros give ±inf
-    or 0 without warnings; ``inf - inf`` gives NaN (callers flag it).
+    :func:`push_down`.  With ``error=True`` returns ``(K, bound)``: a running
+    forward bound of the relative rounding error of K at each ω (see Notes).
+    ``condition=True`` is the same bound divided by the unit roundoff (kept
+    for callers of the former condition number).  Exact poles and zeros give
+    ±inf or 0 without warnings (their bound is inf); ``inf - inf`` gives NaN
+    (callers flag it).
 
     Notes
     -----
@@ -460,43 +482,68 @@ def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: boo
     its number of leaves.  A lossless sub-network (no dampers) has a purely
     imaginary K = jX and is computed in real arithmetic on X, which is about
     four times cheaper than complex arithmetic and keeps 1/0 = ∞, 1/∞ = 0.
+
+    The error bound follows the rounding through every sum, first order in the
+    unit roundoff u.  A node forms S = Σ tᵢ from m terms (its leaf groups and its
+    children; in parallel the terms are admittances 1/Kᵢ), each term known to a
+    relative error ρᵢ, so that
+
+        |Ŝ − S| ≤ Σ |tᵢ| (ρᵢ + m·u),     ρ(S) = that / |S|,
+
+    where a leaf group of n same-signed scalars has ρ = (n + 2)·u, a reciprocal
+    turns ρ into ρ/(1 − ρ) + 4u (∞ from ρ ≥ 1 on: no digit is known) and a
+    lever's division by r² adds 2u.  ρ is carried relative to the computed
+    values, so only the rounding of each addition (the m·u term) is first order.  Cancellation at a node
+    (Σ|tᵢ| ≫ |S|) raises the bound there; the children's errors are weighted by
+    |tᵢ|/|S|, not multiplied down the tree, so a deep ladder with no
+    cancellation keeps a bound of a few hundred u.
     """
     omega = np.asarray(omega, dtype=float)
     values: dict[int, _Value] = {}
+    track = error or condition
     with np.errstate(all="ignore"):
         inv_omega = 1.0 / omega
         for node in _postorder(root):
             if isinstance(node, Leaf):
                 continue
             if isinstance(node, Reflect):
-                child = _value_of(node.child, values, omega, inv_omega)
+                child = _value_of(node.child, values, omega, inv_omega, track)
                 # Divide twice: ratio ** 2 overflows a Python float for ratio > 1.3e154.
                 r = node.lever.ratio
-                val = _Value(child.imaginary, child.array / r / r, child.cond)
+                val = _Value(child.imaginary, child.array / r / r)
+                if track:
+                    val.mag = child.mag / r / r
+                    val.rho = child.rho + 2 * _U
             else:
-                val = _combine(node, values, omega, inv_omega, condition)
+                val = _combine(node, values, omega, inv_omega, track)
             if not keep:
                 kids = node.children if isinstance(node, (Series, Parallel)) else (node.child,)
                 for c in kids:
                     values.pop(id(c), None)
             values[id(node)] = val
-        top = _value_of(root, values, omega, inv_omega)
+        top = _value_of(root, values, omega, inv_omega, track)
     K = top.complex()
     if keep:
         return K, {k: v.complex() for k, v in values.items()}
-    if condition:
-        cond = top.cond if top.cond is not None else 1.0
-        return K, np.broadcast_to(cond, omega.shape).copy()
+    if track:
+        # ``rho`` bounds the error relative to the computed |K̂|; relative to the
+        # true |K| ≥ |K̂|(1 − ρ) it is ρ / (1 − ρ).
+        rho = np.broadcast_to(_through_reciprocal(top.rho), omega.shape).astype(float)
+        rho[np.isnan(rho)] = np.inf
+        return K, (rho / _U if condition and not error else rho)
     return K
 
 
 class _Value:
-    """K of a node: ``array`` is X with K = jX when ``imaginary``, else K itself."""
+    """K of a node: ``array`` is X with K = jX when ``imaginary``, else K itself.
 
-    __slots__ = ("imaginary", "array", "cond")
+    With error tracking, ``mag`` is |K| and ``rho`` the bound of its relative error.
+    """
 
-    def __init__(self, imaginary: bool, array: NDArray, cond=None):
-        self.imaginary, self.array, self.cond = imaginary, array, cond
+    __slots__ = ("imaginary", "array", "mag", "rho")
+
+    def __init__(self, imaginary: bool, array: NDArray, mag=None, rho=None):
+        self.imaginary, self.array, self.mag, self.rho = imaginary, array, mag, rho
 
     def complex(self) -> NDArray[np.complex128]:
         if not self.imaginary:
@@ -507,19 +554,24 @@ class _Value:
 
     def reciprocal(self) -> "_Value":
         if self.imaginary:
-            return _Value(True, -1.0 / self.array, self.cond)     # 1/(jX) = j(-1/X)
-        return _Value(False, _reciprocal(self.array), self.cond)
+            return _Value(True, -1.0 / self.array)     # 1/(jX) = j(-1/X)
+        return _Value(False, _reciprocal(self.array))
 
 
-def _value_of(node: Node, values: dict, omega, inv_omega) -> _Value:
+def _value_of(node: Node, values: dict, omega, inv_omega, track: bool = False) -> _Value:
     if isinstance(node, Leaf):
         e = node.element
         s = _scaled(e)
         if e.kind == "mass":
-            return _Value(True, inv_omega * (-1.0 / s))
-        if e.kind == "spring":
-            return _Value(True, omega * (1.0 / s))
-        return _Value(False, np.full(omega.shape, 1.0 / s, dtype=complex))
+            v = _Value(True, inv_omega * (-1.0 / s))
+        elif e.kind == "spring":
+            v = _Value(True, omega * (1.0 / s))
+        else:
+            v = _Value(False, np.full(omega.shape, 1.0 / s, dtype=complex))
+        if track:
+            v.mag = np.abs(v.array)
+            v.rho = 4 * _U      # value·η, 1/s, 1/ω and the product
+        return v
     return values[id(node)]
 
 
@@ -529,10 +581,11 @@ def _scaled(e: Element) -> np.float64:
     return np.float64(e.value) * np.float64(e.eta)
 
 
-def _combine(node, values: dict, omega, inv_omega, condition: bool = False) -> _Value:
+def _combine(node, values: dict, omega, inv_omega, track: bool = False) -> _Value:
     """Series: K = Σ K_i.  Parallel: 1/K = Σ 1/K_i.  Leaves are grouped by kind."""
     series = isinstance(node, Series)
     real = im_inv = im_omega = 0.0      # leaf terms: real + j(im_inv/ω + im_omega·ω)
+    n_real = n_inv = n_omega = 0
     parts: list[_Value] = []
     for c in node.children:
         if isinstance(c, Leaf):
@@ -540,25 +593,33 @@ def _combine(node, values: dict, omega, inv_omega, condition: bool = False) -> _
             s = _scaled(e)
             if e.kind == "damper":
                 real += 1.0 / s if series else s
+                n_real += 1
             elif e.kind == "mass":
                 if series:
                     im_inv -= 1.0 / s           # K = -j/(ω m)
+                    n_inv += 1
                 else:
                     im_omega += s               # Y = jωm
+                    n_omega += 1
             elif series:
                 im_omega += 1.0 / s             # K = jω/k
+                n_omega += 1
             else:
                 im_inv -= s                     # Y = -jk/ω
+                n_inv += 1
         else:
-            v = values[id(c)]
-            parts.append(v if series else v.reciprocal())
+            parts.append(values[id(c)])
+    if not series:
+        terms = [v.reciprocal() for v in parts]
+    else:
+        terms = parts
     imag = None
     if im_inv:
         imag = inv_omega * im_inv
     if im_omega:
         imag = omega * im_omega if imag is None else imag + omega * im_omega
     cplx = None
-    for v in parts:
+    for v in terms:
         if v.imaginary:
             imag = v.array.copy() if imag is None else imag + v.array
         else:
@@ -574,26 +635,36 @@ def _combine(node, values: dict, omega, inv_omega, condition: bool = False) -> _
         if imag is not None:
             cplx.imag += imag
         total = _Value(False, cplx)
-    if condition:
-        leaf_terms = [abs(real)]
+    if track:
+        m = len(parts) + (real != 0) + (im_inv != 0) + (im_omega != 0)
+        mu = m * _U
+        # Leaf groups: n same-signed scalars summed (n·u), value·η and 1/s (2u),
+        # times ω or 1/ω (2u).
+        bound = abs(real) * ((n_real + 2) * _U + mu)
         if im_inv:
-            leaf_terms.append(abs(im_inv) * inv_omega)
+            bound = bound + (abs(im_inv) * ((n_inv + 4) * _U + mu)) * inv_omega
         if im_omega:
-            leaf_terms.append(abs(im_omega) * omega)
-        total.cond = _condition(parts, leaf_terms, total.array)
+            bound = bound + (abs(im_omega) * ((n_omega + 4) * _U + mu)) * omega
+        for v in parts:
+            if series:
+                bound = bound + v.mag * (v.rho + mu)
+            else:
+                bound = bound + (_through_reciprocal(v.rho) + (_U_RECIP + mu)) / v.mag
+        mag = np.abs(total.array)
+        rho = bound / mag
+        if series:
+            total.mag, total.rho = mag, rho
+        else:
+            total = total.reciprocal()
+            total.mag, total.rho = 1.0 / mag, _through_reciprocal(rho) + _U_RECIP
+        return total
     return total if series else total.reciprocal()
 
 
-def _condition(parts, leaf_terms, total):
-    """max(child cond) · Σ|terms| / |Σ terms| for one sum (see :func:`evaluate`)."""
-    size = sum(leaf_terms)
-    worst = 1.0
-    for v in parts:
-        size = size + np.abs(v.array)
-        if v.cond is not None:
-            worst = np.maximum(worst, v.cond)
-    ratio = size / np.abs(total)
-    return worst * np.where(np.isnan(ratio), np.inf, ratio)
+def _through_reciprocal(rho):
+    """Relative error of 1/x̂ given |x̂ − x| ≤ ρ|x̂|: ρ / (1 − ρ), ∞ from ρ ≥ 1 on."""
+    with np.errstate(all="ignore"):
+        return np.where(rho < 1, rho / (1 - rho), np.inf)
 
 
 def _reciprocal(K: NDArray[np.complex128]) -> NDArray[np.complex128]:

@@ -2,12 +2,60 @@
 
 from __future__ import annotations
 
+import math
 import os
-from pathlib import Path
+import re
+import stat
 
 from .errors import NetlistError
 
-__all__ = ["read_source"]
+__all__ = ["read_source", "read_bytes", "MAX_INPUT_BYTES", "split_lines", "line_col",
+           "finite_number", "brief", "load_toml", "locate", "locate_path", "located"]
+
+#: The largest input file mechcirc reads [bytes].  A netlist of the statement
+#: limit is far below this; anything larger is refused before it is read.
+MAX_INPUT_BYTES = 64 * 2**20
+
+
+def read_bytes(path: str | os.PathLike, expected: str) -> bytes:
+    """The bytes of the regular file ``path``, at most :data:`MAX_INPUT_BYTES`.
+
+    Devices, pipes and sockets (``/dev/zero``, a FIFO) are refused before
+    anything is read, and so is a file larger than the bound; at most
+    ``MAX_INPUT_BYTES + 1`` bytes are ever read, so a file that grows while
+    it is read cannot exhaust memory either.
+
+    Raises
+    ------
+    NetlistError
+        If the file is missing, a folder, not a regular file, unreadable or
+        too large.
+    """
+    source = os.fspath(path)
+    try:
+        info = os.stat(source)
+    except FileNotFoundError:
+        raise NetlistError("no such file", source, 0, 0, f"the path of {expected}") from None
+    except OSError as exc:
+        raise NetlistError(f"cannot read: {exc.strerror}", source) from None
+    if stat.S_ISDIR(info.st_mode):
+        raise NetlistError("is a directory", source, 0, 0, f"{expected} file") from None
+    if not stat.S_ISREG(info.st_mode):
+        raise NetlistError("is not a regular file (a device, pipe or socket); nothing was read",
+                           source, 0, 0, f"{expected} file")
+    if info.st_size > MAX_INPUT_BYTES:
+        raise NetlistError(f"is {info.st_size:,} bytes, more than the limit of "
+                           f"{MAX_INPUT_BYTES:,} bytes; nothing was read", source, 0, 0,
+                           f"{expected} file")
+    try:
+        with open(source, "rb") as fh:
+            data = fh.read(MAX_INPUT_BYTES + 1)
+    except OSError as exc:
+        raise NetlistError(f"cannot read: {exc.strerror}", source) from None
+    if len(data) > MAX_INPUT_BYTES:
+        raise NetlistError(f"grew past the limit of {MAX_INPUT_BYTES:,} bytes while it was "
+                           "read", source, 0, 0, f"{expected} file")
+    return data
 
 
 def read_source(path: str | os.PathLike, expected: str) -> str:
@@ -19,18 +67,12 @@ def read_source(path: str | os.PathLike, expected: str) -> str:
     Raises
     ------
     NetlistError
-        If the file is missing, a folder, unreadable, or not UTF-8 (then with
-        the line and column of the first bad byte).
+        If the file is missing, a folder, not a regular file, larger than
+        :data:`MAX_INPUT_BYTES`, unreadable, or not UTF-8 (then with the line
+        and column of the first bad byte).
     """
     source = os.fspath(path)
-    try:
-        data = Path(path).read_bytes()
-    except FileNotFoundError:
-        raise NetlistError("no such file", source, 0, 0, f"the path of {expected}") from None
-    except IsADirectoryError:
-        raise NetlistError("is a directory", source, 0, 0, f"{expected} file") from None
-    except OSError as exc:
-        raise NetlistError(f"cannot read: {exc.strerror}", source) from None
+    data = read_bytes(path, expected)
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError as exc:
@@ -40,3 +82,132 @@ def read_source(path: str | os.PathLike, expected: str) -> str:
         raise NetlistError(f"byte 0x{data[exc.start]:02x} is not valid UTF-8", source,
                            line, col, "a UTF-8 text file") from None
     return text.removeprefix("\ufeff")
+
+
+# ------------------------------------------------------------------ lines and places
+def split_lines(text: str) -> list[str]:
+    """The lines of ``text`` as editors and ``wc -l`` count them.
+
+    Only ``\\n`` ends a line (``\\r\\n`` too: its ``\\r`` is dropped).  Unlike
+    :meth:`str.splitlines`, a form feed, vertical tab, lone ``\\r``, NEL
+    (U+0085) or U+2028/U+2029 is a character of its line, not a line break,
+    so a reported line number always names a line that ``wc -l`` and an
+    editor show (TOML agrees: only LF and CRLF end a line there).
+    """
+    lines = text.split("\n")
+    if lines and lines[-1] == "":
+        lines.pop()                   # the terminator of the last line starts no new one
+    return [ln[:-1] if ln.endswith("\r") else ln for ln in lines]
+
+
+def line_col(text: str, index: int) -> tuple[int, int]:
+    """1-based (line, column) of the character at ``index`` (lines as :func:`split_lines`)."""
+    index = max(0, min(index, len(text)))
+    line = text.count("\n", 0, index) + 1
+    return line, index - (text.rfind("\n", 0, index) + 1) + 1
+
+
+# ------------------------------------------------------------------ values
+def finite_number(value) -> bool:
+    """A TOML integer or float that is a finite float64 (not a bool, not ``10**400``)."""
+    if not isinstance(value, (int, float)) or isinstance(value, bool):
+        return False
+    try:
+        return math.isfinite(value)
+    except OverflowError:              # an integer beyond float64's range
+        return False
+
+
+def brief(value) -> str:
+    """``repr(value)`` cut short for a message (a 400-digit integer is not a message)."""
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+# ------------------------------------------------------------------ TOML with places
+_HEADER = re.compile(r"^\s*\[\[?\s*([^\]]+?)\s*\]\]?\s*(#.*)?$")
+
+
+def load_toml(text: str, source: str) -> dict:
+    """Parse TOML ``text``; a syntax error becomes a :class:`NetlistError` at its line and column."""
+    import tomllib
+
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        m = re.search(r"\(at line (\d+), column (\d+)\)", str(exc))
+        line, col = (int(m.group(1)), int(m.group(2))) if m else (0, 0)
+        msg = re.sub(r"\s*\(at line \d+, column \d+\)", "", str(exc))
+        raise NetlistError(f"TOML syntax: {msg}", source, line, col) from None
+    except ValueError:
+        # tomllib converts integers with int(), which refuses more than
+        # sys.get_int_max_str_digits() (4300) digits.
+        m = re.search(r"\d{4000,}", text)
+        line, col = line_col(text, m.start()) if m else (0, 0)
+        raise NetlistError("integer with thousands of digits", source, line, col,
+                           "a number within float64's range") from None
+
+
+def locate(text: str, section: str | None, key: str, value: str | None = None,
+           occurrence: int = 0) -> tuple[int, int]:
+    """1-based (line, col) of ``key = …`` in ``[section]`` (or its n-th ``[[section]]``).
+
+    ``section=None`` means the top level.  With ``value``, the column of that
+    quoted string on the line.  (0, 0) when not found.
+    """
+    in_section = section is None
+    seen = -1
+    key_re = re.compile(r'^\s*["\']?' + re.escape(key) + r'["\']?\s*=')
+    for n, line in enumerate(split_lines(text), start=1):
+        m = _HEADER.match(line)
+        if m:
+            in_section = False                     # top-level keys end at the first header
+            if section is not None and m.group(1).replace(" ", "") == section:
+                seen += 1
+                in_section = seen == occurrence
+            continue
+        if in_section and key_re.match(line):
+            col = line.index(key) + 1
+            if value is not None:
+                for quote in ('"', "'"):
+                    pos = line.find(f"{quote}{value}{quote}")
+                    if pos >= 0:
+                        col = pos + 1
+                        break
+            return n, col
+    return 0, 0
+
+
+def locate_path(text: str, path: tuple[str, ...]) -> tuple[int, int]:
+    """(line, col) of the TOML key ``path`` (e.g. ``("grid", "eta2", "num")``), however written.
+
+    Tries ``[a.b]`` then ``c = …``; ``[a]`` then ``b = {c = …}`` (the column of
+    ``c`` on that line when it is there); the header ``[a.b.c]`` itself; and
+    so on up to the top level.  (0, 0) when nothing matches.
+    """
+    path = tuple(str(p) for p in path)
+    for cut in range(len(path) - 1, -1, -1):
+        section = ".".join(path[:cut]) or None
+        line, col = locate(text, section, path[cut])
+        if line:
+            rest = path[cut + 1:]
+            if rest:
+                here = split_lines(text)[line - 1]
+                m = re.search(r"[{,\s]" + re.escape(rest[-1]) + r"\s*=", here)
+                if m:
+                    col = m.start() + 2
+            return line, col
+        name = ".".join(path[:cut + 1])
+        for n, ln in enumerate(split_lines(text), start=1):
+            m = _HEADER.match(ln)
+            if m and m.group(1).replace(" ", "") == name:
+                return n, ln.index("[") + 1
+    return 0, 0
+
+
+def located(text: str, source: str, message: str, section: str | None, key: str,
+            value=None, occurrence: int = 0, expected: str | None = None) -> NetlistError:
+    """A :class:`NetlistError` placed at ``key`` of ``[section]`` (see :func:`locate`)."""
+    line, col = locate(text, section, key, value if isinstance(value, str) else None,
+                       occurrence)
+    return NetlistError(message, source, line, col, expected)

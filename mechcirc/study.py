@@ -47,7 +47,8 @@ never dropped.
 
 Columns: ``index``, the parameters, ``status``, ``error``, then for a sweep
 ``K_abs_min K_abs_max Q0_abs_max omega_at_Q0_max n_flagged`` [m/(N·s), N,
-rad/s], for resonances ``resonance_1..N`` and ``antiresonance_1..N`` [rad/s]
+rad/s] (``Q0_abs_max`` is the exact peak of :func:`mechcirc.sweep.peak`: ``inf``
+with ``omega_at_Q0_max`` the resonance when the band holds an undamped one), for resonances ``resonance_1..N`` and ``antiresonance_1..N`` [rad/s]
 (empty where there are fewer), for a sley simulation the minimum and maximum
 over the tabulated revolution of ``eps2P eps4P eps4T`` [1/s²] and ``M2V``
 [N·m] (both-sides drive: also ``eps5P M5V``), e.g. ``eps4P_min``.
@@ -55,11 +56,12 @@ over the tabulated revolution of ``eps2P eps4P eps4T`` [1/s²] and ``M2V``
 Execution: all local cores (``concurrent.futures.ProcessPoolExecutor``) by
 default, or an existing Dask cluster (``scheduler="tcp://host:8786"``;
 ``dask.distributed`` is imported only then).  Points go out in batches;
-finished rows are appended to the output as they arrive, so an interrupted
-study keeps them, and ``resume=True`` runs only the points the file lacks.
-At the end the file is rewritten in index order (atomically); a ``.parquet``
-output is written then (pyarrow), the rows journalled to a CSV beside it
-meanwhile.  Local and
+finished rows are journalled (each with a checksum) to ``OUTPUT.partial.csv``
+as they arrive, so an interrupted study keeps them, and ``resume=True`` runs
+only the points the journal lacks or holds incomplete.  At the end the output
+(CSV, or ``.parquet`` with pyarrow) is written whole in index order
+(atomically) and the journal removed; until then an existing output is
+left as it was.  Local and
 cluster runs give identical tables: each point is computed the same way,
 whatever runs it.
 """
@@ -75,10 +77,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Iterable
 
-from .errors import MechcircError
+from .errors import MechcircError, NetlistError
+from .limits import (MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS, MAX_STUDY_POINTS,
+                     MAX_STUDY_SWEEP_POINTS, MAX_STUDY_WORK)
+from .sources import brief, finite_number, load_toml, locate_path
 
 __all__ = ["StudySpec", "load_spec", "parse_spec", "study_points", "run_point", "run_batch",
-           "run_study", "StudyResult", "read_rows"]
+           "run_study", "StudyResult", "read_rows", "journal_path"]
 
 _SWEEP_COLUMNS = ["K_abs_min", "K_abs_max", "Q0_abs_max", "omega_at_Q0_max", "n_flagged"]
 _SLEY_QUANTITIES = {"one-side": ["eps2P", "eps4P", "eps4T", "M2V"],
@@ -115,127 +120,183 @@ class StudySpec:
             [f"antiresonance_{i}" for i in range(1, n + 1)]
 
 
-def _fail(source: str, message: str):
-    raise MechcircError(f"{source}: {message}")
+class _SpecError(Exception):
+    """A fault in a study description, with the TOML key path it belongs to."""
+
+    def __init__(self, message: str, path: tuple):
+        super().__init__(message)
+        self.message, self.path = message, tuple(str(p) for p in path)
 
 
-def _omega(source, value, what) -> float:
+def _fail(path, message: str):
+    raise _SpecError(message, tuple(path))
+
+
+def _omega(path, value, what) -> float:
     from .units import parse_omega
 
     if isinstance(value, bool):
-        _fail(source, f"{what} must be a number [rad/s] or a string such as '50Hz'")
+        _fail(path, f"{what} must be a number [rad/s] or a string such as '50Hz'")
     if isinstance(value, (int, float)):
+        if not finite_number(value):
+            _fail(path, f"{what} must be a finite number [rad/s], got {brief(value)}")
         return float(value)
     if isinstance(value, str):
         try:
-            return parse_omega(value)
+            w = parse_omega(value)
         except ValueError as exc:
-            _fail(source, f"{what}: {exc}")
-    _fail(source, f"{what} must be a number [rad/s] or a string such as '50Hz', got {value!r}")
+            _fail(path, f"{what}: {exc}")
+        if not math.isfinite(w):
+            _fail(path, f"{what} must be finite, got {brief(value)}")
+        return w
+    _fail(path, f"{what} must be a number [rad/s] or a string such as '50Hz', "
+                f"got {brief(value)}")
 
 
-def _number(source, value, what) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        _fail(source, f"{what} must be a finite number, got {value!r}")
+def _number(path, value, what) -> float:
+    if not finite_number(value):
+        _fail(path, f"{what} must be a finite number, got {brief(value)}")
     return float(value)
 
 
-def _axis(source, name, value) -> list[float]:
+def _integer(path, value, what, lo, hi) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
+        _fail(path, f"{what} must be an integer from {lo} to {hi:,}, got {brief(value)}")
+    return value
+
+
+def _axis_length(name, value) -> int:
+    """How many values the axis ``grid.NAME`` has, checked before any is made."""
+    path = ("grid", name)
     if isinstance(value, list):
         if not value:
-            _fail(source, f"grid.{name} is an empty list")
-        return [_number(source, v, f"grid.{name}") for v in value]
+            _fail(path, f"grid.{name} is an empty list")
+        return len(value)
     if isinstance(value, dict):
         extra = set(value) - {"min", "max", "num", "log"}
         if extra or not {"min", "max", "num"} <= set(value):
-            _fail(source, f"grid.{name} needs min, max and num (and optionally log), got "
-                          f"{', '.join(sorted(value))}")
-        lo, hi = _number(source, value["min"], f"grid.{name}.min"), \
-            _number(source, value["max"], f"grid.{name}.max")
-        num = value["num"]
-        if isinstance(num, bool) or not isinstance(num, int) or num < 1:
-            _fail(source, f"grid.{name}.num must be a positive integer, got {num!r}")
-        import numpy as np
-
-        if value.get("log", False):
-            if lo <= 0 or hi <= 0:
-                _fail(source, f"grid.{name}: log spacing needs min and max > 0")
-            return [float(x) for x in np.geomspace(lo, hi, num)]
-        return [float(x) for x in np.linspace(lo, hi, num)]
-    _fail(source, f"grid.{name} must be a list of values or {{min, max, num}}, got {value!r}")
+            _fail(path, f"grid.{name} needs min, max and num (and optionally log), got "
+                        f"{', '.join(sorted(map(str, value)))}")
+        return _integer((*path, "num"), value["num"], f"grid.{name}.num", 1, MAX_POINTS)
+    _fail(path, f"grid.{name} must be a list of values or {{min, max, num}}, "
+                f"got {brief(value)}")
 
 
-#: The largest number of points a study may have (a typo in num should not fill the disk).
-MAX_POINTS = 10_000_000
+def _axis(name, value) -> list[float]:
+    path = ("grid", name)
+    if isinstance(value, list):
+        return [_number(path, v, f"grid.{name}") for v in value]
+    lo = _number((*path, "min"), value["min"], f"grid.{name}.min")
+    hi = _number((*path, "max"), value["max"], f"grid.{name}.max")
+    num = value["num"]
+    import numpy as np
+
+    if value.get("log", False):
+        if lo <= 0 or hi <= 0:
+            _fail((*path, "log"), f"grid.{name}: log spacing needs min and max > 0")
+        return [float(x) for x in np.geomspace(lo, hi, num)]
+    return [float(x) for x in np.linspace(lo, hi, num)]
 
 
-def parse_spec(data: dict, *, source: str = "<spec>", base: Path | None = None) -> StudySpec:
+#: The largest number of points (rows) a study may have; each row holds ~1 kB
+#: while the study runs (docs/reliability.md).
+MAX_POINTS = MAX_STUDY_POINTS
+
+
+def parse_spec(data: dict, *, source: str = "<spec>", base: Path | None = None,
+               text: str | None = None) -> StudySpec:
     """Check a study description (the TOML file's content) and build its points.
+
+    ``text`` is the TOML text ``data`` was read from; with it, errors carry
+    the line and column of the key at fault.
 
     Raises
     ------
+    NetlistError
+        With ``text``: at file:line:col, naming the key and what would be right.
     MechcircError
-        Naming the key at fault and what would be right.
+        Without ``text``: the same message after the source's name.
     """
-    base = base or Path(".")
+    try:
+        return _parse_spec(data, source, base or Path("."))
+    except _SpecError as exc:
+        if text is None:
+            raise MechcircError(f"{source}: {exc.message}") from None
+        line, col = locate_path(text, exc.path) if exc.path else (0, 0)
+        raise NetlistError(exc.message, source, line, col) from None
+
+
+def _parse_spec(data: dict, source: str, base: Path) -> StudySpec:
     known = {"netlist", "analysis", "omega", "grid", "random", "resonances", "omega_max",
              "sley"}
     unknown = sorted(set(data) - known)
     if unknown:
-        _fail(source, f"unknown key(s) {', '.join(unknown)} (expected {', '.join(sorted(known))})")
+        _fail((unknown[0],), f"unknown key(s) {', '.join(unknown)} (expected "
+                             f"{', '.join(sorted(known))})")
     analysis = data.get("analysis", "sweep")
     if analysis not in ("sweep", "resonances", "simulate"):
-        _fail(source, f"analysis must be 'sweep', 'resonances' or 'simulate', got {analysis!r}")
+        _fail(("analysis",), f"analysis must be 'sweep', 'resonances' or 'simulate', "
+                             f"got {brief(analysis)}")
     if analysis == "simulate":
         text, path = "", ""
     else:
         if "netlist" not in data or not isinstance(data["netlist"], str):
-            _fail(source, "needs netlist = \"PATH\" (relative to the spec file)")
+            _fail(("netlist",), "needs netlist = \"PATH\" (relative to the spec file)")
         path = Path(os.path.normpath(base / data["netlist"]))
         try:
             path = path.relative_to(Path.cwd())
         except ValueError:
             pass
+        from .sources import read_source
+
         try:
-            text = path.read_text(encoding="utf-8")
-        except OSError as exc:
-            _fail(source, f"netlist {str(path)!r}: {exc.strerror or exc}")
+            text = read_source(path, "a .mcir netlist")
+        except NetlistError as exc:
+            _fail(("netlist",), f"netlist {str(path)!r}: {exc.message}")
     if ("grid" in data) == ("random" in data):
-        _fail(source, "needs exactly one of a [grid] table or a [random] table")
+        _fail(("grid",) if "grid" in data else (), "needs exactly one of a [grid] table or a "
+                                                   "[random] table")
     if "grid" in data:
         grid = data["grid"]
         if not isinstance(grid, dict) or not grid:
-            _fail(source, "[grid] must name at least one parameter")
+            _fail(("grid",), "[grid] must name at least one parameter")
         names = tuple(grid)
-        axes = [_axis(source, n, grid[n]) for n in names]
-        count = math.prod(len(a) for a in axes)
+        # Count first: an axis of num = 1e9 is refused before it is built.
+        count = math.prod(_axis_length(n, grid[n]) for n in names)
         if count > MAX_POINTS:
-            _fail(source, f"the grid has {count} points, the limit is {MAX_POINTS}")
+            _fail(("grid",), f"the grid has {count:,} points, the limit is {MAX_POINTS:,}")
+        axes = [_axis(n, grid[n]) for n in names]
         points = tuple(itertools.product(*axes))
     else:
         rnd = data["random"]
+        if not isinstance(rnd, dict):
+            _fail(("random",), "[random] must be a table (n, seed, params)")
         extra = set(rnd) - {"n", "seed", "params"}
         if extra:
-            _fail(source, f"unknown key(s) in [random]: {', '.join(sorted(extra))}")
-        n = rnd.get("n")
-        if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= MAX_POINTS:
-            _fail(source, f"random.n must be an integer from 1 to {MAX_POINTS}, got {n!r}")
+            _fail(("random", sorted(extra)[0]),
+                  f"unknown key(s) in [random]: {', '.join(sorted(extra))}")
+        n = _integer(("random", "n"), rnd.get("n"), "random.n", 1, MAX_POINTS)
+        seed = rnd.get("seed", 0)
+        if isinstance(seed, bool) or not isinstance(seed, (int, str)):
+            _fail(("random", "seed"), f"random.seed must be an integer, got {brief(seed)}")
         ranges = rnd.get("params")
         if not isinstance(ranges, dict) or not ranges:
-            _fail(source, "[random.params] must give {min, max} for at least one parameter")
+            _fail(("random", "params"), "[random.params] must give {min, max} for at least one "
+                                        "parameter")
         names = tuple(ranges)
         bounds = []
         for name in names:
             r = ranges[name]
+            where = ("random", "params", name)
             if not isinstance(r, dict) or not {"min", "max"} <= set(r) or \
                     set(r) - {"min", "max", "log"}:
-                _fail(source, f"random.params.{name} must be {{min, max[, log]}}")
-            lo = _number(source, r["min"], f"random.params.{name}.min")
-            hi = _number(source, r["max"], f"random.params.{name}.max")
+                _fail(where, f"random.params.{name} must be {{min, max[, log]}}")
+            lo = _number((*where, "min"), r["min"], f"random.params.{name}.min")
+            hi = _number((*where, "max"), r["max"], f"random.params.{name}.max")
             if not lo <= hi or (r.get("log") and lo <= 0):
-                _fail(source, f"random.params.{name}: need min <= max (and > 0 with log)")
+                _fail(where, f"random.params.{name}: need min <= max (and > 0 with log)")
             bounds.append((lo, hi, bool(r.get("log", False))))
-        rng = random.Random(rnd.get("seed", 0))
+        rng = random.Random(seed)
         points = tuple(tuple(math.exp(rng.uniform(math.log(lo), math.log(hi))) if log
                              else rng.uniform(lo, hi) for lo, hi, log in bounds)
                        for _ in range(n))
@@ -243,23 +304,27 @@ def parse_spec(data: dict, *, source: str = "<spec>", base: Path | None = None) 
     if analysis == "sweep":
         o = data.get("omega")
         if not isinstance(o, dict) or not {"min", "max"} <= set(o):
-            _fail(source, "analysis 'sweep' needs an [omega] table with min and max "
-                          "(and points, log)")
-        lo, hi = _omega(source, o["min"], "omega.min"), _omega(source, o["max"], "omega.max")
-        npts = o.get("points", 200)
-        if isinstance(npts, bool) or not isinstance(npts, int) or not 1 <= npts <= 1_000_000:
-            _fail(source, f"omega.points must be an integer from 1 to 1000000, got {npts!r}")
+            _fail(("omega",), "analysis 'sweep' needs an [omega] table with min and max "
+                              "(and points, log)")
+        lo = _omega(("omega", "min"), o["min"], "omega.min")
+        hi = _omega(("omega", "max"), o["max"], "omega.max")
+        npts = _integer(("omega", "points"), o.get("points", 200), "omega.points", 1,
+                        MAX_STUDY_SWEEP_POINTS)
         log = bool(o.get("log", False))
         if not (0 <= lo < hi) or (log and lo <= 0):
-            _fail(source, f"need 0 <= omega.min < omega.max (and > 0 with log), got {lo}, {hi}")
+            _fail(("omega", "min"), f"need 0 <= omega.min < omega.max (and > 0 with log), "
+                                    f"got {lo}, {hi}")
+        if len(points) * npts > MAX_STUDY_WORK:
+            _fail(("omega", "points"), f"{len(points):,} points × {npts:,} frequencies is "
+                                       f"{len(points) * npts:,} evaluations, the limit is "
+                                       f"{MAX_STUDY_WORK:,}")
         omega = (lo, hi, npts, log)
-    n_res = data.get("resonances", 3)
-    if isinstance(n_res, bool) or not isinstance(n_res, int) or not 1 <= n_res <= 100:
-        _fail(source, f"resonances must be an integer from 1 to 100, got {n_res!r}")
-    omega_max = _omega(source, data["omega_max"], "omega_max") if "omega_max" in data else None
+    n_res = _integer(("resonances",), data.get("resonances", 3), "resonances", 1, 100)
+    omega_max = _omega(("omega_max",), data["omega_max"], "omega_max") \
+        if "omega_max" in data else None
     sley = None
     if analysis == "simulate":
-        sley = _sley_settings(source, data.get("sley", {}), names)
+        sley = _sley_settings(data.get("sley", {}), names)
     else:
         # Check the names against the netlist now, not once per point.
         from .netlist import parse
@@ -267,29 +332,29 @@ def parse_spec(data: dict, *, source: str = "<spec>", base: Path | None = None) 
         base_circuit = parse(text, source=str(path))
         missing = [n for n in names if n not in base_circuit.params]
         if missing:
-            _fail(source, f"{', '.join(missing)} is not a .param of {path} (its parameters: "
-                          f"{', '.join(base_circuit.params) or 'none'})")
+            _fail(("grid" if "grid" in data else "random",),
+                  f"{', '.join(missing)} is not a .param of {path} (its parameters: "
+                  f"{', '.join(base_circuit.params) or 'none'})")
     return StudySpec(text, str(path), analysis, names, points, omega, n_res, omega_max, source,
                      sley)
 
 
-def _sley_settings(source, table, names) -> tuple:
+def _sley_settings(table, names) -> tuple:
     if not isinstance(table, dict):
-        _fail(source, "[sley] must be a table (drive, variant, revolutions, "
-                      "points_per_revolution)")
+        _fail(("sley",), "[sley] must be a table (drive, variant, revolutions, "
+                         "points_per_revolution)")
     extra = set(table) - {"drive", "variant", "revolutions", "points_per_revolution"}
     if extra:
-        _fail(source, f"unknown key(s) in [sley]: {', '.join(sorted(extra))}")
+        _fail(("sley", sorted(extra)[0]), f"unknown key(s) in [sley]: {', '.join(sorted(extra))}")
     drive = table.get("drive", "one-side")
-    if drive not in _SLEY_QUANTITIES:
-        _fail(source, f"sley.drive must be 'one-side' or 'both-sides', got {drive!r}")
+    if not isinstance(drive, str) or drive not in _SLEY_QUANTITIES:
+        _fail(("sley", "drive"), f"sley.drive must be 'one-side' or 'both-sides', "
+                                 f"got {brief(drive)}")
     settings = []
-    for key, default, lo, hi in (("variant", 3, 1, 7), ("revolutions", 5, 1, 1000),
-                                 ("points_per_revolution", 7200, 8, 10_000_000)):
-        v = table.get(key, default)
-        if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
-            _fail(source, f"sley.{key} must be an integer from {lo} to {hi}, got {v!r}")
-        settings.append(v)
+    for key, default, lo, hi in (("variant", 3, 1, 7),
+                                 ("revolutions", 5, 1, MAX_REVOLUTIONS),
+                                 ("points_per_revolution", 7200, 16, MAX_POINTS_PER_REVOLUTION)):
+        settings.append(_integer(("sley", key), table.get(key, default), f"sley.{key}", lo, hi))
     from dataclasses import fields
 
     from .sley import SleyParameters
@@ -298,24 +363,26 @@ def _sley_settings(source, table, names) -> tuple:
                                                         "beat_sign"}
     bad = [n for n in names if n not in known]
     if bad:
-        _fail(source, f"{', '.join(bad)} is not a sley parameter (expected some of "
-                      f"{', '.join(sorted(known))})")
+        _fail(("grid",), f"{', '.join(bad)} is not a sley parameter (expected some of "
+                         f"{', '.join(sorted(known))})")
     return (drive, *settings)
 
 
 def load_spec(path: str | os.PathLike) -> StudySpec:
-    """Read a study TOML file (see the module docstring)."""
-    import tomllib
+    """Read a study TOML file (see the module docstring).
+
+    Raises
+    ------
+    NetlistError
+        The file is missing, not UTF-8, not valid TOML, or has a fault, with
+        its line and column.
+    """
+    from .sources import read_source
 
     source = os.fspath(path)
-    try:
-        with open(source, "rb") as fh:
-            data = tomllib.load(fh)
-    except FileNotFoundError:
-        raise MechcircError(f"{source}: no such file") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise MechcircError(f"{source}: not valid TOML: {exc}") from None
-    return parse_spec(data, source=source, base=Path(source).resolve().parent)
+    text = read_source(path, "a study .toml")
+    data = load_toml(text, source)
+    return parse_spec(data, source=source, base=Path(source).resolve().parent, text=text)
 
 
 def study_points(spec: StudySpec) -> list[tuple[int, dict[str, float]]]:
@@ -352,11 +419,11 @@ def run_point(spec: StudySpec, index: int, values: dict[str, float]) -> dict:
                 result = circuit.sweep(omega)
                 with np.errstate(all="ignore"):
                     absK, absQ = np.abs(result.K), np.abs(result.Q0)
-                ok = np.isfinite(absQ)
-                peak = int(np.argmax(np.where(ok, absQ, -1.0)))
+                # The exact peak (∞ at an undamped resonance in the band, named by
+                # its ω), not the grid's largest value (issue 11 §4).
+                pk = result.peak(quantity="Q0")
                 row.update(K_abs_min=float(np.nanmin(absK)), K_abs_max=float(np.nanmax(absK)),
-                           Q0_abs_max=float(absQ[peak]) if ok.any() else math.inf,
-                           omega_at_Q0_max=float(omega[peak]) if ok.any() else math.nan,
+                           Q0_abs_max=pk.value, omega_at_Q0_max=pk.omega,
                            n_flagged=int(np.count_nonzero(result.flags)))
             else:
                 found = circuit.resonances(omega_max=spec.omega_max)
@@ -394,30 +461,81 @@ def _format(value) -> str:
     return str(value)
 
 
+#: The journal's last column: a CRC-32 of the row's other fields, so that a row cut
+#: short by an interruption (even inside a number: 10.0 for 1046.098) is recognised.
+_CHECK = "crc32"
+
+
+def _crc(fields: list[str]) -> str:
+    import zlib
+
+    return f"{zlib.crc32(chr(31).join(fields).encode('utf-8')):08x}"
+
+
+def _row(columns: list[str], rec: list[str]) -> dict | None:
+    """The row of a CSV record, or None if a field does not have its column's syntax."""
+    row = {}
+    try:
+        for name, text in zip(columns, rec, strict=True):
+            if name == "status":
+                if text not in ("ok", "error"):
+                    return None
+                row[name] = text
+            elif name == "error":
+                row[name] = text
+            elif name in ("index", "n_flagged"):
+                row[name] = int(text) if text else ""
+                if name == "index" and (row[name] == "" or row[name] < 0):
+                    return None
+            else:
+                row[name] = float(text) if text else ""
+    except ValueError:
+        return None
+    return row
+
+
 def read_rows(path: str | os.PathLike, columns: list[str]) -> list[dict]:
-    """Rows of a results CSV written by a study with these ``columns`` (for ``resume``)."""
-    with open(path, newline="", encoding="utf-8") as fh:
-        reader = csv.reader(fh)
-        header = next(reader, None)
-        if header is None:
-            return []
-        if header != columns:
-            raise MechcircError(f"{os.fspath(path)}: its columns ({', '.join(header)}) are not "
-                                "this study's; cannot resume (use another -o)")
-        rows = []
-        for rec in reader:
-            if len(rec) != len(columns):
-                continue        # a line cut short by an interruption: run that point again
-            row = {}
-            for name, text in zip(columns, rec):
-                if name in ("status", "error"):
-                    row[name] = text
-                elif name in ("index", "n_flagged"):
-                    row[name] = int(text) if text else ""
-                else:
-                    row[name] = float(text) if text else ""
-            rows.append(row)
-        return rows
+    """The complete rows of a study's table or journal with these ``columns`` (for ``resume``).
+
+    A journal (written while a study runs) ends each row with a CRC-32 of its
+    fields; a finished table has none.  Rows that are cut short, fail their
+    check, or do not parse are left out (their points run again), and so is
+    a second row for the same point.
+
+    Raises
+    ------
+    MechcircError
+        The file holds another study's columns, or is not UTF-8 text.
+    """
+    source = os.fspath(path)
+    try:
+        with open(path, newline="", encoding="utf-8") as fh:
+            reader = csv.reader(fh)
+            header = next(reader, None)
+            if header is None:
+                return []
+            journal = header == [*columns, _CHECK]
+            if header != columns and not journal:
+                raise MechcircError(f"{source}: its columns ({', '.join(header)}) are not "
+                                    "this study's; cannot resume (use another -o)")
+            rows, seen = [], set()
+            width = len(header)
+            for rec in reader:
+                if len(rec) != width:
+                    continue        # cut short by an interruption: run that point again
+                if journal and (rec[-1] != _crc(rec[:-1])):
+                    continue        # cut inside its last field, or damaged
+                row = _row(columns, rec[:len(columns)])
+                if row is None or row["index"] in seen:
+                    continue
+                seen.add(row["index"])
+                rows.append(row)
+            return rows
+    except UnicodeDecodeError:
+        raise MechcircError(f"{source}: not a study's table (not UTF-8 text); cannot resume "
+                            "(use another -o)") from None
+    except csv.Error as exc:
+        raise MechcircError(f"{source}: not a study's table ({exc}); cannot resume") from None
 
 
 def _batches(points, size):
@@ -434,16 +552,18 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
     Parameters
     ----------
     output : path, optional
-        CSV file; rows are appended as they finish, then the file is
-        rewritten in index order.  A ``.parquet`` name writes Parquet at the
-        end (needs pyarrow), journalling rows to ``NAME.partial.csv`` meanwhile.
+        CSV file (or ``.parquet``, needs pyarrow), written whole and
+        atomically at the end in index order; an existing file is kept until
+        then.  Meanwhile rows are journalled, each with a checksum, to
+        ``OUTPUT.partial.csv`` (:func:`journal_path`), removed at the end.
     scheduler : str, optional
         Address of a Dask scheduler (``tcp://host:8786``); by default the
         local cores run the study.
     workers : int, optional
         Local processes (default: all cores); 1 runs in this process.
     resume : bool
-        Keep the rows already in ``output`` and run only the missing points.
+        Keep the verified rows of the journal (or of a finished ``output``)
+        and run only the missing points.
     batch_size : int, optional
         Points per task (default: about 8 tasks per worker, at most 500).
     connect_timeout : float
@@ -457,26 +577,33 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
     parquet = bool(output) and str(output).lower().endswith(".parquet")
     if parquet:
         _require_pyarrow()
-    # Rows are journalled to a CSV as they finish: the output itself, or for
-    # Parquet (written whole at the end) a CSV beside it.
-    journal = f"{os.fspath(output)}.partial.csv" if parquet else output
+    # Rows are journalled as they finish to a CSV beside the output, each with
+    # a checksum; the output itself is written whole at the end (atomically),
+    # so an existing file stays as it was until the new table is complete.
+    journal = journal_path(output) if output else None
     if resume and output:
         if Path(journal).exists():
             done = read_rows(journal, columns)
-        elif parquet and Path(output).exists():
-            done = _read_parquet(output, columns)
+        elif Path(output).exists():
+            done = _read_parquet(output, columns) if parquet else read_rows(output, columns)
+        n = len(spec.points)
+        done = [r for r in done if r["index"] < n]
         have = {r["index"] for r in done}
         todo = [(i, v) for i, v in todo if i not in have]
     sink = None
     if output:
-        fresh = not (resume and Path(journal).exists() and done)
-        sink = open(journal, "w" if fresh else "a", newline="", encoding="utf-8")
-        writer = csv.writer(sink)
-        if fresh:
-            writer.writerow(columns)
+        from .outputs import atomic_open
+
+        # A fresh journal holding the verified rows (a resumed journal is
+        # rewritten, not appended to: its last line may lack its terminator).
+        with atomic_open(journal, "w", newline="", encoding="utf-8") as fh:
+            w = csv.writer(fh)
+            w.writerow([*columns, _CHECK])
             for r in done:
-                writer.writerow([_format(r.get(c, "")) for c in columns])
-            sink.flush()
+                fields = [_format(r.get(c, "")) for c in columns]
+                w.writerow([*fields, _crc(fields)])
+        sink = open(journal, "a", newline="", encoding="utf-8")
+        writer = csv.writer(sink)
 
     rows = list(done)
 
@@ -485,7 +612,8 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
         rows.extend(batch_rows)
         if sink is not None:
             for r in batch_rows:
-                writer.writerow([_format(r.get(c, "")) for c in columns])
+                fields = [_format(r.get(c, "")) for c in columns]
+                writer.writerow([*fields, _crc(fields)])
             sink.flush()
         if on_rows is not None:
             on_rows(len(batch_rows))
@@ -512,8 +640,14 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
             w.writerow(columns)
             for r in rows:
                 w.writerow([_format(r.get(c, "")) for c in columns])
+        os.unlink(journal)
     failed = sum(r["status"] != "ok" for r in rows)
     return StudyResult(columns, rows, executor, n_workers, len(done), failed)
+
+
+def journal_path(output: str | os.PathLike) -> str:
+    """Where a study writing ``output`` journals its rows while it runs: ``OUTPUT.partial.csv``."""
+    return f"{os.fspath(output)}.partial.csv"
 
 
 def _require_pyarrow():
@@ -573,7 +707,8 @@ def _run_local(spec, todo, n_workers, batch_size, take) -> tuple[str, int]:
         return "inline", 1
     from concurrent.futures import ProcessPoolExecutor, as_completed
 
-    with ProcessPoolExecutor(max_workers=n_workers) as pool:
+    with ProcessPoolExecutor(max_workers=n_workers, initializer=_die_with_parent,
+                             initargs=(os.getpid(),)) as pool:
         light = _for_workers(spec)
         futures = [pool.submit(run_batch, light, batch) for batch in _batches(todo, size)]
         try:
@@ -584,6 +719,41 @@ def _run_local(spec, todo, n_workers, batch_size, take) -> tuple[str, int]:
                 fut.cancel()
             raise
     return "local", n_workers
+
+
+def _die_with_parent(parent: int) -> None:
+    """Worker initializer: end this worker when the study's process ends, however it ends.
+
+    After SIGKILL of the parent, workers would otherwise be re-parented to
+    init and wait on the pipe for minutes.  On Linux the kernel delivers
+    SIGKILL to the worker when its parent dies (``prctl(PR_SET_PDEATHSIG)``);
+    elsewhere a daemon thread polls the parent's pid once a second.
+    """
+    import signal
+    import sys
+    import threading
+
+    if sys.platform.startswith("linux"):
+        try:
+            import ctypes
+
+            libc = ctypes.CDLL(None, use_errno=True)
+            PR_SET_PDEATHSIG = 1
+            if libc.prctl(PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0) == 0:
+                if os.getppid() != parent:      # the parent died before prctl took hold
+                    os._exit(1)
+                return
+        except (OSError, AttributeError):
+            pass
+
+    def watch():
+        import time
+
+        while os.getppid() == parent:
+            time.sleep(1.0)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="mechcirc-parent-watch", daemon=True).start()
 
 
 def _run_dask(spec, todo, scheduler, batch_size, take, connect_timeout) -> int:

@@ -8,6 +8,7 @@ velocity amplitude is v0 = F0 · K.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Callable, Literal
@@ -19,7 +20,7 @@ from .circuit import Circuit, Drive
 from .errors import NotSeriesParallelError
 from .reduction import Node, evaluate, push_down
 
-__all__ = ["Sweep", "sweep", "FLAG_OK", "FLAG_SINGULAR", "FLAG_NEAR_SINGULAR",
+__all__ = ["Sweep", "sweep", "Peak", "peak", "FLAG_OK", "FLAG_SINGULAR", "FLAG_NEAR_SINGULAR",
            "NEAR_SINGULAR_ERROR", "Method"]
 
 Method = Literal["auto", "sp", "nodal"]
@@ -42,7 +43,7 @@ CHUNK_POINTS = 2**18
 
 @dataclass(frozen=True, eq=False)
 class Sweep:
-    """The result of a frequency sweep.
+    """The result of a frequency sweep: plain data (it pickles).
 
     Attributes
     ----------
@@ -57,6 +58,11 @@ class Sweep:
         The circuit's name.
     tree : Node or None
         The reduction tree (series–parallel method only).
+    circuit : Circuit or None
+        The circuit swept (element forces and error estimates are computed
+        from it on first use).
+    notes : tuple of str
+        What the caller should know about the result (e.g. a point budget hit).
     """
 
     omega: NDArray[np.float64]
@@ -65,9 +71,33 @@ class Sweep:
     method: str
     name: str = "circuit"
     tree: Node | None = None
-    _responses: Callable = field(default=None, repr=False)
-    _errors: Callable = field(default=None, repr=False)
+    circuit: Circuit | None = field(default=None, repr=False)
+    notes: tuple[str, ...] = ()
     _cache: dict = field(default_factory=dict, repr=False)
+
+    def with_notes(self, notes: tuple[str, ...]) -> "Sweep":
+        """The same sweep with ``notes`` (e.g. an adaptive grid's budget) added."""
+        return Sweep(self.omega, self.K, self.drive, self.method, self.name, self.tree,
+                     self.circuit, self.notes + tuple(notes))
+
+    def __repr__(self) -> str:
+        n = self.omega.size
+        band = f"{self.omega.min():.4g}…{self.omega.max():.4g} rad/s" if n else "empty"
+        return f"Sweep({self.name!r}, {n} points, {band}, method={self.method!r})"
+
+    def __getstate__(self):
+        # The tree nests as deep as the network (a ladder of 10⁵ elements is
+        # 5·10⁴ levels), deeper than pickle's recursion: rebuild it from the
+        # circuit's flat element list instead.
+        state = dict(self.__dict__)
+        if state.get("circuit") is not None:
+            state["tree"] = None
+        return state
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
+        if self.method == "sp" and self.tree is None and self.circuit is not None:
+            object.__setattr__(self, "tree", self.circuit.tree)
 
     @property
     def S(self) -> NDArray[np.complex128]:
@@ -81,25 +111,44 @@ class Sweep:
         if self.drive.kind == "force":
             return np.full(self.omega.shape, self.drive.amplitude, dtype=complex)
         with np.errstate(all="ignore"):
-            return self.drive.amplitude / self.K
+            Q0 = self.drive.amplitude / self.K
+        # The limits at an exact zero or pole of K (see :func:`sweep`):
+        # K = 0 → Q0 = +∞·j·sign(V0); K = ∞·j → Q0 = 0.
+        zero = self.K == 0
+        if zero.any():
+            Q0[zero] = complex(0.0, math.copysign(math.inf, self.drive.amplitude))
+        Q0[np.isinf(self.K)] = 0.0
+        return Q0
 
     @cached_property
     def v0(self) -> NDArray[np.complex128]:
         """Velocity amplitude at the drive [m/s]: V0 (velocity drive) or F0·K (force drive)."""
         if self.drive.kind == "velocity":
             return np.full(self.omega.shape, self.drive.amplitude, dtype=complex)
+        out = np.empty(self.K.shape, dtype=complex)
         with np.errstate(all="ignore"):
-            return self.drive.amplitude * self.K
+            # Part by part: a complex product would turn F0 · ∞j into nan + ∞j.
+            out.real = self.drive.amplitude * self.K.real
+            out.imag = self.drive.amplitude * self.K.imag
+        out.real[np.isinf(self.K.imag) & (self.K.real == 0)] = 0.0
+        return out
 
     @cached_property
     def error(self) -> NDArray[np.float64]:
-        """Estimated relative rounding error of K at each point [1] (inf on a pole or zero).
+        """Bound of the relative rounding error of K at each point [1] (inf on a pole or zero).
 
-        Series–parallel: condition of the tree's sums × machine epsilon × depth.
-        Nodal: machine epsilon × the 2-norm condition number of A(ω) (dense
-        systems), NaN where not estimated (large sparse systems).
+        Series–parallel: a forward error bound carried through the tree's sums
+        (the cancellation at each node, see :func:`mechcirc.reduction.evaluate`);
+        calibrated against 40-digit references in ``docs/accuracy.md``.
+        Nodal: machine epsilon × the condition number of A(ω) (see
+        :mod:`mechcirc.nodal`).
         """
-        return self._errors()
+        if "error" in self._cache:
+            return self._cache["error"]
+        if self.method == "sp":
+            return _chunked(lambda w: evaluate(self.tree, w, error=True)[1],
+                            self.omega, float)
+        return _nodal_errors(self.circuit.nodal, self.omega)
 
     @cached_property
     def flags(self) -> NDArray[np.int8]:
@@ -118,6 +167,10 @@ class Sweep:
         """Velocity difference amplitude v = v(n1) − v(n2) [m/s] across element ``name``."""
         return self._element(name)[1]
 
+    def peak(self, quantity: str | None = None) -> "Peak":
+        """The largest |``quantity``| over the band, located exactly; see :func:`peak`."""
+        return peak(self, quantity=quantity)
+
     def to_skrf(self, **kwargs):
         """K as a one-port ``skrf.Network`` (Z parameters, m/(N·s)); see :func:`mechcirc.interop.skrf.to_skrf`."""
         from .interop.skrf import to_skrf
@@ -126,12 +179,20 @@ class Sweep:
 
     def _element(self, name: str):
         if "elements" not in self._cache:
-            self._cache["elements"] = self._responses(self.Q0, self.v0)
+            self._cache["elements"] = self._element_responses()
         elements = self._cache["elements"]
         if name not in elements:
             raise KeyError(f"no loaded element named {name!r}; elements: "
                            f"{', '.join(sorted(elements))}")
         return elements[name]
+
+    def _element_responses(self) -> dict:
+        if self.method == "sp":
+            _, values = evaluate(self.tree, self.omega, keep=True)
+            return push_down(self.tree, values, self.Q0, self.v0, self.omega)
+        from . import nodal
+
+        return nodal.element_response(self.circuit.nodal, self.omega, self.Q0)
 
 
 def sweep(circuit: Circuit, omega: ArrayLike, *, method: Method = "auto") -> Sweep:
@@ -153,6 +214,15 @@ def sweep(circuit: Circuit, omega: ArrayLike, *, method: Method = "auto") -> Swe
     Sweep
         With ``omega``, ``K``, ``Q0``, ``v0``, ``flags``, ``error`` and
         per-element ``force(name)`` / ``velocity(name)``.
+
+    Notes
+    -----
+    Singular points: at a point ω > 0 exactly on a pole of K, ``K = +∞·j`` (the
+    limit from below: a lossless K = jX rises through its poles, Foster's
+    reactance theorem; at ω = 0 the limit from above, −∞·j for a mass), ``Q0 = 0`` and ``v0 = +∞·j·F0``; exactly on a zero of K, ``K = 0``
+    and ``Q0 = +∞·j·V0``.  Such points get :data:`FLAG_SINGULAR`.  The library
+    does not warn (the flags are the per-point report; a study would drown in
+    warnings); the command line prints a note naming those ω.
 
     Examples
     --------
@@ -188,55 +258,196 @@ def _chunked(fn: Callable, omega: NDArray, dtype) -> NDArray:
     return out
 
 
+def _singular_limits(K: NDArray[np.complex128], omega) -> NDArray[np.complex128]:
+    """K on an exact pole at ω > 0 is +∞·j (see :func:`sweep`), whatever sign
+    rounding gave; at ω = 0 the limit from above stands (−∞·j for a mass)."""
+    pole = np.isinf(K) & (omega > 0)
+    if pole.any():
+        K[pole] = complex(0.0, math.inf)
+    return K
+
+
 def _sweep_tree(circuit: Circuit, tree: Node, omega) -> Sweep:
-    def responses(Q0, v0):
-        _, values = evaluate(tree, omega, keep=True)
-        return push_down(tree, values, Q0, v0, omega)
-
-    def errors():
-        scale = np.finfo(float).eps * _depth(tree)
-        return _chunked(lambda w: evaluate(tree, w, condition=True)[1] * scale, omega, float)
-
-    K = _chunked(lambda w: evaluate(tree, w), omega, complex)
+    K = _singular_limits(_chunked(lambda w: evaluate(tree, w), omega, complex), omega)
     return Sweep(omega=omega, K=K, drive=circuit.drive, method="sp",
-                 name=circuit.name, tree=tree, _responses=responses, _errors=errors)
-
-
-def _depth(root: Node) -> int:
-    depth, stack = 1, [(root, 1)]
-    while stack:
-        node, d = stack.pop()
-        depth = max(depth, d)
-        kids = getattr(node, "children", None) or ((node.child,) if hasattr(node, "child") else ())
-        stack.extend((c, d + 1) for c in kids)
-    return depth
+                 name=circuit.name, tree=tree, circuit=circuit)
 
 
 def _sweep_nodal(circuit: Circuit, omega) -> Sweep:
     from . import nodal
 
-    system = circuit.nodal
-    K = nodal.mobility(system, omega)
-
-    def responses(Q0, v0):
-        return nodal.element_response(system, omega, Q0)
-
-    def errors():
-        # eps·cond(A) bounds the error of x relative to ‖x‖; K = x_a − x_b can be
-        # far smaller than ‖x‖ near a resonance (K → 0), and its relative error
-        # larger by ‖x‖/|K| (a series m–k at 1e-13 from its resonance: 2e-4).
-        err = nodal.condition_error(system, omega)
-        if system.size > nodal.DENSE_LIMIT:
-            return err                      # not estimated (NaN) for sparse systems
-
-        def cancellation(w):
-            x = nodal.solve_unit(system, w, refine=False)
-            with np.errstate(all="ignore"):
-                ratio = np.linalg.norm(x, axis=1) / np.abs(system.difference(x))
-            return np.where(np.isnan(ratio), np.inf, np.maximum(ratio, 1.0))
-
-        with np.errstate(invalid="ignore"):
-            return err * _chunked(cancellation, omega, float)
-
+    K = nodal.mobility(circuit.nodal, omega)
     return Sweep(omega=omega, K=K, drive=circuit.drive, method="nodal", name=circuit.name,
-                 _responses=responses, _errors=errors)
+                 circuit=circuit)
+
+
+def _nodal_errors(system, omega) -> NDArray[np.float64]:
+    from . import nodal
+
+    # eps·cond(A) bounds the error of x relative to ‖x‖; K = x_a − x_b can be
+    # far smaller than ‖x‖ near a resonance (K → 0), and its relative error
+    # larger by ‖x‖/|K| (a series m–k at 1e-13 from its resonance: 2e-4).
+    err = nodal.condition_error(system, omega)
+    if system.size > nodal.DENSE_LIMIT:
+        return err                      # not estimated (NaN) for sparse systems
+
+    def cancellation(w):
+        x = nodal.solve_unit(system, w, refine=False)
+        with np.errstate(all="ignore"):
+            ratio = np.linalg.norm(x, axis=1) / np.abs(system.difference(x))
+        return np.where(np.isnan(ratio), np.inf, np.maximum(ratio, 1.0))
+
+    with np.errstate(invalid="ignore"):
+        return err * _chunked(cancellation, omega, float)
+
+
+
+@dataclass(frozen=True)
+class Peak:
+    """The largest magnitude of a response over a band (see :func:`peak`).
+
+    Attributes
+    ----------
+    quantity : {"Q0", "v0", "K"}
+    value : float
+        The peak magnitude (N, m/s or m/(N·s)); ``math.inf`` when unbounded.
+    omega : float
+        Where it is [rad/s]: the located maximum, or the (first) undamped
+        resonance where the quantity is unbounded.
+    unbounded : bool
+        True when the band holds an undamped zero (Q0) or pole (v0, K) of K.
+    poles : tuple of float
+        Every ω [rad/s] in the band where the quantity is unbounded.
+    grid_value, grid_omega : float
+        The largest finite value on the sweep's grid and where (for comparison).
+    """
+
+    quantity: str
+    value: float
+    omega: float
+    unbounded: bool
+    poles: tuple = ()
+    grid_value: float = math.nan
+    grid_omega: float = math.nan
+
+    def __str__(self) -> str:
+        if self.unbounded:
+            at = ", ".join(f"{w:.10g}" for w in self.poles)
+            return f"max |{self.quantity}| = inf (undamped resonance at omega = {at} rad/s)"
+        return f"max |{self.quantity}| = {self.value:.7g} at omega = {self.omega:.10g} rad/s"
+
+
+#: Damping ratio below which a zero or pole of K counts as undamped for
+#: :func:`peak` (the eigen-solver reports ζ = 0 for lossless modes).
+UNDAMPED_ZETA = 1e-12
+
+
+def peak(result: "Sweep | Circuit", omega_min: float | None = None,
+         omega_max: float | None = None, quantity: str | None = None, *,
+         method: Method = "auto", xtol: float = 1e-12) -> Peak:
+    """The largest |Q0|, |v0| or |K| over [``omega_min``, ``omega_max``], located exactly.
+
+    Parameters
+    ----------
+    result : Sweep or Circuit
+        A sweep (its band and grid are used unless given) or a circuit.
+    quantity : {"Q0", "v0", "K"}, optional
+        Default: ``"Q0"`` for a velocity drive, ``"v0"`` for a force drive.
+    xtol : float
+        Relative tolerance in ω of the located maximum (the value is then
+        right to far better than 1e-6: |q| is flat at its maximum).
+
+    Returns
+    -------
+    Peak
+        Unbounded (``value = inf``, ``omega`` = the resonance) when the band
+        holds an undamped zero of K (for Q0) or pole of K (for v0 and K),
+        found exactly by :meth:`Circuit.resonances`; otherwise the maximum
+        located by a bounded Brent search around the grid's largest value and
+        around every damped resonance of the right kind in the band.
+
+    Examples
+    --------
+    >>> from mechcirc import parse
+    >>> from mechcirc.sweep import peak
+    >>> c = parse("drive V a 0 velocity=1\nmass m a b 1\nspring k b 0 1e4")
+    >>> print(peak(c, 10, 1000))
+    max |Q0| = inf (undamped resonance at omega = 100 rad/s)
+    """
+    from scipy.optimize import minimize_scalar
+
+    if isinstance(result, Sweep):
+        circuit = result.circuit
+        grid = result
+        lo = float(result.omega.min()) if omega_min is None else float(omega_min)
+        hi = float(result.omega.max()) if omega_max is None else float(omega_max)
+        method = result.method
+    else:
+        circuit, grid = result, None
+        if omega_min is None or omega_max is None:
+            raise ValueError("peak(circuit, ...) needs omega_min and omega_max")
+        lo, hi = float(omega_min), float(omega_max)
+    if not 0 <= lo < hi < math.inf:
+        raise ValueError(f"need 0 <= omega_min < omega_max < inf, got {lo} and {hi}")
+    if quantity is None:
+        quantity = "v0" if circuit.drive.kind == "force" else "Q0"
+    if quantity not in ("Q0", "v0", "K"):
+        raise ValueError(f"quantity must be 'Q0', 'v0' or 'K', got {quantity!r}")
+    if quantity == "Q0" and circuit.drive.kind == "force":
+        # Q0 is the applied force: constant.
+        return Peak(quantity, abs(circuit.drive.amplitude), lo, False, (),
+                    abs(circuit.drive.amplitude), lo)
+    # Q0 = V0/K is unbounded at zeros of K ("resonance"); v0 = F0·K and K at
+    # poles ("antiresonance").
+    kind = "resonance" if quantity == "Q0" else "antiresonance"
+    try:
+        found = [r for r in circuit.resonances(omega_max=hi * (1 + 1e-9))
+                 if r.kind == kind and lo * (1 - 1e-12) <= r.omega]
+    except Exception:       # e.g. too large for the eigen-solver: grid search only
+        found = []
+    undamped = tuple(r.omega for r in found if r.zeta <= UNDAMPED_ZETA)
+
+    def magnitude(w):
+        s = sweep(circuit, np.atleast_1d(np.asarray(w, dtype=float)), method=method)
+        with np.errstate(all="ignore"):
+            q = np.abs(getattr(s, quantity))
+        return np.where(np.isfinite(q), q, np.inf)
+
+    if grid is None:
+        grid = sweep(circuit, np.geomspace(max(lo, hi * 1e-12), hi, 401) if lo > 0
+                     else np.linspace(lo, hi, 401), method=method)
+    q_grid = np.abs(getattr(grid, quantity))
+    finite = np.isfinite(q_grid)
+    i_grid = int(np.argmax(np.where(finite, q_grid, -1.0)))
+    g_value = float(q_grid[i_grid]) if finite.any() else math.nan
+    g_omega = float(grid.omega[i_grid]) if finite.any() else math.nan
+    if undamped:
+        return Peak(quantity, math.inf, undamped[0], True, undamped, g_value, g_omega)
+    # Brackets: the grid's maximum with its neighbours, and each damped
+    # resonance of the right kind ± four half-power bandwidths.
+    w = grid.omega
+    brackets = [(w[max(i_grid - 1, 0)], w[min(i_grid + 1, w.size - 1)])]
+    for r in found:
+        centre = r.omega_d if r.omega_d > 0 else r.omega
+        half = max(r.zeta * r.omega, 1e-9 * r.omega)
+        brackets.append((centre - 4 * half, centre + 4 * half))
+    best_value, best_omega = g_value, g_omega
+    for a, b in (lo, lo), (hi, hi):
+        v = float(magnitude(a)[0])
+        if not best_value >= v:
+            best_value, best_omega = v, a
+    for a, b in brackets:
+        a, b = max(a, lo), min(b, hi)
+        if not a < b:
+            continue
+        scale = max(abs(a), abs(b))
+        res = minimize_scalar(lambda x: -float(magnitude(x)[0]), bounds=(a, b),
+                              method="bounded", options={"xatol": xtol * scale})
+        v = -float(res.fun)
+        if v > best_value or not np.isfinite(best_value):
+            best_value, best_omega = v, float(res.x)
+    if math.isinf(best_value):
+        # An exact pole the eigen-solver did not report as undamped (or could
+        # not be run): unbounded all the same.
+        return Peak(quantity, math.inf, best_omega, True, (best_omega,), g_value, g_omega)
+    return Peak(quantity, best_value, best_omega, False, (), g_value, g_omega)

@@ -7,6 +7,7 @@ subprocess, where the exit status comes from the real interpreter.
 
 import csv
 import json
+import math
 import os
 import re
 import subprocess
@@ -216,8 +217,18 @@ def test_sweep_text_summary(capsys):
     s = mechcirc.load(STB).sweep(np.geomspace(10, 1e4, 50))
     lines = out.splitlines()
     assert lines[0] == f"{STB}: 50 points, omega 10 .. 10000 rad/s, method sp"
-    assert lines[1] == (f"  |K|  {np.abs(s.K).min():.4g} .. {np.abs(s.K).max():.4g} m/(N·s)")
-    assert lines[2] == (f"  |Q0| {np.abs(s.Q0).min():.4g} .. {np.abs(s.Q0).max():.4g} N")
+    assert lines[1] == (f"  |K|  {np.abs(s.K).min():.4g} .. {np.abs(s.K).max():.4g} m/(N·s)"
+                        " on the grid")
+    assert lines[2] == (f"  |Q0| {np.abs(s.Q0).min():.4g} .. {np.abs(s.Q0).max():.4g} N"
+                        " on the grid")
+    # The network is undamped and the band holds its resonances: the peak is ∞
+    # (issue 11 §4), named at the exact resonances, not the grid's largest value.
+    zeros = [r.omega for r in mechcirc.load(STB).resonances(omega_max=1e4)
+             if r.kind == "resonance" and r.omega >= 10]
+    assert lines[3] == ("  max |Q0| = inf: undamped resonance at omega = "
+                        + ", ".join(f"{w:.10g}" for w in zeros)
+                        + f" rad/s (the grid's largest, {np.abs(s.Q0).max():.4g} N, depends "
+                        "only on how close a point falls)")
 
 
 def test_sweep_json(capsys):
@@ -235,6 +246,7 @@ def test_sweep_json(capsys):
     np.testing.assert_array_equal(doc["Q0"]["im"], s.Q0.imag)
     assert doc["flags"] == [0] * 40 and doc["n_flagged"] == 0
     assert doc["warnings"] == []
+    assert doc["peak"]["unbounded"] is True and doc["peak"]["value"] in ("inf", math.inf)
 
 
 def test_sweep_json_at_a_pole_is_still_strict_json(tmp_path, capsys):
@@ -317,8 +329,8 @@ def test_sweep_by_subprocess_writes_csv_and_png(tmp_path):
 
 BAD = [
     ("mass m1 a 0 2\nmas k1 a 0 100\ndrive V a 0 velocity=1\n",
-     "2:1: error: unknown keyword 'mas' (expected one of .param, mass, spring, damper, "
-     "lever, drive, .ic)"),
+     "2:1: error: unknown keyword 'mas' (expected one of .param, .ic, mass, spring, damper, "
+     "lever, drive)"),
     ("mass m1 a 0 2\nspring k1 a 0 {2e5 * }\ndrive V a 0 velocity=1\n",
      "2:22: error: expression ends too early (expected a number, a name or '(')"),
     ("mass m1 a 0 -2\ndrive V a 0 velocity=1\n",

@@ -73,7 +73,11 @@ def test_top_level_help_and_no_command(capsys):
     ["simulate", "--variant", "9"],
 ])
 def test_user_errors_exit_2_with_one_line(argv, capsys):
-    assert main(argv) == 2
+    try:
+        status = main(argv)
+    except SystemExit as exc:       # a value refused by the option's type: a usage error
+        status = exc.code
+    assert status == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "error" in err and "Traceback" not in err
 

@@ -180,8 +180,10 @@ def test_unsupported_plot_format_is_a_user_error_before_any_work(tmp_path, capsy
 
 
 def test_synth_limit_below_one_is_refused(capsys):
-    assert main(["synth", "--limit", "0"]) == 2
-    assert "--limit must be at least 1, got 0" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exit_:      # a usage error: argparse exits
+        main(["synth", "--limit", "0"])
+    assert exit_.value.code == 2
+    assert "--limit: must be at least 1, got 0" in capsys.readouterr().err
 
 
 def test_crosscheck_reports_unmeasurable_ringing_instead_of_crashing(capsys):
@@ -218,5 +220,7 @@ def test_locking_linkage_is_reported_quickly():
 @pytest.mark.parametrize("theta", ["inf", "1e400", "nan", "-inf"])
 def test_crosscheck_refuses_a_non_finite_theta(theta, capsys):
     """Long-run CLI fuzz (17 of 3,000 command lines): --theta inf was a math domain error."""
-    assert main(["crosscheck", f"--theta={theta}"]) == 2
-    assert "--theta must be a finite angle [deg]" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exit_:      # a usage error: argparse exits
+        main(["crosscheck", f"--theta={theta}"])
+    assert exit_.value.code == 2
+    assert "--theta: " in (err := capsys.readouterr().err) and "is not a finite number" in err

@@ -6,6 +6,7 @@ import math
 from pathlib import Path
 
 import numpy as np
+from scipy.optimize import brentq
 import pytest
 
 import mechcirc
@@ -45,9 +46,17 @@ def test_grid_points_and_results_match_eq7():
         K = np.abs(full_K(omega, {**STB_PARAMS, "eta1": r["eta1"], "eta3": r["eta3"]}))
         assert r["K_abs_max"] == pytest.approx(K.max(), rel=1e-9)
         assert r["K_abs_min"] == pytest.approx(K.min(), rel=1e-9)
-        peak = np.argmax(0.1 / K)
-        assert r["omega_at_Q0_max"] == omega[peak]
-        assert r["Q0_abs_max"] == pytest.approx(0.1 / K[peak], rel=1e-9)
+        # The STB network is undamped: the band holds zeros of K, where |Q0| is
+        # unbounded (issue 11 §4); the column says inf at the first of them,
+        # found here on eq. (7) itself (K = jX, X rises through its zeros).
+        p = {**STB_PARAMS, "eta1": r["eta1"], "eta3": r["eta3"]}
+        fine = np.geomspace(10, 2000, 20001)
+        X = full_K(fine, p).imag
+        i = np.flatnonzero((X[:-1] < 0) & (X[1:] > 0))[0]
+        zero = brentq(lambda w: full_K(np.array([w]), p).imag[0], fine[i], fine[i + 1],
+                      xtol=1e-14, rtol=1e-15)
+        assert r["Q0_abs_max"] == math.inf
+        assert r["omega_at_Q0_max"] == pytest.approx(zero, rel=1e-9)
 
 
 def test_failed_points_are_recorded(tmp_path):
@@ -103,15 +112,20 @@ def test_an_interrupted_study_keeps_its_rows_and_resumes(tmp_path):
         if len(seen) == 2:
             raise KeyboardInterrupt
 
+    out.write_text("the previous table\n")
     with pytest.raises(KeyboardInterrupt):
         run_study(spec, output=out, workers=1, batch_size=2, on_rows=stop_after_two_batches)
-    table = read(out)
+    # The old output is untouched until the new table is complete (issue 16 §4);
+    # the finished rows are in the journal beside it.
+    assert out.read_text() == "the previous table\n"
+    journal = Path(str(out) + ".partial.csv")
+    table = read(journal)
     assert len(table) == 1 + 4                 # header and the two finished batches
-    with open(out, "a") as fh:
+    with open(journal, "a") as fh:
         fh.write("4,0.8,0.8,ok")               # a row cut short: must be run again
     r = run_study(spec, output=out, workers=1, resume=True)
     assert r.skipped == 4
-    assert out.read_bytes() == full.read_bytes()
+    assert out.read_bytes() == full.read_bytes() and not journal.exists()
 
 
 def test_resume_refuses_another_studys_table(tmp_path):

@@ -27,9 +27,16 @@ COMMAND_MODULES: list[str] = [
 ]
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse, with a usage error on one line (the full usage is one ``--help`` away)."""
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """Build the argument parser with every sub-command registered."""
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="mechcirc",
         description="Dynamic analysis of mechanisms with mechanical circuits: "
                     "netlists to K(ω) = v/Q and Q0 = V0/K, kinematics, sley dynamics.",

@@ -77,6 +77,85 @@ def run_handler(args) -> int:
         return EXIT_INTERNAL
 
 
+# ------------------------------------------------------------------ option values
+# One validator for every number the command line takes: argparse calls it,
+# so a bad value is a usage error (exit 2) naming the option, before any work.
+def real(*, least: float | None = None, above: float | None = None,
+         most: float | None = None, unit: str = "", omega: bool = False,
+         finite: bool = True):
+    """argparse type: a finite number (``omega``: also ``50Hz``, ``3000rpm``) in range.
+
+    ``least`` ≤ x, ``above`` < x, x ≤ ``most``; ``nan``, ``inf`` and
+    overflowing literals such as ``1e400`` are refused (``finite=False``: let
+    the command check the range itself, with its own message).
+    """
+    import argparse
+
+    def parse(text: str) -> float:
+        if omega:
+            from ..units import parse_omega
+
+            try:
+                value = parse_omega(text)
+            except ValueError as exc:
+                raise argparse.ArgumentTypeError(str(exc)) from None
+        else:
+            try:
+                value = float(text)
+            except ValueError:
+                raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+        u = f" {unit}" if unit else ""
+        if not finite:
+            return value
+        if not math.isfinite(value):
+            raise argparse.ArgumentTypeError(f"{text!r} is not a finite number"
+                                             + (f" (largest magnitude {most:g}{u})"
+                                                if most is not None else ""))
+        if least is not None and value < least:
+            raise argparse.ArgumentTypeError(f"must be ≥ {least:g}{u}, got {text!r}")
+        if above is not None and value <= above:
+            raise argparse.ArgumentTypeError(f"must be > {above:g}{u}, got {text!r}")
+        if most is not None and abs(value) > most:
+            raise argparse.ArgumentTypeError(f"must be at most {most:g}{u} in magnitude, "
+                                             f"got {text!r}")
+        return value
+
+    parse.__name__ = "number"          # argparse names the type in its messages
+    return parse
+
+
+def count(least: int = 1, most: int | None = None, *, why: str = ""):
+    """argparse type: an integer in ``least..most`` (``1e6`` accepted); the limit is named."""
+    import argparse
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            try:
+                value = float(text)
+            except ValueError:
+                raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
+            if not (math.isfinite(value) and value.is_integer()):
+                raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
+            value = int(value)
+        if value < least:
+            raise argparse.ArgumentTypeError(f"must be at least {least}, got {text}")
+        if most is not None and value > most:
+            raise argparse.ArgumentTypeError(
+                f"{text} is more than the limit of {most:,}" + (f" ({why})" if why else ""))
+        return value
+
+    parse.__name__ = "integer"
+    return parse
+
+
+#: The largest angular frequency the command line accepts [rad/s] (ω² stays finite).
+MAX_OMEGA = 1e100
+#: The largest length the command line accepts (products of four stay finite).
+MAX_LENGTH = 1e50
+
+
 def _jsonable(obj):
     if isinstance(obj, float) and not math.isfinite(obj):
         return None if math.isnan(obj) else ("inf" if obj > 0 else "-inf")

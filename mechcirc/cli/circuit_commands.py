@@ -5,17 +5,18 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ._common import check_output_paths, print_json, save_figure
+from ..limits import (MAX_ADAPTIVE_NODAL_POINTS, MAX_JSON_POINTS, MAX_NODAL_POINTS,
+                      MAX_PLOT_POINTS, MAX_SWEEP_POINTS)
+from ._common import check_output_paths, count, print_json, real, save_figure
 
 
-def omega_value(text: str) -> float:
-    """argparse type: an angular frequency [rad/s], or with a unit (``50Hz``, ``3000rpm``)."""
-    from ..units import parse_omega
-
-    try:
-        return parse_omega(text)
-    except ValueError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
+#: argparse type: an angular frequency [rad/s], or with a unit (``50Hz``, ``3000rpm``); the
+#: command checks the range (a sweep's --omega-min/--omega-max together).
+omega_value = real(omega=True, finite=False)
+#: A finite angular frequency ≥ 0 (bounds of a band).
+band_omega = real(omega=True, least=0.0, unit="rad/s")
+#: The same, > 0 (one frequency at which to evaluate).
+positive_omega = real(omega=True, above=0.0, unit="rad/s")
 
 
 def register(sub) -> None:
@@ -58,7 +59,7 @@ def register(sub) -> None:
     p.add_argument("--adaptive", action="store_true",
                    help="refine the grid around resonances and wherever |K| or |Q0| "
                         "bends (--points is then the starting grid)")
-    p.add_argument("--tol", type=float, default=0.005,
+    p.add_argument("--tol", type=real(above=0.0, most=1.0), default=0.005,
                    help="adaptive: largest relative midpoint deviation (default 0.005)")
     p.add_argument("--json", action="store_true", help="print one JSON document")
     p.set_defaults(func=cmd_sweep)
@@ -71,7 +72,7 @@ def register(sub) -> None:
                     "Damped networks also get the damping ratio.",
         epilog="Example: mechcirc resonances netlists/stb_heald.mcir --omega-max 5000")
     p.add_argument("file", help="netlist file (.mcir)")
-    p.add_argument("--omega-max", type=omega_value, metavar="W",
+    p.add_argument("--omega-max", type=positive_omega, metavar="W",
                    help="report only up to this angular frequency [rad/s]; or with a unit: "
                         "50Hz, 3000rpm")
     p.add_argument("--json", action="store_true", help="print one JSON document")
@@ -169,8 +170,14 @@ def _omega_grid(args):
     if not (np.isfinite(lo) and np.isfinite(hi)) or lo < 0 or hi <= lo:
         raise MechcircError(f"need 0 <= --omega-min < --omega-max (finite), got "
                             f"{lo:g} and {hi:g}")
-    if n < 1 or n > 10_000_000:
-        raise MechcircError(f"--points must be between 1 and 10000000, got {n}")
+    if n < 1 or n > MAX_SWEEP_POINTS:
+        raise MechcircError(f"--points must be between 1 and {MAX_SWEEP_POINTS}, got {n}")
+    for wanted, limit, what in ((args.plot, MAX_PLOT_POINTS, "--plot"),
+                                (args.json, MAX_JSON_POINTS, "--json"),
+                                (args.method == "nodal", MAX_NODAL_POINTS, "--method nodal")):
+        if wanted and n > limit:
+            raise MechcircError(f"--points {n} with {what}: the limit is {limit} points "
+                                "(write larger sweeps with -o CSV)")
     if args.log:
         if lo <= 0:
             raise MechcircError("--log needs --omega-min > 0")
@@ -209,6 +216,28 @@ def write_sweep_csv(result, path) -> None:
             bar.update(len(table))
 
 
+def _some_omega(values, limit: int = 5) -> str:
+    text = ", ".join(f"{w:.10g}" for w in values[:limit])
+    return text + (f" and {len(values) - limit} more" if len(values) > limit else "")
+
+
+def _peak_doc(pk) -> dict:
+    """The exact peak for ``--json``: value inf when unbounded (see mechcirc.sweep.peak)."""
+    return {"quantity": pk.quantity, "value": pk.value, "omega": pk.omega,
+            "unbounded": pk.unbounded, "unbounded_at": list(pk.poles),
+            "grid_value": pk.grid_value, "grid_omega": pk.grid_omega}
+
+
+def _peak_text(pk) -> str:
+    unit = {"Q0": "N", "v0": "m/s", "K": "m/(N·s)"}[pk.quantity]
+    if pk.unbounded:
+        return (f"max |{pk.quantity}| = inf: undamped resonance at omega = "
+                f"{_some_omega(list(pk.poles))} rad/s (the grid's largest, "
+                f"{pk.grid_value:.4g} {unit}, depends only on how close a point falls)")
+    return (f"max |{pk.quantity}| = {pk.value:.7g} {unit} at omega = {pk.omega:.9g} rad/s "
+            f"(located; the grid's largest is {pk.grid_value:.4g} {unit})")
+
+
 def _resonance_rows(found) -> list[dict]:
     return [{"kind": r.kind, "omega": r.omega, "f_hz": r.f_hz, "omega_d": r.omega_d,
              "zeta": r.zeta, "error": r.error} for r in found]
@@ -229,8 +258,12 @@ def cmd_sweep(args) -> int:
             from ..errors import MechcircError
 
             raise MechcircError("--adaptive needs --omega-min > 0")
+        # Each refinement round re-evaluates every midpoint; by nodal analysis
+        # that is ~0.1 ms a point, so its budget is smaller (152 s at 20,000).
+        budget = MAX_ADAPTIVE_NODAL_POINTS if args.method == "nodal" else 20_000
         result = adaptive_sweep(circuit, omega[0], omega[-1], tol=args.tol,
-                                initial=max(2, args.points), method=args.method)
+                                initial=max(2, min(args.points, budget)), method=args.method,
+                                max_points=budget)
     else:
         result = circuit.sweep(omega, method=args.method)
     found = []
@@ -242,6 +275,15 @@ def cmd_sweep(args) -> int:
         except SolverError as exc:      # too large for the eigenproblem: sweep anyway
             warns.append(f"resonance markers left out: {exc}")
     found = [r for r in found if r.omega >= omega[0]]
+    from ..sweep import FLAG_SINGULAR
+
+    pk = result.peak()
+    singular = [float(w) for w in result.omega[result.flags == FLAG_SINGULAR]]
+    notes = list(getattr(result, "notes", ()))
+    if singular:
+        notes.append(f"{len(singular)} point(s) exactly on a pole or zero of K "
+                     f"(omega = {_some_omega(singular)} rad/s): there K is +inf·j or 0 and "
+                     "Q0 is 0 or +inf·j (flag 1)")
     for w in warns:
         print(f"warning: {w}", file=sys.stderr)
     dropped = 0
@@ -256,7 +298,8 @@ def cmd_sweep(args) -> int:
         if args.plot:
             from ..plotting import plot_sweep
 
-            save_figure(plot_sweep(result, resonances=found), args.plot, out.path(args.plot))
+            save_figure(plot_sweep(result, resonances=found, peak=pk), args.plot,
+                        out.path(args.plot))
     n_flag = int(np.count_nonzero(result.flags))
     n_points = len(result.omega)
     if args.json:
@@ -267,6 +310,7 @@ def cmd_sweep(args) -> int:
             "Q0": {"re": result.Q0.real, "im": result.Q0.imag},
             "flags": result.flags, "n_flagged": n_flag, "warnings": warns,
             "resonances": _resonance_rows(found),
+            "peak": _peak_doc(pk), "singular_omega": singular, "notes": notes,
         }
         if result.drive.kind == "force":
             doc["v0"] = {"re": result.v0.real, "im": result.v0.imag}
@@ -274,15 +318,18 @@ def cmd_sweep(args) -> int:
         return 0
     absK = np.abs(result.K)
     absQ = np.abs(result.Q0)
-    how = "adaptive grid" if args.adaptive else "points"
+    how = "adaptive grid points" if args.adaptive else "points"
     print(f"{args.file}: {n_points} {how}, omega {result.omega[0]:g} .. "
           f"{result.omega[-1]:g} rad/s, method {result.method}")
     with np.errstate(all="ignore"):
-        print(f"  |K|  {np.nanmin(absK):.4g} .. {np.nanmax(absK):.4g} m/(N·s)")
-        print(f"  |Q0| {np.nanmin(absQ):.4g} .. {np.nanmax(absQ):.4g} N")
+        print(f"  |K|  {np.nanmin(absK):.4g} .. {np.nanmax(absK):.4g} m/(N·s) on the grid")
+        print(f"  |Q0| {np.nanmin(absQ):.4g} .. {np.nanmax(absQ):.4g} N on the grid")
+    print(f"  {_peak_text(pk)}")
     if n_flag:
         print(f"  {n_flag} point(s) on or within rounding of a pole or zero of K "
               "(flagged; see the 'flag' column)")
+    for note in notes:
+        print(f"  note: {note}")
     for label, path in (("CSV", args.output), ("plot", args.plot),
                         ("Touchstone", args.touchstone)):
         if path:

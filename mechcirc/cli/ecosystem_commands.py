@@ -6,11 +6,11 @@ import argparse
 import sys
 from pathlib import Path
 
-from ._common import check_output_paths, print_json, save_figure
+from ._common import check_output_paths, count, print_json, save_figure
 
 
 def register(sub) -> None:
-    from .circuit_commands import omega_value
+    from .circuit_commands import band_omega, positive_omega
 
     p = sub.add_parser(
         "forces", help="force and velocity of every element at one frequency",
@@ -20,7 +20,7 @@ def register(sub) -> None:
         epilog="Example: mechcirc forces netlists/stb_heald.mcir --omega 300 --plot forces.png",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("file", help="netlist file (.mcir)")
-    p.add_argument("--omega", type=omega_value, required=True, metavar="W",
+    p.add_argument("--omega", type=positive_omega, required=True, metavar="W",
                    help="angular frequency: rad/s, or with a unit: 50Hz, 3000rpm")
     p.add_argument("--method", choices=("auto", "sp", "nodal"), default="auto",
                    help="series–parallel tree, nodal analysis, or auto (default)")
@@ -36,9 +36,9 @@ def register(sub) -> None:
         epilog="Example: mechcirc compare netlists/stb_heald.mcir measured.s1p --plot cmp.png")
     p.add_argument("file", help="netlist file (.mcir)")
     p.add_argument("measured", help="Touchstone one-port file (.s1p)")
-    p.add_argument("--omega-min", type=omega_value, metavar="W1",
+    p.add_argument("--omega-min", type=band_omega, metavar="W1",
                    help="compare only from this angular frequency [rad/s] (or 5Hz, 300rpm)")
-    p.add_argument("--omega-max", type=omega_value, metavar="W2",
+    p.add_argument("--omega-max", type=band_omega, metavar="W2",
                    help="compare only up to this angular frequency [rad/s] (or 50Hz, 3000rpm)")
     p.add_argument("--method", choices=("auto", "sp", "nodal"), default="auto",
                    help="series–parallel tree, nodal analysis, or auto (default)")
@@ -74,7 +74,7 @@ def register(sub) -> None:
     p.add_argument("--scheduler", metavar="ADDRESS",
                    help="run on an existing Dask cluster (tcp://host:8786); needs "
                         "'mechcirc[study]'")
-    p.add_argument("--workers", type=int, metavar="N",
+    p.add_argument("--workers", type=count(1, 1024), metavar="N",
                    help="local processes (default: all cores; 1 = this process)")
     p.add_argument("--resume", action="store_true",
                    help="keep the rows already in -o and run only the missing points")

@@ -5,7 +5,8 @@ from __future__ import annotations
 import argparse
 import math
 
-from ._common import check_output_paths, print_json, save_figure
+from ._common import (MAX_LENGTH, MAX_OMEGA, check_output_paths, count, print_json, real,
+                      save_figure)
 
 
 def register(sub) -> None:
@@ -19,9 +20,10 @@ def register(sub) -> None:
                "--omega 100 --plot fourbar.png",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     for name, what in (("crank", "AB"), ("coupler", "BC"), ("rocker", "CD"), ("frame", "AD")):
-        p.add_argument(f"--{name}", type=float, required=True, metavar="L",
+        p.add_argument(f"--{name}", type=real(above=0.0, most=MAX_LENGTH), required=True,
+                       metavar="L",
                        help=f"{name} length {what} (any unit)")
-    p.add_argument("--omega", type=float, metavar="W",
+    p.add_argument("--omega", type=real(most=MAX_OMEGA, unit="rad/s"), metavar="W",
                    help="crank speed [rad/s] for ε4T = ν·ω²")
     p.add_argument("--branch", type=int, choices=(1, -1), default=1,
                    help="assembly mode (default +1; see docs/kinematics.md)")
@@ -38,11 +40,11 @@ def register(sub) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--load", choices=("light", "medium", "heavy"), default="medium",
                    help="loom class: crank 33–34, 35–36 or 37–38 mm (default medium)")
-    p.add_argument("--swing", type=float, metavar="DEG",
+    p.add_argument("--swing", type=real(above=0.0, most=180.0, unit="deg"), metavar="DEG",
                    help="swing Ψ [deg] (default: explore 23–26°)")
     p.add_argument("--objective", choices=("margin", "ratio"), default="margin",
                    help="rank by the smallest criterion margin (default) or by |Φ2''|/|Φ1''|")
-    p.add_argument("--limit", type=int, default=10, metavar="N",
+    p.add_argument("--limit", type=count(1, 100_000), default=10, metavar="N",
                    help="number of designs shown (default 10)")
     p.add_argument("--plot", metavar="IMAGE",
                    help="transmission angle and rocker acceleration against θ")
@@ -58,7 +60,7 @@ def register(sub) -> None:
         epilog="Example: mechcirc linkage examples/fnf_sixbar.toml --theta 30 --plot fnf.png",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("file", help="linkage file (.toml)")
-    p.add_argument("--theta", type=float, default=0.0, metavar="DEG",
+    p.add_argument("--theta", type=real(most=1e9, unit="deg"), default=0.0, metavar="DEG",
                    help="rotation of the first crank from the pose [deg] (default 0)")
     p.add_argument("--plot", metavar="IMAGE",
                    help="draw the linkage at θ with the paths of its points")
@@ -70,10 +72,26 @@ def _deg(x):
     return f"{math.degrees(x):.3f}°"
 
 
+#: The longest link may be at most this many times the shortest (float64 keeps ~16 digits).
+MAX_LENGTH_RATIO = 1e6
+
+
+def _check_length_ratio(args) -> None:
+    from ..errors import InputError
+
+    lengths = {n: getattr(args, n) for n in ("crank", "coupler", "rocker", "frame")}
+    lo, hi = min(lengths, key=lengths.get), max(lengths, key=lengths.get)
+    if lengths[hi] > MAX_LENGTH_RATIO * lengths[lo]:
+        raise InputError(f"--{hi} {lengths[hi]:g} is more than {MAX_LENGTH_RATIO:g} times "
+                         f"--{lo} {lengths[lo]:g}; the four-bar's angles would be lost to "
+                         "rounding (give the lengths in a unit that keeps them comparable)")
+
+
 def cmd_fourbar(args) -> int:
     from ..kinematics import FourBar
 
     check_output_paths(plots=(args.plot,))
+    _check_length_ratio(args)
 
     fb = FourBar(args.crank, args.coupler, args.rocker, args.frame, branch=args.branch)
     doc = fb.summary(args.omega)

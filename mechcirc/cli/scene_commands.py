@@ -5,7 +5,8 @@ from __future__ import annotations
 import argparse
 import math
 
-from ._common import check_output_paths, print_json, save_figure
+from ..limits import MAX_CYCLE_POINTS
+from ._common import check_output_paths, count, print_json, real, save_figure
 
 
 def register(sub) -> None:
@@ -20,7 +21,7 @@ def register(sub) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("file", help="scene file (.toml)")
     what = p.add_mutually_exclusive_group()
-    what.add_argument("--theta", type=float, metavar="DEG",
+    what.add_argument("--theta", type=real(most=1e9, unit="deg"), metavar="DEG",
                       help="crank rotation from the pose [deg] to linearise at (default: "
                            "theta_deg of the file's [analysis])")
     what.add_argument("--cycle", action="store_true",
@@ -29,9 +30,10 @@ def register(sub) -> None:
                    help="--theta: write the netlist (.mcir); --cycle: write a CSV table")
     p.add_argument("--reflect", choices=("eta", "lever"), default="eta",
                    help="reflect through eta = ratio² (default) or explicit ideal levers")
-    p.add_argument("--points", type=int, default=72, metavar="N",
+    p.add_argument("--points", type=count(2, MAX_CYCLE_POINTS, why="about 10 ms each"),
+                   default=72, metavar="N",
                    help="--cycle: crank angles over the revolution (default 72)")
-    p.add_argument("--harmonics", type=int, default=5, metavar="H",
+    p.add_argument("--harmonics", type=count(1, 1000), default=5, metavar="H",
                    help="--cycle: shaft harmonics h = 1..H for |Q0| (default 5)")
     p.add_argument("--reduce", action="store_true",
                    help="reduce the circuit to what the file's [analysis] output needs over "
@@ -51,7 +53,7 @@ def register(sub) -> None:
     p.add_argument("file", help="netlist file (.mcir)")
     p.add_argument("--band", required=True, metavar="W1:W2",
                    help="angular frequency band [rad/s], W1 < W2")
-    p.add_argument("--tol", type=float, required=True, metavar="T",
+    p.add_argument("--tol", type=real(above=0.0, most=1.0), required=True, metavar="T",
                    help="largest relative error of the output allowed over the band (> 0)")
     p.add_argument("--output", dest="element", metavar="ELEMENT",
                    help="the force in this element is the output (default: K at the drive)")

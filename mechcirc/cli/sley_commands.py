@@ -6,7 +6,8 @@ import argparse
 import math
 import sys
 
-from ._common import check_output_paths, print_json, save_figure
+from ..limits import MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS
+from ._common import check_output_paths, count, print_json, real, save_figure
 
 _METHODS = ("rk4", "rk4-python", "DOP853", "RK45", "LSODA")   # = mechcirc.sley.METHODS
 _UNITS = {"eps4T": "1/s^2", "eps2P": "1/s^2", "eps4P": "1/s^2", "eps5P": "1/s^2",
@@ -28,11 +29,12 @@ def register(sub) -> None:
     p.add_argument("--variant", default="3", metavar="N",
                    help="variant 1-7 (default 3), or 'all' for all 14 of both tables "
                         "on every core")
-    p.add_argument("--revolutions", type=int, default=5, metavar="R",
+    p.add_argument("--revolutions", type=count(1, MAX_REVOLUTIONS), default=5, metavar="R",
                    help="revolutions to integrate; the last is tabulated (default 5)")
-    p.add_argument("--revolution", type=int, metavar="K",
+    p.add_argument("--revolution", type=count(1, MAX_REVOLUTIONS), metavar="K",
                    help="tabulate revolution K (1..R) instead of the last")
-    p.add_argument("--alpha", type=float, default=40.0, metavar="DEG",
+    p.add_argument("--alpha", type=real(above=0.0, most=360.0, unit="deg"), default=40.0,
+                   metavar="DEG",
                    help="beat-up interval alpha [deg] (default 40, not printed in the paper)")
     p.add_argument("--beat-sign", type=int, choices=(-1, 1), default=-1,
                    help="sign of M4 in the sley equation: -1 as eq. (4) prints it (default), "
@@ -42,11 +44,12 @@ def register(sub) -> None:
                         "(repeatable)")
     p.add_argument("--method", choices=_METHODS, default="rk4",
                    help="integrator (default rk4: numba if installed, else pure Python)")
-    p.add_argument("--rtol", type=float, metavar="TOL",
+    p.add_argument("--rtol", type=real(above=0.0, most=1.0), metavar="TOL",
                    help="relative tolerance of the scipy methods (default 1e-10)")
-    p.add_argument("--steps-per-period", type=float, metavar="N",
+    p.add_argument("--steps-per-period", type=real(least=1.0, most=1e6), metavar="N",
                    help="rk4 steps per period of the fastest mode (default 50)")
-    p.add_argument("--points", type=int, default=7200, metavar="N",
+    p.add_argument("--points", type=count(16, MAX_POINTS_PER_REVOLUTION), default=7200,
+                   metavar="N",
                    help="output points per revolution (default 7200, i.e. 0.05 deg)")
     p.add_argument("-o", "--output", metavar="CSV", help="write the curves as CSV")
     p.add_argument("--plot", metavar="IMAGE", help="plot eps2P, eps4P, eps4T, M2V (Figs. 4-9)")
@@ -61,7 +64,7 @@ def register(sub) -> None:
                     "frequency; (c) harmonic forcing of the linear model against |Q0|.",
         epilog="Example: mechcirc crosscheck --drive one-side --variant 3 --theta 60\n"
                "         mechcirc crosscheck netlists/stb_heald.mcir --omega-max 5000\n"
-               "(a netlist FILE: its resonances and |Q0| against its transients)",
+               "(the second form takes any netlist; see the transient command)",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("file", nargs="?", metavar="FILE.mcir",
                    help="a netlist: cross-check its resonances and |Q0| against its "
@@ -72,7 +75,7 @@ def register(sub) -> None:
     p.add_argument("--drive", choices=("one-side", "both-sides"), default="one-side")
     p.add_argument("--variant", type=int, default=3, choices=range(1, 8), metavar="N",
                    help="variant 1-7 (default 3)")
-    p.add_argument("--theta", type=float, metavar="DEG",
+    p.add_argument("--theta", type=real(most=1e9, unit="deg"), metavar="DEG",
                    help="crank angle of the linearisation [deg] (default: the start angle, "
                         "where the sley's rigid acceleration is zero)")
     p.add_argument("--netlist", metavar="FILE", help="also write the netlist used")

@@ -143,7 +143,7 @@ class _Builder:
             tree = self.circuit.tree
         except NotSeriesParallelError:
             return self.build_nodal()
-        from ..sweep import _depth
+        from ..reduction import depth as _depth
 
         depth = _depth(tree)
         if depth > MAX_TREE_DEPTH:

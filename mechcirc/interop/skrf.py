@@ -142,23 +142,17 @@ def write_touchstone(path: str | os.PathLike, omega: ArrayLike, Z: ArrayLike, *,
 
 
 def read_mobility(path: str | os.PathLike) -> tuple[NDArray[np.float64], NDArray[np.complex128], str]:
-    """Read a one-port Touchstone file with scikit-rf: ``(omega [rad/s], K [m/(N·s)], name)``.
+    """Read a one-port Touchstone file: ``(omega [rad/s], K [m/(N·s)], name)``.
 
-    The file's Z parameter is taken as the mobility (any Touchstone format
-    and reference scikit-rf understands: S, Y or Z; RI, MA or DB).
+    The file's Z parameter is taken as the mobility (S, Y or Z; RI, MA or DB;
+    any reference R > 0).  The file is parsed as text by
+    :func:`mechcirc.interop.touchstone.read_touchstone_one_port`, never by
+    ``skrf.Network(path)``, which would unpickle a file that is a pickle and
+    so run code from it.
     """
-    import skrf
+    from .touchstone import read_touchstone_one_port
 
-    source = os.fspath(path)
-    if not os.path.exists(source):
-        raise MechcircError(f"{source}: no such file")
-    try:
-        net = skrf.Network(source)
-    except Exception as exc:  # noqa: BLE001 - scikit-rf raises many kinds
-        raise MechcircError(f"{source}: cannot read as Touchstone: {exc}") from None
-    if net.nports != 1:
-        raise MechcircError(f"{source}: has {net.nports} ports, expected a one-port (.s1p)")
-    return 2 * math.pi * np.asarray(net.f, dtype=float), net.z[:, 0, 0].copy(), net.name
+    return read_touchstone_one_port(path)
 
 
 # --------------------------------------------------------------------------

@@ -52,8 +52,6 @@ from __future__ import annotations
 
 import math
 import os
-import re
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -521,57 +519,12 @@ class Linkage:
 
 
 # ------------------------------------------------------------------ parsing
-def _locate(text: str, section: str | None, key: str, value: str | None = None,
-            occurrence: int = 0) -> tuple[int, int]:
-    """1-based (line, col) of ``key = …`` in ``[section]`` (or its n-th ``[[section]]``).
-
-    With ``value``, the column of that quoted string on the line.  (0, 0) when
-    not found.
-    """
-    lines = text.splitlines()
-    in_section = section is None
-    seen = -1
-    header = re.compile(r"^\s*\[\[?\s*([^\]]+?)\s*\]\]?\s*(#.*)?$")
-    key_re = re.compile(r'^\s*"?' + re.escape(key) + r'"?\s*=')
-    for n, line in enumerate(lines, start=1):
-        m = header.match(line)
-        if m:
-            in_section = False                     # top-level keys end at the first header
-            if section is not None and m.group(1) == section:
-                seen += 1
-                in_section = seen == occurrence
-            continue
-        if in_section and key_re.match(line):
-            col = line.index(key) + 1
-            if value is not None:
-                for quote in ('"', "'"):
-                    pos = line.find(f"{quote}{value}{quote}")
-                    if pos >= 0:
-                        col = pos + 1
-                        break
-            return n, col
-    return 0, 0
-
-
-def _err(text, source, message, section, key, value=None, occurrence=0, expected=None):
-    line, col = _locate(text, section, key, value, occurrence)
-    return NetlistError(message, source, line, col, expected)
-
-
-def _finite_number(v) -> bool:
-    """A TOML integer or float that is a finite float64 (not a bool, not 10**400)."""
-    if not isinstance(v, (int, float)) or isinstance(v, bool):
-        return False
-    try:
-        return math.isfinite(v)
-    except OverflowError:           # an integer beyond float64's range
-        return False
-
-
-def _brief(v) -> str:
-    """A value for a message, cut short."""
-    text = repr(v)
-    return text if len(text) <= 60 else text[:57] + "..."
+# The located-TOML helpers are shared with the scene and study readers.
+from ..sources import brief as _brief  # noqa: E402
+from ..sources import finite_number as _finite_number  # noqa: E402
+from ..sources import load_toml  # noqa: E402
+from ..sources import locate as _locate  # noqa: E402,F401
+from ..sources import located as _err  # noqa: E402
 
 
 def parse_linkage(text: str, source: str = "<string>") -> Linkage:
@@ -586,22 +539,7 @@ def parse_linkage(text: str, source: str = "<string>") -> Linkage:
         The mobility differs from the number of cranks (says W), or a link's
         points coincide.
     """
-    try:
-        doc = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        m = re.search(r"\(at line (\d+), column (\d+)\)", str(exc))
-        line, col = (int(m.group(1)), int(m.group(2))) if m else (0, 0)
-        msg = re.sub(r"\s*\(at line \d+, column \d+\)", "", str(exc))
-        raise NetlistError(f"TOML syntax: {msg}", source, line, col) from None
-    except ValueError:
-        # tomllib converts integers with int(), which refuses more than
-        # sys.get_int_max_str_digits() (4300) digits.
-        m = re.search(r"\d{4000,}", text)
-        start = m.start() if m else 0
-        line = text.count("\n", 0, start) + 1
-        col = start - (text.rfind("\n", 0, start) + 1) + 1
-        raise NetlistError("integer with thousands of digits", source, line if m else 0,
-                           col if m else 0, "a number within float64's range") from None
+    doc = load_toml(text, source)
 
     for table in ("points", "ground", "links", "cranks"):
         header = "[[cranks]]" if table == "cranks" else f"[{table}]"

@@ -63,12 +63,13 @@ from __future__ import annotations
 import math
 import os
 import re
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
 from ..errors import GeometryError, NetlistError
-from ..kinematics.linkage import Linkage, _err, parse_linkage
+from ..kinematics.linkage import Linkage, parse_linkage
+from ..sources import brief, finite_number, load_toml, split_lines
+from ..sources import located as _err
 
 __all__ = ["Scene", "Analysis", "SceneMass", "ElasticLink", "Torsion", "Load", "SceneDrive",
            "parse_scene", "load_scene", "LENGTH_UNITS", "SCENE_TABLES"]
@@ -226,7 +227,7 @@ def _hide_scene_tables(text: str) -> str:
     header = re.compile(r"^\s*\[\[?\s*([^\]]+?)\s*\]\]?\s*(#.*)?$")
     key = re.compile(r'^\s*"?([A-Za-z0-9_-]+)"?\s*=')
     out, hiding, top = [], False, True
-    for line in text.splitlines():
+    for line in split_lines(text):
         m = header.match(line)
         if m:
             top = False
@@ -238,13 +239,18 @@ def _hide_scene_tables(text: str) -> str:
     return "\n".join(out) + "\n"
 
 
+def _named(value, names) -> bool:
+    """``value`` is a string among ``names`` (a list or a number in the file is no name)."""
+    return isinstance(value, str) and value in names
+
+
 def _number(text, source, value, what, table, key, n, *, positive=True, allow_zero=False):
-    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+    ok = finite_number(value)
     if ok and positive:
         ok = value > 0 or (allow_zero and value == 0)
     if not ok:
         need = "a finite number" + ("" if not positive else " ≥ 0" if allow_zero else " > 0")
-        raise _err(text, source, f"{what} must be {need}, got {value!r}", table, key,
+        raise _err(text, source, f"{what} must be {need}, got {brief(value)}", table, key,
                    occurrence=n, expected=need)
     return float(value)
 
@@ -261,11 +267,7 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
         The linkage's own geometry checks, or a rigid part that does not have
         exactly one degree of freedom once the elastic elements are released.
     """
-    try:
-        doc = tomllib.loads(text)
-    except tomllib.TOMLDecodeError:
-        parse_linkage(text, source)     # raises the located TOML error
-        raise
+    doc = load_toml(text, source)
     allowed = {"name", "points", "ground", "links", "cranks", "units", "description",
                *SCENE_TABLES}
     for k in doc:
@@ -273,7 +275,7 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
             err = _err(text, source, f"unknown top-level key {k!r}", None, k,
                        expected=", ".join(sorted(allowed)))
             if not err.line:                  # a table: point at its header
-                for n, line in enumerate(text.splitlines(), start=1):
+                for n, line in enumerate(split_lines(text), start=1):
                     if re.match(r"^\s*\[\[?\s*" + re.escape(k) + r"\s*[\].]", line):
                         err = NetlistError(err.message, source, n, line.index(k) + 1,
                                            err.expected)
@@ -281,7 +283,7 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
             raise err
     linkage = parse_linkage(_hide_scene_tables(text), source)
     units = doc.get("units")
-    if units not in LENGTH_UNITS:
+    if not _named(units, LENGTH_UNITS):
         raise _err(text, source, f"a scene needs units = \"m\", \"cm\" or \"mm\" (the length "
                    f"unit of [points]), got {units!r}", None, "units",
                    expected="units = \"mm\" (masses and stiffnesses are SI)")
@@ -318,7 +320,7 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
 
     def point_ref(entry, table, n, key="point"):
         p = entry.get(key)
-        if p not in points:
+        if not _named(p, points):
             raise _err(text, source, f"[[{table}]] #{n + 1}: {key} {p!r} does not exist in "
                        f"[points]", table, key, value=p if isinstance(p, str) else None,
                        occurrence=n, expected=f"one of {', '.join(points)}")
@@ -329,7 +331,7 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
     for n, e in enumerate(entries("elastic")):
         check_keys(e, "elastic", n, ("name", "link", "stiffness", "damping"))
         lname = e.get("link")
-        if lname not in links:
+        if not _named(lname, links):
             raise _err(text, source, f"elastic link {lname!r} is not in the linkage's [links]",
                        "elastic", "link", value=lname if isinstance(lname, str) else None,
                        occurrence=n, expected=f"one of {', '.join(links)}")
@@ -356,7 +358,7 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
     for n, t in enumerate(entries("torsion")):
         check_keys(t, "torsion", n, ("name", "link", "body", "pivot", "stiffness", "damping"))
         lname = t.get("link")
-        if lname not in links or lname in elastic_links:
+        if not _named(lname, links) or lname in elastic_links:
             raise _err(text, source, f"torsion rod #{n + 1}: link {lname!r} is not a rigid link "
                        f"of [links]", "torsion", "link",
                        value=lname if isinstance(lname, str) else None, occurrence=n,
@@ -408,7 +410,7 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
             masses.append(SceneMass(name, "mass", v, point=p))
         else:
             lname = m.get("link")
-            if lname not in bodies:
+            if not _named(lname, bodies):
                 hint = (" (an elastic link has no inertia of its own here: lump its mass at "
                         "its end points)") if lname in elastic_links else ""
                 raise _err(text, source, f"[[masses]] #{n + 1}: link {lname!r} is not a rigid "
@@ -437,7 +439,7 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
         anchor = direction = None
         if "anchor" in ld:
             anchor = ld["anchor"]
-            if anchor not in linkage.ground:
+            if not _named(anchor, linkage.ground):
                 raise _err(text, source, f"load #{n + 1}: anchor {anchor!r} is not a ground "
                            "point", "loads", "anchor", occurrence=n,
                            value=anchor if isinstance(anchor, str) else None,
@@ -474,11 +476,11 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
     if ("link" in dr) == ("point" in dr):
         raise _err(text, source, "[drive] needs exactly one of link or point", "drive",
                    next(iter(dr), "link"), expected='link = "…" or point = "…"')
-    if "link" in dr and dr["link"] not in bodies:
+    if "link" in dr and not _named(dr["link"], bodies):
         raise _err(text, source, f"[drive] link {dr['link']!r} is not a rigid link or torsion "
                    "body", "drive", "link", expected=f"one of {', '.join(sorted(bodies))}")
     if "point" in dr:
-        if dr["point"] not in points:
+        if not _named(dr["point"], points):
             raise _err(text, source, f"[drive] point {dr['point']!r} does not exist in [points]",
                        "drive", "point", expected=f"one of {', '.join(points)}")
         if dr["point"] not in rigid_points:
@@ -505,7 +507,7 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
             taken = el.name + "_d"
             if taken in names:
                 where = next(((n, ln.index(f'"{taken}"') + 1) for n, ln in
-                              enumerate(text.splitlines(), start=1) if f'"{taken}"' in ln), (0, 0))
+                              enumerate(split_lines(text), start=1) if f'"{taken}"' in ln), (0, 0))
                 raise NetlistError(f"{el.name!r} has a damper, named {taken!r} in the circuit, "
                                    "but that name is taken", source, *where, "another name")
             circuit_names.add(el.name + "_d")
@@ -533,7 +535,7 @@ def _analysis(text, source, table, circuit_names) -> Analysis:
         theta = _number(text, source, table["theta_deg"], "theta_deg [deg]", "analysis",
                         "theta_deg", 0, positive=False)
     output = table.get("output")
-    if output is not None and output not in circuit_names:
+    if output is not None and not _named(output, circuit_names):
         raise _err(text, source, f"[analysis] output {output!r} is not an element of the "
                    "scene's circuit", "analysis", "output",
                    value=output if isinstance(output, str) else None,

@@ -39,7 +39,7 @@ from typing import Literal
 import numpy as np
 
 from ..circuit import Circuit
-from ..errors import GeometryError
+from ..errors import GeometryError, InputError
 from .files import Scene
 
 __all__ = ["SceneCircuit", "build", "build_needed", "ZERO_RATIO"]
@@ -124,7 +124,7 @@ def build(scene: Scene, theta: float, *, reflect: Literal["eta", "lever"] = "eta
         raise ValueError(f"reflect must be 'eta' or 'lever', got {reflect!r}")
     theta = float(theta)
     if not math.isfinite(theta):
-        raise ValueError(f"theta must be finite, got {theta!r}")
+        raise InputError(f"theta must be finite, got {theta!r}")
     lk = scene.linkage
     deg = math.degrees(theta)
     if state is None:

@@ -328,7 +328,9 @@ def _check_location(exc: NetlistError, text: str | None, *, one_line: bool = Fal
     """
     if text is None or not exc.line:
         return
-    lines = [text] if one_line else (text.splitlines() or [""])
+    from mechcirc.sources import split_lines      # lines as editors and wc -l count them
+
+    lines = [text] if one_line else (split_lines(text) or [""])
     if not 1 <= exc.line <= len(lines):
         raise PropertyFailure(f"line {exc.line} outside the text ({len(lines)} lines): {exc}")
     if not 1 <= exc.col <= len(lines[exc.line - 1]) + 2:

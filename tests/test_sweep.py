@@ -1,0 +1,225 @@
+"""Sweeps on the series–parallel tree: honest error bounds, singular points, peaks, pickling.
+
+Every reference here is computed independently of mechcirc's reduction: in
+mpmath at 40 digits from the element laws (``tests/reference/sp_corpus.py``),
+or from closed forms.  The code's own error estimate is what is checked, never
+what decides the check.
+"""
+
+import math
+import pickle
+import warnings
+
+import numpy as np
+import pytest
+from scipy.optimize import minimize_scalar
+
+import mechcirc
+from mechcirc.sweep import FLAG_NEAR_SINGULAR, FLAG_SINGULAR, peak
+from reference import sp_corpus as corpus
+
+U = np.finfo(float).eps / 2
+
+
+def _sweep(expr, omega):
+    c = corpus.to_circuit(expr)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        s = c.sweep(omega, method="sp")
+    ref = corpus.reference(expr, omega)
+    return s, corpus.true_error(s.K, ref)
+
+
+def _small_corpus():
+    """Random SP trees (levers, 12 decades of values, undamped/lightly damped/damped),
+    sampled on a log grid and, for lossless ones, at 1e-6 … 0 relative distance of
+    their exact poles and zeros; plus issue 11's lightly damped 45-element ladder."""
+    rng = np.random.default_rng(20261123)
+    est, true, flags = [], [], []
+    for i in range(24):
+        expr = corpus.random_tree(rng, int(rng.integers(2, 30)), damped=(0, 0.02, 0.3)[i % 3])
+        omega = np.geomspace(1e-3, 1e3, 21)
+        if corpus.lossless(expr):
+            crit = corpus.critical_points(expr, 1e-3, 1e3, 60)[:3]
+            near = [w * (1 + d) for w in crit for d in (1e-6, -1e-9, 1e-12, -1e-14, 0.0)]
+            omega = np.concatenate([omega, near])
+        s, t = _sweep(expr, omega)
+        est.append(s.error), true.append(t), flags.append(s.flags)
+    s, t = _sweep(corpus.ladder(rng, 45), np.geomspace(2 * np.pi * 0.1, 2 * np.pi * 1e3, 101))
+    est.append(s.error), true.append(t), flags.append(s.flags)
+    return np.concatenate(est), np.concatenate(true), np.concatenate(flags)
+
+
+@pytest.fixture(scope="module")
+def calibration():
+    return _small_corpus()
+
+
+def test_error_bound_is_never_below_the_true_error(calibration):
+    est, true, flags = calibration
+    regular = flags != FLAG_SINGULAR
+    assert regular.sum() > 500
+    assert np.all(est[regular] >= true[regular])
+
+
+def test_no_misses_and_few_false_alarms(calibration):
+    est, true, flags = calibration
+    regular = flags != FLAG_SINGULAR
+    # The corpus reaches the interesting range: points with garbage K exist.
+    assert np.count_nonzero(regular & (true > 1e-6)) >= 5
+    misses = regular & (true > 1e-6) & (flags != FLAG_NEAR_SINGULAR)
+    assert not misses.any()
+    accurate = regular & (true < 1e-8)
+    false_alarms = accurate & (flags == FLAG_NEAR_SINGULAR)
+    # Measured: 0.2 % on this corpus (1 % is issue 11's goal).
+    assert false_alarms.sum() <= 0.01 * accurate.sum()
+
+
+def test_error_bound_is_tight(calibration):
+    est, true, flags = calibration
+    ok = (flags != FLAG_SINGULAR) & np.isfinite(est)
+    # True errors below one rounding count as one rounding (K is a float64).
+    ratio = est[ok] / np.maximum(true[ok], U)
+    # Measured: median 15, 99th percentile ≈ 1.5e3 (issue 11's goal: ≤ 1e4 at 99 %).
+    assert np.percentile(ratio, 99) <= 1e4
+    assert np.median(ratio) <= 100
+
+
+@pytest.mark.parametrize("n", [45, 999])
+def test_issue11_ladders_are_not_flagged(n):
+    """Issue 11 §1: 67/401 and 306/401 points were flagged (error up to inf)."""
+    rng = np.random.default_rng(n)
+    expr = corpus.ladder(rng, n)
+    c = corpus.to_circuit(expr)
+    omega = np.geomspace(2 * np.pi * 0.1, 2 * np.pi * 1e3, 401)
+    s = c.sweep(omega)
+    assert np.count_nonzero(s.flags) == 0
+    assert s.error.max() < 1e-9                # measured 7.5e-11 at 999 elements
+    sample = omega[::40]
+    true = corpus.true_error(c.sweep(sample).K, corpus.reference(expr, sample))
+    assert np.all(s.error[::40] >= true)
+
+
+# ---------------------------------------------------------------------------
+# Singular points: one convention
+# ---------------------------------------------------------------------------
+
+POLE = "drive V a 0 velocity=1\nspring k a 0 1e4\nmass m a 0 1\n"     # 1/K = j(ω − 1e4/ω)
+ZERO = "drive V a 0 velocity=2\nspring k a b 1e4\nmass m b 0 1\n"      # K = j(ω/1e4 − 1/ω)
+
+
+def test_pole_convention_sp():
+    s = mechcirc.parse(POLE).sweep([50.0, 100.0, 200.0], method="sp")
+    assert s.K[1] == complex(0, math.inf)
+    assert s.Q0[1] == 0
+    assert s.flags.tolist() == [0, FLAG_SINGULAR, 0]
+
+
+def test_zero_convention_sp():
+    s = mechcirc.parse(ZERO).sweep([50.0, 100.0, 200.0], method="sp")
+    assert s.K[1] == 0
+    assert s.Q0[1] == complex(0, math.inf)      # +∞·j·V0
+    assert s.flags.tolist() == [0, FLAG_SINGULAR, 0]
+
+
+def test_force_drive_at_a_pole():
+    c = mechcirc.parse(POLE.replace("velocity=1", "force=3"))
+    s = c.sweep([100.0], method="sp")
+    assert s.v0[0] == complex(0, math.inf) and s.flags[0] == FLAG_SINGULAR
+
+
+def test_singular_points_do_not_warn():
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        mechcirc.parse(POLE).sweep([100.0], method="sp")
+
+
+@pytest.mark.parametrize("text", [POLE, ZERO])
+def test_both_methods_agree_at_singular_points(text):
+    """Issue 11 §3: method="nodal" must give the same value and flag as "sp".
+
+    The nodal side is implemented by the nodal helper's branch; until it lands
+    this test may fail (xfail, not strict).
+    """
+    c = mechcirc.parse(text)
+    sp = c.sweep([100.0], method="sp")
+    nodal = c.sweep([100.0], method="nodal")
+    if not nodal.K[0] == sp.K[0]:
+        pytest.xfail(f"nodal gives K = {nodal.K[0]}, sp {sp.K[0]} (nodal side not merged)")
+    assert nodal.flags[0] == sp.flags[0] == FLAG_SINGULAR
+    assert nodal.Q0[0] == sp.Q0[0]
+
+
+# ---------------------------------------------------------------------------
+# Peaks
+# ---------------------------------------------------------------------------
+
+def test_undamped_peak_is_unbounded_and_named():
+    c = mechcirc.parse(ZERO)
+    p = peak(c, 10.0, 1000.0)
+    assert p.unbounded and p.value == math.inf
+    assert p.omega == pytest.approx(100.0, rel=1e-12)      # sqrt(k/m)
+    # A Sweep reports the same whatever its grid.
+    for n in (40, 401):
+        s = c.sweep(np.geomspace(10, 1000, n))
+        assert s.peak().value == math.inf and s.peak().omega == pytest.approx(100.0, rel=1e-12)
+
+
+def test_stb_peak_is_unbounded_not_the_grid_max():
+    """Issue 11 §4: 6307 N on 400 points, 1.5e8 N on 2e6 points; the truth is ∞."""
+    c = mechcirc.load("netlists/stb_heald.mcir")
+    s = c.sweep(np.geomspace(10, 1e4, 400))
+    p = s.peak()
+    assert p.unbounded and p.value == math.inf
+    exact = [r.omega for r in c.resonances(omega_max=1e4) if r.kind == "resonance"
+             and r.omega >= 10]
+    assert p.poles == tuple(exact) and p.omega == exact[0]
+    assert math.isfinite(p.grid_value)
+
+
+@pytest.mark.parametrize("m,k,c", [(1.0, 1e4, 2.0), (2.0, 3e5, 0.5), (0.5, 80.0, 0.02)])
+def test_damped_peak_located_to_1e_6(m, k, c):
+    circuit = mechcirc.parse(f"drive V a 0 velocity=1\nspring k a b {k}\ndamper c a b {c}\n"
+                             f"mass m b 0 {m}\n")
+
+    def minus_q(w):         # the SDOF's closed form, not mechcirc
+        K = 1 / (k / (1j * w) + c) + 1 / (1j * w * m)
+        return -abs(1 / K)
+
+    wn = math.sqrt(k / m)
+    ref = minimize_scalar(minus_q, bounds=(0.9 * wn, 1.1 * wn), method="bounded",
+                          options={"xatol": 1e-13 * wn})
+    p = peak(circuit.sweep(np.geomspace(0.1, 1e4, 200)))
+    assert not p.unbounded
+    assert p.value == pytest.approx(-ref.fun, rel=1e-6)
+    assert p.omega == pytest.approx(ref.x, rel=1e-6)
+    assert p.grid_value < p.value
+
+
+# ---------------------------------------------------------------------------
+# Plain data
+# ---------------------------------------------------------------------------
+
+@pytest.mark.parametrize("method", ["sp", "nodal"])
+def test_sweep_pickles(method):
+    c = mechcirc.load("netlists/stb_heald.mcir")
+    s = c.sweep(np.geomspace(10, 1e4, 50), method=method)
+    name = c.elements[0].name
+    force = s.force(name)
+    t = pickle.loads(pickle.dumps(s))
+    assert np.array_equal(t.K, s.K) and np.array_equal(t.omega, s.omega)
+    assert np.array_equal(t.flags, s.flags)
+    assert np.array_equal(t.force(name), force)
+    assert t.method == s.method and t.drive == s.drive
+    if method == "sp":
+        assert str(t.tree) == str(s.tree)
+
+
+def test_deep_ladder_sweep_pickles():
+    """A 20,000-element ladder nests 10,000 levels: deeper than pickle recurses."""
+    rng = np.random.default_rng(3)
+    c = corpus.to_circuit(corpus.ladder(rng, 20_000))
+    s = c.sweep([1.0, 10.0])
+    t = pickle.loads(pickle.dumps(s))
+    assert np.array_equal(t.K, s.K)
+    assert np.array_equal(t.error, s.error)
