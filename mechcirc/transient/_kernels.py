@@ -122,14 +122,24 @@ _B5 = np.array([35 / 384, 0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84, 0])
 _B4 = np.array([5179 / 57600, 0, 7571 / 16695, 393 / 640, -92097 / 339200, 187 / 2100, 1 / 40])
 
 
+#: Dense output of Dormand–Prince (Hairer, Nørsett & Wanner, DOPRI5 ``contd5``): a
+#: 4th-order continuous extension from the stages of the step itself.
+_D = np.array([-12715105075 / 11282082432, 0.0, 87487479700 / 32700410799,
+               -10690763975 / 1880347072, 701980252875 / 199316789632,
+               -1453857185 / 822651844, 69997945 / 29380423])
+
+
 @_jit
 def dopri_run(z, t0, dt, nout, A, B, cx, dx, cv, dv, extra, prm, u, rtol, atol, hmax,
-              coefA, coefB5, coefB4, coefC, out):
+              coefA, coefB5, coefB4, coefC, coefD, dense, out):
     """Integrate from t0 and store z at t0 + k dt (k < nout) in ``out``; returns the step count.
 
-    Steps never cross an output time (nor so a sample of the piecewise-linear
-    drive), so the drive's kinks are always at step boundaries.  A step is
-    accepted when the embedded error, scaled by atol + rtol |z|, is ≤ 1 (RMS).
+    A step is accepted when the embedded error, scaled by atol + rtol |z|, is ≤ 1
+    (RMS).  With ``dense`` steps run across output times (which are filled by the
+    method's continuous extension) and are limited only by ``hmax``; without it
+    they end on every output time, i.e. on every sample of the piecewise-linear
+    drive, so its kinks are always at step boundaries.  Negative return: the
+    step size underflowed.
     """
     N = z.shape[0]
     K = np.zeros((7, N))
@@ -138,53 +148,68 @@ def dopri_run(z, t0, dt, nout, A, B, cx, dx, cv, dv, extra, prm, u, rtol, atol, 
     t = t0
     for i in range(N):
         out[0, i] = z[i]
+    t_end = t0 + (nout - 1) * dt
     h = min(hmax, dt)
     steps = 0
+    k_out = 1
     rhs(t, z, A, B, cx, dx, cv, dv, extra, prm, t0, dt, u, K[0])
-    for k in range(1, nout):
-        t_target = t0 + k * dt
-        while t < t_target:
-            last = False
-            if t + h >= t_target - 1e-14 * abs(t_target):
-                hh = t_target - t
-                last = True
-            else:
-                hh = h
-            for s in range(1, 7):
-                for i in range(N):
-                    acc = z[i]
-                    for r in range(s):
-                        acc += hh * coefA[s, r] * K[r, i]
-                    ytmp[i] = acc
-                rhs(t + coefC[s] * hh, ytmp, A, B, cx, dx, cv, dv, extra, prm, t0, dt, u, K[s])
-            err = 0.0
+    while k_out < nout:
+        stop = t_end if dense else t0 + k_out * dt
+        last = False
+        if t + h >= stop - 1e-14 * abs(stop):
+            hh = stop - t
+            last = True
+        else:
+            hh = h
+        for s in range(1, 7):
             for i in range(N):
-                a5 = z[i]
-                a4 = z[i]
-                for r in range(7):
-                    a5 += hh * coefB5[r] * K[r, i]
-                    a4 += hh * coefB4[r] * K[r, i]
-                y5[i] = a5
-                sc = atol + rtol * max(abs(z[i]), abs(a5))
-                q = (a5 - a4) / sc
-                err += q * q
-            err = math.sqrt(err / N)
-            steps += 1
-            if err <= 1.0:
-                t = t_target if last else t + hh
-                for i in range(N):
-                    z[i] = y5[i]
-                rhs(t, z, A, B, cx, dx, cv, dv, extra, prm, t0, dt, u, K[0])
-                fac = 5.0 if err == 0.0 else min(5.0, 0.9 * err ** -0.2)
-                if not last:
-                    h = min(hmax, hh * fac)
-                # after a step cut short by an output time, keep the previous h
-            else:
-                h = hh * max(0.1, 0.9 * err ** -0.2)
-                if h < 1e-14 * max(1.0, abs(t)):
-                    return -steps
+                acc = z[i]
+                for r in range(s):
+                    acc += hh * coefA[s, r] * K[r, i]
+                ytmp[i] = acc
+            rhs(t + coefC[s] * hh, ytmp, A, B, cx, dx, cv, dv, extra, prm, t0, dt, u, K[s])
+        # ytmp now holds the 5th-order solution (the last stage is at it: FSAL)
+        err = 0.0
         for i in range(N):
-            out[k, i] = z[i]
+            a4 = z[i]
+            for r in range(7):
+                a4 += hh * coefB4[r] * K[r, i]
+            y5[i] = ytmp[i]
+            sc = atol + rtol * max(abs(z[i]), abs(ytmp[i]))
+            q = (ytmp[i] - a4) / sc
+            err += q * q
+        err = math.sqrt(err / N)
+        steps += 1
+        if err <= 1.0:
+            t_new = stop if last else t + hh
+            # outputs inside (t, t_new]: continuous extension
+            while k_out < nout and t0 + k_out * dt <= t_new + 1e-12 * abs(t_new):
+                th = (t0 + k_out * dt - t) / hh
+                if th > 1.0:
+                    th = 1.0
+                s1 = 1.0 - th
+                for i in range(N):
+                    ydiff = y5[i] - z[i]
+                    bspl = hh * K[0, i] - ydiff
+                    r4 = ydiff - hh * K[6, i] - bspl
+                    r5 = 0.0
+                    for r in range(7):
+                        r5 += coefD[r] * K[r, i]
+                    r5 *= hh
+                    out[k_out, i] = z[i] + th * (ydiff + s1 * (bspl + th * (r4 + s1 * r5)))
+                k_out += 1
+            t = t_new
+            for i in range(N):
+                z[i] = y5[i]
+                K[0, i] = K[6, i]
+            fac = 5.0 if err == 0.0 else min(5.0, 0.9 * err ** -0.2)
+            if not last or dense:
+                h = min(hmax, hh * fac)
+            # after a step cut short by an output time, keep the previous h
+        else:
+            h = hh * max(0.1, 0.9 * err ** -0.2)
+            if h < 1e-14 * max(1.0, abs(t)):
+                return -steps
     return steps
 
 
