@@ -316,3 +316,13 @@ def test_nodes_only_outputs_match_full_run():
     lean = transient(c, 0.5, 1e-3, "harmonic:7", elements=False)
     assert lean.elements == () and lean.force.shape == (full.time.size, 0)
     assert np.array_equal(lean.x, full.x) and np.array_equal(lean.drive_force, full.drive_force)
+
+
+def test_too_large_network_is_refused_clearly():
+    from mechcirc.transient.model import MAX_NODES
+
+    n = MAX_NODES + 5
+    text = "\n".join(f"mass m{i} a{i} 0 1\nspring k{i} a{i} 0 1" for i in range(n))
+    c = mechcirc.parse(text, require_drive=False)
+    with pytest.raises(MechcircError, match="limited"):
+        transient(c, 1.0, 0.1)
