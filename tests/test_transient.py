@@ -145,8 +145,8 @@ def test_dead_zone_oscillator_exact_period():
     t_cross = res.time[i] - x[i] * (res.time[i + 1] - res.time[i]) / (x[i + 1] - x[i])
     periods = np.diff(t_cross)
     assert periods.size >= 5
-    assert np.abs(periods - T).max() <= 5e-7 * T           # achieved 1e-7 (rtol 1e-10)
-    assert abs(np.abs(res.node("a")[1]).max() - v0) <= 3e-7 * v0  # energy kept: achieved 9e-8
+    assert np.abs(periods - T).max() <= 2e-8 * T           # achieved 4e-9 (rtol 1e-10)
+    assert abs(np.abs(res.node("a")[1]).max() - v0) <= 1e-9 * v0  # energy kept: achieved 0
 
 
 def test_elasto_backlash_law_properties():

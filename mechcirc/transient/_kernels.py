@@ -108,6 +108,37 @@ def rhs(t, z, A, B, cx, dx, cv, dv, extra, prm, t0, dt, u, dz):
                 dz[i] += extra[i, k] * f
 
 
+@_jit
+def switch_state(t, z, cx, dx, cv, dv, prm, t0, dt, u, k):
+    """(branch code, switching functions g_gap, g_sep, g_min) of clearance element k.
+
+    Codes: 0 in the gap; ±1 contact with the damping part limiting (f_d < f_c);
+    ±2 contact with the full damping; ±3 at the wall but separating (f = 0).
+    The law is smooth inside one code; a change of code is a kink.
+    """
+    ut = drive_at(t, t0, dt, u)
+    e = dx[k] * ut
+    w = dv[k] * ut
+    for j in range(z.shape[0]):
+        e += cx[k, j] * z[j]
+        w += cv[k, j] * z[j]
+    c, d, b = prm[k, 0], prm[k, 1], prm[k, 2]
+    half = 0.5 * b
+    if abs(b) <= B_EPS:
+        return 0, 1.0, 1.0, 1.0
+    if e > half:
+        fc = c * (e - half)
+        fd = d * w
+        code = 3 if fc + fd <= 0.0 else (2 if fd <= fc else 1)
+        return code, e - half, fc + fd, fc - fd
+    if e < -half:
+        fc = c * (e + half)
+        fd = d * w
+        code = -3 if fc + fd >= 0.0 else (-2 if fd >= fc else -1)
+        return code, e + half, fc + fd, fc - fd
+    return 0, min(half - e, e + half), 1.0, 1.0
+
+
 # Dormand–Prince 5(4) coefficients.
 _C = np.array([0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0, 1.0])
 _A = np.array([
@@ -131,7 +162,7 @@ _D = np.array([-12715105075 / 11282082432, 0.0, 87487479700 / 32700410799,
 
 @_jit
 def dopri_run(z, t0, dt, nout, A, B, cx, dx, cv, dv, extra, prm, u, rtol, atol, hmax,
-              coefA, coefB5, coefB4, coefC, coefD, dense, out):
+              coefA, coefB5, coefB4, coefC, coefD, dense, out, kink_tol=0.0):
     """Integrate from t0 and store z at t0 + k dt (k < nout) in ``out``; returns the step count.
 
     A step is accepted when the embedded error, scaled by atol + rtol |z|, is ≤ 1
@@ -180,6 +211,33 @@ def dopri_run(z, t0, dt, nout, A, B, cx, dx, cv, dv, extra, prm, u, rtol, atol, 
             err += q * q
         err = math.sqrt(err / N)
         steps += 1
+        # Kink location: if a clearance element changes branch inside the step,
+        # shorten the step to end just past the switch (secant on its switching
+        # function), so the law is smooth inside every step.
+        if err <= 1.0 and hh > kink_tol:
+            theta = 2.0
+            for k in range(prm.shape[0]):
+                c0, ga0, gs0, gm0 = switch_state(t, z, cx, dx, cv, dv, prm, t0, dt, u, k)
+                c1, ga1, gs1, gm1 = switch_state(t + hh, y5, cx, dx, cv, dv, prm, t0, dt,
+                                                 u, k)
+                if c0 != c1:
+                    if (c0 == 0) != (c1 == 0):
+                        g0, g1 = ga0, ga1
+                    elif abs(c0) == 3 or abs(c1) == 3:
+                        g0, g1 = gs0, gs1
+                    else:
+                        g0, g1 = gm0, gm1
+                    th = g0 / (g0 - g1) if g0 != g1 else 0.5
+                    if th < 0.0 or th > 1.0 or th != th:
+                        th = 0.5
+                    if th < theta:
+                        theta = th
+            if theta < 2.0:
+                h_new = hh * min(1.0, theta * 1.001 + 1e-3)
+                if h_new < 0.999 * hh:
+                    hh_retry = h_new
+                    h = hh_retry
+                    continue
         if err <= 1.0:
             t_new = stop if last else t + hh
             # outputs inside (t, t_new]: continuous extension

@@ -446,7 +446,8 @@ def _nonlinear(ss: StateSpace, circuit, z0, t, u, rtol):
         scale = max(np.abs(z0).max(), 1e-300)
         atol = tol * scale if np.abs(z0).max() > 0 else tol
         steps = kern.dopri_run(z, 0.0, h, t.size, *args[:8], args[8], tol, atol, hmax,
-                               kern._A, kern._B5, kern._B4, kern._C, kern._D, dense, out)
+                               kern._A, kern._B5, kern._B4, kern._C, kern._D, dense, out,
+                               1e-6 * hmax)
         if steps < 0:
             raise MechcircError("the clearance integrator's step fell below 1e-14 s "
                                 "(the network is too stiff for it)")
