@@ -17,6 +17,7 @@ from .errors import (GeometryError, MechcircError, MechcircWarning, NetlistError
                      UnloadedElementWarning)
 from .netlist import load, parse
 from .sweep import Sweep
+from . import _methods  # noqa: F401  (attaches Circuit.sweep, .tree, …; see there)
 
 __all__ = [
     "parse", "load", "Circuit", "Element", "Lever", "Drive", "Sweep",

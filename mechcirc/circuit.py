@@ -31,15 +31,10 @@ Conventions (DIGEST §1, Grigoriev et al. 2002):
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from functools import cached_property
-from typing import TYPE_CHECKING, Literal
+from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-
-if TYPE_CHECKING:  # pragma: no cover
-    from .reduction import Node
-    from .sweep import Sweep
 
 __all__ = ["Element", "Lever", "Drive", "Circuit", "element_mobility", "FRAME",
            "ELEMENT_UNITS"]
@@ -172,6 +167,11 @@ class Circuit:
     initial : tuple of (str, float, float)
         Initial conditions ``(node, x0, v0)`` [m, m/s] from ``.ic`` lines
         (transients only; unnamed nodes start at rest).
+
+    Analysis methods (``tree``, ``unloaded``, ``nodal``, ``sweep``,
+    ``resonances``, ``two_port``, ``formula``) are defined by the modules that
+    do the analysis and attached by :mod:`mechcirc._methods`, so that this
+    module, at the bottom of the package, imports nothing above it.
     """
 
     elements: tuple[Element, ...]
@@ -207,57 +207,3 @@ class Circuit:
         seen.setdefault(self.drive.n1)
         seen.setdefault(self.drive.n2)
         return list(seen)
-
-    @cached_property
-    def _reduction(self):
-        from .reduction import reduce_circuit
-
-        return reduce_circuit(self)
-
-    @property
-    def tree(self) -> "Node":
-        """The series-parallel reduction tree seen from the drive.
-
-        Prints as a nested expression, e.g. ``m1 + m2 + (k4 | (m5 + k5))``.
-        Raises :class:`~mechcirc.errors.TopologyError` if the network is not
-        series-parallel reducible.
-        """
-        return self._reduction.tree
-
-    @property
-    def unloaded(self) -> tuple[str, ...]:
-        """Names of elements on no path between the drive terminals (they carry no force)."""
-        return self._reduction.unloaded
-
-    @cached_property
-    def nodal(self):
-        """The :class:`~mechcirc.nodal.NodalSystem` of the loaded network (built on first use)."""
-        from .nodal import assemble, require_nonsingular
-
-        system = assemble(self)
-        require_nonsingular(system)
-        return system
-
-    def sweep(self, omega: ArrayLike, method: str = "auto") -> "Sweep":
-        """K(ω), Q0(ω) and per-element forces over ``omega`` [rad/s]; see :func:`mechcirc.sweep.sweep`."""
-        from .sweep import sweep
-
-        return sweep(self, omega, method=method)
-
-    def resonances(self, omega_max: float | None = None) -> list:
-        """Zeros and poles of K(ω) up to ``omega_max`` [rad/s]; see :func:`mechcirc.resonances.find_resonances`."""
-        from .resonances import find_resonances
-
-        return find_resonances(self, omega_max=omega_max)
-
-    def two_port(self, P1: str, P2: str, S1: str, S2: str, omega: ArrayLike, **kwargs):
-        """Z parameters [m/(N·s)] between ports P1–P2 and S1–S2 as an ``skrf.Network``; see :func:`mechcirc.interop.skrf.two_port`."""
-        from .interop.skrf import two_port
-
-        return two_port(self, P1, P2, S1, S2, omega, **kwargs)
-
-    def formula(self, **kwargs):
-        """K(ω) as a SymPy expression nested as the reduction tree; see :func:`mechcirc.interop.formula.formula`."""
-        from .interop.formula import formula
-
-        return formula(self, **kwargs)

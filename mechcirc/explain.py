@@ -14,7 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from .circuit import ELEMENT_UNITS, Circuit
-from .reduction import Leaf, Node, Parallel, Series, _postorder
+from .reduction import Leaf, Node, Parallel, Series, postorder
 
 __all__ = ["Step", "explain", "explain_lines"]
 
@@ -54,7 +54,7 @@ def explain(circuit: Circuit) -> tuple[list[Step], str]:
     def name(node: Node) -> str:
         return node.element.name if isinstance(node, Leaf) else labels[id(node)]
 
-    for node in _postorder(tree):
+    for node in postorder(tree):
         if isinstance(node, Leaf):
             continue
         if isinstance(node, Series):

@@ -223,3 +223,42 @@ def test_deep_ladder_sweep_pickles():
     t = pickle.loads(pickle.dumps(s))
     assert np.array_equal(t.K, s.K)
     assert np.array_equal(t.error, s.error)
+
+
+def test_cli_names_singular_points_and_the_peak(tmp_path, capsys):
+    import json
+
+    from mechcirc import cli
+
+    path = tmp_path / "pole.mcir"
+    path.write_text(POLE)
+    assert cli.main(["sweep", str(path), "--omega-min", "50", "--omega-max", "150",
+                     "--points", "3", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["singular_omega"] == [100.0] and doc["flags"] == [0, 1, 0]
+    # |Q0| = |ω − 1e4/ω| on [50, 150]: largest at ω = 50, 150 N (closed form).
+    assert doc["peak"]["value"] == pytest.approx(150.0, rel=1e-12)
+    assert doc["peak"]["omega"] == 50.0 and doc["peak"]["unbounded"] is False
+    assert cli.main(["sweep", str(path), "--omega-min", "50", "--omega-max", "150",
+                     "--points", "3"]) == 0
+    out = capsys.readouterr().out
+    assert "exactly on a pole or zero of K (omega = 100 rad/s)" in out
+
+
+def test_plot_marks_the_exact_peak():
+    pytest.importorskip("matplotlib")
+    from mechcirc.plotting import plot_sweep
+
+    c = mechcirc.parse(ZERO)
+    s = c.sweep(np.geomspace(10, 1000, 30))
+    fig = plot_sweep(s, peak=s.peak())
+    ax_q = fig.axes[-1]
+    marks = [ln for ln in ax_q.get_lines() if ln.get_label() == "|Q0| = ∞ (undamped)"]
+    assert len(marks) == 1 and marks[0].get_xdata()[0] == pytest.approx(100.0, rel=1e-12)
+    damped = mechcirc.parse("drive V a 0 velocity=1\nspring k a b 1e4\ndamper c a b 2\n"
+                            "mass m b 0 1\n")
+    s = damped.sweep(np.geomspace(1, 1e3, 30))
+    p = s.peak()
+    fig = plot_sweep(s, peak=p)
+    dots = [ln for ln in fig.axes[-1].get_lines() if ln.get_label().startswith("peak ")]
+    assert len(dots) == 1 and dots[0].get_ydata()[0] == p.value

@@ -1,4 +1,4 @@
-"""Sub-commands on kinematics: ``fourbar``, ``synth`` and ``linkage``."""
+"""Sub-commands on kinematics: ``fourbar``, ``frame``, ``synth`` and ``linkage``."""
 
 from __future__ import annotations
 
@@ -32,11 +32,67 @@ def register(sub) -> None:
     p.set_defaults(func=cmd_fourbar)
 
     p = sub.add_parser(
+        "frame", help="four-bar frame loading: bearing forces, shaking force and moments (eq. 7)",
+        description="Kineto-static analysis of a four-bar at constant crank speed (patent "
+                    "CN104178888 eq. 7): bearing forces at the crankshaft A and the rocking "
+                    "shaft D, driving torque T, shaking force S = −(F_A + F_D) on the frame and "
+                    "shaking moments T_a, T_d. Lengths and centres of mass in --unit (default "
+                    "mm), masses in kg, inertias in kg·m² about the centre of mass, forces in N. "
+                    "Link frames: crank x along A→B, coupler x along B→C, rocker x along D→C. "
+                    "The reed force is a half sine over a window of crank angle around the "
+                    "front dead centre, given in the rocker's frame.",
+        epilog="Example: mechcirc frame --crank 35 --coupler 57.8 --rocker 155.6 --frame 162.75 "
+               "--rpm 600 --mass 2,1.5,15 --rocker-com 110,30 --rocker-inertia 0.08 "
+               "--reed-force=-50,-500 --reed-point 140,50 --plot frame.png -o frame.csv\n"
+               "(write a value that starts with a minus with '=', as --reed-force=-50,-500)",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    for name, what in (("crank", "AB"), ("coupler", "BC"), ("rocker", "CD"), ("frame", "AD")):
+        p.add_argument(f"--{name}", type=real(above=0.0, most=MAX_LENGTH), required=True,
+                       metavar="L", help=f"{name} length {what} [--unit]")
+    p.add_argument("--unit", choices=("mm", "m"), default="mm",
+                   help="length unit of lengths, centres of mass and the reed point (default mm)")
+    speed = p.add_mutually_exclusive_group(required=True)
+    speed.add_argument("--rpm", type=real(above=0.0, most=1e9, unit="rpm"), metavar="N",
+                       help="crank speed [rev/min]")
+    speed.add_argument("--omega", type=real(above=0.0, most=MAX_OMEGA, unit="rad/s"),
+                       metavar="W", help="crank speed [rad/s]")
+    p.add_argument("--mass", type=_vector("--mass", 3, nonneg=True), default=(0.0, 0.0, 0.0),
+                   metavar="M2,M3,M4", help="masses of crank, coupler, rocker (with sley and "
+                   "reed) [kg] (default 0,0,0)")
+    for link in ("crank", "coupler", "rocker"):
+        p.add_argument(f"--{link}-com", type=_vector(f"--{link}-com", 2), default=(0.0, 0.0),
+                       metavar="X,Y", help=f"{link} centre of mass in its frame [--unit] "
+                       f"(--{link}-com=-5,2 when it starts with a minus)")
+        p.add_argument(f"--{link}-inertia", type=real(least=0.0, most=1e30, unit="kg·m²"),
+                       default=0.0, metavar="J", help=f"{link} inertia about its centre of "
+                       f"mass [kg·m²]")
+    p.add_argument("--reed-force", type=_vector("--reed-force", 2), default=(0.0, 0.0),
+                   metavar="FX,FY", help="peak cloth force on the reed, rocker frame [N] "
+                   "(--reed-force=-50,-500 when it starts with a minus)")
+    p.add_argument("--reed-point", type=_vector("--reed-point", 2), default=(0.0, 0.0),
+                   metavar="X,Y", help="where it acts, rocker frame [--unit]")
+    p.add_argument("--beat-window", type=real(above=0.0, most=360.0, unit="deg"), default=40.0,
+                   metavar="DEG", help="crank window of the half-sine reed force [deg] "
+                   "(default 40, centred on the front dead centre)")
+    p.add_argument("--gravity", action="store_true", help="add gravity, 9.81 m/s² along −y")
+    p.add_argument("--branch", type=int, choices=(1, -1), default=1, help="assembly mode")
+    p.add_argument("--points", type=count(3, 100_000, why="one 9×9 solve per angle"),
+                   default=361, metavar="N",
+                   help="crank angles over one turn, 0…360° (default 361; 3…100000)")
+    p.add_argument("-o", "--output", metavar="CSV", help="write every angle's loads as CSV")
+    p.add_argument("--plot", metavar="IMAGE", help="shaking force polar curve and magnitude "
+                   "(patent Figs. 5–6), bearing forces, torque and shaking moments")
+    p.add_argument("--json", action="store_true", help="print one JSON document")
+    p.set_defaults(func=cmd_frame)
+
+    p = sub.add_parser(
         "synth", help="beat-up four-bar synthesis after patent CN104178888",
         description="Explore crank-rockers meeting every criterion of the patent "
                     "(γ at the front dead centre > 70°, γmin > 45°, |Φ2''|/|Φ1''| < 0.3, "
                     "d < 180 mm, eq. (9), swing 23–26°) and rank them. Lengths in mm.",
-        epilog="Example: mechcirc synth --load medium --swing 24 --plot synth.png",
+        epilog="Example: mechcirc synth --load medium --swing 24 --plot synth.png\n"
+               "         mechcirc synth --load medium --frame 165 --swing-range 24:26 "
+               "--export designs/",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--load", choices=("light", "medium", "heavy"), default="medium",
                    help="loom class: crank 33–34, 35–36 or 37–38 mm (default medium)")
@@ -45,9 +101,48 @@ def register(sub) -> None:
     p.add_argument("--objective", choices=("margin", "ratio"), default="margin",
                    help="rank by the smallest criterion margin (default) or by |Φ2''|/|Φ1''|")
     p.add_argument("--limit", type=count(1, 100_000), default=10, metavar="N",
-                   help="number of designs shown (default 10)")
+                   help="number of designs shown, distinct shapes (default 10)")
+    p.add_argument("--swing-range", type=_range("--swing-range"), metavar="LO:HI",
+                   help="admissible swing Ψ [deg] (default the patent's 23:26)")
+    for name in ("crank", "coupler", "rocker", "frame"):
+        p.add_argument(f"--{name}", type=real(above=0.0, most=MAX_LENGTH), metavar="MM",
+                       help=f"hold the {name} length fixed [mm]"
+                       + (" (replaces the load's range)" if name == "crank" else "")
+                       + (" (not with --frame)" if name == "rocker" else ""))
+    p.add_argument("--b-a-range", type=_range("--b-a-range"), default=(1.5, 8.0),
+                   metavar="LO:HI", help="coupler/crank ratios explored (default 1.5:8)")
+    p.add_argument("--d-a-range", type=_range("--d-a-range"), default=(1.5, 8.0),
+                   metavar="LO:HI", help="frame/crank ratios explored (default 1.5:8)")
+    p.add_argument("--step", type=real(above=0.0, most=1e3), default=0.05,
+                   metavar="S", help="grid step of b/a and d/a (default 0.05)")
+    p.add_argument("--crank-step", type=real(above=0.0, most=1e3, unit="mm"), default=0.5,
+                   metavar="MM", help="grid step of the crank length (default 0.5 mm)")
+    p.add_argument("--swing-step", type=real(above=0.0, most=180.0, unit="deg"), default=0.5,
+                   metavar="DEG", help="grid step of the swing (default 0.5°)")
+    p.add_argument("--no-refine", action="store_true",
+                   help="report the grid's designs without the continuous refinement")
+    p.add_argument("--export", metavar="DIR",
+                   help="write DIR/design_K.linkage.toml and DIR/design_K.scene.toml per design")
+    p.add_argument("--omega", type=real(above=0.0, most=MAX_OMEGA, unit="rad/s"),
+                   default=100.0, metavar="W", help="crank speed in exported files [rad/s] "
+                   "(default 100)")
+    for name, what, default in (("sley-inertia", "I4P, sley [kg·m²]", 0.35),
+                                ("rocker-inertia", "I4, rocker [kg·m²]", 0.025),
+                                ("crank-inertia", "I2P, crank side [kg·m²]", 0.005),
+                                ("c2", "C2, torsion rod shaft–crank [N·m/rad]", 1e5),
+                                ("c4", "C4, torsion rod rocker–sley [N·m/rad]", 5e4),
+                                ("k2", "k2, damping of C2 [N·m·s/rad]", 7.0),
+                                ("k4", "k4, damping of C4 [N·m·s/rad]", 29.0),
+                                ("beat-moment", "M0, beat-up moment [N·m], + counter-clockwise "
+                                 "on the sley (--beat-moment=-500 for a negative one)", 0.0),
+                                ("beat-window", "α, beat-up window [deg]", 40.0)):
+        p.add_argument(f"--{name}", type=real(least=None if name == "beat-moment" else 0.0,
+                                              most=1e30), default=default,
+                       metavar="X", help=f"exported scene: {what} (default {default:g}, "
+                       f"Mrázek's one-side variant 1)")
     p.add_argument("--plot", metavar="IMAGE",
-                   help="transmission angle and rocker acceleration against θ")
+                   help="the best design drawn at both dead centres with its swing, beside "
+                        "the transmission angle and rocker acceleration against θ")
     p.add_argument("--json", action="store_true", help="print one JSON document")
     p.set_defaults(func=cmd_synth)
 
@@ -66,6 +161,34 @@ def register(sub) -> None:
                    help="draw the linkage at θ with the paths of its points")
     p.add_argument("--json", action="store_true", help="print one JSON document")
     p.set_defaults(func=cmd_linkage)
+
+
+def _vector(option, n, *, nonneg=False):
+    """argparse type: ``n`` finite numbers separated by commas (each as :func:`real` checks)."""
+    single = real(least=0.0 if nonneg else None, most=1e30)
+
+    def parse(text):
+        parts = text.split(",")
+        if len(parts) != n:
+            raise argparse.ArgumentTypeError(
+                f"{option} wants {n} numbers separated by commas (no spaces), got {text!r}")
+        return tuple(single(x.strip()) for x in parts)
+    return parse
+
+
+def _range(option):
+    """argparse type: ``LO:HI``, two finite numbers with LO ≤ HI."""
+    single = real(most=1e30)
+
+    def parse(text):
+        parts = text.split(":")
+        if len(parts) != 2:
+            raise argparse.ArgumentTypeError(f"{option} wants LO:HI, got {text!r}")
+        lo, hi = (single(x.strip()) for x in parts)
+        if not lo <= hi:
+            raise argparse.ArgumentTypeError(f"{option}: LO must not exceed HI, got {text!r}")
+        return lo, hi
+    return parse
 
 
 def _deg(x):
@@ -101,8 +224,14 @@ def cmd_fourbar(args) -> int:
     if args.json:
         print_json(doc)
         return 0
+    kind = (f"change-point (Grashof equality s + l = p + q): {fb.linkage_type}"
+            if fb.grashof_class == "change-point" else f"{fb.grashof_class} {fb.linkage_type}")
     print(f"four-bar a={fb.crank:g} b={fb.coupler:g} c={fb.rocker:g} d={fb.frame:g}, "
-          f"branch {fb.branch:+d}: {fb.grashof_class} {fb.linkage_type}")
+          f"branch {fb.branch:+d}: {kind}")
+    if doc["branch_crossings_deg"]:
+        print("  branches cross at θ = "
+              + ", ".join(f"{t:g}°" for t in doc["branch_crossings_deg"])
+              + " (all four joints in line: the motion beyond is not fixed by the geometry)")
     if not doc["crank_rotates_fully"]:
         lo, hi = doc["crank_range_deg"]
         print(f"  the input link cannot turn fully: it rocks in θ ∈ [{lo:.3f}°, {hi:.3f}°]"
@@ -120,47 +249,150 @@ def cmd_fourbar(args) -> int:
     tmax = ", ".join(f"{t:.2f}°" for t in doc["theta_at_gamma_max_deg"])
     print(f"  transmission angle γ: min {doc['gamma_min_deg']:.3f}° at θ = {tmin}; "
           f"max {doc['gamma_max_deg']:.3f}° at θ = {tmax}")
-    print(f"  ν range: [{doc['nu_min']:+.6f}, {doc['nu_max']:+.6f}] 1/rad at θ = "
-          f"{doc['theta_at_nu_min_deg']:.2f}°, {doc['theta_at_nu_max_deg']:.2f}°")
-    if args.omega is not None:
-        print(f"  ε4T = ν·ω² at ω = {args.omega:g} rad/s: "
-              f"[{doc['eps4T_min']:.1f}, {doc['eps4T_max']:.1f}] 1/s²")
+    if doc["nu_min"] is not None:
+        print(f"  ν range: [{doc['nu_min']:+.6f}, {doc['nu_max']:+.6f}] 1/rad at θ = "
+              f"{doc['theta_at_nu_min_deg']:.2f}°, {doc['theta_at_nu_max_deg']:.2f}°")
+        if args.omega is not None:
+            print(f"  ε4T = ν·ω² at ω = {args.omega:g} rad/s: "
+                  f"[{doc['eps4T_min']:.1f}, {doc['eps4T_max']:.1f}] 1/s²")
+    for note in doc["notes"]:
+        print(f"  note: {note}")
+    return 0
+
+
+def cmd_frame(args) -> int:
+    import numpy as np
+
+    from ..errors import MechcircError
+    from ..kinematics import FourBar, LinkMass, beat_up_force, frame_loading
+
+    check_output_paths(args.output, plots=(args.plot,))
+    k = 1e-3 if args.unit == "mm" else 1.0            # to metres
+    fb = FourBar(args.crank * k, args.coupler * k, args.rocker * k, args.frame * k,
+                 branch=args.branch)
+    if fb.linkage_type != "crank-rocker" or not fb.crank_rotates_fully:
+        raise MechcircError(
+            f"frame loading needs a crank-rocker whose crank turns fully; this four-bar is a "
+            f"{fb.grashof_class} {fb.linkage_type} (see mechcirc fourbar)")
+    omega = args.omega if args.omega is not None else args.rpm * 2 * math.pi / 60
+    m2, m3, m4 = args.mass
+    links = {name: LinkMass(m, tuple(x * k for x in getattr(args, f"{name}_com")),
+                            getattr(args, f"{name}_inertia"))
+             for name, m in (("crank", m2), ("coupler", m3), ("rocker", m4))}
+    theta = np.radians(np.linspace(0.0, 360.0, args.points))
+    reed = beat_up_force(fb, args.reed_force, args.beat_window)
+    res = frame_loading(fb, theta, omega, reed_force=reed,
+                        reed_point=tuple(x * k for x in args.reed_point),
+                        gravity=(0.0, -9.81) if args.gravity else (0.0, 0.0), **links)
+    cols = res.columns()
+    summary = res.summary()
+    if args.output:
+        from ..outputs import atomic_open
+
+        names = list(cols)
+        with atomic_open(args.output, "w", newline="") as fh:
+            fh.write(f"# mechcirc frame: a={args.crank:g} b={args.coupler:g} c={args.rocker:g} "
+                     f"d={args.frame:g} {args.unit}, omega={omega:.10g} rad/s; "
+                     f"{res.CONVENTION}\n")
+            fh.write(",".join(names) + "\n")
+            for row in zip(*(cols[n] for n in names)):
+                fh.write(",".join(repr(float(v)) for v in row) + "\n")
+    if args.plot:
+        from ..kinematics.plots import plot_shaking
+        save_figure(plot_shaking(res), args.plot)
+    if args.json:
+        print_json({"fourbar": {"crank": args.crank, "coupler": args.coupler,
+                                "rocker": args.rocker, "frame": args.frame,
+                                "unit": args.unit, "branch": fb.branch},
+                    "omega": omega, "rpm": omega * 60 / (2 * math.pi),
+                    "convention": res.CONVENTION, "summary": summary,
+                    "columns": {n: v.tolist() for n, v in cols.items()}})
+        return 0
+    front, back = fb.dead_centres()
+    print(f"frame loading of the four-bar a={args.crank:g} b={args.coupler:g} "
+          f"c={args.rocker:g} d={args.frame:g} {args.unit} at ω = {omega:.6g} rad/s "
+          f"({omega * 60 / (2 * math.pi):.6g} rpm), {args.points} crank angles; front dead "
+          f"centre θ = {math.degrees(front.theta):.3f}°")
+    print(f"  {'quantity':34s} {'min':>11s} {'at θ':>8s} {'max':>11s} {'at θ':>8s}")
+    labels = {"S_abs_N": "|S| shaking force on the frame [N]",
+              "F_A_abs_N": "|F_A| crankshaft bearing [N]",
+              "F_D_abs_N": "|F_D| rocking-shaft bearing [N]",
+              "T_Nm": "T driving torque [N·m]", "T_a_Nm": "T_a shaking moment about A [N·m]",
+              "T_d_Nm": "T_d shaking moment about D [N·m]"}
+    for name, label in labels.items():
+        e = summary[name]
+        print(f"  {label:34s} {e['min']:11.4g} {e['theta_at_min_deg']:7.1f}° "
+              f"{e['max']:11.4g} {e['theta_at_max_deg']:7.1f}°")
+    print(f"  sign convention: {res.CONVENTION}.")
+    print(f"  the printed eq. 7's T_d would differ from this T_d by up to "
+          f"{summary['T_d_printed_minus_T_d_max_abs_Nm']:.4g} N·m here (column T_d_printed_Nm "
+          f"of the CSV).")
     return 0
 
 
 def cmd_synth(args) -> int:
     import sys
+    from pathlib import Path
 
     from ..errors import MechcircError
     from ..kinematics import synthesize
+    from ..kinematics.synthesis_export import SceneOptions, export_designs
 
     check_output_paths(plots=(args.plot,))
     if args.limit < 1:
         raise MechcircError(f"--limit must be at least 1, got {args.limit}")
-
-    res = synthesize(args.load, args.swing, objective=args.objective, limit=args.limit)
+    if args.export and not Path(args.export).is_dir():
+        raise MechcircError(f"--export {args.export}: no such folder (create it first)")
+    fixed = {n: getattr(args, n) for n in ("crank", "coupler", "rocker", "frame")
+             if getattr(args, n) is not None}
+    scene = SceneOptions(args.omega, args.crank_inertia, args.rocker_inertia,
+                         args.sley_inertia, args.c2, args.c4, args.k2, args.k4,
+                         args.beat_moment, args.beat_window)
+    res = synthesize(args.load, args.swing, objective=args.objective, limit=args.limit,
+                     b_a_range=args.b_a_range, d_a_range=args.d_a_range, step=args.step,
+                     crank_step=args.crank_step, swing_step=args.swing_step,
+                     swing_range=args.swing_range, fixed=fixed, refine=not args.no_refine)
     if args.plot and res.designs:
         from ..kinematics.plots import plot_synthesis
         save_figure(plot_synthesis(res.designs[:5]), args.plot)
+    exported = export_designs(res.designs, args.export, scene) if args.export and \
+        res.designs else []
     if args.json:
-        print_json(res.as_dict())
+        doc = res.as_dict()
+        doc["exported"] = [{"linkage": str(lk), "scene": str(sc)} for lk, sc in exported]
+        print_json(doc)
         return 0 if res.designs else 2
     if not res.designs:
         print(f"mechcirc: error: {res.message}", file=sys.stderr)
-        for name, count in res.rejected.items():
-            print(f"  {name:20s} rejects {count} of {res.explored}", file=sys.stderr)
+        for name, n_rejected in res.rejected.items():
+            print(f"  {name:20s} rejects {n_rejected} of {res.explored}", file=sys.stderr)
         return 2
     print(res.message + ".")
+    what = "margin" if args.objective == "margin" else "ratio"
     print(f"{'#':>2} {'a':>6} {'b':>7} {'c':>7} {'d':>7} {'Ψ°':>6} {'γ1°':>6} {'γmin°':>6} "
-          f"{'ratio':>6} {'c/a':>6} {'bound':>6}  binding")
+          f"{'ratio':>6} {'c/a':>6} {'bound':>6} {what + ' (grid)':>16}  binding")
     for k, des in enumerate(res.designs, 1):
         cr = des.criteria
         bound = float(cr["rocker_ratio"].limit.lstrip("> "))
         print(f"{k:2d} {des.a:6.2f} {des.b:7.2f} {des.c:7.2f} {des.d:7.2f} "
               f"{des.swing_deg:6.2f} {cr['front_transmission'].value:6.2f} "
               f"{cr['min_transmission'].value:6.2f} {cr['acceleration_ratio'].value:6.3f} "
-              f"{cr['rocker_ratio'].value:6.3f} {bound:6.3f}  {', '.join(des.binding)}")
-    print(f"({res.explored} crank-rockers explored; lengths in mm; ratio = |Φ2''|/|Φ1''|)")
+              f"{cr['rocker_ratio'].value:6.3f} {bound:6.3f} "
+              f"{des.objective:7.4f} ({des.grid_objective:6.4f})  {', '.join(des.binding)}")
+    lo, hi = res.swing_range
+    print(f"({res.explored} crank-rockers explored; lengths in mm; ratio = |Φ2''|/|Φ1''|; "
+          f"swing {lo:g}–{hi:g}°; one design per shape b/a, c/a, d/a; "
+          + ("each refined from its grid point (objective at the grid point in brackets)"
+             if res.refined else "grid points, not refined") + ")")
+    if exported:
+        print("exported:")
+        for lk, sc in exported:
+            print(f"  {lk}\n  {sc}")
+        from ..kinematics.synthesis_export import _reader_takes_moments
+
+        print("  (the scene has the sley inertia and the torsion rods; the beat-up moment "
+              + ("is its [[moments]] table)" if args.beat_moment and _reader_takes_moments()
+                 else "is written as a comment: this scene format has no crank-angle loads)"))
     return 0
 
 
@@ -183,7 +415,8 @@ def cmd_linkage(args) -> int:
         paths = {p: np.array([s.points[p] for s in sweep]) for p in moving}
         save_figure(plot_linkage(lk, state, paths), args.plot)
     groups = lk.assur_groups()
-    doc = {"file": args.file, "name": lk.name, "links": len(lk.links),
+    doc = {"file": args.file, "name": lk.name, "units": lk.units or None,
+           "links": len(lk.links),
            "revolute_pairs": lk.revolute_pairs, "mobility": lk.mobility,
            "assur_groups": [{"links": list(g.links), "class": g.group_class, "order": g.order,
                              "base": g.base, "external_pairs": list(g.external_pairs)}
@@ -201,9 +434,12 @@ def cmd_linkage(args) -> int:
         base = f" on base {g.base}" if g.base else ""
         print(f"  {cls} ({', '.join(g.links)}){base}, order {g.order} "
               f"(external pairs {', '.join(g.external_pairs)})")
-    print(f"at θ = {args.theta:g}° (t = {state.t:.6g} s):")
-    cols = "".join(f" {('v from ' + c.link):>24s}" for c in lk.cranks)
-    print(f"  {'point':6s} {'x':>10s} {'y':>10s} {'v (vx, vy)':>24s}{cols}")
+    length = lk.units or "length"       # the file's unit, or a neutral word without one
+    print(f"at θ = {args.theta:g}° (t = {state.t:.6g} s); positions in {length}, velocities "
+          f"in {length}/s:")
+    cols = "".join(f" {('v from ' + c.link + f' [{length}/s]'):>24s}" for c in lk.cranks)
+    print(f"  {'point':6s} {f'x [{length}]':>10s} {f'y [{length}]':>10s} "
+          f"{f'v (vx, vy) [{length}/s]':>24s}{cols}")
     vscale = max(float(np.max(np.abs(v))) for v in state.velocities.values()) or 1.0
 
     def vec(v):   # rounding residue of a resting point prints as 0, not -0.000

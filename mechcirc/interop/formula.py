@@ -188,12 +188,12 @@ class _Builder:
         return sp.factor(sp.cancel(sp.together(K)))
 
     def build_tree(self, tree):
-        from ..reduction import Leaf, Parallel, Series, _postorder
+        from ..reduction import Leaf, Parallel, Series, postorder
 
         sp = self.sp
         w = self.omega
         out: dict[int, object] = {}
-        for node in _postorder(tree):
+        for node in postorder(tree):
             if isinstance(node, Leaf):
                 e = node.element
                 scaled = self.element_value(e)

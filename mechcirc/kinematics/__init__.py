@@ -6,11 +6,11 @@ numpy and scipy only; nothing here imports matplotlib (see :mod:`.plots`).
 """
 
 from .fourbar import DeadCentre, FourBar, FourBarState, TransmissionRange
-from .frame_loading import FrameLoading, LinkMass, frame_loading
-from .linkage import Crank, Linkage, LinkageState, load_linkage, parse_linkage
+from .frame_loading import FrameLoading, LinkMass, beat_up_force, frame_loading
+from .linkage import Crank, Linkage, LinkageMotion, LinkageState, load_linkage, parse_linkage
 from .synthesis import Design, SynthesisResult, evaluate_design, solve_eq10, synthesize
 
 __all__ = ["FourBar", "FourBarState", "DeadCentre", "TransmissionRange",
            "Design", "SynthesisResult", "evaluate_design", "solve_eq10", "synthesize",
-           "LinkMass", "FrameLoading", "frame_loading",
-           "Crank", "Linkage", "LinkageState", "load_linkage", "parse_linkage"]
+           "LinkMass", "FrameLoading", "frame_loading", "beat_up_force",
+           "Crank", "Linkage", "LinkageMotion", "LinkageState", "load_linkage", "parse_linkage"]

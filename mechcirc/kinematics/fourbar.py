@@ -54,7 +54,12 @@ __all__ = ["FourBar", "FourBarState", "DeadCentre", "TransmissionRange"]
 TWO_PI = 2.0 * math.pi
 
 LinkageType = Literal["crank-rocker", "double-crank", "double-rocker",
-                      "rocker-crank", "triple-rocker"]
+                      "rocker-crank", "triple-rocker", "parallelogram", "deltoid",
+                      "change-point"]
+
+#: Largest and smallest link length accepted: squares and products of lengths
+#: must stay finite and normal in float64.
+MAX_LENGTH, MIN_LENGTH = 1e150, 1e-150
 
 
 @dataclass(frozen=True)
@@ -191,6 +196,10 @@ class FourBar:
                     or not math.isfinite(value) or value <= 0:
                 raise GeometryError(f"four-bar {name} length must be a positive finite "
                                     f"number, got {value!r}")
+            if not MIN_LENGTH <= value <= MAX_LENGTH:
+                raise GeometryError(f"four-bar {name} length {value:g} is out of range: lengths "
+                                    f"must lie in [{MIN_LENGTH:g}, {MAX_LENGTH:g}] (their squares "
+                                    f"must stay finite); change the unit")
             object.__setattr__(self, name, float(value))
         if self.branch not in (1, -1):
             raise GeometryError(f"four-bar branch must be +1 or -1, got {self.branch!r}")
@@ -202,8 +211,8 @@ class FourBar:
                     f"four-bar cannot be assembled: the {name} ({value:g}) is not shorter "
                     f"than the sum of the other three links ({total - value:g})")
         # a double-crank's output turns with the crank: track φ4 − θ instead of φ4
-        object.__setattr__(self, "_turns", self.linkage_type == "double-crank"
-                           and self.crank_rotates_fully)
+        object.__setattr__(self, "_turns", self.crank_rotates_fully and (
+            self._shortest_type() == "double-crank" or self.linkage_type == "parallelogram"))
         object.__setattr__(self, "_ref", self._reference_angle())
 
     # ------------------------------------------------------------------ class
@@ -218,19 +227,59 @@ class FourBar:
 
     @property
     def linkage_type(self) -> LinkageType:
-        """Type by the shortest link (Grashof or change-point), else 'triple-rocker'.
+        """Type by the shortest link (Grashof), 'triple-rocker' (non-Grashof), or a change point.
 
-        'crank-rocker' (crank shortest), 'double-crank' (frame shortest),
-        'double-rocker' (coupler shortest), 'rocker-crank' (rocker shortest: the
-        rocker turns fully, the input rocks).
+        Grashof: 'crank-rocker' (crank shortest), 'double-crank' (frame
+        shortest), 'double-rocker' (coupler shortest), 'rocker-crank' (rocker
+        shortest: the rocker turns fully, the input rocks).
+
+        Change point (s + l = p + q): 'parallelogram' (crank = rocker and
+        coupler = frame; it can fold into the antiparallelogram), 'deltoid'
+        (two pairs of equal adjacent links), else 'change-point'.  Each passes
+        through positions with all four joints on one line, where its two
+        assembly modes meet (:meth:`branch_crossings`): the motion beyond is not
+        determined by the geometry, and the closed form switches branch there.
         """
+        if self.grashof_class == "change-point":
+            a, b, c, d = self.crank, self.coupler, self.rocker, self.frame
+
+            def eq(x, y):
+                return math.isclose(x, y, rel_tol=1e-12)
+
+            if eq(a, c) and eq(b, d):
+                return "parallelogram"
+            if (eq(a, b) and eq(c, d)) or (eq(a, d) and eq(b, c)):
+                return "deltoid"
+            return "change-point"
         if self.grashof_class == "non-Grashof":
             return "triple-rocker"
+        return self._shortest_type()
+
+    def _shortest_type(self) -> str:
         lengths = {"crank": self.crank, "frame": self.frame,
                    "coupler": self.coupler, "rocker": self.rocker}
         shortest = min(lengths, key=lengths.get)
         return {"crank": "crank-rocker", "frame": "double-crank",
                 "coupler": "double-rocker", "rocker": "rocker-crank"}[shortest]
+
+    def branch_crossings(self) -> tuple[float, ...]:
+        """Crank angles θ [rad] in [0, 2π) where the four joints are collinear and the branches cross.
+
+        Only a change-point linkage (Grashof equality) has them: there the
+        constraint Jacobian is singular, μ and ν of the closed form are 0/0, and
+        the linkage may leave on either assembly mode.  B is on the frame line
+        (θ = 0 or π) and C on the same line: BD = |d − a| or d + a equals
+        b + c or |b − c|.
+        """
+        if self.grashof_class != "change-point":
+            return ()
+        a, b, c, d = self.crank, self.coupler, self.rocker, self.frame
+        tol = 1e-9 * max(a, b, c, d)
+        out = []
+        for theta, bd in ((0.0, abs(d - a)), (math.pi, d + a)):
+            if abs(bd - (b + c)) <= tol or abs(bd - abs(b - c)) <= tol:
+                out.append(theta)
+        return tuple(out)
 
     @property
     def crank_rotates_fully(self) -> bool:
@@ -412,6 +461,12 @@ class FourBar:
         phi3 = math.atan2(c * s4 - by, c * c4 - bx)
         s43 = math.sin(phi4 - phi3)
         c43 = math.cos(phi4 - phi3)
+        if s43 == 0.0:
+            raise GeometryError(
+                f"four-bar at a singular position at θ = {math.degrees(theta):.6g}°: coupler and "
+                f"rocker in line, μ and ν undefined"
+                + (" (a branch crossing of this change-point linkage)"
+                   if self.grashof_class == "change-point" else ""))
         mu = a * math.sin(theta - phi3) / (c * s43)
         mu3 = a * math.sin(theta - phi4) / (b * s43)
         nu = (a * math.cos(theta - phi3) + b * mu3 * mu3 - c * mu * mu * c43) / (c * s43)
@@ -555,10 +610,32 @@ class FourBar:
                 if omega is not None:
                     entry["rocker_acceleration"] = dc.rocker_acceleration(omega)
                 doc["dead_centres"].append(entry)
+        crossings = self.branch_crossings()
+        doc["branch_crossings_deg"] = [math.degrees(t) for t in crossings]
+        doc["notes"] = []
+        if omega is not None:
+            if not (isinstance(omega, (int, float)) and math.isfinite(omega)
+                    and math.isfinite(omega * omega)):
+                raise GeometryError(f"crank speed ω must be a finite number whose square is "
+                                    f"finite [rad/s], got {omega!r}")
+            doc["omega"] = omega
+        if crossings:
+            where = " and ".join(f"{math.degrees(t):g}°" for t in crossings)
+            doc["notes"].append(
+                "change-point linkage"
+                + ("" if self.linkage_type == "change-point" else f" ({self.linkage_type})")
+                + f": all four joints fall on one line "
+                f"at θ = {where}, where its two assembly modes cross; μ and ν are 0/0 there and "
+                f"the motion beyond depends on which branch the linkage takes, so the ν range "
+                f"and ε4T are not given")
+            doc["nu_min"] = doc["nu_max"] = None
+            doc["theta_at_nu_min_deg"] = doc["theta_at_nu_max_deg"] = None
+            if omega is not None:
+                doc["eps4T_min"] = doc["eps4T_max"] = None
+            return doc
         (tlo, nlo), (thi, nhi) = self.nu_extrema()
         doc["nu_min"], doc["theta_at_nu_min_deg"] = nlo, math.degrees(tlo)
         doc["nu_max"], doc["theta_at_nu_max_deg"] = nhi, math.degrees(thi)
         if omega is not None:
-            doc["omega"] = omega
-            doc["eps4T_min"], doc["eps4T_max"] = nlo * omega ** 2, nhi * omega ** 2
+            doc["eps4T_min"], doc["eps4T_max"] = nlo * omega * omega, nhi * omega * omega
         return doc

@@ -51,7 +51,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..errors import GeometryError
 from .fourbar import FourBar
 
-__all__ = ["LinkMass", "FrameLoading", "frame_loading", "link_kinematics"]
+__all__ = ["LinkMass", "FrameLoading", "frame_loading", "link_kinematics", "beat_up_force"]
 
 
 @dataclass(frozen=True)
@@ -122,6 +122,53 @@ class FrameLoading:
     def shaking_force_magnitude(self) -> NDArray[np.float64]:
         """|S| [N]."""
         return np.hypot(self.shaking_force[:, 0], self.shaking_force[:, 1])
+
+    @property
+    def T_d_printed(self) -> NDArray[np.float64]:
+        """T_d as eq. (7) is printed, F_ax·AD_y − F_ay·AD_x − T [N·m] (for comparison only).
+
+        The cross term has the opposite sign of :attr:`T_d`, so this equals
+        −T_d − 2T; it breaks the moment transfer T_a − T_d = AD × S.
+        """
+        return -self.T_d - 2.0 * self.torque
+
+    #: How T_a and T_d are defined, for reports.
+    CONVENTION = ("T_a = F_Dx·AD_y − F_Dy·AD_x − T (eq. 7 as printed); "
+                  "T_d = AD_x·F_Ay − AD_y·F_Ax − T (eq. 7's cross term with the sign the "
+                  "moment transfer T_a − T_d = AD × S requires; the printed T_d = "
+                  "F_Ax·AD_y − F_Ay·AD_x − T differs from it by 2·(AD × F_A)); F_A, F_D are "
+                  "the forces of the frame on the crank and on the rocker, T the driving "
+                  "torque, S = −(F_A + F_D) the shaking force on the frame")
+
+    def columns(self) -> dict:
+        """Ordered columns (name with unit → array) for tables and CSV."""
+        S = self.shaking_force
+        cols = {"theta_deg": np.degrees(self.theta)}
+        for name, F in (("F_A", self.F_A), ("F_B", self.F_B), ("F_C", self.F_C),
+                        ("F_D", self.F_D)):
+            cols[f"{name}x_N"], cols[f"{name}y_N"] = F[:, 0], F[:, 1]
+            cols[f"{name}_abs_N"] = np.hypot(F[:, 0], F[:, 1])
+        cols["S_x_N"], cols["S_y_N"] = S[:, 0], S[:, 1]
+        cols["S_abs_N"] = self.shaking_force_magnitude
+        cols["T_Nm"] = self.torque
+        cols["T_a_Nm"], cols["T_d_Nm"] = self.T_a, self.T_d
+        cols["T_d_printed_Nm"] = self.T_d_printed
+        return cols
+
+    def summary(self) -> dict:
+        """Extremes (value and crank angle in degrees) of the main quantities, plain data."""
+        deg = np.degrees(self.theta)
+
+        def ext(x):
+            i, j = int(np.argmin(x)), int(np.argmax(x))
+            return {"min": float(x[i]), "theta_at_min_deg": float(deg[i]),
+                    "max": float(x[j]), "theta_at_max_deg": float(deg[j])}
+
+        cols = self.columns()
+        out = {name: ext(cols[name]) for name in
+               ("S_abs_N", "F_A_abs_N", "F_D_abs_N", "T_Nm", "T_a_Nm", "T_d_Nm")}
+        out["T_d_printed_minus_T_d_max_abs_Nm"] = float(np.max(np.abs(self.T_d_printed - self.T_d)))
+        return out
 
 
 def _rot(phi, uv):
@@ -273,3 +320,43 @@ def frame_loading(fourbar: FourBar, theta: ArrayLike, omega: float, *,
     T_d = _cross(-AD, -F_A) - T
     return FrameLoading(theta, float(omega), F_A, F_B, F_C, F_D, T, F,
                         -(F_A + F_D), T_a, T_d)
+
+
+def beat_up_force(fourbar: FourBar, peak: tuple[float, float], window_deg: float = 40.0,
+                  centre_deg: float | None = None) -> Callable[[NDArray[np.float64]], NDArray]:
+    """A reed force for :func:`frame_loading`: a half sine of ``peak`` over a crank window.
+
+    Parameters
+    ----------
+    fourbar : FourBar
+        A crank-rocker (the window is centred on its front dead centre by default).
+    peak : (float, float)
+        The force at the centre of the window, in the rocker's frame [N].
+    window_deg : float
+        Width of the window [deg of crank], in (0, 360].
+    centre_deg : float, optional
+        Crank angle of the window's centre [deg]; default the front dead centre.
+
+    Returns
+    -------
+    callable
+        ``f(theta)`` → (n, 2): ``peak · cos(π x / window)`` for |x| < window/2,
+        x the crank angle from the centre, else 0.
+    """
+    px, py = (float(v) for v in peak)
+    if not (math.isfinite(px) and math.isfinite(py)):
+        raise GeometryError(f"reed force peak must be two finite numbers [N], got {peak}")
+    if not (math.isfinite(window_deg) and 0 < window_deg <= 360):
+        raise GeometryError(f"beat-up window must be in (0, 360] degrees, got {window_deg}")
+    if centre_deg is None:
+        centre = fourbar.dead_centres()[0].theta
+    else:
+        centre = math.radians(centre_deg)
+    half = math.radians(window_deg) / 2
+
+    def force(theta):
+        x = (np.asarray(theta, dtype=float) - centre + math.pi) % (2 * math.pi) - math.pi
+        mag = np.where(np.abs(x) < half, np.cos(x / (2 * half) * math.pi), 0.0)
+        return np.stack([px * mag, py * mag], axis=-1)
+
+    return force

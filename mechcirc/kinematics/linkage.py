@@ -53,14 +53,17 @@ from __future__ import annotations
 import math
 import os
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import GeometryError, NetlistError
+from .linkage_solver import LinkageMotion
 
-__all__ = ["Crank", "AssurGroup", "Linkage", "LinkageState", "parse_linkage", "load_linkage"]
+__all__ = ["Crank", "AssurGroup", "Linkage", "LinkageState", "LinkageMotion", "parse_linkage",
+           "load_linkage"]
 
 
 @dataclass(frozen=True)
@@ -179,6 +182,8 @@ class Linkage:
     cranks : tuple of Crank
     source : str
         File name, for messages.
+    units : str
+        The file's ``units`` (the length unit of the pose, e.g. ``"mm"``), or ``""``.
     """
 
     name: str
@@ -187,6 +192,7 @@ class Linkage:
     links: dict
     cranks: tuple
     source: str = "<string>"
+    units: str = ""
 
     # ------------------------------------------------------------ structure
     @property
@@ -332,24 +338,9 @@ class Linkage:
             k += 1
         return J
 
-    def _gamma(self, q, qdot, local, idx, rows):
-        g = np.zeros(len(q))
-        k = 0
-        for p, a, b in rows:
-            for body, sign in ((a, 1.0), (b, -1.0)):
-                if body == "ground":
-                    continue
-                i = idx[body]
-                g[k:k + 2] += sign * (_rot(q[3 * i + 2]) @ local[body][p]) * qdot[3 * i + 2] ** 2
-            k += 2
-        return g
-
     def _scale(self):
         pts = np.array(list(self.pose.values()))
         return float(np.max(np.ptp(pts, axis=0))) or 1.0
-
-    def _angles(self, t):
-        return [c.omega * t for c in self.cranks]
 
     def _newton(self, q, angles, local, idx, rows, tol):
         previous = np.inf
@@ -375,22 +366,49 @@ class Linkage:
                 return q, False
         return q, np.max(np.abs(self._phi(q, angles, local, idx, rows))) < tol
 
-    def _derivatives(self, q, local, idx, rows):
-        J = self._jac(q, local, idx, rows)
-        n = len(q)
-        nc = len(self.cranks)
-        cond = np.linalg.cond(J)
-        if not np.isfinite(cond) or cond > 1e12:
-            return J, None, None, None
-        rhs = np.zeros((n, nc))
-        for j, c in enumerate(self.cranks):
-            rhs[n - nc + j, j] = c.omega
-        parts = np.linalg.solve(J, rhs)                  # one column per crank
-        qdot = parts.sum(axis=1)
-        qddot = np.linalg.solve(J, self._gamma(q, qdot, local, idx, rows))
-        return J, qdot, qddot, parts
+    @cached_property
+    def _plan(self):
+        from .linkage_solver import plan
 
-    def solve(self, theta: float | NDArray, *, max_step_deg: float = 2.0):
+        return plan(self)
+
+    @property
+    def solver(self) -> str:
+        """``"dyads"`` (closed form per RRR dyad) or ``"newton"``: how :meth:`motion` solves."""
+        return self._plan.method
+
+    def motion(self, theta: float | NDArray, *, max_step_deg: float = 2.0,
+               method: str = "auto"):
+        """Kinematics at first-crank rotations ``theta`` [rad] as arrays (a :class:`LinkageMotion`).
+
+        The fast path: no per-position objects.  A linkage made of RRR dyads
+        only (a four-bar, a Watt or Stephenson six-bar) is solved in closed
+        form, vectorised; any other by warm-started, batched Newton with the
+        analytic Jacobian (see :mod:`.linkage_solver`).
+
+        Parameters
+        ----------
+        theta : float or array_like
+            Rotation of the first crank from the pose [rad]; an array is a path
+            traversed in order from the pose (branch continuity).
+        max_step_deg : float
+            Largest rotation of any crank between two continuation nodes [deg];
+            the dyad path checks the assembly at the same spacing.
+        method : {"auto", "dyads", "newton"}
+
+        Raises
+        ------
+        GeometryError
+            The linkage locks (no assembly, or a singular Jacobian) — the
+            message gives the first θ where it does — or the continuation
+            jumped to another branch.
+        """
+        from .linkage_solver import motion
+
+        return motion(self, self._plan, theta, max_step_deg=max_step_deg, method=method)
+
+    def solve(self, theta: float | NDArray, *, max_step_deg: float = 2.0,
+              method: str = "auto"):
         """Positions, velocities and accelerations at first-crank rotation(s) ``theta`` [rad].
 
         Parameters
@@ -400,6 +418,8 @@ class Linkage:
             traversed in order, each position continued from the previous one.
         max_step_deg : float
             Largest rotation of any crank in one continuation step [deg].
+        method : {"auto", "dyads", "newton"}
+            See :meth:`motion`, which this wraps.
 
         Returns
         -------
@@ -413,60 +433,8 @@ class Linkage:
             jumped to another branch.
         """
         scalar = np.ndim(theta) == 0
-        thetas = np.atleast_1d(np.asarray(theta, dtype=float))
-        local, idx, rows = self._local(), self._index(), self._rows()
-        w1 = self.cranks[0].omega
-        wmax = max(abs(c.omega) for c in self.cranks)
-        tol = 1e-12 * self._scale()
-        q, t_now = self.q0(), 0.0
-        J, qdot, qddot, parts = self._derivatives(q, local, idx, rows)
-        if qdot is None:
-            raise GeometryError(f"{self.source}: the linkage is singular in its pose "
-                                f"(constraint Jacobian not invertible)")
-        sign = np.sign(np.linalg.det(J))
-        if not max_step_deg > 0:
-            raise ValueError(f"max_step_deg must be > 0, got {max_step_deg}")
-        # Each continuation step turns the fastest crank by at most max_step_deg;
-        # refuse at once what would take more than MAX_CONTINUATION_STEPS steps
-        # (a tiny first-crank omega makes t = theta / omega huge).
-        with np.errstate(all="ignore"):
-            times = np.concatenate(([0.0], thetas / w1))
-            steps = float(np.sum(np.abs(np.diff(times)))) * wmax / math.radians(max_step_deg)
-        if not steps <= MAX_CONTINUATION_STEPS:
-            raise GeometryError(
-                f"{self.source}: reaching θ needs about {steps:.3g} continuation steps of "
-                f"{max_step_deg:g}° of the fastest crank (|ω| = {wmax:g} rad/s against the "
-                f"first crank's {abs(w1):g} rad/s); the limit is {MAX_CONTINUATION_STEPS}")
-        out = []
-        for th in thetas:
-            t_target = th / w1
-            while t_now != t_target:
-                dt_max = math.radians(max_step_deg) / wmax
-                dt = max(-dt_max, min(dt_max, t_target - t_now))
-                while True:
-                    guess = q + qdot * dt + 0.5 * qddot * dt * dt
-                    q_new, ok = self._newton(guess, self._angles(t_now + dt), local, idx,
-                                             rows, tol)
-                    if ok:
-                        Jn, qd_n, qdd_n, parts_n = self._derivatives(q_new, local, idx, rows)
-                        if qd_n is not None:
-                            break
-                    dt *= 0.5
-                    if abs(dt) * wmax < 1e-9:
-                        th_lock = (t_now + 2 * dt) * w1
-                        raise GeometryError(
-                            f"{self.source}: the linkage locks near θ = "
-                            f"{math.degrees(th_lock):.6g}° (first crank rotation from the "
-                            f"pose): no assembly beyond it on this branch")
-                new_sign = np.sign(np.linalg.det(Jn))
-                if new_sign != sign:
-                    raise GeometryError(
-                        f"{self.source}: branch jump between θ = {math.degrees(t_now * w1):.6g}° "
-                        f"and {math.degrees((t_now + dt) * w1):.6g}°: the position passed a "
-                        f"singular configuration (det J changed sign); reduce max_step_deg "
-                        f"or the linkage reaches a change point there")
-                q, qdot, qddot, parts, t_now = q_new, qd_n, qdd_n, parts_n, t_now + dt
-            out.append(self._state(th, t_now, q, qdot, qddot, parts, local))
+        m = self.motion(theta, max_step_deg=max_step_deg, method=method)
+        out = m.states()
         return out[0] if scalar else out
 
     def assemble(self, crank_angles: dict, near: NDArray | None = None) -> dict:
@@ -493,29 +461,6 @@ class Linkage:
             owner = next((l for l, ps in self.links.items() if p in ps), None)
             pts[p] = x.copy() if owner is None else self._point(q, owner, p, local, idx)
         return {"q": q, "points": pts}
-
-    def _state(self, theta, t, q, qdot, qddot, parts, local):
-        idx = self._index()
-        pts, vel, acc, contrib = {}, {}, {}, {c.link: {} for c in self.cranks}
-        for p, x in self.pose.items():
-            owner = next((l for l, ps in self.links.items() if p in ps), None)
-            if owner is None:                      # a ground point
-                pts[p], vel[p], acc[p] = x.copy(), np.zeros(2), np.zeros(2)
-                for c in self.cranks:
-                    contrib[c.link][p] = np.zeros(2)
-                continue
-            i = idx[owner]
-            Rs = _rot(q[3 * i + 2]) @ local[owner][p]
-            w, al = qdot[3 * i + 2], qddot[3 * i + 2]
-            pts[p] = q[3 * i:3 * i + 2] + Rs
-            vel[p] = qdot[3 * i:3 * i + 2] + w * (_PERP @ Rs)
-            acc[p] = qddot[3 * i:3 * i + 2] + al * (_PERP @ Rs) - w * w * Rs
-            for j, c in enumerate(self.cranks):
-                col = parts[:, j]
-                contrib[c.link][p] = col[3 * i:3 * i + 2] + col[3 * i + 2] * (_PERP @ Rs)
-        omegas = {l: float(qdot[3 * idx[l] + 2]) for l in self.links}
-        return LinkageState(float(theta), float(t), q.copy(), qdot.copy(), qddot.copy(),
-                            pts, vel, acc, omegas, contrib)
 
 
 # ------------------------------------------------------------------ parsing
@@ -630,8 +575,13 @@ def parse_linkage(text: str, source: str = "<string>") -> Linkage:
                        value=lname, occurrence=n)
         cranks.append(Crank(lname, pivot, float(omega)))
 
+    units = doc.get("units", "")
+    if not isinstance(units, str) or len(units) > 20 or any(ch.isspace() or ch in "[]"
+                                                            for ch in units):
+        raise _err(text, source, f"units must be a short length unit such as \"mm\", got "
+                   f"{_brief(units)}", None, "units", expected='"mm", "m", "in", …')
     lk = Linkage(str(doc.get("name", Path(source).stem)), pose, tuple(ground_pts), links,
-                 tuple(cranks), source)
+                 tuple(cranks), source, units)
     if lk.mobility != len(cranks):
         raise GeometryError(
             f"{source}: mobility W = 3·{len(links)} − 2·{lk.revolute_pairs} = {lk.mobility}, "

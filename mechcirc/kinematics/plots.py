@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-__all__ = ["plot_fourbar", "plot_synthesis", "plot_frame_loading", "plot_linkage"]
+__all__ = ["plot_fourbar", "plot_synthesis", "draw_design", "plot_frame_loading", "plot_shaking", "plot_linkage"]
 
 
 def _figure(rows, cols, size):
@@ -33,10 +33,20 @@ def plot_fourbar(fourbar, omega: float | None = None, n: int = 721):
     th = np.linspace(lo, hi, n)
     if not fourbar.crank_rotates_fully:
         th = th[1:-1]
-    st = fourbar.evaluate(th)
+    with np.errstate(all="ignore"):             # 0/0 at a change point's branch crossing
+        st = fourbar.evaluate(th)
     deg = np.degrees(th)
     fig, ax = _figure(4, 1, (7, 9))
     acc = st.nu * omega ** 2 if omega else st.nu
+    crossings = fourbar.branch_crossings()
+    if crossings:
+        # the closed form switches branch at a crossing: μ and ν are not
+        # drawn within 1° of one (they would jump through ±1e15)
+        near = np.zeros(th.shape, dtype=bool)
+        for tc in crossings:
+            near |= np.abs((th - tc + math.pi) % (2 * math.pi) - math.pi) < math.radians(1.0)
+        st = type(st)(**{**st.__dict__, "mu": np.where(near, np.nan, st.mu)})
+        acc = np.where(near, np.nan, acc)
     panels = [(np.degrees(st.phi4), "φ4 [deg]"), (st.mu, "μ = dφ4/dθ [1]"),
               (acc, "ε4T = ν·ω² [1/s²]" if omega else "ν = d²φ4/dθ² [1/rad]"),
               (np.degrees(st.gamma), "γ [deg]")]
@@ -50,18 +60,63 @@ def plot_fourbar(fourbar, omega: float | None = None, n: int = 721):
                 a.axvline(math.degrees(dc.theta), color="k", ls=style, lw=0.8,
                           label=f"{dc.kind} dead centre")
         ax[0, 0].legend(loc="best", fontsize="small")
+    for k, tc in enumerate(crossings):
+        for a in ax[:, 0]:
+            a.axvline(math.degrees(tc), color="r", ls="-.", lw=0.8,
+                      label="branch crossing (μ, ν undefined)" if k == 0 else None)
+    if crossings:
+        ax[1, 0].legend(loc="best", fontsize="small")
     ax[-1, 0].set_xlabel("crank angle θ [deg]")
     fig.suptitle(f"four-bar a={fourbar.crank:g} b={fourbar.coupler:g} c={fourbar.rocker:g} "
                  f"d={fourbar.frame:g} ({fourbar.linkage_type}, branch {fourbar.branch:+d})")
     return fig
 
 
-def plot_synthesis(designs, n: int = 721):
-    """Patent-style figures: transmission angle and dimensionless rocker acceleration ν against θ.
+def draw_design(design, ax):
+    """The four-bar of ``design`` on ``ax``: both dead-centre positions and the swing arc.
 
-    θ is measured from the front dead centre of each design, so the curves line up.
+    Lengths in mm; A at the origin, D on the x axis.  Returns ``ax``.
     """
-    fig, ax = _figure(2, 1, (7, 7))
+    fb = design.fourbar()
+    front, back = fb.dead_centres()
+    a, c, d = fb.crank, fb.rocker, fb.frame
+    for dc, style, colour in ((front, "-", "C0"), (back, "--", "C1")):
+        B = (a * math.cos(dc.theta), a * math.sin(dc.theta))
+        C = (d + c * math.cos(dc.phi4), c * math.sin(dc.phi4))
+        ax.plot([0, B[0], C[0], d], [0, B[1], C[1], 0], style, color=colour, lw=2, marker="o",
+                ms=4, label=f"{dc.kind} dead centre (θ = {math.degrees(dc.theta):.1f}°)")
+    lo, hi = sorted((front.phi4, back.phi4))
+    arc = np.linspace(lo, hi, 60)
+    ax.plot(d + c * np.cos(arc), c * np.sin(arc), color="k", lw=1,
+            label=f"swing Ψ = {design.swing_deg:.2f}°")
+    th = np.linspace(0, 2 * math.pi, 121)
+    ax.plot(a * np.cos(th), a * np.sin(th), color="0.6", lw=0.8)
+    ax.plot([0, d], [0, 0], "k^", ms=9)
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("x [mm]")
+    ax.set_ylabel("y [mm]")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize="small", loc="best")
+    ax.set_title(f"#1: a={design.a:.2f} b={design.b:.2f} c={design.c:.2f} d={design.d:.2f} mm")
+    return ax
+
+
+def plot_synthesis(designs, n: int = 721, fig=None):
+    """Patent-style figures beside the best design drawn.
+
+    Left: ``designs[0]`` at both dead centres with its swing (:func:`draw_design`).
+    Right: transmission angle and dimensionless rocker acceleration ν against θ
+    for every design, θ measured from each design's front dead centre so the
+    curves line up.  Draws on ``fig`` when given; returns the figure.
+    """
+    if fig is None:
+        from matplotlib.figure import Figure
+
+        fig = Figure(figsize=(12, 7), layout="constrained")
+    grid = fig.add_gridspec(2, 2, width_ratios=(1, 1.3))
+    draw_design(designs[0], fig.add_subplot(grid[:, 0]))
+    ax = [fig.add_subplot(grid[0, 1]), None]
+    ax[1] = fig.add_subplot(grid[1, 1], sharex=ax[0])
     for k, des in enumerate(designs):
         fb = des.fourbar()
         front, _ = fb.dead_centres()
@@ -69,15 +124,15 @@ def plot_synthesis(designs, n: int = 721):
         st = fb.evaluate(th)
         label = f"#{k + 1}: {des.a:.1f}/{des.b:.1f}/{des.c:.1f}/{des.d:.1f} mm"
         deg = np.degrees(th - front.theta)
-        ax[0, 0].plot(deg, np.degrees(st.gamma), lw=1.2, label=label)
-        ax[1, 0].plot(deg, st.nu, lw=1.2, label=label)
-    ax[0, 0].axhline(45, color="r", ls="--", lw=0.8, label="γ = 45° (eq. 3)")
-    ax[0, 0].set_ylabel("transmission angle γ [deg]")
-    ax[1, 0].set_ylabel("rocker acceleration d²Φ/dθ² [1/rad]")
-    ax[1, 0].set_xlabel("crank angle from the front dead centre [deg]")
-    for a in ax[:, 0]:
+        ax[0].plot(deg, np.degrees(st.gamma), lw=1.2, label=label)
+        ax[1].plot(deg, st.nu, lw=1.2, label=label)
+    ax[0].axhline(45, color="r", ls="--", lw=0.8, label="γ = 45° (eq. 3)")
+    ax[0].set_ylabel("transmission angle γ [deg]")
+    ax[1].set_ylabel("rocker acceleration d²Φ/dθ² [1/rad]")
+    ax[1].set_xlabel("crank angle from the front dead centre [deg]")
+    for a in ax:
         a.grid(alpha=0.3)
-    ax[0, 0].legend(fontsize="small", loc="best")
+    ax[0].legend(fontsize="small", loc="best")
     fig.suptitle("beat-up four-bar synthesis (CN104178888)")
     return fig
 
@@ -103,6 +158,58 @@ def plot_frame_loading(result):
     return fig
 
 
+def plot_shaking(result, fig=None):
+    """The patent's Figs. 5–6 for a :class:`FrameLoading`, and the loads behind them.
+
+    Four panels: the shaking force S on the frame as a polar curve (the locus
+    of its tip, S_y against S_x, one point per crank angle), |S| against the
+    crank angle, the bearing forces |F_A| and |F_D|, and the driving torque
+    with the shaking moments T_a, T_d.  Draws on ``fig`` (a matplotlib
+    ``Figure``) when given, else on a new one; returns the figure.
+    """
+    if fig is None:
+        from matplotlib.figure import Figure
+
+        fig = Figure(figsize=(10, 8), layout="constrained")
+    ax = fig.subplots(2, 2, squeeze=False)
+    deg = np.degrees(result.theta)
+    S = result.shaking_force
+    mag = result.shaking_force_magnitude
+    a = ax[0, 0]
+    a.plot(S[:, 0], S[:, 1], lw=1.4)
+    a.plot([0], [0], "k+", ms=10)
+    k = int(np.argmax(mag))
+    a.plot([0, S[k, 0]], [0, S[k, 1]], "r-", lw=1,
+           label=f"max |S| = {mag[k]:.4g} N at θ = {deg[k]:.1f}°")
+    a.set_aspect("equal", adjustable="datalim")
+    a.set_xlabel("S_x [N]")
+    a.set_ylabel("S_y [N]")
+    a.set_title("shaking force on the frame, polar curve (Fig. 5)")
+    a.legend(fontsize="small", loc="best")
+    a = ax[0, 1]
+    a.plot(deg, mag, "k", lw=1.4)
+    a.set_ylabel("|S| [N]")
+    a.set_title("shaking force magnitude (Fig. 6)")
+    a = ax[1, 0]
+    a.plot(deg, np.hypot(*result.F_A.T), label="|F_A| (crankshaft bearing)")
+    a.plot(deg, np.hypot(*result.F_D.T), label="|F_D| (rocking-shaft bearing)")
+    a.set_ylabel("bearing force [N]")
+    a = ax[1, 1]
+    a.plot(deg, result.torque, label="T (driving torque)")
+    a.plot(deg, result.T_a, label="T_a (about A)")
+    a.plot(deg, result.T_d, label="T_d (about D)")
+    a.set_ylabel("moment [N·m]")
+    for a in (ax[0, 1], ax[1, 0], ax[1, 1]):
+        a.set_xlabel("crank angle θ [deg]")
+        a.grid(alpha=0.3)
+    ax[0, 0].grid(alpha=0.3)
+    for a in (ax[1, 0], ax[1, 1]):
+        a.legend(fontsize="small", loc="best")
+    fig.suptitle(f"frame loading at ω = {result.omega:.4g} rad/s "
+                 f"({result.omega * 60 / (2 * math.pi):.4g} rpm)")
+    return fig
+
+
 def plot_linkage(linkage, state, paths=None):
     """The linkage drawn at ``state``, with traced point paths ``{point: (n, 2) array}``."""
     fig, ax = _figure(1, 1, (7, 7))
@@ -123,5 +230,8 @@ def plot_linkage(linkage, state, paths=None):
         a.annotate(p, x, textcoords="offset points", xytext=(4, 4), fontsize="x-small")
     a.set_aspect("equal")
     a.grid(alpha=0.3)
-    a.set_title(f"{linkage.name} at θ = {math.degrees(state.theta):.4g}°")
+    unit = getattr(linkage, "units", "") or "length"
+    a.set_xlabel(f"x [{unit}]")
+    a.set_ylabel(f"y [{unit}]")
+    a.set_title(f"{linkage.name} at θ = {math.degrees(state.theta):.4g}° (first crank)")
     return fig

@@ -134,6 +134,7 @@ class Design:
     phi2_dd: float
     swing_deg: float
     objective: float = float("nan")
+    grid_objective: float = float("nan")
 
     @property
     def feasible(self) -> bool:
@@ -158,7 +159,8 @@ class Design:
                "swing_deg": self.swing_deg, "mu1_deg": self.mu1_deg, "mu2_deg": self.mu2_deg,
                "phi1_dd": self.phi1_dd, "phi2_dd": self.phi2_dd,
                "feasible": self.feasible, "binding": list(self.binding),
-               "objective": self.objective}
+               "objective": self.objective, "grid_objective": self.grid_objective,
+               "shape": {"b_a": self.b / self.a, "c_a": self.c / self.a, "d_a": self.d / self.a}}
         out["criteria"] = {n: {"value": c.value, "limit": c.limit, "passed": c.passed,
                                "margin": c.margin} for n, c in self.criteria.items()}
         return out
@@ -194,6 +196,9 @@ class SynthesisResult:
     explored: int
     rejected: dict
     conflicts: tuple = field(default=())
+    swing_range: tuple = SWING_RANGE_DEG
+    fixed: dict = field(default_factory=dict)
+    refined: bool = False
 
     @property
     def message(self) -> str:
@@ -214,7 +219,9 @@ class SynthesisResult:
                 "message": self.message,
                 "load": self.load, "swing_deg": list(self.swing_deg),
                 "explored": self.explored, "rejected": self.rejected,
-                "conflicts": [list(c) for c in self.conflicts]}
+                "conflicts": [list(c) for c in self.conflicts],
+                "swing_range_deg": list(self.swing_range), "fixed_mm": dict(self.fixed),
+                "refined": self.refined}
 
 
 # --------------------------------------------------------------- the equations
@@ -339,12 +346,14 @@ def _crit(name, value, limit_text, margin):
 
 
 def evaluate_design(a: float, b: float, c: float, d: float, *,
-                    load: str | None = None) -> Design:
+                    load: str | None = None, swing_range: tuple = SWING_RANGE_DEG,
+                    crank_range: tuple | None = None) -> Design:
     """Evaluate every patent criterion for the four-bar a, b, c, d [mm], directly.
 
     Dead-centre accelerations come from :class:`FourBar` (not eq. (5)); the
     swing is the linkage's own.  ``load`` picks the crank range of step 1
-    (default: any of 33–38 mm).
+    (default: any of 33–38 mm); ``crank_range`` [mm] overrides it (a crank
+    length the user fixed).  ``swing_range`` [deg] is the swing criterion.
 
     Raises
     ------
@@ -353,7 +362,8 @@ def evaluate_design(a: float, b: float, c: float, d: float, *,
     """
     fb = FourBar(a, b, c, d)
     front, back = fb.dead_centres()            # raises for a non-crank-rocker
-    lo, hi = LOAD_CRANK_MM[load] if load else (33.0, 38.0)
+    lo, hi = crank_range or (LOAD_CRANK_MM[load] if load else (33.0, 38.0))
+    s_lo, s_hi = swing_range
     mu1, mu2 = (math.degrees(x) for x in dead_centre_angles(b / a, c / a, d / a))
     gamma1 = min(mu1, 180.0 - mu1)
     gmin = math.degrees(fb.transmission_range().gamma_min)
@@ -373,14 +383,14 @@ def evaluate_design(a: float, b: float, c: float, d: float, *,
         "frame_length": _crit("frame_length", d, f"< {FRAME_MAX_MM:g} mm",
                               (FRAME_MAX_MM - d) / FRAME_MAX_MM),
         "rocker_ratio": _crit("rocker_ratio", c / a, f"> {bound:.4g}", (c / a - bound) / bound),
-        "swing": _crit("swing", swing, f"{SWING_RANGE_DEG[0]:g}–{SWING_RANGE_DEG[1]:g}°",
-                       min(swing - SWING_RANGE_DEG[0], SWING_RANGE_DEG[1] - swing)
-                       / (SWING_RANGE_DEG[1] - SWING_RANGE_DEG[0])),
+        "swing": _crit("swing", swing, f"{s_lo:g}–{s_hi:g}°",
+                       min(swing - s_lo, s_hi - swing) / (s_hi - s_lo) if s_hi > s_lo
+                       else -abs(swing - s_lo) / s_lo),
     }
     # crank_length and swing: a value exactly on the closed range is allowed
     for name in ("crank_length", "swing"):
         cr = crit[name]
-        if cr.margin == 0.0 or abs(cr.margin) < 1e-12:
+        if cr.margin == 0.0 or abs(cr.margin) < 1e-9:
             crit[name] = Criterion(cr.name, cr.value, cr.limit, True, 0.0)
     return Design(a, b, c, d, crit, mu1, mu2, front.nu, back.nu, swing)
 
@@ -393,12 +403,16 @@ _OBJECTIVES = {
 }
 
 
+_FIXABLE = ("crank", "coupler", "rocker", "frame")
+
+
 def synthesize(load: Literal["light", "medium", "heavy"] = "medium",
                swing: float | None = None, *,
                objective: Literal["margin", "ratio"] = "margin",
                limit: int = 10, b_a_range=(1.5, 8.0), d_a_range=(1.5, 8.0),
                step: float = 0.05, crank_step: float = 0.5,
-               swing_step: float = 0.5) -> SynthesisResult:
+               swing_step: float = 0.5, swing_range: tuple | None = None,
+               fixed: dict | None = None, refine: bool = True) -> SynthesisResult:
     """Explore the patent's feasible region and rank the designs that meet every criterion.
 
     Parameters
@@ -406,28 +420,45 @@ def synthesize(load: Literal["light", "medium", "heavy"] = "medium",
     load : {"light", "medium", "heavy"}
         Loom class; fixes the crank range (step 1).
     swing : float, optional
-        Swing Ψ [deg]; default: every ``swing_step`` over 23–26°.
+        Swing Ψ [deg], exactly; default: every ``swing_step`` over ``swing_range``.
+        It is still judged by the swing criterion (``swing_range``).
     objective : {"margin", "ratio"}
         "margin" (default): maximise the smallest relative margin of the
         shape criteria; "ratio": minimise |Φ2''|/|Φ1''|.
     limit : int
-        Number of designs returned.
+        Number of designs returned (distinct shapes).
     b_a_range, d_a_range : (float, float)
         Ranges of b/a and d/a explored, in steps of ``step``; c/a follows
-        from eq. (10).  d/a is also capped by d < 180 mm.
+        from eq. (10).  d/a is also capped by d < 180 mm.  The refinement
+        stays inside them.
     crank_step : float
         Crank lengths explored within the load's range [mm].
+    swing_range : (float, float), optional
+        Admissible swing [deg] (default the patent's 23–26°): the swing
+        criterion and the grid.
+    fixed : dict, optional
+        Lengths held fixed [mm], by name among "crank", "coupler", "rocker",
+        "frame" (not both rocker and frame).  A fixed crank replaces the
+        load's range.
+    refine : bool
+        After the grid, improve each candidate with a bounded Nelder–Mead
+        search (``scipy.optimize.minimize``) on the same objective over the
+        free parameters (crank, swing, b/a and d/a or c/a), c/a or d/a
+        following from eq. (10); a refined design replaces its grid point only
+        when its direct evaluation is feasible and at least as good.
 
     Returns
     -------
     SynthesisResult
-        Designs best first, each with its binding criteria; if none is
-        feasible, ``conflicts`` names the criteria that cannot hold together.
+        Designs best first, one per shape (b/a, c/a, d/a: scaled copies are
+        dropped), each with its binding criteria; if none is feasible,
+        ``conflicts`` names the criteria that cannot hold together.
 
     Raises
     ------
     GeometryError
-        Unknown load, a swing outside (0°, 180°), or an empty grid.
+        Unknown load, a swing outside (0°, 180°), a bad fixed length, or an
+        empty grid.
 
     Notes
     -----
@@ -442,30 +473,62 @@ def synthesize(load: Literal["light", "medium", "heavy"] = "medium",
     if objective not in _OBJECTIVES:
         raise GeometryError(f"unknown objective {objective!r}; expected one of "
                             f"{', '.join(_OBJECTIVES)}")
-    if swing is not None and not 0 < swing < 180:
-        raise GeometryError(f"swing must be in (0°, 180°), got {swing}°")
-    lo, hi = LOAD_CRANK_MM[load]
+    fixed = dict(fixed or {})
+    for name, value in fixed.items():
+        if name not in _FIXABLE:
+            raise GeometryError(f"unknown fixed length {name!r}; expected one of "
+                                f"{', '.join(_FIXABLE)}")
+        if not (isinstance(value, (int, float)) and math.isfinite(value) and 0 < value < 1e6):
+            raise GeometryError(f"fixed {name} length must be a positive number of mm, got "
+                                f"{value!r}")
+    if "rocker" in fixed and "frame" in fixed:
+        raise GeometryError("fix the rocker or the frame, not both: eq. (10) then fixes b/a, "
+                            "which is not searched for")
+    s_range = tuple(float(x) for x in (swing_range or SWING_RANGE_DEG))
+    if not (len(s_range) == 2 and 0 < s_range[0] <= s_range[1] < 180):
+        raise GeometryError(f"swing range must be 0 < low ≤ high < 180 degrees, got {s_range}")
+    if swing is not None:
+        if not 0 < swing < 180:
+            raise GeometryError(f"swing must be in (0°, 180°), got {swing}°")
+    for name, rng in (("b_a_range", b_a_range), ("d_a_range", d_a_range)):
+        if not (len(rng) == 2 and 1 < rng[0] <= rng[1] < 1e3):
+            raise GeometryError(f"{name} must be 1 < low ≤ high < 1000, got {tuple(rng)}")
+    if not (step > 0 and crank_step > 0 and swing_step > 0):
+        raise GeometryError("step, crank_step and swing_step must be > 0")
+    lo, hi = ((fixed["crank"],) * 2 if "crank" in fixed else LOAD_CRANK_MM[load])
     cranks = np.arange(lo, hi + 1e-9, crank_step)
     swings = (np.array([float(swing)]) if swing is not None else
-              np.arange(SWING_RANGE_DEG[0], SWING_RANGE_DEG[1] + 1e-9, swing_step))
+              np.arange(s_range[0], s_range[1] + 1e-9, swing_step))
     b_as = np.arange(b_a_range[0], b_a_range[1] + 1e-9, step)
     d_as = np.arange(d_a_range[0], d_a_range[1] + 1e-9, step)
-    if b_as.size == 0 or d_as.size == 0:
+    n_grid = cranks.size * swings.size * (1 if "coupler" in fixed else b_as.size) * \
+        (1 if {"rocker", "frame"} & set(fixed) else d_as.size)
+    if n_grid == 0:
         raise GeometryError("empty synthesis grid: check b_a_range, d_a_range and step")
+    if n_grid > 20_000_000:
+        raise GeometryError(f"synthesis grid of {n_grid:.3g} points is too large (limit 2e7); "
+                            f"use larger steps or narrower ranges")
 
-    A, PSI, BA, DA = (g.ravel() for g in np.meshgrid(cranks, np.radians(swings), b_as, d_as,
-                                                     indexing="ij"))
-    u1, u2 = _eq10_roots_squared(PSI, BA, DA)
-    A, PSI, BA, DA = (np.concatenate([x, x]) for x in (A, PSI, BA, DA))
+    space = _Space(fixed, b_a_range, d_a_range, (lo, hi), s_range, swing)
+    A, PSI, BA, OTHER = (g.ravel() for g in np.meshgrid(
+        cranks, np.radians(swings), [np.nan] if "coupler" in fixed else b_as,
+        [np.nan] if {"rocker", "frame"} & set(fixed) else d_as, indexing="ij"))
+    BA, OTHER = space.ratios(A, BA, OTHER)
+    u1, u2 = _eq10_roots_squared(PSI, BA, OTHER)
+    A, PSI, BA, OTHER = (np.concatenate([x, x]) for x in (A, PSI, BA, OTHER))
+    ROOT = np.repeat([0, 1], u1.size)
     with np.errstate(invalid="ignore"):
-        CA = np.sqrt(np.concatenate([u1, u2]))
+        X = np.sqrt(np.concatenate([u1, u2]))
+    CA, DA = space.split(X, OTHER)
     cols = _screen(A, PSI, BA, CA, DA)
     valid = cols.pop("_valid")
     explored = int(valid.sum())
     passes = {name: cols[name][0] & valid for name in _SHAPE_CRITERIA}
     psi_deg = np.degrees(PSI)
-    passes["swing"] = valid & (psi_deg >= SWING_RANGE_DEG[0] - 1e-9) \
-        & (psi_deg <= SWING_RANGE_DEG[1] + 1e-9)
+    passes["swing"] = valid & (psi_deg >= s_range[0] - 1e-9) & (psi_deg <= s_range[1] + 1e-9)
+    if space.limits_in_ratio:
+        # a fixed length makes a ratio follow the crank: keep it in its range
+        passes["ratio_ranges"] = valid & space.in_ranges(BA, DA)
     rejected = {name: int((valid & ~p).sum()) for name, p in passes.items()}
     ok = valid.copy()
     for p in passes.values():
@@ -474,7 +537,7 @@ def synthesize(load: Literal["light", "medium", "heavy"] = "medium",
     if not ok.any():
         conflicts = _conflicts(passes, valid)
         return SynthesisResult((), _OBJECTIVES[objective], load, tuple(swings.tolist()),
-                               explored, rejected, conflicts)
+                               explored, rejected, conflicts, s_range, fixed, refine)
 
     idx = np.flatnonzero(ok)
     if objective == "margin":
@@ -483,26 +546,223 @@ def synthesize(load: Literal["light", "medium", "heavy"] = "medium",
     else:
         order = idx[np.argsort(cols["acceleration_ratio"][2][idx], kind="stable")]
 
+    def value_of(des):
+        return (min(des.criteria[n].margin for n in _SHAPE_CRITERIA) if objective == "margin"
+                else des.criteria["acceleration_ratio"].value)
+
+    def better(x, y):
+        return x >= y if objective == "margin" else x <= y
+
+    crank_range = (lo, hi) if "crank" in fixed else None
     designs, seen = [], set()
     for k in order:
         a = float(A[k])
-        key = tuple(round(float(x), 9) for x in (a, BA[k], CA[k], DA[k]))
-        if key in seen:
+        # one candidate per shape: the best-ranked crank length of each b/a, c/a, d/a
+        shape = tuple(round(float(x), 9) for x in (BA[k], CA[k], DA[k]))
+        if shape in seen:
             continue
-        seen.add(key)
+        seen.add(shape)
         try:
-            des = evaluate_design(a, a * BA[k], a * CA[k], a * DA[k], load=load)
+            des = evaluate_design(a, a * BA[k], a * CA[k], a * DA[k], load=load,
+                                  swing_range=s_range, crank_range=crank_range)
         except GeometryError:
             continue
         if not des.feasible or abs(des.swing_deg - math.degrees(PSI[k])) > 1e-6:
             continue            # eq. (10) root of the mirror configuration, or a screen slip
-        value = (min(des.criteria[n].margin for n in _SHAPE_CRITERIA) if objective == "margin"
-                 else des.criteria["acceleration_ratio"].value)
-        designs.append(dataclasses.replace(des, objective=value))
+        grid_value = value_of(des)
+        des = dataclasses.replace(des, objective=grid_value, grid_objective=grid_value)
+        if any(_same_shape(des, other) for other in designs):
+            continue
+        if refine:
+            x = space.refine(objective, a, float(PSI[k]), float(BA[k]), float(OTHER[k]),
+                             int(ROOT[k]))
+            if x is not None:
+                try:
+                    r = evaluate_design(*x, load=load, swing_range=s_range,
+                                        crank_range=crank_range)
+                    # keep the refinement when it is feasible, no worse, and not
+                    # a shape already reported (several grid points often climb
+                    # to one optimum: the grid point then stands for itself)
+                    if r.feasible and better(value_of(r), grid_value) and \
+                            not any(_same_shape(r, other) for other in designs):
+                        des = dataclasses.replace(r, objective=value_of(r),
+                                                  grid_objective=grid_value)
+                except GeometryError:
+                    pass
+        designs.append(des)
         if len(designs) >= limit:
             break
+    designs.sort(key=lambda d: -d.objective if objective == "margin" else d.objective)
     return SynthesisResult(tuple(designs), _OBJECTIVES[objective], load,
-                           tuple(swings.tolist()), explored, rejected)
+                           tuple(swings.tolist()), explored, rejected, (), s_range, fixed,
+                           refine)
+
+
+#: Two designs whose b/a, c/a and d/a agree to this (relative) are one shape: the
+#: grid's scaled copies agree exactly, refinements that end on one optimum to
+#: the optimiser's tolerance (about 1e-5 here).
+SAME_SHAPE_REL = 1e-3
+
+
+def _same_shape(d1: Design, d2: Design, rel: float = SAME_SHAPE_REL) -> bool:
+    """Equal b/a, c/a, d/a to ``rel`` (scaled copies of one linkage)."""
+    r1 = (d1.b / d1.a, d1.c / d1.a, d1.d / d1.a)
+    r2 = (d2.b / d2.a, d2.c / d2.a, d2.d / d2.a)
+    return all(abs(x - y) <= rel * abs(y) for x, y in zip(r1, r2))
+
+
+class _Space:
+    """The free parameters of a search and how the ratios follow from them.
+
+    Parameters p = (a [mm], Ψ [rad], β = b/a, o) with o = δ = d/a (c/a solved
+    from eq. 10) or, with the rocker fixed, o = κ = c/a (d/a solved).  A fixed
+    coupler makes β = b/a, a fixed frame δ = d/a, a fixed rocker κ = c/a.
+    """
+
+    def __init__(self, fixed, b_a_range, d_a_range, crank_range, swing_range, swing):
+        self.fixed = fixed
+        self.b_a_range, self.d_a_range = tuple(b_a_range), tuple(d_a_range)
+        self.crank_range = crank_range
+        self.swing_range = swing_range
+        self.swing = swing
+        self.solve_d = "rocker" in fixed
+        self.limits_in_ratio = bool({"coupler", "frame"} & set(fixed))
+
+    def ratios(self, A, BA, OTHER):
+        f = self.fixed
+        if "coupler" in f:
+            BA = f["coupler"] / A
+        if "frame" in f:
+            OTHER = f["frame"] / A
+        elif "rocker" in f:
+            OTHER = f["rocker"] / A
+        return BA, OTHER
+
+    def split(self, X, OTHER):
+        """(c/a, d/a) from the eq. (10) root X and the other ratio."""
+        return (OTHER, X) if self.solve_d else (X, OTHER)
+
+    def in_ranges(self, BA, DA):
+        (b0, b1), (d0, d1) = self.b_a_range, self.d_a_range
+        return (BA >= b0 - 1e-12) & (BA <= b1 + 1e-12) & (DA >= d0 - 1e-12) & (DA <= d1 + 1e-12)
+
+    def refine(self, objective, a, psi, ba, other, root):
+        """Lengths (a, b, c, d) [mm] of the refined design, or None."""
+        from scipy.optimize import minimize
+
+        free, x0, bounds = [], [], []
+        for name, value, rng, is_free in (
+                ("a", a, self.crank_range, self.crank_range[1] > self.crank_range[0]),
+                ("psi", psi, tuple(math.radians(v) for v in self.swing_range),
+                 self.swing is None and self.swing_range[1] > self.swing_range[0]),
+                ("ba", ba, self.b_a_range, "coupler" not in self.fixed),
+                ("other", other, self.d_a_range, not {"rocker", "frame"} & set(self.fixed))):
+            if is_free:
+                free.append(name)
+                x0.append(value)
+                bounds.append(rng)
+        if not free:
+            return None
+        base = {"a": a, "psi": psi, "ba": ba, "other": other}
+
+        def lengths(x):
+            p = dict(base, **dict(zip(free, x)))
+            A = np.array([p["a"]])
+            BA, OTHER = self.ratios(A, np.array([p["ba"]]), np.array([p["other"]]))
+            u = _eq10_roots_squared(np.array([p["psi"]]), BA, OTHER)[root]
+            with np.errstate(invalid="ignore"):
+                CA, DA = self.split(np.sqrt(u), OTHER)
+            return A, np.array([p["psi"]]), BA, CA, DA
+
+        f = self.fixed
+        (b0, b1), (d0, d1) = self.b_a_range, self.d_a_range
+
+        def cost(x):
+            # the objective of _screen, in plain floats (one point: numpy's
+            # per-call cost would dominate)
+            p = dict(base, **dict(zip(free, x)))
+            a_, psi_ = p["a"], p["psi"]
+            ba_ = f["coupler"] / a_ if "coupler" in f else p["ba"]
+            other_ = (f["frame"] / a_ if "frame" in f else
+                      f["rocker"] / a_ if "rocker" in f else p["other"])
+            u = _eq10_root_scalar(psi_, ba_, other_, root)
+            if u is None:
+                return 1e6
+            ca_, da_ = (other_, math.sqrt(u)) if self.solve_d else (math.sqrt(u), other_)
+            if self.limits_in_ratio and not (b0 - 1e-12 <= ba_ <= b1 + 1e-12
+                                             and d0 - 1e-12 <= da_ <= d1 + 1e-12):
+                return 1e6
+            got = _screen_scalar(a_, psi_, ba_, ca_, da_)
+            if got is None:
+                return 1e6
+            worst, ratio = got
+            if objective == "margin":
+                return -worst
+            return ratio if worst > 0 else 1e3 - worst
+
+        res = minimize(cost, np.array(x0), method="Nelder-Mead", bounds=bounds,
+                       options={"xatol": 1e-8, "fatol": 1e-11, "maxiter": 2000})
+        if not np.isfinite(res.fun) or res.fun >= 1e3:
+            return None
+        A, _, BA, CA, DA = lengths(res.x)
+        a = float(A[0])
+        return a, a * float(BA[0]), a * float(CA[0]), a * float(DA[0])
+
+
+def _eq10_root_scalar(psi, b_a, other, which):
+    """Root ``which`` (0 larger, 1 smaller) u > 0 of eq. (10) as in :func:`_eq10_roots_squared`."""
+    cp, sp2 = math.cos(psi), math.sin(psi) ** 2
+    o2 = other * other
+    k1 = o2 - (b_a + 1) ** 2
+    k2 = o2 - (b_a - 1) ** 2
+    A = 2 - 2 * cp
+    B = 2 * (k1 + k2) * (1 - cp) - 4 * o2 * sp2
+    C = k1 * k1 + k2 * k2 - 2 * cp * k1 * k2
+    disc = B * B - 4 * A * C
+    if not disc >= 0 or A == 0:
+        return None
+    sq = math.sqrt(disc)
+    u = (-B + sq) / (2 * A) if which == 0 else (-B - sq) / (2 * A)
+    return u if u > 0 else None
+
+
+def _screen_scalar(a, psi, ba, ca, da):
+    """(smallest shape margin, |Φ2''|/|Φ1''|) of one design as :func:`_screen` computes them.
+
+    None where the screen marks the design invalid.
+    """
+    try:
+        longest = max(ba, ca, da)
+        if not (1 + longest < ba + ca + da - longest and ba > 1 and ca > 1 and da > 1):
+            return None
+        c1 = (ca ** 2 + (1 + ba) ** 2 - da ** 2) / (2 * (1 + ba) * ca)
+        c2 = (ca ** 2 + (ba - 1) ** 2 - da ** 2) / (2 * (ba - 1) * ca)
+        if not (-1 <= c1 <= 1 and -1 <= c2 <= 1):
+            return None
+        mu1, mu2 = math.acos(c1), math.acos(c2)
+        cf = (ca ** 2 + da ** 2 - (ba + 1) ** 2) / (2 * ca * da)
+        cb = (ca ** 2 + da ** 2 - (ba - 1) ** 2) / (2 * ca * da)
+        if not (-1 <= cf <= 1 and -1 <= cb <= 1):
+            return None
+        if not abs(abs(math.acos(cf) - math.acos(cb)) - psi) < 1e-7:
+            return None
+        g1 = math.degrees(min(mu1, math.pi - mu1))
+
+        def acute_at(bd):
+            ang = math.acos(max(-1.0, min(1.0, (ba ** 2 + ca ** 2 - bd ** 2) / (2 * ba * ca))))
+            return min(ang, math.pi - ang)
+
+        gmin = math.degrees(min(acute_at(da - 1), acute_at(da + 1)))
+        ratio = 1.0 / ((ba + 1) / (ba - 1) * math.sin(mu2) / math.sin(mu1))
+        bound = ba / psi
+        margins = ((g1 - FRONT_TRANSMISSION_MIN_DEG) / FRONT_TRANSMISSION_MIN_DEG,
+                   (gmin - MIN_TRANSMISSION_MIN_DEG) / MIN_TRANSMISSION_MIN_DEG,
+                   (ACCELERATION_RATIO_MAX - ratio) / ACCELERATION_RATIO_MAX,
+                   (FRAME_MAX_MM - a * da) / FRAME_MAX_MM,
+                   (ca - bound) / bound)
+        return min(margins), ratio
+    except (ZeroDivisionError, ValueError):
+        return None
 
 
 def _screen(A, PSI, BA, CA, DA):

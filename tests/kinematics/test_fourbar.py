@@ -209,3 +209,46 @@ def test_locking_names_the_crank_angle():
     # the reachable window's ends are where the coupler and rocker line up (γ → 0)
     assert fb.transmission_angle(lo + 1e-9) < 1e-3
     assert fb.transmission_angle(hi - 1e-9) < 1e-3
+
+
+# ------------------------------------------------------------- change points
+@pytest.mark.parametrize("dims,kind,crossings", [
+    ((30, 100, 30, 100), "parallelogram", (0.0, 180.0)),
+    ((30, 100, 100, 30), "deltoid", (0.0,)),
+    ((30, 30, 100, 100), "deltoid", (0.0, 180.0)),
+    ((20, 30, 40, 50), "change-point", (180.0,)),
+    ((20, 60, 50, 30), "change-point", (0.0,)),
+])
+def test_change_point_linkages_are_classified_and_crossings_located(dims, kind, crossings):
+    fb = FourBar(*dims)
+    assert fb.grashof_class == "change-point" and fb.linkage_type == kind
+    got = tuple(math.degrees(t) for t in fb.branch_crossings())
+    assert got == pytest.approx(crossings)
+    a, b, c, d = dims
+    for th in fb.branch_crossings():
+        # independent check: B on the frame line and BD equal to b + c or |b − c|,
+        # so C is on the same line (all four joints collinear)
+        bd = math.hypot(a * math.cos(th) - d, a * math.sin(th))
+        assert min(abs(bd - (b + c)), abs(bd - abs(b - c))) < 1e-9 * max(dims)
+
+
+def test_change_point_summary_withholds_nu_and_says_why():
+    doc = FourBar(30, 100, 30, 100).summary(100.0)
+    assert doc["nu_min"] is None and doc["eps4T_max"] is None
+    assert doc["branch_crossings_deg"] == [0.0, 180.0]
+    assert any("assembly modes cross" in n for n in doc["notes"])
+    assert "dead_centres" not in doc          # no longer called a crank-rocker
+    with pytest.raises(GeometryError, match="branch crossing"):
+        FourBar(30, 100, 30, 100).transfer(0.0)
+
+
+def test_grashof_linkage_has_no_crossings():
+    assert FourBar(*MRAZEK).branch_crossings() == ()
+    assert FourBar(*MRAZEK).summary()["notes"] == []
+
+
+def test_lengths_whose_squares_overflow_are_refused():
+    with pytest.raises(GeometryError, match="out of range"):
+        FourBar(1e308, 37, 1e308, 189)
+    with pytest.raises(GeometryError, match="square"):
+        FourBar(*MRAZEK).summary(1e300)

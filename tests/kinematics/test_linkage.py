@@ -192,11 +192,15 @@ def test_locking_names_theta():
 
 
 def test_branch_jump_is_reported():
-    # with a huge step the predictor lands nearer the mirror assembly
-    text, _ = _fourbar_text(0.3)
+    # with a huge step the Newton predictor lands nearer the mirror assembly
+    text, fb = _fourbar_text(0.3)
     lk = parse_linkage(text)
     with pytest.raises(GeometryError, match="branch jump"):
-        lk.solve(math.radians(180.0), max_step_deg=180.0)
+        lk.solve(math.radians(180.0), max_step_deg=180.0, method="newton")
+    # the closed-form dyad keeps its assembly mode whatever the step
+    C = lk.solve(math.radians(180.0), max_step_deg=180.0).points["C"]
+    assert math.atan2(C[1], C[0] - 189.0) == pytest.approx(fb.rocker_angle(0.3 + math.pi),
+                                                           abs=1e-12)
 
 
 def test_the_format_example_in_the_docs_runs():

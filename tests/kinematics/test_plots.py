@@ -41,9 +41,32 @@ def test_plot_frame_loading_draws_the_shaking_force():
 def test_plot_synthesis_and_linkage(tmp_path):
     res = synthesize("light", 25.0, limit=2)
     fig = plot_synthesis(res.designs)
-    assert len(fig.axes[0].lines) == 3    # two designs and the 45° limit
+    assert len(fig.axes[1].lines) == 3    # two designs and the 45° limit
+    # the first panel draws design 1 at its dead centres: B on the crank circle at θ_front
+    fb = res.designs[0].fourbar()
+    front, back = fb.dead_centres()
+    x, y = fig.axes[0].lines[0].get_data()
+    np.testing.assert_allclose([x[1], y[1]], [fb.crank * math.cos(front.theta),
+                                              fb.crank * math.sin(front.theta)], atol=1e-12)
+    x, y = fig.axes[0].lines[1].get_data()
+    np.testing.assert_allclose([x[2], y[2]], [fb.frame + fb.rocker * math.cos(back.phi4),
+                                              fb.rocker * math.sin(back.phi4)], atol=1e-12)
     lk = load_linkage(Path(__file__).resolve().parents[2] / "examples" / "fnf_sixbar.toml")
     st = lk.solve(0.2)
     fig = plot_linkage(lk, st, {"K": np.array([st.points["K"], st.points["K"] + 1])})
     fig.savefig(tmp_path / "x.png")
     assert (tmp_path / "x.png").stat().st_size > 1000
+
+
+def test_plot_shaking_draws_the_polar_curve_and_magnitude():
+    from mechcirc.kinematics.plots import plot_shaking
+
+    fb = FourBar(0.035, 0.0578, 0.1556, 0.16275)
+    th = np.linspace(0, 2 * math.pi, 91)
+    res = frame_loading(fb, th, 60.0, rocker=LinkMass(15.0, (0.1, 0.02), 0.08))
+    fig = plot_shaking(res)
+    x, y = fig.axes[0].lines[0].get_data()
+    np.testing.assert_allclose(x, res.shaking_force[:, 0])
+    np.testing.assert_allclose(y, res.shaking_force[:, 1])
+    np.testing.assert_allclose(fig.axes[1].lines[0].get_data()[1], np.hypot(x, y))
+    fig.canvas.draw()

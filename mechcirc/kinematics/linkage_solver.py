@@ -1,0 +1,891 @@
+"""Fast position, velocity and acceleration analysis of a :class:`~.linkage.Linkage`.
+
+Two solvers, chosen per linkage once (:func:`plan`):
+
+* ``"dyads"`` — when every Assur group is an RRR dyad (two links, three
+  revolute pairs: one inside, one to a known body on each link), each group is
+  solved in closed form, vectorised over all crank positions: the inner joint
+  is the intersection of two circles on the side of the line through the
+  outer joints where the pose puts it (the assembly mode, which fixes the
+  branch for good); the link angular velocities and accelerations come from
+  one 2×2 system per group, written out by Cramer's rule.  A four-bar costs
+  about as much as :meth:`FourBar.evaluate`.
+* ``"newton"`` — any other structure (a class-III group, say): Newton on the
+  constraint equations Φ(q, t) = 0 with the analytic Jacobian, assembled from
+  index arrays built once.  A sequential continuation visits coarse nodes at
+  most ``max_step_deg`` of the fastest crank apart (Taylor predictor from the
+  node's q, q̇, q̈; step halving; sign of det J tracked, a change is a branch
+  jump); the requested positions are then solved together, batched, each
+  started from the Taylor predictor of the node just before it, and their
+  velocities and accelerations come from two batched linear solves.
+
+Both return a :class:`LinkageMotion` of plain arrays.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import GeometryError
+
+__all__ = ["LinkageMotion", "plan", "motion"]
+
+
+@dataclass(frozen=True)
+class LinkageMotion:
+    """Kinematics of a linkage at N drive positions, as arrays (first axis: position).
+
+    Attributes
+    ----------
+    theta, t : ndarray (N,)
+        First-crank rotation from the pose [rad]; time θ/ω_1 [s].
+    q, qdot, qddot : ndarray (N, 3n)
+        (x [length], y [length], φ [rad]) of each moving link's frame and
+        their first and second time derivatives.
+    parts : ndarray (N, 3n, n_cranks)
+        q̇ with every crank but one stopped (conditional stop); ``q̇ = Σ parts``.
+    point_names, link_names, crank_links : tuple of str
+    points, velocities, accelerations : ndarray (N, P, 2)
+        Every named point [length], [length/s], [length/s²].
+    contributions : ndarray (n_cranks, N, P, 2)
+        Point velocities with every other crank stopped [length/s].
+    method : str
+        ``"dyads"`` or ``"newton"``.
+    """
+
+    theta: NDArray[np.float64]
+    t: NDArray[np.float64]
+    q: NDArray[np.float64]
+    qdot: NDArray[np.float64]
+    qddot: NDArray[np.float64]
+    parts: NDArray[np.float64]
+    point_names: tuple
+    link_names: tuple
+    crank_links: tuple
+    method: str
+    _plan: object = field(repr=False, compare=False)
+
+    # point kinematics are derived from q, q̇, q̈ on first use (the solve
+    # itself, like FourBar.evaluate, yields the links' coordinates and rates)
+    @cached_property
+    def _points(self):
+        return _point_kinematics(self._plan, self.q, self.qdot, self.qddot, self.parts)
+
+    @property
+    def points(self) -> NDArray[np.float64]:
+        """Every named point, shape (N, P, 2) [length]."""
+        return self._points[0]
+
+    @property
+    def velocities(self) -> NDArray[np.float64]:
+        """Point velocities, shape (N, P, 2) [length/s]."""
+        return self._points[1]
+
+    @property
+    def accelerations(self) -> NDArray[np.float64]:
+        """Point accelerations, shape (N, P, 2) [length/s²]."""
+        return self._points[2]
+
+    @property
+    def contributions(self) -> NDArray[np.float64]:
+        """Point velocities with every other crank stopped, (n_cranks, N, P, 2) [length/s]."""
+        return self._points[3]
+
+    def __len__(self) -> int:
+        return len(self.theta)
+
+    def __repr__(self) -> str:
+        return (f"LinkageMotion({len(self)} positions, {len(self.link_names)} links, "
+                f"{len(self.point_names)} points, method={self.method!r})")
+
+    @property
+    def angular_velocities(self) -> NDArray[np.float64]:
+        """φ̇ of each moving link, shape (N, n) [rad/s]."""
+        return self.qdot[:, 2::3]
+
+    @property
+    def angular_accelerations(self) -> NDArray[np.float64]:
+        """φ̈ of each moving link, shape (N, n) [rad/s²]."""
+        return self.qddot[:, 2::3]
+
+    def states(self) -> list:
+        """Every position as a :class:`~.linkage.LinkageState` (what ``Linkage.solve`` returns).
+
+        The arrays are copied once; each state's vectors are disjoint views of
+        that private copy.
+        """
+        from .linkage import LinkageState
+
+        names, links = self.point_names, self.link_names
+        P, V, A = self.points.copy(), self.velocities.copy(), self.accelerations.copy()
+        C = np.moveaxis(self.contributions, 0, 1).copy()
+        q, qd, qdd = self.q.copy(), self.qdot.copy(), self.qddot.copy()
+        th, t, w = self.theta.tolist(), self.t.tolist(), qd[:, 2::3].tolist()
+        cranks = self.crank_links
+        out = []
+        new = object.__new__
+        for i in range(len(th)):
+            # filled as unpickling does: the frozen dataclass's __init__ (one
+            # object.__setattr__ per field) costs more than the rest of a state
+            st = new(LinkageState)
+            st.__dict__.update(
+                theta=th[i], t=t[i], q=q[i], qdot=qd[i], qddot=qdd[i],
+                points=dict(zip(names, P[i])), velocities=dict(zip(names, V[i])),
+                accelerations=dict(zip(names, A[i])),
+                angular_velocities=dict(zip(links, w[i])),
+                contributions={c: dict(zip(names, C[i, j])) for j, c in enumerate(cranks)})
+            out.append(st)
+        return out
+
+    def state(self, i: int):
+        """The :class:`~.linkage.LinkageState` of position ``i``."""
+        from .linkage import LinkageState
+
+        names = self.point_names
+        # one copy per array, then per-point views into it
+        pts = dict(zip(names, self.points[i].copy()))
+        vel = dict(zip(names, self.velocities[i].copy()))
+        acc = dict(zip(names, self.accelerations[i].copy()))
+        con = self.contributions[:, i].copy()
+        contrib = {c: dict(zip(names, con[j])) for j, c in enumerate(self.crank_links)}
+        omegas = dict(zip(self.link_names, self.qdot[i, 2::3].tolist()))
+        return LinkageState(float(self.theta[i]), float(self.t[i]), self.q[i].copy(),
+                            self.qdot[i].copy(), self.qddot[i].copy(), pts, vel, acc, omegas,
+                            contrib)
+
+
+# ------------------------------------------------------------------- structure
+@dataclass(frozen=True)
+class _Dyad:
+    links: tuple          # (L1, L2) link indices
+    inner: str            # the joint between them
+    outer: tuple          # (P1 on L1, P2 on L2)
+    known: tuple          # body index carrying P1 and P2 (-1: ground)
+    l1: float             # |P3 − P1| and |P3 − P2| from the pose
+    l2: float
+    sign: float           # side of P1→P2 on which P3 lies in the pose
+
+
+@dataclass(frozen=True)
+class _Plan:
+    method: str
+    nb: int                              # moving links
+    offsets: NDArray                     # (P, 2): point offset in its owner's frame (or ground xy)
+    owner: NDArray                       # (P,): owner link index, nb for a ground point
+    crank_idx: NDArray                   # (nc,)
+    omega: NDArray                       # (nc,)
+    pivot: NDArray                       # (nc, 2): crank ground pivots
+    dyads: tuple = ()
+    order: tuple = ()                    # ("crank", j) / ("dyad", k) in solving order
+    # newton
+    ia: NDArray | None = None            # (m,) body index of side a (nb = ground)
+    ib: NDArray | None = None
+    sa: NDArray | None = None            # (m, 2)
+    sb: NDArray | None = None
+    q0: NDArray | None = None
+    scale: float = 1.0
+
+
+def plan(lk) -> _Plan:
+    """Structure of ``lk`` compiled to index arrays, and the solver that fits it."""
+    names = lk.link_names
+    idx = {n: i for i, n in enumerate(names)}
+    nb = len(names)
+    local = lk._local()
+    points = tuple(lk.pose)
+    owner, offsets = [], []
+    for p in points:
+        o = next((l for l, ps in lk.links.items() if p in ps), None)
+        owner.append(nb if o is None else idx[o])
+        offsets.append(lk.pose[p] if o is None else local[o][p])
+    crank_idx = np.array([idx[c.link] for c in lk.cranks])
+    omega = np.array([c.omega for c in lk.cranks], dtype=float)
+    pivot = np.array([lk.pose[c.pivot] for c in lk.cranks])
+    rows = lk._rows()
+    m = len(rows)
+
+    def body(b):
+        return nb if b == "ground" else idx[b]
+
+    def off(b, p):
+        return lk.pose[p] if b == "ground" else local[b][p]
+
+    common = dict(nb=nb, offsets=np.array(offsets, dtype=float).reshape(-1, 2),
+                  owner=np.array(owner), crank_idx=crank_idx, omega=omega, pivot=pivot,
+                  ia=np.array([body(a) for _, a, _ in rows], dtype=int).reshape(m),
+                  ib=np.array([body(b) for _, _, b in rows], dtype=int).reshape(m),
+                  sa=np.array([off(a, p) for p, a, _ in rows], dtype=float).reshape(m, 2),
+                  sb=np.array([off(b, p) for p, _, b in rows], dtype=float).reshape(m, 2),
+                  q0=lk.q0(), scale=lk._scale())
+    dyads = _dyads(lk, idx)
+    if dyads is None:
+        return _Plan("newton", **common)
+    order = tuple(("crank", j) for j in range(len(lk.cranks))) + \
+        tuple(("dyad", k) for k in range(len(dyads)))
+    return _Plan("dyads", dyads=dyads, order=order, **common)
+
+
+def _dyads(lk, idx):
+    """The Assur groups as RRR dyads in solving order, or None if one is not."""
+    try:
+        groups = lk.assur_groups()
+    except GeometryError:
+        return None
+    joints = lk.joints()
+    known = {"ground"} | {c.link for c in lk.cranks}
+    out = []
+    for g in groups:
+        if g.group_class != 2 or len(g.internal_pairs) != 1 or len(g.external_pairs) != 2:
+            return None
+        L1, L2 = g.links
+        (P3,) = g.internal_pairs
+        if set(joints[P3]) != {L1, L2}:
+            return None
+        outer, carriers = [], []
+        for L in (L1, L2):
+            mine = [p for p in g.external_pairs if L in joints[p]]
+            if len(mine) != 1:
+                return None
+            p = mine[0]
+            others = [b for b in joints[p] if b != L]
+            if not others or not all(b in known for b in others) or \
+                    any(b in (L1, L2) for b in others):
+                return None
+            outer.append(p)
+            carriers.append(-1 if others[0] == "ground" else idx[others[0]])
+        P1, P2 = outer
+        x1, x2, x3 = lk.pose[P1], lk.pose[P2], lk.pose[P3]
+        e, r = x2 - x1, x3 - x1
+        cross = e[0] * r[1] - e[1] * r[0]
+        l1, l2 = float(np.hypot(*(x3 - x1))), float(np.hypot(*(x3 - x2)))
+        if l1 == 0 or l2 == 0 or abs(cross) <= 1e-9 * l1 * float(np.hypot(*e)):
+            return None           # degenerate or singular in the pose: let Newton say so
+        out.append(_Dyad((idx[L1], idx[L2]), P3, (P1, P2), tuple(carriers), l1, l2,
+                         math.copysign(1.0, cross)))
+        known |= {L1, L2}
+    return tuple(out)
+
+
+# ------------------------------------------------------------------ helpers
+# Points and vectors are complex numbers x + iy: R(φ)s = e^{iφ}s, and the
+# perpendicular (−y, x) of a vector is i times it.
+
+def _times(lk, thetas, max_step_deg):
+    from .linkage import MAX_CONTINUATION_STEPS
+
+    if not max_step_deg > 0:
+        raise ValueError(f"max_step_deg must be > 0, got {max_step_deg}")
+    w1 = lk.cranks[0].omega
+    wmax = max(abs(c.omega) for c in lk.cranks)
+    with np.errstate(all="ignore"):
+        t = thetas / w1
+        path = np.concatenate(([0.0], t))
+        steps = float(np.sum(np.abs(np.diff(path)))) * wmax / math.radians(max_step_deg)
+    if not steps <= MAX_CONTINUATION_STEPS:
+        raise GeometryError(
+            f"{lk.source}: reaching θ needs about {steps:.3g} continuation steps of "
+            f"{max_step_deg:g}° of the fastest crank (|ω| = {wmax:g} rad/s against the "
+            f"first crank's {abs(w1):g} rad/s); the limit is {MAX_CONTINUATION_STEPS}")
+    return t, math.radians(max_step_deg) / wmax
+
+
+def _path(t, dt_max):
+    """Times along the traversal 0 → t[0] → t[1] …, no two more than dt_max apart.
+
+    Returns (nodes, index of each target in nodes).
+    """
+    path = np.concatenate(([0.0], t))
+    d = np.diff(path)
+    n = np.maximum(1, np.ceil(np.abs(d) / dt_max).astype(int))
+    if np.all(n == 1):
+        return path, np.arange(1, len(path))
+    pieces = [np.zeros(1)]
+    for k in range(len(d)):
+        pieces.append(path[k] + d[k] * np.arange(1, n[k] + 1) / n[k])
+    return np.concatenate(pieces), np.cumsum(n)
+
+
+def _cplx(xy):
+    xy = np.asarray(xy, dtype=float)
+    return xy[..., 0] + 1j * xy[..., 1]
+
+
+def _xy(z):
+    return np.stack([z.real, z.imag], axis=-1)
+
+
+def _point_kinematics(pl, q, qdot, qddot, parts):
+    """Every point's position, velocity, acceleration and conditional-stop velocities."""
+    N = len(q)
+    nb = pl.nb
+    o = pl.owner
+    s = _cplx(pl.offsets)
+
+    def ext(a):                       # (N, nb + 1) with a zero "ground body" last
+        out = np.zeros((N, nb + 1), dtype=a.dtype)
+        out[:, :nb] = a
+        return out
+
+    r = ext(q[:, 0::3] + 1j * q[:, 1::3])[:, o]
+    v = ext(qdot[:, 0::3] + 1j * qdot[:, 1::3])[:, o]
+    a = ext(qddot[:, 0::3] + 1j * qddot[:, 1::3])[:, o]
+    w = ext(qdot[:, 2::3])[:, o]
+    al = ext(qddot[:, 2::3])[:, o]
+    Rs = np.exp(1j * ext(q[:, 2::3])[:, o]) * s
+    pts = r + Rs
+    vel = v + 1j * w * Rs
+    acc = a + (1j * al - w * w) * Rs
+    contrib = []
+    for j in range(parts.shape[2]):
+        pj = parts[:, :, j]
+        contrib.append(ext(pj[:, 0::3] + 1j * pj[:, 1::3])[:, o] +
+                       1j * ext(pj[:, 2::3])[:, o] * Rs)
+    return _xy(pts), _xy(vel), _xy(acc), _xy(np.array(contrib))
+
+
+def motion(lk, pl: _Plan, theta, *, max_step_deg: float = 2.0, method: str = "auto"):
+    """Solve ``lk`` at first-crank rotations ``theta`` [rad] (1-D array); see the module."""
+    thetas = np.asarray(theta, dtype=float).reshape(-1)
+    t, dt_max = _times(lk, thetas, max_step_deg)
+    use = pl.method if method == "auto" else method
+    if use not in ("dyads", "newton"):
+        raise ValueError(f"method must be 'auto', 'dyads' or 'newton', got {method!r}")
+    if use == "dyads" and pl.method != "dyads":
+        raise GeometryError(f"{lk.source}: the linkage is not made of RRR dyads only; "
+                            f"use method='newton'")
+    if use == "dyads":
+        q, qd, qdd, parts = _solve_dyads(lk, pl, t, dt_max)
+    else:
+        q, qd, qdd, parts = _solve_newton(lk, pl, t, dt_max)
+    return LinkageMotion(thetas, t, q, qd, qdd, parts, tuple(lk.pose), lk.link_names,
+                         tuple(c.link for c in lk.cranks), use, pl)
+
+
+# ------------------------------------------------------------ dyads, closed form
+def _im_conj(a, b):
+    """Im(conj(a)·b) = a × b (the 2-D cross product)."""
+    return a.real * b.imag - a.imag * b.real
+
+
+class _DyadSolver:
+    """Closed-form RRR dyads, vectorised over positions (see the module docstring).
+
+    Per link L: angle φ_L (N,), origin r_L (N,) complex, ω_L, v_L, α_L, a_L.
+    """
+
+    def __init__(self, lk, pl):
+        self.lk, self.pl = lk, pl
+        local = lk._local()
+        self.local = [{p: complex(*x) for p, x in local[n].items()} for n in lk.link_names]
+        self.pose = {p: complex(*x) for p, x in lk.pose.items()}
+        self.crank_arm = [-self.local[pl.crank_idx[j]][c.pivot] for j, c in enumerate(lk.cranks)]
+        # per dyad: the inner joint's offset from each outer joint in the pose,
+        # and its angle; offsets of the outer joints in their carriers' frames
+        self.geo = []
+        for dy in pl.dyads:
+            (L1, L2), (P1, P2) = dy.links, dy.outer
+            z3 = self.pose[dy.inner]
+            self.geo.append((math.atan2((z3 - self.pose[P1]).imag, (z3 - self.pose[P1]).real),
+                             math.atan2((z3 - self.pose[P2]).imag, (z3 - self.pose[P2]).real),
+                             -self.local[L1][P1], -self.local[L2][P2]))
+
+    def positions(self, t):
+        pl, lk = self.pl, self.lk
+        N = len(t)
+        E = np.empty((pl.nb, N), dtype=complex)          # e^{iφ}
+        phi = np.empty((pl.nb, N))
+        r = np.empty((pl.nb, N), dtype=complex)
+        inner = []
+        margin = np.full(N, np.inf)
+        for j, c in enumerate(lk.cranks):
+            ci = pl.crank_idx[j]
+            phi[ci] = pl.omega[j] * t
+            E[ci] = np.exp(1j * phi[ci])
+            r[ci] = self.pose[c.pivot] + E[ci] * self.crank_arm[j]
+        for dy, (ang1, ang2, arm1, arm2) in zip(pl.dyads, self.geo):
+            (L1, L2), (P1, P2), (K1, K2) = dy.links, dy.outer, dy.known
+            x1 = self.pose[P1] if K1 == -1 else r[K1] + E[K1] * self.local[K1][P1]
+            x2 = self.pose[P2] if K2 == -1 else r[K2] + E[K2] * self.local[K2][P2]
+            e = x2 - x1
+            d2 = e.real * e.real + e.imag * e.imag
+            with np.errstate(all="ignore"):
+                d = np.sqrt(d2)
+                x = (dy.l1 * dy.l1 - dy.l2 * dy.l2 + d2) / (2.0 * d)
+                h2 = dy.l1 * dy.l1 - x * x
+                x3 = x1 + e * (x + 1j * dy.sign * np.sqrt(np.maximum(h2, 0.0))) / d
+            r1, r2 = x3 - x1, x3 - x2
+            # sin of the angle between the links at the inner joint: 0 when the
+            # dyad is stretched or folded (its Jacobian is singular there)
+            sin_ = np.abs(_im_conj(r1, r2)) / (dy.l1 * dy.l2)
+            m = np.where(h2 >= 0, sin_, -1.0)
+            margin = np.minimum(margin, np.where(np.isfinite(m), m, -1.0))
+            for L, xp, rr, ang, arm in ((L1, x1, r1, ang1, arm1), (L2, x2, r2, ang2, arm2)):
+                phi[L] = np.angle(rr) - ang
+                E[L] = rr / np.abs(rr) * complex(math.cos(ang), -math.sin(ang))
+                r[L] = xp + E[L] * arm
+            inner.append((x1, x2, r1, r2))
+        return phi, E, r, inner, margin
+
+    def velocities(self, E, inner, w_cranks):
+        """(ω (nb, N), origin velocity (nb, N) complex) for crank speeds ``w_cranks``."""
+        pl, lk = self.pl, self.lk
+        N = E.shape[1]
+        w = np.zeros((pl.nb, N))
+        v = np.zeros((pl.nb, N), dtype=complex)
+        for j in range(len(lk.cranks)):
+            ci = pl.crank_idx[j]
+            w[ci] = w_cranks[j]
+            v[ci] = 1j * w_cranks[j] * E[ci] * self.crank_arm[j]
+        for dy, (x1, x2, r1, r2), (_, _, arm1, arm2) in zip(pl.dyads, inner, self.geo):
+            (L1, L2), (P1, P2), (K1, K2) = dy.links, dy.outer, dy.known
+            v1 = 0.0 if K1 == -1 else v[K1] + 1j * w[K1] * E[K1] * self.local[K1][P1]
+            v2 = 0.0 if K2 == -1 else v[K2] + 1j * w[K2] * E[K2] * self.local[K2][P2]
+            # i(ω1 r1 − ω2 r2) = v2 − v1
+            w[L1], w[L2] = _cramer(r1, r2, -1j * (v2 - v1))
+            v[L1] = v1 + 1j * w[L1] * E[L1] * arm1
+            v[L2] = v2 + 1j * w[L2] * E[L2] * arm2
+        return w, v
+
+    def accelerations(self, E, inner, w):
+        pl, lk = self.pl, self.lk
+        N = E.shape[1]
+        al = np.zeros((pl.nb, N))
+        a = np.zeros((pl.nb, N), dtype=complex)
+        for j in range(len(lk.cranks)):
+            ci = pl.crank_idx[j]
+            a[ci] = -w[ci] ** 2 * E[ci] * self.crank_arm[j]
+        for dy, (x1, x2, r1, r2), (_, _, arm1, arm2) in zip(pl.dyads, inner, self.geo):
+            (L1, L2), (P1, P2), (K1, K2) = dy.links, dy.outer, dy.known
+            a1 = 0.0 if K1 == -1 else \
+                a[K1] + (1j * al[K1] - w[K1] ** 2) * E[K1] * self.local[K1][P1]
+            a2 = 0.0 if K2 == -1 else \
+                a[K2] + (1j * al[K2] - w[K2] ** 2) * E[K2] * self.local[K2][P2]
+            # i(α1 r1 − α2 r2) = a2 − a1 + ω1² r1 − ω2² r2
+            rhs = a2 - a1 + w[L1] ** 2 * r1 - w[L2] ** 2 * r2
+            al[L1], al[L2] = _cramer(r1, r2, -1j * rhs)
+            a[L1] = a1 + (1j * al[L1] - w[L1] ** 2) * E[L1] * arm1
+            a[L2] = a2 + (1j * al[L2] - w[L2] ** 2) * E[L2] * arm2
+        return al, a
+
+
+def _cramer(r1, r2, b):
+    """Real (x1, x2) with x1·r1 − x2·r2 = b (complex)."""
+    D = _im_conj(r2, r1)
+    return _im_conj(r2, b) / D, _im_conj(r1, b) / D
+
+
+_SINGULAR = 1e-10
+
+
+def _pack(r, phi):
+    """(nb, N) complex origins and (nb, N) angles → q rows (N, 3 nb)."""
+    nb, N = r.shape
+    return np.ascontiguousarray(np.stack([r.real, r.imag, phi], axis=1).reshape(3 * nb, N).T)
+
+
+def _solve_dyads(lk, pl, t, dt_max):
+    ds = _DyadSolver(lk, pl)
+    phi, E, r, inner, margin = ds.positions(t)
+    # the traversal from the pose must stay assemblable: check the path between
+    # the targets too where they are further apart than a continuation step
+    nodes, _ = _path(t, dt_max)
+    if len(nodes) == len(t) + 1:
+        check_t, check_m = t, margin
+    else:
+        check_t = nodes[1:]
+        check_m = ds.positions(check_t)[4]
+    if not np.all(check_m > _SINGULAR):
+        k = int(np.argmax(~(check_m > _SINGULAR)))
+        _lock_error(lk, ds, 0.0 if k == 0 else check_t[k - 1], check_t[k])
+    nc = len(lk.cranks)
+    N = len(t)
+    parts = np.empty((N, 3 * pl.nb, nc))
+    for j in range(nc):
+        wc = np.zeros(nc)
+        wc[j] = pl.omega[j]
+        wj, vj = ds.velocities(E, inner, wc)
+        parts[:, :, j] = _pack(vj, wj)
+    if nc == 1:
+        qd = parts[:, :, 0].copy()
+        w = qd[:, 2::3].T
+    else:
+        w, v = ds.velocities(E, inner, pl.omega)
+        qd = _pack(v, w)
+    al, a = ds.accelerations(E, inner, w)
+    return _pack(r, phi), qd, _pack(a, al), parts
+
+
+def _lock_error(lk, ds, t_good, t_bad):
+    """Bisect to where the dyads stop assembling (or turn singular) and say so."""
+    w1 = lk.cranks[0].omega
+    if t_good == 0.0 and ds.positions(np.array([0.0]))[4][0] <= _SINGULAR:
+        raise GeometryError(f"{lk.source}: the linkage is singular in its pose "
+                            f"(constraint Jacobian not invertible)")
+    lo, hi = t_good, t_bad
+    for _ in range(80):
+        mid = 0.5 * (lo + hi)
+        if ds.positions(np.array([mid]))[4][0] > _SINGULAR:
+            lo = mid
+        else:
+            hi = mid
+        if abs(hi - lo) * abs(w1) < 1e-12:
+            break
+    raise GeometryError(
+        f"{lk.source}: the linkage locks near θ = {math.degrees(hi * w1):.6g}° (first crank "
+        f"rotation from the pose): no assembly beyond it on this branch")
+
+
+# ------------------------------------------------------------------ Newton
+class _Newton:
+    """Residual, Jacobian and γ of Φ(q, t) = 0, batched over positions (first axis).
+
+    Joint rows are computed as complex numbers whose float view is the
+    interleaved (x, y) rows; the Jacobian is a constant template with the
+    φ-columns filled in by one flat-index assignment per side.
+    """
+
+    def __init__(self, pl):
+        self.pl = pl
+        nb = pl.nb
+        self.n = n = 3 * nb
+        self.m = m = len(pl.ia)
+        J0 = np.zeros((n, n))
+        k = np.arange(m)
+        a_mov, b_mov = pl.ia < nb, pl.ib < nb
+        ka, kb = k[a_mov], k[b_mov]
+        ia, ib = pl.ia[a_mov], pl.ib[b_mov]
+        J0[2 * ka, 3 * ia] = 1.0
+        J0[2 * ka + 1, 3 * ia + 1] = 1.0
+        J0[2 * kb, 3 * ib] = -1.0
+        J0[2 * kb + 1, 3 * ib + 1] = -1.0
+        for j, ci in enumerate(pl.crank_idx):
+            J0[2 * m + j, 3 * ci + 2] = 1.0
+        self.J0 = J0
+        self.ka, self.kb = ka, kb
+        # flat indices of the φ-column entries, rows (2k, 2k+1) interleaved
+        self.flat_a = np.stack([(2 * ka) * n + 3 * ia + 2, (2 * ka + 1) * n + 3 * ia + 2],
+                               axis=-1).reshape(-1)
+        self.flat_b = np.stack([(2 * kb) * n + 3 * ib + 2, (2 * kb + 1) * n + 3 * ib + 2],
+                               axis=-1).reshape(-1)
+        self.sa, self.sb = _cplx(pl.sa), _cplx(pl.sb)
+        self.cphi = 3 * pl.crank_idx + 2
+        self.tol = 1e-12 * pl.scale
+
+    def _sides(self, q):
+        """(R s, P) of both sides of every joint row, complex (N, m) each."""
+        pl = self.pl
+        N = len(q)
+        nb = pl.nb
+        z = np.zeros((N, nb + 1), dtype=complex)
+        z[:, :nb] = q[:, 0::3] + 1j * q[:, 1::3]
+        e = np.ones((N, nb + 1), dtype=complex)
+        e[:, :nb] = np.exp(1j * q[:, 2::3])
+        Ra = e[:, pl.ia] * self.sa
+        Rb = e[:, pl.ib] * self.sb
+        return Ra, z[:, pl.ia] + Ra, Rb, z[:, pl.ib] + Rb
+
+    def residual(self, q, angles, sides=None):
+        _, Pa, _, Pb = sides if sides is not None else self._sides(q)
+        r = np.empty((len(q), self.n))
+        r[:, :2 * self.m] = np.ascontiguousarray(Pa - Pb).view(np.float64)
+        r[:, 2 * self.m:] = q[:, self.cphi] - angles
+        return r
+
+    def jacobian(self, q, sides=None):
+        Ra, _, Rb, _ = sides if sides is not None else self._sides(q)
+        N = len(q)
+        J = np.repeat(self.J0[None], N, axis=0).reshape(N, -1)
+        J[:, self.flat_a] = np.ascontiguousarray(1j * Ra[:, self.ka]).view(np.float64)
+        J[:, self.flat_b] = np.ascontiguousarray(-1j * Rb[:, self.kb]).view(np.float64)
+        return J.reshape(N, self.n, self.n)
+
+    def gamma(self, q, qdot, sides=None):
+        Ra, _, Rb, _ = sides if sides is not None else self._sides(q)
+        pl = self.pl
+        N = len(q)
+        w2 = np.zeros((N, pl.nb + 1))
+        w2[:, :pl.nb] = qdot[:, 2::3] ** 2
+        g = np.zeros((N, self.n))
+        g[:, :2 * self.m] = np.ascontiguousarray(Ra * w2[:, pl.ia] - Rb * w2[:, pl.ib]).view(
+            np.float64)
+        return g
+
+    def derivatives(self, q):
+        """(J, q̇, q̈, parts) batched; NaN rows where J is singular."""
+        pl = self.pl
+        N = len(q)
+        sides = self._sides(q)
+        J = self.jacobian(q, sides)
+        nc = len(pl.crank_idx)
+        rhs = np.zeros((N, self.n, nc))
+        rhs[:, 2 * self.m + np.arange(nc), np.arange(nc)] = pl.omega
+        with np.errstate(all="ignore"):
+            try:
+                parts = np.linalg.solve(J, rhs)
+            except np.linalg.LinAlgError:
+                parts = np.full((N, self.n, nc), np.nan)
+                for i in range(N):
+                    try:
+                        parts[i] = np.linalg.solve(J[i], rhs[i])
+                    except np.linalg.LinAlgError:
+                        pass
+            qdot = parts.sum(axis=2)
+            g = self.gamma(q, qdot, sides)
+            qddot = np.full_like(qdot, np.nan)
+            fine = np.all(np.isfinite(qdot), axis=1)
+            if np.any(fine):
+                qddot[fine] = np.linalg.solve(J[fine], g[fine][..., None])[..., 0]
+        return J, qdot, qddot, parts
+
+    def newton(self, q, angles, max_iter=30):
+        """Batched Newton from q (N, n); returns (q, converged mask)."""
+        q = q.copy()
+        previous = np.full(len(q), np.inf)
+        active = np.ones(len(q), dtype=bool)
+        ok = np.zeros(len(q), dtype=bool)
+        for k in range(max_iter):
+            idx = np.flatnonzero(active)
+            if idx.size == 0:
+                break
+            qi = q[idx]
+            sides = self._sides(qi)
+            r = self.residual(qi, angles[idx], sides)
+            size = np.max(np.abs(r), axis=1)
+            done = size < self.tol
+            ok[idx[done]] = True
+            # a growing residual means no assembly near here: give up at once
+            diverging = ((size > previous[idx]) & (k >= 2)) | ~np.isfinite(size)
+            previous[idx] = size
+            # a converged row takes one more step: from a residual just below
+            # tol, quadratic convergence then leaves rounding only
+            go = done | ~diverging
+            active[idx[~go | done]] = False
+            if not np.any(go):
+                break
+            J = self.jacobian(qi[go], tuple(x[go] for x in sides))
+            sel, r = idx[go], r[go]
+            try:
+                q[sel] -= np.linalg.solve(J, r[..., None])[..., 0]
+            except np.linalg.LinAlgError:
+                for i, Ji, ri in zip(sel, J, r):       # one singular matrix: row by row
+                    try:
+                        q[i] -= np.linalg.solve(Ji, ri)
+                    except np.linalg.LinAlgError:
+                        active[i] = ok[i] = False
+        return q, ok
+
+    def step(self, q, angles):
+        """One position, sequentially: Newton, then q̇, q̈ and the sign of det J.
+
+        Returns (q, q̇, q̈, sign) or None (no convergence, or J near singular).
+        LAPACK's dgesv/dgetrs are called directly: for one small matrix the
+        numpy wrappers cost more than the arithmetic.
+        """
+        from scipy.linalg import lapack
+
+        previous = math.inf
+        q = q[None].copy()
+        angles = angles[None]
+        for k in range(30):
+            sides = self._sides(q)
+            r = self.residual(q, angles, sides)[0]
+            size = float(np.max(np.abs(r)))
+            if not math.isfinite(size) or (k >= 2 and size > previous):
+                return None
+            previous = size
+            lu, piv, dq, info = lapack.dgesv(self.jacobian(q, sides)[0], r)
+            if info != 0:
+                return None
+            if size < self.tol:
+                # converged: the LU of J at q serves the derivatives (they only
+                # feed predictors; the targets are polished in the batch)
+                break
+            q[0] -= dq
+        else:
+            return None
+        d = np.abs(lu.diagonal())
+        if not d.min() > 1e-12 * d.max():
+            return None
+        pl = self.pl
+        # one column at a time: a multi-column dgetrs hands the triangular
+        # solves to a threaded BLAS that costs milliseconds on a busy machine
+        qdot = np.zeros(self.n)
+        for j in range(len(pl.crank_idx)):
+            e = np.zeros(self.n)
+            e[2 * self.m + j] = pl.omega[j]
+            qdot += lapack.dgetrs(lu, piv, e)[0]
+        qddot = lapack.dgetrs(lu, piv, self.gamma(q, qdot[None], sides)[0])[0]
+        swaps = int(np.count_nonzero(piv != np.arange(len(piv))))
+        sign = math.copysign(1.0, float(np.prod(lu.diagonal()))) * (-1) ** swaps
+        return q[0], qdot, qddot, sign
+
+
+def _solve_newton(lk, pl, t, dt_max):
+    nw = _Newton(pl)
+    w1 = lk.cranks[0].omega
+    wmax = float(np.max(np.abs(pl.omega)))
+    nodes, at = _path(t, dt_max)
+    first = nw.step(pl.q0, pl.omega * 0.0)
+    if first is None:
+        raise GeometryError(f"{lk.source}: the linkage is singular in its pose "
+                            f"(constraint Jacobian not invertible)")
+    q, qdot, qddot, sign = first
+    # The sequential continuation visits only the nodes it needs (consecutive
+    # kept nodes at most dt_max apart along the path); every other node is
+    # solved afterwards in one batch from the kept node before it.
+    arc = np.concatenate(([0.0], np.cumsum(np.abs(np.diff(nodes)))))
+    keep = [0]
+    for k in range(1, len(nodes)):
+        if k == len(nodes) - 1 or arc[k + 1] - arc[keep[-1]] > dt_max * (1 + 1e-12):
+            keep.append(k)
+    keep = np.array(keep)
+    Qk = np.empty((len(keep), nw.n))
+    Qdk, Qddk = np.empty_like(Qk), np.empty_like(Qk)
+    Qk[0], Qdk[0], Qddk[0] = q, qdot, qddot
+    # nodes solved by a block are final (polished, with batched derivatives):
+    # a target on one is taken as it is
+    exact = np.zeros(len(keep), dtype=bool)
+    Pk = np.empty((len(keep), nw.n, len(pl.crank_idx)))
+    t_now = 0.0
+    j, block = 1, 16
+    while j < len(keep):
+        if block > 1:
+            # Blocks of nodes together: Taylor predictors from the last solved
+            # node, batched Newton and derivatives, accepted only if every node
+            # keeps the sign of det J and sits within 1 % of the size of the
+            # Taylor step from the node before it (another assembly is a size
+            # away); otherwise the block shrinks down to single steps.
+            jj = min(len(keep), j + block)
+            T = nodes[keep[j:jj]]
+            got = _block(nw, q, qdot, qddot, t_now, T, sign, pl)
+            if got is not None:
+                Qk[j:jj], Qdk[j:jj], Qddk[j:jj], Pk[j:jj] = got
+                exact[j:jj] = True
+                q, qdot, qddot, t_now = got[0][-1], got[1][-1], got[2][-1], T[-1]
+                j, block = jj, min(2 * block, 64)
+                continue
+            block //= 2
+            continue
+        t_target = nodes[keep[j]]
+        while t_now != t_target:
+            dt = max(-dt_max, min(dt_max, t_target - t_now))
+            while True:
+                guess = q + qdot * dt + 0.5 * qddot * dt * dt
+                res = nw.step(guess, pl.omega * (t_now + dt))
+                if res is not None:
+                    break
+                dt *= 0.5
+                if abs(dt) * wmax < 1e-9:
+                    th_lock = (t_now + 2 * dt) * w1
+                    raise GeometryError(
+                        f"{lk.source}: the linkage locks near θ = "
+                        f"{math.degrees(th_lock):.6g}° (first crank rotation from the "
+                        f"pose): no assembly beyond it on this branch")
+            if res[3] != sign:
+                raise GeometryError(
+                    f"{lk.source}: branch jump between θ = {math.degrees(t_now * w1):.6g}° "
+                    f"and {math.degrees((t_now + dt) * w1):.6g}°: the position passed a "
+                    f"singular configuration (det J changed sign); reduce max_step_deg "
+                    f"or the linkage reaches a change point there")
+            q, qdot, qddot, _ = res
+            t_now = t_now + dt
+        Qk[j], Qdk[j], Qddk[j] = q, qdot, qddot
+        j, block = j + 1, 2
+    # Every target lies between two kept nodes (or is one): quintic Hermite
+    # interpolation from their q, q̇, q̈ (error ~ h⁶ q⁽⁶⁾/720, about 1e-12 of
+    # the size at the default spacing), then batched Newton — usually one
+    # polishing step — and two batched solves for q̇, q̈.
+    src = np.searchsorted(keep, at, side="right") - 1
+    done = exact[src] & (keep[src] == at)
+    if np.all(done):
+        return Qk[src], Qdk[src], Qddk[src], Pk[src]
+    final = (Qk[src[done]], Qdk[src[done]], Qddk[src[done]], Pk[src[done]])
+    rest = np.flatnonzero(~done)
+    src, at, t = src[rest], at[rest], t[rest]
+    nxt = np.minimum(src + 1, len(keep) - 1)
+    t0, t1 = nodes[keep[src]], nodes[keep[nxt]]
+    h = t1 - t0
+    with np.errstate(all="ignore"):
+        u = np.where(h != 0, (nodes[at] - t0) / np.where(h != 0, h, 1.0), 0.0)
+    u2, u3 = u * u, u * u * u
+    u4, u5 = u3 * u, u3 * u2
+    H = np.stack([1 - 10 * u3 + 15 * u4 - 6 * u5, u - 6 * u3 + 8 * u4 - 3 * u5,
+                  0.5 * u2 - 1.5 * u3 + 1.5 * u4 - 0.5 * u5, 0.5 * u3 - u4 + 0.5 * u5,
+                  -4 * u3 + 7 * u4 - 3 * u5, 10 * u3 - 15 * u4 + 6 * u5], axis=1)[:, :, None]
+    hh = h[:, None]
+    guess = (H[:, 0] * Qk[src] + H[:, 1] * hh * Qdk[src] + H[:, 2] * hh * hh * Qddk[src]
+             + H[:, 3] * hh * hh * Qddk[nxt] + H[:, 4] * hh * Qdk[nxt] + H[:, 5] * Qk[nxt])
+    angles = pl.omega[None, :] * t[:, None]
+    start = np.max(np.abs(nw.residual(guess, angles)), axis=1)
+    Q, ok = nw.newton(guess, angles)
+    for i in np.flatnonzero(~ok):              # rare: redo from the node, sequentially
+        Q[i] = _continue(lk, nw, Qk[src[i]], Qdk[src[i]], Qddk[src[i]], nodes[keep[src[i]]],
+                         t[i], dt_max, sign)
+    J, qd, qdd, parts = nw.derivatives(Q)
+    bad = ~np.all(np.isfinite(qd), axis=1) | ~np.all(np.isfinite(qdd), axis=1)
+    if np.any(bad):
+        th = math.degrees(t[int(np.argmax(bad))] * w1)
+        raise GeometryError(f"{lk.source}: singular position at θ = {th:.6g}° (constraint "
+                            f"Jacobian not invertible)")
+    # a target whose interpolated start was not already close could have
+    # converged elsewhere: check its det J sign (the nodes were checked)
+    far = np.flatnonzero(~(start < 1e-6 * pl.scale) | ~ok)
+    if far.size:
+        sgn = np.sign(np.linalg.det(J[far]))
+        if np.any(sgn != sign):
+            th = math.degrees(t[far[int(np.argmax(sgn != sign))]] * w1)
+            raise GeometryError(f"{lk.source}: branch jump near θ = {th:.6g}°: the position "
+                                f"passed a singular configuration (det J changed sign); reduce "
+                                f"max_step_deg or the linkage reaches a change point there")
+    out = []
+    for a, b in zip(final, (Q, qd, qdd, parts)):
+        full = np.empty((len(done),) + a.shape[1:])
+        full[done], full[rest] = a, b
+        out.append(full)
+    return tuple(out)
+
+
+def _block(nw, q, qdot, qddot, t_now, T, sign, pl):
+    """Solve the nodes at times ``T`` together from (q, q̇, q̈) at ``t_now``; None if unsafe."""
+    d = (T - t_now)[:, None]
+    guess = q + qdot * d + 0.5 * qddot * d * d
+    Q, ok = nw.newton(guess, pl.omega[None, :] * T[:, None])
+    if not ok.all():
+        return None
+    J, qd, qdd, parts = nw.derivatives(Q)
+    if not (np.all(np.isfinite(qd)) and np.all(np.isfinite(qdd))):
+        return None
+    with np.errstate(all="ignore"):
+        if not np.all(np.sign(np.linalg.det(J)) == sign):
+            return None
+    prev_q, prev_d, prev_dd = (np.vstack([x[None], y[:-1]]) for x, y in
+                               ((q, Q), (qdot, qd), (qddot, qdd)))
+    h = np.diff(np.concatenate(([t_now], T)))[:, None]
+    pred = prev_q + prev_d * h + 0.5 * prev_dd * h * h
+    if not np.max(np.abs(pred - Q)) <= 1e-2 * pl.scale:
+        return None
+    return Q, qd, qdd, parts
+
+
+def _continue(lk, nw, q, qdot, qddot, t_now, t_target, dt_max, sign):
+    """Sequential continuation from a solved node to one target (fallback)."""
+    pl = nw.pl
+    w1 = lk.cranks[0].omega
+    h = dt_max
+    while t_now != t_target:
+        dt = max(-h, min(h, t_target - t_now))
+        res = nw.step(q + qdot * dt + 0.5 * qddot * dt * dt, pl.omega * (t_now + dt))
+        if res is None or res[3] != sign:
+            h *= 0.5
+            if h * float(np.max(np.abs(pl.omega))) < 1e-9:
+                raise GeometryError(f"{lk.source}: no assembly near θ = "
+                                    f"{math.degrees(t_target * w1):.6g}° on this branch")
+            continue
+        q, qdot, qddot, _ = res
+        t_now += dt
+    return q
