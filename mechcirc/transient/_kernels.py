@@ -271,6 +271,31 @@ def dopri_run(z, t0, dt, nout, A, B, cx, dx, cv, dv, extra, prm, u, rtol, atol, 
     return steps
 
 
+@_jit
+def modal_run(mu, g1, g2, q0, u, cre, cim, out):
+    """Diagonal first-order-hold recurrence q⁺ = μ q + g₁ u + g₂ (u⁺ − u), every mode.
+
+    ``mu``, ``g1``, ``g2``, ``q0``: complex (m,) per mode; ``u`` real (nt,);
+    ``out`` real (nt, ·) receives Re q_j in column ``cre[j]`` and Im q_j in
+    column ``cim[j]`` (skipped when negative: a real mode).
+    """
+    nt = u.shape[0]
+    m = mu.shape[0]
+    q = q0.copy()
+    for j in range(m):
+        out[0, cre[j]] = q[j].real
+        if cim[j] >= 0:
+            out[0, cim[j]] = q[j].imag
+    for k in range(nt - 1):
+        uk = u[k]
+        du = u[k + 1] - uk
+        for j in range(m):
+            q[j] = mu[j] * q[j] + g1[j] * uk + g2[j] * du
+            out[k + 1, cre[j]] = q[j].real
+            if cim[j] >= 0:
+                out[k + 1, cim[j]] = q[j].imag
+
+
 def load_python():
     """A fresh copy of this module that never uses numba (the pure-Python backend)."""
     import importlib.util

@@ -294,16 +294,24 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
         u_in = u
     interp = _interpolation_error(u, drive)
     has_clear = bool(backlash_elements(circuit)) and not linearise
+    T = None
     if has_clear:
         Z, method, err = _nonlinear(ss, circuit, z0, t, u_in, rtol)
     else:
-        Z = _propagate(ss.A, ss.B, z0, u_in, h)
-        method, err = "exact (matrix exponential, first-order hold of the drive)", 0.0
+        Z, T, why = _propagate_modal(ss.A, ss.B, z0, u_in, h)
+        if Z is None:
+            Z = _propagate(ss.A, ss.B, z0, u_in, h)
+            path = f"block propagation (modal path refused: {why})"
+        else:
+            path = why
+        method, err = ("exact (matrix exponential, first-order hold of the drive; "
+                       f"{path.split(' (')[0]})"), 0.0
+        notes.append(f"linear propagation: {path}")
     if interp > 1e-13 * float(np.abs(u).max()):      # not rounding of an exact ramp
         notes.append(f"drive interpolated linearly between samples: its error is at most "
                      f"{interp:.3g} (h²/8·max|ü|, from the samples' second differences)")
     return _outputs(ss, circuit, t, Z, u, u_in, h, drive, method, err, interp, notes,
-                    elements)
+                    elements, T)
 
 
 def _with_oscillator(ss: StateSpace, z0, omega: float, amp: float):
@@ -405,6 +413,105 @@ def _propagate(A, B, z0, u, h, block: int | None = None) -> np.ndarray:
     return Z
 
 
+#: Largest condition number of the eigenvector matrix for which the modal path
+#: runs; above it (near-defective A: critical damping, repeated undamped modes,
+#: rigid-body pairs) the block method does.
+MODAL_COND_MAX = 1e6
+#: Largest relative difference between the modal one-step map V e^{Λh} V⁻¹
+#: (and its input responses) and the matrix exponential's for the modal path.
+MODAL_CHECK_TOL = 1e-12
+
+
+def _propagate_modal(A, B, z0, u, h):
+    """The FOH recurrence in the eigenbasis of A: (Q, T, note) with Z = Q Tᵀ, or (None, None, note).
+
+    A = V Λ V⁻¹ (real A: real modes and conjugate pairs; one of each pair is
+    propagated, q⁺ = μ q + g₁ u + g₂ Δu with μ = e^{λh}, g₁ = h φ₁(λh) b,
+    g₂ = h φ₂(λh) b from the 3×3 exponential of each mode, exact).  Q holds
+    Re q (and Im q of the complex modes), N real columns; T maps them back.
+    The work per step is O(N) and the outputs are one matrix product each.
+    Refused (None) when V is ill-conditioned or when V e^{Λh} V⁻¹ and its
+    input responses differ from the exact (Φ, Γ₁, Γ₂) by more than
+    ``MODAL_CHECK_TOL`` (relative), so the block method takes over.
+    """
+    N = A.shape[0]
+    nt = u.size
+    if N == 0:
+        return None, None, "no states"
+    try:
+        lam, V = la.eig(A)
+    except (la.LinAlgError, ValueError):
+        return None, None, "eigen-decomposition failed"
+    real = lam.imag == 0.0
+    pos = lam.imag > 0.0
+    if int(real.sum()) + 2 * int(pos.sum()) != N or not np.all(np.isfinite(lam)):
+        return None, None, "eigenvalues not in conjugate pairs"
+    cond = float(np.linalg.cond(V))
+    if not (cond <= MODAL_COND_MAX):
+        return None, None, f"eigenvector matrix condition number {cond:.1e} > {MODAL_COND_MAX:.0e}"
+    keep = np.flatnonzero(real | pos)
+    lam_k = lam[keep]
+    Vk = V[:, keep]
+    rhs = np.column_stack([B.astype(complex), np.asarray(z0, complex)])
+    W = la.solve(V, rhs)[keep]
+    b, q0 = W[:, 0], W[:, 1]
+    # φ-functions of every mode from one 3×3 exponential each (batched).
+    m = lam_k.size
+    small = np.zeros((m, 3, 3), complex)
+    small[:, 0, 0] = lam_k * h
+    small[:, 0, 1] = 1.0
+    small[:, 1, 2] = 1.0
+    E = la.expm(small)
+    mu, g1, g2 = E[:, 0, 0], h * E[:, 0, 1] * b, h * E[:, 0, 2] * b
+    # A posteriori: the modal one-step map against the exact one.
+    Phi, G1, G2 = discretise(A, B, h)
+    Vinv = la.inv(V)
+    mu_all = np.exp(lam * h)
+    Phi_m = ((V * mu_all) @ Vinv).real
+    scale = max(float(np.abs(Phi).max()), 1e-300)
+    dev = float(np.abs(Phi_m - Phi).max()) / scale
+    gscale = max(float(np.abs(G1).max()), float(np.abs(G2).max()), 1e-300)
+    g1_m = 2 * (Vk[:, ~real[keep]] @ g1[~real[keep]]).real + (Vk[:, real[keep]] @ g1[real[keep]]).real
+    g2_m = 2 * (Vk[:, ~real[keep]] @ g2[~real[keep]]).real + (Vk[:, real[keep]] @ g2[real[keep]]).real
+    if np.abs(B).max() > 0:
+        dev = max(dev, float(max(np.abs(g1_m - G1).max(), np.abs(g2_m - G2).max())) / gscale)
+    if not (dev <= MODAL_CHECK_TOL):
+        return None, None, (f"modal one-step map differs from the exponential's by {dev:.1e} "
+                            f"(> {MODAL_CHECK_TOL:.0e}; eigenvector condition {cond:.1e})")
+    # Real columns: Re q_j for every kept mode, Im q_j for the complex ones.
+    is_c = ~real[keep]
+    cre = np.arange(m)
+    cim = np.full(m, -1)
+    cim[is_c] = m + np.arange(int(is_c.sum()))
+    T = np.empty((N, N))
+    T[:, cre[~is_c]] = Vk[:, ~is_c].real
+    T[:, cre[is_c]] = 2 * Vk[:, is_c].real
+    T[:, cim[is_c]] = -2 * Vk[:, is_c].imag
+    Q = np.empty((nt, N))
+    _modal_states(mu, g1, g2, q0, np.ascontiguousarray(u, float), cre, cim, Q)
+    return Q, T, f"modal (eigenvector condition {cond:.1e}, one-step map checked to {dev:.1e})"
+
+
+def _modal_states(mu, g1, g2, q0, u, cre, cim, out):
+    from . import _kernels as kern
+
+    if kern.HAVE_NUMBA:
+        kern.modal_run(mu, g1, g2, q0, u, cre, cim, out)
+        return
+    # numpy/scipy fallback: one first-order IIR filter per mode along time.
+    from scipy.signal import lfilter
+
+    x = np.empty(u.size, complex)
+    du = np.diff(u)
+    for j in range(mu.size):
+        x[0] = q0[j]
+        x[1:] = g1[j] * u[:-1] + g2[j] * du
+        y = lfilter([1.0], [1.0, -mu[j]], x)
+        out[:, cre[j]] = y.real
+        if cim[j] >= 0:
+            out[:, cim[j]] = y.imag
+
+
 def _nonlinear(ss: StateSpace, circuit, z0, t, u, rtol):
     from . import _kernels as kern
 
@@ -462,11 +569,15 @@ def _nonlinear(ss: StateSpace, circuit, z0, t, u, rtol):
     return Z, f"Dormand-Prince 5(4), rtol {rtol:g} ({backend}); clearances in the RHS", err
 
 
-def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes, want=True
-             ) -> TransientResult:
+def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes, want=True,
+             T=None) -> TransientResult:
+    """Outputs from the states: z = Z[k] (or Tᵀ-mapped modal coordinates, z = T Z[k])."""
+    def lin(C):                         # (n_t × N) · (C T)ᵀ: one BLAS-3 product
+        return Z @ (C.T if T is None else (C @ T).T)
+
     udot = np.gradient(u, h) if u.size > 1 else np.zeros_like(u)
-    X = Z @ ss.Cx.T + np.outer(u, ss.Dx)
-    V = Z @ ss.Cv.T + np.outer(u, ss.Dv) + np.outer(udot, ss.Ev)
+    X = lin(ss.Cx) + np.outer(u, ss.Dx)
+    V = lin(ss.Cv) + np.outer(u, ss.Dv) + np.outer(udot, ss.Ev)
     clear = {e.name: (e, comp) for e, comp in backlash_elements(circuit)} if ss.extra is not None else {}
     comp_of = {comp.name: e.name for e, comp in clear.values() if comp is not None}
     index = {n: i for i, n in enumerate(ss.nodes)}
@@ -486,7 +597,7 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes,
     if need_acc:
         # a = C_v ż + D_v u̇, with ż = A z + B u (+ the clearance forces): C_v A is
         # formed once, so the cost is one (n_t × N) · (N × n) product.
-        Acc = Z @ (ss.Cv @ ss.A).T + np.outer(u, ss.Cv @ ss.B) + np.outer(udot, ss.Dv)
+        Acc = lin(ss.Cv @ ss.A) + np.outer(u, ss.Cv @ ss.B) + np.outer(udot, ss.Dv)
         for j, name in enumerate(clear):        # the clearance forces drive the masses too
             Acc += np.outer(law_cache[name][0], ss.Cv @ ss.extra[:, j])
 
