@@ -136,7 +136,7 @@ class TransientResult:
     """The transient on the time grid ``time`` [s] (plain arrays; picklable).
 
     ``x``, ``v``: node displacements [m or rad] and velocities, shape (nt, n_nodes),
-    columns in ``nodes`` order; ``force``, ``dv``: every element's force [N] and
+    columns in ``nodes`` order (``v`` is None when not asked for); ``force``, ``dv``: every element's force [N] and
     velocity difference v(n1) − v(n2), shape (nt, n_elements), columns in
     ``elements`` order; ``drive_force`` (velocity drive) or ``drive_velocity``
     (force drive) [nt] or None; ``drive`` the drive's value u(t) [nt] (None
@@ -163,7 +163,7 @@ class TransientResult:
     def node(self, name: str) -> tuple[np.ndarray, np.ndarray]:
         """(x, v) of node ``name``."""
         i = self.nodes.index(name)
-        return self.x[:, i], self.v[:, i]
+        return self.x[:, i], (self.v[:, i] if self.v is not None else None)
 
     def element_force(self, name: str) -> np.ndarray:
         """Force [N] through element ``name`` (n1 → n2)."""
@@ -172,7 +172,8 @@ class TransientResult:
     def to_json(self) -> dict:
         """The ``--json`` document (issue 12 §4)."""
         doc = {"time": self.time,
-               "nodes": {n: {"x": self.x[:, i], "v": self.v[:, i]}
+               "nodes": {n: ({"x": self.x[:, i], "v": self.v[:, i]} if self.v is not None
+                             else {"x": self.x[:, i]})
                          for i, n in enumerate(self.nodes)},
                "elements": {e: {"force": self.force[:, j], "dv": self.dv[:, j]}
                             for j, e in enumerate(self.elements)},
@@ -184,9 +185,11 @@ class TransientResult:
 
     def write_csv(self, fh) -> None:
         """Columns: t, x(node), v(node) for each node, F(element) for each element, drive."""
-        header = ["t"] + [f"x({n})" for n in self.nodes] + [f"v({n})" for n in self.nodes] \
+        vs = self.v if self.v is not None else np.zeros((self.time.size, 0))
+        header = ["t"] + [f"x({n})" for n in self.nodes] \
+            + [f"v({n})" for n in self.nodes if self.v is not None] \
             + [f"F({e})" for e in self.elements]
-        cols = [self.time, *self.x.T, *self.v.T, *self.force.T]
+        cols = [self.time, *self.x.T, *vs.T, *self.force.T]
         if self.drive_force is not None:
             header.append("F(drive)")
             cols.append(self.drive_force)
@@ -236,7 +239,7 @@ def _grid(t_end: float, dt: float | None, waveform: Waveform) -> np.ndarray:
 def transient(circuit: Circuit, t_end: float, dt: float | None = None,
               drive: Waveform | str | Callable | None = None, *,
               amplitude: float | None = None, linearise: bool = False,
-              elements: bool = True,
+              elements: bool = True, velocities: bool = True,
               rtol: float = 1e-10) -> TransientResult:
     """Integrate ``circuit`` from its ``.ic`` state over [0, t_end] on a grid of step ``dt``.
 
@@ -260,6 +263,10 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
     elements : bool
         Compute every element's force and velocity difference (default); if
         false only node and drive outputs (faster for long runs of large networks).
+    velocities : bool
+        Compute the node velocities ``v`` (default); with ``elements=False``
+        and ``velocities=False`` only the displacements ``x`` and the drive's
+        output are formed (``v`` is None): half the output work of a linear run.
     """
     if callable(drive) and not isinstance(drive, Waveform):
         drive = Waveform("callable", func=drive)
@@ -311,7 +318,7 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
         notes.append(f"drive interpolated linearly between samples: its error is at most "
                      f"{interp:.3g} (h²/8·max|ü|, from the samples' second differences)")
     return _outputs(ss, circuit, t, Z, u, u_in, h, drive, method, err, interp, notes,
-                    elements, T)
+                    elements, T, velocities)
 
 
 def _with_oscillator(ss: StateSpace, z0, omega: float, amp: float):
@@ -570,15 +577,25 @@ def _nonlinear(ss: StateSpace, circuit, z0, t, u, rtol):
 
 
 def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes, want=True,
-             T=None) -> TransientResult:
-    """Outputs from the states: z = Z[k] (or Tᵀ-mapped modal coordinates, z = T Z[k])."""
-    def lin(C):                         # (n_t × N) · (C T)ᵀ: one BLAS-3 product
-        return Z @ (C.T if T is None else (C @ T).T)
+             T=None, velocities=True) -> TransientResult:
+    """Outputs from the states: z = Z[k] (or modal coordinates, z = T Z[k]).
+
+    Every output is affine in z, so each is one product of Z with the output
+    map (C T)ᵀ (BLAS-3 for node outputs, a vector for the drive's); terms of
+    the drive that vanish are skipped.
+    """
+    def affine(C, Du=None, Dud=None):   # C z + Du u + Dud u̇ at every sample
+        out = Z @ (C.T if T is None else (C @ T).T)
+        for coef, sig in ((Du, u), (Dud, udot)):
+            if coef is not None and np.any(coef):
+                out += np.multiply.outer(sig, coef)
+        return out
 
     udot = np.gradient(u, h) if u.size > 1 else np.zeros_like(u)
-    X = lin(ss.Cx) + np.outer(u, ss.Dx)
-    V = lin(ss.Cv) + np.outer(u, ss.Dv) + np.outer(udot, ss.Ev)
     clear = {e.name: (e, comp) for e, comp in backlash_elements(circuit)} if ss.extra is not None else {}
+    velocities = velocities or bool(want) or bool(clear)
+    X = affine(ss.Cx, ss.Dx)
+    V = affine(ss.Cv, ss.Dv, ss.Ev) if velocities else None
     comp_of = {comp.name: e.name for e, comp in clear.values() if comp is not None}
     index = {n: i for i, n in enumerate(ss.nodes)}
     def diff(Y, e):
@@ -593,11 +610,11 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes,
     for name, (e, comp) in clear.items():
         law_cache[name] = _law_forces(e, comp, diff(X, e), diff(V, e))
     need_acc = (want and any(e.kind == "mass" for e in circuit.elements)) or \
-        ss.kind == "velocity"
+        (ss.kind == "velocity" and bool(clear))
     if need_acc:
         # a = C_v ż + D_v u̇, with ż = A z + B u (+ the clearance forces): C_v A is
         # formed once, so the cost is one (n_t × N) · (N × n) product.
-        Acc = lin(ss.Cv @ ss.A) + np.outer(u, ss.Cv @ ss.B) + np.outer(udot, ss.Dv)
+        Acc = affine(ss.Cv @ ss.A, ss.Cv @ ss.B, ss.Dv)
         for j, name in enumerate(clear):        # the clearance forces drive the masses too
             Acc += np.outer(law_cache[name][0], ss.Cv @ ss.extra[:, j])
 
@@ -614,7 +631,7 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes,
         out -= second
         return out
 
-    dvm = across(V)
+    dvm = across(V) if V is not None else np.zeros((t.size, 0))
     scale = np.array([e.value * e.eta for e in els])
     kinds = np.array([e.kind for e in els])
     force = np.zeros((t.size, len(els)))
@@ -635,7 +652,12 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes,
     drive_force = drive_velocity = None
     if ss.kind == "velocity":
         # Q = h·(M a + D v + K x + Σ g_e f_e): contract with h first (vectors only).
-        Q = Acc @ (ss.M.T @ ss.h) + V @ (ss.D.T @ ss.h) + X @ (ss.K.T @ ss.h)
+        a, b, c = ss.M.T @ ss.h, ss.D.T @ ss.h, ss.K.T @ ss.h
+        if clear:
+            Q = Acc @ a + V @ b + X @ c
+        else:                   # one vector: h·(M a + D v + K x) is affine in z
+            Q = affine(a @ (ss.Cv @ ss.A) + b @ ss.Cv + c @ ss.Cx,
+                       a @ (ss.Cv @ ss.B) + b @ ss.Dv + c @ ss.Dx, a @ ss.Dv + b @ ss.Ev)
         for name, (e, comp) in clear.items():
             ge = np.zeros(len(ss.nodes))
             if e.n1 in index:
@@ -645,7 +667,7 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes,
             Q = Q + law_cache[name][0] * (ge @ ss.h)
         drive_force = Q
     elif ss.kind == "force":
-        drive_velocity = V @ ss.g
+        drive_velocity = affine(ss.g @ ss.Cv, ss.g @ ss.Dv, ss.g @ ss.Ev)
     if ss.Ev.any() and drive.kind not in ("rest", "impulse"):
         notes.append("some nodes carry neither mass nor damping: their velocities use the "
                      "drive's derivative estimated from the samples")
