@@ -301,11 +301,11 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
         u_in = u
     interp = _interpolation_error(u, drive)
     has_clear = bool(backlash_elements(circuit)) and not linearise
-    T = None
+    T, nx = None, None
     if has_clear:
         Z, method, err = _nonlinear(ss, circuit, z0, t, u_in, rtol)
     else:
-        Z, T, why = _propagate_modal(ss.A, ss.B, z0, u_in, h)
+        Z, T, why, nx, dropped = _propagate_modal(ss.A, ss.B, z0, u_in, h, ss.Cx)
         if Z is None:
             Z = _propagate(ss.A, ss.B, z0, u_in, h)
             path = f"block propagation (modal path refused: {why})"
@@ -313,12 +313,17 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
             path = why
         method, err = ("exact (matrix exponential, first-order hold of the drive; "
                        f"{path.split(' (')[0]})"), 0.0
+        if Z is not None and T is not None and dropped > 0 and velocities is False \
+                and not elements:
+            err = dropped           # x formed without the shapes' rounding-level imaginary parts
+        elif T is not None:
+            nx = None               # v and forces use every column anyway: keep x whole
         notes.append(f"linear propagation: {path}")
     if interp > 1e-13 * float(np.abs(u).max()):      # not rounding of an exact ramp
         notes.append(f"drive interpolated linearly between samples: its error is at most "
                      f"{interp:.3g} (h²/8·max|ü|, from the samples' second differences)")
     return _outputs(ss, circuit, t, Z, u, u_in, h, drive, method, err, interp, notes,
-                    elements, T, velocities)
+                    elements, T, velocities, nx)
 
 
 def _with_oscillator(ss: StateSpace, z0, omega: float, amp: float):
@@ -429,8 +434,17 @@ MODAL_COND_MAX = 1e6
 MODAL_CHECK_TOL = 1e-12
 
 
-def _propagate_modal(A, B, z0, u, h):
-    """The FOH recurrence in the eigenbasis of A: (Q, T, note) with Z = Q Tᵀ, or (None, None, note).
+#: A mode whose displacement shape C_x v is real up to this fraction of its
+#: norm (after one phase rotation: classical damping, undamped modes; computed
+#: shapes of such modes carry ~1e-12 of rounding) needs one real signal for
+#: the displacements instead of two; the part left out is bounded and reported.
+REAL_SHAPE_TOL = 1e-11
+
+
+def _propagate_modal(A, B, z0, u, h, Cx=None):
+    """The FOH recurrence in the eigenbasis of A: (Q, T, note, nx, dropped) with Z = Q Tᵀ.
+
+    (None, None, note, 0, 0.0) when refused.
 
     A = V Λ V⁻¹ (real A: real modes and conjugate pairs; one of each pair is
     propagated, q⁺ = μ q + g₁ u + g₂ Δu with μ = e^{λh}, g₁ = h φ₁(λh) b,
@@ -440,22 +454,28 @@ def _propagate_modal(A, B, z0, u, h):
     Refused (None) when V is ill-conditioned or when V e^{Λh} V⁻¹ and its
     input responses differ from the exact (Φ, Γ₁, Γ₂) by more than
     ``MODAL_CHECK_TOL`` (relative), so the block method takes over.
+
+    With ``Cx``: a complex mode whose displacement shape Cx v is real after a
+    phase rotation (classical damping) is rotated so, and its Im q column is
+    put last; x then needs only the first ``nx`` columns of Q (the dropped
+    part of each such shape is below ``REAL_SHAPE_TOL`` of its norm; ``dropped``
+    bounds what it contributes to any x: Σ max|Cx T_col| · max_k |Q_k,col|).
     """
     N = A.shape[0]
     nt = u.size
     if N == 0:
-        return None, None, "no states"
+        return None, None, "no states", 0, 0.0
     try:
         lam, V = la.eig(A)
     except (la.LinAlgError, ValueError):
-        return None, None, "eigen-decomposition failed"
+        return None, None, "eigen-decomposition failed", 0, 0.0
     real = lam.imag == 0.0
     pos = lam.imag > 0.0
     if int(real.sum()) + 2 * int(pos.sum()) != N or not np.all(np.isfinite(lam)):
-        return None, None, "eigenvalues not in conjugate pairs"
+        return None, None, "eigenvalues not in conjugate pairs", 0, 0.0
     cond = float(np.linalg.cond(V))
     if not (cond <= MODAL_COND_MAX):
-        return None, None, f"eigenvector matrix condition number {cond:.1e} > {MODAL_COND_MAX:.0e}"
+        return None, None, f"eigenvector matrix condition number {cond:.1e} > {MODAL_COND_MAX:.0e}", 0, 0.0
     keep = np.flatnonzero(real | pos)
     lam_k = lam[keep]
     Vk = V[:, keep]
@@ -484,19 +504,39 @@ def _propagate_modal(A, B, z0, u, h):
         dev = max(dev, float(max(np.abs(g1_m - G1).max(), np.abs(g2_m - G2).max())) / gscale)
     if not (dev <= MODAL_CHECK_TOL):
         return None, None, (f"modal one-step map differs from the exponential's by {dev:.1e} "
-                            f"(> {MODAL_CHECK_TOL:.0e}; eigenvector condition {cond:.1e})")
+                            f"(> {MODAL_CHECK_TOL:.0e}; eigenvector condition {cond:.1e})"), 0, 0.0
     # Real columns: Re q_j for every kept mode, Im q_j for the complex ones.
     is_c = ~real[keep]
+    real_shape = np.zeros(m, bool)
+    if Cx is not None and Cx.shape[0]:
+        phi = Cx @ Vk
+        rot = np.exp(-0.5j * np.angle((phi * phi).sum(axis=0)))
+        rot[~is_c] = 1.0
+        shape_norm = np.abs(phi).max(axis=0)
+        real_shape = is_c & (np.abs((phi * rot).imag).max(axis=0) <= REAL_SHAPE_TOL * shape_norm)
+        rot[~real_shape] = 1.0
+        Vk, g1, g2, q0 = Vk * rot, g1 / rot, g2 / rot, q0 / rot     # z = v q unchanged
     cre = np.arange(m)
     cim = np.full(m, -1)
-    cim[is_c] = m + np.arange(int(is_c.sum()))
+    late = is_c & real_shape
+    early = is_c & ~real_shape
+    cim[early] = m + np.arange(int(early.sum()))
+    cim[late] = m + int(early.sum()) + np.arange(int(late.sum()))
+    nx = m + int(early.sum())
     T = np.empty((N, N))
     T[:, cre[~is_c]] = Vk[:, ~is_c].real
     T[:, cre[is_c]] = 2 * Vk[:, is_c].real
     T[:, cim[is_c]] = -2 * Vk[:, is_c].imag
     Q = np.empty((nt, N))
     _modal_states(mu, g1, g2, q0, np.ascontiguousarray(u, float), cre, cim, Q)
-    return Q, T, f"modal (eigenvector condition {cond:.1e}, one-step map checked to {dev:.1e})"
+    note = f"modal (eigenvector condition {cond:.1e}, one-step map checked to {dev:.1e}"
+    if late.any():
+        note += f"; {int(late.sum())} of {int(is_c.sum())} oscillating modes with real shapes"
+    dropped = 0.0
+    if late.any():
+        cols = cim[late]
+        dropped = float((np.abs(Cx @ T[:, cols]).max(axis=0) * np.abs(Q[:, cols]).max(axis=0)).sum())
+    return Q, T, note + ")", (nx if Cx is not None else N), dropped
 
 
 def _modal_states(mu, g1, g2, q0, u, cre, cim, out):
@@ -577,15 +617,20 @@ def _nonlinear(ss: StateSpace, circuit, z0, t, u, rtol):
 
 
 def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes, want=True,
-             T=None, velocities=True) -> TransientResult:
+             T=None, velocities=True, nx=None) -> TransientResult:
     """Outputs from the states: z = Z[k] (or modal coordinates, z = T Z[k]).
 
     Every output is affine in z, so each is one product of Z with the output
     map (C T)ᵀ (BLAS-3 for node outputs, a vector for the drive's); terms of
     the drive that vanish are skipped.
     """
-    def affine(C, Du=None, Dud=None):   # C z + Du u + Dud u̇ at every sample
-        out = Z @ (C.T if T is None else (C @ T).T)
+    def affine(C, Du=None, Dud=None, cols=None):   # C z + Du u + Dud u̇ at every sample
+        if T is None:
+            out = Z @ C.T
+        elif cols is None:
+            out = Z @ (C @ T).T
+        else:                           # the other columns of Q do not reach C (x)
+            out = Z[:, :cols] @ (C @ T[:, :cols]).T
         for coef, sig in ((Du, u), (Dud, udot)):
             if coef is not None and np.any(coef):
                 out += np.multiply.outer(sig, coef)
@@ -594,7 +639,7 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes,
     udot = np.gradient(u, h) if u.size > 1 else np.zeros_like(u)
     clear = {e.name: (e, comp) for e, comp in backlash_elements(circuit)} if ss.extra is not None else {}
     velocities = velocities or bool(want) or bool(clear)
-    X = affine(ss.Cx, ss.Dx)
+    X = affine(ss.Cx, ss.Dx, cols=nx)
     V = affine(ss.Cv, ss.Dv, ss.Ev) if velocities else None
     comp_of = {comp.name: e.name for e, comp in clear.values() if comp is not None}
     index = {n: i for i, n in enumerate(ss.nodes)}
