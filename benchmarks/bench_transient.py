@@ -5,8 +5,10 @@ springs 1e4 N/m and dampers 2 N·s/m between neighbours and to the frame at
 the first), a force step of 1 N at the last mass, 1e5 output steps of 1 ms;
 all 100 node displacements.
 
-* ``mechcirc.transient`` (exact first-order hold; the whole call: all node x
-  and v, every element force) and its propagation core alone;
+* ``mechcirc.transient`` (exact first-order hold; the whole call) for the
+  same outputs as the baselines (x of all nodes: ``velocities=False,
+  elements=False``), with v as well, with every element force, and its
+  propagation cores alone (modal, and the block method it falls back to);
 * ``scipy.signal.lsim`` on the same state space (FOH, also exact for a step);
 * ``solve_ivp`` DOP853 rtol 1e-10 (atol 1e-14), sparse-matrix Python RHS.
 
@@ -78,22 +80,18 @@ def chain_matrices(n, k=1e4, c=2.0):
     return L * k, L * c
 
 
-def linear(n=100, steps=100_000, dt=1e-3):
+def linear(n=100, steps=100_000, dt=1e-3, repeat=3):
+    """Median of ``repeat`` runs of each method, interleaved (same load for all)."""
     from scipy import signal
 
     circuit = mechcirc.parse(chain_netlist(n))
     t_end = steps * dt
-    t_all, _ = timed(lambda: transient(circuit, t_end, dt, "step"))
-    t_mc, res = timed(lambda: transient(circuit, t_end, dt, "step", elements=False))
+    transient(circuit, 10 * dt, dt, "step")          # warm: numba kernel loaded/compiled
     from mechcirc.transient.model import state_space
-    from mechcirc.transient.simulate import _propagate
+    from mechcirc.transient.simulate import _propagate, _propagate_modal
 
     ss = state_space(circuit)
     u = np.ones(steps + 1)
-    t_core, Z = timed(lambda: _propagate(ss.A, ss.B, ss.initial[0], u, dt))
-    x_mc = res.x
-    order = [res.nodes.index(f"n{i}") for i in range(1, n + 1)]
-    x_mc = x_mc[:, order]
     # lsim on the same physics written here: z = [x, v], M = I.
     K, C = chain_matrices(n)
     A = np.block([[np.zeros((n, n)), np.eye(n)], [-K.toarray(), -C.toarray()]])
@@ -102,8 +100,6 @@ def linear(n=100, steps=100_000, dt=1e-3):
     Cm = np.hstack([np.eye(n), np.zeros((n, n))])
     sys_ = signal.StateSpace(A, B, Cm, np.zeros((n, 1)))
     t = np.linspace(0, t_end, steps + 1)
-    t_lsim, out = timed(lambda: signal.lsim(sys_, np.ones_like(t), t, interp=True))
-    x_lsim = out[1]
 
     def rhs(_, y):
         x, v = y[:n], y[n:]
@@ -111,21 +107,50 @@ def linear(n=100, steps=100_000, dt=1e-3):
         a[-1] += 1.0
         return np.concatenate([v, a])
 
-    t_dop, sol = timed(lambda: solve_ivp(rhs, (0, t_end), np.zeros(2 * n), method="DOP853",
-                                         rtol=1e-10, atol=1e-14, t_eval=t))
-    x_dop = sol.y[:n].T
+    runs = {
+        "x": lambda: transient(circuit, t_end, dt, "step", elements=False, velocities=False),
+        "nodes": lambda: transient(circuit, t_end, dt, "step", elements=False),
+        "all": lambda: transient(circuit, t_end, dt, "step"),
+        "modal": lambda: _propagate_modal(ss.A, ss.B, ss.initial[0], u, dt, ss.Cx),
+        "block": lambda: _propagate(ss.A, ss.B, ss.initial[0], u, dt),
+        "lsim": lambda: signal.lsim(sys_, np.ones_like(t), t, interp=True),
+        "dop": lambda: solve_ivp(rhs, (0, t_end), np.zeros(2 * n), method="DOP853",
+                                 rtol=1e-10, atol=1e-14, t_eval=t),
+    }
+    times = {k: [] for k in runs}
+    out = {}
+    for _ in range(repeat):
+        for k, fn in runs.items():
+            dt_k, res = timed(fn)
+            times[k].append(dt_k)
+            if k in ("x", "nodes", "lsim", "dop"):
+                out[k] = res
+            del res
+    med = {k: float(np.median(v)) for k, v in times.items()}
+    order = [out["x"].nodes.index(f"n{i}") for i in range(1, n + 1)]
+    x_lsim = out["lsim"][1]
     scale = np.abs(x_lsim).max()
-    print(f"linear chain, {n} DOF, {steps} steps of {dt} s (force step; x of all nodes)")
-    print(f"  mechcirc.transient, all outputs  {t_all:8.3f} s   (x, v of 100 nodes, force and "
-          f"Δv of 300 elements)")
-    print(f"  mechcirc.transient, nodes only   {t_mc:8.3f} s   max|x - x_lsim| "
+    x_mc = out["x"].x[:, order]
+    x_nodes = out["nodes"].x[:, order]
+    x_dop = out["dop"].y[:n].T
+    print(f"linear chain, {n} DOF, {steps} steps of {dt} s (force step), median of {repeat} "
+          f"interleaved runs")
+    print(f"  path: {out['x'].notes[-1]}")
+    print(f"  mechcirc.transient, x only        {med['x']:8.3f} s   max|x - x_lsim| "
           f"{np.abs(x_mc - x_lsim).max() / scale:.1e} (rel. to max|x|)")
-    print(f"  propagation core                 {t_core:8.3f} s")
-    print(f"  scipy.signal.lsim                {t_lsim:8.3f} s   (reference)")
-    print(f"  solve_ivp DOP853 rtol 1e-10      {t_dop:8.3f} s   max|x - x_lsim| "
+    print(f"  mechcirc.transient, nodes only    {med['nodes']:8.3f} s   (x and v of 100 nodes) "
+          f"max|x - x_lsim| {np.abs(x_nodes - x_lsim).max() / scale:.1e}")
+    print(f"  mechcirc.transient, all outputs   {med['all']:8.3f} s   (x, v of 100 nodes, force "
+          f"and Δv of 300 elements)")
+    print(f"  propagation core: modal {med['modal']:.3f} s, block (the fallback) "
+          f"{med['block']:.3f} s")
+    print(f"  scipy.signal.lsim (x)             {med['lsim']:8.3f} s   (reference)")
+    print(f"  solve_ivp DOP853 rtol 1e-10       {med['dop']:8.3f} s   max|x - x_lsim| "
           f"{np.abs(x_dop - x_lsim).max() / scale:.1e}")
-    print(f"  ratios: lsim / mechcirc {t_lsim / t_mc:.1f}x (core {t_lsim / t_core:.1f}x); "
-          f"DOP853 / mechcirc {t_dop / t_mc:.1f}x (core {t_dop / t_core:.1f}x)")
+    print(f"  ratios, same outputs (x of all nodes): lsim / mechcirc {med['lsim'] / med['x']:.1f}x; "
+          f"DOP853 / mechcirc {med['dop'] / med['x']:.1f}x")
+    print(f"  ratios with v as well: lsim / mechcirc {med['lsim'] / med['nodes']:.1f}x; "
+          f"DOP853 / mechcirc {med['dop'] / med['nodes']:.1f}x")
 
 
 def _law(e, w, c, d, b):
@@ -287,12 +312,13 @@ def cold_start():
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="1e4 linear steps instead of 1e5")
+    ap.add_argument("--repeat", type=int, default=3, help="linear runs per method (median)")
     ap.add_argument("--only", choices=("linear", "clearances", "cold"), help="one part only")
     args = ap.parse_args()
     print(f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores; "
           f"OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS')}")
     if args.only in (None, "linear"):
-        linear(steps=10_000 if args.quick else 100_000)
+        linear(steps=10_000 if args.quick else 100_000, repeat=args.repeat)
     if args.only in (None, "clearances"):
         clearances()
     if args.only in (None, "cold"):
