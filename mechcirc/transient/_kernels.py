@@ -272,17 +272,19 @@ def dopri_run(z, t0, dt, nout, A, B, cx, dx, cv, dv, extra, prm, u, rtol, atol, 
 
 
 @_jit
-def modal_run(mu, g1, g2, q0, u, cre, cim, out):
+def modal_run(mu, g1, g2, q0, u, cre, cim, out, qmax):
     """Diagonal first-order-hold recurrence q⁺ = μ q + g₁ u + g₂ (u⁺ − u), every mode.
 
     ``mu``, ``g1``, ``g2``, ``q0``: complex (m,) per mode; ``u`` real (nt,);
     ``out`` real (nt, ·) receives Re q_j in column ``cre[j]`` and Im q_j in
-    column ``cim[j]`` (skipped when negative: a real mode).
+    column ``cim[j]`` (skipped when negative: a real mode); ``qmax[j]``
+    receives max_k |q_j|.
     """
     nt = u.shape[0]
     m = mu.shape[0]
     q = q0.copy()
     for j in range(m):
+        qmax[j] = q[j].real * q[j].real + q[j].imag * q[j].imag
         out[0, cre[j]] = q[j].real
         if cim[j] >= 0:
             out[0, cim[j]] = q[j].imag
@@ -291,9 +293,14 @@ def modal_run(mu, g1, g2, q0, u, cre, cim, out):
         du = u[k + 1] - uk
         for j in range(m):
             q[j] = mu[j] * q[j] + g1[j] * uk + g2[j] * du
+            a = q[j].real * q[j].real + q[j].imag * q[j].imag
+            if a > qmax[j]:
+                qmax[j] = a
             out[k + 1, cre[j]] = q[j].real
             if cim[j] >= 0:
                 out[k + 1, cim[j]] = q[j].imag
+    for j in range(m):
+        qmax[j] = math.sqrt(qmax[j])
 
 
 def load_python():

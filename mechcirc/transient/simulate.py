@@ -534,22 +534,23 @@ def _propagate_modal(A, B, z0, u, h, Cx=None):
     T[:, cre[is_c]] = 2 * Vk[:, is_c].real
     T[:, cim[is_c]] = -2 * Vk[:, is_c].imag
     Q = np.empty((nt, N))
-    _modal_states(mu, g1, g2, q0, np.ascontiguousarray(u, float), cre, cim, Q)
+    qmax = np.zeros(m)
+    _modal_states(mu, g1, g2, q0, np.ascontiguousarray(u, float), cre, cim, Q, qmax)
     note = f"modal (eigenvector condition {cond:.1e}, one-step map checked to {dev:.1e}"
     if late.any():
         note += f"; {int(late.sum())} of {int(is_c.sum())} oscillating modes with real shapes"
     dropped = 0.0
     if late.any():
         cols = cim[late]
-        dropped = float((np.abs(Cx @ T[:, cols]).max(axis=0) * np.abs(Q[:, cols]).max(axis=0)).sum())
+        dropped = float((np.abs(Cx @ T[:, cols]).max(axis=0) * qmax[late]).sum())
     return Q, T, note + ")", (nx if Cx is not None else N), dropped
 
 
-def _modal_states(mu, g1, g2, q0, u, cre, cim, out):
+def _modal_states(mu, g1, g2, q0, u, cre, cim, out, qmax):
     from . import _kernels as kern
 
     if kern.HAVE_NUMBA:
-        kern.modal_run(mu, g1, g2, q0, u, cre, cim, out)
+        kern.modal_run(mu, g1, g2, q0, u, cre, cim, out, qmax)
         return
     # numpy/scipy fallback: one first-order IIR filter per mode along time.
     from scipy.signal import lfilter
@@ -560,6 +561,7 @@ def _modal_states(mu, g1, g2, q0, u, cre, cim, out):
         x[0] = q0[j]
         x[1:] = g1[j] * u[:-1] + g2[j] * du
         y = lfilter([1.0], [1.0, -mu[j]], x)
+        qmax[j] = np.abs(y).max()
         out[:, cre[j]] = y.real
         if cim[j] >= 0:
             out[:, cim[j]] = y.imag
