@@ -27,11 +27,13 @@ file, line and column, what is wrong and what would be right.
 
 from __future__ import annotations
 
+import functools
+import gc
 import math
 import os
 import re
 import weakref
-from dataclasses import dataclass
+from dataclasses import MISSING, dataclass, fields
 from typing import Mapping
 from pathlib import Path
 
@@ -68,6 +70,50 @@ SYNTAX = {
 
 #: Where the first positional field that carries a value is (elements: VALUE).
 _VALUE_INDEX = {"mass": 3, "spring": 3, "damper": 3}
+
+# -- the fast path ------------------------------------------------------------
+# Most lines of a large netlist are plain element statements:
+# ``KIND NAME N1 N2 NUMBER [UNIT] [eta=NUMBER] [# comment]``.  Such a line is
+# matched by one precompiled pattern and its Element is built directly; the
+# pattern only admits text on which the general path (tokenizer, slip checks,
+# expression parser) cannot fail or read anything else, and every semantic
+# check (unique name, distinct nodes, value > 0, the unit and its role) that
+# does not pass sends the line to the general path, so each error message
+# comes from the same code as before.
+_FAST_NAME = r"([A-Za-z_][A-Za-z0-9_]*|[0-9]+)"
+_FAST_NUMBER = r"((?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?)"
+_FAST = re.compile(
+    r"([ \t]*)([A-Za-z]+)[ \t]+" + _FAST_NAME + r"[ \t]+" + _FAST_NAME + r"[ \t]+"
+    + _FAST_NAME + r"[ \t]+" + _FAST_NUMBER
+    + r"(?:[ \t]+([A-Za-z\u00b5\u03bc][A-Za-z0-9*/^\-\u00b7\u00b2\u00b3\u00b5\u03bc]*))?"
+    + r"(?:[ \t]+eta=" + _FAST_NUMBER + r")?[ \t]*(?:[#;].*)?")
+_FAST_KINDS = {"mass": "mass", "spring": "spring", "damper": "damper"}
+
+#: Fields of Element with their defaults (those without one are always given).
+_ELEMENT_DEFAULTS = {f.name: f.default for f in fields(Element) if f.default is not MISSING}
+_new = object.__new__
+
+
+def _make_element(kind, name, n1, n2, value, eta, line, col) -> Element:
+    """``Element(kind, name, n1, n2, value, eta, line, col)`` without the frozen
+    dataclass's ``__init__`` (ten ``object.__setattr__`` calls): same object."""
+    e = _new(Element)
+    d = e.__dict__
+    d.update(_ELEMENT_DEFAULTS)
+    d.update(kind=kind, name=name, n1=n1, n2=n2, value=value, eta=eta, line=line, col=col)
+    return e
+
+
+def _num_expr(value: float) -> Expr:
+    """``parse_expression`` of a plain number: ``Expr("num", 0, value)``."""
+    e = _new(Expr)
+    e.__dict__.update(kind="num", col=0, value=value, args=())
+    return e
+
+
+#: Units are few and parsed again on every line: memoise the one grammar's result
+#: (a Unit is immutable; a failing unit raises each time, uncached).
+_unit = functools.lru_cache(maxsize=1024)(parse_unit)
 
 
 @dataclass(frozen=True)
@@ -209,6 +255,18 @@ class _Parser:
 
     # -- statements ------------------------------------------------------
     def run(self) -> Circuit:
+        # A large netlist allocates millions of small objects that all live on:
+        # the cyclic collector would walk them again and again (quadratic-looking
+        # growth of the time per element).  Off while parsing, restored after.
+        enabled = gc.isenabled()
+        gc.disable()
+        try:
+            return self._run()
+        finally:
+            if enabled:
+                gc.enable()
+
+    def _run(self) -> Circuit:
         lines = split_lines(self.text)     # as editors and wc -l count them
         if not any(ln.strip() for ln in lines):
             raise NetlistError("the file is empty", self.source, 0, 0,
@@ -218,13 +276,19 @@ class _Parser:
             raise NetlistError(f"the netlist has about {statements} statements, the limit is "
                                f"{MAX_STATEMENTS}", self.source, 0, 0,
                                "a smaller network (see 'mechcirc reduce')")
-        parsed = []
+        parsed: list = []
+        fast = _FAST.fullmatch
         # First pass: split every line, and note where each parameter is defined
-        # so a use-before-definition can name the line.
+        # so a use-before-definition can name the line.  A plain element line
+        # (see _FAST) is kept as its match, to be built in the second pass.
         for lineno, raw in enumerate(lines, start=1):
             if len(raw) > MAX_LINE_LENGTH:
                 raise NetlistError(f"line is {len(raw)} characters long, the limit is "
                                    f"{MAX_LINE_LENGTH}", self.source, lineno, 1)
+            m = fast(raw)
+            if m is not None and m.group(2).lower() in _FAST_KINDS:
+                parsed.append((lineno, m))
+                continue
             line = _Line(raw, self.source, lineno)
             if not line.tokens:
                 continue
@@ -240,14 +304,19 @@ class _Parser:
                                self.source, 0, 0,
                                "one of " + (", ".join(self.param_lines) or "(none defined)"))
         for line in parsed:
-            if line.tokens[0].text.lower() == ".param":
+            if type(line) is _Line and line.tokens[0].text.lower() == ".param":
                 self.param(line)
+        handlers = {"mass": self.element, "spring": self.element, "damper": self.element,
+                    "lever": self.lever, "drive": self.drive, ".ic": self.ic}
+        fast_element = self.fast_element
         for line in parsed:
+            if type(line) is tuple:
+                fast_element(*line)
+                continue
             keyword = line.tokens[0].text.lower()
             if keyword == ".param":
                 continue
-            handler = {"mass": self.element, "spring": self.element, "damper": self.element,
-                       "lever": self.lever, "drive": self.drive, ".ic": self.ic}.get(keyword)
+            handler = handlers.get(keyword)
             if handler is None:
                 line.error(f"unknown keyword {line.tokens[0].text!r}", line.tokens[0].col,
                            "one of .param, .ic, mass, spring, damper, lever, drive")
@@ -294,7 +363,7 @@ class _Parser:
         if unit is None:
             return value
         try:
-            u = parse_unit(unit.text)
+            u = _unit(unit.text)
             out = convert(value, u, role)
         except UnitError as exc:
             expected = exc.expected
@@ -427,6 +496,41 @@ class _Parser:
                        tok.col, "a positive value")
         return value
 
+    def fast_element(self, lineno: int, m: "re.Match") -> None:
+        """Build the element of a line matched by ``_FAST``; anything unusual goes to
+        :meth:`element`, which checks (and reports) it as for any other line."""
+        indent, keyword, name, n1, n2, number, unit, eta_text = m.groups()
+        kind = _FAST_KINDS[keyword.lower()]
+        if name.isdigit():
+            name = str(int(name))
+        if n1.isdigit():
+            n1 = str(int(n1))
+        if n2.isdigit():
+            n2 = str(int(n2))
+        raw = float(number)
+        value, factor, u = raw, 1.0, None
+        eta = 1.0 if eta_text is None else float(eta_text)
+        ok = name not in self.names and n1 != n2 and raw != math.inf and eta > 0 \
+            and eta != math.inf
+        if ok and unit is not None:
+            try:
+                u = _unit(unit)
+                value = convert(raw, u, kind)
+                factor = u.factor
+            except UnitError:
+                ok = False
+        if not (ok and value > 0):
+            self.element(_Line(m.string, self.source, lineno), kind)
+            return
+        col = len(indent) + 1
+        self.names[name] = lineno
+        self.expressions[(name, "value")] = (_num_expr(raw), factor)
+        if eta_text is not None:
+            self.expressions[(name, "eta")] = (_num_expr(eta), 1.0)
+        if u is not None:
+            self._note_kind(lineno, name, u, unit, m.start(7) + 1, (n1, n2))
+        self.elements.append(_make_element(kind, name, n1, n2, value, eta, lineno, col))
+
     def element(self, line: _Line, kind: str):
         allowed = ("eta", "backlash", "damping") if kind == "spring" else ("eta",)
         pos, opts, units = self._fields(line, kind, 4, allowed)
@@ -439,7 +543,9 @@ class _Parser:
         value = self._positive(line, pos[3], f"{kind} {name!r}", ELEMENT_UNITS[kind],
                                unit_tok=units.get("value"), role=kind, key=(name, "value"))
         if "value" in units:
-            self._note_kind(line, name, units["value"], (n1, n2))
+            unit_tok = units["value"]
+            self._note_kind(line.lineno, name, _unit(unit_tok.text), unit_tok.text,
+                            unit_tok.col, (n1, n2))
         eta = self._positive(line, opts["eta"], f"eta of {name!r}", "",
                              unit_tok=units.get("eta"), role="eta", key=(name, "eta")) \
             if "eta" in opts else 1.0
@@ -491,9 +597,10 @@ class _Parser:
         self.initial.append((node, values.get("x", 0.0), values.get("v", 0.0), line.lineno,
                              pos[0].col))
 
-    def _note_kind(self, line: _Line, name: str, unit_tok: _Token, nodes) -> None:
+    def _note_kind(self, lineno: int, name: str, unit, unit_text: str, col: int,
+                   nodes) -> None:
         """Warn once per node that carries both translational and rotational units."""
-        rot = is_rotational(parse_unit(unit_tok.text))
+        rot = is_rotational(unit)
         if rot is None:
             return
         for node in nodes:
@@ -509,12 +616,12 @@ class _Parser:
                 kinds = ("rotational", "translational") if rot else ("translational",
                                                                    "rotational")
                 warnings.warn(UnitMixWarning(
-                    f"{self.source}:{line.lineno}:{unit_tok.col}: node {node!r} gets a "
-                    f"{kinds[0]} unit ({unit_tok.text!r} of {name!r}) and a {kinds[1]} one "
+                    f"{self.source}:{lineno}:{col}: node {node!r} gets a "
+                    f"{kinds[0]} unit ({unit_text!r} of {name!r}) and a {kinds[1]} one "
                     f"({other[1]!r} of {other[0]!r}, line {other[2]}); one node is one "
                     "coordinate, a length or an angle: reflect the rotational part through "
                     "a lever (J/r², c_t/r²) or use separate nodes"), stacklevel=4)
-            seen.setdefault(rot, (name, unit_tok.text, line.lineno))
+            seen.setdefault(rot, (name, unit_text, lineno))
 
     def lever(self, line: _Line, kind: str):
         pos, opts, units = self._fields(line, kind, 5, ("ratio",))
