@@ -33,7 +33,7 @@ import math
 import os
 import re
 import weakref
-from dataclasses import MISSING, dataclass, fields
+from dataclasses import dataclass, fields
 from typing import Mapping
 from pathlib import Path
 
@@ -89,26 +89,48 @@ _FAST = re.compile(
     + r"(?:[ \t]+eta=" + _FAST_NUMBER + r")?[ \t]*(?:[#;].*)?")
 _FAST_KINDS = {"mass": "mass", "spring": "spring", "damper": "damper"}
 
-#: Fields of Element with their defaults (those without one are always given).
-_ELEMENT_DEFAULTS = {f.name: f.default for f in fields(Element) if f.default is not MISSING}
 _new = object.__new__
 
 
-def _make_element(kind, name, n1, n2, value, eta, line, col) -> Element:
+def _element_fast(kind, name, n1, n2, value, eta, line, col) -> Element:
     """``Element(kind, name, n1, n2, value, eta, line, col)`` without the frozen
-    dataclass's ``__init__`` (ten ``object.__setattr__`` calls): same object."""
+    dataclass's ``__init__`` (ten ``object.__setattr__`` calls, 2-3x slower): the
+    same object, its instance dict filled item by item (keys stay shared)."""
     e = _new(Element)
     d = e.__dict__
-    d.update(_ELEMENT_DEFAULTS)
-    d.update(kind=kind, name=name, n1=n1, n2=n2, value=value, eta=eta, line=line, col=col)
+    d["kind"] = kind
+    d["name"] = name
+    d["n1"] = n1
+    d["n2"] = n2
+    d["value"] = value
+    d["eta"] = eta
+    d["line"] = line
+    d["col"] = col
+    d["backlash"] = 0.0
+    d["damping"] = 0.0
     return e
+
+
+# Only while Element has exactly these fields; a new field goes through __init__.
+_make_element = _element_fast if tuple(f.name for f in fields(Element)) == (
+    "kind", "name", "n1", "n2", "value", "eta", "line", "col", "backlash", "damping") \
+    else Element
 
 
 def _num_expr(value: float) -> Expr:
     """``parse_expression`` of a plain number: ``Expr("num", 0, value)``."""
     e = _new(Expr)
-    e.__dict__.update(kind="num", col=0, value=value, args=())
+    d = e.__dict__
+    d["kind"] = "num"
+    d["col"] = 0
+    d["value"] = value
+    d["args"] = ()
     return e
+
+
+if tuple(f.name for f in fields(Expr)) != ("kind", "col", "value", "args"):
+    def _num_expr(value: float) -> Expr:      # noqa: F811 - Expr changed: use __init__
+        return Expr("num", 0, value)
 
 
 #: Units are few and parsed again on every line: memoise the one grammar's result
