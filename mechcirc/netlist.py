@@ -133,6 +133,8 @@ if tuple(f.name for f in fields(Expr)) != ("kind", "col", "value", "args"):
         return Expr("num", 0, value)
 
 
+_INF = math.inf
+
 #: Units are few and parsed again on every line: memoise the one grammar's result
 #: (a Unit is immutable; a failing unit raises each time, uncached).
 _unit = functools.lru_cache(maxsize=1024)(parse_unit)
@@ -353,9 +355,11 @@ class _Parser:
         if not self.elements:
             raise NetlistError("the netlist has no elements", self.source, 0, 0,
                                "mass, spring or damper lines")
-        known = {n for e in self.elements for n in (e.n1, e.n2)}
-        known |= {n for lv in self.levers for n in (lv.p1, lv.p2, lv.s1, lv.s2)}
-        known |= {n for d in self.drives for n in (d.n1, d.n2)}
+        known: set[str] = set()
+        if self.initial:
+            known = {n for e in self.elements for n in (e.n1, e.n2)}
+            known |= {n for lv in self.levers for n in (lv.p1, lv.p2, lv.s1, lv.s2)}
+            known |= {n for d in self.drives for n in (d.n1, d.n2)}
         seen_ic: dict[str, int] = {}
         for node, _, _, lineno, col in self.initial:
             if node == "0":
@@ -529,29 +533,35 @@ class _Parser:
             n1 = str(int(n1))
         if n2.isdigit():
             n2 = str(int(n2))
-        raw = float(number)
-        value, factor, u = raw, 1.0, None
-        eta = 1.0 if eta_text is None else float(eta_text)
-        ok = name not in self.names and n1 != n2 and raw != math.inf and eta > 0 \
-            and eta != math.inf
-        if ok and unit is not None:
+        value = raw = float(number)
+        names = self.names
+        if name in names or n1 == n2 or raw == _INF:
+            return self.element(_Line(m.string, self.source, lineno), kind)
+        if eta_text is None:
+            eta = 1.0
+        else:
+            eta = float(eta_text)
+            if not 0 < eta < _INF:
+                return self.element(_Line(m.string, self.source, lineno), kind)
+        u = None
+        if unit is not None:
             try:
                 u = _unit(unit)
                 value = convert(raw, u, kind)
-                factor = u.factor
             except UnitError:
-                ok = False
-        if not (ok and value > 0):
-            self.element(_Line(m.string, self.source, lineno), kind)
-            return
-        col = len(indent) + 1
-        self.names[name] = lineno
-        self.expressions[(name, "value")] = (_num_expr(raw), factor)
+                return self.element(_Line(m.string, self.source, lineno), kind)
+        if not value > 0:
+            return self.element(_Line(m.string, self.source, lineno), kind)
+        names[name] = lineno
+        # The parsed expression of a plain number, Expr("num", 0, raw), is made
+        # when expressions_of() is first asked (see _materialise).
+        self.expressions[(name, "value")] = raw if u is None else (raw, u.factor)
         if eta_text is not None:
-            self.expressions[(name, "eta")] = (_num_expr(eta), 1.0)
+            self.expressions[(name, "eta")] = eta
         if u is not None:
             self._note_kind(lineno, name, u, unit, m.start(7) + 1, (n1, n2))
-        self.elements.append(_make_element(kind, name, n1, n2, value, eta, lineno, col))
+        self.elements.append(_make_element(kind, name, n1, n2, value, eta, lineno,
+                                           len(indent) + 1))
 
     def element(self, line: _Line, kind: str):
         allowed = ("eta", "backlash", "damping") if kind == "spring" else ("eta",)
@@ -707,7 +717,20 @@ def expressions_of(circuit: Circuit) -> dict | None:
     "velocity" | "force")`` to ``(Expr, unit factor)``; the SI value is the
     expression's value times the factor.  ``None`` for circuits built in code.
     """
-    return _EXPRESSIONS.get(id(circuit))
+    expressions = _EXPRESSIONS.get(id(circuit))
+    if expressions is not None:
+        _materialise(expressions)
+    return expressions
+
+
+def _materialise(expressions: dict) -> None:
+    """Turn the plain numbers the fast path stored (``raw`` or ``(raw, factor)``, raw a
+    float) into ``(Expr("num", 0, raw), factor)``, in place (order kept), once."""
+    for key, entry in expressions.items():
+        if type(entry) is float:
+            expressions[key] = (_num_expr(entry), 1.0)
+        elif type(entry[0]) is float:
+            expressions[key] = (_num_expr(entry[0]), entry[1])
 
 
 def parse(text: str, source: str = "<string>", *,
