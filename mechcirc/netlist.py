@@ -300,7 +300,8 @@ class _Parser:
             raise NetlistError(f"the netlist has about {statements} statements, the limit is "
                                f"{MAX_STATEMENTS}", self.source, 0, 0,
                                "a smaller network (see 'mechcirc reduce')")
-        parsed: list = []
+        parsed: list = []               # _Line, or a list of consecutive plain lines
+        run = None
         fast = _FAST.fullmatch
         # First pass: split every line, and note where each parameter is defined
         # so a use-before-definition can name the line.  A plain element line
@@ -310,9 +311,15 @@ class _Parser:
                 raise NetlistError(f"line is {len(raw)} characters long, the limit is "
                                    f"{MAX_LINE_LENGTH}", self.source, lineno, 1)
             m = fast(raw)
-            if m is not None and m.group(2).lower() in _FAST_KINDS:
-                parsed.append((lineno, m))
-                continue
+            if m is not None:
+                kind = _FAST_KINDS.get(m.group(2).lower())
+                if kind is not None:
+                    if run is None:
+                        run = []
+                        parsed.append(run)
+                    run.append((lineno, kind, m))
+                    continue
+            run = None
             line = _Line(raw, self.source, lineno)
             if not line.tokens:
                 continue
@@ -332,10 +339,10 @@ class _Parser:
                 self.param(line)
         handlers = {"mass": self.element, "spring": self.element, "damper": self.element,
                     "lever": self.lever, "drive": self.drive, ".ic": self.ic}
-        fast_element = self.fast_element
+        fast_elements = self.fast_elements
         for line in parsed:
-            if type(line) is tuple:
-                fast_element(*line)
+            if type(line) is list:
+                fast_elements(line)
                 continue
             keyword = line.tokens[0].text.lower()
             if keyword == ".param":
@@ -522,46 +529,44 @@ class _Parser:
                        tok.col, "a positive value")
         return value
 
-    def fast_element(self, lineno: int, m: "re.Match") -> None:
-        """Build the element of a line matched by ``_FAST``; anything unusual goes to
-        :meth:`element`, which checks (and reports) it as for any other line."""
-        indent, keyword, name, n1, n2, number, unit, eta_text = m.groups()
-        kind = _FAST_KINDS[keyword.lower()]
-        if name.isdigit():
-            name = str(int(name))
-        if n1.isdigit():
-            n1 = str(int(n1))
-        if n2.isdigit():
-            n2 = str(int(n2))
-        value = raw = float(number)
-        names = self.names
-        if name in names or n1 == n2 or raw == _INF:
-            return self.element(_Line(m.string, self.source, lineno), kind)
-        if eta_text is None:
-            eta = 1.0
-        else:
-            eta = float(eta_text)
-            if not 0 < eta < _INF:
-                return self.element(_Line(m.string, self.source, lineno), kind)
-        u = None
-        if unit is not None:
-            try:
-                u = _unit(unit)
-                value = convert(raw, u, kind)
-            except UnitError:
-                return self.element(_Line(m.string, self.source, lineno), kind)
-        if not value > 0:
-            return self.element(_Line(m.string, self.source, lineno), kind)
-        names[name] = lineno
-        # The parsed expression of a plain number, Expr("num", 0, raw), is made
-        # when expressions_of() is first asked (see _materialise).
-        self.expressions[(name, "value")] = raw if u is None else (raw, u.factor)
-        if eta_text is not None:
-            self.expressions[(name, "eta")] = eta
-        if u is not None:
-            self._note_kind(lineno, name, u, unit, m.start(7) + 1, (n1, n2))
-        self.elements.append(_make_element(kind, name, n1, n2, value, eta, lineno,
-                                           len(indent) + 1))
+    def fast_elements(self, run: list) -> None:
+        """Build the elements of consecutive lines matched by ``_FAST``; a line that
+        fails any check goes to :meth:`element`, which reports it as for any other line.
+
+        One loop over the run with everything bound locally: per line, this is most
+        of the parse time of a large netlist."""
+        names, expressions, elements = self.names, self.expressions, self.elements
+        append, unit_of, inf, make = elements.append, _unit, _INF, _make_element
+        for lineno, kind, m in run:
+            indent, _, name, n1, n2, number, unit, eta_text = m.groups()
+            if name.isdigit():
+                name = str(int(name))
+            if n1.isdigit():
+                n1 = str(int(n1))
+            if n2.isdigit():
+                n2 = str(int(n2))
+            value = raw = float(number)
+            eta = 1.0 if eta_text is None else float(eta_text)
+            u = None
+            if unit is not None:
+                try:
+                    u = unit_of(unit)
+                    value = convert(raw, u, kind)
+                except UnitError:
+                    value = 0.0                     # the general path says why
+            if name in names or n1 == n2 or raw == inf or not value > 0 \
+                    or not 0 < eta < inf:
+                self.element(_Line(m.string, self.source, lineno), kind)
+                continue
+            names[name] = lineno
+            # The parsed expression of a plain number, Expr("num", 0, raw), is
+            # made when expressions_of() is first asked (see _materialise).
+            expressions[(name, "value")] = raw if u is None else (raw, u.factor)
+            if eta_text is not None:
+                expressions[(name, "eta")] = eta
+            if u is not None:
+                self._note_kind(lineno, name, u, unit, m.start(7) + 1, (n1, n2))
+            append(make(kind, name, n1, n2, value, eta, lineno, len(indent) + 1))
 
     def element(self, line: _Line, kind: str):
         allowed = ("eta", "backlash", "damping") if kind == "spring" else ("eta",)

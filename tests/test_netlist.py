@@ -161,7 +161,7 @@ def test_lever_topology_errors_name_file_line_col(tmp_path, capsys):
 
 # -- the fast path for plain element lines (issue 14 §2) -----------------------
 # Plain lines (KIND NAME N1 N2 NUMBER [UNIT] [eta=NUMBER]) are built directly by
-# netlist.fast_element; everything else, and every plain line that fails a
+# netlist._Parser.fast_elements; everything else, and every plain line that fails a
 # check, goes through the general tokenizer.  The reference here is the general
 # path itself, run on the same text with the fast pattern switched off.
 
@@ -231,12 +231,13 @@ def test_fast_path_taken_and_same_objects_as_the_general_path():
     text = ("drive V a 0 velocity=1\nmass m1 a 0 5 kg eta=2\n  Spring k1 a b 1e5 N/mm ; c\n"
             "damper c1 b 0 .5 # x\nmass 7 b 0 3.\nspring kt b 0 2 N*m/rad\n")
     calls = []
-    original = _nl._Parser.fast_element
-    _nl._Parser.fast_element = lambda self, *a: (calls.append(a[0]), original(self, *a))
+    original = _nl._Parser.fast_elements
+    _nl._Parser.fast_elements = lambda self, run: (calls.extend(r[0] for r in run),
+                                                  original(self, run))
     try:
         fast = _outcome(text, fast=True)
     finally:
-        _nl._Parser.fast_element = original
+        _nl._Parser.fast_elements = original
     assert calls == [2, 3, 4, 5, 6]
     general = _outcome(text, fast=False)
     assert fast == general
@@ -267,11 +268,11 @@ def test_random_plain_lines_parse_alike_on_both_paths():
         return rng.choice(good if rng.random() < 0.92 else bad)
 
     fast_lines = 0
-    original = _nl._Parser.fast_element
+    original = _nl._Parser.fast_elements
 
     def counting(self, *a):
         nonlocal fast_lines
-        fast_lines += 1
+        fast_lines += len(a[0])
         return original(self, *a)
 
     for trial in range(400):
@@ -281,11 +282,11 @@ def test_random_plain_lines_parse_alike_on_both_paths():
                 [pick(kinds), pick(names), pick(names), pick(names), pick(numbers)])
                 + pick(units) + pick(etas) + pick(tails))
         text = "\n".join(lines) + "\n"
-        _nl._Parser.fast_element = counting
+        _nl._Parser.fast_elements = counting
         try:
             fast = _outcome(text, fast=True)
         finally:
-            _nl._Parser.fast_element = original
+            _nl._Parser.fast_elements = original
         assert fast == _outcome(text, fast=False), text
     assert fast_lines > 200           # the fast path was exercised, not bypassed
 
