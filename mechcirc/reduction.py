@@ -557,7 +557,8 @@ def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: boo
                 val = _Value(child.imaginary, child.array / r / r)
                 if track:
                     val.mag = child.mag / r / r
-                    val.rho = child.rho + 2 * _U
+                    # (a full array even over a single leaf, whose ρ is a scalar)
+                    val.rho = np.broadcast_to(child.rho + 2 * _U, omega.shape).copy()
             else:
                 val = _combine(node, values, omega, inv_omega, track, keep, checked)
             if not keep:
@@ -738,9 +739,10 @@ def _through_reciprocal(rho: NDArray) -> NDArray:
     Computed as 1 / max(1/ρ − 1, 0) in place (NaN → ∞); callers hold
     ``np.errstate(all="ignore")``.
     """
+    if not (isinstance(rho, np.ndarray) and rho.ndim):
+        # A scalar ρ (a leaf's, constant in ω: fuzz seed 599): work on an array.
+        rho = np.atleast_1d(np.asarray(rho, dtype=float))
     r = np.reciprocal(rho)
-    if not isinstance(r, np.ndarray):          # a scalar ρ (a leaf constant in ω)
-        return np.reciprocal(np.fmax(r - 1.0, 0.0))
     r -= 1.0
     np.fmax(r, 0.0, out=r)
     return np.reciprocal(r, out=r)

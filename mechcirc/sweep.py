@@ -146,9 +146,12 @@ class Sweep:
         if "error" in self._cache:
             return self._cache["error"]
         if self.method == "sp":
-            return _chunked(lambda w: evaluate(self.tree, w, error=True)[1],
-                            self.omega, float)
-        return _nodal_errors(self.circuit.nodal, self.omega)
+            err = _chunked(lambda w: evaluate(self.tree, w, error=True)[1], self.omega, float)
+        else:
+            err = _nodal_errors(self.circuit.nodal, self.omega)
+        # On a pole or zero (flag 1) no relative error exists: inf, never NaN.
+        err[~np.isfinite(self.K) | (self.K == 0)] = np.inf
+        return err
 
     @cached_property
     def flags(self) -> NDArray[np.int8]:
@@ -295,8 +298,36 @@ def _sweep_nodal(circuit: Circuit, omega) -> Sweep:
     from . import nodal
 
     K = nodal.mobility(circuit.nodal, omega)
+    K = _nodal_singular_limits(circuit.nodal, K, omega)
     return Sweep(omega=omega, K=K, drive=circuit.drive, method="nodal", name=circuit.name,
                  circuit=circuit)
+
+
+def _nodal_singular_limits(system, K, omega, delta: float = 1e-6):
+    """The singular-point convention of :func:`sweep` for nodal analysis.
+
+    Where A(ω) is singular the solve gives NaN.  K just below and above tells
+    what the point is: a pole (K changes sign through it, K(ω⁻) ≈ −K(ω⁺)) gets
+    K = +∞·j like the tree; otherwise the mode is not seen from the drive and K
+    is the mean of its two neighbours (flagged by its error estimate, which is
+    infinite there).
+    """
+    from . import nodal
+
+    bad = ~np.isfinite(K) & (omega > 0)
+    if not bad.any():
+        return K
+    w = omega[bad]
+    with np.errstate(all="ignore"):
+        below = nodal.mobility(system, w * (1 - delta))
+        above = nodal.mobility(system, w * (1 + delta))
+        pole = np.abs(below + above) < 0.5 * np.abs(below - above)
+    K = K.copy()
+    K[np.flatnonzero(bad)[pole]] = complex(0.0, math.inf)
+    mean = (below + above) / 2
+    keep = ~pole & np.isfinite(mean)
+    K[np.flatnonzero(bad)[keep]] = mean[keep]
+    return K
 
 
 def _nodal_errors(system, omega) -> NDArray[np.float64]:
@@ -355,6 +386,12 @@ class Peak:
         return f"max |{self.quantity}| = {self.value:.7g} at omega = {self.omega:.10g} rad/s"
 
 
+#: Circuits with more elements are not handed to the eigen-solver by
+#: :func:`peak` (its dense solve is O(n³)): the peak is then searched around the
+#: grid's maximum only, and an exact pole shows as ``inf`` only if a point or
+#: the search lands on it.
+PEAK_RESONANCE_LIMIT = 500
+
 #: Damping ratio below which a zero or pole of K counts as undamped for
 #: :func:`peak` (the eigen-solver reports ζ = 0 for lossless modes).
 UNDAMPED_ZETA = 1e-12
@@ -383,7 +420,9 @@ def peak(result: "Sweep | Circuit", omega_min: float | None = None,
         holds an undamped zero of K (for Q0) or pole of K (for v0 and K),
         found exactly by :meth:`Circuit.resonances`; otherwise the maximum
         located by a bounded Brent search around the grid's largest value and
-        around every damped resonance of the right kind in the band.
+        around every damped resonance of the right kind in the band.  Above
+        :data:`PEAK_RESONANCE_LIMIT` elements the resonances are not computed
+        (grid search only).
 
     Examples
     --------
@@ -419,11 +458,13 @@ def peak(result: "Sweep | Circuit", omega_min: float | None = None,
     # Q0 = V0/K is unbounded at zeros of K ("resonance"); v0 = F0·K and K at
     # poles ("antiresonance").
     kind = "resonance" if quantity == "Q0" else "antiresonance"
-    try:
-        found = [r for r in circuit.resonances(omega_max=hi * (1 + 1e-9))
-                 if r.kind == kind and lo * (1 - 1e-12) <= r.omega]
-    except Exception:       # e.g. too large for the eigen-solver: grid search only
-        found = []
+    found = []
+    if len(circuit.elements) <= PEAK_RESONANCE_LIMIT:
+        try:
+            found = [r for r in circuit.resonances(omega_max=hi * (1 + 1e-9))
+                     if r.kind == kind and lo * (1 - 1e-12) <= r.omega]
+        except Exception:   # e.g. refused by the eigen-solver: grid search only
+            found = []
     undamped = tuple(r.omega for r in found if r.zeta <= UNDAMPED_ZETA)
 
     def magnitude(w):

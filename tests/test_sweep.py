@@ -138,8 +138,8 @@ def test_singular_points_do_not_warn():
 def test_both_methods_agree_at_singular_points(text):
     """Issue 11 §3: method="nodal" must give the same value and flag as "sp".
 
-    The nodal side is implemented by the nodal helper's branch; until it lands
-    this test may fail (xfail, not strict).
+    (sweep._nodal_singular_limits looks at K on either side of a singular A(ω);
+    the xfail guard stays in case another nodal path returns something else.)
     """
     c = mechcirc.parse(text)
     sp = c.sweep([100.0], method="sp")
@@ -262,3 +262,14 @@ def test_plot_marks_the_exact_peak():
     fig = plot_sweep(s, peak=p)
     dots = [ln for ln in fig.axes[-1].get_lines() if ln.get_label().startswith("peak ")]
     assert len(dots) == 1 and dots[0].get_ydata()[0] == p.value
+
+
+def test_error_bound_through_a_lever_over_one_element():
+    """A lever reflecting a single element, in parallel with another (fuzz seed 599
+    found the bound crashing there); reference: mpmath from the element laws."""
+    expr = ("p", [("lever", 3.0, ("leaf", "mass", 2.0)), ("leaf", "spring", 50.0),
+                  ("s", [("lever", 0.5, ("leaf", "damper", 0.1)), ("leaf", "mass", 1.0)])])
+    omega = np.geomspace(0.1, 100, 31)
+    s, true = _sweep(expr, omega)
+    ok = s.flags != FLAG_SINGULAR
+    assert ok.all() and np.all(s.error >= true) and s.error.max() < 1e-13

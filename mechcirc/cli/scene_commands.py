@@ -245,3 +245,129 @@ def cmd_reduce(args) -> int:
     if args.out:
         print(f"wrote {args.out}")
     return 0
+
+
+# ------------------------------------------------------------ simulate SCENE.toml
+def cmd_simulate_scene(args) -> int:
+    """``mechcirc simulate SCENE.toml``: the scene's motion over whole revolutions."""
+    import warnings
+
+    from ..errors import MechcircError
+    from ..scene import load_scene
+    from ..scene.simfile import apply_overrides
+    from ..scene.simulation import SceneAccuracyWarning, simulate_scene
+
+    if args.method not in ("rk4", "rk4-python"):
+        raise MechcircError(f"a scene runs with rk4 or rk4-python, not {args.method}")
+    if args.rtol is not None or args.revolution is not None:
+        raise MechcircError("--rtol and --revolution apply to the sley presets, not a scene")
+    check_output_paths(args.output, plots=(args.plot,) if args.plot else ())
+    scene = getattr(args, "scene_object", None) or load_scene(args.scene)
+    over = {}
+    for item in args.set:
+        name, sep, value = item.partition("=")
+        if not sep:
+            raise MechcircError(f"--set expects NAME=VALUE, got {item!r}")
+        try:
+            over[name.strip()] = float(value)
+        except ValueError:
+            raise MechcircError(f"--set {name.strip()}: {value!r} is not a number") from None
+    if args.omega is not None:
+        over["omega"] = args.omega
+    if over:
+        scene = apply_overrides(scene, over)
+    from ..progress import Progress
+
+    bar = None
+
+    def progress(done, total):
+        nonlocal bar
+        if bar is None:
+            bar = Progress(total, scene.name)
+        bar.update(done - bar.done)
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", SceneAccuracyWarning)   # kept in notes, printed below
+        try:
+            result = simulate_scene(scene, revolutions=args.revolutions,
+                                    start_deg=args.start_deg,
+                                    steps_per_period=args.steps_per_period, points=args.points,
+                                    method=args.method,
+                                    error_estimate=not args.no_error_estimate,
+                                    progress=progress)
+        finally:
+            if bar is not None:
+                bar.__exit__(None, None, None)
+    if args.output:
+        from ..outputs import atomic_open
+
+        cols = result.columns()
+        with atomic_open(args.output, "w", newline="") as fh:
+            fh.write(f"# {scene.name} ({args.scene}); revolution {result.revolution}; "
+                     f"omega = {result.omega!r} rad/s\n")
+            fh.write(",".join(cols) + "\n")
+            for row in zip(*cols.values()):
+                fh.write(",".join(repr(float(v)) for v in row) + "\n")
+    if args.plot:
+        from ..scene.plots import plot_motion
+
+        save_figure(plot_motion(result), args.plot)
+    if args.json:
+        doc = result.summary()
+        doc["file"] = args.scene
+        doc["output"] = args.output
+        print_json(doc)
+        return 0
+    est = "not computed" if result.error_estimate is None else f"{result.error_estimate:.2g}"
+    per = "n/a (1 revolution)" if result.periodicity is None else f"{result.periodicity:.2g}"
+    print(f"{args.scene}: scene {scene.name!r}, revolution {result.revolution} at "
+          f"Ω = {result.omega:g} rad/s, {result.method} ({result.backend}), "
+          f"{result.wall_time * 1e3:.1f} ms")
+    print(f"error estimate {est}, periodicity {per} (relative change of the extrema at half "
+          f"the step / from the previous revolution)")
+    print(f"{'quantity':<28} {'min':>14} {'max':>14}")
+    for k, (lo, hi) in result.extrema.items():
+        print(f"{k:<28} {lo:>14.6g} {hi:>14.6g}")
+    for n in result.notes:
+        print(f"note: {n}")
+    return 0
+
+
+# ------------------------------------------------------------- crosscheck SCENE.toml
+def cmd_crosscheck_scene(args) -> int:
+    """``mechcirc crosscheck SCENE.toml --theta DEG``."""
+    from ..errors import MechcircError
+
+    if not args.file.endswith(".toml"):
+        raise MechcircError(f"{args.file}: crosscheck reads a scene file (.toml) here")
+    if args.netlist:
+        check_output_paths(args.netlist)
+    from ..scene import build, load_scene
+    from ..scene.crosscheck import crosscheck_scene
+
+    scene = load_scene(args.file)
+    theta_deg = args.theta if args.theta is not None else scene.analysis.theta_deg
+    if theta_deg is None or not math.isfinite(theta_deg):
+        raise MechcircError(f"{args.file}: give --theta DEG (a finite crank rotation from the "
+                            "pose; the file has no [analysis] theta_deg)")
+    result = crosscheck_scene(scene, math.radians(theta_deg))
+    if args.netlist:
+        from ..outputs import atomic_open
+
+        with atomic_open(args.netlist, "w", encoding="utf-8") as fh:
+            fh.write(build(scene, math.radians(theta_deg)).netlist)
+    if args.json:
+        print_json(result.summary())
+        return 0
+    print(f"{args.file}: scene {scene.name!r} at θ = {theta_deg:g}°: resonances of the circuit "
+          "against the ringing of the time-domain motion after a kick")
+    print(f"{'circuit ω_n':>14} {'ζ':>9} {'ringing ω_n':>14} {'ζ':>9} {'rel. diff':>10}")
+    for r in result.resonances:
+        if r["ringing_omega"] is None:
+            print(f"{r['omega']:>14.6g} {r['zeta']:>9.4g} {'not found':>14}")
+            continue
+        print(f"{r['omega']:>14.6g} {r['zeta']:>9.4g} {r['ringing_omega']:>14.6g} "
+              f"{r['ringing_zeta']:>9.4g} {r['rel_error']:>10.2e}")
+    for n in result.notes:
+        print(f"note: {n}")
+    return 0

@@ -20,22 +20,37 @@ def register(sub) -> None:
         description="Integrate the sley model (eq. 4 one-side, eq. 9 both-sides) from the "
                     "crank angle of zero sley acceleration over R revolutions and print the "
                     "min/max of the last one beside the paper's printed values. The beat-up "
-                    "interval alpha is not printed in the paper: default 40 deg (sigma = alpha).",
+                    "interval alpha is not printed in the paper: default 10 deg, the best fit to the printed cells (sigma = alpha).",
         epilog="Example: mechcirc simulate --drive one-side --variant 3 --plot sley.png\n"
                "         mechcirc simulate --variant all --json",
         formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("scene", nargs="?", metavar="SCENE.toml",
+                   help="simulate this scene file over whole revolutions (docs/scenes.md); "
+                        "without it, the sley presets (--drive, --variant)")
+    p.add_argument("--omega", type=real(above=0.0, unit="rad/s", omega=True), metavar="W",
+                   help="scene: crank shaft speed [rad/s] (default the file's)")
+    p.add_argument("--start-deg", type=real(most=1e9, unit="deg", role="angle"), metavar="DEG",
+                   help="scene: crank rotation from the pose at t = 0 (default the file's, "
+                        "else 0)")
+    p.add_argument("--no-error-estimate", action="store_true",
+                   help="scene: skip the half-step rerun that estimates the error")
+    p.add_argument("--via-scene", action="store_true",
+                   help="run the preset as its scene (examples/mrazek_*.toml plus the "
+                        "variant's overrides) through the generic scene model")
     p.add_argument("--drive", choices=("one-side", "both-sides"), default="one-side",
                    help="Table 1 (one-side, default) or Table 2 (both-sides)")
     p.add_argument("--variant", default="3", metavar="N",
                    help="variant 1-7 (default 3), or 'all' for all 14 of both tables "
                         "on every core")
-    p.add_argument("--revolutions", type=count(1, MAX_REVOLUTIONS), default=5, metavar="R",
+    p.add_argument("--revolutions", type=count(1, MAX_REVOLUTIONS), metavar="R",
                    help="revolutions to integrate; the last is tabulated (default 5)")
     p.add_argument("--revolution", type=count(1, MAX_REVOLUTIONS), metavar="K",
                    help="tabulate revolution K (1..R) instead of the last")
-    p.add_argument("--alpha", type=real(above=0.0, most=360.0, unit="deg", role="angle"), default=40.0,
+    p.add_argument("--alpha", type=real(above=0.0, most=360.0, unit="deg", role="angle"),
+                   default=10.0,
                    metavar="DEG",
-                   help="beat-up interval alpha [deg] (default 40, not printed in the paper)")
+                   help="beat-up interval alpha [deg] (default 10, the best fit to the "
+                        "printed cells; not printed in the paper)")
     p.add_argument("--beat-sign", type=int, choices=(-1, 1), default=-1,
                    help="sign of M4 in the sley equation: -1 as eq. (4) prints it (default), "
                         "+1 along the rigid acceleration at beat-up (see docs/sley.md)")
@@ -48,8 +63,7 @@ def register(sub) -> None:
                    help="relative tolerance of the scipy methods (default 1e-10)")
     p.add_argument("--steps-per-period", type=real(least=1.0, most=1e6), metavar="N",
                    help="rk4 steps per period of the fastest mode (default 50)")
-    p.add_argument("--points", type=count(16, MAX_POINTS_PER_REVOLUTION), default=7200,
-                   metavar="N",
+    p.add_argument("--points", type=count(16, MAX_POINTS_PER_REVOLUTION), metavar="N",
                    help="output points per revolution (default 7200, i.e. 0.05 deg)")
     p.add_argument("-o", "--output", metavar="CSV", help="write the curves as CSV")
     p.add_argument("--plot", metavar="IMAGE", help="plot eps2P, eps4P, eps4T, M2V (Figs. 4-9)")
@@ -63,14 +77,17 @@ def register(sub) -> None:
                     "of the sley after the beat-up pulse against the predicted damped "
                     "frequency; (c) harmonic forcing of the linear model against |Q0|.",
         epilog="Example: mechcirc crosscheck --drive one-side --variant 3 --theta 60\n"
+               "         mechcirc crosscheck examples/heald_scene.toml --theta 40\n"
                "         mechcirc crosscheck netlists/stb_heald.mcir --omega-max 5000\n"
-               "(the second form takes any netlist; see the transient command)",
+               "(a scene .toml: circuit resonances at --theta against the ringing of its "
+               "time-domain motion; a netlist: see the transient command)",
         formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("file", nargs="?", metavar="FILE.mcir",
-                   help="a netlist: cross-check its resonances and |Q0| against its "
-                        "transients (the sley options are then ignored)")
+    p.add_argument("file", nargs="?", metavar="FILE",
+                   help="a scene (.toml): cross-check it at --theta; a netlist (.mcir): "
+                        "cross-check its resonances and |Q0| against its transients (the "
+                        "sley options are then ignored)")
     p.add_argument("--omega-max", metavar="W",
-                   help="with FILE: check resonances up to W [rad/s, or 50Hz] "
+                   help="with a netlist FILE: check resonances up to W [rad/s, or 50Hz] "
                         "(default 1.5 x the highest)")
     p.add_argument("--drive", choices=("one-side", "both-sides"), default="one-side")
     p.add_argument("--variant", type=int, default=3, choices=range(1, 8), metavar="N",
@@ -178,9 +195,32 @@ def _write_csv(result, path) -> None:
 
 # ----------------------------------------------------------------- handlers
 def cmd_simulate(args) -> int:
+    if args.scene is not None:
+        from .scene_commands import cmd_simulate_scene
+
+        return cmd_simulate_scene(args)
     from ..sley import (PAPER, ParameterError, all_presets, preset, simulate_batch,
                         simulate_params)
 
+    if args.via_scene:
+        from ..sley.scenes import preset_scene
+        from .scene_commands import cmd_simulate_scene
+
+        try:
+            variant = int(args.variant)
+        except ValueError:
+            raise ParameterError(f"--via-scene needs one variant 1-7, got {args.variant!r}") \
+                from None
+        over = _overrides(args)
+        args.scene_object = preset_scene(args.drive, variant, **over)
+        args.scene = f"<{args.drive} variant {variant} as a scene>"
+        args.set = []
+        return cmd_simulate_scene(args)
+    if args.omega is not None or args.start_deg is not None or args.no_error_estimate:
+        raise ParameterError("--omega, --start-deg and --no-error-estimate apply to a scene "
+                             "file; for the presets use --set omega=W")
+    args.revolutions = 5 if args.revolutions is None else args.revolutions
+    args.points = 7200 if args.points is None else args.points
     check_output_paths(args.output, plots=(args.plot,))
     over = _overrides(args)
     opts = _options(args)
@@ -217,6 +257,10 @@ def cmd_simulate(args) -> int:
 
 def cmd_crosscheck(args) -> int:
     if args.file is not None:
+        if str(args.file).endswith(".toml"):
+            from .scene_commands import cmd_crosscheck_scene
+
+            return cmd_crosscheck_scene(args)
         from .transient_commands import cmd_crosscheck_netlist
 
         return cmd_crosscheck_netlist(args)

@@ -4,6 +4,8 @@
 * :mod:`.model` -- :func:`build`: the mechanical circuit at crank angle θ;
   :func:`build_needed`: that circuit reduced to what the scene's ``[analysis]`` asks for.
 * :mod:`.cycle` -- :func:`cycle_map`: resonances and |Q0| at shaft harmonics over a revolution.
+* :mod:`.simulation` -- :func:`simulate_scene`: the motion over whole revolutions (issue 13);
+  :mod:`.motion` builds its equations, :mod:`.crosscheck` compares them with the circuit.
 
 Documented in ``docs/scenes.md``.
 """
@@ -11,8 +13,12 @@ Documented in ``docs/scenes.md``.
 from .cycle import CycleMap, cycle_map
 from .files import (Analysis, ElasticLink, Load, Scene, SceneDrive, SceneMass, Torsion,
                     load_scene, parse_scene)
+from .crosscheck import SceneCrosscheck, crosscheck_scene
 from .model import SceneCircuit, build, build_needed
+from .motion import MotionModel, motion_model
+from .simulation import SceneMotion, simulate_scene
 
 __all__ = ["Scene", "Analysis", "SceneMass", "ElasticLink", "Torsion", "Load", "SceneDrive",
            "load_scene", "parse_scene", "build", "build_needed", "SceneCircuit", "cycle_map",
-           "CycleMap"]
+           "CycleMap", "simulate_scene", "SceneMotion", "motion_model", "MotionModel",
+           "crosscheck_scene", "SceneCrosscheck"]

@@ -49,7 +49,9 @@ tables::
 The linkage part is read by :func:`mechcirc.kinematics.linkage.parse_linkage`
 (the scene tables are hidden from it, line numbers kept), so its errors and
 checks are the linkage's.  Masses, stiffnesses and dampings are SI; lengths
-are converted from ``units`` to metres.  Exactly one crank.
+are converted from ``units`` to metres.  One crank, or several on one shaft (the
+same ``omega``); the time-domain tables ``[[moments]]`` and ``[simulate]`` are
+read by :mod:`.simfile`.
 
 Structure.  Releasing the elastic links and torsion rods splits the moving
 bodies into *rigid parts* (bodies joined through joints other than ground
@@ -77,7 +79,10 @@ __all__ = ["Scene", "Analysis", "SceneMass", "ElasticLink", "Torsion", "Load", "
 #: Length units accepted for ``units`` and their size [m].
 LENGTH_UNITS = {"m": 1.0, "cm": 1e-2, "mm": 1e-3}
 #: Tables a scene adds to the linkage format.
-SCENE_TABLES = ("masses", "elastic", "torsion", "loads", "drive", "analysis")
+SCENE_TABLES = ("masses", "elastic", "torsion", "loads", "drive", "analysis", "moments",
+                "simulate")
+#: Clearance laws of an elastic link or torsion rod (docs/scenes.md, "In the time domain").
+CLEARANCE_LAWS = ("elastobacklash", "dead-zone")
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 
 
@@ -100,6 +105,8 @@ class ElasticLink:
     link: str
     stiffness: float
     damping: float = 0.0
+    clearance: float = 0.0
+    clearance_law: str = "elastobacklash"
 
 
 @dataclass(frozen=True)
@@ -116,6 +123,8 @@ class Torsion:
     pivot: str
     stiffness: float
     damping: float = 0.0
+    clearance: float = 0.0
+    clearance_law: str = "elastobacklash"
 
 
 @dataclass(frozen=True)
@@ -193,6 +202,8 @@ class Scene:
     parts: tuple
     source: str = "<string>"
     analysis: Analysis = Analysis()
+    moments: tuple = ()
+    simulate: object = None
 
     @property
     def omega_shaft(self) -> float:
@@ -305,9 +316,10 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
         raise _err(text, source, f"a scene needs units = \"m\", \"cm\" or \"mm\" (the length "
                    f"unit of [points]), got {units!r}", None, "units",
                    expected="units = \"mm\" (masses and stiffnesses are SI)")
-    if len(linkage.cranks) != 1:
-        raise _err(text, source, f"a scene has one degree of freedom and one crank; this "
-                   f"linkage has {len(linkage.cranks)}", "cranks", "link", occurrence=1)
+    if len({c.omega for c in linkage.cranks}) != 1:
+        raise _err(text, source, f"the cranks of a scene turn on one shaft and need the same "
+                   f"omega; this linkage has {[c.omega for c in linkage.cranks]}", "cranks",
+                   "omega", occurrence=1)
     points, links = linkage.pose, linkage.links
     names: dict[str, str] = {}
 
@@ -347,7 +359,8 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
     # ---- elastic links
     elastic = []
     for n, e in enumerate(entries("elastic")):
-        check_keys(e, "elastic", n, ("name", "link", "stiffness", "damping"))
+        check_keys(e, "elastic", n, ("name", "link", "stiffness", "damping", "clearance",
+                                      "clearance_law"))
         lname = e.get("link")
         if not _named(lname, links):
             raise _err(text, source, f"elastic link {lname!r} is not in the linkage's [links]",
@@ -368,13 +381,15 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
                     "elastic", "stiffness" if "stiffness" in e else "link", n)
         c = _number(text, source, e.get("damping", 0.0), f"damping of {name!r} [N·s/m]",
                     "elastic", "damping", n, allow_zero=True)
-        elastic.append(ElasticLink(name, lname, k, c))
+        elastic.append(ElasticLink(name, lname, k, c, *_clearance(text, source, e, name,
+                                                                   "elastic", n, "m")))
     elastic_links = {x.link for x in elastic}
 
     # ---- torsion rods
     torsions = []
     for n, t in enumerate(entries("torsion")):
-        check_keys(t, "torsion", n, ("name", "link", "body", "pivot", "stiffness", "damping"))
+        check_keys(t, "torsion", n, ("name", "link", "body", "pivot", "stiffness", "damping",
+                                      "clearance", "clearance_law"))
         lname = t.get("link")
         if not _named(lname, links) or lname in elastic_links:
             raise _err(text, source, f"torsion rod #{n + 1}: link {lname!r} is not a rigid link "
@@ -390,9 +405,9 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
                        expected="pivot = one of the link's ground pivots")
         body = t.get("body")
         if not isinstance(body, str) or not _IDENT.fullmatch(body) or body in links \
-                or any(x.body == body for x in torsions) or body == "ground":
+                or body == "ground":
             raise _err(text, source, f"torsion rod #{n + 1}: body {body!r} must be a new name "
-                       "(not a link, 'ground' or another rod's body)", "torsion",
+                       "(not a link or 'ground'; several rods may share one body)", "torsion",
                        "body" if "body" in t else "link", occurrence=n,
                        expected="an identifier for the body beyond the rod")
         name = new_name(t.get("name"), "torsion", "name" if "name" in t else "body", n,
@@ -401,7 +416,8 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
                     "torsion", "stiffness" if "stiffness" in t else "link", n)
         c = _number(text, source, t.get("damping", 0.0), f"damping of {name!r} [N·m·s/rad]",
                     "torsion", "damping", n, allow_zero=True)
-        torsions.append(Torsion(name, lname, body, pivot, k, c))
+        torsions.append(Torsion(name, lname, body, pivot, k, c,
+                                *_clearance(text, source, t, name, "torsion", n, "rad")))
     bodies = {l for l in links if l not in elastic_links} | {t.body for t in torsions}
     rigid_points = set().union(*(set(links[l]) for l in links if l not in elastic_links))
 
@@ -531,11 +547,29 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
             circuit_names.add(el.name + "_d")
     analysis = _analysis(text, source, doc.get("analysis"), circuit_names)
 
+    from .simfile import parse_moments, parse_simulate
+
     scene = Scene(str(doc.get("name", linkage.name)), linkage, units, LENGTH_UNITS[units],
                   tuple(masses), tuple(elastic), tuple(torsions), tuple(loads), drive, (),
                   source, analysis)
     object.__setattr__(scene, "parts", _parts(scene))
+    object.__setattr__(scene, "moments", parse_moments(text, source, doc.get("moments"), scene))
+    object.__setattr__(scene, "simulate", parse_simulate(text, source, doc.get("simulate"),
+                                                         scene))
     return scene
+
+
+def _clearance(text, source, entry, name, table, n, unit):
+    """(clearance, clearance_law) of an [[elastic]] or [[torsion]] entry (time domain only)."""
+    b = _number(text, source, entry.get("clearance", 0.0),
+                f"clearance of {name!r} (half-width of the gap) [{unit}]", table, "clearance",
+                n, allow_zero=True)
+    law = entry.get("clearance_law", "elastobacklash")
+    if law not in CLEARANCE_LAWS:
+        raise _err(text, source, f"[[{table}]] #{n + 1}: clearance_law {law!r} is unknown",
+                   table, "clearance_law", occurrence=n,
+                   expected=" or ".join(f'"{x}"' for x in CLEARANCE_LAWS))
+    return b, law
 
 
 def _analysis(text, source, table, circuit_names) -> Analysis:

@@ -30,7 +30,6 @@ drive translational (m/s, N, m/(N·s)).
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import re
 from dataclasses import dataclass
@@ -38,7 +37,7 @@ from typing import Literal
 
 import numpy as np
 
-from ..circuit import Circuit
+from ..circuit import Circuit, Drive, Element, Lever
 from ..errors import GeometryError, InputError
 from .files import Scene
 
@@ -144,6 +143,14 @@ def build(scene: Scene, theta: float, *, reflect: Literal["eta", "lever"] = "eta
     ang = {l: w / omega for l, w in state.angular_velocities.items()}
     for body, link in tbody_link.items():
         ang[body] = ang[link]
+    for t in scene.torsions:          # rods sharing a body: a redundant, consistent loop only
+        if abs(ang[t.link] - ang[t.body]) > 1e-9 * max(abs(ang[t.body]), 1e-300) \
+                and abs(ang[t.link] - ang[t.body]) > 1e-12:
+            raise GeometryError(
+                f"{scene.source}: at θ = {deg:.6g}° the links {t.link!r} and "
+                f"{tbody_link[t.body]!r} of the rods on body {t.body!r} turn at different "
+                f"rates ({ang[t.link]:.6g} and {ang[t.body]:.6g} per unit crank speed): the "
+                f"rigid mechanism's redundant constraint is not consistent")
     Lc = lk._scale() * L
     S_all = max(max(np.hypot(*v) for v in vel.values()),
                 max(abs(w) for w in ang.values()) * Lc)
@@ -180,6 +187,7 @@ def build(scene: Scene, theta: float, *, reflect: Literal["eta", "lever"] = "eta
         return "0" if i is None else node_of_part[i]
 
     lines, ratios, dropped = [], {}, []
+    elements, levers = [], []          # the circuit, built as objects beside its text
     names_used = set(used)
     element_names = {m.name for m in scene.masses} | {d.name} | {
         x.name + suffix for x in (*scene.elastic, *scene.torsions, *scene.loads)
@@ -198,6 +206,7 @@ def build(scene: Scene, theta: float, *, reflect: Literal["eta", "lever"] = "eta
             lever = "L" + lever
         element_names.add(lever)
         lines.append(f"lever {lever} {node} 0 {port_node} 0 ratio={abs(r)!r}")
+        levers.append(Lever(lever, node, "0", port_node, "0", abs(r)))
         return port_node, ""
 
     lines.append("# masses and inertias (kinetic energy, reflected to the drive)")
@@ -219,6 +228,7 @@ def build(scene: Scene, theta: float, *, reflect: Literal["eta", "lever"] = "eta
             continue
         n, eta = port(m.name, node, r)
         lines.append(f"mass {m.name} {n} 0 {m.value!r}{eta}   ; {what} = {r!r}")
+        elements.append(Element("mass", m.name, n, "0", m.value, r * r if eta else 1.0))
 
     lines.append("# elastic elements (elongation rate = ratio × velocity difference of the nodes)")
     springs = []           # (name, node_a, node_b, c, size)
@@ -264,12 +274,16 @@ def build(scene: Scene, theta: float, *, reflect: Literal["eta", "lever"] = "eta
             else:
                 ends.append(port(f"{el.name}_{side}", node, c)[0])
         eta = f" eta={c * c!r}" if reflect == "eta" else ""
+        eta_value = c * c if reflect == "eta" else 1.0
         if el.stiffness > 0:
             lines.append(f"spring {el.name} {ends[0]} {ends[1]} {el.stiffness!r}{eta}"
                          f"   ; {what} = {c!r}")
+            elements.append(Element("spring", el.name, ends[0], ends[1], el.stiffness,
+                                    eta_value))
         if el.damping > 0:
             dname = el.name + "_d" if el.stiffness > 0 else el.name
             lines.append(f"damper {dname} {ends[0]} {ends[1]} {el.damping!r}{eta}")
+            elements.append(Element("damper", dname, ends[0], ends[1], el.damping, eta_value))
     _check_connected(scene, node_of_part, kept_edges, dropped, deg)
 
     unit = "rad/s" if d.link is not None else "m/s"
@@ -290,12 +304,12 @@ def build(scene: Scene, theta: float, *, reflect: Literal["eta", "lever"] = "eta
                if not ln.startswith("#")):
         raise GeometryError(f"{scene.source}: at θ = {deg:.6g}° no mass, spring or damper of "
                             f"the scene moves with the drive; the circuit would be empty")
-    from ..netlist import parse
-
-    circuit = parse(text, source=f"<scene {scene.name}>")
     stem = scene.source.rsplit("/", 1)[-1].rsplit(".", 1)[0] if scene.source != "<string>" \
         else "scene"
-    circuit = dataclasses.replace(circuit, name=f"{stem}@{deg:.6g}deg", source=scene.source)
+    drive = Drive(d.name, node_of_part[0], "0", d.kind, float(d.amplitude))
+    # built as objects (issue 15 §3); ``text`` is the same circuit as a netlist (tested)
+    circuit = Circuit(tuple(elements), drive, tuple(levers), name=f"{stem}@{deg:.6g}deg",
+                      source=scene.source)
     return SceneCircuit(theta, circuit, text, ratios, parts, tuple(dropped), float(r0),
                         d.link is not None)
 

@@ -6,7 +6,8 @@
 * :mod:`.linear` -- linearisation at a crank angle, eigenfrequencies, :func:`to_netlist`.
 * :mod:`.plots` -- the curves of Figs. 4–9 (matplotlib imported inside).
 
-The beat-up interval α defaults to 40° (not printed in the paper; σ = α).
+The beat-up interval α defaults to 10° (not printed in the paper; σ = α; fitted to the
+printed cells, docs/sley.md).
 """
 
 from .linear import LinearModel, Mode, eigenfrequencies, linearise, to_netlist

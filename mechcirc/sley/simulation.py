@@ -36,18 +36,19 @@ from __future__ import annotations
 import math
 import os
 import time
-from dataclasses import dataclass, field
+import warnings
+from dataclasses import dataclass, field, replace
 from functools import lru_cache
 from typing import Callable
 
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import SolverError
+from ..errors import MechcircWarning, SolverError
 from .models import ParameterError, SleyParameters
 
 __all__ = ["SleyResult", "simulate", "simulate_params", "simulate_batch", "METHODS",
-           "table_error", "start_angle"]
+           "table_error", "start_angle", "SleyAccuracyWarning", "ACCURACY_GOAL"]
 
 METHODS = ("rk4", "rk4-python", "DOP853", "RK45", "LSODA")
 _SCIPY_METHODS = ("DOP853", "RK45", "LSODA")
@@ -57,6 +58,14 @@ TWO_PI = 2.0 * math.pi
 DEFAULT_STEPS_PER_PERIOD = 50
 #: Default output points per revolution (0.05° in crank angle).
 DEFAULT_POINTS = 7200
+#: Relative error estimate / periodicity above which a result is flagged (issue 11 §8).
+ACCURACY_GOAL = 1e-3
+
+
+class SleyAccuracyWarning(MechcircWarning):
+    """A sley result may be inaccurate (error estimate, periodicity or too few steps)."""
+
+
 #: Above this many RK4 steps per revolution the run is refused (see the message).
 MAX_STEPS_PER_REV = 20_000_000
 
@@ -100,7 +109,15 @@ class SleyResult:
     n_steps, nfev : int
         Steps taken and right-hand-side evaluations.
     notes : tuple of str
-        Readings and fall-backs that apply (α, σ = α, numba missing, …).
+        Readings and fall-backs that apply (α, σ = α, numba missing, …), and
+        the accuracy warnings.
+    error_estimate : float or None
+        RK4 methods: the largest change of an extremum (eps2P, eps4P, M2V, …)
+        when the run is repeated at half the step, relative to that quantity's
+        largest magnitude (``docs/sley.md`` compares it with the true error);
+        None for the scipy methods and with ``error_estimate=False``.
+    periodicity : float or None
+        The same change from the previous revolution (None for R = 1).
     """
 
     params: SleyParameters
@@ -124,6 +141,8 @@ class SleyResult:
     n_steps: int
     nfev: int
     notes: tuple[str, ...] = field(default=())
+    error_estimate: float | None = None
+    periodicity: float | None = None
 
     @property
     def alpha_deg(self) -> float:
@@ -149,6 +168,7 @@ class SleyResult:
                 "theta0_deg": math.degrees(self.theta0), "phiP_deg": math.degrees(self.phiP),
                 "wall_time_s": self.wall_time, "compile_time_s": self.compile_time,
                 "n_steps": self.n_steps, "nfev": self.nfev, "notes": list(self.notes),
+                "error_estimate": self.error_estimate, "periodicity": self.periodicity,
                 "parameters": self.params.as_dict()}
 
 
@@ -280,7 +300,7 @@ def simulate(drive: str = "one-side", variant: int = 3, revolutions: int = 5,
              steps_per_period: float | None = None, rtol: float | None = None,
              table_points: int = 1024, revolution: int | None = None,
              progress: Callable[[int, int], None] | None = None,
-             **overrides) -> SleyResult:
+             error_estimate: bool = True, **overrides) -> SleyResult:
     """Simulate a preset variant (Table 1 or 2) or given parameters over R revolutions.
 
     Parameters
@@ -343,15 +363,23 @@ def simulate(drive: str = "one-side", variant: int = 3, revolutions: int = 5,
                            points_per_revolution=points_per_revolution,
                            steps_per_period=steps_per_period, rtol=rtol,
                            table_points=table_points, revolution=revolution,
-                           progress=progress)
+                           progress=progress, error_estimate=error_estimate)
 
 
 def simulate_params(params: SleyParameters, revolutions: int = 5, method: str | None = None,
                     *, points_per_revolution: int = DEFAULT_POINTS,
                     steps_per_period: float | None = None, rtol: float | None = None,
                     table_points: int = 1024, revolution: int | None = None,
-                    progress: Callable[[int, int], None] | None = None) -> SleyResult:
-    """:func:`simulate` for explicit :class:`SleyParameters` (same options)."""
+                    progress: Callable[[int, int], None] | None = None,
+                    error_estimate: bool = True) -> SleyResult:
+    """:func:`simulate` for explicit :class:`SleyParameters` (same options).
+
+    ``error_estimate`` (rk4 methods): repeat the run at half the step and keep
+    the relative change of the extrema as ``result.error_estimate`` (about
+    three times the cost).  A :class:`SleyAccuracyWarning` is issued when it or
+    the periodicity exceeds 1e-3, or fewer steps per period than the default
+    are used.
+    """
     method = "rk4" if method is None else method
     if method not in METHODS:
         raise ParameterError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
@@ -397,6 +425,8 @@ def simulate_params(params: SleyParameters, revolutions: int = 5, method: str | 
                       "+M4 (beat_sign=+1: along the rigid acceleration at beat-up)"))
 
     compile_time = 0.0
+    estimate = periodicity = None
+    warn = []
     if method in _SCIPY_METHODS:
         ts, ys, n_steps, nfev, backend, wall = _run_scipy(
             method, rtol, both, pvec, tab, y, period, revolutions, npts, params, progress)
@@ -420,35 +450,85 @@ def simulate_params(params: SleyParameters, revolutions: int = 5, method: str | 
                 "method='LSODA'", status="too-stiff")
         per_rev = max(int(math.ceil(need)), 16)
         h = period / per_rev
-        rec_y = np.empty((npts, y.size))
-        rec_t = np.empty(npts)
-        dummy_y = np.empty((0, y.size))
-        dummy_t = np.empty(0)
-        t_start = time.perf_counter()
-        for r in range(revolutions):
-            last = r == revolutions - 1
-            t_end, rows, ok = kern.rk4_run(both, pvec, tab, y, r * period, h, per_rev,
-                                           r * period, period / npts,
-                                           rec_y if last else dummy_y,
-                                           rec_t if last else dummy_t)
-            if not ok:
-                raise SolverError(
-                    f"RK4 diverged at t = {t_end:.6g} s (revolution {r + 1}) with step "
-                    f"{h:.3g} s: raise steps_per_period (now {steps_per_period:g})",
-                    status="diverged")
-            if last and rows != npts:
-                raise SolverError(f"internal: RK4 stored {rows} of {npts} output points",
-                                  status="output")
-            if progress is not None:
-                progress(r + 1, revolutions)
-        wall = time.perf_counter() - t_start
-        ts, ys = rec_t, rec_y
+        y_start = y.copy()
+        ts, ys, prev, wall = _rk4_pass(kern, both, pvec, tab, y, period, per_rev, revolutions,
+                                       npts, progress, steps_per_period)
+        if revolutions >= 2:
+            periodicity = _rel_change(_extrema_of(kern, both, pvec, tab, ts, ys),
+                                      _extrema_of(kern, both, pvec, tab, *prev))
+        if error_estimate:
+            fts, fys, _, _ = _rk4_pass(kern, both, pvec, tab, y_start.copy(), period,
+                                       2 * per_rev, revolutions, npts, None,
+                                       2 * steps_per_period)
+            estimate = _rel_change(_extrema_of(kern, both, pvec, tab, ts, ys),
+                                   _extrema_of(kern, both, pvec, tab, fts, fys))
+        if steps_per_period < DEFAULT_STEPS_PER_PERIOD:
+            warn.append(f"{steps_per_period:g} RK4 steps per period of the fastest mode, fewer "
+                        f"than the default {DEFAULT_STEPS_PER_PERIOD}: the extrema may be far "
+                        "off (raise steps_per_period)")
         n_steps = per_rev * revolutions
         nfev = 4 * n_steps + revolutions          # + the first stage of each call
         notes.append(f"RK4 step {h:.4g} s ({per_rev} steps per revolution)")
 
-    return _assemble(params, kern, both, pvec, tab, ts, ys, theta0, phiP, revolutions,
-                     method, backend, wall, compile_time, n_steps, nfev, notes)
+    if estimate is not None and estimate > ACCURACY_GOAL:
+        warn.append(f"error estimate {estimate:.2g} > {ACCURACY_GOAL:g}: the extrema change by "
+                    "that much (relative) at half the step; raise steps_per_period or use "
+                    "method='DOP853'")
+    if periodicity is not None and periodicity > ACCURACY_GOAL:
+        warn.append(f"not periodic yet: the extrema changed by {periodicity:.2g} (relative) "
+                    f"from revolution {revolutions - 1} to {revolutions}; raise revolutions")
+    for w in warn:
+        warnings.warn(f"{params.label or params.drive}: {w}", SleyAccuracyWarning, stacklevel=3)
+    notes += [f"warning: {w}" for w in warn]
+    result = _assemble(params, kern, both, pvec, tab, ts, ys, theta0, phiP, revolutions,
+                       method, backend, wall, compile_time, n_steps, nfev, notes)
+    return replace(result, error_estimate=estimate, periodicity=periodicity)
+
+
+def _rk4_pass(kern, both, pvec, tab, y, period, per_rev, revolutions, npts, progress, spp):
+    """R revolutions of RK4 from y (in place): (ts, ys) of the last, (ts, ys) of the one
+    before (or None), wall time."""
+    h = period / per_rev
+    rec_y, rec_t = np.empty((npts, y.size)), np.empty(npts)
+    prev = (np.empty(npts), np.empty((npts, y.size))) if revolutions >= 2 else None
+    dummy_y, dummy_t = np.empty((0, y.size)), np.empty(0)
+    t_start = time.perf_counter()
+    for r in range(revolutions):
+        if r == revolutions - 1:
+            ry, rt = rec_y, rec_t
+        elif r == revolutions - 2:
+            rt, ry = prev
+        else:
+            ry, rt = dummy_y, dummy_t
+        t_end, rows, ok = kern.rk4_run(both, pvec, tab, y, r * period, h, per_rev,
+                                       r * period, period / npts, ry, rt)
+        if not ok:
+            raise SolverError(
+                f"RK4 diverged at t = {t_end:.6g} s (revolution {r + 1}) with step "
+                f"{h:.3g} s: raise steps_per_period (now {spp:g})", status="diverged")
+        if ry.shape[0] and rows != npts:
+            raise SolverError(f"internal: RK4 stored {rows} of {npts} output points",
+                              status="output")
+        if progress is not None:
+            progress(r + 1, revolutions)
+    return rec_t, rec_y, prev, time.perf_counter() - t_start
+
+
+def _extrema_of(kern, both, pvec, tab, ts, ys) -> dict:
+    out = np.empty((ts.size, 6))
+    kern.outputs(both, pvec, tab, np.ascontiguousarray(ts), np.ascontiguousarray(ys), out)
+    cols = (0, 1, 2, 3, 4) if both else (0, 1, 2)
+    return {j: _mm(out[:, j]) for j in cols}
+
+
+def _rel_change(a: dict, b: dict) -> float:
+    """Largest change of an extremum, relative to that quantity's largest magnitude."""
+    worst = 0.0
+    for k, (lo, hi) in a.items():
+        scale = max(abs(lo), abs(hi))
+        if scale > 0:
+            worst = max(worst, abs(lo - b[k][0]) / scale, abs(hi - b[k][1]) / scale)
+    return worst
 
 
 def _warm_up(kern, both, pvec, tab, y) -> float:

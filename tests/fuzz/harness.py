@@ -32,7 +32,10 @@ from mechcirc.errors import MechcircError, NetlistError
 
 ROOT = Path(__file__).resolve().parents[2]
 NETLIST_SEEDS = sorted((ROOT / "netlists").glob("*.mcir"))
-TOML_SEEDS = sorted((ROOT / "examples").glob("*.toml"))
+#: Linkage files seed the linkage property; scene files (a [drive] table) only the CLI.
+SCENE_SEEDS = sorted(p for p in (ROOT / "examples").glob("*.toml")
+                     if "\n[drive]" in p.read_text())
+TOML_SEEDS = sorted(p for p in (ROOT / "examples").glob("*.toml") if p not in SCENE_SEEDS)
 
 
 @functools.lru_cache(maxsize=None)
@@ -509,7 +512,7 @@ def cli_property(argv: list[str], *, seconds: float = 20.0) -> str:
 def cli_files(workdir: Path, rng: random.Random | None = None) -> list[str]:
     """Input files for the CLI fuzz: the bundled ones, mutated copies, and bad paths."""
     rng = rng or random.Random(0)
-    files = [str(p) for p in NETLIST_SEEDS + TOML_SEEDS]
+    files = [str(p) for p in NETLIST_SEEDS + TOML_SEEDS + SCENE_SEEDS]
     for k in range(4):
         p = workdir / f"mut{k}.mcir"
         p.write_text(netlist_input(rng), encoding="utf-8", errors="surrogatepass")

@@ -13,7 +13,7 @@ from mechcirc.sley import simulate
 def test_simulate_table_beside_paper(capsys):
     assert main(["simulate", "--variant", "7", "--revolutions", "1", "--points", "720"]) == 0
     out = capsys.readouterr().out
-    assert "one-side variant 7" in out and "alpha = 40 deg" in out
+    assert "one-side variant 7" in out and "alpha = 10 deg" in out
     line = next(l for l in out.splitlines() if l.startswith("eps4T"))
     assert line.split()[2:] == ["-371", "466", "-371", "466"]
 
@@ -25,7 +25,7 @@ def test_simulate_json_equals_api(capsys):
     api = simulate("both-sides", 2, revolutions=1, points_per_revolution=720)
     for k, v in api.extrema.items():
         assert doc["extrema"][k] == pytest.approx(list(v), rel=1e-12)
-    assert doc["alpha_deg"] == pytest.approx(40.0)
+    assert doc["alpha_deg"] == pytest.approx(10.0)
     assert doc["paper"]["eps4P"] == [-4664, 6822]
 
 

@@ -12,7 +12,7 @@ def test_table1_readings():
     p = preset("one-side", 3)
     assert (p.I2P, p.I4, p.I4P, p.C2, p.C4, p.k2, p.k4) == (0.005, 0.025, 0.35, 1e5, 5e4, 7.0, 29.0)
     assert (p.omega, p.clearance, p.M0) == (100.0, 0.001, 500.0)
-    assert math.isclose(math.degrees(p.alpha), 40.0)
+    assert math.isclose(math.degrees(p.alpha), 10.0)
     v6 = preset("one-side", 6)
     assert (v6.C2, v6.C4, v6.k2, v6.k4) == (5e4, 1e4, 5.0, 13.0)   # C4 read as 1e4
     assert preset("one-side", 7).omega == 40.0

@@ -1,0 +1,374 @@
+"""Right-hand side of a scene's equations of motion (Lagrange II) and a fixed-step RK4 loop.
+
+Written once for any scene, on plain arrays built by :mod:`mechcirc.scene.motion`;
+compiled with numba when it is importable (the ``fast`` extra), else plain
+Python (:func:`load_python` forces that), as :mod:`mechcirc.sley._kernels`.
+
+Each rigid part i has one coordinate q_i (the rotation of one of its bodies
+from the pose); part 0 (the drive's) is prescribed: q_0 = ψ_0(θ), θ = θs + Ω t.
+Every geometric quantity the energies need (a body's rotation, a point's x or
+y) is a *function* of its part's coordinate, evaluated with its first and
+second derivatives: a quintic Hermite table (value, slope and curvature
+matched at every node, so the derivatives are exact derivatives of the
+interpolant), a line a + b q, or a circle a + b cos(q + c).
+
+    T = ½ Σ_i m_i(q_i) q̇_i²,   m_i = Σ w f'²  (w: a mass for x and y, an inertia for a rotation)
+    m_i q̈_i + ½ m_i' q̇_i² = Q_i = −Σ_e f_e ∂δ_e/∂q_i + Σ moments M ∂φ/∂q_i
+
+Function kinds: 0 periodic table of f(q) − w q over [lo, lo + 2π); 1 table on
+[lo, lo + N h] (outside: flagged); 2 line a + b q; 3 circle a + b cos(q + c).
+A function of part −1 is evaluated at the crank angle θ (the rigid motion).
+
+Element types: 0 twist δ = f_b − f_a; 1 length δ = |P_b − P_a| − ℓ0 (a side
+without functions is a fixed point); 2 load along u: δ = u·(P − P_rig(θ));
+3 load toward anchor A: δ = |A − P_rig(θ)| − |A − P|.  Laws: 0 linear
+(no clearance), 1 ElastoBacklash (no force in the gap, damping part limited to
+|f_d| ≤ |f_c|), 2 Mrázek's dead zone (damping throughout).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+if globals().get("_FORCE_PYTHON"):
+    HAVE_NUMBA = False
+else:
+    try:
+        from numba import njit as _numba_njit
+        HAVE_NUMBA = True
+    except ImportError:
+        HAVE_NUMBA = False
+
+if HAVE_NUMBA:
+    def _jit(fn):
+        return _numba_njit(cache=True, error_model="numpy")(fn)
+
+    def _jit_inline(fn):
+        return _numba_njit(cache=True, error_model="numpy", inline="always")(fn)
+else:
+    def _jit(fn):
+        return fn
+
+    _jit_inline = _jit
+
+TWO_PI = 2.0 * math.pi
+# function columns: FI = [kind, part, table]; FF = [a, b, c, lo, h, w]
+# element columns: EI = [type, law, fa, fa2, fb, fb2, part_a, part_b]
+#                  EF = [k, d, clearance, l0, xa, ya, xb, yb, ux, uy]
+# moment columns:  MI = [window fn, body fn]; MF = [amplitude, alpha, sigma, centre]
+# PV = [Omega, theta_s, speed limit, functions to evaluate (the dynamics' first)]
+
+
+@_jit_inline
+def feval(kind, tabs, ti, a, b, c, lo, h, w, q):
+    """(value, first, second derivative) of one function at coordinate q; flag out of range."""
+    if kind == 2:
+        return a + b * q, b, 0.0, 0
+    if kind == 3:
+        cs = math.cos(q + c)
+        sn = math.sin(q + c)
+        return a + b * cs, -b * sn, -b * cs, 0
+    n = tabs.shape[1]
+    u = q - lo
+    bad = 0
+    if kind == 0:
+        u = u - TWO_PI * math.floor(u / TWO_PI)
+        i = int(u / h)
+        if i >= n:
+            i = n - 1
+    else:
+        i = int(math.floor(u / h))
+        if i < 0:
+            i = 0
+            bad = 1
+        elif i >= n:
+            i = n - 1
+            if u > n * h:
+                bad = 1
+    s = u - i * h
+    c0 = tabs[ti, i, 0]
+    c1 = tabs[ti, i, 1]
+    c2 = tabs[ti, i, 2]
+    c3 = tabs[ti, i, 3]
+    c4 = tabs[ti, i, 4]
+    c5 = tabs[ti, i, 5]
+    f = c0 + s * (c1 + s * (c2 + s * (c3 + s * (c4 + s * c5))))
+    f1 = c1 + s * (2.0 * c2 + s * (3.0 * c3 + s * (4.0 * c4 + s * 5.0 * c5)))
+    f2 = 2.0 * c2 + s * (6.0 * c3 + s * (12.0 * c4 + s * 20.0 * c5))
+    return f + w * q, f1 + w, f2, bad
+
+
+@_jit_inline
+def force_law(law, k, d, cl, e, edot):
+    """Force of a spring k ∥ damper d with deformation e, rate edot and clearance cl."""
+    if law == 0:
+        return k * e + d * edot
+    if e > cl:
+        fc = k * (e - cl)
+    elif e < -cl:
+        fc = k * (e + cl)
+    else:
+        if law == 1:
+            return 0.0
+        return d * edot
+    fd = d * edot
+    if law == 1:
+        a = abs(fc)
+        if fd > a:
+            fd = a
+        elif fd < -a:
+            fd = -a
+    return fc + fd
+
+
+@_jit_inline
+def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, work):
+    """Derivatives of y = [q_1..q_n, q̇_1..q̇_n] into dy; outputs into aux.
+
+    aux = [body accelerations (B) | element forces (E) | deformations (E) |
+    drive moment | moments (Mo) | out-of-range flag].
+    """
+    npart = PRIG.shape[0]
+    n = npart - 1
+    nf = int(PV[3])
+    want = PV[4] != 0.0
+    omega = PV[0]
+    theta = PV[1] + omega * t
+    # work rows: 0 q, 1 qd, 2 qdd, 3 m, 4 m', 5 Q, then fv, f1, f2 over functions
+    bad = 0
+    r = PRIG[0]
+    v0, d0, dd0, b0 = feval(FI[r, 0], tabs, FI[r, 2], FF[r, 0], FF[r, 1], FF[r, 2], FF[r, 3],
+                            FF[r, 4], FF[r, 5], theta)
+    work[0, 0] = v0
+    work[1, 0] = d0 * omega
+    work[2, 0] = dd0 * omega * omega
+    for i in range(n):
+        work[0, i + 1] = y[i]
+        work[1, i + 1] = y[n + i]
+    for j in range(npart):
+        work[3, j] = 0.0
+        work[4, j] = 0.0
+        work[5, j] = 0.0
+    for f in range(nf):
+        p = FI[f, 1]
+        if p < 0:           # a rigid-motion function of θ: evaluated where needed
+            continue
+        arg = work[0, p]
+        a, b1, b2, bb = feval(FI[f, 0], tabs, FI[f, 2], FF[f, 0], FF[f, 1], FF[f, 2],
+                              FF[f, 3], FF[f, 4], FF[f, 5], arg)
+        work[6, f] = a
+        work[7, f] = b1
+        work[8, f] = b2
+        bad = bad | bb
+    for k in range(MI_.shape[0]):
+        f = MI_[k]
+        p = FI[f, 1]
+        work[3, p] += MW[k] * work[7, f] * work[7, f]
+        work[4, p] += 2.0 * MW[k] * work[7, f] * work[8, f]
+    nb = BI.shape[0]
+    ne = EI.shape[0]
+    for e in range(ne):
+        typ = EI[e, 0]
+        pa = EI[e, 6]
+        pb = EI[e, 7]
+        ga = 0.0
+        gb = 0.0
+        rate_rig = 0.0
+        if typ == 0:
+            fa = EI[e, 2]
+            fb = EI[e, 4]
+            de = work[6, fb] - work[6, fa]
+            ga = -work[7, fa]
+            gb = work[7, fb]
+        elif typ == 1:
+            if EI[e, 2] >= 0:
+                xa = work[6, EI[e, 2]]
+                ya = work[6, EI[e, 3]]
+            else:
+                xa = EF[e, 4]
+                ya = EF[e, 5]
+            if EI[e, 4] >= 0:
+                xb = work[6, EI[e, 4]]
+                yb = work[6, EI[e, 5]]
+            else:
+                xb = EF[e, 6]
+                yb = EF[e, 7]
+            dx = xb - xa
+            dyy = yb - ya
+            ln = math.sqrt(dx * dx + dyy * dyy)
+            ux = dx / ln
+            uy = dyy / ln
+            de = ln - EF[e, 3]
+            if EI[e, 2] >= 0:
+                ga = -(ux * work[7, EI[e, 2]] + uy * work[7, EI[e, 3]])
+            if EI[e, 4] >= 0:
+                gb = ux * work[7, EI[e, 4]] + uy * work[7, EI[e, 5]]
+        else:
+            # a load: P on part pb (functions fb, fb2); P_rig = same functions at the rigid
+            # coordinate of that part (fa: the part's rigid-coordinate function of θ)
+            fx = EI[e, 4]
+            fy = EI[e, 5]
+            rr = EI[e, 2]
+            qr, qr1, qr2, bb = feval(FI[rr, 0], tabs, FI[rr, 2], FF[rr, 0], FF[rr, 1],
+                                     FF[rr, 2], FF[rr, 3], FF[rr, 4], FF[rr, 5], theta)
+            xr, xr1, xr2, bb = feval(FI[fx, 0], tabs, FI[fx, 2], FF[fx, 0], FF[fx, 1],
+                                     FF[fx, 2], FF[fx, 3], FF[fx, 4], FF[fx, 5], qr)
+            yr, yr1, yr2, bb = feval(FI[fy, 0], tabs, FI[fy, 2], FF[fy, 0], FF[fy, 1],
+                                     FF[fy, 2], FF[fy, 3], FF[fy, 4], FF[fy, 5], qr)
+            vxr = xr1 * qr1 * omega
+            vyr = yr1 * qr1 * omega
+            if typ == 2:
+                ux = EF[e, 8]
+                uy = EF[e, 9]
+                de = ux * (work[6, fx] - xr) + uy * (work[6, fy] - yr)
+                gb = ux * work[7, fx] + uy * work[7, fy]
+                rate_rig = -(ux * vxr + uy * vyr)
+            else:
+                ax = EF[e, 4]
+                ay = EF[e, 5]
+                dxr = ax - xr
+                dyr = ay - yr
+                lr = math.sqrt(dxr * dxr + dyr * dyr)
+                dx = ax - work[6, fx]
+                dyy = ay - work[6, fy]
+                ln = math.sqrt(dx * dx + dyy * dyy)
+                de = lr - ln
+                gb = (dx * work[7, fx] + dyy * work[7, fy]) / ln
+                rate_rig = -(dxr * vxr + dyr * vyr) / lr
+        edot = ga * work[1, pa] + gb * work[1, pb] + rate_rig
+        fe = force_law(EI[e, 1], EF[e, 0], EF[e, 1], EF[e, 2], de, edot)
+        work[5, pa] -= fe * ga
+        work[5, pb] -= fe * gb
+        if want:
+            aux[nb + e] = fe
+            aux[nb + ne + e] = de
+    nmo = MOI.shape[0]
+    for k in range(nmo):
+        fw = MOI[k, 0]
+        fbd = MOI[k, 1]
+        alpha = MOF[k, 1]
+        x = work[6, fw] - MOF[k, 3] + 0.5 * alpha
+        x = x - TWO_PI * math.floor(x / TWO_PI)
+        mval = 0.0
+        if x < alpha:
+            mval = MOF[k, 0] * math.sin(math.pi * x / MOF[k, 2])
+        work[5, FI[fbd, 1]] += mval * work[7, fbd]
+        aux[nb + 2 * ne + 1 + k] = mval
+    for i in range(1, npart):
+        work[2, i] = (work[5, i] - 0.5 * work[4, i] * work[1, i] * work[1, i]) / work[3, i]
+        dy[i - 1] = work[1, i]
+        dy[n + i - 1] = work[2, i]
+    if not want:
+        aux[nb + 2 * ne + 1 + nmo] = bad
+        return
+    aux[nb + 2 * ne] = work[3, 0] * work[2, 0] + 0.5 * work[4, 0] * work[1, 0] * work[1, 0] - work[5, 0]
+    for k in range(nb):
+        f = BI[k]
+        p = FI[f, 1]
+        if f < nf:
+            aux[k] = work[7, f] * work[2, p] + work[8, f] * work[1, p] * work[1, p]
+        else:
+            aux[k] = 0.0
+    aux[nb + 2 * ne + 1 + nmo] = bad
+
+
+@_jit
+def rk4_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_, MW, EI,
+            EF, MOI, MOF, PRIG, BI, naux):
+    """``nsteps`` classical RK4 steps from t0 (y in place); cubic Hermite output, as the sley's.
+
+    Returns (time reached, outputs written, no blow-up, out-of-range seen).
+    """
+    n = y.shape[0]
+    k1 = np.empty(n)
+    k2 = np.empty(n)
+    k3 = np.empty(n)
+    k4 = np.empty(n)
+    tmp = np.empty(n)
+    ynew = np.empty(n)
+    aux = np.empty(naux)
+    work = np.zeros((9, max(FI.shape[0], PRIG.shape[0])))
+    nrec = rec_y.shape[0]
+    j = 0
+    half = 0.5 * h
+    sixth = h / 6.0
+    bad = 0.0
+    npart = PRIG.shape[0]
+    limit = PV[2]
+    rhs(t0, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, k1, aux, work)
+    for step in range(nsteps):
+        t = t0 + step * h
+        for i in range(n):
+            tmp[i] = y[i] + half * k1[i]
+        rhs(t + half, tmp, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, k2, aux, work)
+        for i in range(n):
+            tmp[i] = y[i] + half * k2[i]
+        rhs(t + half, tmp, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, k3, aux, work)
+        for i in range(n):
+            tmp[i] = y[i] + h * k3[i]
+        rhs(t + h, tmp, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, k4, aux, work)
+        for i in range(n):
+            ynew[i] = y[i] + sixth * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i])
+        rhs(t + h, ynew, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, k4, aux, work)
+        if aux[naux - 1] > bad:
+            bad = aux[naux - 1]
+        while j < nrec:
+            tj = t_out0 + j * dt_out
+            if tj >= t + h and step < nsteps - 1:
+                break
+            if tj > t + h * (1.0 + 1e-9):
+                break
+            s = (tj - t) / h
+            s2 = s * s
+            s3 = s2 * s
+            h00 = 2.0 * s3 - 3.0 * s2 + 1.0
+            h10 = s3 - 2.0 * s2 + s
+            h01 = -2.0 * s3 + 3.0 * s2
+            h11 = s3 - s2
+            for i in range(n):
+                rec_y[j, i] = h00 * y[i] + h * h10 * k1[i] + h01 * ynew[i] + h * h11 * k4[i]
+            rec_t[j] = tj
+            j += 1
+        for i in range(n):
+            y[i] = ynew[i]
+            k1[i] = k4[i]
+        for i in range(npart - 1, n):
+            if not abs(y[i]) <= limit:
+                return t0 + (step + 1) * h, j, False, bad
+    return t0 + nsteps * h, j, True, bad
+
+
+@_jit
+def outputs(ts, ys, out, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI):
+    """Evaluate aux at each stored state into ``out`` (rows)."""
+    n = ys.shape[1]
+    dy = np.empty(n)
+    aux = np.empty(out.shape[1])
+    work = np.zeros((9, max(FI.shape[0], PRIG.shape[0])))
+    for i in range(ts.shape[0]):
+        rhs(ts[i], ys[i], PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, work)
+        for j in range(out.shape[1]):
+            out[i, j] = aux[j]
+
+
+@_jit
+def eval_many(kind, tabs, ti, a, b, c, lo, h, w, qs, out):
+    """One function at many coordinates: out[i] = (value, first, second derivative)."""
+    for i in range(qs.shape[0]):
+        v, d1, d2, bad = feval(kind, tabs, ti, a, b, c, lo, h, w, qs[i])
+        out[i, 0] = v
+        out[i, 1] = d1
+        out[i, 2] = d2
+
+
+def load_python():
+    """A fresh copy of this module that never uses numba."""
+    import importlib.util
+
+    spec = importlib.util.find_spec(__name__)
+    mod = importlib.util.module_from_spec(spec)
+    mod.__dict__["_FORCE_PYTHON"] = True
+    spec.loader.exec_module(mod)
+    return mod

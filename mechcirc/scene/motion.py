@@ -1,0 +1,460 @@
+"""A scene over the whole cycle in the time domain (issue 13 §1): :func:`motion_model`.
+
+Each rigid part (the bodies left joined when the elastic links and torsion
+rods are released) keeps its exact kinematics and gets one coordinate: the
+rotation from the pose of one of its bodies — the crank for a part holding a
+crank, the body itself for a single body, else a link pinned to the frame.
+Every rotation and point position the energies need is tabulated against that
+coordinate (value, first and second derivative from the linkage solver) and
+interpolated by quintic Hermite pieces, as the sley kernel does for μ, ν.
+The drive's part follows the rigid motion at crank speed Ω; the others obey
+Lagrange II (:mod:`mechcirc.scene._motion_kernels`), written once for any
+scene.  :mod:`mechcirc.scene.simulation` integrates it.
+
+The model's linearisation about the rigid motion at θ is the circuit of
+:func:`mechcirc.scene.build` (tested by finite differences in
+``tests/scene/test_motion.py``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import GeometryError
+from ..kinematics.linkage import Crank, Linkage
+from .files import Scene
+
+__all__ = ["MotionModel", "motion_model", "hermite_table", "dead_centre"]
+
+TWO_PI = 2.0 * math.pi
+#: Intervals of every kinematic table (per revolution or per tabulated range).
+TABLE_POINTS = 1024
+_LAWS = {"elastobacklash": 1, "dead-zone": 2}
+
+
+def hermite_table(h, f, f1, f2):
+    """Quintic Hermite pieces (n, 6) through values, slopes and curvatures at n + 1 nodes."""
+    f, f1, f2 = (np.asarray(a, float) for a in (f, f1, f2))
+    a0, a1, a2 = f[:-1], f1[:-1], 0.5 * f2[:-1]
+    r0 = f[1:] - (a0 + a1 * h + a2 * h * h)
+    r1 = f1[1:] - (a1 + 2 * a2 * h)
+    r2 = f2[1:] - 2 * a2
+    A = np.array([[h ** 3, h ** 4, h ** 5], [3 * h ** 2, 4 * h ** 3, 5 * h ** 4],
+                  [6 * h, 12 * h ** 2, 20 * h ** 3]])
+    a345 = np.linalg.solve(A, np.vstack([r0, r1, r2]))
+    return np.ascontiguousarray(np.column_stack([a0, a1, a2, a345[0], a345[1], a345[2]]))
+
+
+@dataclass(frozen=True, eq=False)
+class MotionModel:
+    """A scene's equations of motion as arrays for the kernel (plain, picklable data).
+
+    Attributes
+    ----------
+    scene : Scene
+    omega : float
+        Crank shaft speed Ω [rad/s].
+    parts : tuple of tuple of str
+        Rigid parts, the drive's first (prescribed).
+    coordinate : tuple of str
+        The body whose rotation from the pose is each part's coordinate [rad].
+    bodies, elements, moments : tuple of str
+        Output order of body accelerations, element forces/deformations, moments.
+    arrays : dict
+        FI, FF, tabs, MI, MW, EI, EF, MOI, MOF, PRIG, BI (see the kernel module).
+    body_fn : dict
+        Body → its rotation function index (for the rigid accelerations).
+    """
+
+    scene: Scene
+    omega: float
+    parts: tuple
+    coordinate: tuple
+    bodies: tuple
+    elements: tuple
+    moments: tuple
+    arrays: dict
+    body_fn: dict
+    centre: dict
+
+    @property
+    def n_free(self) -> int:
+        return len(self.parts) - 1
+
+    def naux(self) -> int:
+        return len(self.bodies) + 2 * len(self.elements) + 2 + len(self.moments)
+
+    def kernel_args(self, theta_s: float, limit: float, *, outputs: bool = False):
+        """The kernel's array arguments; ``outputs``: evaluate the output-only functions too."""
+        a = self.arrays
+        pv = np.array([self.omega, float(theta_s), float(limit),
+                       float(a["FI"].shape[0] if outputs else a["n_dyn"]),
+                       1.0 if outputs else 0.0])
+        return (pv, a["FI"], a["FF"], a["tabs"], a["MI"], a["MW"], a["EI"], a["EF"], a["MOI"],
+                a["MOF"], a["PRIG"], a["BI"])
+
+    def rigid_state(self, theta: float):
+        """y = [q, q̇] of the free parts in the rigid motion at crank rotation θ."""
+        kern = _py()
+        a = self.arrays
+        q, qd = [], []
+        for r in a["PRIG"][1:]:
+            v, d, _, _ = kern.feval(a["FI"][r, 0], a["tabs"], a["FI"][r, 2], *a["FF"][r], theta)
+            q.append(v)
+            qd.append(d * self.omega)
+        return np.array(q + qd)
+
+
+_PY = None
+
+
+def _py():
+    global _PY
+    if _PY is None:
+        from . import _motion_kernels
+
+        _PY = _motion_kernels.load_python()
+    return _PY
+
+
+class _Builder:
+    def __init__(self, n):
+        self.FI, self.FF, self.tabs = [], [], [np.zeros((n, 6))]
+        self.n = n
+
+    def table(self, part, lo, h, f, f1, f2, periodic, w=0.0):
+        f = np.asarray(f, float) - w * (lo + h * np.arange(len(f)))
+        f1 = np.asarray(f1, float) - w
+        if periodic and max(np.max(np.abs(f)), np.max(np.abs(f1)),
+                            np.max(np.abs(f2))) < 1e-13:
+            return self.line(part, 0.0, w)          # turns exactly with the crank
+        self.tabs.append(hermite_table(h, f, f1, f2))
+        self.FI.append((0 if periodic else 1, part, len(self.tabs) - 1))
+        self.FF.append((0.0, 0.0, 0.0, lo, h, w))
+        return len(self.FI) - 1
+
+    def line(self, part, a, b):
+        self.FI.append((2, part, 0))
+        self.FF.append((a, b, 0.0, 0.0, 1.0, 0.0))
+        return len(self.FI) - 1
+
+    def circle(self, part, a, b, c):
+        self.FI.append((3, part, 0))
+        self.FF.append((a, b, c, 0.0, 1.0, 0.0))
+        return len(self.FI) - 1
+
+
+def _winding(v):
+    return float(round((v[-1] - v[0]) / TWO_PI))
+
+
+def motion_model(scene: Scene, omega: float | None = None, *,
+                 table_points: int = TABLE_POINTS) -> MotionModel:
+    """Tabulate ``scene``'s kinematics and gather its energies into a :class:`MotionModel`.
+
+    Raises
+    ------
+    GeometryError
+        The rigid linkage cannot turn a full revolution, or a part's own
+        kinematics cannot be tabulated.
+    """
+    lk = scene.linkage
+    L = scene.length_scale
+    w1 = lk.cranks[0].omega
+    omega = abs(w1) if omega is None else float(omega)
+    if not (math.isfinite(omega) and omega > 0):
+        raise ValueError(f"omega must be a finite number > 0 rad/s, got {omega!r}")
+    N = int(table_points)
+    h = TWO_PI / N
+    ang, ang1, ang2, pos, vel, acc = (dict(x) for x in _rigid_tables(scene, N))
+    tlink = {}
+    for t in scene.torsions:
+        tlink.setdefault(t.body, t.link)
+    for b, l in tlink.items():
+        ang[b], ang1[b], ang2[b] = ang[l], ang1[l], ang2[l]
+    B = _Builder(N)
+    bodies = scene.bodies
+    tbodies = set(tlink)
+    cranks = [c.link for c in lk.cranks]
+    fn = {}            # (part, "angle"/"x"/"y", name) → function index, made on demand
+    makers = []        # part → maker(kind, name) → function index
+    prig, coords = [], []
+    for i, part in enumerate(scene.parts):
+        crank = next((c for c in cranks if c in part), None)
+        if crank is not None:
+            coords.append(crank)
+            prig.append(B.line(-1, 0.0, 1.0))
+
+            def make(kind, name, i=i, crank=crank):
+                if kind == "angle":
+                    return B.line(i, 0.0, 1.0) if name == crank else B.table(
+                        i, 0.0, h, ang[name], ang1[name], ang2[name], True,
+                        _winding(ang[name]))
+                k = "xy".index(kind)
+                return B.table(i, 0.0, h, pos[name][:, k], vel[name][:, k], acc[name][:, k],
+                               True)
+            makers.append(make)
+            continue
+        if len(part) == 1:
+            b = part[0]
+            coords.append(b)
+            prig.append(B.table(-1, 0.0, h, ang[b], ang1[b], ang2[b], True, _winding(ang[b])))
+            piv = next((p for p in bodies[b] if p in lk.ground), None)
+
+            def make(kind, name, i=i, piv=piv):
+                if kind == "angle":
+                    return B.line(i, 0.0, 1.0)
+                o = lk.pose[piv] * L
+                r = lk.pose[name] * L - o
+                rad, a0 = float(np.hypot(*r)), float(math.atan2(r[1], r[0]))
+                k = "xy".index(kind)
+                return B.circle(i, float(o[k]), rad, a0 - k * 0.5 * math.pi)
+            makers.append(make)
+            continue
+        # a part of several bodies without a crank: its own linkage, driven by a pinned link
+        cb = next((b for b in part if b not in tbodies
+                   and any(p in lk.ground for p in bodies[b])), None)
+        if cb is None:
+            raise GeometryError(f"{scene.source}: the rigid part {{{', '.join(part)}}} has no "
+                                "link pinned to the frame to serve as its coordinate")
+        coords.append(cb)
+        prig.append(B.table(-1, 0.0, h, ang[cb], ang1[cb], ang2[cb], True, _winding(ang[cb])))
+        lo, hi = float(ang[cb].min()), float(ang[cb].max())
+        margin = max(0.25 * (hi - lo), 0.05)
+        plinks = {b: lk.links[b] for b in part if b not in tbodies}
+        ppts = {p for pts in plinks.values() for p in pts}
+        piv = next(p for p in plinks[cb] if p in lk.ground)
+        sub = Linkage(f"{scene.name}:{cb}", {p: lk.pose[p] for p in ppts},
+                      tuple(p for p in lk.ground if p in ppts), plinks,
+                      (Crank(cb, piv, 1.0),), scene.source)
+        sidx = sub._index()
+        sub_states = None
+        for _ in range(6):
+            grid = np.linspace(lo - margin, hi + margin, N + 1)
+            try:
+                sub_states = sub.solve(grid)
+                break
+            except GeometryError:
+                margin *= 0.5
+        if sub_states is None:
+            raise GeometryError(f"{scene.source}: the rigid part {{{', '.join(part)}}} cannot "
+                                f"be tabulated against the rotation of {cb!r}")
+        sh = (grid[-1] - grid[0]) / N
+
+        def make(kind, name, i=i, cb=cb, st=sub_states, g0=float(grid[0]), sh=sh, sidx=sidx):
+            if kind == "angle":
+                name = tlink.get(name, name)
+                if name == cb:
+                    return B.line(i, 0.0, 1.0)
+                j = sidx[name]
+                return B.table(i, g0, sh, [s.q[3 * j + 2] for s in st],
+                               [s.qdot[3 * j + 2] for s in st],
+                               [s.qddot[3 * j + 2] for s in st], False)
+            k = "xy".index(kind)
+            return B.table(i, g0, sh, [s.points[name][k] * L for s in st],
+                           [s.velocities[name][k] * L for s in st],
+                           [s.accelerations[name][k] * L for s in st], False)
+        makers.append(make)
+
+    def need(i, kind, name):
+        key = (i, kind, name)
+        if key not in fn:
+            fn[key] = makers[i](kind, name)
+        return fn[key]
+
+    part_of = scene.part_of_body()
+
+    def angle_fn(body):
+        return need(part_of[body], "angle", body)
+
+    def point_fns(p):
+        i = scene.part_of_point(p)
+        if i is None:
+            return None
+        return need(i, "x", p), need(i, "y", p), i
+
+    # ---- kinetic energy
+    MI, MW = [], []
+    for m in scene.masses:
+        if m.kind == "mass":
+            pf = point_fns(m.point)
+            if pf is None:
+                continue
+            MI += [pf[0], pf[1]]
+            MW += [m.value, m.value]
+        else:
+            MI.append(angle_fn(m.link))
+            MW.append(m.value)
+    # ---- elastic elements: EI = [type, law, fa, fa2, fb, fb2, part_a, part_b]
+    EI, EF, enames = [], [], []
+
+    def law_of(el):
+        return 0 if getattr(el, "clearance", 0.0) == 0 else _LAWS[el.clearance_law]
+
+    for e in scene.elastic:
+        a, b = lk.links[e.link]
+        row, fl = [1, law_of(e), -1, -1, -1, -1, 0, 0], [e.stiffness, e.damping,
+                                                         e.clearance, 0.0, 0, 0, 0, 0, 0, 0]
+        for side, p in ((0, a), (1, b)):
+            pf = point_fns(p)
+            if pf is None:
+                x = lk.pose[p] * L
+                fl[4 + 2 * side], fl[5 + 2 * side] = float(x[0]), float(x[1])
+            else:
+                row[2 + 2 * side], row[3 + 2 * side], row[6 + side] = pf
+        fl[3] = float(np.hypot(*(lk.pose[b] - lk.pose[a]))) * L
+        EI.append(row)
+        EF.append(fl)
+        enames.append(e.name)
+    for t in scene.torsions:
+        EI.append([0, law_of(t), angle_fn(t.link), -1, angle_fn(t.body), -1,
+                   part_of[t.link], part_of[t.body]])
+        EF.append([t.stiffness, t.damping, t.clearance, 0, 0, 0, 0, 0, 0, 0])
+        enames.append(t.name)
+    for ld in scene.loads:
+        fx, fy, i = point_fns(ld.point)
+        if ld.anchor is not None:
+            x = lk.pose[ld.anchor] * L
+            row, fl = [3, 0, prig[i], -1, fx, fy, i, i], [ld.stiffness, ld.damping, 0, 0,
+                                                           float(x[0]), float(x[1]), 0, 0, 0, 0]
+        else:
+            u = np.array(ld.direction, float)
+            u = u / np.hypot(*u)
+            row, fl = [2, 0, prig[i], -1, fx, fy, i, i], [ld.stiffness, ld.damping, 0, 0, 0, 0,
+                                                           0, 0, float(u[0]), float(u[1])]
+        EI.append(row)
+        EF.append(fl)
+        enames.append(ld.name)
+    # ---- crank-angle moments
+    MOI, MOF, mnames, centres = [], [], [], {}
+    crank0 = cranks[0]
+    for m in scene.moments:
+        c = m.centre
+        if isinstance(c, str):
+            c = dead_centre(scene, "front" if c.startswith("front") else "back")
+        centres[m.name] = c
+        MOI.append([angle_fn(crank0), angle_fn(m.body)])
+        MOF.append([m.amplitude, m.window, m.sigma, c])
+        mnames.append(m.name)
+    body_names = tuple(bodies)
+    n_dyn = len(B.FI)          # functions the dynamics need; the rest only for outputs
+    BI = [angle_fn(b) for b in body_names]
+    arrays = {
+        "FI": np.array(B.FI, dtype=np.int64).reshape(-1, 3),
+        "FF": np.array(B.FF, dtype=float).reshape(-1, 6),
+        "tabs": np.ascontiguousarray(np.array(B.tabs)),
+        "MI": np.array(MI, dtype=np.int64), "MW": np.array(MW, dtype=float),
+        "EI": np.array(EI, dtype=np.int64).reshape(-1, 8),
+        "EF": np.array(EF, dtype=float).reshape(-1, 10),
+        "MOI": np.array(MOI, dtype=np.int64).reshape(-1, 2),
+        "MOF": np.array(MOF, dtype=float).reshape(-1, 4),
+        "PRIG": np.array(prig, dtype=np.int64), "BI": np.array(BI, dtype=np.int64),
+        "n_dyn": n_dyn}
+    return MotionModel(scene, omega, scene.parts, tuple(coords), body_names, tuple(enames),
+                       tuple(mnames), arrays, {b: f for b, f in zip(body_names, BI)}, centres)
+
+
+_CACHE: dict = {}
+
+
+def _signature(scene: Scene, *extra):
+    lk = scene.linkage
+    return (tuple((p, float(x[0]), float(x[1])) for p, x in lk.pose.items()), tuple(lk.ground),
+            tuple((k, tuple(v)) for k, v in lk.links.items()),
+            tuple((c.link, c.pivot, float(c.omega)) for c in lk.cranks), scene.length_scale,
+            extra)
+
+
+def _memo(key, make):
+    if key not in _CACHE:
+        if len(_CACHE) > 32:
+            _CACHE.clear()
+        _CACHE[key] = make()
+    return _CACHE[key]
+
+
+def _rigid_tables(scene: Scene, N: int):
+    """Rotations, point positions and their first and second derivatives with respect to
+    the crank angle over one revolution (N + 1 nodes), memoised per linkage."""
+    def make():
+        lk = scene.linkage
+        L = scene.length_scale
+        w1 = lk.cranks[0].omega
+        th = np.linspace(0.0, TWO_PI, N + 1)
+        try:
+            states = lk.solve(th)
+        except GeometryError as exc:
+            raise GeometryError(f"{scene.source}: the rigid mechanism cannot turn a full "
+                                f"revolution, so the scene cannot be simulated over the cycle "
+                                f"({exc})") from None
+        idx = lk._index()
+        ang = {l: np.unwrap([s.q[3 * i + 2] for s in states]) for l, i in idx.items()}
+        ang1 = {l: np.array([s.qdot[3 * i + 2] for s in states]) / w1 for l, i in idx.items()}
+        ang2 = {l: np.array([s.qddot[3 * i + 2] for s in states]) / w1 ** 2
+                for l, i in idx.items()}
+        pos = {p: np.array([s.points[p] for s in states]) * L for p in lk.pose}
+        vel = {p: np.array([s.velocities[p] for s in states]) * L / w1 for p in lk.pose}
+        acc = {p: np.array([s.accelerations[p] for s in states]) * L / w1 ** 2
+               for p in lk.pose}
+        return tuple(tuple(d.items()) for d in (ang, ang1, ang2, pos, vel, acc))
+    return _memo(_signature(scene, "rigid", N), make)
+
+
+def dead_centre(scene: Scene, kind: str = "front") -> float:
+    """Crank rotation from the pose [rad, in [0, 2π)] where the crank and its coupler are
+    extended (``"front"``) or folded (``"back"``); memoised per linkage.
+
+    Raises
+    ------
+    GeometryError
+        The crank has no coupler (no other link at its moving point) or never
+        lines up with it.
+    """
+    return _memo(_signature(scene, "dead", kind), lambda: _dead_centre(scene, kind))
+
+
+def _dead_centre(scene: Scene, kind: str) -> float:
+    """Crank rotation from the pose [rad, in [0, 2π)] where the crank and its coupler are
+    extended (``"front"``) or folded (``"back"``).
+
+    Raises
+    ------
+    GeometryError
+        The crank has no coupler (no other link at its moving point) or never
+        lines up with it.
+    """
+    from scipy.optimize import brentq
+
+    lk = scene.linkage
+    crank = lk.cranks[0].link
+    pts = lk.links[crank]
+    piv = next(p for p in pts if p in lk.ground)
+    tip = next((p for p in pts if p not in lk.ground), None)
+    coupler = next((l for l, ps in lk.links.items() if l != crank and tip in ps), None)
+    if coupler is None:
+        raise GeometryError(f"{scene.source}: a dead centre needs a coupler at the crank's "
+                            f"moving point; crank {crank!r} has none")
+    far = next(p for p in lk.links[coupler] if p != tip)
+
+    def cd(s):
+        a = s.points[tip] - s.points[piv]
+        b = s.points[far] - s.points[tip]
+        return float(a[0] * b[1] - a[1] * b[0]), float(a @ b)
+
+    def cross_dot(theta):
+        return cd(lk.solve(theta))
+
+    th = np.linspace(0.0, TWO_PI, 361)
+    vals = [cd(s) for s in lk.solve(th)]
+    want = 1.0 if kind == "front" else -1.0
+    for k in range(360):
+        (c0, d0), (c1, _) = vals[k], vals[k + 1]
+        if c0 == 0 and d0 * want > 0:
+            return float(th[k])
+        if c0 * c1 < 0 and d0 * want > 0:
+            return float(brentq(lambda t: cross_dot(t)[0], th[k], th[k + 1], xtol=1e-14))
+    raise GeometryError(f"{scene.source}: the crank {crank!r} and coupler {coupler!r} never "
+                        f"line up {'extended' if kind == 'front' else 'folded'}")

@@ -1,0 +1,229 @@
+"""The time-domain tables of a scene file: ``[[moments]]`` and ``[simulate]``.
+
+``[[moments]]`` -- a moment on a body that depends on the crank angle (the
+beat-up moment of Mrázek's sley, DIGEST §2, eqs. (5)–(7))::
+
+    [[moments]]
+    name = "beatup"
+    body = "sley"                # a rigid link or a torsion body
+    amplitude = -500.0           # M0 [N·m], positive turning the body counter-clockwise
+    window_deg = 10.0            # α: the moment acts while the crank is within α around the centre
+    sigma_deg = 10.0             # optional, default α: M = M0 sin(π x / σ), x ∈ [0, α)
+    centre = "front-dead-centre" # or "back-dead-centre", or a crank rotation from the pose [deg]
+
+x = φ − centre + α/2 (mod 2π), φ the crank link's own rotation from the pose
+(in the deformed motion: the crank's part, not the driven shaft).
+
+``[simulate]`` -- defaults of ``mechcirc simulate SCENE.toml`` (all optional)::
+
+    [simulate]
+    omega = 100.0                # crank shaft speed [rad/s]; default the crank's omega
+    revolutions = 5              # the last one is tabulated
+    start_deg = 0.0              # crank rotation from the pose at t = 0 (rigid state)
+    steps_per_period = 50        # RK4 steps per period of the fastest linearised mode
+    points = 7200                # output points per revolution
+    [simulate.aliases]           # more output names: NAME = "BODY.acceleration", …
+    eps2P = "crank.acceleration"
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, field
+
+from ..kinematics.linkage import _err
+
+__all__ = ["Moment", "SimulateSettings", "parse_moments", "parse_simulate", "OUTPUT_KINDS",
+           "apply_overrides"]
+
+_IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+#: Output quantities: BODY.acceleration, BODY.rigid_acceleration, ELEMENT.force,
+#: ELEMENT.deformation, drive.moment.
+OUTPUT_KINDS = ("acceleration", "rigid_acceleration", "force", "deformation", "moment")
+
+
+@dataclass(frozen=True)
+class Moment:
+    """A crank-angle-dependent moment on ``body`` (half sine over a window)."""
+
+    name: str
+    body: str
+    amplitude: float
+    window: float             # α [rad]
+    sigma: float              # σ [rad]
+    centre: str | float       # "front-dead-centre", "back-dead-centre" or a rotation [rad]
+
+
+@dataclass(frozen=True)
+class SimulateSettings:
+    """Defaults of the time-domain run (``[simulate]``); None: the built-in default."""
+
+    omega: float | None = None
+    revolutions: int | None = None
+    start_deg: float = 0.0
+    steps_per_period: float | None = None
+    points: int | None = None
+    aliases: dict = field(default_factory=dict)
+
+
+def _num(text, source, value, what, table, key, n, *, positive=True):
+    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+    if ok and positive:
+        ok = value > 0
+    if not ok:
+        need = "a finite number" + (" > 0" if positive else "")
+        raise _err(text, source, f"{what} must be {need}, got {value!r}", table, key,
+                   occurrence=n, expected=need)
+    return float(value)
+
+
+def parse_moments(text, source, table, scene) -> tuple:
+    """The ``[[moments]]`` entries, checked against the scene's bodies."""
+    if table is None:
+        return ()
+    if not isinstance(table, list) or not all(isinstance(x, dict) for x in table):
+        raise _err(text, source, "moments must be an array of tables [[moments]]", None,
+                   "moments")
+    bodies = scene.bodies
+    taken = {m.name for m in scene.masses} | {x.name for x in (*scene.elastic, *scene.torsions,
+                                                                 *scene.loads)}
+    out = []
+    for n, m in enumerate(table):
+        for k in m:
+            if k not in ("name", "body", "amplitude", "window_deg", "sigma_deg", "centre"):
+                raise _err(text, source, f"unknown key {k!r} in [[moments]] #{n + 1}", "moments",
+                           k, occurrence=n,
+                           expected="name, body, amplitude, window_deg, sigma_deg, centre")
+        body = m.get("body")
+        if body not in bodies:
+            raise _err(text, source, f"[[moments]] #{n + 1}: body {body!r} is not a rigid link "
+                       "or torsion body", "moments", "body" if "body" in m else "amplitude",
+                       occurrence=n, expected=f"one of {', '.join(bodies)}")
+        name = m.get("name", f"M_{body}")
+        if not isinstance(name, str) or not _IDENT.fullmatch(name) or name in taken:
+            raise _err(text, source, f"[[moments]] #{n + 1}: name {name!r} is not a valid "
+                       "unused name", "moments", "name" if "name" in m else "body",
+                       occurrence=n, expected="an identifier not used by another element")
+        taken.add(name)
+        amp = _num(text, source, m.get("amplitude"), f"amplitude of {name!r} [N·m]", "moments",
+                   "amplitude" if "amplitude" in m else "body", n, positive=False)
+        alpha = _num(text, source, m.get("window_deg"), f"window_deg of {name!r} [deg]",
+                     "moments", "window_deg" if "window_deg" in m else "body", n)
+        if alpha >= 360:
+            raise _err(text, source, f"window_deg of {name!r} must be < 360, got {alpha!r}",
+                       "moments", "window_deg", occurrence=n, expected="0 < window_deg < 360")
+        sigma = _num(text, source, m.get("sigma_deg", alpha), f"sigma_deg of {name!r} [deg]",
+                     "moments", "sigma_deg", n)
+        centre = m.get("centre", "front-dead-centre")
+        if isinstance(centre, str):
+            if centre not in ("front-dead-centre", "back-dead-centre"):
+                raise _err(text, source, f"centre {centre!r} of {name!r} is unknown", "moments",
+                           "centre", occurrence=n, expected='"front-dead-centre", '
+                           '"back-dead-centre" or a crank rotation from the pose [deg]')
+        else:
+            centre = math.radians(_num(text, source, centre, f"centre of {name!r} [deg]",
+                                       "moments", "centre", n, positive=False))
+        out.append(Moment(name, body, amp, math.radians(alpha), math.radians(sigma), centre))
+    return tuple(out)
+
+
+def parse_simulate(text, source, table, scene) -> SimulateSettings:
+    """The optional ``[simulate]`` table."""
+    if table is None:
+        return SimulateSettings()
+    if not isinstance(table, dict):
+        raise _err(text, source, "simulate must be a table [simulate]", None, "simulate")
+    kw = {}
+    for k, v in table.items():
+        if k == "aliases":
+            if not isinstance(v, dict) or not all(
+                    isinstance(a, str) and _IDENT.fullmatch(a) and isinstance(b, str)
+                    and "." in b for a, b in v.items()):
+                raise _err(text, source, "[simulate.aliases] maps names to \"THING.quantity\" "
+                           "strings", "simulate.aliases", next(iter(v), "aliases")
+                           if isinstance(v, dict) else "aliases",
+                           expected='eps2P = "crank.acceleration"')
+            kw["aliases"] = dict(v)
+        elif k in ("omega", "steps_per_period"):
+            kw[k] = _num(text, source, v, f"[simulate] {k}", "simulate", k, 0)
+        elif k == "start_deg":
+            kw[k] = _num(text, source, v, "[simulate] start_deg", "simulate", k, 0,
+                         positive=False)
+        elif k in ("revolutions", "points"):
+            if isinstance(v, bool) or not isinstance(v, int) or v < (1 if k == "revolutions"
+                                                                      else 16):
+                raise _err(text, source, f"[simulate] {k} must be an integer ≥ "
+                           f"{1 if k == 'revolutions' else 16}, got {v!r}", "simulate", k)
+            kw[k] = v
+        else:
+            raise _err(text, source, f"unknown key {k!r} in [simulate]", "simulate", k,
+                       expected="omega, revolutions, start_deg, steps_per_period, points, "
+                       "aliases")
+    return SimulateSettings(**kw)
+
+
+def apply_overrides(scene, overrides: dict):
+    """A copy of ``scene`` with ``NAME.FIELD = value`` overrides (``--set``); also ``omega``.
+
+    Fields: ``mass``/``inertia`` (or ``value``) of a mass; ``stiffness``,
+    ``damping``, ``clearance`` of an elastic link, torsion rod or load;
+    ``amplitude``, ``window_deg``, ``sigma_deg`` of a moment.  ``omega`` sets the
+    crank speed of the run.
+
+    Raises
+    ------
+    MechcircError
+        An unknown name or field, or a value out of range (named).
+    """
+    import dataclasses
+
+    from ..errors import MechcircError
+
+    masses = {m.name: m for m in scene.masses}
+    groups = {"elastic": {e.name: e for e in scene.elastic},
+              "torsions": {t.name: t for t in scene.torsions},
+              "loads": {ld.name: ld for ld in scene.loads}}
+    moments = {m.name: m for m in scene.moments}
+    sim = scene.simulate if scene.simulate is not None else SimulateSettings()
+    for key, value in overrides.items():
+        if not (isinstance(value, float) and math.isfinite(value)):
+            raise MechcircError(f"--set {key}: the value must be a finite number, got {value!r}")
+        if key == "omega":
+            if value <= 0:
+                raise MechcircError(f"--set omega must be > 0 rad/s, got {value!r}")
+            sim = dataclasses.replace(sim, omega=value)
+            continue
+        name, _, fld = key.partition(".")
+        if name in masses and fld in ("mass", "inertia", "value"):
+            if value <= 0:
+                raise MechcircError(f"--set {key} must be > 0, got {value!r}")
+            masses[name] = dataclasses.replace(masses[name], value=value)
+            continue
+        grp = next((g for g in groups.values() if name in g), None)
+        if grp is not None and fld in ("stiffness", "damping", "clearance"):
+            if value < 0 or (fld == "clearance" and not hasattr(grp[name], "clearance")):
+                raise MechcircError(f"--set {key}: must be ≥ 0 (and clearance applies to "
+                                    f"elastic links and torsion rods), got {value!r}")
+            grp[name] = dataclasses.replace(grp[name], **{fld: value})
+            continue
+        if name in moments and fld in ("amplitude", "window_deg", "sigma_deg"):
+            if fld == "amplitude":
+                moments[name] = dataclasses.replace(moments[name], amplitude=value)
+            else:
+                if not 0 < value < 360:
+                    raise MechcircError(f"--set {key} must be in (0, 360) deg, got {value!r}")
+                rad = math.radians(value)
+                old = moments[name]
+                moments[name] = dataclasses.replace(
+                    old, window=rad, sigma=rad if old.sigma == old.window else old.sigma) \
+                    if fld == "window_deg" else dataclasses.replace(old, sigma=rad)
+            continue
+        known = ["omega"] + [f"{n}.inertia/mass" for n in masses] + \
+            [f"{n}.stiffness/damping/clearance" for g in groups.values() for n in g] + \
+            [f"{n}.amplitude/window_deg/sigma_deg" for n in moments]
+        raise MechcircError(f"--set {key}: no such parameter; known: {', '.join(known)}")
+    return dataclasses.replace(
+        scene, masses=tuple(masses.values()), elastic=tuple(groups["elastic"].values()),
+        torsions=tuple(groups["torsions"].values()), loads=tuple(groups["loads"].values()),
+        moments=tuple(moments.values()), simulate=sim)

@@ -1,0 +1,389 @@
+"""Simulate a scene over whole revolutions: :func:`simulate_scene` → :class:`SceneMotion`.
+
+The drive's part turns with the rigid motion at crank speed Ω from crank
+rotation ``start_deg`` (t = 0: every part in its rigid position with its rigid
+velocity, nothing deformed); R revolutions are integrated and the last one is
+tabulated on a uniform grid against the crank angle.  The step rule is the
+sley's (``docs/sley.md``): classical RK4 with ``steps_per_period`` steps per
+period 2π/|λ|max of the fastest mode of the linearised model over the cycle.
+
+Every result carries two checks (issue 11 §8):
+
+* ``error_estimate`` — the largest change of any tabulated extremum when the
+  whole run is repeated at half the step, relative to that quantity's largest
+  magnitude (for RK4 this is about 15/16 of the error of the coarse run);
+* ``periodicity`` — the same change from the previous revolution (needs R ≥ 2).
+
+A :class:`~mechcirc.errors.MechcircWarning` is issued (and a note kept) when
+either exceeds 1e-3, when fewer steps per period than the default are asked
+for, and when a part leaves the range its kinematics are tabulated over.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+import warnings
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from ..errors import MechcircError, MechcircWarning, SolverError
+from .files import Scene
+from .motion import MotionModel, motion_model
+
+__all__ = ["SceneMotion", "simulate_scene", "linear_matrices", "max_rate", "ACCURACY_GOAL"]
+
+TWO_PI = 2.0 * math.pi
+DEFAULT_STEPS_PER_PERIOD = 50
+DEFAULT_POINTS = 7200
+DEFAULT_REVOLUTIONS = 5
+MAX_STEPS_PER_REV = 20_000_000
+#: Relative error estimate / periodicity above which a result is flagged.
+ACCURACY_GOAL = 1e-3
+
+
+class SceneAccuracyWarning(MechcircWarning):
+    """A time-domain result may be inaccurate (the message says which check failed)."""
+
+
+@dataclass(frozen=True)
+class SceneMotion:
+    """One tabulated revolution of a scene's motion (plain data).
+
+    Attributes
+    ----------
+    name, source : str
+    omega : float
+        Crank shaft speed Ω [rad/s].
+    crank_angle : ndarray
+        Crank rotation from the pose, mod 2π [rad], ascending.
+    values : dict[str, ndarray]
+        ``BODY.acceleration`` [rad/s²], ``ELEMENT.force`` [N or N·m] and
+        ``ELEMENT.deformation`` [m or rad], ``drive.moment`` (the generalised
+        force the drive supplies), ``MOMENT.moment`` [N·m], and the aliases.
+    extrema : dict[str, (float, float)]
+    revolution : int
+    error_estimate, periodicity : float or None
+        Relative (see the module docstring); None when not computed.
+    n_steps, nfev : int
+    wall_time : float
+    method, backend : str
+    notes : tuple of str
+    """
+
+    name: str
+    source: str
+    omega: float
+    crank_angle: np.ndarray
+    values: dict
+    extrema: dict
+    revolution: int
+    error_estimate: float | None
+    periodicity: float | None
+    n_steps: int
+    nfev: int
+    wall_time: float
+    method: str
+    backend: str
+    steps_per_revolution: int
+    notes: tuple = field(default=())
+
+    def summary(self) -> dict:
+        """Plain-data summary for JSON."""
+        return {"scene": self.name, "source": self.source, "omega": self.omega,
+                "revolution": self.revolution, "method": self.method, "backend": self.backend,
+                "steps_per_revolution": self.steps_per_revolution,
+                "extrema": {k: list(v) for k, v in self.extrema.items()},
+                "error_estimate": self.error_estimate, "periodicity": self.periodicity,
+                "n_steps": self.n_steps, "nfev": self.nfev, "wall_time_s": self.wall_time,
+                "notes": list(self.notes)}
+
+    def columns(self) -> dict:
+        """Output arrays by name, crank angle in degrees first (for CSV)."""
+        return {"crank_angle_deg": np.degrees(self.crank_angle), **self.values}
+
+
+_PYK = None
+
+
+def _kernels(method):
+    global _PYK
+    if method == "rk4":
+        from . import _motion_kernels as k
+
+        if k.HAVE_NUMBA:
+            return k, "numba"
+    if _PYK is None:
+        from . import _motion_kernels as k
+
+        _PYK = k.load_python()
+    return _PYK, "python"
+
+
+def linear_matrices(model: MotionModel, theta: float):
+    """(M, D, K) of the free coordinates linearised about the rigid motion at θ [rad].
+
+    M is the diagonal of the kinetic energy; K and D are Σ k ∇δ ∇δᵀ, Σ d ∇δ ∇δᵀ
+    over the elastic elements with ∇δ by central differences of the kernel's
+    deformations (pre-load and velocity-squared terms excluded, as in the circuit).
+    """
+    kern = _kernels("rk4")[0]           # compiled when numba is importable
+    n = model.n_free
+    y0 = model.rigid_state(theta)
+    args = model.kernel_args(0.0, 1e300, outputs=True)
+    args[0][1] = theta
+    naux = model.naux()
+    nb, ne = len(model.bodies), len(model.elements)
+
+    def deformations(y):
+        aux = np.empty(naux)
+        kern.rhs(0.0, y, *args, np.empty(2 * n), aux,
+                 np.zeros((9, max(args[1].shape[0], args[10].shape[0]))))
+        return aux[nb + ne:nb + 2 * ne].copy()
+
+    step = 1e-6
+    G = np.zeros((ne, n))
+    for i in range(n):
+        yp, ym = y0.copy(), y0.copy()
+        yp[i] += step
+        ym[i] -= step
+        G[:, i] = (deformations(yp) - deformations(ym)) / (2 * step)
+    k = args[7][:, 0]
+    d = args[7][:, 1]
+    # element gradients w.r.t. the prescribed part do not enter; loads are linear anyway
+    K = G.T @ (k[:, None] * G)
+    D = G.T @ (d[:, None] * G)
+    a = model.arrays
+    m = np.zeros(n + 1)
+    for f, w in zip(a["MI"], a["MW"]):
+        p = a["FI"][f, 1]
+        q = y0[p - 1] if p > 0 else kern.feval(*_fargs(a, a["PRIG"][0]), theta)[0]
+        m[p] += w * kern.feval(*_fargs(a, f), q)[1] ** 2
+    return np.diag(m[1:]), D, K
+
+
+def _fargs(a, f):
+    return (a["FI"][f, 0], a["tabs"], a["FI"][f, 2], *a["FF"][f])
+
+
+def max_rate(model: MotionModel, samples: int = 72) -> float:
+    """Largest |λ| of the linearised model over a revolution [1/s] (sets the RK4 step)."""
+    rates = []
+    for th in np.linspace(0.0, TWO_PI, samples, endpoint=False):
+        M, D, K = linear_matrices(model, th)
+        n = M.shape[0]
+        inv = 1.0 / np.diag(M)[:, None]
+        A = np.zeros((2 * n, 2 * n))
+        A[:n, n:] = np.eye(n)
+        A[n:, :n] = -inv * K
+        A[n:, n:] = -inv * D
+        rates.append(np.max(np.abs(np.linalg.eigvals(A))))
+    return float(max(rates))
+
+
+def simulate_scene(scene: Scene, *, omega: float | None = None,
+                   revolutions: int | None = None, start_deg: float | None = None,
+                   steps_per_period: float | None = None, points: int | None = None,
+                   method: str = "rk4", error_estimate: bool = True,
+                   model: MotionModel | None = None,
+                   progress: Callable[[int, int], None] | None = None) -> SceneMotion:
+    """Simulate ``scene`` over ``revolutions`` turns of the crank and tabulate the last.
+
+    Parameters default to the scene's ``[simulate]`` table, then Ω from its
+    crank, 5 revolutions, start 0°, 50 steps per period, 7200 points.
+    ``method`` is ``"rk4"`` (numba when importable) or ``"rk4-python"``.
+
+    Raises
+    ------
+    MechcircError
+        A bad option (names it).
+    GeometryError
+        The rigid mechanism cannot turn a full revolution.
+    SolverError
+        The integration diverged or needs too many steps.
+    """
+    cfg = scene.simulate
+    pick = (lambda v, k, d: v if v is not None else (getattr(cfg, k) if cfg is not None
+                                                      and getattr(cfg, k) is not None else d))
+    omega = pick(omega, "omega", None)
+    revolutions = int(pick(revolutions, "revolutions", DEFAULT_REVOLUTIONS))
+    start_deg = float(pick(start_deg, "start_deg", 0.0))
+    spp = float(pick(steps_per_period, "steps_per_period", DEFAULT_STEPS_PER_PERIOD))
+    npts = int(pick(points, "points", DEFAULT_POINTS))
+    if method not in ("rk4", "rk4-python"):
+        raise MechcircError(f"unknown method {method!r}; choose rk4 or rk4-python")
+    if revolutions < 1:
+        raise MechcircError(f"revolutions must be ≥ 1, got {revolutions}")
+    if not spp >= 1:
+        raise MechcircError(f"steps_per_period must be ≥ 1, got {spp!r}")
+    if npts < 16:
+        raise MechcircError(f"points must be ≥ 16, got {npts}")
+    if model is None or (omega is not None and model.omega != float(omega)):
+        model = motion_model(scene, omega)
+    rate = max_rate(model)
+    period = TWO_PI / model.omega
+    need = period * rate * spp / TWO_PI
+    if need > MAX_STEPS_PER_REV:
+        raise SolverError(f"the stiffest linearised mode (|λ| = {rate:.4g} 1/s) needs {need:.3g} "
+                          f"RK4 steps per revolution, more than {MAX_STEPS_PER_REV:.0e}",
+                          status="too-stiff")
+    per_rev = max(int(math.ceil(need)), 16)
+    kern, backend = _kernels(method)
+    notes, warn = [], []
+    if spp < DEFAULT_STEPS_PER_PERIOD:
+        warn.append(f"{spp:g} steps per period of the fastest mode, fewer than the default "
+                    f"{DEFAULT_STEPS_PER_PERIOD}: expect a larger error")
+    run = _run(model, kern, math.radians(start_deg), per_rev, revolutions, npts, progress)
+    ts, ys, prev, wall, bad = run
+    out = _outputs(model, kern, math.radians(start_deg), ts, ys)
+    extrema = {k: (float(v.min()), float(v.max())) for k, v in out.items()}
+    periodicity = None
+    if prev is not None:
+        pout = _outputs(model, kern, math.radians(start_deg), *prev)
+        periodicity = _rel_change(extrema, {k: (float(v.min()), float(v.max()))
+                                            for k, v in pout.items()})
+    est = None
+    if error_estimate:
+        fine = _run(model, kern, math.radians(start_deg), 2 * per_rev, revolutions, npts, None)
+        fout = _outputs(model, kern, math.radians(start_deg), fine[0], fine[1])
+        est = _rel_change(extrema, {k: (float(v.min()), float(v.max()))
+                                    for k, v in fout.items()})
+        bad = bad or fine[4]
+    crank = (math.radians(start_deg) + model.omega * ts) % TWO_PI
+    wrap = np.flatnonzero(np.diff(crank) < 0)
+    order = np.roll(np.arange(crank.size), -(int(wrap[0]) + 1)) if wrap.size == 1 \
+        else np.argsort(crank, kind="stable")
+    crank = crank[order]
+    values = {k: v[order] for k, v in out.items()}
+    aliases = dict(cfg.aliases) if cfg is not None else {}
+    for alias, target in aliases.items():
+        if target.endswith(".rigid_acceleration"):
+            body = target.rsplit(".", 1)[0]
+            values[alias], extrema[alias] = _rigid_acceleration(model, body, crank)
+        elif target in values:
+            values[alias] = values[target]
+            extrema[alias] = extrema[target]
+        else:
+            raise MechcircError(f"{scene.source}: alias {alias!r} names {target!r}, which is "
+                                f"not an output (outputs: {', '.join(values)})")
+    notes.append(f"RK4 step {period / per_rev:.4g} s ({per_rev} steps per revolution, "
+                 f"{spp:g} per period of the fastest mode |λ| = {rate:.5g} 1/s)")
+    if bad:
+        warn.append("a part left the range its kinematics are tabulated over (the values "
+                    "there are extrapolated)")
+    if est is not None and est > ACCURACY_GOAL:
+        warn.append(f"error estimate {est:.2g} (change of the extrema at half the step) > "
+                    f"{ACCURACY_GOAL:g}: raise steps_per_period")
+    if periodicity is not None and periodicity > ACCURACY_GOAL:
+        warn.append(f"not yet periodic: the extrema changed by {periodicity:.2g} (relative) "
+                    f"from the previous revolution > {ACCURACY_GOAL:g}: raise revolutions")
+    for w in warn:
+        warnings.warn(f"{scene.source}: {w}", SceneAccuracyWarning, stacklevel=2)
+    n_steps = per_rev * revolutions
+    return SceneMotion(scene.name, scene.source, model.omega, crank, values, extrema,
+                       revolutions, est, periodicity, n_steps, 4 * n_steps + revolutions, wall,
+                       method, backend, per_rev, tuple(notes + [f"warning: {w}" for w in warn]))
+
+
+def _run(model, kern, theta_s, per_rev, revolutions, npts, progress):
+    y = model.rigid_state(theta_s)
+    n = model.n_free
+    limit = 1e3 * model.omega * max(1.0, float(np.max(np.abs(y[n:]))) / model.omega)
+    args = model.kernel_args(theta_s, limit)
+    period = TWO_PI / model.omega
+    h = period / per_rev
+    rec = np.empty((npts, y.size)), np.empty(npts)
+    prev = (np.empty(npts), np.empty((npts, y.size))) if revolutions >= 2 else None
+    dummy = np.empty((0, y.size)), np.empty(0)
+    naux = model.naux()
+    bad = False
+    t0 = time.perf_counter()
+    for r in range(revolutions):
+        last = r == revolutions - 1
+        if last:
+            ry, rt = rec
+        elif r == revolutions - 2:
+            rt, ry = prev
+        else:
+            ry, rt = dummy
+        t_end, rows, ok, flag = kern.rk4_run(y, r * period, h, per_rev, r * period,
+                                             period / npts, ry, rt, *args, naux)
+        bad = bad or flag > 0
+        if not ok:
+            raise SolverError(f"RK4 diverged at t = {t_end:.6g} s (revolution {r + 1}) with "
+                              f"step {h:.3g} s: raise steps_per_period", status="diverged")
+        if progress is not None:
+            progress(r + 1, revolutions)
+    wall = time.perf_counter() - t0
+    return rec[1], rec[0], prev, wall, bad
+
+
+def _outputs(model, kern, theta_s, ts, ys):
+    args = model.kernel_args(theta_s, 1e300, outputs=True)
+    out = np.empty((ts.size, model.naux()))
+    kern.outputs(np.ascontiguousarray(ts), np.ascontiguousarray(ys), out, *args)
+    nb, ne, nm = len(model.bodies), len(model.elements), len(model.moments)
+    vals = {}
+    for i, b in enumerate(model.bodies):
+        vals[f"{b}.acceleration"] = out[:, i].copy()
+    for i, e in enumerate(model.elements):
+        vals[f"{e}.force"] = out[:, nb + i].copy()
+    for i, e in enumerate(model.elements):
+        vals[f"{e}.deformation"] = out[:, nb + ne + i].copy()
+    vals["drive.moment"] = out[:, nb + 2 * ne].copy()
+    for i, m in enumerate(model.moments):
+        vals[f"{m}.moment"] = out[:, nb + 2 * ne + 1 + i].copy()
+    del nm
+    return vals
+
+
+def _rel_change(a: dict, b: dict) -> float:
+    """Largest change of an extremum between two runs, relative to the largest magnitude of
+    that quantity; quantities below 1e-6 of the largest of their kind (acceleration, force,
+    …) are rounding noise (a translating body's rotation) and are skipped."""
+    kind_scale = {}
+    for k, (lo, hi) in a.items():
+        kind = k.rsplit(".", 1)[-1]
+        kind_scale[kind] = max(kind_scale.get(kind, 0.0), abs(lo), abs(hi))
+    worst = 0.0
+    for k, (lo, hi) in a.items():
+        scale = max(abs(lo), abs(hi))
+        if scale == 0 or scale < 1e-6 * kind_scale[k.rsplit(".", 1)[-1]]:
+            continue
+        lo2, hi2 = b[k]
+        worst = max(worst, abs(lo - lo2) / scale, abs(hi - hi2) / scale)
+    return worst
+
+
+def _rigid_acceleration(model, body, crank):
+    """Angular acceleration of ``body`` in the rigid motion at the crank angles, and its
+    exact extrema (grid, then Brent-refined on the tables)."""
+    from scipy.optimize import minimize_scalar
+
+    kern = _kernels("rk4-python")[0]
+    a = model.arrays
+    if body not in model.body_fn:
+        raise MechcircError(f"no body {body!r} (bodies: {', '.join(model.bodies)})")
+    g = model.body_fn[body]
+    r = a["PRIG"][a["FI"][g, 1]]
+    w2 = model.omega ** 2
+
+    def acc(th):
+        q, q1, q2, _ = kern.feval(*_fargs(a, r), th)
+        _, g1, g2, _ = kern.feval(*_fargs(a, g), q)
+        return (g2 * q1 * q1 + g1 * q2) * w2
+
+    fast = _kernels("rk4")[0]
+    qv, gv = np.empty((crank.size, 3)), np.empty((crank.size, 3))
+    fast.eval_many(*_fargs(a, r), np.ascontiguousarray(crank), qv)
+    fast.eval_many(*_fargs(a, g), np.ascontiguousarray(qv[:, 0]), gv)
+    vals = (gv[:, 2] * qv[:, 1] ** 2 + gv[:, 1] * qv[:, 2]) * w2
+    ext = []
+    for sgn, i in ((1.0, int(np.argmin(vals))), (-1.0, int(np.argmax(vals)))):
+        lo, hi = crank[max(i - 1, 0)], crank[min(i + 1, crank.size - 1)]
+        res = minimize_scalar(lambda t: sgn * acc(t), bounds=(lo, hi), method="bounded",
+                              options={"xatol": 1e-12})
+        ext.append(sgn * min(res.fun, sgn * vals[i]))
+    return vals, (float(ext[0]), float(ext[1]))

@@ -1,0 +1,316 @@
+"""Scenes in the time domain (issue 13 §1–2): linearisation, the sley as scenes, clearance law."""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+import pytest
+
+from mechcirc.nodal import assemble
+from mechcirc.scene import build, load_scene, parse_scene
+from mechcirc.scene.motion import motion_model
+from mechcirc.scene.simfile import apply_overrides
+from mechcirc.scene.simulation import SceneAccuracyWarning, simulate_scene
+
+SCENES = ["examples/heald_scene.toml", "examples/mrazek_one_side.toml",
+          "examples/mrazek_both_sides.toml"]
+
+
+def _python_kernel():
+    from mechcirc.scene import _motion_kernels
+
+    return _motion_kernels.load_python()
+
+
+def _rhs_jacobians(model, theta):
+    """Finite-difference Jacobians ∂q̈/∂q and ∂q̈/∂q̇ of the time-domain right-hand side
+    at the rigid state at θ (Ω tiny, so the velocity-squared terms vanish)."""
+    kern = _python_kernel()
+    n = model.n_free
+    y0 = model.rigid_state(theta)
+    args = model.kernel_args(theta, 1e300)
+
+    def acc(y):
+        dy = np.empty(2 * n)
+        aux = np.empty(model.naux())
+        work = np.zeros((9, max(args[1].shape[0], args[10].shape[0])))
+        kern.rhs(0.0, y, *args, dy, aux, work)
+        return dy[n:]
+
+    Jq, Jv = np.zeros((n, n)), np.zeros((n, n))
+    for i in range(n):
+        for J, j, h in ((Jq, i, 1e-6), (Jv, n + i, 1e-3)):
+            yp, ym = y0.copy(), y0.copy()
+            yp[j] += h
+            ym[j] -= h
+            J[:, i] = (acc(yp) - acc(ym)) / (2 * h)
+    return Jq, Jv
+
+
+@pytest.mark.parametrize("path", SCENES)
+def test_linearisation_is_the_circuit(path):
+    """FD of the time-domain RHS about the rigid motion = −M⁻¹K, −M⁻¹D of build(scene, θ)."""
+    scene = load_scene(path)
+    # the circuit knows no clearance: linearise the scene with its gaps closed
+    scene = apply_overrides(scene, {f"{x.name}.clearance": 0.0
+                                    for x in (*scene.elastic, *scene.torsions) if x.clearance})
+    omega_small = 1e-6 * scene.omega_shaft
+    model = motion_model(scene, omega_small)
+    kern = _python_kernel()
+    a = model.arrays
+    for deg in (37.3, 101.7, 250.1):
+        theta = math.radians(deg)
+        sc = build(scene, theta)
+        system = assemble(sc.circuit)
+        index = {nm: i for i, nm in enumerate(system.nodes)}
+        nodes = list(sc.parts)[1:]                 # the free parts, in the model's order
+        sel = [index[nm] for nm in nodes]
+        Mc = system.M.toarray()[np.ix_(sel, sel)]
+        Dc = system.D.toarray()[np.ix_(sel, sel)]
+        Kc = system.Ks.toarray()[np.ix_(sel, sel)]
+        # ρ_i: the part's coordinate rate per unit drive velocity in the rigid motion
+        rho = np.array([kern.feval(a["FI"][r, 0], a["tabs"], a["FI"][r, 2], *a["FF"][r],
+                                   theta)[1] for r in a["PRIG"][1:]]) / sc.drive_ratio
+        P = np.diag(1.0 / rho)
+        Mq, Dq, Kq = P @ Mc @ P, P @ Dc @ P, P @ Kc @ P
+        want_q = -np.linalg.solve(Mq, Kq)
+        want_v = -np.linalg.solve(Mq, Dq)
+        Jq, Jv = _rhs_jacobians(model, theta)
+        assert np.max(np.abs(Jq - want_q)) <= 1e-6 * np.max(np.abs(want_q)), (path, deg)
+        assert np.max(np.abs(Jv - want_v)) <= 1e-6 * np.max(np.abs(want_v)), (path, deg)
+
+
+def _compare(drive, variant, tol=1e-6):
+    from mechcirc.sley import simulate
+    from mechcirc.sley.scenes import preset_scene
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", SceneAccuracyWarning)
+        got = simulate_scene(preset_scene(drive, variant), error_estimate=False)
+    ref = simulate(drive, variant)
+    worst = 0.0
+    for k, (lo, hi) in ref.extrema.items():
+        scale = max(abs(lo), abs(hi))
+        glo, ghi = got.extrema[k]
+        worst = max(worst, abs(glo - lo) / scale, abs(ghi - hi) / scale)
+    assert worst <= tol, (drive, variant, worst)
+    return got, ref
+
+
+@pytest.mark.parametrize("drive,variant", [("one-side", 3), ("one-side", 6),
+                                           ("both-sides", 2), ("both-sides", 7)])
+def test_sley_scene_reproduces_sley(drive, variant):
+    """The shipped scene + the variant's overrides = the hand-written sley model (eqs. 4, 9)."""
+    got, ref = _compare(drive, variant)
+    assert got.steps_per_revolution * got.revolution == ref.n_steps
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("drive", ["one-side", "both-sides"])
+@pytest.mark.parametrize("variant", range(1, 8))
+def test_sley_scene_reproduces_sley_all(drive, variant):
+    _compare(drive, variant)
+
+
+def test_shipped_mrazek_files_are_the_generated_scenes():
+    from mechcirc.sley.presets import preset
+    from mechcirc.sley.scenes import scene_text
+
+    for drive, path in (("one-side", "examples/mrazek_one_side.toml"),
+                        ("both-sides", "examples/mrazek_both_sides.toml")):
+        text = open(path, encoding="utf-8").read()
+        body = lambda t: t.split("\n", 1)[1]          # noqa: E731 (the title line differs)
+        assert body(text) == body(scene_text(preset(drive, 3)))
+
+
+def test_front_dead_centre_matches_fourbar():
+    from mechcirc.scene.motion import dead_centre
+    from mechcirc.sley.presets import preset
+
+    scene = load_scene("examples/mrazek_one_side.toml")
+    want = preset("one-side", 3).fourbar().dead_centres()
+    assert dead_centre(scene, "front") == pytest.approx(want[0].theta, abs=1e-10)
+    assert dead_centre(scene, "back") == pytest.approx(want[1].theta, abs=1e-10)
+
+
+def test_elastobacklash_law():
+    """No force in the gap; beyond it f = k(e ∓ b) + d ė with |d ė| limited to |f_c|."""
+    kern = _python_kernel()
+    k, d, b = 100.0, 10.0, 0.5
+    assert kern.force_law(1, k, d, b, 0.3, 50.0) == 0.0              # in the gap
+    assert kern.force_law(1, k, d, b, 0.7, 1.0) == pytest.approx(100 * 0.2 + 10)
+    assert kern.force_law(1, k, d, b, 0.7, -50.0) == pytest.approx(0.0)   # never pulls
+    assert kern.force_law(1, k, d, b, 0.7, 50.0) == pytest.approx(40.0)   # |f_d| ≤ |f_c|
+    assert kern.force_law(1, k, d, b, -0.7, 50.0) == pytest.approx(0.0)
+    assert kern.force_law(2, k, d, b, 0.3, 5.0) == pytest.approx(50.0)   # Mrázek: damping on
+    assert kern.force_law(0, k, d, 0.0, 0.3, 5.0) == pytest.approx(80.0)
+
+
+def test_heald_simulates_and_reports_names():
+    scene = load_scene("examples/heald_scene.toml")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", SceneAccuracyWarning)
+        r = simulate_scene(scene, revolutions=2, points=720)
+    for name in ("lever3.acceleration", "kCD.force", "kEF.force", "warp.force",
+                 "drive.moment"):
+        assert name in r.extrema
+    assert r.error_estimate is not None and r.periodicity is not None
+
+
+def test_small_motion_matches_linear_forced_response():
+    """A stiff single rod: the time domain against the closed form of m ẍ + d ẋ + k x = F."""
+    text = '''
+units = "m"
+[points]
+O = [0.0, 0.0]
+P = [1.0, 0.0]
+[ground]
+points = ["O"]
+[links]
+crank = ["O", "P"]
+[[cranks]]
+link = "crank"
+omega = 10.0
+[[torsion]]
+name = "C"
+link = "crank"
+body = "disc"
+stiffness = 400.0
+damping = 2.0
+[[masses]]
+name = "J"
+link = "disc"
+inertia = 1.0
+[[moments]]
+name = "kick"
+body = "disc"
+amplitude = 3.0
+window_deg = 359.0
+centre = 180.0
+[drive]
+link = "crank"
+velocity = 1.0
+'''
+    scene = parse_scene(text)
+    r = simulate_scene(scene, revolutions=1, points=360, steps_per_period=2000,
+                       error_estimate=False)
+    # twist e = φ_disc − φ_crank obeys J ë + d ė + k e = M(t), e(0) = ė(0) = 0 (crank at
+    # constant speed: no inertial load).  Reference: scipy solve_ivp at rtol 1e-11.
+    from scipy.integrate import solve_ivp
+
+    W, a = 10.0, math.radians(359.0)
+
+    def m(t):
+        x = (W * t - math.pi + a / 2) % (2 * math.pi)
+        return 3.0 * math.sin(math.pi * x / a) if x < a else 0.0
+
+    sol = solve_ivp(lambda t, y: [y[1], m(t) - 2.0 * y[1] - 400.0 * y[0]], (0, 2 * math.pi / W),
+                    [0.0, 0.0], rtol=1e-11, atol=1e-14, dense_output=True,
+                    max_step=1e-3)
+    t = r.crank_angle / W
+    force = r.values["C.force"]            # C (φ_disc − φ_crank) + d (rate)
+    e = sol.sol(t)
+    want = 400.0 * e[0] + 2.0 * e[1]
+    assert np.max(np.abs(force - want)) <= 1e-6 * np.max(np.abs(want))
+
+
+def test_overrides_are_checked():
+    from mechcirc.errors import MechcircError
+
+    scene = load_scene("examples/mrazek_one_side.toml")
+    with pytest.raises(MechcircError, match="no such parameter"):
+        apply_overrides(scene, {"C9.stiffness": 1.0})
+    with pytest.raises(MechcircError, match="omega"):
+        apply_overrides(scene, {"omega": -1.0})
+
+
+@pytest.mark.parametrize("path,deg", [("examples/heald_scene.toml", 40.0),
+                                      ("examples/heald_scene.toml", 200.0),
+                                      ("examples/mrazek_one_side.toml", 40.0),
+                                      ("examples/mrazek_both_sides.toml", 200.0)])
+def test_crosscheck_ringing_matches_circuit(path, deg):
+    """Ringing of the time-domain motion after a kick = the circuit's resonances at θ.
+
+    Measured: at most 1.7e-4 (the fast, ζ ≈ 0.16 sley mode); tolerance 1e-3.
+    """
+    from mechcirc.scene.crosscheck import crosscheck_scene
+
+    c = crosscheck_scene(load_scene(path), math.radians(deg))
+    assert len(c.resonances) >= 2
+    for r in c.resonances:
+        assert r["rel_error"] <= 1e-3, r
+        assert r["ringing_zeta"] == pytest.approx(r["zeta"], rel=1e-2, abs=1e-4)
+
+
+def test_cli_simulate_and_crosscheck_scene_json(capsys):
+    import json
+
+    from mechcirc.cli import main
+
+    assert main(["simulate", "examples/mrazek_one_side.toml", "--revolutions", "2",
+                 "--points", "720", "--json", "--set", "C2.clearance=0"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    for name in ("eps2P", "eps4P", "eps4T", "M2V", "crank.acceleration", "C2.force"):
+        assert len(doc["extrema"][name]) == 2
+    assert doc["error_estimate"] is not None
+    assert main(["crosscheck", "examples/mrazek_both_sides.toml", "--theta", "40",
+                 "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert {"omega", "ringing_omega", "rel_error"} <= set(doc["resonances"][0])
+    assert main(["simulate", "examples/mrazek_one_side.toml", "--set", "nope=1"]) == 2
+
+
+def test_cli_via_scene_matches_preset(capsys):
+    """`simulate --drive D --variant V --via-scene` = the sley preset, same output names."""
+    import json
+
+    from mechcirc.cli import main
+    from mechcirc.sley import simulate
+
+    assert main(["simulate", "--drive", "one-side", "--variant", "4", "--via-scene",
+                 "--revolutions", "2", "--points", "720", "--no-error-estimate",
+                 "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ref = simulate("one-side", 4, revolutions=2, points_per_revolution=720,
+                       error_estimate=False)
+    for k, (lo, hi) in ref.extrema.items():
+        scale = max(abs(lo), abs(hi))
+        assert abs(doc["extrema"][k][0] - lo) <= 1e-6 * scale, k
+        assert abs(doc["extrema"][k][1] - hi) <= 1e-6 * scale, k
+
+
+def test_plot_motion_draws_the_named_outputs():
+    from mechcirc.scene.plots import plot_motion
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        r = simulate_scene(load_scene("examples/mrazek_one_side.toml"), revolutions=1,
+                           points=360, error_estimate=False)
+    fig = plot_motion(r, ["sley.acceleration", "C2.force"])
+    top, bottom = fig.axes
+    assert [ln.get_label() for ln in top.lines] == ["sley.acceleration"]
+    assert [ln.get_label() for ln in bottom.lines] == ["C2.force"]
+    assert np.array_equal(top.lines[0].get_ydata(), r.values["sley.acceleration"])
+    with pytest.raises(ValueError, match="no output"):
+        plot_motion(r, ["nothing.force"])
+
+
+@pytest.mark.parametrize("path", SCENES)
+@pytest.mark.parametrize("reflect", ["eta", "lever"])
+def test_circuit_built_as_objects_equals_its_netlist(path, reflect):
+    """build() makes the Circuit from Element/Lever/Drive objects; its netlist text parses
+    to the same circuit (issue 15 §3)."""
+    import dataclasses
+
+    from mechcirc.netlist import parse
+
+    model = build(load_scene(path), math.radians(40.0), reflect=reflect)
+    parsed = parse(model.netlist)
+    strip = lambda x: dataclasses.replace(x, line=0, col=0)       # noqa: E731
+    assert [strip(e) for e in parsed.elements] == list(model.circuit.elements)
+    assert [strip(lv) for lv in parsed.levers] == list(model.circuit.levers)
+    assert strip(parsed.drive) == model.circuit.drive
