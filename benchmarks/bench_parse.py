@@ -50,7 +50,12 @@ def ladder_text(n_elements: int, seed: int = 0) -> str:
         lines.append(f"damper c{i} n{i - 1} n{i} {10 ** rng.uniform(0, 2)!r}"
                      + (" N·s/m" if unit else ""))
         lines.append(f"mass m{i} n{i} 0 {10 ** rng.uniform(-4, 0)!r}" + (" kg" if unit else ""))
-    return "\n".join(lines[:n_elements + 1]) + "\n"
+    # A partial last section would leave k, c dangling (unloaded): masses instead.
+    extra = len(lines) - 1 - n_elements
+    if extra:
+        del lines[-3:]
+        lines += [f"mass x{j} n{i - 1} 0 {10 ** rng.uniform(-4, 0)!r}" for j in range(3 - extra)]
+    return "\n".join(lines) + "\n"
 
 
 _SI = {"N/m": 1.0, "N·s/m": 1.0, "kg": 1.0}
