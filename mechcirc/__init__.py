@@ -48,7 +48,33 @@ stay importable as ``importlib.import_module("mechcirc.sweep")`` and by
 and ``simplify`` are loaded on first use, so ``import mechcirc`` stays fast.
 """
 
-import importlib as _importlib
+def _starting_the_command_line() -> bool:
+    """This process is ``mechcirc ...`` or ``python -m mechcirc ...`` (not a library user)."""
+    import os
+    import sys
+
+    argv = getattr(sys, "orig_argv", sys.argv)
+    if any(a == "-m" and b == "mechcirc" for a, b in zip(argv, argv[1:])):
+        return True
+    return bool(sys.argv) and os.path.basename(sys.argv[0]) in ("mechcirc", "mechcirc.exe")
+
+
+if _starting_the_command_line():
+    # Ctrl-C while the command line is still starting (before its own handler
+    # is in place) ends it quietly, as after start-up: no traceback.
+    # cli.main() restores Python's default handler.
+    import signal as _signal
+
+    def _interrupted_while_starting(signum, frame):
+        import os
+        import sys
+
+        sys.stderr.write("mechcirc: interrupted\n")
+        os._exit(130)
+
+    _signal.signal(_signal.SIGINT, _interrupted_while_starting)
+
+import importlib as _importlib  # noqa: E402
 import types as _types
 import sys as _sys
 

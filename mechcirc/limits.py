@@ -23,26 +23,27 @@ MAX_SWEEP_POINTS = 10_000_000
 MAX_PLOT_POINTS = 1_000_000
 #: Points a ``--json`` document may hold (JSON text is ~200 bytes a point).
 MAX_JSON_POINTS = 1_000_000
-#: Points of a sweep by nodal analysis (a matrix per point while solving).
-MAX_NODAL_POINTS = 1_000_000
+#: Points of a sweep by nodal analysis (~0.2 ms a point on the bundled netlist: 10⁶ took over 4 min).
+MAX_NODAL_POINTS = 100_000
 #: Points of an adaptive sweep by nodal analysis (its refinement re-solves every midpoint).
 MAX_ADAPTIVE_NODAL_POINTS = 2_000
-#: Points (rows) of a parameter study.
-MAX_STUDY_POINTS = 1_000_000
+#: Points (rows) of a parameter study (about 1.1 kB each in memory while it runs).
+MAX_STUDY_POINTS = 500_000
 #: Frequency points of the sweep at each study point.
 MAX_STUDY_SWEEP_POINTS = 100_000
 #: Study points × sweep points (the whole study's frequency evaluations).
 MAX_STUDY_WORK = 1_000_000_000
 #: Revolutions a time-domain simulation integrates (compiled RK4).
 MAX_REVOLUTIONS = 1_000
-#: Revolutions with the scipy integrators (Python right-hand side, ~0.15 s each).
+#: Revolutions with the scipy integrators (Python right-hand side: 100 took 31 s here).
 MAX_SCIPY_REVOLUTIONS = 100
 #: Output points per revolution of a simulation.
 MAX_POINTS_PER_REVOLUTION = 1_000_000
-#: Crank angles of a scene's cycle map (~10 ms each).
-MAX_CYCLE_POINTS = 3_600
-#: Elements of a network that is not series–parallel for a symbolic formula.
-MAX_FORMULA_ELEMENTS = 8
+#: Crank angles of a scene's cycle map (a step of 0.25°; 10–25 ms each: 3,600 took 95 s under load).
+MAX_CYCLE_POINTS = 1_440
+#: Elements (and levers) of a network without a series–parallel tree whose symbolic
+#: formula is attempted (its size grows with the number of spanning trees).
+MAX_FORMULA_ELEMENTS = 12
 #: Seconds a symbolic formula may take before it is abandoned.
 FORMULA_SECONDS = 20.0
 

@@ -11,19 +11,23 @@ Method.  The nodal matrices give the quadratic eigenproblem
 (s² M + s D + Kₛ) v = 0 with the lever constraints (and, for resonances, the
 drive constraint v_a = v_b) imposed exactly by projecting onto their null
 space.  Undamped networks: massless directions are condensed out statically
-(exact) and the symmetric definite problem Kₛ v = ω² M v is solved by
-``scipy.linalg.eigh``; each root is then polished to full precision on the
-circuit's own K(ω) (a bracketed root search on Im K, which is monotone in ω
-for a lossless network by Foster's reactance theorem).  Damped networks: the
-problem is linearised to a 2n generalised eigenproblem solved by QZ
-(``scipy.linalg.eig``); s = −ζωₙ ± jωₙ√(1 − ζ²).
+(exact) and the symmetric problem Kₛ v = ω² M v is solved by
+``scipy.linalg.eigvalsh`` (error bound eps·λ_max/λ, Weyl).  Damped networks:
+the problem is linearised to a 2n generalised eigenproblem solved by QZ
+(``scipy.linalg.eig``); s = −ζωₙ ± jωₙ√(1 − ζ²).  Networks above the dense
+limits are solved in a band ``omega_max`` by shift-invert Arnoldi on the
+same linearisation (``scipy.sparse.linalg.eigs``).
+
+Every damped root, and every undamped root whose eigenvalue bound is not
+already at rounding level, is then polished on the circuit's own K(s) at
+complex s (a complex secant; anti-resonances on the held system, which is
+regular where A is singular), K being refined in extended precision; the
+reported ``error`` is the uncertainty of K there over its slope, plus the
+last step, including the effect of rounding the element values.
 
 A mode that appears in both problems at the same frequency is not seen from
 the drive (it cancels in K) and is not reported.  Zero-frequency (rigid-body)
 modes are not reported.
-
-Cost: O(n³) in the number of unknowns n; polishing costs about ten
-evaluations of K at all roots at once.
 """
 
 from __future__ import annotations
@@ -102,6 +106,16 @@ def find_resonances(circuit: Circuit, omega_max: float | None = None) -> list[Re
                                "overflows float64", circuit.source, e.line, e.col,
                                "a product below 1.8e308")
     system = circuit.nodal
+    if system.unloaded:
+        import warnings
+
+        from .errors import UnloadedElementWarning
+
+        d = circuit.drive
+        warnings.warn(
+            f"{len(system.unloaded)} element(s) lie on no path between the drive's nodes "
+            f"{d.n1!r} and {d.n2!r} and carry no force: {', '.join(system.unloaded)}",
+            UnloadedElementWarning, stacklevel=2)
     n_nodes = len(system.nodes)
     # Lever constraints are the rows of C below the node block; the lever forces
     # themselves drop out once the velocities are confined to the constraints' null space.
@@ -113,12 +127,15 @@ def find_resonances(circuit: Circuit, omega_max: float | None = None) -> list[Re
     if system.b >= 0:
         drive_row[0, system.b] = -1.0
     damped = D.nnz > 0 and bool(np.any(D.data))
-    released = _modes(M, D, Ks, G_levers, damped)
-    held = _modes(M, D, Ks, np.vstack([G_levers, drive_row]), damped)
+    released = _modes(M, D, Ks, G_levers, damped, omega_max)
+    held = _modes(M, D, Ks, np.vstack([G_levers, drive_row]), damped, omega_max)
     held, released = _cancel(held, released)
-    out = [_make("resonance", s) for s in held] + [_make("antiresonance", s) for s in released]
-    if not damped and out:
-        out = _polish(circuit, out)
+    roots = [("resonance", s, e, f) for s, e, f in held] + \
+        [("antiresonance", s, e, f) for s, e, f in released]
+    if omega_max is not None:
+        # A little beyond the band: polishing may move a root across its edge.
+        roots = [t for t in roots if abs(t[1]) <= omega_max * (1 + 1e-6)]
+    out = _polish(system, roots, damped) if roots else []
     if omega_max is not None:
         out = [r for r in out if r.omega <= omega_max]
     return sorted(out, key=lambda r: (r.omega, r.kind))
@@ -144,41 +161,48 @@ def _project(G: np.ndarray, n: int):
     # G_p v_p + G_f v_f = 0  ->  v_p = -G_p⁺ G_f v_f (exact for consistent constraints)
     Gp, Gf = G[:, pivots], G[:, free]
     elim = -la.lstsq(Gp, Gf)[0]
-    Z = sp.lil_matrix((n, free.size))
-    Z[free, np.arange(free.size)] = 1.0
-    rows, cols = np.nonzero(np.abs(elim) > 0)
-    for i, j in zip(rows, cols):
-        Z[pivots[i], j] = elim[i, j]
-    return Z.tocsr()
+    rows, cols = np.nonzero(elim)
+    r = np.concatenate([free, pivots[rows]])
+    c = np.concatenate([np.arange(free.size), cols])
+    v = np.concatenate([np.ones(free.size), elim[rows, cols]])
+    Z = sp.csr_matrix((v, (r, c)), shape=(n, free.size))
+    return Z
 
 
-def _modes(M, D, Ks, G, damped: bool) -> np.ndarray:
+def _modes(M, D, Ks, G, damped: bool, omega_max=None) -> np.ndarray:
     """:func:`_modes_unchecked`, with LAPACK's failures reported as :class:`SolverError`."""
     try:
-        return _modes_unchecked(M, D, Ks, G, damped)
+        return _modes_unchecked(M, D, Ks, G, damped, omega_max)
     except np.linalg.LinAlgError as exc:
         # Seen only for values spanning most of float64's range (1e-320 … 1e220).
         raise SolverError(f"resonances: the eigenvalue solver failed ({exc}); element "
                           "values span too many orders of magnitude", status="lapack") from None
 
 
-def _modes_unchecked(M, D, Ks, G, damped: bool) -> np.ndarray:
+def _modes_unchecked(M, D, Ks, G, damped: bool, omega_max=None) -> np.ndarray:
     """Eigenvalues s (Im s ≥ 0, |s| > 0) of the constrained network, with their error estimates.
 
     ``M``, ``D``, ``Ks`` are sparse; returns an array of shape (k, 2): column
-    0 the complex s, column 1 the estimated relative error of |s|.
+    0 the complex s, column 1 the estimated relative error of |s|.  Networks
+    above the dense limits are solved in the band |s| ≤ ``omega_max`` by
+    shift-invert Arnoldi (:func:`_band_modes`); without a band they are refused.
     """
     Z = _project(G, M.shape[0])
     limit = MAX_UNKNOWNS_DAMPED if damped else MAX_UNKNOWNS
     if Z.shape[1] > limit:
+        if omega_max is not None and math.isfinite(omega_max) and omega_max > 0:
+            with np.errstate(all="ignore"):
+                Mr, Dr, Kr = ((Z.T @ X @ Z).tocsc() for X in (M, D, Ks))
+            return _band_modes(Mr, Dr, Kr, float(omega_max))
         raise SolverError(
             f"resonances: {Z.shape[1]} unknowns, the limit is {limit} for "
-            f"{'damped' if damped else 'undamped'} networks (a dense O(n³) eigenproblem); "
-            "sweep K(ω) instead, or reduce the network", status="size")
+            f"{'damped' if damped else 'undamped'} networks (a dense O(n³) eigenproblem) "
+            "unless a band omega_max is given; give omega_max, sweep K(ω) instead, or "
+            "reduce the network", status="size")
     with np.errstate(all="ignore"):
         Mr, Dr, Kr = ((Z.T @ X @ Z).toarray() for X in (M, D, Ks))
     if Mr.shape[0] == 0:
-        return np.zeros((0, 2), dtype=complex)
+        return np.zeros((0, 3), dtype=complex)
     if not (np.isfinite(Mr).all() and np.isfinite(Dr).all() and np.isfinite(Kr).all()):
         raise SolverError("resonances: the network's matrices overflow float64 (element "
                           "values or lever ratios near 1e308 combine beyond it)",
@@ -192,10 +216,15 @@ def _modes_unchecked(M, D, Ks, G, damped: bool) -> np.ndarray:
                           f"{scale_m:.3g} kg) are too far apart for float64", status="range")
     eps = np.finfo(float).eps
     if not damped:
-        lam = _undamped(Mr / scale_m, Kr / scale_k)      # λ = (ω / w_ref)²
+        lam, direct = _undamped(Mr / scale_m, Kr / scale_k)      # λ = (ω / w_ref)²
         lam = lam[lam > 1e-11 * max(1.0, lam.max(initial=0.0))]
         s = 1j * w_ref * np.sqrt(lam)
         err = eps * (lam.max(initial=1.0) / lam) * 4
+        # Weyl's bound holds for the scaled matrix, not through a static
+        # condensation or an eigen-decomposition of M (their rounding is
+        # amplified by the condition of the condensed block): not a bound
+        # then, and these roots are always polished on K (column 2).
+        must = np.full(s.size, 0.0 if direct else 1.0)
     else:
         with np.errstate(all="ignore"):
             scaled = (Mr / scale_m, Dr / (scale_m * w_ref), Kr / scale_k)
@@ -219,11 +248,55 @@ def _modes_unchecked(M, D, Ks, G, damped: bool) -> np.ndarray:
                 near = np.minimum(np.sqrt(eps), eps / (gap.min(axis=1) / mag))
             err = np.maximum(err, 10 * near)
         s = np.where(np.abs(s.imag) <= 1e-12 * np.abs(s), s.real + 0j, s)
-    return np.column_stack([s, err]) if s.size else np.zeros((0, 2), dtype=complex)
+    if damped:
+        must = np.ones(s.size)
+    return np.column_stack([s, err, must]) if s.size else np.zeros((0, 3), dtype=complex)
+
+
+def _band_modes(M, D, K, omega_max: float) -> np.ndarray:
+    """Roots s with |s| ≤ ``omega_max`` of (s²M + sD + K) v = 0, by shift-invert Arnoldi.
+
+    The companion pencil A − sB, A = [[0, I], [−K, −D]], B = [[I, 0], [0, M]],
+    is factorised once at a shift σ = −omega_max·1e-3 (just off the rigid-body
+    roots at 0) by a sparse LU; ARPACK (``scipy.sparse.linalg.eigs``) finds the
+    largest ν of (A − σB)⁻¹B, ν = 1/(s − σ), that is the roots nearest σ, and
+    the number asked doubles until a root beyond the band is found.  Massless
+    directions (B singular) give ν = 0 and are never reached.  The error of
+    each root is a first estimate only: every root is then polished on K.
+    """
+    import scipy.sparse as sp
+    from scipy.sparse.linalg import LinearOperator, eigs, splu
+
+    n = M.shape[0]
+    eye = sp.identity(n, format="csc")
+    A = sp.bmat([[None, eye], [-K, -D]], format="csc")
+    B = sp.bmat([[eye, None], [None, M]], format="csc")
+    sigma = -1e-3 * omega_max
+    lu = splu((A - sigma * B).tocsc().astype(complex))
+    op = LinearOperator((2 * n, 2 * n), matvec=lambda v: lu.solve(B @ v), dtype=complex)
+    k = min(24, 2 * n - 2)
+    while True:
+        nu = eigs(op, k=k, which="LM", return_eigenvectors=False, tol=1e-13)
+        with np.errstate(divide="ignore"):
+            s_all = sigma + 1.0 / nu
+        s_all = s_all[np.isfinite(s_all)]
+        if np.abs(s_all).max(initial=0.0) > omega_max or k >= 2 * n - 2:
+            break
+        k = min(2 * k, 2 * n - 2)
+    keep = (np.abs(s_all) > 1e-6 * omega_max) & (np.abs(s_all) <= omega_max * (1 + 1e-6)) \
+        & (s_all.imag >= -1e-9 * np.abs(s_all))
+    s = s_all[keep]
+    s = np.where(np.abs(s.imag) <= 1e-9 * np.abs(s), s.real + 0j, s)
+    err = np.full(s.size, 1e-8)
+    must = np.ones(s.size)
+    return np.column_stack([s, err, must]) if s.size else np.zeros((0, 3), dtype=complex)
 
 
 def _undamped(M: np.ndarray, K: np.ndarray) -> np.ndarray:
     """λ with K v = λ M v, M positive semi-definite; massless directions condensed out.
+
+    Returns ``(λ, direct)``: ``direct`` when M was diagonal and every
+    direction had mass (no condensation), where eps·λ_max/λ bounds the error.
 
     A diagonal M (every mass to the frame, the usual mobility-analogy layout)
     is handled without an eigen-decomposition of M.
@@ -234,8 +307,9 @@ def _undamped(M: np.ndarray, K: np.ndarray) -> np.ndarray:
     else:
         mu, V = la.eigh(M)
     massive = mu > 1e-13 * max(mu.max(initial=0.0), 1e-300)
+    direct = V is None and bool(massive.all())
     if not massive.any():
-        return np.zeros(0)          # no inertia: no oscillation
+        return np.zeros(0), direct  # no inertia: no oscillation
     if V is None:
         Krr = K[np.ix_(massive, massive)]
         Knn = K[np.ix_(~massive, ~massive)]
@@ -245,11 +319,11 @@ def _undamped(M: np.ndarray, K: np.ndarray) -> np.ndarray:
         Krr, Knn, Knr = R.T @ K @ R, N.T @ K @ N, N.T @ K @ R
     Kc = Krr - Knr.T @ la.lstsq(Knn, Knr)[0] if Knn.size else Krr
     if Kc.shape[0] == 0:
-        return np.zeros(0)
+        return np.zeros(0), direct
     # Symmetric scaling by the masses gives a standard symmetric eigenproblem.
     d = 1.0 / np.sqrt(mu[massive])
     A = Kc * d[:, None] * d[None, :]
-    return la.eigvalsh((A + A.T) / 2)
+    return la.eigvalsh((A + A.T) / 2), direct
 
 
 def _damped(M, D, K) -> np.ndarray:
@@ -267,7 +341,7 @@ def _cancel(held: np.ndarray, released: np.ndarray):
     """Drop modes present in both problems (they do not appear in K)."""
     keep_h = np.ones(len(held), bool)
     keep_r = np.ones(len(released), bool)
-    for i, (s, err) in enumerate(held):
+    for i, (s, err, _) in enumerate(held):
         if not len(released):
             break
         d = np.abs(released[:, 0] - s) / abs(s)
@@ -280,60 +354,127 @@ def _cancel(held: np.ndarray, released: np.ndarray):
     return held[keep_h], released[keep_r]
 
 
-def _make(kind: str, row) -> Resonance:
-    s, err = complex(row[0]), float(np.real(row[1]))
+def _make(kind: str, s: complex, err: float) -> Resonance:
+    s = complex(s)
     wn = abs(s)
     return Resonance(kind, float(wn), float(abs(s.imag)),
-                     float(-s.real / wn) if wn else 0.0, err)
+                     float(-s.real / wn) + 0.0 if wn else 0.0, float(err))
 
 
-def _polish(circuit: Circuit, found: list[Resonance]) -> list[Resonance]:
-    """Refine undamped roots on the circuit's own K(ω) by a bracketed (Illinois) search.
+#: Roots whose eigen-solver bound is below this are not polished on K (undamped).
+_POLISH_BELOW = 1e-13
 
-    Im K rises through zero at a resonance and −1/Im K rises through zero at
-    an anti-resonance (Foster); roots without a sign change in the bracket
-    keep their eigenvalue estimate.
+
+def _polish(system, roots: list, damped: bool) -> list[Resonance]:
+    """Each root polished on the circuit's own K(s) by a complex secant iteration.
+
+    K(s) comes from the nodal matrices at complex frequency, A(s) = D + C +
+    sM + Kₛ/s (``nodal.combine`` at ω = −js); a resonance is a zero of K, an
+    anti-resonance a zero of 1/K.  The error of the polished root is
+    |δg| / |g'(s)| with δg the absolute error of g = K (or 1/K) at the root
+    (K is refined in extended precision; δK its estimate, at least eps·|K|,
+    times a safety factor of 4), plus the last secant step.  Undamped roots whose eigenvalue bound (Weyl:
+    eps·λ_max/λ) is already below :data:`_POLISH_BELOW` keep it; a root the
+    secant does not confirm (it leaves for another root) keeps its
+    eigen-solver value and estimate.
     """
-    w0 = np.array([r.omega for r in found])
-    pole = np.array([r.kind == "antiresonance" for r in found])
-    width = np.maximum(np.array([r.error for r in found]) * 50, 1e-9)
+    eps = np.finfo(float).eps
+    kinds = [k for k, _, _, _ in roots]
+    s0 = np.array([complex(s) for _, s, _, _ in roots])
+    e0 = np.array([float(np.real(e)) for _, _, e, _ in roots])
+    must = np.array([float(np.real(f)) > 0 for _, _, _, f in roots])
+    todo = np.flatnonzero((e0 > _POLISH_BELOW) | must) if not damped else np.arange(s0.size)
+    s_new, e_new = s0.copy(), e0.copy()
+    if todo.size:
+        pole = np.array([kinds[i] == "antiresonance" for i in todo])
+        s, err = _secant(system, s0[todo], pole, e0[todo], damped)
+        s_new[todo], e_new[todo] = s, err
+    if not damped:
+        s_new = 1j * np.abs(s_new.imag)
+    else:
+        s_new = np.where(np.abs(s_new.imag) <= e_new * np.abs(s_new), s_new.real + 0j, s_new)
+    return [_make(k, s, max(e, eps)) for k, s, e in zip(kinds, s_new, e_new)]
 
-    def f(w):
-        X = circuit.sweep(w).K.imag
-        with np.errstate(divide="ignore"):
-            return np.where(pole, -1.0 / X, X)
 
-    lo, hi = w0 * (1 - width), w0 * (1 + width)
-    flo, fhi = f(lo), f(hi)
-    ok = (flo < 0) & (fhi > 0) & np.isfinite(flo) & np.isfinite(fhi)
-    side = np.zeros(w0.size)
-    for _ in range(60):
-        if not ok.any():
+def _g_and_delta(system, s: np.ndarray, pole: np.ndarray):
+    """g(s) (K, or 1/K at anti-resonances) and its absolute rounding uncertainty."""
+    from . import nodal
+
+    eps = np.finfo(float).eps
+    g = np.full(s.shape, np.nan, dtype=complex)
+    dg = np.full(s.shape, np.inf)
+    for want, sys_ in ((~pole, system), (pole, _held(system))):
+        if want.any():
+            # Anti-resonances on the held system: 1/K = −q there, and A is
+            # singular at the root while the held matrix is not.
+            K, dK = nodal.evaluate_complex(sys_, s[want])
+            sign = -1.0 if sys_ is not system else 1.0
+            g[want] = sign * K
+            # The refined value is good to about eps relative at best (its
+            # rounding to float64), whatever the estimate of the solve says.
+            dg[want] = 4 * np.maximum(dK, eps * np.abs(K))
+    return g, dg
+
+
+_HELD: dict = {}
+
+
+def _held(system):
+    """nodal.held(system), built once per system."""
+    from . import nodal
+
+    key = id(system)
+    if key not in _HELD or _HELD[key][0] is not system:
+        _HELD.clear()
+        _HELD[key] = (system, nodal.held(system))
+    return _HELD[key][1]
+
+
+def _secant(system, s0: np.ndarray, pole: np.ndarray, e0: np.ndarray, damped: bool):
+    """Complex secant iteration from the eigen-solver's roots; returns (s, relative error)."""
+    eps = np.finfo(float).eps
+    h = np.maximum(np.abs(s0) * np.maximum(e0, 1e-9), 1e-300)
+    a, b = s0 - h * (1 if damped else 1j), s0.copy()
+    ga, _ = _g_and_delta(system, a, pole)
+    gb, db = _g_and_delta(system, b, pole)
+    with np.errstate(all="ignore"):
+        g0, slope0 = gb, (gb - ga) / (b - a)
+    active = np.isfinite(ga) & np.isfinite(gb)
+    step = np.full(s0.size, np.inf)
+    slope = np.full(s0.size, np.nan, dtype=complex)
+    for _ in range(12):
+        if not active.any():
             break
         with np.errstate(all="ignore"):
-            mid = np.where(ok, (lo * fhi - hi * flo) / (fhi - flo), w0)
-        mid = np.where((mid > lo) & (mid < hi), mid, 0.5 * (lo + hi))
-        fm = f(mid)
-        left = ok & (fm < 0)
-        right = ok & (fm >= 0)
-        lo, flo = np.where(left, mid, lo), np.where(left, fm, flo)
-        hi, fhi = np.where(right, mid, hi), np.where(right, fm, fhi)
-        # Illinois: halve the stale end's value when the same end moves twice.
-        fhi = np.where(left & (side < 0), fhi / 2, fhi)
-        flo = np.where(right & (side > 0), flo / 2, flo)
-        side = np.where(left, -1, np.where(right, 1, side))
-        if np.all(~ok | (hi - lo <= 4 * np.finfo(float).eps * hi)):
-            break
+            sl = (gb - ga) / (b - a)
+            c = np.where(active, b - gb / sl, b)
+        if not damped:
+            c = 1j * c.imag                       # undamped: roots on the jω axis
+        ok = active & np.isfinite(c)
+        gc, dc = _g_and_delta(system, np.where(ok, c, b), pole)
+        ok &= np.isfinite(gc)
+        # On an exact zero of g its relative estimate says nothing (0·inf):
+        # the uncertainty at the previous iterate, a step away, stands.
+        dc = np.where(np.isfinite(dc), dc, db)
+        step = np.where(ok, np.abs(c - b), step)
+        slope = np.where(ok, sl, slope)
+        a, ga = np.where(ok, b, a), np.where(ok, gb, ga)
+        b, gb, db = np.where(ok, c, b), np.where(ok, gc, gb), np.where(ok, dc, db)
+        # Stop once a step is within rounding of the root's own uncertainty.
+        with np.errstate(all="ignore"):
+            done = step <= np.maximum(4 * eps * np.abs(b), db / np.abs(slope))
+        active = ok & ~done
     with np.errstate(all="ignore"):
-        f_lo, f_hi = f(lo), f(hi)
-    out = []
-    for r, good, a, b, fa, fb in zip(found, ok, lo, hi, f_lo, f_hi):
-        if good:
-            # An end on an exact zero of the computed f is the root itself (the
-            # midpoint of a one-ulp bracket [10 − ulp, 10] is not).
-            w = float(a if fa == 0 else b if fb == 0 else 0.5 * (a + b))
-            out.append(Resonance(r.kind, w, w, 0.0, float(max((b - a) / (2 * w),
-                                                               np.finfo(float).eps))))
-        else:
-            out.append(r)
-    return out
+        err = (db / np.abs(slope) + step) / np.abs(b)
+    # Keep the eigen-solver's root where the secant wandered off (to another root,
+    # or nowhere): farther than 1e-3 relative, or no estimate.
+    moved = np.abs(b - s0) / np.abs(s0)
+    bad = ~np.isfinite(err) | ~np.isfinite(b) | (moved > 1e-3)
+    s = np.where(bad, s0, b)
+    # Unconfirmed: the eigen-solver's estimate, but never below the Newton
+    # step |g/g'| at its root (how far the circuit's own K says the root is).
+    with np.errstate(all="ignore"):
+        newton = np.abs(g0 / slope0) / np.abs(s0)
+    newton = np.where(np.isfinite(newton), 10 * newton, 0.0)
+    err = np.where(bad, np.maximum(e0, newton), np.maximum(err, eps))
+    return s, err

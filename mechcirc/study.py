@@ -306,6 +306,10 @@ def _parse_spec(data: dict, source: str, base: Path) -> StudySpec:
         if not isinstance(o, dict) or not {"min", "max"} <= set(o):
             _fail(("omega",), "analysis 'sweep' needs an [omega] table with min and max "
                               "(and points, log)")
+        extra = sorted(set(o) - {"min", "max", "points", "log"})
+        if extra:
+            _fail(("omega", extra[0]), f"unknown key(s) in [omega]: {', '.join(extra)} "
+                                       "(expected min, max, points, log)")
         lo = _omega(("omega", "min"), o["min"], "omega.min")
         hi = _omega(("omega", "max"), o["max"], "omega.max")
         npts = _integer(("omega", "points"), o.get("points", 200), "omega.points", 1,

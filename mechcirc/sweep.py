@@ -140,8 +140,8 @@ class Sweep:
         Series–parallel: a forward error bound carried through the tree's sums
         (the cancellation at each node, see :func:`mechcirc.reduction.evaluate`);
         calibrated against 40-digit references in ``docs/accuracy.md``.
-        Nodal: machine epsilon × the condition number of A(ω) (see
-        :mod:`mechcirc.nodal`).
+        Nodal: the drive component of the last iterative-refinement
+        correction (:class:`mechcirc.nodal.Solution`), dense and sparse alike.
         """
         if "error" in self._cache:
             return self._cache["error"]
@@ -297,10 +297,18 @@ def _sweep_tree(circuit: Circuit, tree: Node, omega) -> Sweep:
 def _sweep_nodal(circuit: Circuit, omega) -> Sweep:
     from . import nodal
 
-    K = nodal.mobility(circuit.nodal, omega)
+    # One refined solve gives K and its error estimate (the last refinement
+    # correction, see nodal.Solution), dense and sparse alike; nodal.solve
+    # already applies the singular-point convention, and the neighbours decide
+    # any point it left undetermined.
+    K, err = nodal.mobility_and_error(circuit.nodal, omega)
+    singular = ~np.isfinite(K) & (omega > 0)
     K = _nodal_singular_limits(circuit.nodal, K, omega)
-    return Sweep(omega=omega, K=K, drive=circuit.drive, method="nodal", name=circuit.name,
-                 circuit=circuit)
+    err = np.where(singular, np.inf, err)
+    result = Sweep(omega=omega, K=K, drive=circuit.drive, method="nodal", name=circuit.name,
+                   circuit=circuit)
+    result._cache["error"] = err
+    return result
 
 
 def _nodal_singular_limits(system, K, omega, delta: float = 1e-6):
@@ -333,21 +341,8 @@ def _nodal_singular_limits(system, K, omega, delta: float = 1e-6):
 def _nodal_errors(system, omega) -> NDArray[np.float64]:
     from . import nodal
 
-    # eps·cond(A) bounds the error of x relative to ‖x‖; K = x_a − x_b can be
-    # far smaller than ‖x‖ near a resonance (K → 0), and its relative error
-    # larger by ‖x‖/|K| (a series m–k at 1e-13 from its resonance: 2e-4).
-    err = nodal.condition_error(system, omega)
-    if system.size > nodal.DENSE_LIMIT:
-        return err                      # not estimated (NaN) for sparse systems
-
-    def cancellation(w):
-        x = nodal.solve_unit(system, w, refine=False)
-        with np.errstate(all="ignore"):
-            ratio = np.linalg.norm(x, axis=1) / np.abs(system.difference(x))
-        return np.where(np.isnan(ratio), np.inf, np.maximum(ratio, 1.0))
-
-    with np.errstate(invalid="ignore"):
-        return err * _chunked(cancellation, omega, float)
+    # Normally cached by _sweep_nodal from the same refined solve.
+    return nodal.mobility_and_error(system, omega)[1]
 
 
 

@@ -144,3 +144,116 @@ def test_large_networks_use_sparse_solves_and_agree_with_the_tree():
     omega = np.geomspace(1, 1e3, 20)
     np.testing.assert_allclose(c.sweep(omega, method="nodal").K, c.sweep(omega, method="sp").K,
                                rtol=1e-10)
+
+
+# ----------------------------------------------------------- one assembly, honest errors
+def _grid_text(n, k=1e4, m=1.0):
+    lines = ["drive V g0_0 0 velocity=1"]
+    for i in range(n):
+        for j in range(n):
+            g = f"g{i}_{j}"
+            lines += [f"mass m{i}_{j} {g} 0 {m}", f"spring f{i}_{j} {g} 0 {k}"]
+            if i + 1 < n:
+                lines.append(f"spring h{i}_{j} {g} g{i + 1}_{j} {k}")
+            if j + 1 < n:
+                lines.append(f"spring v{i}_{j} {g} g{i}_{j + 1} {k}")
+    return "\n".join(lines)
+
+
+def _grid_K_reference(n, w, k=1e4, m=1.0):
+    """K at the corner of the grid from its own Laplacian (numpy, no mechcirc)."""
+    P = np.diag(np.r_[1.0, 2 * np.ones(n - 2), 1.0]) - np.eye(n, k=1) - np.eye(n, k=-1)
+    L = np.kron(P, np.eye(n)) + np.kron(np.eye(n), P)
+    A = 1j * (w * m * np.eye(n * n) - k * (np.eye(n * n) + L) / w)
+    e = np.zeros(n * n)
+    e[0] = 1.0
+    return complex(np.linalg.solve(A, e)[0])
+
+
+def test_grid_lowest_mode_is_flagged_on_the_sparse_path():
+    """Issue 11 §2: the 30×30 grid's mode at exactly ω = 100 used to return −5.6e12j, flag 0."""
+    c = mechcirc.parse(_grid_text(30))
+    assert c.nodal.size > mechcirc.nodal.DENSE_LIMIT            # the sparse path
+    omega = np.array([99.0, 100.0, 101.0])
+    s = c.sweep(omega, method="nodal")
+    assert s.flags[1] == 1 and np.isinf(s.K[1].imag) and s.K[1].real == 0
+    assert not np.isnan(s.error).any()
+    for i in (0, 2):
+        assert s.flags[i] == 0
+        # The reference's own error is about eps·cond ≈ 1e-13 here.
+        assert s.K[i] == pytest.approx(_grid_K_reference(30, omega[i]), rel=1e-11)
+
+
+def test_spring_parallel_mass_singular_point_is_the_same_from_both_methods():
+    """Issue 11 §3: −inf·j from the tree, nan from nodal; now both give the same value, flag 1."""
+    c = mechcirc.parse("drive V a 0 velocity=1\nspring k a 0 1e4\nmass m a 0 1\n")
+    sp, nd = c.sweep([99.0, 100.0, 101.0], method="sp"), c.sweep([99.0, 100.0, 101.0],
+                                                                    method="nodal")
+    assert nd.K[1] == sp.K[1] and np.isinf(nd.K[1].imag)
+    np.testing.assert_array_equal(nd.flags, sp.flags)
+    np.testing.assert_array_equal(nd.flags, [0, 1, 0])
+    assert not np.isnan(nd.error).any()
+
+
+@pytest.mark.parametrize("ratio", [1e-150, 1e-8, 1e8, 1e150])
+def test_extreme_lever_ratios_are_exact_and_not_flagged(ratio):
+    """Issue 11 §7: every point was flagged (estimate 2.2 … ∞) while K was exact to 2e-16."""
+    text = f"drive V a 0 velocity=1\nlever L a 0 b 0 ratio={ratio!r}\nmass m b 0 2\n"
+    omega = np.array([0.1, 1.0, 10.0])
+    s = mechcirc.parse(text).sweep(omega, method="nodal")
+    exact = -1j / (omega * 2 * ratio * ratio)
+    np.testing.assert_allclose(s.K, exact, rtol=4e-16)
+    np.testing.assert_array_equal(s.flags, 0)
+
+
+def test_tiny_damper_is_exact_and_not_flagged():
+    s = mechcirc.parse("drive V a 0 velocity=1\ndamper c a 0 1e-300\n").sweep(
+        [0.1, 1.0, 10.0], method="nodal")
+    np.testing.assert_allclose(s.K, 1 / 1e-300, rtol=2.3e-16)   # 1e-300 is not exact
+    np.testing.assert_array_equal(s.flags, 0)
+
+
+def test_assemble_whole_keeps_every_element():
+    text = ("drive V a 0 velocity=1\nmass m a 0 2\nspring k a b 3\n"
+            "mass hidden_m c 0 5\nspring hidden_k c 0 7\n")
+    c = mechcirc.parse(text)
+    loaded = mechcirc.nodal.assemble(c)
+    whole = mechcirc.nodal.assemble(c, whole=True)
+    assert "hidden_m" in loaded.unloaded and whole.unloaded == ()
+    index = {n: i for i, n in enumerate(whole.nodes)}
+    assert set(index) == {"a", "b", "c"}
+    M, Ks = whole.M.toarray(), whole.Ks.toarray()
+    a, b, cc = index["a"], index["b"], index["c"]
+    assert M[a, a] == 2 and M[cc, cc] == 5 and M[b, b] == 0
+    assert Ks[a, a] == 3 and Ks[a, b] == -3 and Ks[b, b] == 3 and Ks[cc, cc] == 7
+    assert whole.a == a and whole.b == -1
+
+
+@pytest.mark.parametrize("sparse", [False, True])
+def test_error_estimate_bounds_the_true_error_on_random_networks(sparse, monkeypatch):
+    """A small calibration against mpmath (the full one: benchmarks/calibrate_nodal.py)."""
+    import warnings
+
+    from reference import mp_nodal
+
+    if sparse:
+        monkeypatch.setattr(mechcirc.nodal, "DENSE_LIMIT", 0)
+    rng = np.random.default_rng(7)
+    true_all, est_all = [], []
+    for i in range(6):
+        text, spec, w_char = mp_nodal.random_network(rng, n_nodes=8 + i, damped=bool(i % 2),
+                                                     levers=i % 3)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            system = mechcirc.parse(text).nodal
+        omega = w_char * 10 ** rng.uniform(-2, 2, 3)
+        s = mechcirc.nodal.solve(system, omega)
+        ref = np.array([complex(mp_nodal.K(spec, 1j * w, 30)) for w in omega])
+        true_all.extend(np.abs(s.K - ref) / np.abs(ref))
+        est_all.extend(s.error)
+    true, est = np.array(true_all), np.array(est_all)
+    assert np.all(est >= true)
+    assert np.all(est < 1e-6)                 # no false alarm: every true error is ≤ 1e-11
+    assert np.max(true) < 1e-11
+    # Tight: within 1e4 of the true error (floored at 1e-17) at these points.
+    assert np.all(est <= 1e4 * np.maximum(true, 1e-17))

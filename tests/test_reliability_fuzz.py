@@ -111,3 +111,43 @@ def test_generators_reach_results_and_errors():
     for i in range(200):
         toml[h.linkage_property(h.toml_input(random.Random(i)))] += 1
     assert toml["result"] > 3 and toml["error"] > 100, toml
+
+
+# ------------------------------------------------------------------ issue 16: files of every kind
+@pytest.fixture(scope="module")
+def file_workdir(tmp_path_factory):
+    return tmp_path_factory.mktemp("files")
+
+
+@pytest.mark.parametrize("kind", h.FILE_KINDS)
+@fast(60)
+@given(seeds)
+def test_fuzz_files_of_every_kind(file_workdir, kind, seed):
+    """Hostile values, lists where names belong, huge integers, non-UTF-8, pickles,
+    binary files and line-break characters: a result or a located MechcircError."""
+    h.file_property(kind, h.file_input(random.Random(seed), kind), file_workdir)
+
+
+def test_file_generators_reach_each_hazard():
+    rng = random.Random(5)
+    blobs = [h.file_input(rng, k) for k in h.FILE_KINDS for _ in range(200)]
+    assert any(b.startswith(b"\x80") for b in blobs)                       # pickles
+    assert any(b"\xff" in b or b"\xc3" in b for b in blobs)                # not UTF-8
+    assert any(ch.encode() in b for b in blobs for ch in ("\x0c", "\u2028"))
+    assert any(b"9" * 300 in b for b in blobs)                             # huge integers
+    assert any(b'= ["' in b or b"= [-12]" in b for b in blobs)             # lists for names
+
+
+def test_a_pickle_given_as_a_data_file_is_never_loaded(file_workdir):
+    import pickle
+
+    data = pickle.dumps({"K": [1, 2]})
+    for kind in h.FILE_KINDS:
+        assert h.file_property(kind, data, file_workdir) == "error"
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("n", [4000])
+def test_parallel_and_series_blowups_finish_in_bounded_time(n):
+    for seed in range(2):
+        h.netlist_blowup_property(h.blowup_netlist(random.Random(seed), n))

@@ -117,3 +117,85 @@ def test_omega_max_limits_the_list():
     found = _chain(5).resonances(omega_max=10.0)
     assert found and all(r.omega <= 10.0 for r in found)
     assert len(found) < 10
+
+
+# ----------------------------------------------------------- honest errors, eigen-solvers
+def _ladder(n_el, seed=0, r=1e-3):
+    """Issue 11 §1's lightly damped ladder: k in [1e4, 2e4] N/m, m in [0.2, 1.2] kg, r to the frame."""
+    rng = np.random.default_rng(seed)
+    lines = ["drive V n0 0 velocity=1"]
+    i = node = 0
+    while i < n_el:
+        lines.append(f"spring k{i} n{node} n{node + 1} {rng.uniform(1e4, 2e4)!r}")
+        i += 1
+        if i < n_el:
+            lines.append(f"mass m{i} n{node + 1} 0 {rng.uniform(0.2, 1.2)!r}")
+            i += 1
+        if i < n_el:
+            lines.append(f"damper c{i} n{node + 1} 0 {r!r}")
+            i += 1
+        node += 1
+    return "\n".join(lines), lines
+
+
+def _spec(lines):
+    elements = []
+    for line in lines[1:]:
+        kind, _, a, b, v = line.split()
+        elements.append((kind, a, b, float(v)))
+    return {"elements": elements, "levers": [], "drive": ("n0", "0")}
+
+
+def test_damped_ladder_roots_are_within_their_error_of_mpmath():
+    """Issue 11 §5: the overdamped root s ≈ −1.4e-3 was off by 6.3e-7 with error 5.6e-9."""
+    from reference import mp_nodal
+
+    text, lines = _ladder(45)
+    found = mechcirc.parse(text).resonances()
+    spec = _spec(lines)
+    real = [r for r in found if r.omega_d == 0]
+    assert real, "the ladder has an overdamped root"
+    checked = real + found[::4]
+    for r in checked:
+        s = complex(-r.zeta * r.omega, r.omega_d)
+        exact = mp_nodal.root(spec, s, r.kind == "antiresonance", 30)
+        assert abs(abs(exact) - r.omega) <= r.error * abs(exact), (r, exact)
+        assert r.error < 1e-6
+
+
+def test_damped_network_above_the_dense_limit_is_solved_in_a_band(monkeypatch):
+    """Shift-invert Arnoldi in a band gives the dense solver's roots (forced by a low limit)."""
+    text, _ = _ladder(300)
+    dense = mechcirc.parse(text).resonances(omega_max=40.0)
+    monkeypatch.setattr(mechcirc.resonances, "MAX_UNKNOWNS_DAMPED", 20)
+    band = mechcirc.parse(text).resonances(omega_max=40.0)
+    assert [r.kind for r in band] == [r.kind for r in dense] and len(dense) >= 5
+    for a, b in zip(band, dense):
+        assert abs(a.omega - b.omega) <= (a.error + b.error) * b.omega
+    with pytest.raises(mechcirc.SolverError, match="omega_max"):
+        mechcirc.parse(text).resonances()
+
+
+def test_grid_anti_resonances_against_the_closed_form():
+    """Uniform n×n grid, springs k between neighbours and to the frame, masses m, corner drive.
+
+    Released (anti-resonances): ω² = (k/m)(1 + λ_i + λ_j) with λ_j = 2 − 2cos(πj/n) the
+    free-free path eigenvalues; every distinct one is seen at the corner (cosine modes).
+    """
+    n, k, m = 6, 1e4, 1.0
+    lines = ["drive V g0_0 0 velocity=1"]
+    for i in range(n):
+        for j in range(n):
+            g = f"g{i}_{j}"
+            lines += [f"mass m{i}_{j} {g} 0 {m}", f"spring f{i}_{j} {g} 0 {k}"]
+            if i + 1 < n:
+                lines.append(f"spring h{i}_{j} {g} g{i + 1}_{j} {k}")
+            if j + 1 < n:
+                lines.append(f"spring v{i}_{j} {g} g{i}_{j + 1} {k}")
+    found = mechcirc.parse("\n".join(lines)).resonances()
+    lam = 2 - 2 * np.cos(np.pi * np.arange(n) / n)
+    w2 = np.sort((k / m) * (1 + lam[:, None] + lam[None, :]).ravel())
+    w2 = w2[np.r_[True, np.diff(w2) > 1e-9 * w2[1:]]]         # distinct values
+    anti = np.sort([r.omega for r in found if r.kind == "antiresonance"])
+    np.testing.assert_allclose(anti, np.sqrt(w2), rtol=1e-12)
+    assert all(r.error <= 1e-13 for r in found)

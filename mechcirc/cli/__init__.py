@@ -56,14 +56,24 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; return the exit status (also used by ``python -m mechcirc``)."""
+    import signal
     import sys
+    import threading
 
-    from ._common import join_spaced_quantities, run_handler, sigterm_unwinds
+    if threading.current_thread() is threading.main_thread():
+        # From here on Ctrl-C raises KeyboardInterrupt, which the handlers unwind.
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        from ._common import join_spaced_quantities, run_handler, sigterm_unwinds
 
-    parser = build_parser()
-    args = parser.parse_args(join_spaced_quantities(sys.argv[1:] if argv is None else argv))
-    if not getattr(args, "func", None):
-        parser.print_help()
-        return 2
-    with sigterm_unwinds():
-        return run_handler(args)
+        parser = build_parser()
+        args = parser.parse_args(join_spaced_quantities(sys.argv[1:] if argv is None
+                                                        else argv))
+        if not getattr(args, "func", None):
+            parser.print_help()
+            return 2
+        with sigterm_unwinds():
+            return run_handler(args)
+    except KeyboardInterrupt:       # Ctrl-C before the command's own handler took over
+        print("mechcirc: interrupted", file=sys.stderr)
+        return 130

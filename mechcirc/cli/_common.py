@@ -42,8 +42,56 @@ def sigterm_unwinds():
         signal.signal(signal.SIGTERM, old)
 
 
+@contextlib.contextmanager
+def time_limit(seconds: float, what: str, instead: str):
+    """Raise :class:`MechcircError` if the block runs longer than ``seconds``.
+
+    For work whose time cannot be bounded beforehand (SymPy); uses SIGALRM,
+    so only in the main thread of a POSIX process (elsewhere: no limit).
+    """
+    if not hasattr(signal, "setitimer") or \
+            threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    class _Expired(BaseException):
+        pass
+
+    def on_alarm(signum, frame):
+        raise _Expired()
+
+    old = signal.signal(signal.SIGALRM, on_alarm)
+    signal.setitimer(signal.ITIMER_REAL, seconds)
+    try:
+        yield
+    except _Expired:
+        raise MechcircError(f"{what} took longer than the limit of {seconds:g} s; "
+                            f"{instead}") from None
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, old)
+
+
 def run_handler(args) -> int:
-    """Call ``args.func(args)`` and map errors to messages and exit codes."""
+    """Call ``args.func(args)`` and map errors to messages and exit codes.
+
+    Warnings are held back while the command runs: when it ends in a user
+    error, numpy's ``RuntimeWarning`` lines (overflow, invalid value: symptoms
+    of the bad input the message names) are dropped, so the one-line message
+    stands alone; otherwise every warning is shown as usual.
+    """
+    import warnings
+
+    with warnings.catch_warnings(record=True) as caught:
+        status = _run(args)
+    for w in caught:
+        if status == EXIT_USER and issubclass(w.category, RuntimeWarning):
+            continue
+        warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+    return status
+
+
+def _run(args) -> int:
     try:
         status = args.func(args)
         return EXIT_OK if status is None else status
@@ -235,6 +283,8 @@ def _jsonable(obj):
         return {str(k): _jsonable(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):
         return [_jsonable(v) for v in obj]
+    if getattr(obj, "dtype", None) is not None and obj.dtype.kind in "iuf" and obj.ndim:
+        return obj.tolist()               # no per-number recursion (10⁶ points: 120 s)
     if hasattr(obj, "tolist"):
         return _jsonable(obj.tolist())
     if isinstance(obj, complex):
@@ -242,9 +292,27 @@ def _jsonable(obj):
     return obj
 
 
+def _longest_list(obj, depth: int = 0) -> int:
+    if depth > 4:
+        return 0
+    if isinstance(obj, dict):
+        return max((_longest_list(v, depth + 1) for v in obj.values()), default=0)
+    if isinstance(obj, list):
+        inner = max((_longest_list(v, depth + 1) for v in obj[:3]), default=0)
+        return max(len(obj), inner)
+    return 0
+
+
 def print_json(document) -> None:
     """Print one JSON document on stdout (non-finite floats as Infinity, -Infinity, NaN)."""
-    json.dump(_jsonable(document), sys.stdout, indent=2, allow_nan=True)
+    doc = _jsonable(document)
+    # json.dump and indented output go through json's pure-Python encoder, one
+    # write per number; a long document is encoded compact in one go by the C
+    # encoder (10⁶ sweep points: 120 s before).
+    if _longest_list(doc) > 10_000:
+        sys.stdout.write(json.dumps(doc, allow_nan=True, separators=(",", ":")))
+    else:
+        json.dump(doc, sys.stdout, indent=2, allow_nan=True)
     sys.stdout.write("\n")
 
 

@@ -166,18 +166,24 @@ def cmd_compare(args) -> int:
 
 def cmd_formula(args) -> int:
     from ..interop.formula import formula_and_values
+    from ..limits import FORMULA_SECONDS
+    from ._common import time_limit
     from .circuit_commands import _load_with_warnings
 
     circuit, warns = _load_with_warnings(args.file)
     for w in warns:
         print(f"warning: {w}", file=sys.stderr)
-    K, values = formula_and_values(circuit, expand=args.expand, numeric=args.numeric)
-    if args.latex:
-        import sympy
+    with time_limit(FORMULA_SECONDS, "the symbolic formula", "evaluate K numerically "
+                    "instead: mechcirc sweep FILE --method nodal, or mechcirc forces FILE "
+                    "--omega W"):
+        K, values = formula_and_values(circuit, expand=args.expand, numeric=args.numeric)
+        if args.latex:
+            import sympy
 
-        print(f"K(\\omega) = {sympy.latex(K)}")
-    else:
-        print(f"K(omega) = {K}")
+            text = f"K(\\omega) = {sympy.latex(K)}"
+        else:
+            text = f"K(omega) = {K}"
+    print(text)
     if not args.numeric:
         if values:
             print("where (SI values; K in m/(N·s), omega in rad/s):")

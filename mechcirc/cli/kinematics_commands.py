@@ -135,7 +135,7 @@ def register(sub) -> None:
                                 ("k4", "k4, damping of C4 [N·m·s/rad]", 29.0),
                                 ("beat-moment", "M0, beat-up moment [N·m], + counter-clockwise "
                                  "on the sley (--beat-moment=-500 for a negative one)", 0.0),
-                                ("beat-window", "α, beat-up window [deg]", 40.0)):
+                                ("beat-window", "α, beat-up window [deg]", 10.0)):
         p.add_argument(f"--{name}", type=real(least=None if name == "beat-moment" else 0.0,
                                               most=1e30), default=default,
                        metavar="X", help=f"exported scene: {what} (default {default:g}, "

@@ -30,7 +30,7 @@ def register(sub) -> None:
                    help="--theta: write the netlist (.mcir); --cycle: write a CSV table")
     p.add_argument("--reflect", choices=("eta", "lever"), default="eta",
                    help="reflect through eta = ratio² (default) or explicit ideal levers")
-    p.add_argument("--points", type=count(2, MAX_CYCLE_POINTS, why="about 10 ms each"),
+    p.add_argument("--points", type=count(2, MAX_CYCLE_POINTS, why="10–25 ms each"),
                    default=72, metavar="N",
                    help="--cycle: crank angles over the revolution (default 72)")
     p.add_argument("--harmonics", type=count(1, 1000), default=5, metavar="H",

@@ -6,7 +6,7 @@ import argparse
 import math
 import sys
 
-from ..limits import MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS
+from ..limits import MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS, MAX_SCIPY_REVOLUTIONS
 from ._common import check_output_paths, count, print_json, real, save_figure
 
 _METHODS = ("rk4", "rk4-python", "DOP853", "RK45", "LSODA")   # = mechcirc.sley.METHODS
@@ -135,10 +135,21 @@ def _overrides(args) -> dict:
         except UnitError as exc:
             raise ParameterError(f"--set {name.strip()}: {exc.message} (expected "
                                  f"{exc.expected})") from None
+        v = out[name.strip()]
+        if not (math.isfinite(v) and abs(v) <= 1e100):    # C2 = 1e308 overflowed
+            raise ParameterError(f"--set {name.strip()}: must be finite and at most 1e+100 "
+                                 f"in magnitude, got {value!r}")
     return out
 
 
 def _options(args) -> dict:
+    if args.method not in ("rk4", "rk4-python") and args.revolutions > MAX_SCIPY_REVOLUTIONS:
+        from ..errors import InputError
+
+        raise InputError(f"--revolutions {args.revolutions} with --method {args.method}: the "
+                         f"limit is {MAX_SCIPY_REVOLUTIONS} (a Python right-hand side, ~0.3 s "
+                         "a revolution); the compiled rk4 takes up to "
+                         f"{MAX_REVOLUTIONS}")
     opts = {"points_per_revolution": args.points, "revolution": args.revolution}
     if args.rtol is not None:
         opts["rtol"] = args.rtol

@@ -159,33 +159,60 @@ class _Builder:
         sp = self.sp
         w = self.omega
         system = assemble(self.circuit)
+        from ..limits import MAX_FORMULA_ELEMENTS
+
+        size = len(system.elements) + len(system.levers)
+        if size > MAX_FORMULA_ELEMENTS:
+            raise MechcircError(
+                f"the network has no series–parallel tree and {size} elements; its formula "
+                f"grows with the number of spanning trees, so a symbolic solution is "
+                f"attempted up to {MAX_FORMULA_ELEMENTS} elements (13 took 6 s and 25,000 "
+                "characters); evaluate it numerically instead: mechcirc sweep FILE "
+                "--method nodal, or mechcirc forces FILE --omega W")
         if system.size > MAX_NODAL_UNKNOWNS:
             raise MechcircError(
                 f"the network has no series–parallel tree and {system.size} nodal unknowns; "
                 f"a symbolic solution is attempted up to {MAX_NODAL_UNKNOWNS}")
+        from ..nodal import stamps
+
         index = {n: i for i, n in enumerate(system.nodes)}
+        index.update({node: -1 for e in system.elements for node in (e.n1, e.n2)
+                      if node not in index})
+        index.update({node: -1 for lv in system.levers
+                      for node in (lv.p1, lv.p2, lv.s1, lv.s2) if node not in index})
         n = system.size
         A = sp.zeros(n, n)
-        for e in system.elements:
-            scaled = self.element_value(e)
-            y = {"mass": sp.I * w * scaled, "spring": scaled / (sp.I * w),
-                 "damper": scaled}[e.kind]
-            i, j = index.get(e.n1, -1), index.get(e.n2, -1)
-            for r, c, v in ((i, i, y), (j, j, y), (i, j, -y), (j, i, -y)):
-                if r >= 0 and c >= 0:
-                    A[r, c] += v
-        for k, lv in enumerate(system.levers):
-            col = len(system.nodes) + k
-            r = self.field(lv.name, "ratio", lv.ratio, f"r_{lv.name}")
-            for node, coef in ((lv.p1, r), (lv.p2, -r), (lv.s1, -1), (lv.s2, 1)):
-                i = index.get(node, -1)
-                if i >= 0:
-                    A[i, col] += coef
-                    A[col, i] += coef
+        admittance, ratio = {}, {}
+        for kind, i, j, sign, source, uses_ratio in stamps(system.elements, system.levers, index):
+            if kind == "lever":
+                if source.name not in ratio:
+                    ratio[source.name] = self.field(source.name, "ratio", source.ratio,
+                                                    f"r_{source.name}")
+                y = ratio[source.name] if uses_ratio else 1
+            else:
+                if source.name not in admittance:
+                    scaled = self.element_value(source)
+                    admittance[source.name] = {"mass": sp.I * w * scaled,
+                                               "spring": scaled / (sp.I * w),
+                                               "damper": scaled}[kind]
+                y = admittance[source.name]
+            A[i, j] += y if sign > 0 else -y
         rhs = sp.Matrix(system.injection().astype(int).tolist())
-        x = A.LUsolve(rhs)
-        K = (x[system.a] if system.a >= 0 else 0) - (x[system.b] if system.b >= 0 else 0)
-        return sp.factor(sp.cancel(sp.together(K)))
+        # Cramer's rule on B = jω·A, whose entries are polynomials (no 1/ω):
+        # K = x_a − x_b = (det B_a − det B_b) / det B, with B_i the matrix B whose
+        # column i is jω·rhs.  Division-free determinants (Berkowitz) and one
+        # division of common monomials at the end: symbolic LU divided at every
+        # step and spent its time in nested polynomial GCDs (6 elements: 31 s),
+        # and a full cancel() alone took 25 s on a 2×2 grid of 8 elements.
+        B = (sp.I * w * A).applyfunc(sp.expand)
+        den = B.det(method="berkowitz")
+        num = sp.Integer(0)
+        for node, sign in ((system.a, 1), (system.b, -1)):
+            if node >= 0:
+                Bi = B.copy()
+                Bi[:, node] = sp.I * w * rhs
+                num += sign * Bi.det(method="berkowitz")
+        return _lowest_terms(sp, sp.expand(num), sp.expand(den))
 
     def build_tree(self, tree):
         from ..reduction import Leaf, Parallel, Series, postorder
@@ -209,6 +236,23 @@ class _Builder:
                 K = out[id(node.child)] / r ** 2
             out[id(node)] = K
         return out[id(tree)]
+
+
+def _lowest_terms(sp, num, den):
+    """``num/den`` with the monomial common to both divided out (ω^k, a symbol's power).
+
+    Cheap (no multivariate GCD); a fraction from the nodal equations keeps no
+    other common factor unless part of the network is decoupled.
+    """
+    gens = sorted(num.free_symbols | den.free_symbols, key=str)
+    if not gens or num == 0:
+        return num / den
+    pn, pd = sp.Poly(num, *gens), sp.Poly(den, *gens)
+    (mn, qn), (md, qd) = pn.terms_gcd(), pd.terms_gcd()
+    common = [min(a, b) for a, b in zip(mn, md)]
+    scale_n = sp.Mul(*[g ** (a - c) for g, a, c in zip(gens, mn, common)])
+    scale_d = sp.Mul(*[g ** (b - c) for g, b, c in zip(gens, md, common)])
+    return (scale_n * qn.as_expr()) / (scale_d * qd.as_expr())
 
 
 def formula(circuit: "Circuit", *, expand: bool = False, numeric: bool = False):

@@ -178,44 +178,29 @@ def two_port_z(circuit: "Circuit", P1: str, P2: str, S1: str, S2: str,
         or the network is singular (a part not tied to the frame).
     """
     from ..circuit import FRAME
-    from ..nodal import _batched_solve, _stamp
+    from ..nodal import assemble, dense_matrices
 
-    # Not nodal.assemble(): it keeps only the part of the network that the
-    # circuit's drive loads, while a two-port needs every element, including
-    # those reached only from the second port.  The stamps are the same.
-
+    # The whole network (assemble(..., whole=True)): the drive's loaded part is
+    # not enough, a two-port needs every element, including those reached only
+    # from the second port.
     omega = np.atleast_1d(np.asarray(omega, dtype=float))
-    names: dict[str, None] = {}
+    system = assemble(circuit, whole=True)
+    names = set(system.nodes)
     for e in circuit.elements:
-        names.setdefault(e.n1)
-        names.setdefault(e.n2)
+        names.update((e.n1, e.n2))
     for lv in circuit.levers:
-        for n in (lv.p1, lv.p2, lv.s1, lv.s2):
-            names.setdefault(n)
+        names.update((lv.p1, lv.p2, lv.s1, lv.s2))
     for port in (P1, P2, S1, S2):
         if port not in names:
             raise TopologyError(f"port node {port!r} is not a node of the circuit "
-                                f"(nodes: {', '.join(names)})", nodes=(port,))
+                                f"(nodes: {', '.join(sorted(names))})", nodes=(port,))
     if P1 == P2 or S1 == S2:
         raise TopologyError("each port needs two different nodes", nodes=(P1, P2, S1, S2))
     if FRAME not in names:
         raise TopologyError("the circuit has no frame node '0' to refer velocities to")
-    nodes = [n for n in names if n != FRAME]
-    index = {n: i for i, n in enumerate(nodes)}
+    index = {n: i for i, n in enumerate(system.nodes)}
     index[FRAME] = -1
-    n = len(nodes) + len(circuit.levers)
-    mats = {k: np.zeros((n, n)) for k in ("mass", "spring", "damper", "lever")}
-    for e in circuit.elements:
-        rows, cols, vals = [], [], []
-        _stamp((rows, cols, vals), index[e.n1], index[e.n2], e.value * e.eta)
-        np.add.at(mats[e.kind], (rows, cols), vals)
-    for k, lv in enumerate(circuit.levers):
-        col = len(nodes) + k
-        for node, coef in ((lv.p1, lv.ratio), (lv.p2, -lv.ratio), (lv.s1, -1.0), (lv.s2, 1.0)):
-            i = index[node]
-            if i >= 0:
-                mats["lever"][i, col] += coef
-                mats["lever"][col, i] += coef
+    n = system.size
     rhs = np.zeros((2, n))
     for j, (a, b) in enumerate(((P1, P2), (S1, S2))):
         if index[a] >= 0:
@@ -225,11 +210,13 @@ def two_port_z(circuit: "Circuit", P1: str, P2: str, S1: str, S2: str,
     Z = np.full((omega.size, 2, 2), np.nan, dtype=complex)
     ok = np.isfinite(omega) & (omega > 0)
     if ok.any():
-        w = omega[ok][:, None, None]
-        A = mats["damper"] + mats["lever"] + 1j * (w * mats["mass"] - mats["spring"] / w)
-        for j in range(2):
-            x = _batched_solve(A, rhs[j])
-            Z[ok, :, j] = x @ rhs.T          # rows of rhs pick v(a) − v(b) of each port
+        A = dense_matrices(system, omega[ok])
+        for k, i in enumerate(np.flatnonzero(ok)):
+            try:
+                x = np.linalg.solve(A[k], rhs.T)       # columns: unit force at each port
+            except np.linalg.LinAlgError:
+                continue                               # exactly singular: NaN
+            Z[i] = rhs @ x          # rows of rhs pick v(a) − v(b) of each port
         if np.isnan(Z[ok]).all():
             raise TopologyError("the network is singular at every frequency asked (a part "
                                 "not tied to the frame, or levers in parallel)")

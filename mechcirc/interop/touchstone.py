@@ -85,7 +85,10 @@ def _parse_options(tokens: list[str], source: str, line: int, col: int) -> tuple
 def _complex(a: float, b: float, fmt: str) -> complex:
     if fmt == "ri":
         return complex(a, b)
-    mag = a if fmt == "ma" else 10.0 ** (a / 20.0)
+    try:
+        mag = a if fmt == "ma" else 10.0 ** (a / 20.0)
+    except OverflowError:       # dB beyond float64: refused below as a non-finite value
+        mag = math.inf
     phase = math.radians(b)
     return complex(mag * math.cos(phase), mag * math.sin(phase))
 

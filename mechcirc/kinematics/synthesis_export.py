@@ -60,7 +60,7 @@ class SceneOptions:
     k2: float = 7.0
     k4: float = 29.0
     M0: float = 0.0
-    alpha_deg: float = 40.0
+    alpha_deg: float = 10.0      # the sley default (fitted to Tables 1 and 2 in docs/sley.md)
 
     def __post_init__(self):
         for name in ("omega", "I2P", "I4", "I4P", "C2", "C4"):

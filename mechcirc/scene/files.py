@@ -446,7 +446,7 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
             lname = m.get("link")
             if not _named(lname, bodies):
                 hint = (" (an elastic link has no inertia of its own here: lump its mass at "
-                        "its end points)") if lname in elastic_links else ""
+                        "its end points)") if _named(lname, elastic_links) else ""
                 raise _err(text, source, f"[[masses]] #{n + 1}: link {lname!r} is not a rigid "
                            f"link or torsion body{hint}", "masses", "link",
                            value=lname if isinstance(lname, str) else None, occurrence=n,
@@ -598,8 +598,7 @@ def _analysis(text, source, table, circuit_names) -> Analysis:
 
         raw = table["band"]
         try:
-            if not (isinstance(raw, list) and len(raw) == 2 and all(
-                    isinstance(x, (int, float)) and not isinstance(x, bool) for x in raw)):
+            if not (isinstance(raw, list) and len(raw) == 2 and all(map(finite_number, raw))):
                 raise BandError(f"band must be [W1, W2] in rad/s, got {raw!r}")
             band = _check_band(raw)
         except BandError as exc:

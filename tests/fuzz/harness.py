@@ -492,7 +492,9 @@ def cli_property(argv: list[str], *, seconds: float = 20.0) -> str:
     try:
         with time_bound(seconds), warnings.catch_warnings(), \
                 contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-            warnings.simplefilter("ignore")
+            # Warnings shown as a user would see them: a RuntimeWarning line
+            # before a user error's message is a failure (issue 16 §2).
+            warnings.simplefilter("always", RuntimeWarning)
             try:
                 status = main(argv)
             except SystemExit as exc:        # argparse: usage errors (2) and --help (0)
@@ -504,6 +506,8 @@ def cli_property(argv: list[str], *, seconds: float = 20.0) -> str:
     text = err.getvalue()
     if status not in (0, 2) or "Traceback" in text or "internal error" in text:
         raise PropertyFailure(f"main({argv}) -> {status}: {text.strip()[:500]}")
+    if status == 2 and "RuntimeWarning" in text:
+        raise PropertyFailure(f"main({argv}) -> 2 after a RuntimeWarning: {text.strip()[:500]}")
     if status == 2 and not (text.strip() or out.getvalue().strip()):
         raise PropertyFailure(f"main({argv}) -> 2 with no message")
     return "result" if status == 0 else "error"
@@ -525,3 +529,217 @@ def cli_files(workdir: Path, rng: random.Random | None = None) -> list[str]:
     files += [str(workdir / "bad_utf8.mcir"), str(workdir / "bad_utf8.toml"),
               str(workdir / "nope.mcir"), str(workdir), os.devnull]
     return files
+
+
+# ---------------------------------------------------------------- files of every kind (issue 16)
+SCENE_SEED = ROOT / "examples" / "heald_scene.toml"
+STUDY_SEED = ROOT / "examples" / "study_stb.toml"
+
+#: Characters that str.splitlines() takes for line breaks and editors do not.
+LINE_BREAKERS = ["\x0c", "\x0b", "\r", "\x85", "\u2028", "\u2029", "\x1c", "\x1d", "\x1e",
+                 "\r\n", "\n\r"]
+
+#: Values that belong nowhere a name or a number is expected.
+HOSTILE_VALUES = [[-12], ["M"], ["crank"], [["A"]], {"x": 1}, 10**400, -(10**400),
+                  int("9" * 300), 10**5000 // 10**4990, float("nan"), float("inf"), True, "",
+                  "\x00", "é" * 3, [], {}]
+
+
+def _pickle_bytes(rng: random.Random) -> bytes:
+    """A pickle (harmless payload) — a data file must never be unpickled."""
+    import pickle
+
+    obj = rng.choice([{"a": 1}, [1.0, 2.0], "text", (1, "x"), np.arange(3)])
+    return pickle.dumps(obj, protocol=rng.randint(0, pickle.HIGHEST_PROTOCOL))
+
+
+def binary_bytes(rng: random.Random) -> bytes:
+    """Bytes that are not the expected text: pickles, PNG/zip/npz headers, noise, non-UTF-8."""
+    r = rng.random()
+    if r < 0.25:
+        return _pickle_bytes(rng)
+    if r < 0.4:
+        return rng.choice([b"\x89PNG\r\n\x1a\n", b"PK\x03\x04", b"\x93NUMPY\x01\x00",
+                           b"\x7fELF\x02\x01", b"%PDF-1.4\n"]) + rng.randbytes(rng.randint(0, 200))
+    if r < 0.6:
+        return rng.randbytes(rng.randint(0, 400))
+    text = rng.choice(seed_texts(NETLIST_SEEDS + TOML_SEEDS)).encode("utf-8")
+    i = rng.randint(0, len(text))
+    bad = rng.choice([b"\xff", b"\xfe\xff", b"\xc3", b"\xed\xa0\x80", b"\x80", b"\xf8\x88"])
+    return text[:i] + bad + text[i:]
+
+
+def with_line_breakers(rng: random.Random, text: str) -> str:
+    """``text`` with characters that ``str.splitlines`` (not wc -l) takes for line ends."""
+    for _ in range(rng.randint(1, 4)):
+        i = rng.randint(0, len(text))
+        text = text[:i] + rng.choice(LINE_BREAKERS) + text[i:]
+    return text
+
+
+def _hostile_tree(rng: random.Random, doc: dict) -> dict:
+    """The parsed document with one scalar, name or table replaced by a hostile value."""
+    doc = copy.deepcopy(doc)
+    for _ in range(rng.randint(1, 2)):
+        node = doc
+        while True:
+            if isinstance(node, dict) and node:
+                key = rng.choice(list(node))
+            elif isinstance(node, list) and node:
+                key = rng.randrange(len(node))
+            else:
+                break
+            child = node[key]
+            if isinstance(child, (dict, list)) and child and rng.random() < 0.75:
+                node = child
+                continue
+            node[key] = copy.deepcopy(rng.choice(HOSTILE_VALUES))
+            break
+    return doc
+
+
+def toml_file_input(rng: random.Random, seed_path: Path) -> bytes:
+    """Bytes for a TOML input (scene, study, linkage): structural, text, line-break or binary."""
+    import tomllib
+
+    text = _read(seed_path)
+    r = rng.random()
+    if r < 0.45:
+        out = dump_toml(_hostile_tree(rng, tomllib.loads(text)))
+    elif r < 0.7:
+        out = mutate(rng, text, TOML_TOKENS, max_ops=3)
+    elif r < 0.9:
+        out = with_line_breakers(rng, mutate(rng, text, TOML_TOKENS, max_ops=1))
+    else:
+        return binary_bytes(rng)
+    return out.encode("utf-8", errors="surrogatepass")
+
+
+def touchstone_input(rng: random.Random) -> bytes:
+    """Touchstone one-port text with hostile option lines and data, or binary."""
+    if rng.random() < 0.15:
+        return binary_bytes(rng)
+    unit = rng.choice(["Hz", "kHz", "MHz", "GHz", "THz", "rpm", ""])
+    fmt = rng.choice(["RI", "MA", "DB", "XY", ""])
+    param = rng.choice(["Z", "Y", "S", "H", ""])
+    R = rng.choice(["1", "50", "-50", "0", "nan", "inf", "1e-320", "x", ""])
+    lines = [f"# {unit} {param} {fmt} R {R}".replace("  ", " ")] if rng.random() < 0.9 else []
+    f = 1.0
+    for _ in range(rng.randint(0, 8)):
+        f = rng.choice([f * 2, -f, float("nan"), f, 0.0, 1e308, f + 1])
+        a = rng.choice(["1", "0", "-1", "1e308", "1e-320", "nan", "inf", "1e400", "300"])
+        b = rng.choice(["0", "90", "-1e308", "nan", "2"])
+        lines.append(" ".join([repr(f), a, b][:rng.choice([3, 3, 3, 2, 4])]))
+    text = "\n".join(lines) + "\n"
+    if rng.random() < 0.2:
+        text = with_line_breakers(rng, text)
+    return text.encode("utf-8")
+
+
+def netlist_file_input(rng: random.Random) -> bytes:
+    r = rng.random()
+    if r < 0.6:
+        return netlist_input(rng).encode("utf-8", errors="surrogatepass")
+    if r < 0.85:
+        return with_line_breakers(rng, netlist_input(rng)).encode("utf-8", errors="surrogatepass")
+    return binary_bytes(rng)
+
+
+def blowup_netlist(rng: random.Random, n: int | None = None) -> str:
+    """Long parallel or series runs (quadratic reductions showed here: 16k parallel, 264 s)."""
+    n = n or rng.choice([100, 1000, 4000])
+    if rng.random() < 0.5:                     # n elements in parallel between a and 0
+        lines = [f"{rng.choice(['spring', 'damper', 'mass'])} e{i} a 0 {1 + i % 7}"
+                 for i in range(n)]
+    else:                                      # a series chain of n springs and dampers
+        lines = [f"{rng.choice(['spring', 'damper'])} e{i} n{i} n{i + 1} {1 + i % 7}"
+                 for i in range(n)] + [f"mass m n{n} 0 1"]
+        lines.append("drive V n0 0 velocity=1")
+        return "\n".join(lines) + "\n"
+    lines.append("drive V a 0 velocity=1")
+    return "\n".join(lines) + "\n"
+
+
+FILE_KINDS = ("netlist", "linkage", "scene", "study", "touchstone")
+
+
+def file_input(rng: random.Random, kind: str) -> bytes:
+    if kind == "netlist":
+        return netlist_file_input(rng)
+    if kind == "linkage":
+        return toml_file_input(rng, rng.choice(TOML_SEEDS))
+    if kind == "scene":
+        return toml_file_input(rng, SCENE_SEED)
+    if kind == "study":
+        return toml_file_input(rng, STUDY_SEED)
+    return touchstone_input(rng)
+
+
+def file_property(kind: str, data: bytes, workdir: Path, *, seconds: float = 10.0) -> str:
+    """Load ``data`` as a file of ``kind`` through the public reader (and one analysis).
+
+    The reader must end in a result or a located ``MechcircError``; a pickle
+    must never be loaded (checked by the harness's ``pickle.load`` guard).
+    """
+    import pickle
+
+    suffix = {"netlist": ".mcir", "linkage": ".toml", "scene": ".toml", "study": ".toml",
+              "touchstone": ".s1p"}[kind]
+    folder = workdir / "specs" if kind == "study" else workdir
+    folder.mkdir(exist_ok=True)
+    path = folder / f"fuzz_{kind}{suffix}"
+    path.write_bytes(data)
+    if kind == "study":       # the spec's ../netlists/stb_heald.mcir
+        (workdir / "netlists").mkdir(exist_ok=True)
+        target = workdir / "netlists" / "stb_heald.mcir"
+        if not target.exists():
+            target.write_text(_read(NETLIST_SEEDS[0]))
+    try:
+        text = data.decode("utf-8").removeprefix("\ufeff")
+    except UnicodeDecodeError:
+        text = None
+
+    def go():
+        if kind == "netlist":
+            c = mechcirc.load(path)
+            c.sweep(OMEGA_PROBE[1:5]).flags
+        elif kind == "linkage":
+            from mechcirc.kinematics.linkage import load_linkage
+
+            load_linkage(path).solve(0.3)
+        elif kind == "scene":
+            from mechcirc.scene import build, load_scene
+
+            build(load_scene(path), 0.3)
+        elif kind == "study":
+            from mechcirc.study import load_spec
+
+            load_spec(path)
+        else:
+            from mechcirc.interop.touchstone import read_touchstone_one_port
+
+            read_touchstone_one_port(path)
+
+    real_loads, real_load = pickle.loads, pickle.load
+
+    def refuse(*a, **k):
+        raise PropertyFailure(f"{kind}: a data file was unpickled")
+
+    pickle.loads, pickle.load = refuse, refuse
+    try:
+        return run_target(go, text, seconds=seconds)
+    finally:
+        pickle.loads, pickle.load = real_loads, real_load
+
+
+#: Time bound of a blow-up netlist (issue 16 §3: no input within the statement
+#: limit may take more than a few seconds).
+BLOWUP_SECONDS = 20.0
+
+
+def netlist_blowup_property(text: str) -> str:
+    """Parse, reduce and sweep 50 points of a long parallel or series run, in bounded time."""
+    def go():
+        c = mechcirc.parse(text)
+        c.sweep(np.geomspace(1.0, 1e4, 50)).flags
+    return run_target(go, text, seconds=BLOWUP_SECONDS)

@@ -30,6 +30,10 @@ from fuzz import harness as h  # noqa: E402
 
 #: Inputs per target in a full run (103,000 in all).
 COUNTS = {"expression": 40_000, "netlist": 40_000, "linkage": 20_000, "cli": 3_000}
+#: Issue 16: files of every kind through their public readers (netlist, linkage,
+#: scene, study, Touchstone: hostile values, non-UTF-8, pickles, binary, line
+#: breakers) and parallel/series blow-ups.  ``--targets files blowup``.
+COUNTS.update({"files": 100_000, "blowup": 200})
 
 
 def run(target: str, n: int, first_seed: int, work: Path) -> dict:
@@ -47,6 +51,12 @@ def run(target: str, n: int, first_seed: int, work: Path) -> dict:
         try:
             if target == "cli":
                 outcome = h.cli_property(h.cli_argv(rng, work, files))
+            elif target == "files":
+                kind = h.FILE_KINDS[seed % len(h.FILE_KINDS)]
+                outcome = h.file_property(kind, h.file_input(rng, kind), work)
+            elif target == "blowup":
+                outcome = h.netlist_blowup_property(h.blowup_netlist(rng, rng.choice(
+                    [1000, 4000, 16000, 50000])))
                 if seed % 50 == 0 and "matplotlib.pyplot" in sys.modules:
                     sys.modules["matplotlib.pyplot"].close("all")
             else:
@@ -67,7 +77,8 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scale", type=float, default=1.0, help="multiply every count")
     ap.add_argument("--first-seed", type=int, default=1_000_000)
-    ap.add_argument("--targets", nargs="*", default=list(COUNTS))
+    ap.add_argument("--targets", nargs="*", default=["expression", "netlist", "linkage", "cli"],
+                    choices=list(COUNTS))
     ap.add_argument("--json", help="write the summary here")
     args = ap.parse_args(argv)
     summary = {"python": platform.python_version(), "machine": platform.machine(),
