@@ -65,7 +65,7 @@ class Element:
         Where the element was defined (0 when built in code).
     backlash : float
         Springs only: total clearance B [m or rad] in series with the spring
-        (Modelica ``ElastoBacklash`` law, see :mod:`mechcirc.transient.backlash`);
+        (Modelica ``ElastoBacklash`` law, see :mod:`mechcirc.transient._kernels`);
         0 for none.  The frequency domain takes the contact as closed.
     damping : float
         Springs only: damping coefficient [N·s/m] in parallel with the spring

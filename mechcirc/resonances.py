@@ -51,6 +51,8 @@ __all__ = ["Resonance", "find_resonances", "MAX_UNKNOWNS", "MAX_UNKNOWNS_DAMPED"
 MAX_UNKNOWNS = 2000
 #: The same for networks with dampers (QZ on a 2n × 2n pencil).
 MAX_UNKNOWNS_DAMPED = 500
+#: The most eigenvalues the band solver asks ARPACK for (roots and their mirror images).
+MAX_BAND_ROOTS = 192
 
 
 @dataclass(frozen=True)
@@ -282,6 +284,14 @@ def _band_modes(M, D, K, omega_max: float) -> np.ndarray:
         s_all = s_all[np.isfinite(s_all)]
         if np.abs(s_all).max(initial=0.0) > omega_max or k >= 2 * n - 2:
             break
+        if 2 * k > MAX_BAND_ROOTS:
+            # ARPACK's cost grows as k² n: a band holding hundreds of roots of a
+            # large network would run for minutes (a 2,500-mass chain below
+            # 10 rad/s: > 5 min).  Refuse with the count found so far.
+            raise SolverError(
+                f"resonances: more than {k // 2} roots below omega_max = {omega_max:g} rad/s "
+                f"in a network of {n} unknowns (the band solver stops at "
+                f"{MAX_BAND_ROOTS // 2}); give a smaller omega_max or sweep K(ω) instead")
         k = min(2 * k, 2 * n - 2)
     keep = (np.abs(s_all) > 1e-6 * omega_max) & (np.abs(s_all) <= omega_max * (1 + 1e-6)) \
         & (s_all.imag >= -1e-9 * np.abs(s_all))

@@ -190,17 +190,11 @@ def test_every_fenced_example_runs(page, tmp_path):
     assert not failures, "\n\n".join(failures)
 
 
-#: Pages written by other work streams, whose issue references are theirs to remove.
-_OTHERS = {"performance.md", "accuracy.md", "transient.md"}
-
-
 def test_docs_stand_alone():
     """No link to ../shared (a clone does not have it), no 'issue N' references."""
     for page in PAGES:
         text = page.read_text(encoding="utf-8")
         assert "../shared" not in text and "DIGEST" not in text, page
-        if page.name in _OTHERS:
-            continue
         assert not re.search(r"\bissues? \d", text, re.I), (page, re.search(
             r".{0,40}\bissues? \d.{0,40}", text, re.I).group())
 

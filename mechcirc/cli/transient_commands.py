@@ -34,8 +34,8 @@ def register(sub) -> None:
                         "(default: the drive stays at rest)")
     p.add_argument("--amplitude", type=float, metavar="A",
                    help="amplitude of harmonic/step/impulse (default: the netlist's)")
-    p.add_argument("--rtol", type=float, default=1e-9, metavar="TOL",
-                   help="relative tolerance with clearances (default 1e-9)")
+    p.add_argument("--rtol", type=float, default=1e-10, metavar="TOL",
+                   help="relative tolerance with clearances (default 1e-10)")
     p.add_argument("-o", "--output", metavar="CSV", help="write the time series as CSV")
     p.add_argument("--plot", metavar="IMAGE", help="plot node displacements")
     p.add_argument("--json", action="store_true", help="print one JSON document")

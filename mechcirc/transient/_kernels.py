@@ -108,6 +108,37 @@ def rhs(t, z, A, B, cx, dx, cv, dv, extra, prm, t0, dt, u, dz):
                 dz[i] += extra[i, k] * f
 
 
+@_jit
+def switch_state(t, z, cx, dx, cv, dv, prm, t0, dt, u, k):
+    """(branch code, switching functions g_gap, g_sep, g_min) of clearance element k.
+
+    Codes: 0 in the gap; ±1 contact with the damping part limiting (f_d < f_c);
+    ±2 contact with the full damping; ±3 at the wall but separating (f = 0).
+    The law is smooth inside one code; a change of code is a kink.
+    """
+    ut = drive_at(t, t0, dt, u)
+    e = dx[k] * ut
+    w = dv[k] * ut
+    for j in range(z.shape[0]):
+        e += cx[k, j] * z[j]
+        w += cv[k, j] * z[j]
+    c, d, b = prm[k, 0], prm[k, 1], prm[k, 2]
+    half = 0.5 * b
+    if abs(b) <= B_EPS:
+        return 0, 1.0, 1.0, 1.0
+    if e > half:
+        fc = c * (e - half)
+        fd = d * w
+        code = 3 if fc + fd <= 0.0 else (2 if fd <= fc else 1)
+        return code, e - half, fc + fd, fc - fd
+    if e < -half:
+        fc = c * (e + half)
+        fd = d * w
+        code = -3 if fc + fd >= 0.0 else (-2 if fd >= fc else -1)
+        return code, e + half, fc + fd, fc - fd
+    return 0, min(half - e, e + half), 1.0, 1.0
+
+
 # Dormand–Prince 5(4) coefficients.
 _C = np.array([0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0, 1.0])
 _A = np.array([
@@ -122,14 +153,24 @@ _B5 = np.array([35 / 384, 0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84, 0])
 _B4 = np.array([5179 / 57600, 0, 7571 / 16695, 393 / 640, -92097 / 339200, 187 / 2100, 1 / 40])
 
 
+#: Dense output of Dormand–Prince (Hairer, Nørsett & Wanner, DOPRI5 ``contd5``): a
+#: 4th-order continuous extension from the stages of the step itself.
+_D = np.array([-12715105075 / 11282082432, 0.0, 87487479700 / 32700410799,
+               -10690763975 / 1880347072, 701980252875 / 199316789632,
+               -1453857185 / 822651844, 69997945 / 29380423])
+
+
 @_jit
 def dopri_run(z, t0, dt, nout, A, B, cx, dx, cv, dv, extra, prm, u, rtol, atol, hmax,
-              coefA, coefB5, coefB4, coefC, out):
+              coefA, coefB5, coefB4, coefC, coefD, dense, out, kink_tol=0.0):
     """Integrate from t0 and store z at t0 + k dt (k < nout) in ``out``; returns the step count.
 
-    Steps never cross an output time (nor so a sample of the piecewise-linear
-    drive), so the drive's kinks are always at step boundaries.  A step is
-    accepted when the embedded error, scaled by atol + rtol |z|, is ≤ 1 (RMS).
+    A step is accepted when the embedded error, scaled by atol + rtol |z|, is ≤ 1
+    (RMS).  With ``dense`` steps run across output times (which are filled by the
+    method's continuous extension) and are limited only by ``hmax``; without it
+    they end on every output time, i.e. on every sample of the piecewise-linear
+    drive, so its kinks are always at step boundaries.  Negative return: the
+    step size underflowed.
     """
     N = z.shape[0]
     K = np.zeros((7, N))
@@ -138,54 +179,128 @@ def dopri_run(z, t0, dt, nout, A, B, cx, dx, cv, dv, extra, prm, u, rtol, atol, 
     t = t0
     for i in range(N):
         out[0, i] = z[i]
+    t_end = t0 + (nout - 1) * dt
     h = min(hmax, dt)
     steps = 0
+    k_out = 1
     rhs(t, z, A, B, cx, dx, cv, dv, extra, prm, t0, dt, u, K[0])
-    for k in range(1, nout):
-        t_target = t0 + k * dt
-        while t < t_target:
-            last = False
-            if t + h >= t_target - 1e-14 * abs(t_target):
-                hh = t_target - t
-                last = True
-            else:
-                hh = h
-            for s in range(1, 7):
-                for i in range(N):
-                    acc = z[i]
-                    for r in range(s):
-                        acc += hh * coefA[s, r] * K[r, i]
-                    ytmp[i] = acc
-                rhs(t + coefC[s] * hh, ytmp, A, B, cx, dx, cv, dv, extra, prm, t0, dt, u, K[s])
-            err = 0.0
+    while k_out < nout:
+        stop = t_end if dense else t0 + k_out * dt
+        last = False
+        if t + h >= stop - 1e-14 * abs(stop):
+            hh = stop - t
+            last = True
+        else:
+            hh = h
+        for s in range(1, 7):
             for i in range(N):
-                a5 = z[i]
-                a4 = z[i]
-                for r in range(7):
-                    a5 += hh * coefB5[r] * K[r, i]
-                    a4 += hh * coefB4[r] * K[r, i]
-                y5[i] = a5
-                sc = atol + rtol * max(abs(z[i]), abs(a5))
-                q = (a5 - a4) / sc
-                err += q * q
-            err = math.sqrt(err / N)
-            steps += 1
-            if err <= 1.0:
-                t = t_target if last else t + hh
-                for i in range(N):
-                    z[i] = y5[i]
-                rhs(t, z, A, B, cx, dx, cv, dv, extra, prm, t0, dt, u, K[0])
-                fac = 5.0 if err == 0.0 else min(5.0, 0.9 * err ** -0.2)
-                if not last:
-                    h = min(hmax, hh * fac)
-                # after a step cut short by an output time, keep the previous h
-            else:
-                h = hh * max(0.1, 0.9 * err ** -0.2)
-                if h < 1e-14 * max(1.0, abs(t)):
-                    return -steps
+                acc = z[i]
+                for r in range(s):
+                    acc += hh * coefA[s, r] * K[r, i]
+                ytmp[i] = acc
+            rhs(t + coefC[s] * hh, ytmp, A, B, cx, dx, cv, dv, extra, prm, t0, dt, u, K[s])
+        # ytmp now holds the 5th-order solution (the last stage is at it: FSAL)
+        err = 0.0
         for i in range(N):
-            out[k, i] = z[i]
+            a4 = z[i]
+            for r in range(7):
+                a4 += hh * coefB4[r] * K[r, i]
+            y5[i] = ytmp[i]
+            sc = atol + rtol * max(abs(z[i]), abs(ytmp[i]))
+            q = (ytmp[i] - a4) / sc
+            err += q * q
+        err = math.sqrt(err / N)
+        steps += 1
+        # Kink location: if a clearance element changes branch inside the step,
+        # shorten the step to end just past the switch (secant on its switching
+        # function), so the law is smooth inside every step.
+        if err <= 1.0 and hh > kink_tol:
+            theta = 2.0
+            for k in range(prm.shape[0]):
+                c0, ga0, gs0, gm0 = switch_state(t, z, cx, dx, cv, dv, prm, t0, dt, u, k)
+                c1, ga1, gs1, gm1 = switch_state(t + hh, y5, cx, dx, cv, dv, prm, t0, dt,
+                                                 u, k)
+                if c0 != c1:
+                    if (c0 == 0) != (c1 == 0):
+                        g0, g1 = ga0, ga1
+                    elif abs(c0) == 3 or abs(c1) == 3:
+                        g0, g1 = gs0, gs1
+                    else:
+                        g0, g1 = gm0, gm1
+                    th = g0 / (g0 - g1) if g0 != g1 else 0.5
+                    if th < 0.0 or th > 1.0 or th != th:
+                        th = 0.5
+                    if th < theta:
+                        theta = th
+            if theta < 2.0:
+                h_new = hh * min(1.0, theta * 1.001 + 1e-3)
+                if h_new < 0.999 * hh:
+                    hh_retry = h_new
+                    h = hh_retry
+                    continue
+        if err <= 1.0:
+            t_new = stop if last else t + hh
+            # outputs inside (t, t_new]: continuous extension
+            while k_out < nout and t0 + k_out * dt <= t_new + 1e-12 * abs(t_new):
+                th = (t0 + k_out * dt - t) / hh
+                if th > 1.0:
+                    th = 1.0
+                s1 = 1.0 - th
+                for i in range(N):
+                    ydiff = y5[i] - z[i]
+                    bspl = hh * K[0, i] - ydiff
+                    r4 = ydiff - hh * K[6, i] - bspl
+                    r5 = 0.0
+                    for r in range(7):
+                        r5 += coefD[r] * K[r, i]
+                    r5 *= hh
+                    out[k_out, i] = z[i] + th * (ydiff + s1 * (bspl + th * (r4 + s1 * r5)))
+                k_out += 1
+            t = t_new
+            for i in range(N):
+                z[i] = y5[i]
+                K[0, i] = K[6, i]
+            fac = 5.0 if err == 0.0 else min(5.0, 0.9 * err ** -0.2)
+            if not last or dense:
+                h = min(hmax, hh * fac)
+            # after a step cut short by an output time, keep the previous h
+        else:
+            h = hh * max(0.1, 0.9 * err ** -0.2)
+            if h < 1e-14 * max(1.0, abs(t)):
+                return -steps
     return steps
+
+
+@_jit
+def modal_run(mu, g1, g2, q0, u, cre, cim, out, qmax):
+    """Diagonal first-order-hold recurrence q⁺ = μ q + g₁ u + g₂ (u⁺ − u), every mode.
+
+    ``mu``, ``g1``, ``g2``, ``q0``: complex (m,) per mode; ``u`` real (nt,);
+    ``out`` real (nt, ·) receives Re q_j in column ``cre[j]`` and Im q_j in
+    column ``cim[j]`` (skipped when negative: a real mode); ``qmax[j]``
+    receives max_k |q_j|.
+    """
+    nt = u.shape[0]
+    m = mu.shape[0]
+    q = q0.copy()
+    for j in range(m):
+        qmax[j] = q[j].real * q[j].real + q[j].imag * q[j].imag
+        out[0, cre[j]] = q[j].real
+        if cim[j] >= 0:
+            out[0, cim[j]] = q[j].imag
+    for k in range(nt - 1):
+        uk = u[k]
+        du = u[k + 1] - uk
+        for j in range(m):
+            q[j] = mu[j] * q[j] + g1[j] * uk + g2[j] * du
+            a = q[j].real * q[j].real + q[j].imag * q[j].imag
+            if a > qmax[j]:
+                qmax[j] = a
+            out[k + 1, cre[j]] = q[j].real
+            if cim[j] >= 0:
+                out[k + 1, cim[j]] = q[j].imag
+    for j in range(m):
+        qmax[j] = math.sqrt(qmax[j])
 
 
 def load_python():

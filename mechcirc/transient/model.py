@@ -30,7 +30,11 @@ import scipy.linalg as la
 from ..circuit import Circuit, Element
 from ..errors import MechcircError, TopologyError
 
-__all__ = ["StateSpace", "state_space", "backlash_elements"]
+__all__ = ["StateSpace", "state_space", "backlash_elements", "MAX_NODES"]
+
+#: Most nodes (plus levers) a transient accepts: the model is dense, O(n²) memory
+#: and O(n³) set-up (2000 nodes: 32 MB per matrix, a few seconds).
+MAX_NODES = 2000
 
 
 @dataclass(frozen=True, eq=False)
@@ -121,6 +125,11 @@ def state_space(circuit: Circuit, *, linearise: bool = False) -> StateSpace:
         work = circuit
     if work is None:
         raise MechcircError("the circuit has only clearance elements; add a mass")
+    count = len({nd for e in work.elements for nd in (e.n1, e.n2)}) + len(work.levers)
+    if count > MAX_NODES:
+        raise MechcircError(f"the network has {count} nodes and levers; transients are limited "
+                            f"to {MAX_NODES} (dense matrices); reduce it first "
+                            "('mechcirc reduce')")
     system = assemble(work, whole=True)
     nodes = list(system.nodes)
     for e, _ in clear:                      # clearance-only nodes still need a coordinate

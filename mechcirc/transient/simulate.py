@@ -11,19 +11,21 @@ the drive, with u taken piecewise linear (first-order hold):
 [[A h, B h, 0], [0, 0, 1], [0, 0, 0]] (``scipy.linalg.expm``).  The only error
 is the drive's interpolation between samples, bounded by h²/8 · max|ü|,
 estimated from the second differences of the samples and reported.  The
-recurrence runs in blocks of L steps with precomputed powers Φʲ, so its cost
-is a few matrix products instead of one Python step per sample.
+recurrence runs in blocks of L ≈ √n steps, all blocks advanced together, so
+its cost is matrix products instead of one Python step per sample.
 
 Circuits with clearances integrate with the embedded Dormand–Prince 5(4) loop
 of :mod:`mechcirc.transient._kernels` (contacts evaluated inside the
-right-hand side, steps ending on every output time); its error is estimated
-by the same run with a 100× tighter tolerance.
+right-hand side; steps end on every drive sample unless the drive is constant
+or harmonic, when outputs come from the method's continuous extension); its error is estimated
+by the difference from the same run at a 10× looser tolerance.
 """
 
 from __future__ import annotations
 
 import csv
 import math
+import warnings
 from dataclasses import dataclass, field
 from typing import Callable
 
@@ -135,7 +137,7 @@ class TransientResult:
     """The transient on the time grid ``time`` [s] (plain arrays; picklable).
 
     ``x``, ``v``: node displacements [m or rad] and velocities, shape (nt, n_nodes),
-    columns in ``nodes`` order; ``force``, ``dv``: every element's force [N] and
+    columns in ``nodes`` order (``v`` is None when not asked for); ``force``, ``dv``: every element's force [N] and
     velocity difference v(n1) − v(n2), shape (nt, n_elements), columns in
     ``elements`` order; ``drive_force`` (velocity drive) or ``drive_velocity``
     (force drive) [nt] or None; ``drive`` the drive's value u(t) [nt] (None
@@ -162,7 +164,7 @@ class TransientResult:
     def node(self, name: str) -> tuple[np.ndarray, np.ndarray]:
         """(x, v) of node ``name``."""
         i = self.nodes.index(name)
-        return self.x[:, i], self.v[:, i]
+        return self.x[:, i], (self.v[:, i] if self.v is not None else None)
 
     def element_force(self, name: str) -> np.ndarray:
         """Force [N] through element ``name`` (n1 → n2)."""
@@ -171,7 +173,8 @@ class TransientResult:
     def to_json(self) -> dict:
         """The ``--json`` document (issue 12 §4)."""
         doc = {"time": self.time,
-               "nodes": {n: {"x": self.x[:, i], "v": self.v[:, i]}
+               "nodes": {n: ({"x": self.x[:, i], "v": self.v[:, i]} if self.v is not None
+                             else {"x": self.x[:, i]})
                          for i, n in enumerate(self.nodes)},
                "elements": {e: {"force": self.force[:, j], "dv": self.dv[:, j]}
                             for j, e in enumerate(self.elements)},
@@ -183,9 +186,11 @@ class TransientResult:
 
     def write_csv(self, fh) -> None:
         """Columns: t, x(node), v(node) for each node, F(element) for each element, drive."""
-        header = ["t"] + [f"x({n})" for n in self.nodes] + [f"v({n})" for n in self.nodes] \
+        vs = self.v if self.v is not None else np.zeros((self.time.size, 0))
+        header = ["t"] + [f"x({n})" for n in self.nodes] \
+            + [f"v({n})" for n in self.nodes if self.v is not None] \
             + [f"F({e})" for e in self.elements]
-        cols = [self.time, *self.x.T, *self.v.T, *self.force.T]
+        cols = [self.time, *self.x.T, *vs.T, *self.force.T]
         if self.drive_force is not None:
             header.append("F(drive)")
             cols.append(self.drive_force)
@@ -235,7 +240,8 @@ def _grid(t_end: float, dt: float | None, waveform: Waveform) -> np.ndarray:
 def transient(circuit: Circuit, t_end: float, dt: float | None = None,
               drive: Waveform | str | Callable | None = None, *,
               amplitude: float | None = None, linearise: bool = False,
-              rtol: float = 1e-9) -> TransientResult:
+              elements: bool = True, velocities: bool = True,
+              rtol: float = 1e-10) -> TransientResult:
     """Integrate ``circuit`` from its ``.ic`` state over [0, t_end] on a grid of step ``dt``.
 
     Parameters
@@ -255,6 +261,13 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
         Take every clearance as closed (the frequency domain's reading).
     rtol : float
         Relative tolerance of the clearance integrator (ignored when linear).
+    elements : bool
+        Compute every element's force and velocity difference (default); if
+        false only node and drive outputs (faster for long runs of large networks).
+    velocities : bool
+        Compute the node velocities ``v`` (default); with ``elements=False``
+        and ``velocities=False`` only the displacements ``x`` and the drive's
+        output are formed (``v`` is None): half the output work of a linear run.
     """
     if callable(drive) and not isinstance(drive, Waveform):
         drive = Waveform("callable", func=drive)
@@ -289,15 +302,29 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
         u_in = u
     interp = _interpolation_error(u, drive)
     has_clear = bool(backlash_elements(circuit)) and not linearise
+    T, nx = None, None
     if has_clear:
         Z, method, err = _nonlinear(ss, circuit, z0, t, u_in, rtol)
     else:
-        Z = _propagate(ss.A, ss.B, z0, u_in, h)
-        method, err = "exact (matrix exponential, first-order hold of the drive)", 0.0
+        Z, T, why, nx, dropped = _propagate_modal(ss.A, ss.B, z0, u_in, h, ss.Cx)
+        if Z is None:
+            Z = _propagate(ss.A, ss.B, z0, u_in, h)
+            path = f"block propagation (modal path refused: {why})"
+        else:
+            path = why
+        method, err = ("exact (matrix exponential, first-order hold of the drive; "
+                       f"{path.split(' (')[0]})"), 0.0
+        if Z is not None and T is not None and dropped > 0 and velocities is False \
+                and not elements:
+            err = dropped           # x formed without the shapes' rounding-level imaginary parts
+        elif T is not None:
+            nx = None               # v and forces use every column anyway: keep x whole
+        notes.append(f"linear propagation: {path}")
     if interp > 1e-13 * float(np.abs(u).max()):      # not rounding of an exact ramp
         notes.append(f"drive interpolated linearly between samples: its error is at most "
                      f"{interp:.3g} (h²/8·max|ü|, from the samples' second differences)")
-    return _outputs(ss, circuit, t, Z, u, u_in, h, drive, method, err, interp, notes)
+    return _outputs(ss, circuit, t, Z, u, u_in, h, drive, method, err, interp, notes,
+                    elements, T, velocities, nx)
 
 
 def _with_oscillator(ss: StateSpace, z0, omega: float, amp: float):
@@ -348,49 +375,196 @@ def discretise(A: np.ndarray, B: np.ndarray, h: float):
     return E[:N, :N], E[:N, N], E[:N, N + 1]
 
 
-def _propagate(A, B, z0, u, h, block: int = 64) -> np.ndarray:
-    """All states z_k, k = 0..nt−1, of the FOH recurrence, in blocks of ``block`` steps."""
+def _propagate(A, B, z0, u, h, block: int | None = None) -> np.ndarray:
+    """All states z_k, k = 0..nt−1, of the FOH recurrence, in blocks of L steps.
+
+    1. The state at every block start, sequentially with Φᴸ (nt/L small steps);
+       the forcing over a block enters through the input responses Φᵐ Γ.
+    2. All blocks advanced together, one step at a time (L products of an
+       (nt/L × N) matrix with Φᵀ).
+    With L ≈ √nt both loops are short and the work is in matrix products.
+    """
     N = A.shape[0]
     nt = u.size
     Z = np.empty((nt, N))
-    if N == 0:
+    Z[0] = z0
+    if N == 0 or nt == 1:
         return Z
     Phi, G1, G2 = discretise(A, B, h)
-    L = max(1, min(block, nt - 1))
-    P = np.empty((L + 1, N, N))
-    P[0] = np.eye(N)
-    for j in range(1, L + 1):
-        P[j] = P[j - 1] @ Phi
-    # Input responses h_m = Φ^m Γ, and the drive as (u_k, u_{k+1} − u_k) per step.
-    H1 = P[:L] @ G1
-    H2 = P[:L] @ G2
-    nb = -(-(nt - 1) // L)
-    pad = nb * L + 1
-    up = np.empty(pad)
+    steps = nt - 1
+    L = block or max(1, min(steps, int(math.sqrt(steps)) + 1))
+    nb = -(-steps // L)
+    up = np.empty(nb * L + 1)
     up[:nt] = u
     up[nt:] = u[-1]
-    du = np.diff(up)
     ub = up[:-1].reshape(nb, L)
-    dub = du.reshape(nb, L)
-    # Forced part inside a block: F[b, j] = Σ_{i<j} h[j−1−i] w[b, i], j = 1..L.
-    idx = np.arange(L)
-    lag = idx[:, None] - 1 - idx[None, :]                 # (j−1) − i for j = 1..L rows
-    jj = np.arange(1, L + 1)
-    lag = (jj[:, None] - 1) - idx[None, :]
-    mask = lag >= 0
-    T1 = np.where(mask[..., None], H1[np.clip(lag, 0, L - 1)], 0.0)   # (L, L, N)
-    T2 = np.where(mask[..., None], H2[np.clip(lag, 0, L - 1)], 0.0)
-    F = np.einsum("jin,bi->bjn", T1, ub) + np.einsum("jin,bi->bjn", T2, dub)   # (nb, L, N)
+    dub = np.diff(up).reshape(nb, L)
+    # Input responses h_m = Φᵐ Γ for m < L (matrix-vector products).
+    H1 = np.empty((L, N))
+    H2 = np.empty((L, N))
+    H1[0], H2[0] = G1, G2
+    for m in range(1, L):
+        H1[m] = Phi @ H1[m - 1]
+        H2[m] = Phi @ H2[m - 1]
+    # Forcing accumulated over a whole block: Σ_i h[L−1−i] w_i.
+    Fend = ub @ H1[::-1] + dub @ H2[::-1]
+    PL = np.linalg.matrix_power(Phi, L)
     starts = np.empty((nb, N))
-    z = z0.astype(float).copy()
-    PL = P[L]
+    z = np.asarray(z0, float).copy()
     for b in range(nb):
         starts[b] = z
-        z = PL @ z + F[b, -1]
-    full = np.einsum("jmn,bn->bjm", P[1:], starts) + F                    # steps 1..L
-    Z[0] = z0
-    Z[1:] = full.reshape(nb * L, N)[:nt - 1]
+        z = PL @ z + Fend[b]
+    out = Z[1:]
+    cur = starts
+    PhiT = np.ascontiguousarray(Phi.T)
+    G12 = np.vstack([G1, G2])
+    for j in range(L):
+        cur = cur @ PhiT + np.column_stack([ub[:, j], dub[:, j]]) @ G12
+        k = np.arange(nb) * L + j          # state index − 1 of step j+1 in block b
+        ok = k < steps
+        out[k[ok]] = cur[ok]
     return Z
+
+
+#: Largest condition number of the eigenvector matrix for which the modal path
+#: runs; above it (near-defective A: critical damping, repeated undamped modes,
+#: rigid-body pairs) the block method does.
+MODAL_COND_MAX = 1e6
+#: Largest relative difference between the modal one-step map V e^{Λh} V⁻¹
+#: (and its input responses) and the matrix exponential's for the modal path.
+MODAL_CHECK_TOL = 1e-12
+
+
+#: A mode whose displacement shape C_x v is real up to this fraction of its
+#: norm (after one phase rotation: classical damping, undamped modes; computed
+#: shapes of such modes carry ~1e-12 of rounding) needs one real signal for
+#: the displacements instead of two; the part left out is bounded and reported.
+REAL_SHAPE_TOL = 1e-11
+
+
+def _propagate_modal(A, B, z0, u, h, Cx=None):
+    """The FOH recurrence in the eigenbasis of A: (Q, T, note, nx, dropped) with Z = Q Tᵀ.
+
+    (None, None, note, 0, 0.0) when refused.
+
+    A = V Λ V⁻¹ (real A: real modes and conjugate pairs; one of each pair is
+    propagated, q⁺ = μ q + g₁ u + g₂ Δu with μ = e^{λh}, g₁ = h φ₁(λh) b,
+    g₂ = h φ₂(λh) b from the 3×3 exponential of each mode, exact).  Q holds
+    Re q (and Im q of the complex modes), N real columns; T maps them back.
+    The work per step is O(N) and the outputs are one matrix product each.
+    Refused (None) when V is ill-conditioned or when V e^{Λh} V⁻¹ and its
+    input responses differ from the exact (Φ, Γ₁, Γ₂) by more than
+    ``MODAL_CHECK_TOL`` (relative), so the block method takes over.
+
+    With ``Cx``: a complex mode whose displacement shape Cx v is real after a
+    phase rotation (classical damping) is rotated so, and its Im q column is
+    put last; x then needs only the first ``nx`` columns of Q (the dropped
+    part of each such shape is below ``REAL_SHAPE_TOL`` of its norm; ``dropped``
+    bounds what it contributes to any x: Σ max|Cx T_col| · max_k |Q_k,col|).
+    """
+    N = A.shape[0]
+    nt = u.size
+    if N == 0:
+        return None, None, "no states", 0, 0.0
+    try:
+        lam, V = la.eig(A)
+    except (la.LinAlgError, ValueError):
+        return None, None, "eigen-decomposition failed", 0, 0.0
+    real = lam.imag == 0.0
+    pos = lam.imag > 0.0
+    if int(real.sum()) + 2 * int(pos.sum()) != N or not np.all(np.isfinite(lam)):
+        return None, None, "eigenvalues not in conjugate pairs", 0, 0.0
+    try:
+        with warnings.catch_warnings():         # ill-conditioning is judged just below
+            warnings.simplefilter("ignore", la.LinAlgWarning)
+            Vinv = la.inv(V)
+    except (la.LinAlgError, ValueError):
+        return None, None, "eigenvector matrix singular", 0, 0.0
+    cond = float(np.abs(V).sum(axis=0).max() * np.abs(Vinv).sum(axis=0).max())   # 1-norm
+    if not (cond <= MODAL_COND_MAX):
+        return None, None, f"eigenvector matrix condition number (1-norm) {cond:.1e} > {MODAL_COND_MAX:.0e}", 0, 0.0
+    keep = np.flatnonzero(real | pos)
+    lam_k = lam[keep]
+    Vk = V[:, keep]
+    rhs = np.column_stack([B.astype(complex), np.asarray(z0, complex)])
+    W = (Vinv @ rhs)[keep]
+    b, q0 = W[:, 0], W[:, 1]
+    # φ-functions of every mode from one 3×3 exponential each (batched).
+    m = lam_k.size
+    small = np.zeros((m, 3, 3), complex)
+    small[:, 0, 0] = lam_k * h
+    small[:, 0, 1] = 1.0
+    small[:, 1, 2] = 1.0
+    E = la.expm(small)
+    mu, g1, g2 = E[:, 0, 0], h * E[:, 0, 1] * b, h * E[:, 0, 2] * b
+    # A posteriori: the modal one-step map against the exact one.
+    Phi, G1, G2 = discretise(A, B, h)
+    mu_all = np.exp(lam * h)
+    Phi_m = ((V * mu_all) @ Vinv).real
+    scale = max(float(np.abs(Phi).max()), 1e-300)
+    dev = float(np.abs(Phi_m - Phi).max()) / scale
+    gscale = max(float(np.abs(G1).max()), float(np.abs(G2).max()), 1e-300)
+    g1_m = 2 * (Vk[:, ~real[keep]] @ g1[~real[keep]]).real + (Vk[:, real[keep]] @ g1[real[keep]]).real
+    g2_m = 2 * (Vk[:, ~real[keep]] @ g2[~real[keep]]).real + (Vk[:, real[keep]] @ g2[real[keep]]).real
+    if np.abs(B).max() > 0:
+        dev = max(dev, float(max(np.abs(g1_m - G1).max(), np.abs(g2_m - G2).max())) / gscale)
+    if not (dev <= MODAL_CHECK_TOL):
+        return None, None, (f"modal one-step map differs from the exponential's by {dev:.1e} "
+                            f"(> {MODAL_CHECK_TOL:.0e}; eigenvector condition {cond:.1e})"), 0, 0.0
+    # Real columns: Re q_j for every kept mode, Im q_j for the complex ones.
+    is_c = ~real[keep]
+    real_shape = np.zeros(m, bool)
+    if Cx is not None and Cx.shape[0]:
+        phi = Cx @ Vk
+        rot = np.exp(-0.5j * np.angle((phi * phi).sum(axis=0)))
+        rot[~is_c] = 1.0
+        shape_norm = np.abs(phi).max(axis=0)
+        real_shape = is_c & (np.abs((phi * rot).imag).max(axis=0) <= REAL_SHAPE_TOL * shape_norm)
+        rot[~real_shape] = 1.0
+        Vk, g1, g2, q0 = Vk * rot, g1 / rot, g2 / rot, q0 / rot     # z = v q unchanged
+    cre = np.arange(m)
+    cim = np.full(m, -1)
+    late = is_c & real_shape
+    early = is_c & ~real_shape
+    cim[early] = m + np.arange(int(early.sum()))
+    cim[late] = m + int(early.sum()) + np.arange(int(late.sum()))
+    nx = m + int(early.sum())
+    T = np.empty((N, N))
+    T[:, cre[~is_c]] = Vk[:, ~is_c].real
+    T[:, cre[is_c]] = 2 * Vk[:, is_c].real
+    T[:, cim[is_c]] = -2 * Vk[:, is_c].imag
+    Q = np.empty((nt, N))
+    qmax = np.zeros(m)
+    _modal_states(mu, g1, g2, q0, np.ascontiguousarray(u, float), cre, cim, Q, qmax)
+    note = f"modal (eigenvector condition {cond:.1e}, one-step map checked to {dev:.1e}"
+    if late.any():
+        note += f"; {int(late.sum())} of {int(is_c.sum())} oscillating modes with real shapes"
+    dropped = 0.0
+    if late.any():
+        cols = cim[late]
+        dropped = float((np.abs(Cx @ T[:, cols]).max(axis=0) * qmax[late]).sum())
+    return Q, T, note + ")", (nx if Cx is not None else N), dropped
+
+
+def _modal_states(mu, g1, g2, q0, u, cre, cim, out, qmax):
+    from . import _kernels as kern
+
+    if kern.HAVE_NUMBA:
+        kern.modal_run(mu, g1, g2, q0, u, cre, cim, out, qmax)
+        return
+    # numpy/scipy fallback: one first-order IIR filter per mode along time.
+    from scipy.signal import lfilter
+
+    x = np.empty(u.size, complex)
+    du = np.diff(u)
+    for j in range(mu.size):
+        x[0] = q0[j]
+        x[1:] = g1[j] * u[:-1] + g2[j] * du
+        y = lfilter([1.0], [1.0, -mu[j]], x)
+        qmax[j] = np.abs(y).max()
+        out[:, cre[j]] = y.real
+        if cim[j] >= 0:
+            out[:, cim[j]] = y.imag
 
 
 def _nonlinear(ss: StateSpace, circuit, z0, t, u, rtol):
@@ -419,33 +593,62 @@ def _nonlinear(ss: StateSpace, circuit, z0, t, u, rtol):
     args = (np.ascontiguousarray(ss.A), np.ascontiguousarray(ss.B), cx, dx, cv, dv,
             np.ascontiguousarray(ss.extra), prm, np.ascontiguousarray(u))
 
+    # Steps may run across output times when the drive has no kinks there (it
+    # is constant; a harmonic drive is generated by states), up to 1 rad of the
+    # fastest mode with every contact closed, so no contact can be stepped over.
+    dense = bool(np.all(u == u[0]))
+    # A with every contact closed: A + Σ_e extra_e ⊗ (c_e cx_e + d_e cv_e).
+    closed = ss.A + ss.extra @ (prm[:, :1] * cx + prm[:, 1:2] * cv)
+    w_max = float(np.abs(np.linalg.eigvals(closed)).max()) if N else 0.0
+    hmax = min(1.0 / w_max, t[-1]) if w_max > 0 else t[-1]
+
     def run(tol):
         out = np.empty((t.size, N))
         z = z0.astype(float).copy()
         scale = max(np.abs(z0).max(), 1e-300)
         atol = tol * scale if np.abs(z0).max() > 0 else tol
-        steps = kern.dopri_run(z, 0.0, h, t.size, *args[:8], args[8], tol, atol, h,
-                               kern._A, kern._B5, kern._B4, kern._C, out)
+        steps = kern.dopri_run(z, 0.0, h, t.size, *args[:8], args[8], tol, atol, hmax,
+                               kern._A, kern._B5, kern._B4, kern._C, kern._D, dense, out,
+                               1e-6 * hmax)
         if steps < 0:
             raise MechcircError("the clearance integrator's step fell below 1e-14 s "
                                 "(the network is too stiff for it)")
         return out
 
     Z = run(rtol)
-    Z2 = run(rtol / 100)
-    xs1 = Z @ ss.Cx.T
-    xs2 = Z2 @ ss.Cx.T
-    err = float(np.abs(xs1 - xs2).max())
+    # Error estimate: the same run at a 10× looser tolerance; the difference is
+    # (about) that run's error, so it over-estimates the error of the one returned.
+    Z2 = run(rtol * 10)
+    err = float(np.abs((Z - Z2) @ ss.Cx.T).max())
     backend = "numba" if kern.HAVE_NUMBA else "Python"
-    return Z2, f"Dormand-Prince 5(4), rtol {rtol / 100:g} ({backend}); clearances in the RHS", err
+    return Z, f"Dormand-Prince 5(4), rtol {rtol:g} ({backend}); clearances in the RHS", err
 
 
-def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes
-             ) -> TransientResult:
+def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes, want=True,
+             T=None, velocities=True, nx=None) -> TransientResult:
+    """Outputs from the states: z = Z[k] (or modal coordinates, z = T Z[k]).
+
+    Every output is affine in z, so each is one product of Z with the output
+    map (C T)ᵀ (BLAS-3 for node outputs, a vector for the drive's); terms of
+    the drive that vanish are skipped.
+    """
+    def affine(C, Du=None, Dud=None, cols=None):   # C z + Du u + Dud u̇ at every sample
+        if T is None:
+            out = Z @ C.T
+        elif cols is None:
+            out = Z @ (C @ T).T
+        else:                           # the other columns of Q do not reach C (x)
+            out = Z[:, :cols] @ (C @ T[:, :cols]).T
+        for coef, sig in ((Du, u), (Dud, udot)):
+            if coef is not None and np.any(coef):
+                out += np.multiply.outer(sig, coef)
+        return out
+
     udot = np.gradient(u, h) if u.size > 1 else np.zeros_like(u)
-    X = Z @ ss.Cx.T + np.outer(u, ss.Dx)
-    V = Z @ ss.Cv.T + np.outer(u, ss.Dv) + np.outer(udot, ss.Ev)
     clear = {e.name: (e, comp) for e, comp in backlash_elements(circuit)} if ss.extra is not None else {}
+    velocities = velocities or bool(want) or bool(clear)
+    X = affine(ss.Cx, ss.Dx, cols=nx)
+    V = affine(ss.Cv, ss.Dv, ss.Ev) if velocities else None
     comp_of = {comp.name: e.name for e, comp in clear.values() if comp is not None}
     index = {n: i for i, n in enumerate(ss.nodes)}
     def diff(Y, e):
@@ -459,46 +662,65 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes
     law_cache = {}
     for name, (e, comp) in clear.items():
         law_cache[name] = _law_forces(e, comp, diff(X, e), diff(V, e))
-    need_acc = any(e.kind == "mass" for e in circuit.elements) or ss.h is not None
+    need_acc = (want and any(e.kind == "mass" for e in circuit.elements)) or \
+        (ss.kind == "velocity" and bool(clear))
     if need_acc:
-        Zdot = Z @ ss.A.T + np.outer(u, ss.B)
+        # a = C_v ż + D_v u̇, with ż = A z + B u (+ the clearance forces): C_v A is
+        # formed once, so the cost is one (n_t × N) · (N × n) product.
+        Acc = affine(ss.Cv @ ss.A, ss.Cv @ ss.B, ss.Dv)
         for j, name in enumerate(clear):        # the clearance forces drive the masses too
-            Zdot += np.outer(law_cache[name][0], ss.extra[:, j])
-        Acc = Zdot @ ss.Cv.T + np.outer(udot, ss.Dv)
+            Acc += np.outer(law_cache[name][0], ss.Cv @ ss.extra[:, j])
 
-    names, forces, dvs = [], [], []
-    for e in circuit.elements:
-        dve = diff(V, e)
+    # Differences across every element at once: two column gathers.
+    els = circuit.elements if want else ()
+    i1 = np.array([index.get(e.n1, -1) for e in els], dtype=int)
+    i2 = np.array([index.get(e.n2, -1) for e in els], dtype=int)
+
+    def across(Y):                          # (n_t, n_elements)
+        out = np.take(Y, np.maximum(i1, 0), axis=1)
+        out[:, i1 < 0] = 0.0
+        second = np.take(Y, np.maximum(i2, 0), axis=1)
+        second[:, i2 < 0] = 0.0
+        out -= second
+        return out
+
+    dvm = across(V) if V is not None else np.zeros((t.size, 0))
+    scale = np.array([e.value * e.eta for e in els])
+    kinds = np.array([e.kind for e in els])
+    force = np.zeros((t.size, len(els)))
+    if (kinds == "spring").any():
+        sel = np.flatnonzero(kinds == "spring")
+        force[:, sel] = across(X)[:, sel] * scale[sel]
+    sel = np.flatnonzero(kinds == "damper")
+    force[:, sel] = dvm[:, sel] * scale[sel]
+    if (kinds == "mass").any():
+        sel = np.flatnonzero(kinds == "mass")
+        force[:, sel] = across(Acc)[:, sel] * scale[sel]
+    names = [e.name for e in els]
+    for j, e in enumerate(els):
         if e.name in clear or e.name in comp_of:
             sp = clear[e.name][0] if e.name in clear else clear[comp_of[e.name]][0]
             total, spring = law_cache[sp.name]
-            f = spring if e.name == sp.name else total - spring
-        elif e.kind == "mass":
-            f = e.value * e.eta * diff(Acc, e)
-        elif e.kind == "spring":
-            f = e.value * e.eta * diff(X, e)
-        else:
-            f = e.value * e.eta * dve
-        names.append(e.name)
-        forces.append(f)
-        dvs.append(dve)
-    force = np.column_stack(forces) if forces else np.zeros((t.size, 0))
-    dvm = np.column_stack(dvs) if dvs else np.zeros((t.size, 0))
+            force[:, j] = spring if e.name == sp.name else total - spring
     drive_force = drive_velocity = None
-    if ss.kind is not None:
-        r = Acc @ ss.M.T + V @ ss.D.T + X @ ss.K.T
+    if ss.kind == "velocity":
+        # Q = h·(M a + D v + K x + Σ g_e f_e): contract with h first (vectors only).
+        a, b, c = ss.M.T @ ss.h, ss.D.T @ ss.h, ss.K.T @ ss.h
+        if clear:
+            Q = Acc @ a + V @ b + X @ c
+        else:                   # one vector: h·(M a + D v + K x) is affine in z
+            Q = affine(a @ (ss.Cv @ ss.A) + b @ ss.Cv + c @ ss.Cx,
+                       a @ (ss.Cv @ ss.B) + b @ ss.Dv + c @ ss.Dx, a @ ss.Dv + b @ ss.Ev)
         for name, (e, comp) in clear.items():
             ge = np.zeros(len(ss.nodes))
             if e.n1 in index:
                 ge[index[e.n1]] += 1.0
             if e.n2 in index:
                 ge[index[e.n2]] -= 1.0
-            r += np.outer(law_cache[name][0], ge)
-        Q = r @ ss.h
-        if ss.kind == "velocity":
-            drive_force = Q
-        else:
-            drive_velocity = V @ ss.g
+            Q = Q + law_cache[name][0] * (ge @ ss.h)
+        drive_force = Q
+    elif ss.kind == "force":
+        drive_velocity = affine(ss.g @ ss.Cv, ss.g @ ss.Dv, ss.g @ ss.Ev)
     if ss.Ev.any() and drive.kind not in ("rest", "impulse"):
         notes.append("some nodes carry neither mass nor damping: their velocities use the "
                      "drive's derivative estimated from the samples")

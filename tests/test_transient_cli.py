@@ -1,0 +1,111 @@
+"""``mechcirc transient`` and ``mechcirc crosscheck FILE.mcir``: interface of issue 12 §4."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mechcirc import cli
+
+REPO = Path(__file__).resolve().parents[1]
+NETLISTS = sorted(REPO.glob("netlists/*.mcir")) + sorted(REPO.glob("examples/*.mcir"))
+
+
+def run(argv, capsys):
+    try:
+        status = cli.main([str(a) for a in argv])
+    except SystemExit as exc:
+        status = exc.code
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+@pytest.mark.parametrize("path", NETLISTS, ids=lambda p: p.name)
+def test_every_shipped_netlist_runs_transient_and_crosscheck(path, capsys):
+    status, out, err = run(["transient", path, "--t-end", "0.02", "--dt", "1e-4", "--json"],
+                           capsys)
+    assert status == 0, err
+    doc = json.loads(out)
+    assert len(doc["time"]) == 201
+    assert set(doc) >= {"time", "nodes", "elements", "drive", "notes"}
+    for node in doc["nodes"].values():
+        assert len(node["x"]) == 201 and np.all(np.isfinite(node["v"]))
+    status, out, err = run(["crosscheck", path, "--json"], capsys)
+    assert status == 0, err
+    doc = json.loads(out)
+    assert doc["resonances"] and doc["steady_state"]
+    for r in doc["resonances"]:
+        assert set(r) >= {"kind", "omega", "ringing_omega", "rel_error"}
+        if r["ringing_omega"] is not None:
+            assert r["rel_error"] < 1e-8          # achieved ≤ 1e-14 on these
+    for s in doc["steady_state"]:
+        assert set(s) >= {"omega", "expected", "measured", "rel_error"}
+        assert s["rel_error"] < 1e-8              # achieved ≤ 1e-10
+
+
+def test_transient_outputs_csv_and_plot(tmp_path, capsys):
+    csv_path, png = tmp_path / "o.csv", tmp_path / "o.png"
+    status, out, err = run(["transient", REPO / "examples/msl_backlash.mcir", "--t-end", "0.1",
+                            "--dt", "1e-3", "-o", csv_path, "--plot", png], capsys)
+    assert status == 0, err
+    rows = csv_path.read_text().splitlines()
+    assert rows[0].startswith("t,x(phi),x(phi2)") and len(rows) == 102
+    assert png.read_bytes()[:4] == b"\x89PNG"
+    assert "Dormand-Prince" in out
+
+
+def test_transient_drive_waveforms_and_json_drive_key(tmp_path, capsys):
+    net = tmp_path / "v.mcir"
+    net.write_text("drive V b 0 velocity=0.2\nspring k b a 900\nmass m a 0 4\n")
+    status, out, _ = run(["transient", net, "--t-end", "0.1", "--drive", "harmonic:30",
+                          "--json"], capsys)
+    assert status == 0
+    assert "force" in json.loads(out)["drive"]
+    samples = tmp_path / "d.csv"
+    samples.write_text("t,v\n0,0\n0.1,1\n")
+    status, out, _ = run(["transient", net, "--t-end", "0.1", "--drive", f"csv:{samples}",
+                          "--json"], capsys)
+    assert status == 0
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--t-end", "-1"], "--t-end"),
+    (["--t-end", "1", "--drive", "harmonic:-3"], "ω"),
+    (["--t-end", "1", "--drive", "square"], "not understood"),
+    (["--t-end", "1", "--drive", "csv:/nonexistent.csv"], "nonexistent"),
+    (["--t-end", "1", "--dt", "1e-12"], "limit"),
+])
+def test_transient_user_errors_exit_2(argv, message, capsys, tmp_path):
+    out_csv = tmp_path / "never.csv"
+    status, _, err = run(["transient", REPO / "netlists/stb_heald.mcir", *argv, "-o", out_csv],
+                         capsys)
+    assert status == 2
+    assert message in err
+    assert not out_csv.exists() and not list(tmp_path.iterdir())
+
+
+def test_driveless_netlist_transient_ok_sweep_and_crosscheck_refuse(tmp_path, capsys):
+    net = tmp_path / "free.mcir"
+    net.write_text("mass m a 0 1\nspring k a 0 100\n.ic a x=0.1\n")
+    status, out, _ = run(["transient", net, "--t-end", "1", "--json"], capsys)
+    assert status == 0
+    x = np.array(json.loads(out)["nodes"]["a"]["x"])
+    t = np.array(json.loads(out)["time"])
+    assert np.abs(x - 0.1 * np.cos(10 * t)).max() < 1e-13
+    for cmd in (["sweep", net, "--omega-min", "1", "--omega-max", "10"], ["crosscheck", net]):
+        status, _, err = run(cmd, capsys)
+        assert status == 2 and "no drive" in err
+
+
+def test_sley_crosscheck_still_works_without_file(capsys):
+    status, out, _ = run(["crosscheck", "--json"], capsys)
+    assert status == 0
+    assert "ringing" in json.loads(out)
+
+
+def test_sweep_warns_backlash_is_linearised(capsys):
+    status, _, err = run(["sweep", REPO / "examples/msl_backlash.mcir", "--omega-min", "1",
+                          "--omega-max", "100", "--points", "5"], capsys)
+    assert status == 0
+    assert "linearised" in err

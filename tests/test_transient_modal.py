@@ -1,0 +1,119 @@
+"""The two linear propagation paths (modal and block) against closed forms (issue 12 §5).
+
+References are written here independently of the code under test: the
+textbook SDOF responses, and for a non-proportionally damped 3-DOF chain the
+exact step response z(t) = A⁻¹ (e^{At} − I) B F from ``scipy.linalg.expm``
+at a few times, with M, C, K written by hand.
+"""
+
+import math
+
+import numpy as np
+import pytest
+import scipy.linalg as la
+
+import mechcirc
+import mechcirc.transient._kernels as kern
+import mechcirc.transient.simulate as sim
+from mechcirc.transient import transient
+
+CHAIN3 = """
+mass   m1 a 0 1
+mass   m2 b 0 2
+mass   m3 c 0 1.5
+spring k1 0 a 1000
+spring k2 a b 2000
+spring k3 b c 500
+damper c1 a 0 3
+damper c3 b c 0.5
+drive  F c 0 force=2
+"""
+
+
+def _chain3_reference(times):
+    M = np.diag([1.0, 2.0, 1.5])
+    K = np.array([[3000.0, -2000, 0], [-2000, 2500, -500], [0, -500, 500]])
+    C = np.array([[3.0, 0, 0], [0, 0.5, -0.5], [0, -0.5, 0.5]])
+    Mi = np.linalg.inv(M)
+    A = np.block([[np.zeros((3, 3)), np.eye(3)], [-Mi @ K, -Mi @ C]])
+    B = np.concatenate([np.zeros(3), Mi @ np.array([0.0, 0.0, 2.0])])
+    Ai = np.linalg.inv(A)
+    return np.array([Ai @ (la.expm(A * t) - np.eye(6)) @ B for t in times])
+
+
+def _modal_note(r):
+    return [n for n in r.notes if n.startswith("linear propagation")][0]
+
+
+@pytest.mark.parametrize("path", ["modal", "block"])
+def test_non_proportional_chain_step_both_paths(path, monkeypatch):
+    if path == "block":
+        monkeypatch.setattr(sim, "MODAL_COND_MAX", 0.0)      # refuse the modal path
+    r = transient(mechcirc.parse(CHAIN3), 4.0, 1e-3, "step")
+    assert path in _modal_note(r)
+    idx = np.arange(0, r.time.size, 200)
+    ref = _chain3_reference(r.time[idx])
+    x = np.column_stack([r.node(n)[0][idx] for n in "abc"])
+    v = np.column_stack([r.node(n)[1][idx] for n in "abc"])
+    # achieved 5e-14 / 9e-14 (x / v, modal) and 3e-14 / 6e-14 (block): margin ≥ 10
+    assert np.abs(x - ref[:, :3]).max() <= 1e-12 * np.abs(ref[:, :3]).max()
+    assert np.abs(v - ref[:, 3:]).max() <= 1e-12 * np.abs(ref[:, 3:]).max()
+    # element forces balance the drive at the driven mass' node (c): F = k3 + c3 + m3
+    tot = r.element_force("m3") - r.element_force("k3") - r.element_force("c3")
+    assert np.abs(tot[1:] - 2.0).max() <= 1e-9 * 2.0
+
+
+def test_x_only_run_matches_full_run_and_omits_v():
+    c = mechcirc.parse(CHAIN3)
+    full = transient(c, 4.0, 1e-3, "step")
+    lean = transient(c, 4.0, 1e-3, "step", elements=False, velocities=False)
+    assert lean.v is None and lean.force.shape == (full.time.size, 0)
+    assert np.abs(lean.x - full.x).max() <= 1e-14 * np.abs(full.x).max()
+    assert np.abs(lean.drive_velocity - full.drive_velocity).max() <= \
+        1e-13 * np.abs(full.drive_velocity).max()
+    doc = lean.to_json()
+    assert set(doc["nodes"]["a"]) == {"x"}
+
+
+def test_undamped_long_run_real_shapes_closed_form():
+    # classical (zero) damping: every mode shape is real, so an x-only run
+    # forms x from one signal per mode; 100 s = 318 periods of ω = 20 rad/s
+    net = "mass m a 0 2\nspring k a 0 800\ndrive F a 0 force=3\n"
+    r = transient(mechcirc.parse(net), 100.0, 1e-3, "step", elements=False, velocities=False)
+    assert "1 of 1 oscillating modes with real shapes" in _modal_note(r)
+    x_ref = 3.0 / 800 * (1 - np.cos(20.0 * r.time))
+    # achieved 1.5e-12 (phase rounding over 1e5 steps); 1e-11 is a margin of ~7
+    assert np.abs(r.x[:, 0] - x_ref).max() <= 1e-11 * np.abs(x_ref).max()
+    assert r.error <= 1e-12 * np.abs(x_ref).max()
+
+
+def test_critical_damping_falls_back_to_block_exactly():
+    m, k = 2.0, 800.0
+    wn = math.sqrt(k / m)
+    cc = 2 * math.sqrt(k * m)
+    net = f"mass m a 0 {m}\nspring k a 0 {k}\ndamper c a 0 {cc!r}\ndrive F a 0 force=3\n"
+    r = transient(mechcirc.parse(net), 2.0, 1e-3, "step")
+    assert "block propagation (modal path refused: eigenvector matrix condition" in \
+        _modal_note(r)
+    x_ref = 3.0 / k * (1 - np.exp(-wn * r.time) * (1 + wn * r.time))
+    # achieved 8e-15; margin 100
+    assert np.abs(r.node("a")[0] - x_ref).max() <= 1e-12 * np.abs(x_ref).max()
+
+
+def test_modal_fallback_without_numba_matches(monkeypatch):
+    c = mechcirc.parse(CHAIN3)
+
+    def drive(t):                       # nonzero u and Δu: both input responses act
+        return np.sin(30 * t) * t
+
+    compiled = transient(c, 2.0, 1e-3, drive)
+
+    def refuse(*_):
+        raise AssertionError("the compiled kernel ran")
+
+    monkeypatch.setattr(kern, "HAVE_NUMBA", False)           # the lfilter recurrence
+    monkeypatch.setattr(kern, "modal_run", refuse)
+    plain = transient(c, 2.0, 1e-3, drive)
+    assert "modal" in _modal_note(plain)
+    assert np.abs(plain.x - compiled.x).max() <= 1e-13 * np.abs(compiled.x).max()
+    assert np.abs(plain.force - compiled.force).max() <= 1e-12 * np.abs(compiled.force).max()
