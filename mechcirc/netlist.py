@@ -27,11 +27,13 @@ file, line and column, what is wrong and what would be right.
 
 from __future__ import annotations
 
+import functools
+import gc
 import math
 import os
 import re
 import weakref
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import Mapping
 from pathlib import Path
 
@@ -46,10 +48,10 @@ __all__ = ["parse", "load", "expressions_of", "MAX_LINE_LENGTH", "MAX_STATEMENTS
 
 #: Longest line accepted [characters]; longer lines are refused at once.
 MAX_LINE_LENGTH = 100_000
-#: Most statements a netlist may hold.  A 10⁵-element netlist parses, reduces
-#: and sweeps in seconds; 10⁶ elements took six minutes and 4.7 GB
-#: (docs/reliability.md), so larger files are refused at once instead.
-MAX_STATEMENTS = 200_000
+#: Most statements a netlist may hold.  At the limit, a 10⁶-statement ladder
+#: parses in 6 s, reduces in 21 s and sweeps 100 points in 14 s of CPU, with a
+#: peak of 1.8 GB (docs/reliability.md); larger files are refused at once.
+MAX_STATEMENTS = 1_000_000
 
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*|[0-9]+")
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
@@ -68,6 +70,74 @@ SYNTAX = {
 
 #: Where the first positional field that carries a value is (elements: VALUE).
 _VALUE_INDEX = {"mass": 3, "spring": 3, "damper": 3}
+
+# -- the fast path ------------------------------------------------------------
+# Most lines of a large netlist are plain element statements:
+# ``KIND NAME N1 N2 NUMBER [UNIT] [eta=NUMBER] [# comment]``.  Such a line is
+# matched by one precompiled pattern and its Element is built directly; the
+# pattern only admits text on which the general path (tokenizer, slip checks,
+# expression parser) cannot fail or read anything else, and every semantic
+# check (unique name, distinct nodes, value > 0, the unit and its role) that
+# does not pass sends the line to the general path, so each error message
+# comes from the same code as before.
+_FAST_NAME = r"([A-Za-z_][A-Za-z0-9_]*|[0-9]+)"
+_FAST_NUMBER = r"((?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?)"
+_FAST = re.compile(
+    r"([ \t]*)([A-Za-z]+)[ \t]+" + _FAST_NAME + r"[ \t]+" + _FAST_NAME + r"[ \t]+"
+    + _FAST_NAME + r"[ \t]+" + _FAST_NUMBER
+    + r"(?:[ \t]+([A-Za-z\u00b5\u03bc][A-Za-z0-9*/^\-\u00b7\u00b2\u00b3\u00b5\u03bc]*))?"
+    + r"(?:[ \t]+eta=" + _FAST_NUMBER + r")?[ \t]*(?:[#;].*)?")
+_FAST_KINDS = {"mass": "mass", "spring": "spring", "damper": "damper"}
+
+_new = object.__new__
+
+
+def _element_fast(kind, name, n1, n2, value, eta, line, col) -> Element:
+    """``Element(kind, name, n1, n2, value, eta, line, col)`` without the frozen
+    dataclass's ``__init__`` (ten ``object.__setattr__`` calls, 2-3x slower): the
+    same object, its instance dict filled item by item (keys stay shared)."""
+    e = _new(Element)
+    d = e.__dict__
+    d["kind"] = kind
+    d["name"] = name
+    d["n1"] = n1
+    d["n2"] = n2
+    d["value"] = value
+    d["eta"] = eta
+    d["line"] = line
+    d["col"] = col
+    d["backlash"] = 0.0
+    d["damping"] = 0.0
+    return e
+
+
+# Only while Element has exactly these fields; a new field goes through __init__.
+_make_element = _element_fast if tuple(f.name for f in fields(Element)) == (
+    "kind", "name", "n1", "n2", "value", "eta", "line", "col", "backlash", "damping") \
+    else Element
+
+
+def _num_expr(value: float) -> Expr:
+    """``parse_expression`` of a plain number: ``Expr("num", 0, value)``."""
+    e = _new(Expr)
+    d = e.__dict__
+    d["kind"] = "num"
+    d["col"] = 0
+    d["value"] = value
+    d["args"] = ()
+    return e
+
+
+if tuple(f.name for f in fields(Expr)) != ("kind", "col", "value", "args"):
+    def _num_expr(value: float) -> Expr:      # noqa: F811 - Expr changed: use __init__
+        return Expr("num", 0, value)
+
+
+_INF = math.inf
+
+#: Units are few and parsed again on every line: memoise the one grammar's result
+#: (a Unit is immutable; a failing unit raises each time, uncached).
+_unit = functools.lru_cache(maxsize=1024)(parse_unit)
 
 
 @dataclass(frozen=True)
@@ -209,6 +279,18 @@ class _Parser:
 
     # -- statements ------------------------------------------------------
     def run(self) -> Circuit:
+        # A large netlist allocates millions of small objects that all live on:
+        # the cyclic collector would walk them again and again (quadratic-looking
+        # growth of the time per element).  Off while parsing, restored after.
+        enabled = gc.isenabled()
+        gc.disable()
+        try:
+            return self._run()
+        finally:
+            if enabled:
+                gc.enable()
+
+    def _run(self) -> Circuit:
         lines = split_lines(self.text)     # as editors and wc -l count them
         if not any(ln.strip() for ln in lines):
             raise NetlistError("the file is empty", self.source, 0, 0,
@@ -218,13 +300,26 @@ class _Parser:
             raise NetlistError(f"the netlist has about {statements} statements, the limit is "
                                f"{MAX_STATEMENTS}", self.source, 0, 0,
                                "a smaller network (see 'mechcirc reduce')")
-        parsed = []
+        parsed: list = []               # _Line, or a list of consecutive plain lines
+        run = None
+        fast = _FAST.fullmatch
         # First pass: split every line, and note where each parameter is defined
-        # so a use-before-definition can name the line.
+        # so a use-before-definition can name the line.  A plain element line
+        # (see _FAST) is kept as its match, to be built in the second pass.
         for lineno, raw in enumerate(lines, start=1):
             if len(raw) > MAX_LINE_LENGTH:
                 raise NetlistError(f"line is {len(raw)} characters long, the limit is "
                                    f"{MAX_LINE_LENGTH}", self.source, lineno, 1)
+            m = fast(raw)
+            if m is not None:
+                kind = _FAST_KINDS.get(m.group(2).lower())
+                if kind is not None:
+                    if run is None:
+                        run = []
+                        parsed.append(run)
+                    run.append((lineno, kind, m))
+                    continue
+            run = None
             line = _Line(raw, self.source, lineno)
             if not line.tokens:
                 continue
@@ -240,14 +335,19 @@ class _Parser:
                                self.source, 0, 0,
                                "one of " + (", ".join(self.param_lines) or "(none defined)"))
         for line in parsed:
-            if line.tokens[0].text.lower() == ".param":
+            if type(line) is _Line and line.tokens[0].text.lower() == ".param":
                 self.param(line)
+        handlers = {"mass": self.element, "spring": self.element, "damper": self.element,
+                    "lever": self.lever, "drive": self.drive, ".ic": self.ic}
+        fast_elements = self.fast_elements
         for line in parsed:
+            if type(line) is list:
+                fast_elements(line)
+                continue
             keyword = line.tokens[0].text.lower()
             if keyword == ".param":
                 continue
-            handler = {"mass": self.element, "spring": self.element, "damper": self.element,
-                       "lever": self.lever, "drive": self.drive, ".ic": self.ic}.get(keyword)
+            handler = handlers.get(keyword)
             if handler is None:
                 line.error(f"unknown keyword {line.tokens[0].text!r}", line.tokens[0].col,
                            "one of .param, .ic, mass, spring, damper, lever, drive")
@@ -262,9 +362,11 @@ class _Parser:
         if not self.elements:
             raise NetlistError("the netlist has no elements", self.source, 0, 0,
                                "mass, spring or damper lines")
-        known = {n for e in self.elements for n in (e.n1, e.n2)}
-        known |= {n for lv in self.levers for n in (lv.p1, lv.p2, lv.s1, lv.s2)}
-        known |= {n for d in self.drives for n in (d.n1, d.n2)}
+        known: set[str] = set()
+        if self.initial:
+            known = {n for e in self.elements for n in (e.n1, e.n2)}
+            known |= {n for lv in self.levers for n in (lv.p1, lv.p2, lv.s1, lv.s2)}
+            known |= {n for d in self.drives for n in (d.n1, d.n2)}
         seen_ic: dict[str, int] = {}
         for node, _, _, lineno, col in self.initial:
             if node == "0":
@@ -294,7 +396,7 @@ class _Parser:
         if unit is None:
             return value
         try:
-            u = parse_unit(unit.text)
+            u = _unit(unit.text)
             out = convert(value, u, role)
         except UnitError as exc:
             expected = exc.expected
@@ -427,6 +529,45 @@ class _Parser:
                        tok.col, "a positive value")
         return value
 
+    def fast_elements(self, run: list) -> None:
+        """Build the elements of consecutive lines matched by ``_FAST``; a line that
+        fails any check goes to :meth:`element`, which reports it as for any other line.
+
+        One loop over the run with everything bound locally: per line, this is most
+        of the parse time of a large netlist."""
+        names, expressions, elements = self.names, self.expressions, self.elements
+        append, unit_of, inf, make = elements.append, _unit, _INF, _make_element
+        for lineno, kind, m in run:
+            indent, _, name, n1, n2, number, unit, eta_text = m.groups()
+            if name.isdigit():
+                name = str(int(name))
+            if n1.isdigit():
+                n1 = str(int(n1))
+            if n2.isdigit():
+                n2 = str(int(n2))
+            value = raw = float(number)
+            eta = 1.0 if eta_text is None else float(eta_text)
+            u = None
+            if unit is not None:
+                try:
+                    u = unit_of(unit)
+                    value = convert(raw, u, kind)
+                except UnitError:
+                    value = 0.0                     # the general path says why
+            if name in names or n1 == n2 or raw == inf or not value > 0 \
+                    or not 0 < eta < inf:
+                self.element(_Line(m.string, self.source, lineno), kind)
+                continue
+            names[name] = lineno
+            # The parsed expression of a plain number, Expr("num", 0, raw), is
+            # made when expressions_of() is first asked (see _materialise).
+            expressions[(name, "value")] = raw if u is None else (raw, u.factor)
+            if eta_text is not None:
+                expressions[(name, "eta")] = eta
+            if u is not None:
+                self._note_kind(lineno, name, u, unit, m.start(7) + 1, (n1, n2))
+            append(make(kind, name, n1, n2, value, eta, lineno, len(indent) + 1))
+
     def element(self, line: _Line, kind: str):
         allowed = ("eta", "backlash", "damping") if kind == "spring" else ("eta",)
         pos, opts, units = self._fields(line, kind, 4, allowed)
@@ -439,7 +580,9 @@ class _Parser:
         value = self._positive(line, pos[3], f"{kind} {name!r}", ELEMENT_UNITS[kind],
                                unit_tok=units.get("value"), role=kind, key=(name, "value"))
         if "value" in units:
-            self._note_kind(line, name, units["value"], (n1, n2))
+            unit_tok = units["value"]
+            self._note_kind(line.lineno, name, _unit(unit_tok.text), unit_tok.text,
+                            unit_tok.col, (n1, n2))
         eta = self._positive(line, opts["eta"], f"eta of {name!r}", "",
                              unit_tok=units.get("eta"), role="eta", key=(name, "eta")) \
             if "eta" in opts else 1.0
@@ -491,9 +634,10 @@ class _Parser:
         self.initial.append((node, values.get("x", 0.0), values.get("v", 0.0), line.lineno,
                              pos[0].col))
 
-    def _note_kind(self, line: _Line, name: str, unit_tok: _Token, nodes) -> None:
+    def _note_kind(self, lineno: int, name: str, unit, unit_text: str, col: int,
+                   nodes) -> None:
         """Warn once per node that carries both translational and rotational units."""
-        rot = is_rotational(parse_unit(unit_tok.text))
+        rot = is_rotational(unit)
         if rot is None:
             return
         for node in nodes:
@@ -509,12 +653,12 @@ class _Parser:
                 kinds = ("rotational", "translational") if rot else ("translational",
                                                                    "rotational")
                 warnings.warn(UnitMixWarning(
-                    f"{self.source}:{line.lineno}:{unit_tok.col}: node {node!r} gets a "
-                    f"{kinds[0]} unit ({unit_tok.text!r} of {name!r}) and a {kinds[1]} one "
+                    f"{self.source}:{lineno}:{col}: node {node!r} gets a "
+                    f"{kinds[0]} unit ({unit_text!r} of {name!r}) and a {kinds[1]} one "
                     f"({other[1]!r} of {other[0]!r}, line {other[2]}); one node is one "
                     "coordinate, a length or an angle: reflect the rotational part through "
                     "a lever (J/r², c_t/r²) or use separate nodes"), stacklevel=4)
-            seen.setdefault(rot, (name, unit_tok.text, line.lineno))
+            seen.setdefault(rot, (name, unit_text, lineno))
 
     def lever(self, line: _Line, kind: str):
         pos, opts, units = self._fields(line, kind, 5, ("ratio",))
@@ -578,7 +722,20 @@ def expressions_of(circuit: Circuit) -> dict | None:
     "velocity" | "force")`` to ``(Expr, unit factor)``; the SI value is the
     expression's value times the factor.  ``None`` for circuits built in code.
     """
-    return _EXPRESSIONS.get(id(circuit))
+    expressions = _EXPRESSIONS.get(id(circuit))
+    if expressions is not None:
+        _materialise(expressions)
+    return expressions
+
+
+def _materialise(expressions: dict) -> None:
+    """Turn the plain numbers the fast path stored (``raw`` or ``(raw, factor)``, raw a
+    float) into ``(Expr("num", 0, raw), factor)``, in place (order kept), once."""
+    for key, entry in expressions.items():
+        if type(entry) is float:
+            expressions[key] = (_num_expr(entry), 1.0)
+        elif type(entry[0]) is float:
+            expressions[key] = (_num_expr(entry[0]), entry[1])
 
 
 def parse(text: str, source: str = "<string>", *,

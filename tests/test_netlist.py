@@ -157,3 +157,148 @@ def test_lever_topology_errors_name_file_line_col(tmp_path, capsys):
     assert main(["check", str(path)]) == 2
     err = capsys.readouterr().err
     assert err.startswith(f"{path}:2:1: error: node(s) b, c have no path to the frame"), err
+
+
+# -- the fast path for plain element lines (issue 14 §2) -----------------------
+# Plain lines (KIND NAME N1 N2 NUMBER [UNIT] [eta=NUMBER]) are built directly by
+# netlist._Parser.fast_elements; everything else, and every plain line that fails a
+# check, goes through the general tokenizer.  The reference here is the general
+# path itself, run on the same text with the fast pattern switched off.
+
+import gc  # noqa: E402
+import random  # noqa: E402
+import re  # noqa: E402
+import warnings  # noqa: E402
+
+from mechcirc import netlist as _nl  # noqa: E402
+
+
+def _outcome(text, *, fast):
+    """(elements, expressions, warnings) or the error text, by either path."""
+    saved = _nl._FAST
+    if not fast:
+        _nl._FAST = re.compile(r"(?!)")           # matches nothing: all lines general
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            c = mechcirc.parse(text, source="t.mcir")
+        return (c.elements, list(_nl.expressions_of(c).items()),
+                [str(w.message) for w in caught])
+    except NetlistError as exc:
+        return str(exc)
+    finally:
+        _nl._FAST = saved
+
+
+@pytest.mark.parametrize("line, message", [
+    # Messages as the general path gave them before the fast path existed.
+    ("mass m1 a 0 1\nmass m1 a 0 2",
+     "t.mcir:3:6: error: element name 'm1' is already used on line 2 (expected a unique name)"),
+    ("spring k1 a a 1",
+     "t.mcir:2:13: error: both ends of spring 'k1' are node 'a' (expected two different nodes)"),
+    ("damper c1 a 0 0",
+     "t.mcir:2:15: error: damper 'c1' must be > 0 N·s/m, got 0 (expected a positive value)"),
+    ("mass m1 a 0 5 kgg",
+     "t.mcir:2:15: error: unknown unit 'kgg' (expected one of kg, g, t, N, kN, m, mm, cm, s, "
+     "ms, rad, deg, Hz, rpm, min, h and prefixed g/m/s/N/Hz/rad)"),
+    ("mass m1 a 0 5 N/m",
+     "t.mcir:2:15: error: unit 'N/m' is a stiffness; a mass value needs mass or moment of "
+     "inertia (expected mass (kg, g, t) or moment of inertia (kg*m^2))"),
+    ("mass m1 a 0 1e999",
+     "t.mcir:2:13: error: number 1e999 is too large for float64 (expected a magnitude below "
+     "1.8e308)"),
+    ("mass m1 a 0 1 eta=0",
+     "t.mcir:2:19: error: eta of 'm1' must be > 0, got 0 (expected a positive value)"),
+    ("spring k1 a 0 5 m",
+     "t.mcir:2:17: error: unit 'm' is a length; a spring value needs stiffness or torsional "
+     "rigidity (expected stiffness (N/m, N/mm, kN/m) or torsional rigidity (N*m/rad); note: "
+     "mechcirc has no SPICE suffixes, 'm' is read as a unit)"),
+    ("mas m1 a 0 1",
+     "t.mcir:2:1: error: unknown keyword 'mas' (expected one of .param, .ic, mass, spring, "
+     "damper, lever, drive)"),
+    ("mass 01 a 0 1\nmass 1 a 0 2",
+     "t.mcir:3:6: error: element name '1' is already used on line 2 (expected a unique name)"),
+    ("mass m1 a 0 1e-300 Mg\nmass m2 a 0 1e-320 mg",
+     "t.mcir:3:13: error: mass 'm2' must be > 0 kg, got 0 (expected a positive value)"),
+])
+def test_plain_lines_that_fail_keep_their_messages(line, message):
+    text = f"drive V a 0 velocity=1\n{line}\n"
+    assert _outcome(text, fast=True) == message
+    assert _outcome(text, fast=False) == message
+
+
+def test_fast_path_taken_and_same_objects_as_the_general_path():
+    text = ("drive V a 0 velocity=1\nmass m1 a 0 5 kg eta=2\n  Spring k1 a b 1e5 N/mm ; c\n"
+            "damper c1 b 0 .5 # x\nmass 7 b 0 3.\nspring kt b 0 2 N*m/rad\n")
+    calls = []
+    original = _nl._Parser.fast_elements
+    _nl._Parser.fast_elements = lambda self, run: (calls.extend(r[0] for r in run),
+                                                  original(self, run))
+    try:
+        fast = _outcome(text, fast=True)
+    finally:
+        _nl._Parser.fast_elements = original
+    assert calls == [2, 3, 4, 5, 6]
+    general = _outcome(text, fast=False)
+    assert fast == general
+    elements, exprs, caught = fast
+    assert elements[1].value == 1e8 and elements[1].col == 3 and elements[0].eta == 2.0
+    assert dict(exprs)[("k1", "value")][1] == 1000.0
+    assert len(caught) == 1 and caught[0].startswith("t.mcir:6:17: node 'b' gets a rotational")
+
+
+def test_random_plain_lines_parse_alike_on_both_paths():
+    """Random lines near the fast path's shape (good and bad): same result or same error."""
+    rng = random.Random(14)
+    # (mostly good, sometimes bad) choices for each field
+    names = (["m1", "k1", "c1", "a", "b", "0", "00", "7", "_x"], ["1a", "a-b", "n\u00e9", "a=b"])
+    numbers = (["1", "2.5", ".5", "5.", "1e3", "1E-3", "3e-320"],
+               ["0", "0.0", "1e999", "-1", "+2", "1e", "1,5", "2\u22123", "{3}", "1_0", "5kg",
+                "inf", "2*3"])
+    units = (["", " kg", " g", " N/m", " N/mm", " N*s/m", " N·s/m", " kg*m^2", " µg", " N/m²",
+              " Mg"], [" kgg", " m", " eta", " 1/s", " N/m\t", " kg kg", " {kg}"])
+    etas = (["", " eta=0.5", " eta=2", " #eta=0"],
+            [" eta=0", " eta=1e999", " eta={2}", " eta= 2", " eta=2 kg", " damping=3",
+             " backlash=1e-3 mm", " eta=1 eta=2"])
+    kinds = (["mass", "spring", "damper", "MASS", "Damper"], ["lever", "masss", "*mass"])
+    tails = (["", " # note", ";x", "\t", "  "], [" extra", "\x0b", " {"])
+
+    def pick(choices):
+        good, bad = choices
+        return rng.choice(good if rng.random() < 0.92 else bad)
+
+    fast_lines = 0
+    original = _nl._Parser.fast_elements
+
+    def counting(self, *a):
+        nonlocal fast_lines
+        fast_lines += len(a[0])
+        return original(self, *a)
+
+    for trial in range(400):
+        lines = ["drive V a 0 velocity=1"]
+        for _ in range(rng.randint(1, 4)):
+            lines.append(rng.choice(["", " ", "\t"]) + " ".join(
+                [pick(kinds), pick(names), pick(names), pick(names), pick(numbers)])
+                + pick(units) + pick(etas) + pick(tails))
+        text = "\n".join(lines) + "\n"
+        _nl._Parser.fast_elements = counting
+        try:
+            fast = _outcome(text, fast=True)
+        finally:
+            _nl._Parser.fast_elements = original
+        assert fast == _outcome(text, fast=False), text
+    assert fast_lines > 200           # the fast path was exercised, not bypassed
+
+
+def test_parse_restores_the_garbage_collector():
+    for enabled in (True, False):
+        (gc.enable if enabled else gc.disable)()
+        try:
+            mechcirc.parse("mass m a 0 1\ndrive V a 0 velocity=1\n")
+            assert gc.isenabled() is enabled
+            with pytest.raises(NetlistError):
+                mechcirc.parse("mass m a 0 -1\ndrive V a 0 velocity=1\n")
+            assert gc.isenabled() is enabled
+        finally:
+            gc.enable()
