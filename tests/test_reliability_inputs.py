@@ -477,5 +477,9 @@ def test_sigint_during_start_up_prints_no_mechcirc_traceback(tmp_path):
         if "Traceback" in err:
             # Only Python's own start-up (site, the import system) may be in it.
             assert f'File "{ROOT / "mechcirc"}' not in err, err
+        elif p.returncode == -signal.SIGINT:
+            # Killed by the default action before the interpreter installed its own
+            # handler (seen under load): nothing may have been printed.
+            assert err == "", err
         else:
             assert p.returncode in (0, 130), (p.returncode, err)
