@@ -32,26 +32,10 @@ import math
 
 import numpy as np
 
-if globals().get("_FORCE_PYTHON"):
-    HAVE_NUMBA = False
-else:
-    try:
-        from numba import njit as _numba_njit
-        HAVE_NUMBA = True
-    except ImportError:
-        HAVE_NUMBA = False
+from .._jit import decorators
+from ..transient._kernels import elasto_backlash
 
-if HAVE_NUMBA:
-    def _jit(fn):
-        return _numba_njit(cache=True, error_model="numpy")(fn)
-
-    def _jit_inline(fn):
-        return _numba_njit(cache=True, error_model="numpy", inline="always")(fn)
-else:
-    def _jit(fn):
-        return fn
-
-    _jit_inline = _jit
+HAVE_NUMBA, _jit, _jit_inline = decorators(bool(globals().get("_FORCE_PYTHON")))
 
 TWO_PI = 2.0 * math.pi
 # function columns: FI = [kind, part, table]; FF = [a, b, c, lo, h, w]
@@ -105,22 +89,15 @@ def force_law(law, k, d, cl, e, edot):
     """Force of a spring k ∥ damper d with deformation e, rate edot and clearance cl."""
     if law == 0:
         return k * e + d * edot
-    if e > cl:
-        fc = k * (e - cl)
-    elif e < -cl:
-        fc = k * (e + cl)
-    else:
-        if law == 1:
-            return 0.0
-        return d * edot
-    fd = d * edot
     if law == 1:
-        a = abs(fc)
-        if fd > a:
-            fd = a
-        elif fd < -a:
-            fd = -a
-    return fc + fd
+        # ElastoBacklash, written once (mechcirc.transient._kernels); cl is half the gap
+        return elasto_backlash(e, edot, k, d, 2.0 * cl)[0]
+    # Mrázek's dead zone: the damper acts inside the gap too
+    if e > cl:
+        return k * (e - cl) + d * edot
+    if e < -cl:
+        return k * (e + cl) + d * edot
+    return d * edot
 
 
 @_jit_inline

@@ -23,21 +23,9 @@ import math
 
 import numpy as np
 
-if globals().get("_FORCE_PYTHON"):
-    HAVE_NUMBA = False
-else:
-    try:
-        from numba import njit as _numba_njit
-        HAVE_NUMBA = True
-    except ImportError:          # the "fast" extra is not installed
-        HAVE_NUMBA = False
+from .._jit import decorators
 
-if HAVE_NUMBA:
-    def _jit(fn):
-        return _numba_njit(cache=True, error_model="numpy")(fn)
-else:
-    def _jit(fn):
-        return fn
+HAVE_NUMBA, _jit, _ = decorators(bool(globals().get("_FORCE_PYTHON")))
 
 (P_OMEGA, P_THETA0, P_I2P, P_I4, P_I4P, P_C2, P_C4, P_K2, P_K4, P_CL, P_M0, P_PHIP,
  P_ALPHA, P_SIGMA, P_I5P, P_I7, P_C5, P_C7, P_K5, P_K7) = range(20)

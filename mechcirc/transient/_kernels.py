@@ -23,21 +23,9 @@ import math
 
 import numpy as np
 
-if globals().get("_FORCE_PYTHON"):
-    HAVE_NUMBA = False
-else:
-    try:
-        from numba import njit as _numba_njit
-        HAVE_NUMBA = True
-    except ImportError:          # the "fast" extra is not installed
-        HAVE_NUMBA = False
+from .._jit import decorators
 
-if HAVE_NUMBA:
-    def _jit(fn):
-        return _numba_njit(cache=True, error_model="numpy")(fn)
-else:
-    def _jit(fn):
-        return fn
+HAVE_NUMBA, _jit, _ = decorators(bool(globals().get("_FORCE_PYTHON")))
 
 B_EPS = 1e-10
 

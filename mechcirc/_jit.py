@@ -1,0 +1,37 @@
+"""Optional compilation with numba, decided in one place for every kernel module.
+
+The kernels (sley, scene motion, transients, contact laws) are plain Python
+functions written in the subset numba compiles.  With the ``fast`` extra
+installed they are compiled on first use (cached on disk); without it they run
+as Python.  A kernel module asks for its decorators with
+``HAVE_NUMBA, jit, jit_inline = decorators(force_python)``; tests load a fresh
+copy of a kernel module with ``force_python`` set to compare both backends.
+numba is imported here only when a kernel module is imported, never by
+``import mechcirc``.
+"""
+
+from __future__ import annotations
+
+__all__ = ["decorators"]
+
+
+def _identity(fn):
+    return fn
+
+
+def decorators(force_python: bool = False):
+    """``(have_numba, jit, jit_inline)`` for a kernel module."""
+    if not force_python:
+        try:
+            from numba import njit
+        except ImportError:          # the "fast" extra is not installed
+            pass
+        else:
+            def jit(fn):
+                return njit(cache=True, error_model="numpy")(fn)
+
+            def jit_inline(fn):
+                return njit(cache=True, error_model="numpy", inline="always")(fn)
+
+            return True, jit, jit_inline
+    return False, _identity, _identity
