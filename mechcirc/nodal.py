@@ -37,7 +37,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .circuit import FRAME, Circuit, Element, Lever
 from .errors import TopologyError
-from .topology import check_frame_paths, loaded_groups
+from .topology import check_frame_paths, force_groups, loaded_groups, node_names
 
 __all__ = ["NodalSystem", "Solution", "assemble", "stamps", "combine", "matrix",
            "dense_matrices", "solve", "solve_unit", "mobility", "mobility_and_error",
@@ -132,10 +132,7 @@ def assemble(circuit: Circuit, whole: bool = False) -> NodalSystem:
         elements, levers, unloaded = tuple(circuit.elements), tuple(circuit.levers), ()
     else:
         check_frame_paths(circuit)
-        groups = [[(e.n1, e.n2)] for e in circuit.elements]
-        for lv in circuit.levers:
-            t = (lv.p1, lv.p2, lv.s1, lv.s2)
-            groups.append([(t[i], t[j]) for i in range(4) for j in range(i + 1, 4)])
+        groups = force_groups(circuit.elements, circuit.levers)
         kept = set(loaded_groups(groups, d.n1, d.n2, drive_line=d.line,
                                  source=circuit.source))
         n_el = len(circuit.elements)
@@ -144,13 +141,7 @@ def assemble(circuit: Circuit, whole: bool = False) -> NodalSystem:
         unloaded = tuple(e.name for i, e in enumerate(circuit.elements) if i not in kept) + \
             tuple(lv.name for i, lv in enumerate(circuit.levers) if n_el + i not in kept)
 
-    names: dict[str, None] = {}
-    for e in elements:
-        names.setdefault(e.n1)
-        names.setdefault(e.n2)
-    for lv in levers:
-        for n in (lv.p1, lv.p2, lv.s1, lv.s2):
-            names.setdefault(n)
+    names = node_names(elements, levers)
     reference = FRAME if FRAME in names or d is None or not names else d.n2
     nodes = tuple(n for n in names if n != reference)
     index = {n: i for i, n in enumerate(nodes)}

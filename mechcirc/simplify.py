@@ -89,7 +89,6 @@ def check_band(band) -> tuple[float, float]:
     return w1, w2
 
 
-_check_band = check_band     # scene/files.py still imports the old name; to go when it doesn't
 
 
 @dataclass(frozen=True, eq=False)

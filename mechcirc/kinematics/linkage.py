@@ -296,7 +296,6 @@ class Linkage:
         pts = np.array(list(self.pose.values()))
         return float(np.max(np.ptp(pts, axis=0))) or 1.0
 
-    _scale = length_scale      # scene/model.py still calls lk._scale(); to go when it doesn't
 
     def _newton(self, q, angles, local, idx, rows, tol):
         previous = np.inf

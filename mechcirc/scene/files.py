@@ -594,13 +594,13 @@ def _analysis(text, source, table, circuit_names) -> Analysis:
                    expected=f"one of {', '.join(sorted(circuit_names))}")
     band = None
     if "band" in table:
-        from ..simplify import BandError, _check_band
+        from ..simplify import BandError, check_band
 
         raw = table["band"]
         try:
             if not (isinstance(raw, list) and len(raw) == 2 and all(map(finite_number, raw))):
                 raise BandError(f"band must be [W1, W2] in rad/s, got {raw!r}")
-            band = _check_band(raw)
+            band = check_band(raw)
         except BandError as exc:
             raise _err(text, source, f"[analysis] {exc}", "analysis", "band",
                        expected="band = [W1, W2] with 0 < W1 < W2 [rad/s]") from None

@@ -151,7 +151,7 @@ def build(scene: Scene, theta: float, *, reflect: Literal["eta", "lever"] = "eta
                 f"{tbody_link[t.body]!r} of the rods on body {t.body!r} turn at different "
                 f"rates ({ang[t.link]:.6g} and {ang[t.body]:.6g} per unit crank speed): the "
                 f"rigid mechanism's redundant constraint is not consistent")
-    Lc = lk._scale() * L
+    Lc = lk.length_scale() * L
     S_all = max(max(np.hypot(*v) for v in vel.values()),
                 max(abs(w) for w in ang.values()) * Lc)
     tiny = ZERO_RATIO * S_all
