@@ -158,13 +158,23 @@ def _options(args) -> dict:
     return opts
 
 
-def _table(result) -> str:
+#: Overrides that change only how the paper is read (the beat-up window it did
+#: not print), not the case it computed: the paper's columns still apply.
+_READINGS = {"alpha", "sigma", "beat_sign"}
+
+
+def _paper_applies(over: dict) -> bool:
+    """The paper computed this case: no parameter was changed but the readings."""
+    return set(over) <= _READINGS
+
+
+def _table(result, paper_applies: bool = True) -> str:
     from ..sley import PAPER
 
     p = result.params
     variant = int(p.label.split()[-1]) if p.label.split()[-1:] and \
         p.label.split()[-1].isdigit() else None
-    paper = PAPER.get(p.drive, {}).get(variant, {})
+    paper = PAPER.get(p.drive, {}).get(variant, {}) if paper_applies else {}
     speed = f"{result.wall_time * 1e3:.1f} ms"
     if result.compile_time:
         speed += f" + {result.compile_time:.2f} s compile/cache load"
@@ -184,9 +194,12 @@ def _table(result) -> str:
     plo, phi = paper.get("M2V", ("-", "-"))
     lines.append(f"{name:<9} {'N m':<6} {-total.max():>10.0f} {-total.min():>10.0f}   "
                  f"{plo!s:>10} {phi!s:>10}")
-    lines.append("* the paper's printed moments fit this sign"
-                 + (" and the sum of both cranks" if result.M5V is not None else "")
-                 + " (docs/sley.md)")
+    if paper_applies:
+        lines.append("* the paper's printed moments fit this sign"
+                     + (" and the sum of both cranks" if result.M5V is not None else "")
+                     + " (docs/sley.md)")
+    else:
+        lines.append("* changed parameters: the paper did not compute this case ('-' columns)")
     lines.extend(f"note: {n}" for n in result.notes)
     return "\n".join(lines)
 
@@ -242,7 +255,7 @@ def cmd_simulate(args) -> int:
         if args.json:
             print_json({"results": [r.summary() for r in results]})
         else:
-            print("\n\n".join(_table(r) for r in results))
+            print("\n\n".join(_table(r, _paper_applies(over)) for r in results))
         return 0
     try:
         variant = int(args.variant)
@@ -259,10 +272,11 @@ def cmd_simulate(args) -> int:
         save_figure(plot_result(result), args.plot)
     if args.json:
         doc = result.summary()
-        doc["paper"] = {k: list(v) for k, v in PAPER[params.drive][variant].items()}
+        if _paper_applies(over):
+            doc["paper"] = {k: list(v) for k, v in PAPER[params.drive][variant].items()}
         print_json(doc)
     else:
-        print(_table(result))
+        print(_table(result, _paper_applies(over)))
     return 0
 
 

@@ -64,3 +64,19 @@ def test_crosscheck_json(capsys):
     assert all(r["rel_error"] < 1e-9 for r in doc["resonances"])
     assert doc["harmonic"]["rel_error"] < 0.01
     assert doc["ringing"]["rel_error"] < 0.02          # variant 1: no clearance
+
+
+def test_changed_parameters_drop_the_paper_columns(capsys):
+    """The paper computed its variants at their own parameters: --set omega=120 is not one."""
+    assert main(["simulate", "--drive", "one-side", "--variant", "1", "--set", "omega=120",
+                 "--revolutions", "2"]) == 0
+    out = capsys.readouterr().out
+    assert "the paper did not compute this case" in out
+    assert "-2319" not in out                     # the paper's eps4T minimum of variant 1
+    assert main(["simulate", "--drive", "one-side", "--variant", "1", "--set", "omega=120",
+                 "--revolutions", "2", "--json"]) == 0
+    assert "paper" not in json.loads(capsys.readouterr().out)
+    # a different reading of the beat-up window is still the paper's case
+    assert main(["simulate", "--drive", "one-side", "--variant", "1", "--alpha", "40",
+                 "--revolutions", "2", "--json"]) == 0
+    assert "paper" in json.loads(capsys.readouterr().out)
