@@ -109,3 +109,20 @@ def test_sweep_warns_backlash_is_linearised(capsys):
                           "--omega-max", "100", "--points", "5"], capsys)
     assert status == 0
     assert "linearised" in err
+
+
+def test_crosscheck_reports_progress_per_transient_run():
+    """One update per transient run, and the total announced matches the runs made."""
+    import io
+
+    import mechcirc
+    from mechcirc.progress import Progress
+    from mechcirc.transient.crosscheck import crosscheck
+
+    c = mechcirc.load(str(REPO / "netlists" / "stb_heald.mcir"))
+    bar = Progress(0, "x", stream=io.StringIO(), enabled=True, delay=0.0)
+    with bar:
+        result = crosscheck(c, progress=bar)
+    kinds = {r["kind"] for r in result.resonances}
+    assert bar.total == len(kinds) + len(result.steady_state) == bar.done
+    assert "[" in bar.stream.getvalue()            # the bar was drawn

@@ -116,7 +116,10 @@ def cmd_crosscheck_netlist(args) -> int:
             raise MechcircError(f"--omega-max {args.omega_max!r}: {exc}") from None
         _positive("--omega-max", omega_max)
     circuit = load(args.file)
-    result = crosscheck(circuit, omega_max=omega_max)
+    from ..progress import Progress
+
+    with Progress(0, f"{circuit.name}: crosscheck") as bar:   # total set by crosscheck
+        result = crosscheck(circuit, omega_max=omega_max, progress=bar)
     if args.json:
         print_json(result.to_json())
         return 0

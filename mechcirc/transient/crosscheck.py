@@ -98,8 +98,12 @@ def _grid(omegas_lo: float, omega_hi: float, decay: float | None):
 
 
 def crosscheck(circuit: Circuit, omega_max: float | None = None,
-               n_steady: int = 4) -> CrossCheck:
-    """Run both checks on ``circuit`` (it needs a drive); see the module docstring."""
+               n_steady: int = 4, progress=None) -> CrossCheck:
+    """Run both checks on ``circuit`` (it needs a drive); see the module docstring.
+
+    ``progress``, if given, is a :class:`mechcirc.progress.Progress`: its
+    ``total`` is set to the number of transient runs and it is updated after each.
+    """
     if circuit.drive is None:
         raise MechcircError("crosscheck needs a drive line in the netlist (the port whose "
                             "K(ω) is checked); 'mechcirc transient' runs without one")
@@ -120,6 +124,12 @@ def crosscheck(circuit: Circuit, omega_max: float | None = None,
         omega_max = 1.5 * max(all_omega) if all_omega else 1.0
     checked = [r for r in res if r.omega <= omega_max]
     top = max([r.omega for r in res] + [omega_max])
+    first = min([r.omega for r in checked if r.kind == "resonance"] or
+                [r.omega for r in checked] or [omega_max / 3])
+    omegas = sorted({0.5 * first, 0.97 * first, 1.6 * first, 0.8 * omega_max}
+                    if n_steady >= 4 else {0.5 * first, 0.97 * first})
+    if progress is not None:
+        progress.total = len({r.kind for r in checked}) + len(omegas)
     for kind, drive_kind, signal in (("resonance", "velocity", "drive_force"),
                                      ("antiresonance", "force", "drive_velocity")):
         modes = [r for r in checked if r.kind == kind]
@@ -129,6 +139,8 @@ def crosscheck(circuit: Circuit, omega_max: float | None = None,
         lo = min(r.omega for r in modes)
         t_end, dt = _grid(lo, top, None)
         run = transient(variant, t_end, dt, "impulse", amplitude=1.0, linearise=True)
+        if progress is not None:
+            progress.update()
         y = getattr(run, signal)
         # Skip the first sample: a velocity impulse makes the held drive's force
         # an impulse at t = 0 that the samples cannot carry.
@@ -168,10 +180,6 @@ def crosscheck(circuit: Circuit, omega_max: float | None = None,
             out.resonances.append(entry)
     # (b) steady state at several ω, one near the first resonance.
     d = circuit.drive
-    first = min([r.omega for r in checked if r.kind == "resonance"] or
-                [r.omega for r in checked] or [omega_max / 3])
-    omegas = sorted({0.5 * first, 0.97 * first, 1.6 * first, 0.8 * omega_max}
-                    if n_steady >= 4 else {0.5 * first, 0.97 * first})
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")         # already reported above
         sweep = circuit.sweep(np.array(omegas))
@@ -183,6 +191,8 @@ def crosscheck(circuit: Circuit, omega_max: float | None = None,
         t_end = max(t_end, 30 * 2 * math.pi / w)
         t_end = min(t_end, PENCIL_SAMPLES * dt * 2)
         run = transient(circuit, t_end, dt, f"harmonic:{w!r}", linearise=True)
+        if progress is not None:
+            progress.update()
         y = run.drive_force if d.kind == "velocity" else run.drive_velocity
         measured = _steady_amplitude(y, run.time, w)
         rel = abs(measured - exp) / exp if exp > 0 else math.inf
