@@ -41,6 +41,10 @@ NEAR_SINGULAR_ERROR = 1e-6
 CHUNK_POINTS = 2**18
 
 
+
+#: Sweep.plot marks resonances by default up to this many elements (an eigenproblem each).
+PLOT_RESONANCES_ELEMENTS = 400
+
 @dataclass(frozen=True, eq=False)
 class Sweep:
     """The result of a frequency sweep: plain data (it pickles).
@@ -191,12 +195,37 @@ class Sweep:
 
         return "<pre>" + html.escape(repr(self)) + "</pre>"
 
-    def plot(self, ax=None, *, resonances=(), fig=None, title: str | None = None):
+    def plot(self, ax=None, *, resonances=None, fig=None, title: str | None = None):
         """Plot this sweep: :func:`mechcirc.plotting.plot_sweep` (``ax=`` one panel of |K|,
-        else three panels on ``fig`` or a new Figure); returns what it drew on."""
+        else three panels on ``fig`` or a new Figure); returns what it drew on.
+
+        ``resonances=None`` marks the circuit's exact resonances in the band
+        when that is cheap (at most :data:`PLOT_RESONANCES_ELEMENTS` elements);
+        pass a list to choose them, or ``()`` for none.
+        """
         from .plotting import plot_sweep
 
+        if resonances is None:
+            resonances = self._cheap_resonances()
         return plot_sweep(self, title, resonances, ax=ax, fig=fig)
+
+    def _cheap_resonances(self) -> list:
+        if self.circuit is None or len(self.circuit.elements) > PLOT_RESONANCES_ELEMENTS \
+                or self.omega.size == 0:
+            return []
+        import warnings
+
+        from .errors import MechcircError
+        from .resonances import find_resonances
+
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                found = find_resonances(self.circuit, omega_max=float(np.max(self.omega)))
+        except MechcircError:          # too large or ill-scaled: the plot goes without
+            return []
+        lo = float(np.min(self.omega))
+        return [r for r in found if r.omega >= lo]
 
     def _element(self, name: str):
         if "elements" not in self._cache:

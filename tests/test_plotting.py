@@ -206,3 +206,20 @@ def test_comparison_plot_on_a_given_figure():
     fig = Figure()
     assert plot_comparison(result, name=c.name, fig=fig) is fig and len(fig.axes) == 2
     np.testing.assert_allclose(fig.axes[0].lines[0].get_xdata(), result.omega)
+
+
+def test_sweep_plot_marks_resonances_by_default():
+    """Sweep.plot(ax=) draws the circuit's resonances in the band unless told not to."""
+    from matplotlib.figure import Figure
+
+    c = mechcirc.load(str(REPO / "netlists" / "stb_heald.mcir"))
+    s = c.sweep(np.geomspace(10, 1e4, 200))
+    bare = Figure().add_subplot()
+    s.plot(ax=bare, resonances=())
+    marked = Figure().add_subplot()
+    assert s.plot(ax=marked) is marked
+    inband = [r.omega for r in c.resonances(omega_max=1e4) if r.omega >= 10]
+    assert inband
+    xs = sorted(float(np.atleast_1d(ln.get_xdata())[0]) for ln in marked.lines[len(bare.lines):])
+    assert len(marked.lines) - len(bare.lines) == len(inband)
+    assert xs == pytest.approx(sorted(inband), rel=1e-12)
