@@ -85,7 +85,13 @@ def test_random_networks_with_levers_same_K_by_both_methods(net, log_omega):
     K_sp = c.sweep([omega], method="sp").K[0]
     K_nodal = c.sweep([omega], method="nodal").K[0]
     assert abs(K_sp - ref) <= 1e-12 * abs(ref)
-    assert abs(K_nodal - ref) <= 1e-12 * abs(ref)
+    # Nodal analysis refines with residuals in 80-bit extended precision; where a
+    # node velocity times an admittance exceeds |K| by ~1e7 (masses of 1 and
+    # 1000 kg in series with a 0.01 N/m spring at ω = 10: |x| ~ 1e3, |y| ~ 1e4,
+    # |K| ~ 1e3) the residual's own rounding leaves ~1e-12 (1.05e-12 measured,
+    # found by hypothesis in CI); 1e-10 is that with a margin of ~100.  The
+    # series-parallel path above keeps 1e-12.
+    assert abs(K_nodal - ref) <= 1e-10 * abs(ref)
 
 
 def test_force_excitation_gives_velocity_and_force_characteristic():
