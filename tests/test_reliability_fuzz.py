@@ -151,3 +151,11 @@ def test_a_pickle_given_as_a_data_file_is_never_loaded(file_workdir):
 def test_parallel_and_series_blowups_finish_in_bounded_time(n):
     for seed in range(2):
         h.netlist_blowup_property(h.blowup_netlist(random.Random(seed), n))
+
+
+@pytest.mark.parametrize("seed", [1012357, 1025632, 1025932, 1059107])
+def test_long_run_seeds_of_huge_integers_in_scene_files(file_workdir, seed):
+    """The 100,000-file long run: integers beyond float64 in a scene's load direction
+    and [simulate] numbers were an OverflowError; now located user errors."""
+    kind = h.FILE_KINDS[seed % len(h.FILE_KINDS)]
+    h.file_property(kind, h.file_input(random.Random(seed), kind), file_workdir)

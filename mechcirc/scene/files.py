@@ -480,12 +480,11 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
                            expected=f"one of {', '.join(linkage.ground)}")
         else:
             d = ld["direction"]
-            ok = isinstance(d, list) and len(d) == 2 and all(
-                isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
-                for x in d) and any(x != 0 for x in d)
+            ok = isinstance(d, list) and len(d) == 2 and all(finite_number(x) for x in d) \
+                and any(x != 0 for x in d)
             if not ok:
                 raise _err(text, source, f"load #{n + 1}: direction must be [dx, dy], not zero, "
-                           f"got {d!r}", "loads", "direction", occurrence=n)
+                           f"got {brief(d)}", "loads", "direction", occurrence=n)
             direction = (float(d[0]), float(d[1]))
         name = new_name(ld.get("name"), "loads", "name" if "name" in ld else "point", n,
                         f"load_{p}")

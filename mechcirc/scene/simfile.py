@@ -32,7 +32,8 @@ import math
 import re
 from dataclasses import dataclass, field
 
-from ..kinematics.linkage import _err
+from ..sources import brief, finite_number
+from ..sources import located as _err
 
 __all__ = ["Moment", "SimulateSettings", "parse_moments", "parse_simulate", "OUTPUT_KINDS",
            "apply_overrides"]
@@ -68,12 +69,12 @@ class SimulateSettings:
 
 
 def _num(text, source, value, what, table, key, n, *, positive=True):
-    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+    ok = finite_number(value)
     if ok and positive:
         ok = value > 0
     if not ok:
         need = "a finite number" + (" > 0" if positive else "")
-        raise _err(text, source, f"{what} must be {need}, got {value!r}", table, key,
+        raise _err(text, source, f"{what} must be {need}, got {brief(value)}", table, key,
                    occurrence=n, expected=need)
     return float(value)
 
