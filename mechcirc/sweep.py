@@ -40,10 +40,9 @@ NEAR_SINGULAR_ERROR = 1e-6
 #: little more memory than its results (K alone is 160 MB there).
 CHUNK_POINTS = 2**18
 
-
-
 #: Sweep.plot marks resonances by default up to this many elements (an eigenproblem each).
 PLOT_RESONANCES_ELEMENTS = 400
+
 
 @dataclass(frozen=True, eq=False)
 class Sweep:
