@@ -423,7 +423,7 @@ class Linkage:
 from ..sources import brief as _brief  # noqa: E402
 from ..sources import finite_number as _finite_number  # noqa: E402
 from ..sources import load_toml  # noqa: E402
-from ..sources import locate as _locate  # noqa: E402,F401
+from ..sources import locate as _locate  # noqa: E402
 from ..sources import located as _err  # noqa: E402
 
 

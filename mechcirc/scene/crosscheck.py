@@ -60,7 +60,7 @@ def crosscheck_scene(scene: Scene, theta: float, *, steps_per_period: float = 40
     from . import build
     from .motion import motion_model
     from .simfile import apply_overrides
-    from .simulation import _kernels
+    from .simulation import kernels_for
 
     notes = []
     gaps = {f"{x.name}.clearance": 0.0 for x in (*scene.elastic, *scene.torsions) if x.clearance}
@@ -82,7 +82,7 @@ def crosscheck_scene(scene: Scene, theta: float, *, steps_per_period: float = 40
     sample = max(1, int(steps_per_period // 16))
     nsamp = int(math.ceil(periods * 2 * math.pi / w_min / (h * sample))) + 1
     nsamp = max(nsamp, 4 * n + 4)
-    kern, backend = _kernels("rk4")
+    kern, backend = kernels_for("rk4")
     y0 = model.rigid_state(theta)
     # kick: a velocity on every free part, sized so the deflections stay ~1e-7 of a radian
     kick = 1e-7 * rate * np.array([1.0 + 0.37 * i for i in range(n)])

@@ -108,7 +108,7 @@ class SceneMotion:
 _PYK = None
 
 
-def _kernels(method):
+def kernels_for(method):
     global _PYK
     if method == "rk4":
         from . import _motion_kernels as k
@@ -129,7 +129,7 @@ def linear_matrices(model: MotionModel, theta: float):
     over the elastic elements with ∇δ by central differences of the kernel's
     deformations (pre-load and velocity-squared terms excluded, as in the circuit).
     """
-    kern = _kernels("rk4")[0]           # compiled when numba is importable
+    kern = kernels_for("rk4")[0]           # compiled when numba is importable
     n = model.n_free
     y0 = model.rigid_state(theta)
     args = model.kernel_args(0.0, 1e300, outputs=True)
@@ -230,7 +230,7 @@ def simulate_scene(scene: Scene, *, omega: float | None = None,
                           f"RK4 steps per revolution, more than {MAX_STEPS_PER_REV:.0e}",
                           status="too-stiff")
     per_rev = max(int(math.ceil(need)), 16)
-    kern, backend = _kernels(method)
+    kern, backend = kernels_for(method)
     notes, warn = [], []
     if spp < DEFAULT_STEPS_PER_PERIOD:
         warn.append(f"{spp:g} steps per period of the fastest mode, fewer than the default "
@@ -362,7 +362,7 @@ def _rigid_acceleration(model, body, crank):
     exact extrema (grid, then Brent-refined on the tables)."""
     from scipy.optimize import minimize_scalar
 
-    kern = _kernels("rk4-python")[0]
+    kern = kernels_for("rk4-python")[0]
     a = model.arrays
     if body not in model.body_fn:
         raise MechcircError(f"no body {body!r} (bodies: {', '.join(model.bodies)})")
@@ -375,7 +375,7 @@ def _rigid_acceleration(model, body, crank):
         _, g1, g2, _ = kern.feval(*_fargs(a, g), q)
         return (g2 * q1 * q1 + g1 * q2) * w2
 
-    fast = _kernels("rk4")[0]
+    fast = kernels_for("rk4")[0]
     qv, gv = np.empty((crank.size, 3)), np.empty((crank.size, 3))
     fast.eval_many(*_fargs(a, r), np.ascontiguousarray(crank), qv)
     fast.eval_many(*_fargs(a, g), np.ascontiguousarray(qv[:, 0]), gv)

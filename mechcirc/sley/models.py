@@ -46,7 +46,7 @@ from typing import Literal
 from ..errors import GeometryError, MechcircError
 
 @lru_cache(maxsize=64)
-def _fourbar(l2P, l3, l4, d, branch):
+def fourbar_of_lengths(l2P, l3, l4, d, branch):
     from ..kinematics import FourBar
 
     return FourBar(l2P, l3, l4, d, branch=branch)
@@ -182,7 +182,7 @@ class SleyParameters:
 
     def fourbar(self):
         """The beat-up four-bar (crank 2P, coupler 3, rocker 4, frame) as a ``FourBar``."""
-        return _fourbar(self.l2P, self.l3, self.l4, self.d, self.branch)
+        return fourbar_of_lengths(self.l2P, self.l3, self.l4, self.d, self.branch)
 
     @property
     def sigma(self) -> float:

@@ -234,9 +234,9 @@ def start_angle(params: SleyParameters) -> float:
 def _start_angle(l2P, l3, l4, d, branch) -> float:
     from scipy.optimize import brentq
 
-    from .models import _fourbar
+    from .models import fourbar_of_lengths
 
-    fb = _fourbar(l2P, l3, l4, d, branch)
+    fb = fourbar_of_lengths(l2P, l3, l4, d, branch)
     th = np.linspace(0.0, TWO_PI, 721)
     nu = fb.evaluate(th).nu
     idx = np.flatnonzero(np.sign(nu[:-1]) * np.sign(nu[1:]) <= 0)
@@ -618,9 +618,9 @@ def _assemble(params, kern, both, pvec, tab, ts, ys, theta0, phiP, revolutions, 
 
 @lru_cache(maxsize=64)
 def _nu_range(l2P, l3, l4, d, branch):
-    from .models import _fourbar
+    from .models import fourbar_of_lengths
 
-    (_, lo), (_, hi) = _fourbar(l2P, l3, l4, d, branch).nu_extrema()
+    (_, lo), (_, hi) = fourbar_of_lengths(l2P, l3, l4, d, branch).nu_extrema()
     return lo, hi
 
 
