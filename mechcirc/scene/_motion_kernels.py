@@ -33,6 +33,7 @@ import math
 import numpy as np
 
 from .._jit import decorators
+from .._ode import record_hermite
 from ..transient._kernels import elasto_backlash
 
 HAVE_NUMBA, _jit, _jit_inline = decorators(bool(globals().get("_FORCE_PYTHON")))
@@ -267,7 +268,6 @@ def rk4_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI
     ynew = np.empty(n)
     aux = np.empty(naux)
     work = np.zeros((9, max(FI.shape[0], PRIG.shape[0])))
-    nrec = rec_y.shape[0]
     j = 0
     half = 0.5 * h
     sixth = h / 6.0
@@ -291,23 +291,8 @@ def rk4_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI
         rhs(t + h, ynew, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, k4, aux, work)
         if aux[naux - 1] > bad:
             bad = aux[naux - 1]
-        while j < nrec:
-            tj = t_out0 + j * dt_out
-            if tj >= t + h and step < nsteps - 1:
-                break
-            if tj > t + h * (1.0 + 1e-9):
-                break
-            s = (tj - t) / h
-            s2 = s * s
-            s3 = s2 * s
-            h00 = 2.0 * s3 - 3.0 * s2 + 1.0
-            h10 = s3 - 2.0 * s2 + s
-            h01 = -2.0 * s3 + 3.0 * s2
-            h11 = s3 - s2
-            for i in range(n):
-                rec_y[j, i] = h00 * y[i] + h * h10 * k1[i] + h01 * ynew[i] + h * h11 * k4[i]
-            rec_t[j] = tj
-            j += 1
+        j = record_hermite(rec_t, rec_y, j, t_out0, dt_out, t, h, step == nsteps - 1,
+                           y, k1, ynew, k4, n)
         for i in range(n):
             y[i] = ynew[i]
             k1[i] = k4[i]

@@ -24,6 +24,7 @@ import math
 import numpy as np
 
 from .._jit import decorators
+from .._ode import record_hermite
 
 HAVE_NUMBA, _jit, _ = decorators(bool(globals().get("_FORCE_PYTHON")))
 
@@ -171,7 +172,6 @@ def rk4_run(both, p, tab, y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t):
     tmp = np.empty(n)
     ynew = np.empty(n)
     aux = np.empty(6)
-    nrec = rec_y.shape[0]
     j = 0
     half = 0.5 * h
     sixth = h / 6.0
@@ -190,23 +190,8 @@ def rk4_run(both, p, tab, y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t):
         for i in range(n):
             ynew[i] = y[i] + sixth * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i])
         rhs(both, t + h, ynew, p, tab, k4, aux)       # derivative at the step's end
-        while j < nrec:
-            tj = t_out0 + j * dt_out
-            if tj >= t + h and step < nsteps - 1:
-                break
-            if tj > t + h * (1.0 + 1e-9):
-                break
-            s = (tj - t) / h
-            s2 = s * s
-            s3 = s2 * s
-            h00 = 2.0 * s3 - 3.0 * s2 + 1.0
-            h10 = s3 - 2.0 * s2 + s
-            h01 = -2.0 * s3 + 3.0 * s2
-            h11 = s3 - s2
-            for i in range(n):
-                rec_y[j, i] = h00 * y[i] + h * h10 * k1[i] + h01 * ynew[i] + h * h11 * k4[i]
-            rec_t[j] = tj
-            j += 1
+        j = record_hermite(rec_t, rec_y, j, t_out0, dt_out, t, h, step == nsteps - 1,
+                           y, k1, ynew, k4, n)
         for i in range(n):
             y[i] = ynew[i]
             k1[i] = k4[i]
