@@ -405,6 +405,8 @@ def motion(lk, pl: _Plan, theta, *, max_step_deg: float = 2.0, method: str = "au
                             f"use method='newton'")
     if use == "dyads":
         q, qd, qdd, parts = _solve_dyads(lk, pl, t, dt_max)
+    elif _compiled():
+        q, qd, qdd, parts = _solve_newton_compiled(lk, pl, t, dt_max)
     else:
         q, qd, qdd, parts = _solve_newton(lk, pl, t, dt_max)
     return LinkageMotion(thetas, t, q, qd, qdd, parts, tuple(lk.pose), lk.link_names,
@@ -771,6 +773,47 @@ class _Newton:
         swaps = int(np.count_nonzero(piv != np.arange(len(piv))))
         sign = math.copysign(1.0, float(np.prod(lu.diagonal()))) * (-1) ** swaps
         return q[0], qdot, qddot, sign
+
+
+#: Use the compiled sequential Newton (numba) when it is importable: None =
+#: when numba is there, False = always the batched numpy path (tests set it).
+USE_COMPILED = None
+
+
+def _compiled() -> bool:
+    if USE_COMPILED is False:
+        return False
+    from . import _linkage_kernels
+
+    return _linkage_kernels.HAVE_NUMBA or bool(USE_COMPILED)
+
+
+def _solve_newton_compiled(lk, pl, t, dt_max):
+    """The continuation as one compiled loop (:mod:`._linkage_kernels`)."""
+    from . import _linkage_kernels as K
+
+    N, n, nc = len(t), 3 * pl.nb, len(pl.crank_idx)
+    Q, QD, QDD = np.empty((N, n)), np.empty((N, n)), np.empty((N, n))
+    parts = np.empty((N, n, nc))
+    info = np.zeros(2)
+    w1 = lk.cranks[0].omega
+    status = K.newton_path(pl.q0, np.ascontiguousarray(t, dtype=float), pl.ia, pl.ib, pl.sa,
+                           pl.sb, pl.crank_idx, pl.omega, 1e-12 * pl.scale, float(dt_max),
+                           float(np.max(np.abs(pl.omega))), Q, QD, QDD, parts, info)
+    if status == K.SINGULAR_POSE:
+        raise GeometryError(f"{lk.source}: the linkage is singular in its pose "
+                            f"(constraint Jacobian not invertible)")
+    if status == K.LOCK:
+        raise GeometryError(
+            f"{lk.source}: the linkage locks near θ = {math.degrees(info[0] * w1):.6g}° "
+            f"(first crank rotation from the pose): no assembly beyond it on this branch")
+    if status == K.BRANCH_JUMP:
+        raise GeometryError(
+            f"{lk.source}: branch jump between θ = {math.degrees(info[0] * w1):.6g}° "
+            f"and {math.degrees(info[1] * w1):.6g}°: the position passed a "
+            f"singular configuration (det J changed sign); reduce max_step_deg "
+            f"or the linkage reaches a change point there")
+    return Q, QD, QDD, parts
 
 
 def _solve_newton(lk, pl, t, dt_max):

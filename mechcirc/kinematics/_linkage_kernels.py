@@ -1,0 +1,293 @@
+"""The linkage Newton continuation as one compiled loop over the crank positions.
+
+One source, two backends, as :mod:`mechcirc.sley._kernels`: compiled with
+numba's ``@njit(cache=True)`` when numba is importable (the ``fast`` extra),
+plain Python otherwise.  :mod:`.linkage_solver` uses :func:`newton_path` only
+when it is compiled (``HAVE_NUMBA``); without numba it keeps its batched numpy
+Newton, which is faster than this loop run as Python.
+
+The equations are those of :mod:`.linkage` (Φ(q, t) = 0: coincident joint
+points, 2 rows per revolute pair, then φ_c − ω_c t for each crank), written on
+the index arrays of :func:`.linkage_solver.plan`:
+
+* row pair k: P_a − P_b, with P = (x_i, y_i) + R(φ_i) s for a moving body i and
+  P = s (the pose coordinate) for the ground (index ``nb``);
+* Jacobian: ±1 on the (x, y) columns, ±(−(R s)_y, (R s)_x) on the φ column;
+* γ (constant crank speeds): R_a s_a φ̇_a² − R_b s_b φ̇_b².
+
+The loop visits the targets in order; between two it takes continuation steps
+of at most ``dt_max`` (Taylor predictor from q, q̇, q̈; Newton with partial
+pivoting LU; the step halves when Newton fails or J is near singular) and
+tracks the sign of det J: a change is a branch jump.  At every target q̇, q̈
+and the conditional-stop parts come from the LU of J at the converged q.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .._jit import decorators
+
+HAVE_NUMBA, _jit, _jit_inline = decorators(bool(globals().get("_FORCE_PYTHON")))
+
+#: Status codes of :func:`newton_path`.
+OK, SINGULAR_POSE, LOCK, BRANCH_JUMP = 0, 1, 2, 3
+
+
+@_jit_inline
+def _sides(q, nb, ia, ib, sa, sb, cs, sn, R):
+    """R(φ) s of both sides of every joint row into R (m, 4): (Rax, Ray, Rbx, Rby)."""
+    for i in range(nb):
+        cs[i] = math.cos(q[3 * i + 2])
+        sn[i] = math.sin(q[3 * i + 2])
+    for k in range(ia.shape[0]):
+        a, b = ia[k], ib[k]
+        if a < nb:
+            R[k, 0] = cs[a] * sa[k, 0] - sn[a] * sa[k, 1]
+            R[k, 1] = sn[a] * sa[k, 0] + cs[a] * sa[k, 1]
+        else:
+            R[k, 0] = sa[k, 0]
+            R[k, 1] = sa[k, 1]
+        if b < nb:
+            R[k, 2] = cs[b] * sb[k, 0] - sn[b] * sb[k, 1]
+            R[k, 3] = sn[b] * sb[k, 0] + cs[b] * sb[k, 1]
+        else:
+            R[k, 2] = sb[k, 0]
+            R[k, 3] = sb[k, 1]
+
+
+@_jit_inline
+def _residual(q, t, nb, ia, ib, R, crank_idx, omega, r):
+    """Φ(q, t) into r; returns max |Φ|."""
+    m = ia.shape[0]
+    for k in range(m):
+        a, b = ia[k], ib[k]
+        xa, ya = R[k, 0], R[k, 1]
+        if a < nb:
+            xa += q[3 * a]
+            ya += q[3 * a + 1]
+        xb, yb = R[k, 2], R[k, 3]
+        if b < nb:
+            xb += q[3 * b]
+            yb += q[3 * b + 1]
+        r[2 * k] = xa - xb
+        r[2 * k + 1] = ya - yb
+    for j in range(crank_idx.shape[0]):
+        r[2 * m + j] = q[3 * crank_idx[j] + 2] - omega[j] * t
+    size = 0.0
+    for i in range(r.shape[0]):
+        v = abs(r[i])
+        if not v <= size:           # NaN propagates
+            size = v
+    return size
+
+
+@_jit_inline
+def _jacobian(nb, ia, ib, R, crank_idx, J):
+    m = ia.shape[0]
+    J[:, :] = 0.0
+    for k in range(m):
+        a, b = ia[k], ib[k]
+        if a < nb:
+            J[2 * k, 3 * a] = 1.0
+            J[2 * k + 1, 3 * a + 1] = 1.0
+            J[2 * k, 3 * a + 2] = -R[k, 1]
+            J[2 * k + 1, 3 * a + 2] = R[k, 0]
+        if b < nb:
+            J[2 * k, 3 * b] -= 1.0
+            J[2 * k + 1, 3 * b + 1] -= 1.0
+            J[2 * k, 3 * b + 2] += R[k, 3]
+            J[2 * k + 1, 3 * b + 2] -= R[k, 2]
+    for j in range(crank_idx.shape[0]):
+        J[2 * m + j, 3 * crank_idx[j] + 2] = 1.0
+
+
+@_jit_inline
+def _lu(A, piv):
+    """LU with partial pivoting in place; returns the sign of det A, 0 if near singular.
+
+    Near singular: min |U_kk| ≤ 1e-12 max |U_kk| (the test the numpy path
+    applies to LAPACK's factors).
+    """
+    n = A.shape[0]
+    sign = 1.0
+    for k in range(n):
+        p = k
+        big = abs(A[k, k])
+        for i in range(k + 1, n):
+            v = abs(A[i, k])
+            if v > big:
+                big = v
+                p = i
+        piv[k] = p
+        if not big > 0.0:
+            return 0.0
+        if p != k:
+            sign = -sign
+            for j in range(n):
+                tmp = A[k, j]
+                A[k, j] = A[p, j]
+                A[p, j] = tmp
+        inv = 1.0 / A[k, k]
+        for i in range(k + 1, n):
+            f = A[i, k]
+            if f != 0.0:
+                f *= inv
+                A[i, k] = f
+                for j in range(k + 1, n):
+                    A[i, j] -= f * A[k, j]
+    lo = math.inf
+    hi = 0.0
+    for k in range(n):
+        v = abs(A[k, k])
+        lo = min(lo, v)
+        hi = max(hi, v)
+        if A[k, k] < 0.0:
+            sign = -sign
+    if not lo > 1e-12 * hi:
+        return 0.0
+    return sign
+
+
+@_jit_inline
+def _lu_solve(A, piv, b):
+    """Solve with the factors of :func:`_lu`, b overwritten by the solution."""
+    n = A.shape[0]
+    for k in range(n):
+        p = piv[k]
+        if p != k:
+            tmp = b[k]
+            b[k] = b[p]
+            b[p] = tmp
+    for i in range(n):
+        s = b[i]
+        for j in range(i):
+            s -= A[i, j] * b[j]
+        b[i] = s
+    for i in range(n - 1, -1, -1):
+        s = b[i]
+        for j in range(i + 1, n):
+            s -= A[i, j] * b[j]
+        b[i] = s / A[i, i]
+
+
+@_jit
+def newton_path(q0, targets, ia, ib, sa, sb, crank_idx, omega, tol, dt_max, wmax,
+                Q, QD, QDD, PARTS, info):
+    """Continue from the pose q0 (t = 0) through ``targets`` [s] in order.
+
+    Fills Q, QD, QDD (N, n) and PARTS (N, n, nc).  Returns a status:
+    ``OK``; ``SINGULAR_POSE``; ``LOCK`` (info[0] = time of the lock estimate);
+    ``BRANCH_JUMP`` (info[0], info[1] = the step's ends).
+    """
+    n = q0.shape[0]
+    nb = n // 3
+    m = ia.shape[0]
+    nc = crank_idx.shape[0]
+    cs = np.empty(nb)
+    sn = np.empty(nb)
+    R = np.empty((m, 4))
+    J = np.empty((n, n))
+    piv = np.empty(n, dtype=np.int64)
+    r = np.empty(n)
+    q = q0.copy()
+    qd = np.zeros(n)
+    qdd = np.zeros(n)
+    parts = np.zeros((n, nc))
+    trial = np.empty(n)
+    e = np.empty(n)
+    t_now = 0.0
+    sign0 = 0.0
+    first = True                # the pose itself (t = 0) is solved first
+    k = 0
+    N = targets.shape[0]
+    while k < N:
+        if first:
+            dt = 0.0
+            t_new = 0.0
+        else:
+            t_new = targets[k]
+            dt = t_new - t_now
+            if dt == 0.0:
+                Q[k, :] = q
+                QD[k, :] = qd
+                QDD[k, :] = qdd
+                PARTS[k, :, :] = parts
+                k += 1
+                continue
+            if dt > dt_max:
+                dt = dt_max
+                t_new = t_now + dt
+            elif dt < -dt_max:
+                dt = -dt_max
+                t_new = t_now + dt
+        # one continuation step of dt from t_now, halving on failure
+        while True:
+            for i in range(n):
+                trial[i] = q[i] + dt * (qd[i] + 0.5 * dt * qdd[i])
+            ok = False
+            previous = math.inf
+            for it in range(30):
+                _sides(trial, nb, ia, ib, sa, sb, cs, sn, R)
+                size = _residual(trial, t_new, nb, ia, ib, R, crank_idx, omega, r)
+                if not size < math.inf or (it >= 2 and size > previous):
+                    break
+                previous = size
+                _jacobian(nb, ia, ib, R, crank_idx, J)
+                if _lu(J, piv) == 0.0:
+                    break
+                _lu_solve(J, piv, r)
+                for i in range(n):
+                    trial[i] -= r[i]
+                if size < tol:
+                    # converged; that last step polished it to rounding
+                    ok = True
+                    break
+            sgn = 0.0
+            if ok:
+                # J and its LU at the converged q, for the sign and the rates
+                _sides(trial, nb, ia, ib, sa, sb, cs, sn, R)
+                _jacobian(nb, ia, ib, R, crank_idx, J)
+                sgn = _lu(J, piv)
+            if sgn != 0.0:
+                break
+            if first:
+                return SINGULAR_POSE
+            dt *= 0.5
+            t_new = t_now + dt
+            if abs(dt) * wmax < 1e-9:
+                info[0] = t_now + 2.0 * dt
+                return LOCK
+        if first:
+            sign0 = sgn
+        elif sgn != sign0:
+            info[0] = t_now
+            info[1] = t_new
+            return BRANCH_JUMP
+        first = False
+        t_now = t_new
+        # q̇ = Σ_c J⁻¹ ω_c e_c, q̈ = J⁻¹ γ, from the LU at the converged q
+        for i in range(n):
+            q[i] = trial[i]
+            qd[i] = 0.0
+        for c in range(nc):
+            e[:] = 0.0
+            e[2 * m + c] = omega[c]
+            _lu_solve(J, piv, e)
+            for i in range(n):
+                parts[i, c] = e[i]
+                qd[i] += e[i]
+        e[:] = 0.0
+        for kk in range(m):
+            a = ia[kk]
+            b = ib[kk]
+            wa = qd[3 * a + 2] ** 2 if a < nb else 0.0
+            wb = qd[3 * b + 2] ** 2 if b < nb else 0.0
+            e[2 * kk] = R[kk, 0] * wa - R[kk, 2] * wb
+            e[2 * kk + 1] = R[kk, 1] * wa - R[kk, 3] * wb
+        _lu_solve(J, piv, e)
+        for i in range(n):
+            qdd[i] = e[i]
+    return OK
