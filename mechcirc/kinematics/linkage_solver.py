@@ -74,6 +74,21 @@ class LinkageState:
     angular_velocities: dict
     contributions: dict
 
+    # States made by LinkageMotion.states() fill the five dictionaries on first
+    # access from rows shared by all the states of one solve: building 40-odd
+    # small dicts and array views per position costs more than the solve.
+    def __getattr__(self, name):
+        rows = self.__dict__.get("_rows")
+        if rows is None or name not in _LAZY_FIELDS:
+            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+        value = rows.field(name, self.__dict__["_i"])
+        self.__dict__[name] = value
+        return value
+
+    def __getstate__(self):
+        # plain data: every field, not the shared rows
+        return {f: getattr(self, f) for f in _STATE_FIELDS}
+
     def as_dict(self) -> dict:
         """Plain data for JSON output."""
         return {
@@ -85,6 +100,34 @@ class LinkageState:
             "conditional_stop": {c: {k: v.tolist() for k, v in d.items()}
                                  for c, d in self.contributions.items()},
         }
+
+
+_STATE_FIELDS = ("theta", "t", "q", "qdot", "qddot", "points", "velocities", "accelerations",
+                 "angular_velocities", "contributions")
+_LAZY_FIELDS = frozenset(_STATE_FIELDS[5:])
+
+
+class _StateRows:
+    """Private copies of a motion's point arrays, from which states build their dicts."""
+
+    def __init__(self, m):
+        self.names, self.links, self.cranks = m.point_names, m.link_names, m.crank_links
+        self.P, self.V, self.A = m.points.copy(), m.velocities.copy(), m.accelerations.copy()
+        self.C = np.moveaxis(m.contributions, 0, 1).copy()
+        self.w = m.qdot[:, 2::3].tolist()
+
+    def field(self, name, i):
+        names = self.names
+        if name == "points":
+            return dict(zip(names, self.P[i]))
+        if name == "velocities":
+            return dict(zip(names, self.V[i]))
+        if name == "accelerations":
+            return dict(zip(names, self.A[i]))
+        if name == "angular_velocities":
+            return dict(zip(self.links, self.w[i]))
+        C = self.C[i]
+        return {c: dict(zip(names, C[j])) for j, c in enumerate(self.cranks)}
 
 
 @dataclass(frozen=True)
@@ -168,26 +211,19 @@ class LinkageMotion:
         """Every position as a :class:`~.linkage.LinkageState` (what ``Linkage.solve`` returns).
 
         The arrays are copied once; each state's vectors are disjoint views of
-        that private copy.
+        that private copy, and its dictionaries are made on first access.
         """
-        names, links = self.point_names, self.link_names
-        P, V, A = self.points.copy(), self.velocities.copy(), self.accelerations.copy()
-        C = np.moveaxis(self.contributions, 0, 1).copy()
+        rows = _StateRows(self)
         q, qd, qdd = self.q.copy(), self.qdot.copy(), self.qddot.copy()
-        th, t, w = self.theta.tolist(), self.t.tolist(), qd[:, 2::3].tolist()
-        cranks = self.crank_links
+        th, t = self.theta.tolist(), self.t.tolist()
         out = []
         new = object.__new__
         for i in range(len(th)):
             # filled as unpickling does: the frozen dataclass's __init__ (one
             # object.__setattr__ per field) costs more than the rest of a state
             st = new(LinkageState)
-            st.__dict__.update(
-                theta=th[i], t=t[i], q=q[i], qdot=qd[i], qddot=qdd[i],
-                points=dict(zip(names, P[i])), velocities=dict(zip(names, V[i])),
-                accelerations=dict(zip(names, A[i])),
-                angular_velocities=dict(zip(links, w[i])),
-                contributions={c: dict(zip(names, C[i, j])) for j, c in enumerate(cranks)})
+            st.__dict__.update(theta=th[i], t=t[i], q=q[i], qdot=qd[i], qddot=qdd[i],
+                               _rows=rows, _i=i)
             out.append(st)
         return out
 

@@ -149,3 +149,26 @@ def test_lock_is_located_by_the_newton_path(backend):
     import re
     got = float(re.search(r"θ = ([\d.]+)°", str(info.value)).group(1))
     assert got == pytest.approx(math.degrees(hi - th0), abs=1e-3)
+
+
+def test_states_fill_their_dicts_on_access_and_pickle_as_plain_data():
+    lk = load_linkage(ROOT / "examples" / "fnf_sixbar.toml")
+    th = np.radians([10.0, 20.0, 30.0])
+    states, m = lk.solve(th), lk.motion(th)
+    s1 = states[1]
+    data = pickle.dumps(s1)
+    assert b"_rows" not in data                 # not the rows of the other positions
+    back = pickle.loads(data)
+    ref = m.state(1)
+    for s in (s1, back):
+        assert set(s.points) == set(lk.pose)
+        for name in ("points", "velocities", "accelerations"):
+            for p, x in getattr(ref, name).items():
+                np.testing.assert_array_equal(getattr(s, name)[p], x)
+        assert s.angular_velocities == ref.angular_velocities
+        for c, d in ref.contributions.items():
+            for p, x in d.items():
+                np.testing.assert_array_equal(s.contributions[c][p], x)
+    assert "velocities=" in repr(states[2])
+    with pytest.raises(AttributeError):
+        s1.no_such_field
