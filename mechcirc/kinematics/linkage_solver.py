@@ -272,6 +272,8 @@ class _Plan:
     sb: NDArray | None = None
     q0: NDArray | None = None
     scale: float = 1.0
+    # per-linkage solver objects (the dyads' geometry), made on first use
+    cache: dict = field(default_factory=dict, repr=False, compare=False)
 
 
 def plan(lk) -> _Plan:
@@ -570,23 +572,39 @@ _SINGULAR = 1e-10
 def _pack(r, phi):
     """(nb, N) complex origins and (nb, N) angles → q rows (N, 3 nb)."""
     nb, N = r.shape
-    return np.ascontiguousarray(np.stack([r.real, r.imag, phi], axis=1).reshape(3 * nb, N).T)
+    out = np.empty((N, nb, 3))
+    out[:, :, 0] = r.real.T
+    out[:, :, 1] = r.imag.T
+    out[:, :, 2] = phi.T
+    return out.reshape(N, 3 * nb)
 
 
 def _solve_dyads(lk, pl, t, dt_max):
-    ds = _DyadSolver(lk, pl)
-    phi, E, r, inner, margin = ds.positions(t)
+    ds = pl.cache.get("dyads")
+    if ds is None:
+        ds = pl.cache["dyads"] = _DyadSolver(lk, pl)
+    compiled = _compiled()
+    if compiled:
+        out = _dyads_compiled(ds, t)
+        margin = out[-1]
+    else:
+        phi, E, r, inner, margin = ds.positions(t)
     # the traversal from the pose must stay assemblable: check the path between
     # the targets too where they are further apart than a continuation step
     nodes, _ = _path(t, dt_max)
     if len(nodes) == len(t) + 1:
         check_t, check_m = t, margin
+    elif compiled:
+        check_t = nodes[1:]
+        check_m = _dyads_compiled(ds, check_t)[-1]
     else:
         check_t = nodes[1:]
         check_m = ds.positions(check_t)[4]
     if not np.all(check_m > _SINGULAR):
         k = int(np.argmax(~(check_m > _SINGULAR)))
         _lock_error(lk, ds, 0.0 if k == 0 else check_t[k - 1], check_t[k])
+    if compiled:
+        return out[:4]
     nc = len(lk.cranks)
     N = len(t)
     if nc == 1:                     # one crank: its part is the whole velocity
@@ -604,6 +622,35 @@ def _solve_dyads(lk, pl, t, dt_max):
         qd = _pack(v, w)
     al, a = ds.accelerations(E, inner, w)
     return _pack(r, phi), qd, _pack(a, al), parts
+
+
+def _dyads_compiled(ds, t):
+    """(q, q̇, q̈, parts, margin) by the compiled dyad loop (:mod:`._linkage_kernels`)."""
+    from . import _linkage_kernels as K
+
+    args = ds.__dict__.get("_kernel_args")
+    if args is None:
+        pl, lk = ds.pl, ds.lk
+        dy = pl.dyads
+        X = np.array([[ds.pose[P] if k == -1 else ds.local[k][P]
+                       for P, k in zip(d.outer, d.known)] for d in dy], dtype=complex)
+        ang = np.array([[g[0], g[1]] for g in ds.geo])
+        ln = np.array([[d.l1, d.l2] for d in dy])
+        rot = (np.cos(ang) - 1j * np.sin(ang)) / ln
+        args = ds._kernel_args = (
+            np.asarray(pl.crank_idx, dtype=np.int64), pl.omega,
+            np.array([ds.pose[c.pivot] for c in lk.cranks], dtype=complex),
+            np.array(ds.crank_arm, dtype=complex),
+            np.array([d.links for d in dy], dtype=np.int64).reshape(-1, 2),
+            np.array([d.known for d in dy], dtype=np.int64).reshape(-1, 2), X.reshape(-1, 2),
+            ln.reshape(-1, 2), np.array([d.sign for d in dy]), ang.reshape(-1, 2),
+            rot.reshape(-1, 2), np.array([[g[2], g[3]] for g in ds.geo],
+                                         dtype=complex).reshape(-1, 2))
+    N, n, nc = len(t), 3 * ds.pl.nb, len(ds.pl.crank_idx)
+    Q, QD, QDD = np.empty((N, n)), np.empty((N, n)), np.empty((N, n))
+    parts, margin = np.empty((N, n, nc)), np.empty(N)
+    K.dyads_path(np.ascontiguousarray(t, dtype=float), *args, Q, QD, QDD, parts, margin)
+    return Q, QD, QDD, parts, margin
 
 
 def _lock_error(lk, ds, t_good, t_bad):
