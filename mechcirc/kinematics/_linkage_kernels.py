@@ -30,13 +30,13 @@ import numpy as np
 
 from .._jit import decorators
 
-HAVE_NUMBA, _jit, _jit_inline = decorators(bool(globals().get("_FORCE_PYTHON")))
+HAVE_NUMBA, _jit, _ = decorators(bool(globals().get("_FORCE_PYTHON")))
 
 #: Status codes of :func:`newton_path`.
 OK, SINGULAR_POSE, LOCK, BRANCH_JUMP = 0, 1, 2, 3
 
 
-@_jit_inline
+@_jit
 def _sides(q, nb, ia, ib, sa, sb, cs, sn, R):
     """R(φ) s of both sides of every joint row into R (m, 4): (Rax, Ray, Rbx, Rby)."""
     for i in range(nb):
@@ -58,7 +58,7 @@ def _sides(q, nb, ia, ib, sa, sb, cs, sn, R):
             R[k, 3] = sb[k, 1]
 
 
-@_jit_inline
+@_jit
 def _residual(q, t, nb, ia, ib, R, crank_idx, omega, r):
     """Φ(q, t) into r; returns max |Φ|."""
     m = ia.shape[0]
@@ -84,10 +84,13 @@ def _residual(q, t, nb, ia, ib, R, crank_idx, omega, r):
     return size
 
 
-@_jit_inline
+@_jit
 def _jacobian(nb, ia, ib, R, crank_idx, J):
     m = ia.shape[0]
-    J[:, :] = 0.0
+    n = J.shape[0]
+    for i in range(n):
+        for j in range(n):
+            J[i, j] = 0.0
     for k in range(m):
         a, b = ia[k], ib[k]
         if a < nb:
@@ -104,7 +107,7 @@ def _jacobian(nb, ia, ib, R, crank_idx, J):
         J[2 * m + j, 3 * crank_idx[j] + 2] = 1.0
 
 
-@_jit_inline
+@_jit
 def _lu(A, piv):
     """LU with partial pivoting in place; returns the sign of det A, 0 if near singular.
 
@@ -151,7 +154,7 @@ def _lu(A, piv):
     return sign
 
 
-@_jit_inline
+@_jit
 def _lu_solve(A, piv, b):
     """Solve with the factors of :func:`_lu`, b overwritten by the solution."""
     n = A.shape[0]
@@ -211,10 +214,12 @@ def newton_path(q0, targets, ia, ib, sa, sb, crank_idx, omega, tol, dt_max, wmax
             t_new = targets[k]
             dt = t_new - t_now
             if dt == 0.0:
-                Q[k, :] = q
-                QD[k, :] = qd
-                QDD[k, :] = qdd
-                PARTS[k, :, :] = parts
+                for i in range(n):
+                    Q[k, i] = q[i]
+                    QD[k, i] = qd[i]
+                    QDD[k, i] = qdd[i]
+                    for c in range(nc):
+                        PARTS[k, i, c] = parts[i, c]
                 k += 1
                 continue
             if dt > dt_max:
@@ -273,13 +278,15 @@ def newton_path(q0, targets, ia, ib, sa, sb, crank_idx, omega, tol, dt_max, wmax
             q[i] = trial[i]
             qd[i] = 0.0
         for c in range(nc):
-            e[:] = 0.0
+            for i in range(n):
+                e[i] = 0.0
             e[2 * m + c] = omega[c]
             _lu_solve(J, piv, e)
             for i in range(n):
                 parts[i, c] = e[i]
                 qd[i] += e[i]
-        e[:] = 0.0
+        for i in range(n):
+            e[i] = 0.0
         for kk in range(m):
             a = ia[kk]
             b = ib[kk]
@@ -293,7 +300,7 @@ def newton_path(q0, targets, ia, ib, sa, sb, crank_idx, omega, tol, dt_max, wmax
     return OK
 
 
-@_jit_inline
+@_jit
 def _im_conj(a, b):
     """Im(conj(a)·b) = a × b."""
     return a.real * b.imag - a.imag * b.real
