@@ -203,7 +203,8 @@ def _kernel_args(c, ss):
     cv = np.array([r[2] for r in rows])
     dv = np.array([r[3] for r in rows])
     prm = np.array([r[4] for r in rows])
-    return (ss.A, ss.B, cx, dx, cv, dv, np.ascontiguousarray(ss.extra), prm, np.zeros(51))
+    from mechcirc.transient import _kernels as kern
+    return kern.kernel_args(ss.A, ss.B, cx, dx, cv, dv, ss.extra, prm) + (np.zeros(51),)
 
 
 def test_msl_backlash_example_agrees():

@@ -25,7 +25,7 @@ import numpy as np
 
 from .._jit import decorators
 
-HAVE_NUMBA, _jit, _ = decorators(bool(globals().get("_FORCE_PYTHON")))
+HAVE_NUMBA, _jit, _jit_inline = decorators(bool(globals().get("_FORCE_PYTHON")))
 
 B_EPS = 1e-10
 
@@ -73,31 +73,69 @@ def drive_at(t, t0, dt, u):
     return u[k] + f * (u[k + 1] - u[k])
 
 
-@_jit
-def rhs(t, z, A, B, cx, dx, cv, dv, extra, prm, t0, dt, u, dz):
-    """dz = A z + B u(t) + Σ_e extra[:, e] · f_e(cx_e·z + dx_e u, cv_e·z + dv_e u)."""
+def pack_rows(M):
+    """Rows of a matrix as (column index, value) arrays padded to the longest row's nonzeros.
+
+    The right-hand side works on these: the matrices of a network (A, the
+    clearance rows, the force columns) are sparse, and a padded row costs its
+    nonzeros only.  Padding entries have value 0 and column 0.
+    """
+    M = np.atleast_2d(np.asarray(M, dtype=float))
+    nz = M != 0.0
+    w = max(1, int(nz.sum(axis=1).max())) if M.size else 1
+    idx = np.zeros((M.shape[0], w), dtype=np.int64)
+    val = np.zeros((M.shape[0], w))
+    for i in range(M.shape[0]):
+        cols = np.flatnonzero(nz[i])
+        idx[i, :cols.size] = cols
+        val[i, :cols.size] = M[i, cols]
+    return idx, val
+
+
+def kernel_args(A, B, cx, dx, cv, dv, extra, prm):
+    """The matrices of ż = A z + B u + Σ_e extra_e f_e as :func:`dopri_run` takes them."""
+    Ai, Av = pack_rows(A)
+    xi, xv = pack_rows(cx)
+    vi, vv = pack_rows(cv)
+    ei, ev = pack_rows(np.asarray(extra).T)
+    return (Ai, Av, np.ascontiguousarray(B, dtype=float), xi, xv,
+            np.ascontiguousarray(dx, dtype=float), vi, vv,
+            np.ascontiguousarray(dv, dtype=float), ei, ev,
+            np.ascontiguousarray(prm, dtype=float))
+
+
+@_jit_inline
+def rhs(t, z, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, t0, dt, u, dz):
+    """dz = A z + B u(t) + Σ_e extra[:, e] · f_e(cx_e·z + dx_e u, cv_e·z + dv_e u).
+
+    A, cx, cv and the columns of extra as :func:`pack_rows` gives them.
+    """
     ut = drive_at(t, t0, dt, u)
     N = z.shape[0]
+    wa = Ai.shape[1]
     for i in range(N):
         acc = B[i] * ut
-        for j in range(N):
-            acc += A[i, j] * z[j]
+        for j in range(wa):
+            acc += Av[i, j] * z[Ai[i, j]]
         dz[i] = acc
     E = prm.shape[0]
+    wx = xi.shape[1]
+    wv = vi.shape[1]
     for k in range(E):
         e = dx[k] * ut
+        for j in range(wx):
+            e += xv[k, j] * z[xi[k, j]]
         w = dv[k] * ut
-        for j in range(N):
-            e += cx[k, j] * z[j]
-            w += cv[k, j] * z[j]
+        for j in range(wv):
+            w += vv[k, j] * z[vi[k, j]]
         f, fc = elasto_backlash(e, w, prm[k, 0], prm[k, 1], prm[k, 2])
         if f != 0.0:
-            for i in range(N):
-                dz[i] += extra[i, k] * f
+            for j in range(ei.shape[1]):
+                dz[ei[k, j]] += ev[k, j] * f
 
 
-@_jit
-def switch_state(t, z, cx, dx, cv, dv, prm, t0, dt, u, k):
+@_jit_inline
+def switch_state(t, z, xi, xv, dx, vi, vv, dv, prm, t0, dt, u, k):
     """(branch code, switching functions g_gap, g_sep, g_min) of clearance element k.
 
     Codes: 0 in the gap; ±1 contact with the damping part limiting (f_d < f_c);
@@ -106,10 +144,11 @@ def switch_state(t, z, cx, dx, cv, dv, prm, t0, dt, u, k):
     """
     ut = drive_at(t, t0, dt, u)
     e = dx[k] * ut
+    for j in range(xi.shape[1]):
+        e += xv[k, j] * z[xi[k, j]]
     w = dv[k] * ut
-    for j in range(z.shape[0]):
-        e += cx[k, j] * z[j]
-        w += cv[k, j] * z[j]
+    for j in range(vi.shape[1]):
+        w += vv[k, j] * z[vi[k, j]]
     c, d, b = prm[k, 0], prm[k, 1], prm[k, 2]
     half = 0.5 * b
     if abs(b) <= B_EPS:
@@ -149,8 +188,8 @@ _D = np.array([-12715105075 / 11282082432, 0.0, 87487479700 / 32700410799,
 
 
 @_jit
-def dopri_run(z, t0, dt, nout, A, B, cx, dx, cv, dv, extra, prm, u, rtol, atol, hmax,
-              coefA, coefB5, coefB4, coefC, coefD, dense, out, kink_tol=0.0):
+def dopri_run(z, t0, dt, nout, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, u, rtol, atol,
+              hmax, coefA, coefB5, coefB4, coefC, coefD, dense, out, kink_tol=0.0):
     """Integrate from t0 and store z at t0 + k dt (k < nout) in ``out``; returns the step count.
 
     A step is accepted when the embedded error, scaled by atol + rtol |z|, is ≤ 1
@@ -158,7 +197,7 @@ def dopri_run(z, t0, dt, nout, A, B, cx, dx, cv, dv, extra, prm, u, rtol, atol, 
     method's continuous extension) and are limited only by ``hmax``; without it
     they end on every output time, i.e. on every sample of the piecewise-linear
     drive, so its kinks are always at step boundaries.  Negative return: the
-    step size underflowed.
+    step size underflowed.  The matrices come from :func:`kernel_args`.
     """
     N = z.shape[0]
     K = np.zeros((7, N))
@@ -171,7 +210,7 @@ def dopri_run(z, t0, dt, nout, A, B, cx, dx, cv, dv, extra, prm, u, rtol, atol, 
     h = min(hmax, dt)
     steps = 0
     k_out = 1
-    rhs(t, z, A, B, cx, dx, cv, dv, extra, prm, t0, dt, u, K[0])
+    rhs(t, z, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, t0, dt, u, K[0])
     while k_out < nout:
         stop = t_end if dense else t0 + k_out * dt
         last = False
@@ -186,7 +225,8 @@ def dopri_run(z, t0, dt, nout, A, B, cx, dx, cv, dv, extra, prm, u, rtol, atol, 
                 for r in range(s):
                     acc += hh * coefA[s, r] * K[r, i]
                 ytmp[i] = acc
-            rhs(t + coefC[s] * hh, ytmp, A, B, cx, dx, cv, dv, extra, prm, t0, dt, u, K[s])
+            rhs(t + coefC[s] * hh, ytmp, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, t0, dt,
+                u, K[s])
         # ytmp now holds the 5th-order solution (the last stage is at it: FSAL)
         err = 0.0
         for i in range(N):
@@ -205,9 +245,10 @@ def dopri_run(z, t0, dt, nout, A, B, cx, dx, cv, dv, extra, prm, u, rtol, atol, 
         if err <= 1.0 and hh > kink_tol:
             theta = 2.0
             for k in range(prm.shape[0]):
-                c0, ga0, gs0, gm0 = switch_state(t, z, cx, dx, cv, dv, prm, t0, dt, u, k)
-                c1, ga1, gs1, gm1 = switch_state(t + hh, y5, cx, dx, cv, dv, prm, t0, dt,
+                c0, ga0, gs0, gm0 = switch_state(t, z, xi, xv, dx, vi, vv, dv, prm, t0, dt,
                                                  u, k)
+                c1, ga1, gs1, gm1 = switch_state(t + hh, y5, xi, xv, dx, vi, vv, dv, prm, t0,
+                                                 dt, u, k)
                 if c0 != c1:
                     if (c0 == 0) != (c1 == 0):
                         g0, g1 = ga0, ga1
