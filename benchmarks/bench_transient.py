@@ -111,7 +111,7 @@ def linear(n=100, steps=100_000, dt=1e-3, repeat=3):
         "x": lambda: transient(circuit, t_end, dt, "step", elements=False, velocities=False),
         "nodes": lambda: transient(circuit, t_end, dt, "step", elements=False),
         "all": lambda: transient(circuit, t_end, dt, "step"),
-        "modal": lambda: _propagate_modal(ss.A, ss.B, ss.initial[0], u, dt, ss.Cx),
+        "modal": lambda: _propagate_modal(ss.A, ss.B, ss.initial[0], u, dt, ss.Cx, ss.g @ ss.Cv, True),
         "block": lambda: _propagate(ss.A, ss.B, ss.initial[0], u, dt),
         "lsim": lambda: signal.lsim(sys_, np.ones_like(t), t, interp=True),
         "dop": lambda: solve_ivp(rhs, (0, t_end), np.zeros(2 * n), method="DOP853",

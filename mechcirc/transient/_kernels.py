@@ -301,35 +301,66 @@ def dopri_run(z, t0, dt, nout, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, u
 
 
 @_jit
-def modal_run(mu, g1, g2, q0, u, cre, cim, out, qmax):
+def modal_run(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout):
     """Diagonal first-order-hold recurrence q⁺ = μ q + g₁ u + g₂ (u⁺ − u), every mode.
 
     ``mu``, ``g1``, ``g2``, ``q0``: complex (m,) per mode; ``u`` real (nt,);
-    ``out`` real (nt, ·) receives Re q_j in column ``cre[j]`` and Im q_j in
-    column ``cim[j]`` (skipped when negative: a real mode); ``qmax[j]``
-    receives max_k |q_j|.
+    ``out`` real (nt, ncols) receives Re q_j in column ``cre[j]`` and Im q_j in
+    column ``cim[j]`` (negative: a real mode), columns ≥ ncols not stored;
+    ``qmax[j]`` receives max_k |q_j|; ``yout[k]`` receives Σ wout[c] · (column c
+    of step k) over every column, stored or not (a scalar output).
+    Real arithmetic on split arrays, so the per-mode update vectorises.
     """
     nt = u.shape[0]
     m = mu.shape[0]
-    q = q0.copy()
+    ncols = out.shape[1]
+    mr = np.empty(m)
+    mi = np.empty(m)
+    ar = np.empty(m)
+    ai = np.empty(m)
+    br = np.empty(m)
+    bi = np.empty(m)
+    qr = np.empty(m)
+    qi = np.empty(m)
+    wr = np.zeros(m)
+    wi = np.zeros(m)
+    q2 = np.zeros(m)
     for j in range(m):
-        qmax[j] = q[j].real * q[j].real + q[j].imag * q[j].imag
-        out[0, cre[j]] = q[j].real
+        mr[j] = mu[j].real
+        mi[j] = mu[j].imag
+        ar[j] = g1[j].real
+        ai[j] = g1[j].imag
+        br[j] = g2[j].real
+        bi[j] = g2[j].imag
+        qr[j] = q0[j].real
+        qi[j] = q0[j].imag
+        wr[j] = wout[cre[j]]
         if cim[j] >= 0:
-            out[0, cim[j]] = q[j].imag
-    for k in range(nt - 1):
-        uk = u[k]
-        du = u[k + 1] - uk
+            wi[j] = wout[cim[j]]
+    for k in range(nt):
+        if k > 0:
+            uk = u[k - 1]
+            du = u[k] - uk
+            for j in range(m):
+                xr = mr[j] * qr[j] - mi[j] * qi[j] + ar[j] * uk + br[j] * du
+                xi = mr[j] * qi[j] + mi[j] * qr[j] + ai[j] * uk + bi[j] * du
+                qr[j] = xr
+                qi[j] = xi
+        y = 0.0
         for j in range(m):
-            q[j] = mu[j] * q[j] + g1[j] * uk + g2[j] * du
-            a = q[j].real * q[j].real + q[j].imag * q[j].imag
-            if a > qmax[j]:
-                qmax[j] = a
-            out[k + 1, cre[j]] = q[j].real
-            if cim[j] >= 0:
-                out[k + 1, cim[j]] = q[j].imag
+            a = qr[j] * qr[j] + qi[j] * qi[j]
+            q2[j] = max(q2[j], a)
+            y += wr[j] * qr[j] + wi[j] * qi[j]
+        yout[k] = y
+        for j in range(m):
+            c = cre[j]
+            if c < ncols:
+                out[k, c] = qr[j]
+            c = cim[j]
+            if c >= 0 and c < ncols:
+                out[k, c] = qi[j]
     for j in range(m):
-        qmax[j] = math.sqrt(qmax[j])
+        qmax[j] = math.sqrt(q2[j])
 
 
 def load_python():

@@ -302,11 +302,14 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
         u_in = u
     interp = _interpolation_error(u, drive)
     has_clear = bool(backlash_elements(circuit)) and not linearise
-    T, nx = None, None
+    T, nx, drive_y = None, None, None
     if has_clear:
         Z, method, err = _nonlinear(ss, circuit, z0, t, u_in, rtol)
     else:
-        Z, T, why, nx, dropped = _propagate_modal(ss.A, ss.B, z0, u_in, h, ss.Cx)
+        x_only = velocities is False and not elements
+        dmap = _drive_map(ss)
+        Z, T, why, nx, dropped, drive_y = _propagate_modal(
+            ss.A, ss.B, z0, u_in, h, ss.Cx, None if dmap is None else dmap[0], x_only)
         if Z is None:
             Z = _propagate(ss.A, ss.B, z0, u_in, h)
             path = f"block propagation (modal path refused: {why})"
@@ -324,7 +327,21 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
         notes.append(f"drive interpolated linearly between samples: its error is at most "
                      f"{interp:.3g} (h²/8·max|ü|, from the samples' second differences)")
     return _outputs(ss, circuit, t, Z, u, u_in, h, drive, method, err, interp, notes,
-                    elements, T, velocities, nx)
+                    elements, T, velocities, nx, drive_y)
+
+
+def _drive_map(ss: StateSpace):
+    """(w, Du, Dud): the drive's output (velocity of a force drive, force of a
+    velocity drive) is w·z + Du·u + Dud·u̇ when the network is linear; None
+    without a drive."""
+    if ss.kind == "velocity":
+        # Q = h·(M a + D v + K x), contracted with h first (vectors only)
+        a, b, c = ss.M.T @ ss.h, ss.D.T @ ss.h, ss.K.T @ ss.h
+        return (a @ (ss.Cv @ ss.A) + b @ ss.Cv + c @ ss.Cx,
+                a @ (ss.Cv @ ss.B) + b @ ss.Dv + c @ ss.Dx, a @ ss.Dv + b @ ss.Ev)
+    if ss.kind == "force":
+        return ss.g @ ss.Cv, ss.g @ ss.Dv, ss.g @ ss.Ev
+    return None
 
 
 def _with_oscillator(ss: StateSpace, z0, omega: float, amp: float):
@@ -442,10 +459,10 @@ MODAL_CHECK_TOL = 1e-12
 REAL_SHAPE_TOL = 1e-11
 
 
-def _propagate_modal(A, B, z0, u, h, Cx=None):
-    """The FOH recurrence in the eigenbasis of A: (Q, T, note, nx, dropped) with Z = Q Tᵀ.
+def _propagate_modal(A, B, z0, u, h, Cx=None, w=None, x_only=False):
+    """The FOH recurrence in the eigenbasis of A: (Q, T, note, nx, dropped, y), Z = Q Tᵀ.
 
-    (None, None, note, 0, 0.0) when refused.
+    (None, None, note, 0, 0.0, None) when refused.
 
     A = V Λ V⁻¹ (real A: real modes and conjugate pairs; one of each pair is
     propagated, q⁺ = μ q + g₁ u + g₂ Δu with μ = e^{λh}, g₁ = h φ₁(λh) b,
@@ -461,28 +478,33 @@ def _propagate_modal(A, B, z0, u, h, Cx=None):
     put last; x then needs only the first ``nx`` columns of Q (the dropped
     part of each such shape is below ``REAL_SHAPE_TOL`` of its norm; ``dropped``
     bounds what it contributes to any x: Σ max|Cx T_col| · max_k |Q_k,col|).
+
+    With ``w`` (a row over z), ``y`` is the scalar output w·z at every step,
+    formed inside the recurrence (else None).  With ``x_only`` (and ``Cx``) Q
+    keeps only its first ``nx`` columns: no x needs the others, and w·z is
+    already formed, so a quarter of the memory traffic goes.
     """
     N = A.shape[0]
     nt = u.size
     if N == 0:
-        return None, None, "no states", 0, 0.0
+        return None, None, "no states", 0, 0.0, None
     try:
         lam, V = la.eig(A)
     except (la.LinAlgError, ValueError):
-        return None, None, "eigen-decomposition failed", 0, 0.0
+        return None, None, "eigen-decomposition failed", 0, 0.0, None
     real = lam.imag == 0.0
     pos = lam.imag > 0.0
     if int(real.sum()) + 2 * int(pos.sum()) != N or not np.all(np.isfinite(lam)):
-        return None, None, "eigenvalues not in conjugate pairs", 0, 0.0
+        return None, None, "eigenvalues not in conjugate pairs", 0, 0.0, None
     try:
         with warnings.catch_warnings():         # ill-conditioning is judged just below
             warnings.simplefilter("ignore", la.LinAlgWarning)
             Vinv = la.inv(V)
     except (la.LinAlgError, ValueError):
-        return None, None, "eigenvector matrix singular", 0, 0.0
+        return None, None, "eigenvector matrix singular", 0, 0.0, None
     cond = float(np.abs(V).sum(axis=0).max() * np.abs(Vinv).sum(axis=0).max())   # 1-norm
     if not (cond <= MODAL_COND_MAX):
-        return None, None, f"eigenvector matrix condition number (1-norm) {cond:.1e} > {MODAL_COND_MAX:.0e}", 0, 0.0
+        return None, None, f"eigenvector matrix condition number (1-norm) {cond:.1e} > {MODAL_COND_MAX:.0e}", 0, 0.0, None
     keep = np.flatnonzero(real | pos)
     lam_k = lam[keep]
     Vk = V[:, keep]
@@ -510,7 +532,7 @@ def _propagate_modal(A, B, z0, u, h, Cx=None):
         dev = max(dev, float(max(np.abs(g1_m - G1).max(), np.abs(g2_m - G2).max())) / gscale)
     if not (dev <= MODAL_CHECK_TOL):
         return None, None, (f"modal one-step map differs from the exponential's by {dev:.1e} "
-                            f"(> {MODAL_CHECK_TOL:.0e}; eigenvector condition {cond:.1e})"), 0, 0.0
+                            f"(> {MODAL_CHECK_TOL:.0e}; eigenvector condition {cond:.1e})"), 0, 0.0, None
     # Real columns: Re q_j for every kept mode, Im q_j for the complex ones.
     is_c = ~real[keep]
     real_shape = np.zeros(m, bool)
@@ -533,9 +555,12 @@ def _propagate_modal(A, B, z0, u, h, Cx=None):
     T[:, cre[~is_c]] = Vk[:, ~is_c].real
     T[:, cre[is_c]] = 2 * Vk[:, is_c].real
     T[:, cim[is_c]] = -2 * Vk[:, is_c].imag
-    Q = np.empty((nt, N))
+    keep_cols = nx if (x_only and Cx is not None) else N
+    Q = np.empty((nt, keep_cols))
     qmax = np.zeros(m)
-    _modal_states(mu, g1, g2, q0, np.ascontiguousarray(u, float), cre, cim, Q, qmax)
+    wout = np.zeros(N) if w is None else np.asarray(w, dtype=float) @ T
+    y = np.empty(nt)
+    _modal_states(mu, g1, g2, q0, np.ascontiguousarray(u, float), cre, cim, Q, qmax, wout, y)
     note = f"modal (eigenvector condition {cond:.1e}, one-step map checked to {dev:.1e}"
     if late.any():
         note += f"; {int(late.sum())} of {int(is_c.sum())} oscillating modes with real shapes"
@@ -543,28 +568,34 @@ def _propagate_modal(A, B, z0, u, h, Cx=None):
     if late.any():
         cols = cim[late]
         dropped = float((np.abs(Cx @ T[:, cols]).max(axis=0) * qmax[late]).sum())
-    return Q, T, note + ")", (nx if Cx is not None else N), dropped
+    return Q, T, note + ")", (nx if Cx is not None else N), dropped, (None if w is None else y)
 
 
-def _modal_states(mu, g1, g2, q0, u, cre, cim, out, qmax):
+def _modal_states(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout):
     from . import _kernels as kern
 
     if kern.HAVE_NUMBA:
-        kern.modal_run(mu, g1, g2, q0, u, cre, cim, out, qmax)
+        kern.modal_run(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout)
         return
     # numpy/scipy fallback: one first-order IIR filter per mode along time.
     from scipy.signal import lfilter
 
     x = np.empty(u.size, complex)
     du = np.diff(u)
+    ncols = out.shape[1]
+    yout[:] = 0.0
     for j in range(mu.size):
         x[0] = q0[j]
         x[1:] = g1[j] * u[:-1] + g2[j] * du
         y = lfilter([1.0], [1.0, -mu[j]], x)
         qmax[j] = np.abs(y).max()
-        out[:, cre[j]] = y.real
-        if cim[j] >= 0:
-            out[:, cim[j]] = y.imag
+        for col, part in ((cre[j], y.real), (cim[j], y.imag)):
+            if col < 0:
+                continue
+            if col < ncols:
+                out[:, col] = part
+            if wout[col] != 0.0:
+                yout += wout[col] * part
 
 
 def _nonlinear(ss: StateSpace, circuit, z0, t, u, rtol):
@@ -625,15 +656,17 @@ def _nonlinear(ss: StateSpace, circuit, z0, t, u, rtol):
 
 
 def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes, want=True,
-             T=None, velocities=True, nx=None) -> TransientResult:
+             T=None, velocities=True, nx=None, drive_y=None) -> TransientResult:
     """Outputs from the states: z = Z[k] (or modal coordinates, z = T Z[k]).
 
     Every output is affine in z, so each is one product of Z with the output
     map (C T)ᵀ (BLAS-3 for node outputs, a vector for the drive's); terms of
     the drive that vanish are skipped.
     """
-    def affine(C, Du=None, Dud=None, cols=None):   # C z + Du u + Dud u̇ at every sample
-        if T is None:
+    def affine(C, Du=None, Dud=None, cols=None, Cz=None):   # C z + Du u + Dud u̇ at every sample
+        if Cz is not None:              # C z already formed (in the recurrence)
+            out = Cz.copy()
+        elif T is None:
             out = Z @ C.T
         elif cols is None:
             out = Z @ (C @ T).T
@@ -709,8 +742,7 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes,
         if clear:
             Q = Acc @ a + V @ b + X @ c
         else:                   # one vector: h·(M a + D v + K x) is affine in z
-            Q = affine(a @ (ss.Cv @ ss.A) + b @ ss.Cv + c @ ss.Cx,
-                       a @ (ss.Cv @ ss.B) + b @ ss.Dv + c @ ss.Dx, a @ ss.Dv + b @ ss.Ev)
+            Q = affine(*_drive_map(ss), Cz=drive_y)
         for name, (e, comp) in clear.items():
             ge = np.zeros(len(ss.nodes))
             if e.n1 in index:
@@ -720,11 +752,10 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes,
             Q = Q + law_cache[name][0] * (ge @ ss.h)
         drive_force = Q
     elif ss.kind == "force":
-        drive_velocity = affine(ss.g @ ss.Cv, ss.g @ ss.Dv, ss.g @ ss.Ev)
+        drive_velocity = affine(*_drive_map(ss), Cz=drive_y)
     if ss.Ev.any() and drive.kind not in ("rest", "impulse"):
         notes.append("some nodes carry neither mass nor damping: their velocities use the "
                      "drive's derivative estimated from the samples")
-    scale = float(np.abs(X).max()) if X.size else 0.0
     err_total = err
     return TransientResult(time=t, nodes=ss.nodes, x=X, v=V, elements=tuple(names), force=force,
                            dv=dvm, drive_kind=ss.kind,
