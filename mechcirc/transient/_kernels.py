@@ -337,6 +337,11 @@ def modal_run(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout):
         wr[j] = wout[cre[j]]
         if cim[j] >= 0:
             wi[j] = wout[cim[j]]
+    identity = True
+    for j in range(m):
+        if cre[j] != j:
+            identity = False
+    nre = min(m, ncols)
     for k in range(nt):
         if k > 0:
             uk = u[k - 1]
@@ -352,10 +357,15 @@ def modal_run(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout):
             q2[j] = max(q2[j], a)
             y += wr[j] * qr[j] + wi[j] * qi[j]
         yout[k] = y
+        if identity:                # column j is Re q_j: a contiguous copy
+            for j in range(nre):
+                out[k, j] = qr[j]
+        else:
+            for j in range(m):
+                c = cre[j]
+                if c < ncols:
+                    out[k, c] = qr[j]
         for j in range(m):
-            c = cre[j]
-            if c < ncols:
-                out[k, c] = qr[j]
             c = cim[j]
             if c >= 0 and c < ncols:
                 out[k, c] = qi[j]
