@@ -81,14 +81,13 @@ def pack_rows(M):
     nonzeros only.  Padding entries have value 0 and column 0.
     """
     M = np.atleast_2d(np.asarray(M, dtype=float))
+    if M.size == 0:
+        return np.zeros((M.shape[0], 1), dtype=np.int64), np.zeros((M.shape[0], 1))
     nz = M != 0.0
-    w = max(1, int(nz.sum(axis=1).max())) if M.size else 1
-    idx = np.zeros((M.shape[0], w), dtype=np.int64)
-    val = np.zeros((M.shape[0], w))
-    for i in range(M.shape[0]):
-        cols = np.flatnonzero(nz[i])
-        idx[i, :cols.size] = cols
-        val[i, :cols.size] = M[i, cols]
+    w = max(1, int(nz.sum(axis=1).max()))
+    # each row's nonzero columns first (in order), then zero entries as padding
+    idx = np.ascontiguousarray(np.argsort(~nz, axis=1, kind="stable")[:, :w], dtype=np.int64)
+    val = np.ascontiguousarray(np.take_along_axis(M, idx, axis=1))
     return idx, val
 
 
