@@ -309,7 +309,8 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
         x_only = velocities is False and not elements
         dmap = _drive_map(ss)
         Z, T, why, nx, dropped, drive_y = _propagate_modal(
-            ss.A, ss.B, z0, u_in, h, ss.Cx, None if dmap is None else dmap[0], x_only)
+            ss.A, ss.B, z0, u_in, h, ss.Cx, None if dmap is None else dmap[0], x_only,
+            ss.__dict__.setdefault("_modal_plans", {}))
         if Z is None:
             Z = _propagate(ss.A, ss.B, z0, u_in, h)
             path = f"block propagation (modal path refused: {why})"
@@ -473,7 +474,7 @@ MODAL_CHECK_TOL = 1e-12
 REAL_SHAPE_TOL = 1e-11
 
 
-def _propagate_modal(A, B, z0, u, h, Cx=None, w=None, x_only=False):
+def _propagate_modal(A, B, z0, u, h, Cx=None, w=None, x_only=False, cache=None):
     """The FOH recurrence in the eigenbasis of A: (Q, T, note, nx, dropped, y), Z = Q Tᵀ.
 
     (None, None, note, 0, 0.0, None) when refused.
@@ -497,34 +498,65 @@ def _propagate_modal(A, B, z0, u, h, Cx=None, w=None, x_only=False):
     formed inside the recurrence (else None).  With ``x_only`` (and ``Cx``) Q
     keeps only its first ``nx`` columns: no x needs the others, and w·z is
     already formed, so a quarter of the memory traffic goes.
+
+    Everything but the start state and the drive (the eigen-decomposition,
+    the per-mode maps, the check, the real columns) depends on A, B, h and
+    Cx only; with ``cache`` (a dict kept with the model) it is made once.
     """
     N = A.shape[0]
     nt = u.size
+    key = ("modal", h, Cx is not None, MODAL_COND_MAX, MODAL_CHECK_TOL, REAL_SHAPE_TOL)
+    plan = None if cache is None else cache.get(key)
+    if plan is None:
+        plan = _modal_plan(A, B, h, Cx)
+        if cache is not None:
+            if len(cache) >= 4:             # a few step sizes at most
+                cache.clear()
+            cache[key] = plan
+    if isinstance(plan, str):
+        return None, None, plan, 0, 0.0, None
+    (m, Vinv_k, rot, mu, g1, g2, cre, cim, nx, T, note, late) = plan
+    q0 = (Vinv_k @ np.asarray(z0, complex)) / rot
+    keep_cols = nx if (x_only and Cx is not None) else N
+    Q = np.empty((nt, keep_cols))
+    qmax = np.zeros(m)
+    wout = np.zeros(N) if w is None else np.asarray(w, dtype=float) @ T
+    y = np.empty(nt)
+    _modal_states(mu, g1, g2, q0, np.ascontiguousarray(u, float), cre, cim, Q, qmax, wout, y)
+    dropped = 0.0
+    if late.any():
+        cols = cim[late]
+        dropped = float((np.abs(Cx @ T[:, cols]).max(axis=0) * qmax[late]).sum())
+    return Q, T, note, (nx if Cx is not None else N), dropped, (None if w is None else y)
+
+
+def _modal_plan(A, B, h, Cx):
+    """What :func:`_propagate_modal` needs besides z0 and u, or the reason it refuses (a str)."""
+    N = A.shape[0]
     if N == 0:
-        return None, None, "no states", 0, 0.0, None
+        return "no states"
     try:
         lam, V = la.eig(A)
     except (la.LinAlgError, ValueError):
-        return None, None, "eigen-decomposition failed", 0, 0.0, None
+        return "eigen-decomposition failed"
     real = lam.imag == 0.0
     pos = lam.imag > 0.0
     if int(real.sum()) + 2 * int(pos.sum()) != N or not np.all(np.isfinite(lam)):
-        return None, None, "eigenvalues not in conjugate pairs", 0, 0.0, None
+        return "eigenvalues not in conjugate pairs"
     try:
         with warnings.catch_warnings():         # ill-conditioning is judged just below
             warnings.simplefilter("ignore", la.LinAlgWarning)
             Vinv = la.inv(V)
     except (la.LinAlgError, ValueError):
-        return None, None, "eigenvector matrix singular", 0, 0.0, None
+        return "eigenvector matrix singular"
     cond = float(np.abs(V).sum(axis=0).max() * np.abs(Vinv).sum(axis=0).max())   # 1-norm
     if not (cond <= MODAL_COND_MAX):
-        return None, None, f"eigenvector matrix condition number (1-norm) {cond:.1e} > {MODAL_COND_MAX:.0e}", 0, 0.0, None
+        return f"eigenvector matrix condition number (1-norm) {cond:.1e} > {MODAL_COND_MAX:.0e}"
     keep = np.flatnonzero(real | pos)
     lam_k = lam[keep]
     Vk = V[:, keep]
-    rhs = np.column_stack([B.astype(complex), np.asarray(z0, complex)])
-    W = (Vinv @ rhs)[keep]
-    b, q0 = W[:, 0], W[:, 1]
+    Vinv_k = Vinv[keep]
+    b = Vinv_k @ B.astype(complex)
     # φ-functions of every mode from one 3×3 exponential each (batched).
     m = lam_k.size
     small = np.zeros((m, 3, 3), complex)
@@ -545,11 +577,12 @@ def _propagate_modal(A, B, z0, u, h, Cx=None, w=None, x_only=False):
     if np.abs(B).max() > 0:
         dev = max(dev, float(max(np.abs(g1_m - G1).max(), np.abs(g2_m - G2).max())) / gscale)
     if not (dev <= MODAL_CHECK_TOL):
-        return None, None, (f"modal one-step map differs from the exponential's by {dev:.1e} "
-                            f"(> {MODAL_CHECK_TOL:.0e}; eigenvector condition {cond:.1e})"), 0, 0.0, None
+        return (f"modal one-step map differs from the exponential's by {dev:.1e} "
+                f"(> {MODAL_CHECK_TOL:.0e}; eigenvector condition {cond:.1e})")
     # Real columns: Re q_j for every kept mode, Im q_j for the complex ones.
     is_c = ~real[keep]
     real_shape = np.zeros(m, bool)
+    rot = np.ones(m, complex)
     if Cx is not None and Cx.shape[0]:
         phi = Cx @ Vk
         rot = np.exp(-0.5j * np.angle((phi * phi).sum(axis=0)))
@@ -557,7 +590,7 @@ def _propagate_modal(A, B, z0, u, h, Cx=None, w=None, x_only=False):
         shape_norm = np.abs(phi).max(axis=0)
         real_shape = is_c & (np.abs((phi * rot).imag).max(axis=0) <= REAL_SHAPE_TOL * shape_norm)
         rot[~real_shape] = 1.0
-        Vk, g1, g2, q0 = Vk * rot, g1 / rot, g2 / rot, q0 / rot     # z = v q unchanged
+        Vk, g1, g2 = Vk * rot, g1 / rot, g2 / rot     # z = v q unchanged (q0 / rot)
     cre = np.arange(m)
     cim = np.full(m, -1)
     late = is_c & real_shape
@@ -569,20 +602,10 @@ def _propagate_modal(A, B, z0, u, h, Cx=None, w=None, x_only=False):
     T[:, cre[~is_c]] = Vk[:, ~is_c].real
     T[:, cre[is_c]] = 2 * Vk[:, is_c].real
     T[:, cim[is_c]] = -2 * Vk[:, is_c].imag
-    keep_cols = nx if (x_only and Cx is not None) else N
-    Q = np.empty((nt, keep_cols))
-    qmax = np.zeros(m)
-    wout = np.zeros(N) if w is None else np.asarray(w, dtype=float) @ T
-    y = np.empty(nt)
-    _modal_states(mu, g1, g2, q0, np.ascontiguousarray(u, float), cre, cim, Q, qmax, wout, y)
     note = f"modal (eigenvector condition {cond:.1e}, one-step map checked to {dev:.1e}"
     if late.any():
         note += f"; {int(late.sum())} of {int(is_c.sum())} oscillating modes with real shapes"
-    dropped = 0.0
-    if late.any():
-        cols = cim[late]
-        dropped = float((np.abs(Cx @ T[:, cols]).max(axis=0) * qmax[late]).sum())
-    return Q, T, note + ")", (nx if Cx is not None else N), dropped, (None if w is None else y)
+    return (m, Vinv_k, rot, mu, g1, g2, cre, cim, nx, T, note + ")", late)
 
 
 def _modal_states(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout):
