@@ -119,10 +119,12 @@ def test_modal_fallback_without_numba_matches(monkeypatch):
     assert np.abs(plain.force - compiled.force).max() <= 1e-12 * np.abs(compiled.force).max()
 
 
-@pytest.mark.parametrize("numba", [True, False])
-def test_x_only_run_keeps_the_drive_output_exact(numba, monkeypatch):
-    # x only: the recurrence keeps x's columns only and forms the drive's
+@pytest.mark.parametrize("numba,chunk", [(True, 4096), (True, 333), (False, 4096)])
+def test_x_only_run_keeps_the_drive_output_exact(numba, chunk, monkeypatch):
+    # x only: the recurrence forms x block by block (blocks of `chunk`
+    # samples; 333 puts 12 block boundaries in this run) and the drive's
     # output (here the force drive's velocity, v of node c) inside the loop
+    monkeypatch.setattr(sim, "CHUNK", chunk)
     if not numba:
         monkeypatch.setattr(kern, "HAVE_NUMBA", False)       # the lfilter recurrence
     c = mechcirc.parse(CHAIN3)

@@ -300,15 +300,17 @@ def dopri_run(z, t0, dt, nout, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, u
 
 
 @_jit
-def modal_run(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout):
+def modal_run(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout, qlast):
     """Diagonal first-order-hold recurrence q⁺ = μ q + g₁ u + g₂ (u⁺ − u), every mode.
 
     ``mu``, ``g1``, ``g2``, ``q0``: complex (m,) per mode; ``u`` real (nt,);
     ``out`` real (nt, ncols) receives Re q_j in column ``cre[j]`` and Im q_j in
     column ``cim[j]`` (negative: a real mode), columns ≥ ncols not stored;
     ``qmax[j]`` receives max_k |q_j|; ``yout[k]`` receives Σ wout[c] · (column c
-    of step k) over every column, stored or not (a scalar output).
-    Real arithmetic on split arrays, so the per-mode update vectorises.
+    of step k) over every column, stored or not (a scalar output); ``qlast``
+    (complex (m,)) the state at the last sample, from which a run over the
+    next samples continues.  Real arithmetic on split arrays, so the per-mode
+    update vectorises.
     """
     nt = u.shape[0]
     m = mu.shape[0]
@@ -370,6 +372,7 @@ def modal_run(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout):
                 out[k, c] = qi[j]
     for j in range(m):
         qmax[j] = math.sqrt(q2[j])
+        qlast[j] = complex(qr[j], qi[j])
 
 
 def load_python():

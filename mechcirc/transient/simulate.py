@@ -302,24 +302,32 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
         u_in = u
     interp = _interpolation_error(u, drive)
     has_clear = bool(backlash_elements(circuit)) and not linearise
-    T, nx, drive_y = None, None, None
+    T, nx, drive_y, x_ready = None, None, None, None
     if has_clear:
         Z, method, err = _nonlinear(ss, circuit, z0, t, u_in, rtol)
     else:
         x_only = velocities is False and not elements
         dmap = _drive_map(ss)
-        Z, T, why, nx, dropped, drive_y = _propagate_modal(
-            ss.A, ss.B, z0, u_in, h, ss.Cx, None if dmap is None else dmap[0], x_only,
-            ss.__dict__.setdefault("_modal_plans", {}))
-        if Z is None:
+        w = None if dmap is None else dmap[0]
+        plans = ss.__dict__.setdefault("_modal_plans", {})
+        Z = None
+        if x_only:
+            x_ready, why, dropped, drive_y = _propagate_modal_x(ss.A, ss.B, z0, u_in, h, ss.Cx,
+                                                                w, plans)
+            if x_ready is not None:
+                Z, T, nx = None, None, None
+        if x_ready is None:
+            Z, T, why, nx, dropped, drive_y = _propagate_modal(
+                ss.A, ss.B, z0, u_in, h, ss.Cx, w, x_only, plans)
+        if Z is None and x_ready is None:
             Z = _propagate(ss.A, ss.B, z0, u_in, h)
             path = f"block propagation (modal path refused: {why})"
         else:
             path = why
         method, err = ("exact (matrix exponential, first-order hold of the drive; "
                        f"{path.split(' (')[0]})"), 0.0
-        if Z is not None and T is not None and dropped > 0 and velocities is False \
-                and not elements:
+        if (x_ready is not None or (Z is not None and T is not None)) and dropped > 0 \
+                and velocities is False and not elements:
             err = dropped           # x formed without the shapes' rounding-level imaginary parts
         elif T is not None:
             nx = None               # v and forces use every column anyway: keep x whole
@@ -328,7 +336,7 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
         notes.append(f"drive interpolated linearly between samples: its error is at most "
                      f"{interp:.3g} (h²/8·max|ü|, from the samples' second differences)")
     return _outputs(ss, circuit, t, Z, u, u_in, h, drive, method, err, interp, notes,
-                    elements, T, velocities, nx, drive_y)
+                    elements, T, velocities, nx, drive_y, x_ready)
 
 
 def _model(circuit: Circuit, linearise: bool) -> StateSpace:
@@ -505,14 +513,7 @@ def _propagate_modal(A, B, z0, u, h, Cx=None, w=None, x_only=False, cache=None):
     """
     N = A.shape[0]
     nt = u.size
-    key = ("modal", h, Cx is not None, MODAL_COND_MAX, MODAL_CHECK_TOL, REAL_SHAPE_TOL)
-    plan = None if cache is None else cache.get(key)
-    if plan is None:
-        plan = _modal_plan(A, B, h, Cx)
-        if cache is not None:
-            if len(cache) >= 4:             # a few step sizes at most
-                cache.clear()
-            cache[key] = plan
+    plan = _cached_plan(A, B, h, Cx, cache)
     if isinstance(plan, str):
         return None, None, plan, 0, 0.0, None
     (m, Vinv_k, rot, mu, g1, g2, cre, cim, nx, T, note, late) = plan
@@ -528,6 +529,76 @@ def _propagate_modal(A, B, z0, u, h, Cx=None, w=None, x_only=False, cache=None):
         cols = cim[late]
         dropped = float((np.abs(Cx @ T[:, cols]).max(axis=0) * qmax[late]).sum())
     return Q, T, note, (nx if Cx is not None else N), dropped, (None if w is None else y)
+
+
+#: Samples per block of the fused x-only modal path: the modal signals of a
+#: block (≤ CHUNK × N doubles) stay in cache between the recurrence and the
+#: product with the mode shapes, and never exist for the whole run.
+CHUNK = 4096
+
+
+def _cached_plan(A, B, h, Cx, cache):
+    key = ("modal", h, Cx is not None, MODAL_COND_MAX, MODAL_CHECK_TOL, REAL_SHAPE_TOL)
+    plan = None if cache is None else cache.get(key)
+    if plan is None:
+        plan = _modal_plan(A, B, h, Cx)
+        if cache is not None:
+            if len(cache) >= 4:             # a few step sizes at most
+                cache.clear()
+            cache[key] = plan
+    return plan
+
+
+def _propagate_modal_x(A, B, z0, u, h, Cx, w=None, cache=None):
+    """x only, by the modal path in blocks of samples: (X, note, dropped, y).
+
+    X = Cx z without the drive's direct terms; y = w·z (None without w);
+    ``dropped`` as in :func:`_propagate_modal`.  (None, reason, 0, None) when
+    the modal path refuses (or numba is not installed: the block loop is
+    compiled only), and the caller takes the general path.
+
+    The recurrence fills a block of modal signals, one product maps it to x,
+    and the next block continues from the block's last state (blocks share
+    their boundary sample, computed twice, identically).
+    """
+    from . import _kernels as kern
+
+    if not kern.HAVE_NUMBA or not Cx.shape[0]:
+        return None, "no compiled block loop", 0.0, None
+    plan = _cached_plan(A, B, h, Cx, cache)
+    if isinstance(plan, str):
+        return None, plan, 0.0, None
+    (m, Vinv_k, rot, mu, g1, g2, cre, cim, nx, T, note, late) = plan
+    N = A.shape[0]
+    q0 = (Vinv_k @ np.asarray(z0, complex)) / rot
+    nt = u.size
+    u = np.ascontiguousarray(u, float)
+    S = np.ascontiguousarray((Cx @ T[:, :nx]).T)
+    X = np.empty((nt, Cx.shape[0]))
+    y = np.empty(nt)
+    wout = np.zeros(N) if w is None else np.asarray(w, dtype=float) @ T
+    buf = np.empty((min(CHUNK, nt - 1) + 1, nx)) if nt > 1 else np.empty((1, nx))
+    qmax = np.zeros(m)
+    qm = np.empty(m)
+    q = np.asarray(q0, complex).copy()
+    qlast = np.empty(m, complex)
+    a = 0
+    while True:
+        b = min(nt - 1, a + CHUNK)
+        n = b - a + 1
+        kern.modal_run(mu, g1, g2, q, u[a:b + 1], cre, cim, buf[:n], qm, wout, y[a:b + 1],
+                       qlast)
+        np.matmul(buf[:n], S, out=X[a:b + 1])
+        np.maximum(qmax, qm, out=qmax)
+        q, qlast = qlast, q
+        if b >= nt - 1:
+            break
+        a = b
+    dropped = 0.0
+    if late.any():
+        cols = cim[late]
+        dropped = float((np.abs(Cx @ T[:, cols]).max(axis=0) * qmax[late]).sum())
+    return X, note, dropped, (None if w is None else y)
 
 
 def _modal_plan(A, B, h, Cx):
@@ -612,7 +683,8 @@ def _modal_states(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout):
     from . import _kernels as kern
 
     if kern.HAVE_NUMBA:
-        kern.modal_run(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout)
+        kern.modal_run(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout,
+                       np.empty(mu.size, complex))
         return
     # numpy/scipy fallback: one first-order IIR filter per mode along time.
     from scipy.signal import lfilter
@@ -704,7 +776,7 @@ def _clearance_setup(ss: StateSpace, circuit):
 
 
 def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes, want=True,
-             T=None, velocities=True, nx=None, drive_y=None) -> TransientResult:
+             T=None, velocities=True, nx=None, drive_y=None, x_ready=None) -> TransientResult:
     """Outputs from the states: z = Z[k] (or modal coordinates, z = T Z[k]).
 
     Every output is affine in z, so each is one product of Z with the output
@@ -712,8 +784,8 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes,
     the drive that vanish are skipped.
     """
     def affine(C, Du=None, Dud=None, cols=None, Cz=None):   # C z + Du u + Dud u̇ at every sample
-        if Cz is not None:              # C z already formed (in the recurrence)
-            out = Cz.copy()
+        if Cz is not None:              # C z already formed (in the recurrence): used in place
+            out = Cz
         elif T is None:
             out = Z @ C.T
         elif cols is None:
@@ -728,7 +800,7 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes,
     udot = np.gradient(u, h) if u.size > 1 else np.zeros_like(u)
     clear = {e.name: (e, comp) for e, comp in backlash_elements(circuit)} if ss.extra is not None else {}
     velocities = velocities or bool(want) or bool(clear)
-    X = affine(ss.Cx, ss.Dx, cols=nx)
+    X = affine(ss.Cx, ss.Dx, cols=nx, Cz=x_ready)
     V = affine(ss.Cv, ss.Dv, ss.Ev) if velocities else None
     comp_of = {comp.name: e.name for e, comp in clear.values() if comp is not None}
     index = {n: i for i, n in enumerate(ss.nodes)}
