@@ -618,24 +618,7 @@ def _parts(scene: Scene) -> tuple:
     lk = scene.linkage
     bodies = scene.bodies
     tbodies = {t.body for t in scene.torsions}
-    parent = {b: b for b in bodies}
-
-    def find(b):
-        while parent[b] != b:
-            parent[b] = parent[parent[b]]
-            b = parent[b]
-        return b
-
-    for p in lk.pose:
-        if p in lk.ground:
-            continue
-        on = [b for b, pts in bodies.items() if p in pts and b not in tbodies]
-        for b in on[1:]:
-            parent[find(b)] = find(on[0])
-    groups: dict[str, list] = {}
-    for b in bodies:
-        groups.setdefault(find(b), []).append(b)
-    parts = [tuple(g) for g in groups.values()]
+    parts = _rigid_parts(lk, bodies, tbodies)
     for part in parts:
         n = len(part)
         pairs = 0
@@ -673,6 +656,26 @@ def _parts(scene: Scene) -> tuple:
         first = next(b for b, pts in bodies.items() if d.point in pts and b not in tbodies)
     parts.sort(key=lambda part: first not in part)
     return tuple(parts)
+
+
+def _rigid_parts(lk, bodies: dict, tbodies: set) -> list[tuple]:
+    """Bodies joined by a moving pin (not through a torsion body), as connected components.
+
+    Each part lists its bodies in the order of ``bodies``; the parts are in the
+    order of their first body.
+    """
+    import networkx as nx
+
+    g = nx.Graph()
+    g.add_nodes_from(bodies)
+    for p in lk.pose:
+        if p in lk.ground:
+            continue
+        on = [b for b, pts in bodies.items() if p in pts and b not in tbodies]
+        g.add_edges_from((on[0], b) for b in on[1:])
+    order = {b: i for i, b in enumerate(bodies)}
+    parts = [tuple(sorted(c, key=order.__getitem__)) for c in nx.connected_components(g)]
+    return sorted(parts, key=lambda part: order[part[0]])
 
 
 def load_scene(path: str | Path) -> Scene:
