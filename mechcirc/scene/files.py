@@ -85,7 +85,7 @@ SCENE_TABLES = ("masses", "elastic", "torsion", "loads", "drive", "analysis", "m
 _CLEARANCE = {"clearance": "half-width of the gap [m or rad], 0 for none",
               "clearance_law": "\"elastobacklash\" or \"dead-zone\""}
 #: The tables of a scene file, declared once (see :class:`mechcirc.sources.Table`);
-#: [moments] and [simulate] are declared by :mod:`mechcirc.scene.simfile`.
+#: [moments] and [simulate] keep their own key lists in :mod:`mechcirc.scene.simfile`.
 TABLES = {
     None: Table(None, dict(sorted({**LINKAGE_TABLES[None].keys,
                                    **{t: f"[{t}] (a scene table)" for t in SCENE_TABLES}}.items()))),
