@@ -37,7 +37,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 __all__ = ["Element", "Lever", "Drive", "Circuit", "element_mobility", "FRAME",
-           "ELEMENT_UNITS", "Law", "LAWS"]
+           "ELEMENT_UNITS", "Law", "LAWS", "node_names"]
 
 FRAME = "0"
 
@@ -249,13 +249,17 @@ class Circuit:
     @property
     def nodes(self) -> list[str]:
         """All node names, frame first, then in order of appearance."""
-        seen = {FRAME: None}
-        for e in self.elements:
-            seen.setdefault(e.n1)
-            seen.setdefault(e.n2)
-        for lv in self.levers:
-            for n in (lv.p1, lv.p2, lv.s1, lv.s2):
-                seen.setdefault(n)
-        seen.setdefault(self.drive.n1)
-        seen.setdefault(self.drive.n2)
-        return list(seen)
+        return list(dict.fromkeys([FRAME, *node_names(self.elements, self.levers),
+                                   self.drive.n1, self.drive.n2]))
+
+
+def node_names(elements, levers=()) -> list[str]:
+    """The node names of ``elements`` and ``levers``, in order of first appearance."""
+    seen: dict[str, None] = {}
+    for e in elements:
+        seen.setdefault(e.n1)
+        seen.setdefault(e.n2)
+    for lv in levers:
+        for n in (lv.p1, lv.p2, lv.s1, lv.s2):
+            seen.setdefault(n)
+    return list(seen)

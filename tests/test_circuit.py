@@ -60,3 +60,14 @@ def test_symbolic_leaf_evaluates_to_the_law():
         f = sympy.lambdify(sympy.Symbol("omega", positive=True), expr, "numpy")
         np.testing.assert_allclose(np.asarray(f(OMEGA), dtype=complex) * np.ones_like(OMEGA),
                                    HAND[kind](OMEGA, 1.0), rtol=1e-15)
+
+
+def test_nodes_frame_first_then_in_order_of_appearance():
+    from mechcirc.circuit import node_names
+    from mechcirc.topology import node_names as topology_node_names
+
+    c = mechcirc.parse("drive V d 0 velocity=1\nmass m a 0 1\nspring k b a 2\n"
+                       "lever L a 0 c 0 ratio=2\ndamper x c 0 1\n")
+    assert node_names(c.elements, c.levers) == ["a", "0", "b", "c"]
+    assert c.nodes == ["0", "a", "b", "c", "d"]
+    assert topology_node_names is node_names
