@@ -31,10 +31,16 @@ Conventions (DIGEST §1, Grigoriev et al. 2002):
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
+if TYPE_CHECKING:  # pragma: no cover - annotations of the attached methods only
+    from .nodal import NodalSystem
+    from .reduction import Node
+    from .resonances import Resonance
+    from .sweep import Sweep
 
 __all__ = ["Element", "Lever", "Drive", "Circuit", "element_mobility", "FRAME",
            "ELEMENT_UNITS", "Law", "LAWS", "node_names"]
@@ -214,6 +220,21 @@ class Circuit:
     source: str = "<string>"
     params: dict = field(default_factory=dict, compare=False)
     initial: tuple = ()
+
+    if TYPE_CHECKING:  # pragma: no cover
+        # What mechcirc._methods attaches, declared for editors and type checkers
+        # (tests/test_methods.py checks these signatures against the attached ones).
+        @property
+        def tree(self) -> Node: ...
+        @property
+        def unloaded(self) -> tuple[str, ...]: ...
+        @property
+        def nodal(self) -> NodalSystem: ...
+        def sweep(self, omega: ArrayLike, method: str = "auto") -> Sweep: ...
+        def resonances(self, omega_max: float | None = None) -> list[Resonance]: ...
+        def two_port(self, P1: str, P2: str, S1: str, S2: str, omega: ArrayLike,
+                     **kwargs): ...
+        def formula(self, **kwargs): ...
 
     def __getstate__(self):
         # Pickle the description only: the cached reduction tree nests as deep
