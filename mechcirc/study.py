@@ -80,7 +80,8 @@ from typing import Callable, Iterable
 from .errors import MechcircError, NetlistError
 from .limits import (MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS, MAX_STUDY_POINTS,
                      MAX_STUDY_SWEEP_POINTS, MAX_STUDY_WORK)
-from .sources import Table, brief, finite_number, load_toml, locate_path, unknown_key
+from .sources import (Table, brief, finite_number, load_toml, locate_path, number_error,
+                      unknown_key)
 
 __all__ = ["StudySpec", "load_spec", "parse_spec", "study_points", "run_point", "run_batch",
            "run_study", "StudyResult", "read_rows", "journal_path"]
@@ -154,8 +155,9 @@ def _omega(path, value, what) -> float:
 
 
 def _number(path, value, what) -> float:
-    if not finite_number(value):
-        _fail(path, f"{what} must be a finite number, got {brief(value)}")
+    bad = number_error(value, what)
+    if bad:
+        _fail(path, bad[0])
     return float(value)
 
 

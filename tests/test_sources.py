@@ -44,3 +44,16 @@ def test_locate_path_falls_back_to_a_sub_table_header():
     assert locate_path(text, ("random", "n")) == (2, 1)
     assert locate_path(text, ("random", "params", "eta", "max")) == (3, 17)
     assert locate_path(text, ("nothing",)) == (0, 0)
+
+
+def test_number_error_is_one_message_for_every_reader():
+    from mechcirc.sources import number_error
+
+    assert number_error(2.5, "x") is None and number_error(0, "x", positive=True,
+                                                           allow_zero=True) is None
+    assert number_error(True, "x") == ("x must be a finite number, got True", "a finite number")
+    assert number_error(0.0, "k [N/m]", positive=True) == \
+        ("k [N/m] must be a finite number > 0, got 0.0", "a finite number > 0")
+    assert number_error(-1, "c", positive=True, allow_zero=True)[1] == "a finite number ≥ 0"
+    msg, _ = number_error(10 ** 400, "m")
+    assert len(msg) < 120 and msg.endswith("...")      # a 400-digit integer, cut short
