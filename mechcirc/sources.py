@@ -268,7 +268,10 @@ class Table:
 
 
 def unknown_key(table: Table, entry: dict, occurrence: int = 0) -> tuple[str, str] | None:
-    """``(key, message)`` for the first key of ``entry`` that ``table`` does not declare, or None."""
+    """``(key, message)`` for the first key of ``entry`` that ``table`` does not declare.
+
+    None when every key is declared.
+    """
     for key in entry:
         if key not in table.keys:
             if table.name is None:

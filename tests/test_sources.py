@@ -12,7 +12,8 @@ ITEMS = Table("items", {"a": "x", "b": "y"}, array=True)
 
 def test_unknown_key_names_the_first_undeclared_key_in_file_order():
     assert unknown_key(OMEGA, {"min": 1, "max": 2}) is None
-    assert unknown_key(OMEGA, {"min": 1, "zz": 2, "aa": 3}) == ("zz", "unknown key 'zz' in [omega]")
+    assert unknown_key(OMEGA, {"min": 1, "zz": 2, "aa": 3}) == \
+        ("zz", "unknown key 'zz' in [omega]")
     assert unknown_key(TOP, {"colour": 1}) == ("colour", "unknown top-level key 'colour'")
     assert unknown_key(ITEMS, {"c": 1}, 2) == ("c", "unknown key 'c' in [[items]] #3")
     assert OMEGA.expected == "min, max" and ITEMS.header == "[[items]]"

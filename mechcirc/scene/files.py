@@ -89,7 +89,8 @@ _CLEARANCE = {"clearance": "half-width of the gap [m or rad], 0 for none",
 #: [moments] and [simulate] keep their own key lists in :mod:`mechcirc.scene.simfile`.
 TABLES = {
     None: Table(None, dict(sorted({**LINKAGE_TABLES[None].keys,
-                                   **{t: f"[{t}] (a scene table)" for t in SCENE_TABLES}}.items()))),
+                                   **{t: f"[{t}] (a scene table)" for t in SCENE_TABLES}
+                                   }.items()))),
     "elastic": Table("elastic", {"name": "element name (default: the link)",
                                  "link": "a binary link of [links]",
                                  "stiffness": "[N/m]", "damping": "[N·s/m], default 0",
