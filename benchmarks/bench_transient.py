@@ -178,8 +178,9 @@ def linear(n=100, steps=100_000, dt=1e-3, repeat=3):
     print("  CPU time of this process (medians): " + ", ".join(
         f"{k} {mcpu[k]:.3f} s" for k in ("x", "x_first", "nodes", "all", "modal", "block",
                                          "lsim", "dop")))
-    print(f"  ratios in CPU time, x of all nodes: lsim / mechcirc {mcpu['lsim'] / mcpu['x']:.1f}x; "
-          f"DOP853 / mechcirc {mcpu['dop'] / mcpu['x']:.1f}x; first call on a new circuit: "
+    print(f"  ratios in CPU time, x of all nodes: lsim / mechcirc "
+          f"{mcpu['lsim'] / mcpu['x']:.1f}x; DOP853 / mechcirc {mcpu['dop'] / mcpu['x']:.1f}x; "
+          f"first call on a new circuit: "
           f"lsim / mechcirc {mcpu['lsim'] / mcpu['x_first']:.1f}x "
           f"(wall {med['lsim'] / med['x_first']:.1f}x)")
 
