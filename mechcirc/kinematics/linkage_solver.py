@@ -115,15 +115,26 @@ _LAZY_FIELDS = frozenset(_STATE_FIELDS[5:])
 
 
 class _StateRows:
-    """Private copies of a motion's point arrays, from which states build their dicts."""
+    """Private copies of a motion's point arrays, from which states build their dicts.
+
+    The point kinematics are computed (and copied) when the first state's
+    first dictionary is asked for.
+    """
 
     def __init__(self, m):
         self.names, self.links, self.cranks = m.point_names, m.link_names, m.crank_links
+        self._motion = m
+
+    def _fill(self):
+        m = self._motion
         self.P, self.V, self.A = m.points.copy(), m.velocities.copy(), m.accelerations.copy()
         self.C = np.moveaxis(m.contributions, 0, 1).copy()
         self.w = m.qdot[:, 2::3].tolist()
+        self._motion = None
 
     def field(self, name, i):
+        if self._motion is not None:
+            self._fill()
         names = self.names
         if name == "points":
             return dict(zip(names, self.P[i]))
