@@ -200,9 +200,19 @@ def reduce_circuit(circuit: Circuit) -> Reduction:
 def reduce_network(elements, levers, a: str, b: str, *, drive_line: int = 0,
                    source: str = "<string>") -> Reduction:
     """Series–parallel reduction of ``elements`` and ``levers`` seen between nodes ``a`` and ``b``."""
-    edges = [_Edge(e.n1, e.n2, Leaf(e)) for e in elements]
     unloaded: list[str] = []
-    tree = _reduce(edges, list(levers), a, b, unloaded, drive_line, source)
+    if not levers:
+        # The common case, without the per-element ``_Edge`` records.
+        tree = _reduce_edges([e.n1 for e in elements], [e.n2 for e in elements],
+                             [Leaf(e) for e in elements], a, b, unloaded, drive_line, source)
+    else:
+        edges = [_Edge(e.n1, e.n2, Leaf(e)) for e in elements]
+        tree = _reduce(edges, list(levers), a, b, unloaded, drive_line, source)
+    if len(unloaded) > 1:
+        # In the order the elements were given (the fast path finds them by the
+        # order in which it strips dangling branches).
+        order = {e.name: i for i, e in enumerate(elements)}
+        unloaded.sort(key=lambda name: order.get(name, len(order)))
     return Reduction(tree, tuple(unloaded))
 
 
@@ -242,8 +252,220 @@ def _reduce(edges: list[_Edge], levers: list[Lever], a: str, b: str,
             f"lever(s) {', '.join(names)} couple parts of the network that are not "
             f"series–parallel reducible (secondary sides are not closed sub-networks); "
             f"nodes {', '.join(nodes)}", nodes=nodes, elements=names)
+    return _reduce_edges([e.n1 for e in edges], [e.n2 for e in edges],
+                         [e.node for e in edges], a, b, unloaded, drive_line, source)
+
+
+def _reduce_edges(n1s: list, n2s: list, nodes: list, a: str, b: str, unloaded: list[str],
+                  drive_line: int, source: str) -> Node:
+    """The tree of the two-poles ``nodes[i]`` between ``n1s[i]`` and ``n2s[i]``, seen from a → b.
+
+    One pass (:func:`_series_parallel_runs`) strips dangling branches and
+    reduces series and parallel pairs at once, building the flat nodes as it
+    goes.  If that does not end in one edge between ``a`` and ``b`` (an
+    unloaded part that is not itself series–parallel, a bridge, terminals
+    that are not connected), the network is pruned to the drive's biconnected
+    block first and reduced again, which also words the error.
+    """
+    found = _series_parallel_runs(n1s, n2s, nodes, a, b)
+    if found is not None:
+        root, dangling = found
+        for node in dangling:
+            unloaded.extend(el.name for el in leaves(_close(node, 1)[0]))
+        return root
+    edges = [_Edge(u, w, node) for u, w, node in zip(n1s, n2s, nodes)]
     edges = _prune(edges, a, b, unloaded, drive_line, source)
     return _flatten(_series_parallel(edges, a, b))
+
+
+class _Run:
+    """A series or parallel run being built: its operands, in the run's own
+    orientation (the edge's n1 → n2 when stored), with their signs.
+
+    ``kids`` and ``signs`` are lists, turned into deques the first time a long
+    run must grow at its front (so that growing stays O(1) per operand)."""
+
+    __slots__ = ("series", "kids", "signs")
+
+    def __init__(self, series: bool, kids: list, signs: list):
+        self.series, self.kids, self.signs = series, kids, signs
+
+    def prepend(self, kids: list, signs: list) -> None:
+        if type(self.kids) is list:
+            if len(self.kids) < 64:
+                self.kids[:0] = kids
+                self.signs[:0] = signs
+                return
+            self.kids, self.signs = deque(self.kids), deque(self.signs)
+        self.kids.extendleft(reversed(kids))
+        self.signs.extendleft(reversed(signs))
+
+
+def _close(node, sign: int):
+    """``(node, sign)`` as a finished child: a run becomes a flat Series/Parallel
+    turned to the parent's orientation (so that only leaves and lever
+    reflections carry signs), leaves keep theirs."""
+    if type(node) is not _Run:
+        return node, sign
+    if node.series:
+        if sign > 0:
+            return Series(tuple(node.kids), tuple(node.signs)), 1
+        return Series(tuple(reversed(node.kids)), tuple(-s for s in reversed(node.signs))), 1
+    if sign > 0:
+        return Parallel(tuple(node.kids), tuple(node.signs)), 1
+    return Parallel(tuple(node.kids), tuple(-s for s in node.signs)), 1
+
+
+def _operands(node, sign: int, series: bool):
+    """The operands ``node`` contributes to a run of kind ``series``, oriented by ``sign``:
+    its own operands when it is a run of the same kind, else itself closed."""
+    if type(node) is not _Run:
+        return [node], [sign]
+    if node.series == series:
+        if sign > 0:
+            return list(node.kids), list(node.signs)
+        if series:
+            return list(reversed(node.kids)), [-s for s in reversed(node.signs)]
+        return list(node.kids), [-s for s in node.signs]
+    c, s = _close(node, sign)
+    return [c], [s]
+
+
+def _join(x, sx: int, y, sy: int, series: bool):
+    """The run of kind ``series`` of ``x`` then ``y`` with signs ``sx``, ``sy`` relative
+    to the result's orientation ("path": for a series run, x's far end to y's).
+
+    Returns ``(run, flip)``; ``flip`` is True when the run is kept in the opposite
+    orientation to the path.  A run of the same kind is grown in place, the larger
+    of the two when both are runs, so the whole reduction stays linear (the run
+    then keeps its own orientation).
+    """
+    xr = type(x) is _Run and x.series == series
+    yr = type(y) is _Run and y.series == series
+    if xr and (not yr or len(x.kids) >= len(y.kids)):
+        if not series:
+            kids, signs = _operands(y, sy * sx, False)
+            x.kids.extend(kids)
+            x.signs.extend(signs)
+        elif sx > 0:
+            kids, signs = _operands(y, sy, True)
+            x.kids.extend(kids)
+            x.signs.extend(signs)
+        else:
+            # x runs against the path: in x's orientation y (reversed) comes first.
+            x.prepend(*_operands(y, -sy, True))
+        return x, sx < 0
+    if yr:
+        if not series:
+            y.prepend(*_operands(x, sx * sy, False))
+        elif sy > 0:
+            y.prepend(*_operands(x, sx, True))
+        else:
+            kids, signs = _operands(x, -sx, True)
+            y.kids.extend(kids)
+            y.signs.extend(signs)
+        return y, sy < 0
+    if type(x) is _Run:
+        x, sx = _close(x, sx)
+    if type(y) is _Run:
+        y, sy = _close(y, sy)
+    return _Run(series, [x, y], [sx, sy]), False
+
+
+def _series_parallel_runs(n1s: list, n2s: list, nodes: list, a: str, b: str):
+    """Dangling-branch stripping and series/parallel reduction in one worklist
+    pass on integer node ids.  Returns ``(root oriented a → b, dangling
+    two-poles)``, or None when it does not end in one edge between a and b."""
+    ids: dict = {}
+    U = [ids.setdefault(x, len(ids)) for x in n1s]
+    W = [ids.setdefault(x, len(ids)) for x in n2s]
+    if a not in ids or b not in ids or a == b:
+        return None
+    ia, ib = ids[a], ids[b]
+    N = len(ids)
+    E = list(nodes)
+    adj: list[dict] = [{} for _ in range(N)]
+    pair: dict[int, int] = {}
+    dangling: list = []
+    queue: deque[int] = deque()
+    for eid in range(len(E)):
+        u, w = U[eid], W[eid]
+        if u == w:
+            return None
+        key = u * N + w if u < w else w * N + u
+        old = pair.get(key)
+        if old is not None:
+            _merge_parallel(old, u, E[eid], U, W, E)
+            continue
+        pair[key] = eid
+        adj[u][eid] = None
+        adj[w][eid] = None
+    queue.extend(range(N))
+    while queue:
+        n = queue.popleft()
+        if n == ia or n == ib:
+            continue
+        edges = adj[n]
+        deg = len(edges)
+        if deg == 1:
+            (eid,) = edges
+            u, w = U[eid], W[eid]
+            far = w if u == n else u
+            del adj[u][eid], adj[w][eid]
+            del pair[u * N + w if u < w else w * N + u]
+            dangling.append(E[eid])
+            E[eid] = None
+            queue.append(far)
+            continue
+        if deg != 2:
+            continue
+        e1, e2 = edges
+        u1, w1 = U[e1], W[e1]
+        u2, w2 = U[e2], W[e2]
+        u = w1 if u1 == n else u1          # far end of e1
+        w = w2 if u2 == n else u2          # far end of e2
+        s1 = 1 if w1 == n else -1          # e1 runs u -> n ?
+        s2 = 1 if u2 == n else -1          # e2 runs n -> w ?
+        del adj[u1][e1], adj[w1][e1], adj[u2][e2], adj[w2][e2]
+        del pair[u1 * N + w1 if u1 < w1 else w1 * N + u1]
+        del pair[u2 * N + w2 if u2 < w2 else w2 * N + u2]
+        # The series run u -> w, kept in e1's slot.
+        run, flip = _join(E[e1], s1, E[e2], s2, True)
+        E[e2] = None
+        start, end = (w, u) if flip else (u, w)
+        if u == w:
+            # The series loop closes on itself: a dangling cycle (or the terminals).
+            return None
+        U[e1], W[e1], E[e1] = start, end, run
+        key = u * N + w if u < w else w * N + u
+        old = pair.get(key)
+        if old is not None:
+            _merge_parallel(old, start, run, U, W, E)
+            E[e1] = None
+        else:
+            pair[key] = e1
+            adj[u][e1] = None
+            adj[w][e1] = None
+        queue.append(u)
+        queue.append(w)
+    if len(pair) != 1:
+        return None
+    (eid,) = pair.values()
+    if {U[eid], W[eid]} != {ia, ib}:
+        return None
+    node, sign = _close(E[eid], 1 if U[eid] == ia else -1)
+    if sign < 0:
+        node = Series((node,), (-1,))
+    return node, dangling
+
+
+def _merge_parallel(old: int, u: int, node, U: list, W: list, E: list) -> None:
+    """Put ``node`` (running from ``u``) in parallel with edge ``old``."""
+    sign = 1 if U[old] == u else -1
+    run, flip = _join(E[old], 1, node, sign, False)
+    E[old] = run
+    if flip:
+        U[old], W[old] = W[old], U[old]
 
 
 def _secondary_part(lv: Lever, edges: list[_Edge], levers: list[Lever], a: str, b: str):
