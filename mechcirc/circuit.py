@@ -36,8 +36,8 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["Element", "Lever", "Drive", "Circuit", "element_mobility", "FRAME",
-           "ELEMENT_UNITS"]
+__all__ = ["Element", "Lever", "Drive", "Circuit", "element_mobility", "law_terms",
+           "ELEMENT_POWER", "FRAME", "ELEMENT_UNITS"]
 
 FRAME = "0"
 
@@ -88,8 +88,39 @@ class Element:
         return element_mobility(self.kind, self.value * self.eta, omega)
 
 
+#: The element laws, written once: K(ω) = (jω)^p / (value·η) with this p, and
+#: so the admittance 1/K = (value·η) · (jω)^−p.  mass: K = −j/(ωm); spring:
+#: K = jω/k; damper: K = 1/c (see the table above).
+ELEMENT_POWER: dict[str, int] = {"mass": -1, "spring": 1, "damper": 0}
+
+
+def law_terms(kind: str, scaled_value, admittance: bool = False) -> tuple:
+    """The law of one element kind as ``(real, inv, omega)`` with
+    K(ω) = real + j·(inv/ω + omega·ω), or 1/K(ω) in that form with ``admittance``.
+
+    ``scaled_value`` is value·η; pass a numpy float so that 1/0 = ∞ instead of
+    ZeroDivisionError (callers hold ``np.errstate``).  Exactly one term is nonzero.
+    Series–parallel reduction adds these terms over a node's leaves; nodal
+    analysis stamps the same laws (``nodal.stamps``).
+    """
+    try:
+        p = ELEMENT_POWER[kind]
+    except KeyError:
+        raise ValueError(f"unknown element kind {kind!r}") from None
+    if admittance:
+        p, c = -p, scaled_value
+    else:
+        c = 1.0 / scaled_value
+    # (jω)^1 = j·ω, (jω)^−1 = −j/ω, (jω)^0 = 1.
+    if p == 0:
+        return c, 0.0, 0.0
+    if p > 0:
+        return 0.0, 0.0, c
+    return 0.0, -c, 0.0
+
+
 def element_mobility(kind: str, scaled_value: float, omega: ArrayLike) -> NDArray[np.complex128]:
-    """K(ω) [m/(N·s)] of one element kind with value·η = ``scaled_value``.
+    """K(ω) [m/(N·s)] of one element kind with value·η = ``scaled_value`` (by :func:`law_terms`).
 
     ω = 0 gives K = ∞ for a mass and 0 for a spring (no warnings are raised;
     callers flag non-finite results).
@@ -97,16 +128,15 @@ def element_mobility(kind: str, scaled_value: float, omega: ArrayLike) -> NDArra
     omega = np.asarray(omega, dtype=float)
     out = np.zeros(omega.shape, dtype=complex)
     with np.errstate(divide="ignore", invalid="ignore"):
+        real, inv, om = law_terms(kind, np.float64(scaled_value))
         # Fill the real and imaginary parts separately: a complex product such
         # as 1j * inf would give nan + inf·j at ω = 0 instead of -j∞.
-        if kind == "mass":
-            out.imag = -1.0 / (omega * scaled_value)
-        elif kind == "spring":
-            out.imag = omega / scaled_value
-        elif kind == "damper":
-            out.real = 1.0 / scaled_value
-        else:
-            raise ValueError(f"unknown element kind {kind!r}")
+        if real:
+            out.real = real
+        elif inv:
+            out.imag = inv / omega
+        elif om:
+            out.imag = omega * om
     return out
 
 
@@ -127,6 +157,12 @@ class Lever:
     ratio: float
     line: int = 0
     col: int = 0
+
+    def reflect(self, K):
+        """K [m/(N·s)] of a sub-network on the secondary, seen from the primary: K / r².
+
+        Divided twice: r² overflows a float for r > 1.3e154."""
+        return K / self.ratio / self.ratio
 
 
 @dataclass(frozen=True)

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import gc
 import warnings
+import weakref
 from collections import deque
 from dataclasses import dataclass
 from typing import Iterator, Union
@@ -26,13 +27,13 @@ from typing import Iterator, Union
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .circuit import Circuit, Element, Lever
+from .circuit import ELEMENT_POWER, Circuit, Element, Lever, law_terms
 from .errors import NotSeriesParallelError, TopologyError, UnloadedElementWarning
 from .topology import check_frame_paths, loaded_groups, reachable
 
 __all__ = ["Leaf", "Series", "Parallel", "Reflect", "Node", "Reduction",
            "reduce_circuit", "reduce_network", "evaluate", "push_down", "leaves", "depth",
-           "postorder"]
+           "postorder", "plan", "Plan"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -749,6 +750,12 @@ def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: boo
     cancellation keeps a bound of a few hundred u.
     """
     omega = np.asarray(omega, dtype=float)
+    if not keep and _mode == "auto" and USE_KERNEL is not False:
+        p = plan(root)
+        if USE_KERNEL or _KERNEL or p.kind.size * omega.size >= KERNEL_MIN_WORK:
+            kernel = _kernel()
+            if kernel is not None:
+                return _evaluate_compiled(kernel, p, omega, error, condition)
     if not keep and _mode == "auto":
         # Fast pass with numpy's reciprocal as is; it gives NaN for 1/0 where
         # 1/0 = ∞ is wanted, and a NaN never disappears downstream: the points
@@ -774,11 +781,9 @@ def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: boo
                 continue
             if isinstance(node, Reflect):
                 child = _value_of(node.child, values, omega, inv_omega, track)
-                # Divide twice: ratio ** 2 overflows a Python float for ratio > 1.3e154.
-                r = node.lever.ratio
-                val = _Value(child.imaginary, child.array / r / r)
+                val = _Value(child.imaginary, node.lever.reflect(child.array))
                 if track:
-                    val.mag = child.mag / r / r
+                    val.mag = node.lever.reflect(child.mag)
                     # (a full array even over a single leaf, whose ρ is a scalar)
                     val.rho = np.broadcast_to(child.rho + 2 * _U, omega.shape).copy()
             else:
@@ -801,6 +806,152 @@ def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: boo
         rho[np.isnan(rho)] = np.inf
         return K, (rho / _U if condition and not error else rho)
     return K
+
+
+#: Evaluate with the compiled plan (:mod:`mechcirc._sp_kernel`) when numba is
+#: installed: None (default) once the kernel is loaded or when a call has at
+#: least :data:`KERNEL_MIN_WORK` node-points; True always; False never (the
+#: numpy path; tests compare the two).
+USE_KERNEL: bool | None = None
+#: Importing numba and loading the compiled kernel from its cache takes about
+#: 1 s once per process (0.7–1.1 s measured): below this many plan nodes × ω
+#: points (about 0.15 s of the numpy path) a sweep does not start it.
+KERNEL_MIN_WORK = 5_000_000
+_KERNEL: list = []
+
+
+def _kernel():
+    """The compiled plan evaluator, or None without numba (imported on first use)."""
+    if not _KERNEL:
+        from . import _sp_kernel
+
+        _KERNEL.append(_sp_kernel.evaluate_plan if _sp_kernel.HAVE_NUMBA else None)
+    return _KERNEL[0]
+
+
+@dataclass(frozen=True, eq=False)
+class Plan:
+    """A tree compiled into flat arrays for :mod:`mechcirc._sp_kernel` (see
+    :func:`plan`): one entry per series, parallel and lever node (and per leaf
+    that stands alone, at the root or under a lever), children first."""
+
+    kind: NDArray[np.int8]
+    cplx: NDArray[np.bool_]
+    c_real: NDArray[np.float64]
+    c_inv: NDArray[np.float64]
+    c_om: NDArray[np.float64]
+    e_real: NDArray[np.float64]
+    e_inv: NDArray[np.float64]
+    e_om: NDArray[np.float64]
+    mu: NDArray[np.float64]
+    kstart: NDArray[np.int64]
+    kids: NDArray[np.int64]
+    ratio: NDArray[np.float64]
+    slot: NDArray[np.int64]
+    n_slots: int
+
+    def arrays(self) -> tuple:
+        return (self.kind, self.cplx, self.c_real, self.c_inv, self.c_om, self.e_real,
+                self.e_inv, self.e_om, self.mu, self.kstart, self.kids, self.ratio,
+                self.slot, self.n_slots)
+
+
+_PLANS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
+def plan(root: Node) -> Plan:
+    """The evaluation plan of ``root``, built once per tree (linear in its size).
+
+    Each node's leaves are folded into three coefficients by the element laws
+    (:func:`_leaf_term`), with the constants of their error terms, exactly as
+    :func:`evaluate`'s numpy path forms them at every call.
+    """
+    found = _PLANS.get(root)
+    if found is not None:
+        return found
+    kind, cplx, coef, err, mu, kids, kstart, ratio = [], [], [], [], [], [], [0], []
+    index: dict[int, int] = {}
+
+    def emit(k, is_cplx, c, e, m, children, r=0.0):
+        kind.append(k)
+        cplx.append(is_cplx)
+        coef.append(c)
+        err.append(e)
+        mu.append(m)
+        kids.extend(children)
+        kstart.append(len(kids))
+        ratio.append(r)
+        return len(kind) - 1
+
+    def lone_leaf(e: Element) -> int:
+        real, inv, om = law_terms(e.kind, _scaled(e))
+        return emit(3, ELEMENT_POWER[e.kind] == 0, (real, inv, om), (0.0, 0.0, 0.0), _U, ())
+
+    with np.errstate(all="ignore"):
+        for node in postorder(root):
+            if isinstance(node, Leaf):
+                continue
+            if isinstance(node, Reflect):
+                c = node.child
+                ci = lone_leaf(c.element) if isinstance(c, Leaf) else index[id(c)]
+                index[id(node)] = emit(2, cplx[ci], (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), 0.0,
+                                       (ci,), float(node.lever.ratio))
+                continue
+            series = isinstance(node, Series)
+            acc = [0.0, 0.0, 0.0]          # slots 0 real, 1 ω, −1 1/ω, summed as _combine sums them
+            count = [0, 0, 0]
+            children = []
+            for c in node.children:
+                if isinstance(c, Leaf):
+                    slot, term = _leaf_term(c.element, series)
+                    acc[slot] += term
+                    count[slot] += 1
+                else:
+                    children.append(index[id(c)])
+            real, om, inv = acc[0], acc[1], acc[-1]
+            m = len(children) + (real != 0) + (inv != 0) + (om != 0)
+            m_u = m * _U
+            e = (abs(real) * ((count[0] + 2) * _U + m_u),
+                 abs(inv) * ((count[-1] + 4) * _U + m_u),
+                 abs(om) * ((count[1] + 4) * _U + m_u))
+            is_cplx = bool(real) or any(cplx[i] for i in children)
+            index[id(node)] = emit(0 if series else 1, is_cplx, (real, inv, om), e, m_u,
+                                   children)
+        if isinstance(root, Leaf):
+            lone_leaf(root.element)
+    # Postorder keeps every subtree contiguous, so a node's internal children are
+    # the top rows of a stack when it is reached: its value takes the first of them.
+    slot, height = [], 0
+    for i in range(len(kind)):
+        n_kids = kstart[i + 1] - kstart[i]
+        height -= n_kids
+        slot.append(height)
+        height += 1
+    n_slots = max(slot, default=0) + 1
+    coef_a = np.array(coef, dtype=float).reshape(-1, 3)
+    err_a = np.array(err, dtype=float).reshape(-1, 3)
+    out = Plan(np.array(kind, dtype=np.int8), np.array(cplx, dtype=bool),
+               coef_a[:, 0].copy(), coef_a[:, 1].copy(), coef_a[:, 2].copy(),
+               err_a[:, 0].copy(), err_a[:, 1].copy(), err_a[:, 2].copy(),
+               np.array(mu, dtype=float), np.array(kstart, dtype=np.int64),
+               np.array(kids, dtype=np.int64), np.array(ratio, dtype=float),
+               np.array(slot, dtype=np.int64), n_slots)
+    _PLANS[root] = out
+    return out
+
+
+def _evaluate_compiled(kernel, p: Plan, omega: NDArray, error: bool, condition: bool):
+    """:func:`evaluate` (without ``keep``) by the compiled plan."""
+    flat = np.ascontiguousarray(omega.ravel())
+    K = np.empty(flat.shape, dtype=complex)
+    track = error or condition
+    rho = np.empty(flat.shape if track else 0)
+    kernel(flat, *p.arrays(), track, K, rho)
+    K = K.reshape(omega.shape)
+    if not track:
+        return K
+    rho = rho.reshape(omega.shape)
+    return K, (rho / _U if condition and not error else rho)
 
 
 class _Value:
@@ -832,13 +983,13 @@ class _Value:
 def _value_of(node: Node, values: dict, omega, inv_omega, track: bool = False) -> _Value:
     if isinstance(node, Leaf):
         e = node.element
-        s = _scaled(e)
-        if e.kind == "mass":
-            v = _Value(True, inv_omega * (-1.0 / s))
-        elif e.kind == "spring":
-            v = _Value(True, omega * (1.0 / s))
+        real, inv, om = law_terms(e.kind, _scaled(e))
+        if ELEMENT_POWER[e.kind] < 0:
+            v = _Value(True, inv_omega * inv)
+        elif ELEMENT_POWER[e.kind] > 0:
+            v = _Value(True, omega * om)
         else:
-            v = _Value(False, np.full(omega.shape, 1.0 / s, dtype=complex))
+            v = _Value(False, np.full(omega.shape, real, dtype=complex))
         if track:
             v.mag = np.abs(v.array)
             v.rho = 4 * _U      # value·η, 1/s, 1/ω and the product
@@ -852,6 +1003,16 @@ def _scaled(e: Element) -> np.float64:
     return np.float64(e.value) * np.float64(e.eta)
 
 
+def _leaf_term(e: Element, series: bool) -> tuple[int, float]:
+    """Where element ``e`` enters a series node's impedance sum (``series``) or a
+    parallel node's admittance sum, and its coefficient there: slot 0 the real
+    part, +1 the part times ω, −1 the part times 1/ω (by :func:`~mechcirc.circuit.law_terms`)."""
+    real, inv, om = law_terms(e.kind, _scaled(e), admittance=not series)
+    p = ELEMENT_POWER[e.kind]
+    slot = p if series else -p
+    return slot, (real if slot == 0 else om if slot > 0 else inv)
+
+
 def _combine(node, values: dict, omega, inv_omega, track: bool = False,
              keep: bool = True, checked: bool = True) -> _Value:
     """Series: K = Σ K_i.  Parallel: 1/K = Σ 1/K_i.  Leaves are grouped by kind."""
@@ -861,23 +1022,15 @@ def _combine(node, values: dict, omega, inv_omega, track: bool = False,
     parts: list[_Value] = []
     for c in node.children:
         if isinstance(c, Leaf):
-            e = c.element
-            s = _scaled(e)
-            if e.kind == "damper":
-                real += 1.0 / s if series else s
+            slot, term = _leaf_term(c.element, series)
+            if slot == 0:
+                real += term
                 n_real += 1
-            elif e.kind == "mass":
-                if series:
-                    im_inv -= 1.0 / s           # K = -j/(ω m)
-                    n_inv += 1
-                else:
-                    im_omega += s               # Y = jωm
-                    n_omega += 1
-            elif series:
-                im_omega += 1.0 / s             # K = jω/k
+            elif slot > 0:
+                im_omega += term
                 n_omega += 1
             else:
-                im_inv -= s                     # Y = -jk/ω
+                im_inv += term
                 n_inv += 1
         else:
             parts.append(values[id(c)])
@@ -956,18 +1109,16 @@ def _combine(node, values: dict, omega, inv_omega, track: bool = False,
 
 
 def _through_reciprocal(rho: NDArray) -> NDArray:
-    """Relative error of 1/x̂ given |x̂ − x| ≤ ρ|x̂|: ρ / (1 − ρ), ∞ from ρ ≥ 1 on.
+    """Relative error of 1/x̂ given |x̂ − x| ≤ ρ|x̂|: ρ / (1 − ρ), ∞ from ρ ≥ 1 on (and for NaN).
 
-    Computed as 1 / max(1/ρ − 1, 0) in place (NaN → ∞); callers hold
-    ``np.errstate(all="ignore")``.
+    Callers hold ``np.errstate(all="ignore")``; :mod:`mechcirc._sp_kernel` computes the same.
     """
     if not (isinstance(rho, np.ndarray) and rho.ndim):
         # A scalar ρ (a leaf's, constant in ω: fuzz seed 599): work on an array.
         rho = np.atleast_1d(np.asarray(rho, dtype=float))
-    r = np.reciprocal(rho)
-    r -= 1.0
-    np.fmax(r, 0.0, out=r)
-    return np.reciprocal(r, out=r)
+    out = rho / (1.0 - rho)
+    out[~(rho < 1.0)] = np.inf
+    return out
 
 
 def _reciprocal(K: NDArray[np.complex128]) -> NDArray[np.complex128]:
