@@ -871,6 +871,7 @@ def plan(root: Node) -> Plan:
         return found
     kind, cplx, coef, err, mu, kids, kstart, ratio = [], [], [], [], [], [], [0], []
     index: dict[int, int] = {}
+    U = float(_U)
 
     def emit(k, is_cplx, c, e, m, children, r=0.0):
         kind.append(k)
@@ -885,7 +886,8 @@ def plan(root: Node) -> Plan:
 
     def lone_leaf(e: Element) -> int:
         real, inv, om = law_terms(e.kind, _scaled(e))
-        return emit(3, ELEMENT_POWER[e.kind] == 0, (real, inv, om), (0.0, 0.0, 0.0), _U, ())
+        return emit(3, ELEMENT_POWER[e.kind] == 0, (float(real), float(inv), float(om)),
+                    (0.0, 0.0, 0.0), U, ())
 
     with np.errstate(all="ignore"):
         for node in postorder(root):
@@ -903,17 +905,17 @@ def plan(root: Node) -> Plan:
             children = []
             for c in node.children:
                 if isinstance(c, Leaf):
-                    slot, term = _leaf_term(c.element, series)
+                    slot, term = _leaf_term(c.element, series, fast=True)
                     acc[slot] += term
                     count[slot] += 1
                 else:
                     children.append(index[id(c)])
             real, om, inv = acc[0], acc[1], acc[-1]
             m = len(children) + (real != 0) + (inv != 0) + (om != 0)
-            m_u = m * _U
-            e = (abs(real) * ((count[0] + 2) * _U + m_u),
-                 abs(inv) * ((count[-1] + 4) * _U + m_u),
-                 abs(om) * ((count[1] + 4) * _U + m_u))
+            m_u = m * U
+            e = (abs(real) * ((count[0] + 2) * U + m_u),
+                 abs(inv) * ((count[-1] + 4) * U + m_u),
+                 abs(om) * ((count[1] + 4) * U + m_u))
             is_cplx = bool(real) or any(cplx[i] for i in children)
             index[id(node)] = emit(0 if series else 1, is_cplx, (real, inv, om), e, m_u,
                                    children)
@@ -1003,11 +1005,22 @@ def _scaled(e: Element) -> np.float64:
     return np.float64(e.value) * np.float64(e.eta)
 
 
-def _leaf_term(e: Element, series: bool) -> tuple[int, float]:
+def _leaf_term(e: Element, series: bool, fast: bool = False) -> tuple[int, float]:
     """Where element ``e`` enters a series node's impedance sum (``series``) or a
     parallel node's admittance sum, and its coefficient there: slot 0 the real
-    part, +1 the part times ω, −1 the part times 1/ω (by :func:`~mechcirc.circuit.law_terms`)."""
-    real, inv, om = law_terms(e.kind, _scaled(e), admittance=not series)
+    part, +1 the part times ω, −1 the part times 1/ω (by :func:`~mechcirc.circuit.law_terms`).
+
+    ``fast``: in Python floats (the same IEEE operations as numpy scalars, without
+    their per-operation overhead), numpy's only where value·η is 0 (1/0 = ∞).
+    """
+    if fast:
+        try:
+            real, inv, om = law_terms(e.kind, e.value * e.eta, admittance=not series)
+        except ZeroDivisionError:
+            real, inv, om = (float(t) for t in
+                             law_terms(e.kind, _scaled(e), admittance=not series))
+    else:
+        real, inv, om = law_terms(e.kind, _scaled(e), admittance=not series)
     p = ELEMENT_POWER[e.kind]
     slot = p if series else -p
     return slot, (real if slot == 0 else om if slot > 0 else inv)
