@@ -385,74 +385,65 @@ def _series_parallel_runs(n1s: list, n2s: list, nodes: list, a: str, b: str):
     ia, ib = ids[a], ids[b]
     N = len(ids)
     E = list(nodes)
+    # adj[n] maps each neighbour of node n to the one edge between them (a second
+    # edge between the same two nodes is merged in parallel at once).
     adj: list[dict] = [{} for _ in range(N)]
-    pair: dict[int, int] = {}
-    dangling: list = []
-    queue: deque[int] = deque()
+    alive = 0
     for eid in range(len(E)):
         u, w = U[eid], W[eid]
         if u == w:
             return None
-        key = u * N + w if u < w else w * N + u
-        old = pair.get(key)
+        au = adj[u]
+        old = au.get(w)
         if old is not None:
             _merge_parallel(old, u, E[eid], U, W, E)
+            E[eid] = None
             continue
-        pair[key] = eid
-        adj[u][eid] = None
-        adj[w][eid] = None
-    queue.extend(range(N))
+        au[w] = eid
+        adj[w][u] = eid
+        alive += 1
+    dangling: list = []
+    queue: deque[int] = deque(range(N))
+    pop, push = queue.popleft, queue.append
     while queue:
-        n = queue.popleft()
+        n = pop()
         if n == ia or n == ib:
             continue
-        edges = adj[n]
-        deg = len(edges)
-        if deg == 1:
-            (eid,) = edges
-            u, w = U[eid], W[eid]
-            far = w if u == n else u
-            del adj[u][eid], adj[w][eid]
-            del pair[u * N + w if u < w else w * N + u]
+        an = adj[n]
+        deg = len(an)
+        if deg == 2:
+            (u, e1), (w, e2) = an.items()          # far ends u (of e1) and w (of e2)
+            s1 = 1 if W[e1] == n else -1           # e1 runs u -> n ?
+            s2 = 1 if U[e2] == n else -1           # e2 runs n -> w ?
+            an.clear()
+            au, aw = adj[u], adj[w]
+            del au[n], aw[n]
+            # The series run u -> w, kept in e1's slot.
+            run, flip = _join(E[e1], s1, E[e2], s2, True)
+            E[e2] = None
+            alive -= 1
+            start, end = (w, u) if flip else (u, w)
+            old = au.get(w)
+            if old is not None:
+                E[e1] = None
+                _merge_parallel(old, start, run, U, W, E)
+                alive -= 1
+            else:
+                U[e1], W[e1], E[e1] = start, end, run
+                au[w] = e1
+                aw[u] = e1
+            push(u)
+            push(w)
+        elif deg == 1:
+            ((far, eid),) = an.items()
+            an.clear()
+            del adj[far][n]
             dangling.append(E[eid])
             E[eid] = None
-            queue.append(far)
-            continue
-        if deg != 2:
-            continue
-        e1, e2 = edges
-        u1, w1 = U[e1], W[e1]
-        u2, w2 = U[e2], W[e2]
-        u = w1 if u1 == n else u1          # far end of e1
-        w = w2 if u2 == n else u2          # far end of e2
-        s1 = 1 if w1 == n else -1          # e1 runs u -> n ?
-        s2 = 1 if u2 == n else -1          # e2 runs n -> w ?
-        del adj[u1][e1], adj[w1][e1], adj[u2][e2], adj[w2][e2]
-        del pair[u1 * N + w1 if u1 < w1 else w1 * N + u1]
-        del pair[u2 * N + w2 if u2 < w2 else w2 * N + u2]
-        # The series run u -> w, kept in e1's slot.
-        run, flip = _join(E[e1], s1, E[e2], s2, True)
-        E[e2] = None
-        start, end = (w, u) if flip else (u, w)
-        if u == w:
-            # The series loop closes on itself: a dangling cycle (or the terminals).
-            return None
-        U[e1], W[e1], E[e1] = start, end, run
-        key = u * N + w if u < w else w * N + u
-        old = pair.get(key)
-        if old is not None:
-            _merge_parallel(old, start, run, U, W, E)
-            E[e1] = None
-        else:
-            pair[key] = e1
-            adj[u][e1] = None
-            adj[w][e1] = None
-        queue.append(u)
-        queue.append(w)
-    if len(pair) != 1:
-        return None
-    (eid,) = pair.values()
-    if {U[eid], W[eid]} != {ia, ib}:
+            alive -= 1
+            push(far)
+    eid = adj[ia].get(ib)
+    if alive != 1 or eid is None:
         return None
     node, sign = _close(E[eid], 1 if U[eid] == ia else -1)
     if sign < 0:
