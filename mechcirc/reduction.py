@@ -850,85 +850,129 @@ class Plan:
 _PLANS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
 
 
+_KIND_CODE = {kind: i for i, kind in enumerate(ELEMENT_POWER)}
+
+
+def _leaf_table() -> tuple:
+    """Arrays indexed ``[kind code, series]`` of slot, coefficient and ``divides``,
+    read off :func:`~mechcirc.circuit.law_terms` at unit value: a leaf's term is
+    coefficient / (value·η) when ``divides`` (an impedance, in a series node),
+    else coefficient · (value·η); slots as in :func:`_leaf_term` (0 real, +1 ω,
+    −1 1/ω)."""
+    slot = np.zeros((len(_KIND_CODE), 2), dtype=np.int64)
+    coef = np.zeros((len(_KIND_CODE), 2))
+    for kind, code in _KIND_CODE.items():
+        p = ELEMENT_POWER[kind]
+        for series in (0, 1):
+            sl = p if series else -p
+            real, inv, om = law_terms(kind, 1.0, admittance=not series)
+            slot[code, series] = sl
+            coef[code, series] = real if sl == 0 else om if sl > 0 else inv
+    return slot, coef
+
+
+_LEAF_SLOT, _LEAF_COEF = _leaf_table()
+
+
 def plan(root: Node) -> Plan:
     """The evaluation plan of ``root``, built once per tree (linear in its size).
 
     Each node's leaves are folded into three coefficients by the element laws
-    (:func:`_leaf_term`), with the constants of their error terms, exactly as
-    :func:`evaluate`'s numpy path forms them at every call.
+    (:func:`~mechcirc.circuit.law_terms`), with the constants of their error
+    terms, exactly as :func:`evaluate`'s numpy path forms them at every call
+    (the same IEEE operations in the same order, here vectorised over the leaves).
     """
     found = _PLANS.get(root)
     if found is not None:
         return found
-    kind, cplx, coef, err, mu, kids, kstart, ratio = [], [], [], [], [], [], [0], []
+    kind: list[int] = []
+    kids: list[int] = []
+    kstart = [0]
+    ratio: list[float] = []
+    leaf_of: list[int] = []          # the node each folded leaf belongs to
+    leaf_el: list[Element] = []
     index: dict[int, int] = {}
-    U = float(_U)
-
-    def emit(k, is_cplx, c, e, m, children, r=0.0):
-        kind.append(k)
-        cplx.append(is_cplx)
-        coef.append(c)
-        err.append(e)
-        mu.append(m)
-        kids.extend(children)
-        kstart.append(len(kids))
-        ratio.append(r)
-        return len(kind) - 1
 
     def lone_leaf(e: Element) -> int:
-        real, inv, om = law_terms(e.kind, _scaled(e))
-        return emit(3, ELEMENT_POWER[e.kind] == 0, (float(real), float(inv), float(om)),
-                    (0.0, 0.0, 0.0), U, ())
+        # A leaf at the root or under a lever: a node of its own (kind 3),
+        # holding the leaf as a one-term series node would.
+        kind.append(3)
+        kstart.append(len(kids))
+        ratio.append(0.0)
+        leaf_of.append(len(kind) - 1)
+        leaf_el.append(e)
+        return len(kind) - 1
 
+    for node in postorder(root):
+        cls = type(node)
+        if cls is Leaf:
+            continue
+        if cls is Reflect:
+            c = node.child
+            ci = lone_leaf(c.element) if type(c) is Leaf else index[id(c)]
+            kind.append(2)
+            kids.append(ci)
+            kstart.append(len(kids))
+            ratio.append(float(node.lever.ratio))
+            index[id(node)] = len(kind) - 1
+            continue
+        me = len(kind)
+        kind.append(0 if cls is Series else 1)
+        for c in node.children:
+            if type(c) is Leaf:
+                leaf_of.append(me)
+                leaf_el.append(c.element)
+            else:
+                kids.append(index[id(c)])
+        kstart.append(len(kids))
+        ratio.append(0.0)
+        index[id(node)] = me
+    if type(root) is Leaf:
+        lone_leaf(root.element)
+    M = len(kind)
+    kind_a = np.array(kind, dtype=np.int8)
+    kstart_a = np.array(kstart, dtype=np.int64)
+    kids_a = np.array(kids, dtype=np.int64)
+    owner = np.array(leaf_of, dtype=np.int64)
+    code = np.array([_KIND_CODE[e.kind] for e in leaf_el], dtype=np.int64)
+    scaled = np.array([e.value for e in leaf_el], dtype=float) * \
+        np.array([e.eta for e in leaf_el], dtype=float)
+    series = (kind_a[owner] != 1).astype(np.int64)
+    slot = _LEAF_SLOT[code, series]
+    coef = _LEAF_COEF[code, series]
     with np.errstate(all="ignore"):
-        for node in postorder(root):
-            if isinstance(node, Leaf):
-                continue
-            if isinstance(node, Reflect):
-                c = node.child
-                ci = lone_leaf(c.element) if isinstance(c, Leaf) else index[id(c)]
-                index[id(node)] = emit(2, cplx[ci], (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), 0.0,
-                                       (ci,), float(node.lever.ratio))
-                continue
-            series = isinstance(node, Series)
-            acc = [0.0, 0.0, 0.0]          # slots 0 real, 1 ω, −1 1/ω, summed as _combine sums them
-            count = [0, 0, 0]
-            children = []
-            for c in node.children:
-                if isinstance(c, Leaf):
-                    slot, term = _leaf_term(c.element, series, fast=True)
-                    acc[slot] += term
-                    count[slot] += 1
-                else:
-                    children.append(index[id(c)])
-            real, om, inv = acc[0], acc[1], acc[-1]
-            m = len(children) + (real != 0) + (inv != 0) + (om != 0)
-            m_u = m * U
-            e = (abs(real) * ((count[0] + 2) * U + m_u),
-                 abs(inv) * ((count[-1] + 4) * U + m_u),
-                 abs(om) * ((count[1] + 4) * U + m_u))
-            is_cplx = bool(real) or any(cplx[i] for i in children)
-            index[id(node)] = emit(0 if series else 1, is_cplx, (real, inv, om), e, m_u,
-                                   children)
-        if isinstance(root, Leaf):
-            lone_leaf(root.element)
+        term = np.where(series == 1, coef / scaled, coef * scaled)
+        # Summed in child order from 0.0, as _combine sums them (ufunc.at is
+        # unbuffered and applies the terms in the order given).
+        acc = np.zeros((M, 3))
+        col = slot % 3                       # 0 real, 1 ω, 2 (= −1) 1/ω
+        np.add.at(acc, (owner, col), term)
+        count = np.zeros((M, 3), dtype=np.int64)
+        np.add.at(count, (owner, col), 1)
+        real, om, inv = acc[:, 0].copy(), acc[:, 1].copy(), acc[:, 2].copy()
+        U = float(_U)
+        n_kids = np.diff(kstart_a)
+        m_u = (n_kids + (real != 0) + (inv != 0) + (om != 0)) * U
+        e_real = np.abs(real) * ((count[:, 0] + 2) * U + m_u)
+        e_inv = np.abs(inv) * ((count[:, 2] + 4) * U + m_u)
+        e_om = np.abs(om) * ((count[:, 1] + 4) * U + m_u)
+    lever = kind_a == 2
+    m_u[lever] = 0.0
+    # A node has a real part if its leaves give one or any child has one.
+    has = ((real != 0) | np.isnan(real)).tolist()
+    ks, kd = kstart, kids
+    for i in range(M):
+        if not has[i]:
+            for q in range(ks[i], ks[i + 1]):
+                if has[kd[q]]:
+                    has[i] = True
+                    break
     # Postorder keeps every subtree contiguous, so a node's internal children are
     # the top rows of a stack when it is reached: its value takes the first of them.
-    slot, height = [], 0
-    for i in range(len(kind)):
-        n_kids = kstart[i + 1] - kstart[i]
-        height -= n_kids
-        slot.append(height)
-        height += 1
-    n_slots = max(slot, default=0) + 1
-    coef_a = np.array(coef, dtype=float).reshape(-1, 3)
-    err_a = np.array(err, dtype=float).reshape(-1, 3)
-    out = Plan(np.array(kind, dtype=np.int8), np.array(cplx, dtype=bool),
-               coef_a[:, 0].copy(), coef_a[:, 1].copy(), coef_a[:, 2].copy(),
-               err_a[:, 0].copy(), err_a[:, 1].copy(), err_a[:, 2].copy(),
-               np.array(mu, dtype=float), np.array(kstart, dtype=np.int64),
-               np.array(kids, dtype=np.int64), np.array(ratio, dtype=float),
-               np.array(slot, dtype=np.int64), n_slots)
+    stack_slot = np.cumsum(1 - n_kids) - 1
+    out = Plan(kind_a, np.array(has, dtype=bool), real, inv, om, e_real, e_inv, e_om, m_u,
+               kstart_a, kids_a, np.array(ratio), stack_slot.astype(np.int64),
+               int(stack_slot.max(initial=0)) + 1)
     _PLANS[root] = out
     return out
 
