@@ -45,7 +45,10 @@ def _recip(a, b):
 
 @jit_inline
 def _through_reciprocal(rho):
-    """ρ/(1 − ρ): the relative error of 1/x̂ given that of x̂; ∞ from ρ ≥ 1 on, and for NaN."""
+    """A bound of the relative error of 1/x̂ given that of x̂, ρ/(1 − ρ): ρ + 2ρ² for
+    ρ ≤ 1/2 (≥ ρ/(1 − ρ) there, without a division), ∞ from ρ ≥ 1 on and for NaN."""
+    if rho <= 0.5:
+        return rho + 2.0 * rho * rho
     if rho < 1.0:
         return rho / (1.0 - rho)
     return math.inf
@@ -58,6 +61,95 @@ def _abs(a, b):
     if 1e-150 < big < 1e150:
         return math.sqrt(a * a + b * b)
     return math.hypot(a, b)
+
+
+@jit_inline
+def _children(i, nb, series, kstart, kids, slot, cplx, re, im, ai, cr, ci, has_i, has_c):
+    """Add node i's internal children (impedances in series, admittances in
+    parallel) to the complex sum (cr, ci) or the imaginary one (ai)."""
+    for q in range(kstart[i], kstart[i + 1]):
+        cn = kids[q]
+        c = slot[cn]
+        if cplx[cn]:
+            if series:
+                if has_c:
+                    for j in range(nb):
+                        cr[j] += re[c, j]
+                        ci[j] += im[c, j]
+                else:
+                    for j in range(nb):
+                        cr[j] = re[c, j]
+                        ci[j] = im[c, j]
+            else:
+                if has_c:
+                    for j in range(nb):
+                        tr, ti = _recip(re[c, j], im[c, j])
+                        cr[j] += tr
+                        ci[j] += ti
+                else:
+                    for j in range(nb):
+                        cr[j], ci[j] = _recip(re[c, j], im[c, j])
+            has_c = True
+        else:
+            if series:
+                if has_i:
+                    for j in range(nb):
+                        ai[j] += im[c, j]
+                else:
+                    for j in range(nb):
+                        ai[j] = im[c, j]
+            else:
+                if has_i:
+                    for j in range(nb):
+                        ai[j] += -1.0 / im[c, j]
+                else:
+                    for j in range(nb):
+                        ai[j] = -1.0 / im[c, j]
+            has_i = True
+    return has_i, has_c
+
+
+@jit_inline
+def _children_with_error(i, nb, series, m_u, kstart, kids, slot, cplx, re, im, mg, ig, rh,
+                         ai, cr, ci, bb, has_i, has_c, have_b):
+    """:func:`_children` and, in the same loop, each child's term of the error
+    bound: |tᵢ|(ρᵢ + m·u) in series, |1/Kᵢ|(ρᵢ/(1 − ρᵢ) + 4u + m·u) in parallel."""
+    for q in range(kstart[i], kstart[i + 1]):
+        cn = kids[q]
+        c = slot[cn]
+        cc = cplx[cn]
+        first_c = cc and not has_c
+        first_i = not cc and not has_i
+        for j in range(nb):
+            if series:
+                tr = re[c, j]
+                ti = im[c, j]
+                t = (rh[c, j] + m_u) * mg[c, j]
+            else:
+                if cc:
+                    tr, ti = _recip(re[c, j], im[c, j])
+                else:
+                    tr = 0.0
+                    ti = -1.0 / im[c, j]
+                t = (_through_reciprocal(rh[c, j]) + (_U_RECIP + m_u)) * ig[c, j]
+            if cc:
+                if first_c:
+                    cr[j] = tr
+                    ci[j] = ti
+                else:
+                    cr[j] += tr
+                    ci[j] += ti
+            elif first_i:
+                ai[j] = ti
+            else:
+                ai[j] += ti
+            bb[j] = bb[j] + t if have_b else t
+        have_b = True
+        if cc:
+            has_c = True
+        else:
+            has_i = True
+    return has_i, has_c
 
 
 #: Points per block: every node is evaluated over a block of ω at once, so the
@@ -86,7 +178,8 @@ def evaluate_plan(omega, kind, cplx, c_real, c_inv, c_om, e_real, e_inv, e_om, m
     B = BLOCK
     re = np.empty((n_slots, B))
     im = np.empty((n_slots, B))
-    mg = np.empty((n_slots, B))
+    mg = np.empty((n_slots, B))       # |K| of each node
+    ig = np.empty((n_slots, B))       # 1/|K| = |Y| (a parallel parent's weight)
     rh = np.empty((n_slots, B))
     ai = np.empty(B)
     cr = np.empty(B)
@@ -111,6 +204,7 @@ def evaluate_plan(omega, kind, cplx, c_real, c_inv, c_om, e_real, e_inv, e_om, m
                 if want_error:
                     for j in range(nb):
                         mg[s, j] = mg[c, j] / r / r
+                        ig[s, j] = ig[c, j] * r * r
                         rh[s, j] = rh[c, j] + 2 * _U
                 continue
             series = k != 1           # 0 series, 3 a single leaf
@@ -146,57 +240,17 @@ def evaluate_plan(omega, kind, cplx, c_real, c_inv, c_om, e_real, e_inv, e_om, m
                             bb[j] = e_om[i] * w[j]
                     have_b = True
                 has_i = True
-            for q in range(kstart[i], kstart[i + 1]):
-                cn = kids[q]
-                c = slot[cn]
-                if cplx[cn]:
-                    if series:
-                        if has_c:
-                            for j in range(nb):
-                                cr[j] += re[c, j]
-                                ci[j] += im[c, j]
-                        else:
-                            for j in range(nb):
-                                cr[j] = re[c, j]
-                                ci[j] = im[c, j]
-                    else:
-                        if has_c:
-                            for j in range(nb):
-                                tr, ti = _recip(re[c, j], im[c, j])
-                                cr[j] += tr
-                                ci[j] += ti
-                        else:
-                            for j in range(nb):
-                                cr[j], ci[j] = _recip(re[c, j], im[c, j])
-                    has_c = True
-                else:
-                    if series:
-                        if has_i:
-                            for j in range(nb):
-                                ai[j] += im[c, j]
-                        else:
-                            for j in range(nb):
-                                ai[j] = im[c, j]
-                    else:
-                        if has_i:
-                            for j in range(nb):
-                                ai[j] += -1.0 / im[c, j]
-                        else:
-                            for j in range(nb):
-                                ai[j] = -1.0 / im[c, j]
-                    has_i = True
-                if want_error:
-                    if series:
-                        for j in range(nb):
-                            t = (rh[c, j] + m_u) * mg[c, j]
-                            bb[j] = bb[j] + t if have_b else t
-                    else:
-                        for j in range(nb):
-                            t = (_through_reciprocal(rh[c, j]) + (_U_RECIP + m_u)) / mg[c, j]
-                            bb[j] = bb[j] + t if have_b else t
-                    have_b = True
+            if want_error:
+                has_i, has_c = _children_with_error(
+                    i, nb, series, m_u, kstart, kids, slot, cplx, re, im, mg, ig, rh,
+                    ai, cr, ci, bb, has_i, has_c, have_b)
+                have_b = have_b or kstart[i + 1] > kstart[i]
+            else:
+                has_i, has_c = _children(i, nb, series, kstart, kids, slot, cplx, re, im,
+                                         ai, cr, ci, has_i, has_c)
             real = c_real[i]
-            if real != 0.0 or real != real:
+            with_real = real != 0.0 or real != real
+            if with_real:
                 if has_c:
                     for j in range(nb):
                         cr[j] += real
@@ -209,46 +263,59 @@ def evaluate_plan(omega, kind, cplx, c_real, c_inv, c_om, e_real, e_inv, e_om, m
                 for j in range(nb):
                     ai[j] = 0.0
                 has_i = True
-            if has_c:
-                if has_i:
-                    for j in range(nb):
-                        ci[j] += ai[j]
-                if series:
-                    for j in range(nb):
-                        re[s, j] = cr[j]
-                        im[s, j] = ci[j]
-                else:
-                    for j in range(nb):
-                        re[s, j], im[s, j] = _recip(cr[j], ci[j])
-            else:
-                if series:
-                    for j in range(nb):
-                        re[s, j] = 0.0
-                        im[s, j] = ai[j]
-                else:
-                    for j in range(nb):
-                        re[s, j] = 0.0
-                        im[s, j] = -1.0 / ai[j]
-            if want_error:
-                if not have_b:
-                    for j in range(nb):
-                        bb[j] = 0.0
-                if real != 0.0 or real != real:
-                    for j in range(nb):
-                        bb[j] += e_real[i]
+            if has_c and has_i:
                 for j in range(nb):
-                    mag = _abs(cr[j], ci[j]) if has_c else abs(ai[j])
-                    rho = bb[j] / mag
-                    if k == 3:
-                        # A leaf alone: value·η, 1/s, 1/ω and the product.
-                        mg[s, j] = mag
-                        rh[s, j] = 4 * _U
-                    elif series:
-                        mg[s, j] = mag
-                        rh[s, j] = rho
+                    ci[j] += ai[j]
+            if not want_error:
+                if has_c:
+                    if series:
+                        for j in range(nb):
+                            re[s, j] = cr[j]
+                            im[s, j] = ci[j]
                     else:
-                        rh[s, j] = _through_reciprocal(rho) + _U_RECIP
-                        mg[s, j] = 1.0 / mag
+                        for j in range(nb):
+                            re[s, j], im[s, j] = _recip(cr[j], ci[j])
+                else:
+                    if series:
+                        for j in range(nb):
+                            re[s, j] = 0.0
+                            im[s, j] = ai[j]
+                    else:
+                        for j in range(nb):
+                            re[s, j] = 0.0
+                            im[s, j] = -1.0 / ai[j]
+                continue
+            extra = e_real[i] if with_real else 0.0
+            for j in range(nb):
+                b = bb[j] if have_b else 0.0
+                if with_real:
+                    b += extra
+                if has_c:
+                    sr = cr[j]
+                    si = ci[j]
+                    mag = _abs(sr, si)
+                else:
+                    sr = 0.0
+                    si = ai[j]
+                    mag = abs(si)
+                inv = 1.0 / mag
+                rho = b * inv
+                if series:
+                    re[s, j] = sr
+                    im[s, j] = si
+                    mg[s, j] = mag
+                    ig[s, j] = inv
+                    # A leaf alone (k = 3): value·η, 1/s, 1/ω and the product.
+                    rh[s, j] = 4 * _U if k == 3 else rho
+                else:
+                    if has_c:
+                        re[s, j], im[s, j] = _recip(sr, si)
+                    else:
+                        re[s, j] = 0.0
+                        im[s, j] = -1.0 / si
+                    rh[s, j] = _through_reciprocal(rho) + _U_RECIP
+                    mg[s, j] = inv
+                    ig[s, j] = mag
         top = slot[M - 1]
         for j in range(nb):
             K[j0 + j] = complex(re[top, j], im[top, j])

@@ -733,7 +733,8 @@ def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: boo
         |Ŝ − S| ≤ Σ |tᵢ| (ρᵢ + m·u),     ρ(S) = that / |S|,
 
     where a leaf group of n same-signed scalars has ρ = (n + 2)·u, a reciprocal
-    turns ρ into ρ/(1 − ρ) + 4u (∞ from ρ ≥ 1 on: no digit is known) and a
+    turns ρ into ρ/(1 − ρ) + 4u (taken as ρ + 2ρ² + 4u while ρ ≤ 1/2; ∞ from ρ ≥ 1 on:
+    no digit is known) and a
     lever's division by r² adds 2u.  ρ is carried relative to the computed
     values, so only the rounding of each addition (the m·u term) is first order.  Cancellation at a node
     (Σ|tᵢ| ≫ |S|) raises the bound there; the children's errors are weighted by
@@ -1143,7 +1144,8 @@ def _combine(node, values: dict, omega, inv_omega, track: bool = False,
         if real:
             bound += abs(real) * ((n_real + 2) * _U + mu)
         mag = np.abs(total.array)
-        bound /= mag
+        inv = np.reciprocal(mag)
+        bound *= inv
         rho = bound
         if series:
             total.mag, total.rho = mag, rho
@@ -1151,21 +1153,27 @@ def _combine(node, values: dict, omega, inv_omega, track: bool = False,
             total = total.reciprocal(checked)
             rho = _through_reciprocal(rho)
             rho += _U_RECIP
-            total.mag, total.rho = np.reciprocal(mag, out=mag), rho
+            total.mag, total.rho = inv, rho
         return total
     return total if series else total.reciprocal(checked)
 
 
 def _through_reciprocal(rho: NDArray) -> NDArray:
-    """Relative error of 1/x̂ given |x̂ − x| ≤ ρ|x̂|: ρ / (1 − ρ), ∞ from ρ ≥ 1 on (and for NaN).
+    """A bound of the relative error of 1/x̂ given |x̂ − x| ≤ ρ|x̂|, ρ / (1 − ρ): as
+    ρ + 2ρ² for ρ ≤ 1/2 (no smaller there), ∞ from ρ ≥ 1 on (and for NaN).
 
     Callers hold ``np.errstate(all="ignore")``; :mod:`mechcirc._sp_kernel` computes the same.
     """
     if not (isinstance(rho, np.ndarray) and rho.ndim):
         # A scalar ρ (a leaf's, constant in ω: fuzz seed 599): work on an array.
         rho = np.atleast_1d(np.asarray(rho, dtype=float))
-    out = rho / (1.0 - rho)
-    out[~(rho < 1.0)] = np.inf
+    out = rho * rho
+    out *= 2.0
+    out += rho
+    big = ~(rho <= 0.5)
+    if big.any():
+        out[big] = rho[big] / (1.0 - rho[big])
+        out[~(rho < 1.0)] = np.inf
     return out
 
 
