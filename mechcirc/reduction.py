@@ -7,12 +7,15 @@ that touches the rest only at the lever (and possibly at one shared node,
 such as the frame) reduces to that sub-network's K / r² on the primary.
 
 The result is a tree of :class:`Leaf`, :class:`Series`, :class:`Parallel`
-and :class:`Reflect` nodes, evaluated vectorised over ω by :func:`evaluate`;
+and :class:`Reflect` nodes, evaluated vectorised over ω by :func:`evaluate`
+(through a flat :func:`plan` of the tree and the compiled
+:mod:`mechcirc._sp_kernel` when numba is installed, else in numpy);
 :func:`push_down` carries the drive's force and velocity back down the tree
-to every element.
+to every element.  The element laws come from :func:`mechcirc.circuit.law_terms`.
 
-Cost: pruning, lever extraction and reduction are O(n) in the number of
-elements (O(n·L) with L levers); evaluation is O(n · n_omega).
+Cost: the reduction is one worklist pass, O(n) in the number of elements
+(O(n·L) with L levers); the plan is O(n) once per tree; evaluation is
+O(n · n_omega).
 """
 
 from __future__ import annotations
