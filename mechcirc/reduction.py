@@ -30,7 +30,7 @@ from typing import Iterator, Union
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .circuit import ELEMENT_POWER, Circuit, Element, Lever, law_terms
+from .circuit import LAWS, Circuit, Element, Lever, law_terms
 from .errors import NotSeriesParallelError, TopologyError, UnloadedElementWarning
 from .topology import check_frame_paths, loaded_groups, reachable
 
@@ -854,7 +854,7 @@ class Plan:
 _PLANS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
 
 
-_KIND_CODE = {kind: i for i, kind in enumerate(ELEMENT_POWER)}
+_KIND_CODE = {kind: i for i, kind in enumerate(LAWS)}
 
 
 def _leaf_table() -> tuple:
@@ -866,7 +866,7 @@ def _leaf_table() -> tuple:
     slot = np.zeros((len(_KIND_CODE), 2), dtype=np.int64)
     coef = np.zeros((len(_KIND_CODE), 2))
     for kind, code in _KIND_CODE.items():
-        p = ELEMENT_POWER[kind]
+        p = LAWS[kind].power
         for series in (0, 1):
             sl = p if series else -p
             real, inv, om = law_terms(kind, 1.0, admittance=not series)
@@ -1025,9 +1025,9 @@ def _value_of(node: Node, values: dict, omega, inv_omega, track: bool = False) -
     if isinstance(node, Leaf):
         e = node.element
         real, inv, om = law_terms(e.kind, _scaled(e))
-        if ELEMENT_POWER[e.kind] < 0:
+        if LAWS[e.kind].power < 0:
             v = _Value(True, inv_omega * inv)
-        elif ELEMENT_POWER[e.kind] > 0:
+        elif LAWS[e.kind].power > 0:
             v = _Value(True, omega * om)
         else:
             v = _Value(False, np.full(omega.shape, real, dtype=complex))
@@ -1060,7 +1060,7 @@ def _leaf_term(e: Element, series: bool, fast: bool = False) -> tuple[int, float
                              law_terms(e.kind, _scaled(e), admittance=not series))
     else:
         real, inv, om = law_terms(e.kind, _scaled(e), admittance=not series)
-    p = ELEMENT_POWER[e.kind]
+    p = LAWS[e.kind].power
     slot = p if series else -p
     return slot, (real if slot == 0 else om if slot > 0 else inv)
 
