@@ -21,13 +21,15 @@ import numpy as np
 
 from ._jit import decorators
 
-HAVE_NUMBA, jit, jit_inline = decorators()
+# Plain @jit for the helpers too: numba-level forced inlining made the cold compile
+# 5.8 s instead of 4.1 s (CPU) for no measurable gain; LLVM inlines them anyway.
+HAVE_NUMBA, jit, _ = decorators()
 
 _U = np.finfo(float).eps / 2
 _U_RECIP = 4 * _U
 
 
-@jit_inline
+@jit
 def _recip(a, b):
     """1/(a + jb) with 1/0 = ∞, 1/∞ = 0 (Smith's algorithm otherwise, as numpy's)."""
     if math.isinf(a) or math.isinf(b):
@@ -43,7 +45,7 @@ def _recip(a, b):
     return r / d, -1.0 / d
 
 
-@jit_inline
+@jit
 def _through_reciprocal(rho):
     """A bound of the relative error of 1/x̂ given that of x̂, ρ/(1 − ρ): ρ + 2ρ² for
     ρ ≤ 1/2 (≥ ρ/(1 − ρ) there, without a division), ∞ from ρ ≥ 1 on and for NaN."""
@@ -54,7 +56,7 @@ def _through_reciprocal(rho):
     return math.inf
 
 
-@jit_inline
+@jit
 def _abs(a, b):
     """|a + jb|: √(a² + b²) where no square can overflow or underflow, else hypot."""
     big = max(abs(a), abs(b))
@@ -63,7 +65,7 @@ def _abs(a, b):
     return math.hypot(a, b)
 
 
-@jit_inline
+@jit
 def _children(i, nb, series, kstart, kids, slot, cplx, re, im, ai, cr, ci, has_i, has_c):
     """Add node i's internal children (impedances in series, admittances in
     parallel) to the complex sum (cr, ci) or the imaginary one (ai)."""
@@ -109,7 +111,7 @@ def _children(i, nb, series, kstart, kids, slot, cplx, re, im, ai, cr, ci, has_i
     return has_i, has_c
 
 
-@jit_inline
+@jit
 def _children_with_error(i, nb, series, m_u, kstart, kids, slot, cplx, re, im, mg, ig, rh,
                          ai, cr, ci, bb, has_i, has_c, have_b):
     """:func:`_children` and, in the same loop, each child's term of the error
