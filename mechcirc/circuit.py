@@ -42,7 +42,7 @@ if TYPE_CHECKING:  # pragma: no cover - annotations of the attached methods only
     from .resonances import Resonance
     from .sweep import Sweep
 
-__all__ = ["Element", "Lever", "Drive", "Circuit", "element_mobility", "FRAME",
+__all__ = ["Element", "Lever", "Drive", "Circuit", "element_mobility", "law_terms", "FRAME",
            "ELEMENT_UNITS", "Law", "LAWS", "node_names"]
 
 FRAME = "0"
@@ -126,8 +126,33 @@ class Element:
         return element_mobility(self.kind, self.value * self.eta, omega)
 
 
+def law_terms(kind: str, scaled_value, admittance: bool = False) -> tuple:
+    """The law of one element kind as ``(real, inv, omega)`` with
+    K(ω) = real + j·(inv/ω + omega·ω), or 1/K(ω) in that form with ``admittance``.
+
+    ``scaled_value`` is value·η; pass a numpy float so that 1/0 = ∞ instead of
+    ZeroDivisionError (callers hold ``np.errstate``).  Exactly one term is nonzero.
+    Series–parallel reduction adds these terms over a node's leaves; nodal
+    analysis stamps the same laws (``nodal.stamps``).
+    """
+    law = LAWS.get(kind)
+    if law is None:
+        raise ValueError(f"unknown element kind {kind!r}")
+    p = law.power
+    if admittance:
+        p, c = -p, scaled_value
+    else:
+        c = 1.0 / scaled_value
+    # (jω)^1 = j·ω, (jω)^−1 = −j/ω, (jω)^0 = 1.
+    if p == 0:
+        return c, 0.0, 0.0
+    if p > 0:
+        return 0.0, 0.0, c
+    return 0.0, -c, 0.0
+
+
 def element_mobility(kind: str, scaled_value: float, omega: ArrayLike) -> NDArray[np.complex128]:
-    """K(ω) [m/(N·s)] of one element kind with value·η = ``scaled_value``.
+    """K(ω) [m/(N·s)] of one element kind with value·η = ``scaled_value`` (by :func:`law_terms`).
 
     ω = 0 gives K = ∞ for a mass and 0 for a spring (no warnings are raised;
     callers flag non-finite results).
@@ -166,6 +191,12 @@ class Lever:
     ratio: float
     line: int = 0
     col: int = 0
+
+    def reflect(self, K):
+        """K [m/(N·s)] of a sub-network on the secondary, seen from the primary: K / r².
+
+        Divided twice: r² overflows a float for r > 1.3e154."""
+        return K / self.ratio / self.ratio
 
 
 @dataclass(frozen=True)
