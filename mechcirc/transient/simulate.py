@@ -302,7 +302,7 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
         u_in = u
     interp = _interpolation_error(u, drive)
     has_clear = bool(backlash_elements(circuit)) and not linearise
-    T, nx, drive_y, x_ready = None, None, None, None
+    T, nx, drive_y, x_ready, v_ready = None, None, None, None, None
     if has_clear:
         Z, method, err = _nonlinear(ss, circuit, z0, t, u_in, rtol)
     else:
@@ -311,9 +311,9 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
         w = None if dmap is None else dmap[0]
         plans = ss.__dict__.setdefault("_modal_plans", {})
         Z = None
-        if x_only:
-            x_ready, why, dropped, drive_y = _propagate_modal_x(ss.A, ss.B, z0, u_in, h, ss.Cx,
-                                                                w, plans)
+        if not elements:                    # node outputs only: block by block
+            x_ready, v_ready, why, dropped, drive_y = _propagate_modal_x(
+                ss.A, ss.B, z0, u_in, h, ss.Cx, w, plans, None if x_only else ss.Cv)
             if x_ready is not None:
                 Z, T, nx = None, None, None
         if x_ready is None:
@@ -327,7 +327,7 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
         method, err = ("exact (matrix exponential, first-order hold of the drive; "
                        f"{path.split(' (')[0]})"), 0.0
         if (x_ready is not None or (Z is not None and T is not None)) and dropped > 0 \
-                and velocities is False and not elements:
+                and x_only:
             err = dropped           # x formed without the shapes' rounding-level imaginary parts
         elif T is not None:
             nx = None               # v and forces use every column anyway: keep x whole
@@ -336,7 +336,7 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
         notes.append(f"drive interpolated linearly between samples: its error is at most "
                      f"{interp:.3g} (h²/8·max|ü|, from the samples' second differences)")
     return _outputs(ss, circuit, t, Z, u, u_in, h, drive, method, err, interp, notes,
-                    elements, T, velocities, nx, drive_y, x_ready)
+                    elements, T, velocities, nx, drive_y, x_ready, v_ready)
 
 
 def _model(circuit: Circuit, linearise: bool) -> StateSpace:
@@ -549,35 +549,41 @@ def _cached_plan(A, B, h, Cx, cache):
     return plan
 
 
-def _propagate_modal_x(A, B, z0, u, h, Cx, w=None, cache=None):
-    """x only, by the modal path in blocks of samples: (X, note, dropped, y).
+def _propagate_modal_x(A, B, z0, u, h, Cx, w=None, cache=None, Cv=None):
+    """x (and v with ``Cv``) by the modal path in blocks of samples: (X, V, note, dropped, y).
 
-    X = Cx z without the drive's direct terms; y = w·z (None without w);
-    ``dropped`` as in :func:`_propagate_modal`.  (None, reason, 0, None) when
-    the modal path refuses (or numba is not installed: the block loop is
-    compiled only), and the caller takes the general path.
+    X = Cx z and V = Cv z (None without ``Cv``) without the drive's direct
+    terms; y = w·z (None without w).  Without ``Cv`` x is formed from the
+    first ``nx`` modal columns only and ``dropped`` is as in
+    :func:`_propagate_modal`; with it every column is used (v needs them all)
+    and ``dropped`` is 0.  (None, None, reason, 0, None) when the modal path
+    refuses (or numba is not installed: the block loop is compiled only), and
+    the caller takes the general path.
 
-    The recurrence fills a block of modal signals, one product maps it to x,
-    and the next block continues from the block's last state (blocks share
-    their boundary sample, computed twice, identically).
+    The recurrence fills a block of modal signals, one product per output maps
+    it, and the next block continues from the block's last state (blocks
+    share their boundary sample, computed twice, identically).
     """
     from . import _kernels as kern
 
     if not kern.HAVE_NUMBA or not Cx.shape[0]:
-        return None, "no compiled block loop", 0.0, None
+        return None, None, "no compiled block loop", 0.0, None
     plan = _cached_plan(A, B, h, Cx, cache)
     if isinstance(plan, str):
-        return None, plan, 0.0, None
+        return None, None, plan, 0.0, None
     (m, Vinv_k, rot, mu, g1, g2, cre, cim, nx, T, note, late) = plan
     N = A.shape[0]
+    ncols = nx if Cv is None else N
     q0 = (Vinv_k @ np.asarray(z0, complex)) / rot
     nt = u.size
     u = np.ascontiguousarray(u, float)
-    S = np.ascontiguousarray((Cx @ T[:, :nx]).T)
+    Sx = np.ascontiguousarray((Cx @ T[:, :ncols]).T)
+    Sv = None if Cv is None else np.ascontiguousarray((Cv @ T).T)
     X = np.empty((nt, Cx.shape[0]))
+    V = None if Cv is None else np.empty((nt, Cv.shape[0]))
     y = np.empty(nt)
     wout = np.zeros(N) if w is None else np.asarray(w, dtype=float) @ T
-    buf = np.empty((min(CHUNK, nt - 1) + 1, nx)) if nt > 1 else np.empty((1, nx))
+    buf = np.empty((min(CHUNK, nt - 1) + 1, ncols)) if nt > 1 else np.empty((1, ncols))
     qmax = np.zeros(m)
     qm = np.empty(m)
     q = np.asarray(q0, complex).copy()
@@ -588,17 +594,19 @@ def _propagate_modal_x(A, B, z0, u, h, Cx, w=None, cache=None):
         n = b - a + 1
         kern.modal_run(mu, g1, g2, q, u[a:b + 1], cre, cim, buf[:n], qm, wout, y[a:b + 1],
                        qlast)
-        np.matmul(buf[:n], S, out=X[a:b + 1])
+        np.matmul(buf[:n], Sx, out=X[a:b + 1])
+        if V is not None:
+            np.matmul(buf[:n], Sv, out=V[a:b + 1])
         np.maximum(qmax, qm, out=qmax)
         q, qlast = qlast, q
         if b >= nt - 1:
             break
         a = b
     dropped = 0.0
-    if late.any():
+    if late.any() and Cv is None:
         cols = cim[late]
         dropped = float((np.abs(Cx @ T[:, cols]).max(axis=0) * qmax[late]).sum())
-    return X, note, dropped, (None if w is None else y)
+    return X, V, note, dropped, (None if w is None else y)
 
 
 def _modal_plan(A, B, h, Cx):
@@ -776,7 +784,8 @@ def _clearance_setup(ss: StateSpace, circuit):
 
 
 def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes, want=True,
-             T=None, velocities=True, nx=None, drive_y=None, x_ready=None) -> TransientResult:
+             T=None, velocities=True, nx=None, drive_y=None, x_ready=None,
+             v_ready=None) -> TransientResult:
     """Outputs from the states: z = Z[k] (or modal coordinates, z = T Z[k]).
 
     Every output is affine in z, so each is one product of Z with the output
@@ -801,7 +810,7 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes,
     clear = {e.name: (e, comp) for e, comp in backlash_elements(circuit)} if ss.extra is not None else {}
     velocities = velocities or bool(want) or bool(clear)
     X = affine(ss.Cx, ss.Dx, cols=nx, Cz=x_ready)
-    V = affine(ss.Cv, ss.Dv, ss.Ev) if velocities else None
+    V = affine(ss.Cv, ss.Dv, ss.Ev, Cz=v_ready) if velocities else None
     comp_of = {comp.name: e.name for e, comp in clear.values() if comp is not None}
     index = {n: i for i, n in enumerate(ss.nodes)}
     def diff(Y, e):
