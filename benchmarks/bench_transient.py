@@ -233,7 +233,7 @@ def clearance_case(label, circuit, masses, springs, x0, t_end, dt):
     t_ref, _, ref = timed(lambda: solve_ivp(rhs, (0, t_end), y0, method="DOP853", rtol=1e-11,
                                             atol=1e-14, t_eval=t))
     t_dop, c_dop, dop = timed(lambda: solve_ivp(rhs, (0, t_end), y0, method="DOP853",
-                                                rtol=1e-8, atol=1e-12, t_eval=t), repeat=3)
+                                                rtol=1e-8, atol=1e-12, t_eval=t), repeat=5)
     f_ref = forces(ref.y)
     f_dop = forces(dop.y)
     peak = np.abs(f_ref).max()
@@ -244,7 +244,7 @@ def clearance_case(label, circuit, masses, springs, x0, t_end, dt):
     names = [e.name for e in circuit.elements if e.kind == "spring"]
     transient(circuit, t_end, dt)                 # warm (compiled)
     for rtol in (1e-10, 1e-7):
-        t_mc, c_mc, res = timed(lambda: transient(circuit, t_end, dt, rtol=rtol), repeat=7)
+        t_mc, c_mc, res = timed(lambda: transient(circuit, t_end, dt, rtol=rtol), repeat=31)
         f_mc = np.array([res.element_force(nm) + (res.element_force(nm + "_damping")
                                                   if nm + "_damping" in res.elements else 0)
                          for nm in names])
@@ -260,7 +260,7 @@ def _first_call(run, circuit, t_dop, c_dop):
     """The same run on a new copy of the circuit: the state-space model is built again."""
     import dataclasses
 
-    t_1, c_1, _ = timed(lambda: run(dataclasses.replace(circuit)), repeat=7)
+    t_1, c_1, _ = timed(lambda: run(dataclasses.replace(circuit)), repeat=15)
     print(f"    first call on a new circuit (model built in the call) {t_1:8.4f} s  "
           f"ratio {t_dop / t_1:.0f}x (CPU {c_1:.4f} s: {c_dop / c_1:.0f}x)")
 
@@ -308,7 +308,7 @@ def _chain_with_velocity(chain, springs, n, t_end=0.2, dt=1e-4):
     t_ref, _, ref = timed(lambda: solve_ivp(rhs, (0, t_end), y0, method="DOP853", rtol=1e-11,
                                             atol=1e-14, t_eval=t))
     t_dop, c_dop, dop = timed(lambda: solve_ivp(rhs, (0, t_end), y0, method="DOP853",
-                                                rtol=1e-8, atol=1e-12, t_eval=t), repeat=3)
+                                                rtol=1e-8, atol=1e-12, t_eval=t), repeat=5)
 
     def forces(Y):
         out = []
@@ -329,7 +329,7 @@ def _chain_with_velocity(chain, springs, n, t_end=0.2, dt=1e-4):
           f"   (reference DOP853 rtol 1e-11: {t_ref:.2f} s); CPU {c_dop:.3f} s")
     transient(chain, t_end, dt)
     for rtol in (1e-10, 1e-7):
-        t_mc, c_mc, res = timed(lambda: transient(chain, t_end, dt, rtol=rtol), repeat=7)
+        t_mc, c_mc, res = timed(lambda: transient(chain, t_end, dt, rtol=rtol), repeat=31)
         f_mc = np.array([res.element_force(f"k{i}") + res.element_force(f"k{i}_damping")
                          for i in range(1, n + 1)])
         e_mc = abs(np.abs(f_mc).max() - peak) / peak
