@@ -134,6 +134,12 @@ def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, wo
         if p < 0:           # a rigid-motion function of θ: evaluated where needed
             continue
         arg = work[0, p]
+        if FI[f, 0] == 2:           # a line a + b q: most functions (a crank, a pinned body)
+            b1 = FF[f, 1]
+            work[6, f] = FF[f, 0] + b1 * arg
+            work[7, f] = b1
+            work[8, f] = 0.0
+            continue
         a, b1, b2, bb = feval(FI[f, 0], tabs, FI[f, 2], FF[f, 0], FF[f, 1], FF[f, 2],
                               FF[f, 3], FF[f, 4], FF[f, 5], arg)
         work[6, f] = a

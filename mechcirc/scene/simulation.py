@@ -24,6 +24,7 @@ from __future__ import annotations
 import math
 import time
 import warnings
+import weakref
 from dataclasses import dataclass, field
 from typing import Callable
 
@@ -198,8 +199,20 @@ def _fargs(a, f):
     return (a["FI"][f, 0], a["tabs"], a["FI"][f, 2], *a["FF"][f])
 
 
+_RATES: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
 def max_rate(model: MotionModel, samples: int = 72) -> float:
-    """Largest |λ| of the linearised model over a revolution [1/s] (sets the RK4 step)."""
+    """Largest |λ| of the linearised model over a revolution [1/s] (sets the RK4 step);
+    memoised per model (a model is immutable)."""
+    key = _RATES.get(model, {})
+    if samples not in key:
+        key[samples] = _max_rate(model, samples)
+        _RATES[model] = key
+    return key[samples]
+
+
+def _max_rate(model: MotionModel, samples: int) -> float:
     rates = []
     for th in np.linspace(0.0, TWO_PI, samples, endpoint=False):
         M, D, K = linear_matrices(model, th)
