@@ -43,7 +43,8 @@ TWO_PI = 2.0 * math.pi
 # element columns: EI = [type, law, fa, fa2, fb, fb2, part_a, part_b]
 #                  EF = [k, d, clearance, l0, xa, ya, xb, yb, ux, uy]
 # moment columns:  MI = [window fn, body fn]; MF = [amplitude, alpha, sigma, centre]
-# PV = [Omega, theta_s, speed limit, functions to evaluate (the dynamics' first)]
+# PV = [Omega, theta_s, speed limit, functions to evaluate (the dynamics' first), outputs?,
+#       speed ripple amplitude A [rad/s], its angular frequency ν [rad/s]]
 
 
 @_jit_inline
@@ -112,8 +113,17 @@ def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, wo
     n = npart - 1
     nf = int(PV[3])
     want = PV[4] != 0.0
+    # the crank: θ = θs + Ω t + (A/ν) sin(ν t) (a speed ripple A cos(ν t); A = 0: constant)
+    amp = PV[5]
+    theta = PV[1] + PV[0] * t
     omega = PV[0]
-    theta = PV[1] + omega * t
+    accel = 0.0
+    if amp != 0.0:
+        nu = PV[6]
+        sn = math.sin(nu * t)
+        theta += amp / nu * sn
+        omega += amp * math.cos(nu * t)
+        accel = -amp * nu * sn
     # work rows: 0 q, 1 qd, 2 qdd, 3 m, 4 m', 5 Q, then fv, f1, f2 over functions
     bad = 0
     r = PRIG[0]
@@ -121,7 +131,7 @@ def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, wo
                             FF[r, 4], FF[r, 5], theta)
     work[0, 0] = v0
     work[1, 0] = d0 * omega
-    work[2, 0] = dd0 * omega * omega
+    work[2, 0] = dd0 * omega * omega + d0 * accel
     for i in range(n):
         work[0, i + 1] = y[i]
         work[1, i + 1] = y[n + i]

@@ -87,24 +87,28 @@ class MotionModel:
     def naux(self) -> int:
         return len(self.bodies) + 2 * len(self.elements) + 2 + len(self.moments)
 
-    def kernel_args(self, theta_s: float, limit: float, *, outputs: bool = False):
-        """The kernel's array arguments; ``outputs``: evaluate the output-only functions too."""
+    def kernel_args(self, theta_s: float, limit: float, *, outputs: bool = False,
+                    ripple: tuple = (0.0, 0.0)):
+        """The kernel's array arguments; ``outputs``: evaluate the output-only functions too;
+        ``ripple`` = (A, ν): the crank speed is Ω + A cos(ν t) [rad/s] (default constant)."""
         a = self.arrays
         pv = np.array([self.omega, float(theta_s), float(limit),
                        float(a["FI"].shape[0] if outputs else a["n_dyn"]),
-                       1.0 if outputs else 0.0])
+                       1.0 if outputs else 0.0, float(ripple[0]), float(ripple[1])])
         return (pv, a["FI"], a["FF"], a["tabs"], a["MI"], a["MW"], a["EI"], a["EF"], a["MOI"],
                 a["MOF"], a["PRIG"], a["BI"])
 
-    def rigid_state(self, theta: float):
-        """y = [q, q̇] of the free parts in the rigid motion at crank rotation θ."""
+    def rigid_state(self, theta: float, speed: float | None = None):
+        """y = [q, q̇] of the free parts in the rigid motion at crank rotation θ, the crank
+        turning at ``speed`` [rad/s] (default Ω)."""
         kern = _py()
         a = self.arrays
+        w = self.omega if speed is None else float(speed)
         q, qd = [], []
         for r in a["PRIG"][1:]:
             v, d, _, _ = kern.feval(a["FI"][r, 0], a["tabs"], a["FI"][r, 2], *a["FF"][r], theta)
             q.append(v)
-            qd.append(d * self.omega)
+            qd.append(d * w)
         return np.array(q + qd)
 
 

@@ -231,7 +231,7 @@ def simulate_scene(scene: Scene, *, omega: float | None = None,
                    steps_per_period: float | None = None, points: int | None = None,
                    method: str = "rk4", error_estimate: bool = True,
                    model: MotionModel | None = None, rtol: float | None = None,
-                   revolution: int | None = None,
+                   revolution: int | None = None, omega_ripple: tuple | None = None,
                    progress: Callable[[int, int], None] | None = None) -> SceneMotion:
     """Simulate ``scene`` over ``revolutions`` turns of the crank and tabulate the last.
 
@@ -242,7 +242,11 @@ def simulate_scene(scene: Scene, *, omega: float | None = None,
     (default 1e-10; the same right-hand side, integrated in the deviations from the
     rigid motion so that the tolerance applies to the deformations).
     ``revolution`` tabulates that revolution (1 … R) instead of the last; the
-    integration stops after it.
+    integration stops after it.  ``omega_ripple`` = (a, k) (default the file's
+    ``omega_ripple = {amplitude = a, harmonic = k}``, else none): the crank speed
+    is Ω (1 + a cos(k Ω t)), 0 ≤ a < 1, k a whole number ≥ 1, so the crank still
+    turns once per period 2π/Ω; the crank angle is θ = θs + Ω t + (a/k) sin(k Ω t)
+    and the rigid parts follow it with θ̈ = −a k Ω² sin(k Ω t).
 
     Raises
     ------
@@ -261,6 +265,15 @@ def simulate_scene(scene: Scene, *, omega: float | None = None,
     start_deg = float(pick(start_deg, "start_deg", 0.0))
     spp = float(pick(steps_per_period, "steps_per_period", DEFAULT_STEPS_PER_PERIOD))
     npts = int(pick(points, "points", DEFAULT_POINTS))
+    ripple_rel = pick(omega_ripple, "omega_ripple", None)
+    if ripple_rel is not None:
+        amp_rel, harmonic = ripple_rel
+        if not (math.isfinite(amp_rel) and 0.0 <= amp_rel < 1.0):
+            raise MechcircError(f"omega_ripple amplitude must be in [0, 1) (relative to Ω), "
+                                f"got {amp_rel!r}")
+        if isinstance(harmonic, bool) or int(harmonic) != harmonic or not harmonic >= 1:
+            raise MechcircError(f"omega_ripple harmonic must be a whole number >= 1, got "
+                                f"{harmonic!r}")
     if method not in METHODS:
         raise MechcircError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
     if revolutions < 1:
@@ -285,6 +298,8 @@ def simulate_scene(scene: Scene, *, omega: float | None = None,
     if model is None or (omega is not None and model.omega != float(omega)):
         model = motion_model(scene, omega)
     period = TWO_PI / model.omega
+    ripple = (0.0, 0.0) if ripple_rel is None or ripple_rel[0] == 0.0 else \
+        (float(ripple_rel[0]) * model.omega, float(ripple_rel[1]) * model.omega)
     kern, backend = kernels_for(method)
     notes, warn = [], []
     if backend == "python" and method != "rk4-python":
@@ -293,9 +308,9 @@ def simulate_scene(scene: Scene, *, omega: float | None = None,
     theta_s = math.radians(start_deg)
     if scipy_method:
         ts, ys, prev, wall, bad, n_steps, nfev = _run_scipy(
-            model, kern, theta_s, revolutions, npts, method, rtol, progress)
+            model, kern, theta_s, revolutions, npts, method, rtol, progress, ripple)
         backend = "scipy"
-        return _finish(scene, cfg, model, kern, theta_s, ts, ys, prev, None, wall, bad,
+        return _finish(scene, cfg, model, kern, theta_s, ripple, ts, ys, prev, None, wall, bad,
                        n_steps, nfev, method, backend, 0, notes + [f"{method}, rtol {rtol:g}"],
                        warn, revolutions, compile_time)
     rate = max_rate(model)
@@ -310,36 +325,38 @@ def simulate_scene(scene: Scene, *, omega: float | None = None,
     if spp < DEFAULT_STEPS_PER_PERIOD:
         warn.append(f"{spp:g} steps per period of the fastest mode, fewer than the default "
                     f"{DEFAULT_STEPS_PER_PERIOD}: expect a larger error")
-    run = _run(model, kern, theta_s, per_rev, revolutions, npts, progress)
+    run = _run(model, kern, theta_s, ripple, per_rev, revolutions, npts, progress)
     ts, ys, prev, wall, bad = run
     fine = None
     if error_estimate:
-        fine = _run(model, kern, theta_s, 2 * per_rev, revolutions, npts, None)
+        fine = _run(model, kern, theta_s, ripple, 2 * per_rev, revolutions, npts, None)
     notes.append(f"RK4 step {period / per_rev:.4g} s ({per_rev} steps per revolution, "
                  f"{spp:g} per period of the fastest mode |λ| = {rate:.5g} 1/s)")
     n_steps = per_rev * revolutions
-    return _finish(scene, cfg, model, kern, theta_s, ts, ys, prev, fine, wall, bad, n_steps,
+    return _finish(scene, cfg, model, kern, theta_s, ripple, ts, ys, prev, fine, wall, bad,
+                   n_steps,
                    4 * n_steps + revolutions, method, backend, per_rev, notes, warn,
                    revolutions, compile_time)
 
 
-def _finish(scene, cfg, model, kern, theta_s, ts, ys, prev, fine, wall, bad, n_steps, nfev,
+def _finish(scene, cfg, model, kern, theta_s, ripple, ts, ys, prev, fine, wall, bad, n_steps,
+            nfev,
             method, backend, per_rev, notes, warn, revolutions, compile_time):
     """Outputs, extrema, the checks and the warnings of one run → :class:`SceneMotion`."""
-    out = _outputs(model, kern, theta_s, ts, ys)
+    out = _outputs(model, kern, theta_s, ripple, ts, ys)
     extrema = {k: (float(v.min()), float(v.max())) for k, v in out.items()}
     periodicity = None
     if prev is not None:
-        pout = _outputs(model, kern, theta_s, *prev)
+        pout = _outputs(model, kern, theta_s, ripple, *prev)
         periodicity = _rel_change(extrema, {k: (float(v.min()), float(v.max()))
                                             for k, v in pout.items()})
     est = None
     if fine is not None:
-        fout = _outputs(model, kern, theta_s, fine[0], fine[1])
+        fout = _outputs(model, kern, theta_s, ripple, fine[0], fine[1])
         est = _rel_change(extrema, {k: (float(v.min()), float(v.max()))
                                     for k, v in fout.items()})
         bad = bad or fine[4]
-    crank = (theta_s + model.omega * ts) % TWO_PI
+    crank = crank_angle(model.omega, theta_s, ripple, ts)[0] % TWO_PI
     wrap = np.flatnonzero(np.diff(crank) < 0)
     order = np.roll(np.arange(crank.size), -(int(wrap[0]) + 1)) if wrap.size == 1 \
         else np.argsort(crank, kind="stable")
@@ -350,7 +367,8 @@ def _finish(scene, cfg, model, kern, theta_s, ts, ys, prev, fine, wall, bad, n_s
     for alias, target in aliases.items():
         if target.endswith(".rigid_acceleration"):
             body = target.rsplit(".", 1)[0]
-            values[alias], extrema[alias] = _rigid_acceleration(model, body, crank)
+            values[alias], extrema[alias] = _rigid_acceleration(model, body, crank,
+                                                                ripple, ts)
         elif target in values:
             values[alias] = values[target]
             extrema[alias] = extrema[target]
@@ -374,7 +392,7 @@ def _finish(scene, cfg, model, kern, theta_s, ts, ys, prev, fine, wall, bad, n_s
                        ts, ys, compile_time)
 
 
-def _run_scipy(model, kern, theta_s, revolutions, npts, method, rtol, progress):
+def _run_scipy(model, kern, theta_s, revolutions, npts, method, rtol, progress, ripple):
     """R revolutions by ``solve_ivp`` on the kernel's right-hand side; same outputs as
     :func:`_run` plus (steps, evaluations).
 
@@ -389,7 +407,7 @@ def _run_scipy(model, kern, theta_s, revolutions, npts, method, rtol, progress):
     n = model.n_free
     a = model.arrays
     omega = model.omega
-    args = model.kernel_args(theta_s, 1e300)
+    args = model.kernel_args(theta_s, 1e300, ripple=ripple)
     naux = model.naux()
     aux = np.empty(naux)
     work = np.zeros((9, max(a["FI"].shape[0], a["PRIG"].shape[0])))
@@ -415,7 +433,7 @@ def _run_scipy(model, kern, theta_s, revolutions, npts, method, rtol, progress):
         bad[0] = max(bad[0], aux[naux - 1])
         return dy - ydr
 
-    y0 = model.rigid_state(theta_s)
+    y0 = model.rigid_state(theta_s, omega + ripple[0])
     qs = np.full(n, 1e-2)                       # a bounded rotation (a rocker, the sley)
     qs[[i for i, _, _ in lines]] = 1e-4         # a twist
     scale = np.concatenate([qs, 0.1 * np.maximum(np.abs(y0[n:]), omega)])
@@ -448,11 +466,11 @@ def _run_scipy(model, kern, theta_s, revolutions, npts, method, rtol, progress):
     return out[0], out[1], prev, wall, bad[0] > 0, n_steps, nfev
 
 
-def _run(model, kern, theta_s, per_rev, revolutions, npts, progress):
-    y = model.rigid_state(theta_s)
+def _run(model, kern, theta_s, ripple, per_rev, revolutions, npts, progress):
+    y = model.rigid_state(theta_s, model.omega + ripple[0])
     n = model.n_free
     limit = 1e3 * model.omega * max(1.0, float(np.max(np.abs(y[n:]))) / model.omega)
-    args = model.kernel_args(theta_s, limit)
+    args = model.kernel_args(theta_s, limit, ripple=ripple)
     period = TWO_PI / model.omega
     h = period / per_rev
     rec = np.empty((npts, y.size)), np.empty(npts)
@@ -481,8 +499,19 @@ def _run(model, kern, theta_s, per_rev, revolutions, npts, progress):
     return rec[1], rec[0], prev, wall, bad
 
 
-def _outputs(model, kern, theta_s, ts, ys):
-    args = model.kernel_args(theta_s, 1e300, outputs=True)
+def crank_angle(omega, theta_s, ripple, t):
+    """(θ, θ̇, θ̈) of the crank at times ``t``: θ = θs + Ω t + (A/ν) sin(ν t), the speed
+    Ω + A cos(ν t) (``ripple`` = (A, ν); A = 0: constant speed)."""
+    t = np.asarray(t, float)
+    amp, nu = ripple
+    if amp == 0.0:
+        return theta_s + omega * t, np.full_like(t, omega), np.zeros_like(t)
+    return (theta_s + omega * t + amp / nu * np.sin(nu * t), omega + amp * np.cos(nu * t),
+            -amp * nu * np.sin(nu * t))
+
+
+def _outputs(model, kern, theta_s, ripple, ts, ys):
+    args = model.kernel_args(theta_s, 1e300, outputs=True, ripple=ripple)
     out = np.empty((ts.size, model.naux()))
     kern.outputs(np.ascontiguousarray(ts), np.ascontiguousarray(ys), out, *args)
     nb, ne, nm = len(model.bodies), len(model.elements), len(model.moments)
@@ -518,7 +547,7 @@ def _rel_change(a: dict, b: dict) -> float:
     return worst
 
 
-def _rigid_acceleration(model, body, crank):
+def _rigid_acceleration(model, body, crank, ripple=(0.0, 0.0), ts=None):
     """Angular acceleration of ``body`` in the rigid motion at the crank angles, and its
     exact extrema (grid, then Brent-refined on the tables)."""
     from scipy.optimize import minimize_scalar
@@ -541,6 +570,12 @@ def _rigid_acceleration(model, body, crank):
     fast.eval_many(*_fargs(a, r), np.ascontiguousarray(crank), qv)
     fast.eval_many(*_fargs(a, g), np.ascontiguousarray(qv[:, 0]), gv)
     vals = (gv[:, 2] * qv[:, 1] ** 2 + gv[:, 1] * qv[:, 2]) * w2
+    if ripple[0] != 0.0:
+        # a varying crank speed: (g'' q'² + g' q'') θ̇² + g' q' θ̈ at the samples' times;
+        # its extrema are those of the samples (the output grid sets their accuracy)
+        _, w, dw = crank_angle(model.omega, 0.0, ripple, ts)
+        vals = (gv[:, 2] * qv[:, 1] ** 2 + gv[:, 1] * qv[:, 2]) * w ** 2 + gv[:, 1] * qv[:, 1] * dw
+        return vals, (float(vals.min()), float(vals.max()))
     ext = []
     for sgn, i in ((1.0, int(np.argmin(vals))), (-1.0, int(np.argmax(vals)))):
         lo, hi = crank[max(i - 1, 0)], crank[min(i + 1, crank.size - 1)]
