@@ -82,7 +82,8 @@ def register(sub) -> None:
                "         mechcirc crosscheck examples/heald_scene.toml --theta 40\n"
                "         mechcirc crosscheck netlists/stb_heald.mcir --omega-max 5000\n"
                "(a scene .toml: circuit resonances at --theta against the ringing of its "
-               "time-domain motion; a netlist: see the transient command)",
+               "time-domain motion, and |Q0| against the forced response to a drive-speed "
+               "ripple; a netlist: see the transient command)",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("file", nargs="?", metavar="FILE",
                    help="a scene (.toml): cross-check it at --theta; a netlist (.mcir): "

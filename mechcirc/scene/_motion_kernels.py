@@ -44,7 +44,8 @@ TWO_PI = 2.0 * math.pi
 #                  EF = [k, d, clearance, l0, xa, ya, xb, yb, ux, uy]
 # moment columns:  MI = [window fn, body fn]; MF = [amplitude, alpha, sigma, centre]
 # PV = [Omega, theta_s, speed limit, functions to evaluate (the dynamics' first), outputs?,
-#       speed ripple amplitude A [rad/s], its angular frequency ν [rad/s]]
+#       speed ripple amplitude A [rad/s], its angular frequency ν [rad/s],
+#       loads referred to the mean motion (1) or to the crank angle (0)]
 
 
 @_jit_inline
@@ -117,6 +118,10 @@ def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, wo
     amp = PV[5]
     theta = PV[1] + PV[0] * t
     omega = PV[0]
+    # a load's reference: the rigid motion at the crank angle (PV[7] = 0), or at the mean
+    # motion θs + Ω t (PV[7] = 1: a load to the frame under a small ripple, as the circuit)
+    th_load = theta
+    w_load = omega
     accel = 0.0
     if amp != 0.0:
         nu = PV[6]
@@ -124,6 +129,9 @@ def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, wo
         theta += amp / nu * sn
         omega += amp * math.cos(nu * t)
         accel = -amp * nu * sn
+        if PV[7] == 0.0:
+            th_load = theta
+            w_load = omega
     # work rows: 0 q, 1 qd, 2 qdd, 3 m, 4 m', 5 Q, then fv, f1, f2 over functions
     bad = 0
     r = PRIG[0]
@@ -206,13 +214,13 @@ def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, wo
             fy = EI[e, 5]
             rr = EI[e, 2]
             qr, qr1, qr2, bb = feval(FI[rr, 0], tabs, FI[rr, 2], FF[rr, 0], FF[rr, 1],
-                                     FF[rr, 2], FF[rr, 3], FF[rr, 4], FF[rr, 5], theta)
+                                     FF[rr, 2], FF[rr, 3], FF[rr, 4], FF[rr, 5], th_load)
             xr, xr1, xr2, bb = feval(FI[fx, 0], tabs, FI[fx, 2], FF[fx, 0], FF[fx, 1],
                                      FF[fx, 2], FF[fx, 3], FF[fx, 4], FF[fx, 5], qr)
             yr, yr1, yr2, bb = feval(FI[fy, 0], tabs, FI[fy, 2], FF[fy, 0], FF[fy, 1],
                                      FF[fy, 2], FF[fy, 3], FF[fy, 4], FF[fy, 5], qr)
-            vxr = xr1 * qr1 * omega
-            vyr = yr1 * qr1 * omega
+            vxr = xr1 * qr1 * w_load
+            vyr = yr1 * qr1 * w_load
             if typ == 2:
                 ux = EF[e, 8]
                 uy = EF[e, 9]

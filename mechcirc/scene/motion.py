@@ -88,13 +88,16 @@ class MotionModel:
         return len(self.bodies) + 2 * len(self.elements) + 2 + len(self.moments)
 
     def kernel_args(self, theta_s: float, limit: float, *, outputs: bool = False,
-                    ripple: tuple = (0.0, 0.0)):
+                    ripple: tuple = (0.0, 0.0), loads_on_mean: bool = False):
         """The kernel's array arguments; ``outputs``: evaluate the output-only functions too;
-        ``ripple`` = (A, ν): the crank speed is Ω + A cos(ν t) [rad/s] (default constant)."""
+        ``ripple`` = (A, ν): the crank speed is Ω + A cos(ν t) [rad/s] (default constant);
+        ``loads_on_mean``: a load's reference is the rigid motion at the mean crank angle
+        θs + Ω t instead of the actual one (a load to the frame, as in the circuit)."""
         a = self.arrays
         pv = np.array([self.omega, float(theta_s), float(limit),
                        float(a["FI"].shape[0] if outputs else a["n_dyn"]),
-                       1.0 if outputs else 0.0, float(ripple[0]), float(ripple[1])])
+                       1.0 if outputs else 0.0, float(ripple[0]), float(ripple[1]),
+                       1.0 if loads_on_mean else 0.0])
         return (pv, a["FI"], a["FF"], a["tabs"], a["MI"], a["MW"], a["EI"], a["EF"], a["MOI"],
                 a["MOF"], a["PRIG"], a["BI"])
 

@@ -238,7 +238,7 @@ def test_crosscheck_ringing_matches_circuit(path, deg):
     """
     from mechcirc.scene.crosscheck import crosscheck_scene
 
-    c = crosscheck_scene(load_scene(path), math.radians(deg))
+    c = crosscheck_scene(load_scene(path), math.radians(deg), forced=False)
     assert len(c.resonances) >= 2
     for r in c.resonances:
         assert r["rel_error"] <= 1e-3, r
@@ -260,6 +260,10 @@ def test_cli_simulate_and_crosscheck_scene_json(capsys):
                  "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert {"omega", "ringing_omega", "rel_error"} <= set(doc["resonances"][0])
+    assert len(doc["forced"]) == 5           # 3 resonances: 0.5, 0.9 x the lowest, 2 between, 1.5 x
+    for f in doc["forced"]:
+        assert {"omega", "Q0_circuit", "Q0_time", "rel_error"} <= set(f)
+        assert f["rel_error"] <= 1e-5, f
     assert main(["simulate", "examples/mrazek_one_side.toml", "--set", "nope=1"]) == 2
 
 
