@@ -2,7 +2,7 @@
 
 Written once for any scene, on plain arrays built by :mod:`mechcirc.scene.motion`;
 compiled with numba when it is importable (the ``fast`` extra), else plain
-Python (:func:`load_python` forces that), as :mod:`mechcirc.sley._kernels`.
+Python (:func:`load_python` forces that), through :mod:`mechcirc._jit`.
 
 Each rigid part i has one coordinate q_i (the rotation of one of its bodies
 from the pose); part 0 (the drive's) is prescribed: q_0 = ψ_0(θ), θ = θs + Ω t.
