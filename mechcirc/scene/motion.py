@@ -19,7 +19,7 @@ The model's linearisation about the rigid motion at θ is the circuit of
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -79,6 +79,8 @@ class MotionModel:
     arrays: dict
     body_fn: dict
     centre: dict
+    #: Point → (x function, y function, part) for every point on a moving part (outputs).
+    point_fn: dict = field(default_factory=dict)
 
     @property
     def n_free(self) -> int:
@@ -349,6 +351,11 @@ def motion_model(scene: Scene, omega: float | None = None, *,
     body_names = tuple(bodies)
     n_dyn = len(B.FI)          # functions the dynamics need; the rest only for outputs
     BI = [angle_fn(b) for b in body_names]
+    pfn = {}
+    for p in lk.pose:                      # output-only: the points' linear accelerations
+        pf = point_fns(p)
+        if pf is not None:
+            pfn[p] = pf
     arrays = {
         "FI": np.array(B.FI, dtype=np.int64).reshape(-1, 3),
         "FF": np.array(B.FF, dtype=float).reshape(-1, 6),
@@ -361,7 +368,8 @@ def motion_model(scene: Scene, omega: float | None = None, *,
         "PRIG": np.array(prig, dtype=np.int64), "BI": np.array(BI, dtype=np.int64),
         "n_dyn": n_dyn}
     return MotionModel(scene, omega, scene.parts, tuple(coords), body_names, tuple(enames),
-                       tuple(mnames), arrays, {b: f for b, f in zip(body_names, BI)}, centres)
+                       tuple(mnames), arrays, {b: f for b, f in zip(body_names, BI)}, centres,
+                       pfn)
 
 
 _CACHE: dict = {}

@@ -363,6 +363,9 @@ def _finish(scene, cfg, model, kern, theta_s, ripple, ts, ys, prev, fine, wall, 
     crank = crank[order]
     ts, ys = ts[order], ys[order]
     values = {k: v[order] for k, v in out.items()}
+    for k, v in _point_accelerations(model, theta_s, ripple, ts, ys, values).items():
+        values[k] = v
+        extrema[k] = (float(v.min()), float(v.max()))
     aliases = dict(cfg.aliases) if cfg is not None else {}
     for alias, target in aliases.items():
         if target.endswith(".rigid_acceleration"):
@@ -497,6 +500,37 @@ def _run(model, kern, theta_s, ripple, per_rev, revolutions, npts, progress):
             progress(r + 1, revolutions)
     wall = time.perf_counter() - t0
     return rec[1], rec[0], prev, wall, bad
+
+
+def _point_accelerations(model, theta_s, ripple, ts, ys, values):
+    """``POINT.acceleration`` (magnitude) and ``POINT.acceleration_x``/``_y`` [m/s²] of every
+    point on a moving part: a = f''(q) q̇² + f'(q) q̈ for its tabulated position f of its
+    part's coordinate q (q̈: the acceleration of the part's coordinate body)."""
+    if not model.point_fn:
+        return {}
+    kern = kernels_for("rk4")[0]
+    a = model.arrays
+    n = model.n_free
+    th, w, dw = crank_angle(model.omega, theta_s, ripple, ts)
+    r0 = a["PRIG"][0]
+    q0 = np.empty((ts.size, 3))
+    kern.eval_many(*_fargs(a, r0), np.ascontiguousarray(th), q0)
+    coord = {0: (q0[:, 0], q0[:, 1] * w)}
+    for i in range(1, n + 1):
+        coord[i] = (ys[:, i - 1], ys[:, n + i - 1])
+    out = {}
+    for p, (fx, fy, i) in model.point_fn.items():
+        q, qd = coord[i]
+        qdd = values[f"{model.coordinate[i]}.acceleration"]
+        comp = []
+        for f in (fx, fy):
+            fv = np.empty((ts.size, 3))
+            kern.eval_many(*_fargs(a, f), np.ascontiguousarray(q), fv)
+            comp.append(fv[:, 2] * qd * qd + fv[:, 1] * qdd)
+        out[f"{p}.acceleration"] = np.hypot(comp[0], comp[1])
+        out[f"{p}.acceleration_x"] = comp[0]
+        out[f"{p}.acceleration_y"] = comp[1]
+    return out
 
 
 def crank_angle(omega, theta_s, ripple, t):
