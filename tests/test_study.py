@@ -11,7 +11,7 @@ import pytest
 
 import mechcirc
 from mechcirc import cli
-from mechcirc.errors import MechcircError
+from mechcirc.errors import MechcircError, NetlistError
 from mechcirc.study import load_spec, parse_spec, run_study
 from reference.stb_eq7 import full_K
 
@@ -168,7 +168,7 @@ def test_resonance_tables():
     ({"grid": {"eta1": [1.0]}, "random": {"n": 2}}, "exactly one of"),
     ({"grid": {"eta1": {"min": 1, "max": 2}}}, "needs min, max and num"),
     ({"grid": {"eta1": []}}, "empty list"),
-    ({"grid": {"eta1": [1.0]}, "colour": 1}, "unknown key(s) colour"),
+    ({"grid": {"eta1": [1.0]}, "colour": 1}, "unknown top-level key 'colour' (expected analysis,"),
     ({"grid": {"eta1": [1.0]}, "analysis": "fft"}, "analysis must be"),
 ])
 def test_bad_specs_name_the_key(data, fragment):
@@ -302,3 +302,25 @@ def test_study_cli_on_a_dask_scheduler(tmp_path, capsys):
     out = capsys.readouterr().out
     assert f"on Dask cluster {cluster.scheduler_address} (2 threads)" in out
     assert (tmp_path / "one.csv").read_bytes() == (tmp_path / "dask.csv").read_bytes()
+
+
+@pytest.mark.parametrize("table, line, fragment", [
+    ("[sley]\nvariant = 3\nspeed = 1\n", "speed = 1", "unknown key 'speed' in [sley]"),
+    ("[omega]\nmin = 1\nmax = 2\nstep = 1\n", "step = 1", "unknown key 'step' in [omega]"),
+    ("[random]\nn = 2\nsead = 1\n", "sead = 1", "unknown key 'sead' in [random]"),
+])
+def test_study_file_errors_carry_file_line(tmp_path, table, line, fragment):
+    analysis = "simulate" if "sley" in table else "sweep"
+    points = "[grid]\nC2 = [1e4]\n" if "sley" in table or "omega" not in table else \
+        "[grid]\neta1 = [0.8]\n"
+    if "random" in table:
+        points = ""
+        table += "[random.params]\neta1 = {min = 0.7, max = 0.9}\n"
+    text = (f'netlist = "{STB}"\nanalysis = "{analysis}"\n' + points + table)
+    spec = tmp_path / "s.toml"
+    spec.write_text(text)
+    with pytest.raises(NetlistError) as info:
+        load_spec(spec)
+    assert fragment in info.value.message
+    assert info.value.source == str(spec)
+    assert text.splitlines()[info.value.line - 1] == line
