@@ -49,7 +49,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import MechcircWarning
-from .models import ParameterError, SleyParameters
+from .models import ParameterError, SleyParameters, start_angle
 
 __all__ = ["SleyResult", "simulate", "simulate_params", "simulate_batch", "METHODS",
            "table_error", "start_angle", "SleyAccuracyWarning", "ACCURACY_GOAL"]
@@ -231,26 +231,6 @@ def table_error(params: SleyParameters | None = None, n: int = 1024,
     err["nu_rel"] = err["nu"] / float(np.max(np.abs(st.nu)))
     return err
 
-
-def start_angle(params: SleyParameters) -> float:
-    """First crank angle θ0 in [0, 2π) with ν(θ0) = 0 (zero rigid sley acceleration) [rad]."""
-    return _start_angle(params.l2P, params.l3, params.l4, params.d, params.branch)
-
-
-@lru_cache(maxsize=64)
-def _start_angle(l2P, l3, l4, d, branch) -> float:
-    from scipy.optimize import brentq
-
-    from .models import fourbar_of_lengths
-
-    fb = fourbar_of_lengths(l2P, l3, l4, d, branch)
-    th = np.linspace(0.0, TWO_PI, 721)
-    nu = fb.evaluate(th).nu
-    idx = np.flatnonzero(np.sign(nu[:-1]) * np.sign(nu[1:]) <= 0)
-    i = int(idx[0])
-    if nu[i] == 0.0:
-        return float(th[i])
-    return float(brentq(lambda t: fb.transfer(t)[2], th[i], th[i + 1], xtol=1e-14))
 
 # ----------------------------------------------------------------- simulate
 def simulate(drive: str = "one-side", variant: int = 3, revolutions: int = 5,
