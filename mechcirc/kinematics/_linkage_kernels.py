@@ -1,6 +1,6 @@
 """The linkage Newton continuation as one compiled loop over the crank positions.
 
-One source, two backends, as :mod:`mechcirc.sley._kernels`: compiled with
+One source, two backends, as :mod:`mechcirc.scene._motion_kernels`: compiled with
 numba's ``@njit(cache=True)`` when numba is importable (the ``fast`` extra),
 plain Python otherwise.  :mod:`.linkage_solver` uses :func:`newton_path` only
 when it is compiled (``HAVE_NUMBA``); without numba it keeps its batched numpy

@@ -1,6 +1,6 @@
 """The clearance (ElastoBacklash) law and an embedded Dormand–Prince 5(4) loop, on plain arrays.
 
-One source, two backends, as :mod:`mechcirc.sley._kernels`: compiled with
+One source, two backends, as :mod:`mechcirc.scene._motion_kernels`: compiled with
 numba's ``@njit(cache=True)`` when numba is importable (the ``fast`` extra),
 ordinary Python otherwise or through :func:`load_python`.  Imported only when a
 transient with clearances runs, so ``import mechcirc`` never imports numba.
