@@ -37,14 +37,46 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 __all__ = ["Element", "Lever", "Drive", "Circuit", "element_mobility", "FRAME",
-           "ELEMENT_UNITS"]
+           "ELEMENT_UNITS", "Law", "LAWS"]
 
 FRAME = "0"
 
 ElementKind = Literal["mass", "spring", "damper"]
 
+
+@dataclass(frozen=True)
+class Law:
+    """The law of one element kind: K(ω) = (jω)^power / (value·η).
+
+    This table is the one place the element laws are written; every
+    evaluation (numeric, nodal, symbolic, textual) derives from it.
+
+    Attributes
+    ----------
+    power : int
+        Exponent p of jω in K = (jω)^p / s, s = value·η: −1 for a mass
+        (K = 1/(jωm)), +1 for a spring (K = jω/k), 0 for a damper (K = 1/c).
+        The force characteristic is S = 1/K = s·(jω)^(−p).
+    unit : str
+        SI unit of the value (translational reading).
+    matrix : str
+        Where the element's S enters the nodal matrix
+        A(ω) = G + j(ωM − K/ω): ``"M"`` (S = jω·s), ``"G"`` (S = s) or
+        ``"K"`` (S = s/(jω)).
+    """
+
+    power: int
+    unit: str
+    matrix: str
+
+
+#: Element kind → its :class:`Law`.
+LAWS: dict[str, Law] = {"mass": Law(-1, "kg", "M"),
+                        "spring": Law(+1, "N/m", "K"),
+                        "damper": Law(0, "N·s/m", "G")}
+
 #: SI unit of each element kind's value (translational reading).
-ELEMENT_UNITS: dict[str, str] = {"mass": "kg", "spring": "N/m", "damper": "N·s/m"}
+ELEMENT_UNITS: dict[str, str] = {kind: law.unit for kind, law in LAWS.items()}
 
 
 @dataclass(frozen=True)
@@ -94,19 +126,20 @@ def element_mobility(kind: str, scaled_value: float, omega: ArrayLike) -> NDArra
     ω = 0 gives K = ∞ for a mass and 0 for a spring (no warnings are raised;
     callers flag non-finite results).
     """
+    law = LAWS.get(kind)
+    if law is None:
+        raise ValueError(f"unknown element kind {kind!r}")
     omega = np.asarray(omega, dtype=float)
     out = np.zeros(omega.shape, dtype=complex)
     with np.errstate(divide="ignore", invalid="ignore"):
-        # Fill the real and imaginary parts separately: a complex product such
-        # as 1j * inf would give nan + inf·j at ω = 0 instead of -j∞.
-        if kind == "mass":
-            out.imag = -1.0 / (omega * scaled_value)
-        elif kind == "spring":
-            out.imag = omega / scaled_value
-        elif kind == "damper":
+        # (jω)^p / s filled part by part: a complex product such as 1j * inf
+        # would give nan + inf·j at ω = 0 instead of -j∞.
+        if law.power == 0:
             out.real = 1.0 / scaled_value
+        elif law.power == 1:
+            out.imag = omega / scaled_value                 # jω/s
         else:
-            raise ValueError(f"unknown element kind {kind!r}")
+            out.imag = -1.0 / (omega * scaled_value)        # 1/(jωs) = -j/(ωs)
     return out
 
 

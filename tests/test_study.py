@@ -11,14 +11,13 @@ import pytest
 
 import mechcirc
 from mechcirc import cli
-from mechcirc.errors import MechcircError
+from mechcirc.errors import MechcircError, NetlistError
 from mechcirc.study import load_spec, parse_spec, run_study
 from reference.stb_eq7 import full_K
 import os
 import subprocess
 import sys
 import time
-from mechcirc.errors import NetlistError
 from mechcirc.sources import split_lines
 from cli_helpers import assert_user_error, run
 
@@ -175,7 +174,7 @@ def test_resonance_tables():
     ({"grid": {"eta1": [1.0]}, "random": {"n": 2}}, "exactly one of"),
     ({"grid": {"eta1": {"min": 1, "max": 2}}}, "needs min, max and num"),
     ({"grid": {"eta1": []}}, "empty list"),
-    ({"grid": {"eta1": [1.0]}, "colour": 1}, "unknown key(s) colour"),
+    ({"grid": {"eta1": [1.0]}, "colour": 1}, "unknown top-level key 'colour' (expected analysis,"),
     ({"grid": {"eta1": [1.0]}, "analysis": "fft"}, "analysis must be"),
 ])
 def test_bad_specs_name_the_key(data, fragment):
@@ -478,3 +477,25 @@ def _alive(pid):
             return fh.read().split(")")[-1].split()[0] != "Z"
     except OSError:
         return False
+
+
+@pytest.mark.parametrize("table, line, fragment", [
+    ("[sley]\nvariant = 3\nspeed = 1\n", "speed = 1", "unknown key 'speed' in [sley]"),
+    ("[omega]\nmin = 1\nmax = 2\nstep = 1\n", "step = 1", "unknown key 'step' in [omega]"),
+    ("[random]\nn = 2\nsead = 1\n", "sead = 1", "unknown key 'sead' in [random]"),
+])
+def test_study_file_errors_carry_file_line(tmp_path, table, line, fragment):
+    analysis = "simulate" if "sley" in table else "sweep"
+    points = "[grid]\nC2 = [1e4]\n" if "sley" in table or "omega" not in table else \
+        "[grid]\neta1 = [0.8]\n"
+    if "random" in table:
+        points = ""
+        table += "[random.params]\neta1 = {min = 0.7, max = 0.9}\n"
+    text = (f'netlist = "{STB}"\nanalysis = "{analysis}"\n' + points + table)
+    spec = tmp_path / "s.toml"
+    spec.write_text(text)
+    with pytest.raises(NetlistError) as info:
+        load_spec(spec)
+    assert fragment in info.value.message
+    assert info.value.source == str(spec)
+    assert text.splitlines()[info.value.line - 1] == line

@@ -364,14 +364,13 @@ def _check_part(scene, part, pos, vel, ang, Lc, tiny, deg, crank):
 
 
 def _check_connected(scene, node_of_part, edges, dropped, deg):
-    reach = {node_of_part[0]}
-    changed = True
-    while changed:
-        changed = False
-        for a, b in edges:
-            if (a in reach) != (b in reach) and "0" not in (a, b):
-                reach |= {a, b}
-                changed = True
+    """Refuse parts that no kept element couples to the drive's part (not through the frame)."""
+    import networkx as nx
+
+    g = nx.Graph()
+    g.add_nodes_from(node_of_part)
+    g.add_edges_from((a, b) for a, b in edges if "0" not in (a, b))
+    reach = nx.node_connected_component(g, node_of_part[0])
     lost = [n for n in node_of_part if n not in reach]
     if lost:
         why = "; ".join(f"{n}: {w}" for n, w in dropped if "deform" in w)
