@@ -12,7 +12,7 @@ from .errors import NetlistError
 
 __all__ = ["read_source", "read_bytes", "MAX_INPUT_BYTES", "split_lines", "line_col",
            "finite_number", "brief", "load_toml", "locate", "locate_path", "located", "Table",
-           "unknown_key", "check_keys"]
+           "unknown_key", "check_keys", "number_error"]
 
 #: The largest input file mechcirc reads [bytes].  A netlist of the statement
 #: limit is far below this; anything larger is refused before it is read.
@@ -118,6 +118,19 @@ def finite_number(value) -> bool:
         return math.isfinite(value)
     except OverflowError:              # an integer beyond float64's range
         return False
+
+
+def number_error(value, what: str, *, positive: bool = False,
+                 allow_zero: bool = False) -> tuple[str, str] | None:
+    """None for a finite number (> 0 with ``positive``, ≥ 0 with ``allow_zero`` too),
+    else ``(message, what is right)`` for the located error of every reader."""
+    ok = finite_number(value)
+    if ok and positive:
+        ok = value > 0 or (allow_zero and value == 0)
+    if ok:
+        return None
+    need = "a finite number" + ("" if not positive else " ≥ 0" if allow_zero else " > 0")
+    return f"{what} must be {need}, got {brief(value)}", need
 
 
 def brief(value) -> str:
@@ -255,7 +268,10 @@ class Table:
 
 
 def unknown_key(table: Table, entry: dict, occurrence: int = 0) -> tuple[str, str] | None:
-    """``(key, message)`` for the first key of ``entry`` that ``table`` does not declare, or None."""
+    """``(key, message)`` for the first key of ``entry`` that ``table`` does not declare.
+
+    None when every key is declared.
+    """
     for key in entry:
         if key not in table.keys:
             if table.name is None:

@@ -80,7 +80,8 @@ from typing import Callable, Iterable
 from .errors import MechcircError, NetlistError
 from .limits import (MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS, MAX_STUDY_POINTS,
                      MAX_STUDY_SWEEP_POINTS, MAX_STUDY_WORK)
-from .sources import Table, brief, finite_number, load_toml, locate_path, unknown_key
+from .sources import (Table, brief, finite_number, load_toml, locate_path, number_error,
+                      unknown_key)
 
 __all__ = ["StudySpec", "load_spec", "parse_spec", "study_points", "run_point", "run_batch",
            "run_study", "StudyResult", "read_rows", "journal_path"]
@@ -154,8 +155,9 @@ def _omega(path, value, what) -> float:
 
 
 def _number(path, value, what) -> float:
-    if not finite_number(value):
-        _fail(path, f"{what} must be a finite number, got {brief(value)}")
+    bad = number_error(value, what)
+    if bad:
+        _fail(path, bad[0])
     return float(value)
 
 
@@ -607,7 +609,6 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
     """
     columns = spec.columns
     todo = study_points(spec)
-    done: list[dict] = []
     parquet = bool(output) and str(output).lower().endswith(".parquet")
     if parquet:
         _require_pyarrow()
@@ -615,30 +616,11 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
     # a checksum; the output itself is written whole at the end (atomically),
     # so an existing file stays as it was until the new table is complete.
     journal = journal_path(output) if output else None
-    if resume and output:
-        if Path(journal).exists():
-            done = read_rows(journal, columns)
-        elif Path(output).exists():
-            done = _read_parquet(output, columns) if parquet else read_rows(output, columns)
-        n = len(spec.points)
-        done = [r for r in done if r["index"] < n]
-        have = {r["index"] for r in done}
-        todo = [(i, v) for i, v in todo if i not in have]
-    sink = None
-    if output:
-        from .outputs import atomic_open
-
-        # A fresh journal holding the verified rows (a resumed journal is
-        # rewritten, not appended to: its last line may lack its terminator).
-        with atomic_open(journal, "w", newline="", encoding="utf-8") as fh:
-            w = csv.writer(fh)
-            w.writerow([*columns, _CHECK])
-            for r in done:
-                fields = [_format(r.get(c, "")) for c in columns]
-                w.writerow([*fields, _crc(fields)])
-        sink = open(journal, "a", newline="", encoding="utf-8")
-        writer = csv.writer(sink)
-
+    done = _resumed_rows(spec, output, journal, parquet) if resume and output else []
+    have = {r["index"] for r in done}
+    todo = [(i, v) for i, v in todo if i not in have]
+    sink = _open_journal(journal, columns, done) if output else None
+    writer = csv.writer(sink) if sink is not None else None
     rows = list(done)
 
     def take(batch_rows: Iterable[dict]) -> None:
@@ -663,20 +645,54 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
         if sink is not None:
             sink.close()
     rows.sort(key=lambda r: r["index"])
-    if parquet:
-        _write_parquet(output, columns, rows)
-        os.unlink(journal)
-    elif output:
-        from .outputs import atomic_open
-
-        with atomic_open(output, "w", newline="", encoding="utf-8") as fh:
-            w = csv.writer(fh)
-            w.writerow(columns)
-            for r in rows:
-                w.writerow([_format(r.get(c, "")) for c in columns])
+    if output:
+        _write_output(output, parquet, columns, rows)
         os.unlink(journal)
     failed = sum(r["status"] != "ok" for r in rows)
     return StudyResult(columns, rows, executor, n_workers, len(done), failed)
+
+
+def _resumed_rows(spec: StudySpec, output, journal: str, parquet: bool) -> list[dict]:
+    """The verified rows of the journal, or of a finished output, that are points of ``spec``."""
+    columns = spec.columns
+    done: list[dict] = []
+    if Path(journal).exists():
+        done = read_rows(journal, columns)
+    elif Path(output).exists():
+        done = _read_parquet(output, columns) if parquet else read_rows(output, columns)
+    n = len(spec.points)
+    return [r for r in done if r["index"] < n]
+
+
+def _open_journal(journal: str, columns: list[str], done: list[dict]):
+    """A fresh journal holding the verified rows, open for appending.
+
+    A resumed journal is rewritten, not appended to: its last line may lack
+    its terminator.
+    """
+    from .outputs import atomic_open
+
+    with atomic_open(journal, "w", newline="", encoding="utf-8") as fh:
+        w = csv.writer(fh)
+        w.writerow([*columns, _CHECK])
+        for r in done:
+            fields = [_format(r.get(c, "")) for c in columns]
+            w.writerow([*fields, _crc(fields)])
+    return open(journal, "a", newline="", encoding="utf-8")
+
+
+def _write_output(output, parquet: bool, columns: list[str], rows: list[dict]) -> None:
+    """The whole table, in index order, written atomically (CSV or Parquet)."""
+    if parquet:
+        _write_parquet(output, columns, rows)
+        return
+    from .outputs import atomic_open
+
+    with atomic_open(output, "w", newline="", encoding="utf-8") as fh:
+        w = csv.writer(fh)
+        w.writerow(columns)
+        for r in rows:
+            w.writerow([_format(r.get(c, "")) for c in columns])
 
 
 def journal_path(output: str | os.PathLike) -> str:

@@ -16,7 +16,8 @@ ITEMS = Table("items", {"a": "x", "b": "y"}, array=True)
 
 def test_unknown_key_names_the_first_undeclared_key_in_file_order():
     assert unknown_key(OMEGA, {"min": 1, "max": 2}) is None
-    assert unknown_key(OMEGA, {"min": 1, "zz": 2, "aa": 3}) == ("zz", "unknown key 'zz' in [omega]")
+    assert unknown_key(OMEGA, {"min": 1, "zz": 2, "aa": 3}) == \
+        ("zz", "unknown key 'zz' in [omega]")
     assert unknown_key(TOP, {"colour": 1}) == ("colour", "unknown top-level key 'colour'")
     assert unknown_key(ITEMS, {"c": 1}, 2) == ("c", "unknown key 'c' in [[items]] #3")
     assert OMEGA.expected == "min, max" and ITEMS.header == "[[items]]"
@@ -85,3 +86,16 @@ def test_locate_path_finds_inline_table_keys():
     assert locate_path(text, ("grid", "eta2", "num")) == (3, 27)
     assert locate_path(text, ("omega", "min")) == (5, 1)
     assert locate_path(text, ("omega",)) == (4, 1)
+
+
+def test_number_error_is_one_message_for_every_reader():
+    from mechcirc.sources import number_error
+
+    assert number_error(2.5, "x") is None and number_error(0, "x", positive=True,
+                                                           allow_zero=True) is None
+    assert number_error(True, "x") == ("x must be a finite number, got True", "a finite number")
+    assert number_error(0.0, "k [N/m]", positive=True) == \
+        ("k [N/m] must be a finite number > 0, got 0.0", "a finite number > 0")
+    assert number_error(-1, "c", positive=True, allow_zero=True)[1] == "a finite number ≥ 0"
+    msg, _ = number_error(10 ** 400, "m")
+    assert len(msg) < 120 and msg.endswith("...")      # a 400-digit integer, cut short

@@ -316,8 +316,9 @@ def dyads_path(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, ro
     (−1: the ground), outer joints X[d] (the pose point for the ground, else the
     offset in the carrier's frame), lengths ln[d], assembly side sign[d],
     rot[d] = e^{−i·pose angle}/length, arm[d] = the link frame's origin from
-    its outer joint in the link's frame, ang[d] = the links' pose angles.  Fills Q, QD, QDD, PARTS and margin
-    (the smallest |sin| of a dyad's inner angle, −1 where it cannot assemble).
+    its outer joint in the link's frame, ang[d] = the links' pose angles.
+    Fills Q, QD, QDD, PARTS and margin (the smallest |sin| of a dyad's inner
+    angle, −1 where it cannot assemble).
     """
     N = t.shape[0]
     nb = Q.shape[1] // 3

@@ -19,6 +19,13 @@ Two solvers, chosen per linkage once (:func:`plan`):
   started from the Taylor predictor of the node just before it, and their
   velocities and accelerations come from two batched linear solves.
 
+With numba installed (the ``fast`` extra) both run as one compiled loop over
+the positions instead (:mod:`._linkage_kernels`): the dyads' closed form per
+position, and Newton as a sequential continuation through every target,
+warm-started from the previous one, q̇ and q̈ from the LU of J at each
+converged q — the same cost per position at 360 positions as at 3,600.
+``USE_COMPILED = False`` keeps the numpy versions (tests run both).
+
 Both return a :class:`LinkageMotion` of plain arrays.  The result types
 (:class:`LinkageState`, :class:`LinkageMotion`) live here, below
 :mod:`.linkage`, which re-exports them, so the two modules import one way.

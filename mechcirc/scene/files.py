@@ -71,7 +71,8 @@ from pathlib import Path
 from ..errors import GeometryError, NetlistError
 from ..kinematics.linkage import TABLES as LINKAGE_TABLES
 from ..kinematics.linkage import Linkage, parse_linkage
-from ..sources import Table, brief, check_keys, finite_number, load_toml, split_lines
+from ..sources import (Table, brief, check_keys, finite_number, load_toml, number_error,
+                       split_lines)
 from ..sources import located as _err
 
 __all__ = ["Scene", "Analysis", "SceneMass", "ElasticLink", "Torsion", "Load", "SceneDrive",
@@ -85,10 +86,11 @@ SCENE_TABLES = ("masses", "elastic", "torsion", "loads", "drive", "analysis", "m
 _CLEARANCE = {"clearance": "half-width of the gap [m or rad], 0 for none",
               "clearance_law": "\"elastobacklash\" or \"dead-zone\""}
 #: The tables of a scene file, declared once (see :class:`mechcirc.sources.Table`);
-#: [moments] and [simulate] are declared by :mod:`mechcirc.scene.simfile`.
+#: [moments] and [simulate] keep their own key lists in :mod:`mechcirc.scene.simfile`.
 TABLES = {
     None: Table(None, dict(sorted({**LINKAGE_TABLES[None].keys,
-                                   **{t: f"[{t}] (a scene table)" for t in SCENE_TABLES}}.items()))),
+                                   **{t: f"[{t}] (a scene table)" for t in SCENE_TABLES}
+                                   }.items()))),
     "elastic": Table("elastic", {"name": "element name (default: the link)",
                                  "link": "a binary link of [links]",
                                  "stiffness": "[N/m]", "damping": "[N·s/m], default 0",
@@ -306,13 +308,9 @@ def _number(text, source, value, what, table, key, n, *, positive=True, allow_ze
         if role == "angle" and parts and parts[1]:
             converted = math.degrees(converted)
         value = converted
-    ok = finite_number(value)
-    if ok and positive:
-        ok = value > 0 or (allow_zero and value == 0)
-    if not ok:
-        need = "a finite number" + ("" if not positive else " ≥ 0" if allow_zero else " > 0")
-        raise _err(text, source, f"{what} must be {need}, got {brief(value)}", table, key,
-                   occurrence=n, expected=need)
+    bad = number_error(value, what, positive=positive, allow_zero=allow_zero)
+    if bad:
+        raise _err(text, source, bad[0], table, key, occurrence=n, expected=bad[1])
     return float(value)
 
 
