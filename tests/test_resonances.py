@@ -8,6 +8,7 @@ import pytest
 
 import mechcirc
 from reference import stb_eq7
+from mechcirc.errors import NetlistError
 
 
 def _chain(N, k=100.0, m=1.0):
@@ -199,3 +200,76 @@ def test_grid_anti_resonances_against_the_closed_form():
     anti = np.sort([r.omega for r in found if r.kind == "antiresonance"])
     np.testing.assert_allclose(anti, np.sqrt(w2), rtol=1e-12)
     assert all(r.error <= 1e-13 for r in found)
+
+
+def test_resonances_of_an_overflowing_product_name_the_element():
+    c = mechcirc.parse("drive V a 0 velocity=1\nmass m a b 1e308 eta=1e5\nspring k b 0 1\n")
+    with pytest.raises(NetlistError, match="value × eta .* overflows float64") as err:
+        c.resonances()
+    assert (err.value.line, err.value.col) == (2, 1)
+
+
+def test_resonance_at_1e_minus_181_rad_per_s_is_found():
+    """Scales 1e-200 N/m and 1e181 kg: sqrt(k/m) underflowed to 0 and divided by it."""
+    text = ("drive V 0 n2 force=0.1\nspring e1 0 n2 2.2e-200\ndamper e2 0 n2 5.2\n"
+            "mass e3 0 n2 3.8e181\n")
+    found = mechcirc.parse(text).resonances()
+    # Overdamped m, c, k in parallel: s = -c/m (the other root, -k/c, is below the
+    # rigid-body cut).  K = 1/(sm + c + k/s) is infinite there: an anti-resonance.
+    assert [r.kind for r in found] == ["antiresonance"]
+    assert found[0].omega == pytest.approx(5.2 / 3.8e181, rel=1e-12)
+    assert found[0].zeta == 1.0
+
+
+def _mck(zeta: float, m=2.0, k=800.0):
+    c = 2 * zeta * math.sqrt(k * m)
+    return mechcirc.parse(f"drive V a 0 velocity=1\nmass m a 0 {m!r}\n"
+                          f"damper c a 0 {c!r}\nspring k a 0 {k!r}\n")
+
+
+@pytest.mark.parametrize("zeta", [0.5, 1 - 1e-6, 1 - 1e-12, 1.0, 1 + 1e-12, 1 + 1e-6, 2.0])
+def test_coalescing_roots_at_critical_damping(zeta):
+    """m, c, k in parallel: anti-resonances at s = -ωn(ζ ∓ sqrt(ζ² − 1)), ωn = 20 rad/s.
+
+    At ζ = 1 the two roots coalesce; each reported ω is within its own error
+    estimate of the exact root (which must grow to about sqrt(eps) there).
+    """
+    wn = 20.0
+    found = _mck(zeta).resonances()
+    assert all(r.kind == "antiresonance" for r in found)
+    if zeta < 1:
+        exact = [wn]
+        wd = wn * math.sqrt((1 - zeta) * (1 + zeta))
+        (r,) = found
+        assert r.zeta == pytest.approx(zeta, rel=1e-12)
+        # Im s of a near-double root is ill-conditioned; its absolute error is
+        # that of s, ωn·error (ω_d = 2.8e-5 rad/s at ζ = 1 − 1e-12).
+        assert abs(r.omega_d - wd) <= wn * r.error
+    elif zeta == 1:
+        exact = [wn, wn]
+    else:
+        root = math.sqrt((zeta - 1) * (zeta + 1))
+        exact = [wn * (zeta - root), wn * (zeta + root)]
+    assert len(found) == len(exact)
+    for r, w in zip(sorted(found, key=lambda r: r.omega), sorted(exact)):
+        assert abs(r.omega - w) / w <= r.error, (r, w)
+        assert r.error < 1e-6
+        if zeta >= 1:
+            assert r.zeta == 1.0 and r.omega_d == 0.0
+
+
+def test_error_estimate_covers_coalesced_roots_for_many_networks():
+    """Before the fix, critically damped roots were off by 2e-8 with an estimate of 2e-14."""
+    import random
+
+    for i in range(60):
+        rng = random.Random(i)
+        m, k = 10 ** rng.uniform(-2, 2), 10 ** rng.uniform(1, 6)
+        wn = math.sqrt(k / m)
+        for r in _mck(1.0, m, k).resonances():
+            assert abs(r.omega - wn) / wn <= r.error
+            # Bounds of our own, not the code's: a double root is found to about
+            # sqrt(eps) ≈ 1.5e-8 (achieved: ≤ 4.4e-8 over these 109 roots), and an
+            # estimate that covers it need not be loose (achieved: ≤ 2.2e-7).
+            assert abs(r.omega - wn) / wn <= 1e-7
+            assert r.error <= 1e-6

@@ -103,7 +103,7 @@ def force_law(law, k, d, cl, e, edot):
     return d * edot
 
 
-@_jit_inline
+@_jit
 def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, work):
     """Derivatives of y = [q_1..q_n, q̇_1..q̇_n] into dy; outputs into aux.
 
