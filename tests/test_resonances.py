@@ -177,6 +177,57 @@ def test_damped_network_above_the_dense_limit_is_solved_in_a_band(monkeypatch):
         mechcirc.parse(text).resonances()
 
 
+def _undamped_chain(n, massless_every=0):
+    lines = ["drive V n0 0 velocity=1"]
+    for i in range(n):
+        if not (massless_every and i % massless_every == 1):
+            lines.append(f"mass m{i} n{i} 0 {1 + i % 3}")
+        lines.append(f"spring k{i} n{i} n{i + 1} {1000 + 37 * (i % 7)}")
+    return "\n".join(lines) + f"\nspring kend n{n} 0 100\n"
+
+
+@pytest.mark.parametrize("massless_every", [0, 4])
+def test_inertia_count_of_undamped_roots_against_dense_eigenvalues(massless_every):
+    """Sylvester's count of natural frequencies in the band equals the count of the
+    finite generalised eigenvalues of (K, M) from scipy.linalg.eig (QZ, independent)."""
+    import scipy.linalg as la
+
+    from mechcirc.resonances import count_undamped_roots
+
+    system = mechcirc.parse(_undamped_chain(120, massless_every)).nodal
+    n = len(system.nodes)
+    M, K = system.M[:n, :n].tocsc(), system.Ks[:n, :n].tocsc()
+    lam = la.eigvals(K.toarray(), M.toarray())
+    w = np.sqrt(np.abs(lam[np.isfinite(lam)].real))
+    for omega_max in (5.0, 20.0, 41.3, 1e3):
+        assert np.min(np.abs(w - omega_max)) > 1e-6 * omega_max   # no root on the edge
+        want = int(np.count_nonzero((w > 1e-6 * omega_max) & (w < omega_max)))
+        assert count_undamped_roots(M, K, omega_max) == want, omega_max
+
+
+def test_undamped_network_above_the_dense_limit_is_solved_in_a_band(monkeypatch):
+    """An undamped band gives the dense solver's roots (forced by a low limit)."""
+    text = _undamped_chain(200)
+    dense = mechcirc.parse(text).resonances(omega_max=15.0)
+    monkeypatch.setattr(mechcirc.resonances, "MAX_UNKNOWNS", 20)
+    band = mechcirc.parse(text).resonances(omega_max=15.0)
+    assert [r.kind for r in band] == [r.kind for r in dense] and len(dense) >= 10
+    for a, b in zip(band, dense):
+        assert abs(a.omega - b.omega) <= (a.error + b.error) * b.omega
+
+
+def test_undamped_band_with_too_many_roots_is_refused_with_their_count(monkeypatch):
+    """The count comes first, so the refusal names it exactly: the released network's
+    roots below 15 rad/s (its anti-resonances, found here by the dense solver) are the
+    first band solved."""
+    text = _undamped_chain(200)
+    want = sum(r.kind == "antiresonance" for r in mechcirc.parse(text).resonances(omega_max=15.0))
+    monkeypatch.setattr(mechcirc.resonances, "MAX_UNKNOWNS", 20)
+    monkeypatch.setattr(mechcirc.resonances, "MAX_BAND_ROOTS", 2 * want - 2)
+    with pytest.raises(mechcirc.SolverError, match=f"resonances: {want} roots below"):
+        mechcirc.parse(text).resonances(omega_max=15.0)
+
+
 def test_grid_anti_resonances_against_the_closed_form():
     """Uniform n×n grid, springs k between neighbours and to the frame, masses m, corner drive.
 
