@@ -15,7 +15,10 @@ space.  Undamped networks: massless directions are condensed out statically
 ``scipy.linalg.eigvalsh`` (error bound eps·λ_max/λ, Weyl).  Damped networks:
 the problem is linearised to a 2n generalised eigenproblem solved by QZ
 (``scipy.linalg.eig``); s = −ζωₙ ± jωₙ√(1 − ζ²).  Networks above the dense
-limits are solved in a band ``omega_max`` by shift-invert Arnoldi on the
+limits are solved in a band ``omega_max``: undamped ones by counting the
+roots in the band first (Sylvester's inertia of K − ω²M from sparse symmetric
+factorisations) and then shift-invert Lanczos on the symmetric pencil
+(``scipy.sparse.linalg.eigsh``); damped ones by shift-invert Arnoldi on the
 same linearisation (``scipy.sparse.linalg.eigs``).
 
 Every damped root, and every undamped root whose eigenvalue bound is not
@@ -258,28 +261,29 @@ def _modes_unchecked(M, D, Ks, G, damped: bool, omega_max=None) -> np.ndarray:
 def _band_modes(M, D, K, omega_max: float) -> np.ndarray:
     """Roots s with |s| ≤ ``omega_max`` of (s²M + sD + K) v = 0, by shift-invert Arnoldi.
 
-    The companion pencil A − sB, A = [[0, I], [−K, −D]], B = [[I, 0], [0, M]],
-    is factorised once at a shift σ = −omega_max·1e-3 (just off the rigid-body
-    roots at 0) by a sparse LU; ARPACK (``scipy.sparse.linalg.eigs``) finds the
-    largest ν of (A − σB)⁻¹B, ν = 1/(s − σ), that is the roots nearest σ, and
-    the number asked doubles until a root beyond the band is found.  Massless
-    directions (B singular) give ν = 0 and are never reached.  The error of
-    each root is a first estimate only: every root is then polished on K.
+    Undamped networks: see :func:`_band_modes_undamped` (counted, then Lanczos).
+    Otherwise, and where the count cannot be had, the companion pencil A − sB,
+    A = [[0, I], [−K, −D]], B = [[I, 0], [0, M]], is factorised once at a shift
+    σ = −omega_max·1e-3 (just off the rigid-body roots at 0) by a sparse LU;
+    ARPACK (``scipy.sparse.linalg.eigs``) finds the largest ν of (A − σB)⁻¹B,
+    ν = 1/(s − σ), that is the roots nearest σ, and the number asked doubles
+    until a root beyond the band is found.  Massless directions (B singular)
+    give ν = 0 and are never reached.  The error of each root is a first
+    estimate only: every root is then polished on K.
     """
     import scipy.sparse as sp
     from scipy.sparse.linalg import LinearOperator, eigs, splu
 
     n = M.shape[0]
-    k = min(24, 2 * n - 2)
+    # A fixed start vector: ARPACK's own is random, so two runs could differ
+    # in the last bits of a root and in how long they take.
+    rng = np.random.default_rng(20261123)
     if not (D.nnz and np.any(D.data)):
-        # Undamped: count the roots in the band first (Sylvester's inertia), so
-        # that a band holding too many is refused at once, and ARPACK is asked
-        # for all of them in one call instead of doubling its way up.
-        found = count_undamped_roots(M, K, omega_max)
+        found = _band_modes_undamped(M, K, omega_max, rng.standard_normal(n))
         if found is not None:
-            if found > MAX_BAND_ROOTS // 2:
-                _refuse_band(found, omega_max, n, exact=True)
-            k = min(2 * found + 8, 2 * n - 2)
+            return found
+    k = min(24, 2 * n - 2)
+    v0 = rng.standard_normal(2 * n) + 0j
     eye = sp.identity(n, format="csc")
     A = sp.bmat([[None, eye], [-K, -D]], format="csc")
     B = sp.bmat([[eye, None], [None, M]], format="csc")
@@ -287,7 +291,7 @@ def _band_modes(M, D, K, omega_max: float) -> np.ndarray:
     lu = splu((A - sigma * B).tocsc().astype(complex))
     op = LinearOperator((2 * n, 2 * n), matvec=lambda v: lu.solve(B @ v), dtype=complex)
     while True:
-        nu = eigs(op, k=k, which="LM", return_eigenvectors=False, tol=1e-13)
+        nu = eigs(op, k=k, which="LM", return_eigenvectors=False, tol=1e-13, v0=v0)
         with np.errstate(divide="ignore"):
             s_all = sigma + 1.0 / nu
         s_all = s_all[np.isfinite(s_all)]
@@ -306,6 +310,44 @@ def _band_modes(M, D, K, omega_max: float) -> np.ndarray:
     err = np.full(s.size, 1e-8)
     must = np.ones(s.size)
     return np.column_stack([s, err, must]) if s.size else np.zeros((0, 3), dtype=complex)
+
+
+def _band_modes_undamped(M, K, omega_max: float, v0: np.ndarray) -> np.ndarray | None:
+    """The undamped band: roots s = jω, ω ≤ ``omega_max``, of K v = ω² M v, or None.
+
+    The roots in the band are counted first (:func:`count_undamped_roots`), so
+    that a band holding too many is refused at once with their number, and the
+    symmetric pencil is then solved by shift-invert Lanczos
+    (``scipy.sparse.linalg.eigsh``, one factorisation of K − σM at
+    σ = −(1e-3·omega_max)²) for exactly those roots, the rigid-body ones below
+    them and a few above.  None when the count cannot be had (the caller then
+    uses the general path).
+    """
+    from scipy.sparse.linalg import ArpackError, ArpackNoConvergence, eigsh
+
+    n = M.shape[0]
+    counts = _inertia_counts(M, K, omega_max)
+    if counts is None:
+        return None
+    below, upto = counts
+    found = upto - below
+    if found > MAX_BAND_ROOTS // 2:
+        _refuse_band(found, omega_max, n, exact=True)
+    if found == 0:
+        return np.zeros((0, 3), dtype=complex)
+    k = upto + 2
+    if 2 * k + 1 > n:           # Lanczos wants room (ncv = 2k + 1 ≤ n): a small network
+        return None
+    try:
+        lam = eigsh(K.tocsc(), k=k, M=M.tocsc(), sigma=-(1e-3 * omega_max) ** 2,
+                    which="LM", return_eigenvectors=False, tol=1e-13, v0=v0)
+    except (ArpackError, ArpackNoConvergence):
+        return None
+    w = np.sqrt(np.sort(lam[lam > 0]))
+    w = w[(w > 1e-6 * omega_max) & (w <= omega_max * (1 + 1e-6))]
+    s = 1j * w
+    return np.column_stack([s, np.full(s.size, 1e-8), np.ones(s.size)]) if s.size \
+        else np.zeros((0, 3), dtype=complex)
 
 
 def _refuse_band(count: int, omega_max: float, n: int, exact: bool):
@@ -340,21 +382,29 @@ def _negative_pivots(A) -> int | None:
     return int(np.count_nonzero(d < 0))
 
 
-def count_undamped_roots(M, K, omega_max: float) -> int | None:
-    """How many natural frequencies 1e-6·omega_max < ω < omega_max the pencil (K, M) has.
+def _inertia_counts(M, K, omega_max: float) -> tuple[int, int] | None:
+    """Natural frequencies of the pencil (K, M) below 1e-6·omega_max and below omega_max.
 
     ``M`` and ``K`` are the sparse, symmetric, positive semidefinite mass and
     stiffness matrices of an undamped network (constraints already projected
-    out).  The count is the difference of the negative eigenvalues of
-    K − ω²M at the two ends (Sylvester's law of inertia), from two sparse
-    factorisations; None when a factorisation cannot tell (see
-    :func:`_negative_pivots`).
+    out).  Each count is the number of negative eigenvalues of K − ω²M
+    (Sylvester's law of inertia), from one sparse factorisation; None when a
+    factorisation cannot tell (see :func:`_negative_pivots`).
     """
     lo = _negative_pivots(K - (1e-6 * omega_max) ** 2 * M)
     hi = _negative_pivots(K - omega_max ** 2 * M)
     if lo is None or hi is None:
         return None
-    return hi - lo
+    return lo, hi
+
+
+def count_undamped_roots(M, K, omega_max: float) -> int | None:
+    """How many natural frequencies 1e-6·omega_max < ω < omega_max the pencil (K, M) has.
+
+    See :func:`_inertia_counts`; None when the count cannot be had.
+    """
+    counts = _inertia_counts(M, K, omega_max)
+    return None if counts is None else counts[1] - counts[0]
 
 
 def _undamped(M: np.ndarray, K: np.ndarray) -> np.ndarray:
