@@ -85,13 +85,35 @@ def test_random_networks_with_levers_same_K_by_both_methods(net, log_omega):
     K_sp = c.sweep([omega], method="sp").K[0]
     K_nodal = c.sweep([omega], method="nodal").K[0]
     assert abs(K_sp - ref) <= 1e-12 * abs(ref)
-    # Nodal analysis refines with residuals in 80-bit extended precision; where a
-    # node velocity times an admittance exceeds |K| by ~1e7 (masses of 1 and
-    # 1000 kg in series with a 0.01 N/m spring at ω = 10: |x| ~ 1e3, |y| ~ 1e4,
-    # |K| ~ 1e3) the residual's own rounding leaves ~1e-12 (1.05e-12 measured,
-    # found by hypothesis in CI); 1e-10 is that with a margin of ~100.  The
-    # series-parallel path above keeps 1e-12.
-    assert abs(K_nodal - ref) <= 1e-10 * abs(ref)
+    # Back to 1e-12 (it was 1e-10 while the refinement's residual was summed in
+    # 80-bit long double, which left 1.05e-12 on a series chain; see
+    # test_series_chain_of_disparate_values_is_exact below).
+    assert abs(K_nodal - ref) <= 1e-12 * abs(ref)
+
+
+@pytest.mark.parametrize("order", [("m1", "m1000", "s"), ("m1000", "s", "m1"),
+                                   ("m1000", "m1", "s")])
+@pytest.mark.parametrize("omega", [10.0, 31.6227766])
+def test_series_chain_of_disparate_values_is_exact(order, omega):
+    """1 kg and 1000 kg masses in series with a 0.01 N/m spring (found by hypothesis in CI).
+
+    With the refinement's residual in 80-bit long double nodal K was off by
+    up to 3.5e-12 here (|x|·|y| ~ 1e7·|K|); in double-double it is K
+    rounded to float64.  Reference: the series sum of mobilities in mpmath.
+    """
+    values = {"m1": ("mass", 1.0), "m1000": ("mass", 1000.0), "s": ("spring", 0.01)}
+    lines = ["drive V n0 0 velocity=1"]
+    ref = mpmath.mpf(0)
+    w = mpmath.mpf(omega)
+    with mpmath.workdps(40):
+        for i, name in enumerate(order):
+            kind, v = values[name]
+            lines.append(f"{kind} e{i} n{i} {f'n{i + 1}' if i < 2 else '0'} {v!r}")
+            ref += 1 / (1j * w * v) if kind == "mass" else 1j * w / v
+        ref = complex(ref)
+    K = mechcirc.parse("\n".join(lines)).sweep([omega], method="nodal").K[0]
+    # Achieved: 0 at these six points; 4e-16 allows K's own rounding twice over.
+    assert abs(K - ref) <= 4e-16 * abs(ref)
 
 
 def test_force_excitation_gives_velocity_and_force_characteristic():
