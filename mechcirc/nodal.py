@@ -368,6 +368,10 @@ class _Pattern:
             sel = pos == s
             self.slots.append(term[sel][np.argsort(r[sel], kind="stable")])
         self.buckets = uniq[order]             # bucket of each rank
+        # The same order, bucket by bucket, for the compiled kernel.
+        by_bucket = np.lexsort((np.arange(bucket.size), bucket))
+        self.k_terms = np.arange(keep.size)[keep][by_bucket].astype(np.int64)
+        self.k_ptr = np.searchsorted(bucket[by_bucket], np.arange(4 * n + 1)).astype(np.int64)
         self.n_terms = 2 * E + self.s_row.size
         self.max_terms = int(counts.max(initial=0))
 
@@ -382,6 +386,8 @@ class _Pattern:
         double-double.  Complex ω (resonance polishing) are accepted.
         """
         c, n = xh.shape
+        if not np.iscomplexobj(omega) and n > DENSE_LIMIT and _kernels() is not None:
+            return self._residual_compiled(omega, xh, xl, rhs)
         z = np.zeros((c, 1), dtype=complex)
         xe = np.concatenate([xh.astype(complex, copy=False), z], axis=1)
         d_h, d_l = _two_sum(xe[:, self.e_i], -xe[:, self.e_j])
@@ -449,10 +455,31 @@ class _Pattern:
             ax_im = _dd_add(g_h.imag, g_l.imag, *sus_re)
             r_re = _dd_add(rhs[None, :], 0.0, -ax_re[0], -ax_re[1])
             r_im = (-ax_im[0], -ax_im[1])
-            lo = r_re[1] + 1j * r_im[1]
-            hi = r_re[0] + 1j * r_im[0]
-            lo = np.where(np.isfinite(lo) | ~np.isfinite(hi), lo, 0.0)
-            return hi + lo
+            out = np.empty((c, n), dtype=complex)
+            for part, (hi, lo) in ((out.real, r_re), (out.imag, r_im)):
+                lo = np.where(np.isfinite(lo) | ~np.isfinite(hi), lo, 0.0)
+                part[...] = hi + lo
+            return out
+
+    def _residual_compiled(self, omega, xh, xl, rhs):
+        """:meth:`residual` by the compiled kernel (the same operations in the same order)."""
+        c, n = xh.shape
+        z = np.zeros((c, 1))
+        xr = np.concatenate([xh.real, z], axis=1)
+        xi = np.concatenate([xh.imag, z], axis=1)
+        if xl is not None:
+            xlr = np.concatenate([xl.real, z], axis=1)
+            xli = np.concatenate([xl.imag, z], axis=1)
+        else:
+            xlr = xli = xr
+        out_r, out_i = np.empty((c, n)), np.empty((c, n))
+        with np.errstate(all="ignore"):
+            _kernels().residual(np.ascontiguousarray(omega, dtype=float), xr, xi, xlr, xli,
+                                xl is not None, np.asarray(rhs, dtype=float), self.k_ptr,
+                                self.k_terms, self.e_i.size, self.e_i, self.e_j, self.e_val,
+                                self.e_vs[0], self.e_vs[1], self.s_col, self.s_val,
+                                self.s_vs[0], self.s_vs[1], out_r, out_i)
+        return out_r + 1j * out_i
 
     def sensitivities(self, omega: NDArray, x: NDArray, K: NDArray) -> tuple[NDArray, NDArray]:
         """(S/|K|, S_data/|K|) for each ω: the sensitivity of K to rounding the stamps and the data.
@@ -476,6 +503,17 @@ class _Pattern:
         with np.errstate(all="ignore"):
             scale = np.max(np.abs(x), axis=1, initial=0.0)
             scale = np.where((scale > 0) & np.isfinite(scale), scale, 1.0)
+            kern = _kernels() if self.n > DENSE_LIMIT else None
+            if kern is not None and not np.iscomplexobj(omega):
+                S, Sd = np.empty(c), np.empty(c)
+                xe = np.concatenate([np.asarray(x, dtype=complex), np.zeros((c, 1), complex)],
+                                    axis=1)
+                kern.sensitivities(np.asarray(omega, dtype=float), xe, scale, self.e_i,
+                                   self.e_j, self.e_m, self.e_k, self.e_c, self.s_row,
+                                   self.s_col, self.s_val, self.l_p1, self.l_p2, self.l_col,
+                                   self.l_r, S, Sd)
+                f = scale / np.abs(K)
+                return S * f * scale, Sd * f * scale
             xe = np.concatenate([np.asarray(x, dtype=complex) / scale[:, None],
                                  np.zeros((c, 1), complex)], axis=1)
             y = np.abs(combine(self.e_c, self.e_m, self.e_k, w))
@@ -492,6 +530,26 @@ class _Pattern:
                 Sd = Sd + np.sum(2 * self.l_r * dl * ax[:, self.l_col], axis=1)
             f = scale / np.abs(K)
             return S * f * scale, Sd * f * scale
+
+
+#: Use the compiled residual kernel when numba is installed (set False to force numpy).
+USE_NUMBA = True
+_KERNELS = []
+
+
+def _kernels():
+    """The compiled kernel module, or None (numba not installed or not wanted).
+
+    Used on the sparse path only (above :data:`DENSE_LIMIT` unknowns): small
+    systems are vectorised over many ω at once, and need no compilation.
+    """
+    if not USE_NUMBA:
+        return None
+    if not _KERNELS:
+        from . import _nodal_kernels
+
+        _KERNELS.append(_nodal_kernels if _nodal_kernels.HAVE_NUMBA else None)
+    return _KERNELS[0]
 
 
 def _dd_div_dd(ah, al, bh, bl):
@@ -800,9 +858,11 @@ class _DenseSolver:
         return good, lambda r: np.einsum("kij,kj->ki", inv, r)
 
 
-#: The sparse path uses LAPACK's banded LU when n·kl² (kl: the half band
-#: width after reverse Cuthill–McKee) is at most this, SuperLU otherwise.
-BAND_WORK = 4e6
+#: The sparse path uses a banded LU when the half band width kl after a reverse
+#: Cuthill–McKee ordering is at most this, SuperLU otherwise.
+BAND_MAX = 12
+#: SuperLU's threshold for keeping the diagonal pivot (symmetric mode).
+DIAG_PIVOT_THRESH = 0.01
 
 
 class _SparseSolver:
@@ -811,13 +871,17 @@ class _SparseSolver:
     The choice is made from the pattern alone, so that the same network
     gives the same factorisation, bit for bit, on every run: after a reverse
     Cuthill–McKee ordering of the (symmetric) pattern, of half band width
-    kl, LAPACK's banded LU (``zgbtrf``/``zgbtrs``, called directly) when
-    n·kl² ≤ :data:`BAND_WORK` (chains, ladders and narrow networks: the
-    ladder's band is 1 wide, the 30×30 grid's about 30); otherwise
-    SuperLU (``scipy.sparse.linalg.splu``) with a minimum-degree ordering of
-    AᵀA + A found once from the pattern and reused (``permc_spec=
-    "NATURAL"`` on the pre-permuted columns).  Both are partial-pivoting
-    LUs; the refinement and its error estimate are the same for either.
+    kl, a banded LU with partial pivoting when kl ≤ :data:`BAND_MAX`
+    (chains, ladders and narrow strips: the ladder's band is 1 wide) — the
+    compiled kernels of :mod:`mechcirc._nodal_kernels` when numba is
+    installed, LAPACK's ``zgbtrf``/``zgbtrs`` otherwise; for wider bands
+    (grids: the 30×30 grid's band is 30) SuperLU (``scipy.sparse.linalg.
+    splu``) on A permuted symmetrically by a minimum-degree ordering of
+    Aᵀ + A found once from the pattern, in its symmetric mode (diagonal
+    pivots kept unless below :data:`DIAG_PIVOT_THRESH` of the column's
+    largest entry), which fills 2–3× less than partial pivoting on these
+    complex symmetric matrices.  The refinement and its error estimate are
+    the same for either.
     """
 
     def __init__(self, pat: _Pattern):
@@ -826,7 +890,8 @@ class _SparseSolver:
 
         self.pat = pat
         n = pat.n
-        ones = np.ones(pat.indices.size)
+        nnz = pat.indices.size
+        ones = np.ones(nnz)
         A = sp.csc_matrix((ones, pat.indices, pat.indptr), shape=(n, n))
         p = np.asarray(reverse_cuthill_mckee(A.tocsr(), symmetric_mode=True))
         q = np.empty_like(p)
@@ -835,7 +900,7 @@ class _SparseSolver:
         ri, ci = q[pat.indices], q[cols]                  # permuted positions
         kl = int(np.max(np.abs(ri - ci), initial=0))
         self.kl = kl
-        if n * kl * kl <= BAND_WORK:
+        if kl <= BAND_MAX:
             self.kind = "band"
             self.p = p
             self.band_rows = 3 * kl + 1
@@ -847,26 +912,54 @@ class _SparseSolver:
             self.kind = "superlu"
             # The ordering depends on the pattern only: find it on a
             # nonsingular matrix of the same pattern (the diagonal does not
-            # enter a minimum-degree ordering of AᵀA + A).
+            # enter a minimum-degree ordering of Aᵀ + A).
             struct = A + sp.identity(n, format="csc") * (n + 1.0)
             perm = np.asarray(splu(struct.tocsc(), permc_spec="MMD_AT_PLUS_A").perm_c)
             iperm = np.argsort(perm)
-            self.perm = perm
-            lengths = np.diff(pat.indptr)[iperm]
-            self.indptr_p = np.concatenate([[0], np.cumsum(lengths)]).astype(np.int32)
-            self.take = np.concatenate([np.arange(pat.indptr[j], pat.indptr[j + 1])
-                                        for j in iperm]) if n else np.zeros(0, int)
-            self.indices_p = pat.indices[self.take]
+            self.perm, self.iperm = perm, iperm
+            # The pattern permuted symmetrically, and where its data come from.
+            where = sp.csc_matrix((np.arange(1, nnz + 1, dtype=float), pat.indices,
+                                   pat.indptr), shape=(n, n))[iperm][:, iperm].tocsc()
+            where.sort_indices()
+            self.take = where.data.astype(np.int64) - 1
+            self.indices_p, self.indptr_p = where.indices, where.indptr
             self.max_chunk = 8
 
     def factor(self, omega):
         """(good, solve): the frequencies factorised, and a solver for their rows."""
         pat = self.pat
+        if self.kind == "band" and _kernels() is not None and not np.iscomplexobj(omega):
+            return self._banded_compiled(np.asarray(omega, dtype=float))
         data = combine(pat.dc, pat.m, pat.k, np.asarray(omega)[:, None])
         good = np.isfinite(data).all(axis=1)
         if self.kind == "band":
             return self._banded(data, good)
         return self._superlu(data, good)
+
+    def _banded_compiled(self, omega):
+        """The banded LU by the compiled kernels (the same unblocked LU as LAPACK's zgbtf2).
+
+        No per-ω call overhead, and none of zgbtrf's BLAS calls per column,
+        which on a band 1–2 wide cost many times the arithmetic.
+        """
+        kern = _kernels()
+        pat, n, kl = self.pat, self.pat.n, self.kl
+        ab = np.zeros((omega.size, n, self.band_rows), dtype=complex)
+        good = np.ones(omega.size, dtype=bool)
+        kern.band_assemble(pat.dc, pat.m, pat.k, omega, self.dest[0], self.dest[1], ab, good)
+        ab = ab[good]
+        ipiv = np.zeros((ab.shape[0], n), dtype=np.int64)
+        ok = np.ones(ab.shape[0], dtype=bool)
+        kern.band_factor(ab, kl, ipiv, ok)
+        good[np.flatnonzero(good)[~ok]] = False
+        ab, ipiv = ab[ok], ipiv[ok]
+        p = self.p
+
+        def solve(r):
+            out = np.empty((ab.shape[0], n), dtype=complex)
+            kern.band_solve_perm(ab, kl, ipiv, p, np.ascontiguousarray(r, dtype=complex), out)
+            return out
+        return good, solve
 
     def _banded(self, data, good):
         from scipy.linalg.lapack import zgbtrf, zgbtrs
@@ -874,6 +967,7 @@ class _SparseSolver:
         n, kl = self.pat.n, self.kl
         ab = np.zeros((data.shape[0], n, self.band_rows), dtype=complex)
         ab[:, self.dest[0], self.dest[1]] = data
+        p = self.p
         factors = []
         for k in np.flatnonzero(good):
             lu, piv, info = zgbtrf(ab[k].T, kl, kl, overwrite_ab=1)
@@ -881,7 +975,6 @@ class _SparseSolver:
                 good[k] = False             # exactly singular at this frequency
                 continue
             factors.append((lu, piv))
-        p = self.p
 
         def solve(r):
             rp = np.ascontiguousarray(r[:, p], dtype=complex)
@@ -903,14 +996,16 @@ class _SparseSolver:
             A = sp.csc_matrix((data[k, self.take], self.indices_p, self.indptr_p),
                               shape=(n, n))
             try:
-                factors.append(splu(A, permc_spec="NATURAL"))
+                factors.append(splu(A, permc_spec="NATURAL",
+                                    diag_pivot_thresh=DIAG_PIVOT_THRESH,
+                                    options={"SymmetricMode": True}))
             except RuntimeError:            # exactly singular at this frequency
                 good[k] = False
-        perm = self.perm
+        perm, iperm = self.perm, self.iperm
 
         def solve(r):
-            r = np.asarray(r, dtype=complex)
-            return np.stack([lu.solve(np.ascontiguousarray(r[k]))[perm]
+            r = np.asarray(r, dtype=complex)[:, iperm]
+            return np.stack([lu.solve(r[k])[perm]
                              for k, lu in enumerate(factors)]) if factors \
                 else np.zeros((0, n), complex)
         return good, solve
