@@ -609,6 +609,10 @@ class Solution:
     singular: NDArray[np.bool_]
 
 
+#: SuperLU points whose refinement leaves a larger estimate than this are
+#: factorised again with partial pivoting (:class:`_SparseSolver`).
+_STRICT_AFTER = 1e-10
+
 #: Work per chunk of frequencies: about this many (ω, term) pairs at once.
 _CHUNK_TERMS = 2 ** 17
 
@@ -640,6 +644,18 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int, keep: 
         if not sel.size:
             continue
         xh, xl, est = _refined(solve_fn, pat, omega[sel], rhs, system, refine, steps)
+        redo = np.flatnonzero(~(est <= _STRICT_AFTER)) if solver.kind == "superlu" else []
+        if len(redo):
+            # Diagonal pivoting was not stable enough here: partial pivoting.
+            ok2, strict_fn = solver.factor(omega[sel[redo]], strict=True)
+            if ok2.all():
+                xh2, xl2, est2 = _refined(strict_fn, pat, omega[sel[redo]], rhs, system,
+                                          refine, steps)
+                better = ~(est2 >= est[redo])
+                take = redo[better]
+                xh[take], est[take] = xh2[better], est2[better]
+                if xl is not None:
+                    xl[take] = xl2[better]
         K[sel] = _difference_dd(system, xh, xl)
         x = xh + xl if xl is not None else xh
         err[sel] = est
@@ -725,7 +741,7 @@ def _refined(solve_fn, pat: _Pattern, omega, rhs, system, refine: bool, steps: i
         # No refinement: the first correction is still the error estimate.
         d = solve_fn(pat.residual(omega, x0, None, rhs))
         return x0, None, _estimate(system, x0, None, d, x0)
-    xh, xl = x0, np.zeros_like(x0)
+    xh, xl = x0, None
     prev = x0
     est = np.full(omega.size, np.inf)
     for _ in range(steps):
@@ -733,7 +749,7 @@ def _refined(solve_fn, pat: _Pattern, omega, rhs, system, refine: bool, steps: i
         est = _estimate(system, xh, xl, d, prev)
         with np.errstate(all="ignore"):
             xh, e = _two_sum(xh, d)
-            xl = xl + e
+            xl = e if xl is None else xl + e
         prev = d
         # est bounds the error before this correction; after it, the error is
         # smaller still (by the contraction): stop once est is near rounding.
@@ -831,6 +847,8 @@ class _DenseSolver:
     is applied as one matrix product (small systems, many ω).
     """
 
+    kind = "dense"
+
     def __init__(self, system: NodalSystem, pat: _Pattern):
         self.dc = (system.D + system.C).toarray()
         self.m, self.k = system.M.toarray(), system.Ks.toarray()
@@ -862,7 +880,7 @@ class _DenseSolver:
 #: Cuthill–McKee ordering is at most this, SuperLU otherwise.
 BAND_MAX = 12
 #: SuperLU's threshold for keeping the diagonal pivot (symmetric mode).
-DIAG_PIVOT_THRESH = 0.01
+DIAG_PIVOT_THRESH = 0.001
 
 
 class _SparseSolver:
@@ -880,8 +898,9 @@ class _SparseSolver:
     Aᵀ + A found once from the pattern, in its symmetric mode (diagonal
     pivots kept unless below :data:`DIAG_PIVOT_THRESH` of the column's
     largest entry), which fills 2–3× less than partial pivoting on these
-    complex symmetric matrices.  The refinement and its error estimate are
-    the same for either.
+    complex symmetric matrices; where the refinement then does not reach
+    1e-10, the point is factorised again with partial pivoting.  The
+    refinement and its error estimate are the same for either.
     """
 
     def __init__(self, pat: _Pattern):
@@ -925,8 +944,12 @@ class _SparseSolver:
             self.indices_p, self.indptr_p = where.indices, where.indptr
             self.max_chunk = 8
 
-    def factor(self, omega):
-        """(good, solve): the frequencies factorised, and a solver for their rows."""
+    def factor(self, omega, strict: bool = False):
+        """(good, solve): the frequencies factorised, and a solver for their rows.
+
+        ``strict``: SuperLU with partial pivoting (threshold 1) instead of
+        the symmetric mode, where the refinement did not converge.
+        """
         pat = self.pat
         if self.kind == "band" and _kernels() is not None and not np.iscomplexobj(omega):
             return self._banded_compiled(np.asarray(omega, dtype=float))
@@ -934,7 +957,7 @@ class _SparseSolver:
         good = np.isfinite(data).all(axis=1)
         if self.kind == "band":
             return self._banded(data, good)
-        return self._superlu(data, good)
+        return self._superlu(data, good, strict)
 
     def _banded_compiled(self, omega):
         """The banded LU by the compiled kernels (the same unblocked LU as LAPACK's zgbtf2).
@@ -986,7 +1009,7 @@ class _SparseSolver:
             return x
         return good, solve
 
-    def _superlu(self, data, good):
+    def _superlu(self, data, good, strict=False):
         import scipy.sparse as sp
         from scipy.sparse.linalg import splu
 
@@ -996,9 +1019,10 @@ class _SparseSolver:
             A = sp.csc_matrix((data[k, self.take], self.indices_p, self.indptr_p),
                               shape=(n, n))
             try:
-                factors.append(splu(A, permc_spec="NATURAL",
-                                    diag_pivot_thresh=DIAG_PIVOT_THRESH,
-                                    options={"SymmetricMode": True}))
+                factors.append(
+                    splu(A, permc_spec="NATURAL", diag_pivot_thresh=1.0) if strict else
+                    splu(A, permc_spec="NATURAL", diag_pivot_thresh=DIAG_PIVOT_THRESH,
+                         options={"SymmetricMode": True}))
             except RuntimeError:            # exactly singular at this frequency
                 good[k] = False
         perm, iperm = self.perm, self.iperm

@@ -349,11 +349,18 @@ def _LADDER_REFERENCE():
     return text, np.array([K_ref(w) for w in _LADDER_OMEGA])
 
 
-@pytest.mark.parametrize("path", ["band", "superlu", "band-numpy", "superlu-numpy"])
+@pytest.mark.parametrize("path", ["band", "superlu", "band-numpy", "superlu-numpy",
+                                  "superlu-strict"])
 def test_large_ladder_with_levers_is_exact_against_mpmath(path, monkeypatch):
-    """Issue 14 §3: the sparse paths keep K ≤ 1e-12 from mpmath (2,000 sections, sampled ω)."""
+    """Issue 14 §3: the sparse paths keep K ≤ 1e-12 from mpmath (2,000 sections, sampled ω).
+
+    ``superlu-strict`` sends every point through the partial-pivoting
+    fallback (taken where the symmetric mode's refinement stays above 1e-10).
+    """
     if path.startswith("superlu"):
         monkeypatch.setattr(mechcirc.nodal, "BAND_MAX", -1)
+    if path.endswith("strict"):
+        monkeypatch.setattr(mechcirc.nodal, "_STRICT_AFTER", -1.0)
     if path.endswith("numpy"):
         monkeypatch.setattr(mechcirc.nodal, "USE_NUMBA", False)
     text, ref = _LADDER_REFERENCE()
