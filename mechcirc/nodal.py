@@ -21,10 +21,12 @@ matrices (of the loaded part, or with ``whole=True`` of the whole network,
 as the time domain and two-ports need them), and :func:`combine` forms
 A(ω) from them.  :func:`solve` solves A(ω) x = e_a − e_b: small systems as
 batched dense solves, large ones by a sparse LU per ω on a fixed pattern
-(ordering found once; LAPACK's banded LU where the band is narrow).  Each
-solution is refined with residuals in extended precision reusing the
-factors, and the last correction gives the error estimate of K
-(:class:`Solution`).  At a singular point K is +∞·j (a pole) or 0 (a zero),
+(a banded LU where the band is narrow, SuperLU otherwise; the choice and
+the ordering made once from the pattern, see :class:`_SparseSolver`).  Each
+solution is refined with residuals in double-double arithmetic reusing the
+factors (compiled by numba on the sparse path when it is installed:
+:mod:`mechcirc._nodal_kernels`), and the last correction gives the error
+estimate of K (:class:`Solution`).  At a singular point K is +∞·j (a pole) or 0 (a zero),
 with an infinite error, as the series–parallel method gives it.
 """
 
@@ -70,7 +72,7 @@ class NodalSystem:
         Indices of the drive's nodes, −1 for the reference node.
     stamps : dict
         The unsummed entries ``kind -> (rows, cols, values)`` of M, D, Kₛ and C,
-        for residuals in extended precision (a summed diagonal is already rounded).
+        for residuals in double-double (a summed diagonal is already rounded).
     """
 
     nodes: tuple[str, ...]
