@@ -66,30 +66,28 @@ def _dd_div_d(h, lo, w, wh, wl):
 
 
 @_jit
-def residual(omega, xr, xi, xlr, xli, has_lo, rhs, ptr, terms, n_el,
-             e_i, e_j, e_val, e_vh, e_vl, s_col, s_val, s_vh, s_vl, out_r, out_i):
+def residual(omega, xr, xi, xlr, xli, has_lo, rhs, b_i, b_j, b_s,
+             e_i, e_j, e_val, e_vh, e_vl, s_col, s_val, s_vh, s_vl, acc, out_r, out_i):
     """b − A(ω) x into ``out_r``/``out_i`` (shape (n_ω, n)); x = (xr + j xi) + (xlr + j xli).
 
-    ``x*`` have one extra zero column (index n, the reference).  Bucket
-    4·r + q (q: mass, spring, damper, lever) holds ``terms[ptr[b]:ptr[b+1]]``:
-    t < n_el is +element t, t < 2·n_el is −element t − n_el, else lever
-    stamp t − 2·n_el.
+    ``x*`` have one extra zero column (index n, the reference).  ``b_i``,
+    ``b_j``, ``b_s`` are the buckets 4·row + kind (kind: mass, spring,
+    damper, lever) of +element e, −element e and lever stamp s (4·n: the
+    reference's row, dropped).  Each bucket receives its terms in the numpy
+    code's order — the + terms by element, then the − terms, then the lever
+    stamps — and adds them by TwoSum into ``acc`` (4·n + 4 rows of
+    re_hi, re_lo, im_hi, im_lo).
     """
     n_w, n = out_r.shape
+    n_el = e_i.size
     n_s = s_col.size
-    n_t = n_el + n_s
-    th_r = np.empty(n_t)
-    tl_r = np.empty(n_t)
-    th_i = np.empty(n_t)
-    tl_i = np.empty(n_t)
-    sr_h = np.zeros(4)
-    sr_l = np.zeros(4)
-    si_h = np.zeros(4)
-    si_l = np.zeros(4)
+    drop = 4 * n
+    t = np.empty((n_el, 4))
     for k in range(n_w):
         w = omega[k]
         wh, wl = _split(w)
-        for e in range(n_el):                   # each element's y·(x_i − x_j), exactly
+        acc[:] = 0.0
+        for e in range(n_el):                   # +y·(x_i − x_j), formed once
             i = e_i[e]
             j = e_j[e]
             v, vh, vl = e_val[e], e_vh[e], e_vl[e]
@@ -98,64 +96,60 @@ def residual(omega, xr, xi, xlr, xli, has_lo, rhs, ptr, terms, n_el,
             if has_lo:
                 dl_r = dl_r + (xlr[k, i] - xlr[k, j])
                 dl_i = dl_i + (xli[k, i] - xli[k, j])
-            a, b = _two_prod(v, vh, vl, dh_r)
-            th_r[e] = a
-            tl_r[e] = b + v * dl_r
-            a, b = _two_prod(v, vh, vl, dh_i)
-            th_i[e] = a
-            tl_i[e] = b + v * dl_i
-        for s in range(n_s):                    # each lever stamp's value·x_c
+            th_r, tl_r = _two_prod(v, vh, vl, dh_r)
+            th_i, tl_i = _two_prod(v, vh, vl, dh_i)
+            tl_r = tl_r + v * dl_r
+            tl_i = tl_i + v * dl_i
+            t[e, 0] = th_r
+            t[e, 1] = tl_r
+            t[e, 2] = th_i
+            t[e, 3] = tl_i
+            bk = b_i[e]
+            if bk != drop:
+                a, ea = _two_sum(acc[bk, 0], th_r)
+                acc[bk, 0] = a
+                acc[bk, 1] += ea + tl_r
+                a, ea = _two_sum(acc[bk, 2], th_i)
+                acc[bk, 2] = a
+                acc[bk, 3] += ea + tl_i
+        for e in range(n_el):                   # −y·(x_i − x_j) into the second row
+            bk = b_j[e]
+            if bk == drop:
+                continue
+            a, ea = _two_sum(acc[bk, 0], -t[e, 0])
+            acc[bk, 0] = a
+            acc[bk, 1] += ea + -t[e, 1]
+            a, ea = _two_sum(acc[bk, 2], -t[e, 2])
+            acc[bk, 2] = a
+            acc[bk, 3] += ea + -t[e, 3]
+        for s in range(n_s):
+            bk = b_s[s]
+            if bk == drop:
+                continue
             c = s_col[s]
             v, vh, vl = s_val[s], s_vh[s], s_vl[s]
-            a, b = _two_prod(v, vh, vl, xr[k, c])
+            th_r, tl_r = _two_prod(v, vh, vl, xr[k, c])
+            th_i, tl_i = _two_prod(v, vh, vl, xi[k, c])
             if has_lo:
-                b = b + v * xlr[k, c]
-            th_r[n_el + s] = a
-            tl_r[n_el + s] = b
-            a, b = _two_prod(v, vh, vl, xi[k, c])
-            if has_lo:
-                b = b + v * xli[k, c]
-            th_i[n_el + s] = a
-            tl_i[n_el + s] = b
+                tl_r = tl_r + v * xlr[k, c]
+                tl_i = tl_i + v * xli[k, c]
+            a, ea = _two_sum(acc[bk, 0], th_r)
+            acc[bk, 0] = a
+            acc[bk, 1] += ea + tl_r
+            a, ea = _two_sum(acc[bk, 2], th_i)
+            acc[bk, 2] = a
+            acc[bk, 3] += ea + tl_i
         for r in range(n):
-            for q in range(4):
-                bk = 4 * r + q
-                ah_r = 0.0
-                al_r = 0.0
-                ah_i = 0.0
-                al_i = 0.0
-                for p in range(ptr[bk], ptr[bk + 1]):
-                    t = terms[p]
-                    if t < n_el:
-                        u = t
-                        sg = 1.0
-                    elif t < 2 * n_el:
-                        u = t - n_el
-                        sg = -1.0
-                    else:
-                        u = t - n_el
-                        sg = 1.0
-                    if p == ptr[bk]:
-                        ah_r, al_r = sg * th_r[u], sg * tl_r[u]
-                        ah_i, al_i = sg * th_i[u], sg * tl_i[u]
-                    else:
-                        ah_r, e_r = _two_sum(ah_r, sg * th_r[u])
-                        al_r += e_r + sg * tl_r[u]
-                        ah_i, e_m = _two_sum(ah_i, sg * th_i[u])
-                        al_i += e_m + sg * tl_i[u]
-                sr_h[q] = ah_r
-                sr_l[q] = al_r
-                si_h[q] = ah_i
-                si_l[q] = al_i
+            m_ = 4 * r
             # ω S_m − S_k/ω, then A x = S_c + S_l + j·sus, then b − A x.
-            wm_rh, wm_rl = _dd_mul_d(sr_h[0], sr_l[0], w, wh, wl)
-            wm_ih, wm_il = _dd_mul_d(si_h[0], si_l[0], w, wh, wl)
-            kw_rh, kw_rl = _dd_div_d(sr_h[1], sr_l[1], w, wh, wl)
-            kw_ih, kw_il = _dd_div_d(si_h[1], si_l[1], w, wh, wl)
+            wm_rh, wm_rl = _dd_mul_d(acc[m_, 0], acc[m_, 1], w, wh, wl)
+            wm_ih, wm_il = _dd_mul_d(acc[m_, 2], acc[m_, 3], w, wh, wl)
+            kw_rh, kw_rl = _dd_div_d(acc[m_ + 1, 0], acc[m_ + 1, 1], w, wh, wl)
+            kw_ih, kw_il = _dd_div_d(acc[m_ + 1, 2], acc[m_ + 1, 3], w, wh, wl)
             su_rh, su_rl = _dd_add(wm_rh, wm_rl, -kw_rh, -kw_rl)
             su_ih, su_il = _dd_add(wm_ih, wm_il, -kw_ih, -kw_il)
-            g_rh, g_rl = _dd_add(sr_h[2], sr_l[2], sr_h[3], sr_l[3])
-            g_ih, g_il = _dd_add(si_h[2], si_l[2], si_h[3], si_l[3])
+            g_rh, g_rl = _dd_add(acc[m_ + 2, 0], acc[m_ + 2, 1], acc[m_ + 3, 0], acc[m_ + 3, 1])
+            g_ih, g_il = _dd_add(acc[m_ + 2, 2], acc[m_ + 2, 3], acc[m_ + 3, 2], acc[m_ + 3, 3])
             ax_rh, ax_rl = _dd_add(g_rh, g_rl, -su_ih, -su_il)
             ax_ih, ax_il = _dd_add(g_ih, g_il, su_rh, su_rl)
             rr_h, rr_l = _dd_add(rhs[r], 0.0, -ax_rh, -ax_rl)

@@ -370,10 +370,11 @@ class _Pattern:
             sel = pos == s
             self.slots.append(term[sel][np.argsort(r[sel], kind="stable")])
         self.buckets = uniq[order]             # bucket of each rank
-        # The same order, bucket by bucket, for the compiled kernel.
-        by_bucket = np.lexsort((np.arange(bucket.size), bucket))
-        self.k_terms = np.arange(keep.size)[keep][by_bucket].astype(np.int64)
-        self.k_ptr = np.searchsorted(bucket[by_bucket], np.arange(4 * n + 1)).astype(np.int64)
+        # The compiled kernel adds each bucket's terms in the same order: the
+        # + terms by element, then the − terms, then the lever stamps.
+        self.k_bi = np.minimum(self.e_i * 4 + self.e_kind, 4 * n).astype(np.int64)
+        self.k_bj = np.minimum(self.e_j * 4 + self.e_kind, 4 * n).astype(np.int64)
+        self.k_bs = np.minimum(self.s_row * 4 + 3, 4 * n).astype(np.int64)
         self.n_terms = 2 * E + self.s_row.size
         self.max_terms = int(counts.max(initial=0))
 
@@ -477,10 +478,11 @@ class _Pattern:
         out_r, out_i = np.empty((c, n)), np.empty((c, n))
         with np.errstate(all="ignore"):
             _kernels().residual(np.ascontiguousarray(omega, dtype=float), xr, xi, xlr, xli,
-                                xl is not None, np.asarray(rhs, dtype=float), self.k_ptr,
-                                self.k_terms, self.e_i.size, self.e_i, self.e_j, self.e_val,
+                                xl is not None, np.asarray(rhs, dtype=float), self.k_bi,
+                                self.k_bj, self.k_bs, self.e_i, self.e_j, self.e_val,
                                 self.e_vs[0], self.e_vs[1], self.s_col, self.s_val,
-                                self.s_vs[0], self.s_vs[1], out_r, out_i)
+                                self.s_vs[0], self.s_vs[1], np.zeros((4 * n + 4, 4)),
+                                out_r, out_i)
         return out_r + 1j * out_i
 
     def sensitivities(self, omega: NDArray, x: NDArray, K: NDArray) -> tuple[NDArray, NDArray]:
@@ -638,7 +640,10 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int, keep: 
     x_all = np.full((m, n), complex(np.nan, np.nan)) if keep is None else None
     kept = {}
     solver = _solver(system)
-    chunk = max(1, min(solver.max_chunk, _CHUNK_TERMS // max(1, pat.n_terms + n)))
+    if solver.kind != "dense" and _kernels() is not None:
+        chunk = solver.max_chunk            # compiled: no (ω, term) temporaries
+    else:
+        chunk = max(1, min(solver.max_chunk, _CHUNK_TERMS // max(1, pat.n_terms + n)))
     for start in range(0, m, chunk):
         sel = np.arange(start, min(start + chunk, m))
         good, solve_fn = solver.factor(omega[sel])
@@ -926,7 +931,7 @@ class _SparseSolver:
             self.p = p
             self.band_rows = 3 * kl + 1
             self.dest = (ci, 2 * kl + ri - ci)            # in the (n, rows) C-order array
-            self.max_chunk = 64
+            self.max_chunk = max(1, min(64, 2 ** 22 // max(1, n * self.band_rows)))
         else:
             from scipy.sparse.linalg import splu
 
