@@ -162,56 +162,71 @@ def residual(omega, xr, xi, xlr, xli, has_lo, rhs, b_i, b_j, b_s,
             out_i[k, r] = ri_h + ri_l
 
 
-@_jit
-def band_factor(ab, kl, ipiv, ok):
-    """LU with partial pivoting of each banded matrix ``ab[k]`` in place (LAPACK's zgbtf2).
+@_jit_inline
+def _band_lu(a, kl, ipiv):
+    """LU with partial pivoting of one banded matrix in place (LAPACK's zgbtf2); False if singular.
 
-    ``ab[k, c, 2·kl + i − c]`` holds A[i, c] (kl = ku; the first kl of the
+    ``a[c, 2·kl + i − c]`` holds A[i, c] (kl = ku; the first kl of the
     3·kl + 1 places of a column are room for the fill).  The pivot is the
     largest |re| + |im| in the column, as LAPACK's izamax picks it.
-    ``ok[k]`` is cleared where a pivot is exactly zero (A singular).
     """
-    n_w, n, _ = ab.shape
+    n = a.shape[0]
     kv = 2 * kl
-    for k in range(n_w):
-        if not ok[k]:
-            continue
+    ju = 0
+    for j in range(n):
+        km = min(kl, n - 1 - j)
+        jp = 0
+        best = -1.0
+        for t in range(km + 1):
+            z = a[j, kv + t]
+            m = abs(z.real) + abs(z.imag)
+            if m > best:
+                best = m
+                jp = t
+        ipiv[j] = j + jp
+        if best == 0.0 or not np.isfinite(best):
+            return False
+        ju = max(ju, min(j + kl + jp, n - 1))
+        if jp != 0:
+            for c in range(j, ju + 1):
+                tmp = a[c, kv + j - c]
+                a[c, kv + j - c] = a[c, kv + j + jp - c]
+                a[c, kv + j + jp - c] = tmp
+        if km > 0:
+            recip = 1.0 / a[j, kv]
+            for t in range(1, km + 1):
+                a[j, kv + t] *= recip
+            for c in range(j + 1, ju + 1):
+                u = a[c, kv + j - c]
+                if u != 0:
+                    for t in range(1, km + 1):
+                        a[c, kv + j + t - c] -= a[j, kv + t] * u
+    return True
+
+
+@_jit
+def band_assemble_factor(dc, m, kk, omega, dest_c, dest_r, kl, ab, ipiv, ok):
+    """Form A(ω_k) = dc + j(ω_k m − kk/ω_k) (:func:`mechcirc.nodal.combine`) in band
+    storage ``ab[k, dest_c, dest_r]`` and factorise it at once (while it is in cache).
+
+    ``ok[k]`` is cleared where an entry is not finite or A is singular.
+    """
+    for k in range(omega.size):
+        w = omega[k]
         a = ab[k]
-        ju = 0
-        for j in range(n):
-            km = min(kl, n - 1 - j)
-            jp = 0
-            best = -1.0
-            for t in range(km + 1):
-                z = a[j, kv + t]
-                m = abs(z.real) + abs(z.imag)
-                if m > best:
-                    best = m
-                    jp = t
-            ipiv[k, j] = j + jp
-            if best == 0.0 or not np.isfinite(best):
-                ok[k] = False
-                break
-            ju = max(ju, min(j + kl + jp, n - 1))
-            if jp != 0:
-                for c in range(j, ju + 1):
-                    tmp = a[c, kv + j - c]
-                    a[c, kv + j - c] = a[c, kv + j + jp - c]
-                    a[c, kv + j + jp - c] = tmp
-            if km > 0:
-                recip = 1.0 / a[j, kv]
-                for t in range(1, km + 1):
-                    a[j, kv + t] *= recip
-                for c in range(j + 1, ju + 1):
-                    u = a[c, kv + j - c]
-                    if u != 0:
-                        for t in range(1, km + 1):
-                            a[c, kv + j + t - c] -= a[j, kv + t] * u
+        a[:, :] = 0
+        fin = True
+        for t in range(dc.size):
+            z = complex(dc[t], w * m[t] - kk[t] / w)
+            if not (np.isfinite(z.real) and np.isfinite(z.imag)):
+                fin = False
+            a[dest_c[t], dest_r[t]] = z
+        ok[k] = fin and _band_lu(a, kl, ipiv[k])
 
 
 @_jit
 def band_solve(ab, kl, ipiv, b):
-    """Solve with the factors of :func:`band_factor`, each ``b[k]`` in place."""
+    """Solve with the factors of :func:`_band_lu`, each ``b[k]`` in place."""
     n_w, n, _ = ab.shape
     kv = 2 * kl
     for k in range(n_w):
@@ -245,22 +260,6 @@ def band_solve_perm(ab, kl, ipiv, p, r, out):
         band_solve(ab[k:k + 1], kl, ipiv[k:k + 1], x.reshape(1, n))
         for i in range(n):
             out[k, p[i]] = x[i]
-
-
-@_jit
-def band_assemble(dc, m, kk, omega, dest_c, dest_r, ab, ok):
-    """ab[k, dest_c, dest_r] = dc + j(ω_k m − kk/ω_k) (:func:`mechcirc.nodal.combine`).
-
-    ``ok[k]`` is cleared where an entry is not finite.
-    """
-    n_w = omega.size
-    for k in range(n_w):
-        w = omega[k]
-        for t in range(dc.size):
-            z = complex(dc[t], w * m[t] - kk[t] / w)
-            if not (np.isfinite(z.real) and np.isfinite(z.imag)):
-                ok[k] = False
-            ab[k, dest_c[t], dest_r[t]] = z
 
 
 @_jit_inline

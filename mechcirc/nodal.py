@@ -974,15 +974,13 @@ class _SparseSolver:
         """
         kern = _kernels()
         pat, n, kl = self.pat, self.pat.n, self.kl
-        ab = np.zeros((omega.size, n, self.band_rows), dtype=complex)
+        ab = np.empty((omega.size, n, self.band_rows), dtype=complex)
+        ipiv = np.empty((omega.size, n), dtype=np.int64)
         good = np.ones(omega.size, dtype=bool)
-        kern.band_assemble(pat.dc, pat.m, pat.k, omega, self.dest[0], self.dest[1], ab, good)
-        ab = ab[good]
-        ipiv = np.zeros((ab.shape[0], n), dtype=np.int64)
-        ok = np.ones(ab.shape[0], dtype=bool)
-        kern.band_factor(ab, kl, ipiv, ok)
-        good[np.flatnonzero(good)[~ok]] = False
-        ab, ipiv = ab[ok], ipiv[ok]
+        kern.band_assemble_factor(pat.dc, pat.m, pat.k, omega, self.dest[0], self.dest[1],
+                                  kl, ab, ipiv, good)
+        if not good.all():
+            ab, ipiv = ab[good], ipiv[good]
         p = self.p
 
         def solve(r):
