@@ -250,14 +250,15 @@ def band_solve(ab, kl, ipiv, b):
 
 
 @_jit
-def band_solve_perm(ab, kl, ipiv, p, r, out):
-    """x = A⁻¹ r for each k, A's rows and columns in the order ``p``: out[k, p] = A_p⁻¹ r[k, p]."""
-    n_w, n, _ = ab.shape
+def band_solve_perm(ab, kl, ipiv, rows, p, r, out):
+    """out[k, p] = A_p⁻¹ r[k, p] with the factors ``ab[rows[k]]`` (A's rows and columns in the order ``p``)."""
+    n = ab.shape[1]
     x = np.empty(n, dtype=np.complex128)
-    for k in range(n_w):
+    for k in range(rows.size):
+        f = rows[k]
         for i in range(n):
             x[i] = r[k, p[i]]
-        band_solve(ab[k:k + 1], kl, ipiv[k:k + 1], x.reshape(1, n))
+        band_solve(ab[f:f + 1], kl, ipiv[f:f + 1], x.reshape(1, n))
         for i in range(n):
             out[k, p[i]] = x[i]
 

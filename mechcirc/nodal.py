@@ -641,7 +641,8 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int, keep: 
     kept = {}
     solver = _solver(system)
     if solver.kind != "dense" and _kernels() is not None:
-        chunk = solver.max_chunk            # compiled: no (ω, term) temporaries
+        # Compiled: no (ω, term) temporaries; the chunk's (ω, n) arrays stay in cache.
+        chunk = max(1, min(solver.max_chunk, 2 ** 16 // max(1, n)))
     else:
         chunk = max(1, min(solver.max_chunk, _CHUNK_TERMS // max(1, pat.n_terms + n)))
     for start in range(0, m, chunk):
@@ -748,19 +749,27 @@ def _refined(solve_fn, pat: _Pattern, omega, rhs, system, refine: bool, steps: i
         # No refinement: the first correction is still the error estimate.
         d = solve_fn(pat.residual(omega, x0, None, rhs))
         return x0, None, _estimate(system, x0, None, d, x0)
-    xh, xl = x0, None
+    xh, xl = x0.copy(), np.zeros_like(x0)
     prev = x0
     est = np.full(omega.size, np.inf)
-    for _ in range(steps):
-        d = solve_fn(pat.residual(omega, xh, xl, rhs))
-        est = _estimate(system, xh, xl, d, prev)
+    active = np.arange(omega.size)
+    for step in range(steps):
+        # Only the points not yet converged take a further step (their
+        # factors chosen by ``rows``).
+        rows = None if active.size == omega.size else active
+        xa, xla = xh[active], (xl[active] if step else None)
+        d = solve_fn(pat.residual(omega[active], xa, xla, rhs), *(() if rows is None else (rows,)))
+        est[active] = _estimate(system, xa, xla, d, prev[active])
         with np.errstate(all="ignore"):
-            xh, e = _two_sum(xh, d)
-            xl = e if xl is None else xl + e
-        prev = d
+            s, e = _two_sum(xa, d)
+        xh[active] = s
+        xl[active] = e if xla is None else xla + e
+        prev = prev.copy() if step == 0 else prev
+        prev[active] = d
         # est bounds the error before this correction; after it, the error is
         # smaller still (by the contraction): stop once est is near rounding.
-        if not np.any(est > 16 * eps):
+        active = active[est[active] > 16 * eps]
+        if not active.size:
             break
     return xh, xl, est
 
@@ -880,7 +889,7 @@ class _DenseSolver:
             ok = np.isfinite(inv).all(axis=(1, 2))
             good[np.flatnonzero(good)[~ok]] = False
             inv = inv[ok]
-        return good, lambda r: np.einsum("kij,kj->ki", inv, r)
+        return good, lambda r, rows=slice(None): np.einsum("kij,kj->ki", inv[rows], r)
 
 
 #: The sparse path uses a banded LU when the half band width kl after a reverse
@@ -983,9 +992,13 @@ class _SparseSolver:
             ab, ipiv = ab[good], ipiv[good]
         p = self.p
 
-        def solve(r):
-            out = np.empty((ab.shape[0], n), dtype=complex)
-            kern.band_solve_perm(ab, kl, ipiv, p, np.ascontiguousarray(r, dtype=complex), out)
+        every = np.arange(ab.shape[0])
+
+        def solve(r, rows=None):
+            rows = every if rows is None else np.asarray(rows, dtype=np.int64)
+            out = np.empty((rows.size, n), dtype=complex)
+            kern.band_solve_perm(ab, kl, ipiv, rows, p, np.ascontiguousarray(r, dtype=complex),
+                                 out)
             return out
         return good, solve
 
@@ -1004,10 +1017,11 @@ class _SparseSolver:
                 continue
             factors.append((lu, piv))
 
-        def solve(r):
+        def solve(r, rows=None):
             rp = np.ascontiguousarray(r[:, p], dtype=complex)
             out = np.empty_like(rp)
-            for k, (lu, piv) in enumerate(factors):
+            use = factors if rows is None else [factors[i] for i in rows]
+            for k, (lu, piv) in enumerate(use):
                 out[k] = zgbtrs(lu, kl, kl, rp[k], piv, overwrite_b=1)[0]
             x = np.empty_like(out)
             x[:, p] = out
@@ -1032,10 +1046,10 @@ class _SparseSolver:
                 good[k] = False
         perm, iperm = self.perm, self.iperm
 
-        def solve(r):
+        def solve(r, rows=None):
             r = np.asarray(r, dtype=complex)[:, iperm]
-            return np.stack([lu.solve(r[k])[perm]
-                             for k, lu in enumerate(factors)]) if factors \
+            use = factors if rows is None else [factors[i] for i in rows]
+            return np.stack([lu.solve(r[k])[perm] for k, lu in enumerate(use)]) if use \
                 else np.zeros((0, n), complex)
         return good, solve
 
