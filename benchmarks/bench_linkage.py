@@ -15,8 +15,11 @@ Measured in one run, on the same machine:
 * ``Linkage.solve`` (a list of ``LinkageState``) against the old path per
   position: the issue's "≥ 50× faster".
 
-Each timing is the best of a few repeats (the closed form and the dyads
-alternately); the machine is shared, so the ratios (same run) are what to read.  Agreement with the old path is printed.
+Each timing is the median of several repeats (the closed form and each
+linkage path alternately); the machine is shared, so the ratios (same run) are
+what to read.  The Newton path is the compiled loop when numba is installed
+(the ``fast`` extra), and the batched numpy fallback is timed beside it.
+Agreement with the old path is printed.
 
 Run:  python benchmarks/bench_linkage.py
 """
@@ -52,26 +55,37 @@ omega = 100.0
 
 
 def median_time(fn, repeat=5):
-    """Best of ``repeat`` runs [s]: on a shared machine the minimum is the least disturbed."""
+    """Median of ``repeat`` runs [s]."""
     times = []
     for _ in range(repeat):
         t0 = time.perf_counter()
         fn()
         times.append(time.perf_counter() - t0)
-    return float(np.min(times))
+    return float(np.median(times))
 
 
-def interleaved(fa, fb, repeat=30):
-    """Best times of two functions run alternately (same load for both) [s]."""
-    ta, tb = [], []
+CPU = {}
+
+
+def interleaved(fa, fb, repeat=30, label=None):
+    """Median wall times of two functions run alternately (same load for both) [s].
+
+    The median CPU times of this process are kept in ``CPU[label]`` (the
+    other jobs on the shared machine disturb them less).
+    """
+    ta, tb, ca, cb = [], [], [], []
     for _ in range(repeat):
-        t0 = time.perf_counter()
+        c0, t0 = time.process_time(), time.perf_counter()
         fa()
         ta.append(time.perf_counter() - t0)
-        t0 = time.perf_counter()
+        ca.append(time.process_time() - c0)
+        c0, t0 = time.process_time(), time.perf_counter()
         fb()
         tb.append(time.perf_counter() - t0)
-    return float(np.min(ta)), float(np.min(tb))
+        cb.append(time.process_time() - c0)
+    if label:
+        CPU[label] = (float(np.median(ca)), float(np.median(cb)))
+    return float(np.median(ta)), float(np.median(tb))
 
 
 # ------------------------------------------------------------ the old path
@@ -164,12 +178,26 @@ def main() -> None:
     theta = np.linspace(0.0, 2 * math.pi, 3600, endpoint=False)
     lk4.motion(theta[:10])                                   # warm (imports)
 
-    t_closed, t_dyads = interleaved(lambda: fb.evaluate(theta), lambda: lk4.motion(theta))
-    t_newton4 = median_time(lambda: lk4.motion(theta, method="newton"), repeat=3)
+    from mechcirc.kinematics import linkage_solver
+
+    def numpy_newton(lk, th):
+        linkage_solver.USE_COMPILED = False
+        try:
+            return lk.motion(th, method="newton")
+        finally:
+            linkage_solver.USE_COMPILED = None
+
+    lk4.motion(theta[:10], method="newton")                  # compile (or load) the kernel
+    compiled = linkage_solver._compiled()
+    t_closed, t_dyads = interleaved(lambda: fb.evaluate(theta), lambda: lk4.motion(theta),
+                                    repeat=100, label="dyads")
+    t_closed2, t_newton4 = interleaved(lambda: fb.evaluate(theta),
+                                       lambda: lk4.motion(theta, method="newton"), repeat=15,
+                                       label="newton")
+    t_np4 = median_time(lambda: numpy_newton(lk4, theta), repeat=3)
     n_old = 120
     t_old4 = median_time(lambda: old_solve(lk4, theta[:n_old]), repeat=3) / n_old * 3600
-    t_solve4 = median_time(lambda: lk4.solve(theta[:360]), repeat=3) / 360 * 3600
-
+    t_solve4 = median_time(lambda: lk4.solve(theta), repeat=5)
     m = lk4.motion(theta)
     ref = old_solve(lk4, theta[:n_old])
     st = fb.evaluate(theta)
@@ -184,8 +212,13 @@ def main() -> None:
     print(f"  FourBar.evaluate (closed form)        {t_closed * 1e3:9.3f} ms")
     print(f"  Linkage.motion, dyads (closed form)   {t_dyads * 1e3:9.3f} ms   "
           f"{t_dyads / t_closed:6.2f}× the closed form (goal ≤ 3×)")
+    print(f"    in CPU time: {CPU['dyads'][1] / CPU['dyads'][0]:.2f}× the closed form "
+          f"({CPU['dyads'][0] * 1e3:.3f} and {CPU['dyads'][1] * 1e3:.3f} ms)")
     print(f"  Linkage.motion, method='newton'       {t_newton4 * 1e3:9.3f} ms   "
-          f"{t_newton4 / t_closed:6.2f}× the closed form")
+          f"{t_newton4 / t_closed2:6.2f}× the closed form "
+          f"({'compiled' if compiled else 'numpy: numba not installed'})")
+    print(f"  ... batched numpy Newton (no numba)   {t_np4 * 1e3:9.3f} ms   "
+          f"{t_np4 / t_closed:6.2f}× the closed form")
     print(f"  Linkage.solve (LinkageState list)     {t_solve4 * 1e3:9.3f} ms   "
           f"({t_solve4 / 3600 * 1e6:.2f} µs per position)")
     print(f"  old path (measured on {n_old}, scaled)    {t_old4 * 1e3:9.1f} ms   "
@@ -200,10 +233,12 @@ def main() -> None:
     print("\nFNF six-bar (class-III group: Newton), one turn of crank 1")
     for n in (360, 3600):
         th = np.linspace(0.0, 2 * math.pi, n, endpoint=False)
-        t_new = median_time(lambda: six.motion(th), repeat=3)
-        t_sol = median_time(lambda: six.solve(th), repeat=3)
-        print(f"  {n:5d} positions: motion {t_new / n * 1e6:7.1f} µs per position "
-              f"(goal ≤ 50), solve {t_sol / n * 1e6:7.1f} µs per position")
+        t_new = median_time(lambda: six.motion(th), repeat=9)
+        t_sol = median_time(lambda: six.solve(th), repeat=9)
+        t_np = median_time(lambda: numpy_newton(six, th), repeat=3)
+        print(f"  {n:5d} positions: motion {t_new / n * 1e6:6.1f} µs per position "
+              f"(goal ≤ 50), solve {t_sol / n * 1e6:6.1f} µs; batched numpy Newton "
+              f"{t_np / n * 1e6:6.1f} µs")
     n_ref = 60
     th = np.linspace(0.0, 2 * math.pi, 360, endpoint=False)[:n_ref]
     t_old6 = median_time(lambda: old_solve(six, th), repeat=3) / n_ref

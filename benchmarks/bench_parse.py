@@ -12,6 +12,8 @@ path is measured too).  For each size N it prints, measured in the same run:
 * **parse**: :func:`mechcirc.parse` (all checks, located errors, expressions
   kept for formulas);
 * **reduce**: the series-parallel reduction (``circuit.tree``; ``reduction.py``);
+* **plan**: the tree compiled into the flat arrays a sweep evaluates
+  (``reduction.plan``, built once per circuit on its first sweep);
 
 as CPU µs per element, the ratio parse / floor, and the growth of the per-element
 time against the previous size (1.0 = linear).  Best of ``--repeat`` runs
@@ -33,6 +35,7 @@ import time
 import numpy as np
 
 import mechcirc
+from mechcirc import reduction
 from mechcirc.circuit import Element
 from mechcirc.netlist import MAX_STATEMENTS
 
@@ -103,8 +106,9 @@ def main() -> None:
     print(f"python {platform.python_version()}, {platform.machine()}, {os.cpu_count()} CPUs, "
           f"load average {', '.join(f'{x:.1f}' for x in os.getloadavg())} at the start")
     print("| elements | floor [µs/el] | parse [µs/el] | parse / floor | parse growth "
-          "| reduce [µs/el] | reduce growth | parse + reduce [µs/el] |")
-    print("|---:|---:|---:|---:|---:|---:|---:|---:|")
+          "| reduce [µs/el] | reduce growth | parse + reduce [µs/el] | plan [µs/el] "
+          "| parse + reduce + plan [µs/el] |")
+    print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     prev = None
     for size in sizes:
         # 10^k statements: the drive and 10^k - 1 elements (so 10^6 fits the limit).
@@ -123,12 +127,15 @@ def main() -> None:
         circuits = [circuit] + [mechcirc.parse(text) for _ in range(repeat - 1)]
         it = iter(circuits)
         t_red, _ = timed(lambda: next(it).tree, repeat)
-        del circuits, it, circuit
-        per = (1e6 * t_floor / n, 1e6 * t_parse / n, 1e6 * t_red / n)
+        trees = iter([c.tree for c in circuits])
+        t_plan, _ = timed(lambda: reduction.plan(next(trees)), repeat)
+        del circuits, it, circuit, trees
+        per = (1e6 * t_floor / n, 1e6 * t_parse / n, 1e6 * t_red / n, 1e6 * t_plan / n)
         g_parse = f"{per[1] / prev[1]:.2f}" if prev else "—"
         g_red = f"{per[2] / prev[2]:.2f}" if prev else "—"
         print(f"| {n:,} | {per[0]:.2f} | {per[1]:.2f} | {per[1] / per[0]:.1f} | {g_parse} "
-              f"| {per[2]:.2f} | {g_red} | {per[1] + per[2]:.2f} |", flush=True)
+              f"| {per[2]:.2f} | {g_red} | {per[1] + per[2]:.2f} | {per[3]:.2f} "
+              f"| {per[1] + per[2] + per[3]:.2f} |", flush=True)
         prev = per
 
 

@@ -5,8 +5,9 @@ springs 1e4 N/m and dampers 2 N·s/m between neighbours and to the frame at
 the first), a force step of 1 N at the last mass, 1e5 output steps of 1 ms;
 all 100 node displacements.
 
-* ``mechcirc.transient`` (exact first-order hold; the whole call) for the
-  same outputs as the baselines (x of all nodes: ``velocities=False,
+* ``mechcirc.transient`` (exact first-order hold; the whole call; the model
+  and its eigen-decomposition are kept on the circuit, so the first call on a
+  new circuit is timed as well) for the same outputs as the baselines (x of all nodes: ``velocities=False,
   elements=False``), with v as well, with every element force, and its
   propagation cores alone (modal, and the block method it falls back to);
 * ``scipy.signal.lsim`` on the same state space (FOH, also exact for a step);
@@ -18,8 +19,14 @@ two independent exact discretisations; they agree to rounding).
 Clearances: the MSL backlash example (one ElastoBacklash, 1 s, 1e3 outputs)
 and a 10-mass chain with a clearance at every spring (0.2 s), against
 ``solve_ivp`` DOP853 rtol 1e-8 with a Python RHS of the same law; peak force
-error against DOP853 rtol 1e-11.  Cold start (numba compilation) measured in
+error against DOP853 rtol 1e-11.  mechcirc keeps a circuit's state-space
+model on the circuit, so repeated runs skip building it; the first call on a
+new circuit is timed too.  Cold start (numba compilation) measured in
 a fresh process with an empty cache directory.
+
+Times are medians (wall clock, and CPU time of the process, which the other
+jobs on the shared machine disturb less); the ratios of one run are what to
+read.
 
 Run:  python benchmarks/bench_transient.py [--quick]
 """
@@ -50,12 +57,19 @@ from mechcirc.transient import transient  # noqa: E402
 
 
 def timed(fn, repeat=1):
-    best, out = float("inf"), None
+    """(median wall time, median CPU time of this process, last result) of ``repeat`` runs [s].
+
+    On the shared machine the wall time depends on the other jobs; the CPU
+    time much less, so both are printed.
+    """
+    wall, cpu, out = [], [], None
     for _ in range(repeat):
-        t0 = time.perf_counter()
+        out = None
+        c0, t0 = time.process_time(), time.perf_counter()
         out = fn()
-        best = min(best, time.perf_counter() - t0)
-    return best, out
+        wall.append(time.perf_counter() - t0)
+        cpu.append(time.process_time() - c0)
+    return float(np.median(wall)), float(np.median(cpu)), out
 
 
 def chain_netlist(n, k=1e4, c=2.0, m=1.0, backlash=None, damping_in_spring=False):
@@ -107,26 +121,34 @@ def linear(n=100, steps=100_000, dt=1e-3, repeat=3):
         a[-1] += 1.0
         return np.concatenate([v, a])
 
+    import dataclasses
+
     runs = {
         "x": lambda: transient(circuit, t_end, dt, "step", elements=False, velocities=False),
+        "x_first": lambda: transient(dataclasses.replace(circuit), t_end, dt, "step",
+                                     elements=False, velocities=False),
         "nodes": lambda: transient(circuit, t_end, dt, "step", elements=False),
         "all": lambda: transient(circuit, t_end, dt, "step"),
-        "modal": lambda: _propagate_modal(ss.A, ss.B, ss.initial[0], u, dt, ss.Cx),
+        "modal": lambda: _propagate_modal(ss.A, ss.B, ss.initial[0], u, dt, ss.Cx,
+                                          ss.g @ ss.Cv, True),
         "block": lambda: _propagate(ss.A, ss.B, ss.initial[0], u, dt),
         "lsim": lambda: signal.lsim(sys_, np.ones_like(t), t, interp=True),
         "dop": lambda: solve_ivp(rhs, (0, t_end), np.zeros(2 * n), method="DOP853",
                                  rtol=1e-10, atol=1e-14, t_eval=t),
     }
     times = {k: [] for k in runs}
+    cpu = {k: [] for k in runs}
     out = {}
     for _ in range(repeat):
         for k, fn in runs.items():
-            dt_k, res = timed(fn)
+            dt_k, c_k, res = timed(fn)
             times[k].append(dt_k)
+            cpu[k].append(c_k)
             if k in ("x", "nodes", "lsim", "dop"):
                 out[k] = res
             del res
     med = {k: float(np.median(v)) for k, v in times.items()}
+    mcpu = {k: float(np.median(v)) for k, v in cpu.items()}
     order = [out["x"].nodes.index(f"n{i}") for i in range(1, n + 1)]
     x_lsim = out["lsim"][1]
     scale = np.abs(x_lsim).max()
@@ -138,6 +160,8 @@ def linear(n=100, steps=100_000, dt=1e-3, repeat=3):
     print(f"  path: {out['x'].notes[-1]}")
     print(f"  mechcirc.transient, x only        {med['x']:8.3f} s   max|x - x_lsim| "
           f"{np.abs(x_mc - x_lsim).max() / scale:.1e} (rel. to max|x|)")
+    print(f"  ... x only, first call on a new circuit (model, eigen-decomposition and checks "
+          f"made in the call) {med['x_first']:8.3f} s")
     print(f"  mechcirc.transient, nodes only    {med['nodes']:8.3f} s   (x and v of 100 nodes) "
           f"max|x - x_lsim| {np.abs(x_nodes - x_lsim).max() / scale:.1e}")
     print(f"  mechcirc.transient, all outputs   {med['all']:8.3f} s   (x, v of 100 nodes, force "
@@ -151,6 +175,14 @@ def linear(n=100, steps=100_000, dt=1e-3, repeat=3):
           f"DOP853 / mechcirc {med['dop'] / med['x']:.1f}x")
     print(f"  ratios with v as well: lsim / mechcirc {med['lsim'] / med['nodes']:.1f}x; "
           f"DOP853 / mechcirc {med['dop'] / med['nodes']:.1f}x")
+    print("  CPU time of this process (medians): " + ", ".join(
+        f"{k} {mcpu[k]:.3f} s" for k in ("x", "x_first", "nodes", "all", "modal", "block",
+                                         "lsim", "dop")))
+    print(f"  ratios in CPU time, x of all nodes: lsim / mechcirc "
+          f"{mcpu['lsim'] / mcpu['x']:.1f}x; DOP853 / mechcirc {mcpu['dop'] / mcpu['x']:.1f}x; "
+          f"first call on a new circuit: "
+          f"lsim / mechcirc {mcpu['lsim'] / mcpu['x_first']:.1f}x "
+          f"(wall {med['lsim'] / med['x_first']:.1f}x)")
 
 
 def _law(e, w, c, d, b):
@@ -198,21 +230,21 @@ def clearance_case(label, circuit, masses, springs, x0, t_end, dt):
             out.append([_law(a, b_, c, d, b) for a, b_ in zip(xi - xj, vi - vj)])
         return np.array(out)
 
-    t_ref, ref = timed(lambda: solve_ivp(rhs, (0, t_end), y0, method="DOP853", rtol=1e-11,
-                                         atol=1e-14, t_eval=t))
-    t_dop, dop = timed(lambda: solve_ivp(rhs, (0, t_end), y0, method="DOP853", rtol=1e-8,
-                                         atol=1e-12, t_eval=t))
+    t_ref, _, ref = timed(lambda: solve_ivp(rhs, (0, t_end), y0, method="DOP853", rtol=1e-11,
+                                            atol=1e-14, t_eval=t))
+    t_dop, c_dop, dop = timed(lambda: solve_ivp(rhs, (0, t_end), y0, method="DOP853",
+                                                rtol=1e-8, atol=1e-12, t_eval=t), repeat=5)
     f_ref = forces(ref.y)
     f_dop = forces(dop.y)
     peak = np.abs(f_ref).max()
     e_dop = abs(np.abs(f_dop).max() - peak) / peak
     print(f"{label}: {t.size} outputs")
     print(f"  solve_ivp DOP853 rtol 1e-8, Python RHS {t_dop:8.3f} s  peak-force err {e_dop:.1e}"
-          f"   (reference DOP853 rtol 1e-11: {t_ref:.2f} s)")
+          f"   (reference DOP853 rtol 1e-11: {t_ref:.2f} s); CPU {c_dop:.3f} s")
     names = [e.name for e in circuit.elements if e.kind == "spring"]
     transient(circuit, t_end, dt)                 # warm (compiled)
     for rtol in (1e-10, 1e-7):
-        t_mc, res = timed(lambda: transient(circuit, t_end, dt, rtol=rtol), repeat=3)
+        t_mc, c_mc, res = timed(lambda: transient(circuit, t_end, dt, rtol=rtol), repeat=31)
         f_mc = np.array([res.element_force(nm) + (res.element_force(nm + "_damping")
                                                   if nm + "_damping" in res.elements else 0)
                          for nm in names])
@@ -220,7 +252,17 @@ def clearance_case(label, circuit, masses, springs, x0, t_end, dt):
         e_mc_all = np.abs(f_mc - f_ref).max() / peak
         print(f"  mechcirc rtol {rtol:g} (numba, incl. the 2nd run of the error estimate) "
               f"{t_mc:8.4f} s  peak-force err {e_mc:.1e}, max|ΔF|/peak {e_mc_all:.1e}  "
-              f"ratio {t_dop / t_mc:.0f}x")
+              f"ratio {t_dop / t_mc:.0f}x (CPU {c_mc:.4f} s: {c_dop / c_mc:.0f}x)")
+        _first_call(lambda c: transient(c, t_end, dt, rtol=rtol), circuit, t_dop, c_dop)
+
+
+def _first_call(run, circuit, t_dop, c_dop):
+    """The same run on a new copy of the circuit: the state-space model is built again."""
+    import dataclasses
+
+    t_1, c_1, _ = timed(lambda: run(dataclasses.replace(circuit)), repeat=15)
+    print(f"    first call on a new circuit (model built in the call) {t_1:8.4f} s  "
+          f"ratio {t_dop / t_1:.0f}x (CPU {c_1:.4f} s: {c_dop / c_1:.0f}x)")
 
 
 def clearances(quick=False):
@@ -263,10 +305,10 @@ def _chain_with_velocity(chain, springs, n, t_end=0.2, dt=1e-4):
     t = np.linspace(0, t_end, int(round(t_end / dt)) + 1)
     y0 = np.zeros(2 * n)
     y0[2 * n - 1] = 1.0
-    t_ref, ref = timed(lambda: solve_ivp(rhs, (0, t_end), y0, method="DOP853", rtol=1e-11,
-                                         atol=1e-14, t_eval=t))
-    t_dop, dop = timed(lambda: solve_ivp(rhs, (0, t_end), y0, method="DOP853", rtol=1e-8,
-                                         atol=1e-12, t_eval=t))
+    t_ref, _, ref = timed(lambda: solve_ivp(rhs, (0, t_end), y0, method="DOP853", rtol=1e-11,
+                                            atol=1e-14, t_eval=t))
+    t_dop, c_dop, dop = timed(lambda: solve_ivp(rhs, (0, t_end), y0, method="DOP853",
+                                                rtol=1e-8, atol=1e-12, t_eval=t), repeat=5)
 
     def forces(Y):
         out = []
@@ -284,16 +326,18 @@ def _chain_with_velocity(chain, springs, n, t_end=0.2, dt=1e-4):
     print(f"10-mass chain, 2 mm clearance at every spring, v0 = 1 m/s at the end, "
           f"{t_end} s, {t.size} outputs")
     print(f"  solve_ivp DOP853 rtol 1e-8, Python RHS {t_dop:8.3f} s  peak-force err {e_dop:.1e}"
-          f"   (reference DOP853 rtol 1e-11: {t_ref:.2f} s)")
+          f"   (reference DOP853 rtol 1e-11: {t_ref:.2f} s); CPU {c_dop:.3f} s")
     transient(chain, t_end, dt)
     for rtol in (1e-10, 1e-7):
-        t_mc, res = timed(lambda: transient(chain, t_end, dt, rtol=rtol), repeat=3)
+        t_mc, c_mc, res = timed(lambda: transient(chain, t_end, dt, rtol=rtol), repeat=31)
         f_mc = np.array([res.element_force(f"k{i}") + res.element_force(f"k{i}_damping")
                          for i in range(1, n + 1)])
         e_mc = abs(np.abs(f_mc).max() - peak) / peak
         print(f"  mechcirc rtol {rtol:g} (numba, incl. the 2nd run of the error estimate) "
               f"{t_mc:8.4f} s  peak-force err {e_mc:.1e}, "
-              f"max|ΔF|/peak {np.abs(f_mc - f_ref).max() / peak:.1e}  ratio {t_dop / t_mc:.0f}x")
+              f"max|ΔF|/peak {np.abs(f_mc - f_ref).max() / peak:.1e}  ratio {t_dop / t_mc:.0f}x "
+              f"(CPU {c_mc:.4f} s: {c_dop / c_mc:.0f}x)")
+        _first_call(lambda c: transient(c, t_end, dt, rtol=rtol), chain, t_dop, c_dop)
 
 
 def cold_start():

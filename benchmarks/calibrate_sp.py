@@ -20,7 +20,7 @@ included (u = 1.1e-16: a float64 result cannot be closer than one rounding).
 Goals: misses 0, false alarms ≤ 1 %, bound ≥ true everywhere, ≤ 1e4 × true at
 99 %.  Run from the repository root::
 
-    python benchmarks/calibrate_sp.py [--quick]
+    python benchmarks/calibrate_sp.py [--quick] [--path compiled|numpy]
 """
 
 from __future__ import annotations
@@ -74,7 +74,13 @@ def summarise(name, parts):
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="a tenth of the corpus")
+    ap.add_argument("--path", choices=("compiled", "numpy"), default="compiled",
+                    help="evaluate by the compiled plan (numba) or the numpy path")
     args = ap.parse_args()
+    from mechcirc import reduction
+
+    reduction.USE_KERNEL = args.path == "compiled"
+    print(f"# evaluation path: {args.path}")
     q = 10 if args.quick else 1
     rng = np.random.default_rng(11)
     t0 = time.perf_counter()

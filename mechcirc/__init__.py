@@ -10,7 +10,8 @@ Netlists and circuits
 
    parse            -- netlist text -> Circuit
    load             -- netlist file (.mcir) -> Circuit
-   Circuit          -- elements, levers and one drive; .tree, .sweep(), .resonances()
+   Circuit          -- elements, levers and one drive (plain data), with
+                       .tree .unloaded .nodal .sweep() .resonances() .two_port() .formula()
    Element, Lever, Drive
 
 Frequency domain
@@ -18,6 +19,7 @@ Frequency domain
 
    sweep            -- K(ω) = v/Q [m/(N·s)], Q0 = V0/K [N] over ω: a Sweep
    Sweep            -- the result: .omega .K .Q0 .v0 .flags .error .force() .velocity() .plot()
+                       .to_skrf()
    adaptive_sweep   -- a grid refined around resonances and bends of |K|, |Q0|
    find_resonances  -- exact resonances (K = 0) and antiresonances (K = ∞)
    Resonance        -- one of them: kind, omega, omega_d, zeta, error
@@ -41,6 +43,10 @@ Errors and warnings
    MechcircError, NetlistError (file:line:col), TopologyError,
    NotSeriesParallelError, GeometryError, SolverError,
    MechcircWarning, UnloadedElementWarning, SingularPointWarning, UnitMixWarning
+
+The analysis methods of ``Circuit`` and ``Sweep.to_skrf`` are defined in the
+top layer (``mechcirc._methods``, which says why) and attached on import, so
+that ``circuit.py`` imports nothing above it; ``help(mechcirc.Circuit)`` lists them.
 
 ``mechcirc.sweep`` and ``mechcirc.simplify`` are the functions; their modules
 stay importable as ``importlib.import_module("mechcirc.sweep")`` and by

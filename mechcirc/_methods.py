@@ -7,6 +7,16 @@ nothing above it; the conveniences ``Circuit.tree``, ``.unloaded``,
 resonances, interop).  They are thin wrappers defined here, in the top layer,
 and attached when :mod:`mechcirc` is imported (which importing any of its
 modules does first).  Each wrapper only calls the function of its module.
+
+Why attached here rather than written as methods in ``circuit.py`` with a
+function-local import: a local import is still a dependency (it only moves
+the circle from import time to call time), and ``tests/test_import_graph.py``
+counts it; ``Circuit.sweep`` importing :mod:`mechcirc.sweep`, which imports
+:mod:`mechcirc.circuit`, would close a circle through the bottom layer.  The
+rule is that conveniences needing a higher layer live in that layer; this is
+the top layer.  They stay discoverable: :data:`ATTACHED` lists them, each has
+a docstring that ``help(Circuit)`` shows, and the ``Circuit`` docstring and
+the index in :mod:`mechcirc` name every one (``tests/test_methods.py``).
 """
 
 from __future__ import annotations
@@ -92,11 +102,16 @@ def _attach(cls, name, value):
     setattr(cls, name, value)
 
 
-for _name, _value in (("_reduction", cached_property(_reduction)),
-                      ("tree", property(tree)), ("unloaded", property(unloaded)),
-                      ("nodal", cached_property(nodal)), ("sweep", circuit_sweep),
-                      ("resonances", resonances), ("two_port", two_port),
-                      ("formula", formula)):
+_CIRCUIT = (("tree", property(tree)), ("unloaded", property(unloaded)),
+            ("nodal", cached_property(nodal)), ("sweep", circuit_sweep),
+            ("resonances", resonances), ("two_port", two_port), ("formula", formula))
+
+#: The public names attached, per class.
+ATTACHED: dict[str, tuple[str, ...]] = {"Circuit": tuple(name for name, _ in _CIRCUIT),
+                                        "Sweep": ("to_skrf",)}
+
+_attach(Circuit, "_reduction", cached_property(_reduction))
+for _name, _value in _CIRCUIT:
     if callable(_value) and not isinstance(_value, (property, cached_property)):
         _value.__qualname__ = f"Circuit.{_name}"
     _attach(Circuit, _name, _value)

@@ -31,20 +31,58 @@ Conventions (DIGEST §1, Grigoriev et al. 2002):
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["Element", "Lever", "Drive", "Circuit", "element_mobility", "FRAME",
-           "ELEMENT_UNITS"]
+if TYPE_CHECKING:  # pragma: no cover - annotations of the attached methods only
+    from .nodal import NodalSystem
+    from .reduction import Node
+    from .resonances import Resonance
+    from .sweep import Sweep
+
+__all__ = ["Element", "Lever", "Drive", "Circuit", "element_mobility", "law_terms", "FRAME",
+           "ELEMENT_UNITS", "Law", "LAWS", "node_names"]
 
 FRAME = "0"
 
 ElementKind = Literal["mass", "spring", "damper"]
 
+
+@dataclass(frozen=True)
+class Law:
+    """The law of one element kind: K(ω) = (jω)^power / (value·η).
+
+    This table is the one place the element laws are written; every
+    evaluation (numeric, nodal, symbolic, textual) derives from it.
+
+    Attributes
+    ----------
+    power : int
+        Exponent p of jω in K = (jω)^p / s, s = value·η: −1 for a mass
+        (K = 1/(jωm)), +1 for a spring (K = jω/k), 0 for a damper (K = 1/c).
+        The force characteristic is S = 1/K = s·(jω)^(−p).
+    unit : str
+        SI unit of the value (translational reading).
+    matrix : str
+        Where the element's S enters the nodal matrix
+        A(ω) = G + j(ωM − K/ω): ``"M"`` (S = jω·s), ``"G"`` (S = s) or
+        ``"K"`` (S = s/(jω)).
+    """
+
+    power: int
+    unit: str
+    matrix: str
+
+
+#: Element kind → its :class:`Law`.
+LAWS: dict[str, Law] = {"mass": Law(-1, "kg", "M"),
+                        "spring": Law(+1, "N/m", "K"),
+                        "damper": Law(0, "N·s/m", "G")}
+
 #: SI unit of each element kind's value (translational reading).
-ELEMENT_UNITS: dict[str, str] = {"mass": "kg", "spring": "N/m", "damper": "N·s/m"}
+ELEMENT_UNITS: dict[str, str] = {kind: law.unit for kind, law in LAWS.items()}
 
 
 @dataclass(frozen=True)
@@ -88,25 +126,51 @@ class Element:
         return element_mobility(self.kind, self.value * self.eta, omega)
 
 
+def law_terms(kind: str, scaled_value, admittance: bool = False) -> tuple:
+    """The law of one element kind as ``(real, inv, omega)`` with
+    K(ω) = real + j·(inv/ω + omega·ω), or 1/K(ω) in that form with ``admittance``.
+
+    ``scaled_value`` is value·η; pass a numpy float so that 1/0 = ∞ instead of
+    ZeroDivisionError (callers hold ``np.errstate``).  Exactly one term is nonzero.
+    Series–parallel reduction adds these terms over a node's leaves; nodal
+    analysis stamps the same laws (``nodal.stamps``).
+    """
+    law = LAWS.get(kind)
+    if law is None:
+        raise ValueError(f"unknown element kind {kind!r}")
+    p = law.power
+    if admittance:
+        p, c = -p, scaled_value
+    else:
+        c = 1.0 / scaled_value
+    # (jω)^1 = j·ω, (jω)^−1 = −j/ω, (jω)^0 = 1.
+    if p == 0:
+        return c, 0.0, 0.0
+    if p > 0:
+        return 0.0, 0.0, c
+    return 0.0, -c, 0.0
+
+
 def element_mobility(kind: str, scaled_value: float, omega: ArrayLike) -> NDArray[np.complex128]:
-    """K(ω) [m/(N·s)] of one element kind with value·η = ``scaled_value``.
+    """K(ω) [m/(N·s)] of one element kind with value·η = ``scaled_value`` (by :func:`law_terms`).
 
     ω = 0 gives K = ∞ for a mass and 0 for a spring (no warnings are raised;
     callers flag non-finite results).
     """
+    law = LAWS.get(kind)
+    if law is None:
+        raise ValueError(f"unknown element kind {kind!r}")
     omega = np.asarray(omega, dtype=float)
     out = np.zeros(omega.shape, dtype=complex)
     with np.errstate(divide="ignore", invalid="ignore"):
-        # Fill the real and imaginary parts separately: a complex product such
-        # as 1j * inf would give nan + inf·j at ω = 0 instead of -j∞.
-        if kind == "mass":
-            out.imag = -1.0 / (omega * scaled_value)
-        elif kind == "spring":
-            out.imag = omega / scaled_value
-        elif kind == "damper":
+        # (jω)^p / s filled part by part: a complex product such as 1j * inf
+        # would give nan + inf·j at ω = 0 instead of -j∞.
+        if law.power == 0:
             out.real = 1.0 / scaled_value
+        elif law.power == 1:
+            out.imag = omega / scaled_value                 # jω/s
         else:
-            raise ValueError(f"unknown element kind {kind!r}")
+            out.imag = -1.0 / (omega * scaled_value)        # 1/(jωs) = -j/(ωs)
     return out
 
 
@@ -127,6 +191,12 @@ class Lever:
     ratio: float
     line: int = 0
     col: int = 0
+
+    def reflect(self, K):
+        """K [m/(N·s)] of a sub-network on the secondary, seen from the primary: K / r².
+
+        Divided twice: r² overflows a float for r > 1.3e154."""
+        return K / self.ratio / self.ratio
 
 
 @dataclass(frozen=True)
@@ -182,6 +252,21 @@ class Circuit:
     params: dict = field(default_factory=dict, compare=False)
     initial: tuple = ()
 
+    if TYPE_CHECKING:  # pragma: no cover
+        # What mechcirc._methods attaches, declared for editors and type checkers
+        # (tests/test_methods.py checks these signatures against the attached ones).
+        @property
+        def tree(self) -> Node: ...
+        @property
+        def unloaded(self) -> tuple[str, ...]: ...
+        @property
+        def nodal(self) -> NodalSystem: ...
+        def sweep(self, omega: ArrayLike, method: str = "auto") -> Sweep: ...
+        def resonances(self, omega_max: float | None = None) -> list[Resonance]: ...
+        def two_port(self, P1: str, P2: str, S1: str, S2: str, omega: ArrayLike,
+                     **kwargs): ...
+        def formula(self, **kwargs): ...
+
     def __getstate__(self):
         # Pickle the description only: the cached reduction tree nests as deep
         # as the network (deeper than pickle recurses) and is rebuilt on use.
@@ -216,13 +301,17 @@ class Circuit:
     @property
     def nodes(self) -> list[str]:
         """All node names, frame first, then in order of appearance."""
-        seen = {FRAME: None}
-        for e in self.elements:
-            seen.setdefault(e.n1)
-            seen.setdefault(e.n2)
-        for lv in self.levers:
-            for n in (lv.p1, lv.p2, lv.s1, lv.s2):
-                seen.setdefault(n)
-        seen.setdefault(self.drive.n1)
-        seen.setdefault(self.drive.n2)
-        return list(seen)
+        return list(dict.fromkeys([FRAME, *node_names(self.elements, self.levers),
+                                   self.drive.n1, self.drive.n2]))
+
+
+def node_names(elements, levers=()) -> list[str]:
+    """The node names of ``elements`` and ``levers``, in order of first appearance."""
+    seen: dict[str, None] = {}
+    for e in elements:
+        seen.setdefault(e.n1)
+        seen.setdefault(e.n2)
+    for lv in levers:
+        for n in (lv.p1, lv.p2, lv.s1, lv.s2):
+            seen.setdefault(n)
+    return list(seen)

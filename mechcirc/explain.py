@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .circuit import ELEMENT_UNITS, Circuit
+from .circuit import LAWS, Circuit
 from .reduction import Leaf, Node, Parallel, Series, leaves, postorder
 
 __all__ = ["Step", "explain", "explain_lines"]
@@ -31,12 +31,14 @@ class Step:
 
 
 def _leaf_formula(e) -> str:
-    s = e.value * e.eta
-    if e.kind == "mass":
-        return f"K = -j/({s:.6g}·ω)"
-    if e.kind == "spring":
-        return f"K = jω/{s:.6g}"
-    return f"K = 1/{s:.6g}"
+    """K = (jω)^p / (value·η) of :data:`mechcirc.circuit.LAWS`, written for people."""
+    s = f"{e.value * e.eta:.6g}"
+    power = LAWS[e.kind].power
+    if power == 0:
+        return f"K = 1/{s}"
+    if power == 1:
+        return f"K = jω/{s}"
+    return f"K = -j/({s}·ω)"          # (jω)^-1 / s
 
 
 def explain(circuit: Circuit) -> tuple[list[Step], str]:
@@ -96,7 +98,7 @@ def explain_lines(circuit: Circuit) -> list[str]:
     for e in circuit.elements:
         if e.name not in loaded:
             continue
-        unit = ELEMENT_UNITS[e.kind]
+        unit = LAWS[e.kind].unit
         value = f"{e.value:.6g} {unit}"
         if e.eta != 1:
             value += f" · η {e.eta:.6g} = {e.value * e.eta:.6g} {unit}"

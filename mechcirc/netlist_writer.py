@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Mapping
 
 from .circuit import Circuit, Element
 
@@ -38,7 +39,8 @@ __all__ = ["write"]
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*|0|[1-9][0-9]*")
 
 
-def write(circuit: Circuit, header: tuple[str, ...] | list[str] | str = ()) -> str:
+def write(circuit: Circuit, header: tuple[str, ...] | list[str] | str = (),
+          comments: Mapping[str, str] | None = None) -> str:
     """The netlist text of ``circuit``, with ``header`` lines as ``#`` comments first.
 
     Parameters
@@ -47,6 +49,9 @@ def write(circuit: Circuit, header: tuple[str, ...] | list[str] | str = ()) -> s
         The drive may be None (a free-vibration circuit).
     header : str or sequence of str
         Comment lines (newlines inside one start new comment lines).
+    comments : mapping of str to str, optional
+        A comment for the line of the drive, element or lever of that name,
+        written after it as ``   ; text`` (one line: newlines become spaces).
 
     Returns
     -------
@@ -62,10 +67,16 @@ def write(circuit: Circuit, header: tuple[str, ...] | list[str] | str = ()) -> s
     """
     if isinstance(header, str):
         header = (header,)
+    notes = {k: " ".join(str(v).split()) for k, v in (comments or {}).items()}
+
+    def noted(name: str, line: str) -> str:
+        return f"{line}   ; {notes[name]}" if notes.get(name) else line
+
     out = [f"# {line}".rstrip() for h in header for line in str(h).split("\n")]
     d = circuit.drive
     if d is not None:
-        out.append(f"drive {_names(d.name, d.n1, d.n2)} {d.kind}={_number(d.amplitude)}")
+        out.append(noted(d.name, f"drive {_names(d.name, d.n1, d.n2)} {d.kind}="
+                                 f"{_number(d.amplitude)}"))
     elements = circuit.elements
     i = 0
     while i < len(elements):
@@ -78,11 +89,11 @@ def write(circuit: Circuit, header: tuple[str, ...] | list[str] | str = ()) -> s
                                               else None):
             line += f" damping={_number(e.damping)}"
             i += 1                       # the companion is written by damping=
-        out.append(line)
+        out.append(noted(e.name, line))
         i += 1
     for lv in circuit.levers:
-        out.append(f"lever {_names(lv.name, lv.p1, lv.p2, lv.s1, lv.s2)} "
-                   f"ratio={_number(lv.ratio)}")
+        out.append(noted(lv.name, f"lever {_names(lv.name, lv.p1, lv.p2, lv.s1, lv.s2)} "
+                                  f"ratio={_number(lv.ratio)}"))
     for node, x0, v0 in circuit.initial:
         out.append(f".ic {_names(node)} x={_number(x0)} v={_number(v0)}")
     return "\n".join(out) + "\n"

@@ -7,18 +7,22 @@ that touches the rest only at the lever (and possibly at one shared node,
 such as the frame) reduces to that sub-network's K / r² on the primary.
 
 The result is a tree of :class:`Leaf`, :class:`Series`, :class:`Parallel`
-and :class:`Reflect` nodes, evaluated vectorised over ω by :func:`evaluate`;
+and :class:`Reflect` nodes, evaluated vectorised over ω by :func:`evaluate`
+(through a flat :func:`plan` of the tree and the compiled
+:mod:`mechcirc._sp_kernel` when numba is installed, else in numpy);
 :func:`push_down` carries the drive's force and velocity back down the tree
-to every element.
+to every element.  The element laws come from :func:`mechcirc.circuit.law_terms`.
 
-Cost: pruning, lever extraction and reduction are O(n) in the number of
-elements (O(n·L) with L levers); evaluation is O(n · n_omega).
+Cost: the reduction is one worklist pass, O(n) in the number of elements
+(O(n·L) with L levers); the plan is O(n) once per tree; evaluation is
+O(n · n_omega).
 """
 
 from __future__ import annotations
 
 import gc
 import warnings
+import weakref
 from collections import deque
 from dataclasses import dataclass
 from typing import Iterator, Union
@@ -26,13 +30,13 @@ from typing import Iterator, Union
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .circuit import Circuit, Element, Lever
+from .circuit import LAWS, Circuit, Element, Lever, law_terms
 from .errors import NotSeriesParallelError, TopologyError, UnloadedElementWarning
 from .topology import check_frame_paths, loaded_groups, reachable
 
 __all__ = ["Leaf", "Series", "Parallel", "Reflect", "Node", "Reduction",
            "reduce_circuit", "reduce_network", "evaluate", "push_down", "leaves", "depth",
-           "postorder"]
+           "postorder", "plan", "Plan"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -200,9 +204,19 @@ def reduce_circuit(circuit: Circuit) -> Reduction:
 def reduce_network(elements, levers, a: str, b: str, *, drive_line: int = 0,
                    source: str = "<string>") -> Reduction:
     """Series–parallel reduction of ``elements`` and ``levers`` seen between nodes ``a`` and ``b``."""
-    edges = [_Edge(e.n1, e.n2, Leaf(e)) for e in elements]
     unloaded: list[str] = []
-    tree = _reduce(edges, list(levers), a, b, unloaded, drive_line, source)
+    if not levers:
+        # The common case, without the per-element ``_Edge`` records.
+        tree = _reduce_edges([e.n1 for e in elements], [e.n2 for e in elements],
+                             [Leaf(e) for e in elements], a, b, unloaded, drive_line, source)
+    else:
+        edges = [_Edge(e.n1, e.n2, Leaf(e)) for e in elements]
+        tree = _reduce(edges, list(levers), a, b, unloaded, drive_line, source)
+    if len(unloaded) > 1:
+        # In the order the elements were given (the fast path finds them by the
+        # order in which it strips dangling branches).
+        order = {e.name: i for i, e in enumerate(elements)}
+        unloaded.sort(key=lambda name: order.get(name, len(order)))
     return Reduction(tree, tuple(unloaded))
 
 
@@ -242,8 +256,211 @@ def _reduce(edges: list[_Edge], levers: list[Lever], a: str, b: str,
             f"lever(s) {', '.join(names)} couple parts of the network that are not "
             f"series–parallel reducible (secondary sides are not closed sub-networks); "
             f"nodes {', '.join(nodes)}", nodes=nodes, elements=names)
+    return _reduce_edges([e.n1 for e in edges], [e.n2 for e in edges],
+                         [e.node for e in edges], a, b, unloaded, drive_line, source)
+
+
+def _reduce_edges(n1s: list, n2s: list, nodes: list, a: str, b: str, unloaded: list[str],
+                  drive_line: int, source: str) -> Node:
+    """The tree of the two-poles ``nodes[i]`` between ``n1s[i]`` and ``n2s[i]``, seen from a → b.
+
+    One pass (:func:`_series_parallel_runs`) strips dangling branches and
+    reduces series and parallel pairs at once, building the flat nodes as it
+    goes.  If that does not end in one edge between ``a`` and ``b`` (an
+    unloaded part that is not itself series–parallel, a bridge, terminals
+    that are not connected), the network is pruned to the drive's biconnected
+    block first and reduced again, which also words the error.
+    """
+    found = _series_parallel_runs(n1s, n2s, nodes, a, b)
+    if found is not None:
+        root, dangling = found
+        for node in dangling:
+            unloaded.extend(el.name for el in leaves(_close(node, 1)[0]))
+        return root
+    edges = [_Edge(u, w, node) for u, w, node in zip(n1s, n2s, nodes)]
     edges = _prune(edges, a, b, unloaded, drive_line, source)
     return _flatten(_series_parallel(edges, a, b))
+
+
+class _Run:
+    """A series or parallel run being built: its operands, in the run's own
+    orientation (the edge's n1 → n2 when stored), with their signs.
+
+    ``kids`` and ``signs`` are lists, turned into deques the first time a long
+    run must grow at its front (so that growing stays O(1) per operand)."""
+
+    __slots__ = ("series", "kids", "signs")
+
+    def __init__(self, series: bool, kids: list, signs: list):
+        self.series, self.kids, self.signs = series, kids, signs
+
+    def prepend(self, kids: list, signs: list) -> None:
+        if type(self.kids) is list:
+            if len(self.kids) < 64:
+                self.kids[:0] = kids
+                self.signs[:0] = signs
+                return
+            self.kids, self.signs = deque(self.kids), deque(self.signs)
+        self.kids.extendleft(reversed(kids))
+        self.signs.extendleft(reversed(signs))
+
+
+def _close(node, sign: int):
+    """``(node, sign)`` as a finished child: a run becomes a flat Series/Parallel
+    turned to the parent's orientation (so that only leaves and lever
+    reflections carry signs), leaves keep theirs."""
+    if type(node) is not _Run:
+        return node, sign
+    if node.series:
+        if sign > 0:
+            return Series(tuple(node.kids), tuple(node.signs)), 1
+        return Series(tuple(reversed(node.kids)), tuple(-s for s in reversed(node.signs))), 1
+    if sign > 0:
+        return Parallel(tuple(node.kids), tuple(node.signs)), 1
+    return Parallel(tuple(node.kids), tuple(-s for s in node.signs)), 1
+
+
+def _operands(node, sign: int, series: bool):
+    """The operands ``node`` contributes to a run of kind ``series``, oriented by ``sign``:
+    its own operands when it is a run of the same kind, else itself closed."""
+    if type(node) is not _Run:
+        return [node], [sign]
+    if node.series == series:
+        if sign > 0:
+            return list(node.kids), list(node.signs)
+        if series:
+            return list(reversed(node.kids)), [-s for s in reversed(node.signs)]
+        return list(node.kids), [-s for s in node.signs]
+    c, s = _close(node, sign)
+    return [c], [s]
+
+
+def _join(x, sx: int, y, sy: int, series: bool):
+    """The run of kind ``series`` of ``x`` then ``y`` with signs ``sx``, ``sy`` relative
+    to the result's orientation ("path": for a series run, x's far end to y's).
+
+    Returns ``(run, flip)``; ``flip`` is True when the run is kept in the opposite
+    orientation to the path.  A run of the same kind is grown in place, the larger
+    of the two when both are runs, so the whole reduction stays linear (the run
+    then keeps its own orientation).
+    """
+    xr = type(x) is _Run and x.series == series
+    yr = type(y) is _Run and y.series == series
+    if xr and (not yr or len(x.kids) >= len(y.kids)):
+        if not series:
+            kids, signs = _operands(y, sy * sx, False)
+            x.kids.extend(kids)
+            x.signs.extend(signs)
+        elif sx > 0:
+            kids, signs = _operands(y, sy, True)
+            x.kids.extend(kids)
+            x.signs.extend(signs)
+        else:
+            # x runs against the path: in x's orientation y (reversed) comes first.
+            x.prepend(*_operands(y, -sy, True))
+        return x, sx < 0
+    if yr:
+        if not series:
+            y.prepend(*_operands(x, sx * sy, False))
+        elif sy > 0:
+            y.prepend(*_operands(x, sx, True))
+        else:
+            kids, signs = _operands(x, -sx, True)
+            y.kids.extend(kids)
+            y.signs.extend(signs)
+        return y, sy < 0
+    if type(x) is _Run:
+        x, sx = _close(x, sx)
+    if type(y) is _Run:
+        y, sy = _close(y, sy)
+    return _Run(series, [x, y], [sx, sy]), False
+
+
+def _series_parallel_runs(n1s: list, n2s: list, nodes: list, a: str, b: str):
+    """Dangling-branch stripping and series/parallel reduction in one worklist
+    pass on integer node ids.  Returns ``(root oriented a → b, dangling
+    two-poles)``, or None when it does not end in one edge between a and b."""
+    ids: dict = {}
+    U = [ids.setdefault(x, len(ids)) for x in n1s]
+    W = [ids.setdefault(x, len(ids)) for x in n2s]
+    if a not in ids or b not in ids or a == b:
+        return None
+    ia, ib = ids[a], ids[b]
+    N = len(ids)
+    E = list(nodes)
+    # adj[n] maps each neighbour of node n to the one edge between them (a second
+    # edge between the same two nodes is merged in parallel at once).
+    adj: list[dict] = [{} for _ in range(N)]
+    alive = 0
+    for eid in range(len(E)):
+        u, w = U[eid], W[eid]
+        if u == w:
+            return None
+        au = adj[u]
+        old = au.get(w)
+        if old is not None:
+            _merge_parallel(old, u, E[eid], U, W, E)
+            E[eid] = None
+            continue
+        au[w] = eid
+        adj[w][u] = eid
+        alive += 1
+    dangling: list = []
+    queue: deque[int] = deque(range(N))
+    pop, push = queue.popleft, queue.append
+    while queue:
+        n = pop()
+        if n == ia or n == ib:
+            continue
+        an = adj[n]
+        deg = len(an)
+        if deg == 2:
+            (u, e1), (w, e2) = an.items()          # far ends u (of e1) and w (of e2)
+            s1 = 1 if W[e1] == n else -1           # e1 runs u -> n ?
+            s2 = 1 if U[e2] == n else -1           # e2 runs n -> w ?
+            an.clear()
+            au, aw = adj[u], adj[w]
+            del au[n], aw[n]
+            # The series run u -> w, kept in e1's slot.
+            run, flip = _join(E[e1], s1, E[e2], s2, True)
+            E[e2] = None
+            alive -= 1
+            start, end = (w, u) if flip else (u, w)
+            old = au.get(w)
+            if old is not None:
+                E[e1] = None
+                _merge_parallel(old, start, run, U, W, E)
+                alive -= 1
+            else:
+                U[e1], W[e1], E[e1] = start, end, run
+                au[w] = e1
+                aw[u] = e1
+            push(u)
+            push(w)
+        elif deg == 1:
+            ((far, eid),) = an.items()
+            an.clear()
+            del adj[far][n]
+            dangling.append(E[eid])
+            E[eid] = None
+            alive -= 1
+            push(far)
+    eid = adj[ia].get(ib)
+    if alive != 1 or eid is None:
+        return None
+    node, sign = _close(E[eid], 1 if U[eid] == ia else -1)
+    if sign < 0:
+        node = Series((node,), (-1,))
+    return node, dangling
+
+
+def _merge_parallel(old: int, u: int, node, U: list, W: list, E: list) -> None:
+    """Put ``node`` (running from ``u``) in parallel with edge ``old``."""
+    sign = 1 if U[old] == u else -1
+    run, flip = _join(E[old], 1, node, sign, False)
+    E[old] = run
+    if flip:
+        U[old], W[old] = W[old], U[old]
 
 
 def _secondary_part(lv: Lever, edges: list[_Edge], levers: list[Lever], a: str, b: str):
@@ -519,7 +736,8 @@ def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: boo
         |Ŝ − S| ≤ Σ |tᵢ| (ρᵢ + m·u),     ρ(S) = that / |S|,
 
     where a leaf group of n same-signed scalars has ρ = (n + 2)·u, a reciprocal
-    turns ρ into ρ/(1 − ρ) + 4u (∞ from ρ ≥ 1 on: no digit is known) and a
+    turns ρ into ρ/(1 − ρ) + 4u (taken as ρ + 2ρ² + 4u while ρ ≤ 1/2; ∞ from ρ ≥ 1 on:
+    no digit is known) and a
     lever's division by r² adds 2u.  ρ is carried relative to the computed
     values, so only the rounding of each addition (the m·u term) is first order.  Cancellation at a node
     (Σ|tᵢ| ≫ |S|) raises the bound there; the children's errors are weighted by
@@ -527,6 +745,12 @@ def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: boo
     cancellation keeps a bound of a few hundred u.
     """
     omega = np.asarray(omega, dtype=float)
+    if not keep and _mode == "auto" and USE_KERNEL is not False:
+        p = plan(root)
+        if USE_KERNEL or _KERNEL or p.kind.size * omega.size >= KERNEL_MIN_WORK:
+            kernel = _kernel()
+            if kernel is not None:
+                return _evaluate_compiled(kernel, p, omega, error, condition)
     if not keep and _mode == "auto":
         # Fast pass with numpy's reciprocal as is; it gives NaN for 1/0 where
         # 1/0 = ∞ is wanted, and a NaN never disappears downstream: the points
@@ -552,11 +776,9 @@ def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: boo
                 continue
             if isinstance(node, Reflect):
                 child = _value_of(node.child, values, omega, inv_omega, track)
-                # Divide twice: ratio ** 2 overflows a Python float for ratio > 1.3e154.
-                r = node.lever.ratio
-                val = _Value(child.imaginary, child.array / r / r)
+                val = _Value(child.imaginary, node.lever.reflect(child.array))
                 if track:
-                    val.mag = child.mag / r / r
+                    val.mag = node.lever.reflect(child.mag)
                     # (a full array even over a single leaf, whose ρ is a scalar)
                     val.rho = np.broadcast_to(child.rho + 2 * _U, omega.shape).copy()
             else:
@@ -579,6 +801,198 @@ def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: boo
         rho[np.isnan(rho)] = np.inf
         return K, (rho / _U if condition and not error else rho)
     return K
+
+
+#: Evaluate with the compiled plan (:mod:`mechcirc._sp_kernel`) when numba is
+#: installed: None (default) once the kernel is loaded or when a call has at
+#: least :data:`KERNEL_MIN_WORK` node-points; True always; False never (the
+#: numpy path; tests compare the two).
+USE_KERNEL: bool | None = None
+#: Importing numba and loading the compiled kernel from its cache takes about
+#: 1 s once per process (0.7–1.1 s measured): below this many plan nodes × ω
+#: points (about 0.15 s of the numpy path) a sweep does not start it.
+KERNEL_MIN_WORK = 5_000_000
+_KERNEL: list = []
+
+
+def _kernel():
+    """The compiled plan evaluator, or None without numba (imported on first use)."""
+    if not _KERNEL:
+        from . import _sp_kernel
+
+        _KERNEL.append(_sp_kernel.evaluate_plan if _sp_kernel.HAVE_NUMBA else None)
+    return _KERNEL[0]
+
+
+@dataclass(frozen=True, eq=False)
+class Plan:
+    """A tree compiled into flat arrays for :mod:`mechcirc._sp_kernel` (see
+    :func:`plan`): one entry per series, parallel and lever node (and per leaf
+    that stands alone, at the root or under a lever), children first."""
+
+    kind: NDArray[np.int8]
+    cplx: NDArray[np.bool_]
+    c_real: NDArray[np.float64]
+    c_inv: NDArray[np.float64]
+    c_om: NDArray[np.float64]
+    e_real: NDArray[np.float64]
+    e_inv: NDArray[np.float64]
+    e_om: NDArray[np.float64]
+    mu: NDArray[np.float64]
+    kstart: NDArray[np.int64]
+    kids: NDArray[np.int64]
+    ratio: NDArray[np.float64]
+    slot: NDArray[np.int64]
+    n_slots: int
+
+    def arrays(self) -> tuple:
+        return (self.kind, self.cplx, self.c_real, self.c_inv, self.c_om, self.e_real,
+                self.e_inv, self.e_om, self.mu, self.kstart, self.kids, self.ratio,
+                self.slot, self.n_slots)
+
+
+_PLANS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
+_KIND_CODE = {kind: i for i, kind in enumerate(LAWS)}
+
+
+def _leaf_table() -> tuple:
+    """Arrays indexed ``[kind code, series]`` of slot, coefficient and ``divides``,
+    read off :func:`~mechcirc.circuit.law_terms` at unit value: a leaf's term is
+    coefficient / (value·η) when ``divides`` (an impedance, in a series node),
+    else coefficient · (value·η); slots as in :func:`_leaf_term` (0 real, +1 ω,
+    −1 1/ω)."""
+    slot = np.zeros((len(_KIND_CODE), 2), dtype=np.int64)
+    coef = np.zeros((len(_KIND_CODE), 2))
+    for kind, code in _KIND_CODE.items():
+        p = LAWS[kind].power
+        for series in (0, 1):
+            sl = p if series else -p
+            real, inv, om = law_terms(kind, 1.0, admittance=not series)
+            slot[code, series] = sl
+            coef[code, series] = real if sl == 0 else om if sl > 0 else inv
+    return slot, coef
+
+
+_LEAF_SLOT, _LEAF_COEF = _leaf_table()
+
+
+def plan(root: Node) -> Plan:
+    """The evaluation plan of ``root``, built once per tree (linear in its size).
+
+    Each node's leaves are folded into three coefficients by the element laws
+    (:func:`~mechcirc.circuit.law_terms`), with the constants of their error
+    terms, exactly as :func:`evaluate`'s numpy path forms them at every call
+    (the same IEEE operations in the same order, here vectorised over the leaves).
+    """
+    found = _PLANS.get(root)
+    if found is not None:
+        return found
+    kind: list[int] = []
+    kids: list[int] = []
+    kstart = [0]
+    ratio: list[float] = []
+    leaf_of: list[int] = []          # the node each folded leaf belongs to
+    leaf_el: list[Element] = []
+    index: dict[int, int] = {}
+
+    def lone_leaf(e: Element) -> int:
+        # A leaf at the root or under a lever: a node of its own (kind 3),
+        # holding the leaf as a one-term series node would.
+        kind.append(3)
+        kstart.append(len(kids))
+        ratio.append(0.0)
+        leaf_of.append(len(kind) - 1)
+        leaf_el.append(e)
+        return len(kind) - 1
+
+    for node in postorder(root):
+        cls = type(node)
+        if cls is Leaf:
+            continue
+        if cls is Reflect:
+            c = node.child
+            ci = lone_leaf(c.element) if type(c) is Leaf else index[id(c)]
+            kind.append(2)
+            kids.append(ci)
+            kstart.append(len(kids))
+            ratio.append(float(node.lever.ratio))
+            index[id(node)] = len(kind) - 1
+            continue
+        me = len(kind)
+        kind.append(0 if cls is Series else 1)
+        for c in node.children:
+            if type(c) is Leaf:
+                leaf_of.append(me)
+                leaf_el.append(c.element)
+            else:
+                kids.append(index[id(c)])
+        kstart.append(len(kids))
+        ratio.append(0.0)
+        index[id(node)] = me
+    if type(root) is Leaf:
+        lone_leaf(root.element)
+    M = len(kind)
+    kind_a = np.array(kind, dtype=np.int8)
+    kstart_a = np.array(kstart, dtype=np.int64)
+    kids_a = np.array(kids, dtype=np.int64)
+    owner = np.array(leaf_of, dtype=np.int64)
+    code = np.array([_KIND_CODE[e.kind] for e in leaf_el], dtype=np.int64)
+    scaled = np.array([e.value for e in leaf_el], dtype=float) * \
+        np.array([e.eta for e in leaf_el], dtype=float)
+    series = (kind_a[owner] != 1).astype(np.int64)
+    slot = _LEAF_SLOT[code, series]
+    coef = _LEAF_COEF[code, series]
+    with np.errstate(all="ignore"):
+        term = np.where(series == 1, coef / scaled, coef * scaled)
+        # Summed in child order from 0.0, as _combine sums them (ufunc.at is
+        # unbuffered and applies the terms in the order given).
+        acc = np.zeros((M, 3))
+        col = slot % 3                       # 0 real, 1 ω, 2 (= −1) 1/ω
+        np.add.at(acc, (owner, col), term)
+        count = np.zeros((M, 3), dtype=np.int64)
+        np.add.at(count, (owner, col), 1)
+        real, om, inv = acc[:, 0].copy(), acc[:, 1].copy(), acc[:, 2].copy()
+        U = float(_U)
+        n_kids = np.diff(kstart_a)
+        m_u = (n_kids + (real != 0) + (inv != 0) + (om != 0)) * U
+        e_real = np.abs(real) * ((count[:, 0] + 2) * U + m_u)
+        e_inv = np.abs(inv) * ((count[:, 2] + 4) * U + m_u)
+        e_om = np.abs(om) * ((count[:, 1] + 4) * U + m_u)
+    lever = kind_a == 2
+    m_u[lever] = 0.0
+    # A node has a real part if its leaves give one or any child has one.
+    has = ((real != 0) | np.isnan(real)).tolist()
+    ks, kd = kstart, kids
+    for i in range(M):
+        if not has[i]:
+            for q in range(ks[i], ks[i + 1]):
+                if has[kd[q]]:
+                    has[i] = True
+                    break
+    # Postorder keeps every subtree contiguous, so a node's internal children are
+    # the top rows of a stack when it is reached: its value takes the first of them.
+    stack_slot = np.cumsum(1 - n_kids) - 1
+    out = Plan(kind_a, np.array(has, dtype=bool), real, inv, om, e_real, e_inv, e_om, m_u,
+               kstart_a, kids_a, np.array(ratio), stack_slot.astype(np.int64),
+               int(stack_slot.max(initial=0)) + 1)
+    _PLANS[root] = out
+    return out
+
+
+def _evaluate_compiled(kernel, p: Plan, omega: NDArray, error: bool, condition: bool):
+    """:func:`evaluate` (without ``keep``) by the compiled plan."""
+    flat = np.ascontiguousarray(omega.ravel())
+    K = np.empty(flat.shape, dtype=complex)
+    track = error or condition
+    rho = np.empty(flat.shape if track else 0)
+    kernel(flat, *p.arrays(), track, K, rho)
+    K = K.reshape(omega.shape)
+    if not track:
+        return K
+    rho = rho.reshape(omega.shape)
+    return K, (rho / _U if condition and not error else rho)
 
 
 class _Value:
@@ -610,13 +1024,13 @@ class _Value:
 def _value_of(node: Node, values: dict, omega, inv_omega, track: bool = False) -> _Value:
     if isinstance(node, Leaf):
         e = node.element
-        s = _scaled(e)
-        if e.kind == "mass":
-            v = _Value(True, inv_omega * (-1.0 / s))
-        elif e.kind == "spring":
-            v = _Value(True, omega * (1.0 / s))
+        real, inv, om = law_terms(e.kind, _scaled(e))
+        if LAWS[e.kind].power < 0:
+            v = _Value(True, inv_omega * inv)
+        elif LAWS[e.kind].power > 0:
+            v = _Value(True, omega * om)
         else:
-            v = _Value(False, np.full(omega.shape, 1.0 / s, dtype=complex))
+            v = _Value(False, np.full(omega.shape, real, dtype=complex))
         if track:
             v.mag = np.abs(v.array)
             v.rho = 4 * _U      # value·η, 1/s, 1/ω and the product
@@ -630,6 +1044,27 @@ def _scaled(e: Element) -> np.float64:
     return np.float64(e.value) * np.float64(e.eta)
 
 
+def _leaf_term(e: Element, series: bool, fast: bool = False) -> tuple[int, float]:
+    """Where element ``e`` enters a series node's impedance sum (``series``) or a
+    parallel node's admittance sum, and its coefficient there: slot 0 the real
+    part, +1 the part times ω, −1 the part times 1/ω (by :func:`~mechcirc.circuit.law_terms`).
+
+    ``fast``: in Python floats (the same IEEE operations as numpy scalars, without
+    their per-operation overhead), numpy's only where value·η is 0 (1/0 = ∞).
+    """
+    if fast:
+        try:
+            real, inv, om = law_terms(e.kind, e.value * e.eta, admittance=not series)
+        except ZeroDivisionError:
+            real, inv, om = (float(t) for t in
+                             law_terms(e.kind, _scaled(e), admittance=not series))
+    else:
+        real, inv, om = law_terms(e.kind, _scaled(e), admittance=not series)
+    p = LAWS[e.kind].power
+    slot = p if series else -p
+    return slot, (real if slot == 0 else om if slot > 0 else inv)
+
+
 def _combine(node, values: dict, omega, inv_omega, track: bool = False,
              keep: bool = True, checked: bool = True) -> _Value:
     """Series: K = Σ K_i.  Parallel: 1/K = Σ 1/K_i.  Leaves are grouped by kind."""
@@ -639,23 +1074,15 @@ def _combine(node, values: dict, omega, inv_omega, track: bool = False,
     parts: list[_Value] = []
     for c in node.children:
         if isinstance(c, Leaf):
-            e = c.element
-            s = _scaled(e)
-            if e.kind == "damper":
-                real += 1.0 / s if series else s
+            slot, term = _leaf_term(c.element, series)
+            if slot == 0:
+                real += term
                 n_real += 1
-            elif e.kind == "mass":
-                if series:
-                    im_inv -= 1.0 / s           # K = -j/(ω m)
-                    n_inv += 1
-                else:
-                    im_omega += s               # Y = jωm
-                    n_omega += 1
-            elif series:
-                im_omega += 1.0 / s             # K = jω/k
+            elif slot > 0:
+                im_omega += term
                 n_omega += 1
             else:
-                im_inv -= s                     # Y = -jk/ω
+                im_inv += term
                 n_inv += 1
         else:
             parts.append(values[id(c)])
@@ -720,7 +1147,8 @@ def _combine(node, values: dict, omega, inv_omega, track: bool = False,
         if real:
             bound += abs(real) * ((n_real + 2) * _U + mu)
         mag = np.abs(total.array)
-        bound /= mag
+        inv = np.reciprocal(mag)
+        bound *= inv
         rho = bound
         if series:
             total.mag, total.rho = mag, rho
@@ -728,24 +1156,28 @@ def _combine(node, values: dict, omega, inv_omega, track: bool = False,
             total = total.reciprocal(checked)
             rho = _through_reciprocal(rho)
             rho += _U_RECIP
-            total.mag, total.rho = np.reciprocal(mag, out=mag), rho
+            total.mag, total.rho = inv, rho
         return total
     return total if series else total.reciprocal(checked)
 
 
 def _through_reciprocal(rho: NDArray) -> NDArray:
-    """Relative error of 1/x̂ given |x̂ − x| ≤ ρ|x̂|: ρ / (1 − ρ), ∞ from ρ ≥ 1 on.
+    """A bound of the relative error of 1/x̂ given |x̂ − x| ≤ ρ|x̂|, ρ / (1 − ρ): as
+    ρ + 2ρ² for ρ ≤ 1/2 (no smaller there), ∞ from ρ ≥ 1 on (and for NaN).
 
-    Computed as 1 / max(1/ρ − 1, 0) in place (NaN → ∞); callers hold
-    ``np.errstate(all="ignore")``.
+    Callers hold ``np.errstate(all="ignore")``; :mod:`mechcirc._sp_kernel` computes the same.
     """
     if not (isinstance(rho, np.ndarray) and rho.ndim):
         # A scalar ρ (a leaf's, constant in ω: fuzz seed 599): work on an array.
         rho = np.atleast_1d(np.asarray(rho, dtype=float))
-    r = np.reciprocal(rho)
-    r -= 1.0
-    np.fmax(r, 0.0, out=r)
-    return np.reciprocal(r, out=r)
+    out = rho * rho
+    out *= 2.0
+    out += rho
+    big = ~(rho <= 0.5)
+    if big.any():
+        out[big] = rho[big] / (1.0 - rho[big])
+        out[~(rho < 1.0)] = np.inf
+    return out
 
 
 def _reciprocal(K: NDArray[np.complex128]) -> NDArray[np.complex128]:

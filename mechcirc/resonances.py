@@ -270,13 +270,22 @@ def _band_modes(M, D, K, omega_max: float) -> np.ndarray:
     from scipy.sparse.linalg import LinearOperator, eigs, splu
 
     n = M.shape[0]
+    k = min(24, 2 * n - 2)
+    if not (D.nnz and np.any(D.data)):
+        # Undamped: count the roots in the band first (Sylvester's inertia), so
+        # that a band holding too many is refused at once, and ARPACK is asked
+        # for all of them in one call instead of doubling its way up.
+        found = count_undamped_roots(M, K, omega_max)
+        if found is not None:
+            if found > MAX_BAND_ROOTS // 2:
+                _refuse_band(found, omega_max, n, exact=True)
+            k = min(2 * found + 8, 2 * n - 2)
     eye = sp.identity(n, format="csc")
     A = sp.bmat([[None, eye], [-K, -D]], format="csc")
     B = sp.bmat([[eye, None], [None, M]], format="csc")
     sigma = -1e-3 * omega_max
     lu = splu((A - sigma * B).tocsc().astype(complex))
     op = LinearOperator((2 * n, 2 * n), matvec=lambda v: lu.solve(B @ v), dtype=complex)
-    k = min(24, 2 * n - 2)
     while True:
         nu = eigs(op, k=k, which="LM", return_eigenvectors=False, tol=1e-13)
         with np.errstate(divide="ignore"):
@@ -288,10 +297,7 @@ def _band_modes(M, D, K, omega_max: float) -> np.ndarray:
             # ARPACK's cost grows as k² n: a band holding hundreds of roots of a
             # large network would run for minutes (a 2,500-mass chain below
             # 10 rad/s: > 5 min).  Refuse with the count found so far.
-            raise SolverError(
-                f"resonances: more than {k // 2} roots below omega_max = {omega_max:g} rad/s "
-                f"in a network of {n} unknowns (the band solver stops at "
-                f"{MAX_BAND_ROOTS // 2}); give a smaller omega_max or sweep K(ω) instead")
+            _refuse_band(k // 2, omega_max, n, exact=False)
         k = min(2 * k, 2 * n - 2)
     keep = (np.abs(s_all) > 1e-6 * omega_max) & (np.abs(s_all) <= omega_max * (1 + 1e-6)) \
         & (s_all.imag >= -1e-9 * np.abs(s_all))
@@ -300,6 +306,55 @@ def _band_modes(M, D, K, omega_max: float) -> np.ndarray:
     err = np.full(s.size, 1e-8)
     must = np.ones(s.size)
     return np.column_stack([s, err, must]) if s.size else np.zeros((0, 3), dtype=complex)
+
+
+def _refuse_band(count: int, omega_max: float, n: int, exact: bool):
+    raise SolverError(
+        f"resonances: {'' if exact else 'more than '}{count} roots below omega_max = "
+        f"{omega_max:g} rad/s in a network of {n} unknowns (the band solver stops at "
+        f"{MAX_BAND_ROOTS // 2}); give a smaller omega_max or sweep K(ω) instead",
+        status="size")
+
+
+def _negative_pivots(A) -> int | None:
+    """Number of negative eigenvalues of the sparse symmetric ``A``, or None if unknown.
+
+    Sylvester's law of inertia: a symmetric factorisation P A Pᵀ = L D Lᵀ has as
+    many negative pivots in D as A has negative eigenvalues.  SuperLU in its
+    symmetric mode with diagonal pivoting gives that factorisation (U = D Lᵀ)
+    when it kept the row order equal to the column order; otherwise, or if A is
+    singular, the count is unknown.
+    """
+    from scipy.sparse.linalg import splu
+
+    try:
+        lu = splu(A.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                  options={"SymmetricMode": True})
+    except RuntimeError:                          # exactly singular
+        return None
+    if not np.array_equal(lu.perm_r, lu.perm_c):
+        return None
+    d = lu.U.diagonal()
+    if not np.all(np.isfinite(d)) or np.any(d == 0):
+        return None
+    return int(np.count_nonzero(d < 0))
+
+
+def count_undamped_roots(M, K, omega_max: float) -> int | None:
+    """How many natural frequencies 1e-6·omega_max < ω < omega_max the pencil (K, M) has.
+
+    ``M`` and ``K`` are the sparse, symmetric, positive semidefinite mass and
+    stiffness matrices of an undamped network (constraints already projected
+    out).  The count is the difference of the negative eigenvalues of
+    K − ω²M at the two ends (Sylvester's law of inertia), from two sparse
+    factorisations; None when a factorisation cannot tell (see
+    :func:`_negative_pivots`).
+    """
+    lo = _negative_pivots(K - (1e-6 * omega_max) ** 2 * M)
+    hi = _negative_pivots(K - omega_max ** 2 * M)
+    if lo is None or hi is None:
+        return None
+    return hi - lo
 
 
 def _undamped(M: np.ndarray, K: np.ndarray) -> np.ndarray:

@@ -6,11 +6,13 @@ import math
 import os
 import re
 import stat
+from dataclasses import dataclass
 
 from .errors import NetlistError
 
 __all__ = ["read_source", "read_bytes", "MAX_INPUT_BYTES", "split_lines", "line_col",
-           "finite_number", "brief", "load_toml", "locate", "locate_path", "located"]
+           "finite_number", "brief", "load_toml", "locate", "locate_path", "located", "Table",
+           "unknown_key", "check_keys", "number_error"]
 
 #: The largest input file mechcirc reads [bytes].  A netlist of the statement
 #: limit is far below this; anything larger is refused before it is read.
@@ -118,6 +120,19 @@ def finite_number(value) -> bool:
         return False
 
 
+def number_error(value, what: str, *, positive: bool = False,
+                 allow_zero: bool = False) -> tuple[str, str] | None:
+    """None for a finite number (> 0 with ``positive``, ≥ 0 with ``allow_zero`` too),
+    else ``(message, what is right)`` for the located error of every reader."""
+    ok = finite_number(value)
+    if ok and positive:
+        ok = value > 0 or (allow_zero and value == 0)
+    if ok:
+        return None
+    need = "a finite number" + ("" if not positive else " ≥ 0" if allow_zero else " > 0")
+    return f"{what} must be {need}, got {brief(value)}", need
+
+
 def brief(value) -> str:
     """``repr(value)`` cut short for a message (a 400-digit integer is not a message)."""
     text = repr(value)
@@ -182,8 +197,8 @@ def locate_path(text: str, path: tuple[str, ...]) -> tuple[int, int]:
     """(line, col) of the TOML key ``path`` (e.g. ``("grid", "eta2", "num")``), however written.
 
     Tries ``[a.b]`` then ``c = …``; ``[a]`` then ``b = {c = …}`` (the column of
-    ``c`` on that line when it is there); the header ``[a.b.c]`` itself; and
-    so on up to the top level.  (0, 0) when nothing matches.
+    ``c`` on that line when it is there); the header ``[a.b.c]`` itself (or
+    the first ``[a.b.c.x]``); and so on up to the top level.  (0, 0) when nothing matches.
     """
     path = tuple(str(p) for p in path)
     for cut in range(len(path) - 1, -1, -1):
@@ -200,7 +215,8 @@ def locate_path(text: str, path: tuple[str, ...]) -> tuple[int, int]:
         name = ".".join(path[:cut + 1])
         for n, ln in enumerate(split_lines(text), start=1):
             m = _HEADER.match(ln)
-            if m and m.group(1).replace(" ", "") == name:
+            # [a.b] itself, or the first [a.b.x] (which makes [a.b] without a header)
+            if m and (m.group(1).replace(" ", "") + ".").startswith(name + "."):
                 return n, ln.index("[") + 1
     return 0, 0
 
@@ -211,3 +227,79 @@ def located(text: str, source: str, message: str, section: str | None, key: str,
     line, col = locate(text, section, key, value if isinstance(value, str) else None,
                        occurrence)
     return NetlistError(message, source, line, col, expected)
+
+
+# ------------------------------------------------------------------ declared tables
+@dataclass(frozen=True)
+class Table:
+    """The declarative description of one TOML table a reader accepts.
+
+    Each reader (linkage, scene, study) declares its tables once, as data;
+    :func:`check_keys` refuses an undeclared key with one message form,
+    located at the key, and the description is the "expected" part of it.
+
+    Attributes
+    ----------
+    name : str or None
+        The table's name (``"cranks"``, ``"omega"``); None for the top level.
+    keys : dict of str to str
+        Each key it may hold, in the order the messages list them, and what
+        the key holds.
+    array : bool
+        An array of tables (``[[name]]``), whose entries are counted from 1
+        in messages.
+    """
+
+    name: str | None
+    keys: dict[str, str]
+    array: bool = False
+
+    @property
+    def header(self) -> str:
+        """``[name]``, ``[[name]]`` or ``the top level``."""
+        if self.name is None:
+            return "the top level"
+        return f"[[{self.name}]]" if self.array else f"[{self.name}]"
+
+    @property
+    def expected(self) -> str:
+        """The declared keys, comma-separated."""
+        return ", ".join(self.keys)
+
+
+def unknown_key(table: Table, entry: dict, occurrence: int = 0) -> tuple[str, str] | None:
+    """``(key, message)`` for the first key of ``entry`` that ``table`` does not declare.
+
+    None when every key is declared.
+    """
+    for key in entry:
+        if key not in table.keys:
+            if table.name is None:
+                return key, f"unknown top-level key {key!r}"
+            where = table.header + (f" #{occurrence + 1}" if table.array else "")
+            return key, f"unknown key {key!r} in {where}"
+    return None
+
+
+def check_keys(text: str, source: str, table: Table, entry: dict, occurrence: int = 0) -> None:
+    """Refuse an undeclared key of ``entry`` (see :func:`unknown_key`) at its line and column.
+
+    Raises
+    ------
+    NetlistError
+        At the key (or, for an undeclared top-level table, at its header),
+        listing the declared keys as what is expected.
+    """
+    found = unknown_key(table, entry, occurrence)
+    if found is None:
+        return
+    key, message = found
+    err = located(text, source, message, table.name, key, occurrence=occurrence,
+                  expected=table.expected)
+    if not err.line and table.name is None:          # a table: point at its header
+        header = re.compile(r"^\s*\[\[?\s*" + re.escape(key) + r"\s*[\].]")
+        for n, line in enumerate(split_lines(text), start=1):
+            if header.match(line):
+                err = NetlistError(message, source, n, line.index(key) + 1, table.expected)
+                break
+    raise err

@@ -80,7 +80,8 @@ from typing import Callable, Iterable
 from .errors import MechcircError, NetlistError
 from .limits import (MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS, MAX_STUDY_POINTS,
                      MAX_STUDY_SWEEP_POINTS, MAX_STUDY_WORK)
-from .sources import brief, finite_number, load_toml, locate_path
+from .sources import (Table, brief, finite_number, load_toml, locate_path, number_error,
+                      unknown_key)
 
 __all__ = ["StudySpec", "load_spec", "parse_spec", "study_points", "run_point", "run_batch",
            "run_study", "StudyResult", "read_rows", "journal_path"]
@@ -154,8 +155,9 @@ def _omega(path, value, what) -> float:
 
 
 def _number(path, value, what) -> float:
-    if not finite_number(value):
-        _fail(path, f"{what} must be a finite number, got {brief(value)}")
+    bad = number_error(value, what)
+    if bad:
+        _fail(path, bad[0])
     return float(value)
 
 
@@ -226,103 +228,47 @@ def parse_spec(data: dict, *, source: str = "<spec>", base: Path | None = None,
         raise NetlistError(exc.message, source, line, col) from None
 
 
+#: The tables of a study file, declared once (see :class:`mechcirc.sources.Table`);
+#: ``[grid]`` and ``[random.params]`` map the parameters' names.
+TABLES = {
+    None: Table(None, {"analysis": "\"sweep\", \"resonances\" or \"simulate\"",
+                       "grid": "[grid]: NAME = [values] or {min, max, num[, log]}",
+                       "netlist": "the netlist's path, relative to the spec file",
+                       "omega": "[omega]: the sweep (analysis = \"sweep\")",
+                       "omega_max": "highest resonance sought [rad/s]",
+                       "random": "[random]: n, seed, params",
+                       "resonances": "how many of each kind to tabulate",
+                       "sley": "[sley]: the preset (analysis = \"simulate\")"}),
+    "omega": Table("omega", {"min": "[rad/s] or \"5Hz\"", "max": "[rad/s] or \"1500Hz\"",
+                             "points": "default 200", "log": "geometric spacing"}),
+    "random": Table("random", {"n": "number of points", "seed": "default 0",
+                               "params": "[random.params]: NAME = {min, max[, log]}"}),
+    "sley": Table("sley", {"drive": "\"one-side\" or \"both-sides\"", "variant": "1 to 7",
+                           "revolutions": "default 5", "points_per_revolution": "default 7200"}),
+}
+
+
+def _check_keys(table: str | None, entry: dict) -> None:
+    """Refuse a key ``TABLES[table]`` does not declare, at its key path."""
+    found = unknown_key(TABLES[table], entry)
+    if found is not None:
+        key, message = found
+        _fail((key,) if table is None else (table, key),
+              f"{message} (expected {TABLES[table].expected})")
+
+
 def _parse_spec(data: dict, source: str, base: Path) -> StudySpec:
-    known = {"netlist", "analysis", "omega", "grid", "random", "resonances", "omega_max",
-             "sley"}
-    unknown = sorted(set(data) - known)
-    if unknown:
-        _fail((unknown[0],), f"unknown key(s) {', '.join(unknown)} (expected "
-                             f"{', '.join(sorted(known))})")
+    _check_keys(None, data)
     analysis = data.get("analysis", "sweep")
     if analysis not in ("sweep", "resonances", "simulate"):
         _fail(("analysis",), f"analysis must be 'sweep', 'resonances' or 'simulate', "
                              f"got {brief(analysis)}")
-    if analysis == "simulate":
-        text, path = "", ""
-    else:
-        if "netlist" not in data or not isinstance(data["netlist"], str):
-            _fail(("netlist",), "needs netlist = \"PATH\" (relative to the spec file)")
-        path = Path(os.path.normpath(base / data["netlist"]))
-        try:
-            path = path.relative_to(Path.cwd())
-        except ValueError:
-            pass
-        from .sources import read_source
-
-        try:
-            text = read_source(path, "a .mcir netlist")
-        except NetlistError as exc:
-            _fail(("netlist",), f"netlist {str(path)!r}: {exc.message}")
+    text, path = ("", "") if analysis == "simulate" else _read_netlist(data, base)
     if ("grid" in data) == ("random" in data):
         _fail(("grid",) if "grid" in data else (), "needs exactly one of a [grid] table or a "
                                                    "[random] table")
-    if "grid" in data:
-        grid = data["grid"]
-        if not isinstance(grid, dict) or not grid:
-            _fail(("grid",), "[grid] must name at least one parameter")
-        names = tuple(grid)
-        # Count first: an axis of num = 1e9 is refused before it is built.
-        count = math.prod(_axis_length(n, grid[n]) for n in names)
-        if count > MAX_POINTS:
-            _fail(("grid",), f"the grid has {count:,} points, the limit is {MAX_POINTS:,}")
-        axes = [_axis(n, grid[n]) for n in names]
-        points = tuple(itertools.product(*axes))
-    else:
-        rnd = data["random"]
-        if not isinstance(rnd, dict):
-            _fail(("random",), "[random] must be a table (n, seed, params)")
-        extra = set(rnd) - {"n", "seed", "params"}
-        if extra:
-            _fail(("random", sorted(extra)[0]),
-                  f"unknown key(s) in [random]: {', '.join(sorted(extra))}")
-        n = _integer(("random", "n"), rnd.get("n"), "random.n", 1, MAX_POINTS)
-        seed = rnd.get("seed", 0)
-        if isinstance(seed, bool) or not isinstance(seed, (int, str)):
-            _fail(("random", "seed"), f"random.seed must be an integer, got {brief(seed)}")
-        ranges = rnd.get("params")
-        if not isinstance(ranges, dict) or not ranges:
-            _fail(("random", "params"), "[random.params] must give {min, max} for at least one "
-                                        "parameter")
-        names = tuple(ranges)
-        bounds = []
-        for name in names:
-            r = ranges[name]
-            where = ("random", "params", name)
-            if not isinstance(r, dict) or not {"min", "max"} <= set(r) or \
-                    set(r) - {"min", "max", "log"}:
-                _fail(where, f"random.params.{name} must be {{min, max[, log]}}")
-            lo = _number((*where, "min"), r["min"], f"random.params.{name}.min")
-            hi = _number((*where, "max"), r["max"], f"random.params.{name}.max")
-            if not lo <= hi or (r.get("log") and lo <= 0):
-                _fail(where, f"random.params.{name}: need min <= max (and > 0 with log)")
-            bounds.append((lo, hi, bool(r.get("log", False))))
-        rng = random.Random(seed)
-        points = tuple(tuple(math.exp(rng.uniform(math.log(lo), math.log(hi))) if log
-                             else rng.uniform(lo, hi) for lo, hi, log in bounds)
-                       for _ in range(n))
-    omega = None
-    if analysis == "sweep":
-        o = data.get("omega")
-        if not isinstance(o, dict) or not {"min", "max"} <= set(o):
-            _fail(("omega",), "analysis 'sweep' needs an [omega] table with min and max "
-                              "(and points, log)")
-        extra = sorted(set(o) - {"min", "max", "points", "log"})
-        if extra:
-            _fail(("omega", extra[0]), f"unknown key(s) in [omega]: {', '.join(extra)} "
-                                       "(expected min, max, points, log)")
-        lo = _omega(("omega", "min"), o["min"], "omega.min")
-        hi = _omega(("omega", "max"), o["max"], "omega.max")
-        npts = _integer(("omega", "points"), o.get("points", 200), "omega.points", 1,
-                        MAX_STUDY_SWEEP_POINTS)
-        log = bool(o.get("log", False))
-        if not (0 <= lo < hi) or (log and lo <= 0):
-            _fail(("omega", "min"), f"need 0 <= omega.min < omega.max (and > 0 with log), "
-                                    f"got {lo}, {hi}")
-        if len(points) * npts > MAX_STUDY_WORK:
-            _fail(("omega", "points"), f"{len(points):,} points × {npts:,} frequencies is "
-                                       f"{len(points) * npts:,} evaluations, the limit is "
-                                       f"{MAX_STUDY_WORK:,}")
-        omega = (lo, hi, npts, log)
+    names, points = _grid(data["grid"]) if "grid" in data else _random(data["random"])
+    omega = _sweep_omega(data.get("omega"), len(points)) if analysis == "sweep" else None
     n_res = _integer(("resonances",), data.get("resonances", 3), "resonances", 1, 100)
     omega_max = _omega(("omega_max",), data["omega_max"], "omega_max") \
         if "omega_max" in data else None
@@ -330,26 +276,112 @@ def _parse_spec(data: dict, source: str, base: Path) -> StudySpec:
     if analysis == "simulate":
         sley = _sley_settings(data.get("sley", {}), names)
     else:
-        # Check the names against the netlist now, not once per point.
-        from .netlist import parse
-
-        base_circuit = parse(text, source=str(path))
-        missing = [n for n in names if n not in base_circuit.params]
-        if missing:
-            _fail(("grid" if "grid" in data else "random",),
-                  f"{', '.join(missing)} is not a .param of {path} (its parameters: "
-                  f"{', '.join(base_circuit.params) or 'none'})")
+        _check_params(text, path, names, "grid" if "grid" in data else "random")
     return StudySpec(text, str(path), analysis, names, points, omega, n_res, omega_max, source,
                      sley)
+
+
+def _read_netlist(data: dict, base: Path) -> tuple[str, Path]:
+    """The text of ``netlist = "PATH"`` (relative to the spec file) and its path."""
+    if "netlist" not in data or not isinstance(data["netlist"], str):
+        _fail(("netlist",), "needs netlist = \"PATH\" (relative to the spec file)")
+    path = Path(os.path.normpath(base / data["netlist"]))
+    try:
+        path = path.relative_to(Path.cwd())
+    except ValueError:
+        pass
+    from .sources import read_source
+
+    try:
+        return read_source(path, "a .mcir netlist"), path
+    except NetlistError as exc:
+        _fail(("netlist",), f"netlist {str(path)!r}: {exc.message}")
+
+
+def _grid(grid) -> tuple[tuple[str, ...], tuple[tuple[float, ...], ...]]:
+    """[grid]: the parameters' names and every combination of their values."""
+    if not isinstance(grid, dict) or not grid:
+        _fail(("grid",), "[grid] must name at least one parameter")
+    names = tuple(grid)
+    # Count first: an axis of num = 1e9 is refused before it is built.
+    count = math.prod(_axis_length(n, grid[n]) for n in names)
+    if count > MAX_POINTS:
+        _fail(("grid",), f"the grid has {count:,} points, the limit is {MAX_POINTS:,}")
+    axes = [_axis(n, grid[n]) for n in names]
+    return names, tuple(itertools.product(*axes))
+
+
+def _random(rnd) -> tuple[tuple[str, ...], tuple[tuple[float, ...], ...]]:
+    """[random]: the parameters' names and n points drawn (seeded) from their ranges."""
+    if not isinstance(rnd, dict):
+        _fail(("random",), "[random] must be a table (n, seed, params)")
+    _check_keys("random", rnd)
+    n = _integer(("random", "n"), rnd.get("n"), "random.n", 1, MAX_POINTS)
+    seed = rnd.get("seed", 0)
+    if isinstance(seed, bool) or not isinstance(seed, (int, str)):
+        _fail(("random", "seed"), f"random.seed must be an integer, got {brief(seed)}")
+    ranges = rnd.get("params")
+    if not isinstance(ranges, dict) or not ranges:
+        _fail(("random", "params"), "[random.params] must give {min, max} for at least one "
+                                    "parameter")
+    names = tuple(ranges)
+    bounds = [_random_range(name, ranges[name]) for name in names]
+    rng = random.Random(seed)
+    return names, tuple(tuple(math.exp(rng.uniform(math.log(lo), math.log(hi))) if log
+                              else rng.uniform(lo, hi) for lo, hi, log in bounds)
+                        for _ in range(n))
+
+
+def _random_range(name, r) -> tuple[float, float, bool]:
+    """random.params.NAME = {min, max[, log]} as (min, max, log)."""
+    where = ("random", "params", name)
+    if not isinstance(r, dict) or not {"min", "max"} <= set(r) or \
+            set(r) - {"min", "max", "log"}:
+        _fail(where, f"random.params.{name} must be {{min, max[, log]}}")
+    lo = _number((*where, "min"), r["min"], f"random.params.{name}.min")
+    hi = _number((*where, "max"), r["max"], f"random.params.{name}.max")
+    if not lo <= hi or (r.get("log") and lo <= 0):
+        _fail(where, f"random.params.{name}: need min <= max (and > 0 with log)")
+    return lo, hi, bool(r.get("log", False))
+
+
+def _sweep_omega(o, n_points: int) -> tuple[float, float, int, bool]:
+    """[omega] of a sweep study: (min, max, points, log), within the work limit."""
+    if not isinstance(o, dict) or not {"min", "max"} <= set(o):
+        _fail(("omega",), "analysis 'sweep' needs an [omega] table with min and max "
+                          "(and points, log)")
+    _check_keys("omega", o)
+    lo = _omega(("omega", "min"), o["min"], "omega.min")
+    hi = _omega(("omega", "max"), o["max"], "omega.max")
+    npts = _integer(("omega", "points"), o.get("points", 200), "omega.points", 1,
+                    MAX_STUDY_SWEEP_POINTS)
+    log = bool(o.get("log", False))
+    if not (0 <= lo < hi) or (log and lo <= 0):
+        _fail(("omega", "min"), f"need 0 <= omega.min < omega.max (and > 0 with log), "
+                                f"got {lo}, {hi}")
+    if n_points * npts > MAX_STUDY_WORK:
+        _fail(("omega", "points"), f"{n_points:,} points × {npts:,} frequencies is "
+                                   f"{n_points * npts:,} evaluations, the limit is "
+                                   f"{MAX_STUDY_WORK:,}")
+    return lo, hi, npts, log
+
+
+def _check_params(text: str, path, names, table: str) -> None:
+    """Every varied name is a ``.param`` of the netlist (checked once, not per point)."""
+    from .netlist import parse
+
+    base_circuit = parse(text, source=str(path))
+    missing = [n for n in names if n not in base_circuit.params]
+    if missing:
+        _fail((table,), f"{', '.join(missing)} is not a .param of {path} (its parameters: "
+                        f"{', '.join(base_circuit.params) or 'none'})")
 
 
 def _sley_settings(table, names) -> tuple:
     if not isinstance(table, dict):
         _fail(("sley",), "[sley] must be a table (drive, variant, revolutions, "
                          "points_per_revolution)")
-    extra = set(table) - {"drive", "variant", "revolutions", "points_per_revolution"}
-    if extra:
-        _fail(("sley", sorted(extra)[0]), f"unknown key(s) in [sley]: {', '.join(sorted(extra))}")
+    _check_keys("sley", table)
     drive = table.get("drive", "one-side")
     if not isinstance(drive, str) or drive not in _SLEY_QUANTITIES:
         _fail(("sley", "drive"), f"sley.drive must be 'one-side' or 'both-sides', "
@@ -577,7 +609,6 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
     """
     columns = spec.columns
     todo = study_points(spec)
-    done: list[dict] = []
     parquet = bool(output) and str(output).lower().endswith(".parquet")
     if parquet:
         _require_pyarrow()
@@ -585,30 +616,11 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
     # a checksum; the output itself is written whole at the end (atomically),
     # so an existing file stays as it was until the new table is complete.
     journal = journal_path(output) if output else None
-    if resume and output:
-        if Path(journal).exists():
-            done = read_rows(journal, columns)
-        elif Path(output).exists():
-            done = _read_parquet(output, columns) if parquet else read_rows(output, columns)
-        n = len(spec.points)
-        done = [r for r in done if r["index"] < n]
-        have = {r["index"] for r in done}
-        todo = [(i, v) for i, v in todo if i not in have]
-    sink = None
-    if output:
-        from .outputs import atomic_open
-
-        # A fresh journal holding the verified rows (a resumed journal is
-        # rewritten, not appended to: its last line may lack its terminator).
-        with atomic_open(journal, "w", newline="", encoding="utf-8") as fh:
-            w = csv.writer(fh)
-            w.writerow([*columns, _CHECK])
-            for r in done:
-                fields = [_format(r.get(c, "")) for c in columns]
-                w.writerow([*fields, _crc(fields)])
-        sink = open(journal, "a", newline="", encoding="utf-8")
-        writer = csv.writer(sink)
-
+    done = _resumed_rows(spec, output, journal, parquet) if resume and output else []
+    have = {r["index"] for r in done}
+    todo = [(i, v) for i, v in todo if i not in have]
+    sink = _open_journal(journal, columns, done) if output else None
+    writer = csv.writer(sink) if sink is not None else None
     rows = list(done)
 
     def take(batch_rows: Iterable[dict]) -> None:
@@ -633,20 +645,54 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
         if sink is not None:
             sink.close()
     rows.sort(key=lambda r: r["index"])
-    if parquet:
-        _write_parquet(output, columns, rows)
-        os.unlink(journal)
-    elif output:
-        from .outputs import atomic_open
-
-        with atomic_open(output, "w", newline="", encoding="utf-8") as fh:
-            w = csv.writer(fh)
-            w.writerow(columns)
-            for r in rows:
-                w.writerow([_format(r.get(c, "")) for c in columns])
+    if output:
+        _write_output(output, parquet, columns, rows)
         os.unlink(journal)
     failed = sum(r["status"] != "ok" for r in rows)
     return StudyResult(columns, rows, executor, n_workers, len(done), failed)
+
+
+def _resumed_rows(spec: StudySpec, output, journal: str, parquet: bool) -> list[dict]:
+    """The verified rows of the journal, or of a finished output, that are points of ``spec``."""
+    columns = spec.columns
+    done: list[dict] = []
+    if Path(journal).exists():
+        done = read_rows(journal, columns)
+    elif Path(output).exists():
+        done = _read_parquet(output, columns) if parquet else read_rows(output, columns)
+    n = len(spec.points)
+    return [r for r in done if r["index"] < n]
+
+
+def _open_journal(journal: str, columns: list[str], done: list[dict]):
+    """A fresh journal holding the verified rows, open for appending.
+
+    A resumed journal is rewritten, not appended to: its last line may lack
+    its terminator.
+    """
+    from .outputs import atomic_open
+
+    with atomic_open(journal, "w", newline="", encoding="utf-8") as fh:
+        w = csv.writer(fh)
+        w.writerow([*columns, _CHECK])
+        for r in done:
+            fields = [_format(r.get(c, "")) for c in columns]
+            w.writerow([*fields, _crc(fields)])
+    return open(journal, "a", newline="", encoding="utf-8")
+
+
+def _write_output(output, parquet: bool, columns: list[str], rows: list[dict]) -> None:
+    """The whole table, in index order, written atomically (CSV or Parquet)."""
+    if parquet:
+        _write_parquet(output, columns, rows)
+        return
+    from .outputs import atomic_open
+
+    with atomic_open(output, "w", newline="", encoding="utf-8") as fh:
+        w = csv.writer(fh)
+        w.writerow(columns)
+        for r in rows:
+            w.writerow([_format(r.get(c, "")) for c in columns])
 
 
 def journal_path(output: str | os.PathLike) -> str:

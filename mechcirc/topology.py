@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections import deque
 from typing import Sequence
 
-from .circuit import FRAME, Circuit
+from .circuit import FRAME, Circuit, node_names  # node_names: re-exported here
 from .errors import TopologyError
 
 __all__ = ["loaded_groups", "force_groups", "node_names", "check_frame_paths", "reachable"]
@@ -50,18 +50,6 @@ def force_groups(elements, levers) -> list[list[tuple[str, str]]]:
         t = (lv.p1, lv.p2, lv.s1, lv.s2)
         groups.append([(t[i], t[j]) for i in range(4) for j in range(i + 1, 4)])
     return groups
-
-
-def node_names(elements, levers) -> list[str]:
-    """The node names of ``elements`` and ``levers``, in order of first appearance."""
-    seen: dict[str, None] = {}
-    for e in elements:
-        seen.setdefault(e.n1)
-        seen.setdefault(e.n2)
-    for lv in levers:
-        for n in (lv.p1, lv.p2, lv.s1, lv.s2):
-            seen.setdefault(n)
-    return list(seen)
 
 
 def loaded_groups(groups: Sequence[Sequence[tuple[str, str]]], a: str, b: str,

@@ -9,9 +9,17 @@ docs/tutorial.md under "Examples in these docs"):
   output shown must be the output produced (``...`` elides, whitespace is
   normalised).
 * Any other block whose lines start with ``$ `` is a shell session: its
-  ``$`` commands run in one ``bash`` (so ``echo $?`` sees the last status);
+  ``$`` commands run in order; a plain ``mechcirc ...`` line (no pipe,
+  redirection or expansion) runs in this process with the same argv and
+  working directory (``mechcirc.cli.main``, as ``python -m mechcirc`` does;
+  it saves the interpreter start-up of every line), any other line in
+  ``bash -o pipefail``, which sees the previous status as ``$?`` (``echo $?``;
+  each line is its own ``bash``, so ``cd`` or a variable does not carry over);
   each ``mechcirc`` command must exit 0, or the status of an
   ``<!-- exit: N -->`` marker; other commands (``cat``, ``head``) must exit 0.
+  Real start-up, exit codes and signals of the ``mechcirc`` script are
+  tested by subprocess in ``tests/test_cli.py``, ``tests/test_cli_common.py``
+  and ``tests/test_outputs.py``.
   The lines after a command are its output as shown and are not compared
   (numbers move with the last digit of a library).
 * ``<!-- file: PATH -->`` writes the block to PATH before the next blocks
@@ -33,6 +41,7 @@ from __future__ import annotations
 import doctest
 import os
 import re
+import shlex
 import subprocess
 import sys
 from pathlib import Path
@@ -120,25 +129,79 @@ def _commands(text: str):
     return cmds
 
 
+#: Characters that make a command line need a real shell (pipes, redirections,
+#: expansions, several commands); a ``mechcirc`` line without them runs in-process.
+_SHELL_SYNTAX = set("|&;<>()$`*?[]{}~!\\'\"")
+
+
+def _in_process_argv(cmd: str):
+    """The argv of a plain ``mechcirc ...`` line, or None when it needs a shell."""
+    line = cmd.replace("\\\n", " ")
+    try:
+        words = shlex.split(line, comments=True)
+    except ValueError:
+        return None
+    code = re.split(r"(?:^|\s)#", line, maxsplit=1)[0]     # without its comment
+    if not words or words[0] != "mechcirc" or _SHELL_SYNTAX & set(code) or "#" in code:
+        return None
+    return words[1:]
+
+
+def run_mechcirc(argv: list[str]) -> tuple[int, str, str]:
+    """``mechcirc ARGV`` in this process: ``(exit status, stdout, stderr)``.
+
+    What ``python -m mechcirc`` does (``mechcirc.cli.main``), without the ~1 s
+    of interpreter, numpy/scipy/matplotlib and numba-cache start-up per line.
+    A ``SystemExit`` (argparse's usage errors, ``--help``) gives its code; any
+    other exception escaping ``main`` is what a real run would show as a
+    traceback, so it is a failure (status 1, the traceback on stderr).
+    """
+    import contextlib
+    import io
+    import traceback
+
+    from mechcirc.cli import main
+
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            status = main(list(argv))
+        except SystemExit as exc:
+            status = exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
+            if exc.code is not None and not isinstance(exc.code, int):
+                print(exc.code, file=sys.stderr)
+        except BaseException:               # noqa: BLE001 - a traceback is a failure here
+            traceback.print_exc()
+            status = 1
+    return status, out.getvalue(), err.getvalue()
+
+
 def _run_shell(text, marks, where, tmp, env):
-    """Run a block's ``$`` commands as one bash session (``echo $?`` sees the last status)."""
+    """Run a block's ``$`` commands in order, as one shell session would.
+
+    A plain ``mechcirc ...`` line (no pipe, redirection or expansion) runs
+    in-process with the same argv and working directory (:func:`run_mechcirc`);
+    any other line runs in ``bash`` (``set -o pipefail``), which sees the last
+    status as ``$?`` (``echo $?``).
+    """
     expected = int(marks.get("exit", "0") or 0)
     # Benchmarks measure time, they do not check anything, and take minutes: the
     # pages show their command and output, the test does not run them.
     cmds = [c for c in _commands(text) if not c.lstrip().startswith("python benchmarks/")]
-    script = []
-    for i, cmd in enumerate(cmds):
-        script.append(f"{cmd}\n__rc=$?; echo \"@@rc {i} $__rc\" >&2; (exit $__rc)")
-    proc = subprocess.run(["bash", "-c", "set -o pipefail\n" + "\n".join(script)], cwd=tmp,
-                          env=env, capture_output=True, text=True, timeout=SHELL_TIMEOUT)
-    status = {int(i): int(rc) for i, rc in re.findall(r"^@@rc (\d+) (\d+)$", proc.stderr,
-                                                      re.M)}
-    failures = []
-    for i, cmd in enumerate(cmds):
+    failures, last = [], 0
+    for cmd in cmds:
+        argv = _in_process_argv(cmd)
+        if argv is not None:
+            last, _, stderr = run_mechcirc(argv)
+        else:
+            proc = subprocess.run(["bash", "-c", f"set -o pipefail\n(exit {last})\n{cmd}"],
+                                  cwd=tmp, env=env, capture_output=True, text=True,
+                                  timeout=SHELL_TIMEOUT)
+            last, stderr = proc.returncode, proc.stderr
         want = expected if cmd.lstrip().startswith("mechcirc") else 0
-        if status.get(i) != want:
-            failures.append(f"{where}: `{cmd}` exited {status.get(i)}, expected {want}\n"
-                            f"{proc.stderr[-1500:]}")
+        if last != want:
+            failures.append(f"{where}: `{cmd}` exited {last}, expected {want}\n"
+                            f"{stderr[-1500:]}")
     return failures
 
 

@@ -14,6 +14,7 @@ from mechcirc.circuit import element_mobility
 from mechcirc.explain import explain
 from mechcirc.forces import element_forces
 from reference.stb_eq7 import full_K
+from mechcirc.errors import InputError
 
 REPO = Path(__file__).resolve().parents[1]
 STB = REPO / "netlists" / "stb_heald.mcir"
@@ -144,3 +145,16 @@ def test_check_explain_bridge_is_a_user_error(capsys):
     status, _, err = run(["check", fh.name, "--explain"], capsys)
     Path(fh.name).unlink()
     assert status == 2 and "series–parallel" in err
+
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_forces_api_refuses_bad_omega_with_input_error():
+    import mechcirc
+    from mechcirc.forces import element_forces
+
+    c = mechcirc.load(STB)
+    for w in (0.0, -1.0, math.inf, math.nan):
+        with pytest.raises(InputError):
+            element_forces(c, w)

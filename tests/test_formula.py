@@ -13,6 +13,8 @@ from reference.stb_eq7 import denominator, numerator
 sp = pytest.importorskip("sympy")
 
 from mechcirc.interop.formula import formula, symbol_values  # noqa: E402
+import time
+from cli_helpers import assert_user_error, run
 
 REPO = Path(__file__).resolve().parents[1]
 STB = REPO / "netlists" / "stb_heald.mcir"
@@ -134,3 +136,49 @@ def test_deep_trees_are_refused_with_a_reason(capsys):
         formula(_ladder(100))
     F = formula(_ladder(MAX_TREE_DEPTH // 2))        # depth 2n: the deepest accepted prints
     assert str(F) and sp.latex(F)
+
+
+def test_formula_on_a_large_network_without_a_tree_is_refused_at_once(tmp_path, capsys):
+    pytest.importorskip("sympy")
+    lines = ["drive V n0_0 0 velocity=1"]
+    k = 0
+    for i in range(3):
+        for j in range(3):
+            n = f"n{i}_{j}"
+            if j < 2:
+                lines.append(f"spring k{k} {n} n{i}_{j + 1} {100 + k}")
+                k += 1
+            if i < 2:
+                lines.append(f"damper c{k} {n} n{i + 1}_{j} {1 + k}")
+                k += 1
+            lines.append(f"mass m{k} {n} 0 {1 + k}")
+            k += 1
+    path = tmp_path / "grid.mcir"
+    path.write_text("\n".join(lines) + "\n")
+    t0 = time.perf_counter()
+    assert_user_error(["formula", path], capsys, "21 elements", "--method nodal")
+    assert time.perf_counter() - t0 < 10
+
+
+def test_formula_bridge_by_cramer_matches_a_numeric_solve():
+    """The determinant form equals K from an independent dense complex solve at sampled ω."""
+    sp = pytest.importorskip("sympy")
+    import numpy as np
+
+    import mechcirc
+    from mechcirc.interop.formula import formula_and_values
+
+    text = ("spring k1 a b 1000\nspring k2 a c 2000\ndamper c3 b c 5\nmass m4 b 0 1\n"
+            "mass m5 c 0 2\nspring k6 c 0 300\ndrive V a 0 velocity=1\n")
+    K, values = formula_and_values(mechcirc.parse(text))
+    f = sp.lambdify(sp.Symbol("omega", positive=True), K.subs(values), "numpy")
+    for w in (0.7, 13.0, 55.5, 400.0):
+        # Nodal admittance (velocity drive: unit velocity at a; K = v/Q = 1/Q):
+        # unknown node velocities b, c; force at a from the elements at a.
+        yk = lambda k: k / (1j * w)                                     # noqa: E731
+        A = np.array([[yk(1000) + 5 + 1j * w * 1, -5],
+                      [-5, yk(2000) + 5 + 1j * w * 2 + yk(300)]])
+        rhs = np.array([yk(1000), yk(2000)])
+        vb, vc = np.linalg.solve(A, rhs)
+        Q = yk(1000) * (1 - vb) + yk(2000) * (1 - vc)
+        assert abs(complex(f(w)) - 1 / Q) <= 1e-12 * abs(1 / Q)

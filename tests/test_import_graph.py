@@ -7,6 +7,7 @@ under ``if TYPE_CHECKING:`` (annotations only, never executed).
 """
 
 import ast
+import functools
 from pathlib import Path
 
 import networkx as nx
@@ -64,6 +65,7 @@ def _imports(path: Path, modules: set[str]):
     return found
 
 
+@functools.lru_cache(maxsize=None)     # read once per run; the tests only read it
 def import_graph() -> nx.DiGraph:
     files = sorted(PACKAGE.rglob("*.py"))
     modules = {_module_name(p) for p in files}

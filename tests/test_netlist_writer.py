@@ -145,3 +145,23 @@ def test_damping_without_its_damper_is_not_written():
     back = parse(text)
     assert [(e.kind, e.name, e.value, e.damping) for e in back.elements] == \
         [("spring", "k", 3.0, 0.0)]
+
+
+def test_comments_follow_their_lines_and_read_back():
+    from mechcirc import parse
+    from mechcirc.netlist_writer import write
+
+    c = parse("drive V a 0 velocity=1\nmass m a 0 2\nspring k a b 800\n"
+              "lever L b 0 c 0 ratio=2\ndamper d c 0 3\n")
+    text = write(c, "head", comments={"V": "[m/s]", "k": "ratio = 0.5\nsecond line",
+                                      "L": "a lever", "nobody": "ignored"})
+    lines = text.splitlines()
+    assert lines[0] == "# head"
+    assert lines[1] == "drive V a 0 velocity=1.0   ; [m/s]"
+    assert "spring k a b 800.0   ; ratio = 0.5 second line" in lines
+    assert "lever L b 0 c 0 ratio=2.0   ; a lever" in lines
+    assert "mass m a 0 2.0" in lines and "ignored" not in text
+    back = parse(text)
+    assert [(e.kind, e.name, e.n1, e.n2, e.value, e.eta) for e in back.elements] == \
+        [(e.kind, e.name, e.n1, e.n2, e.value, e.eta) for e in c.elements]
+    assert back.levers[0].ratio == 2.0 and back.drive.amplitude == 1.0

@@ -8,6 +8,7 @@ import pytest
 
 import mechcirc
 from reference import stb_eq7
+from mechcirc.errors import NetlistError
 
 
 def _chain(N, k=100.0, m=1.0):
@@ -176,6 +177,57 @@ def test_damped_network_above_the_dense_limit_is_solved_in_a_band(monkeypatch):
         mechcirc.parse(text).resonances()
 
 
+def _undamped_chain(n, massless_every=0):
+    lines = ["drive V n0 0 velocity=1"]
+    for i in range(n):
+        if not (massless_every and i % massless_every == 1):
+            lines.append(f"mass m{i} n{i} 0 {1 + i % 3}")
+        lines.append(f"spring k{i} n{i} n{i + 1} {1000 + 37 * (i % 7)}")
+    return "\n".join(lines) + f"\nspring kend n{n} 0 100\n"
+
+
+@pytest.mark.parametrize("massless_every", [0, 4])
+def test_inertia_count_of_undamped_roots_against_dense_eigenvalues(massless_every):
+    """Sylvester's count of natural frequencies in the band equals the count of the
+    finite generalised eigenvalues of (K, M) from scipy.linalg.eig (QZ, independent)."""
+    import scipy.linalg as la
+
+    from mechcirc.resonances import count_undamped_roots
+
+    system = mechcirc.parse(_undamped_chain(120, massless_every)).nodal
+    n = len(system.nodes)
+    M, K = system.M[:n, :n].tocsc(), system.Ks[:n, :n].tocsc()
+    lam = la.eigvals(K.toarray(), M.toarray())
+    w = np.sqrt(np.abs(lam[np.isfinite(lam)].real))
+    for omega_max in (5.0, 20.0, 41.3, 1e3):
+        assert np.min(np.abs(w - omega_max)) > 1e-6 * omega_max   # no root on the edge
+        want = int(np.count_nonzero((w > 1e-6 * omega_max) & (w < omega_max)))
+        assert count_undamped_roots(M, K, omega_max) == want, omega_max
+
+
+def test_undamped_network_above_the_dense_limit_is_solved_in_a_band(monkeypatch):
+    """An undamped band gives the dense solver's roots (forced by a low limit)."""
+    text = _undamped_chain(200)
+    dense = mechcirc.parse(text).resonances(omega_max=15.0)
+    monkeypatch.setattr(mechcirc.resonances, "MAX_UNKNOWNS", 20)
+    band = mechcirc.parse(text).resonances(omega_max=15.0)
+    assert [r.kind for r in band] == [r.kind for r in dense] and len(dense) >= 10
+    for a, b in zip(band, dense):
+        assert abs(a.omega - b.omega) <= (a.error + b.error) * b.omega
+
+
+def test_undamped_band_with_too_many_roots_is_refused_with_their_count(monkeypatch):
+    """The count comes first, so the refusal names it exactly: the released network's
+    roots below 15 rad/s (its anti-resonances, found here by the dense solver) are the
+    first band solved."""
+    text = _undamped_chain(200)
+    want = sum(r.kind == "antiresonance" for r in mechcirc.parse(text).resonances(omega_max=15.0))
+    monkeypatch.setattr(mechcirc.resonances, "MAX_UNKNOWNS", 20)
+    monkeypatch.setattr(mechcirc.resonances, "MAX_BAND_ROOTS", 2 * want - 2)
+    with pytest.raises(mechcirc.SolverError, match=f"resonances: {want} roots below"):
+        mechcirc.parse(text).resonances(omega_max=15.0)
+
+
 def test_grid_anti_resonances_against_the_closed_form():
     """Uniform n×n grid, springs k between neighbours and to the frame, masses m, corner drive.
 
@@ -199,3 +251,76 @@ def test_grid_anti_resonances_against_the_closed_form():
     anti = np.sort([r.omega for r in found if r.kind == "antiresonance"])
     np.testing.assert_allclose(anti, np.sqrt(w2), rtol=1e-12)
     assert all(r.error <= 1e-13 for r in found)
+
+
+def test_resonances_of_an_overflowing_product_name_the_element():
+    c = mechcirc.parse("drive V a 0 velocity=1\nmass m a b 1e308 eta=1e5\nspring k b 0 1\n")
+    with pytest.raises(NetlistError, match="value × eta .* overflows float64") as err:
+        c.resonances()
+    assert (err.value.line, err.value.col) == (2, 1)
+
+
+def test_resonance_at_1e_minus_181_rad_per_s_is_found():
+    """Scales 1e-200 N/m and 1e181 kg: sqrt(k/m) underflowed to 0 and divided by it."""
+    text = ("drive V 0 n2 force=0.1\nspring e1 0 n2 2.2e-200\ndamper e2 0 n2 5.2\n"
+            "mass e3 0 n2 3.8e181\n")
+    found = mechcirc.parse(text).resonances()
+    # Overdamped m, c, k in parallel: s = -c/m (the other root, -k/c, is below the
+    # rigid-body cut).  K = 1/(sm + c + k/s) is infinite there: an anti-resonance.
+    assert [r.kind for r in found] == ["antiresonance"]
+    assert found[0].omega == pytest.approx(5.2 / 3.8e181, rel=1e-12)
+    assert found[0].zeta == 1.0
+
+
+def _mck(zeta: float, m=2.0, k=800.0):
+    c = 2 * zeta * math.sqrt(k * m)
+    return mechcirc.parse(f"drive V a 0 velocity=1\nmass m a 0 {m!r}\n"
+                          f"damper c a 0 {c!r}\nspring k a 0 {k!r}\n")
+
+
+@pytest.mark.parametrize("zeta", [0.5, 1 - 1e-6, 1 - 1e-12, 1.0, 1 + 1e-12, 1 + 1e-6, 2.0])
+def test_coalescing_roots_at_critical_damping(zeta):
+    """m, c, k in parallel: anti-resonances at s = -ωn(ζ ∓ sqrt(ζ² − 1)), ωn = 20 rad/s.
+
+    At ζ = 1 the two roots coalesce; each reported ω is within its own error
+    estimate of the exact root (which must grow to about sqrt(eps) there).
+    """
+    wn = 20.0
+    found = _mck(zeta).resonances()
+    assert all(r.kind == "antiresonance" for r in found)
+    if zeta < 1:
+        exact = [wn]
+        wd = wn * math.sqrt((1 - zeta) * (1 + zeta))
+        (r,) = found
+        assert r.zeta == pytest.approx(zeta, rel=1e-12)
+        # Im s of a near-double root is ill-conditioned; its absolute error is
+        # that of s, ωn·error (ω_d = 2.8e-5 rad/s at ζ = 1 − 1e-12).
+        assert abs(r.omega_d - wd) <= wn * r.error
+    elif zeta == 1:
+        exact = [wn, wn]
+    else:
+        root = math.sqrt((zeta - 1) * (zeta + 1))
+        exact = [wn * (zeta - root), wn * (zeta + root)]
+    assert len(found) == len(exact)
+    for r, w in zip(sorted(found, key=lambda r: r.omega), sorted(exact)):
+        assert abs(r.omega - w) / w <= r.error, (r, w)
+        assert r.error < 1e-6
+        if zeta >= 1:
+            assert r.zeta == 1.0 and r.omega_d == 0.0
+
+
+def test_error_estimate_covers_coalesced_roots_for_many_networks():
+    """Before the fix, critically damped roots were off by 2e-8 with an estimate of 2e-14."""
+    import random
+
+    for i in range(60):
+        rng = random.Random(i)
+        m, k = 10 ** rng.uniform(-2, 2), 10 ** rng.uniform(1, 6)
+        wn = math.sqrt(k / m)
+        for r in _mck(1.0, m, k).resonances():
+            assert abs(r.omega - wn) / wn <= r.error
+            # Bounds of our own, not the code's: a double root is found to about
+            # sqrt(eps) ≈ 1.5e-8 (achieved: ≤ 4.4e-8 over these 109 roots), and an
+            # estimate that covers it need not be loose (achieved: ≤ 2.2e-7).
+            assert abs(r.omega - wn) / wn <= 1e-7
+            assert r.error <= 1e-6

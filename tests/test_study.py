@@ -11,9 +11,15 @@ import pytest
 
 import mechcirc
 from mechcirc import cli
-from mechcirc.errors import MechcircError
+from mechcirc.errors import MechcircError, NetlistError
 from mechcirc.study import load_spec, parse_spec, run_study
 from reference.stb_eq7 import full_K
+import os
+import subprocess
+import sys
+import time
+from mechcirc.sources import split_lines
+from cli_helpers import assert_user_error, run
 
 REPO = Path(__file__).resolve().parents[1]
 STB = REPO / "netlists" / "stb_heald.mcir"
@@ -168,7 +174,7 @@ def test_resonance_tables():
     ({"grid": {"eta1": [1.0]}, "random": {"n": 2}}, "exactly one of"),
     ({"grid": {"eta1": {"min": 1, "max": 2}}}, "needs min, max and num"),
     ({"grid": {"eta1": []}}, "empty list"),
-    ({"grid": {"eta1": [1.0]}, "colour": 1}, "unknown key(s) colour"),
+    ({"grid": {"eta1": [1.0]}, "colour": 1}, "unknown top-level key 'colour' (expected analysis,"),
     ({"grid": {"eta1": [1.0]}, "analysis": "fft"}, "analysis must be"),
 ])
 def test_bad_specs_name_the_key(data, fragment):
@@ -302,3 +308,194 @@ def test_study_cli_on_a_dask_scheduler(tmp_path, capsys):
     out = capsys.readouterr().out
     assert f"on Dask cluster {cluster.scheduler_address} (2 threads)" in out
     assert (tmp_path / "one.csv").read_bytes() == (tmp_path / "dask.csv").read_bytes()
+
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+STUDY = ROOT / "examples" / "study_stb.toml"
+
+
+def _spec(tmp_path, old, new):
+    text = STUDY.read_text().replace("../netlists/", str(ROOT / "netlists") + "/")
+    assert old in text, old
+    text = text.replace(old, new, 1)
+    path = tmp_path / "spec.toml"
+    path.write_text(text)
+    return path, text
+
+
+@pytest.mark.parametrize("old, new, line_starts", [
+    ("points = 400", "points = " + "9" * 300, "points"),
+    ("eta1 = [0.7, 0.8, 0.9]", "eta1 = [0.7, " + "9" * 310 + "]", "eta1"),
+    ('max = "1500Hz"', "max = [1]", "max"),
+    ('analysis = "sweep"', "analysis = 5", "analysis"),
+    ("num = 6}", "num = 1000000000}", "eta2"),
+    ("num = 6}", "num = -3}", "eta2"),
+    ("log = true", "log = true\nbogus = 1", "bogus"),        # an unknown key in [omega]
+])
+def test_study_spec_errors_carry_file_line_col(old, new, line_starts, tmp_path, capsys):
+    from mechcirc.study import load_spec
+
+    path, text = _spec(tmp_path, old, new)
+    with pytest.raises(NetlistError) as info:
+        load_spec(path)
+    err = info.value
+    assert err.source == str(path) and err.line >= 1, err
+    line = split_lines(text)[err.line - 1]
+    assert line.lstrip().startswith(line_starts), (err, line)
+    assert len(str(err)) < 400
+    assert_user_error(["study", path], capsys, f"{path}:{err.line}:")
+
+
+def test_study_spec_not_utf8_is_located(tmp_path, capsys):
+    path = tmp_path / "spec.toml"
+    path.write_bytes(b'netlist = "x.mcir"\n# caf\xe9\n')
+    err = assert_user_error(["study", path], capsys)
+    assert f"{path}:2:6:" in err and "UTF-8" in err
+
+
+def _tiny_spec(tmp_path, n=6):
+    from mechcirc.study import parse_spec
+
+    net = tmp_path / "n.mcir"
+    net.write_text(".param m=2\nmass m1 a 0 m\nspring k a 0 100\ndrive V a 0 velocity=1\n")
+    return parse_spec({"netlist": str(net), "omega": {"min": 1, "max": 30, "points": 7},
+                       "grid": {"m": [1.0 + i for i in range(n)]}}, source="t.toml")
+
+
+def test_study_keeps_the_old_output_until_the_new_one_is_complete(tmp_path):
+    from mechcirc.study import journal_path, run_study
+
+    spec = _tiny_spec(tmp_path)
+    out = tmp_path / "out.csv"
+    out.write_text("old table\n")
+    seen = []
+
+    def stop(n):
+        seen.append(n)
+        assert out.read_text() == "old table\n"          # untouched while running
+        if len(seen) == 2:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run_study(spec, output=out, workers=1, batch_size=1, on_rows=stop)
+    assert out.read_text() == "old table\n"
+    assert Path(journal_path(out)).exists()
+    r = run_study(spec, output=out, workers=1, resume=True)
+    assert r.skipped == 2 and not Path(journal_path(out)).exists()
+    assert out.read_text().startswith("index,m,status")
+
+
+def test_resume_recomputes_every_cut_journal_row(tmp_path):
+    """Cut the journal at every byte of its last row: each resume gives the full table."""
+    from mechcirc.study import journal_path, run_study
+
+    spec = _tiny_spec(tmp_path, n=3)
+    full = tmp_path / "full.csv"
+    run_study(spec, output=full, workers=1)
+    out = tmp_path / "out.csv"
+    seen = []
+
+    def stop(n):
+        seen.append(n)
+        if len(seen) == 3:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run_study(spec, output=out, workers=1, batch_size=1, on_rows=stop)
+    journal = Path(journal_path(out))
+    whole = journal.read_bytes()
+    last_start = whole.rstrip(b"\n").rfind(b"\n") + 1
+    cuts = range(last_start, len(whole))
+    for cut in cuts:
+        journal.write_bytes(whole[:cut])
+        r = run_study(spec, output=out, workers=1, resume=True)
+        assert out.read_bytes() == full.read_bytes(), cut
+        # The row cut short was run again, never kept truncated; a row that
+        # lost only its line terminator is complete (its checksum says so).
+        complete = whole[cut:].strip(b"\r\n") == b""
+        assert r.skipped == (3 if complete else 2), (cut, r.skipped)
+
+
+def test_resume_from_a_finished_table_with_a_damaged_row(tmp_path):
+    from mechcirc.study import read_rows, run_study
+
+    spec = _tiny_spec(tmp_path, n=3)
+    out = tmp_path / "out.csv"
+    run_study(spec, output=out, workers=1)
+    good = out.read_bytes()
+    rows = list(csv.reader(good.decode().splitlines()))
+    rows[2][-2] = "n"                                   # a cut 'nan' or number
+    out.write_text("\n".join(",".join(r) for r in rows) + "\n")
+    assert len(read_rows(out, spec.columns)) == 2
+    r = run_study(spec, output=out, workers=1, resume=True)
+    assert r.skipped == 2 and out.read_bytes() == good
+
+
+def _children(pid):
+    try:
+        out = subprocess.run(["ps", "-o", "pid=", "--ppid", str(pid)], capture_output=True,
+                             text=True, timeout=10).stdout
+    except (OSError, subprocess.SubprocessError):
+        pytest.skip("ps is not available")
+    return [int(x) for x in out.split()]
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="Linux process table")
+def test_study_workers_die_with_their_parent(tmp_path):
+    net = tmp_path / "n.mcir"
+    net.write_text(".param m=2\nmass m1 a 0 m\nspring k a 0 100\ndrive V a 0 velocity=1\n")
+    spec = tmp_path / "s.toml"
+    spec.write_text(f'netlist = "{net}"\n[omega]\nmin = 1\nmax = 30\npoints = 100000\n'
+                    "[grid]\nm = {min = 1, max = 2, num = 4000}\n")
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    proc = subprocess.Popen([sys.executable, "-m", "mechcirc", "study", str(spec), "-o",
+                             str(tmp_path / "o.csv"), "--workers", "2"], env=env,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    workers = []
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and len(workers) < 2:
+        time.sleep(0.2)
+        workers = _children(proc.pid)
+        if proc.poll() is not None:
+            pytest.skip("the study finished before it could be killed")
+    assert len(workers) >= 2
+    proc.kill()
+    proc.wait()
+    deadline = time.monotonic() + 10
+    alive = workers
+    while alive and time.monotonic() < deadline:
+        time.sleep(0.2)
+        alive = [w for w in alive if _alive(w)]
+    assert not alive, f"workers {alive} outlived their parent"
+
+
+def _alive(pid):
+    try:
+        with open(f"/proc/{pid}/stat") as fh:
+            return fh.read().split(")")[-1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+@pytest.mark.parametrize("table, line, fragment", [
+    ("[sley]\nvariant = 3\nspeed = 1\n", "speed = 1", "unknown key 'speed' in [sley]"),
+    ("[omega]\nmin = 1\nmax = 2\nstep = 1\n", "step = 1", "unknown key 'step' in [omega]"),
+    ("[random]\nn = 2\nsead = 1\n", "sead = 1", "unknown key 'sead' in [random]"),
+])
+def test_study_file_errors_carry_file_line(tmp_path, table, line, fragment):
+    analysis = "simulate" if "sley" in table else "sweep"
+    points = "[grid]\nC2 = [1e4]\n" if "sley" in table or "omega" not in table else \
+        "[grid]\neta1 = [0.8]\n"
+    if "random" in table:
+        points = ""
+        table += "[random.params]\neta1 = {min = 0.7, max = 0.9}\n"
+    text = (f'netlist = "{STB}"\nanalysis = "{analysis}"\n' + points + table)
+    spec = tmp_path / "s.toml"
+    spec.write_text(text)
+    with pytest.raises(NetlistError) as info:
+        load_spec(spec)
+    assert fragment in info.value.message
+    assert info.value.source == str(spec)
+    assert text.splitlines()[info.value.line - 1] == line

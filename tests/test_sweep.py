@@ -6,6 +6,7 @@ or from closed forms.  The code's own error estimate is what is checked, never
 what decides the check.
 """
 
+import functools
 import math
 import pickle
 import warnings
@@ -21,21 +22,24 @@ from reference import sp_corpus as corpus
 U = np.finfo(float).eps / 2
 
 
-def _sweep(expr, omega):
+def _sweep(expr, omega, ref=None):
     c = corpus.to_circuit(expr)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         s = c.sweep(omega, method="sp")
-    ref = corpus.reference(expr, omega)
+    if ref is None:
+        ref = corpus.reference(expr, omega)
     return s, corpus.true_error(s.K, ref)
 
 
-def _small_corpus():
+@functools.lru_cache(maxsize=1)
+def _small_corpus_cases():
     """Random SP trees (levers, 12 decades of values, undamped/lightly damped/damped),
     sampled on a log grid and, for lossless ones, at 1e-6 … 0 relative distance of
-    their exact poles and zeros; plus issue 11's lightly damped 45-element ladder."""
+    their exact poles and zeros; plus issue 11's lightly damped 45-element ladder.
+    Returns ``(expr, omega, 40-digit K)`` triples (mpmath, computed once)."""
     rng = np.random.default_rng(20261123)
-    est, true, flags = [], [], []
+    cases = []
     for i in range(24):
         expr = corpus.random_tree(rng, int(rng.integers(2, 30)), damped=(0, 0.02, 0.3)[i % 3])
         omega = np.geomspace(1e-3, 1e3, 21)
@@ -43,16 +47,32 @@ def _small_corpus():
             crit = corpus.critical_points(expr, 1e-3, 1e3, 60)[:3]
             near = [w * (1 + d) for w in crit for d in (1e-6, -1e-9, 1e-12, -1e-14, 0.0)]
             omega = np.concatenate([omega, near])
-        s, t = _sweep(expr, omega)
+        cases.append((expr, omega))
+    cases.append((corpus.ladder(rng, 45), np.geomspace(2 * np.pi * 0.1, 2 * np.pi * 1e3, 101)))
+    return [(expr, omega, corpus.reference(expr, omega)) for expr, omega in cases]
+
+
+def _small_corpus():
+    est, true, flags = [], [], []
+    for expr, omega, ref in _small_corpus_cases():
+        s, t = _sweep(expr, omega, ref)
         est.append(s.error), true.append(t), flags.append(s.flags)
-    s, t = _sweep(corpus.ladder(rng, 45), np.geomspace(2 * np.pi * 0.1, 2 * np.pi * 1e3, 101))
-    est.append(s.error), true.append(t), flags.append(s.flags)
     return np.concatenate(est), np.concatenate(true), np.concatenate(flags)
 
 
-@pytest.fixture(scope="module")
-def calibration():
-    return _small_corpus()
+@pytest.fixture(scope="module", params=["numpy", "compiled"])
+def calibration(request):
+    """The corpus through each evaluation path of the tree (the compiled plan needs numba)."""
+    from mechcirc import reduction
+
+    if request.param == "compiled":
+        pytest.importorskip("numba")
+    saved = reduction.USE_KERNEL
+    reduction.USE_KERNEL = request.param == "compiled"
+    try:
+        return _small_corpus()
+    finally:
+        reduction.USE_KERNEL = saved
 
 
 def test_error_bound_is_never_below_the_true_error(calibration):

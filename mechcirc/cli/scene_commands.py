@@ -257,12 +257,14 @@ def cmd_simulate_scene(args) -> int:
     from ..scene.simfile import apply_overrides
     from ..scene.simulation import SceneAccuracyWarning, simulate_scene
 
-    if args.method not in ("rk4", "rk4-python"):
-        raise MechcircError(f"a scene runs with rk4 or rk4-python, not {args.method}")
-    if args.rtol is not None or args.revolution is not None:
-        raise MechcircError("--rtol and --revolution apply to the sley presets, not a scene")
+    if args.rtol is not None and args.method in ("rk4", "rk4-python"):
+        raise MechcircError(f"--rtol applies to the scipy methods (DOP853, RK45, LSODA), not "
+                            f"{args.method}; use --steps-per-period")
+    if args.steps_per_period is not None and args.method not in ("rk4", "rk4-python"):
+        raise MechcircError(f"--steps-per-period applies to the rk4 methods, not {args.method}; "
+                            "use --rtol")
     check_output_paths(args.output, plots=(args.plot,) if args.plot else ())
-    scene = getattr(args, "scene_object", None) or load_scene(args.scene)
+    scene = load_scene(args.scene)
     over = {}
     for item in args.set:
         name, sep, value = item.partition("=")
@@ -292,7 +294,8 @@ def cmd_simulate_scene(args) -> int:
             result = simulate_scene(scene, revolutions=args.revolutions,
                                     start_deg=args.start_deg,
                                     steps_per_period=args.steps_per_period, points=args.points,
-                                    method=args.method,
+                                    method=args.method, rtol=args.rtol,
+                                    revolution=args.revolution,
                                     error_estimate=not args.no_error_estimate,
                                     progress=progress)
         finally:
@@ -368,6 +371,13 @@ def cmd_crosscheck_scene(args) -> int:
             continue
         print(f"{r['omega']:>14.6g} {r['zeta']:>9.4g} {r['ringing_omega']:>14.6g} "
               f"{r['ringing_zeta']:>9.4g} {r['rel_error']:>10.2e}")
+    if result.forced:
+        print("forced response to a drive-speed ripple: |Q0| of the circuit against the "
+              "time domain")
+        print(f"{'ω':>14} {'|Q0| circuit':>16} {'|Q0| time':>16} {'rel. diff':>10}")
+        for f in result.forced:
+            print(f"{f['omega']:>14.6g} {f['Q0_circuit']:>16.8g} {f['Q0_time']:>16.8g} "
+                  f"{f['rel_error']:>10.2e}")
     for n in result.notes:
         print(f"note: {n}")
     return 0

@@ -17,7 +17,8 @@ _UNITS = {"eps4T": "1/s^2", "eps2P": "1/s^2", "eps4P": "1/s^2", "eps5P": "1/s^2"
 def register(sub) -> None:
     p = sub.add_parser(
         "simulate", help="sley beat-up dynamics (Mrázek, Tables 1 and 2) in the time domain",
-        description="Integrate the sley model (eq. 4 one-side, eq. 9 both-sides) from the "
+        description="Integrate the sley model (eq. 4 one-side, eq. 9 both-sides; the "
+                    "presets run as their scenes, examples/mrazek_*.toml) from the "
                     "crank angle of zero sley acceleration over R revolutions and print the "
                     "min/max of the last one beside the paper's printed values. The beat-up "
                     "interval alpha is not printed in the paper: default 10 deg, the best fit to the printed cells (sigma = alpha).",
@@ -28,15 +29,15 @@ def register(sub) -> None:
                    help="simulate this scene file over whole revolutions (docs/scenes.md); "
                         "without it, the sley presets (--drive, --variant)")
     p.add_argument("--omega", type=real(above=0.0, unit="rad/s", omega=True), metavar="W",
-                   help="scene: crank shaft speed [rad/s] (default the file's)")
+                   help="crank shaft speed [rad/s] (default the file's or the preset's)")
     p.add_argument("--start-deg", type=real(most=1e9, unit="deg", role="angle"), metavar="DEG",
                    help="scene: crank rotation from the pose at t = 0 (default the file's, "
                         "else 0)")
     p.add_argument("--no-error-estimate", action="store_true",
-                   help="scene: skip the half-step rerun that estimates the error")
+                   help="skip the half-step rerun that estimates the error")
     p.add_argument("--via-scene", action="store_true",
-                   help="run the preset as its scene (examples/mrazek_*.toml plus the "
-                        "variant's overrides) through the generic scene model")
+                   help="accepted for old scripts and ignored: the presets always run as "
+                        "their scenes (examples/mrazek_*.toml plus the variant's values)")
     p.add_argument("--drive", choices=("one-side", "both-sides"), default="one-side",
                    help="Table 1 (one-side, default) or Table 2 (both-sides)")
     p.add_argument("--variant", default="3", metavar="N",
@@ -58,7 +59,8 @@ def register(sub) -> None:
                    help="override a parameter in SI units, e.g. --set clearance=0.002 "
                         "(repeatable)")
     p.add_argument("--method", choices=_METHODS, default="rk4",
-                   help="integrator (default rk4: numba if installed, else pure Python)")
+                   help="integrator (default rk4: numba if installed, else pure Python; "
+                        "DOP853, RK45, LSODA: scipy's, with --rtol)")
     p.add_argument("--rtol", type=real(above=0.0, most=1.0), metavar="TOL",
                    help="relative tolerance of the scipy methods (default 1e-10)")
     p.add_argument("--steps-per-period", type=real(least=1.0, most=1e6), metavar="N",
@@ -80,7 +82,8 @@ def register(sub) -> None:
                "         mechcirc crosscheck examples/heald_scene.toml --theta 40\n"
                "         mechcirc crosscheck netlists/stb_heald.mcir --omega-max 5000\n"
                "(a scene .toml: circuit resonances at --theta against the ringing of its "
-               "time-domain motion; a netlist: see the transient command)",
+               "time-domain motion, and |Q0| against the forced response to a drive-speed "
+               "ripple; a netlist: see the transient command)",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("file", nargs="?", metavar="FILE",
                    help="a scene (.toml): cross-check it at --theta; a netlist (.mcir): "
@@ -226,28 +229,17 @@ def cmd_simulate(args) -> int:
     from ..sley import (PAPER, ParameterError, all_presets, preset, simulate_batch,
                         simulate_params)
 
-    if args.via_scene:
-        from ..sley.scenes import preset_scene
-        from .scene_commands import cmd_simulate_scene
-
-        try:
-            variant = int(args.variant)
-        except ValueError:
-            raise ParameterError(f"--via-scene needs one variant 1-7, got {args.variant!r}") \
-                from None
-        over = _overrides(args)
-        args.scene_object = preset_scene(args.drive, variant, **over)
-        args.scene = f"<{args.drive} variant {variant} as a scene>"
-        args.set = []
-        return cmd_simulate_scene(args)
-    if args.omega is not None or args.start_deg is not None or args.no_error_estimate:
-        raise ParameterError("--omega, --start-deg and --no-error-estimate apply to a scene "
-                             "file; for the presets use --set omega=W")
+    if args.start_deg is not None:
+        raise ParameterError("--start-deg applies to a scene file; the presets start where "
+                             "the rigid sley acceleration is zero, as the paper")
     args.revolutions = 5 if args.revolutions is None else args.revolutions
     args.points = 7200 if args.points is None else args.points
     check_output_paths(args.output, plots=(args.plot,))
     over = _overrides(args)
+    if args.omega is not None:
+        over["omega"] = args.omega
     opts = _options(args)
+    opts["error_estimate"] = not args.no_error_estimate
     if args.variant == "all":
         if args.output or args.plot:
             raise ParameterError("-o/--plot need one variant, not --variant all")

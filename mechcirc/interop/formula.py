@@ -212,12 +212,10 @@ class _Builder:
         return _lowest_terms(sp, sp.expand(num), sp.expand(den))
 
     def leaf(self, e):
-        """K(ω) of element ``e`` (the law of :func:`mechcirc.circuit.element_mobility`)."""
-        sp = self.sp
-        w = self.omega
-        scaled = self.element_value(e)
-        return {"mass": -sp.I / (w * scaled), "spring": sp.I * w / scaled,
-                "damper": 1 / scaled}[e.kind]
+        """K(ω) = (jω)^p / (value·η) of element ``e`` (:data:`mechcirc.circuit.LAWS`)."""
+        from ..circuit import LAWS
+
+        return (self.sp.I * self.omega) ** LAWS[e.kind].power / self.element_value(e)
 
     def build_tree(self, tree):
         from ..reduction import Leaf, Parallel, Series, postorder

@@ -2,7 +2,7 @@
 
 Written once for any scene, on plain arrays built by :mod:`mechcirc.scene.motion`;
 compiled with numba when it is importable (the ``fast`` extra), else plain
-Python (:func:`load_python` forces that), as :mod:`mechcirc.sley._kernels`.
+Python (:func:`load_python` forces that), through :mod:`mechcirc._jit`.
 
 Each rigid part i has one coordinate q_i (the rotation of one of its bodies
 from the pose); part 0 (the drive's) is prescribed: q_0 = ψ_0(θ), θ = θs + Ω t.
@@ -43,7 +43,9 @@ TWO_PI = 2.0 * math.pi
 # element columns: EI = [type, law, fa, fa2, fb, fb2, part_a, part_b]
 #                  EF = [k, d, clearance, l0, xa, ya, xb, yb, ux, uy]
 # moment columns:  MI = [window fn, body fn]; MF = [amplitude, alpha, sigma, centre]
-# PV = [Omega, theta_s, speed limit, functions to evaluate (the dynamics' first)]
+# PV = [Omega, theta_s, speed limit, functions to evaluate (the dynamics' first), outputs?,
+#       speed ripple amplitude A [rad/s], its angular frequency ν [rad/s],
+#       loads referred to the mean motion (1) or to the crank angle (0)]
 
 
 @_jit_inline
@@ -101,7 +103,7 @@ def force_law(law, k, d, cl, e, edot):
     return d * edot
 
 
-@_jit_inline
+@_jit
 def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, work):
     """Derivatives of y = [q_1..q_n, q̇_1..q̇_n] into dy; outputs into aux.
 
@@ -112,8 +114,24 @@ def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, wo
     n = npart - 1
     nf = int(PV[3])
     want = PV[4] != 0.0
+    # the crank: θ = θs + Ω t + (A/ν) sin(ν t) (a speed ripple A cos(ν t); A = 0: constant)
+    amp = PV[5]
+    theta = PV[1] + PV[0] * t
     omega = PV[0]
-    theta = PV[1] + omega * t
+    # a load's reference: the rigid motion at the crank angle (PV[7] = 0), or at the mean
+    # motion θs + Ω t (PV[7] = 1: a load to the frame under a small ripple, as the circuit)
+    th_load = theta
+    w_load = omega
+    accel = 0.0
+    if amp != 0.0:
+        nu = PV[6]
+        sn = math.sin(nu * t)
+        theta += amp / nu * sn
+        omega += amp * math.cos(nu * t)
+        accel = -amp * nu * sn
+        if PV[7] == 0.0:
+            th_load = theta
+            w_load = omega
     # work rows: 0 q, 1 qd, 2 qdd, 3 m, 4 m', 5 Q, then fv, f1, f2 over functions
     bad = 0
     r = PRIG[0]
@@ -121,7 +139,7 @@ def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, wo
                             FF[r, 4], FF[r, 5], theta)
     work[0, 0] = v0
     work[1, 0] = d0 * omega
-    work[2, 0] = dd0 * omega * omega
+    work[2, 0] = dd0 * omega * omega + d0 * accel
     for i in range(n):
         work[0, i + 1] = y[i]
         work[1, i + 1] = y[n + i]
@@ -134,6 +152,12 @@ def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, wo
         if p < 0:           # a rigid-motion function of θ: evaluated where needed
             continue
         arg = work[0, p]
+        if FI[f, 0] == 2:           # a line a + b q: most functions (a crank, a pinned body)
+            b1 = FF[f, 1]
+            work[6, f] = FF[f, 0] + b1 * arg
+            work[7, f] = b1
+            work[8, f] = 0.0
+            continue
         a, b1, b2, bb = feval(FI[f, 0], tabs, FI[f, 2], FF[f, 0], FF[f, 1], FF[f, 2],
                               FF[f, 3], FF[f, 4], FF[f, 5], arg)
         work[6, f] = a
@@ -190,13 +214,13 @@ def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, wo
             fy = EI[e, 5]
             rr = EI[e, 2]
             qr, qr1, qr2, bb = feval(FI[rr, 0], tabs, FI[rr, 2], FF[rr, 0], FF[rr, 1],
-                                     FF[rr, 2], FF[rr, 3], FF[rr, 4], FF[rr, 5], theta)
+                                     FF[rr, 2], FF[rr, 3], FF[rr, 4], FF[rr, 5], th_load)
             xr, xr1, xr2, bb = feval(FI[fx, 0], tabs, FI[fx, 2], FF[fx, 0], FF[fx, 1],
                                      FF[fx, 2], FF[fx, 3], FF[fx, 4], FF[fx, 5], qr)
             yr, yr1, yr2, bb = feval(FI[fy, 0], tabs, FI[fy, 2], FF[fy, 0], FF[fy, 1],
                                      FF[fy, 2], FF[fy, 3], FF[fy, 4], FF[fy, 5], qr)
-            vxr = xr1 * qr1 * omega
-            vyr = yr1 * qr1 * omega
+            vxr = xr1 * qr1 * w_load
+            vyr = yr1 * qr1 * w_load
             if typ == 2:
                 ux = EF[e, 8]
                 uy = EF[e, 9]

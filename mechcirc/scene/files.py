@@ -69,8 +69,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..errors import GeometryError, NetlistError
+from ..kinematics.linkage import TABLES as LINKAGE_TABLES
 from ..kinematics.linkage import Linkage, parse_linkage
-from ..sources import brief, finite_number, load_toml, split_lines
+from ..sources import (Table, brief, check_keys, finite_number, load_toml, number_error,
+                       split_lines)
 from ..sources import located as _err
 
 __all__ = ["Scene", "Analysis", "SceneMass", "ElasticLink", "Torsion", "Load", "SceneDrive",
@@ -81,6 +83,38 @@ LENGTH_UNITS = {"m": 1.0, "cm": 1e-2, "mm": 1e-3}
 #: Tables a scene adds to the linkage format.
 SCENE_TABLES = ("masses", "elastic", "torsion", "loads", "drive", "analysis", "moments",
                 "simulate")
+_CLEARANCE = {"clearance": "half-width of the gap [m or rad], 0 for none",
+              "clearance_law": "\"elastobacklash\" or \"dead-zone\""}
+#: The tables of a scene file, declared once (see :class:`mechcirc.sources.Table`);
+#: [moments] and [simulate] keep their own key lists in :mod:`mechcirc.scene.simfile`.
+TABLES = {
+    None: Table(None, dict(sorted({**LINKAGE_TABLES[None].keys,
+                                   **{t: f"[{t}] (a scene table)" for t in SCENE_TABLES}
+                                   }.items()))),
+    "elastic": Table("elastic", {"name": "element name (default: the link)",
+                                 "link": "a binary link of [links]",
+                                 "stiffness": "[N/m]", "damping": "[N·s/m], default 0",
+                                 **_CLEARANCE}, array=True),
+    "torsion": Table("torsion", {"name": "element name (default C_BODY)",
+                                 "link": "a rigid link", "body": "the new body beyond the rod",
+                                 "pivot": "a ground pivot of the link",
+                                 "stiffness": "[N·m/rad]", "damping": "[N·m·s/rad], default 0",
+                                 **_CLEARANCE}, array=True),
+    "masses": Table("masses", {"name": "element name (default m_POINT or J_LINK)",
+                               "point": "a point of a rigid link", "link": "a rigid link or body",
+                               "mass": "[kg], with point", "inertia": "[kg·m²], with link"},
+                    array=True),
+    "loads": Table("loads", {"name": "element name (default load_POINT)",
+                             "point": "the loaded point", "anchor": "a ground point",
+                             "direction": "[dx, dy]", "stiffness": "[N/m]",
+                             "damping": "[N·s/m]"}, array=True),
+    "drive": Table("drive", {"name": "element name (default V)", "link": "a rigid link or body",
+                             "point": "a point of a rigid link", "velocity": "amplitude V0",
+                             "force": "amplitude F0"}),
+    "analysis": Table("analysis", {"theta_deg": "crank angle [deg]",
+                                   "output": "an element of the circuit",
+                                   "band": "[W1, W2] [rad/s]", "tol": "relative tolerance"}),
+}
 #: Clearance laws of an elastic link or torsion rod (docs/scenes.md, "In the time domain").
 CLEARANCE_LAWS = ("elastobacklash", "dead-zone")
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
@@ -274,13 +308,9 @@ def _number(text, source, value, what, table, key, n, *, positive=True, allow_ze
         if role == "angle" and parts and parts[1]:
             converted = math.degrees(converted)
         value = converted
-    ok = finite_number(value)
-    if ok and positive:
-        ok = value > 0 or (allow_zero and value == 0)
-    if not ok:
-        need = "a finite number" + ("" if not positive else " ≥ 0" if allow_zero else " > 0")
-        raise _err(text, source, f"{what} must be {need}, got {brief(value)}", table, key,
-                   occurrence=n, expected=need)
+    bad = number_error(value, what, positive=positive, allow_zero=allow_zero)
+    if bad:
+        raise _err(text, source, bad[0], table, key, occurrence=n, expected=bad[1])
     return float(value)
 
 
@@ -297,19 +327,7 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
         exactly one degree of freedom once the elastic elements are released.
     """
     doc = load_toml(text, source)
-    allowed = {"name", "points", "ground", "links", "cranks", "units", "description",
-               *SCENE_TABLES}
-    for k in doc:
-        if k not in allowed:
-            err = _err(text, source, f"unknown top-level key {k!r}", None, k,
-                       expected=", ".join(sorted(allowed)))
-            if not err.line:                  # a table: point at its header
-                for n, line in enumerate(split_lines(text), start=1):
-                    if re.match(r"^\s*\[\[?\s*" + re.escape(k) + r"\s*[\].]", line):
-                        err = NetlistError(err.message, source, n, line.index(k) + 1,
-                                           err.expected)
-                        break
-            raise err
+    check_keys(text, source, TABLES[None], doc)
     linkage = parse_linkage(_hide_scene_tables(text), source)
     units = doc.get("units")
     if not _named(units, LENGTH_UNITS):
@@ -320,230 +338,17 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
         raise _err(text, source, f"the cranks of a scene turn on one shaft and need the same "
                    f"omega; this linkage has {[c.omega for c in linkage.cranks]}", "cranks",
                    "omega", occurrence=1)
-    points, links = linkage.pose, linkage.links
-    names: dict[str, str] = {}
-
-    def new_name(name, table, key, n, default=None):
-        name = default if name is None else name
-        if not isinstance(name, str) or not _IDENT.fullmatch(name):
-            raise _err(text, source, f"[[{table}]] #{n + 1}: name {name!r} is not a valid "
-                       f"element name", table, key, occurrence=n,
-                       expected="letters, digits and '_', not starting with a digit")
-        if name in names:
-            raise _err(text, source, f"element name {name!r} is already used in "
-                       f"[[{names[name]}]]", table, key, occurrence=n, expected="a unique name")
-        names[name] = table
-        return name
-
-    def entries(table):
-        raw = doc.get(table, [])
-        if not isinstance(raw, list) or not all(isinstance(e, dict) for e in raw):
-            raise _err(text, source, f"{table} must be an array of tables [[{table}]]",
-                       None, table)
-        return raw
-
-    def check_keys(entry, table, n, allowed_keys):
-        for k in entry:
-            if k not in allowed_keys:
-                raise _err(text, source, f"unknown key {k!r} in [[{table}]] #{n + 1}", table,
-                           k, occurrence=n, expected=", ".join(allowed_keys))
-
-    def point_ref(entry, table, n, key="point"):
-        p = entry.get(key)
-        if not _named(p, points):
-            raise _err(text, source, f"[[{table}]] #{n + 1}: {key} {p!r} does not exist in "
-                       f"[points]", table, key, value=p if isinstance(p, str) else None,
-                       occurrence=n, expected=f"one of {', '.join(points)}")
-        return p
-
-    # ---- elastic links
-    elastic = []
-    for n, e in enumerate(entries("elastic")):
-        check_keys(e, "elastic", n, ("name", "link", "stiffness", "damping", "clearance",
-                                      "clearance_law"))
-        lname = e.get("link")
-        if not _named(lname, links):
-            raise _err(text, source, f"elastic link {lname!r} is not in the linkage's [links]",
-                       "elastic", "link", value=lname if isinstance(lname, str) else None,
-                       occurrence=n, expected=f"one of {', '.join(links)}")
-        if len(links[lname]) != 2:
-            raise _err(text, source, f"elastic link {lname!r} has {len(links[lname])} points; "
-                       "only a binary link can be an axial spring", "elastic", "link",
-                       value=lname, occurrence=n, expected="a link of two points")
-        if any(x.link == lname for x in elastic):
-            raise _err(text, source, f"link {lname!r} is declared elastic twice", "elastic",
-                       "link", value=lname, occurrence=n)
-        if any(c.link == lname for c in linkage.cranks):
-            raise _err(text, source, f"the crank {lname!r} cannot be an axial spring",
-                       "elastic", "link", value=lname, occurrence=n)
-        name = new_name(e.get("name"), "elastic", "name" if "name" in e else "link", n, lname)
-        k = _number(text, source, e.get("stiffness"), f"stiffness of {name!r} [N/m]",
-                    "elastic", "stiffness" if "stiffness" in e else "link", n)
-        c = _number(text, source, e.get("damping", 0.0), f"damping of {name!r} [N·s/m]",
-                    "elastic", "damping", n, allow_zero=True)
-        elastic.append(ElasticLink(name, lname, k, c, *_clearance(text, source, e, name,
-                                                                   "elastic", n, "m")))
+    r = _SceneReader(text, source, doc, linkage)
+    elastic = r.elastic()
     elastic_links = {x.link for x in elastic}
-
-    # ---- torsion rods
-    torsions = []
-    for n, t in enumerate(entries("torsion")):
-        check_keys(t, "torsion", n, ("name", "link", "body", "pivot", "stiffness", "damping",
-                                      "clearance", "clearance_law"))
-        lname = t.get("link")
-        if not _named(lname, links) or lname in elastic_links:
-            raise _err(text, source, f"torsion rod #{n + 1}: link {lname!r} is not a rigid link "
-                       f"of [links]", "torsion", "link",
-                       value=lname if isinstance(lname, str) else None, occurrence=n,
-                       expected=f"one of {', '.join(l for l in links if l not in elastic_links)}")
-        pivots = [p for p in links[lname] if p in linkage.ground]
-        pivot = t.get("pivot", pivots[0] if len(pivots) == 1 else None)
-        if pivot not in pivots:
-            raise _err(text, source, f"torsion rod #{n + 1} must sit at a ground pivot of link "
-                       f"{lname!r} (its ground pivots: {pivots or 'none'})", "torsion",
-                       "pivot" if "pivot" in t else "link", occurrence=n,
-                       expected="pivot = one of the link's ground pivots")
-        body = t.get("body")
-        if not isinstance(body, str) or not _IDENT.fullmatch(body) or body in links \
-                or body == "ground":
-            raise _err(text, source, f"torsion rod #{n + 1}: body {body!r} must be a new name "
-                       "(not a link or 'ground'; several rods may share one body)", "torsion",
-                       "body" if "body" in t else "link", occurrence=n,
-                       expected="an identifier for the body beyond the rod")
-        name = new_name(t.get("name"), "torsion", "name" if "name" in t else "body", n,
-                        f"C_{body}")
-        k = _number(text, source, t.get("stiffness"), f"stiffness of {name!r} [N·m/rad]",
-                    "torsion", "stiffness" if "stiffness" in t else "link", n)
-        c = _number(text, source, t.get("damping", 0.0), f"damping of {name!r} [N·m·s/rad]",
-                    "torsion", "damping", n, allow_zero=True)
-        torsions.append(Torsion(name, lname, body, pivot, k, c,
-                                *_clearance(text, source, t, name, "torsion", n, "rad")))
+    torsions = r.torsions(elastic_links)
+    links = linkage.links
     bodies = {l for l in links if l not in elastic_links} | {t.body for t in torsions}
     rigid_points = set().union(*(set(links[l]) for l in links if l not in elastic_links))
-
-    # ---- masses
-    masses = []
-    for n, m in enumerate(entries("masses")):
-        check_keys(m, "masses", n, ("name", "point", "link", "mass", "inertia"))
-        if ("point" in m) == ("link" in m):
-            raise _err(text, source, f"[[masses]] #{n + 1} needs exactly one of point or link",
-                       "masses", next(iter(m), "name"), occurrence=n,
-                       expected='point = "P" with mass = …, or link = "L" with inertia = …')
-        if "point" in m:
-            p = point_ref(m, "masses", n)
-            if p not in rigid_points and p not in linkage.ground:
-                raise _err(text, source, f"mass at point {p!r}: the point is on elastic links "
-                           "only, so it belongs to no rigid part", "masses", "point", value=p,
-                           occurrence=n, expected="a point of a rigid link")
-            if "inertia" in m or "mass" not in m:
-                raise _err(text, source, f"[[masses]] #{n + 1} at a point takes mass = … [kg]",
-                           "masses", "point", occurrence=n)
-            name = new_name(m.get("name"), "masses", "name" if "name" in m else "point", n,
-                            f"m_{p}")
-            v = _number(text, source, m["mass"], f"mass {name!r} [kg]", "masses", "mass", n)
-            masses.append(SceneMass(name, "mass", v, point=p))
-        else:
-            lname = m.get("link")
-            if not _named(lname, bodies):
-                hint = (" (an elastic link has no inertia of its own here: lump its mass at "
-                        "its end points)") if _named(lname, elastic_links) else ""
-                raise _err(text, source, f"[[masses]] #{n + 1}: link {lname!r} is not a rigid "
-                           f"link or torsion body{hint}", "masses", "link",
-                           value=lname if isinstance(lname, str) else None, occurrence=n,
-                           expected=f"one of {', '.join(sorted(bodies))}")
-            if "mass" in m or "inertia" not in m:
-                raise _err(text, source, f"[[masses]] #{n + 1} on a link takes inertia = … "
-                           "[kg·m²]", "masses", "link", occurrence=n)
-            name = new_name(m.get("name"), "masses", "name" if "name" in m else "link", n,
-                            f"J_{lname}")
-            v = _number(text, source, m["inertia"], f"inertia {name!r} [kg·m²]", "masses",
-                        "inertia", n)
-            masses.append(SceneMass(name, "inertia", v, link=lname))
-
-    # ---- loads
-    loads = []
-    for n, ld in enumerate(entries("loads")):
-        check_keys(ld, "loads", n, ("name", "point", "anchor", "direction", "stiffness",
-                                    "damping"))
-        p = point_ref(ld, "loads", n)
-        if ("anchor" in ld) == ("direction" in ld):
-            raise _err(text, source, f"load #{n + 1} needs exactly one of anchor or direction",
-                       "loads", "point", occurrence=n,
-                       expected='anchor = "GROUND_POINT" or direction = [dx, dy]')
-        anchor = direction = None
-        if "anchor" in ld:
-            anchor = ld["anchor"]
-            if not _named(anchor, linkage.ground):
-                raise _err(text, source, f"load #{n + 1}: anchor {anchor!r} is not a ground "
-                           "point", "loads", "anchor", occurrence=n,
-                           value=anchor if isinstance(anchor, str) else None,
-                           expected=f"one of {', '.join(linkage.ground)}")
-        else:
-            d = ld["direction"]
-            ok = isinstance(d, list) and len(d) == 2 and all(finite_number(x) for x in d) \
-                and any(x != 0 for x in d)
-            if not ok:
-                raise _err(text, source, f"load #{n + 1}: direction must be [dx, dy], not zero, "
-                           f"got {brief(d)}", "loads", "direction", occurrence=n)
-            direction = (float(d[0]), float(d[1]))
-        name = new_name(ld.get("name"), "loads", "name" if "name" in ld else "point", n,
-                        f"load_{p}")
-        k = _number(text, source, ld.get("stiffness", 0.0), f"stiffness of {name!r} [N/m]",
-                    "loads", "stiffness", n, allow_zero=True)
-        c = _number(text, source, ld.get("damping", 0.0), f"damping of {name!r} [N·s/m]",
-                    "loads", "damping", n, allow_zero=True)
-        if k == 0 and c == 0:
-            raise _err(text, source, f"load {name!r} needs stiffness > 0 or damping > 0",
-                       "loads", "point", occurrence=n)
-        loads.append(Load(name, p, k, c, anchor, direction))
-
-    # ---- drive
-    dr = doc.get("drive")
-    if not isinstance(dr, dict):
-        raise NetlistError("a scene needs a [drive] table", source, 0, 0,
-                           '[drive] with link = "…" (or point = "…") and velocity = V0')
-    for k in dr:
-        if k not in ("name", "link", "point", "velocity", "force"):
-            raise _err(text, source, f"unknown key {k!r} in [drive]", "drive", k,
-                       expected="name, link or point, velocity or force")
-    if ("link" in dr) == ("point" in dr):
-        raise _err(text, source, "[drive] needs exactly one of link or point", "drive",
-                   next(iter(dr), "link"), expected='link = "…" or point = "…"')
-    if "link" in dr and not _named(dr["link"], bodies):
-        raise _err(text, source, f"[drive] link {dr['link']!r} is not a rigid link or torsion "
-                   "body", "drive", "link", expected=f"one of {', '.join(sorted(bodies))}")
-    if "point" in dr:
-        if not _named(dr["point"], points):
-            raise _err(text, source, f"[drive] point {dr['point']!r} does not exist in [points]",
-                       "drive", "point", expected=f"one of {', '.join(points)}")
-        if dr["point"] not in rigid_points:
-            raise _err(text, source, f"[drive] point {dr['point']!r} is on no rigid link",
-                       "drive", "point")
-    if ("velocity" in dr) == ("force" in dr):
-        raise _err(text, source, "[drive] needs exactly one of velocity = V0 or force = F0",
-                   "drive", "force" if "force" in dr else next(iter(dr), "link"))
-    kind = "velocity" if "velocity" in dr else "force"
-    amp = _number(text, source, dr[kind], f"drive {kind} amplitude", "drive", kind, 0,
-                  positive=False)
-    dname = dr.get("name", "V")
-    if not isinstance(dname, str) or not _IDENT.fullmatch(dname) or dname in names:
-        raise _err(text, source, f"[drive] name {dname!r} is not a valid unused element name",
-                   "drive", "name")
-    drive = SceneDrive(dname, kind, amp, link=dr.get("link"), point=dr.get("point"))
-
-    # ---- circuit element names: a damper in parallel with a spring is NAME_d
-    circuit_names = {m.name for m in masses} | {dname}
-    for el, table in [(e, "elastic") for e in elastic] + [(t, "torsion") for t in torsions] \
-            + [(ld, "loads") for ld in loads]:
-        circuit_names.add(el.name)
-        if el.damping > 0 and el.stiffness > 0:
-            taken = el.name + "_d"
-            if taken in names:
-                where = next(((n, ln.index(f'"{taken}"') + 1) for n, ln in
-                              enumerate(split_lines(text), start=1) if f'"{taken}"' in ln), (0, 0))
-                raise NetlistError(f"{el.name!r} has a damper, named {taken!r} in the circuit, "
-                                   "but that name is taken", source, *where, "another name")
-            circuit_names.add(el.name + "_d")
+    masses = r.masses(bodies, rigid_points, elastic_links)
+    loads = r.loads()
+    drive = r.drive(bodies, rigid_points)
+    circuit_names = r.circuit_names(masses, elastic, torsions, loads, drive)
     analysis = _analysis(text, source, doc.get("analysis"), circuit_names)
 
     from .simfile import parse_moments, parse_simulate
@@ -556,6 +361,254 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
     object.__setattr__(scene, "simulate", parse_simulate(text, source, doc.get("simulate"),
                                                          scene))
     return scene
+
+
+class _SceneReader:
+    """Reads the scene's element tables, one method a table, keeping the names used."""
+
+    def __init__(self, text: str, source: str, doc: dict, linkage: Linkage):
+        self.text, self.source, self.doc, self.linkage = text, source, doc, linkage
+        self.names: dict[str, str] = {}            # element name -> its table
+
+    def err(self, message, table, key, **kw) -> NetlistError:
+        return _err(self.text, self.source, message, table, key, **kw)
+
+    def new_name(self, name, table, key, n, default=None) -> str:
+        """A valid element name not used before (``default`` when none is given)."""
+        name = default if name is None else name
+        if not isinstance(name, str) or not _IDENT.fullmatch(name):
+            raise self.err(f"[[{table}]] #{n + 1}: name {name!r} is not a valid "
+                           f"element name", table, key, occurrence=n,
+                           expected="letters, digits and '_', not starting with a digit")
+        if name in self.names:
+            raise self.err(f"element name {name!r} is already used in "
+                           f"[[{self.names[name]}]]", table, key, occurrence=n,
+                           expected="a unique name")
+        self.names[name] = table
+        return name
+
+    def entries(self, table):
+        """``(n, entry)`` of ``[[table]]``, each checked for undeclared keys when reached."""
+        raw = self.doc.get(table, [])
+        if not isinstance(raw, list) or not all(isinstance(e, dict) for e in raw):
+            raise self.err(f"{table} must be an array of tables [[{table}]]", None, table)
+        for n, entry in enumerate(raw):
+            check_keys(self.text, self.source, TABLES[table], entry, n)
+            yield n, entry
+
+    def point_ref(self, entry, table, n, key="point"):
+        points = self.linkage.pose
+        p = entry.get(key)
+        if not _named(p, points):
+            raise self.err(f"[[{table}]] #{n + 1}: {key} {p!r} does not exist in "
+                           f"[points]", table, key, value=p if isinstance(p, str) else None,
+                           occurrence=n, expected=f"one of {', '.join(points)}")
+        return p
+
+    def number(self, value, what, table, key, n, **kw) -> float:
+        return _number(self.text, self.source, value, what, table, key, n, **kw)
+
+    def elastic(self) -> list:
+        """[[elastic]]: binary rigid links of the linkage made axial springs."""
+        links, cranks = self.linkage.links, self.linkage.cranks
+        elastic = []
+        for n, e in self.entries("elastic"):
+            lname = e.get("link")
+            if not _named(lname, links):
+                raise self.err(f"elastic link {lname!r} is not in the linkage's [links]",
+                               "elastic", "link", value=lname if isinstance(lname, str) else None,
+                               occurrence=n, expected=f"one of {', '.join(links)}")
+            if len(links[lname]) != 2:
+                raise self.err(f"elastic link {lname!r} has {len(links[lname])} points; "
+                               "only a binary link can be an axial spring", "elastic", "link",
+                               value=lname, occurrence=n, expected="a link of two points")
+            if any(x.link == lname for x in elastic):
+                raise self.err(f"link {lname!r} is declared elastic twice", "elastic",
+                               "link", value=lname, occurrence=n)
+            if any(c.link == lname for c in cranks):
+                raise self.err(f"the crank {lname!r} cannot be an axial spring",
+                               "elastic", "link", value=lname, occurrence=n)
+            name = self.new_name(e.get("name"), "elastic", "name" if "name" in e else "link", n,
+                                 lname)
+            k = self.number(e.get("stiffness"), f"stiffness of {name!r} [N/m]",
+                            "elastic", "stiffness" if "stiffness" in e else "link", n)
+            c = self.number(e.get("damping", 0.0), f"damping of {name!r} [N·s/m]",
+                            "elastic", "damping", n, allow_zero=True)
+            elastic.append(ElasticLink(name, lname, k, c, *_clearance(
+                self.text, self.source, e, name, "elastic", n, "m")))
+        return elastic
+
+    def torsions(self, elastic_links: set) -> list:
+        """[[torsion]]: rods at a ground pivot between a rigid link and a new body."""
+        links, ground = self.linkage.links, self.linkage.ground
+        torsions = []
+        for n, t in self.entries("torsion"):
+            lname = t.get("link")
+            if not _named(lname, links) or lname in elastic_links:
+                raise self.err(
+                    f"torsion rod #{n + 1}: link {lname!r} is not a rigid link of [links]",
+                    "torsion", "link", value=lname if isinstance(lname, str) else None,
+                    occurrence=n,
+                    expected=f"one of {', '.join(l for l in links if l not in elastic_links)}")
+            pivots = [p for p in links[lname] if p in ground]
+            pivot = t.get("pivot", pivots[0] if len(pivots) == 1 else None)
+            if pivot not in pivots:
+                raise self.err(f"torsion rod #{n + 1} must sit at a ground pivot of link "
+                               f"{lname!r} (its ground pivots: {pivots or 'none'})", "torsion",
+                               "pivot" if "pivot" in t else "link", occurrence=n,
+                               expected="pivot = one of the link's ground pivots")
+            body = t.get("body")
+            if not isinstance(body, str) or not _IDENT.fullmatch(body) or body in links \
+                    or body == "ground":
+                raise self.err(f"torsion rod #{n + 1}: body {body!r} must be a new name "
+                               "(not a link or 'ground'; several rods may share one body)",
+                               "torsion", "body" if "body" in t else "link", occurrence=n,
+                               expected="an identifier for the body beyond the rod")
+            name = self.new_name(t.get("name"), "torsion", "name" if "name" in t else "body", n,
+                                 f"C_{body}")
+            k = self.number(t.get("stiffness"), f"stiffness of {name!r} [N·m/rad]",
+                            "torsion", "stiffness" if "stiffness" in t else "link", n)
+            c = self.number(t.get("damping", 0.0), f"damping of {name!r} [N·m·s/rad]",
+                            "torsion", "damping", n, allow_zero=True)
+            torsions.append(Torsion(name, lname, body, pivot, k, c, *_clearance(
+                self.text, self.source, t, name, "torsion", n, "rad")))
+        return torsions
+
+    def masses(self, bodies: set, rigid_points: set, elastic_links: set) -> list:
+        """[[masses]]: a mass at a point of a rigid link, or the inertia of a body."""
+        masses = []
+        for n, m in self.entries("masses"):
+            if ("point" in m) == ("link" in m):
+                raise self.err(f"[[masses]] #{n + 1} needs exactly one of point or link",
+                               "masses", next(iter(m), "name"), occurrence=n,
+                               expected='point = "P" with mass = …, or link = "L" with '
+                                        'inertia = …')
+            if "point" in m:
+                masses.append(self._point_mass(m, n, rigid_points))
+            else:
+                masses.append(self._link_inertia(m, n, bodies, elastic_links))
+        return masses
+
+    def _point_mass(self, m, n, rigid_points):
+        p = self.point_ref(m, "masses", n)
+        if p not in rigid_points and p not in self.linkage.ground:
+            raise self.err(f"mass at point {p!r}: the point is on elastic links "
+                           "only, so it belongs to no rigid part", "masses", "point", value=p,
+                           occurrence=n, expected="a point of a rigid link")
+        if "inertia" in m or "mass" not in m:
+            raise self.err(f"[[masses]] #{n + 1} at a point takes mass = … [kg]",
+                           "masses", "point", occurrence=n)
+        name = self.new_name(m.get("name"), "masses", "name" if "name" in m else "point", n,
+                             f"m_{p}")
+        v = self.number(m["mass"], f"mass {name!r} [kg]", "masses", "mass", n)
+        return SceneMass(name, "mass", v, point=p)
+
+    def _link_inertia(self, m, n, bodies, elastic_links):
+        lname = m.get("link")
+        if not _named(lname, bodies):
+            hint = (" (an elastic link has no inertia of its own here: lump its mass at "
+                    "its end points)") if _named(lname, elastic_links) else ""
+            raise self.err(f"[[masses]] #{n + 1}: link {lname!r} is not a rigid "
+                           f"link or torsion body{hint}", "masses", "link",
+                           value=lname if isinstance(lname, str) else None, occurrence=n,
+                           expected=f"one of {', '.join(sorted(bodies))}")
+        if "mass" in m or "inertia" not in m:
+            raise self.err(f"[[masses]] #{n + 1} on a link takes inertia = … "
+                           "[kg·m²]", "masses", "link", occurrence=n)
+        name = self.new_name(m.get("name"), "masses", "name" if "name" in m else "link", n,
+                             f"J_{lname}")
+        v = self.number(m["inertia"], f"inertia {name!r} [kg·m²]", "masses", "inertia", n)
+        return SceneMass(name, "inertia", v, link=lname)
+
+    def loads(self) -> list:
+        """[[loads]]: a spring/damper from a point to a ground anchor or along a direction."""
+        loads = []
+        for n, ld in self.entries("loads"):
+            p = self.point_ref(ld, "loads", n)
+            if ("anchor" in ld) == ("direction" in ld):
+                raise self.err(f"load #{n + 1} needs exactly one of anchor or direction",
+                               "loads", "point", occurrence=n,
+                               expected='anchor = "GROUND_POINT" or direction = [dx, dy]')
+            anchor, direction = self._load_line(ld, n)
+            name = self.new_name(ld.get("name"), "loads", "name" if "name" in ld else "point",
+                                 n, f"load_{p}")
+            k = self.number(ld.get("stiffness", 0.0), f"stiffness of {name!r} [N/m]",
+                            "loads", "stiffness", n, allow_zero=True)
+            c = self.number(ld.get("damping", 0.0), f"damping of {name!r} [N·s/m]",
+                            "loads", "damping", n, allow_zero=True)
+            if k == 0 and c == 0:
+                raise self.err(f"load {name!r} needs stiffness > 0 or damping > 0",
+                               "loads", "point", occurrence=n)
+            loads.append(Load(name, p, k, c, anchor, direction))
+        return loads
+
+    def _load_line(self, ld, n):
+        """(anchor, direction) of a load: one of them, the other None."""
+        if "anchor" in ld:
+            anchor = ld["anchor"]
+            if not _named(anchor, self.linkage.ground):
+                raise self.err(f"load #{n + 1}: anchor {anchor!r} is not a ground "
+                               "point", "loads", "anchor", occurrence=n,
+                               value=anchor if isinstance(anchor, str) else None,
+                               expected=f"one of {', '.join(self.linkage.ground)}")
+            return anchor, None
+        d = ld["direction"]
+        ok = isinstance(d, list) and len(d) == 2 and all(finite_number(x) for x in d) \
+            and any(x != 0 for x in d)
+        if not ok:
+            raise self.err(f"load #{n + 1}: direction must be [dx, dy], not zero, "
+                           f"got {brief(d)}", "loads", "direction", occurrence=n)
+        return None, (float(d[0]), float(d[1]))
+
+    def drive(self, bodies: set, rigid_points: set) -> "SceneDrive":
+        """[drive]: a velocity or force on a rigid link or a point of one."""
+        dr = self.doc.get("drive")
+        points = self.linkage.pose
+        if not isinstance(dr, dict):
+            raise NetlistError("a scene needs a [drive] table", self.source, 0, 0,
+                               '[drive] with link = "…" (or point = "…") and velocity = V0')
+        check_keys(self.text, self.source, TABLES["drive"], dr)
+        if ("link" in dr) == ("point" in dr):
+            raise self.err("[drive] needs exactly one of link or point", "drive",
+                           next(iter(dr), "link"), expected='link = "…" or point = "…"')
+        if "link" in dr and not _named(dr["link"], bodies):
+            raise self.err(f"[drive] link {dr['link']!r} is not a rigid link or torsion "
+                           "body", "drive", "link", expected=f"one of {', '.join(sorted(bodies))}")
+        if "point" in dr:
+            if not _named(dr["point"], points):
+                raise self.err(f"[drive] point {dr['point']!r} does not exist in [points]",
+                               "drive", "point", expected=f"one of {', '.join(points)}")
+            if dr["point"] not in rigid_points:
+                raise self.err(f"[drive] point {dr['point']!r} is on no rigid link",
+                               "drive", "point")
+        if ("velocity" in dr) == ("force" in dr):
+            raise self.err("[drive] needs exactly one of velocity = V0 or force = F0",
+                           "drive", "force" if "force" in dr else next(iter(dr), "link"))
+        kind = "velocity" if "velocity" in dr else "force"
+        amp = self.number(dr[kind], f"drive {kind} amplitude", "drive", kind, 0,
+                          positive=False)
+        dname = dr.get("name", "V")
+        if not isinstance(dname, str) or not _IDENT.fullmatch(dname) or dname in self.names:
+            raise self.err(f"[drive] name {dname!r} is not a valid unused element name",
+                           "drive", "name")
+        return SceneDrive(dname, kind, amp, link=dr.get("link"), point=dr.get("point"))
+
+    def circuit_names(self, masses, elastic, torsions, loads, drive) -> set:
+        """The circuit's element names: a damper in parallel with a spring is NAME_d."""
+        names = {m.name for m in masses} | {drive.name}
+        for el in (*elastic, *torsions, *loads):
+            names.add(el.name)
+            if el.damping > 0 and el.stiffness > 0:
+                taken = el.name + "_d"
+                if taken in self.names:
+                    where = next(((n, ln.index(f'"{taken}"') + 1) for n, ln in
+                                  enumerate(split_lines(self.text), start=1)
+                                  if f'"{taken}"' in ln), (0, 0))
+                    raise NetlistError(f"{el.name!r} has a damper, named {taken!r} in the "
+                                       "circuit, but that name is taken", self.source, *where,
+                                       "another name")
+                names.add(taken)
+        return names
 
 
 def _clearance(text, source, entry, name, table, n, unit):
@@ -577,10 +630,7 @@ def _analysis(text, source, table, circuit_names) -> Analysis:
         return Analysis()
     if not isinstance(table, dict):
         raise _err(text, source, "analysis must be a table [analysis]", None, "analysis")
-    for k in table:
-        if k not in ("theta_deg", "output", "band", "tol"):
-            raise _err(text, source, f"unknown key {k!r} in [analysis]", "analysis", k,
-                       expected="theta_deg, output, band, tol")
+    check_keys(text, source, TABLES["analysis"], table)
     theta = None
     if "theta_deg" in table:
         theta = _number(text, source, table["theta_deg"], "theta_deg [deg]", "analysis",
@@ -618,24 +668,7 @@ def _parts(scene: Scene) -> tuple:
     lk = scene.linkage
     bodies = scene.bodies
     tbodies = {t.body for t in scene.torsions}
-    parent = {b: b for b in bodies}
-
-    def find(b):
-        while parent[b] != b:
-            parent[b] = parent[parent[b]]
-            b = parent[b]
-        return b
-
-    for p in lk.pose:
-        if p in lk.ground:
-            continue
-        on = [b for b, pts in bodies.items() if p in pts and b not in tbodies]
-        for b in on[1:]:
-            parent[find(b)] = find(on[0])
-    groups: dict[str, list] = {}
-    for b in bodies:
-        groups.setdefault(find(b), []).append(b)
-    parts = [tuple(g) for g in groups.values()]
+    parts = _rigid_parts(lk, bodies, tbodies)
     for part in parts:
         n = len(part)
         pairs = 0
@@ -673,6 +706,26 @@ def _parts(scene: Scene) -> tuple:
         first = next(b for b, pts in bodies.items() if d.point in pts and b not in tbodies)
     parts.sort(key=lambda part: first not in part)
     return tuple(parts)
+
+
+def _rigid_parts(lk, bodies: dict, tbodies: set) -> list[tuple]:
+    """Bodies joined by a moving pin (not through a torsion body), as connected components.
+
+    Each part lists its bodies in the order of ``bodies``; the parts are in the
+    order of their first body.
+    """
+    import networkx as nx
+
+    g = nx.Graph()
+    g.add_nodes_from(bodies)
+    for p in lk.pose:
+        if p in lk.ground:
+            continue
+        on = [b for b, pts in bodies.items() if p in pts and b not in tbodies]
+        g.add_edges_from((on[0], b) for b in on[1:])
+    order = {b: i for i, b in enumerate(bodies)}
+    parts = [tuple(sorted(c, key=order.__getitem__)) for c in nx.connected_components(g)]
+    return sorted(parts, key=lambda part: order[part[0]])
 
 
 def load_scene(path: str | Path) -> Scene:

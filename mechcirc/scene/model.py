@@ -58,9 +58,10 @@ class SceneCircuit:
     theta : float
         Crank rotation from the pose [rad].
     circuit : Circuit
-        The circuit, parsed from ``netlist``.
+        The circuit, built from Element/Lever/Drive objects.
     netlist : str
-        Its ``.mcir`` text (every ratio written out in comments).
+        Its ``.mcir`` text (:func:`mechcirc.netlist_writer.write`; every ratio
+        written out in comments), which parses back to ``circuit``.
     ratios : dict[str, float]
         Element name → velocity ratio to the drive [1, m/rad or 1/m]: the speed
         of a mass's point, a link's ω, or a spring's elongation rate, per unit
@@ -124,6 +125,42 @@ def build(scene: Scene, theta: float, *, reflect: Literal["eta", "lever"] = "eta
     theta = float(theta)
     if not math.isfinite(theta):
         raise InputError(f"theta must be finite, got {theta!r}")
+    m = _motion(scene, theta, state)
+    r0, r0_text = _drive_ratio(scene, m)
+    node_of_part, parts = _part_nodes(scene, m)
+    b = _Builder(scene, m, r0, node_of_part, reflect)
+    b.masses()
+    kept_edges = b.springs()
+    _check_connected(scene, node_of_part, kept_edges, b.dropped, m.deg)
+    d = scene.drive
+    drive = Drive(d.name, node_of_part[0], "0", d.kind, float(d.amplitude))
+    if not b.elements:
+        raise GeometryError(f"{scene.source}: at θ = {m.deg:.6g}° no mass, spring or damper of "
+                            f"the scene moves with the drive; the circuit would be empty")
+    stem = scene.source.rsplit("/", 1)[-1].rsplit(".", 1)[0] if scene.source != "<string>" \
+        else "scene"
+    circuit = Circuit(tuple(b.elements), drive, tuple(b.levers), name=f"{stem}@{m.deg:.6g}deg",
+                      source=scene.source)
+    text = _netlist(scene, circuit, m.deg, r0, r0_text, parts, b)
+    return SceneCircuit(theta, circuit, text, b.ratios, parts, tuple(b.dropped), float(r0),
+                        d.link is not None)
+
+
+@dataclass(frozen=True)
+class _Motion:
+    """The rigid motion at θ in SI, per unit crank speed, and the scale of "at rest"."""
+
+    deg: float
+    pos: dict        # point -> position [m]
+    vel: dict        # point -> velocity per unit crank speed [m/rad]
+    ang: dict        # link or torsion body -> angular velocity per unit crank speed [1]
+    Lc: float        # the linkage's length scale [m]
+    tiny: float      # a velocity ratio at most this is zero (ZERO_RATIO × the largest)
+    crank: str
+
+
+def _motion(scene: Scene, theta: float, state) -> _Motion:
+    """Solve the rigid linkage at θ (unless ``state`` is given) and scale it."""
     lk = scene.linkage
     deg = math.degrees(theta)
     if state is None:
@@ -136,7 +173,6 @@ def build(scene: Scene, theta: float, *, reflect: Literal["eta", "lever"] = "eta
                 f"position where its velocity ratios to the crank are infinite ({exc})") from None
     L = scene.length_scale
     omega = lk.cranks[0].omega
-    crank = lk.cranks[0].link
     tbody_link = {t.body: t.link for t in scene.torsions}
     pos = {p: np.asarray(x, float) * L for p, x in state.points.items()}
     vel = {p: np.asarray(v, float) * L / omega for p, v in state.velocities.items()}
@@ -154,22 +190,28 @@ def build(scene: Scene, theta: float, *, reflect: Literal["eta", "lever"] = "eta
     Lc = lk.length_scale() * L
     S_all = max(max(np.hypot(*v) for v in vel.values()),
                 max(abs(w) for w in ang.values()) * Lc)
-    tiny = ZERO_RATIO * S_all
+    return _Motion(deg, pos, vel, ang, Lc, ZERO_RATIO * S_all, lk.cranks[0].link)
 
+
+def _drive_ratio(scene: Scene, m: _Motion) -> tuple[float, str]:
+    """r₀, the drive's velocity per unit crank speed, and its name; refused at rest."""
     d = scene.drive
     if d.link is not None:
-        r0, r0_size = ang[d.link], abs(ang[d.link]) * Lc
-        r0_text = f"ω_{d.link}/ω_{crank}"
+        r0, r0_size = m.ang[d.link], abs(m.ang[d.link]) * m.Lc
+        r0_text = f"ω_{d.link}/ω_{m.crank}"
     else:
-        r0 = float(np.hypot(*vel[d.point]))
-        r0_size, r0_text = r0, f"|v_{d.point}|/ω_{crank}"
-    if r0_size <= tiny:
+        r0 = float(np.hypot(*m.vel[d.point]))
+        r0_size, r0_text = r0, f"|v_{d.point}|/ω_{m.crank}"
+    if r0_size <= m.tiny:
         raise GeometryError(
-            f"{scene.source}: at θ = {deg:.6g}° the drive is at a dead centre: the velocity "
+            f"{scene.source}: at θ = {m.deg:.6g}° the drive is at a dead centre: the velocity "
             f"ratio {r0_text} is {r0:.3g}, so the drive does not move the mechanism and every "
             f"ratio to it is infinite; choose another crank angle")
+    return r0, r0_text
 
-    # ---- the rigid parts: one node each, checked to move and to have one DOF
+
+def _part_nodes(scene: Scene, m: _Motion) -> tuple[list[str], dict]:
+    """One node a rigid part (named after its first body), each checked to move with one DOF."""
     node_of_part, parts = [], {}
     used = {"0"}
     for i, part in enumerate(scene.parts):
@@ -179,139 +221,151 @@ def build(scene: Scene, theta: float, *, reflect: Literal["eta", "lever"] = "eta
         used.add(name)
         node_of_part.append(name)
         parts[name] = part
-        _check_part(scene, part, pos, vel, ang, Lc, tiny, deg, crank)
-    part_of_body = scene.part_of_body()
+        _check_part(scene, part, m.pos, m.vel, m.ang, m.Lc, m.tiny, m.deg, m.crank)
+    return node_of_part, parts
 
-    def node_of_point(p):
-        i = scene.part_of_point(p)
-        return "0" if i is None else node_of_part[i]
 
-    lines, ratios, dropped = [], {}, []
-    elements, levers = [], []          # the circuit, built as objects beside its text
-    names_used = set(used)
-    element_names = {m.name for m in scene.masses} | {d.name} | {
-        x.name + suffix for x in (*scene.elastic, *scene.torsions, *scene.loads)
-        for suffix in ("", "_d")}
+class _Builder:
+    """The circuit's elements and levers, built as objects, with each one's ratio."""
 
-    def port(name, node, r):
-        """Reflection through ``r``: (node, eta string) or a lever to a new node."""
-        if reflect == "eta":
-            return node, f" eta={r * r!r}"
+    def __init__(self, scene: Scene, m: _Motion, r0: float, node_of_part: list,
+                 reflect: str):
+        self.scene, self.m, self.r0, self.node_of_part = scene, m, r0, node_of_part
+        self.reflect = reflect
+        self.part_of_body = scene.part_of_body()
+        self.elements: list[Element] = []
+        self.levers: list[Lever] = []
+        self.ratios: dict[str, float] = {}
+        self.dropped: list[tuple[str, str]] = []
+        self.notes: dict[str, str] = {}      # element -> "what = ratio", for the text
+        self.names_used = {"0", *node_of_part}
+        self.element_names = {x.name for x in scene.masses} | {scene.drive.name} | {
+            x.name + suffix for x in (*scene.elastic, *scene.torsions, *scene.loads)
+            for suffix in ("", "_d")}
+
+    def node_of_point(self, p) -> str:
+        i = self.scene.part_of_point(p)
+        return "0" if i is None else self.node_of_part[i]
+
+    def port(self, name, node, r) -> tuple[str, float]:
+        """Reflection through ``r``: (node, η = r²), or a lever of ratio |r| to a new node."""
+        if self.reflect == "eta":
+            return node, r * r
         port_node = f"{name}_v"
-        while port_node in names_used:
+        while port_node in self.names_used:
             port_node += "_"
-        names_used.add(port_node)
+        self.names_used.add(port_node)
         lever = f"L_{name}"
-        while lever in element_names:
+        while lever in self.element_names:
             lever = "L" + lever
-        element_names.add(lever)
-        lines.append(f"lever {lever} {node} 0 {port_node} 0 ratio={abs(r)!r}")
-        levers.append(Lever(lever, node, "0", port_node, "0", abs(r)))
-        return port_node, ""
+        self.element_names.add(lever)
+        self.levers.append(Lever(lever, node, "0", port_node, "0", abs(r)))
+        return port_node, 1.0
 
-    lines.append("# masses and inertias (kinetic energy, reflected to the drive)")
-    for m in scene.masses:
-        if m.kind == "mass":
-            if m.point in lk.ground:
-                dropped.append((m.name, f"at ground point {m.point!r}: it does not move"))
-                continue
-            r = float(np.hypot(*vel[m.point])) / abs(r0)
-            size, node = r * abs(r0), node_of_point(m.point)
-            what = f"|v_{m.point}|/v_drive"
-        else:
-            r = ang[m.link] / r0
-            size, node = abs(ang[m.link]) * Lc, node_of_part[part_of_body[m.link]]
-            what = f"ω_{m.link}/v_drive"
-        ratios[m.name] = r
-        if size <= tiny:
-            dropped.append((m.name, f"at rest at this θ ({what} = {r:.3g})"))
-            continue
-        n, eta = port(m.name, node, r)
-        lines.append(f"mass {m.name} {n} 0 {m.value!r}{eta}   ; {what} = {r!r}")
-        elements.append(Element("mass", m.name, n, "0", m.value, r * r if eta else 1.0))
-
-    lines.append("# elastic elements (elongation rate = ratio × velocity difference of the nodes)")
-    springs = []           # (name, node_a, node_b, c, size)
-    for e in scene.elastic:
-        a, b = lk.links[e.link]
-        u = pos[b] - pos[a]
-        u = u / np.hypot(*u)
-        ca, cb = float(u @ vel[a]), float(u @ vel[b])
-        c = (cb if b not in lk.ground else ca) / r0
-        springs.append((e, node_of_point(a), node_of_point(b), c, abs(c * r0),
-                        f"elongation rate of {e.link} / v_drive"))
-    for t in scene.torsions:
-        c = ang[t.link] / r0
-        springs.append((t, node_of_part[part_of_body[t.link]],
-                        node_of_part[part_of_body[t.body]], c, abs(ang[t.link]) * Lc,
-                        f"ω_{t.link}/v_drive (twist rate of the rod per unit drive velocity)"))
-    for ld in scene.loads:
-        if ld.anchor is not None:
-            u = pos[ld.anchor] - pos[ld.point]
-            if np.hypot(*u) == 0:
-                raise GeometryError(f"{scene.source}: at θ = {deg:.6g}° load {ld.name!r}'s point "
-                                    f"{ld.point!r} coincides with its anchor {ld.anchor!r}")
-        else:
-            u = np.array(ld.direction, float)
-        u = u / np.hypot(*u)
-        c = float(u @ vel[ld.point]) / r0
-        springs.append((ld, node_of_point(ld.point), "0", c, abs(c * r0),
-                        f"velocity of {ld.point} along the load / v_drive"))
-
-    kept_edges = []
-    for el, na, nb, c, size, what in springs:
-        ratios[el.name] = c
-        if size <= tiny:
-            dropped.append((el.name, f"does not deform at this θ ({what} = {c:.3g})"))
-            continue
-        kept_edges.append((na, nb))
-        ends = []
-        for side, node in (("a", na), ("b", nb)):
-            if node == "0":
-                ends.append("0")
-            elif reflect == "eta":
-                ends.append(node)
+    def masses(self) -> None:
+        """A mass element a moving mass or inertia (kinetic energy, reflected to the drive)."""
+        m, r0, ground = self.m, self.r0, self.scene.linkage.ground
+        for ms in self.scene.masses:
+            if ms.kind == "mass":
+                if ms.point in ground:
+                    self.dropped.append((ms.name, f"at ground point {ms.point!r}: it does "
+                                                  "not move"))
+                    continue
+                r = float(np.hypot(*m.vel[ms.point])) / abs(r0)
+                size, node = r * abs(r0), self.node_of_point(ms.point)
+                what = f"|v_{ms.point}|/v_drive"
             else:
-                ends.append(port(f"{el.name}_{side}", node, c)[0])
-        eta = f" eta={c * c!r}" if reflect == "eta" else ""
-        eta_value = c * c if reflect == "eta" else 1.0
-        if el.stiffness > 0:
-            lines.append(f"spring {el.name} {ends[0]} {ends[1]} {el.stiffness!r}{eta}"
-                         f"   ; {what} = {c!r}")
-            elements.append(Element("spring", el.name, ends[0], ends[1], el.stiffness,
-                                    eta_value))
-        if el.damping > 0:
-            dname = el.name + "_d" if el.stiffness > 0 else el.name
-            lines.append(f"damper {dname} {ends[0]} {ends[1]} {el.damping!r}{eta}")
-            elements.append(Element("damper", dname, ends[0], ends[1], el.damping, eta_value))
-    _check_connected(scene, node_of_part, kept_edges, dropped, deg)
+                r = m.ang[ms.link] / r0
+                size = abs(m.ang[ms.link]) * m.Lc
+                node = self.node_of_part[self.part_of_body[ms.link]]
+                what = f"ω_{ms.link}/v_drive"
+            self.ratios[ms.name] = r
+            if size <= m.tiny:
+                self.dropped.append((ms.name, f"at rest at this θ ({what} = {r:.3g})"))
+                continue
+            n, eta = self.port(ms.name, node, r)
+            self.elements.append(Element("mass", ms.name, n, "0", ms.value, eta))
+            self.notes[ms.name] = f"{what} = {r!r}"
 
-    unit = "rad/s" if d.link is not None else "m/s"
-    head = [f"# scene {scene.name!r} ({scene.source}) linearised by mechcirc.scene.build",
-            f"# at crank rotation theta = {deg!r} deg from the pose; drive on "
+    def _elastic(self) -> list:
+        """(element, node a, node b, ratio c, size, what) of every spring, rod and load."""
+        scene, m, r0 = self.scene, self.m, self.r0
+        lk = scene.linkage
+        out = []
+        for e in scene.elastic:
+            a, b = lk.links[e.link]
+            u = m.pos[b] - m.pos[a]
+            u = u / np.hypot(*u)
+            ca, cb = float(u @ m.vel[a]), float(u @ m.vel[b])
+            c = (cb if b not in lk.ground else ca) / r0
+            out.append((e, self.node_of_point(a), self.node_of_point(b), c, abs(c * r0),
+                        f"elongation rate of {e.link} / v_drive"))
+        for t in scene.torsions:
+            c = m.ang[t.link] / r0
+            out.append((t, self.node_of_part[self.part_of_body[t.link]],
+                        self.node_of_part[self.part_of_body[t.body]], c,
+                        abs(m.ang[t.link]) * m.Lc,
+                        f"ω_{t.link}/v_drive (twist rate of the rod per unit drive velocity)"))
+        for ld in scene.loads:
+            if ld.anchor is not None:
+                u = m.pos[ld.anchor] - m.pos[ld.point]
+                if np.hypot(*u) == 0:
+                    raise GeometryError(
+                        f"{scene.source}: at θ = {m.deg:.6g}° load {ld.name!r}'s point "
+                        f"{ld.point!r} coincides with its anchor {ld.anchor!r}")
+            else:
+                u = np.array(ld.direction, float)
+            u = u / np.hypot(*u)
+            c = float(u @ m.vel[ld.point]) / r0
+            out.append((ld, self.node_of_point(ld.point), "0", c, abs(c * r0),
+                        f"velocity of {ld.point} along the load / v_drive"))
+        return out
+
+    def springs(self) -> list[tuple[str, str]]:
+        """Springs and dampers of the elastic elements that deform; their node pairs."""
+        kept_edges = []
+        for el, na, nb, c, size, what in self._elastic():
+            self.ratios[el.name] = c
+            if size <= self.m.tiny:
+                self.dropped.append((el.name, f"does not deform at this θ ({what} = {c:.3g})"))
+                continue
+            kept_edges.append((na, nb))
+            ends = []
+            for side, node in (("a", na), ("b", nb)):
+                if node == "0" or self.reflect == "eta":
+                    ends.append(node)
+                else:
+                    ends.append(self.port(f"{el.name}_{side}", node, c)[0])
+            eta = c * c if self.reflect == "eta" else 1.0
+            if el.stiffness > 0:
+                self.elements.append(Element("spring", el.name, ends[0], ends[1], el.stiffness,
+                                             eta))
+                self.notes[el.name] = f"{what} = {c!r}"
+            if el.damping > 0:
+                dname = el.name + "_d" if el.stiffness > 0 else el.name
+                self.elements.append(Element("damper", dname, ends[0], ends[1], el.damping, eta))
+                if el.stiffness == 0:
+                    self.notes[dname] = f"{what} = {c!r}"
+        return kept_edges
+
+
+def _netlist(scene, circuit, deg, r0, r0_text, parts, b: _Builder) -> str:
+    """The circuit's text (the one netlist writer), every ratio and choice in a comment."""
+    from ..netlist_writer import write
+
+    d = scene.drive
+    head = [f"scene {scene.name!r} ({scene.source}) linearised by mechcirc.scene.build",
+            f"at crank rotation theta = {deg!r} deg from the pose; drive on "
             + (f"link {d.link} (rotational: v in rad/s, Q in N·m)" if d.link is not None
                else f"point {d.point} along its path (translational: v in m/s, Q in N)"),
-            f"# drive ratio r0 = {r0_text} = {r0!r}",
-            "# nodes (rigid parts between elastic elements):"]
-    head += [f"#   {n}: {', '.join(p)}" for n, p in parts.items()]
-    for name, why in dropped:
-        head.append(f"# left out: {name}: {why}")
-    head.append(f"drive {d.name} {node_of_part[0]} 0 {d.kind}={d.amplitude!r}   ; [{unit}]"
-                if d.kind == "velocity" else
-                f"drive {d.name} {node_of_part[0]} 0 force={d.amplitude!r}")
-    text = "\n".join(head + lines) + "\n"
-    if not any(ln.split(None, 1)[0] in ("mass", "spring", "damper") for ln in lines
-               if not ln.startswith("#")):
-        raise GeometryError(f"{scene.source}: at θ = {deg:.6g}° no mass, spring or damper of "
-                            f"the scene moves with the drive; the circuit would be empty")
-    stem = scene.source.rsplit("/", 1)[-1].rsplit(".", 1)[0] if scene.source != "<string>" \
-        else "scene"
-    drive = Drive(d.name, node_of_part[0], "0", d.kind, float(d.amplitude))
-    # built as objects (issue 15 §3); ``text`` is the same circuit as a netlist (tested)
-    circuit = Circuit(tuple(elements), drive, tuple(levers), name=f"{stem}@{deg:.6g}deg",
-                      source=scene.source)
-    return SceneCircuit(theta, circuit, text, ratios, parts, tuple(dropped), float(r0),
-                        d.link is not None)
+            f"drive ratio r0 = {r0_text} = {r0!r}",
+            "nodes (rigid parts between elastic elements):"]
+    head += [f"  {n}: {', '.join(p)}" for n, p in parts.items()]
+    head += [f"left out: {name}: {why}" for name, why in b.dropped]
+    notes = dict(b.notes)
+    if d.kind == "velocity":
+        notes[d.name] = "[rad/s]" if d.link is not None else "[m/s]"
+    return write(circuit, head, comments=notes)
 
 
 def _check_part(scene, part, pos, vel, ang, Lc, tiny, deg, crank):
@@ -364,14 +418,13 @@ def _check_part(scene, part, pos, vel, ang, Lc, tiny, deg, crank):
 
 
 def _check_connected(scene, node_of_part, edges, dropped, deg):
-    reach = {node_of_part[0]}
-    changed = True
-    while changed:
-        changed = False
-        for a, b in edges:
-            if (a in reach) != (b in reach) and "0" not in (a, b):
-                reach |= {a, b}
-                changed = True
+    """Refuse parts that no kept element couples to the drive's part (not through the frame)."""
+    import networkx as nx
+
+    g = nx.Graph()
+    g.add_nodes_from(node_of_part)
+    g.add_edges_from((a, b) for a, b in edges if "0" not in (a, b))
+    reach = nx.node_connected_component(g, node_of_part[0])
     lost = [n for n in node_of_part if n not in reach]
     if lost:
         why = "; ".join(f"{n}: {w}" for n, w in dropped if "deform" in w)

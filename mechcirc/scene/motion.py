@@ -19,7 +19,7 @@ The model's linearisation about the rigid motion at θ is the circuit of
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -79,6 +79,8 @@ class MotionModel:
     arrays: dict
     body_fn: dict
     centre: dict
+    #: Point → (x function, y function, part) for every point on a moving part (outputs).
+    point_fn: dict = field(default_factory=dict)
 
     @property
     def n_free(self) -> int:
@@ -87,24 +89,31 @@ class MotionModel:
     def naux(self) -> int:
         return len(self.bodies) + 2 * len(self.elements) + 2 + len(self.moments)
 
-    def kernel_args(self, theta_s: float, limit: float, *, outputs: bool = False):
-        """The kernel's array arguments; ``outputs``: evaluate the output-only functions too."""
+    def kernel_args(self, theta_s: float, limit: float, *, outputs: bool = False,
+                    ripple: tuple = (0.0, 0.0), loads_on_mean: bool = False):
+        """The kernel's array arguments; ``outputs``: evaluate the output-only functions too;
+        ``ripple`` = (A, ν): the crank speed is Ω + A cos(ν t) [rad/s] (default constant);
+        ``loads_on_mean``: a load's reference is the rigid motion at the mean crank angle
+        θs + Ω t instead of the actual one (a load to the frame, as in the circuit)."""
         a = self.arrays
         pv = np.array([self.omega, float(theta_s), float(limit),
                        float(a["FI"].shape[0] if outputs else a["n_dyn"]),
-                       1.0 if outputs else 0.0])
+                       1.0 if outputs else 0.0, float(ripple[0]), float(ripple[1]),
+                       1.0 if loads_on_mean else 0.0])
         return (pv, a["FI"], a["FF"], a["tabs"], a["MI"], a["MW"], a["EI"], a["EF"], a["MOI"],
                 a["MOF"], a["PRIG"], a["BI"])
 
-    def rigid_state(self, theta: float):
-        """y = [q, q̇] of the free parts in the rigid motion at crank rotation θ."""
+    def rigid_state(self, theta: float, speed: float | None = None):
+        """y = [q, q̇] of the free parts in the rigid motion at crank rotation θ, the crank
+        turning at ``speed`` [rad/s] (default Ω)."""
         kern = _py()
         a = self.arrays
+        w = self.omega if speed is None else float(speed)
         q, qd = [], []
         for r in a["PRIG"][1:]:
             v, d, _, _ = kern.feval(a["FI"][r, 0], a["tabs"], a["FI"][r, 2], *a["FF"][r], theta)
             q.append(v)
-            qd.append(d * self.omega)
+            qd.append(d * w)
         return np.array(q + qd)
 
 
@@ -342,6 +351,11 @@ def motion_model(scene: Scene, omega: float | None = None, *,
     body_names = tuple(bodies)
     n_dyn = len(B.FI)          # functions the dynamics need; the rest only for outputs
     BI = [angle_fn(b) for b in body_names]
+    pfn = {}
+    for p in lk.pose:                      # output-only: the points' linear accelerations
+        pf = point_fns(p)
+        if pf is not None:
+            pfn[p] = pf
     arrays = {
         "FI": np.array(B.FI, dtype=np.int64).reshape(-1, 3),
         "FF": np.array(B.FF, dtype=float).reshape(-1, 6),
@@ -354,7 +368,8 @@ def motion_model(scene: Scene, omega: float | None = None, *,
         "PRIG": np.array(prig, dtype=np.int64), "BI": np.array(BI, dtype=np.int64),
         "n_dyn": n_dyn}
     return MotionModel(scene, omega, scene.parts, tuple(coords), body_names, tuple(enames),
-                       tuple(mnames), arrays, {b: f for b, f in zip(body_names, BI)}, centres)
+                       tuple(mnames), arrays, {b: f for b, f in zip(body_names, BI)}, centres,
+                       pfn)
 
 
 _CACHE: dict = {}

@@ -22,8 +22,16 @@ x = φ − centre + α/2 (mod 2π), φ the crank link's own rotation from the po
     start_deg = 0.0              # crank rotation from the pose at t = 0 (rigid state)
     steps_per_period = 50        # RK4 steps per period of the fastest linearised mode
     points = 7200                # output points per revolution
+    omega_ripple = {amplitude = 0.05, harmonic = 2}   # optional: a crank speed profile
     [simulate.aliases]           # more output names: NAME = "BODY.acceleration", …
     eps2P = "crank.acceleration"
+
+``omega_ripple`` -- the crank does not turn at constant speed but with
+ω(t) = Ω (1 + a cos(k Ω t)): ``amplitude`` a in [0, 1) (relative to Ω, so the
+crank never stops or turns back), ``harmonic`` k a whole number ≥ 1 (k ripples per
+revolution, so the crank still turns once per period 2π/Ω).  The crank angle is
+θ = θs + Ω t + (a/k) sin(k Ω t), and every rigid part follows it with
+θ̈ = −a k Ω² sin(k Ω t) (``docs/scenes.md``).
 """
 
 from __future__ import annotations
@@ -66,6 +74,8 @@ class SimulateSettings:
     steps_per_period: float | None = None
     points: int | None = None
     aliases: dict = field(default_factory=dict)
+    #: (amplitude a, harmonic k): crank speed Ω (1 + a cos(k Ω t)); None: constant.
+    omega_ripple: tuple | None = None
 
 
 def _num(text, source, value, what, table, key, n, *, positive=True):
@@ -157,11 +167,39 @@ def parse_simulate(text, source, table, scene) -> SimulateSettings:
                 raise _err(text, source, f"[simulate] {k} must be an integer ≥ "
                            f"{1 if k == 'revolutions' else 16}, got {v!r}", "simulate", k)
             kw[k] = v
+        elif k == "omega_ripple":
+            kw[k] = _ripple(text, source, v)
         else:
             raise _err(text, source, f"unknown key {k!r} in [simulate]", "simulate", k,
                        expected="omega, revolutions, start_deg, steps_per_period, points, "
-                       "aliases")
+                       "omega_ripple, aliases")
     return SimulateSettings(**kw)
+
+
+_RIPPLE_FORM = "omega_ripple = {amplitude = 0.05, harmonic = 2}"
+
+
+def _ripple(text, source, v):
+    """``omega_ripple = {amplitude = a, harmonic = k}`` → (a, k), checked."""
+    if not isinstance(v, dict):
+        raise _err(text, source, f"[simulate] omega_ripple must be an inline table, got "
+                   f"{brief(v)}", "simulate", "omega_ripple", expected=_RIPPLE_FORM)
+    extra = set(v) - {"amplitude", "harmonic"}
+    if extra or "amplitude" not in v:
+        what = (f"unknown key {sorted(extra)[0]!r}" if extra else "missing amplitude")
+        raise _err(text, source, f"[simulate] omega_ripple: {what}", "simulate",
+                   "omega_ripple", expected=_RIPPLE_FORM)
+    a = v["amplitude"]
+    if not (finite_number(a) and 0 <= a < 1):
+        raise _err(text, source, f"[simulate] omega_ripple amplitude must be a number in "
+                   f"[0, 1) (relative to the crank speed), got {brief(a)}", "simulate",
+                   "omega_ripple", expected="0 <= amplitude < 1")
+    k = v.get("harmonic", 1)
+    if isinstance(k, bool) or not isinstance(k, int) or k < 1:
+        raise _err(text, source, f"[simulate] omega_ripple harmonic must be a whole number "
+                   f">= 1 (ripples per revolution), got {brief(k)}", "simulate",
+                   "omega_ripple", expected="harmonic = 1, 2, 3, ...")
+    return float(a), int(k)
 
 
 def apply_overrides(scene, overrides: dict):
@@ -195,6 +233,19 @@ def apply_overrides(scene, overrides: dict):
                 raise MechcircError(f"--set omega must be > 0 rad/s, got {value!r}")
             sim = dataclasses.replace(sim, omega=value)
             continue
+        if key in ("omega_ripple.amplitude", "omega_ripple.harmonic"):
+            a, k = sim.omega_ripple or (0.0, 1)
+            if key.endswith("amplitude"):
+                if not 0 <= value < 1:
+                    raise MechcircError(f"--set {key} must be in [0, 1), got {value!r}")
+                a = value
+            else:
+                if value != int(value) or value < 1:
+                    raise MechcircError(f"--set {key} must be a whole number >= 1, got "
+                                        f"{value!r}")
+                k = int(value)
+            sim = dataclasses.replace(sim, omega_ripple=(a, k))
+            continue
         name, _, fld = key.partition(".")
         if name in masses and fld in ("mass", "inertia", "value"):
             if value <= 0:
@@ -220,7 +271,7 @@ def apply_overrides(scene, overrides: dict):
                     old, window=rad, sigma=rad if old.sigma == old.window else old.sigma) \
                     if fld == "window_deg" else dataclasses.replace(old, sigma=rad)
             continue
-        known = ["omega"] + [f"{n}.inertia/mass" for n in masses] + \
+        known = ["omega", "omega_ripple.amplitude/harmonic"] + [f"{n}.inertia/mass" for n in masses] + \
             [f"{n}.stiffness/damping/clearance" for g in groups.values() for n in g] + \
             [f"{n}.amplitude/window_deg/sigma_deg" for n in moments]
         raise MechcircError(f"--set {key}: no such parameter; known: {', '.join(known)}")

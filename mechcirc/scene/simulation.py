@@ -24,6 +24,7 @@ from __future__ import annotations
 import math
 import time
 import warnings
+import weakref
 from dataclasses import dataclass, field
 from typing import Callable
 
@@ -89,6 +90,12 @@ class SceneMotion:
     backend: str
     steps_per_revolution: int
     notes: tuple = field(default=())
+    #: Time [s] of each tabulated point (the crank-angle order) and the state there,
+    #: ``[q_1..q_n, q̇_1..q̇_n]`` (each free part's coordinate, :attr:`MotionModel.coordinate`).
+    time: np.ndarray | None = None
+    states: np.ndarray | None = None
+    #: numba compilation or cache load of the first call in a process [s], else 0.
+    compile_time: float = 0.0
 
     def summary(self) -> dict:
         """Plain-data summary for JSON."""
@@ -98,7 +105,7 @@ class SceneMotion:
                 "extrema": {k: list(v) for k, v in self.extrema.items()},
                 "error_estimate": self.error_estimate, "periodicity": self.periodicity,
                 "n_steps": self.n_steps, "nfev": self.nfev, "wall_time_s": self.wall_time,
-                "notes": list(self.notes)}
+                "compile_time_s": self.compile_time, "notes": list(self.notes)}
 
     def columns(self) -> dict:
         """Output arrays by name, crank angle in degrees first (for CSV)."""
@@ -106,11 +113,19 @@ class SceneMotion:
 
 
 _PYK = None
+#: Methods of :func:`simulate_scene`: the fixed-step RK4 kernel, and scipy's adaptive ones.
+METHODS = ("rk4", "rk4-python", "DOP853", "RK45", "LSODA")
+SCIPY_METHODS = ("DOP853", "RK45", "LSODA")
+NO_NUMBA_NOTE = ("numba is not importable (install the 'fast' extra: pip install "
+                 "'mechcirc[fast]'); ran the same RK4 as pure Python, about 100x slower")
+_WARM = False
 
 
 def kernels_for(method):
+    """(kernel module, backend name): compiled for ``"rk4"`` (and the scipy methods' right-hand
+    side) when numba is importable, else the pure-Python copy."""
     global _PYK
-    if method == "rk4":
+    if method != "rk4-python":
         from . import _motion_kernels as k
 
         if k.HAVE_NUMBA:
@@ -120,6 +135,22 @@ def kernels_for(method):
 
         _PYK = k.load_python()
     return _PYK, "python"
+
+
+def _warm_up(model, kern) -> float:
+    """Compile (or load from numba's cache) the kernels once per process; the time it took."""
+    global _WARM
+    if _WARM:
+        return 0.0
+    t0 = time.perf_counter()
+    y = model.rigid_state(0.0)
+    args = model.kernel_args(0.0, 1e300)
+    kern.rk4_run(y, 0.0, 1e-9, 2, 0.0, 1e-9, np.empty((1, y.size)), np.empty(1), *args,
+                 model.naux())
+    oargs = model.kernel_args(0.0, 1e300, outputs=True)
+    kern.outputs(np.zeros(1), np.array([y]), np.empty((1, model.naux())), *oargs)
+    _WARM = True
+    return time.perf_counter() - t0
 
 
 def linear_matrices(model: MotionModel, theta: float):
@@ -168,8 +199,20 @@ def _fargs(a, f):
     return (a["FI"][f, 0], a["tabs"], a["FI"][f, 2], *a["FF"][f])
 
 
+_RATES: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
 def max_rate(model: MotionModel, samples: int = 72) -> float:
-    """Largest |λ| of the linearised model over a revolution [1/s] (sets the RK4 step)."""
+    """Largest |λ| of the linearised model over a revolution [1/s] (sets the RK4 step);
+    memoised per model (a model is immutable)."""
+    key = _RATES.get(model, {})
+    if samples not in key:
+        key[samples] = _max_rate(model, samples)
+        _RATES[model] = key
+    return key[samples]
+
+
+def _max_rate(model: MotionModel, samples: int) -> float:
     rates = []
     for th in np.linspace(0.0, TWO_PI, samples, endpoint=False):
         M, D, K = linear_matrices(model, th)
@@ -187,13 +230,23 @@ def simulate_scene(scene: Scene, *, omega: float | None = None,
                    revolutions: int | None = None, start_deg: float | None = None,
                    steps_per_period: float | None = None, points: int | None = None,
                    method: str = "rk4", error_estimate: bool = True,
-                   model: MotionModel | None = None,
+                   model: MotionModel | None = None, rtol: float | None = None,
+                   revolution: int | None = None, omega_ripple: tuple | None = None,
                    progress: Callable[[int, int], None] | None = None) -> SceneMotion:
     """Simulate ``scene`` over ``revolutions`` turns of the crank and tabulate the last.
 
     Parameters default to the scene's ``[simulate]`` table, then Ω from its
     crank, 5 revolutions, start 0°, 50 steps per period, 7200 points.
-    ``method`` is ``"rk4"`` (numba when importable) or ``"rk4-python"``.
+    ``method`` is ``"rk4"`` (numba when importable), ``"rk4-python"``, or one of
+    scipy's ``"DOP853"``, ``"RK45"``, ``"LSODA"`` at relative tolerance ``rtol``
+    (default 1e-10; the same right-hand side, integrated in the deviations from the
+    rigid motion so that the tolerance applies to the deformations).
+    ``revolution`` tabulates that revolution (1 … R) instead of the last; the
+    integration stops after it.  ``omega_ripple`` = (a, k) (default the file's
+    ``omega_ripple = {amplitude = a, harmonic = k}``, else none): the crank speed
+    is Ω (1 + a cos(k Ω t)), 0 ≤ a < 1, k a whole number ≥ 1, so the crank still
+    turns once per period 2π/Ω; the crank angle is θ = θs + Ω t + (a/k) sin(k Ω t)
+    and the rigid parts follow it with θ̈ = −a k Ω² sin(k Ω t).
 
     Raises
     ------
@@ -212,64 +265,119 @@ def simulate_scene(scene: Scene, *, omega: float | None = None,
     start_deg = float(pick(start_deg, "start_deg", 0.0))
     spp = float(pick(steps_per_period, "steps_per_period", DEFAULT_STEPS_PER_PERIOD))
     npts = int(pick(points, "points", DEFAULT_POINTS))
-    if method not in ("rk4", "rk4-python"):
-        raise MechcircError(f"unknown method {method!r}; choose rk4 or rk4-python")
+    ripple_rel = pick(omega_ripple, "omega_ripple", None)
+    if ripple_rel is not None:
+        amp_rel, harmonic = ripple_rel
+        if not (math.isfinite(amp_rel) and 0.0 <= amp_rel < 1.0):
+            raise MechcircError(f"omega_ripple amplitude must be in [0, 1) (relative to Ω), "
+                                f"got {amp_rel!r}")
+        if isinstance(harmonic, bool) or int(harmonic) != harmonic or not harmonic >= 1:
+            raise MechcircError(f"omega_ripple harmonic must be a whole number >= 1, got "
+                                f"{harmonic!r}")
+    if method not in METHODS:
+        raise MechcircError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
     if revolutions < 1:
         raise MechcircError(f"revolutions must be ≥ 1, got {revolutions}")
+    if revolution is not None:
+        if not 1 <= revolution <= revolutions:
+            raise MechcircError(f"revolution must be an integer in 1..{revolutions}, "
+                                f"got {revolution!r}")
+        revolutions = int(revolution)       # later revolutions cannot change this one
     if not spp >= 1:
         raise MechcircError(f"steps_per_period must be ≥ 1, got {spp!r}")
     if npts < 16:
         raise MechcircError(f"points must be ≥ 16, got {npts}")
+    scipy_method = method in SCIPY_METHODS
+    if scipy_method:
+        rtol = 1e-10 if rtol is None else float(rtol)
+        if not 1e-14 <= rtol < 1:
+            raise MechcircError(f"rtol must be in [1e-14, 1), got {rtol!r}")
+    elif rtol is not None:
+        raise MechcircError(f"rtol applies to the scipy methods, not {method}; use "
+                            "steps_per_period")
     if model is None or (omega is not None and model.omega != float(omega)):
         model = motion_model(scene, omega)
-    rate = max_rate(model)
     period = TWO_PI / model.omega
+    ripple = (0.0, 0.0) if ripple_rel is None or ripple_rel[0] == 0.0 else \
+        (float(ripple_rel[0]) * model.omega, float(ripple_rel[1]) * model.omega)
+    kern, backend = kernels_for(method)
+    notes, warn = [], []
+    if backend == "python" and method != "rk4-python":
+        notes.append(NO_NUMBA_NOTE)
+    compile_time = _warm_up(model, kern) if backend == "numba" else 0.0
+    theta_s = math.radians(start_deg)
+    if scipy_method:
+        ts, ys, prev, wall, bad, n_steps, nfev = _run_scipy(
+            model, kern, theta_s, revolutions, npts, method, rtol, progress, ripple)
+        backend = "scipy"
+        return _finish(scene, cfg, model, kern, theta_s, ripple, ts, ys, prev, None, wall, bad,
+                       n_steps, nfev, method, backend, 0, notes + [f"{method}, rtol {rtol:g}"],
+                       warn, revolutions, compile_time)
+    rate = max_rate(model)
     need = period * rate * spp / TWO_PI
     if need > MAX_STEPS_PER_REV:
         raise SolverError(f"the stiffest linearised mode (|λ| = {rate:.4g} 1/s) needs {need:.3g} "
-                          f"RK4 steps per revolution, more than {MAX_STEPS_PER_REV:.0e}",
+                          f"RK4 steps per revolution at steps_per_period={spp:g}, more than "
+                          f"the limit {MAX_STEPS_PER_REV:.0e}: lower the stiffest rigidity "
+                          "(stiffness), raise the inertias, or use method='LSODA'",
                           status="too-stiff")
     per_rev = max(int(math.ceil(need)), 16)
-    kern, backend = kernels_for(method)
-    notes, warn = [], []
     if spp < DEFAULT_STEPS_PER_PERIOD:
         warn.append(f"{spp:g} steps per period of the fastest mode, fewer than the default "
                     f"{DEFAULT_STEPS_PER_PERIOD}: expect a larger error")
-    run = _run(model, kern, math.radians(start_deg), per_rev, revolutions, npts, progress)
+    run = _run(model, kern, theta_s, ripple, per_rev, revolutions, npts, progress)
     ts, ys, prev, wall, bad = run
-    out = _outputs(model, kern, math.radians(start_deg), ts, ys)
+    fine = None
+    if error_estimate:
+        fine = _run(model, kern, theta_s, ripple, 2 * per_rev, revolutions, npts, None)
+    notes.append(f"RK4 step {period / per_rev:.4g} s ({per_rev} steps per revolution, "
+                 f"{spp:g} per period of the fastest mode |λ| = {rate:.5g} 1/s)")
+    n_steps = per_rev * revolutions
+    return _finish(scene, cfg, model, kern, theta_s, ripple, ts, ys, prev, fine, wall, bad,
+                   n_steps,
+                   4 * n_steps + revolutions, method, backend, per_rev, notes, warn,
+                   revolutions, compile_time)
+
+
+def _finish(scene, cfg, model, kern, theta_s, ripple, ts, ys, prev, fine, wall, bad, n_steps,
+            nfev,
+            method, backend, per_rev, notes, warn, revolutions, compile_time):
+    """Outputs, extrema, the checks and the warnings of one run → :class:`SceneMotion`."""
+    out = _outputs(model, kern, theta_s, ripple, ts, ys)
     extrema = {k: (float(v.min()), float(v.max())) for k, v in out.items()}
     periodicity = None
     if prev is not None:
-        pout = _outputs(model, kern, math.radians(start_deg), *prev)
+        pout = _outputs(model, kern, theta_s, ripple, *prev)
         periodicity = _rel_change(extrema, {k: (float(v.min()), float(v.max()))
                                             for k, v in pout.items()})
     est = None
-    if error_estimate:
-        fine = _run(model, kern, math.radians(start_deg), 2 * per_rev, revolutions, npts, None)
-        fout = _outputs(model, kern, math.radians(start_deg), fine[0], fine[1])
+    if fine is not None:
+        fout = _outputs(model, kern, theta_s, ripple, fine[0], fine[1])
         est = _rel_change(extrema, {k: (float(v.min()), float(v.max()))
                                     for k, v in fout.items()})
         bad = bad or fine[4]
-    crank = (math.radians(start_deg) + model.omega * ts) % TWO_PI
+    crank = crank_angle(model.omega, theta_s, ripple, ts)[0] % TWO_PI
     wrap = np.flatnonzero(np.diff(crank) < 0)
     order = np.roll(np.arange(crank.size), -(int(wrap[0]) + 1)) if wrap.size == 1 \
         else np.argsort(crank, kind="stable")
     crank = crank[order]
+    ts, ys = ts[order], ys[order]
     values = {k: v[order] for k, v in out.items()}
+    for k, v in _point_accelerations(model, theta_s, ripple, ts, ys, values).items():
+        values[k] = v
+        extrema[k] = (float(v.min()), float(v.max()))
     aliases = dict(cfg.aliases) if cfg is not None else {}
     for alias, target in aliases.items():
         if target.endswith(".rigid_acceleration"):
             body = target.rsplit(".", 1)[0]
-            values[alias], extrema[alias] = _rigid_acceleration(model, body, crank)
+            values[alias], extrema[alias] = _rigid_acceleration(model, body, crank,
+                                                                ripple, ts)
         elif target in values:
             values[alias] = values[target]
             extrema[alias] = extrema[target]
         else:
             raise MechcircError(f"{scene.source}: alias {alias!r} names {target!r}, which is "
                                 f"not an output (outputs: {', '.join(values)})")
-    notes.append(f"RK4 step {period / per_rev:.4g} s ({per_rev} steps per revolution, "
-                 f"{spp:g} per period of the fastest mode |λ| = {rate:.5g} 1/s)")
     if bad:
         warn.append("a part left the range its kinematics are tabulated over (the values "
                     "there are extrapolated)")
@@ -280,18 +388,92 @@ def simulate_scene(scene: Scene, *, omega: float | None = None,
         warn.append(f"not yet periodic: the extrema changed by {periodicity:.2g} (relative) "
                     f"from the previous revolution > {ACCURACY_GOAL:g}: raise revolutions")
     for w in warn:
-        warnings.warn(f"{scene.source}: {w}", SceneAccuracyWarning, stacklevel=2)
-    n_steps = per_rev * revolutions
+        warnings.warn(f"{scene.source}: {w}", SceneAccuracyWarning, stacklevel=3)
     return SceneMotion(scene.name, scene.source, model.omega, crank, values, extrema,
-                       revolutions, est, periodicity, n_steps, 4 * n_steps + revolutions, wall,
-                       method, backend, per_rev, tuple(notes + [f"warning: {w}" for w in warn]))
+                       revolutions, est, periodicity, n_steps, nfev, wall,
+                       method, backend, per_rev, tuple(notes + [f"warning: {w}" for w in warn]),
+                       ts, ys, compile_time)
 
 
-def _run(model, kern, theta_s, per_rev, revolutions, npts, progress):
-    y = model.rigid_state(theta_s)
+def _run_scipy(model, kern, theta_s, revolutions, npts, method, rtol, progress, ripple):
+    """R revolutions by ``solve_ivp`` on the kernel's right-hand side; same outputs as
+    :func:`_run` plus (steps, evaluations).
+
+    A part whose rigid motion is a line in θ (a crank: q = θ) is integrated in its
+    deviation from it (its twist), so that the tolerance bounds the twist and not the
+    growing crank angle; the others in their own (bounded) coordinates.  Only the
+    lines are subtracted: a tabulated rigid motion is C² only at its nodes, which
+    would make the deviation equation rough for an adaptive step.
+    """
+    from scipy.integrate import solve_ivp
+
+    n = model.n_free
+    a = model.arrays
+    omega = model.omega
+    args = model.kernel_args(theta_s, 1e300, ripple=ripple)
+    naux = model.naux()
+    aux = np.empty(naux)
+    work = np.zeros((9, max(a["FI"].shape[0], a["PRIG"].shape[0])))
+    rhs = kern.rhs
+    lines = [(i, float(a["FF"][r, 0]), float(a["FF"][r, 1]))
+             for i, r in enumerate(a["PRIG"][1:]) if a["FI"][r, 0] == 2]
+    bad = [0.0]
+
+    def rigid(t):
+        """The subtracted motion (lines only) and its derivative."""
+        th = theta_s + omega * t
+        y = np.zeros(2 * n)
+        yd = np.zeros(2 * n)
+        for i, c0, c1 in lines:
+            y[i], y[n + i] = c0 + c1 * th, c1 * omega
+            yd[i] = c1 * omega
+        return y, yd
+
+    def f(t, e):
+        yr, ydr = rigid(t)
+        dy = np.empty(2 * n)
+        rhs(t, e + yr, *args, dy, aux, work)
+        bad[0] = max(bad[0], aux[naux - 1])
+        return dy - ydr
+
+    y0 = model.rigid_state(theta_s, omega + ripple[0])
+    qs = np.full(n, 1e-2)                       # a bounded rotation (a rocker, the sley)
+    qs[[i for i, _, _ in lines]] = 1e-4         # a twist
+    scale = np.concatenate([qs, 0.1 * np.maximum(np.abs(y0[n:]), omega)])
+    period = TWO_PI / omega
+    t_of = lambda r: (r * period) + np.arange(npts) * (period / npts)
+    e = y0 - rigid(0.0)[0]
+    n_steps = nfev = 0
+    out, prev = None, None
+    t0 = time.perf_counter()
+    for r in range(revolutions):
+        keep = r >= revolutions - 2
+        sol = solve_ivp(f, (r * period, (r + 1) * period), e, method=method, rtol=rtol,
+                        atol=rtol * scale, dense_output=keep)
+        if sol.status != 0:
+            raise SolverError(f"solve_ivp({method}) failed in revolution {r + 1}: "
+                              f"{sol.message}", status=sol.status)
+        n_steps += len(sol.t) - 1
+        nfev += sol.nfev
+        if keep:
+            ts = t_of(r)
+            ys = sol.sol(ts).T + np.array([rigid(t)[0] for t in ts])
+            if r == revolutions - 1:
+                out = (ts, np.ascontiguousarray(ys))
+            else:
+                prev = (ts, np.ascontiguousarray(ys))
+        e = sol.y[:, -1].copy()
+        if progress is not None:
+            progress(r + 1, revolutions)
+    wall = time.perf_counter() - t0
+    return out[0], out[1], prev, wall, bad[0] > 0, n_steps, nfev
+
+
+def _run(model, kern, theta_s, ripple, per_rev, revolutions, npts, progress):
+    y = model.rigid_state(theta_s, model.omega + ripple[0])
     n = model.n_free
     limit = 1e3 * model.omega * max(1.0, float(np.max(np.abs(y[n:]))) / model.omega)
-    args = model.kernel_args(theta_s, limit)
+    args = model.kernel_args(theta_s, limit, ripple=ripple)
     period = TWO_PI / model.omega
     h = period / per_rev
     rec = np.empty((npts, y.size)), np.empty(npts)
@@ -320,8 +502,50 @@ def _run(model, kern, theta_s, per_rev, revolutions, npts, progress):
     return rec[1], rec[0], prev, wall, bad
 
 
-def _outputs(model, kern, theta_s, ts, ys):
-    args = model.kernel_args(theta_s, 1e300, outputs=True)
+def _point_accelerations(model, theta_s, ripple, ts, ys, values):
+    """``POINT.acceleration`` (magnitude) and ``POINT.acceleration_x``/``_y`` [m/s²] of every
+    point on a moving part: a = f''(q) q̇² + f'(q) q̈ for its tabulated position f of its
+    part's coordinate q (q̈: the acceleration of the part's coordinate body)."""
+    if not model.point_fn:
+        return {}
+    kern = kernels_for("rk4")[0]
+    a = model.arrays
+    n = model.n_free
+    th, w, dw = crank_angle(model.omega, theta_s, ripple, ts)
+    r0 = a["PRIG"][0]
+    q0 = np.empty((ts.size, 3))
+    kern.eval_many(*_fargs(a, r0), np.ascontiguousarray(th), q0)
+    coord = {0: (q0[:, 0], q0[:, 1] * w)}
+    for i in range(1, n + 1):
+        coord[i] = (ys[:, i - 1], ys[:, n + i - 1])
+    out = {}
+    for p, (fx, fy, i) in model.point_fn.items():
+        q, qd = coord[i]
+        qdd = values[f"{model.coordinate[i]}.acceleration"]
+        comp = []
+        for f in (fx, fy):
+            fv = np.empty((ts.size, 3))
+            kern.eval_many(*_fargs(a, f), np.ascontiguousarray(q), fv)
+            comp.append(fv[:, 2] * qd * qd + fv[:, 1] * qdd)
+        out[f"{p}.acceleration"] = np.hypot(comp[0], comp[1])
+        out[f"{p}.acceleration_x"] = comp[0]
+        out[f"{p}.acceleration_y"] = comp[1]
+    return out
+
+
+def crank_angle(omega, theta_s, ripple, t):
+    """(θ, θ̇, θ̈) of the crank at times ``t``: θ = θs + Ω t + (A/ν) sin(ν t), the speed
+    Ω + A cos(ν t) (``ripple`` = (A, ν); A = 0: constant speed)."""
+    t = np.asarray(t, float)
+    amp, nu = ripple
+    if amp == 0.0:
+        return theta_s + omega * t, np.full_like(t, omega), np.zeros_like(t)
+    return (theta_s + omega * t + amp / nu * np.sin(nu * t), omega + amp * np.cos(nu * t),
+            -amp * nu * np.sin(nu * t))
+
+
+def _outputs(model, kern, theta_s, ripple, ts, ys):
+    args = model.kernel_args(theta_s, 1e300, outputs=True, ripple=ripple)
     out = np.empty((ts.size, model.naux()))
     kern.outputs(np.ascontiguousarray(ts), np.ascontiguousarray(ys), out, *args)
     nb, ne, nm = len(model.bodies), len(model.elements), len(model.moments)
@@ -357,7 +581,7 @@ def _rel_change(a: dict, b: dict) -> float:
     return worst
 
 
-def _rigid_acceleration(model, body, crank):
+def _rigid_acceleration(model, body, crank, ripple=(0.0, 0.0), ts=None):
     """Angular acceleration of ``body`` in the rigid motion at the crank angles, and its
     exact extrema (grid, then Brent-refined on the tables)."""
     from scipy.optimize import minimize_scalar
@@ -380,6 +604,12 @@ def _rigid_acceleration(model, body, crank):
     fast.eval_many(*_fargs(a, r), np.ascontiguousarray(crank), qv)
     fast.eval_many(*_fargs(a, g), np.ascontiguousarray(qv[:, 0]), gv)
     vals = (gv[:, 2] * qv[:, 1] ** 2 + gv[:, 1] * qv[:, 2]) * w2
+    if ripple[0] != 0.0:
+        # a varying crank speed: (g'' q'² + g' q'') θ̇² + g' q' θ̈ at the samples' times;
+        # its extrema are those of the samples (the output grid sets their accuracy)
+        _, w, dw = crank_angle(model.omega, 0.0, ripple, ts)
+        vals = (gv[:, 2] * qv[:, 1] ** 2 + gv[:, 1] * qv[:, 2]) * w ** 2 + gv[:, 1] * qv[:, 1] * dw
+        return vals, (float(vals.min()), float(vals.max()))
     ext = []
     for sgn, i in ((1.0, int(np.argmin(vals))), (-1.0, int(np.argmax(vals)))):
         lo, hi = crank[max(i - 1, 0)], crank[min(i + 1, crank.size - 1)]

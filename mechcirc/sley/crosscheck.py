@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .linear import eigenfrequencies, linearise, to_netlist
+from .linear import eigenfrequencies, linearise, to_circuit, to_netlist
 from .models import SleyParameters
 
 __all__ = ["resonance_check", "ringing_check", "harmonic_check", "ResonanceCheck",
@@ -103,16 +103,14 @@ def resonance_check(params: SleyParameters, theta0: float, *,
     |λ| and Im λ of the state matrix against ω_n = |s| and ω_d of the circuit's
     complex resonances.
     """
-    import mechcirc
-
     modes = eigenfrequencies(params, theta0)
     if damping:
         eigen = tuple(abs(m.eigenvalue) for m in modes)
         eigen_d = tuple(m.omega_d for m in modes)
     else:
         eigen = eigen_d = tuple(m.omega_n for m in modes)
+    circuit = to_circuit(params, theta0, damping=damping)
     text = to_netlist(params, theta0, damping=damping)
-    circuit = mechcirc.parse(text, source=f"<sley {params.label or params.drive}>")
     found, how = circuit_resonances(circuit, 4.0 * max(eigen))
     wn = tuple(w for w, _ in found)
     wd = tuple(w for _, w in found)
@@ -283,7 +281,7 @@ def harmonic_check(params: SleyParameters, theta0: float, omegas) -> HarmonicChe
     try:
         import mechcirc
 
-        circuit = mechcirc.parse(to_netlist(params, theta0, velocity=1.0))
+        circuit = to_circuit(params, theta0, velocity=1.0)
         q_circ = np.abs(circuit.sweep(omegas).Q0)
         how = "netlist sweep Q0"
     except (ImportError, AttributeError):

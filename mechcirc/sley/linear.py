@@ -13,7 +13,7 @@ M ẍ + C ẋ + K x = 0 with (one side)::
 and, both sides, a third coordinate φ5P with I5P + I7 μ², C5 + C7 μ², rod 7
 joining it to the sley like rod 4 (both cranks are at θ0).
 
-This is exactly the mechanical circuit of :func:`to_netlist`: crank inertia
+This is exactly the mechanical circuit of :func:`to_circuit`: crank inertia
 I2P + I4 μ² and the rod C2 ∥ k2 on the crank side, the lever μ (or the sley
 side reflected with η = μ²) and the rod C4 ∥ k4 and inertia I4P on the rocker
 side.  Its resonances (K = 0 with the drive held) are the eigenfrequencies.
@@ -27,9 +27,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from ..circuit import Circuit, Drive, Element, Lever
 from .models import SleyParameters
 
-__all__ = ["LinearModel", "linearise", "eigenfrequencies", "to_netlist", "Mode"]
+__all__ = ["LinearModel", "linearise", "eigenfrequencies", "to_circuit", "to_netlist", "Mode"]
 
 
 @dataclass(frozen=True)
@@ -197,18 +198,18 @@ def max_rate(params: SleyParameters, samples: int = 72) -> float:
     return float(np.max(np.abs(np.linalg.eigvals(_state_matrices(M, C, K)))))
 
 
-def to_netlist(params: SleyParameters, theta0: float, *, lever: bool = False,
-               damping: bool = True, velocity: float | None = None) -> str:
-    """The mechanical-circuit netlist of the linearised sley at ``theta0`` [rad].
+def to_circuit(params: SleyParameters, theta0: float, *, lever: bool = False,
+               damping: bool = True, velocity: float | None = None) -> Circuit:
+    """The mechanical circuit of the linearised sley at ``theta0`` [rad], built as objects.
 
     Mobility analogy, rotational reading (inertia [kg·m²] as ``mass``, torsional
     rigidity [N·m/rad] as ``spring``, torsional damping [kg·m²/s] as ``damper``).
     Node 0 is the frame, node ``shaft`` the driven crank shaft (the ``drive``,
     velocity ω), ``crank`` the crank 2P beyond rod C2 ∥ k2 with inertia
     I2P + I4 μ² to the frame.  The rocker side (rod C4 ∥ k4 to the sley
-    inertia I4P) hangs either behind an ideal ``lever`` of ratio μ(θ0)
-    (``lever=True``, issue 3 syntax) or directly on the crank node with every
-    element reflected through ``eta = μ²`` (default; series-parallel, no lever
+    inertia I4P) hangs either behind an ideal ``lever`` of ratio |μ(θ0)|
+    (``lever=True``) or directly on the crank node with every element
+    reflected through ``eta = μ²`` (default; series-parallel, no lever
     needed).  Both sides adds ``shaft``→``crank5`` (C5 ∥ k5, I5P + I7 μ²) and rod
     7 from crank 5 to the same sley.
 
@@ -226,8 +227,8 @@ def to_netlist(params: SleyParameters, theta0: float, *, lever: bool = False,
 
     Returns
     -------
-    str
-        Netlist text for :func:`mechcirc.parse`.
+    Circuit
+        Named ``sley``, source ``<sley LABEL>`` (the label or the drive).
 
     Raises
     ------
@@ -240,6 +241,57 @@ def to_netlist(params: SleyParameters, theta0: float, *, lever: bool = False,
     branches), which needs nodal analysis; the one-sided one is series-parallel.
     """
     p = params
+    mu = _coupling(p, theta0)
+    mu2 = mu * mu
+    v = p.omega if velocity is None else velocity
+    elements = [Element("spring", "C2", "shaft", "crank", p.C2)]
+    if damping and p.k2 > 0:
+        elements.append(Element("damper", "k2", "shaft", "crank", p.k2))
+    elements.append(Element("mass", "J2", "crank", "0", p.I2P + p.I4 * mu2))
+    levers = []
+    eta = 1.0 if lever else mu2
+
+    def rocker_side(crank: str, rocker: str, c: float, k: float, tag: str):
+        if lever:
+            levers.append(Lever(f"L{tag}", crank, "0", rocker, "0", abs(mu)))
+        else:
+            rocker = crank
+        elements.append(Element("spring", f"C{tag}", rocker, "sley", c, eta))
+        if damping and k > 0:
+            elements.append(Element("damper", f"k{tag}", rocker, "sley", k, eta))
+
+    rocker_side("crank", "rocker", p.C4, p.k4, "4")
+    if p.drive == "both-sides":
+        elements.append(Element("spring", "C5", "shaft", "crank5", p.C5))
+        if damping and p.k5 > 0:
+            elements.append(Element("damper", "k5", "shaft", "crank5", p.k5))
+        elements.append(Element("mass", "J5", "crank5", "0", p.I5P + p.I7 * mu2))
+        rocker_side("crank5", "rocker7", p.C7, p.k7, "7")
+    elements.append(Element("mass", "I4P", "sley", "0", p.I4P, eta))
+    return Circuit(tuple(elements), Drive("V", "shaft", "0", "velocity", float(v)),
+                   tuple(levers), name="sley", source=f"<sley {p.label or p.drive}>")
+
+
+def to_netlist(params: SleyParameters, theta0: float, *, lever: bool = False,
+               damping: bool = True, velocity: float | None = None) -> str:
+    """:func:`to_circuit` as netlist text (:func:`mechcirc.netlist_writer.write`).
+
+    The same parameters and errors as :func:`to_circuit`; the text starts with
+    comments giving θ0, μ(θ0) and how the rocker side is reflected, and
+    ``mechcirc.parse`` of it gives the same circuit.
+    """
+    from ..netlist_writer import write
+
+    circuit = to_circuit(params, theta0, lever=lever, damping=damping, velocity=velocity)
+    mu = _coupling(params, theta0)
+    how = (f"rocker side behind levers of ratio |mu| = {abs(mu)!r}" if lever else
+           f"rocker side reflected with eta = mu^2 = {mu * mu!r}")
+    return write(circuit, (f"Mrázek sley ({params.drive}), linearised at crank angle "
+                           f"{math.degrees(theta0):.6g} deg; mu = {mu!r}", how))
+
+
+def _coupling(p: SleyParameters, theta0: float) -> float:
+    """μ(θ0) [1], refused at a dead centre."""
     mu = float(p.fourbar().transfer(float(theta0))[1])
     if abs(mu) < 1e-9:
         from .models import ParameterError
@@ -248,37 +300,4 @@ def to_netlist(params: SleyParameters, theta0: float, *, lever: bool = False,
             f"at crank angle {math.degrees(theta0):.6g} deg the four-bar is at a dead centre "
             f"(mu = {mu:.3g}): the sley is decoupled from the drive and the circuit would "
             "be singular; choose a crank angle away from the dead centres")
-    mu2 = mu * mu
-    v = p.omega if velocity is None else velocity
-    lines = [f"# Mrázek sley ({p.drive}), linearised at crank angle "
-             f"{math.degrees(theta0):.6g} deg; mu = {mu!r}",
-             f".param mu={mu!r} r={abs(mu)!r}   # mu(theta0) and the lever ratio |mu|",
-             f"drive V shaft 0 velocity={v!r}",
-             f"spring C2 shaft crank {p.C2!r}"]
-    if damping and p.k2 > 0:
-        lines.append(f"damper k2 shaft crank {p.k2!r}")
-    lines.append(f"mass J2 crank 0 {p.I2P + p.I4 * mu2!r}")
-
-    def rocker_side(crank: str, rocker: str, c: float, k: float, tag: str):
-        out = []
-        if lever:
-            out.append(f"lever L{tag} {crank} 0 {rocker} 0 ratio=r")
-            eta = ""
-        else:
-            eta = " eta={mu^2}"
-            rocker = crank
-        out.append(f"spring C{tag} {rocker} sley {c!r}{eta}")
-        if damping and k > 0:
-            out.append(f"damper k{tag} {rocker} sley {k!r}{eta}")
-        return out
-
-    lines += rocker_side("crank", "rocker", p.C4, p.k4, "4")
-    if p.drive == "both-sides":
-        lines.append(f"spring C5 shaft crank5 {p.C5!r}")
-        if damping and p.k5 > 0:
-            lines.append(f"damper k5 shaft crank5 {p.k5!r}")
-        lines.append(f"mass J5 crank5 0 {p.I5P + p.I7 * mu2!r}")
-        lines += rocker_side("crank5", "rocker7", p.C7, p.k7, "7")
-    eta = "" if lever else " eta={mu^2}"
-    lines.append(f"mass I4P sley 0 {p.I4P!r}{eta}")
-    return "\n".join(lines) + "\n"
+    return mu

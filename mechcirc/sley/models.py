@@ -52,7 +52,7 @@ def fourbar_of_lengths(l2P, l3, l4, d, branch):
     return FourBar(l2P, l3, l4, d, branch=branch)
 
 
-__all__ = ["SleyParameters", "ParameterError", "Drive", "DEFAULT_ALPHA_DEG"]
+__all__ = ["SleyParameters", "ParameterError", "Drive", "DEFAULT_ALPHA_DEG", "start_angle"]
 
 Drive = Literal["one-side", "both-sides"]
 
@@ -207,3 +207,23 @@ class SleyParameters:
     def as_dict(self) -> dict:
         """Plain dict of every field (for JSON)."""
         return asdict(self)
+
+
+def start_angle(params: SleyParameters) -> float:
+    """First crank angle θ0 in [0, 2π) with ν(θ0) = 0 (zero rigid sley acceleration) [rad]."""
+    return _start_angle(params.l2P, params.l3, params.l4, params.d, params.branch)
+
+
+@lru_cache(maxsize=64)
+def _start_angle(l2P, l3, l4, d, branch) -> float:
+    import numpy as np
+    from scipy.optimize import brentq
+
+    fb = fourbar_of_lengths(l2P, l3, l4, d, branch)
+    th = np.linspace(0.0, 2.0 * math.pi, 721)
+    nu = fb.evaluate(th).nu
+    idx = np.flatnonzero(np.sign(nu[:-1]) * np.sign(nu[1:]) <= 0)
+    i = int(idx[0])
+    if nu[i] == 0.0:
+        return float(th[i])
+    return float(brentq(lambda t: fb.transfer(t)[2], th[i], th[i + 1], xtol=1e-14))

@@ -34,7 +34,7 @@ def scene_text(params: SleyParameters, *, revolutions: int = 5, title: str | Non
     written even when M0 = 0, so that every preset is this text plus
     :func:`scene_overrides`.
     """
-    from .simulation import start_angle
+    from .models import start_angle
 
     p = params
     fb = p.fourbar()

@@ -1,6 +1,6 @@
 """The clearance (ElastoBacklash) law and an embedded Dormand–Prince 5(4) loop, on plain arrays.
 
-One source, two backends, as :mod:`mechcirc.sley._kernels`: compiled with
+One source, two backends, as :mod:`mechcirc.scene._motion_kernels`: compiled with
 numba's ``@njit(cache=True)`` when numba is importable (the ``fast`` extra),
 ordinary Python otherwise or through :func:`load_python`.  Imported only when a
 transient with clearances runs, so ``import mechcirc`` never imports numba.
@@ -25,7 +25,7 @@ import numpy as np
 
 from .._jit import decorators
 
-HAVE_NUMBA, _jit, _ = decorators(bool(globals().get("_FORCE_PYTHON")))
+HAVE_NUMBA, _jit, _jit_inline = decorators(bool(globals().get("_FORCE_PYTHON")))
 
 B_EPS = 1e-10
 
@@ -73,31 +73,68 @@ def drive_at(t, t0, dt, u):
     return u[k] + f * (u[k + 1] - u[k])
 
 
-@_jit
-def rhs(t, z, A, B, cx, dx, cv, dv, extra, prm, t0, dt, u, dz):
-    """dz = A z + B u(t) + Σ_e extra[:, e] · f_e(cx_e·z + dx_e u, cv_e·z + dv_e u)."""
+def pack_rows(M):
+    """Rows of a matrix as (column index, value) arrays padded to the longest row's nonzeros.
+
+    The right-hand side works on these: the matrices of a network (A, the
+    clearance rows, the force columns) are sparse, and a padded row costs its
+    nonzeros only.  Padding entries have value 0 and column 0.
+    """
+    M = np.atleast_2d(np.asarray(M, dtype=float))
+    if M.size == 0:
+        return np.zeros((M.shape[0], 1), dtype=np.int64), np.zeros((M.shape[0], 1))
+    nz = M != 0.0
+    w = max(1, int(nz.sum(axis=1).max()))
+    # each row's nonzero columns first (in order), then zero entries as padding
+    idx = np.ascontiguousarray(np.argsort(~nz, axis=1, kind="stable")[:, :w], dtype=np.int64)
+    val = np.ascontiguousarray(np.take_along_axis(M, idx, axis=1))
+    return idx, val
+
+
+def kernel_args(A, B, cx, dx, cv, dv, extra, prm):
+    """The matrices of ż = A z + B u + Σ_e extra_e f_e as :func:`dopri_run` takes them."""
+    Ai, Av = pack_rows(A)
+    xi, xv = pack_rows(cx)
+    vi, vv = pack_rows(cv)
+    ei, ev = pack_rows(np.asarray(extra).T)
+    return (Ai, Av, np.ascontiguousarray(B, dtype=float), xi, xv,
+            np.ascontiguousarray(dx, dtype=float), vi, vv,
+            np.ascontiguousarray(dv, dtype=float), ei, ev,
+            np.ascontiguousarray(prm, dtype=float))
+
+
+@_jit_inline
+def rhs(t, z, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, t0, dt, u, dz):
+    """dz = A z + B u(t) + Σ_e extra[:, e] · f_e(cx_e·z + dx_e u, cv_e·z + dv_e u).
+
+    A, cx, cv and the columns of extra as :func:`pack_rows` gives them.
+    """
     ut = drive_at(t, t0, dt, u)
     N = z.shape[0]
+    wa = Ai.shape[1]
     for i in range(N):
         acc = B[i] * ut
-        for j in range(N):
-            acc += A[i, j] * z[j]
+        for j in range(wa):
+            acc += Av[i, j] * z[Ai[i, j]]
         dz[i] = acc
     E = prm.shape[0]
+    wx = xi.shape[1]
+    wv = vi.shape[1]
     for k in range(E):
         e = dx[k] * ut
+        for j in range(wx):
+            e += xv[k, j] * z[xi[k, j]]
         w = dv[k] * ut
-        for j in range(N):
-            e += cx[k, j] * z[j]
-            w += cv[k, j] * z[j]
+        for j in range(wv):
+            w += vv[k, j] * z[vi[k, j]]
         f, fc = elasto_backlash(e, w, prm[k, 0], prm[k, 1], prm[k, 2])
         if f != 0.0:
-            for i in range(N):
-                dz[i] += extra[i, k] * f
+            for j in range(ei.shape[1]):
+                dz[ei[k, j]] += ev[k, j] * f
 
 
-@_jit
-def switch_state(t, z, cx, dx, cv, dv, prm, t0, dt, u, k):
+@_jit_inline
+def switch_state(t, z, xi, xv, dx, vi, vv, dv, prm, t0, dt, u, k):
     """(branch code, switching functions g_gap, g_sep, g_min) of clearance element k.
 
     Codes: 0 in the gap; ±1 contact with the damping part limiting (f_d < f_c);
@@ -106,10 +143,11 @@ def switch_state(t, z, cx, dx, cv, dv, prm, t0, dt, u, k):
     """
     ut = drive_at(t, t0, dt, u)
     e = dx[k] * ut
+    for j in range(xi.shape[1]):
+        e += xv[k, j] * z[xi[k, j]]
     w = dv[k] * ut
-    for j in range(z.shape[0]):
-        e += cx[k, j] * z[j]
-        w += cv[k, j] * z[j]
+    for j in range(vi.shape[1]):
+        w += vv[k, j] * z[vi[k, j]]
     c, d, b = prm[k, 0], prm[k, 1], prm[k, 2]
     half = 0.5 * b
     if abs(b) <= B_EPS:
@@ -149,8 +187,8 @@ _D = np.array([-12715105075 / 11282082432, 0.0, 87487479700 / 32700410799,
 
 
 @_jit
-def dopri_run(z, t0, dt, nout, A, B, cx, dx, cv, dv, extra, prm, u, rtol, atol, hmax,
-              coefA, coefB5, coefB4, coefC, coefD, dense, out, kink_tol=0.0):
+def dopri_run(z, t0, dt, nout, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, u, rtol, atol,
+              hmax, coefA, coefB5, coefB4, coefC, coefD, dense, out, kink_tol=0.0):
     """Integrate from t0 and store z at t0 + k dt (k < nout) in ``out``; returns the step count.
 
     A step is accepted when the embedded error, scaled by atol + rtol |z|, is ≤ 1
@@ -158,7 +196,7 @@ def dopri_run(z, t0, dt, nout, A, B, cx, dx, cv, dv, extra, prm, u, rtol, atol, 
     method's continuous extension) and are limited only by ``hmax``; without it
     they end on every output time, i.e. on every sample of the piecewise-linear
     drive, so its kinks are always at step boundaries.  Negative return: the
-    step size underflowed.
+    step size underflowed.  The matrices come from :func:`kernel_args`.
     """
     N = z.shape[0]
     K = np.zeros((7, N))
@@ -171,7 +209,7 @@ def dopri_run(z, t0, dt, nout, A, B, cx, dx, cv, dv, extra, prm, u, rtol, atol, 
     h = min(hmax, dt)
     steps = 0
     k_out = 1
-    rhs(t, z, A, B, cx, dx, cv, dv, extra, prm, t0, dt, u, K[0])
+    rhs(t, z, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, t0, dt, u, K[0])
     while k_out < nout:
         stop = t_end if dense else t0 + k_out * dt
         last = False
@@ -186,7 +224,8 @@ def dopri_run(z, t0, dt, nout, A, B, cx, dx, cv, dv, extra, prm, u, rtol, atol, 
                 for r in range(s):
                     acc += hh * coefA[s, r] * K[r, i]
                 ytmp[i] = acc
-            rhs(t + coefC[s] * hh, ytmp, A, B, cx, dx, cv, dv, extra, prm, t0, dt, u, K[s])
+            rhs(t + coefC[s] * hh, ytmp, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, t0, dt,
+                u, K[s])
         # ytmp now holds the 5th-order solution (the last stage is at it: FSAL)
         err = 0.0
         for i in range(N):
@@ -205,9 +244,10 @@ def dopri_run(z, t0, dt, nout, A, B, cx, dx, cv, dv, extra, prm, u, rtol, atol, 
         if err <= 1.0 and hh > kink_tol:
             theta = 2.0
             for k in range(prm.shape[0]):
-                c0, ga0, gs0, gm0 = switch_state(t, z, cx, dx, cv, dv, prm, t0, dt, u, k)
-                c1, ga1, gs1, gm1 = switch_state(t + hh, y5, cx, dx, cv, dv, prm, t0, dt,
+                c0, ga0, gs0, gm0 = switch_state(t, z, xi, xv, dx, vi, vv, dv, prm, t0, dt,
                                                  u, k)
+                c1, ga1, gs1, gm1 = switch_state(t + hh, y5, xi, xv, dx, vi, vv, dv, prm, t0,
+                                                 dt, u, k)
                 if c0 != c1:
                     if (c0 == 0) != (c1 == 0):
                         g0, g1 = ga0, ga1
@@ -260,35 +300,79 @@ def dopri_run(z, t0, dt, nout, A, B, cx, dx, cv, dv, extra, prm, u, rtol, atol, 
 
 
 @_jit
-def modal_run(mu, g1, g2, q0, u, cre, cim, out, qmax):
+def modal_run(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout, qlast):
     """Diagonal first-order-hold recurrence q⁺ = μ q + g₁ u + g₂ (u⁺ − u), every mode.
 
     ``mu``, ``g1``, ``g2``, ``q0``: complex (m,) per mode; ``u`` real (nt,);
-    ``out`` real (nt, ·) receives Re q_j in column ``cre[j]`` and Im q_j in
-    column ``cim[j]`` (skipped when negative: a real mode); ``qmax[j]``
-    receives max_k |q_j|.
+    ``out`` real (nt, ncols) receives Re q_j in column ``cre[j]`` and Im q_j in
+    column ``cim[j]`` (negative: a real mode), columns ≥ ncols not stored;
+    ``qmax[j]`` receives max_k |q_j|; ``yout[k]`` receives Σ wout[c] · (column c
+    of step k) over every column, stored or not (a scalar output); ``qlast``
+    (complex (m,)) the state at the last sample, from which a run over the
+    next samples continues.  Real arithmetic on split arrays, so the per-mode
+    update vectorises.
     """
     nt = u.shape[0]
     m = mu.shape[0]
-    q = q0.copy()
+    ncols = out.shape[1]
+    mr = np.empty(m)
+    mi = np.empty(m)
+    ar = np.empty(m)
+    ai = np.empty(m)
+    br = np.empty(m)
+    bi = np.empty(m)
+    qr = np.empty(m)
+    qi = np.empty(m)
+    wr = np.zeros(m)
+    wi = np.zeros(m)
+    q2 = np.zeros(m)
     for j in range(m):
-        qmax[j] = q[j].real * q[j].real + q[j].imag * q[j].imag
-        out[0, cre[j]] = q[j].real
+        mr[j] = mu[j].real
+        mi[j] = mu[j].imag
+        ar[j] = g1[j].real
+        ai[j] = g1[j].imag
+        br[j] = g2[j].real
+        bi[j] = g2[j].imag
+        qr[j] = q0[j].real
+        qi[j] = q0[j].imag
+        wr[j] = wout[cre[j]]
         if cim[j] >= 0:
-            out[0, cim[j]] = q[j].imag
-    for k in range(nt - 1):
-        uk = u[k]
-        du = u[k + 1] - uk
-        for j in range(m):
-            q[j] = mu[j] * q[j] + g1[j] * uk + g2[j] * du
-            a = q[j].real * q[j].real + q[j].imag * q[j].imag
-            if a > qmax[j]:
-                qmax[j] = a
-            out[k + 1, cre[j]] = q[j].real
-            if cim[j] >= 0:
-                out[k + 1, cim[j]] = q[j].imag
+            wi[j] = wout[cim[j]]
+    identity = True
     for j in range(m):
-        qmax[j] = math.sqrt(qmax[j])
+        if cre[j] != j:
+            identity = False
+    nre = min(m, ncols)
+    for k in range(nt):
+        if k > 0:
+            uk = u[k - 1]
+            du = u[k] - uk
+            for j in range(m):
+                xr = mr[j] * qr[j] - mi[j] * qi[j] + ar[j] * uk + br[j] * du
+                xi = mr[j] * qi[j] + mi[j] * qr[j] + ai[j] * uk + bi[j] * du
+                qr[j] = xr
+                qi[j] = xi
+        y = 0.0
+        for j in range(m):
+            a = qr[j] * qr[j] + qi[j] * qi[j]
+            q2[j] = max(q2[j], a)
+            y += wr[j] * qr[j] + wi[j] * qi[j]
+        yout[k] = y
+        if identity:                # column j is Re q_j: a contiguous copy
+            for j in range(nre):
+                out[k, j] = qr[j]
+        else:
+            for j in range(m):
+                c = cre[j]
+                if c < ncols:
+                    out[k, c] = qr[j]
+        for j in range(m):
+            c = cim[j]
+            if c >= 0 and c < ncols:
+                out[k, c] = qi[j]
+    for j in range(m):
+        qmax[j] = math.sqrt(q2[j])
+        qlast[j] = complex(qr[j], qi[j])
 
 
 def load_python():

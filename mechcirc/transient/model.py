@@ -141,12 +141,14 @@ def state_space(circuit: Circuit, *, linearise: bool = False) -> StateSpace:
     M = np.zeros((n, n))
     D = np.zeros((n, n))
     K = np.zeros((n, n))
-    M[:nn, :nn] = system.M[:nn, :nn].toarray()
-    D[:nn, :nn] = system.D[:nn, :nn].toarray()
-    K[:nn, :nn] = system.Ks[:nn, :nn].toarray()
+    # dense first, then sliced: slicing a scipy sparse matrix costs more than
+    # the whole (small) dense copy
+    M[:nn, :nn] = system.M.toarray()[:nn, :nn]
+    D[:nn, :nn] = system.D.toarray()[:nn, :nn]
+    K[:nn, :nn] = system.Ks.toarray()[:nn, :nn]
     G = np.zeros((len(system.levers), n))
     if system.levers:
-        G[:, :nn] = system.C[nn:, :nn].toarray()
+        G[:, :nn] = system.C.toarray()[nn:, :nn]
     index = {nd: i for i, nd in enumerate(nodes)}
     d = circuit.drive
     g = np.zeros(n)

@@ -281,7 +281,7 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
     amp = (d.amplitude if d is not None else 0.0) if amplitude is None else float(amplitude)
     t = _grid(t_end, dt, drive)
     h = t[1] - t[0]
-    ss = state_space(circuit, linearise=linearise)
+    ss = _model(circuit, linearise)
     notes.extend(ss.initial[1])
     u = drive.sample(t, amp)
     z0 = ss.initial[0].copy()
@@ -302,20 +302,32 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
         u_in = u
     interp = _interpolation_error(u, drive)
     has_clear = bool(backlash_elements(circuit)) and not linearise
-    T, nx = None, None
+    T, nx, drive_y, x_ready, v_ready = None, None, None, None, None
     if has_clear:
         Z, method, err = _nonlinear(ss, circuit, z0, t, u_in, rtol)
     else:
-        Z, T, why, nx, dropped = _propagate_modal(ss.A, ss.B, z0, u_in, h, ss.Cx)
-        if Z is None:
+        x_only = velocities is False and not elements
+        dmap = _drive_map(ss)
+        w = None if dmap is None else dmap[0]
+        plans = ss.__dict__.setdefault("_modal_plans", {})
+        Z = None
+        if not elements:                    # node outputs only: block by block
+            x_ready, v_ready, why, dropped, drive_y = _propagate_modal_x(
+                ss.A, ss.B, z0, u_in, h, ss.Cx, w, plans, None if x_only else ss.Cv)
+            if x_ready is not None:
+                Z, T, nx = None, None, None
+        if x_ready is None:
+            Z, T, why, nx, dropped, drive_y = _propagate_modal(
+                ss.A, ss.B, z0, u_in, h, ss.Cx, w, x_only, plans)
+        if Z is None and x_ready is None:
             Z = _propagate(ss.A, ss.B, z0, u_in, h)
             path = f"block propagation (modal path refused: {why})"
         else:
             path = why
         method, err = ("exact (matrix exponential, first-order hold of the drive; "
                        f"{path.split(' (')[0]})"), 0.0
-        if Z is not None and T is not None and dropped > 0 and velocities is False \
-                and not elements:
+        if (x_ready is not None or (Z is not None and T is not None)) and dropped > 0 \
+                and x_only:
             err = dropped           # x formed without the shapes' rounding-level imaginary parts
         elif T is not None:
             nx = None               # v and forces use every column anyway: keep x whole
@@ -324,7 +336,35 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
         notes.append(f"drive interpolated linearly between samples: its error is at most "
                      f"{interp:.3g} (h²/8·max|ü|, from the samples' second differences)")
     return _outputs(ss, circuit, t, Z, u, u_in, h, drive, method, err, interp, notes,
-                    elements, T, velocities, nx)
+                    elements, T, velocities, nx, drive_y, x_ready, v_ready)
+
+
+def _model(circuit: Circuit, linearise: bool) -> StateSpace:
+    """The circuit's state-space model, built on first use and kept on the circuit.
+
+    It depends only on the (frozen) circuit, as the nodal assembly cached on
+    it does; repeated transients of one circuit skip building it.
+    """
+    key = "_transient_model_closed" if linearise else "_transient_model"
+    ss = circuit.__dict__.get(key)
+    if ss is None:
+        ss = state_space(circuit, linearise=linearise)
+        circuit.__dict__[key] = ss          # a cache entry, not a field
+    return ss
+
+
+def _drive_map(ss: StateSpace):
+    """(w, Du, Dud): the drive's output (velocity of a force drive, force of a
+    velocity drive) is w·z + Du·u + Dud·u̇ when the network is linear; None
+    without a drive."""
+    if ss.kind == "velocity":
+        # Q = h·(M a + D v + K x), contracted with h first (vectors only)
+        a, b, c = ss.M.T @ ss.h, ss.D.T @ ss.h, ss.K.T @ ss.h
+        return (a @ (ss.Cv @ ss.A) + b @ ss.Cv + c @ ss.Cx,
+                a @ (ss.Cv @ ss.B) + b @ ss.Dv + c @ ss.Dx, a @ ss.Dv + b @ ss.Ev)
+    if ss.kind == "force":
+        return ss.g @ ss.Cv, ss.g @ ss.Dv, ss.g @ ss.Ev
+    return None
 
 
 def _with_oscillator(ss: StateSpace, z0, omega: float, amp: float):
@@ -442,10 +482,10 @@ MODAL_CHECK_TOL = 1e-12
 REAL_SHAPE_TOL = 1e-11
 
 
-def _propagate_modal(A, B, z0, u, h, Cx=None):
-    """The FOH recurrence in the eigenbasis of A: (Q, T, note, nx, dropped) with Z = Q Tᵀ.
+def _propagate_modal(A, B, z0, u, h, Cx=None, w=None, x_only=False, cache=None):
+    """The FOH recurrence in the eigenbasis of A: (Q, T, note, nx, dropped, y), Z = Q Tᵀ.
 
-    (None, None, note, 0, 0.0) when refused.
+    (None, None, note, 0, 0.0, None) when refused.
 
     A = V Λ V⁻¹ (real A: real modes and conjugate pairs; one of each pair is
     propagated, q⁺ = μ q + g₁ u + g₂ Δu with μ = e^{λh}, g₁ = h φ₁(λh) b,
@@ -461,34 +501,141 @@ def _propagate_modal(A, B, z0, u, h, Cx=None):
     put last; x then needs only the first ``nx`` columns of Q (the dropped
     part of each such shape is below ``REAL_SHAPE_TOL`` of its norm; ``dropped``
     bounds what it contributes to any x: Σ max|Cx T_col| · max_k |Q_k,col|).
+
+    With ``w`` (a row over z), ``y`` is the scalar output w·z at every step,
+    formed inside the recurrence (else None).  With ``x_only`` (and ``Cx``) Q
+    keeps only its first ``nx`` columns: no x needs the others, and w·z is
+    already formed, so a quarter of the memory traffic goes.
+
+    Everything but the start state and the drive (the eigen-decomposition,
+    the per-mode maps, the check, the real columns) depends on A, B, h and
+    Cx only; with ``cache`` (a dict kept with the model) it is made once.
     """
     N = A.shape[0]
     nt = u.size
+    plan = _cached_plan(A, B, h, Cx, cache)
+    if isinstance(plan, str):
+        return None, None, plan, 0, 0.0, None
+    (m, Vinv_k, rot, mu, g1, g2, cre, cim, nx, T, note, late) = plan
+    q0 = (Vinv_k @ np.asarray(z0, complex)) / rot
+    keep_cols = nx if (x_only and Cx is not None) else N
+    Q = np.empty((nt, keep_cols))
+    qmax = np.zeros(m)
+    wout = np.zeros(N) if w is None else np.asarray(w, dtype=float) @ T
+    y = np.empty(nt)
+    _modal_states(mu, g1, g2, q0, np.ascontiguousarray(u, float), cre, cim, Q, qmax, wout, y)
+    dropped = 0.0
+    if late.any():
+        cols = cim[late]
+        dropped = float((np.abs(Cx @ T[:, cols]).max(axis=0) * qmax[late]).sum())
+    return Q, T, note, (nx if Cx is not None else N), dropped, (None if w is None else y)
+
+
+#: Samples per block of the fused x-only modal path: the modal signals of a
+#: block (≤ CHUNK × N doubles) stay in cache between the recurrence and the
+#: product with the mode shapes, and never exist for the whole run.
+CHUNK = 4096
+
+
+def _cached_plan(A, B, h, Cx, cache):
+    key = ("modal", h, Cx is not None, MODAL_COND_MAX, MODAL_CHECK_TOL, REAL_SHAPE_TOL)
+    plan = None if cache is None else cache.get(key)
+    if plan is None:
+        plan = _modal_plan(A, B, h, Cx)
+        if cache is not None:
+            if len(cache) >= 4:             # a few step sizes at most
+                cache.clear()
+            cache[key] = plan
+    return plan
+
+
+def _propagate_modal_x(A, B, z0, u, h, Cx, w=None, cache=None, Cv=None):
+    """x (and v with ``Cv``) by the modal path in blocks of samples: (X, V, note, dropped, y).
+
+    X = Cx z and V = Cv z (None without ``Cv``) without the drive's direct
+    terms; y = w·z (None without w).  Without ``Cv`` x is formed from the
+    first ``nx`` modal columns only and ``dropped`` is as in
+    :func:`_propagate_modal`; with it every column is used (v needs them all)
+    and ``dropped`` is 0.  (None, None, reason, 0, None) when the modal path
+    refuses (or numba is not installed: the block loop is compiled only), and
+    the caller takes the general path.
+
+    The recurrence fills a block of modal signals, one product per output maps
+    it, and the next block continues from the block's last state (blocks
+    share their boundary sample, computed twice, identically).
+    """
+    from . import _kernels as kern
+
+    if not kern.HAVE_NUMBA or not Cx.shape[0]:
+        return None, None, "no compiled block loop", 0.0, None
+    plan = _cached_plan(A, B, h, Cx, cache)
+    if isinstance(plan, str):
+        return None, None, plan, 0.0, None
+    (m, Vinv_k, rot, mu, g1, g2, cre, cim, nx, T, note, late) = plan
+    N = A.shape[0]
+    ncols = nx if Cv is None else N
+    q0 = (Vinv_k @ np.asarray(z0, complex)) / rot
+    nt = u.size
+    u = np.ascontiguousarray(u, float)
+    Sx = np.ascontiguousarray((Cx @ T[:, :ncols]).T)
+    Sv = None if Cv is None else np.ascontiguousarray((Cv @ T).T)
+    X = np.empty((nt, Cx.shape[0]))
+    V = None if Cv is None else np.empty((nt, Cv.shape[0]))
+    y = np.empty(nt)
+    wout = np.zeros(N) if w is None else np.asarray(w, dtype=float) @ T
+    buf = np.empty((min(CHUNK, nt - 1) + 1, ncols)) if nt > 1 else np.empty((1, ncols))
+    qmax = np.zeros(m)
+    qm = np.empty(m)
+    q = np.asarray(q0, complex).copy()
+    qlast = np.empty(m, complex)
+    a = 0
+    while True:
+        b = min(nt - 1, a + CHUNK)
+        n = b - a + 1
+        kern.modal_run(mu, g1, g2, q, u[a:b + 1], cre, cim, buf[:n], qm, wout, y[a:b + 1],
+                       qlast)
+        np.matmul(buf[:n], Sx, out=X[a:b + 1])
+        if V is not None:
+            np.matmul(buf[:n], Sv, out=V[a:b + 1])
+        np.maximum(qmax, qm, out=qmax)
+        q, qlast = qlast, q
+        if b >= nt - 1:
+            break
+        a = b
+    dropped = 0.0
+    if late.any() and Cv is None:
+        cols = cim[late]
+        dropped = float((np.abs(Cx @ T[:, cols]).max(axis=0) * qmax[late]).sum())
+    return X, V, note, dropped, (None if w is None else y)
+
+
+def _modal_plan(A, B, h, Cx):
+    """What :func:`_propagate_modal` needs besides z0 and u, or the reason it refuses (a str)."""
+    N = A.shape[0]
     if N == 0:
-        return None, None, "no states", 0, 0.0
+        return "no states"
     try:
         lam, V = la.eig(A)
     except (la.LinAlgError, ValueError):
-        return None, None, "eigen-decomposition failed", 0, 0.0
+        return "eigen-decomposition failed"
     real = lam.imag == 0.0
     pos = lam.imag > 0.0
     if int(real.sum()) + 2 * int(pos.sum()) != N or not np.all(np.isfinite(lam)):
-        return None, None, "eigenvalues not in conjugate pairs", 0, 0.0
+        return "eigenvalues not in conjugate pairs"
     try:
         with warnings.catch_warnings():         # ill-conditioning is judged just below
             warnings.simplefilter("ignore", la.LinAlgWarning)
             Vinv = la.inv(V)
     except (la.LinAlgError, ValueError):
-        return None, None, "eigenvector matrix singular", 0, 0.0
+        return "eigenvector matrix singular"
     cond = float(np.abs(V).sum(axis=0).max() * np.abs(Vinv).sum(axis=0).max())   # 1-norm
     if not (cond <= MODAL_COND_MAX):
-        return None, None, f"eigenvector matrix condition number (1-norm) {cond:.1e} > {MODAL_COND_MAX:.0e}", 0, 0.0
+        return f"eigenvector matrix condition number (1-norm) {cond:.1e} > {MODAL_COND_MAX:.0e}"
     keep = np.flatnonzero(real | pos)
     lam_k = lam[keep]
     Vk = V[:, keep]
-    rhs = np.column_stack([B.astype(complex), np.asarray(z0, complex)])
-    W = (Vinv @ rhs)[keep]
-    b, q0 = W[:, 0], W[:, 1]
+    Vinv_k = Vinv[keep]
+    b = Vinv_k @ B.astype(complex)
     # φ-functions of every mode from one 3×3 exponential each (batched).
     m = lam_k.size
     small = np.zeros((m, 3, 3), complex)
@@ -509,11 +656,12 @@ def _propagate_modal(A, B, z0, u, h, Cx=None):
     if np.abs(B).max() > 0:
         dev = max(dev, float(max(np.abs(g1_m - G1).max(), np.abs(g2_m - G2).max())) / gscale)
     if not (dev <= MODAL_CHECK_TOL):
-        return None, None, (f"modal one-step map differs from the exponential's by {dev:.1e} "
-                            f"(> {MODAL_CHECK_TOL:.0e}; eigenvector condition {cond:.1e})"), 0, 0.0
+        return (f"modal one-step map differs from the exponential's by {dev:.1e} "
+                f"(> {MODAL_CHECK_TOL:.0e}; eigenvector condition {cond:.1e})")
     # Real columns: Re q_j for every kept mode, Im q_j for the complex ones.
     is_c = ~real[keep]
     real_shape = np.zeros(m, bool)
+    rot = np.ones(m, complex)
     if Cx is not None and Cx.shape[0]:
         phi = Cx @ Vk
         rot = np.exp(-0.5j * np.angle((phi * phi).sum(axis=0)))
@@ -521,7 +669,7 @@ def _propagate_modal(A, B, z0, u, h, Cx=None):
         shape_norm = np.abs(phi).max(axis=0)
         real_shape = is_c & (np.abs((phi * rot).imag).max(axis=0) <= REAL_SHAPE_TOL * shape_norm)
         rot[~real_shape] = 1.0
-        Vk, g1, g2, q0 = Vk * rot, g1 / rot, g2 / rot, q0 / rot     # z = v q unchanged
+        Vk, g1, g2 = Vk * rot, g1 / rot, g2 / rot     # z = v q unchanged (q0 / rot)
     cre = np.arange(m)
     cim = np.full(m, -1)
     late = is_c & real_shape
@@ -533,41 +681,80 @@ def _propagate_modal(A, B, z0, u, h, Cx=None):
     T[:, cre[~is_c]] = Vk[:, ~is_c].real
     T[:, cre[is_c]] = 2 * Vk[:, is_c].real
     T[:, cim[is_c]] = -2 * Vk[:, is_c].imag
-    Q = np.empty((nt, N))
-    qmax = np.zeros(m)
-    _modal_states(mu, g1, g2, q0, np.ascontiguousarray(u, float), cre, cim, Q, qmax)
     note = f"modal (eigenvector condition {cond:.1e}, one-step map checked to {dev:.1e}"
     if late.any():
         note += f"; {int(late.sum())} of {int(is_c.sum())} oscillating modes with real shapes"
-    dropped = 0.0
-    if late.any():
-        cols = cim[late]
-        dropped = float((np.abs(Cx @ T[:, cols]).max(axis=0) * qmax[late]).sum())
-    return Q, T, note + ")", (nx if Cx is not None else N), dropped
+    return (m, Vinv_k, rot, mu, g1, g2, cre, cim, nx, T, note + ")", late)
 
 
-def _modal_states(mu, g1, g2, q0, u, cre, cim, out, qmax):
+def _modal_states(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout):
     from . import _kernels as kern
 
     if kern.HAVE_NUMBA:
-        kern.modal_run(mu, g1, g2, q0, u, cre, cim, out, qmax)
+        kern.modal_run(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout,
+                       np.empty(mu.size, complex))
         return
     # numpy/scipy fallback: one first-order IIR filter per mode along time.
     from scipy.signal import lfilter
 
     x = np.empty(u.size, complex)
     du = np.diff(u)
+    ncols = out.shape[1]
+    yout[:] = 0.0
     for j in range(mu.size):
         x[0] = q0[j]
         x[1:] = g1[j] * u[:-1] + g2[j] * du
         y = lfilter([1.0], [1.0, -mu[j]], x)
         qmax[j] = np.abs(y).max()
-        out[:, cre[j]] = y.real
-        if cim[j] >= 0:
-            out[:, cim[j]] = y.imag
+        for col, part in ((cre[j], y.real), (cim[j], y.imag)):
+            if col < 0:
+                continue
+            if col < ncols:
+                out[:, col] = part
+            if wout[col] != 0.0:
+                yout += wout[col] * part
 
 
 def _nonlinear(ss: StateSpace, circuit, z0, t, u, rtol):
+    from . import _kernels as kern
+
+    N = ss.size
+    h = t[1] - t[0]
+    u = np.ascontiguousarray(u, dtype=float)
+    cached = ss.__dict__.get("_clearance_setup")
+    if cached is None:
+        cached = ss.__dict__["_clearance_setup"] = _clearance_setup(ss, circuit)
+    mats, w_max = cached
+    # Steps may run across output times when the drive has no kinks there (it
+    # is constant; a harmonic drive is generated by states), up to 1 rad of the
+    # fastest mode with every contact closed, so no contact can be stepped over.
+    dense = bool(np.all(u == u[0]))
+    hmax = min(1.0 / w_max, t[-1]) if w_max > 0 else t[-1]
+
+    def run(tol):
+        out = np.empty((t.size, N))
+        z = z0.astype(float).copy()
+        scale = max(np.abs(z0).max(), 1e-300)
+        atol = tol * scale if np.abs(z0).max() > 0 else tol
+        steps = kern.dopri_run(z, 0.0, h, t.size, *mats, u, tol, atol, hmax,
+                               kern._A, kern._B5, kern._B4, kern._C, kern._D, dense, out,
+                               1e-6 * hmax)
+        if steps < 0:
+            raise MechcircError("the clearance integrator's step fell below 1e-14 s "
+                                "(the network is too stiff for it)")
+        return out
+
+    Z = run(rtol)
+    # Error estimate: the same run at a 10× looser tolerance; the difference is
+    # (about) that run's error, so it over-estimates the error of the one returned.
+    Z2 = run(rtol * 10)
+    err = float(np.abs((Z - Z2) @ ss.Cx.T).max())
+    backend = "numba" if kern.HAVE_NUMBA else "Python"
+    return Z, f"Dormand-Prince 5(4), rtol {rtol:g} ({backend}); clearances in the RHS", err
+
+
+def _clearance_setup(ss: StateSpace, circuit):
+    """(kernel matrices, largest |eigenvalue| with every contact closed) for :func:`_nonlinear`."""
     from . import _kernels as kern
 
     clear = backlash_elements(circuit)
@@ -589,51 +776,26 @@ def _nonlinear(ss: StateSpace, circuit, z0, t, u, rtol):
         cv[k], dv[k] = ge @ ss.Cv, ge @ ss.Dv
         damping = comp.value * comp.eta if comp is not None else e.damping * e.eta
         prm[k] = (e.value * e.eta, damping, e.backlash)
-    h = t[1] - t[0]
-    args = (np.ascontiguousarray(ss.A), np.ascontiguousarray(ss.B), cx, dx, cv, dv,
-            np.ascontiguousarray(ss.extra), prm, np.ascontiguousarray(u))
-
-    # Steps may run across output times when the drive has no kinks there (it
-    # is constant; a harmonic drive is generated by states), up to 1 rad of the
-    # fastest mode with every contact closed, so no contact can be stepped over.
-    dense = bool(np.all(u == u[0]))
+    mats = kern.kernel_args(ss.A, ss.B, cx, dx, cv, dv, ss.extra, prm)
     # A with every contact closed: A + Σ_e extra_e ⊗ (c_e cx_e + d_e cv_e).
     closed = ss.A + ss.extra @ (prm[:, :1] * cx + prm[:, 1:2] * cv)
     w_max = float(np.abs(np.linalg.eigvals(closed)).max()) if N else 0.0
-    hmax = min(1.0 / w_max, t[-1]) if w_max > 0 else t[-1]
-
-    def run(tol):
-        out = np.empty((t.size, N))
-        z = z0.astype(float).copy()
-        scale = max(np.abs(z0).max(), 1e-300)
-        atol = tol * scale if np.abs(z0).max() > 0 else tol
-        steps = kern.dopri_run(z, 0.0, h, t.size, *args[:8], args[8], tol, atol, hmax,
-                               kern._A, kern._B5, kern._B4, kern._C, kern._D, dense, out,
-                               1e-6 * hmax)
-        if steps < 0:
-            raise MechcircError("the clearance integrator's step fell below 1e-14 s "
-                                "(the network is too stiff for it)")
-        return out
-
-    Z = run(rtol)
-    # Error estimate: the same run at a 10× looser tolerance; the difference is
-    # (about) that run's error, so it over-estimates the error of the one returned.
-    Z2 = run(rtol * 10)
-    err = float(np.abs((Z - Z2) @ ss.Cx.T).max())
-    backend = "numba" if kern.HAVE_NUMBA else "Python"
-    return Z, f"Dormand-Prince 5(4), rtol {rtol:g} ({backend}); clearances in the RHS", err
+    return mats, w_max
 
 
 def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes, want=True,
-             T=None, velocities=True, nx=None) -> TransientResult:
+             T=None, velocities=True, nx=None, drive_y=None, x_ready=None,
+             v_ready=None) -> TransientResult:
     """Outputs from the states: z = Z[k] (or modal coordinates, z = T Z[k]).
 
     Every output is affine in z, so each is one product of Z with the output
     map (C T)ᵀ (BLAS-3 for node outputs, a vector for the drive's); terms of
     the drive that vanish are skipped.
     """
-    def affine(C, Du=None, Dud=None, cols=None):   # C z + Du u + Dud u̇ at every sample
-        if T is None:
+    def affine(C, Du=None, Dud=None, cols=None, Cz=None):   # C z + Du u + Dud u̇ at every sample
+        if Cz is not None:              # C z already formed (in the recurrence): used in place
+            out = Cz
+        elif T is None:
             out = Z @ C.T
         elif cols is None:
             out = Z @ (C @ T).T
@@ -647,8 +809,8 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes,
     udot = np.gradient(u, h) if u.size > 1 else np.zeros_like(u)
     clear = {e.name: (e, comp) for e, comp in backlash_elements(circuit)} if ss.extra is not None else {}
     velocities = velocities or bool(want) or bool(clear)
-    X = affine(ss.Cx, ss.Dx, cols=nx)
-    V = affine(ss.Cv, ss.Dv, ss.Ev) if velocities else None
+    X = affine(ss.Cx, ss.Dx, cols=nx, Cz=x_ready)
+    V = affine(ss.Cv, ss.Dv, ss.Ev, Cz=v_ready) if velocities else None
     comp_of = {comp.name: e.name for e, comp in clear.values() if comp is not None}
     index = {n: i for i, n in enumerate(ss.nodes)}
     def diff(Y, e):
@@ -709,8 +871,7 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes,
         if clear:
             Q = Acc @ a + V @ b + X @ c
         else:                   # one vector: h·(M a + D v + K x) is affine in z
-            Q = affine(a @ (ss.Cv @ ss.A) + b @ ss.Cv + c @ ss.Cx,
-                       a @ (ss.Cv @ ss.B) + b @ ss.Dv + c @ ss.Dx, a @ ss.Dv + b @ ss.Ev)
+            Q = affine(*_drive_map(ss), Cz=drive_y)
         for name, (e, comp) in clear.items():
             ge = np.zeros(len(ss.nodes))
             if e.n1 in index:
@@ -720,11 +881,10 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes,
             Q = Q + law_cache[name][0] * (ge @ ss.h)
         drive_force = Q
     elif ss.kind == "force":
-        drive_velocity = affine(ss.g @ ss.Cv, ss.g @ ss.Dv, ss.g @ ss.Ev)
+        drive_velocity = affine(*_drive_map(ss), Cz=drive_y)
     if ss.Ev.any() and drive.kind not in ("rest", "impulse"):
         notes.append("some nodes carry neither mass nor damping: their velocities use the "
                      "drive's derivative estimated from the samples")
-    scale = float(np.abs(X).max()) if X.size else 0.0
     err_total = err
     return TransientResult(time=t, nodes=ss.nodes, x=X, v=V, elements=tuple(names), force=force,
                            dv=dvm, drive_kind=ss.kind,

@@ -258,3 +258,20 @@ def test_unknown_key_in_crank_is_located():
         parse_linkage(text, "fnf.toml")
     assert text.splitlines()[info.value.line - 1].startswith("omgea")
     assert info.value.col == 1
+
+
+def test_unknown_key_in_ground_is_located():
+    # [ground] is declared (kinematics.linkage.TABLES): a typo there is refused, not ignored
+    text = FNF.read_text().replace("[ground]\n", "[ground]\npivot = \"A\"\n", 1)
+    assert text != FNF.read_text()
+    with pytest.raises(NetlistError, match=r"unknown key 'pivot' in \[ground\]") as info:
+        parse_linkage(text, "fnf.toml")
+    assert text.splitlines()[info.value.line - 1].startswith("pivot")
+    assert info.value.expected == "points"
+
+
+def test_a_scene_table_in_a_linkage_file_is_located_at_its_header():
+    text = FNF.read_text() + "\n[drive]\nlink = \"crank\"\n"
+    with pytest.raises(NetlistError, match="unknown top-level key 'drive'") as info:
+        parse_linkage(text, "fnf.toml")
+    assert text.splitlines()[info.value.line - 1] == "[drive]"

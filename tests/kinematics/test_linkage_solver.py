@@ -14,9 +14,16 @@ import pytest
 from scipy.optimize import fsolve
 
 from mechcirc.errors import GeometryError
-from mechcirc.kinematics import FourBar, load_linkage, parse_linkage
+from mechcirc.kinematics import FourBar, linkage_solver, load_linkage, parse_linkage
 
 ROOT = Path(__file__).resolve().parents[2]
+
+
+@pytest.fixture(params=["compiled", "numpy"])
+def backend(request, monkeypatch):
+    """Newton as one compiled loop (numba; plain Python without it) or batched numpy."""
+    monkeypatch.setattr(linkage_solver, "USE_COMPILED", request.param == "compiled")
+    return request.param
 
 TEMPLATE = """
 [points]
@@ -49,7 +56,7 @@ def fourbar_linkage(a, b, c, d, branch=1, theta0=0.0, omega=100.0):
                                          ((20.0, 70.0, 60.0, 80.0), 1),
                                          ((60.0, 90.0, 80.0, 30.0), 1)])   # double-crank
 @pytest.mark.parametrize("method", ["dyads", "newton"])
-def test_fourbar_against_the_closed_form(dims, branch, method):
+def test_fourbar_against_the_closed_form(dims, branch, method, backend):
     a, b, c, d = dims
     omega = 100.0
     lk, fb = fourbar_linkage(a, b, c, d, branch, theta0=0.4, omega=omega)
@@ -70,7 +77,7 @@ def test_fourbar_against_the_closed_form(dims, branch, method):
         np.testing.assert_allclose(got, want, rtol=0, atol=1e-13 * np.max(np.abs(want)))
 
 
-def test_dyads_and_newton_agree_on_a_six_bar_of_two_dyads():
+def test_dyads_and_newton_agree_on_a_six_bar_of_two_dyads(backend):
     text = (ROOT / "tests" / "kinematics" / "test_linkage.py").read_text()
     block = text.split('def test_structure_of_a_six_bar_of_two_dyads():\n    text = """', 1)[1]
     lk = parse_linkage(block.split('"""', 1)[0])
@@ -81,7 +88,7 @@ def test_dyads_and_newton_agree_on_a_six_bar_of_two_dyads():
         np.testing.assert_allclose(x, y, rtol=0, atol=1e-13 * np.max(np.abs(y)))  # 2e-15 achieved
 
 
-def test_six_bar_against_fsolve_and_finite_differences():
+def test_six_bar_against_fsolve_and_finite_differences(backend):
     lk = load_linkage(ROOT / "examples" / "fnf_sixbar.toml")
     assert lk.solver == "newton"
     th = np.radians(np.arange(0.0, 360.0, 0.25))
@@ -102,7 +109,7 @@ def test_six_bar_against_fsolve_and_finite_differences():
     np.testing.assert_allclose(m.qddot[2:-2], fd_a, rtol=0, atol=3e-9 * np.max(np.abs(m.qddot)))
 
 
-def test_targets_far_apart_still_continue_along_the_branch():
+def test_targets_far_apart_still_continue_along_the_branch(backend):
     lk = load_linkage(ROOT / "examples" / "fnf_sixbar.toml")
     dense = lk.motion(np.radians(np.arange(0.0, 300.0, 1.0)))
     sparse = lk.motion(np.radians([299.0, 100.0, 7.0]))
@@ -122,7 +129,7 @@ def test_lock_is_located_by_the_dyad_path():
     assert got == pytest.approx(math.degrees(hi - th0), abs=1e-4)   # 6 digits printed
 
 
-def test_motion_pickles_and_states_match():
+def test_motion_pickles_and_states_match(backend):
     lk = load_linkage(ROOT / "examples" / "fnf_sixbar.toml")
     m = lk.motion(np.radians([10.0, 20.0]))
     m2 = pickle.loads(pickle.dumps(m))
@@ -132,7 +139,7 @@ def test_motion_pickles_and_states_match():
         np.testing.assert_allclose(x, m.points[1, m.point_names.index(p)], atol=1e-12)
 
 
-def test_lock_is_located_by_the_newton_path():
+def test_lock_is_located_by_the_newton_path(backend):
     fb = FourBar(30.0, 10.0, 30.0, 25.0)
     lo, hi = fb.crank_range()
     th0 = 0.5 * (lo + hi)
@@ -142,3 +149,26 @@ def test_lock_is_located_by_the_newton_path():
     import re
     got = float(re.search(r"θ = ([\d.]+)°", str(info.value)).group(1))
     assert got == pytest.approx(math.degrees(hi - th0), abs=1e-3)
+
+
+def test_states_fill_their_dicts_on_access_and_pickle_as_plain_data():
+    lk = load_linkage(ROOT / "examples" / "fnf_sixbar.toml")
+    th = np.radians([10.0, 20.0, 30.0])
+    states, m = lk.solve(th), lk.motion(th)
+    s1 = states[1]
+    data = pickle.dumps(s1)
+    assert b"_rows" not in data                 # not the rows of the other positions
+    back = pickle.loads(data)
+    ref = m.state(1)
+    for s in (s1, back):
+        assert set(s.points) == set(lk.pose)
+        for name in ("points", "velocities", "accelerations"):
+            for p, x in getattr(ref, name).items():
+                np.testing.assert_array_equal(getattr(s, name)[p], x)
+        assert s.angular_velocities == ref.angular_velocities
+        for c, d in ref.contributions.items():
+            for p, x in d.items():
+                np.testing.assert_array_equal(s.contributions[c][p], x)
+    assert "velocities=" in repr(states[2])
+    with pytest.raises(AttributeError):
+        s1.no_such_field

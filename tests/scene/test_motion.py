@@ -102,7 +102,8 @@ def _compare(drive, variant, tol=1e-6):
 @pytest.mark.parametrize("drive,variant", [("one-side", 3), ("one-side", 6),
                                            ("both-sides", 2), ("both-sides", 7)])
 def test_sley_scene_reproduces_sley(drive, variant):
-    """The shipped scene + the variant's overrides = the hand-written sley model (eqs. 4, 9)."""
+    """The shipped scene (variant 3) + the variant's overrides = the preset layer's scene of
+    the variant's parameters (eqs. 4 and 9 themselves: tests/sley/test_simulation_reference.py)."""
     got, ref = _compare(drive, variant)
     assert got.steps_per_revolution * got.revolution == ref.n_steps
 
@@ -237,7 +238,7 @@ def test_crosscheck_ringing_matches_circuit(path, deg):
     """
     from mechcirc.scene.crosscheck import crosscheck_scene
 
-    c = crosscheck_scene(load_scene(path), math.radians(deg))
+    c = crosscheck_scene(load_scene(path), math.radians(deg), forced=False)
     assert len(c.resonances) >= 2
     for r in c.resonances:
         assert r["rel_error"] <= 1e-3, r
@@ -259,11 +260,16 @@ def test_cli_simulate_and_crosscheck_scene_json(capsys):
                  "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert {"omega", "ringing_omega", "rel_error"} <= set(doc["resonances"][0])
+    assert len(doc["forced"]) == 5           # 3 resonances: 0.5, 0.9 x the lowest, 2 between, 1.5 x
+    for f in doc["forced"]:
+        assert {"omega", "Q0_circuit", "Q0_time", "rel_error"} <= set(f)
+        assert f["rel_error"] <= 1e-5, f
     assert main(["simulate", "examples/mrazek_one_side.toml", "--set", "nope=1"]) == 2
 
 
-def test_cli_via_scene_matches_preset(capsys):
-    """`simulate --drive D --variant V --via-scene` = the sley preset, same output names."""
+def test_cli_via_scene_is_an_alias_of_the_preset(capsys):
+    """`simulate --drive D --variant V --via-scene` (kept for old scripts; the presets are
+    scenes now) = the sley preset, with the paper's and the scene's output names."""
     import json
 
     from mechcirc.cli import main
@@ -281,6 +287,8 @@ def test_cli_via_scene_matches_preset(capsys):
         scale = max(abs(lo), abs(hi))
         assert abs(doc["extrema"][k][0] - lo) <= 1e-6 * scale, k
         assert abs(doc["extrema"][k][1] - hi) <= 1e-6 * scale, k
+    for k in ("crank.acceleration", "sley.acceleration", "C2.force", "C4.force"):
+        assert len(doc["extrema"][k]) == 2
 
 
 def test_plot_motion_draws_the_named_outputs():

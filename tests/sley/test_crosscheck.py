@@ -31,7 +31,7 @@ def test_eigenfrequencies_closed_form(theta0):
 def test_circuit_resonances_equal_eigenfrequencies(drive, damping, theta0):
     chk = resonance_check(preset(drive, 3), theta0, damping=damping)
     assert len(chk.circuit) == (2 if drive == "one-side" else 3)
-    assert chk.rel_error <= 1e-9, (chk.eigen, chk.circuit)
+    assert chk.rel_error <= 1e-13, (chk.eigen, chk.circuit)   # achieved ≤ 1.3e-15
 
 
 def test_lever_netlist_same_resonances():
@@ -49,10 +49,10 @@ def test_lever_netlist_same_resonances():
 def test_ringing_after_beat_up(drive):
     # no clearance: the pulse response is then exactly the difference of two runs
     chk = ringing_check(preset(drive, 1, M0=500.0))
-    assert chk.rel_error < 0.02, chk
+    assert chk.rel_error < 0.006, chk      # achieved 1.9e-3 / 3.3e-3 (one / both sides)
 
 
 def test_harmonic_forcing_reproduces_Q0():
     chk = harmonic_check(preset("one-side", 3), 1.0, [150.0, 377.0, 2000.0])
     assert chk.how == "netlist sweep Q0"
-    assert chk.rel_error < 0.01, chk
+    assert chk.rel_error < 3e-6, chk       # achieved 9.0e-7

@@ -9,10 +9,10 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import _sley_reference as ref
+from mechcirc.scene import _motion_kernels
 from mechcirc.sley import PAPER, preset, simulate, simulate_batch
-from mechcirc.sley import _kernels
 
-HAVE_NUMBA = _kernels.HAVE_NUMBA
+HAVE_NUMBA = _motion_kernels.HAVE_NUMBA
 
 
 def rel_err(a, b, keys=("eps2P", "eps4P", "M2V")):
@@ -72,19 +72,47 @@ def test_against_independent_eq4(variant):
             assert abs(got.extrema[k][1] - hi) <= tol * scale, (method, k)
 
 
+def _scene_rhs(p, theta0):
+    """The preset's scene right-hand side as f(t, y_abs) -> (accelerations, aux), with
+    y_abs in the paper's absolute angles [φ2P, ω2P, (φ5P, ω5P,) φ4P, ω4P]."""
+    from mechcirc.sley.simulation import _model
+
+    _, model = _model(p, 1024)
+    kp = _motion_kernels.load_python()
+    args = model.kernel_args(theta0, 1e300, outputs=True)
+    coord = list(model.coordinate[1:])
+    n = len(coord)
+    phi4_pose = p.fourbar().transfer(0.0)[0]
+    names = ("crank", "crank5", "sley") if n == 3 else ("crank", "sley")
+    aux = np.empty(model.naux())
+    work = np.zeros((9, max(args[1].shape[0], args[10].shape[0])))
+
+    def f(t, y_abs):
+        y = np.empty(2 * n)
+        for k, name in enumerate(names):
+            i = coord.index(name)
+            y[i] = y_abs[2 * k] - (phi4_pose if name == "sley" else 0.0)
+            y[n + i] = y_abs[2 * k + 1]
+        dy = np.empty(2 * n)
+        kp.rhs(t, y, *args, dy, aux, work)
+        acc = [dy[n + coord.index(name)] for name in names]
+        return acc, aux.copy()
+    return f, model
+
+
 def test_rhs_matches_independent_eq4():
+    """The scene's Lagrange II right-hand side of the one-side preset is eq. (4)."""
     from mechcirc.sley import simulation as S
 
-    kp = _kernels.load_python()
     rng = np.random.default_rng(5)
     p = preset("one-side", 3, clearance=0.002, alpha=math.radians(40))  # wide window: many samples in it
-    theta0, phiP = S.start_angle(p), p.fourbar().dead_centres()[0].theta
-    tab, offset = S._table(p, 1024)
-    pv = S._param_vector(p, theta0, phiP)
+    theta0 = S.start_angle(p)
     d = dict(I2P=p.I2P, I4=p.I4, I4P=p.I4P, C2=p.C2, C4=p.C4, k2=p.k2, k4=p.k4,
              omega=p.omega, clearance=p.clearance, M0=p.M0, theta0=theta0)
     f = ref.eq4_rhs(d, ref.front_dead_centre(), p.alpha)
-    dy, aux = np.empty(4), np.empty(6)
+    g, model = _scene_rhs(p, theta0)
+    nb, c2 = len(model.bodies), model.elements.index("C2")
+    k_m4 = nb + 2 * len(model.elements) + 1 + model.moments.index("M4")
     hits_window = 0
     for _ in range(300):
         t = rng.uniform(0, 0.07)
@@ -93,14 +121,12 @@ def test_rhs_matches_independent_eq4():
         phi4 = ref.rocker(phi2p)[0]
         y_abs = np.array([phi2p, p.omega * (1 + rng.normal(0, 0.05)),
                           phi4 + rng.normal(0, 0.01), rng.normal(0, 40)])
-        y_k = np.array([delta, y_abs[1], y_abs[2] - offset, y_abs[3]])
-        kp.rhs(False, t, y_k, pv, tab, dy, aux)
+        (e2, e4), aux = g(t, y_abs)
         want = f(t, y_abs)
-        hits_window += aux[5] != 0
-        np.testing.assert_allclose(dy[1], want[1], rtol=1e-7, atol=1e-6 * abs(want[1]).max() + 1e-6)
-        np.testing.assert_allclose(dy[3], want[3], rtol=1e-7, atol=1e-6)
-        assert dy[2] == y_abs[3] and dy[0] == pytest.approx(y_abs[1] - p.omega)
-        assert aux[2] == pytest.approx(ref.driving_moment(d, t, y_abs), rel=1e-9, abs=1e-9)
+        hits_window += aux[k_m4] != 0
+        np.testing.assert_allclose(e2, want[1], rtol=1e-7, atol=1e-6 * abs(want[1]).max() + 1e-6)
+        np.testing.assert_allclose(e4, want[3], rtol=1e-7, atol=1e-6)
+        assert aux[nb + c2] == pytest.approx(ref.driving_moment(d, t, y_abs), rel=1e-9, abs=1e-9)
     assert hits_window > 10
 
 
@@ -128,7 +154,7 @@ def test_numba_and_python_backends_agree():
 
 
 def test_fallback_without_numba(monkeypatch):
-    monkeypatch.setattr(_kernels, "HAVE_NUMBA", False)
+    monkeypatch.setattr(_motion_kernels, "HAVE_NUMBA", False)
     r = simulate("one-side", 1, revolutions=1, points_per_revolution=360)
     assert r.backend == "python"
     assert any("numba is not importable" in n and "fast" in n for n in r.notes)
@@ -196,20 +222,19 @@ def test_chosen_revolution():
 
 @pytest.mark.parametrize("beat_sign", [-1, 1])
 def test_both_sides_rhs_matches_independent_eq9(beat_sign):
+    """The scene's right-hand side of the both-sides preset (an elastic loop) is eq. (9)."""
     from mechcirc.sley import simulation as S
 
-    kp = _kernels.load_python()
     rng = np.random.default_rng(9)
     p = preset("both-sides", 4, clearance=0.002, beat_sign=beat_sign,
                alpha=math.radians(40))           # a wide window: many samples fall in it
-    theta0, phiP = S.start_angle(p), p.fourbar().dead_centres()[0].theta
-    tab, offset = S._table(p, 1024)
-    pv = S._param_vector(p, theta0, phiP)
+    theta0 = S.start_angle(p)
     d = {k: getattr(p, k) for k in ("I2P", "I4", "I4P", "I5P", "I7", "C2", "C4", "C5", "C7",
                                     "k2", "k4", "k5", "k7", "omega", "clearance", "M0")}
     d["theta0"] = theta0
     f = ref.eq9_rhs(d, ref.front_dead_centre(), p.alpha, beat_sign=beat_sign)
-    dy, aux = np.empty(6), np.empty(6)
+    g, model = _scene_rhs(p, theta0)
+    k_m4 = len(model.bodies) + 2 * len(model.elements) + 1 + model.moments.index("M4")
     in_window = 0
     for _ in range(300):
         t = rng.uniform(0, 0.07)
@@ -218,10 +243,9 @@ def test_both_sides_rhs_matches_independent_eq9(beat_sign):
         y_abs = np.array([phi2 + d2, p.omega * (1 + rng.normal(0, 0.05)), phi2 + d5,
                           p.omega * (1 + rng.normal(0, 0.05)),
                           ref.rocker(phi2)[0] + rng.normal(0, 0.01), rng.normal(0, 40)])
-        y_k = np.array([d2, y_abs[1], d5, y_abs[3], y_abs[4] - offset, y_abs[5]])
-        kp.rhs(True, t, y_k, pv, tab, dy, aux)
+        acc, aux = g(t, y_abs)
         want = f(t, y_abs)
-        in_window += aux[5] != 0
-        for i in (1, 3, 5):
-            assert dy[i] == pytest.approx(want[i], rel=1e-7, abs=1e-6), i
+        in_window += aux[k_m4] != 0
+        for a, i in zip(acc, (1, 3, 5)):
+            assert a == pytest.approx(want[i], rel=1e-7, abs=1e-6), i
     assert in_window > 10

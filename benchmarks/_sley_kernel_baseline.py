@@ -1,4 +1,11 @@
-"""Right-hand sides of eqs. (4) and (9) and a fixed-step RK4 loop, on plain floats.
+"""BASELINE for benchmarks/bench_scene_sley.py: the retired hand-written sley kernel.
+
+Until the presets became scenes, ``mechcirc/sley/_kernels.py`` held eqs. (4) and (9)
+written out by hand; this is that file as it was (plus a small driver at the end),
+kept only so that the benchmark can measure the generic scene kernel against it in
+the same run.  Nothing in ``mechcirc`` imports it.
+
+Right-hand sides of eqs. (4) and (9) and a fixed-step RK4 loop, on plain floats.
 
 One source, two backends: when numba is importable the functions are compiled
 with ``@njit(cache=True)``; otherwise (or when loaded through
@@ -23,8 +30,8 @@ import math
 
 import numpy as np
 
-from .._jit import decorators
-from .._ode import record_hermite
+from mechcirc._jit import decorators
+from mechcirc._ode import record_hermite
 
 HAVE_NUMBA, _jit, _ = decorators(bool(globals().get("_FORCE_PYTHON")))
 
@@ -222,3 +229,41 @@ def load_python():
     mod.__dict__["_FORCE_PYTHON"] = True
     spec.loader.exec_module(mod)
     return mod
+
+
+# ------------------------------------------------------------- driver (benchmark only)
+def run(params, revolutions, npts, per_rev, table_points=1024):
+    """The retired ``simulate_params`` RK4 path: (extrema of eps2P, eps4P, M2V, wall time)."""
+    import time
+
+    from mechcirc.scene.motion import hermite_table
+    from mechcirc.sley.simulation import start_angle
+
+    fb = params.fourbar()
+    th = np.linspace(0.0, TWO_PI, table_points + 1)
+    st = fb.evaluate(th)
+    ref = 0.5 * (st.phi4.max() + st.phi4.min())
+    tab = hermite_table(TWO_PI / table_points, st.phi4 - ref, st.mu, st.nu)
+    theta0 = start_angle(params)
+    p = params
+    v = np.zeros(N_PARAMS)
+    v[P_OMEGA], v[P_THETA0] = p.omega, theta0
+    v[P_I2P], v[P_I4], v[P_I4P] = p.I2P, p.I4, p.I4P
+    v[P_C2], v[P_C4], v[P_K2], v[P_K4] = p.C2, p.C4, p.k2, p.k4
+    v[P_CL], v[P_M0], v[P_PHIP] = p.clearance, -p.beat_sign * p.M0, fb.dead_centres()[0].theta
+    v[P_ALPHA], v[P_SIGMA] = p.alpha, p.sigma
+    phi4, mu, _ = fb.transfer(theta0)
+    y = np.array([0.0, p.omega, phi4 - ref, mu * p.omega])
+    period = TWO_PI / p.omega
+    h = period / per_rev
+    rec_y, rec_t = np.empty((npts, 4)), np.empty(npts)
+    dummy_y, dummy_t = np.empty((0, 4)), np.empty(0)
+    t0 = time.perf_counter()
+    for r in range(revolutions):
+        ry, rt = (rec_y, rec_t) if r == revolutions - 1 else (dummy_y, dummy_t)
+        rk4_run(False, v, tab, y, r * period, h, per_rev, r * period, period / npts, ry, rt)
+    wall = time.perf_counter() - t0
+    out = np.empty((npts, 6))
+    outputs(False, v, tab, rec_t, rec_y, out)
+    mm = lambda a: (float(a.min()), float(a.max()))
+    return {"eps2P": mm(out[:, 0]), "eps4P": mm(out[:, 1]), "M2V": mm(out[:, 2])}, wall

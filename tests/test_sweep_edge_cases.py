@@ -1,22 +1,83 @@
-"""Numerical edge cases (issue 8, §3): results are correct or flagged, never NaN unflagged.
+"""mechcirc.sweep at the edges: results are correct or flagged, never NaN unflagged.
 
 The flag contract (``mechcirc.sweep``): 0 = regular (estimated relative error
 of K ≤ 1e-6), 1 = on a pole or zero (K, Q0 or v0 is 0, infinite or NaN),
 2 = within rounding of one.  Every case below checks both halves: where a
-point is not flagged its value matches a closed form, and every non-finite
-value carries a flag.
+point is not flagged its value matches a closed form, every non-finite value
+carries a flag, and the points that are neither on a root nor outside
+float64's range must be unflagged (so no check passes by flagging everything).
+The last cases are regressions the fuzz harness found.
 """
 
 from __future__ import annotations
 
-import math
 import warnings
+import math
 
 import numpy as np
 import pytest
 
 import mechcirc
+from mechcirc.errors import TopologyError
+from mechcirc.sweep import FLAG_OK
 from mechcirc.sweep import FLAG_NEAR_SINGULAR, FLAG_OK, FLAG_SINGULAR
+
+
+def test_lever_ratio_above_1e154_does_not_overflow_python_floats():
+    c = mechcirc.parse("drive V a 0 velocity=1\nlever L a 0 b 0 ratio=1e300\nmass m b 0 1\n")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        s = c.sweep([1.0, 10.0])
+    # K = K_m / r² = (-j/ω) / 1e600 underflows to 0: flagged, not an OverflowError.
+    assert np.all(s.K == 0) and np.all(s.flags == 1)
+
+
+def test_value_times_eta_underflowing_to_zero_is_flagged():
+    c = mechcirc.parse("drive V a 0 velocity=1\nmass m a b 0.4 eta=5e-324\nspring k b 0 10\n")
+    s = c.sweep([0.5, 2.0])
+    assert np.all(np.isinf(s.K)) and np.all(s.flags == 1)
+
+
+def test_huge_masses_do_not_break_the_singularity_check():
+    # Two masses of 1e308 make trace(M) = inf; the frequency scale must stay finite.
+    text = ("drive V a 0 velocity=1\nmass m1 a b 1e308\nmass m2 b c 1e308\nspring k c 0 1e6\n"
+            "spring k2 a c 5\nspring k3 b 0 7\n")
+    c = mechcirc.parse(text)
+    s = c.sweep([1.0, 100.0], method="nodal")
+    assert np.all((s.flags != FLAG_OK) | np.isfinite(s.K))
+    assert np.isfinite(s.error).all() or np.all(s.flags[~np.isfinite(s.error)] != FLAG_OK)
+
+
+HUGE_MASSES = ("drive V a 0 velocity=1\nmass m1 a b 1e308\nmass m2 b c 1e308\n"
+               "spring k c 0 1e6\nspring k2 a c 5\nspring k3 b 0 7\n")
+
+
+@pytest.mark.xfail(strict=True, reason="nodal gives NaN (flagged) for 1e308 masses where K is "
+                   "finite; the check above passes because both points are flagged")
+def test_huge_masses_give_the_value_of_the_rigid_chain():
+    """K = jω/(1e6 + 7) to 1e-12: the 1e308 masses tie a, b and c together, so the
+    springs k and k3 carry the drive (700-digit mpmath solve of the nodal equations:
+    9.999930000489996e-07j at ω = 1, 9.999930000489997e-05j at ω = 100)."""
+    s = mechcirc.parse(HUGE_MASSES).sweep([1.0, 100.0], method="nodal")
+    np.testing.assert_allclose(s.K, [9.999930000489996e-07j, 9.999930000489997e-05j],
+                               rtol=1e-12)
+    assert np.all(s.flags == FLAG_OK)
+
+
+def test_self_looped_lever_with_nothing_loaded_is_a_topology_error():
+    text = ("mass e0 n1 0 3\nlever L0 n3 n4 n4 n3 ratio=1\ndamper e1 n3 n1 1\n"
+            "drive V n4 n3 force=1\n")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(TopologyError, match="nothing between the drive's nodes"):
+            mechcirc.parse(text).sweep([1.0])
+
+
+def test_series_of_terms_that_are_all_exactly_zero_is_zero_not_a_crash():
+    """Long-run seed 1018381: value·η = 1e308·31 = ∞ makes the only term 1/∞ = 0."""
+    c = mechcirc.parse("drive V n6 n7 force=1\nmass e1 n7 n6 1e308 eta=31\n")
+    s = c.sweep([0.0, 1.0, 1e3])
+    assert np.all(s.K == 0) and np.all(s.flags == 1)
 
 
 def _sweep(text: str, omega, method="auto"):
@@ -25,12 +86,27 @@ def _sweep(text: str, omega, method="auto"):
         return mechcirc.parse(text).sweep(np.asarray(omega, dtype=float), method=method)
 
 
-def _contract(s, K_exact=None, rtol=1e-13):
-    """No unflagged non-finite value; unflagged points match ``K_exact`` to ``rtol``."""
+def _contract(s, K_exact=None, rtol=1e-13, regular=None):
+    """No unflagged non-finite value; unflagged points match ``K_exact`` to ``rtol``.
+
+    So that the check cannot pass by flagging everything, the ``regular``
+    points must be unflagged: by default those where ``K_exact`` is finite
+    and of normal size (1e-300 ≤ |K| ≤ 1e300) at a finite ω > 0, i.e. points
+    that neither sit on a pole or zero nor leave float64's range.
+    """
     bad = ~np.isfinite(s.K) | ~np.isfinite(s.Q0) | ~np.isfinite(s.v0)
     assert np.all(s.flags[bad] != FLAG_OK), (s.omega[bad], s.flags[bad])
     assert np.all(np.isin(s.flags, (FLAG_OK, FLAG_SINGULAR, FLAG_NEAR_SINGULAR)))
     if K_exact is not None:
+        K_exact = np.asarray(K_exact)
+        if regular is None:
+            w = np.asarray(s.omega, dtype=float)
+            with np.errstate(invalid="ignore", over="ignore"):
+                size = np.abs(K_exact)
+                regular = (np.isfinite(K_exact) & (size >= 1e-300) & (size <= 1e300)
+                           & (w > 0) & np.isfinite(w))
+        regular = np.asarray(regular, dtype=bool)
+        assert np.all(s.flags[regular] == FLAG_OK), (s.omega[regular], s.flags[regular])
         ok = s.flags == FLAG_OK
         np.testing.assert_allclose(s.K[ok], K_exact[ok], rtol=rtol, atol=0)
 
@@ -90,8 +166,9 @@ def test_mass_and_spring_of_opposite_extremes_in_series():
     assert np.all(s.flags == FLAG_OK)
 
 
-# --------------------------------------------------------------- resonances in the sweep
 SERIES_MK = "drive V a 0 velocity=0.1\nmass m a b 1\nspring k b 0 100\n"      # K = 0 at ω = 10
+
+
 PARALLEL_MK = "drive V a 0 force=3\nmass m a 0 1\nspring k a 0 100\n"         # K = ∞ at ω = 10
 
 
@@ -102,7 +179,7 @@ def test_exact_resonance_is_flagged_and_nearby_points_are_right(method):
     omega = [10.0 * (1 - 1e-3), 10.0 * (1 - 1e-13), 10.0, 10.0 * (1 + 1e-13), 10.0 * (1 + 1e-3)]
     s = _sweep(SERIES_MK, omega, method)
     exact = np.array([1j * (w / 100 - 1 / w) for w in omega])
-    _contract(s, exact, rtol=1e-9)
+    _contract(s, exact, rtol=1e-9, regular=[True, False, False, False, True])
     assert s.flags[2] != FLAG_OK                     # on the zero of K: Q0 = V0/K infinite
     assert s.flags[1] != FLAG_OK and s.flags[3] != FLAG_OK   # K within rounding of 0
     assert s.flags[0] == FLAG_OK and s.flags[4] == FLAG_OK
@@ -161,7 +238,6 @@ def _bridge_K(w: float) -> complex:
     return complex(np.linalg.solve(A, [1, 0, 0])[0])
 
 
-# --------------------------------------------------------------- levers
 @pytest.mark.parametrize("method", ["sp", "nodal"])
 @pytest.mark.parametrize("ratio", [1e-150, 1e-8, 1e-3, 1.0, 1e3, 1e8, 1e150])
 def test_lever_ratios_near_zero_and_very_large(ratio, method):
@@ -183,54 +259,10 @@ def test_lever_ratio_whose_square_leaves_float64_is_flagged(ratio):
     assert s.flags[0] == FLAG_SINGULAR                # m·r² = 0 or ∞: K = ∞ or 0
 
 
-# --------------------------------------------------------------- critical damping
 def _mck(zeta: float, m=2.0, k=800.0):
     c = 2 * zeta * math.sqrt(k * m)
     return mechcirc.parse(f"drive V a 0 velocity=1\nmass m a 0 {m!r}\n"
                           f"damper c a 0 {c!r}\nspring k a 0 {k!r}\n")
-
-
-@pytest.mark.parametrize("zeta", [0.5, 1 - 1e-6, 1 - 1e-12, 1.0, 1 + 1e-12, 1 + 1e-6, 2.0])
-def test_coalescing_roots_at_critical_damping(zeta):
-    """m, c, k in parallel: anti-resonances at s = -ωn(ζ ∓ sqrt(ζ² − 1)), ωn = 20 rad/s.
-
-    At ζ = 1 the two roots coalesce; each reported ω is within its own error
-    estimate of the exact root (which must grow to about sqrt(eps) there).
-    """
-    wn = 20.0
-    found = _mck(zeta).resonances()
-    assert all(r.kind == "antiresonance" for r in found)
-    if zeta < 1:
-        exact = [wn]
-        wd = wn * math.sqrt((1 - zeta) * (1 + zeta))
-        (r,) = found
-        assert r.zeta == pytest.approx(zeta, rel=1e-12)
-        # Im s of a near-double root is ill-conditioned; its absolute error is
-        # that of s, ωn·error (ω_d = 2.8e-5 rad/s at ζ = 1 − 1e-12).
-        assert abs(r.omega_d - wd) <= wn * r.error
-    elif zeta == 1:
-        exact = [wn, wn]
-    else:
-        root = math.sqrt((zeta - 1) * (zeta + 1))
-        exact = [wn * (zeta - root), wn * (zeta + root)]
-    assert len(found) == len(exact)
-    for r, w in zip(sorted(found, key=lambda r: r.omega), sorted(exact)):
-        assert abs(r.omega - w) / w <= r.error, (r, w)
-        assert r.error < 1e-6
-        if zeta >= 1:
-            assert r.zeta == 1.0 and r.omega_d == 0.0
-
-
-def test_error_estimate_covers_coalesced_roots_for_many_networks():
-    """Before the fix, critically damped roots were off by 2e-8 with an estimate of 2e-14."""
-    import random
-
-    for i in range(60):
-        rng = random.Random(i)
-        m, k = 10 ** rng.uniform(-2, 2), 10 ** rng.uniform(1, 6)
-        wn = math.sqrt(k / m)
-        for r in _mck(1.0, m, k).resonances():
-            assert abs(r.omega - wn) / wn <= r.error
 
 
 @pytest.mark.parametrize("zeta", [1 - 1e-9, 1.0, 1 + 1e-9])

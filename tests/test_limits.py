@@ -1,4 +1,7 @@
-"""Bounded work (issue 8, §2): hostile sizes finish within a bound or are refused quickly.
+"""mechcirc.limits — bounded work: hostile sizes finish within a bound or are refused quickly.
+
+Expressions, netlist lines, sweep points per output, time-domain and cycle
+sizes, study axes and grids: each limit is checked where it refuses.
 
 The large cases (a 10⁶-element netlist, a 10⁷-point sweep) are measured in
 ``benchmarks/bench_bounds.py``; here are the quick ones.  Time bounds are
@@ -22,6 +25,7 @@ from mechcirc.cli import main
 from mechcirc.errors import NetlistError
 from mechcirc.expressions import MAX_DEPTH, MAX_LENGTH, evaluate, parse_expression
 from mechcirc.netlist import MAX_LINE_LENGTH
+from cli_helpers import assert_user_error, run
 
 STB = Path(__file__).resolve().parents[1] / "netlists" / "stb_heald.mcir"
 
@@ -189,3 +193,76 @@ def test_sweep_csv_is_written_in_bounded_memory(tmp_path, monkeypatch):
     small = _csv_peak(300_000, tmp_path, monkeypatch)
     large = _csv_peak(1_200_000, tmp_path, monkeypatch)
     assert large < 1.5 * small, (small, large)
+
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+SCENE = ROOT / "examples" / "heald_scene.toml"
+
+
+STUDY = ROOT / "examples" / "study_stb.toml"
+
+
+def _spec(tmp_path, old, new):
+    text = STUDY.read_text().replace("../netlists/", str(ROOT / "netlists") + "/")
+    assert old in text, old
+    text = text.replace(old, new, 1)
+    path = tmp_path / "spec.toml"
+    path.write_text(text)
+    return path, text
+
+
+def test_study_axis_of_a_billion_values_is_refused_before_it_is_built(tmp_path):
+    from mechcirc.study import load_spec
+
+    path, _ = _spec(tmp_path, "num = 6}", "num = 1000000000}")
+    t0 = time.perf_counter()
+    with pytest.raises(NetlistError, match="num must be an integer from 1 to 500,000"):
+        load_spec(path)
+    assert time.perf_counter() - t0 < 5        # not a 1e9-element list first
+
+
+def test_study_grid_product_over_the_limit(tmp_path):
+    from mechcirc.study import load_spec
+
+    path, _ = _spec(tmp_path, "eta1 = [0.7, 0.8, 0.9]", "eta1 = {min = 0.5, max = 1, num = 2000}")
+    text = path.read_text().replace("num = 6}", "num = 1000}")
+    path.write_text(text)
+    with pytest.raises(NetlistError, match="the grid has 2,000,000 points, the limit is"):
+        load_spec(path)
+
+
+def test_study_work_limit(tmp_path):
+    from mechcirc.study import load_spec
+
+    path, _ = _spec(tmp_path, "num = 6}", "num = 100000}")
+    path.write_text(path.read_text().replace("points = 400", "points = 100000"))
+    with pytest.raises(NetlistError, match="evaluations, the limit is"):
+        load_spec(path)
+
+
+@pytest.mark.parametrize("extra, what", [
+    (["--plot", "K.png"], "--plot"),
+    (["--json"], "--json"),
+    (["--method", "nodal"], "--method nodal"),
+])
+def test_sweep_point_limits_per_output(extra, what, tmp_path, capsys):
+    from mechcirc.limits import MAX_JSON_POINTS, MAX_NODAL_POINTS, MAX_PLOT_POINTS
+
+    limit = {"--plot": MAX_PLOT_POINTS, "--json": MAX_JSON_POINTS,
+             "--method nodal": MAX_NODAL_POINTS}[what]
+    extra = [str(tmp_path / e) if e.endswith(".png") else e for e in extra]
+    t0 = time.perf_counter()
+    assert_user_error(["sweep", STB, "--omega-min", "10", "--omega-max", "1e4",
+                       "--points", str(limit + 1), *extra], capsys, what, f"{limit}")
+    assert time.perf_counter() - t0 < 10          # refused before the sweep
+
+
+@pytest.mark.parametrize("argv, needle", [
+    (["simulate", "--revolutions", "1000000"], "limit of 1,000"),
+    (["simulate", "--points", "1000000000"], "limit of 1,000,000"),
+    (["scene", str(SCENE), "--cycle", "--points", "100000"], "limit of 1,440"),
+])
+def test_time_domain_and_cycle_sizes_are_bounded(argv, needle, capsys):
+    assert_user_error(argv, capsys, needle)

@@ -1,0 +1,433 @@
+"""The linkage Newton continuation as one compiled loop over the crank positions.
+
+One source, two backends, as :mod:`mechcirc.scene._motion_kernels`: compiled with
+numba's ``@njit(cache=True)`` when numba is importable (the ``fast`` extra),
+plain Python otherwise.  :mod:`.linkage_solver` uses :func:`newton_path` only
+when it is compiled (``HAVE_NUMBA``); without numba it keeps its batched numpy
+Newton, which is faster than this loop run as Python.
+
+The equations are those of :mod:`.linkage` (Φ(q, t) = 0: coincident joint
+points, 2 rows per revolute pair, then φ_c − ω_c t for each crank), written on
+the index arrays of :func:`.linkage_solver.plan`:
+
+* row pair k: P_a − P_b, with P = (x_i, y_i) + R(φ_i) s for a moving body i and
+  P = s (the pose coordinate) for the ground (index ``nb``);
+* Jacobian: ±1 on the (x, y) columns, ±(−(R s)_y, (R s)_x) on the φ column;
+* γ (constant crank speeds): R_a s_a φ̇_a² − R_b s_b φ̇_b².
+
+The loop visits the targets in order; between two it takes continuation steps
+of at most ``dt_max`` (Taylor predictor from q, q̇, q̈; Newton with partial
+pivoting LU; the step halves when Newton fails or J is near singular) and
+tracks the sign of det J: a change is a branch jump.  At every target q̇, q̈
+and the conditional-stop parts come from the LU of J at the converged q.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .._jit import decorators
+
+HAVE_NUMBA, _jit, _ = decorators(bool(globals().get("_FORCE_PYTHON")))
+
+#: Status codes of :func:`newton_path`.
+OK, SINGULAR_POSE, LOCK, BRANCH_JUMP = 0, 1, 2, 3
+
+
+@_jit
+def _sides(q, nb, ia, ib, sa, sb, cs, sn, R):
+    """R(φ) s of both sides of every joint row into R (m, 4): (Rax, Ray, Rbx, Rby)."""
+    for i in range(nb):
+        cs[i] = math.cos(q[3 * i + 2])
+        sn[i] = math.sin(q[3 * i + 2])
+    for k in range(ia.shape[0]):
+        a, b = ia[k], ib[k]
+        if a < nb:
+            R[k, 0] = cs[a] * sa[k, 0] - sn[a] * sa[k, 1]
+            R[k, 1] = sn[a] * sa[k, 0] + cs[a] * sa[k, 1]
+        else:
+            R[k, 0] = sa[k, 0]
+            R[k, 1] = sa[k, 1]
+        if b < nb:
+            R[k, 2] = cs[b] * sb[k, 0] - sn[b] * sb[k, 1]
+            R[k, 3] = sn[b] * sb[k, 0] + cs[b] * sb[k, 1]
+        else:
+            R[k, 2] = sb[k, 0]
+            R[k, 3] = sb[k, 1]
+
+
+@_jit
+def _residual(q, t, nb, ia, ib, R, crank_idx, omega, r):
+    """Φ(q, t) into r; returns max |Φ|."""
+    m = ia.shape[0]
+    for k in range(m):
+        a, b = ia[k], ib[k]
+        xa, ya = R[k, 0], R[k, 1]
+        if a < nb:
+            xa += q[3 * a]
+            ya += q[3 * a + 1]
+        xb, yb = R[k, 2], R[k, 3]
+        if b < nb:
+            xb += q[3 * b]
+            yb += q[3 * b + 1]
+        r[2 * k] = xa - xb
+        r[2 * k + 1] = ya - yb
+    for j in range(crank_idx.shape[0]):
+        r[2 * m + j] = q[3 * crank_idx[j] + 2] - omega[j] * t
+    size = 0.0
+    for i in range(r.shape[0]):
+        v = abs(r[i])
+        if not v <= size:           # NaN propagates
+            size = v
+    return size
+
+
+@_jit
+def _jacobian(nb, ia, ib, R, crank_idx, J):
+    m = ia.shape[0]
+    n = J.shape[0]
+    for i in range(n):
+        for j in range(n):
+            J[i, j] = 0.0
+    for k in range(m):
+        a, b = ia[k], ib[k]
+        if a < nb:
+            J[2 * k, 3 * a] = 1.0
+            J[2 * k + 1, 3 * a + 1] = 1.0
+            J[2 * k, 3 * a + 2] = -R[k, 1]
+            J[2 * k + 1, 3 * a + 2] = R[k, 0]
+        if b < nb:
+            J[2 * k, 3 * b] -= 1.0
+            J[2 * k + 1, 3 * b + 1] -= 1.0
+            J[2 * k, 3 * b + 2] += R[k, 3]
+            J[2 * k + 1, 3 * b + 2] -= R[k, 2]
+    for j in range(crank_idx.shape[0]):
+        J[2 * m + j, 3 * crank_idx[j] + 2] = 1.0
+
+
+@_jit
+def _lu(A, piv):
+    """LU with partial pivoting in place; returns the sign of det A, 0 if near singular.
+
+    Near singular: min |U_kk| ≤ 1e-12 max |U_kk| (the test the numpy path
+    applies to LAPACK's factors).
+    """
+    n = A.shape[0]
+    sign = 1.0
+    for k in range(n):
+        p = k
+        big = abs(A[k, k])
+        for i in range(k + 1, n):
+            v = abs(A[i, k])
+            if v > big:
+                big = v
+                p = i
+        piv[k] = p
+        if not big > 0.0:
+            return 0.0
+        if p != k:
+            sign = -sign
+            for j in range(n):
+                tmp = A[k, j]
+                A[k, j] = A[p, j]
+                A[p, j] = tmp
+        inv = 1.0 / A[k, k]
+        for i in range(k + 1, n):
+            f = A[i, k]
+            if f != 0.0:
+                f *= inv
+                A[i, k] = f
+                for j in range(k + 1, n):
+                    A[i, j] -= f * A[k, j]
+    lo = math.inf
+    hi = 0.0
+    for k in range(n):
+        v = abs(A[k, k])
+        lo = min(lo, v)
+        hi = max(hi, v)
+        if A[k, k] < 0.0:
+            sign = -sign
+    if not lo > 1e-12 * hi:
+        return 0.0
+    return sign
+
+
+@_jit
+def _lu_solve(A, piv, b):
+    """Solve with the factors of :func:`_lu`, b overwritten by the solution."""
+    n = A.shape[0]
+    for k in range(n):
+        p = piv[k]
+        if p != k:
+            tmp = b[k]
+            b[k] = b[p]
+            b[p] = tmp
+    for i in range(n):
+        s = b[i]
+        for j in range(i):
+            s -= A[i, j] * b[j]
+        b[i] = s
+    for i in range(n - 1, -1, -1):
+        s = b[i]
+        for j in range(i + 1, n):
+            s -= A[i, j] * b[j]
+        b[i] = s / A[i, i]
+
+
+@_jit
+def newton_path(q0, targets, ia, ib, sa, sb, crank_idx, omega, tol, dt_max, wmax,
+                Q, QD, QDD, PARTS, info):
+    """Continue from the pose q0 (t = 0) through ``targets`` [s] in order.
+
+    Fills Q, QD, QDD (N, n) and PARTS (N, n, nc).  Returns a status:
+    ``OK``; ``SINGULAR_POSE``; ``LOCK`` (info[0] = time of the lock estimate);
+    ``BRANCH_JUMP`` (info[0], info[1] = the step's ends).
+    """
+    n = q0.shape[0]
+    nb = n // 3
+    m = ia.shape[0]
+    nc = crank_idx.shape[0]
+    cs = np.empty(nb)
+    sn = np.empty(nb)
+    R = np.empty((m, 4))
+    J = np.empty((n, n))
+    piv = np.empty(n, dtype=np.int64)
+    r = np.empty(n)
+    q = q0.copy()
+    qd = np.zeros(n)
+    qdd = np.zeros(n)
+    parts = np.zeros((n, nc))
+    trial = np.empty(n)
+    e = np.empty(n)
+    t_now = 0.0
+    sign0 = 0.0
+    first = True                # the pose itself (t = 0) is solved first
+    k = 0
+    N = targets.shape[0]
+    while k < N:
+        if first:
+            dt = 0.0
+            t_new = 0.0
+        else:
+            t_new = targets[k]
+            dt = t_new - t_now
+            if dt == 0.0:
+                for i in range(n):
+                    Q[k, i] = q[i]
+                    QD[k, i] = qd[i]
+                    QDD[k, i] = qdd[i]
+                    for c in range(nc):
+                        PARTS[k, i, c] = parts[i, c]
+                k += 1
+                continue
+            if dt > dt_max:
+                dt = dt_max
+                t_new = t_now + dt
+            elif dt < -dt_max:
+                dt = -dt_max
+                t_new = t_now + dt
+        # one continuation step of dt from t_now, halving on failure
+        while True:
+            for i in range(n):
+                trial[i] = q[i] + dt * (qd[i] + 0.5 * dt * qdd[i])
+            ok = False
+            previous = math.inf
+            for it in range(30):
+                _sides(trial, nb, ia, ib, sa, sb, cs, sn, R)
+                size = _residual(trial, t_new, nb, ia, ib, R, crank_idx, omega, r)
+                if not size < math.inf or (it >= 2 and size > previous):
+                    break
+                previous = size
+                _jacobian(nb, ia, ib, R, crank_idx, J)
+                if _lu(J, piv) == 0.0:
+                    break
+                _lu_solve(J, piv, r)
+                for i in range(n):
+                    trial[i] -= r[i]
+                if size < tol:
+                    # converged; that last step polished it to rounding
+                    ok = True
+                    break
+            sgn = 0.0
+            if ok:
+                # J and its LU at the converged q, for the sign and the rates
+                _sides(trial, nb, ia, ib, sa, sb, cs, sn, R)
+                _jacobian(nb, ia, ib, R, crank_idx, J)
+                sgn = _lu(J, piv)
+            if sgn != 0.0:
+                break
+            if first:
+                return SINGULAR_POSE
+            dt *= 0.5
+            t_new = t_now + dt
+            if abs(dt) * wmax < 1e-9:
+                info[0] = t_now + 2.0 * dt
+                return LOCK
+        if first:
+            sign0 = sgn
+        elif sgn != sign0:
+            info[0] = t_now
+            info[1] = t_new
+            return BRANCH_JUMP
+        first = False
+        t_now = t_new
+        # q̇ = Σ_c J⁻¹ ω_c e_c, q̈ = J⁻¹ γ, from the LU at the converged q
+        for i in range(n):
+            q[i] = trial[i]
+            qd[i] = 0.0
+        for c in range(nc):
+            for i in range(n):
+                e[i] = 0.0
+            e[2 * m + c] = omega[c]
+            _lu_solve(J, piv, e)
+            for i in range(n):
+                parts[i, c] = e[i]
+                qd[i] += e[i]
+        for i in range(n):
+            e[i] = 0.0
+        for kk in range(m):
+            a = ia[kk]
+            b = ib[kk]
+            wa = qd[3 * a + 2] ** 2 if a < nb else 0.0
+            wb = qd[3 * b + 2] ** 2 if b < nb else 0.0
+            e[2 * kk] = R[kk, 0] * wa - R[kk, 2] * wb
+            e[2 * kk + 1] = R[kk, 1] * wa - R[kk, 3] * wb
+        _lu_solve(J, piv, e)
+        for i in range(n):
+            qdd[i] = e[i]
+    return OK
+
+
+@_jit
+def _im_conj(a, b):
+    """Im(conj(a)·b) = a × b."""
+    return a.real * b.imag - a.imag * b.real
+
+
+@_jit
+def dyads_path(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, rot, arm,
+               Q, QD, QDD, PARTS, margin):
+    """Closed-form RRR dyads at every time in ``t``, one position at a time.
+
+    The same formulas as :class:`.linkage_solver._DyadSolver` (which documents
+    them), as scalar complex arithmetic.  Per dyad d: links L[d], carriers K[d]
+    (−1: the ground), outer joints X[d] (the pose point for the ground, else the
+    offset in the carrier's frame), lengths ln[d], assembly side sign[d],
+    rot[d] = e^{−i·pose angle}/length, arm[d] = the link frame's origin from
+    its outer joint in the link's frame, ang[d] = the links' pose angles.
+    Fills Q, QD, QDD, PARTS and margin (the smallest |sin| of a dyad's inner
+    angle, −1 where it cannot assemble).
+    """
+    N = t.shape[0]
+    nb = Q.shape[1] // 3
+    nc = crank_idx.shape[0]
+    nd = L.shape[0]
+    E = np.empty(nb, dtype=np.complex128)
+    r = np.empty(nb, dtype=np.complex128)
+    phi = np.empty(nb)
+    r1s = np.empty(nd, dtype=np.complex128)
+    r2s = np.empty(nd, dtype=np.complex128)
+    w = np.empty(nb)
+    v = np.empty(nb, dtype=np.complex128)
+    wt = np.empty(nb)
+    al = np.empty(nb)
+    a = np.empty(nb, dtype=np.complex128)
+    for k in range(N):
+        for j in range(nc):
+            ci = crank_idx[j]
+            phi[ci] = omega[j] * t[k]
+            E[ci] = complex(math.cos(phi[ci]), math.sin(phi[ci]))
+            r[ci] = pivot[j] + E[ci] * crank_arm[j]
+        mg = math.inf
+        for d in range(nd):
+            K1, K2 = K[d, 0], K[d, 1]
+            x1 = X[d, 0] if K1 < 0 else r[K1] + E[K1] * X[d, 0]
+            x2 = X[d, 1] if K2 < 0 else r[K2] + E[K2] * X[d, 1]
+            e = x2 - x1
+            d2 = e.real * e.real + e.imag * e.imag
+            dd = math.sqrt(d2)
+            l1, l2 = ln[d, 0], ln[d, 1]
+            x = (l1 * l1 - l2 * l2 + d2) / (2.0 * dd)
+            h2 = l1 * l1 - x * x
+            x3 = x1 + e * complex(x, sign[d] * math.sqrt(max(h2, 0.0))) / dd
+            r1 = x3 - x1
+            r2 = x3 - x2
+            s = abs(_im_conj(r1, r2)) / (l1 * l2)
+            if not (h2 >= 0.0 and s < math.inf):
+                s = -1.0
+            mg = min(mg, s)
+            r1s[d] = r1
+            r2s[d] = r2
+            for side in range(2):
+                Ls = L[d, side]
+                rr = r1 if side == 0 else r2
+                xp = x1 if side == 0 else x2
+                phi[Ls] = math.atan2(rr.imag, rr.real) - ang[d, side]
+                E[Ls] = rr * rot[d, side]
+                r[Ls] = xp + E[Ls] * arm[d, side]
+        margin[k] = mg
+        for i in range(nb):
+            Q[k, 3 * i] = r[i].real
+            Q[k, 3 * i + 1] = r[i].imag
+            Q[k, 3 * i + 2] = phi[i]
+        # velocities, one crank at a time (conditional stop): they add up
+        for i in range(nb):
+            wt[i] = 0.0
+            QD[k, 3 * i] = 0.0
+            QD[k, 3 * i + 1] = 0.0
+            QD[k, 3 * i + 2] = 0.0
+        for c in range(nc):
+            for i in range(nb):
+                w[i] = 0.0
+                v[i] = 0.0
+            for j in range(nc):
+                ci = crank_idx[j]
+                wj = omega[j] if j == c else 0.0
+                w[ci] = wj
+                v[ci] = 1j * wj * E[ci] * crank_arm[j]
+            for d in range(nd):
+                K1, K2 = K[d, 0], K[d, 1]
+                v1 = 0j if K1 < 0 else v[K1] + 1j * w[K1] * E[K1] * X[d, 0]
+                v2 = 0j if K2 < 0 else v[K2] + 1j * w[K2] * E[K2] * X[d, 1]
+                b = -1j * (v2 - v1)
+                r1 = r1s[d]
+                r2 = r2s[d]
+                D = _im_conj(r2, r1)
+                L1, L2 = L[d, 0], L[d, 1]
+                w[L1] = _im_conj(r2, b) / D
+                w[L2] = _im_conj(r1, b) / D
+                v[L1] = v1 + 1j * w[L1] * E[L1] * arm[d, 0]
+                v[L2] = v2 + 1j * w[L2] * E[L2] * arm[d, 1]
+            for i in range(nb):
+                PARTS[k, 3 * i, c] = v[i].real
+                PARTS[k, 3 * i + 1, c] = v[i].imag
+                PARTS[k, 3 * i + 2, c] = w[i]
+                QD[k, 3 * i] += v[i].real
+                QD[k, 3 * i + 1] += v[i].imag
+                QD[k, 3 * i + 2] += w[i]
+                wt[i] += w[i]
+        for i in range(nb):
+            al[i] = 0.0
+            a[i] = 0.0
+        for j in range(nc):
+            ci = crank_idx[j]
+            a[ci] = -wt[ci] ** 2 * E[ci] * crank_arm[j]
+        for d in range(nd):
+            K1, K2 = K[d, 0], K[d, 1]
+            a1 = 0j if K1 < 0 else a[K1] + (1j * al[K1] - wt[K1] ** 2) * E[K1] * X[d, 0]
+            a2 = 0j if K2 < 0 else a[K2] + (1j * al[K2] - wt[K2] ** 2) * E[K2] * X[d, 1]
+            r1 = r1s[d]
+            r2 = r2s[d]
+            L1, L2 = L[d, 0], L[d, 1]
+            b = -1j * (a2 - a1 + wt[L1] ** 2 * r1 - wt[L2] ** 2 * r2)
+            D = _im_conj(r2, r1)
+            al[L1] = _im_conj(r2, b) / D
+            al[L2] = _im_conj(r1, b) / D
+            a[L1] = a1 + (1j * al[L1] - wt[L1] ** 2) * E[L1] * arm[d, 0]
+            a[L2] = a2 + (1j * al[L2] - wt[L2] ** 2) * E[L2] * arm[d, 1]
+        for i in range(nb):
+            QDD[k, 3 * i] = a[i].real
+            QDD[k, 3 * i + 1] = a[i].imag
+            QDD[k, 3 * i + 2] = al[i]

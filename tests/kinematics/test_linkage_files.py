@@ -1,0 +1,117 @@
+"""Linkage TOML files (mechcirc.kinematics.linkage): bugs the fuzz harness found, one test each.
+
+Values of the wrong kind are located user errors; crank speeds and locking
+positions that made the solver hang are refused quickly.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from mechcirc.errors import GeometryError, NetlistError
+from mechcirc.kinematics.linkage import load_linkage, parse_linkage
+
+
+FNF = """
+[points]
+O1 = [124.0, -27.0]
+A  = [124.0, -2.0]
+O2 = [76.0, -22.0]
+B  = [76.0, -2.0]
+C  = [74.0, 85.0]
+E  = [126.0, 85.0]
+K  = [100.0, 130.0]
+O6 = [30.0, 130.0]
+[ground]
+points = ["O1", "O2", "O6"]
+[links]
+crank1   = ["O1", "A"]
+crank2   = ["O2", "B"]
+coupler3 = ["A", "C"]
+link4    = ["C", "E", "K"]
+coupler5 = ["B", "E"]
+output6  = ["O6", "K"]
+[[cranks]]
+link = "crank1"
+omega = 20.0
+[[cranks]]
+link = "crank2"
+omega = -30.0
+"""
+
+
+def test_fnf_text_is_valid():
+    assert parse_linkage(FNF).solve(0.3).theta == 0.3
+
+
+@pytest.mark.parametrize("table, replacement", [
+    ("[points]", "points = 3"), ("[ground]", 'ground = "A"'), ("[links]", "links = [1.0, 2.0]"),
+])
+def test_table_of_the_wrong_kind_is_a_located_error(table, replacement):
+    body = FNF.replace(table + "\n", "[unused_" + table[1:] + "\n")
+    with pytest.raises(NetlistError) as err:
+        parse_linkage(replacement + "\n" + body, "fnf.toml")
+    name = table.strip("[]")
+    assert err.value.message.startswith(f"{name!r} must be a {table} table, got ")
+    assert (err.value.line, err.value.col) == (1, 1)
+
+
+@pytest.mark.parametrize("old, new, line, fragment", [
+    ('points = ["O1", "O2", "O6"]', 'points = ["O1", "O2", [1.0]]', 12, "in [ground]"),
+    ('points = ["O1", "O2", "O6"]', 'points = ["O1", "O2", {a = 1}]', 12, "in [ground]"),
+    ('B  = [76.0, -2.0]', 'B  = [1' + '0' * 400 + ', -2.0]', 6, "must be [x, y]"),
+    ('omega = 20.0', 'omega = 1' + '0' * 400, 22, "omega must be a nonzero number"),
+    ('link = "crank1"', 'link = ["crank1"]', 21, "unknown link"),
+])
+def test_linkage_value_of_the_wrong_kind_is_a_located_error(old, new, line, fragment):
+    text = FNF.replace(old, new, 1)
+    assert text != FNF
+    with pytest.raises(NetlistError) as err:
+        parse_linkage(text, "fnf.toml")
+    assert fragment in err.value.message
+    assert len(err.value.message) < 200           # huge values are cut short
+    assert err.value.line == line and err.value.col >= 1
+
+
+def test_cranks_must_be_tables():
+    text = FNF.split("[[cranks]]")[0].replace("[points]", "cranks = [1, 2]\n[points]")
+    with pytest.raises(NetlistError) as err:
+        parse_linkage(text, "fnf.toml")
+    assert err.value.message == "'cranks' must be a [[cranks]] table, got [1, 2]"
+    assert err.value.line == 2
+
+
+def test_integer_beyond_python_digit_limit_is_a_located_error():
+    text = FNF.replace("omega = 20.0", "omega = " + "1" * 5000)
+    with pytest.raises(NetlistError, match="thousands of digits") as err:
+        parse_linkage(text)
+    assert (err.value.line, err.value.col) == (22, 9)
+
+
+def test_linkage_file_not_utf8_is_located(tmp_path):
+    path = tmp_path / "bad.toml"
+    path.write_bytes(b'name = "x"\nunits = "\xff"\n')
+    with pytest.raises(NetlistError, match="not valid UTF-8") as err:
+        load_linkage(path)
+    assert (err.value.line, err.value.col) == (2, 10)
+
+
+def test_tiny_first_crank_speed_is_refused_quickly_not_a_hang():
+    lk = parse_linkage(FNF.replace("omega = 20.0", "omega = 1e-300"))
+    with pytest.raises(GeometryError, match="continuation steps.*the limit is 100000"):
+        lk.solve(0.3)
+
+
+def test_locking_linkage_is_reported_quickly():
+    """Long-run seed 1009246 (O1 moved to y = 327): 3.7 s to find the lock, now well under 2 s.
+
+    Newton gives up as soon as its residual grows, instead of iterating 30
+    times at every halving of the step; the lock angle is unchanged.
+    """
+    import time
+
+    lk = parse_linkage(FNF.replace("O1 = [124.0, -27.0]", "O1 = [124.0, 327.0]"))
+    t0 = time.perf_counter()
+    with pytest.raises(GeometryError, match=r"locks near θ = 14\.4171°"):
+        lk.solve(0.3)
+    assert time.perf_counter() - t0 < 2.0

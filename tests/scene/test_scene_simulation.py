@@ -1,0 +1,165 @@
+"""mechcirc.scene.simulation: a crank speed profile (``omega_ripple``) against an independent
+solution, and the scipy methods on a scene."""
+
+import math
+import warnings
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from mechcirc.scene import parse_scene
+from mechcirc.scene.simulation import SceneAccuracyWarning, simulate_scene
+
+J, K, D, OMEGA, A, H = 0.01, 1000.0, 0.5, 50.0, 0.1, 2
+
+FLYWHEEL = f"""
+name = "flywheel"
+units = "m"
+[points]
+A = [0.0, 0.0]
+B = [0.1, 0.0]
+[ground]
+points = ["A"]
+[links]
+crank = ["A", "B"]
+[[cranks]]
+link = "crank"
+omega = {OMEGA}
+[[torsion]]
+name = "rod"
+link = "crank"
+body = "shaft"
+stiffness = {K}
+damping = {D}
+[[masses]]
+name = "J"
+link = "crank"
+inertia = {J}
+[drive]
+link = "shaft"
+velocity = {OMEGA}
+[simulate]
+revolutions = 3
+points = 720
+omega_ripple = {{amplitude = {A}, harmonic = {H}}}
+"""
+
+
+def reference(t_out):
+    """The crank on a torsion rod from a shaft turning at Ω (1 + a cos(k Ω t)), written out:
+    x = q − θ, J ẍ + D ẋ + K x = −J θ̈, θ̈ = −a k Ω² sin(k Ω t); from rest in x (the rigid
+    start).  Returns the crank's acceleration q̈ = ẍ + θ̈ and the rod's moment −(K x + D ẋ)."""
+    nu = H * OMEGA
+
+    def thdd(t):
+        return -A * OMEGA * nu * np.sin(nu * t)
+
+    def f(t, y):
+        return [y[1], (-J * thdd(t) - D * y[1] - K * y[0]) / J]
+
+    sol = solve_ivp(f, (0, t_out.max()), [0.0, 0.0], method="DOP853", rtol=1e-12,
+                    atol=[1e-15, 1e-12], dense_output=True)
+    x, xd = sol.sol(t_out)
+    xdd = (-J * thdd(t_out) - D * xd - K * x) / J
+    return xdd + thdd(t_out), -(K * x + D * xd)
+
+
+def crank_motion(t_out):
+    """q, q̇, q̈ of the crank (independent, as :func:`reference`)."""
+    nu = H * OMEGA
+    acc, moment = reference(t_out)
+    th = OMEGA * t_out + A / H * np.sin(nu * t_out)
+    thd = OMEGA * (1 + A * np.cos(nu * t_out))
+    # x = q − θ from the rod's moment −(K x + D ẋ) and J(ẍ + θ̈) = moment: integrate again
+    sol_x = solve_ivp(lambda t, y: [y[1], (A * OMEGA * nu * np.sin(nu * t) * J - D * y[1]
+                                           - K * y[0]) / J],
+                      (0, t_out.max()), [0.0, 0.0], method="DOP853", rtol=1e-12,
+                      atol=[1e-15, 1e-12], dense_output=True)
+    x, xd = sol_x.sol(t_out)
+    return th + x, thd + xd, acc
+
+
+@pytest.mark.parametrize("method, kw, tol", [("rk4", {"steps_per_period": 200}, 1e-7),
+                                             ("DOP853", {"rtol": 1e-11}, 1e-9)])
+def test_speed_ripple_against_written_out_equation(method, kw, tol):
+    scene = parse_scene(FLYWHEEL, "<flywheel>")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", SceneAccuracyWarning)
+        m = simulate_scene(scene, method=method, error_estimate=False, **kw)
+    acc, moment = reference(m.time)
+    # measured: rk4 (200 steps/period) 1.2e-8, DOP853 (rtol 1e-11) 2.3e-11 of the largest
+    # value (rk4 at the default 50: 3.0e-6); tolerances ~9x and ~40x above
+    for got, want in ((m.values["crank.acceleration"], acc), (m.values["rod.force"], moment)):
+        assert np.max(np.abs(got - want)) <= tol * np.max(np.abs(want))
+    # the shaft follows the profile exactly: θ̈ = −a k Ω² sin(k Ω t)
+    want = -A * H * OMEGA ** 2 * np.sin(H * OMEGA * m.time)
+    np.testing.assert_allclose(m.values["shaft.acceleration"], want, atol=1e-9 * A * H * OMEGA ** 2)
+    # crank angle: θ = Ω t + (a/k) sin(k Ω t), mod 2π, ascending
+    th = (OMEGA * m.time + A / H * np.sin(H * OMEGA * m.time)) % (2 * math.pi)
+    np.testing.assert_allclose(m.crank_angle, th, atol=1e-12)
+    assert np.all(np.diff(m.crank_angle) > 0)
+
+
+def test_no_ripple_is_constant_speed():
+    scene = parse_scene(FLYWHEEL, "<flywheel>")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", SceneAccuracyWarning)
+        m = simulate_scene(scene, omega_ripple=(0.0, 1), error_estimate=False)
+    # a rigid crank at constant speed: nothing deforms
+    assert max(map(abs, m.extrema["rod.force"])) < 1e-9
+
+
+@pytest.mark.parametrize("ripple, text", [((1.0, 1), "amplitude must be in"),
+                                          ((0.1, 1.5), "whole number"),
+                                          ((0.1, 0), "whole number")])
+def test_bad_ripple_options(ripple, text):
+    from mechcirc.errors import MechcircError
+
+    with pytest.raises(MechcircError, match=text):
+        simulate_scene(parse_scene(FLYWHEEL, "<flywheel>"), omega_ripple=ripple)
+
+
+@pytest.mark.parametrize("value, text", [
+    ("0.1", "must be an inline table"),
+    ("{amplitude = 1.5}", "amplitude must be a number in"),
+    ("{amplitude = 0.1, harmonic = 0}", "harmonic must be a whole number"),
+    ("{amplitude = 0.1, harmonic = 1.5}", "harmonic must be a whole number"),
+    ("{amplitude = 0.1, phase = 2}", "unknown key 'phase'"),
+    ("{harmonic = 2}", "missing amplitude"),
+])
+def test_ripple_grammar_errors_are_located(value, text):
+    from mechcirc.errors import NetlistError
+
+    src = FLYWHEEL.replace("omega_ripple = {amplitude = 0.1, harmonic = 2}",
+                           f"omega_ripple = {value}")
+    line = next(i for i, ln in enumerate(src.splitlines(), 1) if ln.startswith("omega_ripple"))
+    with pytest.raises(NetlistError, match=text) as info:
+        parse_scene(src, "s.toml")
+    assert info.value.line == line
+
+
+def test_set_overrides_the_ripple():
+    from mechcirc.scene.simfile import apply_overrides
+
+    scene = apply_overrides(parse_scene(FLYWHEEL, "<f>"), {"omega_ripple.amplitude": 0.2,
+                                                            "omega_ripple.harmonic": 3.0})
+    assert scene.simulate.omega_ripple == (0.2, 3)
+
+
+def test_point_acceleration_of_a_crank_pin():
+    """B on the crank, 0.1 m from the pivot: a = 0.1 (−q̇² cos q − q̈ sin q, −q̇² sin q + q̈ cos q)
+    with q from the equation written out (measured 1.8e-9 of the largest |a| at 200 steps per
+    period; tolerance 1e-7)."""
+    scene = parse_scene(FLYWHEEL, "<flywheel>")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", SceneAccuracyWarning)
+        m = simulate_scene(scene, steps_per_period=200, error_estimate=False)
+    q, qd, qdd = crank_motion(m.time)
+    ax = 0.1 * (-qd ** 2 * np.cos(q) - qdd * np.sin(q))
+    ay = 0.1 * (-qd ** 2 * np.sin(q) + qdd * np.cos(q))
+    scale = np.max(np.hypot(ax, ay))
+    assert np.max(np.abs(m.values["B.acceleration_x"] - ax)) <= 1e-7 * scale
+    assert np.max(np.abs(m.values["B.acceleration_y"] - ay)) <= 1e-7 * scale
+    assert np.max(np.abs(m.values["B.acceleration"] - np.hypot(ax, ay))) <= 1e-7 * scale
+    assert "A.acceleration" not in m.values          # a frame point does not move
