@@ -21,10 +21,12 @@ matrices (of the loaded part, or with ``whole=True`` of the whole network,
 as the time domain and two-ports need them), and :func:`combine` forms
 A(ω) from them.  :func:`solve` solves A(ω) x = e_a − e_b: small systems as
 batched dense solves, large ones by a sparse LU per ω on a fixed pattern
-(ordering found once; LAPACK's banded LU where the band is narrow).  Each
-solution is refined with residuals in extended precision reusing the
-factors, and the last correction gives the error estimate of K
-(:class:`Solution`).  At a singular point K is +∞·j (a pole) or 0 (a zero),
+(a banded LU where the band is narrow, SuperLU otherwise; the choice and
+the ordering made once from the pattern, see :class:`_SparseSolver`).  Each
+solution is refined with residuals in double-double arithmetic reusing the
+factors (compiled by numba on the sparse path when it is installed:
+:mod:`mechcirc._nodal_kernels`), and the last correction gives the error
+estimate of K (:class:`Solution`).  At a singular point K is +∞·j (a pole) or 0 (a zero),
 with an infinite error, as the series–parallel method gives it.
 """
 
@@ -70,7 +72,7 @@ class NodalSystem:
         Indices of the drive's nodes, −1 for the reference node.
     stamps : dict
         The unsummed entries ``kind -> (rows, cols, values)`` of M, D, Kₛ and C,
-        for residuals in extended precision (a summed diagonal is already rounded).
+        for residuals in double-double (a summed diagonal is already rounded).
     """
 
     nodes: tuple[str, ...]
@@ -214,13 +216,73 @@ def susceptance(m, k, omega):
         return omega * m - k / omega
 
 
-class _Pattern:
-    """The sparsity pattern of A(ω), fixed over ω, with the parts' values aligned to it.
+# ---------------------------------------------------------------------------
+# Double-double arithmetic (error-free transformations, elementwise in numpy).
+# A value is a pair (hi, lo) with hi + lo exact to about 2⁻¹⁰⁴ relative; real
+# and complex arrays alike (complex addition, and complex times real, work
+# component by component).
 
-    ``dc``, ``m``, ``k`` are the summed nonzeros (CSC order) of D + C, M and
-    Kₛ; ``l_*`` the same sums in extended precision (for residuals: a
-    diagonal summed in float64 is already rounded); ``u_*`` the unsummed
-    stamps (for the sensitivity of K to rounding each of them).
+_SPLITTER = 134217729.0                 # 2²⁷ + 1 (Veltkamp's split)
+
+
+def _split(a):
+    """a = hi + lo exactly, hi and lo of 26 significant bits each."""
+    with np.errstate(all="ignore"):
+        c = _SPLITTER * a
+        hi = c - (c - a)
+        if not np.isfinite(np.sum(np.abs(hi))):
+            # |a| above 2⁹⁹⁶: split a·2⁻²⁸ (exact) and scale back.
+            big = np.abs(a) > 2.0 ** 995
+            c = _SPLITTER * (a * 2.0 ** -28)
+            hi = np.where(big, (c - (c - a * 2.0 ** -28)) * 2.0 ** 28, hi)
+        return hi, a - hi
+
+
+def _two_sum(a, b):
+    """a + b = s + e exactly (Knuth's TwoSum)."""
+    s = a + b
+    bb = s - a
+    return s, (a - (s - bb)) + (b - bb)
+
+
+def _two_prod(a, ah, al, b):
+    """a·b = p + e exactly (Dekker's TwoProduct; ``a`` split beforehand as ah + al, real)."""
+    p = a * b
+    bh, bl = _split(b)
+    return p, ((ah * bh - p) + ah * bl + al * bh) + al * bl
+
+
+def _dd_add(ah, al, bh, bl):
+    s, e = _two_sum(ah, bh)
+    return s, e + (al + bl)
+
+
+def _dd_mul_d(h, lo, w):
+    """(h + lo)·w for a double w (real)."""
+    wh, wl = _split(w)
+    p, e = _two_prod(w, wh, wl, h)
+    return p, e + lo * w
+
+
+def _dd_div_d(h, lo, w):
+    """(h + lo)/w for a double w (real)."""
+    q = h / w
+    wh, wl = _split(w)
+    p, e = _two_prod(w, wh, wl, q)
+    return q, (((h - p) - e) + lo) / w
+
+
+class _Pattern:
+    """What does not change with ω: the pattern of A(ω), its parts, and the residual's plan.
+
+    ``indices``/``indptr`` are the CSC pattern of A(ω) (symmetric); ``dc``,
+    ``m``, ``k`` the summed nonzeros of D + C, M and Kₛ aligned to it, from
+    which A(ω) is formed (:func:`combine`) as a data vector on the fixed
+    pattern.  The residual b − A x (:meth:`residual`) is not formed from
+    these sums (a summed diagonal is already rounded): each element's
+    current y·(x_i − x_j) and each lever stamp's product is computed exactly
+    in double-double arithmetic and summed per row and kind in double-double,
+    following a plan (:attr:`slots`) made here once.
     """
 
     def __init__(self, system: NodalSystem):
@@ -239,23 +301,8 @@ class _Pattern:
         parts = [np.bincount(inv, weights=np.where(kind == i, vals, 0.0), minlength=nnz)
                  for i in range(4)]
         self.m, self.k, self.dc = parts[0], parts[2], parts[1] + parts[3]
-        # The same sums in extended precision, for b − A x: A is symmetric, so
-        # the CSC pattern read as CSR gives its rows.
-        ext = np.longdouble
-        summed = []
-        for sel in ((kind == 0), (kind == 2), (kind == 1) | (kind == 3)):
-            acc = np.zeros(nnz, dtype=ext)
-            np.add.at(acc, inv[sel], vals[sel].astype(ext))
-            summed.append(acc)
-        self.l_m, self.l_k, self.l_dc = summed
-        lengths = np.diff(self.indptr)
-        self.l_rows = np.flatnonzero(lengths > 0)
-        self.l_starts = self.indptr[:-1][self.l_rows]
-        # Unsummed stamps, for the sensitivity of K to rounding each one.
-        self.u_rows, self.u_cols = rows, cols
-        self.u_m, self.u_k = np.where(kind == 0, vals, 0.0), np.where(kind == 2, vals, 0.0)
-        self.u_dc = np.where((kind == 1) | (kind == 3), vals, 0.0)
         self._elements(system)
+        self._plan(system)
 
     def csc(self, omega: float):
         """A(ω) as a ``scipy.sparse.csc_matrix`` on the fixed pattern."""
@@ -263,46 +310,6 @@ class _Pattern:
 
         data = combine(self.dc, self.m, self.k, omega)
         return sp.csc_matrix((data, self.indices, self.indptr), shape=(self.n, self.n))
-
-    def residual(self, omega: NDArray, x: NDArray, rhs: NDArray) -> NDArray[np.complex128]:
-        """b − A(ω) x for each ω (rows of ``x``), accumulated in extended precision.
-
-        The same A(ω) as :func:`combine`, with its real part D + C and imaginary
-        part ωM − Kₛ/ω kept apart: real ``longdouble`` arithmetic is several
-        times faster than complex.
-        """
-        ext = np.longdouble
-        if np.iscomplexobj(omega):          # complex frequency (resonance polishing)
-            w = np.asarray(omega).astype(np.clongdouble)[:, None]
-            sus = susceptance(self.l_m, self.l_k, w)
-            re, im = self.l_dc - sus.imag, sus.real
-        else:
-            w = np.asarray(omega).astype(ext)[:, None]
-            re, im = self.l_dc, susceptance(self.l_m, self.l_k, w)
-        xc = x[:, self.indices]
-        xr, xi = xc.real.astype(ext), xc.imag.astype(ext)
-        Ax = np.zeros((w.shape[0], self.n), dtype=np.clongdouble)
-        if self.l_rows.size:
-            pr = re * xr - im * xi
-            pi = re * xi + im * xr
-            Ax.real[:, self.l_rows] = np.add.reduceat(pr, self.l_starts, axis=1)
-            Ax.imag[:, self.l_rows] = np.add.reduceat(pi, self.l_starts, axis=1)
-        r = rhs.astype(ext)[None, :] - Ax
-        return r.astype(complex)
-
-    def sensitivity(self, omega: NDArray, x: NDArray) -> NDArray[np.float64]:
-        """Σ |x_r · a_rc · x_c| over the unsummed stamps, for each ω.
-
-        A is complex symmetric, so the adjoint solution of K = cᵀ A⁻¹ c is x
-        itself and a relative change ε of every stamp moves K by at most ε
-        times this sum: the sensitivity of K to rounding the data.
-        """
-        w = np.asarray(omega)[:, None]
-        xa = np.abs(x).astype(float)
-        with np.errstate(all="ignore"):
-            a = np.abs(combine(self.u_dc, self.u_m, self.u_k, w))
-            return np.einsum("ij,ij,ij->i", xa[:, self.u_rows], a, xa[:, self.u_cols])
-
 
     def _elements(self, system: NodalSystem) -> None:
         index = {n: i for i, n in enumerate(system.nodes)}
@@ -313,39 +320,248 @@ class _Pattern:
         els = system.elements
         self.e_i = np.array([at(e.n1) for e in els], dtype=np.int64)
         self.e_j = np.array([at(e.n2) for e in els], dtype=np.int64)
-        val = np.array([e.value * e.eta for e in els], dtype=float)
+        self.e_val = np.array([e.value * e.eta for e in els], dtype=float)
         kind = np.array([e.kind for e in els])
-        self.e_m = np.where(kind == "mass", val, 0.0)
-        self.e_k = np.where(kind == "spring", val, 0.0)
-        self.e_c = np.where(kind == "damper", val, 0.0)
+        self.e_kind = np.select([kind == "mass", kind == "spring"], [0, 1], 2).astype(np.int64)
+        self.e_m = np.where(self.e_kind == 0, self.e_val, 0.0)
+        self.e_k = np.where(self.e_kind == 1, self.e_val, 0.0)
+        self.e_c = np.where(self.e_kind == 2, self.e_val, 0.0)
         n_nodes = len(system.nodes)
         lv = system.levers
         self.l_p1 = np.array([at(v.p1) for v in lv], dtype=np.int64)
         self.l_p2 = np.array([at(v.p2) for v in lv], dtype=np.int64)
         self.l_col = n_nodes + np.arange(len(lv), dtype=np.int64)
         self.l_r = np.array([abs(v.ratio) for v in lv], dtype=float)
+        # The lever block's stamps (the held drive's constraint included).
+        lr, lc, lval = (np.asarray(a) for a in system.stamps["lever"])
+        self.s_row = lr.astype(np.int64)
+        self.s_col = lc.astype(np.int64)
+        self.s_val = lval.astype(float)
 
-    def data_sensitivity(self, omega: NDArray, x: NDArray) -> NDArray[np.float64]:
-        """Σ_e |y_e| |x_n1 − x_n2|² + Σ_levers 2|r| |x_p1 − x_p2| |q|, for each ω.
+    def _plan(self, system: NodalSystem) -> None:
+        """Terms of b − A x and their summation order, per (row, kind) bucket.
 
-        Rounding an element's value by a relative ε changes its four stamps
-        together, δA = ε·y·(e_i − e_j)(e_i − e_j)ᵀ, and K by ε·y·(x_i − x_j)²
-        (the adjoint of the complex symmetric A is x itself); a lever's ratio
-        enters its two primary stamps.  This sum times eps bounds the change
-        of K when every value is rounded, without the cancellation that a
-        bound stamp by stamp would count many times over.
+        Terms: +y·d of each element into its first node's row, −y·d into its
+        second's (the reference row dropped), v·x_c of each lever stamp.  A
+        bucket is (row, kind) with kinds mass, spring, damper, lever; buckets
+        are ranked by their number of terms, so that the s-th terms of all
+        buckets with more than s terms form one slot, added in one
+        vectorised double-double step.
+        """
+        n, E = self.n, self.e_i.size
+        self.e_vs = _split(self.e_val)
+        self.s_vs = _split(self.s_val)
+        bucket = np.concatenate([self.e_i * 4 + self.e_kind, self.e_j * 4 + self.e_kind,
+                                 self.s_row * 4 + 3])
+        term = np.arange(bucket.size)
+        keep = bucket < 4 * n                  # rows of the reference dropped
+        bucket, term = bucket[keep], term[keep]
+        uniq, inv, counts = np.unique(bucket, return_inverse=True, return_counts=True)
+        order = np.argsort(-counts, kind="stable")
+        rank = np.empty_like(order)
+        rank[order] = np.arange(order.size)
+        r = rank[inv]
+        srt = np.lexsort((term, r))
+        r, term = r[srt], term[srt]
+        first = np.searchsorted(r, np.arange(uniq.size))
+        pos = np.arange(r.size) - first[r]
+        self.slots = []
+        for s in range(int(counts.max(initial=0))):
+            sel = pos == s
+            self.slots.append(term[sel][np.argsort(r[sel], kind="stable")])
+        self.buckets = uniq[order]             # bucket of each rank
+        # The compiled kernel adds each bucket's terms in the same order: the
+        # + terms by element, then the − terms, then the lever stamps.
+        self.k_bi = np.minimum(self.e_i * 4 + self.e_kind, 4 * n).astype(np.int64)
+        self.k_bj = np.minimum(self.e_j * 4 + self.e_kind, 4 * n).astype(np.int64)
+        self.k_bs = np.minimum(self.s_row * 4 + 3, 4 * n).astype(np.int64)
+        self.n_terms = 2 * E + self.s_row.size
+        self.max_terms = int(counts.max(initial=0))
+
+    def residual(self, omega: NDArray, xh: NDArray, xl: NDArray | None,
+                 rhs: NDArray) -> NDArray[np.complex128]:
+        """b − A(ω) x for each ω (rows of x = xh + xl), in double-double, rounded at the end.
+
+        The same A(ω) as :func:`combine`: (A x)_r = Σ dampers + Σ levers +
+        jω Σ masses − j Σ springs / ω, each sum Σ ±value·(x_i − x_j) exact to
+        about 2⁻¹⁰⁴ (TwoSum of the differences, TwoProduct of the products,
+        cascaded TwoSum per bucket), and the ω factors applied to the sums in
+        double-double.  Complex ω (resonance polishing) are accepted.
+        """
+        c, n = xh.shape
+        if not np.iscomplexobj(omega) and n > DENSE_LIMIT and _kernels() is not None:
+            return self._residual_compiled(omega, xh, xl, rhs)
+        z = np.zeros((c, 1), dtype=complex)
+        xe = np.concatenate([xh.astype(complex, copy=False), z], axis=1)
+        d_h, d_l = _two_sum(xe[:, self.e_i], -xe[:, self.e_j])
+        xs = xe[:, self.s_col]
+        if xl is not None:
+            xle = np.concatenate([xl.astype(complex, copy=False), z], axis=1)
+            d_l = d_l + (xle[:, self.e_i] - xle[:, self.e_j])
+        vh, vl = self.e_vs
+        p_h, p_l = _two_prod(self.e_val, vh, vl, d_h)
+        p_l = p_l + self.e_val * d_l
+        sh, sl = self.s_vs
+        q_h, q_l = _two_prod(self.s_val, sh, sl, xs)
+        if xl is not None:
+            q_l = q_l + self.s_val * xle[:, self.s_col]
+        T_h = np.concatenate([p_h, -p_h, q_h], axis=1)
+        T_l = np.concatenate([p_l, -p_l, q_l], axis=1)
+        S_h = np.zeros((c, 4 * n), dtype=complex)
+        S_l = np.zeros((c, 4 * n), dtype=complex)
+        if self.slots:
+            acc_h, acc_l = T_h[:, self.slots[0]], T_l[:, self.slots[0]]
+            for s in self.slots[1:]:
+                k = s.size
+                a, e = _two_sum(acc_h[:, :k], T_h[:, s])
+                acc_h[:, :k] = a
+                acc_l[:, :k] += e + T_l[:, s]
+            S_h[:, self.buckets], S_l[:, self.buckets] = acc_h, acc_l
+        S_h, S_l = S_h.reshape(c, n, 4), S_l.reshape(c, n, 4)
+        with np.errstate(all="ignore"):
+            w = np.asarray(omega)[:, None]
+            m_h, m_l = S_h[..., 0], S_l[..., 0]
+            k_h, k_l = S_h[..., 1], S_l[..., 1]
+            if np.iscomplexobj(w):
+                wr, wi = w.real, w.imag
+                # jω·S_m = (−wi + j wr)·S_m, component by component.
+                a_h, a_l = _dd_mul_d(m_h.real, m_l.real, wr)    # S_m.re wr
+                b_h, b_l = _dd_mul_d(m_h.imag, m_l.imag, wi)    # S_m.im wi
+                c_h, c_l = _dd_mul_d(m_h.real, m_l.real, wi)
+                d_h2, d_l2 = _dd_mul_d(m_h.imag, m_l.imag, wr)
+                # ω S_m = (re wr − im wi) + j(re wi + im wr)
+                wm_re = _dd_add(a_h, a_l, -b_h, -b_l)
+                wm_im = _dd_add(c_h, c_l, d_h2, d_l2)
+                # S_k/ω = S_k·conj(ŵ)/(|ŵ|²·2ᵉ), ŵ = ω/2ᵉ (exact scaling).
+                e2 = np.ldexp(1.0, np.frexp(np.maximum(np.abs(wr), np.abs(wi)))[1])
+                ur, ui = wr / e2, wi / e2
+                p1 = _dd_mul_d(k_h.real, k_l.real, ur)
+                p2 = _dd_mul_d(k_h.imag, k_l.imag, ui)
+                p3 = _dd_mul_d(k_h.imag, k_l.imag, ur)
+                p4 = _dd_mul_d(k_h.real, k_l.real, ui)
+                num_re = _dd_add(*p1, *p2)              # re·ur + im·ui
+                num_im = _dd_add(*p3, -p4[0], -p4[1])   # im·ur − re·ui
+                n2 = _dd_add(*_dd_mul_d(ur, 0.0, ur), *_dd_mul_d(ui, 0.0, ui))
+                den = (n2[0] * e2, n2[1] * e2)
+                kw_re = _dd_div_dd(*num_re, *den)
+                kw_im = _dd_div_dd(*num_im, *den)
+            else:
+                wm_re = _dd_mul_d(m_h.real, m_l.real, w)
+                wm_im = _dd_mul_d(m_h.imag, m_l.imag, w)
+                kw_re = _dd_div_d(k_h.real, k_l.real, w)
+                kw_im = _dd_div_d(k_h.imag, k_l.imag, w)
+            # susceptance part: ω S_m − S_k/ω; A x = S_c + S_l + j·sus
+            sus_re = _dd_add(*wm_re, -kw_re[0], -kw_re[1])
+            sus_im = _dd_add(*wm_im, -kw_im[0], -kw_im[1])
+            g_h, g_l = _dd_add(S_h[..., 2], S_l[..., 2], S_h[..., 3], S_l[..., 3])
+            ax_re = _dd_add(g_h.real, g_l.real, -sus_im[0], -sus_im[1])
+            ax_im = _dd_add(g_h.imag, g_l.imag, *sus_re)
+            r_re = _dd_add(rhs[None, :], 0.0, -ax_re[0], -ax_re[1])
+            r_im = (-ax_im[0], -ax_im[1])
+            out = np.empty((c, n), dtype=complex)
+            for part, (hi, lo) in ((out.real, r_re), (out.imag, r_im)):
+                lo = np.where(np.isfinite(lo) | ~np.isfinite(hi), lo, 0.0)
+                part[...] = hi + lo
+            return out
+
+    def _residual_compiled(self, omega, xh, xl, rhs):
+        """:meth:`residual` by the compiled kernel (the same operations in the same order)."""
+        c, n = xh.shape
+        z = np.zeros((c, 1))
+        xr = np.concatenate([xh.real, z], axis=1)
+        xi = np.concatenate([xh.imag, z], axis=1)
+        if xl is not None:
+            xlr = np.concatenate([xl.real, z], axis=1)
+            xli = np.concatenate([xl.imag, z], axis=1)
+        else:
+            xlr = xli = xr
+        out_r, out_i = np.empty((c, n)), np.empty((c, n))
+        with np.errstate(all="ignore"):
+            _kernels().residual(np.ascontiguousarray(omega, dtype=float), xr, xi, xlr, xli,
+                                xl is not None, np.asarray(rhs, dtype=float), self.k_bi,
+                                self.k_bj, self.k_bs, self.e_i, self.e_j, self.e_val,
+                                self.e_vs[0], self.e_vs[1], self.s_col, self.s_val,
+                                self.s_vs[0], self.s_vs[1], np.zeros((4 * n + 4, 4)),
+                                out_r, out_i)
+        return out_r + 1j * out_i
+
+    def sensitivities(self, omega: NDArray, x: NDArray, K: NDArray) -> tuple[NDArray, NDArray]:
+        """(S/|K|, S_data/|K|) for each ω: the sensitivity of K to rounding the stamps and the data.
+
+        S = Σ |x_r · a_rc · x_c| over the unsummed stamps: A is complex
+        symmetric, so the adjoint solution of K = cᵀ A⁻¹ c is x itself and a
+        relative change ε of every stamp moves K by at most ε·S (for an
+        element, its four stamps give |y|(|x_i| + |x_j|)²).
+
+        S_data = Σ_e |y_e| |x_i − x_j|² + Σ_levers 2|r| |x_p1 − x_p2| |q|:
+        rounding an element's value by a relative ε changes its four stamps
+        together, δA = ε·y·(e_i − e_j)(e_i − e_j)ᵀ, and K by ε·y·(x_i − x_j)²;
+        a lever's ratio enters its two primary stamps.  This sum times eps
+        bounds the change of K when every value is rounded, without the
+        cancellation that a bound stamp by stamp would count many times over.
+        Both are computed with x scaled to max-norm 1 (no overflow where x
+        and K are near float64's limits), and divided by |K|.
         """
         w = np.asarray(omega)[:, None]
-        xe = np.concatenate([np.asarray(x), np.zeros((x.shape[0], 1), x.dtype)], axis=1)
+        c = x.shape[0]
         with np.errstate(all="ignore"):
+            scale = np.max(np.abs(x), axis=1, initial=0.0)
+            scale = np.where((scale > 0) & np.isfinite(scale), scale, 1.0)
+            kern = _kernels() if self.n > DENSE_LIMIT else None
+            if kern is not None and not np.iscomplexobj(omega):
+                S, Sd = np.empty(c), np.empty(c)
+                xe = np.concatenate([np.asarray(x, dtype=complex), np.zeros((c, 1), complex)],
+                                    axis=1)
+                kern.sensitivities(np.asarray(omega, dtype=float), xe, scale, self.e_i,
+                                   self.e_j, self.e_m, self.e_k, self.e_c, self.s_row,
+                                   self.s_col, self.s_val, self.l_p1, self.l_p2, self.l_col,
+                                   self.l_r, S, Sd)
+                f = scale / np.abs(K)
+                return S * f * scale, Sd * f * scale
+            xe = np.concatenate([np.asarray(x, dtype=complex) / scale[:, None],
+                                 np.zeros((c, 1), complex)], axis=1)
             y = np.abs(combine(self.e_c, self.e_m, self.e_k, w))
-            d = np.abs(xe[:, self.e_i] - xe[:, self.e_j]).astype(float)
-            out = np.sum(y * d * d, axis=1)
+            ax = np.abs(xe)
+            ai, aj = ax[:, self.e_i], ax[:, self.e_j]
+            S = np.einsum("ij,ij->i", y, (ai + aj) ** 2)
+            if self.s_row.size:
+                S = S + np.abs(self.s_val) @ (ax[:, self.s_row] * ax[:, self.s_col]).T \
+                    if c else S
+            d = np.abs(xe[:, self.e_i] - xe[:, self.e_j])
+            Sd = np.einsum("ij,ij->i", y, d * d)
             if self.l_r.size:
-                dl = np.abs(xe[:, self.l_p1] - xe[:, self.l_p2]).astype(float)
-                out = out + np.sum(2 * self.l_r * dl * np.abs(xe[:, self.l_col]).astype(float),
-                                   axis=1)
-        return out
+                dl = np.abs(xe[:, self.l_p1] - xe[:, self.l_p2])
+                Sd = Sd + np.sum(2 * self.l_r * dl * ax[:, self.l_col], axis=1)
+            f = scale / np.abs(K)
+            return S * f * scale, Sd * f * scale
+
+
+#: Use the compiled residual kernel when numba is installed (set False to force numpy).
+USE_NUMBA = True
+_KERNELS = []
+
+
+def _kernels():
+    """The compiled kernel module, or None (numba not installed or not wanted).
+
+    Used on the sparse path only (above :data:`DENSE_LIMIT` unknowns): small
+    systems are vectorised over many ω at once, and need no compilation.
+    """
+    if not USE_NUMBA:
+        return None
+    if not _KERNELS:
+        from . import _nodal_kernels
+
+        _KERNELS.append(_nodal_kernels if _nodal_kernels.HAVE_NUMBA else None)
+    return _KERNELS[0]
+
+
+def _dd_div_dd(ah, al, bh, bl):
+    """(ah + al)/(bh + bl) in double-double (real)."""
+    q = ah / bh
+    qh, ql = _split(q)
+    p, e = _two_prod(q, qh, ql, bh)
+    return q, ((((ah - p) - e) + al) - q * bl) / bh
 
 
 def _pattern(system: NodalSystem) -> _Pattern:
@@ -375,8 +591,10 @@ class Solution:
 
     Attributes
     ----------
-    x : ndarray, shape (n_ω, n)
-        ``clongdouble`` if refined, NaN rows where A(ω) could not be solved.
+    x : ndarray of complex, shape (n_ω, n), or None
+        The refined solutions rounded to complex128 (K itself is formed
+        from the unrounded double-double solution); NaN rows where A(ω)
+        could not be solved; None when not kept (``keep_x=False``).
     K : ndarray of complex, shape (n_ω,)
         x_a − x_b (the drive's velocity difference per unit force).
     error : ndarray of float, shape (n_ω,)
@@ -389,109 +607,193 @@ class Solution:
         Points on a singularity of A(ω) (exact, or within rounding).
     """
 
-    x: NDArray
+    x: NDArray | None
     K: NDArray[np.complex128]
     error: NDArray[np.float64]
     singular: NDArray[np.bool_]
 
 
+#: SuperLU points whose refinement leaves a larger estimate than this are
+#: factorised again with partial pivoting (:class:`_SparseSolver`).
+_STRICT_AFTER = 1e-10
+
+#: Work per chunk of frequencies: about this many (ω, term) pairs at once.
+_CHUNK_TERMS = 2 ** 17
+
+
+def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int, keep: NDArray):
+    """Factor, solve and refine at each ω (real or complex, already checked), chunk by chunk.
+
+    Returns (K, error of the solve, S, S_data, x rows or None, the rows of x
+    at ``keep``).  What does not change with ω — the pattern, the solver's
+    choice and ordering, the residual's plan — comes from :func:`_pattern`
+    and :func:`_solver`.
+    """
+    n = system.size
+    m = omega.size
+    pat = _pattern(system)
+    rhs = system.injection()
+    K = np.full(m, complex(np.nan, np.nan))
+    err = np.full(m, np.inf)
+    S = np.full(m, np.nan)
+    Sd = np.full(m, np.nan)
+    x_all = np.full((m, n), complex(np.nan, np.nan)) if keep is None else None
+    kept = {}
+    solver = _solver(system)
+    if solver.kind != "dense" and _kernels() is not None:
+        # Compiled: no (ω, term) temporaries; the chunk's (ω, n) arrays stay in cache.
+        chunk = max(1, min(solver.max_chunk, 2 ** 16 // max(1, n)))
+    else:
+        chunk = max(1, min(solver.max_chunk, _CHUNK_TERMS // max(1, pat.n_terms + n)))
+    for start in range(0, m, chunk):
+        sel = np.arange(start, min(start + chunk, m))
+        good, solve_fn = solver.factor(omega[sel])
+        sel = sel[good]
+        if not sel.size:
+            continue
+        xh, xl, est = _refined(solve_fn, pat, omega[sel], rhs, system, refine, steps)
+        redo = np.flatnonzero(~(est <= _STRICT_AFTER)) if solver.kind == "superlu" else []
+        if len(redo):
+            # Diagonal pivoting was not stable enough here: partial pivoting.
+            ok2, strict_fn = solver.factor(omega[sel[redo]], strict=True)
+            if ok2.all():
+                xh2, xl2, est2 = _refined(strict_fn, pat, omega[sel[redo]], rhs, system,
+                                          refine, steps)
+                better = ~(est2 >= est[redo])
+                take = redo[better]
+                xh[take], est[take] = xh2[better], est2[better]
+                if xl is not None:
+                    xl[take] = xl2[better]
+        K[sel] = _difference_dd(system, xh, xl)
+        x = xh + xl if xl is not None else xh
+        err[sel] = est
+        S[sel], Sd[sel] = pat.sensitivities(omega[sel], x, K[sel])
+        if x_all is not None:
+            x_all[sel] = x
+        elif keep is not None:
+            for k in np.flatnonzero(keep[sel]):
+                kept[int(sel[k])] = x[k]
+    return K, err, S, Sd, x_all, kept
+
+
+def _difference_dd(system, xh, xl):
+    """K = x_a − x_b from x = xh + xl, rounded once."""
+    zero = np.zeros(xh.shape[0], dtype=complex)
+    ah = xh[:, system.a] if system.a >= 0 else zero
+    bh = xh[:, system.b] if system.b >= 0 else zero
+    with np.errstate(all="ignore"):
+        s, e = _two_sum(ah, -bh)
+        if xl is not None:
+            al = xl[:, system.a] if system.a >= 0 else zero
+            bl = xl[:, system.b] if system.b >= 0 else zero
+            e = e + (al - bl)
+        return np.asarray(s + e, dtype=complex)
+
+
 def solve(system: NodalSystem, omega: ArrayLike, *, refine: bool = True,
-          steps: int = 4, limits: bool = True) -> Solution:
+          steps: int = 4, limits: bool = True, keep_x: bool = True) -> Solution:
     """Solve A(ω) x = e_a − e_b at each ω, refined, with an error estimate of K.
 
     Small systems (≤ :data:`DENSE_LIMIT` unknowns) are solved as batched dense
-    systems; large ones by a sparse LU per ω whose column ordering is computed
-    once and reused.  Refinement reuses the factors: each step is one
-    residual in extended precision and one triangular solve.
+    systems; large ones by a sparse LU per ω on the fixed pattern (the choice
+    of solver and its ordering made once, deterministically: see
+    :class:`_SparseSolver`).  Refinement reuses the factors: each step is one
+    residual in double-double arithmetic (:meth:`_Pattern.residual`) and one
+    triangular solve, done for a chunk of frequencies at once.  With
+    ``keep_x=False`` the solutions are not kept (``Solution.x`` is None),
+    which bounds the memory of long sweeps of large networks.
     """
     omega = np.asarray(omega, dtype=float).reshape(-1)
-    n = system.size
-    m = omega.size
-    dtype = np.clongdouble if refine else complex
-    x = np.full((m, n), np.nan, dtype=dtype)
-    err = np.full(m, np.inf)
     ok = np.isfinite(omega) & (omega > 0)
     idx = np.flatnonzero(ok)
-    rhs = system.injection()
-    pat = _pattern(system)
-    if n <= DENSE_LIMIT:
-        chunk = max(1, _CHUNK_BYTES // (16 * n * n))
-        for start in range(0, idx.size, chunk):
-            sel = idx[start:start + chunk]
-            A = dense_matrices(system, omega[sel])
-            finite = np.isfinite(A).all(axis=(1, 2))
-            sel, A = sel[finite], A[finite]
-            if not sel.size:
-                continue
-            lu = _DenseLU(A)
-            xs, es = _refined(lu.solve, pat, omega[sel], rhs, system, refine, steps)
-            x[sel], err[sel] = xs, es
-    else:
-        solver = _SparseSolver(pat)
-        for i in idx:
-            lu = solver.factor(omega[i])
-            if lu is None:
-                continue
-            xs, es = _refined(lambda r: lu(r[0])[None, :], pat, omega[i:i + 1], rhs,
-                              system, refine, steps)
-            x[i], err[i] = xs[0], es[0]
-    K = system.difference(x).astype(complex)
+    m = omega.size
+    K = np.full(m, complex(np.nan, np.nan))
+    err = np.full(m, np.inf)
+    S = np.full(m, np.nan)
+    Sd = np.full(m, np.nan)
+    x = np.full((m, system.size), complex(np.nan, np.nan)) if keep_x else None
+    kept = {}
+    if idx.size:
+        Ki, ei, Si, Sdi, xi, kept_i = _sweep(system, omega[idx], refine, steps,
+                                             None if keep_x else np.ones(idx.size, bool))
+        K[idx], err[idx], S[idx], Sd[idx] = Ki, ei, Si, Sdi
+        if keep_x:
+            x[idx] = xi
+        else:
+            # Only the rows needed at singular points are kept.
+            sing = ~np.isfinite(Ki) | (ei >= 1.0)
+            kept = {int(idx[k]): v for k, v in kept_i.items() if sing[k]}
     # No correct digit from the refinement itself (it did not contract): A(ω)
     # is numerically singular.  The residual-rounding bound below is a worst
     # case and is not used for this verdict.
     singular = ok & (~np.isfinite(K) | (err >= 1.0))
-    S = pat.sensitivity(omega, x)
     with np.errstate(all="ignore"):
-        err = err + _residual_rounding(K, S)
-    with np.errstate(all="ignore"):
-        err = np.where(ok, _total(K, pat.data_sensitivity(omega, x), err), np.inf)
+        err = err + _residual_rounding(system, S)
+        err = np.where(ok, _total(Sd, err), np.inf)
     if limits:
-        K, err = _singular_points(system, omega, x, K, err, singular, steps)
+        rows = x if keep_x else kept
+        K, err = _singular_points(system, omega, rows, K, err, singular, steps)
     return Solution(x, K, err, singular)
 
 
 def _refined(solve_fn, pat: _Pattern, omega, rhs, system, refine: bool, steps: int):
-    """x from one solve and up to ``steps`` refinement steps; returns (x, relative error of K)."""
+    """x from one solve and up to ``steps`` refinement steps.
+
+    Returns (xh, xl, relative error of K): x = xh + xl in double-double
+    (xl None without refinement).
+    """
     eps = np.finfo(float).eps
     b = np.broadcast_to(rhs.astype(complex), (omega.size, rhs.size))
     x0 = solve_fn(b)
     if not refine:
         # No refinement: the first correction is still the error estimate.
-        d = solve_fn(pat.residual(omega, x0.astype(np.clongdouble), rhs))
-        return x0, _estimate(system, x0, d, x0)
-    x = x0.astype(np.clongdouble)
+        d = solve_fn(pat.residual(omega, x0, None, rhs))
+        return x0, None, _estimate(system, x0, None, d, x0)
+    xh, xl = x0.copy(), np.zeros_like(x0)
     prev = x0
     est = np.full(omega.size, np.inf)
-    for _ in range(steps):
-        d = solve_fn(pat.residual(omega, x, rhs))
-        est = _estimate(system, x, d, prev)
-        x = x + d
-        prev = d
+    active = np.arange(omega.size)
+    for step in range(steps):
+        # Only the points not yet converged take a further step (their
+        # factors chosen by ``rows``).
+        rows = None if active.size == omega.size else active
+        xa, xla = xh[active], (xl[active] if step else None)
+        d = solve_fn(pat.residual(omega[active], xa, xla, rhs), *(() if rows is None else (rows,)))
+        est[active] = _estimate(system, xa, xla, d, prev[active])
+        with np.errstate(all="ignore"):
+            s, e = _two_sum(xa, d)
+        xh[active] = s
+        xl[active] = e if xla is None else xla + e
+        prev = prev.copy() if step == 0 else prev
+        prev[active] = d
         # est bounds the error before this correction; after it, the error is
         # smaller still (by the contraction): stop once est is near rounding.
-        if not np.any(est > 16 * eps):
+        active = active[est[active] > 16 * eps]
+        if not active.size:
             break
-    return x, est
+    return xh, xl, est
 
 
-def _residual_rounding(K, S):
-    """Relative error of K left by residuals rounded in extended precision.
+def _residual_rounding(system, S):
+    """Relative error of K left by residuals rounded in double-double.
 
-    Each residual row is rounded by about eps_ld × Σ_c |a_rc x_c|, which K
-    (through the adjoint solution, x itself) feels as eps_ld × S; the
-    refinement cannot see it.  Four times that, for the accumulation.
+    Each residual row is summed to about (terms + 4)·u² × Σ_c |a_rc x_c|
+    (u = 2⁻⁵³), which K (through the adjoint solution, x itself) feels as
+    that times S; the refinement cannot see it.
     """
-    eps_ld = float(np.finfo(np.longdouble).eps)
+    pat = _pattern(system)
+    u2 = (np.finfo(float).eps / 2) ** 2
     with np.errstate(all="ignore"):
-        out = 4 * eps_ld * S / np.abs(K)
+        out = 4 * (pat.max_terms + 4) * u2 * S
     return np.where(np.isnan(out), np.inf, out)
 
 
-def _total(K, S, est, *, data: str = "flag"):
+def _total(S, est, *, data: str = "flag"):
     """The solve's error ``est``, and the sensitivity of K to rounding its data.
 
     Each value (m, k, c, r) carries a rounding of up to eps relative; that
-    moves K by eps × S / |K| (S from :meth:`_Pattern.data_sensitivity`), far more than the solve near a zero of K.
+    moves K by eps × S_data / |K| (``S``, from :meth:`_Pattern.sensitivities`), far
+    more than the solve near a zero of K.
     With ``data="flag"`` (sweeps) that figure replaces the estimate only where
     it exceeds :data:`~mechcirc.sweep.NEAR_SINGULAR_ERROR` (1e-6): a point
     within rounding of a zero is flagged, as the series–parallel method flags
@@ -503,7 +805,7 @@ def _total(K, S, est, *, data: str = "flag"):
     """
     eps = np.finfo(float).eps
     with np.errstate(all="ignore"):
-        rounding = eps * S / np.abs(K)
+        rounding = eps * S
         rounding = np.where(np.isnan(rounding), np.inf, rounding)
         if data == "add":
             total = est + rounding
@@ -512,7 +814,7 @@ def _total(K, S, est, *, data: str = "flag"):
     return np.maximum(total, eps)
 
 
-def _estimate(system, x, d, prev):
+def _estimate(system, xh, xl, d, prev):
     """Relative error of K = x_a − x_b before applying the correction ``d``.
 
     |d_a − d_b| estimates the error of K; ``d`` itself is wrong by about the
@@ -521,152 +823,235 @@ def _estimate(system, x, d, prev):
     as large as x itself that does not contract means A is numerically
     singular: inf.
     """
-    tiny = np.finfo(np.longdouble).eps
+    tiny = np.finfo(float).eps ** 2
     with np.errstate(all="ignore"):
-        nd = np.max(np.abs(d), axis=-1).astype(float)
-        nx = np.max(np.abs(x), axis=-1).astype(float)
-        npv = np.maximum(np.max(np.abs(prev), axis=-1).astype(float), tiny * nx)
+        nd = np.max(np.abs(d), axis=-1)
+        nx = np.max(np.abs(xh), axis=-1)
+        npv = np.maximum(np.max(np.abs(prev), axis=-1), tiny * nx)
         rho = np.where(npv > 0, nd / npv, 0.0)
-        K = np.abs(system.difference(x)).astype(float)
-        dK = np.abs(system.difference(d)).astype(float)
+        K = np.abs(_difference_dd(system, xh, xl))
+        dK = np.abs(system.difference(d))
         # The drive's own components: a norm over all of d would mix scales
         # (a lever of ratio 1e150 puts velocities 1e150 apart).
-        da = np.abs(d[..., system.a]).astype(float) if system.a >= 0 else 0.0
-        db = np.abs(d[..., system.b]).astype(float) if system.b >= 0 else 0.0
+        da = np.abs(d[..., system.a]) if system.a >= 0 else 0.0
+        db = np.abs(d[..., system.b]) if system.b >= 0 else 0.0
         est = (dK + np.minimum(rho, 1.0) * (da + db)) / K
-        # Stagnation at the residual's own rounding level (corrections of
-        # eps_ld·cond(A) relative) is not divergence: only corrections of the
-        # size of x itself that do not shrink mean a singular A.
+        # Stagnation at the residual's own rounding level is not divergence:
+        # only corrections of the size of x itself that do not shrink mean a
+        # singular A.
         diverged = (rho >= 0.5) & (nd > 1e-2 * nx)
         est = np.where(diverged | np.isnan(est), np.inf, est)
     return est
 
 
-class _DenseLU:
-    """The inverses of a batch of small dense matrices, reused for every right-hand side.
+def _solver(system: NodalSystem):
+    """The solver of ``system`` (dense batch or sparse), built once per system."""
+    cached = system.__dict__.get("_solver")
+    if cached is None:
+        pat = _pattern(system)
+        cached = _DenseSolver(system, pat) if system.size <= DENSE_LIMIT \
+            else _SparseSolver(pat)
+        object.__setattr__(system, "_solver", cached)
+    return cached
+
+
+class _DenseSolver:
+    """Batched dense solves: the inverses of A(ω) for a chunk of ω, applied as one product.
 
     An explicit inverse is no less accurate here than LU factors: every
-    solution is refined with residuals in extended precision, and the batch
+    solution is refined with residuals in double-double, and the batch
     is applied as one matrix product (small systems, many ω).
     """
 
-    def __init__(self, A: NDArray):
+    kind = "dense"
+
+    def __init__(self, system: NodalSystem, pat: _Pattern):
+        self.dc = (system.D + system.C).toarray()
+        self.m, self.k = system.M.toarray(), system.Ks.toarray()
+        n = system.size
+        self.max_chunk = max(1, _CHUNK_BYTES // (16 * n * n))
+
+    def factor(self, omega):
+        A = combine(self.dc, self.m, self.k, np.asarray(omega)[:, None, None])
+        good = np.isfinite(A).all(axis=(1, 2))
+        A = A[good]
         try:
-            self.inv = np.linalg.inv(A)
+            inv = np.linalg.inv(A)
         except np.linalg.LinAlgError:
             # Some matrix of the batch is exactly singular: invert one by one and
             # leave that frequency as NaN (rare; only on the failure path).
-            self.inv = np.full(A.shape, np.nan, dtype=complex)
+            inv = np.full(A.shape, np.nan, dtype=complex)
             for k in range(A.shape[0]):
                 try:
-                    self.inv[k] = np.linalg.inv(A[k])
+                    inv[k] = np.linalg.inv(A[k])
                 except np.linalg.LinAlgError:
                     pass
+            ok = np.isfinite(inv).all(axis=(1, 2))
+            good[np.flatnonzero(good)[~ok]] = False
+            inv = inv[ok]
+        return good, lambda r, rows=slice(None): np.einsum("kij,kj->ki", inv[rows], r)
 
-    def solve(self, r: NDArray) -> NDArray:
-        return np.einsum("kij,kj->ki", self.inv, r)
+
+#: The sparse path uses a banded LU when the half band width kl after a reverse
+#: Cuthill–McKee ordering is at most this, SuperLU otherwise.
+BAND_MAX = 12
+#: SuperLU's threshold for keeping the diagonal pivot (symmetric mode).
+DIAG_PIVOT_THRESH = 0.001
 
 
 class _SparseSolver:
     """LU of A(ω) on its fixed pattern, with what does not change with ω found once.
 
-    Two factorisations are tried at the first ω and the faster kept for the
-    rest: SuperLU (``scipy.sparse.linalg.splu``) with the minimum-degree
-    column ordering of that first factorisation reused (``permc_spec=
-    "NATURAL"`` on the pre-permuted matrix), and LAPACK's banded LU (``zgbtrf``) after a
-    reverse Cuthill–McKee ordering, which wins on chains and narrow networks
-    (the ladder's band is 1–2 wide).  Both are partial-pivoting LUs; the
+    The choice is made from the pattern alone, so that the same network
+    gives the same factorisation, bit for bit, on every run: after a reverse
+    Cuthill–McKee ordering of the (symmetric) pattern, of half band width
+    kl, a banded LU with partial pivoting when kl ≤ :data:`BAND_MAX`
+    (chains, ladders and narrow strips: the ladder's band is 1 wide) — the
+    compiled kernels of :mod:`mechcirc._nodal_kernels` when numba is
+    installed, LAPACK's ``zgbtrf``/``zgbtrs`` otherwise; for wider bands
+    (grids: the 30×30 grid's band is 30) SuperLU (``scipy.sparse.linalg.
+    splu``) on A permuted symmetrically by a minimum-degree ordering of
+    Aᵀ + A found once from the pattern, in its symmetric mode (diagonal
+    pivots kept unless below :data:`DIAG_PIVOT_THRESH` of the column's
+    largest entry), which fills 2–3× less than partial pivoting on these
+    complex symmetric matrices; where the refinement then does not reach
+    1e-10, the point is factorised again with partial pivoting.  The
     refinement and its error estimate are the same for either.
     """
 
     def __init__(self, pat: _Pattern):
-        self.pat = pat
-        self.kind = None
-
-    def factor(self, omega: float):
-        A = self.pat.csc(omega)
-        if not np.isfinite(A.data).all():
-            return None
-        if self.kind is None:
-            return self._choose(A)
-        return self._banded(A) if self.kind == "band" else self._superlu(A)
-
-    def _choose(self, A):
-        import time
-
-        from scipy.sparse.linalg import splu
-
-        t0 = time.perf_counter()
-        try:
-            # A is symmetric: a minimum-degree ordering of its pattern fills less
-            # than the default COLAMD (20k against 30k entries on the 30×30 grid).
-            lu = splu(A, permc_spec="MMD_AT_PLUS_A")
-        except RuntimeError:            # exactly singular here: decide at the next ω
-            return None
-        # Reused as A[:, iperm] with no further ordering: x = y[perm].
-        self.perm = np.asarray(lu.perm_c)
-        self.iperm = np.argsort(self.perm)
-        t_super = time.perf_counter() - t0
-        self.kind = "superlu"
-        band = self._band_setup(A)
-        if band:
-            t0 = time.perf_counter()
-            solve = self._banded(A)
-            if time.perf_counter() - t0 < t_super and solve is not None:
-                self.kind = "band"
-                return solve
-        return lu.solve
-
-    def _superlu(self, A):
-        from scipy.sparse.linalg import splu
-
-        try:
-            lu = splu(A[:, self.iperm], permc_spec="NATURAL")
-        except RuntimeError:            # exactly singular at this frequency
-            return None
-        perm = self.perm
-
-        def solve(b):
-            return lu.solve(np.ascontiguousarray(b, dtype=complex))[perm]
-        return solve
-
-    def _band_setup(self, A) -> bool:
+        import scipy.sparse as sp
         from scipy.sparse.csgraph import reverse_cuthill_mckee
 
-        n = A.shape[0]
+        self.pat = pat
+        n = pat.n
+        nnz = pat.indices.size
+        ones = np.ones(nnz)
+        A = sp.csc_matrix((ones, pat.indices, pat.indptr), shape=(n, n))
         p = np.asarray(reverse_cuthill_mckee(A.tocsr(), symmetric_mode=True))
         q = np.empty_like(p)
         q[p] = np.arange(n)
-        cols = np.repeat(np.arange(n), np.diff(self.pat.indptr))
-        ri, ci = q[self.pat.indices], q[cols]             # permuted positions
+        cols = np.repeat(np.arange(n), np.diff(pat.indptr))
+        ri, ci = q[pat.indices], q[cols]                  # permuted positions
         kl = int(np.max(np.abs(ri - ci), initial=0))
-        # Banded LU costs about n·kl·3kl; not worth trying on wide bands.
-        if n * kl * kl > 2e7:
-            return False
-        self.p, self.kl = p, kl
-        self.band_rows = 2 * kl + kl + 1
-        self.dest = (kl + kl + ri - ci, ci)
-        return True
+        self.kl = kl
+        if kl <= BAND_MAX:
+            self.kind = "band"
+            self.p = p
+            self.band_rows = 3 * kl + 1
+            self.dest = (ci, 2 * kl + ri - ci)            # in the (n, rows) C-order array
+            self.max_chunk = max(1, min(64, 2 ** 22 // max(1, n * self.band_rows)))
+        else:
+            from scipy.sparse.linalg import splu
 
-    def _banded(self, A):
-        from scipy.linalg.lapack import zgbtrf, zgbtrs
+            self.kind = "superlu"
+            # The ordering depends on the pattern only: find it on a
+            # nonsingular matrix of the same pattern (the diagonal does not
+            # enter a minimum-degree ordering of Aᵀ + A).
+            struct = A + sp.identity(n, format="csc") * (n + 1.0)
+            perm = np.asarray(splu(struct.tocsc(), permc_spec="MMD_AT_PLUS_A").perm_c)
+            iperm = np.argsort(perm)
+            self.perm, self.iperm = perm, iperm
+            # The pattern permuted symmetrically, and where its data come from.
+            where = sp.csc_matrix((np.arange(1, nnz + 1, dtype=float), pat.indices,
+                                   pat.indptr), shape=(n, n))[iperm][:, iperm].tocsc()
+            where.sort_indices()
+            self.take = where.data.astype(np.int64) - 1
+            self.indices_p, self.indptr_p = where.indices, where.indptr
+            self.max_chunk = 8
 
-        n, kl = A.shape[0], self.kl
-        ab = np.zeros((self.band_rows, n), dtype=complex)
-        ab[self.dest] = A.data
-        lu, piv, info = zgbtrf(ab, kl, kl, overwrite_ab=True)
-        if info != 0:
-            return None
+    def factor(self, omega, strict: bool = False):
+        """(good, solve): the frequencies factorised, and a solver for their rows.
+
+        ``strict``: SuperLU with partial pivoting (threshold 1) instead of
+        the symmetric mode, where the refinement did not converge.
+        """
+        pat = self.pat
+        if self.kind == "band" and _kernels() is not None and not np.iscomplexobj(omega):
+            return self._banded_compiled(np.asarray(omega, dtype=float))
+        data = combine(pat.dc, pat.m, pat.k, np.asarray(omega)[:, None])
+        good = np.isfinite(data).all(axis=1)
+        if self.kind == "band":
+            return self._banded(data, good)
+        return self._superlu(data, good, strict)
+
+    def _banded_compiled(self, omega):
+        """The banded LU by the compiled kernels (the same unblocked LU as LAPACK's zgbtf2).
+
+        No per-ω call overhead, and none of zgbtrf's BLAS calls per column,
+        which on a band 1–2 wide cost many times the arithmetic.
+        """
+        kern = _kernels()
+        pat, n, kl = self.pat, self.pat.n, self.kl
+        ab = np.empty((omega.size, n, self.band_rows), dtype=complex)
+        ipiv = np.empty((omega.size, n), dtype=np.int64)
+        good = np.ones(omega.size, dtype=bool)
+        kern.band_assemble_factor(pat.dc, pat.m, pat.k, omega, self.dest[0], self.dest[1],
+                                  kl, ab, ipiv, good)
+        if not good.all():
+            ab, ipiv = ab[good], ipiv[good]
         p = self.p
 
-        def solve(b):
-            b = np.atleast_2d(b)
-            out = np.empty(b.shape, dtype=complex)
-            rhs = np.ascontiguousarray(b[:, p].T, dtype=complex)
-            x, info = zgbtrs(lu, kl, kl, rhs, piv)
-            out[:, p] = x.T
-            return out if out.shape[0] > 1 else out[0]
-        return solve
+        every = np.arange(ab.shape[0])
+
+        def solve(r, rows=None):
+            rows = every if rows is None else np.asarray(rows, dtype=np.int64)
+            out = np.empty((rows.size, n), dtype=complex)
+            kern.band_solve_perm(ab, kl, ipiv, rows, p, np.ascontiguousarray(r, dtype=complex),
+                                 out)
+            return out
+        return good, solve
+
+    def _banded(self, data, good):
+        from scipy.linalg.lapack import zgbtrf, zgbtrs
+
+        n, kl = self.pat.n, self.kl
+        ab = np.zeros((data.shape[0], n, self.band_rows), dtype=complex)
+        ab[:, self.dest[0], self.dest[1]] = data
+        p = self.p
+        factors = []
+        for k in np.flatnonzero(good):
+            lu, piv, info = zgbtrf(ab[k].T, kl, kl, overwrite_ab=1)
+            if info != 0:
+                good[k] = False             # exactly singular at this frequency
+                continue
+            factors.append((lu, piv))
+
+        def solve(r, rows=None):
+            rp = np.ascontiguousarray(r[:, p], dtype=complex)
+            out = np.empty_like(rp)
+            use = factors if rows is None else [factors[i] for i in rows]
+            for k, (lu, piv) in enumerate(use):
+                out[k] = zgbtrs(lu, kl, kl, rp[k], piv, overwrite_b=1)[0]
+            x = np.empty_like(out)
+            x[:, p] = out
+            return x
+        return good, solve
+
+    def _superlu(self, data, good, strict=False):
+        import scipy.sparse as sp
+        from scipy.sparse.linalg import splu
+
+        n = self.pat.n
+        factors = []
+        for k in np.flatnonzero(good):
+            A = sp.csc_matrix((data[k, self.take], self.indices_p, self.indptr_p),
+                              shape=(n, n))
+            try:
+                factors.append(
+                    splu(A, permc_spec="NATURAL", diag_pivot_thresh=1.0) if strict else
+                    splu(A, permc_spec="NATURAL", diag_pivot_thresh=DIAG_PIVOT_THRESH,
+                         options={"SymmetricMode": True}))
+            except RuntimeError:            # exactly singular at this frequency
+                good[k] = False
+        perm, iperm = self.perm, self.iperm
+
+        def solve(r, rows=None):
+            r = np.asarray(r, dtype=complex)[:, iperm]
+            use = factors if rows is None else [factors[i] for i in rows]
+            return np.stack([lu.solve(r[k])[perm] for k, lu in enumerate(use)]) if use \
+                else np.zeros((0, n), complex)
+        return good, solve
 
 
 def _singular_points(system, omega, x, K, err, singular, steps):
@@ -675,13 +1060,15 @@ def _singular_points(system, omega, x, K, err, singular, steps):
     Where the solution blows up along a mode seen from the drive (a pole of
     K), K = +∞·j (the series–parallel method's convention); where K carries no correct digit otherwise, K = 0 (a
     zero of K within rounding).  The estimate there is inf; ``Sweep.flags``
-    marks both as singular (flag 1).
+    marks both as singular (flag 1).  ``x`` gives the solution's row at
+    each singular point (an array, or a dict of rows).
     """
     K = K.copy()
     err = err.copy()
     for i in np.flatnonzero(singular):
-        xi, Ki = x[i], K[i]
-        if not np.isfinite(Ki):
+        xi = x.get(i) if isinstance(x, dict) else x[i]
+        Ki = K[i]
+        if xi is None or not np.isfinite(Ki):
             # Exactly singular: look just above ω, where the solution is the mode.
             w = omega[i] * (1 + 2.0 ** -40)
             s = solve(system, [w], refine=False, steps=steps, limits=False) \
@@ -700,13 +1087,13 @@ def _singular_points(system, omega, x, K, err, singular, steps):
 
 def solve_unit(system: NodalSystem, omega: ArrayLike, *, refine: bool = True
                ) -> NDArray[np.complex128]:
-    """Solutions x(ω) of A(ω) x = e_a − e_b, shape (n_omega, n) (``clongdouble`` if refined).
+    """Solutions x(ω) of A(ω) x = e_a − e_b, shape (n_omega, n), complex128.
 
     With ``refine`` (the default) each solution gets iterative refinement
-    with the residual b − A x computed in extended precision
-    (``numpy.longdouble``), reusing the LU factors: the forward error then no
-    longer grows with the condition number of A (masses and springs of very
-    different size in series).  See :func:`solve` for the error estimate.
+    with the residual b − A x computed in double-double arithmetic, reusing
+    the LU factors: the forward error then no longer grows with the
+    condition number of A (masses and springs of very different size in
+    series).  See :func:`solve` for the error estimate.
 
     Frequencies where A is exactly singular, or ω is 0 or ∞ (where A is not
     finite), give rows of NaN; callers flag them.
@@ -746,7 +1133,7 @@ def evaluate_complex(system: NodalSystem, s: ArrayLike
     """K(s) at complex frequencies s (jω on the axis) and its estimated absolute error.
 
     A(s) = D + C + sM + Kₛ/s is :func:`combine` at ω = −js.  Each solution is
-    refined with residuals in extended precision as in :func:`solve`, and the
+    refined with residuals in double-double as in :func:`solve`, and the
     error is the same estimate (the last correction, the residual's own
     rounding and the sensitivity to rounding the data, eps × Σ|x_r a_rc x_c|):
     used to polish resonances on the circuit's own K.  NaN where A(s) is
@@ -754,43 +1141,15 @@ def evaluate_complex(system: NodalSystem, s: ArrayLike
     """
     s = np.asarray(s, dtype=complex).reshape(-1)
     omega = -1j * s
-    pat = _pattern(system)
-    rhs = system.injection()
-    x = np.full((s.size, system.size), np.nan, dtype=np.clongdouble)
-    est = np.full(s.size, np.inf)
-    if system.size <= DENSE_LIMIT:
-        for start in range(0, s.size, 4096):
-            sel = np.arange(start, min(start + 4096, s.size))
-            A = dense_matrices(system, omega[sel])
-            sel = sel[np.isfinite(A).all(axis=(1, 2))]
-            if sel.size:
-                lu = _DenseLU(dense_matrices(system, omega[sel]))
-                x[sel], est[sel] = _refined(lu.solve, pat, omega[sel], rhs, system, True, 4)
-    else:
-        from scipy.sparse.linalg import splu
-
-        for i, w in enumerate(omega):
-            A = pat.csc(w)
-            if not np.isfinite(A.data).all():
-                continue
-            try:
-                lu = splu(A, permc_spec="MMD_AT_PLUS_A")
-            except RuntimeError:
-                continue
-            x[i], est[i] = (v[0] for v in _refined(
-                lambda r: lu.solve(np.ascontiguousarray(r[0]))[None, :], pat,
-                omega[i:i + 1], rhs, system, True, 4))
-    K = system.difference(x).astype(complex)
-    S = pat.sensitivity(omega, x)
-    est = _total(K, pat.data_sensitivity(omega, x), est + _residual_rounding(K, S),
-                 data="add")
+    K, est, S, Sd, _, _ = _sweep(system, omega, True, 4, None)
+    est = _total(Sd, est + _residual_rounding(system, S), data="add")
     with np.errstate(all="ignore"):
         return K, est * np.abs(K)
 
 
 def mobility(system: NodalSystem, omega: ArrayLike) -> NDArray[np.complex128]:
     """K(ω) [m/(N·s)] seen by the drive, by nodal analysis."""
-    return solve(system, omega).K
+    return solve(system, omega, keep_x=False).K
 
 
 def mobility_and_error(system: NodalSystem, omega: ArrayLike
@@ -799,7 +1158,7 @@ def mobility_and_error(system: NodalSystem, omega: ArrayLike
 
     See :class:`Solution` for the estimate and the singular-point convention.
     """
-    s = solve(system, omega)
+    s = solve(system, omega, keep_x=False)
     return s.K, s.error
 
 
@@ -808,7 +1167,7 @@ def mobility_unrefined(system: NodalSystem, omega: ArrayLike) -> NDArray[np.comp
 
     Its relative error is about eps × cond(A(ω)), see :func:`condition_error`.
     """
-    return system.difference(solve(system, omega, refine=False).x)
+    return solve(system, omega, refine=False, limits=False, keep_x=False).K
 
 
 def element_response(system: NodalSystem, omega: ArrayLike, scale: NDArray) -> dict[str, tuple]:

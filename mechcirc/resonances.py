@@ -24,7 +24,7 @@ same linearisation (``scipy.sparse.linalg.eigs``).
 Every damped root, and every undamped root whose eigenvalue bound is not
 already at rounding level, is then polished on the circuit's own K(s) at
 complex s (a complex secant; anti-resonances on the held system, which is
-regular where A is singular), K being refined in extended precision; the
+regular where A is singular), K being refined in double-double; the
 reported ``error`` is the uncertainty of K there over its slope, plus the
 last step, including the effect of rounding the element values.
 
@@ -487,7 +487,7 @@ def _polish(system, roots: list, damped: bool) -> list[Resonance]:
     sM + Kₛ/s (``nodal.combine`` at ω = −js); a resonance is a zero of K, an
     anti-resonance a zero of 1/K.  The error of the polished root is
     |δg| / |g'(s)| with δg the absolute error of g = K (or 1/K) at the root
-    (K is refined in extended precision; δK its estimate, at least eps·|K|,
+    (K is refined in double-double; δK its estimate, at least eps·|K|,
     times a safety factor of 4), plus the last secant step.  Undamped roots whose eigenvalue bound (Weyl:
     eps·λ_max/λ) is already below :data:`_POLISH_BELOW` keep it; a root the
     secant does not confirm (it leaves for another root) keeps its

@@ -1,0 +1,297 @@
+"""Compiled kernel of the nodal refinement: the residual b − A(ω) x in double-double.
+
+The same arithmetic, operation for operation and in the same order, as the
+vectorised numpy code of :meth:`mechcirc.nodal._Pattern.residual` (real ω):
+each term (an element's ±value·(x_i − x_j), a lever stamp's value·x_c) is
+formed exactly (TwoSum, TwoProduct), the terms of one (row, kind) bucket are
+added by cascaded TwoSum in ascending term order, and the sums are combined
+as (A x)_r = S_c + S_l + j(ω S_m − S_k/ω) in double-double.  Compiled by
+numba when the ``fast`` extra is installed (see :mod:`mechcirc._jit`); the
+numpy code is used otherwise, so this module is imported only when numba is.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._jit import decorators
+
+HAVE_NUMBA, _jit, _jit_inline = decorators(bool(globals().get("_FORCE_PYTHON")))
+
+_SPLITTER = 134217729.0                 # 2²⁷ + 1
+
+
+@_jit_inline
+def _split(a):
+    c = _SPLITTER * a
+    hi = c - (c - a)
+    if not np.isfinite(hi) and np.isfinite(a):
+        b = a * 2.0 ** -28
+        c = _SPLITTER * b
+        hi = (c - (c - b)) * 2.0 ** 28
+    return hi, a - hi
+
+
+@_jit_inline
+def _two_sum(a, b):
+    s = a + b
+    bb = s - a
+    return s, (a - (s - bb)) + (b - bb)
+
+
+@_jit_inline
+def _two_prod(a, ah, al, b):
+    p = a * b
+    bh, bl = _split(b)
+    return p, ((ah * bh - p) + ah * bl + al * bh) + al * bl
+
+
+@_jit_inline
+def _dd_add(ah, al, bh, bl):
+    s, e = _two_sum(ah, bh)
+    return s, e + (al + bl)
+
+
+@_jit_inline
+def _dd_mul_d(h, lo, w, wh, wl):
+    p, e = _two_prod(w, wh, wl, h)
+    return p, e + lo * w
+
+
+@_jit_inline
+def _dd_div_d(h, lo, w, wh, wl):
+    q = h / w
+    p, e = _two_prod(w, wh, wl, q)
+    return q, (((h - p) - e) + lo) / w
+
+
+@_jit
+def residual(omega, xr, xi, xlr, xli, has_lo, rhs, b_i, b_j, b_s,
+             e_i, e_j, e_val, e_vh, e_vl, s_col, s_val, s_vh, s_vl, acc, out_r, out_i):
+    """b − A(ω) x into ``out_r``/``out_i`` (shape (n_ω, n)); x = (xr + j xi) + (xlr + j xli).
+
+    ``x*`` have one extra zero column (index n, the reference).  ``b_i``,
+    ``b_j``, ``b_s`` are the buckets 4·row + kind (kind: mass, spring,
+    damper, lever) of +element e, −element e and lever stamp s (4·n: the
+    reference's row, dropped).  Each bucket receives its terms in the numpy
+    code's order — the + terms by element, then the − terms, then the lever
+    stamps — and adds them by TwoSum into ``acc`` (4·n + 4 rows of
+    re_hi, re_lo, im_hi, im_lo).
+    """
+    n_w, n = out_r.shape
+    n_el = e_i.size
+    n_s = s_col.size
+    drop = 4 * n
+    t = np.empty((n_el, 4))
+    for k in range(n_w):
+        w = omega[k]
+        wh, wl = _split(w)
+        acc[:] = 0.0
+        for e in range(n_el):                   # +y·(x_i − x_j), formed once
+            i = e_i[e]
+            j = e_j[e]
+            v, vh, vl = e_val[e], e_vh[e], e_vl[e]
+            dh_r, dl_r = _two_sum(xr[k, i], -xr[k, j])
+            dh_i, dl_i = _two_sum(xi[k, i], -xi[k, j])
+            if has_lo:
+                dl_r = dl_r + (xlr[k, i] - xlr[k, j])
+                dl_i = dl_i + (xli[k, i] - xli[k, j])
+            th_r, tl_r = _two_prod(v, vh, vl, dh_r)
+            th_i, tl_i = _two_prod(v, vh, vl, dh_i)
+            tl_r = tl_r + v * dl_r
+            tl_i = tl_i + v * dl_i
+            t[e, 0] = th_r
+            t[e, 1] = tl_r
+            t[e, 2] = th_i
+            t[e, 3] = tl_i
+            bk = b_i[e]
+            if bk != drop:
+                a, ea = _two_sum(acc[bk, 0], th_r)
+                acc[bk, 0] = a
+                acc[bk, 1] += ea + tl_r
+                a, ea = _two_sum(acc[bk, 2], th_i)
+                acc[bk, 2] = a
+                acc[bk, 3] += ea + tl_i
+        for e in range(n_el):                   # −y·(x_i − x_j) into the second row
+            bk = b_j[e]
+            if bk == drop:
+                continue
+            a, ea = _two_sum(acc[bk, 0], -t[e, 0])
+            acc[bk, 0] = a
+            acc[bk, 1] += ea + -t[e, 1]
+            a, ea = _two_sum(acc[bk, 2], -t[e, 2])
+            acc[bk, 2] = a
+            acc[bk, 3] += ea + -t[e, 3]
+        for s in range(n_s):
+            bk = b_s[s]
+            if bk == drop:
+                continue
+            c = s_col[s]
+            v, vh, vl = s_val[s], s_vh[s], s_vl[s]
+            th_r, tl_r = _two_prod(v, vh, vl, xr[k, c])
+            th_i, tl_i = _two_prod(v, vh, vl, xi[k, c])
+            if has_lo:
+                tl_r = tl_r + v * xlr[k, c]
+                tl_i = tl_i + v * xli[k, c]
+            a, ea = _two_sum(acc[bk, 0], th_r)
+            acc[bk, 0] = a
+            acc[bk, 1] += ea + tl_r
+            a, ea = _two_sum(acc[bk, 2], th_i)
+            acc[bk, 2] = a
+            acc[bk, 3] += ea + tl_i
+        for r in range(n):
+            m_ = 4 * r
+            # ω S_m − S_k/ω, then A x = S_c + S_l + j·sus, then b − A x.
+            wm_rh, wm_rl = _dd_mul_d(acc[m_, 0], acc[m_, 1], w, wh, wl)
+            wm_ih, wm_il = _dd_mul_d(acc[m_, 2], acc[m_, 3], w, wh, wl)
+            kw_rh, kw_rl = _dd_div_d(acc[m_ + 1, 0], acc[m_ + 1, 1], w, wh, wl)
+            kw_ih, kw_il = _dd_div_d(acc[m_ + 1, 2], acc[m_ + 1, 3], w, wh, wl)
+            su_rh, su_rl = _dd_add(wm_rh, wm_rl, -kw_rh, -kw_rl)
+            su_ih, su_il = _dd_add(wm_ih, wm_il, -kw_ih, -kw_il)
+            g_rh, g_rl = _dd_add(acc[m_ + 2, 0], acc[m_ + 2, 1], acc[m_ + 3, 0], acc[m_ + 3, 1])
+            g_ih, g_il = _dd_add(acc[m_ + 2, 2], acc[m_ + 2, 3], acc[m_ + 3, 2], acc[m_ + 3, 3])
+            ax_rh, ax_rl = _dd_add(g_rh, g_rl, -su_ih, -su_il)
+            ax_ih, ax_il = _dd_add(g_ih, g_il, su_rh, su_rl)
+            rr_h, rr_l = _dd_add(rhs[r], 0.0, -ax_rh, -ax_rl)
+            ri_h, ri_l = -ax_ih, -ax_il
+            if not np.isfinite(rr_l) and np.isfinite(rr_h):
+                rr_l = 0.0
+            if not np.isfinite(ri_l) and np.isfinite(ri_h):
+                ri_l = 0.0
+            out_r[k, r] = rr_h + rr_l
+            out_i[k, r] = ri_h + ri_l
+
+
+@_jit_inline
+def _band_lu(a, kl, ipiv):
+    """LU with partial pivoting of one banded matrix in place (LAPACK's zgbtf2); False if singular.
+
+    ``a[c, 2·kl + i − c]`` holds A[i, c] (kl = ku; the first kl of the
+    3·kl + 1 places of a column are room for the fill).  The pivot is the
+    largest |re| + |im| in the column, as LAPACK's izamax picks it.
+    """
+    n = a.shape[0]
+    kv = 2 * kl
+    ju = 0
+    for j in range(n):
+        km = min(kl, n - 1 - j)
+        jp = 0
+        best = -1.0
+        for t in range(km + 1):
+            z = a[j, kv + t]
+            m = abs(z.real) + abs(z.imag)
+            if m > best:
+                best = m
+                jp = t
+        ipiv[j] = j + jp
+        if best == 0.0 or not np.isfinite(best):
+            return False
+        ju = max(ju, min(j + kl + jp, n - 1))
+        if jp != 0:
+            for c in range(j, ju + 1):
+                tmp = a[c, kv + j - c]
+                a[c, kv + j - c] = a[c, kv + j + jp - c]
+                a[c, kv + j + jp - c] = tmp
+        if km > 0:
+            recip = 1.0 / a[j, kv]
+            for t in range(1, km + 1):
+                a[j, kv + t] *= recip
+            for c in range(j + 1, ju + 1):
+                u = a[c, kv + j - c]
+                if u != 0:
+                    for t in range(1, km + 1):
+                        a[c, kv + j + t - c] -= a[j, kv + t] * u
+    return True
+
+
+@_jit
+def band_assemble_factor(dc, m, kk, omega, dest_c, dest_r, kl, ab, ipiv, ok):
+    """Form A(ω_k) = dc + j(ω_k m − kk/ω_k) (:func:`mechcirc.nodal.combine`) in band
+    storage ``ab[k, dest_c, dest_r]`` and factorise it at once (while it is in cache).
+
+    ``ok[k]`` is cleared where an entry is not finite or A is singular.
+    """
+    for k in range(omega.size):
+        w = omega[k]
+        a = ab[k]
+        a[:, :] = 0
+        fin = True
+        for t in range(dc.size):
+            z = complex(dc[t], w * m[t] - kk[t] / w)
+            if not (np.isfinite(z.real) and np.isfinite(z.imag)):
+                fin = False
+            a[dest_c[t], dest_r[t]] = z
+        ok[k] = fin and _band_lu(a, kl, ipiv[k])
+
+
+@_jit
+def band_solve(ab, kl, ipiv, b):
+    """Solve with the factors of :func:`_band_lu`, each ``b[k]`` in place."""
+    n_w, n, _ = ab.shape
+    kv = 2 * kl
+    for k in range(n_w):
+        a = ab[k]
+        x = b[k]
+        for j in range(n - 1):
+            km = min(kl, n - 1 - j)
+            p = ipiv[k, j]
+            if p != j:
+                tmp = x[p]
+                x[p] = x[j]
+                x[j] = tmp
+            xj = x[j]
+            for t in range(1, km + 1):
+                x[j + t] -= a[j, kv + t] * xj
+        for j in range(n - 1, -1, -1):
+            x[j] /= a[j, kv]
+            xj = x[j]
+            for i in range(max(0, j - kv), j):
+                x[i] -= a[j, kv + i - j] * xj
+
+
+@_jit
+def band_solve_perm(ab, kl, ipiv, rows, p, r, out):
+    """out[k, p] = A_p⁻¹ r[k, p] with the factors ``ab[rows[k]]`` (A's rows and columns in the order ``p``)."""
+    n = ab.shape[1]
+    x = np.empty(n, dtype=np.complex128)
+    for k in range(rows.size):
+        f = rows[k]
+        for i in range(n):
+            x[i] = r[k, p[i]]
+        band_solve(ab[f:f + 1], kl, ipiv[f:f + 1], x.reshape(1, n))
+        for i in range(n):
+            out[k, p[i]] = x[i]
+
+
+@_jit_inline
+def _mag(z):
+    """|z| for |z| ≤ about 1 (x scaled to max-norm 1): no hypot needed."""
+    return np.sqrt(z.real * z.real + z.imag * z.imag)
+
+
+@_jit
+def sensitivities(omega, x, scale, e_i, e_j, e_m, e_k, e_c, s_row, s_col, s_val,
+                  l_p1, l_p2, l_col, l_r, S, Sd):
+    """S and S_data of :meth:`mechcirc.nodal._Pattern.sensitivities` for x/scale (real ω)."""
+    n_w, n1 = x.shape
+    for k in range(n_w):
+        w = omega[k]
+        f = 1.0 / scale[k]
+        acc = 0.0
+        accd = 0.0
+        for e in range(e_i.size):
+            # One of c, m, k is nonzero: |c + j(ωm − k/ω)| without a hypot.
+            y = abs(e_c[e]) + abs(w * e_m[e] - e_k[e] / w)
+            xi = x[k, e_i[e]] * f
+            xj = x[k, e_j[e]] * f
+            a = _mag(xi) + _mag(xj)
+            d = _mag(xi - xj)
+            acc += y * a * a
+            accd += y * d * d
+        for s in range(s_row.size):
+            acc += abs(s_val[s]) * _mag(x[k, s_row[s]] * f) * _mag(x[k, s_col[s]] * f)
+        for v in range(l_r.size):
+            accd += 2 * l_r[v] * _mag(x[k, l_p1[v]] * f - x[k, l_p2[v]] * f) * \
+                _mag(x[k, l_col[v]] * f)
+        S[k] = acc
+        Sd[k] = accd
