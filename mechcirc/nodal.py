@@ -32,6 +32,8 @@ with an infinite error, as the series–parallel method gives it.
 
 from __future__ import annotations
 
+import contextvars
+
 from dataclasses import dataclass
 
 import numpy as np
@@ -538,7 +540,15 @@ class _Pattern:
 
 #: Use the compiled residual kernel when numba is installed (set False to force numpy).
 USE_NUMBA = True
+#: A sweep uses the compiled kernels only from this many unknowns × ω points
+#: on: importing numba and loading the kernels from their cache costs about
+#: 0.6 s once per process (and compiling them in a fresh environment about
+#: 12 s), while the numpy path takes about 1 µs per unknown and point (about
+#: 3× the compiled one).  Decided per sweep from its size alone, so the same
+#: call always takes the same path.
+KERNEL_MIN_WORK = 1_000_000
 _KERNELS = []
+_WANTED = contextvars.ContextVar("mechcirc_nodal_kernels", default=True)
 
 
 def _kernels():
@@ -546,8 +556,9 @@ def _kernels():
 
     Used on the sparse path only (above :data:`DENSE_LIMIT` unknowns): small
     systems are vectorised over many ω at once, and need no compilation.
+    Inside a sweep smaller than :data:`KERNEL_MIN_WORK`, None.
     """
-    if not USE_NUMBA:
+    if not USE_NUMBA or not _WANTED.get():
         return None
     if not _KERNELS:
         from . import _nodal_kernels
@@ -639,6 +650,18 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int, keep: 
     Sd = np.full(m, np.nan)
     x_all = np.full((m, n), complex(np.nan, np.nan)) if keep is None else None
     kept = {}
+    token = _WANTED.set(n * m >= KERNEL_MIN_WORK)
+    try:
+        return _sweep_chunks(system, omega, refine, steps, keep, pat, rhs, K, err, S, Sd,
+                             x_all, kept)
+    finally:
+        _WANTED.reset(token)
+
+
+def _sweep_chunks(system, omega, refine, steps, keep, pat, rhs, K, err, S, Sd, x_all, kept):
+    """The loop of :func:`_sweep` over chunks of ω (its arrays filled in place)."""
+    n = system.size
+    m = omega.size
     solver = _solver(system)
     if solver.kind != "dense" and _kernels() is not None:
         # Compiled: no (ω, term) temporaries; the chunk's (ω, n) arrays stay in cache.

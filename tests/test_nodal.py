@@ -363,6 +363,8 @@ def test_large_ladder_with_levers_is_exact_against_mpmath(path, monkeypatch):
         monkeypatch.setattr(mechcirc.nodal, "_STRICT_AFTER", -1.0)
     if path.endswith("numpy"):
         monkeypatch.setattr(mechcirc.nodal, "USE_NUMBA", False)
+    else:                            # compiled even for a sweep this small
+        monkeypatch.setattr(mechcirc.nodal, "KERNEL_MIN_WORK", 0)
     text, ref = _LADDER_REFERENCE()
     system = mechcirc.parse(text).nodal
     assert mechcirc.nodal._solver(system).kind == path.split("-")[0]
