@@ -320,8 +320,9 @@ def _band_modes_undamped(M, K, omega_max: float, v0: np.ndarray) -> np.ndarray |
     symmetric pencil is then solved by shift-invert Lanczos
     (``scipy.sparse.linalg.eigsh``, one factorisation of K − σM at
     σ = −(1e-3·omega_max)²) for exactly those roots, the rigid-body ones below
-    them and a few above.  None when the count cannot be had (the caller then
-    uses the general path).
+    them and a few above; the roots found must agree with the count and reach
+    beyond the band.  None when the count cannot be had or they disagree (the
+    caller then uses the general path).
     """
     from scipy.sparse.linalg import ArpackError, ArpackNoConvergence, eigsh
 
@@ -342,6 +343,11 @@ def _band_modes_undamped(M, K, omega_max: float, v0: np.ndarray) -> np.ndarray |
         lam = eigsh(K.tocsc(), k=k, M=M.tocsc(), sigma=-(1e-3 * omega_max) ** 2,
                     which="LM", return_eigenvectors=False, tol=1e-13, v0=v0)
     except (ArpackError, ArpackNoConvergence):
+        return None
+    lo2, hi2 = (1e-6 * omega_max) ** 2, omega_max ** 2
+    if lam.max() <= hi2 or np.count_nonzero((lam > lo2) & (lam < hi2)) != found:
+        # Lanczos and the count disagree (a count spoiled by rounding in an
+        # unpivoted factorisation): trust neither, take the general path.
         return None
     w = np.sqrt(np.sort(lam[lam > 0]))
     w = w[(w > 1e-6 * omega_max) & (w <= omega_max * (1 + 1e-6))]

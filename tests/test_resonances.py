@@ -219,6 +219,21 @@ def test_undamped_network_above_the_dense_limit_is_solved_in_a_band(monkeypatch,
         assert abs(a.omega - b.omega) <= (a.error + b.error) * b.omega
 
 
+def test_undamped_band_with_a_wrong_count_falls_back_to_the_general_path(monkeypatch):
+    """A count three short (as rounding could spoil it) must not drop a root: Lanczos
+    disagrees with it, and the general Arnoldi path gives the dense solver's roots."""
+    text = _undamped_chain(80)
+    dense = mechcirc.parse(text).resonances(omega_max=15.0)
+    right = mechcirc.resonances._inertia_counts
+    monkeypatch.setattr(mechcirc.resonances, "_inertia_counts",
+                        lambda M, K, w: (lambda c: (c[0], c[1] - 3))(right(M, K, w)))
+    monkeypatch.setattr(mechcirc.resonances, "MAX_UNKNOWNS", 20)
+    band = mechcirc.parse(text).resonances(omega_max=15.0)
+    assert [r.kind for r in band] == [r.kind for r in dense]
+    for a, b in zip(band, dense):
+        assert abs(a.omega - b.omega) <= (a.error + b.error) * b.omega
+
+
 def test_undamped_band_with_too_many_roots_is_refused_with_their_count(monkeypatch):
     """The count comes first, so the refusal names it exactly: the released network's
     roots below 15 rad/s (its anti-resonances, found here by the dense solver) are the
