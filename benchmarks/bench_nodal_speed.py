@@ -38,26 +38,21 @@ import resource
 import shutil
 import statistics
 import subprocess
+import sys
 import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 
 import mechcirc
 import mechcirc.nodal as nodal
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+from reference.networks import grid_text  # noqa: E402
 
-def grid(n: int, k: float = 1e4, m: float = 1.0) -> str:
-    lines = ["drive V g0_0 0 velocity=1"]
-    for i in range(n):
-        for j in range(n):
-            g = f"g{i}_{j}"
-            lines += [f"mass m{i}_{j} {g} 0 {m}", f"spring f{i}_{j} {g} 0 {k}"]
-            if i + 1 < n:
-                lines.append(f"spring h{i}_{j} {g} g{i + 1}_{j} {k}")
-            if j + 1 < n:
-                lines.append(f"spring v{i}_{j} {g} g{i}_{j + 1} {k}")
-    return "\n".join(lines)
+
+grid = grid_text       # the tests' grid (tests/reference/networks.py)
 
 
 def ladder(n_el: int, seed: int = 0) -> str:
@@ -193,7 +188,6 @@ def run(name, text, spice, omega, repeat, *, spice_points=None, floor=True):
             results[k] = out
     med = {k: statistics.median(v) for k, v in times.items()}
     print(f"{name}: {system.size} unknowns, {omega.size} points (CPU s, median of {repeat})")
-    ref_key = "splu per ω" if floor else "mechcirc refined"
     for k in runs:
         note = ""
         if k == "ngspice -b" and spice_points:

@@ -22,30 +22,17 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
 import scipy.linalg as la
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import mechcirc  # noqa: E402
 from bench_nodal_speed import grid  # noqa: E402
+from reference.networks import damped_ladder_lines  # noqa: E402
 
 
 def damped_ladder(n_el: int, seed: int = 0, r: float = 1e-3) -> str:
-    rng = np.random.default_rng(seed)
-    lines = ["drive V n0 0 velocity=1"]
-    i = node = 0
-    while i < n_el:
-        lines.append(f"spring k{i} n{node} n{node + 1} {rng.uniform(1e4, 2e4)!r}")
-        i += 1
-        if i < n_el:
-            lines.append(f"mass m{i} n{node + 1} 0 {rng.uniform(0.2, 1.2)!r}")
-            i += 1
-        if i < n_el:
-            lines.append(f"damper c{i} n{node + 1} 0 {r!r}")
-            i += 1
-        node += 1
-    return "\n".join(lines)
+    return "\n".join(damped_ladder_lines(n_el, seed, r))
 
 
 def cpu(fn):

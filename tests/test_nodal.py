@@ -10,6 +10,7 @@ from hypothesis import strategies as st
 
 import mechcirc
 from mechcirc.errors import NotSeriesParallelError, TopologyError
+from reference.networks import grid_text
 from strategies import networks_with_levers, reference_K_and_cancellation, to_netlist_with_levers
 
 BRIDGE = """drive V a 0 velocity=0.5
@@ -177,19 +178,6 @@ def test_large_networks_use_sparse_solves_and_agree_with_the_tree():
 
 
 # ----------------------------------------------------------- one assembly, honest errors
-def _grid_text(n, k=1e4, m=1.0):
-    lines = ["drive V g0_0 0 velocity=1"]
-    for i in range(n):
-        for j in range(n):
-            g = f"g{i}_{j}"
-            lines += [f"mass m{i}_{j} {g} 0 {m}", f"spring f{i}_{j} {g} 0 {k}"]
-            if i + 1 < n:
-                lines.append(f"spring h{i}_{j} {g} g{i + 1}_{j} {k}")
-            if j + 1 < n:
-                lines.append(f"spring v{i}_{j} {g} g{i}_{j + 1} {k}")
-    return "\n".join(lines)
-
-
 def _grid_K_reference(n, w, k=1e4, m=1.0):
     """K at the corner of the grid from its own Laplacian (numpy, no mechcirc)."""
     P = np.diag(np.r_[1.0, 2 * np.ones(n - 2), 1.0]) - np.eye(n, k=1) - np.eye(n, k=-1)
@@ -202,7 +190,7 @@ def _grid_K_reference(n, w, k=1e4, m=1.0):
 
 def test_grid_lowest_mode_is_flagged_on_the_sparse_path():
     """Issue 11 §2: the 30×30 grid's mode at exactly ω = 100 used to return −5.6e12j, flag 0."""
-    c = mechcirc.parse(_grid_text(30))
+    c = mechcirc.parse(grid_text(30))
     assert c.nodal.size > mechcirc.nodal.DENSE_LIMIT            # the sparse path
     omega = np.array([99.0, 100.0, 101.0])
     s = c.sweep(omega, method="nodal")
@@ -378,7 +366,7 @@ def test_large_ladder_with_levers_is_exact_against_mpmath(path, monkeypatch):
 def test_sparse_solves_are_bit_identical_between_runs():
     """The solver is chosen from the pattern (not by timing): the same K, bit for bit, every time."""
     ladder, _ = _lever_ladder(400, seed=3)
-    for text, kind in ((ladder, "band"), (_grid_text(14), "superlu")):
+    for text, kind in ((ladder, "band"), (grid_text(14), "superlu")):
         omega = np.geomspace(3.0, 300.0, 17)
         runs = []
         for _ in range(2):

@@ -8,6 +8,7 @@ import pytest
 
 import mechcirc
 from reference import stb_eq7
+from reference.networks import damped_ladder_lines, grid_text
 from mechcirc.errors import NetlistError
 
 
@@ -123,19 +124,7 @@ def test_omega_max_limits_the_list():
 # ----------------------------------------------------------- honest errors, eigen-solvers
 def _ladder(n_el, seed=0, r=1e-3):
     """Issue 11 §1's lightly damped ladder: k in [1e4, 2e4] N/m, m in [0.2, 1.2] kg, r to the frame."""
-    rng = np.random.default_rng(seed)
-    lines = ["drive V n0 0 velocity=1"]
-    i = node = 0
-    while i < n_el:
-        lines.append(f"spring k{i} n{node} n{node + 1} {rng.uniform(1e4, 2e4)!r}")
-        i += 1
-        if i < n_el:
-            lines.append(f"mass m{i} n{node + 1} 0 {rng.uniform(0.2, 1.2)!r}")
-            i += 1
-        if i < n_el:
-            lines.append(f"damper c{i} n{node + 1} 0 {r!r}")
-            i += 1
-        node += 1
+    lines = damped_ladder_lines(n_el, seed, r)
     return "\n".join(lines), lines
 
 
@@ -253,16 +242,7 @@ def test_grid_anti_resonances_against_the_closed_form():
     free-free path eigenvalues; every distinct one is seen at the corner (cosine modes).
     """
     n, k, m = 6, 1e4, 1.0
-    lines = ["drive V g0_0 0 velocity=1"]
-    for i in range(n):
-        for j in range(n):
-            g = f"g{i}_{j}"
-            lines += [f"mass m{i}_{j} {g} 0 {m}", f"spring f{i}_{j} {g} 0 {k}"]
-            if i + 1 < n:
-                lines.append(f"spring h{i}_{j} {g} g{i + 1}_{j} {k}")
-            if j + 1 < n:
-                lines.append(f"spring v{i}_{j} {g} g{i}_{j + 1} {k}")
-    found = mechcirc.parse("\n".join(lines)).resonances()
+    found = mechcirc.parse(grid_text(n, k, m)).resonances()
     lam = 2 - 2 * np.cos(np.pi * np.arange(n) / n)
     w2 = np.sort((k / m) * (1 + lam[:, None] + lam[None, :]).ravel())
     w2 = w2[np.r_[True, np.diff(w2) > 1e-9 * w2[1:]]]         # distinct values
