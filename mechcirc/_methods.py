@@ -77,23 +77,23 @@ def resonances(self, omega_max: float | None = None) -> list:
 
 def two_port(self, P1: str, P2: str, S1: str, S2: str, omega: ArrayLike, **kwargs):
     """Z parameters [m/(N·s)] between ports P1–P2 and S1–S2 as an ``skrf.Network``; see :func:`mechcirc.interop.skrf.two_port`."""
-    from .interop.skrf import two_port as _two_port
+    from .interop import skrf as skrf_interop
 
-    return _two_port(self, P1, P2, S1, S2, omega, **kwargs)
+    return skrf_interop.two_port(self, P1, P2, S1, S2, omega, **kwargs)
 
 
 def formula(self, **kwargs):
     """K(ω) as a SymPy expression nested as the reduction tree; see :func:`mechcirc.interop.formula.formula`."""
-    from .interop.formula import formula as _formula
+    from .interop import formula as formula_module
 
-    return _formula(self, **kwargs)
+    return formula_module.formula(self, **kwargs)
 
 
 def to_skrf(self, **kwargs):
     """K as a one-port ``skrf.Network`` (Z parameters, m/(N·s)); see :func:`mechcirc.interop.skrf.to_skrf`."""
-    from .interop.skrf import to_skrf as _to_skrf
+    from .interop import skrf as skrf_interop
 
-    return _to_skrf(self, **kwargs)
+    return skrf_interop.to_skrf(self, **kwargs)
 
 
 def _attach(cls, name, value):

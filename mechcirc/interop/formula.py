@@ -143,9 +143,9 @@ class _Builder:
             tree = self.circuit.tree
         except NotSeriesParallelError:
             return self.build_nodal()
-        from ..reduction import depth as _depth
+        from .. import reduction
 
-        depth = _depth(tree)
+        depth = reduction.depth(tree)
         if depth > MAX_TREE_DEPTH:
             raise MechcircError(
                 f"the reduction tree is {depth} levels deep; formulas are built up to "

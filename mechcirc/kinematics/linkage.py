@@ -421,10 +421,7 @@ class Linkage:
 # ------------------------------------------------------------------ parsing
 # The located-TOML helpers are shared with the scene and study readers.
 from ..sources import Table, check_keys, load_toml  # noqa: E402
-from ..sources import brief as _brief  # noqa: E402
-from ..sources import finite_number as _finite_number  # noqa: E402
-from ..sources import locate as _locate  # noqa: E402
-from ..sources import located as _err  # noqa: E402
+from ..sources import brief, finite_number, locate, located  # noqa: E402
 
 #: The tables of a linkage file, declared once (see :class:`mechcirc.sources.Table`);
 #: ``[points]`` and ``[links]`` map names of the user's choice.
@@ -481,9 +478,9 @@ def _check_tables(doc: dict, text: str, source: str) -> None:
         kind = list if table == "cranks" else dict
         if not isinstance(doc[table], kind) or (
                 table == "cranks" and not all(isinstance(c, dict) for c in doc[table])):
-            line, col = _locate(text, None, table)
+            line, col = locate(text, None, table)
             raise NetlistError(f"{table!r} must be a {header} table, got "
-                               f"{_brief(doc[table])}", source, line, col, header)
+                               f"{brief(doc[table])}", source, line, col, header)
     check_keys(text, source, TABLES[None], doc)
 
 
@@ -491,9 +488,9 @@ def _read_points(table: dict, text: str, source: str) -> dict[str, NDArray[np.fl
     """[points]: name → [x, y] of two finite numbers."""
     pose = {}
     for name, xy in table.items():
-        ok = isinstance(xy, list) and len(xy) == 2 and all(map(_finite_number, xy))
+        ok = isinstance(xy, list) and len(xy) == 2 and all(map(finite_number, xy))
         if not ok:
-            raise _err(text, source, f"point {name!r} must be [x, y], got {_brief(xy)}",
+            raise located(text, source, f"point {name!r} must be [x, y], got {brief(xy)}",
                        "points", name, expected="two finite numbers")
         pose[name] = np.array(xy, dtype=float)
     return pose
@@ -504,11 +501,11 @@ def _read_ground(table: dict, pose: dict, text: str, source: str) -> list[str]:
     check_keys(text, source, TABLES["ground"], table)
     ground_pts = table.get("points")
     if not isinstance(ground_pts, list) or not ground_pts:
-        raise _err(text, source, "[ground] needs points = [\"…\", …]", "ground", "points",
+        raise located(text, source, "[ground] needs points = [\"…\", …]", "ground", "points",
                    expected="a list of ground pivot names")
     for p in ground_pts:
         if not isinstance(p, str) or p not in pose:
-            raise _err(text, source, f"unknown point {p!r} in [ground]", "ground", "points",
+            raise located(text, source, f"unknown point {p!r} in [ground]", "ground", "points",
                        value=p, expected=f"one of {', '.join(pose)}")
     return ground_pts
 
@@ -518,16 +515,16 @@ def _read_links(table: dict, pose: dict, text: str, source: str) -> dict[str, tu
     links = {}
     for lname, pts in table.items():
         if not isinstance(pts, list) or len(pts) < 2 or not all(isinstance(p, str) for p in pts):
-            raise _err(text, source, f"link {lname!r} must list at least two point names",
+            raise located(text, source, f"link {lname!r} must list at least two point names",
                        "links", lname, expected='["P1", "P2", …]')
         for p in pts:
             if p not in pose:
-                raise _err(text, source, f"unknown point {p!r} in link {lname!r}", "links",
+                raise located(text, source, f"unknown point {p!r} in link {lname!r}", "links",
                            lname, value=p, expected=f"one of {', '.join(pose)}")
         if len(set(pts)) != len(pts):
-            raise _err(text, source, f"link {lname!r} lists a point twice", "links", lname)
+            raise located(text, source, f"link {lname!r} lists a point twice", "links", lname)
         if lname == "ground":
-            raise _err(text, source, "'ground' is reserved for the frame", "links", lname)
+            raise located(text, source, "'ground' is reserved for the frame", "links", lname)
         xy = np.array([pose[p] for p in pts])
         if np.max(np.ptp(xy, axis=0)) == 0.0:
             raise GeometryError(f"{source}: link {lname!r} has all its points at the same "
@@ -541,7 +538,7 @@ def _check_every_point_used(pose, ground_pts, links, text: str, source: str) -> 
     used = set(ground_pts).union(*map(set, links.values()))
     for p in pose:
         if p not in used:
-            raise _err(text, source, f"point {p!r} belongs to no link and is not a ground pivot",
+            raise located(text, source, f"point {p!r} belongs to no link and is not a ground pivot",
                        "points", p)
 
 
@@ -554,22 +551,22 @@ def _read_cranks(raw_cranks: list, links, ground_pts, text: str, source: str) ->
         check_keys(text, source, TABLES["cranks"], c, n)
         lname = c.get("link")
         if not isinstance(lname, str) or lname not in links:
-            raise _err(text, source, f"unknown link {lname!r} in [[cranks]] #{n + 1}", "cranks",
+            raise located(text, source, f"unknown link {lname!r} in [[cranks]] #{n + 1}", "cranks",
                        "link", value=lname, occurrence=n,
                        expected=f"one of {', '.join(links)}")
         pivots = [p for p in links[lname] if p in ground_pts]
         pivot = c.get("pivot", pivots[0] if len(pivots) == 1 else None)
         if pivot not in pivots:
-            raise _err(text, source, f"crank {lname!r} needs exactly one ground pivot among its "
+            raise located(text, source, f"crank {lname!r} needs exactly one ground pivot among its "
                        f"points (found {pivots or 'none'}); name it with pivot = \"…\"",
                        "cranks", "pivot" if "pivot" in c else "link", occurrence=n)
         omega = c.get("omega")
-        if not _finite_number(omega) or omega == 0:
-            raise _err(text, source, f"crank {lname!r}: omega must be a nonzero number "
-                       f"[rad/s], got {_brief(omega)}", "cranks", "omega" if "omega" in c else "link",
+        if not finite_number(omega) or omega == 0:
+            raise located(text, source, f"crank {lname!r}: omega must be a nonzero number "
+                       f"[rad/s], got {brief(omega)}", "cranks", "omega" if "omega" in c else "link",
                        occurrence=n)
         if any(k.link == lname for k in cranks):
-            raise _err(text, source, f"link {lname!r} is driven twice", "cranks", "link",
+            raise located(text, source, f"link {lname!r} is driven twice", "cranks", "link",
                        value=lname, occurrence=n)
         cranks.append(Crank(lname, pivot, float(omega)))
     return cranks
@@ -580,8 +577,8 @@ def _read_units(doc: dict, text: str, source: str) -> str:
     units = doc.get("units", "")
     if not isinstance(units, str) or len(units) > 20 or any(ch.isspace() or ch in "[]"
                                                             for ch in units):
-        raise _err(text, source, f"units must be a short length unit such as \"mm\", got "
-                   f"{_brief(units)}", None, "units", expected='"mm", "m", "in", …')
+        raise located(text, source, f"units must be a short length unit such as \"mm\", got "
+                   f"{brief(units)}", None, "units", expected='"mm", "m", "in", …')
     return units
 
 

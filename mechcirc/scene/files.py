@@ -73,7 +73,7 @@ from ..kinematics.linkage import TABLES as LINKAGE_TABLES
 from ..kinematics.linkage import Linkage, parse_linkage
 from ..sources import (Table, brief, check_keys, finite_number, load_toml, number_error,
                        split_lines)
-from ..sources import located as _err
+from ..sources import located
 
 __all__ = ["Scene", "Analysis", "SceneMass", "ElasticLink", "Torsion", "Load", "SceneDrive",
            "parse_scene", "load_scene", "LENGTH_UNITS", "SCENE_TABLES"]
@@ -302,7 +302,7 @@ def _number(text, source, value, what, table, key, n, *, positive=True, allow_ze
         try:
             converted = parse_quantity(value, role, what=what)
         except UnitError as exc:
-            raise _err(text, source, exc.message, table, key, occurrence=n,
+            raise located(text, source, exc.message, table, key, occurrence=n,
                        expected=exc.expected) from None
         parts = split_quantity(value)
         if role == "angle" and parts and parts[1]:
@@ -310,7 +310,7 @@ def _number(text, source, value, what, table, key, n, *, positive=True, allow_ze
         value = converted
     bad = number_error(value, what, positive=positive, allow_zero=allow_zero)
     if bad:
-        raise _err(text, source, bad[0], table, key, occurrence=n, expected=bad[1])
+        raise located(text, source, bad[0], table, key, occurrence=n, expected=bad[1])
     return float(value)
 
 
@@ -331,11 +331,11 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
     linkage = parse_linkage(_hide_scene_tables(text), source)
     units = doc.get("units")
     if not _named(units, LENGTH_UNITS):
-        raise _err(text, source, f"a scene needs units = \"m\", \"cm\" or \"mm\" (the length "
+        raise located(text, source, f"a scene needs units = \"m\", \"cm\" or \"mm\" (the length "
                    f"unit of [points]), got {units!r}", None, "units",
                    expected="units = \"mm\" (masses and stiffnesses are SI)")
     if len({c.omega for c in linkage.cranks}) != 1:
-        raise _err(text, source, f"the cranks of a scene turn on one shaft and need the same "
+        raise located(text, source, f"the cranks of a scene turn on one shaft and need the same "
                    f"omega; this linkage has {[c.omega for c in linkage.cranks]}", "cranks",
                    "omega", occurrence=1)
     r = _SceneReader(text, source, doc, linkage)
@@ -371,7 +371,7 @@ class _SceneReader:
         self.names: dict[str, str] = {}            # element name -> its table
 
     def err(self, message, table, key, **kw) -> NetlistError:
-        return _err(self.text, self.source, message, table, key, **kw)
+        return located(self.text, self.source, message, table, key, **kw)
 
     def new_name(self, name, table, key, n, default=None) -> str:
         """A valid element name not used before (``default`` when none is given)."""
@@ -618,7 +618,7 @@ def _clearance(text, source, entry, name, table, n, unit):
                 n, allow_zero=True)
     law = entry.get("clearance_law", "elastobacklash")
     if law not in CLEARANCE_LAWS:
-        raise _err(text, source, f"[[{table}]] #{n + 1}: clearance_law {law!r} is unknown",
+        raise located(text, source, f"[[{table}]] #{n + 1}: clearance_law {law!r} is unknown",
                    table, "clearance_law", occurrence=n,
                    expected=" or ".join(f'"{x}"' for x in CLEARANCE_LAWS))
     return b, law
@@ -629,7 +629,7 @@ def _analysis(text, source, table, circuit_names) -> Analysis:
     if table is None:
         return Analysis()
     if not isinstance(table, dict):
-        raise _err(text, source, "analysis must be a table [analysis]", None, "analysis")
+        raise located(text, source, "analysis must be a table [analysis]", None, "analysis")
     check_keys(text, source, TABLES["analysis"], table)
     theta = None
     if "theta_deg" in table:
@@ -637,7 +637,7 @@ def _analysis(text, source, table, circuit_names) -> Analysis:
                         "theta_deg", 0, positive=False)
     output = table.get("output")
     if output is not None and not _named(output, circuit_names):
-        raise _err(text, source, f"[analysis] output {output!r} is not an element of the "
+        raise located(text, source, f"[analysis] output {output!r} is not an element of the "
                    "scene's circuit", "analysis", "output",
                    value=output if isinstance(output, str) else None,
                    expected=f"one of {', '.join(sorted(circuit_names))}")
@@ -651,13 +651,13 @@ def _analysis(text, source, table, circuit_names) -> Analysis:
                 raise BandError(f"band must be [W1, W2] in rad/s, got {raw!r}")
             band = check_band(raw)
         except BandError as exc:
-            raise _err(text, source, f"[analysis] {exc}", "analysis", "band",
+            raise located(text, source, f"[analysis] {exc}", "analysis", "band",
                        expected="band = [W1, W2] with 0 < W1 < W2 [rad/s]") from None
     tol = None
     if "tol" in table:
         tol = _number(text, source, table["tol"], "tol", "analysis", "tol", 0)
     if (band is None) != (tol is None):
-        raise _err(text, source, "[analysis] needs band and tol together", "analysis",
+        raise located(text, source, "[analysis] needs band and tol together", "analysis",
                    "band" if band is not None else "tol",
                    expected="band = [W1, W2] and tol = T")
     return Analysis(theta, output, band, tol)

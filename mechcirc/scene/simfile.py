@@ -40,8 +40,7 @@ import math
 import re
 from dataclasses import dataclass, field
 
-from ..sources import brief, finite_number
-from ..sources import located as _err
+from ..sources import brief, finite_number, located
 
 __all__ = ["Moment", "SimulateSettings", "parse_moments", "parse_simulate", "OUTPUT_KINDS",
            "apply_overrides"]
@@ -84,7 +83,7 @@ def _num(text, source, value, what, table, key, n, *, positive=True):
         ok = value > 0
     if not ok:
         need = "a finite number" + (" > 0" if positive else "")
-        raise _err(text, source, f"{what} must be {need}, got {brief(value)}", table, key,
+        raise located(text, source, f"{what} must be {need}, got {brief(value)}", table, key,
                    occurrence=n, expected=need)
     return float(value)
 
@@ -94,7 +93,7 @@ def parse_moments(text, source, table, scene) -> tuple:
     if table is None:
         return ()
     if not isinstance(table, list) or not all(isinstance(x, dict) for x in table):
-        raise _err(text, source, "moments must be an array of tables [[moments]]", None,
+        raise located(text, source, "moments must be an array of tables [[moments]]", None,
                    "moments")
     bodies = scene.bodies
     taken = {m.name for m in scene.masses} | {x.name for x in (*scene.elastic, *scene.torsions,
@@ -103,17 +102,17 @@ def parse_moments(text, source, table, scene) -> tuple:
     for n, m in enumerate(table):
         for k in m:
             if k not in ("name", "body", "amplitude", "window_deg", "sigma_deg", "centre"):
-                raise _err(text, source, f"unknown key {k!r} in [[moments]] #{n + 1}", "moments",
+                raise located(text, source, f"unknown key {k!r} in [[moments]] #{n + 1}", "moments",
                            k, occurrence=n,
                            expected="name, body, amplitude, window_deg, sigma_deg, centre")
         body = m.get("body")
         if body not in bodies:
-            raise _err(text, source, f"[[moments]] #{n + 1}: body {body!r} is not a rigid link "
+            raise located(text, source, f"[[moments]] #{n + 1}: body {body!r} is not a rigid link "
                        "or torsion body", "moments", "body" if "body" in m else "amplitude",
                        occurrence=n, expected=f"one of {', '.join(bodies)}")
         name = m.get("name", f"M_{body}")
         if not isinstance(name, str) or not _IDENT.fullmatch(name) or name in taken:
-            raise _err(text, source, f"[[moments]] #{n + 1}: name {name!r} is not a valid "
+            raise located(text, source, f"[[moments]] #{n + 1}: name {name!r} is not a valid "
                        "unused name", "moments", "name" if "name" in m else "body",
                        occurrence=n, expected="an identifier not used by another element")
         taken.add(name)
@@ -122,14 +121,14 @@ def parse_moments(text, source, table, scene) -> tuple:
         alpha = _num(text, source, m.get("window_deg"), f"window_deg of {name!r} [deg]",
                      "moments", "window_deg" if "window_deg" in m else "body", n)
         if alpha >= 360:
-            raise _err(text, source, f"window_deg of {name!r} must be < 360, got {alpha!r}",
+            raise located(text, source, f"window_deg of {name!r} must be < 360, got {alpha!r}",
                        "moments", "window_deg", occurrence=n, expected="0 < window_deg < 360")
         sigma = _num(text, source, m.get("sigma_deg", alpha), f"sigma_deg of {name!r} [deg]",
                      "moments", "sigma_deg", n)
         centre = m.get("centre", "front-dead-centre")
         if isinstance(centre, str):
             if centre not in ("front-dead-centre", "back-dead-centre"):
-                raise _err(text, source, f"centre {centre!r} of {name!r} is unknown", "moments",
+                raise located(text, source, f"centre {centre!r} of {name!r} is unknown", "moments",
                            "centre", occurrence=n, expected='"front-dead-centre", '
                            '"back-dead-centre" or a crank rotation from the pose [deg]')
         else:
@@ -144,14 +143,14 @@ def parse_simulate(text, source, table, scene) -> SimulateSettings:
     if table is None:
         return SimulateSettings()
     if not isinstance(table, dict):
-        raise _err(text, source, "simulate must be a table [simulate]", None, "simulate")
+        raise located(text, source, "simulate must be a table [simulate]", None, "simulate")
     kw = {}
     for k, v in table.items():
         if k == "aliases":
             if not isinstance(v, dict) or not all(
                     isinstance(a, str) and _IDENT.fullmatch(a) and isinstance(b, str)
                     and "." in b for a, b in v.items()):
-                raise _err(text, source, "[simulate.aliases] maps names to \"THING.quantity\" "
+                raise located(text, source, "[simulate.aliases] maps names to \"THING.quantity\" "
                            "strings", "simulate.aliases", next(iter(v), "aliases")
                            if isinstance(v, dict) else "aliases",
                            expected='eps2P = "crank.acceleration"')
@@ -164,13 +163,13 @@ def parse_simulate(text, source, table, scene) -> SimulateSettings:
         elif k in ("revolutions", "points"):
             if isinstance(v, bool) or not isinstance(v, int) or v < (1 if k == "revolutions"
                                                                       else 16):
-                raise _err(text, source, f"[simulate] {k} must be an integer ≥ "
+                raise located(text, source, f"[simulate] {k} must be an integer ≥ "
                            f"{1 if k == 'revolutions' else 16}, got {v!r}", "simulate", k)
             kw[k] = v
         elif k == "omega_ripple":
             kw[k] = _ripple(text, source, v)
         else:
-            raise _err(text, source, f"unknown key {k!r} in [simulate]", "simulate", k,
+            raise located(text, source, f"unknown key {k!r} in [simulate]", "simulate", k,
                        expected="omega, revolutions, start_deg, steps_per_period, points, "
                        "omega_ripple, aliases")
     return SimulateSettings(**kw)
@@ -182,21 +181,21 @@ _RIPPLE_FORM = "omega_ripple = {amplitude = 0.05, harmonic = 2}"
 def _ripple(text, source, v):
     """``omega_ripple = {amplitude = a, harmonic = k}`` → (a, k), checked."""
     if not isinstance(v, dict):
-        raise _err(text, source, f"[simulate] omega_ripple must be an inline table, got "
+        raise located(text, source, f"[simulate] omega_ripple must be an inline table, got "
                    f"{brief(v)}", "simulate", "omega_ripple", expected=_RIPPLE_FORM)
     extra = set(v) - {"amplitude", "harmonic"}
     if extra or "amplitude" not in v:
         what = (f"unknown key {sorted(extra)[0]!r}" if extra else "missing amplitude")
-        raise _err(text, source, f"[simulate] omega_ripple: {what}", "simulate",
+        raise located(text, source, f"[simulate] omega_ripple: {what}", "simulate",
                    "omega_ripple", expected=_RIPPLE_FORM)
     a = v["amplitude"]
     if not (finite_number(a) and 0 <= a < 1):
-        raise _err(text, source, f"[simulate] omega_ripple amplitude must be a number in "
+        raise located(text, source, f"[simulate] omega_ripple amplitude must be a number in "
                    f"[0, 1) (relative to the crank speed), got {brief(a)}", "simulate",
                    "omega_ripple", expected="0 <= amplitude < 1")
     k = v.get("harmonic", 1)
     if isinstance(k, bool) or not isinstance(k, int) or k < 1:
-        raise _err(text, source, f"[simulate] omega_ripple harmonic must be a whole number "
+        raise located(text, source, f"[simulate] omega_ripple harmonic must be a whole number "
                    f">= 1 (ripples per revolution), got {brief(k)}", "simulate",
                    "omega_ripple", expected="harmonic = 1, 2, 3, ...")
     return float(a), int(k)

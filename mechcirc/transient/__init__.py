@@ -15,6 +15,6 @@ __all__ = ["transient", "TransientResult", "Waveform", "parse_drive", "crosschec
 
 def crosscheck(*args, **kwargs):
     """See :func:`mechcirc.transient.crosscheck.crosscheck`."""
-    from .crosscheck import crosscheck as _cc
+    from . import crosscheck as crosscheck_module
 
-    return _cc(*args, **kwargs)
+    return crosscheck_module.crosscheck(*args, **kwargs)
