@@ -638,8 +638,19 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int, keep: 
     Returns (K, error of the solve, S, S_data, x rows or None, the rows of x
     at ``keep``).  What does not change with ω — the pattern, the solver's
     choice and ordering, the residual's plan — comes from :func:`_pattern`
-    and :func:`_solver`.
+    and :func:`_solver`.  The compiled kernels serve it only if it is large
+    enough (:data:`KERNEL_MIN_WORK`).
     """
+    token = _WANTED.set(system.size * omega.size >= KERNEL_MIN_WORK)
+    try:
+        return _sweep_chunks(system, omega, refine, steps, keep)
+    finally:
+        _WANTED.reset(token)
+
+
+def _sweep_chunks(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
+                  keep: NDArray):
+    """:func:`_sweep`'s work: the loop over chunks of ω."""
     n = system.size
     m = omega.size
     pat = _pattern(system)
@@ -650,18 +661,6 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int, keep: 
     Sd = np.full(m, np.nan)
     x_all = np.full((m, n), complex(np.nan, np.nan)) if keep is None else None
     kept = {}
-    token = _WANTED.set(n * m >= KERNEL_MIN_WORK)
-    try:
-        return _sweep_chunks(system, omega, refine, steps, keep, pat, rhs, K, err, S, Sd,
-                             x_all, kept)
-    finally:
-        _WANTED.reset(token)
-
-
-def _sweep_chunks(system, omega, refine, steps, keep, pat, rhs, K, err, S, Sd, x_all, kept):
-    """The loop of :func:`_sweep` over chunks of ω (its arrays filled in place)."""
-    n = system.size
-    m = omega.size
     solver = _solver(system)
     if solver.kind != "dense" and _kernels() is not None:
         # Compiled: no (ω, term) temporaries; the chunk's (ω, n) arrays stay in cache.
