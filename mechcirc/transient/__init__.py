@@ -15,6 +15,7 @@ __all__ = ["transient", "TransientResult", "Waveform", "parse_drive", "crosschec
 
 def crosscheck(*args, **kwargs):
     """See :func:`mechcirc.transient.crosscheck.crosscheck`."""
-    from . import crosscheck as crosscheck_module
+    # (``from . import crosscheck`` would find this function, not the module.)
+    from .crosscheck import crosscheck as run_crosscheck
 
-    return crosscheck_module.crosscheck(*args, **kwargs)
+    return run_crosscheck(*args, **kwargs)
