@@ -20,8 +20,15 @@ docs/tutorial.md under "Examples in these docs"):
   Real start-up, exit codes and signals of the ``mechcirc`` script are
   tested by subprocess in ``tests/test_cli.py``, ``tests/test_cli_common.py``
   and ``tests/test_outputs.py``.
-  The lines after a command are its output as shown and are not compared
-  (numbers move with the last digit of a library).
+  The lines after a command are its output as shown, and they are compared
+  with what the command printed (stdout, then stderr; :func:`output_mismatch`):
+  text word for word (runs of spaces are one space), every number to the
+  digits shown, within one unit of the last digit shown or 1e-10 relative,
+  whichever is wider (a library's last bit may move it); a line ``...`` stands for any number of lines, and
+  ``...`` inside a line for any text there (the rest of that line is then
+  compared as text).  An
+  ``<!-- output-varies: REASON -->`` marker skips the comparison for a block
+  whose output cannot repeat (times, load, a random start).
 * ``<!-- file: PATH -->`` writes the block to PATH before the next blocks
   run, so a netlist shown in a page is the netlist its commands read; when
   PATH is shipped (``docs/examples/...``) the block must equal the file.
@@ -176,6 +183,77 @@ def run_mechcirc(argv: list[str]) -> tuple[int, str, str]:
     return status, out.getvalue(), err.getvalue()
 
 
+def _shown_outputs(text: str) -> list[list[str]]:
+    """The lines shown after each ``$`` command of a shell block, in order."""
+    shown: list[list[str]] = []
+    cont = False
+    for line in text.splitlines():
+        if cont:
+            cont = line.rstrip().endswith("\\")
+            continue
+        if line.startswith("$ "):
+            shown.append([])
+            cont = line.rstrip().endswith("\\")
+        elif shown:
+            shown[-1].append(line)
+    return shown
+
+
+_NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
+
+
+def _number_matches(shown: str, actual: str) -> bool:
+    """``actual`` is ``shown`` to the digits shown, within one unit of the last."""
+    if shown == actual:
+        return True
+    mantissa, _, exponent = shown.lower().partition("e")
+    decimals = len(mantissa.partition(".")[2])
+    unit = 10.0 ** (int(exponent or 0) - decimals)
+    try:
+        # One unit of the last digit shown, and never tighter than 1e-10
+        # relative (a 17-digit CSV value may move in its last bits with the
+        # CPU or the library; 1e-10 is still far below any drift a reader sees).
+        return abs(float(actual) - float(shown)) <= max(unit, 1e-10 * abs(float(shown))) * (1 + 1e-9)
+    except ValueError:
+        return False
+
+
+def _line_matches(shown: str, actual: str) -> bool:
+    if "..." in shown and shown.strip() != "...":   # elided inside the line: the rest as text
+        parts = [re.escape(" ".join(p.split())) for p in shown.split("...")]
+        return re.fullmatch(".*?".join(parts), " ".join(actual.split())) is not None
+    s_words, a_words = _NUMBER.split(" ".join(shown.split())), _NUMBER.split(" ".join(actual.split()))
+    s_nums, a_nums = _NUMBER.findall(" ".join(shown.split())), _NUMBER.findall(" ".join(actual.split()))
+    return (s_words == a_words and len(s_nums) == len(a_nums)
+            and all(_number_matches(s, a) for s, a in zip(s_nums, a_nums)))
+
+
+def output_mismatch(shown: list[str], actual: str) -> str | None:
+    """None when ``actual`` (a command's output) is what ``shown`` shows, else why not.
+
+    Blank lines are ignored on both sides; a shown line ``...`` matches any
+    number of lines (the shortest run that lets the rest match).
+    """
+    want = [line for line in shown if line.strip()]
+    have = [line for line in actual.splitlines() if line.strip()]
+    if not want:
+        return None
+
+    def match(i: int, j: int) -> bool:
+        if i == len(want):
+            return j == len(have)
+        if want[i].strip() == "...":
+            return any(match(i + 1, k) for k in range(j, len(have) + 1))
+        return j < len(have) and _line_matches(want[i], have[j]) and match(i + 1, j + 1)
+
+    if match(0, 0):
+        return None
+    first = next((f"shown:   {w!r}\nprinted: {h!r}" for w, h in zip(want, have)
+                  if w.strip() != "..." and not _line_matches(w, h)), "")
+    return (f"the output shown ({len(want)} lines) is not what it printed "
+            f"({len(have)} lines)\n{first}\n--- printed ---\n" + "\n".join(have[:40]))
+
+
 def _run_shell(text, marks, where, tmp, env):
     """Run a block's ``$`` commands in order, as one shell session would.
 
@@ -187,21 +265,27 @@ def _run_shell(text, marks, where, tmp, env):
     expected = int(marks.get("exit", "0") or 0)
     # Benchmarks measure time, they do not check anything, and take minutes: the
     # pages show their command and output, the test does not run them.
-    cmds = [c for c in _commands(text) if not c.lstrip().startswith("python benchmarks/")]
+    compare = "output-varies" not in marks
     failures, last = [], 0
-    for cmd in cmds:
+    for cmd, shown in zip(_commands(text), _shown_outputs(text)):
+        if cmd.lstrip().startswith("python benchmarks/"):
+            continue
         argv = _in_process_argv(cmd)
         if argv is not None:
-            last, _, stderr = run_mechcirc(argv)
+            last, stdout, stderr = run_mechcirc(argv)
         else:
             proc = subprocess.run(["bash", "-c", f"set -o pipefail\n(exit {last})\n{cmd}"],
                                   cwd=tmp, env=env, capture_output=True, text=True,
                                   timeout=SHELL_TIMEOUT)
-            last, stderr = proc.returncode, proc.stderr
+            last, stdout, stderr = proc.returncode, proc.stdout, proc.stderr
         want = expected if cmd.lstrip().startswith("mechcirc") else 0
         if last != want:
             failures.append(f"{where}: `{cmd}` exited {last}, expected {want}\n"
                             f"{stderr[-1500:]}")
+        elif compare:
+            why = output_mismatch(shown, stdout + stderr)
+            if why:
+                failures.append(f"{where}: `{cmd}`: {why}")
     return failures
 
 
@@ -275,4 +359,23 @@ def test_the_markers_are_known():
         for line in page.read_text("utf-8").splitlines():
             m = _MARK.match(line)
             if m:
-                assert m.group(1) in ("file", "not-run", "exit"), (page, line)
+                assert m.group(1) in ("file", "not-run", "exit", "output-varies"), (page, line)
+
+
+@pytest.mark.parametrize("shown, printed, ok", [
+    (["K = 1.25 m/(N·s)"], "K = 1.2501 m/(N·s)\n", True),      # within one unit of 0.01
+    (["K = 1.25 m/(N·s)"], "K = 1.27 m/(N·s)\n", False),
+    (["K = 1.25 m/(N·s)"], "K = 1.25 N\n", False),             # the words differ
+    (["3.4e-13"], "3.5e-13", True),
+    (["0.6360572198528941"], "0.6360572198528951", True),     # 1.6e-15 relative
+    (["0.6360572198528941"], "0.6360572208528941", False),    # 1.6e-9 relative
+    (["3.4e-13"], "3.4e-12", False),
+    (["a", "...", "z"], "a\nb\nc\nz\n", True),
+    (["a", "z"], "a\nb\nz\n", False),
+    (["dead centre ... so"], "dead centre -1e-17, so\n", True),
+    (["dead centre ... so"], "dead center -1e-17, so\n", False),                         # a line missing from the shown
+    (["a", "b", "c"], "a\nb\n", False),
+    ([], "anything\n", True),                                  # nothing shown: nothing compared
+])
+def test_output_comparison(shown, printed, ok):
+    assert (output_mismatch(shown, printed) is None) == ok
