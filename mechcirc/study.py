@@ -1,4 +1,4 @@
-"""Parameter studies: a grid or a random sample over a netlist's ``.param`` values.
+"""Parameter studies: a grid, a sample or a file of designs over a netlist's ``.param`` values.
 
 A study is described by a TOML file (``mechcirc study SPEC.toml``)::
 
@@ -15,12 +15,19 @@ A study is described by a TOML file (``mechcirc study SPEC.toml``)::
     eta1 = [0.7, 0.8, 0.9]                    # listed values
     eta2 = {min = 1.0, max = 1.5, num = 6}    # evenly spaced (log = true: geometric)
 
-    # ... or a random sample (uniform, or log-uniform with log = true)
-    # [random]
-    # n = 1000
+    # ... or a sample of n points in a box (uniform, or log-uniform with log = true)
+    # [sample]
+    # method = "sobol"        # "random" (default), "latin-hypercube" or "sobol"
+    # n = 1024
     # seed = 1
-    # [random.params]
+    # [sample.params]
     # eta1 = {min = 0.6, max = 1.0}
+    # ([random] with n, seed, params is method = "random")
+
+    # ... or your own points: a CSV (or Parquet) file, a header row naming the
+    # parameters, a row per point; every cell checked (file:line:col errors)
+    # [sample]
+    # file = "designs.csv"
 
     # analysis = "resonances": how many of each kind to tabulate, and up to where
     # resonances = 3
@@ -58,12 +65,19 @@ default, or an existing Dask cluster (``scheduler="tcp://host:8786"``;
 ``dask.distributed`` is imported only then).  Points go out in batches;
 finished rows are journalled (each with a checksum) to ``OUTPUT.partial.csv``
 as they arrive, so an interrupted study keeps them, and ``resume=True`` runs
-only the points the journal lacks or holds incomplete.  At the end the output
-(CSV, or ``.parquet`` with pyarrow) is written whole in index order
-(atomically) and the journal removed; until then an existing output is
-left as it was.  Local and
+only the points the journal lacks or holds incomplete, refusing a journal
+(or finished output) made from another spec.  At the end the output (CSV, or
+``.parquet`` with pyarrow) is written whole in index order (atomically) and
+the journal removed; until then an existing output is left as it was.
+``OUTPUT.lock`` keeps a second study from writing the same output.  Local and
 cluster runs give identical tables: each point is computed the same way,
 whatever runs it.
+
+Provenance: :attr:`StudySpec.canonical` is the resolved spec as canonical JSON
+(the netlist and a sample file by their SHA-256) and :attr:`StudySpec.sha256`
+its hash; the journal's first line, a Parquet output's metadata and a CSV
+output's sidecar ``OUTPUT.meta.json`` (:func:`provenance`) record them, with
+the spec's text and the unit of every column (:func:`column_units`).
 """
 
 from __future__ import annotations
@@ -987,16 +1001,22 @@ def _resumed_rows(spec: StudySpec, output, journal: str, parquet: bool) -> list[
     """
     columns = spec.columns
     if Path(journal).exists():
-        where, recorded, done = journal, _journal_spec(journal), read_rows(journal, columns)
+        _same_spec(journal, _journal_spec(journal), spec)
+        done = read_rows(journal, columns)
+    elif Path(output).exists() and parquet:
+        recorded, table = _read_parquet(output)
+        _same_spec(os.fspath(output), recorded, spec)
+        if table.column_names != columns:
+            raise MechcircError(f"{os.fspath(output)}: its columns "
+                                f"({', '.join(table.column_names)}) are not this study's; "
+                                "cannot resume (use another -o)")
+        done = [{c: ("" if v is None else v) for c, v in row.items()}
+                for row in table.to_pylist()]
     elif Path(output).exists():
-        where = os.fspath(output)
-        if parquet:
-            recorded, done = _read_parquet(output, columns)
-        else:
-            recorded, done = _sidecar_spec(output), read_rows(output, columns)
+        _same_spec(os.fspath(output), _sidecar_spec(output), spec)
+        done = read_rows(output, columns)
     else:
         return []
-    _same_spec(where, recorded, spec)
     n, k = len(spec.points), len(spec.params)
     return [r for r in done if r["index"] < n and
             tuple(r[p] for p in spec.params) == spec.points[r["index"]][:k]]
@@ -1024,8 +1044,12 @@ def _same_spec(where: str, recorded: str | None, spec: StudySpec) -> None:
 
 
 def _changes(old: dict, new: dict, prefix: str = "") -> list[str]:
-    """What differs between two canonical specs, key by key (``sample.axes.eta1 was …``)."""
+    """What differs between two canonical specs, key by key (``sample.axes.eta1 was …``);
+    of two samples made by different methods, only the method."""
     out = []
+    if old.get("method") != new.get("method"):
+        return [f"{prefix}method was {_show(old.get('method'))}, now "
+                f"{_show(new.get('method'))}"]
     for key in sorted(set(old) | set(new)):
         name = prefix + key
         if key not in new:
@@ -1167,22 +1191,22 @@ def _write_parquet(path, columns: list[str], rows: list[dict], record: dict) -> 
     pq.write_table(table, path)
 
 
-def _read_parquet(path, columns: list[str]) -> tuple[str | None, list[dict]]:
-    """The recorded canonical spec (or None) and the rows of a study's Parquet table."""
+def _read_parquet(path):
+    """The recorded canonical spec (or None) and the table of a study's Parquet file."""
     import json
 
     import pyarrow.parquet as pq
 
-    table = pq.read_table(path)
-    if table.column_names != columns:
-        raise MechcircError(f"{os.fspath(path)}: its columns ({', '.join(table.column_names)}) "
-                            "are not this study's; cannot resume (use another -o)")
+    try:
+        table = pq.read_table(path)
+    except Exception as exc:  # noqa: BLE001 - pyarrow's errors have no common base
+        raise MechcircError(f"{os.fspath(path)}: not a Parquet table ({type(exc).__name__}); "
+                            "cannot resume (use another -o)") from None
     try:
         recorded = _canonical(json.loads(table.schema.metadata[b"mechcirc"])["spec"])
     except (TypeError, KeyError, ValueError):
         recorded = None
-    return recorded, [{c: ("" if v is None else v) for c, v in row.items()}
-                      for row in table.to_pylist()]
+    return recorded, table
 
 
 def _lock(output):
