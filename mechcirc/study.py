@@ -82,6 +82,7 @@ the spec's text and the unit of every column (:func:`column_units`).
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import itertools
 import math
@@ -573,7 +574,7 @@ def _file_sha256(path) -> str:
 
 
 def _csv_records(path):
-    """(header [(name, col)], [(line, [(text, col)])]) of a CSV sample file; blank lines skipped."""
+    """(header, records) of a CSV sample file: [(name, col)], [(line, [(text, col)])]."""
     from .sources import read_source, split_lines
 
     lines = split_lines(read_source(path, "a CSV file of parameter columns"))
@@ -934,7 +935,6 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
         Another study holds ``output``; ``resume`` finds rows of another spec;
         the scheduler cannot be reached or has no worker (nothing is written).
     """
-    import contextlib
 
     columns = spec.columns
     parquet = bool(output) and str(output).lower().endswith(".parquet")
@@ -1048,8 +1048,7 @@ def _changes(old: dict, new: dict, prefix: str = "") -> list[str]:
     of two samples made by different methods, only the method."""
     out = []
     if old.get("method") != new.get("method"):
-        return [f"{prefix}method was {_show(old.get('method'))}, now "
-                f"{_show(new.get('method'))}"]
+        return [f"{prefix}method was {_show(old.get('method'))}, now {_show(new.get('method'))}"]
     for key in sorted(set(old) | set(new)):
         name = prefix + key
         if key not in new:
@@ -1073,7 +1072,7 @@ def _journal_spec(journal: str) -> str | None:
     """The canonical spec a journal was started with (its first line), or None."""
     try:
         with open(journal, encoding="utf-8") as fh:
-            first = fh.readline(1 << 20).rstrip("\n")
+            first = fh.readline().rstrip("\n")
     except (UnicodeDecodeError, OSError):
         return None
     tag, _, rest = first.partition(" ")
@@ -1218,7 +1217,6 @@ def _lock(output):
     the message a second writer gets.  Without ``fcntl`` (Windows) the file is
     created with ``O_EXCL`` and one left by a killed study must be deleted by hand.
     """
-    import contextlib
     import socket
 
     path = f"{os.fspath(output)}.lock"
@@ -1257,6 +1255,7 @@ def _lock(output):
             except FileNotFoundError:
                 pass
             os.close(fd)
+        _LOCK_FDS.add(fd)
         try:
             os.ftruncate(fd, 0)
             os.write(fd, f"{me}\n".encode())
@@ -1264,9 +1263,15 @@ def _lock(output):
         finally:
             with contextlib.suppress(OSError):
                 os.unlink(path)         # before the lock goes: see the samestat check
+            _LOCK_FDS.discard(fd)
             os.close(fd)
 
     return hold()
+
+
+#: Descriptors of the output locks this process holds: a forked worker closes its
+#: copies (:func:`_die_with_parent`), so that the lock ends with the study's process.
+_LOCK_FDS: set[int] = set()
 
 
 def _holder(path: str) -> str:
@@ -1321,11 +1326,18 @@ def _die_with_parent(parent: int) -> None:
     After SIGKILL of the parent, workers would otherwise be re-parented to
     init and wait on the pipe for minutes.  On Linux the kernel delivers
     SIGKILL to the worker when its parent dies (``prctl(PR_SET_PDEATHSIG)``);
-    elsewhere a daemon thread polls the parent's pid once a second.
+    elsewhere a daemon thread polls the parent's pid once a second.  A forked
+    worker also closes its copies of the output lock's descriptor (a flock
+    belongs to every copy: the lock would outlive a killed study in its workers).
     """
     import signal
     import sys
     import threading
+
+    for fd in _LOCK_FDS:
+        with contextlib.suppress(OSError):
+            os.close(fd)
+    _LOCK_FDS.clear()
 
     if sys.platform.startswith("linux"):
         try:

@@ -4,7 +4,6 @@ and located errors in sample files (issue 21 §5-6, issue 23 §6)."""
 
 import csv
 import json
-import math
 import os
 import subprocess
 import sys
@@ -12,11 +11,17 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from cli_helpers import assert_user_error, run
+
 from mechcirc.errors import MechcircError, NetlistError
-from mechcirc.study import (column_units, journal_path, load_spec, parse_spec, run_study,
-                            sidecar_path)
+from mechcirc.study import (
+    column_units,
+    journal_path,
+    load_spec,
+    parse_spec,
+    run_study,
+    sidecar_path,
+)
 
 REPO = Path(__file__).resolve().parents[1]
 STB = REPO / "netlists" / "stb_heald.mcir"
@@ -178,7 +183,7 @@ def test_the_lock_of_a_killed_study_is_taken_over(tmp_path, capsys):
 
 # ------------------------------------------------------------------ Dask start-up
 def test_a_scheduler_without_workers_is_a_user_error_and_leaves_no_files(tmp_path, capsys):
-    import distributed          # the test extra installs it: CI runs this
+    import distributed  # the test extra installs it: CI runs this
     a = spec_file(tmp_path)
     out = tmp_path / "r.csv"
     with distributed.LocalCluster(n_workers=0, processes=False, protocol="tcp",
@@ -338,8 +343,8 @@ SIMPLE = ".param m=2 k=100\nmass m1 a 0 m\nspring s a 0 {2*k}\ndrive V a 0 veloc
 @pytest.mark.parametrize("content, line, col, fragment", [
     ("m,k\n1,nan\n", 2, 3, "column k: 'nan' is not a finite number"),
     ("m,k\n1,2\n3,abc\n", 3, 3, "column k: 'abc' is not a finite number"),
-    ("m,k\n1,2\n-1,2\n", 3, 1, "column m: -1 is not allowed: m is the mass of 'm1', "
-                               "which must be > 0"),
+    ("m,k\n1,2\n-1,2\n", 3, 1, ("column m: -1 is not allowed: m is the mass of 'm1', "
+                               "which must be > 0")),
     ("m,k\n1,2\n0,2\n", 3, 1, "m is the mass of 'm1'"),
     ("m,kk\n1,2\n", 1, 3, "column 'kk' is not a .param of the netlist; did you mean 'k'?"),
     ("m,k\n1,2\n3\n", 3, 1, "1 values, the header names 2 columns (no value for k)"),
@@ -419,3 +424,33 @@ def test_a_file_that_is_not_a_netlist_is_not_quoted(tmp_path, capsys):
     net.write_text("# a comment\n.param m=2\nmas m1 a 0 m\ndrive V a 0 velocity=1\n")
     spec.write_text('netlist = "n.mcir"\nanalysis = "resonances"\n[grid]\nm = [1.0]\n')
     assert_user_error(["study", spec], capsys, "n.mcir:3:1: error: unknown keyword 'mas'")
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="Linux /proc")
+def test_worker_processes_do_not_hold_the_output_lock(tmp_path):
+    """A flock belongs to every copy of its descriptor: forked workers close theirs,
+    so the lock of a killed study does not live on in its workers."""
+    spec = load_spec(spec_file(tmp_path, "eta1 = [0.6, 0.7, 0.8, 0.9]"))
+    out = tmp_path / "r.csv"
+    lock = str(tmp_path / "r.csv.lock")
+    seen = []
+
+    def holders(n):
+        me = os.getpid()
+        for pid in os.listdir("/proc"):
+            if not pid.isdigit():
+                continue
+            try:
+                with open(f"/proc/{pid}/stat") as fh:
+                    ppid = int(fh.read().rsplit(")", 1)[1].split()[1])
+                if ppid != me:
+                    continue
+                fds = [os.readlink(f"/proc/{pid}/fd/{fd}")
+                       for fd in os.listdir(f"/proc/{pid}/fd")]
+            except OSError:
+                continue
+            seen.append((pid, lock in fds))
+
+    r = run_study(spec, output=out, workers=2, batch_size=1, on_rows=holders)
+    assert r.executor == "local"
+    assert seen and not any(held for _, held in seen), seen
