@@ -129,7 +129,7 @@ class StudySpec:
     #: The spec file's text as written (provenance; empty when built from a dict).
     spec_text: str = ""
     #: The unit of each parameter, in the order of ``params`` (see :func:`column_units`).
-    param_units: tuple[str, ...] = ()
+    param_units: tuple[str | None, ...] = ()
 
     @property
     def sha256(self) -> str:
@@ -166,10 +166,10 @@ _SLEY_UNITS = {"I2P": "kg·m²", "I4": "kg·m²", "I4P": "kg·m²", "I5P": "kg·
                "l2P": "m", "l3": "m", "l4": "m", "d": "m"}
 
 
-def column_units(spec: StudySpec) -> dict[str, str]:
+def column_units(spec: StudySpec) -> dict[str, str | None]:
     """The unit of every column of ``spec``'s table (``"1"``: a count or a pure number;
-    ``""``: text; ``"SI"``: a ``.param`` whose unit the netlist does not fix, in SI)."""
-    units = dict(zip(spec.params, spec.param_units or ("SI",) * len(spec.params)))
+    ``""``: text; None: a ``.param`` whose unit the netlist does not fix)."""
+    units = dict(zip(spec.params, spec.param_units or (None,) * len(spec.params)))
     return {c: units[c] if c in units else _UNITS.get(c, _UNITS.get(c.rsplit("_", 1)[0]))
             for c in spec.columns}
 
@@ -346,7 +346,7 @@ def _parse_spec(data: dict, source: str, base: Path) -> StudySpec:
     sley = None
     if analysis == "simulate":
         sley = _sley_settings(data.get("sley", {}), names, kind)
-        units = tuple(_SLEY_UNITS.get(n, "SI") for n in names)
+        units = tuple(_SLEY_UNITS.get(n) for n in names)
     else:
         _check_params(roles, path, names, kind)
         units = tuple(roles[n][0] for n in names)
@@ -550,8 +550,10 @@ def _sample_file(table: dict, base: Path, analysis: str, roles: dict):
             except ValueError:
                 value = None
             if value is None or isinstance(value, bool) or not math.isfinite(value):
+                unit = roles.get(name, (None,))[0]
                 raise NetlistError(f"column {name}: {brief(text)} is not a finite number",
-                                   source, line, col, f"a number [{_unit_of(roles, name)}]")
+                                   source, line, col, f"a number [{unit}]" if unit else
+                                   "a number")
             reason = roles.get(name, ("", None))[1]
             if reason and not value > 0:
                 raise NetlistError(f"column {name}: {value:g} is not allowed: {name} is "
@@ -561,10 +563,6 @@ def _sample_file(table: dict, base: Path, analysis: str, roles: dict):
         points.append(tuple(row))
     canon = {"method": "file", "columns": list(names), "file_sha256": _file_sha256(path)}
     return names, tuple(points), canon
-
-
-def _unit_of(roles, name) -> str:
-    return roles.get(name, ("SI", None))[0]
 
 
 def _file_sha256(path) -> str:
@@ -647,33 +645,50 @@ def _sweep_omega(o, n_points: int) -> tuple[float, float, int, bool]:
     return lo, hi, npts, log
 
 
-def _param_roles(text: str, path) -> dict[str, tuple[str, str | None]]:
+def _param_roles(text: str, path) -> dict[str, tuple[str | None, str | None]]:
     """Each ``.param`` of the netlist: its unit, and why it must be > 0 (or None).
 
     A parameter that is itself (not inside an expression) the value, ``eta``
-    or ``ratio`` of an element has that field's unit and must be > 0; any
-    other has the unit ``"SI"`` (the netlist does not fix it).  Parsed once,
+    or ``ratio`` of an element, or a drive's amplitude, has the unit written
+    after it on that line (``mass m1 a 0 m g``: ``g``), else that field's SI
+    unit, and (value, ``eta``, ``ratio``) must be > 0.  Any other's unit is None:
+    the netlist does not fix it (a parameter inside expressions).  Parsed once,
     not per point.
     """
     from .circuit import ELEMENT_UNITS
     from .netlist import expressions_of, parse
+    from .sources import split_lines
+    from .units import looks_like_unit
 
     circuit = parse(text, source=str(path))
-    kinds = {e.name: e.kind for e in circuit.elements}
-    fields = {"eta": "1", "ratio": "1", "velocity": "m/s", "force": "N"}
+    owners = {e.name: e for e in circuit.elements}
+    if circuit.drive is not None:
+        owners[circuit.drive.name] = circuit.drive
+    lines = split_lines(text)
+    defaults = {"eta": "1", "ratio": "1", "velocity": "m/s", "force": "N"}
     uses: dict[str, set] = {}
     reasons: dict[str, str] = {}
     for (owner, role), (expr, _factor) in (expressions_of(circuit) or {}).items():
         if owner == "param" or expr.kind != "name":
             continue
-        unit = ELEMENT_UNITS.get(kinds.get(owner)) if role == "value" else fields.get(role)
+        unit = None
+        if role in ("value", "velocity", "force") and owner in owners:
+            el = owners[owner]
+            words = re.split(r"[#;]", lines[el.line - 1], maxsplit=1)[0].split() \
+                if 0 < el.line <= len(lines) else []
+            at = 4 if role == "value" else next(
+                (i for i, w in enumerate(words) if w.startswith(role + "=")), len(words))
+            after = words[at + 1] if at + 1 < len(words) else ""
+            unit = after if "=" not in after and looks_like_unit(after) else \
+                ELEMENT_UNITS.get(getattr(el, "kind", None), defaults.get(role))
+        elif role in ("eta", "ratio"):
+            unit = "1"
         uses.setdefault(expr.value, set()).add(unit)
         if role in ("value", "eta", "ratio"):
-            what = f"the {kinds[owner]}" if role == "value" else f"the {role}"
+            what = f"the {owners[owner].kind}" if role == "value" else f"the {role}"
             reasons.setdefault(expr.value, f"{what} of {owner!r}")
-    return {name: (next(iter(uses[name])) if len(uses.get(name, ())) == 1 and
-                   None not in uses[name] else "SI", reasons.get(name))
-            for name in circuit.params}
+    return {name: (next(iter(uses[name])) if len(uses.get(name, ())) == 1 else None,
+                   reasons.get(name)) for name in circuit.params}
 
 
 def _check_params(roles: dict, path, names, table: str) -> None:
@@ -1183,8 +1198,9 @@ def _write_parquet(path, columns: list[str], rows: list[dict], record: dict) -> 
     data = {c: [None if r.get(c, "") == "" else r.get(c) for r in rows] for c in columns}
     types = {c: pa.string() if c in ("status", "error") else
              pa.int64() if c in ("index", "n_flagged") else pa.float64() for c in columns}
-    schema = pa.schema([pa.field(c, types[c], metadata={"unit": record["units"][c] or ""})
-                        for c in columns],
+    units = record["units"]
+    schema = pa.schema([pa.field(c, types[c], metadata=None if units[c] is None else
+                                 {"unit": units[c]}) for c in columns],
                        metadata={"mechcirc": json.dumps(record, ensure_ascii=False)})
     table = pa.table({c: pa.array(data[c], type=types[c]) for c in columns}, schema=schema)
     pq.write_table(table, path)
