@@ -230,8 +230,10 @@ def _axis_length(name, value) -> int:
     if isinstance(value, dict):
         extra = set(value) - {"min", "max", "num", "log"}
         if extra or not {"min", "max", "num"} <= set(value):
+            hint = did_you_mean(min(map(str, extra)), ("min", "max", "num", "log")) \
+                if extra else ""
             _fail(path, f"grid.{name} needs min, max and num (and optionally log), got "
-                        f"{', '.join(sorted(map(str, value)))}")
+                        f"{', '.join(sorted(map(str, value)))}{hint}")
         return _integer((*path, "num"), value["num"], f"grid.{name}.num", 1, MAX_POINTS)
     _fail(path, f"grid.{name} must be a list of values or {{min, max, num}}, "
                 f"got {brief(value)}")
@@ -485,7 +487,9 @@ def _random_range(kind, name, r) -> tuple[float, float, bool]:
     where = (kind, "params", name)
     if not isinstance(r, dict) or not {"min", "max"} <= set(r) or \
             set(r) - {"min", "max", "log"}:
-        _fail(where, f"{kind}.params.{name} must be {{min, max[, log]}}")
+        extra = sorted(map(str, set(r) - {"min", "max", "log"})) if isinstance(r, dict) else []
+        _fail(where, f"{kind}.params.{name} must be {{min, max[, log]}}"
+                     f"{did_you_mean(extra[0], ('min', 'max', 'log')) if extra else ''}")
     lo = _number((*where, "min"), r["min"], f"{kind}.params.{name}.min")
     hi = _number((*where, "max"), r["max"], f"{kind}.params.{name}.max")
     if not lo <= hi or (r.get("log") and lo <= 0):
