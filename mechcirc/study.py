@@ -309,6 +309,11 @@ TABLES = {
                            "revolutions": "default 5", "points_per_revolution": "default 7200"}),
 }
 
+#: The version of what a row holds, part of the canonical spec: raise it whenever
+#: :func:`run_point` computes a column differently, so that ``resume`` refuses to
+#: mix rows of the old computation with the new.
+ROWS_VERSION = 1
+
 #: ``[sample] method``: how the n points fill the box of ``[sample.params]``.
 SAMPLE_METHODS = ("random", "latin-hypercube", "sobol")
 
@@ -352,7 +357,7 @@ def _parse_spec(data: dict, source: str, base: Path) -> StudySpec:
     else:
         _check_params(roles, path, names, kind)
         units = tuple(roles[n][0] for n in names)
-    canon = {"analysis": analysis, "sample": canon}
+    canon = {"analysis": analysis, "sample": canon, "rows": ROWS_VERSION}
     if analysis == "sweep":
         canon["omega"] = dict(zip(("min", "max", "points", "log"), omega))
     elif analysis == "resonances":

@@ -469,3 +469,15 @@ def test_a_parameters_unit_is_the_one_written_after_it(tmp_path):
                        "grid": {"m": [250.0], "k": [5.0], "v": [100.0], "c": [3.0],
                                 "x": [2.0]}})
     assert spec.param_units == ("g", "N/mm", "mm/s", "N·s/m", None)
+
+
+def test_rows_of_another_computation_are_not_resumed(tmp_path, monkeypatch):
+    import mechcirc.study as study
+
+    a = spec_file(tmp_path)
+    out = tmp_path / "r.csv"
+    run_study(load_spec(a), output=out, workers=1)
+    monkeypatch.setattr(study, "ROWS_VERSION", study.ROWS_VERSION + 1)
+    with pytest.raises(MechcircError, match=f"rows was {study.ROWS_VERSION - 1}, now "
+                                            f"{study.ROWS_VERSION}"):
+        run_study(load_spec(a), output=out, workers=1, resume=True)
