@@ -520,6 +520,9 @@ def _sample_file(table: dict, base: Path, analysis: str, roles: dict):
     except ValueError:
         pass
     source = str(path)
+    if not source.lower().endswith((".csv", ".parquet")):
+        _fail(("sample", "file"), f"sample.file must name a .csv or .parquet file, got "
+                                  f"{brief(table['file'])}")
     try:
         header, records = (_parquet_records if source.lower().endswith(".parquet")
                            else _csv_records)(path)
@@ -533,10 +536,13 @@ def _sample_file(table: dict, base: Path, analysis: str, roles: dict):
         if not name:
             raise NetlistError(f"column {j + 1} has no name", source, 1, col,
                                "a header row naming each column's parameter")
+        # Quoted only if it could be a name: not the first line of some other file.
+        shown = brief(name) if re.fullmatch(r"[A-Za-z_]\w{0,39}", name) else \
+            f"{j + 1} (not a parameter name)"
         if name in [h for h, _ in header[:j]]:
-            raise NetlistError(f"column {brief(name)} appears twice", source, 1, col)
+            raise NetlistError(f"column {shown} appears twice", source, 1, col)
         if name not in known:
-            raise NetlistError(f"column {brief(name)} is not {what}"
+            raise NetlistError(f"column {shown} is not {what}"
                                f"{did_you_mean(name, sorted(known))}", source, 1, col,
                                f"some of {', '.join(sorted(known)) or 'none'}")
     names = tuple(h for h, _ in header)

@@ -481,3 +481,20 @@ def test_rows_of_another_computation_are_not_resumed(tmp_path, monkeypatch):
     with pytest.raises(MechcircError, match=f"rows was {study.ROWS_VERSION - 1}, now "
                                             f"{study.ROWS_VERSION}"):
         run_study(load_spec(a), output=out, workers=1, resume=True)
+
+
+def test_a_sample_file_that_is_not_a_table_is_not_quoted(tmp_path, capsys):
+    (tmp_path / "n.mcir").write_text(SIMPLE)
+    secret = tmp_path / "shadow"
+    secret.write_text("root:$6$SECRETHASH:19000:0:99999:7:::\n")
+    spec = tmp_path / "s.toml"
+    spec.write_text(f'netlist = "n.mcir"\nanalysis = "resonances"\n[sample]\nfile = "{secret}"\n')
+    err = assert_user_error(["study", spec], capsys, "sample.file must name a .csv or .parquet")
+    assert "SECRET" not in err
+    table = tmp_path / "shadow.csv"
+    table.write_text(secret.read_text() + "1\n")
+    spec.write_text('netlist = "n.mcir"\nanalysis = "resonances"\n[sample]\nfile = "shadow.csv"\n')
+    err = assert_user_error(["study", spec], capsys,
+                            "shadow.csv:1:1: error: column 1 (not a parameter name) is not a "
+                            ".param of the netlist")
+    assert "SECRET" not in err and "19000" not in err
