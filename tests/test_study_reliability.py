@@ -472,7 +472,7 @@ def test_a_parameters_unit_is_the_one_written_after_it(tmp_path):
 
 
 def test_rows_of_another_computation_are_not_resumed(tmp_path, monkeypatch):
-    import mechcirc.study as study
+    from mechcirc import study
 
     a = spec_file(tmp_path)
     out = tmp_path / "r.csv"
