@@ -316,6 +316,7 @@ ROWS_VERSION = 1
 
 #: ``[sample] method``: how the n points fill the box of ``[sample.params]``.
 SAMPLE_METHODS = ("random", "latin-hypercube", "sobol")
+_ANALYSES = ("sweep", "resonances", "simulate")
 
 
 def _check_keys(table: str | None, entry: dict) -> None:
@@ -330,7 +331,7 @@ def _check_keys(table: str | None, entry: dict) -> None:
 def _parse_spec(data: dict, source: str, base: Path) -> StudySpec:
     _check_keys(None, data)
     analysis = data.get("analysis", "sweep")
-    if analysis not in ("sweep", "resonances", "simulate"):
+    if analysis not in _ANALYSES:
         _fail(("analysis",), f"analysis must be 'sweep', 'resonances' or 'simulate', "
                              f"got {brief(analysis)}{did_you_mean(analysis, _ANALYSES)}")
     text, path = ("", "") if analysis == "simulate" else _read_netlist(data, base)
@@ -369,9 +370,6 @@ def _parse_spec(data: dict, source: str, base: Path) -> StudySpec:
         canon["netlist_sha256"] = _sha256(text)
     return StudySpec(text, str(path), analysis, names, points, omega, n_res, omega_max, source,
                      sley, canonical=_canonical(canon), param_units=units)
-
-
-_ANALYSES = ("sweep", "resonances", "simulate")
 
 
 def _sha256(text: str | bytes) -> str:
