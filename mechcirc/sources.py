@@ -12,7 +12,7 @@ from .errors import NetlistError
 
 __all__ = ["read_source", "read_bytes", "MAX_INPUT_BYTES", "split_lines", "line_col",
            "finite_number", "brief", "load_toml", "locate", "locate_path", "located", "Table",
-           "unknown_key", "check_keys", "number_error"]
+           "unknown_key", "check_keys", "number_error", "did_you_mean"]
 
 #: The largest input file mechcirc reads [bytes].  A netlist of the statement
 #: limit is far below this; anything larger is refused before it is read.
@@ -275,10 +275,18 @@ def unknown_key(table: Table, entry: dict, occurrence: int = 0) -> tuple[str, st
     for key in entry:
         if key not in table.keys:
             if table.name is None:
-                return key, f"unknown top-level key {key!r}"
+                return key, f"unknown top-level key {key!r}{did_you_mean(key, table.keys)}"
             where = table.header + (f" #{occurrence + 1}" if table.array else "")
-            return key, f"unknown key {key!r} in {where}"
+            return key, f"unknown key {key!r} in {where}{did_you_mean(key, table.keys)}"
     return None
+
+
+def did_you_mean(word: str, choices) -> str:
+    """``"; did you mean 'x'?"`` for the nearest of ``choices`` (difflib), or ``""``."""
+    import difflib
+
+    close = difflib.get_close_matches(str(word)[:100], [str(c) for c in choices], n=1)
+    return f"; did you mean {close[0]!r}?" if close else ""
 
 
 def check_keys(text: str, source: str, table: Table, entry: dict, occurrence: int = 0) -> None:

@@ -1,4 +1,4 @@
-"""Parameter studies: a grid or a random sample over a netlist's ``.param`` values.
+"""Parameter studies: a grid, a sample or a file of designs over a netlist's ``.param`` values.
 
 A study is described by a TOML file (``mechcirc study SPEC.toml``)::
 
@@ -15,12 +15,19 @@ A study is described by a TOML file (``mechcirc study SPEC.toml``)::
     eta1 = [0.7, 0.8, 0.9]                    # listed values
     eta2 = {min = 1.0, max = 1.5, num = 6}    # evenly spaced (log = true: geometric)
 
-    # ... or a random sample (uniform, or log-uniform with log = true)
-    # [random]
-    # n = 1000
+    # ... or a sample of n points in a box (uniform, or log-uniform with log = true)
+    # [sample]
+    # method = "sobol"        # "random" (default), "latin-hypercube" or "sobol"
+    # n = 1024
     # seed = 1
-    # [random.params]
+    # [sample.params]
     # eta1 = {min = 0.6, max = 1.0}
+    # ([random] with n, seed, params is method = "random")
+
+    # ... or your own points: a CSV (or Parquet) file, a header row naming the
+    # parameters, a row per point; every cell checked (file:line:col errors)
+    # [sample]
+    # file = "designs.csv"
 
     # analysis = "resonances": how many of each kind to tabulate, and up to where
     # resonances = 3
@@ -58,21 +65,30 @@ default, or an existing Dask cluster (``scheduler="tcp://host:8786"``;
 ``dask.distributed`` is imported only then).  Points go out in batches;
 finished rows are journalled (each with a checksum) to ``OUTPUT.partial.csv``
 as they arrive, so an interrupted study keeps them, and ``resume=True`` runs
-only the points the journal lacks or holds incomplete.  At the end the output
-(CSV, or ``.parquet`` with pyarrow) is written whole in index order
-(atomically) and the journal removed; until then an existing output is
-left as it was.  Local and
+only the points the journal lacks or holds incomplete, refusing a journal
+(or finished output) made from another spec.  At the end the output (CSV, or
+``.parquet`` with pyarrow) is written whole in index order (atomically) and
+the journal removed; until then an existing output is left as it was.
+``OUTPUT.lock`` keeps a second study from writing the same output.  Local and
 cluster runs give identical tables: each point is computed the same way,
 whatever runs it.
+
+Provenance: :attr:`StudySpec.canonical` is the resolved spec as canonical JSON
+(the netlist and a sample file by their SHA-256) and :attr:`StudySpec.sha256`
+its hash; the journal's first line, a Parquet output's metadata and a CSV
+output's sidecar ``OUTPUT.meta.json`` (:func:`provenance`) record them, with
+the spec's text and the unit of every column (:func:`column_units`).
 """
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import itertools
 import math
 import os
 import random
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Iterable
@@ -80,11 +96,12 @@ from typing import Callable, Iterable
 from .errors import MechcircError, NetlistError
 from .limits import (MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS, MAX_STUDY_POINTS,
                      MAX_STUDY_SWEEP_POINTS, MAX_STUDY_WORK)
-from .sources import (Table, brief, finite_number, load_toml, locate_path, number_error,
-                      unknown_key)
+from .sources import (Table, brief, did_you_mean, finite_number, load_toml, locate_path,
+                      number_error, unknown_key)
 
 __all__ = ["StudySpec", "load_spec", "parse_spec", "study_points", "run_point", "run_batch",
-           "run_study", "StudyResult", "read_rows", "journal_path"]
+           "run_study", "StudyResult", "read_rows", "journal_path", "sidecar_path",
+           "provenance", "column_units", "SAMPLE_METHODS"]
 
 _SWEEP_COLUMNS = ["K_abs_min", "K_abs_max", "Q0_abs_max", "omega_at_Q0_max", "n_flagged"]
 _SLEY_QUANTITIES = {"one-side": ["eps2P", "eps4P", "eps4T", "M2V"],
@@ -106,6 +123,20 @@ class StudySpec:
     spec_source: str = "<spec>"
     #: ``analysis = "simulate"``: (drive, variant, revolutions, points_per_revolution).
     sley: tuple | None = None
+    #: The resolved spec as canonical JSON (sorted keys, defaults filled in, the
+    #: netlist and a sample file by their SHA-256): what ``resume`` compares.
+    canonical: str = "{}"
+    #: The spec file's text as written (provenance; empty when built from a dict).
+    spec_text: str = ""
+    #: The unit of each parameter, in the order of ``params`` (see :func:`column_units`).
+    param_units: tuple[str | None, ...] = ()
+
+    @property
+    def sha256(self) -> str:
+        """SHA-256 of :attr:`canonical`: two specs with the same hash run the same points."""
+        import hashlib
+
+        return hashlib.sha256(self.canonical.encode("utf-8")).hexdigest()
 
     @property
     def columns(self) -> list[str]:
@@ -119,6 +150,28 @@ class StudySpec:
         n = self.n_resonances
         return head + [f"resonance_{i}" for i in range(1, n + 1)] + \
             [f"antiresonance_{i}" for i in range(1, n + 1)]
+
+
+#: Units of the result columns [SI]; a parameter's unit is in ``StudySpec.param_units``.
+_UNITS = {"index": "1", "status": "", "error": "", "K_abs_min": "m/(N·s)",
+          "K_abs_max": "m/(N·s)", "Q0_abs_max": "N", "omega_at_Q0_max": "rad/s",
+          "n_flagged": "1", "resonance": "rad/s", "antiresonance": "rad/s",
+          "eps2P": "1/s²", "eps4P": "1/s²", "eps4T": "1/s²", "eps5P": "1/s²",
+          "M2V": "N·m", "M5V": "N·m"}
+#: Units of the sley parameters a study may vary (:class:`mechcirc.sley.SleyParameters`).
+_SLEY_UNITS = {"I2P": "kg·m²", "I4": "kg·m²", "I4P": "kg·m²", "I5P": "kg·m²", "I7": "kg·m²",
+               "C2": "N·m/rad", "C4": "N·m/rad", "C5": "N·m/rad", "C7": "N·m/rad",
+               "k2": "kg·m²/s", "k4": "kg·m²/s", "k5": "kg·m²/s", "k7": "kg·m²/s",
+               "omega": "rad/s", "clearance": "rad", "M0": "N·m", "alpha": "rad",
+               "l2P": "m", "l3": "m", "l4": "m", "d": "m"}
+
+
+def column_units(spec: StudySpec) -> dict[str, str | None]:
+    """The unit of every column of ``spec``'s table (``"1"``: a count or a pure number;
+    ``""``: text; None: a ``.param`` whose unit the netlist does not fix)."""
+    units = dict(zip(spec.params, spec.param_units or (None,) * len(spec.params)))
+    return {c: units[c] if c in units else _UNITS.get(c, _UNITS.get(c.rsplit("_", 1)[0]))
+            for c in spec.columns}
 
 
 class _SpecError(Exception):
@@ -177,8 +230,10 @@ def _axis_length(name, value) -> int:
     if isinstance(value, dict):
         extra = set(value) - {"min", "max", "num", "log"}
         if extra or not {"min", "max", "num"} <= set(value):
+            hint = did_you_mean(min(map(str, extra)), ("min", "max", "num", "log")) \
+                if extra else ""
             _fail(path, f"grid.{name} needs min, max and num (and optionally log), got "
-                        f"{', '.join(sorted(map(str, value)))}")
+                        f"{', '.join(sorted(map(str, value)))}{hint}")
         return _integer((*path, "num"), value["num"], f"grid.{name}.num", 1, MAX_POINTS)
     _fail(path, f"grid.{name} must be a list of values or {{min, max, num}}, "
                 f"got {brief(value)}")
@@ -219,8 +274,10 @@ def parse_spec(data: dict, *, source: str = "<spec>", base: Path | None = None,
     MechcircError
         Without ``text``: the same message after the source's name.
     """
+    from dataclasses import replace
+
     try:
-        return _parse_spec(data, source, base or Path("."))
+        return replace(_parse_spec(data, source, base or Path(".")), spec_text=text or "")
     except _SpecError as exc:
         if text is None:
             raise MechcircError(f"{source}: {exc.message}") from None
@@ -229,7 +286,7 @@ def parse_spec(data: dict, *, source: str = "<spec>", base: Path | None = None,
 
 
 #: The tables of a study file, declared once (see :class:`mechcirc.sources.Table`);
-#: ``[grid]`` and ``[random.params]`` map the parameters' names.
+#: ``[grid]``, ``[random.params]`` and ``[sample.params]`` map the parameters' names.
 TABLES = {
     None: Table(None, {"analysis": "\"sweep\", \"resonances\" or \"simulate\"",
                        "grid": "[grid]: NAME = [values] or {min, max, num[, log]}",
@@ -238,14 +295,28 @@ TABLES = {
                        "omega_max": "highest resonance sought [rad/s]",
                        "random": "[random]: n, seed, params",
                        "resonances": "how many of each kind to tabulate",
+                       "sample": "[sample]: method, n, seed, params; or file",
                        "sley": "[sley]: the preset (analysis = \"simulate\")"}),
     "omega": Table("omega", {"min": "[rad/s] or \"5Hz\"", "max": "[rad/s] or \"1500Hz\"",
                              "points": "default 200", "log": "geometric spacing"}),
     "random": Table("random", {"n": "number of points", "seed": "default 0",
                                "params": "[random.params]: NAME = {min, max[, log]}"}),
+    "sample": Table("sample", {"method": "\"random\", \"latin-hypercube\" or \"sobol\"",
+                               "n": "number of points", "seed": "default 0",
+                               "params": "[sample.params]: NAME = {min, max[, log]}",
+                               "file": "a CSV (or Parquet) file of parameter columns"}),
     "sley": Table("sley", {"drive": "\"one-side\" or \"both-sides\"", "variant": "1 to 7",
                            "revolutions": "default 5", "points_per_revolution": "default 7200"}),
 }
+
+#: The version of what a row holds, part of the canonical spec: raise it whenever
+#: :func:`run_point` computes a column differently, so that ``resume`` refuses to
+#: mix rows of the old computation with the new.
+ROWS_VERSION = 1
+
+#: ``[sample] method``: how the n points fill the box of ``[sample.params]``.
+SAMPLE_METHODS = ("random", "latin-hypercube", "sobol")
+_ANALYSES = ("sweep", "resonances", "simulate")
 
 
 def _check_keys(table: str | None, entry: dict) -> None:
@@ -260,29 +331,68 @@ def _check_keys(table: str | None, entry: dict) -> None:
 def _parse_spec(data: dict, source: str, base: Path) -> StudySpec:
     _check_keys(None, data)
     analysis = data.get("analysis", "sweep")
-    if analysis not in ("sweep", "resonances", "simulate"):
+    if analysis not in _ANALYSES:
         _fail(("analysis",), f"analysis must be 'sweep', 'resonances' or 'simulate', "
-                             f"got {brief(analysis)}")
+                             f"got {brief(analysis)}{did_you_mean(analysis, _ANALYSES)}")
     text, path = ("", "") if analysis == "simulate" else _read_netlist(data, base)
-    if ("grid" in data) == ("random" in data):
-        _fail(("grid",) if "grid" in data else (), "needs exactly one of a [grid] table or a "
-                                                   "[random] table")
-    names, points = _grid(data["grid"]) if "grid" in data else _random(data["random"])
+    kinds = [k for k in ("grid", "random", "sample") if k in data]
+    if len(kinds) != 1:
+        _fail((kinds[1],) if kinds else (), "needs exactly one of a [grid], a [random] or a "
+                                             "[sample] table")
+    kind = kinds[0]
+    roles = {} if analysis == "simulate" else _param_roles(text, path)
+    if kind == "grid":
+        names, points, canon = _grid(data["grid"])
+    elif kind == "sample" and isinstance(data["sample"], dict) and "file" in data["sample"]:
+        names, points, canon = _sample_file(data["sample"], base, analysis, roles)
+    else:
+        names, points, canon = _sample(data[kind], kind)
     omega = _sweep_omega(data.get("omega"), len(points)) if analysis == "sweep" else None
     n_res = _integer(("resonances",), data.get("resonances", 3), "resonances", 1, 100)
     omega_max = _omega(("omega_max",), data["omega_max"], "omega_max") \
         if "omega_max" in data else None
     sley = None
     if analysis == "simulate":
-        sley = _sley_settings(data.get("sley", {}), names)
+        sley = _sley_settings(data.get("sley", {}), names, kind)
+        units = tuple(_SLEY_UNITS.get(n) for n in names)
     else:
-        _check_params(text, path, names, "grid" if "grid" in data else "random")
+        _check_params(roles, path, names, kind)
+        units = tuple(roles[n][0] for n in names)
+    canon = {"analysis": analysis, "sample": canon, "rows": ROWS_VERSION}
+    if analysis == "sweep":
+        canon["omega"] = dict(zip(("min", "max", "points", "log"), omega))
+    elif analysis == "resonances":
+        canon.update(resonances=n_res, omega_max=omega_max)
+    else:
+        canon["sley"] = dict(zip(("drive", "variant", "revolutions", "points_per_revolution"),
+                                 sley))
+    if text:
+        canon["netlist_sha256"] = _sha256(text)
     return StudySpec(text, str(path), analysis, names, points, omega, n_res, omega_max, source,
-                     sley)
+                     sley, canonical=_canonical(canon), param_units=units)
+
+
+def _sha256(text: str | bytes) -> str:
+    import hashlib
+
+    return hashlib.sha256(text.encode("utf-8") if isinstance(text, str) else text).hexdigest()
+
+
+def _canonical(data) -> str:
+    """One line of JSON, keys sorted, floats as ``repr``: equal specs give equal text."""
+    import json
+
+    return json.dumps(data, sort_keys=True, separators=(",", ":"), ensure_ascii=True,
+                      allow_nan=False)
 
 
 def _read_netlist(data: dict, base: Path) -> tuple[str, Path]:
-    """The text of ``netlist = "PATH"`` (relative to the spec file) and its path."""
+    """The text of ``netlist = "PATH"`` (relative to the spec file) and its path.
+
+    A file whose first statement does not begin with a netlist keyword is
+    refused without quoting it: it is not a netlist (``/etc/shadow``), and
+    its content is nobody's business (issue 23 §6).
+    """
     if "netlist" not in data or not isinstance(data["netlist"], str):
         _fail(("netlist",), "needs netlist = \"PATH\" (relative to the spec file)")
     path = Path(os.path.normpath(base / data["netlist"]))
@@ -290,16 +400,27 @@ def _read_netlist(data: dict, base: Path) -> tuple[str, Path]:
         path = path.relative_to(Path.cwd())
     except ValueError:
         pass
-    from .sources import read_source
+    from .netlist import SYNTAX
+    from .sources import read_source, split_lines
 
     try:
-        return read_source(path, "a .mcir netlist"), path
+        text = read_source(path, "a .mcir netlist")
     except NetlistError as exc:
         _fail(("netlist",), f"netlist {str(path)!r}: {exc.message}")
+    for lineno, line in enumerate(split_lines(text), 1):
+        words = re.split(r"[#;]", line, maxsplit=1)[0].split()
+        if words:
+            if words[0].lower() not in SYNTAX and not words[0].startswith("*"):
+                _fail(("netlist",), f"netlist {str(path)!r} is not a netlist: its first "
+                                    f"statement (line {lineno}) does not begin with one of "
+                                    f"{', '.join(SYNTAX)}")
+            break
+    return text, path
 
 
-def _grid(grid) -> tuple[tuple[str, ...], tuple[tuple[float, ...], ...]]:
-    """[grid]: the parameters' names and every combination of their values."""
+def _grid(grid) -> tuple[tuple[str, ...], tuple[tuple[float, ...], ...], dict]:
+    """[grid]: the parameters' names, every combination of their values, and the
+    grid as the canonical spec records it."""
     if not isinstance(grid, dict) or not grid:
         _fail(("grid",), "[grid] must name at least one parameter")
     names = tuple(grid)
@@ -308,41 +429,212 @@ def _grid(grid) -> tuple[tuple[str, ...], tuple[tuple[float, ...], ...]]:
     if count > MAX_POINTS:
         _fail(("grid",), f"the grid has {count:,} points, the limit is {MAX_POINTS:,}")
     axes = [_axis(n, grid[n]) for n in names]
-    return names, tuple(itertools.product(*axes))
+    canon = {"method": "grid", "order": list(names), "axes": {
+        n: axis if isinstance(grid[n], list) else
+        {"min": axis[0], "max": axis[-1], "num": len(axis), "log": bool(grid[n].get("log"))}
+        for n, axis in zip(names, axes)}}
+    return names, tuple(itertools.product(*axes)), canon
 
 
-def _random(rnd) -> tuple[tuple[str, ...], tuple[tuple[float, ...], ...]]:
-    """[random]: the parameters' names and n points drawn (seeded) from their ranges."""
-    if not isinstance(rnd, dict):
-        _fail(("random",), "[random] must be a table (n, seed, params)")
-    _check_keys("random", rnd)
-    n = _integer(("random", "n"), rnd.get("n"), "random.n", 1, MAX_POINTS)
-    seed = rnd.get("seed", 0)
-    if isinstance(seed, bool) or not isinstance(seed, (int, str)):
-        _fail(("random", "seed"), f"random.seed must be an integer, got {brief(seed)}")
-    ranges = rnd.get("params")
+def _sample(table, kind: str) -> tuple[tuple[str, ...], tuple[tuple[float, ...], ...], dict]:
+    """[random], or [sample] with a method: n points drawn (seeded) from the
+    parameters' ranges (uniform, or log-uniform with log = true)."""
+    if not isinstance(table, dict):
+        _fail((kind,), f"[{kind}] must be a table (n, seed, params)")
+    _check_keys(kind, table)
+    method = table.get("method", "random")
+    if method not in SAMPLE_METHODS:
+        _fail((kind, "method"), f"{kind}.method must be one of {', '.join(SAMPLE_METHODS)}, "
+                                f"got {brief(method)}{did_you_mean(method, SAMPLE_METHODS)}")
+    n = _integer((kind, "n"), table.get("n"), f"{kind}.n", 1, MAX_POINTS)
+    seed = table.get("seed", 0)
+    if method == "random":          # Python's generator, as since the first [random] studies
+        if isinstance(seed, bool) or not isinstance(seed, (int, str)):
+            _fail((kind, "seed"), f"{kind}.seed must be an integer, got {brief(seed)}")
+    else:
+        seed = _integer((kind, "seed"), seed, f"{kind}.seed", 0, 2**63 - 1)
+    ranges = table.get("params")
     if not isinstance(ranges, dict) or not ranges:
-        _fail(("random", "params"), "[random.params] must give {min, max} for at least one "
-                                    "parameter")
+        _fail((kind, "params"), f"[{kind}.params] must give {{min, max}} for at least one "
+                                "parameter")
     names = tuple(ranges)
-    bounds = [_random_range(name, ranges[name]) for name in names]
-    rng = random.Random(seed)
-    return names, tuple(tuple(math.exp(rng.uniform(math.log(lo), math.log(hi))) if log
-                              else rng.uniform(lo, hi) for lo, hi, log in bounds)
-                        for _ in range(n))
+    bounds = [_random_range(kind, name, ranges[name]) for name in names]
+    canon = {"method": method, "n": n, "seed": seed, "order": list(names),
+             "params": {name: {"min": lo, "max": hi, "log": log}
+                        for name, (lo, hi, log) in zip(names, bounds)}}
+    if method == "random":
+        rng = random.Random(seed)
+        return names, tuple(tuple(math.exp(rng.uniform(math.log(lo), math.log(hi))) if log
+                                  else rng.uniform(lo, hi) for lo, hi, log in bounds)
+                            for _ in range(n)), canon
+    import warnings
+
+    import numpy as np
+    from scipy.stats import qmc
+
+    with warnings.catch_warnings():     # Sobol: n not a power of 2 loses balance (docs say so)
+        warnings.simplefilter("ignore")
+        engine = (qmc.LatinHypercube if method == "latin-hypercube" else qmc.Sobol)(
+            d=len(names), seed=seed)
+        unit = engine.random(n)
+    cols = []
+    for j, (lo, hi, log) in enumerate(bounds):
+        u = unit[:, j]
+        cols.append(np.exp(np.log(lo) + u * (np.log(hi) - np.log(lo))) if log
+                    else lo + u * (hi - lo))
+    return names, tuple(tuple(float(x) for x in row) for row in zip(*cols)), canon
 
 
-def _random_range(name, r) -> tuple[float, float, bool]:
-    """random.params.NAME = {min, max[, log]} as (min, max, log)."""
-    where = ("random", "params", name)
+def _random_range(kind, name, r) -> tuple[float, float, bool]:
+    """KIND.params.NAME = {min, max[, log]} as (min, max, log)."""
+    where = (kind, "params", name)
     if not isinstance(r, dict) or not {"min", "max"} <= set(r) or \
             set(r) - {"min", "max", "log"}:
-        _fail(where, f"random.params.{name} must be {{min, max[, log]}}")
-    lo = _number((*where, "min"), r["min"], f"random.params.{name}.min")
-    hi = _number((*where, "max"), r["max"], f"random.params.{name}.max")
+        extra = sorted(map(str, set(r) - {"min", "max", "log"})) if isinstance(r, dict) else []
+        _fail(where, f"{kind}.params.{name} must be {{min, max[, log]}}"
+                     f"{did_you_mean(extra[0], ('min', 'max', 'log')) if extra else ''}")
+    lo = _number((*where, "min"), r["min"], f"{kind}.params.{name}.min")
+    hi = _number((*where, "max"), r["max"], f"{kind}.params.{name}.max")
     if not lo <= hi or (r.get("log") and lo <= 0):
-        _fail(where, f"random.params.{name}: need min <= max (and > 0 with log)")
+        _fail(where, f"{kind}.params.{name}: need min <= max (and > 0 with log)")
     return lo, hi, bool(r.get("log", False))
+
+
+def _sample_file(table: dict, base: Path, analysis: str, roles: dict):
+    """[sample] file = "PATH": the user's own points, one row each, a column per parameter.
+
+    Every cell is checked before anything runs; a fault is a :class:`NetlistError`
+    at the file's row (line) and column.
+    """
+    extra = sorted(set(table) - {"file"})
+    if extra:
+        _fail(("sample", extra[0]), f"[sample] with file takes no {extra[0]!r} (the file "
+                                    "holds the points)")
+    if not isinstance(table["file"], str):
+        _fail(("sample", "file"), "sample.file must be a path (relative to the spec file)")
+    path = Path(os.path.normpath(base / table["file"]))
+    try:
+        path = path.relative_to(Path.cwd())
+    except ValueError:
+        pass
+    source = str(path)
+    if not source.lower().endswith((".csv", ".parquet")):
+        _fail(("sample", "file"), f"sample.file must name a .csv or .parquet file, got "
+                                  f"{brief(table['file'])}")
+    try:
+        header, records = (_parquet_records if source.lower().endswith(".parquet")
+                           else _csv_records)(path)
+    except NetlistError as exc:
+        _fail(("sample", "file"), f"sample file {source!r}: {exc.message}")
+    if analysis == "simulate":
+        known, what = _sley_names(), "a sley parameter"
+    else:
+        known, what = set(roles), "a .param of the netlist"
+    for j, (name, col) in enumerate(header):
+        if not name:
+            raise NetlistError(f"column {j + 1} has no name", source, 1, col,
+                               "a header row naming each column's parameter")
+        # Quoted only if it could be a name: not the first line of some other file.
+        shown = brief(name) if re.fullmatch(r"[A-Za-z_]\w{0,39}", name) else \
+            f"{j + 1} (not a parameter name)"
+        if name in [h for h, _ in header[:j]]:
+            raise NetlistError(f"column {shown} appears twice", source, 1, col)
+        if name not in known:
+            raise NetlistError(f"column {shown} is not {what}"
+                               f"{did_you_mean(name, sorted(known))}", source, 1, col,
+                               f"some of {', '.join(sorted(known)) or 'none'}")
+    names = tuple(h for h, _ in header)
+    if not records:
+        raise NetlistError("has a header but no rows of values", source, 0, 0,
+                           "one row per point")
+    if len(records) > MAX_POINTS:
+        raise NetlistError(f"has {len(records):,} rows, the limit is {MAX_POINTS:,}", source)
+    points = []
+    for line, cells in records:
+        if len(cells) != len(names):
+            missing = f" (no value for {', '.join(names[len(cells):])})" \
+                if len(cells) < len(names) else ""
+            raise NetlistError(f"{len(cells)} values, the header names {len(names)} "
+                               f"columns{missing}", source, line, cells[-1][1] if cells else 1)
+        row = []
+        for (text, col), name in zip(cells, names):
+            try:
+                value = float(text) if isinstance(text, str) else text
+            except ValueError:
+                value = None
+            if value is None or isinstance(value, bool) or not math.isfinite(value):
+                unit = roles.get(name, (None,))[0]
+                raise NetlistError(f"column {name}: {brief(text)} is not a finite number",
+                                   source, line, col, f"a number [{unit}]" if unit else
+                                   "a number")
+            reason = roles.get(name, ("", None))[1]
+            if reason and not value > 0:
+                raise NetlistError(f"column {name}: {value:g} is not allowed: {name} is "
+                                   f"{reason}, which must be > 0", source, line, col,
+                                   "a positive number")
+            row.append(value)
+        points.append(tuple(row))
+    canon = {"method": "file", "columns": list(names), "file_sha256": _file_sha256(path)}
+    return names, tuple(points), canon
+
+
+def _file_sha256(path) -> str:
+    from .sources import read_bytes
+
+    return _sha256(read_bytes(path, "a sample file"))
+
+
+def _csv_records(path):
+    """(header, records) of a CSV sample file: [(name, col)], [(line, [(text, col)])]."""
+    from .sources import read_source, split_lines
+
+    lines = split_lines(read_source(path, "a CSV file of parameter columns"))
+    records = []
+    for lineno, line in enumerate(lines, 1):
+        if not line.strip():
+            continue
+        try:
+            fields = next(csv.reader([line]))
+        except csv.Error as exc:
+            raise NetlistError(f"not CSV: {exc}", os.fspath(path), lineno, 1) from None
+        cols, at = [], 1
+        for f in fields:                # columns exact for unquoted fields
+            cols.append(at)
+            at += len(f) + 1
+        if '"' in line:
+            cols = [1] * len(fields)
+        records.append((lineno, [(f.strip(), c) for f, c in zip(fields, cols)]))
+    if not records:
+        raise NetlistError("is empty", os.fspath(path), 0, 0,
+                           "a header row naming the parameters, then a row per point")
+    return [(t, c) for t, c in records[0][1]], records[1:]
+
+
+def _parquet_records(path):
+    """The same as :func:`_csv_records` for a Parquet file: its rows counted from 1 as
+    lines 2.. (line 1 being the header), its columns numbered from 1."""
+    try:
+        import pyarrow.parquet as pq
+    except ImportError:
+        raise NetlistError("reading Parquet needs pyarrow (pip install pyarrow); or give a "
+                           "CSV file", os.fspath(path)) from None
+    import io
+
+    from .sources import read_bytes
+
+    try:
+        table = pq.read_table(io.BytesIO(read_bytes(path, "a Parquet file")))
+    except NetlistError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - pyarrow's errors have no common base
+        raise NetlistError(f"not a Parquet file ({type(exc).__name__})", os.fspath(path)) \
+            from None
+    header = [(name, j + 1) for j, name in enumerate(table.column_names)]
+    columns = [table.column(j).to_pylist() for j in range(table.num_columns)]
+    records = [(i + 2, [("" if v is None else v if isinstance(v, (int, float)) else str(v),
+                         j + 1) for j, v in enumerate(values)])
+               for i, values in enumerate(zip(*columns))]
+    return header, records
 
 
 def _sweep_omega(o, n_points: int) -> tuple[float, float, int, bool]:
@@ -366,18 +658,71 @@ def _sweep_omega(o, n_points: int) -> tuple[float, float, int, bool]:
     return lo, hi, npts, log
 
 
-def _check_params(text: str, path, names, table: str) -> None:
+def _param_roles(text: str, path) -> dict[str, tuple[str | None, str | None]]:
+    """Each ``.param`` of the netlist: its unit, and why it must be > 0 (or None).
+
+    A parameter that is itself (not inside an expression) the value, ``eta``
+    or ``ratio`` of an element, or a drive's amplitude, has the unit written
+    after it on that line (``mass m1 a 0 m g``: ``g``), else that field's SI
+    unit, and (value, ``eta``, ``ratio``) must be > 0.  Any other's unit is None:
+    the netlist does not fix it (a parameter inside expressions).  Parsed once,
+    not per point.
+    """
+    from .circuit import ELEMENT_UNITS
+    from .netlist import expressions_of, parse
+    from .sources import split_lines
+    from .units import looks_like_unit
+
+    circuit = parse(text, source=str(path))
+    owners = {e.name: e for e in circuit.elements}
+    if circuit.drive is not None:
+        owners[circuit.drive.name] = circuit.drive
+    lines = split_lines(text)
+    defaults = {"eta": "1", "ratio": "1", "velocity": "m/s", "force": "N"}
+    uses: dict[str, set] = {}
+    reasons: dict[str, str] = {}
+    for (owner, role), (expr, _factor) in (expressions_of(circuit) or {}).items():
+        if owner == "param" or expr.kind != "name":
+            continue
+        unit = None
+        if role in ("value", "velocity", "force") and owner in owners:
+            el = owners[owner]
+            words = re.split(r"[#;]", lines[el.line - 1], maxsplit=1)[0].split() \
+                if 0 < el.line <= len(lines) else []
+            at = 4 if role == "value" else next(
+                (i for i, w in enumerate(words) if w.startswith(role + "=")), len(words))
+            after = words[at + 1] if at + 1 < len(words) else ""
+            unit = after if "=" not in after and looks_like_unit(after) else \
+                ELEMENT_UNITS.get(getattr(el, "kind", None), defaults.get(role))
+        elif role in ("eta", "ratio"):
+            unit = "1"
+        uses.setdefault(expr.value, set()).add(unit)
+        if role in ("value", "eta", "ratio"):
+            what = f"the {owners[owner].kind}" if role == "value" else f"the {role}"
+            reasons.setdefault(expr.value, f"{what} of {owner!r}")
+    return {name: (next(iter(uses[name])) if len(uses.get(name, ())) == 1 else None,
+                   reasons.get(name)) for name in circuit.params}
+
+
+def _check_params(roles: dict, path, names, table: str) -> None:
     """Every varied name is a ``.param`` of the netlist (checked once, not per point)."""
-    from .netlist import parse
-
-    base_circuit = parse(text, source=str(path))
-    missing = [n for n in names if n not in base_circuit.params]
+    missing = [n for n in names if n not in roles]
     if missing:
-        _fail((table,), f"{', '.join(missing)} is not a .param of {path} (its parameters: "
-                        f"{', '.join(base_circuit.params) or 'none'})")
+        _fail((table,), f"{', '.join(missing)} is not a .param of {path}"
+                        f"{did_you_mean(missing[0], roles)} (its parameters: "
+                        f"{', '.join(roles) or 'none'})")
 
 
-def _sley_settings(table, names) -> tuple:
+def _sley_names() -> set[str]:
+    """The :class:`~mechcirc.sley.SleyParameters` fields a study may vary."""
+    from dataclasses import fields
+
+    from .sley import SleyParameters
+
+    return {f.name for f in fields(SleyParameters)} - {"drive", "label", "branch", "beat_sign"}
+
+
+def _sley_settings(table, names, kind: str) -> tuple:
     if not isinstance(table, dict):
         _fail(("sley",), "[sley] must be a table (drive, variant, revolutions, "
                          "points_per_revolution)")
@@ -391,16 +736,11 @@ def _sley_settings(table, names) -> tuple:
                                  ("revolutions", 5, 1, MAX_REVOLUTIONS),
                                  ("points_per_revolution", 7200, 16, MAX_POINTS_PER_REVOLUTION)):
         settings.append(_integer(("sley", key), table.get(key, default), f"sley.{key}", lo, hi))
-    from dataclasses import fields
-
-    from .sley import SleyParameters
-
-    known = {f.name for f in fields(SleyParameters)} - {"drive", "label", "branch",
-                                                        "beat_sign"}
+    known = _sley_names()
     bad = [n for n in names if n not in known]
     if bad:
-        _fail(("grid",), f"{', '.join(bad)} is not a sley parameter (expected some of "
-                         f"{', '.join(sorted(known))})")
+        _fail((kind,), f"{', '.join(bad)} is not a sley parameter{did_you_mean(bad[0], known)}"
+                       f" (expected some of {', '.join(sorted(known))})")
     return (drive, *settings)
 
 
@@ -533,8 +873,9 @@ def _row(columns: list[str], rec: list[str]) -> dict | None:
 def read_rows(path: str | os.PathLike, columns: list[str]) -> list[dict]:
     """The complete rows of a study's table or journal with these ``columns`` (for ``resume``).
 
-    A journal (written while a study runs) ends each row with a CRC-32 of its
-    fields; a finished table has none.  Rows that are cut short, fail their
+    A journal (written while a study runs) starts with a line recording the
+    spec and ends each row with a CRC-32 of its fields; a finished table has
+    neither.  Rows that are cut short, fail their
     check, or do not parse are left out (their points run again), and so is
     a second row for the same point.
 
@@ -546,6 +887,10 @@ def read_rows(path: str | os.PathLike, columns: list[str]) -> list[dict]:
     source = os.fspath(path)
     try:
         with open(path, newline="", encoding="utf-8") as fh:
+            if not fh.readline(len(_SPEC_LINE)).startswith(_SPEC_LINE):
+                fh.seek(0)          # no spec line (a finished table)
+            else:
+                fh.readline()       # the rest of the spec line
             reader = csv.reader(fh)
             header = next(reader, None)
             if header is None:
@@ -589,9 +934,12 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
     ----------
     output : path, optional
         CSV file (or ``.parquet``, needs pyarrow), written whole and
-        atomically at the end in index order; an existing file is kept until
-        then.  Meanwhile rows are journalled, each with a checksum, to
-        ``OUTPUT.partial.csv`` (:func:`journal_path`), removed at the end.
+        atomically at the end in index order, with the spec and the unit of
+        every column (Parquet metadata; for CSV the sidecar
+        ``OUTPUT.meta.json``); an existing file is kept until then.
+        Meanwhile rows are journalled, each with a checksum, to
+        ``OUTPUT.partial.csv`` (:func:`journal_path`), removed at the end, and
+        ``OUTPUT.lock`` keeps a second study from writing the same output.
     scheduler : str, optional
         Address of a Dask scheduler (``tcp://host:8786``); by default the
         local cores run the study.
@@ -599,80 +947,180 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
         Local processes (default: all cores); 1 runs in this process.
     resume : bool
         Keep the verified rows of the journal (or of a finished ``output``)
-        and run only the missing points.
+        and run only the missing points; refused when they were made from
+        another spec.
     batch_size : int, optional
         Points per task (default: about 8 tasks per worker, at most 500).
     connect_timeout : float
-        Seconds to wait for the Dask scheduler before giving up.
+        Seconds to wait for the Dask scheduler, and then for its first worker,
+        before giving up.
     on_rows : callable, optional
         Called with the number of rows each time a batch finishes (progress).
+
+    Raises
+    ------
+    MechcircError
+        Another study holds ``output``; ``resume`` finds rows of another spec;
+        the scheduler cannot be reached or has no worker (nothing is written).
     """
+
     columns = spec.columns
-    todo = study_points(spec)
     parquet = bool(output) and str(output).lower().endswith(".parquet")
     if parquet:
         _require_pyarrow()
-    # Rows are journalled as they finish to a CSV beside the output, each with
-    # a checksum; the output itself is written whole at the end (atomically),
-    # so an existing file stays as it was until the new table is complete.
-    journal = journal_path(output) if output else None
-    done = _resumed_rows(spec, output, journal, parquet) if resume and output else []
-    have = {r["index"] for r in done}
-    todo = [(i, v) for i, v in todo if i not in have]
-    sink = _open_journal(journal, columns, done) if output else None
-    writer = csv.writer(sink) if sink is not None else None
-    rows = list(done)
+    if scheduler and not (isinstance(connect_timeout, (int, float)) and
+                          0 < connect_timeout <= 3600):
+        raise MechcircError(f"connect_timeout must be from 0 to 3600 s, got "
+                            f"{brief(connect_timeout)}")
+    with _lock(output) if output else contextlib.nullcontext():
+        # Rows are journalled as they finish to a CSV beside the output, each with
+        # a checksum; the output itself is written whole at the end (atomically),
+        # so an existing file stays as it was until the new table is complete.
+        journal = journal_path(output) if output else None
+        done = _resumed_rows(spec, output, journal, parquet) if resume and output else []
+        have = {r["index"] for r in done}
+        todo = [(i, v) for i, v in study_points(spec) if i not in have]
+        # Connect before the journal is touched: a failed start leaves no file.
+        client = _dask_client(scheduler, connect_timeout) if scheduler else None
+        rows = list(done)
+        sink = None
 
-    def take(batch_rows: Iterable[dict]) -> None:
-        batch_rows = list(batch_rows)
-        rows.extend(batch_rows)
-        if sink is not None:
-            for r in batch_rows:
-                fields = [_format(r.get(c, "")) for c in columns]
-                writer.writerow([*fields, _crc(fields)])
-            sink.flush()
-        if on_rows is not None:
-            on_rows(len(batch_rows))
+        def take(batch_rows: Iterable[dict]) -> None:
+            nonlocal sink
+            batch_rows = list(batch_rows)
+            rows.extend(batch_rows)
+            if output:
+                if sink is None:
+                    sink = _open_journal(journal, spec, done)
+                for r in batch_rows:
+                    fields = [_format(r.get(c, "")) for c in columns]
+                    csv.writer(sink).writerow([*fields, _crc(fields)])
+                sink.flush()
+            if on_rows is not None:
+                on_rows(len(batch_rows))
 
-    try:
-        if scheduler:
-            executor, n_workers = "dask", _run_dask(spec, todo, scheduler, batch_size, take,
-                                                    connect_timeout)
-        else:
-            executor, n_workers = _run_local(spec, todo, workers or os.cpu_count() or 1,
-                                             batch_size, take)
-    finally:
-        if sink is not None:
-            sink.close()
-    rows.sort(key=lambda r: r["index"])
-    if output:
-        _write_output(output, parquet, columns, rows)
-        os.unlink(journal)
+        try:
+            if client is not None:
+                executor, n_workers = "dask", _run_dask(spec, todo, client, batch_size, take)
+            else:
+                executor, n_workers = _run_local(spec, todo, workers or os.cpu_count() or 1,
+                                                 batch_size, take)
+        finally:
+            if sink is not None:
+                sink.close()
+        rows.sort(key=lambda r: r["index"])
+        if output:
+            _write_output(output, parquet, spec, rows)
+            with contextlib.suppress(FileNotFoundError):
+                os.unlink(journal)
     failed = sum(r["status"] != "ok" for r in rows)
     return StudyResult(columns, rows, executor, n_workers, len(done), failed)
 
 
+#: First line of a journal: this tag, the spec's SHA-256 and its canonical JSON.
+_SPEC_LINE = "#mechcirc-study-spec"
+
+
 def _resumed_rows(spec: StudySpec, output, journal: str, parquet: bool) -> list[dict]:
-    """The verified rows of the journal, or of a finished output, that are points of ``spec``."""
+    """The verified rows of the journal, or of a finished output, that are points of ``spec``.
+
+    The file's recorded spec must be ``spec``'s (else an error naming what
+    changed); a row whose parameter values are not its point's is run again.
+    """
     columns = spec.columns
-    done: list[dict] = []
     if Path(journal).exists():
+        _same_spec(journal, _journal_spec(journal), spec)
         done = read_rows(journal, columns)
+    elif Path(output).exists() and parquet:
+        recorded, table = _read_parquet(output)
+        _same_spec(os.fspath(output), recorded, spec)
+        if table.column_names != columns:
+            raise MechcircError(f"{os.fspath(output)}: its columns "
+                                f"({', '.join(table.column_names)}) are not this study's; "
+                                "cannot resume (use another -o)")
+        done = [{c: ("" if v is None else v) for c, v in row.items()}
+                for row in table.to_pylist()]
     elif Path(output).exists():
-        done = _read_parquet(output, columns) if parquet else read_rows(output, columns)
-    n = len(spec.points)
-    return [r for r in done if r["index"] < n]
+        _same_spec(os.fspath(output), _sidecar_spec(output), spec)
+        done = read_rows(output, columns)
+    else:
+        return []
+    n, k = len(spec.points), len(spec.params)
+    return [r for r in done if r["index"] < n and
+            tuple(r[p] for p in spec.params) == spec.points[r["index"]][:k]]
 
 
-def _open_journal(journal: str, columns: list[str], done: list[dict]):
-    """A fresh journal holding the verified rows, open for appending.
+def _same_spec(where: str, recorded: str | None, spec: StudySpec) -> None:
+    """Refuse to resume from ``where`` unless it records ``spec`` (its canonical text)."""
+    import json
+
+    if recorded is None:
+        raise MechcircError(f"{where}: records no study spec (written by another program or "
+                            "an older mechcirc), so its rows cannot be checked against this "
+                            "study; cannot resume (run without --resume to start over, or use "
+                            "another -o)")
+    if recorded == spec.canonical:
+        return
+    try:
+        changes = _changes(json.loads(recorded), json.loads(spec.canonical))
+    except (ValueError, AttributeError):
+        changes = []
+    changes = changes or ["its spec record differs"]
+    raise MechcircError(f"{where} was made from another spec: {'; '.join(changes[:4])}"
+                        f"{'; …' if len(changes) > 4 else ''}; cannot resume (run without "
+                        "--resume to start over, or use another -o)")
+
+
+def _changes(old: dict, new: dict, prefix: str = "") -> list[str]:
+    """What differs between two canonical specs, key by key (``sample.axes.eta1 was …``);
+    of two samples made by different methods, only the method."""
+    out = []
+    if old.get("method") != new.get("method"):
+        return [f"{prefix}method was {_show(old.get('method'))}, now {_show(new.get('method'))}"]
+    for key in sorted(set(old) | set(new)):
+        name = prefix + key
+        if key not in new:
+            out.append(f"{name} was {_show(old[key])}, now absent")
+        elif key not in old:
+            out.append(f"{name} is new ({_show(new[key])})")
+        elif isinstance(old[key], dict) and isinstance(new[key], dict):
+            out += _changes(old[key], new[key], name + ".")
+        elif old[key] != new[key]:
+            out.append(f"{name} was {_show(old[key])}, now {_show(new[key])}")
+    return out
+
+
+def _show(value) -> str:
+    if isinstance(value, str) and re.fullmatch(r"[0-9a-f]{64}", value):
+        return value[:12] + "…"            # a SHA-256: the file's content changed
+    return brief(value)
+
+
+def _journal_spec(journal: str) -> str | None:
+    """The canonical spec a journal was started with (its first line), or None."""
+    try:
+        with open(journal, encoding="utf-8") as fh:
+            first = fh.readline().rstrip("\n")
+    except (UnicodeDecodeError, OSError):
+        return None
+    tag, _, rest = first.partition(" ")
+    digest, _, canonical = rest.partition(" ")
+    if tag != _SPEC_LINE or digest != "sha256=" + _sha256(canonical):
+        return None
+    return canonical
+
+
+def _open_journal(journal: str, spec: StudySpec, done: list[dict]):
+    """A fresh journal holding the spec and the verified rows, open for appending.
 
     A resumed journal is rewritten, not appended to: its last line may lack
     its terminator.
     """
     from .outputs import atomic_open
 
+    columns = spec.columns
     with atomic_open(journal, "w", newline="", encoding="utf-8") as fh:
+        fh.write(f"{_SPEC_LINE} sha256={spec.sha256} {spec.canonical}\n")
         w = csv.writer(fh)
         w.writerow([*columns, _CHECK])
         for r in done:
@@ -681,18 +1129,62 @@ def _open_journal(journal: str, columns: list[str], done: list[dict]):
     return open(journal, "a", newline="", encoding="utf-8")
 
 
-def _write_output(output, parquet: bool, columns: list[str], rows: list[dict]) -> None:
-    """The whole table, in index order, written atomically (CSV or Parquet)."""
-    if parquet:
-        _write_parquet(output, columns, rows)
-        return
-    from .outputs import atomic_open
+def provenance(spec: StudySpec) -> dict:
+    """What an output records about the study that made it (JSON-ready).
 
-    with atomic_open(output, "w", newline="", encoding="utf-8") as fh:
-        w = csv.writer(fh)
-        w.writerow(columns)
-        for r in rows:
-            w.writerow([_format(r.get(c, "")) for c in columns])
+    ``spec`` (the canonical spec, as a dict) and ``spec_sha256`` (its hash,
+    what ``--resume`` compares), ``spec_text`` (the spec file as written),
+    ``spec_file``, ``netlist``, ``units`` (every column's unit) and the
+    ``mechcirc`` version.
+    """
+    import json
+
+    from . import __version__
+
+    return {"mechcirc": __version__, "spec_sha256": spec.sha256,
+            "spec": json.loads(spec.canonical), "spec_file": spec.spec_source,
+            "spec_text": spec.spec_text, "netlist": spec.netlist_source or None,
+            "units": column_units(spec)}
+
+
+def sidecar_path(output: str | os.PathLike) -> str:
+    """The provenance file of a CSV table: ``OUTPUT.meta.json`` (see :func:`provenance`)."""
+    return f"{os.fspath(output)}.meta.json"
+
+
+def _sidecar_spec(output) -> str | None:
+    import json
+
+    try:
+        with open(sidecar_path(output), encoding="utf-8") as fh:
+            return _canonical(json.load(fh)["spec"])
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+
+
+def _write_output(output, parquet: bool, spec: StudySpec, rows: list[dict]) -> None:
+    """The whole table, in index order, with its provenance: Parquet with it in the
+    file's metadata, or CSV with the sidecar ``OUTPUT.meta.json``, the two
+    replaced together (sidecar first) or not at all."""
+    import json
+
+    from .outputs import OutputSet
+
+    columns, record = spec.columns, provenance(spec)
+    with OutputSet() as out:
+        if parquet:
+            _write_parquet(out.path(output), columns, rows, record)
+            return
+        with open(out.path(sidecar_path(output)), "w", encoding="utf-8") as fh:
+            json.dump(record, fh, indent=1, ensure_ascii=False)
+            fh.write("\n")
+        with open(out.path(output), "w", newline="", encoding="utf-8") as fh:
+            w = csv.writer(fh)
+            w.writerow(columns)
+            for r in rows:
+                w.writerow([_format(r.get(c, "")) for c in columns])
+            fh.flush()
+            os.fsync(fh.fileno())
 
 
 def journal_path(output: str | os.PathLike) -> str:
@@ -708,29 +1200,115 @@ def _require_pyarrow():
                             "or write CSV (-o results.csv)") from None
 
 
-def _write_parquet(path, columns: list[str], rows: list[dict]) -> None:
-    """The table as Parquet (atomically); empty result cells are nulls."""
+def _write_parquet(path, columns: list[str], rows: list[dict], record: dict) -> None:
+    """The table as Parquet; empty result cells are nulls.  The file's key-value
+    metadata ``mechcirc`` holds ``record`` (JSON), and each field its ``unit``."""
+    import json
+
     import pyarrow as pa
     import pyarrow.parquet as pq
-
-    from .outputs import atomic_path
 
     data = {c: [None if r.get(c, "") == "" else r.get(c) for r in rows] for c in columns}
     types = {c: pa.string() if c in ("status", "error") else
              pa.int64() if c in ("index", "n_flagged") else pa.float64() for c in columns}
-    table = pa.table({c: pa.array(data[c], type=types[c]) for c in columns})
-    with atomic_path(path) as tmp:
-        pq.write_table(table, tmp)
+    units = record["units"]
+    schema = pa.schema([pa.field(c, types[c], metadata=None if units[c] is None else
+                                 {"unit": units[c]}) for c in columns],
+                       metadata={"mechcirc": json.dumps(record, ensure_ascii=False)})
+    table = pa.table({c: pa.array(data[c], type=types[c]) for c in columns}, schema=schema)
+    pq.write_table(table, path)
 
 
-def _read_parquet(path, columns: list[str]) -> list[dict]:
+def _read_parquet(path):
+    """The recorded canonical spec (or None) and the table of a study's Parquet file."""
+    import json
+
     import pyarrow.parquet as pq
 
-    table = pq.read_table(path)
-    if table.column_names != columns:
-        raise MechcircError(f"{os.fspath(path)}: its columns ({', '.join(table.column_names)}) "
-                            "are not this study's; cannot resume (use another -o)")
-    return [{c: ("" if v is None else v) for c, v in row.items()} for row in table.to_pylist()]
+    try:
+        table = pq.read_table(path)
+    except Exception as exc:  # noqa: BLE001 - pyarrow's errors have no common base
+        raise MechcircError(f"{os.fspath(path)}: not a Parquet table ({type(exc).__name__}); "
+                            "cannot resume (use another -o)") from None
+    try:
+        recorded = _canonical(json.loads(table.schema.metadata[b"mechcirc"])["spec"])
+    except (TypeError, KeyError, ValueError):
+        recorded = None
+    return recorded, table
+
+
+def _lock(output):
+    """Hold ``OUTPUT.lock`` while a study writes ``output`` (a context manager).
+
+    ``fcntl.flock`` on the lock file: the kernel releases it when its holder
+    ends, however it ends, so a lock file left by a killed study (its pid no
+    longer running) is simply taken over.  The file names the holder's pid for
+    the message a second writer gets.  Without ``fcntl`` (Windows) the file is
+    created with ``O_EXCL`` and one left by a killed study must be deleted by hand.
+    """
+    import socket
+
+    path = f"{os.fspath(output)}.lock"
+    me = f"pid {os.getpid()} on {socket.gethostname()}"
+
+    def held(holder: str, hint: str = ""):
+        return MechcircError(f"{os.fspath(output)} is being written by another study "
+                             f"({holder or 'pid unknown'}, per {path}); wait for it to end, "
+                             f"or write another -o{hint}")
+
+    @contextlib.contextmanager
+    def hold():
+        try:
+            import fcntl
+        except ImportError:
+            fcntl = None
+        while True:
+            try:
+                fd = os.open(path, os.O_RDWR | os.O_CREAT | (0 if fcntl else os.O_EXCL), 0o644)
+            except FileExistsError:
+                raise held(_holder(path), f" (if it is no longer running, delete {path})") \
+                    from None
+            except OSError as exc:
+                raise MechcircError(f"{os.fspath(output)}: cannot create the lock file {path}: "
+                                    f"{exc.strerror}") from None
+            if fcntl is None:
+                break
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError:
+                os.close(fd)
+                raise held(_holder(path)) from None
+            try:            # the holder may have removed the file as we opened it
+                if os.path.samestat(os.fstat(fd), os.stat(path)):
+                    break
+            except FileNotFoundError:
+                pass
+            os.close(fd)
+        _LOCK_FDS.add(fd)
+        try:
+            os.ftruncate(fd, 0)
+            os.write(fd, f"{me}\n".encode())
+            yield
+        finally:
+            with contextlib.suppress(OSError):
+                os.unlink(path)         # before the lock goes: see the samestat check
+            _LOCK_FDS.discard(fd)
+            os.close(fd)
+
+    return hold()
+
+
+#: Descriptors of the output locks this process holds: a forked worker closes its
+#: copies (:func:`_die_with_parent`), so that the lock ends with the study's process.
+_LOCK_FDS: set[int] = set()
+
+
+def _holder(path: str) -> str:
+    try:
+        with open(path, encoding="utf-8", errors="replace") as fh:
+            return fh.read(200).strip()
+    except OSError:
+        return ""
 
 
 def _for_workers(spec: StudySpec) -> StudySpec:
@@ -777,11 +1355,18 @@ def _die_with_parent(parent: int) -> None:
     After SIGKILL of the parent, workers would otherwise be re-parented to
     init and wait on the pipe for minutes.  On Linux the kernel delivers
     SIGKILL to the worker when its parent dies (``prctl(PR_SET_PDEATHSIG)``);
-    elsewhere a daemon thread polls the parent's pid once a second.
+    elsewhere a daemon thread polls the parent's pid once a second.  A forked
+    worker also closes its copies of the output lock's descriptor (a flock
+    belongs to every copy: the lock would outlive a killed study in its workers).
     """
     import signal
     import sys
     import threading
+
+    for fd in _LOCK_FDS:
+        with contextlib.suppress(OSError):
+            os.close(fd)
+    _LOCK_FDS.clear()
 
     if sys.platform.startswith("linux"):
         try:
@@ -806,20 +1391,43 @@ def _die_with_parent(parent: int) -> None:
     threading.Thread(target=watch, name="mechcirc-parent-watch", daemon=True).start()
 
 
-def _run_dask(spec, todo, scheduler, batch_size, take, connect_timeout) -> int:
+def _dask_client(scheduler: str, timeout: float):
+    """A client of the scheduler at ``scheduler`` once it has a worker, else a user error
+    within about ``timeout`` seconds (for the connection, then for the first worker)."""
     try:
-        from distributed import Client, as_completed
+        from distributed import Client
     except ImportError:
         raise MechcircError("--scheduler needs Dask: pip install 'mechcirc[study]'") from None
     try:
-        client = Client(scheduler, timeout=f"{connect_timeout}s")
-    except (OSError, TimeoutError) as exc:
-        raise MechcircError(f"cannot reach the Dask scheduler at {scheduler}: {exc}") from None
+        client = Client(scheduler, timeout=f"{timeout}s")
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise MechcircError(f"cannot reach the Dask scheduler at {brief(scheduler)}: "
+                            f"{exc}") from None
+    try:
+        client.wait_for_workers(1, timeout=timeout)
+    except (OSError, TimeoutError):
+        client.close()
+        raise MechcircError(f"the Dask scheduler at {scheduler} has no workers (none joined "
+                            f"within {timeout:g} s); start one with 'dask worker {scheduler}' "
+                            "or raise --connect-timeout") from None
+    except BaseException:
+        client.close()
+        raise
+    return client
+
+
+def _run_dask(spec, todo, client, batch_size, take) -> int:
+    from distributed import as_completed
+
     try:
         n_workers = max(1, sum(w.get("nthreads", 1) for w in
                                client.scheduler_info()["workers"].values()))
         size = _size(len(todo), n_workers, batch_size)
-        spec_future = client.scatter(_for_workers(spec), broadcast=True)
+        try:
+            spec_future = client.scatter(_for_workers(spec), broadcast=True)
+        except TimeoutError:
+            raise MechcircError("the Dask cluster's workers left before the study "
+                                "started") from None
         futures = [client.submit(run_batch, spec_future, batch, pure=False)
                    for batch in _batches(todo, size)]
         for fut in as_completed(futures):

@@ -88,12 +88,16 @@ def test_local_processes_give_the_same_table_as_one_process(tmp_path):
 
 
 def test_dask_local_cluster_gives_the_same_table(tmp_path):
-    distributed = pytest.importorskip(
-        "distributed", reason="dask.distributed is not installed (pip install 'mechcirc[study]')")
+    # Not skipped when Dask is missing: the test extra installs dask[distributed], so
+    # CI runs the cluster path (a scheduler and two workers talking TCP on 127.0.0.1).
+    import distributed
+
     spec = stb_spec()
     run_study(spec, output=tmp_path / "local.csv", workers=1)
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
-                                  dashboard_address=None) as cluster:
+                                  protocol="tcp", host="127.0.0.1",
+                                  dashboard_address=":0") as cluster:
+        assert cluster.scheduler_address.startswith("tcp://127.0.0.1:")
         r = run_study(spec, output=tmp_path / "dask.csv", scheduler=cluster.scheduler_address,
                       batch_size=1)
     assert r.executor == "dask" and r.workers == 2
@@ -101,7 +105,6 @@ def test_dask_local_cluster_gives_the_same_table(tmp_path):
 
 
 def test_unreachable_scheduler_is_a_user_error():
-    pytest.importorskip("distributed", reason="dask.distributed is not installed")
     with pytest.raises(MechcircError, match="cannot reach the Dask scheduler"):
         run_study(stb_spec(), scheduler="tcp://127.0.0.1:9", connect_timeout=1)
 
@@ -126,7 +129,8 @@ def test_an_interrupted_study_keeps_its_rows_and_resumes(tmp_path):
     assert out.read_text() == "the previous table\n"
     journal = Path(str(out) + ".partial.csv")
     table = read(journal)
-    assert len(table) == 1 + 4                 # header and the two finished batches
+    assert len(table) == 2 + 4                 # spec, header and the two finished batches
+    assert table[0][0].startswith("#mechcirc-study-spec sha256=" + spec.sha256)
     with open(journal, "a") as fh:
         fh.write("4,0.8,0.8,ok")               # a row cut short: must be run again
     r = run_study(spec, output=out, workers=1, resume=True)
@@ -262,7 +266,7 @@ def test_parquet_output_and_resume(tmp_path):
 
     with pytest.raises(KeyboardInterrupt):
         run_study(spec, output=out, workers=1, batch_size=1, on_rows=stop)
-    assert not out.exists() and len(read(str(out) + ".partial.csv")) == 3
+    assert not out.exists() and len(read(str(out) + ".partial.csv")) == 4
     r = run_study(spec, output=out, workers=1, resume=True)
     assert r.skipped == 2 and not Path(str(out) + ".partial.csv").exists()
     table = pq.read_table(out)
@@ -295,14 +299,14 @@ def test_sley_preset_study():
 
 
 def test_study_cli_on_a_dask_scheduler(tmp_path, capsys):
-    distributed = pytest.importorskip(
-        "distributed", reason="dask.distributed is not installed (pip install 'mechcirc[study]')")
+    import distributed          # the test extra installs it: CI runs this
     spec = tmp_path / "s.toml"
     spec.write_text(f'netlist = "{STB}"\nanalysis = "resonances"\n[grid]\n'
                     'eta1 = [0.7, 0.8, 0.9]\n')
     assert cli.main(["study", str(spec), "-o", str(tmp_path / "one.csv"), "--workers", "1"]) == 0
     with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False,
-                                  dashboard_address=None) as cluster:
+                                  protocol="tcp", host="127.0.0.1",
+                                  dashboard_address=":0") as cluster:
         assert cli.main(["study", str(spec), "-o", str(tmp_path / "dask.csv"),
                          "--scheduler", cluster.scheduler_address]) == 0
     out = capsys.readouterr().out

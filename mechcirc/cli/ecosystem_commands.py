@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from ._common import check_output_paths, count, load_with_warnings, print_json, save_figure
+from ._common import check_output_paths, count, load_with_warnings, print_json, real, save_figure
 
 
 def register(sub) -> None:
@@ -62,12 +62,15 @@ def register(sub) -> None:
     p.set_defaults(func=cmd_formula)
 
     p = sub.add_parser(
-        "study", help="a parameter grid or random sample, on local cores or a Dask cluster",
+        "study", help="a parameter grid or sample, on local cores or a Dask cluster",
         description="Run a parameter study described by a TOML file (see docs/ecosystem.md): "
-                    "each point re-parses the netlist with new .param values and records a "
-                    "sweep summary or a resonance table; failed points are rows with their "
-                    "error.  Rows are written as they finish (an interrupted study keeps "
-                    "them; --resume runs only the missing points).",
+                    "a grid, a random, Latin hypercube or Sobol sample, or the points of a "
+                    "CSV/Parquet file; each point re-parses the netlist with new .param "
+                    "values and records a sweep summary or a resonance table; failed points "
+                    "are rows with their error.  Rows are journalled as they finish (an "
+                    "interrupted study keeps them; --resume runs only the missing points of "
+                    "the same spec).  The output records the spec and every column's unit "
+                    "(CSV: OUTPUT.meta.json beside it).",
         epilog="Example: mechcirc study examples/study_stb.toml -o results.csv")
     p.add_argument("spec", help="study description (.toml)")
     p.add_argument("-o", "--output", metavar="CSV", help="write the table to this CSV file")
@@ -77,7 +80,12 @@ def register(sub) -> None:
     p.add_argument("--workers", type=count(1, 1024), metavar="N",
                    help="local processes (default: all cores; 1 = this process)")
     p.add_argument("--resume", action="store_true",
-                   help="keep the rows already in -o and run only the missing points")
+                   help="keep the rows already in -o and run only the missing points "
+                        "(refused if -o was made from another spec)")
+    p.add_argument("--connect-timeout", type=real(above=0, most=3600, unit="s"), default=10.0,
+                   metavar="SECONDS",
+                   help="with --scheduler: wait this long for the scheduler, then as long "
+                        "for its first worker (default 10)")
     p.add_argument("--plot", metavar="IMAGE",
                    help="plot a result column against the parameters (PNG, SVG or PDF)")
     p.add_argument("--plot-column", metavar="NAME",
@@ -190,7 +198,7 @@ def cmd_formula(args) -> int:
 def cmd_study(args) -> int:
     from ..errors import MechcircError
     from ..progress import Progress
-    from ..study import load_spec, run_study
+    from ..study import column_units, load_spec, run_study, sidecar_path
 
     check_output_paths(args.output, plots=(args.plot,))
     if args.resume and not args.output:
@@ -204,18 +212,20 @@ def cmd_study(args) -> int:
                             f"{', '.join(spec.columns[len(spec.params) + 3:])})")
     with Progress(len(spec.points), "study") as bar:
         result = run_study(spec, output=args.output, scheduler=args.scheduler,
-                           workers=args.workers, resume=args.resume, on_rows=bar.update)
+                           workers=args.workers, resume=args.resume,
+                           connect_timeout=args.connect_timeout, on_rows=bar.update)
     if args.plot:
         from ..plotting import plot_study
 
         save_figure(plot_study(result, spec.params, column, name=Path(args.spec).stem),
                     args.plot)
     if args.json:
-        print_json({"spec": args.spec, "netlist": spec.netlist_source,
+        print_json({"spec": args.spec, "spec_sha256": spec.sha256,
+                    "netlist": spec.netlist_source,
                     "analysis": spec.analysis, "executor": result.executor,
                     "workers": result.workers, "points": len(result.rows),
                     "resumed": result.skipped, "failed": result.failed,
-                    "columns": result.columns,
+                    "columns": result.columns, "units": column_units(spec),
                     "rows": [[r.get(c, None) for c in result.columns] for r in result.rows]})
         return 0
     where = {"dask": f"Dask cluster {args.scheduler} ({result.workers} threads)",
@@ -231,7 +241,9 @@ def cmd_study(args) -> int:
         for r in [r for r in result.rows if r["status"] != "ok"][:3]:
             print(f"    point {r['index']}: {r['error']}")
     if args.output:
-        print(f"  table written to {args.output}")
+        meta = "" if args.output.lower().endswith(".parquet") else \
+            f" (spec and units in {sidecar_path(args.output)})"
+        print(f"  table written to {args.output}{meta}")
     if args.plot:
         print(f"  plot of {column} written to {args.plot}")
     return 0
