@@ -43,8 +43,15 @@ import numpy as np
 
 from .errors import NetlistError
 
-__all__ = ["LAWS", "Motion", "law", "cam_cycle", "motion_table", "read_motion_table",
-           "PERIODIC_TOLERANCE"]
+__all__ = [
+    "LAWS",
+    "PERIODIC_TOLERANCE",
+    "Motion",
+    "cam_cycle",
+    "law",
+    "motion_table",
+    "read_motion_table",
+]
 
 #: Names of the standard laws.
 LAWS = ("harmonic", "cycloidal", "modified_sine", "modified_trapezoid", "polynomial_345")
@@ -188,7 +195,7 @@ class Motion:
         Units: x in the drive's displacement unit [m or rad], the derivatives
         per radian of shaft angle (dx/dθ · Ω is the velocity at shaft speed Ω).
         """
-        start, length, a, sine = self._arrays()
+        start, _length, a, sine = self._arrays()
         theta = np.asarray(theta, dtype=float)
         th = np.where(theta == self.period, self.period, np.mod(theta, self.period))
         i = np.clip(np.searchsorted(start, th, side="right") - 1, 0, start.size - 1)
@@ -312,8 +319,9 @@ def cam_cycle(law_name: str, rise: float, dwell: float, ret: float, stroke: floa
     pieces += _piece_map(_law_pieces(ret_law), b1 + d1, b2, stroke, False)
     if b1 + d1 + b2 < _TAU * (1 - 1e-12):
         pieces.append((b1 + d1 + b2, (0.0,) * _DEG, (0.0, 0.0, 0.0)))
-    spec = (f"motion={law_name} rise={rise:.17g} dwell={dwell:.17g} return={ret:.17g} "
-            f"stroke={stroke:.17g}" + (f" return_law={ret_law}" if return_law else ""))
+    spec = (f"motion={law_name} rise={float(rise)!r} dwell={float(dwell)!r} "
+            f"return={float(ret)!r} stroke={float(stroke)!r}"
+            + (f" return_law={ret_law}" if return_law else ""))
     return Motion(spec, tuple(p[0] for p in pieces), tuple(p[1] for p in pieces),
                   tuple(p[2] for p in pieces))
 

@@ -75,8 +75,8 @@ def write(circuit: Circuit, header: tuple[str, ...] | list[str] | str = (),
     out = [f"# {line}".rstrip() for h in header for line in str(h).split("\n")]
     d = circuit.drive
     if d is not None:
-        out.append(noted(d.name, f"drive {_names(d.name, d.n1, d.n2)} {d.kind}="
-                                 f"{_number(d.amplitude)}"))
+        how = d.motion.spec if d.motion is not None else f"{d.kind}={_number(d.amplitude)}"
+        out.append(noted(d.name, f"drive {_names(d.name, d.n1, d.n2)} {how}"))
     elements = circuit.elements
     i = 0
     while i < len(elements):

@@ -1,6 +1,7 @@
 """Cam motion laws and tables (mechcirc.motion_laws) against closed forms,
 sympy integrations, finite differences, quadrature and textbook coefficients."""
 
+import itertools
 import math
 import pickle
 
@@ -103,7 +104,7 @@ def test_derivatives_against_finite_differences(name):
     h = 1e-5
     u = np.linspace(0.01, 0.99, 97)
     u = u[np.min(np.abs(u[:, None] - np.array([1, 3, 5, 7]) / 8), axis=1) > 2 * h]
-    s, ds, dds = law(name, u)
+    _s, ds, dds = law(name, u)
     sp_, dsp, _ = law(name, u + h)
     sm, dsm, _ = law(name, u - h)
     assert np.max(np.abs((sp_ - sm) / (2 * h) - ds)) < 1e-8
@@ -140,13 +141,13 @@ def test_fourier_coefficients_against_quadrature(name):
     c = m.fourier(12)
     edges = sorted(set(np.degrees(np.array(m.start)).round(12)) | {360.0})
     for k in (1, 2, 3, 7, 12):
-        def f(d, part):
+        def f(d, part, k=k):
             val = m.evaluate(np.radians(d))[1] * np.exp(-1j * k * np.radians(d))
             return float(getattr(val, part))
         re = sum(quad(f, a, b, args=("real",), epsabs=1e-14, epsrel=1e-12)[0]
-                 for a, b in zip(edges[:-1], edges[1:])) / 360
+                 for a, b in itertools.pairwise(edges)) / 360
         im = sum(quad(f, a, b, args=("imag",), epsabs=1e-14, epsrel=1e-12)[0]
-                 for a, b in zip(edges[:-1], edges[1:])) / 360
+                 for a, b in itertools.pairwise(edges)) / 360
         assert abs(c[k - 1] - complex(re, im)) <= 1e-13 * max(abs(c[0]), 1e-3)
     # and the series rebuilds dx/dθ
     cc = m.fourier(4000)
