@@ -166,6 +166,9 @@ class Motion:
         Estimated error of dx/dθ as a fraction of its largest value: 0 for a law
         (closed form), the interpolation estimate for a table (see
         :func:`motion_table`).
+    coarse : Motion or None
+        A table's spline through every other row (its difference from this one
+        estimates the interpolation error of anything computed from it).
     """
 
     spec: str
@@ -174,6 +177,7 @@ class Motion:
     sine: tuple
     period: float = _TAU
     error: float = 0.0
+    coarse: Motion | None = field(default=None, compare=False, repr=False)
     _cache: dict = field(default_factory=dict, compare=False, repr=False, hash=False)
 
     def __getstate__(self):
@@ -364,16 +368,17 @@ def motion_table(angle_deg, displacement, spec: str = "motion=<table>") -> Motio
     spl = _spline(theta, x)
     c = spl.c                                          # (4, n−1), highest power first
     poly = tuple((c[3, i], c[2, i], c[1, i], c[0, i], 0.0, 0.0) for i in range(c.shape[1]))
-    error = math.inf
+    error, coarse = math.inf, None
     if ang.size >= 9:
         keep = np.unique(np.append(np.arange(0, ang.size, 2), ang.size - 1))
-        coarse = _spline(theta[keep], x[keep])
+        coarse = motion_table(ang[keep], x[keep], spec + " (every other row)")
         dense = np.linspace(0, _TAU, 16 * ang.size)
         fine = spl(dense, 1)
         scale = float(np.max(np.abs(fine)))
-        error = float(np.max(np.abs(fine - coarse(dense, 1)))) / scale if scale > 0 else 0.0
+        error = float(np.max(np.abs(fine - coarse.evaluate(dense)[1]))) / scale \
+            if scale > 0 else 0.0
     return Motion(spec, tuple(theta[:-1]), poly, ((0.0, 0.0, 0.0),) * len(poly),
-                  error=error)
+                  error=error, coarse=coarse)
 
 
 def read_motion_table(path: str | os.PathLike, spec: str | None = None) -> Motion:
