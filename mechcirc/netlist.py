@@ -773,7 +773,7 @@ class _Parser:
         if not os.path.isfile(path):
             line.error(f"motion table {path!r} does not exist", tok.col,
                        "a CSV file angle_deg,displacement, its path relative to the netlist")
-        return read_motion_table(path, spec=f"motion={os.path.abspath(path)}")
+        return read_motion_table(path, spec=f"motion={path}")
 
 
 # Parsed expressions of each circuit parse() made, for symbolic formulas

@@ -42,10 +42,12 @@ import numpy as np
 from .circuit import Circuit
 from .errors import MechcircError
 
-__all__ = ["PeriodicResult", "SpeedMap", "periodic", "speed_map", "rpm_to_omega"]
+__all__ = ["PeriodicResult", "SpeedMap", "periodic", "rpm_to_omega", "speed_map"]
 
 #: Relative distance |kΩ − ωₙ|/ωₙ within which a harmonic is named "near" a resonance.
 NEAR = 0.03
+#: The default error asked for, relative to the peak force.
+TOL = 1e-4
 #: The most harmonics computed (the tail beyond is extrapolated).
 MAX_HARMONICS = 4096
 #: Damping ratio below which a resonance counts as undamped (as mechcirc.sweep).
@@ -347,8 +349,9 @@ def _solve(circuit, motion, Omega, tol, harmonics, method, max_harmonics=MAX_HAR
     if not harmonics and np.any(error > tol):
         i = int(np.argmax(error > tol))
         notes.append(f"the error asked for ({tol:g}) is not met with {int(N[i])} harmonics: "
-                     f"estimated {error[i]:.3g} (the force's series converges slowly: the "
-                     "motion's acceleration jumps into a stiff path)")
+                     f"estimated {error[i]:.3g} (the force's harmonics fall off slowly: a "
+                     "mass or a stiff path at the drive sees the jumps of the motion's "
+                     "acceleration or jerk; ask a larger --tol or smooth the motion)")
     return N, Vs, Qs, error, notes, responses
 
 
@@ -379,7 +382,7 @@ def _validate(rpm, tol, harmonics):
 
 
 # ------------------------------------------------------------------ periodic
-def periodic(circuit: Circuit, rpm: float, *, motion=None, tol: float = 1e-6,
+def periodic(circuit: Circuit, rpm: float, *, motion=None, tol: float = TOL,
              harmonics: int | None = None, points: int = 360, elements=(),
              near: float = NEAR, method: str = "auto") -> PeriodicResult:
     """The steady-state periodic force of the drive over one revolution at ``rpm``.
@@ -475,7 +478,7 @@ def periodic(circuit: Circuit, rpm: float, *, motion=None, tol: float = 1e-6,
 
 # ------------------------------------------------------------------ the speed map
 def speed_map(circuit: Circuit, rpm_min: float, rpm_max: float, points: int = 200, *,
-              motion=None, tol: float = 1e-6, harmonics: int | None = None, elements=(),
+              motion=None, tol: float = TOL, harmonics: int | None = None, elements=(),
               method: str = "auto") -> SpeedMap:
     """Peak drive force over the cycle versus machine speed, resonance crossings marked.
 
@@ -502,7 +505,7 @@ def speed_map(circuit: Circuit, rpm_min: float, rpm_max: float, points: int = 20
         raise MechcircError(f"points must be an integer from 2 to 100000, got {points!r}")
     circuit, motion = _prepared(circuit, motion)
     rpm = np.linspace(rpm_min, rpm_max, points)
-    used, V, Qk, error, notes, responses = _solve(circuit, motion, rpm_to_omega(rpm), tol,
+    used, _, Qk, error, notes, responses = _solve(circuit, motion, rpm_to_omega(rpm), tol,
                                                   harmonics, method)
     unbounded = ~np.all(np.isfinite(Qk), axis=1)
     peak = _peaks(np.where(unbounded[:, None], 0.0, Qk))[0]
