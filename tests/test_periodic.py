@@ -175,3 +175,36 @@ def test_results_pickle_and_bad_calls_are_refused():
     with pytest.raises(MechcircError, match="force drive"):
         periodic(parse("drive F T 0 force=1\nmass m T 0 1"), 600,
                  motion=cam_cycle("cycloidal", 90, 0, 90, 0.01))
+
+
+def test_netlist_motion_syntax_units_and_round_trip():
+    from mechcirc.netlist_writer import write
+
+    c = parse("drive V T 0 motion=modified_sine rise=1.5 rad dwell=10deg return=90 "
+              "stroke=25 mm\nmass m T 0 1")
+    want = cam_cycle("modified_sine", math.degrees(1.5), 10, 90, 0.025)
+    th = np.linspace(0, 2 * np.pi, 50)
+    assert np.allclose(c.drive.motion.evaluate(th)[0], want.evaluate(th)[0], rtol=0,
+                       atol=1e-15)
+    assert c.drive.kind == "velocity" and c.drive.amplitude == 1.0
+    assert parse(write(c)) == c
+
+
+# the column is that of the offending value
+@pytest.mark.parametrize("line,col,needle", [
+    ("drive V T 0 motion=cycloid rise=90 return=90 stroke=1", 20, "unknown motion law"),
+    ("drive V T 0 motion=cycloidal rise=90 stroke=1", 20, "needs return="),
+    ("drive V T 0 motion=cycloidal rise=200 return=200 stroke=1", 35, "more than one revolution"),
+    ("drive V T 0 motion=cycloidal rise=90 return=90 stroke=0", 55, "stroke"),
+    ("drive V T 0 motion=cycloidal rise=90 return=90 stroke=1 velocity=2", 66, "no velocity"),
+    ("drive V T 0 velocity=1 rise=90", 29, "belongs to a motion law"),
+    ("drive V T 0 motion=nothere.csv", 20, "does not exist"),
+    ("drive V T 0 motion=lift.csv rise=3", 34, "not a table"),
+])
+def test_netlist_motion_errors_are_located(line, col, needle):
+    from mechcirc.errors import NetlistError
+
+    with pytest.raises(NetlistError) as info:
+        parse(line + "\nmass m T 0 1")
+    assert (info.value.line, info.value.col) == (1, col) and needle in str(info.value), \
+        str(info.value)
