@@ -185,7 +185,8 @@ class SpeedMap:
 
 # ------------------------------------------------------------------ the pieces
 def _prepared(circuit: Circuit, motion):
-    """``(circuit with a unit velocity drive carrying the motion, motion)``."""
+    """``(circuit, motion, amplitude)``: the motion (given or the drive's) and the drive's
+    amplitude, by which per-element responses are divided (a motion drive has 1)."""
     drive = circuit.drive
     if drive is None:
         raise MechcircError("the circuit has no drive; a periodic drive needs "
@@ -200,10 +201,9 @@ def _prepared(circuit: Circuit, motion):
     if drive.kind != "velocity":
         raise MechcircError(f"drive {drive.name!r} is a force drive; a motion is imposed "
                             "by a velocity drive")
-    if drive.motion is not motion or drive.amplitude != 1.0:
-        circuit = dataclasses.replace(
-            circuit, drive=dataclasses.replace(drive, amplitude=1.0, motion=motion))
-    return circuit, motion
+    if drive.amplitude == 0 or not math.isfinite(drive.amplitude):
+        circuit = dataclasses.replace(circuit, drive=dataclasses.replace(drive, amplitude=1.0))
+    return circuit, motion, circuit.drive.amplitude
 
 
 def _on_grid(Qk: np.ndarray, n: int) -> np.ndarray:
@@ -278,7 +278,8 @@ def _unit_force(K: np.ndarray) -> np.ndarray:
     return Qu
 
 
-def _solve(circuit, motion, Omega, tol, harmonics, method, max_harmonics=MAX_HARMONICS):
+def _solve(circuit, motion, amp, Omega, tol, harmonics, method,
+           max_harmonics=MAX_HARMONICS):
     """Harmonic amplitudes at the shaft speeds ``Omega`` (shape (S,)).
 
     Returns ``(N, V, Qk, error, notes, responses)``: N and error of shape (S,);
@@ -292,6 +293,7 @@ def _solve(circuit, motion, Omega, tol, harmonics, method, max_harmonics=MAX_HAR
     notes: list[str] = []
     N = np.zeros(S, dtype=int)
     error = np.zeros(S)
+    table_error = np.zeros(S)
     rows: list = [None] * S                    # (V, Qk, sweep, index in the sweep)
     pending = np.arange(S)
     kmax = max(64, 4 * harmonics) if harmonics else 64
@@ -321,14 +323,17 @@ def _solve(circuit, motion, Omega, tol, harmonics, method, max_harmonics=MAX_HAR
         err = tail[np.arange(pending.size), n - 1]
         errK = sw.error.reshape(Qk.shape)
         err = err + np.sum(np.where(used & np.isfinite(errK), errK, 0.0) * mag, axis=1)
+        interp = np.zeros(pending.size)
         if coarse is not None:
             dQ = np.abs(2 * Omega[pending, None] * (c - coarse.fourier(kmax)) * Qu)
-            err = err + np.sum(np.where(used & np.isfinite(dQ), dQ, 0.0), axis=1)
+            interp = np.sum(np.where(used & np.isfinite(dQ), dQ, 0.0), axis=1)
         with np.errstate(divide="ignore", invalid="ignore"):
-            e = np.where(scale > 0, err / scale, np.where(err == 0, 0.0, np.inf))
+            e = np.where(scale > 0, (err + interp) / scale,
+                         np.where(err + interp == 0, 0.0, np.inf))
+            from_table = np.where(scale > 0, interp / scale, 0.0)
         for j in np.flatnonzero(done):
             i = pending[j]
-            N[i], error[i] = n[j], e[j]
+            N[i], error[i], table_error[i] = n[j], e[j], from_table[j]
             rows[i] = (V[j, :n[j]], Qk[j, :n[j]], sw, j * kmax)
         pending = pending[~done]
         kmax = min(4 * kmax, max_harmonics)
@@ -342,16 +347,21 @@ def _solve(circuit, motion, Omega, tol, harmonics, method, max_harmonics=MAX_HAR
         F = np.zeros((S, width), dtype=complex)
         U = np.zeros((S, width), dtype=complex)
         for i, (v, _, sw, at) in enumerate(rows):
-            F[i, :v.size] = sw.force(name)[at:at + v.size] * v
-            U[i, :v.size] = sw.velocity(name)[at:at + v.size] * v
+            F[i, :v.size] = sw.force(name)[at:at + v.size] * (v / amp)
+            U[i, :v.size] = sw.velocity(name)[at:at + v.size] * (v / amp)
         return F, U
 
-    if not harmonics and np.any(error > tol):
+    if np.any(error > tol):
         i = int(np.argmax(error > tol))
+        if table_error[i] >= 0.5 * error[i]:
+            why = (f"{table_error[i]:.2g} of it is the table's interpolation, estimated from "
+                   "the spline through every other row: give a finer table")
+        else:
+            why = ("the force's harmonics fall off slowly: a mass or a stiff path at the "
+                   "drive sees the jumps of the motion's acceleration or jerk; ask a larger "
+                   "tolerance or smooth the motion")
         notes.append(f"the error asked for ({tol:g}) is not met with {int(N[i])} harmonics: "
-                     f"estimated {error[i]:.3g} (the force's harmonics fall off slowly: a "
-                     "mass or a stiff path at the drive sees the jumps of the motion's "
-                     "acceleration or jerk; ask a larger --tol or smooth the motion)")
+                     f"estimated {error[i]:.3g} ({why})")
     return N, Vs, Qs, error, notes, responses
 
 
@@ -426,9 +436,9 @@ def periodic(circuit: Circuit, rpm: float, *, motion=None, tol: float = TOL,
     _validate(rpm, tol, harmonics)
     if not (isinstance(points, int) and 4 <= points <= 1_000_000):
         raise MechcircError(f"points must be an integer from 4 to 1000000, got {points!r}")
-    circuit, motion = _prepared(circuit, motion)
+    circuit, motion, amp = _prepared(circuit, motion)
     Omega = rpm_to_omega(rpm)
-    N, V, Qk, error, notes, responses = _solve(circuit, motion, Omega, tol, harmonics,
+    N, V, Qk, error, notes, responses = _solve(circuit, motion, amp, Omega, tol, harmonics,
                                                method)
     N, error = int(N[0]), float(error[0])
     k = np.arange(1, N + 1)
@@ -503,9 +513,9 @@ def speed_map(circuit: Circuit, rpm_min: float, rpm_max: float, points: int = 20
         raise MechcircError(f"need rpm_min < rpm_max, got {rpm_min:g} and {rpm_max:g}")
     if not (isinstance(points, int) and 2 <= points <= 100_000):
         raise MechcircError(f"points must be an integer from 2 to 100000, got {points!r}")
-    circuit, motion = _prepared(circuit, motion)
+    circuit, motion, amp = _prepared(circuit, motion)
     rpm = np.linspace(rpm_min, rpm_max, points)
-    used, _, Qk, error, notes, responses = _solve(circuit, motion, rpm_to_omega(rpm), tol,
+    used, _, Qk, error, notes, responses = _solve(circuit, motion, amp, rpm_to_omega(rpm), tol,
                                                   harmonics, method)
     unbounded = ~np.all(np.isfinite(Qk), axis=1)
     peak = _peaks(np.where(unbounded[:, None], 0.0, Qk))[0]

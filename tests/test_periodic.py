@@ -208,3 +208,16 @@ def test_netlist_motion_errors_are_located(line, col, needle):
         parse(line + "\nmass m T 0 1")
     assert (info.value.line, info.value.col) == (1, col) and needle in str(info.value), \
         str(info.value)
+
+
+def test_motion_given_to_a_plain_velocity_drive():
+    # the drive's amplitude (here 0.3 m/s) does not scale the periodic result
+    plain = parse(SDOF.replace(f"motion=cycloidal rise=120 dwell=60 return=120 stroke={H}",
+                               "velocity=0.3"))
+    motion = cam_cycle("cycloidal", 120, 60, 120, H)
+    a = periodic(plain, 700, motion=motion, elements=["c", "k"])
+    b = periodic(parse(SDOF), 700, elements=["c", "k"])
+    assert a.harmonics == b.harmonics
+    assert np.max(np.abs(a.Q - b.Q)) <= 1e-12 * b.peak
+    for name in ("c", "k"):
+        assert np.max(np.abs(a.forces[name] - b.forces[name])) <= 1e-12 * b.peak
