@@ -34,6 +34,7 @@ same laws and coefficients.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 import os
@@ -169,15 +170,18 @@ class Motion:
     coarse : Motion or None
         A table's spline through every other row (its difference from this one
         estimates the interpolation error of anything computed from it).
+    path : str
+        The table file it was read from ("" for a law or a table built in code).
     """
 
-    spec: str
+    spec: str = field(compare=False)
     start: tuple
     poly: tuple
     sine: tuple
     period: float = _TAU
     error: float = 0.0
     coarse: Motion | None = field(default=None, compare=False, repr=False)
+    path: str = field(default="", compare=False)
     _cache: dict = field(default_factory=dict, compare=False, repr=False, hash=False)
 
     def __getstate__(self):
@@ -398,7 +402,7 @@ def read_motion_table(path: str | os.PathLike, spec: str | None = None) -> Motio
     """
     import csv
 
-    from .sources import read_source, split_lines
+    from .sources import brief, read_source, split_lines
 
     source = os.fspath(path)
     text = read_source(path, "a motion table (CSV: angle_deg,displacement)")
@@ -417,8 +421,10 @@ def read_motion_table(path: str | os.PathLike, spec: str | None = None) -> Motio
             names = [c.strip().lower() for c in cells]
             for need in ("angle_deg", "displacement"):
                 if need not in names:
-                    raise NetlistError(f"the header has no column {need!r} (found "
-                                       f"{', '.join(map(repr, names))})", source, lineno, 1,
+                    found = ", ".join(brief(n[:40]) for n in names[:4])
+                    raise NetlistError(f"the header has no column {need!r} (found {found}"
+                                       f"{', ...' if len(names) > 4 else ''})", source,
+                                       lineno, 1,
                                        "a first line 'angle_deg,displacement'")
             header = (names.index("angle_deg"), names.index("displacement"))
             continue
@@ -464,4 +470,5 @@ def read_motion_table(path: str | os.PathLike, spec: str | None = None) -> Motio
                            f"{tol:.3g} = {PERIODIC_TOLERANCE:g} of the range)", source,
                            last[2], last[3][header[1]],
                            "the same displacement at both ends of the revolution")
-    return motion_table([r[0] for r in rows], x, spec or f"motion={source}")
+    m = motion_table([r[0] for r in rows], x, spec or f"motion={source}")
+    return dataclasses.replace(m, path=source)
