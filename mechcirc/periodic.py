@@ -226,7 +226,7 @@ def _peaks(Qk: np.ndarray, fine: bool = True) -> tuple[np.ndarray, np.ndarray]:
     rows, n_k = Qk.shape
     if n_k == 0:
         return np.zeros(rows), np.zeros(rows)
-    per = 16 if fine else 4                 # grid points per period of the highest harmonic
+    per = 4                                 # grid points per period of the highest harmonic
     n = 1 << max(10 if fine else 6, math.ceil(math.log2(per * n_k + 1)))
     X = np.zeros((rows, n // 2 + 1), dtype=complex)
     X[:, 1:n_k + 1] = Qk * (n / 2)

@@ -2,6 +2,7 @@
 the periodic solution of the SDOF equation of motion by shooting with solve_ivp, the
 single-frequency law Q0 = V0/K, and a table's stated interpolation error."""
 
+import itertools
 import math
 import pickle
 
@@ -52,7 +53,7 @@ def _shooting_reference(rpm, angles_deg):
     def flow(z0, t_end):
         z = np.array(z0, dtype=float)
         stops = [0.0] + [t for t in kinks if t < t_end] + [t_end]
-        for a, b in zip(stops[:-1], stops[1:], strict=True):
+        for a, b in itertools.pairwise(stops):
             if b > a:
                 z = solve_ivp(rhs, (a, b), z, method="DOP853", rtol=1e-13,
                               atol=1e-18).y[:, -1]
