@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import numbers
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -383,11 +384,12 @@ def _resonances(circuit, omega_max, notes):
 
 
 def _validate(rpm, tol, harmonics):
-    if not (isinstance(rpm, (int, float)) and math.isfinite(rpm) and rpm > 0):
+    if not (isinstance(rpm, numbers.Real) and math.isfinite(rpm) and rpm > 0):
         raise MechcircError(f"the machine speed must be a finite number > 0 rev/min, got {rpm!r}")
     if not (0 < tol < 1):
         raise MechcircError(f"tol must be between 0 and 1, got {tol!r}")
-    if harmonics is not None and not (1 <= harmonics <= MAX_HARMONICS):
+    if harmonics is not None and not (isinstance(harmonics, numbers.Integral)
+                                      and 1 <= harmonics <= MAX_HARMONICS):
         raise MechcircError(f"harmonics must be between 1 and {MAX_HARMONICS}, got {harmonics}")
 
 
@@ -434,7 +436,7 @@ def periodic(circuit: Circuit, rpm: float, *, motion=None, tol: float = TOL,
     True
     """
     _validate(rpm, tol, harmonics)
-    if not (isinstance(points, int) and 4 <= points <= 1_000_000):
+    if not (isinstance(points, numbers.Integral) and 4 <= points <= 1_000_000):
         raise MechcircError(f"points must be an integer from 4 to 1000000, got {points!r}")
     circuit, motion, amp = _prepared(circuit, motion)
     Omega = rpm_to_omega(rpm)
@@ -511,7 +513,7 @@ def speed_map(circuit: Circuit, rpm_min: float, rpm_max: float, points: int = 20
     _validate(rpm_max, tol, harmonics)
     if not rpm_min < rpm_max:
         raise MechcircError(f"need rpm_min < rpm_max, got {rpm_min:g} and {rpm_max:g}")
-    if not (isinstance(points, int) and 2 <= points <= 100_000):
+    if not (isinstance(points, numbers.Integral) and 2 <= points <= 100_000):
         raise MechcircError(f"points must be an integer from 2 to 100000, got {points!r}")
     circuit, motion, amp = _prepared(circuit, motion)
     rpm = np.linspace(rpm_min, rpm_max, points)
