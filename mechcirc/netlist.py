@@ -770,7 +770,7 @@ class _Parser:
                            "rise=, dwell=, return=, stroke=")
         base = os.path.dirname(self.source) if self.source != "<string>" else ""
         path = os.path.join(base, text)
-        if not os.path.isfile(path):
+        if not os.path.exists(path):
             line.error(f"motion table {path!r} does not exist", tok.col,
                        "a CSV file angle_deg,displacement, its path relative to the netlist")
         return read_motion_table(path, spec=f"motion={path}")
