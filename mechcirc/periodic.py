@@ -283,8 +283,8 @@ def _solve(circuit, motion, amp, Omega, tol, harmonics, method,
            max_harmonics=MAX_HARMONICS):
     """Harmonic amplitudes at the shaft speeds ``Omega`` (shape (S,)).
 
-    Returns ``(N, V, Qk, error, notes, responses)``: N and error of shape (S,);
-    V and Qk of shape (S, max N), zero beyond each row's N; ``responses(name)``
+    Returns ``(N, V, Qk, K, error, notes, responses)``: N and error of shape (S,);
+    V, Qk and K(kΩ) of shape (S, max N), V and Qk zero beyond each row's N; ``responses(name)``
     gives an element's (force, velocity) phasors in the same shape.  k_max starts
     at 64 (4N when ``harmonics`` is fixed) and is raised ×4 for the speeds whose
     extrapolated tail is not yet small.
@@ -341,8 +341,9 @@ def _solve(circuit, motion, amp, Omega, tol, harmonics, method,
     width = int(N.max())
     Vs = np.zeros((S, width), dtype=complex)
     Qs = np.zeros((S, width), dtype=complex)
-    for i, (v, q, _, _) in enumerate(rows):
-        Vs[i, :v.size], Qs[i, :q.size] = v, q
+    Ks = np.full((S, width), complex(math.inf, 0.0))
+    for i, (v, q, sw, at) in enumerate(rows):
+        Vs[i, :v.size], Qs[i, :q.size], Ks[i, :v.size] = v, q, sw.K[at:at + v.size]
 
     def responses(name):
         F = np.zeros((S, width), dtype=complex)
@@ -363,7 +364,7 @@ def _solve(circuit, motion, amp, Omega, tol, harmonics, method,
                    "tolerance or smooth the motion")
         notes.append(f"the error asked for ({tol:g}) is not met with {int(N[i])} harmonics: "
                      f"estimated {error[i]:.3g} ({why})")
-    return N, Vs, Qs, error, notes, responses
+    return N, Vs, Qs, Ks, error, notes, responses
 
 
 def _resonances(circuit, omega_max, notes):
@@ -440,14 +441,12 @@ def periodic(circuit: Circuit, rpm: float, *, motion=None, tol: float = TOL,
         raise MechcircError(f"points must be an integer from 4 to 1000000, got {points!r}")
     circuit, motion, amp = _prepared(circuit, motion)
     Omega = rpm_to_omega(rpm)
-    N, V, Qk, error, notes, responses = _solve(circuit, motion, amp, Omega, tol, harmonics,
+    N, V, Qk, K, error, notes, responses = _solve(circuit, motion, amp, Omega, tol, harmonics,
                                                method)
     N, error = int(N[0]), float(error[0])
     k = np.arange(1, N + 1)
     w = k * Omega
-    V, Qk = V[0], Qk[0]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        K = np.where(Qk == 0, np.inf + 0j, V / Qk)
+    V, Qk, K = V[0], Qk[0], K[0]
     found = _resonances(circuit, (N + 1) * Omega * (1 + near), notes)
     nearest = np.full(N, np.nan)
     distance = np.full(N, np.nan)
@@ -524,8 +523,9 @@ def speed_map(circuit: Circuit, rpm_min: float, rpm_max: float, points: int = 20
     notes: list[str] = []
     for lo in range(0, points, SPEED_CHUNK):        # bounded memory: chunk × k_max phasors
         part = slice(lo, min(lo + SPEED_CHUNK, points))
-        n, _, Qk, err, _, responses = _solve(circuit, motion, amp, rpm_to_omega(rpm[part]),
-                                             tol, harmonics, method)
+        n, _, Qk, _, err, _, responses = _solve(circuit, motion, amp,
+                                                rpm_to_omega(rpm[part]), tol, harmonics,
+                                                method)
         unbounded = ~np.all(np.isfinite(Qk), axis=1)
         used[part], error[part] = n, np.where(unbounded, math.inf, err)
         peak[part] = np.where(unbounded, math.inf,

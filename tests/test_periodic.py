@@ -98,6 +98,7 @@ def test_pure_harmonic_motion_is_one_phasor():
     ref = (-1j * Q0 * np.exp(1j * th)).real
     assert np.max(np.abs(r.Q - ref)) <= 1e-13 * abs(Q0)
     assert abs(abs(r.amplitude[0]) - abs(Q0)) <= 1e-14 * abs(Q0)
+    assert r.K[0] == s.K[0] and r.omega[0] == W
     assert r.error <= 1e-12
 
 
