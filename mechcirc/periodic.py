@@ -358,6 +358,10 @@ def _solve(circuit, motion, amp, Omega, tol, harmonics, method,
         if table_error[i] >= 0.5 * error[i]:
             why = (f"{table_error[i]:.2g} of it is the table's interpolation, estimated from "
                    "the spline through every other row: give a finer table")
+        elif math.isinf(error[i]):
+            why = ("|Q_k| falls about as slowly as 1/k, too slowly to bound the tail: the force "
+                   "itself jumps, as where a mass at the drive follows a law whose "
+                   "acceleration jumps; the sum shows Gibbs overshoot at the jumps")
         else:
             why = ("the force's harmonics fall off slowly: a mass or a stiff path at the "
                    "drive sees the jumps of the motion's acceleration or jerk; ask a larger "

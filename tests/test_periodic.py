@@ -246,3 +246,18 @@ def test_against_the_transients_steady_state():
     th = (W * tr.time[last]) % (2 * np.pi)
     Q = (np.exp(1j * np.outer(th, r.k)) @ r.amplitude).real
     assert np.max(np.abs(tr.drive_force[last] - Q)) <= 1e-6 * r.peak
+
+
+def test_a_force_with_jumps_has_no_error_bound_and_says_so():
+    # A mass right at the drive under the harmonic law: m·ẍ jumps where the law's
+    # acceleration does, |Q_k| ~ 1/k; the sum cannot meet any tolerance uniformly.
+    c = parse("drive V T 0 motion=harmonic rise=90 dwell=30 return=90 stroke=0.01\n"
+              "mass m T 0 2\n")
+    r = periodic(c, 600)
+    assert math.isinf(r.error) and r.harmonics == 4096
+    assert any("too slowly to bound the tail" in n for n in r.notes)
+    # away from the jumps the sum still converges to m·ẍ
+    W = rpm_to_omega(600)
+    th = np.radians(20.0)
+    exact = 2 * W ** 2 * cam_cycle("harmonic", 90, 30, 90, 0.01).evaluate(th)[2]
+    assert abs(r.Q[20] - exact) <= 1e-3 * abs(exact)
