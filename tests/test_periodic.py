@@ -261,3 +261,16 @@ def test_a_force_with_jumps_has_no_error_bound_and_says_so():
     th = np.radians(20.0)
     exact = 2 * W ** 2 * cam_cycle("harmonic", 90, 30, 90, 0.01).evaluate(th)[2]
     assert abs(r.Q[20] - exact) <= 1e-3 * abs(exact)
+
+
+def test_plots_follow_the_ax_convention():
+    from matplotlib.figure import Figure
+
+    c = parse(SDOF)
+    r = periodic(c, 600, elements=["k"], harmonics=60)
+    fig = r.plot()
+    assert isinstance(fig, Figure) and len(fig.axes) == 3       # Q(θ), spectrum, |K| twin
+    m = speed_map(c, 200, 900, 8)
+    ax = Figure().add_subplot()
+    assert m.plot(ax=ax) is ax and ax.lines
+    assert isinstance(m.plot(), Figure)
