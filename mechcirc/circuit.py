@@ -37,6 +37,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 if TYPE_CHECKING:  # pragma: no cover - annotations of the attached methods only
+    from .motion_laws import Motion
     from .nodal import NodalSystem
     from .reduction import Node
     from .resonances import Resonance
@@ -204,7 +205,11 @@ class Drive:
     """The excitation between ``n1`` and ``n2``.
 
     ``kind`` is ``"velocity"`` (kinematic excitation, amplitude V0 [m/s]) or
-    ``"force"`` (force excitation, amplitude F0 [N]).
+    ``"force"`` (force excitation, amplitude F0 [N]).  ``motion``, when given,
+    is the drive's displacement over one revolution of the main shaft
+    (:class:`mechcirc.motion_laws.Motion`, netlist ``motion=``) for
+    :func:`mechcirc.periodic.periodic`; such a drive is a velocity drive of
+    amplitude 1 m/s for the single-frequency analyses.
     """
 
     name: str
@@ -214,6 +219,7 @@ class Drive:
     amplitude: float
     line: int = 0
     col: int = 0
+    motion: Motion | None = None
 
 
 @dataclass(frozen=True)

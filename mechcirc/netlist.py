@@ -9,13 +9,18 @@ short, one statement per line::
     spring NAME N1 N2 VALUE [eta=EXPR] [backlash=EXPR] [damping=EXPR]
     damper NAME N1 N2 VALUE [eta=EXPR]
     lever  NAME P1 P2 S1 S2 ratio=EXPR
-    drive  NAME N1 N2 velocity=EXPR      (or force=EXPR)
+    drive  NAME N1 N2 velocity=EXPR      (or force=EXPR, or motion=..., below)
     .ic    NODE [x=EXPR] [v=EXPR]        (initial state, for transients)
 
 ``spring ... damping=D`` adds a damper of coefficient D in parallel, as the
 element ``NAME_damping``; ``backlash=B`` puts a total clearance B in series
 with the pair (Modelica ``ElastoBacklash``).  The frequency domain sees the
 contact closed; :mod:`mechcirc.transient` integrates the clearance.
+
+``drive ... motion=PATH.csv`` (a table of crank angle → displacement) or
+``motion=LAW rise=DEG [dwell=DEG] return=DEG stroke=EXPR`` (a standard cam
+law, :mod:`mechcirc.motion_laws`) gives the drive's motion over one revolution
+of the main shaft, for :func:`mechcirc.periodic.periodic`.
 
 A value (VALUE, a ``.param`` value, ``velocity=``/``force=``) may be followed,
 after a space, by its unit: ``spring k1 a 0 5 N/mm``.  The unit is checked
@@ -64,9 +69,14 @@ SYNTAX = {
               "[damping=EXPR [UNIT]]",
     "damper": "damper NAME N1 N2 VALUE [UNIT] [eta=EXPR]",
     "lever": "lever NAME P1 P2 S1 S2 ratio=EXPR",
-    "drive": "drive NAME N1 N2 velocity=EXPR [UNIT]  or  drive NAME N1 N2 force=EXPR [UNIT]",
+    "drive": "drive NAME N1 N2 velocity=EXPR [UNIT]  or  drive NAME N1 N2 force=EXPR [UNIT]  "
+             "or  drive NAME N1 N2 motion=PATH.csv  or  drive NAME N1 N2 motion=LAW "
+             "rise=DEG [dwell=DEG] return=DEG stroke=EXPR [UNIT] [return_law=LAW]",
     ".ic": ".ic NODE [x=EXPR [UNIT]] [v=EXPR [UNIT]]",
 }
+
+#: The options of a drive with ``motion=`` (a table takes only ``motion``).
+_MOTION_KEYS = ("motion", "rise", "dwell", "return", "stroke", "return_law")
 
 #: Where the first positional field that carries a value is (elements: VALUE).
 _VALUE_INDEX = {"mass": 3, "spring": 3, "damper": 3}
@@ -677,7 +687,7 @@ class _Parser:
         self.levers.append(Lever(name, *nodes, ratio, line.lineno, line.tokens[0].col))
 
     def drive(self, line: _Line, kind: str):
-        pos, opts, units = self._fields(line, kind, 3, ("velocity", "force"))
+        pos, opts, units = self._fields(line, kind, 3, ("velocity", "force") + _MOTION_KEYS)
         if self.drives:
             first = self.drives[0]
             line.error(f"a second drive; the netlist already has {first.name!r} on line "
@@ -688,19 +698,82 @@ class _Parser:
         if n1 == n2:
             line.error(f"both ends of drive {name!r} are node {n1!r}", pos[2].col,
                        "two different nodes")
+        if "motion" in opts:
+            self.drives.append(Drive(name, n1, n2, "velocity", 1.0, line.lineno,
+                                     line.tokens[0].col, self.motion(line, opts, units)))
+            return
+        for key in _MOTION_KEYS:
+            if key in opts:
+                line.error(f"option {key!r} belongs to a motion law", opts[key].col,
+                           "motion=LAW with rise=, dwell=, return=, stroke=")
         if len(opts) != 1:
             if opts:
                 key, tok = list(opts.items())[1]
                 where = tok.col - len(key) - 1
             else:
                 where = line.tokens[-1].col + len(line.tokens[-1].text)
-            line.error("a drive needs exactly one of velocity=EXPR or force=EXPR", where,
-                       SYNTAX["drive"])
+            line.error("a drive needs exactly one of velocity=EXPR, force=EXPR or motion=",
+                       where, SYNTAX["drive"])
         (key, tok), = opts.items()
         amplitude = self.expr(line, tok.text, tok.col, defined=self.params, key=(name, key))
         amplitude = self.with_unit(line, amplitude, units.get(key), key, (name, key))
         self.drives.append(Drive(name, n1, n2, key, amplitude, line.lineno,
                                  line.tokens[0].col))
+
+    def motion(self, line: _Line, opts: dict, units: dict):
+        """The :class:`~mechcirc.motion_laws.Motion` of ``drive ... motion=``: a law or a table."""
+        from .motion_laws import LAWS, cam_cycle, read_motion_table
+
+        tok = opts["motion"]
+        for key in ("velocity", "force"):
+            if key in opts:
+                line.error(f"a drive with motion= takes no {key}= (its velocity follows "
+                           "from the motion and the shaft speed)", opts[key].col,
+                           SYNTAX["drive"])
+        text = tok.text
+        if text not in LAWS and "." not in text and "/" not in text and os.sep not in text:
+            line.error(f"unknown motion law {text!r}", tok.col,
+                       "one of " + ", ".join(LAWS) + ", or a table file such as lift.csv")
+        if text in LAWS:
+            values = {}
+            for key in ("rise", "dwell", "return", "stroke"):
+                if key not in opts:
+                    if key == "dwell":
+                        values[key] = 0.0
+                        continue
+                    line.error(f"motion={text} needs {key}=", tok.col, SYNTAX["drive"])
+                t = opts[key]
+                v = self.expr(line, t.text, t.col, defined=self.params)
+                if key == "stroke":
+                    v = self.with_unit(line, v, units.get(key), "displacement")
+                elif key in units:
+                    v = math.degrees(self.with_unit(line, v, units[key], "angle"))
+                values[key] = v
+            ret_law = None
+            if "return_law" in opts:
+                ret_law = opts["return_law"].text
+                if ret_law not in LAWS:
+                    line.error(f"unknown motion law {ret_law!r}", opts["return_law"].col,
+                               "one of " + ", ".join(LAWS))
+            try:
+                return cam_cycle(text, values["rise"], values["dwell"], values["return"],
+                                 values["stroke"], return_law=ret_law)
+            except ValueError as exc:
+                bad = "stroke" if "stroke" in str(exc) else "rise"
+                line.error(str(exc), opts[bad].col if bad in opts else tok.col,
+                           "rise + dwell + return <= 360 degrees, rise and return > 0, "
+                           "a nonzero stroke")
+        for key in _MOTION_KEYS[1:]:
+            if key in opts:
+                line.error(f"option {key!r} belongs to a motion law, not a table",
+                           opts[key].col, "motion=PATH alone, or motion=LAW with "
+                           "rise=, dwell=, return=, stroke=")
+        base = os.path.dirname(self.source) if self.source != "<string>" else ""
+        path = os.path.join(base, text)
+        if not os.path.exists(path):
+            line.error(f"motion table {path!r} does not exist", tok.col,
+                       "a CSV file angle_deg,displacement, its path relative to the netlist")
+        return read_motion_table(path, spec=f"motion={path}")
 
 
 # Parsed expressions of each circuit parse() made, for symbolic formulas

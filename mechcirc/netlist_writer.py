@@ -27,6 +27,7 @@ spring k1 a 0 800.0 eta=0.5
 from __future__ import annotations
 
 import math
+import os
 import re
 from collections.abc import Mapping
 
@@ -75,8 +76,11 @@ def write(circuit: Circuit, header: tuple[str, ...] | list[str] | str = (),
     out = [f"# {line}".rstrip() for h in header for line in str(h).split("\n")]
     d = circuit.drive
     if d is not None:
-        out.append(noted(d.name, f"drive {_names(d.name, d.n1, d.n2)} {d.kind}="
-                                 f"{_number(d.amplitude)}"))
+        how = f"{d.kind}={_number(d.amplitude)}"
+        if d.motion is not None:     # a table by its absolute path: the text may go elsewhere
+            how = (f"motion={os.path.abspath(d.motion.path)}" if d.motion.path
+                   else d.motion.spec)
+        out.append(noted(d.name, f"drive {_names(d.name, d.n1, d.n2)} {how}"))
     elements = circuit.elements
     i = 0
     while i < len(elements):

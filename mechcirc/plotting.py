@@ -19,7 +19,8 @@ follows the extension given to :func:`mechcirc.cli._common.save_figure`
 
 from __future__ import annotations
 
-__all__ = ["plot_sweep", "plot_forces", "plot_comparison", "plot_study"]
+__all__ = ["plot_sweep", "plot_forces", "plot_comparison", "plot_study", "plot_periodic",
+           "plot_speed_map"]
 
 
 def _figure(figsize):
@@ -255,6 +256,95 @@ def plot_study(result, params, column: str, name: str = "study", title: str | No
         ax.set_ylabel(py)
     ax.grid(True, which="both", alpha=0.3)
     ax.set_title(title or f"{name}: {column} over {len(result.rows)} points")
+    if made:
+        fig.tight_layout()
+        return fig
+    return ax
+
+
+def plot_periodic(result, title: str | None = None, *, fig=None):
+    """Q(θ) [N] over the crank angle beside its spectrum |Q_k| [N] at ω = kΩ, with
+    |K(kΩ)| [m/(N·s)] and the resonances (a :class:`mechcirc.periodic.PeriodicResult`).
+
+    Two panels on ``fig`` (a new Figure by default), which is returned.
+    Harmonics near a resonance are drawn in red.
+    """
+    import numpy as np
+
+    fig = fig if fig is not None else _figure((11, 4.2))
+    ax_q, ax_s = fig.subplots(1, 2, gridspec_kw={"width_ratios": [3, 2]})
+    ax_q.plot(result.angle_deg, result.Q, color="C0", label="Q(θ), drive")
+    for name, f in result.forces.items():
+        ax_q.plot(result.angle_deg, f, lw=0.9, label=f"{name}")
+    if result.unbounded:
+        ax_q.text(0.5, 0.5, "unbounded: harmonic on an undamped resonance",
+                  transform=ax_q.transAxes, ha="center", color="C3")
+    ax_q.set_xlabel("crank angle θ [deg]")
+    ax_q.set_ylabel("force [N]")
+    ax_q.set_xlim(0, 360)
+    ax_q.grid(True, alpha=0.3)
+    ax_q.legend(loc="best", fontsize="small")
+    with np.errstate(all="ignore"):
+        amp = np.abs(result.amplitude)
+    top = float(np.max(amp[np.isfinite(amp)], initial=0.0))
+    floor = top * 1e-6 if top > 0 else 1.0
+    ok = np.isfinite(amp) & (amp >= floor)           # the spectrum down to 1e-6 of its top
+    colours = np.where(result.near, "C3", "C0")
+    ax_s.vlines(result.omega[ok], floor, amp[ok], colors=colours[ok], lw=1.2)
+    ax_s.set_yscale("log")
+    ax_s.set_ylim(floor, 2 * top if top > 0 else 10.0)
+    ax_s.set_xscale("log")
+    ax_s.set_xlabel("ω = kΩ [rad/s]")
+    ax_s.set_ylabel("|Q_k| [N]")
+    ax_k = ax_s.twinx()
+    with np.errstate(all="ignore"):
+        absK = np.abs(result.K)
+    good = np.isfinite(absK) & (absK > 0)
+    ax_k.loglog(result.omega[good], absK[good], color="0.4", lw=0.9, label="|K(kΩ)|")
+    ax_k.set_ylabel("|K| [m/(N·s)]")
+    for i, (wn, _) in enumerate(result.resonances):
+        ax_s.axvline(wn, color="C3", lw=0.8, ls="--",
+                     label="resonance (K = 0)" if i == 0 else None)
+    if result.resonances:
+        ax_s.legend(loc="lower left", fontsize="small")
+    ax_s.grid(True, which="both", alpha=0.3)
+    fig.suptitle(title or f"{result.name}: drive force over one revolution at "
+                          f"{result.rpm:g} rpm ({result.harmonics} harmonics, error "
+                          f"{result.error:.1g})")
+    fig.tight_layout()
+    return fig
+
+
+def plot_speed_map(result, title: str | None = None, *, ax=None, min_weight: float = 1e-3):
+    """The peak drive force over the cycle [N] against machine speed [rpm] (a
+    :class:`mechcirc.periodic.SpeedMap`), with a line at each speed where a harmonic
+    meets a resonance (k·Ω = ωₙ) whose share of the drive velocity is at least
+    ``min_weight``, labelled by k.  Returns ``ax`` when given, else the Figure."""
+    import numpy as np
+
+    fig, ax, made = _axes(ax, (8, 4.5))
+    peak = np.where(np.isfinite(result.peak), result.peak, np.nan)
+    ax.plot(result.rpm, peak, color="C0", label="max |Q(θ)|, drive")
+    for name, p in result.element_peaks.items():
+        ax.plot(result.rpm, np.where(np.isfinite(p), p, np.nan), lw=0.9, ls="--",
+                label=f"max |force| {name}")
+    inf = ~np.isfinite(result.peak)
+    if inf.any():
+        ax.plot(result.rpm[inf], np.ones(int(inf.sum())), "^", color="C3",
+                transform=ax.get_xaxis_transform(), clip_on=False, label="unbounded")
+    for rpm, k, _, _, weight in result.crossings:
+        if weight >= min_weight:
+            ax.axvline(rpm, color="C3", lw=0.7, alpha=0.6)
+            ax.text(rpm, 1.0, f"{k}", transform=ax.get_xaxis_transform(), ha="center",
+                    va="bottom", fontsize="x-small", color="C3")
+    if np.nanmax(peak, initial=0) > 100 * np.nanmin(peak, initial=np.inf):
+        ax.set_yscale("log")
+    ax.set_xlabel("machine speed [rpm]")
+    ax.set_ylabel("peak force over the cycle [N]")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(loc="best", fontsize="small")
+    ax.set_title(title or f"{result.name}: peak drive force vs speed (red: k·Ω = ωₙ)",
+                 pad=14)
     if made:
         fig.tight_layout()
         return fig

@@ -24,6 +24,7 @@ COMMAND_MODULES: list[str] = [
     "mechcirc.cli.ecosystem_commands",
     "mechcirc.cli.scene_commands",
     "mechcirc.cli.transient_commands",
+    "mechcirc.cli.periodic_commands",
 ]
 
 

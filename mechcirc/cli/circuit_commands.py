@@ -106,7 +106,8 @@ def cmd_check(args) -> int:
     doc = {
         "file": args.file, "name": circuit.name,
         "drive": {"name": d.name, "n1": d.n1, "n2": d.n2, "kind": d.kind,
-                  "amplitude": d.amplitude},
+                  "amplitude": d.amplitude,
+                  **({"motion": d.motion.spec} if d.motion is not None else {})},
         "nodes": circuit.nodes, "elements": elements, "levers": levers,
         "unloaded": list(unloaded), "warnings": warns, "tree": tree,
     }
@@ -132,7 +133,9 @@ def cmd_check(args) -> int:
     print(f"{args.file}: {len(elements)} elements, {len(levers)} levers, "
           f"{len(circuit.nodes)} nodes")
     unit = "m/s" if d.kind == "velocity" else "N"
-    print(f"drive {d.name}: {d.kind} {d.amplitude:g} {unit} between {d.n1} and {d.n2}")
+    print(f"drive {d.name}: {d.kind} {d.amplitude:g} {unit} between {d.n1} and {d.n2}"
+          + (f"; over the revolution {d.motion.spec} ('mechcirc periodic')"
+             if d.motion is not None else ""))
     for e in circuit.elements:
         eta = f"  eta={e.eta:g}" if e.eta != 1 else ""
         print(f"  {e.kind:<7} {e.name:<8} {e.n1:>6} {e.n2:>6}  {e.value:<12g}{eta}")

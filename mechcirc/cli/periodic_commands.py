@@ -1,0 +1,224 @@
+"""Sub-command ``periodic``: the drive's force over one revolution at machine speed, or
+the operating-speed map of its peak."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from ._common import (
+    check_output_paths,
+    count,
+    load_with_warnings,
+    print_json,
+    real,
+    save_figure,
+)
+
+
+def register(sub) -> None:
+    p = sub.add_parser(
+        "periodic", help="drive force over one revolution at machine speed; speed map",
+        description="Steady-state periodic force of a drive given by its motion over one "
+                    "revolution ('drive ... motion=lift.csv' or 'motion=cycloidal rise=... "
+                    "dwell=... return=... stroke=...'): the harmonics kΩ of the drive's "
+                    "velocity through K(kΩ), as many as the error asked for needs (said). "
+                    "With --rpm: Q(θ) over the crank angle and the harmonics near resonances. "
+                    "With --rpm-min/--rpm-max: the peak |Q(θ)| against machine speed and the "
+                    "speeds where a harmonic meets a resonance (k·Ω = ωn).",
+        epilog="Examples:\n"
+               "  mechcirc periodic docs/examples/cam_drive.mcir --rpm 600 -o Q.csv\n"
+               "  mechcirc periodic docs/examples/cam_drive.mcir --rpm-min 100 --rpm-max 1200",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("file", help="netlist (.mcir) whose drive has motion=")
+    p.add_argument("--rpm", type=real(above=0.0, most=1e9, unit="rpm"), metavar="RPM",
+                   help="machine speed [rev/min]")
+    p.add_argument("--rpm-min", type=real(above=0.0, most=1e9, unit="rpm"), metavar="A",
+                   help="lowest speed of the speed map [rev/min]")
+    p.add_argument("--rpm-max", type=real(above=0.0, most=1e9, unit="rpm"), metavar="B",
+                   help="highest speed of the speed map [rev/min]")
+    p.add_argument("--points", type=count(2, 100_000), default=200, metavar="N",
+                   help="speeds of the map (default 200)")
+    p.add_argument("--angles", type=count(4, 1_000_000), default=360, metavar="N",
+                   help="crank angles per revolution in the outputs (default 360)")
+    p.add_argument("--tol", type=real(above=0.0, most=0.5), default=1e-4, metavar="TOL",
+                   help="error asked for, relative to the peak force (default 1e-4)")
+    p.add_argument("--harmonics", type=count(1, 4096), metavar="N",
+                   help="use exactly N harmonics (the error is still estimated)")
+    p.add_argument("--elements", metavar="NAMES",
+                   help="comma-separated elements whose force (and velocity) to add, or 'all'")
+    p.add_argument("--near", type=real(above=0.0, most=1.0), default=0.03, metavar="FRAC",
+                   help="name harmonics within this relative distance of a resonance "
+                        "(default 0.03)")
+    p.add_argument("--method", choices=("auto", "sp", "nodal"), default="auto",
+                   help="how K is evaluated (default auto)")
+    p.add_argument("-o", "--output", metavar="CSV", help="write the table as CSV")
+    p.add_argument("--plot", metavar="IMAGE", help="plot (PNG, SVG or PDF)")
+    p.add_argument("--json", action="store_true", help="print one JSON document")
+    p.set_defaults(func=cmd_periodic)
+
+
+def _elements(args, circuit):
+    from ..errors import MechcircError
+
+    if not args.elements:
+        return []
+    names = [e.name for e in circuit.elements]
+    if args.elements.strip() == "all":
+        return names
+    asked = [n.strip() for n in args.elements.split(",") if n.strip()]
+    unknown = [n for n in asked if n not in names]
+    if unknown:
+        raise MechcircError(f"--elements: no element named {', '.join(map(repr, unknown))}; "
+                            f"elements: {', '.join(names)}")
+    return asked
+
+
+def cmd_periodic(args) -> int:
+    from ..errors import MechcircError
+
+    check_output_paths(args.output, plots=(args.plot,))
+    single = args.rpm is not None
+    ranged = args.rpm_min is not None or args.rpm_max is not None
+    if single == ranged:
+        raise MechcircError("give either --rpm RPM, or --rpm-min A and --rpm-max B "
+                            "(an operating-speed map)")
+    if ranged and (args.rpm_min is None or args.rpm_max is None
+                   or not args.rpm_min < args.rpm_max):
+        raise MechcircError("the speed map needs both --rpm-min and --rpm-max, with "
+                            "--rpm-min < --rpm-max")
+    circuit, warns = load_with_warnings(args.file)
+    elements = _elements(args, circuit)
+    for w in warns:
+        print(f"warning: {w}", file=sys.stderr)
+    if single:
+        return _one_speed(args, circuit, elements)
+    return _speed_map(args, circuit, elements)
+
+
+def _one_speed(args, circuit, elements) -> int:
+    import numpy as np
+
+    from ..outputs import OutputSet
+    from ..periodic import periodic
+
+    r = periodic(circuit, args.rpm, tol=args.tol, harmonics=args.harmonics,
+                 points=args.angles, elements=elements, near=args.near, method=args.method)
+    with OutputSet() as out:
+        if args.output:
+            cols = [r.angle_deg, r.x, r.v, r.Q]
+            head = ["angle_deg", "x", "v", "Q"]
+            for name in elements:
+                cols += [r.forces.get(name, np.full_like(r.Q, np.nan)),
+                         r.velocities.get(name, np.full_like(r.Q, np.nan))]
+                head += [f"F_{name}", f"v_{name}"]
+            with open(out.path(args.output), "w", newline="") as fh:
+                fh.write(",".join(head) + "\n")
+                np.savetxt(fh, np.column_stack(cols), delimiter=",", fmt="%.17g")
+        if args.plot:
+            save_figure(r.plot(), args.plot, out.path(args.plot))
+    rows = [{"k": int(k), "omega": float(w), "velocity": complex(v),
+             "amplitude": float(abs(q)), "phase_deg": float(np.degrees(np.angle(q))),
+             "nearest_resonance": float(n), "distance": float(d), "near": bool(nr)}
+            for k, w, v, q, n, d, nr in zip(r.k, r.omega, r.V, r.amplitude, r.nearest,
+                                            r.distance, r.near)]
+    if args.json:
+        print_json({"file": args.file, "name": r.name, "rpm": r.rpm,
+                    "omega_shaft": r.omega_shaft, "angle_deg": r.angle_deg, "x": r.x,
+                    "v": r.v, "Q": r.Q, "peak": r.peak, "peak_angle_deg": r.peak_angle_deg,
+                    "error": r.error, "tol": r.tol, "n_harmonics": r.harmonics,
+                    "harmonics": rows,
+                    "resonances": [{"omega": w, "zeta": z} for w, z in r.resonances],
+                    "unbounded": list(r.unbounded), "forces": r.forces,
+                    "velocities": r.velocities, "notes": list(r.notes)})
+        return 0
+    d = circuit.drive
+    print(f"{args.file}: drive {d.name} {d.motion.spec} at {r.rpm:g} rpm "
+          f"(Ω = {r.omega_shaft:.6g} rad/s)")
+    print(f"  {r.harmonics} harmonics; estimated error {r.error:.2g} of the peak "
+          f"(asked {r.tol:g})")
+    if r.unbounded:
+        print("  peak |Q| = inf: the steady periodic force is unbounded")
+    else:
+        print(f"  peak |Q| = {r.peak:.7g} N at θ = {r.peak_angle_deg:.4f} deg; "
+              f"drive velocity up to {np.max(np.abs(r.v)):.4g} m/s")
+    near = np.flatnonzero(r.near)
+    if near.size:
+        print(f"  harmonics within {args.near:.0%} of a resonance:")
+        for i in near:
+            print(f"    k = {r.k[i]}: kΩ = {r.omega[i]:.6g} rad/s, resonance "
+                  f"ωn = {r.nearest[i]:.6g} rad/s ({r.distance[i]:+.2%}), "
+                  f"|Q_k| = {abs(r.amplitude[i]):.4g} N")
+    else:
+        print(f"  no harmonic within {args.near:.0%} of a resonance")
+    top = np.argsort(-np.nan_to_num(np.abs(r.amplitude), nan=np.inf))[:8]
+    print(f"  {'k':>5} {'kΩ [rad/s]':>12} {'|V_k| [m/s]':>12} {'|Q_k| [N]':>12} "
+          f"{'nearest ωn':>12} {'distance':>9}")
+    for i in sorted(top):
+        print(f"  {r.k[i]:>5} {r.omega[i]:>12.6g} {abs(r.V[i]):>12.4g} "
+              f"{abs(r.amplitude[i]):>12.4g} {r.nearest[i]:>12.6g} {r.distance[i]:>+9.2%}")
+    if r.harmonics > top.size:
+        print(f"  (the {top.size} largest of {r.harmonics} harmonics; --json lists all)")
+    for name in elements:
+        f = r.forces.get(name)
+        if f is not None:
+            print(f"  element {name}: peak |force| {np.max(np.abs(f)):.6g} N")
+    for note in r.notes:
+        print(f"  note: {note}")
+    for label, path in (("CSV", args.output), ("plot", args.plot)):
+        if path:
+            print(f"  {label} written to {path}")
+    return 0
+
+
+def _speed_map(args, circuit, elements) -> int:
+    import numpy as np
+
+    from ..outputs import OutputSet
+    from ..periodic import speed_map
+
+    m = speed_map(circuit, args.rpm_min, args.rpm_max, args.points, tol=args.tol,
+                  harmonics=args.harmonics, elements=elements, method=args.method)
+    with OutputSet() as out:
+        if args.output:
+            cols = [m.rpm, m.peak, m.harmonics, m.error]
+            head = ["rpm", "peak_Q", "harmonics", "error"]
+            for name in elements:
+                cols.append(m.element_peaks[name])
+                head.append(f"peak_{name}")
+            with open(out.path(args.output), "w", newline="") as fh:
+                fh.write(",".join(head) + "\n")
+                np.savetxt(fh, np.column_stack(cols), delimiter=",", fmt="%.17g")
+        if args.plot:
+            save_figure(m.plot(), args.plot, out.path(args.plot))
+    crossings = [{"rpm": r, "k": k, "omega_n": w, "zeta": z, "weight": wt}
+                 for r, k, w, z, wt in m.crossings]
+    if args.json:
+        print_json({"file": args.file, "name": m.name, "rpm": m.rpm, "peak": m.peak,
+                    "harmonics": m.harmonics, "error": m.error, "crossings": crossings,
+                    "element_peaks": m.element_peaks, "notes": list(m.notes)})
+        return 0
+    finite = np.isfinite(m.peak)
+    print(f"{args.file}: peak drive force over the cycle at {m.rpm.size} speeds, "
+          f"{m.rpm[0]:g} .. {m.rpm[-1]:g} rpm ({int(m.harmonics.min())} .. "
+          f"{int(m.harmonics.max())} harmonics; largest estimated error "
+          f"{np.max(m.error):.2g})")
+    if finite.any():
+        lo, hi = np.argmin(np.where(finite, m.peak, np.inf)), np.argmax(
+            np.where(finite, m.peak, -np.inf))
+        print(f"  smallest peak {m.peak[lo]:.6g} N at {m.rpm[lo]:.6g} rpm; largest "
+              f"{m.peak[hi]:.6g} N at {m.rpm[hi]:.6g} rpm")
+    strong = [c for c in crossings if c["weight"] >= 1e-3]
+    print(f"  speeds where a harmonic meets a resonance (k·Ω = ωn; {len(strong)} of "
+          f"{len(crossings)} with a harmonic of at least 1e-3 of the drive velocity):")
+    for c in strong[:30]:
+        print(f"    {c['rpm']:10.6g} rpm: k = {c['k']:>3}, ωn = {c['omega_n']:.6g} rad/s "
+              f"(ζ = {c['zeta']:.3g}, harmonic weight {c['weight']:.2g})")
+    if len(strong) > 30:
+        print(f"    ... {len(strong) - 30} more (--json lists all)")
+    for note in m.notes:
+        print(f"  note: {note}")
+    for label, path in (("CSV", args.output), ("plot", args.plot)):
+        if path:
+            print(f"  {label} written to {path}")
+    return 0

@@ -1,0 +1,474 @@
+"""Motions over one revolution of the main shaft: the standard cam laws and tables.
+
+A :class:`Motion` is a displacement x(θ) [m or rad] over one turn of the main
+shaft, θ ∈ [0, 2π) [rad], written piecewise in closed form: on piece i,
+with τ = θ − θᵢ,
+
+    x(τ) = Σₘ aₘ τᵐ (m ≤ 5) + B sin(w τ + φ).
+
+Every standard cam law is of this form, and so is a periodic cubic spline
+through a table, so one representation gives x, dx/dθ and d²x/dθ² exactly and
+the Fourier coefficients of dx/dθ exactly (:meth:`Motion.fourier`).
+
+The laws (normalised rise s(u) from 0 to 1 for u ∈ [0, 1]; a rise of stroke h
+over the cam angle β is x = h·s(θ/β), so dx/dθ = h·s'/β and d²x/dθ² = h·s''/β²):
+
+=====================  ======================================  =========  =========
+law                    acceleration s''(u)                      max s'     max |s''|
+=====================  ======================================  =========  =========
+``harmonic``           (π²/2) cos πu                            π/2        π²/2
+``cycloidal``          2π sin 2πu                               2          2π
+``modified_sine``      C sin 4πu, C cos(4π/3 (u−1/8)),          1.760      5.528
+                       −C cos 4π(u−7/8) at u = 1/8, 7/8
+``modified_trapezoid`` C sin 4πu, C, C cos 4π(u−3/8), −C,       2.000      4.888
+                       −C cos 4π(u−7/8) at u = 1/8, 3/8, 5/8,
+                       7/8
+``polynomial_345``     60u − 180u² + 120u³ (s = 10u³−15u⁴+6u⁵)  15/8       10/√3
+=====================  ======================================  =========  =========
+
+C is fixed by s(1) = 1 (the pieces are integrated in closed form, the
+constants carried from piece to piece).  Mechanism design texts (Norton,
+*Design of Machinery*, ch. 8; Rothbart, *Cam Design Handbook*) tabulate the
+same laws and coefficients.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import math
+import os
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .errors import NetlistError
+
+__all__ = [
+    "LAWS",
+    "PERIODIC_TOLERANCE",
+    "Motion",
+    "cam_cycle",
+    "law",
+    "motion_table",
+    "read_motion_table",
+]
+
+#: Names of the standard laws.
+LAWS = ("harmonic", "cycloidal", "modified_sine", "modified_trapezoid", "polynomial_345")
+
+#: A table's two ends must meet within this fraction of its displacement range
+#: (or 1e-12 m when the table does not move at all).
+PERIODIC_TOLERANCE = 1e-6
+
+_TAU = 2 * math.pi
+_DEG = 6  # polynomial coefficients per piece: τ⁰ … τ⁵
+
+
+# ------------------------------------------------------------------ the laws
+def _integrate(pieces) -> list:
+    """Displacement pieces ``(u0, a[6], B, w, φ)`` from acceleration pieces
+    ``(u0, u1, p[4], B, w, φ)`` (s'' = Σ pₘ tᵐ + B sin(w t + φ), t = u − u0), with
+    s and s' continuous from s(0) = s'(0) = 0."""
+    out, s0, v0 = [], 0.0, 0.0
+    for u0, u1, p, B, w, phi in pieces:
+        a = [s0, v0] + [0.0] * (_DEG - 2)
+        for m, pm in enumerate(p):
+            a[m + 2] += pm / ((m + 1) * (m + 2))
+        b = 0.0
+        if B:
+            a[0] += B * math.sin(phi) / w ** 2
+            a[1] += B * math.cos(phi) / w
+            b = -B / w ** 2
+        out.append((u0, a, b, w, phi))
+        t = u1 - u0
+        s0 = sum(am * t ** m for m, am in enumerate(a)) + b * math.sin(w * t + phi)
+        v0 = sum(m * am * t ** (m - 1) for m, am in enumerate(a) if m) + \
+            b * w * math.cos(w * t + phi)
+    return out, s0
+
+
+@functools.cache
+def _law_pieces(name: str) -> tuple:
+    """The normalised rise of law ``name`` as displacement pieces ``(u0, a, B, w, φ)``."""
+    pi, h = math.pi, math.pi / 2
+    if name == "polynomial_345":
+        return ((0.0, (0.0, 0.0, 0.0, 10.0, -15.0, 6.0), 0.0, 0.0, 0.0),)
+    accel = {
+        "harmonic": [(0, 1, (), pi ** 2 / 2, pi, h)],
+        "cycloidal": [(0, 1, (), 2 * pi, 2 * pi, 0.0)],
+        "modified_sine": [(0, 1 / 8, (), 1.0, 4 * pi, 0.0),
+                          (1 / 8, 7 / 8, (), 1.0, 4 * pi / 3, h),
+                          (7 / 8, 1, (), 1.0, 4 * pi, -h)],
+        "modified_trapezoid": [(0, 1 / 8, (), 1.0, 4 * pi, 0.0),
+                               (1 / 8, 3 / 8, (1.0,), 0.0, 0.0, 0.0),
+                               (3 / 8, 5 / 8, (), 1.0, 4 * pi, h),
+                               (5 / 8, 7 / 8, (-1.0,), 0.0, 0.0, 0.0),
+                               (7 / 8, 1, (), 1.0, 4 * pi, -h)],
+    }.get(name)
+    if accel is None:
+        raise ValueError(f"unknown motion law {name!r}; expected one of {', '.join(LAWS)}")
+    pieces, end = _integrate(accel)
+    # Harmonic and cycloidal end at 1 by construction; the modified laws fix C = 1/s(1).
+    return tuple((u0, tuple(am / end for am in a), b / end, w, phi)
+                 for u0, a, b, w, phi in pieces)
+
+
+def law(name: str, u) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The normalised rise of law ``name``: s(u), s'(u), s''(u) for u ∈ [0, 1].
+
+    Parameters
+    ----------
+    name : str
+        One of :data:`LAWS`.
+    u : array_like
+        Fraction of the rise angle; clipped to [0, 1].
+
+    Returns
+    -------
+    s, ds, dds : ndarray
+        Displacement (0 → 1) and its first two derivatives with respect to u.
+
+    Examples
+    --------
+    >>> s, ds, dds = law("cycloidal", [0.25, 0.5])
+    >>> [round(float(x), 12) for x in ds]     # peak velocity 2 at u = 1/2
+    [1.0, 2.0]
+    """
+    pieces = _law_pieces(name)
+    u = np.clip(np.asarray(u, dtype=float), 0.0, 1.0)
+    m = Motion("", tuple(p[0] for p in pieces), tuple(p[1] for p in pieces),
+               tuple(p[2:] for p in pieces), period=1.0)
+    return m.evaluate(u)
+
+
+# ------------------------------------------------------------------ the motion
+@dataclass(frozen=True)
+class Motion:
+    """A displacement over one revolution of the main shaft, piecewise in closed form.
+
+    Build one with :func:`cam_cycle` or :func:`motion_table` (or a netlist's
+    ``drive ... motion=``).  Plain data: it pickles and compares.
+
+    Attributes
+    ----------
+    spec : str
+        The netlist options that give this motion (``motion=cycloidal rise=120 ...``
+        or ``motion=PATH``), for messages and for writing the netlist back.
+    start : tuple of float
+        θᵢ, the start of each piece [rad], increasing from 0.
+    poly : tuple of tuple of float
+        Coefficients a₀ … a₅ of each piece's polynomial in τ = θ − θᵢ.
+    sine : tuple of (B, w, φ)
+        Each piece's sinusoid B sin(w τ + φ) (B = 0 for none).
+    period : float
+        The period of θ: 2π (one revolution).
+    error : float
+        Estimated error of dx/dθ as a fraction of its largest value: 0 for a law
+        (closed form), the interpolation estimate for a table (see
+        :func:`motion_table`).
+    coarse : Motion or None
+        A table's spline through every other row (its difference from this one
+        estimates the interpolation error of anything computed from it).
+    path : str
+        The table file it was read from ("" for a law or a table built in code).
+    """
+
+    spec: str = field(compare=False)
+    start: tuple
+    poly: tuple
+    sine: tuple
+    period: float = _TAU
+    error: float = 0.0
+    coarse: Motion | None = field(default=None, compare=False, repr=False)
+    path: str = field(default="", compare=False)
+    _cache: dict = field(default_factory=dict, compare=False, repr=False, hash=False)
+
+    def __getstate__(self):
+        state = dict(self.__dict__)
+        state["_cache"] = {}
+        return state
+
+    def _arrays(self):
+        if "arrays" not in self._cache:
+            start = np.asarray(self.start, dtype=float)
+            length = np.diff(np.append(start, self.period))
+            self._cache["arrays"] = (start, length, np.asarray(self.poly, dtype=float),
+                                     np.asarray(self.sine, dtype=float).reshape(-1, 3))
+        return self._cache["arrays"]
+
+    def evaluate(self, theta) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """x(θ), dx/dθ and d²x/dθ² at ``theta`` [rad] (taken modulo the period).
+
+        Units: x in the drive's displacement unit [m or rad], the derivatives
+        per radian of shaft angle (dx/dθ · Ω is the velocity at shaft speed Ω).
+        """
+        start, _length, a, sine = self._arrays()
+        theta = np.asarray(theta, dtype=float)
+        th = np.where(theta == self.period, self.period, np.mod(theta, self.period))
+        i = np.clip(np.searchsorted(start, th, side="right") - 1, 0, start.size - 1)
+        t = th - start[i]
+        ai = a[i]
+        x = np.zeros_like(t)
+        dx = np.zeros_like(t)
+        ddx = np.zeros_like(t)
+        for m in range(_DEG - 1, -1, -1):           # Horner, with its two derivatives
+            ddx = ddx * t + 2 * dx
+            dx = dx * t + x
+            x = x * t + ai[..., m]
+        B, w, phi = sine[i, 0], sine[i, 1], sine[i, 2]
+        arg = w * t + phi
+        x = x + B * np.sin(arg)
+        dx = dx + B * w * np.cos(arg)
+        ddx = ddx - B * w * w * np.sin(arg)
+        return x, dx, ddx
+
+    def fourier(self, kmax: int) -> np.ndarray:
+        """Fourier coefficients cₖ of dx/dθ, k = 1 … ``kmax``, exactly (closed form).
+
+        dx/dθ = Σₖ cₖ e^{jkθ} (k from −∞ to ∞; c₀ = 0 for a periodic x, c₋ₖ = cₖ*),
+        so dx/dθ = Σ_{k≥1} Re(2 cₖ e^{jkθ}).  Each piece's integral of
+        polynomial × e^{−jkθ} is summed by parts (finitely many terms), the
+        sinusoid's by the closed form L·e^{jαL/2}·sinc(αL/2).
+        """
+        key = ("fourier", int(kmax))
+        if key in self._cache:
+            return self._cache[key]
+        start, length, a, sine = self._arrays()
+        k = np.arange(1, kmax + 1, dtype=float) * (_TAU / self.period)
+        L = length[:, None]
+        phase0 = np.exp(-1j * np.outer(start, k))                      # e^{−jkθᵢ}
+        # Polynomial part: q(τ) = Σ m aₘ τ^{m−1}; ∫₀ᴸ q e^{zτ} dτ with z = −jk is
+        # [e^{zτ} Σᵣ (−1)ʳ q⁽ʳ⁾(τ) / z^{r+1}]₀ᴸ.
+        q = a[:, 1:] * np.arange(1, _DEG)                               # q's coefficients
+        z = -1j * k[None, :]
+        eL = np.exp(z * L)
+        acc = np.zeros((start.size, k.size), dtype=complex)
+        sign = 1.0
+        zpow = z
+        for _ in range(_DEG - 1):
+            qL = np.polynomial.polynomial.polyval(length, q.T, tensor=False)       # q⁽ʳ⁾(L), per piece
+            q0 = q[:, 0]
+            acc += sign * (eL * qL[:, None] - q0[:, None]) / zpow
+            q = q[:, 1:] * np.arange(1, q.shape[1]) if q.shape[1] > 1 else q[:, :0]
+            if q.shape[1] == 0:
+                break
+            sign = -sign
+            zpow = zpow * z
+        # Sinusoid part: B w cos(wτ + φ) = (Bw/2)(e^{j(wτ+φ)} + e^{−j(wτ+φ)}).
+        B, w, phi = sine[:, 0:1], sine[:, 1:2], sine[:, 2:3]
+        for sgn in (1.0, -1.0):
+            alpha = sgn * w - k[None, :]
+            integral = L * np.exp(0.5j * alpha * L) * np.sinc(alpha * L / (2 * math.pi))
+            acc += 0.5 * B * w * np.exp(1j * sgn * phi) * integral
+        c = (phase0 * acc).sum(axis=0) / self.period
+        if len(self._cache) > 16:
+            self._cache.clear()
+        self._cache[key] = c
+        return c
+
+
+def _piece_map(pieces, theta0: float, beta: float, h: float, rising: bool):
+    """The normalised law pieces placed at θ₀ over β, stroke h, rising or returning."""
+    out = []
+    for u0, a, b, w, phi in pieces:
+        sc = h if rising else -h
+        poly = [sc * am / beta ** m for m, am in enumerate(a)]
+        if not rising:
+            poly[0] += h
+        out.append((theta0 + beta * u0, tuple(poly), (sc * b, w / beta, phi)))
+    return out
+
+
+def cam_cycle(law_name: str, rise: float, dwell: float, ret: float, stroke: float,
+              return_law: str | None = None) -> Motion:
+    """A cam cycle: rise, dwell, return, dwell, over one revolution.
+
+    Parameters
+    ----------
+    law_name : str
+        One of :data:`LAWS`, for the rise (and the return unless ``return_law``).
+    rise, dwell, ret : float
+        Cam angles [deg] of the rise (from θ = 0), the dwell at the top and the
+        return; the dwell at the bottom is what is left of 360°.  ``rise`` and
+        ``ret`` > 0, ``dwell`` ≥ 0, their sum ≤ 360.
+    stroke : float
+        Lift h [m or rad]; any finite nonzero number (negative: the follower
+        moves down first).
+
+    Returns
+    -------
+    Motion
+
+    Examples
+    --------
+    >>> m = cam_cycle("cycloidal", 120, 60, 120, 0.05)
+    >>> x, dx, ddx = m.evaluate(np.radians([60.0, 150.0]))
+    >>> round(float(x[0]), 12), round(float(x[1]), 12)   # mid-rise, top dwell
+    (0.025, 0.05)
+    """
+    ret_law = return_law or law_name
+    for name in (law_name, ret_law):
+        if name not in LAWS:
+            raise ValueError(f"unknown motion law {name!r}; expected one of {', '.join(LAWS)}")
+    if not (math.isfinite(rise) and rise > 0 and math.isfinite(ret) and ret > 0
+            and math.isfinite(dwell) and dwell >= 0):
+        raise ValueError(f"rise and return must be > 0 and dwell >= 0 degrees, got "
+                         f"rise={rise:g}, dwell={dwell:g}, return={ret:g}")
+    if rise + dwell + ret > 360 * (1 + 1e-12):
+        raise ValueError(f"rise + dwell + return = {rise + dwell + ret:g} degrees, more than "
+                         "one revolution (360)")
+    if not (math.isfinite(stroke) and stroke != 0):
+        raise ValueError(f"stroke must be a finite nonzero number, got {stroke!r}")
+    b1, d1, b2 = (math.radians(v) for v in (rise, dwell, ret))
+    pieces = _piece_map(_law_pieces(law_name), 0.0, b1, stroke, True)
+    if d1 > 0:
+        pieces.append((b1, (stroke,) + (0.0,) * (_DEG - 1), (0.0, 0.0, 0.0)))
+    pieces += _piece_map(_law_pieces(ret_law), b1 + d1, b2, stroke, False)
+    if b1 + d1 + b2 < _TAU * (1 - 1e-12):
+        pieces.append((b1 + d1 + b2, (0.0,) * _DEG, (0.0, 0.0, 0.0)))
+    spec = (f"motion={law_name} rise={float(rise)!r} dwell={float(dwell)!r} "
+            f"return={float(ret)!r} stroke={float(stroke)!r}"
+            + (f" return_law={ret_law}" if return_law else ""))
+    return Motion(spec, tuple(p[0] for p in pieces), tuple(p[1] for p in pieces),
+                  tuple(p[2] for p in pieces))
+
+
+# ------------------------------------------------------------------ tables
+def _spline(theta: np.ndarray, x: np.ndarray):
+    from scipy.interpolate import CubicSpline
+
+    return CubicSpline(theta, x, bc_type="periodic")
+
+
+def motion_table(angle_deg, displacement, spec: str = "motion=<table>") -> Motion:
+    """The periodic cubic spline through a table of one revolution, as a :class:`Motion`.
+
+    Parameters
+    ----------
+    angle_deg : array_like
+        Crank angles [deg], strictly increasing, the last 360° after the first
+        (which is θ = 0 of the motion).
+    displacement : array_like
+        The displacement at each angle [m or rad]; the last equal to the first
+        within :data:`PERIODIC_TOLERANCE` of the range (then set equal).
+    spec : str
+        What to call it (the netlist's ``motion=PATH``).
+
+    Returns
+    -------
+    Motion
+        With ``error``: the largest difference of dx/dθ between this spline and
+        the one through every other row, as a fraction of max |dx/dθ| — an
+        estimate of the interpolation error that errs high (for smooth data the
+        full table's error is about 16 times smaller).  Tables of fewer than 9
+        rows get no estimate (``inf``).
+    """
+    ang = np.asarray(angle_deg, dtype=float)
+    x = np.array(displacement, dtype=float)
+    theta = np.radians(ang - ang[0])
+    theta[-1] = _TAU
+    x[-1] = x[0]
+    spl = _spline(theta, x)
+    c = spl.c                                          # (4, n−1), highest power first
+    poly = tuple((c[3, i], c[2, i], c[1, i], c[0, i], 0.0, 0.0) for i in range(c.shape[1]))
+    error, coarse = math.inf, None
+    if ang.size >= 9:
+        keep = np.unique(np.append(np.arange(0, ang.size, 2), ang.size - 1))
+        coarse = motion_table(ang[keep], x[keep], spec + " (every other row)")
+        dense = np.linspace(0, _TAU, 16 * ang.size)
+        fine = spl(dense, 1)
+        scale = float(np.max(np.abs(fine)))
+        error = float(np.max(np.abs(fine - coarse.evaluate(dense)[1]))) / scale \
+            if scale > 0 else 0.0
+    return Motion(spec, tuple(theta[:-1]), poly, ((0.0, 0.0, 0.0),) * len(poly),
+                  error=error, coarse=coarse)
+
+
+def read_motion_table(path: str | os.PathLike, spec: str | None = None) -> Motion:
+    """Read a motion table (CSV: columns ``angle_deg`` and ``displacement``) into a Motion.
+
+    The first non-comment line is the header naming the two columns (in any
+    order; other columns are ignored); ``#`` starts a comment line.  The
+    angles must increase strictly and span exactly one revolution (last =
+    first + 360, within 1e-9°), the two ends' displacements must meet within
+    :data:`PERIODIC_TOLERANCE` of the range, every value finite.  Nothing in
+    the file is executed.
+
+    Raises
+    ------
+    NetlistError
+        At ``file:row:column`` of the first bad value, with what is expected.
+    """
+    import csv
+
+    from .sources import brief, read_source, split_lines
+
+    source = os.fspath(path)
+    text = read_source(path, "a motion table (CSV: angle_deg,displacement)")
+    rows = []
+    header = None
+    for lineno, line in enumerate(split_lines(text), start=1):
+        if not line.strip() or line.lstrip().startswith("#"):
+            continue
+        cells = next(csv.reader([line]))
+        cols = []
+        pos = 1
+        for cell in cells:                           # 1-based column of each cell
+            cols.append(pos + len(cell) - len(cell.lstrip()))
+            pos += len(cell) + 1
+        if header is None:
+            names = [c.strip().lower() for c in cells]
+            for need in ("angle_deg", "displacement"):
+                if need not in names:
+                    found = ", ".join(brief(n[:40]) for n in names[:4])
+                    raise NetlistError(f"the header has no column {need!r} (found {found}"
+                                       f"{', ...' if len(names) > 4 else ''})", source,
+                                       lineno, 1,
+                                       "a first line 'angle_deg,displacement'")
+            header = (names.index("angle_deg"), names.index("displacement"))
+            continue
+        values = []
+        for j in header:
+            if j >= len(cells):
+                raise NetlistError(f"row has {len(cells)} column(s), the header {len(names)}",
+                                   source, lineno, pos, f"{len(names)} comma-separated values")
+            try:
+                v = float(cells[j])
+            except ValueError:
+                raise NetlistError(f"{cells[j].strip()!r} is not a number", source, lineno,
+                                   cols[j], "a finite number") from None
+            if not math.isfinite(v):
+                raise NetlistError(f"{cells[j].strip()} is not a finite number", source,
+                                   lineno, cols[j], "a finite number")
+            values.append(v)
+        if rows and not values[0] > rows[-1][0]:
+            prev = rows[-1]
+            what = "repeats" if values[0] == prev[0] else "is below"
+            raise NetlistError(f"angle {values[0]:g} {what} the previous row's {prev[0]:g} "
+                               f"(line {prev[2]})", source, lineno, cols[header[0]],
+                               "angles strictly increasing over one revolution")
+        rows.append((values[0], values[1], lineno, cols))
+    if header is None or len(rows) < 4:
+        raise NetlistError(f"the table has {len(rows)} row(s)", source, 0, 0,
+                           "a header 'angle_deg,displacement' and at least 4 rows covering "
+                           "one revolution, the last row 360 degrees after the first")
+    first, last = rows[0], rows[-1]
+    span = last[0] - first[0]
+    if abs(span - 360.0) > 1e-9:
+        raise NetlistError(f"the angles span {span:.12g} degrees ({first[0]:g} to {last[0]:g}),"
+                           " not one revolution", source, last[2], last[3][header[0]],
+                           f"a last row at {first[0] + 360:g} degrees (the first + 360), with "
+                           "the first row's displacement")
+    x = np.array([r[1] for r in rows])
+    rng = float(np.ptp(x))
+    tol = PERIODIC_TOLERANCE * rng if rng > 0 else 1e-12
+    if abs(last[1] - first[1]) > tol:
+        raise NetlistError(f"the motion is not periodic: displacement {last[1]:.12g} at "
+                           f"{last[0]:g} degrees, {first[1]:.12g} at {first[0]:g} degrees "
+                           f"(differ by {abs(last[1] - first[1]):.3g}, more than the tolerance "
+                           f"{tol:.3g} = {PERIODIC_TOLERANCE:g} of the range)", source,
+                           last[2], last[3][header[1]],
+                           "the same displacement at both ends of the revolution")
+    m = motion_table([r[0] for r in rows], x, spec or f"motion={source}")
+    return dataclasses.replace(m, path=source)

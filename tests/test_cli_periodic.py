@@ -1,0 +1,99 @@
+"""``mechcirc periodic``: outputs agree with the API, are written whole or not at all,
+and bad input is a located one-line error with exit status 2."""
+
+import csv
+import json
+import math
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+from cli_helpers import assert_user_error, run
+
+from mechcirc import load
+from mechcirc.periodic import periodic, speed_map
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "docs" / "examples"
+CAM = EXAMPLES / "cam_drive.mcir"
+
+
+def test_one_speed_csv_and_json_agree_with_the_api(tmp_path, capsys):
+    out = tmp_path / "q.csv"
+    status, text, err = run(["periodic", CAM, "--rpm", "600", "-o", out, "--elements", "k1"],
+                            capsys)
+    assert status == 0, err
+    ref = periodic(load(CAM), 600, elements=["k1"])
+    assert f"{ref.harmonics} harmonics" in text and "peak |Q|" in text
+    rows = list(csv.DictReader(out.open()))
+    assert len(rows) == 360 and list(rows[0]) == ["angle_deg", "x", "v", "Q", "F_k1", "v_k1"]
+    Q = np.array([float(r["Q"]) for r in rows])
+    assert np.array_equal(Q, ref.Q)
+    status, text, _ = run(["periodic", CAM, "--rpm", "600", "--json"], capsys)
+    doc = json.loads(text)
+    assert doc["n_harmonics"] == ref.harmonics == len(doc["harmonics"])
+    assert doc["harmonics"][0]["k"] == 1 and doc["error"] == ref.error
+    assert math.isclose(doc["peak"], ref.peak, rel_tol=1e-15)
+
+
+def test_speed_map_csv_plot_and_crossings(tmp_path, capsys):
+    out, png = tmp_path / "map.csv", tmp_path / "map.png"
+    status, text, err = run(["periodic", CAM, "--rpm-min", "300", "--rpm-max", "900",
+                             "--points", "7", "-o", out, "--plot", png], capsys)
+    assert status == 0, err
+    ref = speed_map(load(CAM), 300, 900, 7)
+    rows = list(csv.DictReader(out.open()))
+    assert [float(r["peak_Q"]) for r in rows] == list(ref.peak)
+    assert png.stat().st_size > 1000
+    assert "k·Ω = ωn" in text
+    status, text, _ = run(["periodic", CAM, "--rpm-min", "300", "--rpm-max", "900",
+                           "--points", "7", "--json"], capsys)
+    doc = json.loads(text)
+    assert len(doc["crossings"]) == len(ref.crossings)
+
+
+def test_periodic_plot_is_written(tmp_path, capsys):
+    png = tmp_path / "q.svg"
+    status, _, err = run(["periodic", CAM, "--rpm", "450", "--plot", png, "--harmonics", "40"],
+                         capsys)
+    assert status == 0, err
+    assert png.read_text().startswith("<?xml")
+
+
+def test_a_failing_run_leaves_no_output(tmp_path, capsys):
+    out = tmp_path / "q.csv"
+    assert_user_error(["periodic", CAM, "--rpm", "600", "-o", out, "--elements", "nope"],
+                      capsys, "no element named 'nope'")
+    assert not out.exists() and not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("args,needle", [
+    (["--rpm", "600", "--rpm-min", "1"], "either --rpm"),
+    ([], "either --rpm"),
+    (["--rpm-min", "500", "--rpm-max", "100"], "--rpm-min < --rpm-max"),
+])
+def test_bad_speed_options(args, needle, capsys):
+    assert_user_error(["periodic", CAM, *args], capsys, needle)
+
+
+def test_bad_table_is_located(tmp_path, capsys):
+    err = assert_user_error(["periodic", EXAMPLES / "bad_lift.mcir", "--rpm", "600"], capsys,
+                            "bad_lift.csv:363:5:", "not periodic")
+    assert "expected the same displacement" in err
+
+
+@pytest.mark.parametrize("body,where,needle", [
+    ("angle_deg,displacement\n0,0\n180,1\n180,0\n360,0\n", ":4:1:", "repeats"),
+    ("angle_deg,displacement\n0,0\n90,1\n180,NaN\n360,0\n", ":4:5:", "finite"),
+    ("angle_deg,displacement\n0,0\n90,1\n180,0\n350,0\n", ":5:1:", "one revolution"),
+])
+def test_bad_tables_from_the_netlist(tmp_path, capsys, body, where, needle):
+    shutil.copy(EXAMPLES / "cam_table.mcir", tmp_path / "n.mcir")
+    (tmp_path / "lift.csv").write_text(body)
+    assert_user_error(["periodic", tmp_path / "n.mcir", "--rpm", "600"], capsys,
+                      "lift.csv" + where, needle)
+
+
+def test_drive_without_motion(capsys):
+    assert_user_error(["periodic", EXAMPLES / "drive.mcir", "--rpm", "600"], capsys,
+                      "has no motion")
