@@ -479,9 +479,11 @@ def _undamped(M: np.ndarray, K: np.ndarray, vectors: bool = False) -> tuple:
     # Symmetric scaling by the masses gives a standard symmetric eigenproblem.
     d = 1.0 / np.sqrt(mu[massive])
     A = Kc * d[:, None] * d[None, :]
+    lam = la.eigvalsh((A + A.T) / 2)
     if not vectors:
-        return la.eigvalsh((A + A.T) / 2), direct, None
-    lam, Y = la.eigh((A + A.T) / 2)
+        return lam, direct, None
+    # The vectors by their own call: the roots stay those find_resonances reports, to the bit.
+    Y = la.eigh((A + A.T) / 2)[1]
     Ur = Y * d[:, None]
     Un = -X @ Ur                     # the massless directions follow statically
     if V is None:
