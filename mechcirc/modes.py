@@ -153,9 +153,9 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
         for p, row in slopes.items():
             ds_p = row @ ds
             p_rel[p], p_zeta[p] = (float(x[0]) for x in _omega_zeta(s, np.array([ds_p])))
-        common = dict(sensitivity=dict(zip(names, rel.tolist())),
-                      zeta_sensitivity=dict(zip(names, zeta.tolist())),
-                      param_sensitivity=p_rel, param_zeta_sensitivity=p_zeta)
+        common = {"sensitivity": dict(zip(names, rel.tolist())),
+                  "zeta_sensitivity": dict(zip(names, zeta.tolist())),
+                  "param_sensitivity": p_rel, "param_zeta_sensitivity": p_zeta}
         if r.omega_d == 0:
             out.append(Mode(r, note=f"overdamped (zeta = {r.zeta:.4g} >= 1, omega_d = 0): "
                                     "a decaying motion, not a mode of vibration", **common))

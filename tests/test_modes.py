@@ -153,7 +153,7 @@ def test_sensitivities_against_central_differences(path):
     names = list(found[0].sensitivity)
     assert set(names) == {e.name for e in circuit.elements} | {lv.name for lv in circuit.levers}
     for name in names:
-        rel, zeta = _fd(lambda f: _rebuilt(circuit, name, f), n)
+        rel, zeta = _fd(lambda f, name=name: _rebuilt(circuit, name, f), n)
         for m, r, z in zip(found, rel, zeta):
             scale = max(abs(x) for x in m.sensitivity.values())
             assert abs(m.sensitivity[name] - r) <= 1e-6 * scale, (name, m.resonance)
@@ -161,7 +161,7 @@ def test_sensitivities_against_central_differences(path):
                                                                    1e-12), (name, m.resonance)
     assert set(found[0].param_sensitivity) == set(circuit.params)
     for p, value in circuit.params.items():
-        rel, zeta = _fd(lambda f: mechcirc.load(path, params={p: value * f}), n)
+        rel, zeta = _fd(lambda f, p=p, v=value: mechcirc.load(path, params={p: v * f}), n)
         for m, r, z in zip(found, rel, zeta):
             scale = max(abs(x) for x in m.sensitivity.values())
             assert abs(m.param_sensitivity[p] - r) <= 1e-6 * scale, (p, m.resonance)
@@ -208,7 +208,7 @@ def test_sensitivities_against_mpmath_40_digits():
             roots = _two_dof_roots(kk, cc, held)
             k = min(range(len(roots)), key=lambda i: abs(complex(roots[i]) - m.s))
 
-            def wz(kk_, cc_):
+            def wz(kk_, cc_, held=held, k=k):
                 s = _two_dof_roots(kk_, cc_, held)[k]
                 return abs(s), -mpmath.re(s) / abs(s)
 
@@ -241,3 +241,63 @@ def test_band_solver_roots_get_their_vectors_by_inverse_iteration(monkeypatch):
         assert 1 - _mac(va, vb) <= 1e-12
         for name, x in a.sensitivity.items():
             assert b.sensitivity[name] == pytest.approx(x, abs=1e-9)
+
+
+def _run(argv, capsys):
+    from mechcirc.cli import main
+
+    status = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+def test_cli_modes_and_sensitivity_json_carry_the_api_values(capsys):
+    path = "docs/examples/drive.mcir"
+    status, out, err = _run(["resonances", path, "--modes", "--sensitivity", "--json"], capsys)
+    assert status == 0, err
+    import json
+
+    rows = json.loads(out)["resonances"]
+    api = modes(mechcirc.load(path))
+    assert len(rows) == len(api) == 4
+    for row, m in zip(rows, api):
+        assert row["omega"] == m.resonance.omega
+        assert row["element_sensitivity"] == m.sensitivity
+        assert row["param_sensitivity"] == m.param_sensitivity == {
+            "eta1": pytest.approx(m.param_sensitivity["eta1"])}
+        if m.shape:
+            assert row["mode"] == {n: [v.real, v.imag] for n, v in m.shape.items()}
+            assert row["energy"] == m.energy
+        else:
+            assert row["mode"] is None and "overdamped" in row["note"]
+    # Without the flags the document is what it was.
+    status, out, err = _run(["resonances", path, "--json"], capsys)
+    assert set(json.loads(out)["resonances"][0]) == {"kind", "omega", "f_hz", "omega_d",
+                                                     "zeta", "error"}
+
+
+def test_cli_tables_and_plot(capsys, tmp_path):
+    path = "netlists/stb_heald.mcir"
+    image = tmp_path / "modes.png"
+    status, out, err = _run(["resonances", path, "--modes", "--sensitivity", "--plot", image],
+                            capsys)
+    assert status == 0, err
+    assert image.stat().st_size > 10_000
+    assert out.count("to raise omega by 10 % (linear estimate): ") == 5
+    # The first resonance is the warp (k0) on the heald frame: its advice names k0 first.
+    first = out.split("\n1: resonance")[1].split("\n2: ")[0]
+    assert "stiffen k0 by" in first.split("linear estimate): ")[1].split(",")[0]
+    assert "energy" in first and "eta4" in first
+
+
+def test_plot_mode_draws_on_the_axes_given():
+    from matplotlib.figure import Figure
+
+    from mechcirc.plotting import plot_mode
+
+    found = modes(mechcirc.load("docs/examples/drive.mcir"))
+    ax = Figure().add_subplot()
+    assert plot_mode(found[0], ax=ax) is ax
+    (line,) = [ln for ln in ax.lines if ln.get_label() == "Re v"]
+    assert list(line.get_ydata()) == pytest.approx([v.real for v in found[0].shape.values()])
+    assert isinstance(plot_mode(found[-1]), Figure)       # overdamped: the note, no curve
