@@ -136,8 +136,12 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
     names = [e.name for e in els] + [lv.name for lv in system.levers]
     slopes = _param_slopes(circuit, names)
     n = len(system.nodes)
+    # Constraint forces from the node rows, P(s) v + s Gᵀ q = 0: Gᵀ's pseudo-inverse,
+    # once per problem (only levers need them).
+    pinv = {kind: np.linalg.pinv(G.T) if system.levers else None
+            for kind, G in (("resonance", G_held), ("antiresonance", G_released))}
     out = []
-    for r, v in pairs:
+    for r, v, repeated in pairs:
         s = complex(-r.zeta * r.omega, r.omega_d)
         G = G_held if r.kind == "resonance" else G_released
         if v is None:                       # a band root: no vector from the solver
@@ -147,7 +151,7 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
         v = v / v[top]
         v[top] = 1.0                        # exactly (a complex quotient may miss by an ulp)
         dv = np.append(v, 0)[ei] - np.append(v, 0)[ej]
-        ds = _root_sensitivity(system, M, D, Ks, G, s, v, dv, y, power)
+        ds = _root_sensitivity(system, M, D, Ks, pinv[r.kind], s, v, dv, y, power)
         rel, zeta = _omega_zeta(s, ds)
         p_rel, p_zeta = {}, {}
         for p, row in slopes.items():
@@ -156,7 +160,12 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
         common = {"sensitivity": dict(zip(names, rel.tolist())),
                   "zeta_sensitivity": dict(zip(names, zeta.tolist())),
                   "param_sensitivity": p_rel, "param_zeta_sensitivity": p_zeta}
+        if repeated:
+            common["note"] = ("a repeated root: its shape is one of a family (any "
+                              "combination is a mode too) and the sensitivities hold for "
+                              "this shape only")
         if r.omega_d == 0:
+            common.pop("note", None)
             out.append(Mode(r, note=f"overdamped (zeta = {r.zeta:.4g} >= 1, omega_d = 0): "
                                     "a decaying motion, not a mode of vibration", **common))
             continue
@@ -178,15 +187,16 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
     return out
 
 
-def _root_sensitivity(system, M, D, Ks, G, s, v, dv, y, power) -> np.ndarray:
-    """p·∂s/∂p for every loaded element (value p) and lever (ratio p), in that order."""
+def _root_sensitivity(system, M, D, Ks, pinv_GT, s, v, dv, y, power) -> np.ndarray:
+    """p·∂s/∂p for every loaded element (value p) and lever (ratio p), in that order;
+    ``pinv_GT`` the pseudo-inverse of the transposed constraint rows."""
     den = v @ (2 * s * (M @ v) + D @ v)
     ds = -y * s ** (1.0 - power) * dv * dv / den
     if not system.levers:
         return ds
     # Constraint forces q from the node rows: P(s) v + s Gᵀ q = 0 (exact at an eigenvector).
     Pv = s * s * (M @ v) + s * (D @ v) + Ks @ v
-    q = np.linalg.lstsq(s * G.T.astype(complex), -Pv, rcond=None)[0]
+    q = -(pinv_GT @ Pv) / s
     index = {n: i for i, n in enumerate(system.nodes)}
     ve = np.append(v, 0)
     lever = np.array([-2 * s * lv.ratio * q[k] * (ve[index.get(lv.p1, -1)]

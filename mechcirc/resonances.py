@@ -114,7 +114,10 @@ def _solve(circuit: Circuit, omega_max: float | None = None, vectors: bool = Fal
     ``v`` is the root's eigenvector from the eigen-solve, the node velocities
     of ``circuit.nodal.nodes`` (the drive held for a resonance, released for
     an anti-resonance; unnormalised); None without ``vectors``, and for roots
-    found by the band solver (which computes no vectors).
+    found by the band solver (which computes no vectors).  With ``vectors``
+    the pairs are triples ``(Resonance, v, repeated)``, ``repeated`` true
+    where the eigenproblem has another root within 1e-9 (relative) of this
+    one (then v is one vector of a family).
     """
     for e in circuit.elements:
         if not math.isfinite(e.value * e.eta):
@@ -138,8 +141,8 @@ def _solve(circuit: Circuit, omega_max: float | None = None, vectors: bool = Fal
     keep_h, keep_r = _cancel(held, released)
     roots = [("resonance", s, e, f) for s, e, f in held[keep_h]] + \
         [("antiresonance", s, e, f) for s, e, f in released[keep_r]]
-    vecs = [None if V is None else V[:, i] for V, keep in ((v_held, keep_h),
-                                                          (v_released, keep_r))
+    vecs = [(None if V is None else V[:, i], _repeats(found[:, 0], i))
+            for V, keep, found in ((v_held, keep_h, held), (v_released, keep_r, released))
             for i in np.flatnonzero(keep)]
     if omega_max is not None:
         # A little beyond the band: polishing may move a root across its edge.
@@ -149,7 +152,13 @@ def _solve(circuit: Circuit, omega_max: float | None = None, vectors: bool = Fal
     out = list(zip(_polish(system, roots, damped), vecs)) if roots else []
     if omega_max is not None:
         out = [(r, v) for r, v in out if r.omega <= omega_max]
-    return sorted(out, key=lambda rv: (rv[0].omega, rv[0].kind))
+    out = sorted(out, key=lambda rv: (rv[0].omega, rv[0].kind))
+    return [(r, *v) for r, v in out] if vectors else [(r, v[0]) for r, v in out]
+
+
+def _repeats(s: np.ndarray, i: int) -> bool:
+    """Whether another root of ``s`` lies within 1e-9 (relative) of ``s[i]``."""
+    return int(np.count_nonzero(np.abs(s - s[i]) <= 1e-9 * abs(s[i]))) > 1
 
 
 def pencil(system) -> tuple:

@@ -301,3 +301,14 @@ def test_plot_mode_draws_on_the_axes_given():
     (line,) = [ln for ln in ax.lines if ln.get_label() == "Re v"]
     assert list(line.get_ydata()) == pytest.approx([v.real for v in found[0].shape.values()])
     assert isinstance(plot_mode(found[-1]), Figure)       # overdamped: the note, no curve
+
+
+def test_a_repeated_root_says_its_shape_is_one_of_a_family():
+    """Three identical branches on the driven node: held, their root is triple (two
+    copies cancel in K); the one reported has no unique shape and says so."""
+    text = "drive V a 0 velocity=1\nmass ma a 0 1\n" + "".join(
+        f"spring k{i} a b{i} 100\nmass m{i} b{i} 0 1\n" for i in range(3))
+    found = modes(mechcirc.parse(text))
+    assert [(m.resonance.kind, round(m.resonance.omega, 9)) for m in found] == [
+        ("resonance", 10.0), ("antiresonance", 20.0)]
+    assert "repeated root" in found[0].note and found[1].note == ""
