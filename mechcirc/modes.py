@@ -133,9 +133,9 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
     y = np.array([e.value * e.eta for e in els])
     power = np.array([LAWS[e.kind].power for e in els])
     kinds = np.array([e.kind for e in els])
+    el_names = np.array([e.name for e in els], dtype=object)
     names = [e.name for e in els] + [lv.name for lv in system.levers]
     slopes = _param_slopes(circuit, names)
-    n = len(system.nodes)
     # Constraint forces from the node rows, P(s) v + s Gᵀ q = 0: Gᵀ's pseudo-inverse,
     # once per problem (only levers need them).
     pinv = {kind: np.linalg.pinv(G.T) if system.levers else None
@@ -174,16 +174,16 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
         stored = np.where(kinds == "mass", 0.5 * y * a2,
                           np.where(kinds == "spring", 0.5 * y * a2 / wn ** 2, 0.0))
         total = stored.sum()
-        energy = {e.name: float(x / total) for e, x, k in zip(els, stored, kinds)
-                  if k != "damper"}
-        dissipation = {e.name: float(yy * a / (2 * wn * total))
-                       for e, yy, a, k in zip(els, y, a2, kinds) if k == "damper"}
+        damper = kinds == "damper"
+        # Lists, not numpy scalars, into the dicts: thousands of elements per root.
+        energy = dict(zip(el_names[~damper], (stored[~damper] / total).tolist()))
+        dissipation = dict(zip(el_names[damper],
+                               (y[damper] * a2[damper] / (2 * wn * total)).tolist()))
         force = y * s ** (-power.astype(float)) * dv
-        out.append(Mode(r, shape={node: complex(v[i]) for node, i in index.items()
-                                  if i < n},
+        out.append(Mode(r, shape=dict(zip(system.nodes, v.tolist())),
                         energy=energy, dissipation=dissipation,
-                        velocity={e.name: complex(x) for e, x in zip(els, dv)},
-                        force={e.name: complex(x) for e, x in zip(els, force)}, **common))
+                        velocity=dict(zip(el_names, dv.tolist())),
+                        force=dict(zip(el_names, force.tolist())), **common))
     return out
 
 

@@ -492,7 +492,7 @@ def _undamped(M: np.ndarray, K: np.ndarray, vectors: bool = False) -> tuple:
     if not vectors:
         return lam, direct, None
     # The vectors by their own call: the roots stay those find_resonances reports, to the bit.
-    Y = la.eigh((A + A.T) / 2)[1]
+    Y = la.eigh((A + A.T) / 2, driver="evd")[1]      # divide and conquer: the fastest here
     Ur = Y * d[:, None]
     Un = -X @ Ur                     # the massless directions follow statically
     if V is None:
