@@ -312,3 +312,16 @@ def test_a_repeated_root_says_its_shape_is_one_of_a_family():
     assert [(m.resonance.kind, round(m.resonance.omega, 9)) for m in found] == [
         ("resonance", 10.0), ("antiresonance", 20.0)]
     assert "repeated root" in found[0].note and found[1].note == ""
+
+
+def test_cli_plot_of_many_modes_draws_the_lowest_and_says_so(capsys, tmp_path):
+    path = tmp_path / "chain.mcir"
+    lines = ["drive V d 0 velocity=1", "spring k0 d n1 100"]
+    for i in range(1, 21):
+        lines += [f"mass m{i} n{i} 0 1", f"spring k{i} n{i} {f'n{i + 1}' if i < 20 else '0'} 100"]
+    path.write_text("\n".join(lines))
+    status, out, err = _run(["resonances", path, "--plot", tmp_path / "m.png"], capsys)
+    assert status == 0
+    assert "draws the lowest 12 of 40 modes" in err
+    status, out, err = _run(["resonances", path, "--plot", tmp_path / "no" / "m.png"], capsys)
+    assert status == 2 and "does not exist" in err

@@ -340,8 +340,13 @@ def cmd_resonances(args) -> int:
     if args.plot:
         from ..plotting import plot_modes
 
+        if len(modes) > MAX_MODE_PANELS:
+            warns.append(f"--plot draws the lowest {MAX_MODE_PANELS} of {len(modes)} modes "
+                         "(give --omega-max for fewer)")
+            print(f"warning: {warns[-1]}", file=sys.stderr)
         with OutputSet() as out:
-            save_figure(plot_modes(modes, circuit.name), args.plot, out.path(args.plot))
+            save_figure(plot_modes(modes[:MAX_MODE_PANELS], circuit.name), args.plot,
+                        out.path(args.plot))
     if args.json:
         rows = _resonance_rows(found)
         for row, m in zip(rows, modes or ()):
@@ -373,6 +378,10 @@ def cmd_resonances(args) -> int:
     if args.plot:
         print(f"  plot written to {args.plot}")
     return 0
+
+
+#: The most mode shapes one ``resonances --plot`` draws (one panel each).
+MAX_MODE_PANELS = 12
 
 
 def _mode_doc(m) -> dict:
