@@ -325,3 +325,31 @@ def test_cli_plot_of_many_modes_draws_the_lowest_and_says_so(capsys, tmp_path):
     assert "draws the lowest 12 of 40 modes" in err
     status, out, err = _run(["resonances", path, "--plot", tmp_path / "no" / "m.png"], capsys)
     assert status == 2 and "does not exist" in err
+
+
+UNITS = """.param k=2 N/mm r=0.5
+.param m2={k/1000 + 1} g
+drive V a 0 velocity=1
+spring k1 a b {k} N/m
+mass m1 b 0 {m2*1e3} g
+lever L b 0 c 0 ratio={r*2}
+spring k2 c 0 {3*k} N/mm damping={r} N*s/mm eta={1 + r}
+mass m3 c 0 0.2
+"""
+
+
+def test_param_sensitivities_through_units_levers_and_a_spring_damping():
+    """A .param in N/mm, one defined from another in g, a lever ratio, a spring's
+    damping= companion and its η: against central differences of the roots with the
+    parameter overridden (SI)."""
+    circuit = mechcirc.parse(UNITS)
+    found = modes(circuit)
+    assert len(found) >= 2
+    for p, value in circuit.params.items():
+        rel, zeta = _fd(lambda f, p=p, v=value: mechcirc.parse(UNITS, params={p: v * f}),
+                        len(found))
+        for m, r, z in zip(found, rel, zeta):
+            scale = max(abs(x) for x in m.sensitivity.values())
+            assert abs(m.param_sensitivity[p] - r) <= 1e-6 * scale, (p, m.resonance)
+            assert abs(m.param_zeta_sensitivity[p] - z) <= 1e-6 * max(
+                scale * m.resonance.zeta, 1e-12), (p, m.resonance)
