@@ -221,7 +221,8 @@ def test_sensitivities_against_mpmath_40_digits():
                 assert abs(m.param_zeta_sensitivity[p] - dz) <= 1e-10, (p, m.resonance)
 
 
-def test_band_solver_roots_get_their_vectors_by_inverse_iteration(monkeypatch):
+@pytest.mark.parametrize("damped", [False, True])
+def test_band_solver_roots_get_their_vectors_by_inverse_iteration(monkeypatch, damped):
     """Above the dense limit the band solver gives no vectors: the modes found by
     inverse iteration equal those of the dense solve."""
     import mechcirc.resonances as res
@@ -230,9 +231,10 @@ def test_band_solver_roots_get_their_vectors_by_inverse_iteration(monkeypatch):
     for i in range(1, 61):
         lines += [f"mass m{i} n{i} 0 {1 + 0.01 * i}",
                   f"spring k{i} n{i} {f'n{i + 1}' if i < 60 else '0'} {100 + i}"]
+        lines += [f"damper c{i} n{i} 0 0.05"] if damped else []
     text = "\n".join(lines)
     dense = modes(mechcirc.parse(text), omega_max=5.0)
-    monkeypatch.setattr(res, "MAX_UNKNOWNS", 10)
+    monkeypatch.setattr(res, "MAX_UNKNOWNS_DAMPED" if damped else "MAX_UNKNOWNS", 10)
     band = modes(mechcirc.parse(text), omega_max=5.0)
     assert len(band) == len(dense) >= 4
     for a, b in zip(dense, band):
@@ -241,6 +243,8 @@ def test_band_solver_roots_get_their_vectors_by_inverse_iteration(monkeypatch):
         assert 1 - _mac(va, vb) <= 1e-12
         for name, x in a.sensitivity.items():
             assert b.sensitivity[name] == pytest.approx(x, abs=1e-9)
+            assert b.zeta_sensitivity[name] == pytest.approx(a.zeta_sensitivity[name],
+                                                             abs=1e-9)
 
 
 def _run(argv, capsys):
