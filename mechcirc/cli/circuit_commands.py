@@ -356,6 +356,8 @@ def cmd_resonances(args) -> int:
                 row.update(element_sensitivity=m.sensitivity, param_sensitivity=m.param_sensitivity,
                            zeta_sensitivity=m.zeta_sensitivity,
                            param_zeta_sensitivity=m.param_zeta_sensitivity)
+            if m.note:
+                row["note"] = m.note
         print_json({"file": args.file, "name": circuit.name, "resonances": rows})
         return 0
     print(f"{args.file}: {sum(r.kind == 'resonance' for r in found)} resonances (K = 0), "
@@ -371,6 +373,8 @@ def cmd_resonances(args) -> int:
         r = m.resonance
         print(f"\n{i}: {r.kind} omega = {r.omega:.10g} rad/s ({r.f_hz:.6g} Hz)"
               + (f", zeta = {r.zeta:.4g}" if r.zeta else ""))
+        if m.note and (m.shape or not args.modes):   # else the mode table says it
+            print(f"  note: {m.note}")
         if args.modes:
             _print_mode(m, kinds)
         if args.sensitivity:
@@ -387,7 +391,7 @@ MAX_MODE_PANELS = 12
 def _mode_doc(m) -> dict:
     """A mode for ``--json``: node → [re, im], element → energy share (null when overdamped)."""
     if not m.shape:
-        return {"mode": None, "energy": None, "dissipation": None, "note": m.note}
+        return {"mode": None, "energy": None, "dissipation": None}
     return {"mode": {n: [v.real, v.imag] for n, v in m.shape.items()}, "energy": m.energy,
             "dissipation": m.dissipation,
             "velocity": {n: [v.real, v.imag] for n, v in m.velocity.items()},
