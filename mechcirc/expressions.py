@@ -321,11 +321,11 @@ def _slope(node: Expr, args: list, r: float, d: list, tangent: Mapping[str, floa
     if k == "num":
         return 0.0
     if k == "name":
-        return float(tangent.get(node.value, 0.0))
+        return float(tangent.get(str(node.value), 0.0))
     if k == "neg":
         return -d[0]
     if k == "call":
-        return _DERIVATIVES[node.value](args[0], r) * d[0] if d[0] else 0.0
+        return _DERIVATIVES[str(node.value)](args[0], r) * d[0] if d[0] else 0.0
     (a, b), (da, db) = args, d
     if k == "+":
         return da + db

@@ -157,7 +157,7 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
         for p, row in slopes.items():
             ds_p = row @ ds
             p_rel[p], p_zeta[p] = (float(x[0]) for x in _omega_zeta(s, np.array([ds_p])))
-        common = {"sensitivity": dict(zip(names, rel.tolist())),
+        common: dict = {"sensitivity": dict(zip(names, rel.tolist())),
                   "zeta_sensitivity": dict(zip(names, zeta.tolist())),
                   "param_sensitivity": p_rel, "param_zeta_sensitivity": p_zeta}
         if repeated:

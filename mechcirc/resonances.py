@@ -141,7 +141,7 @@ def _solve(circuit: Circuit, omega_max: float | None = None, vectors: bool = Fal
     keep_h, keep_r = _cancel(held, released)
     roots = [("resonance", s, e, f) for s, e, f in held[keep_h]] + \
         [("antiresonance", s, e, f) for s, e, f in released[keep_r]]
-    vecs = [(None if V is None else V[:, i], vectors and _repeats(found[:, 0], i))
+    vecs = [(None if V is None else V[:, i], vectors and _repeats(found[:, 0], int(i)))
             for V, keep, found in ((v_held, keep_h, held), (v_released, keep_r, released))
             for i in np.flatnonzero(keep)]
     if omega_max is not None:
