@@ -324,10 +324,10 @@ def test_cli_plot_of_many_modes_draws_the_lowest_and_says_so(capsys, tmp_path):
     for i in range(1, 21):
         lines += [f"mass m{i} n{i} 0 1", f"spring k{i} n{i} {f'n{i + 1}' if i < 20 else '0'} 100"]
     path.write_text("\n".join(lines))
-    status, out, err = _run(["resonances", path, "--plot", tmp_path / "m.png"], capsys)
+    status, _, err = _run(["resonances", path, "--plot", tmp_path / "m.png"], capsys)
     assert status == 0
     assert "draws the lowest 12 of 40 modes" in err
-    status, out, err = _run(["resonances", path, "--plot", tmp_path / "no" / "m.png"], capsys)
+    status, _, err = _run(["resonances", path, "--plot", tmp_path / "no" / "m.png"], capsys)
     assert status == 2 and "does not exist" in err
 
 
