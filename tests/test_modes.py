@@ -159,6 +159,11 @@ def test_sensitivities_against_central_differences(path):
             assert abs(m.sensitivity[name] - r) <= 1e-6 * scale, (name, m.resonance)
             assert abs(m.zeta_sensitivity[name] - z) <= 1e-6 * max(scale * m.resonance.zeta,
                                                                    1e-12), (name, m.resonance)
+    # Scaling every mass, spring and damper together moves no root: the element
+    # sensitivities sum to 0 (levers excluded).
+    elements = {e.name for e in circuit.elements}
+    for m in found:
+        assert abs(sum(x for k, x in m.sensitivity.items() if k in elements)) <= 1e-12
     assert set(found[0].param_sensitivity) == set(circuit.params)
     for p, value in circuit.params.items():
         rel, zeta = _fd(lambda f, p=p, v=value: mechcirc.load(path, params={p: v * f}), n)
