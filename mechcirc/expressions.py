@@ -232,12 +232,17 @@ def parse_expression(text: str, *, source: str = "<string>", line: int = 0,
 
 
 def evaluate(expr: Expr, params: Mapping[str, float], *, source: str = "<string>",
-             line: int = 0, col: int = 1) -> float:
+             line: int = 0, col: int = 1, tangent: Mapping[str, float] | None = None):
     """Evaluate ``expr`` in float64 with the parameter values ``params``.
 
     ``col`` is the column where the expression text started, so errors
     (undefined name, division by zero, overflow, domain error) point at the
     offending operator or name.
+
+    With ``tangent`` (the derivatives of the parameters with respect to some
+    variable; names not given have 0), returns ``(value, derivative)``: the
+    exact derivative of the expression, carried through every operation by the
+    rules of calculus (forward mode), as sensitivities need it.
     """
     base = col - 1
 
@@ -288,9 +293,50 @@ def evaluate(expr: Expr, params: Mapping[str, float], *, source: str = "<string>
         return r
 
     # Operands first (iteratively: see postorder), so errors come left to right.
+    if tangent is None:
+        for node in postorder(expr):
+            values[id(node)] = ev(node)
+        return values[id(expr)]
+    slopes: dict[int, float] = {}
     for node in postorder(expr):
-        values[id(node)] = ev(node)
-    return values[id(expr)]
+        args = [values[id(a)] for a in node.args]
+        r = values[id(node)] = ev(node)
+        slopes[id(node)] = _slope(node, args, r, [slopes.pop(id(a)) for a in node.args],
+                                  tangent)
+    return values[id(expr)], slopes[id(expr)]
+
+
+#: d f(x) / dx of each function, from x and f(x).
+_DERIVATIVES: dict[str, Callable[[float, float], float]] = {
+    "sqrt": lambda x, r: 0.5 / r, "sin": lambda x, r: math.cos(x),
+    "cos": lambda x, r: -math.sin(x), "tan": lambda x, r: 1.0 + r * r,
+    "exp": lambda x, r: r, "log": lambda x, r: 1.0 / x,
+    "radians": lambda x, r: math.pi / 180, "degrees": lambda x, r: 180 / math.pi,
+}
+
+
+def _slope(node: Expr, args: list, r: float, d: list, tangent: Mapping[str, float]) -> float:
+    """The derivative of ``node`` (value ``r``, operands ``args`` with derivatives ``d``)."""
+    k = node.kind
+    if k == "num":
+        return 0.0
+    if k == "name":
+        return float(tangent.get(str(node.value), 0.0))
+    if k == "neg":
+        return -d[0]
+    if k == "call":
+        return _DERIVATIVES[str(node.value)](args[0], r) * d[0] if d[0] else 0.0
+    (a, b), (da, db) = args, d
+    if k == "+":
+        return da + db
+    if k == "-":
+        return da - db
+    if k == "*":
+        return da * b + a * db
+    if k == "/":
+        return (da - r * db) / b
+    # a ** b: each term only where its operand moves (a ** (b - 1) or log a may not exist).
+    return (b * a ** (b - 1) * da if da else 0.0) + (r * math.log(a) * db if db else 0.0)
 
 
 def _number_hint(bad: str, number: str, glued: str = "") -> str:

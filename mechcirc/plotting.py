@@ -20,7 +20,7 @@ follows the extension given to :func:`mechcirc.cli._common.save_figure`
 from __future__ import annotations
 
 __all__ = ["plot_sweep", "plot_forces", "plot_comparison", "plot_study", "plot_periodic",
-           "plot_speed_map"]
+           "plot_speed_map", "plot_mode", "plot_modes"]
 
 
 def _figure(figsize):
@@ -349,3 +349,53 @@ def plot_speed_map(result, title: str | None = None, *, ax=None, min_weight: flo
         fig.tight_layout()
         return fig
     return ax
+
+
+def plot_mode(mode, name: str = "circuit", title: str | None = None, *, ax=None):
+    """A mode shape (a :class:`mechcirc.modes.Mode`): each node's velocity along the circuit.
+
+    The nodes in the netlist's order on x; the real part of the normalised
+    velocity (the largest is 1) joined by a line, and for a damped mode its
+    modulus as a dashed envelope.  Returns ``ax`` when given, else the new Figure.
+    """
+    import numpy as np
+
+    fig, ax, made = _axes(ax, (max(5.0, 0.45 * len(mode.shape) + 2), 3.5))
+    r = mode.resonance
+    label = f"{r.kind} ω = {r.omega:.6g} rad/s ({r.f_hz:.4g} Hz)" + \
+        (f", ζ = {r.zeta:.3g}" if r.zeta else "")
+    ax.set_title(title or f"{name}: {label}")
+    if not mode.shape:
+        ax.text(0.5, 0.5, mode.note, ha="center", va="center", transform=ax.transAxes,
+                wrap=True)
+        return fig if made else ax
+    v = np.array(list(mode.shape.values()), dtype=complex)
+    x = np.arange(v.size)
+    ax.axhline(0, color="0.5", lw=0.8)
+    ax.plot(x, v.real, "o-", color="C0", ms=4, label="Re v")
+    if np.any(np.abs(v.imag) > 1e-9):
+        ax.plot(x, np.abs(v), "--", color="C1", lw=1, label="|v|")
+        ax.legend(loc="best", fontsize="small")
+    ax.set_xticks(x, list(mode.shape), rotation=45 if v.size > 8 else 0, ha="right"
+                  if v.size > 8 else "center")
+    ax.set_ylim(-1.1, 1.1)
+    ax.set_xlabel("node")
+    ax.set_ylabel("velocity / largest [1]")
+    ax.grid(True, alpha=0.3)
+    if made:
+        fig.tight_layout()
+        return fig
+    return ax
+
+
+def plot_modes(found, name: str = "circuit", *, fig=None):
+    """One panel per mode of ``found`` (from :func:`mechcirc.modes.modes`) by
+    :func:`plot_mode`, stacked, on ``fig`` when given (else a new Figure); returns the Figure."""
+    fig = fig if fig is not None else _figure(
+        (max(6.0, 0.45 * max((len(m.shape) for m in found), default=0) + 2),
+         2.6 * max(len(found), 1)))
+    axes = fig.subplots(max(len(found), 1), 1, squeeze=False)[:, 0]
+    for mode, ax in zip(found, axes):
+        plot_mode(mode, name, ax=ax)
+    fig.tight_layout()
+    return fig

@@ -105,6 +105,20 @@ def find_resonances(circuit: Circuit, omega_max: float | None = None) -> list[Re
     >>> [(r.kind, round(r.omega, 12)) for r in c.resonances()]
     [('resonance', 10.0)]
     """
+    return [r for r, _ in _solve(circuit, omega_max)]
+
+
+def _solve(circuit: Circuit, omega_max: float | None = None, vectors: bool = False) -> list:
+    """:func:`find_resonances` as ``(Resonance, v)`` pairs, sorted as there.
+
+    ``v`` is the root's eigenvector from the eigen-solve, the node velocities
+    of ``circuit.nodal.nodes`` (the drive held for a resonance, released for
+    an anti-resonance; unnormalised); None without ``vectors``, and for roots
+    found by the band solver (which computes no vectors).  With ``vectors``
+    the pairs are triples ``(Resonance, v, repeated)``, ``repeated`` true
+    where the eigenproblem has another root within 1e-9 (relative) of this
+    one (then v is one vector of a family).
+    """
     for e in circuit.elements:
         if not math.isfinite(e.value * e.eta):
             raise NetlistError(f"{e.kind} {e.name!r}: value × eta = {e.value:g} × {e.eta:g} "
@@ -120,7 +134,37 @@ def find_resonances(circuit: Circuit, omega_max: float | None = None) -> list[Re
         warnings.warn(
             f"{len(system.unloaded)} element(s) lie on no path between the drive's nodes "
             f"{d.n1!r} and {d.n2!r} and carry no force: {', '.join(system.unloaded)}",
-            UnloadedElementWarning, stacklevel=2)
+            UnloadedElementWarning, stacklevel=3)
+    M, D, Ks, G_released, G_held, damped = pencil(system)
+    released, v_released = _modes(M, D, Ks, G_released, damped, omega_max, vectors)
+    held, v_held = _modes(M, D, Ks, G_held, damped, omega_max, vectors)
+    keep_h, keep_r = _cancel(held, released)
+    roots = [("resonance", s, e, f) for s, e, f in held[keep_h]] + \
+        [("antiresonance", s, e, f) for s, e, f in released[keep_r]]
+    vecs = [(None if V is None else V[:, i], vectors and _repeats(found[:, 0], int(i)))
+            for V, keep, found in ((v_held, keep_h, held), (v_released, keep_r, released))
+            for i in np.flatnonzero(keep)]
+    if omega_max is not None:
+        # A little beyond the band: polishing may move a root across its edge.
+        inside = [abs(t[1]) <= omega_max * (1 + 1e-6) for t in roots]
+        roots = [t for t, ok in zip(roots, inside) if ok]
+        vecs = [v for v, ok in zip(vecs, inside) if ok]
+    out = list(zip(_polish(system, roots, damped), vecs)) if roots else []
+    if omega_max is not None:
+        out = [(r, v) for r, v in out if r.omega <= omega_max]
+    out = sorted(out, key=lambda rv: (rv[0].omega, rv[0].kind))
+    return [(r, *v) for r, v in out] if vectors else [(r, v[0]) for r, v in out]
+
+
+def _repeats(s: np.ndarray, i: int) -> bool:
+    """Whether another root of ``s`` lies within 1e-9 (relative) of ``s[i]``."""
+    return int(np.count_nonzero(np.abs(s - s[i]) <= 1e-9 * abs(s[i]))) > 1
+
+
+def pencil(system) -> tuple:
+    """``(M, D, Kₛ, G_released, G_held, damped)``: the node blocks of the nodal
+    matrices (sparse) and the constraint rows (dense) of the two eigenproblems —
+    the lever constraints, and for the held drive also v_a − v_b = 0."""
     n_nodes = len(system.nodes)
     # Lever constraints are the rows of C below the node block; the lever forces
     # themselves drop out once the velocities are confined to the constraints' null space.
@@ -132,18 +176,7 @@ def find_resonances(circuit: Circuit, omega_max: float | None = None) -> list[Re
     if system.b >= 0:
         drive_row[0, system.b] = -1.0
     damped = D.nnz > 0 and bool(np.any(D.data))
-    released = _modes(M, D, Ks, G_levers, damped, omega_max)
-    held = _modes(M, D, Ks, np.vstack([G_levers, drive_row]), damped, omega_max)
-    held, released = _cancel(held, released)
-    roots = [("resonance", s, e, f) for s, e, f in held] + \
-        [("antiresonance", s, e, f) for s, e, f in released]
-    if omega_max is not None:
-        # A little beyond the band: polishing may move a root across its edge.
-        roots = [t for t in roots if abs(t[1]) <= omega_max * (1 + 1e-6)]
-    out = _polish(system, roots, damped) if roots else []
-    if omega_max is not None:
-        out = [r for r in out if r.omega <= omega_max]
-    return sorted(out, key=lambda r: (r.omega, r.kind))
+    return M, D, Ks, G_levers, np.vstack([G_levers, drive_row]), damped
 
 
 def _project(G: np.ndarray, n: int):
@@ -174,23 +207,26 @@ def _project(G: np.ndarray, n: int):
     return Z
 
 
-def _modes(M, D, Ks, G, damped: bool, omega_max=None) -> np.ndarray:
+def _modes(M, D, Ks, G, damped: bool, omega_max=None, vectors: bool = False):
     """:func:`_modes_unchecked`, with LAPACK's failures reported as :class:`SolverError`."""
     try:
-        return _modes_unchecked(M, D, Ks, G, damped, omega_max)
+        return _modes_unchecked(M, D, Ks, G, damped, omega_max, vectors)
     except np.linalg.LinAlgError as exc:
         # Seen only for values spanning most of float64's range (1e-320 … 1e220).
         raise SolverError(f"resonances: the eigenvalue solver failed ({exc}); element "
                           "values span too many orders of magnitude", status="lapack") from None
 
 
-def _modes_unchecked(M, D, Ks, G, damped: bool, omega_max=None) -> np.ndarray:
+def _modes_unchecked(M, D, Ks, G, damped: bool, omega_max=None, vectors: bool = False):
     """Eigenvalues s (Im s ≥ 0, |s| > 0) of the constrained network, with their error estimates.
 
-    ``M``, ``D``, ``Ks`` are sparse; returns an array of shape (k, 2): column
-    0 the complex s, column 1 the estimated relative error of |s|.  Networks
-    above the dense limits are solved in the band |s| ≤ ``omega_max`` by
-    shift-invert Arnoldi (:func:`_band_modes`); without a band they are refused.
+    ``M``, ``D``, ``Ks`` are sparse; returns ``(roots, V)``: ``roots`` of shape
+    (k, 3), column 0 the complex s, column 1 the estimated relative error of
+    |s|, column 2 nonzero where the root must be polished; ``V`` (n × k) the
+    eigenvectors in the unknowns of ``M`` with ``vectors``, else None.
+    Networks above the dense limits are solved in the band |s| ≤ ``omega_max``
+    by shift-invert Arnoldi (:func:`_band_modes`, no vectors); without a band
+    they are refused.
     """
     Z = _project(G, M.shape[0])
     limit = MAX_UNKNOWNS_DAMPED if damped else MAX_UNKNOWNS
@@ -198,7 +234,7 @@ def _modes_unchecked(M, D, Ks, G, damped: bool, omega_max=None) -> np.ndarray:
         if omega_max is not None and math.isfinite(omega_max) and omega_max > 0:
             with np.errstate(all="ignore"):
                 Mr, Dr, Kr = ((Z.T @ X @ Z).tocsc() for X in (M, D, Ks))
-            return _band_modes(Mr, Dr, Kr, float(omega_max))
+            return _band_modes(Mr, Dr, Kr, float(omega_max)), None
         raise SolverError(
             f"resonances: {Z.shape[1]} unknowns, the limit is {limit} for "
             f"{'damped' if damped else 'undamped'} networks (a dense O(n³) eigenproblem) "
@@ -207,7 +243,7 @@ def _modes_unchecked(M, D, Ks, G, damped: bool, omega_max=None) -> np.ndarray:
     with np.errstate(all="ignore"):
         Mr, Dr, Kr = ((Z.T @ X @ Z).toarray() for X in (M, D, Ks))
     if Mr.shape[0] == 0:
-        return np.zeros((0, 3), dtype=complex)
+        return np.zeros((0, 3), dtype=complex), np.zeros((M.shape[0], 0)) if vectors else None
     if not (np.isfinite(Mr).all() and np.isfinite(Dr).all() and np.isfinite(Kr).all()):
         raise SolverError("resonances: the network's matrices overflow float64 (element "
                           "values or lever ratios near 1e308 combine beyond it)",
@@ -221,8 +257,9 @@ def _modes_unchecked(M, D, Ks, G, damped: bool, omega_max=None) -> np.ndarray:
                           f"{scale_m:.3g} kg) are too far apart for float64", status="range")
     eps = np.finfo(float).eps
     if not damped:
-        lam, direct = _undamped(Mr / scale_m, Kr / scale_k)      # λ = (ω / w_ref)²
-        lam = lam[lam > 1e-11 * max(1.0, lam.max(initial=0.0))]
+        lam, direct, U = _undamped(Mr / scale_m, Kr / scale_k, vectors)  # λ = (ω / w_ref)²
+        up = lam > 1e-11 * max(1.0, lam.max(initial=0.0))
+        lam, U = lam[up], (U[:, up] if vectors else None)
         s = 1j * w_ref * np.sqrt(lam)
         err = eps * (lam.max(initial=1.0) / lam) * 4
         # Weyl's bound holds for the scaled matrix, not through a static
@@ -236,11 +273,13 @@ def _modes_unchecked(M, D, Ks, G, damped: bool, omega_max=None) -> np.ndarray:
         if not all(np.isfinite(X).all() for X in scaled):
             raise SolverError("resonances: the damping, mass and stiffness scales are too far "
                               "apart for float64", status="range")
-        s_all = _damped(*scaled) * w_ref
+        s_all, U = _damped(*scaled, vectors=vectors)
+        s_all = s_all * w_ref
         # Rigid-body (zero) roots come out of QZ split by about sqrt(eps)·w_ref.
         keep = np.flatnonzero((np.abs(s_all) > 1e-6 * w_ref)
                               & (s_all.imag >= -1e-12 * np.abs(s_all)))
         s = s_all[keep]
+        U = U[:, keep] if vectors else None
         mag = np.abs(s)
         err = eps * 1e2 * (mag.max(initial=1.0) / mag)
         if s.size > 1 or s_all.size > 1:
@@ -255,7 +294,8 @@ def _modes_unchecked(M, D, Ks, G, damped: bool, omega_max=None) -> np.ndarray:
         s = np.where(np.abs(s.imag) <= 1e-12 * np.abs(s), s.real + 0j, s)
     if damped:
         must = np.ones(s.size)
-    return np.column_stack([s, err, must]) if s.size else np.zeros((0, 3), dtype=complex)
+    roots = np.column_stack([s, err, must]) if s.size else np.zeros((0, 3), dtype=complex)
+    return roots, (Z @ U if vectors else None)
 
 
 def _band_modes(M, D, K, omega_max: float) -> np.ndarray:
@@ -413,11 +453,13 @@ def count_undamped_roots(M, K, omega_max: float) -> int | None:
     return None if counts is None else counts[1] - counts[0]
 
 
-def _undamped(M: np.ndarray, K: np.ndarray) -> np.ndarray:
+def _undamped(M: np.ndarray, K: np.ndarray, vectors: bool = False) -> tuple:
     """λ with K v = λ M v, M positive semi-definite; massless directions condensed out.
 
-    Returns ``(λ, direct)``: ``direct`` when M was diagonal and every
-    direction had mass (no condensation), where eps·λ_max/λ bounds the error.
+    Returns ``(λ, direct, V)``: ``direct`` when M was diagonal and every
+    direction had mass (no condensation), where eps·λ_max/λ bounds the error;
+    ``V`` the eigenvectors v (columns, massless directions restored from the
+    condensation) with ``vectors``, else None.
 
     A diagonal M (every mass to the frame, the usual mobility-analogy layout)
     is handled without an eigen-decomposition of M.
@@ -429,8 +471,9 @@ def _undamped(M: np.ndarray, K: np.ndarray) -> np.ndarray:
         mu, V = la.eigh(M)
     massive = mu > 1e-13 * max(mu.max(initial=0.0), 1e-300)
     direct = V is None and bool(massive.all())
+    none = (np.zeros(0), direct, np.zeros((M.shape[0], 0)) if vectors else None)
     if not massive.any():
-        return np.zeros(0), direct  # no inertia: no oscillation
+        return none  # no inertia: no oscillation
     if V is None:
         Krr = K[np.ix_(massive, massive)]
         Knn = K[np.ix_(~massive, ~massive)]
@@ -438,28 +481,51 @@ def _undamped(M: np.ndarray, K: np.ndarray) -> np.ndarray:
     else:
         R, N = V[:, massive], V[:, ~massive]
         Krr, Knn, Knr = R.T @ K @ R, N.T @ K @ N, N.T @ K @ R
-    Kc = Krr - Knr.T @ la.lstsq(Knn, Knr)[0] if Knn.size else Krr
+    X = la.lstsq(Knn, Knr)[0] if Knn.size else np.zeros((0, Krr.shape[0]))
+    Kc = Krr - Knr.T @ X
     if Kc.shape[0] == 0:
-        return np.zeros(0), direct
+        return none
     # Symmetric scaling by the masses gives a standard symmetric eigenproblem.
     d = 1.0 / np.sqrt(mu[massive])
     A = Kc * d[:, None] * d[None, :]
-    return la.eigvalsh((A + A.T) / 2), direct
+    lam = la.eigvalsh((A + A.T) / 2)
+    if not vectors:
+        return lam, direct, None
+    # The vectors by their own call: the roots stay those find_resonances reports, to the bit.
+    Y = la.eigh((A + A.T) / 2, driver="evd")[1]      # divide and conquer: the fastest here
+    Ur = Y * d[:, None]
+    Un = -X @ Ur                     # the massless directions follow statically
+    if V is None:
+        U = np.empty((M.shape[0], lam.size))
+        U[massive], U[~massive] = Ur, Un
+    else:
+        U = V[:, massive] @ Ur + V[:, ~massive] @ Un
+    return lam, direct, U
 
 
-def _damped(M, D, K) -> np.ndarray:
-    """Finite eigenvalues s of (s² M + s D + K) v = 0 by a companion linearisation."""
+def _damped(M, D, K, vectors: bool = False) -> tuple:
+    """Finite eigenvalues s of (s² M + s D + K) v = 0 by a companion linearisation.
+
+    Returns ``(s, V)``: ``V`` the eigenvectors v (columns) with ``vectors``, else None.
+    """
     n = M.shape[0]
     eye, zero = np.eye(n), np.zeros((n, n))
     A = np.block([[zero, eye], [-K, -D]])
     B = np.block([[eye, zero], [zero, M]])
-    alpha, beta = la.eig(A, B, right=False, homogeneous_eigvals=True)
+    out = la.eig(A, B, right=vectors, homogeneous_eigvals=True)
+    alpha, beta = out[0] if vectors else out
     finite = np.abs(beta) > 1e-12 * np.abs(alpha)
-    return alpha[finite] / beta[finite]
+    s = alpha[finite] / beta[finite]
+    if not vectors:
+        return s, None
+    # The companion vector is [v; s·v]: the better-scaled half gives v.
+    Z = out[1][:, finite]
+    return s, np.where(np.abs(s) <= 1.0, Z[:n], Z[n:] / np.where(s == 0, 1.0, s))
 
 
 def _cancel(held: np.ndarray, released: np.ndarray):
-    """Drop modes present in both problems (they do not appear in K)."""
+    """Which modes to keep (two masks): not those present in both problems (they
+    do not appear in K)."""
     keep_h = np.ones(len(held), bool)
     keep_r = np.ones(len(released), bool)
     for i, (s, err, _) in enumerate(held):
@@ -472,7 +538,7 @@ def _cancel(held: np.ndarray, released: np.ndarray):
         # modes of long chains can lie within 1e-8 of each other, so use the estimates.
         if d[j] < 1e3 * (abs(err) + abs(released[j, 1])):
             keep_h[i] = keep_r[j] = False
-    return held[keep_h], released[keep_r]
+    return keep_h, keep_r
 
 
 def _make(kind: str, s: complex, err: float) -> Resonance:

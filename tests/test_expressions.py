@@ -56,3 +56,27 @@ def test_depth_limit_is_an_error_not_a_crash():
 def test_length_limit():
     with pytest.raises(NetlistError, match="limit"):
         ev("1+" * 10_000 + "1")
+
+
+@pytest.mark.parametrize("text, value, slope", [
+    ("sqrt(x)", math.sqrt(2.0), 0.5 / math.sqrt(2.0)),
+    ("sin(x)", math.sin(2.0), math.cos(2.0)),
+    ("cos(x)", math.cos(2.0), -math.sin(2.0)),
+    ("tan(x)", math.tan(2.0), 1 / math.cos(2.0) ** 2),
+    ("exp(x)", math.exp(2.0), math.exp(2.0)),
+    ("log(x)", math.log(2.0), 0.5),
+    ("radians(x)", math.radians(2.0), math.pi / 180),
+    ("degrees(x)", math.degrees(2.0), 180 / math.pi),
+    ("x^3 / (1 + x) - 2*x", 8 / 3 - 4, 12 / 3 - 8 / 9 - 2),
+    ("2^x", 4.0, 4 * math.log(2)),
+    ("x^x", 4.0, 4 * (math.log(2) + 1)),
+    ("-(x * y) + pi", -6.0 + math.pi, -3.0),
+    ("0^2 + y", 3.0, 0.0),
+])
+def test_evaluate_with_a_tangent_gives_the_exact_derivative(text, value, slope):
+    """d/dx at x = 2 (y = 3), against derivatives written by hand."""
+    from mechcirc.expressions import evaluate, parse_expression
+
+    v, d = evaluate(parse_expression(text), {"x": 2.0, "y": 3.0}, tangent={"x": 1.0})
+    assert v == pytest.approx(value, rel=1e-15)
+    assert d == pytest.approx(slope, rel=1e-14, abs=1e-15)

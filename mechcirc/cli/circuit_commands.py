@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 
 from ..limits import (MAX_ADAPTIVE_NODAL_POINTS, MAX_JSON_POINTS, MAX_NODAL_POINTS,
@@ -79,6 +80,16 @@ def register(sub) -> None:
     p.add_argument("--omega-max", type=positive_omega, metavar="W",
                    help="report only up to this angular frequency [rad/s]; or with a unit: "
                         "50Hz, 3000rpm")
+    p.add_argument("--modes", action="store_true",
+                   help="also each mode: node velocities (largest 1), each mass's and "
+                        "spring's share of the energy, each damper's part of zeta, and "
+                        "each element's velocity and force")
+    p.add_argument("--sensitivity", action="store_true",
+                   help="also the relative sensitivity (p/omega)·d(omega)/dp of each root to "
+                        "every element value, lever ratio and .param, ranked, with what "
+                        "would raise omega by 10 %% (a linear estimate)")
+    p.add_argument("--plot", metavar="IMAGE",
+                   help="plot the mode shapes (PNG, SVG or PDF)")
     p.add_argument("--json", action="store_true", help="print one JSON document")
     p.set_defaults(func=cmd_resonances)
 
@@ -315,13 +326,42 @@ def cmd_sweep(args) -> int:
 
 
 def cmd_resonances(args) -> int:
+    from ..outputs import OutputSet
+
+    check_output_paths(plots=(args.plot,))
     circuit, warns = load_with_warnings(args.file)
-    found = circuit.resonances(omega_max=args.omega_max)
+    found = modes = None
+    if args.modes or args.sensitivity or args.plot:
+        from ..modes import modes as find_modes
+
+        modes = find_modes(circuit, omega_max=args.omega_max)
+        found = [m.resonance for m in modes]
+    else:
+        found = circuit.resonances(omega_max=args.omega_max)
     for w in warns:
         print(f"warning: {w}", file=sys.stderr)
+    if args.plot:
+        from ..plotting import plot_modes
+
+        if len(modes) > MAX_MODE_PANELS:
+            warns.append(f"--plot draws the lowest {MAX_MODE_PANELS} of {len(modes)} modes "
+                         "(give --omega-max for fewer)")
+            print(f"warning: {warns[-1]}", file=sys.stderr)
+        with OutputSet() as out:
+            save_figure(plot_modes(modes[:MAX_MODE_PANELS], circuit.name), args.plot,
+                        out.path(args.plot))
     if args.json:
-        print_json({"file": args.file, "name": circuit.name,
-                    "resonances": _resonance_rows(found)})
+        rows = _resonance_rows(found)
+        for row, m in zip(rows, modes or ()):
+            if args.modes:
+                row.update(_mode_doc(m))
+            if args.sensitivity:
+                row.update(element_sensitivity=m.sensitivity, param_sensitivity=m.param_sensitivity,
+                           zeta_sensitivity=m.zeta_sensitivity,
+                           param_zeta_sensitivity=m.param_zeta_sensitivity)
+            if m.note:
+                row["note"] = m.note
+        print_json({"file": args.file, "name": circuit.name, "resonances": rows})
         return 0
     print(f"{args.file}: {sum(r.kind == 'resonance' for r in found)} resonances (K = 0), "
           f"{sum(r.kind == 'antiresonance' for r in found)} anti-resonances (K = ∞)"
@@ -331,4 +371,78 @@ def cmd_resonances(args) -> int:
     for r in found:
         print(f"  {r.kind:<14} {r.omega:>17.10g} {r.f_hz:>14.8g} {r.omega_d:>17.10g} "
               f"{r.zeta:>10.4g} {r.error:>10.1e}")
+    kinds = {e.name: e.kind for e in circuit.elements} | {lv.name: "lever" for lv in circuit.levers}
+    for i, m in enumerate(modes or (), 1):
+        r = m.resonance
+        print(f"\n{i}: {r.kind} omega = {r.omega:.10g} rad/s ({r.f_hz:.6g} Hz)"
+              + (f", zeta = {r.zeta:.4g}" if r.zeta else ""))
+        if m.note and (m.shape or not args.modes):   # else the mode table says it
+            print(f"  note: {m.note}")
+        if args.modes:
+            _print_mode(m, kinds)
+        if args.sensitivity:
+            _print_sensitivity(m, kinds)
+    if args.plot:
+        print(f"  plot written to {args.plot}")
     return 0
+
+
+#: The most mode shapes one ``resonances --plot`` draws (one panel each).
+MAX_MODE_PANELS = 12
+
+
+def _mode_doc(m) -> dict:
+    """A mode for ``--json``: node → [re, im], element → energy share (null when overdamped)."""
+    if not m.shape:
+        return {"mode": None, "energy": None, "dissipation": None}
+    return {"mode": {n: [v.real, v.imag] for n, v in m.shape.items()}, "energy": m.energy,
+            "dissipation": m.dissipation,
+            "velocity": {n: [v.real, v.imag] for n, v in m.velocity.items()},
+            "force": {n: [q.real, q.imag] for n, q in m.force.items()}}
+
+
+def _print_mode(m, kinds) -> None:
+    import cmath
+    import math
+
+    if not m.shape:
+        print(f"  no mode shape: {m.note}")
+        return
+    print(f"  {'node':<10} {'|v|':>10} {'phase [deg]':>12}")
+    for n, v in m.shape.items():
+        print(f"  {n:<10} {abs(v):>10.4g} {math.degrees(cmath.phase(v)) if v else 0:>12.4g}")
+    print(f"  {'element':<10} {'kind':<7} {'energy':>8} {'zeta part':>10} {'|v| [m/s]':>10} "
+          f"{'|Q| [N]':>10}")
+    for name, v in m.velocity.items():
+        energy = f"{100 * m.energy[name]:.3g} %" if m.energy.get(name, 0) > 1e-12 else \
+            "0 %" if name in m.energy else ""
+        zeta = f"{m.dissipation[name]:.4g}" if name in m.dissipation else ""
+        print(f"  {name:<10} {kinds[name]:<7} {energy:>8} {zeta:>10} {abs(v):>10.4g} "
+              f"{abs(m.force[name]):>10.4g}")
+
+
+#: What raising (True) or lowering (False) a quantity of each kind is called.
+_VERBS = {"mass": ("add mass to", "lighten"), "spring": ("stiffen", "soften"),
+          "damper": ("raise the damping of", "lower the damping of"),
+          "lever": ("raise the ratio of", "lower the ratio of"), ".param": ("raise", "lower")}
+
+
+def _print_sensitivity(m, kinds, shown: int = 10) -> None:
+    ranked = sorted([(name, kinds[name], x) for name, x in m.sensitivity.items()]
+                    + [(p, ".param", x) for p, x in m.param_sensitivity.items()],
+                    key=lambda t: -abs(t[2]))
+    moves = []
+    for name, kind, x in ranked:
+        change = 0.1 / x if abs(x) > 1e-12 else math.inf
+        if abs(change) <= 1:        # beyond 100 % a first-order estimate says nothing
+            moves.append(f"{_VERBS[kind][change < 0]} {name} by {abs(change) * 100:.3g} %")
+        if len(moves) == 3:
+            break
+    if moves:
+        print("  to raise omega by 10 % (linear estimate): " + ", or ".join(moves))
+    print(f"  {'name':<10} {'kind':<7} {'(p/omega) d(omega)/dp':>22} {'p d(zeta)/dp':>13}")
+    zeta = m.zeta_sensitivity | m.param_zeta_sensitivity
+    for name, kind, x in ranked[:shown]:
+        print(f"  {name:<10} {kind:<7} {x:>+22.4g} {zeta[name]:>+13.3g}")
+    if len(ranked) > shown:
+        print(f"  ... and {len(ranked) - shown} smaller (--json gives every one)")

@@ -1,0 +1,56 @@
+"""Modes and sensitivities (issue 22 §1–2) against ``resonances()`` alone, in the same run.
+
+CPU seconds, median of ``--repeat``, each from a fresh parse (nothing cached):
+
+* the STB heald netlist (13 nodes, 5 roots, 6 ``.param``): the goal is modes +
+  sensitivities ≤ 2× the cost of ``resonances`` alone;
+* the 30×30 spring–mass grid of bench_resonances (900 unknowns, ~1,800 roots),
+  where the eigenvectors (a second ``eigh``) and the per-root work show.
+
+Run from the repository root: ``python benchmarks/bench_modes.py``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import mechcirc  # noqa: E402
+from bench_nodal_speed import grid  # noqa: E402
+from mechcirc.modes import modes  # noqa: E402
+
+
+def cpu(fn):
+    t0 = time.process_time()
+    out = fn()
+    return time.process_time() - t0, out
+
+
+def compare(label: str, text: str, repeat: int) -> None:
+    t_res, t_modes = [], []
+    for _ in range(repeat):
+        t, found = cpu(lambda: mechcirc.parse(text).resonances())
+        t_res.append(t)
+        t, _ = cpu(lambda: modes(mechcirc.parse(text)))
+        t_modes.append(t)
+    a, b = statistics.median(t_res), statistics.median(t_modes)
+    print(f"{label}: {len(found)} roots; resonances() {a * 1e3:.1f} ms CPU, modes() with "
+          f"sensitivities {b * 1e3:.1f} ms; ratio {b / a:.2f} (goal ≤ 2)")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--repeat", type=int, default=5)
+    args = ap.parse_args()
+    root = Path(__file__).resolve().parents[1]
+    compare("stb_heald", (root / "netlists" / "stb_heald.mcir").read_text(), args.repeat)
+    compare("30×30 grid", grid(30), max(1, args.repeat // 2))
+
+
+if __name__ == "__main__":
+    main()

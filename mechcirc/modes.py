@@ -1,0 +1,280 @@
+"""Mode shapes of the resonances and anti-resonances, energy per element, exact sensitivities.
+
+:func:`modes` takes the eigenvectors of the same eigenproblem that
+:func:`mechcirc.resonances.find_resonances` solves — (s²M + sD + Kₛ) v = 0 on
+the null space of the lever constraints, with the drive held (resonances) or
+released (anti-resonances) — and gives, for every root, a :class:`Mode`:
+
+* the modal vector: the node velocities, complex for damped modes,
+  normalised so that the largest is 1 (its phase is the reference);
+* each mass's kinetic energy ½·mη·|Δv|² and each spring's potential energy
+  ½·kη·|Δv|²/ωₙ² as a share of their sum (the shares sum to 1), and beside
+  them each damper's part of the damping ratio, D_e / (2π E) with
+  D_e = π·cη·|Δv|²/ωₙ the energy it dissipates in one cycle and E the sum
+  above (for one degree of freedom the parts sum to ζ exactly; for light
+  damping nearly);
+* each element's velocity Δv = v(n1) − v(n2) and force Q = S(s)·Δv at the
+  complex frequency s of the root (S = 1/K of the element's law);
+* the exact relative sensitivities (p/ωₙ)·∂ωₙ/∂p of ωₙ to every element
+  value, lever ratio and ``.param``, and p·∂ζ/∂p of the damping ratio.
+
+Sensitivities are first-order eigenvalue perturbation of the quadratic
+pencil P(s) = s²M + sD + Kₛ bordered by the constraints.  The matrices are
+symmetric, so the left eigenvector is the right one transposed (not
+conjugated) and
+
+    ∂s/∂p = −wᵀ (∂T/∂p) w / vᵀ (2sM + D) v,
+
+w = [v; q] with q the constraint forces (lever forces, and the drive's force
+when held).  An element of value·η = y between nodes i, j contributes
+∂T/∂y = s^(1−power) (e_i − e_j)(e_i − e_j)ᵀ (power from the law table:
+s² for a mass, s for a damper, 1 for a spring); a lever's ratio r enters its
+constraint row r(v_p1 − v_p2) − (v_s1 − v_s2) = 0.  Undamped, this is
+∂λ/∂p = vᵀ(∂K/∂p − λ ∂M/∂p)v / vᵀMv with λ = ω².  An element's η enters only
+as the product value·η: its relative sensitivity equals that of the value.
+A ``.param`` acts through every value, η and ratio written with it: the
+chain rule with the exact derivative of each expression
+(:func:`mechcirc.expressions.evaluate` with ``tangent``), through later
+parameters defined from it.
+
+A root with ω_d = 0 (overdamped, ζ ≥ 1) is a decaying motion, not a
+vibration: its :class:`Mode` has no shape and says so in ``note``; its ωₙ
+sensitivities are still those of the real root.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .circuit import LAWS, Circuit
+from .resonances import Resonance, _project, _solve, pencil
+
+__all__ = ["Mode", "modes"]
+
+
+@dataclass(frozen=True)
+class Mode:
+    """One resonance or anti-resonance with its mode of vibration.
+
+    Attributes
+    ----------
+    resonance : Resonance
+        The root (kind, ωₙ, ω_d, ζ, error) as :func:`~mechcirc.resonances.find_resonances` gives it.
+    shape : dict of str to complex
+        Node → velocity in the mode [m/s], the largest |v| being 1 (real 1 at
+        that node); every loaded node but the frame.  Empty for an
+        overdamped root.
+    energy : dict of str to float
+        Mass or spring → its share of the mode's energy [1] (sum 1).
+    dissipation : dict of str to float
+        Damper → its part of the damping ratio [1] (see the module docstring).
+    velocity, force : dict of str to complex
+        Element → Δv = v(n1) − v(n2) [m/s] and Q [N] in the mode, for the
+        shape as normalised.
+    sensitivity : dict of str to float
+        Element or lever → (p/ωₙ)·∂ωₙ/∂p [1], p its value (or ratio); the same
+        for the element's η.
+    zeta_sensitivity : dict of str to float
+        Element or lever → p·∂ζ/∂p [1] (all 0 for an undamped network).
+    param_sensitivity, param_zeta_sensitivity : dict of str to float
+        The same with respect to each ``.param`` (empty for a circuit built in code).
+    note : str
+        Why there is no shape (overdamped root), else empty.
+    """
+
+    resonance: Resonance
+    shape: dict = field(default_factory=dict)
+    energy: dict = field(default_factory=dict)
+    dissipation: dict = field(default_factory=dict)
+    velocity: dict = field(default_factory=dict)
+    force: dict = field(default_factory=dict)
+    sensitivity: dict = field(default_factory=dict)
+    zeta_sensitivity: dict = field(default_factory=dict)
+    param_sensitivity: dict = field(default_factory=dict)
+    param_zeta_sensitivity: dict = field(default_factory=dict)
+    note: str = ""
+
+    @property
+    def s(self) -> complex:
+        """The complex frequency of the root, s = −ζωₙ + jω_d [1/s]."""
+        r = self.resonance
+        return complex(-r.zeta * r.omega, r.omega_d)
+
+
+def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
+    """The :class:`Mode` of every resonance and anti-resonance of ``circuit`` up to ``omega_max``.
+
+    The roots are those of :func:`~mechcirc.resonances.find_resonances` (same
+    order, same values); see the module docstring for what each mode holds.
+
+    Examples
+    --------
+    >>> from mechcirc import parse
+    >>> from mechcirc.modes import modes
+    >>> c = parse("drive V a 0 velocity=1\\nmass m a b 1\\nspring k b 0 100\\n")
+    >>> (m,) = modes(c)
+    >>> round(m.resonance.omega, 12), {k: round(v, 12) for k, v in m.energy.items()}
+    (10.0, {'m': 0.5, 'k': 0.5})
+    >>> {k: round(v, 12) for k, v in m.sensitivity.items()}
+    {'m': -0.5, 'k': 0.5}
+    """
+    system = circuit.nodal
+    pairs = _solve(circuit, omega_max, vectors=True)
+    if not pairs:
+        return []
+    M, D, Ks, G_released, G_held, _ = pencil(system)
+    els = system.elements
+    index = {n: i for i, n in enumerate(system.nodes)}
+    ei = np.array([index.get(e.n1, -1) for e in els], dtype=int)
+    ej = np.array([index.get(e.n2, -1) for e in els], dtype=int)
+    y = np.array([e.value * e.eta for e in els])
+    power = np.array([LAWS[e.kind].power for e in els])
+    kinds = np.array([e.kind for e in els])
+    el_names = np.array([e.name for e in els], dtype=object)
+    names = [e.name for e in els] + [lv.name for lv in system.levers]
+    slopes = _param_slopes(circuit, names)
+    # Constraint forces from the node rows, P(s) v + s Gᵀ q = 0: Gᵀ's pseudo-inverse,
+    # once per problem (only levers need them).
+    pinv = {kind: np.linalg.pinv(G.T) if system.levers else None
+            for kind, G in (("resonance", G_held), ("antiresonance", G_released))}
+    out = []
+    for r, v, repeated in pairs:
+        s = complex(-r.zeta * r.omega, r.omega_d)
+        G = G_held if r.kind == "resonance" else G_released
+        if v is None:                       # a band root: no vector from the solver
+            v = _inverse_iteration(M, D, Ks, G, s)
+        v = np.asarray(v, dtype=complex)
+        top = int(np.argmax(np.abs(v)))
+        v = v / v[top]
+        v[top] = 1.0                        # exactly (a complex quotient may miss by an ulp)
+        dv = np.append(v, 0)[ei] - np.append(v, 0)[ej]
+        ds = _root_sensitivity(system, M, D, Ks, pinv[r.kind], s, v, dv, y, power)
+        rel, zeta = _omega_zeta(s, ds)
+        p_rel, p_zeta = {}, {}
+        for p, row in slopes.items():
+            ds_p = row @ ds
+            p_rel[p], p_zeta[p] = (float(x[0]) for x in _omega_zeta(s, np.array([ds_p])))
+        common: dict = {"sensitivity": dict(zip(names, rel.tolist())),
+                  "zeta_sensitivity": dict(zip(names, zeta.tolist())),
+                  "param_sensitivity": p_rel, "param_zeta_sensitivity": p_zeta}
+        if repeated:
+            common["note"] = ("a repeated root: its shape is one of a family (any "
+                              "combination is a mode too) and the sensitivities hold for "
+                              "this shape only")
+        if r.omega_d == 0:
+            common.pop("note", None)
+            out.append(Mode(r, note=f"overdamped (zeta = {r.zeta:.4g} >= 1, omega_d = 0): "
+                                    "a decaying motion, not a mode of vibration", **common))
+            continue
+        wn = r.omega
+        a2 = np.abs(dv) ** 2
+        stored = np.where(kinds == "mass", 0.5 * y * a2,
+                          np.where(kinds == "spring", 0.5 * y * a2 / wn ** 2, 0.0))
+        total = stored.sum()
+        damper = kinds == "damper"
+        # Lists, not numpy scalars, into the dicts: thousands of elements per root.
+        energy = dict(zip(el_names[~damper], (stored[~damper] / total).tolist()))
+        dissipation = dict(zip(el_names[damper],
+                               (y[damper] * a2[damper] / (2 * wn * total)).tolist()))
+        force = y * s ** (-power.astype(float)) * dv
+        out.append(Mode(r, shape=dict(zip(system.nodes, v.tolist())),
+                        energy=energy, dissipation=dissipation,
+                        velocity=dict(zip(el_names, dv.tolist())),
+                        force=dict(zip(el_names, force.tolist())), **common))
+    return out
+
+
+def _root_sensitivity(system, M, D, Ks, pinv_GT, s, v, dv, y, power) -> np.ndarray:
+    """p·∂s/∂p for every loaded element (value p) and lever (ratio p), in that order;
+    ``pinv_GT`` the pseudo-inverse of the transposed constraint rows."""
+    den = v @ (2 * s * (M @ v) + D @ v)
+    ds = -y * s ** (1.0 - power) * dv * dv / den
+    if not system.levers:
+        return ds
+    # Constraint forces q from the node rows: P(s) v + s Gᵀ q = 0 (exact at an eigenvector).
+    Pv = s * s * (M @ v) + s * (D @ v) + Ks @ v
+    q = -(pinv_GT @ Pv) / s
+    index = {n: i for i, n in enumerate(system.nodes)}
+    ve = np.append(v, 0)
+    lever = np.array([-2 * s * lv.ratio * q[k] * (ve[index.get(lv.p1, -1)]
+                                                  - ve[index.get(lv.p2, -1)]) / den
+                      for k, lv in enumerate(system.levers)])
+    return np.concatenate([ds, lever])
+
+
+def _omega_zeta(s: complex, ds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(p/ωₙ)·∂ωₙ/∂p and p·∂ζ/∂p from p·∂s/∂p, ωₙ = |s|, ζ = −Re s/|s|."""
+    wn = abs(s)
+    rel = (s.conjugate() * ds).real / wn ** 2
+    zeta = -ds.real / wn + s.real * rel / wn
+    return rel, zeta
+
+
+def _inverse_iteration(M, D, Ks, G, s: complex, steps: int = 3) -> np.ndarray:
+    """The eigenvector at the polished root s by inverse iteration on the projected
+    pencil (sparse LU): for roots of the band solver, which gives no vectors."""
+    from scipy.sparse.linalg import splu
+
+    Z = _project(G, M.shape[0])
+    P = (Z.T @ (s * s * M + s * D + Ks) @ Z).tocsc().astype(complex)
+    try:
+        lu = splu(P)
+    except RuntimeError:               # exactly singular at s: any nearby shift will do
+        lu = splu((P + 1e-14 * abs(s) ** 2 * (Z.T @ M @ Z)).tocsc().astype(complex))
+    u = np.random.default_rng(20261125).standard_normal(P.shape[0]) + 0j
+    for _ in range(steps):
+        u = lu.solve(u)
+        u /= np.linalg.norm(u)
+    return Z @ u
+
+
+def _param_slopes(circuit: Circuit, names: list[str]) -> dict[str, np.ndarray]:
+    """``.param`` → the vector (P/x)·∂x/∂P over ``names`` (loaded elements, then levers).
+
+    x is each element's value (its η counts the same, and a spring's η also
+    scales its ``damping=`` companion) or lever ratio; P the parameter's SI
+    value.  From the parsed expressions (:func:`mechcirc.netlist.expressions_of`)
+    differentiated exactly, parameters in the order defined.
+    """
+    from .expressions import evaluate
+    from .netlist import expressions_of
+
+    exprs = expressions_of(circuit)
+    params = dict(circuit.params)
+    if not exprs or not params:
+        return {}
+    position = {name: k for k, name in enumerate(names)}
+    x = {e.name: e.value for e in circuit.elements} | {lv.name: lv.ratio for lv in circuit.levers}
+    eta = {e.name: e.eta for e in circuit.elements}
+    targets: dict[tuple, list[tuple[str, float]]] = {}
+    for (name, what) in exprs:
+        if what == "value" or what == "ratio":
+            targets[(name, what)] = [(name, x.get(name, math.nan))]
+        elif what == "eta":
+            targets[(name, what)] = [(m, eta[name]) for m in (name, f"{name}_damping")
+                                     if m in eta]
+        elif what == "damping" and f"{name}_damping" in x:
+            targets[(name, what)] = [(f"{name}_damping", x[f"{name}_damping"])]
+    used = [(key, e, f) for key, (e, f) in exprs.items()
+            if e.kind != "num" and (key[0] == "param" or key in targets) and e.names() & params.keys()]
+    out = {}
+    for p, value in params.items():
+        tangent = {p: 1.0}
+        row = np.zeros(len(names))
+        for key, expr, factor in used:
+            if key == ("param", p):
+                continue
+            d = factor * evaluate(expr, params, tangent=tangent)[1]
+            if not d:
+                continue
+            if key[0] == "param":
+                tangent[key[1]] = d
+                continue
+            for name, xv in targets[key]:
+                if name in position:
+                    row[position[name]] += value * d / xv
+        out[p] = row
+    return out

@@ -1,0 +1,364 @@
+"""Mode shapes, energy per element and sensitivities against independent references:
+mpmath eigen-solves of hand-built M, C, K, closed forms, and central finite
+differences of find_resonances."""
+
+import dataclasses
+import math
+
+import mpmath
+import numpy as np
+import pytest
+
+import mechcirc
+from mechcirc.modes import modes
+
+CHAIN = """drive V a 0 velocity=1
+spring k1 a n1 1000
+mass m1 n1 0 1.0
+spring k2 n1 n2 2000
+mass m2 n2 0 2.0
+spring k3 n2 n3 1500
+mass m3 n3 0 0.5
+spring k4 n3 0 800
+"""
+VALUES = {"k1": 1000, "m1": 1.0, "k2": 2000, "m2": 2.0, "k3": 1500, "m3": 0.5, "k4": 800,
+          "c2": 3.0}
+
+
+def _chain_matrices(v, held: bool, damped: bool):
+    """M, C, K (mpmath) of the chain n1-n2-n3, written by hand: node a held at rest
+    (resonances) or released (k1 carries no force: anti-resonances)."""
+    k1 = v["k1"] if held else 0
+    M = mpmath.diag([v["m1"], v["m2"], v["m3"]])
+    K = mpmath.matrix([[k1 + v["k2"], -v["k2"], 0],
+                       [-v["k2"], v["k2"] + v["k3"], -v["k3"]],
+                       [0, -v["k3"], v["k3"] + v["k4"]]])
+    C = mpmath.diag([0, v["c2"] if damped else 0, 0])
+    return M, C, K
+
+
+def _mp_roots(M, C, K):
+    """(s, x) of (s²M + sC + K) x = 0 with Im s ≥ 0, by mpmath's eig of the first-order form."""
+    n = M.rows
+    Minv = M ** -1
+    A = mpmath.zeros(2 * n, 2 * n)
+    for i in range(n):
+        A[i, n + i] = 1
+    A[n:, :n] = -Minv * K
+    A[n:, n:] = -Minv * C
+    E, ER = mpmath.eig(A)
+    return [(complex(E[j]), np.array([complex(ER[i, j]) for i in range(n)]))
+            for j in range(2 * n) if mpmath.im(E[j]) >= 0]
+
+
+def _mac(a, b):
+    return abs(np.vdot(a, b)) ** 2 / (np.vdot(a, a).real * np.vdot(b, b).real)
+
+
+@pytest.mark.parametrize("damped", [False, True])
+def test_mode_shapes_and_energies_against_an_mpmath_eigen_solve(damped):
+    text = CHAIN + ("damper c2 n2 0 3.0\n" if damped else "")
+    found = modes(mechcirc.parse(text))
+    assert [m.resonance for m in found] == mechcirc.parse(text).resonances()
+    assert len(found) == 6
+    with mpmath.workdps(30):
+        for m in found:
+            r = m.resonance
+            held = r.kind == "resonance"
+            ref = _mp_roots(*_chain_matrices(VALUES, held, damped))
+            s_ref, x = min(ref, key=lambda sx: abs(sx[0] - m.s))
+            assert abs(s_ref - m.s) <= 1e-12 * abs(s_ref)
+            # Node a: at rest when held; released, it follows n1 through the unloaded k1.
+            want = np.concatenate([[0 if held else x[0]], x])
+            got = np.array([m.shape[n] for n in ("a", "n1", "n2", "n3")])
+            assert 1 - _mac(got, want) <= 1e-12
+            assert max(abs(z) for z in m.shape.values()) == 1
+            # Energies from the reference vector (velocity = s·x), written out by hand.
+            vel = s_ref * x
+            wn2 = abs(s_ref) ** 2
+            d = {"k1": vel[0] if held else 0, "k2": vel[0] - vel[1], "k3": vel[1] - vel[2],
+                 "k4": vel[2]}
+            E = {f"m{i + 1}": 0.5 * VALUES[f"m{i + 1}"] * abs(vel[i]) ** 2 for i in range(3)}
+            E |= {k: 0.5 * VALUES[k] * abs(dv) ** 2 / wn2 for k, dv in d.items()}
+            total = sum(E.values())
+            for name, value in E.items():
+                assert m.energy[name] == pytest.approx(value / total, abs=1e-12)
+            assert abs(sum(m.energy.values()) - 1) <= 1e-12
+            if damped:
+                assert m.dissipation["c2"] == pytest.approx(
+                    VALUES["c2"] * abs(vel[1]) ** 2 / (2 * math.sqrt(wn2) * total), rel=1e-12)
+
+
+def test_single_degree_of_freedom_closed_forms():
+    """m, k, c from one node to the frame, force-driven: the anti-resonance is the
+    free oscillator; its damper's part of ζ is ζ = c / (2√(km)), the energies are
+    ½ each, and the forces are S·v of each law at s."""
+    m, k, c = 2.0, 800.0, 4.0
+    (mode,) = modes(mechcirc.parse(f"drive F a 0 force=1\nmass m a 0 {m}\n"
+                                   f"spring k a 0 {k}\ndamper c a 0 {c}\n"))
+    zeta = c / (2 * math.sqrt(k * m))
+    assert mode.resonance.kind == "antiresonance"
+    assert mode.resonance.zeta == pytest.approx(zeta, rel=1e-13)
+    assert mode.dissipation["c"] == pytest.approx(zeta, rel=1e-12)
+    assert mode.energy == pytest.approx({"m": 0.5, "k": 0.5}, abs=1e-12)
+    s = complex(-zeta, math.sqrt(1 - zeta ** 2)) * math.sqrt(k / m)
+    assert mode.shape == {"a": 1}
+    assert mode.force["m"] == pytest.approx(m * s, rel=1e-12)
+    assert mode.force["k"] == pytest.approx(k / s, rel=1e-12)
+    assert mode.force["c"] == pytest.approx(c, rel=1e-12)
+    # Free oscillation: no net force on the node.
+    assert abs(sum(mode.force.values())) <= 1e-12 * abs(mode.force["k"])
+    assert mode.sensitivity == pytest.approx({"m": -0.5, "k": 0.5, "c": 0.0}, abs=1e-12)
+    # ζ = c/(2√(km)): p·∂ζ/∂p = ζ·(exponent of p).
+    assert mode.zeta_sensitivity == pytest.approx({"m": -zeta / 2, "k": -zeta / 2, "c": zeta},
+                                                  abs=1e-12)
+
+
+def test_overdamped_root_has_no_mode():
+    found = modes(mechcirc.load("docs/examples/drive.mcir"))
+    over = [m for m in found if m.resonance.omega_d == 0]
+    assert len(over) == 1
+    assert over[0].shape == {} and over[0].energy == {}
+    assert "overdamped" in over[0].note
+    assert all(m.shape and not m.note for m in found if m.resonance.omega_d > 0)
+
+
+def _rebuilt(circuit, name, factor):
+    """``circuit`` with the value (or lever ratio) of ``name`` multiplied by ``factor``."""
+    els = tuple(dataclasses.replace(e, value=e.value * factor) if e.name == name else e
+                for e in circuit.elements)
+    levers = tuple(dataclasses.replace(lv, ratio=lv.ratio * factor) if lv.name == name else lv
+                   for lv in circuit.levers)
+    return dataclasses.replace(circuit, elements=els, levers=levers)
+
+
+H = 1e-5
+
+
+def _fd(make, n_roots):
+    """Central differences of (ln ωₙ, ζ) of every root against ln p, step H."""
+    up, down = make(1 + H).resonances(), make(1 - H).resonances()
+    assert len(up) == len(down) == n_roots
+    return ([(math.log(a.omega) - math.log(b.omega)) / (math.log1p(H) - math.log1p(-H))
+             for a, b in zip(up, down)],
+            [(a.zeta - b.zeta) / (math.log1p(H) - math.log1p(-H)) for a, b in zip(up, down)])
+
+
+@pytest.mark.parametrize("path", ["docs/examples/drive.mcir", "netlists/stb_heald.mcir",
+                                  "docs/examples/lever.mcir"])
+def test_sensitivities_against_central_differences(path):
+    circuit = mechcirc.load(path)
+    found = modes(circuit)
+    n = len(found)
+    names = list(found[0].sensitivity)
+    assert set(names) == {e.name for e in circuit.elements} | {lv.name for lv in circuit.levers}
+    for name in names:
+        rel, zeta = _fd(lambda f, name=name: _rebuilt(circuit, name, f), n)
+        for m, r, z in zip(found, rel, zeta):
+            scale = max(abs(x) for x in m.sensitivity.values())
+            assert abs(m.sensitivity[name] - r) <= 1e-6 * scale, (name, m.resonance)
+            assert abs(m.zeta_sensitivity[name] - z) <= 1e-6 * max(scale * m.resonance.zeta,
+                                                                   1e-12), (name, m.resonance)
+    # Scaling every mass, spring and damper together moves no root: the element
+    # sensitivities sum to 0 (levers excluded).
+    elements = {e.name for e in circuit.elements}
+    for m in found:
+        assert abs(sum(x for k, x in m.sensitivity.items() if k in elements)) <= 1e-12
+    assert set(found[0].param_sensitivity) == set(circuit.params)
+    for p, value in circuit.params.items():
+        rel, zeta = _fd(lambda f, p=p, v=value: mechcirc.load(path, params={p: v * f}), n)
+        for m, r, z in zip(found, rel, zeta):
+            scale = max(abs(x) for x in m.sensitivity.values())
+            assert abs(m.param_sensitivity[p] - r) <= 1e-6 * scale, (p, m.resonance)
+            assert abs(m.param_zeta_sensitivity[p] - z) <= 1e-6 * max(
+                scale * m.resonance.zeta, 1e-12), (p, m.resonance)
+
+
+TWO_DOF = """.param kk=3000 cc=2.5
+drive V a 0 velocity=1
+spring k1 a n1 {kk}
+mass m1 n1 0 1.5
+damper c1 n1 0 {cc}
+spring k2 n1 n2 {2*kk - 1000}
+mass m2 n2 0 0.7 eta={sqrt(cc)}
+spring k3 n2 0 900
+"""
+
+
+def _two_dof_roots(kk, cc, held):
+    """The roots (Im s ≥ 0) of the netlist TWO_DOF, in mpmath, from hand-built matrices."""
+    k1, k2, k3 = (kk if held else 0), 2 * kk - 1000, 900
+    M = mpmath.diag([mpmath.mpf("1.5"), mpmath.mpf("0.7") * mpmath.sqrt(cc)])
+    K = mpmath.matrix([[k1 + k2, -k2], [-k2, k2 + k3]])
+    C = mpmath.diag([cc, 0])
+    n = 2
+    A = mpmath.zeros(4, 4)
+    A[0, 2] = A[1, 3] = 1
+    A[2:, :2] = -(M ** -1) * K
+    A[2:, 2:] = -(M ** -1) * C
+    E = mpmath.eig(A, right=False)
+    return sorted((e for e in E if mpmath.im(e) > 0), key=lambda e: abs(e))[:n]
+
+
+def test_sensitivities_against_mpmath_40_digits():
+    """(p/ωₙ)∂ωₙ/∂p and p∂ζ/∂p of a damped two-degree-of-freedom system, elements
+    and .params (through several values and an η), against central differences of
+    its roots in 40-digit arithmetic (step 1e-12: error ~1e-24)."""
+    found = modes(mechcirc.parse(TWO_DOF))
+    assert len(found) == 4
+    with mpmath.workdps(40):
+        kk, cc, h = mpmath.mpf(3000), mpmath.mpf("2.5"), mpmath.mpf("1e-12")
+        for m in found:
+            held = m.resonance.kind == "resonance"
+            roots = _two_dof_roots(kk, cc, held)
+            k = min(range(len(roots)), key=lambda i: abs(complex(roots[i]) - m.s))
+
+            def wz(kk_, cc_, held=held, k=k):
+                s = _two_dof_roots(kk_, cc_, held)[k]
+                return abs(s), -mpmath.re(s) / abs(s)
+
+            for p, args in (("kk", lambda f: (kk * f, cc)), ("cc", lambda f: (kk, cc * f))):
+                (w1, z1), (w0, z0) = wz(*args(1 + h)), wz(*args(1 - h))
+                w = wz(kk, cc)[0]
+                rel = float((w1 - w0) / (2 * h * w))
+                dz = float((z1 - z0) / (2 * h))
+                assert abs(m.param_sensitivity[p] - rel) <= 1e-10, (p, m.resonance)
+                assert abs(m.param_zeta_sensitivity[p] - dz) <= 1e-10, (p, m.resonance)
+
+
+@pytest.mark.parametrize("damped", [False, True])
+def test_band_solver_roots_get_their_vectors_by_inverse_iteration(monkeypatch, damped):
+    """Above the dense limit the band solver gives no vectors: the modes found by
+    inverse iteration equal those of the dense solve."""
+    import mechcirc.resonances as res
+
+    lines = ["drive V d 0 velocity=1", "spring k0 d n1 100"]
+    for i in range(1, 61):
+        lines += [f"mass m{i} n{i} 0 {1 + 0.01 * i}",
+                  f"spring k{i} n{i} {f'n{i + 1}' if i < 60 else '0'} {100 + i}"]
+        lines += [f"damper c{i} n{i} 0 0.05"] if damped else []
+    text = "\n".join(lines)
+    dense = modes(mechcirc.parse(text), omega_max=5.0)
+    monkeypatch.setattr(res, "MAX_UNKNOWNS_DAMPED" if damped else "MAX_UNKNOWNS", 10)
+    band = modes(mechcirc.parse(text), omega_max=5.0)
+    assert len(band) == len(dense) >= 4
+    for a, b in zip(dense, band):
+        assert b.resonance.omega == pytest.approx(a.resonance.omega, rel=1e-12)
+        va, vb = (np.array(list(m.shape.values())) for m in (a, b))
+        assert 1 - _mac(va, vb) <= 1e-12
+        for name, x in a.sensitivity.items():
+            assert b.sensitivity[name] == pytest.approx(x, abs=1e-9)
+            assert b.zeta_sensitivity[name] == pytest.approx(a.zeta_sensitivity[name],
+                                                             abs=1e-9)
+
+
+def _run(argv, capsys):
+    from mechcirc.cli import main
+
+    status = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+def test_cli_modes_and_sensitivity_json_carry_the_api_values(capsys):
+    path = "docs/examples/drive.mcir"
+    status, out, err = _run(["resonances", path, "--modes", "--sensitivity", "--json"], capsys)
+    assert status == 0, err
+    import json
+
+    rows = json.loads(out)["resonances"]
+    api = modes(mechcirc.load(path))
+    assert len(rows) == len(api) == 4
+    for row, m in zip(rows, api):
+        assert row["omega"] == m.resonance.omega
+        assert row["element_sensitivity"] == m.sensitivity
+        assert row["param_sensitivity"] == m.param_sensitivity == {
+            "eta1": pytest.approx(m.param_sensitivity["eta1"])}
+        if m.shape:
+            assert row["mode"] == {n: [v.real, v.imag] for n, v in m.shape.items()}
+            assert row["energy"] == m.energy
+        else:
+            assert row["mode"] is None and "overdamped" in row["note"]
+    # Without the flags the document is what it was.
+    status, out, err = _run(["resonances", path, "--json"], capsys)
+    assert set(json.loads(out)["resonances"][0]) == {"kind", "omega", "f_hz", "omega_d",
+                                                     "zeta", "error"}
+
+
+def test_cli_tables_and_plot(capsys, tmp_path):
+    path = "netlists/stb_heald.mcir"
+    image = tmp_path / "modes.png"
+    status, out, err = _run(["resonances", path, "--modes", "--sensitivity", "--plot", image],
+                            capsys)
+    assert status == 0, err
+    assert image.stat().st_size > 10_000
+    assert out.count("to raise omega by 10 % (linear estimate): ") == 5
+    # The first resonance is the warp (k0) on the heald frame: its advice names k0 first.
+    first = out.split("\n1: resonance")[1].split("\n2: ")[0]
+    assert "stiffen k0 by" in first.split("linear estimate): ")[1].split(",")[0]
+    assert "energy" in first and "eta4" in first
+
+
+def test_plot_mode_draws_on_the_axes_given():
+    from matplotlib.figure import Figure
+
+    from mechcirc.plotting import plot_mode
+
+    found = modes(mechcirc.load("docs/examples/drive.mcir"))
+    ax = Figure().add_subplot()
+    assert plot_mode(found[0], ax=ax) is ax
+    (line,) = [ln for ln in ax.lines if ln.get_label() == "Re v"]
+    assert list(line.get_ydata()) == pytest.approx([v.real for v in found[0].shape.values()])
+    assert isinstance(plot_mode(found[-1]), Figure)       # overdamped: the note, no curve
+
+
+def test_a_repeated_root_says_its_shape_is_one_of_a_family():
+    """Three identical branches on the driven node: held, their root is triple (two
+    copies cancel in K); the one reported has no unique shape and says so."""
+    text = "drive V a 0 velocity=1\nmass ma a 0 1\n" + "".join(
+        f"spring k{i} a b{i} 100\nmass m{i} b{i} 0 1\n" for i in range(3))
+    found = modes(mechcirc.parse(text))
+    assert [(m.resonance.kind, round(m.resonance.omega, 9)) for m in found] == [
+        ("resonance", 10.0), ("antiresonance", 20.0)]
+    assert "repeated root" in found[0].note and found[1].note == ""
+
+
+def test_cli_plot_of_many_modes_draws_the_lowest_and_says_so(capsys, tmp_path):
+    path = tmp_path / "chain.mcir"
+    lines = ["drive V d 0 velocity=1", "spring k0 d n1 100"]
+    for i in range(1, 21):
+        lines += [f"mass m{i} n{i} 0 1", f"spring k{i} n{i} {f'n{i + 1}' if i < 20 else '0'} 100"]
+    path.write_text("\n".join(lines))
+    status, _, err = _run(["resonances", path, "--plot", tmp_path / "m.png"], capsys)
+    assert status == 0
+    assert "draws the lowest 12 of 40 modes" in err
+    status, _, err = _run(["resonances", path, "--plot", tmp_path / "no" / "m.png"], capsys)
+    assert status == 2 and "does not exist" in err
+
+
+UNITS = """.param k=2 N/mm r=0.5
+.param m2={k/1000 + 1} g
+drive V a 0 velocity=1
+spring k1 a b {k} N/m
+mass m1 b 0 {m2*1e3} g
+lever L b 0 c 0 ratio={r*2}
+spring k2 c 0 {3*k} N/mm damping={r} N*s/mm eta={1 + r}
+mass m3 c 0 0.2
+"""
+
+
+def test_param_sensitivities_through_units_levers_and_a_spring_damping():
+    """A .param in N/mm, one defined from another in g, a lever ratio, a spring's
+    damping= companion and its η: against central differences of the roots with the
+    parameter overridden (SI)."""
+    circuit = mechcirc.parse(UNITS)
+    found = modes(circuit)
+    assert len(found) >= 2
+    for p, value in circuit.params.items():
+        rel, zeta = _fd(lambda f, p=p, v=value: mechcirc.parse(UNITS, params={p: v * f}),
+                        len(found))
+        for m, r, z in zip(found, rel, zeta):
+            scale = max(abs(x) for x in m.sensitivity.values())
+            assert abs(m.param_sensitivity[p] - r) <= 1e-6 * scale, (p, m.resonance)
+            assert abs(m.param_zeta_sensitivity[p] - z) <= 1e-6 * max(
+                scale * m.resonance.zeta, 1e-12), (p, m.resonance)
