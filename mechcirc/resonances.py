@@ -599,3 +599,293 @@ def _secant(system, s0: np.ndarray, pole: np.ndarray, e0: np.ndarray, damped: bo
     newton = np.where(np.isfinite(newton), 10 * newton, 0.0)
     err = np.where(bad, np.maximum(e0, newton), np.maximum(err, eps))
     return s, err
+
+
+# --------------------------------------------------------------------------
+# Many designs at once (mechcirc.batch)
+# --------------------------------------------------------------------------
+
+def batched_resonances(ds, omega_max: float | None = None):
+    """The resonances of the designs ``ds`` (:class:`mechcirc.batch.Designs`); see
+    :meth:`mechcirc.batch.Designs.resonances`.
+
+    The undamped designs of a series–parallel network whose mass matrix is
+    regular follow :func:`find_resonances` step by step on stacks: the same
+    stamps (:func:`mechcirc.nodal.stamps`), the same projections
+    (:func:`_project`), the same scaling and filters as :func:`_modes_unchecked`;
+    the pencil is reduced by a batched Cholesky factorisation of the mass
+    matrix (where :func:`_undamped` diagonalises it) and all designs are solved
+    by one stacked ``eigvalsh``; each root is then polished by a secant on the
+    design's own K(ω) from the compiled plan (:func:`_secant_designs`).  The
+    other designs are solved one by one by :func:`find_resonances`.
+    """
+    import warnings
+
+    from .batch import DesignResonances
+    from .errors import MechcircError
+
+    D = ds.size
+    rows = _batched_roots(ds, omega_max)
+    batched = {} if rows is None else rows
+    failed: dict[int, str] = {}
+    found: dict[int, list] = {}
+    single = np.array(sorted(set(range(D)) - set(batched)), dtype=np.int64)
+    for d in single.tolist():
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                found[d] = [(r.kind, r.omega, r.omega_d, r.zeta, r.error)
+                            for r in find_resonances(ds.design(d), omega_max)]
+        except MechcircError as exc:
+            failed[d] = str(exc)
+            found[d] = []
+    found.update(batched)
+    R = max((len(v) for v in found.values()), default=0)
+    kind = np.full((D, R), "", dtype=object)
+    out = np.full((5 - 1, D, R), np.nan)
+    count = np.zeros(D, dtype=np.int64)
+    for d, roots in found.items():
+        count[d] = len(roots)
+        for i, (k, *vals) in enumerate(roots):
+            kind[d, i] = k
+            out[:, d, i] = vals
+    return DesignResonances(kind.astype(str), out[0], out[1], out[2], out[3], count,
+                            omega_max, single, failed)
+
+
+def _batched_roots(ds, omega_max) -> dict | None:
+    """``{design: [(kind, ω, ω_d, ζ, error), ...]}`` for the designs the stacked path
+    solves (undamped, regular mass matrix, the template's lever ratios), or None."""
+    from . import nodal
+    from .errors import NotSeriesParallelError, TopologyError
+
+    try:
+        ds.circuit.tree
+        system = ds.circuit.nodal
+    except (NotSeriesParallelError, TopologyError):
+        return None
+    cand = ds.valid.copy()
+    row = {e.name: i for i, e in enumerate(ds.circuit.elements)}
+    if system.D.nnz and np.any(system.D.data):
+        return None                                   # dampers: QZ, one by one
+    for lv in system.levers:                          # the projection depends on them
+        i = next(j for j, m in enumerate(ds.circuit.levers) if m.name == lv.name)
+        cand &= ds.ratios[i] == lv.ratio
+    which = np.flatnonzero(cand)
+    if not which.size:
+        return None
+    n_nodes = len(system.nodes)
+    G_levers = system.C[n_nodes:, :n_nodes].toarray()
+    drive_row = np.zeros((1, n_nodes))
+    if system.a >= 0:
+        drive_row[0, system.a] = 1.0
+    if system.b >= 0:
+        drive_row[0, system.b] = -1.0
+    # Each element's stamp pattern B_e, so that M = Σ_e (value·η)_e B_e (the same
+    # entries nodal.assemble sums); projected, Zᵀ M Z = Σ_e s_e Zᵀ B_e Z.
+    index = {n: i for i, n in enumerate(system.nodes)}
+    for e in system.elements:
+        index.setdefault(e.n1, -1)
+        index.setdefault(e.n2, -1)
+    for lv in system.levers:
+        for n in (lv.p1, lv.p2, lv.s1, lv.s2):
+            index.setdefault(n, -1)
+    E = len(system.elements)
+    pos = {e.name: k for k, e in enumerate(system.elements)}
+    B = {"mass": np.zeros((E, n_nodes, n_nodes)), "spring": np.zeros((E, n_nodes, n_nodes))}
+    for kind, r, c, sign, source, _ in nodal.stamps(system.elements, (), index):
+        if kind in B:
+            B[kind][pos[source.name], r, c] += sign
+    el_rows = np.array([row[e.name] for e in system.elements], dtype=np.int64)
+    S = (ds.values[el_rows][:, which] * ds.eta[el_rows][:, which]).T      # (D', E)
+    roots: dict[int, list] = {}
+    problems = []
+    for kind, G in (("resonance", np.vstack([G_levers, drive_row])),
+                    ("antiresonance", G_levers)):
+        Z = _project(G, n_nodes).toarray()
+        k = Z.shape[1]
+        Mr, Kr = (S @ np.einsum("ia,eij,jb->eab", Z, B[x], Z).reshape(E, k * k)
+                  for x in ("mass", "spring"))
+        problems.append((kind, _stacked_modes(Mr.reshape(-1, k, k), Kr.reshape(-1, k, k),
+                                              omega_max)))
+    (_, (w_h, e_h, ok_h)), (_, (w_r, e_r, ok_r)) = problems
+    ok = ok_h & ok_r
+    # A mode in both problems cancels in K (_cancel): left to the single path.
+    with np.errstate(invalid="ignore"):
+        close = np.abs(w_r[:, None, :] - w_h[:, :, None]) / w_h[:, :, None] < \
+            1e3 * (e_h[:, :, None] + e_r[:, None, :])
+    ok &= ~close.any(axis=(1, 2))
+    keep = np.flatnonzero(ok)
+    if not keep.size:
+        return {}
+    w = np.concatenate([w_h[keep], w_r[keep]], axis=1)
+    e0 = np.concatenate([e_h[keep], e_r[keep]], axis=1)
+    pole = np.zeros(w.shape, dtype=bool)
+    pole[:, w_h.shape[1]:] = True
+    p = ds._plan(which[keep])
+    if p is None:
+        return None
+    w, err = _secant_designs(p, w, pole, e0)
+    eps = np.finfo(float).eps
+    for j, d in enumerate(which[keep].tolist()):
+        live = np.isfinite(w[j])
+        if omega_max is not None:
+            live &= w[j] <= omega_max
+        out = [("antiresonance" if pole[j, i] else "resonance", float(w[j, i]),
+                float(w[j, i]), 0.0, float(max(err[j, i], eps)))
+               for i in np.flatnonzero(live)]
+        roots[d] = sorted(out, key=lambda t: (t[1], t[0]))
+    return roots
+
+
+def _stacked_modes(M: np.ndarray, K: np.ndarray, omega_max):
+    """Undamped roots ω of stacks of projected pencils (K, M): :func:`_modes_unchecked`'s
+    scaling and filters on stacks, the pencil reduced by a Cholesky factor of M.
+
+    Returns ``(ω, error, ok)``: ω and its eigenvalue estimate (eps·λ_max/λ·4) of shape
+    (D, k), NaN where no root; ``ok`` false for the designs this cannot solve (a mass
+    matrix that is singular to within 1e-13 of its largest eigenvalue, where
+    :func:`_undamped` condenses, or values beyond float64's range).
+    """
+    D, k = M.shape[0], M.shape[1]
+    if k == 0:
+        return np.zeros((D, 0)), np.zeros((D, 0)), np.ones(D, dtype=bool)
+    with np.errstate(all="ignore"):
+        scale_m = np.abs(M).max(axis=(1, 2))
+        scale_k = np.abs(K).max(axis=(1, 2))
+        scale_m = np.where(scale_m > 0, scale_m, 1.0)
+        scale_k = np.where(scale_k > 0, scale_k, 1.0)
+        w_ref = np.sqrt(scale_k) / np.sqrt(scale_m)
+        Ms = M / scale_m[:, None, None]
+        Ks = K / scale_k[:, None, None]
+    ok = np.isfinite(w_ref) & (w_ref > 0) & np.isfinite(Ms).all(axis=(1, 2)) & \
+        np.isfinite(Ks).all(axis=(1, 2))
+    Ms = np.where(ok[:, None, None], Ms, np.eye(k))
+    Ks = np.where(ok[:, None, None], Ks, np.eye(k))
+    lam, regular = _undamped_stack(Ms, Ks)
+    ok &= regular
+    lam = np.where(np.isfinite(lam), lam, -np.inf)
+    top = np.maximum(1.0, lam.max(axis=1, initial=0.0))
+    live = (lam > 1e-11 * top[:, None]) & ok[:, None]
+    eps = np.finfo(float).eps
+    with np.errstate(all="ignore"):
+        w = np.where(live, w_ref[:, None] * np.sqrt(np.where(live, lam, 1.0)), np.nan)
+        err = np.where(live, eps * (np.where(live, lam, 1.0).max(axis=1, initial=1.0)[:, None]
+                                    / np.where(live, lam, 1.0)) * 4, np.nan)
+    if omega_max is not None:
+        beyond = w > omega_max * (1 + 1e-6)
+        w[beyond] = np.nan
+        err[beyond] = np.nan
+    return w, err, ok
+
+
+def _undamped_stack(M: np.ndarray, K: np.ndarray):
+    """:func:`_undamped` on stacks (D, k, k): λ of K v = λ M v, shape (D, k), NaN-padded.
+
+    A mass matrix that factors (its smallest eigenvalue, ≥ 1/‖L⁻¹‖²_F, above
+    1e-13 of its largest, ≤ ‖M‖_F) reduces the pencil to L⁻¹ K L⁻ᵀ by its
+    Cholesky factor L; the others are diagonalised (``eigh``) and their massless
+    directions condensed out statically, as :func:`_undamped` does, when all of
+    them have the same number of such directions (else ``regular`` is false for
+    those that differ: the single path takes them).  One stacked ``eigvalsh``.
+    """
+    D, k = M.shape[0], M.shape[1]
+    eye = np.eye(k)
+    try:
+        chol = np.linalg.cholesky(M)
+        factored = np.isfinite(chol).all(axis=(1, 2))
+    except np.linalg.LinAlgError:                  # one of them is not definite
+        chol, factored = np.broadcast_to(eye, M.shape).copy(), np.zeros(D, dtype=bool)
+    chol = np.where(factored[:, None, None], chol, eye)
+    Linv = np.linalg.inv(chol)
+    with np.errstate(all="ignore"):
+        lam_min = 1.0 / np.sum(Linv * Linv, axis=(1, 2))
+    factored &= lam_min > 1e-13 * np.sqrt(np.sum(M * M, axis=(1, 2)))
+    lam = np.full((D, k), np.nan)
+    regular = factored.copy()
+    if factored.any():
+        f = np.flatnonzero(factored)
+        A = Linv[f] @ K[f] @ np.swapaxes(Linv[f], 1, 2)
+        lam[f] = np.linalg.eigvalsh((A + np.swapaxes(A, 1, 2)) / 2)
+    rest = np.flatnonzero(~factored)
+    if rest.size:
+        mu, V = np.linalg.eigh(M[rest])
+        massless = mu <= 1e-13 * np.maximum(mu.max(axis=1, initial=0.0), 1e-300)[:, None]
+        n0s = massless.sum(axis=1)
+        n0 = int(np.bincount(n0s).argmax())
+        same = (n0s == n0) & (n0 < k) & (massless[:, :n0].all(axis=1))
+        g = rest[same]
+        mu, V = mu[same], V[same]
+        R, N = V[:, :, n0:], V[:, :, :n0]
+        Kg = K[g]
+        Rt, Nt = np.swapaxes(R, 1, 2), np.swapaxes(N, 1, 2)
+        Kc = Rt @ Kg @ R
+        if n0:
+            Knr = Nt @ Kg @ R
+            Kc = Kc - np.swapaxes(Knr, 1, 2) @ np.linalg.solve(Nt @ Kg @ N, Knr)
+        d = 1.0 / np.sqrt(mu[:, n0:])
+        A = Kc * d[:, :, None] * d[:, None, :]
+        lam[g, :k - n0] = np.linalg.eigvalsh((A + np.swapaxes(A, 1, 2)) / 2)
+        regular[g] = True
+    return lam, regular
+
+
+def _secant_designs(p, w0: np.ndarray, pole: np.ndarray, e0: np.ndarray):
+    """:func:`_secant` for undamped roots of many designs on their own K(ω) = jX(ω).
+
+    ``p`` is the plan of the D designs (:meth:`mechcirc.reduction.Plan.with_values`);
+    ``w0`` (D, R) the eigen-solver's roots (NaN: none), ``pole`` whether each is
+    a zero of 1/K (anti-resonance: g = −1/X) or of K (resonance: g = X), ``e0``
+    their estimates.  g and the bound of its error come from one evaluation of
+    every design's plan at its own points.  Returns ``(ω, relative error)``.
+    """
+    from .reduction import evaluate_designs
+
+    eps = np.finfo(float).eps
+    have = np.isfinite(w0)
+    w_safe = np.where(have, w0, 1.0)
+
+    def g_and_delta(w):
+        K, rho = evaluate_designs(p, np.where(np.isfinite(w), w, 1.0), error=True)
+        with np.errstate(all="ignore"):
+            X = K.imag
+            g = np.where(pole, -1.0 / X, X)
+            rho = np.where(pole, rho + 2 * rho * rho + 4 * eps / 2, rho)
+            dg = 4 * np.maximum(rho * np.abs(g), eps * np.abs(g))
+        return g, dg
+
+    h = np.maximum(w_safe * np.maximum(np.nan_to_num(e0, nan=1e-9), 1e-9), 1e-300)
+    a, b = w_safe - h, w_safe.copy()
+    ga, _ = g_and_delta(a)
+    gb, db = g_and_delta(b)
+    with np.errstate(all="ignore"):
+        g0, slope0 = gb, (gb - ga) / (b - a)
+    active = have & np.isfinite(ga) & np.isfinite(gb)
+    step = np.full(w0.shape, np.inf)
+    slope = np.full(w0.shape, np.nan)
+    for _ in range(12):
+        if not active.any():
+            break
+        with np.errstate(all="ignore"):
+            sl = (gb - ga) / (b - a)
+            c = np.where(active, b - gb / sl, b)
+        ok = active & np.isfinite(c) & (c > 0)
+        gc, dc = g_and_delta(np.where(ok, c, b))
+        ok &= np.isfinite(gc)
+        dc = np.where(np.isfinite(dc), dc, db)
+        step = np.where(ok, np.abs(c - b), step)
+        slope = np.where(ok, sl, slope)
+        a, ga = np.where(ok, b, a), np.where(ok, gb, ga)
+        b, gb, db = np.where(ok, c, b), np.where(ok, gc, gb), np.where(ok, dc, db)
+        with np.errstate(all="ignore"):
+            done = step <= np.maximum(4 * eps * np.abs(b), db / np.abs(slope))
+        active = ok & ~done
+    with np.errstate(all="ignore"):
+        err = (db / np.abs(slope) + step) / np.abs(b)
+        moved = np.abs(b - w_safe) / w_safe
+        newton = np.abs(g0 / slope0) / w_safe
+    bad = ~np.isfinite(err) | ~np.isfinite(b) | (moved > 1e-3)
+    w = np.where(bad, w_safe, b)
+    newton = np.where(np.isfinite(newton), 10 * newton, 0.0)
+    err = np.where(bad, np.maximum(np.nan_to_num(e0, nan=0.0), newton), np.maximum(err, eps))
+    return np.where(have, w, np.nan), np.where(have, err, np.nan)
