@@ -431,11 +431,16 @@ def _extremes(ds: Designs, lo: float, hi: float, res: DesignResonances) -> Desig
         edges = ds.sweep(np.array([lo, hi]))
         Ke = np.abs(edges.K[fast])
         amp = np.abs(ds.amplitude[fast])
-        in_band = (res.omega[fast] >= lo * (1 - 1e-12)) & (res.omega[fast] <= hi)
+        with np.errstate(invalid="ignore"):
+            in_band = (res.omega[fast] >= lo * (1 - 1e-12)) & \
+                (res.omega[fast] <= hi * (1 + 1e-9))
         for kind, name in (("resonance", "min"), ("antiresonance", "max")):
             hit = in_band & (res.kind[fast] == kind)
-            first = np.where(hit.any(axis=1), np.argmax(hit, axis=1), -1)
-            w_first = np.where(first >= 0, res.omega[fast, np.maximum(first, 0)], np.nan)
+            if hit.shape[1] == 0:                     # no design has a root at all
+                first, w_first = np.full(fast.size, -1), np.full(fast.size, np.nan)
+            else:
+                first = np.where(hit.any(axis=1), np.argmax(hit, axis=1), -1)
+                w_first = np.where(first >= 0, res.omega[fast, np.maximum(first, 0)], np.nan)
             pick = np.argmin(Ke, axis=1) if name == "min" else np.argmax(Ke, axis=1)
             edge_v = Ke[np.arange(fast.size), pick]
             edge_w = np.array([lo, hi])[pick]

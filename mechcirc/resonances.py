@@ -704,10 +704,9 @@ def _batched_roots(ds, omega_max) -> dict | None:
                     ("antiresonance", G_levers)):
         Z = _project(G, n_nodes).toarray()
         k = Z.shape[1]
-        Mr, Kr = (S @ np.einsum("ia,eij,jb->eab", Z, B[x], Z).reshape(E, k * k)
+        Mr, Kr = (_weighted_sum(S, np.einsum("ia,eij,jb->eab", Z, B[x], Z))
                   for x in ("mass", "spring"))
-        problems.append((kind, _stacked_modes(Mr.reshape(-1, k, k), Kr.reshape(-1, k, k),
-                                              omega_max)))
+        problems.append((kind, _stacked_modes(Mr, Kr, omega_max)))
     (_, (w_h, e_h, ok_h)), (_, (w_r, e_r, ok_r)) = problems
     ok = ok_h & ok_r
     # A mode in both problems cancels in K (_cancel): left to the single path.
@@ -736,6 +735,16 @@ def _batched_roots(ds, omega_max) -> dict | None:
                for i in np.flatnonzero(live)]
         roots[d] = sorted(out, key=lambda t: (t[1], t[0]))
     return roots
+
+
+def _weighted_sum(S: np.ndarray, P: np.ndarray) -> np.ndarray:
+    """Σ_e S[:, e] · P[e] over the elements e with a nonzero pattern, shape (D, k, k):
+    term by term in element order, so that a design's matrix does not depend on
+    the other designs of the batch (a matrix product may block differently)."""
+    out = np.zeros((S.shape[0], *P.shape[1:]))
+    for e in np.flatnonzero(np.abs(P).reshape(P.shape[0], -1).max(axis=1, initial=0.0)):
+        out += S[:, e, None, None] * P[e]
+    return out
 
 
 def _stacked_modes(M: np.ndarray, K: np.ndarray, omega_max):
