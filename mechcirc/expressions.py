@@ -293,6 +293,18 @@ def evaluate(expr: Expr, params: Mapping[str, float], *, source: str = "<string>
     return values[id(expr)]
 
 
+
+def _pow(a: float, b: float) -> float:
+    """``a ** b`` as :func:`evaluate` computes it, NaN where it raises or is complex."""
+    try:
+        r = a ** b
+    except (ZeroDivisionError, OverflowError):
+        return math.nan
+    return math.nan if isinstance(r, complex) else r
+
+
+_POW = None
+
 def evaluate_array(expr: Expr, params: Mapping, size: int):
     """``expr`` over ``size`` designs at once: ``params`` maps names to arrays of shape
     (size,) (or floats).  Returns ``(values, bad)``: float64 arrays of shape (size,)
@@ -304,6 +316,9 @@ def evaluate_array(expr: Expr, params: Mapping, size: int):
     """
     import numpy as np
 
+    global _POW
+    if _POW is None:
+        _POW = np.frompyfunc(_pow, 2, 1)
     values: dict[int, object] = {}
     bad = np.zeros(size, dtype=bool)
     with np.errstate(all="ignore"):
@@ -332,8 +347,11 @@ def evaluate_array(expr: Expr, params: Mapping, size: int):
                         r[i] = math.nan
             else:
                 a, b = values.pop(id(node.args[0])), values.pop(id(node.args[1]))
-                r = (np.add if k == "+" else np.subtract if k == "-" else np.multiply
-                     if k == "*" else np.divide if k == "/" else np.power)(a, b)
+                if k == "**":             # Python's pow, as evaluate (numpy's may differ by an ulp)
+                    r = _POW(a, b).astype(float)
+                else:
+                    r = (np.add if k == "+" else np.subtract if k == "-" else np.multiply
+                         if k == "*" else np.divide)(a, b)
             bad |= ~np.isfinite(r)
             values[id(node)] = r
     return values[id(expr)], bad

@@ -1,0 +1,212 @@
+"""mechcirc.batch: many designs of one netlist at once, against the single-design path."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import mpmath
+import numpy as np
+import pytest
+
+from mechcirc import parse
+from mechcirc.batch import designs
+from mechcirc.errors import InputError, NetlistError
+from mechcirc.expressions import evaluate, evaluate_array, parse_expression
+from mechcirc.resonances import find_resonances
+
+STB = Path(__file__).resolve().parents[1] / "netlists" / "stb_heald.mcir"
+OMEGA = np.geomspace(10, 1e4, 200)
+
+# Masses to the frame (a regular mass matrix: the Cholesky path), a lever whose
+# ratio is a parameter, units, a spring's damping= companion and a damper.
+LEVER = """\
+.param r=2 m=1.5 k=4e4 c=3
+drive V a 0 velocity=0.2
+mass  m1 a 0 {m} kg
+spring k1 a b {k/1000} N/mm
+lever L b 0 c 0 ratio=r
+mass  m2 c 0 0.4
+spring k2 c 0 {2*k}
+"""
+DAMPED = LEVER + "damper d1 b 0 c\n"
+
+
+def stb_params(n, seed):
+    rng = np.random.default_rng(seed)
+    return {"eta1": rng.uniform(0.6, 1.0, n), "eta2": rng.uniform(1.0, 1.5, n),
+            "eta3": rng.uniform(0.7, 1.1, n), "eta4": rng.uniform(0.8, 1.2, n)}
+
+
+def one(text, params, d):
+    return parse(text, params={k: float(v[d]) for k, v in params.items()})
+
+
+@pytest.mark.parametrize("text, params", [
+    (STB.read_text(), stb_params(25, 1)),
+    (LEVER, {"r": np.linspace(0.5, 3, 7), "m": np.geomspace(0.1, 10, 7)}),
+    (DAMPED, {"c": np.geomspace(1e-3, 1e3, 7), "k": np.linspace(1e3, 1e5, 7)}),
+])
+def test_batched_sweep_is_the_single_sweep(text, params):
+    ds = designs(text, params)
+    s = ds.sweep(OMEGA)
+    assert s.single.size == 0 and not s.failed       # all through the batch
+    flags, Q0, v0 = s.flags, s.Q0, s.v0
+    for d in range(ds.size):
+        ref = one(text, params, d).sweep(OMEGA)
+        # The same compiled plan, a design at a time: the same numbers (the
+        # brief's bound is 1e-13 relative; they are equal).
+        np.testing.assert_array_equal(s.K[d], ref.K)
+        np.testing.assert_array_equal(s.error[d], ref.error)
+        np.testing.assert_array_equal(flags[d], ref.flags)
+        np.testing.assert_array_equal(Q0[d], ref.Q0)
+        np.testing.assert_array_equal(v0[d], ref.v0)
+
+
+def test_flags_and_singular_points_match():
+    # ω exactly on the pole of m | k (ω² = k/m = 100): K = +∞·j, flag 1, Q0 = 0.
+    text = ".param k=100\nmass m a 0 1\nspring s a 0 k\ndrive V a 0 velocity=1\n"
+    params = {"k": np.array([100.0, 400.0, 2500.0])}
+    omega = np.array([5.0, 10.0, 20.0, 50.0])
+    s = designs(text, params).sweep(omega)
+    for d in range(3):
+        ref = one(text, params, d).sweep(omega)
+        np.testing.assert_array_equal(s.K[d], ref.K)
+        np.testing.assert_array_equal(s.flags[d], ref.flags)
+    assert s.flags[0, 1] == 1 and s.Q0[0, 1] == 0
+
+
+@pytest.mark.parametrize("text, params, n_batched", [
+    (STB.read_text(), stb_params(40, 2), 40),            # singular M: condensed
+    (LEVER, {"m": np.geomspace(0.1, 10, 9)}, 9),          # regular M: Cholesky
+    (LEVER, {"r": np.array([0.5, 2.0, 3.0])}, 1),         # ratio varies: one by one but r = 2
+    (DAMPED, {"c": np.geomspace(1e-2, 1e2, 5)}, 0),       # dampers: QZ, one by one
+])
+def test_batched_resonances_are_find_resonances(text, params, n_batched):
+    ds = designs(text, params)
+    res = ds.resonances(omega_max=2e4)
+    assert ds.size - res.single.size == n_batched and not res.failed
+    worst = 0.0
+    for d in range(ds.size):
+        ref = find_resonances(one(text, params, d), 2e4)
+        got = res.list(d)
+        assert [r.kind for r in got] == [r.kind for r in ref]
+        for a, b in zip(got, ref):
+            worst = max(worst, abs(a.omega - b.omega) / b.omega)
+            assert a.zeta == pytest.approx(b.zeta, abs=1e-12)
+    assert worst <= 1e-12
+
+
+def test_batched_resonances_against_mpmath():
+    # drive at a, m1 a–0, k1 a–b, m2 b–0, k2 b–0 (masses to the frame: Cholesky).
+    # Resonance (a held): ω² = (k1 + k2)/m2.  Anti-resonance (a free): the
+    # 2-DOF pencil det([[k1 − ω²m1, −k1], [−k1, k1 + k2 − ω²m2]]) = 0.
+    text = ".param m1=1 m2=0.5 k1=1e4 k2=3e4\ndrive V a 0 velocity=1\nmass ma a 0 m1\n" \
+           "spring ka a b k1\nmass mb b 0 m2\nspring kb b 0 k2\n"
+    rng = np.random.default_rng(7)
+    params = {"m1": rng.uniform(0.2, 3, 6), "m2": rng.uniform(0.2, 3, 6),
+              "k1": rng.uniform(1e3, 1e5, 6), "k2": rng.uniform(1e3, 1e5, 6)}
+    res = designs(text, params).resonances()
+    assert res.single.size == 0
+    mpmath.mp.dps = 40
+    for d in range(6):
+        m1, m2, k1, k2 = (mpmath.mpf(float(params[n][d])) for n in ("m1", "m2", "k1", "k2"))
+        held = mpmath.sqrt((k1 + k2) / m2)
+        # m1 m2 λ² − (k1 m2 + (k1 + k2) m1) λ + k1 k2 = 0; the released network
+        # also has the rigid-free root only if k's vanish (they do not).
+        a, b, c = m1 * m2, -(k1 * m2 + (k1 + k2) * m1), k1 * k2
+        disc = mpmath.sqrt(b * b - 4 * a * c)
+        free = sorted(mpmath.sqrt(x) for x in ((-b - disc) / (2 * a), (-b + disc) / (2 * a)))
+        ref = sorted([("resonance", held)] + [("antiresonance", w) for w in free],
+                     key=lambda t: t[1])
+        got = res.list(d)
+        assert [r.kind for r in got] == [k for k, _ in ref]
+        for r, (_, w) in zip(got, ref):
+            rel = abs(r.omega - float(w)) / float(w)
+            assert rel <= 1e-15                      # achieved: ≤ 5.2e-16 (2-3 ulp)
+            assert r.error >= rel                    # the estimate covers the error
+
+
+def test_a_design_is_the_same_in_any_batch():
+    text, params = STB.read_text(), stb_params(12, 3)
+    ds = designs(text, params)
+    s, r = ds.sweep(OMEGA), ds.resonances(omega_max=1e4)
+    for d in (0, 5, 11):
+        alone = designs(text, {k: v[d:d + 1] for k, v in params.items()})
+        s1, r1 = alone.sweep(OMEGA), alone.resonances(omega_max=1e4)
+        np.testing.assert_array_equal(s1.K[0], s.K[d])
+        assert r1.list(0) == r.list(d)
+
+
+def test_extremes_of_a_lossless_design_against_a_fine_grid():
+    text = ".param k=100\nmass m a 0 1\nspring s a b k\nmass m2 b 0 2\ndrive V a 0 velocity=0.5\n"
+    params = {"k": np.array([100.0, 1e4])}
+    ds = designs(text, params)
+    ex = ds.extremes(np.array([1.0, 30.0]))
+    # k = 100: zero of K at ω = sqrt(k/m2) ≈ 7.07 and pole at sqrt(k(1/m + 1/m2)) ≈ 12.2
+    assert ex.K_min[0] == 0 and ex.omega_at_K_min[0] == pytest.approx(math.sqrt(50), rel=1e-14)
+    assert ex.K_max[0] == math.inf
+    assert ex.omega_at_K_max[0] == pytest.approx(math.sqrt(150), rel=1e-14)
+    assert ex.Q0_max[0] == math.inf
+    # k = 1e4: no zero or pole below 30 rad/s (first at ω = sqrt(5000) ≈ 70.7); the
+    # mass-like K = 1/(jω(m + m2 ∥ spring…)) falls: extremes at the band's ends,
+    # checked on a fine grid of the closed form K = (jω m2 + k/(jω)) / ...
+    w = np.geomspace(1.0, 30.0, 100001)
+    s = 1j * w
+    Y = s * 1 + 1 / (s / 1e4 + 1 / (s * 2))
+    absK = np.abs(1 / Y)
+    assert ex.K_max[1] == pytest.approx(absK.max(), rel=1e-12)
+    assert ex.K_min[1] == pytest.approx(absK.min(), rel=1e-12)
+    assert (ex.omega_at_K_max[1], ex.omega_at_K_min[1]) == (1.0, 30.0)
+    assert ex.Q0_max[1] == pytest.approx(0.5 / absK.min(), rel=1e-12)
+
+
+def test_damped_designs_take_the_single_path_and_are_counted():
+    params = {"c": np.array([1.0, 10.0])}
+    ds = designs(DAMPED, params)
+    ex = ds.extremes(np.geomspace(10, 1e3, 50))
+    assert list(ex.single) == [0, 1]
+    for d in range(2):
+        c = one(DAMPED, params, d)
+        from mechcirc.sweep import peak
+
+        assert ex.Q0_max[d] == peak(c, 10, 1e3, quantity="Q0").value
+        assert ex.K_max[d] == peak(c, 10, 1e3, quantity="K").value
+
+
+def test_invalid_designs_fail_with_the_parsers_message():
+    text = ".param m=2\nmass m1 a 0 m\nspring k a 0 100\ndrive V a 0 velocity=1\n"
+    ds = designs(text, {"m": [1.0, -1.0, 2.0]})
+    assert list(ds.valid) == [True, False, True]
+    s = ds.sweep([1.0, 2.0])
+    assert list(s.failed) == [1] and "mass 'm1' must be > 0 kg, got -1" in s.failed[1]
+    assert np.isfinite(s.K[[0, 2]]).all()
+
+
+def test_bad_arguments_are_refused():
+    text = ".param m=2\nmass m1 a 0 m\nspring k a 0 100\ndrive V a 0 velocity=1\n"
+    with pytest.raises(InputError, match="different lengths"):
+        designs(".param m=2 k=1\nmass m1 a 0 m\nspring s a 0 k\ndrive V a 0 velocity=1\n",
+                {"m": [1.0, 2.0], "k": [1.0, 2.0, 3.0]})
+    with pytest.raises(NetlistError, match="no .param named 'x'"):
+        designs(text, {"x": [1.0]})
+    with pytest.raises(InputError, match="one-dimensional"):
+        designs(text, {"m": np.ones((2, 2))})
+
+
+@pytest.mark.parametrize("source", ["a^2 * b - 3/a", "sqrt(a) + exp(b/10) * sin(a)",
+                                    "log(a - 1)", "a / (b - 2)", "(a - 2) ** 0.5",
+                                    "-a ** b", "degrees(radians(a)) + pi"])
+def test_array_expressions_are_the_scalar_ones(source):
+    expr = parse_expression(source)
+    rng = np.random.default_rng(5)
+    a = np.concatenate([rng.uniform(0.5, 4, 40), [1.0, 2.0]])
+    b = np.concatenate([rng.uniform(-3, 3, 40), [2.0, 2.0]])
+    values, bad = evaluate_array(expr, {"a": a, "b": b}, a.size)
+    for i in range(a.size):
+        try:
+            ref = evaluate(expr, {"a": float(a[i]), "b": float(b[i])})
+        except NetlistError:
+            assert bad[i]
+            continue
+        assert not bad[i] and values[i] == ref          # the same IEEE operations
