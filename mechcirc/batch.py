@@ -32,8 +32,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from .circuit import Circuit
 from .errors import InputError, MechcircError, NetlistError, NotSeriesParallelError
-from .sweep import (FLAG_OK, drive_force, drive_velocity, point_flags, singular_error,
-                    UNDAMPED_ZETA)
+from .sweep import (UNDAMPED_ZETA, drive_force, drive_velocity, point_flags,
+                    singular_error)
 
 __all__ = ["designs", "Designs", "DesignSweep", "DesignResonances", "DesignExtremes"]
 

@@ -625,42 +625,50 @@ def batched_resonances(ds, omega_max: float | None = None):
     from .errors import MechcircError
 
     D = ds.size
-    rows = _batched_roots(ds, omega_max)
-    batched = {} if rows is None else rows
+    found = _batched_roots(ds, omega_max)
+    which, pole, w, err = found if found is not None else (np.zeros(0, dtype=np.int64),) * 4
+    single = np.setdiff1d(np.arange(D), which)
     failed: dict[int, str] = {}
-    found: dict[int, list] = {}
-    single = np.array(sorted(set(range(D)) - set(batched)), dtype=np.int64)
+    alone: dict[int, list] = {}
     for d in single.tolist():
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
-                found[d] = [(r.kind, r.omega, r.omega_d, r.zeta, r.error)
-                            for r in find_resonances(ds.design(d), omega_max)]
+                alone[d] = find_resonances(ds.design(d), omega_max)
         except MechcircError as exc:
             failed[d] = str(exc)
-            found[d] = []
-    found.update(batched)
-    R = max((len(v) for v in found.values()), default=0)
-    kind = np.full((D, R), "", dtype=object)
-    out = np.full((5 - 1, D, R), np.nan)
+    R = max([w.shape[1] if w.ndim == 2 else 0] + [len(v) for v in alone.values()])
+    kind = np.full((D, R), "", dtype="<U13")
+    out = np.full((4, D, R), np.nan)
     count = np.zeros(D, dtype=np.int64)
-    for d, roots in found.items():
+    if which.size:
+        r = w.shape[1]
+        live = np.isfinite(w)
+        count[which] = live.sum(axis=1)
+        kind[which, :r] = np.where(live, np.where(pole, "antiresonance", "resonance"), "")
+        out[0, which, :r] = w
+        out[1, which, :r] = w
+        out[2, which, :r] = np.where(live, 0.0, np.nan)
+        out[3, which, :r] = err
+    for d, roots in alone.items():
         count[d] = len(roots)
-        for i, (k, *vals) in enumerate(roots):
-            kind[d, i] = k
-            out[:, d, i] = vals
-    return DesignResonances(kind.astype(str), out[0], out[1], out[2], out[3], count,
-                            omega_max, single, failed)
+        for i, x in enumerate(roots):
+            kind[d, i] = x.kind
+            out[:, d, i] = x.omega, x.omega_d, x.zeta, x.error
+    return DesignResonances(kind, out[0], out[1], out[2], out[3], count, omega_max, single,
+                            failed)
 
 
-def _batched_roots(ds, omega_max) -> dict | None:
-    """``{design: [(kind, ω, ω_d, ζ, error), ...]}`` for the designs the stacked path
-    solves (undamped, regular mass matrix, the template's lever ratios), or None."""
+def _batched_roots(ds, omega_max):
+    """``(designs, pole, ω, error)`` for the designs the stacked path solves (undamped,
+    a mass matrix it can reduce, the template's lever ratios), each row sorted as
+    :func:`find_resonances` sorts, NaN-padded; ``pole`` marks anti-resonances.  None
+    when it solves none."""
     from . import nodal
     from .errors import NotSeriesParallelError, TopologyError
 
     try:
-        ds.circuit.tree
+        _ = ds.circuit.tree                       # series–parallel: the plan polishes
         system = ds.circuit.nodal
     except (NotSeriesParallelError, TopologyError):
         return None
@@ -698,12 +706,10 @@ def _batched_roots(ds, omega_max) -> dict | None:
             B[kind][pos[source.name], r, c] += sign
     el_rows = np.array([row[e.name] for e in system.elements], dtype=np.int64)
     S = (ds.values[el_rows][:, which] * ds.eta[el_rows][:, which]).T      # (D', E)
-    roots: dict[int, list] = {}
     problems = []
     for kind, G in (("resonance", np.vstack([G_levers, drive_row])),
                     ("antiresonance", G_levers)):
         Z = _project(G, n_nodes).toarray()
-        k = Z.shape[1]
         Mr, Kr = (_weighted_sum(S, np.einsum("ia,eij,jb->eab", Z, B[x], Z))
                   for x in ("mass", "spring"))
         problems.append((kind, _stacked_modes(Mr, Kr, omega_max)))
@@ -716,7 +722,7 @@ def _batched_roots(ds, omega_max) -> dict | None:
     ok &= ~close.any(axis=(1, 2))
     keep = np.flatnonzero(ok)
     if not keep.size:
-        return {}
+        return None
     w = np.concatenate([w_h[keep], w_r[keep]], axis=1)
     e0 = np.concatenate([e_h[keep], e_r[keep]], axis=1)
     pole = np.zeros(w.shape, dtype=bool)
@@ -725,26 +731,23 @@ def _batched_roots(ds, omega_max) -> dict | None:
     if p is None:
         return None
     w, err = _secant_designs(p, w, pole, e0)
-    eps = np.finfo(float).eps
-    for j, d in enumerate(which[keep].tolist()):
-        live = np.isfinite(w[j])
-        if omega_max is not None:
-            live &= w[j] <= omega_max
-        out = [("antiresonance" if pole[j, i] else "resonance", float(w[j, i]),
-                float(w[j, i]), 0.0, float(max(err[j, i], eps)))
-               for i in np.flatnonzero(live)]
-        roots[d] = sorted(out, key=lambda t: (t[1], t[0]))
-    return roots
+    if omega_max is not None:
+        w = np.where(w <= omega_max, w, np.nan)
+    err = np.maximum(err, np.finfo(float).eps)
+    # Sorted as find_resonances sorts (by ω, then kind), the missing roots last.
+    order = np.lexsort((pole, np.where(np.isfinite(w), w, np.inf)), axis=-1)
+    take = np.take_along_axis
+    w, pole, err = take(w, order, 1), take(pole, order, 1), take(err, order, 1)
+    err = np.where(np.isfinite(w), err, np.nan)
+    return which[keep], pole, w, err
 
 
 def _weighted_sum(S: np.ndarray, P: np.ndarray) -> np.ndarray:
-    """Σ_e S[:, e] · P[e] over the elements e with a nonzero pattern, shape (D, k, k):
-    term by term in element order, so that a design's matrix does not depend on
-    the other designs of the batch (a matrix product may block differently)."""
-    out = np.zeros((S.shape[0], *P.shape[1:]))
-    for e in np.flatnonzero(np.abs(P).reshape(P.shape[0], -1).max(axis=1, initial=0.0)):
-        out += S[:, e, None, None] * P[e]
-    return out
+    """Σ_e S[:, e] · P[e], shape (D, k, k): one small product per design (a stacked
+    matmul), so that a design's matrix does not depend on the other designs of
+    the batch (one large matrix product may block and sum differently)."""
+    E, k = P.shape[0], P.shape[1]
+    return (S[:, None, :] @ P.reshape(E, k * k)).reshape(S.shape[0], k, k)
 
 
 def _stacked_modes(M: np.ndarray, K: np.ndarray, omega_max):
@@ -799,23 +802,23 @@ def _undamped_stack(M: np.ndarray, K: np.ndarray):
     those that differ: the single path takes them).  One stacked ``eigvalsh``.
     """
     D, k = M.shape[0], M.shape[1]
-    eye = np.eye(k)
     try:
         chol = np.linalg.cholesky(M)
         factored = np.isfinite(chol).all(axis=(1, 2))
     except np.linalg.LinAlgError:                  # one of them is not definite
-        chol, factored = np.broadcast_to(eye, M.shape).copy(), np.zeros(D, dtype=bool)
-    chol = np.where(factored[:, None, None], chol, eye)
-    Linv = np.linalg.inv(chol)
-    with np.errstate(all="ignore"):
-        lam_min = 1.0 / np.sum(Linv * Linv, axis=(1, 2))
-    factored &= lam_min > 1e-13 * np.sqrt(np.sum(M * M, axis=(1, 2)))
+        chol, factored = None, np.zeros(D, dtype=bool)
     lam = np.full((D, k), np.nan)
-    regular = factored.copy()
     if factored.any():
         f = np.flatnonzero(factored)
-        A = Linv[f] @ K[f] @ np.swapaxes(Linv[f], 1, 2)
+        Linv = np.linalg.inv(chol[f])
+        with np.errstate(all="ignore"):
+            lam_min = 1.0 / np.sum(Linv * Linv, axis=(1, 2))
+        regular = lam_min > 1e-13 * np.sqrt(np.sum(M[f] * M[f], axis=(1, 2)))
+        factored[f[~regular]] = False
+        f, Linv = f[regular], Linv[regular]
+        A = Linv @ K[f] @ np.swapaxes(Linv, 1, 2)
         lam[f] = np.linalg.eigvalsh((A + np.swapaxes(A, 1, 2)) / 2)
+    regular = factored.copy()
     rest = np.flatnonzero(~factored)
     if rest.size:
         mu, V = np.linalg.eigh(M[rest])
