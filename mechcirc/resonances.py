@@ -710,9 +710,19 @@ def _batched_roots(ds, omega_max):
     for kind, G in (("resonance", np.vstack([G_levers, drive_row])),
                     ("antiresonance", G_levers)):
         Z = _project(G, n_nodes).toarray()
+        # The massless directions are those of the pattern: with every value > 0,
+        # null(Σ m_e B_e) = ∩ null(B_e) in every design.  Ordered last, they are
+        # condensed out statically (_undamped_stack), as _undamped does per design.
+        if Z.shape[1]:
+            mu, V = np.linalg.eigh(Z.T @ B["mass"].sum(axis=0) @ Z)
+            massless = mu <= 1e-10 * max(mu.max(), 1e-300)
+            Z = Z @ np.concatenate([V[:, ~massless], V[:, massless]], axis=1)
+            n0 = int(massless.sum())
+        else:
+            n0 = 0
         Mr, Kr = (_weighted_sum(S, np.einsum("ia,eij,jb->eab", Z, B[x], Z))
                   for x in ("mass", "spring"))
-        problems.append((kind, _stacked_modes(Mr, Kr, omega_max)))
+        problems.append((kind, _stacked_modes(Mr, Kr, n0, omega_max)))
     (_, (w_h, e_h, ok_h)), (_, (w_r, e_r, ok_r)) = problems
     ok = ok_h & ok_r
     # A mode in both problems cancels in K (_cancel): left to the single path.
@@ -750,7 +760,7 @@ def _weighted_sum(S: np.ndarray, P: np.ndarray) -> np.ndarray:
     return (S[:, None, :] @ P.reshape(E, k * k)).reshape(S.shape[0], k, k)
 
 
-def _stacked_modes(M: np.ndarray, K: np.ndarray, omega_max):
+def _stacked_modes(M: np.ndarray, K: np.ndarray, n0: int, omega_max):
     """Undamped roots ω of stacks of projected pencils (K, M): :func:`_modes_unchecked`'s
     scaling and filters on stacks, the pencil reduced by a Cholesky factor of M.
 
@@ -774,7 +784,7 @@ def _stacked_modes(M: np.ndarray, K: np.ndarray, omega_max):
         np.isfinite(Ks).all(axis=(1, 2))
     Ms = np.where(ok[:, None, None], Ms, np.eye(k))
     Ks = np.where(ok[:, None, None], Ks, np.eye(k))
-    lam, regular = _undamped_stack(Ms, Ks)
+    lam, regular = _undamped_stack(Ms, Ks, n0)
     ok &= regular
     lam = np.where(np.isfinite(lam), lam, -np.inf)
     top = np.maximum(1.0, lam.max(axis=1, initial=0.0))
@@ -791,55 +801,45 @@ def _stacked_modes(M: np.ndarray, K: np.ndarray, omega_max):
     return w, err, ok
 
 
-def _undamped_stack(M: np.ndarray, K: np.ndarray):
-    """:func:`_undamped` on stacks (D, k, k): λ of K v = λ M v, shape (D, k), NaN-padded.
+def _undamped_stack(M: np.ndarray, K: np.ndarray, n0: int):
+    """:func:`_undamped` on stacks (D, k, k) whose last ``n0`` directions are massless:
+    λ of K v = λ M v, shape (D, k − n0); ``regular`` false where this cannot solve.
 
-    A mass matrix that factors (its smallest eigenvalue, ≥ 1/‖L⁻¹‖²_F, above
-    1e-13 of its largest, ≤ ‖M‖_F) reduces the pencil to L⁻¹ K L⁻ᵀ by its
-    Cholesky factor L; the others are diagonalised (``eigh``) and their massless
-    directions condensed out statically, as :func:`_undamped` does, when all of
-    them have the same number of such directions (else ``regular`` is false for
-    those that differ: the single path takes them).  One stacked ``eigvalsh``.
+    The massless directions are condensed out statically (K_c = K_rr − K_nrᵀ K_nn⁻¹
+    K_nr) and the pencil (K_c, M_rr) reduced to L⁻¹ K_c L⁻ᵀ by the Cholesky factor L of
+    M_rr, provided M_rr is safely definite: its smallest eigenvalue, ≥ 1/‖L⁻¹‖²_F, above
+    1e-13 of its largest, ≤ ‖M‖_F (else :func:`_undamped` would condense more
+    directions, and the single path takes the design).  One stacked ``eigvalsh``.
     """
     D, k = M.shape[0], M.shape[1]
+    r = k - n0
+    regular = np.ones(D, dtype=bool)
+    Mrr, Kc = M[:, :r, :r], K[:, :r, :r]
+    if n0:
+        Knr = K[:, r:, :r]
+        try:
+            Kc = Kc - np.swapaxes(Knr, 1, 2) @ np.linalg.solve(K[:, r:, r:], Knr)
+        except np.linalg.LinAlgError:              # a massless part without stiffness
+            return np.full((D, r), np.nan), np.zeros(D, dtype=bool)
     try:
-        chol = np.linalg.cholesky(M)
-        factored = np.isfinite(chol).all(axis=(1, 2))
-    except np.linalg.LinAlgError:                  # one of them is not definite
-        chol, factored = None, np.zeros(D, dtype=bool)
-    lam = np.full((D, k), np.nan)
-    if factored.any():
-        f = np.flatnonzero(factored)
-        Linv = np.linalg.inv(chol[f])
-        with np.errstate(all="ignore"):
-            lam_min = 1.0 / np.sum(Linv * Linv, axis=(1, 2))
-        regular = lam_min > 1e-13 * np.sqrt(np.sum(M[f] * M[f], axis=(1, 2)))
-        factored[f[~regular]] = False
-        f, Linv = f[regular], Linv[regular]
-        A = Linv @ K[f] @ np.swapaxes(Linv, 1, 2)
-        lam[f] = np.linalg.eigvalsh((A + np.swapaxes(A, 1, 2)) / 2)
-    regular = factored.copy()
-    rest = np.flatnonzero(~factored)
-    if rest.size:
-        mu, V = np.linalg.eigh(M[rest])
-        massless = mu <= 1e-13 * np.maximum(mu.max(axis=1, initial=0.0), 1e-300)[:, None]
-        n0s = massless.sum(axis=1)
-        n0 = int(np.bincount(n0s).argmax())
-        same = (n0s == n0) & (n0 < k) & (massless[:, :n0].all(axis=1))
-        g = rest[same]
-        mu, V = mu[same], V[same]
-        R, N = V[:, :, n0:], V[:, :, :n0]
-        Kg = K[g]
-        Rt, Nt = np.swapaxes(R, 1, 2), np.swapaxes(N, 1, 2)
-        Kc = Rt @ Kg @ R
-        if n0:
-            Knr = Nt @ Kg @ R
-            Kc = Kc - np.swapaxes(Knr, 1, 2) @ np.linalg.solve(Nt @ Kg @ N, Knr)
-        d = 1.0 / np.sqrt(mu[:, n0:])
-        A = Kc * d[:, :, None] * d[:, None, :]
-        lam[g, :k - n0] = np.linalg.eigvalsh((A + np.swapaxes(A, 1, 2)) / 2)
-        regular[g] = True
-    return lam, regular
+        chol = np.linalg.cholesky(Mrr)
+    except np.linalg.LinAlgError:                  # one of them is not definite: which?
+        for d in range(D):
+            try:
+                np.linalg.cholesky(Mrr[d])
+            except np.linalg.LinAlgError:
+                regular[d] = False
+        Mrr = np.where(regular[:, None, None], Mrr, np.eye(r))
+        chol = np.linalg.cholesky(Mrr)
+    Linv = np.linalg.inv(chol)
+    with np.errstate(all="ignore"):
+        lam_min = 1.0 / np.sum(Linv * Linv, axis=(1, 2))
+    regular &= np.isfinite(Kc).all(axis=(1, 2)) & np.isfinite(Linv).all(axis=(1, 2))
+    regular &= lam_min > 1e-13 * np.sqrt(np.sum(Mrr * Mrr, axis=(1, 2)))
+    A = Linv @ np.where(regular[:, None, None], Kc, 0.0) @ np.swapaxes(Linv, 1, 2)
+    A = np.where(regular[:, None, None], A, 0.0)
+    lam = np.linalg.eigvalsh((A + np.swapaxes(A, 1, 2)) / 2)
+    return np.where(regular[:, None], lam, np.nan), regular
 
 
 def _secant_designs(p, w0: np.ndarray, pole: np.ndarray, e0: np.ndarray):
