@@ -250,18 +250,18 @@ class Designs:
         if omega.ndim != 1 or not np.isfinite(omega).all() or (omega < 0).any():
             raise InputError("omega must be a one-dimensional array of finite values >= 0")
         D, W = self.size, omega.size
-        K = np.empty((D, W), dtype=complex)
-        err = np.empty((D, W))
         batched = np.flatnonzero(self.valid)
         p = self._plan(batched) if batched.size else None
         if p is None:
             batched = batched[:0]
+            K, err = np.empty((D, W), dtype=complex), np.empty((D, W))
         else:
             from .reduction import evaluate_designs
 
-            Kb, eb = evaluate_designs(p, omega, error=True)
-            K[batched] = _singular_limits(Kb, omega[None, :])
-            err[batched] = eb
+            K, err = evaluate_designs(p, omega, error=True)
+            K = _singular_limits(K, omega[None, :])
+            if batched.size < D:
+                K, err = _spread(K, batched, D), _spread(err, batched, D)
         single = np.setdiff1d(np.arange(D), batched)
         failed: dict[int, str] = {}
         for d in single.tolist():
@@ -307,6 +307,13 @@ class Designs:
         if resonances is None:
             resonances = self.resonances(omega_max=hi * (1 + 1e-9))
         return _extremes(self, lo, hi, resonances)
+
+
+def _spread(rows: NDArray, where: NDArray, D: int) -> NDArray:
+    """``rows`` placed at rows ``where`` of a (D, ...) array (the others unset)."""
+    out = np.empty((D, *rows.shape[1:]), dtype=rows.dtype)
+    out[where] = rows
+    return out
 
 
 @dataclass(frozen=True, eq=False)
