@@ -217,7 +217,7 @@ class Designs:
             drive=replace(c.drive, amplitude=float(self.amplitude[d])))
 
     # -- the batched series–parallel plan ----------------------------------
-    def _plan(self, which: NDArray):
+    def plan(self, which: NDArray):
         """The template's plan with the values of designs ``which``, or None (not
         series–parallel, or no compiled kernel)."""
         from .reduction import _kernel, plan
@@ -251,7 +251,7 @@ class Designs:
             raise InputError("omega must be a one-dimensional array of finite values >= 0")
         D, W = self.size, omega.size
         batched = np.flatnonzero(self.valid)
-        p = self._plan(batched) if batched.size else None
+        p = self.plan(batched) if batched.size else None
         if p is None:
             batched = batched[:0]
             K, err = np.empty((D, W), dtype=complex), np.empty((D, W))
@@ -288,7 +288,43 @@ class Designs:
         mode in both the held and released problems) go through
         :func:`mechcirc.resonances.find_resonances` one by one (``single``).
         """
-        from .resonances import batched_resonances
+        import warnings
+
+        from .resonances import batched_roots, find_resonances
+
+        D = self.size
+        found = batched_roots(self, omega_max)
+        which, pole, w, err = found if found is not None else (np.zeros(0, dtype=np.int64),) * 4
+        single = np.setdiff1d(np.arange(D), which)
+        failed: dict[int, str] = {}
+        alone: dict[int, list] = {}
+        for d in single.tolist():
+            try:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    alone[d] = find_resonances(self.design(d), omega_max)
+            except MechcircError as exc:
+                failed[d] = str(exc)
+        R = max([w.shape[1] if w.ndim == 2 else 0] + [len(v) for v in alone.values()])
+        kind = np.full((D, R), "", dtype="<U13")
+        out = np.full((4, D, R), np.nan)
+        count = np.zeros(D, dtype=np.int64)
+        if which.size:
+            r = w.shape[1]
+            live = np.isfinite(w)
+            count[which] = live.sum(axis=1)
+            kind[which, :r] = np.where(live, np.where(pole, "antiresonance", "resonance"), "")
+            out[0, which, :r] = w                     # ω_n = ω_d, ζ = 0: undamped
+            out[1, which, :r] = w
+            out[2, which, :r] = np.where(live, 0.0, np.nan)
+            out[3, which, :r] = err
+        for d, roots in alone.items():
+            count[d] = len(roots)
+            for i, x in enumerate(roots):
+                kind[d, i] = x.kind
+                out[:, d, i] = x.omega, x.omega_d, x.zeta, x.error
+        return DesignResonances(kind, out[0], out[1], out[2], out[3], count, omega_max,
+                                single, failed)
 
         return batched_resonances(self, omega_max)
 

@@ -605,65 +605,26 @@ def _secant(system, s0: np.ndarray, pole: np.ndarray, e0: np.ndarray, damped: bo
 # Many designs at once (mechcirc.batch)
 # --------------------------------------------------------------------------
 
-def batched_resonances(ds, omega_max: float | None = None):
-    """The resonances of the designs ``ds`` (:class:`mechcirc.batch.Designs`); see
-    :meth:`mechcirc.batch.Designs.resonances`.
+def batched_roots(ds, omega_max: float | None = None):
+    """The undamped roots of many designs ``ds`` (a :class:`mechcirc.batch.Designs`)
+    up to ``omega_max``, from stacked eigenproblems: :func:`find_resonances` step
+    by step on stacks.
 
-    The undamped designs of a series–parallel network whose mass matrix is
-    regular follow :func:`find_resonances` step by step on stacks: the same
-    stamps (:func:`mechcirc.nodal.stamps`), the same projections
-    (:func:`_project`), the same scaling and filters as :func:`_modes_unchecked`;
-    the pencil is reduced by a batched Cholesky factorisation of the mass
-    matrix (where :func:`_undamped` diagonalises it) and all designs are solved
-    by one stacked ``eigvalsh``; each root is then polished by a secant on the
-    design's own K(ω) from the compiled plan (:func:`_secant_designs`).  The
-    other designs are solved one by one by :func:`find_resonances`.
+    The same stamps (:func:`mechcirc.nodal.stamps`), projections
+    (:func:`_project`), scaling and filters as :func:`_modes_unchecked`; the
+    massless directions, structural, are condensed out once for all designs and
+    each pencil reduced by a batched Cholesky factorisation of its mass matrix
+    (:func:`_undamped_stack`); all designs are solved by one stacked
+    ``eigvalsh`` per problem (drive held: resonances; released:
+    anti-resonances), and each root polished by a secant on its design's own
+    K(ω) (:func:`_secant_designs`).
+
+    Returns ``(designs, pole, ω, error)`` for the designs it solves (undamped,
+    series–parallel, a mass matrix it can reduce, the template's lever ratios,
+    no mode in both problems), each row sorted as :func:`find_resonances`
+    sorts, NaN-padded, ``pole`` true for anti-resonances; None when it solves
+    none (the caller solves the others one by one).
     """
-    import warnings
-
-    from .batch import DesignResonances
-    from .errors import MechcircError
-
-    D = ds.size
-    found = _batched_roots(ds, omega_max)
-    which, pole, w, err = found if found is not None else (np.zeros(0, dtype=np.int64),) * 4
-    single = np.setdiff1d(np.arange(D), which)
-    failed: dict[int, str] = {}
-    alone: dict[int, list] = {}
-    for d in single.tolist():
-        try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                alone[d] = find_resonances(ds.design(d), omega_max)
-        except MechcircError as exc:
-            failed[d] = str(exc)
-    R = max([w.shape[1] if w.ndim == 2 else 0] + [len(v) for v in alone.values()])
-    kind = np.full((D, R), "", dtype="<U13")
-    out = np.full((4, D, R), np.nan)
-    count = np.zeros(D, dtype=np.int64)
-    if which.size:
-        r = w.shape[1]
-        live = np.isfinite(w)
-        count[which] = live.sum(axis=1)
-        kind[which, :r] = np.where(live, np.where(pole, "antiresonance", "resonance"), "")
-        out[0, which, :r] = w
-        out[1, which, :r] = w
-        out[2, which, :r] = np.where(live, 0.0, np.nan)
-        out[3, which, :r] = err
-    for d, roots in alone.items():
-        count[d] = len(roots)
-        for i, x in enumerate(roots):
-            kind[d, i] = x.kind
-            out[:, d, i] = x.omega, x.omega_d, x.zeta, x.error
-    return DesignResonances(kind, out[0], out[1], out[2], out[3], count, omega_max, single,
-                            failed)
-
-
-def _batched_roots(ds, omega_max):
-    """``(designs, pole, ω, error)`` for the designs the stacked path solves (undamped,
-    a mass matrix it can reduce, the template's lever ratios), each row sorted as
-    :func:`find_resonances` sorts, NaN-padded; ``pole`` marks anti-resonances.  None
-    when it solves none."""
     from . import nodal
     from .errors import NotSeriesParallelError, TopologyError
 
@@ -737,7 +698,7 @@ def _batched_roots(ds, omega_max):
     e0 = np.concatenate([e_h[keep], e_r[keep]], axis=1)
     pole = np.zeros(w.shape, dtype=bool)
     pole[:, w_h.shape[1]:] = True
-    p = ds._plan(which[keep])
+    p = ds.plan(which[keep])
     if p is None:
         return None
     w, err = _secant_designs(p, w, pole, e0)
