@@ -394,7 +394,10 @@ class DesignSweep:
     @property
     def flags(self) -> NDArray[np.int8]:
         """Per-point flags as :attr:`mechcirc.sweep.Sweep.flags`, shape (D, W)."""
-        return point_flags(self.K, self.Q0, self.v0, self.error)
+        # The drive's own quantity is its amplitude at every ω: not formed in full.
+        if self.kind == "velocity":
+            return point_flags(self.K, self.Q0, self.amplitude, self.error)
+        return point_flags(self.K, self.amplitude, self.v0, self.error)
 
 
 @dataclass(frozen=True, eq=False)

@@ -698,6 +698,10 @@ def batched_roots(ds, omega_max: float | None = None):
     e0 = np.concatenate([e_h[keep], e_r[keep]], axis=1)
     pole = np.zeros(w.shape, dtype=bool)
     pole[:, w_h.shape[1]:] = True
+    # The roots first, the empty slots (beyond omega_max, rigid) last and cut off.
+    order = np.argsort(np.where(np.isfinite(w), w, np.inf), axis=1, kind="stable")
+    width = int(np.isfinite(w).sum(axis=1).max(initial=0))
+    w, e0, pole = (np.take_along_axis(x, order, 1)[:, :width] for x in (w, e0, pole))
     p = ds.plan(which[keep])
     if p is None:
         return None
@@ -743,8 +747,9 @@ def _stacked_modes(M: np.ndarray, K: np.ndarray, n0: int, omega_max):
         Ks = K / scale_k[:, None, None]
     ok = np.isfinite(w_ref) & (w_ref > 0) & np.isfinite(Ms).all(axis=(1, 2)) & \
         np.isfinite(Ks).all(axis=(1, 2))
-    Ms = np.where(ok[:, None, None], Ms, np.eye(k))
-    Ks = np.where(ok[:, None, None], Ks, np.eye(k))
+    if not ok.all():
+        Ms = np.where(ok[:, None, None], Ms, np.eye(k))
+        Ks = np.where(ok[:, None, None], Ks, np.eye(k))
     lam, regular = _undamped_stack(Ms, Ks, n0)
     ok &= regular
     lam = np.where(np.isfinite(lam), lam, -np.inf)
@@ -797,9 +802,13 @@ def _undamped_stack(M: np.ndarray, K: np.ndarray, n0: int):
         lam_min = 1.0 / np.sum(Linv * Linv, axis=(1, 2))
     regular &= np.isfinite(Kc).all(axis=(1, 2)) & np.isfinite(Linv).all(axis=(1, 2))
     regular &= lam_min > 1e-13 * np.sqrt(np.sum(Mrr * Mrr, axis=(1, 2)))
-    A = Linv @ np.where(regular[:, None, None], Kc, 0.0) @ np.swapaxes(Linv, 1, 2)
-    A = np.where(regular[:, None, None], A, 0.0)
-    lam = np.linalg.eigvalsh((A + np.swapaxes(A, 1, 2)) / 2)
+    if not regular.all():
+        Kc = np.where(regular[:, None, None], Kc, 0.0)
+        Linv = np.where(regular[:, None, None], Linv, 0.0)
+    A = Linv @ Kc @ np.swapaxes(Linv, 1, 2)
+    A += np.swapaxes(A, 1, 2)
+    A *= 0.5
+    lam = np.linalg.eigvalsh(A)
     return np.where(regular[:, None], lam, np.nan), regular
 
 

@@ -264,11 +264,17 @@ def singular_error(K: NDArray, err: NDArray) -> NDArray[np.float64]:
 
 
 def point_flags(K, Q0, v0, error) -> NDArray[np.int8]:
-    """Per-point flags from K, Q0, v0 and the error bound; see :attr:`Sweep.flags`."""
-    exact = ~np.isfinite(K) | (K == 0) | ~np.isfinite(Q0) | ~np.isfinite(v0)
-    near = error > NEAR_SINGULAR_ERROR
-    return np.where(exact, FLAG_SINGULAR,
-                    np.where(near, FLAG_NEAR_SINGULAR, FLAG_OK)).astype(np.int8)
+    """Per-point flags from K, Q0, v0 and the error bound; see :attr:`Sweep.flags`.
+
+    ``Q0`` or ``v0`` may be given as anything that broadcasts against K (the
+    drive's amplitude where the quantity is that constant)."""
+    flags = (error > NEAR_SINGULAR_ERROR).view(np.int8) * np.int8(FLAG_NEAR_SINGULAR)
+    exact = ~np.isfinite(K)
+    exact |= K == 0
+    exact |= ~np.isfinite(Q0)
+    exact |= ~np.isfinite(v0)
+    flags[exact] = FLAG_SINGULAR
+    return flags
 
 
 def sweep(circuit: Circuit, omega: ArrayLike, *, method: Method = "auto") -> Sweep:
