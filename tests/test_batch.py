@@ -210,3 +210,34 @@ def test_array_expressions_are_the_scalar_ones(source):
             assert bad[i]
             continue
         assert not bad[i] and values[i] == ref          # the same IEEE operations
+
+
+def test_without_the_compiled_kernel_every_design_takes_the_single_path(monkeypatch):
+    from mechcirc import reduction
+
+    text, params = STB.read_text(), stb_params(4, 9)
+    ref = designs(text, params)
+    s_ref, r_ref = ref.sweep(OMEGA), ref.resonances(omega_max=1e4)
+    monkeypatch.setattr(reduction, "_KERNEL", [None])      # as without numba
+    ds = designs(text, params)
+    s, r = ds.sweep(OMEGA), ds.resonances(omega_max=1e4)
+    assert list(s.single) == list(r.single) == [0, 1, 2, 3]
+    np.testing.assert_array_equal(s.K, s_ref.K)            # numpy path = compiled plan
+    np.testing.assert_array_equal(s.flags, s_ref.flags)
+    for d in range(4):
+        for a, b in zip(r.list(d), r_ref.list(d)):
+            assert a.kind == b.kind and a.omega == pytest.approx(b.omega, rel=1e-12)
+
+
+def test_a_circuit_built_in_code_is_a_template_of_one_design():
+    from mechcirc import Circuit, Drive, Element
+
+    c = Circuit((Element("mass", "m", "a", "0", 2.0), Element("spring", "k", "a", "0", 800.0)),
+                Drive("V", "a", "0", "force", 3.0))
+    ds = designs(c)
+    assert ds.size == 1 and ds.design(0) == c
+    np.testing.assert_array_equal(ds.sweep([1.0, 10.0]).K[0], c.sweep([1.0, 10.0]).K)
+    (r,) = ds.resonances().list(0)
+    assert r.kind == "antiresonance" and r.omega == pytest.approx(20.0, rel=1e-15)
+    with pytest.raises(InputError, match="built in code"):
+        designs(c, {"k": [1.0]})
