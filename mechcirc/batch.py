@@ -504,9 +504,11 @@ def _extremes(ds: Designs, lo: float, hi: float, res: DesignResonances) -> Desig
     for d in rest.tolist():
         try:
             c = ds.design(d)
-            kmax = peak(c, lo, hi, quantity="K")
-            smax = peak(c, lo, hi, quantity="S")
-            qmax = peak(c, lo, hi, quantity="Q0")
+            # The design's resonances once (find_resonances, as peak would) for all three.
+            found = res.list(d) if res.omega_max is not None and res.omega_max >= hi and \
+                d in set(res.single.tolist()) else None
+            kmax, smax, qmax = (peak(c, lo, hi, quantity=q, resonances=found)
+                                for q in ("K", "S", "Q0"))
         except MechcircError as exc:
             failed[d] = str(exc)
             continue

@@ -455,7 +455,7 @@ UNDAMPED_ZETA = 1e-12
 
 def peak(result: "Sweep | Circuit", omega_min: float | None = None,
          omega_max: float | None = None, quantity: str | None = None, *,
-         method: Method = "auto", xtol: float = 1e-12) -> Peak:
+         method: Method = "auto", xtol: float = 1e-12, resonances: list | None = None) -> Peak:
     """The largest |Q0|, |v0|, |K| or |S| = 1/|K| over [``omega_min``, ``omega_max``], located exactly.
 
     Parameters
@@ -464,6 +464,9 @@ def peak(result: "Sweep | Circuit", omega_min: float | None = None,
         A sweep (its band and grid are used unless given) or a circuit.
     quantity : {"Q0", "v0", "K", "S"}, optional
         ``"S"`` (1/K) gives the smallest |K| as 1/value.  Default: ``"Q0"`` for a velocity drive, ``"v0"`` for a force drive.
+    resonances : list of Resonance, optional
+        The circuit's resonances up to at least the band's top, when already
+        computed (otherwise :meth:`Circuit.resonances` is called).
     xtol : float
         Relative tolerance in ω asked of the Brent search.  |q| is flat at its
         maximum, so the value is right to about machine precision while ω is
@@ -515,7 +518,10 @@ def peak(result: "Sweep | Circuit", omega_min: float | None = None,
     # poles ("antiresonance").
     kind = "resonance" if quantity in ("Q0", "S") else "antiresonance"
     found = []
-    if len(circuit.elements) <= PEAK_RESONANCE_LIMIT:
+    if resonances is not None:
+        found = [r for r in resonances if r.kind == kind and lo * (1 - 1e-12) <= r.omega
+                 and r.omega <= hi * (1 + 1e-9)]
+    elif len(circuit.elements) <= PEAK_RESONANCE_LIMIT:
         try:
             found = [r for r in circuit.resonances(omega_max=hi * (1 + 1e-9))
                      if r.kind == kind and lo * (1 - 1e-12) <= r.omega]
