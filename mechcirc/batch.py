@@ -306,17 +306,18 @@ class Designs:
             except MechcircError as exc:
                 failed[d] = str(exc)
         R = max([w.shape[1] if w.ndim == 2 else 0] + [len(v) for v in alone.values()])
+        live = np.isfinite(w)
         kind = np.full((D, R), "", dtype="<U13")
         out = np.full((4, D, R), np.nan)
         count = np.zeros(D, dtype=np.int64)
         if which.size:
             r = w.shape[1]
-            live = np.isfinite(w)
             count[which] = live.sum(axis=1)
             kind[which, :r] = np.where(live, np.where(pole, "antiresonance", "resonance"), "")
-            out[0, which, :r] = w                     # ω_n = ω_d, ζ = 0: undamped
-            out[1, which, :r] = w
-            out[2, which, :r] = np.where(live, 0.0, np.nan)
+            with np.errstate(all="ignore"):
+                out[0, which, :r] = np.abs(w)           # w: the roots s, as _make reads them
+                out[1, which, :r] = np.abs(w.imag)
+                out[2, which, :r] = -w.real / np.abs(w) + 0.0
             out[3, which, :r] = err
         for d, roots in alone.items():
             count[d] = len(roots)
@@ -505,8 +506,8 @@ def _extremes(ds: Designs, lo: float, hi: float, res: DesignResonances) -> Desig
         try:
             c = ds.design(d)
             # The design's resonances once (find_resonances, as peak would) for all three.
-            found = res.list(d) if res.omega_max is not None and res.omega_max >= hi and \
-                d in set(res.single.tolist()) else None
+            found = res.list(d) if res.omega_max is not None and res.omega_max >= hi \
+                else None
             kmax, smax, qmax = (peak(c, lo, hi, quantity=q, resonances=found)
                                 for q in ("K", "S", "Q0"))
         except MechcircError as exc:

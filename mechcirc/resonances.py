@@ -635,8 +635,7 @@ def batched_roots(ds, omega_max: float | None = None):
         return None
     cand = ds.valid.copy()
     row = {e.name: i for i, e in enumerate(ds.circuit.elements)}
-    if system.D.nnz and np.any(system.D.data):
-        return None                                   # dampers: QZ, one by one
+    damped = bool(system.D.nnz and np.any(system.D.data))
     for lv in system.levers:                          # the projection depends on them
         i = next(j for j, m in enumerate(ds.circuit.levers) if m.name == lv.name)
         cand &= ds.ratios[i] == lv.ratio
@@ -661,7 +660,7 @@ def batched_roots(ds, omega_max: float | None = None):
             index.setdefault(n, -1)
     E = len(system.elements)
     pos = {e.name: k for k, e in enumerate(system.elements)}
-    B = {"mass": np.zeros((E, n_nodes, n_nodes)), "spring": np.zeros((E, n_nodes, n_nodes))}
+    B = {x: np.zeros((E, n_nodes, n_nodes)) for x in ("mass", "spring", "damper")}
     for kind, r, c, sign, source, _ in nodal.stamps(system.elements, (), index):
         if kind in B:
             B[kind][pos[source.name], r, c] += sign
@@ -671,6 +670,11 @@ def batched_roots(ds, omega_max: float | None = None):
     for kind, G in (("resonance", np.vstack([G_levers, drive_row])),
                     ("antiresonance", G_levers)):
         Z = _project(G, n_nodes).toarray()
+        if damped:
+            Mr, Dr, Kr = (_weighted_sum(S, np.einsum("ia,eij,jb->eab", Z, B[x], Z))
+                          for x in ("mass", "damper", "spring"))
+            problems.append((kind, _stacked_damped(Mr, Dr, Kr, omega_max)))
+            continue
         # The massless directions are those of the pattern: with every value > 0,
         # null(Σ m_e B_e) = ∩ null(B_e) in every design.  Ordered last, they are
         # condensed out statically (_undamped_stack), as _undamped does per design.
@@ -686,14 +690,31 @@ def batched_roots(ds, omega_max: float | None = None):
         problems.append((kind, _stacked_modes(Mr, Kr, n0, omega_max)))
     (_, (w_h, e_h, ok_h)), (_, (w_r, e_r, ok_r)) = problems
     ok = ok_h & ok_r
-    # A mode in both problems cancels in K (_cancel): left to the single path.
-    with np.errstate(invalid="ignore"):
-        close = np.abs(w_r[:, None, :] - w_h[:, :, None]) / w_h[:, :, None] < \
+    # A mode in both problems cancels in K (_cancel): left to the single path.  Damped
+    # roots are compared with the eigen-solver's estimates (eps·1e2·|s|max/|s|), as
+    # find_resonances compares them before polishing.
+    with np.errstate(all="ignore"):
+        if damped:
+            e_h, e_r = (np.maximum(e, 1e2 * np.finfo(float).eps * np.nanmax(
+                np.abs(x), axis=1, initial=1.0)[:, None] / np.abs(x))
+                for e, x in ((e_h, w_h), (e_r, w_r)))
+        close = np.abs(w_r[:, None, :] - w_h[:, :, None]) / np.abs(w_h[:, :, None]) < \
             1e3 * (e_h[:, :, None] + e_r[:, None, :])
     ok &= ~close.any(axis=(1, 2))
     keep = np.flatnonzero(ok)
     if not keep.size:
         return None
+    if damped:                        # already polished (on the matrices): sort and go
+        s_ = np.concatenate([w_h[keep], w_r[keep]], axis=1)
+        err = np.concatenate([problems[0][1][1][keep], problems[1][1][1][keep]], axis=1)
+        pole = np.zeros(s_.shape, dtype=bool)
+        pole[:, w_h.shape[1]:] = True
+        mag = np.abs(s_)
+        order = np.lexsort((pole, np.where(np.isfinite(mag), mag, np.inf)), axis=-1)
+        width = int(np.isfinite(mag).sum(axis=1).max(initial=0))
+        take = np.take_along_axis
+        return (which[keep], take(pole, order, 1)[:, :width], take(s_, order, 1)[:, :width],
+                take(err, order, 1)[:, :width])
     w = np.concatenate([w_h[keep], w_r[keep]], axis=1)
     e0 = np.concatenate([e_h[keep], e_r[keep]], axis=1)
     pole = np.zeros(w.shape, dtype=bool)
@@ -714,7 +735,7 @@ def batched_roots(ds, omega_max: float | None = None):
     take = np.take_along_axis
     w, pole, err = take(w, order, 1), take(pole, order, 1), take(err, order, 1)
     err = np.where(np.isfinite(w), err, np.nan)
-    return which[keep], pole, w, err
+    return which[keep], pole, 1j * w, err
 
 
 def _weighted_sum(S: np.ndarray, P: np.ndarray) -> np.ndarray:
@@ -765,6 +786,94 @@ def _stacked_modes(M: np.ndarray, K: np.ndarray, n0: int, omega_max):
         w[beyond] = np.nan
         err[beyond] = np.nan
     return w, err, ok
+
+
+def _stacked_damped(M: np.ndarray, Dm: np.ndarray, K: np.ndarray, omega_max):
+    """Damped roots s of stacks of projected problems (s² M + s D + K) v = 0, polished.
+
+    :func:`_modes_unchecked`'s scaling, filters and estimates on stacks, for mass
+    matrices that are safely definite (the criterion of :func:`_undamped_stack`;
+    others are not ``ok``): the companion matrix [[0, I], [−M⁻¹K, −M⁻¹D]] of
+    every design, one stacked ``eigvals`` call (where :func:`_damped` runs QZ on
+    the pencil), and each root polished by Newton's method on det P(s),
+    s ← s − 1/tr(P(s)⁻¹ P'(s)), P(s) = s²M + sD + K, batched.  The error: the
+    last Newton step, at least the estimate of nearly coalescing roots
+    (:func:`_modes_unchecked`'s) and 4 eps.  Returns ``(s, error, ok)``, NaN where
+    no root (s with Im s ≥ 0, |s| > 0).
+    """
+    n, k = M.shape[0], M.shape[1]
+    eps = np.finfo(float).eps
+    if k == 0:
+        return np.zeros((n, 0), dtype=complex), np.zeros((n, 0)), np.ones(n, dtype=bool)
+    with np.errstate(all="ignore"):
+        scale_m = np.abs(M).max(axis=(1, 2))
+        scale_k = np.abs(K).max(axis=(1, 2))
+        scale_m = np.where(scale_m > 0, scale_m, 1.0)
+        scale_k = np.where(scale_k > 0, scale_k, 1.0)
+        w_ref = np.sqrt(scale_k) / np.sqrt(scale_m)
+        Ms = M / scale_m[:, None, None]
+        Ds = Dm / (scale_m * w_ref)[:, None, None]
+        Ks = K / scale_k[:, None, None]
+    ok = np.isfinite(w_ref) & (w_ref > 0)
+    for X in (Ms, Ds, Ks):
+        ok &= np.isfinite(X).all(axis=(1, 2))
+    eye = np.eye(k)
+    Ms = np.where(ok[:, None, None], Ms, eye)
+    Ds = np.where(ok[:, None, None], Ds, 0.0)
+    Ks = np.where(ok[:, None, None], Ks, eye)
+    try:
+        chol = np.linalg.cholesky(Ms)
+    except np.linalg.LinAlgError:
+        for d in range(n):
+            try:
+                np.linalg.cholesky(Ms[d])
+            except np.linalg.LinAlgError:
+                ok[d] = False
+        Ms = np.where(ok[:, None, None], Ms, eye)
+        chol = np.linalg.cholesky(Ms)
+    Linv = np.linalg.inv(chol)
+    with np.errstate(all="ignore"):
+        lam_min = 1.0 / np.sum(Linv * Linv, axis=(1, 2))
+    ok &= lam_min > 1e-13 * np.sqrt(np.sum(Ms * Ms, axis=(1, 2)))
+    Minv = np.swapaxes(Linv, 1, 2) @ Linv
+    A = np.zeros((n, 2 * k, 2 * k))
+    A[:, :k, k:] = eye
+    A[:, k:, :k] = -(Minv @ Ks)
+    A[:, k:, k:] = -(Minv @ Ds)
+    sig = np.linalg.eigvals(A)                           # s / w_ref
+    mag = np.abs(sig)
+    live = (mag > 1e-6) & (sig.imag >= -1e-12 * mag) & ok[:, None]
+    # Coalescing roots (ζ → 1): _modes_unchecked's estimate from the gaps.
+    with np.errstate(all="ignore"):
+        gap = np.abs(sig[:, :, None] - sig[:, None, :])
+        gap[:, np.arange(2 * k), np.arange(2 * k)] = np.inf
+        near = np.minimum(np.sqrt(eps), eps / (gap.min(axis=2) / mag))
+    sig = np.where(live, sig, 1.0 + 0j)
+    step = np.zeros(sig.shape)
+    for _ in range(3):
+        P = sig[..., None, None] ** 2 * Ms[:, None] + sig[..., None, None] * Ds[:, None] + \
+            Ks[:, None]
+        dP = 2 * sig[..., None, None] * Ms[:, None] + Ds[:, None]
+        with np.errstate(all="ignore"):
+            try:
+                t = np.trace(np.linalg.solve(P, dP), axis1=-2, axis2=-1)
+            except np.linalg.LinAlgError:                 # exactly on a root
+                break
+            delta = 1.0 / t
+        good = np.isfinite(delta) & live
+        sig = np.where(good, sig - delta, sig)
+        step = np.where(good, np.abs(delta), 0.0)
+    mag = np.abs(sig)
+    with np.errstate(all="ignore"):
+        err = np.maximum(np.maximum(step / mag, 4 * eps), 10 * near)
+    s = np.where(live, sig * w_ref[:, None], np.nan)
+    err = np.where(live, err, np.nan)
+    s = np.where(np.abs(s.imag) <= err * np.abs(s), s.real + 0j, s)
+    if omega_max is not None:
+        beyond = ~(np.abs(s) <= omega_max)
+        s[beyond] = np.nan
+        err[beyond] = np.nan
+    return s, err, ok
 
 
 def _undamped_stack(M: np.ndarray, K: np.ndarray, n0: int):

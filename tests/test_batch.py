@@ -80,7 +80,7 @@ def test_flags_and_singular_points_match():
     (STB.read_text(), stb_params(40, 2), 40),            # singular M: condensed
     (LEVER, {"m": np.geomspace(0.1, 10, 9)}, 9),          # regular M: Cholesky
     (LEVER, {"r": np.array([0.5, 2.0, 3.0])}, 1),         # ratio varies: one by one but r = 2
-    (DAMPED, {"c": np.geomspace(1e-2, 1e2, 5)}, 0),       # dampers: QZ, one by one
+    (DAMPED, {"c": np.geomspace(1e-2, 1e2, 5)}, 5),       # dampers: stacked eigvals + Newton
 ])
 def test_batched_resonances_are_find_resonances(text, params, n_batched):
     ds = designs(text, params)
