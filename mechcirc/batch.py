@@ -35,7 +35,8 @@ from .errors import InputError, MechcircError, NetlistError, NotSeriesParallelEr
 from .sweep import (UNDAMPED_ZETA, drive_force, drive_velocity, point_flags,
                     singular_error)
 
-__all__ = ["designs", "Designs", "DesignSweep", "DesignResonances", "DesignExtremes"]
+__all__ = ["designs", "from_circuits", "Designs", "DesignSweep", "DesignResonances",
+           "DesignExtremes"]
 
 
 def designs(netlist: "str | Circuit", params: dict | None = None, *,
@@ -105,6 +106,43 @@ def designs(netlist: "str | Circuit", params: dict | None = None, *,
             f"{n} {a.size}" for n, a in arrays.items() if a.ndim == 1))
     D = sizes.pop() if sizes else 1
     return _build(circuit, text, exprs, arrays, D)
+
+
+def from_circuits(circuits) -> "Designs":
+    """The designs of several circuits of one topology (the same elements, levers and
+    drive, in the same order, differing only in values, η, ratios and amplitude),
+    e.g. a scene linearised at each crank angle.
+
+    Raises
+    ------
+    InputError
+        No circuits, or two of different topology (naming the first difference).
+    """
+    circuits = list(circuits)
+    if not circuits:
+        raise InputError("from_circuits needs at least one circuit")
+    first = circuits[0]
+
+    def shape(c):
+        return ([(e.kind, e.name, e.n1, e.n2) for e in c.elements],
+                [(lv.name, lv.p1, lv.p2, lv.s1, lv.s2) for lv in c.levers],
+                (c.drive.name, c.drive.n1, c.drive.n2, c.drive.kind))
+
+    ref = shape(first)
+    for i, c in enumerate(circuits[1:], start=1):
+        if shape(c) != ref:
+            raise InputError(f"circuit {i} ({c.name}) differs in topology from circuit 0 "
+                             f"({first.name}): not designs of one network")
+    values = np.array([[e.value for e in c.elements] for c in circuits], dtype=float).T
+    etas = np.array([[e.eta for e in c.elements] for c in circuits], dtype=float).T
+    ratios = np.array([[lv.ratio for lv in c.levers] for c in circuits], dtype=float).T \
+        .reshape(len(first.levers), len(circuits))
+    amplitude = np.array([c.drive.amplitude for c in circuits], dtype=float)
+    with np.errstate(all="ignore"):
+        scaled = values * etas
+        valid = (np.isfinite(scaled) & (scaled > 0)).all(axis=0) & \
+            (np.isfinite(ratios) & (ratios > 0)).all(axis=0) & np.isfinite(amplitude)
+    return Designs(first, {}, values, etas, ratios, amplitude, valid, None)
 
 
 def _build(circuit: Circuit, text, exprs, arrays: dict, D: int) -> "Designs":
