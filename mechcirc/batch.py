@@ -316,14 +316,16 @@ class Designs:
     def resonances(self, omega_max: float | None = None) -> "DesignResonances":
         """Resonances and anti-resonances of every design up to ``omega_max`` [rad/s].
 
-        Undamped series–parallel designs: the nodal matrices of all designs are
-        formed at once from the stamps (:func:`mechcirc.nodal.stamps`, one matrix
-        product per kind), the pencils reduced to standard symmetric problems by
-        a batched Cholesky factorisation of the mass matrices and solved by one
-        stacked ``eigvalsh`` call, and every root polished by a batched secant on
-        the design's own K(ω) (the compiled plan with its error bound).  The
-        others (dampers, a singular mass matrix, levers whose ratio varies, a
-        mode in both the held and released problems) go through
+        Series–parallel designs: the nodal matrices of all designs formed at once
+        from the stamps (:func:`mechcirc.nodal.stamps`); undamped, the pencils
+        reduced by a batched Cholesky factorisation of the mass matrices and
+        solved by one stacked ``eigvalsh`` call, every root polished by a batched
+        secant on the design's own K(ω) (the compiled plan with its error
+        bound); damped, the companion matrices in one stacked ``eigvals`` call,
+        every root polished by Newton on det(s²M + sD + K)
+        (:func:`mechcirc.resonances.batched_roots`).  The others (a mass matrix
+        too close to singular, levers whose ratio varies, a mode in both the
+        held and released problems) go through
         :func:`mechcirc.resonances.find_resonances` one by one (``single``).
         """
         import warnings
@@ -364,8 +366,6 @@ class Designs:
                 out[:, d, i] = x.omega, x.omega_d, x.zeta, x.error
         return DesignResonances(kind, out[0], out[1], out[2], out[3], count, omega_max,
                                 single, failed)
-
-        return batched_resonances(self, omega_max)
 
     def extremes(self, omega: ArrayLike, resonances: "DesignResonances | None" = None
                  ) -> "DesignExtremes":

@@ -606,7 +606,7 @@ def _secant(system, s0: np.ndarray, pole: np.ndarray, e0: np.ndarray, damped: bo
 # --------------------------------------------------------------------------
 
 def batched_roots(ds, omega_max: float | None = None):
-    """The undamped roots of many designs ``ds`` (a :class:`mechcirc.batch.Designs`)
+    """The roots of many designs ``ds`` (a :class:`mechcirc.batch.Designs`)
     up to ``omega_max``, from stacked eigenproblems: :func:`find_resonances` step
     by step on stacks.
 
@@ -619,11 +619,14 @@ def batched_roots(ds, omega_max: float | None = None):
     anti-resonances), and each root polished by a secant on its design's own
     K(ω) (:func:`_secant_designs`).
 
-    Returns ``(designs, pole, ω, error)`` for the designs it solves (undamped,
-    series–parallel, a mass matrix it can reduce, the template's lever ratios,
-    no mode in both problems), each row sorted as :func:`find_resonances`
-    sorts, NaN-padded, ``pole`` true for anti-resonances; None when it solves
-    none (the caller solves the others one by one).
+    Damped designs (a regular mass matrix): :func:`_stacked_damped`.
+
+    Returns ``(designs, pole, s, error)`` for the designs it solves
+    (series–parallel, a mass matrix it can reduce, the template's lever ratios,
+    no mode in both problems): the roots s (jω undamped), each row sorted as
+    :func:`find_resonances` sorts, NaN-padded, ``pole`` true for
+    anti-resonances; None when it solves none (the caller solves the others
+    one by one).
     """
     from . import nodal
     from .errors import NotSeriesParallelError, TopologyError
