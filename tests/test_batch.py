@@ -262,3 +262,37 @@ def test_cycle_map_is_one_batch_equal_to_each_angle_alone():
             assert a.zeta == pytest.approx(b.zeta, rel=1e-12, abs=1e-15)
         np.testing.assert_array_equal(cmap.Q0[i], c.sweep(cmap.harmonics * cmap.omega_shaft).Q0)
     assert worst <= 1e-12                    # measured ≤ 1.5e-14 (360 angles)
+
+
+def test_batched_damped_resonances_against_mpmath():
+    # drive at a; m1 a–0, k a–b, m2 b–0, c b–0.  Held (a fixed): m2 s² + c s + k = 0.
+    # Released: det(s²M + sD + K) = s (m1 m2 s³ + m1 c s² + (m1 + m2) k s + c k), a
+    # rigid root s = 0 (not reported) and a cubic: a complex pair and a real root
+    # (an overdamped mode: ω_d = 0, ζ = 1).
+    text = ".param m1=1 m2=0.5 k=1e4 c=3\ndrive V a 0 velocity=1\nmass ma a 0 m1\n" \
+           "spring ka a b k\nmass mb b 0 m2\ndamper cb b 0 c\n"
+    rng = np.random.default_rng(11)
+    params = {"m1": rng.uniform(0.2, 3, 5), "m2": rng.uniform(0.2, 3, 5),
+              "k": rng.uniform(1e3, 1e5, 5), "c": rng.uniform(0.1, 30, 5)}
+    res = designs(text, params).resonances()
+    assert res.single.size == 0
+    mpmath.mp.dps = 40
+    for d in range(5):
+        m1, m2, k, c = (mpmath.mpf(float(params[n][d])) for n in ("m1", "m2", "k", "c"))
+        held = mpmath.polyroots([m2, c, k])
+        free = mpmath.polyroots([m1 * m2, m1 * c, (m1 + m2) * k, c * k], maxsteps=200,
+                                extraprec=200)
+        ref = [("resonance", s) for s in held if mpmath.im(s) >= 0] + \
+            [("antiresonance", s) for s in free if mpmath.im(s) >= 0]
+        ref.sort(key=lambda t: (float(abs(t[1])), t[0]))
+        got = res.list(d)
+        assert [r.kind for r in got] == [kd for kd, _ in ref]
+        for r, (_, s) in zip(got, ref):
+            wn = float(abs(s))
+            rel = abs(r.omega - wn) / wn
+            # Complex roots within 1e-15; the slow overdamped root (≈ 7 rad/s beside a
+            # rigid root at 0) to 1.5e-13: P(s) formed in float64 limits Newton.
+            assert rel <= 5e-13
+            assert r.error >= rel                            # the estimate covers it
+            assert r.zeta == pytest.approx(float(-mpmath.re(s) / abs(s)), rel=1e-12, abs=1e-15)
+            assert r.omega_d == pytest.approx(float(abs(mpmath.im(s))), rel=1e-12, abs=1e-12)
