@@ -12,14 +12,16 @@ the result, :class:`Designs`, evaluates
   and :func:`mechcirc.reduction.evaluate_designs`: one design is the single
   sweep, the same code);
 * the exact resonances of every design from stacked eigenvalue problems, one
-  LAPACK call per stack, polished on each design's own K (:meth:`Designs.resonances`);
+  LAPACK call per stack, each root polished (:meth:`Designs.resonances`);
 * the true extremes of |K| and |Q0| over a band (:meth:`Designs.extremes`).
 
 A design the batch cannot take (a value that is not a positive finite
 number, a topology that changes with the values, a network that is not
-series–parallel, dampers or a singular mass matrix for the resonances) is
+series–parallel, a mass matrix too close to singular for the resonances) is
 evaluated by the single-design path (:meth:`Designs.design` gives its
 :class:`~mechcirc.circuit.Circuit`); the results say which and how many.
+:func:`from_circuits` makes the designs of circuits built in code (a scene
+at each crank angle).
 """
 
 from __future__ import annotations
