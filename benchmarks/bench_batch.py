@@ -143,8 +143,14 @@ def main():
     import scipy
 
     text = NETLIST.read_text()
+    try:
+        import numba
+        compiled = f"numba {numba.__version__}"
+    except ImportError:
+        compiled = "no numba (every design takes the single path)"
     print(f"{platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}, "
-          f"numpy {np.__version__}, scipy {scipy.__version__}; load {os.getloadavg()[0]:.2f}")
+          f"numpy {np.__version__}, scipy {scipy.__version__}, {compiled}; "
+          f"load {os.getloadavg()[0]:.2f}")
     rng = np.random.default_rng(21)
     core(tuple(rng.uniform(0.7, 1.1, (4, 10))), OMEGA, text)        # load the kernel
     sizes = [1_000, 10_000] + ([100_000] if args.big else [])
