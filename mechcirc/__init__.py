@@ -22,6 +22,7 @@ Frequency domain
                        .to_skrf()
    adaptive_sweep   -- a grid refined around resonances and bends of |K|, |Q0|
    find_resonances  -- exact resonances (K = 0) and antiresonances (K = ∞)
+   designs          -- D designs of one netlist (.param arrays): K, resonances, extremes at once
    Resonance        -- one of them: kind, omega, omega_d, zeta, error
    simplify         -- model reduction over a band, with the measured error
 
@@ -95,7 +96,7 @@ from . import _methods  # noqa: F401  (attaches Circuit.sweep, .tree, …; see t
 
 __all__ = [
     "parse", "load", "Circuit", "Element", "Lever", "Drive", "Sweep", "sweep",
-    "adaptive_sweep", "find_resonances", "Resonance", "simplify",
+    "adaptive_sweep", "find_resonances", "Resonance", "simplify", "designs",
     "MechcircError", "NetlistError", "TopologyError", "NotSeriesParallelError",
     "GeometryError", "SolverError", "MechcircWarning", "UnloadedElementWarning",
     "SingularPointWarning", "UnitMixWarning",
@@ -107,7 +108,8 @@ __version__ = "0.1.0"
 _LAZY = {"find_resonances": ("resonances", "find_resonances"),
          "Resonance": ("resonances", "Resonance"),
          "adaptive_sweep": ("adaptive", "adaptive_sweep"),
-         "simplify": ("simplify", "simplify")}
+         "simplify": ("simplify", "simplify"),
+         "designs": ("batch", "designs")}
 #: Names that are both a function here and a submodule: the package attribute
 #: is the function, whatever order the submodule is imported in.
 _FUNCTIONS_OVER_MODULES = ("sweep", "simplify")

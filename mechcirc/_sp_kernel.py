@@ -163,7 +163,8 @@ BLOCK = 128
 @jit
 def evaluate_plan(omega, kind, cplx, c_real, c_inv, c_om, e_real, e_inv, e_om, mu,
                   kstart, kids, ratio, slot, n_slots, want_error, K, rho_out):
-    """Fill ``K[j]`` (and ``rho_out[j]`` when ``want_error``) for every ``omega[j]``.
+    """Fill ``K[d, j]`` (and ``rho_out[d, j]`` when ``want_error``) for every design d
+    at ``omega[d, j]`` (``omega`` has one row for all designs, or one per design).
 
     Node i of the plan (children before parents, the root last): ``kind`` 0
     series, 1 parallel, 2 lever, 3 a single leaf (the root, or under a lever);
@@ -171,24 +172,32 @@ def evaluate_plan(omega, kind, cplx, c_real, c_inv, c_om, e_real, e_inv, e_om, m
     c_om·ω)`` (impedances in series, admittances in parallel; a zero
     coefficient is absent, as ``0·∞`` would be NaN) and their error constants
     ``e_*``; ``mu`` = m·u for its m terms; internal children
-    ``kids[kstart[i]:kstart[i+1]]``; ``ratio`` of a lever node.  Node values
-    live in ``slot[i]`` of a stack of ``n_slots`` rows (postorder: a node's
-    children are the rows just above it).
+    ``kids[kstart[i]:kstart[i+1]]``; ``ratio`` of a lever node.  The
+    value-dependent arrays have one row per design (``c_real[d, i]``).  Node
+    values live in ``slot[i]`` of a stack of ``n_slots`` rows (postorder: a
+    node's children are the rows just above it).
     """
     M = kind.shape[0]
+    # Per node: re, im, |K|, 1/|K| (a parallel parent's weight) and ρ over a block
+    # of ω; per block: the sums and ω, 1/ω.  Allocated once for all designs.
+    work = np.empty((5, n_slots, BLOCK))
+    vec = np.empty((6, BLOCK))
+    for d in range(K.shape[0]):
+        dw = d if omega.shape[0] > 1 else 0
+        rd = d if want_error else 0
+        _evaluate_design(omega[dw], kind, cplx, c_real[d], c_inv[d], c_om[d], e_real[d],
+                         e_inv[d], e_om[d], mu[d], kstart, kids, ratio[d], slot, want_error,
+                         K[d], rho_out[rd], M, work, vec)
+
+
+@jit
+def _evaluate_design(omega, kind, cplx, c_real, c_inv, c_om, e_real, e_inv, e_om, mu,
+                     kstart, kids, ratio, slot, want_error, K, rho_out, M, work, vec):
+    """One design of :func:`evaluate_plan`: its rows of the plan, its row of K."""
     n = omega.shape[0]
     B = BLOCK
-    re = np.empty((n_slots, B))
-    im = np.empty((n_slots, B))
-    mg = np.empty((n_slots, B))       # |K| of each node
-    ig = np.empty((n_slots, B))       # 1/|K| = |Y| (a parallel parent's weight)
-    rh = np.empty((n_slots, B))
-    ai = np.empty(B)
-    cr = np.empty(B)
-    ci = np.empty(B)
-    bb = np.empty(B)
-    iw = np.empty(B)
-    w = np.empty(B)
+    re, im, mg, ig, rh = work[0], work[1], work[2], work[3], work[4]
+    ai, cr, ci, bb, iw, w = vec[0], vec[1], vec[2], vec[3], vec[4], vec[5]
     for j0 in range(0, n, B):
         nb = min(B, n - j0)
         for j in range(nb):

@@ -26,7 +26,7 @@ from typing import Callable, Mapping
 
 from .errors import NetlistError
 
-__all__ = ["Expr", "parse_expression", "evaluate", "postorder", "FUNCTIONS", "CONSTANTS",
+__all__ = ["Expr", "parse_expression", "evaluate", "evaluate_array", "postorder", "FUNCTIONS", "CONSTANTS",
            "MAX_LENGTH", "MAX_DEPTH"]
 
 #: Longest expression accepted [characters]; longer text is refused at once.
@@ -337,6 +337,70 @@ def _slope(node: Expr, args: list, r: float, d: list, tangent: Mapping[str, floa
         return (da - r * db) / b
     # a ** b: each term only where its operand moves (a ** (b - 1) or log a may not exist).
     return (b * a ** (b - 1) * da if da else 0.0) + (r * math.log(a) * db if db else 0.0)
+
+
+
+def _pow(a: float, b: float) -> float:
+    """``a ** b`` as :func:`evaluate` computes it, NaN where it raises or is complex."""
+    try:
+        r = a ** b
+    except (ZeroDivisionError, OverflowError):
+        return math.nan
+    return math.nan if isinstance(r, complex) else r
+
+
+_POW = None
+
+def evaluate_array(expr: Expr, params: Mapping, size: int):
+    """``expr`` over ``size`` designs at once: ``params`` maps names to arrays of shape
+    (size,) (or floats).  Returns ``(values, bad)``: float64 arrays of shape (size,)
+    and the mask of the designs where :func:`evaluate` would raise (an undefined
+    operation, an overflow: their value is then meaningless; evaluate them one by
+    one to get the located error).  The operators are numpy's IEEE operations, as
+    :func:`evaluate`'s; the functions are applied value by value with the same
+    ``math`` functions, so each design's value is the one :func:`evaluate` gives.
+    """
+    import numpy as np
+
+    global _POW
+    if _POW is None:
+        _POW = np.frompyfunc(_pow, 2, 1)
+    values: dict[int, object] = {}
+    bad = np.zeros(size, dtype=bool)
+    with np.errstate(all="ignore"):
+        for node in postorder(expr):
+            k = node.kind
+            if k == "num":
+                r = np.full(size, node.value)
+            elif k == "name":
+                if node.value in params:
+                    r = np.broadcast_to(np.asarray(params[node.value], dtype=float),
+                                        (size,)).copy()
+                elif node.value in CONSTANTS:
+                    r = np.full(size, CONSTANTS[node.value])
+                else:
+                    raise NetlistError(f"undefined parameter {node.value!r}")
+            elif k == "neg":
+                r = -values.pop(id(node.args[0]))
+            elif k == "call":
+                x = values.pop(id(node.args[0]))
+                f = FUNCTIONS[node.value]
+                r = np.empty(size)
+                for i, xi in enumerate(x.tolist()):
+                    try:
+                        r[i] = f(xi)
+                    except (ValueError, OverflowError):
+                        r[i] = math.nan
+            else:
+                a, b = values.pop(id(node.args[0])), values.pop(id(node.args[1]))
+                if k == "**":             # Python's pow, as evaluate (numpy's may differ by an ulp)
+                    r = _POW(a, b).astype(float)
+                else:
+                    r = (np.add if k == "+" else np.subtract if k == "-" else np.multiply
+                         if k == "*" else np.divide)(a, b)
+            bad |= ~np.isfinite(r)
+            values[id(node)] = r
+    return values[id(expr)], bad
 
 
 def _number_hint(bad: str, number: str, glued: str = "") -> str:

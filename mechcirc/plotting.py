@@ -222,7 +222,7 @@ def plot_study(result, params, column: str, name: str = "study", title: str | No
     bad = [r for r in result.rows if r["status"] != "ok"]
     unit = {"K_abs_min": " [m/(N·s)]", "K_abs_max": " [m/(N·s)]", "Q0_abs_max": " [N]",
             "omega_at_Q0_max": " [rad/s]", "n_flagged": ""}.get(
-        column, " [rad/s]" if "resonance" in column else "")
+        column, " [rad/s]" if "resonance" in column or column.startswith("omega") else "")
     fig, ax, made = _axes(ax, (6.5, 4.5))
     if len(params) == 1:
         p = params[0]

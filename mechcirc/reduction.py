@@ -828,7 +828,12 @@ def _kernel():
 class Plan:
     """A tree compiled into flat arrays for :mod:`mechcirc._sp_kernel` (see
     :func:`plan`): one entry per series, parallel and lever node (and per leaf
-    that stands alone, at the root or under a lever), children first."""
+    that stands alone, at the root or under a lever), children first.
+
+    The value-dependent arrays (leaf coefficients, their error constants,
+    ``mu`` and the lever ratios) have one row per design, shape (D, M): D = 1
+    for the tree's own values, D > 1 for a batch of designs of the same
+    topology (:meth:`with_values`)."""
 
     kind: NDArray[np.int8]
     cplx: NDArray[np.bool_]
@@ -844,11 +849,31 @@ class Plan:
     ratio: NDArray[np.float64]
     slot: NDArray[np.int64]
     n_slots: int
+    #: The folded leaves' elements, in fold order (rows of :meth:`with_values`'s ``scaled``).
+    leaves: tuple = ()
+    #: The lever of each lever node, in node order (rows of ``ratios``).
+    levers: tuple = ()
+    _fold: tuple = ()
 
     def arrays(self) -> tuple:
         return (self.kind, self.cplx, self.c_real, self.c_inv, self.c_om, self.e_real,
                 self.e_inv, self.e_om, self.mu, self.kstart, self.kids, self.ratio,
                 self.slot, self.n_slots)
+
+    @property
+    def designs(self) -> int:
+        """D, the number of designs whose values the plan holds."""
+        return self.c_real.shape[0]
+
+    def with_values(self, scaled: ArrayLike, ratios: ArrayLike | None = None) -> "Plan":
+        """The same plan for D designs: ``scaled[l, d]`` is value·η of leaf ``leaves[l]``
+        in design d, ``ratios[r, d]`` the ratio of lever ``levers[r]`` (default: its own)."""
+        scaled = np.asarray(scaled, dtype=float)
+        if ratios is None:
+            ratios = np.array([[lv.ratio] for lv in self.levers], dtype=float).reshape(-1, 1)
+        return _fold_values(self.kind, self.kstart, self.kids, self.slot, self.n_slots,
+                            self.leaves, self.levers, self._fold, scaled,
+                            np.asarray(ratios, dtype=float))
 
 
 _PLANS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
@@ -884,7 +909,8 @@ def plan(root: Node) -> Plan:
     Each node's leaves are folded into three coefficients by the element laws
     (:func:`~mechcirc.circuit.law_terms`), with the constants of their error
     terms, exactly as :func:`evaluate`'s numpy path forms them at every call
-    (the same IEEE operations in the same order, here vectorised over the leaves).
+    (the same IEEE operations in the same order, here vectorised over the
+    leaves and, for a batch of designs, over the designs: :meth:`Plan.with_values`).
     """
     found = _PLANS.get(root)
     if found is not None:
@@ -892,9 +918,9 @@ def plan(root: Node) -> Plan:
     kind: list[int] = []
     kids: list[int] = []
     kstart = [0]
-    ratio: list[float] = []
     leaf_of: list[int] = []          # the node each folded leaf belongs to
     leaf_el: list[Element] = []
+    levers: list = []
     index: dict[int, int] = {}
 
     def lone_leaf(e: Element) -> int:
@@ -902,7 +928,6 @@ def plan(root: Node) -> Plan:
         # holding the leaf as a one-term series node would.
         kind.append(3)
         kstart.append(len(kids))
-        ratio.append(0.0)
         leaf_of.append(len(kind) - 1)
         leaf_el.append(e)
         return len(kind) - 1
@@ -917,7 +942,7 @@ def plan(root: Node) -> Plan:
             kind.append(2)
             kids.append(ci)
             kstart.append(len(kids))
-            ratio.append(float(node.lever.ratio))
+            levers.append(node.lever)
             index[id(node)] = len(kind) - 1
             continue
         me = len(kind)
@@ -929,11 +954,9 @@ def plan(root: Node) -> Plan:
             else:
                 kids.append(index[id(c)])
         kstart.append(len(kids))
-        ratio.append(0.0)
         index[id(node)] = me
     if type(root) is Leaf:
         lone_leaf(root.element)
-    M = len(kind)
     kind_a = np.array(kind, dtype=np.int8)
     kstart_a = np.array(kstart, dtype=np.int64)
     kids_a = np.array(kids, dtype=np.int64)
@@ -943,56 +966,95 @@ def plan(root: Node) -> Plan:
         np.array([e.eta for e in leaf_el], dtype=float)
     series = (kind_a[owner] != 1).astype(np.int64)
     slot = _LEAF_SLOT[code, series]
-    coef = _LEAF_COEF[code, series]
+    count = np.zeros((len(kind), 3), dtype=np.int64)
+    np.add.at(count, (owner, slot % 3), 1)        # 0 real, 1 ω, 2 (= −1) 1/ω
+    n_kids = np.diff(kstart_a)
+    # Postorder keeps every subtree contiguous, so a node's internal children are
+    # the top rows of a stack when it is reached: its value takes the first of them.
+    stack_slot = np.cumsum(1 - n_kids) - 1
+    fold = (owner, series, slot % 3, _LEAF_COEF[code, series], count)
+    ratios = np.array([lv.ratio for lv in levers], dtype=float).reshape(-1, 1)
+    out = _fold_values(kind_a, kstart_a, kids_a, stack_slot.astype(np.int64),
+                       int(stack_slot.max(initial=0)) + 1, tuple(leaf_el), tuple(levers),
+                       fold, scaled[:, None], ratios)
+    _PLANS[root] = out
+    return out
+
+
+def _fold_values(kind, kstart, kids, slot, n_slots, leaves, levers, fold, scaled,
+                 ratios) -> Plan:
+    """The plan with the leaves' values·η ``scaled`` (L, D) and lever ``ratios`` (R, D)
+    folded into each node's coefficients and error constants, one row per design."""
+    owner, series, col, coef, count = fold
+    M, D = kind.shape[0], scaled.shape[1]
+    if scaled.shape != (len(leaves), D) or ratios.shape != (len(levers), D):
+        raise ValueError(f"need values of shape ({len(leaves)}, D) and ratios of shape "
+                         f"({len(levers)}, D), got {scaled.shape} and {ratios.shape}")
     with np.errstate(all="ignore"):
-        term = np.where(series == 1, coef / scaled, coef * scaled)
+        term = np.where((series == 1)[:, None], coef[:, None] / scaled, coef[:, None] * scaled)
         # Summed in child order from 0.0, as _combine sums them (ufunc.at is
         # unbuffered and applies the terms in the order given).
-        acc = np.zeros((M, 3))
-        col = slot % 3                       # 0 real, 1 ω, 2 (= −1) 1/ω
-        np.add.at(acc, (owner, col), term)
-        count = np.zeros((M, 3), dtype=np.int64)
-        np.add.at(count, (owner, col), 1)
-        real, om, inv = acc[:, 0].copy(), acc[:, 1].copy(), acc[:, 2].copy()
+        acc = np.zeros((3, M, D))
+        np.add.at(acc, (col, owner), term)
+        real, om, inv = acc[0], acc[1], acc[2]
         U = float(_U)
-        n_kids = np.diff(kstart_a)
+        n_kids = np.diff(kstart)[:, None]
         m_u = (n_kids + (real != 0) + (inv != 0) + (om != 0)) * U
-        e_real = np.abs(real) * ((count[:, 0] + 2) * U + m_u)
-        e_inv = np.abs(inv) * ((count[:, 2] + 4) * U + m_u)
-        e_om = np.abs(om) * ((count[:, 1] + 4) * U + m_u)
-    lever = kind_a == 2
+        e_real = np.abs(real) * ((count[:, 0:1] + 2) * U + m_u)
+        e_inv = np.abs(inv) * ((count[:, 2:3] + 4) * U + m_u)
+        e_om = np.abs(om) * ((count[:, 1:2] + 4) * U + m_u)
+    lever = kind == 2
     m_u[lever] = 0.0
-    # A node has a real part if its leaves give one or any child has one.
-    has = ((real != 0) | np.isnan(real)).tolist()
-    ks, kd = kstart, kids
+    ratio = np.zeros((M, D))
+    ratio[lever] = ratios
+    # A node has a real part if its leaves give one (in any design) or any child has one.
+    has = ((real != 0) | np.isnan(real)).any(axis=1).tolist()
+    ks, kd = kstart.tolist(), kids.tolist()
     for i in range(M):
         if not has[i]:
             for q in range(ks[i], ks[i + 1]):
                 if has[kd[q]]:
                     has[i] = True
                     break
-    # Postorder keeps every subtree contiguous, so a node's internal children are
-    # the top rows of a stack when it is reached: its value takes the first of them.
-    stack_slot = np.cumsum(1 - n_kids) - 1
-    out = Plan(kind_a, np.array(has, dtype=bool), real, inv, om, e_real, e_inv, e_om, m_u,
-               kstart_a, kids_a, np.array(ratio), stack_slot.astype(np.int64),
-               int(stack_slot.max(initial=0)) + 1)
-    _PLANS[root] = out
-    return out
+
+    def rows(x):                  # one contiguous row of M values per design
+        return np.ascontiguousarray(x.T)
+
+    return Plan(kind, np.array(has, dtype=bool), rows(real), rows(inv), rows(om), rows(e_real),
+                rows(e_inv), rows(e_om), rows(m_u), kstart, kids, rows(ratio), slot, n_slots,
+                leaves, levers, fold)
 
 
 def _evaluate_compiled(kernel, p: Plan, omega: NDArray, error: bool, condition: bool):
     """:func:`evaluate` (without ``keep``) by the compiled plan."""
     flat = np.ascontiguousarray(omega.ravel())
-    K = np.empty(flat.shape, dtype=complex)
-    track = error or condition
-    rho = np.empty(flat.shape if track else 0)
-    kernel(flat, *p.arrays(), track, K, rho)
+    K, rho = evaluate_designs(p, flat[None, :], error or condition, kernel)
     K = K.reshape(omega.shape)
-    if not track:
+    if not (error or condition):
         return K
     rho = rho.reshape(omega.shape)
     return K, (rho / _U if condition and not error else rho)
+
+
+def evaluate_designs(p: Plan, omega: NDArray, error: bool = False, kernel=None):
+    """K (and the bound of its relative error, else None) of the plan's D designs
+    at ``omega`` of shape (W,) (every design at the same ω) or (D, W), by the
+    compiled plan; returns arrays of shape (D, W).
+
+    This is :func:`evaluate`'s compiled path, a design at a time: one design
+    (D = 1) is the single sweep.  Raises RuntimeError without numba.
+    """
+    kernel = kernel or _kernel()
+    if kernel is None:
+        raise RuntimeError("evaluating a batch of designs needs numba (pip install numba)")
+    omega = np.ascontiguousarray(np.atleast_2d(np.asarray(omega, dtype=float)))
+    D = p.designs
+    if omega.shape[0] not in (1, D):
+        raise ValueError(f"omega must have 1 or {D} rows, got shape {omega.shape}")
+    K = np.empty((D, omega.shape[1]), dtype=complex)
+    rho = np.empty(K.shape if error else (D, 0))
+    kernel(omega, *p.arrays(), error, K, rho)
+    return K, (rho if error else None)
 
 
 class _Value:

@@ -665,3 +665,393 @@ def _secant(system, s0: np.ndarray, pole: np.ndarray, e0: np.ndarray, damped: bo
     newton = np.where(np.isfinite(newton), 10 * newton, 0.0)
     err = np.where(bad, np.maximum(e0, newton), np.maximum(err, eps))
     return s, err
+
+
+# --------------------------------------------------------------------------
+# Many designs at once (mechcirc.batch)
+# --------------------------------------------------------------------------
+
+def batched_roots(ds, omega_max: float | None = None):
+    """The roots of many designs ``ds`` (a :class:`mechcirc.batch.Designs`)
+    up to ``omega_max``, from stacked eigenproblems: :func:`find_resonances` step
+    by step on stacks.
+
+    The same stamps (:func:`mechcirc.nodal.stamps`), projections
+    (:func:`_project`), scaling and filters as :func:`_modes_unchecked`; the
+    massless directions, structural, are condensed out once for all designs and
+    each pencil reduced by a batched Cholesky factorisation of its mass matrix
+    (:func:`_undamped_stack`); all designs are solved by one stacked
+    ``eigvalsh`` per problem (drive held: resonances; released:
+    anti-resonances), and each root polished by a secant on its design's own
+    K(ω) (:func:`_secant_designs`).
+
+    Damped designs (a regular mass matrix): :func:`_stacked_damped`.
+
+    Returns ``(designs, pole, s, error)`` for the designs it solves
+    (series–parallel, a mass matrix it can reduce, the template's lever ratios,
+    no mode in both problems): the roots s (jω undamped), each row sorted as
+    :func:`find_resonances` sorts, NaN-padded, ``pole`` true for
+    anti-resonances; None when it solves none (the caller solves the others
+    one by one).
+    """
+    from . import nodal
+    from .errors import NotSeriesParallelError, TopologyError
+
+    try:
+        _ = ds.circuit.tree                       # series–parallel: the plan polishes
+        system = ds.circuit.nodal
+    except (NotSeriesParallelError, TopologyError):
+        return None
+    cand = ds.valid.copy()
+    row = {e.name: i for i, e in enumerate(ds.circuit.elements)}
+    damped = bool(system.D.nnz and np.any(system.D.data))
+    for lv in system.levers:                          # the projection depends on them
+        i = next(j for j, m in enumerate(ds.circuit.levers) if m.name == lv.name)
+        cand &= ds.ratios[i] == lv.ratio
+    which = np.flatnonzero(cand)
+    if not which.size:
+        return None
+    n_nodes = len(system.nodes)
+    G_levers = system.C[n_nodes:, :n_nodes].toarray()
+    drive_row = np.zeros((1, n_nodes))
+    if system.a >= 0:
+        drive_row[0, system.a] = 1.0
+    if system.b >= 0:
+        drive_row[0, system.b] = -1.0
+    # Each element's stamp pattern B_e, so that M = Σ_e (value·η)_e B_e (the same
+    # entries nodal.assemble sums); projected, Zᵀ M Z = Σ_e s_e Zᵀ B_e Z.
+    index = {n: i for i, n in enumerate(system.nodes)}
+    for e in system.elements:
+        index.setdefault(e.n1, -1)
+        index.setdefault(e.n2, -1)
+    for lv in system.levers:
+        for n in (lv.p1, lv.p2, lv.s1, lv.s2):
+            index.setdefault(n, -1)
+    E = len(system.elements)
+    pos = {e.name: k for k, e in enumerate(system.elements)}
+    B = {x: np.zeros((E, n_nodes, n_nodes)) for x in ("mass", "spring", "damper")}
+    for kind, r, c, sign, source, _ in nodal.stamps(system.elements, (), index):
+        if kind in B:
+            B[kind][pos[source.name], r, c] += sign
+    el_rows = np.array([row[e.name] for e in system.elements], dtype=np.int64)
+    S = (ds.values[el_rows][:, which] * ds.eta[el_rows][:, which]).T      # (D', E)
+    problems = []
+    for kind, G in (("resonance", np.vstack([G_levers, drive_row])),
+                    ("antiresonance", G_levers)):
+        Z = _project(G, n_nodes).toarray()
+        if damped:
+            Mr, Dr, Kr = (_weighted_sum(S, np.einsum("ia,eij,jb->eab", Z, B[x], Z))
+                          for x in ("mass", "damper", "spring"))
+            problems.append((kind, _stacked_damped(Mr, Dr, Kr, omega_max)))
+            continue
+        # The massless directions are those of the pattern: with every value > 0,
+        # null(Σ m_e B_e) = ∩ null(B_e) in every design.  Ordered last, they are
+        # condensed out statically (_undamped_stack), as _undamped does per design.
+        if Z.shape[1]:
+            mu, V = np.linalg.eigh(Z.T @ B["mass"].sum(axis=0) @ Z)
+            massless = mu <= 1e-10 * max(mu.max(), 1e-300)
+            Z = Z @ np.concatenate([V[:, ~massless], V[:, massless]], axis=1)
+            n0 = int(massless.sum())
+        else:
+            n0 = 0
+        Mr, Kr = (_weighted_sum(S, np.einsum("ia,eij,jb->eab", Z, B[x], Z))
+                  for x in ("mass", "spring"))
+        problems.append((kind, _stacked_modes(Mr, Kr, n0, omega_max)))
+    (_, (w_h, e_h, ok_h)), (_, (w_r, e_r, ok_r)) = problems
+    ok = ok_h & ok_r
+    # A mode in both problems cancels in K (_cancel): left to the single path.  Damped
+    # roots are compared with the eigen-solver's estimates (eps·1e2·|s|max/|s|), as
+    # find_resonances compares them before polishing.
+    with np.errstate(all="ignore"):
+        if damped:
+            e_h, e_r = (np.maximum(e, 1e2 * np.finfo(float).eps * np.nanmax(
+                np.abs(x), axis=1, initial=1.0)[:, None] / np.abs(x))
+                for e, x in ((e_h, w_h), (e_r, w_r)))
+        close = np.abs(w_r[:, None, :] - w_h[:, :, None]) / np.abs(w_h[:, :, None]) < \
+            1e3 * (e_h[:, :, None] + e_r[:, None, :])
+    ok &= ~close.any(axis=(1, 2))
+    keep = np.flatnonzero(ok)
+    if not keep.size:
+        return None
+    if damped:                        # already polished (on the matrices): sort and go
+        s_ = np.concatenate([w_h[keep], w_r[keep]], axis=1)
+        err = np.concatenate([problems[0][1][1][keep], problems[1][1][1][keep]], axis=1)
+        pole = np.zeros(s_.shape, dtype=bool)
+        pole[:, w_h.shape[1]:] = True
+        mag = np.abs(s_)
+        order = np.lexsort((pole, np.where(np.isfinite(mag), mag, np.inf)), axis=-1)
+        width = int(np.isfinite(mag).sum(axis=1).max(initial=0))
+        take = np.take_along_axis
+        return (which[keep], take(pole, order, 1)[:, :width], take(s_, order, 1)[:, :width],
+                take(err, order, 1)[:, :width])
+    w = np.concatenate([w_h[keep], w_r[keep]], axis=1)
+    e0 = np.concatenate([e_h[keep], e_r[keep]], axis=1)
+    pole = np.zeros(w.shape, dtype=bool)
+    pole[:, w_h.shape[1]:] = True
+    # The roots first, the empty slots (beyond omega_max, rigid) last and cut off.
+    order = np.argsort(np.where(np.isfinite(w), w, np.inf), axis=1, kind="stable")
+    width = int(np.isfinite(w).sum(axis=1).max(initial=0))
+    w, e0, pole = (np.take_along_axis(x, order, 1)[:, :width] for x in (w, e0, pole))
+    p = ds.plan(which[keep])
+    if p is None:
+        return None
+    w, err = _secant_designs(p, w, pole, e0)
+    if omega_max is not None:
+        w = np.where(w <= omega_max, w, np.nan)
+    err = np.maximum(err, np.finfo(float).eps)
+    # Sorted as find_resonances sorts (by ω, then kind), the missing roots last.
+    order = np.lexsort((pole, np.where(np.isfinite(w), w, np.inf)), axis=-1)
+    take = np.take_along_axis
+    w, pole, err = take(w, order, 1), take(pole, order, 1), take(err, order, 1)
+    err = np.where(np.isfinite(w), err, np.nan)
+    return which[keep], pole, 1j * w, err
+
+
+def _weighted_sum(S: np.ndarray, P: np.ndarray) -> np.ndarray:
+    """Σ_e S[:, e] · P[e], shape (D, k, k): one small product per design (a stacked
+    matmul), so that a design's matrix does not depend on the other designs of
+    the batch (one large matrix product may block and sum differently)."""
+    E, k = P.shape[0], P.shape[1]
+    return (S[:, None, :] @ P.reshape(E, k * k)).reshape(S.shape[0], k, k)
+
+
+def _stacked_modes(M: np.ndarray, K: np.ndarray, n0: int, omega_max):
+    """Undamped roots ω of stacks of projected pencils (K, M): :func:`_modes_unchecked`'s
+    scaling and filters on stacks, the pencil reduced by a Cholesky factor of M.
+
+    Returns ``(ω, error, ok)``: ω and its eigenvalue estimate (eps·λ_max/λ·4) of shape
+    (D, k), NaN where no root; ``ok`` false for the designs this cannot solve (a mass
+    matrix that is singular to within 1e-13 of its largest eigenvalue, where
+    :func:`_undamped` condenses, or values beyond float64's range).
+    """
+    D, k = M.shape[0], M.shape[1]
+    if k == 0:
+        return np.zeros((D, 0)), np.zeros((D, 0)), np.ones(D, dtype=bool)
+    with np.errstate(all="ignore"):
+        scale_m = np.abs(M).max(axis=(1, 2))
+        scale_k = np.abs(K).max(axis=(1, 2))
+        scale_m = np.where(scale_m > 0, scale_m, 1.0)
+        scale_k = np.where(scale_k > 0, scale_k, 1.0)
+        w_ref = np.sqrt(scale_k) / np.sqrt(scale_m)
+        Ms = M / scale_m[:, None, None]
+        Ks = K / scale_k[:, None, None]
+    ok = np.isfinite(w_ref) & (w_ref > 0) & np.isfinite(Ms).all(axis=(1, 2)) & \
+        np.isfinite(Ks).all(axis=(1, 2))
+    if not ok.all():
+        Ms = np.where(ok[:, None, None], Ms, np.eye(k))
+        Ks = np.where(ok[:, None, None], Ks, np.eye(k))
+    lam, regular = _undamped_stack(Ms, Ks, n0)
+    ok &= regular
+    lam = np.where(np.isfinite(lam), lam, -np.inf)
+    top = np.maximum(1.0, lam.max(axis=1, initial=0.0))
+    live = (lam > 1e-11 * top[:, None]) & ok[:, None]
+    eps = np.finfo(float).eps
+    with np.errstate(all="ignore"):
+        w = np.where(live, w_ref[:, None] * np.sqrt(np.where(live, lam, 1.0)), np.nan)
+        err = np.where(live, eps * (np.where(live, lam, 1.0).max(axis=1, initial=1.0)[:, None]
+                                    / np.where(live, lam, 1.0)) * 4, np.nan)
+    if omega_max is not None:
+        beyond = w > omega_max * (1 + 1e-6)
+        w[beyond] = np.nan
+        err[beyond] = np.nan
+    return w, err, ok
+
+
+def _stacked_damped(M: np.ndarray, Dm: np.ndarray, K: np.ndarray, omega_max):
+    """Damped roots s of stacks of projected problems (s² M + s D + K) v = 0, polished.
+
+    :func:`_modes_unchecked`'s scaling, filters and estimates on stacks, for mass
+    matrices that are safely definite (the criterion of :func:`_undamped_stack`;
+    others are not ``ok``): the companion matrix [[0, I], [−M⁻¹K, −M⁻¹D]] of
+    every design, one stacked ``eigvals`` call (where :func:`_damped` runs QZ on
+    the pencil), and each root polished by Newton's method on det P(s),
+    s ← s − 1/tr(P(s)⁻¹ P'(s)), P(s) = s²M + sD + K, batched.  The error: the
+    last Newton step, at least :func:`_modes_unchecked`'s estimates (eps·1e2·
+    |s|max/|s|, nearly coalescing roots): P(s) is formed in float64, so Newton
+    cannot make a root more accurate than that (find_resonances polishes on K
+    in double-double and reports less).  Returns ``(s, error, ok)``, NaN where
+    no root (s with Im s ≥ 0, |s| > 0).
+    """
+    n, k = M.shape[0], M.shape[1]
+    eps = np.finfo(float).eps
+    if k == 0:
+        return np.zeros((n, 0), dtype=complex), np.zeros((n, 0)), np.ones(n, dtype=bool)
+    with np.errstate(all="ignore"):
+        scale_m = np.abs(M).max(axis=(1, 2))
+        scale_k = np.abs(K).max(axis=(1, 2))
+        scale_m = np.where(scale_m > 0, scale_m, 1.0)
+        scale_k = np.where(scale_k > 0, scale_k, 1.0)
+        w_ref = np.sqrt(scale_k) / np.sqrt(scale_m)
+        Ms = M / scale_m[:, None, None]
+        Ds = Dm / (scale_m * w_ref)[:, None, None]
+        Ks = K / scale_k[:, None, None]
+    ok = np.isfinite(w_ref) & (w_ref > 0)
+    for X in (Ms, Ds, Ks):
+        ok &= np.isfinite(X).all(axis=(1, 2))
+    eye = np.eye(k)
+    Ms = np.where(ok[:, None, None], Ms, eye)
+    Ds = np.where(ok[:, None, None], Ds, 0.0)
+    Ks = np.where(ok[:, None, None], Ks, eye)
+    try:
+        chol = np.linalg.cholesky(Ms)
+    except np.linalg.LinAlgError:
+        for d in range(n):
+            try:
+                np.linalg.cholesky(Ms[d])
+            except np.linalg.LinAlgError:
+                ok[d] = False
+        Ms = np.where(ok[:, None, None], Ms, eye)
+        chol = np.linalg.cholesky(Ms)
+    Linv = np.linalg.inv(chol)
+    with np.errstate(all="ignore"):
+        lam_min = 1.0 / np.sum(Linv * Linv, axis=(1, 2))
+    ok &= lam_min > 1e-13 * np.sqrt(np.sum(Ms * Ms, axis=(1, 2)))
+    Minv = np.swapaxes(Linv, 1, 2) @ Linv
+    A = np.zeros((n, 2 * k, 2 * k))
+    A[:, :k, k:] = eye
+    A[:, k:, :k] = -(Minv @ Ks)
+    A[:, k:, k:] = -(Minv @ Ds)
+    sig = np.linalg.eigvals(A)                           # s / w_ref
+    mag = np.abs(sig)
+    live = (mag > 1e-6) & (sig.imag >= -1e-12 * mag) & ok[:, None]
+    # Coalescing roots (ζ → 1): _modes_unchecked's estimate from the gaps.
+    with np.errstate(all="ignore"):
+        gap = np.abs(sig[:, :, None] - sig[:, None, :])
+        gap[:, np.arange(2 * k), np.arange(2 * k)] = np.inf
+        near = np.minimum(np.sqrt(eps), eps / (gap.min(axis=2) / mag))
+    sig = np.where(live, sig, 1.0 + 0j)
+    step = np.zeros(sig.shape)
+    for _ in range(3):
+        P = sig[..., None, None] ** 2 * Ms[:, None] + sig[..., None, None] * Ds[:, None] + \
+            Ks[:, None]
+        dP = 2 * sig[..., None, None] * Ms[:, None] + Ds[:, None]
+        with np.errstate(all="ignore"):
+            try:
+                t = np.trace(np.linalg.solve(P, dP), axis1=-2, axis2=-1)
+            except np.linalg.LinAlgError:                 # exactly on a root
+                break
+            delta = 1.0 / t
+        good = np.isfinite(delta) & live
+        sig = np.where(good, sig - delta, sig)
+        step = np.where(good, np.abs(delta), 0.0)
+    mag = np.abs(sig)
+    with np.errstate(all="ignore"):
+        # Newton on det P in float64 cannot beat the rounding of P(s) itself, about
+        # the eigen-solver's own estimate (_modes_unchecked's eps·1e2·|s|max/|s|):
+        # measured 1.5e-13 on a slow overdamped root (tests/test_batch.py).
+        top = np.where(live, mag, 0.0).max(axis=1, initial=1.0)[:, None]
+        err = np.maximum(np.maximum(step / mag, 1e2 * eps * top / mag), 10 * near)
+    s = np.where(live, sig * w_ref[:, None], np.nan)
+    err = np.where(live, err, np.nan)
+    s = np.where(np.abs(s.imag) <= err * np.abs(s), s.real + 0j, s)
+    if omega_max is not None:
+        beyond = ~(np.abs(s) <= omega_max)
+        s[beyond] = np.nan
+        err[beyond] = np.nan
+    return s, err, ok
+
+
+def _undamped_stack(M: np.ndarray, K: np.ndarray, n0: int):
+    """:func:`_undamped` on stacks (D, k, k) whose last ``n0`` directions are massless:
+    λ of K v = λ M v, shape (D, k − n0); ``regular`` false where this cannot solve.
+
+    The massless directions are condensed out statically (K_c = K_rr − K_nrᵀ K_nn⁻¹
+    K_nr) and the pencil (K_c, M_rr) reduced to L⁻¹ K_c L⁻ᵀ by the Cholesky factor L of
+    M_rr, provided M_rr is safely definite: its smallest eigenvalue, ≥ 1/‖L⁻¹‖²_F, above
+    1e-13 of its largest, ≤ ‖M‖_F (else :func:`_undamped` would condense more
+    directions, and the single path takes the design).  One stacked ``eigvalsh``.
+    """
+    D, k = M.shape[0], M.shape[1]
+    r = k - n0
+    regular = np.ones(D, dtype=bool)
+    Mrr, Kc = M[:, :r, :r], K[:, :r, :r]
+    if n0:
+        Knr = K[:, r:, :r]
+        try:
+            Kc = Kc - np.swapaxes(Knr, 1, 2) @ np.linalg.solve(K[:, r:, r:], Knr)
+        except np.linalg.LinAlgError:              # a massless part without stiffness
+            return np.full((D, r), np.nan), np.zeros(D, dtype=bool)
+    try:
+        chol = np.linalg.cholesky(Mrr)
+    except np.linalg.LinAlgError:                  # one of them is not definite: which?
+        for d in range(D):
+            try:
+                np.linalg.cholesky(Mrr[d])
+            except np.linalg.LinAlgError:
+                regular[d] = False
+        Mrr = np.where(regular[:, None, None], Mrr, np.eye(r))
+        chol = np.linalg.cholesky(Mrr)
+    Linv = np.linalg.inv(chol)
+    with np.errstate(all="ignore"):
+        lam_min = 1.0 / np.sum(Linv * Linv, axis=(1, 2))
+    regular &= np.isfinite(Kc).all(axis=(1, 2)) & np.isfinite(Linv).all(axis=(1, 2))
+    regular &= lam_min > 1e-13 * np.sqrt(np.sum(Mrr * Mrr, axis=(1, 2)))
+    if not regular.all():
+        Kc = np.where(regular[:, None, None], Kc, 0.0)
+        Linv = np.where(regular[:, None, None], Linv, 0.0)
+    A = Linv @ Kc @ np.swapaxes(Linv, 1, 2)
+    A += np.swapaxes(A, 1, 2)
+    A *= 0.5
+    lam = np.linalg.eigvalsh(A)
+    return np.where(regular[:, None], lam, np.nan), regular
+
+
+def _secant_designs(p, w0: np.ndarray, pole: np.ndarray, e0: np.ndarray):
+    """:func:`_secant` for undamped roots of many designs on their own K(ω) = jX(ω).
+
+    ``p`` is the plan of the D designs (:meth:`mechcirc.reduction.Plan.with_values`);
+    ``w0`` (D, R) the eigen-solver's roots (NaN: none), ``pole`` whether each is
+    a zero of 1/K (anti-resonance: g = −1/X) or of K (resonance: g = X), ``e0``
+    their estimates.  g and the bound of its error come from one evaluation of
+    every design's plan at its own points.  Returns ``(ω, relative error)``.
+    """
+    from .reduction import evaluate_designs
+
+    eps = np.finfo(float).eps
+    have = np.isfinite(w0)
+    w_safe = np.where(have, w0, 1.0)
+
+    def g_and_delta(w):
+        K, rho = evaluate_designs(p, np.where(np.isfinite(w), w, 1.0), error=True)
+        with np.errstate(all="ignore"):
+            X = K.imag
+            g = np.where(pole, -1.0 / X, X)
+            rho = np.where(pole, rho + 2 * rho * rho + 4 * eps / 2, rho)
+            dg = 4 * np.maximum(rho * np.abs(g), eps * np.abs(g))
+        return g, dg
+
+    h = np.maximum(w_safe * np.maximum(np.nan_to_num(e0, nan=1e-9), 1e-9), 1e-300)
+    a, b = w_safe - h, w_safe.copy()
+    ga, _ = g_and_delta(a)
+    gb, db = g_and_delta(b)
+    with np.errstate(all="ignore"):
+        g0, slope0 = gb, (gb - ga) / (b - a)
+    active = have & np.isfinite(ga) & np.isfinite(gb)
+    step = np.full(w0.shape, np.inf)
+    slope = np.full(w0.shape, np.nan)
+    for _ in range(12):
+        if not active.any():
+            break
+        with np.errstate(all="ignore"):
+            sl = (gb - ga) / (b - a)
+            c = np.where(active, b - gb / sl, b)
+        ok = active & np.isfinite(c) & (c > 0)
+        gc, dc = g_and_delta(np.where(ok, c, b))
+        ok &= np.isfinite(gc)
+        dc = np.where(np.isfinite(dc), dc, db)
+        step = np.where(ok, np.abs(c - b), step)
+        slope = np.where(ok, sl, slope)
+        a, ga = np.where(ok, b, a), np.where(ok, gb, ga)
+        b, gb, db = np.where(ok, c, b), np.where(ok, gc, gb), np.where(ok, dc, db)
+        with np.errstate(all="ignore"):
+            done = step <= np.maximum(4 * eps * np.abs(b), db / np.abs(slope))
+        active = ok & ~done
+    with np.errstate(all="ignore"):
+        err = (db / np.abs(slope) + step) / np.abs(b)
+        moved = np.abs(b - w_safe) / w_safe
+        newton = np.abs(g0 / slope0) / w_safe
+    bad = ~np.isfinite(err) | ~np.isfinite(b) | (moved > 1e-3)
+    w = np.where(bad, w_safe, b)
+    newton = np.where(np.isfinite(newton), 10 * newton, 0.0)
+    err = np.where(bad, np.maximum(np.nan_to_num(e0, nan=0.0), newton), np.maximum(err, eps))
+    return np.where(have, w, np.nan), np.where(have, err, np.nan)

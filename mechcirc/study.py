@@ -46,16 +46,20 @@ A study of the sley model (:mod:`mechcirc.sley`) varies a preset's
     C2 = {min = 2e4, max = 8e4, num = 4}     # N·m/rad
     omega = [90.0, 100.0, 110.0]            # rad/s
 
-Each point re-parses the netlist with the point's values in place of the
-``.param`` definitions (:func:`mechcirc.parse` ``params=``), so parameters
-defined from them follow.  Values are SI.  A point that fails (a negative
+The points of a task are one batch of designs (:func:`mechcirc.batch.designs`):
+the netlist is parsed once and its ``.param`` expressions evaluated over the
+points' values, so parameters defined from them follow, as with
+:func:`mechcirc.parse` ``params=``.  Values are SI.  A point that fails (a negative
 mass, a singular network) is a row with ``status = "error"`` and the message,
 never dropped.
 
 Columns: ``index``, the parameters, ``status``, ``error``, then for a sweep
-``K_abs_min K_abs_max Q0_abs_max omega_at_Q0_max n_flagged`` [m/(N·s), N,
-rad/s] (``Q0_abs_max`` is the exact peak of :func:`mechcirc.sweep.peak`: ``inf``
-with ``omega_at_Q0_max`` the resonance when the band holds an undamped one), for resonances ``resonance_1..N`` and ``antiresonance_1..N`` [rad/s]
+``K_abs_min omega_at_K_min K_abs_max omega_at_K_max Q0_abs_max omega_at_Q0_max
+n_flagged`` [m/(N·s), rad/s, m/(N·s), rad/s, N, rad/s, 1]: the true extremes over
+the band (:meth:`mechcirc.batch.Designs.extremes`), not grid samples — ``0``
+or ``inf`` with the ω of the first zero or pole of K when the band holds an
+undamped one — and the number of flagged grid points; for resonances
+``resonance_1..N`` and ``antiresonance_1..N`` [rad/s]
 (empty where there are fewer), for a sley simulation the minimum and maximum
 over the tabulated revolution of ``eps2P eps4P eps4T`` [1/s²] and ``M2V``
 [N·m] (both-sides drive: also ``eps5P M5V``), e.g. ``eps4P_min``.
@@ -103,7 +107,8 @@ __all__ = ["StudySpec", "load_spec", "parse_spec", "study_points", "run_point", 
            "run_study", "StudyResult", "read_rows", "journal_path", "sidecar_path",
            "provenance", "column_units", "SAMPLE_METHODS"]
 
-_SWEEP_COLUMNS = ["K_abs_min", "K_abs_max", "Q0_abs_max", "omega_at_Q0_max", "n_flagged"]
+_SWEEP_COLUMNS = ["K_abs_min", "omega_at_K_min", "K_abs_max", "omega_at_K_max", "Q0_abs_max",
+                  "omega_at_Q0_max", "n_flagged"]
 _SLEY_QUANTITIES = {"one-side": ["eps2P", "eps4P", "eps4T", "M2V"],
                     "both-sides": ["eps2P", "eps4P", "eps4T", "M2V", "eps5P", "M5V"]}
 
@@ -155,6 +160,7 @@ class StudySpec:
 #: Units of the result columns [SI]; a parameter's unit is in ``StudySpec.param_units``.
 _UNITS = {"index": "1", "status": "", "error": "", "K_abs_min": "m/(N·s)",
           "K_abs_max": "m/(N·s)", "Q0_abs_max": "N", "omega_at_Q0_max": "rad/s",
+          "omega_at_K_min": "rad/s", "omega_at_K_max": "rad/s",
           "n_flagged": "1", "resonance": "rad/s", "antiresonance": "rad/s",
           "eps2P": "1/s²", "eps4P": "1/s²", "eps4T": "1/s²", "eps5P": "1/s²",
           "M2V": "N·m", "M5V": "N·m"}
@@ -312,7 +318,7 @@ TABLES = {
 #: The version of what a row holds, part of the canonical spec: raise it whenever
 #: :func:`run_point` computes a column differently, so that ``resume`` refuses to
 #: mix rows of the old computation with the new.
-ROWS_VERSION = 1
+ROWS_VERSION = 2     # 2: true extremes of |K| over the band with their ω (batched core)
 
 #: ``[sample] method``: how the n points fill the box of ``[sample.params]``.
 SAMPLE_METHODS = ("random", "latin-hypercube", "sobol")
@@ -767,55 +773,96 @@ def study_points(spec: StudySpec) -> list[tuple[int, dict[str, float]]]:
 
 
 def run_point(spec: StudySpec, index: int, values: dict[str, float]) -> dict:
-    """One row of the table (errors caught and recorded, never raised)."""
+    """One row of the table (errors caught and recorded, never raised): a batch of one."""
+    return run_batch(spec, [(index, values)])[0]
+
+
+def run_batch(spec: StudySpec, batch: list[tuple[int, dict[str, float]]]) -> list[dict]:
+    """Rows of a batch of points (what each worker runs; errors recorded, never raised).
+
+    A netlist's points are one :func:`mechcirc.batch.designs` batch: the
+    netlist parsed once, K on the D × W grid in one pass, the resonances from
+    stacked eigenproblems; a point the batch cannot take is computed on its
+    own, and a point that fails is a row with its error.  Each row is the
+    same whatever the batch it is in.
+    """
     import warnings
 
     import numpy as np
 
-    row: dict = {"index": index, **values, "status": "ok", "error": ""}
+    rows = [{"index": i, **v, "status": "ok", "error": ""} for i, v in batch]
+    if spec.analysis == "simulate":
+        return [_simulate_row(spec, row, v) for row, (_, v) in zip(rows, batch)]
     try:
-        from .netlist import parse
+        from .batch import designs
 
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            if spec.analysis == "simulate":
-                from .sley import simulate
-
-                drive, variant, revolutions, ppr = spec.sley
-                result = simulate(drive, variant, revolutions=revolutions,
-                                  points_per_revolution=ppr, **values)
-                for q in _SLEY_QUANTITIES[drive]:
-                    lo, hi = result.extrema[q]
-                    row[f"{q}_min"], row[f"{q}_max"] = float(lo), float(hi)
-                return row
-            circuit = parse(spec.netlist_text, source=spec.netlist_source, params=values)
+            ds = designs(spec.netlist_text, {n: [v[n] for _, v in batch] for n in spec.params},
+                         source=spec.netlist_source)
             if spec.analysis == "sweep":
                 lo, hi, n, log = spec.omega
                 omega = np.geomspace(lo, hi, n) if log else np.linspace(lo, hi, n)
-                result = circuit.sweep(omega)
-                with np.errstate(all="ignore"):
-                    absK, absQ = np.abs(result.K), np.abs(result.Q0)
-                # The exact peak (∞ at an undamped resonance in the band, named by
-                # its ω), not the grid's largest value (issue 11 §4).
-                pk = result.peak(quantity="Q0")
-                row.update(K_abs_min=float(np.nanmin(absK)), K_abs_max=float(np.nanmax(absK)),
-                           Q0_abs_max=pk.value, omega_at_Q0_max=pk.omega,
-                           n_flagged=int(np.count_nonzero(result.flags)))
+                s = ds.sweep(omega)
+                flagged = np.count_nonzero(s.flags, axis=1)
+                ex = ds.extremes(omega, ds.resonances(omega_max=hi * (1 + 1e-9)))
+                failed = {**ex.failed, **s.failed}
+                for d, row in enumerate(rows):
+                    # Exact extremes over the band: 0 and inf at a zero or pole of K
+                    # in it, named by its ω (issue 21 §4), not the grid's values.
+                    row.update(K_abs_min=float(ex.K_min[d]), omega_at_K_min=float(
+                        ex.omega_at_K_min[d]), K_abs_max=float(ex.K_max[d]),
+                        omega_at_K_max=float(ex.omega_at_K_max[d]),
+                        Q0_abs_max=float(ex.Q0_max[d]),
+                        omega_at_Q0_max=float(ex.omega_at_Q0_max[d]),
+                        n_flagged=int(flagged[d]))
             else:
-                found = circuit.resonances(omega_max=spec.omega_max)
-                for kind in ("resonance", "antiresonance"):
-                    ws = [r.omega for r in found if r.kind == kind][:spec.n_resonances]
-                    for i in range(spec.n_resonances):
-                        row[f"{kind}_{i + 1}"] = ws[i] if i < len(ws) else math.nan
+                res = ds.resonances(omega_max=spec.omega_max)
+                failed = res.failed
+                for d, row in enumerate(rows):
+                    for kind in ("resonance", "antiresonance"):
+                        ws = res.omega[d, :res.count[d]][res.kind[d, :res.count[d]] == kind]
+                        for i in range(spec.n_resonances):
+                            row[f"{kind}_{i + 1}"] = float(ws[i]) if i < ws.size else math.nan
+    except Exception as exc:  # noqa: BLE001 - a study records every failure
+        if len(batch) > 1:          # find the point at fault: each on its own
+            return [run_batch(spec, [point])[0] for point in batch]
+        message = f"{type(exc).__name__}: {exc}".replace("\n", " ")
+        return [{**row, "status": "error", "error": message} for row in rows]
+    for d, message in failed.items():
+        rows[d] = {"index": rows[d]["index"], **batch[d][1], "status": "error",
+                   "error": _failure(ds, d, message)}
+    return rows
+
+
+def _failure(ds, d: int, message: str) -> str:
+    """The row's error: the single path's exception, named as run_point names it."""
+    try:
+        ds.design(d)
+    except Exception as exc:  # noqa: BLE001
+        return f"{type(exc).__name__}: {exc}".replace("\n", " ")
+    return message.replace("\n", " ")
+
+
+def _simulate_row(spec: StudySpec, row: dict, values: dict) -> dict:
+    """One row of a sley study (errors caught and recorded, never raised)."""
+    import warnings
+
+    try:
+        from .sley import simulate
+
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            drive, variant, revolutions, ppr = spec.sley
+            result = simulate(drive, variant, revolutions=revolutions,
+                              points_per_revolution=ppr, **values)
+            for q in _SLEY_QUANTITIES[drive]:
+                lo, hi = result.extrema[q]
+                row[f"{q}_min"], row[f"{q}_max"] = float(lo), float(hi)
     except Exception as exc:  # noqa: BLE001 - a study records every failure
         row["status"] = "error"
         row["error"] = f"{type(exc).__name__}: {exc}".replace("\n", " ")
     return row
-
-
-def run_batch(spec: StudySpec, batch: list[tuple[int, dict[str, float]]]) -> list[dict]:
-    """Rows of a batch of points (what each worker runs)."""
-    return [run_point(spec, i, v) for i, v in batch]
 
 
 @dataclass

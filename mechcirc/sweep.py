@@ -111,30 +111,12 @@ class Sweep:
     @cached_property
     def Q0(self) -> NDArray[np.complex128]:
         """Force amplitude at the drive [N]: V0/K (velocity drive) or F0 (force drive)."""
-        if self.drive.kind == "force":
-            return np.full(self.omega.shape, self.drive.amplitude, dtype=complex)
-        with np.errstate(all="ignore"):
-            Q0 = self.drive.amplitude / self.K
-        # The limits at an exact zero or pole of K (see :func:`sweep`):
-        # K = 0 → Q0 = +∞·j·sign(V0); K = ∞·j → Q0 = 0.
-        zero = self.K == 0
-        if zero.any():
-            Q0[zero] = complex(0.0, math.copysign(math.inf, self.drive.amplitude))
-        Q0[np.isinf(self.K)] = 0.0
-        return Q0
+        return drive_force(self.K, self.drive.kind, self.drive.amplitude)
 
     @cached_property
     def v0(self) -> NDArray[np.complex128]:
         """Velocity amplitude at the drive [m/s]: V0 (velocity drive) or F0·K (force drive)."""
-        if self.drive.kind == "velocity":
-            return np.full(self.omega.shape, self.drive.amplitude, dtype=complex)
-        out = np.empty(self.K.shape, dtype=complex)
-        with np.errstate(all="ignore"):
-            # Part by part: a complex product would turn F0 · ∞j into nan + ∞j.
-            out.real = self.drive.amplitude * self.K.real
-            out.imag = self.drive.amplitude * self.K.imag
-        out.real[np.isinf(self.K.imag) & (self.K.real == 0)] = 0.0
-        return out
+        return drive_velocity(self.K, self.drive.kind, self.drive.amplitude)
 
     @cached_property
     def error(self) -> NDArray[np.float64]:
@@ -152,18 +134,12 @@ class Sweep:
             err = _chunked(lambda w: evaluate(self.tree, w, error=True)[1], self.omega, float)
         else:
             err = _nodal_errors(self.circuit.nodal, self.omega)
-        # On a pole or zero (flag 1) no relative error exists: inf, never NaN.
-        err[~np.isfinite(self.K) | (self.K == 0)] = np.inf
-        return err
+        return singular_error(self.K, err)
 
     @cached_property
     def flags(self) -> NDArray[np.int8]:
         """Per-point flag: 0 regular, :data:`FLAG_SINGULAR`, :data:`FLAG_NEAR_SINGULAR`."""
-        exact = ~np.isfinite(self.K) | (self.K == 0) | ~np.isfinite(self.Q0) | \
-            ~np.isfinite(self.v0)
-        near = self.error > NEAR_SINGULAR_ERROR
-        return np.where(exact, FLAG_SINGULAR,
-                        np.where(near, FLAG_NEAR_SINGULAR, FLAG_OK)).astype(np.int8)
+        return point_flags(self.K, self.Q0, self.v0, self.error)
 
     def force(self, name: str) -> NDArray[np.complex128]:
         """Force amplitude Q [N] through element ``name`` (from its n1 to its n2)."""
@@ -242,6 +218,63 @@ class Sweep:
         from . import nodal
 
         return nodal.element_response(self.circuit.nodal, self.omega, self.Q0)
+
+
+# The per-point quantities of a sweep from K, written once for a sweep (shape (n,),
+# scalar amplitude) and a batch of designs (shape (D, n), amplitudes of shape (D, 1)).
+
+def drive_force(K: NDArray, kind: str, amplitude) -> NDArray[np.complex128]:
+    """Q0 from K: V0/K (velocity drive) or F0 (force drive); see :attr:`Sweep.Q0`."""
+    amplitude = np.asarray(amplitude, dtype=float)
+    if kind == "force":
+        return np.broadcast_to(amplitude, np.broadcast_shapes(K.shape, amplitude.shape)) \
+            .astype(complex)
+    with np.errstate(all="ignore"):
+        Q0 = amplitude / K
+    # The limits at an exact zero or pole of K (see :func:`sweep`):
+    # K = 0 → Q0 = +∞·j·sign(V0); K = ∞·j → Q0 = 0.
+    zero = K == 0
+    if zero.any():
+        limit = np.zeros(K.shape, dtype=complex)
+        limit.imag = np.copysign(np.inf, np.broadcast_to(amplitude, K.shape))
+        Q0[zero] = limit[zero]
+    Q0[np.isinf(K)] = 0.0
+    return Q0
+
+
+def drive_velocity(K: NDArray, kind: str, amplitude) -> NDArray[np.complex128]:
+    """v0 from K: V0 (velocity drive) or F0·K (force drive); see :attr:`Sweep.v0`."""
+    amplitude = np.asarray(amplitude, dtype=float)
+    if kind == "velocity":
+        return np.broadcast_to(amplitude, np.broadcast_shapes(K.shape, amplitude.shape)) \
+            .astype(complex)
+    out = np.empty(K.shape, dtype=complex)
+    with np.errstate(all="ignore"):
+        # Part by part: a complex product would turn F0 · ∞j into nan + ∞j.
+        out.real = amplitude * K.real
+        out.imag = amplitude * K.imag
+    out.real[np.isinf(K.imag) & (K.real == 0)] = 0.0
+    return out
+
+
+def singular_error(K: NDArray, err: NDArray) -> NDArray[np.float64]:
+    """The error bound of K with inf on a pole or zero (flag 1: no relative error exists)."""
+    err[~np.isfinite(K) | (K == 0)] = np.inf
+    return err
+
+
+def point_flags(K, Q0, v0, error) -> NDArray[np.int8]:
+    """Per-point flags from K, Q0, v0 and the error bound; see :attr:`Sweep.flags`.
+
+    ``Q0`` or ``v0`` may be given as anything that broadcasts against K (the
+    drive's amplitude where the quantity is that constant)."""
+    flags = (error > NEAR_SINGULAR_ERROR).view(np.int8) * np.int8(FLAG_NEAR_SINGULAR)
+    exact = ~np.isfinite(K)
+    exact |= K == 0
+    exact |= ~np.isfinite(Q0)
+    exact |= ~np.isfinite(v0)
+    flags[exact] = FLAG_SINGULAR
+    return flags
 
 
 def sweep(circuit: Circuit, omega: ArrayLike, *, method: Method = "auto") -> Sweep:
@@ -380,7 +413,7 @@ class Peak:
 
     Attributes
     ----------
-    quantity : {"Q0", "v0", "K"}
+    quantity : {"Q0", "v0", "K", "S"}
     value : float
         The peak magnitude (N, m/s or m/(N·s)); ``math.inf`` when unbounded.
     omega : float
@@ -422,15 +455,18 @@ UNDAMPED_ZETA = 1e-12
 
 def peak(result: "Sweep | Circuit", omega_min: float | None = None,
          omega_max: float | None = None, quantity: str | None = None, *,
-         method: Method = "auto", xtol: float = 1e-12) -> Peak:
-    """The largest |Q0|, |v0| or |K| over [``omega_min``, ``omega_max``], located exactly.
+         method: Method = "auto", xtol: float = 1e-12, resonances: list | None = None) -> Peak:
+    """The largest |Q0|, |v0|, |K| or |S| = 1/|K| over [``omega_min``, ``omega_max``], located exactly.
 
     Parameters
     ----------
     result : Sweep or Circuit
         A sweep (its band and grid are used unless given) or a circuit.
-    quantity : {"Q0", "v0", "K"}, optional
-        Default: ``"Q0"`` for a velocity drive, ``"v0"`` for a force drive.
+    quantity : {"Q0", "v0", "K", "S"}, optional
+        ``"S"`` (1/K) gives the smallest |K| as 1/value.  Default: ``"Q0"`` for a velocity drive, ``"v0"`` for a force drive.
+    resonances : list of Resonance, optional
+        The circuit's resonances up to at least the band's top, when already
+        computed (otherwise :meth:`Circuit.resonances` is called).
     xtol : float
         Relative tolerance in ω asked of the Brent search.  |q| is flat at its
         maximum, so the value is right to about machine precision while ω is
@@ -440,7 +476,7 @@ def peak(result: "Sweep | Circuit", omega_min: float | None = None,
     -------
     Peak
         Unbounded (``value = inf``, ``omega`` = the resonance) when the band
-        holds an undamped zero of K (for Q0) or pole of K (for v0 and K),
+        holds an undamped zero of K (for Q0 and S) or pole of K (for v0 and K),
         found exactly by :meth:`Circuit.resonances`; otherwise the maximum
         located by a bounded Brent search around the grid's largest value and
         around every damped resonance of the right kind in the band.  Above
@@ -472,17 +508,20 @@ def peak(result: "Sweep | Circuit", omega_min: float | None = None,
         raise ValueError(f"need 0 <= omega_min < omega_max < inf, got {lo} and {hi}")
     if quantity is None:
         quantity = "v0" if circuit.drive.kind == "force" else "Q0"
-    if quantity not in ("Q0", "v0", "K"):
-        raise ValueError(f"quantity must be 'Q0', 'v0' or 'K', got {quantity!r}")
+    if quantity not in ("Q0", "v0", "K", "S"):
+        raise ValueError(f"quantity must be 'Q0', 'v0', 'K' or 'S', got {quantity!r}")
     if quantity == "Q0" and circuit.drive.kind == "force":
         # Q0 is the applied force: constant.
         return Peak(quantity, abs(circuit.drive.amplitude), lo, False, (),
                     abs(circuit.drive.amplitude), lo)
     # Q0 = V0/K is unbounded at zeros of K ("resonance"); v0 = F0·K and K at
     # poles ("antiresonance").
-    kind = "resonance" if quantity == "Q0" else "antiresonance"
+    kind = "resonance" if quantity in ("Q0", "S") else "antiresonance"
     found = []
-    if len(circuit.elements) <= PEAK_RESONANCE_LIMIT:
+    if resonances is not None:
+        found = [r for r in resonances if r.kind == kind and lo * (1 - 1e-12) <= r.omega
+                 and r.omega <= hi * (1 + 1e-9)]
+    elif len(circuit.elements) <= PEAK_RESONANCE_LIMIT:
         try:
             found = [r for r in circuit.resonances(omega_max=hi * (1 + 1e-9))
                      if r.kind == kind and lo * (1 - 1e-12) <= r.omega]

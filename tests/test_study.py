@@ -47,22 +47,44 @@ def test_grid_points_and_results_match_eq7():
     assert len(result.rows) == 6 and result.failed == 0
     assert [(r["eta1"], r["eta3"]) for r in result.rows] == [
         (0.7, 0.8), (0.7, 0.9), (0.7, 1.0), (0.8, 0.8), (0.8, 0.9), (0.8, 1.0)]
-    omega = np.geomspace(10, 2000, 60)
     for r in result.rows:
-        K = np.abs(full_K(omega, {**STB_PARAMS, "eta1": r["eta1"], "eta3": r["eta3"]}))
-        assert r["K_abs_max"] == pytest.approx(K.max(), rel=1e-9)
-        assert r["K_abs_min"] == pytest.approx(K.min(), rel=1e-9)
-        # The STB network is undamped: the band holds zeros of K, where |Q0| is
-        # unbounded (issue 11 §4); the column says inf at the first of them,
-        # found here on eq. (7) itself (K = jX, X rises through its zeros).
+        # The STB network is undamped and the band holds zeros and poles of K:
+        # |K| runs from 0 to inf and |Q0| = |V0|/|K| is unbounded (issue 21 §4,
+        # issue 11 §4).  Each column names the first zero or pole, found here on
+        # eq. (7) itself (K = jX, X rises through its zeros and falls from +inf
+        # to -inf through its poles).
         p = {**STB_PARAMS, "eta1": r["eta1"], "eta3": r["eta3"]}
         fine = np.geomspace(10, 2000, 20001)
         X = full_K(fine, p).imag
         i = np.flatnonzero((X[:-1] < 0) & (X[1:] > 0))[0]
         zero = brentq(lambda w: full_K(np.array([w]), p).imag[0], fine[i], fine[i + 1],
                       xtol=1e-14, rtol=1e-15)
+        j = np.flatnonzero((X[:-1] > 0) & (X[1:] < 0))[0]
+        pole = brentq(lambda w: 1.0 / full_K(np.array([w]), p).imag[0], fine[j], fine[j + 1],
+                      xtol=1e-14, rtol=1e-15)
+        assert r["K_abs_min"] == 0.0 and r["K_abs_max"] == math.inf
+        assert r["omega_at_K_min"] == pytest.approx(zero, rel=1e-9)
+        assert r["omega_at_K_max"] == pytest.approx(pole, rel=1e-9)
         assert r["Q0_abs_max"] == math.inf
         assert r["omega_at_Q0_max"] == pytest.approx(zero, rel=1e-9)
+
+
+def test_band_without_zeros_or_poles_has_its_extremes_at_the_ends():
+    # Below the first pole and zero of the STB network, K = jX with X rising
+    # (negative, mass-like): |K| falls from the lower end to the upper end, and
+    # |Q0| = V0/|K| is largest at the upper end; reference eq. (7).
+    spec = stb_spec(omega={"min": 10, "max": 300, "points": 7, "log": True})
+    result = run_study(spec, workers=1)
+    assert result.failed == 0
+    for r in result.rows:
+        p = {**STB_PARAMS, "eta1": r["eta1"], "eta3": r["eta3"]}
+        K_lo, K_hi = np.abs(full_K(np.array([10.0, 300.0]), p))
+        assert r["K_abs_max"] == pytest.approx(K_lo, rel=1e-12)
+        assert r["omega_at_K_max"] == 10.0
+        assert r["K_abs_min"] == pytest.approx(K_hi, rel=1e-12)
+        assert r["omega_at_K_min"] == 300.0
+        assert r["Q0_abs_max"] == pytest.approx(0.1 / K_hi, rel=1e-12)
+        assert r["omega_at_Q0_max"] == 300.0
 
 
 def test_failed_points_are_recorded(tmp_path):
@@ -76,7 +98,7 @@ def test_failed_points_are_recorded(tmp_path):
     assert "mass 'm1' must be > 0 kg, got -1" in result.rows[1]["error"]
     table = read(tmp_path / "r.csv")
     assert len(table) == 4 and table[2][2:4] == ["error", result.rows[1]["error"]]
-    assert table[2][4:] == ["", "", "", "", ""]
+    assert table[2][4:] == ["", "", "", "", "", "", ""]
 
 
 def test_local_processes_give_the_same_table_as_one_process(tmp_path):
@@ -167,7 +189,9 @@ def test_resonance_tables():
     for r in result.rows:
         found = mechcirc.load(STB, params={"eta1": r["eta1"]}).resonances()
         res = [x.omega for x in found if x.kind == "resonance"]
-        assert [r["resonance_1"], r["resonance_2"]] == res[:2]
+        # The study solves its points as one batch (stacked eigenproblems, polished
+        # on each design's K): the same roots as find_resonances to ≤ 1e-12.
+        assert [r["resonance_1"], r["resonance_2"]] == pytest.approx(res[:2], rel=1e-12)
         # a zero of K is a root of eq. (7)'s numerator: |K| tiny there, by an independent formula
         K = full_K(np.array(res[:2]), {**STB_PARAMS, "eta1": r["eta1"]})
         assert np.all(np.abs(K) < 1e-9)

@@ -21,7 +21,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import GeometryError
+from ..batch import from_circuits
+from ..errors import GeometryError, InputError, SolverError
 from .files import Scene
 from .model import build
 
@@ -152,25 +153,38 @@ def cycle_map(scene: Scene, *, points: int = 72, harmonics: int = 5,
     hs = np.arange(1, harmonics + 1)
     omega_shaft = abs(scene.omega_shaft)
     Q0 = np.full((points, harmonics), np.nan, dtype=complex)
-    res, anti, skipped = [], [], {}
+    res: list = [()] * points
+    anti: list = [()] * points
+    skipped = {}
     rotational = scene.drive.link is not None
+    circuits, where = [], []
     for i, (th, st) in enumerate(zip(theta, states)):
         try:
-            model = build(scene, th, state=st, reflect=reflect)
+            circuits.append(build(scene, th, state=st, reflect=reflect).circuit)
+            where.append(i)
         except GeometryError as exc:
             skipped[i] = str(exc)
-            res.append(())
-            anti.append(())
-            if progress is not None:
-                progress(i + 1, points)
-            continue
-        found = model.circuit.resonances()
-        res.append(tuple(r for r in found if r.kind == "resonance"))
-        anti.append(tuple(r for r in found if r.kind == "antiresonance"))
-        with np.errstate(all="ignore"):
-            Q0[i] = model.circuit.sweep(hs * omega_shaft).Q0
         if progress is not None:
             progress(i + 1, points)
+    if circuits:
+        # Every crank angle is one design of the same network (issue 21): all at once.
+        try:
+            designs = from_circuits(circuits)
+        except InputError:              # the topology changes over the cycle: one by one
+            designs = None
+        for part in ([designs] if designs is not None else
+                     [from_circuits([c]) for c in circuits]):
+            found = part.resonances()
+            with np.errstate(all="ignore"):
+                q = part.sweep(hs * omega_shaft).Q0
+            for d in range(part.size):
+                i = where[d] if designs is not None else where[circuits.index(part.circuit)]
+                if d in found.failed:
+                    raise SolverError(found.failed[d])
+                rows = found.list(d)
+                res[i] = tuple(r for r in rows if r.kind == "resonance")
+                anti[i] = tuple(r for r in rows if r.kind == "antiresonance")
+                Q0[i] = q[d]
     return CycleMap(theta, res, anti, hs, omega_shaft, Q0, skipped, rotational)
 
 

@@ -1,0 +1,191 @@
+"""Many designs at once (issue 21): the batched core against a hand-written numpy floor.
+
+``netlists/stb_heald.mcir`` with its four lever ratios eta1…eta4 drawn at
+random over D designs (D = 1e3, 1e4 and, with ``--big``, 1e5), 200 log points
+10 … 10⁴ rad/s, and per design: K on the grid, the exact resonances and
+anti-resonances, and the extremes of |K| and |Q0| over the band.  Timed in the
+same run (CPU time, ``time.process_time``, median of ``--repeats``):
+
+* ``floor``: what a careful analyst writes by hand for this one netlist: K(ω)
+  of eq. (1) broadcast over designs in real arithmetic (K = jX), the nodal mass
+  and stiffness matrices of all designs from precomputed patterns, the drive
+  held (resonances) and released (anti-resonances, its one massless direction
+  condensed out), both reduced by a Cholesky factor of M and solved in ONE
+  stacked ``numpy.linalg.eigvalsh`` call, and the extremes from the roots and
+  the band's ends (Foster).  No error bounds, no flags, no polishing.
+* ``mechcirc``: :func:`mechcirc.batch.designs` (the ``.param`` expressions over
+  arrays), ``Designs.sweep`` (K, error bound and flags), ``Designs.resonances``
+  (stacked eigenproblems, every root polished on its design's K) and
+  ``Designs.extremes``.
+
+It checks that both agree (K, roots) and prints the per-design times and their
+ratio (goal ≤ 2×).  The compiled kernel is loaded before timing.  It prints; it
+asserts nothing.  Run from the repository root::
+
+    python benchmarks/bench_batch.py [--big] [--repeats N]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import time
+from pathlib import Path
+
+import numpy as np
+
+import mechcirc
+from mechcirc.batch import designs
+
+NETLIST = Path(__file__).resolve().parents[1] / "netlists" / "stb_heald.mcir"
+OMEGA = np.geomspace(10.0, 1e4, 200)
+
+# The netlist's elements (value, η as a function of eta1..eta4): eq. (1),
+# K = m1 + m2 + m3 + m4 + (k4 | (m5 + k5) | (m6 + ... + m12 + k0)).
+SERIES_MASSES = [(2.0, lambda e: 1.0), (1.5, lambda e: e[0] ** 2),
+                 (1.2, lambda e: e[0] ** 2 * e[1]), (0.9, lambda e: e[0] ** 2 * e[1] * e[2] ** 2)]
+CHAIN = [(0.6, 0), (0.5, 0), (0.7, 0), (0.4, 1), (0.3, 1), (0.5, 0), (3.0, 1)]   # (m, η = eta4?)
+
+
+def floor_K(eta, omega):
+    """X with K = jX over (D, W) by eq. (1), in real arithmetic."""
+    e1, e2, e3, e4 = eta
+    inv_w = 1.0 / omega[None, :]
+    w = omega[None, :]
+    a = sum(1.0 / (m * f(eta)) for m, f in SERIES_MASSES)          # Σ 1/(mη)
+    etaC = e1 ** 2 * e2 * e3 ** 2
+    b3 = sum(1.0 / (m * (e4 if s else 1.0)) for m, s in CHAIN)
+    X_k4 = w / (2.0e6 * etaC)[:, None]
+    X_b2 = -inv_w / 0.8 + w / 1.5e6
+    X_b3 = -inv_w * b3[:, None] + w / (4.0e4 * e4)[:, None]
+    return -inv_w * a[:, None] + 1.0 / (1.0 / X_k4 + 1.0 / X_b2 + 1.0 / X_b3)
+
+
+def floor_matrices(eta):
+    """Nodal M and K (D, 13, 13) of the held and released problems, condensed, as
+    (D, 12, 12) pencils: nodes T A B C D E F G H I J L M, frame 0."""
+    e1, e2, e3, e4 = eta
+    D = e1.size
+    nodes = "T A B C D E F G H I J L M".split()
+    ix = {n: i for i, n in enumerate(nodes)}
+    etaB, etaC = e1 ** 2 * e2, e1 ** 2 * e2 * e3 ** 2
+    one = np.ones(D)
+    masses = [("T", "A", 2.0 * one), ("A", "B", 1.5 * e1 ** 2), ("B", "C", 1.2 * etaB),
+              ("C", "D", 0.9 * etaC), ("D", "E", 0.8 * one), ("D", "F", 0.6 * one),
+              ("F", "G", 0.5 * one), ("G", "H", 0.7 * one), ("H", "I", 0.4 * e4),
+              ("I", "J", 0.3 * e4), ("J", "L", 0.5 * one), ("L", "M", 3.0 * e4)]
+    springs = [("D", "0", 2.0e6 * etaC), ("E", "0", 1.5e6 * one), ("M", "0", 4.0e4 * e4)]
+    n = len(nodes)
+    M = np.zeros((D, n, n))
+    K = np.zeros((D, n, n))
+    for X, items in ((M, masses), (K, springs)):
+        for a, b, v in items:
+            for p, q, s in ((a, a, 1), (b, b, 1), (a, b, -1), (b, a, -1)):
+                if p != "0" and q != "0":
+                    X[:, ix[p], ix[q]] += s * v
+    # Held: T is fixed (drop it).  Released: the uniform motion of all nodes has no
+    # mass (masses only between nodes): condense it out statically.
+    Mh, Kh = M[:, 1:, 1:], K[:, 1:, 1:]
+    u = np.ones(n) / np.sqrt(n)
+    Q = np.linalg.qr(np.column_stack([u, np.eye(n)[:, 1:]]))[0][:, 1:]   # ⊥ u
+    Mr = Q.T @ M @ Q
+    Ku = K @ u                                   # (D, n)
+    Kqu = Ku @ Q                                 # (D, n - 1)
+    Kr = Q.T @ K @ Q - Kqu[:, :, None] * Kqu[:, None, :] / (Ku @ u)[:, None, None]
+    return np.concatenate([Mh, Mr]), np.concatenate([Kh, Kr])
+
+
+def floor(eta, omega):
+    """K, roots and extremes of all designs, by hand."""
+    D = eta[0].size
+    X = floor_K(eta, omega)
+    M, K = floor_matrices(eta)
+    L = np.linalg.cholesky(M)
+    Li = np.linalg.inv(L)
+    lam = np.linalg.eigvalsh(Li @ K @ np.swapaxes(Li, 1, 2))    # one stacked call
+    w = np.sqrt(np.maximum(lam, 0.0))
+    res, anti = w[:D], w[D:]
+    lo, hi = omega[0], omega[-1]
+    has_zero = ((res >= lo) & (res <= hi)).any(axis=1)
+    has_pole = ((anti >= lo) & (anti <= hi)).any(axis=1)
+    ends = np.abs(X[:, [0, -1]])
+    K_min = np.where(has_zero, 0.0, ends.min(axis=1))
+    K_max = np.where(has_pole, np.inf, ends.max(axis=1))
+    with np.errstate(divide="ignore"):
+        Q0_max = 0.1 / K_min
+    return X, res, anti, K_min, K_max, Q0_max
+
+
+def core(eta, omega, text):
+    ds = designs(text, dict(zip(("eta1", "eta2", "eta3", "eta4"), eta)), source="stb")
+    s = ds.sweep(omega)
+    flags = s.flags
+    r = ds.resonances(omega_max=omega[-1] * (1 + 1e-9))
+    ex = ds.extremes(omega, r)
+    return s, flags, r, ex
+
+
+def cpu(fn, repeats):
+    times = []
+    for _ in range(repeats):
+        t0 = time.process_time()
+        out = fn()
+        times.append(time.process_time() - t0)
+    return float(np.median(times)), out
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--big", action="store_true", help="also 1e5 designs")
+    ap.add_argument("--repeats", type=int, default=3)
+    args = ap.parse_args()
+    import scipy
+
+    text = NETLIST.read_text()
+    try:
+        import numba
+        compiled = f"numba {numba.__version__}"
+    except ImportError:
+        compiled = "no numba (every design takes the single path)"
+    print(f"{platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}, "
+          f"numpy {np.__version__}, scipy {scipy.__version__}, {compiled}; "
+          f"load {os.getloadavg()[0]:.2f}")
+    rng = np.random.default_rng(21)
+    core(tuple(rng.uniform(0.7, 1.1, (4, 10))), OMEGA, text)        # load the kernel
+    sizes = [1_000, 10_000] + ([100_000] if args.big else [])
+    for D in sizes:
+        eta = tuple(rng.uniform(lo, hi, D) for lo, hi in
+                    ((0.6, 1.0), (1.0, 1.5), (0.7, 1.1), (0.8, 1.2)))
+        # Interleaved, in chunks of at most 20,000 designs each (memory).
+        t_floor = t_core = 0.0
+        worst_K = worst_w = 0.0
+        same = True
+        for start in range(0, D, 20_000):
+            part = tuple(e[start:start + 20_000] for e in eta)
+            tf, (X, res, _, K_min, K_max, _) = cpu(lambda p=part: floor(p, OMEGA),
+                                                   args.repeats)
+            tc, (s, _, r, ex) = cpu(lambda p=part: core(p, OMEGA, text), args.repeats)
+            t_floor += tf
+            t_core += tc
+            worst_K = max(worst_K, float(np.max(np.abs(s.K.imag - X) / np.abs(X))))
+            lo = OMEGA[0]
+            mine_res = np.sort(np.where(r.kind == "resonance", r.omega, np.inf), axis=1)
+            ref = np.sort(np.where(res >= lo, res, np.inf), axis=1)
+            cols = min(ref.shape[1], mine_res.shape[1])
+            mine_res, ref = mine_res[:, :cols], ref[:, :cols]
+            k = np.isfinite(mine_res) & np.isfinite(ref)
+            worst_w = max(worst_w, float(np.max(np.abs(mine_res[k] - ref[k]) / ref[k])))
+            same &= bool(np.array_equal(ex.K_max == np.inf, K_max == np.inf)) and \
+                bool(np.array_equal(ex.K_min == 0, K_min == 0))
+        print(f"D = {D:>7,}: floor {1e6 * t_floor / D:7.1f} µs/design, mechcirc "
+              f"{1e6 * t_core / D:7.1f} µs/design, ratio {t_core / t_floor:5.2f}x (goal ≤ 2x); "
+              f"{D / t_core:,.0f} designs per CPU-second; batched {D - r.single.size}/{D} "
+              f"of the last chunk")
+        print(f"    agreement: K {worst_K:.1e}, resonance ω {worst_w:.1e} (floor unpolished), "
+              f"0/inf extremes identical: {same}")
+    print(f"load after: {os.getloadavg()[0]:.2f}; mechcirc {mechcirc.__version__}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,561 @@
+"""Many designs of one circuit at once: values as arrays over D designs.
+
+A study, a cycle map or a sample explores thousands of variants of one
+mechanism: the same netlist with other ``.param`` values (lever ratios,
+masses, stiffnesses).  :func:`designs` parses the netlist once and evaluates
+its ``.param`` expressions and element values over arrays of D designs
+(:func:`mechcirc.expressions.evaluate_array`, no re-parsing, no ``eval``);
+the result, :class:`Designs`, evaluates
+
+* K, Q0, v0, the error bound and the flags on a D × W grid in one pass of the
+  compiled series–parallel plan (:meth:`mechcirc.reduction.Plan.with_values`
+  and :func:`mechcirc.reduction.evaluate_designs`: one design is the single
+  sweep, the same code);
+* the exact resonances of every design from stacked eigenvalue problems, one
+  LAPACK call per stack, each root polished (:meth:`Designs.resonances`);
+* the true extremes of |K| and |Q0| over a band (:meth:`Designs.extremes`).
+
+A design the batch cannot take (a value that is not a positive finite
+number, a topology that changes with the values, a network that is not
+series–parallel, a mass matrix too close to singular for the resonances) is
+evaluated by the single-design path (:meth:`Designs.design` gives its
+:class:`~mechcirc.circuit.Circuit`); the results say which and how many.
+:func:`from_circuits` makes the designs of circuits built in code (a scene
+at each crank angle).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .circuit import Circuit
+from .errors import InputError, MechcircError, NetlistError, NotSeriesParallelError
+from .sweep import (UNDAMPED_ZETA, drive_force, drive_velocity, point_flags,
+                    singular_error)
+
+__all__ = ["designs", "from_circuits", "Designs", "DesignSweep", "DesignResonances",
+           "DesignExtremes"]
+
+
+def designs(netlist: "str | Circuit", params: dict | None = None, *,
+            source: str = "<string>") -> "Designs":
+    """D designs of one netlist, differing in their ``.param`` values.
+
+    Parameters
+    ----------
+    netlist : str or Circuit
+        Netlist text, or a circuit made by :func:`mechcirc.parse` /
+        :func:`mechcirc.load` (its parsed expressions are reused).
+    params : dict of str to array_like
+        ``.param`` name → values [SI] over the designs: arrays of one length D
+        (scalars are the same in every design).  Parameters defined from
+        them follow, as :func:`mechcirc.parse` ``params=`` does.
+    source : str
+        Name of the netlist for messages (text input).
+
+    Returns
+    -------
+    Designs
+
+    Raises
+    ------
+    NetlistError
+        The text has an error, or a name is not a ``.param`` of it.
+    InputError
+        The arrays have different lengths or are not one-dimensional.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from mechcirc import designs
+    >>> d = designs(".param k=100\\nmass m a 0 1\\nspring s a 0 k\\ndrive V a 0 force=1",
+    ...             params={"k": [100.0, 400.0]})
+    >>> d.size, d.sweep([1.0, 50.0]).K.shape
+    (2, (2, 2))
+    >>> [round(r.omega, 9) for r in d.resonances().list(1)]
+    [20.0]
+    """
+    from .netlist import expressions_of, parse
+
+    if isinstance(netlist, Circuit):
+        circuit, text = netlist, None
+    else:
+        text = netlist
+        circuit = parse(text, source=source)
+    exprs = expressions_of(circuit)
+    params = dict(params or {})
+    if params and exprs is None:
+        raise InputError("params= needs a circuit made by mechcirc.parse or mechcirc.load "
+                         "(its .param expressions); this one was built in code")
+    unknown = sorted(set(params) - set(circuit.params))
+    if unknown:
+        raise NetlistError(f"no .param named {', '.join(map(repr, unknown))} to set",
+                           circuit.source, 0, 0,
+                           "one of " + (", ".join(circuit.params) or "(none defined)"))
+    arrays = {}
+    for name, v in params.items():
+        a = np.asarray(v, dtype=float)
+        if a.ndim > 1:
+            raise InputError(f"params[{name!r}] must be one-dimensional, got shape {a.shape}")
+        arrays[name] = a
+    sizes = {a.size for a in arrays.values() if a.ndim == 1}
+    if len(sizes) > 1:
+        raise InputError("params= arrays have different lengths: " + ", ".join(
+            f"{n} {a.size}" for n, a in arrays.items() if a.ndim == 1))
+    D = sizes.pop() if sizes else 1
+    return _build(circuit, text, exprs, arrays, D)
+
+
+def from_circuits(circuits) -> "Designs":
+    """The designs of several circuits of one topology (the same elements, levers and
+    drive, in the same order, differing only in values, η, ratios and amplitude),
+    e.g. a scene linearised at each crank angle.
+
+    Raises
+    ------
+    InputError
+        No circuits, or two of different topology (naming the first difference).
+    """
+    circuits = list(circuits)
+    if not circuits:
+        raise InputError("from_circuits needs at least one circuit")
+    first = circuits[0]
+
+    def shape(c):
+        return ([(e.kind, e.name, e.n1, e.n2) for e in c.elements],
+                [(lv.name, lv.p1, lv.p2, lv.s1, lv.s2) for lv in c.levers],
+                (c.drive.name, c.drive.n1, c.drive.n2, c.drive.kind))
+
+    ref = shape(first)
+    for i, c in enumerate(circuits[1:], start=1):
+        if shape(c) != ref:
+            raise InputError(f"circuit {i} ({c.name}) differs in topology from circuit 0 "
+                             f"({first.name}): not designs of one network")
+    values = np.array([[e.value for e in c.elements] for c in circuits], dtype=float).T
+    etas = np.array([[e.eta for e in c.elements] for c in circuits], dtype=float).T
+    ratios = np.array([[lv.ratio for lv in c.levers] for c in circuits], dtype=float).T \
+        .reshape(len(first.levers), len(circuits))
+    amplitude = np.array([c.drive.amplitude for c in circuits], dtype=float)
+    with np.errstate(all="ignore"):
+        scaled = values * etas
+        valid = (np.isfinite(scaled) & (scaled > 0)).all(axis=0) & \
+            (np.isfinite(ratios) & (ratios > 0)).all(axis=0) & np.isfinite(amplitude)
+    return Designs(first, {}, values, etas, ratios, amplitude, valid, None)
+
+
+def _build(circuit: Circuit, text, exprs, arrays: dict, D: int) -> "Designs":
+    """Every value of the circuit over the D designs, with the designs it cannot form."""
+    from .expressions import evaluate_array
+
+    bad = np.zeros(D, dtype=bool)
+    for a in arrays.values():
+        bad |= ~np.isfinite(np.broadcast_to(a, (D,)))
+
+    def value(key, default):
+        nonlocal bad
+        if exprs is None or key not in exprs:
+            return np.full(D, float(default))
+        tree, factor = exprs[key]
+        v, b = evaluate_array(tree, pvals, D)
+        bad |= b
+        return v * factor if factor != 1.0 else v
+
+    pvals: dict = {}
+    for name in circuit.params:
+        if name in arrays:
+            pvals[name] = np.broadcast_to(arrays[name], (D,)).astype(float)
+        else:
+            pvals[name] = value(("param", name), circuit.params[name])
+    n_el = len(circuit.elements)
+    values, etas = np.empty((n_el, D)), np.empty((n_el, D))
+    for i, e in enumerate(circuit.elements):
+        base = e.name
+        key = (e.name, "value")
+        if exprs is not None and key not in exprs and e.name.endswith("_damping") \
+                and (e.name[:-8], "damping") in exprs:
+            base, key = e.name[:-8], (e.name[:-8], "damping")      # a spring's damping=
+        values[i] = value(key, e.value)
+        etas[i] = value((base, "eta"), e.eta)
+        if e.kind == "spring" and exprs is not None and (e.name, "damping") in exprs:
+            # damping= adds a damper where it is > 0: the topology must not change.
+            companion = any(f.name == f"{e.name}_damping" for f in circuit.elements)
+            bad |= (value((e.name, "damping"), e.damping) > 0) != companion
+    ratios = np.array([value((lv.name, "ratio"), lv.ratio) for lv in circuit.levers]) \
+        .reshape(len(circuit.levers), D)
+    d = circuit.drive
+    amplitude = value((d.name, d.kind), d.amplitude) if d is not None else np.zeros(D)
+    with np.errstate(all="ignore"):
+        scaled = values * etas
+        ok = np.isfinite(scaled) & (scaled > 0) & (values > 0) & (etas > 0)
+    bad |= ~ok.all(axis=0)
+    bad |= ~(np.isfinite(ratios) & (ratios > 0)).all(axis=0)
+    bad |= ~np.isfinite(amplitude)
+    return Designs(circuit, {n: np.broadcast_to(a, (D,)).astype(float)
+                             for n, a in arrays.items()},
+                   values, etas, ratios, amplitude, ~bad, text)
+
+
+@dataclass(frozen=True, eq=False)
+class Designs:
+    """D designs of one circuit (see :func:`designs`): plain data, it pickles.
+
+    Attributes
+    ----------
+    circuit : Circuit
+        The template: the netlist with its own values.
+    params : dict of str to ndarray
+        The varied ``.param`` values, shape (D,).
+    values, eta : ndarray, shape (E, D)
+        Value [SI] and η of each of ``circuit.elements`` in each design.
+    ratios : ndarray, shape (R, D)
+        Ratio of each of ``circuit.levers``.
+    amplitude : ndarray, shape (D,)
+        The drive's amplitude (V0 [m/s] or F0 [N]).
+    valid : ndarray of bool, shape (D,)
+        The designs whose values form the template's network (every value
+        positive and finite); the others are evaluated one by one
+        (:meth:`design`), where parsing reports what is wrong.
+    """
+
+    circuit: Circuit
+    params: dict
+    values: NDArray[np.float64]
+    eta: NDArray[np.float64]
+    ratios: NDArray[np.float64]
+    amplitude: NDArray[np.float64]
+    valid: NDArray[np.bool_]
+    text: str | None = field(default=None, repr=False)
+
+    @property
+    def size(self) -> int:
+        """D, the number of designs."""
+        return self.valid.size
+
+    def design(self, d: int) -> Circuit:
+        """The :class:`~mechcirc.circuit.Circuit` of design ``d`` (the single-design path).
+
+        From the netlist text when there is one (:func:`mechcirc.parse` with the
+        design's ``params=``, so an invalid design raises its located error),
+        else the template with the design's values.
+        """
+        if self.text is not None:
+            from .netlist import parse
+
+            return parse(self.text, source=self.circuit.source,
+                         params={n: float(a[d]) for n, a in self.params.items()})
+        c = self.circuit
+        return replace(
+            c, elements=tuple(replace(e, value=float(self.values[i, d]),
+                                      eta=float(self.eta[i, d]))
+                              for i, e in enumerate(c.elements)),
+            levers=tuple(replace(lv, ratio=float(self.ratios[i, d]))
+                         for i, lv in enumerate(c.levers)),
+            drive=replace(c.drive, amplitude=float(self.amplitude[d])))
+
+    # -- the batched series–parallel plan ----------------------------------
+    def plan(self, which: NDArray):
+        """The template's plan with the values of designs ``which``, or None (not
+        series–parallel, or no compiled kernel)."""
+        from .reduction import _kernel, plan
+
+        try:
+            tree = self.circuit.tree
+        except NotSeriesParallelError:
+            return None
+        if _kernel() is None:
+            return None
+        p = plan(tree)
+        row = {e.name: i for i, e in enumerate(self.circuit.elements)}
+        lev = {lv.name: i for i, lv in enumerate(self.circuit.levers)}
+        rows = np.array([row[e.name] for e in p.leaves], dtype=np.int64)
+        scaled = self.values[rows][:, which] * self.eta[rows][:, which]
+        ratios = self.ratios[[lev[lv.name] for lv in p.levers]][:, which]
+        return p.with_values(scaled, ratios.reshape(len(p.levers), which.size))
+
+    def sweep(self, omega: ArrayLike) -> "DesignSweep":
+        """K, Q0, v0, error bound and flags of every design at each ω [rad/s].
+
+        The valid designs of a series–parallel network go through the compiled
+        plan in one pass; the others (``DesignSweep.single``) through
+        :func:`mechcirc.sweep.sweep` one by one.  Each row equals the single
+        design's :class:`~mechcirc.sweep.Sweep` (K, error and flags).
+        """
+        from .sweep import _singular_limits, sweep as sweep_one
+
+        omega = np.atleast_1d(np.asarray(omega, dtype=float))
+        if omega.ndim != 1 or not np.isfinite(omega).all() or (omega < 0).any():
+            raise InputError("omega must be a one-dimensional array of finite values >= 0")
+        D, W = self.size, omega.size
+        batched = np.flatnonzero(self.valid)
+        p = self.plan(batched) if batched.size else None
+        if p is None:
+            batched = batched[:0]
+            K, err = np.empty((D, W), dtype=complex), np.empty((D, W))
+        else:
+            from .reduction import evaluate_designs
+
+            K, err = evaluate_designs(p, omega, error=True)
+            K = _singular_limits(K, omega[None, :])
+            if batched.size < D:
+                K, err = _spread(K, batched, D), _spread(err, batched, D)
+        single = np.setdiff1d(np.arange(D), batched)
+        failed: dict[int, str] = {}
+        for d in single.tolist():
+            try:
+                s = sweep_one(self.design(d), omega)
+                K[d], err[d] = s.K, s.error
+            except MechcircError as exc:
+                K[d], err[d] = np.nan, np.inf
+                failed[d] = str(exc)
+        err = singular_error(K, err)
+        return DesignSweep(omega, K, err, self.circuit.drive.kind, self.amplitude[:, None],
+                           single, failed)
+
+    def resonances(self, omega_max: float | None = None) -> "DesignResonances":
+        """Resonances and anti-resonances of every design up to ``omega_max`` [rad/s].
+
+        Series–parallel designs: the nodal matrices of all designs formed at once
+        from the stamps (:func:`mechcirc.nodal.stamps`); undamped, the pencils
+        reduced by a batched Cholesky factorisation of the mass matrices and
+        solved by one stacked ``eigvalsh`` call, every root polished by a batched
+        secant on the design's own K(ω) (the compiled plan with its error
+        bound); damped, the companion matrices in one stacked ``eigvals`` call,
+        every root polished by Newton on det(s²M + sD + K)
+        (:func:`mechcirc.resonances.batched_roots`).  The others (a mass matrix
+        too close to singular, levers whose ratio varies, a mode in both the
+        held and released problems) go through
+        :func:`mechcirc.resonances.find_resonances` one by one (``single``).
+        """
+        import warnings
+
+        from .resonances import batched_roots, find_resonances
+
+        D = self.size
+        found = batched_roots(self, omega_max)
+        which, pole, w, err = found if found is not None else (np.zeros(0, dtype=np.int64),) * 4
+        single = np.setdiff1d(np.arange(D), which)
+        failed: dict[int, str] = {}
+        alone: dict[int, list] = {}
+        for d in single.tolist():
+            try:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    alone[d] = find_resonances(self.design(d), omega_max)
+            except MechcircError as exc:
+                failed[d] = str(exc)
+        R = max([w.shape[1] if w.ndim == 2 else 0] + [len(v) for v in alone.values()])
+        live = np.isfinite(w)
+        kind = np.full((D, R), "", dtype="<U13")
+        out = np.full((4, D, R), np.nan)
+        count = np.zeros(D, dtype=np.int64)
+        if which.size:
+            r = w.shape[1]
+            count[which] = live.sum(axis=1)
+            kind[which, :r] = np.where(live, np.where(pole, "antiresonance", "resonance"), "")
+            with np.errstate(all="ignore"):
+                out[0, which, :r] = np.abs(w)           # w: the roots s, as _make reads them
+                out[1, which, :r] = np.abs(w.imag)
+                out[2, which, :r] = -w.real / np.abs(w) + 0.0
+            out[3, which, :r] = err
+        for d, roots in alone.items():
+            count[d] = len(roots)
+            for i, x in enumerate(roots):
+                kind[d, i] = x.kind
+                out[:, d, i] = x.omega, x.omega_d, x.zeta, x.error
+        return DesignResonances(kind, out[0], out[1], out[2], out[3], count, omega_max,
+                                single, failed)
+
+    def extremes(self, omega: ArrayLike, resonances: "DesignResonances | None" = None
+                 ) -> "DesignExtremes":
+        """The true extremes of |K| and |Q0| over the band [min ω, max ω] of every design.
+
+        Undamped designs: K = jX with X increasing between its poles (Foster's
+        reactance theorem), so |K| is 0 at a resonance in the band, ∞ at an
+        anti-resonance, and otherwise takes its extremes at the band's ends;
+        |Q0| = |V0|/|K| likewise (velocity drive; a force drive's Q0 is F0).  The
+        others: :func:`mechcirc.sweep.peak` on the single design (``single``).
+        """
+        omega = np.atleast_1d(np.asarray(omega, dtype=float))
+        lo, hi = float(omega.min()), float(omega.max())
+        if resonances is None:
+            resonances = self.resonances(omega_max=hi * (1 + 1e-9))
+        return _extremes(self, lo, hi, resonances)
+
+
+def _spread(rows: NDArray, where: NDArray, D: int) -> NDArray:
+    """``rows`` placed at rows ``where`` of a (D, ...) array (the others unset)."""
+    out = np.empty((D, *rows.shape[1:]), dtype=rows.dtype)
+    out[where] = rows
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class DesignSweep:
+    """K and the drive's quantities of D designs on W frequencies (plain data).
+
+    Attributes
+    ----------
+    omega : ndarray, shape (W,)
+        [rad/s].
+    K : ndarray of complex, shape (D, W)
+        [m/(N·s)]; NaN in the rows of ``failed``.
+    error : ndarray, shape (D, W)
+        Bound of the relative error of K (inf on a pole or zero).
+    kind : {"velocity", "force"}
+    amplitude : ndarray, shape (D, 1)
+        The drive's amplitude.
+    single : ndarray of int
+        The designs evaluated one by one (not through the batch).
+    failed : dict of int to str
+        Designs that could not be evaluated, with the error message.
+    """
+
+    omega: NDArray[np.float64]
+    K: NDArray[np.complex128]
+    error: NDArray[np.float64]
+    kind: str
+    amplitude: NDArray[np.float64]
+    single: NDArray[np.int64]
+    failed: dict
+
+    @property
+    def Q0(self) -> NDArray[np.complex128]:
+        """Force amplitude at the drive [N], shape (D, W)."""
+        return drive_force(self.K, self.kind, self.amplitude)
+
+    @property
+    def v0(self) -> NDArray[np.complex128]:
+        """Velocity amplitude at the drive [m/s], shape (D, W)."""
+        return drive_velocity(self.K, self.kind, self.amplitude)
+
+    @property
+    def flags(self) -> NDArray[np.int8]:
+        """Per-point flags as :attr:`mechcirc.sweep.Sweep.flags`, shape (D, W)."""
+        # The drive's own quantity is its amplitude at every ω: not formed in full.
+        if self.kind == "velocity":
+            return point_flags(self.K, self.Q0, self.amplitude, self.error)
+        return point_flags(self.K, self.amplitude, self.v0, self.error)
+
+
+@dataclass(frozen=True, eq=False)
+class DesignResonances:
+    """The resonances of D designs, as padded arrays (plain data).
+
+    Row d holds design d's roots sorted as :func:`~mechcirc.resonances.find_resonances`
+    sorts them, ``count[d]`` of them; the rest of the row is NaN (``kind`` "").
+
+    Attributes
+    ----------
+    kind : ndarray of str, shape (D, R)
+        "resonance" (K = 0) or "antiresonance" (K = ∞).
+    omega, omega_d, zeta, error : ndarray, shape (D, R)
+        As in :class:`~mechcirc.resonances.Resonance`.
+    count : ndarray of int, shape (D,)
+    omega_max : float or None
+    single : ndarray of int
+        The designs solved one by one by ``find_resonances``.
+    failed : dict of int to str
+        Designs whose resonances could not be found, with the message.
+    """
+
+    kind: NDArray
+    omega: NDArray[np.float64]
+    omega_d: NDArray[np.float64]
+    zeta: NDArray[np.float64]
+    error: NDArray[np.float64]
+    count: NDArray[np.int64]
+    omega_max: float | None
+    single: NDArray[np.int64]
+    failed: dict
+
+    def list(self, d: int) -> list:
+        """Design ``d``'s roots as :class:`~mechcirc.resonances.Resonance` objects."""
+        from .resonances import Resonance
+
+        return [Resonance(str(self.kind[d, i]), float(self.omega[d, i]),
+                          float(self.omega_d[d, i]), float(self.zeta[d, i]),
+                          float(self.error[d, i])) for i in range(int(self.count[d]))]
+
+
+@dataclass(frozen=True, eq=False)
+class DesignExtremes:
+    """Extremes of |K| and |Q0| over a band, per design (shape (D,) each).
+
+    ``K_min``/``K_max`` [m/(N·s)] and ``Q0_max`` [N] are the true values over
+    [``omega_min``, ``omega_max``] (0 or inf where K has a zero or pole in the
+    band), ``omega_at_*`` where they occur [rad/s] (the first resonance or
+    anti-resonance when the value is 0 or inf); NaN for ``failed`` designs.
+    """
+
+    K_min: NDArray[np.float64]
+    omega_at_K_min: NDArray[np.float64]
+    K_max: NDArray[np.float64]
+    omega_at_K_max: NDArray[np.float64]
+    Q0_max: NDArray[np.float64]
+    omega_at_Q0_max: NDArray[np.float64]
+    single: NDArray[np.int64]
+    failed: dict
+
+
+def _extremes(ds: Designs, lo: float, hi: float, res: DesignResonances) -> DesignExtremes:
+    from .sweep import peak
+
+    D = ds.size
+    out = {k: np.full(D, np.nan) for k in ("K_min", "omega_at_K_min", "K_max",
+                                           "omega_at_K_max", "Q0_max", "omega_at_Q0_max")}
+    lossless = res.count >= 0
+    lossless &= ~np.isin(np.arange(D), res.single)
+    with np.errstate(invalid="ignore"):
+        undamped = np.where(res.count[:, None] > np.arange(res.omega.shape[1])[None, :],
+                            res.zeta <= UNDAMPED_ZETA, True).all(axis=1)
+    fast = np.flatnonzero(lossless & undamped)
+    failed = dict(res.failed)
+    if fast.size:
+        edges = ds.sweep(np.array([lo, hi]))
+        Ke = np.abs(edges.K[fast])
+        amp = np.abs(ds.amplitude[fast])
+        with np.errstate(invalid="ignore"):
+            in_band = (res.omega[fast] >= lo * (1 - 1e-12)) & \
+                (res.omega[fast] <= hi * (1 + 1e-9))
+        for kind, name in (("resonance", "min"), ("antiresonance", "max")):
+            hit = in_band & (res.kind[fast] == kind)
+            if hit.shape[1] == 0:                     # no design has a root at all
+                first, w_first = np.full(fast.size, -1), np.full(fast.size, np.nan)
+            else:
+                first = np.where(hit.any(axis=1), np.argmax(hit, axis=1), -1)
+                w_first = np.where(first >= 0, res.omega[fast, np.maximum(first, 0)], np.nan)
+            pick = np.argmin(Ke, axis=1) if name == "min" else np.argmax(Ke, axis=1)
+            edge_v = Ke[np.arange(fast.size), pick]
+            edge_w = np.array([lo, hi])[pick]
+            singular = 0.0 if name == "min" else np.inf
+            out[f"K_{name}"][fast] = np.where(first >= 0, singular, edge_v)
+            out[f"omega_at_K_{name}"][fast] = np.where(first >= 0, w_first, edge_w)
+        if ds.circuit.drive.kind == "force":
+            out["Q0_max"][fast] = amp
+            out["omega_at_Q0_max"][fast] = lo
+        else:
+            with np.errstate(divide="ignore"):
+                out["Q0_max"][fast] = amp / out["K_min"][fast]
+            out["omega_at_Q0_max"][fast] = out["omega_at_K_min"][fast]
+    rest = np.setdiff1d(np.flatnonzero(~np.isin(np.arange(D), list(res.failed))), fast)
+    for d in rest.tolist():
+        try:
+            c = ds.design(d)
+            # The design's resonances once (find_resonances, as peak would) for all three.
+            found = res.list(d) if res.omega_max is not None and res.omega_max >= hi \
+                else None
+            kmax, smax, qmax = (peak(c, lo, hi, quantity=q, resonances=found)
+                                for q in ("K", "S", "Q0"))
+        except MechcircError as exc:
+            failed[d] = str(exc)
+            continue
+        out["K_max"][d], out["omega_at_K_max"][d] = kmax.value, kmax.omega
+        with np.errstate(divide="ignore"):
+            out["K_min"][d] = 1.0 / smax.value if smax.value else math.inf
+        out["omega_at_K_min"][d] = smax.omega
+        out["Q0_max"][d], out["omega_at_Q0_max"][d] = qmax.value, qmax.omega
+    return DesignExtremes(**out, single=rest, failed=failed)

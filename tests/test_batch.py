@@ -1,0 +1,298 @@
+"""mechcirc.batch: many designs of one netlist at once, against the single-design path."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import mpmath
+import numpy as np
+import pytest
+
+from mechcirc import parse
+from mechcirc.batch import designs
+from mechcirc.errors import InputError, NetlistError
+from mechcirc.expressions import evaluate, evaluate_array, parse_expression
+from mechcirc.resonances import find_resonances
+
+STB = Path(__file__).resolve().parents[1] / "netlists" / "stb_heald.mcir"
+OMEGA = np.geomspace(10, 1e4, 200)
+
+# Masses to the frame (a regular mass matrix: the Cholesky path), a lever whose
+# ratio is a parameter, units, a spring's damping= companion and a damper.
+LEVER = """\
+.param r=2 m=1.5 k=4e4 c=3
+drive V a 0 velocity=0.2
+mass  m1 a 0 {m} kg
+spring k1 a b {k/1000} N/mm
+lever L b 0 c 0 ratio=r
+mass  m2 c 0 0.4
+spring k2 c 0 {2*k}
+"""
+DAMPED = LEVER + "damper d1 b 0 c\n"
+
+
+def stb_params(n, seed):
+    rng = np.random.default_rng(seed)
+    return {"eta1": rng.uniform(0.6, 1.0, n), "eta2": rng.uniform(1.0, 1.5, n),
+            "eta3": rng.uniform(0.7, 1.1, n), "eta4": rng.uniform(0.8, 1.2, n)}
+
+
+def one(text, params, d):
+    return parse(text, params={k: float(v[d]) for k, v in params.items()})
+
+
+@pytest.mark.parametrize("text, params", [
+    (STB.read_text(), stb_params(25, 1)),
+    (LEVER, {"r": np.linspace(0.5, 3, 7), "m": np.geomspace(0.1, 10, 7)}),
+    (DAMPED, {"c": np.geomspace(1e-3, 1e3, 7), "k": np.linspace(1e3, 1e5, 7)}),
+])
+def test_batched_sweep_is_the_single_sweep(text, params):
+    ds = designs(text, params)
+    s = ds.sweep(OMEGA)
+    assert s.single.size == 0 and not s.failed       # all through the batch
+    flags, Q0, v0 = s.flags, s.Q0, s.v0
+    for d in range(ds.size):
+        ref = one(text, params, d).sweep(OMEGA)
+        # The same compiled plan, a design at a time: the same numbers (the
+        # brief's bound is 1e-13 relative; they are equal).
+        np.testing.assert_array_equal(s.K[d], ref.K)
+        np.testing.assert_array_equal(s.error[d], ref.error)
+        np.testing.assert_array_equal(flags[d], ref.flags)
+        np.testing.assert_array_equal(Q0[d], ref.Q0)
+        np.testing.assert_array_equal(v0[d], ref.v0)
+
+
+def test_flags_and_singular_points_match():
+    # ω exactly on the pole of m | k (ω² = k/m = 100): K = +∞·j, flag 1, Q0 = 0.
+    text = ".param k=100\nmass m a 0 1\nspring s a 0 k\ndrive V a 0 velocity=1\n"
+    params = {"k": np.array([100.0, 400.0, 2500.0])}
+    omega = np.array([5.0, 10.0, 20.0, 50.0])
+    s = designs(text, params).sweep(omega)
+    for d in range(3):
+        ref = one(text, params, d).sweep(omega)
+        np.testing.assert_array_equal(s.K[d], ref.K)
+        np.testing.assert_array_equal(s.flags[d], ref.flags)
+    assert s.flags[0, 1] == 1 and s.Q0[0, 1] == 0
+
+
+@pytest.mark.parametrize("text, params, n_batched", [
+    (STB.read_text(), stb_params(40, 2), 40),            # singular M: condensed
+    (LEVER, {"m": np.geomspace(0.1, 10, 9)}, 9),          # regular M: Cholesky
+    (LEVER, {"r": np.array([0.5, 2.0, 3.0])}, 1),         # ratio varies: one by one but r = 2
+    (DAMPED, {"c": np.geomspace(1e-2, 1e2, 5)}, 5),       # dampers: stacked eigvals + Newton
+])
+def test_batched_resonances_are_find_resonances(text, params, n_batched):
+    ds = designs(text, params)
+    res = ds.resonances(omega_max=2e4)
+    assert ds.size - res.single.size == n_batched and not res.failed
+    worst = 0.0
+    for d in range(ds.size):
+        ref = find_resonances(one(text, params, d), 2e4)
+        got = res.list(d)
+        assert [r.kind for r in got] == [r.kind for r in ref]
+        for a, b in zip(got, ref):
+            worst = max(worst, abs(a.omega - b.omega) / b.omega)
+            assert a.zeta == pytest.approx(b.zeta, abs=1e-12)
+    assert worst <= 1e-12
+
+
+def test_batched_resonances_against_mpmath():
+    # drive at a, m1 a–0, k1 a–b, m2 b–0, k2 b–0 (masses to the frame: Cholesky).
+    # Resonance (a held): ω² = (k1 + k2)/m2.  Anti-resonance (a free): the
+    # 2-DOF pencil det([[k1 − ω²m1, −k1], [−k1, k1 + k2 − ω²m2]]) = 0.
+    text = ".param m1=1 m2=0.5 k1=1e4 k2=3e4\ndrive V a 0 velocity=1\nmass ma a 0 m1\n" \
+           "spring ka a b k1\nmass mb b 0 m2\nspring kb b 0 k2\n"
+    rng = np.random.default_rng(7)
+    params = {"m1": rng.uniform(0.2, 3, 6), "m2": rng.uniform(0.2, 3, 6),
+              "k1": rng.uniform(1e3, 1e5, 6), "k2": rng.uniform(1e3, 1e5, 6)}
+    res = designs(text, params).resonances()
+    assert res.single.size == 0
+    mpmath.mp.dps = 40
+    for d in range(6):
+        m1, m2, k1, k2 = (mpmath.mpf(float(params[n][d])) for n in ("m1", "m2", "k1", "k2"))
+        held = mpmath.sqrt((k1 + k2) / m2)
+        # m1 m2 λ² − (k1 m2 + (k1 + k2) m1) λ + k1 k2 = 0; the released network
+        # also has the rigid-free root only if k's vanish (they do not).
+        a, b, c = m1 * m2, -(k1 * m2 + (k1 + k2) * m1), k1 * k2
+        disc = mpmath.sqrt(b * b - 4 * a * c)
+        free = sorted(mpmath.sqrt(x) for x in ((-b - disc) / (2 * a), (-b + disc) / (2 * a)))
+        ref = sorted([("resonance", held)] + [("antiresonance", w) for w in free],
+                     key=lambda t: t[1])
+        got = res.list(d)
+        assert [r.kind for r in got] == [k for k, _ in ref]
+        for r, (_, w) in zip(got, ref):
+            rel = abs(r.omega - float(w)) / float(w)
+            assert rel <= 1e-15                      # achieved: ≤ 5.2e-16 (2-3 ulp)
+            assert r.error >= rel                    # the estimate covers the error
+
+
+def test_a_design_is_the_same_in_any_batch():
+    text, params = STB.read_text(), stb_params(12, 3)
+    ds = designs(text, params)
+    s, r = ds.sweep(OMEGA), ds.resonances(omega_max=1e4)
+    for d in (0, 5, 11):
+        alone = designs(text, {k: v[d:d + 1] for k, v in params.items()})
+        s1, r1 = alone.sweep(OMEGA), alone.resonances(omega_max=1e4)
+        np.testing.assert_array_equal(s1.K[0], s.K[d])
+        assert r1.list(0) == r.list(d)
+
+
+def test_extremes_of_a_lossless_design_against_a_fine_grid():
+    text = ".param k=100\nmass m a 0 1\nspring s a b k\nmass m2 b 0 2\ndrive V a 0 velocity=0.5\n"
+    params = {"k": np.array([100.0, 1e4])}
+    ds = designs(text, params)
+    ex = ds.extremes(np.array([1.0, 30.0]))
+    # k = 100: zero of K at ω = sqrt(k/m2) ≈ 7.07 and pole at sqrt(k(1/m + 1/m2)) ≈ 12.2
+    assert ex.K_min[0] == 0 and ex.omega_at_K_min[0] == pytest.approx(math.sqrt(50), rel=1e-14)
+    assert ex.K_max[0] == math.inf
+    assert ex.omega_at_K_max[0] == pytest.approx(math.sqrt(150), rel=1e-14)
+    assert ex.Q0_max[0] == math.inf
+    # k = 1e4: no zero or pole below 30 rad/s (first at ω = sqrt(5000) ≈ 70.7); the
+    # mass-like K = 1/(jω(m + m2 ∥ spring…)) falls: extremes at the band's ends,
+    # checked on a fine grid of the closed form K = (jω m2 + k/(jω)) / ...
+    w = np.geomspace(1.0, 30.0, 100001)
+    s = 1j * w
+    Y = s * 1 + 1 / (s / 1e4 + 1 / (s * 2))
+    absK = np.abs(1 / Y)
+    assert ex.K_max[1] == pytest.approx(absK.max(), rel=1e-12)
+    assert ex.K_min[1] == pytest.approx(absK.min(), rel=1e-12)
+    assert (ex.omega_at_K_max[1], ex.omega_at_K_min[1]) == (1.0, 30.0)
+    assert ex.Q0_max[1] == pytest.approx(0.5 / absK.min(), rel=1e-12)
+
+
+def test_damped_designs_take_the_single_path_and_are_counted():
+    params = {"c": np.array([1.0, 10.0])}
+    ds = designs(DAMPED, params)
+    ex = ds.extremes(np.geomspace(10, 1e3, 50))
+    assert list(ex.single) == [0, 1]
+    for d in range(2):
+        c = one(DAMPED, params, d)
+        from mechcirc.sweep import peak
+
+        assert ex.Q0_max[d] == peak(c, 10, 1e3, quantity="Q0").value
+        assert ex.K_max[d] == peak(c, 10, 1e3, quantity="K").value
+
+
+def test_invalid_designs_fail_with_the_parsers_message():
+    text = ".param m=2\nmass m1 a 0 m\nspring k a 0 100\ndrive V a 0 velocity=1\n"
+    ds = designs(text, {"m": [1.0, -1.0, 2.0]})
+    assert list(ds.valid) == [True, False, True]
+    s = ds.sweep([1.0, 2.0])
+    assert list(s.failed) == [1] and "mass 'm1' must be > 0 kg, got -1" in s.failed[1]
+    assert np.isfinite(s.K[[0, 2]]).all()
+
+
+def test_bad_arguments_are_refused():
+    text = ".param m=2\nmass m1 a 0 m\nspring k a 0 100\ndrive V a 0 velocity=1\n"
+    with pytest.raises(InputError, match="different lengths"):
+        designs(".param m=2 k=1\nmass m1 a 0 m\nspring s a 0 k\ndrive V a 0 velocity=1\n",
+                {"m": [1.0, 2.0], "k": [1.0, 2.0, 3.0]})
+    with pytest.raises(NetlistError, match="no .param named 'x'"):
+        designs(text, {"x": [1.0]})
+    with pytest.raises(InputError, match="one-dimensional"):
+        designs(text, {"m": np.ones((2, 2))})
+
+
+@pytest.mark.parametrize("source", ["a^2 * b - 3/a", "sqrt(a) + exp(b/10) * sin(a)",
+                                    "log(a - 1)", "a / (b - 2)", "(a - 2) ** 0.5",
+                                    "-a ** b", "degrees(radians(a)) + pi"])
+def test_array_expressions_are_the_scalar_ones(source):
+    expr = parse_expression(source)
+    rng = np.random.default_rng(5)
+    a = np.concatenate([rng.uniform(0.5, 4, 40), [1.0, 2.0]])
+    b = np.concatenate([rng.uniform(-3, 3, 40), [2.0, 2.0]])
+    values, bad = evaluate_array(expr, {"a": a, "b": b}, a.size)
+    for i in range(a.size):
+        try:
+            ref = evaluate(expr, {"a": float(a[i]), "b": float(b[i])})
+        except NetlistError:
+            assert bad[i]
+            continue
+        assert not bad[i] and values[i] == ref          # the same IEEE operations
+
+
+def test_without_the_compiled_kernel_every_design_takes_the_single_path(monkeypatch):
+    from mechcirc import reduction
+
+    text, params = STB.read_text(), stb_params(4, 9)
+    ref = designs(text, params)
+    s_ref, r_ref = ref.sweep(OMEGA), ref.resonances(omega_max=1e4)
+    monkeypatch.setattr(reduction, "_KERNEL", [None])      # as without numba
+    ds = designs(text, params)
+    s, r = ds.sweep(OMEGA), ds.resonances(omega_max=1e4)
+    assert list(s.single) == list(r.single) == [0, 1, 2, 3]
+    np.testing.assert_array_equal(s.K, s_ref.K)            # numpy path = compiled plan
+    np.testing.assert_array_equal(s.flags, s_ref.flags)
+    for d in range(4):
+        for a, b in zip(r.list(d), r_ref.list(d)):
+            assert a.kind == b.kind and a.omega == pytest.approx(b.omega, rel=1e-12)
+
+
+def test_a_circuit_built_in_code_is_a_template_of_one_design():
+    from mechcirc import Circuit, Drive, Element
+
+    c = Circuit((Element("mass", "m", "a", "0", 2.0), Element("spring", "k", "a", "0", 800.0)),
+                Drive("V", "a", "0", "force", 3.0))
+    ds = designs(c)
+    assert ds.size == 1 and ds.design(0) == c
+    np.testing.assert_array_equal(ds.sweep([1.0, 10.0]).K[0], c.sweep([1.0, 10.0]).K)
+    (r,) = ds.resonances().list(0)
+    assert r.kind == "antiresonance" and r.omega == pytest.approx(20.0, rel=1e-15)
+    with pytest.raises(InputError, match="built in code"):
+        designs(c, {"k": [1.0]})
+
+
+def test_cycle_map_is_one_batch_equal_to_each_angle_alone():
+    # Every crank angle of the heald scene is one design (dampers: the stacked
+    # eigvals path); each equals find_resonances on that angle's circuit.
+    from mechcirc.scene import build, cycle_map, load_scene
+
+    scene = load_scene(Path(__file__).resolve().parents[1] / "examples" / "heald_scene.toml")
+    cmap = cycle_map(scene, points=24)
+    states = scene.linkage.solve(cmap.theta)
+    worst = 0.0
+    for i in range(24):
+        c = build(scene, cmap.theta[i], state=states[i]).circuit
+        ref = c.resonances()
+        got = sorted(cmap.resonances[i] + cmap.antiresonances[i], key=lambda r: (r.omega, r.kind))
+        assert [r.kind for r in got] == [r.kind for r in ref]
+        for a, b in zip(got, ref):
+            worst = max(worst, abs(a.omega - b.omega) / b.omega)
+            assert a.zeta == pytest.approx(b.zeta, rel=1e-12, abs=1e-15)
+        np.testing.assert_array_equal(cmap.Q0[i], c.sweep(cmap.harmonics * cmap.omega_shaft).Q0)
+    assert worst <= 1e-12                    # measured ≤ 1.5e-14 (360 angles)
+
+
+def test_batched_damped_resonances_against_mpmath():
+    # drive at a; m1 a–0, k a–b, m2 b–0, c b–0.  Held (a fixed): m2 s² + c s + k = 0.
+    # Released: det(s²M + sD + K) = s (m1 m2 s³ + m1 c s² + (m1 + m2) k s + c k), a
+    # rigid root s = 0 (not reported) and a cubic: a complex pair and a real root
+    # (an overdamped mode: ω_d = 0, ζ = 1).
+    text = ".param m1=1 m2=0.5 k=1e4 c=3\ndrive V a 0 velocity=1\nmass ma a 0 m1\n" \
+           "spring ka a b k\nmass mb b 0 m2\ndamper cb b 0 c\n"
+    rng = np.random.default_rng(11)
+    params = {"m1": rng.uniform(0.2, 3, 5), "m2": rng.uniform(0.2, 3, 5),
+              "k": rng.uniform(1e3, 1e5, 5), "c": rng.uniform(0.1, 30, 5)}
+    res = designs(text, params).resonances()
+    assert res.single.size == 0
+    mpmath.mp.dps = 40
+    for d in range(5):
+        m1, m2, k, c = (mpmath.mpf(float(params[n][d])) for n in ("m1", "m2", "k", "c"))
+        held = mpmath.polyroots([m2, c, k])
+        free = mpmath.polyroots([m1 * m2, m1 * c, (m1 + m2) * k, c * k], maxsteps=200,
+                                extraprec=200)
+        ref = [("resonance", s) for s in held if mpmath.im(s) >= 0] + \
+            [("antiresonance", s) for s in free if mpmath.im(s) >= 0]
+        ref.sort(key=lambda t: (float(abs(t[1])), t[0]))
+        got = res.list(d)
+        assert [r.kind for r in got] == [kd for kd, _ in ref]
+        for r, (_, s) in zip(got, ref):
+            wn = float(abs(s))
+            rel = abs(r.omega - wn) / wn
+            # Complex roots within 1e-15; the slow overdamped root (≈ 7 rad/s beside a
+            # rigid root at 0) to 1.5e-13: P(s) formed in float64 limits Newton.
+            assert rel <= 5e-13
+            assert r.error >= rel                            # the estimate covers it
+            assert r.zeta == pytest.approx(float(-mpmath.re(s) / abs(s)), rel=1e-12, abs=1e-15)
+            assert r.omega_d == pytest.approx(float(abs(mpmath.im(s))), rel=1e-12, abs=1e-12)
