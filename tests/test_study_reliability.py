@@ -228,8 +228,9 @@ def test_csv_output_records_the_spec_and_every_columns_unit(tmp_path):
     assert list(record["units"]) == header
     assert record["units"] == {
         "index": "1", "m": "kg", "r": "1", "x": None, "status": "", "error": "",
-        "K_abs_min": "m/(N·s)", "K_abs_max": "m/(N·s)", "Q0_abs_max": "N",
-        "omega_at_Q0_max": "rad/s", "n_flagged": "1"}
+        "K_abs_min": "m/(N·s)", "omega_at_K_min": "rad/s", "K_abs_max": "m/(N·s)",
+        "omega_at_K_max": "rad/s", "Q0_abs_max": "N", "omega_at_Q0_max": "rad/s",
+        "n_flagged": "1"}
 
 
 @pytest.mark.parametrize("data", [
