@@ -429,6 +429,7 @@ def test_topology_error_exit_2(tmp_path, capsys):
     (["--omega-min", 1, "--omega-max", "inf"], "need 0 <= --omega-min < --omega-max"),
     (["--omega-min", 0, "--omega-max", 1, "--log"], "--log needs --omega-min > 0"),
     (["--omega-min", 1, "--omega-max", 2, "--points", 0], "--points must be between"),
+    (["--omega-min", 1, "--omega-max", 2, "--points", 1], "--points must be between 2 and"),
 ])
 def test_bad_omega_range_exit_2(tmp_path, capsys, options, message):
     path = write(tmp_path, "ok.mcir", GOOD)

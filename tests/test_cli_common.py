@@ -111,12 +111,21 @@ def test_internal_error_is_one_line_and_a_hint(monkeypatch, capsys, message):
     assert len(lines) == 2 and "report" in lines[1] and "--debug" in lines[1]
 
 
-def test_internal_error_traceback_only_with_debug(monkeypatch):
+@pytest.mark.parametrize("argv", [["--debug", "check", "x.mcir"],
+                                  ["check", "x.mcir", "--debug"]])   # where the hint puts it
+def test_internal_error_traceback_only_with_debug(monkeypatch, argv):
     from mechcirc.cli import circuit_commands
 
     monkeypatch.setattr(circuit_commands, "cmd_check", _boom("boom"))
     with pytest.raises(RuntimeError, match="boom"):
-        main(["--debug", "check", "x.mcir"])
+        main(argv)
+
+
+@pytest.mark.parametrize("name", COMMANDS)
+def test_every_command_takes_debug_after_it(name):
+    parser = build_parser()
+    command = next(a for a in parser._subparsers._group_actions).choices[name]
+    assert "--debug" in command._option_string_actions
 
 
 def test_internal_error_in_a_real_process_has_no_traceback(tmp_path):

@@ -51,6 +51,12 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in COMMAND_MODULES:
         importlib.import_module(name).register(sub)
+    # --debug is global, but the internal-error hint says "run again with --debug",
+    # which users append after the command: each command takes it too.  SUPPRESS
+    # keeps a command's parser from resetting a --debug given before the command.
+    for command in {id(p): p for p in sub.choices.values()}.values():
+        command.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
+                             help="show the full traceback of an internal error")
     return parser
 
 

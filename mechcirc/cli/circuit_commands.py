@@ -153,8 +153,10 @@ def _omega_grid(args):
     if not (np.isfinite(lo) and np.isfinite(hi)) or lo < 0 or hi <= lo:
         raise MechcircError(f"need 0 <= --omega-min < --omega-max (finite), got "
                             f"{lo:g} and {hi:g}")
-    if n < 1 or n > MAX_SWEEP_POINTS:
-        raise MechcircError(f"--points must be between 1 and {MAX_SWEEP_POINTS}, got {n}")
+    if n < 2 or n > MAX_SWEEP_POINTS:
+        # One point would be --omega-min alone: the band and its peak need both ends.
+        raise MechcircError(f"--points must be between 2 and {MAX_SWEEP_POINTS} (a sweep "
+                            f"spans --omega-min to --omega-max), got {n}")
     for wanted, limit, what in ((args.plot, MAX_PLOT_POINTS, "--plot"),
                                 (args.json, MAX_JSON_POINTS, "--json"),
                                 (args.method == "nodal", MAX_NODAL_POINTS, "--method nodal")):
