@@ -108,7 +108,8 @@ def _run(args) -> int:
         print(f"{exc.filename}: error: is a directory, expected a file", file=sys.stderr)
         return EXIT_USER
     except PermissionError as exc:
-        print(f"{exc.filename}: error: permission denied", file=sys.stderr)
+        print(f"{exc.filename}: error: {(exc.strerror or 'permission denied').lower()}",
+              file=sys.stderr)
         return EXIT_USER
     except KeyboardInterrupt:
         print("mechcirc: interrupted", file=sys.stderr)
@@ -118,14 +119,26 @@ def _run(args) -> int:
         return EXIT_SIGTERM
     except BrokenPipeError:
         return EXIT_OK
+    except OSError as exc:
+        if exc.filename is None or exc.strerror is None:
+            return _internal(args, exc)
+        # A file the system would not read or write (a full disk, a read-only
+        # file system): the environment's refusal, named, not a bug.
+        print(f"{exc.filename}: error: {exc.strerror.lower()}", file=sys.stderr)
+        return EXIT_USER
     except Exception as exc:  # noqa: BLE001 - the last line of defence
-        if getattr(args, "debug", False):
-            raise
-        first = (str(exc).splitlines() or [""])[0]     # one line, whatever the message
-        print(f"mechcirc: internal error: {type(exc).__name__}: {first}\n"
-              "This is a bug in mechcirc; please report it with the input "
-              "(run again with --debug for the traceback).", file=sys.stderr)
-        return EXIT_INTERNAL
+        return _internal(args, exc)
+
+
+def _internal(args, exc: Exception) -> int:
+    """Report an internal error in one line (the traceback with ``--debug``)."""
+    if getattr(args, "debug", False):
+        raise exc
+    first = (str(exc).splitlines() or [""])[0]     # one line, whatever the message
+    print(f"mechcirc: internal error: {type(exc).__name__}: {first}\n"
+          "This is a bug in mechcirc; please report it with the input "
+          "(run again with --debug for the traceback).", file=sys.stderr)
+    return EXIT_INTERNAL
 
 
 def quantity_type(role: str, default_unit: str | None = None):
@@ -320,21 +333,34 @@ def print_json(document) -> None:
 PLOT_FORMATS = ("png", "svg", "pdf", "eps", "ps", "jpg", "jpeg", "tif", "tiff", "webp")
 
 
-def check_output_paths(*paths, plots=()) -> None:
-    """Refuse, before any work, outputs into missing folders or plots in unknown formats."""
+def check_output_paths(*paths, plots=(), reads=()) -> None:
+    """Refuse, before any work, outputs that cannot or must not be written.
+
+    An output into a missing folder (a dangling link's included), onto a
+    folder, block device or socket, one named twice, one that is a file the
+    command reads (``reads``: its input files), or a plot in an unknown format.
+    Links are followed and FIFOs and character devices written in place
+    (:func:`mechcirc.outputs.output_target`).
+    """
     from pathlib import Path
 
+    from ..outputs import output_target
+
     given = [p for p in (*paths, *plots) if p]
-    for path in given:
-        if not Path(path).resolve().parent.is_dir():
-            raise MechcircError(f"{path}: folder {str(Path(path).parent)!r} does not exist")
-        if Path(path).is_dir():
-            raise MechcircError(f"{path}: is a folder; give a file name for the output")
-    resolved = [Path(p).resolve() for p in given]
+    resolved = [output_target(p)[0] for p in given]
     for i, path in enumerate(resolved):
         if path in resolved[:i]:
             raise MechcircError(f"{given[i]}: named for two outputs; each output needs "
                                 "its own file")
+    for source in (r for r in reads if r):
+        for out, path in zip(given, resolved):
+            same = path == Path(os.path.realpath(source))
+            with contextlib.suppress(OSError):
+                same = same or os.path.samefile(path, source)
+            if same:
+                raise MechcircError(f"{out}: is also this command's input {str(source)!r}; "
+                                    "writing it would replace the input: give the output "
+                                    "another name")
     for path in plots:
         if path and Path(path).suffix.lstrip(".").lower() not in PLOT_FORMATS:
             raise MechcircError(

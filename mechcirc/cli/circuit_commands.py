@@ -202,7 +202,7 @@ def cmd_sweep(args) -> int:
 
     from ..outputs import OutputSet
 
-    check_output_paths(args.output, args.touchstone, plots=(args.plot,))
+    check_output_paths(args.output, args.touchstone, plots=(args.plot,), reads=(args.file,))
     if args.touchstone:
         from pathlib import Path
 
