@@ -31,7 +31,9 @@ class _Parser(argparse.ArgumentParser):
     """argparse, with a usage error on one line (the full usage is one ``--help`` away)."""
 
     def error(self, message):
-        self.exit(2, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
+        from ..errors import shorten     # argparse quotes the value given: it may be long
+
+        self.exit(2, f"{self.prog}: error: {shorten(message)} (see '{self.prog} --help')\n")
 
 
 def build_parser() -> argparse.ArgumentParser:

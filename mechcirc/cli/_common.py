@@ -10,7 +10,7 @@ import signal
 import sys
 import threading
 
-from ..errors import MechcircError, NetlistError
+from ..errors import MechcircError, NetlistError, clip, shorten
 
 EXIT_OK, EXIT_INTERNAL, EXIT_USER = 0, 1, 2
 #: Exit status after SIGINT and SIGTERM (128 + the signal number, as shells report).
@@ -102,13 +102,13 @@ def _run(args) -> int:
               else f"mechcirc: error: {exc}", file=sys.stderr)
         return EXIT_USER
     except FileNotFoundError as exc:
-        print(f"{exc.filename}: error: no such file", file=sys.stderr)
+        print(f"{_name(exc)}: error: no such file", file=sys.stderr)
         return EXIT_USER
     except IsADirectoryError as exc:
-        print(f"{exc.filename}: error: is a directory, expected a file", file=sys.stderr)
+        print(f"{_name(exc)}: error: is a directory, expected a file", file=sys.stderr)
         return EXIT_USER
     except PermissionError as exc:
-        print(f"{exc.filename}: error: {(exc.strerror or 'permission denied').lower()}",
+        print(f"{_name(exc)}: error: {(exc.strerror or 'permission denied').lower()}",
               file=sys.stderr)
         return EXIT_USER
     except KeyboardInterrupt:
@@ -124,17 +124,22 @@ def _run(args) -> int:
             return _internal(args, exc)
         # A file the system would not read or write (a full disk, a read-only
         # file system): the environment's refusal, named, not a bug.
-        print(f"{exc.filename}: error: {exc.strerror.lower()}", file=sys.stderr)
+        print(f"{_name(exc)}: error: {exc.strerror.lower()}", file=sys.stderr)
         return EXIT_USER
     except Exception as exc:  # noqa: BLE001 - the last line of defence
         return _internal(args, exc)
+
+
+def _name(exc: OSError) -> str:
+    """The file an OSError names, clipped: a path typed on the command line can be long."""
+    return clip(str(exc.filename))
 
 
 def _internal(args, exc: Exception) -> int:
     """Report an internal error in one line (the traceback with ``--debug``)."""
     if getattr(args, "debug", False):
         raise exc
-    first = (str(exc).splitlines() or [""])[0]     # one line, whatever the message
+    first = shorten((str(exc).splitlines() or [""])[0])    # one line, whatever the message
     print(f"mechcirc: internal error: {type(exc).__name__}: {first}\n"
           "This is a bug in mechcirc; please report it with the input "
           "(run again with --debug for the traceback).", file=sys.stderr)
