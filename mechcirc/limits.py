@@ -44,7 +44,8 @@ MAX_CYCLE_POINTS = 1_440
 #: Elements (and levers) of a network without a series–parallel tree whose symbolic
 #: formula is attempted (its size grows with the number of spanning trees).
 MAX_FORMULA_ELEMENTS = 12
-#: Seconds a symbolic formula may take before it is abandoned.
+#: CPU seconds (not wall clock: the same on a loaded machine) a symbolic formula may
+#: use before it is abandoned (``cli._common.time_limit``).
 FORMULA_SECONDS = 20.0
 
 

@@ -10,7 +10,7 @@ import signal
 import sys
 import threading
 
-from ..errors import MechcircError, NetlistError, clip, shorten
+from ..errors import MAX_QUOTED, MechcircError, NetlistError, clip, shorten
 
 EXIT_OK, EXIT_INTERNAL, EXIT_USER = 0, 1, 2
 #: Exit status after SIGINT and SIGTERM (128 + the signal number, as shells report).
@@ -44,10 +44,13 @@ def sigterm_unwinds():
 
 @contextlib.contextmanager
 def time_limit(seconds: float, what: str, instead: str):
-    """Raise :class:`MechcircError` if the block runs longer than ``seconds``.
+    """Raise :class:`MechcircError` once the block has used ``seconds`` of CPU time.
 
-    For work whose time cannot be bounded beforehand (SymPy); uses SIGALRM,
-    so only in the main thread of a POSIX process (elsewhere: no limit).
+    For work whose size cannot be bounded beforehand (SymPy).  CPU time of the
+    process (``ITIMER_PROF``, user and system, all threads; what
+    ``time.process_time`` counts), not the wall clock: the same input gets the
+    same answer on a loaded machine.  Uses SIGPROF, so only in the main thread
+    of a POSIX process (elsewhere: no limit).
     """
     if not hasattr(signal, "setitimer") or \
             threading.current_thread() is not threading.main_thread():
@@ -57,19 +60,19 @@ def time_limit(seconds: float, what: str, instead: str):
     class _Expired(BaseException):
         pass
 
-    def on_alarm(signum, frame):
+    def on_expiry(signum, frame):
         raise _Expired()
 
-    old = signal.signal(signal.SIGALRM, on_alarm)
-    signal.setitimer(signal.ITIMER_REAL, seconds)
+    old = signal.signal(signal.SIGPROF, on_expiry)
+    signal.setitimer(signal.ITIMER_PROF, seconds)
     try:
         yield
     except _Expired:
-        raise MechcircError(f"{what} took longer than the limit of {seconds:g} s; "
+        raise MechcircError(f"{what} used more than the limit of {seconds:g} s of CPU time; "
                             f"{instead}") from None
     finally:
-        signal.setitimer(signal.ITIMER_REAL, 0)
-        signal.signal(signal.SIGALRM, old)
+        signal.setitimer(signal.ITIMER_PROF, 0)
+        signal.signal(signal.SIGPROF, old)
 
 
 def run_handler(args) -> int:
@@ -132,7 +135,7 @@ def _run(args) -> int:
 
 def _name(exc: OSError) -> str:
     """The file an OSError names, clipped: a path typed on the command line can be long."""
-    return clip(str(exc.filename))
+    return clip(str(exc.filename), 2 * MAX_QUOTED)
 
 
 def _internal(args, exc: Exception) -> int:
