@@ -5,8 +5,8 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ..limits import (MAX_ADAPTIVE_NODAL_POINTS, MAX_JSON_POINTS, MAX_NODAL_POINTS,
-                      MAX_PLOT_POINTS, MAX_SWEEP_POINTS)
+from ..limits import (MAX_ADAPTIVE_NODAL_POINTS, MAX_ADAPTIVE_POINTS, MAX_JSON_POINTS,
+                      MAX_NODAL_POINTS, MAX_PLOT_POINTS, MAX_SWEEP_POINTS)
 from ._common import (check_output_paths, count, load_with_warnings, print_json, real,
                       save_figure)
 
@@ -223,9 +223,9 @@ def cmd_sweep(args) -> int:
             from ..errors import MechcircError
 
             raise MechcircError("--adaptive needs --omega-min > 0")
-        # Each refinement round re-evaluates every midpoint; by nodal analysis
-        # that is ~0.1 ms a point, so its budget is smaller (152 s at 20,000).
-        budget = MAX_ADAPTIVE_NODAL_POINTS if args.method == "nodal" else 20_000
+        # By nodal analysis a point costs ~0.1 ms or more, so its budget is smaller;
+        # the work (points × elements) is bounded in adaptive_sweep on either path.
+        budget = MAX_ADAPTIVE_NODAL_POINTS if args.method == "nodal" else MAX_ADAPTIVE_POINTS
         result = adaptive_sweep(circuit, omega[0], omega[-1], tol=args.tol,
                                 initial=max(2, min(args.points, budget)), method=args.method,
                                 max_points=budget)
