@@ -45,8 +45,9 @@ def clip(text: str, limit: int = MAX_QUOTED) -> str:
 
 
 def shorten(message: str) -> str:
-    """``message`` with every quoted piece of user text clipped (:data:`MAX_QUOTED`) and
-    the whole at most :data:`MAX_MESSAGE` characters: an error line stays a line."""
+    """``message`` with every quoted piece of user text longer than :data:`MAX_QUOTED`
+    cut to its first 50 and last 25 characters and its length, and the whole at most
+    :data:`MAX_MESSAGE` characters: an error line stays a line."""
     if len(message) <= MAX_QUOTED:
         return message
 
@@ -54,7 +55,8 @@ def shorten(message: str) -> str:
         q, inner = m.group(1), m.group(2)
         if len(inner) <= MAX_QUOTED:
             return m.group(0)
-        return f"{q}{inner[:MAX_QUOTED - 25]}…{q} ({len(inner):,} characters)"
+        # The head and the tail: a token's start, a path's file name.
+        return f"{q}{inner[:50]}…{inner[-25:]}{q} ({len(inner):,} characters)"
 
     return clip(_QUOTED.sub(cut, message), MAX_MESSAGE)
 

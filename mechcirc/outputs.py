@@ -46,15 +46,15 @@ def output_target(path: str | os.PathLike) -> tuple[Path, bool]:
     given = os.fspath(path)
     target = Path(os.path.realpath(given))
     linked = target != Path(os.path.abspath(given))
-    via = f"{given}: a symbolic link to '{target}', which" if linked else f"{given}:"
+    via = f"{given}: a symbolic link to {target}, which" if linked else f"{given}:"
     try:
         mode = os.stat(target).st_mode
     except FileNotFoundError:
         if target.parent.is_dir():
             return target, False
         if linked:
-            raise InputError(f"{given}: a symbolic link to '{target}', whose folder "
-                             f"'{target.parent}' does not exist") from None
+            raise InputError(f"{given}: a symbolic link to {target}, whose folder "
+                             f"{target.parent} does not exist") from None
         raise InputError(f"{given}: folder '{Path(given).parent}' does not exist") from None
     except OSError as exc:       # a link loop (ELOOP), a file used as a folder (ENOTDIR)
         raise InputError(f"{given}: cannot be written: {exc.strerror}") from None
@@ -78,7 +78,7 @@ def _naming(target: Path, given):
     except OSError as exc:
         if exc.errno is None:
             raise
-        raise type(exc)(exc.errno, f"{exc.strerror} (writing into folder '{target.parent}')",
+        raise type(exc)(exc.errno, f"{exc.strerror} (writing into folder {target.parent})",
                         os.fspath(given)) from None
 
 

@@ -646,7 +646,7 @@ def test_error_lines_stay_short_and_do_not_quote_other_files(tmp_path, capsys):
     assert status == 2 and "not a netlist" in err and "hunter2" not in err
     status, _, err = run(["sweep", STB, "--omega-min", 1, "--omega-max", 10,
                           "--method", "x" * 50_000], capsys)      # argparse quotes choices
-    assert status == 2 and len(err) < 400 and "…' (50,000 characters)" in err
+    assert status == 2 and len(err) < 400 and "x…" + "x" * 25 + "' (50,000 characters)" in err
     long = write(tmp_path, "long.mcir", "mass m a 0 1\n" + "z" * 90_000 + " k a 0 1\n" + GOOD)
     status, _, err = run(["check", long], capsys)
     assert status == 2 and len(err) < 400 and "(90,000 characters)" in err

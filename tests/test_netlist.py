@@ -329,6 +329,6 @@ def test_a_long_token_is_quoted_in_part_with_its_length():
     err = str(_error(f"mass m a 0 1\n{token} k a 0 1\n{D}"))
     assert len(err) < 300
     assert err.startswith("bad.mcir:2:1: error: unknown keyword 'qqqq")
-    assert "…' (90,000 characters) (expected one of .param" in err
+    assert "q…" + "q" * 25 + "' (90,000 characters) (expected one of .param" in err
     quoted = err.split("'")[1]
     assert len(quoted) <= 100

@@ -366,7 +366,7 @@ def check_output_paths(*paths, plots=(), reads=()) -> None:
             with contextlib.suppress(OSError):
                 same = same or os.path.samefile(path, source)
             if same:
-                raise MechcircError(f"{out}: is also this command's input {str(source)!r}; "
+                raise MechcircError(f"{out}: is also this command's input {source}; "
                                     "writing it would replace the input: give the output "
                                     "another name")
     for path in plots:
