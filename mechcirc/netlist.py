@@ -235,7 +235,7 @@ def _check_slips(line: "_Line", raw: str) -> None:
 KEYWORDS = (".param", ".ic", "mass", "spring", "damper", "lever", "drive")
 
 
-def _check_first_keyword(line: "_Line") -> None:
+def _check_first_keyword(line: _Line) -> None:
     """A first statement that begins with no keyword, nor a slip of one ('sprnig'), means
     the file is not a netlist (/etc/passwd, a CSV): say so without quoting any of it."""
     word = line.tokens[0].text.lower()

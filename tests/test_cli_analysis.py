@@ -100,7 +100,7 @@ def test_force_drive_csv_has_velocity_columns(tmp_path, capsys):
 
 def test_adaptive_sweep_says_its_work_bound_or_refuses_with_it(tmp_path, capsys, monkeypatch):
     """The bound counts work (K evaluations × elements) and is said when hit (issue 23 §8)."""
-    import mechcirc.limits as limits
+    from mechcirc import limits
 
     path = tmp_path / "two.mcir"
     path.write_text("drive V a 0 velocity=1\nspring k1 a b 2e4\ndamper c1 a b 0.01\n"

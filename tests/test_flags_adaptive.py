@@ -137,7 +137,7 @@ def test_adaptive_sweep_says_when_its_budget_is_hit():
 # ------------------------------------------- the adaptive sweep is bounded in work (issue 23 §8)
 def _counting(monkeypatch):
     """Count the K evaluations adaptive_sweep makes (points passed to sweep)."""
-    import mechcirc.adaptive as adaptive
+    from mechcirc import adaptive
 
     counted = []
     real = adaptive.sweep
@@ -171,7 +171,7 @@ def test_adaptive_sweep_evaluates_each_point_about_three_times(monkeypatch):
 
 
 def test_adaptive_sweep_stops_at_its_work_bound_and_says_so(monkeypatch):
-    import mechcirc.limits as limits
+    from mechcirc import limits
 
     c = _ladder(30)                       # 18 resonances: a 13,045-point grid at tol 1e-4
     size = len(c.elements) + len(c.levers)
@@ -190,7 +190,7 @@ def test_adaptive_sweep_stops_at_its_work_bound_and_says_so(monkeypatch):
 
 
 def test_adaptive_sweep_refuses_a_starting_grid_over_its_work_bound(monkeypatch):
-    import mechcirc.limits as limits
+    from mechcirc import limits
 
     c = _ladder(30)
     size = len(c.elements) + len(c.levers)

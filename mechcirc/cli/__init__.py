@@ -31,7 +31,7 @@ class _Parser(argparse.ArgumentParser):
     """argparse, with a usage error on one line (the full usage is one ``--help`` away)."""
 
     def error(self, message):
-        from ..errors import shorten     # argparse quotes the value given: it may be long
+        from ..errors import shorten  # argparse quotes the value given: it may be long
 
         self.exit(2, f"{self.prog}: error: {shorten(message)} (see '{self.prog} --help')\n")
 
