@@ -27,28 +27,39 @@ from .errors import InputError
 __all__ = ["atomic_path", "atomic_open", "OutputSet", "output_target"]
 
 
+#: Names of an open file descriptor (``-o /dev/stdout``): written in place when they
+#: lead to a pipe or terminal; refused when they lead to a regular file (replacing it
+#: would lose what else the descriptor receives, writing into it would mix the two).
+_DESCRIPTORS = ("/dev/stdout", "/dev/stderr", "/dev/fd/", "/proc/self/fd/")
+
+
 def output_target(path: str | os.PathLike) -> tuple[Path, bool]:
     """The file that writing ``path`` changes, and whether it is a stream written in place.
 
     Returns
     -------
     target : Path
-        ``path`` with every symbolic link followed (the file that is replaced).
+        ``path`` with every symbolic link followed (the file that is replaced);
+        ``path`` itself for a stream (opened through its links).
     stream : bool
-        True for a FIFO or character device: written in place, not replaced.
+        True for a FIFO or character device (also ``/dev/stdout`` to a pipe or
+        terminal): written in place, not replaced.
 
     Raises
     ------
     InputError
         ``path`` is a folder, a block device or a socket, its folder (or that of
-        a link's target) does not exist, or its links loop.
+        a link's target) does not exist, its links loop, or it names a file
+        descriptor open on a regular file.
     """
     given = os.fspath(path)
     target = Path(os.path.realpath(given))
     linked = target != Path(os.path.abspath(given))
     via = f"{given}: a symbolic link to {target}, which" if linked else f"{given}:"
     try:
-        mode = os.stat(target).st_mode
+        # The kernel follows the links: also /dev/stdout → /proc/self/fd/1 → "pipe:[…]",
+        # which has no path realpath could give.
+        mode = os.stat(given).st_mode
     except FileNotFoundError:
         if target.parent.is_dir():
             return target, False
@@ -58,10 +69,14 @@ def output_target(path: str | os.PathLike) -> tuple[Path, bool]:
         raise InputError(f"{given}: folder '{Path(given).parent}' does not exist") from None
     except OSError as exc:       # a link loop (ELOOP), a file used as a folder (ENOTDIR)
         raise InputError(f"{given}: cannot be written: {exc.strerror}") from None
+    if stat.S_ISFIFO(mode) or stat.S_ISCHR(mode):
+        return Path(given), True
+    if stat.S_ISREG(mode) and os.path.abspath(given).startswith(_DESCRIPTORS):
+        raise InputError(f"{given}: an open file descriptor, here of the file {target}; "
+                         "give that file's name instead (through the descriptor the output "
+                         "would be mixed with what else it receives)")
     if stat.S_ISREG(mode):
         return target, False
-    if stat.S_ISFIFO(mode) or stat.S_ISCHR(mode):
-        return target, True
     if stat.S_ISDIR(mode):
         raise InputError(f"{via} is a folder; give a file name for the output")
     kind = "a block device" if stat.S_ISBLK(mode) else \

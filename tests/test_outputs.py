@@ -331,3 +331,24 @@ def test_a_system_refusal_at_the_rename_is_a_named_user_error(tmp_path, monkeypa
     err = capsys.readouterr().err
     assert err.strip() == f"{target}: error: {text} (writing into folder {tmp_path})"
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc/self/fd"), reason="no /proc/self/fd")
+def test_a_descriptor_name_writes_into_its_pipe_and_refuses_its_regular_file(tmp_path, capsys):
+    """``-o /dev/stdout`` is /proc/self/fd/1: to a pipe it is written in place (its link
+    names no path, 'pipe:[…]'); to a regular file (stdout redirected) it is refused,
+    since replacing that file or writing into it would lose or mix the summary."""
+    expected = _csv_of_sweep(tmp_path, capsys)
+    read, write = os.pipe()
+    with os.fdopen(read) as reader:
+        with os.fdopen(write, "w") as writer:
+            status = main(SWEEP + ["-o", f"/proc/self/fd/{writer.fileno()}"])
+        assert status == 0, capsys.readouterr().err
+        assert reader.read() == expected
+    capsys.readouterr()
+    log = tmp_path / "log.txt"
+    with open(log, "w") as fh:
+        assert main(SWEEP + ["-o", f"/proc/self/fd/{fh.fileno()}"]) == 2
+    assert f"an open file descriptor, here of the file {log}; give that file's name" in \
+        capsys.readouterr().err
+    assert log.read_text() == ""
