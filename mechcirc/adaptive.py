@@ -32,7 +32,7 @@ UNDAMPED_OFFSETS = (1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2, 0.1)
 
 
 def adaptive_sweep(circuit: Circuit, omega_min: float, omega_max: float, *,
-                   tol: float = 0.005, initial: int = 41, max_points: int = 20_000,
+                   tol: float = 0.005, initial: int = 41, max_points: int | None = None,
                    method: str = "auto") -> Sweep:
     """Sweep ``circuit`` over [``omega_min``, ``omega_max``] [rad/s] on an adaptive grid.
 
@@ -43,19 +43,38 @@ def adaptive_sweep(circuit: Circuit, omega_min: float, omega_max: float, *,
         out) at an interval's midpoint from the log–log interpolation of its ends.
     initial : int
         Points of the starting logarithmic grid.
-    max_points : int
-        Upper bound on the number of points; reaching it is recorded in
-        ``result.notes``.
+    max_points : int, optional
+        Upper bound on the number of points (default
+        :data:`~mechcirc.limits.MAX_ADAPTIVE_POINTS`); reaching it is recorded
+        in ``result.notes``.
 
     Returns
     -------
     Sweep
         On the final grid (``len(result.omega)`` tells how many points).
+
+    Raises
+    ------
+    InputError
+        The starting grid alone (``initial`` points and those placed around
+        each resonance) would exceed the work bound.
+
+    Notes
+    -----
+    The work is bounded: each K evaluation costs about one operation per
+    element, and every point is evaluated about three times (as a point, as a
+    midpoint before it, and in the final sweep), so the refinement stops when
+    points × 3 × (elements + levers) would pass
+    :data:`~mechcirc.limits.MAX_ADAPTIVE_WORK` (series–parallel tree) or
+    :data:`~mechcirc.limits.MAX_ADAPTIVE_NODAL_WORK` (nodal analysis, about
+    100 times dearer per element); ``result.notes`` then says so, with the bound.
     """
-    from .errors import SolverError
+    from . import limits
+    from .errors import InputError, SolverError
 
     if not 0 < omega_min < omega_max:
-        raise ValueError(f"need 0 < omega_min < omega_max, got {omega_min} and {omega_max}")
+        raise InputError(f"need 0 < omega_min < omega_max, got {omega_min} and {omega_max}")
+    max_points = limits.MAX_ADAPTIVE_POINTS if max_points is None else max_points
     notes: list[str] = []
     grid = [np.geomspace(omega_min, omega_max, initial)]
     try:
@@ -88,10 +107,23 @@ def adaptive_sweep(circuit: Circuit, omega_min: float, omega_max: float, *,
 
     omega = np.unique(np.concatenate(grid))
     omega = omega[(omega >= omega_min) & (omega <= omega_max)]
-    values = smooth(sweep(circuit, omega, method=method))
+    first = sweep(circuit, omega, method=method)
+    size = max(1, len(circuit.elements) + len(circuit.levers))
+    bound = limits.MAX_ADAPTIVE_WORK if first.method == "sp" else limits.MAX_ADAPTIVE_NODAL_WORK
+    evaluations = bound // size          # K evaluations the bound allows on this network
+    work = (f"work bound of {bound:,} element evaluations ({evaluations:,} evaluations of K "
+            f"on this network of {size:,} elements and levers, method {first.method})")
+    if 3 * omega.size > evaluations:
+        raise InputError(f"adaptive sweep: its starting grid of {omega.size:,} points is over "
+                         f"the {work}; start from fewer points or a narrower band, or sweep "
+                         "a fixed grid")
+    values = smooth(first)
+    # The midpoint of each interval (geometric mean) and its value, kept between
+    # rounds: a round evaluates only the two new midpoints of each split interval.
+    mid = np.sqrt(omega[:-1] * omega[1:])
+    mid_values = smooth(sweep(circuit, mid, method=method))
+    used = omega.size + mid.size
     while True:
-        mid = np.sqrt(omega[:-1] * omega[1:])
-        mid_values = smooth(sweep(circuit, mid, method=method))
         with np.errstate(all="ignore"):
             predicted = (values[:-1] + values[1:]) / 2          # log-log midpoint
             deviation = np.abs(np.expm1(mid_values - predicted))
@@ -99,18 +131,29 @@ def adaptive_sweep(circuit: Circuit, omega_min: float, omega_max: float, *,
         split = np.flatnonzero(deviation > tol)
         if split.size == 0:
             break
-        room = max_points - omega.size
-        if split.size > room:
-            notes.append(f"point budget of {max_points} reached: {split.size - room} "
-                         f"interval(s) still deviate by more than tol = {tol:g} "
-                         f"(largest {deviation.max():.3g})")
+        # A split adds a point and two midpoints; the final sweep evaluates every point.
+        room_points = max_points - omega.size
+        room_work = (evaluations - used - omega.size) // 3
+        room = max(0, min(room_points, room_work))
+        full = split.size > room
+        if full:
+            which = f"point budget of {max_points}" if room_points <= room_work else work
+            notes.append(f"{which} reached: {split.size - room} interval(s) still deviate "
+                         f"by more than tol = {tol:g} (largest {deviation.max():.3g})")
+            if room == 0:
+                break
             split = split[np.argsort(deviation[split])[::-1][:room]]
             split.sort()
-        omega = np.insert(omega, split + 1, mid[split])
-        values = np.insert(values, split + 1, mid_values[split])
-        if omega.size >= max_points:
-            if not notes or "budget" not in notes[-1]:
-                notes.append(f"point budget of {max_points} reached")
+        new = mid[split]
+        left, right = np.sqrt(omega[split] * new), np.sqrt(new * omega[split + 1])
+        omega = np.insert(omega, split + 1, new)
+        if full:                 # the last round: its new midpoints would not be used
             break
+        values = np.insert(values, split + 1, mid_values[split])
+        fresh = smooth(sweep(circuit, np.concatenate([left, right]), method=method))
+        used += 2 * split.size
+        mid[split], mid_values[split] = left, fresh[:split.size]
+        mid = np.insert(mid, split + 1, right)
+        mid_values = np.insert(mid_values, split + 1, fresh[split.size:])
     result = sweep(circuit, omega, method=method)
     return result.with_notes(tuple(notes)) if notes else result

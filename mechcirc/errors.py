@@ -8,6 +8,8 @@ file carry that place (:class:`NetlistError`).  Dual bases (``ValueError``,
 
 from __future__ import annotations
 
+import re
+
 __all__ = [
     "MechcircError",
     "NetlistError",
@@ -19,11 +21,55 @@ __all__ = [
     "MechcircWarning",
     "UnloadedElementWarning",
     "SingularPointWarning",
+    "MAX_QUOTED",
+    "clip",
+    "shorten",
 ]
 
 
+#: The most characters of one piece of user text (a token, a value, a name) an
+#: error message quotes; a longer one is cut and its length said.
+MAX_QUOTED = 100
+#: The most characters of a whole error message.
+MAX_MESSAGE = 1000
+# A quoted piece as repr() writes it: an opening quote not glued to a word
+# (so "the drive's" is prose), escapes inside, the same quote closing it.
+_QUOTED = re.compile(r"""(?<!\w)(['"])((?:\\.|(?!\1)[^\\\n])*)\1(?!\w)""")
+
+
+def clip(text: str, limit: int = MAX_QUOTED) -> str:
+    """``text`` cut to about ``limit`` characters, ending ``… (N characters)`` when cut."""
+    if len(text) <= limit:
+        return text
+    return f"{text[:max(limit - 25, 10)]}… ({len(text):,} characters)"
+
+
+def shorten(message: str) -> str:
+    """``message`` with every quoted piece of user text longer than :data:`MAX_QUOTED`
+    cut to its first 50 and last 25 characters and its length, and the whole at most
+    :data:`MAX_MESSAGE` characters: an error line stays a line."""
+    if len(message) <= MAX_QUOTED:
+        return message
+
+    def cut(m: re.Match) -> str:
+        q, inner = m.group(1), m.group(2)
+        if len(inner) <= MAX_QUOTED:
+            return m.group(0)
+        # The head and the tail: a token's start, a path's file name.
+        return f"{q}{inner[:50]}…{inner[-25:]}{q} ({len(inner):,} characters)"
+
+    return clip(_QUOTED.sub(cut, message), MAX_MESSAGE)
+
+
 class MechcircError(Exception):
-    """Base class of every error mechcirc raises on purpose."""
+    """Base class of every error mechcirc raises on purpose.
+
+    Its text quotes at most :data:`MAX_QUOTED` characters of any piece of user
+    text (:func:`shorten`).
+    """
+
+    def __str__(self) -> str:
+        return shorten(super().__str__())
 
 
 class NetlistError(MechcircError, ValueError):
@@ -51,13 +97,13 @@ class NetlistError(MechcircError, ValueError):
         super().__init__(str(self))
 
     def __str__(self) -> str:
-        where = self.source
+        where = clip(self.source, 2 * MAX_QUOTED)     # a path typed on the command line
         if self.line:
             where += f":{self.line}:{self.col}"
         text = f"{where}: error: {self.message}"
         if self.expected:
             text += f" (expected {self.expected})"
-        return text
+        return shorten(text)
 
 
 class InputError(MechcircError, ValueError):

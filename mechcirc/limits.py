@@ -12,7 +12,8 @@ from __future__ import annotations
 from .errors import InputError
 
 __all__ = ["MAX_SWEEP_POINTS", "MAX_PLOT_POINTS", "MAX_JSON_POINTS", "MAX_NODAL_POINTS",
-           "MAX_ADAPTIVE_NODAL_POINTS", "MAX_STUDY_POINTS", "MAX_STUDY_SWEEP_POINTS",
+           "MAX_ADAPTIVE_POINTS", "MAX_ADAPTIVE_NODAL_POINTS", "MAX_ADAPTIVE_WORK",
+           "MAX_ADAPTIVE_NODAL_WORK", "MAX_STUDY_POINTS", "MAX_STUDY_SWEEP_POINTS",
            "MAX_STUDY_WORK", "MAX_REVOLUTIONS", "MAX_SCIPY_REVOLUTIONS",
            "MAX_POINTS_PER_REVOLUTION", "MAX_CYCLE_POINTS", "MAX_FORMULA_ELEMENTS",
            "FORMULA_SECONDS", "check_count"]
@@ -25,8 +26,15 @@ MAX_PLOT_POINTS = 1_000_000
 MAX_JSON_POINTS = 1_000_000
 #: Points of a sweep by nodal analysis (~0.2 ms a point on the bundled netlist: 10⁶ took over 4 min).
 MAX_NODAL_POINTS = 100_000
-#: Points of an adaptive sweep by nodal analysis (its refinement re-solves every midpoint).
+#: Points of an adaptive sweep (``mechcirc.adaptive.adaptive_sweep``'s default budget).
+MAX_ADAPTIVE_POINTS = 20_000
+#: Points of an adaptive sweep by nodal analysis.
 MAX_ADAPTIVE_NODAL_POINTS = 2_000
+#: K evaluations × (elements + levers) of an adaptive sweep on the series–parallel tree
+#: (5–50 ns each measured: a 4,000-element ladder gets 16,666 points, ≤ 10 s).
+MAX_ADAPTIVE_WORK = 200_000_000
+#: The same by nodal analysis (0.5–1.2 µs per element and point measured: ≤ 12 s).
+MAX_ADAPTIVE_NODAL_WORK = 10_000_000
 #: Points (rows) of a parameter study (about 1.1 kB each in memory while it runs).
 MAX_STUDY_POINTS = 500_000
 #: Frequency points of the sweep at each study point.
@@ -44,7 +52,8 @@ MAX_CYCLE_POINTS = 1_440
 #: Elements (and levers) of a network without a series–parallel tree whose symbolic
 #: formula is attempted (its size grows with the number of spanning trees).
 MAX_FORMULA_ELEMENTS = 12
-#: Seconds a symbolic formula may take before it is abandoned.
+#: CPU seconds (not wall clock: the same on a loaded machine) a symbolic formula may
+#: use before it is abandoned (``cli._common.time_limit``).
 FORMULA_SECONDS = 20.0
 
 

@@ -241,6 +241,24 @@ def _check_slips(line: "_Line", raw: str) -> None:
             line.error("a decimal comma", j + 1, "a decimal point, e.g. 1.5 (not 1,5)")
 
 
+#: The keywords a netlist statement begins with.
+KEYWORDS = (".param", ".ic", "mass", "spring", "damper", "lever", "drive")
+
+
+def _check_first_keyword(line: _Line) -> None:
+    """A first statement that begins with no keyword, nor a slip of one ('sprnig'), means
+    the file is not a netlist (/etc/passwd, a CSV): say so without quoting any of it."""
+    word = line.tokens[0].text.lower()
+    if word in KEYWORDS:
+        return
+    import difflib
+
+    if not difflib.get_close_matches(word, KEYWORDS, n=1, cutoff=0.6):
+        line.error("not a netlist: its first statement does not begin with a netlist "
+                   "keyword (the file's text is not shown)", line.tokens[0].col,
+                   "a .mcir netlist, whose statements begin with one of " + ", ".join(KEYWORDS))
+
+
 def _unbrace(text: str, col: int) -> tuple[str, int]:
     """Strip one pair of enclosing braces, moving the column past the '{'."""
     if text.startswith("{") and text.endswith("}"):
@@ -334,6 +352,8 @@ class _Parser:
             if not line.tokens:
                 continue
             _check_slips(line, raw)
+            if not parsed:
+                _check_first_keyword(line)
             parsed.append(line)
             if line.tokens[0].text.lower() == ".param":
                 for tok in line.tokens[1:]:

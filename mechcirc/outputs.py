@@ -2,27 +2,111 @@
 
 An interrupted or failed write leaves either the old file or none, never a
 half-written one (``os.replace`` is atomic on POSIX and Windows).
+
+What is replaced is always a regular file (:func:`output_target`):
+
+* a symbolic link is followed: its target is replaced, the link stays
+  (a dangling link creates its target, as a shell's ``>`` does);
+* a FIFO or a character device (``/dev/null``, ``/dev/stdout``, a named pipe)
+  is written in place, as a stream, never replaced by a file;
+* a block device, socket or folder is refused.
+
+Errors name the output as the caller gave it, never the temporary file.
 """
 
 from __future__ import annotations
 
 import contextlib
 import os
+import stat
 import tempfile
 from pathlib import Path
 
-__all__ = ["atomic_path", "atomic_open", "OutputSet"]
+from .errors import InputError
+
+__all__ = ["atomic_path", "atomic_open", "OutputSet", "output_target"]
 
 
-def _temporary_beside(target: Path) -> str:
+#: Names of an open file descriptor (``-o /dev/stdout``): written in place when they
+#: lead to a pipe or terminal; refused when they lead to a regular file (replacing it
+#: would lose what else the descriptor receives, writing into it would mix the two).
+_DESCRIPTORS = ("/dev/stdout", "/dev/stderr", "/dev/fd/", "/proc/self/fd/")
+
+
+def output_target(path: str | os.PathLike) -> tuple[Path, bool]:
+    """The file that writing ``path`` changes, and whether it is a stream written in place.
+
+    Returns
+    -------
+    target : Path
+        ``path`` with every symbolic link followed (the file that is replaced);
+        ``path`` itself for a stream (opened through its links).
+    stream : bool
+        True for a FIFO or character device (also ``/dev/stdout`` to a pipe or
+        terminal): written in place, not replaced.
+
+    Raises
+    ------
+    InputError
+        ``path`` is a folder, a block device or a socket, its folder (or that of
+        a link's target) does not exist, its links loop, or it names a file
+        descriptor open on a regular file.
+    """
+    given = os.fspath(path)
+    target = Path(os.path.realpath(given))
+    linked = target != Path(os.path.abspath(given))
+    via = f"{given}: a symbolic link to {target}, which" if linked else f"{given}:"
+    try:
+        # The kernel follows the links: also /dev/stdout → /proc/self/fd/1 → "pipe:[…]",
+        # which has no path realpath could give.
+        mode = os.stat(given).st_mode
+    except FileNotFoundError:
+        if target.parent.is_dir():
+            return target, False
+        if linked:
+            raise InputError(f"{given}: a symbolic link to {target}, whose folder "
+                             f"{target.parent} does not exist") from None
+        raise InputError(f"{given}: folder '{Path(given).parent}' does not exist") from None
+    except OSError as exc:       # a link loop (ELOOP), a file used as a folder (ENOTDIR)
+        raise InputError(f"{given}: cannot be written: {exc.strerror}") from None
+    if stat.S_ISFIFO(mode) or stat.S_ISCHR(mode):
+        return Path(given), True
+    if stat.S_ISREG(mode) and os.path.abspath(given).startswith(_DESCRIPTORS):
+        raise InputError(f"{given}: an open file descriptor, here of the file {target}; "
+                         "give that file's name instead (through the descriptor the output "
+                         "would be mixed with what else it receives)")
+    if stat.S_ISREG(mode):
+        return target, False
+    if stat.S_ISDIR(mode):
+        raise InputError(f"{via} is a folder; give a file name for the output")
+    kind = "a block device" if stat.S_ISBLK(mode) else \
+        "a socket" if stat.S_ISSOCK(mode) else "not a regular file"
+    raise InputError(f"{via} is {kind}; an output must be a regular file (or a FIFO or "
+                     "character device, written in place)")
+
+
+@contextlib.contextmanager
+def _naming(target: Path, given):
+    """Re-raise an OSError of the temporary file or the rename as one naming ``given``."""
+    try:
+        yield
+    except OSError as exc:
+        if exc.errno is None:
+            raise
+        raise type(exc)(exc.errno, f"{exc.strerror} (writing into folder {target.parent})",
+                        os.fspath(given)) from None
+
+
+def _temporary_beside(target: Path, given=None) -> str:
     """Create an empty temporary file next to ``target``, with the suffix kept.
 
     ``mkstemp`` makes it mode 0600; it gets the mode a newly created file
     would have (0666 less the umask), since it becomes the output itself.
     """
     folder = target.parent if str(target.parent) else Path(".")
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=f".tmp{target.suffix}",
-                               dir=folder)
+    with _naming(target, target if given is None else given):
+        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=f".tmp{target.suffix}",
+                                   dir=folder)
     os.close(fd)
     umask = os.umask(0)
     os.umask(umask)
@@ -36,12 +120,19 @@ def atomic_path(path: str | os.PathLike):
 
     The temporary name keeps the target's suffix, so tools that pick a format
     from the extension (matplotlib's ``savefig``) still work.  On any exception
-    (``KeyboardInterrupt`` included) the temporary file is removed.
+    (``KeyboardInterrupt`` included) the temporary file is removed.  A symbolic
+    link is followed; a FIFO or character device is yielded itself, to be
+    written in place (:func:`output_target`).
     """
-    tmp = _temporary_beside(Path(path))
+    target, stream = output_target(path)
+    if stream:
+        yield target
+        return
+    tmp = _temporary_beside(target, path)
     try:
         yield Path(tmp)
-        os.replace(tmp, path)
+        with _naming(target, path):
+            os.replace(tmp, target)
     except BaseException:
         with contextlib.suppress(OSError):
             os.unlink(tmp)
@@ -55,7 +146,8 @@ def atomic_open(path: str | os.PathLike, mode: str = "w", **kwargs):
         with open(tmp, mode, **kwargs) as fh:
             yield fh
             fh.flush()
-            os.fsync(fh.fileno())
+            if stat.S_ISREG(os.fstat(fh.fileno()).st_mode):    # a FIFO cannot be synced
+                os.fsync(fh.fileno())
 
 
 class OutputSet:
@@ -67,13 +159,20 @@ class OutputSet:
     """
 
     def __init__(self):
-        self._pending: list[tuple[Path, Path]] = []
+        self._pending: list[tuple[Path, Path, str | os.PathLike]] = []
 
     def path(self, target: str | os.PathLike) -> Path:
-        """A temporary path beside ``target`` (same suffix) to write it to."""
-        target = Path(target)
-        tmp = _temporary_beside(target)
-        self._pending.append((Path(tmp), target))
+        """A temporary path beside ``target`` (same suffix) to write it to.
+
+        A FIFO or character device is returned itself, written in place and
+        outside the all-or-nothing promise (:func:`output_target`).
+        """
+        given = target
+        target, stream = output_target(given)
+        if stream:
+            return target
+        tmp = _temporary_beside(target, given)
+        self._pending.append((Path(tmp), target, given))
         return Path(tmp)
 
     def __enter__(self) -> "OutputSet":
@@ -82,11 +181,12 @@ class OutputSet:
     def __exit__(self, exc_type, exc, tb) -> None:
         try:
             if exc_type is None:
-                for tmp, target in self._pending:
-                    os.replace(tmp, target)
+                for tmp, target, given in self._pending:
+                    with _naming(target, given):
+                        os.replace(tmp, target)
         finally:
             # Whatever was not renamed (an error, or a rename that failed) goes.
-            for tmp, _ in self._pending:
+            for tmp, _, _ in self._pending:
                 with contextlib.suppress(OSError):
                     os.unlink(tmp)
             self._pending.clear()

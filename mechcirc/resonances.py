@@ -43,7 +43,7 @@ import numpy as np
 import scipy.linalg as la
 
 from .circuit import Circuit
-from .errors import NetlistError, SolverError
+from .errors import InputError, NetlistError, SolverError
 
 __all__ = ["Resonance", "find_resonances", "MAX_UNKNOWNS", "MAX_UNKNOWNS_DAMPED"]
 
@@ -119,6 +119,8 @@ def _solve(circuit: Circuit, omega_max: float | None = None, vectors: bool = Fal
     where the eigenproblem has another root within 1e-9 (relative) of this
     one (then v is one vector of a family).
     """
+    if omega_max is not None and not omega_max > 0:     # NaN would report nothing, silently
+        raise InputError(f"omega_max must be > 0 rad/s or None, got {omega_max!r}")
     for e in circuit.elements:
         if not math.isfinite(e.value * e.eta):
             raise NetlistError(f"{e.kind} {e.name!r}: value × eta = {e.value:g} × {e.eta:g} "

@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .circuit import Circuit, Drive
-from .errors import NotSeriesParallelError
+from .errors import InputError, NotSeriesParallelError
 from .reduction import Node, evaluate, push_down
 
 __all__ = ["Sweep", "sweep", "Peak", "peak", "FLAG_OK", "FLAG_SINGULAR", "FLAG_NEAR_SINGULAR",
@@ -297,6 +297,12 @@ def sweep(circuit: Circuit, omega: ArrayLike, *, method: Method = "auto") -> Swe
         With ``omega``, ``K``, ``Q0``, ``v0``, ``flags``, ``error`` and
         per-element ``force(name)`` / ``velocity(name)``.
 
+    Raises
+    ------
+    InputError
+        ``omega`` is complex, not numbers, or not one-dimensional; ``method``
+        is unknown.
+
     Notes
     -----
     Singular points: at a point ω > 0 exactly on a pole of K, ``K = +∞·j`` (the
@@ -314,11 +320,9 @@ def sweep(circuit: Circuit, omega: ArrayLike, *, method: Method = "auto") -> Swe
     >>> float(s.Q0[0].imag), float(abs(s.Q0[0].real))   # V0 / K = V0 · jωm
     (2.0, 0.0)
     """
-    omega = np.atleast_1d(np.asarray(omega, dtype=float))
-    if omega.ndim != 1:
-        raise ValueError(f"omega must be one-dimensional, got shape {omega.shape}")
+    omega = _real_omega(omega)
     if method not in ("auto", "sp", "nodal"):
-        raise ValueError(f"method must be 'auto', 'sp' or 'nodal', got {method!r}")
+        raise InputError(f"method must be 'auto', 'sp' or 'nodal', got {method!r}")
     if method != "nodal":
         try:
             tree = circuit.tree
@@ -328,6 +332,24 @@ def sweep(circuit: Circuit, omega: ArrayLike, *, method: Method = "auto") -> Swe
         else:
             return _sweep_tree(circuit, tree, omega)
     return _sweep_nodal(circuit, omega)
+
+
+def _real_omega(omega: ArrayLike) -> NDArray[np.float64]:
+    """``omega`` as a 1-D float array, or :class:`InputError` saying why it is not one."""
+    values = np.atleast_1d(np.asarray(omega))
+    if values.dtype.kind == "c":
+        if np.any(values.imag != 0):
+            raise InputError("omega must be real angular frequencies [rad/s], got complex "
+                             "values (K(ω) is evaluated on the real ω axis)")
+        values = values.real
+    try:
+        values = values.astype(float)
+    except (TypeError, ValueError):
+        raise InputError(f"omega must be numbers [rad/s], got values of dtype "
+                         f"{values.dtype}") from None
+    if values.ndim != 1:
+        raise InputError(f"omega must be one-dimensional, got shape {values.shape}")
+    return values
 
 
 def _chunked(fn: Callable, omega: NDArray, dtype) -> NDArray:

@@ -429,6 +429,7 @@ def test_topology_error_exit_2(tmp_path, capsys):
     (["--omega-min", 1, "--omega-max", "inf"], "need 0 <= --omega-min < --omega-max"),
     (["--omega-min", 0, "--omega-max", 1, "--log"], "--log needs --omega-min > 0"),
     (["--omega-min", 1, "--omega-max", 2, "--points", 0], "--points must be between"),
+    (["--omega-min", 1, "--omega-max", 2, "--points", 1], "--points must be between 2 and"),
 ])
 def test_bad_omega_range_exit_2(tmp_path, capsys, options, message):
     path = write(tmp_path, "ok.mcir", GOOD)
@@ -631,3 +632,21 @@ def test_internal_error_by_subprocess_has_no_traceback(tmp_path):
     assert proc.returncode == 1
     assert "mechcirc: internal error: RuntimeError: boom" in proc.stderr
     assert "Traceback" not in proc.stderr
+
+
+def test_error_lines_stay_short_and_do_not_quote_other_files(tmp_path, capsys):
+    """A study whose netlist is a secret file, a huge option value, a huge token: every
+    error is one short line, and the secret file's text is not in it (issue 23 §6)."""
+    secret = tmp_path / "shadow"
+    secret.write_text("root:$6$hunter2$abcdefgh:19000:0:99999:7:::\n")
+    spec = tmp_path / "s.toml"
+    spec.write_text(f'netlist = "{secret}"\n[omega]\nmin = 1\nmax = 10\npoints = 3\n'
+                    "[grid]\neta1 = [0.8]\n")
+    status, _, err = run(["study", spec, "--workers", "1"], capsys)
+    assert status == 2 and "not a netlist" in err and "hunter2" not in err
+    status, _, err = run(["sweep", STB, "--omega-min", 1, "--omega-max", 10,
+                          "--method", "x" * 50_000], capsys)      # argparse quotes choices
+    assert status == 2 and len(err) < 400 and "x…" + "x" * 25 + "' (50,000 characters)" in err
+    long = write(tmp_path, "long.mcir", "mass m a 0 1\n" + "z" * 90_000 + " k a 0 1\n" + GOOD)
+    status, _, err = run(["check", long], capsys)
+    assert status == 2 and len(err) < 400 and "(90,000 characters)" in err

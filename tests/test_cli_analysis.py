@@ -96,3 +96,25 @@ def test_force_drive_csv_has_velocity_columns(tmp_path, capsys):
     w = table[:, 0]
     K = 1 / (2j * w + 800 / (1j * w))
     np.testing.assert_allclose(table[:, 5] + 1j * table[:, 6], 10 * K, rtol=1e-13)
+
+
+def test_adaptive_sweep_says_its_work_bound_or_refuses_with_it(tmp_path, capsys, monkeypatch):
+    """The bound counts work (K evaluations × elements) and is said when hit (issue 23 §8)."""
+    from mechcirc import limits
+
+    path = tmp_path / "two.mcir"
+    path.write_text("drive V a 0 velocity=1\nspring k1 a b 2e4\ndamper c1 a b 0.01\n"
+                    "mass m1 b 0 1\nspring k2 b c 5e4\ndamper c2 b c 0.01\nmass m2 c 0 0.5\n")
+    monkeypatch.setattr(limits, "MAX_ADAPTIVE_WORK", 6 * 400)      # 400 evaluations of K
+    status, out, err = run(["sweep", path, "--omega-min", 1, "--omega-max", 1e4,
+                            "--adaptive", "--tol", 1e-5, "--points", 41], capsys)
+    assert status == 0, err
+    assert ("note: work bound of 2,400 element evaluations (400 evaluations of K on this "
+            "network of 6 elements and levers, method sp) reached: ") in out
+    points = int(out.split(": ")[1].split()[0])
+    assert points <= 400 // 3
+    status, out, err = run(["sweep", path, "--omega-min", 1, "--omega-max", 1e4,
+                            "--adaptive", "--points", 1000], capsys)
+    assert status == 2 and out == ""
+    assert err.startswith("mechcirc: error: adaptive sweep: its starting grid of ")
+    assert "over the work bound of 2,400 element evaluations" in err

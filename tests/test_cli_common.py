@@ -111,12 +111,21 @@ def test_internal_error_is_one_line_and_a_hint(monkeypatch, capsys, message):
     assert len(lines) == 2 and "report" in lines[1] and "--debug" in lines[1]
 
 
-def test_internal_error_traceback_only_with_debug(monkeypatch):
+@pytest.mark.parametrize("argv", [["--debug", "check", "x.mcir"],
+                                  ["check", "x.mcir", "--debug"]])   # where the hint puts it
+def test_internal_error_traceback_only_with_debug(monkeypatch, argv):
     from mechcirc.cli import circuit_commands
 
     monkeypatch.setattr(circuit_commands, "cmd_check", _boom("boom"))
     with pytest.raises(RuntimeError, match="boom"):
-        main(["--debug", "check", "x.mcir"])
+        main(argv)
+
+
+@pytest.mark.parametrize("name", COMMANDS)
+def test_every_command_takes_debug_after_it(name):
+    parser = build_parser()
+    command = next(a for a in parser._subparsers._group_actions).choices[name]
+    assert "--debug" in command._option_string_actions
 
 
 def test_internal_error_in_a_real_process_has_no_traceback(tmp_path):
@@ -253,3 +262,25 @@ def test_crosscheck_refuses_a_non_finite_theta(theta, capsys):
         main(["crosscheck", f"--theta={theta}"])
     assert exit_.value.code == 2
     assert "--theta: " in (err := capsys.readouterr().err) and "is not a finite number" in err
+
+
+# ------------------------------------------------- the formula's limit counts CPU time (issue 23 §8)
+def test_time_limit_ignores_time_spent_waiting():
+    """Wall-clock time without CPU use (a loaded machine, here a sleep) does not count."""
+    from mechcirc.cli._common import time_limit
+
+    with time_limit(0.05, "the test", "nothing"):
+        time.sleep(0.3)             # 6× the limit of wall time, ~0 CPU time
+
+
+def test_time_limit_stops_cpu_work_and_says_so():
+    from mechcirc.cli._common import time_limit
+    from mechcirc.errors import MechcircError
+
+    start = time.process_time()
+    with pytest.raises(MechcircError, match=r"the test used more than the limit of 0\.1 s of "
+                                            r"CPU time; do less"), \
+            time_limit(0.1, "the test", "do less"):
+        while time.process_time() - start < 5.0:        # CPU work, bounded by CPU time
+            pass
+    assert time.process_time() - start < 5.0            # stopped by the limit, not the loop

@@ -132,3 +132,74 @@ def test_adaptive_sweep_says_when_its_budget_is_hit():
     s = adaptive_sweep(c, 0.1, 1e4, tol=1e-6, max_points=60)
     assert len(s.omega) <= 60
     assert any("budget of 60" in n for n in s.notes)
+
+
+# ------------------------------------------- the adaptive sweep is bounded in work (issue 23 §8)
+def _counting(monkeypatch):
+    """Count the K evaluations adaptive_sweep makes (points passed to sweep)."""
+    from mechcirc import adaptive
+
+    counted = []
+    real = adaptive.sweep
+
+    def sweep(circuit, omega, method="auto"):
+        counted.append(len(omega))
+        return real(circuit, omega, method=method)
+
+    monkeypatch.setattr(adaptive, "sweep", sweep)
+    return counted
+
+
+def _ladder(n_el):
+    from reference.networks import damped_ladder_lines
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")        # the last spring hangs free: unloaded
+        c = mechcirc.parse("\n".join(damped_ladder_lines(n_el)))
+        c.resonances(1.5e3)
+    return c
+
+
+def test_adaptive_sweep_evaluates_each_point_about_three_times(monkeypatch):
+    """Each round evaluates only the new midpoints (before: every midpoint again, so
+    a 4,000-element ladder had not finished after 300 s)."""
+    counted = _counting(monkeypatch)
+    c = _sdof(1.0, 1e4, 1e-3)
+    s = adaptive_sweep(c, 0.1, 1e4, tol=1e-6, max_points=3000)
+    assert len(s.omega) == 3000                          # the budget was reached …
+    assert sum(counted) <= 3 * len(s.omega)              # … at ≤ 3 evaluations a point
+
+
+def test_adaptive_sweep_stops_at_its_work_bound_and_says_so(monkeypatch):
+    from mechcirc import limits
+
+    c = _ladder(30)                       # 18 resonances: a 13,045-point grid at tol 1e-4
+    size = len(c.elements) + len(c.levers)
+    bound = 3_000 * size                  # 3,000 evaluations of K on this network
+    monkeypatch.setattr(limits, "MAX_ADAPTIVE_WORK", bound)
+    counted = _counting(monkeypatch)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        s = adaptive_sweep(c, 1, 1e3, tol=1e-4)
+    assert sum(counted) * size <= bound
+    assert sum(counted) > 2_500                          # the bound, not the tolerance, ended it
+    assert len(s.omega) > 500
+    assert any(n.startswith(f"work bound of {bound:,} element evaluations (3,000 evaluations "
+                            f"of K on this network of {size} elements and levers, method sp)"
+                            " reached:") for n in s.notes), s.notes
+
+
+def test_adaptive_sweep_refuses_a_starting_grid_over_its_work_bound(monkeypatch):
+    from mechcirc import limits
+
+    c = _ladder(30)
+    size = len(c.elements) + len(c.levers)
+    monkeypatch.setattr(limits, "MAX_ADAPTIVE_WORK", 100 * size)
+    counted = _counting(monkeypatch)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(mechcirc.errors.InputError, match=r"adaptive sweep: its starting "
+                           r"grid of [\d,]+ points is over the work bound of [\d,]+ element "
+                           r"evaluations \(100 evaluations of K"):
+            adaptive_sweep(c, 1, 1e3, initial=200)
+    assert sum(counted) <= 200 + 14 * len(c.resonances(1.5e3))     # the starting grid only

@@ -98,7 +98,7 @@ def test_long_flat_expression_within_the_limit_evaluates():
 def test_cli_refuses_more_than_ten_million_points(capsys, tmp_path):
     assert main(["sweep", str(STB), "--omega-min", "1", "--omega-max", "2",
                  "--points", "10000001"]) == 2
-    assert "--points must be between 1 and 10000000, got 10000001" in capsys.readouterr().err
+    assert "--points must be between 2 and 10000000 (a sweep spans --omega-min to --omega-max), got 10000001" in capsys.readouterr().err
 
 
 def test_chunked_sweep_equals_one_piece(monkeypatch):

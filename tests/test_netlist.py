@@ -302,3 +302,33 @@ def test_parse_restores_the_garbage_collector():
             assert gc.isenabled() is enabled
         finally:
             gc.enable()
+
+
+# ------------------------------------------- error lines that neither leak nor sprawl (issue 23 §6)
+@pytest.mark.parametrize("text", [
+    "root:x:0:0:hunter2:/root:/bin/bash\nspring s a 0 1\n",          # /etc/passwd-like
+    "SHELL=/bin/bash\x00TOKEN=hunter2\x00HOME=/root\x00",           # /proc/self/environ-like
+    "time,force\n0,hunter2\n",                                        # a CSV
+    "hunter2 is the password\n",                                      # prose
+])
+def test_a_file_that_is_not_a_netlist_is_never_quoted(text):
+    err = _error(text)
+    assert str(err).startswith("bad.mcir:1:1: error: not a netlist: its first statement "
+                               "does not begin with a netlist keyword")
+    assert "hunter2" not in str(err) and "root" not in str(err).split("(expected")[0]
+
+
+@pytest.mark.parametrize("first", ["masss m a 0 1", "sprnig k a 0 1", "Dirve V a 0 velocity=1"])
+def test_a_slip_of_a_keyword_on_the_first_line_is_still_named(first):
+    word = first.split()[0]
+    assert f"unknown keyword {word!r}" in str(_error(first + "\n" + D))
+
+
+def test_a_long_token_is_quoted_in_part_with_its_length():
+    token = "q" * 90_000
+    err = str(_error(f"mass m a 0 1\n{token} k a 0 1\n{D}"))
+    assert len(err) < 300
+    assert err.startswith("bad.mcir:2:1: error: unknown keyword 'qqqq")
+    assert "q…" + "q" * 25 + "' (90,000 characters) (expected one of .param" in err
+    quoted = err.split("'")[1]
+    assert len(quoted) <= 100

@@ -149,3 +149,206 @@ def test_commands_write_through_a_temporary_and_rename(tmp_path, monkeypatch, ca
     for src, dst in replaced:
         assert src.parent == dst.parent and src.name.startswith(f".{dst.name}.")
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(names)
+
+
+# ------------------------------------------------ what an output path may be (issue 23 §5)
+# Links are followed (their target replaced, the link kept); FIFOs and character
+# devices are written in place, never replaced by a regular file; sockets, block
+# devices and folders are refused; an output never replaces one of the inputs.
+SWEEP = ["sweep", str(NETLIST), "--omega-min", "1", "--omega-max", "10", "--points", "3"]
+posix_only = pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="FIFOs and Unix sockets")
+
+
+def _csv_of_sweep(tmp_path, capsys) -> str:
+    plain = tmp_path / "plain.csv"
+    assert main(SWEEP + ["-o", str(plain)]) == 0
+    capsys.readouterr()
+    text = plain.read_text()
+    plain.unlink()
+    return text
+
+
+@posix_only
+def test_fifo_output_is_written_in_place_not_replaced(tmp_path, capsys):
+    import stat
+
+    expected = _csv_of_sweep(tmp_path, capsys)
+    fifo = tmp_path / "out.csv"
+    os.mkfifo(fifo)
+    # A non-blocking reader: the open succeeds at once, and if the FIFO were
+    # replaced the read would find end-of-file instead of hanging.
+    fd = os.open(fifo, os.O_RDONLY | os.O_NONBLOCK)
+    try:
+        assert main(SWEEP + ["-o", str(fifo)]) == 0, capsys.readouterr().err
+        received = os.read(fd, 1 << 16).decode()
+    finally:
+        os.close(fd)
+    assert stat.S_ISFIFO(os.lstat(fifo).st_mode)
+    assert received == expected
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.csv"]     # no temporary
+
+
+@posix_only
+def test_atomic_open_on_a_fifo_writes_through(tmp_path):
+    import stat
+
+    fifo = tmp_path / "pipe"
+    os.mkfifo(fifo)
+    fd = os.open(fifo, os.O_RDONLY | os.O_NONBLOCK)
+    try:
+        with atomic_open(fifo) as fh:          # no fsync of a pipe (EINVAL)
+            fh.write("through\n")
+        assert os.read(fd, 100) == b"through\n"
+    finally:
+        os.close(fd)
+    assert stat.S_ISFIFO(os.lstat(fifo).st_mode)
+
+
+def test_symlink_output_writes_its_target_and_keeps_the_link(tmp_path, capsys):
+    expected = _csv_of_sweep(tmp_path, capsys)
+    (tmp_path / "data").mkdir()
+    real = tmp_path / "data" / "real.csv"
+    real.write_text("old\n")
+    link = tmp_path / "link.csv"
+    link.symlink_to(real)
+    assert main(SWEEP + ["-o", str(link)]) == 0, capsys.readouterr().err
+    assert link.is_symlink() and os.readlink(link) == str(real)
+    assert real.read_text() == expected
+    assert sorted(p.name for p in (tmp_path / "data").iterdir()) == ["real.csv"]
+
+
+def test_dangling_symlink_output_creates_its_target_or_names_the_missing_folder(tmp_path,
+                                                                             capsys):
+    expected = _csv_of_sweep(tmp_path, capsys)
+    link = tmp_path / "new.csv"
+    link.symlink_to(tmp_path / "made.csv")
+    assert main(SWEEP + ["-o", str(link)]) == 0
+    assert link.is_symlink() and (tmp_path / "made.csv").read_text() == expected
+    capsys.readouterr()
+    dangling = tmp_path / "dangling.csv"
+    dangling.symlink_to(tmp_path / "nowhere" / "x.csv")
+    assert main(SWEEP + ["-o", str(dangling)]) == 2
+    err = capsys.readouterr().err
+    assert err.strip() == (f"mechcirc: error: {dangling}: a symbolic link to "
+                           f"{tmp_path / 'nowhere' / 'x.csv'}, whose folder "
+                           f"{tmp_path / 'nowhere'} does not exist")
+
+
+@posix_only
+def test_symlink_loop_and_socket_outputs_are_refused(tmp_path, capsys):
+    import socket
+
+    (tmp_path / "a.csv").symlink_to(tmp_path / "b.csv")
+    (tmp_path / "b.csv").symlink_to(tmp_path / "a.csv")
+    assert main(SWEEP + ["-o", str(tmp_path / "a.csv")]) == 2
+    assert "cannot be written: Too many levels of symbolic links" in capsys.readouterr().err
+    sock = socket.socket(socket.AF_UNIX)
+    try:
+        sock.bind(str(tmp_path / "s.csv"))
+        assert main(SWEEP + ["-o", str(tmp_path / "s.csv")]) == 2
+    finally:
+        sock.close()
+    assert f"{tmp_path / 's.csv'}: is a socket; an output must be a regular file" in \
+        capsys.readouterr().err
+    assert (tmp_path / "s.csv").is_socket()
+
+
+@pytest.mark.parametrize("how", ["same name", "symlink", "hard link"])
+def test_output_onto_the_commands_own_input_is_refused(tmp_path, capsys, how):
+    netlist = tmp_path / "X.mcir"
+    netlist.write_text(NETLIST.read_text())
+    out = netlist
+    if how == "symlink":
+        out = tmp_path / "out.csv"
+        out.symlink_to(netlist)
+    elif how == "hard link":
+        out = tmp_path / "out.csv"
+        os.link(netlist, out)
+    status = main(["sweep", str(netlist), "--omega-min", "1", "--omega-max", "10",
+                   "--points", "3", "-o", str(out)])
+    assert status == 2
+    assert capsys.readouterr().err.strip() == (
+        f"mechcirc: error: {out}: is also this command's input {netlist}; writing it "
+        "would replace the input: give the output another name")
+    assert netlist.read_text() == NETLIST.read_text()
+
+
+@pytest.mark.parametrize("argv", [
+    ["transient", "{in}", "--t-end", "0.01", "--drive", "step", "-o", "{in}"],
+    ["forces", "{in}", "--omega", "10", "--plot", "{in}.png", "--json"],
+])
+def test_other_commands_refuse_their_input_as_output(tmp_path, capsys, argv):
+    netlist = tmp_path / "X.mcir"
+    netlist.write_text(NETLIST.read_text())
+    if argv[0] == "forces":                    # a plot named like the input's PNG twin
+        (tmp_path / "X.mcir.png").symlink_to(netlist)
+    argv = [a.replace("{in}", str(netlist)) for a in argv]
+    assert main(argv) == 2
+    assert "is also this command's input" in capsys.readouterr().err
+    assert netlist.read_text() == NETLIST.read_text()
+
+
+def test_permission_error_names_the_output_not_the_temporary(tmp_path, monkeypatch, capsys):
+    """mkstemp's own error names the temporary file it tried (.out.csv.XXXX.tmp.csv)."""
+    import tempfile
+
+    def refused(prefix, suffix, dir):
+        raise PermissionError(13, "Permission denied", os.path.join(dir, f"{prefix}abcd{suffix}"))
+
+    monkeypatch.setattr(tempfile, "mkstemp", refused)
+    target = tmp_path / "out.csv"
+    assert main(SWEEP + ["-o", str(target)]) == 2
+    err = capsys.readouterr().err
+    assert err.strip() == (f"{target}: error: permission denied (writing into folder "
+                           f"{tmp_path})")
+
+
+@pytest.mark.skipif(getattr(os, "geteuid", lambda: 0)() == 0,
+                    reason="root writes into read-only folders (and Windows has no geteuid)")
+def test_read_only_folder_names_the_output(tmp_path, capsys):
+    folder = tmp_path / "ro"
+    folder.mkdir()
+    folder.chmod(0o555)
+    try:
+        assert main(SWEEP + ["-o", str(folder / "out.csv")]) == 2
+    finally:
+        folder.chmod(0o755)
+    err = capsys.readouterr().err
+    assert err.startswith(f"{folder / 'out.csv'}: error: permission denied") and ".tmp" not in err
+
+
+@pytest.mark.parametrize("errno_, text", [(28, "no space left on device"),
+                                          (30, "read-only file system")])
+def test_a_system_refusal_at_the_rename_is_a_named_user_error(tmp_path, monkeypatch, capsys,
+                                                              errno_, text):
+    """Not an internal error: the disk or file system refused, and the output is named."""
+    def refused(src, dst):
+        raise OSError(errno_, os.strerror(errno_), src, dst)
+
+    monkeypatch.setattr(os, "replace", refused)
+    target = tmp_path / "out.csv"
+    assert main(SWEEP + ["-o", str(target)]) == 2
+    err = capsys.readouterr().err
+    assert err.strip() == f"{target}: error: {text} (writing into folder {tmp_path})"
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc/self/fd"), reason="no /proc/self/fd")
+def test_a_descriptor_name_writes_into_its_pipe_and_refuses_its_regular_file(tmp_path, capsys):
+    """``-o /dev/stdout`` is /proc/self/fd/1: to a pipe it is written in place (its link
+    names no path, 'pipe:[…]'); to a regular file (stdout redirected) it is refused,
+    since replacing that file or writing into it would lose or mix the summary."""
+    expected = _csv_of_sweep(tmp_path, capsys)
+    read, write = os.pipe()
+    with os.fdopen(read) as reader:
+        with os.fdopen(write, "w") as writer:
+            status = main(SWEEP + ["-o", f"/proc/self/fd/{writer.fileno()}"])
+        assert status == 0, capsys.readouterr().err
+        assert reader.read() == expected
+    capsys.readouterr()
+    log = tmp_path / "log.txt"
+    with open(log, "w") as fh:
+        assert main(SWEEP + ["-o", f"/proc/self/fd/{fh.fileno()}"]) == 2
+    assert f"an open file descriptor, here of the file {log}; give that file's name" in \
+        capsys.readouterr().err
+    assert log.read_text() == ""

@@ -115,6 +115,13 @@ def test_hidden_mode_is_not_reported():
     assert [(r.kind, round(r.omega, 9)) for r in found] == [("resonance", 10.0)]
 
 
+@pytest.mark.parametrize("omega_max", [math.nan, 0.0, -5.0])
+def test_omega_max_that_bounds_nothing_is_refused(omega_max):
+    """NaN (and ≤ 0) used to give [] silently, as if the network had no resonances."""
+    with pytest.raises(mechcirc.errors.InputError, match="omega_max must be > 0"):
+        _chain(5).resonances(omega_max=omega_max)
+
+
 def test_omega_max_limits_the_list():
     found = _chain(5).resonances(omega_max=10.0)
     assert found and all(r.omega <= 10.0 for r in found)

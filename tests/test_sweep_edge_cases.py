@@ -275,3 +275,27 @@ def test_sweep_across_critical_damping_is_regular(zeta):
     exact = np.array([0j] + [1 / (1j * w * m + c + k / (1j * w)) for w in omega[1:]])
     _contract(s, exact, rtol=1e-13)
     assert list(s.flags) == [FLAG_SINGULAR, 0, 0, 0, 0]     # ω = 0: the spring shorts K to 0
+
+
+@pytest.mark.parametrize("omega, message", [
+    ([1 + 1j], "omega must be real angular frequencies"),
+    ([[1.0, 2.0], [3.0, 4.0]], "omega must be one-dimensional, got shape (2, 2)"),
+    (["fast"], "omega must be numbers"),
+])
+@pytest.mark.parametrize("call", ["function", "method"])
+def test_bad_omega_is_an_input_error_not_a_numpy_one(omega, message, call):
+    """mechcirc.sweep and Circuit.sweep refuse complex, 2-D and non-numeric ω with
+    InputError (a MechcircError and a ValueError), not numpy's TypeError."""
+    c = mechcirc.parse("drive V0 a 0 velocity=1\nmass m a b 1\nspring k b 0 1e4\n")
+    with pytest.raises(mechcirc.errors.InputError) as info:
+        mechcirc.sweep(c, omega) if call == "function" else c.sweep(omega)
+    assert message in str(info.value)
+    assert isinstance(info.value, mechcirc.MechcircError) and isinstance(info.value, ValueError)
+
+
+def test_complex_omega_with_zero_imaginary_part_is_its_real_part():
+    c = mechcirc.parse("drive V0 a 0 velocity=1\nmass m a b 1\nspring k b 0 1e4\n")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")       # no ComplexWarning about a discarded part
+        s = c.sweep(np.array([10.0 + 0j, 50.0 + 0j]))
+    np.testing.assert_array_equal(s.K, c.sweep([10.0, 50.0]).K)

@@ -32,7 +32,9 @@ class _Parser(argparse.ArgumentParser):
     """argparse, with a usage error on one line (the full usage is one ``--help`` away)."""
 
     def error(self, message):
-        self.exit(2, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
+        from ..errors import shorten  # argparse quotes the value given: it may be long
+
+        self.exit(2, f"{self.prog}: error: {shorten(message)} (see '{self.prog} --help')\n")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -52,6 +54,12 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in COMMAND_MODULES:
         importlib.import_module(name).register(sub)
+    # --debug is global, but the internal-error hint says "run again with --debug",
+    # which users append after the command: each command takes it too.  SUPPRESS
+    # keeps a command's parser from resetting a --debug given before the command.
+    for command in {id(p): p for p in sub.choices.values()}.values():
+        command.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
+                             help="show the full traceback of an internal error")
     return parser
 
 

@@ -10,7 +10,7 @@ import signal
 import sys
 import threading
 
-from ..errors import MechcircError, NetlistError
+from ..errors import MAX_QUOTED, MechcircError, NetlistError, clip, shorten
 
 EXIT_OK, EXIT_INTERNAL, EXIT_USER = 0, 1, 2
 #: Exit status after SIGINT and SIGTERM (128 + the signal number, as shells report).
@@ -44,10 +44,13 @@ def sigterm_unwinds():
 
 @contextlib.contextmanager
 def time_limit(seconds: float, what: str, instead: str):
-    """Raise :class:`MechcircError` if the block runs longer than ``seconds``.
+    """Raise :class:`MechcircError` once the block has used ``seconds`` of CPU time.
 
-    For work whose time cannot be bounded beforehand (SymPy); uses SIGALRM,
-    so only in the main thread of a POSIX process (elsewhere: no limit).
+    For work whose size cannot be bounded beforehand (SymPy).  CPU time of the
+    process (``ITIMER_PROF``, user and system, all threads; what
+    ``time.process_time`` counts), not the wall clock: the same input gets the
+    same answer on a loaded machine.  Uses SIGPROF, so only in the main thread
+    of a POSIX process (elsewhere: no limit).
     """
     if not hasattr(signal, "setitimer") or \
             threading.current_thread() is not threading.main_thread():
@@ -57,19 +60,19 @@ def time_limit(seconds: float, what: str, instead: str):
     class _Expired(BaseException):
         pass
 
-    def on_alarm(signum, frame):
+    def on_expiry(signum, frame):
         raise _Expired()
 
-    old = signal.signal(signal.SIGALRM, on_alarm)
-    signal.setitimer(signal.ITIMER_REAL, seconds)
+    old = signal.signal(signal.SIGPROF, on_expiry)
+    signal.setitimer(signal.ITIMER_PROF, seconds)
     try:
         yield
     except _Expired:
-        raise MechcircError(f"{what} took longer than the limit of {seconds:g} s; "
+        raise MechcircError(f"{what} used more than the limit of {seconds:g} s of CPU time; "
                             f"{instead}") from None
     finally:
-        signal.setitimer(signal.ITIMER_REAL, 0)
-        signal.signal(signal.SIGALRM, old)
+        signal.setitimer(signal.ITIMER_PROF, 0)
+        signal.signal(signal.SIGPROF, old)
 
 
 def run_handler(args) -> int:
@@ -102,13 +105,14 @@ def _run(args) -> int:
               else f"mechcirc: error: {exc}", file=sys.stderr)
         return EXIT_USER
     except FileNotFoundError as exc:
-        print(f"{exc.filename}: error: no such file", file=sys.stderr)
+        print(f"{_name(exc)}: error: no such file", file=sys.stderr)
         return EXIT_USER
     except IsADirectoryError as exc:
-        print(f"{exc.filename}: error: is a directory, expected a file", file=sys.stderr)
+        print(f"{_name(exc)}: error: is a directory, expected a file", file=sys.stderr)
         return EXIT_USER
     except PermissionError as exc:
-        print(f"{exc.filename}: error: permission denied", file=sys.stderr)
+        print(f"{_name(exc)}: error: {(exc.strerror or 'permission denied').lower()}",
+              file=sys.stderr)
         return EXIT_USER
     except KeyboardInterrupt:
         print("mechcirc: interrupted", file=sys.stderr)
@@ -118,14 +122,31 @@ def _run(args) -> int:
         return EXIT_SIGTERM
     except BrokenPipeError:
         return EXIT_OK
+    except OSError as exc:
+        if exc.filename is None or exc.strerror is None:
+            return _internal(args, exc)
+        # A file the system would not read or write (a full disk, a read-only
+        # file system): the environment's refusal, named, not a bug.
+        print(f"{_name(exc)}: error: {exc.strerror.lower()}", file=sys.stderr)
+        return EXIT_USER
     except Exception as exc:  # noqa: BLE001 - the last line of defence
-        if getattr(args, "debug", False):
-            raise
-        first = (str(exc).splitlines() or [""])[0]     # one line, whatever the message
-        print(f"mechcirc: internal error: {type(exc).__name__}: {first}\n"
-              "This is a bug in mechcirc; please report it with the input "
-              "(run again with --debug for the traceback).", file=sys.stderr)
-        return EXIT_INTERNAL
+        return _internal(args, exc)
+
+
+def _name(exc: OSError) -> str:
+    """The file an OSError names, clipped: a path typed on the command line can be long."""
+    return clip(str(exc.filename), 2 * MAX_QUOTED)
+
+
+def _internal(args, exc: Exception) -> int:
+    """Report an internal error in one line (the traceback with ``--debug``)."""
+    if getattr(args, "debug", False):
+        raise exc
+    first = shorten((str(exc).splitlines() or [""])[0])    # one line, whatever the message
+    print(f"mechcirc: internal error: {type(exc).__name__}: {first}\n"
+          "This is a bug in mechcirc; please report it with the input "
+          "(run again with --debug for the traceback).", file=sys.stderr)
+    return EXIT_INTERNAL
 
 
 def quantity_type(role: str, default_unit: str | None = None):
@@ -320,21 +341,34 @@ def print_json(document) -> None:
 PLOT_FORMATS = ("png", "svg", "pdf", "eps", "ps", "jpg", "jpeg", "tif", "tiff", "webp")
 
 
-def check_output_paths(*paths, plots=()) -> None:
-    """Refuse, before any work, outputs into missing folders or plots in unknown formats."""
+def check_output_paths(*paths, plots=(), reads=()) -> None:
+    """Refuse, before any work, outputs that cannot or must not be written.
+
+    An output into a missing folder (a dangling link's included), onto a
+    folder, block device or socket, one named twice, one that is a file the
+    command reads (``reads``: its input files), or a plot in an unknown format.
+    Links are followed and FIFOs and character devices written in place
+    (:func:`mechcirc.outputs.output_target`).
+    """
     from pathlib import Path
 
+    from ..outputs import output_target
+
     given = [p for p in (*paths, *plots) if p]
-    for path in given:
-        if not Path(path).resolve().parent.is_dir():
-            raise MechcircError(f"{path}: folder {str(Path(path).parent)!r} does not exist")
-        if Path(path).is_dir():
-            raise MechcircError(f"{path}: is a folder; give a file name for the output")
-    resolved = [Path(p).resolve() for p in given]
+    resolved = [output_target(p)[0] for p in given]
     for i, path in enumerate(resolved):
         if path in resolved[:i]:
             raise MechcircError(f"{given[i]}: named for two outputs; each output needs "
                                 "its own file")
+    for source in (r for r in reads if r):
+        for out, path in zip(given, resolved):
+            same = path == Path(os.path.realpath(source))
+            with contextlib.suppress(OSError):
+                same = same or os.path.samefile(path, source)
+            if same:
+                raise MechcircError(f"{out}: is also this command's input {source}; "
+                                    "writing it would replace the input: give the output "
+                                    "another name")
     for path in plots:
         if path and Path(path).suffix.lstrip(".").lower() not in PLOT_FORMATS:
             raise MechcircError(

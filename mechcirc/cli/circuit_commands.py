@@ -6,8 +6,8 @@ import argparse
 import math
 import sys
 
-from ..limits import (MAX_ADAPTIVE_NODAL_POINTS, MAX_JSON_POINTS, MAX_NODAL_POINTS,
-                      MAX_PLOT_POINTS, MAX_SWEEP_POINTS)
+from ..limits import (MAX_ADAPTIVE_NODAL_POINTS, MAX_ADAPTIVE_POINTS, MAX_JSON_POINTS,
+                      MAX_NODAL_POINTS, MAX_PLOT_POINTS, MAX_SWEEP_POINTS)
 from ._common import (check_output_paths, count, load_with_warnings, print_json, real,
                       save_figure)
 
@@ -167,8 +167,10 @@ def _omega_grid(args):
     if not (np.isfinite(lo) and np.isfinite(hi)) or lo < 0 or hi <= lo:
         raise MechcircError(f"need 0 <= --omega-min < --omega-max (finite), got "
                             f"{lo:g} and {hi:g}")
-    if n < 1 or n > MAX_SWEEP_POINTS:
-        raise MechcircError(f"--points must be between 1 and {MAX_SWEEP_POINTS}, got {n}")
+    if n < 2 or n > MAX_SWEEP_POINTS:
+        # One point would be --omega-min alone: the band and its peak need both ends.
+        raise MechcircError(f"--points must be between 2 and {MAX_SWEEP_POINTS} (a sweep "
+                            f"spans --omega-min to --omega-max), got {n}")
     for wanted, limit, what in ((args.plot, MAX_PLOT_POINTS, "--plot"),
                                 (args.json, MAX_JSON_POINTS, "--json"),
                                 (args.method == "nodal", MAX_NODAL_POINTS, "--method nodal")):
@@ -214,7 +216,7 @@ def cmd_sweep(args) -> int:
 
     from ..outputs import OutputSet
 
-    check_output_paths(args.output, args.touchstone, plots=(args.plot,))
+    check_output_paths(args.output, args.touchstone, plots=(args.plot,), reads=(args.file,))
     if args.touchstone:
         from pathlib import Path
 
@@ -235,9 +237,9 @@ def cmd_sweep(args) -> int:
             from ..errors import MechcircError
 
             raise MechcircError("--adaptive needs --omega-min > 0")
-        # Each refinement round re-evaluates every midpoint; by nodal analysis
-        # that is ~0.1 ms a point, so its budget is smaller (152 s at 20,000).
-        budget = MAX_ADAPTIVE_NODAL_POINTS if args.method == "nodal" else 20_000
+        # By nodal analysis a point costs ~0.1 ms or more, so its budget is smaller;
+        # the work (points × elements) is bounded in adaptive_sweep on either path.
+        budget = MAX_ADAPTIVE_NODAL_POINTS if args.method == "nodal" else MAX_ADAPTIVE_POINTS
         result = adaptive_sweep(circuit, omega[0], omega[-1], tol=args.tol,
                                 initial=max(2, min(args.points, budget)), method=args.method,
                                 max_points=budget)

@@ -97,7 +97,7 @@ def register(sub) -> None:
 
 def cmd_forces(args) -> int:
     from ..forces import element_forces
-    check_output_paths(plots=(args.plot,))
+    check_output_paths(plots=(args.plot,), reads=(args.file,))
     circuit, warns = load_with_warnings(args.file)
     rows, K, Q0, flag = element_forces(circuit, args.omega, method=args.method)
     for w in warns:
@@ -137,7 +137,7 @@ def _deg(x: float) -> float:
 
 def cmd_compare(args) -> int:
     from ..interop.skrf import compare
-    check_output_paths(plots=(args.plot,))
+    check_output_paths(plots=(args.plot,), reads=(args.file, args.measured))
     circuit, warns = load_with_warnings(args.file)
     result = compare(circuit, args.measured, method=args.method,
                      omega_min=args.omega_min, omega_max=args.omega_max)
@@ -200,12 +200,13 @@ def cmd_study(args) -> int:
     from ..progress import Progress
     from ..study import column_units, load_spec, run_study, sidecar_path
 
-    check_output_paths(args.output, plots=(args.plot,))
+    check_output_paths(args.output, plots=(args.plot,), reads=(args.spec,))
     if args.resume and not args.output:
         raise MechcircError("--resume needs -o FILE (the table to continue)")
     if args.workers is not None and args.workers < 1:
         raise MechcircError(f"--workers must be at least 1, got {args.workers}")
     spec = load_spec(args.spec)
+    check_output_paths(args.output, plots=(args.plot,), reads=(spec.netlist_source,))
     column = args.plot_column or ("Q0_abs_max" if spec.analysis == "sweep" else "resonance_1")
     if args.plot and column not in spec.columns[len(spec.params) + 3:]:
         raise MechcircError(f"--plot-column {column!r} is not a result column (expected one of "

@@ -401,7 +401,7 @@ def cmd_linkage(args) -> int:
 
     from ..kinematics import load_linkage
 
-    check_output_paths(plots=(args.plot,))
+    check_output_paths(plots=(args.plot,), reads=(args.file,))
 
     lk = load_linkage(args.file)
     theta = math.radians(args.theta)

@@ -75,7 +75,7 @@ def cmd_scene(args) -> int:
     from ..errors import MechcircError
 
     plots = (args.plot,) if args.plot else ()
-    check_output_paths(args.output, plots=plots)
+    check_output_paths(args.output, plots=plots, reads=(args.file,))
     if args.plot and not args.cycle:
         raise MechcircError("--plot draws the --cycle map; with --theta use -o and "
                             "'mechcirc sweep' on the netlist")
@@ -210,7 +210,7 @@ def cmd_reduce(args) -> int:
     from ..netlist import load
     from ..simplify import parse_band, simplify
 
-    check_output_paths(args.out)
+    check_output_paths(args.out, reads=(args.file,))
     band = parse_band(args.band)
     if not (math.isfinite(args.tol) and args.tol > 0):
         raise MechcircError(f"--tol must be a positive number, got {args.tol:g}")
@@ -263,7 +263,8 @@ def cmd_simulate_scene(args) -> int:
     if args.steps_per_period is not None and args.method not in ("rk4", "rk4-python"):
         raise MechcircError(f"--steps-per-period applies to the rk4 methods, not {args.method}; "
                             "use --rtol")
-    check_output_paths(args.output, plots=(args.plot,) if args.plot else ())
+    check_output_paths(args.output, plots=(args.plot,) if args.plot else (),
+                       reads=(args.scene,))
     scene = load_scene(args.scene)
     over = {}
     for item in args.set:
@@ -344,7 +345,7 @@ def cmd_crosscheck_scene(args) -> int:
     if not args.file.endswith(".toml"):
         raise MechcircError(f"{args.file}: crosscheck reads a scene file (.toml) here")
     if args.netlist:
-        check_output_paths(args.netlist)
+        check_output_paths(args.netlist, reads=(args.file,))
     from ..scene import build, load_scene
     from ..scene.crosscheck import crosscheck_scene
 

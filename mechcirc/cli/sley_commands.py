@@ -123,6 +123,12 @@ class _Progress:
         sys.stderr.flush()
 
 
+#: Names --set cannot take (it sets numbers), and what to use instead.
+_NOT_NUMBERS = {"drive": "choose the layout with --drive one-side|both-sides",
+                "variant": "choose the table row with --variant 1-7|all",
+                "label": "the label is text naming the variant, set by --drive and --variant"}
+
+
 def _overrides(args) -> dict:
     from ..sley import ParameterError
 
@@ -131,6 +137,9 @@ def _overrides(args) -> dict:
         name, sep, value = item.partition("=")
         if not sep:
             raise ParameterError(f"--set expects NAME=VALUE, got {item!r}")
+        if name.strip() in _NOT_NUMBERS:
+            raise ParameterError(f"--set {name.strip()}: not a numeric parameter; "
+                                 f"{_NOT_NUMBERS[name.strip()]}")
         from ..units import UnitError, parse_quantity
 
         try:

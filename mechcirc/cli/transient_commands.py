@@ -54,7 +54,7 @@ def cmd_transient(args) -> int:
     from ..outputs import OutputSet
     from ..transient import transient
 
-    check_output_paths(args.output, plots=(args.plot,))
+    check_output_paths(args.output, plots=(args.plot,), reads=(args.file,))
     _positive("--t-end", args.t_end)
     _positive("--dt", args.dt)
     _positive("--rtol", args.rtol)

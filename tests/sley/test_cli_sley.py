@@ -50,6 +50,12 @@ def test_simulate_csv_and_plot(tmp_path, capsys):
     (["simulate", "--set", "l2P=0.5"], "cannot be assembled"),
     (["simulate", "--set", "C2"], "NAME=VALUE"),
     (["simulate", "--variant", "9"], "variant must be one of"),
+    # --set takes numbers: the layout, the table row and the label are chosen otherwise
+    (["simulate", "--set", "drive=1"], ("--set drive: not a numeric parameter; choose the "
+                                        "layout with --drive")),
+    (["simulate", "--set", "variant=2"], ("--set variant: not a numeric parameter; choose "
+                                          "the table row with --variant")),
+    (["simulate", "--set", "label=1"], "--set label: not a numeric parameter"),
     (["crosscheck", "--theta", "79.0638705730987"], "dead centre"),
 ])
 def test_user_errors_exit_2(argv, text, capsys, tmp_path):
