@@ -50,8 +50,15 @@ import numpy as np
 
 from ..errors import InputError
 
-__all__ = ["CamCheck", "CamProfile", "FOLLOWERS", "cam_profile", "profile_csv", "profile_svg",
-           "save_profile"]
+__all__ = [
+    "FOLLOWERS",
+    "CamCheck",
+    "CamProfile",
+    "cam_profile",
+    "profile_csv",
+    "profile_svg",
+    "save_profile",
+]
 
 #: The follower kinds :func:`cam_profile` takes.
 FOLLOWERS = ("roller", "flat", "oscillating")
@@ -233,7 +240,7 @@ def cam_profile(motion, base_radius: float, follower: str = "roller", *,
     >>> cam = cam_profile(cam_cycle("cycloidal", 120, 60, 120, 20.0), 40.0,
     ...                   roller_radius=10.0)
     >>> round(math.degrees(cam.check("pressure_angle").value), 4)
-    24.8069
+    17.8466
     """
     if follower not in FOLLOWERS:
         raise InputError(f"unknown follower {follower!r}; expected one of {', '.join(FOLLOWERS)}")
@@ -317,9 +324,9 @@ def profile_csv(cam: CamProfile) -> str:
     curvature is the profile's (+ convex, ``inf`` where straight).  A ``#``
     line first says what cam it is.
     """
-    rows = [f"# mechcirc cam: {cam.follower} follower, base radius {cam.base_radius!r}, roller "
+    rows = [(f"# mechcirc cam: {cam.follower} follower, base radius {cam.base_radius!r}, roller "
             f"radius {cam.roller_radius!r}, offset {cam.offset!r}, arm {cam.arm!r}, pivot "
-            f"{cam.pivot!r}; cam frame, cam turning counter-clockwise",
+            f"{cam.pivot!r}; cam frame, cam turning counter-clockwise"),
             "theta_deg,x,y,pressure_angle_deg,radius_of_curvature"]
     cols = (np.degrees(cam.theta), cam.x, cam.y, np.degrees(cam.pressure_angle), cam.rho)
     rows += [",".join(repr(float(v)) for v in row) for row in zip(*cols)]
