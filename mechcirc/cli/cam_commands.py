@@ -75,7 +75,11 @@ def _motion(args):
         if given:
             name = "return" if given[0] == "ret" else given[0].replace("_", "-")
             raise InputError(f"--motion gives the whole lift; drop --{name}")
-        return read_motion_table(args.motion).scaled(scale), f"lift table {args.motion}"
+        m = read_motion_table(args.motion)
+        note = (f" (periodic spline; its slope uncertain by ~{m.error:.1g} of its peak)"
+                if math.isfinite(m.error) else " (periodic spline; under 9 rows: no error "
+                "estimate)")
+        return m.scaled(scale), f"lift table {args.motion}{note}"
     missing = [o for o in ("rise", "ret", "stroke") if getattr(args, o) is None]
     if missing:
         raise InputError(f"--law {args.law} needs --{'return' if missing[0] == 'ret' else missing[0]}"
@@ -124,12 +128,12 @@ def cmd_cam(args) -> int:
                         f"{math.degrees(phi.limit):g}° (a larger base circle, a longer rise or "
                         "an offset lowers it)")
     if not cut.ok:
-        why = (f"the roller (r_f = {cam.roller_radius:g} mm) is larger than the pitch curve's "
-               f"radius of curvature {cut.value + cam.roller_radius:.4g} mm there"
-               if args.follower != "flat" else "r_b + s + s'' ≤ 0")
-        warnings.append(f"undercut: the profile's radius of curvature reaches {cut.value:.4g} mm "
-                        f"at θ = {math.degrees(cut.theta):.3f}° ({why}); the cam cannot give "
-                        "this motion (enlarge the base circle or lengthen the rise)")
+        why = (f"the roller radius {cam.roller_radius:g} mm exceeds the pitch curve's radius "
+               f"of curvature {cut.value + cam.roller_radius:.4g} mm there, so the profile's "
+               if args.follower != "flat" else "the profile's radius of curvature r_b + s + s'' ")
+        warnings.append(f"undercut at θ = {math.degrees(cut.theta):.3f}°: {why}is "
+                        f"{cut.value:.4g} mm; the cam cannot give this motion (enlarge the "
+                        "base circle or lengthen the rise)")
     save_profile(cam, args.output, args.svg)
     if args.json:
         print_json({
@@ -161,6 +165,9 @@ def cmd_cam(args) -> int:
             f" (pitch curve {cut.value + cam.roller_radius:.4f} mm)"
         print(f"  radius of curvature: smallest convex {cut.value:.4f} mm at θ = "
               f"{math.degrees(cut.theta):.3f}°{pitch}")
+        if cam.follower == "flat":       # the contact runs along the face by x = s'
+            print(f"  contact on the face from x = {cam.dlift.min():.4f} to "
+                  f"{cam.dlift.max():.4f} mm of its axis")
         print(f"  undercut: {'no' if cut.ok else 'YES'}")
         written = [p for p in (args.output, args.svg) if p]
         if written:

@@ -112,7 +112,7 @@ class CamProfile:
     x, y : ndarray
         The cam profile.
     pressure_angle : ndarray
-        φ [rad], signed (+ when the contact force leans against the lift).
+        φ [rad], signed: + where s' > e (a translating follower's rise with e = 0).
     rho_pitch : ndarray or None
         Radius of curvature of the pitch curve (+ convex; ±inf where straight).
     rho : ndarray

@@ -68,8 +68,8 @@ def test_undercut_and_pressure_angle_warn_with_their_values(capsys):
     assert status == 0 and "undercut: YES" in out and "EXCEEDED" in out
     cam = cam_profile(cam_cycle("cycloidal", 60, 30, 60, 40.0), 10.0, roller_radius=20.0)
     cut, phi = cam.check("undercut"), cam.check("pressure_angle")
-    assert f"warning: undercut: the profile's radius of curvature reaches {cut.value:.4g} mm" \
-        in err
+    assert f"warning: undercut at θ = {math.degrees(cut.theta):.3f}°" in err
+    assert f"so the profile's is {cut.value:.4g} mm" in err
     assert f"warning: pressure angle {math.degrees(phi.value):.4f}°" in err
 
 
