@@ -271,8 +271,12 @@ def cam_profile(motion, base_radius: float, follower: str = "roller", *,
             raise InputError(f"an arm of {arm:g} pivoted {pivot:g} from the cam's centre "
                              f"cannot put its roller centre at r_b + r_f = {rp:g} (needs "
                              f"{abs(pivot - arm):g} < r_b + r_f < {pivot + arm:g})")
-    pressure_limit = math.radians(PRESSURE_LIMIT_DEG[follower] if pressure_limit_deg is None
-                                  else pressure_limit_deg)
+    limit_deg = PRESSURE_LIMIT_DEG[follower] if pressure_limit_deg is None \
+        else float(pressure_limit_deg)
+    if not 0 < limit_deg < 90:
+        raise InputError(f"the pressure-angle limit must be between 0 and 90 degrees, got "
+                         f"{limit_deg:g}")
+    pressure_limit = math.radians(limit_deg)
     theta = np.linspace(0.0, 2 * math.pi, int(points))
 
     def geo(t):

@@ -211,6 +211,7 @@ def test_pressure_angle_check_and_its_refined_extreme():
      "cannot put its roller centre"),
     ({"base_radius": 40.0, "follower": "knife"}, "unknown follower"),
     ({"base_radius": 40.0, "points": 3}, "points must be at least 8"),
+    ({"base_radius": 40.0, "pressure_limit_deg": 90.0}, "between 0 and 90 degrees"),
 ])
 def test_bad_geometry_is_named(kw, needle):
     with pytest.raises(InputError, match=None) as info:
