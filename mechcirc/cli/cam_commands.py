@@ -102,6 +102,11 @@ def _motion(args):
     return m, text
 
 
+def _mm(v: float) -> str:
+    """A length for the report: 4 decimals, or 6 digits when that would be very long."""
+    return f"{v:.4f}" if abs(v) < 1e6 else f"{v:.6g}"
+
+
 def cmd_cam(args) -> int:
     import numpy as np
 
@@ -162,12 +167,12 @@ def cmd_cam(args) -> int:
               f"{math.degrees(phi.theta):.3f}° (limit {math.degrees(phi.limit):g}°"
               + ("" if phi.ok else ", EXCEEDED") + ")")
         pitch = "" if cam.rho_pitch is None else \
-            f" (pitch curve {cut.value + cam.roller_radius:.4f} mm)"
-        print(f"  radius of curvature: smallest convex {cut.value:.4f} mm at θ = "
+            f" (pitch curve {_mm(cut.value + cam.roller_radius)} mm)"
+        print(f"  radius of curvature: smallest convex {_mm(cut.value)} mm at θ = "
               f"{math.degrees(cut.theta):.3f}°{pitch}")
         if cam.follower == "flat":       # the contact runs along the face by x = s'
-            print(f"  contact on the face from x = {cam.dlift.min():.4f} to "
-                  f"{cam.dlift.max():.4f} mm of its axis")
+            print(f"  contact on the face from x = {_mm(cam.dlift.min())} to "
+                  f"{_mm(cam.dlift.max())} mm of its axis")
         print(f"  undercut: {'no' if cut.ok else 'YES'}")
         written = [p for p in (args.output, args.svg) if p]
         if written:

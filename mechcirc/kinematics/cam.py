@@ -1,9 +1,12 @@
 """Disc cams: profile, pressure angle, radius of curvature and undercut, in closed form.
 
 A disc cam turns counter-clockwise about its centre O by the cam angle θ; the
-follower's lift x(θ) is a :class:`~mechcirc.motion_laws.Motion` (a law cycle
+follower's motion x(θ) is a :class:`~mechcirc.motion_laws.Motion` (a law cycle
 from :func:`~mechcirc.motion_laws.cam_cycle` or a table), which gives x, dx/dθ
-and d²x/dθ² exactly.  Three followers:
+and d²x/dθ² exactly.  The lift s = x − min x is measured from the motion's
+lowest point, where the follower touches the base circle r_b (the cam's
+smallest circle): a negative stroke or a table of absolute positions needs no
+shifting.  Three followers:
 
 ``roller``
     Translating roller of radius r_f on an axis parallel to y at x = e (the
@@ -16,8 +19,8 @@ and d²x/dθ² exactly.  Three followers:
 ``oscillating``
     Roller of radius r_f at the end of an arm of length L pivoted at
     A = (D, 0) (D, the pivot distance, = |OA|).  The arm angle ψ (between A→O
-    and A→B) is ψ₀ + x [rad], with r_b + r_f = |OB| at ψ₀; the roller centre
-    is B = (D − L cos ψ, L sin ψ) and x > 0 moves it away from O.
+    and A→B) is ψ₀ + s [rad], with r_b + r_f = |OB| at ψ₀; the roller centre
+    is B = (D − L cos ψ, L sin ψ) and s > 0 moves it away from O.
 
 In the cam's frame a fixed-frame point B(θ) is P = R(−θ)B, so with J the
 quarter turn, P' = R(−θ)(B' − JB) and P'' = R(−θ)(B'' − 2JB' − B): the pitch
@@ -105,8 +108,8 @@ class CamProfile:
     base_radius, roller_radius, offset, arm, pivot : float
         r_b, r_f, e, L and D (the last two 0 for a translating follower).
     theta, lift, dlift, ddlift : ndarray
-        Cam angle [rad]; the follower's x, dx/dθ, d²x/dθ² (length, or rad for
-        the oscillating arm).
+        Cam angle [rad]; the lift s = x − min x and its derivatives ds/dθ,
+        d²s/dθ² (length, or rad for the oscillating arm).
     pitch_x, pitch_y : ndarray or None
         The roller centre's path (None for a flat face).
     x, y : ndarray
@@ -146,9 +149,10 @@ class CamProfile:
         return next(c for c in self.checks if c.name == name)
 
 
-def _geometry(motion, theta, follower, rb, rf, e, arm, pivot):
+def _geometry(motion, theta, follower, rb, rf, e, arm, pivot, x0):
     """Everything at ``theta``: (s, s', s'', P or None, C, φ, κ_pitch or None, ρ_profile)."""
-    s, ds, dds = motion.evaluate(theta)
+    x, ds, dds = motion.evaluate(theta)
+    s = x - x0
     c, sn = np.cos(theta), np.sin(theta)
 
     def to_cam(u, v):                           # R(−θ)·(u, v)
@@ -205,10 +209,11 @@ def cam_profile(motion, base_radius: float, follower: str = "roller", *,
     Parameters
     ----------
     motion : Motion
-        The follower's lift x(θ) above the base circle [length; rad for
-        ``oscillating``], θ the cam angle, the cam turning counter-clockwise.
+        The follower's motion x(θ) [length; rad for ``oscillating``], θ the
+        cam angle, the cam turning counter-clockwise; its lowest point (on the
+        grid of ``points``) touches the base circle.
     base_radius : float
-        r_b > 0, the profile's radius where x = 0.
+        r_b > 0, the cam's smallest radius, where x is least.
     follower : {"roller", "flat", "oscillating"}
         See the module text for the geometry of each.
     roller_radius : float
@@ -230,9 +235,8 @@ def cam_profile(motion, base_radius: float, follower: str = "roller", *,
     ------
     InputError
         A radius ≤ 0 (or r_f < 0), a geometry that cannot be assembled (the
-        follower's axis missing the base circle, an arm that cannot reach it,
-        a lift that takes the follower through the cam's centre or swings the
-        arm through the line AO), or ``points`` < 8.
+        follower's axis missing the base circle, an arm that cannot reach it
+        or a lift that swings it through the line AO), or ``points`` < 8.
 
     Examples
     --------
@@ -278,20 +282,12 @@ def cam_profile(motion, base_radius: float, follower: str = "roller", *,
                          f"{limit_deg:g}")
     pressure_limit = math.radians(limit_deg)
     theta = np.linspace(0.0, 2 * math.pi, int(points))
+    x0 = float(np.min(motion.evaluate(theta)[0]))
 
     def geo(t):
-        return _geometry(motion, t, follower, rb, rf, e, arm, pivot)
+        return _geometry(motion, t, follower, rb, rf, e, arm, pivot, x0)
 
     s, ds, dds, P, C, phi, kappa, rho = geo(theta)
-    if follower == "roller" and np.any(math.sqrt(rp * rp - e * e) + s <= 0):
-        i = int(np.argmin(s))
-        raise InputError(f"the lift {s[i]:g} at θ = {math.degrees(theta[i]):.3f}° takes the "
-                         f"roller centre through the cam's centre (lift must stay > "
-                         f"{-math.sqrt(rp * rp - e * e):g})")
-    if follower == "flat" and np.any(rb + s <= 0):
-        i = int(np.argmin(s))
-        raise InputError(f"the lift {s[i]:g} at θ = {math.degrees(theta[i]):.3f}° takes the "
-                         f"face through the cam's centre (lift must stay > {-rb:g})")
     if follower == "oscillating":
         psi0 = math.acos((pivot ** 2 + arm ** 2 - rp * rp) / (2 * pivot * arm))
         psi = psi0 + s

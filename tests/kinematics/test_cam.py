@@ -7,6 +7,7 @@ that curve's normal and from the textbook closed forms; curvature from the
 parametric formula κ = (x'y'' − y'x'')/(x'² + y'²)^{3/2}.
 """
 
+import dataclasses
 import math
 import pickle
 
@@ -219,9 +220,23 @@ def test_bad_geometry_is_named(kw, needle):
     assert needle in str(info.value)
 
 
-def test_lift_through_the_centre_and_arm_through_the_pivot_line():
-    with pytest.raises(InputError, match="through the cam's centre"):
-        cam_profile(cam_cycle("cycloidal", 120, 60, 120, -60.0), 40.0, roller_radius=10.0)
+def test_the_lift_is_measured_from_its_lowest_point():
+    """A negative stroke (or a table of absolute positions): the lowest point touches the
+    base circle, and the cam is the positive-stroke cam turned by the rise and dwell."""
+    down = cam_profile(cam_cycle("cycloidal", 120, 60, 120, -20.0), 40.0, roller_radius=10.0,
+                       points=361)
+    up = cam_profile(cam_cycle("cycloidal", 120, 60, 120, 20.0), 40.0, roller_radius=10.0,
+                     points=361)
+    assert np.min(down.lift) == 0.0 and np.min(np.hypot(down.x, down.y)) == pytest.approx(40)
+    # s_down(θ) = 20 − s_up(θ): the down cam dwells at the top where the up cam dwells low.
+    assert np.max(np.abs(down.lift - (20.0 - up.lift))) < 1e-13
+    m = cam_cycle("cycloidal", 120, 60, 120, 20.0)
+    raised = dataclasses.replace(m, poly=tuple((p[0] + 7.0, *p[1:]) for p in m.poly))
+    shifted = cam_profile(raised, 40.0, roller_radius=10.0, points=361)
+    assert np.max(np.abs(shifted.x - up.x)) < 1e-13 and np.max(np.abs(shifted.y - up.y)) < 1e-13
+
+
+def test_arm_through_the_pivot_line():
     with pytest.raises(InputError, match="leaves"):
         cam_profile(cam_cycle("cycloidal", 120, 60, 120, math.radians(150)), 40.0,
                     "oscillating", roller_radius=10.0, arm=60.0, pivot=80.0)
