@@ -11,6 +11,7 @@ import dataclasses
 import math
 import pickle
 
+import mpmath
 import numpy as np
 import pytest
 import sympy as sp
@@ -56,9 +57,8 @@ def _reference(B, v, theta):
     nx, ny = -y1, x1                                   # outward normal (unnormalised)
     phi = sp.atan2(vx * ny - vy * nx, vx * nx + vy * ny)
     f = sp.lambdify(TH, [x, y, phi, kappa], "mpmath")
-    import mpmath
-    mpmath.mp.dps = 30
-    return np.array([[float(val) for val in f(mpmath.mpf(float(t)))] for t in theta]).T
+    with mpmath.workdps(30):
+        return np.array([[float(val) for val in f(mpmath.mpf(float(t)))] for t in theta]).T
 
 
 @pytest.mark.parametrize("e", [0.0, 7.5, -12.0])
@@ -283,3 +283,39 @@ def test_motion_scaled():
     t = np.linspace(0, 2 * np.pi, 50)
     for a, b in zip(m.scaled(0.25).evaluate(t), m.evaluate(t)):
         assert np.array_equal(a, 0.25 * b)
+
+
+def test_flat_face_profile_is_the_envelope_of_the_face():
+    """Each profile point lies on the face line (C·u = r_b + s, u the face normal turned into
+    the cam's frame), the profile's tangent runs along the face (finite differences), and its
+    curvature from SymPy's parametric derivatives of the written-out rise is 1/(r_b + s + s'')."""
+    h, beta, rb = 20.0, math.radians(120), 60.0
+    cam = cam_profile(cam_cycle("cycloidal", 120, 60, 120, h), rb, "flat", points=20001)
+    ux, uy = np.sin(cam.theta), np.cos(cam.theta)             # R(−θ)·(0, 1)
+    assert np.max(np.abs(cam.x * ux + cam.y * uy - (rb + cam.lift))) < 1e-12 * rb
+    C = cam.x + 1j * cam.y
+    dt = cam.theta[1] - cam.theta[0]
+    tangent = (-C[4:] + 8 * C[3:-1] - 8 * C[1:-3] + C[:-4]) / (12 * dt)
+    along = (tangent.real * ux[2:-2] + tangent.imag * uy[2:-2]) / np.abs(tangent)
+    motion = cam_cycle("cycloidal", 120, 60, 120, h)
+    smooth = _clear_of_junctions(cam.theta, motion.start, 2)[2:-2]
+    assert np.max(np.abs(along[smooth])) < 1e-9
+    # The profile as the envelope of the lines X·u(θ) = p(θ), solved by SymPy: X·u = p and
+    # X·u' = p' (no formula of the module), then its curvature.
+    s = _cycloidal_rise(h, sp.Float(beta, 30))
+    p = rb + s
+    X, Y = sp.symbols("X Y")
+    u = (sp.sin(TH), sp.cos(TH))
+    sol = sp.solve([X * u[0] + Y * u[1] - p,
+                    X * sp.diff(u[0], TH) + Y * sp.diff(u[1], TH) - sp.diff(p, TH)], [X, Y])
+    x, y = sol[X], sol[Y]
+    x1, y1 = sp.diff(x, TH), sp.diff(y, TH)
+    kappa = -(x1 * sp.diff(y1, TH) - y1 * sp.diff(x1, TH)) / (x1 ** 2 + y1 ** 2) ** 1.5
+    f = sp.lambdify(TH, [x, y, kappa], "mpmath")
+    inside = np.flatnonzero((cam.theta > 0.01) & (cam.theta < beta - 0.01))[::500]
+    with mpmath.workdps(30):
+        ref = np.array([[float(v) for v in f(mpmath.mpf(float(cam.theta[i])))]
+                        for i in inside]).T
+    assert np.max(np.abs(cam.x[inside] - ref[0])) < 1e-12 * rb
+    assert np.max(np.abs(cam.y[inside] - ref[1])) < 1e-12 * rb
+    assert np.max(np.abs(1 / cam.rho[inside] - ref[2]) * rb) < 1e-12
