@@ -45,7 +45,7 @@ def register(sub) -> None:
                    help="translating roller (default), translating flat face, oscillating roller")
     p.add_argument("--roller-radius", type=real(least=0.0, most=MAX_LENGTH, unit="mm"),
                    metavar="MM", help="roller radius r_f [mm] (0: a knife edge)")
-    p.add_argument("--offset", type=real(most=MAX_LENGTH), default=0.0, metavar="MM",
+    p.add_argument("--offset", type=real(most=MAX_LENGTH), metavar="MM",
                    help="offset e of a translating follower's axis [mm] (default 0; "
                         "--offset=-5 for a negative one)")
     p.add_argument("--arm", type=real(above=0.0, most=MAX_LENGTH, unit="mm"), metavar="MM",
@@ -120,9 +120,15 @@ def cmd_cam(args) -> int:
         raise InputError(f"a {args.follower} follower needs --roller-radius (0 for a knife edge)")
     if args.follower == "oscillating" and (args.arm is None or args.pivot is None):
         raise InputError("an oscillating follower needs --arm and --pivot")
+    unused = {"flat": ("roller_radius", "arm", "pivot"), "roller": ("arm", "pivot"),
+              "oscillating": ("offset",)}[args.follower]
+    for name in unused:
+        if getattr(args, name) is not None:
+            raise InputError(f"--{name.replace('_', '-')} does not apply to a {args.follower} "
+                             "follower (see 'mechcirc cam --help')")
     motion, what = _motion(args)
     cam = cam_profile(motion, args.base_radius, args.follower,
-                      roller_radius=args.roller_radius or 0.0, offset=args.offset,
+                      roller_radius=args.roller_radius or 0.0, offset=args.offset or 0.0,
                       arm=args.arm or 0.0, pivot=args.pivot or 0.0, points=args.points,
                       pressure_limit_deg=args.pressure_limit)
     phi, cut = cam.check("pressure_angle"), cam.check("undercut")

@@ -75,9 +75,11 @@ def test_undercut_and_pressure_angle_warn_with_their_values(capsys):
 
 @pytest.mark.parametrize("extra,needles", [
     (["--low-dwell", "30"], ("= 330°, not 360°",)),
-    (["--pivot", "80"], ()),            # ignored for a translating follower: not an error
+    (["--low-dwell", "60"], ()),
+    (["--pivot", "80"], ("--pivot does not apply to a roller follower",)),
+    (["--follower", "flat"], ("--roller-radius does not apply to a flat follower",)),
 ])
-def test_cycle_sum(extra, needles, capsys):
+def test_cycle_sum_and_options_that_do_not_apply(extra, needles, capsys):
     if needles:
         assert_user_error(BASE + extra, capsys, *needles)
     else:
