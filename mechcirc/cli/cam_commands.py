@@ -38,7 +38,8 @@ def register(sub) -> None:
                         "angles must sum to 360°)")
     p.add_argument("--return-law", choices=_LAWS, help="law of the return (default --law)")
     p.add_argument("--stroke", type=real(most=MAX_LENGTH), metavar="H",
-                   help="lift [mm; deg for an oscillating follower]")
+                   help="lift [mm; deg for an oscillating follower] (--stroke=-20: the "
+                        "follower falls first)")
     p.add_argument("--base-radius", type=real(above=0.0, most=MAX_LENGTH, unit="mm"),
                    required=True, metavar="MM", help="base circle radius r_b [mm]")
     p.add_argument("--follower", choices=("roller", "flat", "oscillating"), default="roller",
@@ -46,8 +47,9 @@ def register(sub) -> None:
     p.add_argument("--roller-radius", type=real(least=0.0, most=MAX_LENGTH, unit="mm"),
                    metavar="MM", help="roller radius r_f [mm] (0: a knife edge)")
     p.add_argument("--offset", type=real(most=MAX_LENGTH), metavar="MM",
-                   help="offset e of a translating follower's axis [mm] (default 0; "
-                        "--offset=-5 for a negative one)")
+                   help="offset e of a translating follower's axis [mm] (default 0; a "
+                        "positive one lowers the rise's pressure angle, the cam turning "
+                        "counter-clockwise; --offset=-5 for a negative one)")
     p.add_argument("--arm", type=real(above=0.0, most=MAX_LENGTH, unit="mm"), metavar="MM",
                    help="oscillating follower: arm length, pivot to roller centre [mm]")
     p.add_argument("--pivot", type=real(above=0.0, most=MAX_LENGTH, unit="mm"), metavar="MM",
