@@ -35,7 +35,7 @@ def test_fnf_sixbar_example():
 
 def test_shedding_cam_example(tmp_path):
     """The smallest base radius it prints meets |φ| ≤ 45°, a hundredth of a mm less does not:
-    checked with the textbook tan φ = (L(1 + ψ') − D cos ψ)/(D sin ψ) on a dense grid."""
+    checked with the closed form tan φ = (L(1 + ψ') − D cos ψ)/(D sin ψ) on a dense grid."""
     import math
 
     import numpy as np

@@ -28,14 +28,16 @@ curve (the roller centre's path), its unit normal and its curvature follow in
 closed form for both roller followers, and the profile is the envelope of the
 roller circle, P − r_f n (n the outward normal).  The pressure angle φ is the
 angle between n (the line of the contact force) and the velocity of the
-roller centre; it reduces to the textbook forms (Norton, *Design of
-Machinery*, §8.6–8.7; Rothbart, *Cam Design Handbook*, ch. 2 and 6)
+roller centre; it reduces to
 
     translating roller:   tan φ = (s' − e) / (s + √((r_b + r_f)² − e²))
     oscillating roller:   tan φ = (L (1 + ψ') − D cos ψ) / (D sin ψ)
 
-(primes: d/dθ; the cam turning counter-clockwise).  The radius of curvature
-of the pitch curve is ρ = |P'|³ / (P' × P''), signed + where it is convex
+(primes: d/dθ; the cam turning counter-clockwise), the first the textbook
+form (Norton, *Design of Machinery*, ch. 8, sizing the cam; Rothbart, *Cam
+Design Handbook*), the second from the geometry above.  The radius of
+curvature of the pitch curve is ρ = −|P'|³ / (P' × P'') (the pitch curve runs
+clockwise in the cam's frame), signed + where it is convex
 (for e = 0 it is Norton's (R² + s'²)^{3/2} / (R² + 2s'² − R s''), R = r_b + r_f
 + s), and the profile's is ρ − r_f.  A roller undercuts (the envelope loops)
 where the pitch curve is convex with 0 < ρ < r_f.  The flat face touches the
@@ -65,7 +67,7 @@ __all__ = [
 
 #: The follower kinds :func:`cam_profile` takes.
 FOLLOWERS = ("roller", "flat", "oscillating")
-#: Default pressure-angle limits [deg]: translating, oscillating (Norton §8.6).
+#: Default pressure-angle limits [deg]: translating, oscillating (Norton, ch. 8).
 PRESSURE_LIMIT_DEG = {"roller": 30.0, "flat": 30.0, "oscillating": 45.0}
 
 

@@ -3,8 +3,8 @@
 The references never call mechcirc.kinematics.cam: the pitch curve is built in
 SymPy from the law written out here (not from mechcirc.motion_laws), rotated
 into the cam's frame and differentiated symbolically; pressure angles come from
-that curve's normal and from the textbook closed forms; curvature from the
-parametric formula κ = (x'y'' − y'x'')/(x'² + y'²)^{3/2}.
+that curve's normal and from the closed forms (the translating one the
+textbook's); curvature from the parametric formula κ = (x'y'' − y'x'')/(x'² + y'²)^{3/2}.
 """
 
 import dataclasses
@@ -75,7 +75,7 @@ def test_translating_roller_against_sympy(e):
     assert np.max(np.abs(cam.pitch_y[inside] - y)) < 1e-12 * rb
     assert np.max(np.abs(cam.pressure_angle[inside] - phi)) < 1e-13
     assert np.max(np.abs(1 / cam.rho_pitch[inside] - kappa) * rb) < 1e-12
-    # The textbook form tan φ = (s' − e)/(s + √((r_b + r_f)² − e²)) (Norton §8.6).
+    # The textbook form tan φ = (s' − e)/(s + √((r_b + r_f)² − e²)) (Norton, ch. 8).
     textbook = np.arctan2(cam.dlift - e, cam.lift + d)
     assert np.max(np.abs(cam.pressure_angle - textbook)) < 1e-14
 
@@ -95,10 +95,10 @@ def test_oscillating_roller_against_sympy():
     assert np.max(np.abs(cam.pitch_y[inside] - y)) < 1e-12 * pivot
     assert np.max(np.abs(cam.pressure_angle[inside] - phi)) < 1e-13
     assert np.max(np.abs(1 / cam.rho_pitch[inside] - kappa) * rb) < 1e-12
-    # Textbook: tan φ = (L(1 + ψ') − D cos ψ)/(D sin ψ) (Rothbart ch. 6), over the whole turn.
+    # Closed form: tan φ = (L(1 + ψ') − D cos ψ)/(D sin ψ) (derived in cam.py), over the whole turn.
     ps = float(psi0) + cam.lift
-    textbook = np.arctan2(arm * (1 + cam.dlift) - pivot * np.cos(ps), pivot * np.sin(ps))
-    assert np.max(np.abs(cam.pressure_angle - textbook)) < 1e-14
+    closed = np.arctan2(arm * (1 + cam.dlift) - pivot * np.cos(ps), pivot * np.sin(ps))
+    assert np.max(np.abs(cam.pressure_angle - closed)) < 1e-14
     # The roller centre is L from the pivot, which turns with −θ in the cam frame.
     ax, ay = pivot * np.cos(cam.theta), -pivot * np.sin(cam.theta)
     assert np.max(np.abs(np.hypot(cam.pitch_x - ax, cam.pitch_y - ay) - arm)) < 1e-12 * pivot
