@@ -250,6 +250,9 @@ def cam_profile(motion, base_radius: float, follower: str = "roller", *,
     """
     if follower not in FOLLOWERS:
         raise InputError(f"unknown follower {follower!r}; expected one of {', '.join(FOLLOWERS)}")
+    if getattr(motion, "period", None) != 2 * math.pi:
+        raise InputError("the motion must be a Motion over one turn of the cam (period 2π; "
+                         "build it with cam_cycle, motion_table or read_motion_table)")
     rb, rf, e = float(base_radius), float(roller_radius), float(offset)
     values = {"base radius": rb, "roller radius": rf, "offset": e, "arm": arm, "pivot": pivot}
     for name, val in values.items():

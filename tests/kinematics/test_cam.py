@@ -236,6 +236,12 @@ def test_the_lift_is_measured_from_its_lowest_point():
     assert np.max(np.abs(shifted.x - up.x)) < 1e-13 and np.max(np.abs(shifted.y - up.y)) < 1e-13
 
 
+def test_a_motion_of_another_period_is_refused():
+    m = dataclasses.replace(cam_cycle("cycloidal", 120, 60, 120, 20.0), period=1.0)
+    with pytest.raises(InputError, match="period 2π"):
+        cam_profile(m, 40.0, roller_radius=10.0)
+
+
 def test_arm_through_the_pivot_line():
     with pytest.raises(InputError, match="leaves"):
         cam_profile(cam_cycle("cycloidal", 120, 60, 120, math.radians(150)), 40.0,
