@@ -223,6 +223,14 @@ class Motion:
         ddx = ddx - B * w * w * np.sin(arg)
         return x, dx, ddx
 
+    def scaled(self, factor: float) -> Motion:
+        """This motion times ``factor`` (a change of unit: mm → m, degrees → radians)."""
+        return dataclasses.replace(
+            self, spec=f"{self.spec} (x {factor:g})", _cache={},
+            poly=tuple(tuple(factor * am for am in p) for p in self.poly),
+            sine=tuple((factor * B, w, phi) for B, w, phi in self.sine),
+            coarse=self.coarse.scaled(factor) if self.coarse is not None else None)
+
     def fourier(self, kmax: int) -> np.ndarray:
         """Fourier coefficients cₖ of dx/dθ, k = 1 … ``kmax``, exactly (closed form).
 

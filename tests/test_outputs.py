@@ -124,6 +124,9 @@ WRITERS = [
       "--plot", "{d}/l.svg"], ["l.svg"]),
     (["simulate", "--variant", "3", "--revolutions", "1", "--points", "360",
       "-o", "{d}/s.csv"], ["s.csv"]),
+    (["cam", "--law", "cycloidal", "--rise", "120", "--return", "120", "--stroke", "20",
+      "--base-radius", "40", "--roller-radius", "10", "-o", "{d}/c.csv", "--svg",
+      "{d}/c.svg"], ["c.csv", "c.svg"]),
 ]
 
 

@@ -1,4 +1,4 @@
-"""Sub-commands on kinematics: ``fourbar``, ``frame``, ``synth`` and ``linkage``."""
+"""Sub-commands on kinematics: ``fourbar``, ``frame``, ``synth``, ``linkage`` (and ``cam``)."""
 
 from __future__ import annotations
 
@@ -161,6 +161,10 @@ def register(sub) -> None:
                    help="draw the linkage at θ with the paths of its points")
     p.add_argument("--json", action="store_true", help="print one JSON document")
     p.set_defaults(func=cmd_linkage)
+
+    from . import cam_commands
+
+    cam_commands.register(sub)      # the cam command lives in its own module
 
 
 def _vector(option, n, *, nonneg=False):

@@ -1,10 +1,11 @@
 """Kinematics of loom mechanisms: four-bar transfer functions (DIGEST §2), the
 beat-up synthesis of patent CN104178888 (DIGEST §3), frame loading, and planar
-linkages with several driving cranks (DIGEST §4).
+linkages with several driving cranks (DIGEST §4); disc cams (:mod:`.cam`).
 
 numpy and scipy only; nothing here imports matplotlib (see :mod:`.plots`).
 """
 
+from .cam import CamCheck, CamProfile, cam_profile
 from .fourbar import DeadCentre, FourBar, FourBarState, TransmissionRange
 from .frame_loading import FrameLoading, LinkMass, beat_up_force, frame_loading
 from .linkage import Crank, Linkage, LinkageMotion, LinkageState, load_linkage, parse_linkage
@@ -13,4 +14,5 @@ from .synthesis import Design, SynthesisResult, evaluate_design, solve_eq10, syn
 __all__ = ["FourBar", "FourBarState", "DeadCentre", "TransmissionRange",
            "Design", "SynthesisResult", "evaluate_design", "solve_eq10", "synthesize",
            "LinkMass", "FrameLoading", "frame_loading", "beat_up_force",
+           "CamCheck", "CamProfile", "cam_profile",
            "Crank", "Linkage", "LinkageMotion", "LinkageState", "load_linkage", "parse_linkage"]

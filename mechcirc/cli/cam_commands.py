@@ -1,0 +1,190 @@
+"""The ``cam`` sub-command: a disc cam's profile, pressure angle, curvature and undercut."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+
+from ._common import MAX_LENGTH, check_output_paths, count, print_json, real
+
+_LAWS = ("harmonic", "cycloidal", "modified_sine", "modified_trapezoid", "polynomial_345")
+
+
+def register(sub) -> None:
+    p = sub.add_parser(
+        "cam", help="disc cam profile, pressure angle, radius of curvature, undercut; CSV/SVG",
+        description="Profile of a disc cam turning counter-clockwise and driving a translating "
+                    "roller, a translating flat face or an oscillating roller follower, from a "
+                    "motion law cycle (rise, dwell, return, and the rest of the turn dwelling "
+                    "at the bottom) or a lift table. Lengths in mm, angles in degrees; the "
+                    "stroke and a table's lift are in mm, or degrees of the arm for "
+                    "--follower oscillating. See docs/kinematics.md, 'Cams'.",
+        epilog="Example: mechcirc cam --law cycloidal --rise 120 --dwell 60 --return 120 "
+               "--stroke 20 --base-radius 40 --roller-radius 10 -o profile.csv "
+               "--svg profile.svg",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    src = p.add_mutually_exclusive_group(required=True)
+    src.add_argument("--law", choices=_LAWS, help="motion law of the rise (and the return)")
+    src.add_argument("--motion", metavar="CSV",
+                     help="lift table: columns angle_deg,displacement over one turn")
+    for name, what in (("rise", "rise"), ("dwell", "dwell at the top (default 0)"),
+                       ("return", "return")):
+        p.add_argument(f"--{name}", type=real(least=0.0, most=360.0, unit="deg"),
+                       dest="ret" if name == "return" else name, metavar="DEG",
+                       help=f"cam angle of the {what} [deg]")
+    p.add_argument("--low-dwell", type=real(least=0.0, most=360.0, unit="deg"), metavar="DEG",
+                   help="dwell at the bottom [deg] (default: the rest of 360°; given, the four "
+                        "angles must sum to 360°)")
+    p.add_argument("--return-law", choices=_LAWS, help="law of the return (default --law)")
+    p.add_argument("--stroke", type=real(most=MAX_LENGTH), metavar="H",
+                   help="lift [mm; deg for an oscillating follower] (--stroke=-20: the "
+                        "follower falls first)")
+    p.add_argument("--base-radius", type=real(above=0.0, most=MAX_LENGTH, unit="mm"),
+                   required=True, metavar="MM", help="base circle radius r_b [mm]")
+    p.add_argument("--follower", choices=("roller", "flat", "oscillating"), default="roller",
+                   help="translating roller (default), translating flat face, oscillating roller")
+    p.add_argument("--roller-radius", type=real(least=0.0, most=MAX_LENGTH, unit="mm"),
+                   metavar="MM", help="roller radius r_f [mm] (0: a knife edge)")
+    p.add_argument("--offset", type=real(most=MAX_LENGTH), metavar="MM",
+                   help="offset e of a translating follower's axis [mm] (default 0; a "
+                        "positive one lowers the rise's pressure angle, the cam turning "
+                        "counter-clockwise; --offset=-5 for a negative one)")
+    p.add_argument("--arm", type=real(above=0.0, most=MAX_LENGTH, unit="mm"), metavar="MM",
+                   help="oscillating follower: arm length, pivot to roller centre [mm]")
+    p.add_argument("--pivot", type=real(above=0.0, most=MAX_LENGTH, unit="mm"), metavar="MM",
+                   help="oscillating follower: distance from the cam's centre to the pivot [mm]")
+    p.add_argument("--pressure-limit", type=real(above=0.0, most=90.0, unit="deg"),
+                   metavar="DEG", help="largest admissible pressure angle [deg] (default 30 "
+                                       "translating, 45 oscillating)")
+    p.add_argument("--points", type=count(8, 1_000_000), default=721, metavar="N",
+                   help="cam angles from 0 to 360° inclusive (default 721)")
+    p.add_argument("-o", "--output", metavar="CSV", help="write the profile as CSV")
+    p.add_argument("--svg", metavar="SVG", help="draw the profile as SVG (mm)")
+    p.add_argument("--json", action="store_true", help="print one JSON document")
+    p.set_defaults(func=cmd_cam)
+
+
+def _motion(args):
+    from ..errors import InputError
+    from ..motion_laws import cam_cycle, read_motion_table
+
+    scale = math.pi / 180 if args.follower == "oscillating" else 1.0
+    unit = "°" if args.follower == "oscillating" else " mm"
+    if args.motion:
+        given = [o for o in ("rise", "dwell", "ret", "low_dwell", "stroke", "return_law")
+                 if getattr(args, o) is not None]
+        if given:
+            name = "return" if given[0] == "ret" else given[0].replace("_", "-")
+            raise InputError(f"--motion gives the whole lift; drop --{name}")
+        m = read_motion_table(args.motion)
+        note = (f" (periodic spline; its slope uncertain by ~{m.error:.1g} of its peak)"
+                if math.isfinite(m.error) else " (periodic spline; under 9 rows: no error "
+                "estimate)")
+        return m.scaled(scale), f"lift table {args.motion}{note}"
+    missing = [o for o in ("rise", "ret", "stroke") if getattr(args, o) is None]
+    if missing:
+        raise InputError(f"--law {args.law} needs --{'return' if missing[0] == 'ret' else missing[0]}"
+                         " (a law cycle takes --rise, --return and --stroke; --dwell defaults to 0)")
+    dwell = args.dwell or 0.0
+    total = args.rise + dwell + args.ret
+    if args.low_dwell is not None and abs(total + args.low_dwell - 360.0) > 1e-9:
+        raise InputError(f"rise + dwell + return + low dwell = {args.rise:g} + {dwell:g} + "
+                         f"{args.ret:g} + {args.low_dwell:g} = {total + args.low_dwell:g}°, "
+                         "not 360° (one turn)")
+    try:
+        m = cam_cycle(args.law, args.rise, dwell, args.ret, args.stroke * scale,
+                      args.return_law)
+    except ValueError as exc:
+        raise InputError(str(exc)) from None
+    text = (f"{args.law} rise {args.rise:g}° dwell {dwell:g}° "
+            + (f"return {args.ret:g}° ({args.return_law})" if args.return_law
+               else f"return {args.ret:g}°")
+            + f", low dwell {360 - total:g}°, stroke {args.stroke:g}{unit}")
+    return m, text
+
+
+def _mm(v: float) -> str:
+    """A length for the report: 4 decimals, or 6 digits when that would be very long."""
+    return f"{v:.4f}" if abs(v) < 1e6 else f"{v:.6g}"
+
+
+def cmd_cam(args) -> int:
+    import numpy as np
+
+    from ..errors import InputError
+    from ..kinematics.cam import cam_profile, save_profile
+
+    check_output_paths(args.output, args.svg)
+    if args.svg and not args.svg.lower().endswith(".svg"):
+        raise InputError(f"--svg {args.svg}: the drawing is SVG; give a file ending in .svg")
+    if args.follower != "flat" and args.roller_radius is None:
+        raise InputError(f"a {args.follower} follower needs --roller-radius (0 for a knife edge)")
+    if args.follower == "oscillating" and (args.arm is None or args.pivot is None):
+        raise InputError("an oscillating follower needs --arm and --pivot")
+    unused = {"flat": ("roller_radius", "arm", "pivot"), "roller": ("arm", "pivot"),
+              "oscillating": ("offset",)}[args.follower]
+    for name in unused:
+        if getattr(args, name) is not None:
+            raise InputError(f"--{name.replace('_', '-')} does not apply to a {args.follower} "
+                             "follower (see 'mechcirc cam --help')")
+    motion, what = _motion(args)
+    cam = cam_profile(motion, args.base_radius, args.follower,
+                      roller_radius=args.roller_radius or 0.0, offset=args.offset or 0.0,
+                      arm=args.arm or 0.0, pivot=args.pivot or 0.0, points=args.points,
+                      pressure_limit_deg=args.pressure_limit)
+    phi, cut = cam.check("pressure_angle"), cam.check("undercut")
+    warnings = []
+    if not phi.ok:
+        warnings.append(f"pressure angle {math.degrees(phi.value):.4f}° at θ = "
+                        f"{math.degrees(phi.theta):.3f}° exceeds the limit "
+                        f"{math.degrees(phi.limit):g}° (a larger base circle, a longer rise or "
+                        "an offset lowers it)")
+    if not cut.ok:
+        why = (f"the roller radius {cam.roller_radius:g} mm exceeds the pitch curve's radius "
+               f"of curvature {cut.value + cam.roller_radius:.4g} mm there, so the profile's "
+               if args.follower != "flat" else "the profile's radius of curvature r_b + s + s'' ")
+        warnings.append(f"undercut at θ = {math.degrees(cut.theta):.3f}°: {why}is "
+                        f"{cut.value:.4g} mm; the cam cannot give this motion (enlarge the "
+                        "base circle or lengthen the rise)")
+    save_profile(cam, args.output, args.svg)
+    if args.json:
+        print_json({
+            "motion": motion.spec, "follower": cam.follower, "base_radius": cam.base_radius,
+            "roller_radius": cam.roller_radius, "offset": cam.offset, "arm": cam.arm,
+            "pivot": cam.pivot, "unit": "mm",
+            "checks": {c.name: {"ok": c.ok, "theta_deg": math.degrees(c.theta),
+                                **({"value_deg": math.degrees(c.value),
+                                    "limit_deg": math.degrees(c.limit)}
+                                   if c.name == "pressure_angle" else {"value": c.value})}
+                       for c in cam.checks},
+            "warnings": warnings,
+            "profile": {"theta_deg": np.degrees(cam.theta), "x": cam.x, "y": cam.y,
+                        "pressure_angle_deg": np.degrees(cam.pressure_angle),
+                        "radius_of_curvature": cam.rho}})
+    else:
+        kind = {"roller": f"translating roller r_f = {cam.roller_radius:g} mm, offset "
+                          f"{cam.offset:g} mm",
+                "flat": "translating flat face",
+                "oscillating": f"oscillating roller r_f = {cam.roller_radius:g} mm, arm "
+                               f"{cam.arm:g} mm, pivot {cam.pivot:g} mm"}[cam.follower]
+        print(f"cam: {what}")
+        print(f"  follower: {kind}; base circle r_b = {cam.base_radius:g} mm; "
+              f"{cam.theta.size} cam angles")
+        print(f"  pressure angle: max |φ| = {math.degrees(phi.value):.4f}° at θ = "
+              f"{math.degrees(phi.theta):.3f}° (limit {math.degrees(phi.limit):g}°"
+              + ("" if phi.ok else ", EXCEEDED") + ")")
+        pitch = "" if cam.rho_pitch is None else \
+            f" (pitch curve {_mm(cut.value + cam.roller_radius)} mm)"
+        print(f"  radius of curvature: smallest convex {_mm(cut.value)} mm at θ = "
+              f"{math.degrees(cut.theta):.3f}°{pitch}")
+        if cam.follower == "flat":       # the contact runs along the face by x = s'
+            print(f"  contact on the face from x = {_mm(cam.dlift.min())} to "
+                  f"{_mm(cam.dlift.max())} mm of its axis")
+        print(f"  undercut: {'no' if cut.ok else 'YES'}")
+        written = [p for p in (args.output, args.svg) if p]
+        if written:
+            print(f"  wrote {', '.join(written)}")
+    for w in warnings:
+        print(f"warning: {w}", file=sys.stderr)
+    return 0

@@ -1,0 +1,120 @@
+"""The ``cam`` sub-command: output equals the API, files, warnings and exit codes."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+from cli_helpers import assert_user_error, run
+
+from mechcirc.cli.cam_commands import _LAWS
+from mechcirc.kinematics.cam import cam_profile, profile_csv
+from mechcirc.motion_laws import LAWS, cam_cycle, read_motion_table
+
+BASE = ["cam", "--law", "cycloidal", "--rise", "120", "--dwell", "60", "--return", "120",
+        "--stroke", "20", "--base-radius", "40", "--roller-radius", "10"]
+
+
+def test_the_cli_offers_the_laws_of_motion_laws():
+    assert _LAWS == LAWS
+
+
+def test_text_json_and_files_match_the_api(tmp_path, capsys):
+    csv, svg = tmp_path / "p.csv", tmp_path / "p.svg"
+    status, out, err = run(BASE + ["--offset", "5", "-o", csv, "--svg", svg], capsys)
+    assert status == 0 and err == ""
+    cam = cam_profile(cam_cycle("cycloidal", 120, 60, 120, 20.0), 40.0, roller_radius=10.0,
+                      offset=5.0)
+    phi = cam.check("pressure_angle")
+    assert f"max |φ| = {math.degrees(phi.value):.4f}° at θ = {math.degrees(phi.theta):.3f}°" \
+        in out
+    assert "undercut: no" in out and f"wrote {csv}, {svg}" in out
+    assert csv.read_text() == profile_csv(cam)
+    assert svg.read_text().count("<polygon") == 1
+    status, out, err = run(BASE + ["--offset", "5", "--json"], capsys)
+    doc = json.loads(out)
+    assert doc["checks"]["pressure_angle"]["value_deg"] == math.degrees(phi.value)
+    assert doc["checks"]["undercut"]["ok"] is True
+    assert np.array_equal(doc["profile"]["x"], cam.x)
+
+
+def test_oscillating_stroke_and_table_in_degrees(tmp_path, capsys):
+    status, out, _ = run(["cam", "--law", "harmonic", "--rise", "90", "--return", "90",
+                          "--stroke", "15", "--base-radius", "30", "--roller-radius", "8",
+                          "--follower", "oscillating", "--arm", "50", "--pivot", "60",
+                          "--json"], capsys)
+    assert status == 0
+    cam = cam_profile(cam_cycle("harmonic", 90, 0, 90, math.radians(15)), 30.0, "oscillating",
+                      roller_radius=8.0, arm=50.0, pivot=60.0)
+    assert np.array_equal(json.loads(out)["profile"]["y"], cam.y)
+    table = tmp_path / "lift.csv"
+    th = np.linspace(0, 360, 73)
+    table.write_text("angle_deg,displacement\n"
+                     + "".join(f"{a!r},{10 * (1 - math.cos(math.radians(a)))!r}\n"
+                               for a in map(float, th)))
+    status, out, _ = run(["cam", "--motion", table, "--base-radius", "30", "--roller-radius",
+                          "8", "--follower", "oscillating", "--arm", "50", "--pivot", "60",
+                          "--json"], capsys)
+    assert status == 0
+    ref = cam_profile(read_motion_table(table).scaled(math.pi / 180), 30.0, "oscillating",
+                      roller_radius=8.0, arm=50.0, pivot=60.0)
+    assert np.array_equal(json.loads(out)["profile"]["x"], ref.x)
+
+
+def test_undercut_and_pressure_angle_warn_with_their_values(capsys):
+    status, out, err = run(["cam", "--law", "cycloidal", "--rise", "60", "--dwell", "30",
+                            "--return", "60", "--stroke", "40", "--base-radius", "10",
+                            "--roller-radius", "20"], capsys)
+    assert status == 0 and "undercut: YES" in out and "EXCEEDED" in out
+    cam = cam_profile(cam_cycle("cycloidal", 60, 30, 60, 40.0), 10.0, roller_radius=20.0)
+    cut, phi = cam.check("undercut"), cam.check("pressure_angle")
+    assert f"warning: undercut at θ = {math.degrees(cut.theta):.3f}°" in err
+    assert f"so the profile's is {cut.value:.4g} mm" in err
+    assert f"warning: pressure angle {math.degrees(phi.value):.4f}°" in err
+
+
+@pytest.mark.parametrize("extra,needles", [
+    (["--low-dwell", "30"], ("= 330°, not 360°",)),
+    (["--low-dwell", "60"], ()),
+    (["--pivot", "80"], ("--pivot does not apply to a roller follower",)),
+    (["--follower", "flat"], ("--roller-radius does not apply to a flat follower",)),
+])
+def test_cycle_sum_and_options_that_do_not_apply(extra, needles, capsys):
+    if needles:
+        assert_user_error(BASE + extra, capsys, *needles)
+    else:
+        assert run(BASE + extra, capsys)[0] == 0
+
+
+@pytest.mark.parametrize("argv,needles", [
+    (["--rise", "220"], ("more than one revolution",)),
+    (["--base-radius", "-40"], ("--base-radius", "must be > 0")),
+    (["--roller-radius", "-1"], ("--roller-radius", "≥ 0")),
+    (["--offset", "60"], ("offset |e| = 60",)),
+    (["--follower", "oscillating"], ("--arm and --pivot",)),
+    (["--stroke", "0"], ("stroke must be a finite nonzero",)),
+    (["--motion", "nofile.csv"], ("not allowed with argument --law",)),
+])
+def test_bad_input_exits_2_with_one_line(argv, needles, capsys):
+    args = list(BASE)
+    for opt, val in zip(argv[::2], argv[1::2]):
+        if opt in args:
+            args[args.index(opt) + 1] = val
+        else:
+            args += [opt, val]
+    assert_user_error(args, capsys, *needles)
+
+
+def test_table_errors_are_located(tmp_path, capsys):
+    table = tmp_path / "lift.csv"
+    table.write_text("angle_deg,displacement\n0,0\n90,1\n180,x\n270,1\n360,0\n")
+    assert_user_error(["cam", "--motion", table, "--base-radius", "30", "--roller-radius",
+                       "5"], capsys, f"{table}:4:5", "'x' is not a number")
+    assert_user_error(["cam", "--motion", table, "--rise", "30", "--base-radius", "30",
+                       "--roller-radius", "5"], capsys, "drop --rise")
+
+
+def test_no_output_file_on_error(tmp_path, capsys):
+    csv = tmp_path / "p.csv"
+    assert_user_error(BASE + ["--offset", "60", "-o", csv], capsys, "offset")
+    assert not csv.exists() and list(tmp_path.iterdir()) == []
