@@ -279,7 +279,7 @@ def test_a_failed_export_leaves_no_file(tmp_path):
     cam = cam_profile(cam_cycle("cycloidal", 120, 60, 120, 20.0), 40.0, roller_radius=10.0,
                       points=9)
     csv = tmp_path / "p.csv"
-    with pytest.raises(OSError):
+    with pytest.raises(InputError, match="does not exist"):   # the output layer's user error
         save_profile(cam, csv, tmp_path / "missing" / "p.svg")
     assert list(tmp_path.iterdir()) == []
 
