@@ -22,6 +22,8 @@ import os
 import signal
 import time
 from cli_helpers import assert_user_error, run
+from bounds import SUBPROCESS_TIMEOUT
+from reference.inputs import STB
 
 ROOT = Path(__file__).resolve().parents[1]
 COMMANDS = sorted(cli_commands())
@@ -127,7 +129,7 @@ def test_internal_error_in_a_real_process_has_no_traceback(tmp_path):
             "from mechcirc.cli import main\n"
             "sys.exit(main(['check', 'any.mcir']))\n")
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                          timeout=60)
+                          timeout=SUBPROCESS_TIMEOUT)
     assert proc.returncode == 1
     assert "Traceback" not in proc.stderr
     assert proc.stderr.startswith("mechcirc: internal error: KeyError: 'x'\n")
@@ -141,9 +143,6 @@ def test_broken_pipe_is_not_an_error(monkeypatch):
 
     monkeypatch.setattr(circuit_commands, "cmd_check", pipe)
     assert main(["check", "x.mcir"]) == 0
-
-
-STB = str(ROOT / "netlists" / "stb_heald.mcir")
 
 
 @pytest.mark.parametrize("value", ["0", "-1", "inf", "nan", "1e400"])
@@ -199,7 +198,7 @@ def test_sigint_during_start_up_prints_no_mechcirc_traceback(tmp_path):
                              preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
         time.sleep(delay)
         p.send_signal(signal.SIGINT)
-        err = p.communicate(timeout=60)[1].decode()
+        err = p.communicate(timeout=SUBPROCESS_TIMEOUT)[1].decode()
         if "Traceback" in err:
             # Only Python's own start-up (site, the import system) may be in it.
             assert f'File "{ROOT / "mechcirc"}' not in err, err
