@@ -251,7 +251,7 @@ def evaluate_plan(omega, kind, cplx, c_real, c_inv, c_om, e_real, e_inv, e_om, m
                 has_i, has_c = _children(i, nb, series, kstart, kids, slot, cplx, re, im,
                                          ai, cr, ci, has_i, has_c)
             real = c_real[i]
-            with_real = real != 0.0 or real != real
+            with_real = real != 0.0 or math.isnan(real)
             if with_real:
                 if has_c:
                     for j in range(nb):
@@ -324,4 +324,4 @@ def evaluate_plan(omega, kind, cplx, c_real, c_inv, c_om, e_real, e_inv, e_om, m
         if want_error:
             for j in range(nb):
                 r = _through_reciprocal(rh[top, j])
-                rho_out[j0 + j] = math.inf if r != r else r
+                rho_out[j0 + j] = math.inf if math.isnan(r) else r

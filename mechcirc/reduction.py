@@ -21,7 +21,6 @@ O(n · n_omega).
 from __future__ import annotations
 
 import gc
-import warnings
 import weakref
 from collections import deque
 from dataclasses import dataclass
@@ -31,7 +30,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .circuit import LAWS, Circuit, Element, Lever, law_terms
-from .errors import NotSeriesParallelError, TopologyError, UnloadedElementWarning
+from .errors import NotSeriesParallelError, TopologyError, UnloadedElementWarning, warn
 from .topology import check_frame_paths, loaded_groups, reachable
 
 __all__ = ["Leaf", "Series", "Parallel", "Reflect", "Node", "Reduction",
@@ -194,10 +193,9 @@ def reduce_circuit(circuit: Circuit) -> Reduction:
         if enabled:
             gc.enable()
     if red.unloaded:
-        warnings.warn(
-            f"{len(red.unloaded)} element(s) lie on no path between the drive's nodes "
-            f"{d.n1!r} and {d.n2!r} and carry no force: {', '.join(red.unloaded)}",
-            UnloadedElementWarning, stacklevel=3)
+        warn(f"{len(red.unloaded)} element(s) lie on no path between the drive's nodes "
+             f"{d.n1!r} and {d.n2!r} and carry no force: {', '.join(red.unloaded)}",
+             UnloadedElementWarning)
     return red
 
 
@@ -654,10 +652,6 @@ def _reversed(node):
     if isinstance(node, Series):
         return Series(node.children[::-1], signs[::-1])
     return Parallel(node.children, signs)
-
-
-def _binary_children(node: _Binary):
-    return [c for c, _ in _binary_items(node)]
 
 
 def _binary_items(node: _Binary):

@@ -546,7 +546,7 @@ class _DyadSolver:
             ci = pl.crank_idx[j]
             w[ci] = w_cranks[j]
             v[ci] = 1j * w_cranks[j] * E[ci] * self.crank_arm[j]
-        for dy, (x1, x2, r1, r2), (_, _, arm1, arm2) in zip(pl.dyads, inner, self.geo):
+        for dy, (_, _, r1, r2), (_, _, arm1, arm2) in zip(pl.dyads, inner, self.geo):
             (L1, L2), (P1, P2), (K1, K2) = dy.links, dy.outer, dy.known
             v1 = 0.0 if K1 == -1 else v[K1] + 1j * w[K1] * E[K1] * self.local[K1][P1]
             v2 = 0.0 if K2 == -1 else v[K2] + 1j * w[K2] * E[K2] * self.local[K2][P2]
@@ -564,7 +564,7 @@ class _DyadSolver:
         for j in range(len(lk.cranks)):
             ci = pl.crank_idx[j]
             a[ci] = -w[ci] ** 2 * E[ci] * self.crank_arm[j]
-        for dy, (x1, x2, r1, r2), (_, _, arm1, arm2) in zip(pl.dyads, inner, self.geo):
+        for dy, (_, _, r1, r2), (_, _, arm1, arm2) in zip(pl.dyads, inner, self.geo):
             (L1, L2), (P1, P2), (K1, K2) = dy.links, dy.outer, dy.known
             a1 = 0.0 if K1 == -1 else \
                 a[K1] + (1j * al[K1] - w[K1] ** 2) * E[K1] * self.local[K1][P1]
