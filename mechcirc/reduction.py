@@ -29,6 +29,7 @@ from typing import Iterator, Union
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from . import _jit
 from .circuit import LAWS, Circuit, Element, Lever, law_terms
 from .errors import NotSeriesParallelError, TopologyError, UnloadedElementWarning, warn
 from .topology import check_frame_paths, loaded_groups, reachable
@@ -739,9 +740,9 @@ def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: boo
     cancellation keeps a bound of a few hundred u.
     """
     omega = np.asarray(omega, dtype=float)
-    if not keep and _mode == "auto" and USE_KERNEL is not False:
+    if not keep and _mode == "auto" and _jit.COMPILED is not False:
         p = plan(root)
-        if USE_KERNEL or _KERNEL or p.kind.size * omega.size >= KERNEL_MIN_WORK:
+        if _jit.COMPILED or _KERNEL or p.kind.size * omega.size >= KERNEL_MIN_WORK:
             kernel = _kernel()
             if kernel is not None:
                 return _evaluate_compiled(kernel, p, omega, error, condition)
@@ -797,11 +798,9 @@ def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: boo
     return K
 
 
-#: Evaluate with the compiled plan (:mod:`mechcirc._sp_kernel`) when numba is
-#: installed: None (default) once the kernel is loaded or when a call has at
-#: least :data:`KERNEL_MIN_WORK` node-points; True always; False never (the
-#: numpy path; tests compare the two).
-USE_KERNEL: bool | None = None
+#: The compiled plan (:mod:`mechcirc._sp_kernel`) evaluates when numba is installed
+#: and ``mechcirc._jit.COMPILED`` is None (default), once the kernel is loaded or when
+#: a call has at least :data:`KERNEL_MIN_WORK` node-points; True always; False never.
 #: Importing numba and loading the compiled kernel from its cache takes about
 #: 1 s once per process (0.7–1.1 s measured): below this many plan nodes × ω
 #: points (about 0.15 s of the numpy path) a sweep does not start it.
