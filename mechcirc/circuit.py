@@ -41,7 +41,7 @@ if TYPE_CHECKING:  # pragma: no cover - annotations of the delegates only
     from .nodal import NodalSystem
     from .reduction import Node, Reduction
     from .resonances import Resonance
-    from .sweep import Sweep
+    from .sweep import Method, Sweep
 
 __all__ = ["Element", "Lever", "Drive", "Circuit", "element_mobility", "law_terms", "FRAME",
            "ELEMENT_UNITS", "Law", "LAWS", "node_names"]
@@ -284,7 +284,7 @@ class Circuit:
         require_nonsingular(system)
         return system
 
-    def sweep(self, omega: ArrayLike, method: str = "auto") -> Sweep:
+    def sweep(self, omega: ArrayLike, method: Method = "auto") -> Sweep:
         """K(ω), Q0(ω) and per-element forces over ``omega`` [rad/s].
 
         See :func:`mechcirc.sweep.sweep`.

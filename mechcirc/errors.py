@@ -149,10 +149,12 @@ def warn(message: str, category: type[Warning]) -> None:
     import functools
     import os
     import sys
+    import types
     import warnings
 
     inside = (os.path.dirname(os.path.abspath(__file__)) + os.sep, functools.__file__)
-    frame, level = sys._getframe(1), 2
+    frame: types.FrameType | None = sys._getframe(1)
+    level = 2
     while frame is not None and frame.f_code.co_filename.startswith(inside):
         frame, level = frame.f_back, level + 1
     warnings.warn(message, category, stacklevel=level)
