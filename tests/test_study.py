@@ -104,7 +104,7 @@ def test_dask_local_cluster_gives_the_same_table(tmp_path):
 def test_unreachable_scheduler_is_a_user_error():
     pytest.importorskip("distributed", reason="dask.distributed is not installed")
     with pytest.raises(MechcircError, match="cannot reach the Dask scheduler"):
-        run_study(stb_spec(), scheduler="tcp://127.0.0.1:9", connect_timeout=SUBPROCESS_TIMEOUT)
+        run_study(stb_spec(), scheduler="tcp://127.0.0.1:9", connect_timeout=1)
 
 
 def test_an_interrupted_study_keeps_its_rows_and_resumes(tmp_path):
