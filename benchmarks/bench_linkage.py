@@ -178,14 +178,15 @@ def main() -> None:
     theta = np.linspace(0.0, 2 * math.pi, 3600, endpoint=False)
     lk4.motion(theta[:10])                                   # warm (imports)
 
+    from mechcirc import _jit
     from mechcirc.kinematics import linkage_solver
 
     def numpy_newton(lk, th):
-        linkage_solver.USE_COMPILED = False
+        _jit.COMPILED = False
         try:
             return lk.motion(th, method="newton")
         finally:
-            linkage_solver.USE_COMPILED = None
+            _jit.COMPILED = None
 
     lk4.motion(theta[:10], method="newton")                  # compile (or load) the kernel
     compiled = linkage_solver._compiled()

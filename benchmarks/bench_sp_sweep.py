@@ -106,7 +106,7 @@ def ladder_tree(ks, ms, r=1e-3):
 
 
 def bench_floor(args) -> int:
-    from mechcirc import reduction
+    from mechcirc import _jit, reduction
 
     sizes = [15, 45, 999, 10_000] + ([] if args.quick else [100_000])
     omega = np.geomspace(2 * np.pi * 0.1, 2 * np.pi * 1e3, args.points)
@@ -126,7 +126,7 @@ def bench_floor(args) -> int:
         for path in (True, False):
             if path and not have_kernel:
                 continue
-            reduction.USE_KERNEL = path
+            _jit.COMPILED = path
             K_sp = evaluate(tree, omega)
             diff = float(np.max(np.abs(K_sp - K_floor) / np.abs(K_floor)))
             evaluate(tree, omega, error=True)
@@ -134,7 +134,7 @@ def bench_floor(args) -> int:
             t_sp = median_time(lambda: evaluate(tree, omega), repeats)
             t_err = median_time(lambda: evaluate(tree, omega, error=True), repeats)
             times[path] = (t_floor, t_sp, t_err, diff)
-        reduction.USE_KERNEL = None
+        _jit.COMPILED = None
         tf, ts, te, diff = times.get(True, (np.nan,) * 4)
         nf, ns, ne, ndiff = times[False]
         print(f"| {n:,} | {tf * 1e3:.2f} | {ts * 1e3:.2f} | {te * 1e3:.2f} | {ts / tf:.2f} "
@@ -216,7 +216,7 @@ class NgSpice:
 
 def bench_e2e(args) -> int:
     import mechcirc
-    from mechcirc import reduction
+    from mechcirc import _jit, reduction
 
     omega = 2 * np.pi * np.geomspace(0.1, 1e3, 401)
     try:
@@ -248,9 +248,9 @@ def bench_e2e(args) -> int:
         t_k = median_time(mech_K, args.repeats)
         t_f = median_time(mech_flags, args.repeats)
         # The numpy path: what a fresh process gets below KERNEL_MIN_WORK.
-        reduction.USE_KERNEL = False
+        _jit.COMPILED = False
         t_n = median_time(mech_flags, args.repeats)
-        reduction.USE_KERNEL = None
+        _jit.COMPILED = None
         if spice is not None:
             lines = spice_lines(ks, ms)
             K_sp = spice.ac(lines)

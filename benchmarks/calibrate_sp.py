@@ -77,9 +77,9 @@ def main() -> int:
     ap.add_argument("--path", choices=("compiled", "numpy"), default="compiled",
                     help="evaluate by the compiled plan (numba) or the numpy path")
     args = ap.parse_args()
-    from mechcirc import reduction
+    from mechcirc import _jit
 
-    reduction.USE_KERNEL = args.path == "compiled"
+    _jit.COMPILED = args.path == "compiled"
     print(f"# evaluation path: {args.path}")
     q = 10 if args.quick else 1
     rng = np.random.default_rng(11)

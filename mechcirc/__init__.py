@@ -43,69 +43,44 @@ Errors and warnings
 
    MechcircError, NetlistError (file:line:col), TopologyError,
    NotSeriesParallelError, GeometryError, SolverError,
-   MechcircWarning, UnloadedElementWarning, SingularPointWarning, UnitMixWarning
+   MechcircWarning, UnloadedElementWarning, UnitMixWarning
+   (every class is in mechcirc.errors, under MechcircError or MechcircWarning)
 
-The analysis methods of ``Circuit`` and ``Sweep.to_skrf`` are defined in the
-top layer (``mechcirc._methods``, which says why) and attached on import, so
-that ``circuit.py`` imports nothing above it; ``help(mechcirc.Circuit)`` lists them.
+The analysis methods of ``Circuit`` and ``Sweep.to_skrf`` are one-line
+delegates written in their classes, importing their module when called.
 
 ``mechcirc.sweep`` and ``mechcirc.simplify`` are the functions; their modules
 stay importable as ``importlib.import_module("mechcirc.sweep")`` and by
-``from mechcirc.sweep import ...``.  ``find_resonances``, ``adaptive_sweep``
-and ``simplify`` are loaded on first use, so ``import mechcirc`` stays fast.
+``from mechcirc.sweep import ...``.  Every public name (and every submodule,
+``mechcirc.nodal`` say) is loaded on first use, so ``import mechcirc`` reads
+no numpy and the command line is in charge of Ctrl-C from its first line.
 """
 
-def _starting_the_command_line() -> bool:
-    """This process is ``mechcirc ...`` or ``python -m mechcirc ...`` (not a library user)."""
-    import os
-    import sys
-
-    argv = getattr(sys, "orig_argv", sys.argv)
-    if any(a == "-m" and b == "mechcirc" for a, b in zip(argv, argv[1:])):
-        return True
-    return bool(sys.argv) and os.path.basename(sys.argv[0]) in ("mechcirc", "mechcirc.exe")
-
-
-if _starting_the_command_line():
-    # Ctrl-C while the command line is still starting (before its own handler
-    # is in place) ends it quietly, as after start-up: no traceback.
-    # cli.main() restores Python's default handler.
-    import signal as _signal
-
-    def _interrupted_while_starting(signum, frame):
-        import os
-        import sys
-
-        sys.stderr.write("mechcirc: interrupted\n")
-        os._exit(130)
-
-    _signal.signal(_signal.SIGINT, _interrupted_while_starting)
-
-import importlib as _importlib  # noqa: E402
-import types as _types
+import importlib as _importlib
+import importlib.util as _importlib_util
 import sys as _sys
+import types as _types
 
-from .circuit import Circuit, Drive, Element, Lever
 from .errors import (GeometryError, MechcircError, MechcircWarning, NetlistError,
-                     NotSeriesParallelError, SingularPointWarning, SolverError, TopologyError,
-                     UnitMixWarning, UnloadedElementWarning)
-from .netlist import load, parse
-from .sweep import Sweep
-from .sweep import sweep
-from . import _methods  # noqa: F401  (attaches Circuit.sweep, .tree, …; see there)
+                     NotSeriesParallelError, SolverError, TopologyError, UnitMixWarning,
+                     UnloadedElementWarning)
 
 __all__ = [
     "parse", "load", "Circuit", "Element", "Lever", "Drive", "Sweep", "sweep",
     "adaptive_sweep", "find_resonances", "Resonance", "simplify", "designs",
     "MechcircError", "NetlistError", "TopologyError", "NotSeriesParallelError",
     "GeometryError", "SolverError", "MechcircWarning", "UnloadedElementWarning",
-    "SingularPointWarning", "UnitMixWarning",
+    "UnitMixWarning",
 ]
 
 __version__ = "0.1.0"
 
 #: Public names loaded on first use: name -> (module, attribute).
-_LAZY = {"find_resonances": ("resonances", "find_resonances"),
+_LAZY = {"parse": ("netlist", "parse"), "load": ("netlist", "load"),
+         "Circuit": ("circuit", "Circuit"), "Element": ("circuit", "Element"),
+         "Lever": ("circuit", "Lever"), "Drive": ("circuit", "Drive"),
+         "Sweep": ("sweep", "Sweep"), "sweep": ("sweep", "sweep"),
+         "find_resonances": ("resonances", "find_resonances"),
          "Resonance": ("resonances", "Resonance"),
          "adaptive_sweep": ("adaptive", "adaptive_sweep"),
          "simplify": ("simplify", "simplify"),
@@ -120,17 +95,18 @@ class _Package(_types.ModuleType):
         if name in _LAZY:
             module, attr = _LAZY[name]
             value = getattr(_importlib.import_module(f"{__name__}.{module}"), attr)
-            _types.ModuleType.__setattr__(self, name, value)
-            return value
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+        elif not name.startswith("__") and _importlib_util.find_spec(f"{__name__}.{name}"):
+            value = _importlib.import_module(f"{__name__}.{name}")       # a submodule
+        else:
+            raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+        _types.ModuleType.__setattr__(self, name, value)
+        return value
 
     def __setattr__(self, name, value):
         # The import system binds a submodule on its parent when it is first
-        # loaded; keep the function bound under that name instead.
+        # loaded; bind the function of that name instead.
         if name in _FUNCTIONS_OVER_MODULES and isinstance(value, _types.ModuleType):
-            if name == "simplify":      # the function is not loaded yet: load it now
-                _types.ModuleType.__setattr__(self, name, value.simplify)
-            return
+            value = getattr(value, name)
         _types.ModuleType.__setattr__(self, name, value)
 
     def __dir__(self):

@@ -1,4 +1,9 @@
-"""``python -m mechcirc`` runs the command line."""
+"""``python -m mechcirc`` runs the command line.
+
+``import mechcirc`` loads nothing but the error classes, so a Ctrl-C while the
+command line starts arrives here (or in :func:`mechcirc.cli.main`, which puts
+Python's own SIGINT handler in place) and ends it quietly with status 130.
+"""
 
 import sys
 

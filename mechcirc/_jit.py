@@ -1,5 +1,10 @@
 """Optional compilation with numba, decided in one place for every kernel module.
 
+:data:`COMPILED` is the one switch between a compiled kernel and the numpy code
+it replaces: None (default) lets each caller decide (numba installed, enough
+work to repay loading it), True always runs the kernel (as plain Python without
+numba), False never (the numpy paths; tests compare the two).
+
 The kernels (sley, scene motion, transients, contact laws) are plain Python
 functions written in the subset numba compiles.  With the ``fast`` extra
 installed they are compiled on first use (cached on disk); without it they run
@@ -12,7 +17,10 @@ numba is imported here only when a kernel module is imported, never by
 
 from __future__ import annotations
 
-__all__ = ["decorators"]
+__all__ = ["decorators", "COMPILED"]
+
+#: None: each caller decides; True: always the kernel; False: never (see above).
+COMPILED: bool | None = None
 
 
 def _identity(fn):

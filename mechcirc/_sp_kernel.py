@@ -260,7 +260,7 @@ def _evaluate_design(omega, kind, cplx, c_real, c_inv, c_om, e_real, e_inv, e_om
                 has_i, has_c = _children(i, nb, series, kstart, kids, slot, cplx, re, im,
                                          ai, cr, ci, has_i, has_c)
             real = c_real[i]
-            with_real = real != 0.0 or real != real
+            with_real = real != 0.0 or math.isnan(real)
             if with_real:
                 if has_c:
                     for j in range(nb):
@@ -333,4 +333,4 @@ def _evaluate_design(omega, kind, cplx, c_real, c_inv, c_om, e_real, e_inv, e_om
         if want_error:
             for j in range(nb):
                 r = _through_reciprocal(rh[top, j])
-                rho_out[j0 + j] = math.inf if r != r else r
+                rho_out[j0 + j] = math.inf if math.isnan(r) else r

@@ -31,17 +31,18 @@ Conventions (DIGEST §1, Grigoriev et al. 2002):
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-if TYPE_CHECKING:  # pragma: no cover - annotations of the attached methods only
+if TYPE_CHECKING:  # pragma: no cover - annotations of the delegates only
     from .motion_laws import Motion
     from .nodal import NodalSystem
-    from .reduction import Node
+    from .reduction import Node, Reduction
     from .resonances import Resonance
-    from .sweep import Sweep
+    from .sweep import Method, Sweep
 
 __all__ = ["Element", "Lever", "Drive", "Circuit", "element_mobility", "law_terms", "FRAME",
            "ELEMENT_UNITS", "Law", "LAWS", "node_names"]
@@ -245,9 +246,10 @@ class Circuit:
         (transients only; unnamed nodes start at rest).
 
     Analysis methods (``tree``, ``unloaded``, ``nodal``, ``sweep``,
-    ``resonances``, ``two_port``, ``formula``) are defined by the modules that
-    do the analysis and attached by :mod:`mechcirc._methods`, so that this
-    module, at the bottom of the package, imports nothing above it.
+    ``resonances``, ``two_port``, ``formula``) are one-line delegates to the
+    functions of the modules that do the analysis, imported when called (as
+    SciPy's ``lti.bode``): the function is the implementation, the method a
+    convenience, and this module imports nothing above it when it is loaded.
     """
 
     elements: tuple[Element, ...]
@@ -258,20 +260,71 @@ class Circuit:
     params: dict = field(default_factory=dict, compare=False)
     initial: tuple = ()
 
-    if TYPE_CHECKING:  # pragma: no cover
-        # What mechcirc._methods attaches, declared for editors and type checkers
-        # (tests/test_methods.py checks these signatures against the attached ones).
-        @property
-        def tree(self) -> Node: ...
-        @property
-        def unloaded(self) -> tuple[str, ...]: ...
-        @property
-        def nodal(self) -> NodalSystem: ...
-        def sweep(self, omega: ArrayLike, method: str = "auto") -> Sweep: ...
-        def resonances(self, omega_max: float | None = None) -> list[Resonance]: ...
-        def two_port(self, P1: str, P2: str, S1: str, S2: str, omega: ArrayLike,
-                     **kwargs): ...
-        def formula(self, **kwargs): ...
+    @cached_property
+    def _reduction(self) -> Reduction:
+        from .reduction import reduce_circuit
+
+        return reduce_circuit(self)
+
+    @property
+    def tree(self) -> Node:
+        """The series-parallel reduction tree seen from the drive.
+
+        Prints as a nested expression, e.g. ``m1 + m2 + (k4 | (m5 + k5))``.
+        Raises :class:`~mechcirc.errors.TopologyError` if the network is not
+        series-parallel reducible.
+        """
+        return self._reduction.tree
+
+    @property
+    def unloaded(self) -> tuple[str, ...]:
+        """Names of elements on no path between the drive terminals (they carry no force)."""
+        return self._reduction.unloaded
+
+    @cached_property
+    def nodal(self) -> NodalSystem:
+        """The :class:`~mechcirc.nodal.NodalSystem` of the loaded network (built on first use)."""
+        from .nodal import assemble, require_nonsingular
+
+        system = assemble(self)
+        require_nonsingular(system)
+        return system
+
+    def sweep(self, omega: ArrayLike, method: Method = "auto") -> Sweep:
+        """K(ω), Q0(ω) and per-element forces over ``omega`` [rad/s].
+
+        See :func:`mechcirc.sweep.sweep`.
+        """
+        from .sweep import sweep
+
+        return sweep(self, omega, method=method)
+
+    def resonances(self, omega_max: float | None = None) -> list[Resonance]:
+        """Zeros and poles of K(ω) up to ``omega_max`` [rad/s].
+
+        See :func:`mechcirc.resonances.find_resonances`.
+        """
+        from .resonances import find_resonances
+
+        return find_resonances(self, omega_max=omega_max)
+
+    def two_port(self, P1: str, P2: str, S1: str, S2: str, omega: ArrayLike, **kwargs):
+        """Z parameters [m/(N·s)] between ports P1–P2 and S1–S2 as an ``skrf.Network``.
+
+        See :func:`mechcirc.interop.skrf.two_port`.
+        """
+        from .interop.skrf import two_port
+
+        return two_port(self, P1, P2, S1, S2, omega, **kwargs)
+
+    def formula(self, **kwargs):
+        """K(ω) as a SymPy expression nested as the reduction tree.
+
+        See :func:`mechcirc.interop.formula.formula`.
+        """
+        from .interop.formula import formula
+
+        return formula(self, **kwargs)
 
     def __getstate__(self):
         # Pickle the description only: the cached reduction tree nests as deep

@@ -14,13 +14,18 @@ __all__ = [
     "MechcircError",
     "NetlistError",
     "InputError",
+    "UnitError",
+    "BandError",
+    "ParameterError",
     "TopologyError",
     "NotSeriesParallelError",
     "GeometryError",
     "SolverError",
     "MechcircWarning",
     "UnloadedElementWarning",
-    "SingularPointWarning",
+    "UnitMixWarning",
+    "SceneAccuracyWarning",
+    "SleyAccuracyWarning",
     "MAX_QUOTED",
     "clip",
     "shorten",
@@ -110,6 +115,26 @@ class InputError(MechcircError, ValueError):
     """An argument out of its domain (a non-finite ω, a negative count): the caller's mistake."""
 
 
+class UnitError(MechcircError, ValueError):
+    """A unit that cannot be parsed; ``offset`` is the 0-based position of the culprit.
+
+    The readers turn it into a :class:`NetlistError` at the unit's line and column.
+    """
+
+    def __init__(self, message: str, offset: int, expected: str | None = None):
+        self.message, self.offset, self.expected = message, offset, expected
+        super().__init__(message)
+
+
+class BandError(MechcircError, ValueError):
+    """A frequency band or tolerance that cannot be used (names the values)."""
+
+
+class ParameterError(MechcircError, ValueError):
+    """A sley parameter is out of range (names the parameter, its value, what is allowed),
+    or an unknown preset, method or option."""
+
+
 class TopologyError(MechcircError, ValueError):
     """The network cannot be analysed as asked; names the blocking nodes/elements."""
 
@@ -152,5 +177,30 @@ class UnitMixWarning(MechcircWarning):
     N·m/rad): one node is one coordinate, a length or an angle, not both."""
 
 
-class SingularPointWarning(MechcircWarning):
-    """A sweep point falls on (or within rounding of) a pole or zero of K."""
+class SceneAccuracyWarning(MechcircWarning):
+    """A time-domain result may be inaccurate (the message says which check failed)."""
+
+
+class SleyAccuracyWarning(MechcircWarning):
+    """A sley result may be inaccurate (error estimate, periodicity or too few steps)."""
+
+
+def warn(message: str, category: type[Warning]) -> None:
+    """Issue a warning attributed to the caller's line: the first frame outside mechcirc.
+
+    A fixed ``stacklevel`` names the right line only for one call path; the
+    analysis methods, cached properties and functions reach the same warning
+    at different depths.
+    """
+    import functools
+    import os
+    import sys
+    import types
+    import warnings
+
+    inside = (os.path.dirname(os.path.abspath(__file__)) + os.sep, functools.__file__)
+    frame: types.FrameType | None = sys._getframe(1)
+    level = 2
+    while frame is not None and frame.f_code.co_filename.startswith(inside):
+        frame, level = frame.f_back, level + 1
+    warnings.warn(message, category, stacklevel=level)

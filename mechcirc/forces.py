@@ -11,11 +11,15 @@ from __future__ import annotations
 import cmath
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .circuit import Circuit
 from .errors import InputError
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .sweep import Method
 
 __all__ = ["ElementForce", "element_forces"]
 
@@ -72,7 +76,7 @@ def _phase_deg(z: complex) -> float:
     return 180.0 if deg <= -180.0 + 1e-9 else deg + 0.0
 
 
-def element_forces(circuit: Circuit, omega: float, *, method: str = "auto"
+def element_forces(circuit: Circuit, omega: float, *, method: Method = "auto"
                    ) -> tuple[list[ElementForce], complex, complex, int]:
     """Q and v of every loaded element at ``omega`` [rad/s].
 

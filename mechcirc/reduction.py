@@ -21,7 +21,6 @@ O(n · n_omega).
 from __future__ import annotations
 
 import gc
-import warnings
 import weakref
 from collections import deque
 from dataclasses import dataclass
@@ -30,8 +29,9 @@ from typing import Iterator, Union
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from . import _jit
 from .circuit import LAWS, Circuit, Element, Lever, law_terms
-from .errors import NotSeriesParallelError, TopologyError, UnloadedElementWarning
+from .errors import NotSeriesParallelError, TopologyError, UnloadedElementWarning, warn
 from .topology import check_frame_paths, loaded_groups, reachable
 
 __all__ = ["Leaf", "Series", "Parallel", "Reflect", "Node", "Reduction",
@@ -194,10 +194,9 @@ def reduce_circuit(circuit: Circuit) -> Reduction:
         if enabled:
             gc.enable()
     if red.unloaded:
-        warnings.warn(
-            f"{len(red.unloaded)} element(s) lie on no path between the drive's nodes "
-            f"{d.n1!r} and {d.n2!r} and carry no force: {', '.join(red.unloaded)}",
-            UnloadedElementWarning, stacklevel=3)
+        warn(f"{len(red.unloaded)} element(s) lie on no path between the drive's nodes "
+             f"{d.n1!r} and {d.n2!r} and carry no force: {', '.join(red.unloaded)}",
+             UnloadedElementWarning)
     return red
 
 
@@ -656,10 +655,6 @@ def _reversed(node):
     return Parallel(node.children, signs)
 
 
-def _binary_children(node: _Binary):
-    return [c for c, _ in _binary_items(node)]
-
-
 def _binary_items(node: _Binary):
     items = [(node.a, node.sign_a)]
     if node.b is not None:
@@ -745,9 +740,9 @@ def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: boo
     cancellation keeps a bound of a few hundred u.
     """
     omega = np.asarray(omega, dtype=float)
-    if not keep and _mode == "auto" and USE_KERNEL is not False:
+    if not keep and _mode == "auto" and _jit.COMPILED is not False:
         p = plan(root)
-        if USE_KERNEL or _KERNEL or p.kind.size * omega.size >= KERNEL_MIN_WORK:
+        if _jit.COMPILED or _KERNEL or p.kind.size * omega.size >= KERNEL_MIN_WORK:
             kernel = _kernel()
             if kernel is not None:
                 return _evaluate_compiled(kernel, p, omega, error, condition)
@@ -803,11 +798,9 @@ def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: boo
     return K
 
 
-#: Evaluate with the compiled plan (:mod:`mechcirc._sp_kernel`) when numba is
-#: installed: None (default) once the kernel is loaded or when a call has at
-#: least :data:`KERNEL_MIN_WORK` node-points; True always; False never (the
-#: numpy path; tests compare the two).
-USE_KERNEL: bool | None = None
+#: The compiled plan (:mod:`mechcirc._sp_kernel`) evaluates when numba is installed
+#: and ``mechcirc._jit.COMPILED`` is None (default), once the kernel is loaded or when
+#: a call has at least :data:`KERNEL_MIN_WORK` node-points; True always; False never.
 #: Importing numba and loading the compiled kernel from its cache takes about
 #: 1 s once per process (0.7–1.1 s measured): below this many plan nodes × ω
 #: points (about 0.15 s of the numpy path) a sweep does not start it.

@@ -40,13 +40,9 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .circuit import FRAME, Circuit, Element
-from .errors import MechcircError, TopologyError
+from .errors import BandError, MechcircError, TopologyError
 
 __all__ = ["BandError", "Simplified", "simplify", "parse_band", "check_band", "write_netlist"]
-
-
-class BandError(MechcircError, ValueError):
-    """A frequency band or tolerance that cannot be used (names the values)."""
 
 
 def parse_band(text: str) -> tuple[float, float]:

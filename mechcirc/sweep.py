@@ -83,11 +83,6 @@ class Sweep:
         return Sweep(self.omega, self.K, self.drive, self.method, self.name, self.tree,
                      self.circuit, self.notes + tuple(notes))
 
-    def __repr__(self) -> str:
-        n = self.omega.size
-        band = f"{self.omega.min():.4g}…{self.omega.max():.4g} rad/s" if n else "empty"
-        return f"Sweep({self.name!r}, {n} points, {band}, method={self.method!r})"
-
     def __getstate__(self):
         # The tree nests as deep as the network (a ladder of 10⁵ elements is
         # 5·10⁴ levels), deeper than pickle's recursion: rebuild it from the
@@ -169,6 +164,15 @@ class Sweep:
         import html
 
         return "<pre>" + html.escape(repr(self)) + "</pre>"
+
+    def to_skrf(self, **kwargs):
+        """K as a one-port ``skrf.Network`` (Z parameters [m/(N·s)]).
+
+        See :func:`mechcirc.interop.skrf.to_skrf`.
+        """
+        from .interop.skrf import to_skrf
+
+        return to_skrf(self, **kwargs)
 
     def plot(self, ax=None, *, resonances=None, fig=None, title: str | None = None):
         """Plot this sweep: :func:`mechcirc.plotting.plot_sweep` (``ax=`` one panel of |K|,
@@ -576,7 +580,7 @@ def peak(result: "Sweep | Circuit", omega_min: float | None = None,
         half = max(r.zeta * r.omega, 1e-9 * r.omega)
         brackets.append((centre - 4 * half, centre + 4 * half))
     best_value, best_omega = g_value, g_omega
-    for a, b in (lo, lo), (hi, hi):
+    for a in (lo, hi):
         v = float(magnitude(a)[0])
         if not best_value >= v:
             best_value, best_omega = v, a

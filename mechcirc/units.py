@@ -36,6 +36,8 @@ import math
 import re
 from dataclasses import dataclass
 
+from .errors import UnitError
+
 __all__ = ["Unit", "UnitError", "ATOMS", "PREFIXES", "PREFIXABLE", "ROLES", "parse_unit",
            "looks_like_unit", "convert", "parse_quantity", "split_quantity", "parse_omega",
            "OMEGA_UNITS", "is_rotational", "SPICE_SUFFIXES"]
@@ -102,14 +104,6 @@ _DIM_NAMES = {(1, 0, 0): "a mass", (1, 2, 0): "a moment of inertia",
               (0, 0, 0): "dimensionless"}
 
 _FACTOR = re.compile(r"([A-Za-zµμ]+)(?:\^(-?\d+)|(²)|(³))?")
-
-
-class UnitError(ValueError):
-    """A unit that cannot be parsed; ``offset`` is the 0-based position of the culprit."""
-
-    def __init__(self, message: str, offset: int, expected: str | None = None):
-        self.message, self.offset, self.expected = message, offset, expected
-        super().__init__(message)
 
 
 @dataclass(frozen=True)

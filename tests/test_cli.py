@@ -20,9 +20,10 @@ import pytest
 import mechcirc
 from mechcirc import cli
 from mechcirc.cli import circuit_commands
+from bounds import SUBPROCESS_TIMEOUT
+from reference.inputs import STB
 
 REPO = Path(__file__).resolve().parents[1]
-STB = REPO / "netlists" / "stb_heald.mcir"
 HEADER = "omega,K_re,K_im,Q0_re,Q0_im,flag"
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
@@ -42,7 +43,7 @@ def run(argv, capsys):
 def run_subprocess(*argv, cwd=REPO):
     """``python -m mechcirc ARGV`` from the repository root (so the working tree is imported)."""
     return subprocess.run([sys.executable, "-m", "mechcirc", *map(str, argv)], cwd=cwd,
-                          capture_output=True, text=True, timeout=120)
+                          capture_output=True, text=True, timeout=SUBPROCESS_TIMEOUT)
 
 
 def write(tmp_path, name, text):
@@ -85,7 +86,8 @@ def test_console_script_help():
     script = Path(sys.executable).with_name("mechcirc")
     if not script.exists():
         pytest.skip("no mechcirc console script beside this interpreter")
-    proc = subprocess.run([str(script), "--help"], capture_output=True, text=True, timeout=60)
+    proc = subprocess.run([str(script), "--help"], capture_output=True, text=True,
+                          timeout=SUBPROCESS_TIMEOUT)
     assert proc.returncode == 0, proc.stderr
     assert "check" in proc.stdout and "sweep" in proc.stdout
 
@@ -99,7 +101,7 @@ def test_import_mechcirc_does_not_import_matplotlib_or_heavy_modules():
             "print(sorted(m for m in sys.modules if m.split('.')[0] in "
             "('matplotlib', 'scipy', 'networkx', 'numba')))")
     proc = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True,
-                          text=True, timeout=60)
+                          text=True, timeout=SUBPROCESS_TIMEOUT)
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.strip() == "[]"
 
@@ -628,7 +630,7 @@ def test_internal_error_by_subprocess_has_no_traceback(tmp_path):
             "from mechcirc.cli import main\n"
             "sys.exit(main(['check', 'netlists/stb_heald.mcir']))\n")
     proc = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True,
-                          text=True, timeout=60)
+                          text=True, timeout=SUBPROCESS_TIMEOUT)
     assert proc.returncode == 1
     assert "mechcirc: internal error: RuntimeError: boom" in proc.stderr
     assert "Traceback" not in proc.stderr

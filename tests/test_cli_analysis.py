@@ -6,8 +6,8 @@ import numpy as np
 
 import mechcirc
 from mechcirc.cli import main
+from reference.inputs import STB
 
-STB = "netlists/stb_heald.mcir"
 BRIDGE = """drive V a 0 velocity=0.5
 spring k1 a b 1e4
 damper c2 a c 30

@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from mechcirc.cli import main
+from reference.inputs import STB
 
 REPO = Path(__file__).resolve().parents[1]
-STB = str(REPO / "netlists" / "stb_heald.mcir")
 
 
 def test_version(capsys):
@@ -38,21 +38,21 @@ def test_force_driven_sweep_prints_the_velocity_response(tmp_path, capsys):
 
 def test_touchstone_refuses_a_two_port_name(tmp_path, capsys):
     path = tmp_path / "K.s2p"
-    assert main(["sweep", STB, "--omega-min", "10", "--omega-max", "100",
+    assert main(["sweep", str(STB), "--omega-min", "10", "--omega-max", "100",
                  "--touchstone", str(path)]) == 2
     assert ".s1p" in capsys.readouterr().err and not path.exists()
 
 
 def test_reduce_output_is_a_file_and_element_names_the_element(tmp_path, capsys):
     out = tmp_path / "r.mcir"
-    assert main(["reduce", STB, "--band", "10:2000", "--tol", "0.01", "--output",
+    assert main(["reduce", str(STB), "--band", "10:2000", "--tol", "0.01", "--output",
                  str(out), "--points", "200"]) == 0
     assert out.exists() and "drive" in out.read_text()
     capsys.readouterr()
-    assert main(["reduce", STB, "--band", "1Hz:300Hz", "--tol", "0.01", "--element", "k0",
+    assert main(["reduce", str(STB), "--band", "1Hz:300Hz", "--tol", "0.01", "--element", "k0",
                  "--points", "200", "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
-    assert doc["file"] == STB
+    assert doc["file"] == str(STB)
 
 
 def test_json_nonfinite_are_numbers_for_json_and_pandas(tmp_path, capsys):

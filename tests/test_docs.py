@@ -55,11 +55,12 @@ from pathlib import Path
 
 import pytest
 
+from bounds import SUBPROCESS_TIMEOUT
+
 REPO = Path(__file__).resolve().parents[1]
 PAGES = [REPO / "README.md"] + sorted((REPO / "docs").glob("*.md"))
 _FENCE = re.compile(r"^(```+|~~~+)\s*([\w+-]*)")
 _MARK = re.compile(r"^<!--\s*([\w-]+)\s*(?::\s*(.*?))?\s*-->\s*$")
-SHELL_TIMEOUT = 240
 
 
 def blocks(path: Path):
@@ -276,7 +277,7 @@ def _run_shell(text, marks, where, tmp, env):
         else:
             proc = subprocess.run(["bash", "-c", f"set -o pipefail\n(exit {last})\n{cmd}"],
                                   cwd=tmp, env=env, capture_output=True, text=True,
-                                  timeout=SHELL_TIMEOUT)
+                                  timeout=SUBPROCESS_TIMEOUT)
             last, stdout, stderr = proc.returncode, proc.stdout, proc.stderr
         want = expected if cmd.lstrip().startswith("mechcirc") else 0
         if last != want:

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from reference import stb_eq7
+from bounds import SUBPROCESS_TIMEOUT
 
 REPO = Path(__file__).resolve().parents[1]
 EXAMPLE = REPO / "examples" / "stb_eq7_check.py"
@@ -24,7 +25,7 @@ def _load_example():
 
 def test_stb_eq7_example_runs_and_reports_agreement():
     proc = subprocess.run([sys.executable, str(EXAMPLE)], cwd=REPO, capture_output=True,
-                          text=True, timeout=60)
+                          text=True, timeout=SUBPROCESS_TIMEOUT)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     assert proc.stderr == ""
     out = proc.stdout

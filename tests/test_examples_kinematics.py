@@ -5,12 +5,14 @@ import subprocess
 import sys
 from pathlib import Path
 
+from bounds import SUBPROCESS_TIMEOUT
+
 REPO = Path(__file__).resolve().parents[1]
 
 
 def _run(name):
     proc = subprocess.run([sys.executable, str(REPO / "examples" / name)], cwd=REPO,
-                          capture_output=True, text=True, timeout=120)
+                          capture_output=True, text=True, timeout=SUBPROCESS_TIMEOUT)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     return proc.stdout
 

@@ -15,9 +15,9 @@ from mechcirc.explain import explain
 from mechcirc.forces import element_forces
 from reference.stb_eq7 import full_K
 from mechcirc.errors import InputError
+from reference.inputs import STB
 
 REPO = Path(__file__).resolve().parents[1]
-STB = REPO / "netlists" / "stb_heald.mcir"
 STB_PARAMS = {"m1": 2.0, "m2": 1.5, "m3": 1.2, "m4": 0.9, "m5": 0.8, "m6": 0.6, "m7": 0.5,
               "m8": 0.7, "m9": 0.4, "m10": 0.3, "m11": 0.5, "m12": 3.0, "k0": 4.0e4,
               "k4": 2.0e6, "k5": 1.5e6, "eta1": 0.8, "eta2": 1.25, "eta3": 0.9, "eta4": 1.0}

@@ -13,11 +13,12 @@ from mechcirc import cli
 from mechcirc.errors import MechcircError, TopologyError
 from mechcirc.interop.skrf import reference_mobility, two_port_z, write_touchstone
 from reference.stb_eq7 import full_K
+from bounds import SUBPROCESS_TIMEOUT
+from reference.inputs import STB
 
 skrf = pytest.importorskip("skrf")
 
 REPO = Path(__file__).resolve().parents[1]
-STB = REPO / "netlists" / "stb_heald.mcir"
 STB_PARAMS = {"m1": 2.0, "m2": 1.5, "m3": 1.2, "m4": 0.9, "m5": 0.8, "m6": 0.6, "m7": 0.5,
               "m8": 0.7, "m9": 0.4, "m10": 0.3, "m11": 0.5, "m12": 3.0, "k0": 4.0e4,
               "k4": 2.0e6, "k5": 1.5e6, "eta1": 0.8, "eta2": 1.25, "eta3": 0.9, "eta4": 1.0}
@@ -175,6 +176,6 @@ def test_import_mechcirc_stays_light():
             "print(sorted(m for m in sys.modules if m.split('.')[0] in "
             "('skrf', 'sympy', 'pint', 'dask', 'distributed', 'matplotlib', 'pandas')))")
     proc = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True,
-                          text=True, timeout=60)
+                          text=True, timeout=SUBPROCESS_TIMEOUT)
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.strip() == "[]"

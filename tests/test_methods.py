@@ -1,35 +1,40 @@
-"""mechcirc._methods: the analysis methods attached to Circuit and Sweep are discoverable."""
+"""The analysis methods of Circuit and Sweep: one-line delegates written in their classes."""
 
 import pydoc
 import re
+import warnings
 
 import pytest
 
 import mechcirc
 from mechcirc import Circuit, Sweep
-from mechcirc._methods import ATTACHED
 
 CLASSES = {"Circuit": Circuit, "Sweep": Sweep}
-PAIRS = [(cls, name) for cls, names in ATTACHED.items() for name in names]
+METHODS = {"Circuit": ("tree", "unloaded", "nodal", "sweep", "resonances", "two_port",
+                       "formula"),
+           "Sweep": ("to_skrf",)}
+PAIRS = [(cls, name) for cls, names in METHODS.items() for name in names]
 
 
-def test_the_list_is_what_is_attached():
-    # every public callable/property _methods defines on Circuit is in ATTACHED
-    import mechcirc._methods as m
+def _function(attr):
+    return getattr(attr, "fget", getattr(attr, "func", attr))
 
-    mine = {name for name, value in vars(Circuit).items()
-            if not name.startswith("_")
-            and getattr(getattr(value, "fget", getattr(value, "func", value)), "__module__",
-                        None) == m.__name__}
-    assert mine == set(ATTACHED["Circuit"])
-    assert set(ATTACHED) == {"Circuit", "Sweep"}
+
+@pytest.mark.parametrize("cls", CLASSES)
+def test_every_method_is_written_in_its_class(cls):
+    """Nothing is attached from another module (no setattr at import)."""
+    obj = CLASSES[cls]
+    for name, attr in vars(obj).items():
+        func = _function(attr)
+        if callable(func) and hasattr(func, "__qualname__") and not name.startswith("__"):
+            assert func.__module__ == obj.__module__, (name, func.__module__)
+            assert func.__qualname__ == f"{cls}.{name}", (name, func.__qualname__)
 
 
 @pytest.mark.parametrize("cls,name", PAIRS)
-def test_attached_method_is_documented_and_listed(cls, name):
+def test_method_is_documented_and_listed(cls, name):
     obj = CLASSES[cls]
-    attr = vars(obj)[name]
-    func = getattr(attr, "fget", getattr(attr, "func", attr))
+    func = _function(vars(obj)[name])
     assert (func.__doc__ or "").strip(), f"{cls}.{name} has no docstring"
     # help(Circuit) shows it with its docstring's first line
     text = pydoc.render_doc(obj, renderer=pydoc.plaintext)
@@ -41,30 +46,15 @@ def test_attached_method_is_documented_and_listed(cls, name):
         assert f"``{name}``" in Circuit.__doc__
 
 
-def test_declarations_for_type_checkers_match_what_is_attached():
-    # circuit.py declares the attached methods under TYPE_CHECKING (never run);
-    # read them from the source and compare with the attached functions.
-    import ast
-    import inspect
-    from pathlib import Path
-
-    import mechcirc.circuit as circuit_module
-
-    tree = ast.parse(Path(circuit_module.__file__).read_text(encoding="utf-8"))
-    cls = next(n for n in tree.body if isinstance(n, ast.ClassDef) and n.name == "Circuit")
-    block = next(n for n in cls.body if isinstance(n, ast.If)
-                 and getattr(n.test, "id", None) == "TYPE_CHECKING")
-    declared = {f.name: f for f in block.body if isinstance(f, ast.FunctionDef)}
-    assert set(declared) == set(ATTACHED["Circuit"])
-    for name, f in declared.items():
-        attr = vars(Circuit)[name]
-        func = getattr(attr, "fget", getattr(attr, "func", attr))
-        want = [(p.name, p.kind.name) for p in inspect.signature(func).parameters.values()]
-        args = f.args
-        got = [(a.arg, "POSITIONAL_OR_KEYWORD") for a in args.args]
-        if args.kwarg:
-            got.append((args.kwarg.arg, "VAR_KEYWORD"))
-        assert got == want, name
-        is_property = any(getattr(d, "id", None) == "property" for d in f.decorator_list)
-        assert is_property == (not callable(attr) or hasattr(attr, "fget")
-                               or hasattr(attr, "func")), name
+def test_a_warning_points_at_the_callers_line():
+    """UnloadedElementWarning from ``c.tree`` / ``c.sweep`` names this file and line."""
+    text = "drive V a 0 velocity=1\nmass m a 0 1\nspring k a 0 100\nmass lone x y 2\n"
+    for use in (lambda c: c.tree, lambda c: c.sweep([1.0, 2.0])):
+        c = mechcirc.parse(text)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            line = use.__code__.co_firstlineno
+            use(c)
+        hits = [w for w in caught if issubclass(w.category, mechcirc.UnloadedElementWarning)]
+        assert hits and all((w.filename, w.lineno) == (__file__, line) for w in hits), \
+            [(w.filename, w.lineno) for w in hits]

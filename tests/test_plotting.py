@@ -9,9 +9,9 @@ import mechcirc
 from mechcirc import cli
 from mechcirc.forces import element_forces
 from mechcirc.plotting import plot_forces, plot_study, plot_sweep
+from reference.inputs import STB
 
 REPO = Path(__file__).resolve().parents[1]
-STB = REPO / "netlists" / "stb_heald.mcir"
 
 
 @pytest.fixture(scope="module")

@@ -9,6 +9,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 import mechcirc
+from mechcirc import reduction
 from mechcirc.errors import TopologyError, UnloadedElementWarning
 
 from reference import stb_eq7
@@ -274,12 +275,14 @@ def test_series_parallel_runs_written_in_every_orientation():
 
 @pytest.fixture
 def both_paths():
-    """Run a test with the compiled plan forced on, then off; restores the default."""
-    from mechcirc import reduction
+    """Run a test with the compiled plan forced on, then off; restores the default.
 
-    saved = reduction.USE_KERNEL
-    yield reduction
-    reduction.USE_KERNEL = saved
+    Yields :mod:`mechcirc._jit`, whose ``COMPILED`` the test sets."""
+    from mechcirc import _jit
+
+    saved = _jit.COMPILED
+    yield _jit
+    _jit.COMPILED = saved
 
 
 def _trees_for_paths():
@@ -302,11 +305,11 @@ def test_compiled_plan_computes_what_the_numpy_path_computes(both_paths):
     omega = np.concatenate([[0.0, np.inf], np.geomspace(1e-3, 1e3, 60)])
     for c in _trees_for_paths():
         tree = c.tree
-        both_paths.USE_KERNEL = True
-        K1, r1 = both_paths.evaluate(tree, omega, error=True)
-        K1b = both_paths.evaluate(tree, omega)
-        both_paths.USE_KERNEL = False
-        K0, r0 = both_paths.evaluate(tree, omega, error=True)
+        both_paths.COMPILED = True
+        K1, r1 = reduction.evaluate(tree, omega, error=True)
+        K1b = reduction.evaluate(tree, omega)
+        both_paths.COMPILED = False
+        K0, r0 = reduction.evaluate(tree, omega, error=True)
         np.testing.assert_array_equal(K1, K1b)
         ok = np.isfinite(K0) & np.isfinite(K1)
         # The same operations in the same order; a few ulps where a complex
@@ -328,11 +331,11 @@ def test_compiled_plan_matches_mpmath_on_a_ladder(both_paths):
     expr = sp_corpus.ladder(rng, 999)
     c = sp_corpus.to_circuit(expr)
     omega = np.geomspace(2 * np.pi * 0.1, 2 * np.pi * 1e3, 9)
-    both_paths.USE_KERNEL = True
-    K, rho = both_paths.evaluate(c.tree, omega, error=True)
+    both_paths.COMPILED = True
+    K, rho = reduction.evaluate(c.tree, omega, error=True)
     true = sp_corpus.true_error(K, sp_corpus.reference(expr, omega))
     assert true.max() < 1e-12          # measured 1.6e-16 … 2e-15
     assert np.all(rho >= true)
     # Shapes: a 0-d ω and an empty one.
-    assert both_paths.evaluate(c.tree, np.float64(3.0)).shape == ()
-    assert both_paths.evaluate(c.tree, np.array([])).shape == (0,)
+    assert reduction.evaluate(c.tree, np.float64(3.0)).shape == ()
+    assert reduction.evaluate(c.tree, np.array([])).shape == (0,)

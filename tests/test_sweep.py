@@ -63,16 +63,16 @@ def _small_corpus():
 @pytest.fixture(scope="module", params=["numpy", "compiled"])
 def calibration(request):
     """The corpus through each evaluation path of the tree (the compiled plan needs numba)."""
-    from mechcirc import reduction
+    from mechcirc import _jit
 
     if request.param == "compiled":
         pytest.importorskip("numba")
-    saved = reduction.USE_KERNEL
-    reduction.USE_KERNEL = request.param == "compiled"
+    saved = _jit.COMPILED
+    _jit.COMPILED = request.param == "compiled"
     try:
         return _small_corpus()
     finally:
-        reduction.USE_KERNEL = saved
+        _jit.COMPILED = saved
 
 
 def test_error_bound_is_never_below_the_true_error(calibration):

@@ -12,9 +12,9 @@ import mechcirc
 from mechcirc import cli
 from mechcirc.errors import NetlistError
 from mechcirc.interop.touchstone import read_touchstone_one_port
+from reference.inputs import STB
 
 REPO = Path(__file__).resolve().parents[1]
-STB = REPO / "netlists" / "stb_heald.mcir"
 
 
 def run(argv, capsys):

@@ -35,7 +35,7 @@ from ..errors import MechcircError, TopologyError
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..circuit import Circuit
-    from ..sweep import Sweep
+    from ..sweep import Method, Sweep
 
 __all__ = ["to_skrf", "two_port", "two_port_z", "write_touchstone", "read_mobility",
            "compare", "Comparison", "reference_mobility", "MOBILITY_NOTE"]
@@ -291,7 +291,7 @@ class Comparison:
         return out
 
 
-def compare(circuit: "Circuit", path: str | os.PathLike, *, method: str = "auto",
+def compare(circuit: "Circuit", path: str | os.PathLike, *, method: "Method" = "auto",
             omega_min: float | None = None, omega_max: float | None = None) -> Comparison:
     """Evaluate ``circuit`` at the frequencies of a measured one-port Touchstone file.
 

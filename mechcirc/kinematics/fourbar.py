@@ -566,7 +566,7 @@ class FourBar:
             left, right = t0 - step, t0 + step
             if not self.crank_rotates_fully:
                 left, right = max(left, th[0]), min(right, th[-1])
-            res = minimize_scalar(lambda t: sign * self.transfer(float(t))[2],
+            res = minimize_scalar(lambda t, sign=sign: sign * self.transfer(float(t))[2],
                                   bounds=(left, right), method="bounded",
                                   options={"xatol": 1e-12})
             t_best, v_best = (float(res.x), float(sign * res.fun))

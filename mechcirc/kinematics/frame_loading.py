@@ -291,23 +291,23 @@ def frame_loading(fourbar: FourBar, theta: ArrayLike, omega: float, *,
 
     m2, m3, m4 = crank.mass, coupler.mass, rocker.mass
     # crank
-    M[:, 0, 0] = 1; M[:, 0, 2] = -1
-    M[:, 1, 1] = 1; M[:, 1, 3] = -1
+    M[:, 0, 0], M[:, 0, 2] = 1, -1
+    M[:, 1, 1], M[:, 1, 3] = 1, -1
     rhs[:, 0:2] = m2 * (k["aG2"] - g)
     moment_row(2, 0, k["A"] - k["G2"])
     moment_row(2, 2, -(k["B"] - k["G2"]))
     M[:, 2, 8] = 1
     rhs[:, 2] = crank.inertia * k["al2"]
     # coupler
-    M[:, 3, 2] = 1; M[:, 3, 4] = -1
-    M[:, 4, 3] = 1; M[:, 4, 5] = -1
+    M[:, 3, 2], M[:, 3, 4] = 1, -1
+    M[:, 4, 3], M[:, 4, 5] = 1, -1
     rhs[:, 3:5] = m3 * (k["aG3"] - g)
     moment_row(5, 2, k["B"] - k["G3"])
     moment_row(5, 4, -(k["C"] - k["G3"]))
     rhs[:, 5] = coupler.inertia * k["al3"]
     # rocker
-    M[:, 6, 4] = 1; M[:, 6, 6] = 1
-    M[:, 7, 5] = 1; M[:, 7, 7] = 1
+    M[:, 6, 4], M[:, 6, 6] = 1, 1
+    M[:, 7, 5], M[:, 7, 7] = 1, 1
     rhs[:, 6:8] = m4 * (k["aG4"] - g) - F
     moment_row(8, 4, k["C"] - k["G4"])
     moment_row(8, 6, k["D"] - k["G4"])

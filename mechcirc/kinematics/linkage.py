@@ -252,7 +252,7 @@ class Linkage:
     def q0(self) -> NDArray[np.float64]:
         """Generalised coordinates of the pose."""
         q = np.zeros(3 * len(self.links))
-        for i, (l, pts) in enumerate(self.links.items()):
+        for i, pts in enumerate(self.links.values()):
             q[3 * i:3 * i + 2] = self.pose[pts[0]]
         return q
 

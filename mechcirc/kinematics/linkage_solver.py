@@ -24,7 +24,7 @@ the positions instead (:mod:`._linkage_kernels`): the dyads' closed form per
 position, and Newton as a sequential continuation through every target,
 warm-started from the previous one, q̇ and q̈ from the LU of J at each
 converged q — the same cost per position at 360 positions as at 3,600.
-``USE_COMPILED = False`` keeps the numpy versions (tests run both).
+``mechcirc._jit.COMPILED = False`` keeps the numpy versions (tests run both).
 
 Both return a :class:`LinkageMotion` of plain arrays.  The result types
 (:class:`LinkageState`, :class:`LinkageMotion`) live here, below
@@ -40,6 +40,7 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import NDArray
 
+from .. import _jit
 from ..errors import GeometryError
 
 __all__ = ["LinkageMotion", "LinkageState", "MAX_CONTINUATION_STEPS", "plan", "motion"]
@@ -546,7 +547,7 @@ class _DyadSolver:
             ci = pl.crank_idx[j]
             w[ci] = w_cranks[j]
             v[ci] = 1j * w_cranks[j] * E[ci] * self.crank_arm[j]
-        for dy, (x1, x2, r1, r2), (_, _, arm1, arm2) in zip(pl.dyads, inner, self.geo):
+        for dy, (_, _, r1, r2), (_, _, arm1, arm2) in zip(pl.dyads, inner, self.geo):
             (L1, L2), (P1, P2), (K1, K2) = dy.links, dy.outer, dy.known
             v1 = 0.0 if K1 == -1 else v[K1] + 1j * w[K1] * E[K1] * self.local[K1][P1]
             v2 = 0.0 if K2 == -1 else v[K2] + 1j * w[K2] * E[K2] * self.local[K2][P2]
@@ -564,7 +565,7 @@ class _DyadSolver:
         for j in range(len(lk.cranks)):
             ci = pl.crank_idx[j]
             a[ci] = -w[ci] ** 2 * E[ci] * self.crank_arm[j]
-        for dy, (x1, x2, r1, r2), (_, _, arm1, arm2) in zip(pl.dyads, inner, self.geo):
+        for dy, (_, _, r1, r2), (_, _, arm1, arm2) in zip(pl.dyads, inner, self.geo):
             (L1, L2), (P1, P2), (K1, K2) = dy.links, dy.outer, dy.known
             a1 = 0.0 if K1 == -1 else \
                 a[K1] + (1j * al[K1] - w[K1] ** 2) * E[K1] * self.local[K1][P1]
@@ -876,17 +877,14 @@ class _Newton:
         return q[0], qdot, qddot, sign
 
 
-#: Use the compiled sequential Newton (numba) when it is importable: None =
-#: when numba is there, False = always the batched numpy path (tests set it).
-USE_COMPILED = None
-
-
 def _compiled() -> bool:
-    if USE_COMPILED is False:
+    """The compiled sequential Newton (numba) when it is importable, unless
+    ``mechcirc._jit.COMPILED`` says otherwise (False: the batched numpy path)."""
+    if _jit.COMPILED is False:
         return False
     from . import _linkage_kernels
 
-    return _linkage_kernels.HAVE_NUMBA or bool(USE_COMPILED)
+    return _linkage_kernels.HAVE_NUMBA or bool(_jit.COMPILED)
 
 
 def _solve_newton_compiled(lk, pl, t, dt_max):

@@ -225,7 +225,7 @@ def plot_linkage(linkage, state, paths=None, *, ax=None, fig=None):
         fig, axes = _figure(1, 1, (7, 7), fig)
         a = axes[0, 0]
     if paths:
-        for p, xy in paths.items():
+        for xy in paths.values():
             a.plot(xy[:, 0], xy[:, 1], lw=0.8, alpha=0.7)
     for name, pts in linkage.links.items():
         xy = np.array([state.points[p] for p in pts] + [state.points[pts[0]]])

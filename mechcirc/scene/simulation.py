@@ -30,7 +30,7 @@ from typing import Callable
 
 import numpy as np
 
-from ..errors import MechcircError, MechcircWarning, SolverError
+from ..errors import MechcircError, SceneAccuracyWarning, SolverError
 from .files import Scene
 from .motion import MotionModel, motion_model
 
@@ -43,10 +43,6 @@ DEFAULT_REVOLUTIONS = 5
 MAX_STEPS_PER_REV = 20_000_000
 #: Relative error estimate / periodicity above which a result is flagged.
 ACCURACY_GOAL = 1e-3
-
-
-class SceneAccuracyWarning(MechcircWarning):
-    """A time-domain result may be inaccurate (the message says which check failed)."""
 
 
 @dataclass(frozen=True)
@@ -258,8 +254,12 @@ def simulate_scene(scene: Scene, *, omega: float | None = None,
         The integration diverged or needs too many steps.
     """
     cfg = scene.simulate
-    pick = (lambda v, k, d: v if v is not None else (getattr(cfg, k) if cfg is not None
-                                                      and getattr(cfg, k) is not None else d))
+
+    def pick(v, k, d):
+        if v is not None:
+            return v
+        return getattr(cfg, k) if cfg is not None and getattr(cfg, k) is not None else d
+
     omega = pick(omega, "omega", None)
     revolutions = int(pick(revolutions, "revolutions", DEFAULT_REVOLUTIONS))
     start_deg = float(pick(start_deg, "start_deg", 0.0))
@@ -441,7 +441,10 @@ def _run_scipy(model, kern, theta_s, revolutions, npts, method, rtol, progress, 
     qs[[i for i, _, _ in lines]] = 1e-4         # a twist
     scale = np.concatenate([qs, 0.1 * np.maximum(np.abs(y0[n:]), omega)])
     period = TWO_PI / omega
-    t_of = lambda r: (r * period) + np.arange(npts) * (period / npts)
+
+    def t_of(r):
+        return (r * period) + np.arange(npts) * (period / npts)
+
     e = y0 - rigid(0.0)[0]
     n_steps = nfev = 0
     out, prev = None, None
@@ -613,7 +616,7 @@ def _rigid_acceleration(model, body, crank, ripple=(0.0, 0.0), ts=None):
     ext = []
     for sgn, i in ((1.0, int(np.argmin(vals))), (-1.0, int(np.argmax(vals)))):
         lo, hi = crank[max(i - 1, 0)], crank[min(i + 1, crank.size - 1)]
-        res = minimize_scalar(lambda t: sgn * acc(t), bounds=(lo, hi), method="bounded",
+        res = minimize_scalar(lambda t, sgn=sgn: sgn * acc(t), bounds=(lo, hi), method="bounded",
                               options={"xatol": 1e-12})
         ext.append(sgn * min(res.fun, sgn * vals[i]))
     return vals, (float(ext[0]), float(ext[1]))

@@ -278,14 +278,6 @@ def harmonic_check(params: SleyParameters, theta0: float, omegas) -> HarmonicChe
     lin = linearise(params, theta0)
     omegas = np.asarray(omegas, dtype=float)
     q_time = np.array([forced_amplitude(lin, w) for w in omegas])
-    try:
-        import mechcirc
-
-        circuit = to_circuit(params, theta0, velocity=1.0)
-        q_circ = np.abs(circuit.sweep(omegas).Q0)
-        how = "netlist sweep Q0"
-    except (ImportError, AttributeError):
-        q_circ = np.abs(lin.drive_moment(omegas))
-        how = "LinearModel.drive_moment (netlist core missing)"
+    q_circ = np.abs(to_circuit(params, theta0, velocity=1.0).sweep(omegas).Q0)
     rel = float(np.max(np.abs(q_time - q_circ) / q_circ))
-    return HarmonicCheck(omegas, q_time, q_circ, rel, how)
+    return HarmonicCheck(omegas, q_time, q_circ, rel, "netlist sweep Q0")

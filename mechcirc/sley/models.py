@@ -43,7 +43,7 @@ from functools import lru_cache
 from dataclasses import asdict, dataclass, fields, replace
 from typing import Literal
 
-from ..errors import GeometryError, MechcircError
+from ..errors import GeometryError, ParameterError
 
 @lru_cache(maxsize=64)
 def fourbar_of_lengths(l2P, l3, l4, d, branch):
@@ -59,10 +59,6 @@ Drive = Literal["one-side", "both-sides"]
 #: Default beat-up interval α [deg]; not printed in the paper (DIGEST §2); the median
 #: difference over the 98 printed cells is smallest at 10° (3.3 %; 40°: 4.6 %).
 DEFAULT_ALPHA_DEG = 10.0
-
-
-class ParameterError(MechcircError, ValueError):
-    """A sley parameter is out of range (names the parameter, its value, what is allowed)."""
 
 
 _POSITIVE = ("I2P", "I4", "I4P", "C2", "C4", "omega", "alpha", "l2P", "l3", "l4", "d")

@@ -48,7 +48,7 @@ from typing import Callable
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import MechcircWarning
+from ..errors import SleyAccuracyWarning
 from .models import ParameterError, SleyParameters, start_angle
 
 __all__ = ["SleyResult", "simulate", "simulate_params", "simulate_batch", "METHODS",
@@ -64,10 +64,6 @@ DEFAULT_STEPS_PER_PERIOD = 50
 DEFAULT_POINTS = 7200
 #: Relative error estimate / periodicity above which a result is flagged (issue 11 §8).
 ACCURACY_GOAL = 1e-3
-
-
-class SleyAccuracyWarning(MechcircWarning):
-    """A sley result may be inaccurate (error estimate, periodicity or too few steps)."""
 
 
 #: Above this many RK4 steps per revolution the run is refused (see the message).

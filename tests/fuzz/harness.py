@@ -7,7 +7,7 @@ run (plain seeded ``Random``, fast and reproducible).
 The property checked by :func:`run_target` is the one issue 8 states: every
 input ends in a result or in :class:`~mechcirc.errors.MechcircError` (with a
 line and column inside the text when one is given) — no other exception,
-and no hang (a per-input time bound enforced with ``SIGALRM``).
+and no hang (a per-input bound on CPU time enforced with ``SIGPROF``).
 """
 
 from __future__ import annotations
@@ -58,17 +58,22 @@ class Hang(BaseException):
 
 @contextlib.contextmanager
 def time_bound(seconds: float):
-    """Raise :class:`Hang` if the block runs longer than ``seconds`` (main thread only)."""
-    def on_alarm(signum, frame):
-        raise Hang(f"no result after {seconds} s")
+    """Raise :class:`Hang` if the block uses more than ``seconds`` of CPU time (main thread only).
 
-    old = signal.signal(signal.SIGALRM, on_alarm)
-    signal.setitimer(signal.ITIMER_REAL, seconds)
+    CPU time of the process (``ITIMER_PROF``), not the wall clock: a loaded
+    machine slows every input down without making it more work, while a hang
+    (an endless loop, an exponential blow-up) uses CPU until the bound.
+    """
+    def on_alarm(signum, frame):
+        raise Hang(f"no result after {seconds} s of CPU time")
+
+    old = signal.signal(signal.SIGPROF, on_alarm)
+    signal.setitimer(signal.ITIMER_PROF, seconds)
     try:
         yield
     finally:
-        signal.setitimer(signal.ITIMER_REAL, 0)
-        signal.signal(signal.SIGALRM, old)
+        signal.setitimer(signal.ITIMER_PROF, 0)
+        signal.signal(signal.SIGPROF, old)
 
 
 # ---------------------------------------------------------------- text mutation

@@ -2,8 +2,11 @@
 
 The generators and the property live in ``tests/fuzz/harness.py``; the long
 run (≥ 100,000 inputs) is ``tests/fuzz/long_run.py`` and its numbers are in
-``docs/reliability.md``.  Two kinds of input here, derandomised so that a
-failure reproduces:
+``docs/reliability.md``.  By default each property runs a small share
+(:data:`BUDGET`) of its full count, so the suite stays quick;
+``MECHCIRC_FUZZ_BUDGET=1 python -m pytest tests/fuzz`` runs the full counts
+(17,860 inputs).  Two kinds of input here, derandomised so that a failure
+reproduces:
 
 * hypothesis text strategies over the grammars' alphabets (shrunk to a
   minimal failing text by hypothesis);
@@ -14,6 +17,7 @@ failure reproduces:
 
 from __future__ import annotations
 
+import os
 import random
 
 import pytest
@@ -23,9 +27,27 @@ from hypothesis import strategies as st
 from fuzz import harness as h
 
 
+def _budget() -> float:
+    text = os.environ.get("MECHCIRC_FUZZ_BUDGET", "0.05")
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not 0 < value <= 100:
+        raise pytest.UsageError(f"MECHCIRC_FUZZ_BUDGET must be a number in (0, 100], the share "
+                                f"of the full fuzz counts to run; got {text!r}")
+    return value
+
+
+#: Share of each property's full count run (environment variable MECHCIRC_FUZZ_BUDGET;
+#: default 0.05, i.e. 905 of the 17,860 inputs; 1 runs them all).
+BUDGET = _budget()
+
+
 def fast(n: int):
-    return settings(max_examples=n, deadline=None, derandomize=True, database=None,
-                    suppress_health_check=list(HealthCheck))
+    """Settings for a property whose full count is ``n`` inputs: ``BUDGET × n`` of them, at least 5."""
+    return settings(max_examples=max(5, round(n * BUDGET)), deadline=None, derandomize=True,
+                    database=None, suppress_health_check=list(HealthCheck))
 
 
 seeds = st.integers(0, 2**32 - 1)

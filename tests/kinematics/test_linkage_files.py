@@ -106,12 +106,13 @@ def test_locking_linkage_is_reported_quickly():
     """Long-run seed 1009246 (O1 moved to y = 327): 3.7 s to find the lock, now well under 2 s.
 
     Newton gives up as soon as its residual grows, instead of iterating 30
-    times at every halving of the step; the lock angle is unchanged.
+    times at every halving of the step; the lock angle is unchanged.  CPU time,
+    after the kernels are compiled (a fresh environment's first solve compiles).
     """
-    import time
+    from bounds import cpu_seconds_below
 
+    parse_linkage(FNF).solve(0.3)
     lk = parse_linkage(FNF.replace("O1 = [124.0, -27.0]", "O1 = [124.0, 327.0]"))
-    t0 = time.perf_counter()
-    with pytest.raises(GeometryError, match=r"locks near θ = 14\.4171°"):
+    with cpu_seconds_below(2.0), \
+            pytest.raises(GeometryError, match=r"locks near θ = 14\.4171°"):
         lk.solve(0.3)
-    assert time.perf_counter() - t0 < 2.0

@@ -22,7 +22,9 @@ ROOT = Path(__file__).resolve().parents[2]
 @pytest.fixture(params=["compiled", "numpy"])
 def backend(request, monkeypatch):
     """Newton as one compiled loop (numba; plain Python without it) or batched numpy."""
-    monkeypatch.setattr(linkage_solver, "USE_COMPILED", request.param == "compiled")
+    from mechcirc import _jit
+
+    monkeypatch.setattr(_jit, "COMPILED", request.param == "compiled")
     return request.param
 
 TEMPLATE = """

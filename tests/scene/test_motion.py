@@ -82,30 +82,37 @@ def test_linearisation_is_the_circuit(path):
         assert np.max(np.abs(Jv - want_v)) <= 1e-6 * np.max(np.abs(want_v)), (path, deg)
 
 
-def _compare(drive, variant, tol=1e-6):
-    from mechcirc.sley import simulate
-    from mechcirc.sley.scenes import preset_scene
+def _compare(drive, variant):
+    """The preset layer's scene of a variant (the shipped variant-3 scene with the variant's
+    overrides), simulated as a scene, against eqs. (4) and (9) written out independently
+    (``reference/sley_eqs.py``, DOP853 at rtol 1e-12).
 
+    The scene runs DOP853 at rtol 1e-11, so what is compared is the equations, not RK4's
+    error across the clearance.  Measured over all 14 variants: ≤ 8.6e-8 except Table 2
+    variant 6, 2.2e-7 (the φ4/μ/ν table of 1024 intervals against the closed form);
+    tolerance 5e-7 (margin 2.3×).
+    """
+    from mechcirc.sley import preset
+    from mechcirc.sley.scenes import preset_scene
+    from reference.sley_eqs import extrema, worst_relative_difference
+
+    want = extrema(preset(drive, variant), 2, 1440)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SceneAccuracyWarning)
-        got = simulate_scene(preset_scene(drive, variant), error_estimate=False)
-    ref = simulate(drive, variant)
-    worst = 0.0
-    for k, (lo, hi) in ref.extrema.items():
-        scale = max(abs(lo), abs(hi))
-        glo, ghi = got.extrema[k]
-        worst = max(worst, abs(glo - lo) / scale, abs(ghi - hi) / scale)
-    assert worst <= tol, (drive, variant, worst)
-    return got, ref
+        got = simulate_scene(preset_scene(drive, variant), revolutions=2, points=1440,
+                             method="DOP853", rtol=1e-11, error_estimate=False)
+    assert set(want) <= set(got.extrema)
+    worst = worst_relative_difference(got.extrema, want)
+    assert worst <= 5e-7, (drive, variant, worst)
 
 
-@pytest.mark.parametrize("drive,variant", [("one-side", 3), ("one-side", 6),
-                                           ("both-sides", 2), ("both-sides", 7)])
+@pytest.mark.parametrize("drive,variant", [("one-side", 6), ("both-sides", 6)])
 def test_sley_scene_reproduces_sley(drive, variant):
-    """The shipped scene (variant 3) + the variant's overrides = the preset layer's scene of
-    the variant's parameters (eqs. 4 and 9 themselves: tests/sley/test_simulation_reference.py)."""
-    got, ref = _compare(drive, variant)
-    assert got.steps_per_revolution * got.revolution == ref.n_steps
+    """The shipped scene (variant 3) + the variant's overrides obeys eqs. (4) and (9) of the
+    variant's parameters.  (It used to be compared with ``sley.simulate``, which runs the
+    same scene code on the same scene: a code path compared with itself.)  Variants 3
+    and 1 are checked through ``sley.simulate`` in tests/sley/test_simulation_reference.py."""
+    _compare(drive, variant)
 
 
 @pytest.mark.slow

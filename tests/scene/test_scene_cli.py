@@ -11,10 +11,10 @@ import pytest
 import mechcirc
 from mechcirc import cli
 from mechcirc.scene import build, load_scene
+from reference.inputs import STB
 
 ROOT = Path(__file__).resolve().parents[2]
 HEALD = ROOT / "examples" / "heald_scene.toml"
-STB = ROOT / "netlists" / "stb_heald.mcir"
 
 
 def run(argv, capsys):

@@ -6,6 +6,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+from bounds import SUBPROCESS_TIMEOUT
+
 ROOT = Path(__file__).resolve().parents[2]
 DOC = ROOT / "docs" / "scenes.md"
 
@@ -24,7 +26,7 @@ def test_cli_excerpts_match():
                   "--harmonics", "6"],
                  ["reduce", "netlists/stb_heald.mcir", "--band", "10:300", "--tol", "0.01"]):
         out = subprocess.run([sys.executable, "-m", "mechcirc", *argv], cwd=ROOT, env=env,
-                             capture_output=True, text=True, timeout=120).stdout
+                             capture_output=True, text=True, timeout=SUBPROCESS_TIMEOUT).stdout
         for line in out.splitlines():
             if line.startswith("wrote"):
                 continue

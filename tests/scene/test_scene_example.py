@@ -6,13 +6,14 @@ import sys
 from pathlib import Path
 
 import pytest
+from bounds import SUBPROCESS_TIMEOUT
 
 ROOT = Path(__file__).resolve().parents[2]
 
 
 def test_heald_example_prints_consistent_numbers():
     proc = subprocess.run([sys.executable, str(ROOT / "examples" / "heald_scene.py")], cwd=ROOT,
-                          capture_output=True, text=True, timeout=120)
+                          capture_output=True, text=True, timeout=SUBPROCESS_TIMEOUT)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     assert proc.stderr == ""
     out = proc.stdout

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-import _sley_reference as ref
+from reference import sley_eqs as ref
 import mechcirc
 from mechcirc.sley import eigenfrequencies, preset, to_netlist
 from mechcirc.sley.crosscheck import (circuit_resonances, harmonic_check, resonance_check,

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-import _sley_reference as ref
+from reference import sley_eqs as ref
 from mechcirc.scene import _motion_kernels
 from mechcirc.sley import PAPER, preset, simulate, simulate_batch
 

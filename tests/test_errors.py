@@ -1,0 +1,49 @@
+"""Every exception and warning class lives in mechcirc/errors.py, under one base."""
+
+import ast
+import inspect
+from pathlib import Path
+
+import mechcirc
+from mechcirc import errors
+
+PACKAGE = Path(mechcirc.__file__).resolve().parent
+
+
+def test_errors_form_one_tree():
+    classes = [c for _, c in inspect.getmembers(errors, inspect.isclass)
+               if c.__module__ == errors.__name__]
+    assert len(classes) > 10
+    for c in classes:
+        assert issubclass(c, (errors.MechcircError, errors.MechcircWarning)), c
+    assert set(errors.__all__) == {c.__name__ for c in classes}
+    assert issubclass(errors.UnitError, ValueError)            # callers may catch either
+
+
+def test_no_public_exception_class_outside_errors_py():
+    """Private ones may stay where they are raised and caught (study's _SpecError becomes a
+    NetlistError in its module); BaseException subclasses are control flow (the CLI's
+    SIGTERM unwinding), not errors."""
+    found = []
+    for path in sorted(PACKAGE.rglob("*.py")):
+        if path.name == "errors.py":
+            continue
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.ClassDef) and not node.name.startswith("_"):
+                bases = [ast.unparse(b).rpartition(".")[2] for b in node.bases]
+                if any(b.endswith(("Error", "Warning", "Exception")) and b != "BaseException"
+                       for b in bases):
+                    found.append(f"{path.relative_to(PACKAGE)}: {node.name}")
+    assert found == []
+
+
+def test_old_import_locations_still_work():
+    from mechcirc.scene.simulation import SceneAccuracyWarning
+    from mechcirc.simplify import BandError
+    from mechcirc.sley import ParameterError
+    from mechcirc.sley.simulation import SleyAccuracyWarning
+    from mechcirc.units import UnitError
+
+    assert (BandError, ParameterError, UnitError, SceneAccuracyWarning, SleyAccuracyWarning) \
+        == (errors.BandError, errors.ParameterError, errors.UnitError,
+            errors.SceneAccuracyWarning, errors.SleyAccuracyWarning)
