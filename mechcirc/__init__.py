@@ -11,7 +11,8 @@ Netlists and circuits
    parse            -- netlist text -> Circuit
    load             -- netlist file (.mcir) -> Circuit
    Circuit          -- elements, levers and one drive (plain data), with
-                       .tree .unloaded .nodal .sweep() .resonances() .two_port() .formula()
+                       .tree .unloaded .nodal .sweep() .resonances() .modes() .periodic()
+                       .speed_map() .two_port() .formula()
    Element, Lever, Drive
 
 Frequency domain

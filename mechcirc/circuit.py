@@ -308,6 +308,33 @@ class Circuit:
 
         return find_resonances(self, omega_max=omega_max)
 
+    def modes(self, omega_max: float | None = None) -> list:
+        """The mode shape, energy shares and sensitivities of every root up to ``omega_max``.
+
+        See :func:`mechcirc.modes.modes`.
+        """
+        from .modes import modes
+
+        return modes(self, omega_max=omega_max)
+
+    def periodic(self, rpm: float, **kwargs):
+        """The drive's steady periodic force over one revolution at ``rpm``.
+
+        See :func:`mechcirc.periodic.periodic`.
+        """
+        from .periodic import periodic
+
+        return periodic(self, rpm, **kwargs)
+
+    def speed_map(self, rpm_min: float, rpm_max: float, points: int = 200, **kwargs):
+        """Peak drive force over the cycle against machine speed.
+
+        See :func:`mechcirc.periodic.speed_map`.
+        """
+        from .periodic import speed_map
+
+        return speed_map(self, rpm_min, rpm_max, points, **kwargs)
+
     def two_port(self, P1: str, P2: str, S1: str, S2: str, omega: ArrayLike, **kwargs):
         """Z parameters [m/(N·s)] between ports P1–P2 and S1–S2 as an ``skrf.Network``.
 

@@ -362,3 +362,14 @@ def test_param_sensitivities_through_units_levers_and_a_spring_damping():
             assert abs(m.param_sensitivity[p] - r) <= 1e-6 * scale, (p, m.resonance)
             assert abs(m.param_zeta_sensitivity[p] - z) <= 1e-6 * max(
                 scale * m.resonance.zeta, 1e-12), (p, m.resonance)
+
+
+def test_circuit_delegates_give_the_module_functions():
+    """Circuit.modes / .periodic / .speed_map are the functions of their modules."""
+    from mechcirc import parse
+    from mechcirc.modes import modes
+
+    c = parse("drive V a 0 velocity=1\nmass m a b 1\nspring k b 0 100\ndamper c b 0 0.5\n")
+    a, b = c.modes(), modes(c)
+    assert [m.resonance for m in a] == [m.resonance for m in b]
+    assert a[0].shape == b[0].shape
