@@ -66,6 +66,10 @@ def register(sub) -> None:
                         "bends (--points is then the starting grid)")
     p.add_argument("--tol", type=real(above=0.0, most=1.0), default=0.005,
                    help="adaptive: largest relative midpoint deviation (default 0.005)")
+    p.add_argument("--sensitivity", action="append", metavar="NAME", default=[],
+                   help="also the exact derivative of |Q0| (|v0| under a force drive) with "
+                        "respect to the element value, lever ratio or .param NAME: CSV "
+                        "columns dQ0_dNAME and relQ0_NAME = (p/|Q0|)·d|Q0|/dp (repeatable)")
     p.add_argument("--json", action="store_true", help="print one JSON document")
     p.set_defaults(func=cmd_sweep)
 
@@ -252,6 +256,11 @@ def cmd_sweep(args) -> int:
         except SolverError as exc:      # too large for the eigenproblem: sweep anyway
             warns.append(f"resonance markers left out: {exc}")
     found = [r for r in found if r.omega >= omega[0]]
+    sens = None
+    if args.sensitivity:
+        from ..modes import sweep_sensitivity
+
+        sens = sweep_sensitivity(circuit, result.omega, args.sensitivity)
     from ..sweep import FLAG_SINGULAR
 
     pk = result.peak()
@@ -268,7 +277,7 @@ def cmd_sweep(args) -> int:
         if args.output:
             from ..io_csv import write_sweep_csv
 
-            write_sweep_csv(result, out.path(args.output))
+            write_sweep_csv(result, out.path(args.output), _sensitivity_columns(sens))
         if args.touchstone:
             from ..interop.skrf import write_touchstone
 
@@ -293,6 +302,11 @@ def cmd_sweep(args) -> int:
         }
         if result.drive.kind == "force":
             doc["v0"] = {"re": result.v0.real, "im": result.v0.imag}
+        if sens is not None:
+            doc["sensitivity"] = {name: {"value": sens.value[name], "quantity": sens.quantity,
+                                         "derivative": sens.derivative(name),
+                                         "relative": sens.relative(name)}
+                                  for name in sens.dK}
         print_json(doc)
         return 0
     absK = np.abs(result.K)
@@ -310,6 +324,8 @@ def cmd_sweep(args) -> int:
         else:
             print(f"  |Q0| {np.nanmin(absQ):.4g} .. {np.nanmax(absQ):.4g} N on the grid")
     print(f"  {_peak_text(pk)}")
+    if sens is not None:
+        _print_sweep_sensitivity(sens, result)
     if n_flag:
         print(f"  {n_flag} point(s) on or within rounding of a pole or zero of K "
               "(flagged; see the 'flag' column)")
@@ -323,6 +339,36 @@ def cmd_sweep(args) -> int:
         print(f"  {dropped} point(s) with omega = 0 or a non-finite K left out of "
               f"{args.touchstone}")
     return 0
+
+
+def _sensitivity_columns(sens) -> dict:
+    """CSV columns ``d{q}_d{name}`` and ``rel{q}_{name}`` of ``sweep --sensitivity``."""
+    if sens is None:
+        return {}
+    q = sens.quantity
+    out = {}
+    for name in sens.dK:
+        out[f"d{q}_d{name}"] = sens.derivative(name)
+        out[f"rel{q}_{name}"] = sens.relative(name)
+    return out
+
+
+def _print_sweep_sensitivity(sens, result) -> None:
+    import numpy as np
+
+    q = sens.quantity
+    mag = np.abs(getattr(result, q))
+    with np.errstate(all="ignore"):
+        i = int(np.nanargmax(np.where(np.isfinite(mag), mag, np.nan)))
+    print(f"  (p/|{q}|) d|{q}|/dp, exact (the relative change of |{q}| per relative change "
+          f"of p), on the grid and at the grid's largest |{q}| (omega = {result.omega[i]:.6g} "
+          "rad/s):")
+    for name in sens.dK:
+        rel = sens.relative(name)
+        with np.errstate(all="ignore"):
+            lo, hi = np.nanmin(rel), np.nanmax(rel)
+        print(f"    {name:<10} p = {sens.value[name]:<10.6g} {lo:+.4g} .. {hi:+.4g}; "
+              f"{rel[i]:+.4g} there")
 
 
 def cmd_resonances(args) -> int:
