@@ -264,7 +264,7 @@ class SweepSensitivity:
 
 
 def sweep_sensitivity(circuit: Circuit, omega, names=None) -> SweepSensitivity:
-    """Exact p·∂K/∂p at each ω for element values, lever ratios and ``.param``\ s.
+    """Exact p·∂K/∂p at each ω for element values, lever ratios and ``.param`` values.
 
     By the adjoint of the nodal system (module docstring): one refined solve
     per ω (:func:`mechcirc.nodal.solve`) gives the derivatives to every
@@ -276,7 +276,7 @@ def sweep_sensitivity(circuit: Circuit, omega, names=None) -> SweepSensitivity:
     omega : array_like of float
         Angular frequencies [rad/s], > 0.
     names : iterable of str, optional
-        Elements, levers or ``.param``\ s; default every one.
+        Elements, levers or ``.param`` values; default every one.
 
     Raises
     ------
