@@ -57,10 +57,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .circuit import LAWS, Circuit
+from .circuit import LAWS, Circuit, Drive
 from .resonances import Resonance, _project, _solve, pencil
 
-__all__ = ["Mode", "modes", "SweepSensitivity", "sweep_sensitivity"]
+__all__ = ["Mode", "SweepSensitivity", "modes", "sweep_sensitivity"]
 
 
 @dataclass(frozen=True)
@@ -222,7 +222,7 @@ class SweepSensitivity:
 
     omega: np.ndarray
     K: np.ndarray
-    drive: object
+    drive: Drive
     value: dict
     dK: dict
 
@@ -307,6 +307,7 @@ def sweep_sensitivity(circuit: Circuit, omega, names=None) -> SweepSensitivity:
                          f"{', '.join(value)}")
     omega = np.atleast_1d(np.asarray(omega, dtype=float))
     sol = nodal.solve(system, omega)
+    assert sol.x is not None            # kept by default
     m, n_nodes = omega.size, len(system.nodes)
     xe = np.concatenate([sol.x, np.zeros((m, 1), complex)], axis=1)
     with np.errstate(all="ignore"):
@@ -316,7 +317,7 @@ def sweep_sensitivity(circuit: Circuit, omega, names=None) -> SweepSensitivity:
         index = {nd: i for i, nd in enumerate(system.nodes)}
         for k, lv in enumerate(system.levers):
             dp = xe[:, index.get(lv.p1, -1)] - xe[:, index.get(lv.p2, -1)]
-            parts.append((-2 * lv.ratio * sol.x[:, n_nodes + k] * dp)[:, None])
+            parts.append((-2 * lv.ratio * xe[:, n_nodes + k] * dp)[:, None])
         dK_all = np.concatenate(parts, axis=1)
     column = {name: k for k, name in enumerate(stamped)}
     slopes = _param_slopes(circuit, stamped) if set(names) & circuit.params.keys() else {}

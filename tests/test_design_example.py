@@ -176,6 +176,6 @@ def test_sweep_sensitivity_at_the_harmonics(example):
 
 def test_the_example_runs():
     proc = subprocess.run([sys.executable, str(REPO / "examples" / "heald_design.py")],
-                          cwd=REPO, capture_output=True, text=True, timeout=300)
+                          cwd=REPO, capture_output=True, text=True, timeout=300, check=False)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     assert "exact re-solve: 16.88%" in proc.stdout
