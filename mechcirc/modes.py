@@ -306,30 +306,34 @@ def sweep_sensitivity(circuit: Circuit, omega, names=None) -> SweepSensitivity:
         raise InputError(f"no element, lever or .param named {unknown[0]!r}; there are: "
                          f"{', '.join(value)}")
     omega = np.atleast_1d(np.asarray(omega, dtype=float))
-    sol = nodal.solve(system, omega)
-    assert sol.x is not None            # kept by default
-    m, n_nodes = omega.size, len(system.nodes)
-    xe = np.concatenate([sol.x, np.zeros((m, 1), complex)], axis=1)
-    with np.errstate(all="ignore"):
-        S = y * (1j * omega[:, None]) ** (-power.astype(float))
-        dv = xe[:, ei] - xe[:, ej]
-        parts = [-S * dv * dv]
-        index = {nd: i for i, nd in enumerate(system.nodes)}
-        for k, lv in enumerate(system.levers):
-            dp = xe[:, index.get(lv.p1, -1)] - xe[:, index.get(lv.p2, -1)]
-            parts.append((-2 * lv.ratio * xe[:, n_nodes + k] * dp)[:, None])
-        dK_all = np.concatenate(parts, axis=1)
     column = {name: k for k, name in enumerate(stamped)}
     slopes = _param_slopes(circuit, stamped) if set(names) & circuit.params.keys() else {}
-    dK = {}
-    for name in names:
-        if name in column:
-            dK[name] = dK_all[:, column[name]]
-        elif name in slopes:
-            dK[name] = dK_all @ slopes[name]
-        else:                   # carries no force, or a .param nothing loaded uses
-            dK[name] = np.zeros(m, complex)
-    return SweepSensitivity(omega, sol.K, circuit.drive, {k: value[k] for k in names}, dK)
+    m, n_nodes = omega.size, len(system.nodes)
+    K = np.empty(m, complex)
+    dK = {name: np.zeros(m, complex) for name in names}   # 0: carries no force
+    index = {nd: i for i, nd in enumerate(system.nodes)}
+    # Chunks of ω: the solutions of one chunk are held (≤ 2**20 values), never all.
+    chunk = max(1, 2**20 // (system.size + len(stamped) + 1))
+    for at in range(0, m, chunk):
+        w = omega[at:at + chunk]
+        sol = nodal.solve(system, w)
+        assert sol.x is not None            # kept by default
+        K[at:at + w.size] = sol.K
+        xe = np.concatenate([sol.x, np.zeros((w.size, 1), complex)], axis=1)
+        with np.errstate(all="ignore"):
+            S = y * (1j * w[:, None]) ** (-power.astype(float))
+            dv = xe[:, ei] - xe[:, ej]
+            parts = [-S * dv * dv]
+            for k, lv in enumerate(system.levers):
+                dp = xe[:, index.get(lv.p1, -1)] - xe[:, index.get(lv.p2, -1)]
+                parts.append((-2 * lv.ratio * xe[:, n_nodes + k] * dp)[:, None])
+            dK_all = np.concatenate(parts, axis=1)
+            for name in names:
+                if name in column:
+                    dK[name][at:at + w.size] = dK_all[:, column[name]]
+                elif name in slopes:
+                    dK[name][at:at + w.size] = dK_all @ slopes[name]
+    return SweepSensitivity(omega, K, circuit.drive, {k: value[k] for k in names}, dK)
 
 
 def _root_sensitivity(system, M, D, Ks, pinv_GT, s, v, dv, y, power) -> np.ndarray:

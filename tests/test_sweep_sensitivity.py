@@ -123,6 +123,18 @@ def test_force_drive_and_unloaded_names():
         sweep_sensitivity(c, [1.0], ["z"])
 
 
+def test_chunks_of_omega_give_the_same_values():
+    """Long sweeps are solved in chunks of ω (memory): the values across a chunk's
+    boundary are those of the points solved alone."""
+    c = mechcirc.load("netlists/heald_damped.mcir")
+    w = np.linspace(10, 3000, 70_000)
+    s = sweep_sensitivity(c, w, ["k4", "eta1"])
+    pick = np.r_[0:3, 32_760:32_780, 65_530:65_540, 69_997:70_000]   # chunks of 32,768
+    alone = sweep_sensitivity(c, w[pick], ["k4", "eta1"])
+    for name in ("k4", "eta1"):
+        np.testing.assert_array_equal(s.dK[name][pick], alone.dK[name])
+
+
 def test_cli_columns_json_and_summary(capsys, tmp_path):
     path = "netlists/heald_damped.mcir"
     out_csv = tmp_path / "s.csv"
@@ -144,3 +156,6 @@ def test_cli_columns_json_and_summary(capsys, tmp_path):
     np.testing.assert_array_equal(doc["sensitivity"]["eta1"]["relative"], s.relative("eta1"))
     assert_user_error(["sweep", path, "--omega-min", "1", "--omega-max", "2",
                        "--sensitivity", "k9"], capsys, "'k9'", "there are:", "k4", "eta1")
+    assert_user_error(["sweep", path, "--omega-min", "1", "--omega-max", "2", "--points",
+                       "100001", "--sensitivity", "k4"], capsys, "--sensitivity",
+                      "100000 points")

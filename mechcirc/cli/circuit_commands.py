@@ -179,6 +179,9 @@ def _omega_grid(args):
         if wanted and n > limit:
             raise MechcircError(f"--points {n} with {what}: the limit is {limit} points "
                                 "(write larger sweeps with -o CSV)")
+    if args.sensitivity and n > MAX_NODAL_POINTS:
+        raise MechcircError(f"--points {n} with --sensitivity: the limit is "
+                            f"{MAX_NODAL_POINTS} points (a nodal solve at each)")
     if args.log:
         if lo <= 0:
             raise MechcircError("--log needs --omega-min > 0")
