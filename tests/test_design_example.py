@@ -162,6 +162,17 @@ def test_peak_forces_before_and_after(example):
     assert r["warp_after"] < 0.75 * r["warp_before"]
 
 
+def test_a_stiffer_rod_still_is_worse():
+    """docs/design.md: at 0.7 kN/mm the first resonance is at 9.14 Ω (near the 9th
+    harmonic) and the rod's peak force is 239.4 N, more than at 0.6 kN/mm (217.9 N):
+    both from the closed form alone."""
+    W = 2 * math.pi * 600 / 60
+    s = mp_root(7e5, complex(-0.046 * 9.1 * W, 9.1 * W))
+    assert round(abs(s) / W, 2) == 9.14
+    rod = _periodic_forces(7e5)[1]
+    assert round(rod, 1) == 239.4 and rod > _periodic_forces(6e5)[1] + 20
+
+
 def test_sweep_sensitivity_at_the_harmonics(example):
     """(k/|Q0|)∂|Q0|/∂k of the rod at 7Ω, 8Ω, 9Ω against central differences of the
     closed form (step 1e-6)."""
