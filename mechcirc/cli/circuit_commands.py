@@ -69,7 +69,8 @@ def register(sub) -> None:
     p.add_argument("--sensitivity", action="append", metavar="NAME", default=[],
                    help="also the exact derivative of |Q0| (|v0| under a force drive) with "
                         "respect to the element value, lever ratio or .param NAME: CSV "
-                        "columns dQ0_dNAME and relQ0_NAME = (p/|Q0|)·d|Q0|/dp (repeatable)")
+                        "columns dQ0_dNAME and relQ0_NAME = (p/|Q0|)·d|Q0|/dp (dv0_dNAME, "
+                        "relv0_NAME under a force drive; repeatable)")
     p.add_argument("--json", action="store_true", help="print one JSON document")
     p.set_defaults(func=cmd_sweep)
 
