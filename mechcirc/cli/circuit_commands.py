@@ -362,15 +362,15 @@ def _print_sweep_sensitivity(sens, result) -> None:
 
     q = sens.quantity
     mag = np.abs(getattr(result, q))
-    with np.errstate(all="ignore"):
-        i = int(np.nanargmax(np.where(np.isfinite(mag), mag, np.nan)))
+    finite = np.isfinite(mag)
+    i = int(np.argmax(np.where(finite, mag, -1.0))) if finite.any() else 0
     print(f"  (p/|{q}|) d|{q}|/dp, exact (the relative change of |{q}| per relative change "
           f"of p), on the grid and at the grid's largest |{q}| (omega = {result.omega[i]:.6g} "
           "rad/s):")
     for name in sens.dK:
         rel = sens.relative(name)
-        with np.errstate(all="ignore"):
-            lo, hi = np.nanmin(rel), np.nanmax(rel)
+        ok = rel[np.isfinite(rel)]
+        lo, hi = (ok.min(), ok.max()) if ok.size else (math.nan, math.nan)
         print(f"    {name:<10} p = {sens.value[name]:<10.6g} {lo:+.4g} .. {hi:+.4g}; "
               f"{rel[i]:+.4g} there")
 
