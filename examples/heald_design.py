@@ -108,8 +108,9 @@ def main() -> None:
     print("   checked: bisection on the closed-form root")
     print(f"   chosen: {r['chosen'] / 1e6:g} kN/mm -> omega1 = {r['omega1_after']:.4f} rad/s "
           f"= {r['order1_after']:.3f} x Omega (between the 8th and 9th harmonics)")
-    print(f"4. periodic steady state at {RPM} rpm (error <= {max(r['error_before'], r['error_after']):.1g}"
-          " of the peak), before -> after:")
+    error = max(r["error_before"], r["error_after"])
+    print(f"4. periodic steady state at {RPM} rpm (error <= {error:.1g} of the peak), "
+          "before -> after:")
     print("   (element peaks over the crank angle every 0.1 deg; the drive's located exactly)")
     print(f"   rod {ROD} peak force   {r['rod_before']:8.2f} N -> {r['rod_after']:8.2f} N "
           f"({r['rod_after'] / r['rod_before'] - 1:+.1%})")

@@ -204,7 +204,9 @@ def _stamped(system) -> tuple:
 
 @dataclass(frozen=True)
 class SweepSensitivity:
-    """Exact derivatives of K(ω) and of the drive's response on a sweep (:func:`sweep_sensitivity`).
+    """Exact derivatives of K(ω) and of the drive's response on a sweep.
+
+    The result of :func:`sweep_sensitivity`.
 
     Attributes
     ----------

@@ -371,8 +371,8 @@ def _print_sweep_sensitivity(sens, result) -> None:
         rel = sens.relative(name)
         ok = rel[np.isfinite(rel)]
         lo, hi = (ok.min(), ok.max()) if ok.size else (math.nan, math.nan)
-        print(f"    {name:<10} p = {sens.value[name]:<10.6g} {lo:+.4g} .. {hi:+.4g}; "
-              f"{rel[i]:+.4g} there")
+        print(f"    {name:<10} p = {sens.value[name]:<10.6g} {lo + 0.0:+.4g} .. {hi + 0.0:+.4g}; "
+              f"{rel[i] + 0.0:+.4g} there")
 
 
 def cmd_resonances(args) -> int:
