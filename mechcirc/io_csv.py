@@ -9,10 +9,11 @@ from .progress import Progress
 __all__ = ["write_sweep_csv"]
 
 
-def write_sweep_csv(result, path) -> None:
-    """Write ``omega,K_re,K_im,Q0_re,Q0_im[,v0_re,v0_im],flag`` rows to ``path``.
+def write_sweep_csv(result, path, extra: dict | None = None) -> None:
+    """Write ``omega,K_re,K_im,Q0_re,Q0_im[,v0_re,v0_im][,extra...],flag`` rows to ``path``.
 
-    The ``v0`` columns appear for a force drive.  ``flag`` is 0 for a regular
+    The ``v0`` columns appear for a force drive; ``extra`` maps more column
+    names to arrays of real values, one per point (``sweep --sensitivity``).  ``flag`` is 0 for a regular
     point, 1 on a pole or zero of K, 2 within rounding of one.  ``path`` is
     written in place: for a file that appears whole or not at all, pass a
     temporary path from :func:`mechcirc.outputs.atomic_path` or
@@ -23,6 +24,9 @@ def write_sweep_csv(result, path) -> None:
     if result.drive.kind == "force":
         columns += [result.v0.real, result.v0.imag]
         header += ",v0_re,v0_im"
+    for name, values in (extra or {}).items():
+        columns.append(np.asarray(values, dtype=float))
+        header += f",{name}"
     columns.append(result.flags)
     n = len(result.omega)
     # Formatting 17 digits is the slow part (about 5 s per million rows): in

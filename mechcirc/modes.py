@@ -40,6 +40,14 @@ parameters defined from it.
 A root with ω_d = 0 (overdamped, ζ ≥ 1) is a decaying motion, not a
 vibration: its :class:`Mode` has no shape and says so in ``note``; its ωₙ
 sensitivities are still those of the real root.
+
+:func:`sweep_sensitivity` gives the same derivatives of K(ω) and Q0(ω) on a
+sweep, by the adjoint of the nodal system: A(ω) x = c (c = e_a − e_b) with A
+complex symmetric gives K = cᵀx and ∂K/∂p = −xᵀ (∂A/∂p) x — one refined
+solve per ω, whatever the number of parameters.  An element of value·η = y
+adds S(ω)·(e_i − e_j)(e_i − e_j)ᵀ to A (S = y·(jω)^(−power), the law table),
+so y·∂K/∂y = −S·(x_i − x_j)²; a lever's ratio r gives r·∂K/∂r =
+−2r·q·(x_p1 − x_p2), q its force unknown; a ``.param`` the chain rule above.
 """
 
 from __future__ import annotations
@@ -49,10 +57,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .circuit import LAWS, Circuit
+from .circuit import LAWS, Circuit, Drive
 from .resonances import Resonance, _project, _solve, pencil
 
-__all__ = ["Mode", "modes"]
+__all__ = ["Mode", "SweepSensitivity", "modes", "sweep_sensitivity"]
 
 
 @dataclass(frozen=True)
@@ -127,14 +135,9 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
         return []
     M, D, Ks, G_released, G_held, _ = pencil(system)
     els = system.elements
-    index = {n: i for i, n in enumerate(system.nodes)}
-    ei = np.array([index.get(e.n1, -1) for e in els], dtype=int)
-    ej = np.array([index.get(e.n2, -1) for e in els], dtype=int)
-    y = np.array([e.value * e.eta for e in els])
-    power = np.array([LAWS[e.kind].power for e in els])
+    ei, ej, y, power, names = _stamped(system)
     kinds = np.array([e.kind for e in els])
     el_names = np.array([e.name for e in els], dtype=object)
-    names = [e.name for e in els] + [lv.name for lv in system.levers]
     slopes = _param_slopes(circuit, names)
     # Constraint forces from the node rows, P(s) v + s Gᵀ q = 0: Gᵀ's pseudo-inverse,
     # once per problem (only levers need them).
@@ -185,6 +188,154 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
                         velocity=dict(zip(el_names, dv.tolist())),
                         force=dict(zip(el_names, force.tolist())), **common))
     return out
+
+
+def _stamped(system) -> tuple:
+    """(row i, row j (−1 the reference), value·η, law power) of each loaded element,
+    and the names: the elements, then the levers."""
+    els = system.elements
+    index = {n: i for i, n in enumerate(system.nodes)}
+    ei = np.array([index.get(e.n1, -1) for e in els], dtype=int)
+    ej = np.array([index.get(e.n2, -1) for e in els], dtype=int)
+    y = np.array([e.value * e.eta for e in els])
+    power = np.array([LAWS[e.kind].power for e in els])
+    return ei, ej, y, power, [e.name for e in els] + [lv.name for lv in system.levers]
+
+
+@dataclass(frozen=True)
+class SweepSensitivity:
+    """Exact derivatives of K(ω) and of the drive's response on a sweep.
+
+    The result of :func:`sweep_sensitivity`.
+
+    Attributes
+    ----------
+    omega : ndarray of float, shape (n,)
+        Angular frequency [rad/s].
+    K : ndarray of complex, shape (n,)
+        K(ω) [m/(N·s)] from the same nodal solve.
+    drive : Drive
+    value : dict of str to float
+        Name → p, the element's value, the lever's ratio or the ``.param`` (SI).
+    dK : dict of str to ndarray of complex
+        Name → p·∂K/∂p [m/(N·s)] at each ω (0 for an element that carries no force;
+        an element's η has the same derivative as its value).
+    """
+
+    omega: np.ndarray
+    K: np.ndarray
+    drive: Drive
+    value: dict
+    dK: dict
+
+    @property
+    def quantity(self) -> str:
+        """The drive's response: ``"Q0"`` (velocity drive, Q0 = V0/K) or ``"v0"`` (v0 = F0·K)."""
+        return "v0" if self.drive.kind == "force" else "Q0"
+
+    def relative(self, name: str, quantity: str | None = None) -> np.ndarray:
+        """(p/|q|)·∂|q|/∂p [1] at each ω, q = ``"K"``, ``"Q0"`` or ``"v0"``
+        (default :attr:`quantity`); a prescribed quantity has 0."""
+        quantity = quantity or self.quantity
+        with np.errstate(all="ignore"):
+            rel = (self.dK[self._key(name)] / self.K).real
+        if quantity == "K" or (quantity == "v0" and self.drive.kind == "force"):
+            return rel
+        if quantity == "Q0" and self.drive.kind == "velocity":
+            return -rel
+        if quantity in ("Q0", "v0"):
+            return np.zeros_like(rel)
+        raise ValueError(f"quantity must be 'K', 'Q0' or 'v0', got {quantity!r}")
+
+    def derivative(self, name: str, quantity: str | None = None) -> np.ndarray:
+        """∂|q|/∂p at each ω [unit of q per SI unit of p] (see :meth:`relative`)."""
+        quantity = quantity or self.quantity
+        amp = abs(self.drive.amplitude)
+        with np.errstate(all="ignore"):
+            mag = {"K": np.abs(self.K), "Q0": amp / np.abs(self.K) if self.drive.kind ==
+                   "velocity" else np.full(self.K.shape, amp),
+                   "v0": amp * np.abs(self.K) if self.drive.kind == "force"
+                   else np.full(self.K.shape, amp)}[quantity]
+            return self.relative(name, quantity) * mag / self.value[self._key(name)]
+
+    def _key(self, name: str) -> str:
+        if name not in self.dK:
+            raise KeyError(f"no sensitivity to {name!r} computed; computed: "
+                           f"{', '.join(self.dK)}")
+        return name
+
+
+def sweep_sensitivity(circuit: Circuit, omega, names=None) -> SweepSensitivity:
+    """Exact p·∂K/∂p at each ω for element values, lever ratios and ``.param`` values.
+
+    By the adjoint of the nodal system (module docstring): one refined solve
+    per ω (:func:`mechcirc.nodal.solve`) gives the derivatives to every
+    parameter at once.
+
+    Parameters
+    ----------
+    circuit : Circuit
+    omega : array_like of float
+        Angular frequencies [rad/s], > 0.
+    names : iterable of str, optional
+        Elements, levers or ``.param`` values; default every one.
+
+    Raises
+    ------
+    InputError
+        A name that is none of these (the message lists those that are).
+
+    Examples
+    --------
+    >>> from mechcirc import parse
+    >>> from mechcirc.modes import sweep_sensitivity
+    >>> c = parse("drive V a 0 velocity=1\\nmass m a 0 2\\ndamper c a 0 4\\n")
+    >>> s = sweep_sensitivity(c, [2.0])       # |Q0| = |4 + 4j|: each carries half
+    >>> round(float(s.relative("m")[0]), 12), round(float(s.relative("c")[0]), 12)
+    (0.5, 0.5)
+    """
+    from . import nodal
+    from .errors import InputError
+
+    system = circuit.nodal
+    ei, ej, y, power, stamped = _stamped(system)
+    value = {e.name: e.value for e in circuit.elements} | \
+        {lv.name: lv.ratio for lv in circuit.levers} | \
+        {p: float(v) for p, v in circuit.params.items()}
+    names = list(value) if names is None else list(dict.fromkeys(names))
+    unknown = [n for n in names if n not in value]
+    if unknown:
+        raise InputError(f"no element, lever or .param named {unknown[0]!r}; there are: "
+                         f"{', '.join(value)}")
+    omega = np.atleast_1d(np.asarray(omega, dtype=float))
+    column = {name: k for k, name in enumerate(stamped)}
+    slopes = _param_slopes(circuit, stamped) if set(names) & circuit.params.keys() else {}
+    m, n_nodes = omega.size, len(system.nodes)
+    K = np.empty(m, complex)
+    dK = {name: np.zeros(m, complex) for name in names}   # 0: carries no force
+    index = {nd: i for i, nd in enumerate(system.nodes)}
+    # Chunks of ω: the solutions of one chunk are held (≤ 2**20 values), never all.
+    chunk = max(1, 2**20 // (system.size + len(stamped) + 1))
+    for at in range(0, m, chunk):
+        w = omega[at:at + chunk]
+        sol = nodal.solve(system, w)
+        assert sol.x is not None            # kept by default
+        K[at:at + w.size] = sol.K
+        xe = np.concatenate([sol.x, np.zeros((w.size, 1), complex)], axis=1)
+        with np.errstate(all="ignore"):
+            S = y * (1j * w[:, None]) ** (-power.astype(float))
+            dv = xe[:, ei] - xe[:, ej]
+            parts = [-S * dv * dv]
+            for k, lv in enumerate(system.levers):
+                dp = xe[:, index.get(lv.p1, -1)] - xe[:, index.get(lv.p2, -1)]
+                parts.append((-2 * lv.ratio * xe[:, n_nodes + k] * dp)[:, None])
+            dK_all = np.concatenate(parts, axis=1)
+            for name in names:
+                if name in column:
+                    dK[name][at:at + w.size] = dK_all[:, column[name]]
+                elif name in slopes:
+                    dK[name][at:at + w.size] = dK_all @ slopes[name]
+    return SweepSensitivity(omega, K, circuit.drive, {k: value[k] for k in names}, dK)
 
 
 def _root_sensitivity(system, M, D, Ks, pinv_GT, s, v, dv, y, power) -> np.ndarray:

@@ -66,6 +66,11 @@ def register(sub) -> None:
                         "bends (--points is then the starting grid)")
     p.add_argument("--tol", type=real(above=0.0, most=1.0), default=0.005,
                    help="adaptive: largest relative midpoint deviation (default 0.005)")
+    p.add_argument("--sensitivity", action="append", metavar="NAME", default=[],
+                   help="also the exact derivative of |Q0| (|v0| under a force drive) with "
+                        "respect to the element value, lever ratio or .param NAME: CSV "
+                        "columns dQ0_dNAME and relQ0_NAME = (p/|Q0|)·d|Q0|/dp (dv0_dNAME, "
+                        "relv0_NAME under a force drive; repeatable)")
     p.add_argument("--json", action="store_true", help="print one JSON document")
     p.set_defaults(func=cmd_sweep)
 
@@ -177,6 +182,9 @@ def _omega_grid(args):
         if wanted and n > limit:
             raise MechcircError(f"--points {n} with {what}: the limit is {limit} points "
                                 "(write larger sweeps with -o CSV)")
+    if args.sensitivity and n > MAX_NODAL_POINTS:
+        raise MechcircError(f"--points {n} with --sensitivity: the limit is "
+                            f"{MAX_NODAL_POINTS} points (a nodal solve at each)")
     if args.log:
         if lo <= 0:
             raise MechcircError("--log needs --omega-min > 0")
@@ -254,6 +262,11 @@ def cmd_sweep(args) -> int:
         except SolverError as exc:      # too large for the eigenproblem: sweep anyway
             warns.append(f"resonance markers left out: {exc}")
     found = [r for r in found if r.omega >= omega[0]]
+    sens = None
+    if args.sensitivity:
+        from ..modes import sweep_sensitivity
+
+        sens = sweep_sensitivity(circuit, result.omega, args.sensitivity)
     from ..sweep import FLAG_SINGULAR
 
     pk = result.peak()
@@ -270,7 +283,7 @@ def cmd_sweep(args) -> int:
         if args.output:
             from ..io_csv import write_sweep_csv
 
-            write_sweep_csv(result, out.path(args.output))
+            write_sweep_csv(result, out.path(args.output), _sensitivity_columns(sens))
         if args.touchstone:
             from ..interop.skrf import write_touchstone
 
@@ -295,6 +308,11 @@ def cmd_sweep(args) -> int:
         }
         if result.drive.kind == "force":
             doc["v0"] = {"re": result.v0.real, "im": result.v0.imag}
+        if sens is not None:
+            doc["sensitivity"] = {name: {"value": sens.value[name], "quantity": sens.quantity,
+                                         "derivative": sens.derivative(name),
+                                         "relative": sens.relative(name)}
+                                  for name in sens.dK}
         print_json(doc)
         return 0
     absK = np.abs(result.K)
@@ -312,6 +330,8 @@ def cmd_sweep(args) -> int:
         else:
             print(f"  |Q0| {np.nanmin(absQ):.4g} .. {np.nanmax(absQ):.4g} N on the grid")
     print(f"  {_peak_text(pk)}")
+    if sens is not None:
+        _print_sweep_sensitivity(sens, result)
     if n_flag:
         print(f"  {n_flag} point(s) on or within rounding of a pole or zero of K "
               "(flagged; see the 'flag' column)")
@@ -325,6 +345,36 @@ def cmd_sweep(args) -> int:
         print(f"  {dropped} point(s) with omega = 0 or a non-finite K left out of "
               f"{args.touchstone}")
     return 0
+
+
+def _sensitivity_columns(sens) -> dict:
+    """CSV columns ``d{q}_d{name}`` and ``rel{q}_{name}`` of ``sweep --sensitivity``."""
+    if sens is None:
+        return {}
+    q = sens.quantity
+    out = {}
+    for name in sens.dK:
+        out[f"d{q}_d{name}"] = sens.derivative(name)
+        out[f"rel{q}_{name}"] = sens.relative(name)
+    return out
+
+
+def _print_sweep_sensitivity(sens, result) -> None:
+    import numpy as np
+
+    q = sens.quantity
+    mag = np.abs(getattr(result, q))
+    finite = np.isfinite(mag)
+    i = int(np.argmax(np.where(finite, mag, -1.0))) if finite.any() else 0
+    print(f"  (p/|{q}|) d|{q}|/dp, exact (the relative change of |{q}| per relative change "
+          f"of p), on the grid and at the grid's largest |{q}| (omega = {result.omega[i]:.6g} "
+          "rad/s):")
+    for name in sens.dK:
+        rel = sens.relative(name)
+        ok = rel[np.isfinite(rel)]
+        lo, hi = (ok.min(), ok.max()) if ok.size else (math.nan, math.nan)
+        print(f"    {name:<10} p = {sens.value[name]:<10.6g} {lo + 0.0:+.4g} .. {hi + 0.0:+.4g}; "
+              f"{rel[i] + 0.0:+.4g} there")
 
 
 def cmd_resonances(args) -> int:
