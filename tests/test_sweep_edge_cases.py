@@ -19,7 +19,6 @@ import pytest
 
 import mechcirc
 from mechcirc.errors import TopologyError
-from mechcirc.sweep import FLAG_OK
 from mechcirc.sweep import FLAG_NEAR_SINGULAR, FLAG_OK, FLAG_SINGULAR
 
 
