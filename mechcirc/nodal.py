@@ -274,6 +274,172 @@ def _dd_div_d(h, lo, w):
     return q, (((h - p) - e) + lo) / w
 
 
+def _dd_norm(h, lo):
+    """(h, lo) renormalised: |lo| ≤ ulp(h)/2 (Fast2Sum)."""
+    s = h + lo
+    return s, lo - (s - h)
+
+
+def _dd_mul(ah, al, bh, bl):
+    """(ah + al)(bh + bl) in double-double (real)."""
+    a1, a2 = _split(ah)
+    p, e = _two_prod(ah, a1, a2, bh)
+    return _dd_norm(p, e + (ah * bl + al * bh))
+
+
+def _dd_sub(ah, al, bh, bl):
+    s, e = _two_sum(ah, -bh)
+    return _dd_norm(s, e + (al - bl))
+
+
+def _cdd_mul(a, b):
+    """Complex double-double product; a value is (re_hi, re_lo, im_hi, im_lo)."""
+    rr, ii = _dd_mul(a[0], a[1], b[0], b[1]), _dd_mul(a[2], a[3], b[2], b[3])
+    ri, ir = _dd_mul(a[0], a[1], b[2], b[3]), _dd_mul(a[2], a[3], b[0], b[1])
+    return (*_dd_sub(*rr, *ii), *_dd_norm(*_dd_add(*ri, *ir)))
+
+
+def _cdd_div(a, b):
+    """Complex double-double quotient a / b (b of moderate size: no overflow check)."""
+    den = _dd_norm(*_dd_add(*_dd_mul(b[0], b[1], b[0], b[1]), *_dd_mul(b[2], b[3], b[2], b[3])))
+    re = _dd_norm(*_dd_add(*_dd_mul(a[0], a[1], b[0], b[1]), *_dd_mul(a[2], a[3], b[2], b[3])))
+    im = _dd_sub(*_dd_mul(a[2], a[3], b[0], b[1]), *_dd_mul(a[0], a[1], b[2], b[3]))
+    return (*_dd_norm(*_dd_div_dd(*re, *den)), *_dd_norm(*_dd_div_dd(*im, *den)))
+
+
+def _balance(mag, diag):
+    """Symmetric scaling d (powers of two) so that d_i |a_ij| d_j ≤ 1 with rows near 1.
+
+    ``mag`` holds |A| (batch, n, n), ``diag`` the diagonal's Σ|stamp| (batch,
+    n).  Rows with a diagonal start at 1/√diag, the others (lever forces,
+    nodes tied only by levers) at 1/max_j |a_ij| d_j: so a lever's force
+    unknown is scaled to the admittance level around it, which Ruiz's
+    iteration alone (started at 1) does not find when every element value is
+    1e±100 and the lever entries are ±1, r.  A few symmetric Ruiz steps
+    follow.  Powers of two: the scaled matrix carries no new rounding, and a
+    singular matrix stays singular.
+    """
+    with np.errstate(all="ignore"):
+        d = np.where(diag > 0, 1.0 / np.sqrt(diag), 0.0)
+        for _ in range(mag.shape[-1]):      # outward from the rows with a diagonal
+            unset = d == 0
+            if not unset.any():
+                break
+            off = np.max(mag * d[:, None, :], axis=2)
+            d = np.where(unset & (off > 0), 1.0 / off, d)
+            if not (unset & (off > 0)).any():
+                break
+        d = np.where(d > 0, d, 1.0)
+        for _ in range(8):
+            r = np.max(mag * d[:, :, None] * d[:, None, :], axis=2)
+            d = d / np.sqrt(np.where((r > 0) & np.isfinite(r), r, 1.0))
+        d = np.where(np.isfinite(d) & (d > 0), d, 1.0)
+        return np.ldexp(1.0, np.round(np.log2(d)).astype(int))
+
+
+#: Systems up to this many unknowns are solved again by a dense LU in
+#: double-double where the refinement with float64 factors does not reach
+#: :data:`_STRICT_AFTER` (A(ω) too ill-conditioned for float64 factors).
+DD_LIMIT = 200
+
+
+class _DDSolver:
+    """Dense LU in double-double of the scaled A(ω), assembled exactly from its stamps.
+
+    The fallback where float64 factors cannot give a contracting refinement:
+    a summed diagonal already loses an admittance below 1e-16 of its
+    neighbour's (a soft spring beside a stiff one), and elimination loses
+    more; here every entry is the double-double sum of its stamps, the
+    matrix is scaled symmetrically by powers of two (:func:`_balance`), and
+    the LU (partial pivoting) runs in double-double, so that the refinement
+    contracts up to cond(A) ≈ 1e30.  Dense and vectorised over a batch of
+    ω, about 100 array operations per column: only for the points that need
+    it, and only up to :data:`DD_LIMIT` unknowns.
+    """
+
+    kind = "dd"
+    max_chunk = 16
+
+    def __init__(self, system: NodalSystem):
+        n = system.size
+        self.n = n
+        self.parts = []
+        for kinds in (("damper", "lever"), ("mass",), ("spring",)):
+            h, lo = np.zeros((n, n)), np.zeros((n, n))
+            for kind in kinds:
+                for r, c, v in zip(*system.stamps[kind]):
+                    h[r, c], e = _two_sum(h[r, c], float(v))
+                    lo[r, c] += e
+            self.parts.append(_dd_norm(h, lo))
+        self.absdiag = [np.abs(np.diagonal(p[0])) for p in self.parts]
+
+    def factor(self, omega, strict: bool = False):
+        omega = np.asarray(omega, dtype=float)
+        w = omega[:, None, None]
+        (ch, cl), (mh, ml), (kh, kl) = self.parts
+        with np.errstate(all="ignore"):
+            im = _dd_norm(*_dd_sub(*_dd_mul_d(mh, ml, w), *_dd_div_d(kh, kl, w)))
+            B, n = omega.size, self.n
+            X = [np.broadcast_to(ch, (B, n, n)).copy(), np.broadcast_to(cl, (B, n, n)).copy(),
+                 im[0], im[1]]
+            mag = np.abs(X[0] + 1j * X[2])
+            cd, md, kd = self.absdiag
+            d = _balance(mag, cd + omega[:, None] * md + kd / omega[:, None])
+            good = np.isfinite(mag).all(axis=(1, 2)) & (omega > 0)
+            dd = d[:, :, None] * d[:, None, :]
+            X = [x * dd for x in X]
+            perm = np.broadcast_to(np.arange(n), (B, n)).copy()
+            rows = np.arange(B)
+            for k in range(n):
+                p = k + np.argmax(np.abs(X[0][:, k:, k]) + np.abs(X[2][:, k:, k]), axis=1)
+                for x in X + [perm]:
+                    x[rows, k], x[rows, p] = x[rows, p], x[rows, k].copy()
+                piv = [x[:, k, k] for x in X]
+                zero = (piv[0] == 0) & (piv[2] == 0)
+                good &= ~zero
+                piv[0] = np.where(zero, 1.0, piv[0])
+                if k + 1 == n:
+                    break
+                lk = _cdd_div([x[:, k + 1:, k] for x in X], [v[:, None] for v in piv])
+                for x, v in zip(X, lk):
+                    x[:, k + 1:, k] = v
+                upd = _cdd_mul([v[:, :, None] for v in lk], [x[:, None, k, k + 1:] for x in X])
+                sub = X[0][:, k + 1:, k + 1:], X[1][:, k + 1:, k + 1:]
+                re = _dd_sub(*sub, *upd[:2])
+                sub = X[2][:, k + 1:, k + 1:], X[3][:, k + 1:, k + 1:]
+                im = _dd_sub(*sub, *upd[2:])
+                for x, v in zip(X, (*re, *im)):
+                    x[:, k + 1:, k + 1:] = v
+            good &= np.isfinite(X[0]).all(axis=(1, 2)) & np.isfinite(X[2]).all(axis=(1, 2))
+        X, perm, d = [x[good] for x in X], perm[good], d[good]
+        every = np.arange(perm.shape[0])
+
+        def solve(r, rows=None):
+            rows = every if rows is None else np.asarray(rows)
+            b = np.take_along_axis(np.asarray(r, dtype=complex) * d[rows], perm[rows], axis=1)
+            F = [x[rows] for x in X]
+            y = [b.real.copy(), np.zeros(b.shape), b.imag.copy(), np.zeros(b.shape)]
+            with np.errstate(all="ignore"):
+                for k in range(self.n - 1):          # L (unit diagonal)
+                    t = _cdd_mul([f[:, k + 1:, k] for f in F], [v[:, k, None] for v in y])
+                    re = _dd_sub(y[0][:, k + 1:], y[1][:, k + 1:], *t[:2])
+                    im = _dd_sub(y[2][:, k + 1:], y[3][:, k + 1:], *t[2:])
+                    for v, u in zip(y, (*re, *im)):
+                        v[:, k + 1:] = u
+                for k in range(self.n - 1, -1, -1):  # U
+                    q = _cdd_div([v[:, k] for v in y], [f[:, k, k] for f in F])
+                    for v, u in zip(y, q):
+                        v[:, k] = u
+                    if k:
+                        t = _cdd_mul([f[:, :k, k] for f in F], [u[:, None] for u in q])
+                        re = _dd_sub(y[0][:, :k], y[1][:, :k], *t[:2])
+                        im = _dd_sub(y[2][:, :k], y[3][:, :k], *t[2:])
+                        for v, u in zip(y, (*re, *im)):
+                            v[:, :k] = u
+            return ((y[0] + y[1]) + 1j * (y[2] + y[3])) * d[rows]
+        return good, solve
+
+
 class _Pattern:
     """What does not change with ω: the pattern of A(ω), its parts, and the residual's plan.
 
@@ -661,6 +827,7 @@ def _sweep_chunks(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
     Sd = np.full(m, np.nan)
     x_all = np.full((m, n), complex(np.nan, np.nan)) if keep is None else None
     kept = {}
+    checked = np.zeros(m, dtype=bool)
     solver = _solver(system)
     if solver.kind != "dense" and _kernels() is not None:
         # Compiled: no (ω, term) temporaries; the chunk's (ω, n) arrays stay in cache.
@@ -686,6 +853,17 @@ def _sweep_chunks(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
                 xh[take], est[take] = xh2[better], est2[better]
                 if xl is not None:
                     xl[take] = xl2[better]
+        if refine and n <= DD_LIMIT and not np.iscomplexobj(omega):
+            redo = np.flatnonzero(~(est <= _STRICT_AFTER))
+            if redo.size:
+                checked[sel[redo]] = True
+                ok2, dd_fn = _dd_solver(system).factor(omega[sel[redo]])
+                redo = redo[ok2]
+                xh2, xl2, est2 = _refined(dd_fn, pat, omega[sel[redo]], rhs, system,
+                                          refine, steps)
+                better = ~(est2 >= est[redo])
+                take = redo[better]
+                xh[take], xl[take], est[take] = xh2[better], xl2[better], est2[better]
         K[sel] = _difference_dd(system, xh, xl)
         x = xh + xl if xl is not None else xh
         err[sel] = est
@@ -695,7 +873,7 @@ def _sweep_chunks(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
         elif keep is not None:
             for k in np.flatnonzero(keep[sel]):
                 kept[int(sel[k])] = x[k]
-    return K, err, S, Sd, x_all, kept
+    return K, err, S, Sd, x_all, kept, checked
 
 
 def _difference_dd(system, xh, xl):
@@ -735,27 +913,63 @@ def solve(system: NodalSystem, omega: ArrayLike, *, refine: bool = True,
     Sd = np.full(m, np.nan)
     x = np.full((m, system.size), complex(np.nan, np.nan)) if keep_x else None
     kept = {}
+    checked = np.zeros(m, dtype=bool)
     if idx.size:
-        Ki, ei, Si, Sdi, xi, kept_i = _sweep(system, omega[idx], refine, steps,
-                                             None if keep_x else np.ones(idx.size, bool))
-        K[idx], err[idx], S[idx], Sd[idx] = Ki, ei, Si, Sdi
+        Ki, ei, Si, Sdi, xi, kept_i, ci = _sweep(system, omega[idx], refine, steps,
+                                                 None if keep_x else np.ones(idx.size, bool))
+        K[idx], err[idx], S[idx], Sd[idx], checked[idx] = Ki, ei, Si, Sdi, ci
         if keep_x:
             x[idx] = xi
         else:
             # Only the rows needed at singular points are kept.
             sing = ~np.isfinite(Ki) | (ei >= 1.0)
             kept = {int(idx[k]): v for k, v in kept_i.items() if sing[k]}
-    # No correct digit from the refinement itself (it did not contract): A(ω)
-    # is numerically singular.  The residual-rounding bound below is a worst
-    # case and is not used for this verdict.
-    singular = ok & (~np.isfinite(K) | (err >= 1.0))
+    # No correct digit even from the double-double LU (cond(A) beyond about
+    # 1e30), or A(ω) exactly singular: a singular point.  Where only float64
+    # factors were tried (no refinement, or more than DD_LIMIT unknowns), a
+    # refinement that does not contract says no more than "no digit known":
+    # K stays finite with an infinite error (flag 2), never a pole.  The
+    # residual-rounding bound below is a worst case and not used here.
+    singular = ok & (~np.isfinite(K) | (err >= 1.0) & checked)
+    rows = x if keep_x else kept
+    for i in np.flatnonzero(ok & (err >= 1.0) & ~checked & np.isfinite(K)):
+        # Only float64 factors: singular if the iterate's element-wise
+        # backward error says A(ω) is within rounding of its values of a
+        # singular matrix; a stiff network's garbage iterate is not.
+        singular[i] = _backward_error(system, omega[i], rows[i]) <= SINGULAR_BACKWARD
     with np.errstate(all="ignore"):
         err = err + _residual_rounding(system, S)
         err = np.where(ok, _total(Sd, err), np.inf)
     if limits:
-        rows = x if keep_x else kept
         K, err = _singular_points(system, omega, rows, K, err, singular, steps)
     return Solution(x, K, err, singular)
+
+
+#: A point whose refinement by float64 factors does not contract is singular
+#: when changing every element value and lever ratio by at most this
+#: (relative) makes A(ω) x = 0 for the iterate x (its element-wise backward error).
+SINGULAR_BACKWARD = 2.0 ** -43
+
+
+def _backward_error(system, omega: float, x: NDArray) -> float:
+    """max_i |(A x)_i| / Σ |stamp·x| over row i, by element (see :data:`SINGULAR_BACKWARD`).
+
+    An element's stamps enter as y_e·|x_i − x_j| (rounding its value moves
+    all four together), a lever stamp as |value·x_c|.  A x from the
+    residual in double-double.
+    """
+    pat = _pattern(system)
+    rhs = system.injection()
+    with np.errstate(all="ignore"):
+        ax = rhs - pat.residual(np.array([omega]), x[None, :], None, rhs)[0]
+        xe = np.append(np.asarray(x, dtype=complex), 0.0)
+        y = np.abs(combine(pat.e_c, pat.e_m, pat.e_k, omega))
+        t = y * np.abs(xe[pat.e_i] - xe[pat.e_j])
+        n1 = pat.n + 1
+        den = np.bincount(pat.e_i, t, n1) + np.bincount(pat.e_j, t, n1) + \
+            np.bincount(pat.s_row, np.abs(pat.s_val * xe[pat.s_col]), n1)
+        eta = np.abs(ax) / den[:-1]
+        return float(np.max(np.where(np.abs(ax) == 0, 0.0, eta), initial=0.0))
 
 
 def _refined(solve_fn, pat: _Pattern, omega, rhs, system, refine: bool, steps: int):
@@ -864,6 +1078,14 @@ def _estimate(system, xh, xl, d, prev):
         diverged = (rho >= 0.5) & (nd > 1e-2 * nx)
         est = np.where(diverged | np.isnan(est), np.inf, est)
     return est
+
+
+def _dd_solver(system: NodalSystem) -> _DDSolver:
+    cached = system.__dict__.get("_dd_solver")
+    if cached is None:
+        cached = _DDSolver(system)
+        object.__setattr__(system, "_dd_solver", cached)
+    return cached
 
 
 def _solver(system: NodalSystem):
@@ -1163,7 +1385,7 @@ def evaluate_complex(system: NodalSystem, s: ArrayLike
     """
     s = np.asarray(s, dtype=complex).reshape(-1)
     omega = -1j * s
-    K, est, S, Sd, _, _ = _sweep(system, omega, True, 4, None)
+    K, est, S, Sd, _, _, _ = _sweep(system, omega, True, 4, None)
     est = _total(Sd, est + _residual_rounding(system, S), data="add")
     with np.errstate(all="ignore"):
         return K, est * np.abs(K)
@@ -1276,12 +1498,16 @@ def require_nonsingular(system: NodalSystem) -> None:
         raise TopologyError("the network is singular at every frequency (tried "
                             f"ω = {trial[0]:.4g} and {trial[1]:.4g} rad/s)")
     judged = None
-    for A in dense_matrices(system, trial):
+    absdiag = [np.abs(p.diagonal()) for p in (system.D + system.C, system.M, system.Ks)]
+    for w, A in zip(trial, dense_matrices(system, trial)):
         if not np.isfinite(A).all():
             continue            # values at float64's edge: no verdict at this ω
-        # Judge the equilibrated matrix: a lever of ratio 1e-8 puts entries of
-        # 1e-8 beside 1, and the raw singular values then look singular.
-        A = _equilibrate(A)
+        # Judge the balanced matrix: a lever of ratio 1e-8 puts entries of
+        # 1e-8 beside 1, every value scaled by 1e-100 puts admittances of
+        # 1e-100 beside the lever's ±1, and the raw singular values then look
+        # singular.
+        d = _balance(np.abs(A)[None], (absdiag[0] + w * absdiag[1] + absdiag[2] / w)[None])[0]
+        A = A * d[:, None] * d[None, :]
         sv = np.linalg.svd(A, compute_uv=False)
         if sv[-1] > 1e-13 * sv[0]:
             return
@@ -1297,19 +1523,6 @@ def require_nonsingular(system: NodalSystem) -> None:
         f"are not determined): {', '.join(culprits[:12])}; check for levers in parallel "
         "or nodes tied only by levers", nodes=[c for c in culprits if not c.startswith("lever")],
         elements=[c[6:] for c in culprits if c.startswith("lever")])
-
-
-def _equilibrate(A: NDArray) -> NDArray:
-    """Rows and columns scaled to max-norm 1 (Ruiz iteration; singular stays singular)."""
-    A = A.copy()
-    for _ in range(8):
-        mag = np.abs(A)
-        r, c = np.sqrt(mag.max(axis=1)), np.sqrt(mag.max(axis=0))
-        r[r == 0] = 1.0
-        c[c == 0] = 1.0
-        A /= r[:, None]
-        A /= c[None, :]
-    return A
 
 
 def _frequency_scale(system: NodalSystem) -> float:
