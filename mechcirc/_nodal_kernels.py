@@ -286,7 +286,7 @@ def sensitivities(omega, x, scale, e_i, e_j, e_m, e_k, e_c, s_row, s_col, s_val,
             xj = x[k, e_j[e]] * f
             a = _mag(xi) + _mag(xj)
             d = _mag(xi - xj)
-            acc += y * a * a
+            acc += y * a * d
             accd += y * d * d
         for s in range(s_row.size):
             acc += abs(s_val[s]) * _mag(x[k, s_row[s]] * f) * _mag(x[k, s_col[s]] * f)

@@ -656,10 +656,16 @@ class _Pattern:
     def sensitivities(self, omega: NDArray, x: NDArray, K: NDArray) -> tuple[NDArray, NDArray]:
         """(S/|K|, S_data/|K|) for each ω: the sensitivity of K to rounding the stamps and the data.
 
-        S = Σ |x_r · a_rc · x_c| over the unsummed stamps: A is complex
-        symmetric, so the adjoint solution of K = cᵀ A⁻¹ c is x itself and a
-        relative change ε of every stamp moves K by at most ε·S (for an
-        element, its four stamps give |y|(|x_i| + |x_j|)²).
+        S = Σ_e |y_e| |x_i − x_j| (|x_i| + |x_j|) + Σ_levers |v · x_r · x_c|:
+        the residual forms each element's current y·(x_i − x_j) once and
+        adds it to both rows, so its rounding (relative to the current, and
+        u·|x| from the low parts of x_i, x_j in double-double) enters as
+        δ·(e_i − e_j); A is complex symmetric, so the adjoint solution of
+        K = cᵀ A⁻¹ c is x itself and K moves by δ·(x_i − x_j).  A row's own
+        summation error, relative to Σ|y_e (x_i − x_j)| over its elements,
+        meets |x_i|; a lever stamp's rounding meets |x_r|.  (The earlier
+        Σ |y|(|x_i| + |x_j|)² counted a stiff element's currents as if
+        they did not cancel: 1e14 × the true error on stiff networks.)
 
         S_data = Σ_e |y_e| |x_i − x_j|² + Σ_levers 2|r| |x_p1 − x_p2| |q|:
         rounding an element's value by a relative ε changes its four stamps
@@ -691,11 +697,11 @@ class _Pattern:
             y = np.abs(combine(self.e_c, self.e_m, self.e_k, w))
             ax = np.abs(xe)
             ai, aj = ax[:, self.e_i], ax[:, self.e_j]
-            S = np.einsum("ij,ij->i", y, (ai + aj) ** 2)
+            d = np.abs(xe[:, self.e_i] - xe[:, self.e_j])
+            S = np.einsum("ij,ij->i", y, (ai + aj) * d)
             if self.s_row.size:
                 S = S + np.abs(self.s_val) @ (ax[:, self.s_row] * ax[:, self.s_col]).T \
                     if c else S
-            d = np.abs(xe[:, self.e_i] - xe[:, self.e_j])
             Sd = np.einsum("ij,ij->i", y, d * d)
             if self.l_r.size:
                 dl = np.abs(xe[:, self.l_p1] - xe[:, self.l_p2])
@@ -834,36 +840,9 @@ def _sweep_chunks(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
         chunk = max(1, min(solver.max_chunk, 2 ** 16 // max(1, n)))
     else:
         chunk = max(1, min(solver.max_chunk, _CHUNK_TERMS // max(1, pat.n_terms + n)))
-    for start in range(0, m, chunk):
-        sel = np.arange(start, min(start + chunk, m))
-        good, solve_fn = solver.factor(omega[sel])
-        sel = sel[good]
-        if not sel.size:
-            continue
-        xh, xl, est = _refined(solve_fn, pat, omega[sel], rhs, system, refine, steps)
-        redo = np.flatnonzero(~(est <= _STRICT_AFTER)) if solver.kind == "superlu" else []
-        if len(redo):
-            # Diagonal pivoting was not stable enough here: partial pivoting.
-            ok2, strict_fn = solver.factor(omega[sel[redo]], strict=True)
-            if ok2.all():
-                xh2, xl2, est2 = _refined(strict_fn, pat, omega[sel[redo]], rhs, system,
-                                          refine, steps)
-                better = ~(est2 >= est[redo])
-                take = redo[better]
-                xh[take], est[take] = xh2[better], est2[better]
-                if xl is not None:
-                    xl[take] = xl2[better]
-        if refine and n <= DD_LIMIT and not np.iscomplexobj(omega):
-            redo = np.flatnonzero(~(est <= _STRICT_AFTER))
-            if redo.size:
-                checked[sel[redo]] = True
-                ok2, dd_fn = _dd_solver(system).factor(omega[sel[redo]])
-                redo = redo[ok2]
-                xh2, xl2, est2 = _refined(dd_fn, pat, omega[sel[redo]], rhs, system,
-                                          refine, steps)
-                better = ~(est2 >= est[redo])
-                take = redo[better]
-                xh[take], xl[take], est[take] = xh2[better], xl2[better], est2[better]
+    use_dd = refine and n <= DD_LIMIT and not np.iscomplexobj(omega)
+
+    def store(sel, xh, xl, est):
         K[sel] = _difference_dd(system, xh, xl)
         x = xh + xl if xl is not None else xh
         err[sel] = est
@@ -873,6 +852,37 @@ def _sweep_chunks(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
         elif keep is not None:
             for k in np.flatnonzero(keep[sel]):
                 kept[int(sel[k])] = x[k]
+
+    for start in range(0, m, chunk):
+        every = np.arange(start, min(start + chunk, m))
+        good, solve_fn = solver.factor(omega[every])
+        sel = every[good]
+        if sel.size:
+            xh, xl, est = _refined(solve_fn, pat, omega[sel], rhs, system, refine, steps)
+            redo = np.flatnonzero(~(est <= _STRICT_AFTER)) if solver.kind == "superlu" else []
+            if len(redo):
+                # Diagonal pivoting was not stable enough here: partial pivoting.
+                ok2, strict_fn = solver.factor(omega[sel[redo]], strict=True)
+                if ok2.all():
+                    xh2, xl2, est2 = _refined(strict_fn, pat, omega[sel[redo]], rhs, system,
+                                              refine, steps)
+                    better = ~(est2 >= est[redo])
+                    take = redo[better]
+                    xh[take], est[take] = xh2[better], est2[better]
+                    if xl is not None:
+                        xl[take] = xl2[better]
+            store(sel, xh, xl, est)
+        if use_dd:
+            # Float64 factors failed (A(ω) exactly singular as rounded to float64)
+            # or could not refine: the double-double LU.
+            redo = every[~(err[every] <= _STRICT_AFTER)]
+            if redo.size:
+                checked[redo] = True
+                ok2, dd_fn = _dd_solver(system).factor(omega[redo])
+                redo = redo[ok2]
+                xh2, xl2, est2 = _refined(dd_fn, pat, omega[redo], rhs, system, refine, steps)
+                better = ~(est2 >= err[redo])
+                store(redo[better], xh2[better], xl2[better], est2[better])
     return K, err, S, Sd, x_all, kept, checked
 
 
@@ -939,7 +949,7 @@ def solve(system: NodalSystem, omega: ArrayLike, *, refine: bool = True,
         singular[i] = _backward_error(system, omega[i], rows[i]) <= SINGULAR_BACKWARD
     with np.errstate(all="ignore"):
         err = err + _residual_rounding(system, S)
-        err = np.where(ok, _total(Sd, err), np.inf)
+        err = np.where(ok, np.maximum(err, np.finfo(float).eps), np.inf)
     if limits:
         K, err = _singular_points(system, omega, rows, K, err, singular, steps)
     return Solution(x, K, err, singular)
@@ -1013,9 +1023,10 @@ def _refined(solve_fn, pat: _Pattern, omega, rhs, system, refine: bool, steps: i
 def _residual_rounding(system, S):
     """Relative error of K left by residuals rounded in double-double.
 
-    Each residual row is summed to about (terms + 4)·u² × Σ_c |a_rc x_c|
-    (u = 2⁻⁵³), which K (through the adjoint solution, x itself) feels as
-    that times S; the refinement cannot see it.
+    Each residual row is summed to about (terms + 4)·u² × Σ_e |y_e (x_i − x_j)|
+    (+ its lever stamps; u = 2⁻⁵³), which K (through the adjoint solution,
+    x itself) feels as that times S (:meth:`_Pattern.sensitivities`); the
+    refinement cannot see it.
     """
     pat = _pattern(system)
     u2 = (np.finfo(float).eps / 2) ** 2
@@ -1024,29 +1035,23 @@ def _residual_rounding(system, S):
     return np.where(np.isnan(out), np.inf, out)
 
 
-def _total(S, est, *, data: str = "flag"):
-    """The solve's error ``est``, and the sensitivity of K to rounding its data.
+def _total(S, est):
+    """The solve's error ``est`` plus the sensitivity of K to rounding its data (resonances).
 
     Each value (m, k, c, r) carries a rounding of up to eps relative; that
-    moves K by eps × S_data / |K| (``S``, from :meth:`_Pattern.sensitivities`), far
-    more than the solve near a zero of K.
-    With ``data="flag"`` (sweeps) that figure replaces the estimate only where
-    it exceeds :data:`~mechcirc.sweep.NEAR_SINGULAR_ERROR` (1e-6): a point
-    within rounding of a zero is flagged, as the series–parallel method flags
-    it, while everywhere else the estimate stays that of the computation
-    (K exact for the binary inputs, as mpmath would compute it).  With
-    ``data="add"`` (resonances) it is always added: the error then bounds
-    the distance to the root of the values as written, before rounding.
-    The result is rounded to float64 at the end: at least eps.
+    moves K by eps × S_data / |K| (``S``, from :meth:`_Pattern.sensitivities`),
+    far more than the solve near a zero of K.  It is added for resonances,
+    whose error then bounds the distance to the root of the values as
+    written, before rounding.  Sweeps do not add it: their error is that of
+    the computation for the binary inputs (as the series–parallel bound's,
+    and as a 40-digit reference measures it); flagging from it made half the
+    points near a grid's poles false alarms, accurate to 1e-13.  At least
+    eps (the result is rounded to float64).
     """
     eps = np.finfo(float).eps
     with np.errstate(all="ignore"):
         rounding = eps * S
-        rounding = np.where(np.isnan(rounding), np.inf, rounding)
-        if data == "add":
-            total = est + rounding
-        else:
-            total = np.where(rounding > 1e-6, np.maximum(est, rounding), est)
+        total = est + np.where(np.isnan(rounding), np.inf, rounding)
     return np.maximum(total, eps)
 
 
@@ -1386,7 +1391,7 @@ def evaluate_complex(system: NodalSystem, s: ArrayLike
     s = np.asarray(s, dtype=complex).reshape(-1)
     omega = -1j * s
     K, est, S, Sd, _, _, _ = _sweep(system, omega, True, 4, None)
-    est = _total(Sd, est + _residual_rounding(system, S), data="add")
+    est = _total(Sd, est + _residual_rounding(system, S))
     with np.errstate(all="ignore"):
         return K, est * np.abs(K)
 
@@ -1482,8 +1487,14 @@ def condition_error(system: NodalSystem, omega: ArrayLike) -> NDArray[np.float64
 def require_nonsingular(system: NodalSystem) -> None:
     """Raise if A(ω) is singular at every frequency (checked at two generic ω).
 
-    Dense systems are judged by their smallest singular value, and the null
-    vector names the undetermined unknowns; large ones by a sparse LU.
+    Dense systems are first judged by the smallest singular value of the
+    balanced matrix (:func:`_balance`), and the null vector names the
+    undetermined unknowns.  Where that does not clear a system, or it is
+    large, the refined solve decides (in double-double where float64 factors
+    cannot refine, see :class:`_DDSolver`): the system is regular at a trial
+    ω if the solve gives a finite K and its solution's element-wise backward
+    error as a null vector is above rounding (:func:`_backward_error`) — so a
+    stiff network (cond(A) of 1e20, K well conditioned) is not refused.
     """
     if system.size == 0:
         raise TopologyError(
@@ -1491,29 +1502,31 @@ def require_nonsingular(system: NodalSystem) -> None:
             f"{', '.join(system.unloaded[:12]) or 'none'})", elements=system.unloaded)
     scale = _frequency_scale(system)
     trial = [0.731 * scale, 1.913 * scale]
-    if system.size > DENSE_LIMIT:
-        x = solve_unit(system, trial)
-        if np.isfinite(x).all(axis=1).any():
+    judged = None
+    if system.size <= DENSE_LIMIT:
+        absdiag = [np.abs(p.diagonal()) for p in (system.D + system.C, system.M, system.Ks)]
+        for w, A in zip(trial, dense_matrices(system, trial)):
+            if not np.isfinite(A).all():
+                return          # values at float64's edge: the sweep flags such points
+            # Judge the balanced matrix: a lever of ratio 1e-8 puts entries of
+            # 1e-8 beside 1, every value scaled by 1e-100 puts admittances of
+            # 1e-100 beside the lever's ±1, and the raw singular values then
+            # look singular.
+            diag = absdiag[0] + w * absdiag[1] + absdiag[2] / w
+            d = _balance(np.abs(A)[None], diag[None])[0]
+            A = A * d[:, None] * d[None, :]
+            sv = np.linalg.svd(A, compute_uv=False)
+            if sv[-1] > 1e-13 * sv[0]:
+                return
+            judged = A
+    s = solve(system, trial, limits=False)
+    for i, w in enumerate(trial):
+        if np.isfinite(s.K[i]) and not s.singular[i] and \
+                _backward_error(system, w, s.x[i]) > SINGULAR_BACKWARD:
             return
+    if judged is None:
         raise TopologyError("the network is singular at every frequency (tried "
                             f"ω = {trial[0]:.4g} and {trial[1]:.4g} rad/s)")
-    judged = None
-    absdiag = [np.abs(p.diagonal()) for p in (system.D + system.C, system.M, system.Ks)]
-    for w, A in zip(trial, dense_matrices(system, trial)):
-        if not np.isfinite(A).all():
-            continue            # values at float64's edge: no verdict at this ω
-        # Judge the balanced matrix: a lever of ratio 1e-8 puts entries of
-        # 1e-8 beside 1, every value scaled by 1e-100 puts admittances of
-        # 1e-100 beside the lever's ±1, and the raw singular values then look
-        # singular.
-        d = _balance(np.abs(A)[None], (absdiag[0] + w * absdiag[1] + absdiag[2] / w)[None])[0]
-        A = A * d[:, None] * d[None, :]
-        sv = np.linalg.svd(A, compute_uv=False)
-        if sv[-1] > 1e-13 * sv[0]:
-            return
-        judged = A
-    if judged is None:
-        return                  # the sweep flags the non-finite points itself
     _, _, vh = np.linalg.svd(judged)
     null = np.abs(vh[-1].conj())
     names = list(system.nodes) + [f"lever {lv.name}" for lv in system.levers]
