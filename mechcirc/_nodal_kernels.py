@@ -94,8 +94,9 @@ def residual(omega, xr, xi, xlr, xli, has_lo, rhs, b_i, b_j, b_s,
             dh_r, dl_r = _two_sum(xr[k, i], -xr[k, j])
             dh_i, dl_i = _two_sum(xi[k, i], -xi[k, j])
             if has_lo:
-                dl_r = dl_r + (xlr[k, i] - xlr[k, j])
-                dl_i = dl_i + (xli[k, i] - xli[k, j])
+                # Renormalised: the low parts of x_i ≈ x_j are ~u|x|, not ~u|d|.
+                dh_r, dl_r = _two_sum(dh_r, dl_r + (xlr[k, i] - xlr[k, j]))
+                dh_i, dl_i = _two_sum(dh_i, dl_i + (xli[k, i] - xli[k, j]))
             th_r, tl_r = _two_prod(v, vh, vl, dh_r)
             th_i, tl_i = _two_prod(v, vh, vl, dh_i)
             tl_r = tl_r + v * dl_r

@@ -565,7 +565,10 @@ class _Pattern:
         xs = xe[:, self.s_col]
         if xl is not None:
             xle = np.concatenate([xl.astype(complex, copy=False), z], axis=1)
-            d_l = d_l + (xle[:, self.e_i] - xle[:, self.e_j])
+            # Renormalised (TwoSum): where x_i ≈ x_j their low parts (~u|x|)
+            # would leave a low part far above u|d|, and every later sum of
+            # low parts would round at u²|x| per row instead of u²|y d|.
+            d_h, d_l = _two_sum(d_h, d_l + (xle[:, self.e_i] - xle[:, self.e_j]))
         vh, vl = self.e_vs
         p_h, p_l = _two_prod(self.e_val, vh, vl, d_h)
         p_l = p_l + self.e_val * d_l
@@ -842,11 +845,17 @@ def _sweep_chunks(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
         chunk = max(1, min(solver.max_chunk, _CHUNK_TERMS // max(1, pat.n_terms + n)))
     use_dd = refine and n <= DD_LIMIT and not np.iscomplexobj(omega)
 
-    def store(sel, xh, xl, est):
+    def store(sel, xh, xl, est, rho):
         K[sel] = _difference_dd(system, xh, xl)
         x = xh + xl if xl is not None else xh
-        err[sel] = est
         S[sel], Sd[sel] = pat.sensitivities(omega[sel], x, K[sel])
+        # A refinement that stalls (corrections not shrinking: the factors
+        # are too inaccurate, cond(A)·u ≳ 1) has not converged, unless it
+        # stalls at the residual's own rounding: its last correction says
+        # nothing of the error (seen: 2.8e-9 and 2.8e-12 with corrections of
+        # 1e-11 and 2.6e-16 on a stiff tree, cond(A) ≈ 1e17).  No estimate: inf.
+        floor = 16 * _residual_rounding(system, S[sel])
+        err[sel] = np.where((rho >= 0.5) & (est > floor), np.inf, est)
         if x_all is not None:
             x_all[sel] = x
         elif keep is not None:
@@ -858,20 +867,20 @@ def _sweep_chunks(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
         good, solve_fn = solver.factor(omega[every])
         sel = every[good]
         if sel.size:
-            xh, xl, est = _refined(solve_fn, pat, omega[sel], rhs, system, refine, steps)
+            xh, xl, est, rho = _refined(solve_fn, pat, omega[sel], rhs, system, refine, steps)
             redo = np.flatnonzero(~(est <= _STRICT_AFTER)) if solver.kind == "superlu" else []
             if len(redo):
                 # Diagonal pivoting was not stable enough here: partial pivoting.
                 ok2, strict_fn = solver.factor(omega[sel[redo]], strict=True)
                 if ok2.all():
-                    xh2, xl2, est2 = _refined(strict_fn, pat, omega[sel[redo]], rhs, system,
-                                              refine, steps)
+                    xh2, xl2, est2, rho2 = _refined(strict_fn, pat, omega[sel[redo]], rhs,
+                                                    system, refine, steps)
                     better = ~(est2 >= est[redo])
                     take = redo[better]
-                    xh[take], est[take] = xh2[better], est2[better]
+                    xh[take], est[take], rho[take] = xh2[better], est2[better], rho2[better]
                     if xl is not None:
                         xl[take] = xl2[better]
-            store(sel, xh, xl, est)
+            store(sel, xh, xl, est, rho)
         if use_dd:
             # Float64 factors failed (A(ω) exactly singular as rounded to float64)
             # or could not refine: the double-double LU.
@@ -880,9 +889,10 @@ def _sweep_chunks(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
                 checked[redo] = True
                 ok2, dd_fn = _dd_solver(system).factor(omega[redo])
                 redo = redo[ok2]
-                xh2, xl2, est2 = _refined(dd_fn, pat, omega[redo], rhs, system, refine, steps)
+                xh2, xl2, est2, rho2 = _refined(dd_fn, pat, omega[redo], rhs, system, refine,
+                                                steps)
                 better = ~(est2 >= err[redo])
-                store(redo[better], xh2[better], xl2[better], est2[better])
+                store(redo[better], xh2[better], xl2[better], est2[better], rho2[better])
     return K, err, S, Sd, x_all, kept, checked
 
 
@@ -985,8 +995,8 @@ def _backward_error(system, omega: float, x: NDArray) -> float:
 def _refined(solve_fn, pat: _Pattern, omega, rhs, system, refine: bool, steps: int):
     """x from one solve and up to ``steps`` refinement steps.
 
-    Returns (xh, xl, relative error of K): x = xh + xl in double-double
-    (xl None without refinement).
+    Returns (xh, xl, relative error of K, contraction of the last step):
+    x = xh + xl in double-double (xl None without refinement).
     """
     eps = np.finfo(float).eps
     b = np.broadcast_to(rhs.astype(complex), (omega.size, rhs.size))
@@ -994,10 +1004,11 @@ def _refined(solve_fn, pat: _Pattern, omega, rhs, system, refine: bool, steps: i
     if not refine:
         # No refinement: the first correction is still the error estimate.
         d = solve_fn(pat.residual(omega, x0, None, rhs))
-        return x0, None, _estimate(system, x0, None, d, x0)
+        return (x0, None, *_estimate(system, x0, None, d, x0))
     xh, xl = x0.copy(), np.zeros_like(x0)
     prev = x0
     est = np.full(omega.size, np.inf)
+    rho = np.zeros(omega.size)
     active = np.arange(omega.size)
     for step in range(steps):
         # Only the points not yet converged take a further step (their
@@ -1005,7 +1016,7 @@ def _refined(solve_fn, pat: _Pattern, omega, rhs, system, refine: bool, steps: i
         rows = None if active.size == omega.size else active
         xa, xla = xh[active], (xl[active] if step else None)
         d = solve_fn(pat.residual(omega[active], xa, xla, rhs), *(() if rows is None else (rows,)))
-        est[active] = _estimate(system, xa, xla, d, prev[active])
+        est[active], rho[active] = _estimate(system, xa, xla, d, prev[active])
         with np.errstate(all="ignore"):
             s, e = _two_sum(xa, d)
         xh[active] = s
@@ -1017,7 +1028,7 @@ def _refined(solve_fn, pat: _Pattern, omega, rhs, system, refine: bool, steps: i
         active = active[est[active] > 16 * eps]
         if not active.size:
             break
-    return xh, xl, est
+    return xh, xl, est, rho
 
 
 def _residual_rounding(system, S):
@@ -1056,7 +1067,7 @@ def _total(S, est):
 
 
 def _estimate(system, xh, xl, d, prev):
-    """Relative error of K = x_a − x_b before applying the correction ``d``.
+    """(Relative error of K = x_a − x_b before applying the correction ``d``, contraction ρ).
 
     |d_a − d_b| estimates the error of K; ``d`` itself is wrong by about the
     contraction ρ = ‖d‖/‖prev‖ times the size of its drive components, which
@@ -1082,7 +1093,7 @@ def _estimate(system, xh, xl, d, prev):
         # singular A.
         diverged = (rho >= 0.5) & (nd > 1e-2 * nx)
         est = np.where(diverged | np.isnan(est), np.inf, est)
-    return est
+    return est, rho
 
 
 def _dd_solver(system: NodalSystem) -> _DDSolver:
