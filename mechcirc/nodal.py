@@ -26,7 +26,10 @@ the ordering made once from the pattern, see :class:`_SparseSolver`).  Each
 solution is refined with residuals in double-double arithmetic reusing the
 factors (compiled by numba on the sparse path when it is installed:
 :mod:`mechcirc._nodal_kernels`), and the last correction gives the error
-estimate of K (:class:`Solution`).  At a singular point K is +∞·j (a pole) or 0 (a zero),
+estimate of K (:class:`Solution`).  Where float64 factors cannot refine
+(cond(A) beyond 1/u, as on stiff networks whose K is well conditioned),
+a dense LU in double-double of the balanced matrix takes over
+(:class:`_DDSolver`).  At a singular point K is +∞·j (a pole) or 0 (a zero),
 with an infinite error, as the series–parallel method gives it.
 """
 
@@ -358,11 +361,12 @@ class _DDSolver:
     """
 
     kind = "dd"
-    max_chunk = 16
 
     def __init__(self, system: NodalSystem):
         n = system.size
         self.n = n
+        # About 2¹⁹ matrix entries per batch (some 30 temporaries of that size).
+        self.max_chunk = max(1, min(64, 2 ** 19 // max(1, n * n)))
         self.parts = []
         for kinds in (("damper", "lever"), ("mass",), ("spring",)):
             h, lo = np.zeros((n, n)), np.zeros((n, n))
@@ -403,13 +407,20 @@ class _DDSolver:
                 lk = _cdd_div([x[:, k + 1:, k] for x in X], [v[:, None] for v in piv])
                 for x, v in zip(X, lk):
                     x[:, k + 1:, k] = v
-                upd = _cdd_mul([v[:, :, None] for v in lk], [x[:, None, k, k + 1:] for x in X])
-                sub = X[0][:, k + 1:, k + 1:], X[1][:, k + 1:, k + 1:]
-                re = _dd_sub(*sub, *upd[:2])
-                sub = X[2][:, k + 1:, k + 1:], X[3][:, k + 1:, k + 1:]
-                im = _dd_sub(*sub, *upd[2:])
+                # Only the rows and columns the update reaches (the nodal
+                # matrices are sparse: a tree fills little).
+                ri = k + 1 + np.flatnonzero(((lk[0] != 0) | (lk[2] != 0)).any(axis=0))
+                ci = k + 1 + np.flatnonzero(((X[0][:, k, k + 1:] != 0) |
+                                             (X[2][:, k, k + 1:] != 0)).any(axis=0))
+                if not (ri.size and ci.size):
+                    continue
+                at = (slice(None), ri[:, None], ci[None, :])
+                upd = _cdd_mul([v[:, ri - k - 1, None] for v in lk],
+                               [x[:, None, k, ci] for x in X])
+                re = _dd_sub(X[0][at], X[1][at], *upd[:2])
+                im = _dd_sub(X[2][at], X[3][at], *upd[2:])
                 for x, v in zip(X, (*re, *im)):
-                    x[:, k + 1:, k + 1:] = v
+                    x[at] = v
             good &= np.isfinite(X[0]).all(axis=(1, 2)) & np.isfinite(X[2]).all(axis=(1, 2))
         X, perm, d = [x[good] for x in X], perm[good], d[good]
         every = np.arange(perm.shape[0])
@@ -786,9 +797,11 @@ class Solution:
     error : ndarray of float, shape (n_ω,)
         Estimated relative error of K: the drive component of the last
         correction of the iterative refinement, plus its own uncertainty
-        (the observed contraction × the correction's size), floored at the
-        rounding to float64; ``inf`` where the refinement does not contract
-        (A(ω) numerically singular) or A(ω) is not finite.
+        (the observed contraction × the correction's size), plus the
+        residual's rounding in double-double, floored at the rounding to
+        float64; ``inf`` where the refinement does not contract or stalls
+        even with double-double factors (:class:`_DDSolver`, up to
+        :data:`DD_LIMIT` unknowns), or A(ω) is not finite.
     singular : ndarray of bool, shape (n_ω,)
         Points on a singularity of A(ω) (exact, or within rounding).
     """
@@ -889,10 +902,12 @@ def _sweep_chunks(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
             done = np.isfinite(err[every]) & (
                 err[every] <= np.maximum(16 * np.finfo(float).eps,
                                          16 * _residual_rounding(system, S[every])))
-            redo = every[~done]
-            if redo.size:
-                checked[redo] = True
-                ok2, dd_fn = _dd_solver(system).factor(omega[redo])
+            todo = every[~done]
+            checked[todo] = True
+            dd = _dd_solver(system)
+            for at in range(0, todo.size, dd.max_chunk):
+                redo = todo[at:at + dd.max_chunk]
+                ok2, dd_fn = dd.factor(omega[redo])
                 redo = redo[ok2]
                 xh2, xl2, est2, rho2 = _refined(dd_fn, pat, omega[redo], rhs, system, refine,
                                                 steps)
