@@ -17,10 +17,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from reference import nodal_corpus
 
 import mechcirc
 from mechcirc.sweep import FLAG_OK, FLAG_SINGULAR
-from reference import nodal_corpus
 
 HERE = Path(__file__).parent / "reference" / "nodal_defects"
 

@@ -42,7 +42,7 @@ import numpy as np
 
 if __package__ in (None, ""):
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from reference import mp_nodal, sp_corpus  # noqa: E402
+from reference import mp_nodal, sp_corpus
 
 DIGITS = 40
 DISTANCES = (1e-6, -1e-9, 1e-12, -1e-14, 0.0)
