@@ -94,8 +94,9 @@ def residual(omega, xr, xi, xlr, xli, has_lo, rhs, b_i, b_j, b_s,
             dh_r, dl_r = _two_sum(xr[k, i], -xr[k, j])
             dh_i, dl_i = _two_sum(xi[k, i], -xi[k, j])
             if has_lo:
-                dl_r = dl_r + (xlr[k, i] - xlr[k, j])
-                dl_i = dl_i + (xli[k, i] - xli[k, j])
+                # Renormalised: the low parts of x_i ≈ x_j are ~u|x|, not ~u|d|.
+                dh_r, dl_r = _two_sum(dh_r, dl_r + (xlr[k, i] - xlr[k, j]))
+                dh_i, dl_i = _two_sum(dh_i, dl_i + (xli[k, i] - xli[k, j]))
             th_r, tl_r = _two_prod(v, vh, vl, dh_r)
             th_i, tl_i = _two_prod(v, vh, vl, dh_i)
             tl_r = tl_r + v * dl_r
@@ -286,7 +287,7 @@ def sensitivities(omega, x, scale, e_i, e_j, e_m, e_k, e_c, s_row, s_col, s_val,
             xj = x[k, e_j[e]] * f
             a = _mag(xi) + _mag(xj)
             d = _mag(xi - xj)
-            acc += y * a * a
+            acc += y * a * d
             accd += y * d * d
         for s in range(s_row.size):
             acc += abs(s_val[s]) * _mag(x[k, s_row[s]] * f) * _mag(x[k, s_col[s]] * f)

@@ -26,7 +26,10 @@ the ordering made once from the pattern, see :class:`_SparseSolver`).  Each
 solution is refined with residuals in double-double arithmetic reusing the
 factors (compiled by numba on the sparse path when it is installed:
 :mod:`mechcirc._nodal_kernels`), and the last correction gives the error
-estimate of K (:class:`Solution`).  At a singular point K is +∞·j (a pole) or 0 (a zero),
+estimate of K (:class:`Solution`).  Where float64 factors cannot refine
+(cond(A) beyond 1/u, as on stiff networks whose K is well conditioned),
+a dense LU in double-double of the balanced matrix takes over
+(:class:`_DDSolver`).  At a singular point K is +∞·j (a pole) or 0 (a zero),
 with an infinite error, as the series–parallel method gives it.
 """
 
@@ -274,6 +277,180 @@ def _dd_div_d(h, lo, w):
     return q, (((h - p) - e) + lo) / w
 
 
+def _dd_norm(h, lo):
+    """(h, lo) renormalised: |lo| ≤ ulp(h)/2 (Fast2Sum)."""
+    s = h + lo
+    return s, lo - (s - h)
+
+
+def _dd_mul(ah, al, bh, bl):
+    """(ah + al)(bh + bl) in double-double (real)."""
+    a1, a2 = _split(ah)
+    p, e = _two_prod(ah, a1, a2, bh)
+    return _dd_norm(p, e + (ah * bl + al * bh))
+
+
+def _dd_sub(ah, al, bh, bl):
+    s, e = _two_sum(ah, -bh)
+    return _dd_norm(s, e + (al - bl))
+
+
+def _cdd_mul(a, b):
+    """Complex double-double product; a value is (re_hi, re_lo, im_hi, im_lo)."""
+    rr, ii = _dd_mul(a[0], a[1], b[0], b[1]), _dd_mul(a[2], a[3], b[2], b[3])
+    ri, ir = _dd_mul(a[0], a[1], b[2], b[3]), _dd_mul(a[2], a[3], b[0], b[1])
+    return (*_dd_sub(*rr, *ii), *_dd_norm(*_dd_add(*ri, *ir)))
+
+
+def _cdd_div(a, b):
+    """Complex double-double quotient a / b (b of moderate size: no overflow check)."""
+    den = _dd_norm(*_dd_add(*_dd_mul(b[0], b[1], b[0], b[1]), *_dd_mul(b[2], b[3], b[2], b[3])))
+    re = _dd_norm(*_dd_add(*_dd_mul(a[0], a[1], b[0], b[1]), *_dd_mul(a[2], a[3], b[2], b[3])))
+    im = _dd_sub(*_dd_mul(a[2], a[3], b[0], b[1]), *_dd_mul(a[0], a[1], b[2], b[3]))
+    return (*_dd_norm(*_dd_div_dd(*re, *den)), *_dd_norm(*_dd_div_dd(*im, *den)))
+
+
+def _balance(mag, diag):
+    """Symmetric scaling d (powers of two) so that d_i |a_ij| d_j ≤ 1 with rows near 1.
+
+    ``mag`` holds |A| (batch, n, n), ``diag`` the diagonal's Σ|stamp| (batch,
+    n).  Rows with a diagonal start at 1/√diag, the others (lever forces,
+    nodes tied only by levers) at 1/max_j |a_ij| d_j: so a lever's force
+    unknown is scaled to the admittance level around it, which Ruiz's
+    iteration alone (started at 1) does not find when every element value is
+    1e±100 and the lever entries are ±1, r.  A few symmetric Ruiz steps
+    follow.  Powers of two: the scaled matrix carries no new rounding, and a
+    singular matrix stays singular.
+    """
+    with np.errstate(all="ignore"):
+        d = np.where(diag > 0, 1.0 / np.sqrt(diag), 0.0)
+        for _ in range(mag.shape[-1]):      # outward from the rows with a diagonal
+            unset = d == 0
+            if not unset.any():
+                break
+            off = np.max(mag * d[:, None, :], axis=2)
+            d = np.where(unset & (off > 0), 1.0 / off, d)
+            if not (unset & (off > 0)).any():
+                break
+        d = np.where(d > 0, d, 1.0)
+        for _ in range(8):
+            r = np.max(mag * d[:, :, None] * d[:, None, :], axis=2)
+            d = d / np.sqrt(np.where((r > 0) & np.isfinite(r), r, 1.0))
+        d = np.where(np.isfinite(d) & (d > 0), d, 1.0)
+        return np.ldexp(1.0, np.round(np.log2(d)).astype(int))
+
+
+#: Systems up to this many unknowns are solved again by a dense LU in
+#: double-double where the refinement with float64 factors does not reach
+#: :data:`_STRICT_AFTER` (A(ω) too ill-conditioned for float64 factors).
+DD_LIMIT = 200
+
+
+class _DDSolver:
+    """Dense LU in double-double of the scaled A(ω), assembled exactly from its stamps.
+
+    The fallback where float64 factors cannot give a contracting refinement:
+    a summed diagonal already loses an admittance below 1e-16 of its
+    neighbour's (a soft spring beside a stiff one), and elimination loses
+    more; here every entry is the double-double sum of its stamps, the
+    matrix is scaled symmetrically by powers of two (:func:`_balance`), and
+    the LU (partial pivoting) runs in double-double, so that the refinement
+    contracts up to cond(A) ≈ 1e30.  Dense and vectorised over a batch of
+    ω, about 100 array operations per column: only for the points that need
+    it, and only up to :data:`DD_LIMIT` unknowns.
+    """
+
+    kind = "dd"
+
+    def __init__(self, system: NodalSystem):
+        n = system.size
+        self.n = n
+        # About 2¹⁹ matrix entries per batch (some 30 temporaries of that size).
+        self.max_chunk = max(1, min(64, 2 ** 19 // max(1, n * n)))
+        self.parts = []
+        for kinds in (("damper", "lever"), ("mass",), ("spring",)):
+            h, lo = np.zeros((n, n)), np.zeros((n, n))
+            for kind in kinds:
+                for r, c, v in zip(*system.stamps[kind]):
+                    h[r, c], e = _two_sum(h[r, c], float(v))
+                    lo[r, c] += e
+            self.parts.append(_dd_norm(h, lo))
+        self.absdiag = [np.abs(np.diagonal(p[0])) for p in self.parts]
+
+    def factor(self, omega, strict: bool = False):
+        omega = np.asarray(omega, dtype=float)
+        w = omega[:, None, None]
+        (ch, cl), (mh, ml), (kh, kl) = self.parts
+        with np.errstate(all="ignore"):
+            im = _dd_norm(*_dd_sub(*_dd_mul_d(mh, ml, w), *_dd_div_d(kh, kl, w)))
+            B, n = omega.size, self.n
+            X = [np.broadcast_to(ch, (B, n, n)).copy(), np.broadcast_to(cl, (B, n, n)).copy(),
+                 im[0], im[1]]
+            mag = np.abs(X[0] + 1j * X[2])
+            cd, md, kd = self.absdiag
+            d = _balance(mag, cd + omega[:, None] * md + kd / omega[:, None])
+            good = np.isfinite(mag).all(axis=(1, 2)) & (omega > 0)
+            dd = d[:, :, None] * d[:, None, :]
+            X = [x * dd for x in X]
+            perm = np.broadcast_to(np.arange(n), (B, n)).copy()
+            rows = np.arange(B)
+            for k in range(n):
+                p = k + np.argmax(np.abs(X[0][:, k:, k]) + np.abs(X[2][:, k:, k]), axis=1)
+                for x in X + [perm]:
+                    x[rows, k], x[rows, p] = x[rows, p], x[rows, k].copy()
+                piv = [x[:, k, k] for x in X]
+                zero = (piv[0] == 0) & (piv[2] == 0)
+                good &= ~zero
+                piv[0] = np.where(zero, 1.0, piv[0])
+                if k + 1 == n:
+                    break
+                lk = _cdd_div([x[:, k + 1:, k] for x in X], [v[:, None] for v in piv])
+                for x, v in zip(X, lk):
+                    x[:, k + 1:, k] = v
+                # Only the rows and columns the update reaches (the nodal
+                # matrices are sparse: a tree fills little).
+                ri = k + 1 + np.flatnonzero(((lk[0] != 0) | (lk[2] != 0)).any(axis=0))
+                ci = k + 1 + np.flatnonzero(((X[0][:, k, k + 1:] != 0) |
+                                             (X[2][:, k, k + 1:] != 0)).any(axis=0))
+                if not (ri.size and ci.size):
+                    continue
+                at = (slice(None), ri[:, None], ci[None, :])
+                upd = _cdd_mul([v[:, ri - k - 1, None] for v in lk],
+                               [x[:, None, k, ci] for x in X])
+                re = _dd_sub(X[0][at], X[1][at], *upd[:2])
+                im = _dd_sub(X[2][at], X[3][at], *upd[2:])
+                for x, v in zip(X, (*re, *im)):
+                    x[at] = v
+            good &= np.isfinite(X[0]).all(axis=(1, 2)) & np.isfinite(X[2]).all(axis=(1, 2))
+        X, perm, d = [x[good] for x in X], perm[good], d[good]
+        every = np.arange(perm.shape[0])
+
+        def solve(r, rows=None):
+            rows = every if rows is None else np.asarray(rows)
+            b = np.take_along_axis(np.asarray(r, dtype=complex) * d[rows], perm[rows], axis=1)
+            F = [x[rows] for x in X]
+            y = [b.real.copy(), np.zeros(b.shape), b.imag.copy(), np.zeros(b.shape)]
+            with np.errstate(all="ignore"):
+                for k in range(self.n - 1):          # L (unit diagonal)
+                    t = _cdd_mul([f[:, k + 1:, k] for f in F], [v[:, k, None] for v in y])
+                    re = _dd_sub(y[0][:, k + 1:], y[1][:, k + 1:], *t[:2])
+                    im = _dd_sub(y[2][:, k + 1:], y[3][:, k + 1:], *t[2:])
+                    for v, u in zip(y, (*re, *im)):
+                        v[:, k + 1:] = u
+                for k in range(self.n - 1, -1, -1):  # U
+                    q = _cdd_div([v[:, k] for v in y], [f[:, k, k] for f in F])
+                    for v, u in zip(y, q):
+                        v[:, k] = u
+                    if k:
+                        t = _cdd_mul([f[:, :k, k] for f in F], [u[:, None] for u in q])
+                        re = _dd_sub(y[0][:, :k], y[1][:, :k], *t[:2])
+                        im = _dd_sub(y[2][:, :k], y[3][:, :k], *t[2:])
+                        for v, u in zip(y, (*re, *im)):
+                            v[:, :k] = u
+            return ((y[0] + y[1]) + 1j * (y[2] + y[3])) * d[rows]
+        return good, solve
+
+
 class _Pattern:
     """What does not change with ω: the pattern of A(ω), its parts, and the residual's plan.
 
@@ -399,7 +576,10 @@ class _Pattern:
         xs = xe[:, self.s_col]
         if xl is not None:
             xle = np.concatenate([xl.astype(complex, copy=False), z], axis=1)
-            d_l = d_l + (xle[:, self.e_i] - xle[:, self.e_j])
+            # Renormalised (TwoSum): where x_i ≈ x_j their low parts (~u|x|)
+            # would leave a low part far above u|d|, and every later sum of
+            # low parts would round at u²|x| per row instead of u²|y d|.
+            d_h, d_l = _two_sum(d_h, d_l + (xle[:, self.e_i] - xle[:, self.e_j]))
         vh, vl = self.e_vs
         p_h, p_l = _two_prod(self.e_val, vh, vl, d_h)
         p_l = p_l + self.e_val * d_l
@@ -490,10 +670,16 @@ class _Pattern:
     def sensitivities(self, omega: NDArray, x: NDArray, K: NDArray) -> tuple[NDArray, NDArray]:
         """(S/|K|, S_data/|K|) for each ω: the sensitivity of K to rounding the stamps and the data.
 
-        S = Σ |x_r · a_rc · x_c| over the unsummed stamps: A is complex
-        symmetric, so the adjoint solution of K = cᵀ A⁻¹ c is x itself and a
-        relative change ε of every stamp moves K by at most ε·S (for an
-        element, its four stamps give |y|(|x_i| + |x_j|)²).
+        S = Σ_e |y_e| |x_i − x_j| (|x_i| + |x_j|) + Σ_levers |v · x_r · x_c|:
+        the residual forms each element's current y·(x_i − x_j) once and
+        adds it to both rows, so its rounding (relative to the current, and
+        u·|x| from the low parts of x_i, x_j in double-double) enters as
+        δ·(e_i − e_j); A is complex symmetric, so the adjoint solution of
+        K = cᵀ A⁻¹ c is x itself and K moves by δ·(x_i − x_j).  A row's own
+        summation error, relative to Σ|y_e (x_i − x_j)| over its elements,
+        meets |x_i|; a lever stamp's rounding meets |x_r|.  (The earlier
+        Σ |y|(|x_i| + |x_j|)² counted a stiff element's currents as if
+        they did not cancel: 1e14 × the true error on stiff networks.)
 
         S_data = Σ_e |y_e| |x_i − x_j|² + Σ_levers 2|r| |x_p1 − x_p2| |q|:
         rounding an element's value by a relative ε changes its four stamps
@@ -525,11 +711,11 @@ class _Pattern:
             y = np.abs(combine(self.e_c, self.e_m, self.e_k, w))
             ax = np.abs(xe)
             ai, aj = ax[:, self.e_i], ax[:, self.e_j]
-            S = np.einsum("ij,ij->i", y, (ai + aj) ** 2)
+            d = np.abs(xe[:, self.e_i] - xe[:, self.e_j])
+            S = np.einsum("ij,ij->i", y, (ai + aj) * d)
             if self.s_row.size:
                 S = S + np.abs(self.s_val) @ (ax[:, self.s_row] * ax[:, self.s_col]).T \
                     if c else S
-            d = np.abs(xe[:, self.e_i] - xe[:, self.e_j])
             Sd = np.einsum("ij,ij->i", y, d * d)
             if self.l_r.size:
                 dl = np.abs(xe[:, self.l_p1] - xe[:, self.l_p2])
@@ -611,9 +797,11 @@ class Solution:
     error : ndarray of float, shape (n_ω,)
         Estimated relative error of K: the drive component of the last
         correction of the iterative refinement, plus its own uncertainty
-        (the observed contraction × the correction's size), floored at the
-        rounding to float64; ``inf`` where the refinement does not contract
-        (A(ω) numerically singular) or A(ω) is not finite.
+        (the observed contraction × the correction's size), plus the
+        residual's rounding in double-double, floored at the rounding to
+        float64; ``inf`` where the refinement does not contract or stalls
+        even with double-double factors (:class:`_DDSolver`, up to
+        :data:`DD_LIMIT` unknowns), or A(ω) is not finite.
     singular : ndarray of bool, shape (n_ω,)
         Points on a singularity of A(ω) (exact, or within rounding).
     """
@@ -661,41 +849,71 @@ def _sweep_chunks(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
     Sd = np.full(m, np.nan)
     x_all = np.full((m, n), complex(np.nan, np.nan)) if keep is None else None
     kept = {}
+    checked = np.zeros(m, dtype=bool)
     solver = _solver(system)
     if solver.kind != "dense" and _kernels() is not None:
         # Compiled: no (ω, term) temporaries; the chunk's (ω, n) arrays stay in cache.
         chunk = max(1, min(solver.max_chunk, 2 ** 16 // max(1, n)))
     else:
         chunk = max(1, min(solver.max_chunk, _CHUNK_TERMS // max(1, pat.n_terms + n)))
-    for start in range(0, m, chunk):
-        sel = np.arange(start, min(start + chunk, m))
-        good, solve_fn = solver.factor(omega[sel])
-        sel = sel[good]
-        if not sel.size:
-            continue
-        xh, xl, est = _refined(solve_fn, pat, omega[sel], rhs, system, refine, steps)
-        redo = np.flatnonzero(~(est <= _STRICT_AFTER)) if solver.kind == "superlu" else []
-        if len(redo):
-            # Diagonal pivoting was not stable enough here: partial pivoting.
-            ok2, strict_fn = solver.factor(omega[sel[redo]], strict=True)
-            if ok2.all():
-                xh2, xl2, est2 = _refined(strict_fn, pat, omega[sel[redo]], rhs, system,
-                                          refine, steps)
-                better = ~(est2 >= est[redo])
-                take = redo[better]
-                xh[take], est[take] = xh2[better], est2[better]
-                if xl is not None:
-                    xl[take] = xl2[better]
+    use_dd = refine and n <= DD_LIMIT and not np.iscomplexobj(omega)
+
+    def store(sel, xh, xl, est, rho):
         K[sel] = _difference_dd(system, xh, xl)
         x = xh + xl if xl is not None else xh
-        err[sel] = est
         S[sel], Sd[sel] = pat.sensitivities(omega[sel], x, K[sel])
+        # A refinement that stalls (corrections not shrinking: the factors
+        # are too inaccurate, cond(A)·u ≳ 1) has not converged, unless it
+        # stalls at the residual's own rounding: its last correction says
+        # nothing of the error (seen: 2.8e-9 and 2.8e-12 with corrections of
+        # 1e-11 and 2.6e-16 on a stiff tree, cond(A) ≈ 1e17).  No estimate: inf.
+        floor = 16 * _residual_rounding(system, S[sel])
+        err[sel] = np.where((rho >= 0.5) & (est > floor), np.inf, est)
         if x_all is not None:
             x_all[sel] = x
         elif keep is not None:
             for k in np.flatnonzero(keep[sel]):
                 kept[int(sel[k])] = x[k]
-    return K, err, S, Sd, x_all, kept
+
+    for start in range(0, m, chunk):
+        every = np.arange(start, min(start + chunk, m))
+        good, solve_fn = solver.factor(omega[every])
+        sel = every[good]
+        if sel.size:
+            xh, xl, est, rho = _refined(solve_fn, pat, omega[sel], rhs, system, refine, steps)
+            redo = np.flatnonzero(~(est <= _STRICT_AFTER)) if solver.kind == "superlu" else []
+            if len(redo):
+                # Diagonal pivoting was not stable enough here: partial pivoting.
+                ok2, strict_fn = solver.factor(omega[sel[redo]], strict=True)
+                if ok2.all():
+                    xh2, xl2, est2, rho2 = _refined(strict_fn, pat, omega[sel[redo]], rhs,
+                                                    system, refine, steps)
+                    better = ~(est2 >= est[redo])
+                    take = redo[better]
+                    xh[take], est[take], rho[take] = xh2[better], est2[better], rho2[better]
+                    if xl is not None:
+                        xl[take] = xl2[better]
+            store(sel, xh, xl, est, rho)
+        if use_dd:
+            # Float64 factors failed (A(ω) exactly singular as rounded to float64),
+            # could not refine, or had not converged after ``steps`` (then the
+            # last correction is not a safe estimate: 6.6e-14 for a true
+            # 1.7e-13 on a stiff tree): the double-double LU.
+            done = np.isfinite(err[every]) & (
+                err[every] <= np.maximum(16 * np.finfo(float).eps,
+                                         16 * _residual_rounding(system, S[every])))
+            todo = every[~done]
+            checked[todo] = True
+            dd = _dd_solver(system)
+            for at in range(0, todo.size, dd.max_chunk):
+                redo = todo[at:at + dd.max_chunk]
+                ok2, dd_fn = dd.factor(omega[redo])
+                redo = redo[ok2]
+                xh2, xl2, est2, rho2 = _refined(dd_fn, pat, omega[redo], rhs, system, refine,
+                                                steps)
+                better = ~(est2 >= err[redo])
+                store(redo[better], xh2[better], xl2[better], est2[better], rho2[better])
+    return K, err, S, Sd, x_all, kept, checked
 
 
 def _difference_dd(system, xh, xl):
@@ -735,34 +953,70 @@ def solve(system: NodalSystem, omega: ArrayLike, *, refine: bool = True,
     Sd = np.full(m, np.nan)
     x = np.full((m, system.size), complex(np.nan, np.nan)) if keep_x else None
     kept = {}
+    checked = np.zeros(m, dtype=bool)
     if idx.size:
-        Ki, ei, Si, Sdi, xi, kept_i = _sweep(system, omega[idx], refine, steps,
-                                             None if keep_x else np.ones(idx.size, bool))
-        K[idx], err[idx], S[idx], Sd[idx] = Ki, ei, Si, Sdi
+        Ki, ei, Si, Sdi, xi, kept_i, ci = _sweep(system, omega[idx], refine, steps,
+                                                 None if keep_x else np.ones(idx.size, bool))
+        K[idx], err[idx], S[idx], Sd[idx], checked[idx] = Ki, ei, Si, Sdi, ci
         if keep_x:
             x[idx] = xi
         else:
             # Only the rows needed at singular points are kept.
             sing = ~np.isfinite(Ki) | (ei >= 1.0)
             kept = {int(idx[k]): v for k, v in kept_i.items() if sing[k]}
-    # No correct digit from the refinement itself (it did not contract): A(ω)
-    # is numerically singular.  The residual-rounding bound below is a worst
-    # case and is not used for this verdict.
-    singular = ok & (~np.isfinite(K) | (err >= 1.0))
+    # No correct digit even from the double-double LU (cond(A) beyond about
+    # 1e30), or A(ω) exactly singular: a singular point.  Where only float64
+    # factors were tried (no refinement, or more than DD_LIMIT unknowns), a
+    # refinement that does not contract says no more than "no digit known":
+    # K stays finite with an infinite error (flag 2), never a pole.  The
+    # residual-rounding bound below is a worst case and not used here.
+    singular = ok & (~np.isfinite(K) | (err >= 1.0) & checked)
+    rows = x if keep_x else kept
+    for i in np.flatnonzero(ok & (err >= 1.0) & ~checked & np.isfinite(K)):
+        # Only float64 factors: singular if the iterate's element-wise
+        # backward error says A(ω) is within rounding of its values of a
+        # singular matrix; a stiff network's garbage iterate is not.
+        singular[i] = _backward_error(system, omega[i], rows[i]) <= SINGULAR_BACKWARD
     with np.errstate(all="ignore"):
         err = err + _residual_rounding(system, S)
-        err = np.where(ok, _total(Sd, err), np.inf)
+        err = np.where(ok, np.maximum(err, np.finfo(float).eps), np.inf)
     if limits:
-        rows = x if keep_x else kept
         K, err = _singular_points(system, omega, rows, K, err, singular, steps)
     return Solution(x, K, err, singular)
+
+
+#: A point whose refinement by float64 factors does not contract is singular
+#: when changing every element value and lever ratio by at most this
+#: (relative) makes A(ω) x = 0 for the iterate x (its element-wise backward error).
+SINGULAR_BACKWARD = 2.0 ** -43
+
+
+def _backward_error(system, omega: float, x: NDArray) -> float:
+    """max_i |(A x)_i| / Σ |stamp·x| over row i, by element (see :data:`SINGULAR_BACKWARD`).
+
+    An element's stamps enter as y_e·|x_i − x_j| (rounding its value moves
+    all four together), a lever stamp as |value·x_c|.  A x from the
+    residual in double-double.
+    """
+    pat = _pattern(system)
+    rhs = system.injection()
+    with np.errstate(all="ignore"):
+        ax = rhs - pat.residual(np.array([omega]), x[None, :], None, rhs)[0]
+        xe = np.append(np.asarray(x, dtype=complex), 0.0)
+        y = np.abs(combine(pat.e_c, pat.e_m, pat.e_k, omega))
+        t = y * np.abs(xe[pat.e_i] - xe[pat.e_j])
+        n1 = pat.n + 1
+        den = np.bincount(pat.e_i, t, n1) + np.bincount(pat.e_j, t, n1) + \
+            np.bincount(pat.s_row, np.abs(pat.s_val * xe[pat.s_col]), n1)
+        eta = np.abs(ax) / den[:-1]
+        return float(np.max(np.where(np.abs(ax) == 0, 0.0, eta), initial=0.0))
 
 
 def _refined(solve_fn, pat: _Pattern, omega, rhs, system, refine: bool, steps: int):
     """x from one solve and up to ``steps`` refinement steps.
 
-    Returns (xh, xl, relative error of K): x = xh + xl in double-double
-    (xl None without refinement).
+    Returns (xh, xl, relative error of K, contraction of the last step):
+    x = xh + xl in double-double (xl None without refinement).
     """
     eps = np.finfo(float).eps
     b = np.broadcast_to(rhs.astype(complex), (omega.size, rhs.size))
@@ -770,10 +1024,11 @@ def _refined(solve_fn, pat: _Pattern, omega, rhs, system, refine: bool, steps: i
     if not refine:
         # No refinement: the first correction is still the error estimate.
         d = solve_fn(pat.residual(omega, x0, None, rhs))
-        return x0, None, _estimate(system, x0, None, d, x0)
+        return (x0, None, *_estimate(system, x0, None, d, x0))
     xh, xl = x0.copy(), np.zeros_like(x0)
     prev = x0
     est = np.full(omega.size, np.inf)
+    rho = np.zeros(omega.size)
     active = np.arange(omega.size)
     for step in range(steps):
         # Only the points not yet converged take a further step (their
@@ -781,7 +1036,7 @@ def _refined(solve_fn, pat: _Pattern, omega, rhs, system, refine: bool, steps: i
         rows = None if active.size == omega.size else active
         xa, xla = xh[active], (xl[active] if step else None)
         d = solve_fn(pat.residual(omega[active], xa, xla, rhs), *(() if rows is None else (rows,)))
-        est[active] = _estimate(system, xa, xla, d, prev[active])
+        est[active], rho[active] = _estimate(system, xa, xla, d, prev[active])
         with np.errstate(all="ignore"):
             s, e = _two_sum(xa, d)
         xh[active] = s
@@ -793,15 +1048,16 @@ def _refined(solve_fn, pat: _Pattern, omega, rhs, system, refine: bool, steps: i
         active = active[est[active] > 16 * eps]
         if not active.size:
             break
-    return xh, xl, est
+    return xh, xl, est, rho
 
 
 def _residual_rounding(system, S):
     """Relative error of K left by residuals rounded in double-double.
 
-    Each residual row is summed to about (terms + 4)·u² × Σ_c |a_rc x_c|
-    (u = 2⁻⁵³), which K (through the adjoint solution, x itself) feels as
-    that times S; the refinement cannot see it.
+    Each residual row is summed to about (terms + 4)·u² × Σ_e |y_e (x_i − x_j)|
+    (+ its lever stamps; u = 2⁻⁵³), which K (through the adjoint solution,
+    x itself) feels as that times S (:meth:`_Pattern.sensitivities`); the
+    refinement cannot see it.
     """
     pat = _pattern(system)
     u2 = (np.finfo(float).eps / 2) ** 2
@@ -810,34 +1066,28 @@ def _residual_rounding(system, S):
     return np.where(np.isnan(out), np.inf, out)
 
 
-def _total(S, est, *, data: str = "flag"):
-    """The solve's error ``est``, and the sensitivity of K to rounding its data.
+def _total(S, est):
+    """The solve's error ``est`` plus the sensitivity of K to rounding its data (resonances).
 
     Each value (m, k, c, r) carries a rounding of up to eps relative; that
-    moves K by eps × S_data / |K| (``S``, from :meth:`_Pattern.sensitivities`), far
-    more than the solve near a zero of K.
-    With ``data="flag"`` (sweeps) that figure replaces the estimate only where
-    it exceeds :data:`~mechcirc.sweep.NEAR_SINGULAR_ERROR` (1e-6): a point
-    within rounding of a zero is flagged, as the series–parallel method flags
-    it, while everywhere else the estimate stays that of the computation
-    (K exact for the binary inputs, as mpmath would compute it).  With
-    ``data="add"`` (resonances) it is always added: the error then bounds
-    the distance to the root of the values as written, before rounding.
-    The result is rounded to float64 at the end: at least eps.
+    moves K by eps × S_data / |K| (``S``, from :meth:`_Pattern.sensitivities`),
+    far more than the solve near a zero of K.  It is added for resonances,
+    whose error then bounds the distance to the root of the values as
+    written, before rounding.  Sweeps do not add it: their error is that of
+    the computation for the binary inputs (as the series–parallel bound's,
+    and as a 40-digit reference measures it); flagging from it made half the
+    points near a grid's poles false alarms, accurate to 1e-13.  At least
+    eps (the result is rounded to float64).
     """
     eps = np.finfo(float).eps
     with np.errstate(all="ignore"):
         rounding = eps * S
-        rounding = np.where(np.isnan(rounding), np.inf, rounding)
-        if data == "add":
-            total = est + rounding
-        else:
-            total = np.where(rounding > 1e-6, np.maximum(est, rounding), est)
+        total = est + np.where(np.isnan(rounding), np.inf, rounding)
     return np.maximum(total, eps)
 
 
 def _estimate(system, xh, xl, d, prev):
-    """Relative error of K = x_a − x_b before applying the correction ``d``.
+    """(Relative error of K = x_a − x_b before applying the correction ``d``, contraction ρ).
 
     |d_a − d_b| estimates the error of K; ``d`` itself is wrong by about the
     contraction ρ = ‖d‖/‖prev‖ times the size of its drive components, which
@@ -863,7 +1113,15 @@ def _estimate(system, xh, xl, d, prev):
         # singular A.
         diverged = (rho >= 0.5) & (nd > 1e-2 * nx)
         est = np.where(diverged | np.isnan(est), np.inf, est)
-    return est
+    return est, rho
+
+
+def _dd_solver(system: NodalSystem) -> _DDSolver:
+    cached = system.__dict__.get("_dd_solver")
+    if cached is None:
+        cached = _DDSolver(system)
+        object.__setattr__(system, "_dd_solver", cached)
+    return cached
 
 
 def _solver(system: NodalSystem):
@@ -1163,8 +1421,8 @@ def evaluate_complex(system: NodalSystem, s: ArrayLike
     """
     s = np.asarray(s, dtype=complex).reshape(-1)
     omega = -1j * s
-    K, est, S, Sd, _, _ = _sweep(system, omega, True, 4, None)
-    est = _total(Sd, est + _residual_rounding(system, S), data="add")
+    K, est, S, Sd, _, _, _ = _sweep(system, omega, True, 4, None)
+    est = _total(Sd, est + _residual_rounding(system, S))
     with np.errstate(all="ignore"):
         return K, est * np.abs(K)
 
@@ -1260,8 +1518,14 @@ def condition_error(system: NodalSystem, omega: ArrayLike) -> NDArray[np.float64
 def require_nonsingular(system: NodalSystem) -> None:
     """Raise if A(ω) is singular at every frequency (checked at two generic ω).
 
-    Dense systems are judged by their smallest singular value, and the null
-    vector names the undetermined unknowns; large ones by a sparse LU.
+    Dense systems are first judged by the smallest singular value of the
+    balanced matrix (:func:`_balance`), and the null vector names the
+    undetermined unknowns.  Where that does not clear a system, or it is
+    large, the refined solve decides (in double-double where float64 factors
+    cannot refine, see :class:`_DDSolver`): the system is regular at a trial
+    ω if the solve gives a finite K and its solution's element-wise backward
+    error as a null vector is above rounding (:func:`_backward_error`) — so a
+    stiff network (cond(A) of 1e20, K well conditioned) is not refused.
     """
     if system.size == 0:
         raise TopologyError(
@@ -1269,25 +1533,31 @@ def require_nonsingular(system: NodalSystem) -> None:
             f"{', '.join(system.unloaded[:12]) or 'none'})", elements=system.unloaded)
     scale = _frequency_scale(system)
     trial = [0.731 * scale, 1.913 * scale]
-    if system.size > DENSE_LIMIT:
-        x = solve_unit(system, trial)
-        if np.isfinite(x).all(axis=1).any():
+    judged = None
+    if system.size <= DENSE_LIMIT:
+        absdiag = [np.abs(p.diagonal()) for p in (system.D + system.C, system.M, system.Ks)]
+        for w, A in zip(trial, dense_matrices(system, trial)):
+            if not np.isfinite(A).all():
+                return          # values at float64's edge: the sweep flags such points
+            # Judge the balanced matrix: a lever of ratio 1e-8 puts entries of
+            # 1e-8 beside 1, every value scaled by 1e-100 puts admittances of
+            # 1e-100 beside the lever's ±1, and the raw singular values then
+            # look singular.
+            diag = absdiag[0] + w * absdiag[1] + absdiag[2] / w
+            d = _balance(np.abs(A)[None], diag[None])[0]
+            A = A * d[:, None] * d[None, :]
+            sv = np.linalg.svd(A, compute_uv=False)
+            if sv[-1] > 1e-13 * sv[0]:
+                return
+            judged = A
+    s = solve(system, trial, limits=False)
+    for i, w in enumerate(trial):
+        if np.isfinite(s.K[i]) and not s.singular[i] and \
+                _backward_error(system, w, s.x[i]) > SINGULAR_BACKWARD:
             return
+    if judged is None:
         raise TopologyError("the network is singular at every frequency (tried "
                             f"ω = {trial[0]:.4g} and {trial[1]:.4g} rad/s)")
-    judged = None
-    for A in dense_matrices(system, trial):
-        if not np.isfinite(A).all():
-            continue            # values at float64's edge: no verdict at this ω
-        # Judge the equilibrated matrix: a lever of ratio 1e-8 puts entries of
-        # 1e-8 beside 1, and the raw singular values then look singular.
-        A = _equilibrate(A)
-        sv = np.linalg.svd(A, compute_uv=False)
-        if sv[-1] > 1e-13 * sv[0]:
-            return
-        judged = A
-    if judged is None:
-        return                  # the sweep flags the non-finite points itself
     _, _, vh = np.linalg.svd(judged)
     null = np.abs(vh[-1].conj())
     names = list(system.nodes) + [f"lever {lv.name}" for lv in system.levers]
@@ -1297,19 +1567,6 @@ def require_nonsingular(system: NodalSystem) -> None:
         f"are not determined): {', '.join(culprits[:12])}; check for levers in parallel "
         "or nodes tied only by levers", nodes=[c for c in culprits if not c.startswith("lever")],
         elements=[c[6:] for c in culprits if c.startswith("lever")])
-
-
-def _equilibrate(A: NDArray) -> NDArray:
-    """Rows and columns scaled to max-norm 1 (Ruiz iteration; singular stays singular)."""
-    A = A.copy()
-    for _ in range(8):
-        mag = np.abs(A)
-        r, c = np.sqrt(mag.max(axis=1)), np.sqrt(mag.max(axis=0))
-        r[r == 0] = 1.0
-        c[c == 0] = 1.0
-        A /= r[:, None]
-        A /= c[None, :]
-    return A
 
 
 def _frequency_scale(system: NodalSystem) -> float:

@@ -9,6 +9,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 import mechcirc
+import mechcirc.nodal  # noqa: F401  (used as mechcirc.nodal; not imported by `import mechcirc`)
 from mechcirc.errors import NotSeriesParallelError, TopologyError
 from reference.networks import grid_text
 from strategies import networks_with_levers, reference_K_and_cancellation, to_netlist_with_levers

@@ -1,0 +1,90 @@
+"""The nodal path's flags and error estimates against 40-digit references (issue 23).
+
+The corpus and its references: ``tests/reference/nodal_corpus.py`` (grids at
+their poles, trees with levers, stiff trees, every value scaled by 1e±100,
+meshes, ladders; references by a dense mpmath solve of the nodal equations
+or the series–parallel closed form in mpmath, never mechcirc's code).  The
+default run is the small corpus (about 130 points, a few seconds); set
+``MECHCIRC_NODAL_CORPUS=full`` for the calibration of ``docs/accuracy.md``
+(about 2,300 points, minutes).
+"""
+
+from __future__ import annotations
+
+import os
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+from reference import nodal_corpus
+
+import mechcirc
+from mechcirc.sweep import FLAG_OK, FLAG_SINGULAR
+
+HERE = Path(__file__).parent / "reference" / "nodal_defects"
+
+
+@pytest.fixture(scope="module")
+def corpus():
+    size = os.environ.get("MECHCIRC_NODAL_CORPUS", "small")
+    return nodal_corpus.statistics(nodal_corpus.measure(size))
+
+
+def test_corpus_has_every_family(corpus):
+    assert {"grid poles", "trees + levers", "stiff trees", "scaled 1e±100", "meshes",
+            "ladders"} <= set(corpus)
+
+
+def test_no_pole_reported_at_a_regular_point(corpus):
+    """Flag 1 only within rounding (relative 1e-13) of a pole or zero."""
+    assert corpus["all"]["flag1 regular"] == 0
+
+
+def test_estimate_is_never_below_the_true_error(corpus):
+    assert corpus["all"]["under"] == 0
+    assert corpus["all"]["misses"] == 0
+
+
+def test_estimate_is_tight_and_false_alarms_are_rare(corpus):
+    t = corpus["all"]
+    assert t["p99"] <= 1e4
+    assert t["false alarms"] <= 0.01 * (t["points"] - t["flag1"])
+
+
+def _sweep(path, omega, method):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return mechcirc.load(path).sweep(omega, method=method)
+
+
+def test_stiff_tree_is_solved_where_float64_factors_cannot():
+    """defect_nodal_flag1_regular: +∞·j (flag 1) at regular ω, cond(A) 1e16–1e20.
+
+    The reference is the series–parallel path (a second solver, its bound
+    calibrated in docs/accuracy.md), flag 0 at every point here.
+    """
+    omega = np.geomspace(1e-6, 1e8, 57)
+    nd = _sweep(HERE / "defect_nodal_flag1_regular.mcir", omega, "nodal")
+    sp = _sweep(HERE / "defect_nodal_flag1_regular.mcir", omega, "sp")
+    assert nd.circuit.nodal.size > mechcirc.nodal.DENSE_LIMIT      # the sparse path
+    assert np.all(sp.flags == FLAG_OK)
+    assert np.all(nd.flags == FLAG_OK)
+    diff = np.abs(nd.K - sp.K) / np.abs(sp.K)
+    assert np.all(diff <= nd.error + sp.error)
+
+
+def test_values_scaled_by_1e_minus_100_are_not_refused():
+    """defect_nodal_scaled_1e-100: "singular at every frequency" while the tree gives K."""
+    omega = np.geomspace(1e-2, 1e2, 9)
+    nd = _sweep(HERE / "defect_nodal_scaled_1e-100.mcir", omega, "nodal")
+    sp = _sweep(HERE / "defect_nodal_scaled_1e-100.mcir", omega, "sp")
+    assert np.all(nd.flags == FLAG_OK) and np.all(sp.flags == FLAG_OK)
+    np.testing.assert_allclose(nd.K, sp.K, rtol=1e-14)
+
+
+def test_exactly_singular_float_matrix_is_still_a_pole():
+    """A(ω) singular as rounded (spring 1e4 ∥ mass 1 at ω = 100): +∞·j, flag 1, not refined away."""
+    c = mechcirc.parse("drive V a 0 velocity=1\nspring k a 0 1e4\nmass m a 0 1\n")
+    s = c.sweep([100.0], method="nodal")
+    assert s.flags[0] == FLAG_SINGULAR and s.K[0] == complex(0, np.inf)
