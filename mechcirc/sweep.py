@@ -120,8 +120,10 @@ class Sweep:
         Series–parallel: a forward error bound carried through the tree's sums
         (the cancellation at each node, see :func:`mechcirc.reduction.evaluate`);
         calibrated against 40-digit references in ``docs/accuracy.md``.
-        Nodal: the drive component of the last iterative-refinement
-        correction (:class:`mechcirc.nodal.Solution`), dense and sparse alike.
+        Nodal: from the residual of the refined solution in double-double
+        and the convergence of the refinement (a double-double LU where the
+        float64 one stalls; :class:`mechcirc.nodal.Solution`), calibrated on
+        the independent corpus of ``docs/accuracy.md``.
         """
         if "error" in self._cache:
             return self._cache["error"]
