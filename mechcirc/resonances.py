@@ -619,6 +619,41 @@ def _held(system):
     return _HELD[key][1]
 
 
+def _secant_steps(g_and_delta, admissible, a, ga, b, gb, db, active, iterations: int = 12):
+    """Secant steps on g from the points a, b, element-wise over arrays of roots.
+
+    ``g_and_delta(x)`` gives g and the bound of its error at x; ``admissible(c)``
+    the step's point as it may be taken (e.g. projected on the jω axis) and
+    whether it may be.  A root stops once its step is within rounding of its
+    own uncertainty.  Returns ``(b, db, step, slope)``: the last iterate, the
+    bound of g there, the last step and the last secant slope.
+    """
+    eps = np.finfo(float).eps
+    step = np.full(b.shape, np.inf)
+    slope = np.full(b.shape, np.nan, dtype=np.result_type(b, ga))
+    for _ in range(iterations):
+        if not active.any():
+            break
+        with np.errstate(all="ignore"):
+            sl = (gb - ga) / (b - a)
+            c = np.where(active, b - gb / sl, b)
+        c, ok = admissible(c)
+        ok &= active
+        gc, dc = g_and_delta(np.where(ok, c, b))
+        ok &= np.isfinite(gc)
+        # On an exact zero of g its relative estimate says nothing (0·inf):
+        # the uncertainty at the previous iterate, a step away, stands.
+        dc = np.where(np.isfinite(dc), dc, db)
+        step = np.where(ok, np.abs(c - b), step)
+        slope = np.where(ok, sl, slope)
+        a, ga = np.where(ok, b, a), np.where(ok, gb, ga)
+        b, gb, db = np.where(ok, c, b), np.where(ok, gc, gb), np.where(ok, dc, db)
+        with np.errstate(all="ignore"):
+            done = step <= np.maximum(4 * eps * np.abs(b), db / np.abs(slope))
+        active = ok & ~done
+    return b, db, step, slope
+
+
 def _secant(system, s0: np.ndarray, pole: np.ndarray, e0: np.ndarray, damped: bool):
     """Complex secant iteration from the eigen-solver's roots; returns (s, relative error)."""
     eps = np.finfo(float).eps
@@ -629,30 +664,14 @@ def _secant(system, s0: np.ndarray, pole: np.ndarray, e0: np.ndarray, damped: bo
     with np.errstate(all="ignore"):
         g0, slope0 = gb, (gb - ga) / (b - a)
     active = np.isfinite(ga) & np.isfinite(gb)
-    step = np.full(s0.size, np.inf)
-    slope = np.full(s0.size, np.nan, dtype=complex)
-    for _ in range(12):
-        if not active.any():
-            break
-        with np.errstate(all="ignore"):
-            sl = (gb - ga) / (b - a)
-            c = np.where(active, b - gb / sl, b)
+
+    def admissible(c):
         if not damped:
             c = 1j * c.imag                       # undamped: roots on the jω axis
-        ok = active & np.isfinite(c)
-        gc, dc = _g_and_delta(system, np.where(ok, c, b), pole)
-        ok &= np.isfinite(gc)
-        # On an exact zero of g its relative estimate says nothing (0·inf):
-        # the uncertainty at the previous iterate, a step away, stands.
-        dc = np.where(np.isfinite(dc), dc, db)
-        step = np.where(ok, np.abs(c - b), step)
-        slope = np.where(ok, sl, slope)
-        a, ga = np.where(ok, b, a), np.where(ok, gb, ga)
-        b, gb, db = np.where(ok, c, b), np.where(ok, gc, gb), np.where(ok, dc, db)
-        # Stop once a step is within rounding of the root's own uncertainty.
-        with np.errstate(all="ignore"):
-            done = step <= np.maximum(4 * eps * np.abs(b), db / np.abs(slope))
-        active = ok & ~done
+        return c, np.isfinite(c)
+
+    b, db, step, slope = _secant_steps(lambda x: _g_and_delta(system, x, pole), admissible,
+                                       a, ga, b, gb, db, active)
     with np.errstate(all="ignore"):
         err = (db / np.abs(slope) + step) / np.abs(b)
     # Keep the eigen-solver's root where the secant wandered off (to another root,
@@ -1029,25 +1048,8 @@ def _secant_designs(p, w0: np.ndarray, pole: np.ndarray, e0: np.ndarray):
     with np.errstate(all="ignore"):
         g0, slope0 = gb, (gb - ga) / (b - a)
     active = have & np.isfinite(ga) & np.isfinite(gb)
-    step = np.full(w0.shape, np.inf)
-    slope = np.full(w0.shape, np.nan)
-    for _ in range(12):
-        if not active.any():
-            break
-        with np.errstate(all="ignore"):
-            sl = (gb - ga) / (b - a)
-            c = np.where(active, b - gb / sl, b)
-        ok = active & np.isfinite(c) & (c > 0)
-        gc, dc = g_and_delta(np.where(ok, c, b))
-        ok &= np.isfinite(gc)
-        dc = np.where(np.isfinite(dc), dc, db)
-        step = np.where(ok, np.abs(c - b), step)
-        slope = np.where(ok, sl, slope)
-        a, ga = np.where(ok, b, a), np.where(ok, gb, ga)
-        b, gb, db = np.where(ok, c, b), np.where(ok, gc, gb), np.where(ok, dc, db)
-        with np.errstate(all="ignore"):
-            done = step <= np.maximum(4 * eps * np.abs(b), db / np.abs(slope))
-        active = ok & ~done
+    b, db, step, slope = _secant_steps(g_and_delta, lambda c: (c, np.isfinite(c) & (c > 0)),
+                                       a, ga, b, gb, db, active)
     with np.errstate(all="ignore"):
         err = (db / np.abs(slope) + step) / np.abs(b)
         moved = np.abs(b - w_safe) / w_safe
