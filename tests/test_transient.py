@@ -121,6 +121,83 @@ def test_massless_maxwell_node_against_solve_ivp():
     assert np.abs(res.node("b")[0] - sol.y[2]).max() <= 1e-10
 
 
+CHAIN_M = (1.3, 1.6, 1.9, 2.2, 2.5)
+CHAIN_K = (12000.0, 14000.0, 16000.0, 18000.0, 20000.0)
+
+
+def _chain(c, kind):
+    """A 5-mass chain driven at the massless node s through k1 ∥ c1 (issue 23 item 2)."""
+    lines = [f"drive V s 0 {kind}=1"]
+    prev = "s"
+    for i, (m, k) in enumerate(zip(CHAIN_M, CHAIN_K), start=1):
+        lines += [f"mass m{i} n{i} 0 {m}", f"spring k{i} {prev} n{i} {k}",
+                  f"damper c{i} {prev} n{i} {c}"]
+        prev = f"n{i}"
+    return mechcirc.parse("\n".join(lines) + "\n")
+
+
+def _chain_matrix(c, free_s):
+    """ẏ = A y for y = (x1..x5, v1..v5[, xs]), written here by hand: s held at 0, or
+    (``free_s``) massless with c1 (ẋs − v1) = −k1 (xs − x1).  Columns: ẏ of unit y."""
+    m, k = np.array(CHAIN_M), np.array(CHAIN_K)
+
+    def rate(y):
+        x, v = y[:5], y[5:10]
+        xs = y[10] if free_s else 0.0
+        vs = v[0] - k[0] * (xs - x[0]) / c if free_s else 0.0
+        xl, vl = np.r_[xs, x], np.r_[vs, v]
+        link = k * (xl[:-1] - xl[1:]) + c * (vl[:-1] - vl[1:])   # pulls the next mass on
+        acc = (link - np.r_[link[1:], 0.0]) / m
+        return np.r_[v, acc, [vs] if free_s else []]
+    n = 11 if free_s else 10
+    return np.column_stack([rate(e) for e in np.eye(n)])
+
+
+def _exact(A, y0, times):
+    import scipy.linalg as sla
+
+    return np.array([sla.expm(A * t) @ y0 for t in times]).T
+
+
+@pytest.mark.parametrize("c", [0.02, 2.0])
+def test_force_impulse_into_a_massless_damped_node_against_exact(c):
+    # Force impulse J at the massless node s: the damper c1 carries it at once, so
+    # s jumps by J/c1 and m1 gets the momentum J (it used to inject nothing: zero
+    # response).  Reference: the exponential of the equations written by hand.
+    net, J = _chain(c, "force"), 1.0
+    res = transient(net, 1.0, 5e-4, "impulse", amplitude=J)
+    y0 = np.zeros(11)
+    y0[10], y0[5] = J / c, J / CHAIN_M[0]
+    A = _chain_matrix(c, free_s=True)
+    idx = np.arange(1, res.time.size, 97)
+    ref = _exact(A, y0, res.time[idx])
+    for i in range(5):
+        x = res.node(f"n{i + 1}")[0][idx]
+        assert np.abs(x - ref[i]).max() <= 1e-9 * np.abs(ref[i]).max()
+    vs = A[10] @ ref
+    assert np.abs(res.drive_velocity[idx] - vs).max() <= 1e-9 * np.abs(vs).max()
+
+
+@pytest.mark.parametrize("c", [0.02, 2.0])
+def test_velocity_impulse_passes_momentum_through_the_damper(c):
+    # Velocity impulse of area J: s jumps by J and stays; the damper c1 gives m1 the
+    # momentum c1 J (it used to be left out: 0.6 % off at c = 2).
+    net, J = _chain(c, "velocity"), 1.0
+    res = transient(net, 1.0, 5e-4, "impulse", amplitude=J)
+    A = _chain_matrix(c, free_s=False)
+    # s held at J: x_i → x_i − J is the free response of the held chain
+    y0 = np.zeros(10)
+    y0[:5] = -J
+    y0[5] = c * J / CHAIN_M[0]
+    idx = np.arange(1, res.time.size, 97)
+    ref = _exact(A, y0, res.time[idx])
+    for i in range(5):
+        x = res.node(f"n{i + 1}")[0][idx]
+        assert np.abs(x - (ref[i] + J)).max() <= 1e-9 * np.abs(ref[i]).max()
+    q = -CHAIN_K[0] * ref[0] - c * ref[5]
+    assert np.abs(res.drive_force[idx] - q).max() <= 1e-9 * np.abs(q).max()
+
+
 def test_static_condensation_series_springs():
     # two springs in series (massless middle node) = one spring k1 k2/(k1 + k2)
     net = "mass m a 0 2\nspring k1 a b 300\nspring k2 b 0 600\n.ic a x=0.05\n"

@@ -286,10 +286,11 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
     u = drive.sample(t, amp)
     z0 = ss.initial[0].copy()
     if drive.kind == "impulse":
-        if ss.kind == "force":
-            z0 = z0 + ss.inject * amp
-        else:
-            z0[-1] += amp * 1.0         # velocity impulse of area amp·1 s: X jumps
+        # u = amp·δ(t) in ż = A z + B u: the state jumps by B·amp.  A force impulse
+        # gives the masses momentum and, through a damper, moves a massless
+        # damped node; a velocity impulse moves the drive by amp·1 s (X jumps)
+        # and its dampers pass momentum on.
+        z0 = z0 + ss.B * amp
     if drive.kind == "step" and ss.kind == "velocity":
         notes.append("a velocity step makes the drive's nodes jump in velocity: the force "
                      "through the drive has an impulse at t = 0 that samples cannot show")
@@ -393,8 +394,7 @@ def _with_oscillator(ss: StateSpace, z0, omega: float, amp: float):
     if ss.extra is not None:
         extra = np.vstack([ss.extra, np.zeros((2, ss.extra.shape[1]))])
     new = dataclasses.replace(ss, A=A, B=np.zeros(N + 2), Cx=Cx, Dx=zero, Cv=Cv, Dv=zero,
-                              Ev=zero, inject=np.concatenate([ss.inject, [0.0, 0.0]]),
-                              extra=extra)
+                              Ev=zero, extra=extra)
     return new, np.concatenate([z0, [0.0, 1.0]])
 
 
