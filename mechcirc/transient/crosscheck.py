@@ -63,11 +63,11 @@ AGREES, DISAGREES, UNMEASURED = "agrees", "disagrees", "cannot be measured"
 def judge(row: dict, error: float | None, tol: float, why: str | None = None) -> dict:
     """Add ``verdict``, ``tol`` and ``why`` to one comparison ``row`` (returned).
 
-    ``error`` is the relative difference of the two domains; ``why`` (or a
-    missing / non-finite ``error``) makes the line ``cannot be measured``.
+    ``error`` is the relative difference of the two domains (∞ disagrees);
+    ``why`` (or a missing / NaN ``error``) makes the line ``cannot be measured``.
     """
-    if why is None and (error is None or not math.isfinite(error)):
-        why = "no finite difference could be formed"
+    if why is None and (error is None or math.isnan(error)):
+        why = "no difference could be formed"
     if why is not None:
         row.update(verdict=UNMEASURED, tol=tol, why=why)
     else:
