@@ -103,6 +103,10 @@ def test_transient_drive_waveforms_and_json_drive_key(tmp_path, capsys):
     (["--t-end", "1", "--drive", "square"], "not understood"),
     (["--t-end", "1", "--drive", "csv:/nonexistent.csv"], "nonexistent"),
     (["--t-end", "1", "--dt", "1e-12"], "limit"),
+    # issue 23 item 4: OverflowError (exit 1) and NaN labelled "exact" (exit 0) before
+    (["--t-end", "1", "--dt", "5e-324"], "below 1e-300 s"),
+    (["--t-end", "1e10", "--dt", "1e-300"], "t_end/dt = inf samples, the limit is 2000000"),
+    (["--t-end", "1e300", "--drive", "step"], "the transient is not finite from t = 5e+296 s"),
 ])
 def test_transient_user_errors_exit_2(argv, message, capsys, tmp_path):
     out_csv = tmp_path / "never.csv"

@@ -41,8 +41,8 @@ from ..circuit import Circuit, Drive
 from ..errors import MechcircError
 from .simulate import transient
 
-__all__ = ["CrossCheck", "crosscheck", "matrix_pencil", "judge", "summarise",
-           "AGREES", "DISAGREES", "UNMEASURED"]
+__all__ = ["AGREES", "DISAGREES", "UNMEASURED", "CrossCheck", "crosscheck", "judge",
+           "matrix_pencil", "summarise"]
 
 #: Samples handed to the matrix pencil (its SVD costs O(n³)).
 PENCIL_SAMPLES = 600

@@ -40,6 +40,8 @@ __all__ = ["Waveform", "TransientResult", "transient", "parse_drive", "MAX_SAMPL
 
 #: Most output samples of one run (each node's x and v are kept for every one).
 MAX_SAMPLES = 2_000_000
+#: Smallest output step [s]: below it the grid's multiples are subnormal numbers.
+MIN_STEP = 1e-300
 
 
 @dataclass(frozen=True)
@@ -229,14 +231,19 @@ def _grid(t_end: float, dt: float | None, waveform: Waveform) -> np.ndarray:
             dt = min(dt, 2 * math.pi / waveform.omega / 40)
     if not (math.isfinite(dt) and dt > 0):
         raise MechcircError(f"--dt must be a finite time > 0 [s], got {dt:g}")
-    n = int(round(t_end / dt))
-    if n + 1 > MAX_SAMPLES:
-        raise MechcircError(f"t_end/dt = {n} samples, the limit is {MAX_SAMPLES}; "
+    if dt < MIN_STEP:
+        raise MechcircError(f"the step dt = {dt:g} s is below {MIN_STEP:g} s (its multiples "
+                            "would lose precision); give a larger --dt or --t-end")
+    ratio = t_end / dt
+    if not ratio + 1 <= MAX_SAMPLES:
+        raise MechcircError(f"t_end/dt = {ratio:.3g} samples, the limit is {MAX_SAMPLES}; "
                             "give a larger --dt or a shorter --t-end")
+    n = int(round(ratio))
     n = max(n, 1)
     return np.linspace(0.0, n * dt, n + 1)
 
 
+@np.errstate(over="ignore", invalid="ignore")     # a non-finite result is refused at the end
 def transient(circuit: Circuit, t_end: float, dt: float | None = None,
               drive: Waveform | str | Callable | None = None, *,
               amplitude: float | None = None, linearise: bool = False,
@@ -345,8 +352,25 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
     if interp > 1e-13 * float(np.abs(u).max()):      # not rounding of an exact ramp
         notes.append(f"drive interpolated linearly between samples: its error is at most "
                      f"{interp:.3g} (h²/8·max|ü|, from the samples' second differences)")
-    return _outputs(ss, circuit, t, Z, u, u_in, h, drive, method, err, interp, notes,
-                    elements, T, velocities, nx, drive_y, x_ready, v_ready)
+    out = _outputs(ss, circuit, t, Z, u, u_in, h, drive, method, err, interp, notes,
+                   elements, T, velocities, nx, drive_y, x_ready, v_ready)
+    _require_finite(out)
+    return out
+
+
+def _require_finite(r: TransientResult) -> None:
+    """A result with a non-finite value is a failure, never a result (issue 23 item 4)."""
+    arrays = [a for a in (r.x, r.v, r.force, r.drive_force, r.drive_velocity) if a is not None]
+    bad = [np.flatnonzero(~np.isfinite(a).reshape(a.shape[0], -1).all(axis=1)) for a in arrays]
+    first = min((int(b[0]) for b in bad if b.size), default=None)
+    if first is None and math.isfinite(r.error):
+        return
+    where = f"from t = {r.time[first]:.3g} s on" if first is not None else "in its error estimate"
+    raise MechcircError(
+        f"the transient is not finite {where} (t_end = {r.time[-1]:.3g} s, step "
+        f"{r.time[1] - r.time[0]:.3g} s): the values or the propagation over one step "
+        f"overflow the floating-point range (±{np.finfo(float).max:.3g}); give a shorter "
+        "--t-end or a smaller --dt")
 
 
 def _periodic_start(ss: StateSpace, drive: Waveform, amp: float, circuit, linearise):
