@@ -35,7 +35,8 @@ def register(sub) -> None:
     p.add_argument("--amplitude", type=float, metavar="A",
                    help="amplitude of harmonic/step/impulse (default: the netlist's)")
     p.add_argument("--rtol", type=float, default=1e-10, metavar="TOL",
-                   help="relative tolerance with clearances (default 1e-10)")
+                   help="relative tolerance with clearances, 1e-12 to 0.1 (default 1e-10; "
+                        "the absolute one is TOL x each state's peak)")
     p.add_argument("-o", "--output", metavar="CSV", help="write the time series as CSV")
     p.add_argument("--plot", metavar="IMAGE", help="plot node displacements")
     p.add_argument("--json", action="store_true", help="print one JSON document")
