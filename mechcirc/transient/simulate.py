@@ -823,18 +823,21 @@ def _nonlinear(ss: StateSpace, circuit, z0, t, u, rtol):
         atol = np.full(N, rtol * scale)
     # Error estimate: the run asked for, and a reference at a REF_TOL× tighter
     # tolerance and 1/REF_H of the largest step (a run whose steps are limited
-    # by hmax, as at loose tolerances, would otherwise repeat itself).  The
+    # by hmax or by the drive's samples, as at loose tolerances, would
+    # otherwise repeat itself).  The
     # reference is returned and the difference reported: it is about the error
     # of the run at rtol, which is many times the reference's (on the corpus of
     # tests/test_transient_estimates.py ≥ 4.6× at every rtol from 1e-3 to
     # 1e-10), so it bounds the error of what is returned.
     Z1 = run(rtol, atol, hmax)
-    Z = run(rtol / REF_TOL, atol / REF_TOL, hmax / REF_H)
+    # (steps that end on every drive sample are limited by the sample step too)
+    href = (hmax if dense else min(hmax, h)) / REF_H
+    Z = run(rtol / REF_TOL, atol / REF_TOL, href)
     X = Z @ ss.Cx.T
     err = float(np.abs(X - Z1 @ ss.Cx.T).max())
     backend = "numba" if kern.HAVE_NUMBA else "Python"
     method = (f"Dormand-Prince 5(4) ({backend}), clearances in the RHS: rtol "
-              f"{rtol / REF_TOL:g} and steps ≤ {hmax / REF_H:.3g} s; error estimate = the "
+              f"{rtol / REF_TOL:g} and steps ≤ {href:.3g} s; error estimate = the "
               f"difference from the run at rtol {rtol:g} (absolute tolerance rtol × each "
               "state's peak)")
     peak_x = float(np.abs(X).max())
