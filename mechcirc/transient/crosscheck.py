@@ -95,7 +95,7 @@ def verdict_text(row: dict) -> str:
         return f"cannot be measured: {row['why']}"
     sign = "≤" if row["verdict"] == AGREES else ">"
     word = "agrees" if row["verdict"] == AGREES else "DISAGREES"
-    return f"{word} ({sign} tol {row['tol']:.0e})"
+    return f"{word} ({sign} tol {row['tol']:.0e})" + (f": {row['why']}" if row["why"] else "")
 
 
 def summary_line(s: dict) -> str:
