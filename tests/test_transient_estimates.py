@@ -19,25 +19,25 @@ from mechcirc.transient import transient
 
 CASES = {
     # contact 1e9 against a 1e3 spring: stiffness spread 1e6
-    "stiff_stop": ("mass m a 0 1\nspring ks a 0 1e3\nspring stop a 0 1e9 backlash=2e-3\n"
-                   ".ic a v=0.1\n", 0.2, 1e-4, None),
+    "stiff_stop": (("mass m a 0 1\nspring ks a 0 1e3\nspring stop a 0 1e9 backlash=2e-3\n"
+                    ".ic a v=0.1\n"), 0.2, 1e-4, None),
     # a micrometre clearance driven harmonically: motions of a few µm
-    "um_clearance": ("drive V b 0 velocity=1e-4\nspring k b a 1e5 backlash=1e-6 damping=5\n"
-                     "mass m a 0 0.5\nspring k2 a 0 1e3\n", 0.3, 1e-4, "harmonic:50"),
+    "um_clearance": (("drive V b 0 velocity=1e-4\nspring k b a 1e5 backlash=1e-6 damping=5\n"
+                      "mass m a 0 0.5\nspring k2 a 0 1e3\n"), 0.3, 1e-4, "harmonic:50"),
     # ten masses, gaps in every other spring, one mass kicked
     "chain_gaps": ("".join(f"mass m{i} n{i} 0 1\n" for i in range(10))
                    + "".join(f"spring k{i} n{i} n{i + 1} 1e4"
                              + (" backlash=1e-3" if i % 2 == 0 else "") + "\n" for i in range(9))
                    + "spring k9 n9 0 1e4\n.ic n0 v=0.5\n", 0.5, 1e-3, None),
     # a damped stiff stop under a constant force: bouncing that settles (chatter)
-    "chatter": ("drive F a 0 force=10\nmass m a 0 1\nspring stop a 0 1e7 backlash=2e-3 "
-                "damping=20\n.ic a v=-0.3\n", 0.3, 1e-4, "step"),
+    "chatter": (("drive F a 0 force=10\nmass m a 0 1\nspring stop a 0 1e7 backlash=2e-3 "
+                 "damping=20\n.ic a v=-0.3\n"), 0.3, 1e-4, "step"),
     # the MSL backlash example: 45° of clearance, released from 90°
     "msl": (None, 1.0, 1e-3, None),
     # a drive given by samples (steps end on each one: both runs took the same single
     # step per sample, and the estimate was 1e-17 for a true 5e-12)
-    "sampled_drive": ("drive V b 0 velocity=1e-2\nspring k b a 1e5 backlash=1e-4 damping=5\n"
-                      "mass m a 0 0.5\nspring k2 a 0 1e3\n", 0.1, 1e-5,
+    "sampled_drive": (("drive V b 0 velocity=1e-2\nspring k b a 1e5 backlash=1e-4 damping=5\n"
+                       "mass m a 0 0.5\nspring k2 a 0 1e3\n"), 0.1, 1e-5,
                       lambda t: 1e-2 * np.sin(50 * t) + 1e-3 * np.sin(130 * t)),
 }
 RTOLS = (1e-3, 1e-4, 1e-6, 1e-8, 1e-10)

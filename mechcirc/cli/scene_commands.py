@@ -359,7 +359,7 @@ def cmd_crosscheck_scene(args) -> int:
 
         with atomic_open(args.netlist, "w", encoding="utf-8") as fh:
             fh.write(build(scene, math.radians(theta_deg)).netlist)
-    from ..transient.crosscheck import summary_line, verdict_text
+    from ..verdict import summary_line, verdict_text
 
     summary = result.verdict
     if args.json:

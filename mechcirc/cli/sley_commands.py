@@ -310,7 +310,7 @@ def cmd_crosscheck(args) -> int:
         with atomic_open(args.netlist) as fh:
             fh.write(checks[True].netlist)
     from ..sley.crosscheck import TOL_HARMONIC, TOL_RESONANCE, TOL_RINGING
-    from ..transient.crosscheck import judge, summarise, summary_line, verdict_text
+    from ..verdict import judge, summarise, summary_line, verdict_text
 
     ring_params = params
     ring_notes = []

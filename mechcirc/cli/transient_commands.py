@@ -121,7 +121,7 @@ def cmd_crosscheck_netlist(args) -> int:
 
     with Progress(0, f"{circuit.name}: crosscheck") as bar:   # total set by crosscheck
         result = crosscheck(circuit, omega_max=omega_max, progress=bar)
-    from ..transient.crosscheck import summary_line, verdict_text
+    from ..verdict import summary_line, verdict_text
 
     summary = result.verdict
     if args.json:

@@ -35,7 +35,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import MechcircError
-from ..transient.crosscheck import judge, summarise
+from ..verdict import judge, summarise
 from .files import Scene
 
 #: Tolerances of the verdicts: the ringing's ω_n (RK4 record fitted by a
@@ -56,7 +56,7 @@ class SceneCrosscheck:
     ``forced``: list of dicts with ``omega`` (of the drive ripple [rad/s]),
     ``Q0_circuit`` and ``Q0_time`` (|Q0| at the drive's amplitude V0 [N·m or N]) and
     ``rel_error``.  Every row also has ``verdict``, ``tol`` and ``why``
-    (:func:`mechcirc.transient.crosscheck.judge`).
+    (:func:`mechcirc.verdict.judge`).
     """
 
     source: str
@@ -67,12 +67,12 @@ class SceneCrosscheck:
 
     @property
     def verdict(self) -> dict:
-        """Overall verdict (:func:`mechcirc.transient.crosscheck.summarise`)."""
+        """Overall verdict (:func:`mechcirc.verdict.summarise`)."""
         return summarise(list(self.resonances) + list(self.forced))
 
     def summary(self) -> dict:
         return {"file": self.source, "theta_deg": self.theta_deg,
-                "verdict": self.verdict["verdict"], "counts": self.verdict,
+                "verdict": self.verdict["verdict"], "summary": self.verdict,
                 "resonances": list(self.resonances), "forced": list(self.forced),
                 "notes": list(self.notes)}
 

@@ -20,7 +20,7 @@ import numpy as np
 from .linear import eigenfrequencies, linearise, to_circuit, to_netlist
 from .models import SleyParameters
 
-#: Tolerances of the three checks' verdicts (:func:`mechcirc.transient.crosscheck.judge`):
+#: Tolerances of the three checks' verdicts (:func:`mechcirc.verdict.judge`):
 #: (a) exact algebra on both sides, achieved ≤ 1.5e-15 over every preset;
 #: (b) a frozen-θ prediction against the ringing of the moving sley (its frequency
 #: changes with the crank angle over the measured half periods), achieved ≤ 5.1e-3

@@ -22,11 +22,11 @@ periods; the amplitude is the least-squares sinusoid at ω, and the record's
 departure from that sinusoid (it would grow if the time stepping did not
 keep the state periodic) is part of the check.
 
-Every line carries a verdict (:func:`judge`): ``agrees`` (difference within
-the stated tolerance), ``disagrees`` (beyond it) or ``cannot be measured``
-(and why); :func:`summarise` gives the overall verdict, shared with the scene
-and sley cross-checks.  Clearances are taken closed (the frequency domain's
-reading), and said so.
+Every line carries a verdict (:func:`mechcirc.verdict.judge`): ``agrees``
+(difference within the stated tolerance), ``disagrees`` (beyond it) or
+``cannot be measured`` (and why); :func:`mechcirc.verdict.summarise` gives the
+overall verdict, shared with the scene and sley cross-checks.  Clearances
+are taken closed (the frequency domain's reading), and said so.
 """
 
 from __future__ import annotations
@@ -39,10 +39,10 @@ import numpy as np
 
 from ..circuit import Circuit, Drive
 from ..errors import MechcircError
+from ..verdict import DISAGREES, judge, summarise
 from .simulate import transient
 
-__all__ = ["AGREES", "DISAGREES", "UNMEASURED", "CrossCheck", "crosscheck", "judge",
-           "matrix_pencil", "summarise"]
+__all__ = ["CrossCheck", "crosscheck", "matrix_pencil"]
 
 #: Samples handed to the matrix pencil (its SVD costs O(n³)).
 PENCIL_SAMPLES = 600
@@ -57,59 +57,10 @@ TOL_RINGING = 1e-9
 #: sinusoid, relative (achieved ≤ 1.6e-13; widened to 10× the sweep's error bound).
 TOL_STEADY = 1e-9
 
-AGREES, DISAGREES, UNMEASURED = "agrees", "disagrees", "cannot be measured"
-
-
-def judge(row: dict, error: float | None, tol: float, why: str | None = None) -> dict:
-    """Add ``verdict``, ``tol`` and ``why`` to one comparison ``row`` (returned).
-
-    ``error`` is the relative difference of the two domains (∞ disagrees);
-    ``why`` (or a missing / NaN ``error``) makes the line ``cannot be measured``.
-    """
-    if why is None and (error is None or math.isnan(error)):
-        why = "no difference could be formed"
-    if why is not None:
-        row.update(verdict=UNMEASURED, tol=tol, why=why)
-    else:
-        row.update(verdict=AGREES if error <= tol else DISAGREES, tol=tol, why="")
-    return row
-
-
-def summarise(rows) -> dict:
-    """Overall verdict of judged rows: ``{"verdict", "agree", "disagree", "unmeasured", "exit"}``.
-
-    ``disagrees`` (exit status 3) if any line disagrees; otherwise ``agrees``
-    (exit 0) — with the number of lines that could not be measured said, and
-    ``cannot be measured`` when none could.
-    """
-    rows = list(rows)
-    n = {v: sum(r["verdict"] == v for r in rows) for v in (AGREES, DISAGREES, UNMEASURED)}
-    verdict = DISAGREES if n[DISAGREES] else AGREES if n[AGREES] else UNMEASURED
-    return {"verdict": verdict, "agree": n[AGREES], "disagree": n[DISAGREES],
-            "unmeasured": n[UNMEASURED], "exit": 3 if n[DISAGREES] else 0}
-
-
-def verdict_text(row: dict) -> str:
-    """``agrees (≤ tol)`` / ``DISAGREES (> tol)`` / ``cannot be measured: why`` for one row."""
-    if row["verdict"] == UNMEASURED:
-        return f"cannot be measured: {row['why']}"
-    sign = "≤" if row["verdict"] == AGREES else ">"
-    word = "agrees" if row["verdict"] == AGREES else "DISAGREES"
-    return f"{word} ({sign} tol {row['tol']:.0e})" + (f": {row['why']}" if row["why"] else "")
-
-
-def summary_line(s: dict) -> str:
-    """The last line of every cross-check's printout."""
-    total = s["agree"] + s["disagree"] + s["unmeasured"]
-    word = {AGREES: "agrees", DISAGREES: "DISAGREES", UNMEASURED: "cannot be measured"}
-    return (f"verdict: {word[s['verdict']]} — {s['agree']} of {total} checks agree, "
-            f"{s['disagree']} disagree beyond their tolerance, {s['unmeasured']} cannot be "
-            "measured")
-
-
 @dataclass
 class CrossCheck:
-    """Result of :func:`crosscheck` (plain data); ``verdict`` as :func:`summarise`."""
+    """Result of :func:`crosscheck` (plain data); ``verdict`` as
+    :func:`mechcirc.verdict.summarise`."""
 
     name: str
     drive_kind: str
@@ -241,7 +192,8 @@ def crosscheck(circuit: Circuit, omega_max: float | None = None,
     Returns
     -------
     CrossCheck
-        Rows judged by :func:`judge`; ``result.verdict`` summarises them.
+        Rows judged by :func:`mechcirc.verdict.judge`; ``result.verdict``
+        summarises them.
     """
     if circuit.drive is None:
         raise MechcircError("crosscheck needs a drive line in the netlist (the port whose "
