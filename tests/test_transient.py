@@ -36,6 +36,7 @@ def test_sdof_step_response_closed_form():
     x, v = r.node("a")
     assert np.abs(x - x_ref).max() <= 1e-12 * np.abs(x_ref).max()
     assert np.abs(v - v_ref).max() <= 1e-12 * np.abs(v_ref).max()
+    assert np.abs(x - x_ref).max() <= r.error <= 1e-11 * np.abs(x_ref).max()   # rounding
     # element forces: spring k x, damper c v, mass m a; they balance the drive force
     total = r.element_force("k") + r.element_force("c") + r.element_force("m")
     assert np.abs(total[1:] - F).max() <= 1e-9 * F
