@@ -250,7 +250,7 @@ def clearance_case(label, circuit, masses, springs, x0, t_end, dt):
                          for nm in names])
         e_mc = abs(np.abs(f_mc).max() - peak) / peak
         e_mc_all = np.abs(f_mc - f_ref).max() / peak
-        print(f"  mechcirc rtol {rtol:g} (numba, incl. the 2nd run of the error estimate) "
+        print(f"  mechcirc rtol {rtol:g} (numba, incl. the pilot and the reference run of the error estimate) "
               f"{t_mc:8.4f} s  peak-force err {e_mc:.1e}, max|ΔF|/peak {e_mc_all:.1e}  "
               f"ratio {t_dop / t_mc:.0f}x (CPU {c_mc:.4f} s: {c_dop / c_mc:.0f}x)")
         _first_call(lambda c: transient(c, t_end, dt, rtol=rtol), circuit, t_dop, c_dop)
@@ -333,7 +333,7 @@ def _chain_with_velocity(chain, springs, n, t_end=0.2, dt=1e-4):
         f_mc = np.array([res.element_force(f"k{i}") + res.element_force(f"k{i}_damping")
                          for i in range(1, n + 1)])
         e_mc = abs(np.abs(f_mc).max() - peak) / peak
-        print(f"  mechcirc rtol {rtol:g} (numba, incl. the 2nd run of the error estimate) "
+        print(f"  mechcirc rtol {rtol:g} (numba, incl. the pilot and the reference run of the error estimate) "
               f"{t_mc:8.4f} s  peak-force err {e_mc:.1e}, "
               f"max|ΔF|/peak {np.abs(f_mc - f_ref).max() / peak:.1e}  ratio {t_dop / t_mc:.0f}x "
               f"(CPU {c_mc:.4f} s: {c_dop / c_mc:.0f}x)")

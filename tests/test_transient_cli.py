@@ -34,14 +34,42 @@ def test_every_shipped_netlist_runs_transient_and_crosscheck(path, capsys):
     status, out, err = run(["crosscheck", path, "--json"], capsys)
     assert status == 0, err
     doc = json.loads(out)
+    assert doc["verdict"] == "agrees" and doc["summary"]["disagree"] == 0
     assert doc["resonances"] and doc["steady_state"]
     for r in doc["resonances"]:
-        assert set(r) >= {"kind", "omega", "ringing_omega", "rel_error"}
+        assert set(r) >= {"kind", "omega", "ringing_omega", "rel_error", "verdict", "tol"}
         if r["ringing_omega"] is not None:
-            assert r["rel_error"] < 1e-8          # achieved ≤ 1e-14 on these
+            assert r["verdict"] == "agrees"
+            assert r["rel_error"] < 1e-9          # achieved ≤ 1.3e-13 on these
     for s in doc["steady_state"]:
-        assert set(s) >= {"omega", "expected", "measured", "rel_error"}
-        assert s["rel_error"] < 1e-8              # achieved ≤ 1e-10
+        assert set(s) >= {"omega", "expected", "measured", "rel_error", "verdict"}
+        assert s["verdict"] == "agrees"
+        assert s["rel_error"] < 1e-9              # achieved ≤ 1.6e-13
+
+
+def test_crosscheck_says_disagrees_and_exits_3(monkeypatch, capsys):
+    """A time domain that is wrong (here: the steady state not started periodic, so the
+    record still rings) is said on its line and in the verdict, with exit status 3."""
+    import mechcirc.transient.simulate as sim
+
+    monkeypatch.setattr(sim, "_periodic_start", lambda ss, *a: np.zeros(ss.size))
+    path = REPO / "netlists/stb_heald.mcir"
+    status, out, _ = run(["crosscheck", path], capsys)
+    assert status == 3
+    assert "DISAGREES (> tol" in out and out.splitlines()[-1].startswith("verdict: DISAGREES")
+    status, out, _ = run(["crosscheck", path, "--json"], capsys)
+    assert status == 3 and json.loads(out)["verdict"] == "disagrees"
+
+
+def test_crosscheck_unmeasurable_line_says_why(tmp_path, capsys):
+    # the massless damped drive node's first-order mode (ω = k1/c1 = 6000) rings not at all
+    net = tmp_path / "chain.mcir"
+    net.write_text("drive V s 0 velocity=1\nspring k1 s a 12000\ndamper c1 s a 2\n"
+                   "mass m1 a 0 1.3\nspring k2 a b 14000\ndamper c2 a b 2\nmass m2 b 0 1.6\n")
+    status, out, _ = run(["crosscheck", net, "--omega-max", "1e4"], capsys)
+    assert status == 0
+    assert "cannot be measured: overdamped" in out
+    assert out.splitlines()[-1].startswith("verdict: agrees") and "1 cannot be measured" in out
 
 
 def test_transient_outputs_csv_and_plot(tmp_path, capsys):
@@ -75,6 +103,10 @@ def test_transient_drive_waveforms_and_json_drive_key(tmp_path, capsys):
     (["--t-end", "1", "--drive", "square"], "not understood"),
     (["--t-end", "1", "--drive", "csv:/nonexistent.csv"], "nonexistent"),
     (["--t-end", "1", "--dt", "1e-12"], "limit"),
+    # issue 23 item 4: OverflowError (exit 1) and NaN labelled "exact" (exit 0) before
+    (["--t-end", "1", "--dt", "5e-324"], "below 1e-300 s"),
+    (["--t-end", "1e10", "--dt", "1e-300"], "t_end/dt = inf samples, the limit is 2000000"),
+    (["--t-end", "1e300", "--drive", "step"], "the transient is not finite from t = 5e+296 s"),
 ])
 def test_transient_user_errors_exit_2(argv, message, capsys, tmp_path):
     out_csv = tmp_path / "never.csv"
@@ -123,6 +155,6 @@ def test_crosscheck_reports_progress_per_transient_run():
     bar = Progress(0, "x", stream=io.StringIO(), enabled=True, delay=0.0)
     with bar:
         result = crosscheck(c, progress=bar)
-    kinds = {r["kind"] for r in result.resonances}
+    kinds = {r["kind"] for r in result.resonances}         # one record per kind here
     assert bar.total == len(kinds) + len(result.steady_state) == bar.done
     assert "[" in bar.stream.getvalue()            # the bar was drawn

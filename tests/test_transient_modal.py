@@ -84,7 +84,9 @@ def test_undamped_long_run_real_shapes_closed_form():
     x_ref = 3.0 / 800 * (1 - np.cos(20.0 * r.time))
     # achieved 1.5e-12 (phase rounding over 1e5 steps); 1e-11 is a margin of ~7
     assert np.abs(r.x[:, 0] - x_ref).max() <= 1e-11 * np.abs(x_ref).max()
-    assert r.error <= 1e-12 * np.abs(x_ref).max()
+    # the estimate (rounding over 1e5 steps) covers that: it was 0 + the dropped parts,
+    # 6.5e-13 relative, below the true 1.5e-12
+    assert np.abs(r.x[:, 0] - x_ref).max() <= r.error <= 1e-9 * np.abs(x_ref).max()
 
 
 def test_critical_damping_falls_back_to_block_exactly():

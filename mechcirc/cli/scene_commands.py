@@ -360,9 +360,32 @@ def cmd_crosscheck_scene(args) -> int:
 
         with atomic_open(args.netlist, "w", encoding="utf-8") as fh:
             fh.write(build(scene, math.radians(theta_deg)).netlist)
+    from ..verdict import summary_line, verdict_text
+
+    summary = result.verdict
     if args.json:
         print_json(result.summary())
-        return 0
+        return summary["exit"]
+    print(f"{args.file}: scene {scene.name!r} at θ = {theta_deg:g}°: resonances of the circuit "
+          "against the ringing of the time-domain motion after a kick")
+    print(f"{'circuit ω_n':>14} {'ζ':>9} {'ringing ω_n':>14} {'ζ':>9} {'rel. diff':>10}  verdict")
+    for r in result.resonances:
+        if r["ringing_omega"] is None:
+            print(f"{r['omega']:>14.6g} {r['zeta']:>9.4g}  {verdict_text(r)}")
+            continue
+        print(f"{r['omega']:>14.6g} {r['zeta']:>9.4g} {r['ringing_omega']:>14.6g} "
+              f"{r['ringing_zeta']:>9.4g} {r['rel_error']:>10.2e}  {verdict_text(r)}")
+    if result.forced:
+        print("forced response to a drive-speed ripple: |Q0| of the circuit against the "
+              "time domain")
+        print(f"{'ω':>14} {'|Q0| circuit':>16} {'|Q0| time':>16} {'rel. diff':>10}  verdict")
+        for f in result.forced:
+            print(f"{f['omega']:>14.6g} {f['Q0_circuit']:>16.8g} {f['Q0_time']:>16.8g} "
+                  f"{f['rel_error']:>10.2e}  {verdict_text(f)}")
+    for n in result.notes:
+        print(f"note: {n}")
+    print(summary_line(summary))
+    return summary["exit"]
     print(f"{args.file}: scene {scene.name!r} at θ = {theta_deg:g}°: resonances of the circuit "
           "against the ringing of the time-domain motion after a kick")
     print(f"{'circuit ω_n':>14} {'ζ':>9} {'ringing ω_n':>14} {'ζ':>9} {'rel. diff':>10}")

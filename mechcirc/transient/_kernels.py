@@ -191,7 +191,8 @@ def dopri_run(z, t0, dt, nout, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, u
               hmax, coefA, coefB5, coefB4, coefC, coefD, dense, out, kink_tol=0.0):
     """Integrate from t0 and store z at t0 + k dt (k < nout) in ``out``; returns the step count.
 
-    A step is accepted when the embedded error, scaled by atol + rtol |z|, is ≤ 1
+    A step is accepted when the embedded error, scaled by atol_i + rtol |z_i|
+    (``atol`` one value per state), is ≤ 1
     (RMS).  With ``dense`` steps run across output times (which are filled by the
     method's continuous extension) and are limited only by ``hmax``; without it
     they end on every output time, i.e. on every sample of the piecewise-linear
@@ -233,7 +234,7 @@ def dopri_run(z, t0, dt, nout, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, u
             for r in range(7):
                 a4 += hh * coefB4[r] * K[r, i]
             y5[i] = ytmp[i]
-            sc = atol + rtol * max(abs(z[i]), abs(ytmp[i]))
+            sc = atol[i] + rtol * max(abs(z[i]), abs(ytmp[i]))
             q = (ytmp[i] - a4) / sc
             err += q * q
         err = math.sqrt(err / N)

@@ -64,7 +64,6 @@ class StateSpace:
     g: np.ndarray
     h: np.ndarray | None
     massive: bool
-    inject: np.ndarray          # state change per unit force impulse through the drive
     initial: tuple              # (z0, notes)
     drop: tuple                 # element names left out of M, D, K (clearance elements)
     extra: np.ndarray | None    # (N, E): state rate per unit force of each clearance element
@@ -287,13 +286,9 @@ def state_space(circuit: Circuit, *, linearise: bool = False) -> StateSpace:
             if e.n2 in index:
                 ge[index[e.n2]] -= 1.0
             extra[i_v1, j] = M11_inv @ (Y[:, :n1].T @ (T.T @ (-ge)))
-    # Impulse through the drive (force J into n1, out of n2): momentum jump.
-    inject = np.zeros(N)
-    if kind == "force" and n1:
-        inject[i_v1] = M11_inv @ (B1.T @ (T.T @ g))
     z0, notes = _initial(circuit, nodes, index, Cx, Cv, N, vel)
     return StateSpace(tuple(nodes), tuple(work.elements), kind, A, Bv, Cx, Dx, Cv, Dv, Ev,
-                      M, D, K, g, h, massive, inject, (z0, tuple(notes)), tuple(sorted(drop)),
+                      M, D, K, g, h, massive, (z0, tuple(notes)), tuple(sorted(drop)),
                       extra)
 
 

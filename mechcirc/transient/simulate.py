@@ -17,8 +17,10 @@ its cost is matrix products instead of one Python step per sample.
 Circuits with clearances integrate with the embedded Dormand–Prince 5(4) loop
 of :mod:`mechcirc.transient._kernels` (contacts evaluated inside the
 right-hand side; steps end on every drive sample unless the drive is constant
-or harmonic, when outputs come from the method's continuous extension); its error is estimated
-by the difference from the same run at a 10× looser tolerance.
+or harmonic, when outputs come from the method's continuous extension).  The
+absolute tolerance is rtol × each state's peak (from a loose pilot run); the
+run returned is at rtol/100 with a 4× smaller largest step, and its error is
+estimated by its difference from the run at rtol (which errs many times more).
 """
 
 from __future__ import annotations
@@ -40,6 +42,15 @@ __all__ = ["Waveform", "TransientResult", "transient", "parse_drive", "MAX_SAMPL
 
 #: Most output samples of one run (each node's x and v are kept for every one).
 MAX_SAMPLES = 2_000_000
+#: Smallest output step [s]: below it the grid's multiples are subnormal numbers.
+MIN_STEP = 1e-300
+#: The clearance integrator's reference run: tolerance ÷ REF_TOL, largest step
+#: ÷ REF_H (see :func:`_nonlinear`).
+REF_TOL, REF_H = 100.0, 4.0
+#: The clearance integrator's accepted relative tolerances.
+RTOL_RANGE = (1e-12, 0.1)
+#: Rounding charged per step of the exact linear propagation, relative to max|x|.
+ROUNDING_PER_STEP = 8 * float(np.finfo(float).eps)
 
 
 @dataclass(frozen=True)
@@ -229,19 +240,24 @@ def _grid(t_end: float, dt: float | None, waveform: Waveform) -> np.ndarray:
             dt = min(dt, 2 * math.pi / waveform.omega / 40)
     if not (math.isfinite(dt) and dt > 0):
         raise MechcircError(f"--dt must be a finite time > 0 [s], got {dt:g}")
-    n = int(round(t_end / dt))
-    if n + 1 > MAX_SAMPLES:
-        raise MechcircError(f"t_end/dt = {n} samples, the limit is {MAX_SAMPLES}; "
+    if dt < MIN_STEP:
+        raise MechcircError(f"the step dt = {dt:g} s is below {MIN_STEP:g} s (its multiples "
+                            "would lose precision); give a larger --dt or --t-end")
+    ratio = t_end / dt
+    if not ratio + 1 <= MAX_SAMPLES:
+        raise MechcircError(f"t_end/dt = {ratio:.3g} samples, the limit is {MAX_SAMPLES}; "
                             "give a larger --dt or a shorter --t-end")
+    n = int(round(ratio))
     n = max(n, 1)
     return np.linspace(0.0, n * dt, n + 1)
 
 
+@np.errstate(over="ignore", invalid="ignore")     # a non-finite result is refused at the end
 def transient(circuit: Circuit, t_end: float, dt: float | None = None,
               drive: Waveform | str | Callable | None = None, *,
               amplitude: float | None = None, linearise: bool = False,
               elements: bool = True, velocities: bool = True,
-              rtol: float = 1e-10) -> TransientResult:
+              rtol: float = 1e-10, steady: bool = False) -> TransientResult:
     """Integrate ``circuit`` from its ``.ic`` state over [0, t_end] on a grid of step ``dt``.
 
     Parameters
@@ -268,6 +284,12 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
         Compute the node velocities ``v`` (default); with ``elements=False``
         and ``velocities=False`` only the displacements ``x`` and the drive's
         output are formed (``v`` is None): half the output work of a linear run.
+    steady : bool
+        Start in the periodic steady state of a harmonic drive instead of the
+        ``.ic`` state (linear circuits, or ``linearise``): the state that
+        returns after every period, z(0) = amp · Im[(iωI − A)⁻¹ B], so no
+        ring-down has to be waited for.  Refused when ω is a natural
+        frequency of an undamped part (no periodic state exists).
     """
     if callable(drive) and not isinstance(drive, Waveform):
         drive = Waveform("callable", func=drive)
@@ -286,13 +308,17 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
     u = drive.sample(t, amp)
     z0 = ss.initial[0].copy()
     if drive.kind == "impulse":
-        if ss.kind == "force":
-            z0 = z0 + ss.inject * amp
-        else:
-            z0[-1] += amp * 1.0         # velocity impulse of area amp·1 s: X jumps
+        # u = amp·δ(t) in ż = A z + B u: the state jumps by B·amp.  A force impulse
+        # gives the masses momentum and, through a damper, moves a massless
+        # damped node; a velocity impulse moves the drive by amp·1 s (X jumps)
+        # and its dampers pass momentum on.
+        z0 = z0 + ss.B * amp
     if drive.kind == "step" and ss.kind == "velocity":
         notes.append("a velocity step makes the drive's nodes jump in velocity: the force "
                      "through the drive has an impulse at t = 0 that samples cannot show")
+    if steady:
+        z0 = _periodic_start(ss, drive, amp, circuit, linearise)
+        notes.append("started in the periodic steady state of the harmonic drive")
     if drive.kind == "harmonic":
         # Exact: the sinusoid is generated by two more states (an undamped
         # oscillator), so no interpolation of the drive is needed at all.
@@ -304,7 +330,11 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
     has_clear = bool(backlash_elements(circuit)) and not linearise
     T, nx, drive_y, x_ready, v_ready = None, None, None, None, None
     if has_clear:
-        Z, method, err = _nonlinear(ss, circuit, z0, t, u_in, rtol)
+        if not RTOL_RANGE[0] <= rtol <= RTOL_RANGE[1]:
+            raise MechcircError(f"--rtol must be between {RTOL_RANGE[0]:g} and "
+                                f"{RTOL_RANGE[1]:g}, got {rtol:g}")
+        Z, method, err, more = _nonlinear(ss, circuit, z0, t, u_in, rtol)
+        notes.extend(more)
     else:
         x_only = velocities is False and not elements
         dmap = _drive_map(ss)
@@ -335,8 +365,53 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
     if interp > 1e-13 * float(np.abs(u).max()):      # not rounding of an exact ramp
         notes.append(f"drive interpolated linearly between samples: its error is at most "
                      f"{interp:.3g} (h²/8·max|ü|, from the samples' second differences)")
-    return _outputs(ss, circuit, t, Z, u, u_in, h, drive, method, err, interp, notes,
-                    elements, T, velocities, nx, drive_y, x_ready, v_ready)
+    out = _outputs(ss, circuit, t, Z, u, u_in, h, drive, method, err, interp, notes,
+                   elements, T, velocities, nx, drive_y, x_ready, v_ready)
+    if not has_clear:
+        # exact up to rounding, which adds up over the steps: ROUNDING_PER_STEP × max|x|
+        # per step (against closed forms: 3e-15 … 1.5e-12 relative after 2e3 … 1e5 steps,
+        # 4 … 150× below this)
+        with np.errstate(all="ignore"):
+            out.error = err + ROUNDING_PER_STEP * (t.size - 1) * float(np.abs(out.x).max())
+    _require_finite(out)
+    return out
+
+
+def _require_finite(r: TransientResult) -> None:
+    """A result with a non-finite value is a failure, never a result (issue 23 item 4)."""
+    arrays = [a for a in (r.x, r.v, r.force, r.drive_force, r.drive_velocity) if a is not None]
+    bad = [np.flatnonzero(~np.isfinite(a).reshape(a.shape[0], -1).all(axis=1)) for a in arrays]
+    first = min((int(b[0]) for b in bad if b.size), default=None)
+    if first is None and math.isfinite(r.error):
+        return
+    where = f"from t = {r.time[first]:.3g} s on" if first is not None else "in its error estimate"
+    raise MechcircError(
+        f"the transient is not finite {where} (t_end = {r.time[-1]:.3g} s, step "
+        f"{r.time[1] - r.time[0]:.3g} s): the values or the propagation over one step "
+        f"overflow the floating-point range (±{np.finfo(float).max:.3g}); give a shorter "
+        "--t-end or a smaller --dt")
+
+
+def _periodic_start(ss: StateSpace, drive: Waveform, amp: float, circuit, linearise):
+    """z(0) of the periodic response to u = amp·sin ωt: amp · Im[(iωI − A)⁻¹ B]."""
+    if drive.kind != "harmonic":
+        raise MechcircError("a periodic steady state needs a harmonic drive "
+                            "(--drive harmonic:OMEGA)")
+    if backlash_elements(circuit) and not linearise:
+        raise MechcircError("a periodic steady state is computed for linear circuits only "
+                            "(this one has clearances; linearise them or wait for it)")
+    M = 1j * drive.omega * np.eye(ss.size) - ss.A
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", la.LinAlgWarning)     # rcond below eps
+            Z = la.solve(M, ss.B.astype(complex))
+        if not np.all(np.isfinite(Z)):
+            raise la.LinAlgError
+    except (la.LinAlgError, la.LinAlgWarning, ValueError):
+        raise MechcircError(f"no periodic steady state at ω = {drive.omega:g} rad/s: it is a "
+                            "natural frequency of an undamped part of the network "
+                            "(iωI − A is singular)") from None
+    return amp * Z.imag
 
 
 def _model(circuit: Circuit, linearise: bool) -> StateSpace:
@@ -393,8 +468,7 @@ def _with_oscillator(ss: StateSpace, z0, omega: float, amp: float):
     if ss.extra is not None:
         extra = np.vstack([ss.extra, np.zeros((2, ss.extra.shape[1]))])
     new = dataclasses.replace(ss, A=A, B=np.zeros(N + 2), Cx=Cx, Dx=zero, Cv=Cv, Dv=zero,
-                              Ev=zero, inject=np.concatenate([ss.inject, [0.0, 0.0]]),
-                              extra=extra)
+                              Ev=zero, extra=extra)
     return new, np.concatenate([z0, [0.0, 1.0]])
 
 
@@ -731,26 +805,60 @@ def _nonlinear(ss: StateSpace, circuit, z0, t, u, rtol):
     dense = bool(np.all(u == u[0]))
     hmax = min(1.0 / w_max, t[-1]) if w_max > 0 else t[-1]
 
-    def run(tol):
+    def run(tol, atol, hm):
         out = np.empty((t.size, N))
         z = z0.astype(float).copy()
-        scale = max(np.abs(z0).max(), 1e-300)
-        atol = tol * scale if np.abs(z0).max() > 0 else tol
-        steps = kern.dopri_run(z, 0.0, h, t.size, *mats, u, tol, atol, hmax,
+        steps = kern.dopri_run(z, 0.0, h, t.size, *mats, u, tol, atol, hm,
                                kern._A, kern._B5, kern._B4, kern._C, kern._D, dense, out,
-                               1e-6 * hmax)
+                               1e-6 * hm)
         if steps < 0:
             raise MechcircError("the clearance integrator's step fell below 1e-14 s "
                                 "(the network is too stiff for it)")
         return out
 
-    Z = run(rtol)
-    # Error estimate: the same run at a 10× looser tolerance; the difference is
-    # (about) that run's error, so it over-estimates the error of the one returned.
-    Z2 = run(rtol * 10)
-    err = float(np.abs((Z - Z2) @ ss.Cx.T).max())
+    # Absolute tolerance scaled to the solution, state by state: rtol × the
+    # state's peak over the run, from a loose pilot run (repeated once if the
+    # start's scale was far off: a run from rest has none).
+    scale = max(float(np.abs(z0).max()), 0.0) or 1.0
+    pilot_tol = max(rtol, 1e-4)
+    for _ in range(2):
+        peak = np.abs(run(pilot_tol, np.full(N, pilot_tol * scale), hmax)).max(axis=0)
+        new = float(peak.max())
+        if not (math.isfinite(new) and new > 0) or 0.1 * scale <= new <= 10 * scale:
+            break
+        scale = new
+    if math.isfinite(float(peak.max())) and peak.max() > 0:
+        floor = 1e-6 * peak.max()
+        atol = rtol * np.maximum(peak, floor)
+    else:
+        atol = np.full(N, rtol * scale)
+    # Error estimate: the run asked for, and a reference at a REF_TOL× tighter
+    # tolerance and 1/REF_H of the largest step (a run whose steps are limited
+    # by hmax or by the drive's samples, as at loose tolerances, would
+    # otherwise repeat itself).  The
+    # reference is returned and the difference reported: it is about the error
+    # of the run at rtol, which is many times the reference's (on the corpus of
+    # tests/test_transient_estimates.py ≥ 4.6× at every rtol from 1e-3 to
+    # 1e-10), so it bounds the error of what is returned.
+    Z1 = run(rtol, atol, hmax)
+    # (steps that end on every drive sample are limited by the sample step too)
+    href = (hmax if dense else min(hmax, h)) / REF_H
+    Z = run(rtol / REF_TOL, atol / REF_TOL, href)
+    X = Z @ ss.Cx.T
+    err = float(np.abs(X - Z1 @ ss.Cx.T).max())
     backend = "numba" if kern.HAVE_NUMBA else "Python"
-    return Z, f"Dormand-Prince 5(4), rtol {rtol:g} ({backend}); clearances in the RHS", err
+    method = (f"Dormand-Prince 5(4) ({backend}), clearances in the RHS: rtol "
+              f"{rtol / REF_TOL:g} and steps ≤ {href:.3g} s; error estimate = the "
+              f"difference from the run at rtol {rtol:g} (absolute tolerance rtol × each "
+              "state's peak)")
+    peak_x = float(np.abs(X).max())
+    notes = []
+    if err > rtol * peak_x:
+        notes.append(f"the estimated error of x, {err:.2g}, is {err / max(peak_x, 1e-300):.1e} "
+                     f"of the largest |x| ({peak_x:.3g}): above --rtol {rtol:g}, which is "
+                     "not reached (the error adds up over the steps and contacts); a smaller "
+                     "--rtol reduces it")
+    return Z, method, err, notes
 
 
 def _clearance_setup(ss: StateSpace, circuit):

@@ -266,7 +266,9 @@ def test_cli_simulate_and_crosscheck_scene_json(capsys):
     assert main(["crosscheck", "examples/mrazek_both_sides.toml", "--theta", "40",
                  "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
-    assert {"omega", "ringing_omega", "rel_error"} <= set(doc["resonances"][0])
+    assert {"omega", "ringing_omega", "rel_error", "verdict", "tol"} <= set(doc["resonances"][0])
+    assert doc["verdict"] == "agrees"
+    assert all(r["verdict"] == "agrees" for r in doc["resonances"] + doc["forced"])
     assert len(doc["forced"]) == 5           # 3 resonances: 0.5, 0.9 x the lowest, 2 between, 1.5 x
     for f in doc["forced"]:
         assert {"omega", "Q0_circuit", "Q0_time", "rel_error"} <= set(f)

@@ -70,6 +70,28 @@ def test_crosscheck_json(capsys):
     assert all(r["rel_error"] < 1e-9 for r in doc["resonances"])
     assert doc["harmonic"]["rel_error"] < 0.01
     assert doc["ringing"]["rel_error"] < 0.02          # variant 1: no clearance
+    assert doc["verdict"] == "agrees" and doc["summary"]["agree"] == 6
+    rows = doc["resonances"] + [doc["ringing"]] + doc["harmonic"]["rows"]
+    assert all(r["verdict"] == "agrees" and r["rel_error"] <= r["tol"] for r in rows)
+
+
+def test_crosscheck_line_that_cannot_be_measured_says_why(capsys):
+    # variant 6 one-side: the pulse response rings out before enough zero crossings
+    assert main(["crosscheck", "--variant", "6"]) == 0
+    out = capsys.readouterr().out
+    assert "(b) ringing after beat-up: cannot be measured: ringing: 2 zero crossing(s)" in out
+    assert out.splitlines()[-1] == ("verdict: agrees — 5 of 6 checks agree, 0 disagree beyond "
+                                    "their tolerance, 1 cannot be measured")
+
+
+def test_crosscheck_disagreement_exits_3(monkeypatch, capsys):
+    import mechcirc.sley.crosscheck as sc
+
+    real = sc.forced_amplitude
+    monkeypatch.setattr(sc, "forced_amplitude", lambda lin, w: 1.01 * real(lin, w))
+    assert main(["crosscheck", "--variant", "1", "--json"]) == 3
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["verdict"] == "disagrees" and doc["summary"]["disagree"] == 3
 
 
 def test_changed_parameters_drop_the_paper_columns(capsys):

@@ -1,0 +1,63 @@
+"""Verdicts of the cross-checks (netlist, scene, sley): one logic for all three.
+
+Each comparison of the two domains is a row (a dict) that :func:`judge` gives
+a ``verdict`` — ``agrees`` (difference within the stated tolerance),
+``disagrees`` (beyond it) or ``cannot be measured`` (and ``why``) — and
+:func:`summarise` sums up (exit status 3 when one disagrees).
+"""
+
+from __future__ import annotations
+
+import math
+
+__all__ = ["AGREES", "DISAGREES", "UNMEASURED", "judge", "summarise", "summary_line",
+           "verdict_text"]
+
+AGREES, DISAGREES, UNMEASURED = "agrees", "disagrees", "cannot be measured"
+
+
+def judge(row: dict, error: float | None, tol: float, why: str | None = None) -> dict:
+    """Add ``verdict``, ``tol`` and ``why`` to one comparison ``row`` (returned).
+
+    ``error`` is the relative difference of the two domains (∞ disagrees);
+    ``why`` (or a missing / NaN ``error``) makes the line ``cannot be measured``.
+    """
+    if why is None and (error is None or math.isnan(error)):
+        why = "no difference could be formed"
+    if why is not None:
+        row.update(verdict=UNMEASURED, tol=tol, why=why)
+    else:
+        row.update(verdict=AGREES if error <= tol else DISAGREES, tol=tol, why="")
+    return row
+
+
+def summarise(rows) -> dict:
+    """Overall verdict of judged rows: ``{"verdict", "agree", "disagree", "unmeasured", "exit"}``.
+
+    ``disagrees`` (exit status 3) if any line disagrees; otherwise ``agrees``
+    (exit 0) — with the number of lines that could not be measured said, and
+    ``cannot be measured`` when none could.
+    """
+    rows = list(rows)
+    n = {v: sum(r["verdict"] == v for r in rows) for v in (AGREES, DISAGREES, UNMEASURED)}
+    verdict = DISAGREES if n[DISAGREES] else AGREES if n[AGREES] else UNMEASURED
+    return {"verdict": verdict, "agree": n[AGREES], "disagree": n[DISAGREES],
+            "unmeasured": n[UNMEASURED], "exit": 3 if n[DISAGREES] else 0}
+
+
+def verdict_text(row: dict) -> str:
+    """``agrees (≤ tol)`` / ``DISAGREES (> tol)`` / ``cannot be measured: why`` for one row."""
+    if row["verdict"] == UNMEASURED:
+        return f"cannot be measured: {row['why']}"
+    sign = "≤" if row["verdict"] == AGREES else ">"
+    word = "agrees" if row["verdict"] == AGREES else "DISAGREES"
+    return f"{word} ({sign} tol {row['tol']:.0e})" + (f": {row['why']}" if row["why"] else "")
+
+
+def summary_line(s: dict) -> str:
+    """The last line of every cross-check's printout."""
+    total = s["agree"] + s["disagree"] + s["unmeasured"]
+    word = {AGREES: "agrees", DISAGREES: "DISAGREES", UNMEASURED: "cannot be measured"}
+    return (f"verdict: {word[s['verdict']]} — {s['agree']} of {total} checks agree, "
+            f"{s['disagree']} disagree beyond their tolerance, {s['unmeasured']} cannot be "
+            "measured")
