@@ -5,24 +5,35 @@ from __future__ import annotations
 import numpy as np
 
 from .progress import Progress
+from .units import FREQUENCY_UNITS, in_unit
 
 __all__ = ["write_sweep_csv"]
 
 
-def write_sweep_csv(result, path) -> None:
-    """Write ``omega,K_re,K_im,Q0_re,Q0_im[,v0_re,v0_im],flag`` rows to ``path``.
+def write_sweep_csv(result, path, *, unit: str = "rad/s", extra: dict | None = None) -> None:
+    """Write ``omega,K_re,K_im,Q0_re,Q0_im[,v0_re,v0_im][,extra...],flag`` rows to ``path``.
 
-    The ``v0`` columns appear for a force drive.  ``flag`` is 0 for a regular
-    point, 1 on a pole or zero of K, 2 within rounding of one.  ``path`` is
-    written in place: for a file that appears whole or not at all, pass a
-    temporary path from :func:`mechcirc.outputs.atomic_path` or
-    :class:`mechcirc.outputs.OutputSet` (as ``mechcirc sweep -o`` does).
+    The ``v0`` columns appear for a force drive.  ``unit`` (``"rad/s"``,
+    ``"Hz"`` or ``"rpm"``) gives the first column as ``omega`` [rad/s],
+    ``f_Hz`` = ω/2π or ``n_rpm`` = 60·ω/2π.  ``extra`` maps further column
+    names to real arrays (e.g. a node's velocity amplitude), written before
+    ``flag``.  ``flag`` is 0 for a regular point, 1 on a pole or zero of K, 2
+    within rounding of one.  ``path`` is written in place: for a file that
+    appears whole or not at all, pass a temporary path from
+    :func:`mechcirc.outputs.atomic_path` or :class:`mechcirc.outputs.OutputSet`
+    (as ``mechcirc sweep -o`` does).
     """
-    columns = [result.omega, result.K.real, result.K.imag, result.Q0.real, result.Q0.imag]
-    header = "omega,K_re,K_im,Q0_re,Q0_im"
+    name = FREQUENCY_UNITS[unit][0]
+    columns = [in_unit(result.omega, unit), result.K.real, result.K.imag, result.Q0.real,
+               result.Q0.imag]
+    header = ("omega" if unit == "rad/s" else f"{name}_{unit.replace('/', '_')}") \
+        + ",K_re,K_im,Q0_re,Q0_im"
     if result.drive.kind == "force":
         columns += [result.v0.real, result.v0.imag]
         header += ",v0_re,v0_im"
+    for key, values in (extra or {}).items():
+        columns.append(values)
+        header += f",{key}"
     columns.append(result.flags)
     n = len(result.omega)
     # Formatting 17 digits is the slow part (about 5 s per million rows): in

@@ -32,6 +32,7 @@ file, line and column, what is wrong and what would be right.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import gc
 import math
@@ -278,6 +279,7 @@ class _Parser:
         self.elements: list[Element] = []
         self.levers: list[Lever] = []
         self.drives: list[Drive] = []
+        self.drive_rotational: bool | None = None
         self.names: dict[str, int] = {}
         #: Parsed expressions and unit factors, for symbolic formulas:
         #: ``("param", name)`` / ``(element, "value" | "eta")`` -> (Expr, factor).
@@ -412,8 +414,14 @@ class _Parser:
                                    "one .ic line per node")
             seen_ic[node] = lineno
         name = Path(self.source).stem if self.source != "<string>" else "circuit"
-        circuit = Circuit(elements=tuple(self.elements),
-                          drive=self.drives[0] if self.drives else None,
+        drive = self.drives[0] if self.drives else None
+        if drive is not None and drive.motion is None:
+            rot = self.drive_rotational
+            if rot is None:     # rotary when its nodes carry rotary units only
+                kinds = [self.node_kinds.get(n, {}) for n in (drive.n1, drive.n2)]
+                rot = any(True in k for k in kinds) and not any(False in k for k in kinds)
+            drive = dataclasses.replace(drive, rotational=rot)
+        circuit = Circuit(elements=tuple(self.elements), drive=drive,
                           levers=tuple(self.levers), name=name, source=self.source,
                           params=dict(self.params),
                           initial=tuple((n, x, v) for n, x, v, _, _ in self.initial))
@@ -737,6 +745,9 @@ class _Parser:
         (key, tok), = opts.items()
         amplitude = self.expr(line, tok.text, tok.col, defined=self.params, key=(name, key))
         amplitude = self.with_unit(line, amplitude, units.get(key), key, (name, key))
+        # rad/s or N·m: a rotary drive (no unit: decided by its nodes' elements, in build)
+        self.drive_rotational = None if units.get(key) is None else \
+            _unit(units[key].text).dim in ((0, 0, -1), (1, 2, -2))
         self.drives.append(Drive(name, n1, n2, key, amplitude, line.lineno,
                                  line.tokens[0].col))
 
