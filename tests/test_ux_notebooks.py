@@ -201,3 +201,30 @@ def test_sweep_plot_in_rpm_with_a_node_panel_and_rotary_labels():
     assert axes[0].get_ylabel() == "|K| [rad/(N·m·s)]"
     assert axes[2].get_ylabel() == "|Q0| [N·m]"
     assert "V0 = 2 rad/s" in fig._suptitle.get_text()
+
+
+def test_check_columns_fit_long_names_without_trailing_spaces(tmp_path, capsys):
+    net = tmp_path / "rot.mcir"
+    net.write_text(ROTARY.replace("spring k p 0", "spring k_very_long_name p q")
+                   .replace("mass J p 0", "mass J q 0"))
+    status, out, _ = run(["check", net], capsys)
+    assert status == 0
+    lines = out.splitlines()
+    assert "drive W: velocity 2 rad/s between p and 0" in lines
+    assert all(line == line.rstrip() for line in lines)
+    rows = [line for line in lines if line.startswith(("  spring", "  mass"))]
+    assert rows[0].split() == ["spring", "k_very_long_name", "p", "q", "100"]
+    assert rows[1].split() == ["mass", "J", "q", "0", "1"]
+    # the columns line up although one name is longer than the column's default
+    assert rows[0].rindex("100") == rows[1].rindex("1")       # the values
+    assert rows[0].rindex("q") == rows[1].rindex("0")         # the second nodes
+
+
+def test_transient_table_of_a_rotary_drive_says_rad_and_newton_metres(tmp_path, capsys):
+    net = tmp_path / "rot.mcir"
+    net.write_text(ROTARY.replace("spring k p 0", "spring k p q").replace("mass J p 0",
+                                                                           "mass J q 0"))
+    status, out, _ = run(["transient", net, "--t-end", "0.1", "--drive", "step"], capsys)
+    assert status == 0
+    assert "x(end) [rad]" in out and "v(end) [rad/s]" in out and "max|F| [N·m]" in out
+    assert "drive moment: max |F|" in out and "[m]" not in out

@@ -159,15 +159,23 @@ def cmd_check(args) -> int:
         return 0
     print(f"{args.file}: {len(elements)} elements, {len(levers)} levers, "
           f"{len(circuit.nodes)} nodes")
-    unit = "m/s" if d.kind == "velocity" else "N"
+    from ..circuit import units_of
+
+    unit = units_of(d)["v" if d.kind == "velocity" else "Q"]
     print(f"drive {d.name}: {d.kind} {d.amplitude:g} {unit} between {d.n1} and {d.n2}"
           + (f"; over the revolution {d.motion.spec} ('mechcirc periodic')"
              if d.motion is not None else ""))
-    for e in circuit.elements:
+    # Columns as wide as the longest name (at least the classic widths); no trailing spaces.
+    es = circuit.elements
+    wn = max([8] + [len(x.name) for x in es] + [len(lv.name) for lv in circuit.levers])
+    wp = max([6] + [len(n) for x in es for n in (x.n1, x.n2)])
+    wv = max([12] + [len(f"{x.value:g}") for x in es])
+    for e in es:
         eta = f"  eta={e.eta:g}" if e.eta != 1 else ""
-        print(f"  {e.kind:<7} {e.name:<8} {e.n1:>6} {e.n2:>6}  {e.value:<12g}{eta}")
+        print(f"  {e.kind:<7} {e.name:<{wn}} {e.n1:>{wp}} {e.n2:>{wp}}  "
+              f"{e.value:<{wv}g}{eta}".rstrip())
     for lv in circuit.levers:
-        print(f"  lever   {lv.name:<8} {lv.p1}-{lv.p2} -> {lv.s1}-{lv.s2}  ratio={lv.ratio:g}")
+        print(f"  lever   {lv.name:<{wn}} {lv.p1}-{lv.p2} -> {lv.s1}-{lv.s2}  ratio={lv.ratio:g}")
     for w in warns:
         print(f"warning: {w}", file=sys.stderr)
     print(f"K = {tree}")
@@ -445,10 +453,10 @@ def cmd_resonances(args) -> int:
     kinds = {e.name: e.kind for e in circuit.elements} | {lv.name: "lever" for lv in circuit.levers}
     for i, m in enumerate(modes or (), 1):
         r = m.resonance
-        print(f"\n{i}: {r.kind} omega = {r.omega:.10g} rad/s ({r.f_hz:.6g} Hz)"
-              if args.unit == "rad/s" else f"\n{i}: {r.kind} {FREQUENCY_UNITS[args.unit][0]} = "
-              f"{in_unit(r.omega, args.unit):.10g} {args.unit}"
-              + (f", zeta = {r.zeta:.4g}" if r.zeta else ""))
+        where = (f"omega = {r.omega:.10g} rad/s ({r.f_hz:.6g} Hz)" if args.unit == "rad/s"
+                 else f"{FREQUENCY_UNITS[args.unit][0]} = {in_unit(r.omega, args.unit):.10g} "
+                      f"{args.unit}")
+        print(f"\n{i}: {r.kind} {where}" + (f", zeta = {r.zeta:.4g}" if r.zeta else ""))
         if m.note and (m.shape or not args.modes):   # else the mode table says it
             print(f"  note: {m.note}")
         if args.modes:
