@@ -79,6 +79,14 @@ SYNTAX = {
 #: The options of a drive with ``motion=`` (a table takes only ``motion``).
 _MOTION_KEYS = ("motion", "rise", "dwell", "return", "stroke", "return_law")
 
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
 #: Where the first positional field that carries a value is (elements: VALUE).
 _VALUE_INDEX = {"mass": 3, "spring": 3, "damper": 3}
 
@@ -381,7 +389,11 @@ class _Parser:
                 continue
             handler = handlers.get(keyword)
             if handler is None:
-                line.error(f"unknown keyword {line.tokens[0].text!r}", line.tokens[0].col,
+                from .sources import did_you_mean
+
+                word = line.tokens[0].text
+                line.error(f"unknown keyword {word!r}{did_you_mean(word.lower(), KEYWORDS)}",
+                           line.tokens[0].col,
                            "one of .param, .ic, mass, spring, damper, lever, drive")
             handler(line, keyword)
         if not parsed:
@@ -507,7 +519,10 @@ class _Parser:
             head = tok.text.split("=", 1)[0]
             if "=" in tok.text and _IDENT.fullmatch(head):
                 if head not in allowed:
-                    line.error(f"unknown option {head!r} for {keyword}", tok.col,
+                    from .sources import did_you_mean
+
+                    line.error(f"unknown option {head!r} for {keyword}"
+                               f"{did_you_mean(head, allowed)}", tok.col,
                                " or ".join(f"{a}=EXPR" for a in allowed) if allowed
                                else f"no options: {SYNTAX[keyword]}")
                 if head in options:
@@ -530,8 +545,18 @@ class _Parser:
                 if len(positional) - 1 == _VALUE_INDEX.get(keyword) and "value" not in units:
                     previous = "value"
         if len(positional) < npos:
-            missing = SYNTAX[keyword].split()[1 + len(positional)]
+            fields = SYNTAX[keyword].split()[1:1 + npos]
+            missing = fields[len(positional)]
             end = line.tokens[-1].col + len(line.tokens[-1].text)
+            last = positional[-1] if positional else None
+            if missing == "VALUE" and last is not None and last.text != "0" and \
+                    split_quantity(last.text) and \
+                    _is_number(split_quantity(last.text)[0]):
+                # 'mass m a 2': the value is there, read as node N2: a node is missing
+                line.error(f"{keyword} line is missing a node: it has {len(positional)} of "
+                           f"the fields {' '.join(fields)}, and {last.text!r}, read as "
+                           f"{fields[len(positional) - 1]}, looks like the VALUE", last.col,
+                           SYNTAX[keyword])
             line.error(f"{keyword} line is missing {missing}", end, SYNTAX[keyword])
         if len(positional) > npos:
             extra = positional[npos]

@@ -228,3 +228,44 @@ def test_transient_table_of_a_rotary_drive_says_rad_and_newton_metres(tmp_path, 
     assert status == 0
     assert "x(end) [rad]" in out and "v(end) [rad/s]" in out and "max|F| [N·m]" in out
     assert "drive moment: max |F|" in out and "[m]" not in out
+
+
+@pytest.mark.parametrize("text, needle", [
+    ("drive V a 0 velocity=1\nmas m a 0 1\n", "unknown keyword 'mas'; did you mean 'mass'?"),
+    ("drive V a 0 velocty=1\nmass m a 0 1\n",
+     "unknown option 'velocty' for drive; did you mean 'velocity'?"),
+    ("drive V a 0 velocity=1\nmass m a 2\n", "mass line is missing a node"),
+])
+def test_netlist_slips_say_what_was_meant(tmp_path, capsys, text, needle):
+    net = tmp_path / "slip.mcir"
+    net.write_text(text)
+    status, _, err = run(["check", net], capsys)
+    assert status == 2 and needle in err, err
+    assert "missing VALUE" not in err
+
+
+def test_a_missing_value_is_still_called_that(tmp_path, capsys):
+    net = tmp_path / "slip.mcir"
+    net.write_text("drive V a 0 velocity=1\nmass m a 0\n")      # '0' is the frame
+    status, _, err = run(["check", net], capsys)
+    assert status == 2 and "mass line is missing VALUE" in err
+
+
+@pytest.mark.parametrize("argv, needle", [
+    (["swep", STB], "did you mean 'sweep'?"),
+    (["sweep", STB, "--omega-min", "1", "--omega-max", "2", "--method", "spp"],
+     "did you mean 'sp'?"),
+    (["sweep", STB, "--omega-min", "1", "--omega-max", "2", "--methd", "sp"],
+     "did you mean '--method'?"),
+])
+def test_command_line_slips_say_what_was_meant(capsys, argv, needle):
+    status, _, err = run(argv, capsys)
+    assert status == 2 and needle in err, err
+
+
+def test_did_you_mean():
+    from mechcirc.sources import did_you_mean
+
+    assert did_you_mean("maximum", ("min", "max", "num", "log")) == "; did you mean 'max'?"
+    assert did_you_mean("b", ("A", "B")) == "; did you mean 'B'?"
+    assert did_you_mean("zzz", ("min", "max")) == ""
