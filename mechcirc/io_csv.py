@@ -24,7 +24,7 @@ def write_sweep_csv(result, path, *, unit: str = "rad/s", extra: dict | None = N
     (as ``mechcirc sweep -o`` does).
     """
     name = FREQUENCY_UNITS[unit][0]
-    columns = [in_unit(result.omega, unit), result.K.real, result.K.imag, result.Q0.real,
+    columns = [result.omega, result.K.real, result.K.imag, result.Q0.real,
                result.Q0.imag]
     header = ("omega" if unit == "rad/s" else f"{name}_{unit.replace('/', '_')}") \
         + ",K_re,K_im,Q0_re,Q0_im"
@@ -46,5 +46,7 @@ def write_sweep_csv(result, path, *, unit: str = "rad/s", extra: dict | None = N
         fmt = ["%.17g"] * (len(columns) - 1) + ["%d"]
         for start in range(0, n, block):
             table = np.column_stack([c[start:start + block] for c in columns])
+            if unit != "rad/s":         # per block: no second array of n frequencies
+                table[:, 0] = in_unit(table[:, 0], unit)
             np.savetxt(fh, table, delimiter=",", fmt=fmt)
             bar.update(len(table))

@@ -600,8 +600,6 @@ def peak(result: "Sweep | Circuit", omega_min: float | None = None,
     >>> print(peak(c, 10, 1000))   # doctest: +NORMALIZE_WHITESPACE
     max |Q0| = inf (undamped resonance at omega = 100 rad/s)
     """
-    from scipy.optimize import minimize_scalar
-
     if isinstance(result, Sweep):
         circuit = result.circuit
         grid = result
@@ -671,6 +669,10 @@ def peak(result: "Sweep | Circuit", omega_min: float | None = None,
         a, b = max(a, lo), min(b, hi)
         if not a < b:
             continue
+        # Imported here: scipy.optimize costs ~0.4 s of start-up, and a band
+        # with an undamped resonance (returned above) needs no search.
+        from scipy.optimize import minimize_scalar
+
         scale = max(abs(a), abs(b))
         res = minimize_scalar(lambda x: -float(magnitude(x)[0]), bounds=(a, b),
                               method="bounded", options={"xatol": xtol * scale})

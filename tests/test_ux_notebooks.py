@@ -269,3 +269,54 @@ def test_did_you_mean():
     assert did_you_mean("maximum", ("min", "max", "num", "log")) == "; did you mean 'max'?"
     assert did_you_mean("b", ("A", "B")) == "; did you mean 'B'?"
     assert did_you_mean("zzz", ("min", "max")) == ""
+
+
+def _nx_loaded_groups(groups, a, b):
+    """The reference: the block of edge a–b by networkx (what loaded_groups used before).
+
+    A pair (u, u) (a lever whose sides share a node) is a self-loop, which
+    networkx puts into whichever block its DFS has open: it couples nothing,
+    so it is left out of the graph and of the test of the group.
+    """
+    import networkx as nx
+
+    g = nx.Graph()
+    g.add_nodes_from(n for pairs in groups for p in pairs for n in p)
+    g.add_edges_from(p for pairs in groups for p in pairs if p[0] != p[1])
+    if a not in g or b not in g or not nx.has_path(g, a, b):
+        return None
+    g.add_edge(a, b)
+    block = set()
+    for comp in nx.biconnected_component_edges(g):
+        pairs = {frozenset(p) for p in comp}
+        if frozenset((a, b)) in pairs:
+            block = pairs
+            break
+    return [i for i, pairs in enumerate(groups)
+            if all(frozenset(p) in block for p in pairs if p[0] != p[1])]
+
+
+def test_loaded_groups_agree_with_networkx_on_random_graphs():
+    from mechcirc.errors import TopologyError
+    from mechcirc.topology import loaded_groups
+
+    rng = np.random.default_rng(26)
+    for trial in range(1500):
+        n = int(rng.integers(2, 12))
+        m = int(rng.integers(1, 3 * n))
+        nodes = [str(i) for i in range(n)]
+        groups = []
+        for _ in range(m):
+            if rng.random() < 0.15:         # a lever: the clique of four terminals (may repeat)
+                t = [nodes[int(i)] for i in rng.integers(0, n, 4)]
+                groups.append([(t[i], t[j]) for i in range(4) for j in range(i + 1, 4)])
+            else:
+                u, w = rng.choice(n, 2, replace=False)
+                groups.append([(nodes[int(u)], nodes[int(w)])])
+        a, b = nodes[0], nodes[1]
+        expected = _nx_loaded_groups(groups, a, b)
+        if expected is None:
+            with pytest.raises(TopologyError):
+                loaded_groups(groups, a, b)
+        else:
+            assert loaded_groups(groups, a, b) == expected, (trial, groups)
