@@ -220,7 +220,7 @@ class Drive:
     line: int = 0
     col: int = 0
     motion: Motion | None = None
-    rotational: bool = False
+    rotational: bool = field(default=False, compare=False)   # labels only
 
 
 def units_of(drive: Drive | None) -> dict[str, str]:
