@@ -320,3 +320,18 @@ def test_loaded_groups_agree_with_networkx_on_random_graphs():
                 loaded_groups(groups, a, b)
         else:
             assert loaded_groups(groups, a, b) == expected, (trial, groups)
+
+
+def test_sweep_json_carries_the_node_and_element_responses(tmp_path, capsys):
+    import json
+
+    net = tmp_path / "two.mcir"
+    net.write_text(TWO)
+    status, out, _ = run(["sweep", net, "--omega-min", "3", "--omega-max", "50",
+                          "--points", "4", "--node", "b", "--element", "k", "--json"], capsys)
+    assert status == 0
+    doc = json.loads(out)
+    w = np.linspace(3, 50, 4)
+    Q, vb = _closed_form(w)
+    np.testing.assert_allclose(doc["responses"]["v_abs(b)"], np.abs(vb), rtol=1e-12)
+    np.testing.assert_allclose(doc["responses"]["Q_abs(k)"], np.abs(Q), rtol=1e-12)
