@@ -45,7 +45,7 @@ if TYPE_CHECKING:  # pragma: no cover - annotations of the delegates only
     from .sweep import Method, Sweep
 
 __all__ = ["Element", "Lever", "Drive", "Circuit", "element_mobility", "law_terms", "FRAME",
-           "ELEMENT_UNITS", "Law", "LAWS", "node_names"]
+           "ELEMENT_UNITS", "Law", "LAWS", "node_names", "units_of"]
 
 FRAME = "0"
 
@@ -221,6 +221,18 @@ class Drive:
     line: int = 0
     col: int = 0
     motion: Motion | None = None
+    rotational: bool = field(default=False, compare=False)   # labels only
+
+
+def units_of(drive: Drive | None) -> dict[str, str]:
+    """Unit labels of a circuit driven by ``drive``: keys ``v``, ``Q``, ``x``, ``K``.
+
+    Translational: m/s, N, m, m/(N·s); rotary (``drive.rotational``): rad/s,
+    N·m, rad, rad/(N·m·s).
+    """
+    if drive is not None and drive.rotational:
+        return {"v": "rad/s", "Q": "N·m", "x": "rad", "K": "rad/(N·m·s)"}
+    return {"v": "m/s", "Q": "N", "x": "m", "K": "m/(N·s)"}
 
 
 @dataclass(frozen=True)

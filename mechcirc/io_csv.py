@@ -5,28 +5,35 @@ from __future__ import annotations
 import numpy as np
 
 from .progress import Progress
+from .units import FREQUENCY_UNITS, in_unit
 
 __all__ = ["write_sweep_csv"]
 
 
-def write_sweep_csv(result, path, extra: dict | None = None) -> None:
+def write_sweep_csv(result, path, *, unit: str = "rad/s", extra: dict | None = None) -> None:
     """Write ``omega,K_re,K_im,Q0_re,Q0_im[,v0_re,v0_im][,extra...],flag`` rows to ``path``.
 
-    The ``v0`` columns appear for a force drive; ``extra`` maps more column
-    names to arrays of real values, one per point (``sweep --sensitivity``).  ``flag`` is 0 for a regular
-    point, 1 on a pole or zero of K, 2 within rounding of one.  ``path`` is
-    written in place: for a file that appears whole or not at all, pass a
-    temporary path from :func:`mechcirc.outputs.atomic_path` or
-    :class:`mechcirc.outputs.OutputSet` (as ``mechcirc sweep -o`` does).
+    The ``v0`` columns appear for a force drive.  ``unit`` (``"rad/s"``,
+    ``"Hz"`` or ``"rpm"``) gives the first column as ``omega`` [rad/s],
+    ``f_Hz`` = ω/2π or ``n_rpm`` = 60·ω/2π.  ``extra`` maps further column
+    names to real arrays (e.g. a node's velocity amplitude), written before
+    ``flag``.  ``flag`` is 0 for a regular point, 1 on a pole or zero of K, 2
+    within rounding of one.  ``path`` is written in place: for a file that
+    appears whole or not at all, pass a temporary path from
+    :func:`mechcirc.outputs.atomic_path` or :class:`mechcirc.outputs.OutputSet`
+    (as ``mechcirc sweep -o`` does).
     """
-    columns = [result.omega, result.K.real, result.K.imag, result.Q0.real, result.Q0.imag]
-    header = "omega,K_re,K_im,Q0_re,Q0_im"
+    name = FREQUENCY_UNITS[unit][0]
+    columns = [result.omega, result.K.real, result.K.imag, result.Q0.real,
+               result.Q0.imag]
+    header = ("omega" if unit == "rad/s" else f"{name}_{unit.replace('/', '_')}") \
+        + ",K_re,K_im,Q0_re,Q0_im"
     if result.drive.kind == "force":
         columns += [result.v0.real, result.v0.imag]
         header += ",v0_re,v0_im"
-    for name, values in (extra or {}).items():
+    for key, values in (extra or {}).items():
         columns.append(np.asarray(values, dtype=float))
-        header += f",{name}"
+        header += f",{key}"
     columns.append(result.flags)
     n = len(result.omega)
     # Formatting 17 digits is the slow part (about 5 s per million rows): in
@@ -39,5 +46,7 @@ def write_sweep_csv(result, path, extra: dict | None = None) -> None:
         fmt = ["%.17g"] * (len(columns) - 1) + ["%d"]
         for start in range(0, n, block):
             table = np.column_stack([c[start:start + block] for c in columns])
+            if unit != "rad/s":         # per block: no second array of n frequencies
+                table[:, 0] = in_unit(table[:, 0], unit)
             np.savetxt(fh, table, delimiter=",", fmt=fmt)
             bar.update(len(table))

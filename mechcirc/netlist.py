@@ -32,6 +32,7 @@ file, line and column, what is wrong and what would be right.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import gc
 import math
@@ -77,6 +78,14 @@ SYNTAX = {
 
 #: The options of a drive with ``motion=`` (a table takes only ``motion``).
 _MOTION_KEYS = ("motion", "rise", "dwell", "return", "stroke", "return_law")
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
 
 #: Where the first positional field that carries a value is (elements: VALUE).
 _VALUE_INDEX = {"mass": 3, "spring": 3, "damper": 3}
@@ -278,6 +287,7 @@ class _Parser:
         self.elements: list[Element] = []
         self.levers: list[Lever] = []
         self.drives: list[Drive] = []
+        self.drive_rotational: bool | None = None
         self.names: dict[str, int] = {}
         #: Parsed expressions and unit factors, for symbolic formulas:
         #: ``("param", name)`` / ``(element, "value" | "eta")`` -> (Expr, factor).
@@ -379,7 +389,11 @@ class _Parser:
                 continue
             handler = handlers.get(keyword)
             if handler is None:
-                line.error(f"unknown keyword {line.tokens[0].text!r}", line.tokens[0].col,
+                from .sources import did_you_mean
+
+                word = line.tokens[0].text
+                line.error(f"unknown keyword {word!r}{did_you_mean(word.lower(), KEYWORDS)}",
+                           line.tokens[0].col,
                            "one of .param, .ic, mass, spring, damper, lever, drive")
             handler(line, keyword)
         if not parsed:
@@ -412,8 +426,14 @@ class _Parser:
                                    "one .ic line per node")
             seen_ic[node] = lineno
         name = Path(self.source).stem if self.source != "<string>" else "circuit"
-        circuit = Circuit(elements=tuple(self.elements),
-                          drive=self.drives[0] if self.drives else None,
+        drive = self.drives[0] if self.drives else None
+        if drive is not None and drive.motion is None:
+            rot = self.drive_rotational
+            if rot is None:     # rotary when its nodes carry rotary units only
+                kinds = [self.node_kinds.get(n, {}) for n in (drive.n1, drive.n2)]
+                rot = any(True in k for k in kinds) and not any(False in k for k in kinds)
+            drive = dataclasses.replace(drive, rotational=rot)
+        circuit = Circuit(elements=tuple(self.elements), drive=drive,
                           levers=tuple(self.levers), name=name, source=self.source,
                           params=dict(self.params),
                           initial=tuple((n, x, v) for n, x, v, _, _ in self.initial))
@@ -499,7 +519,10 @@ class _Parser:
             head = tok.text.split("=", 1)[0]
             if "=" in tok.text and _IDENT.fullmatch(head):
                 if head not in allowed:
-                    line.error(f"unknown option {head!r} for {keyword}", tok.col,
+                    from .sources import did_you_mean
+
+                    line.error(f"unknown option {head!r} for {keyword}"
+                               f"{did_you_mean(head, allowed)}", tok.col,
                                " or ".join(f"{a}=EXPR" for a in allowed) if allowed
                                else f"no options: {SYNTAX[keyword]}")
                 if head in options:
@@ -522,8 +545,18 @@ class _Parser:
                 if len(positional) - 1 == _VALUE_INDEX.get(keyword) and "value" not in units:
                     previous = "value"
         if len(positional) < npos:
-            missing = SYNTAX[keyword].split()[1 + len(positional)]
+            fields = SYNTAX[keyword].split()[1:1 + npos]
+            missing = fields[len(positional)]
             end = line.tokens[-1].col + len(line.tokens[-1].text)
+            last = positional[-1] if positional else None
+            if missing == "VALUE" and last is not None and last.text != "0" and \
+                    split_quantity(last.text) and \
+                    _is_number(split_quantity(last.text)[0]):
+                # 'mass m a 2': the value is there, read as node N2: a node is missing
+                line.error(f"{keyword} line is missing a node: it has {len(positional)} of "
+                           f"the fields {' '.join(fields)}, and {last.text!r}, read as "
+                           f"{fields[len(positional) - 1]}, looks like the VALUE", last.col,
+                           SYNTAX[keyword])
             line.error(f"{keyword} line is missing {missing}", end, SYNTAX[keyword])
         if len(positional) > npos:
             extra = positional[npos]
@@ -737,6 +770,9 @@ class _Parser:
         (key, tok), = opts.items()
         amplitude = self.expr(line, tok.text, tok.col, defined=self.params, key=(name, key))
         amplitude = self.with_unit(line, amplitude, units.get(key), key, (name, key))
+        # rad/s or N·m: a rotary drive (no unit: decided by its nodes' elements, in build)
+        self.drive_rotational = None if units.get(key) is None else \
+            _unit(units[key].text).dim in ((0, 0, -1), (1, 2, -2))
         self.drives.append(Drive(name, n1, n2, key, amplitude, line.lineno,
                                  line.tokens[0].col))
 

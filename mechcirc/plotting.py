@@ -38,7 +38,8 @@ def _axes(ax, figsize):
     return fig, fig.add_subplot(), True
 
 
-def _mark_resonances(axes, resonances, legend_ax):
+def _mark_resonances(axes, resonances, legend_ax, per_unit: float = 1.0):
+    """Vertical lines at each root's ω (``per_unit`` rad/s per unit of the x axis)."""
     labelled = set()
     for r in resonances:
         style = "-" if r.kind == "resonance" else "--"
@@ -46,35 +47,40 @@ def _mark_resonances(axes, resonances, legend_ax):
                                                   else "anti-resonance (K = ∞)")
         labelled.add(r.kind)
         for ax in axes:
-            ax.axvline(r.omega_d or r.omega, color="0.5", lw=0.8, ls=style,
+            ax.axvline((r.omega_d or r.omega) / per_unit, color="0.5", lw=0.8, ls=style,
                        label=label if ax is legend_ax else None)
     if resonances:
         legend_ax.legend(loc="best", fontsize="small")
 
 
-def _mark_peak(ax, peak) -> None:
+def _mark_peak(ax, peak, unit: str = "rad/s", force_unit: str = "N") -> None:
     """The exact peak of |Q0| (a :class:`mechcirc.sweep.Peak`): a dot at the located
     maximum, or a triangle at the top of the axis at every undamped resonance (∞)."""
+    from .units import in_unit
+
     if peak is None or peak.quantity != "Q0":
         return
     if peak.unbounded:
         for i, w in enumerate(peak.poles):
-            ax.plot([w], [1.0], marker="^", color="C3", ls="none",
+            ax.plot([in_unit(w, unit)], [1.0], marker="^", color="C3", ls="none",
                     transform=ax.get_xaxis_transform(), clip_on=False,
                     label="|Q0| = ∞ (undamped)" if i == 0 else None)
     else:
-        ax.plot([peak.omega], [peak.value], marker="o", color="C3", ls="none",
-                label=f"peak {peak.value:.4g} N at {peak.omega:.6g} rad/s")
+        ax.plot([in_unit(peak.omega, unit)], [peak.value], marker="o", color="C3", ls="none",
+                label=f"peak {peak.value:.4g} {force_unit} at "
+                      f"{in_unit(peak.omega, unit):.6g} {unit}")
     ax.legend(loc="best", fontsize="small")
 
 
 def plot_sweep(result, title: str | None = None, resonances=(), peak=None, *, ax=None,
-               fig=None):
-    """Bode-style |K| [m/(N·s)] and arg K [deg], and the drive's response, against ω [rad/s].
+               fig=None, unit: str = "rad/s", extra=None):
+    """Bode-style |K| and arg K [deg], and the drive's response, against frequency.
 
-    The third panel is what the drive does not prescribe: |Q0| [N] for a
-    velocity drive, the velocity response |v0| = |F0·K| [m/s] for a force
-    drive (its title says so).  ``resonances`` (from
+    The third panel is what the drive does not prescribe: |Q0| for a
+    velocity drive, the velocity response |v0| = |F0·K| for a force drive
+    (its title says so, with the drive's V0 or F0).  Units come from the drive
+    (``result.units``: m/(N·s), N, m/s, or rad/(N·m·s), N·m, rad/s for a
+    rotary drive).  ``resonances`` (from
     :meth:`mechcirc.circuit.Circuit.resonances`) are drawn as vertical lines:
     solid for K = 0, dashed for K = ∞.  Flagged points (on or within rounding
     of a pole or zero) are marked with crosses.  ``peak`` (from
@@ -87,15 +93,26 @@ def plot_sweep(result, title: str | None = None, resonances=(), peak=None, *, ax
         Draw only |K| (with the flags and resonance lines) on this Axes and
         return it.
     fig : matplotlib Figure, optional
-        Draw the three panels on this (empty) Figure; a new one by default.
+        Draw the panels on this (empty) Figure; a new one by default.
+    unit : {"rad/s", "Hz", "rpm"}
+        Unit of the frequency axis: ω, f = ω/2π or n = 60·ω/2π.
+    extra : dict, optional
+        More panels below: y-axis label -> real array over the sweep's points
+        (e.g. ``{"|v(B)| [m/s]": abs(result.node_velocity("B"))}``).
 
     Returns
     -------
-    The Axes given as ``ax``, or the Figure of the three panels.
+    The Axes given as ``ax``, or the Figure of the panels.
     """
     import numpy as np
 
-    omega = result.omega
+    from .circuit import units_of
+    from .units import FREQUENCY_UNITS, in_unit
+
+    per_unit = FREQUENCY_UNITS[unit][1]
+    xlabel = {"rad/s": "ω [rad/s]", "Hz": "f [Hz]", "rpm": "n [rpm]"}[unit]
+    omega = in_unit(result.omega, unit)
+    units = units_of(getattr(result, "drive", None))
     positive = omega > 0
     force_drive = getattr(result.drive, "kind", "velocity") == "force"
     with np.errstate(all="ignore"):
@@ -104,28 +121,35 @@ def plot_sweep(result, title: str | None = None, resonances=(), peak=None, *, ax
         phase = np.degrees(np.angle(result.K))
     if ax is not None:
         _draw_K(ax, omega, absK, positive, result)
-        _mark_resonances((ax,), resonances, ax)
-        ax.set_xlabel("ω [rad/s]")
+        _mark_resonances((ax,), resonances, ax, per_unit)
+        ax.set_xlabel(xlabel)
         ax.grid(True, which="both", alpha=0.3)
         ax.set_title(title or f"{result.name}: kinematic characteristic K = v/Q")
         return ax
-    fig = fig if fig is not None else _figure((7, 8))
-    ax_k, ax_p, ax_q = fig.subplots(3, 1, sharex=True,
-                                    gridspec_kw={"height_ratios": [3, 2, 3]})
+    extra = dict(extra or {})
+    fig = fig if fig is not None else _figure((7, 8 + 2.2 * len(extra)))
+    axes = fig.subplots(3 + len(extra), 1, sharex=True,
+                        gridspec_kw={"height_ratios": [3, 2, 3] + [2] * len(extra)})
+    ax_k, ax_p, ax_q = axes[:3]
     _draw_K(ax_k, omega, absK, positive, result)
     ax_p.semilogx(omega[positive], phase[positive], color="C2")
     ax_p.set_ylabel("arg K [deg]")
     ax_p.set_ylim(-190, 190)
     ax_p.set_yticks([-180, -90, 0, 90, 180])
     ax_q.loglog(omega[positive], absR[positive], color="C1")
-    ax_q.set_ylabel("|v0| = |F0·K| [m/s]" if force_drive else "|Q0| [N]")
-    ax_q.set_xlabel("ω [rad/s]")
-    _mark_resonances((ax_k, ax_p, ax_q), resonances, ax_q)
-    _mark_peak(ax_q, peak)
-    for a in (ax_k, ax_p, ax_q):
+    ax_q.set_ylabel(f"|v0| = |F0·K| [{units['v']}]" if force_drive else f"|Q0| [{units['Q']}]")
+    for a, (label, values) in zip(axes[3:], extra.items()):
+        with np.errstate(all="ignore"):
+            a.loglog(omega[positive], np.asarray(values)[positive], color="C4")
+        a.set_ylabel(label)
+    axes[-1].set_xlabel(xlabel)
+    _mark_resonances(tuple(axes), resonances, ax_q, per_unit)
+    _mark_peak(ax_q, peak, unit, units["Q"])
+    for a in axes:
         a.grid(True, which="both", alpha=0.3)
-    what = ("velocity response v0 = F0·K to the force drive" if force_drive
-            else "force amplitude Q0 = V0/K")
+    amp = result.drive.amplitude
+    what = (f"velocity response v0 = F0·K to the force drive F0 = {amp:g} {units['Q']}"
+            if force_drive else f"force amplitude Q0 = V0/K, V0 = {amp:g} {units['v']}")
     fig.suptitle(title or f"{result.name}: kinematic characteristic and {what}")
     fig.tight_layout()
     return fig
@@ -135,7 +159,9 @@ def _draw_K(ax, omega, absK, positive, result):
     import numpy as np
 
     ax.loglog(omega[positive], absK[positive], color="C0")
-    ax.set_ylabel("|K| [m/(N·s)]")
+    from .circuit import units_of
+
+    ax.set_ylabel(f"|K| [{units_of(getattr(result, 'drive', None))['K']}]")
     flagged = positive & (result.flags != 0) & np.isfinite(absK) & (absK > 0)
     if flagged.any():
         ax.loglog(omega[flagged], absK[flagged], "x", color="C3", label="flagged point")

@@ -44,8 +44,9 @@ import scipy.linalg as la
 
 from .circuit import Circuit
 from .errors import InputError, NetlistError, SolverError
+from .units import FREQUENCY_UNITS, in_unit
 
-__all__ = ["Resonance", "find_resonances", "MAX_UNKNOWNS", "MAX_UNKNOWNS_DAMPED"]
+__all__ = ["Resonance", "Resonances", "find_resonances", "MAX_UNKNOWNS", "MAX_UNKNOWNS_DAMPED"]
 
 #: Largest eigenproblem solved (unknowns left after the constraints).  The
 #: dense solve costs O(n³): about 12 s at 2000 unknowns undamped, and the
@@ -93,10 +94,55 @@ class Resonance:
         return self.omega_d / (2 * math.pi)
 
 
-def find_resonances(circuit: Circuit, omega_max: float | None = None) -> list[Resonance]:
+class Resonances(list):
+    """A list of :class:`Resonance` (sorted by ω) that shows itself as a table.
+
+    It is a plain ``list`` in every other respect (indexing, slicing to a
+    list, pickling).  ``repr`` and ``_repr_html_`` (notebooks) give the table
+    ``mechcirc resonances`` prints; :meth:`table` gives it in Hz or rpm.
+    """
+
+    def table(self, unit: str = "rad/s") -> list[str]:
+        """The table's lines: header, then one line per root; frequencies in ``unit``.
+
+        ``unit`` is ``"rad/s"`` (ωₙ, f = ωₙ/2π [Hz] and ω_d columns), ``"Hz"``
+        (f and f_d) or ``"rpm"`` (n and n_d); then ζ [1] and the relative error.
+        """
+        name, _ = FREQUENCY_UNITS[unit]
+        if unit == "rad/s":
+            head = (f"{'kind':<14} {'omega [rad/s]':>17} {'f [Hz]':>14} {'omega_d [rad/s]':>17} "
+                    f"{'zeta':>10} {'rel. error':>10}")
+            rows = [f"{r.kind:<14} {r.omega:>17.10g} {r.f_hz:>14.8g} {r.omega_d:>17.10g} "
+                    f"{r.zeta:>10.4g} {r.error:>10.1e}" for r in self]
+        else:
+            head = (f"{'kind':<14} {f'{name} [{unit}]':>17} {f'{name}_d [{unit}]':>17} "
+                    f"{'zeta':>10} {'rel. error':>10}")
+            rows = [f"{r.kind:<14} {in_unit(r.omega, unit):>17.10g} "
+                    f"{in_unit(r.omega_d, unit):>17.10g} {r.zeta:>10.4g} {r.error:>10.1e}"
+                    for r in self]
+        return [head] + rows
+
+    def __repr__(self) -> str:
+        if not self:
+            return "Resonances([])  (none found)"
+        return "\n".join(self.table())
+
+    def _repr_html_(self) -> str:
+        import html
+
+        head = ("<tr><th>kind</th><th>omega [rad/s]</th><th>f [Hz]</th>"
+                "<th>omega_d [rad/s]</th><th>zeta</th><th>rel. error</th></tr>")
+        rows = "".join(f"<tr><td>{html.escape(r.kind)}</td><td>{r.omega:.10g}</td>"
+                       f"<td>{r.f_hz:.8g}</td><td>{r.omega_d:.10g}</td><td>{r.zeta:.4g}</td>"
+                       f"<td>{r.error:.1e}</td></tr>" for r in self)
+        return f"<table>{head}{rows}</table>"
+
+
+def find_resonances(circuit: Circuit, omega_max: float | None = None) -> Resonances:
     """All resonances and anti-resonances of ``circuit`` up to ``omega_max`` [rad/s].
 
-    Returns them sorted by ``omega``.  See the module docstring for the method.
+    Returns them sorted by ``omega``, as a :class:`Resonances` list (a table
+    when shown).  See the module docstring for the method.
 
     Examples
     --------
@@ -105,7 +151,7 @@ def find_resonances(circuit: Circuit, omega_max: float | None = None) -> list[Re
     >>> [(r.kind, round(r.omega, 12)) for r in c.resonances()]
     [('resonance', 10.0)]
     """
-    return [r for r, _ in _solve(circuit, omega_max)]
+    return Resonances(r for r, _ in _solve(circuit, omega_max))
 
 
 def _solve(circuit: Circuit, omega_max: float | None = None, vectors: bool = False) -> list:

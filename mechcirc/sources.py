@@ -282,10 +282,20 @@ def unknown_key(table: Table, entry: dict, occurrence: int = 0) -> tuple[str, st
 
 
 def did_you_mean(word: str, choices) -> str:
-    """``"; did you mean 'x'?"`` for the nearest of ``choices`` (difflib), or ``""``."""
+    """``"; did you mean 'x'?"`` for the nearest of ``choices`` (difflib), or ``""``.
+
+    A choice that differs only in case comes first (``b`` → ``B``), then the
+    nearest by difflib's ratio, then one that begins ``word`` or that ``word``
+    begins (``maximum`` → ``max``).
+    """
     import difflib
 
-    close = difflib.get_close_matches(str(word)[:100], [str(c) for c in choices], n=1)
+    choices = [str(c) for c in choices]
+    word = str(word)[:100]
+    close = [c for c in choices if c.lower() == word.lower()] or \
+        difflib.get_close_matches(word, choices, n=1) or \
+        [c for c in choices if len(c) >= 3 and len(word) >= 3
+         and (c.startswith(word) or word.startswith(c))][:1]
     return f"; did you mean {close[0]!r}?" if close else ""
 
 

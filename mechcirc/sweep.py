@@ -16,7 +16,7 @@ from typing import Callable, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .circuit import Circuit, Drive
+from .circuit import Circuit, Drive, units_of
 from .errors import InputError, NotSeriesParallelError
 from .reduction import Node, evaluate, push_down
 
@@ -146,6 +146,31 @@ class Sweep:
         """Velocity difference amplitude v = v(n1) − v(n2) [m/s] across element ``name``."""
         return self._element(name)[1]
 
+    def node_velocity(self, name: str) -> NDArray[np.complex128]:
+        """Velocity amplitude [m/s, or rad/s for a rotary drive] of node ``name`` against
+        the frame ``0`` (its displacement amplitude is this over jω).
+
+        By nodal analysis (:func:`mechcirc.nodal.solve_unit`, scaled by :attr:`Q0`),
+        whichever method computed K; needs :attr:`circuit`.
+        """
+        from .sources import did_you_mean
+
+        if self.circuit is None:
+            raise ValueError("node_velocity needs the sweep's circuit (Sweep.circuit is None)")
+        system = self.circuit.nodal
+        if name == "0":
+            return np.zeros(self.omega.shape, dtype=complex)
+        if name not in system.nodes:
+            raise KeyError(f"no node named {name!r} on a path of the drive"
+                           f"{did_you_mean(name, system.nodes)} (nodes: "
+                           f"{', '.join(sorted(system.nodes)[:20])})")
+        if "nodes" not in self._cache:
+            from .nodal import solve_unit
+
+            with np.errstate(all="ignore"):
+                self._cache["nodes"] = solve_unit(system, self.omega) * self.Q0[:, None]
+        return self._cache["nodes"][:, list(system.nodes).index(name)]
+
     def peak(self, quantity: str | None = None) -> "Peak":
         """The largest |``quantity``| over the band, located exactly; see :func:`peak`."""
         return peak(self, quantity=quantity)
@@ -156,10 +181,68 @@ class Sweep:
         band = f"omega {self.omega[0]:.4g}..{self.omega[-1]:.4g} rad/s" if n else "no points"
         with np.errstate(all="ignore"):
             absK = np.abs(self.K[np.isfinite(self.K)])
-            kr = f", |K| {absK.min():.3g}..{absK.max():.3g} m/(N·s)" if absK.size else ""
+            kr = f", |K| {absK.min():.3g}..{absK.max():.3g} {self.units['K']}" if absK.size else ""
         flagged = int(np.count_nonzero(self.flags)) if n else 0
         return (f"<Sweep {self.name!r}: {n} points, {band}, method {self.method}, "
                 f"{self.drive.kind} drive{kr}, {flagged} flagged>")
+
+    @property
+    def rotational(self) -> bool:
+        """True for a rotary drive: K in rad/(N·m·s), Q0 in N·m, v0 in rad/s."""
+        return bool(getattr(self.drive, "rotational", False))
+
+    @property
+    def units(self) -> dict[str, str]:
+        """Unit labels from the drive (:func:`mechcirc.circuit.units_of`): keys v, Q, x, K."""
+        return units_of(self.drive)
+
+    def _columns(self) -> dict:
+        cols = {"omega": self.omega, "K": self.K, "|K|": np.abs(self.K), "Q0": self.Q0,
+                "|Q0|": np.abs(self.Q0)}
+        if self.drive.kind == "force":
+            cols |= {"v0": self.v0, "|v0|": np.abs(self.v0)}
+        return cols | {"flag": self.flags, "error": self.error}
+
+    def to_dataframe(self):
+        """The sweep as a ``pandas.DataFrame``, one row per frequency point.
+
+        Columns: ``omega`` angular frequency [rad/s]; ``K`` the kinematic
+        characteristic v/Q seen by the drive (complex) [m/(N·s), or
+        rad/(N·m·s) for a rotary drive]; ``|K|`` its magnitude; ``Q0`` the
+        drive's force amplitude (complex) [N, or N·m] and ``|Q0|``; for a force
+        drive also ``v0`` the drive's velocity amplitude (complex) [m/s, or
+        rad/s] and ``|v0|``; ``flag`` 0 regular, 1 on a pole or zero of K, 2
+        within rounding of one (:attr:`flags`); ``error`` the bound of the
+        relative rounding error of K [1] (:attr:`error`).  The values are those
+        of the attributes of the same names.  pandas is imported here only.
+        """
+        import pandas as pd
+
+        return pd.DataFrame(self._columns())
+
+    def to_xarray(self):
+        """The sweep as an ``xarray.Dataset`` on the dimension ``omega`` [rad/s].
+
+        Data variables as the columns of :meth:`to_dataframe` (``abs_K``,
+        ``abs_Q0``, ``abs_v0`` for the magnitudes), each with a ``units``
+        attribute.  Needs xarray (not a dependency of mechcirc): raises
+        ImportError saying so when it is not installed.
+        """
+        try:
+            import xarray as xr
+        except ImportError:
+            raise ImportError("Sweep.to_xarray needs xarray (pip install xarray); "
+                              "Sweep.to_dataframe needs only pandas") from None
+        u = self.units
+        units = {"K": u["K"], "Q0": u["Q"], "v0": u["v"], "flag": "", "error": "1"}
+        cols = self._columns()
+        omega = cols.pop("omega")
+        return xr.Dataset(
+            {k.replace("|", "abs_", 1).rstrip("|"): ("omega", v,
+                                                      {"units": units[k.strip("|")]})
+             for k, v in cols.items()},
+            coords={"omega": ("omega", omega, {"units": "rad/s"})},
+            attrs={"name": self.name, "method": self.method, "drive": self.drive.kind})
 
     def _repr_html_(self) -> str:
         """The summary as a small table for notebooks."""
@@ -176,19 +259,21 @@ class Sweep:
 
         return to_skrf(self, **kwargs)
 
-    def plot(self, ax=None, *, resonances=None, fig=None, title: str | None = None):
+    def plot(self, ax=None, *, resonances=None, fig=None, title: str | None = None,
+             unit: str = "rad/s"):
         """Plot this sweep: :func:`mechcirc.plotting.plot_sweep` (``ax=`` one panel of |K|,
         else three panels on ``fig`` or a new Figure); returns what it drew on.
 
         ``resonances=None`` marks the circuit's exact resonances in the band
         when that is cheap (at most :data:`PLOT_RESONANCES_ELEMENTS` elements);
-        pass a list to choose them, or ``()`` for none.
+        pass a list to choose them, or ``()`` for none.  ``unit``: the frequency
+        axis in ``"rad/s"``, ``"Hz"`` or ``"rpm"``.
         """
         from .plotting import plot_sweep
 
         if resonances is None:
             resonances = self._cheap_resonances()
-        return plot_sweep(self, title, resonances, ax=ax, fig=fig)
+        return plot_sweep(self, title, resonances, ax=ax, fig=fig, unit=unit)
 
     def _cheap_resonances(self) -> list:
         if self.circuit is None or len(self.circuit.elements) > PLOT_RESONANCES_ELEMENTS \
@@ -213,8 +298,10 @@ class Sweep:
             self._cache["elements"] = self._element_responses()
         elements = self._cache["elements"]
         if name not in elements:
-            raise KeyError(f"no loaded element named {name!r}; elements: "
-                           f"{', '.join(sorted(elements))}")
+            from .sources import did_you_mean
+
+            raise KeyError(f"no loaded element named {name!r}{did_you_mean(name, elements)} "
+                           f"(elements: {', '.join(sorted(elements))})")
         return elements[name]
 
     def _element_responses(self) -> dict:
@@ -519,8 +606,6 @@ def peak(result: "Sweep | Circuit", omega_min: float | None = None,
     >>> print(peak(c, 10, 1000))   # doctest: +NORMALIZE_WHITESPACE
     max |Q0| = inf (undamped resonance at omega = 100 rad/s)
     """
-    from scipy.optimize import minimize_scalar
-
     if isinstance(result, Sweep):
         circuit = result.circuit
         grid = result
@@ -590,6 +675,10 @@ def peak(result: "Sweep | Circuit", omega_min: float | None = None,
         a, b = max(a, lo), min(b, hi)
         if not a < b:
             continue
+        # Imported here: scipy.optimize costs ~0.4 s of start-up, and a band
+        # with an undamped resonance (returned above) needs no search.
+        from scipy.optimize import minimize_scalar
+
         scale = max(abs(a), abs(b))
         res = minimize_scalar(lambda x: -float(magnitude(x)[0]), bounds=(a, b),
                               method="bounded", options={"xatol": xtol * scale})

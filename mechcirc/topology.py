@@ -64,11 +64,19 @@ def loaded_groups(groups: Sequence[Sequence[tuple[str, str]]], a: str, b: str,
     TopologyError
         If no path of groups joins ``a`` and ``b``.
     """
-    import networkx as nx
-
-    g = nx.Graph()
-    g.add_edges_from(p for pairs in groups for p in pairs)     # one call: linear, low overhead
-    if a not in g or b not in g or not nx.has_path(g, a, b):
+    # Plain adjacency sets and an iterative Tarjan search, not networkx: the
+    # sweep and resonance paths of the command line then do not import it
+    # (≈ 0.1–0.15 s of start-up); tests/test_ux_notebooks.py checks the block
+    # against networkx.biconnected_component_edges on random graphs.
+    adj: dict[str, set[str]] = {}
+    for pairs in groups:
+        for u, w in pairs:
+            adj.setdefault(u, set())
+            adj.setdefault(w, set())
+            if u != w:
+                adj[u].add(w)
+                adj[w].add(u)
+    if a not in adj or b not in adj or b not in reachable(adj, a):
         where = f" (line {drive_line})" if drive_line else ""
         exc = TopologyError(
             f"the drive's nodes {a!r} and {b!r}{where} are not connected by any path "
@@ -76,15 +84,52 @@ def loaded_groups(groups: Sequence[Sequence[tuple[str, str]]], a: str, b: str,
         if source and drive_line:
             exc.location = f"{source}:{drive_line}:1"     # FILE:LINE:COL for the CLI
         raise exc
-    g.add_edge(a, b)
-    block: set[frozenset] = set()
-    for comp in nx.biconnected_component_edges(g):
-        pairs = {frozenset(p) for p in comp}
-        if frozenset((a, b)) in pairs:
-            block = pairs
-            break
+    adj[a].add(b)
+    adj[b].add(a)
+    block = _block_with(adj, a, b)
+    # A lever whose sides share a node (p2 = s2 = '0') has a pair (u, u) in its
+    # clique: it couples nothing and belongs to no block, so it is not asked for.
     return [i for i, pairs in enumerate(groups)
-            if all(frozenset(p) in block for p in pairs)]
+            if all(frozenset(p) in block for p in pairs if p[0] != p[1])]
+
+
+def _block_with(adj: dict[str, set[str]], a: str, b: str) -> set[frozenset]:
+    """The edges (as frozensets of their two nodes) of the biconnected block of the
+    simple graph ``adj`` that holds the edge a–b (Tarjan's lowpoints, iterative;
+    self-loops belong to no block)."""
+    disc = {a: 0}
+    low = {a: 0}
+    edges: list[tuple[str, str]] = []
+    stack = [(a, None, iter(adj[a]))]
+    while stack:
+        u, parent, it = stack[-1]
+        for w in it:
+            if w == parent or w == u:
+                continue
+            if w not in disc:
+                disc[w] = low[w] = len(disc)
+                edges.append((u, w))
+                stack.append((w, u, iter(adj[w])))
+                break
+            if disc[w] < disc[u]:           # a back edge to an ancestor
+                low[u] = min(low[u], disc[w])
+                edges.append((u, w))
+        else:
+            stack.pop()
+            if not stack:
+                break
+            p = stack[-1][0]
+            low[p] = min(low[p], low[u])
+            if low[u] >= disc[p]:           # p separates u's subtree: a block ends
+                block = set()
+                while True:
+                    e = edges.pop()
+                    block.add(frozenset(e))
+                    if e == (p, u):
+                        break
+                if frozenset((a, b)) in block:
+                    return block
+    return set()
 
 
 def check_frame_paths(circuit: Circuit) -> None:

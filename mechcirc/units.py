@@ -40,7 +40,7 @@ from .errors import UnitError
 
 __all__ = ["Unit", "UnitError", "ATOMS", "PREFIXES", "PREFIXABLE", "ROLES", "parse_unit",
            "looks_like_unit", "convert", "parse_quantity", "split_quantity", "parse_omega",
-           "OMEGA_UNITS", "is_rotational", "SPICE_SUFFIXES"]
+           "OMEGA_UNITS", "is_rotational", "SPICE_SUFFIXES", "FREQUENCY_UNITS", "in_unit"]
 
 # Dimensions are exponents of (kg, m, s).
 _MASS, _LENGTH, _TIME = (1, 0, 0), (0, 1, 0), (0, 0, 1)
@@ -206,6 +206,18 @@ def convert(value: float, unit: Unit, role: str) -> float:
 #: Units accepted for angular frequencies (a subset of the grammar, quoted in messages).
 OMEGA_UNITS = {"rad/s": 1.0, "Hz": 2 * math.pi, "kHz": 2000 * math.pi,
                "rpm": 2 * math.pi / 60, "1/s": 1.0}
+
+#: Units in which a frequency is shown: unit -> (column name, rad/s per unit).
+#: Hz and rpm count revolutions: f = ω/2π, n = 60·ω/2π (docs/units.md).
+FREQUENCY_UNITS = {"rad/s": ("omega", 1.0), "Hz": ("f", 2 * math.pi),
+                   "rpm": ("n", 2 * math.pi / 60)}
+
+
+def in_unit(omega, unit: str = "rad/s"):
+    """Angular frequency ``omega`` [rad/s] (a number or an array) in ``unit`` of
+    :data:`FREQUENCY_UNITS` (``"rad/s"``, ``"Hz"`` or ``"rpm"``)."""
+    return omega / FREQUENCY_UNITS[unit][1]
+
 
 _NUMBER = r"[-+]?(?:(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|inf|nan)"
 _QUANTITY = re.compile(r"\s*(" + _NUMBER + r")\s*(\S.*?)?\s*", re.IGNORECASE)

@@ -337,7 +337,7 @@ def test_sweep_by_subprocess_writes_csv_and_png(tmp_path):
 
 BAD = [
     ("mass m1 a 0 2\nmas k1 a 0 100\ndrive V a 0 velocity=1\n",
-     "2:1: error: unknown keyword 'mas' (expected one of .param, .ic, mass, spring, damper, "
+     "2:1: error: unknown keyword 'mas'; did you mean 'mass'? (expected one of .param, .ic, mass, spring, damper, "
      "lever, drive)"),
     ("mass m1 a 0 2\nspring k1 a 0 {2e5 * }\ndrive V a 0 velocity=1\n",
      "2:22: error: expression ends too early (expected a number, a name or '(')"),

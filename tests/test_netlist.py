@@ -214,7 +214,7 @@ def _outcome(text, *, fast):
      "rigidity (expected stiffness (N/m, N/mm, kN/m) or torsional rigidity (N*m/rad); note: "
      "mechcirc has no SPICE suffixes, 'm' is read as a unit)"),
     ("mas m1 a 0 1",
-     "t.mcir:2:1: error: unknown keyword 'mas' (expected one of .param, .ic, mass, spring, "
+     "t.mcir:2:1: error: unknown keyword 'mas'; did you mean 'mass'? (expected one of .param, .ic, mass, spring, "
      "damper, lever, drive)"),
     ("mass 01 a 0 1\nmass 1 a 0 2",
      "t.mcir:3:6: error: element name '1' is already used on line 2 (expected a unique name)"),

@@ -32,8 +32,25 @@ class _Parser(argparse.ArgumentParser):
     """argparse, with a usage error on one line (the full usage is one ``--help`` away)."""
 
     def error(self, message):
-        from ..errors import shorten  # argparse quotes the value given: it may be long
+        import re
 
+        from ..errors import shorten  # argparse quotes the value given: it may be long
+        from ..sources import did_you_mean
+
+        # 'invalid choice: 'swep' (choose from 'check', 'sweep', ...)': name the nearest
+        m = re.search(r"invalid choice: '([^']*)' \(choose from (.*)\)", message)
+        if m:
+            hint = did_you_mean(m.group(1), re.findall(r"'([^']*)'", m.group(2)))
+            message = message.replace(m.group(0), m.group(0) + hint)
+        m = re.search(r"unrecognized arguments: (--[\w-]+)", message)
+        if m:
+            # parse_args reports it from the top parser: offer every command's options
+            options = set(self._option_string_actions)
+            for action in self._actions:
+                if isinstance(action, argparse._SubParsersAction):
+                    for p in action.choices.values():
+                        options |= set(p._option_string_actions)
+            message += did_you_mean(m.group(1).split("=")[0], sorted(options))
         self.exit(2, f"{self.prog}: error: {shorten(message)} (see '{self.prog} --help')\n")
 
 

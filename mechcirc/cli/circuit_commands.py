@@ -71,6 +71,13 @@ def register(sub) -> None:
                         "respect to the element value, lever ratio or .param NAME: CSV "
                         "columns dQ0_dNAME and relQ0_NAME = (p/|Q0|)·d|Q0|/dp (dv0_dNAME, "
                         "relv0_NAME under a force drive; repeatable)")
+    add_unit_option(p)
+    p.add_argument("--node", action="append", default=[], metavar="NAME",
+                   help="also this node's velocity and displacement amplitude against the "
+                        "frame (CSV columns v_abs(NAME), x_abs(NAME); a plot panel); repeatable")
+    p.add_argument("--element", action="append", default=[], metavar="NAME",
+                   help="also the force amplitude through this element (CSV column "
+                        "Q_abs(NAME); a plot panel); repeatable")
     p.add_argument("--json", action="store_true", help="print one JSON document")
     p.set_defaults(func=cmd_sweep)
 
@@ -95,8 +102,17 @@ def register(sub) -> None:
                         "would raise omega by 10 %% (a linear estimate)")
     p.add_argument("--plot", metavar="IMAGE",
                    help="plot the mode shapes (PNG, SVG or PDF)")
+    add_unit_option(p)
     p.add_argument("--json", action="store_true", help="print one JSON document")
     p.set_defaults(func=cmd_resonances)
+
+
+def add_unit_option(p) -> None:
+    """``--unit rad/s|Hz|rpm``: the unit of every frequency a command shows."""
+    p.add_argument("--unit", choices=("rad/s", "Hz", "rpm"), default="rad/s",
+                   help="show frequencies in rad/s (omega, the default), Hz (f = omega/2 pi) "
+                        "or rpm (n = 60 omega/2 pi): tables, CSV columns and plot axes "
+                        "(--json stays in rad/s)")
 
 
 def _tree_and_unloaded(circuit) -> tuple[str, tuple[str, ...]]:
@@ -148,15 +164,23 @@ def cmd_check(args) -> int:
         return 0
     print(f"{args.file}: {len(elements)} elements, {len(levers)} levers, "
           f"{len(circuit.nodes)} nodes")
-    unit = "m/s" if d.kind == "velocity" else "N"
+    from ..circuit import units_of
+
+    unit = units_of(d)["v" if d.kind == "velocity" else "Q"]
     print(f"drive {d.name}: {d.kind} {d.amplitude:g} {unit} between {d.n1} and {d.n2}"
           + (f"; over the revolution {d.motion.spec} ('mechcirc periodic')"
              if d.motion is not None else ""))
-    for e in circuit.elements:
+    # Columns as wide as the longest name (at least the classic widths); no trailing spaces.
+    es = circuit.elements
+    wn = max([8] + [len(x.name) for x in es] + [len(lv.name) for lv in circuit.levers])
+    wp = max([6] + [len(n) for x in es for n in (x.n1, x.n2)])
+    wv = max([12] + [len(f"{x.value:g}") for x in es])
+    for e in es:
         eta = f"  eta={e.eta:g}" if e.eta != 1 else ""
-        print(f"  {e.kind:<7} {e.name:<8} {e.n1:>6} {e.n2:>6}  {e.value:<12g}{eta}")
+        print(f"  {e.kind:<7} {e.name:<{wn}} {e.n1:>{wp}} {e.n2:>{wp}}  "
+              f"{e.value:<{wv}g}{eta}".rstrip())
     for lv in circuit.levers:
-        print(f"  lever   {lv.name:<8} {lv.p1}-{lv.p2} -> {lv.s1}-{lv.s2}  ratio={lv.ratio:g}")
+        print(f"  lever   {lv.name:<{wn}} {lv.p1}-{lv.p2} -> {lv.s1}-{lv.s2}  ratio={lv.ratio:g}")
     for w in warns:
         print(f"warning: {w}", file=sys.stderr)
     print(f"K = {tree}")
@@ -178,7 +202,8 @@ def _omega_grid(args):
                             f"spans --omega-min to --omega-max), got {n}")
     for wanted, limit, what in ((args.plot, MAX_PLOT_POINTS, "--plot"),
                                 (args.json, MAX_JSON_POINTS, "--json"),
-                                (args.method == "nodal", MAX_NODAL_POINTS, "--method nodal")):
+                                (args.method == "nodal", MAX_NODAL_POINTS, "--method nodal"),
+                                (getattr(args, "node", None), MAX_NODAL_POINTS, "--node")):
         if wanted and n > limit:
             raise MechcircError(f"--points {n} with {what}: the limit is {limit} points "
                                 "(write larger sweeps with -o CSV)")
@@ -192,8 +217,10 @@ def _omega_grid(args):
     return np.linspace(lo, hi, n)
 
 
-def _some_omega(values, limit: int = 5) -> str:
-    text = ", ".join(f"{w:.10g}" for w in values[:limit])
+def _some_omega(values, limit: int = 5, unit: str = "rad/s") -> str:
+    from ..units import in_unit
+
+    text = ", ".join(f"{in_unit(w, unit):.10g}" for w in values[:limit])
     return text + (f" and {len(values) - limit} more" if len(values) > limit else "")
 
 
@@ -204,14 +231,18 @@ def _peak_doc(pk) -> dict:
             "grid_value": pk.grid_value, "grid_omega": pk.grid_omega}
 
 
-def _peak_text(pk) -> str:
-    unit = {"Q0": "N", "v0": "m/s", "K": "m/(N·s)"}[pk.quantity]
+def _peak_text(pk, units: dict, unit: str = "rad/s") -> str:
+    from ..units import FREQUENCY_UNITS, in_unit
+
+    q = {"Q0": units["Q"], "v0": units["v"], "K": units["K"]}[pk.quantity]
+    name = FREQUENCY_UNITS[unit][0]
     if pk.unbounded:
-        return (f"max |{pk.quantity}| = inf: undamped resonance at omega = "
-                f"{_some_omega(list(pk.poles))} rad/s (the grid's largest, "
-                f"{pk.grid_value:.4g} {unit}, depends only on how close a point falls)")
-    return (f"max |{pk.quantity}| = {pk.value:.7g} {unit} at omega = {pk.omega:.9g} rad/s "
-            f"(located; the grid's largest is {pk.grid_value:.4g} {unit})")
+        return (f"max |{pk.quantity}| = inf: undamped resonance at {name} = "
+                f"{_some_omega(list(pk.poles), unit=unit)} {unit} (the grid's largest, "
+                f"{pk.grid_value:.4g} {q}, depends only on how close a point falls)")
+    return (f"max |{pk.quantity}| = {pk.value:.7g} {q} at {name} = "
+            f"{in_unit(pk.omega, unit):.9g} {unit} (located; the grid's largest is "
+            f"{pk.grid_value:.4g} {q})")
 
 
 def _resonance_rows(found) -> list[dict]:
@@ -253,6 +284,7 @@ def cmd_sweep(args) -> int:
                                 max_points=budget)
     else:
         result = circuit.sweep(omega, method=args.method)
+    extra = _responses(result, args.node, args.element)
     found = []
     if args.plot or args.json:
         from ..errors import SolverError
@@ -268,14 +300,16 @@ def cmd_sweep(args) -> int:
 
         sens = sweep_sensitivity(circuit, result.omega, args.sensitivity)
     from ..sweep import FLAG_SINGULAR
+    from ..units import FREQUENCY_UNITS, in_unit
 
     pk = result.peak()
     singular = [float(w) for w in result.omega[result.flags == FLAG_SINGULAR]]
     notes = list(getattr(result, "notes", ()))
     if singular:
+        fname = FREQUENCY_UNITS[args.unit][0]
         notes.append(f"{len(singular)} point(s) exactly on a pole or zero of K "
-                     f"(omega = {_some_omega(singular)} rad/s): there K is +inf·j or 0 and "
-                     "Q0 is 0 or +inf·j (flag 1)")
+                     f"({fname} = {_some_omega(singular, unit=args.unit)} {args.unit}): there "
+                     "K is +inf·j or 0 and Q0 is 0 or +inf·j (flag 1)")
     for w in warns:
         print(f"warning: {w}", file=sys.stderr)
     dropped = 0
@@ -283,7 +317,8 @@ def cmd_sweep(args) -> int:
         if args.output:
             from ..io_csv import write_sweep_csv
 
-            write_sweep_csv(result, out.path(args.output), _sensitivity_columns(sens))
+            write_sweep_csv(result, out.path(args.output), unit=args.unit,
+                            extra={**extra, **_sensitivity_columns(sens)})
         if args.touchstone:
             from ..interop.skrf import write_touchstone
 
@@ -292,8 +327,10 @@ def cmd_sweep(args) -> int:
         if args.plot:
             from ..plotting import plot_sweep
 
-            save_figure(plot_sweep(result, resonances=found, peak=pk), args.plot,
-                        out.path(args.plot))
+            units = result.units
+            panels = {_panel_label(key, units): values for key, values in extra.items()}
+            save_figure(plot_sweep(result, resonances=found, peak=pk, unit=args.unit,
+                                   extra=panels), args.plot, out.path(args.plot))
     n_flag = int(np.count_nonzero(result.flags))
     n_points = len(result.omega)
     if args.json:
@@ -306,6 +343,8 @@ def cmd_sweep(args) -> int:
             "resonances": _resonance_rows(found),
             "peak": _peak_doc(pk), "singular_omega": singular, "notes": notes,
         }
+        if extra:
+            doc["responses"] = extra
         if result.drive.kind == "force":
             doc["v0"] = {"re": result.v0.real, "im": result.v0.imag}
         if sens is not None:
@@ -318,18 +357,25 @@ def cmd_sweep(args) -> int:
     absK = np.abs(result.K)
     absQ = np.abs(result.Q0)
     how = "adaptive grid points" if args.adaptive else "points"
-    print(f"{args.file}: {n_points} {how}, omega {result.omega[0]:g} .. "
-          f"{result.omega[-1]:g} rad/s, method {result.method}")
+    units = result.units
+    print(f"{args.file}: {n_points} {how}, {FREQUENCY_UNITS[args.unit][0]} "
+          f"{in_unit(result.omega[0], args.unit):g} .. {in_unit(result.omega[-1], args.unit):g} "
+          f"{args.unit}, method {result.method}")
     with np.errstate(all="ignore"):
-        print(f"  |K|  {np.nanmin(absK):.4g} .. {np.nanmax(absK):.4g} m/(N·s) on the grid")
+        print(f"  |K|  {np.nanmin(absK):.4g} .. {np.nanmax(absK):.4g} {units['K']} on the grid")
         if result.drive.kind == "force":    # Q0 is the prescribed F0: show the response
             absV = np.abs(result.v0)
-            print(f"  |v0| {np.nanmin(absV):.4g} .. {np.nanmax(absV):.4g} m/s on the grid "
-                  f"(velocity response v0 = F0·K to the force drive F0 = "
-                  f"{result.drive.amplitude:g} N)")
+            print(f"  |v0| {np.nanmin(absV):.4g} .. {np.nanmax(absV):.4g} {units['v']} on the "
+                  f"grid (velocity response v0 = F0·K to the force drive F0 = "
+                  f"{result.drive.amplitude:g} {units['Q']})")
         else:
-            print(f"  |Q0| {np.nanmin(absQ):.4g} .. {np.nanmax(absQ):.4g} N on the grid")
-    print(f"  {_peak_text(pk)}")
+            print(f"  |Q0| {np.nanmin(absQ):.4g} .. {np.nanmax(absQ):.4g} {units['Q']} on the "
+                  "grid")
+        for key, values in extra.items():
+            label = f"|{key[0]}{key[key.index('('):]}|"
+            print(f"  {label:<4} {np.nanmin(values):.4g} .. {np.nanmax(values):.4g} "
+                  f"{_unit_of(key, units)} on the grid")
+    print(f"  {_peak_text(pk, units, args.unit)}")
     if sens is not None:
         _print_sweep_sensitivity(sens, result)
     if n_flag:
@@ -377,8 +423,42 @@ def _print_sweep_sensitivity(sens, result) -> None:
               f"{rel[i] + 0.0:+.4g} there")
 
 
+def _responses(result, nodes, elements) -> dict:
+    """``{column: |amplitude|}`` of ``--node`` (v_abs, x_abs) and ``--element`` (Q_abs)."""
+    import numpy as np
+
+    from ..errors import MechcircError
+
+    out = {}
+    with np.errstate(all="ignore"):
+        for name in nodes:
+            try:
+                v = np.abs(result.node_velocity(name))
+            except KeyError as exc:
+                raise MechcircError(f"--node: {exc.args[0]}") from None
+            out[f"v_abs({name})"] = v
+            out[f"x_abs({name})"] = v / result.omega        # |x| = |v| / ω
+        for name in elements:
+            try:
+                out[f"Q_abs({name})"] = np.abs(result.force(name))
+            except KeyError as exc:
+                raise MechcircError(f"--element: {exc.args[0]}") from None
+    return out
+
+
+def _unit_of(key: str, units: dict) -> str:
+    return units[{"v": "v", "x": "x", "Q": "Q"}[key[0]]]
+
+
+def _panel_label(key: str, units: dict) -> str:
+    name = key[key.index("(") + 1:-1]
+    return f"|{key[0]}({name})| [{_unit_of(key, units)}]"
+
+
 def cmd_resonances(args) -> int:
     from ..outputs import OutputSet
+    from ..resonances import Resonances
+    from ..units import FREQUENCY_UNITS, in_unit
 
     check_output_paths(plots=(args.plot,))
     circuit, warns = load_with_warnings(args.file)
@@ -417,17 +497,17 @@ def cmd_resonances(args) -> int:
         return 0
     print(f"{args.file}: {sum(r.kind == 'resonance' for r in found)} resonances (K = 0), "
           f"{sum(r.kind == 'antiresonance' for r in found)} anti-resonances (K = ∞)"
-          + (f" up to {args.omega_max:g} rad/s" if args.omega_max else ""))
-    print(f"  {'kind':<14} {'omega [rad/s]':>17} {'f [Hz]':>14} {'omega_d [rad/s]':>17} "
-          f"{'zeta':>10} {'rel. error':>10}")
-    for r in found:
-        print(f"  {r.kind:<14} {r.omega:>17.10g} {r.f_hz:>14.8g} {r.omega_d:>17.10g} "
-              f"{r.zeta:>10.4g} {r.error:>10.1e}")
+          + (f" up to {in_unit(args.omega_max, args.unit):g} {args.unit}" if args.omega_max
+             else ""))
+    for line in Resonances(found).table(args.unit):
+        print(f"  {line}")
     kinds = {e.name: e.kind for e in circuit.elements} | {lv.name: "lever" for lv in circuit.levers}
     for i, m in enumerate(modes or (), 1):
         r = m.resonance
-        print(f"\n{i}: {r.kind} omega = {r.omega:.10g} rad/s ({r.f_hz:.6g} Hz)"
-              + (f", zeta = {r.zeta:.4g}" if r.zeta else ""))
+        where = (f"omega = {r.omega:.10g} rad/s ({r.f_hz:.6g} Hz)" if args.unit == "rad/s"
+                 else f"{FREQUENCY_UNITS[args.unit][0]} = {in_unit(r.omega, args.unit):.10g} "
+                      f"{args.unit}")
+        print(f"\n{i}: {r.kind} {where}" + (f", zeta = {r.zeta:.4g}" if r.zeta else ""))
         if m.note and (m.shape or not args.modes):   # else the mode table says it
             print(f"  note: {m.note}")
         if args.modes:

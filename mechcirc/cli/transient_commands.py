@@ -86,17 +86,23 @@ def cmd_transient(args) -> int:
         print(f"note: {n}", file=sys.stderr)
     print(f"{circuit.name}: {result.time.size} samples, t = 0 .. {result.time[-1]:.6g} s; "
           f"{result.method}; estimated error of x {result.error:.3g}")
-    print(f"{'node':>10} {'x(end)':>14} {'v(end)':>14} {'max|x|':>14}")
+    from ..circuit import units_of
+
+    u = units_of(circuit.drive)
+    w = max([10] + [len(n) for n in result.nodes + result.elements])
+    print(f"{'node':>{w}} {'x(end) [' + u['x'] + ']':>14} {'v(end) [' + u['v'] + ']':>14} "
+          f"{'max|x| [' + u['x'] + ']':>14}")
     for i, n in enumerate(result.nodes):
-        print(f"{n:>10} {result.x[-1, i]:14.6g} {result.v[-1, i]:14.6g} "
+        print(f"{n:>{w}} {result.x[-1, i]:14.6g} {result.v[-1, i]:14.6g} "
               f"{abs(result.x[:, i]).max():14.6g}")
-    print(f"{'element':>10} {'max|F|':>14}")
+    print(f"{'element':>{w}} {'max|F| [' + u['Q'] + ']':>14}")
     for j, e in enumerate(result.elements):
-        print(f"{e:>10} {abs(result.force[:, j]).max():14.6g}")
+        print(f"{e:>{w}} {abs(result.force[:, j]).max():14.6g}")
     if result.drive_force is not None:
-        print(f"drive force: max |F| = {abs(result.drive_force).max():.6g}")
+        what = "moment" if u["Q"] == "N·m" else "force"
+        print(f"drive {what}: max |F| = {abs(result.drive_force).max():.6g} {u['Q']}")
     if result.drive_velocity is not None:
-        print(f"drive velocity: max |v| = {abs(result.drive_velocity).max():.6g}")
+        print(f"drive velocity: max |v| = {abs(result.drive_velocity).max():.6g} {u['v']}")
     return 0
 
 

@@ -181,6 +181,19 @@ class TransientResult:
         """Force [N] through element ``name`` (n1 → n2)."""
         return self.force[:, self.elements.index(name)]
 
+    def __repr__(self) -> str:
+        """A short summary (the arrays are in the attributes, not in the repr)."""
+        t = self.time
+        span = f"t {t[0]:.4g}..{t[-1]:.4g} s" if len(t) else "no steps"
+        with np.errstate(all="ignore"):
+            xmax = float(np.nanmax(np.abs(self.x))) if self.x.size else 0.0
+            qmax = float(np.nanmax(np.abs(self.force))) if self.force.size else 0.0
+        return (f"<TransientResult {self.name!r}: {len(t)} samples, {span}, method "
+                f"{self.method}, {len(self.nodes)} nodes (max |x| {xmax:.4g}), "
+                f"{len(self.elements)} elements (max |force| {qmax:.4g}), "
+                f"error {self.error:.2g}" + (f", {len(self.notes)} note(s)>" if self.notes
+                                              else ">"))
+
     def to_json(self) -> dict:
         """The ``--json`` document (issue 12 §4)."""
         doc = {"time": self.time,
