@@ -408,9 +408,9 @@ def load_with_warnings(path):
         warnings.simplefilter("always")
         circuit = load(path)
         try:
-            circuit.tree    # reduce now, so topology errors and warnings surface here
+            _ = circuit.tree    # reduce now, so topology errors and warnings surface here
         except NotSeriesParallelError:
-            circuit.nodal   # nodal analysis takes over; its own errors surface here
+            _ = circuit.nodal   # nodal analysis takes over; its own errors surface here
     messages = [str(w.message) for w in caught]
     messages += [f"spring {e.name!r} has backlash={e.backlash:g}: the frequency domain takes "
                  "its contact as closed (linearised); 'mechcirc transient' integrates the gap"

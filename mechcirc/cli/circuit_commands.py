@@ -8,7 +8,7 @@ import sys
 
 from ..limits import (MAX_ADAPTIVE_NODAL_POINTS, MAX_ADAPTIVE_POINTS, MAX_JSON_POINTS,
                       MAX_NODAL_POINTS, MAX_PLOT_POINTS, MAX_SWEEP_POINTS)
-from ._common import (check_output_paths, count, load_with_warnings, print_json, real,
+from ._common import (check_output_paths, load_with_warnings, print_json, real,
                       save_figure)
 
 

@@ -257,7 +257,7 @@ def dopri_run(z, t0, dt, nout, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, u
                     else:
                         g0, g1 = gm0, gm1
                     th = g0 / (g0 - g1) if g0 != g1 else 0.5
-                    if th < 0.0 or th > 1.0 or th != th:
+                    if th < 0.0 or th > 1.0 or math.isnan(th):
                         th = 0.5
                     if th < theta:
                         theta = th

@@ -993,7 +993,7 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes,
             Q = Acc @ a + V @ b + X @ c
         else:                   # one vector: h·(M a + D v + K x) is affine in z
             Q = affine(*_drive_map(ss), Cz=drive_y)
-        for name, (e, comp) in clear.items():
+        for name, (e, _comp) in clear.items():
             ge = np.zeros(len(ss.nodes))
             if e.n1 in index:
                 ge[index[e.n1]] += 1.0
