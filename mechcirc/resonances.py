@@ -882,6 +882,18 @@ def _weighted_sum(S: np.ndarray, P: np.ndarray) -> np.ndarray:
     return (S[:, None, :] @ P.reshape(E, k * k)).reshape(S.shape[0], k, k)
 
 
+def _scaled_stack(M, K):
+    """Stacked mass and stiffness matrices scaled to unit largest entry per design,
+    and the reference frequency √(max|K| / max|M|) of each: ``(scale_m, w_ref, Ms, Ks)``."""
+    with np.errstate(all="ignore"):
+        scale_m = np.abs(M).max(axis=(1, 2))
+        scale_k = np.abs(K).max(axis=(1, 2))
+        scale_m = np.where(scale_m > 0, scale_m, 1.0)
+        scale_k = np.where(scale_k > 0, scale_k, 1.0)
+        w_ref = np.sqrt(scale_k) / np.sqrt(scale_m)
+        return scale_m, w_ref, M / scale_m[:, None, None], K / scale_k[:, None, None]
+
+
 def _stacked_modes(M: np.ndarray, K: np.ndarray, n0: int, omega_max):
     """Undamped roots ω of stacks of projected pencils (K, M): :func:`_modes_unchecked`'s
     scaling and filters on stacks, the pencil reduced by a Cholesky factor of M.
@@ -894,14 +906,7 @@ def _stacked_modes(M: np.ndarray, K: np.ndarray, n0: int, omega_max):
     D, k = M.shape[0], M.shape[1]
     if k == 0:
         return np.zeros((D, 0)), np.zeros((D, 0)), np.ones(D, dtype=bool)
-    with np.errstate(all="ignore"):
-        scale_m = np.abs(M).max(axis=(1, 2))
-        scale_k = np.abs(K).max(axis=(1, 2))
-        scale_m = np.where(scale_m > 0, scale_m, 1.0)
-        scale_k = np.where(scale_k > 0, scale_k, 1.0)
-        w_ref = np.sqrt(scale_k) / np.sqrt(scale_m)
-        Ms = M / scale_m[:, None, None]
-        Ks = K / scale_k[:, None, None]
+    scale_m, w_ref, Ms, Ks = _scaled_stack(M, K)
     ok = np.isfinite(w_ref) & (w_ref > 0) & np.isfinite(Ms).all(axis=(1, 2)) & \
         np.isfinite(Ks).all(axis=(1, 2))
     if not ok.all():
@@ -943,15 +948,9 @@ def _stacked_damped(M: np.ndarray, Dm: np.ndarray, K: np.ndarray, omega_max):
     eps = np.finfo(float).eps
     if k == 0:
         return np.zeros((n, 0), dtype=complex), np.zeros((n, 0)), np.ones(n, dtype=bool)
+    scale_m, w_ref, Ms, Ks = _scaled_stack(M, K)
     with np.errstate(all="ignore"):
-        scale_m = np.abs(M).max(axis=(1, 2))
-        scale_k = np.abs(K).max(axis=(1, 2))
-        scale_m = np.where(scale_m > 0, scale_m, 1.0)
-        scale_k = np.where(scale_k > 0, scale_k, 1.0)
-        w_ref = np.sqrt(scale_k) / np.sqrt(scale_m)
-        Ms = M / scale_m[:, None, None]
         Ds = Dm / (scale_m * w_ref)[:, None, None]
-        Ks = K / scale_k[:, None, None]
     ok = np.isfinite(w_ref) & (w_ref > 0)
     for X in (Ms, Ds, Ks):
         ok &= np.isfinite(X).all(axis=(1, 2))

@@ -386,22 +386,3 @@ def cmd_crosscheck_scene(args) -> int:
         print(f"note: {n}")
     print(summary_line(summary))
     return summary["exit"]
-    print(f"{args.file}: scene {scene.name!r} at θ = {theta_deg:g}°: resonances of the circuit "
-          "against the ringing of the time-domain motion after a kick")
-    print(f"{'circuit ω_n':>14} {'ζ':>9} {'ringing ω_n':>14} {'ζ':>9} {'rel. diff':>10}")
-    for r in result.resonances:
-        if r["ringing_omega"] is None:
-            print(f"{r['omega']:>14.6g} {r['zeta']:>9.4g} {'not found':>14}")
-            continue
-        print(f"{r['omega']:>14.6g} {r['zeta']:>9.4g} {r['ringing_omega']:>14.6g} "
-              f"{r['ringing_zeta']:>9.4g} {r['rel_error']:>10.2e}")
-    if result.forced:
-        print("forced response to a drive-speed ripple: |Q0| of the circuit against the "
-              "time domain")
-        print(f"{'ω':>14} {'|Q0| circuit':>16} {'|Q0| time':>16} {'rel. diff':>10}")
-        for f in result.forced:
-            print(f"{f['omega']:>14.6g} {f['Q0_circuit']:>16.8g} {f['Q0_time']:>16.8g} "
-                  f"{f['rel_error']:>10.2e}")
-    for n in result.notes:
-        print(f"note: {n}")
-    return 0
