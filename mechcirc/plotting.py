@@ -38,6 +38,66 @@ def _axes(ax, figsize):
     return fig, fig.add_subplot(), True
 
 
+#: Refinement around each exact root: points at ω_r·(1 ± s·δ) for these s, with
+#: δ the root's relative half-width ζ clipped to [REFINE_WIDTH[0], REFINE_WIDTH[1]].
+REFINE_STEPS = (0.02, 0.1, 0.3, 1.0, 3.0)
+REFINE_WIDTH = (1e-3, 0.02)
+#: Roots closer than this (relative) are a close pair: their labels are staggered.
+CLOSE_PAIR = 0.05
+
+
+def _refined(result, resonances):
+    """(ω, K, flags, response) of ``result`` with exact points added around each root.
+
+    The added points are evaluated by the circuit itself (:func:`mechcirc.sweep.sweep`
+    with the sweep's method), so a close resonance/anti-resonance pair that the
+    grid steps over is drawn through; without a circuit (or roots) the sweep as is.
+    """
+    import numpy as np
+
+    force_drive = getattr(result.drive, "kind", "velocity") == "force"
+    omega, K, flags = result.omega, result.K, result.flags
+    R = result.v0 if force_drive else result.Q0
+    circuit = getattr(result, "circuit", None)
+    if circuit is None or not len(resonances) or omega.size < 2:
+        return omega, K, flags, R
+    lo, hi = float(np.min(omega)), float(np.max(omega))
+    steps = np.array(REFINE_STEPS)
+    new = []
+    for r in resonances:
+        w = r.omega_d or r.omega
+        d = min(max(r.zeta, REFINE_WIDTH[0]), REFINE_WIDTH[1])
+        new.append(w * (1 + d * np.concatenate([-steps[::-1], steps])))
+    new = np.unique(np.concatenate(new))
+    new = new[(new > lo) & (new < hi) & ~np.isin(new, omega)]
+    if not new.size:
+        return omega, K, flags, R
+    from .sweep import sweep
+
+    extra = sweep(circuit, new, method=result.method)
+    order = np.argsort(np.concatenate([omega, new]), kind="stable")
+    return tuple(np.concatenate([a, b])[order] for a, b in
+                 ((omega, new), (K, extra.K), (flags, extra.flags),
+                  (R, extra.v0 if force_drive else extra.Q0)))
+
+
+def _label_resonances(ax, resonances, per_unit: float) -> None:
+    """Each root's frequency written at the top of ``ax``; a root within
+    :data:`CLOSE_PAIR` of the previous one goes one row lower, so the labels of
+    a close pair never overlap."""
+    from matplotlib.transforms import blended_transform_factory
+
+    trans = blended_transform_factory(ax.transData, ax.transAxes)
+    prev, level = None, 0
+    for r in sorted(resonances, key=lambda r: r.omega_d or r.omega):
+        w = r.omega_d or r.omega
+        level = (level + 1) % 3 if prev is not None and w <= prev * (1 + CLOSE_PAIR) else 0
+        prev = w
+        ax.text(w / per_unit, 0.96 - 0.09 * level, f"{w / per_unit:.5g}", transform=trans,
+                ha="center", va="top", fontsize="x-small", color="0.3",
+                bbox={"boxstyle": "round,pad=0.15", "fc": "white", "ec": "none", "alpha": 0.8})
+
+
 def _mark_resonances(axes, resonances, legend_ax, per_unit: float = 1.0):
     """Vertical lines at each root's ω (``per_unit`` rad/s per unit of the x axis)."""
     labelled = set()
@@ -73,7 +133,7 @@ def _mark_peak(ax, peak, unit: str = "rad/s", force_unit: str = "N") -> None:
 
 
 def plot_sweep(result, title: str | None = None, resonances=(), peak=None, *, ax=None,
-               fig=None, unit: str = "rad/s", extra=None):
+               fig=None, unit: str = "rad/s", extra=None, refine: bool = True):
     """Bode-style |K| and arg K [deg], and the drive's response, against frequency.
 
     The third panel is what the drive does not prescribe: |Q0| for a
@@ -87,6 +147,14 @@ def plot_sweep(result, title: str | None = None, resonances=(), peak=None, *, ax
     :func:`mechcirc.sweep.peak`) marks the exact maximum of |Q0|, or ∞ at each
     undamped resonance.
 
+    Around each root passed in ``resonances`` the curves are refined: exact
+    points (evaluated by the sweep's circuit with its method) are added at
+    ω_r·(1 ± s·δ), s in :data:`REFINE_STEPS`, δ the root's damping ratio
+    clipped to :data:`REFINE_WIDTH`, so the phase panel resolves a close
+    resonance/anti-resonance pair the grid steps over.  Each root's frequency
+    is written at the top of the |K| panel, the labels of roots within
+    :data:`CLOSE_PAIR` of each other one row apart.
+
     Parameters
     ----------
     ax : matplotlib Axes, optional
@@ -98,7 +166,11 @@ def plot_sweep(result, title: str | None = None, resonances=(), peak=None, *, ax
         Unit of the frequency axis: ω, f = ω/2π or n = 60·ω/2π.
     extra : dict, optional
         More panels below: y-axis label -> real array over the sweep's points
-        (e.g. ``{"|v(B)| [m/s]": abs(result.node_velocity("B"))}``).
+        (e.g. ``{"|v(B)| [m/s]": abs(result.node_velocity("B"))}``), drawn on
+        the sweep's own points.
+    refine : bool
+        Add the exact points around the roots (default); False draws the
+        sweep's points only.
 
     Returns
     -------
@@ -111,17 +183,19 @@ def plot_sweep(result, title: str | None = None, resonances=(), peak=None, *, ax
 
     per_unit = FREQUENCY_UNITS[unit][1]
     xlabel = {"rad/s": "ω [rad/s]", "Hz": "f [Hz]", "rpm": "n [rpm]"}[unit]
-    omega = in_unit(result.omega, unit)
     units = units_of(getattr(result, "drive", None))
-    positive = omega > 0
     force_drive = getattr(result.drive, "kind", "velocity") == "force"
+    w, K, flags, R = _refined(result, resonances if refine else ())
+    omega = in_unit(w, unit)
+    positive = omega > 0
     with np.errstate(all="ignore"):
-        absK = np.abs(result.K)
-        absR = np.abs(result.v0 if force_drive else result.Q0)
-        phase = np.degrees(np.angle(result.K))
+        absK = np.abs(K)
+        absR = np.abs(R)
+        phase = np.degrees(np.angle(K))
     if ax is not None:
-        _draw_K(ax, omega, absK, positive, result)
+        _draw_K(ax, omega, absK, positive, flags, units)
         _mark_resonances((ax,), resonances, ax, per_unit)
+        _label_resonances(ax, resonances, per_unit)
         ax.set_xlabel(xlabel)
         ax.grid(True, which="both", alpha=0.3)
         ax.set_title(title or f"{result.name}: kinematic characteristic K = v/Q")
@@ -131,16 +205,18 @@ def plot_sweep(result, title: str | None = None, resonances=(), peak=None, *, ax
     axes = fig.subplots(3 + len(extra), 1, sharex=True,
                         gridspec_kw={"height_ratios": [3, 2, 3] + [2] * len(extra)})
     ax_k, ax_p, ax_q = axes[:3]
-    _draw_K(ax_k, omega, absK, positive, result)
+    _draw_K(ax_k, omega, absK, positive, flags, units)
+    _label_resonances(ax_k, resonances, per_unit)
     ax_p.semilogx(omega[positive], phase[positive], color="C2")
     ax_p.set_ylabel("arg K [deg]")
     ax_p.set_ylim(-190, 190)
     ax_p.set_yticks([-180, -90, 0, 90, 180])
     ax_q.loglog(omega[positive], absR[positive], color="C1")
     ax_q.set_ylabel(f"|v0| = |F0·K| [{units['v']}]" if force_drive else f"|Q0| [{units['Q']}]")
+    own = in_unit(result.omega, unit)
     for a, (label, values) in zip(axes[3:], extra.items()):
         with np.errstate(all="ignore"):
-            a.loglog(omega[positive], np.asarray(values)[positive], color="C4")
+            a.loglog(own[own > 0], np.asarray(values)[own > 0], color="C4")
         a.set_ylabel(label)
     axes[-1].set_xlabel(xlabel)
     _mark_resonances(tuple(axes), resonances, ax_q, per_unit)
@@ -155,14 +231,12 @@ def plot_sweep(result, title: str | None = None, resonances=(), peak=None, *, ax
     return fig
 
 
-def _draw_K(ax, omega, absK, positive, result):
+def _draw_K(ax, omega, absK, positive, flags, units):
     import numpy as np
 
     ax.loglog(omega[positive], absK[positive], color="C0")
-    from .circuit import units_of
-
-    ax.set_ylabel(f"|K| [{units_of(getattr(result, 'drive', None))['K']}]")
-    flagged = positive & (result.flags != 0) & np.isfinite(absK) & (absK > 0)
+    ax.set_ylabel(f"|K| [{units['K']}]")
+    flagged = positive & (flags != 0) & np.isfinite(absK) & (absK > 0)
     if flagged.any():
         ax.loglog(omega[flagged], absK[flagged], "x", color="C3", label="flagged point")
         ax.legend(loc="best", fontsize="small")

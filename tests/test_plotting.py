@@ -23,7 +23,7 @@ def stb_sweep():
 
 def test_bode_panels_draw_K_phase_and_Q0(stb_sweep):
     c, s, found = stb_sweep
-    fig = plot_sweep(s, resonances=found)
+    fig = plot_sweep(s, resonances=found, refine=False)     # the sweep's own points
     ax_k, ax_p, ax_q = fig.axes
     assert [ax.get_ylabel() for ax in fig.axes] == ["|K| [m/(N·s)]", "arg K [deg]", "|Q0| [N]"]
     assert ax_q.get_xlabel() == "ω [rad/s]"
@@ -92,7 +92,7 @@ def _axes():
 def test_plot_sweep_on_a_given_axes(stb_sweep):
     c, s, found = stb_sweep
     fig, ax = _axes()
-    assert plot_sweep(s, ax=ax, resonances=found) is ax
+    assert plot_sweep(s, ax=ax, resonances=found, refine=False) is ax
     np.testing.assert_array_equal(ax.lines[0].get_ydata(), np.abs(s.K))
     marks = sorted(line.get_xdata()[0] for line in ax.lines[1:]
                    if len(set(line.get_xdata())) == 1)
@@ -223,3 +223,41 @@ def test_sweep_plot_marks_resonances_by_default():
     xs = sorted(float(np.atleast_1d(ln.get_xdata())[0]) for ln in marked.lines[len(bare.lines):])
     assert len(marked.lines) - len(bare.lines) == len(inband)
     assert xs == pytest.approx(sorted(inband), rel=1e-12)
+
+
+def test_sweep_plot_is_refined_around_the_exact_roots(stb_sweep):
+    """stb_heald's close pair 706.45 / 709.55 rad/s falls between two grid points
+    (2.3 % apart): the plotted curve gets points within 1e-3 of every root, and the
+    added points are the circuit's K (checked against the second solver, nodal)."""
+    c, s, found = stb_sweep
+    fig = plot_sweep(s, resonances=found)
+    x, phase = fig.axes[1].lines[0].get_data()
+    for r in found:
+        assert np.min(np.abs(x / r.omega - 1)) < 1e-3, r
+        assert np.min(np.abs(s.omega / r.omega - 1)) > 1e-3      # the grid alone has none
+    added = ~np.isin(x, s.omega)
+    assert added.sum() >= 2 * len(found)
+    nodal = c.sweep(x[added], method="nodal")
+    np.testing.assert_allclose(fig.axes[0].lines[0].get_ydata()[added], np.abs(nodal.K),
+                               rtol=1e-9)
+    np.testing.assert_allclose(phase[added], np.degrees(np.angle(nodal.K)), atol=1e-6)
+    # the pair is resolved: K (undamped, imaginary) changes sign at the zero and back at
+    # the pole, so arg K is ±90° inside the pair and ∓90° on both sides of it; the grid
+    # has no point inside it, the plotted curve several
+    lo, hi = sorted(r.omega for r in found if 700 < r.omega < 720)
+    assert not ((s.omega > lo) & (s.omega < hi)).any()
+    inside, below, above = (x > lo) & (x < hi), (x < lo) & (x > 700), (x > hi) & (x < 720)
+    assert inside.sum() >= 4
+    assert np.ptp(phase[inside]) < 1e-6 and abs(phase[inside][0]) == pytest.approx(90)
+    assert np.all(np.abs(phase[below] - phase[inside][0]) == pytest.approx(180))
+    assert np.all(np.abs(phase[above] - phase[inside][0]) == pytest.approx(180))
+
+
+def test_close_roots_get_labels_at_different_heights(stb_sweep):
+    _, s, found = stb_sweep
+    for where in (plot_sweep(s, resonances=found).axes[0],
+                  plot_sweep(s, ax=_axes()[1], resonances=found)):
+        labels = {round(float(t.get_text())): t.get_position()[1] for t in where.texts}
+        assert set(labels) == {round(r.omega_d) for r in found}
+        assert labels[706] != labels[710]                  # 0.44 % apart: staggered
+        assert labels[3641] == labels[706]                 # far from any other: top row
