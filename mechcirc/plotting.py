@@ -19,7 +19,7 @@ follows the extension given to :func:`mechcirc.cli._common.save_figure`
 
 from __future__ import annotations
 
-__all__ = ["plot_sweep", "plot_forces", "plot_comparison", "plot_study", "plot_periodic",
+__all__ = ["plot_sweep", "plot_transient", "plot_forces", "plot_comparison", "plot_study", "plot_periodic",
            "plot_speed_map", "plot_mode", "plot_modes"]
 
 
@@ -240,6 +240,110 @@ def _draw_K(ax, omega, absK, positive, flags, units):
     if flagged.any():
         ax.loglog(omega[flagged], absK[flagged], "x", color="C3", label="flagged point")
         ax.legend(loc="best", fontsize="small")
+
+
+#: Most clearance (backlash) panels of a transient plot, and most nodes drawn by default.
+MAX_CLEARANCE_PANELS, MAX_NODES = 4, 8
+
+
+def _known(kind: str, names, known) -> list:
+    """``names`` (checked against ``known``, a clear error naming them otherwise)."""
+    from .errors import MechcircError
+
+    names = list(names)
+    bad = [n for n in names if n not in known]
+    if bad:
+        raise MechcircError(f"unknown {kind} {bad[0]!r}; the transient has "
+                            f"{', '.join(known) or 'none'}")
+    return names
+
+
+def plot_transient(result, nodes=None, what: str = "x", elements=None, title: str | None = None,
+                   *, ax=None, fig=None):
+    """A transient (:class:`mechcirc.transient.TransientResult`) against time.
+
+    Panels: the displacement x (or, ``what="v"``, velocity) of ``nodes``
+    (default the first :data:`MAX_NODES`) in the drive's units (m or rad, m/s
+    or rad/s); the forces of ``elements`` (names; N or N·m) when given; and for
+    each spring with a clearance (at most :data:`MAX_CLEARANCE_PANELS`) its
+    deformation x(n1) − x(n2) with the band ±B/2 inside which it transmits
+    nothing and the contact phases (the spring's force is not 0) shaded.  The
+    title names the netlist and the drive.
+
+    Parameters
+    ----------
+    ax : matplotlib Axes, optional
+        Draw only the nodes' panel there and return it.
+    fig : matplotlib Figure, optional
+        Add the panels to this Figure (its axes are kept); a new one by default.
+
+    Returns
+    -------
+    The Axes given as ``ax``, or the Figure of the panels.
+    """
+    import numpy as np
+
+    if what not in ("x", "v") or (what == "v" and result.v is None):
+        from .errors import MechcircError
+
+        raise MechcircError(f"what={what!r}: expected 'x' or 'v' (v only when the transient "
+                            "kept velocities)")
+    u = result.units
+    names = _known("node", nodes, result.nodes) if nodes is not None \
+        else list(result.nodes)[:MAX_NODES]
+    forces = _known("element", elements or (), result.elements)
+    drive = (f"{result.drive_kind} drive {result.drive_name}" if result.drive_name
+             else "no drive")
+    title = title or f"{result.name}: transient, {drive}"
+    t = result.time
+
+    def nodes_panel(a):
+        data = result.x if what == "x" else result.v
+        for n in names:
+            a.plot(t, data[:, result.nodes.index(n)], label=f"{what}({n})")
+        a.set_ylabel(f"displacement x [{u['x']}]" if what == "x"
+                     else f"velocity v [{u['v']}]")
+        if names:
+            a.legend(loc="best", fontsize="small")
+
+    if ax is not None:
+        nodes_panel(ax)
+        ax.set_xlabel("t [s]")
+        ax.set_title(title)
+        ax.grid(True, alpha=0.3)
+        return ax
+    gaps = list(result.clearances.items())[:MAX_CLEARANCE_PANELS]
+    n = 1 + bool(forces) + len(gaps)
+    fig = fig if fig is not None else _figure((8, 3 + 2.2 * n))
+    axes = np.atleast_1d(fig.subplots(n, 1, sharex=True, squeeze=False)[:, 0])
+    nodes_panel(axes[0])
+    if forces:
+        for e in forces:
+            axes[1].plot(t, result.force[:, result.elements.index(e)], label=f"F({e})")
+        word = "moment" if u["Q"] == "N·m" else "force"
+        axes[1].set_ylabel(f"element {word} [{u['Q']}]")
+        axes[1].legend(loc="best", fontsize="small")
+    index = {name: i for i, name in enumerate(result.nodes)}
+    for a, (name, (n1, n2, B)) in zip(axes[1 + bool(forces):], gaps):
+        e = sum(sign * result.x[:, index[m]] for sign, m in ((1, n1), (-1, n2)) if m in index)
+        e = np.broadcast_to(e, t.shape)
+        a.plot(t, e, color="C0", label=f"x({n1}) − x({n2})")
+        for y in (B / 2, -B / 2):
+            a.axhline(y, color="C3", lw=0.8, ls="--",
+                      label=f"clearance ±B/2 = ±{B / 2:.4g} {u['x']}" if y > 0 else None)
+        if name in result.elements:
+            contact = result.force[:, result.elements.index(name)] != 0
+            a.fill_between(t, 0, 1, where=contact, step="mid", color="C1", alpha=0.15,
+                           transform=a.get_xaxis_transform(), label="contact")
+        a.set_ylabel(f"deformation {name} [{u['x']}]")
+        a.legend(loc="best", fontsize="small")
+    axes[-1].set_xlabel("t [s]")
+    for a in axes:
+        a.grid(True, alpha=0.3)
+    fig.suptitle(title)
+    if len(fig.axes) == n:              # a layout of ours only, not of the caller's axes
+        fig.tight_layout()
+    return fig
 
 
 #: Colour of each element kind in force plots (bars and legend swatches alike).

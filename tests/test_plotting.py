@@ -261,3 +261,67 @@ def test_close_roots_get_labels_at_different_heights(stb_sweep):
         assert set(labels) == {round(r.omega_d) for r in found}
         assert labels[706] != labels[710]                  # 0.44 % apart: staggered
         assert labels[3641] == labels[706]                 # far from any other: top row
+
+
+@pytest.fixture(scope="module")
+def msl_transient():
+    from mechcirc.transient import transient
+
+    return transient(mechcirc.load(REPO / "examples/msl_backlash.mcir"), 1.0, 1e-3)
+
+
+def _hlines(ax):
+    """y of the horizontal lines drawn across ``ax`` (axhline: x from 0 to 1 in axes units)."""
+    return sorted(float(line.get_ydata()[0]) for line in ax.lines
+                  if list(line.get_xdata()) == [0, 1] and len(set(line.get_ydata())) == 1)
+
+
+def test_transient_plot_units_forces_and_clearance_band(msl_transient):
+    """msl_backlash: a torque drive on inertias, total backlash 45° of spring eb."""
+    r = msl_transient
+    fig = r.plot(elements=["eb", "sd"])
+    ax_x, ax_f, ax_e = fig.axes
+    assert ax_x.get_ylabel() == "displacement x [rad]"
+    assert ax_f.get_ylabel() == "element moment [N·m]"
+    assert ax_e.get_ylabel() == "deformation eb [rad]" and ax_e.get_xlabel() == "t [s]"
+    assert "msl_backlash" in fig._suptitle.get_text() and "drive T" in fig._suptitle.get_text()
+    np.testing.assert_array_equal(ax_f.lines[1].get_ydata(), r.element_force("sd"))
+    # the band ±B/2 with B = 45° from the netlist, in the panel's data coordinates
+    assert _hlines(ax_e) == pytest.approx([-np.pi / 8, np.pi / 8], rel=1e-15)
+    # deformation of eb (phi to ground) is x(phi)
+    np.testing.assert_array_equal(ax_e.lines[0].get_ydata(), r.node("phi")[0])
+    # contact phases shaded: the spans where |x(phi)| > B/2, a few of them over 1 s
+    (shade,) = ax_e.collections
+    assert shade.get_label() == "contact"
+    inside = np.abs(r.node("phi")[0]) > np.pi / 8
+    starts = np.count_nonzero(np.diff(inside.astype(int)) == 1) + inside[0]
+    assert len(shade.get_paths()) == starts >= 5
+
+
+def test_transient_plot_keeps_the_callers_axes_and_names_units(msl_transient):
+    from matplotlib.figure import Figure
+
+    fig = Figure()
+    mine = fig.add_subplot(3, 1, 1)
+    mine.plot([0, 1], [0, 1])
+    assert msl_transient.plot(fig=fig) is fig
+    assert mine in fig.axes and len(mine.lines) == 1 and len(fig.axes) == 3
+    _, ax = _axes()
+    assert msl_transient.plot(ax=ax, what="v") is ax
+    assert ax.get_ylabel() == "velocity v [rad/s]" and "drive T" in ax.get_title()
+    # a translational netlist says m
+    from mechcirc.transient import transient
+
+    c = mechcirc.parse("drive F a 0 force=1\nspring k a 0 100\nmass m a 0 1\n")
+    lin = transient(c, 0.1, 1e-3, "step")
+    fig = lin.plot(elements=["k"])
+    assert [a.get_ylabel() for a in fig.axes] == ["displacement x [m]", "element force [N]"]
+
+
+def test_transient_plot_refuses_an_unknown_name(msl_transient):
+    from mechcirc.errors import MechcircError
+
+    with pytest.raises(MechcircError, match="unknown element 'nope'.*J1, eb"):
+        msl_transient.plot(elements=["nope"])
+    with pytest.raises(MechcircError, match="unknown node 'q'"):
+        msl_transient.plot(nodes=["q"])
