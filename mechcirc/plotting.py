@@ -42,9 +42,8 @@ def _axes(ax, figsize):
 #: δ the root's relative half-width ζ clipped to [REFINE_WIDTH[0], REFINE_WIDTH[1]].
 REFINE_STEPS = (0.02, 0.1, 0.3, 1.0, 3.0)
 REFINE_WIDTH = (1e-3, 0.02)
-#: Roots closer than this (relative) are a close pair: their labels are staggered.
-CLOSE_PAIR = 0.05
-
+#: Labels of roots closer than this fraction of the axis width go on different rows.
+LABEL_GAP = 0.08
 
 def _refined(result, resonances):
     """(ω, K, flags, response) of ``result`` with exact points added around each root.
@@ -82,19 +81,22 @@ def _refined(result, resonances):
 
 
 def _label_resonances(ax, resonances, per_unit: float) -> None:
-    """Each root's frequency written at the top of ``ax``; a root within
-    :data:`CLOSE_PAIR` of the previous one goes one row lower, so the labels of
-    a close pair never overlap."""
+    """Each root's frequency written at the top of ``ax``, on the highest row where
+    it stands at least :data:`LABEL_GAP` of the axis width from that row's last
+    label, so the labels of a close pair never overlap."""
+    import numpy as np
     from matplotlib.transforms import blended_transform_factory
 
     trans = blended_transform_factory(ax.transData, ax.transAxes)
-    prev, level = None, 0
-    for r in sorted(resonances, key=lambda r: r.omega_d or r.omega):
-        w = r.omega_d or r.omega
-        level = (level + 1) % 3 if prev is not None and w <= prev * (1 + CLOSE_PAIR) else 0
-        prev = w
-        ax.text(w / per_unit, 0.96 - 0.09 * level, f"{w / per_unit:.5g}", transform=trans,
-                ha="center", va="top", fontsize="x-small", color="0.3",
+    scale = np.log if ax.get_xscale() == "log" else (lambda v: v)
+    lo, hi = (scale(v) for v in ax.get_xlim())
+    last = []                                   # per row: position of its last label
+    for w in sorted((r.omega_d or r.omega) / per_unit for r in resonances):
+        pos = (scale(w) - lo) / (hi - lo) if w > 0 and hi != lo else 0.0
+        row = next((i for i, p in enumerate(last) if pos - p >= LABEL_GAP), len(last))
+        last[row:row + 1] = [pos]
+        ax.text(w, 0.96 - 0.09 * row, f"{w:.5g}", transform=trans, ha="center", va="top",
+                fontsize="x-small", color="0.3",
                 bbox={"boxstyle": "round,pad=0.15", "fc": "white", "ec": "none", "alpha": 0.8})
 
 
@@ -152,8 +154,8 @@ def plot_sweep(result, title: str | None = None, resonances=(), peak=None, *, ax
     ω_r·(1 ± s·δ), s in :data:`REFINE_STEPS`, δ the root's damping ratio
     clipped to :data:`REFINE_WIDTH`, so the phase panel resolves a close
     resonance/anti-resonance pair the grid steps over.  Each root's frequency
-    is written at the top of the |K| panel, the labels of roots within
-    :data:`CLOSE_PAIR` of each other one row apart.
+    is written at the top of the |K| panel, the labels of roots closer than
+    :data:`LABEL_GAP` of the axis width on different rows.
 
     Parameters
     ----------

@@ -261,6 +261,13 @@ def test_close_roots_get_labels_at_different_heights(stb_sweep):
         assert set(labels) == {round(r.omega_d) for r in found}
         assert labels[706] != labels[710]                  # 0.44 % apart: staggered
         assert labels[3641] == labels[706]                 # far from any other: top row
+        # on one row, labels stand ≥ 8 % of the (log) axis width apart: they do not overlap
+        span = np.log(np.divide(*where.get_xlim()[::-1]))
+        rows = {}
+        for t in where.texts:
+            rows.setdefault(t.get_position()[1], []).append(np.log(t.get_position()[0]))
+        for xs in rows.values():
+            assert np.all(np.diff(sorted(xs)) >= 0.08 * span)
 
 
 @pytest.fixture(scope="module")
