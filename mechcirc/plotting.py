@@ -19,7 +19,7 @@ follows the extension given to :func:`mechcirc.cli._common.save_figure`
 
 from __future__ import annotations
 
-__all__ = ["plot_sweep", "plot_forces", "plot_comparison", "plot_study", "plot_periodic",
+__all__ = ["plot_sweep", "plot_transient", "plot_forces", "plot_comparison", "plot_study", "plot_periodic",
            "plot_speed_map", "plot_mode", "plot_modes"]
 
 
@@ -36,6 +36,68 @@ def _axes(ax, figsize):
         return ax.figure, ax, False
     fig = _figure(figsize)
     return fig, fig.add_subplot(), True
+
+
+#: Refinement around each exact root: points at ω_r·(1 ± s·δ) for these s, with
+#: δ the root's relative half-width ζ clipped to [REFINE_WIDTH[0], REFINE_WIDTH[1]].
+REFINE_STEPS = (0.02, 0.1, 0.3, 1.0, 3.0)
+REFINE_WIDTH = (1e-3, 0.02)
+#: Labels of roots closer than this fraction of the axis width go on different rows.
+LABEL_GAP = 0.08
+
+def _refined(result, resonances):
+    """(ω, K, flags, response) of ``result`` with exact points added around each root.
+
+    The added points are evaluated by the circuit itself (:func:`mechcirc.sweep.sweep`
+    with the sweep's method), so a close resonance/anti-resonance pair that the
+    grid steps over is drawn through; without a circuit (or roots) the sweep as is.
+    """
+    import numpy as np
+
+    force_drive = getattr(result.drive, "kind", "velocity") == "force"
+    omega, K, flags = result.omega, result.K, result.flags
+    R = result.v0 if force_drive else result.Q0
+    circuit = getattr(result, "circuit", None)
+    if circuit is None or not len(resonances) or omega.size < 2:
+        return omega, K, flags, R
+    lo, hi = float(np.min(omega)), float(np.max(omega))
+    steps = np.array(REFINE_STEPS)
+    new = []
+    for r in resonances:
+        w = r.omega_d or r.omega
+        d = min(max(r.zeta, REFINE_WIDTH[0]), REFINE_WIDTH[1])
+        new.append(w * (1 + d * np.concatenate([-steps[::-1], steps])))
+    new = np.unique(np.concatenate(new))
+    new = new[(new > lo) & (new < hi) & ~np.isin(new, omega)]
+    if not new.size:
+        return omega, K, flags, R
+    from .sweep import sweep
+
+    extra = sweep(circuit, new, method=result.method)
+    order = np.argsort(np.concatenate([omega, new]), kind="stable")
+    return tuple(np.concatenate([a, b])[order] for a, b in
+                 ((omega, new), (K, extra.K), (flags, extra.flags),
+                  (R, extra.v0 if force_drive else extra.Q0)))
+
+
+def _label_resonances(ax, resonances, per_unit: float) -> None:
+    """Each root's frequency written at the top of ``ax``, on the highest row where
+    it stands at least :data:`LABEL_GAP` of the axis width from that row's last
+    label, so the labels of a close pair never overlap."""
+    import numpy as np
+    from matplotlib.transforms import blended_transform_factory
+
+    trans = blended_transform_factory(ax.transData, ax.transAxes)
+    scale = np.log if ax.get_xscale() == "log" else (lambda v: v)
+    lo, hi = (scale(v) for v in ax.get_xlim())
+    last = []                                   # per row: position of its last label
+    for w in sorted((r.omega_d or r.omega) / per_unit for r in resonances):
+        pos = (scale(w) - lo) / (hi - lo) if w > 0 and hi != lo else 0.0
+        row = next((i for i, p in enumerate(last) if pos - p >= LABEL_GAP), len(last))
+        last[row:row + 1] = [pos]
+        ax.text(w, 0.96 - 0.09 * row, f"{w:.5g}", transform=trans, ha="center", va="top",
+                fontsize="x-small", color="0.3",
+                bbox={"boxstyle": "round,pad=0.15", "fc": "white", "ec": "none", "alpha": 0.8})
 
 
 def _mark_resonances(axes, resonances, legend_ax, per_unit: float = 1.0):
@@ -73,7 +135,7 @@ def _mark_peak(ax, peak, unit: str = "rad/s", force_unit: str = "N") -> None:
 
 
 def plot_sweep(result, title: str | None = None, resonances=(), peak=None, *, ax=None,
-               fig=None, unit: str = "rad/s", extra=None):
+               fig=None, unit: str = "rad/s", extra=None, refine: bool = True):
     """Bode-style |K| and arg K [deg], and the drive's response, against frequency.
 
     The third panel is what the drive does not prescribe: |Q0| for a
@@ -87,6 +149,14 @@ def plot_sweep(result, title: str | None = None, resonances=(), peak=None, *, ax
     :func:`mechcirc.sweep.peak`) marks the exact maximum of |Q0|, or ∞ at each
     undamped resonance.
 
+    Around each root passed in ``resonances`` the curves are refined: exact
+    points (evaluated by the sweep's circuit with its method) are added at
+    ω_r·(1 ± s·δ), s in :data:`REFINE_STEPS`, δ the root's damping ratio
+    clipped to :data:`REFINE_WIDTH`, so the phase panel resolves a close
+    resonance/anti-resonance pair the grid steps over.  Each root's frequency
+    is written at the top of the |K| panel, the labels of roots closer than
+    :data:`LABEL_GAP` of the axis width on different rows.
+
     Parameters
     ----------
     ax : matplotlib Axes, optional
@@ -98,7 +168,11 @@ def plot_sweep(result, title: str | None = None, resonances=(), peak=None, *, ax
         Unit of the frequency axis: ω, f = ω/2π or n = 60·ω/2π.
     extra : dict, optional
         More panels below: y-axis label -> real array over the sweep's points
-        (e.g. ``{"|v(B)| [m/s]": abs(result.node_velocity("B"))}``).
+        (e.g. ``{"|v(B)| [m/s]": abs(result.node_velocity("B"))}``), drawn on
+        the sweep's own points.
+    refine : bool
+        Add the exact points around the roots (default); False draws the
+        sweep's points only.
 
     Returns
     -------
@@ -111,17 +185,19 @@ def plot_sweep(result, title: str | None = None, resonances=(), peak=None, *, ax
 
     per_unit = FREQUENCY_UNITS[unit][1]
     xlabel = {"rad/s": "ω [rad/s]", "Hz": "f [Hz]", "rpm": "n [rpm]"}[unit]
-    omega = in_unit(result.omega, unit)
     units = units_of(getattr(result, "drive", None))
-    positive = omega > 0
     force_drive = getattr(result.drive, "kind", "velocity") == "force"
+    w, K, flags, R = _refined(result, resonances if refine else ())
+    omega = in_unit(w, unit)
+    positive = omega > 0
     with np.errstate(all="ignore"):
-        absK = np.abs(result.K)
-        absR = np.abs(result.v0 if force_drive else result.Q0)
-        phase = np.degrees(np.angle(result.K))
+        absK = np.abs(K)
+        absR = np.abs(R)
+        phase = np.degrees(np.angle(K))
     if ax is not None:
-        _draw_K(ax, omega, absK, positive, result)
+        _draw_K(ax, omega, absK, positive, flags, units)
         _mark_resonances((ax,), resonances, ax, per_unit)
+        _label_resonances(ax, resonances, per_unit)
         ax.set_xlabel(xlabel)
         ax.grid(True, which="both", alpha=0.3)
         ax.set_title(title or f"{result.name}: kinematic characteristic K = v/Q")
@@ -131,16 +207,18 @@ def plot_sweep(result, title: str | None = None, resonances=(), peak=None, *, ax
     axes = fig.subplots(3 + len(extra), 1, sharex=True,
                         gridspec_kw={"height_ratios": [3, 2, 3] + [2] * len(extra)})
     ax_k, ax_p, ax_q = axes[:3]
-    _draw_K(ax_k, omega, absK, positive, result)
+    _draw_K(ax_k, omega, absK, positive, flags, units)
+    _label_resonances(ax_k, resonances, per_unit)
     ax_p.semilogx(omega[positive], phase[positive], color="C2")
     ax_p.set_ylabel("arg K [deg]")
     ax_p.set_ylim(-190, 190)
     ax_p.set_yticks([-180, -90, 0, 90, 180])
     ax_q.loglog(omega[positive], absR[positive], color="C1")
     ax_q.set_ylabel(f"|v0| = |F0·K| [{units['v']}]" if force_drive else f"|Q0| [{units['Q']}]")
+    own = in_unit(result.omega, unit)
     for a, (label, values) in zip(axes[3:], extra.items()):
         with np.errstate(all="ignore"):
-            a.loglog(omega[positive], np.asarray(values)[positive], color="C4")
+            a.loglog(own[own > 0], np.asarray(values)[own > 0], color="C4")
         a.set_ylabel(label)
     axes[-1].set_xlabel(xlabel)
     _mark_resonances(tuple(axes), resonances, ax_q, per_unit)
@@ -155,17 +233,119 @@ def plot_sweep(result, title: str | None = None, resonances=(), peak=None, *, ax
     return fig
 
 
-def _draw_K(ax, omega, absK, positive, result):
+def _draw_K(ax, omega, absK, positive, flags, units):
     import numpy as np
 
     ax.loglog(omega[positive], absK[positive], color="C0")
-    from .circuit import units_of
-
-    ax.set_ylabel(f"|K| [{units_of(getattr(result, 'drive', None))['K']}]")
-    flagged = positive & (result.flags != 0) & np.isfinite(absK) & (absK > 0)
+    ax.set_ylabel(f"|K| [{units['K']}]")
+    flagged = positive & (flags != 0) & np.isfinite(absK) & (absK > 0)
     if flagged.any():
         ax.loglog(omega[flagged], absK[flagged], "x", color="C3", label="flagged point")
         ax.legend(loc="best", fontsize="small")
+
+
+#: Most clearance (backlash) panels of a transient plot, and most nodes drawn by default.
+MAX_CLEARANCE_PANELS, MAX_NODES = 4, 8
+
+
+def _known(kind: str, names, known) -> list:
+    """``names`` (checked against ``known``, a clear error naming them otherwise)."""
+    from .errors import MechcircError
+
+    names = list(names)
+    bad = [n for n in names if n not in known]
+    if bad:
+        raise MechcircError(f"unknown {kind} {bad[0]!r}; the transient has "
+                            f"{', '.join(known) or 'none'}")
+    return names
+
+
+def plot_transient(result, nodes=None, what: str = "x", elements=None, title: str | None = None,
+                   *, ax=None, fig=None):
+    """A transient (:class:`mechcirc.transient.TransientResult`) against time.
+
+    Panels: the displacement x (or, ``what="v"``, velocity) of ``nodes``
+    (default the first :data:`MAX_NODES`) in the drive's units (m or rad, m/s
+    or rad/s); the forces of ``elements`` (names; N or N·m) when given; and for
+    each spring with a clearance (at most :data:`MAX_CLEARANCE_PANELS`) its
+    deformation x(n1) − x(n2) with the band ±B/2 inside which it transmits
+    nothing and the contact phases (the spring's force is not 0) shaded.  The
+    title names the netlist and the drive.
+
+    Parameters
+    ----------
+    ax : matplotlib Axes, optional
+        Draw only the nodes' panel there and return it.
+    fig : matplotlib Figure, optional
+        Add the panels to this Figure (its axes are kept); a new one by default.
+
+    Returns
+    -------
+    The Axes given as ``ax``, or the Figure of the panels.
+    """
+    import numpy as np
+
+    if what not in ("x", "v") or (what == "v" and result.v is None):
+        from .errors import MechcircError
+
+        raise MechcircError(f"what={what!r}: expected 'x' or 'v' (v only when the transient "
+                            "kept velocities)")
+    u = result.units
+    names = _known("node", nodes, result.nodes) if nodes is not None \
+        else list(result.nodes)[:MAX_NODES]
+    forces = _known("element", elements or (), result.elements)
+    drive = (f"{result.drive_kind} drive {result.drive_name}" if result.drive_name
+             else "no drive")
+    title = title or f"{result.name}: transient, {drive}"
+    t = result.time
+
+    def nodes_panel(a):
+        data = result.x if what == "x" else result.v
+        for n in names:
+            a.plot(t, data[:, result.nodes.index(n)], label=f"{what}({n})")
+        a.set_ylabel(f"displacement x [{u['x']}]" if what == "x"
+                     else f"velocity v [{u['v']}]")
+        if names:
+            a.legend(loc="best", fontsize="small")
+
+    if ax is not None:
+        nodes_panel(ax)
+        ax.set_xlabel("t [s]")
+        ax.set_title(title)
+        ax.grid(True, alpha=0.3)
+        return ax
+    gaps = list(result.clearances.items())[:MAX_CLEARANCE_PANELS]
+    n = 1 + bool(forces) + len(gaps)
+    fig = fig if fig is not None else _figure((8, 3 + 2.2 * n))
+    axes = np.atleast_1d(fig.subplots(n, 1, sharex=True, squeeze=False)[:, 0])
+    nodes_panel(axes[0])
+    if forces:
+        for e in forces:
+            axes[1].plot(t, result.force[:, result.elements.index(e)], label=f"F({e})")
+        word = "moment" if u["Q"] == "N·m" else "force"
+        axes[1].set_ylabel(f"element {word} [{u['Q']}]")
+        axes[1].legend(loc="best", fontsize="small")
+    index = {name: i for i, name in enumerate(result.nodes)}
+    for a, (name, (n1, n2, B)) in zip(axes[1 + bool(forces):], gaps):
+        e = sum(sign * result.x[:, index[m]] for sign, m in ((1, n1), (-1, n2)) if m in index)
+        e = np.broadcast_to(e, t.shape)
+        a.plot(t, e, color="C0", label=f"x({n1}) − x({n2})")
+        for y in (B / 2, -B / 2):
+            a.axhline(y, color="C3", lw=0.8, ls="--",
+                      label=f"clearance ±B/2 = ±{B / 2:.4g} {u['x']}" if y > 0 else None)
+        if name in result.elements:
+            contact = result.force[:, result.elements.index(name)] != 0
+            a.fill_between(t, 0, 1, where=contact, step="mid", color="C1", alpha=0.15,
+                           transform=a.get_xaxis_transform(), label="contact")
+        a.set_ylabel(f"deformation {name} [{u['x']}]")
+        a.legend(loc="best", fontsize="small")
+    axes[-1].set_xlabel("t [s]")
+    for a in axes:
+        a.grid(True, alpha=0.3)
+    fig.suptitle(title)
+    if len(fig.axes) == n:              # a layout of ours only, not of the caller's axes
+        fig.tight_layout()
+    return fig
 
 
 #: Colour of each element kind in force plots (bars and legend swatches alike).

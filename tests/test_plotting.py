@@ -23,7 +23,7 @@ def stb_sweep():
 
 def test_bode_panels_draw_K_phase_and_Q0(stb_sweep):
     c, s, found = stb_sweep
-    fig = plot_sweep(s, resonances=found)
+    fig = plot_sweep(s, resonances=found, refine=False)     # the sweep's own points
     ax_k, ax_p, ax_q = fig.axes
     assert [ax.get_ylabel() for ax in fig.axes] == ["|K| [m/(N·s)]", "arg K [deg]", "|Q0| [N]"]
     assert ax_q.get_xlabel() == "ω [rad/s]"
@@ -92,7 +92,7 @@ def _axes():
 def test_plot_sweep_on_a_given_axes(stb_sweep):
     c, s, found = stb_sweep
     fig, ax = _axes()
-    assert plot_sweep(s, ax=ax, resonances=found) is ax
+    assert plot_sweep(s, ax=ax, resonances=found, refine=False) is ax
     np.testing.assert_array_equal(ax.lines[0].get_ydata(), np.abs(s.K))
     marks = sorted(line.get_xdata()[0] for line in ax.lines[1:]
                    if len(set(line.get_xdata())) == 1)
@@ -223,3 +223,112 @@ def test_sweep_plot_marks_resonances_by_default():
     xs = sorted(float(np.atleast_1d(ln.get_xdata())[0]) for ln in marked.lines[len(bare.lines):])
     assert len(marked.lines) - len(bare.lines) == len(inband)
     assert xs == pytest.approx(sorted(inband), rel=1e-12)
+
+
+def test_sweep_plot_is_refined_around_the_exact_roots(stb_sweep):
+    """stb_heald's close pair 706.45 / 709.55 rad/s falls between two grid points
+    (2.3 % apart): the plotted curve gets points within 1e-3 of every root, and the
+    added points are the circuit's K (checked against the second solver, nodal)."""
+    c, s, found = stb_sweep
+    fig = plot_sweep(s, resonances=found)
+    x, phase = fig.axes[1].lines[0].get_data()
+    for r in found:
+        assert np.min(np.abs(x / r.omega - 1)) < 1e-3, r
+        assert np.min(np.abs(s.omega / r.omega - 1)) > 1e-3      # the grid alone has none
+    added = ~np.isin(x, s.omega)
+    assert added.sum() >= 2 * len(found)
+    nodal = c.sweep(x[added], method="nodal")
+    np.testing.assert_allclose(fig.axes[0].lines[0].get_ydata()[added], np.abs(nodal.K),
+                               rtol=1e-9)
+    np.testing.assert_allclose(phase[added], np.degrees(np.angle(nodal.K)), atol=1e-6)
+    # the pair is resolved: K (undamped, imaginary) changes sign at the zero and back at
+    # the pole, so arg K is ±90° inside the pair and ∓90° on both sides of it; the grid
+    # has no point inside it, the plotted curve several
+    lo, hi = sorted(r.omega for r in found if 700 < r.omega < 720)
+    assert not ((s.omega > lo) & (s.omega < hi)).any()
+    inside, below, above = (x > lo) & (x < hi), (x < lo) & (x > 700), (x > hi) & (x < 720)
+    assert inside.sum() >= 4
+    assert np.ptp(phase[inside]) < 1e-6 and abs(phase[inside][0]) == pytest.approx(90)
+    assert np.all(np.abs(phase[below] - phase[inside][0]) == pytest.approx(180))
+    assert np.all(np.abs(phase[above] - phase[inside][0]) == pytest.approx(180))
+
+
+def test_close_roots_get_labels_at_different_heights(stb_sweep):
+    _, s, found = stb_sweep
+    for where in (plot_sweep(s, resonances=found).axes[0],
+                  plot_sweep(s, ax=_axes()[1], resonances=found)):
+        labels = {round(float(t.get_text())): t.get_position()[1] for t in where.texts}
+        assert set(labels) == {round(r.omega_d) for r in found}
+        assert labels[706] != labels[710]                  # 0.44 % apart: staggered
+        assert labels[3641] == labels[706]                 # far from any other: top row
+        # on one row, labels stand ≥ 8 % of the (log) axis width apart: they do not overlap
+        span = np.log(np.divide(*where.get_xlim()[::-1]))
+        rows = {}
+        for t in where.texts:
+            rows.setdefault(t.get_position()[1], []).append(np.log(t.get_position()[0]))
+        for xs in rows.values():
+            assert np.all(np.diff(sorted(xs)) >= 0.08 * span)
+
+
+@pytest.fixture(scope="module")
+def msl_transient():
+    from mechcirc.transient import transient
+
+    return transient(mechcirc.load(REPO / "examples/msl_backlash.mcir"), 1.0, 1e-3)
+
+
+def _hlines(ax):
+    """y of the horizontal lines drawn across ``ax`` (axhline: x from 0 to 1 in axes units)."""
+    return sorted(float(line.get_ydata()[0]) for line in ax.lines
+                  if list(line.get_xdata()) == [0, 1] and len(set(line.get_ydata())) == 1)
+
+
+def test_transient_plot_units_forces_and_clearance_band(msl_transient):
+    """msl_backlash: a torque drive on inertias, total backlash 45° of spring eb."""
+    r = msl_transient
+    fig = r.plot(elements=["eb", "sd"])
+    ax_x, ax_f, ax_e = fig.axes
+    assert ax_x.get_ylabel() == "displacement x [rad]"
+    assert ax_f.get_ylabel() == "element moment [N·m]"
+    assert ax_e.get_ylabel() == "deformation eb [rad]" and ax_e.get_xlabel() == "t [s]"
+    assert "msl_backlash" in fig._suptitle.get_text() and "drive T" in fig._suptitle.get_text()
+    np.testing.assert_array_equal(ax_f.lines[1].get_ydata(), r.element_force("sd"))
+    # the band ±B/2 with B = 45° from the netlist, in the panel's data coordinates
+    assert _hlines(ax_e) == pytest.approx([-np.pi / 8, np.pi / 8], rel=1e-15)
+    # deformation of eb (phi to ground) is x(phi)
+    np.testing.assert_array_equal(ax_e.lines[0].get_ydata(), r.node("phi")[0])
+    # contact phases shaded: the spans where |x(phi)| > B/2, a few of them over 1 s
+    (shade,) = ax_e.collections
+    assert shade.get_label() == "contact"
+    inside = np.abs(r.node("phi")[0]) > np.pi / 8
+    starts = np.count_nonzero(np.diff(inside.astype(int)) == 1) + inside[0]
+    assert len(shade.get_paths()) == starts >= 5
+
+
+def test_transient_plot_keeps_the_callers_axes_and_names_units(msl_transient):
+    from matplotlib.figure import Figure
+
+    fig = Figure()
+    mine = fig.add_subplot(3, 1, 1)
+    mine.plot([0, 1], [0, 1])
+    assert msl_transient.plot(fig=fig) is fig
+    assert mine in fig.axes and len(mine.lines) == 1 and len(fig.axes) == 3
+    _, ax = _axes()
+    assert msl_transient.plot(ax=ax, what="v") is ax
+    assert ax.get_ylabel() == "velocity v [rad/s]" and "drive T" in ax.get_title()
+    # a translational netlist says m
+    from mechcirc.transient import transient
+
+    c = mechcirc.parse("drive F a 0 force=1\nspring k a 0 100\nmass m a 0 1\n")
+    lin = transient(c, 0.1, 1e-3, "step")
+    fig = lin.plot(elements=["k"])
+    assert [a.get_ylabel() for a in fig.axes] == ["displacement x [m]", "element force [N]"]
+
+
+def test_transient_plot_refuses_an_unknown_name(msl_transient):
+    from mechcirc.errors import MechcircError
+
+    with pytest.raises(MechcircError, match="unknown element 'nope'.*J1, eb"):
+        msl_transient.plot(elements=["nope"])
+    with pytest.raises(MechcircError, match="unknown node 'q'"):
+        msl_transient.plot(nodes=["q"])

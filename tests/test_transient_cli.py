@@ -87,6 +87,21 @@ def test_transient_outputs_csv_and_plot(tmp_path, capsys):
     assert "Dormand-Prince" in out
 
 
+def test_transient_plot_element_panel(tmp_path, capsys):
+    png = tmp_path / "e.png"
+    net = REPO / "examples/msl_backlash.mcir"
+    status, _, err = run(["transient", net, "--t-end", "0.1", "--dt", "1e-3", "--plot", png,
+                          "--element", "eb", "--element", "sd"], capsys)
+    assert status == 0, err
+    assert png.read_bytes()[:4] == b"\x89PNG"
+    bad = tmp_path / "bad.png"
+    status, _, err = run(["transient", net, "--t-end", "0.1", "--plot", bad,
+                          "--element", "nope"], capsys)
+    assert status == 2 and "unknown element 'nope'" in err and not bad.exists()
+    status, _, err = run(["transient", net, "--t-end", "0.1", "--element", "eb"], capsys)
+    assert status == 2 and "--plot" in err
+
+
 def test_transient_drive_waveforms_and_json_drive_key(tmp_path, capsys):
     net = tmp_path / "v.mcir"
     net.write_text("drive V b 0 velocity=0.2\nspring k b a 900\nmass m a 0 4\n")

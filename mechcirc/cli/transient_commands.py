@@ -38,7 +38,11 @@ def register(sub) -> None:
                    help="relative tolerance with clearances, 1e-12 to 0.1 (default 1e-10; "
                         "the absolute one is TOL x each state's peak)")
     p.add_argument("-o", "--output", metavar="CSV", help="write the time series as CSV")
-    p.add_argument("--plot", metavar="IMAGE", help="plot node displacements")
+    p.add_argument("--plot", metavar="IMAGE",
+                   help="plot node displacements, each clearance's deformation with its "
+                        "band ±B/2 and contact phases, and the --element forces")
+    p.add_argument("--element", action="append", metavar="NAME",
+                   help="with --plot: a panel of this element's force (repeatable)")
     p.add_argument("--json", action="store_true", help="print one JSON document")
     p.set_defaults(func=cmd_transient)
 
@@ -66,19 +70,17 @@ def cmd_transient(args) -> int:
     circuit = load(args.file, require_drive=False)
     result = transient(circuit, args.t_end, args.dt, args.drive, amplitude=args.amplitude,
                        rtol=args.rtol)
+    if args.element and not args.plot:
+        from ..errors import MechcircError
+
+        raise MechcircError("--element NAME draws a panel of the plot: give --plot IMAGE too")
+    fig = result.plot(elements=args.element) if args.plot else None   # names checked here
     with OutputSet() as out:
         if args.output:
             with open(out.path(args.output), "w", encoding="utf-8") as fh:
                 result.write_csv(fh)
-        if args.plot:
-            import matplotlib.pyplot as plt
-
-            fig, ax = plt.subplots(figsize=(8, 4.5))
-            try:
-                result.plot(ax=ax)
-                save_figure(fig, args.plot, into=out.path(args.plot))
-            finally:
-                plt.close(fig)
+        if fig is not None:
+            save_figure(fig, args.plot, into=out.path(args.plot))
     if args.json:
         print_json(result.to_json())
         return 0

@@ -34,7 +34,7 @@ from typing import Callable
 import numpy as np
 import scipy.linalg as la
 
-from ..circuit import Circuit
+from ..circuit import Circuit, units_of
 from ..errors import MechcircError
 from .model import StateSpace, backlash_elements, state_space
 
@@ -153,7 +153,10 @@ class TransientResult:
     ``elements`` order; ``drive_force`` (velocity drive) or ``drive_velocity``
     (force drive) [nt] or None; ``drive`` the drive's value u(t) [nt] (None
     without a drive); ``error`` an estimate of the largest error of ``x``
-    [same unit] and ``notes`` what the run had to say.
+    [same unit] and ``notes`` what the run had to say.  ``drive_name``, ``units``
+    (:func:`mechcirc.circuit.units_of` of the drive: m or rad, N or N·m, ...)
+    and ``clearances`` (spring name -> (n1, n2, total clearance B)) serve the
+    labels and :meth:`plot`.
     """
 
     time: np.ndarray
@@ -171,6 +174,9 @@ class TransientResult:
     method: str
     notes: list
     name: str = "circuit"
+    drive_name: str | None = None
+    units: dict = field(default_factory=lambda: units_of(None))
+    clearances: dict = field(default_factory=dict)
 
     def node(self, name: str) -> tuple[np.ndarray, np.ndarray]:
         """(x, v) of node ``name``."""
@@ -225,23 +231,14 @@ class TransientResult:
         data = np.column_stack(cols)
         np.savetxt(fh, data, delimiter=",", fmt="%.12g")
 
-    def plot(self, ax=None, nodes=None, what: str = "x"):
-        """Plot x (or v) of ``nodes`` (default all, at most 8) against time; returns the axes."""
-        if ax is None:
-            import matplotlib.pyplot as plt
+    def plot(self, ax=None, nodes=None, what: str = "x", *, elements=None, fig=None,
+             title: str | None = None):
+        """Plot this transient: :func:`mechcirc.plotting.plot_transient` (``ax=`` the
+        nodes' panel only, else the panels on ``fig`` or a new Figure); returns what
+        it drew on."""
+        from ..plotting import plot_transient
 
-            _, ax = plt.subplots(figsize=(8, 4.5))
-        names = list(nodes) if nodes is not None else list(self.nodes)[:8]
-        data = self.x if what == "x" else self.v
-        for n in names:
-            ax.plot(self.time, data[:, self.nodes.index(n)], label=f"{what}({n})")
-        ax.set_xlabel("t [s]")
-        ax.set_ylabel("displacement" if what == "x" else "velocity")
-        ax.set_title(f"{self.name}: transient")
-        ax.grid(True, alpha=0.3)
-        if names:
-            ax.legend(loc="best", fontsize="small")
-        return ax
+        return plot_transient(self, nodes, what, elements, title, ax=ax, fig=fig)
 
 
 def _grid(t_end: float, dt: float | None, waveform: Waveform) -> np.ndarray:
@@ -1011,7 +1008,11 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes,
                            dv=dvm, drive_kind=ss.kind,
                            drive=u_true if ss.kind is not None else None,
                            drive_force=drive_force, drive_velocity=drive_velocity,
-                           error=err_total, method=method, notes=notes, name=circuit.name)
+                           error=err_total, method=method, notes=notes, name=circuit.name,
+                           drive_name=circuit.drive.name if circuit.drive is not None else None,
+                           units=units_of(circuit.drive),
+                           clearances={e.name: (e.n1, e.n2, e.backlash)
+                                       for e, _ in backlash_elements(circuit)})
 
 
 def _law_forces(spring, comp, e, w):
