@@ -71,9 +71,7 @@ def _refined(result, resonances):
     new = new[(new > lo) & (new < hi) & ~np.isin(new, omega)]
     if not new.size:
         return omega, K, flags, R
-    from .sweep import sweep
-
-    extra = sweep(circuit, new, method=result.method)
+    extra = circuit.sweep(new, method=result.method)      # the circuit's own delegate
     order = np.argsort(np.concatenate([omega, new]), kind="stable")
     return tuple(np.concatenate([a, b])[order] for a, b in
                  ((omega, new), (K, extra.K), (flags, extra.flags),

@@ -135,12 +135,14 @@ def test_data_classes_import_nothing_above_them():
 
 def test_delegates_are_one_call_and_listed():
     """The upward edges left out above are exactly the analysis methods of Circuit,
-    Sweep.to_skrf and PeriodicResult.plot (a new one is a decision, to be added here)."""
+    Sweep.to_skrf, PeriodicResult.plot and TransientResult.plot (a new one is a decision, to be added here)."""
     g = import_graph()
     delegates = {e for e in g.edges if g.edges[e]["delegate"]}
     assert delegates == {("mechcirc.circuit", f"mechcirc.{m}") for m in
                          ("reduction", "nodal", "sweep", "resonances", "modes", "periodic", "interop.skrf",
                           "interop.formula")} | {("mechcirc.sweep", "mechcirc.interop.skrf"),
-                                                   ("mechcirc.periodic", "mechcirc.plotting")}
+                                                   ("mechcirc.periodic", "mechcirc.plotting"),
+                                                   ("mechcirc.transient.simulate",
+                                                    "mechcirc.plotting")}
     assert not _is_delegate(ast.parse("def f(self):\n    from .x import g\n    return h(self)\n")
                             .body[0], ast.ClassDef("C", [], [], [], []))
