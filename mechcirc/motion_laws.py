@@ -329,10 +329,16 @@ def cam_cycle(law_name: str, rise: float, dwell: float, ret: float, stroke: floa
     if not (math.isfinite(stroke) and stroke != 0):
         raise ValueError(f"stroke must be a finite nonzero number, got {stroke!r}")
     b1, d1, b2 = (math.radians(v) for v in (rise, dwell, ret))
-    pieces = _piece_map(_law_pieces(law_name), 0.0, b1, stroke, True)
-    if d1 > 0:
-        pieces.append((b1, (stroke,) + (0.0,) * (_DEG - 1), (0.0, 0.0, 0.0)))
-    pieces += _piece_map(_law_pieces(ret_law), b1 + d1, b2, stroke, False)
+    try:        # a rise of 1e-320 degrees: 1/β⁵ is not a float64
+        pieces = _piece_map(_law_pieces(law_name), 0.0, b1, stroke, True)
+        if d1 > 0:
+            pieces.append((b1, (stroke,) + (0.0,) * (_DEG - 1), (0.0, 0.0, 0.0)))
+        pieces += _piece_map(_law_pieces(ret_law), b1 + d1, b2, stroke, False)
+    except (ZeroDivisionError, OverflowError):
+        pieces = None
+    if pieces is None or not all(map(math.isfinite, (c for p in pieces for c in p[1] + p[2]))):
+        raise ValueError(f"rise={rise:g} or return={ret:g} degrees is too short for a lift of "
+                         f"{stroke:g}: the motion's derivatives are not finite float64 numbers")
     if b1 + d1 + b2 < _TAU * (1 - 1e-12):
         pieces.append((b1 + d1 + b2, (0.0,) * _DEG, (0.0, 0.0, 0.0)))
     spec = (f"motion={law_name} rise={float(rise)!r} dwell={float(dwell)!r} "
