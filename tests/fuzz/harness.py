@@ -892,7 +892,8 @@ def round_argv(rng: random.Random, kind: str, workdir: Path, seeds: dict[str, st
         if rng.random() < 0.6:
             argv += ["--rpm", _num(rng, rng.choice(["60", "600", "3000"]), 1 - bad)]
         else:
-            argv += ["--rpm-min", _num(rng, "100", 1 - bad), "--rpm-max", _num(rng, "1200", 1 - bad)]
+            argv += ["--rpm-min", _num(rng, "100", 1 - bad), "--rpm-max", _num(rng, "1200", 1 - bad),
+                     "--points", _num(rng, "12", 1 - bad)]      # the default 200 takes seconds
         argv += _opts(rng, [("--points", ["5", "20", "0", "1", "-3", "2", "abc", "1000000000"]),
                             ("--angles", ["36", "360", "0", "1", "nan", "1000000000"]),
                             ("--tol", ["1e-4", "1e-12", "0", "-1", "nan", "1", "1e-300"]),
