@@ -801,6 +801,8 @@ def motion_table(rng: random.Random) -> bytes:
     header = ["angle_deg", "displacement"]
     for _ in range(rng.randint(0, 3)):
         op = rng.randrange(9)
+        if not rows:                                     # emptied by an earlier edit
+            break
         if op == 0 and len(rows) > 2:                    # unsorted
             i, j = rng.sample(range(len(rows)), 2)
             rows[i], rows[j] = rows[j], rows[i]
@@ -831,7 +833,7 @@ def motion_table(rng: random.Random) -> bytes:
                 del rows[k]
         elif op == 7:                                    # scale the displacements wildly
             f = rng.choice([1e300, 1e-300, 1e-320, -1.0, 0.0])
-            rows = [[r[0]] + [v * f if isinstance(v, float) else v for v in r[1:]]
+            rows = [r[:1] + [v * f if isinstance(v, float) else v for v in r[1:]]
                     for r in rows]
         else:
             rows = rows[:rng.randint(0, 2)]
