@@ -383,7 +383,13 @@ def motion_table(angle_deg, displacement, spec: str = "motion=<table>") -> Motio
     theta = np.radians(ang - ang[0])
     theta[-1] = _TAU
     x[-1] = x[0]
-    spl = _spline(theta, x)
+    try:
+        spl = _spline(theta, x)
+    except ValueError:                         # scipy: the slopes overflowed
+        spl = None
+    if spl is None or not np.all(np.isfinite(spl.c)):
+        raise ValueError("the spline through the table is not finite in float64 "
+                         "(displacements too large)")
     c = spl.c                                          # (4, n−1), highest power first
     poly = tuple((c[3, i], c[2, i], c[1, i], c[0, i], 0.0, 0.0) for i in range(c.shape[1]))
     error, coarse = math.inf, None
@@ -484,5 +490,11 @@ def read_motion_table(path: str | os.PathLike, spec: str | None = None) -> Motio
                            f"{tol:.3g} = {PERIODIC_TOLERANCE:g} of the range)", source,
                            last[2], last[3][header[1]],
                            "the same displacement at both ends of the revolution")
-    m = motion_table([r[0] for r in rows], x, spec or f"motion={source}")
+    try:
+        m = motion_table([r[0] for r in rows], x, spec or f"motion={source}")
+    except ValueError as exc:                  # 1e308 m: the slopes overflow
+        big = max(rows, key=lambda r: abs(r[1]))
+        raise NetlistError(f"{exc}; the largest displacement is {big[1]:g}", source, big[2],
+                           big[3][header[1]], "displacements whose slopes are finite "
+                           "float64 numbers") from None
     return dataclasses.replace(m, path=source)
