@@ -431,7 +431,11 @@ def read_motion_table(path: str | os.PathLike, spec: str | None = None) -> Motio
     for lineno, line in enumerate(split_lines(text), start=1):
         if not line.strip() or line.lstrip().startswith("#"):
             continue
-        cells = next(csv.reader([line]))
+        try:
+            cells = next(csv.reader([line]))
+        except csv.Error as exc:                   # a lone carriage return, a stray quote
+            raise NetlistError(f"not a CSV row ({exc})", source, lineno, 1,
+                               "comma-separated numbers") from None
         cols = []
         pos = 1
         for cell in cells:                           # 1-based column of each cell
