@@ -329,10 +329,16 @@ def cam_cycle(law_name: str, rise: float, dwell: float, ret: float, stroke: floa
     if not (math.isfinite(stroke) and stroke != 0):
         raise ValueError(f"stroke must be a finite nonzero number, got {stroke!r}")
     b1, d1, b2 = (math.radians(v) for v in (rise, dwell, ret))
-    pieces = _piece_map(_law_pieces(law_name), 0.0, b1, stroke, True)
-    if d1 > 0:
-        pieces.append((b1, (stroke,) + (0.0,) * (_DEG - 1), (0.0, 0.0, 0.0)))
-    pieces += _piece_map(_law_pieces(ret_law), b1 + d1, b2, stroke, False)
+    try:        # a rise of 1e-320 degrees: 1/β⁵ is not a float64
+        pieces = _piece_map(_law_pieces(law_name), 0.0, b1, stroke, True)
+        if d1 > 0:
+            pieces.append((b1, (stroke,) + (0.0,) * (_DEG - 1), (0.0, 0.0, 0.0)))
+        pieces += _piece_map(_law_pieces(ret_law), b1 + d1, b2, stroke, False)
+    except (ZeroDivisionError, OverflowError):
+        pieces = None
+    if pieces is None or not all(map(math.isfinite, (c for p in pieces for c in p[1] + p[2]))):
+        raise ValueError(f"rise={rise:g} or return={ret:g} degrees is too short for a lift of "
+                         f"{stroke:g}: the motion's derivatives are not finite float64 numbers")
     if b1 + d1 + b2 < _TAU * (1 - 1e-12):
         pieces.append((b1 + d1 + b2, (0.0,) * _DEG, (0.0, 0.0, 0.0)))
     spec = (f"motion={law_name} rise={float(rise)!r} dwell={float(dwell)!r} "
@@ -377,7 +383,13 @@ def motion_table(angle_deg, displacement, spec: str = "motion=<table>") -> Motio
     theta = np.radians(ang - ang[0])
     theta[-1] = _TAU
     x[-1] = x[0]
-    spl = _spline(theta, x)
+    try:
+        spl = _spline(theta, x)
+    except ValueError:                         # scipy: the slopes overflowed
+        spl = None
+    if spl is None or not np.all(np.isfinite(spl.c)):
+        raise ValueError("the spline through the table is not finite in float64 "
+                         "(displacements too large)")
     c = spl.c                                          # (4, n−1), highest power first
     poly = tuple((c[3, i], c[2, i], c[1, i], c[0, i], 0.0, 0.0) for i in range(c.shape[1]))
     error, coarse = math.inf, None
@@ -419,7 +431,11 @@ def read_motion_table(path: str | os.PathLike, spec: str | None = None) -> Motio
     for lineno, line in enumerate(split_lines(text), start=1):
         if not line.strip() or line.lstrip().startswith("#"):
             continue
-        cells = next(csv.reader([line]))
+        try:
+            cells = next(csv.reader([line]))
+        except csv.Error as exc:                   # a lone carriage return, a stray quote
+            raise NetlistError(f"not a CSV row ({exc})", source, lineno, 1,
+                               "comma-separated numbers") from None
         cols = []
         pos = 1
         for cell in cells:                           # 1-based column of each cell
@@ -478,5 +494,11 @@ def read_motion_table(path: str | os.PathLike, spec: str | None = None) -> Motio
                            f"{tol:.3g} = {PERIODIC_TOLERANCE:g} of the range)", source,
                            last[2], last[3][header[1]],
                            "the same displacement at both ends of the revolution")
-    m = motion_table([r[0] for r in rows], x, spec or f"motion={source}")
+    try:
+        m = motion_table([r[0] for r in rows], x, spec or f"motion={source}")
+    except ValueError as exc:                  # 1e308 m: the slopes overflow
+        big = max(rows, key=lambda r: abs(r[1]))
+        raise NetlistError(f"{exc}; the largest displacement is {big[1]:g}", source, big[2],
+                           big[3][header[1]], "displacements whose slopes are finite "
+                           "float64 numbers") from None
     return dataclasses.replace(m, path=source)

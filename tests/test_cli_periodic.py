@@ -97,3 +97,33 @@ def test_bad_tables_from_the_netlist(tmp_path, capsys, body, where, needle):
 def test_drive_without_motion(capsys):
     assert_user_error(["periodic", EXAMPLES / "drive.mcir", "--rpm", "600"], capsys,
                       "has no motion")
+
+
+@pytest.mark.parametrize("rise", ["1e-320", "5e-324"])
+def test_a_rise_too_short_for_float64_is_a_located_error(tmp_path, capsys, rise):
+    """Fuzz (issue 23): rise=1e-320 deg made 1/β² underflow to 0 — ZeroDivisionError, exit 1."""
+    text = Path(CAM).read_text().replace("rise=120", f"rise={rise}")
+    net = tmp_path / "short.mcir"
+    net.write_text(text)
+    col = text.splitlines()[2].index("rise=") + len("rise=") + 1      # at the value
+    assert_user_error(["periodic", net, "--rpm", "600"], capsys,
+                      f"short.mcir:3:{col}: error: rise=")
+    with pytest.raises(ValueError, match="too short"):
+        from mechcirc.motion_laws import cam_cycle
+
+        cam_cycle("polynomial_345", float(rise), 60, 120, 0.1)
+
+
+def test_a_table_too_large_for_float64_slopes_is_located(tmp_path, capsys):
+    """Fuzz (issue 23, seed 3004351): a displacement of 1e308 made scipy's spline raise
+    ValueError ('dydx must contain only finite values'), exit 1."""
+    lines = Path(CAM).parent.joinpath("lift.csv").read_text().splitlines()
+    k = next(i for i, ln in enumerate(lines) if ln.startswith("90,"))
+    lines[k] = "90,1e308"
+    (tmp_path / "lift.csv").write_text("\n".join(lines) + "\n")
+    net = tmp_path / "big.mcir"
+    net.write_text(Path(CAM).read_text().replace(
+        next(ln for ln in Path(CAM).read_text().splitlines() if ln.startswith("drive")),
+        "drive V0 T 0 motion=lift.csv"))
+    assert_user_error(["periodic", net, "--rpm", "600"], capsys,
+                      f"lift.csv:{k + 1}:4: error: the spline through the table is not finite")

@@ -195,3 +195,13 @@ def test_table_direct():
     x, _, _ = m.evaluate(np.radians([0, 90, 180, 270, 360]))
     assert np.allclose(x, [0, 1, 0, -1, 0], atol=1e-15)
     assert m.error == math.inf        # too few rows for an estimate
+
+
+def test_a_row_csv_cannot_split_is_a_located_error(tmp_path):
+    """Fuzz (issue 23, seed 3018541): a carriage return inside a row made csv raise
+    csv.Error ('new-line character seen in unquoted field'), exit 1."""
+    p = tmp_path / "lift.csv"
+    p.write_bytes(b"angle_deg,displacement\n0,0\n90,0.1\r2\n180,0\n270,0.1\n360,0\n")
+    with pytest.raises(NetlistError, match="not a CSV row") as info:
+        read_motion_table(p)
+    assert info.value.line == 3

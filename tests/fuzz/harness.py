@@ -750,3 +750,238 @@ def netlist_blowup_property(text: str) -> str:
         c = mechcirc.parse(text)
         c.sweep(np.geomspace(1.0, 1e4, 50)).flags
     return run_target(go, text, seconds=BLOWUP_SECONDS)
+
+
+# ---------------------------------------------------------------- this round's inputs (issue 23)
+#: The motion laws a netlist's ``drive ... motion=LAW`` and ``cam --law`` accept.
+MOTION_LAWS = ("harmonic", "cycloidal", "modified_sine", "modified_trapezoid", "polynomial_345")
+CAM_SEED = ROOT / "docs" / "examples" / "cam_drive.mcir"
+LIFT_SEED = ROOT / "docs" / "examples" / "lift.csv"
+
+#: Which input each ``round_argv`` kind builds: periodic drives (a law, a table),
+#: the cam command, resonances with modes and sensitivities, the sweep's
+#: sensitivity, node and element columns, a study's sample file, crosscheck.
+ROUND_KINDS = ("periodic_law", "periodic_table", "cam", "resonances", "sweep_sensitivity",
+               "study_sample", "crosscheck")
+
+_ROUND_NUMBERS = _WILD_NUMBERS + ["-5", "360", "361", "720", "1e-9", "abc", "", "1.5 rad",
+                                  "100 mm", "10 kg", "2 Hz", "0x10", "1_000", "+1", "1e-12"]
+
+
+def _num(rng: random.Random, sane: str, p_sane: float = 0.6) -> str:
+    """``sane`` most of the time, otherwise a bad, non-finite, huge or tiny number."""
+    return sane if rng.random() < p_sane else rng.choice(_ROUND_NUMBERS)
+
+
+def motion_drive_line(rng: random.Random) -> str:
+    """``drive V0 T 0 motion=LAW rise= dwell= return= stroke=`` with bad, missing or stray fields."""
+    law = rng.choice(MOTION_LAWS) if rng.random() < 0.9 else rng.choice(["bogus", "", "CYCLOIDAL"])
+    fields = [f"{key}={sane}" for key, sane in
+              (("rise", "120"), ("dwell", "60"), ("return", "120"), ("stroke", "100 mm"))
+              if rng.random() < 0.95]
+    if rng.random() < 0.5:                                   # one field made wrong at most
+        fields = [f.split("=")[0] + "=" + _num(rng, f.split("=", 1)[1], 0.0) if i == 0 else f
+                  for i, f in enumerate(rng.sample(fields, len(fields)))]
+    if rng.random() < 0.15:
+        fields.append(f"return_law={rng.choice(MOTION_LAWS + ('nope',))}")
+    if rng.random() < 0.15:          # stray or duplicated options
+        fields.append(rng.choice(["velocity=1", "force=1", "motion=cycloidal", "bogus=1",
+                                  "rise=10", "eta=2", "stroke=", "=", "motion=lift.csv"]))
+    rng.shuffle(fields)
+    return f"drive  V0  T 0 motion={law} " + " ".join(fields)
+
+
+def motion_table(rng: random.Random) -> bytes:
+    """A lift table (``angle_deg,displacement``) made wrong in one or more ways."""
+    if rng.random() < 0.05:
+        return binary_bytes(rng)
+    n = rng.choice([2, 3, 8, 37, 73])
+    rows = [[360.0 * i / (n - 1), 0.05 * (1 - math.cos(2 * math.pi * i / (n - 1)))]
+            for i in range(n)]
+    header = ["angle_deg", "displacement"]
+    for _ in range(rng.randint(0, 3)):
+        op = rng.randrange(9)
+        if not rows:                                     # emptied by an earlier edit
+            break
+        if op == 0 and len(rows) > 2:                    # unsorted
+            i, j = rng.sample(range(len(rows)), 2)
+            rows[i], rows[j] = rows[j], rows[i]
+        elif op == 1:                                    # duplicate angle
+            k = rng.randrange(len(rows))
+            rows.insert(k, list(rows[k]))
+        elif op == 2:                                    # a bad cell
+            row = rows[rng.randrange(len(rows))] if rows else []
+            if row:
+                row[rng.randrange(len(row))] = rng.choice(_ROUND_NUMBERS)
+        elif op == 3:                                    # missing or extra column
+            if rng.random() < 0.5:
+                c = rng.randrange(2)
+                header = [h for i, h in enumerate(header) if i != c]
+                rows = [[v for i, v in enumerate(r) if i != c] for r in rows]
+            else:
+                header.append(rng.choice(["extra", "angle_deg", ""]))
+                rows = [r + [1.0] for r in rows]
+        elif op == 4:                                    # header renamed, reordered or gone
+            header = rng.choice([["angle", "displacement"], header[::-1], [], ["a", "b"]])
+        elif op == 5:                                    # not one revolution / not closing
+            if rows and rows[-1]:
+                rows[-1][rng.randrange(len(rows[-1]))] = rng.choice([359.0, 720.0, 0.5, 1e300])
+        elif op == 6 and len(rows) > 1:                  # drop or truncate a row
+            k = rng.randrange(len(rows))
+            rows[k] = rows[k][:1] if rng.random() < 0.5 else rows[k] + [0]
+            if rng.random() < 0.5:
+                del rows[k]
+        elif op == 7:                                    # scale the displacements wildly
+            f = rng.choice([1e300, 1e-300, 1e-320, -1.0, 0.0])
+            rows = [r[:1] + [v * f if isinstance(v, float) else v for v in r[1:]]
+                    for r in rows]
+        else:
+            rows = rows[:rng.randint(0, 2)]
+    text = "# fuzzed lift\n" + ",".join(header) + "\n" + "".join(
+        ",".join(str(v) for v in r) + "\n" for r in rows)
+    if rng.random() < 0.2:
+        text = mutate(rng, text, [",", "\n", "nan", "#", "\"", " ", "1e999", ";"], max_ops=2)
+    return text.encode("utf-8", errors="surrogatepass")
+
+
+def round_files(workdir: Path) -> dict[str, str]:
+    """Write the unchanging seeds of :func:`round_argv` into ``workdir`` (once)."""
+    workdir.mkdir(parents=True, exist_ok=True)
+    (workdir / "lift_ok.csv").write_text(_read(LIFT_SEED))
+    (workdir / "stb.mcir").write_text(_read(NETLIST_SEEDS[-1]))
+    return {"stb": str(workdir / "stb.mcir"), "lift_ok": str(workdir / "lift_ok.csv")}
+
+
+def _cam_netlist(rng: random.Random, drive: str) -> str:
+    lines = _read(CAM_SEED).splitlines()
+    lines = [drive if ln.startswith("drive") else ln for ln in lines]
+    text = "\n".join(lines) + "\n"
+    return mutate(rng, text, NETLIST_TOKENS, max_ops=2) if rng.random() < 0.15 else text
+
+
+def _opts(rng: random.Random, options: list[tuple[str, list[str]]], p: float = 0.4,
+          bad: float = 0.4) -> list[str]:
+    """Each option with probability ``p``; its value the list's first (sane) one, or with
+    probability ``bad`` any of the list (most of them wrong)."""
+    argv = []
+    for name, values in options:
+        if rng.random() < p:
+            if values:
+                argv += [name, rng.choice(values) if rng.random() < bad else values[0]]
+            else:
+                argv.append(name)
+    return argv
+
+
+_STRAY = ["--bogus", "-x", "--", "--json", "--rpm", "--modes", "--sensitivity", "--law"]
+
+
+def round_argv(rng: random.Random, kind: str, workdir: Path, seeds: dict[str, str]) -> list[str]:
+    """A command line of this round's commands and inputs, files written into ``workdir``."""
+    W = str(workdir)
+    bad = rng.choice([0.0, 0.1, 0.4])        # share of wrong values: none, few, many
+    if kind in ("periodic_law", "periodic_table"):
+        if kind == "periodic_law":
+            drive = motion_drive_line(rng)
+        else:
+            (workdir / "lift.csv").write_bytes(motion_table(rng))
+            target = rng.choice(["lift.csv"] * 8 + ["lift_ok.csv", "missing.csv", "",
+                                                    "lift.csv extra=1", W, "/dev/null"])
+            drive = f"drive  V0  T 0 motion={target}"
+        (workdir / "periodic.mcir").write_text(_cam_netlist(rng, drive), encoding="utf-8",
+                                               errors="surrogatepass")
+        argv = ["periodic", W + "/periodic.mcir"]
+        if rng.random() < 0.6:
+            argv += ["--rpm", _num(rng, rng.choice(["60", "600", "3000"]), 1 - bad)]
+        else:
+            argv += ["--rpm-min", _num(rng, "100", 1 - bad), "--rpm-max", _num(rng, "1200", 1 - bad),
+                     "--points", _num(rng, "12", 1 - bad)]      # the default 200 takes seconds
+        argv += _opts(rng, [("--points", ["5", "20", "0", "1", "-3", "2", "abc", "1000000000"]),
+                            ("--angles", ["36", "360", "0", "1", "nan", "1000000000"]),
+                            ("--tol", ["1e-4", "1e-12", "0", "-1", "nan", "1", "1e-300"]),
+                            ("--harmonics", ["10", "1", "0", "-1", "1000000000", "x"]),
+                            ("--elements", ["k1", "all", "nope", "k1,m2", "", ",", "V0"]),
+                            ("--near", ["0.03", "0", "-1", "nan", "1e300"]),
+                            ("--method", ["auto", "sp", "nodal", "x"]),
+                            ("-o", [W + "/Q.csv", W + "/missing/Q.csv", W + "/periodic.mcir"]),
+                            ("--plot", [W + "/Q.png", W + "/Q.xyz"]), ("--json", [])], 0.25, bad)
+    elif kind == "cam":
+        follower = rng.choice(["roller", "flat", "oscillating"])
+        argv = ["cam", "--follower", follower, "--base-radius", _num(rng, "40", 1 - bad)]
+        argv += {"roller": ["--roller-radius", "10"], "flat": [],
+                 "oscillating": ["--roller-radius", "10", "--arm", "50", "--pivot", "60"]}[follower]
+        r = rng.random()
+        if r < 0.6:
+            argv += ["--law", rng.choice(MOTION_LAWS)]
+            argv += [a if a.startswith("-") else _num(rng, a, 1 - bad / 2) for a in
+                     ["--rise", "120", "--return", "120", "--stroke", "20"]]
+            argv += _opts(rng, [("--dwell", ["60", "0", "1e-320", "300", "nan"]),
+                                ("--low-dwell", ["60", "0", "100", "nan"]),
+                                ("--return-law", list(MOTION_LAWS) + ["x"])], 0.4, bad)
+        elif r < 0.95:
+            (workdir / "cam_lift.csv").write_bytes(motion_table(rng))
+            argv += ["--motion", rng.choice([W + "/cam_lift.csv"] * 4 + [seeds["lift_ok"]])
+                     if rng.random() > bad else rng.choice([W + "/none.csv", W, "/dev/null"])]
+            if follower == "oscillating":      # a table of metres read as degrees of the arm
+                argv += rng.choice([["--stroke", "20"], []])
+        else:
+            argv += ["--law", "cycloidal", "--motion", seeds["lift_ok"]]
+        argv += _opts(rng, [("--roller-radius", ["10", "0", "100", "-1", "1e-300"]),
+                            ("--offset", ["5", "-5", "1e6", "nan", "1e-300"]),
+                            ("--arm", ["50", "0", "1e-9", "inf", "1e50"]),
+                            ("--pivot", ["60", "1", "1e6", "-3", "1e-300"]),
+                            ("--pressure-limit", ["30", "90", "0", "91", "nan"]),
+                            ("--points", ["73", "8", "7", "721", "1000001", "x"]),
+                            ("-o", [W + "/profile.csv", W + "/missing/p.csv"]),
+                            ("--svg", [W + "/profile.svg", W + "/lift_ok.csv"]),
+                            ("--json", [])], 0.08, bad)
+    elif kind in ("resonances", "sweep_sensitivity", "crosscheck"):
+        (workdir / "mut.mcir").write_text(netlist_input(rng), encoding="utf-8",
+                                          errors="surrogatepass")
+        drive = motion_drive_line(rng) if rng.random() < 0.5 else "drive V0 T 0 velocity=0.1"
+        (workdir / "cam.mcir").write_text(_cam_netlist(rng, drive), encoding="utf-8",
+                                          errors="surrogatepass")
+        others = [seeds["stb"], W + "/mut.mcir", str(NETLIST_SEEDS[0]), W + "/nope.mcir"]
+        f = rng.choice([W + "/cam.mcir", str(CAM_SEED)] if rng.random() > bad else others)
+        if kind == "resonances":
+            argv = ["resonances", f] + _opts(rng, [("--modes", []), ("--sensitivity", [])], 0.7)
+            argv += _opts(rng, [("--omega-max", ["1e4", "0", "nan", "-1", "1e300", "1e-300"]),
+                                ("--unit", ["rad/s", "Hz", "rpm", "x"]), ("--json", [])], 0.3, bad)
+        elif kind == "sweep_sensitivity":
+            names = ["m2", "c2", "eta1", "etaB", "V0", "nope", "", "T", "A", "0", "m1", "k1"]
+            argv = ["sweep", f, "--omega-min", _num(rng, "10", 1 - bad),
+                    "--omega-max", _num(rng, "1e4", 1 - bad), "--points", _num(rng, "20", 1 - bad)]
+            argv += _opts(rng, [("--sensitivity", ["k1"] + names), ("--node", ["A"] + names),
+                                ("--element", ["c2"] + names), ("--node", ["T"] + names)],
+                          0.6, bad)
+            argv += _opts(rng, [("--unit", ["rpm", "rpm", "Hz", "rad/s", "x"]), ("--log", []),
+                                ("--method", ["auto", "sp", "nodal"]), ("--adaptive", []),
+                                ("-o", [W + "/s.csv", f]), ("--json", [])], 0.3, bad)
+        else:
+            argv = ["crosscheck", f] + _opts(rng, [("--omega-max", ["1e4", "0", "nan", "1e300"]),
+                                                   ("--json", [])], 0.3, bad)
+    else:                                                # study_sample
+        (workdir / "study").mkdir(exist_ok=True)
+        table = motion_table(rng).decode("utf-8", "replace")      # numbers made wrong ...
+        header = rng.choice(["eta1,eta3"] * 6 + ["eta1", "eta3,eta1", "eta1,nope", "eta1,eta1", "",
+                             "eta1,eta3,eta4", "1,2", "eta1;eta3"])
+        body = "\n".join(ln for ln in table.splitlines()[2:2 + rng.randint(0, 4)])
+        body = body.replace("360.0", "0.9").replace("0.0", "0.8")  # ... as lever ratios
+        (workdir / "study" / "designs.csv").write_text(header + "\n" + body + "\n",
+                                                       encoding="utf-8", errors="surrogatepass")
+        sample = rng.choice(["designs.csv"] * 20 + ["designs.txt", "missing.csv", "../study",
+                                                   "designs.parquet", "/etc/passwd", ""])
+        count = rng.choice(["2", "1", "0", "nan", '"x"'])
+        spec = (f'netlist = "{seeds["stb"]}"\nanalysis = "resonances"\nresonances = {count}\n'
+                f'\n[sample]\nfile = "{sample}"\n')
+        if rng.random() < 0.15:
+            spec += rng.choice(['method = "random"\n', "n = 3\n", "[grid]\neta1 = [1, 2]\n",
+                                "[sample.params]\neta1 = [0.5, 1]\n"])
+        if rng.random() < 0.1:
+            spec = mutate(rng, spec, TOML_TOKENS, max_ops=2)
+        (workdir / "study" / "spec.toml").write_text(spec, encoding="utf-8",
+                                                     errors="surrogatepass")
+        argv = ["study", W + "/study/spec.toml", "-o", W + "/study/out.csv", "--workers", "1"]
+    if rng.random() < 0.08:
+        argv.insert(rng.randrange(1, len(argv) + 1), rng.choice(_STRAY))
+    return argv

@@ -34,6 +34,10 @@ COUNTS = {"expression": 40_000, "netlist": 40_000, "linkage": 20_000, "cli": 3_0
 #: scene, study, Touchstone: hostile values, non-UTF-8, pickles, binary, line
 #: breakers) and parallel/series blow-ups.  ``--targets files blowup``.
 COUNTS.update({"files": 100_000, "blowup": 200})
+#: Issue 23: this round's commands and inputs (``harness.round_argv``): ``round`` cycles
+#: through periodic (law, table), cam, resonances, sweep --sensitivity and study sample
+#: files; ``round_crosscheck`` is crosscheck alone (a transient run per input).
+COUNTS.update({"round": 12_000, "round_crosscheck": 300})
 
 
 def run(target: str, n: int, first_seed: int, work: Path) -> dict:
@@ -43,6 +47,11 @@ def run(target: str, n: int, first_seed: int, work: Path) -> dict:
     counts = {"result": 0, "error": 0}
     failures = []
     files = h.cli_files(work, random.Random(first_seed)) if target == "cli" else None
+    if target.startswith("round"):
+        files = h.round_files(work / "round")
+        kinds = [k for k in h.ROUND_KINDS if k != "crosscheck"] if target == "round" \
+            else ["crosscheck"]
+    by_kind: dict = {}
     t0 = time.perf_counter()
     slowest = (0.0, None)
     for seed in range(first_seed, first_seed + n):
@@ -51,6 +60,15 @@ def run(target: str, n: int, first_seed: int, work: Path) -> dict:
         try:
             if target == "cli":
                 outcome = h.cli_property(h.cli_argv(rng, work, files))
+            elif target.startswith("round"):
+                kind = kinds[seed % len(kinds)]
+                by_kind.setdefault(kind, {"result": 0, "error": 0, "failures": 0})
+                try:
+                    outcome = h.cli_property(h.round_argv(rng, kind, work / "round", files))
+                except h.PropertyFailure:
+                    by_kind[kind]["failures"] += 1
+                    raise
+                by_kind[kind][outcome] += 1
             elif target == "files":
                 kind = h.FILE_KINDS[seed % len(h.FILE_KINDS)]
                 outcome = h.file_property(kind, h.file_input(rng, kind), work)
@@ -66,10 +84,13 @@ def run(target: str, n: int, first_seed: int, work: Path) -> dict:
         except h.PropertyFailure as exc:
             failures.append({"seed": seed, "failure": str(exc)[:500]})
         dt = time.perf_counter() - t1
+        if (seed - first_seed + 1) % (50 if target == "round_crosscheck" else 1000) == 0:
+            print(f"  {target}: {seed - first_seed + 1} inputs, {counts}, {len(failures)} "
+                  f"failures, {time.perf_counter() - t0:.0f} s {by_kind}", flush=True)
         if dt > slowest[0]:
             slowest = (dt, seed)
     return {"target": target, "inputs": n, "first_seed": first_seed, **counts,
-            "failures": failures, "seconds": round(time.perf_counter() - t0, 1),
+            "failures": failures, "by_kind": by_kind, "seconds": round(time.perf_counter() - t0, 1),
             "slowest_input_s": round(slowest[0], 3), "slowest_seed": slowest[1]}
 
 

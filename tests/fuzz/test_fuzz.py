@@ -5,7 +5,7 @@ run (≥ 100,000 inputs) is ``tests/fuzz/long_run.py`` and its numbers are in
 ``docs/reliability.md``.  By default each property runs a small share
 (:data:`BUDGET`) of its full count, so the suite stays quick;
 ``MECHCIRC_FUZZ_BUDGET=1 python -m pytest tests/fuzz`` runs the full counts
-(17,860 inputs).  Two kinds of input here, derandomised so that a failure
+(18,480 inputs).  Two kinds of input here, derandomised so that a failure
 reproduces:
 
 * hypothesis text strategies over the grammars' alphabets (shrunk to a
@@ -40,7 +40,7 @@ def _budget() -> float:
 
 
 #: Share of each property's full count run (environment variable MECHCIRC_FUZZ_BUDGET;
-#: default 0.05, i.e. 905 of the 17,860 inputs; 1 runs them all).
+#: default 0.05, i.e. 940 of the 18,480 inputs; 1 runs them all).
 BUDGET = _budget()
 
 
@@ -181,3 +181,42 @@ def test_long_run_seeds_of_huge_integers_in_scene_files(file_workdir, seed):
     and [simulate] numbers were an OverflowError; now located user errors."""
     kind = h.FILE_KINDS[seed % len(h.FILE_KINDS)]
     h.file_property(kind, h.file_input(random.Random(seed), kind), file_workdir)
+
+
+# ------------------------------------------------------------------ issue 23: this round's inputs
+@pytest.fixture(scope="module")
+def round_workdir(tmp_path_factory):
+    work = tmp_path_factory.mktemp("round")
+    return work, h.round_files(work)
+
+
+@pytest.mark.parametrize("kind", [k for k in h.ROUND_KINDS if k != "crosscheck"])
+@fast(100)
+@given(seed=seeds)
+def test_fuzz_this_rounds_commands(round_workdir, kind, seed):
+    """periodic (motion laws and tables), cam, resonances --modes --sensitivity, sweep
+    --sensitivity/--node/--element/--unit and study sample files: exit 0 or 2, never 1,
+    a traceback or a hang."""
+    work, files = round_workdir
+    h.cli_property(h.round_argv(random.Random(seed), kind, work, files))
+
+
+@fast(20)
+@given(seed=seeds)
+def test_fuzz_crosscheck_verdicts(round_workdir, seed):
+    """crosscheck runs transients (about a second each): fewer inputs; exit 3 is a verdict."""
+    work, files = round_workdir
+    h.cli_property(h.round_argv(random.Random(seed), "crosscheck", work, files))
+
+
+def test_round_generators_reach_results_and_errors(tmp_path):
+    """Each kind of this round's inputs ends both ways (not stuck in the argument parser):
+    on seeds 0-11 every kind has at least one result and at least two user errors."""
+    files = h.round_files(tmp_path)
+    for kind in h.ROUND_KINDS:
+        if kind == "crosscheck":
+            continue                    # seconds per input; covered by the property above
+        seen = {"result": 0, "error": 0}
+        for i in range(12):
+            seen[h.cli_property(h.round_argv(random.Random(i), kind, tmp_path, files))] += 1
+        assert seen["result"] >= 1 and seen["error"] >= 2, (kind, seen)

@@ -118,3 +118,12 @@ def test_no_output_file_on_error(tmp_path, capsys):
     csv = tmp_path / "p.csv"
     assert_user_error(BASE + ["--offset", "60", "-o", csv], capsys, "offset")
     assert not csv.exists() and list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("angle", ["--rise", "--return"])
+def test_a_rise_or_return_too_short_for_float64_is_a_user_error(angle, capsys):
+    """Fuzz (issue 23): --rise 1e-320 was ZeroDivisionError (1/β² underflowed), exit 1."""
+    argv = ["cam", "--law", "cycloidal", "--rise", "120", "--return", "120", "--stroke", "20",
+            "--base-radius", "40", "--roller-radius", "10"]
+    argv[argv.index(angle) + 1] = "1e-320"
+    assert_user_error(argv, capsys, "too short")
