@@ -163,12 +163,7 @@ def _one_speed(args, circuit, elements) -> int:
         f = r.forces.get(name)
         if f is not None:
             print(f"  element {name}: peak |force| {np.max(np.abs(f)):.6g} N")
-    for note in r.notes:
-        print(f"  note: {note}")
-    for label, path in (("CSV", args.output), ("plot", args.plot)):
-        if path:
-            print(f"  {label} written to {path}")
-    return 0
+    return _print_notes_and_outputs(r.notes, args)
 
 
 def _speed_map(args, circuit, elements) -> int:
@@ -216,7 +211,12 @@ def _speed_map(args, circuit, elements) -> int:
               f"(ζ = {c['zeta']:.3g}, harmonic weight {c['weight']:.2g})")
     if len(strong) > 30:
         print(f"    ... {len(strong) - 30} more (--json lists all)")
-    for note in m.notes:
+    return _print_notes_and_outputs(m.notes, args)
+
+
+def _print_notes_and_outputs(notes, args) -> int:
+    """The notes of a result and the files written, as both forms of the command end."""
+    for note in notes:
         print(f"  note: {note}")
     for label, path in (("CSV", args.output), ("plot", args.plot)):
         if path:
