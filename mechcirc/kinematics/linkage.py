@@ -46,6 +46,23 @@ coincident points of the bodies meeting at each joint (2 rows per pair) and
 
 The drive parameter θ is the rotation of the first crank from the pose
 [rad]; time is t = θ/ω_1.
+
+Prismatic joints (sliders).  A ``[[sliders]]`` table makes ``link`` slide
+without turning along a straight guide fixed to ``guide`` (``"ground"`` or a
+moving link)::
+
+    [[sliders]]
+    link = "block"                       # the sliding link (one point is enough)
+    guide = "ground"                     # or the link it slides on
+    line = ["G1", "G2"]                  # two points of the guide (ground points here)
+    point = "C"                          # the block's point on that line (default:
+                                         # the block's only point)
+
+The guide line G1→G2 is fixed in the guide's frame; in the pose ``point``
+must lie on it (else "off its guide", with the distance).  A prismatic pair counts as one pair in
+Grübler's formula, W = 3·n − 2·(p_revolute + p_prismatic), and gives two
+constraint rows: the block's point on the line, u_g × (P − G) = 0, and no
+relative turning, φ_block − φ_guide = 0.
 """
 
 from __future__ import annotations
@@ -62,7 +79,7 @@ from numpy.typing import NDArray
 from ..errors import GeometryError, NetlistError
 from .linkage_solver import MAX_CONTINUATION_STEPS, LinkageMotion, LinkageState  # noqa: F401
 
-__all__ = ["Crank", "AssurGroup", "Linkage", "LinkageState", "LinkageMotion", "parse_linkage",
+__all__ = ["Crank", "Slider", "AssurGroup", "Linkage", "LinkageState", "LinkageMotion", "parse_linkage",
            "load_linkage"]
 
 
@@ -73,6 +90,26 @@ class Crank:
     link: str
     pivot: str
     omega: float
+
+
+@dataclass(frozen=True)
+class Slider:
+    """A prismatic pair: ``link`` slides along a line fixed to ``guide`` ("ground" or a link).
+
+    The line passes through the pose of ``point`` (a point of ``link``) along
+    the unit vector ``direction`` (pose coordinates), from the guide's points ``line``.
+    """
+
+    link: str
+    guide: str
+    point: str
+    direction: tuple
+    line: tuple = ()
+
+    @property
+    def pair(self) -> str:
+        """The pair's name in :meth:`Linkage.assur_groups` (``"slider:LINK"``)."""
+        return f"slider:{self.link}"
 
 
 @dataclass(frozen=True)
@@ -137,6 +174,8 @@ class Linkage:
         File name, for messages.
     units : str
         The file's ``units`` (the length unit of the pose, e.g. ``"mm"``), or ``""``.
+    sliders : tuple of Slider
+        Prismatic pairs.
     """
 
     name: str
@@ -146,6 +185,7 @@ class Linkage:
     cranks: tuple
     source: str = "<string>"
     units: str = ""
+    sliders: tuple = ()
 
     # ------------------------------------------------------------ structure
     @property
@@ -169,8 +209,15 @@ class Linkage:
 
     @property
     def mobility(self) -> int:
-        """Grübler's W = 3n − 2p."""
-        return 3 * len(self.links) - 2 * self.revolute_pairs
+        """Grübler's W = 3n − 2p (p: revolute and prismatic pairs)."""
+        return 3 * len(self.links) - 2 * (self.revolute_pairs + len(self.sliders))
+
+    def pairs(self) -> dict[str, tuple[str, ...]]:
+        """Every pair → its bodies: the revolute :meth:`joints`, then each slider's pair."""
+        out = self.joints()
+        for s in self.sliders:
+            out[s.pair] = (s.guide, s.link)
+        return out
 
     def assur_groups(self) -> tuple[AssurGroup, ...]:
         """Decompose the linkage into Assur groups, in the order they can be solved.
@@ -187,7 +234,7 @@ class Linkage:
         """
         import itertools
 
-        joints = self.joints()
+        joints = self.pairs()
         known = {"ground"} | {c.link for c in self.cranks}
         remaining = [l for l in self.links if l not in known]
         groups = []
@@ -297,30 +344,6 @@ class Linkage:
         return float(np.max(np.ptp(pts, axis=0))) or 1.0
 
 
-    def _newton(self, q, angles, local, idx, rows, tol):
-        previous = np.inf
-        for k in range(30):
-            r = self._phi(q, angles, local, idx, rows)
-            size = np.max(np.abs(r))
-            if size < tol:
-                return q, True
-            # From the continuation's predictor Newton converges quadratically;
-            # a growing residual means no assembly near here, and giving up at
-            # once (the caller halves the step) makes finding a lock point ~5x
-            # faster than 30 futile iterations at every halving.
-            if k >= 2 and size > previous:
-                return q, False
-            previous = size
-            J = self._jac(q, local, idx, rows)
-            try:
-                dq = np.linalg.solve(J, r)
-            except np.linalg.LinAlgError:
-                return q, False
-            q = q - dq
-            if not np.all(np.isfinite(q)):
-                return q, False
-        return q, np.max(np.abs(self._phi(q, angles, local, idx, rows))) < tol
-
     @cached_property
     def _plan(self):
         from .linkage_solver import plan
@@ -404,11 +427,14 @@ class Linkage:
         GeometryError
             Newton does not converge (no assembly near ``near``).
         """
-        local, idx, rows = self.local_offsets(), self._index(), self.constraint_rows()
+        from .linkage_solver import _Newton
+
+        local, idx = self.local_offsets(), self._index()
         q = self.q0() if near is None else np.array(near, dtype=float)
-        angles = [float(crank_angles[c.link]) for c in self.cranks]
-        q, ok = self._newton(q, angles, local, idx, rows, 1e-12 * self.length_scale())
-        if not ok:
+        angles = np.array([[float(crank_angles[c.link]) for c in self.cranks]])
+        q, ok = _Newton(self._plan).newton(q[None], angles)
+        q = q[0]
+        if not ok[0]:
             raise GeometryError(f"{self.source}: no assembly near the given coordinates for "
                                 f"crank angles {crank_angles}")
         pts = {}
@@ -428,6 +454,7 @@ from ..sources import brief, finite_number, locate, located  # noqa: E402
 TABLES = {
     None: Table(None, {"cranks": "[[cranks]]: the driving cranks",
                        "description": "free text",
+                       "sliders": "[[sliders]]: prismatic pairs",
                        "ground": "[ground]: points = [ground pivots]",
                        "links": "[links]: NAME = [two or more points]",
                        "name": "the linkage's name (default: the file's stem)",
@@ -436,6 +463,10 @@ TABLES = {
     "ground": Table("ground", {"points": "the ground pivots' names"}),
     "cranks": Table("cranks", {"link": "the driven link", "pivot": "its ground pivot",
                                "omega": "its angular velocity [rad/s], nonzero"}, array=True),
+    "sliders": Table("sliders", {"link": "the sliding link",
+                                 "guide": "\"ground\" or the link it slides on",
+                                 "line": "[two points of the guide] along the guide",
+                                 "point": "the sliding link's point on the line"}, array=True),
 }
 
 
@@ -455,16 +486,25 @@ def parse_linkage(text: str, source: str = "<string>") -> Linkage:
     _check_tables(doc, text, source)
     pose = _read_points(doc["points"], text, source)
     ground_pts = _read_ground(doc["ground"], pose, text, source)
-    links = _read_links(doc["links"], pose, text, source)
+    raw_sliders = doc.get("sliders", [])
+    if not isinstance(raw_sliders, list) or not all(isinstance(x, dict) for x in raw_sliders):
+        line, col = locate(text, None, "sliders")
+        raise NetlistError(f"'sliders' must be a [[sliders]] table, got {brief(raw_sliders)}",
+                           source, line, col, "[[sliders]]")
+    slider_links = {x.get("link") for x in raw_sliders}
+    links = _read_links(doc["links"], pose, text, source, slider_links)
     _check_every_point_used(pose, ground_pts, links, text, source)
     cranks = _read_cranks(doc["cranks"], links, ground_pts, text, source)
+    sliders = _read_sliders(raw_sliders, pose, links, ground_pts, text, source)
     units = _read_units(doc, text, source)
     lk = Linkage(str(doc.get("name", Path(source).stem)), pose, tuple(ground_pts), links,
-                 tuple(cranks), source, units)
+                 tuple(cranks), source, units, tuple(sliders))
     if lk.mobility != len(cranks):
+        pairs = f"({lk.revolute_pairs} + {len(sliders)})" if sliders else lk.revolute_pairs
         raise GeometryError(
-            f"{source}: mobility W = 3·{len(links)} − 2·{lk.revolute_pairs} = {lk.mobility}, "
-            f"but {len(cranks)} crank(s) are driven; W must equal the number of cranks")
+            f"{source}: mobility W = 3·{len(links)} − 2·{pairs} = "
+            f"{lk.mobility}, but {len(cranks)} crank(s) are driven; W must equal the number "
+            f"of cranks")
     return lk
 
 
@@ -510,12 +550,17 @@ def _read_ground(table: dict, pose: dict, text: str, source: str) -> list[str]:
     return ground_pts
 
 
-def _read_links(table: dict, pose: dict, text: str, source: str) -> dict[str, tuple[str, ...]]:
-    """[links]: name → two or more distinct known points, not all at one place."""
+def _read_links(table: dict, pose: dict, text: str, source: str,
+                sliders=frozenset()) -> dict[str, tuple[str, ...]]:
+    """[links]: name → two or more distinct known points, not all at one place (a slider's
+    link may have one point)."""
     links = {}
     for lname, pts in table.items():
-        if not isinstance(pts, list) or len(pts) < 2 or not all(isinstance(p, str) for p in pts):
-            raise located(text, source, f"link {lname!r} must list at least two point names",
+        least = 1 if lname in sliders else 2
+        if not isinstance(pts, list) or len(pts) < least or \
+                not all(isinstance(p, str) for p in pts):
+            raise located(text, source, f"link {lname!r} must list at least two point names "
+                          "(one for a slider's link)",
                        "links", lname, expected='["P1", "P2", …]')
         for p in pts:
             if p not in pose:
@@ -526,7 +571,7 @@ def _read_links(table: dict, pose: dict, text: str, source: str) -> dict[str, tu
         if lname == "ground":
             raise located(text, source, "'ground' is reserved for the frame", "links", lname)
         xy = np.array([pose[p] for p in pts])
-        if np.max(np.ptp(xy, axis=0)) == 0.0:
+        if len(pts) > 1 and np.max(np.ptp(xy, axis=0)) == 0.0:
             raise GeometryError(f"{source}: link {lname!r} has all its points at the same "
                                 f"place {xy[0].tolist()}")
         links[lname] = tuple(pts)
@@ -570,6 +615,58 @@ def _read_cranks(raw_cranks: list, links, ground_pts, text: str, source: str) ->
                        value=lname, occurrence=n)
         cranks.append(Crank(lname, pivot, float(omega)))
     return cranks
+
+
+def _read_sliders(raw: list, pose, links, ground_pts, text: str, source: str) -> list[Slider]:
+    """[[sliders]]: a link sliding once, on ground or another link, along two of the guide's
+    points, with its point on that line in the pose."""
+    out: list[Slider] = []
+    scale = float(np.max(np.ptp(np.array(list(pose.values())), axis=0))) or 1.0
+    for n, x in enumerate(raw):
+        check_keys(text, source, TABLES["sliders"], x, n)
+        lname, guide = x.get("link"), x.get("guide")
+        if not isinstance(lname, str) or lname not in links:
+            raise located(text, source, f"unknown link {lname!r} in [[sliders]] #{n + 1}",
+                          "sliders", "link", value=lname, occurrence=n,
+                          expected=f"one of {', '.join(links)}")
+        if any(s.link == lname for s in out):
+            raise located(text, source, f"link {lname!r} slides twice", "sliders", "link",
+                          value=lname, occurrence=n)
+        if guide != "ground" and (not isinstance(guide, str) or guide not in links
+                                  or guide == lname):
+            raise located(text, source, f"unknown guide {guide!r} in [[sliders]] #{n + 1}",
+                          "sliders", "guide" if "guide" in x else "link", occurrence=n,
+                          expected="\"ground\" or another link: "
+                                   f"{', '.join(k for k in links if k != lname)}")
+        on_guide = ground_pts if guide == "ground" else links[guide]
+        line = x.get("line")
+        if not (isinstance(line, list) and len(line) == 2
+                and all(isinstance(p, str) and p in on_guide for p in line)):
+            raise located(text, source, f"slider {lname!r}: line must name two points of its "
+                          f"guide {guide!r}, got {brief(line)}", "sliders",
+                          "line" if "line" in x else "link", occurrence=n,
+                          expected=f"two of {', '.join(on_guide)}")
+        u = pose[line[1]] - pose[line[0]]
+        size = float(np.hypot(*u))
+        if size == 0.0:
+            raise located(text, source, f"slider {lname!r}: the line's points {line[0]!r} and "
+                          f"{line[1]!r} coincide", "sliders", "line", occurrence=n)
+        own = links[lname]
+        point = x.get("point", own[0] if len(own) == 1 else None)
+        if point not in own:
+            raise located(text, source, f"slider {lname!r}: point must be one of its points "
+                          f"(got {brief(point)})", "sliders", "point" if "point" in x else
+                          "link", occurrence=n, expected=f"one of {', '.join(own)}")
+        u = u / size
+        off = float(u[0] * (pose[point] - pose[line[0]])[1] - u[1] * (pose[point] -
+                                                                 pose[line[0]])[0])
+        if abs(off) > 1e-9 * scale:
+            raise located(text, source, f"slider {lname!r} is off its guide: point {point!r} is "
+                          f"{abs(off):.6g} from the line {line[0]}–{line[1]} in the pose",
+                          "sliders", "point" if "point" in x else "line", occurrence=n,
+                          expected=f"{point!r} on the line through {line[0]!r} and {line[1]!r}")
+        out.append(Slider(lname, guide, point, (float(u[0]), float(u[1])), tuple(line)))
+    return out
 
 
 def _read_units(doc: dict, text: str, source: str) -> str:

@@ -291,6 +291,13 @@ class _Plan:
     sb: NDArray | None = None
     q0: NDArray | None = None
     scale: float = 1.0
+    # prismatic pairs: guide body (nb = ground), slider body, the guide line's
+    # point and unit direction in the guide's frame, the slider's point in its own
+    ga: NDArray | None = None
+    gb: NDArray | None = None
+    gs: NDArray | None = None
+    gu: NDArray | None = None
+    bs: NDArray | None = None
     # per-linkage solver objects (the dyads' geometry), made on first use
     cache: dict = field(default_factory=dict, repr=False, compare=False)
 
@@ -326,7 +333,16 @@ def plan(lk) -> _Plan:
                   sa=np.array([off(a, p) for p, a, _ in rows], dtype=float).reshape(m, 2),
                   sb=np.array([off(b, p) for p, _, b in rows], dtype=float).reshape(m, 2),
                   q0=lk.q0(), scale=lk.length_scale())
-    dyads = _dyads(lk, idx)
+    sl = lk.sliders
+    u = np.array([s.direction for s in sl], dtype=float).reshape(-1, 2)
+    common.update(ga=np.array([body(s.guide) for s in sl], dtype=int),
+                  gb=np.array([idx[s.link] for s in sl], dtype=int),
+                  gs=np.array([off(s.guide, s.point) if s.guide == "ground" else
+                               lk.pose[s.point] - lk.pose[lk.links[s.guide][0]] for s in sl],
+                              dtype=float).reshape(-1, 2),
+                  gu=u / np.hypot(u[:, 0], u[:, 1])[:, None] if len(sl) else u,
+                  bs=np.array([local[s.link][s.point] for s in sl], dtype=float).reshape(-1, 2))
+    dyads = None if sl else _dyads(lk, idx)
     if dyads is None:
         return _Plan("newton", **common)
     order = tuple(("crank", j) for j in range(len(lk.cranks))) + \
@@ -462,7 +478,7 @@ def motion(lk, pl: _Plan, theta, *, max_step_deg: float = 2.0, method: str = "au
                             f"use method='newton'")
     if use == "dyads":
         q, qd, qdd, parts = _solve_dyads(lk, pl, t, dt_max)
-    elif _compiled():
+    elif _compiled() and not lk.sliders:
         q, qd, qdd, parts = _solve_newton_compiled(lk, pl, t, dt_max)
     else:
         q, qd, qdd, parts = _solve_newton(lk, pl, t, dt_max)
@@ -474,6 +490,11 @@ def motion(lk, pl: _Plan, theta, *, max_step_deg: float = 2.0, method: str = "au
 def _im_conj(a, b):
     """Im(conj(a)·b) = a × b (the 2-D cross product)."""
     return a.real * b.imag - a.imag * b.real
+
+
+def _dot(a, b):
+    """Re(conj(a)·b) = a · b."""
+    return a.real * b.real + a.imag * b.imag
 
 
 class _DyadSolver:
@@ -715,8 +736,16 @@ class _Newton:
         J0[2 * ka + 1, 3 * ia + 1] = 1.0
         J0[2 * kb, 3 * ib] = -1.0
         J0[2 * kb + 1, 3 * ib + 1] = -1.0
+        # prismatic rows after the joint rows: ns line rows, then ns angle rows
+        self.ns = ns = len(pl.ga)
+        self.c0 = 2 * m + 2 * ns                 # the first crank row
+        for k in range(ns):
+            J0[2 * m + ns + k, 3 * pl.gb[k] + 2] = 1.0
+            if pl.ga[k] < nb:
+                J0[2 * m + ns + k, 3 * pl.ga[k] + 2] = -1.0
         for j, ci in enumerate(pl.crank_idx):
-            J0[2 * m + j, 3 * ci + 2] = 1.0
+            J0[self.c0 + j, 3 * ci + 2] = 1.0
+        self.gu, self.gs, self.bs = _cplx(pl.gu), _cplx(pl.gs), _cplx(pl.bs)
         self.J0 = J0
         self.ka, self.kb = ka, kb
         # flat indices of the φ-column entries, rows (2k, 2k+1) interleaved
@@ -741,11 +770,31 @@ class _Newton:
         Rb = e[:, pl.ib] * self.sb
         return Ra, z[:, pl.ia] + Ra, Rb, z[:, pl.ib] + Rb
 
+    def _prism(self, q):
+        """Guide direction w, R s of guide and slider points, and d = P_slider − P_guide,
+        complex (N, ns) each; and the relative angle φ_slider − φ_guide (N, ns)."""
+        pl = self.pl
+        N, nb = len(q), pl.nb
+        phi = np.zeros((N, nb + 1))
+        phi[:, :nb] = q[:, 2::3]
+        z = np.zeros((N, nb + 1), dtype=complex)
+        z[:, :nb] = q[:, 0::3] + 1j * q[:, 1::3]
+        e = np.exp(1j * phi)
+        w = e[:, pl.ga] * self.gu
+        RA, RB = e[:, pl.ga] * self.gs, e[:, pl.gb] * self.bs
+        d = z[:, pl.gb] + RB - z[:, pl.ga] - RA
+        return w, RA, RB, d, phi[:, pl.gb] - phi[:, pl.ga]
+
     def residual(self, q, angles, sides=None):
         _, Pa, _, Pb = sides if sides is not None else self._sides(q)
         r = np.empty((len(q), self.n))
-        r[:, :2 * self.m] = np.ascontiguousarray(Pa - Pb).view(np.float64)
-        r[:, 2 * self.m:] = q[:, self.cphi] - angles
+        m2, ns = 2 * self.m, self.ns
+        r[:, :m2] = np.ascontiguousarray(Pa - Pb).view(np.float64)
+        if ns:
+            w, _, _, d, dphi = self._prism(q)
+            r[:, m2:m2 + ns] = _im_conj(w, d)
+            r[:, m2 + ns:self.c0] = dphi
+        r[:, self.c0:] = q[:, self.cphi] - angles
         return r
 
     def jacobian(self, q, sides=None):
@@ -754,7 +803,23 @@ class _Newton:
         J = np.repeat(self.J0[None], N, axis=0).reshape(N, -1)
         J[:, self.flat_a] = np.ascontiguousarray(1j * Ra[:, self.ka]).view(np.float64)
         J[:, self.flat_b] = np.ascontiguousarray(-1j * Rb[:, self.kb]).view(np.float64)
-        return J.reshape(N, self.n, self.n)
+        J = J.reshape(N, self.n, self.n)
+        if self.ns:
+            # line row u × d: ∂/∂r_b = i u, ∂/∂φ_b = u·R_b s_b, and the negatives on
+            # the guide, whose turning also turns u: ∂/∂φ_a = −u·d − u·R_a s_a
+            pl = self.pl
+            w, RA, RB, d, _ = self._prism(q)
+            iw = 1j * w
+            for k in range(self.ns):
+                row, a, b = 2 * self.m + k, pl.ga[k], pl.gb[k]
+                J[:, row, 3 * b] = iw[:, k].real
+                J[:, row, 3 * b + 1] = iw[:, k].imag
+                J[:, row, 3 * b + 2] = _dot(w[:, k], RB[:, k])
+                if a < pl.nb:
+                    J[:, row, 3 * a] = -iw[:, k].real
+                    J[:, row, 3 * a + 1] = -iw[:, k].imag
+                    J[:, row, 3 * a + 2] = -_dot(w[:, k], d[:, k] + RA[:, k])
+        return J
 
     def gamma(self, q, qdot, sides=None):
         Ra, _, Rb, _ = sides if sides is not None else self._sides(q)
@@ -765,6 +830,18 @@ class _Newton:
         g = np.zeros((N, self.n))
         g[:, :2 * self.m] = np.ascontiguousarray(Ra * w2[:, pl.ia] - Rb * w2[:, pl.ib]).view(
             np.float64)
+        if self.ns:
+            # line row: −(ü × d + 2 u̇ × ḋ + u × d̈) without the q̈ terms, u̇ = iω_a u
+            w, RA, RB, d, _ = self._prism(q)
+            om = np.zeros((N, pl.nb + 1))
+            om[:, :pl.nb] = qdot[:, 2::3]
+            v = np.zeros((N, pl.nb + 1), dtype=complex)
+            v[:, :pl.nb] = qdot[:, 0::3] + 1j * qdot[:, 1::3]
+            wa, wb = om[:, pl.ga], om[:, pl.gb]
+            dd = v[:, pl.gb] + 1j * wb * RB - v[:, pl.ga] - 1j * wa * RA
+            g[:, 2 * self.m:2 * self.m + self.ns] = -(
+                _im_conj(-wa * wa * w, d) + 2 * _im_conj(1j * wa * w, dd)
+                + _im_conj(w, wa * wa * RA - wb * wb * RB))
         return g
 
     def derivatives(self, q):
@@ -775,7 +852,7 @@ class _Newton:
         J = self.jacobian(q, sides)
         nc = len(pl.crank_idx)
         rhs = np.zeros((N, self.n, nc))
-        rhs[:, 2 * self.m + np.arange(nc), np.arange(nc)] = pl.omega
+        rhs[:, self.c0 + np.arange(nc), np.arange(nc)] = pl.omega
         with np.errstate(all="ignore"):
             try:
                 parts = np.linalg.solve(J, rhs)
@@ -869,7 +946,7 @@ class _Newton:
         qdot = np.zeros(self.n)
         for j in range(len(pl.crank_idx)):
             e = np.zeros(self.n)
-            e[2 * self.m + j] = pl.omega[j]
+            e[self.c0 + j] = pl.omega[j]
             qdot += lapack.dgetrs(lu, piv, e)[0]
         qddot = lapack.dgetrs(lu, piv, self.gamma(q, qdot[None], sides)[0])[0]
         swaps = int(np.count_nonzero(piv != np.arange(len(piv))))

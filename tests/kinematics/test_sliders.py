@@ -1,0 +1,179 @@
+"""Prismatic joints (sliders) against closed forms written out independently (SymPy).
+
+* offset slider-crank: x = r cos θ + sqrt(l² − (r sin θ + e)²), v and a by
+  SymPy's exact derivatives of that formula;
+* inverted slider-crank (crank-shaper quick return): the rocker angle
+  ψ = atan2(y_A − y_O4, x_A − x_O4) and its end B = O4 + R (cos ψ, sin ψ),
+  differentiated by SymPy.
+"""
+
+import math
+
+import numpy as np
+import pytest
+import sympy as sp
+
+from mechcirc.errors import GeometryError, NetlistError
+from mechcirc.kinematics import parse_linkage
+
+R, E, XC = 40.0, 10.0, 178.5357          # crank, offset; the pose puts C here (any x works)
+
+SLIDER_CRANK = f"""
+[points]
+A = [0.0, 0.0]
+B = [{R!r}, 0.0]
+C = [{XC!r}, {-E!r}]
+G1 = [0.0, {-E!r}]
+G2 = [100.0, {-E!r}]
+[ground]
+points = ["A", "G1", "G2"]
+[links]
+crank = ["A", "B"]
+rod = ["B", "C"]
+block = ["C"]
+[[sliders]]
+link = "block"
+guide = "ground"
+line = ["G1", "G2"]
+[[cranks]]
+link = "crank"
+omega = {{omega}}
+"""
+
+TH = np.linspace(0.0, 2 * math.pi, 37)
+
+
+def _slider_crank_reference(omega):
+    """x(θ), ẋ, ẍ of the block from the closed form (l from the pose), θ = ω t."""
+    th, t = sp.symbols("theta t", real=True)
+    ll = sp.sqrt((sp.Float(XC, 30) - R) ** 2 + sp.Float(E, 30) ** 2)
+    x = R * sp.cos(th) + sp.sqrt(ll ** 2 - (R * sp.sin(th) + E) ** 2)
+    xt = x.subs(th, omega * t)
+    f = [sp.lambdify(t, sp.diff(xt, t, k), "mpmath") for k in range(3)]
+    T = TH / omega
+    return [np.array([float(fk(sp.Float(float(ti), 30))) for ti in T]) for fk in f]
+
+
+@pytest.mark.parametrize("omega", [10.0, -7.0])
+def test_offset_slider_crank_against_the_closed_form(omega):
+    lk = parse_linkage(SLIDER_CRANK.format(omega=omega))
+    assert lk.mobility == 1 and len(lk.sliders) == 1
+    m = lk.motion(TH)
+    k = m.point_names.index("C")
+    x, v, a = _slider_crank_reference(omega)
+    stroke = 2 * R
+    assert np.max(np.abs(m.points[:, k, 0] - x)) <= 1e-12 * stroke
+    assert np.max(np.abs(m.velocities[:, k, 0] - v)) <= 1e-12 * stroke * abs(omega)
+    assert np.max(np.abs(m.accelerations[:, k, 0] - a)) <= 1e-12 * stroke * omega ** 2
+    # the block stays on its guide and does not turn
+    assert np.max(np.abs(m.points[:, k, 1] + E)) <= 1e-12 * stroke
+    j = m.link_names.index("block")
+    assert np.max(np.abs(m.q[:, 3 * j + 2])) <= 1e-13
+    assert np.max(np.abs(m.qdot[:, 3 * j + 2])) <= 1e-12 * abs(omega)
+
+
+O2Y, RC, RR = 50.0, 30.0, 120.0          # crank pivot above the rocker pivot, crank, rocker
+TH0 = 0.3                                 # the crank's angle in the pose
+
+
+def _shaper_text():
+    ax, ay = RC * math.cos(TH0), O2Y + RC * math.sin(TH0)
+    psi = math.atan2(ay, ax)
+    return f"""
+[points]
+O2 = [0.0, {O2Y!r}]
+A = [{ax!r}, {ay!r}]
+O4 = [0.0, 0.0]
+B = [{RR * math.cos(psi)!r}, {RR * math.sin(psi)!r}]
+[ground]
+points = ["O2", "O4"]
+[links]
+crank = ["O2", "A"]
+block = ["A"]
+rocker = ["O4", "B"]
+[[sliders]]
+link = "block"
+guide = "rocker"
+line = ["O4", "B"]
+[[cranks]]
+link = "crank"
+omega = 12.0
+"""
+
+
+def test_inverted_slider_crank_quick_return_against_the_closed_form():
+    lk = parse_linkage(_shaper_text())
+    m = lk.motion(TH)
+    t = sp.symbols("t", real=True)
+    th = TH0 + 12.0 * t
+    psi = sp.atan2(O2Y + RC * sp.sin(th), RC * sp.cos(th))
+    bx, by = RR * sp.cos(psi), RR * sp.sin(psi)
+    s = sp.sqrt((RC * sp.cos(th)) ** 2 + (O2Y + RC * sp.sin(th)) ** 2)   # A along the rocker
+    k = m.point_names.index("B")
+    j = m.link_names.index("rocker")
+    jb = m.link_names.index("block")
+    T = TH / 12.0
+    for order, got in enumerate((m.points, m.velocities, m.accelerations)):
+        for comp, expr in ((0, bx), (1, by)):
+            f = sp.lambdify(t, sp.diff(expr, t, order), "mpmath")
+            ref = np.array([float(f(float(ti))) for ti in T])
+            assert np.max(np.abs(got[:, k, comp] - ref)) <= 1e-12 * RR * 12.0 ** order
+    fpsi = [sp.lambdify(t, sp.diff(psi, t, o), "mpmath") for o in (1, 2)]
+    assert np.max(np.abs(m.qdot[:, 3 * j + 2] - [float(fpsi[0](float(x))) for x in T])) \
+        <= 1e-12 * 12.0
+    assert np.max(np.abs(m.qddot[:, 3 * j + 2] - [float(fpsi[1](float(x))) for x in T])) \
+        <= 1e-12 * 144.0
+    # the block turns with the rocker; its point slides along it by s(θ)
+    assert np.max(np.abs(m.qdot[:, 3 * jb + 2] - m.qdot[:, 3 * j + 2])) <= 1e-12 * 12.0
+    fs = sp.lambdify(t, sp.diff(s, t), "mpmath")
+    a_idx, o4 = m.point_names.index("A"), np.array([0.0, 0.0])
+    u = (m.points[:, k] - o4) / RR
+    rel = m.velocities[:, a_idx] - (m.points[:, a_idx] - o4)[:, ::-1] * [-1, 1] * \
+        m.qdot[:, 3 * j + 2][:, None]
+    assert np.max(np.abs(np.sum(rel * u, axis=1) - [float(fs(float(x))) for x in T])) \
+        <= 1e-12 * RR * 12.0
+
+
+def test_quick_return_ratio():
+    """The shaper's forward and return strokes take 180° ± 2 asin(r/d) of crank rotation."""
+    lk = parse_linkage(_shaper_text())
+    th = np.linspace(0.0, 2 * math.pi, 20001)
+    w = lk.motion(th).qdot[:, 3 * lk.link_names.index("rocker") + 2]
+    turns = th[np.flatnonzero(np.diff(np.sign(w)))]
+    span = math.degrees(turns[1] - turns[0])
+    ref = 180.0 + 2 * math.degrees(math.asin(RC / O2Y))
+    assert min(abs(span - ref), abs(360 - span - ref)) < 0.05   # the grid's 0.018° spacing
+
+
+def test_slider_off_its_guide_is_located():
+    text = SLIDER_CRANK.format(omega=1.0).replace("G2 = [100.0, -10.0]", "G2 = [100.0, -9.0]")
+    with pytest.raises(NetlistError) as e:
+        parse_linkage(text, "sc.toml")
+    msg = str(e.value)
+    assert "off its guide" in msg and "sc.toml:" in msg and "'C'" in msg
+    ref = XC * 1.0 / math.hypot(100.0, 1.0)      # C's distance from the tilted line
+    assert f"{ref:.6g}" in msg
+
+
+@pytest.mark.parametrize("change, words", [
+    (('guide = "ground"', 'guide = "nowhere"'), "unknown guide 'nowhere'"),
+    (('line = ["G1", "G2"]', 'line = ["G1", "B"]'), "line must name two points"),
+    (('link = "block"\nguide', 'link = "blok"\nguide'), "link 'block' must list at least two point names (one for a slider's link)"),
+])
+def test_bad_slider_tables_are_located(change, words):
+    text = SLIDER_CRANK.format(omega=1.0).replace(*change)
+    with pytest.raises(NetlistError) as e:
+        parse_linkage(text, "sc.toml")
+    assert words in str(e.value) and "sc.toml:" in str(e.value)
+
+
+def test_rod_too_short_for_the_offset_locks_with_the_angle():
+    """l < r + e: the crank cannot turn round; the lock angle is where r sin θ + e = l."""
+    text = SLIDER_CRANK.format(omega=1.0).replace(f"C = [{XC!r}", "C = [70.0")
+    lk = parse_linkage(text)
+    with pytest.raises(GeometryError) as e:
+        lk.motion(np.linspace(0, 2 * math.pi, 73))
+    ll = math.hypot(70.0 - R, E)
+    ref = math.degrees(math.asin((ll - E) / R))
+    got = float(str(e.value).split("θ = ")[1].split("°")[0])
+    assert abs(got - ref) < 1e-3, (got, ref)
