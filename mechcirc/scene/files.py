@@ -675,6 +675,9 @@ def _parts(scene: Scene) -> tuple:
         for p in {p for b in part for p in bodies[b]}:
             k = sum(1 for b in part if p in bodies[b]) + (1 if p in lk.ground else 0)
             pairs += max(k - 1, 0)
+        # a slider in the part on a guide in the part or the frame
+        pairs += sum(1 for x in lk.sliders if x.link in part and (x.guide in part
+                                                                   or x.guide == "ground"))
         w = 3 * n - 2 * pairs
         if w != 1:
             near = [e.name for e in scene.elastic
@@ -723,6 +726,7 @@ def _rigid_parts(lk, bodies: dict, tbodies: set) -> list[tuple]:
             continue
         on = [b for b, pts in bodies.items() if p in pts and b not in tbodies]
         g.add_edges_from((on[0], b) for b in on[1:])
+    g.add_edges_from((x.guide, x.link) for x in lk.sliders if x.guide in bodies)
     order = {b: i for i, b in enumerate(bodies)}
     parts = [tuple(sorted(c, key=order.__getitem__)) for c in nx.connected_components(g)]
     return sorted(parts, key=lambda part: order[part[0]])

@@ -404,6 +404,20 @@ def _check_part(scene, part, pos, vel, ang, Lc, tiny, deg, crank):
                     arm = (pos[p] - origin[body]) / Lc
                     row[j + 2] += sign * (_PERP @ arm)[axis]
                 rows.append(row)
+    for x in lk.sliders:               # a slider: no relative turning, no motion across the guide
+        if x.link not in part or not (x.guide in cols or x.guide == "ground"):
+            continue
+        u = pos[x.line[1]] - pos[x.line[0]] if x.guide != "ground" else np.array(x.direction)
+        n = _PERP @ (u / np.hypot(*u))
+        turn, across = np.zeros(3 * len(part)), np.zeros(3 * len(part))
+        for body, sign in ((x.link, 1.0), (x.guide, -1.0)):
+            if body == "ground":
+                continue
+            j = cols[body]
+            turn[j + 2] = sign
+            across[j:j + 2] += sign * n
+            across[j + 2] += sign * n @ (_PERP @ ((pos[x.point] - origin[body]) / Lc))
+        rows += [turn, across]
     if rows:
         s = np.linalg.svd(np.array(rows), compute_uv=False)
         rank = int(np.sum(s > 1e-9 * s.max()))

@@ -207,6 +207,23 @@ def motion_model(scene: Scene, omega: float | None = None, *,
                                True)
             makers.append(make)
             continue
+        slide = next((x for x in lk.sliders if part == (x.link,) and x.guide == "ground"), None)
+        if slide is not None:
+            # a block on a fixed guide: its coordinate is its travel s along the guide
+            # [m], every point at pose + s·u, no turning
+            b, u = slide.link, np.array(slide.direction)
+            coords.append(b)
+            p0 = lk.pose[slide.point] * L
+            prig.append(B.table(-1, 0.0, h, (pos[slide.point] - p0) @ u,
+                                vel[slide.point] @ u, acc[slide.point] @ u, True))
+
+            def make(kind, name, i=i, u=u):
+                if kind == "angle":
+                    return B.line(i, 0.0, 0.0)
+                k = "xy".index(kind)
+                return B.line(i, float(lk.pose[name][k] * L), float(u[k]))
+            makers.append(make)
+            continue
         if len(part) == 1:
             b = part[0]
             coords.append(b)
@@ -236,9 +253,11 @@ def motion_model(scene: Scene, omega: float | None = None, *,
         plinks = {b: lk.links[b] for b in part if b not in tbodies}
         ppts = {p for pts in plinks.values() for p in pts}
         piv = next(p for p in plinks[cb] if p in lk.ground)
-        sub = Linkage(f"{scene.name}:{cb}", {p: lk.pose[p] for p in ppts},
+        sub = Linkage(f"{scene.name}:{cb}", {p: lk.pose[p] for p in ppts | {
+                          p for x in lk.sliders if x.link in plinks for p in x.line}},
                       tuple(p for p in lk.ground if p in ppts), plinks,
-                      (Crank(cb, piv, 1.0),), scene.source)
+                      (Crank(cb, piv, 1.0),), scene.source,
+                      sliders=tuple(x for x in lk.sliders if x.link in plinks))
         sidx = sub._index()
         sub_states = None
         for _ in range(6):
@@ -380,7 +399,7 @@ def _signature(scene: Scene, *extra):
     return (tuple((p, float(x[0]), float(x[1])) for p, x in lk.pose.items()), tuple(lk.ground),
             tuple((k, tuple(v)) for k, v in lk.links.items()),
             tuple((c.link, c.pivot, float(c.omega)) for c in lk.cranks), scene.length_scale,
-            extra)
+            lk.sliders, extra)
 
 
 def _memo(key, make):
