@@ -59,7 +59,7 @@ def test_rigid_parts_equal_the_union_find(seed):
     bodies = {b: tuple(rng.sample(points, rng.randint(1, min(3, len(points)))))
               for b in names}
     tbodies = set(rng.sample(names, rng.randint(0, 2) if len(names) > 2 else 0))
-    lk = SimpleNamespace(pose={p: (0.0, 0.0) for p in points}, ground=ground)
+    lk = SimpleNamespace(pose={p: (0.0, 0.0) for p in points}, ground=ground, sliders=())
     assert _rigid_parts(lk, bodies, tbodies) == _old_parts(lk, bodies, tbodies)
 
 
