@@ -29,7 +29,7 @@ from mechcirc.scene import build, cycle_map, load_scene, parse_scene, simulate_s
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLE = ROOT / "examples" / "slider_crank_scene.toml"
 R, E, X0 = 0.040, 0.010, 0.189666295470958     # the example's geometry [m]
-M, K, C, W = 2.5, 3.0e6, 60.0, 40.0             # its block, rod and shaft speed
+M, K, C, W = 2.5, 3.0e6, 300.0, 40.0             # its block, rod and shaft speed
 
 th, x, t = sp.symbols("theta x t", real=True)
 L0 = sp.sqrt((sp.Float(X0, 30) - R) ** 2 + sp.Float(E, 30) ** 2)
@@ -131,3 +131,17 @@ def test_slider_off_its_guide_exits_2(tmp_path, capsys):
     f.write_text(EXAMPLE.read_text().replace("G2 = [100.0, -10.0]", "G2 = [100.0, -12.0]"))
     assert_user_error(["scene", f, "--theta", "60"], capsys, "off.toml:", "off its guide",
                       "3.79")
+
+
+def test_the_shipped_example_script_agrees_with_its_closed_forms(capsys):
+    import re
+    import runpy
+
+    runpy.run_path(str(ROOT / "examples" / "slider_crank_scene.py"), run_name="__main__")
+    out = capsys.readouterr().out
+    x, v, a = (float(s) for s in re.search(r"x (\S+) m, v (\S+) m/s, a (\S+) m/s²", out).groups())
+    assert x <= 1e-14 and v <= 1e-12 and a <= 1e-11
+    pairs = re.findall(r"(\d[\d.e-]*) \(closed form (\d[\d.e-]*)\)", out)
+    assert len(pairs) == 4
+    for got, ref in pairs:
+        assert abs(float(got) - float(ref)) <= 1e-9 * float(ref)
