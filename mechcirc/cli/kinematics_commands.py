@@ -430,7 +430,8 @@ def cmd_linkage(args) -> int:
     if args.json:
         print_json(doc)
         return 0
-    print(f"{lk.name}: {len(lk.links)} moving links, {lk.revolute_pairs} revolute pairs, "
+    prism = f", {len(lk.sliders)} prismatic" if lk.sliders else ""
+    print(f"{lk.name}: {len(lk.links)} moving links, {lk.revolute_pairs} revolute pairs{prism}, "
           f"W = {lk.mobility}; cranks "
           + ", ".join(f"{c.link} (ω = {c.omega:g} rad/s)" for c in lk.cranks))
     for g in groups:
