@@ -191,6 +191,7 @@ def motion_model(scene: Scene, omega: float | None = None, *,
     fn = {}            # (part, "angle"/"x"/"y", name) → function index, made on demand
     makers = []        # part → maker(kind, name) → function index
     prig, coords = [], []
+    travel = {}        # "BLOCK.travel" → its part: a block's travel s is an output body [m]
     for i, part in enumerate(scene.parts):
         crank = next((c for c in cranks if c in part), None)
         if crank is not None:
@@ -212,7 +213,8 @@ def motion_model(scene: Scene, omega: float | None = None, *,
             # a block on a fixed guide: its coordinate is its travel s along the guide
             # [m], every point at pose + s·u, no turning
             b, u = slide.link, np.array(slide.direction)
-            coords.append(b)
+            coords.append(f"{b}.travel")
+            travel[f"{b}.travel"] = i
             p0 = lk.pose[slide.point] * L
             prig.append(B.table(-1, 0.0, h, (pos[slide.point] - p0) @ u,
                                 vel[slide.point] @ u, acc[slide.point] @ u, True))
@@ -367,9 +369,9 @@ def motion_model(scene: Scene, omega: float | None = None, *,
         MOI.append([angle_fn(crank0), angle_fn(m.body)])
         MOF.append([m.amplitude, m.window, m.sigma, c])
         mnames.append(m.name)
-    body_names = tuple(bodies)
+    body_names = tuple(bodies) + tuple(travel)
     n_dyn = len(B.FI)          # functions the dynamics need; the rest only for outputs
-    BI = [angle_fn(b) for b in body_names]
+    BI = [angle_fn(b) if b in bodies else B.line(travel[b], 0.0, 1.0) for b in body_names]
     pfn = {}
     for p in lk.pose:                      # output-only: the points' linear accelerations
         pf = point_fns(p)
