@@ -70,7 +70,8 @@ def main() -> None:
     xr, _, xr2 = closed_form(sm.crank_angle, r, e, l)
     rigid = -m * w * w * xr2 / ((xr - r * np.cos(sm.crank_angle)) / l)
     f = sm.values["k_rod.force"]
-    print(f"3. revolution {sm.revolution}: rod force {f.min():.1f} … {f.max():.1f} N; rigid estimate "
+    print(f"3. revolution {sm.revolution}: rod force {f.min():.1f} … {f.max():.1f} N; "
+          "rigid estimate "
           f"{rigid.min():.1f} … {rigid.max():.1f} N (the rest is the rod's vibration)")
 
 

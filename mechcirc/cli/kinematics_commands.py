@@ -148,8 +148,8 @@ def register(sub) -> None:
 
     p = sub.add_parser(
         "linkage", help="positions, velocities and conditional-stop velocities of a TOML linkage",
-        description="Solve a planar revolute-jointed linkage with any number of driving "
-                    "cranks (TOML file, see docs/kinematics.md) at a rotation θ of the first "
+        description="Solve a planar linkage (revolute joints and sliders) with any number of "
+                    "driving cranks (TOML file, see docs/kinematics.md) at a rotation θ of the first "
                     "crank from the file's pose; velocities are also split into each "
                     "crank's contribution with the others stopped.",
         epilog="Example: mechcirc linkage examples/fnf_sixbar.toml --theta 30 --plot fnf.png",

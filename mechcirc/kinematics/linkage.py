@@ -1,4 +1,4 @@
-"""Planar revolute-jointed linkages with any number of driving cranks (DIGEST §4).
+"""Planar linkages (revolute and prismatic joints) with any number of driving cranks (DIGEST §4).
 
 File format (TOML, lengths in any consistent unit, angular velocities in rad/s)::
 
@@ -79,7 +79,8 @@ from numpy.typing import NDArray
 from ..errors import GeometryError, NetlistError
 from .linkage_solver import MAX_CONTINUATION_STEPS, LinkageMotion, LinkageState  # noqa: F401
 
-__all__ = ["Crank", "Slider", "AssurGroup", "Linkage", "LinkageState", "LinkageMotion", "parse_linkage",
+__all__ = ["Crank", "Slider", "AssurGroup", "Linkage", "LinkageState", "LinkageMotion",
+           "parse_linkage",
            "load_linkage"]
 
 
