@@ -421,7 +421,8 @@ def cmd_linkage(args) -> int:
     groups = lk.assur_groups()
     doc = {"file": args.file, "name": lk.name, "units": lk.units or None,
            "links": len(lk.links),
-           "revolute_pairs": lk.revolute_pairs, "mobility": lk.mobility,
+           "revolute_pairs": lk.revolute_pairs, "prismatic_pairs": len(lk.sliders),
+           "mobility": lk.mobility,
            "assur_groups": [{"links": list(g.links), "class": g.group_class, "order": g.order,
                              "base": g.base, "external_pairs": list(g.external_pairs)}
                             for g in groups],
