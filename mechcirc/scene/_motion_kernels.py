@@ -15,7 +15,8 @@ interpolant), a line a + b q, or a circle a + b cos(q + c).
     T = ½ Σ_i m_i(q_i) q̇_i²,   m_i = Σ w f'²  (w: a mass for x and y, an inertia for a rotation)
     m_i q̈_i + ½ m_i' q̇_i² = Q_i = −Σ_e f_e ∂δ_e/∂q_i + Σ moments M ∂φ/∂q_i
 
-Function kinds: 0 periodic table of f(q) − w q over [lo, lo + 2π); 1 table on
+Function kinds: 0 periodic table of f(q) − w q over [lo, lo + c) (c: 2π, or the
+cycle of geared cranks); 1 table on
 [lo, lo + N h] (outside: flagged); 2 line a + b q; 3 circle a + b cos(q + c).
 A function of part −1 is evaluated at the crank angle θ (the rigid motion).
 
@@ -61,7 +62,7 @@ def feval(kind, tabs, ti, a, b, c, lo, h, w, q):
     u = q - lo
     bad = 0
     if kind == 0:
-        u = u - TWO_PI * math.floor(u / TWO_PI)
+        u = u - c * math.floor(u / c)
         i = int(u / h)
         if i >= n:
             i = n - 1
