@@ -786,7 +786,7 @@ def _parts(scene: Scene) -> tuple:
             raise GeometryError(
                 f"{scene.source}: once the elastic elements are released, the rigid part "
                 f"{{{', '.join(part)}}} has W = 3·{n} − 2·{pairs}{f' − {g}' if g else ''} = {w} "
-                f"degrees of freedom (a gear mesh counts 1); "
+                f"degrees of freedom{' (a rigid gear mesh counts 1)' if g else ''}; "
                 f"each rigid part between elastic elements must have exactly one (elastic "
                 f"elements next to it: {', '.join(near) or 'none'}; an elastic link pinned to "
                 f"the frame is not supported: model it as a torsion rod or a load)")
