@@ -89,6 +89,17 @@ def feval(kind, tabs, ti, a, b, c, lo, h, w, q):
 
 
 @_jit_inline
+def window_moment(amp, alpha, sigma, centre, phi):
+    """A crank-angle moment (the beat-up): amp · sin(π x/σ) for x = φ − centre + α/2
+    (mod 2π) in [0, α), else 0; φ the crank's rotation from the pose [rad]."""
+    x = phi - centre + 0.5 * alpha
+    x = x - TWO_PI * math.floor(x / TWO_PI)
+    if x < alpha:
+        return amp * math.sin(math.pi * x / sigma)
+    return 0.0
+
+
+@_jit_inline
 def force_law(law, k, d, cl, e, edot):
     """Force of a spring k ∥ damper d with deformation e, rate edot and clearance cl."""
     if law == 0:
@@ -251,12 +262,7 @@ def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, wo
     for k in range(nmo):
         fw = MOI[k, 0]
         fbd = MOI[k, 1]
-        alpha = MOF[k, 1]
-        x = work[6, fw] - MOF[k, 3] + 0.5 * alpha
-        x = x - TWO_PI * math.floor(x / TWO_PI)
-        mval = 0.0
-        if x < alpha:
-            mval = MOF[k, 0] * math.sin(math.pi * x / MOF[k, 2])
+        mval = window_moment(MOF[k, 0], MOF[k, 1], MOF[k, 2], MOF[k, 3], work[6, fw])
         work[5, FI[fbd, 1]] += mval * work[7, fbd]
         aux[nb + 2 * ne + 1 + k] = mval
     for i in range(1, npart):
