@@ -448,6 +448,11 @@ def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float 
         J, dJ = rig.J.at(rig.wrap(theta))
         return (tq(w) + rig.Q(theta) - 0.5 * dJ * w * w) / (Jf + J)
 
+    if startup and tq(0.0) + rig.Q(th0) <= 0:
+        raise MechcircError(
+            f"{scene.source}: the motor cannot start the mechanism: its starting torque "
+            f"T(0) = {tq(0.0):.6g} N·m does not exceed the load torque "
+            f"{-rig.Q(th0):.6g} N·m at the start angle {shaft.start_deg:g}°")
     # ---- the steady cycle: speed after one cycle = speed before (in θ: dω/dθ = θ̈/ω)
     scale = max(abs(motor.sync_speed) if motor.kind == "kloss" else max(motor.speeds), 1e-300)
 
@@ -509,11 +514,6 @@ def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float 
     if not startup:
         return ShaftMotion(**motion, notes=tuple(notes))
     # ---- the start-up from rest, in time
-    if float(T(0.0)) + rig.Q(th0) <= 0:
-        raise MechcircError(
-            f"{scene.source}: the motor cannot start the mechanism: its starting torque "
-            f"T(0) = {float(T(0.0)):.6g} N·m does not exceed the load torque "
-            f"{-rig.Q(th0):.6g} N·m at the start angle {shaft.start_deg:g}°")
     band = (wmin - 0.01 * mean, wmax + 0.01 * mean)
     ts, ws = [0.0], [0.0]
     t, y = 0.0, np.array([th0, 0.0])
@@ -568,7 +568,7 @@ def _balance(motor: Motor, torque: float, scale: float) -> float:
     tq = motor.torque(ws) - torque
     i = int(np.argmax(motor.torque(ws)))
     for j in range(i, 400):
-        if tq[j] >= 0 > tq[j + 1]:
+        if tq[j] > 0 >= tq[j + 1]:
             return float(brentq(lambda w: float(motor.torque(w)) - torque, ws[j], ws[j + 1]))
     return 0.5 * scale
 
@@ -580,7 +580,7 @@ def _extremes(f, th, w):
     out = []
     for sgn, i in ((1.0, int(np.argmin(w))), (-1.0, int(np.argmax(w)))):
         a, b = th[max(i - 1, 0)], th[min(i + 1, th.size - 1)]
-        r = minimize_scalar(lambda x: sgn * float(f(x)), bounds=(a, b), method="bounded",
+        r = minimize_scalar(lambda x, sgn=sgn: sgn * float(f(x)), bounds=(a, b), method="bounded",
                             options={"xatol": 1e-12})
         out.append(sgn * min(r.fun, sgn * w[i]))
     return float(out[0]), float(out[1])
