@@ -26,6 +26,7 @@ __all__ = [
     "UnitMixWarning",
     "SceneAccuracyWarning",
     "SleyAccuracyWarning",
+    "ShaftWarning",
     "MAX_QUOTED",
     "clip",
     "shorten",
@@ -179,6 +180,10 @@ class UnitMixWarning(MechcircWarning):
 
 class SceneAccuracyWarning(MechcircWarning):
     """A time-domain result may be inaccurate (the message says which check failed)."""
+
+
+class ShaftWarning(MechcircWarning):
+    """A dynamic main shaft's motor cannot give the peak load torque (the flywheel carries it)."""
 
 
 class SleyAccuracyWarning(MechcircWarning):

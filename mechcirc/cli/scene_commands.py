@@ -279,6 +279,8 @@ def cmd_simulate_scene(args) -> int:
         over["omega"] = args.omega
     if over:
         scene = apply_overrides(scene, over)
+    if getattr(args, "shaft", False) or getattr(args, "flywheel", None) is not None:
+        return _shaft(args, scene)
     from ..progress import Progress
 
     bar = None
@@ -333,6 +335,68 @@ def cmd_simulate_scene(args) -> int:
     for k, (lo, hi) in result.extrema.items():
         print(f"{k:<28} {lo:>14.6g} {hi:>14.6g}")
     for n in result.notes:
+        print(f"note: {n}")
+    return 0
+
+
+def _shaft(args, scene) -> int:
+    """``mechcirc simulate SCENE.toml --shaft``: the dynamic main shaft (docs/scenes.md)."""
+    import warnings
+
+    import numpy as np
+
+    from ..errors import MechcircError
+    from ..scene.shaft import ShaftWarning, simulate_shaft
+
+    for flag in ("revolutions", "revolution", "steps_per_period", "rtol", "plot"):
+        if getattr(args, flag, None) is not None:
+            raise MechcircError(f"--{flag.replace('_', '-')} does not apply to --shaft")
+    if not args.shaft:
+        raise MechcircError("--flywheel applies with --shaft")
+    with warnings.catch_warnings(record=True):
+        warnings.simplefilter("always", ShaftWarning)     # kept in the notes, printed below
+        r = simulate_shaft(scene, flywheel=args.flywheel, points=args.points or 720)
+    aliases = {a: t.rsplit(".", 1)[0] for a, t in (scene.simulate.aliases.items()
+               if scene.simulate is not None else ())
+               if t.endswith("acceleration") and t.rsplit(".", 1)[0] in r.body_accelerations}
+    curves = {"speed": r.speed, "acceleration": r.acceleration, "motor_torque": r.motor_torque,
+              "load_torque": r.load_torque,
+              **{f"{b}.acceleration": v for b, v in r.body_accelerations.items()},
+              **{a: r.body_accelerations[b] for a, b in aliases.items()}}
+    if args.output:
+        from ..outputs import atomic_open
+
+        with atomic_open(args.output, "w", newline="") as fh:
+            fh.write(f"# {scene.name} ({args.scene}); steady cycle of the dynamic main shaft, "
+                     f"flywheel {r.flywheel!r} kg·m²\n")
+            fh.write(",".join(["theta_deg", "time", *curves]) + "\n")
+            for i in range(r.theta.size):
+                fh.write(",".join(repr(float(v)) for v in (
+                    np.degrees(r.theta[i]), r.time[i], *(c[i] for c in curves.values()))) + "\n")
+    if args.json:
+        doc = r.summary()
+        doc.update(file=args.scene, output=args.output, notes=list(r.notes),
+                   extrema={k: [float(v.min()), float(v.max())] for k, v in curves.items()})
+        print_json(doc)
+        return 0
+    m = scene.shaft.motor
+    what = (f"Kloss, ω_s = {m.sync_speed:g} rad/s, T_b = {m.breakdown_torque:g} N·m, "
+            f"s_b = {m.breakdown_slip:.4g}") if m.kind == "kloss" else \
+        f"table of {len(m.speeds)} points"
+    print(f"{args.scene}: scene {scene.name!r}, dynamic main shaft: flywheel {r.flywheel:g} "
+          f"kg·m², motor ({what})")
+    print(f"steady cycle: ω_mean = {r.omega_mean:.6g} rad/s, ω_min = {r.omega_min:.6g}, "
+          f"ω_max = {r.omega_max:.6g}, δ = (ω_max − ω_min)/ω_mean = {r.delta:.4g}, "
+          f"period {r.period:.6g} s")
+    print(f"motor torque: mean {float(np.mean(r.motor_torque)):.6g} N·m, "
+          f"{float(r.motor_torque.min()):.6g} … {float(r.motor_torque.max()):.6g} N·m")
+    if r.startup_time is not None:
+        print(f"start-up from rest: within 1 % of ω_mean of the steady band after "
+              f"{r.startup_time:.4g} s")
+    print(f"{'quantity':<28} {'min':>14} {'max':>14}")
+    for k, v in curves.items():
+        print(f"{k:<28} {float(v.min()):>14.6g} {float(v.max()):>14.6g}")
+    for n in r.notes:
         print(f"note: {n}")
     return 0
 

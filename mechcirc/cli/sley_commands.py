@@ -70,6 +70,11 @@ def register(sub) -> None:
     p.add_argument("-o", "--output", metavar="CSV", help="write the curves as CSV")
     p.add_argument("--plot", metavar="IMAGE", help="plot eps2P, eps4P, eps4T, M2V (Figs. 4-9)")
     p.add_argument("--json", action="store_true", help="print one JSON document")
+    p.add_argument("--shaft", action="store_true",
+                   help="scene: the dynamic main shaft of its [shaft] table (flywheel, motor) "
+                        "turning the rigid mechanism: speed fluctuation, motor torque, start-up")
+    p.add_argument("--flywheel", type=real(least=0.0, unit="kg·m²"), metavar="J",
+                   help="with --shaft: the flywheel's inertia [kg·m²] (default the file's)")
     p.set_defaults(func=cmd_simulate)
 
     p = sub.add_parser(

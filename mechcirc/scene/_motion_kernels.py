@@ -15,7 +15,8 @@ interpolant), a line a + b q, or a circle a + b cos(q + c).
     T = ½ Σ_i m_i(q_i) q̇_i²,   m_i = Σ w f'²  (w: a mass for x and y, an inertia for a rotation)
     m_i q̈_i + ½ m_i' q̇_i² = Q_i = −Σ_e f_e ∂δ_e/∂q_i + Σ moments M ∂φ/∂q_i
 
-Function kinds: 0 periodic table of f(q) − w q over [lo, lo + 2π); 1 table on
+Function kinds: 0 periodic table of f(q) − w q over [lo, lo + c) (c: 2π, or the
+cycle of geared cranks); 1 table on
 [lo, lo + N h] (outside: flagged); 2 line a + b q; 3 circle a + b cos(q + c).
 A function of part −1 is evaluated at the crank angle θ (the rigid motion).
 
@@ -61,7 +62,7 @@ def feval(kind, tabs, ti, a, b, c, lo, h, w, q):
     u = q - lo
     bad = 0
     if kind == 0:
-        u = u - TWO_PI * math.floor(u / TWO_PI)
+        u = u - c * math.floor(u / c)
         i = int(u / h)
         if i >= n:
             i = n - 1
@@ -85,6 +86,17 @@ def feval(kind, tabs, ti, a, b, c, lo, h, w, q):
     f1 = c1 + s * (2.0 * c2 + s * (3.0 * c3 + s * (4.0 * c4 + s * 5.0 * c5)))
     f2 = 2.0 * c2 + s * (6.0 * c3 + s * (12.0 * c4 + s * 20.0 * c5))
     return f + w * q, f1 + w, f2, bad
+
+
+@_jit_inline
+def window_moment(amp, alpha, sigma, centre, phi):
+    """A crank-angle moment (the beat-up): amp · sin(π x/σ) for x = φ − centre + α/2
+    (mod 2π) in [0, α), else 0; φ the crank's rotation from the pose [rad]."""
+    x = phi - centre + 0.5 * alpha
+    x = x - TWO_PI * math.floor(x / TWO_PI)
+    if x < alpha:
+        return amp * math.sin(math.pi * x / sigma)
+    return 0.0
 
 
 @_jit_inline
@@ -250,12 +262,7 @@ def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, wo
     for k in range(nmo):
         fw = MOI[k, 0]
         fbd = MOI[k, 1]
-        alpha = MOF[k, 1]
-        x = work[6, fw] - MOF[k, 3] + 0.5 * alpha
-        x = x - TWO_PI * math.floor(x / TWO_PI)
-        mval = 0.0
-        if x < alpha:
-            mval = MOF[k, 0] * math.sin(math.pi * x / MOF[k, 2])
+        mval = window_moment(MOF[k, 0], MOF[k, 1], MOF[k, 2], MOF[k, 3], work[6, fw])
         work[5, FI[fbd, 1]] += mval * work[7, fbd]
         aux[nb + 2 * ne + 1 + k] = mval
     for i in range(1, npart):

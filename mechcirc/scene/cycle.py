@@ -50,6 +50,9 @@ class CycleMap:
         Index of θ → why the scene could not be linearised there.
     rotational : bool
         Units of Q0: N·m (True) or N.
+    cycle : float
+        The span of ``theta`` [rad]: 2π, or the cycle of geared cranks (then
+        ``omega_shaft`` is the cycle's fundamental |Ω|/revolutions).
     """
 
     theta: NDArray[np.float64]
@@ -60,6 +63,7 @@ class CycleMap:
     Q0: NDArray[np.complex128]
     skipped: dict
     rotational: bool
+    cycle: float = 2 * math.pi
 
     def natural_frequencies(self, kind: str = "resonance") -> NDArray[np.float64]:
         """Array (n, m) of ωₙ [rad/s] of the underdamped modes, NaN-padded (m the most at any θ)."""
@@ -92,10 +96,10 @@ class CycleMap:
                     if b == 0:
                         continue                     # counted at the next interval
                     t0 = self.theta[i]
-                    step = (self.theta[j] - t0) % (2 * math.pi)
+                    step = (self.theta[j] - t0) % self.cycle
                     th = t0 + step * a / (a - b)
                     out.append({"mode": k, "harmonic": int(h),
-                                "theta_deg": math.degrees(th) % 360.0, "omega": float(target)})
+                                "theta_deg": math.degrees(th % self.cycle), "omega": float(target)})
         return sorted(out, key=lambda c: (c["theta_deg"], c["harmonic"]))
 
     def as_dict(self) -> dict:
@@ -125,7 +129,8 @@ def cycle_map(scene: Scene, *, points: int = 72, harmonics: int = 5,
     ----------
     scene : Scene
     points : int
-        Crank angles over one revolution (0 … 2π, end excluded), ≥ 2.
+        Crank angles over one revolution (0 … 2π, end excluded; geared cranks: the
+        cycle), ≥ 2.
     harmonics : int
         Number of harmonics h = 1 … H of the crank speed, ≥ 1.
     reflect : {"eta", "lever"}
@@ -144,14 +149,14 @@ def cycle_map(scene: Scene, *, points: int = 72, harmonics: int = 5,
         raise ValueError(f"points must be an integer ≥ 2, got {points!r}")
     if isinstance(harmonics, bool) or not isinstance(harmonics, int) or harmonics < 1:
         raise ValueError(f"harmonics must be an integer ≥ 1, got {harmonics!r}")
-    theta = np.linspace(0.0, 2 * math.pi, points, endpoint=False)
+    theta = np.linspace(0.0, scene.cycle, points, endpoint=False)
     try:
         states = scene.linkage.solve(theta)
     except GeometryError as exc:
         raise GeometryError(f"{scene.source}: the crank cannot make a full revolution, so there "
                             f"is no cycle to map ({exc})") from None
     hs = np.arange(1, harmonics + 1)
-    omega_shaft = abs(scene.omega_shaft)
+    omega_shaft = abs(scene.omega_shaft) / scene.cycle_revolutions   # the cycle's fundamental
     Q0 = np.full((points, harmonics), np.nan, dtype=complex)
     res: list = [()] * points
     anti: list = [()] * points
@@ -185,7 +190,7 @@ def cycle_map(scene: Scene, *, points: int = 72, harmonics: int = 5,
                 res[i] = tuple(r for r in rows if r.kind == "resonance")
                 anti[i] = tuple(r for r in rows if r.kind == "antiresonance")
                 Q0[i] = q[d]
-    return CycleMap(theta, res, anti, hs, omega_shaft, Q0, skipped, rotational)
+    return CycleMap(theta, res, anti, hs, omega_shaft, Q0, skipped, rotational, scene.cycle)
 
 
 def plot_cycle(cmap: CycleMap, ax=None, *, fig=None, unit: str = "rad/s"):

@@ -75,14 +75,14 @@ from ..sources import (Table, brief, check_keys, finite_number, load_toml, numbe
                        split_lines)
 from ..sources import located
 
-__all__ = ["Scene", "Analysis", "SceneMass", "ElasticLink", "Torsion", "Load", "SceneDrive",
+__all__ = ["Scene", "Analysis", "Gear", "SceneMass", "ElasticLink", "Torsion", "Load", "SceneDrive",
            "parse_scene", "load_scene", "LENGTH_UNITS", "SCENE_TABLES"]
 
 #: Length units accepted for ``units`` and their size [m].
 LENGTH_UNITS = {"m": 1.0, "cm": 1e-2, "mm": 1e-3}
 #: Tables a scene adds to the linkage format.
 SCENE_TABLES = ("masses", "elastic", "torsion", "loads", "drive", "analysis", "moments",
-                "simulate")
+                "simulate", "gears", "shaft")
 _CLEARANCE = {"clearance": "half-width of the gap [m or rad], 0 for none",
               "clearance_law": "\"elastobacklash\" or \"dead-zone\""}
 #: The tables of a scene file, declared once (see :class:`mechcirc.sources.Table`);
@@ -111,6 +111,11 @@ TABLES = {
     "drive": Table("drive", {"name": "element name (default V)", "link": "a rigid link or body",
                              "point": "a point of a rigid link", "velocity": "amplitude V0",
                              "force": "amplitude F0"}),
+    "gears": Table("gears", {"crank": "a crank of [[cranks]] other than the first",
+                             "ratio": "ω_crank/ω_first_crank, a ratio of whole numbers, not 0",
+                             "body": "the gear's body (default gear_CRANK), with stiffness",
+                             "stiffness": "mesh stiffness at the crank [N·m/rad], optional",
+                             "damping": "[N·m·s/rad], default 0"}, array=True),
     "analysis": Table("analysis", {"theta_deg": "crank angle [deg]",
                                    "output": "an element of the circuit",
                                    "band": "[W1, W2] [rad/s]", "tol": "relative tolerance"}),
@@ -159,6 +164,21 @@ class Torsion:
     damping: float = 0.0
     clearance: float = 0.0
     clearance_law: str = "elastobacklash"
+
+
+@dataclass(frozen=True)
+class Gear:
+    """A crank geared to the first crank (the main shaft): ω_crank = ``ratio`` · ω_1.
+
+    ``ratio`` is ``p/q`` in lowest terms (``fraction``); ``body`` is None for a
+    rigid mesh, else the gear's body, geared rigidly to the main shaft and
+    joined to the crank by the torsion rod ``mesh`` (the mesh stiffness).
+    """
+
+    crank: str
+    ratio: float
+    fraction: tuple
+    body: str | None = None
 
 
 @dataclass(frozen=True)
@@ -238,6 +258,22 @@ class Scene:
     analysis: Analysis = Analysis()
     moments: tuple = ()
     simulate: object = None
+    gears: tuple = ()
+    shaft: object = None
+
+    @property
+    def cycle_revolutions(self) -> int:
+        """Revolutions of the first crank in one cycle of the mechanism (1 without gears;
+        the least common multiple of the gear ratios' denominators)."""
+        q = 1
+        for g in self.gears:
+            q = q * g.fraction[1] // math.gcd(q, g.fraction[1])
+        return q
+
+    @property
+    def cycle(self) -> float:
+        """The mechanism's cycle in first-crank rotation [rad]: 2π · cycle_revolutions."""
+        return 2.0 * math.pi * self.cycle_revolutions
 
     @property
     def omega_shaft(self) -> float:
@@ -334,14 +370,11 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
         raise located(text, source, f"a scene needs units = \"m\", \"cm\" or \"mm\" (the length "
                    f"unit of [points]), got {units!r}", None, "units",
                    expected="units = \"mm\" (masses and stiffnesses are SI)")
-    if len({c.omega for c in linkage.cranks}) != 1:
-        raise located(text, source, f"the cranks of a scene turn on one shaft and need the same "
-                   f"omega; this linkage has {[c.omega for c in linkage.cranks]}", "cranks",
-                   "omega", occurrence=1)
     r = _SceneReader(text, source, doc, linkage)
     elastic = r.elastic()
     elastic_links = {x.link for x in elastic}
     torsions = r.torsions(elastic_links)
+    gears = r.gears(torsions)
     links = linkage.links
     bodies = {l for l in links if l not in elastic_links} | {t.body for t in torsions}
     rigid_points = set().union(*(set(links[l]) for l in links if l not in elastic_links))
@@ -355,11 +388,15 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
 
     scene = Scene(str(doc.get("name", linkage.name)), linkage, units, LENGTH_UNITS[units],
                   tuple(masses), tuple(elastic), tuple(torsions), tuple(loads), drive, (),
-                  source, analysis)
+                  source, analysis, gears=tuple(gears))
     object.__setattr__(scene, "parts", _parts(scene))
     object.__setattr__(scene, "moments", parse_moments(text, source, doc.get("moments"), scene))
     object.__setattr__(scene, "simulate", parse_simulate(text, source, doc.get("simulate"),
                                                          scene))
+    if "shaft" in doc:
+        from .shaft import parse_shaft
+
+        object.__setattr__(scene, "shaft", parse_shaft(text, source, doc["shaft"], scene))
     return scene
 
 
@@ -473,6 +510,71 @@ class _SceneReader:
             torsions.append(Torsion(name, lname, body, pivot, k, c, *_clearance(
                 self.text, self.source, t, name, "torsion", n, "rad")))
         return torsions
+
+    def gears(self, torsions: list) -> list:
+        """[[gears]]: cranks geared to the first; a crank turning at another speed needs one.
+
+        A gear with ``stiffness`` adds its mesh as a torsion rod (to ``torsions``)
+        between the crank and the gear's body.
+        """
+        from fractions import Fraction
+
+        cranks = self.linkage.cranks
+        w1, names = cranks[0].omega, [c.link for c in cranks]
+        gears = {}
+        for n, g in self.entries("gears"):
+            c = g.get("crank")
+            if not _named(c, names[1:]) or c in gears:
+                raise self.err(f"[[gears]] #{n + 1}: crank {c!r} is not a crank after the first "
+                               "(the main shaft) or is geared twice", "gears",
+                               "crank" if "crank" in g else next(iter(g), "crank"),
+                               value=c if isinstance(c, str) else None, occurrence=n,
+                               expected=f"one of {', '.join(names[1:]) or '(none: one crank)'}")
+            ratio = self.number(g.get("ratio"), f"gear ratio of {c!r} (ω_{c}/ω_{names[0]})",
+                                "gears", "ratio" if "ratio" in g else "crank", n,
+                                positive=False)
+            if ratio == 0:
+                raise self.err(f"[[gears]] #{n + 1}: gear ratio 0 would stop crank {c!r}",
+                               "gears", "ratio", occurrence=n,
+                               expected="ratio = ω_crank/ω_main, e.g. -1.5 for 3:2 reversed")
+            frac = Fraction(ratio).limit_denominator(1000)
+            if abs(float(frac) - ratio) > 1e-12 * abs(ratio):
+                raise self.err(f"[[gears]] #{n + 1}: gear ratio {ratio!r} is not a ratio of "
+                               "whole numbers (tooth counts) with a denominator ≤ 1000, so the "
+                               "mechanism would never repeat its cycle", "gears", "ratio",
+                               occurrence=n, expected="e.g. ratio = -1.5 (z1/z2 = 30/20)")
+            w = next(x.omega for x in cranks if x.link == c)
+            if abs(w - ratio * w1) > 1e-12 * abs(w):
+                raise self.err(f"[[gears]] #{n + 1}: crank {c!r} has omega = {w:g} rad/s in "
+                               f"[[cranks]] but the gear ratio {ratio:g} makes it "
+                               f"{ratio * w1:g} rad/s", "gears", "ratio", occurrence=n,
+                               expected=f"ratio = {w / w1:g}, or omega = {ratio * w1:g}")
+            body = None
+            if "stiffness" in g or "body" in g or "damping" in g:
+                body = g.get("body", f"gear_{c}")
+                if not isinstance(body, str) or not _IDENT.fullmatch(body) \
+                        or body in self.linkage.links or body == "ground" \
+                        or body in {t.body for t in torsions}:
+                    raise self.err(f"[[gears]] #{n + 1}: body {body!r} must be a new name",
+                                   "gears", "body" if "body" in g else "crank", occurrence=n,
+                                   expected="an identifier for the gear on the crank's shaft")
+                name = self.new_name(None, "gears", "crank", n, f"mesh_{c}")
+                k = self.number(g.get("stiffness"), f"mesh stiffness of {c!r} [N·m/rad]",
+                                "gears", "stiffness" if "stiffness" in g else "crank", n)
+                d = self.number(g.get("damping", 0.0), f"mesh damping of {c!r} [N·m·s/rad]",
+                                "gears", "damping", n, allow_zero=True)
+                piv = next(x.pivot for x in cranks if x.link == c)
+                torsions.append(Torsion(name, c, body, piv, k, d))
+            gears[c] = Gear(c, float(ratio), (frac.numerator, frac.denominator), body)
+        for n, cr in enumerate(cranks[1:], start=1):
+            if cr.link not in gears and cr.omega != w1:
+                raise self.err(f"crank {cr.link!r} turns at {cr.omega:g} rad/s and the first "
+                               f"crank {names[0]!r} at {w1:g}: cranks on one shaft need the "
+                               "same omega, a crank at another speed needs a [[gears]] entry",
+                               "cranks", "omega", occurrence=n,
+                               expected=f'[[gears]] crank = "{cr.link}", ratio = '
+                                        f"{cr.omega / w1:g}")
+        return list(gears.values())
 
     def masses(self, bodies: set, rigid_points: set, elastic_links: set) -> list:
         """[[masses]]: a mass at a point of a rigid link, or the inertia of a body."""
@@ -668,7 +770,8 @@ def _parts(scene: Scene) -> tuple:
     lk = scene.linkage
     bodies = scene.bodies
     tbodies = {t.body for t in scene.torsions}
-    parts = _rigid_parts(lk, bodies, tbodies)
+    meshes = gear_meshes(scene)
+    parts = _rigid_parts(lk, bodies, tbodies, meshes)
     for part in parts:
         n = len(part)
         pairs = 0
@@ -678,13 +781,15 @@ def _parts(scene: Scene) -> tuple:
         # a slider in the part on a guide in the part or the frame
         pairs += sum(1 for x in lk.sliders if x.link in part and (x.guide in part
                                                                    or x.guide == "ground"))
-        w = 3 * n - 2 * pairs
+        g = sum(1 for a, b, _ in meshes if a in part)     # a rigid mesh: one constraint
+        w = 3 * n - 2 * pairs - g
         if w != 1:
             near = [e.name for e in scene.elastic
                     if any(p in bodies[b] for b in part for p in lk.links[e.link])]
             raise GeometryError(
                 f"{scene.source}: once the elastic elements are released, the rigid part "
-                f"{{{', '.join(part)}}} has W = 3·{n} − 2·{pairs} = {w} degrees of freedom; "
+                f"{{{', '.join(part)}}} has W = 3·{n} − 2·{pairs}{f' − {g}' if g else ''} = {w} "
+                f"degrees of freedom{' (a rigid gear mesh counts 1)' if g else ''}; "
                 f"each rigid part between elastic elements must have exactly one (elastic "
                 f"elements next to it: {', '.join(near) or 'none'}; an elastic link pinned to "
                 f"the frame is not supported: model it as a torsion rod or a load)")
@@ -711,8 +816,16 @@ def _parts(scene: Scene) -> tuple:
     return tuple(parts)
 
 
-def _rigid_parts(lk, bodies: dict, tbodies: set) -> list[tuple]:
-    """Bodies joined by a moving pin (not through a torsion body), as connected components.
+def gear_meshes(scene: Scene) -> list[tuple]:
+    """Rigid gear meshes as (body, first crank, ratio): the body turns at ratio × the first
+    crank (the geared crank itself, or the gear beyond its mesh stiffness)."""
+    first = scene.linkage.cranks[0].link
+    return [(g.body or g.crank, first, g.ratio) for g in scene.gears]
+
+
+def _rigid_parts(lk, bodies: dict, tbodies: set, meshes=()) -> list[tuple]:
+    """Bodies joined by a moving pin (not through a torsion body) or a rigid gear mesh, as
+    connected components.
 
     Each part lists its bodies in the order of ``bodies``; the parts are in the
     order of their first body.
@@ -727,6 +840,7 @@ def _rigid_parts(lk, bodies: dict, tbodies: set) -> list[tuple]:
         on = [b for b, pts in bodies.items() if p in pts and b not in tbodies]
         g.add_edges_from((on[0], b) for b in on[1:])
     g.add_edges_from((x.guide, x.link) for x in lk.sliders if x.guide in bodies)
+    g.add_edges_from((a, b) for a, b, _ in meshes)
     order = {b: i for i, b in enumerate(bodies)}
     parts = [tuple(sorted(c, key=order.__getitem__)) for c in nx.connected_components(g)]
     return sorted(parts, key=lambda part: order[part[0]])

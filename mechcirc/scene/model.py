@@ -418,6 +418,13 @@ def _check_part(scene, part, pos, vel, ang, Lc, tiny, deg, crank):
             across[j:j + 2] += sign * n
             across[j + 2] += sign * n @ (_PERP @ ((pos[x.point] - origin[body]) / Lc))
         rows += [turn, across]
+    from .files import gear_meshes
+
+    for a, b, ratio in gear_meshes(scene):       # a rigid mesh: ω_a − ratio · ω_b = 0
+        if a in cols:
+            row = np.zeros(3 * len(part))
+            row[cols[a] + 2], row[cols[b] + 2] = 1.0, -ratio
+            rows.append(row)
     if rows:
         s = np.linalg.svd(np.array(rows), compute_uv=False)
         rank = int(np.sum(s > 1e-9 * s.max()))

@@ -130,11 +130,11 @@ def _py():
 
 
 class _Builder:
-    def __init__(self, n):
+    def __init__(self, n, period=TWO_PI):
         self.FI, self.FF, self.tabs = [], [], [np.zeros((n, 6))]
-        self.n = n
+        self.n, self.period = n, period
 
-    def table(self, part, lo, h, f, f1, f2, periodic, w=0.0):
+    def table(self, part, lo, h, f, f1, f2, periodic, w=0.0, period=None):
         f = np.asarray(f, float) - w * (lo + h * np.arange(len(f)))
         f1 = np.asarray(f1, float) - w
         if periodic and max(np.max(np.abs(f)), np.max(np.abs(f1)),
@@ -142,7 +142,7 @@ class _Builder:
             return self.line(part, 0.0, w)          # turns exactly with the crank
         self.tabs.append(hermite_table(h, f, f1, f2))
         self.FI.append((0 if periodic else 1, part, len(self.tabs) - 1))
-        self.FF.append((0.0, 0.0, 0.0, lo, h, w))
+        self.FF.append((0.0, 0.0, (period or self.period) if periodic else 0.0, lo, h, w))
         return len(self.FI) - 1
 
     def line(self, part, a, b):
@@ -156,8 +156,9 @@ class _Builder:
         return len(self.FI) - 1
 
 
-def _winding(v):
-    return float(round((v[-1] - v[0]) / TWO_PI))
+def _winding(v, q=1):
+    """Mean slope of an angle over the cycle: whole turns per q crank revolutions."""
+    return float(round((v[-1] - v[0]) / TWO_PI)) / q
 
 
 def motion_model(scene: Scene, omega: float | None = None, *,
@@ -178,13 +179,14 @@ def motion_model(scene: Scene, omega: float | None = None, *,
         raise ValueError(f"omega must be a finite number > 0 rad/s, got {omega!r}")
     N = int(table_points)
     h = TWO_PI / N
+    nq = scene.cycle_revolutions                 # the tables span the mechanism's cycle
     ang, ang1, ang2, pos, vel, acc = (dict(x) for x in _rigid_tables(scene, N))
     tlink = {}
     for t in scene.torsions:
         tlink.setdefault(t.body, t.link)
     for b, l in tlink.items():
         ang[b], ang1[b], ang2[b] = ang[l], ang1[l], ang2[l]
-    B = _Builder(N)
+    B = _Builder(N * nq, scene.cycle)
     bodies = scene.bodies
     tbodies = set(tlink)
     cranks = [c.link for c in lk.cranks]
@@ -193,7 +195,7 @@ def motion_model(scene: Scene, omega: float | None = None, *,
     prig, coords = [], []
     travel = {}        # "BLOCK.travel" → its part: a block's travel s is an output body [m]
     for i, part in enumerate(scene.parts):
-        crank = next((c for c in cranks if c in part), None)
+        crank = cranks[0] if cranks[0] in part else None    # a geared crank alone: below
         if crank is not None:
             coords.append(crank)
             prig.append(B.line(-1, 0.0, 1.0))
@@ -202,7 +204,7 @@ def motion_model(scene: Scene, omega: float | None = None, *,
                 if kind == "angle":
                     return B.line(i, 0.0, 1.0) if name == crank else B.table(
                         i, 0.0, h, ang[name], ang1[name], ang2[name], True,
-                        _winding(ang[name]))
+                        _winding(ang[name], nq))
                 k = "xy".index(kind)
                 return B.table(i, 0.0, h, pos[name][:, k], vel[name][:, k], acc[name][:, k],
                                True)
@@ -229,7 +231,8 @@ def motion_model(scene: Scene, omega: float | None = None, *,
         if len(part) == 1:
             b = part[0]
             coords.append(b)
-            prig.append(B.table(-1, 0.0, h, ang[b], ang1[b], ang2[b], True, _winding(ang[b])))
+            prig.append(B.table(-1, 0.0, h, ang[b], ang1[b], ang2[b], True,
+                                _winding(ang[b], nq)))
             piv = next((p for p in bodies[b] if p in lk.ground), None)
 
             def make(kind, name, i=i, piv=piv):
@@ -249,9 +252,11 @@ def motion_model(scene: Scene, omega: float | None = None, *,
             raise GeometryError(f"{scene.source}: the rigid part {{{', '.join(part)}}} has no "
                                 "link pinned to the frame to serve as its coordinate")
         coords.append(cb)
-        prig.append(B.table(-1, 0.0, h, ang[cb], ang1[cb], ang2[cb], True, _winding(ang[cb])))
-        lo, hi = float(ang[cb].min()), float(ang[cb].max())
-        margin = max(0.25 * (hi - lo), 0.05)
+        prig.append(B.table(-1, 0.0, h, ang[cb], ang1[cb], ang2[cb], True,
+                            _winding(ang[cb], nq)))
+        turns = cb in cranks          # a geared crank: its part repeats every turn of it
+        lo, hi = (0.0, TWO_PI) if turns else (float(ang[cb].min()), float(ang[cb].max()))
+        margin = 0.0 if turns else max(0.25 * (hi - lo), 0.05)
         plinks = {b: lk.links[b] for b in part if b not in tbodies}
         ppts = {p for pts in plinks.values() for p in pts}
         piv = next(p for p in plinks[cb] if p in lk.ground)
@@ -263,7 +268,7 @@ def motion_model(scene: Scene, omega: float | None = None, *,
         sidx = sub._index()
         sub_states = None
         for _ in range(6):
-            grid = np.linspace(lo - margin, hi + margin, N + 1)
+            grid = np.linspace(lo - margin, hi + margin, B.n + 1)
             try:
                 sub_states = sub.solve(grid)
                 break
@@ -272,21 +277,24 @@ def motion_model(scene: Scene, omega: float | None = None, *,
         if sub_states is None:
             raise GeometryError(f"{scene.source}: the rigid part {{{', '.join(part)}}} cannot "
                                 f"be tabulated against the rotation of {cb!r}")
-        sh = (grid[-1] - grid[0]) / N
+        sh = (grid[-1] - grid[0]) / B.n
 
-        def make(kind, name, i=i, cb=cb, st=sub_states, g0=float(grid[0]), sh=sh, sidx=sidx):
+        def make(kind, name, i=i, cb=cb, st=sub_states, g0=float(grid[0]), sh=sh, sidx=sidx,
+                 turns=turns):
+            per = TWO_PI if turns else None
             if kind == "angle":
                 name = tlink.get(name, name)
                 if name == cb:
                     return B.line(i, 0.0, 1.0)
                 j = sidx[name]
-                return B.table(i, g0, sh, [s.q[3 * j + 2] for s in st],
-                               [s.qdot[3 * j + 2] for s in st],
-                               [s.qddot[3 * j + 2] for s in st], False)
+                a = np.unwrap([s.q[3 * j + 2] for s in st])
+                return B.table(i, g0, sh, a, [s.qdot[3 * j + 2] for s in st],
+                               [s.qddot[3 * j + 2] for s in st], turns,
+                               _winding(a) if turns else 0.0, per)
             k = "xy".index(kind)
             return B.table(i, g0, sh, [s.points[name][k] * L for s in st],
                            [s.velocities[name][k] * L for s in st],
-                           [s.accelerations[name][k] * L for s in st], False)
+                           [s.accelerations[name][k] * L for s in st], turns, 0.0, per)
         makers.append(make)
 
     def need(i, kind, name):
@@ -414,12 +422,13 @@ def _memo(key, make):
 
 def _rigid_tables(scene: Scene, N: int):
     """Rotations, point positions and their first and second derivatives with respect to
-    the crank angle over one revolution (N + 1 nodes), memoised per linkage."""
+    the crank angle over the mechanism's cycle (N per revolution, plus one), memoised."""
     def make():
         lk = scene.linkage
         L = scene.length_scale
         w1 = lk.cranks[0].omega
-        th = np.linspace(0.0, TWO_PI, N + 1)
+        nq = scene.cycle_revolutions
+        th = np.linspace(0.0, scene.cycle, N * nq + 1)
         try:
             states = lk.solve(th)
         except GeometryError as exc:

@@ -212,7 +212,7 @@ def max_rate(model: MotionModel, samples: int = 72) -> float:
 
 def _max_rate(model: MotionModel, samples: int) -> float:
     rates = []
-    for th in np.linspace(0.0, TWO_PI, samples, endpoint=False):
+    for th in np.linspace(0.0, model.scene.cycle, samples, endpoint=False):
         M, D, K = linear_matrices(model, th)
         n = M.shape[0]
         inv = 1.0 / np.diag(M)[:, None]
@@ -299,7 +299,7 @@ def simulate_scene(scene: Scene, *, omega: float | None = None,
                             "steps_per_period")
     if model is None or (omega is not None and model.omega != float(omega)):
         model = motion_model(scene, omega)
-    period = TWO_PI / model.omega
+    period = scene.cycle / model.omega       # one revolution, or the cycle of geared cranks
     ripple = (0.0, 0.0) if ripple_rel is None or ripple_rel[0] == 0.0 else \
         (float(ripple_rel[0]) * model.omega, float(ripple_rel[1]) * model.omega)
     kern, backend = kernels_for(method)
@@ -332,7 +332,7 @@ def simulate_scene(scene: Scene, *, omega: float | None = None,
                        None if coarse is None else coarse[:5], wall, bad, n_steps, nfev,
                        method, "scipy", 0, notes + [text], warn, revolutions, compile_time)
     rate = max_rate(model)
-    need = period * rate * spp / TWO_PI
+    need = period * rate * spp / TWO_PI    # steps per cycle
     if need > MAX_STEPS_PER_REV:
         raise SolverError(f"the stiffest linearised mode (|λ| = {rate:.4g} 1/s) needs {need:.3g} "
                           f"RK4 steps per revolution at steps_per_period={spp:g}, more than "
@@ -374,7 +374,7 @@ def _finish(scene, cfg, model, kern, theta_s, ripple, ts, ys, prev, fine, wall, 
         est = _rel_change(extrema, {k: (float(v.min()), float(v.max()))
                                     for k, v in fout.items()})
         bad = bad or fine[4]
-    crank = crank_angle(model.omega, theta_s, ripple, ts)[0] % TWO_PI
+    crank = crank_angle(model.omega, theta_s, ripple, ts)[0] % scene.cycle
     wrap = np.flatnonzero(np.diff(crank) < 0)
     order = np.roll(np.arange(crank.size), -(int(wrap[0]) + 1)) if wrap.size == 1 \
         else np.argsort(crank, kind="stable")
@@ -462,7 +462,7 @@ def _run_scipy(model, kern, theta_s, revolutions, npts, method, rtol, progress, 
     qs = np.full(n, 1e-2)                       # a bounded rotation (a rocker, the sley)
     qs[[i for i, _, _ in lines]] = 1e-4         # a twist
     scale = np.concatenate([qs, 0.1 * np.maximum(np.abs(y0[n:]), omega)])
-    period = TWO_PI / omega
+    period = model.scene.cycle / omega
 
     def t_of(r):
         return (r * period) + np.arange(npts) * (period / npts)
@@ -499,7 +499,7 @@ def _run(model, kern, theta_s, ripple, per_rev, revolutions, npts, progress):
     n = model.n_free
     limit = 1e3 * model.omega * max(1.0, float(np.max(np.abs(y[n:]))) / model.omega)
     args = model.kernel_args(theta_s, limit, ripple=ripple)
-    period = TWO_PI / model.omega
+    period = model.scene.cycle / model.omega
     h = period / per_rev
     rec = np.empty((npts, y.size)), np.empty(npts)
     prev = (np.empty(npts), np.empty((npts, y.size))) if revolutions >= 2 else None
