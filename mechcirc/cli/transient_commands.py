@@ -32,6 +32,10 @@ def register(sub) -> None:
                    help="harmonic:OMEGA (rad/s, or with a unit: 50Hz), step, impulse, "
                         "csv:PATH (time,value samples, interpolated linearly) or rest "
                         "(default: the drive stays at rest)")
+    p.add_argument("--rpm", type=float, metavar="RPM",
+                   help="shaft speed [rev/min] of a drive given by its motion over a "
+                        "revolution (drive ... motion=LAW or motion=TABLE.csv); required "
+                        "for such a drive")
     p.add_argument("--amplitude", type=float, metavar="A",
                    help="amplitude of harmonic/step/impulse (default: the netlist's)")
     p.add_argument("--rtol", type=float, default=1e-10, metavar="TOL",
@@ -69,7 +73,7 @@ def cmd_transient(args) -> int:
         raise MechcircError(f"--amplitude must be finite, got {args.amplitude:g}")
     circuit = load(args.file, require_drive=False)
     result = transient(circuit, args.t_end, args.dt, args.drive, amplitude=args.amplitude,
-                       rtol=args.rtol)
+                       rtol=args.rtol, rpm=args.rpm)
     if args.element and not args.plot:
         from ..errors import MechcircError
 

@@ -61,7 +61,11 @@ class Waveform:
     ``"impulse"`` (a unit-area pulse at t = 0: momentum for a force drive, a
     displacement step of amplitude × 1 s for a velocity drive), ``"samples"``
     (``times``, ``values``: linear interpolation, held beyond the ends; values
-    are absolute, not scaled) or ``"callable"`` (``func(t)``, absolute).
+    are absolute, not scaled), ``"callable"`` (``func(t)``, absolute) or
+    ``"motion"`` (the velocity Ω·dx/dθ(Ωt) of ``motion``, a
+    :class:`~mechcirc.motion_laws.Motion` over one shaft revolution, at the
+    shaft speed ``omega`` = Ω [rad/s]; times the amplitude, 1 for a netlist's
+    ``motion=`` drive).
     """
 
     kind: str
@@ -69,6 +73,7 @@ class Waveform:
     times: tuple = ()
     values: tuple = ()
     func: Callable | None = field(default=None, compare=False)
+    motion: object = None
 
     def sample(self, t: np.ndarray, amplitude: float) -> np.ndarray:
         if self.kind in ("rest", "impulse"):
@@ -79,6 +84,8 @@ class Waveform:
             return np.full_like(t, amplitude)
         if self.kind == "samples":
             return np.interp(t, np.asarray(self.times), np.asarray(self.values))
+        if self.kind == "motion":
+            return amplitude * self.omega * self.motion.evaluate(self.omega * t)[1]
         if self.kind == "callable":
             out = np.asarray(self.func(t), dtype=float)
             if out.shape != t.shape:
@@ -248,6 +255,8 @@ def _grid(t_end: float, dt: float | None, waveform: Waveform) -> np.ndarray:
         dt = t_end / 2000
         if waveform.kind == "harmonic":
             dt = min(dt, 2 * math.pi / waveform.omega / 40)
+        elif waveform.kind == "motion":         # 0.5 degree of the shaft
+            dt = min(dt, 2 * math.pi / waveform.omega / 720)
     if not (math.isfinite(dt) and dt > 0):
         raise MechcircError(f"--dt must be a finite time > 0 [s], got {dt:g}")
     if dt < MIN_STEP:
@@ -267,7 +276,8 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
               drive: Waveform | str | Callable | None = None, *,
               amplitude: float | None = None, linearise: bool = False,
               elements: bool = True, velocities: bool = True,
-              rtol: float = 1e-10, steady: bool = False) -> TransientResult:
+              rtol: float = 1e-10, steady: bool = False,
+              rpm: float | None = None) -> TransientResult:
     """Integrate ``circuit`` from its ``.ic`` state over [0, t_end] on a grid of step ``dt``.
 
     Parameters
@@ -300,7 +310,13 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
         returns after every period, z(0) = amp · Im[(iωI − A)⁻¹ B], so no
         ring-down has to be waited for.  Refused when ω is a natural
         frequency of an undamped part (no periodic state exists).
+    rpm : float, optional
+        Shaft speed [rev/min] of a drive given by its motion over one
+        revolution (netlist ``drive ... motion=``): the drive's velocity is
+        Ω·dx/dθ at θ = Ωt (Ω = 2π·rpm/60), from t = 0 at θ = 0.  Required for
+        such a drive unless ``drive`` is given (which then replaces the motion).
     """
+    drive = _motion_drive(circuit, drive, rpm)
     if callable(drive) and not isinstance(drive, Waveform):
         drive = Waveform("callable", func=drive)
     elif not isinstance(drive, Waveform):
@@ -385,6 +401,36 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
             out.error = err + ROUNDING_PER_STEP * (t.size - 1) * float(np.abs(out.x).max())
     _require_finite(out)
     return out
+
+
+def _motion_drive(circuit: Circuit, drive, rpm):
+    """The waveform of a ``motion=`` drive at ``rpm``, else ``drive`` as given (checked)."""
+    from ..errors import NetlistError
+
+    d = circuit.drive
+    motion = getattr(d, "motion", None)
+    if rpm is not None:
+        if not (isinstance(rpm, (int, float)) and math.isfinite(rpm) and rpm > 0):
+            raise MechcircError(f"--rpm must be a finite shaft speed > 0 rev/min, got {rpm!r}")
+        if motion is None:
+            raise MechcircError("--rpm sets the shaft speed of a drive given by its motion "
+                                "over a revolution ('drive NAME N1 N2 motion=...'); this "
+                                "netlist's drive has none" if d is not None else
+                                "--rpm sets the shaft speed of a motion= drive; the netlist "
+                                "has no drive")
+        if drive is not None:
+            raise MechcircError("give either --drive (a waveform in time) or --rpm (the "
+                                f"shaft speed of the drive's {motion.spec}), not both")
+        from ..periodic import rpm_to_omega
+
+        return Waveform("motion", omega=rpm_to_omega(float(rpm)), motion=motion)
+    if motion is not None and drive is None:
+        raise NetlistError(f"drive {d.name!r} moves by {motion.spec.split()[0]} over one "
+                           "revolution of the shaft, and no shaft speed is given",
+                           circuit.source or "<string>", d.line, d.col,
+                           "a shaft speed: --rpm RPM (transient(..., rpm=RPM)), or a "
+                           "--drive waveform in time")
+    return drive
 
 
 def _require_finite(r: TransientResult) -> None:
