@@ -109,7 +109,33 @@ def cmd_transient(args) -> int:
         print(f"drive {what}: max |F| = {abs(result.drive_force).max():.6g} {u['Q']}")
     if result.drive_velocity is not None:
         print(f"drive velocity: max |v| = {abs(result.drive_velocity).max():.6g} {u['v']}")
+    _print_separations(result, u)
     return 0
+
+
+#: Openings of a contact listed one by one (the rest are counted).
+SHOWN = 8
+
+
+def _print_separations(result, u) -> None:
+    """Each clearance's contact openings: when (shaft angle), for how long, impact velocity."""
+    for name in result.clearances:
+        seps = [s for s in result.separations if s.element == name]
+        if not seps:
+            print(f"contact {name}: never opened after closing")
+            continue
+        print(f"contact {name}: opened {len(seps)} time(s)")
+        for s in seps[:SHOWN]:
+            when = (f"at θ = {s.angle_deg:.4f} deg (revolution {s.revolution + 1}), "
+                    if s.revolution >= 0 else "") + f"t = {s.t_open:.6g} s"
+            if math.isnan(s.t_close):
+                print(f"  {when}: still open at the end")
+                continue
+            span = (f"{s.duration_deg:.4f} deg, " if s.revolution >= 0 else "") + \
+                f"{s.duration:.4g} s"
+            print(f"  {when}: open {span}; impact velocity {s.impact_velocity:.6g} {u['v']}")
+        if len(seps) > SHOWN:
+            print(f"  ... {len(seps) - SHOWN} more (--json lists all)")
 
 
 def cmd_crosscheck_netlist(args) -> int:
