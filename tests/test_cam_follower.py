@@ -140,11 +140,14 @@ def test_jump_reported_with_angle_duration_and_impact(capsys, tmp_path):
     first = r.separations[0]
     assert first.element == "kc" and first.revolution == 0
     assert 170 < first.angle_deg < angle and first.duration_deg > 0   # earlier when faster
-    # the impact velocity is the relative velocity at the closing instant
-    i = np.searchsorted(r.time, first.t_close)
-    cam, f = r.nodes.index("cam"), r.nodes.index("f")
-    w = r.v[i - 1:i + 1, cam] - r.v[i - 1:i + 1, f]
-    assert min(w) <= first.impact_velocity <= max(w) and first.impact_velocity > 0
+    # converged in the output step (the instants are refined between samples):
+    # dt/10 moves the angle by 0.0017 deg, the duration by 0.0021 deg and the impact
+    # velocity by 4e-5 of it
+    fine = transient(c, r.time[-1], (r.time[1] - r.time[0]) / 10, rpm=1.2 * rpm).separations[0]
+    assert first.angle_deg == pytest.approx(fine.angle_deg, abs=0.01)
+    assert first.duration_deg == pytest.approx(fine.duration_deg, abs=0.01)
+    assert first.impact_velocity == pytest.approx(fine.impact_velocity, rel=5e-4)
+    assert first.impact_velocity > 0
     assert json.loads(json.dumps(r.to_json(), default=list))["separations"][0]["element"] == "kc"
 
 

@@ -6,7 +6,9 @@ apart (spring and damping parts summing to ≤ 0).  For every stretch of
 samples where its force is 0 after a contact, :func:`separations` reports
 when it opened, when it closed again and with which relative velocity (the
 impact), the instants refined between samples by linear interpolation of the
-law's unclipped values (error O(dt²)).  With a drive given by its motion over
+law's unclipped values (error O(dt²)); the impact velocity is extrapolated
+from the open side, where the motion is smooth.  A contact or an opening
+shorter than the output step can fall between two samples and go unseen.  With a drive given by its motion over
 a shaft revolution the instants are also cam angles, θ = Ωt.
 
 For a cam follower held on its cam by a spring (one flank of the clearance in
@@ -108,8 +110,10 @@ def separations(time, e, w, stiffness, damping, gap, name, omega_shaft=None):
             j += 1
         t_close, v_imp = math.nan, math.nan
         if j < n:
-            t_close, s = _root(time, up if up[j] > 0 else lo, j)
-            v_imp = float(w[j - 1] + s * (w[j] - w[j - 1]))
+            t_close, _ = _root(time, up if up[j] > 0 else lo, j)
+            # w from the open side (smooth in flight; the contact changes it at once)
+            slope = (w[j - 1] - w[j - 2]) / (time[j - 1] - time[j - 2]) if j - 2 >= k else 0.0
+            v_imp = float(w[j - 1] + slope * (t_close - time[j - 1]))
         angle = dur = math.nan
         rev = -1
         if omega_shaft:
