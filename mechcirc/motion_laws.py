@@ -390,9 +390,6 @@ def motion_table(angle_deg, displacement, spec: str = "motion=<table>") -> Motio
     """
     ang = np.asarray(angle_deg, dtype=float)
     x = np.array(displacement, dtype=float)
-    if np.abs(x).max(initial=0.0) > MAX_LIFT:
-        raise ValueError(f"a displacement of {np.abs(x).max():g} is beyond the bound "
-                         f"{MAX_LIFT:g} (the drive's velocities and forces would overflow)")
     theta = np.radians(ang - ang[0])
     theta[-1] = _TAU
     x[-1] = x[0]
@@ -403,6 +400,9 @@ def motion_table(angle_deg, displacement, spec: str = "motion=<table>") -> Motio
     if spl is None or not np.all(np.isfinite(spl.c)):
         raise ValueError("the spline through the table is not finite in float64 "
                          "(displacements too large)")
+    if np.abs(x).max(initial=0.0) > MAX_LIFT:
+        raise ValueError(f"a displacement of {np.abs(x).max():g} is beyond the bound "
+                         f"{MAX_LIFT:g} (the drive's velocities and forces would overflow)")
     c = spl.c                                          # (4, n−1), highest power first
     poly = tuple((c[3, i], c[2, i], c[1, i], c[0, i], 0.0, 0.0) for i in range(c.shape[1]))
     error, coarse = math.inf, None

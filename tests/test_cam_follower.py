@@ -194,3 +194,34 @@ def test_bad_cam_input_is_a_located_user_error(tmp_path, capsys):
     lin.write_text("drive F a 0 force=1\nmass m a 0 1\nspring k a 0 1\n")
     assert_user_error(["transient", lin, "--t-end", "1", "--rpm", "600"], capsys,
                       "--rpm", "has none")
+
+
+def test_example_prints_the_jump_speed_both_ways():
+    import re
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    from bounds import SUBPROCESS_TIMEOUT
+
+    repo = Path(__file__).resolve().parents[1]
+    proc = subprocess.run([sys.executable, str(repo / "examples" / "cam_follower_jump.py")],
+                          cwd=repo, capture_output=True, text=True, timeout=SUBPROCESS_TIMEOUT)
+    assert proc.returncode == 0 and proc.stderr == "", proc.stderr
+    closed = float(re.search(r"closed form \(rigid follower\): (\S+) rpm", proc.stdout).group(1))
+    simulated = float(re.search(r"simulated onset of separation: (\S+) rpm",
+                                proc.stdout).group(1))
+    assert abs(simulated / closed - 1) <= 1e-6                 # achieved 2.6e-9
+    assert re.search(r"at 800 rpm the contact opens [1-9]\d* time", proc.stdout)
+
+
+def test_a_table_beyond_the_lift_bound_is_located(tmp_path, capsys):
+    rows = ["angle_deg,displacement"] + [f"{a},0.0" for a in range(0, 361, 30)]
+    rows[4] = "90,1e200"                                   # finite slopes, beyond 1e100
+    (tmp_path / "lift.csv").write_text("\n".join(rows) + "\n")
+    net = tmp_path / "t.mcir"
+    net.write_text("drive V T 0 motion=lift.csv\nspring k T a 1e5\nmass m a 0 1\n"
+                   "damper c a 0 10\n")
+    for argv in (["periodic", net, "--rpm", "600"],
+                 ["transient", net, "--t-end", "0.1", "--rpm", "600"]):
+        assert_user_error(argv, capsys, "lift.csv:5:4:", "beyond the bound 1e+100")
