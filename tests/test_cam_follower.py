@@ -225,3 +225,13 @@ def test_a_table_beyond_the_lift_bound_is_located(tmp_path, capsys):
     for argv in (["periodic", net, "--rpm", "600"],
                  ["transient", net, "--t-end", "0.1", "--rpm", "600"]):
         assert_user_error(argv, capsys, "lift.csv:5:4:", "beyond the bound 1e+100")
+
+
+@pytest.mark.parametrize("bad", [dict(spring=-1.0), dict(mass=0.0), dict(preload=-5.0),
+                                 dict(damping=math.nan), dict(contact=0.0)])
+def test_follower_refuses_bad_parameters(bad):
+    args = dict(mass=0.5, spring=5e3, preload=50.0, damping=5.0, contact=1e9) | bad
+    motion = cam_cycle("cycloidal", 100, 80, 80, 0.02)
+    with pytest.raises(mechcirc.MechcircError, match=next(iter(bad))):
+        follower_circuit(motion, args["mass"], args["spring"], args["preload"],
+                         args["damping"], contact=args["contact"])

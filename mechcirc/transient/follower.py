@@ -71,12 +71,14 @@ def _min_over_angle(f):
     return float(values[i]), float(grid[i])
 
 
-def _check(mass, spring, preload, damping):
-    for name, v, low in (("mass", mass, 0.0), ("spring", spring, -1.0), ("preload", preload, 0.0),
-                         ("damping", damping, -1.0)):
-        if not (isinstance(v, (int, float)) and math.isfinite(v) and v > low):
-            need = "> 0" if low == 0.0 else ">= 0"
-            raise MechcircError(f"the follower's {name} must be a finite number {need}, got {v!r}")
+def _check(**values):
+    """Each value a finite number, > 0 (mass, preload, contact) or >= 0 (the others)."""
+    for name, v in values.items():
+        positive = name in ("mass", "preload", "contact")
+        if not (isinstance(v, (int, float)) and math.isfinite(v)
+                and (v > 0 if positive else v >= 0)):
+            raise MechcircError(f"the follower's {name} must be a finite number "
+                                f"{'> 0' if positive else '>= 0'}, got {v!r}")
 
 
 def jump_speed(motion, mass: float, spring: float, preload: float,
@@ -105,7 +107,7 @@ def jump_speed(motion, mass: float, spring: float, preload: float,
     """
     from scipy.optimize import brentq
 
-    _check(mass, spring, preload, damping)
+    _check(mass=mass, spring=spring, preload=preload, damping=damping)
     need = _contact_need(motion, mass, spring, preload, damping)
     low, _ = _min_over_angle(lambda t: need(t, 0.0))
     if low <= 0:
@@ -144,13 +146,8 @@ def follower_circuit(motion, mass, spring, preload, damping=0.0, *, contact,
     """
     from ..netlist import parse
 
-    _check(mass, spring, preload, damping)
-    for name, v, positive in (("contact", contact, True),
-                              ("contact_damping", contact_damping, False)):
-        if not (isinstance(v, (int, float)) and math.isfinite(v) and (v > 0 if positive
-                                                                      else v >= 0)):
-            raise MechcircError(f"{name} must be a finite number {'> 0' if positive else '>= 0'}"
-                                f", got {v!r}")
+    _check(mass=mass, spring=spring, preload=preload, damping=damping, contact=contact,
+           contact_damping=contact_damping)
     s = motion.evaluate(np.linspace(0, 2 * math.pi, GRID, endpoint=False))[0]
     z0 = preload / spring
     half = float(np.abs(s).max()) + z0
