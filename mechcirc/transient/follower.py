@@ -100,10 +100,10 @@ def jump_speed(motion, mass: float, spring: float, preload: float,
     Examples
     --------
     >>> from mechcirc.motion_laws import cam_cycle
-    >>> m = cam_cycle("cycloidal", 90, 90, 90, 0.02)
-    >>> rpm, angle = jump_speed(m, 0.5, 5e3, 50.0)
+    >>> m = cam_cycle("cycloidal", 100, 80, 80, 0.02)
+    >>> rpm, angle = jump_speed(m, 0.5, 5e3, 50.0)      # early in the return
     >>> round(rpm, 3), round(angle, 3)
-    (710.764, 236.317)
+    (629.138, 201.639)
     """
     from scipy.optimize import brentq
 
