@@ -235,3 +235,16 @@ def test_follower_refuses_bad_parameters(bad):
     with pytest.raises(mechcirc.MechcircError, match=next(iter(bad))):
         follower_circuit(motion, args["mass"], args["spring"], args["preload"],
                          args["damping"], contact=args["contact"])
+
+
+def test_ic_on_the_drive_node_sets_where_the_drive_starts():
+    c = mechcirc.parse("drive V T 0 velocity=1\nspring k T a 100\nmass m a 0 1\n"
+                       ".ic T x=0.1\n.ic a x=0.1\n")
+    r = transient(c, 1.0, 1e-2)                  # drive at rest: nothing moves
+    assert not any("not attainable" in n for n in r.notes)
+    assert np.allclose(r.node("T")[0], 0.1, rtol=0, atol=1e-15)
+    assert np.allclose(r.node("a")[0], 0.1, rtol=0, atol=1e-15)
+    free = mechcirc.parse("drive V T 0 velocity=1\nspring k T a 100\nmass m a 0 1\n"
+                          ".ic a x=0.1\n")
+    x = transient(free, 1.0, 1e-2).node("a")[0]   # drive held at 0: a oscillates about 0
+    assert np.allclose(x, 0.1 * np.cos(10 * np.arange(101) * 1e-2), rtol=0, atol=1e-12)
