@@ -263,12 +263,16 @@ def follower(motion, rpm: float, mass: float, spring: float, preload: float,
 
 def separation_speed(motion, mass, spring, preload, damping=0.0, *, contact,
                      contact_damping=0.0, bracket, rtol=1e-10, dt=None,
-                     xtol=1e-9) -> float:
+                     xtol=1e-8) -> float:
     """The shaft speed [rev/min] at which the simulated follower first leaves the cam.
 
     The root in ``bracket`` = (rpm_lo, rpm_hi) of the least contact force over
     the first turn (:attr:`FollowerResult.min_contact`), by ``brentq`` to the
     relative tolerance ``xtol``: the simulated counterpart of :func:`jump_speed`.
+    The least force has a kink at the root (beyond it the follower flies), so
+    brentq proceeds about as bisection does (some 20 runs).  Its resolution is
+    the rounding of the contact's deflection: k_c × ~1e-16 m of position
+    (1e-5 N at k_c = 1e11 N/m, about 1e-7 of the speed in the example).
     """
     from scipy.optimize import brentq
 
