@@ -46,6 +46,7 @@ from .errors import NetlistError
 
 __all__ = [
     "LAWS",
+    "MAX_LIFT",
     "PERIODIC_TOLERANCE",
     "Motion",
     "cam_cycle",
@@ -60,6 +61,12 @@ LAWS = ("harmonic", "cycloidal", "modified_sine", "modified_trapezoid", "polynom
 #: A table's two ends must meet within this fraction of its displacement range
 #: (or 1e-12 m when the table does not move at all).
 PERIODIC_TOLERANCE = 1e-6
+
+#: The largest |stroke| of a law and |displacement| of a table [m or rad].  The
+#: drive's velocity, force and Fourier sums multiply it by powers of the shaft
+#: speed and the harmonic number: 1e308 overflows float64 in them, 1e100 leaves
+#: 200 decades for those factors.
+MAX_LIFT = 1e100
 
 _TAU = 2 * math.pi
 _DEG = 6  # polynomial coefficients per piece: τ⁰ … τ⁵
@@ -328,6 +335,9 @@ def cam_cycle(law_name: str, rise: float, dwell: float, ret: float, stroke: floa
                          "one revolution (360)")
     if not (math.isfinite(stroke) and stroke != 0):
         raise ValueError(f"stroke must be a finite nonzero number, got {stroke!r}")
+    if abs(stroke) > MAX_LIFT:
+        raise ValueError(f"stroke={stroke:g} is beyond the bound |stroke| <= {MAX_LIFT:g} "
+                         "(the drive's velocities and forces would overflow float64)")
     b1, d1, b2 = (math.radians(v) for v in (rise, dwell, ret))
     try:        # a rise of 1e-320 degrees: 1/β⁵ is not a float64
         pieces = _piece_map(_law_pieces(law_name), 0.0, b1, stroke, True)
@@ -390,6 +400,9 @@ def motion_table(angle_deg, displacement, spec: str = "motion=<table>") -> Motio
     if spl is None or not np.all(np.isfinite(spl.c)):
         raise ValueError("the spline through the table is not finite in float64 "
                          "(displacements too large)")
+    if np.abs(x).max(initial=0.0) > MAX_LIFT:
+        raise ValueError(f"a displacement of {np.abs(x).max():g} is beyond the bound "
+                         f"{MAX_LIFT:g} (the drive's velocities and forces would overflow)")
     c = spl.c                                          # (4, n−1), highest power first
     poly = tuple((c[3, i], c[2, i], c[1, i], c[0, i], 0.0, 0.0) for i in range(c.shape[1]))
     error, coarse = math.inf, None
@@ -499,6 +512,6 @@ def read_motion_table(path: str | os.PathLike, spec: str | None = None) -> Motio
     except ValueError as exc:                  # 1e308 m: the slopes overflow
         big = max(rows, key=lambda r: abs(r[1]))
         raise NetlistError(f"{exc}; the largest displacement is {big[1]:g}", source, big[2],
-                           big[3][header[1]], "displacements whose slopes are finite "
-                           "float64 numbers") from None
+                           big[3][header[1]], f"displacements within ±{MAX_LIFT:g} whose "
+                           "slopes are finite float64 numbers") from None
     return dataclasses.replace(m, path=source)

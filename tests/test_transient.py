@@ -336,7 +336,9 @@ def _kernel_args(c, ss):
     dv = np.array([r[3] for r in rows])
     prm = np.array([r[4] for r in rows])
     from mechcirc.transient import _kernels as kern
-    return kern.kernel_args(ss.A, ss.B, cx, dx, cv, dv, ss.extra, prm) + (np.zeros(51),)
+    # the drive: values, then rates (NaN: none, linear interpolation)
+    return kern.kernel_args(ss.A, ss.B, cx, dx, cv, dv, ss.extra, prm) + \
+        (np.vstack([np.zeros(51), np.full(51, np.nan)]),)
 
 
 def test_msl_backlash_example_agrees():

@@ -32,6 +32,10 @@ def register(sub) -> None:
                    help="harmonic:OMEGA (rad/s, or with a unit: 50Hz), step, impulse, "
                         "csv:PATH (time,value samples, interpolated linearly) or rest "
                         "(default: the drive stays at rest)")
+    p.add_argument("--rpm", type=float, metavar="RPM",
+                   help="shaft speed [rev/min] of a drive given by its motion over a "
+                        "revolution (drive ... motion=LAW or motion=TABLE.csv); required "
+                        "for such a drive")
     p.add_argument("--amplitude", type=float, metavar="A",
                    help="amplitude of harmonic/step/impulse (default: the netlist's)")
     p.add_argument("--rtol", type=float, default=1e-10, metavar="TOL",
@@ -69,7 +73,7 @@ def cmd_transient(args) -> int:
         raise MechcircError(f"--amplitude must be finite, got {args.amplitude:g}")
     circuit = load(args.file, require_drive=False)
     result = transient(circuit, args.t_end, args.dt, args.drive, amplitude=args.amplitude,
-                       rtol=args.rtol)
+                       rtol=args.rtol, rpm=args.rpm)
     if args.element and not args.plot:
         from ..errors import MechcircError
 
@@ -105,7 +109,33 @@ def cmd_transient(args) -> int:
         print(f"drive {what}: max |F| = {abs(result.drive_force).max():.6g} {u['Q']}")
     if result.drive_velocity is not None:
         print(f"drive velocity: max |v| = {abs(result.drive_velocity).max():.6g} {u['v']}")
+    _print_separations(result, u)
     return 0
+
+
+#: Openings of a contact listed one by one (the rest are counted).
+SHOWN = 8
+
+
+def _print_separations(result, u) -> None:
+    """Each clearance's contact openings: when (shaft angle), for how long, impact velocity."""
+    for name in result.clearances:
+        seps = [s for s in result.separations if s.element == name]
+        if not seps:
+            print(f"contact {name}: never opened after closing")
+            continue
+        print(f"contact {name}: opened {len(seps)} time(s)")
+        for s in seps[:SHOWN]:
+            when = (f"at θ = {s.angle_deg:.4f} deg (revolution {s.revolution + 1}), "
+                    if s.revolution >= 0 else "") + f"t = {s.t_open:.6g} s"
+            if math.isnan(s.t_close):
+                print(f"  {when}: still open at the end")
+                continue
+            span = (f"{s.duration_deg:.4f} deg, " if s.revolution >= 0 else "") + \
+                f"{s.duration:.4g} s"
+            print(f"  {when}: open {span}; impact velocity {s.impact_velocity:.6g} {u['v']}")
+        if len(seps) > SHOWN:
+            print(f"  ... {len(seps) - SHOWN} more (--json lists all)")
 
 
 def cmd_crosscheck_netlist(args) -> int:

@@ -61,16 +61,29 @@ def law_many(e, w, c, d, b, total, spring):
 
 @_jit
 def drive_at(t, t0, dt, u):
-    """Linear interpolation of the drive samples ``u`` on the grid t0 + k dt (held beyond)."""
+    """The drive between its samples on the grid t0 + k dt (held beyond the ends).
+
+    ``u[0]`` holds the values; ``u[1]`` their time derivatives, or NaN first for
+    none: then linear interpolation, else the cubic Hermite through values and
+    derivatives (a motion drive: smooth, so a stiff contact is not rung by the
+    kinks of a piecewise-linear velocity).
+    """
     s = (t - t0) / dt
-    n = u.shape[0]
+    n = u.shape[1]
     if s <= 0.0:
-        return u[0]
+        return u[0, 0]
     k = int(math.floor(s))
     if k >= n - 1:
-        return u[n - 1]
+        return u[0, n - 1]
     f = s - k
-    return u[k] + f * (u[k + 1] - u[k])
+    a = u[0, k]
+    b = u[0, k + 1]
+    if math.isnan(u[1, 0]):
+        return a + f * (b - a)
+    f2 = f * f
+    f3 = f2 * f
+    return ((2 * f3 - 3 * f2 + 1) * a + (f3 - 2 * f2 + f) * dt * u[1, k]
+            + (3 * f2 - 2 * f3) * b + (f3 - f2) * dt * u[1, k + 1])
 
 
 def pack_rows(M):

@@ -311,7 +311,8 @@ def _initial(circuit, nodes, index, Cx, Cv, N, vel):
     Mat = np.vstack([Cx, Cv])
     rhs = np.concatenate([x0, v0])
     cols = np.ones(N, bool)
-    if vel:
+    d = circuit.drive
+    if vel and not any(nd in (d.n1, d.n2) for nd, _, _ in circuit.initial):
         cols[-1] = False            # X(0) = 0: the drive starts from its reference
     named_idx = {index[nd] for nd, _, _ in circuit.initial if nd in index}
     rows = np.array([i in named_idx for i in range(n)] * 2)

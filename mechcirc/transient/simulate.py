@@ -26,6 +26,7 @@ estimated by its difference from the run at rtol (which errs many times more).
 from __future__ import annotations
 
 import csv
+import dataclasses
 import math
 import warnings
 from dataclasses import dataclass, field
@@ -61,7 +62,11 @@ class Waveform:
     ``"impulse"`` (a unit-area pulse at t = 0: momentum for a force drive, a
     displacement step of amplitude × 1 s for a velocity drive), ``"samples"``
     (``times``, ``values``: linear interpolation, held beyond the ends; values
-    are absolute, not scaled) or ``"callable"`` (``func(t)``, absolute).
+    are absolute, not scaled), ``"callable"`` (``func(t)``, absolute) or
+    ``"motion"`` (the velocity Ω·dx/dθ(Ωt) of ``motion``, a
+    :class:`~mechcirc.motion_laws.Motion` over one shaft revolution, at the
+    shaft speed ``omega`` = Ω [rad/s]; times the amplitude, 1 for a netlist's
+    ``motion=`` drive).
     """
 
     kind: str
@@ -69,6 +74,7 @@ class Waveform:
     times: tuple = ()
     values: tuple = ()
     func: Callable | None = field(default=None, compare=False)
+    motion: object = None
 
     def sample(self, t: np.ndarray, amplitude: float) -> np.ndarray:
         if self.kind in ("rest", "impulse"):
@@ -79,6 +85,8 @@ class Waveform:
             return np.full_like(t, amplitude)
         if self.kind == "samples":
             return np.interp(t, np.asarray(self.times), np.asarray(self.values))
+        if self.kind == "motion":
+            return amplitude * self.omega * self.motion.evaluate(self.omega * t)[1]
         if self.kind == "callable":
             out = np.asarray(self.func(t), dtype=float)
             if out.shape != t.shape:
@@ -87,6 +95,10 @@ class Waveform:
                 raise MechcircError("the drive function returned a non-finite value")
             return out
         raise ValueError(f"unknown waveform kind {self.kind!r}")
+
+    def rate(self, t: np.ndarray, amplitude: float) -> np.ndarray:
+        """du/dt of a ``"motion"`` waveform: amplitude · Ω² d²x/dθ² at θ = Ωt."""
+        return amplitude * self.omega ** 2 * self.motion.evaluate(self.omega * t)[2]
 
 
 def parse_drive(text: str | None) -> Waveform:
@@ -156,7 +168,9 @@ class TransientResult:
     [same unit] and ``notes`` what the run had to say.  ``drive_name``, ``units``
     (:func:`mechcirc.circuit.units_of` of the drive: m or rad, N or N·m, ...)
     and ``clearances`` (spring name -> (n1, n2, total clearance B)) serve the
-    labels and :meth:`plot`.
+    labels and :meth:`plot`.  ``separations`` lists every opening of a
+    clearance's contact (:class:`~mechcirc.transient.contact.Separation`: when,
+    at which shaft angle with a motion drive, for how long, the impact velocity).
     """
 
     time: np.ndarray
@@ -177,6 +191,7 @@ class TransientResult:
     drive_name: str | None = None
     units: dict = field(default_factory=lambda: units_of(None))
     clearances: dict = field(default_factory=dict)
+    separations: list = field(default_factory=list)
 
     def node(self, name: str) -> tuple[np.ndarray, np.ndarray]:
         """(x, v) of node ``name``."""
@@ -212,6 +227,8 @@ class TransientResult:
                          {"velocity": self.drive_velocity} if self.drive_velocity is not None
                          else {}),
                "error": self.error, "method": self.method, "notes": list(self.notes)}
+        if self.clearances:
+            doc["separations"] = [dataclasses.asdict(s) for s in self.separations]
         return doc
 
     def write_csv(self, fh) -> None:
@@ -248,6 +265,8 @@ def _grid(t_end: float, dt: float | None, waveform: Waveform) -> np.ndarray:
         dt = t_end / 2000
         if waveform.kind == "harmonic":
             dt = min(dt, 2 * math.pi / waveform.omega / 40)
+        elif waveform.kind == "motion":         # 0.5 degree of the shaft
+            dt = min(dt, 2 * math.pi / waveform.omega / 720)
     if not (math.isfinite(dt) and dt > 0):
         raise MechcircError(f"--dt must be a finite time > 0 [s], got {dt:g}")
     if dt < MIN_STEP:
@@ -267,7 +286,8 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
               drive: Waveform | str | Callable | None = None, *,
               amplitude: float | None = None, linearise: bool = False,
               elements: bool = True, velocities: bool = True,
-              rtol: float = 1e-10, steady: bool = False) -> TransientResult:
+              rtol: float = 1e-10, steady: bool = False,
+              rpm: float | None = None) -> TransientResult:
     """Integrate ``circuit`` from its ``.ic`` state over [0, t_end] on a grid of step ``dt``.
 
     Parameters
@@ -300,7 +320,13 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
         returns after every period, z(0) = amp · Im[(iωI − A)⁻¹ B], so no
         ring-down has to be waited for.  Refused when ω is a natural
         frequency of an undamped part (no periodic state exists).
+    rpm : float, optional
+        Shaft speed [rev/min] of a drive given by its motion over one
+        revolution (netlist ``drive ... motion=``): the drive's velocity is
+        Ω·dx/dθ at θ = Ωt (Ω = 2π·rpm/60), from t = 0 at θ = 0.  Required for
+        such a drive unless ``drive`` is given (which then replaces the motion).
     """
+    drive = _motion_drive(circuit, drive, rpm)
     if callable(drive) and not isinstance(drive, Waveform):
         drive = Waveform("callable", func=drive)
     elif not isinstance(drive, Waveform):
@@ -336,14 +362,18 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
         u_in = np.zeros_like(u)
     else:
         u_in = u
-    interp = _interpolation_error(u, drive)
     has_clear = bool(backlash_elements(circuit)) and not linearise
+    interp = _interpolation_error(u, drive)
+    hermite = has_clear and drive.kind == "motion"
+    if hermite:     # cubic Hermite: h⁴/384·max|u⁗|, from the fourth differences
+        interp = float(np.abs(np.diff(u, 4)).max() / 384.0) if u.size > 4 else 0.0
     T, nx, drive_y, x_ready, v_ready = None, None, None, None, None
     if has_clear:
         if not RTOL_RANGE[0] <= rtol <= RTOL_RANGE[1]:
             raise MechcircError(f"--rtol must be between {RTOL_RANGE[0]:g} and "
                                 f"{RTOL_RANGE[1]:g}, got {rtol:g}")
-        Z, method, err, more = _nonlinear(ss, circuit, z0, t, u_in, rtol)
+        Z, method, err, more = _nonlinear(ss, circuit, z0, t, u_in, rtol,
+                                          drive.rate(t, amp) if drive.kind == "motion" else None)
         notes.extend(more)
     else:
         x_only = velocities is False and not elements
@@ -373,7 +403,10 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
             nx = None               # v and forces use every column anyway: keep x whole
         notes.append(f"linear propagation: {path}")
     if interp > 1e-13 * float(np.abs(u).max()):      # not rounding of an exact ramp
-        notes.append(f"drive interpolated linearly between samples: its error is at most "
+        notes.append(f"drive interpolated by cubic Hermite between samples (exact values and "
+                     f"rates of the motion): its error is at most {interp:.3g} "
+                     "(h⁴/384·max|u⁗|, from the samples' fourth differences)" if hermite else
+                     f"drive interpolated linearly between samples: its error is at most "
                      f"{interp:.3g} (h²/8·max|ü|, from the samples' second differences)")
     out = _outputs(ss, circuit, t, Z, u, u_in, h, drive, method, err, interp, notes,
                    elements, T, velocities, nx, drive_y, x_ready, v_ready)
@@ -384,7 +417,62 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
         with np.errstate(all="ignore"):
             out.error = err + ROUNDING_PER_STEP * (t.size - 1) * float(np.abs(out.x).max())
     _require_finite(out)
+    if has_clear:
+        out.separations = _separations(out, circuit, drive)
     return out
+
+
+def _separations(out: TransientResult, circuit, drive):
+    """Every opening of each clearance's contact (:func:`.contact.separations`)."""
+    from .contact import separations
+
+    found = []
+    index = {n: i for i, n in enumerate(out.nodes)}
+    for e, comp in backlash_elements(circuit):
+        rel = [np.zeros(out.time.size), np.zeros(out.time.size)]
+        for node, sign in ((e.n1, 1.0), (e.n2, -1.0)):
+            if node in index:
+                rel[0] = rel[0] + sign * out.x[:, index[node]]
+                rel[1] = rel[1] + sign * out.v[:, index[node]]
+        found += separations(out.time, rel[0], rel[1], *_law_params(e, comp), e.name,
+                             drive.omega if drive.kind == "motion" else None)
+    return sorted(found, key=lambda s: s.t_open)
+
+
+def _law_params(spring, comp):
+    """(c, d, B) of a clearance spring and its companion damper."""
+    d = comp.value * comp.eta if comp is not None else spring.damping * spring.eta
+    return spring.value * spring.eta, d, spring.backlash
+
+
+def _motion_drive(circuit: Circuit, drive, rpm):
+    """The waveform of a ``motion=`` drive at ``rpm``, else ``drive`` as given (checked)."""
+    from ..errors import NetlistError
+
+    d = circuit.drive
+    motion = getattr(d, "motion", None)
+    if rpm is not None:
+        if not (isinstance(rpm, (int, float)) and math.isfinite(rpm) and rpm > 0):
+            raise MechcircError(f"--rpm must be a finite shaft speed > 0 rev/min, got {rpm!r}")
+        if motion is None:
+            raise MechcircError("--rpm sets the shaft speed of a drive given by its motion "
+                                "over a revolution ('drive NAME N1 N2 motion=...'); this "
+                                "netlist's drive has none" if d is not None else
+                                "--rpm sets the shaft speed of a motion= drive; the netlist "
+                                "has no drive")
+        if drive is not None:
+            raise MechcircError("give either --drive (a waveform in time) or --rpm (the "
+                                f"shaft speed of the drive's {motion.spec}), not both")
+        from ..periodic import rpm_to_omega
+
+        return Waveform("motion", omega=rpm_to_omega(float(rpm)), motion=motion)
+    if motion is not None and drive is None:
+        raise NetlistError(f"drive {d.name!r} moves by {motion.spec.split()[0]} over one "
+                           "revolution of the shaft, and no shaft speed is given",
+                           circuit.source or "<string>", d.line, d.col,
+                           "a shaft speed: --rpm RPM (transient(..., rpm=RPM)), or a "
+                           "--drive waveform in time")
+    return drive
 
 
 def _require_finite(r: TransientResult) -> None:
@@ -799,7 +887,9 @@ def _modal_states(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout):
                 yout += wout[col] * part
 
 
-def _nonlinear(ss: StateSpace, circuit, z0, t, u, rtol):
+def _nonlinear(ss: StateSpace, circuit, z0, t, u, rtol, rate=None):
+    """The clearance integrator; ``rate``: the drive's exact derivative at the samples
+    (then the drive is interpolated by cubic Hermite between them, else linearly)."""
     from . import _kernels as kern
 
     N = ss.size
@@ -813,6 +903,7 @@ def _nonlinear(ss: StateSpace, circuit, z0, t, u, rtol):
     # is constant; a harmonic drive is generated by states), up to 1 rad of the
     # fastest mode with every contact closed, so no contact can be stepped over.
     dense = bool(np.all(u == u[0]))
+    u = np.ascontiguousarray(np.vstack([u, rate if rate is not None else np.full(u.size, np.nan)]))
     hmax = min(1.0 / w_max, t[-1]) if w_max > 0 else t[-1]
 
     def run(tol, atol, hm):
@@ -892,8 +983,7 @@ def _clearance_setup(ss: StateSpace, circuit):
             ge[index[e.n2]] -= 1.0
         cx[k], dx[k] = ge @ ss.Cx, ge @ ss.Dx
         cv[k], dv[k] = ge @ ss.Cv, ge @ ss.Dv
-        damping = comp.value * comp.eta if comp is not None else e.damping * e.eta
-        prm[k] = (e.value * e.eta, damping, e.backlash)
+        prm[k] = _law_params(e, comp)
     mats = kern.kernel_args(ss.A, ss.B, cx, dx, cv, dv, ss.extra, prm)
     # A with every contact closed: A + Σ_e extra_e ⊗ (c_e cx_e + d_e cv_e).
     closed = ss.A + ss.extra @ (prm[:, :1] * cx + prm[:, 1:2] * cv)
@@ -1018,10 +1108,8 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes,
 def _law_forces(spring, comp, e, w):
     from . import _kernels as kern
 
-    c = spring.value * spring.eta
-    d = comp.value * comp.eta if comp is not None else spring.damping * spring.eta
+    c, d, b = _law_params(spring, comp)
     total = np.empty(e.size)
     part = np.empty(e.size)
-    kern.law_many(np.ascontiguousarray(e), np.ascontiguousarray(w), c, d, spring.backlash,
-                  total, part)
+    kern.law_many(np.ascontiguousarray(e), np.ascontiguousarray(w), c, d, b, total, part)
     return total, part
