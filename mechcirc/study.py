@@ -805,7 +805,7 @@ def run_batch(spec: StudySpec, batch: list[tuple[int, dict[str, float]]]) -> lis
                 omega = np.geomspace(lo, hi, n) if log else np.linspace(lo, hi, n)
                 s = ds.sweep(omega)
                 flagged = np.count_nonzero(s.flags, axis=1)
-                ex = ds.extremes(omega, ds.resonances(omega_max=hi * (1 + 1e-9)))
+                ex = ds.extremes(omega, ds.resonances(omega_max=hi * (1 + 1e-9)), s)
                 failed = {**ex.failed, **s.failed}
                 for d, row in enumerate(rows):
                     # Exact extremes over the band: 0 and inf at a zero or pole of K
