@@ -214,7 +214,8 @@ def cmd_study(args) -> int:
     with Progress(len(spec.points), "study") as bar:
         result = run_study(spec, output=args.output, scheduler=args.scheduler,
                            workers=args.workers, resume=args.resume,
-                           connect_timeout=args.connect_timeout, on_rows=bar.update)
+                           connect_timeout=args.connect_timeout, on_rows=bar.update,
+                           keep_rows=bool(args.json or args.plot or not args.output))
     if args.plot:
         from ..plotting import plot_study
 
@@ -224,7 +225,7 @@ def cmd_study(args) -> int:
         print_json({"spec": args.spec, "spec_sha256": spec.sha256,
                     "netlist": spec.netlist_source,
                     "analysis": spec.analysis, "executor": result.executor,
-                    "workers": result.workers, "points": len(result.rows),
+                    "workers": result.workers, "points": result.count,
                     "resumed": result.skipped, "failed": result.failed,
                     "columns": result.columns, "units": column_units(spec),
                     "rows": [[r.get(c, None) for c in result.columns] for r in result.rows]})
@@ -234,7 +235,7 @@ def cmd_study(args) -> int:
              "inline": "this process"}[result.executor]
     model = spec.netlist_source if spec.analysis != "simulate" else \
         f"the sley model, {spec.sley[0]} variant {spec.sley[1]}"
-    print(f"{args.spec}: {len(result.rows)} points of {model} ({spec.analysis}) on {where}")
+    print(f"{args.spec}: {result.count} points of {model} ({spec.analysis}) on {where}")
     if result.skipped:
         print(f"  {result.skipped} point(s) kept from {args.output}")
     if result.failed:
