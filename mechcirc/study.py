@@ -95,7 +95,7 @@ import random
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable, Iterable
+from typing import Callable
 
 from .errors import MechcircError, NetlistError
 from .limits import (MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS, MAX_STUDY_POINTS,
@@ -777,8 +777,12 @@ def run_point(spec: StudySpec, index: int, values: dict[str, float]) -> dict:
     return run_batch(spec, [(index, values)])[0]
 
 
-def run_batch(spec: StudySpec, batch: list[tuple[int, dict[str, float]]]) -> list[dict]:
+def run_batch(spec: StudySpec, batch: list[tuple[int, dict[str, float]]],
+              curves: bool = False):
     """Rows of a batch of points (what each worker runs; errors recorded, never raised).
+
+    With ``curves`` (a sweep), ``(rows, K)``: also K [m/(N·s)] of every point on
+    the study's ω grid, shape (points, W), NaN in the rows of failed points.
 
     A netlist's points are one :func:`mechcirc.batch.designs` batch: the
     netlist parsed once, K on the D × W grid in one pass, the resonances from
@@ -791,6 +795,7 @@ def run_batch(spec: StudySpec, batch: list[tuple[int, dict[str, float]]]) -> lis
     import numpy as np
 
     rows = [{"index": i, **v, "status": "ok", "error": ""} for i, v in batch]
+    K = None
     if spec.analysis == "simulate":
         return [_simulate_row(spec, row, v) for row, (_, v) in zip(rows, batch)]
     try:
@@ -804,6 +809,7 @@ def run_batch(spec: StudySpec, batch: list[tuple[int, dict[str, float]]]) -> lis
                 lo, hi, n, log = spec.omega
                 omega = np.geomspace(lo, hi, n) if log else np.linspace(lo, hi, n)
                 s = ds.sweep(omega)
+                K = s.K
                 flagged = np.count_nonzero(s.flags, axis=1)
                 ex = ds.extremes(omega, ds.resonances(omega_max=hi * (1 + 1e-9)), s)
                 failed = {**ex.failed, **s.failed}
@@ -826,13 +832,22 @@ def run_batch(spec: StudySpec, batch: list[tuple[int, dict[str, float]]]) -> lis
                             row[f"{kind}_{i + 1}"] = float(ws[i]) if i < ws.size else math.nan
     except Exception as exc:  # noqa: BLE001 - a study records every failure
         if len(batch) > 1:          # find the point at fault: each on its own
-            return [run_batch(spec, [point])[0] for point in batch]
+            alone = [run_batch(spec, [point], curves) for point in batch]
+            if not curves:
+                return [r[0] for r in alone]
+            return [r[0][0] for r in alone], np.concatenate([r[1] for r in alone])
         message = f"{type(exc).__name__}: {exc}".replace("\n", " ")
-        return [{**row, "status": "error", "error": message} for row in rows]
+        rows, K = [{**row, "status": "error", "error": message} for row in rows], None
     for d, message in failed.items():
         rows[d] = {"index": rows[d]["index"], **batch[d][1], "status": "error",
                    "error": _failure(ds, d, message)}
-    return rows
+    if not curves:
+        return rows
+    if K is None:
+        K = np.full((len(rows), spec.omega[2]), np.nan, dtype=complex)
+    K = np.array(K)
+    K[[r["status"] != "ok" for r in rows]] = np.nan
+    return rows, K
 
 
 def _failure(ds, d: int, message: str) -> str:
@@ -1000,7 +1015,8 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
               scheduler: str | None = None, workers: int | None = None, resume: bool = False,
               batch_size: int | None = None, connect_timeout: float = 10.0,
               on_rows: Callable[[int], None] | None = None,
-              keep_rows: bool = True) -> StudyResult:
+              keep_rows: bool = True,
+              curves: str | os.PathLike | None = None) -> StudyResult:
     """Run every point of ``spec``; return the rows (and write them to ``output``).
 
     Parameters
@@ -1033,6 +1049,14 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
     keep_rows : bool
         Return every row (default); False keeps only the failed ones in memory
         (with ``output``, for studies too large to hold: the table is the file).
+    curves : path, optional
+        Also write K(ω) of every point (a sweep) to this Parquet file (needs
+        pyarrow), in long format: one row per point and ω, columns ``design``
+        (the table's ``index``), ``omega`` [rad/s], ``K_re`` and ``K_im``
+        [m/(N·s), or rad/(N·m·s) for a rotary drive]; the units in each
+        field's metadata, the spec (:func:`provenance`) in the file's.  Rows
+        come a task at a time (one row group each, in the order tasks
+        finish); failed points have none.  Not with ``resume``.
 
     Raises
     ------
@@ -1050,7 +1074,16 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
         raise MechcircError(f"connect_timeout must be from 0 to 3600 s, got "
                             f"{brief(connect_timeout)}")
     keep_rows = keep_rows or not output
-    with _lock(output) if output else contextlib.nullcontext():
+    if curves is not None:
+        if spec.analysis != "sweep":
+            raise MechcircError(f"curves of K(omega) need analysis = \"sweep\" (an omega grid); "
+                                f"this study is {spec.analysis!r}")
+        if resume:
+            raise MechcircError("curves cannot be resumed (the points kept would have "
+                                "none): run the study again without resume")
+        _require_pyarrow()
+    with _lock(output) if output else contextlib.nullcontext(), \
+            _curve_writer(curves, spec) as write_curves:
         # Rows are journalled as they finish to a CSV beside the output, each with
         # a checksum; the output itself is written whole at the end (atomically),
         # so an existing file stays as it was until the new table is complete.
@@ -1064,8 +1097,11 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
         count, failed = len(done), sum(r["status"] != "ok" for r in done)
         sink = None
 
-        def take(batch_rows: Iterable[dict]) -> None:
+        def take(batch_rows) -> None:
             nonlocal sink, count, failed
+            if curves is not None:
+                batch_rows, K = batch_rows
+                write_curves(batch_rows, K)
             batch_rows = list(batch_rows)
             count += len(batch_rows)
             bad = [r for r in batch_rows if r["status"] != "ok"]
@@ -1085,11 +1121,11 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
         try:
             if client is not None:
                 executor, n_workers = "dask", _run_dask(spec, have, n_todo, client,
-                                                        batch_size, take)
+                                                        batch_size, take, curves is not None)
             else:
                 executor, n_workers = _run_local(spec, have, n_todo,
                                                  workers or os.cpu_count() or 1,
-                                                 batch_size, take)
+                                                 batch_size, take, curves is not None)
         finally:
             if sink is not None:
                 sink.close()
@@ -1101,6 +1137,47 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
             with contextlib.suppress(FileNotFoundError):
                 os.unlink(journal)
     return StudyResult(columns, rows, executor, n_workers, len(done), failed, count)
+
+
+@contextlib.contextmanager
+def _curve_writer(path, spec: StudySpec):
+    """``write(rows, K)`` appending a task's K(ω) curves to the Parquet file ``path``
+    (long format, see :func:`run_study`), which appears only if the block ends
+    cleanly; a no-op without ``path``."""
+    if path is None:
+        yield lambda rows, K: None
+        return
+    import json
+
+    import numpy as np
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    from .outputs import atomic_path
+
+    lo, hi, n, log = spec.omega
+    omega = np.geomspace(lo, hi, n) if log else np.linspace(lo, hi, n)
+    record = provenance(spec)
+    k_unit = record["units"]["K_abs_min"]
+    record["curves"] = ("long format: one row per design and omega; design is the "
+                        "table's index; K = K_re + j K_im")
+    schema = pa.schema([pa.field("design", pa.int64()),
+                        pa.field("omega", pa.float64(), metadata={"unit": "rad/s"}),
+                        pa.field("K_re", pa.float64(), metadata={"unit": k_unit}),
+                        pa.field("K_im", pa.float64(), metadata={"unit": k_unit})],
+                       metadata={"mechcirc": json.dumps(record, ensure_ascii=False)})
+    with atomic_path(path) as tmp, pq.ParquetWriter(tmp, schema) as writer:
+        def write(rows, K):
+            ok = np.array([r["status"] == "ok" for r in rows], dtype=bool)
+            if not ok.any():
+                return
+            index = np.array([r["index"] for r in rows], dtype=np.int64)[ok]
+            K = np.asarray(K)[ok]
+            writer.write_table(pa.table({
+                "design": np.repeat(index, omega.size), "omega": np.tile(omega, index.size),
+                "K_re": K.real.ravel(), "K_im": K.imag.ravel()}, schema=schema))
+
+        yield write
 
 
 #: First line of a journal: this tag, the spec's SHA-256 and its canonical JSON.
@@ -1458,9 +1535,10 @@ def _for_workers(spec: StudySpec) -> StudySpec:
 #: Memory a task may fill with its arrays (bytes): the batch's K, error bound,
 #: Q0 and flags on the designs × ω grid and its stacked nodal matrices.
 TASK_BYTES = 64 * 2 ** 20
-#: Bytes a design takes in a task: per ω point, and for its resonances
-#: (measured with tracemalloc on stb_heald.mcir: see docs/performance.md).
-_BYTES_PER_POINT, _BYTES_PER_DESIGN = 240, 40_000
+#: Bytes a design takes in a task: for its resonances and extremes, and per ω point
+#: (tracemalloc's peak over designs + sweep + flags + resonances + extremes of
+#: stb_heald.mcir: 12.3 kB and 37 B measured; see docs/performance.md).
+_BYTES_PER_DESIGN, _BYTES_PER_POINT = 13_000, 40
 
 
 def task_size(spec: StudySpec, n_points: int, n_workers: int,
@@ -1479,12 +1557,13 @@ def task_size(spec: StudySpec, n_points: int, n_workers: int,
     return max(1, min(fit, share))
 
 
-def _run_local(spec, have, n_todo, n_workers, batch_size, take) -> tuple[str, int]:
+def _run_local(spec, have, n_todo, n_workers, batch_size, take,
+               curves: bool = False) -> tuple[str, int]:
     size = task_size(spec, n_todo, n_workers, batch_size)
     if n_workers <= 1 or n_todo <= size:
         # One batch or one worker: starting processes would cost more than it saves.
         for batch in _todo(spec, have, size):
-            take(run_batch(spec, batch))
+            take(run_batch(spec, batch, curves))
         return "inline", 1
     from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
@@ -1496,7 +1575,7 @@ def _run_local(spec, have, n_todo, n_workers, batch_size, take) -> tuple[str, in
             # A few tasks per worker in flight, the next made as one finishes: the
             # points of a large study are never all in memory as tasks.
             for batch in _todo(spec, have, size):
-                pending.add(pool.submit(run_batch, light, batch))
+                pending.add(pool.submit(run_batch, light, batch, curves))
                 if len(pending) >= 2 * n_workers:
                     finished, pending = wait(pending, return_when=FIRST_COMPLETED)
                     for fut in finished:
@@ -1579,7 +1658,7 @@ def _dask_client(scheduler: str, timeout: float):
     return client
 
 
-def _run_dask(spec, have, n_todo, client, batch_size, take) -> int:
+def _run_dask(spec, have, n_todo, client, batch_size, take, curves: bool = False) -> int:
     from distributed import as_completed
 
     try:
@@ -1593,13 +1672,13 @@ def _run_dask(spec, have, n_todo, client, batch_size, take) -> int:
                                 "started") from None
         # A few tasks per worker thread in flight, the next submitted as one finishes.
         batches = _todo(spec, have, size)
-        futures = as_completed([client.submit(run_batch, spec_future, batch, pure=False)
+        futures = as_completed([client.submit(run_batch, spec_future, batch, curves, pure=False)
                                 for batch in itertools.islice(batches, 4 * n_workers)])
         for fut in futures:
             take(fut.result())
             batch = next(batches, None)
             if batch is not None:
-                futures.add(client.submit(run_batch, spec_future, batch, pure=False))
+                futures.add(client.submit(run_batch, spec_future, batch, curves, pure=False))
         return n_workers
     finally:
         client.close()
