@@ -122,7 +122,7 @@ def core(eta, omega, text):
     s = ds.sweep(omega)
     flags = s.flags
     r = ds.resonances(omega_max=omega[-1] * (1 + 1e-9))
-    ex = ds.extremes(omega, r)
+    ex = ds.extremes(omega, r, s)
     return s, flags, r, ex
 
 

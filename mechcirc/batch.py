@@ -41,6 +41,12 @@ __all__ = ["designs", "from_circuits", "Designs", "DesignSweep", "DesignResonanc
            "DesignExtremes"]
 
 
+#: The last few netlists parsed by :func:`designs` (text, source) → Circuit: the chunks
+#: of a study or a benchmark repeat one netlist, and a Circuit is immutable, so its
+#: reduction, nodal system and plan (cached on it) are built once per process.
+_PARSED: dict = {}
+
+
 def designs(netlist: "str | Circuit", params: dict | None = None, *,
             source: str = "<string>") -> "Designs":
     """D designs of one netlist, differing in their ``.param`` values.
@@ -85,7 +91,12 @@ def designs(netlist: "str | Circuit", params: dict | None = None, *,
         circuit, text = netlist, None
     else:
         text = netlist
-        circuit = parse(text, source=source)
+        circuit = _PARSED.get((text, source))
+        if circuit is None:
+            circuit = parse(text, source=source)
+            if len(_PARSED) >= 8:
+                _PARSED.pop(next(iter(_PARSED)))
+            _PARSED[text, source] = circuit
     exprs = expressions_of(circuit)
     params = dict(params or {})
     if params and exprs is None:
@@ -229,6 +240,10 @@ class Designs:
     amplitude: NDArray[np.float64]
     valid: NDArray[np.bool_]
     text: str | None = field(default=None, repr=False)
+    _plans: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+
+    def __getstate__(self):
+        return {**self.__dict__, "_plans": {}}       # the plans are rebuilt, not shipped
 
     @property
     def size(self) -> int:
@@ -262,6 +277,9 @@ class Designs:
         series–parallel, or no compiled kernel)."""
         from .reduction import _kernel, plan
 
+        key = which.tobytes()
+        if key in self._plans:              # sweep, extremes and resonances share it
+            return self._plans[key]
         try:
             tree = self.circuit.tree
         except NotSeriesParallelError:
@@ -274,7 +292,10 @@ class Designs:
         rows = np.array([row[e.name] for e in p.leaves], dtype=np.int64)
         scaled = self.values[rows][:, which] * self.eta[rows][:, which]
         ratios = self.ratios[[lev[lv.name] for lv in p.levers]][:, which]
-        return p.with_values(scaled, ratios.reshape(len(p.levers), which.size))
+        p = p.with_values(scaled, ratios.reshape(len(p.levers), which.size))
+        self._plans.clear()
+        self._plans[key] = p
+        return p
 
     def sweep(self, omega: ArrayLike) -> "DesignSweep":
         """K, Q0, v0, error bound and flags of every design at each ω [rad/s].
@@ -369,8 +390,8 @@ class Designs:
         return DesignResonances(kind, out[0], out[1], out[2], out[3], count, omega_max,
                                 single, failed)
 
-    def extremes(self, omega: ArrayLike, resonances: "DesignResonances | None" = None
-                 ) -> "DesignExtremes":
+    def extremes(self, omega: ArrayLike, resonances: "DesignResonances | None" = None,
+                 sweep: "DesignSweep | None" = None) -> "DesignExtremes":
         """The true extremes of |K| and |Q0| over the band [min ω, max ω] of every design.
 
         Undamped designs: K = jX with X increasing between its poles (Foster's
@@ -378,12 +399,19 @@ class Designs:
         anti-resonance, and otherwise takes its extremes at the band's ends;
         |Q0| = |V0|/|K| likewise (velocity drive; a force drive's Q0 is F0).  The
         others: :func:`mechcirc.sweep.peak` on the single design (``single``).
+        ``sweep``, this band's :meth:`sweep` already made, gives K at the band's
+        ends (else they are evaluated).
         """
         omega = np.atleast_1d(np.asarray(omega, dtype=float))
         lo, hi = float(omega.min()), float(omega.max())
         if resonances is None:
             resonances = self.resonances(omega_max=hi * (1 + 1e-9))
-        return _extremes(self, lo, hi, resonances)
+        ends = None
+        if sweep is not None and sweep.K.shape[0] == self.size:
+            i, j = int(np.argmin(sweep.omega)), int(np.argmax(sweep.omega))
+            if sweep.omega[i] == lo and sweep.omega[j] == hi:
+                ends = sweep.K[:, [i, j]]
+        return _extremes(self, lo, hi, resonances, ends)
 
 
 def _spread(rows: NDArray, where: NDArray, D: int) -> NDArray:
@@ -501,7 +529,8 @@ class DesignExtremes:
     failed: dict
 
 
-def _extremes(ds: Designs, lo: float, hi: float, res: DesignResonances) -> DesignExtremes:
+def _extremes(ds: Designs, lo: float, hi: float, res: DesignResonances,
+              ends: NDArray | None) -> DesignExtremes:
     from .sweep import peak
 
     D = ds.size
@@ -515,8 +544,9 @@ def _extremes(ds: Designs, lo: float, hi: float, res: DesignResonances) -> Desig
     fast = np.flatnonzero(lossless & undamped)
     failed = dict(res.failed)
     if fast.size:
-        edges = ds.sweep(np.array([lo, hi]))
-        Ke = np.abs(edges.K[fast])
+        if ends is None:
+            ends = ds.sweep(np.array([lo, hi])).K
+        Ke = np.abs(ends[fast])
         amp = np.abs(ds.amplitude[fast])
         with np.errstate(invalid="ignore"):
             in_band = (res.omega[fast] >= lo * (1 - 1e-12)) & \

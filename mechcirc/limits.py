@@ -35,8 +35,11 @@ MAX_ADAPTIVE_NODAL_POINTS = 2_000
 MAX_ADAPTIVE_WORK = 200_000_000
 #: The same by nodal analysis (0.5–1.2 µs per element and point measured: ≤ 12 s).
 MAX_ADAPTIVE_NODAL_WORK = 10_000_000
-#: Points (rows) of a parameter study (about 1.1 kB each in memory while it runs).
-MAX_STUDY_POINTS = 500_000
+#: Points (rows) of a parameter study.  A study written to a file streams its rows
+#: (about 0.2 kB a point held: the spec's values; see docs/performance.md); rows
+#: returned in memory (the API's default, the CLI's --json and --plot) take about
+#: 1.1 kB each.
+MAX_STUDY_POINTS = 1_000_000
 #: Frequency points of the sweep at each study point.
 MAX_STUDY_SWEEP_POINTS = 100_000
 #: Study points × sweep points (the whole study's frequency evaluations).

@@ -807,7 +807,7 @@ def batched_roots(ds, omega_max: float | None = None):
                     ("antiresonance", G_levers)):
         Z = _project(G, n_nodes).toarray()
         if damped:
-            Mr, Dr, Kr = (_weighted_sum(S, np.einsum("ia,eij,jb->eab", Z, B[x], Z))
+            Mr, Dr, Kr = (_weighted_sum(S, Z.T @ B[x] @ Z)
                           for x in ("mass", "damper", "spring"))
             problems.append((kind, _stacked_damped(Mr, Dr, Kr, omega_max)))
             continue
@@ -821,7 +821,7 @@ def batched_roots(ds, omega_max: float | None = None):
             n0 = int(massless.sum())
         else:
             n0 = 0
-        Mr, Kr = (_weighted_sum(S, np.einsum("ia,eij,jb->eab", Z, B[x], Z))
+        Mr, Kr = (_weighted_sum(S, Z.T @ B[x] @ Z)
                   for x in ("mass", "spring"))
         problems.append((kind, _stacked_modes(Mr, Kr, n0, omega_max)))
     (_, (w_h, e_h, ok_h)), (_, (w_r, e_r, ok_r)) = problems
@@ -968,7 +968,7 @@ def _stacked_damped(M: np.ndarray, Dm: np.ndarray, K: np.ndarray, omega_max):
                 ok[d] = False
         Ms = np.where(ok[:, None, None], Ms, eye)
         chol = np.linalg.cholesky(Ms)
-    Linv = np.linalg.inv(chol)
+    Linv = _lower_inverse(chol)
     with np.errstate(all="ignore"):
         lam_min = 1.0 / np.sum(Linv * Linv, axis=(1, 2))
     ok &= lam_min > 1e-13 * np.sqrt(np.sum(Ms * Ms, axis=(1, 2)))
@@ -1017,6 +1017,21 @@ def _stacked_damped(M: np.ndarray, Dm: np.ndarray, K: np.ndarray, omega_max):
     return s, err, ok
 
 
+def _lower_inverse(L: np.ndarray) -> np.ndarray:
+    """L⁻¹ of a stack (D, k, k) of lower-triangular matrices with nonzero diagonals, by
+    forward substitution a row at a time over all D at once (a general inverse,
+    ``numpy.linalg.inv``, factors each again: 2–4× slower for these small k)."""
+    D, k = L.shape[0], L.shape[1]
+    X = np.zeros_like(L)
+    with np.errstate(all="ignore"):
+        d = 1.0 / np.diagonal(L, axis1=1, axis2=2)
+        for i in range(k):
+            r = -(L[:, i, None, :i] @ X[:, :i, :])[:, 0] if i else np.zeros((D, k))
+            r[:, i] += 1.0
+            X[:, i, :] = r * d[:, i, None]
+    return X
+
+
 def _undamped_stack(M: np.ndarray, K: np.ndarray, n0: int):
     """:func:`_undamped` on stacks (D, k, k) whose last ``n0`` directions are massless:
     λ of K v = λ M v, shape (D, k − n0); ``regular`` false where this cannot solve.
@@ -1033,10 +1048,16 @@ def _undamped_stack(M: np.ndarray, K: np.ndarray, n0: int):
     Mrr, Kc = M[:, :r, :r], K[:, :r, :r]
     if n0:
         Knr = K[:, r:, :r]
+        Knn = K[:, r:, r:]
         try:
-            Kc = Kc - np.swapaxes(Knr, 1, 2) @ np.linalg.solve(K[:, r:, r:], Knr)
+            if n0 == 1 and not Knn.all():
+                raise np.linalg.LinAlgError
+            # One massless direction: the 1×1 solve is a division (the same IEEE
+            # result, without LAPACK's set-up per design).
+            X = Knr / Knn if n0 == 1 else np.linalg.solve(Knn, Knr)
         except np.linalg.LinAlgError:              # a massless part without stiffness
             return np.full((D, r), np.nan), np.zeros(D, dtype=bool)
+        Kc = Kc - np.swapaxes(Knr, 1, 2) @ X
     try:
         chol = np.linalg.cholesky(Mrr)
     except np.linalg.LinAlgError:                  # one of them is not definite: which?
@@ -1047,7 +1068,7 @@ def _undamped_stack(M: np.ndarray, K: np.ndarray, n0: int):
                 regular[d] = False
         Mrr = np.where(regular[:, None, None], Mrr, np.eye(r))
         chol = np.linalg.cholesky(Mrr)
-    Linv = np.linalg.inv(chol)
+    Linv = _lower_inverse(chol)
     with np.errstate(all="ignore"):
         lam_min = 1.0 / np.sum(Linv * Linv, axis=(1, 2))
     regular &= np.isfinite(Kc).all(axis=(1, 2)) & np.isfinite(Linv).all(axis=(1, 2))

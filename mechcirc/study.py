@@ -95,7 +95,7 @@ import random
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable, Iterable
+from typing import Callable
 
 from .errors import MechcircError, NetlistError
 from .limits import (MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS, MAX_STUDY_POINTS,
@@ -777,8 +777,12 @@ def run_point(spec: StudySpec, index: int, values: dict[str, float]) -> dict:
     return run_batch(spec, [(index, values)])[0]
 
 
-def run_batch(spec: StudySpec, batch: list[tuple[int, dict[str, float]]]) -> list[dict]:
+def run_batch(spec: StudySpec, batch: list[tuple[int, dict[str, float]]],
+              curves: bool = False):
     """Rows of a batch of points (what each worker runs; errors recorded, never raised).
+
+    With ``curves`` (a sweep), ``(rows, K)``: also K [m/(N·s)] of every point on
+    the study's ω grid, shape (points, W), NaN in the rows of failed points.
 
     A netlist's points are one :func:`mechcirc.batch.designs` batch: the
     netlist parsed once, K on the D × W grid in one pass, the resonances from
@@ -791,6 +795,7 @@ def run_batch(spec: StudySpec, batch: list[tuple[int, dict[str, float]]]) -> lis
     import numpy as np
 
     rows = [{"index": i, **v, "status": "ok", "error": ""} for i, v in batch]
+    K = None
     if spec.analysis == "simulate":
         return [_simulate_row(spec, row, v) for row, (_, v) in zip(rows, batch)]
     try:
@@ -804,8 +809,9 @@ def run_batch(spec: StudySpec, batch: list[tuple[int, dict[str, float]]]) -> lis
                 lo, hi, n, log = spec.omega
                 omega = np.geomspace(lo, hi, n) if log else np.linspace(lo, hi, n)
                 s = ds.sweep(omega)
+                K = s.K
                 flagged = np.count_nonzero(s.flags, axis=1)
-                ex = ds.extremes(omega, ds.resonances(omega_max=hi * (1 + 1e-9)))
+                ex = ds.extremes(omega, ds.resonances(omega_max=hi * (1 + 1e-9)), s)
                 failed = {**ex.failed, **s.failed}
                 for d, row in enumerate(rows):
                     # Exact extremes over the band: 0 and inf at a zero or pole of K
@@ -826,13 +832,22 @@ def run_batch(spec: StudySpec, batch: list[tuple[int, dict[str, float]]]) -> lis
                             row[f"{kind}_{i + 1}"] = float(ws[i]) if i < ws.size else math.nan
     except Exception as exc:  # noqa: BLE001 - a study records every failure
         if len(batch) > 1:          # find the point at fault: each on its own
-            return [run_batch(spec, [point])[0] for point in batch]
+            alone = [run_batch(spec, [point], curves) for point in batch]
+            if not curves:
+                return [r[0] for r in alone]
+            return [r[0][0] for r in alone], np.concatenate([r[1] for r in alone])
         message = f"{type(exc).__name__}: {exc}".replace("\n", " ")
-        return [{**row, "status": "error", "error": message} for row in rows]
+        rows, K = [{**row, "status": "error", "error": message} for row in rows], None
     for d, message in failed.items():
         rows[d] = {"index": rows[d]["index"], **batch[d][1], "status": "error",
                    "error": _failure(ds, d, message)}
-    return rows
+    if not curves:
+        return rows
+    if K is None:
+        K = np.full((len(rows), spec.omega[2]), np.nan, dtype=complex)
+    K = np.array(K)
+    K[[r["status"] != "ok" for r in rows]] = np.nan
+    return rows, K
 
 
 def _failure(ds, d: int, message: str) -> str:
@@ -867,7 +882,12 @@ def _simulate_row(spec: StudySpec, row: dict, values: dict) -> dict:
 
 @dataclass
 class StudyResult:
-    """The rows of a study in index order, and how it ran."""
+    """The rows of a study in index order, and how it ran.
+
+    ``rows`` holds every row, or with ``run_study(keep_rows=False)`` only the
+    failed ones (the table is in the output file); ``count`` is the number of
+    rows of the table either way.
+    """
 
     columns: list[str]
     rows: list[dict]
@@ -875,6 +895,11 @@ class StudyResult:
     workers: int
     skipped: int = 0
     failed: int = field(default=0)
+    count: int = -1
+
+    def __post_init__(self):
+        if self.count < 0:
+            self.count = len(self.rows)
 
 
 def _format(value) -> str:
@@ -882,6 +907,11 @@ def _format(value) -> str:
         return repr(value) if math.isfinite(value) else ("nan" if math.isnan(value) else
                                                          ("inf" if value > 0 else "-inf"))
     return str(value)
+
+
+def _fields(row: dict, columns: list[str]) -> list[str]:
+    """A row's cells as written (journal and CSV table): one line each, no line breaks."""
+    return [_format(row.get(c, "")).replace("\r", " ").replace("\n", " ") for c in columns]
 
 
 #: The journal's last column: a CRC-32 of the row's other fields, so that a row cut
@@ -966,15 +996,27 @@ def read_rows(path: str | os.PathLike, columns: list[str]) -> list[dict]:
         raise MechcircError(f"{source}: not a study's table ({exc}); cannot resume") from None
 
 
-def _batches(points, size):
-    for start in range(0, len(points), size):
-        yield points[start:start + size]
+def _todo(spec: StudySpec, have: set, size: int):
+    """The points not in ``have``, in batches of ``size``, made as they are taken (a
+    million points are not held as dicts at once)."""
+    batch = []
+    for i, p in enumerate(spec.points):
+        if i in have:
+            continue
+        batch.append((i, dict(zip(spec.params, p))))
+        if len(batch) == size:
+            yield batch
+            batch = []
+    if batch:
+        yield batch
 
 
 def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
               scheduler: str | None = None, workers: int | None = None, resume: bool = False,
               batch_size: int | None = None, connect_timeout: float = 10.0,
-              on_rows: Callable[[int], None] | None = None) -> StudyResult:
+              on_rows: Callable[[int], None] | None = None,
+              keep_rows: bool = True,
+              curves: str | os.PathLike | None = None) -> StudyResult:
     """Run every point of ``spec``; return the rows (and write them to ``output``).
 
     Parameters
@@ -987,6 +1029,7 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
         Meanwhile rows are journalled, each with a checksum, to
         ``OUTPUT.partial.csv`` (:func:`journal_path`), removed at the end, and
         ``OUTPUT.lock`` keeps a second study from writing the same output.
+        The output is written from the journal, a chunk of rows at a time.
     scheduler : str, optional
         Address of a Dask scheduler (``tcp://host:8786``); by default the
         local cores run the study.
@@ -997,12 +1040,23 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
         and run only the missing points; refused when they were made from
         another spec.
     batch_size : int, optional
-        Points per task (default: about 8 tasks per worker, at most 500).
+        Points per task (default: sized from memory, :func:`task_size`).
     connect_timeout : float
         Seconds to wait for the Dask scheduler, and then for its first worker,
         before giving up.
     on_rows : callable, optional
         Called with the number of rows each time a batch finishes (progress).
+    keep_rows : bool
+        Return every row (default); False keeps only the failed ones in memory
+        (with ``output``, for studies too large to hold: the table is the file).
+    curves : path, optional
+        Also write K(ω) of every point (a sweep) to this Parquet file (needs
+        pyarrow), in long format: one row per point and ω, columns ``design``
+        (the table's ``index``), ``omega`` [rad/s], ``K_re`` and ``K_im``
+        [m/(N·s), or rad/(N·m·s) for a rotary drive]; the units in each
+        field's metadata, the spec (:func:`provenance`) in the file's.  Rows
+        come a task at a time (one row group each, in the order tasks
+        finish); failed points have none.  Not with ``resume``.
 
     Raises
     ------
@@ -1019,49 +1073,111 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
                           0 < connect_timeout <= 3600):
         raise MechcircError(f"connect_timeout must be from 0 to 3600 s, got "
                             f"{brief(connect_timeout)}")
-    with _lock(output) if output else contextlib.nullcontext():
+    keep_rows = keep_rows or not output
+    if curves is not None:
+        if spec.analysis != "sweep":
+            raise MechcircError(f"curves of K(omega) need analysis = \"sweep\" (an omega grid); "
+                                f"this study is {spec.analysis!r}")
+        if resume:
+            raise MechcircError("curves cannot be resumed (the points kept would have "
+                                "none): run the study again without resume")
+        _require_pyarrow()
+    with _lock(output) if output else contextlib.nullcontext(), \
+            _curve_writer(curves, spec) as write_curves:
         # Rows are journalled as they finish to a CSV beside the output, each with
         # a checksum; the output itself is written whole at the end (atomically),
         # so an existing file stays as it was until the new table is complete.
         journal = journal_path(output) if output else None
         done = _resumed_rows(spec, output, journal, parquet) if resume and output else []
         have = {r["index"] for r in done}
-        todo = [(i, v) for i, v in study_points(spec) if i not in have]
+        n_todo = len(spec.points) - len(have)
         # Connect before the journal is touched: a failed start leaves no file.
         client = _dask_client(scheduler, connect_timeout) if scheduler else None
-        rows = list(done)
+        rows = list(done) if keep_rows else [r for r in done if r["status"] != "ok"]
+        count, failed = len(done), sum(r["status"] != "ok" for r in done)
         sink = None
 
-        def take(batch_rows: Iterable[dict]) -> None:
-            nonlocal sink
+        def take(batch_rows) -> None:
+            nonlocal sink, count, failed
+            if curves is not None:
+                batch_rows, K = batch_rows
+                write_curves(batch_rows, K)
             batch_rows = list(batch_rows)
-            rows.extend(batch_rows)
+            count += len(batch_rows)
+            bad = [r for r in batch_rows if r["status"] != "ok"]
+            failed += len(bad)
+            rows.extend(batch_rows if keep_rows else bad)
             if output:
                 if sink is None:
                     sink = _open_journal(journal, spec, done)
+                w = csv.writer(sink)
                 for r in batch_rows:
-                    fields = [_format(r.get(c, "")) for c in columns]
-                    csv.writer(sink).writerow([*fields, _crc(fields)])
+                    fields = _fields(r, columns)
+                    w.writerow([*fields, _crc(fields)])
                 sink.flush()
             if on_rows is not None:
                 on_rows(len(batch_rows))
 
         try:
             if client is not None:
-                executor, n_workers = "dask", _run_dask(spec, todo, client, batch_size, take)
+                executor, n_workers = "dask", _run_dask(spec, have, n_todo, client,
+                                                        batch_size, take, curves is not None)
             else:
-                executor, n_workers = _run_local(spec, todo, workers or os.cpu_count() or 1,
-                                                 batch_size, take)
+                executor, n_workers = _run_local(spec, have, n_todo,
+                                                 workers or os.cpu_count() or 1,
+                                                 batch_size, take, curves is not None)
         finally:
             if sink is not None:
                 sink.close()
         rows.sort(key=lambda r: r["index"])
         if output:
-            _write_output(output, parquet, spec, rows)
+            if sink is None:                # nothing ran: the journal holds the kept rows
+                _open_journal(journal, spec, done).close()
+            _write_output(output, parquet, spec, journal)
             with contextlib.suppress(FileNotFoundError):
                 os.unlink(journal)
-    failed = sum(r["status"] != "ok" for r in rows)
-    return StudyResult(columns, rows, executor, n_workers, len(done), failed)
+    return StudyResult(columns, rows, executor, n_workers, len(done), failed, count)
+
+
+@contextlib.contextmanager
+def _curve_writer(path, spec: StudySpec):
+    """``write(rows, K)`` appending a task's K(ω) curves to the Parquet file ``path``
+    (long format, see :func:`run_study`), which appears only if the block ends
+    cleanly; a no-op without ``path``."""
+    if path is None:
+        yield lambda rows, K: None
+        return
+    import json
+
+    import numpy as np
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    from .outputs import atomic_path
+
+    lo, hi, n, log = spec.omega
+    omega = np.geomspace(lo, hi, n) if log else np.linspace(lo, hi, n)
+    record = provenance(spec)
+    k_unit = record["units"]["K_abs_min"]
+    record["curves"] = ("long format: one row per design and omega; design is the "
+                        "table's index; K = K_re + j K_im")
+    schema = pa.schema([pa.field("design", pa.int64()),
+                        pa.field("omega", pa.float64(), metadata={"unit": "rad/s"}),
+                        pa.field("K_re", pa.float64(), metadata={"unit": k_unit}),
+                        pa.field("K_im", pa.float64(), metadata={"unit": k_unit})],
+                       metadata={"mechcirc": json.dumps(record, ensure_ascii=False)})
+    with atomic_path(path) as tmp, pq.ParquetWriter(tmp, schema) as writer:
+        def write(rows, K):
+            ok = np.array([r["status"] == "ok" for r in rows], dtype=bool)
+            if not ok.any():
+                return
+            index = np.array([r["index"] for r in rows], dtype=np.int64)[ok]
+            K = np.asarray(K)[ok]
+            writer.write_table(pa.table({
+                "design": np.repeat(index, omega.size), "omega": np.tile(omega, index.size),
+                "K_re": K.real.ravel(), "K_im": K.imag.ravel()}, schema=schema))
+
+        yield write
 
 
 #: First line of a journal: this tag, the spec's SHA-256 and its canonical JSON.
@@ -1171,7 +1287,7 @@ def _open_journal(journal: str, spec: StudySpec, done: list[dict]):
         w = csv.writer(fh)
         w.writerow([*columns, _CHECK])
         for r in done:
-            fields = [_format(r.get(c, "")) for c in columns]
+            fields = _fields(r, columns)
             w.writerow([*fields, _crc(fields)])
     return open(journal, "a", newline="", encoding="utf-8")
 
@@ -1209,18 +1325,20 @@ def _sidecar_spec(output) -> str | None:
         return None
 
 
-def _write_output(output, parquet: bool, spec: StudySpec, rows: list[dict]) -> None:
+def _write_output(output, parquet: bool, spec: StudySpec, journal: str) -> None:
     """The whole table, in index order, with its provenance: Parquet with it in the
     file's metadata, or CSV with the sidecar ``OUTPUT.meta.json``, the two
-    replaced together (sidecar first) or not at all."""
+    replaced together (sidecar first) or not at all.  The rows come from the
+    journal a chunk at a time (:func:`_journal_in_order`)."""
     import json
 
     from .outputs import OutputSet
 
     columns, record = spec.columns, provenance(spec)
+    chunks = _journal_in_order(journal, len(columns))
     with OutputSet() as out:
         if parquet:
-            _write_parquet(out.path(output), columns, rows, record)
+            _write_parquet(out.path(output), columns, chunks, record)
             return
         with open(out.path(sidecar_path(output)), "w", encoding="utf-8") as fh:
             json.dump(record, fh, indent=1, ensure_ascii=False)
@@ -1228,10 +1346,51 @@ def _write_output(output, parquet: bool, spec: StudySpec, rows: list[dict]) -> N
         with open(out.path(output), "w", newline="", encoding="utf-8") as fh:
             w = csv.writer(fh)
             w.writerow(columns)
-            for r in rows:
-                w.writerow([_format(r.get(c, "")) for c in columns])
+            for records in chunks:
+                w.writerows(records)
             fh.flush()
             os.fsync(fh.fileno())
+
+
+def _journal_in_order(journal: str, width: int, chunk: int = 65536):
+    """The rows of a finished journal in index order, as lists of cells (the checksum
+    dropped), ``chunk`` rows at a time; a second row of one point is left out.
+
+    Only the index and the byte offset of each row are held (16 bytes a row):
+    the rows are read back in order by seeking, so writing a million rows takes
+    no more memory than a chunk of them.  Each row is one line
+    (:func:`_fields`), and is checked against its CRC again.
+    """
+    from array import array
+
+    import numpy as np
+
+    index, offset = array("q"), array("q")
+    with open(journal, "rb") as fh:
+        fh.readline()                           # the spec
+        fh.readline()                           # the header
+        pos = fh.tell()
+        for line in fh:
+            index.append(int(line[:line.index(b",")]))
+            offset.append(pos)
+            pos += len(line)
+        idx = np.frombuffer(index, dtype=np.int64) if index else np.zeros(0, np.int64)
+        offs = np.frombuffer(offset, dtype=np.int64) if offset else np.zeros(0, np.int64)
+        order = np.argsort(idx, kind="stable")
+        idx, offs = idx[order], offs[order]
+        first = np.ones(idx.size, dtype=bool)
+        first[1:] = idx[1:] != idx[:-1]
+        offs = offs[first]
+        for start in range(0, offs.size, chunk):
+            records = []
+            for off in offs[start:start + chunk].tolist():
+                fh.seek(off)
+                rec = next(csv.reader([fh.readline().decode("utf-8")]))
+                if len(rec) != width + 1 or rec[-1] != _crc(rec[:-1]):
+                    raise MechcircError(f"{journal}: the row at byte {off} changed on disk "
+                                        "while the study ran; run it again with --resume")
+                records.append(rec[:-1])
+            yield records
 
 
 def journal_path(output: str | os.PathLike) -> str:
@@ -1247,23 +1406,29 @@ def _require_pyarrow():
                             "or write CSV (-o results.csv)") from None
 
 
-def _write_parquet(path, columns: list[str], rows: list[dict], record: dict) -> None:
-    """The table as Parquet; empty result cells are nulls.  The file's key-value
-    metadata ``mechcirc`` holds ``record`` (JSON), and each field its ``unit``."""
+def _write_parquet(path, columns: list[str], chunks, record: dict) -> None:
+    """The table as Parquet from chunks of rows (lists of cells as in the journal),
+    one row group a chunk; empty cells are nulls.  The file's key-value metadata
+    ``mechcirc`` holds ``record`` (JSON), and each field its ``unit``."""
     import json
 
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    data = {c: [None if r.get(c, "") == "" else r.get(c) for r in rows] for c in columns}
     types = {c: pa.string() if c in ("status", "error") else
              pa.int64() if c in ("index", "n_flagged") else pa.float64() for c in columns}
+    convert = {c: str if c in ("status", "error") else
+               int if c in ("index", "n_flagged") else float for c in columns}
     units = record["units"]
     schema = pa.schema([pa.field(c, types[c], metadata=None if units[c] is None else
                                  {"unit": units[c]}) for c in columns],
                        metadata={"mechcirc": json.dumps(record, ensure_ascii=False)})
-    table = pa.table({c: pa.array(data[c], type=types[c]) for c in columns}, schema=schema)
-    pq.write_table(table, path)
+    with pq.ParquetWriter(path, schema) as writer:
+        for records in chunks:
+            cells = list(zip(*records))
+            writer.write_table(pa.table(
+                {c: pa.array([convert[c](x) if x != "" else None for x in cells[k]],
+                             type=types[c]) for k, c in enumerate(columns)}, schema=schema))
 
 
 def _read_parquet(path):
@@ -1367,30 +1532,60 @@ def _for_workers(spec: StudySpec) -> StudySpec:
     return replace(spec, points=())
 
 
-def _size(n_points: int, n_workers: int, batch_size: int | None) -> int:
+#: Memory a task may fill with its arrays (bytes): the batch's K, error bound,
+#: Q0 and flags on the designs × ω grid and its stacked nodal matrices.
+TASK_BYTES = 64 * 2 ** 20
+#: Bytes a design takes in a task: for its resonances and extremes, and per ω point
+#: (tracemalloc's peak over designs + sweep + flags + resonances + extremes of
+#: stb_heald.mcir: 12.3 kB and 37 B measured; see docs/performance.md).
+_BYTES_PER_DESIGN, _BYTES_PER_POINT = 13_000, 40
+
+
+def task_size(spec: StudySpec, n_points: int, n_workers: int,
+              batch_size: int | None = None) -> int:
+    """Points per task: ``batch_size`` if given, else as many as fit in
+    :data:`TASK_BYTES` (the designs' arrays), but at least four tasks per worker
+    (so that the workers share the end of the study) and at most ``n_points``.
+    A sley simulation is one point at a time: at most 500 per task."""
     if batch_size:
         return max(1, int(batch_size))
-    return max(1, min(500, math.ceil(n_points / (8 * max(1, n_workers)))))
+    share = math.ceil(n_points / (4 * max(1, n_workers)))
+    if spec.analysis == "simulate":
+        return max(1, min(500, share))
+    width = spec.omega[2] if spec.analysis == "sweep" and spec.omega else 0
+    fit = TASK_BYTES // (_BYTES_PER_DESIGN + _BYTES_PER_POINT * width)
+    return max(1, min(fit, share))
 
 
-def _run_local(spec, todo, n_workers, batch_size, take) -> tuple[str, int]:
-    size = _size(len(todo), n_workers, batch_size)
-    if n_workers <= 1 or len(todo) <= size:
+def _run_local(spec, have, n_todo, n_workers, batch_size, take,
+               curves: bool = False) -> tuple[str, int]:
+    size = task_size(spec, n_todo, n_workers, batch_size)
+    if n_workers <= 1 or n_todo <= size:
         # One batch or one worker: starting processes would cost more than it saves.
-        for batch in _batches(todo, size):
-            take(run_batch(spec, batch))
+        for batch in _todo(spec, have, size):
+            take(run_batch(spec, batch, curves))
         return "inline", 1
-    from concurrent.futures import ProcessPoolExecutor, as_completed
+    from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
     with ProcessPoolExecutor(max_workers=n_workers, initializer=_die_with_parent,
                              initargs=(os.getpid(),)) as pool:
         light = _for_workers(spec)
-        futures = [pool.submit(run_batch, light, batch) for batch in _batches(todo, size)]
+        pending: set = set()
         try:
-            for fut in as_completed(futures):
-                take(fut.result())
+            # A few tasks per worker in flight, the next made as one finishes: the
+            # points of a large study are never all in memory as tasks.
+            for batch in _todo(spec, have, size):
+                pending.add(pool.submit(run_batch, light, batch, curves))
+                if len(pending) >= 2 * n_workers:
+                    finished, pending = wait(pending, return_when=FIRST_COMPLETED)
+                    for fut in finished:
+                        take(fut.result())
+            while pending:
+                finished, pending = wait(pending, return_when=FIRST_COMPLETED)
+                for fut in finished:
+                    take(fut.result())
         except BaseException:
-            for fut in futures:
+            for fut in pending:
                 fut.cancel()
             raise
     return "local", n_workers
@@ -1463,22 +1658,27 @@ def _dask_client(scheduler: str, timeout: float):
     return client
 
 
-def _run_dask(spec, todo, client, batch_size, take) -> int:
+def _run_dask(spec, have, n_todo, client, batch_size, take, curves: bool = False) -> int:
     from distributed import as_completed
 
     try:
         n_workers = max(1, sum(w.get("nthreads", 1) for w in
                                client.scheduler_info()["workers"].values()))
-        size = _size(len(todo), n_workers, batch_size)
+        size = task_size(spec, n_todo, n_workers, batch_size)
         try:
             spec_future = client.scatter(_for_workers(spec), broadcast=True)
         except TimeoutError:
             raise MechcircError("the Dask cluster's workers left before the study "
                                 "started") from None
-        futures = [client.submit(run_batch, spec_future, batch, pure=False)
-                   for batch in _batches(todo, size)]
-        for fut in as_completed(futures):
+        # A few tasks per worker thread in flight, the next submitted as one finishes.
+        batches = _todo(spec, have, size)
+        futures = as_completed([client.submit(run_batch, spec_future, batch, curves, pure=False)
+                                for batch in itertools.islice(batches, 4 * n_workers)])
+        for fut in futures:
             take(fut.result())
+            batch = next(batches, None)
+            if batch is not None:
+                futures.add(client.submit(run_batch, spec_future, batch, curves, pure=False))
         return n_workers
     finally:
         client.close()

@@ -221,7 +221,7 @@ def test_study_axis_of_a_billion_values_is_refused_before_it_is_built(tmp_path):
 
     path, _ = _spec(tmp_path, "num = 6}", "num = 1000000000}")
     with cpu_seconds_below(5), \
-            pytest.raises(NetlistError, match="num must be an integer from 1 to 500,000"):
+            pytest.raises(NetlistError, match="num must be an integer from 1 to 1,000,000"):
         load_spec(path)                         # not a 1e9-element list first
 
 

@@ -86,6 +86,10 @@ def register(sub) -> None:
                    metavar="SECONDS",
                    help="with --scheduler: wait this long for the scheduler, then as long "
                         "for its first worker (default 10)")
+    p.add_argument("--curves", metavar="PARQUET",
+                   help="also write K(omega) of every point (analysis = \"sweep\") to this "
+                        "Parquet file, one row per point and omega: design, omega, K_re, K_im "
+                        "(units in its metadata; needs pyarrow)")
     p.add_argument("--plot", metavar="IMAGE",
                    help="plot a result column against the parameters (PNG, SVG or PDF)")
     p.add_argument("--plot-column", metavar="NAME",
@@ -200,13 +204,14 @@ def cmd_study(args) -> int:
     from ..progress import Progress
     from ..study import column_units, load_spec, run_study, sidecar_path
 
-    check_output_paths(args.output, plots=(args.plot,), reads=(args.spec,))
+    check_output_paths(args.output, args.curves, plots=(args.plot,), reads=(args.spec,))
     if args.resume and not args.output:
         raise MechcircError("--resume needs -o FILE (the table to continue)")
     if args.workers is not None and args.workers < 1:
         raise MechcircError(f"--workers must be at least 1, got {args.workers}")
     spec = load_spec(args.spec)
-    check_output_paths(args.output, plots=(args.plot,), reads=(spec.netlist_source,))
+    check_output_paths(args.output, args.curves, plots=(args.plot,),
+                       reads=(spec.netlist_source,))
     column = args.plot_column or ("Q0_abs_max" if spec.analysis == "sweep" else "resonance_1")
     if args.plot and column not in spec.columns[len(spec.params) + 3:]:
         raise MechcircError(f"--plot-column {column!r} is not a result column (expected one of "
@@ -214,7 +219,9 @@ def cmd_study(args) -> int:
     with Progress(len(spec.points), "study") as bar:
         result = run_study(spec, output=args.output, scheduler=args.scheduler,
                            workers=args.workers, resume=args.resume,
-                           connect_timeout=args.connect_timeout, on_rows=bar.update)
+                           connect_timeout=args.connect_timeout, on_rows=bar.update,
+                           keep_rows=bool(args.json or args.plot or not args.output),
+                           curves=args.curves)
     if args.plot:
         from ..plotting import plot_study
 
@@ -224,7 +231,7 @@ def cmd_study(args) -> int:
         print_json({"spec": args.spec, "spec_sha256": spec.sha256,
                     "netlist": spec.netlist_source,
                     "analysis": spec.analysis, "executor": result.executor,
-                    "workers": result.workers, "points": len(result.rows),
+                    "workers": result.workers, "points": result.count,
                     "resumed": result.skipped, "failed": result.failed,
                     "columns": result.columns, "units": column_units(spec),
                     "rows": [[r.get(c, None) for c in result.columns] for r in result.rows]})
@@ -234,7 +241,7 @@ def cmd_study(args) -> int:
              "inline": "this process"}[result.executor]
     model = spec.netlist_source if spec.analysis != "simulate" else \
         f"the sley model, {spec.sley[0]} variant {spec.sley[1]}"
-    print(f"{args.spec}: {len(result.rows)} points of {model} ({spec.analysis}) on {where}")
+    print(f"{args.spec}: {result.count} points of {model} ({spec.analysis}) on {where}")
     if result.skipped:
         print(f"  {result.skipped} point(s) kept from {args.output}")
     if result.failed:
@@ -245,6 +252,8 @@ def cmd_study(args) -> int:
         meta = "" if args.output.lower().endswith(".parquet") else \
             f" (spec and units in {sidecar_path(args.output)})"
         print(f"  table written to {args.output}{meta}")
+    if args.curves:
+        print(f"  K(omega) of every point written to {args.curves}")
     if args.plot:
         print(f"  plot of {column} written to {args.plot}")
     return 0

@@ -16,7 +16,7 @@ NaN values; the rest of the map is kept.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -151,7 +151,7 @@ def cycle_map(scene: Scene, *, points: int = 72, harmonics: int = 5,
         raise ValueError(f"harmonics must be an integer ≥ 1, got {harmonics!r}")
     theta = np.linspace(0.0, scene.cycle, points, endpoint=False)
     try:
-        states = scene.linkage.solve(theta)
+        motion = scene.linkage.motion(theta)
     except GeometryError as exc:
         raise GeometryError(f"{scene.source}: the crank cannot make a full revolution, so there "
                             f"is no cycle to map ({exc})") from None
@@ -162,35 +162,231 @@ def cycle_map(scene: Scene, *, points: int = 72, harmonics: int = 5,
     anti: list = [()] * points
     skipped = {}
     rotational = scene.drive.link is not None
-    circuits, where = [], []
-    for i, (th, st) in enumerate(zip(theta, states)):
+    # Every crank angle is one design of the same network (issue 21): the angles
+    # whose circuit _cycle_designs forms from the motion's arrays go in one batch;
+    # the others (near a dead centre, a topology of their own) through build.
+    batch, alone = _cycle_designs(scene, motion, reflect) if _BATCHED else (None, range(points))
+    states = motion.states() if len(alone) else []
+    circuits, single = [], []
+    for i in alone:
         try:
-            circuits.append(build(scene, th, state=st, reflect=reflect).circuit)
-            where.append(i)
+            circuits.append(build(scene, theta[i], state=states[i], reflect=reflect).circuit)
+            single.append(i)
         except GeometryError as exc:
             skipped[i] = str(exc)
-        if progress is not None:
-            progress(i + 1, points)
+    parts = [] if batch is None else [batch]
     if circuits:
-        # Every crank angle is one design of the same network (issue 21): all at once.
-        try:
-            designs = from_circuits(circuits)
-        except InputError:              # the topology changes over the cycle: one by one
-            designs = None
-        for part in ([designs] if designs is not None else
-                     [from_circuits([c]) for c in circuits]):
-            found = part.resonances()
-            with np.errstate(all="ignore"):
-                q = part.sweep(hs * omega_shaft).Q0
-            for d in range(part.size):
-                i = where[d] if designs is not None else where[circuits.index(part.circuit)]
-                if d in found.failed:
-                    raise SolverError(found.failed[d])
-                rows = found.list(d)
-                res[i] = tuple(r for r in rows if r.kind == "resonance")
-                anti[i] = tuple(r for r in rows if r.kind == "antiresonance")
-                Q0[i] = q[d]
+        try:                            # one topology over the cycle: one batch
+            built = [(from_circuits(circuits), np.array(single))]
+        except InputError:
+            built = [(from_circuits([c]), np.array([i])) for c, i in zip(circuits, single)]
+        for ds, where in built:
+            if parts and _same_network(parts[0][0], ds):    # they join the batch
+                parts[0] = (_joined(parts[0][0], ds), np.concatenate([parts[0][1], where]))
+            else:
+                parts.append((ds, where))
+    for part, where in parts:
+        found = part.resonances()
+        with np.errstate(all="ignore"):
+            q = part.sweep(hs * omega_shaft).Q0
+        for d in range(part.size):
+            i = int(where[d])
+            if d in found.failed:
+                raise SolverError(found.failed[d])
+            rows = found.list(d)
+            res[i] = tuple(r for r in rows if r.kind == "resonance")
+            anti[i] = tuple(r for r in rows if r.kind == "antiresonance")
+            Q0[i] = q[d]
+    if progress is not None:
+        for i in range(points):
+            progress(i + 1, points)
     return CycleMap(theta, res, anti, hs, omega_shaft, Q0, skipped, rotational, scene.cycle)
+
+
+#: Batch the crank angles (False: one scene.build per angle, the reference path).
+_BATCHED = True
+#: An angle within this factor of a decision of build (a ratio "at rest", a part's
+#: rank) is left to build, so that the batch never decides differently.
+_MARGIN = 1e3
+
+
+def _joined(a, b):
+    """The designs of ``a`` then those of ``b`` (one network)."""
+    return replace(a, values=np.hstack([a.values, b.values]), eta=np.hstack([a.eta, b.eta]),
+                   ratios=np.hstack([a.ratios, b.ratios]),
+                   amplitude=np.concatenate([a.amplitude, b.amplitude]),
+                   valid=np.concatenate([a.valid, b.valid]))
+
+
+def _same_network(a, b) -> bool:
+    """Whether two Designs have the same elements, levers and drive (names, kinds, nodes)."""
+    def shape(c):
+        return ([(e.kind, e.name, e.n1, e.n2) for e in c.elements],
+                [(lv.name, lv.p1, lv.p2, lv.s1, lv.s2) for lv in c.levers],
+                (c.drive.name, c.drive.n1, c.drive.n2, c.drive.kind))
+    return shape(a.circuit) == shape(b.circuit)
+
+
+def _cycle_designs(scene: Scene, motion, reflect: str):
+    """The circuits of the scene at every angle of ``motion`` as one batch of designs.
+
+    :func:`~mechcirc.scene.build` at one angle gives the network (elements,
+    nodes, what is left out); at every other angle only the reflection factors
+    change, η = r² with r each element's velocity ratio to the drive, computed
+    here from the motion's arrays for all angles at once, as build computes it
+    at one: the speed of a mass's point or a link's ω, the elongation rate of
+    an elastic link along it (its moving end), a load's point along its line,
+    each per unit drive velocity.  The angles where build would decide
+    differently, or nearly so (a ratio within ``_MARGIN`` of "at rest", a
+    rigid part whose joint constraints are within ``_MARGIN`` of losing rank),
+    are returned for build to do one by one.  Only ``reflect="eta"`` on a
+    linkage of pin joints; else every angle goes to build.  As a check, the
+    ratios at the template's angle must equal build's to 1e-12, else the same.
+
+    Returns ``((Designs, angle indices), angles for build)``.
+    """
+    from ..batch import Designs
+    from .model import ZERO_RATIO
+
+    n = len(motion.theta)
+    every = range(n)
+    lk = scene.linkage
+    if reflect != "eta" or getattr(lk, "sliders", ()):
+        return None, every
+    L, omega = scene.length_scale, lk.cranks[0].omega
+    pi = {p: k for k, p in enumerate(motion.point_names)}
+    pos = motion.points * L                                   # (n, P, 2), as build scales
+    vel = motion.velocities * L / omega
+    ang = dict(zip(motion.link_names, (motion.angular_velocities / omega).T))
+    for g in lk.ground:
+        if g not in pi:
+            return None, every
+    for t in scene.torsions:
+        ang[t.body] = ang[t.link]
+    ok = np.ones(n, dtype=bool)
+    for t in scene.torsions:       # build refuses rods on one body turning differently
+        ok &= ang[t.link] == ang[t.body]
+    Lc = lk.length_scale() * L
+    speed = np.hypot(vel[..., 0], vel[..., 1])                 # (n, P)
+    S_all = np.maximum(speed.max(axis=1),
+                       np.max(np.abs(np.array(list(ang.values()))), axis=0) * Lc)
+    tiny = ZERO_RATIO * S_all
+
+    def clear(size):                     # True where build's decision is not close
+        return (size > tiny * _MARGIN) | (size < tiny / _MARGIN)
+
+    d = scene.drive
+    if d.link is not None:
+        r0, r0_size = ang[d.link], np.abs(ang[d.link]) * Lc
+    else:
+        r0 = r0_size = speed[:, pi[d.point]]
+    ok &= r0_size > tiny * _MARGIN
+    bodies = scene.bodies
+    tbodies = {t.body for t in scene.torsions}
+    for part in scene.parts:
+        sizes = [np.abs(ang[b]) * Lc for b in part] + \
+            [speed[:, pi[p]] for b in part if b not in tbodies for p in bodies[b]]
+        ok &= np.max(sizes, axis=0) > tiny * _MARGIN
+        ok &= _part_rank_clear(lk, part, bodies, pos, pi, Lc)
+    with np.errstate(all="ignore"):
+        ratio, size = {}, {}
+        for ms in scene.masses:
+            if ms.kind == "mass":
+                if ms.point in lk.ground:
+                    continue
+                size[ms.name] = speed[:, pi[ms.point]]
+                ratio[ms.name] = size[ms.name] / np.abs(r0)
+            else:
+                ratio[ms.name] = ang[ms.link] / r0
+                size[ms.name] = np.abs(ang[ms.link]) * Lc
+        for e in scene.elastic:
+            a, b = lk.links[e.link]
+            u = pos[:, pi[b]] - pos[:, pi[a]]
+            u = u / np.hypot(u[:, 0], u[:, 1])[:, None]
+            end = a if b in lk.ground else b
+            ratio[e.name] = np.sum(u * vel[:, pi[end]], axis=1) / r0
+        for t in scene.torsions:
+            ratio[t.name] = ang[t.link] / r0
+            size[t.name] = np.abs(ang[t.link]) * Lc
+        for ld in scene.loads:
+            if ld.anchor is not None:
+                u = pos[:, pi[ld.anchor]] - pos[:, pi[ld.point]]
+                ok &= np.hypot(u[:, 0], u[:, 1]) > 0
+            else:
+                u = np.broadcast_to(np.array(ld.direction, float), (n, 2))
+            u = u / np.hypot(u[:, 0], u[:, 1])[:, None]
+            ratio[ld.name] = np.sum(u * vel[:, pi[ld.point]], axis=1) / r0
+        for name in ratio:
+            if name not in size:
+                size[name] = np.abs(ratio[name] * r0)
+            ok &= clear(size[name])
+    ok &= np.isfinite(r0)
+    if not ok.any():
+        return None, every
+    i0 = int(np.argmax(ok))
+    try:
+        template = build(scene, float(motion.theta[i0]), state=motion.state(i0), reflect=reflect)
+    except GeometryError:
+        return None, every
+    dropped = {name for name, _ in template.dropped}
+    for name, r in template.ratios.items():          # the check against build
+        mine = ratio.get(name)
+        if mine is None or not abs(mine[i0] - r) <= 1e-12 * max(abs(r), 1e-300):
+            return None, every
+    for name in ratio:
+        if name not in template.ratios:
+            return None, every
+        ok &= (size[name] > tiny) == (name not in dropped)  # the same elements left out
+    source = {}
+    for e in scene.elastic + scene.torsions + scene.loads:
+        source[e.name] = source[e.name + "_d"] = e.name
+    c = template.circuit
+    try:
+        eta = np.array([ratio[source.get(e.name, e.name)] ** 2 for e in c.elements])
+    except KeyError:
+        return None, every
+    if c.levers:
+        return None, every
+    where = np.flatnonzero(ok)
+    eta = eta[:, where]
+    E, D = len(c.elements), where.size
+    values = np.repeat(np.array([[e.value] for e in c.elements]), D, axis=1)
+    with np.errstate(all="ignore"):
+        valid = (np.isfinite(values * eta) & (values * eta > 0)).all(axis=0)
+    ds = Designs(c, {}, values.reshape(E, D), eta, np.zeros((0, D)),
+                 np.full(D, float(c.drive.amplitude)), valid, None)
+    return (ds, where), np.flatnonzero(~ok).tolist()
+
+
+def _part_rank_clear(lk, part, bodies, pos, pi, Lc):
+    """Per angle: the part's pin-joint constraints have rank 3·len(part) − 1 (one
+    velocity field) with no singular value within ``_MARGIN`` of build's rank
+    threshold (1e-9 of the largest): the rows of ``model._check_part``, stacked."""
+    n = pos.shape[0]
+    cols = {b: 3 * i for i, b in enumerate(part)}
+    rows = []
+    for p in sorted({p for b in part for p in bodies[b]}):
+        on = [b for b in part if p in bodies[b]]
+        members = (["ground"] if p in lk.ground else []) + on
+        for other in members[1:]:
+            for axis in range(2):
+                row = np.zeros((n, 3 * len(part)))
+                for body, sign in ((members[0], 1.0), (other, -1.0)):
+                    if body == "ground":
+                        continue
+                    j = cols[body]
+                    row[:, j + axis] += sign
+                    arm = (pos[:, pi[p]] - pos[:, pi[bodies[body][0]]]) / Lc
+                    # (_PERP @ arm)[axis]: (-arm_y, arm_x)
+                    row[:, j + 2] += sign * (-arm[:, 1] if axis == 0 else arm[:, 0])
+                rows.append(row)
+    if not rows:
+        return np.full(n, len(part) * 3 == 1)
+    s = np.linalg.svd(np.stack(rows, axis=1), compute_uv=False)       # (n, k) descending
+    thr = 1e-9 * s[:, :1]
+    clear = ((s > thr * _MARGIN) | (s < thr / _MARGIN)).all(axis=1)
+    rank = (s > thr).sum(axis=1)
+    return clear & (3 * len(part) - rank == 1)
 
 
 def plot_cycle(cmap: CycleMap, ax=None, *, fig=None, unit: str = "rad/s"):

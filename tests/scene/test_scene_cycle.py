@@ -70,3 +70,31 @@ def test_cycle_arguments_are_checked():
         cycle_map(scene, points=1)
     with pytest.raises(ValueError, match="harmonics"):
         cycle_map(scene, harmonics=0)
+
+
+def test_cycle_batch_forms_every_angle_as_build_does():
+    # The circuits of the batched cycle map (the η of every element at every angle)
+    # against scene.build at each angle, on the heald scene (no angle left to build)
+    # and on a sley scene whose θ = 0 is a dead centre (that angle left to build,
+    # which refuses it; the others batched).
+    from mechcirc.scene.cycle import _cycle_designs
+    from mechcirc.sley import preset
+
+    root = ROOT
+    p = preset("one-side", 1)
+    front = p.fourbar().dead_centres()[0].theta
+    scenes = [(load_scene(root / "examples" / "heald_scene.toml"), 72, []),
+              (parse_scene(helpers.sley_scene_text(p, front)), 12, [0])]
+    for scene, n, left in scenes:
+        theta = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
+        motion = scene.linkage.motion(theta)
+        (ds, where), alone = _cycle_designs(scene, motion, "eta")
+        assert list(alone) == left and sorted(where.tolist() + left) == list(range(n))
+        states = motion.states()
+        for d, i in enumerate(where):
+            c = build(scene, theta[i], state=states[i]).circuit
+            assert [e.name for e in c.elements] == [e.name for e in ds.circuit.elements]
+            np.testing.assert_allclose(ds.eta[:, d], [e.eta for e in c.elements],
+                                       rtol=1e-13, atol=0)
+            np.testing.assert_array_equal(ds.values[:, d], [e.value for e in c.elements])
+
