@@ -52,6 +52,7 @@ so y·∂K/∂y = −S·(x_i − x_j)²; a lever's ratio r gives r·∂K/∂r =
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -61,6 +62,16 @@ from .circuit import LAWS, Circuit, Drive
 from .resonances import Resonance, _project, _solve, pencil
 
 __all__ = ["Mode", "SweepSensitivity", "modes", "sweep_sensitivity"]
+
+
+def _lazy(key: str, names: str):
+    """A dictionary attribute of :class:`Mode` made from its arrays on first use."""
+    def make(self) -> dict:
+        values = self._values.get(key)
+        return {} if values is None else dict(zip(self._names[names], values.tolist()))
+    make.__name__ = key
+    make.__doc__ = f"See the class docstring ({key})."
+    return functools.cached_property(make)
 
 
 @dataclass(frozen=True)
@@ -94,16 +105,22 @@ class Mode:
     """
 
     resonance: Resonance
-    shape: dict = field(default_factory=dict)
-    energy: dict = field(default_factory=dict)
-    dissipation: dict = field(default_factory=dict)
-    velocity: dict = field(default_factory=dict)
-    force: dict = field(default_factory=dict)
-    sensitivity: dict = field(default_factory=dict)
-    zeta_sensitivity: dict = field(default_factory=dict)
     param_sensitivity: dict = field(default_factory=dict)
     param_zeta_sensitivity: dict = field(default_factory=dict)
     note: str = ""
+    # The per-node and per-element values as arrays and the names they go with (shared by
+    # every mode of one call); the dictionaries above are made from them on first use
+    # (thousands of elements times thousands of roots would otherwise be built up front).
+    _values: dict = field(default_factory=dict, repr=False, compare=False)
+    _names: dict = field(default_factory=dict, repr=False, compare=False)
+
+    shape = _lazy("shape", "nodes")
+    energy = _lazy("energy", "stored")
+    dissipation = _lazy("dissipation", "dampers")
+    velocity = _lazy("velocity", "elements")
+    force = _lazy("force", "elements")
+    sensitivity = _lazy("sensitivity", "all")
+    zeta_sensitivity = _lazy("zeta_sensitivity", "all")
 
     @property
     def s(self) -> complex:
@@ -137,7 +154,11 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
     els = system.elements
     ei, ej, y, power, names = _stamped(system)
     kinds = np.array([e.kind for e in els])
-    el_names = np.array([e.name for e in els], dtype=object)
+    mass, spring, damper = (kinds == k for k in ("mass", "spring", "damper"))
+    el_names = [e.name for e in els]
+    shared = {"nodes": list(system.nodes), "elements": el_names, "all": names,
+              "stored": [n for n, d in zip(el_names, damper) if not d],
+              "dampers": [n for n, d in zip(el_names, damper) if d]}
     slopes = _param_slopes(circuit, names)
     # Constraint forces from the node rows, P(s) v + s Gᵀ q = 0: Gᵀ's pseudo-inverse,
     # once per problem (only levers need them).
@@ -160,33 +181,27 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
         for p, row in slopes.items():
             ds_p = row @ ds
             p_rel[p], p_zeta[p] = (float(x[0]) for x in _omega_zeta(s, np.array([ds_p])))
-        common: dict = {"sensitivity": dict(zip(names, rel.tolist())),
-                  "zeta_sensitivity": dict(zip(names, zeta.tolist())),
-                  "param_sensitivity": p_rel, "param_zeta_sensitivity": p_zeta}
+        common: dict = {"param_sensitivity": p_rel, "param_zeta_sensitivity": p_zeta,
+                        "_names": shared}
         if repeated:
             common["note"] = ("a repeated root: its shape is one of a family (any "
                               "combination is a mode too) and the sensitivities hold for "
                               "this shape only")
+        values = {"sensitivity": rel, "zeta_sensitivity": zeta}
         if r.omega_d == 0:
             common.pop("note", None)
             out.append(Mode(r, note=f"overdamped (zeta = {r.zeta:.4g} >= 1, omega_d = 0): "
-                                    "a decaying motion, not a mode of vibration", **common))
+                                    "a decaying motion, not a mode of vibration",
+                            _values=values, **common))
             continue
         wn = r.omega
-        a2 = np.abs(dv) ** 2
-        stored = np.where(kinds == "mass", 0.5 * y * a2,
-                          np.where(kinds == "spring", 0.5 * y * a2 / wn ** 2, 0.0))
+        a2 = dv.real ** 2 + dv.imag ** 2
+        stored = np.where(mass, 0.5 * y * a2, np.where(spring, 0.5 * y * a2 / wn ** 2, 0.0))
         total = stored.sum()
-        damper = kinds == "damper"
-        # Lists, not numpy scalars, into the dicts: thousands of elements per root.
-        energy = dict(zip(el_names[~damper], (stored[~damper] / total).tolist()))
-        dissipation = dict(zip(el_names[damper],
-                               (y[damper] * a2[damper] / (2 * wn * total)).tolist()))
-        force = y * s ** (-power.astype(float)) * dv
-        out.append(Mode(r, shape=dict(zip(system.nodes, v.tolist())),
-                        energy=energy, dissipation=dissipation,
-                        velocity=dict(zip(el_names, dv.tolist())),
-                        force=dict(zip(el_names, force.tolist())), **common))
+        values.update(shape=v, energy=stored[~damper] / total,
+                      dissipation=y[damper] * a2[damper] / (2 * wn * total), velocity=dv,
+                      force=y * s ** (-power.astype(float)) * dv)
+        out.append(Mode(r, _values=values, **common))
     return out
 
 

@@ -365,8 +365,30 @@ def _spline(theta: np.ndarray, x: np.ndarray):
     return CubicSpline(theta, x, bc_type="periodic")
 
 
-def motion_table(angle_deg, displacement, spec: str = "motion=<table>") -> Motion:
+def _hermite(theta, x, dx, ddx) -> tuple:
+    """Quintic Hermite pieces (a₀ … a₅ in τ = θ − θᵢ) matching x, x', x'' at both ends."""
+    h = np.diff(theta)
+    d0, d1 = dx[:-1] * h, dx[1:] * h                  # derivatives in t = τ/h
+    a0, a1 = ddx[:-1] * h * h, ddx[1:] * h * h
+    dp = x[1:] - x[:-1]
+    c = np.array([x[:-1], d0, a0 / 2,
+                  10 * dp - 6 * d0 - 4 * d1 - (3 * a0 - a1) / 2,
+                  -15 * dp + 8 * d0 + 7 * d1 + (3 * a0 - 2 * a1) / 2,
+                  6 * dp - 3 * (d0 + d1) - (a0 - a1) / 2])
+    c = c / h[None, :] ** np.arange(_DEG)[:, None]
+    if not np.all(np.isfinite(c)):
+        raise ValueError("the interpolant through the samples is not finite in float64")
+    return tuple(map(tuple, c.T.tolist()))
+
+
+def motion_table(angle_deg, displacement, spec: str = "motion=<table>", *, slope=None,
+                 curvature=None) -> Motion:
     """The periodic cubic spline through a table of one revolution, as a :class:`Motion`.
+
+    With ``slope`` and ``curvature`` (dx/dθ and d²x/dθ² at every row, per
+    radian, as a linkage's kinematics gives them) the pieces are instead the
+    quintic Hermite polynomials matching x, dx/dθ and d²x/dθ² at both ends of
+    each interval (error O(h⁶) in x, O(h⁵) in dx/dθ).
 
     Parameters
     ----------
@@ -393,24 +415,31 @@ def motion_table(angle_deg, displacement, spec: str = "motion=<table>") -> Motio
     theta = np.radians(ang - ang[0])
     theta[-1] = _TAU
     x[-1] = x[0]
-    try:
-        spl = _spline(theta, x)
-    except ValueError:                         # scipy: the slopes overflowed
-        spl = None
-    if spl is None or not np.all(np.isfinite(spl.c)):
-        raise ValueError("the spline through the table is not finite in float64 "
-                         "(displacements too large)")
     if np.abs(x).max(initial=0.0) > MAX_LIFT:
         raise ValueError(f"a displacement of {np.abs(x).max():g} is beyond the bound "
                          f"{MAX_LIFT:g} (the drive's velocities and forces would overflow)")
-    c = spl.c                                          # (4, n−1), highest power first
-    poly = tuple((c[3, i], c[2, i], c[1, i], c[0, i], 0.0, 0.0) for i in range(c.shape[1]))
+    hermite = slope is not None
+    if hermite:
+        poly = _hermite(theta, x, np.asarray(slope, float), np.asarray(curvature, float))
+    else:
+        try:
+            spl = _spline(theta, x)
+        except ValueError:                         # scipy: the slopes overflowed
+            spl = None
+        if spl is None or not np.all(np.isfinite(spl.c)):
+            raise ValueError("the spline through the table is not finite in float64 "
+                             "(displacements too large)")
+        c = spl.c                                          # (4, n−1), highest power first
+        poly = tuple((c[3, i], c[2, i], c[1, i], c[0, i], 0.0, 0.0) for i in range(c.shape[1]))
     error, coarse = math.inf, None
     if ang.size >= 9:
         keep = np.unique(np.append(np.arange(0, ang.size, 2), ang.size - 1))
-        coarse = motion_table(ang[keep], x[keep], spec + " (every other row)")
+        coarse = motion_table(ang[keep], x[keep], spec + " (every other row)",
+                              slope=None if not hermite else np.asarray(slope)[keep],
+                              curvature=None if not hermite else np.asarray(curvature)[keep])
         dense = np.linspace(0, _TAU, 16 * ang.size)
-        fine = spl(dense, 1)
+        fine = (Motion("", tuple(theta[:-1]), poly, ((0.0, 0.0, 0.0),) * len(poly))
+                .evaluate(dense)[1] if hermite else spl(dense, 1))
         scale = float(np.max(np.abs(fine)))
         error = float(np.max(np.abs(fine - coarse.evaluate(dense)[1]))) / scale \
             if scale > 0 else 0.0

@@ -28,9 +28,14 @@ def register(sub) -> None:
                     "speeds where a harmonic meets a resonance (k·Ω = ωn).",
         epilog="Examples:\n"
                "  mechcirc periodic docs/examples/cam_drive.mcir --rpm 600 -o Q.csv\n"
-               "  mechcirc periodic docs/examples/cam_drive.mcir --rpm-min 100 --rpm-max 1200",
+               "  mechcirc periodic docs/examples/cam_drive.mcir --rpm-min 100 --rpm-max 1200\n"
+               "  mechcirc periodic docs/examples/rocker_drive.toml --theta 30 --rpm 300",
         formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("file", help="netlist (.mcir) whose drive has motion=")
+    p.add_argument("file", help="netlist (.mcir) whose drive has motion=, or a scene (.toml): "
+                                "its circuit at --theta driven by the motion its linkage imposes")
+    p.add_argument("--theta", type=real(most=1e9, unit="deg", role="angle"), metavar="DEG",
+                   help="scene: the crank rotation [deg] at which it is linearised "
+                        "(default: the file's [analysis] theta_deg)")
     p.add_argument("--rpm", type=real(above=0.0, most=1e9, unit="rpm"), metavar="RPM",
                    help="machine speed [rev/min]")
     p.add_argument("--rpm-min", type=real(above=0.0, most=1e9, unit="rpm"), metavar="A",
@@ -77,7 +82,7 @@ def _elements(args, circuit):
 def cmd_periodic(args) -> int:
     from ..errors import MechcircError
 
-    check_output_paths(args.output, plots=(args.plot,))
+    check_output_paths(args.output, plots=(args.plot,), reads=(args.file,))
     single = args.rpm is not None
     ranged = args.rpm_min is not None or args.rpm_max is not None
     if single == ranged:
@@ -87,22 +92,49 @@ def cmd_periodic(args) -> int:
                    or not args.rpm_min < args.rpm_max):
         raise MechcircError("the speed map needs both --rpm-min and --rpm-max, with "
                             "--rpm-min < --rpm-max")
-    circuit, warns = load_with_warnings(args.file)
+    if args.file.lower().endswith(".toml"):
+        circuit, motion, unit = _scene(args)
+    else:
+        if args.theta is not None:
+            raise MechcircError("--theta applies to a scene (.toml), not to a netlist")
+        circuit, warns = load_with_warnings(args.file)
+        motion, unit = None, "N"
+        for w in warns:
+            print(f"warning: {w}", file=sys.stderr)
     elements = _elements(args, circuit)
-    for w in warns:
-        print(f"warning: {w}", file=sys.stderr)
     if single:
-        return _one_speed(args, circuit, elements)
-    return _speed_map(args, circuit, elements)
+        return _one_speed(args, circuit, elements, motion, unit)
+    return _speed_map(args, circuit, elements, motion, unit)
 
 
-def _one_speed(args, circuit, elements) -> int:
+def _scene(args):
+    """A scene's circuit at --theta, the motion its rigid linkage imposes on the drive, the unit."""
+    import math
+
+    from ..errors import MechcircError
+    from ..scene import build, load_scene
+    from ..scene.cycle import drive_motion
+
+    scene = load_scene(args.file)
+    theta_deg = args.theta if args.theta is not None else scene.analysis.theta_deg
+    if theta_deg is None:
+        raise MechcircError(f"{args.file}: give --theta DEG, the crank rotation at which the "
+                            "scene is linearised (the file has no [analysis] theta_deg)")
+    if scene.drive.kind != "velocity":
+        raise MechcircError(f"{args.file}: the drive is a force; the periodic drive imposes "
+                            "the linkage's motion, which needs a velocity drive")
+    model = build(scene, math.radians(theta_deg))
+    return (model.circuit, drive_motion(scene, math.radians(theta_deg)),
+            "N·m" if model.rotational else "N")
+
+
+def _one_speed(args, circuit, elements, motion, unit) -> int:
     import numpy as np
 
     from ..outputs import OutputSet
     from ..periodic import periodic
 
-    r = periodic(circuit, args.rpm, tol=args.tol, harmonics=args.harmonics,
+    r = periodic(circuit, args.rpm, motion=motion, tol=args.tol, harmonics=args.harmonics,
                  points=args.angles, elements=elements, near=args.near, method=args.method)
     with OutputSet() as out:
         if args.output:
@@ -123,7 +155,7 @@ def _one_speed(args, circuit, elements) -> int:
             for k, w, v, q, n, d, nr in zip(r.k, r.omega, r.V, r.amplitude, r.nearest,
                                             r.distance, r.near)]
     if args.json:
-        print_json({"file": args.file, "name": r.name, "rpm": r.rpm,
+        print_json({"file": args.file, "name": r.name, "unit": unit, "rpm": r.rpm,
                     "omega_shaft": r.omega_shaft, "angle_deg": r.angle_deg, "x": r.x,
                     "v": r.v, "Q": r.Q, "peak": r.peak, "peak_angle_deg": r.peak_angle_deg,
                     "error": r.error, "tol": r.tol, "n_harmonics": r.harmonics,
@@ -133,26 +165,28 @@ def _one_speed(args, circuit, elements) -> int:
                     "velocities": r.velocities, "notes": list(r.notes)})
         return 0
     d = circuit.drive
-    print(f"{args.file}: drive {d.name} {d.motion.spec} at {r.rpm:g} rpm "
+    print(f"{args.file}: drive {d.name} {(motion or d.motion).spec} at {r.rpm:g} rpm "
           f"(Ω = {r.omega_shaft:.6g} rad/s)")
     print(f"  {r.harmonics} harmonics; estimated error {r.error:.2g} of the peak "
           f"(asked {r.tol:g})")
     if r.unbounded:
         print("  peak |Q| = inf: the steady periodic force is unbounded")
     else:
-        print(f"  peak |Q| = {r.peak:.7g} N at θ = {r.peak_angle_deg:.4f} deg; "
-              f"drive velocity up to {np.max(np.abs(r.v)):.4g} m/s")
+        print(f"  peak |Q| = {r.peak:.7g} {unit} at θ = {r.peak_angle_deg:.4f} deg; "
+              f"drive velocity up to {np.max(np.abs(r.v)):.4g} "
+              f"{'rad/s' if unit == 'N·m' else 'm/s'}")
     near = np.flatnonzero(r.near)
     if near.size:
         print(f"  harmonics within {args.near:.0%} of a resonance:")
         for i in near:
             print(f"    k = {r.k[i]}: kΩ = {r.omega[i]:.6g} rad/s, resonance "
                   f"ωn = {r.nearest[i]:.6g} rad/s ({r.distance[i]:+.2%}), "
-                  f"|Q_k| = {abs(r.amplitude[i]):.4g} N")
+                  f"|Q_k| = {abs(r.amplitude[i]):.4g} {unit}")
     else:
         print(f"  no harmonic within {args.near:.0%} of a resonance")
     top = np.argsort(-np.nan_to_num(np.abs(r.amplitude), nan=np.inf))[:8]
-    print(f"  {'k':>5} {'kΩ [rad/s]':>12} {'|V_k| [m/s]':>12} {'|Q_k| [N]':>12} "
+    vu = "rad/s" if unit == "N·m" else "m/s"
+    print(f"  {'k':>5} {'kΩ [rad/s]':>12} {f'|V_k| [{vu}]':>12} {f'|Q_k| [{unit}]':>12} "
           f"{'nearest ωn':>12} {'distance':>9}")
     for i in sorted(top):
         print(f"  {r.k[i]:>5} {r.omega[i]:>12.6g} {abs(r.V[i]):>12.4g} "
@@ -162,17 +196,17 @@ def _one_speed(args, circuit, elements) -> int:
     for name in elements:
         f = r.forces.get(name)
         if f is not None:
-            print(f"  element {name}: peak |force| {np.max(np.abs(f)):.6g} N")
+            print(f"  element {name}: peak |force| {np.max(np.abs(f)):.6g} {unit}")
     return _print_notes_and_outputs(r.notes, args)
 
 
-def _speed_map(args, circuit, elements) -> int:
+def _speed_map(args, circuit, elements, motion, unit) -> int:
     import numpy as np
 
     from ..outputs import OutputSet
     from ..periodic import speed_map
 
-    m = speed_map(circuit, args.rpm_min, args.rpm_max, args.points, tol=args.tol,
+    m = speed_map(circuit, args.rpm_min, args.rpm_max, args.points, motion=motion, tol=args.tol,
                   harmonics=args.harmonics, elements=elements, method=args.method)
     with OutputSet() as out:
         if args.output:
@@ -189,7 +223,8 @@ def _speed_map(args, circuit, elements) -> int:
     crossings = [{"rpm": r, "k": k, "omega_n": w, "zeta": z, "weight": wt}
                  for r, k, w, z, wt in m.crossings]
     if args.json:
-        print_json({"file": args.file, "name": m.name, "rpm": m.rpm, "peak": m.peak,
+        print_json({"file": args.file, "name": m.name, "unit": unit, "rpm": m.rpm,
+                    "peak": m.peak,
                     "harmonics": m.harmonics, "error": m.error, "crossings": crossings,
                     "element_peaks": m.element_peaks, "notes": list(m.notes)})
         return 0
@@ -201,8 +236,8 @@ def _speed_map(args, circuit, elements) -> int:
     if finite.any():
         lo, hi = np.argmin(np.where(finite, m.peak, np.inf)), np.argmax(
             np.where(finite, m.peak, -np.inf))
-        print(f"  smallest peak {m.peak[lo]:.6g} N at {m.rpm[lo]:.6g} rpm; largest "
-              f"{m.peak[hi]:.6g} N at {m.rpm[hi]:.6g} rpm")
+        print(f"  smallest peak {m.peak[lo]:.6g} {unit} at {m.rpm[lo]:.6g} rpm; largest "
+              f"{m.peak[hi]:.6g} {unit} at {m.rpm[hi]:.6g} rpm")
     strong = [c for c in crossings if c["weight"] >= 1e-3]
     print(f"  speeds where a harmonic meets a resonance (k·Ω = ωn; {len(strong)} of "
           f"{len(crossings)} with a harmonic of at least 1e-3 of the drive velocity):")

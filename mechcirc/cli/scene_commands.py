@@ -38,7 +38,11 @@ def register(sub) -> None:
     p.add_argument("--reduce", action="store_true",
                    help="reduce the circuit to what the file's [analysis] output needs over "
                         "its band, within its tol (-o then writes the reduced netlist)")
-    p.add_argument("--plot", metavar="IMAGE", help="--cycle: plot the map (PNG, SVG or PDF)")
+    p.add_argument("--plot", metavar="IMAGE", help="--cycle: plot the map; with --mode: draw "
+                                                   "the mode on the linkage (PNG, SVG or PDF)")
+    p.add_argument("--mode", type=count(1, 10_000), metavar="N",
+                   help="--theta: draw resonance N (drive held; 1 = lowest) on the linkage "
+                        "into --plot")
     p.add_argument("--unit", choices=("rad/s", "Hz"), default="rad/s",
                    help="--cycle --plot: frequency unit of the plot (default rad/s, as the "
                         "table)")
@@ -76,9 +80,12 @@ def cmd_scene(args) -> int:
 
     plots = (args.plot,) if args.plot else ()
     check_output_paths(args.output, plots=plots, reads=(args.file,))
-    if args.plot and not args.cycle:
-        raise MechcircError("--plot draws the --cycle map; with --theta use -o and "
-                            "'mechcirc sweep' on the netlist")
+    if args.plot and not args.cycle and args.mode is None:
+        raise MechcircError("--plot draws the --cycle map, or with --mode N a mode at the "
+                            "crank angle; with --theta alone use -o and 'mechcirc sweep'")
+    if args.mode is not None and (args.cycle or args.reduce or not args.plot):
+        raise MechcircError("--mode N draws a mode at one crank angle: give it with --plot "
+                            "IMAGE, without --cycle or --reduce")
     from ..scene import build_needed, load_scene
 
     scene = load_scene(args.file)
@@ -103,6 +110,12 @@ def cmd_scene(args) -> int:
         model, reduced = build(scene, math.radians(theta_deg), reflect=args.reflect), None
     args.theta = theta_deg
     found = model.circuit.resonances()
+    drawn = None
+    if args.mode is not None:
+        from ..scene.plots import plot_mode
+
+        drawn = plot_mode(scene, math.radians(theta_deg), args.mode)
+        save_figure(drawn.figure, args.plot)
     if args.output:
         from ..outputs import atomic_open
 
@@ -141,6 +154,8 @@ def cmd_scene(args) -> int:
             print(f"  {step}")
     if args.output:
         print(f"wrote {args.output}" + (" (reduced)" if reduced is not None else ""))
+    if drawn is not None:
+        print(f"resonance {args.mode} drawn on the linkage into {args.plot}")
     return 0
 
 

@@ -23,10 +23,14 @@ from numpy.typing import NDArray
 
 from ..batch import from_circuits
 from ..errors import GeometryError, InputError, SolverError
+from ..motion_laws import Motion, motion_table
 from .files import Scene
 from .model import build
 
-__all__ = ["CycleMap", "cycle_map"]
+__all__ = ["CycleMap", "cycle_map", "drive_motion"]
+
+#: Rigid-kinematics samples of the drive's motion over a revolution (quintic Hermite between).
+DRIVE_SAMPLES = 720
 
 
 @dataclass(frozen=True, eq=False)
@@ -434,3 +438,76 @@ def plot_cycle(cmap: CycleMap, ax=None, *, fig=None, unit: str = "rad/s"):
     a2.legend(fontsize=7, ncol=3)
     fig.tight_layout()
     return fig
+
+
+def drive_motion(scene: Scene, theta: float, *, samples: int = DRIVE_SAMPLES) -> Motion:
+    """The motion the rigid linkage imposes on the scene's drive over one crank revolution.
+
+    The drive of the circuit built at crank rotation ``theta``
+    (:func:`~mechcirc.scene.build`) moves, over θ' ∈ [0, 2π) from the pose,
+
+    * a link drive: x(θ') = φ_link(θ') [rad], the link's angle (a link that
+      turns whole revolutions: less its steady rotation, which has no harmonic);
+    * a point drive P: x(θ') = u·P(θ') [m], u the direction of P's velocity at
+      ``theta`` (the drive's direction in that circuit).
+
+    x, dx/dθ' and d²x/dθ'² are taken from the rigid kinematics
+    (:meth:`Linkage.motion`) at ``samples`` even crank angles and joined by
+    quintic Hermite pieces (:func:`~mechcirc.motion_laws.motion_table`), whose
+    ``error`` estimates the interpolation as for a table.
+
+    Parameters
+    ----------
+    scene : Scene
+    theta : float
+        Crank rotation [rad] at which the circuit is linearised.
+    samples : int
+        Kinematic samples over the revolution, ≥ 16.
+
+    Returns
+    -------
+    Motion
+        For :func:`mechcirc.periodic.periodic` with the circuit at ``theta``.
+
+    Raises
+    ------
+    GeometryError
+        The crank cannot make a full revolution, or the linkage does not come
+        back to its pose after one (several cranks at unrelated speeds).
+    """
+    if isinstance(samples, bool) or not isinstance(samples, int) or samples < 16:
+        raise ValueError(f"samples must be an integer ≥ 16, got {samples!r}")
+    lk, d = scene.linkage, scene.drive
+    th = np.linspace(0.0, 2 * math.pi, samples + 1)
+    try:
+        km = lk.motion(th)
+    except GeometryError as exc:
+        raise GeometryError(f"{scene.source}: the crank cannot make a full revolution, so the "
+                            f"drive has no periodic motion ({exc})") from None
+    w = lk.cranks[0].omega
+    pts = km.points
+    if np.max(np.abs(pts[-1] - pts[0])) > 1e-9 * lk.length_scale():
+        raise GeometryError(f"{scene.source}: the linkage is not back at its pose after one "
+                            "turn of the first crank, so the drive's motion is not periodic "
+                            "in the crank angle")
+    if d.link is not None:
+        link = {t.body: t.link for t in scene.torsions}.get(d.link, d.link)
+        j = km.link_names.index(link)
+        x = np.unwrap(km.q[:, 3 * j + 2])
+        dx, ddx = km.qdot[:, 3 * j + 2] / w, km.qddot[:, 3 * j + 2] / w ** 2
+        what = f"angle of link {link}"
+        turns = (x[-1] - x[0]) / (2 * math.pi)          # whole turns per revolution
+        x, dx = x - turns * th, dx - turns
+        if round(turns):
+            what += f", less its steady rotation ({round(turns):+d} turn per revolution)"
+    else:
+        L = scene.length_scale
+        i = km.point_names.index(d.point)
+        v0 = lk.solve(float(theta)).velocities[d.point]
+        u = np.asarray(v0, float) / np.hypot(*v0)
+        x = pts[:, i] @ u * L
+        dx = km.velocities[:, i] @ u * (L / w)
+        ddx = km.accelerations[:, i] @ u * (L / w ** 2)
+        what = f"displacement of point {d.point} along ({u[0]:.6g}, {u[1]:.6g})"
+    return motion_table(np.degrees(th), x - x[0], f"motion from the linkage: {what}, "
+                        f"{samples} samples", slope=dx, curvature=ddx)

@@ -1,8 +1,9 @@
-"""Plots of a scene's motion over a revolution (matplotlib imported inside)."""
+"""Plots of a scene: its motion over a revolution, a mode drawn on the linkage
+(matplotlib imported inside)."""
 
 from __future__ import annotations
 
-__all__ = ["plot_motion"]
+__all__ = ["plot_mode", "plot_motion"]
 
 
 def plot_motion(result, names=None, fig=None):
@@ -47,3 +48,96 @@ def plot_motion(result, names=None, fig=None):
     top.set_title(f"{result.name}: revolution {result.revolution} at Ω = {result.omega:g} rad/s",
                   fontsize=10)
     return fig
+
+
+def plot_mode(scene, theta: float, n: int = 1, *, kind: str = "resonance", ax=None,
+              exaggeration: float = 0.1):
+    """Mode ``n`` of the scene's circuit at crank rotation ``theta`` drawn on its linkage.
+
+    The circuit (:func:`~mechcirc.scene.build`) has one node a rigid part,
+    whose velocity ξ is the part's motion in drive units; in the mode
+    (:func:`mechcirc.modes.modes`, largest ξ real 1) each point P of a part
+    moves with Re(ξ)·(dP/dθ)/r₀, dP/dθ its rigid velocity per unit crank
+    speed and r₀ the drive's (:attr:`SceneCircuit.drive_ratio`); ground points
+    stay.  Those displacements, scaled so that the largest is
+    ``exaggeration`` × the linkage's size, are drawn over the rigid linkage
+    (grey); elastic links dashed, as they deform.
+
+    Parameters
+    ----------
+    scene : Scene
+    theta : float
+        Crank rotation from the pose [rad].
+    n : int
+        Which mode, 1 = the lowest of ``kind`` with a shape.
+    kind : {"resonance", "antiresonance"}
+        Drive held (K = 0) or released (K = ∞).
+    ax : matplotlib Axes, optional
+        Drawn on; a new Figure's by default.
+    exaggeration : float
+        Largest drawn displacement as a fraction of the linkage's size.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        Each line's gid is ``"rigid:LINK"`` or ``"mode:LINK"``.
+
+    Raises
+    ------
+    MechcircError
+        No such mode (the message says how many there are), or it is
+        overdamped (no shape).
+    """
+    import math
+
+    import numpy as np
+
+    from ..errors import MechcircError
+    from ..modes import modes
+    from .model import build
+
+    if kind not in ("resonance", "antiresonance"):
+        raise ValueError(f"kind must be 'resonance' or 'antiresonance', got {kind!r}")
+    model = build(scene, theta)
+    found = [m for m in modes(model.circuit) if m.resonance.kind == kind]
+    if not (isinstance(n, int) and 1 <= n <= len(found)):
+        raise MechcircError(f"{scene.source}: no {kind} {n} at θ = {math.degrees(theta):.6g}°: "
+                            f"the circuit has {len(found)} (ask 1 to {len(found)})")
+    mode = found[n - 1]
+    if not mode.shape:
+        raise MechcircError(f"{scene.source}: {kind} {n} has no shape: {mode.note}")
+    lk = scene.linkage
+    state = lk.solve(float(theta))
+    nodes = list(model.parts)
+    scale_si = scene.length_scale
+    raw = {}
+    for p in state.points:
+        part = scene.part_of_point(p)
+        xi = 0.0 if part is None else mode.shape.get(nodes[part], 0.0).real
+        raw[p] = xi * np.asarray(state.velocities[p], float) * scale_si / (
+            lk.cranks[0].omega * model.drive_ratio)
+    big = max(float(np.hypot(*d)) for d in raw.values())
+    k = exaggeration * lk.length_scale() / big if big > 0 else 0.0
+    if ax is None:
+        from matplotlib.figure import Figure
+
+        ax = Figure(figsize=(7, 6)).add_subplot()
+    elastic = {e.link for e in scene.elastic}
+    for link, pts in lk.links.items():
+        ring = list(pts) + ([pts[0]] if len(pts) > 2 else [])
+        rigid = np.array([state.points[p] for p in ring])
+        moved = rigid + k * np.array([raw[p] for p in ring])
+        ls = "--" if link in elastic else "-"
+        ax.plot(*rigid.T, color="0.7", lw=1.5, ls=ls, gid=f"rigid:{link}")
+        ax.plot(*moved.T, "o" + ls, color="C0" if link not in elastic else "C3", ms=3,
+                lw=1.5, gid=f"mode:{link}")
+    g = np.array([state.points[p] for p in lk.ground])
+    ax.plot(*g.T, "k^", ms=7, gid="ground")
+    r = mode.resonance
+    ax.set_title(f"{kind} {n}: ωn = {r.omega:.6g} rad/s, ζ = {r.zeta:.3g}, at θ = "
+                 f"{math.degrees(theta):.6g}° (largest displacement drawn "
+                 f"{exaggeration:.0%} of the linkage)", fontsize=9)
+    ax.set_aspect("equal")
+    ax.set_xlabel(f"x [{lk.units}]")
+    ax.set_ylabel(f"y [{lk.units}]")
+    return ax
