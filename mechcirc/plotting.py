@@ -337,6 +337,8 @@ def plot_transient(result, nodes=None, what: str = "x", elements=None, title: st
     forces = _known("element", elements or (), result.elements)
     drive = (f"{result.drive_kind} drive {result.drive_name}" if result.drive_name
              else "no drive")
+    if result.drive_name and getattr(result, "waveform", None):
+        drive += f", {result.waveform}"
     title = title or f"{result.name}: transient, {drive}"
     t = result.time
 

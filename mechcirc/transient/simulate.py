@@ -88,6 +88,13 @@ class Waveform:
             return out
         raise ValueError(f"unknown waveform kind {self.kind!r}")
 
+    @property
+    def label(self) -> str:
+        """A few words for titles: ``"sin(50 rad/s·t)"``, ``"step"``, ``"table of 12 samples"``."""
+        return {"rest": "at rest", "harmonic": f"sin({self.omega:.6g} rad/s·t)",
+                "samples": f"table of {len(self.times)} samples",
+                "callable": "function of t"}.get(self.kind, self.kind)
+
 
 def parse_drive(text: str | None) -> Waveform:
     """``harmonic:OMEGA`` | ``step`` | ``impulse`` | ``csv:PATH`` | ``rest`` (or None) → Waveform."""
@@ -155,8 +162,8 @@ class TransientResult:
     without a drive); ``error`` an estimate of the largest error of ``x``
     [same unit] and ``notes`` what the run had to say.  ``drive_name``, ``units``
     (:func:`mechcirc.circuit.units_of` of the drive: m or rad, N or N·m, ...)
-    and ``clearances`` (spring name -> (n1, n2, total clearance B)) serve the
-    labels and :meth:`plot`.
+    ``clearances`` (spring name -> (n1, n2, total clearance B)) and ``waveform``
+    (the drive's :attr:`Waveform.label`) serve the labels and :meth:`plot`.
     """
 
     time: np.ndarray
@@ -177,6 +184,7 @@ class TransientResult:
     drive_name: str | None = None
     units: dict = field(default_factory=lambda: units_of(None))
     clearances: dict = field(default_factory=dict)
+    waveform: str | None = None
 
     def node(self, name: str) -> tuple[np.ndarray, np.ndarray]:
         """(x, v) of node ``name``."""
@@ -1012,7 +1020,8 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes,
                            drive_name=circuit.drive.name if circuit.drive is not None else None,
                            units=units_of(circuit.drive),
                            clearances={e.name: (e.n1, e.n2, e.backlash)
-                                       for e, _ in backlash_elements(circuit)})
+                                       for e, _ in backlash_elements(circuit)},
+                           waveform=drive.label if ss.kind is not None else None)
 
 
 def _law_forces(spring, comp, e, w):
