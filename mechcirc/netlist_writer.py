@@ -77,6 +77,8 @@ def write(circuit: Circuit, header: tuple[str, ...] | list[str] | str = (),
     d = circuit.drive
     if d is not None:
         how = f"{d.kind}={_number(d.amplitude)}"
+        if d.rotational:            # with its unit, so the text reads back as a rotary drive
+            how += " rad/s" if d.kind == "velocity" else " N*m"
         if d.motion is not None:     # a table by its absolute path: the text may go elsewhere
             how = (f"motion={os.path.abspath(d.motion.path)}" if d.motion.path
                    else d.motion.spec)

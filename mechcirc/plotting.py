@@ -226,9 +226,52 @@ def plot_sweep(result, title: str | None = None, resonances=(), peak=None, *, ax
     amp = result.drive.amplitude
     what = (f"velocity response v0 = F0·K to the force drive F0 = {amp:g} {units['Q']}"
             if force_drive else f"force amplitude Q0 = V0/K, V0 = {amp:g} {units['v']}")
-    fig.suptitle(title or f"{result.name}: kinematic characteristic and {what}")
-    fig.tight_layout()
+    fig.suptitle(title or f"{result.name}: kinematic characteristic K = v/Q\nand {what}")
+    _light_log_axes(axes)
+    # Fixed margins that hold every label (the panels share x: no tick labels
+    # between them), so neither tight_layout nor a tight bounding box at
+    # saving has to measure every tick label once more (≈ 0.3 s each).
+    height = fig.get_figheight()
+    fig.subplots_adjust(left=0.13, right=0.97, hspace=0.08, top=1 - 0.85 / height,
+                        bottom=0.55 / height)
     return fig
+
+
+_SUPERSCRIPT = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
+
+
+def _decade_label(x, pos=None) -> str:
+    """``10⁻³`` for a power of ten, ``%g`` otherwise: plain text, not mathtext."""
+    import math
+
+    if x > 0:
+        e = round(math.log10(x))
+        if abs(x / 10.0 ** e - 1) < 1e-9:
+            return "10" + str(e).translate(_SUPERSCRIPT)
+    return f"{x:g}"
+
+
+def _light_log_axes(axes, max_minor_decades: float = 3.0) -> None:
+    """Cheaper log axes: decade labels as plain text, and no minor ticks on a y axis
+    spanning more than ``max_minor_decades`` decades.
+
+    matplotlib's default labels are mathtext (its parser is built on first use)
+    and every minor tick is an object drawn with its grid line: on a sweep's
+    |K| and |Q0| panels, spanning 4–10 decades, they cost more than the curves.
+    Minor labels of an axis spanning less than a decade are left as they are.
+    """
+    import math
+
+    from matplotlib.ticker import FuncFormatter, NullLocator
+
+    for a in axes:
+        if a.get_xscale() == "log":
+            a.xaxis.set_major_formatter(FuncFormatter(_decade_label))
+        if a.get_yscale() == "log":
+            a.yaxis.set_major_formatter(FuncFormatter(_decade_label))
+            lo, hi = a.get_ylim()
+            if lo > 0 and math.log10(hi / lo) > max_minor_decades:
+                a.yaxis.set_minor_locator(NullLocator())
 
 
 def _draw_K(ax, omega, absK, positive, flags, units):
@@ -294,6 +337,8 @@ def plot_transient(result, nodes=None, what: str = "x", elements=None, title: st
     forces = _known("element", elements or (), result.elements)
     drive = (f"{result.drive_kind} drive {result.drive_name}" if result.drive_name
              else "no drive")
+    if result.drive_name and getattr(result, "waveform", None):
+        drive += f", {result.waveform}"
     title = title or f"{result.name}: transient, {drive}"
     t = result.time
 

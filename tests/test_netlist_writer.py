@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from mechcirc import load, parse
-from mechcirc.circuit import Circuit, Drive, Element, Lever
+from mechcirc.circuit import Circuit, Drive, Element, Lever, units_of
 from mechcirc.errors import NetlistError
 from mechcirc.netlist_writer import write
 
@@ -165,3 +165,16 @@ def test_comments_follow_their_lines_and_read_back():
     assert [(e.kind, e.name, e.n1, e.n2, e.value, e.eta) for e in back.elements] == \
         [(e.kind, e.name, e.n1, e.n2, e.value, e.eta) for e in c.elements]
     assert back.levers[0].ratio == 2.0 and back.drive.amplitude == 1.0
+
+
+@pytest.mark.parametrize("drive", ["velocity=2.5 rad/s", "force=3 N*m"])
+def test_rotary_drive_reads_back_rotary(drive):
+    """The drive's unit is written: element values carry none, so without it a rotary
+    drive would read back as translational (m/s, N)."""
+    c = parse(f"drive W p 0 {drive}\nmass J p 0 0.2 kg*m^2\nspring k p 0 5e3 N*m/rad\n")
+    assert c.drive.rotational
+    back = parse(write(c))
+    assert back.drive.rotational and back.drive.amplitude == c.drive.amplitude
+    assert units_of(back.drive) == units_of(c.drive)
+    plain = parse("drive V a 0 velocity=2.5\nmass m a 0 1\n")
+    assert not parse(write(plain)).drive.rotational

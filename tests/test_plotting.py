@@ -277,6 +277,16 @@ def msl_transient():
     return transient(mechcirc.load(REPO / "examples/msl_backlash.mcir"), 1.0, 1e-3)
 
 
+def test_transient_plot_title_names_the_waveform():
+    from mechcirc.transient import transient
+
+    c = mechcirc.parse("drive V a 0 velocity=0.1\nmass m a b 1\nspring k b 0 1e4\n")
+    fig = transient(c, 0.02, 1e-4, drive="harmonic:300").plot()
+    assert fig._suptitle.get_text() == "circuit: transient, velocity drive V, sin(300 rad/s·t)"
+    step = transient(c, 0.02, 1e-4, drive="step")
+    assert step.waveform == "step" and step.plot()._suptitle.get_text().endswith("V, step")
+
+
 def _hlines(ax):
     """y of the horizontal lines drawn across ``ax`` (axhline: x from 0 to 1 in axes units)."""
     return sorted(float(line.get_ydata()[0]) for line in ax.lines

@@ -376,12 +376,14 @@ def check_output_paths(*paths, plots=(), reads=()) -> None:
                 f"(expected one of {', '.join('.' + f for f in PLOT_FORMATS)})")
 
 
-def save_figure(fig, path, into=None) -> None:
+def save_figure(fig, path, into=None, tight: bool = True) -> None:
     """Save a matplotlib figure; the format follows ``path``'s extension.
 
     Without ``into`` the file is written atomically (temporary file, rename);
     with ``into`` (a temporary path from an :class:`~mechcirc.outputs.OutputSet`)
-    it is written there and the set renames it.
+    it is written there and the set renames it.  ``tight`` crops to what is
+    drawn (one more draw of the figure); False for a figure laid out to hold
+    its labels.
     """
     from pathlib import Path
 
@@ -391,10 +393,10 @@ def save_figure(fig, path, into=None) -> None:
     if fmt not in PLOT_FORMATS:     # commands check first; this guards any that forget
         check_output_paths(plots=(path,))
     if into is not None:
-        fig.savefig(into, format=fmt, dpi=120, bbox_inches="tight")
+        fig.savefig(into, format=fmt, dpi=120, bbox_inches="tight" if tight else None)
         return
     with atomic_path(path) as tmp:
-        fig.savefig(tmp, format=fmt, dpi=120, bbox_inches="tight")
+        fig.savefig(tmp, format=fmt, dpi=120, bbox_inches="tight" if tight else None)
 
 
 def load_with_warnings(path):

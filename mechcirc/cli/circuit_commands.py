@@ -285,15 +285,16 @@ def cmd_sweep(args) -> int:
     else:
         result = circuit.sweep(omega, method=args.method)
     extra = _responses(result, args.node, args.element)
-    found = []
+    found = everything = None
     if args.plot or args.json:
         from ..errors import SolverError
 
         try:
-            found = circuit.resonances(omega_max=omega[-1])
+            # The band's top as peak() asks for it (1e-9 above): computed once for both.
+            everything = circuit.resonances(omega_max=omega[-1] * (1 + 1e-9))
         except SolverError as exc:      # too large for the eigenproblem: sweep anyway
             warns.append(f"resonance markers left out: {exc}")
-    found = [r for r in found if r.omega >= omega[0]]
+    found = [r for r in everything or () if omega[0] <= r.omega <= omega[-1]]
     sens = None
     if args.sensitivity:
         from ..modes import sweep_sensitivity
@@ -302,7 +303,10 @@ def cmd_sweep(args) -> int:
     from ..sweep import FLAG_SINGULAR
     from ..units import FREQUENCY_UNITS, in_unit
 
-    pk = result.peak()
+    from ..sweep import PEAK_RESONANCE_LIMIT, peak
+
+    pk = peak(result, resonances=everything if len(circuit.elements) <= PEAK_RESONANCE_LIMIT
+              else None)
     singular = [float(w) for w in result.omega[result.flags == FLAG_SINGULAR]]
     notes = list(getattr(result, "notes", ()))
     if singular:
@@ -330,7 +334,7 @@ def cmd_sweep(args) -> int:
             units = result.units
             panels = {_panel_label(key, units): values for key, values in extra.items()}
             save_figure(plot_sweep(result, resonances=found, peak=pk, unit=args.unit,
-                                   extra=panels), args.plot, out.path(args.plot))
+                                   extra=panels), args.plot, out.path(args.plot), tight=False)
     n_flag = int(np.count_nonzero(result.flags))
     n_points = len(result.omega)
     if args.json:

@@ -268,7 +268,8 @@ def to_circuit(params: SleyParameters, theta0: float, *, lever: bool = False,
         elements.append(Element("mass", "J5", "crank5", "0", p.I5P + p.I7 * mu2))
         rocker_side("crank5", "rocker7", p.C7, p.k7, "7")
     elements.append(Element("mass", "I4P", "sley", "0", p.I4P, eta))
-    return Circuit(tuple(elements), Drive("V", "shaft", "0", "velocity", float(v)),
+    return Circuit(tuple(elements),
+                   Drive("V", "shaft", "0", "velocity", float(v), rotational=True),
                    tuple(levers), name="sley", source=f"<sley {p.label or p.drive}>")
 
 

@@ -76,7 +76,8 @@ def test_built_circuit_is_the_old_parsed_netlist(drive, variant, theta0, lever, 
     old = mechcirc.parse(_old_netlist_text(p, theta0, lever=lever, damping=damping))
     assert [_fields(e) for e in built.elements] == [_fields(e) for e in old.elements]
     assert [_fields(lv) for lv in built.levers] == [_fields(lv) for lv in old.levers]
-    assert _fields(built.drive) == _fields(old.drive)
+    # the old text wrote the shaft's speed without its unit (read as m/s); the shaft turns
+    assert _fields(built.drive) == {**_fields(old.drive), "rotational": True}
     assert built.initial == old.initial == ()
     # the same circuit gives the same K; both go through the same solver, so
     # equal inputs must give equal outputs to the last bits
@@ -111,6 +112,8 @@ def test_reflection_by_hand():
                    "k4": ("damper", "crank", "sley", p.k4 * (mu * mu)),
                    "I4P": ("mass", "sley", "0", p.I4P * (mu * mu))}
     assert (c.drive.kind, c.drive.amplitude) == ("velocity", p.omega)
+    # the shaft turns: rad/s, N·m, rad/(N·m·s) in every label, and so reads its netlist back
+    assert c.drive.rotational and mechcirc.parse(to_netlist(p, 2.0)).drive.rotational
 
 
 def test_dead_centre_is_refused():

@@ -1,0 +1,96 @@
+"""CPU time of single CLI commands, start-up included, against their goals.
+
+Each command runs in a fresh Python process (``python -m mechcirc ...``, the
+way a user runs it); its CPU time (user + system, from ``resource.getrusage``
+of the finished child) is taken over ``--repeat`` runs (default 7, at least
+5) and the median, lowest and highest are printed with the goal.  In the same
+run, interleaved with the commands, two floors are timed the same way: the
+bare interpreter (``python -c pass``) and ``python -c "import numpy"`` — what
+any command of a numpy program pays before it does anything.
+
+The bytecode of mechcirc is compiled once before timing (an installed
+package has it; a checkout run with ``PYTHONDONTWRITEBYTECODE`` would compile
+every module at each start).  Outputs go to a temporary directory.  It
+asserts nothing.  Run from the repository root::
+
+    python benchmarks/bench_startup.py
+    python benchmarks/bench_startup.py --repeat 11
+"""
+
+from __future__ import annotations
+
+import argparse
+import compileall
+import os
+import platform
+import resource
+import statistics
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+NETLIST = "netlists/stb_heald.mcir"
+SWEEP = ["sweep", NETLIST, "--omega-min", "10", "--omega-max", "1000", "--points", "400"]
+
+
+def cases(tmp: Path) -> list[tuple[str, list[str], float | None]]:
+    """``(label, argv after python, goal in s CPU or None for a floor)``."""
+    m = ["-m", "mechcirc"]
+    return [
+        ("python -c pass (floor)", ["-c", "pass"], None),
+        ("python -c 'import numpy' (floor)", ["-c", "import numpy"], None),
+        ("mechcirc --help", m + ["--help"], 0.15),
+        ("mechcirc sweep stb_heald, 400 points", m + SWEEP, 0.3),
+        ("  ... with a PNG", m + SWEEP + ["--plot", str(tmp / "sweep.png")], 1.0),
+    ]
+
+
+def cpu_of(argv: list[str], env: dict) -> float:
+    """CPU seconds (user + system) of one child process running ``argv``."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    done = subprocess.run([sys.executable, *argv], cwd=ROOT, env=env,
+                          stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if done.returncode != 0:
+        raise SystemExit(f"{' '.join(argv)} failed ({done.returncode}): {done.stderr[-500:]}")
+    return (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeat", type=int, default=7, help="fresh processes per command (>= 5)")
+    args = ap.parse_args()
+    repeat = max(5, args.repeat)
+    compileall.compile_dir(str(ROOT / "mechcirc"), quiet=1)
+    env = dict(os.environ, PYTHONPATH=str(ROOT), MPLBACKEND="Agg")
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
+    import matplotlib
+    import numpy
+    import scipy
+
+    print(f"python {platform.python_version()}, numpy {numpy.__version__}, scipy "
+          f"{scipy.__version__}, matplotlib {matplotlib.__version__}; "
+          f"load average {os.getloadavg()[0]:.1f}; median of {repeat} fresh processes, CPU s")
+    with tempfile.TemporaryDirectory() as tmp:
+        todo = cases(Path(tmp))
+        times: dict[str, list[float]] = {label: [] for label, _, _ in todo}
+        for label, argv, _ in todo:             # warm the OS file cache, not timed
+            cpu_of(argv, env)
+        for _ in range(repeat):                 # interleaved: load changes hit all alike
+            for label, argv, _ in todo:
+                times[label].append(cpu_of(argv, env))
+    width = max(len(label) for label in times)
+    for label, _, goal in todo:
+        t = times[label]
+        med = statistics.median(t)
+        verdict = "" if goal is None else \
+            f"  goal <= {goal:.2f} s: {'met' if med <= goal else 'NOT met'} ({med / goal:.2f}x)"
+        print(f"{label:<{width}}  median {med:.3f} s (min {min(t):.3f}, max {max(t):.3f}){verdict}")
+    print(f"load average after: {os.getloadavg()[0]:.1f}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
