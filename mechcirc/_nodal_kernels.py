@@ -1,7 +1,10 @@
-"""Compiled kernel of the nodal refinement: the residual b − A(ω) x in double-double.
+"""Compiled kernels of the nodal solve: the residual b − A(ω) x in double-double, the
+banded LU, and the error sensitivities.
 
-The same arithmetic, operation for operation and in the same order, as the
-vectorised numpy code of :meth:`mechcirc.nodal._Pattern.residual` (real ω):
+The residual does the same arithmetic (the double-double functions of
+:mod:`mechcirc._dd`, the one copy, here compiled), operation for operation
+and in the same order, as the vectorised numpy code of
+:meth:`mechcirc._nodal_residual.Pattern.residual` (real ω):
 each term (an element's ±value·(x_i − x_j), a lever stamp's value·x_c) is
 formed exactly (TwoSum, TwoProduct), the terms of one (row, kind) bucket are
 added by cascaded TwoSum in ascending term order, and the sums are combined
@@ -14,55 +17,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._jit import decorators
+from . import _dd
+from ._jit import decorators, load
 
 HAVE_NUMBA, _jit, _jit_inline = decorators(bool(globals().get("_FORCE_PYTHON")))
 
-_SPLITTER = 134217729.0                 # 2²⁷ + 1
-
-
-@_jit_inline
-def _split(a):
-    c = _SPLITTER * a
-    hi = c - (c - a)
-    if not np.isfinite(hi) and np.isfinite(a):
-        b = a * 2.0 ** -28
-        c = _SPLITTER * b
-        hi = (c - (c - b)) * 2.0 ** 28
-    return hi, a - hi
-
-
-@_jit_inline
-def _two_sum(a, b):
-    s = a + b
-    bb = s - a
-    return s, (a - (s - bb)) + (b - bb)
-
-
-@_jit_inline
-def _two_prod(a, ah, al, b):
-    p = a * b
-    bh, bl = _split(b)
-    return p, ((ah * bh - p) + ah * bl + al * bh) + al * bl
-
-
-@_jit_inline
-def _dd_add(ah, al, bh, bl):
-    s, e = _two_sum(ah, bh)
-    return s, e + (al + bl)
-
-
-@_jit_inline
-def _dd_mul_d(h, lo, w, wh, wl):
-    p, e = _two_prod(w, wh, wl, h)
-    return p, e + lo * w
-
-
-@_jit_inline
-def _dd_div_d(h, lo, w, wh, wl):
-    q = h / w
-    p, e = _two_prod(w, wh, wl, q)
-    return q, (((h - p) - e) + lo) / w
+if HAVE_NUMBA:        # the one double-double source (:mod:`mechcirc._dd`), compiled
+    _dd = load("mechcirc._dd", _COMPILE=True)
+_split, _two_sum, _two_prod = _dd.split, _dd.two_sum, _dd.two_prod
+_dd_add, _dd_mul_d, _dd_div_d = _dd.dd_add, _dd.dd_mul_d, _dd.dd_div_d
 
 
 @_jit
@@ -273,7 +236,7 @@ def _mag(z):
 @_jit
 def sensitivities(omega, x, scale, e_i, e_j, e_m, e_k, e_c, s_row, s_col, s_val,
                   l_p1, l_p2, l_col, l_r, S, Sd):
-    """S and S_data of :meth:`mechcirc.nodal._Pattern.sensitivities` for x/scale (real ω)."""
+    """S and S_data of :meth:`mechcirc._nodal_residual.Pattern.sensitivities` for x/scale (real ω)."""
     n_w, n1 = x.shape
     for k in range(n_w):
         w = omega[k]
