@@ -76,6 +76,12 @@ class NodalSystem:
         """Number of unknowns (node velocities and lever forces)."""
         return self.M.shape[0]
 
+    def cached(self, key: str, build):
+        """``build(self)``, built once per system and kept beside the fields under ``key``."""
+        if key not in self.__dict__:
+            object.__setattr__(self, key, build(self))
+        return self.__dict__[key]
+
     def injection(self) -> NDArray[np.float64]:
         """Right-hand side: unit force into node a, out of node b."""
         rhs = np.zeros(self.size)

@@ -28,6 +28,17 @@ _split, _two_sum, _two_prod = _dd.split, _dd.two_sum, _dd.two_prod
 _dd_add, _dd_mul_d, _dd_div_d = _dd.dd_add, _dd.dd_mul_d, _dd.dd_div_d
 
 
+@_jit_inline
+def _add(acc, bk, th_r, tl_r, th_i, tl_i):
+    """Add the term (th_r + tl_r) + j(th_i + tl_i) to bucket ``bk`` by TwoSum."""
+    a, ea = _two_sum(acc[bk, 0], th_r)
+    acc[bk, 0] = a
+    acc[bk, 1] += ea + tl_r
+    a, ea = _two_sum(acc[bk, 2], th_i)
+    acc[bk, 2] = a
+    acc[bk, 3] += ea + tl_i
+
+
 @_jit
 def residual(omega, xr, xi, xlr, xli, has_lo, rhs, b_i, b_j, b_s,
              e_i, e_j, e_val, e_vh, e_vl, s_col, s_val, s_vh, s_vl, acc, out_r, out_i):
@@ -68,24 +79,11 @@ def residual(omega, xr, xi, xlr, xli, has_lo, rhs, b_i, b_j, b_s,
             t[e, 1] = tl_r
             t[e, 2] = th_i
             t[e, 3] = tl_i
-            bk = b_i[e]
-            if bk != drop:
-                a, ea = _two_sum(acc[bk, 0], th_r)
-                acc[bk, 0] = a
-                acc[bk, 1] += ea + tl_r
-                a, ea = _two_sum(acc[bk, 2], th_i)
-                acc[bk, 2] = a
-                acc[bk, 3] += ea + tl_i
+            if b_i[e] != drop:
+                _add(acc, b_i[e], th_r, tl_r, th_i, tl_i)
         for e in range(n_el):                   # −y·(x_i − x_j) into the second row
-            bk = b_j[e]
-            if bk == drop:
-                continue
-            a, ea = _two_sum(acc[bk, 0], -t[e, 0])
-            acc[bk, 0] = a
-            acc[bk, 1] += ea + -t[e, 1]
-            a, ea = _two_sum(acc[bk, 2], -t[e, 2])
-            acc[bk, 2] = a
-            acc[bk, 3] += ea + -t[e, 3]
+            if b_j[e] != drop:
+                _add(acc, b_j[e], -t[e, 0], -t[e, 1], -t[e, 2], -t[e, 3])
         for s in range(n_s):
             bk = b_s[s]
             if bk == drop:
@@ -97,12 +95,7 @@ def residual(omega, xr, xi, xlr, xli, has_lo, rhs, b_i, b_j, b_s,
             if has_lo:
                 tl_r = tl_r + v * xlr[k, c]
                 tl_i = tl_i + v * xli[k, c]
-            a, ea = _two_sum(acc[bk, 0], th_r)
-            acc[bk, 0] = a
-            acc[bk, 1] += ea + tl_r
-            a, ea = _two_sum(acc[bk, 2], th_i)
-            acc[bk, 2] = a
-            acc[bk, 3] += ea + tl_i
+            _add(acc, bk, th_r, tl_r, th_i, tl_i)
         for r in range(n):
             m_ = 4 * r
             # ω S_m − S_k/ω, then A x = S_c + S_l + j·sus, then b − A x.

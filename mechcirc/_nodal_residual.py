@@ -302,11 +302,7 @@ class Pattern:
 
 def pattern(system: NodalSystem) -> Pattern:
     """The :class:`Pattern` of ``system``, built once per system."""
-    cached = system.__dict__.get("_pattern")
-    if cached is None:
-        cached = Pattern(system)
-        object.__setattr__(system, "_pattern", cached)
-    return cached
+    return system.cached("_pattern", Pattern)
 
 
 def residual_rounding(system, S):

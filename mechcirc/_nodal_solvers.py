@@ -167,22 +167,14 @@ class DDSolver:
 
 
 def dd_solver(system: NodalSystem) -> DDSolver:
-    cached = system.__dict__.get("_dd_solver")
-    if cached is None:
-        cached = DDSolver(system)
-        object.__setattr__(system, "_dd_solver", cached)
-    return cached
+    """The :class:`DDSolver` of ``system``, built once per system."""
+    return system.cached("_dd_solver", DDSolver)
 
 
 def solver(system: NodalSystem):
     """The solver of ``system`` (dense batch or sparse), built once per system."""
-    cached = system.__dict__.get("_solver")
-    if cached is None:
-        pat = pattern(system)
-        cached = DenseSolver(system, pat) if system.size <= DENSE_LIMIT \
-            else SparseSolver(pat)
-        object.__setattr__(system, "_solver", cached)
-    return cached
+    return system.cached("_solver", lambda s: DenseSolver(s) if s.size <= DENSE_LIMIT
+                         else SparseSolver(pattern(s)))
 
 
 class DenseSolver:
@@ -195,7 +187,7 @@ class DenseSolver:
 
     kind = "dense"
 
-    def __init__(self, system: NodalSystem, pat: Pattern):
+    def __init__(self, system: NodalSystem):
         self.dc = (system.D + system.C).toarray()
         self.m, self.k = system.M.toarray(), system.Ks.toarray()
         n = system.size

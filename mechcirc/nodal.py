@@ -1,22 +1,8 @@
 """Modified nodal analysis of a mechanical circuit, in the mobility analogy.
 
-Force plays the part of current and velocity that of voltage.  Unknowns are
-the velocities of the nodes (the frame is the reference, velocity 0) and one
-force per lever.  Each element stamps its admittance S = 1/K between its
-nodes, so that the system matrix is
-
-    A(ω) = D + C + j (ω M − Kₛ / ω)
-
-with M the masses (S = jωm·η), Kₛ the springs (S = k·η/(jω)), D the dampers
-(S = c·η) and C the constant lever block: a lever of ratio r adds the unknown
-Q_S with KCL entries (r at p1, −r at p2, −1 at s1, +1 at s2) and the
-constraint row r(v_p1 − v_p2) − (v_s1 − v_s2) = 0; C is symmetric.
-
-K seen by the drive is the velocity difference between its nodes for a unit
-force injected at n1 and taken out at n2.
-
-The equations are written once, in :mod:`mechcirc._nodal_equations`
-(:func:`stamps`, :func:`assemble`, :func:`combine`, re-exported here).
+The system A(ω) x = e_a − e_b, A(ω) = D + C + j(ωM − Kₛ/ω), and K = x_a − x_b
+are written once, in :mod:`mechcirc._nodal_equations` (:func:`stamps`,
+:func:`assemble`, :func:`combine`, re-exported here).
 :func:`solve` solves A(ω) x = e_a − e_b: small systems as
 batched dense solves, large ones by a sparse LU per ω on a fixed pattern
 (a banded LU where the band is narrow, SuperLU otherwise; the choice and
