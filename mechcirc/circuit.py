@@ -42,7 +42,7 @@ if TYPE_CHECKING:  # pragma: no cover - annotations of the delegates only
     from .nodal import NodalSystem
     from .reduction import Node, Reduction
     from .resonances import Resonance
-    from .sweep import Method, Sweep
+    from ._sweep import Method, Sweep
 
 __all__ = ["Element", "Lever", "Drive", "Circuit", "element_mobility", "law_terms", "FRAME",
            "ELEMENT_UNITS", "Law", "LAWS", "node_names", "units_of"]
@@ -300,9 +300,9 @@ class Circuit:
     def sweep(self, omega: ArrayLike, method: Method = "auto") -> Sweep:
         """K(ω), Q0(ω) and per-element forces over ``omega`` [rad/s].
 
-        See :func:`mechcirc.sweep.sweep`.
+        See :func:`mechcirc.sweep`.
         """
-        from .sweep import sweep
+        from ._sweep import sweep
 
         return sweep(self, omega, method=method)
 
