@@ -7,6 +7,10 @@ its values, so the same text serves the vectorised numpy code (this module as
 imported: plain functions, no numba) and the compiled kernels
 (:mod:`mechcirc._nodal_kernels` loads a copy compiled by numba with
 :func:`mechcirc._jit.load`).  Callers silence numpy's floating-point warnings.
+
+numba's disk cache checks only the file of the compiled kernel: after editing
+this file, touch ``_nodal_kernels.py`` (or clear its ``__pycache__``) so that
+the cached kernels are compiled again.
 """
 
 from __future__ import annotations

@@ -55,6 +55,8 @@ def load(name: str, **flags):
     import importlib.util
 
     spec = importlib.util.find_spec(name)
+    if spec is None or spec.loader is None:
+        raise ImportError(f"no module {name!r} to load")
     module = importlib.util.module_from_spec(spec)
     module.__dict__.update(flags)
     spec.loader.exec_module(module)

@@ -25,6 +25,7 @@ A(ω) from them.  Solving them is :mod:`mechcirc.nodal`'s.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -63,13 +64,13 @@ class NodalSystem:
     levers: tuple[Lever, ...]
     elements: tuple[Element, ...]
     unloaded: tuple[str, ...]
-    M: object
-    D: object
-    Ks: object
-    C: object
+    M: Any
+    D: Any
+    Ks: Any
+    C: Any
     a: int
     b: int
-    stamps: dict = None
+    stamps: dict
 
     @property
     def size(self) -> int:
@@ -120,8 +121,9 @@ def assemble(circuit: Circuit, whole: bool = False) -> NodalSystem:
         with ``whole=True``.
     """
     d = circuit.drive
+    unloaded: tuple[str, ...] = ()
     if whole:
-        elements, levers, unloaded = tuple(circuit.elements), tuple(circuit.levers), ()
+        elements, levers = tuple(circuit.elements), tuple(circuit.levers)
     else:
         check_frame_paths(circuit)
         groups = force_groups(circuit.elements, circuit.levers)
@@ -238,5 +240,5 @@ def held(system: NodalSystem) -> NodalSystem:
     grow = [sp.csr_matrix((v, (r, c)), shape=(n + 1, n + 1))
             for r, c, v in (stamped[k] for k in KINDS)]
     return NodalSystem(system.nodes, system.levers, system.elements, system.unloaded,
-                       *grow, n, -1, stamped)
+                       grow[0], grow[1], grow[2], grow[3], n, -1, stamped)
 

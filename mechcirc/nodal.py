@@ -20,6 +20,7 @@ with an infinite error, as the series–parallel method gives it.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any, cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -107,7 +108,8 @@ def kernels(work: int = 0):
     return _KERNELS[0]
 
 
-def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int, keep: NDArray):
+def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
+           keep: NDArray | None):
     """Factor, solve and refine at each ω (real or complex, already checked), chunk by chunk.
 
     Returns (K, error of the solve, S, S_data, x rows or None, the rows of x
@@ -164,7 +166,7 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int, keep: 
         sel = every[good]
         if sel.size:
             xh, xl, est, rho = _refined(solve_fn, residual, omega[sel], rhs, system, refine, steps)
-            redo = np.flatnonzero(~(est <= _STRICT_AFTER)) if solve_with.kind == "superlu" else []
+            redo = np.flatnonzero(~(est <= _STRICT_AFTER) & (solve_with.kind == "superlu"))
             if len(redo):
                 # Diagonal pivoting was not stable enough here: partial pivoting.
                 ok2, strict_fn = solve_with.factor(omega[sel[redo]], kern, strict=True)
@@ -235,13 +237,13 @@ def solve(system: NodalSystem, omega: ArrayLike, *, refine: bool = True,
     S = np.full(m, np.nan)
     Sd = np.full(m, np.nan)
     x = np.full((m, system.size), complex(np.nan, np.nan)) if keep_x else None
-    kept = {}
+    kept: dict[int, NDArray] = {}
     checked = np.zeros(m, dtype=bool)
     if idx.size:
         Ki, ei, Si, Sdi, xi, kept_i, ci = _sweep(system, omega[idx], refine, steps,
                                                  None if keep_x else np.ones(idx.size, bool))
         K[idx], err[idx], S[idx], Sd[idx], checked[idx] = Ki, ei, Si, Sdi, ci
-        if keep_x:
+        if x is not None:
             x[idx] = xi
         else:
             # Only the rows needed at singular points are kept.
@@ -254,7 +256,7 @@ def solve(system: NodalSystem, omega: ArrayLike, *, refine: bool = True,
     # K stays finite with an infinite error (flag 2), never a pole.  The
     # residual-rounding bound below is a worst case and not used here.
     singular = ok & (~np.isfinite(K) | (err >= 1.0) & checked)
-    rows = x if keep_x else kept
+    rows: Any = x if keep_x else kept
     for i in np.flatnonzero(ok & (err >= 1.0) & ~checked & np.isfinite(K)):
         # Only float64 factors: singular if the iterate's element-wise
         # backward error says A(ω) is within rounding of its values of a
@@ -408,7 +410,7 @@ def solve_unit(system: NodalSystem, omega: ArrayLike, *, refine: bool = True
     Frequencies where A is exactly singular, or ω is 0 or ∞ (where A is not
     finite), give rows of NaN; callers flag them.
     """
-    return solve(system, omega, refine=refine).x
+    return cast(NDArray[np.complex128], solve(system, omega, refine=refine).x)
 
 
 def evaluate_complex(system: NodalSystem, s: ArrayLike
@@ -448,7 +450,7 @@ def mobility_and_error(system: NodalSystem, omega: ArrayLike
 def mobility_unrefined(system: NodalSystem, omega: ArrayLike) -> NDArray[np.complex128]:
     """K(ω) [m/(N·s)] by one plain solve per ω, without refinement (the fast path).
 
-    Its relative error is about eps × cond(A(ω)), see :func:`condition_error`.
+    Its relative error is about eps × cond(A(ω)) (:func:`solve` refines it away).
     """
     return solve(system, omega, refine=False, limits=False, keep_x=False).K
 
@@ -510,7 +512,7 @@ def require_nonsingular(system: NodalSystem) -> None:
     s = solve(system, trial, limits=False)
     for i, w in enumerate(trial):
         if np.isfinite(s.K[i]) and not s.singular[i] and \
-                _backward_error(system, w, s.x[i]) > SINGULAR_BACKWARD:
+                _backward_error(system, w, cast(NDArray, s.x)[i]) > SINGULAR_BACKWARD:
             return
     if judged is None:
         raise TopologyError("the network is singular at every frequency (tried "
