@@ -50,7 +50,7 @@ def case_sweep_1e7(chunked: bool = True) -> dict:
 
     import mechcirc
     import importlib
-    sweep_module = importlib.import_module("mechcirc.sweep")
+    sweep_module = importlib.import_module("mechcirc._sweep")
 
     if not chunked:
         sweep_module.CHUNK_POINTS = 10**9

@@ -46,6 +46,7 @@ from pathlib import Path
 import numpy as np
 
 import mechcirc
+import mechcirc._nodal_solvers as solvers
 import mechcirc.nodal as nodal
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
@@ -132,7 +133,7 @@ def baseline(system, omega):
 
 def bare(system, omega):
     """mechcirc's factorisation and one solve per ω, no residual, no estimate (what refinement adds to)."""
-    solver = nodal._solver(system)
+    solver = solvers.solver(system)
     rhs = system.injection().astype(complex)
     out = np.full(omega.size, np.nan, dtype=complex)
     for start in range(0, omega.size, 8):
@@ -222,8 +223,8 @@ def run(name, text, spice, omega, repeat, *, spice_points=None, floor=True):
         print("    ngspice not installed: skipped")
     print(f"    refined / (LU + solve) {med['mechcirc refined'] / med['mechcirc LU + solve']:.2f} "
           f"(goal <= 1.5), refined / plain "
-          f"{med['mechcirc refined'] / med['mechcirc plain']:.2f}; solver: {nodal._solver(system).kind}, "
-          f"band {nodal._solver(system).kl}; numba kernels: {nodal._kernels() is not None}")
+          f"{med['mechcirc refined'] / med['mechcirc plain']:.2f}; solver: {solvers.solver(system).kind}, "
+          f"band {solvers.solver(system).kl}; numba kernels: {nodal.kernels(10 ** 9) is not None}")
 
 
 def versions() -> str:

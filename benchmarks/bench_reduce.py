@@ -32,7 +32,7 @@ import numpy as np
 
 import mechcirc
 from mechcirc.scene import build, load_scene
-from mechcirc.simplify import simplify
+from mechcirc import simplify
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -110,7 +110,7 @@ def bench_floor(args) -> int:
 
     sizes = [15, 45, 999, 10_000] + ([] if args.quick else [100_000])
     omega = np.geomspace(2 * np.pi * 0.1, 2 * np.pi * 1e3, args.points)
-    have_kernel = reduction._kernel() is not None      # load it before timing
+    have_kernel = reduction.compiled_evaluator() is not None      # load it before timing
     print(f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
           f"load {os.getloadavg()[0]:.1f}; numpy {np.__version__}; {args.points} points; "
           f"median times; compiled plan {'(numba)' if have_kernel else 'unavailable'}")
@@ -224,7 +224,7 @@ def bench_e2e(args) -> int:
     except OSError as exc:
         spice = None
         print(f"# libngspice not available ({exc}): mechcirc only")
-    have_kernel = reduction._kernel() is not None      # loaded before timing
+    have_kernel = reduction.compiled_evaluator() is not None      # loaded before timing
     print(f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
           f"load {os.getloadavg()[0]:.1f}; python {platform.python_version()}, "
           f"numpy {np.__version__}; 401 points; median of {args.repeats}; "

@@ -35,6 +35,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 import mechcirc  # noqa: E402
+import mechcirc._nodal_solvers as solvers  # noqa: E402
 import mechcirc.nodal as nodal  # noqa: E402
 from reference import mp_nodal as mp  # noqa: E402
 
@@ -82,7 +83,7 @@ def main() -> None:
     rows = {"nodal dense": ([], [], []), "nodal sparse": ([], [], []),
             "resonances": ([], [], [])}
     t0 = time.time()
-    limit = nodal.DENSE_LIMIT
+    limit = solvers.DENSE_LIMIT
     n_used = 0
     skipped = 0
     for text, spec, w_char in corpus(rng, args.networks):
@@ -97,11 +98,11 @@ def main() -> None:
         for path, lim in (("nodal dense", limit), ("nodal sparse", 0)):
             if path == "nodal dense" and system.size > limit:
                 continue
-            nodal.DENSE_LIMIT = lim
+            solvers.DENSE_LIMIT = lim
             try:
                 s = nodal.solve(system, omega)
             finally:
-                nodal.DENSE_LIMIT = limit
+                solvers.DENSE_LIMIT = limit
             with np.errstate(all="ignore"):
                 true = np.abs(s.K - ref) / np.abs(ref)
             true = np.where(np.isfinite(true), true, np.inf)

@@ -35,7 +35,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
-from mechcirc.sweep import FLAG_NEAR_SINGULAR, FLAG_SINGULAR  # noqa: E402
+from mechcirc import FLAG_NEAR_SINGULAR, FLAG_SINGULAR  # noqa: E402
 from reference import sp_corpus as corpus  # noqa: E402
 
 U = np.finfo(float).eps / 2

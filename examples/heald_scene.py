@@ -21,7 +21,7 @@ import numpy as np
 
 from mechcirc.scene import build, load_scene
 from mechcirc.scene.cycle import cycle_map
-from mechcirc.simplify import simplify
+from mechcirc import simplify
 
 SCENE = Path(__file__).resolve().parent / "heald_scene.toml"
 THETA_DEG = 40.0

@@ -21,11 +21,14 @@ Frequency domain
    sweep            -- K(ω) = v/Q [m/(N·s)], Q0 = V0/K [N] over ω: a Sweep
    Sweep            -- the result: .omega .K .Q0 .v0 .flags .error .force() .velocity() .plot()
                        .to_skrf()
+   FLAG_OK, FLAG_SINGULAR, FLAG_NEAR_SINGULAR -- the values of Sweep.flags
+   peak, Peak       -- the exact maximum of |Q0| between grid points
    adaptive_sweep   -- a grid refined around resonances and bends of |K|, |Q0|
    find_resonances  -- exact resonances (K = 0) and antiresonances (K = ∞)
    designs          -- D designs of one netlist (.param arrays): K, resonances, extremes at once
    Resonance        -- one of them: kind, omega, omega_d, zeta, error
    simplify         -- model reduction over a band, with the measured error
+   parse_band       -- "W1:W2" -> the band (W1, W2) [rad/s] of simplify
 
 Sub-packages and modules (imported on use)
 ==========================================
@@ -43,34 +46,33 @@ Errors and warnings
 ===================
 
    MechcircError, NetlistError (file:line:col), TopologyError,
-   NotSeriesParallelError, GeometryError, SolverError,
+   NotSeriesParallelError, GeometryError, SolverError, BandError,
    MechcircWarning, UnloadedElementWarning, UnitMixWarning
    (every class is in mechcirc.errors, under MechcircError or MechcircWarning)
 
 The analysis methods of ``Circuit`` and ``Sweep.to_skrf`` are one-line
 delegates written in their classes, importing their module when called.
 
-``mechcirc.sweep`` and ``mechcirc.simplify`` are the functions; their modules
-stay importable as ``importlib.import_module("mechcirc.sweep")`` and by
-``from mechcirc.sweep import ...``.  Every public name (and every submodule,
-``mechcirc.nodal`` say) is loaded on first use, so ``import mechcirc`` reads
-no numpy and the command line is in charge of Ctrl-C from its first line.
+The implementation modules of ``sweep`` and ``simplify`` are private
+(``mechcirc._sweep``, ``mechcirc._simplify``), so that no module shadows a
+function of this index.  Every public name (and every submodule,
+``mechcirc.nodal`` say) is loaded on first use (a module ``__getattr__``), so
+``import mechcirc`` reads no numpy.
 """
 
 import importlib as _importlib
 import importlib.util as _importlib_util
-import sys as _sys
-import types as _types
 
-from .errors import (GeometryError, MechcircError, MechcircWarning, NetlistError,
+from .errors import (BandError, GeometryError, MechcircError, MechcircWarning, NetlistError,
                      NotSeriesParallelError, SolverError, TopologyError, UnitMixWarning,
                      UnloadedElementWarning)
 
 __all__ = [
     "parse", "load", "Circuit", "Element", "Lever", "Drive", "Sweep", "sweep",
-    "adaptive_sweep", "find_resonances", "Resonance", "simplify", "designs",
+    "FLAG_OK", "FLAG_SINGULAR", "FLAG_NEAR_SINGULAR", "peak", "Peak",
+    "adaptive_sweep", "find_resonances", "Resonance", "simplify", "parse_band", "designs",
     "MechcircError", "NetlistError", "TopologyError", "NotSeriesParallelError",
-    "GeometryError", "SolverError", "MechcircWarning", "UnloadedElementWarning",
+    "GeometryError", "SolverError", "BandError", "MechcircWarning", "UnloadedElementWarning",
     "UnitMixWarning",
 ]
 
@@ -80,38 +82,27 @@ __version__ = "0.1.0"
 _LAZY = {"parse": ("netlist", "parse"), "load": ("netlist", "load"),
          "Circuit": ("circuit", "Circuit"), "Element": ("circuit", "Element"),
          "Lever": ("circuit", "Lever"), "Drive": ("circuit", "Drive"),
-         "Sweep": ("sweep", "Sweep"), "sweep": ("sweep", "sweep"),
+         **{name: ("_sweep", name) for name in ("Sweep", "sweep", "peak", "Peak", "FLAG_OK",
+                                                 "FLAG_SINGULAR", "FLAG_NEAR_SINGULAR")},
          "find_resonances": ("resonances", "find_resonances"),
          "Resonance": ("resonances", "Resonance"),
          "adaptive_sweep": ("adaptive", "adaptive_sweep"),
-         "simplify": ("simplify", "simplify"),
+         "simplify": ("_simplify", "simplify"), "parse_band": ("_simplify", "parse_band"),
          "designs": ("batch", "designs")}
-#: Names that are both a function here and a submodule: the package attribute
-#: is the function, whatever order the submodule is imported in.
-_FUNCTIONS_OVER_MODULES = ("sweep", "simplify")
 
 
-class _Package(_types.ModuleType):
-    def __getattr__(self, name):
-        if name in _LAZY:
-            module, attr = _LAZY[name]
-            value = getattr(_importlib.import_module(f"{__name__}.{module}"), attr)
-        elif not name.startswith("__") and _importlib_util.find_spec(f"{__name__}.{name}"):
-            value = _importlib.import_module(f"{__name__}.{name}")       # a submodule
-        else:
-            raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-        _types.ModuleType.__setattr__(self, name, value)
-        return value
-
-    def __setattr__(self, name, value):
-        # The import system binds a submodule on its parent when it is first
-        # loaded; bind the function of that name instead.
-        if name in _FUNCTIONS_OVER_MODULES and isinstance(value, _types.ModuleType):
-            value = getattr(value, name)
-        _types.ModuleType.__setattr__(self, name, value)
-
-    def __dir__(self):
-        return sorted(set(super().__dir__()) | set(_LAZY))
+def __getattr__(name):
+    """A public name or a submodule, imported on first use (PEP 562)."""
+    if name in _LAZY:
+        module, attr = _LAZY[name]
+        value = getattr(_importlib.import_module(f"{__name__}.{module}"), attr)
+    elif not name.startswith("__") and _importlib_util.find_spec(f"{__name__}.{name}"):
+        value = _importlib.import_module(f"{__name__}.{name}")       # a submodule
+    else:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    globals()[name] = value
+    return value
 
 
-_sys.modules[__name__].__class__ = _Package
+def __dir__():
+    return sorted(set(globals()) | set(_LAZY))

@@ -43,3 +43,21 @@ def decorators(force_python: bool = False):
 
             return True, jit, jit_inline
     return False, _identity, _identity
+
+
+def load(name: str, **flags):
+    """A fresh copy of the module ``name`` run with ``flags`` set in its globals.
+
+    A kernel module reads its flags (``_FORCE_PYTHON``, ``_COMPILE``) before
+    it decorates its functions: a copy loaded with them set is the same text
+    compiled, or run as Python, beside the module as normally imported.
+    """
+    import importlib.util
+
+    spec = importlib.util.find_spec(name)
+    if spec is None or spec.loader is None:
+        raise ImportError(f"no module {name!r} to load")
+    module = importlib.util.module_from_spec(spec)
+    module.__dict__.update(flags)
+    spec.loader.exec_module(module)
+    return module

@@ -1,7 +1,10 @@
-"""Compiled kernel of the nodal refinement: the residual b − A(ω) x in double-double.
+"""Compiled kernels of the nodal solve: the residual b − A(ω) x in double-double, the
+banded LU, and the error sensitivities.
 
-The same arithmetic, operation for operation and in the same order, as the
-vectorised numpy code of :meth:`mechcirc.nodal._Pattern.residual` (real ω):
+The residual does the same arithmetic (the double-double functions of
+:mod:`mechcirc._dd`, the one copy, here compiled), operation for operation
+and in the same order, as the vectorised numpy code of
+:meth:`mechcirc._nodal_residual.Pattern.residual` (real ω):
 each term (an element's ±value·(x_i − x_j), a lever stamp's value·x_c) is
 formed exactly (TwoSum, TwoProduct), the terms of one (row, kind) bucket are
 added by cascaded TwoSum in ascending term order, and the sums are combined
@@ -14,55 +17,26 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._jit import decorators
+from . import _dd
+from ._jit import decorators, load
 
 HAVE_NUMBA, _jit, _jit_inline = decorators(bool(globals().get("_FORCE_PYTHON")))
 
-_SPLITTER = 134217729.0                 # 2²⁷ + 1
+if HAVE_NUMBA:        # the one double-double source (:mod:`mechcirc._dd`), compiled
+    _dd = load("mechcirc._dd", _COMPILE=True)
+_split, _two_sum, _two_prod = _dd.split, _dd.two_sum, _dd.two_prod
+_dd_add, _dd_mul_d, _dd_div_d = _dd.dd_add, _dd.dd_mul_d, _dd.dd_div_d
 
 
 @_jit_inline
-def _split(a):
-    c = _SPLITTER * a
-    hi = c - (c - a)
-    if not np.isfinite(hi) and np.isfinite(a):
-        b = a * 2.0 ** -28
-        c = _SPLITTER * b
-        hi = (c - (c - b)) * 2.0 ** 28
-    return hi, a - hi
-
-
-@_jit_inline
-def _two_sum(a, b):
-    s = a + b
-    bb = s - a
-    return s, (a - (s - bb)) + (b - bb)
-
-
-@_jit_inline
-def _two_prod(a, ah, al, b):
-    p = a * b
-    bh, bl = _split(b)
-    return p, ((ah * bh - p) + ah * bl + al * bh) + al * bl
-
-
-@_jit_inline
-def _dd_add(ah, al, bh, bl):
-    s, e = _two_sum(ah, bh)
-    return s, e + (al + bl)
-
-
-@_jit_inline
-def _dd_mul_d(h, lo, w, wh, wl):
-    p, e = _two_prod(w, wh, wl, h)
-    return p, e + lo * w
-
-
-@_jit_inline
-def _dd_div_d(h, lo, w, wh, wl):
-    q = h / w
-    p, e = _two_prod(w, wh, wl, q)
-    return q, (((h - p) - e) + lo) / w
+def _add(acc, bk, th_r, tl_r, th_i, tl_i):
+    """Add the term (th_r + tl_r) + j(th_i + tl_i) to bucket ``bk`` by TwoSum."""
+    a, ea = _two_sum(acc[bk, 0], th_r)
+    acc[bk, 0] = a
+    acc[bk, 1] += ea + tl_r
+    a, ea = _two_sum(acc[bk, 2], th_i)
+    acc[bk, 2] = a
+    acc[bk, 3] += ea + tl_i
 
 
 @_jit
@@ -105,24 +79,11 @@ def residual(omega, xr, xi, xlr, xli, has_lo, rhs, b_i, b_j, b_s,
             t[e, 1] = tl_r
             t[e, 2] = th_i
             t[e, 3] = tl_i
-            bk = b_i[e]
-            if bk != drop:
-                a, ea = _two_sum(acc[bk, 0], th_r)
-                acc[bk, 0] = a
-                acc[bk, 1] += ea + tl_r
-                a, ea = _two_sum(acc[bk, 2], th_i)
-                acc[bk, 2] = a
-                acc[bk, 3] += ea + tl_i
+            if b_i[e] != drop:
+                _add(acc, b_i[e], th_r, tl_r, th_i, tl_i)
         for e in range(n_el):                   # −y·(x_i − x_j) into the second row
-            bk = b_j[e]
-            if bk == drop:
-                continue
-            a, ea = _two_sum(acc[bk, 0], -t[e, 0])
-            acc[bk, 0] = a
-            acc[bk, 1] += ea + -t[e, 1]
-            a, ea = _two_sum(acc[bk, 2], -t[e, 2])
-            acc[bk, 2] = a
-            acc[bk, 3] += ea + -t[e, 3]
+            if b_j[e] != drop:
+                _add(acc, b_j[e], -t[e, 0], -t[e, 1], -t[e, 2], -t[e, 3])
         for s in range(n_s):
             bk = b_s[s]
             if bk == drop:
@@ -134,12 +95,7 @@ def residual(omega, xr, xi, xlr, xli, has_lo, rhs, b_i, b_j, b_s,
             if has_lo:
                 tl_r = tl_r + v * xlr[k, c]
                 tl_i = tl_i + v * xli[k, c]
-            a, ea = _two_sum(acc[bk, 0], th_r)
-            acc[bk, 0] = a
-            acc[bk, 1] += ea + tl_r
-            a, ea = _two_sum(acc[bk, 2], th_i)
-            acc[bk, 2] = a
-            acc[bk, 3] += ea + tl_i
+            _add(acc, bk, th_r, tl_r, th_i, tl_i)
         for r in range(n):
             m_ = 4 * r
             # ω S_m − S_k/ω, then A x = S_c + S_l + j·sus, then b − A x.
@@ -273,7 +229,7 @@ def _mag(z):
 @_jit
 def sensitivities(omega, x, scale, e_i, e_j, e_m, e_k, e_c, s_row, s_col, s_val,
                   l_p1, l_p2, l_col, l_r, S, Sd):
-    """S and S_data of :meth:`mechcirc.nodal._Pattern.sensitivities` for x/scale (real ω)."""
+    """S and S_data of :meth:`mechcirc._nodal_residual.Pattern.sensitivities` for x/scale (real ω)."""
     n_w, n1 = x.shape
     for k in range(n_w):
         w = omega[k]

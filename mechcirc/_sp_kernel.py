@@ -161,6 +161,104 @@ BLOCK = 128
 
 
 @jit
+def _reflect(s, c, r, nb, want_error, re, im, mg, ig, rh):
+    """A lever node: its child's value (slot ``c``) reflected by the ratio ``r``."""
+    for j in range(nb):
+        re[s, j] = re[c, j] / r / r
+        im[s, j] = im[c, j] / r / r
+    if want_error:
+        for j in range(nb):
+            mg[s, j] = mg[c, j] / r / r
+            ig[s, j] = ig[c, j] * r * r
+            rh[s, j] = rh[c, j] + 2 * _U
+
+
+@jit
+def _leaf_terms(nb, a_inv, a_om, b_inv, b_om, want_error, w, iw, ai, bb):
+    """A node's leaf terms a_inv/ω + a_om·ω into ``ai`` (and their error terms into
+    ``bb``); True if there is one."""
+    if a_inv != 0.0:
+        for j in range(nb):
+            ai[j] = iw[j] * a_inv
+        if want_error:
+            for j in range(nb):
+                bb[j] = b_inv * iw[j]
+    if a_om != 0.0:
+        if a_inv != 0.0:
+            for j in range(nb):
+                ai[j] += w[j] * a_om
+        else:
+            for j in range(nb):
+                ai[j] = w[j] * a_om
+        if want_error:
+            if a_inv != 0.0:
+                for j in range(nb):
+                    bb[j] += b_om * w[j]
+            else:
+                for j in range(nb):
+                    bb[j] = b_om * w[j]
+    return a_inv != 0.0 or a_om != 0.0
+
+
+@jit
+def _store(s, nb, series, has_c, re, im, cr, ci, ai):
+    """A node's value into slot ``s``: the sum (series), or its reciprocal (parallel)."""
+    if has_c:
+        if series:
+            for j in range(nb):
+                re[s, j] = cr[j]
+                im[s, j] = ci[j]
+        else:
+            for j in range(nb):
+                re[s, j], im[s, j] = _recip(cr[j], ci[j])
+    else:
+        if series:
+            for j in range(nb):
+                re[s, j] = 0.0
+                im[s, j] = ai[j]
+        else:
+            for j in range(nb):
+                re[s, j] = 0.0
+                im[s, j] = -1.0 / ai[j]
+
+
+@jit
+def _store_with_error(s, leaf, nb, series, has_c, have_b, with_real, extra, re, im, mg, ig,
+                      rh, cr, ci, ai, bb):
+    """:func:`_store` with the node's magnitude, its reciprocal and its error bound ρ."""
+    for j in range(nb):
+        b = bb[j] if have_b else 0.0
+        if with_real:
+            b += extra
+        if has_c:
+            sr = cr[j]
+            si = ci[j]
+            mag = _abs(sr, si)
+        else:
+            sr = 0.0
+            si = ai[j]
+            mag = abs(si)
+        inv = 1.0 / mag
+        rho = b * inv
+        if series:
+            re[s, j] = sr
+            im[s, j] = si
+            mg[s, j] = mag
+            ig[s, j] = inv
+            # A leaf alone (k = 3): value·η, 1/s, 1/ω and the product.
+            rh[s, j] = 4 * _U if leaf else rho
+        else:
+            if has_c:
+                re[s, j], im[s, j] = _recip(sr, si)
+            else:
+                re[s, j] = 0.0
+                im[s, j] = -1.0 / si
+            rh[s, j] = _through_reciprocal(rho) + _U_RECIP
+            mg[s, j] = inv
+            ig[s, j] = mag
+
+
+@jit
 def evaluate_plan(omega, kind, cplx, c_real, c_inv, c_om, e_real, e_inv, e_om, mu,
                   kstart, kids, ratio, slot, n_slots, want_error, K, rho_out):
     """Fill ``K[d, j]`` (and ``rho_out[d, j]`` when ``want_error``) for every design d
@@ -207,50 +305,16 @@ def _evaluate_design(omega, kind, cplx, c_real, c_inv, c_om, e_real, e_inv, e_om
             k = kind[i]
             s = slot[i]
             if k == 2:
-                c = slot[kids[kstart[i]]]
-                r = ratio[i]
-                for j in range(nb):
-                    re[s, j] = re[c, j] / r / r
-                    im[s, j] = im[c, j] / r / r
-                if want_error:
-                    for j in range(nb):
-                        mg[s, j] = mg[c, j] / r / r
-                        ig[s, j] = ig[c, j] * r * r
-                        rh[s, j] = rh[c, j] + 2 * _U
+                _reflect(s, slot[kids[kstart[i]]], ratio[i], nb, want_error, re, im, mg, ig, rh)
                 continue
             series = k != 1           # 0 series, 3 a single leaf
             m_u = mu[i]
             # Leaf terms and imaginary children (numpy's "imag"), complex
             # children (numpy's "cplx"): each starts with its first term.
-            has_i = False
             has_c = False
-            have_b = False
-            a_inv = c_inv[i]
-            a_om = c_om[i]
-            if a_inv != 0.0:
-                for j in range(nb):
-                    ai[j] = iw[j] * a_inv
-                if want_error:
-                    for j in range(nb):
-                        bb[j] = e_inv[i] * iw[j]
-                    have_b = True
-                has_i = True
-            if a_om != 0.0:
-                if has_i:
-                    for j in range(nb):
-                        ai[j] += w[j] * a_om
-                else:
-                    for j in range(nb):
-                        ai[j] = w[j] * a_om
-                if want_error:
-                    if have_b:
-                        for j in range(nb):
-                            bb[j] += e_om[i] * w[j]
-                    else:
-                        for j in range(nb):
-                            bb[j] = e_om[i] * w[j]
-                    have_b = True
-                has_i = True
+            has_i = _leaf_terms(nb, c_inv[i], c_om[i], e_inv[i], e_om[i], want_error, w, iw,
+                                ai, bb)
+            have_b = want_error and has_i
             if want_error:
                 has_i, has_c = _children_with_error(
                     i, nb, series, m_u, kstart, kids, slot, cplx, re, im, mg, ig, rh,
@@ -277,56 +341,12 @@ def _evaluate_design(omega, kind, cplx, c_real, c_inv, c_om, e_real, e_inv, e_om
             if has_c and has_i:
                 for j in range(nb):
                     ci[j] += ai[j]
-            if not want_error:
-                if has_c:
-                    if series:
-                        for j in range(nb):
-                            re[s, j] = cr[j]
-                            im[s, j] = ci[j]
-                    else:
-                        for j in range(nb):
-                            re[s, j], im[s, j] = _recip(cr[j], ci[j])
-                else:
-                    if series:
-                        for j in range(nb):
-                            re[s, j] = 0.0
-                            im[s, j] = ai[j]
-                    else:
-                        for j in range(nb):
-                            re[s, j] = 0.0
-                            im[s, j] = -1.0 / ai[j]
-                continue
-            extra = e_real[i] if with_real else 0.0
-            for j in range(nb):
-                b = bb[j] if have_b else 0.0
-                if with_real:
-                    b += extra
-                if has_c:
-                    sr = cr[j]
-                    si = ci[j]
-                    mag = _abs(sr, si)
-                else:
-                    sr = 0.0
-                    si = ai[j]
-                    mag = abs(si)
-                inv = 1.0 / mag
-                rho = b * inv
-                if series:
-                    re[s, j] = sr
-                    im[s, j] = si
-                    mg[s, j] = mag
-                    ig[s, j] = inv
-                    # A leaf alone (k = 3): value·η, 1/s, 1/ω and the product.
-                    rh[s, j] = 4 * _U if k == 3 else rho
-                else:
-                    if has_c:
-                        re[s, j], im[s, j] = _recip(sr, si)
-                    else:
-                        re[s, j] = 0.0
-                        im[s, j] = -1.0 / si
-                    rh[s, j] = _through_reciprocal(rho) + _U_RECIP
-                    mg[s, j] = inv
-                    ig[s, j] = mag
+            if want_error:
+                _store_with_error(s, k == 3, nb, series, has_c, have_b, with_real,
+                                  e_real[i] if with_real else 0.0, re, im, mg, ig, rh, cr, ci,
+                                  ai, bb)
+            else:
+                _store(s, nb, series, has_c, re, im, cr, ci, ai)
         top = slot[M - 1]
         for j in range(nb):
             K[j0 + j] = complex(re[top, j], im[top, j])

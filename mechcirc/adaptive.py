@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from .circuit import Circuit
-from .sweep import UNDAMPED_ZETA, Sweep, sweep
+from ._sweep import UNDAMPED_ZETA, Sweep, sweep
 
 __all__ = ["adaptive_sweep", "UNDAMPED_OFFSETS"]
 

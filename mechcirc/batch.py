@@ -34,7 +34,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .circuit import Circuit
 from .errors import InputError, MechcircError, NetlistError, NotSeriesParallelError
-from .sweep import (UNDAMPED_ZETA, drive_force, drive_velocity, point_flags,
+from ._sweep import (UNDAMPED_ZETA, drive_force, drive_velocity, point_flags,
                     singular_error)
 
 __all__ = ["designs", "from_circuits", "Designs", "DesignSweep", "DesignResonances",
@@ -275,7 +275,7 @@ class Designs:
     def plan(self, which: NDArray):
         """The template's plan with the values of designs ``which``, or None (not
         series–parallel, or no compiled kernel)."""
-        from .reduction import _kernel, plan
+        from .reduction import compiled_evaluator, plan
 
         key = which.tobytes()
         if key in self._plans:              # sweep, extremes and resonances share it
@@ -284,7 +284,7 @@ class Designs:
             tree = self.circuit.tree
         except NotSeriesParallelError:
             return None
-        if _kernel() is None:
+        if compiled_evaluator() is None:
             return None
         p = plan(tree)
         row = {e.name: i for i, e in enumerate(self.circuit.elements)}
@@ -302,10 +302,10 @@ class Designs:
 
         The valid designs of a series–parallel network go through the compiled
         plan in one pass; the others (``DesignSweep.single``) through
-        :func:`mechcirc.sweep.sweep` one by one.  Each row equals the single
-        design's :class:`~mechcirc.sweep.Sweep` (K, error and flags).
+        :func:`mechcirc.sweep` one by one.  Each row equals the single
+        design's :class:`~mechcirc.Sweep` (K, error and flags).
         """
-        from .sweep import _singular_limits, sweep as sweep_one
+        from ._sweep import singular_limits, sweep as sweep_one
 
         omega = np.atleast_1d(np.asarray(omega, dtype=float))
         if omega.ndim != 1 or not np.isfinite(omega).all() or (omega < 0).any():
@@ -320,7 +320,7 @@ class Designs:
             from .reduction import evaluate_designs
 
             K, err = evaluate_designs(p, omega, error=True)
-            K = _singular_limits(K, omega[None, :])
+            K = singular_limits(K, omega[None, :])
             if batched.size < D:
                 K, err = _spread(K, batched, D), _spread(err, batched, D)
         single = np.setdiff1d(np.arange(D), batched)
@@ -398,7 +398,7 @@ class Designs:
         reactance theorem), so |K| is 0 at a resonance in the band, ∞ at an
         anti-resonance, and otherwise takes its extremes at the band's ends;
         |Q0| = |V0|/|K| likewise (velocity drive; a force drive's Q0 is F0).  The
-        others: :func:`mechcirc.sweep.peak` on the single design (``single``).
+        others: :func:`mechcirc.peak` on the single design (``single``).
         ``sweep``, this band's :meth:`sweep` already made, gives K at the band's
         ends (else they are evaluated).
         """
@@ -462,7 +462,7 @@ class DesignSweep:
 
     @property
     def flags(self) -> NDArray[np.int8]:
-        """Per-point flags as :attr:`mechcirc.sweep.Sweep.flags`, shape (D, W)."""
+        """Per-point flags as :attr:`mechcirc.Sweep.flags`, shape (D, W)."""
         # The drive's own quantity is its amplitude at every ω: not formed in full.
         if self.kind == "velocity":
             return point_flags(self.K, self.Q0, self.amplitude, self.error)
@@ -531,7 +531,7 @@ class DesignExtremes:
 
 def _extremes(ds: Designs, lo: float, hi: float, res: DesignResonances,
               ends: NDArray | None) -> DesignExtremes:
-    from .sweep import peak
+    from ._sweep import peak
 
     D = ds.size
     out = {k: np.full(D, np.nan) for k in ("K_min", "omega_at_K_min", "K_max",

@@ -42,7 +42,7 @@ if TYPE_CHECKING:  # pragma: no cover - annotations of the delegates only
     from .nodal import NodalSystem
     from .reduction import Node, Reduction
     from .resonances import Resonance
-    from .sweep import Method, Sweep
+    from ._sweep import Method, Sweep
 
 __all__ = ["Element", "Lever", "Drive", "Circuit", "element_mobility", "law_terms", "FRAME",
            "ELEMENT_UNITS", "Law", "LAWS", "node_names", "units_of"]
@@ -64,24 +64,19 @@ class Law:
     power : int
         Exponent p of jω in K = (jω)^p / s, s = value·η: −1 for a mass
         (K = 1/(jωm)), +1 for a spring (K = jω/k), 0 for a damper (K = 1/c).
-        The force characteristic is S = 1/K = s·(jω)^(−p).
+        The force characteristic is S = 1/K = s·(jω)^(−p), which enters the
+        nodal matrix A(ω) = G + j(ωM − K/ω) in M (p = −1), G (0) or K (+1).
     unit : str
         SI unit of the value (translational reading).
-    matrix : str
-        Where the element's S enters the nodal matrix
-        A(ω) = G + j(ωM − K/ω): ``"M"`` (S = jω·s), ``"G"`` (S = s) or
-        ``"K"`` (S = s/(jω)).
     """
 
     power: int
     unit: str
-    matrix: str
 
 
 #: Element kind → its :class:`Law`.
-LAWS: dict[str, Law] = {"mass": Law(-1, "kg", "M"),
-                        "spring": Law(+1, "N/m", "K"),
-                        "damper": Law(0, "N·s/m", "G")}
+LAWS: dict[str, Law] = {"mass": Law(-1, "kg"), "spring": Law(+1, "N/m"),
+                        "damper": Law(0, "N·s/m")}
 
 #: SI unit of each element kind's value (translational reading).
 ELEMENT_UNITS: dict[str, str] = {kind: law.unit for kind, law in LAWS.items()}
@@ -305,9 +300,9 @@ class Circuit:
     def sweep(self, omega: ArrayLike, method: Method = "auto") -> Sweep:
         """K(ω), Q0(ω) and per-element forces over ``omega`` [rad/s].
 
-        See :func:`mechcirc.sweep.sweep`.
+        See :func:`mechcirc.sweep`.
         """
-        from .sweep import sweep
+        from ._sweep import sweep
 
         return sweep(self, omega, method=method)
 

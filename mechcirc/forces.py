@@ -19,7 +19,7 @@ from .circuit import Circuit
 from .errors import InputError
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .sweep import Method
+    from ._sweep import Method
 
 __all__ = ["ElementForce", "element_forces"]
 

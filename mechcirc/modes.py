@@ -59,7 +59,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .circuit import LAWS, Circuit, Drive
-from .resonances import Resonance, _project, _solve, pencil
+from .resonances import Resonance, constraint_basis, pencil, resonance_pairs
 
 __all__ = ["Mode", "SweepSensitivity", "modes", "sweep_sensitivity"]
 
@@ -147,7 +147,7 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
     {'m': -0.5, 'k': 0.5}
     """
     system = circuit.nodal
-    pairs = _solve(circuit, omega_max, vectors=True)
+    pairs = resonance_pairs(circuit, omega_max, vectors=True)
     if not pairs:
         return []
     M, D, Ks, G_released, G_held, _ = pencil(system)
@@ -384,7 +384,7 @@ def _inverse_iteration(M, D, Ks, G, s: complex, steps: int = 3) -> np.ndarray:
     pencil (sparse LU): for roots of the band solver, which gives no vectors."""
     from scipy.sparse.linalg import splu
 
-    Z = _project(G, M.shape[0])
+    Z = constraint_basis(G, M.shape[0])
     P = (Z.T @ (s * s * M + s * D + Ks) @ Z).tocsc().astype(complex)
     try:
         lu = splu(P)

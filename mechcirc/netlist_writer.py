@@ -10,7 +10,7 @@ evaluated, in SI, with ``repr`` so that they read back exactly).
 A spring with ``damping=D`` is written on one line with the damper
 ``NAME_damping`` that the parser adds after it (the two come back as they
 were).  A spring whose ``damping`` field has lost that damper (a circuit
-edited in code, e.g. by :func:`mechcirc.simplify.simplify`) is written without
+edited in code, e.g. by :func:`mechcirc.simplify`) is written without
 ``damping=``: every analysis sees the damper, not the field, so the text
 describes the circuit the analyses saw.
 

@@ -13,7 +13,7 @@ steady-state periodic force the drive must supply is
     Q(θ) = Σ_{k=1}^{N} Re(Q_k e^{jkθ}),   Q_k = V_k / K(kΩ),
 
 and every element's force and velocity are the same sums of its per-harmonic
-responses (:meth:`mechcirc.sweep.Sweep.force`).  The mean force (k = 0) is 0:
+responses (:meth:`mechcirc.Sweep.force`).  The mean force (k = 0) is 0:
 the mean velocity of a periodic motion is 0, and a static preload depends on
 the springs' free lengths, which a circuit does not hold.
 
@@ -427,7 +427,7 @@ def periodic(circuit: Circuit, rpm: float, *, motion=None, tol: float = TOL,
     near : float
         A harmonic within this relative distance of a resonance is named near it.
     method : {"auto", "sp", "nodal"}
-        How K is evaluated (:func:`mechcirc.sweep.sweep`).
+        How K is evaluated (:func:`mechcirc.sweep`).
 
     Returns
     -------

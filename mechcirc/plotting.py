@@ -14,7 +14,7 @@ One convention for every plot function of mechcirc:
 Every axis carries its unit, the title names the netlist, and the file format
 follows the extension given to :func:`mechcirc.cli._common.save_figure`
 (PNG, SVG, PDF, ...).  Objects that plot have a ``.plot()`` delegate
-(:meth:`mechcirc.sweep.Sweep.plot`).
+(:meth:`mechcirc.Sweep.plot`).
 """
 
 from __future__ import annotations
@@ -48,7 +48,7 @@ LABEL_GAP = 0.08
 def _refined(result, resonances):
     """(ω, K, flags, response) of ``result`` with exact points added around each root.
 
-    The added points are evaluated by the circuit itself (:func:`mechcirc.sweep.sweep`
+    The added points are evaluated by the circuit itself (:func:`mechcirc.sweep`
     with the sweep's method), so a close resonance/anti-resonance pair that the
     grid steps over is drawn through; without a circuit (or roots) the sweep as is.
     """
@@ -114,7 +114,7 @@ def _mark_resonances(axes, resonances, legend_ax, per_unit: float = 1.0):
 
 
 def _mark_peak(ax, peak, unit: str = "rad/s", force_unit: str = "N") -> None:
-    """The exact peak of |Q0| (a :class:`mechcirc.sweep.Peak`): a dot at the located
+    """The exact peak of |Q0| (a :class:`mechcirc.Peak`): a dot at the located
     maximum, or a triangle at the top of the axis at every undamped resonance (∞)."""
     from .units import in_unit
 
@@ -144,7 +144,7 @@ def plot_sweep(result, title: str | None = None, resonances=(), peak=None, *, ax
     :meth:`mechcirc.circuit.Circuit.resonances`) are drawn as vertical lines:
     solid for K = 0, dashed for K = ∞.  Flagged points (on or within rounding
     of a pole or zero) are marked with crosses.  ``peak`` (from
-    :func:`mechcirc.sweep.peak`) marks the exact maximum of |Q0|, or ∞ at each
+    :func:`mechcirc.peak`) marks the exact maximum of |Q0|, or ∞ at each
     undamped resonance.
 
     Around each root passed in ``resonances`` the curves are refined: exact

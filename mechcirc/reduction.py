@@ -743,7 +743,7 @@ def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: boo
     if not keep and _mode == "auto" and _jit.COMPILED is not False:
         p = plan(root)
         if _jit.COMPILED or _KERNEL or p.kind.size * omega.size >= KERNEL_MIN_WORK:
-            kernel = _kernel()
+            kernel = compiled_evaluator()
             if kernel is not None:
                 return _evaluate_compiled(kernel, p, omega, error, condition)
     if not keep and _mode == "auto":
@@ -808,7 +808,7 @@ KERNEL_MIN_WORK = 5_000_000
 _KERNEL: list = []
 
 
-def _kernel():
+def compiled_evaluator():
     """The compiled plan evaluator, or None without numba (imported on first use)."""
     if not _KERNEL:
         from . import _sp_kernel
@@ -1037,7 +1037,7 @@ def evaluate_designs(p: Plan, omega: NDArray, error: bool = False, kernel=None):
     This is :func:`evaluate`'s compiled path, a design at a time: one design
     (D = 1) is the single sweep.  Raises RuntimeError without numba.
     """
-    kernel = kernel or _kernel()
+    kernel = kernel or compiled_evaluator()
     if kernel is None:
         raise RuntimeError("evaluating a batch of designs needs numba (pip install numba)")
     omega = np.ascontiguousarray(np.atleast_2d(np.asarray(omega, dtype=float)))

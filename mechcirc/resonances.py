@@ -151,10 +151,11 @@ def find_resonances(circuit: Circuit, omega_max: float | None = None) -> Resonan
     >>> [(r.kind, round(r.omega, 12)) for r in c.resonances()]
     [('resonance', 10.0)]
     """
-    return Resonances(r for r, _ in _solve(circuit, omega_max))
+    return Resonances(r for r, _ in resonance_pairs(circuit, omega_max))
 
 
-def _solve(circuit: Circuit, omega_max: float | None = None, vectors: bool = False) -> list:
+def resonance_pairs(circuit: Circuit, omega_max: float | None = None,
+                    vectors: bool = False) -> list:
     """:func:`find_resonances` as ``(Resonance, v)`` pairs, sorted as there.
 
     ``v`` is the root's eigenvector from the eigen-solve, the node velocities
@@ -227,7 +228,7 @@ def pencil(system) -> tuple:
     return M, D, Ks, G_levers, np.vstack([G_levers, drive_row]), damped
 
 
-def _project(G: np.ndarray, n: int):
+def constraint_basis(G: np.ndarray, n: int):
     """A basis Z (sparse, n × (n − rank G)) of the null space of the constraint rows ``G``.
 
     Each constraint eliminates one unknown (pivot chosen by a column-pivoted
@@ -276,7 +277,7 @@ def _modes_unchecked(M, D, Ks, G, damped: bool, omega_max=None, vectors: bool = 
     by shift-invert Arnoldi (:func:`_band_modes`, no vectors); without a band
     they are refused.
     """
-    Z = _project(G, M.shape[0])
+    Z = constraint_basis(G, M.shape[0])
     limit = MAX_UNKNOWNS_DAMPED if damped else MAX_UNKNOWNS
     if Z.shape[1] > limit:
         if omega_max is not None and math.isfinite(omega_max) and omega_max > 0:
@@ -744,7 +745,7 @@ def batched_roots(ds, omega_max: float | None = None):
     by step on stacks.
 
     The same stamps (:func:`mechcirc.nodal.stamps`), projections
-    (:func:`_project`), scaling and filters as :func:`_modes_unchecked`; the
+    (:func:`constraint_basis`), scaling and filters as :func:`_modes_unchecked`; the
     massless directions, structural, are condensed out once for all designs and
     each pencil reduced by a batched Cholesky factorisation of its mass matrix
     (:func:`_undamped_stack`); all designs are solved by one stacked
@@ -761,7 +762,6 @@ def batched_roots(ds, omega_max: float | None = None):
     anti-resonances; None when it solves none (the caller solves the others
     one by one).
     """
-    from . import nodal
     from .errors import NotSeriesParallelError, TopologyError
 
     try:
@@ -779,52 +779,13 @@ def batched_roots(ds, omega_max: float | None = None):
     if not which.size:
         return None
     n_nodes = len(system.nodes)
-    G_levers = system.C[n_nodes:, :n_nodes].toarray()
-    drive_row = np.zeros((1, n_nodes))
-    if system.a >= 0:
-        drive_row[0, system.a] = 1.0
-    if system.b >= 0:
-        drive_row[0, system.b] = -1.0
-    # Each element's stamp pattern B_e, so that M = Σ_e (value·η)_e B_e (the same
-    # entries nodal.assemble sums); projected, Zᵀ M Z = Σ_e s_e Zᵀ B_e Z.
-    index = {n: i for i, n in enumerate(system.nodes)}
-    for e in system.elements:
-        index.setdefault(e.n1, -1)
-        index.setdefault(e.n2, -1)
-    for lv in system.levers:
-        for n in (lv.p1, lv.p2, lv.s1, lv.s2):
-            index.setdefault(n, -1)
-    E = len(system.elements)
-    pos = {e.name: k for k, e in enumerate(system.elements)}
-    B = {x: np.zeros((E, n_nodes, n_nodes)) for x in ("mass", "spring", "damper")}
-    for kind, r, c, sign, source, _ in nodal.stamps(system.elements, (), index):
-        if kind in B:
-            B[kind][pos[source.name], r, c] += sign
+    *_, G_released, G_held, _ = pencil(system)
+    B = _element_patterns(system)
     el_rows = np.array([row[e.name] for e in system.elements], dtype=np.int64)
     S = (ds.values[el_rows][:, which] * ds.eta[el_rows][:, which]).T      # (D', E)
-    problems = []
-    for kind, G in (("resonance", np.vstack([G_levers, drive_row])),
-                    ("antiresonance", G_levers)):
-        Z = _project(G, n_nodes).toarray()
-        if damped:
-            Mr, Dr, Kr = (_weighted_sum(S, Z.T @ B[x] @ Z)
-                          for x in ("mass", "damper", "spring"))
-            problems.append((kind, _stacked_damped(Mr, Dr, Kr, omega_max)))
-            continue
-        # The massless directions are those of the pattern: with every value > 0,
-        # null(Σ m_e B_e) = ∩ null(B_e) in every design.  Ordered last, they are
-        # condensed out statically (_undamped_stack), as _undamped does per design.
-        if Z.shape[1]:
-            mu, V = np.linalg.eigh(Z.T @ B["mass"].sum(axis=0) @ Z)
-            massless = mu <= 1e-10 * max(mu.max(), 1e-300)
-            Z = Z @ np.concatenate([V[:, ~massless], V[:, massless]], axis=1)
-            n0 = int(massless.sum())
-        else:
-            n0 = 0
-        Mr, Kr = (_weighted_sum(S, Z.T @ B[x] @ Z)
-                  for x in ("mass", "spring"))
-        problems.append((kind, _stacked_modes(Mr, Kr, n0, omega_max)))
-    (_, (w_h, e_h, ok_h)), (_, (w_r, e_r, ok_r)) = problems
+    problems = [_stacked_problem(constraint_basis(G, n_nodes).toarray(), B, S, damped, omega_max)
+                for G in (G_held, G_released)]
+    (w_h, e_h, ok_h), (w_r, e_r, ok_r) = problems
     ok = ok_h & ok_r
     # A mode in both problems cancels in K (_cancel): left to the single path.  Damped
     # roots are compared with the eigen-solver's estimates (eps·1e2·|s|max/|s|), as
@@ -841,16 +802,8 @@ def batched_roots(ds, omega_max: float | None = None):
     if not keep.size:
         return None
     if damped:                        # already polished (on the matrices): sort and go
-        s_ = np.concatenate([w_h[keep], w_r[keep]], axis=1)
-        err = np.concatenate([problems[0][1][1][keep], problems[1][1][1][keep]], axis=1)
-        pole = np.zeros(s_.shape, dtype=bool)
-        pole[:, w_h.shape[1]:] = True
-        mag = np.abs(s_)
-        order = np.lexsort((pole, np.where(np.isfinite(mag), mag, np.inf)), axis=-1)
-        width = int(np.isfinite(mag).sum(axis=1).max(initial=0))
-        take = np.take_along_axis
-        return (which[keep], take(pole, order, 1)[:, :width], take(s_, order, 1)[:, :width],
-                take(err, order, 1)[:, :width])
+        return (which[keep], *_sorted_damped(w_h[keep], w_r[keep], problems[0][1][keep],
+                                             problems[1][1][keep]))
     w = np.concatenate([w_h[keep], w_r[keep]], axis=1)
     e0 = np.concatenate([e_h[keep], e_r[keep]], axis=1)
     pole = np.zeros(w.shape, dtype=bool)
@@ -872,6 +825,66 @@ def batched_roots(ds, omega_max: float | None = None):
     w, pole, err = take(w, order, 1), take(pole, order, 1), take(err, order, 1)
     err = np.where(np.isfinite(w), err, np.nan)
     return which[keep], pole, 1j * w, err
+
+
+def _element_patterns(system) -> dict[str, np.ndarray]:
+    """Each element's stamp pattern B_e over the node rows, by kind, shape (E, n, n).
+
+    M = Σ_e (value·η)_e B_e (the entries :func:`mechcirc.nodal.stamps` gives
+    and :func:`mechcirc.nodal.assemble` sums); projected, Zᵀ M Z = Σ_e s_e Zᵀ B_e Z.
+    """
+    from .nodal import stamps
+
+    n_nodes = len(system.nodes)
+    index = {n: i for i, n in enumerate(system.nodes)}
+    for e in system.elements:
+        index.setdefault(e.n1, -1)
+        index.setdefault(e.n2, -1)
+    for lv in system.levers:
+        for n in (lv.p1, lv.p2, lv.s1, lv.s2):
+            index.setdefault(n, -1)
+    E = len(system.elements)
+    pos = {e.name: k for k, e in enumerate(system.elements)}
+    B = {x: np.zeros((E, n_nodes, n_nodes)) for x in ("mass", "spring", "damper")}
+    for kind, r, c, sign, source, _ in stamps(system.elements, (), index):
+        if kind in B:
+            B[kind][pos[source.name], r, c] += sign
+    return B
+
+
+def _stacked_problem(Z, B, S, damped: bool, omega_max):
+    """The roots of one stacked eigenproblem (constraint basis ``Z``, patterns ``B``,
+    element values ``S`` per design): :func:`_stacked_damped` or :func:`_stacked_modes`."""
+    if damped:
+        Mr, Dr, Kr = (_weighted_sum(S, Z.T @ B[x] @ Z)
+                      for x in ("mass", "damper", "spring"))
+        return _stacked_damped(Mr, Dr, Kr, omega_max)
+    # The massless directions are those of the pattern: with every value > 0,
+    # null(Σ m_e B_e) = ∩ null(B_e) in every design.  Ordered last, they are
+    # condensed out statically (_undamped_stack), as _undamped does per design.
+    if Z.shape[1]:
+        mu, V = np.linalg.eigh(Z.T @ B["mass"].sum(axis=0) @ Z)
+        massless = mu <= 1e-10 * max(mu.max(), 1e-300)
+        Z = Z @ np.concatenate([V[:, ~massless], V[:, massless]], axis=1)
+        n0 = int(massless.sum())
+    else:
+        n0 = 0
+    Mr, Kr = (_weighted_sum(S, Z.T @ B[x] @ Z)
+              for x in ("mass", "spring"))
+    return _stacked_modes(Mr, Kr, n0, omega_max)
+
+
+def _sorted_damped(s_h, s_r, err_h, err_r):
+    """(pole, s, error) of damped designs' roots (drive held, released), sorted as
+    :func:`find_resonances` sorts, cut to the widest row."""
+    s_ = np.concatenate([s_h, s_r], axis=1)
+    err = np.concatenate([err_h, err_r], axis=1)
+    pole = np.zeros(s_.shape, dtype=bool)
+    pole[:, s_h.shape[1]:] = True
+    mag = np.abs(s_)
+    order = np.lexsort((pole, np.where(np.isfinite(mag), mag, np.inf)), axis=-1)
+    width = int(np.isfinite(mag).sum(axis=1).max(initial=0))
+    return tuple(np.take_along_axis(x, order, 1)[:, :width] for x in (pole, s_, err))
 
 
 def _weighted_sum(S: np.ndarray, P: np.ndarray) -> np.ndarray:

@@ -168,7 +168,7 @@ def test_damped_designs_take_the_single_path_and_are_counted():
     assert list(ex.single) == [0, 1]
     for d in range(2):
         c = one(DAMPED, params, d)
-        from mechcirc.sweep import peak
+        from mechcirc import peak
 
         assert ex.Q0_max[d] == peak(c, 10, 1e3, quantity="Q0").value
         assert ex.K_max[d] == peak(c, 10, 1e3, quantity="K").value

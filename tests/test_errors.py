@@ -41,7 +41,7 @@ def test_no_public_exception_class_outside_errors_py():
 
 def test_old_import_locations_still_work():
     from mechcirc.scene.simulation import SceneAccuracyWarning
-    from mechcirc.simplify import BandError
+    from mechcirc import BandError
     from mechcirc.sley import ParameterError
     from mechcirc.sley.simulation import SleyAccuracyWarning
     from mechcirc.units import UnitError

@@ -9,7 +9,7 @@ from scipy.optimize import minimize_scalar
 
 import mechcirc
 from mechcirc.adaptive import adaptive_sweep
-from mechcirc.sweep import FLAG_NEAR_SINGULAR, FLAG_OK, FLAG_SINGULAR
+from mechcirc import FLAG_NEAR_SINGULAR, FLAG_OK, FLAG_SINGULAR
 
 SERIES_LC = "drive V a 0 velocity=1\nmass m a b 1\nspring k b 0 1\n"   # K = j(ω − 1/ω)
 

@@ -7,7 +7,7 @@ under ``if TYPE_CHECKING:`` (annotations only, never executed).
 
 One kind of edge is told apart: a *delegate*, a method whose body imports a
 function and calls it with ``self`` (SciPy's ``lti.bode``: ``Circuit.sweep``
-is ``from .sweep import sweep; return sweep(self, omega, method=method)``).
+is ``from ._sweep import sweep; return sweep(self, omega, method=method)``).
 The function is the implementation and the method only a convenience, so its
 upward edge is no dependency of the class; the circle test leaves delegates
 out and :func:`test_delegates_are_one_call_and_listed` checks that each is a
@@ -116,7 +116,7 @@ def without_delegates(g: nx.DiGraph) -> nx.DiGraph:
 
 def test_the_graph_is_read():
     g = import_graph()
-    assert g.has_edge("mechcirc.sweep", "mechcirc.reduction")
+    assert g.has_edge("mechcirc._sweep", "mechcirc.reduction")
     assert g.has_edge("mechcirc.reduction", "mechcirc.circuit")
     assert len(g) > 40
 
@@ -139,8 +139,8 @@ def test_delegates_are_one_call_and_listed():
     g = import_graph()
     delegates = {e for e in g.edges if g.edges[e]["delegate"]}
     assert delegates == {("mechcirc.circuit", f"mechcirc.{m}") for m in
-                         ("reduction", "nodal", "sweep", "resonances", "modes", "periodic", "interop.skrf",
-                          "interop.formula")} | {("mechcirc.sweep", "mechcirc.interop.skrf"),
+                         ("reduction", "nodal", "_sweep", "resonances", "modes", "periodic", "interop.skrf",
+                          "interop.formula")} | {("mechcirc._sweep", "mechcirc.interop.skrf"),
                                                    ("mechcirc.periodic", "mechcirc.plotting"),
                                                    ("mechcirc.transient.simulate",
                                                     "mechcirc.plotting")}

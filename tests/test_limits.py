@@ -20,7 +20,7 @@ import pytest
 
 import mechcirc
 import importlib
-sweep_module = importlib.import_module("mechcirc.sweep")   # mechcirc.sweep is the function
+sweep_module = importlib.import_module("mechcirc._sweep")
 from mechcirc.cli import main
 from mechcirc.errors import NetlistError
 from mechcirc.expressions import MAX_DEPTH, MAX_LENGTH, evaluate, parse_expression

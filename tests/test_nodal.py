@@ -9,7 +9,10 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 import mechcirc
-import mechcirc.nodal  # noqa: F401  (used as mechcirc.nodal; not imported by `import mechcirc`)
+import mechcirc._jit  # noqa: F401  (used as mechcirc.<module>; not imported by `import mechcirc`)
+import mechcirc._nodal_residual  # noqa: F401
+import mechcirc._nodal_solvers  # noqa: F401
+import mechcirc.nodal  # noqa: F401
 from mechcirc.errors import NotSeriesParallelError, TopologyError
 from reference.networks import grid_text
 from strategies import networks_with_levers, reference_K_and_cancellation, to_netlist_with_levers
@@ -256,7 +259,7 @@ def test_error_estimate_bounds_the_true_error_on_random_networks(sparse, monkeyp
     from reference import mp_nodal
 
     if sparse:
-        monkeypatch.setattr(mechcirc.nodal, "DENSE_LIMIT", 0)
+        monkeypatch.setattr(mechcirc._nodal_solvers, "DENSE_LIMIT", 0)
     rng = np.random.default_rng(7)
     true_all, est_all = [], []
     for i in range(6):
@@ -347,16 +350,14 @@ def test_large_ladder_with_levers_is_exact_against_mpmath(path, monkeypatch):
     fallback (taken where the symmetric mode's refinement stays above 1e-10).
     """
     if path.startswith("superlu"):
-        monkeypatch.setattr(mechcirc.nodal, "BAND_MAX", -1)
+        monkeypatch.setattr(mechcirc._nodal_solvers, "BAND_MAX", -1)
     if path.endswith("strict"):
         monkeypatch.setattr(mechcirc.nodal, "_STRICT_AFTER", -1.0)
-    if path.endswith("numpy"):
-        monkeypatch.setattr(mechcirc.nodal, "USE_NUMBA", False)
-    else:                            # compiled even for a sweep this small
-        monkeypatch.setattr(mechcirc.nodal, "KERNEL_MIN_WORK", 0)
+    # the numpy path, or compiled even for a sweep this small
+    monkeypatch.setattr(mechcirc._jit, "COMPILED", not path.endswith("numpy"))
     text, ref = _LADDER_REFERENCE()
     system = mechcirc.parse(text).nodal
-    assert mechcirc.nodal._solver(system).kind == path.split("-")[0]
+    assert mechcirc._nodal_solvers.solver(system).kind == path.split("-")[0]
     K, err = mechcirc.nodal.mobility_and_error(system, _LADDER_OMEGA)
     true = np.abs(K - ref) / np.abs(ref)
     # Achieved: ≤ 2.3e-16 on every path (K rounded once); 1e-15 leaves a margin of 4.
@@ -372,7 +373,7 @@ def test_sparse_solves_are_bit_identical_between_runs():
         runs = []
         for _ in range(2):
             system = mechcirc.parse(text).nodal
-            assert mechcirc.nodal._solver(system).kind == kind
+            assert mechcirc._nodal_solvers.solver(system).kind == kind
             runs.append(mechcirc.nodal.mobility_and_error(system, omega))
         assert runs[0][0].tobytes() == runs[1][0].tobytes()
         assert runs[0][1].tobytes() == runs[1][1].tobytes()
@@ -385,7 +386,7 @@ def test_compiled_residual_is_the_numpy_residual_bit_for_bit(monkeypatch):
 
     from reference import mp_nodal
 
-    monkeypatch.setattr(mechcirc.nodal, "DENSE_LIMIT", 0)   # the kernel serves the sparse path
+    kern = mechcirc.nodal.kernels(10 ** 9)
     rng = np.random.default_rng(5)
     for t in range(12):
         text, _, w_char = mp_nodal.random_network(rng, n_nodes=6 + t, damped=bool(t % 2),
@@ -393,14 +394,12 @@ def test_compiled_residual_is_the_numpy_residual_bit_for_bit(monkeypatch):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             system = mechcirc.parse(text).nodal
-        pat = mechcirc.nodal._pattern(system)
+        pat = mechcirc._nodal_residual.pattern(system)
         omega = w_char * 10 ** rng.uniform(-2, 2, 4)
         shape = (4, system.size)
         xh = (rng.standard_normal(shape) + 1j * rng.standard_normal(shape)) * 10.0 ** (t - 6)
         xl = xh * 1e-17 * rng.standard_normal(shape)
         rhs = system.injection()
-        monkeypatch.setattr(mechcirc.nodal, "USE_NUMBA", True)
-        compiled = pat.residual(omega, xh, xl, rhs)
-        monkeypatch.setattr(mechcirc.nodal, "USE_NUMBA", False)
+        compiled = pat.residual(omega, xh, xl, rhs, kern)
         vectorised = pat.residual(omega, xh, xl, rhs)
         assert compiled.tobytes() == vectorised.tobytes()

@@ -20,7 +20,7 @@ import pytest
 from reference import nodal_corpus
 
 import mechcirc
-from mechcirc.sweep import FLAG_OK, FLAG_SINGULAR
+from mechcirc import FLAG_OK, FLAG_SINGULAR
 
 HERE = Path(__file__).parent / "reference" / "nodal_defects"
 

@@ -16,7 +16,7 @@ import pytest
 from scipy.optimize import minimize_scalar
 
 import mechcirc
-from mechcirc.sweep import FLAG_NEAR_SINGULAR, FLAG_SINGULAR, peak
+from mechcirc import FLAG_NEAR_SINGULAR, FLAG_SINGULAR, peak
 from reference import sp_corpus as corpus
 
 U = np.finfo(float).eps / 2

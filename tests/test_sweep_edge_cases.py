@@ -19,7 +19,7 @@ import pytest
 
 import mechcirc
 from mechcirc.errors import TopologyError
-from mechcirc.sweep import FLAG_NEAR_SINGULAR, FLAG_OK, FLAG_SINGULAR
+from mechcirc import FLAG_NEAR_SINGULAR, FLAG_OK, FLAG_SINGULAR
 
 
 def test_lever_ratio_above_1e154_does_not_overflow_python_floats():

@@ -225,7 +225,7 @@ def _some_omega(values, limit: int = 5, unit: str = "rad/s") -> str:
 
 
 def _peak_doc(pk) -> dict:
-    """The exact peak for ``--json``: value inf when unbounded (see mechcirc.sweep.peak)."""
+    """The exact peak for ``--json``: value inf when unbounded (see mechcirc.peak)."""
     return {"quantity": pk.quantity, "value": pk.value, "omega": pk.omega,
             "unbounded": pk.unbounded, "unbounded_at": list(pk.poles),
             "grid_value": pk.grid_value, "grid_omega": pk.grid_omega}
@@ -300,10 +300,10 @@ def cmd_sweep(args) -> int:
         from ..modes import sweep_sensitivity
 
         sens = sweep_sensitivity(circuit, result.omega, args.sensitivity)
-    from ..sweep import FLAG_SINGULAR
+    from .._sweep import FLAG_SINGULAR
     from ..units import FREQUENCY_UNITS, in_unit
 
-    from ..sweep import PEAK_RESONANCE_LIMIT, peak
+    from .._sweep import PEAK_RESONANCE_LIMIT, peak
 
     pk = peak(result, resonances=everything if len(circuit.elements) <= PEAK_RESONANCE_LIMIT
               else None)

@@ -223,7 +223,7 @@ def _cycle(args, scene) -> int:
 def cmd_reduce(args) -> int:
     from ..errors import MechcircError
     from ..netlist import load
-    from ..simplify import parse_band, simplify
+    from .._simplify import parse_band, simplify
 
     check_output_paths(args.out, reads=(args.file,))
     band = parse_band(args.band)

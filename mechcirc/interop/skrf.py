@@ -35,7 +35,7 @@ from ..errors import MechcircError, TopologyError
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..circuit import Circuit
-    from ..sweep import Method, Sweep
+    from .._sweep import Method, Sweep
 
 __all__ = ["to_skrf", "two_port", "two_port_z", "write_touchstone", "read_mobility",
            "compare", "Comparison", "reference_mobility", "MOBILITY_NOTE"]

@@ -216,7 +216,7 @@ class Analysis:
 
     ``theta_deg`` the crank rotation [deg], ``output`` the circuit element whose
     force is the output (None: K at the drive), ``band`` (W1, W2) [rad/s] and
-    ``tol`` [1] for :func:`mechcirc.simplify.simplify`.
+    ``tol`` [1] for :func:`mechcirc.simplify`.
     """
 
     theta_deg: float | None = None
@@ -745,7 +745,7 @@ def _analysis(text, source, table, circuit_names) -> Analysis:
                    expected=f"one of {', '.join(sorted(circuit_names))}")
     band = None
     if "band" in table:
-        from ..simplify import BandError, check_band
+        from .._simplify import BandError, check_band
 
         raw = table["band"]
         try:

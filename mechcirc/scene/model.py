@@ -471,7 +471,7 @@ def build_needed(scene: Scene, theta: float | None = None, *,
     -------
     (SceneCircuit, Simplified or None)
         The full model at θ, and its reduction for ``[analysis] output`` over
-        ``band`` to ``tol`` (:func:`mechcirc.simplify.simplify`), or None
+        ``band`` to ``tol`` (:func:`mechcirc.simplify`), or None
         when the file gives no band.
 
     Raises
@@ -482,7 +482,7 @@ def build_needed(scene: Scene, theta: float | None = None, *,
         As :func:`build`.
     """
     from ..errors import MechcircError
-    from ..simplify import simplify
+    from .._simplify import simplify
 
     a = scene.analysis
     if theta is None:

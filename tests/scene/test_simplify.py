@@ -7,7 +7,7 @@ import pytest
 
 import mechcirc
 from mechcirc.errors import MechcircError
-from mechcirc.simplify import BandError, parse_band, simplify
+from mechcirc import BandError, parse_band, simplify
 
 ROOT = Path(__file__).resolve().parents[2]
 

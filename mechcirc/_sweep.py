@@ -455,7 +455,7 @@ def _chunked(fn: Callable, omega: NDArray, dtype) -> NDArray:
     return out
 
 
-def _singular_limits(K: NDArray[np.complex128], omega) -> NDArray[np.complex128]:
+def singular_limits(K: NDArray[np.complex128], omega) -> NDArray[np.complex128]:
     """K on an exact pole at ω > 0 is +∞·j (see :func:`sweep`), whatever sign
     rounding gave; at ω = 0 the limit from above stands (−∞·j for a mass)."""
     pole = np.isinf(K) & (omega > 0)
@@ -465,7 +465,7 @@ def _singular_limits(K: NDArray[np.complex128], omega) -> NDArray[np.complex128]
 
 
 def _sweep_tree(circuit: Circuit, tree: Node, omega) -> Sweep:
-    K = _singular_limits(_chunked(lambda w: evaluate(tree, w), omega, complex), omega)
+    K = singular_limits(_chunked(lambda w: evaluate(tree, w), omega, complex), omega)
     return Sweep(omega=omega, K=K, drive=circuit.drive, method="sp",
                  name=circuit.name, tree=tree, circuit=circuit)
 
@@ -601,7 +601,7 @@ def peak(result: "Sweep | Circuit", omega_min: float | None = None,
     Examples
     --------
     >>> from mechcirc import parse
-    >>> from mechcirc.sweep import peak
+    >>> from mechcirc import peak
     >>> c = parse("drive V a 0 velocity=1\\nmass m a b 1\\nspring k b 0 1e4")
     >>> print(peak(c, 10, 1000))   # doctest: +NORMALIZE_WHITESPACE
     max |Q0| = inf (undamped resonance at omega = 100 rad/s)

@@ -1,0 +1,341 @@
+"""The residual b − A(ω) x in double-double, and the error bounds of K built on it.
+
+What does not change with ω is found once per system (:func:`pattern`): the
+CSC pattern of A(ω), its parts, the residual's summation plan, and the
+element tables of the sensitivities S and S_data that bound the rounding of
+the residual (:func:`residual_rounding`) and of the data (:func:`total_error`).
+The compiled kernels of :mod:`mechcirc._nodal_kernels` do the same
+operations in the same order, where the caller passes them (``kern``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ._dd import dd_add, dd_div_d, dd_div_dd, dd_mul_d, split, two_prod, two_sum
+from ._nodal_equations import KINDS, NodalSystem, combine
+
+__all__ = ["Pattern", "pattern", "residual_rounding", "total_error"]
+
+
+class Pattern:
+    """What does not change with ω: the pattern of A(ω), its parts, and the residual's plan.
+
+    ``indices``/``indptr`` are the CSC pattern of A(ω) (symmetric); ``dc``,
+    ``m``, ``k`` the summed nonzeros of D + C, M and Kₛ aligned to it, from
+    which A(ω) is formed (:func:`combine`) as a data vector on the fixed
+    pattern.  The residual b − A x (:meth:`residual`) is not formed from
+    these sums (a summed diagonal is already rounded): each element's
+    current y·(x_i − x_j) and each lever stamp's product is computed exactly
+    in double-double arithmetic and summed per row and kind in double-double,
+    following a plan (:attr:`slots`) made here once.
+    """
+
+    def __init__(self, system: NodalSystem):
+        n = system.size
+        r = [np.asarray(system.stamps[k][0], dtype=np.int64) for k in KINDS]
+        c = [np.asarray(system.stamps[k][1], dtype=np.int64) for k in KINDS]
+        v = [np.asarray(system.stamps[k][2], dtype=float) for k in KINDS]
+        rows, cols, vals = np.concatenate(r), np.concatenate(c), np.concatenate(v)
+        kind = np.concatenate([np.full(len(x), i) for i, x in enumerate(r)])
+        self.n = n
+        key = cols * n + rows
+        uniq, inv = np.unique(key, return_inverse=True)
+        self.indices = (uniq % n).astype(np.int32)
+        self.indptr = np.searchsorted(uniq // n, np.arange(n + 1)).astype(np.int32)
+        nnz = uniq.size
+        parts = [np.bincount(inv, weights=np.where(kind == i, vals, 0.0), minlength=nnz)
+                 for i in range(4)]
+        self.m, self.k, self.dc = parts[0], parts[2], parts[1] + parts[3]
+        self._elements(system)
+        self._plan(system)
+
+    def csc(self, omega: float):
+        """A(ω) as a ``scipy.sparse.csc_matrix`` on the fixed pattern."""
+        import scipy.sparse as sp
+
+        data = combine(self.dc, self.m, self.k, omega)
+        return sp.csc_matrix((data, self.indices, self.indptr), shape=(self.n, self.n))
+
+    def _elements(self, system: NodalSystem) -> None:
+        index = {n: i for i, n in enumerate(system.nodes)}
+        n = self.n
+
+        def at(node):
+            return index.get(node, n)         # the reference: a zero column at n
+        els = system.elements
+        self.e_i = np.array([at(e.n1) for e in els], dtype=np.int64)
+        self.e_j = np.array([at(e.n2) for e in els], dtype=np.int64)
+        self.e_val = np.array([e.value * e.eta for e in els], dtype=float)
+        kind = np.array([e.kind for e in els])
+        self.e_kind = np.select([kind == "mass", kind == "spring"], [0, 1], 2).astype(np.int64)
+        self.e_m = np.where(self.e_kind == 0, self.e_val, 0.0)
+        self.e_k = np.where(self.e_kind == 1, self.e_val, 0.0)
+        self.e_c = np.where(self.e_kind == 2, self.e_val, 0.0)
+        n_nodes = len(system.nodes)
+        lv = system.levers
+        self.l_p1 = np.array([at(v.p1) for v in lv], dtype=np.int64)
+        self.l_p2 = np.array([at(v.p2) for v in lv], dtype=np.int64)
+        self.l_col = n_nodes + np.arange(len(lv), dtype=np.int64)
+        self.l_r = np.array([abs(v.ratio) for v in lv], dtype=float)
+        # The lever block's stamps (the held drive's constraint included).
+        lr, lc, lval = (np.asarray(a) for a in system.stamps["lever"])
+        self.s_row = lr.astype(np.int64)
+        self.s_col = lc.astype(np.int64)
+        self.s_val = lval.astype(float)
+
+    def _plan(self, system: NodalSystem) -> None:
+        """Terms of b − A x and their summation order, per (row, kind) bucket.
+
+        Terms: +y·d of each element into its first node's row, −y·d into its
+        second's (the reference row dropped), v·x_c of each lever stamp.  A
+        bucket is (row, kind) with kinds mass, spring, damper, lever; buckets
+        are ranked by their number of terms, so that the s-th terms of all
+        buckets with more than s terms form one slot, added in one
+        vectorised double-double step.
+        """
+        n, E = self.n, self.e_i.size
+        with np.errstate(all="ignore"):
+            self.e_vs = split(self.e_val)
+            self.s_vs = split(self.s_val)
+        bucket = np.concatenate([self.e_i * 4 + self.e_kind, self.e_j * 4 + self.e_kind,
+                                 self.s_row * 4 + 3])
+        term = np.arange(bucket.size)
+        keep = bucket < 4 * n                  # rows of the reference dropped
+        bucket, term = bucket[keep], term[keep]
+        uniq, inv, counts = np.unique(bucket, return_inverse=True, return_counts=True)
+        order = np.argsort(-counts, kind="stable")
+        rank = np.empty_like(order)
+        rank[order] = np.arange(order.size)
+        r = rank[inv]
+        srt = np.lexsort((term, r))
+        r, term = r[srt], term[srt]
+        first = np.searchsorted(r, np.arange(uniq.size))
+        pos = np.arange(r.size) - first[r]
+        self.slots = []
+        for s in range(int(counts.max(initial=0))):
+            sel = pos == s
+            self.slots.append(term[sel][np.argsort(r[sel], kind="stable")])
+        self.buckets = uniq[order]             # bucket of each rank
+        # The compiled kernel adds each bucket's terms in the same order: the
+        # + terms by element, then the − terms, then the lever stamps.
+        self.k_bi = np.minimum(self.e_i * 4 + self.e_kind, 4 * n).astype(np.int64)
+        self.k_bj = np.minimum(self.e_j * 4 + self.e_kind, 4 * n).astype(np.int64)
+        self.k_bs = np.minimum(self.s_row * 4 + 3, 4 * n).astype(np.int64)
+        self.n_terms = 2 * E + self.s_row.size
+        self.max_terms = int(counts.max(initial=0))
+
+    def residual(self, omega: NDArray, xh: NDArray, xl: NDArray | None,
+                 rhs: NDArray, kern=None) -> NDArray[np.complex128]:
+        """b − A(ω) x for each ω (rows of x = xh + xl), in double-double, rounded at the end.
+
+        The same A(ω) as :func:`combine`: (A x)_r = Σ dampers + Σ levers +
+        jω Σ masses − j Σ springs / ω, each sum Σ ±value·(x_i − x_j) exact to
+        about 2⁻¹⁰⁴ (TwoSum of the differences, TwoProduct of the products,
+        cascaded TwoSum per bucket), and the ω factors applied to the sums in
+        double-double.  Complex ω (resonance polishing) are accepted.  With
+        ``kern`` (:mod:`mechcirc._nodal_kernels`) and real ω, by the compiled
+        kernel: the same operations in the same order.
+        """
+        with np.errstate(all="ignore"):
+            if kern is not None and not np.iscomplexobj(omega):
+                return self._residual_compiled(kern, omega, xh, xl, rhs)
+            return self._residual(omega, xh, xl, rhs)
+
+    def _residual(self, omega, xh, xl, rhs):
+        c, n = xh.shape
+        z = np.zeros((c, 1), dtype=complex)
+        xe = np.concatenate([xh.astype(complex, copy=False), z], axis=1)
+        d_h, d_l = two_sum(xe[:, self.e_i], -xe[:, self.e_j])
+        xs = xe[:, self.s_col]
+        if xl is not None:
+            xle = np.concatenate([xl.astype(complex, copy=False), z], axis=1)
+            # Renormalised (TwoSum): where x_i ≈ x_j their low parts (~u|x|)
+            # would leave a low part far above u|d|, and every later sum of
+            # low parts would round at u²|x| per row instead of u²|y d|.
+            d_h, d_l = two_sum(d_h, d_l + (xle[:, self.e_i] - xle[:, self.e_j]))
+        vh, vl = self.e_vs
+        p_h, p_l = two_prod(self.e_val, vh, vl, d_h)
+        p_l = p_l + self.e_val * d_l
+        sh, sl = self.s_vs
+        q_h, q_l = two_prod(self.s_val, sh, sl, xs)
+        if xl is not None:
+            q_l = q_l + self.s_val * xle[:, self.s_col]
+        T_h = np.concatenate([p_h, -p_h, q_h], axis=1)
+        T_l = np.concatenate([p_l, -p_l, q_l], axis=1)
+        S_h = np.zeros((c, 4 * n), dtype=complex)
+        S_l = np.zeros((c, 4 * n), dtype=complex)
+        if self.slots:
+            acc_h, acc_l = T_h[:, self.slots[0]], T_l[:, self.slots[0]]
+            for s in self.slots[1:]:
+                k = s.size
+                a, e = two_sum(acc_h[:, :k], T_h[:, s])
+                acc_h[:, :k] = a
+                acc_l[:, :k] += e + T_l[:, s]
+            S_h[:, self.buckets], S_l[:, self.buckets] = acc_h, acc_l
+        S_h, S_l = S_h.reshape(c, n, 4), S_l.reshape(c, n, 4)
+        with np.errstate(all="ignore"):
+            w = np.asarray(omega)[:, None]
+            m_h, m_l = S_h[..., 0], S_l[..., 0]
+            k_h, k_l = S_h[..., 1], S_l[..., 1]
+            if np.iscomplexobj(w):
+                wr, wi = w.real, w.imag
+                swr, swi = split(wr), split(wi)
+                # jω·S_m = (−wi + j wr)·S_m, component by component.
+                a_h, a_l = dd_mul_d(m_h.real, m_l.real, wr, *swr)    # S_m.re wr
+                b_h, b_l = dd_mul_d(m_h.imag, m_l.imag, wi, *swi)    # S_m.im wi
+                c_h, c_l = dd_mul_d(m_h.real, m_l.real, wi, *swi)
+                d_h2, d_l2 = dd_mul_d(m_h.imag, m_l.imag, wr, *swr)
+                # ω S_m = (re wr − im wi) + j(re wi + im wr)
+                wm_re = dd_add(a_h, a_l, -b_h, -b_l)
+                wm_im = dd_add(c_h, c_l, d_h2, d_l2)
+                # S_k/ω = S_k·conj(ŵ)/(|ŵ|²·2ᵉ), ŵ = ω/2ᵉ (exact scaling).
+                e2 = np.ldexp(1.0, np.frexp(np.maximum(np.abs(wr), np.abs(wi)))[1])
+                ur, ui = wr / e2, wi / e2
+                sur, sui = split(ur), split(ui)
+                p1 = dd_mul_d(k_h.real, k_l.real, ur, *sur)
+                p2 = dd_mul_d(k_h.imag, k_l.imag, ui, *sui)
+                p3 = dd_mul_d(k_h.imag, k_l.imag, ur, *sur)
+                p4 = dd_mul_d(k_h.real, k_l.real, ui, *sui)
+                num_re = dd_add(*p1, *p2)              # re·ur + im·ui
+                num_im = dd_add(*p3, -p4[0], -p4[1])   # im·ur − re·ui
+                n2 = dd_add(*dd_mul_d(ur, 0.0, ur, *sur), *dd_mul_d(ui, 0.0, ui, *sui))
+                den = (n2[0] * e2, n2[1] * e2)
+                kw_re = dd_div_dd(*num_re, *den)
+                kw_im = dd_div_dd(*num_im, *den)
+            else:
+                sw = split(w)
+                wm_re = dd_mul_d(m_h.real, m_l.real, w, *sw)
+                wm_im = dd_mul_d(m_h.imag, m_l.imag, w, *sw)
+                kw_re = dd_div_d(k_h.real, k_l.real, w, *sw)
+                kw_im = dd_div_d(k_h.imag, k_l.imag, w, *sw)
+            # susceptance part: ω S_m − S_k/ω; A x = S_c + S_l + j·sus
+            sus_re = dd_add(*wm_re, -kw_re[0], -kw_re[1])
+            sus_im = dd_add(*wm_im, -kw_im[0], -kw_im[1])
+            g_h, g_l = dd_add(S_h[..., 2], S_l[..., 2], S_h[..., 3], S_l[..., 3])
+            ax_re = dd_add(g_h.real, g_l.real, -sus_im[0], -sus_im[1])
+            ax_im = dd_add(g_h.imag, g_l.imag, *sus_re)
+            r_re = dd_add(rhs[None, :], 0.0, -ax_re[0], -ax_re[1])
+            r_im = (-ax_im[0], -ax_im[1])
+            out = np.empty((c, n), dtype=complex)
+            for part, (hi, lo) in ((out.real, r_re), (out.imag, r_im)):
+                lo = np.where(np.isfinite(lo) | ~np.isfinite(hi), lo, 0.0)
+                part[...] = hi + lo
+            return out
+
+    def _residual_compiled(self, kern, omega, xh, xl, rhs):
+        c, n = xh.shape
+        z = np.zeros((c, 1))
+        xr = np.concatenate([xh.real, z], axis=1)
+        xi = np.concatenate([xh.imag, z], axis=1)
+        if xl is not None:
+            xlr = np.concatenate([xl.real, z], axis=1)
+            xli = np.concatenate([xl.imag, z], axis=1)
+        else:
+            xlr = xli = xr
+        out_r, out_i = np.empty((c, n)), np.empty((c, n))
+        kern.residual(np.ascontiguousarray(omega, dtype=float), xr, xi, xlr, xli,
+                      xl is not None, np.asarray(rhs, dtype=float), self.k_bi, self.k_bj,
+                      self.k_bs, self.e_i, self.e_j, self.e_val, self.e_vs[0], self.e_vs[1],
+                      self.s_col, self.s_val, self.s_vs[0], self.s_vs[1],
+                      np.zeros((4 * n + 4, 4)), out_r, out_i)
+        return out_r + 1j * out_i
+
+    def sensitivities(self, omega: NDArray, x: NDArray, K: NDArray,
+                      kern=None) -> tuple[NDArray, NDArray]:
+        """(S/|K|, S_data/|K|) for each ω: the sensitivity of K to rounding the stamps and the data.
+
+        S = Σ_e |y_e| |x_i − x_j| (|x_i| + |x_j|) + Σ_levers |v · x_r · x_c|:
+        the residual forms each element's current y·(x_i − x_j) once and
+        adds it to both rows, so its rounding (relative to the current, and
+        u·|x| from the low parts of x_i, x_j in double-double) enters as
+        δ·(e_i − e_j); A is complex symmetric, so the adjoint solution of
+        K = cᵀ A⁻¹ c is x itself and K moves by δ·(x_i − x_j).  A row's own
+        summation error, relative to Σ|y_e (x_i − x_j)| over its elements,
+        meets |x_i|; a lever stamp's rounding meets |x_r|.  (The earlier
+        Σ |y|(|x_i| + |x_j|)² counted a stiff element's currents as if
+        they did not cancel: 1e14 × the true error on stiff networks.)
+
+        S_data = Σ_e |y_e| |x_i − x_j|² + Σ_levers 2|r| |x_p1 − x_p2| |q|:
+        rounding an element's value by a relative ε changes its four stamps
+        together, δA = ε·y·(e_i − e_j)(e_i − e_j)ᵀ, and K by ε·y·(x_i − x_j)²;
+        a lever's ratio enters its two primary stamps.  This sum times eps
+        bounds the change of K when every value is rounded, without the
+        cancellation that a bound stamp by stamp would count many times over.
+        Both are computed with x scaled to max-norm 1 (no overflow where x
+        and K are near float64's limits), and divided by |K|.  With ``kern``
+        and real ω, by the compiled kernel.
+        """
+        w = np.asarray(omega)[:, None]
+        c = x.shape[0]
+        with np.errstate(all="ignore"):
+            scale = np.max(np.abs(x), axis=1, initial=0.0)
+            scale = np.where((scale > 0) & np.isfinite(scale), scale, 1.0)
+            if kern is not None and not np.iscomplexobj(omega):
+                S, Sd = np.empty(c), np.empty(c)
+                xe = np.concatenate([np.asarray(x, dtype=complex), np.zeros((c, 1), complex)],
+                                    axis=1)
+                kern.sensitivities(np.asarray(omega, dtype=float), xe, scale, self.e_i,
+                                   self.e_j, self.e_m, self.e_k, self.e_c, self.s_row,
+                                   self.s_col, self.s_val, self.l_p1, self.l_p2, self.l_col,
+                                   self.l_r, S, Sd)
+                f = scale / np.abs(K)
+                return S * f * scale, Sd * f * scale
+            xe = np.concatenate([np.asarray(x, dtype=complex) / scale[:, None],
+                                 np.zeros((c, 1), complex)], axis=1)
+            y = np.abs(combine(self.e_c, self.e_m, self.e_k, w))
+            ax = np.abs(xe)
+            ai, aj = ax[:, self.e_i], ax[:, self.e_j]
+            d = np.abs(xe[:, self.e_i] - xe[:, self.e_j])
+            S = np.einsum("ij,ij->i", y, (ai + aj) * d)
+            if self.s_row.size:
+                S = S + np.abs(self.s_val) @ (ax[:, self.s_row] * ax[:, self.s_col]).T \
+                    if c else S
+            Sd = np.einsum("ij,ij->i", y, d * d)
+            if self.l_r.size:
+                dl = np.abs(xe[:, self.l_p1] - xe[:, self.l_p2])
+                Sd = Sd + np.sum(2 * self.l_r * dl * ax[:, self.l_col], axis=1)
+            f = scale / np.abs(K)
+            return S * f * scale, Sd * f * scale
+
+
+def pattern(system: NodalSystem) -> Pattern:
+    """The :class:`Pattern` of ``system``, built once per system."""
+    return system.cached("_pattern", Pattern)
+
+
+def residual_rounding(system, S):
+    """Relative error of K left by residuals rounded in double-double.
+
+    Each residual row is summed to about (terms + 4)·u² × Σ_e |y_e (x_i − x_j)|
+    (+ its lever stamps; u = 2⁻⁵³), which K (through the adjoint solution,
+    x itself) feels as that times S (:meth:`Pattern.sensitivities`); the
+    refinement cannot see it.
+    """
+    pat = pattern(system)
+    u2 = (np.finfo(float).eps / 2) ** 2
+    with np.errstate(all="ignore"):
+        out = 4 * (pat.max_terms + 4) * u2 * S
+    return np.where(np.isnan(out), np.inf, out)
+
+
+def total_error(S, est):
+    """The solve's error ``est`` plus the sensitivity of K to rounding its data (resonances).
+
+    Each value (m, k, c, r) carries a rounding of up to eps relative; that
+    moves K by eps × S_data / |K| (``S``, from :meth:`Pattern.sensitivities`),
+    far more than the solve near a zero of K.  It is added for resonances,
+    whose error then bounds the distance to the root of the values as
+    written, before rounding.  Sweeps do not add it: their error is that of
+    the computation for the binary inputs (as the series–parallel bound's,
+    and as a 40-digit reference measures it); flagging from it made half the
+    points near a grid's poles false alarms, accurate to 1e-13.  At least
+    eps (the result is rounded to float64).
+    """
+    eps = np.finfo(float).eps
+    with np.errstate(all="ignore"):
+        rounding = eps * S
+        total = est + np.where(np.isnan(rounding), np.inf, rounding)
+    return np.maximum(total, eps)
+

@@ -1,0 +1,377 @@
+"""The factorisations of A(ω) a sweep refines with: dense batches, banded or sparse LU,
+and a dense LU in double-double where float64 factors cannot refine.
+
+:func:`solver` picks one per system from its size and pattern alone (so that
+the same network is solved the same way, bit for bit, every time);
+:func:`dd_solver` is the double-double fallback.  Each ``factor(omega)``
+returns ``(good, solve)``: the frequencies factorised and a function solving
+for their rows (or a subset ``rows`` of them).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._dd import cdd_div, cdd_mul, dd_div_d, dd_mul_d, dd_norm, dd_sub, split, two_sum
+from ._nodal_equations import NodalSystem, combine
+from ._nodal_residual import Pattern, pattern
+
+__all__ = ["solver", "dd_solver", "balance", "DENSE_LIMIT", "DD_LIMIT", "BAND_MAX"]
+
+#: Systems with at most this many unknowns use batched dense solves.
+DENSE_LIMIT = 60
+#: Memory bound for one chunk of batched dense matrices [bytes].
+_CHUNK_BYTES = 32 * 2**20
+
+def balance(mag, diag):
+    """Symmetric scaling d (powers of two) so that d_i |a_ij| d_j ≤ 1 with rows near 1.
+
+    ``mag`` holds |A| (batch, n, n), ``diag`` the diagonal's Σ|stamp| (batch,
+    n).  Rows with a diagonal start at 1/√diag, the others (lever forces,
+    nodes tied only by levers) at 1/max_j |a_ij| d_j: so a lever's force
+    unknown is scaled to the admittance level around it, which Ruiz's
+    iteration alone (started at 1) does not find when every element value is
+    1e±100 and the lever entries are ±1, r.  A few symmetric Ruiz steps
+    follow.  Powers of two: the scaled matrix carries no new rounding, and a
+    singular matrix stays singular.
+    """
+    with np.errstate(all="ignore"):
+        d = np.where(diag > 0, 1.0 / np.sqrt(diag), 0.0)
+        for _ in range(mag.shape[-1]):      # outward from the rows with a diagonal
+            unset = d == 0
+            if not unset.any():
+                break
+            off = np.max(mag * d[:, None, :], axis=2)
+            d = np.where(unset & (off > 0), 1.0 / off, d)
+            if not (unset & (off > 0)).any():
+                break
+        d = np.where(d > 0, d, 1.0)
+        for _ in range(8):
+            r = np.max(mag * d[:, :, None] * d[:, None, :], axis=2)
+            d = d / np.sqrt(np.where((r > 0) & np.isfinite(r), r, 1.0))
+        d = np.where(np.isfinite(d) & (d > 0), d, 1.0)
+        return np.ldexp(1.0, np.round(np.log2(d)).astype(int))
+
+
+#: Systems up to this many unknowns are solved again by a dense LU in
+#: double-double where the refinement with float64 factors does not reach
+#: :data:`_STRICT_AFTER` (A(ω) too ill-conditioned for float64 factors).
+DD_LIMIT = 200
+
+
+class DDSolver:
+    """Dense LU in double-double of the scaled A(ω), assembled exactly from its stamps.
+
+    The fallback where float64 factors cannot give a contracting refinement:
+    a summed diagonal already loses an admittance below 1e-16 of its
+    neighbour's (a soft spring beside a stiff one), and elimination loses
+    more; here every entry is the double-double sum of its stamps, the
+    matrix is scaled symmetrically by powers of two (:func:`_balance`), and
+    the LU (partial pivoting) runs in double-double, so that the refinement
+    contracts up to cond(A) ≈ 1e30.  Dense and vectorised over a batch of
+    ω, about 100 array operations per column: only for the points that need
+    it, and only up to :data:`DD_LIMIT` unknowns.
+    """
+
+    kind = "dd"
+
+    def __init__(self, system: NodalSystem):
+        n = system.size
+        self.n = n
+        # About 2¹⁹ matrix entries per batch (some 30 temporaries of that size).
+        self.max_chunk = max(1, min(64, 2 ** 19 // max(1, n * n)))
+        self.parts = []
+        for kinds in (("damper", "lever"), ("mass",), ("spring",)):
+            h, lo = np.zeros((n, n)), np.zeros((n, n))
+            with np.errstate(all="ignore"):          # entries beyond float64: not finite
+                for kind in kinds:
+                    for r, c, v in zip(*system.stamps[kind]):
+                        h[r, c], e = two_sum(h[r, c], float(v))
+                        lo[r, c] += e
+                self.parts.append(dd_norm(h, lo))
+        self.absdiag = [np.abs(np.diagonal(p[0])) for p in self.parts]
+
+    def factor(self, omega, strict: bool = False):
+        omega = np.asarray(omega, dtype=float)
+        w = omega[:, None, None]
+        (ch, cl), (mh, ml), (kh, kl) = self.parts
+        with np.errstate(all="ignore"):
+            ws = split(w)
+            im = dd_norm(*dd_sub(*dd_mul_d(mh, ml, w, *ws), *dd_div_d(kh, kl, w, *ws)))
+            B, n = omega.size, self.n
+            X = [np.broadcast_to(ch, (B, n, n)).copy(), np.broadcast_to(cl, (B, n, n)).copy(),
+                 im[0], im[1]]
+            mag = np.abs(X[0] + 1j * X[2])
+            cd, md, kd = self.absdiag
+            d = balance(mag, cd + omega[:, None] * md + kd / omega[:, None])
+            good = np.isfinite(mag).all(axis=(1, 2)) & (omega > 0)
+            dd = d[:, :, None] * d[:, None, :]
+            X = [x * dd for x in X]
+            perm = np.broadcast_to(np.arange(n), (B, n)).copy()
+            rows = np.arange(B)
+            for k in range(n):
+                p = k + np.argmax(np.abs(X[0][:, k:, k]) + np.abs(X[2][:, k:, k]), axis=1)
+                for x in X + [perm]:
+                    x[rows, k], x[rows, p] = x[rows, p], x[rows, k].copy()
+                piv = [x[:, k, k] for x in X]
+                zero = (piv[0] == 0) & (piv[2] == 0)
+                good &= ~zero
+                piv[0] = np.where(zero, 1.0, piv[0])
+                if k + 1 == n:
+                    break
+                lk = cdd_div([x[:, k + 1:, k] for x in X], [v[:, None] for v in piv])
+                for x, v in zip(X, lk):
+                    x[:, k + 1:, k] = v
+                # Only the rows and columns the update reaches (the nodal
+                # matrices are sparse: a tree fills little).
+                ri = k + 1 + np.flatnonzero(((lk[0] != 0) | (lk[2] != 0)).any(axis=0))
+                ci = k + 1 + np.flatnonzero(((X[0][:, k, k + 1:] != 0) |
+                                             (X[2][:, k, k + 1:] != 0)).any(axis=0))
+                if not (ri.size and ci.size):
+                    continue
+                at = (slice(None), ri[:, None], ci[None, :])
+                upd = cdd_mul([v[:, ri - k - 1, None] for v in lk],
+                               [x[:, None, k, ci] for x in X])
+                re = dd_sub(X[0][at], X[1][at], *upd[:2])
+                im = dd_sub(X[2][at], X[3][at], *upd[2:])
+                for x, v in zip(X, (*re, *im)):
+                    x[at] = v
+            good &= np.isfinite(X[0]).all(axis=(1, 2)) & np.isfinite(X[2]).all(axis=(1, 2))
+        X, perm, d = [x[good] for x in X], perm[good], d[good]
+        every = np.arange(perm.shape[0])
+
+        def solve(r, rows=None):
+            rows = every if rows is None else np.asarray(rows)
+            b = np.take_along_axis(np.asarray(r, dtype=complex) * d[rows], perm[rows], axis=1)
+            F = [x[rows] for x in X]
+            y = [b.real.copy(), np.zeros(b.shape), b.imag.copy(), np.zeros(b.shape)]
+            with np.errstate(all="ignore"):
+                for k in range(self.n - 1):          # L (unit diagonal)
+                    t = cdd_mul([f[:, k + 1:, k] for f in F], [v[:, k, None] for v in y])
+                    re = dd_sub(y[0][:, k + 1:], y[1][:, k + 1:], *t[:2])
+                    im = dd_sub(y[2][:, k + 1:], y[3][:, k + 1:], *t[2:])
+                    for v, u in zip(y, (*re, *im)):
+                        v[:, k + 1:] = u
+                for k in range(self.n - 1, -1, -1):  # U
+                    q = cdd_div([v[:, k] for v in y], [f[:, k, k] for f in F])
+                    for v, u in zip(y, q):
+                        v[:, k] = u
+                    if k:
+                        t = cdd_mul([f[:, :k, k] for f in F], [u[:, None] for u in q])
+                        re = dd_sub(y[0][:, :k], y[1][:, :k], *t[:2])
+                        im = dd_sub(y[2][:, :k], y[3][:, :k], *t[2:])
+                        for v, u in zip(y, (*re, *im)):
+                            v[:, :k] = u
+            return ((y[0] + y[1]) + 1j * (y[2] + y[3])) * d[rows]
+        return good, solve
+
+
+def dd_solver(system: NodalSystem) -> DDSolver:
+    """The :class:`DDSolver` of ``system``, built once per system."""
+    return system.cached("_dd_solver", DDSolver)
+
+
+def solver(system: NodalSystem):
+    """The solver of ``system`` (dense batch or sparse), built once per system."""
+    return system.cached("_solver", lambda s: DenseSolver(s) if s.size <= DENSE_LIMIT
+                         else SparseSolver(pattern(s)))
+
+
+class DenseSolver:
+    """Batched dense solves: the inverses of A(ω) for a chunk of ω, applied as one product.
+
+    An explicit inverse is no less accurate here than LU factors: every
+    solution is refined with residuals in double-double, and the batch
+    is applied as one matrix product (small systems, many ω).
+    """
+
+    kind = "dense"
+
+    def __init__(self, system: NodalSystem):
+        self.dc = (system.D + system.C).toarray()
+        self.m, self.k = system.M.toarray(), system.Ks.toarray()
+        n = system.size
+        self.max_chunk = max(1, _CHUNK_BYTES // (16 * n * n))
+
+    def factor(self, omega, kern=None):
+        A = combine(self.dc, self.m, self.k, np.asarray(omega)[:, None, None])
+        good = np.isfinite(A).all(axis=(1, 2))
+        A = A[good]
+        try:
+            inv = np.linalg.inv(A)
+        except np.linalg.LinAlgError:
+            # Some matrix of the batch is exactly singular: invert one by one and
+            # leave that frequency as NaN (rare; only on the failure path).
+            inv = np.full(A.shape, np.nan, dtype=complex)
+            for k in range(A.shape[0]):
+                try:
+                    inv[k] = np.linalg.inv(A[k])
+                except np.linalg.LinAlgError:
+                    pass
+            ok = np.isfinite(inv).all(axis=(1, 2))
+            good[np.flatnonzero(good)[~ok]] = False
+            inv = inv[ok]
+        return good, lambda r, rows=slice(None): np.einsum("kij,kj->ki", inv[rows], r)
+
+
+#: The sparse path uses a banded LU when the half band width kl after a reverse
+#: Cuthill–McKee ordering is at most this, SuperLU otherwise.
+BAND_MAX = 12
+#: SuperLU's threshold for keeping the diagonal pivot (symmetric mode).
+DIAG_PIVOT_THRESH = 0.001
+
+
+class SparseSolver:
+    """LU of A(ω) on its fixed pattern, with what does not change with ω found once.
+
+    The choice is made from the pattern alone, so that the same network
+    gives the same factorisation, bit for bit, on every run: after a reverse
+    Cuthill–McKee ordering of the (symmetric) pattern, of half band width
+    kl, a banded LU with partial pivoting when kl ≤ :data:`BAND_MAX`
+    (chains, ladders and narrow strips: the ladder's band is 1 wide) — the
+    compiled kernels of :mod:`mechcirc._nodal_kernels` when numba is
+    installed, LAPACK's ``zgbtrf``/``zgbtrs`` otherwise; for wider bands
+    (grids: the 30×30 grid's band is 30) SuperLU (``scipy.sparse.linalg.
+    splu``) on A permuted symmetrically by a minimum-degree ordering of
+    Aᵀ + A found once from the pattern, in its symmetric mode (diagonal
+    pivots kept unless below :data:`DIAG_PIVOT_THRESH` of the column's
+    largest entry), which fills 2–3× less than partial pivoting on these
+    complex symmetric matrices; where the refinement then does not reach
+    1e-10, the point is factorised again with partial pivoting.  The
+    refinement and its error estimate are the same for either.
+    """
+
+    def __init__(self, pat: Pattern):
+        import scipy.sparse as sp
+        from scipy.sparse.csgraph import reverse_cuthill_mckee
+
+        self.pat = pat
+        n = pat.n
+        nnz = pat.indices.size
+        ones = np.ones(nnz)
+        A = sp.csc_matrix((ones, pat.indices, pat.indptr), shape=(n, n))
+        p = np.asarray(reverse_cuthill_mckee(A.tocsr(), symmetric_mode=True))
+        q = np.empty_like(p)
+        q[p] = np.arange(n)
+        cols = np.repeat(np.arange(n), np.diff(pat.indptr))
+        ri, ci = q[pat.indices], q[cols]                  # permuted positions
+        kl = int(np.max(np.abs(ri - ci), initial=0))
+        self.kl = kl
+        if kl <= BAND_MAX:
+            self.kind = "band"
+            self.p = p
+            self.band_rows = 3 * kl + 1
+            self.dest = (ci, 2 * kl + ri - ci)            # in the (n, rows) C-order array
+            self.max_chunk = max(1, min(64, 2 ** 22 // max(1, n * self.band_rows)))
+        else:
+            from scipy.sparse.linalg import splu
+
+            self.kind = "superlu"
+            # The ordering depends on the pattern only: find it on a
+            # nonsingular matrix of the same pattern (the diagonal does not
+            # enter a minimum-degree ordering of Aᵀ + A).
+            struct = A + sp.identity(n, format="csc") * (n + 1.0)
+            perm = np.asarray(splu(struct.tocsc(), permc_spec="MMD_AT_PLUS_A").perm_c)
+            iperm = np.argsort(perm)
+            self.perm, self.iperm = perm, iperm
+            # The pattern permuted symmetrically, and where its data come from.
+            where = sp.csc_matrix((np.arange(1, nnz + 1, dtype=float), pat.indices,
+                                   pat.indptr), shape=(n, n))[iperm][:, iperm].tocsc()
+            where.sort_indices()
+            self.take = where.data.astype(np.int64) - 1
+            self.indices_p, self.indptr_p = where.indices, where.indptr
+            self.max_chunk = 8
+
+    def factor(self, omega, kern=None, strict: bool = False):
+        """(good, solve): the frequencies factorised, and a solver for their rows.
+
+        ``kern``: the compiled kernels (:mod:`mechcirc._nodal_kernels`) for
+        the banded LU at real ω, or None.  ``strict``: SuperLU with partial pivoting (threshold 1) instead of
+        the symmetric mode, where the refinement did not converge.
+        """
+        pat = self.pat
+        if self.kind == "band" and kern is not None and not np.iscomplexobj(omega):
+            return self._banded_compiled(kern, np.asarray(omega, dtype=float))
+        data = combine(pat.dc, pat.m, pat.k, np.asarray(omega)[:, None])
+        good = np.isfinite(data).all(axis=1)
+        if self.kind == "band":
+            return self._banded(data, good)
+        return self._superlu(data, good, strict)
+
+    def _banded_compiled(self, kern, omega):
+        """The banded LU by the compiled kernels (the same unblocked LU as LAPACK's zgbtf2).
+
+        No per-ω call overhead, and none of zgbtrf's BLAS calls per column,
+        which on a band 1–2 wide cost many times the arithmetic.
+        """
+        pat, n, kl = self.pat, self.pat.n, self.kl
+        ab = np.empty((omega.size, n, self.band_rows), dtype=complex)
+        ipiv = np.empty((omega.size, n), dtype=np.int64)
+        good = np.ones(omega.size, dtype=bool)
+        kern.band_assemble_factor(pat.dc, pat.m, pat.k, omega, self.dest[0], self.dest[1],
+                                  kl, ab, ipiv, good)
+        if not good.all():
+            ab, ipiv = ab[good], ipiv[good]
+        p = self.p
+
+        every = np.arange(ab.shape[0])
+
+        def solve(r, rows=None):
+            rows = every if rows is None else np.asarray(rows, dtype=np.int64)
+            out = np.empty((rows.size, n), dtype=complex)
+            kern.band_solve_perm(ab, kl, ipiv, rows, p, np.ascontiguousarray(r, dtype=complex),
+                                 out)
+            return out
+        return good, solve
+
+    def _banded(self, data, good):
+        from scipy.linalg.lapack import zgbtrf, zgbtrs
+
+        n, kl = self.pat.n, self.kl
+        ab = np.zeros((data.shape[0], n, self.band_rows), dtype=complex)
+        ab[:, self.dest[0], self.dest[1]] = data
+        p = self.p
+        factors = []
+        for k in np.flatnonzero(good):
+            lu, piv, info = zgbtrf(ab[k].T, kl, kl, overwrite_ab=1)
+            if info != 0:
+                good[k] = False             # exactly singular at this frequency
+                continue
+            factors.append((lu, piv))
+
+        def solve(r, rows=None):
+            rp = np.ascontiguousarray(r[:, p], dtype=complex)
+            out = np.empty_like(rp)
+            use = factors if rows is None else [factors[i] for i in rows]
+            for k, (lu, piv) in enumerate(use):
+                out[k] = zgbtrs(lu, kl, kl, rp[k], piv, overwrite_b=1)[0]
+            x = np.empty_like(out)
+            x[:, p] = out
+            return x
+        return good, solve
+
+    def _superlu(self, data, good, strict=False):
+        import scipy.sparse as sp
+        from scipy.sparse.linalg import splu
+
+        n = self.pat.n
+        factors = []
+        for k in np.flatnonzero(good):
+            A = sp.csc_matrix((data[k, self.take], self.indices_p, self.indptr_p),
+                              shape=(n, n))
+            try:
+                factors.append(
+                    splu(A, permc_spec="NATURAL", diag_pivot_thresh=1.0) if strict else
+                    splu(A, permc_spec="NATURAL", diag_pivot_thresh=DIAG_PIVOT_THRESH,
+                         options={"SymmetricMode": True}))
+            except RuntimeError:            # exactly singular at this frequency
+                good[k] = False
+        perm, iperm = self.perm, self.iperm
+
+        def solve(r, rows=None):
+            r = np.asarray(r, dtype=complex)[:, iperm]
+            use = factors if rows is None else [factors[i] for i in rows]
+            return np.stack([lu.solve(r[k])[perm] for k, lu in enumerate(use)]) if use \
+                else np.zeros((0, n), complex)
+        return good, solve
+
