@@ -434,7 +434,7 @@ def _value_for(rng: random.Random, action, workdir: Path, files: list[str]) -> s
     if action.choices is not None and rng.random() < 0.85:
         return str(rng.choice(list(action.choices)))
     if meta in ("CSV", "IMAGE", "S1P", "FILE", "OUT", "JSON") or "output" in action.dest \
-            or action.dest in ("plot", "netlist", "touchstone"):
+            or action.dest in ("plot", "netlist", "touchstone", "export"):
         ext = rng.choice([".csv", ".png", ".svg", ".txt", "", ".s1p", ".xyz", ".mcir"])
         if rng.random() < 0.1:
             return str(workdir / "missing" / f"out{ext}")
@@ -729,10 +729,20 @@ def file_property(kind: str, data: bytes, workdir: Path, *, seconds: float = 10.
 
     real_loads, real_load = pickle.loads, pickle.load
 
-    def refuse(*a, **k):
-        raise PropertyFailure(f"{kind}: a data file was unpickled")
+    # Only the fuzzed file is guarded: numba loads the index of its own cache of
+    # mechcirc's compiled kernels with pickle.load, which is not a user's file.
+    def refuse_load(f, *a, **k):
+        name = str(getattr(f, "name", ""))
+        if not name or Path(name).resolve() == path.resolve():
+            raise PropertyFailure(f"{kind}: a data file was unpickled")
+        return real_load(f, *a, **k)
 
-    pickle.loads, pickle.load = refuse, refuse
+    def refuse_loads(b, *a, **k):
+        if bytes(b)[:64] in data:
+            raise PropertyFailure(f"{kind}: a data file was unpickled")
+        return real_loads(b, *a, **k)
+
+    pickle.loads, pickle.load = refuse_loads, refuse_load
     try:
         return run_target(go, text, seconds=seconds)
     finally:
@@ -1125,7 +1135,9 @@ def all_argv(rng: random.Random, workdir: Path, pools: dict[str, list[str]]) -> 
         argv = list(rng.choice(examples))
         for i in range(1, len(argv)):
             if not argv[i].startswith("-") and rng.random() < bad:
-                argv[i] = rng.choice(_WILD_ARGS + pool[:3])
+                output = argv[i - 1] in ("-o", "--plot", "--svg", "--export")
+                argv[i] = str(workdir / rng.choice(_WILD_ARGS)) if output else \
+                    rng.choice(_WILD_ARGS + pool[:3])      # never a bundled file as output
         if rng.random() < 0.3:                 # and some more options
             argv += cli_argv(rng, workdir, pool, commands=(name,))[1:]
     else:
