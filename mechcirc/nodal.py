@@ -492,7 +492,7 @@ def require_nonsingular(system: NodalSystem) -> None:
             f"{', '.join(system.unloaded[:12]) or 'none'})", elements=system.unloaded)
     scale = _frequency_scale(system)
     trial = [0.731 * scale, 1.913 * scale]
-    judged = None
+    judged, overflow = None, False
     if system.size <= DENSE_LIMIT:
         absdiag = [np.abs(p.diagonal()) for p in (system.D + system.C, system.M, system.Ks)]
         for w, A in zip(trial, dense_matrices(system, trial)):
@@ -504,7 +504,11 @@ def require_nonsingular(system: NodalSystem) -> None:
             # look singular.
             diag = absdiag[0] + w * absdiag[1] + absdiag[2] / w
             d = balance(np.abs(A)[None], diag[None])[0]
-            A = A * d[:, None] * d[None, :]
+            with np.errstate(all="ignore"):
+                A = A * d[:, None] * d[None, :]
+            if not np.isfinite(A).all():    # values over ~600 decades (a lever ratio of
+                overflow = True             # 1e300): balancing overflows; the solve decides
+                continue
             sv = np.linalg.svd(A, compute_uv=False)
             if sv[-1] > 1e-13 * sv[0]:
                 return
@@ -516,7 +520,9 @@ def require_nonsingular(system: NodalSystem) -> None:
             return
     if judged is None:
         raise TopologyError("the network is singular at every frequency (tried "
-                            f"ω = {trial[0]:.4g} and {trial[1]:.4g} rad/s)")
+                            f"ω = {trial[0]:.4g} and {trial[1]:.4g} rad/s)" + (
+                                ", or its values span more decades than float64 holds"
+                                if overflow else ""))
     _, _, vh = np.linalg.svd(judged)
     null = np.abs(vh[-1].conj())
     names = list(system.nodes) + [f"lever {lv.name}" for lv in system.levers]

@@ -51,6 +51,24 @@ HUGE_MASSES = ("drive V a 0 velocity=1\nmass m1 a b 1e308\nmass m2 b c 1e308\n"
                "spring k c 0 1e6\nspring k2 a c 5\nspring k3 b 0 7\n")
 
 
+@pytest.mark.parametrize("text", [
+    # long-run fuzz seeds 5003985, 5011636, 5014573: balancing A overflowed (lever ratio
+    # 1e300 beside 1e-300), LAPACK printed "DLASCL illegal value" and the culprit SVD
+    # raised numpy's LinAlgError "SVD did not converge" (exit 1) instead of an answer
+    "drive V n1 0 velocity=1e-300\nspring e0 n1 0 1e-300\nlever L0 0 n1 n1 s0a ratio=1e300\n"
+    "mass ms0 n1 s0a 1.0\n",
+    "mass ms0 s0b 0 1.0\nspring e1 n3 0 0.013443178467656339\n"
+    "lever L0 n2 n3 s0b 0 ratio=1e300\ndrive V n3 n2 force=1e-300\n"
+    "spring e0 0 n2 1.535244114827356e+50\n",
+])
+def test_lever_ratio_1e300_beside_1e_minus_300_is_a_topology_error_not_linalg(text):
+    c = mechcirc.parse(text)
+    with pytest.raises(TopologyError, match="more decades than float64 holds"):
+        c.sweep([1.0], method="nodal")
+    with pytest.raises(TopologyError):
+        c.resonances()
+
+
 @pytest.mark.xfail(strict=True, reason="nodal gives NaN (flagged) for 1e308 masses where K is "
                    "finite; the check above passes because both points are flagged")
 def test_huge_masses_give_the_value_of_the_rigid_chain():

@@ -66,6 +66,16 @@ def test_crosscheck_says_disagrees_and_exits_3(monkeypatch, capsys):
     assert status == 3 and json.loads(out)["verdict"] == "disagrees"
 
 
+def test_crosscheck_of_a_netlist_refuses_netlist_output(tmp_path, capsys):
+    """--netlist writes the netlist built from a scene or preset; with a netlist FILE there
+    is none, so the option is refused (exit 2, nothing written) rather than ignored."""
+    out_path = tmp_path / "used.mcir"
+    status, out, err = run(["crosscheck", REPO / "netlists/stb_heald.mcir",
+                            "--netlist", out_path], capsys)
+    assert status == 2 and "--netlist" in err and "is a netlist already" in err
+    assert not out_path.exists() and out == ""
+
+
 def test_crosscheck_unmeasurable_line_says_why(tmp_path, capsys):
     # the massless damped drive node's first-order mode (ω = k1/c1 = 6000) rings not at all
     net = tmp_path / "chain.mcir"

@@ -103,7 +103,9 @@ def register(sub) -> None:
     p.add_argument("--theta", type=real(most=1e9, unit="deg", role="angle"), metavar="DEG",
                    help="crank angle of the linearisation [deg] (default: the start angle, "
                         "where the sley's rigid acceleration is zero)")
-    p.add_argument("--netlist", metavar="FILE", help="also write the netlist used")
+    p.add_argument("--netlist", metavar="FILE",
+                   help="also write the netlist built from the scene or the sley preset "
+                        "(refused with a netlist FILE: that file is the netlist used)")
     p.add_argument("--json", action="store_true", help="print one JSON document")
     p.set_defaults(func=cmd_crosscheck)
 
@@ -292,6 +294,12 @@ def cmd_crosscheck(args) -> int:
             from .scene_commands import cmd_crosscheck_scene
 
             return cmd_crosscheck_scene(args)
+        if args.netlist:        # nothing is built from a netlist FILE: refuse, not ignore
+            from ..errors import InputError
+
+            raise InputError(f"--netlist writes the netlist built from a scene or a sley "
+                             f"preset; '{args.file}' is a netlist already, and it is "
+                             "the one checked (leave out --netlist)")
         from .transient_commands import cmd_crosscheck_netlist
 
         return cmd_crosscheck_netlist(args)

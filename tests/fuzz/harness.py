@@ -434,7 +434,7 @@ def _value_for(rng: random.Random, action, workdir: Path, files: list[str]) -> s
     if action.choices is not None and rng.random() < 0.85:
         return str(rng.choice(list(action.choices)))
     if meta in ("CSV", "IMAGE", "S1P", "FILE", "OUT", "JSON") or "output" in action.dest \
-            or action.dest in ("plot", "netlist", "touchstone"):
+            or action.dest in ("plot", "netlist", "touchstone", "export"):
         ext = rng.choice([".csv", ".png", ".svg", ".txt", "", ".s1p", ".xyz", ".mcir"])
         if rng.random() < 0.1:
             return str(workdir / "missing" / f"out{ext}")
@@ -517,7 +517,7 @@ def cli_property(argv: list[str], *, seconds: float = 20.0) -> str:
         raise PropertyFailure(f"main({argv}) -> 2 after a RuntimeWarning: {text.strip()[:500]}")
     if status == 2 and not (text.strip() or out.getvalue().strip()):
         raise PropertyFailure(f"main({argv}) -> 2 with no message")
-    return "result" if status == 0 else "error"
+    return {0: "result", 3: "verdict"}.get(status, "error")
 
 
 def cli_files(workdir: Path, rng: random.Random | None = None) -> list[str]:
@@ -729,10 +729,20 @@ def file_property(kind: str, data: bytes, workdir: Path, *, seconds: float = 10.
 
     real_loads, real_load = pickle.loads, pickle.load
 
-    def refuse(*a, **k):
-        raise PropertyFailure(f"{kind}: a data file was unpickled")
+    # Only the fuzzed file is guarded: numba loads the index of its own cache of
+    # mechcirc's compiled kernels with pickle.load, which is not a user's file.
+    def refuse_load(f, *a, **k):
+        name = str(getattr(f, "name", ""))
+        if not name or Path(name).resolve() == path.resolve():
+            raise PropertyFailure(f"{kind}: a data file was unpickled")
+        return real_load(f, *a, **k)
 
-    pickle.loads, pickle.load = refuse, refuse
+    def refuse_loads(b, *a, **k):
+        if bytes(b)[:64] in data:
+            raise PropertyFailure(f"{kind}: a data file was unpickled")
+        return real_loads(b, *a, **k)
+
+    pickle.loads, pickle.load = refuse_loads, refuse_load
     try:
         return run_target(go, text, seconds=seconds)
     finally:
@@ -984,4 +994,169 @@ def round_argv(rng: random.Random, kind: str, workdir: Path, seeds: dict[str, st
         argv = ["study", W + "/study/spec.toml", "-o", W + "/study/out.csv", "--workers", "1"]
     if rng.random() < 0.08:
         argv.insert(rng.randrange(1, len(argv) + 1), rng.choice(_STRAY))
+    return argv
+
+
+# ---------------------------------------------------------------- every command (the campaign)
+#: Netlists for the time-domain commands: clearances, .ic states, periodic drives.
+TRANSIENT_SEEDS = [ROOT / "examples" / "msl_backlash.mcir"] + sorted(
+    (ROOT / "docs" / "examples").glob("*.mcir"))
+TOUCHSTONE_SEED = ROOT / "docs" / "examples" / "measured.s1p"
+
+
+def all_files(workdir: Path, rng: random.Random | None = None) -> dict[str, list[str]]:
+    """Input files by kind for :func:`all_argv`: bundled, mutated and bad ones (written once)."""
+    rng = rng or random.Random(0)
+    workdir.mkdir(parents=True, exist_ok=True)
+    generic = cli_files(workdir, rng)
+    bad = [str(workdir / "nope.mcir"), str(workdir), os.devnull]
+    pools: dict[str, list[str]] = {"generic": generic}
+    pools["netlist"] = [str(p) for p in NETLIST_SEEDS + TRANSIENT_SEEDS] + [
+        f for f in generic if f.endswith(".mcir")]
+    (workdir / "measured.s1p").write_text(_read(TOUCHSTONE_SEED))
+    pools["touchstone"] = [str(workdir / "measured.s1p")]
+    for k in range(3):
+        p = workdir / f"mut{k}.s1p"
+        p.write_bytes(touchstone_input(rng))
+        pools["touchstone"].append(str(p))
+        q = workdir / f"scene_mut{k}.toml"
+        q.write_bytes(toml_file_input(rng, rng.choice(SCENE_SEEDS)))
+        pools.setdefault("scene", []).append(str(q))
+    pools["scene"] += [str(p) for p in SCENE_SEEDS]
+    pools["linkage"] = [str(p) for p in TOML_SEEDS] + [f for f in generic if f.endswith(".toml")]
+    (workdir / "drive.csv").write_text("0,0\n0.01,1\n0.02,0\n0.05,-1\n0.1,0\n")
+    (workdir / "drive_bad.csv").write_bytes(motion_table(rng))
+    pools["drive_csv"] = [str(workdir / "drive.csv"), str(workdir / "drive_bad.csv")]
+    for pool in pools.values():
+        pool += bad
+    return pools
+
+
+def help_examples(name: str, workdir: Path, pools: dict[str, list[str]]) -> list[list[str]]:
+    """The examples of ``mechcirc NAME --help`` as argv lists: bundled inputs found under
+    the repository (``measured.s1p`` in the work folder), outputs written into ``workdir``."""
+    import shlex
+
+    sub = cli_commands()[name]
+    out = []
+    for line in (sub.epilog or "").splitlines():
+        words = shlex.split(line.split("mechcirc ", 1)[1]) if "mechcirc " + name in line else []
+        if not words:
+            continue
+        argv = []
+        for i, w in enumerate(words):
+            if i and not w.startswith("-") and "." in w and "/" in w or w.endswith(".s1p"):
+                found = ROOT / w
+                w = str(found) if found.exists() else pools["touchstone"][0]
+            elif i and words[i - 1] in ("-o", "--plot", "--svg", "--export", "--output"):
+                w = str(workdir / Path(w).name)
+            argv.append(w)
+        out.append(argv)
+    return out
+
+
+_STUDY_METHODS = ("grid", "random", "latin-hypercube", "sobol", "file", "[random]")
+
+
+def study_spec(rng: random.Random, netlist: str, bad: float) -> str:
+    """A study spec by grid, random, Latin hypercube, Sobol or a file, with ``bad`` share of
+    wrong values; small (≤ 8 points) so that a study runs in a fraction of a second."""
+    analysis = rng.choice(["sweep", "resonances"]) if rng.random() > bad else \
+        rng.choice(["", "nope", "1", "transient"])
+    spec = f'netlist = "{netlist}"\nanalysis = "{analysis}"\n'
+    if analysis == "resonances":
+        spec += f"resonances = {_num(rng, '2', 1 - bad)}\n"
+    else:
+        spec += (f"\n[omega]\nmin = {_num(rng, '10', 1 - bad)}\nmax = {_num(rng, '1e4', 1 - bad)}\n"
+                 f"points = {_num(rng, '40', 1 - bad)}\nlog = {rng.choice(['true', 'false'])}\n")
+    method = rng.choice(_STUDY_METHODS)
+    lo, hi = _num(rng, "0.6", 1 - bad), _num(rng, "1.0", 1 - bad)
+    if method == "grid":
+        spec += (f"\n[grid]\neta1 = [{lo}, {hi}]\n"
+                 f"eta2 = {{min = {_num(rng, '1.0', 1 - bad)}, max = 1.5, "
+                 f"num = {_num(rng, '3', 1 - bad)}}}\n")
+    elif method == "file":
+        spec += '\n[sample]\nfile = "designs.csv"\n'
+    else:
+        table = "random" if method == "[random]" else "sample"
+        spec += f"\n[{table}]\n"
+        if table == "sample":
+            spec += f'method = "{method if rng.random() > bad else rng.choice(["x", "lhs", ""])}"\n'
+        spec += (f"n = {_num(rng, rng.choice(['4', '8']), 1 - bad)}\n"
+                 f"seed = {_num(rng, '7', 1 - bad)}\n"
+                 f"\n[{table}.params]\neta1 = {{min = {lo}, max = {hi}}}\n"
+                 f"eta4 = {{min = 0.5, max = 2.0, log = {rng.choice(['true', 'false', '1'])}}}\n")
+    if rng.random() < 0.15:
+        spec = mutate(rng, spec, TOML_TOKENS, max_ops=2)
+    return spec
+
+
+def all_argv(rng: random.Random, workdir: Path, pools: dict[str, list[str]]) -> list[str]:
+    """A command line of any registered sub-command, its positional files drawn (most of the
+    time) from the kind that command reads; costly knobs kept small, studies in-process."""
+    subs = cli_commands()
+    name = rng.choice(sorted(subs))
+    W = str(workdir)
+    bad = rng.choice([0.0, 0.1, 0.4])
+    if name == "study":
+        (workdir / "study").mkdir(exist_ok=True)
+        (workdir / "study" / "designs.csv").write_text(rng.choice(
+            ["eta1,eta4\n0.7,1\n0.9,1.5\n", "eta1\n0.8\n", "eta1,nope\n1,2\n", ""]))
+        (workdir / "study" / "spec.toml").write_text(
+            study_spec(rng, rng.choice(pools["netlist"][:2] if rng.random() > bad
+                                       else pools["netlist"]), bad),
+            encoding="utf-8", errors="surrogatepass")
+        argv = ["study", W + "/study/spec.toml", "--workers", "1"]
+        return argv + _opts(rng, [("-o", [W + "/study/out.csv", W + "/missing/o.csv"]),
+                                  ("--resume", []), ("--json", []),
+                                  ("--plot", [W + "/study/p.png", W + "/p.xyz"]),
+                                  ("--plot-column", ["Q0_abs_max", "resonance_1", "nope"])],
+                            0.3, bad)
+    if name == "transient":
+        f = rng.choice(pools["netlist"])
+        drive = rng.choice(["harmonic:300", "harmonic:50Hz", "step", "impulse", "rest",
+                            "csv:" + rng.choice(pools["drive_csv"])] if rng.random() > bad else
+                           ["harmonic:", "harmonic:nan", "harmonic:1e308", "csv:", "csv:/nope",
+                            "square", "", "harmonic:-3"])
+        argv = ["transient", f, "--t-end", _num(rng, rng.choice(["0.05", "0.2", "1"]), 1 - bad)]
+        return argv + _opts(rng, [("--dt", ["1e-3", "1e-4", "0", "5e-324", "1e300", "nan"]),
+                                  ("--drive", [drive]),
+                                  ("--amplitude", ["1", "0", "-1", "1e308", "nan", "1e-320"]),
+                                  ("--rtol", ["1e-6", "1e-3", "1e-10", "1e-13", "0.2", "0"]),
+                                  ("-o", [W + "/t.csv", W + "/missing/t.csv", f]),
+                                  ("--plot", [W + "/t.png", W + "/t.xyz"]),
+                                  ("--element", ["eb", "k1", "nope", ""]), ("--json", [])],
+                            0.4, bad)
+    pool_of = {"scene": "scene", "simulate": "scene", "linkage": "linkage",
+               "crosscheck": rng.choice(["scene", "netlist"])}
+    pool = pools[pool_of.get(name, "netlist")] if rng.random() > bad else pools["generic"]
+    examples = help_examples(name, workdir, pools)
+    if examples and rng.random() < 0.5:        # the --help example, some values made wrong
+        argv = list(rng.choice(examples))
+        for i in range(1, len(argv)):
+            if not argv[i].startswith("-") and rng.random() < bad:
+                output = argv[i - 1] in ("-o", "--plot", "--svg", "--export")
+                argv[i] = str(workdir / rng.choice(_WILD_ARGS)) if output else \
+                    rng.choice(_WILD_ARGS + pool[:3])      # never a bundled file as output
+        if rng.random() < 0.3:                 # and some more options
+            argv += cli_argv(rng, workdir, pool, commands=(name,))[1:]
+    else:
+        argv = cli_argv(rng, workdir, pool, commands=(name,))
+    if "all" in argv and name == "simulate":   # 14 variants on every core: not in-process
+        argv[argv.index("all")] = "3"
+    if name == "compare" and len(argv) > 2 and rng.random() > bad:
+        argv[2] = rng.choice(pools["touchstone"])
+    for flag, sane in (("--points", {"scene": "12", "simulate": "36", "reduce": "200",
+                                     "frame": "73"}.get(name)),
+                       ("--revolutions", "1" if name == "simulate" else None),
+                       ("--harmonics", "3" if name == "scene" else None),
+                       ("--variant", "3" if name == "simulate" else None)):
+        if sane and flag in argv:                # the costly knobs small, unless made wrong
+            i = argv.index(flag)
+            if i + 1 < len(argv) and rng.random() > bad:
+                argv[i + 1] = sane
+    if name in ("simulate", "crosscheck") and "--method" in argv:
+        i = argv.index("--method")
+        if i + 1 < len(argv) and argv[i + 1] in ("DOP853", "RK45", "LSODA") and rng.random() < 0.9:
+            argv[i + 1] = "rk4"
     return argv

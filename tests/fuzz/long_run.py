@@ -38,21 +38,27 @@ COUNTS.update({"files": 100_000, "blowup": 200})
 #: through periodic (law, table), cam, resonances, sweep --sensitivity and study sample
 #: files; ``round_crosscheck`` is crosscheck alone (a transient run per input).
 COUNTS.update({"round": 12_000, "round_crosscheck": 300})
+#: The campaign: any registered sub-command (``harness.all_argv``), its inputs drawn from
+#: the file kind it reads (netlists, scenes, linkages, study specs by grid, random, Latin
+#: hypercube, Sobol or file, Touchstone, drive tables) or made wrong.
+COUNTS.update({"all": 20_000})
 
 
 def run(target: str, n: int, first_seed: int, work: Path) -> dict:
     gen = {"expression": (h.expression_input, h.expression_property),
            "netlist": (h.netlist_input, h.netlist_property),
            "linkage": (h.toml_input, h.linkage_property)}
-    counts = {"result": 0, "error": 0}
+    counts = {"result": 0, "error": 0, "verdict": 0}   # verdict: crosscheck's exit 3
     failures = []
     files = h.cli_files(work, random.Random(first_seed)) if target == "cli" else None
+    if target == "all":
+        files = h.all_files(work / "all", random.Random(first_seed))
     if target.startswith("round"):
         files = h.round_files(work / "round")
         kinds = [k for k in h.ROUND_KINDS if k != "crosscheck"] if target == "round" \
             else ["crosscheck"]
     by_kind: dict = {}
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     slowest = (0.0, None)
     for seed in range(first_seed, first_seed + n):
         rng = random.Random(seed)
@@ -60,9 +66,21 @@ def run(target: str, n: int, first_seed: int, work: Path) -> dict:
         try:
             if target == "cli":
                 outcome = h.cli_property(h.cli_argv(rng, work, files))
+            elif target == "all":
+                argv = h.all_argv(rng, work / "all", files)
+                kind = argv[0]
+                by_kind.setdefault(kind, {"result": 0, "error": 0, "verdict": 0, "failures": 0})
+                try:
+                    outcome = h.cli_property(argv)
+                except h.PropertyFailure:
+                    by_kind[kind]["failures"] += 1
+                    raise
+                by_kind[kind][outcome] += 1
+                if seed % 50 == 0 and "matplotlib.pyplot" in sys.modules:
+                    sys.modules["matplotlib.pyplot"].close("all")
             elif target.startswith("round"):
                 kind = kinds[seed % len(kinds)]
-                by_kind.setdefault(kind, {"result": 0, "error": 0, "failures": 0})
+                by_kind.setdefault(kind, {"result": 0, "error": 0, "verdict": 0, "failures": 0})
                 try:
                     outcome = h.cli_property(h.round_argv(rng, kind, work / "round", files))
                 except h.PropertyFailure:
@@ -83,14 +101,19 @@ def run(target: str, n: int, first_seed: int, work: Path) -> dict:
             counts[outcome] += 1
         except h.PropertyFailure as exc:
             failures.append({"seed": seed, "failure": str(exc)[:500]})
+            print(f"  FAILURE seed {seed}: {str(exc)[:300]}", flush=True)
         dt = time.perf_counter() - t1
-        if (seed - first_seed + 1) % (50 if target == "round_crosscheck" else 1000) == 0:
+        if (seed - first_seed + 1) % (50 if target == "round_crosscheck" else
+                                         200 if target == "all" else 1000) == 0:
             print(f"  {target}: {seed - first_seed + 1} inputs, {counts}, {len(failures)} "
                   f"failures, {time.perf_counter() - t0:.0f} s {by_kind}", flush=True)
         if dt > slowest[0]:
+            if target == "all" and dt > 5:
+                print(f"  slow input: seed {seed}, {dt:.1f} s", flush=True)
             slowest = (dt, seed)
     return {"target": target, "inputs": n, "first_seed": first_seed, **counts,
             "failures": failures, "by_kind": by_kind, "seconds": round(time.perf_counter() - t0, 1),
+            "cpu_seconds": round(time.process_time() - c0, 1),
             "slowest_input_s": round(slowest[0], 3), "slowest_seed": slowest[1]}
 
 
