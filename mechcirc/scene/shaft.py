@@ -518,6 +518,7 @@ def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float 
     ts, ws = [0.0], [0.0]
     t, y = 0.0, np.array([th0, 0.0])
     k = 0
+    segments = []
     while True:
         k += 1
         target = th0 + k * cyc
@@ -536,6 +537,7 @@ def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float 
         tk = np.linspace(t, s.t[-1], 65)[1:]
         ts.extend(tk)
         ws.extend(s.sol(tk)[1])
+        segments.append((t, s.sol))
         t, y = float(s.t[-1]), s.y[:, -1]
         if s.status == 1 and s.t_events[1].size:
             raise MechcircError(
@@ -552,7 +554,12 @@ def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float 
             break
     ts, ws = np.array(ts), np.array(ws)
     out = np.flatnonzero((ws < band[0]) | (ws > band[1]))
-    t_up = float(ts[out[-1] + 1]) if out.size and out[-1] + 1 < ts.size else 0.0
+    t_up = 0.0
+    if out.size:                  # the last crossing into the band, on the dense output
+        i = int(out[-1])
+        f = next(sol for t0, sol in reversed(segments) if t0 <= ts[i])
+        bound = band[0] if ws[i] < band[0] else band[1]
+        t_up = float(brentq(lambda x: f(x)[1] - bound, ts[i], ts[i + 1], xtol=1e-14))
     notes.append(f"steady cycle by shooting (DOP853 in θ, rtol {rtol:g}); start-up from rest "
                  f"over {k} cycles")
     return ShaftMotion(**motion, startup_time=t_up, startup_t=ts, startup_speed=ws,
