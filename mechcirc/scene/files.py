@@ -50,8 +50,10 @@ The linkage part is read by :func:`mechcirc.kinematics.linkage.parse_linkage`
 (the scene tables are hidden from it, line numbers kept), so its errors and
 checks are the linkage's.  Masses, stiffnesses and dampings are SI; lengths
 are converted from ``units`` to metres.  One crank, or several on one shaft (the
-same ``omega``); the time-domain tables ``[[moments]]`` and ``[simulate]`` are
-read by :mod:`.simfile`.
+same ``omega``), or cranks geared to the first (``[[gears]]``: crank, ratio =
+ω_crank/ω_first, optional mesh stiffness and damping: a torsion rod between the
+crank and its gear's body); the time-domain tables ``[[moments]]``,
+``[simulate]`` and ``[shaft]`` are read by :mod:`.simfile`.
 
 Structure.  Releasing the elastic links and torsion rods splits the moving
 bodies into *rigid parts* (bodies joined through joints other than ground
@@ -394,7 +396,7 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
     object.__setattr__(scene, "simulate", parse_simulate(text, source, doc.get("simulate"),
                                                          scene))
     if "shaft" in doc:
-        from .shaft import parse_shaft
+        from .simfile import parse_shaft
 
         object.__setattr__(scene, "shaft", parse_shaft(text, source, doc["shaft"], scene))
     return scene
