@@ -790,8 +790,11 @@ def _parts(scene: Scene) -> tuple:
                 f"{{{', '.join(part)}}} has W = 3·{n} − 2·{pairs}{f' − {g}' if g else ''} = {w} "
                 f"degrees of freedom{' (a rigid gear mesh counts 1)' if g else ''}; "
                 f"each rigid part between elastic elements must have exactly one (elastic "
-                f"elements next to it: {', '.join(near) or 'none'}; an elastic link pinned to "
-                f"the frame is not supported: model it as a torsion rod or a load)")
+                f"elements next to it: {', '.join(near) or 'none'}; " + (
+                    "an elastic gear mesh inside a loop through both cranks is not supported: "
+                    "make the mesh rigid)" if any(gb.body in part for gb in scene.gears) else
+                    "an elastic link pinned to the frame is not supported: model it as a "
+                    "torsion rod or a load)"))
     part_of = {b: i for i, part in enumerate(parts) for b in part}
     for e in scene.elastic:
         ends = []
