@@ -182,6 +182,7 @@ def test_circuit_at_theta_matches_the_sympy_linearisation(ref, deg):
         assert abs(z1 - z2) <= 1e-8 * max(z2, 1e-3)
 
 
+@pytest.mark.slow
 def test_simulation_matches_the_sympy_equations_over_a_revolution(ref):
     """mechcirc simulate (RK4, 400 steps per period of the fastest mode, one cycle)
     against the SymPy equations integrated by DOP853 (rtol 1e-10): the forces in the rods C1 and C6 and the organ's

@@ -170,6 +170,7 @@ def sympy_reference():
     return rhs
 
 
+@pytest.mark.slow
 def test_sley_shaft_matches_an_independent_sympy_derivation():
     """Start-up from rest and the steady cycle against the SymPy equations integrated by
     DOP853 at rtol 1e-12: speed to 1e-6 of ω_s."""
