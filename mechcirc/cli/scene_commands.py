@@ -403,8 +403,8 @@ def _shaft(args, scene) -> int:
     print(f"steady cycle: ω_mean = {r.omega_mean:.6g} rad/s, ω_min = {r.omega_min:.6g}, "
           f"ω_max = {r.omega_max:.6g}, δ = (ω_max − ω_min)/ω_mean = {r.delta:.4g}, "
           f"period {r.period:.6g} s")
-    print(f"motor torque: mean {float(np.mean(r.motor_torque)):.6g} N·m, "
-          f"{float(r.motor_torque.min()):.6g} … {float(r.motor_torque.max()):.6g} N·m")
+    print(f"motor torque {float(r.motor_torque.min()):.6g} … {float(r.motor_torque.max()):.6g} "
+          "N·m over the cycle")
     if r.startup_time is not None:
         print(f"start-up from rest: within 1 % of ω_mean of the steady band after "
               f"{r.startup_time:.4g} s")

@@ -50,8 +50,10 @@ The linkage part is read by :func:`mechcirc.kinematics.linkage.parse_linkage`
 (the scene tables are hidden from it, line numbers kept), so its errors and
 checks are the linkage's.  Masses, stiffnesses and dampings are SI; lengths
 are converted from ``units`` to metres.  One crank, or several on one shaft (the
-same ``omega``); the time-domain tables ``[[moments]]`` and ``[simulate]`` are
-read by :mod:`.simfile`.
+same ``omega``), or cranks geared to the first (``[[gears]]``: crank, ratio =
+ω_crank/ω_first, optional mesh stiffness and damping: a torsion rod between the
+crank and its gear's body); the time-domain tables ``[[moments]]``,
+``[simulate]`` and ``[shaft]`` are read by :mod:`.simfile`.
 
 Structure.  Releasing the elastic links and torsion rods splits the moving
 bodies into *rigid parts* (bodies joined through joints other than ground
@@ -394,7 +396,7 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
     object.__setattr__(scene, "simulate", parse_simulate(text, source, doc.get("simulate"),
                                                          scene))
     if "shaft" in doc:
-        from .shaft import parse_shaft
+        from .simfile import parse_shaft
 
         object.__setattr__(scene, "shaft", parse_shaft(text, source, doc["shaft"], scene))
     return scene
@@ -791,8 +793,11 @@ def _parts(scene: Scene) -> tuple:
                 f"{{{', '.join(part)}}} has W = 3·{n} − 2·{pairs}{f' − {g}' if g else ''} = {w} "
                 f"degrees of freedom{' (a rigid gear mesh counts 1)' if g else ''}; "
                 f"each rigid part between elastic elements must have exactly one (elastic "
-                f"elements next to it: {', '.join(near) or 'none'}; an elastic link pinned to "
-                f"the frame is not supported: model it as a torsion rod or a load)")
+                f"elements next to it: {', '.join(near) or 'none'}; " + (
+                    "an elastic gear mesh inside a loop through both cranks is not supported: "
+                    "make the mesh rigid)" if any(gb.body in part for gb in scene.gears) else
+                    "an elastic link pinned to the frame is not supported: model it as a "
+                    "torsion rod or a load)"))
     part_of = {b: i for i, part in enumerate(parts) for b in part}
     for e in scene.elastic:
         ends = []

@@ -46,188 +46,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import MechcircError, ShaftWarning, SolverError
-from ..sources import brief, finite_number, located
 from .files import Scene
+from .simfile import Motor, Shaft, kloss_motor, parse_shaft, table_motor  # noqa: F401
 
 __all__ = ["Motor", "Shaft", "ShaftMotion", "kloss_motor", "table_motor", "parse_shaft",
            "reduced_inertia", "simulate_shaft", "ShaftWarning"]
-
-
-@dataclass(frozen=True)
-class Motor:
-    """A motor's torque–speed characteristic T(ω) [N·m], referred to the main shaft.
-
-    ``kind`` is ``"kloss"`` (``sync_speed`` ω_s [rad/s], ``breakdown_torque`` T_b
-    [N·m], ``breakdown_slip`` s_b) or ``"table"`` (``speeds`` [rad/s] increasing,
-    ``torques`` [N·m]; linear between points and beyond the ends along the end
-    segments).
-    """
-
-    kind: str
-    sync_speed: float = math.nan
-    breakdown_torque: float = math.nan
-    breakdown_slip: float = math.nan
-    speeds: tuple = ()
-    torques: tuple = ()
-
-    def torque(self, omega):
-        """T(ω) [N·m] at shaft speed(s) ``omega`` [rad/s]."""
-        w = np.asarray(omega, float)
-        if self.kind == "kloss":
-            s = (self.sync_speed - w) / self.sync_speed
-            sb = self.breakdown_slip
-            return 2.0 * self.breakdown_torque * s * sb / (s * s + sb * sb)
-        x, y = np.asarray(self.speeds), np.asarray(self.torques)
-        out = np.interp(w, x, y)
-        lo, hi = w < x[0], w > x[-1]
-        out = np.where(lo, y[0] + (w - x[0]) * (y[1] - y[0]) / (x[1] - x[0]), out)
-        return np.where(hi, y[-1] + (w - x[-1]) * (y[-1] - y[-2]) / (x[-1] - x[-2]), out)
-
-    def scalar_torque(self, w: float) -> float:
-        """T(ω) at one speed (the integrators' fast path)."""
-        if self.kind == "kloss":
-            s = (self.sync_speed - w) / self.sync_speed
-            sb = self.breakdown_slip
-            return 2.0 * self.breakdown_torque * s * sb / (s * s + sb * sb)
-        return float(self.torque(w))
-
-    @property
-    def peak_torque(self) -> float:
-        """The largest torque on 0 ≤ ω ≤ (ω_s or the table's last speed) [N·m]."""
-        if self.kind == "kloss":
-            return self.breakdown_torque if self.breakdown_slip <= 1 else float(self.torque(0.0))
-        return float(max(self.torques))
-
-
-def kloss_motor(*, sync_speed: float, breakdown_torque: float,
-                breakdown_slip: float | None = None, rated_power: float | None = None,
-                rated_speed: float | None = None) -> Motor:
-    """An induction motor by Kloss's formula T = 2 T_b / (s/s_b + s_b/s), s = (ω_s − ω)/ω_s.
-
-    Give ``breakdown_slip`` s_b, or the rated point (``rated_power`` P_n [W],
-    ``rated_speed`` ω_n [rad/s]): then T_n = P_n/ω_n, s_n = (ω_s − ω_n)/ω_s, and
-    Kloss's formula through the rated point gives s_b = s_n (λ + √(λ² − 1)),
-    λ = T_b/T_n (the stable branch: s_n < s_b).
-
-    Raises
-    ------
-    MechcircError
-        A non-positive value, both or neither of s_b and the rated point,
-        ω_n ≥ ω_s, or T_b ≤ T_n (names the values).
-    """
-    for what, v in (("sync_speed", sync_speed), ("breakdown_torque", breakdown_torque)):
-        if not (finite_number(v) and v > 0):
-            raise MechcircError(f"motor {what} must be a number > 0, got {v!r}")
-    if (breakdown_slip is None) == (rated_power is None or rated_speed is None):
-        raise MechcircError("a Kloss motor needs breakdown_slip, or rated_power and "
-                            "rated_speed (not both)")
-    if breakdown_slip is None:
-        if not (finite_number(rated_power) and rated_power > 0 and finite_number(rated_speed)
-                and 0 < rated_speed < sync_speed):
-            raise MechcircError(f"the rated point needs rated_power > 0 and 0 < rated_speed < "
-                                f"sync_speed = {sync_speed:g} rad/s, got rated_power = "
-                                f"{rated_power!r} W, rated_speed = {rated_speed!r} rad/s")
-        tn = rated_power / rated_speed
-        sn = (sync_speed - rated_speed) / sync_speed
-        lam = breakdown_torque / tn
-        if lam <= 1:
-            raise MechcircError(f"the breakdown torque T_b = {breakdown_torque:g} N·m must "
-                                f"exceed the rated torque T_n = P/ω_n = {tn:.6g} N·m")
-        breakdown_slip = sn * (lam + math.sqrt(lam * lam - 1.0))
-    if not (finite_number(breakdown_slip) and breakdown_slip > 0):
-        raise MechcircError(f"motor breakdown_slip must be a number > 0, got {breakdown_slip!r}")
-    return Motor("kloss", float(sync_speed), float(breakdown_torque), float(breakdown_slip))
-
-
-def table_motor(speeds, torques) -> Motor:
-    """A motor given as a table of torque [N·m] against speed [rad/s] (linear between points).
-
-    Raises
-    ------
-    MechcircError
-        Fewer than two points, unequal lengths, speeds not increasing, a value
-        not finite.
-    """
-    sp, tq = list(speeds), list(torques)
-    if len(sp) < 2 or len(sp) != len(tq) or not all(map(finite_number, sp + tq)):
-        raise MechcircError(f"a motor table needs two or more finite (speed, torque) pairs of "
-                            f"equal length, got {len(sp)} speeds and {len(tq)} torques")
-    if any(b <= a for a, b in zip(sp, sp[1:])):
-        raise MechcircError(f"the motor table's speeds must increase, got {sp}")
-    return Motor("table", speeds=tuple(map(float, sp)), torques=tuple(map(float, tq)))
-
-
-@dataclass(frozen=True)
-class Shaft:
-    """The ``[shaft]`` table: flywheel J_f [kg·m²], motor, start angle [deg], max_time [s]."""
-
-    flywheel: float
-    motor: Motor
-    start_deg: float = 0.0
-    max_time: float = 120.0
-
-
-_KEYS = {"flywheel": "J_f [kg·m²] on the main shaft, ≥ 0", "motor": '"kloss" or "table"',
-         "sync_speed": "ω_s [rad/s]", "breakdown_torque": "T_b [N·m]",
-         "breakdown_slip": "s_b", "rated_power": "[W]", "rated_speed": "[rad/s]",
-         "speeds": "[rad/s], increasing", "torques": "[N·m]",
-         "start_deg": "crank rotation at rest [deg]", "max_time": "[s], > 0"}
-
-
-def parse_shaft(text: str, source: str, table, scene: Scene) -> Shaft:
-    """The scene file's ``[shaft]`` table (see the module docstring); errors at file:line:col.
-
-    Raises
-    ------
-    NetlistError
-        An unknown key, a missing or bad value, an inconsistent motor.
-    """
-    from ..sources import Table, check_keys
-
-    if not isinstance(table, dict):
-        raise located(text, source, "shaft must be a table [shaft]", None, "shaft")
-    check_keys(text, source, Table("shaft", _KEYS), table)
-
-    def num(key, default=None, positive=True, zero=False):
-        v = table.get(key, default)
-        if not (finite_number(v) and (v > 0 or (zero and v == 0) or not positive)):
-            need = "a finite number" + ((" ≥ 0" if zero else " > 0") if positive else "")
-            raise located(text, source, f"[shaft] {key} must be {need}, got {brief(v)}",
-                          "shaft", key if key in table else next(iter(table), key),
-                          expected=f"{key} = … ({_KEYS[key]})")
-        return float(v)
-
-    flywheel = num("flywheel", 0.0, zero=True)
-    kind = table.get("motor")
-    if kind not in ("kloss", "table"):
-        raise located(text, source, f"[shaft] motor must be \"kloss\" or \"table\", got "
-                      f"{brief(kind)}", "shaft", "motor" if "motor" in table else
-                      next(iter(table), "motor"), expected='motor = "kloss" or "table"')
-    other = ("speeds", "torques") if kind == "kloss" else (
-        "sync_speed", "breakdown_torque", "breakdown_slip", "rated_power", "rated_speed")
-    for k in other:
-        if k in table:
-            raise located(text, source, f"[shaft] {k} does not apply to motor = {kind!r}",
-                          "shaft", k)
-    try:
-        if kind == "kloss":
-            opt = {k: num(k) for k in ("breakdown_slip", "rated_power", "rated_speed")
-                   if k in table}
-            motor = kloss_motor(sync_speed=num("sync_speed"),
-                                breakdown_torque=num("breakdown_torque"), **opt)
-        else:
-            for k in ("speeds", "torques"):
-                if not isinstance(table.get(k), list):
-                    raise located(text, source, f"[shaft] a motor table needs {k} = [...]",
-                                  "shaft", k if k in table else "motor",
-                                  expected=f"{k} = [{_KEYS[k]}]")
-            motor = table_motor(table["speeds"], table["torques"])
-    except MechcircError as exc:
-        if hasattr(exc, "line"):
-            raise
-        raise located(text, source, f"[shaft] {exc}", "shaft", "motor") from None
-    start = num("start_deg", 0.0, positive=False)
-    return Shaft(flywheel, motor, start, num("max_time", 120.0))
 
 
 @dataclass(frozen=True, eq=False)
@@ -518,6 +341,7 @@ def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float 
     ts, ws = [0.0], [0.0]
     t, y = 0.0, np.array([th0, 0.0])
     k = 0
+    segments = []
     while True:
         k += 1
         target = th0 + k * cyc
@@ -536,6 +360,7 @@ def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float 
         tk = np.linspace(t, s.t[-1], 65)[1:]
         ts.extend(tk)
         ws.extend(s.sol(tk)[1])
+        segments.append((t, s.sol))
         t, y = float(s.t[-1]), s.y[:, -1]
         if s.status == 1 and s.t_events[1].size:
             raise MechcircError(
@@ -552,7 +377,12 @@ def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float 
             break
     ts, ws = np.array(ts), np.array(ws)
     out = np.flatnonzero((ws < band[0]) | (ws > band[1]))
-    t_up = float(ts[out[-1] + 1]) if out.size and out[-1] + 1 < ts.size else 0.0
+    t_up = 0.0
+    if out.size:                  # the last crossing into the band, on the dense output
+        i = int(out[-1])
+        f = next(sol for t0, sol in reversed(segments) if t0 <= ts[i])
+        bound = band[0] if ws[i] < band[0] else band[1]
+        t_up = float(brentq(lambda x: f(x)[1] - bound, ts[i], ts[i + 1], xtol=1e-14))
     notes.append(f"steady cycle by shooting (DOP853 in θ, rtol {rtol:g}); start-up from rest "
                  f"over {k} cycles")
     return ShaftMotion(**motion, startup_time=t_up, startup_t=ts, startup_speed=ws,

@@ -182,6 +182,7 @@ def test_circuit_at_theta_matches_the_sympy_linearisation(ref, deg):
         assert abs(z1 - z2) <= 1e-8 * max(z2, 1e-3)
 
 
+@pytest.mark.slow
 def test_simulation_matches_the_sympy_equations_over_a_revolution(ref):
     """mechcirc simulate (RK4, 400 steps per period of the fastest mode, one cycle)
     against the SymPy equations integrated by DOP853 (rtol 1e-10): the forces in the rods C1 and C6 and the organ's
@@ -288,3 +289,28 @@ def test_cranks_at_different_speeds_need_a_gear():
     with pytest.raises(NetlistError, match="needs a \\[\\[gears\\]\\] entry") as exc:
         parse_scene(GEARED)
     assert 'ratio = 2' in str(exc.value)
+
+
+def test_cycle_map_spans_the_cycle_and_equals_the_circuit_at_each_angle():
+    from mechcirc.scene.cycle import cycle_map
+
+    scene = load_scene(FILE)
+    cmap = cycle_map(scene, points=8, harmonics=2)
+    assert np.allclose(cmap.theta, np.arange(8) * math.pi / 2)        # 0 … 4π, end excluded
+    assert cmap.omega_shaft == 10.0                                    # |Ω| / 2 revolutions
+    for k in (3, 6):                                                   # 270°, 540°
+        want = [r.omega for r in build(scene, cmap.theta[k]).circuit.resonances()
+                if r.kind == "resonance"]
+        got = [r.omega for r in cmap.resonances[k]]
+        assert np.allclose(got, want, rtol=1e-12, atol=0)
+
+
+def test_an_elastic_mesh_inside_the_closed_loop_is_refused():
+    from mechcirc.errors import GeometryError
+
+    text = open(FILE, encoding="utf-8").read().replace(
+        "ratio = -1.5\n", "ratio = -1.5\nstiffness = 1.0e4\n")
+    with pytest.raises(GeometryError, match=r"has W = 3·7 − 2·9 − 1 = 2 degrees of freedom "
+                                            r"\(a rigid gear mesh counts 1\).*an elastic gear "
+                                            r"mesh inside a loop through both cranks"):
+        parse_scene(text, FILE)

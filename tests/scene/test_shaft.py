@@ -48,9 +48,9 @@ torques = [{T0}, 0.0]
     want = W0 * (1 - np.exp(-T0 * r.startup_t / (W0 * (J0 + JF))))
     assert np.max(np.abs(r.startup_speed - want)) <= 1e-8 * W0
     assert abs(r.omega_mean - W0) <= 1e-9 * W0 and r.delta <= 1e-9
-    # the speed is within 1 % of ω0 after τ ln 100, τ = J ω0 / T0 (to the sampling)
+    # the speed is within 1 % of ω0 after τ ln 100, τ = J ω0 / T0
     tau = (J0 + JF) * W0 / T0
-    assert abs(r.startup_time - tau * math.log(100)) <= 2 * np.max(np.diff(r.startup_t))
+    assert abs(r.startup_time - tau * math.log(100)) <= 1e-8 * tau
 
 
 def test_kloss_start_up_matches_the_closed_form():
@@ -170,6 +170,7 @@ def sympy_reference():
     return rhs
 
 
+@pytest.mark.slow
 def test_sley_shaft_matches_an_independent_sympy_derivation():
     """Start-up from rest and the steady cycle against the SymPy equations integrated by
     DOP853 at rtol 1e-12: speed to 1e-6 of ω_s."""
@@ -197,7 +198,7 @@ def test_sley_shaft_matches_an_independent_sympy_derivation():
     assert np.max(np.abs(want - r.speed)) <= 1e-6 * 104.72
     fine = s2.sol(np.linspace(y[0], y[0] + 2 * math.pi, 200001))[0]
     mean = 2 * math.pi / s2.y[1, -1]
-    assert abs(mean - r.omega_mean) <= 1e-8 * mean
+    assert abs(mean - r.omega_mean) <= 1e-7 * mean
     assert abs((fine.max() - fine.min()) / mean - r.delta) <= 1e-6 * r.delta
 
 
@@ -232,3 +233,51 @@ def test_bad_shaft_tables_are_located(line, message):
     with pytest.raises(NetlistError, match=message) as exc:
         parse_scene(text)
     assert exc.value.line > 0
+
+
+def test_cli_prints_the_fluctuation_and_refuses_a_motor_that_cannot_start(tmp_path, capsys):
+    import json
+
+    from cli_helpers import assert_user_error, run
+
+    status, out, err = run(["simulate", "examples/fnf_sixbar_scene.toml", "--shaft",
+                            "--json"], capsys)
+    assert status == 0, err
+    doc = json.loads(out)
+    assert 0 < doc["delta"] < 0.1 and doc["startup_time"] > 0
+    assert doc["extrema"]["speed"][0] < doc["omega_mean"] < doc["extrema"]["speed"][1]
+    bad = tmp_path / "weak.toml"
+    bad.write_text(FOURBAR.replace("breakdown_torque = 60.0", "breakdown_torque = 2.0")
+                   .replace("start_deg = 10.0", "start_deg = 150.0"), encoding="utf-8")
+    out_csv = tmp_path / "out.csv"
+    assert_user_error(["simulate", str(bad), "--shaft", "-o", str(out_csv)], capsys,
+                      "cannot start the mechanism", "57.3174 N·m")
+    assert not out_csv.exists()
+    assert_user_error(["simulate", "examples/fnf_sixbar_scene.toml", "--flywheel", "0.1"],
+                      capsys, "--flywheel applies with --shaft")
+
+
+def test_the_sley_flywheel_example_gives_the_numbers_in_the_docs():
+    """examples/sley_flywheel.py for two flywheels against its table in docs/sley.md."""
+    import importlib.util
+    import re
+
+    spec = importlib.util.spec_from_file_location("sley_flywheel", "examples/sley_flywheel.py")
+    ex = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(ex)
+    text = open("docs/sley.md", encoding="utf-8").read()
+    table = {}
+    for line in text.splitlines():
+        m = re.match(r"\|\s*([0-9.]+)\s*\|\s*([0-9.]+)\s*\|\s*([0-9.]+)\s*\|\s*(-?\d+)\s*\|"
+                     r"\s*(-?\d+)\s*\|\s*(-?[0-9.]+)\s*\|\s*(-?[0-9.]+)\s*\|\s*([0-9.]+)\s*\|",
+                     line)
+        if m:
+            table[float(m.group(1))] = [float(x) for x in m.groups()[1:]]
+    assert {0.1, 1.0} <= set(table)
+    for row in ex.rows((0.1,), startup=True) + ex.rows((1.0,), startup=False):
+        want = table[row[0]]
+        got = list(row[1:])
+        digits = (0.01, 0.0001, 1, 1, 0.1, 0.1, 0.001)
+        for g, w, d in zip(got, want, digits):
+            if g is not None:
+                assert abs(g - w) <= 0.51 * d, (row[0], got, want)
