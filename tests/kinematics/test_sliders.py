@@ -151,6 +151,8 @@ def test_slider_off_its_guide_is_located():
 @pytest.mark.parametrize("change, words", [
     (('guide = "ground"', 'guide = "nowhere"'), "unknown guide 'nowhere'"),
     (('line = ["G1", "G2"]', 'line = ["G1", "B"]'), "line must name two points"),
+    (('link = "block"\nguide', 'link = ["block"]\nguide'), "link 'block' must list at least"),
+    (('line = ["G1", "G2"]', 'line = ["G1", "G2"]\npoint = ["C"]'), "point must be one of"),
     (('link = "block"\nguide', 'link = "blok"\nguide'),
      "link 'block' must list at least two point names (one for a slider's link)"),
 ])
@@ -159,6 +161,13 @@ def test_bad_slider_tables_are_located(change, words):
     with pytest.raises(NetlistError) as e:
         parse_linkage(text, "sc.toml")
     assert words in str(e.value) and "sc.toml:" in str(e.value)
+
+
+def test_sliders_not_a_table_is_located():
+    table = '[[sliders]]\nlink = "block"\nguide = "ground"\nline = ["G1", "G2"]\n'
+    text = "sliders = 3\n" + SLIDER_CRANK.format(omega=1.0).replace(table, "")
+    with pytest.raises(NetlistError, match=r"sc.toml:1:1: .*'sliders' must be a \[\[sliders\]\]"):
+        parse_linkage(text, "sc.toml")
 
 
 def test_rod_too_short_for_the_offset_locks_with_the_angle(backend):
