@@ -78,16 +78,16 @@ def main() -> None:
     for N in (360, 3600):
         th = np.linspace(0.0, 2 * math.pi, N)
         for name, lk in cases.items():
-            def run():
-                m = lk.motion(th)
-                m.points
+            def run(lk=lk, th=th):
+                return lk.motion(th).points
             _jit.COMPILED = None
             run()                                  # compile / load the cache once
             fast = median_time(run)
             _jit.COMPILED = False
             slow = median_time(run, 3)
             _jit.COMPILED = None
-            floor = median_time(lambda: closed_form(th)) if name == "slider-crank" else None
+            floor = median_time(lambda th=th: closed_form(th)) if name == "slider-crank" \
+                else None
             extra = f"{floor / N * 1e6:10.2f}" if floor is not None else ""
             print(f"{name:<18} {N:6d} {fast / N * 1e6:10.1f} {slow / N * 1e6:14.1f} "
                   f"{slow / fast:7.1f}x  {extra}")
