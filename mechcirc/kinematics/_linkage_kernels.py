@@ -13,7 +13,10 @@ the index arrays of :func:`.linkage_solver.plan`:
 * row pair k: P_a − P_b, with P = (x_i, y_i) + R(φ_i) s for a moving body i and
   P = s (the pose coordinate) for the ground (index ``nb``);
 * Jacobian: ±1 on the (x, y) columns, ±(−(R s)_y, (R s)_x) on the φ column;
-* γ (constant crank speeds): R_a s_a φ̇_a² − R_b s_b φ̇_b².
+* γ (constant crank speeds): R_a s_a φ̇_a² − R_b s_b φ̇_b²;
+* sliders (:mod:`.linkage`): after the 2m joint rows, one row u × d per slider
+  (u its guide's direction, d = P_slider − P_guide) and one row φ_b − φ_a;
+  the crank rows come last.  Jacobian and γ as in :class:`.linkage_solver._Newton`.
 
 The loop visits the targets in order; between two it takes continuation steps
 of at most ``dt_max`` (Taylor predictor from q, q̇, q̈; Newton with partial
@@ -59,9 +62,29 @@ def _sides(q, nb, ia, ib, sa, sb, cs, sn, R):
 
 
 @_jit
-def _residual(q, t, nb, ia, ib, R, crank_idx, omega, r):
+def _prism(q, nb, ga, gb, gs, gu, bs, cs, sn, P):
+    """Per slider into P (ns, 8): u, R_a s_a, R_b s_b, d = P_b − P_a (x, y each)."""
+    for k in range(ga.shape[0]):
+        a, b = ga[k], gb[k]
+        ca, sa_ = (cs[a], sn[a]) if a < nb else (1.0, 0.0)
+        P[k, 0] = ca * gu[k, 0] - sa_ * gu[k, 1]
+        P[k, 1] = sa_ * gu[k, 0] + ca * gu[k, 1]
+        P[k, 2] = ca * gs[k, 0] - sa_ * gs[k, 1]
+        P[k, 3] = sa_ * gs[k, 0] + ca * gs[k, 1]
+        P[k, 4] = cs[b] * bs[k, 0] - sn[b] * bs[k, 1]
+        P[k, 5] = sn[b] * bs[k, 0] + cs[b] * bs[k, 1]
+        P[k, 6] = q[3 * b] + P[k, 4] - P[k, 2]
+        P[k, 7] = q[3 * b + 1] + P[k, 5] - P[k, 3]
+        if a < nb:
+            P[k, 6] -= q[3 * a]
+            P[k, 7] -= q[3 * a + 1]
+
+
+@_jit
+def _residual(q, t, nb, ia, ib, R, crank_idx, omega, r, ga, gb, P):
     """Φ(q, t) into r; returns max |Φ|."""
     m = ia.shape[0]
+    ns = ga.shape[0]
     for k in range(m):
         a, b = ia[k], ib[k]
         xa, ya = R[k, 0], R[k, 1]
@@ -74,8 +97,11 @@ def _residual(q, t, nb, ia, ib, R, crank_idx, omega, r):
             yb += q[3 * b + 1]
         r[2 * k] = xa - xb
         r[2 * k + 1] = ya - yb
+    for k in range(ns):
+        r[2 * m + k] = P[k, 0] * P[k, 7] - P[k, 1] * P[k, 6]
+        r[2 * m + ns + k] = q[3 * gb[k] + 2] - (q[3 * ga[k] + 2] if ga[k] < nb else 0.0)
     for j in range(crank_idx.shape[0]):
-        r[2 * m + j] = q[3 * crank_idx[j] + 2] - omega[j] * t
+        r[2 * m + 2 * ns + j] = q[3 * crank_idx[j] + 2] - omega[j] * t
     size = 0.0
     for i in range(r.shape[0]):
         v = abs(r[i])
@@ -85,8 +111,9 @@ def _residual(q, t, nb, ia, ib, R, crank_idx, omega, r):
 
 
 @_jit
-def _jacobian(nb, ia, ib, R, crank_idx, J):
+def _jacobian(nb, ia, ib, R, crank_idx, J, ga, gb, P):
     m = ia.shape[0]
+    ns = ga.shape[0]
     n = J.shape[0]
     for i in range(n):
         for j in range(n):
@@ -103,8 +130,21 @@ def _jacobian(nb, ia, ib, R, crank_idx, J):
             J[2 * k + 1, 3 * b + 1] -= 1.0
             J[2 * k, 3 * b + 2] += R[k, 3]
             J[2 * k + 1, 3 * b + 2] -= R[k, 2]
+    for k in range(ns):
+        a, b = ga[k], gb[k]
+        row = 2 * m + k
+        ux, uy, dx, dy = P[k, 0], P[k, 1], P[k, 6], P[k, 7]
+        J[row, 3 * b] = -uy
+        J[row, 3 * b + 1] = ux
+        J[row, 3 * b + 2] = ux * P[k, 4] + uy * P[k, 5]
+        J[2 * m + ns + k, 3 * b + 2] = 1.0
+        if a < nb:
+            J[row, 3 * a] = uy
+            J[row, 3 * a + 1] = -ux
+            J[row, 3 * a + 2] = -(ux * (dx + P[k, 2]) + uy * (dy + P[k, 3]))
+            J[2 * m + ns + k, 3 * a + 2] = -1.0
     for j in range(crank_idx.shape[0]):
-        J[2 * m + j, 3 * crank_idx[j] + 2] = 1.0
+        J[2 * m + 2 * ns + j, 3 * crank_idx[j] + 2] = 1.0
 
 
 @_jit
@@ -178,7 +218,7 @@ def _lu_solve(A, piv, b):
 
 @_jit
 def newton_path(q0, targets, ia, ib, sa, sb, crank_idx, omega, tol, dt_max, wmax,
-                Q, QD, QDD, PARTS, info):
+                Q, QD, QDD, PARTS, info, ga, gb, gs, gu, bs):
     """Continue from the pose q0 (t = 0) through ``targets`` [s] in order.
 
     Fills Q, QD, QDD (N, n) and PARTS (N, n, nc).  Returns a status:
@@ -192,6 +232,8 @@ def newton_path(q0, targets, ia, ib, sa, sb, crank_idx, omega, tol, dt_max, wmax
     cs = np.empty(nb)
     sn = np.empty(nb)
     R = np.empty((m, 4))
+    ns = ga.shape[0]
+    P = np.empty((ns, 8))
     J = np.empty((n, n))
     piv = np.empty(n, dtype=np.int64)
     r = np.empty(n)
@@ -236,11 +278,12 @@ def newton_path(q0, targets, ia, ib, sa, sb, crank_idx, omega, tol, dt_max, wmax
             previous = math.inf
             for it in range(30):
                 _sides(trial, nb, ia, ib, sa, sb, cs, sn, R)
-                size = _residual(trial, t_new, nb, ia, ib, R, crank_idx, omega, r)
+                _prism(trial, nb, ga, gb, gs, gu, bs, cs, sn, P)
+                size = _residual(trial, t_new, nb, ia, ib, R, crank_idx, omega, r, ga, gb, P)
                 if not size < math.inf or (it >= 2 and size > previous):
                     break
                 previous = size
-                _jacobian(nb, ia, ib, R, crank_idx, J)
+                _jacobian(nb, ia, ib, R, crank_idx, J, ga, gb, P)
                 if _lu(J, piv) == 0.0:
                     break
                 _lu_solve(J, piv, r)
@@ -254,7 +297,8 @@ def newton_path(q0, targets, ia, ib, sa, sb, crank_idx, omega, tol, dt_max, wmax
             if ok:
                 # J and its LU at the converged q, for the sign and the rates
                 _sides(trial, nb, ia, ib, sa, sb, cs, sn, R)
-                _jacobian(nb, ia, ib, R, crank_idx, J)
+                _prism(trial, nb, ga, gb, gs, gu, bs, cs, sn, P)
+                _jacobian(nb, ia, ib, R, crank_idx, J, ga, gb, P)
                 sgn = _lu(J, piv)
             if sgn != 0.0:
                 break
@@ -280,7 +324,7 @@ def newton_path(q0, targets, ia, ib, sa, sb, crank_idx, omega, tol, dt_max, wmax
         for c in range(nc):
             for i in range(n):
                 e[i] = 0.0
-            e[2 * m + c] = omega[c]
+            e[2 * m + 2 * ns + c] = omega[c]
             _lu_solve(J, piv, e)
             for i in range(n):
                 parts[i, c] = e[i]
@@ -294,6 +338,25 @@ def newton_path(q0, targets, ia, ib, sa, sb, crank_idx, omega, tol, dt_max, wmax
             wb = qd[3 * b + 2] ** 2 if b < nb else 0.0
             e[2 * kk] = R[kk, 0] * wa - R[kk, 2] * wb
             e[2 * kk + 1] = R[kk, 1] * wa - R[kk, 3] * wb
+        for kk in range(ns):
+            # −(ü × d + 2 u̇ × ḋ + u × d̈) without q̈: u̇ = ω_a i u, ü = −ω_a² u
+            a = ga[kk]
+            b = gb[kk]
+            wa = qd[3 * a + 2] if a < nb else 0.0
+            wb = qd[3 * b + 2]
+            ux, uy, dx, dy = P[kk, 0], P[kk, 1], P[kk, 6], P[kk, 7]
+            ddx = qd[3 * b] - wb * P[kk, 5] + wa * P[kk, 3]
+            ddy = qd[3 * b + 1] + wb * P[kk, 4] - wa * P[kk, 2]
+            if a < nb:
+                ddx -= qd[3 * a]
+                ddy -= qd[3 * a + 1]
+            # ü × d = −ω_a² u × d;  2 u̇ × ḋ = −2 ω_a u · ḋ;  u × d̈ (its q̈-free part)
+            t1 = -wa * wa * (ux * dy - uy * dx)
+            t2 = 2.0 * wa * (-(uy * ddy) - ux * ddx)
+            ex = wa * wa * P[kk, 2] - wb * wb * P[kk, 4]
+            ey = wa * wa * P[kk, 3] - wb * wb * P[kk, 5]
+            t3 = ux * ey - uy * ex
+            e[2 * m + kk] = -(t1 + t2 + t3)
         _lu_solve(J, piv, e)
         for i in range(n):
             qdd[i] = e[i]

@@ -492,7 +492,7 @@ def parse_linkage(text: str, source: str = "<string>") -> Linkage:
         line, col = locate(text, None, "sliders")
         raise NetlistError(f"'sliders' must be a [[sliders]] table, got {brief(raw_sliders)}",
                            source, line, col, "[[sliders]]")
-    slider_links = {x.get("link") for x in raw_sliders}
+    slider_links = {x.get("link") for x in raw_sliders if isinstance(x.get("link"), str)}
     links = _read_links(doc["links"], pose, text, source, slider_links)
     _check_every_point_used(pose, ground_pts, links, text, source)
     cranks = _read_cranks(doc["cranks"], links, ground_pts, text, source)

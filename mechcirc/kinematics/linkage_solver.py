@@ -478,7 +478,7 @@ def motion(lk, pl: _Plan, theta, *, max_step_deg: float = 2.0, method: str = "au
                             f"use method='newton'")
     if use == "dyads":
         q, qd, qdd, parts = _solve_dyads(lk, pl, t, dt_max)
-    elif _compiled() and not lk.sliders:
+    elif _compiled():
         q, qd, qdd, parts = _solve_newton_compiled(lk, pl, t, dt_max)
     else:
         q, qd, qdd, parts = _solve_newton(lk, pl, t, dt_max)
@@ -975,7 +975,8 @@ def _solve_newton_compiled(lk, pl, t, dt_max):
     w1 = lk.cranks[0].omega
     status = K.newton_path(pl.q0, np.ascontiguousarray(t, dtype=float), pl.ia, pl.ib, pl.sa,
                            pl.sb, pl.crank_idx, pl.omega, 1e-12 * pl.scale, float(dt_max),
-                           float(np.max(np.abs(pl.omega))), Q, QD, QDD, parts, info)
+                           float(np.max(np.abs(pl.omega))), Q, QD, QDD, parts, info,
+                           pl.ga, pl.gb, pl.gs, pl.gu, pl.bs)
     if status == K.SINGULAR_POSE:
         raise GeometryError(f"{lk.source}: the linkage is singular in its pose "
                             f"(constraint Jacobian not invertible)")

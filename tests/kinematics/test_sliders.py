@@ -16,6 +16,15 @@ import sympy as sp
 from mechcirc.errors import GeometryError, NetlistError
 from mechcirc.kinematics import parse_linkage
 
+@pytest.fixture(params=["compiled", "numpy"])
+def backend(request, monkeypatch):
+    """Newton as one compiled loop (numba; plain Python without it) or batched numpy."""
+    from mechcirc import _jit
+
+    monkeypatch.setattr(_jit, "COMPILED", request.param == "compiled")
+    return request.param
+
+
 R, E, XC = 40.0, 10.0, 178.5357          # crank, offset; the pose puts C here (any x works)
 
 SLIDER_CRANK = f"""
@@ -54,7 +63,7 @@ def _slider_crank_reference(omega):
 
 
 @pytest.mark.parametrize("omega", [10.0, -7.0])
-def test_offset_slider_crank_against_the_closed_form(omega):
+def test_offset_slider_crank_against_the_closed_form(omega, backend):
     lk = parse_linkage(SLIDER_CRANK.format(omega=omega))
     assert lk.mobility == 1 and len(lk.sliders) == 1
     m = lk.motion(TH)
@@ -100,7 +109,7 @@ omega = 12.0
 """
 
 
-def test_inverted_slider_crank_quick_return_against_the_closed_form():
+def test_inverted_slider_crank_quick_return_against_the_closed_form(backend):
     lk = parse_linkage(_shaper_text())
     m = lk.motion(TH)
     t = sp.symbols("t", real=True)
@@ -142,6 +151,8 @@ def test_slider_off_its_guide_is_located():
 @pytest.mark.parametrize("change, words", [
     (('guide = "ground"', 'guide = "nowhere"'), "unknown guide 'nowhere'"),
     (('line = ["G1", "G2"]', 'line = ["G1", "B"]'), "line must name two points"),
+    (('link = "block"\nguide', 'link = ["block"]\nguide'), "link 'block' must list at least"),
+    (('line = ["G1", "G2"]', 'line = ["G1", "G2"]\npoint = ["C"]'), "point must be one of"),
     (('link = "block"\nguide', 'link = "blok"\nguide'),
      "link 'block' must list at least two point names (one for a slider's link)"),
 ])
@@ -152,7 +163,14 @@ def test_bad_slider_tables_are_located(change, words):
     assert words in str(e.value) and "sc.toml:" in str(e.value)
 
 
-def test_rod_too_short_for_the_offset_locks_with_the_angle():
+def test_sliders_not_a_table_is_located():
+    table = '[[sliders]]\nlink = "block"\nguide = "ground"\nline = ["G1", "G2"]\n'
+    text = "sliders = 3\n" + SLIDER_CRANK.format(omega=1.0).replace(table, "")
+    with pytest.raises(NetlistError, match=r"sc.toml:1:1: .*'sliders' must be a \[\[sliders\]\]"):
+        parse_linkage(text, "sc.toml")
+
+
+def test_rod_too_short_for_the_offset_locks_with_the_angle(backend):
     """l < r + e: the crank cannot turn round; the lock angle is where r sin θ + e = l."""
     text = SLIDER_CRANK.format(omega=1.0).replace(f"C = [{XC!r}", "C = [70.0")
     lk = parse_linkage(text)

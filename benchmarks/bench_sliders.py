@@ -1,0 +1,104 @@
+"""Benchmark: linkages with sliders (prismatic joints), compiled Newton against its baselines.
+
+Measured in one run, on the same machine, per position at 360 and 3,600
+positions over one turn:
+
+* an offset slider-crank (r = 40, l = 150, e = 10) and the crank-shaper quick
+  return (``examples/quick_return.toml``, a slider on a link and one on the
+  frame): ``Linkage.motion`` (the compiled Newton loop when numba is
+  installed) against the batched numpy Newton (``mechcirc._jit.COMPILED =
+  False``, what sliders ran on before the compiled loop had prismatic rows);
+* the slider-crank's closed form x = r cos θ + sqrt(l² − (r sin θ + e)²) with
+  its two derivatives, vectorised numpy: the floor;
+* the FNF six-bar (revolute only, compiled Newton) for scale.
+
+Medians of several repeats; the machine is shared, so read the ratios.
+
+Run:  python benchmarks/bench_sliders.py
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+from mechcirc import _jit
+from mechcirc.kinematics import load_linkage, parse_linkage
+
+ROOT = Path(__file__).resolve().parents[1]
+R, L, E = 40.0, 150.0, 10.0
+SLIDER_CRANK = f"""
+[points]
+A = [0.0, 0.0]
+B = [{R!r}, 0.0]
+C = [{R + math.sqrt(L * L - E * E)!r}, {-E!r}]
+G1 = [0.0, {-E!r}]
+G2 = [100.0, {-E!r}]
+[ground]
+points = ["A", "G1", "G2"]
+[links]
+crank = ["A", "B"]
+rod = ["B", "C"]
+block = ["C"]
+[[sliders]]
+link = "block"
+guide = "ground"
+line = ["G1", "G2"]
+[[cranks]]
+link = "crank"
+omega = 10.0
+"""
+
+
+def median_time(fn, repeat=7):
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return float(np.median(times))
+
+
+def closed_form(th, w=10.0):
+    h, h1, h2 = R * np.sin(th) + E, R * np.cos(th), -R * np.sin(th)
+    S = np.sqrt(L * L - h * h)
+    x1 = -R * np.sin(th) - h * h1 / S
+    x2 = -R * np.cos(th) - (h1 * h1 + h * h2) / S - (h * h1) ** 2 / S ** 3
+    return R * np.cos(th) + S, w * x1, w * w * x2
+
+
+def main() -> None:
+    cases = {"slider-crank": parse_linkage(SLIDER_CRANK, "slider-crank"),
+             "quick return": load_linkage(ROOT / "examples" / "quick_return.toml"),
+             "FNF six-bar": load_linkage(ROOT / "examples" / "fnf_sixbar.toml")}
+    print("per position [µs]        N   compiled   numpy Newton   ratio   closed form")
+    for N in (360, 3600):
+        th = np.linspace(0.0, 2 * math.pi, N)
+        for name, lk in cases.items():
+            def run(lk=lk, th=th):
+                return lk.motion(th).points
+            _jit.COMPILED = None
+            run()                                  # compile / load the cache once
+            fast = median_time(run)
+            _jit.COMPILED = False
+            slow = median_time(run, 3)
+            _jit.COMPILED = None
+            floor = median_time(lambda th=th: closed_form(th)) if name == "slider-crank" \
+                else None
+            extra = f"{floor / N * 1e6:10.2f}" if floor is not None else ""
+            print(f"{name:<18} {N:6d} {fast / N * 1e6:10.1f} {slow / N * 1e6:14.1f} "
+                  f"{slow / fast:7.1f}x  {extra}")
+    lk = cases["slider-crank"]
+    m = lk.motion(np.linspace(0.0, 2 * math.pi, 3600))
+    k = m.point_names.index("C")
+    x, v, a = closed_form(m.theta)
+    print(f"agreement with the closed form at 3,600 positions: "
+          f"x {np.max(np.abs(m.points[:, k, 0] - x)):.1e}, v {np.max(np.abs(m.velocities[:, k, 0] - v)):.1e}, "
+          f"a {np.max(np.abs(m.accelerations[:, k, 0] - a)):.1e} (mm, mm/s, mm/s²)")
+
+
+if __name__ == "__main__":
+    main()
