@@ -7,7 +7,8 @@ CPU seconds, median of ``--repeat``, each from a fresh parse (nothing cached):
 * the 30×30 spring–mass grid of bench_resonances (900 unknowns, ~1,800 roots),
   where the eigenvectors (a second ``eigh``) and the per-root work show.
 
-Run from the repository root: ``python benchmarks/bench_modes.py``.
+Run from the repository root: ``python benchmarks/bench_modes.py`` (on a loaded
+machine with ``OPENBLAS_NUM_THREADS=1``: idle BLAS threads spinning count as CPU time).
 """
 
 from __future__ import annotations

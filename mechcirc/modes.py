@@ -63,6 +63,9 @@ from .resonances import Resonance, constraint_basis, pencil, resonance_pairs
 
 __all__ = ["Mode", "SweepSensitivity", "modes", "sweep_sensitivity"]
 
+#: Roots whose vectors are combined in one array operation (bounded memory: E × _CHUNK).
+_CHUNK = 128
+
 
 def _lazy(key: str, names: str):
     """A dictionary attribute of :class:`Mode` made from its arrays on first use."""
@@ -164,44 +167,60 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
     # once per problem (only levers need them).
     pinv = {kind: np.linalg.pinv(G.T) if system.levers else None
             for kind, G in (("resonance", G_held), ("antiresonance", G_released))}
-    out = []
+    roots = []
     for r, v, repeated in pairs:
         s = complex(-r.zeta * r.omega, r.omega_d)
-        G = G_held if r.kind == "resonance" else G_released
         if v is None:                       # a band root: no vector from the solver
-            v = _inverse_iteration(M, D, Ks, G, s)
+            v = _inverse_iteration(M, D, Ks, G_held if r.kind == "resonance" else G_released, s)
         v = np.asarray(v, dtype=complex)
         top = int(np.argmax(np.abs(v)))
         v = v / v[top]
         v[top] = 1.0                        # exactly (a complex quotient may miss by an ulp)
-        dv = np.append(v, 0)[ei] - np.append(v, 0)[ej]
-        ds = _root_sensitivity(system, M, D, Ks, pinv[r.kind], s, v, dv, y, power)
-        rel, zeta = _omega_zeta(s, ds)
-        p_rel, p_zeta = {}, {}
-        for p, row in slopes.items():
-            ds_p = row @ ds
-            p_rel[p], p_zeta[p] = (float(x[0]) for x in _omega_zeta(s, np.array([ds_p])))
+        roots.append((r, s, v, repeated))
+    # The arithmetic for many roots at once: CHUNK roots of one kind (one constraint set).
+    values: list = [None] * len(roots)
+    for kind in ("resonance", "antiresonance"):
+        idx = [i for i, (r, *_) in enumerate(roots) if r.kind == kind]
+        for lo in range(0, len(idx), _CHUNK):
+            part = idx[lo:lo + _CHUNK]
+            S = np.array([roots[i][1] for i in part])
+            V = np.column_stack([roots[i][2] for i in part])
+            Ve = np.vstack([V, np.zeros((1, len(part)))])
+            dV = Ve[ei] - Ve[ej]
+            dS = _root_sensitivity(system, M, D, Ks, pinv[kind], S, V, dV, y, power)
+            rel, zeta = _omega_zeta(S, dS)
+            p_rel = {p: _omega_zeta(S, row @ dS) for p, row in slopes.items()}
+            wn = np.abs(S)
+            a2 = dV.real ** 2 + dV.imag ** 2
+            stored = np.where(mass[:, None], 0.5 * y[:, None] * a2,
+                              np.where(spring[:, None], 0.5 * y[:, None] * a2 / wn ** 2, 0.0))
+            total = stored.sum(axis=0)
+            energy = stored[~damper] / total
+            dissipation = y[damper, None] * a2[damper] / (2 * wn * total)
+            force = y[:, None] * _law_powers(S, -power) * dV
+            for c, i in enumerate(part):
+                values[i] = ({"sensitivity": rel[:, c], "zeta_sensitivity": zeta[:, c],
+                              "shape": V[:, c], "energy": energy[:, c],
+                              "dissipation": dissipation[:, c], "velocity": dV[:, c],
+                              "force": force[:, c]},
+                             {p: float(x[0][c]) for p, x in p_rel.items()},
+                             {p: float(x[1][c]) for p, x in p_rel.items()})
+    out = []
+    for (r, _, _, repeated), (vals, p_rel, p_zeta) in zip(roots, values):
         common: dict = {"param_sensitivity": p_rel, "param_zeta_sensitivity": p_zeta,
                         "_names": shared}
         if repeated:
             common["note"] = ("a repeated root: its shape is one of a family (any "
                               "combination is a mode too) and the sensitivities hold for "
                               "this shape only")
-        values = {"sensitivity": rel, "zeta_sensitivity": zeta}
         if r.omega_d == 0:
             common.pop("note", None)
             out.append(Mode(r, note=f"overdamped (zeta = {r.zeta:.4g} >= 1, omega_d = 0): "
                                     "a decaying motion, not a mode of vibration",
-                            _values=values, **common))
+                            _values={k: vals[k] for k in ("sensitivity", "zeta_sensitivity")},
+                            **common))
             continue
-        wn = r.omega
-        a2 = dv.real ** 2 + dv.imag ** 2
-        stored = np.where(mass, 0.5 * y * a2, np.where(spring, 0.5 * y * a2 / wn ** 2, 0.0))
-        total = stored.sum()
-        values.update(shape=v, energy=stored[~damper] / total,
-                      dissipation=y[damper] * a2[damper] / (2 * wn * total), velocity=dv,
-                      force=y * s ** (-power.astype(float)) * dv)
-        out.append(Mode(r, _values=values, **common))
+        out.append(Mode(r, _values=vals, **common))
     return out
 
 
@@ -353,27 +372,36 @@ def sweep_sensitivity(circuit: Circuit, omega, names=None) -> SweepSensitivity:
     return SweepSensitivity(omega, K, circuit.drive, {k: value[k] for k in names}, dK)
 
 
-def _root_sensitivity(system, M, D, Ks, pinv_GT, s, v, dv, y, power) -> np.ndarray:
-    """p·∂s/∂p for every loaded element (value p) and lever (ratio p), in that order;
-    ``pinv_GT`` the pseudo-inverse of the transposed constraint rows."""
-    den = v @ (2 * s * (M @ v) + D @ v)
-    ds = -y * s ** (1.0 - power) * dv * dv / den
+def _root_sensitivity(system, M, D, Ks, pinv_GT, S, V, dV, y, power) -> np.ndarray:
+    """p·∂s/∂p for every loaded element (value p) and lever (ratio p), in that order, one
+    column a root: ``S`` the roots, ``V`` their vectors (columns), ``dV`` the elements'
+    Δv; ``pinv_GT`` the pseudo-inverse of the transposed constraint rows."""
+    MV, DV = M @ V, D @ V
+    den = np.sum(V * (2 * S * MV + DV), axis=0)
+    dS = -y[:, None] * _law_powers(S, 1.0 - power) * dV * dV / den
     if not system.levers:
-        return ds
+        return dS
     # Constraint forces q from the node rows: P(s) v + s Gᵀ q = 0 (exact at an eigenvector).
-    Pv = s * s * (M @ v) + s * (D @ v) + Ks @ v
-    q = -(pinv_GT @ Pv) / s
+    q = -(pinv_GT @ (S * S * MV + S * DV + Ks @ V)) / S
     index = {n: i for i, n in enumerate(system.nodes)}
-    ve = np.append(v, 0)
-    lever = np.array([-2 * s * lv.ratio * q[k] * (ve[index.get(lv.p1, -1)]
-                                                  - ve[index.get(lv.p2, -1)]) / den
-                      for k, lv in enumerate(system.levers)])
-    return np.concatenate([ds, lever])
+    Ve = np.vstack([V, np.zeros((1, V.shape[1]))])
+    p1 = [index.get(lv.p1, -1) for lv in system.levers]
+    p2 = [index.get(lv.p2, -1) for lv in system.levers]
+    ratio = np.array([lv.ratio for lv in system.levers])[:, None]
+    lever = -2 * S * ratio * q[:len(p1)] * (Ve[p1] - Ve[p2]) / den
+    return np.vstack([dS, lever])
 
 
-def _omega_zeta(s: complex, ds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(p/ωₙ)·∂ωₙ/∂p and p·∂ζ/∂p from p·∂s/∂p, ωₙ = |s|, ζ = −Re s/|s|."""
-    wn = abs(s)
+def _law_powers(S: np.ndarray, exponent: np.ndarray) -> np.ndarray:
+    """S[r] ** exponent[e] as an (E, R) array, one complex power per distinct exponent."""
+    values, which = np.unique(np.asarray(exponent, dtype=float), return_inverse=True)
+    return (S[None, :] ** values[:, None])[which]
+
+
+def _omega_zeta(s, ds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(p/ωₙ)·∂ωₙ/∂p and p·∂ζ/∂p from p·∂s/∂p, ωₙ = |s|, ζ = −Re s/|s| (s one root, or
+    an array of roots matching the last axis of ``ds``)."""
+    wn = np.abs(s)
     rel = (s.conjugate() * ds).real / wn ** 2
     zeta = -ds.real / wn + s.real * rel / wn
     return rel, zeta

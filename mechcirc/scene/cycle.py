@@ -500,6 +500,9 @@ def drive_motion(scene: Scene, theta: float, *, samples: int = DRIVE_SAMPLES) ->
         x, dx = x - turns * th, dx - turns
         if round(turns):
             what += f", less its steady rotation ({round(turns):+d} turn per revolution)"
+            if np.max(np.abs(dx)) <= 1e-12 * abs(turns):      # the crank itself: rounding
+                x, dx, ddx = (np.zeros_like(x) for _ in range(3))
+                what += "; nothing is left: it turns at the crank's steady speed"
     else:
         L = scene.length_scale
         i = km.point_names.index(d.point)
