@@ -15,6 +15,10 @@ asserts nothing.  Run from the repository root::
 
     python benchmarks/bench_startup.py
     python benchmarks/bench_startup.py --repeat 11
+    python benchmarks/bench_startup.py --compare /path/to/other/checkout
+
+``--compare DIR`` times the same commands with ``PYTHONPATH=DIR`` (another
+checkout, e.g. before a change) interleaved with this one.
 """
 
 from __future__ import annotations
@@ -61,11 +65,17 @@ def cpu_of(argv: list[str], env: dict) -> float:
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=7, help="fresh processes per command (>= 5)")
+    ap.add_argument("--compare", metavar="DIR", help="another checkout, timed alongside")
     args = ap.parse_args()
     repeat = max(5, args.repeat)
-    compileall.compile_dir(str(ROOT / "mechcirc"), quiet=1)
-    env = dict(os.environ, PYTHONPATH=str(ROOT), MPLBACKEND="Agg")
-    env.pop("PYTHONDONTWRITEBYTECODE", None)
+    trees = [("", ROOT)] + ([(" [compare]", Path(args.compare).resolve())] if args.compare
+                            else [])
+    envs = {}
+    for tag, tree in trees:
+        compileall.compile_dir(str(tree / "mechcirc"), quiet=1)
+        env = dict(os.environ, PYTHONPATH=str(tree), MPLBACKEND="Agg")
+        env.pop("PYTHONDONTWRITEBYTECODE", None)
+        envs[tag] = env
     import matplotlib
     import numpy
     import scipy
@@ -74,15 +84,16 @@ def main() -> int:
           f"{scipy.__version__}, matplotlib {matplotlib.__version__}; "
           f"load average {os.getloadavg()[0]:.1f}; median of {repeat} fresh processes, CPU s")
     with tempfile.TemporaryDirectory() as tmp:
-        todo = cases(Path(tmp))
-        times: dict[str, list[float]] = {label: [] for label, _, _ in todo}
-        for label, argv, _ in todo:             # warm the OS file cache, not timed
+        todo = [(label + tag, argv, goal, envs[tag]) for label, argv, goal in cases(Path(tmp))
+                for tag in envs if goal is not None or not tag]
+        times: dict[str, list[float]] = {label: [] for label, _, _, _ in todo}
+        for _label, argv, _, env in todo:       # warm the OS file cache, not timed
             cpu_of(argv, env)
         for _ in range(repeat):                 # interleaved: load changes hit all alike
-            for label, argv, _ in todo:
+            for label, argv, _, env in todo:
                 times[label].append(cpu_of(argv, env))
     width = max(len(label) for label in times)
-    for label, _, goal in todo:
+    for label, _, goal, _ in todo:
         t = times[label]
         med = statistics.median(t)
         verdict = "" if goal is None else \
