@@ -291,20 +291,26 @@ def plot(rows, path: Path) -> None:
     from matplotlib.figure import Figure
 
     domains = list(dict.fromkeys(r["domain"] for r in rows))
-    fig = Figure(figsize=(6.0 * len(domains), 5.2))
-    axes = fig.subplots(1, len(domains), squeeze=False)[0]
+    colour = {m: f"C{k % 10}" for k, m in
+              enumerate(dict.fromkeys(r["method"] for r in rows))}   # one colour per method
+    cols = 2
+    nrows = -(-len(domains) // cols)
+    fig = Figure(figsize=(6.5 * cols, 5.0 * nrows))
+    axes = fig.subplots(nrows, cols, squeeze=False).ravel()
+    for ax in axes[len(domains):]:
+        ax.set_visible(False)
     for ax, domain in zip(axes, domains):
         sel = [r for r in rows if r["domain"] == domain]
         methods = list(dict.fromkeys(r["method"] for r in sel))
-        for k, m in enumerate(methods):
+        for m in methods:
             pts = [r for r in sel if r["method"] == m and np.isfinite(r["error"])]
             if not pts:
                 continue
-            err = [max(r["error"], 1e-18) for r in pts]
+            err = [max(r["error"], 1e-18) for r in pts]      # 0 (or denormal) drawn at 1e-18
             cpu_s = [r["cpu"] for r in pts]
             mine = pts[0]["who"] == "mechcirc"
             ax.loglog(err, cpu_s, "-o" if len(pts) > 1 else "o", ms=5 if mine else 4,
-                      lw=2 if mine else 1, color=f"C{k % 10}",
+                      lw=2 if mine else 1, color=colour[m],
                       mfc=None if mine else "none", label=m)
         ax.set_xlabel("achieved error (max relative to the reference; 0 drawn at 1e-18)")
         ax.set_ylabel("CPU time [s]")
