@@ -8,22 +8,27 @@ run, interleaved with the commands, two floors are timed the same way: the
 bare interpreter (``python -c pass``) and ``python -c "import numpy"`` — what
 any command of a numpy program pays before it does anything.
 
-The bytecode of mechcirc is compiled once before timing (an installed
-package has it; a checkout run with ``PYTHONDONTWRITEBYTECODE`` would compile
-every module at each start).  Outputs go to a temporary directory.  It
+Bytecode is written once, by an untimed first run of each command, to a
+cache directory of the run (``PYTHONPYCACHEPREFIX``; an installed package
+has its bytecode, and a checkout run with ``PYTHONDONTWRITEBYTECODE`` would
+compile every module at each start).  Outputs go to a temporary directory.  It
 asserts nothing.  Run from the repository root::
 
     python benchmarks/bench_startup.py
     python benchmarks/bench_startup.py --repeat 11
+    python benchmarks/bench_startup.py --compare /path/to/other/checkout
+
+``--compare DIR`` times the same commands with ``PYTHONPATH=DIR`` (another
+checkout, e.g. before a change) interleaved with this one.
 """
 
 from __future__ import annotations
 
 import argparse
-import compileall
 import os
 import platform
 import resource
+import shutil
 import statistics
 import subprocess
 import sys
@@ -50,7 +55,9 @@ def cases(tmp: Path) -> list[tuple[str, list[str], float | None]]:
 def cpu_of(argv: list[str], env: dict) -> float:
     """CPU seconds (user + system) of one child process running ``argv``."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    done = subprocess.run([sys.executable, *argv], cwd=ROOT, env=env,
+    # Run in the checkout itself: ``python -m`` puts the working directory first
+    # on sys.path, before PYTHONPATH.
+    done = subprocess.run([sys.executable, *argv], cwd=env["PYTHONPATH"], env=env,
                           stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     if done.returncode != 0:
@@ -61,11 +68,20 @@ def cpu_of(argv: list[str], env: dict) -> float:
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=7, help="fresh processes per command (>= 5)")
+    ap.add_argument("--compare", metavar="DIR", help="another checkout, timed alongside")
     args = ap.parse_args()
     repeat = max(5, args.repeat)
-    compileall.compile_dir(str(ROOT / "mechcirc"), quiet=1)
-    env = dict(os.environ, PYTHONPATH=str(ROOT), MPLBACKEND="Agg")
-    env.pop("PYTHONDONTWRITEBYTECODE", None)
+    trees = [("", ROOT)] + ([(" [compare]", Path(args.compare).resolve())] if args.compare
+                            else [])
+    # Bytecode goes to a cache directory of this run (PYTHONPYCACHEPREFIX), not into
+    # the checkouts; the untimed warm-up run of each command writes it.
+    cache = tempfile.mkdtemp(prefix="bench_startup_pycache_")
+    envs = {}
+    for tag, tree in trees:
+        env = dict(os.environ, PYTHONPATH=str(tree), MPLBACKEND="Agg",
+                   PYTHONPYCACHEPREFIX=cache)
+        env.pop("PYTHONDONTWRITEBYTECODE", None)
+        envs[tag] = env
     import matplotlib
     import numpy
     import scipy
@@ -74,21 +90,23 @@ def main() -> int:
           f"{scipy.__version__}, matplotlib {matplotlib.__version__}; "
           f"load average {os.getloadavg()[0]:.1f}; median of {repeat} fresh processes, CPU s")
     with tempfile.TemporaryDirectory() as tmp:
-        todo = cases(Path(tmp))
-        times: dict[str, list[float]] = {label: [] for label, _, _ in todo}
-        for label, argv, _ in todo:             # warm the OS file cache, not timed
+        todo = [(label + tag, argv, goal, envs[tag]) for label, argv, goal in cases(Path(tmp))
+                for tag in envs if goal is not None or not tag]
+        times: dict[str, list[float]] = {label: [] for label, _, _, _ in todo}
+        for _label, argv, _, env in todo:       # warm the OS file cache, not timed
             cpu_of(argv, env)
         for _ in range(repeat):                 # interleaved: load changes hit all alike
-            for label, argv, _ in todo:
+            for label, argv, _, env in todo:
                 times[label].append(cpu_of(argv, env))
     width = max(len(label) for label in times)
-    for label, _, goal in todo:
+    for label, _, goal, _ in todo:
         t = times[label]
         med = statistics.median(t)
         verdict = "" if goal is None else \
             f"  goal <= {goal:.2f} s: {'met' if med <= goal else 'NOT met'} ({med / goal:.2f}x)"
         print(f"{label:<{width}}  median {med:.3f} s (min {min(t):.3f}, max {max(t):.3f}){verdict}")
     print(f"load average after: {os.getloadavg()[0]:.1f}")
+    shutil.rmtree(cache, ignore_errors=True)
     return 0
 
 

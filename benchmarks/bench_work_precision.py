@@ -11,7 +11,8 @@ when numba is installed; with and without the error bound the flags need),
 the nodal solve (with its double-double refinement, and without it:
 ``refine=False``), and the peers: the same continued fraction by hand in
 numpy (the floor of any method) and one dense ``numpy.linalg.solve`` per ω
-of the nodal matrices.
+of the nodal matrices (45 elements only: at 999 the 401 dense matrices take
+1.6 GB).
 
 Time domain.  Two problems, each against a reference from ``solve_ivp``
 DOP853 at rtol 1e-13 (atol 1e-16 × the scale) with a Python right-hand side
@@ -63,9 +64,9 @@ RTOLS = [10.0 ** -k for k in range(3, 13)]
 SCIPY_METHODS = ("RK45", "DOP853", "Radau", "BDF", "LSODA")
 
 
-def cpu(fn, repeat: int):
-    """(median CPU seconds, last result) of ``repeat`` runs after one untimed run."""
-    out = fn()
+def cpu(fn, repeat: int, warm: bool = True):
+    """(median CPU seconds, last result) of ``repeat`` runs (after one untimed run)."""
+    out = fn() if warm else None
     times = []
     for _ in range(repeat):
         t0 = time.process_time()
@@ -130,12 +131,12 @@ def frequency_domain(sizes, repeat: int) -> list[dict]:
         circuit = mechcirc.parse(ladder_netlist(ks, ms, r))
         tree, system = circuit.tree, circuit.nodal
 
-        def dense_solve():
+        def dense_solve(system=system):
             A = nodal.dense_matrices(system, omega)
             x = np.linalg.solve(A, np.broadcast_to(system.injection(), A.shape[:2])[..., None])
             return system.difference(x[..., 0])
 
-        def compiled(flag: bool, error: bool):
+        def compiled(flag: bool, error: bool, tree=tree):
             def run():
                 _jit.COMPILED = flag
                 try:
@@ -146,23 +147,25 @@ def frequency_domain(sizes, repeat: int) -> list[dict]:
             return run
 
         methods = [("floor: continued fraction by hand (numpy)", "peer",
-                    lambda: ladder_numpy(ks, ms, r, omega)),
-                   ("numpy.linalg.solve per ω (dense LU)", "peer", dense_solve),
-                   ("sp tree, numpy path", "mechcirc", compiled(False, False)),
+                    lambda ks=ks, ms=ms, r=r: ladder_numpy(ks, ms, r, omega))]
+        if n <= 100:        # 401 dense (n/2)² matrices: 1.6 GB and minutes at 999 elements
+            methods.append(("numpy.linalg.solve per ω (dense LU)", "peer", dense_solve))
+        methods += [("sp tree, numpy path", "mechcirc", compiled(False, False)),
                    ("sp tree, numpy path + error bound", "mechcirc", compiled(False, True))]
         if have_kernel:
             methods += [("sp tree, compiled plan", "mechcirc", compiled(True, False)),
                         ("sp tree, compiled plan + error bound", "mechcirc",
                          compiled(True, True))]
-        methods += [("nodal, refined (default)", "mechcirc", lambda: nodal.mobility(system, omega)),
+        methods += [("nodal, refined (default)", "mechcirc", lambda system=system: nodal.mobility(system, omega)),
                     ("nodal, refine=False", "mechcirc",
-                     lambda: nodal.mobility_unrefined(system, omega))]
+                     lambda system=system: nodal.mobility_unrefined(system, omega))]
         for label, who, fn in methods:
             t, K = cpu(fn, repeat)
             with np.errstate(all="ignore"):
                 err = float(np.max(np.abs(K - ref) / np.abs(ref)))
             rows.append({"domain": f"frequency, ladder of {n}", "method": label, "who": who,
                          "rtol": None, "cpu": t, "error": err})
+            show(rows[-1])
     return rows
 
 
@@ -248,6 +251,7 @@ def time_domain(repeat: int, quick: bool) -> list[dict]:
             rows.append({"domain": domain, "method": "mechcirc exact (FOH propagation)",
                          "who": "mechcirc", "rtol": None, "cpu": c,
                          "error": error(res.x[:, order])})
+            show(rows[-1])
         else:
             for rtol in rtols:
                 run = (lambda rtol=rtol: transient(circuit, t_end, dt, rtol=rtol,
@@ -257,19 +261,29 @@ def time_domain(repeat: int, quick: bool) -> list[dict]:
                 rows.append({"domain": domain, "method": "mechcirc DP5(4) (its estimate incl.)",
                              "who": "mechcirc", "rtol": rtol, "cpu": c,
                              "error": error(res.x[:, order])})
+                show(rows[-1])
         for method in SCIPY_METHODS:
             for rtol in rtols:
                 def run(method=method, rtol=rtol):
                     return solve_ivp(rhs, (0, t_end), y0, method=method, rtol=rtol,
                                      atol=rtol * 1e-3 * scale, t_eval=t)
-                c, sol = cpu(run, 1 if rtol < 1e-9 else repeat)
+                # (nothing to compile: the slow tight runs are timed once, without a warm run)
+                c, sol = cpu(run, 1, warm=False) if rtol < 1e-8 else cpu(run, repeat)
                 err = error(sol.y[:n].T) if sol.success else float("nan")
                 rows.append({"domain": domain, "method": f"scipy {method}", "who": "peer",
                              "rtol": rtol, "cpu": c, "error": err})
+                show(rows[-1])
     return rows
 
 
 # ------------------------------------------------------------------------------ output
+def show(r: dict) -> None:
+    """One row of the table, printed as soon as it is measured."""
+    rt = "" if r["rtol"] is None else f"{r['rtol']:.0e}"
+    print(f"{r['domain']:<34} {r['method']:<44} {rt:>7} {r['cpu']:>10.3g} {r['error']:>9.2e}",
+          flush=True)
+
+
 def plot(rows, path: Path) -> None:
     import matplotlib
 
@@ -277,20 +291,26 @@ def plot(rows, path: Path) -> None:
     from matplotlib.figure import Figure
 
     domains = list(dict.fromkeys(r["domain"] for r in rows))
-    fig = Figure(figsize=(6.0 * len(domains), 5.2))
-    axes = fig.subplots(1, len(domains), squeeze=False)[0]
+    colour = {m: f"C{k % 10}" for k, m in
+              enumerate(dict.fromkeys(r["method"] for r in rows))}   # one colour per method
+    cols = 2
+    nrows = -(-len(domains) // cols)
+    fig = Figure(figsize=(6.5 * cols, 5.0 * nrows))
+    axes = fig.subplots(nrows, cols, squeeze=False).ravel()
+    for ax in axes[len(domains):]:
+        ax.set_visible(False)
     for ax, domain in zip(axes, domains):
         sel = [r for r in rows if r["domain"] == domain]
         methods = list(dict.fromkeys(r["method"] for r in sel))
-        for k, m in enumerate(methods):
+        for m in methods:
             pts = [r for r in sel if r["method"] == m and np.isfinite(r["error"])]
             if not pts:
                 continue
-            err = [max(r["error"], 1e-18) for r in pts]
+            err = [max(r["error"], 1e-18) for r in pts]      # 0 (or denormal) drawn at 1e-18
             cpu_s = [r["cpu"] for r in pts]
             mine = pts[0]["who"] == "mechcirc"
             ax.loglog(err, cpu_s, "-o" if len(pts) > 1 else "o", ms=5 if mine else 4,
-                      lw=2 if mine else 1, color=f"C{k % 10}",
+                      lw=2 if mine else 1, color=colour[m],
                       mfc=None if mine else "none", label=m)
         ax.set_xlabel("achieved error (max relative to the reference; 0 drawn at 1e-18)")
         ax.set_ylabel("CPU time [s]")
@@ -313,13 +333,9 @@ def main() -> int:
           f"{'yes' if reduction._kernel() is not None else 'no'}; load average "
           f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} cores; CPU medians of {args.repeat}")
     transient(mechcirc.parse(chain(10, 0.002)[0], require_drive=False), 0.01, 1e-3)
+    print(f"{'domain':<34} {'method':<44} {'rtol':>7} {'CPU s':>10} {'error':>9}", flush=True)
     rows = frequency_domain([45] if args.quick else [45, 999], args.repeat)
     rows += time_domain(args.repeat, args.quick)
-    print(f"{'domain':<34} {'method':<44} {'rtol':>7} {'CPU s':>10} {'error':>9}")
-    for r in rows:
-        rt = "" if r["rtol"] is None else f"{r['rtol']:.0e}"
-        print(f"{r['domain']:<34} {r['method']:<44} {rt:>7} {r['cpu']:>10.3g} "
-              f"{r['error']:>9.2e}")
     plot(rows, Path(args.plot))
     print(f"plot written to {args.plot}; load average after {os.getloadavg()[0]:.1f}")
     return 0

@@ -21,6 +21,23 @@ def stb_sweep():
     return c, c.sweep(omega), c.resonances(omega_max=1e4)
 
 
+def test_sweep_axes_label_decades_in_plain_text(stb_sweep):
+    """Decades as 10ⁿ text (no mathtext parse), no minor ticks on a y axis over 3 decades."""
+    from mechcirc.plotting import _decade_label
+
+    assert [_decade_label(v) for v in (1e-3, 1.0, 100.0, 1e12, 2.5, 0.0)] == \
+        ["10⁻³", "10⁰", "10²", "10¹²", "2.5", "0"]
+    c, s, found = stb_sweep
+    fig = plot_sweep(s, resonances=found)
+    fig.canvas.draw()                           # tick labels are made at drawing
+    ax_k, ax_p, ax_q = fig.axes
+    labels = [t.get_text() for t in ax_q.get_xticklabels() + ax_k.get_yticklabels()]
+    assert "10³" in labels and not any("$" in t for t in labels)
+    lo, hi = ax_k.get_ylim()
+    assert np.log10(hi / lo) > 3 and len(ax_k.yaxis.get_minorticklocs()) == 0
+    assert len(ax_q.xaxis.get_minorticklocs()) > 0      # the frequency axis keeps them
+
+
 def test_bode_panels_draw_K_phase_and_Q0(stb_sweep):
     c, s, found = stb_sweep
     fig = plot_sweep(s, resonances=found, refine=False)     # the sweep's own points
