@@ -415,9 +415,6 @@ def motion_table(angle_deg, displacement, spec: str = "motion=<table>", *, slope
     theta = np.radians(ang - ang[0])
     theta[-1] = _TAU
     x[-1] = x[0]
-    if np.abs(x).max(initial=0.0) > MAX_LIFT:
-        raise ValueError(f"a displacement of {np.abs(x).max():g} is beyond the bound "
-                         f"{MAX_LIFT:g} (the drive's velocities and forces would overflow)")
     hermite = slope is not None
     if hermite:
         poly = _hermite(theta, x, np.asarray(slope, float), np.asarray(curvature, float))
@@ -431,6 +428,9 @@ def motion_table(angle_deg, displacement, spec: str = "motion=<table>", *, slope
                              "(displacements too large)")
         c = spl.c                                          # (4, n−1), highest power first
         poly = tuple((c[3, i], c[2, i], c[1, i], c[0, i], 0.0, 0.0) for i in range(c.shape[1]))
+    if np.abs(x).max(initial=0.0) > MAX_LIFT:
+        raise ValueError(f"a displacement of {np.abs(x).max():g} is beyond the bound "
+                         f"{MAX_LIFT:g} (the drive's velocities and forces would overflow)")
     error, coarse = math.inf, None
     if ang.size >= 9:
         keep = np.unique(np.append(np.arange(0, ang.size, 2), ang.size - 1))
