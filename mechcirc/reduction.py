@@ -21,6 +21,7 @@ from __future__ import annotations
 import gc
 from collections import deque
 from dataclasses import dataclass
+from typing import Any
 
 from ._tree import Leaf, Node, Parallel, Reduction, Reflect, Series, depth, leaves, postorder
 from ._tree_eval import (KERNEL_MIN_WORK, Plan, compiled_evaluator, evaluate, evaluate_designs,
@@ -178,7 +179,9 @@ class _Run:
     __slots__ = ("series", "kids", "signs")
 
     def __init__(self, series: bool, kids: list, signs: list):
-        self.series, self.kids, self.signs = series, kids, signs
+        self.series = series
+        self.kids: Any = kids              # list, or deque once grown at the front
+        self.signs: Any = signs
 
     def prepend(self, kids: list, signs: list) -> None:
         if type(self.kids) is list:
@@ -491,7 +494,8 @@ def _flatten(root) -> Node:
             stack.extend((c, False) for c, _ in items
                          if isinstance(c, _Binary) and id(c) not in done)
             continue
-        children, signs = [], []
+        children: list = []
+        signs: list[int] = []
         for child, sign in gathered.pop(id(head)):
             if isinstance(child, _Binary):
                 child = done[id(child)]
