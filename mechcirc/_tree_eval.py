@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import weakref
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -256,6 +257,7 @@ def plan(root: Node) -> Plan:
         leaf_el.append(e)
         return len(kind) - 1
 
+    node: Any                     # dispatched on its exact type below
     for node in postorder(root):
         cls = type(node)
         if cls is Leaf:
