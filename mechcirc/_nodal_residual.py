@@ -175,54 +175,30 @@ class Pattern:
                 acc_l[:, :k] += e + T_l[:, s]
             S_h[:, self.buckets], S_l[:, self.buckets] = acc_h, acc_l
         S_h, S_l = S_h.reshape(c, n, 4), S_l.reshape(c, n, 4)
-        with np.errstate(all="ignore"):
-            w = np.asarray(omega)[:, None]
-            m_h, m_l = S_h[..., 0], S_l[..., 0]
-            k_h, k_l = S_h[..., 1], S_l[..., 1]
-            if np.iscomplexobj(w):
-                wr, wi = w.real, w.imag
-                swr, swi = split(wr), split(wi)
-                # jω·S_m = (−wi + j wr)·S_m, component by component.
-                a_h, a_l = dd_mul_d(m_h.real, m_l.real, wr, *swr)    # S_m.re wr
-                b_h, b_l = dd_mul_d(m_h.imag, m_l.imag, wi, *swi)    # S_m.im wi
-                c_h, c_l = dd_mul_d(m_h.real, m_l.real, wi, *swi)
-                d_h2, d_l2 = dd_mul_d(m_h.imag, m_l.imag, wr, *swr)
-                # ω S_m = (re wr − im wi) + j(re wi + im wr)
-                wm_re = dd_add(a_h, a_l, -b_h, -b_l)
-                wm_im = dd_add(c_h, c_l, d_h2, d_l2)
-                # S_k/ω = S_k·conj(ŵ)/(|ŵ|²·2ᵉ), ŵ = ω/2ᵉ (exact scaling).
-                e2 = np.ldexp(1.0, np.frexp(np.maximum(np.abs(wr), np.abs(wi)))[1])
-                ur, ui = wr / e2, wi / e2
-                sur, sui = split(ur), split(ui)
-                p1 = dd_mul_d(k_h.real, k_l.real, ur, *sur)
-                p2 = dd_mul_d(k_h.imag, k_l.imag, ui, *sui)
-                p3 = dd_mul_d(k_h.imag, k_l.imag, ur, *sur)
-                p4 = dd_mul_d(k_h.real, k_l.real, ui, *sui)
-                num_re = dd_add(*p1, *p2)              # re·ur + im·ui
-                num_im = dd_add(*p3, -p4[0], -p4[1])   # im·ur − re·ui
-                n2 = dd_add(*dd_mul_d(ur, 0.0, ur, *sur), *dd_mul_d(ui, 0.0, ui, *sui))
-                den = (n2[0] * e2, n2[1] * e2)
-                kw_re = dd_div_dd(*num_re, *den)
-                kw_im = dd_div_dd(*num_im, *den)
-            else:
-                sw = split(w)
-                wm_re = dd_mul_d(m_h.real, m_l.real, w, *sw)
-                wm_im = dd_mul_d(m_h.imag, m_l.imag, w, *sw)
-                kw_re = dd_div_d(k_h.real, k_l.real, w, *sw)
-                kw_im = dd_div_d(k_h.imag, k_l.imag, w, *sw)
-            # susceptance part: ω S_m − S_k/ω; A x = S_c + S_l + j·sus
-            sus_re = dd_add(*wm_re, -kw_re[0], -kw_re[1])
-            sus_im = dd_add(*wm_im, -kw_im[0], -kw_im[1])
-            g_h, g_l = dd_add(S_h[..., 2], S_l[..., 2], S_h[..., 3], S_l[..., 3])
-            ax_re = dd_add(g_h.real, g_l.real, -sus_im[0], -sus_im[1])
-            ax_im = dd_add(g_h.imag, g_l.imag, *sus_re)
-            r_re = dd_add(rhs[None, :], 0.0, -ax_re[0], -ax_re[1])
-            r_im = (-ax_im[0], -ax_im[1])
-            out = np.empty((c, n), dtype=complex)
-            for part, (hi, lo) in ((out.real, r_re), (out.imag, r_im)):
-                lo = np.where(np.isfinite(lo) | ~np.isfinite(hi), lo, 0.0)
-                part[...] = hi + lo
-            return out
+        w = np.asarray(omega)[:, None]
+        m_h, m_l = S_h[..., 0], S_l[..., 0]
+        k_h, k_l = S_h[..., 1], S_l[..., 1]
+        if np.iscomplexobj(w):
+            wm_re, wm_im, kw_re, kw_im = _complex_omega_terms(m_h, m_l, k_h, k_l, w)
+        else:
+            sw = split(w)
+            wm_re = dd_mul_d(m_h.real, m_l.real, w, *sw)
+            wm_im = dd_mul_d(m_h.imag, m_l.imag, w, *sw)
+            kw_re = dd_div_d(k_h.real, k_l.real, w, *sw)
+            kw_im = dd_div_d(k_h.imag, k_l.imag, w, *sw)
+        # susceptance part: ω S_m − S_k/ω; A x = S_c + S_l + j·sus
+        sus_re = dd_add(*wm_re, -kw_re[0], -kw_re[1])
+        sus_im = dd_add(*wm_im, -kw_im[0], -kw_im[1])
+        g_h, g_l = dd_add(S_h[..., 2], S_l[..., 2], S_h[..., 3], S_l[..., 3])
+        ax_re = dd_add(g_h.real, g_l.real, -sus_im[0], -sus_im[1])
+        ax_im = dd_add(g_h.imag, g_l.imag, *sus_re)
+        r_re = dd_add(rhs[None, :], 0.0, -ax_re[0], -ax_re[1])
+        r_im = (-ax_im[0], -ax_im[1])
+        out = np.empty((c, n), dtype=complex)
+        for part, (hi, lo) in ((out.real, r_re), (out.imag, r_im)):
+            lo = np.where(np.isfinite(lo) | ~np.isfinite(hi), lo, 0.0)
+            part[...] = hi + lo
+        return out
 
     def _residual_compiled(self, kern, omega, xh, xl, rhs):
         c, n = xh.shape
@@ -298,6 +274,36 @@ class Pattern:
                 Sd = Sd + np.sum(2 * self.l_r * dl * ax[:, self.l_col], axis=1)
             f = scale / np.abs(K)
             return S * f * scale, Sd * f * scale
+
+
+def _complex_omega_terms(m_h, m_l, k_h, k_l, w):
+    """ω·S_m and S_k/ω in double-double at complex ω (resonance polishing), component by
+    component: (re, im) pairs of (hi, lo)."""
+    wr, wi = w.real, w.imag
+    swr, swi = split(wr), split(wi)
+    # jω·S_m = (−wi + j wr)·S_m, component by component.
+    a_h, a_l = dd_mul_d(m_h.real, m_l.real, wr, *swr)    # S_m.re wr
+    b_h, b_l = dd_mul_d(m_h.imag, m_l.imag, wi, *swi)    # S_m.im wi
+    c_h, c_l = dd_mul_d(m_h.real, m_l.real, wi, *swi)
+    d_h2, d_l2 = dd_mul_d(m_h.imag, m_l.imag, wr, *swr)
+    # ω S_m = (re wr − im wi) + j(re wi + im wr)
+    wm_re = dd_add(a_h, a_l, -b_h, -b_l)
+    wm_im = dd_add(c_h, c_l, d_h2, d_l2)
+    # S_k/ω = S_k·conj(ŵ)/(|ŵ|²·2ᵉ), ŵ = ω/2ᵉ (exact scaling).
+    e2 = np.ldexp(1.0, np.frexp(np.maximum(np.abs(wr), np.abs(wi)))[1])
+    ur, ui = wr / e2, wi / e2
+    sur, sui = split(ur), split(ui)
+    p1 = dd_mul_d(k_h.real, k_l.real, ur, *sur)
+    p2 = dd_mul_d(k_h.imag, k_l.imag, ui, *sui)
+    p3 = dd_mul_d(k_h.imag, k_l.imag, ur, *sur)
+    p4 = dd_mul_d(k_h.real, k_l.real, ui, *sui)
+    num_re = dd_add(*p1, *p2)              # re·ur + im·ui
+    num_im = dd_add(*p3, -p4[0], -p4[1])   # im·ur − re·ui
+    n2 = dd_add(*dd_mul_d(ur, 0.0, ur, *sur), *dd_mul_d(ui, 0.0, ui, *sui))
+    den = (n2[0] * e2, n2[1] * e2)
+    kw_re = dd_div_dd(*num_re, *den)
+    kw_im = dd_div_dd(*num_im, *den)
+    return wm_re, wm_im, kw_re, kw_im
 
 
 def pattern(system: NodalSystem) -> Pattern:

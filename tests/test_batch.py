@@ -213,12 +213,12 @@ def test_array_expressions_are_the_scalar_ones(source):
 
 
 def test_without_the_compiled_kernel_every_design_takes_the_single_path(monkeypatch):
-    from mechcirc import reduction
+    from mechcirc import _tree_eval
 
     text, params = STB.read_text(), stb_params(4, 9)
     ref = designs(text, params)
     s_ref, r_ref = ref.sweep(OMEGA), ref.resonances(omega_max=1e4)
-    monkeypatch.setattr(reduction, "_KERNEL", [None])      # as without numba
+    monkeypatch.setattr(_tree_eval, "_KERNEL", [None])      # as without numba
     ds = designs(text, params)
     s, r = ds.sweep(OMEGA), ds.resonances(omega_max=1e4)
     assert list(s.single) == list(r.single) == [0, 1, 2, 3]

@@ -146,3 +146,19 @@ def test_delegates_are_one_call_and_listed():
                                                     "mechcirc.plotting")}
     assert not _is_delegate(ast.parse("def f(self):\n    from .x import g\n    return h(self)\n")
                             .body[0], ast.ClassDef("C", [], [], [], []))
+
+
+def test_the_index_is_a_plain_module_and_no_module_shadows_its_names():
+    """``mechcirc`` is a plain module (no module class): so no submodule may share a
+    name with a public name of the index, or importing it would rebind that name."""
+    import importlib
+    import importlib.util
+    import types
+
+    assert type(mechcirc) is types.ModuleType
+    clashes = [n for n in mechcirc.__all__ if importlib.util.find_spec(f"mechcirc.{n}")]
+    assert not clashes, clashes
+    for private in ("mechcirc._sweep", "mechcirc._simplify"):
+        importlib.import_module(private)      # the implementation modules, loaded
+    assert isinstance(mechcirc.sweep, types.FunctionType)
+    assert isinstance(mechcirc.simplify, types.FunctionType)

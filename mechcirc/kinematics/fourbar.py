@@ -42,7 +42,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import Any, Literal, cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -255,12 +255,12 @@ class FourBar:
             return "triple-rocker"
         return self._shortest_type()
 
-    def _shortest_type(self) -> str:
+    def _shortest_type(self) -> LinkageType:
         lengths = {"crank": self.crank, "frame": self.frame,
                    "coupler": self.coupler, "rocker": self.rocker}
-        shortest = min(lengths, key=lengths.get)
-        return {"crank": "crank-rocker", "frame": "double-crank",
-                "coupler": "double-rocker", "rocker": "rocker-crank"}[shortest]
+        shortest = min(lengths, key=lengths.__getitem__)
+        return cast(LinkageType, {"crank": "crank-rocker", "frame": "double-crank",
+                                  "coupler": "double-rocker", "rocker": "rocker-crank"}[shortest])
 
     def branch_crossings(self) -> tuple[float, ...]:
         """Crank angles θ [rad] in [0, 2π) where the four joints are collinear and the branches cross.
@@ -485,14 +485,14 @@ class FourBar:
         out = []
         for kind, ac, flip in (("front", b + a, 0.0), ("back", b - a, math.pi)):
             alpha = math.acos(max(-1.0, min(1.0, (ac * ac + d * d - c * c) / (2 * ac * d))))
-            best = None
+            best: tuple[float, ...] = ()
             for sign in (1.0, -1.0):
                 # C on the ray from A at angle sign*alpha; crank along it (front) or opposite (back)
                 theta = (sign * alpha + flip) % TWO_PI
                 cx, cy = ac * math.cos(sign * alpha), ac * math.sin(sign * alpha)
                 phi4 = self.transfer(theta)[0]
                 err = math.hypot(d + c * math.cos(phi4) - cx, c * math.sin(phi4) - cy)
-                if best is None or err < best[0]:
+                if not best or err < best[0]:
                     best = (err, theta, phi4)
             _, theta, phi4 = best
             out.append(DeadCentre(kind, theta, phi4, self.transfer(theta)[2],
@@ -572,7 +572,7 @@ class FourBar:
 
     def summary(self, omega: float | None = None) -> dict:
         """Plain-data summary (angles in degrees) for reports and ``--json``."""
-        doc = {
+        doc: dict[str, Any] = {
             "crank": self.crank, "coupler": self.coupler, "rocker": self.rocker,
             "frame": self.frame, "branch": self.branch,
             "grashof_class": self.grashof_class, "linkage_type": self.linkage_type,

@@ -1,0 +1,153 @@
+"""The series–parallel tree of a circuit: its nodes, and walks over it.
+
+:class:`Leaf`, :class:`Series`, :class:`Parallel` and :class:`Reflect` nodes
+(plain frozen data), built by :func:`mechcirc.reduction.reduce_circuit` and
+evaluated by :mod:`mechcirc._tree_eval` (both re-exported by
+:mod:`mechcirc.reduction`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Iterator, Union
+
+from .circuit import Element, Lever
+
+__all__ = ["Leaf", "Series", "Parallel", "Reflect", "Node", "Reduction", "leaves", "depth",
+           "postorder"]
+
+
+@dataclass(frozen=True, eq=False)
+class Leaf:
+    """One element of the circuit."""
+
+    element: Element
+
+    def __str__(self) -> str:
+        return _format(self)
+
+
+@dataclass(frozen=True, eq=False)
+class Series:
+    """Children carrying the same force; ``signs[i]`` is +1 where child i's
+    orientation (n1 → n2) agrees with this node's, −1 where it is reversed."""
+
+    children: tuple["Node", ...]
+    signs: tuple[int, ...]
+
+    def __str__(self) -> str:
+        return _format(self)
+
+
+@dataclass(frozen=True, eq=False)
+class Parallel:
+    """Children sharing the same velocity difference; ``signs`` as in :class:`Series`."""
+
+    children: tuple["Node", ...]
+    signs: tuple[int, ...]
+
+    def __str__(self) -> str:
+        return _format(self)
+
+
+@dataclass(frozen=True, eq=False)
+class Reflect:
+    """A sub-network seen through a lever: K_primary = K_child / ratio².
+
+    ``sign`` is −1 when the child's orientation runs from the lever's ``s2``
+    to ``s1``.
+    """
+
+    child: "Node"
+    lever: Lever
+    sign: int = 1
+
+    def __str__(self) -> str:
+        return _format(self)
+
+
+Node = Union[Leaf, Series, Parallel, Reflect]
+
+
+@dataclass(frozen=True)
+class Reduction:
+    """Result of :func:`reduce_circuit`: the tree and the unloaded elements' names."""
+
+    tree: Node
+    unloaded: tuple[str, ...]
+
+
+def _format(root: Node) -> str:
+    """Nested expression: series ``a + b``, parallel ``a | b``, lever ``L[...]``.
+
+    Iterative, so trees deeper than Python's recursion limit still print.
+    """
+    out: list[str] = []
+    # Stack items: a node to print, or a literal string.
+    stack: list = [(root, None)]
+    while stack:
+        item, parent = stack.pop()
+        if isinstance(item, str):
+            out.append(item)
+            continue
+        if isinstance(item, Leaf):
+            out.append(item.element.name)
+            continue
+        if isinstance(item, Reflect):
+            stack.append(("]", None))
+            stack.append((item.child, None))
+            out.append(f"{item.lever.name}[")
+            continue
+        sep = " + " if isinstance(item, Series) else " | "
+        wrap = parent is not None
+        parts: list = []
+        if wrap:
+            parts.append(("(", None))
+        for i, child in enumerate(item.children):
+            if i:
+                parts.append((sep, None))
+            parts.append((child, item))
+        if wrap:
+            parts.append((")", None))
+        stack.extend(reversed(parts))
+    return "".join(out)
+
+
+def leaves(root: Node) -> Iterator[Element]:
+    """The elements under ``root``, left to right."""
+    stack = [root]
+    while stack:
+        node = stack.pop()
+        if isinstance(node, Leaf):
+            yield node.element
+        elif isinstance(node, Reflect):
+            stack.append(node.child)
+        else:
+            stack.extend(reversed(node.children))
+
+
+def depth(root: Node) -> int:
+    """Number of levels of the tree (a leaf alone: 1)."""
+    deepest, stack = 1, [(root, 1)]
+    while stack:
+        node, d = stack.pop()
+        deepest = max(deepest, d)
+        if isinstance(node, (Series, Parallel)):
+            stack.extend((c, d + 1) for c in node.children)
+        elif isinstance(node, Reflect):
+            stack.append((node.child, d + 1))
+    return deepest
+
+
+def postorder(root: Node) -> list[Node]:
+    """Every node of the tree, children before their parent (iterative)."""
+    order, stack = [], [root]
+    while stack:
+        node = stack.pop()
+        order.append(node)
+        if isinstance(node, (Series, Parallel)):
+            stack.extend(node.children)
+        elif isinstance(node, Reflect):
+            stack.append(node.child)
+    order.reverse()
+    return order

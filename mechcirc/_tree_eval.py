@@ -1,0 +1,611 @@
+"""Evaluation of a series–parallel tree over ω: K(ω), its rounding bound, the forces.
+
+:func:`evaluate` (vectorised numpy, or through a flat :func:`plan` of the tree
+the compiled :mod:`mechcirc._sp_kernel` when numba is installed), many designs
+of one topology at once (:func:`evaluate_designs`), and :func:`push_down`,
+which carries the drive's force and velocity back down the tree to every
+element.  The element laws come from :func:`mechcirc.circuit.law_terms`.
+Re-exported by :mod:`mechcirc.reduction`.
+"""
+
+from __future__ import annotations
+
+import weakref
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from . import _jit
+from ._tree import Leaf, Node, Parallel, Reflect, Series, postorder
+from .circuit import LAWS, Element, law_terms
+
+__all__ = ["evaluate", "evaluate_designs", "push_down", "plan", "Plan", "compiled_evaluator",
+           "KERNEL_MIN_WORK"]
+
+
+#: Unit roundoff of float64 (half the machine epsilon): the relative error of
+#: one correctly rounded operation.
+_U = np.finfo(float).eps / 2
+#: Relative error of a reciprocal 1/z: ≤ u for a real z; a complex division in
+#: numpy (Smith's algorithm) stays within a few u, bounded here by 4u.
+_U_RECIP = 4 * _U
+
+
+def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: bool = False,
+             error: bool = False, _mode: str = "auto"):
+    """K(ω) [m/(N·s)] of the tree at each ω [rad/s], vectorised.
+
+    With ``keep=True`` returns ``(K, values)`` where ``values`` maps
+    ``id(node)`` to the K of every series, parallel and lever node, for
+    :func:`push_down`.  With ``error=True`` returns ``(K, bound)``: a running
+    forward bound of the relative rounding error of K at each ω (see Notes).
+    ``condition=True`` is the same bound divided by the unit roundoff (kept
+    for callers of the former condition number).  Exact poles and zeros give
+    ±inf or 0 without warnings (their bound is inf); ``inf - inf`` gives NaN
+    (callers flag it).
+
+    Notes
+    -----
+    Leaves are not evaluated one by one: the leaves of a series node add up
+    to ``r + j(a/ω + b·ω)`` and those of a parallel node to an admittance
+    ``g + j(c·ω + d/ω)``, so each node costs a few array operations whatever
+    its number of leaves.  A lossless sub-network (no dampers) has a purely
+    imaginary K = jX and is computed in real arithmetic on X, which is about
+    four times cheaper than complex arithmetic and keeps 1/0 = ∞, 1/∞ = 0.
+
+    The error bound follows the rounding through every sum, first order in the
+    unit roundoff u.  A node forms S = Σ tᵢ from m terms (its leaf groups and its
+    children; in parallel the terms are admittances 1/Kᵢ), each term known to a
+    relative error ρᵢ, so that
+
+        |Ŝ − S| ≤ Σ |tᵢ| (ρᵢ + m·u),     ρ(S) = that / |S|,
+
+    where a leaf group of n same-signed scalars has ρ = (n + 2)·u, a reciprocal
+    turns ρ into ρ/(1 − ρ) + 4u (taken as ρ + 2ρ² + 4u while ρ ≤ 1/2; ∞ from ρ ≥ 1 on:
+    no digit is known) and a
+    lever's division by r² adds 2u.  ρ is carried relative to the computed
+    values, so only the rounding of each addition (the m·u term) is first order.  Cancellation at a node
+    (Σ|tᵢ| ≫ |S|) raises the bound there; the children's errors are weighted by
+    |tᵢ|/|S|, not multiplied down the tree, so a deep ladder with no
+    cancellation keeps a bound of a few hundred u.
+    """
+    omega = np.asarray(omega, dtype=float)
+    if not keep and _mode == "auto" and _jit.COMPILED is not False:
+        p = plan(root)
+        if _jit.COMPILED or _KERNEL or p.kind.size * omega.size >= KERNEL_MIN_WORK:
+            kernel = compiled_evaluator()
+            if kernel is not None:
+                return _evaluate_compiled(kernel, p, omega, error, condition)
+    if not keep and _mode == "auto":
+        # Fast pass with numpy's reciprocal as is; it gives NaN for 1/0 where
+        # 1/0 = ∞ is wanted, and a NaN never disappears downstream: the points
+        # that end non-finite are evaluated again with the exact special cases.
+        out = evaluate(root, omega, error=error, condition=condition, _mode="fast")
+        K = out[0] if isinstance(out, tuple) else out
+        bad = ~np.isfinite(K)
+        if bad.any():
+            again = evaluate(root, omega[bad], error=error, condition=condition,
+                             _mode="checked")
+            if isinstance(out, tuple):
+                K[bad], out[1][bad] = again
+            else:
+                K[bad] = again
+        return out
+    checked = _mode != "fast"
+    values: dict[int, _Value] = {}
+    track = error or condition
+    with np.errstate(all="ignore"):
+        inv_omega = 1.0 / omega
+        for node in postorder(root):
+            if isinstance(node, Leaf):
+                continue
+            if isinstance(node, Reflect):
+                child = _value_of(node.child, values, omega, inv_omega, track)
+                val = _Value(child.imaginary, node.lever.reflect(child.array))
+                if track:
+                    val.mag = node.lever.reflect(child.mag)
+                    # (a full array even over a single leaf, whose ρ is a scalar)
+                    val.rho = np.broadcast_to(child.rho + 2 * _U, omega.shape).copy()
+            else:
+                val = _combine(node, values, omega, inv_omega, track, keep, checked)
+            if not keep:
+                kids = node.children if isinstance(node, (Series, Parallel)) else (node.child,)
+                for c in kids:
+                    values.pop(id(c), None)
+            values[id(node)] = val
+        top = _value_of(root, values, omega, inv_omega, track)
+    K = top.complex()
+    if keep:
+        return K, {k: v.complex() for k, v in values.items()}
+    if track:
+        # ``rho`` bounds the error relative to the computed |K̂|; relative to the
+        # true |K| ≥ |K̂|(1 − ρ) it is ρ / (1 − ρ).
+        with np.errstate(all="ignore"):
+            rho = _through_reciprocal(np.atleast_1d(np.asarray(top.rho, dtype=float)))
+        rho = np.broadcast_to(rho, omega.shape).astype(float)
+        rho[np.isnan(rho)] = np.inf
+        return K, (rho / _U if condition and not error else rho)
+    return K
+
+
+#: The compiled plan (:mod:`mechcirc._sp_kernel`) evaluates when numba is installed
+#: and ``mechcirc._jit.COMPILED`` is None (default), once the kernel is loaded or when
+#: a call has at least :data:`KERNEL_MIN_WORK` node-points; True always; False never.
+#: Importing numba and loading the compiled kernel from its cache takes about
+#: 1 s once per process (0.7–1.1 s measured): below this many plan nodes × ω
+#: points (about 0.15 s of the numpy path) a sweep does not start it.
+KERNEL_MIN_WORK = 5_000_000
+_KERNEL: list = []
+
+
+def compiled_evaluator():
+    """The compiled plan evaluator, or None without numba (imported on first use)."""
+    if not _KERNEL:
+        from . import _sp_kernel
+
+        _KERNEL.append(_sp_kernel.evaluate_plan if _sp_kernel.HAVE_NUMBA else None)
+    return _KERNEL[0]
+
+
+@dataclass(frozen=True, eq=False)
+class Plan:
+    """A tree compiled into flat arrays for :mod:`mechcirc._sp_kernel` (see
+    :func:`plan`): one entry per series, parallel and lever node (and per leaf
+    that stands alone, at the root or under a lever), children first.
+
+    The value-dependent arrays (leaf coefficients, their error constants,
+    ``mu`` and the lever ratios) have one row per design, shape (D, M): D = 1
+    for the tree's own values, D > 1 for a batch of designs of the same
+    topology (:meth:`with_values`)."""
+
+    kind: NDArray[np.int8]
+    cplx: NDArray[np.bool_]
+    c_real: NDArray[np.float64]
+    c_inv: NDArray[np.float64]
+    c_om: NDArray[np.float64]
+    e_real: NDArray[np.float64]
+    e_inv: NDArray[np.float64]
+    e_om: NDArray[np.float64]
+    mu: NDArray[np.float64]
+    kstart: NDArray[np.int64]
+    kids: NDArray[np.int64]
+    ratio: NDArray[np.float64]
+    slot: NDArray[np.int64]
+    n_slots: int
+    #: The folded leaves' elements, in fold order (rows of :meth:`with_values`'s ``scaled``).
+    leaves: tuple = ()
+    #: The lever of each lever node, in node order (rows of ``ratios``).
+    levers: tuple = ()
+    _fold: tuple = ()
+
+    def arrays(self) -> tuple:
+        return (self.kind, self.cplx, self.c_real, self.c_inv, self.c_om, self.e_real,
+                self.e_inv, self.e_om, self.mu, self.kstart, self.kids, self.ratio,
+                self.slot, self.n_slots)
+
+    @property
+    def designs(self) -> int:
+        """D, the number of designs whose values the plan holds."""
+        return self.c_real.shape[0]
+
+    def with_values(self, scaled: ArrayLike, ratios: ArrayLike | None = None) -> "Plan":
+        """The same plan for D designs: ``scaled[l, d]`` is value·η of leaf ``leaves[l]``
+        in design d, ``ratios[r, d]`` the ratio of lever ``levers[r]`` (default: its own)."""
+        scaled = np.asarray(scaled, dtype=float)
+        if ratios is None:
+            ratios = np.array([[lv.ratio] for lv in self.levers], dtype=float).reshape(-1, 1)
+        return _fold_values(self.kind, self.kstart, self.kids, self.slot, self.n_slots,
+                            self.leaves, self.levers, self._fold, scaled,
+                            np.asarray(ratios, dtype=float))
+
+
+_PLANS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
+_KIND_CODE = {kind: i for i, kind in enumerate(LAWS)}
+
+
+def _leaf_table() -> tuple:
+    """Arrays indexed ``[kind code, series]`` of slot, coefficient and ``divides``,
+    read off :func:`~mechcirc.circuit.law_terms` at unit value: a leaf's term is
+    coefficient / (value·η) when ``divides`` (an impedance, in a series node),
+    else coefficient · (value·η); slots as in :func:`_leaf_term` (0 real, +1 ω,
+    −1 1/ω)."""
+    slot = np.zeros((len(_KIND_CODE), 2), dtype=np.int64)
+    coef = np.zeros((len(_KIND_CODE), 2))
+    for kind, code in _KIND_CODE.items():
+        p = LAWS[kind].power
+        for series in (0, 1):
+            sl = p if series else -p
+            real, inv, om = law_terms(kind, 1.0, admittance=not series)
+            slot[code, series] = sl
+            coef[code, series] = real if sl == 0 else om if sl > 0 else inv
+    return slot, coef
+
+
+_LEAF_SLOT, _LEAF_COEF = _leaf_table()
+
+
+def plan(root: Node) -> Plan:
+    """The evaluation plan of ``root``, built once per tree (linear in its size).
+
+    Each node's leaves are folded into three coefficients by the element laws
+    (:func:`~mechcirc.circuit.law_terms`), with the constants of their error
+    terms, exactly as :func:`evaluate`'s numpy path forms them at every call
+    (the same IEEE operations in the same order, here vectorised over the
+    leaves and, for a batch of designs, over the designs: :meth:`Plan.with_values`).
+    """
+    found = _PLANS.get(root)
+    if found is not None:
+        return found
+    kind: list[int] = []
+    kids: list[int] = []
+    kstart = [0]
+    leaf_of: list[int] = []          # the node each folded leaf belongs to
+    leaf_el: list[Element] = []
+    levers: list = []
+    index: dict[int, int] = {}
+
+    def lone_leaf(e: Element) -> int:
+        # A leaf at the root or under a lever: a node of its own (kind 3),
+        # holding the leaf as a one-term series node would.
+        kind.append(3)
+        kstart.append(len(kids))
+        leaf_of.append(len(kind) - 1)
+        leaf_el.append(e)
+        return len(kind) - 1
+
+    node: Any                     # dispatched on its exact type below
+    for node in postorder(root):
+        cls = type(node)
+        if cls is Leaf:
+            continue
+        if cls is Reflect:
+            c = node.child
+            ci = lone_leaf(c.element) if type(c) is Leaf else index[id(c)]
+            kind.append(2)
+            kids.append(ci)
+            kstart.append(len(kids))
+            levers.append(node.lever)
+            index[id(node)] = len(kind) - 1
+            continue
+        me = len(kind)
+        kind.append(0 if cls is Series else 1)
+        for c in node.children:
+            if type(c) is Leaf:
+                leaf_of.append(me)
+                leaf_el.append(c.element)
+            else:
+                kids.append(index[id(c)])
+        kstart.append(len(kids))
+        index[id(node)] = me
+    if type(root) is Leaf:
+        lone_leaf(root.element)
+    kind_a = np.array(kind, dtype=np.int8)
+    kstart_a = np.array(kstart, dtype=np.int64)
+    kids_a = np.array(kids, dtype=np.int64)
+    owner = np.array(leaf_of, dtype=np.int64)
+    code = np.array([_KIND_CODE[e.kind] for e in leaf_el], dtype=np.int64)
+    scaled = np.array([e.value for e in leaf_el], dtype=float) * \
+        np.array([e.eta for e in leaf_el], dtype=float)
+    series = (kind_a[owner] != 1).astype(np.int64)
+    slot = _LEAF_SLOT[code, series]
+    count = np.zeros((len(kind), 3), dtype=np.int64)
+    np.add.at(count, (owner, slot % 3), 1)        # 0 real, 1 ω, 2 (= −1) 1/ω
+    n_kids = np.diff(kstart_a)
+    # Postorder keeps every subtree contiguous, so a node's internal children are
+    # the top rows of a stack when it is reached: its value takes the first of them.
+    stack_slot = np.cumsum(1 - n_kids) - 1
+    fold = (owner, series, slot % 3, _LEAF_COEF[code, series], count)
+    ratios = np.array([lv.ratio for lv in levers], dtype=float).reshape(-1, 1)
+    out = _fold_values(kind_a, kstart_a, kids_a, stack_slot.astype(np.int64),
+                       int(stack_slot.max(initial=0)) + 1, tuple(leaf_el), tuple(levers),
+                       fold, scaled[:, None], ratios)
+    _PLANS[root] = out
+    return out
+
+
+def _fold_values(kind, kstart, kids, slot, n_slots, leaves, levers, fold, scaled,
+                 ratios) -> Plan:
+    """The plan with the leaves' values·η ``scaled`` (L, D) and lever ``ratios`` (R, D)
+    folded into each node's coefficients and error constants, one row per design."""
+    owner, series, col, coef, count = fold
+    M, D = kind.shape[0], scaled.shape[1]
+    if scaled.shape != (len(leaves), D) or ratios.shape != (len(levers), D):
+        raise ValueError(f"need values of shape ({len(leaves)}, D) and ratios of shape "
+                         f"({len(levers)}, D), got {scaled.shape} and {ratios.shape}")
+    with np.errstate(all="ignore"):
+        term = np.where((series == 1)[:, None], coef[:, None] / scaled, coef[:, None] * scaled)
+        # Summed in child order from 0.0, as _combine sums them (ufunc.at is
+        # unbuffered and applies the terms in the order given).
+        acc = np.zeros((3, M, D))
+        np.add.at(acc, (col, owner), term)
+        real, om, inv = acc[0], acc[1], acc[2]
+        U = float(_U)
+        n_kids = np.diff(kstart)[:, None]
+        m_u = (n_kids + (real != 0) + (inv != 0) + (om != 0)) * U
+        e_real = np.abs(real) * ((count[:, 0:1] + 2) * U + m_u)
+        e_inv = np.abs(inv) * ((count[:, 2:3] + 4) * U + m_u)
+        e_om = np.abs(om) * ((count[:, 1:2] + 4) * U + m_u)
+    lever = kind == 2
+    m_u[lever] = 0.0
+    ratio = np.zeros((M, D))
+    ratio[lever] = ratios
+    # A node has a real part if its leaves give one (in any design) or any child has one.
+    has = ((real != 0) | np.isnan(real)).any(axis=1).tolist()
+    ks, kd = kstart.tolist(), kids.tolist()
+    for i in range(M):
+        if not has[i]:
+            for q in range(ks[i], ks[i + 1]):
+                if has[kd[q]]:
+                    has[i] = True
+                    break
+
+    def rows(x):                  # one contiguous row of M values per design
+        return np.ascontiguousarray(x.T)
+
+    return Plan(kind, np.array(has, dtype=bool), rows(real), rows(inv), rows(om), rows(e_real),
+                rows(e_inv), rows(e_om), rows(m_u), kstart, kids, rows(ratio), slot, n_slots,
+                leaves, levers, fold)
+
+
+def _evaluate_compiled(kernel, p: Plan, omega: NDArray, error: bool, condition: bool):
+    """:func:`evaluate` (without ``keep``) by the compiled plan."""
+    flat = np.ascontiguousarray(omega.ravel())
+    K, rho = evaluate_designs(p, flat[None, :], error or condition, kernel)
+    K = K.reshape(omega.shape)
+    if not (error or condition):
+        return K
+    rho = rho.reshape(omega.shape)
+    return K, (rho / _U if condition and not error else rho)
+
+
+def evaluate_designs(p: Plan, omega: NDArray, error: bool = False, kernel=None):
+    """K (and the bound of its relative error, else None) of the plan's D designs
+    at ``omega`` of shape (W,) (every design at the same ω) or (D, W), by the
+    compiled plan; returns arrays of shape (D, W).
+
+    This is :func:`evaluate`'s compiled path, a design at a time: one design
+    (D = 1) is the single sweep.  Raises RuntimeError without numba.
+    """
+    kernel = kernel or compiled_evaluator()
+    if kernel is None:
+        raise RuntimeError("evaluating a batch of designs needs numba (pip install numba)")
+    omega = np.ascontiguousarray(np.atleast_2d(np.asarray(omega, dtype=float)))
+    D = p.designs
+    if omega.shape[0] not in (1, D):
+        raise ValueError(f"omega must have 1 or {D} rows, got shape {omega.shape}")
+    K = np.empty((D, omega.shape[1]), dtype=complex)
+    rho = np.empty(K.shape if error else (D, 0))
+    kernel(omega, *p.arrays(), error, K, rho)
+    return K, (rho if error else None)
+
+
+class _Value:
+    """K of a node: ``array`` is X with K = jX when ``imaginary``, else K itself.
+
+    With error tracking, ``mag`` is |K| and ``rho`` the bound of its relative error.
+    """
+
+    __slots__ = ("imaginary", "array", "mag", "rho")
+
+    def __init__(self, imaginary: bool, array: NDArray, mag=None, rho=None):
+        self.imaginary, self.array, self.mag, self.rho = imaginary, array, mag, rho
+
+    def complex(self) -> NDArray[np.complex128]:
+        if not self.imaginary:
+            return self.array
+        out = np.zeros(self.array.shape, dtype=complex)
+        out.imag = self.array
+        return out
+
+    def reciprocal(self, checked: bool = True) -> "_Value":
+        if self.imaginary:
+            return _Value(True, -1.0 / self.array)     # 1/(jX) = j(-1/X)
+        if not checked:
+            return _Value(False, np.reciprocal(self.array))
+        return _Value(False, _reciprocal(self.array))
+
+
+def _value_of(node: Node, values: dict, omega, inv_omega, track: bool = False) -> _Value:
+    if isinstance(node, Leaf):
+        e = node.element
+        real, inv, om = law_terms(e.kind, _scaled(e))
+        if LAWS[e.kind].power < 0:
+            v = _Value(True, inv_omega * inv)
+        elif LAWS[e.kind].power > 0:
+            v = _Value(True, omega * om)
+        else:
+            v = _Value(False, np.full(omega.shape, real, dtype=complex))
+        if track:
+            v.mag = np.abs(v.array)
+            v.rho = 4 * _U      # value·η, 1/s, 1/ω and the product
+        return v
+    return values[id(node)]
+
+
+def _scaled(e: Element) -> np.float64:
+    """value · η as a numpy float, so that 1/0 = ∞ (flagged) instead of ZeroDivisionError
+    when the product underflows (a value near 1e-308 times a small η)."""
+    return np.float64(e.value) * np.float64(e.eta)
+
+
+def _leaf_term(e: Element, series: bool, fast: bool = False) -> tuple[int, float]:
+    """Where element ``e`` enters a series node's impedance sum (``series``) or a
+    parallel node's admittance sum, and its coefficient there: slot 0 the real
+    part, +1 the part times ω, −1 the part times 1/ω (by :func:`~mechcirc.circuit.law_terms`).
+
+    ``fast``: in Python floats (the same IEEE operations as numpy scalars, without
+    their per-operation overhead), numpy's only where value·η is 0 (1/0 = ∞).
+    """
+    if fast:
+        try:
+            real, inv, om = law_terms(e.kind, e.value * e.eta, admittance=not series)
+        except ZeroDivisionError:
+            real, inv, om = (float(t) for t in
+                             law_terms(e.kind, _scaled(e), admittance=not series))
+    else:
+        real, inv, om = law_terms(e.kind, _scaled(e), admittance=not series)
+    p = LAWS[e.kind].power
+    slot = p if series else -p
+    return slot, (real if slot == 0 else om if slot > 0 else inv)
+
+
+def _combine(node, values: dict, omega, inv_omega, track: bool = False,
+             keep: bool = True, checked: bool = True) -> _Value:
+    """Series: K = Σ K_i.  Parallel: 1/K = Σ 1/K_i.  Leaves are grouped by kind."""
+    series = isinstance(node, Series)
+    real = im_inv = im_omega = 0.0      # leaf terms: real + j(im_inv/ω + im_omega·ω)
+    n_real = n_inv = n_omega = 0
+    parts: list[_Value] = []
+    for c in node.children:
+        if isinstance(c, Leaf):
+            slot, term = _leaf_term(c.element, series)
+            if slot == 0:
+                real += term
+                n_real += 1
+            elif slot > 0:
+                im_omega += term
+                n_omega += 1
+            else:
+                im_inv += term
+                n_inv += 1
+        else:
+            parts.append(values[id(c)])
+    if not series:
+        terms = [v.reciprocal(checked) for v in parts]
+    else:
+        terms = parts
+    imag = None
+    if im_inv:
+        imag = inv_omega * im_inv
+    if im_omega:
+        imag = omega * im_omega if imag is None else imag + omega * im_omega
+    cplx = None
+    # A parallel node's terms are fresh reciprocals, and without ``keep`` a
+    # child's value is dropped after this sum: the first term's array is then
+    # reused in place instead of copied.
+    own = keep and series
+    for v in terms:
+        if v.imaginary:
+            if imag is None:
+                imag = v.array.copy() if own else v.array
+            else:
+                imag += v.array
+        else:
+            if cplx is None:
+                cplx = v.array.copy() if own else v.array
+            else:
+                cplx += v.array
+    if real:
+        cplx = np.full(omega.shape, real, dtype=complex) if cplx is None else cplx + real
+    if cplx is None and imag is None:
+        # Every term was exactly 0 (a value·η of ∞ gives 1/∞ = 0): the sum is 0.
+        imag = np.zeros(omega.shape)
+    if cplx is None:
+        total = _Value(True, imag)
+    else:
+        if imag is not None:
+            cplx.imag += imag
+        total = _Value(False, cplx)
+    if track:
+        m = len(parts) + (real != 0) + (im_inv != 0) + (im_omega != 0)
+        mu = m * _U
+        # Leaf groups: n same-signed scalars summed (n·u), value·η and 1/s (2u),
+        # times ω or 1/ω (2u).
+        bound = None
+        if im_inv:
+            bound = (abs(im_inv) * ((n_inv + 4) * _U + mu)) * inv_omega
+        if im_omega:
+            t = (abs(im_omega) * ((n_omega + 4) * _U + mu)) * omega
+            bound = t if bound is None else np.add(bound, t, out=bound)
+        for v in parts:
+            if series:
+                t = v.rho + mu
+                t *= v.mag
+            else:
+                t = _through_reciprocal(v.rho)
+                t += _U_RECIP + mu
+                t /= v.mag
+            bound = t if bound is None else np.add(bound, t, out=bound)
+        if bound is None:
+            bound = np.zeros(omega.shape)
+        if real:
+            bound += abs(real) * ((n_real + 2) * _U + mu)
+        mag = np.abs(total.array)
+        inv = np.reciprocal(mag)
+        bound *= inv
+        rho = bound
+        if series:
+            total.mag, total.rho = mag, rho
+        else:
+            total = total.reciprocal(checked)
+            rho = _through_reciprocal(rho)
+            rho += _U_RECIP
+            total.mag, total.rho = inv, rho
+        return total
+    return total if series else total.reciprocal(checked)
+
+
+def _through_reciprocal(rho: NDArray) -> NDArray:
+    """A bound of the relative error of 1/x̂ given |x̂ − x| ≤ ρ|x̂|, ρ / (1 − ρ): as
+    ρ + 2ρ² for ρ ≤ 1/2 (no smaller there), ∞ from ρ ≥ 1 on (and for NaN).
+
+    Callers hold ``np.errstate(all="ignore")``; :mod:`mechcirc._sp_kernel` computes the same.
+    """
+    if not (isinstance(rho, np.ndarray) and rho.ndim):
+        # A scalar ρ (a leaf's, constant in ω: fuzz seed 599): work on an array.
+        rho = np.atleast_1d(np.asarray(rho, dtype=float))
+    out = rho * rho
+    out *= 2.0
+    out += rho
+    big = ~(rho <= 0.5)
+    if big.any():
+        out[big] = rho[big] / (1.0 - rho[big])
+        out[~(rho < 1.0)] = np.inf
+    return out
+
+
+def _reciprocal(K: NDArray[np.complex128]) -> NDArray[np.complex128]:
+    """1/K with 1/0 = ∞ and 1/∞ = 0 (numpy's complex division gives NaN for both)."""
+    Y = np.reciprocal(K)       # as accurate as 1.0 / K (within 1.4e-16), twice as fast
+    if not np.isfinite(Y).all():
+        Y[np.isinf(K)] = 0.0
+        Y[K == 0] = np.inf
+    return Y
+
+
+def _node_K(node: Node, values: dict, omega) -> NDArray[np.complex128]:
+    if isinstance(node, Leaf):
+        return node.element.mobility(omega)
+    return values[id(node)]
+
+
+def push_down(root: Node, values: dict, Q: NDArray, v: NDArray,
+              omega: NDArray) -> dict[str, tuple]:
+    """Carry the root's force ``Q`` [N] and velocity ``v`` [m/s] down to every element.
+
+    Series children share Q, parallel children share v, a lever scales
+    v by r and Q by 1/r.  Returns ``{element name: (Q, v)}`` arrays over ω.
+    """
+    out: dict[str, tuple] = {}
+    stack = [(root, Q, v)]
+    with np.errstate(all="ignore"):
+        while stack:
+            node, q, u = stack.pop()
+            if isinstance(node, Leaf):
+                out[node.element.name] = (q, u)
+            elif isinstance(node, Series):
+                for c, s in zip(node.children, node.signs):
+                    qc = q if s > 0 else -q
+                    stack.append((c, qc, _node_K(c, values, omega) * qc))
+            elif isinstance(node, Parallel):
+                for c, s in zip(node.children, node.signs):
+                    uc = u if s > 0 else -u
+                    stack.append((c, uc / _node_K(c, values, omega), uc))
+            else:
+                r = node.lever.ratio * node.sign
+                stack.append((node.child, q / r, u * r))
+    return out
