@@ -1080,7 +1080,7 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
                                 f"this study is {spec.analysis!r}")
         if resume:
             raise MechcircError("curves cannot be resumed (the points kept would have "
-                                "none): run the study again without resume")
+                                "none): run the study again without --resume")
         _require_pyarrow()
     with _lock(output) if output else contextlib.nullcontext(), \
             _curve_writer(curves, spec) as write_curves:

@@ -159,6 +159,11 @@ def test_extremes_of_a_lossless_design_against_a_fine_grid():
     assert ex.K_min[1] == pytest.approx(absK.min(), rel=1e-12)
     assert (ex.omega_at_K_max[1], ex.omega_at_K_min[1]) == (1.0, 30.0)
     assert ex.Q0_max[1] == pytest.approx(0.5 / absK.min(), rel=1e-12)
+    # The band's end values taken from a sweep already made are the same numbers.
+    band = np.geomspace(1.0, 30.0, 9)
+    again = ds.extremes(band, sweep=ds.sweep(band))
+    for name in ("K_min", "omega_at_K_min", "K_max", "omega_at_K_max", "Q0_max"):
+        np.testing.assert_array_equal(getattr(again, name), getattr(ex, name))
 
 
 def test_damped_designs_take_the_single_path_and_are_counted():
