@@ -49,7 +49,8 @@ from .units import FREQUENCY_UNITS, in_unit
 __all__ = ["Resonance", "Resonances", "find_resonances", "MAX_UNKNOWNS", "MAX_UNKNOWNS_DAMPED"]
 
 #: Largest eigenproblem solved (unknowns left after the constraints).  The
-#: dense solve costs O(n³): about 12 s at 2000 unknowns undamped, and the
+#: dense solve costs O(n³): 21.5 s CPU at 1999 unknowns undamped (one BLAS thread;
+#: 80 % polishing the roots on K, docs/reliability.md), and the
 #: damped 2n linearisation about 10 s at 500 (measured, docs/reliability.md).
 #: Larger networks are refused at once instead of running for hours.
 MAX_UNKNOWNS = 2000

@@ -406,8 +406,9 @@ def linkage_property(text: str) -> str:
 
 
 # ---------------------------------------------------------------- CLI argv
+@functools.lru_cache(maxsize=None)
 def cli_commands():
-    """``{name: subparser}`` of every registered sub-command."""
+    """``{name: subparser}`` of every registered sub-command (built once, read only)."""
     import argparse
 
     from mechcirc.cli import build_parser

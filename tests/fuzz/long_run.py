@@ -104,7 +104,7 @@ def run(target: str, n: int, first_seed: int, work: Path) -> dict:
             print(f"  FAILURE seed {seed}: {str(exc)[:300]}", flush=True)
         dt = time.perf_counter() - t1
         if (seed - first_seed + 1) % (50 if target == "round_crosscheck" else
-                                         200 if target == "all" else 1000) == 0:
+                                         200 if target in ("all", "round") else 1000) == 0:
             print(f"  {target}: {seed - first_seed + 1} inputs, {counts}, {len(failures)} "
                   f"failures, {time.perf_counter() - t0:.0f} s {by_kind}", flush=True)
         if dt > slowest[0]:

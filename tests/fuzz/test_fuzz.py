@@ -5,7 +5,7 @@ run (≥ 100,000 inputs) is ``tests/fuzz/long_run.py`` and its numbers are in
 ``docs/reliability.md``.  By default each property runs a small share
 (:data:`BUDGET`) of its full count, so the suite stays quick;
 ``MECHCIRC_FUZZ_BUDGET=1 python -m pytest tests/fuzz`` runs the full counts
-(18,480 inputs).  Two kinds of input here, derandomised so that a failure
+(18,580 inputs).  Two kinds of input here, derandomised so that a failure
 reproduces:
 
 * hypothesis text strategies over the grammars' alphabets (shrunk to a
@@ -40,7 +40,7 @@ def _budget() -> float:
 
 
 #: Share of each property's full count run (environment variable MECHCIRC_FUZZ_BUDGET;
-#: default 0.05, i.e. 940 of the 18,480 inputs; 1 runs them all).
+#: default 0.05, i.e. 945 of the 18,580 inputs; 1 runs them all).
 BUDGET = _budget()
 
 
@@ -220,3 +220,37 @@ def test_round_generators_reach_results_and_errors(tmp_path):
         for i in range(12):
             seen[h.cli_property(h.round_argv(random.Random(i), kind, tmp_path, files))] += 1
         assert seen["result"] >= 1 and seen["error"] >= 2, (kind, seen)
+
+
+# ------------------------------------------------------------------ the campaign: every command
+@pytest.fixture(scope="module")
+def all_workdir(tmp_path_factory):
+    work = tmp_path_factory.mktemp("all")
+    return work, h.all_files(work)
+
+
+@fast(100)
+@given(seed=seeds)
+def test_fuzz_every_command(all_workdir, seed):
+    """Any registered sub-command, from its --help example made wrong or from its options
+    at random, on the file kind it reads: exit 0, 2 (3: a crosscheck verdict), never 1."""
+    work, pools = all_workdir
+    with pytest.MonkeyPatch.context() as mp:
+        mp.chdir(work)                   # a relative output name lands in the work folder
+        h.cli_property(h.all_argv(random.Random(seed), work, pools))
+
+
+def test_campaign_generator_reaches_every_command(tmp_path):
+    """all_argv draws every registered sub-command, and study specs of every sampling
+    method (generation only: nothing is run)."""
+    pools = h.all_files(tmp_path)
+    seen, methods = set(), set()
+    for i in range(300):
+        argv = h.all_argv(random.Random(i), tmp_path, pools)
+        seen.add(argv[0])
+        if argv[0] == "study":
+            spec = (tmp_path / "study" / "spec.toml").read_text()
+            methods |= {m for m in ("[grid]", "latin-hypercube", "sobol", "[random]",
+                                    'file = "designs.csv"') if m in spec}
+    assert seen >= set(h.cli_commands())
+    assert len(methods) == 5, methods
