@@ -40,7 +40,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .circuit import Circuit
+from .circuit import Circuit, units_of
 from .errors import MechcircError
 
 __all__ = ["PeriodicResult", "SpeedMap", "periodic", "rpm_to_omega", "speed_map"]
@@ -106,6 +106,10 @@ class PeriodicResult:
     forces, velocities : dict of str to ndarray
         Each asked-for element's force [N] and velocity difference [m/s] over θ.
     notes : tuple of str
+    units : dict of str to str
+        The unit labels of the drive (:func:`mechcirc.circuit.units_of`): N, m,
+        m/s for a translational drive; N·m, rad, rad/s for a rotary one (the
+        units written above in brackets are the translational ones).
     """
 
     name: str
@@ -133,6 +137,7 @@ class PeriodicResult:
     forces: dict = field(default_factory=dict)
     velocities: dict = field(default_factory=dict)
     notes: tuple = ()
+    units: dict = field(default_factory=lambda: units_of(None))
 
     @property
     def harmonics(self) -> int:
@@ -168,6 +173,8 @@ class SpeedMap:
     element_peaks : dict of str to ndarray
         max |force| [N] over the cycle of each element asked for, at each speed.
     notes : tuple of str
+    units : dict of str to str
+        The drive's unit labels (:func:`mechcirc.circuit.units_of`; N·m for a rotary drive).
     """
 
     name: str
@@ -178,6 +185,7 @@ class SpeedMap:
     crossings: tuple
     element_peaks: dict = field(default_factory=dict)
     notes: tuple = ()
+    units: dict = field(default_factory=lambda: units_of(None))
 
     def plot(self, ax=None):
         """The map: :func:`mechcirc.plotting.plot_speed_map`."""
@@ -491,7 +499,8 @@ def periodic(circuit: Circuit, rpm: float, *, motion=None, tol: float = TOL,
         distance=distance, near=near_mask, resonances=tuple((wn, z) for wn, z, _ in found),
         peak=peak, peak_angle_deg=math.degrees(peak_theta), error=error, tol=tol,
         unbounded=tuple(sorted(int(i) for i in unbounded)), near_fraction=near,
-        forces=forces, velocities=velocities, notes=tuple(notes))
+        forces=forces, velocities=velocities, notes=tuple(notes),
+        units=units_of(circuit.drive))
 
 
 # ------------------------------------------------------------------ the speed map
@@ -563,4 +572,4 @@ def speed_map(circuit: Circuit, rpm_min: float, rpm_max: float, points: int = 20
     crossings.sort()
     return SpeedMap(name=circuit.name, rpm=rpm, peak=peak, harmonics=used, error=error,
                     crossings=tuple(crossings), element_peaks=element_peaks,
-                    notes=tuple(notes))
+                    notes=tuple(notes), units=units_of(circuit.drive))

@@ -513,13 +513,18 @@ def plot_study(result, params, column: str, name: str = "study", title: str | No
 
 def plot_periodic(result, title: str | None = None, *, fig=None):
     """Q(θ) [N] over the crank angle beside its spectrum |Q_k| [N] at ω = kΩ, with
-    |K(kΩ)| [m/(N·s)] and the resonances (a :class:`mechcirc.periodic.PeriodicResult`).
+    |K(kΩ)| [m/(N·s)] and the resonances (a :class:`mechcirc.periodic.PeriodicResult`;
+    labelled in ``result.units``: N·m and rad/(N·m·s) for a rotary drive).
 
     Two panels on ``fig`` (a new Figure by default), which is returned.
     Harmonics near a resonance are drawn in red.
     """
     import numpy as np
 
+    from .circuit import units_of
+
+    u = getattr(result, "units", None) or units_of(None)
+    word = "moment" if u["Q"] == "N·m" else "force"
     fig = fig if fig is not None else _figure((11, 4.2))
     ax_q, ax_s = fig.subplots(1, 2, gridspec_kw={"width_ratios": [3, 2]})
     ax_q.plot(result.angle_deg, result.Q, color="C0", label="Q(θ), drive")
@@ -529,7 +534,7 @@ def plot_periodic(result, title: str | None = None, *, fig=None):
         ax_q.text(0.5, 0.5, "unbounded: harmonic on an undamped resonance",
                   transform=ax_q.transAxes, ha="center", color="C3")
     ax_q.set_xlabel("crank angle θ [deg]")
-    ax_q.set_ylabel("force [N]")
+    ax_q.set_ylabel(f"{word} [{u['Q']}]")
     ax_q.set_xlim(0, 360)
     ax_q.grid(True, alpha=0.3)
     ax_q.legend(loc="best", fontsize="small")
@@ -544,20 +549,20 @@ def plot_periodic(result, title: str | None = None, *, fig=None):
     ax_s.set_ylim(floor, 2 * top if top > 0 else 10.0)
     ax_s.set_xscale("log")
     ax_s.set_xlabel("ω = kΩ [rad/s]")
-    ax_s.set_ylabel("|Q_k| [N]")
+    ax_s.set_ylabel(f"|Q_k| [{u['Q']}]")
     ax_k = ax_s.twinx()
     with np.errstate(all="ignore"):
         absK = np.abs(result.K)
     good = np.isfinite(absK) & (absK > 0)
     ax_k.loglog(result.omega[good], absK[good], color="0.4", lw=0.9, label="|K(kΩ)|")
-    ax_k.set_ylabel("|K| [m/(N·s)]")
+    ax_k.set_ylabel(f"|K| [{u['K']}]")
     for i, (wn, _) in enumerate(result.resonances):
         ax_s.axvline(wn, color="C3", lw=0.8, ls="--",
                      label="resonance (K = 0)" if i == 0 else None)
     if result.resonances:
         ax_s.legend(loc="lower left", fontsize="small")
     ax_s.grid(True, which="both", alpha=0.3)
-    fig.suptitle(title or f"{result.name}: drive force over one revolution at "
+    fig.suptitle(title or f"{result.name}: drive {word} over one revolution at "
                           f"{result.rpm:g} rpm ({result.harmonics} harmonics, error "
                           f"{result.error:.1g})")
     fig.tight_layout()
@@ -568,9 +573,14 @@ def plot_speed_map(result, title: str | None = None, *, ax=None, min_weight: flo
     """The peak drive force over the cycle [N] against machine speed [rpm] (a
     :class:`mechcirc.periodic.SpeedMap`), with a line at each speed where a harmonic
     meets a resonance (k·Ω = ωₙ) whose share of the drive velocity is at least
-    ``min_weight``, labelled by k.  Returns ``ax`` when given, else the Figure."""
+    ``min_weight``, labelled by k (in ``result.units``: N·m for a rotary drive).
+    Returns ``ax`` when given, else the Figure."""
     import numpy as np
 
+    from .circuit import units_of
+
+    u = getattr(result, "units", None) or units_of(None)
+    word = "moment" if u["Q"] == "N·m" else "force"
     fig, ax, made = _axes(ax, (8, 4.5))
     peak = np.where(np.isfinite(result.peak), result.peak, np.nan)
     ax.plot(result.rpm, peak, color="C0", label="max |Q(θ)|, drive")
@@ -589,10 +599,10 @@ def plot_speed_map(result, title: str | None = None, *, ax=None, min_weight: flo
     if np.nanmax(peak, initial=0) > 100 * np.nanmin(peak, initial=np.inf):
         ax.set_yscale("log")
     ax.set_xlabel("machine speed [rpm]")
-    ax.set_ylabel("peak force over the cycle [N]")
+    ax.set_ylabel(f"peak {word} over the cycle [{u['Q']}]")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(loc="best", fontsize="small")
-    ax.set_title(title or f"{result.name}: peak drive force vs speed (red: k·Ω = ωₙ)",
+    ax.set_title(title or f"{result.name}: peak drive {word} vs speed (red: k·Ω = ωₙ)",
                  pad=14)
     if made:
         fig.tight_layout()

@@ -133,7 +133,8 @@ def build(scene: Scene, theta: float, *, reflect: Literal["eta", "lever"] = "eta
     kept_edges = b.springs()
     _check_connected(scene, node_of_part, kept_edges, b.dropped, m.deg)
     d = scene.drive
-    drive = Drive(d.name, node_of_part[0], "0", d.kind, float(d.amplitude))
+    drive = Drive(d.name, node_of_part[0], "0", d.kind, float(d.amplitude),
+                  rotational=d.link is not None)
     if not b.elements:
         raise GeometryError(f"{scene.source}: at θ = {m.deg:.6g}° no mass, spring or damper of "
                             f"the scene moves with the drive; the circuit would be empty")
