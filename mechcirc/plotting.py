@@ -396,15 +396,21 @@ KIND_COLOURS = {"mass": "C0", "spring": "C1", "damper": "C2"}
 
 
 def plot_forces(rows, omega: float, name: str = "circuit", title: str | None = None, *,
-                ax=None):
-    """Bars of |Q| [N] per element (from :func:`mechcirc.forces.element_forces`) at ``omega``.
+                ax=None, units: dict | None = None):
+    """Bars of |Q| per element (from :func:`mechcirc.forces.element_forces`) at ``omega``.
 
     Bars are coloured by element kind, and so are the legend's swatches; the
     y axis is logarithmic when the forces span more than two decades.
+    ``units``: :func:`mechcirc.circuit.units_of` of the circuit's drive (default
+    translational: N; a rotary drive's moments are in N·m).
     Returns ``ax`` when given, else the new Figure.
     """
     import numpy as np
     from matplotlib.patches import Patch
+
+    from .circuit import units_of
+
+    u = units or units_of(None)
 
     fig, ax, made = _axes(ax, (max(5.0, 0.45 * len(rows) + 2), 4))
     values = np.array([r.Q_abs for r in rows], dtype=float)
@@ -413,7 +419,7 @@ def plot_forces(rows, omega: float, name: str = "circuit", title: str | None = N
     finite = values[np.isfinite(values) & (values > 0)]
     if finite.size and finite.max() > 100 * finite.min():
         ax.set_yscale("log")
-    ax.set_ylabel("|Q| [N]")
+    ax.set_ylabel(f"|Q| [{u['Q']}]")
     ax.set_xlabel("element")
     handles = [Patch(facecolor=colour, label=kind) for kind, colour in KIND_COLOURS.items()
                if any(r.kind == kind for r in rows)]
@@ -428,12 +434,18 @@ def plot_forces(rows, omega: float, name: str = "circuit", title: str | None = N
 
 
 def plot_comparison(comparison, name: str = "circuit", measured: str = "measured",
-                    title: str | None = None, *, fig=None):
-    """A measured mobility over the model's: |K| [m/(N·s)] and arg K [deg] against ω [rad/s].
+                    title: str | None = None, *, fig=None, units: dict | None = None):
+    """A measured mobility over the model's: |K| and arg K [deg] against ω [rad/s].
 
     Two panels, on ``fig`` when given (else a new Figure); returns the Figure.
+    ``units``: :func:`mechcirc.circuit.units_of` of the model's drive (default
+    translational: |K| in m/(N·s); rotary: rad/(N·m·s)).
     """
     import numpy as np
+
+    from .circuit import units_of
+
+    u = units or units_of(None)
 
     fig = fig if fig is not None else _figure((7, 6))
     ax_k, ax_p = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [3, 2]})
@@ -443,7 +455,7 @@ def plot_comparison(comparison, name: str = "circuit", measured: str = "measured
                                 (comparison.K_measured, measured, "."),):
             ax_k.loglog(w, np.abs(K), style, label=label, ms=3)
             ax_p.semilogx(w, np.degrees(np.angle(K)), style, ms=3)
-    ax_k.set_ylabel("|K| [m/(N·s)]")
+    ax_k.set_ylabel(f"|K| [{u['K']}]")
     ax_p.set_ylabel("arg K [deg]")
     ax_p.set_ylim(-190, 190)
     ax_p.set_yticks([-180, -90, 0, 90, 180])

@@ -89,3 +89,41 @@ def test_cycle_map_reports_progress():
     cycle_map(load_scene(REPO / "examples" / "heald_scene.toml"), points=5, harmonics=2,
               progress=lambda done, total: calls.append((done, total)))
     assert calls == [(i, 5) for i in range(1, 6)]
+
+
+ROTARY = """# a two-inertia shaft, driven in rotation
+drive W p 0 velocity=2 rad/s
+mass J1 p 0 0.5
+spring k1 p q 1e4
+mass J2 q 0 0.2
+"""
+
+
+def test_forces_of_a_rotary_circuit_are_moments(tmp_path, capsys):
+    """`forces` on a rotary netlist: N·m, rad/s and rad/(N·m·s) in the text and on the plot.
+    Independent check of the numbers: at ω = 100 rad/s the shaft p–q has
+    K = 1/(jωJ1 + 1/(jω/k1 + 1/(jωJ2))), so |Q0| = |V0/K|."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from mechcirc.circuit import units_of
+    from mechcirc.plotting import plot_forces
+
+    path = tmp_path / "shaft.mcir"
+    path.write_text(ROTARY)
+    assert main(["forces", str(path), "--omega", "100"]) == 0
+    out = capsys.readouterr().out
+    w = 100.0
+    Y = 1j * w * 0.5 + 1 / (1j * w / 1e4 + 1 / (1j * w * 0.2))
+    assert f"|Q0| = {abs(2 * Y):.6g} N·m" in out
+    assert "|Q| [N·m]" in out and "|v| [rad/s]" in out and "rad/(N·m·s)" in out
+    assert "[N]" not in out and "m/s" not in out.replace("rad/s", "")
+    from matplotlib.figure import Figure
+
+    import mechcirc
+    from mechcirc.forces import element_forces
+
+    circuit = mechcirc.load(path)
+    rows, *_ = element_forces(circuit, 100.0)
+    ax = plot_forces(rows, 100.0, ax=Figure().subplots(), units=units_of(circuit.drive))
+    assert ax.get_ylabel() == "|Q| [N·m]"

@@ -100,6 +100,7 @@ def register(sub) -> None:
 
 
 def cmd_forces(args) -> int:
+    from ..circuit import units_of
     from ..forces import element_forces
     check_output_paths(plots=(args.plot,), reads=(args.file,))
     circuit, warns = load_with_warnings(args.file)
@@ -109,7 +110,8 @@ def cmd_forces(args) -> int:
     if args.plot:
         from ..plotting import plot_forces
 
-        save_figure(plot_forces(rows, omega=args.omega, name=circuit.name), args.plot)
+        save_figure(plot_forces(rows, omega=args.omega, name=circuit.name,
+                                units=units_of(circuit.drive)), args.plot)
     if args.json:
         print_json({
             "file": args.file, "name": circuit.name, "omega": args.omega, "K": K, "Q0": Q0,
@@ -119,13 +121,15 @@ def cmd_forces(args) -> int:
                           "v": r.v, "v_abs": r.v_abs, "v_phase_deg": r.v_phase_deg,
                           "share": r.share} for r in rows]})
         return 0
+    u = units_of(circuit.drive)
     print(f"{args.file}: omega = {args.omega:.6g} rad/s ({args.omega / 6.283185307179586:.6g} Hz)"
-          f", K = {K.real:.6g}{K.imag:+.6g}j m/(N·s), |Q0| = {abs(Q0):.6g} N")
+          f", K = {K.real:.6g}{K.imag:+.6g}j {u['K']}, |Q0| = {abs(Q0):.6g} {u['Q']}")
     if flag:
         print("  this omega is on or within rounding of a pole or zero of K (flagged)")
     width = max([len(r.name) for r in rows] + [7])
-    print(f"  {'element':<{width}} {'kind':<6} {'|Q| [N]':>12} {'arg Q [deg]':>11} "
-          f"{'|Q|/|Q0|':>9} {'|v| [m/s]':>12} {'arg v [deg]':>11}")
+    q_head, v_head = f"|Q| [{u['Q']}]", f"|v| [{u['v']}]"
+    print(f"  {'element':<{width}} {'kind':<6} {q_head:>12} {'arg Q [deg]':>11} "
+          f"{'|Q|/|Q0|':>9} {v_head:>12} {'arg v [deg]':>11}")
     for r in rows:
         print(f"  {r.name:<{width}} {r.kind:<6} {r.Q_abs:>12.5g} {_deg(r.Q_phase_deg):>11.2f} "
               f"{r.share:>9.4f} {r.v_abs:>12.5g} {_deg(r.v_phase_deg):>11.2f}")
@@ -140,6 +144,7 @@ def _deg(x: float) -> float:
 
 
 def cmd_compare(args) -> int:
+    from ..circuit import units_of
     from ..interop.skrf import compare
     check_output_paths(plots=(args.plot,), reads=(args.file, args.measured))
     circuit, warns = load_with_warnings(args.file)
@@ -151,8 +156,8 @@ def cmd_compare(args) -> int:
     if args.plot:
         from ..plotting import plot_comparison
 
-        save_figure(plot_comparison(result, name=circuit.name, measured=args.measured),
-                    args.plot)
+        save_figure(plot_comparison(result, name=circuit.name, measured=args.measured,
+                                    units=units_of(circuit.drive)), args.plot)
     if args.json:
         print_json({"file": args.file, "measured": args.measured, **summary})
         return 0
