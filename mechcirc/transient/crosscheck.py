@@ -37,7 +37,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..circuit import Circuit, Drive
+from ..circuit import Circuit
 from ..errors import MechcircError
 from ..verdict import DISAGREES, judge, summarise
 from .simulate import transient
@@ -109,7 +109,9 @@ def _variant(circuit: Circuit, kind: str) -> Circuit:
     if d.kind == kind:
         new = d
     else:
-        new = Drive(d.name, d.n1, d.n2, kind, 1.0, d.line, d.col)
+        # the other kind at unit amplitude; rotary stays rotary (its labels), a motion
+        # law belongs to the velocity drive only
+        new = dataclasses.replace(d, kind=kind, amplitude=1.0, motion=None)
     return dataclasses.replace(circuit, drive=new, initial=())
 
 
