@@ -202,6 +202,10 @@ def _drive_ratio(scene: Scene, m: _Motion) -> tuple[float, str]:
     else:
         r0 = float(np.hypot(*m.vel[d.point]))
         r0_size, r0_text = r0, f"|v_{d.point}|/ω_{m.crank}"
+    if r0_size <= m.tiny and getattr(scene.linkage, "cam", None) is not None:
+        raise GeometryError(f"{scene.source}: at θ = {m.deg:.6g}° the cam dwells: the follower "
+                            f"{m.crank!r} is at rest (x'(θ) = 0), so the drive on it does not "
+                            f"move the mechanism; choose a cam angle in a rise or a return")
     if r0_size <= m.tiny:
         raise GeometryError(
             f"{scene.source}: at θ = {m.deg:.6g}° the drive is at a dead centre: the velocity "

@@ -194,6 +194,7 @@ def motion_model(scene: Scene, omega: float | None = None, *,
     makers = []        # part → maker(kind, name) → function index
     prig, coords = [], []
     travel = {}        # "BLOCK.travel" → its part: a block's travel s is an output body [m]
+    cam = getattr(lk, "cam", None) is not None    # a cam swings the crank: tabulate it too
     for i, part in enumerate(scene.parts):
         crank = cranks[0] if cranks[0] in part else None    # a geared crank alone: below
         if crank is not None:
@@ -202,7 +203,7 @@ def motion_model(scene: Scene, omega: float | None = None, *,
 
             def make(kind, name, i=i, crank=crank):
                 if kind == "angle":
-                    return B.line(i, 0.0, 1.0) if name == crank else B.table(
+                    return B.line(i, 0.0, 1.0) if name == crank and not cam else B.table(
                         i, 0.0, h, ang[name], ang1[name], ang2[name], True,
                         _winding(ang[name], nq))
                 k = "xy".index(kind)
@@ -409,7 +410,7 @@ def _signature(scene: Scene, *extra):
     return (tuple((p, float(x[0]), float(x[1])) for p, x in lk.pose.items()), tuple(lk.ground),
             tuple((k, tuple(v)) for k, v in lk.links.items()),
             tuple((c.link, c.pivot, float(c.omega)) for c in lk.cranks), scene.length_scale,
-            lk.sliders, extra)
+            lk.sliders, getattr(lk, "key", ()), extra)
 
 
 def _memo(key, make):
