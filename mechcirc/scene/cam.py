@@ -138,8 +138,9 @@ def parse_cam(text: str, source: str, raw, linkage: Linkage) -> CamLinkage:
             motion = cam_cycle(raw["law"], rise, dwell, ret, math.radians(stroke),
                                raw.get("return_law"))
         except ValueError as exc:
-            raise err(f"[cam] {exc}", "rise", expected="rise + dwell + return ≤ 360 degrees, "
-                      "stroke_deg ≠ 0") from None
+            key = "stroke_deg" if "stroke" in str(exc) else "rise"
+            raise err(f"[cam] {exc}".replace("stroke=", "stroke [rad] = "), key,
+                      expected="rise + dwell + return ≤ 360 degrees, stroke_deg ≠ 0") from None
         key = ("law", raw["law"], raw.get("return_law"), rise, dwell, ret, stroke)
     else:
         path = raw["table"]
