@@ -375,7 +375,10 @@ def motion_model(scene: Scene, omega: float | None = None, *,
         if isinstance(c, str):
             c = dead_centre(scene, "front" if c.startswith("front") else "back")
         centres[m.name] = c
-        MOI.append([angle_fn(crank0), angle_fn(m.body)])
+        # the window is in shaft angle: with a cam the crank (its follower) swings, so θ
+        # is the drive part's coordinate itself
+        MOI.append([B.line(part_of[crank0], 0.0, 1.0) if cam else angle_fn(crank0),
+                    angle_fn(m.body)])
         MOF.append([m.amplitude, m.window, m.sigma, c])
         mnames.append(m.name)
     body_names = tuple(bodies) + tuple(travel)
