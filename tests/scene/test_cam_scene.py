@@ -211,3 +211,19 @@ def test_simulation_over_a_revolution_against_the_equation_of_motion():
     assert np.max(np.abs(sm.values["k_rod.force"] - F)) <= 5e-7 * fmax
     amax = np.max(np.abs(ydd))
     assert np.max(np.abs(sm.values["H.acceleration_y"] - ydd)) <= 5e-7 * amax
+
+
+def test_a_lift_table_drives_the_lever_through_its_rows(tmp_path):
+    """table = "FILE.csv" (the arm's angle [deg]): the spline passes through every row."""
+    deg = np.arange(0.0, 361.0, 5.0)
+    lift = 4.0 * (1 - np.cos(np.radians(deg)))         # [deg], meets itself at 360
+    (tmp_path / "lift.csv").write_text("angle_deg,displacement\n" + "".join(
+        f"{float(a)!r},{float(v)!r}\n" for a, v in zip(deg, lift)))
+    text = _bad('law = "cycloidal"\nrise = 120.0', 'table = "lift.csv"\n#')
+    for key in ("dwell", "return", "stroke_deg"):
+        text = "\n".join(ln for ln in text.splitlines() if not ln.startswith(key + " ="))
+    (tmp_path / "s.toml").write_text(text)
+    lk = load_scene(tmp_path / "s.toml").linkage
+    m = lk.motion(np.radians(deg))
+    j = lk._index()["lever"]
+    assert np.max(np.abs(np.unwrap(m.q[:, 3 * j + 2]) - np.radians(lift))) <= 1e-13
