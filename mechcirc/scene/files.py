@@ -53,7 +53,8 @@ are converted from ``units`` to metres.  One crank, or several on one shaft (the
 same ``omega``), or cranks geared to the first (``[[gears]]``: crank, ratio =
 ω_crank/ω_first, optional mesh stiffness and damping: a torsion rod between the
 crank and its gear's body); the time-domain tables ``[[moments]]``,
-``[simulate]`` and ``[shaft]`` are read by :mod:`.simfile`.
+``[simulate]`` and ``[shaft]`` are read by :mod:`.simfile`; ``[cam]`` (a disc cam
+swinging the only crank, an oscillating follower, by a motion law) by :mod:`.cam`.
 
 Structure.  Releasing the elastic links and torsion rods splits the moving
 bodies into *rigid parts* (bodies joined through joints other than ground
