@@ -158,7 +158,7 @@ def parse_cam(text: str, source: str, raw, linkage: Linkage) -> CamLinkage:
             prof = cam_profile(motion, num("base_radius"), "oscillating",
                                roller_radius=num("roller_radius", 0.0, allow_zero=True),
                                arm=num("arm"), pivot=num("pivot"),
-                               pressure_limit_deg=raw.get("pressure_limit_deg"))
+                               pressure_limit_deg=num("pressure_limit_deg", 45.0))
         except InputError as exc:
             raise err(f"[cam] the cam cannot be built: {exc}", "base_radius",
                       expected="a base circle the arm's roller can reach (|D − L| < r_b + "
