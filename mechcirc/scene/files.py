@@ -404,9 +404,10 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
         from .simfile import parse_shaft
 
         if "cam" in doc:
+            first = next(iter(doc["shaft"]), "") if isinstance(doc["shaft"], dict) else ""
             raise located(text, source, "a dynamic [shaft] with a [cam] is not supported: the "
                           "cam's law is given against a shaft turning at constant speed",
-                          None, "shaft", expected="remove [shaft] (the cam shaft turns at the "
+                          "shaft", first, expected="remove [shaft] (the cam shaft turns at the "
                           "[[cranks]] omega)")
 
         object.__setattr__(scene, "shaft", parse_shaft(text, source, doc["shaft"], scene))

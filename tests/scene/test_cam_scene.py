@@ -227,3 +227,10 @@ def test_a_lift_table_drives_the_lever_through_its_rows(tmp_path):
     m = lk.motion(np.radians(deg))
     j = lk._index()["lever"]
     assert np.max(np.abs(np.unwrap(m.q[:, 3 * j + 2]) - np.radians(lift))) <= 1e-13
+
+
+def test_a_dynamic_shaft_with_a_cam_is_refused_at_the_shaft():
+    text = TEXT + "\n[shaft]\nflywheel = 1.0\n"
+    with pytest.raises(NetlistError, match=r"dynamic \[shaft\] with a \[cam\]") as exc:
+        parse_scene(text, "s.toml")
+    assert exc.value.line == text.splitlines().index("[shaft]") + 2     # its first key
