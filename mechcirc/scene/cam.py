@@ -24,7 +24,7 @@ import numpy as np
 
 from ..kinematics.linkage import Linkage
 
-__all__ = ["CamLinkage", "parse_cam", "DWELL"]
+__all__ = ["CamLinkage", "parse_cam", "aligned_points", "DWELL"]
 
 #: |x′(θ)| at most this fraction of its peak is the round-off of a dwell's 0: the
 #: follower is at rest there (a law's x′ is exact to ~1e-16 of its peak).
@@ -65,6 +65,17 @@ class CamLinkage(Linkage):
         qdd = m.qddot * (x1 * x1)[:, None] + m.qdot * (w * x2)[:, None]
         return dataclasses.replace(m, theta=th, t=th / w, qdot=qd, qddot=qdd,
                                    parts=m.parts * x1[:, None, None])
+
+
+def aligned_points(cam, n: int) -> int:
+    """The fewest intervals per turn, from ``n`` to 4n, that put a node on every joint of the
+    ``cam``'s pieces (where a derivative of x jumps; a quintic Hermite table across one
+    is ~60 times less accurate), else ``n``."""
+    u = np.asarray(cam.start, dtype=float) / (2 * np.pi)
+    for k in range(n, 4 * n + 1):
+        if np.all(np.abs(u * k - np.round(u * k)) <= 1e-9):
+            return k
+    return n
 
 
 #: The ``[cam]`` table's keys (see docs/scenes.md, "A cam drives the scene").

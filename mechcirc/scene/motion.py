@@ -178,6 +178,10 @@ def motion_model(scene: Scene, omega: float | None = None, *,
     if not (math.isfinite(omega) and omega > 0):
         raise ValueError(f"omega must be a finite number > 0 rad/s, got {omega!r}")
     N = int(table_points)
+    if getattr(lk, "cam", None) is not None and N == TABLE_POINTS:
+        from .cam import aligned_points
+
+        N = aligned_points(lk.cam, N)       # table nodes on the law's joints
     h = TWO_PI / N
     nq = scene.cycle_revolutions                 # the tables span the mechanism's cycle
     ang, ang1, ang2, pos, vel, acc = (dict(x) for x in _rigid_tables(scene, N))

@@ -203,14 +203,14 @@ def test_simulation_over_a_revolution_against_the_equation_of_motion():
     y, ydd, F = _lagrange_reference(sm.time)
     # the frame's travel is along the guide, pointing down: s = −(y − y0)
     assert np.max(np.abs(sm.states[:, 0] + (y - YH0))) <= 1e-11
-    # achieved 1.1e-12 m; the force and the acceleration 1.6e-7 of their largest values,
-    # worst at θ = 300° where the law's third derivative jumps between two nodes of the
-    # 1024-interval kinematic tables (6.9e-9 at 4096; the RK4 step does not matter:
-    # 1.6e-7 at 800 steps a period too); the goal was 1e-6
+    # achieved 6.6e-13 m; the force and the acceleration 2.5e-9 of their largest values,
+    # the RK4 step's error (1.6e-10 at 800 steps a period); the kinematic tables have a
+    # node on each joint of the law (1026 intervals; at 1024, where the third derivative
+    # jumps between two nodes, 1.6e-7); the goal was 1e-6
     fmax = np.max(np.abs(F))
-    assert np.max(np.abs(sm.values["k_rod.force"] - F)) <= 5e-7 * fmax
+    assert np.max(np.abs(sm.values["k_rod.force"] - F)) <= 1e-8 * fmax
     amax = np.max(np.abs(ydd))
-    assert np.max(np.abs(sm.values["H.acceleration_y"] - ydd)) <= 5e-7 * amax
+    assert np.max(np.abs(sm.values["H.acceleration_y"] - ydd)) <= 1e-8 * amax
 
 
 def test_a_lift_table_drives_the_lever_through_its_rows(tmp_path):
