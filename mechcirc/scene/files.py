@@ -53,7 +53,8 @@ are converted from ``units`` to metres.  One crank, or several on one shaft (the
 same ``omega``), or cranks geared to the first (``[[gears]]``: crank, ratio =
 ω_crank/ω_first, optional mesh stiffness and damping: a torsion rod between the
 crank and its gear's body); the time-domain tables ``[[moments]]``,
-``[simulate]`` and ``[shaft]`` are read by :mod:`.simfile`.
+``[simulate]`` and ``[shaft]`` are read by :mod:`.simfile`; ``[cam]`` (a disc cam
+swinging the only crank, an oscillating follower, by a motion law) by :mod:`.cam`.
 
 Structure.  Releasing the elastic links and torsion rods splits the moving
 bodies into *rigid parts* (bodies joined through joints other than ground
@@ -84,7 +85,7 @@ __all__ = ["Scene", "Analysis", "Gear", "SceneMass", "ElasticLink", "Torsion", "
 LENGTH_UNITS = {"m": 1.0, "cm": 1e-2, "mm": 1e-3}
 #: Tables a scene adds to the linkage format.
 SCENE_TABLES = ("masses", "elastic", "torsion", "loads", "drive", "analysis", "moments",
-                "simulate", "gears", "shaft")
+                "simulate", "gears", "shaft", "cam")
 _CLEARANCE = {"clearance": "half-width of the gap [m or rad], 0 for none",
               "clearance_law": "\"elastobacklash\" or \"dead-zone\""}
 #: The tables of a scene file, declared once (see :class:`mechcirc.sources.Table`);
@@ -372,6 +373,10 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
         raise located(text, source, f"a scene needs units = \"m\", \"cm\" or \"mm\" (the length "
                    f"unit of [points]), got {units!r}", None, "units",
                    expected="units = \"mm\" (masses and stiffnesses are SI)")
+    if "cam" in doc:                  # a cam swings the first crank (scene/cam.py)
+        from .cam import parse_cam
+
+        linkage = parse_cam(text, source, doc["cam"], linkage)
     r = _SceneReader(text, source, doc, linkage)
     elastic = r.elastic()
     elastic_links = {x.link for x in elastic}
@@ -397,6 +402,13 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
                                                          scene))
     if "shaft" in doc:
         from .simfile import parse_shaft
+
+        if "cam" in doc:
+            first = next(iter(doc["shaft"]), "") if isinstance(doc["shaft"], dict) else ""
+            raise located(text, source, "a dynamic [shaft] with a [cam] is not supported: the "
+                          "cam's law is given against a shaft turning at constant speed",
+                          "shaft", first, expected="remove [shaft] (the cam shaft turns at the "
+                          "[[cranks]] omega)")
 
         object.__setattr__(scene, "shaft", parse_shaft(text, source, doc["shaft"], scene))
     return scene

@@ -191,7 +191,8 @@ def _motion(scene: Scene, theta: float, state) -> _Motion:
     Lc = lk.length_scale() * L
     S_all = max(max(np.hypot(*v) for v in vel.values()),
                 max(abs(w) for w in ang.values()) * Lc)
-    return _Motion(deg, pos, vel, ang, Lc, ZERO_RATIO * S_all, lk.cranks[0].link)
+    crank = "cam" if getattr(lk, "cam", None) is not None else lk.cranks[0].link
+    return _Motion(deg, pos, vel, ang, Lc, ZERO_RATIO * S_all, crank)
 
 
 def _drive_ratio(scene: Scene, m: _Motion) -> tuple[float, str]:
@@ -203,6 +204,11 @@ def _drive_ratio(scene: Scene, m: _Motion) -> tuple[float, str]:
     else:
         r0 = float(np.hypot(*m.vel[d.point]))
         r0_size, r0_text = r0, f"|v_{d.point}|/ω_{m.crank}"
+    if r0_size <= m.tiny and getattr(scene.linkage, "cam", None) is not None:
+        raise GeometryError(f"{scene.source}: at θ = {m.deg:.6g}° the cam dwells: the follower "
+                            f"{scene.linkage.cranks[0].link!r} is at rest (x'(θ) = 0), so the "
+                            f"drive on it does not move the mechanism; choose a cam angle in a "
+                            f"rise or a return")
     if r0_size <= m.tiny:
         raise GeometryError(
             f"{scene.source}: at θ = {m.deg:.6g}° the drive is at a dead centre: the velocity "

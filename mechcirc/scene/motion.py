@@ -178,6 +178,10 @@ def motion_model(scene: Scene, omega: float | None = None, *,
     if not (math.isfinite(omega) and omega > 0):
         raise ValueError(f"omega must be a finite number > 0 rad/s, got {omega!r}")
     N = int(table_points)
+    if getattr(lk, "cam", None) is not None and N == TABLE_POINTS:
+        from .cam import aligned_points
+
+        N = aligned_points(lk.cam, N)       # table nodes on the law's joints
     h = TWO_PI / N
     nq = scene.cycle_revolutions                 # the tables span the mechanism's cycle
     ang, ang1, ang2, pos, vel, acc = (dict(x) for x in _rigid_tables(scene, N))
@@ -194,6 +198,7 @@ def motion_model(scene: Scene, omega: float | None = None, *,
     makers = []        # part → maker(kind, name) → function index
     prig, coords = [], []
     travel = {}        # "BLOCK.travel" → its part: a block's travel s is an output body [m]
+    cam = getattr(lk, "cam", None) is not None    # a cam swings the crank: tabulate it too
     for i, part in enumerate(scene.parts):
         crank = cranks[0] if cranks[0] in part else None    # a geared crank alone: below
         if crank is not None:
@@ -202,7 +207,7 @@ def motion_model(scene: Scene, omega: float | None = None, *,
 
             def make(kind, name, i=i, crank=crank):
                 if kind == "angle":
-                    return B.line(i, 0.0, 1.0) if name == crank else B.table(
+                    return B.line(i, 0.0, 1.0) if name == crank and not cam else B.table(
                         i, 0.0, h, ang[name], ang1[name], ang2[name], True,
                         _winding(ang[name], nq))
                 k = "xy".index(kind)
@@ -374,7 +379,10 @@ def motion_model(scene: Scene, omega: float | None = None, *,
         if isinstance(c, str):
             c = dead_centre(scene, "front" if c.startswith("front") else "back")
         centres[m.name] = c
-        MOI.append([angle_fn(crank0), angle_fn(m.body)])
+        # the window is in shaft angle: with a cam the crank (its follower) swings, so θ
+        # is the drive part's coordinate itself
+        MOI.append([B.line(part_of[crank0], 0.0, 1.0) if cam else angle_fn(crank0),
+                    angle_fn(m.body)])
         MOF.append([m.amplitude, m.window, m.sigma, c])
         mnames.append(m.name)
     body_names = tuple(bodies) + tuple(travel)
@@ -409,7 +417,7 @@ def _signature(scene: Scene, *extra):
     return (tuple((p, float(x[0]), float(x[1])) for p, x in lk.pose.items()), tuple(lk.ground),
             tuple((k, tuple(v)) for k, v in lk.links.items()),
             tuple((c.link, c.pivot, float(c.omega)) for c in lk.cranks), scene.length_scale,
-            lk.sliders, extra)
+            lk.sliders, getattr(lk, "key", ()), extra)
 
 
 def _memo(key, make):
