@@ -100,7 +100,8 @@ def crosscheck_scene(scene: Scene, theta: float, *, steps_per_period: float = 40
         scene = apply_overrides(scene, gaps)
         notes.append("clearances closed for the check (the circuit has none): "
                      + ", ".join(k.split(".")[0] for k in gaps))
-    circuit = build(scene, theta).circuit
+    built = build(scene, theta)
+    circuit = built.circuit
     found = [r for r in circuit.resonances() if r.kind == "resonance"]
     if not found:
         raise MechcircError(f"{scene.source}: the circuit at θ = {math.degrees(theta):.6g}° has "
@@ -155,7 +156,7 @@ def crosscheck_scene(scene: Scene, theta: float, *, steps_per_period: float = 40
         probe.append(1.5 * ws[-1])
         sw = circuit.sweep(np.array(probe))
         for w, q0 in zip(probe, sw.Q0):
-            qt = _forced_amplitude(model, kern, theta, w, free, h, rate)
+            qt = _forced_amplitude(model, kern, theta, w, free, h, built.drive_ratio)
             v0 = abs(circuit.drive.amplitude)
             rel = float(abs(qt * v0 - abs(q0)) / abs(q0))
             frows.append(judge({"omega": float(w), "Q0_circuit": float(abs(q0)),
@@ -166,13 +167,16 @@ def crosscheck_scene(scene: Scene, theta: float, *, steps_per_period: float = 40
     return SceneCrosscheck(scene.source, math.degrees(theta), rows, tuple(notes), frows)
 
 
-def _forced_amplitude(model, kern, theta, w, free, h, rate):
-    """|drive force| / |drive velocity| of the time-domain motion under a speed ripple at ω."""
+def _forced_amplitude(model, kern, theta, w, free, h, r0):
+    """|drive force| / |drive velocity| of the time-domain motion under a speed ripple at ω.
+
+    The ripple is on the crank (the cam for a cam scene): the drive's velocity is
+    r0 times it, and ``drive.moment``, the generalised force conjugate to the crank
+    angle, is r0 times the drive's force (virtual work), so the ratio is
+    |drive.moment| / (|ripple| r0²), with r0 the circuit's drive ratio at θ.
+    """
     n = model.n_free
-    a = model.arrays
     amp = 1e-7 * w                          # the crank swings ±1e-7 rad
-    r0 = a["PRIG"][0]
-    ratio = abs(kern.feval(a["FI"][r0, 0], a["tabs"], a["FI"][r0, 2], *a["FF"][r0], theta)[1])
     # the step resolves both the fastest mode and the ripple; the record spans 40 periods
     # of the beat between the ripple and the nearest free mode (at least 30 ripple periods)
     hh = min(h, 2 * math.pi / w / 400.0)
@@ -201,7 +205,7 @@ def _forced_amplitude(model, kern, theta, w, free, h, rate):
         cols += [env * np.cos(wd * t), env * np.sin(wd * t)]
     B = np.column_stack(cols)
     coef, *_ = np.linalg.lstsq(B, q, rcond=None)
-    return math.hypot(coef[1], coef[2]) / (amp * ratio)
+    return math.hypot(coef[1], coef[2]) / (amp * r0 * r0)
 
 
 def _modes(dev, dt):
