@@ -297,6 +297,34 @@ class Designs:
         self._plans[key] = p
         return p
 
+    def _evaluate(self, which: NDArray, omega: NDArray):
+        """K and its error bound of designs ``which`` at ``omega``, shape (len(which), W):
+        by the compiled plan, else (no numba, or ``mechcirc._jit.COMPILED`` False) by
+        the numpy evaluation over designs (:func:`mechcirc.reduction.evaluate` with
+        ``designs=``) in chunks of rows; None if the network is not series–parallel."""
+        from . import _jit
+        from .reduction import compiled_evaluator, evaluate, evaluate_designs
+
+        if _jit.COMPILED is not False and compiled_evaluator() is not None:
+            p = self.plan(which)
+            return None if p is None else evaluate_designs(p, omega, error=True)
+        try:
+            tree = self.circuit.tree
+        except NotSeriesParallelError:
+            return None
+        K, err = np.empty((which.size, omega.size), dtype=complex), np.empty((which.size,
+                                                                               omega.size))
+        step = max(1, _NUMPY_CHUNK // max(omega.size, 1))
+        for lo in range(0, which.size, step):
+            rows = which[lo:lo + step]
+            scaled = {e.name: (self.values[i, rows] * self.eta[i, rows])[:, None]
+                      for i, e in enumerate(self.circuit.elements)}
+            ratios = {lv.name: self.ratios[i, rows][:, None]
+                      for i, lv in enumerate(self.circuit.levers)}
+            K[lo:lo + step], err[lo:lo + step] = evaluate(tree, omega, error=True,
+                                                          designs=(scaled, ratios))
+        return K, err
+
     def sweep(self, omega: ArrayLike) -> "DesignSweep":
         """K, Q0, v0, error bound and flags of every design at each ω [rad/s].
 
@@ -312,14 +340,12 @@ class Designs:
             raise InputError("omega must be a one-dimensional array of finite values >= 0")
         D, W = self.size, omega.size
         batched = np.flatnonzero(self.valid)
-        p = self.plan(batched) if batched.size else None
-        if p is None:
+        found = self._evaluate(batched, omega) if batched.size else None
+        if found is None:
             batched = batched[:0]
             K, err = np.empty((D, W), dtype=complex), np.empty((D, W))
         else:
-            from .reduction import evaluate_designs
-
-            K, err = evaluate_designs(p, omega, error=True)
+            K, err = found
             K = singular_limits(K, omega[None, :])
             if batched.size < D:
                 K, err = _spread(K, batched, D), _spread(err, batched, D)
@@ -412,6 +438,10 @@ class Designs:
             if sweep.omega[i] == lo and sweep.omega[j] == hi:
                 ends = sweep.K[:, [i, j]]
         return _extremes(self, lo, hi, resonances, ends)
+
+
+#: Design × ω points per pass of the numpy evaluation over designs (a few MB per array).
+_NUMPY_CHUNK = 1 << 16
 
 
 def _spread(rows: NDArray, where: NDArray, D: int) -> NDArray:
