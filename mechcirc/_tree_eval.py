@@ -201,6 +201,9 @@ class Plan:
     #: The lever of each lever node, in node order (rows of ``ratios``).
     levers: tuple = ()
     _fold: tuple = ()
+    #: ``(tree, scaled, ratios)`` for the numpy evaluation of these designs when the
+    #: compiled kernel is not used (:func:`evaluate` with ``designs=(scaled, ratios)``).
+    numpy: tuple | None = None
 
     def arrays(self) -> tuple:
         return (self.kind, self.cplx, self.c_real, self.c_inv, self.c_om, self.e_real,
@@ -390,18 +393,46 @@ def evaluate_designs(p: Plan, omega: NDArray, error: bool = False, kernel=None):
     compiled plan; returns arrays of shape (D, W).
 
     This is :func:`evaluate`'s compiled path, a design at a time: one design
-    (D = 1) is the single sweep.  Raises RuntimeError without numba.
+    (D = 1) is the single sweep.  Without numba (or with ``mechcirc._jit.COMPILED``
+    False) a plan that carries :attr:`Plan.numpy` is evaluated by :func:`evaluate`
+    over its designs, in chunks of rows (the same numbers); RuntimeError otherwise.
     """
-    kernel = kernel or compiled_evaluator()
-    if kernel is None:
-        raise RuntimeError("evaluating a batch of designs needs numba (pip install numba)")
+    if kernel is None and _jit.COMPILED is not False:
+        kernel = compiled_evaluator()
     omega = np.ascontiguousarray(np.atleast_2d(np.asarray(omega, dtype=float)))
     D = p.designs
     if omega.shape[0] not in (1, D):
         raise ValueError(f"omega must have 1 or {D} rows, got shape {omega.shape}")
+    if kernel is None:
+        if p.numpy is None:
+            raise RuntimeError("evaluating this plan needs numba (pip install numba)")
+        return _evaluate_numpy(p.numpy, omega, D, error)
     K = np.empty((D, omega.shape[1]), dtype=complex)
     rho = np.empty(K.shape if error else (D, 0))
     kernel(omega, *p.arrays(), error, K, rho)
+    return K, (rho if error else None)
+
+
+#: Design × ω points per numpy pass over designs (a few MB per array).
+_NUMPY_CHUNK = 1 << 16
+
+
+def _evaluate_numpy(numpy: tuple, omega: NDArray, D: int, error: bool):
+    """:func:`evaluate_designs` by :func:`evaluate` over rows of designs."""
+    root, scaled, ratios = numpy
+    W = omega.shape[1]
+    K = np.empty((D, W), dtype=complex)
+    rho = np.empty(K.shape if error else (D, 0))
+    step = max(1, _NUMPY_CHUNK // max(W, 1))
+    for lo in range(0, D, step):
+        part = slice(lo, lo + step)
+        w = omega if omega.shape[0] == 1 else omega[part]
+        out = evaluate(root, w, error=error, designs=tuple(
+            {k: v[part] for k, v in d.items()} for d in (scaled, ratios)))
+        if error:
+            K[part], rho[part] = out
+        else:
+            K[part] = out
     return K, (rho if error else None)
 
 

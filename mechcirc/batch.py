@@ -274,8 +274,9 @@ class Designs:
     # -- the batched series–parallel plan ----------------------------------
     def plan(self, which: NDArray):
         """The template's plan with the values of designs ``which``, or None (not
-        series–parallel, or no compiled kernel)."""
-        from .reduction import compiled_evaluator, plan
+        series–parallel); evaluated by the compiled kernel, or without it by numpy
+        over the designs (:attr:`mechcirc.reduction.Plan.numpy`)."""
+        from .reduction import plan
 
         key = which.tobytes()
         if key in self._plans:              # sweep, extremes and resonances share it
@@ -284,46 +285,19 @@ class Designs:
             tree = self.circuit.tree
         except NotSeriesParallelError:
             return None
-        if compiled_evaluator() is None:
-            return None
         p = plan(tree)
         row = {e.name: i for i, e in enumerate(self.circuit.elements)}
         lev = {lv.name: i for i, lv in enumerate(self.circuit.levers)}
         rows = np.array([row[e.name] for e in p.leaves], dtype=np.int64)
         scaled = self.values[rows][:, which] * self.eta[rows][:, which]
         ratios = self.ratios[[lev[lv.name] for lv in p.levers]][:, which]
-        p = p.with_values(scaled, ratios.reshape(len(p.levers), which.size))
+        ratios = ratios.reshape(len(p.levers), which.size)
+        p = replace(p.with_values(scaled, ratios), numpy=(
+            tree, {e.name: scaled[i][:, None] for i, e in enumerate(p.leaves)},
+            {lv.name: ratios[i][:, None] for i, lv in enumerate(p.levers)}))
         self._plans.clear()
         self._plans[key] = p
         return p
-
-    def _evaluate(self, which: NDArray, omega: NDArray):
-        """K and its error bound of designs ``which`` at ``omega``, shape (len(which), W):
-        by the compiled plan, else (no numba, or ``mechcirc._jit.COMPILED`` False) by
-        the numpy evaluation over designs (:func:`mechcirc.reduction.evaluate` with
-        ``designs=``) in chunks of rows; None if the network is not series–parallel."""
-        from . import _jit
-        from .reduction import compiled_evaluator, evaluate, evaluate_designs
-
-        if _jit.COMPILED is not False and compiled_evaluator() is not None:
-            p = self.plan(which)
-            return None if p is None else evaluate_designs(p, omega, error=True)
-        try:
-            tree = self.circuit.tree
-        except NotSeriesParallelError:
-            return None
-        K, err = np.empty((which.size, omega.size), dtype=complex), np.empty((which.size,
-                                                                               omega.size))
-        step = max(1, _NUMPY_CHUNK // max(omega.size, 1))
-        for lo in range(0, which.size, step):
-            rows = which[lo:lo + step]
-            scaled = {e.name: (self.values[i, rows] * self.eta[i, rows])[:, None]
-                      for i, e in enumerate(self.circuit.elements)}
-            ratios = {lv.name: self.ratios[i, rows][:, None]
-                      for i, lv in enumerate(self.circuit.levers)}
-            K[lo:lo + step], err[lo:lo + step] = evaluate(tree, omega, error=True,
-                                                          designs=(scaled, ratios))
-        return K, err
 
     def sweep(self, omega: ArrayLike) -> "DesignSweep":
         """K, Q0, v0, error bound and flags of every design at each ω [rad/s].
@@ -340,12 +314,14 @@ class Designs:
             raise InputError("omega must be a one-dimensional array of finite values >= 0")
         D, W = self.size, omega.size
         batched = np.flatnonzero(self.valid)
-        found = self._evaluate(batched, omega) if batched.size else None
-        if found is None:
+        p = self.plan(batched) if batched.size else None
+        if p is None:
             batched = batched[:0]
             K, err = np.empty((D, W), dtype=complex), np.empty((D, W))
         else:
-            K, err = found
+            from .reduction import evaluate_designs
+
+            K, err = evaluate_designs(p, omega, error=True)
             K = singular_limits(K, omega[None, :])
             if batched.size < D:
                 K, err = _spread(K, batched, D), _spread(err, batched, D)
@@ -438,10 +414,6 @@ class Designs:
             if sweep.omega[i] == lo and sweep.omega[j] == hi:
                 ends = sweep.K[:, [i, j]]
         return _extremes(self, lo, hi, resonances, ends)
-
-
-#: Design × ω points per pass of the numpy evaluation over designs (a few MB per array).
-_NUMPY_CHUNK = 1 << 16
 
 
 def _spread(rows: NDArray, where: NDArray, D: int) -> NDArray:

@@ -226,9 +226,8 @@ def test_without_the_compiled_kernel_the_sweep_is_batched_in_numpy(monkeypatch):
     monkeypatch.setattr(_tree_eval, "_KERNEL", [None])      # as without numba
     ds = designs(text, params)
     s, r = ds.sweep(OMEGA), ds.resonances(omega_max=1e4)
-    # The sweep goes through the numpy evaluation over designs; the resonances'
-    # polishing needs the compiled plan, so they take the single path.
-    assert list(s.single) == [] and list(r.single) == [0, 1, 2, 3]
+    # Sweep and resonances' polishing through the numpy evaluation over designs.
+    assert list(s.single) == list(r.single) == []
     np.testing.assert_array_equal(s.K, s_ref.K)            # numpy path = compiled plan
     np.testing.assert_array_equal(s.flags, s_ref.flags)
     for d in range(4):
@@ -343,12 +342,12 @@ def test_numpy_batch_is_the_numpy_single_path(numpy_only, text, params):
 
 
 def test_numpy_batch_at_each_designs_own_points_and_in_chunks(numpy_only, monkeypatch):
-    from mechcirc import batch
+    from mechcirc import _tree_eval
     from mechcirc.reduction import evaluate
 
     params = {"r": np.linspace(0.5, 3, 7), "m": np.geomspace(0.1, 10, 7)}
     ds = designs(LEVER, params)
-    monkeypatch.setattr(batch, "_NUMPY_CHUNK", 3 * OMEGA.size)    # 3 designs per pass
+    monkeypatch.setattr(_tree_eval, "_NUMPY_CHUNK", 3 * OMEGA.size)    # 3 designs per pass
     s = ds.sweep(OMEGA)
     rng = np.random.default_rng(5)
     w = rng.uniform(1.0, 1e3, (ds.size, 9))                       # (D, W): own points
