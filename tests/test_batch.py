@@ -361,3 +361,8 @@ def test_numpy_batch_at_each_designs_own_points_and_in_chunks(numpy_only, monkey
         Kd, ed = evaluate(c.tree, w[d], error=True)
         np.testing.assert_array_equal(K[d], Kd)
         np.testing.assert_array_equal(err[d], ed)
+
+
+def test_numpy_batch_resonances_are_find_resonances(numpy_only):
+    # The batched secant polishes on the numpy evaluation over designs.
+    test_batched_resonances_are_find_resonances(STB.read_text(), stb_params(12, 3), 12)
