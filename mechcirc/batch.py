@@ -10,7 +10,8 @@ the result, :class:`Designs`, evaluates
 * K, Q0, v0, the error bound and the flags on a D × W grid in one pass of the
   compiled series–parallel plan (:meth:`mechcirc.reduction.Plan.with_values`
   and :func:`mechcirc.reduction.evaluate_designs`: one design is the single
-  sweep, the same code);
+  sweep, the same code; without numba the same plan's tree evaluated by numpy
+  over the designs, the single path's numbers);
 * the exact resonances of every design from stacked eigenvalue problems, one
   LAPACK call per stack, each root polished (:meth:`Designs.resonances`);
 * the true extremes of |K| and |Q0| over a band (:meth:`Designs.extremes`).
@@ -303,7 +304,7 @@ class Designs:
         """K, Q0, v0, error bound and flags of every design at each ω [rad/s].
 
         The valid designs of a series–parallel network go through the compiled
-        plan in one pass; the others (``DesignSweep.single``) through
+        plan (without numba: numpy over the designs) in one pass; the others (``DesignSweep.single``) through
         :func:`mechcirc.sweep` one by one.  Each row equals the single
         design's :class:`~mechcirc.Sweep` (K, error and flags).
         """
