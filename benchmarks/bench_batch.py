@@ -147,7 +147,7 @@ def main():
         import numba
         compiled = f"numba {numba.__version__}"
     except ImportError:
-        compiled = "no numba (every design takes the single path)"
+        compiled = "no numba (the numpy path over designs)"
     print(f"{platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}, "
           f"numpy {np.__version__}, scipy {scipy.__version__}, {compiled}; "
           f"load {os.getloadavg()[0]:.2f}")

@@ -34,7 +34,7 @@ _U_RECIP = 4 * _U
 
 
 def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: bool = False,
-             error: bool = False, _mode: str = "auto"):
+             error: bool = False, designs: tuple | None = None, _mode: str = "auto"):
     """K(ω) [m/(N·s)] of the tree at each ω [rad/s], vectorised.
 
     With ``keep=True`` returns ``(K, values)`` where ``values`` maps
@@ -45,6 +45,14 @@ def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: boo
     for callers of the former condition number).  Exact poles and zeros give
     ±inf or 0 without warnings (their bound is inf); ``inf - inf`` gives NaN
     (callers flag it).
+
+    ``designs=(scaled, ratios)`` evaluates D designs of the tree's topology in
+    one numpy pass: ``scaled`` maps each leaf's element name to its value·η and
+    ``ratios`` each lever's name to its ratio, arrays of shape (D, 1) that
+    broadcast against ω (shape (W,), or (D, W) for each design's own points);
+    K and the bound then have shape (D, W), each row the same IEEE operations
+    as the single design's evaluation.  The values must be positive and finite
+    (a leaf group is then present exactly where it has leaves).
 
     Notes
     -----
@@ -72,7 +80,10 @@ def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: boo
     cancellation keeps a bound of a few hundred u.
     """
     omega = np.asarray(omega, dtype=float)
-    if not keep and _mode == "auto" and _jit.COMPILED is not False:
+    if designs is not None:
+        D = next(iter(designs[0].values())).shape[0]
+        omega = np.broadcast_to(omega, (D, omega.shape[-1]))
+    elif not keep and _mode == "auto" and _jit.COMPILED is not False:
         p = plan(root)
         if _jit.COMPILED or _KERNEL or p.kind.size * omega.size >= KERNEL_MIN_WORK:
             kernel = compiled_evaluator()
@@ -82,12 +93,22 @@ def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: boo
         # Fast pass with numpy's reciprocal as is; it gives NaN for 1/0 where
         # 1/0 = ∞ is wanted, and a NaN never disappears downstream: the points
         # that end non-finite are evaluated again with the exact special cases.
-        out = evaluate(root, omega, error=error, condition=condition, _mode="fast")
+        out = evaluate(root, omega, error=error, condition=condition, designs=designs,
+                       _mode="fast")
         K = out[0] if isinstance(out, tuple) else out
         bad = ~np.isfinite(K)
+        sub = None
+        if designs is not None:           # again the whole rows of those designs
+            bad = np.broadcast_to(bad.any(axis=1)[:, None], bad.shape)
+            rows = bad[:, 0]
+            sub = tuple({k: v[rows] for k, v in d.items()} for d in designs)
         if bad.any():
-            again = evaluate(root, omega[bad], error=error, condition=condition,
+            w = omega[bad] if sub is None else omega[bad].reshape(-1, omega.shape[1])
+            again = evaluate(root, w, error=error, condition=condition, designs=sub,
                              _mode="checked")
+            if sub is not None:
+                again = tuple(a.ravel() for a in again) if isinstance(again, tuple) \
+                    else again.ravel()
             if isinstance(out, tuple):
                 K[bad], out[1][bad] = again
             else:
@@ -102,20 +123,21 @@ def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: boo
             if isinstance(node, Leaf):
                 continue
             if isinstance(node, Reflect):
-                child = _value_of(node.child, values, omega, inv_omega, track)
-                val = _Value(child.imaginary, node.lever.reflect(child.array))
+                child = _value_of(node.child, values, omega, inv_omega, track, designs)
+                r = None if designs is None else designs[1][node.lever.name]
+                val = _Value(child.imaginary, node.lever.reflect(child.array, r))
                 if track:
-                    val.mag = node.lever.reflect(child.mag)
+                    val.mag = node.lever.reflect(child.mag, r)
                     # (a full array even over a single leaf, whose ρ is a scalar)
                     val.rho = np.broadcast_to(child.rho + 2 * _U, omega.shape).copy()
             else:
-                val = _combine(node, values, omega, inv_omega, track, keep, checked)
+                val = _combine(node, values, omega, inv_omega, track, keep, checked, designs)
             if not keep:
                 kids = node.children if isinstance(node, (Series, Parallel)) else (node.child,)
                 for c in kids:
                     values.pop(id(c), None)
             values[id(node)] = val
-        top = _value_of(root, values, omega, inv_omega, track)
+        top = _value_of(root, values, omega, inv_omega, track, designs)
     K = top.complex()
     if keep:
         return K, {k: v.complex() for k, v in values.items()}
@@ -179,6 +201,9 @@ class Plan:
     #: The lever of each lever node, in node order (rows of ``ratios``).
     levers: tuple = ()
     _fold: tuple = ()
+    #: ``(tree, scaled, ratios)`` for the numpy evaluation of these designs when the
+    #: compiled kernel is not used (:func:`evaluate` with ``designs=(scaled, ratios)``).
+    numpy: tuple | None = None
 
     def arrays(self) -> tuple:
         return (self.kind, self.cplx, self.c_real, self.c_inv, self.c_om, self.e_real,
@@ -368,18 +393,46 @@ def evaluate_designs(p: Plan, omega: NDArray, error: bool = False, kernel=None):
     compiled plan; returns arrays of shape (D, W).
 
     This is :func:`evaluate`'s compiled path, a design at a time: one design
-    (D = 1) is the single sweep.  Raises RuntimeError without numba.
+    (D = 1) is the single sweep.  Without numba (or with ``mechcirc._jit.COMPILED``
+    False) a plan that carries :attr:`Plan.numpy` is evaluated by :func:`evaluate`
+    over its designs, in chunks of rows (the same numbers); RuntimeError otherwise.
     """
-    kernel = kernel or compiled_evaluator()
-    if kernel is None:
-        raise RuntimeError("evaluating a batch of designs needs numba (pip install numba)")
+    if kernel is None and _jit.COMPILED is not False:
+        kernel = compiled_evaluator()
     omega = np.ascontiguousarray(np.atleast_2d(np.asarray(omega, dtype=float)))
     D = p.designs
     if omega.shape[0] not in (1, D):
         raise ValueError(f"omega must have 1 or {D} rows, got shape {omega.shape}")
+    if kernel is None:
+        if p.numpy is None:
+            raise RuntimeError("evaluating this plan needs numba (pip install numba)")
+        return _evaluate_numpy(p.numpy, omega, D, error)
     K = np.empty((D, omega.shape[1]), dtype=complex)
     rho = np.empty(K.shape if error else (D, 0))
     kernel(omega, *p.arrays(), error, K, rho)
+    return K, (rho if error else None)
+
+
+#: Design × ω points per numpy pass over designs (a few MB per array).
+_NUMPY_CHUNK = 1 << 16
+
+
+def _evaluate_numpy(numpy: tuple, omega: NDArray, D: int, error: bool):
+    """:func:`evaluate_designs` by :func:`evaluate` over rows of designs."""
+    root, scaled, ratios = numpy
+    W = omega.shape[1]
+    K = np.empty((D, W), dtype=complex)
+    rho = np.empty(K.shape if error else (D, 0))
+    step = max(1, _NUMPY_CHUNK // max(W, 1))
+    for lo in range(0, D, step):
+        part = slice(lo, lo + step)
+        w = omega if omega.shape[0] == 1 else omega[part]
+        out = evaluate(root, w, error=error, designs=tuple(
+            {k: v[part] for k, v in d.items()} for d in (scaled, ratios)))
+        if error:
+            K[part], rho[part] = out
+        else:
+            K[part] = out
     return K, (rho if error else None)
 
 
@@ -409,10 +462,11 @@ class _Value:
         return _Value(False, _reciprocal(self.array))
 
 
-def _value_of(node: Node, values: dict, omega, inv_omega, track: bool = False) -> _Value:
+def _value_of(node: Node, values: dict, omega, inv_omega, track: bool = False,
+              designs: tuple | None = None) -> _Value:
     if isinstance(node, Leaf):
         e = node.element
-        real, inv, om = law_terms(e.kind, _scaled(e))
+        real, inv, om = law_terms(e.kind, _scaled(e, designs))
         if LAWS[e.kind].power < 0:
             v = _Value(True, inv_omega * inv)
         elif LAWS[e.kind].power > 0:
@@ -426,13 +480,17 @@ def _value_of(node: Node, values: dict, omega, inv_omega, track: bool = False) -
     return values[id(node)]
 
 
-def _scaled(e: Element) -> np.float64:
+def _scaled(e: Element, designs: tuple | None = None):
     """value · η as a numpy float, so that 1/0 = ∞ (flagged) instead of ZeroDivisionError
-    when the product underflows (a value near 1e-308 times a small η)."""
+    when the product underflows (a value near 1e-308 times a small η); with
+    ``designs`` (see :func:`evaluate`) the designs' values·η, shape (D, 1)."""
+    if designs is not None:
+        return designs[0][e.name]
     return np.float64(e.value) * np.float64(e.eta)
 
 
-def _leaf_term(e: Element, series: bool, fast: bool = False) -> tuple[int, float]:
+def _leaf_term(e: Element, series: bool, fast: bool = False,
+               designs: tuple | None = None) -> tuple[int, Any]:
     """Where element ``e`` enters a series node's impedance sum (``series``) or a
     parallel node's admittance sum, and its coefficient there: slot 0 the real
     part, +1 the part times ω, −1 the part times 1/ω (by :func:`~mechcirc.circuit.law_terms`).
@@ -447,22 +505,25 @@ def _leaf_term(e: Element, series: bool, fast: bool = False) -> tuple[int, float
             real, inv, om = (float(t) for t in
                              law_terms(e.kind, _scaled(e), admittance=not series))
     else:
-        real, inv, om = law_terms(e.kind, _scaled(e), admittance=not series)
+        real, inv, om = law_terms(e.kind, _scaled(e, designs), admittance=not series)
     p = LAWS[e.kind].power
     slot = p if series else -p
     return slot, (real if slot == 0 else om if slot > 0 else inv)
 
 
 def _combine(node, values: dict, omega, inv_omega, track: bool = False,
-             keep: bool = True, checked: bool = True) -> _Value:
-    """Series: K = Σ K_i.  Parallel: 1/K = Σ 1/K_i.  Leaves are grouped by kind."""
+             keep: bool = True, checked: bool = True, designs: tuple | None = None) -> _Value:
+    """Series: K = Σ K_i.  Parallel: 1/K = Σ 1/K_i.  Leaves are grouped by kind.
+
+    A leaf group takes part where its sum is nonzero; over designs (arrays of
+    positive finite values·η, each term nonzero and all of one sign) where it has leaves."""
     series = isinstance(node, Series)
     real = im_inv = im_omega = 0.0      # leaf terms: real + j(im_inv/ω + im_omega·ω)
     n_real = n_inv = n_omega = 0
     parts: list[_Value] = []
     for c in node.children:
         if isinstance(c, Leaf):
-            slot, term = _leaf_term(c.element, series)
+            slot, term = _leaf_term(c.element, series, designs=designs)
             if slot == 0:
                 real += term
                 n_real += 1
@@ -478,10 +539,14 @@ def _combine(node, values: dict, omega, inv_omega, track: bool = False,
         terms = [v.reciprocal(checked) for v in parts]
     else:
         terms = parts
+    if designs is not None:
+        has_real, has_inv, has_omega = n_real > 0, n_inv > 0, n_omega > 0
+    else:
+        has_real, has_inv, has_omega = bool(real), bool(im_inv), bool(im_omega)
     imag = None
-    if im_inv:
+    if has_inv:
         imag = inv_omega * im_inv
-    if im_omega:
+    if has_omega:
         imag = omega * im_omega if imag is None else imag + omega * im_omega
     cplx = None
     # A parallel node's terms are fresh reciprocals, and without ``keep`` a
@@ -499,7 +564,7 @@ def _combine(node, values: dict, omega, inv_omega, track: bool = False,
                 cplx = v.array.copy() if own else v.array
             else:
                 cplx += v.array
-    if real:
+    if has_real:
         cplx = np.full(omega.shape, real, dtype=complex) if cplx is None else cplx + real
     if cplx is None and imag is None:
         # Every term was exactly 0 (a value·η of ∞ gives 1/∞ = 0): the sum is 0.
@@ -516,9 +581,9 @@ def _combine(node, values: dict, omega, inv_omega, track: bool = False,
         # Leaf groups: n same-signed scalars summed (n·u), value·η and 1/s (2u),
         # times ω or 1/ω (2u).
         bound = None
-        if im_inv:
+        if has_inv:
             bound = (abs(im_inv) * ((n_inv + 4) * _U + mu)) * inv_omega
-        if im_omega:
+        if has_omega:
             t = (abs(im_omega) * ((n_omega + 4) * _U + mu)) * omega
             bound = t if bound is None else np.add(bound, t, out=bound)
         for v in parts:
@@ -532,7 +597,7 @@ def _combine(node, values: dict, omega, inv_omega, track: bool = False,
             bound = t if bound is None else np.add(bound, t, out=bound)
         if bound is None:
             bound = np.zeros(omega.shape)
-        if real:
+        if has_real:
             bound += abs(real) * ((n_real + 2) * _U + mu)
         mag = np.abs(total.array)
         inv = np.reciprocal(mag)

@@ -10,7 +10,8 @@ the result, :class:`Designs`, evaluates
 * K, Q0, v0, the error bound and the flags on a D × W grid in one pass of the
   compiled series–parallel plan (:meth:`mechcirc.reduction.Plan.with_values`
   and :func:`mechcirc.reduction.evaluate_designs`: one design is the single
-  sweep, the same code);
+  sweep, the same code; without numba the same plan's tree evaluated by numpy
+  over the designs, the single path's numbers);
 * the exact resonances of every design from stacked eigenvalue problems, one
   LAPACK call per stack, each root polished (:meth:`Designs.resonances`);
 * the true extremes of |K| and |Q0| over a band (:meth:`Designs.extremes`).
@@ -274,8 +275,9 @@ class Designs:
     # -- the batched series–parallel plan ----------------------------------
     def plan(self, which: NDArray):
         """The template's plan with the values of designs ``which``, or None (not
-        series–parallel, or no compiled kernel)."""
-        from .reduction import compiled_evaluator, plan
+        series–parallel); evaluated by the compiled kernel, or without it by numpy
+        over the designs (:attr:`mechcirc.reduction.Plan.numpy`)."""
+        from .reduction import plan
 
         key = which.tobytes()
         if key in self._plans:              # sweep, extremes and resonances share it
@@ -284,15 +286,16 @@ class Designs:
             tree = self.circuit.tree
         except NotSeriesParallelError:
             return None
-        if compiled_evaluator() is None:
-            return None
         p = plan(tree)
         row = {e.name: i for i, e in enumerate(self.circuit.elements)}
         lev = {lv.name: i for i, lv in enumerate(self.circuit.levers)}
         rows = np.array([row[e.name] for e in p.leaves], dtype=np.int64)
         scaled = self.values[rows][:, which] * self.eta[rows][:, which]
         ratios = self.ratios[[lev[lv.name] for lv in p.levers]][:, which]
-        p = p.with_values(scaled, ratios.reshape(len(p.levers), which.size))
+        ratios = ratios.reshape(len(p.levers), which.size)
+        p = replace(p.with_values(scaled, ratios), numpy=(
+            tree, {e.name: scaled[i][:, None] for i, e in enumerate(p.leaves)},
+            {lv.name: ratios[i][:, None] for i, lv in enumerate(p.levers)}))
         self._plans.clear()
         self._plans[key] = p
         return p
@@ -301,7 +304,7 @@ class Designs:
         """K, Q0, v0, error bound and flags of every design at each ω [rad/s].
 
         The valid designs of a series–parallel network go through the compiled
-        plan in one pass; the others (``DesignSweep.single``) through
+        plan (without numba: numpy over the designs) in one pass; the others (``DesignSweep.single``) through
         :func:`mechcirc.sweep` one by one.  Each row equals the single
         design's :class:`~mechcirc.Sweep` (K, error and flags).
         """

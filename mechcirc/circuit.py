@@ -189,11 +189,13 @@ class Lever:
     line: int = 0
     col: int = 0
 
-    def reflect(self, K):
-        """K [m/(N·s)] of a sub-network on the secondary, seen from the primary: K / r².
+    def reflect(self, K, ratio=None):
+        """K [m/(N·s)] of a sub-network on the secondary, seen from the primary: K / r²
+        (r the lever's ratio, or ``ratio``: an array of them over designs).
 
         Divided twice: r² overflows a float for r > 1.3e154."""
-        return K / self.ratio / self.ratio
+        r = self.ratio if ratio is None else ratio
+        return K / r / r
 
 
 @dataclass(frozen=True)

@@ -217,7 +217,7 @@ def test_array_expressions_are_the_scalar_ones(source):
         assert not bad[i] and values[i] == ref          # the same IEEE operations
 
 
-def test_without_the_compiled_kernel_every_design_takes_the_single_path(monkeypatch):
+def test_without_the_compiled_kernel_the_sweep_is_batched_in_numpy(monkeypatch):
     from mechcirc import _tree_eval
 
     text, params = STB.read_text(), stb_params(4, 9)
@@ -226,7 +226,8 @@ def test_without_the_compiled_kernel_every_design_takes_the_single_path(monkeypa
     monkeypatch.setattr(_tree_eval, "_KERNEL", [None])      # as without numba
     ds = designs(text, params)
     s, r = ds.sweep(OMEGA), ds.resonances(omega_max=1e4)
-    assert list(s.single) == list(r.single) == [0, 1, 2, 3]
+    # Sweep and resonances' polishing through the numpy evaluation over designs.
+    assert list(s.single) == list(r.single) == []
     np.testing.assert_array_equal(s.K, s_ref.K)            # numpy path = compiled plan
     np.testing.assert_array_equal(s.flags, s_ref.flags)
     for d in range(4):
@@ -304,3 +305,64 @@ def test_batched_damped_resonances_against_mpmath():
             assert r.error >= rel                            # the estimate covers it
             assert r.zeta == pytest.approx(float(-mpmath.re(s) / abs(s)), rel=1e-12, abs=1e-15)
             assert r.omega_d == pytest.approx(float(abs(mpmath.im(s))), rel=1e-12, abs=1e-12)
+
+
+@pytest.fixture
+def numpy_only():
+    """The numpy paths only (``mechcirc._jit.COMPILED`` False), as without numba."""
+    from mechcirc import _jit
+
+    saved = _jit.COMPILED
+    _jit.COMPILED = False
+    yield
+    _jit.COMPILED = saved
+
+
+@pytest.mark.parametrize("text, params", [
+    (STB.read_text(), stb_params(25, 1)),
+    (LEVER, {"r": np.linspace(0.5, 3, 7), "m": np.geomspace(0.1, 10, 7)}),
+    (DAMPED, {"c": np.geomspace(1e-3, 1e3, 7), "k": np.linspace(1e3, 1e5, 7)}),
+    # ω on the pole of m | k for the first design (ω² = k/m = 100): K = ∞, flagged.
+    (".param k=100\nmass m a 0 1\nspring s a 0 k\ndrive V a 0 velocity=1\n",
+     {"k": np.array([100.0, 400.0, 2500.0])}),
+])
+def test_numpy_batch_is_the_numpy_single_path(numpy_only, text, params):
+    # ω = 0 and an exact pole send rows through the checked (1/0 = ∞) pass.
+    omega = np.concatenate([[0.0, 10.0], OMEGA])
+    ds = designs(text, params)
+    s = ds.sweep(omega)
+    assert s.single.size == 0 and not s.failed         # one numpy pass, no design alone
+    flags = s.flags
+    for d in range(ds.size):
+        ref = one(text, params, d).sweep(omega)
+        # The same IEEE operations per design: equal (the brief's bound is 1e-13 relative).
+        np.testing.assert_array_equal(s.K[d], ref.K)
+        np.testing.assert_array_equal(s.error[d], ref.error)
+        np.testing.assert_array_equal(flags[d], ref.flags)
+
+
+def test_numpy_batch_at_each_designs_own_points_and_in_chunks(numpy_only, monkeypatch):
+    from mechcirc import _tree_eval
+    from mechcirc.reduction import evaluate
+
+    params = {"r": np.linspace(0.5, 3, 7), "m": np.geomspace(0.1, 10, 7)}
+    ds = designs(LEVER, params)
+    monkeypatch.setattr(_tree_eval, "_NUMPY_CHUNK", 3 * OMEGA.size)    # 3 designs per pass
+    s = ds.sweep(OMEGA)
+    rng = np.random.default_rng(5)
+    w = rng.uniform(1.0, 1e3, (ds.size, 9))                       # (D, W): own points
+    scaled = {e.name: (ds.values[i] * ds.eta[i])[:, None]
+              for i, e in enumerate(ds.circuit.elements)}
+    ratios = {lv.name: ds.ratios[i][:, None] for i, lv in enumerate(ds.circuit.levers)}
+    K, err = evaluate(ds.circuit.tree, w, error=True, designs=(scaled, ratios))
+    for d in range(ds.size):
+        c = one(LEVER, params, d)
+        np.testing.assert_array_equal(s.K[d], c.sweep(OMEGA).K)
+        Kd, ed = evaluate(c.tree, w[d], error=True)
+        np.testing.assert_array_equal(K[d], Kd)
+        np.testing.assert_array_equal(err[d], ed)
+
+
+def test_numpy_batch_resonances_are_find_resonances(numpy_only):
+    # The batched secant polishes on the numpy evaluation over designs.
+    test_batched_resonances_are_find_resonances(STB.read_text(), stb_params(12, 3), 12)
