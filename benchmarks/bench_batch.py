@@ -22,7 +22,10 @@ It checks that both agree (K, roots) and prints the per-design times and their
 ratio (goal ≤ 2×).  The compiled kernel is loaded before timing.  It prints; it
 asserts nothing.  Run from the repository root::
 
-    python benchmarks/bench_batch.py [--big] [--repeats N]
+    python benchmarks/bench_batch.py [--big] [--repeats N] [--no-numba]
+
+``--no-numba`` hides numba (``sys.modules["numba"] = None`` before mechcirc is
+imported), as in an install without it: the batch then runs in numpy.
 """
 
 from __future__ import annotations
@@ -30,8 +33,12 @@ from __future__ import annotations
 import argparse
 import os
 import platform
+import sys
 import time
 from pathlib import Path
+
+if "--no-numba" in sys.argv:
+    sys.modules["numba"] = None  # type: ignore[assignment]
 
 import numpy as np
 
@@ -139,6 +146,8 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--big", action="store_true", help="also 1e5 designs")
     ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--no-numba", action="store_true",
+                    help="hide numba (read before import, see the docstring)")
     args = ap.parse_args()
     import scipy
 

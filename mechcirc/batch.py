@@ -346,7 +346,7 @@ class Designs:
         from the stamps (:func:`mechcirc.nodal.stamps`); undamped, the pencils
         reduced by a batched Cholesky factorisation of the mass matrices and
         solved by one stacked ``eigvalsh`` call, every root polished by a batched
-        secant on the design's own K(ω) (the compiled plan with its error
+        secant on the design's own K(ω) (the plan, compiled or in numpy, with its error
         bound); damped, the companion matrices in one stacked ``eigvals`` call,
         every root polished by Newton on det(s²M + sD + K)
         (:func:`mechcirc.resonances.batched_roots`).  The others (a mass matrix
