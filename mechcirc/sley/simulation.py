@@ -112,10 +112,11 @@ class SleyResult:
         the accuracy warnings.
     error_estimate : float or None
         RK4 methods: the largest change of an extremum of any of the scene's
-        outputs (accelerations, rod moments and twists, …) when the run is
-        repeated at half the step, relative to that quantity's largest magnitude
-        (``docs/sley.md`` compares it with the true error); None for the scipy
-        methods and with ``error_estimate=False``.
+        outputs (accelerations, rod moments and twists, …) between the run at
+        the step and the run at half the step (the one returned), relative to
+        that quantity's largest magnitude (``docs/sley.md`` compares it with the
+        true error); the scipy methods: the same change between the runs at
+        rtol and rtol/100 (the one returned); None with ``error_estimate=False``.
     periodicity : float or None
         The same change from the previous revolution (None for R = 1).
     scene_extrema : dict
@@ -309,9 +310,10 @@ def simulate_params(params: SleyParameters, revolutions: int = 5, method: str | 
                     error_estimate: bool = True) -> SleyResult:
     """:func:`simulate` for explicit :class:`SleyParameters` (same options).
 
-    ``error_estimate`` (rk4 methods): repeat the run at half the step and keep
-    the relative change of the extrema as ``result.error_estimate`` (about
-    three times the cost).  A :class:`SleyAccuracyWarning` is issued when it or
+    ``error_estimate`` (rk4 methods): repeat the run at half the step, return
+    that run and keep the relative change of the extrema as
+    ``result.error_estimate`` (about three times the cost).  A
+    :class:`SleyAccuracyWarning` is issued when it or
     the periodicity exceeds 1e-3, or fewer steps per period than the default
     are used.  The run is the scene's (:func:`mechcirc.scene.simulate_scene`).
     """
