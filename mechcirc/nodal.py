@@ -249,21 +249,24 @@ def solve(system: NodalSystem, omega: ArrayLike, *, refine: bool = True,
             # Only the rows needed at singular points are kept.
             sing = ~np.isfinite(Ki) | (ei >= 1.0)
             kept = {int(idx[k]): v for k, v in kept_i.items() if sing[k]}
-    # No correct digit even from the double-double LU (cond(A) beyond about
-    # 1e30), or A(ω) exactly singular: a singular point.  Where only float64
-    # factors were tried (no refinement, or more than DD_LIMIT unknowns), a
-    # refinement that does not contract says no more than "no digit known":
-    # K stays finite with an infinite error (flag 2), never a pole.  The
+    # A(ω) exactly singular: a singular point.  A refinement that does not
+    # contract (float64 factors, or even the double-double LU: cond(A)
+    # beyond about 1e30) says no more than "no digit known": K stays finite
+    # with an infinite error (flag 2), never a pole, unless the iterate's
+    # backward error says A(ω) is singular within rounding.  The
     # residual-rounding bound below is a worst case and not used here.
-    singular = ok & (~np.isfinite(K) | (err >= 1.0) & checked)
+    singular = ok & ~np.isfinite(K)
     rows: Any = x if keep_x else kept
-    for i in np.flatnonzero(ok & (err >= 1.0) & ~checked & np.isfinite(K)):
-        # Only float64 factors: singular if the iterate's element-wise
-        # backward error says A(ω) is within rounding of its values of a
-        # singular matrix; a stiff network's garbage iterate is not.
+    for i in np.flatnonzero(ok & (err >= 1.0) & np.isfinite(K)):
+        # Singular if the iterate's element-wise backward error says A(ω) is
+        # within rounding of its values of a singular matrix; a stiff
+        # network's garbage iterate is not (seen with the double-double LU
+        # too, cond(A) beyond 1e30 at regular ω of a tree).
         singular[i] = _backward_error(system, omega[i], rows[i]) <= SINGULAR_BACKWARD
     with np.errstate(all="ignore"):
-        err = err + residual_rounding(system, S)
+        # + the rounding of K to float64 (u), which the refinement's
+        # estimate of the double-double K does not include.
+        err = err + residual_rounding(system, S) + np.finfo(float).eps / 2
         err = np.where(ok, np.maximum(err, np.finfo(float).eps), np.inf)
     if limits:
         K, err = _singular_points(system, omega, rows, K, err, singular, steps)
@@ -308,8 +311,8 @@ def _refined(solve_fn, residual, omega, rhs, system, refine: bool, steps: int):
     x0 = solve_fn(b)
     if not refine:
         # No refinement: the first correction is still the error estimate.
-        d = solve_fn(residual(omega, x0, None, rhs))
-        return (x0, None, *_estimate(system, x0, None, d, x0))
+        r = residual(omega, x0, None, rhs)
+        return (x0, None, *_estimate(system, x0, None, solve_fn(r), None, r))
     xh, xl = x0.copy(), np.zeros_like(x0)
     prev = x0
     est = np.full(omega.size, np.inf)
@@ -320,8 +323,10 @@ def _refined(solve_fn, residual, omega, rhs, system, refine: bool, steps: int):
         # factors chosen by ``rows``).
         rows = None if active.size == omega.size else active
         xa, xla = xh[active], (xl[active] if step else None)
-        d = solve_fn(residual(omega[active], xa, xla, rhs), *(() if rows is None else (rows,)))
-        est[active], rho[active] = _estimate(system, xa, xla, d, prev[active])
+        r = residual(omega[active], xa, xla, rhs)
+        d = solve_fn(r, *(() if rows is None else (rows,)))
+        est[active], rho[active] = _estimate(system, xa, xla, d, prev[active] if step else None,
+                                             r)
         with np.errstate(all="ignore"):
             s, e = two_sum(xa, d)
         xh[active] = s
@@ -336,12 +341,17 @@ def _refined(solve_fn, residual, omega, rhs, system, refine: bool, steps: int):
     return xh, xl, est, rho
 
 
-def _estimate(system, xh, xl, d, prev):
+def _estimate(system, xh, xl, d, prev, r):
     """(Relative error of K = x_a − x_b before applying the correction ``d``, contraction ρ).
 
     |d_a − d_b| estimates the error of K; ``d`` itself is wrong by about the
     contraction ρ = ‖d‖/‖prev‖ times the size of its drive components, which
-    is added.  A correction
+    is added (the first correction, ``prev`` None, has no contraction measured
+    yet: ρ = 1 there; the ρ returned compares it with x).  The error of K is also xᵀ r to first order, from the residual
+    ``r`` alone (A is complex symmetric and K = cᵀ A⁻¹ c with A x = c: the
+    adjoint solution is x), without the factors: where float64 factors are
+    blind to a direction of r (cond(A)·u ≳ 1), d misses it and the larger
+    of the two is kept.  A correction
     as large as x itself that does not contract means A is numerically
     singular: inf.
     """
@@ -349,15 +359,17 @@ def _estimate(system, xh, xl, d, prev):
     with np.errstate(all="ignore"):
         nd = np.max(np.abs(d), axis=-1)
         nx = np.max(np.abs(xh), axis=-1)
-        npv = np.maximum(np.max(np.abs(prev), axis=-1), tiny * nx)
+        npv = np.maximum(np.max(np.abs(xh if prev is None else prev), axis=-1), tiny * nx)
         rho = np.where(npv > 0, nd / npv, 0.0)
+        own = np.minimum(rho, 1.0) if prev is not None else 1.0
         K = np.abs(_difference_dd(system, xh, xl))
         dK = np.abs(system.difference(d))
         # The drive's own components: a norm over all of d would mix scales
         # (a lever of ratio 1e150 puts velocities 1e150 apart).
         da = np.abs(d[..., system.a]) if system.a >= 0 else 0.0
         db = np.abs(d[..., system.b]) if system.b >= 0 else 0.0
-        est = (dK + np.minimum(rho, 1.0) * (da + db)) / K
+        est = (dK + own * (da + db)) / K
+        est = np.maximum(est, np.abs(np.sum(xh * r, axis=-1)) / K)
         # Stagnation at the residual's own rounding level is not divergence:
         # only corrections of the size of x itself that do not shrink mean a
         # singular A.
@@ -515,8 +527,10 @@ def require_nonsingular(system: NodalSystem) -> None:
             judged = A
     s = solve(system, trial, limits=False)
     for i, w in enumerate(trial):
-        if np.isfinite(s.K[i]) and not s.singular[i] and \
-                _backward_error(system, w, cast(NDArray, s.x)[i]) > SINGULAR_BACKWARD:
+        # Values over ~600 decades: an iterate with no digit known (not even
+        # from the double-double LU) does not show the network regular.
+        if np.isfinite(s.K[i]) and not s.singular[i] and (s.error[i] < 1 or not overflow) \
+                and _backward_error(system, w, cast(NDArray, s.x)[i]) > SINGULAR_BACKWARD:
             return
     if judged is None:
         raise TopologyError("the network is singular at every frequency (tried "

@@ -6,7 +6,8 @@ meshes, ladders; references by a dense mpmath solve of the nodal equations
 or the series–parallel closed form in mpmath, never mechcirc's code).  The
 default run is the small corpus (about 130 points, a few seconds); set
 ``MECHCIRC_NODAL_CORPUS=full`` for the calibration of ``docs/accuracy.md``
-(about 2,300 points, minutes).
+(about 2,300 points, minutes).  Of seed 1, only the cases that showed its
+defects run here (108 points).
 """
 
 from __future__ import annotations
@@ -50,6 +51,27 @@ def test_estimate_is_tight_and_false_alarms_are_rare(corpus):
     t = corpus["all"]
     assert t["p99"] <= 1e4
     assert t["false alarms"] <= 0.01 * (t["points"] - t["flag1"])
+
+
+#: Cases of the full corpus at seed 1 (never used in calibration) that held
+#: its defects: +∞·j (flag 1) at regular ω of stiff trees (96, 116), and
+#: estimates below the true error by up to 11× (28, 55, 82, 101, 109, 121).
+SEED1_CASES = {28, 55, 82, 96, 101, 109, 116, 121}
+
+
+@pytest.fixture(scope="module")
+def seed1():
+    rows = nodal_corpus.measure("full", seed=1, keep=SEED1_CASES)
+    return rows, nodal_corpus.statistics(rows)
+
+
+def test_second_seed_no_pole_at_a_regular_point_nor_estimate_below_truth(seed1):
+    rows, t = seed1
+    assert {r[0] for r in rows} == {"stiff trees", "trees + levers"} and len(rows) == 108
+    assert t["all"]["flag1"] == 0
+    assert t["all"]["under"] == 0 and t["all"]["misses"] == 0
+    assert t["all"]["false alarms"] == 0
+    assert t["all"]["p99"] <= 1e4
 
 
 def _sweep(path, omega, method):

@@ -160,13 +160,22 @@ def near(points, rng, n_generic, lo, hi):
     return np.array([w for w, _ in out]), np.array([d for _, d in out])
 
 
-def cases(size: str = "small", seed: int = 0):
+def cases(size: str = "small", seed: int = 0, keep=None):
     """Yield (family, netlist text or Circuit, ω, distances, reference function ω → mpc).
 
     ``distances``: each ω's relative distance from the pole or zero it was
-    placed at (inf for generic points)."""
+    placed at (inf for generic points).  ``keep``: only the cases of these
+    indices (in the order of generation; the random draws, and so the
+    cases kept, are those of the whole corpus); the others are skipped
+    without their poles' search."""
     rng = np.random.default_rng(seed)
     full = size == "full"
+    at = [0]                        # the index of the next case
+
+    def wanted(step: bool = True):
+        k = at[0]
+        at[0] += step
+        return keep is None or k in keep
 
     def nodal_ref(spec):
         return lambda w: nodal_K(spec, w)
@@ -181,22 +190,28 @@ def cases(size: str = "small", seed: int = 0):
     for rows, cols in ([(2, 3), (3, 3), (4, 4), (6, 6)] if full else [(3, 3)]):
         spec = grid_spec(rng, rows, cols, True)
         modes = uniform_grid_modes(rows, cols)
-        yield "grid poles", spec_text(spec), *near(modes, rng, 4, 50, 500), nodal_ref(spec)
+        case = "grid poles", spec_text(spec), *near(modes, rng, 4, 50, 500), nodal_ref(spec)
+        if wanted():
+            yield case
     for _ in range(8 if full else 0):
         spec = grid_spec(rng, int(rng.integers(2, 5)), int(rng.integers(2, 5)), False)
-        yield "grid poles", spec_text(spec), *near(spec_poles(spec), rng, 4, 1, 1e4), \
-            nodal_ref(spec)
+        poles = spec_poles(spec) if wanted(False) else []
+        case = "grid poles", spec_text(spec), *near(poles, rng, 4, 1, 1e4), nodal_ref(spec)
+        if wanted():
+            yield case
 
     # Trees with levers (undamped, lightly damped), through nodal analysis.
     for i in range(60 if full else 6):
         damped = (0.0, 0.2)[i % 2]
         expr = sp_corpus.random_tree(rng, int(rng.integers(2, 30)), damped=damped, levers=0.3)
+        need = wanted(False) or (i % 3 == 0 and (keep is None or at[0] + 1 in keep))
         crit = sp_corpus.critical_points(expr, 1e-2, 1e2, 100 if full else 40) \
-            if not damped else []
+            if not damped and need else []
         crit = [mpmath.mpf(c) for c in crit[:6 if full else 2]]
         omega, dist = near(crit, rng, 6 if full else 3, 1e-2, 1e2)
-        yield "trees + levers", sp_corpus.to_circuit(expr), omega, dist, tree_ref(expr)
-        if i % 3 == 0:
+        if wanted():
+            yield "trees + levers", sp_corpus.to_circuit(expr), omega, dist, tree_ref(expr)
+        if i % 3 == 0 and wanted():
             f = 1e100 if i % 2 else 1e-100
             e2 = scaled_tree(expr, f)
             yield "scaled 1e±100", sp_corpus.to_circuit(e2), omega, dist, tree_ref(e2)
@@ -206,15 +221,17 @@ def cases(size: str = "small", seed: int = 0):
         expr = sp_corpus.random_tree(rng, int(rng.integers(10, 40)), decades=20.0,
                                      damped=0.0, levers=0.3)
         omega = 10 ** rng.uniform(-6, 8, 12 if full else 5)
-        yield "stiff trees", sp_corpus.to_circuit(expr), omega, omega * math.inf, tree_ref(expr)
+        if wanted():
+            yield "stiff trees", sp_corpus.to_circuit(expr), omega, omega * math.inf, tree_ref(expr)
 
     # Meshes (not series–parallel) with levers; scaled copies.
     for i in range(30 if full else 3):
         _, spec, w_char = mp_nodal.random_network(rng, n_nodes=int(rng.integers(4, 16)),
                                                   damped=bool(i % 2), levers=i % 3)
         omega = w_char * 10 ** rng.uniform(-2, 2, 4 if full else 2)
-        yield "meshes", spec_text(spec), omega, omega * math.inf, nodal_ref(spec)
-        if i % 2 == 0:
+        if wanted():
+            yield "meshes", spec_text(spec), omega, omega * math.inf, nodal_ref(spec)
+        if i % 2 == 0 and wanted():
             s2 = scaled_spec(spec, 1e100 if i % 4 else 1e-100)
             yield "scaled 1e±100", spec_text(s2), omega, omega * math.inf, nodal_ref(s2)
 
@@ -223,18 +240,20 @@ def cases(size: str = "small", seed: int = 0):
         for r in (1e-3, None):
             expr = sp_corpus.ladder(rng, n_el, r=r)
             omega = np.geomspace(2 * math.pi * 0.1, 2 * math.pi * 1e3, 101 if full else 9)
-            yield "ladders", sp_corpus.to_circuit(expr), omega, omega * math.inf, tree_ref(expr)
+            if wanted():
+                yield "ladders", sp_corpus.to_circuit(expr), omega, omega * math.inf, tree_ref(expr)
 
 
-def measure(size: str = "small", seed: int = 0):
-    """Rows (family, ω, K, error, flag, true error, distance) over the corpus.
+def measure(size: str = "small", seed: int = 0, keep=None):
+    """Rows (family, ω, K, error, flag, true error, distance) over the corpus
+    (or its cases ``keep``, see :func:`cases`).
 
     The true error |K − K_ref| / |K_ref| in mpmath; NaN where K is ±∞·j or 0
     (flag 1) or the reference is infinite (A(ω) exactly singular)."""
     import mechcirc
 
     out = []
-    for family, net, omega, dist, ref in cases(size, seed):
+    for family, net, omega, dist, ref in cases(size, seed, keep):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             c = mechcirc.parse(net) if isinstance(net, str) else net
