@@ -64,9 +64,10 @@ def test_user_errors_exit_2(argv, text, capsys, tmp_path):
     assert not list(tmp_path.iterdir())
 
 
-def test_crosscheck_json(capsys):
-    assert main(["crosscheck", "--variant", "1", "--json"]) == 0
-    doc = json.loads(capsys.readouterr().out)
+def test_crosscheck_json(cli_once):
+    status, out, _ = cli_once(["crosscheck", "--variant", "1", "--json"])
+    assert status == 0
+    doc = json.loads(out)
     assert all(r["rel_error"] < 1e-9 for r in doc["resonances"])
     assert doc["harmonic"]["rel_error"] < 0.01
     assert doc["ringing"]["rel_error"] < 0.02          # variant 1: no clearance
