@@ -8,8 +8,92 @@ database of failures) when hunting for new cases.
 
 import os
 
+import pytest
 from hypothesis import settings
 
 settings.register_profile("ci", derandomize=True, database=None)
 settings.register_profile("explore", derandomize=False)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
+
+
+@pytest.fixture(scope="session")
+def cli_once():
+    """``cli_once(argv)``: (status, stdout, stderr) of ``mechcirc ARGV`` in-process, run once.
+
+    For long commands (a full ``crosscheck``) that several test files check
+    with the same argv: the first caller runs it, the others read the same
+    output.  Only for commands that read shipped inputs and nothing a test
+    patches (no ``monkeypatch`` in effect while it runs).
+    """
+    import contextlib
+    import io
+
+    from mechcirc.cli import main
+
+    done: dict[tuple[str, ...], tuple[int, str, str]] = {}
+
+    def run(argv):
+        key = tuple(map(str, argv))
+        if key not in done:
+            out, err = io.StringIO(), io.StringIO()
+            with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+                try:
+                    status = main(list(key))
+                except SystemExit as exc:
+                    status = exc.code
+            done[key] = (status, out.getvalue(), err.getvalue())
+        return done[key]
+
+    return run
+
+
+def _serialise_numba_compiles_across_workers():
+    """With ``-n 2``, one numba compilation at a time across the xdist workers.
+
+    The kernels are compiled with ``cache=True``; numba looks in its disk
+    cache, finds nothing, and compiles.  Two workers starting the same kernel
+    together both compile it (about 45 s of CPU for every kernel in a fresh
+    environment).  Holding a file lock around ``Dispatcher.compile`` makes the
+    second worker wait and then load what the first wrote to the cache (the
+    method checks the cache after taking the lock).  Nothing changes in what
+    is compiled or run; without xdist or numba this does nothing.
+    """
+    import importlib.util
+
+    if not os.environ.get("PYTEST_XDIST_WORKER") or importlib.util.find_spec("numba") is None:
+        return
+    try:
+        import fcntl
+    except ImportError:                             # not on this platform: compile as before
+        return
+    import tempfile
+    import threading
+
+    from numba.core.dispatcher import Dispatcher
+
+    lock_path = os.path.join(tempfile.gettempdir(),
+                             f"mechcirc-numba-{os.environ.get('PYTEST_XDIST_TESTRUNUID', 'x')}.lock")
+    held = threading.local()
+    compile_ = Dispatcher.compile
+
+    def compile_one_at_a_time(self, sig):
+        depth = getattr(held, "depth", 0)
+        if depth:                                   # a callee, compiled under our lock
+            held.depth = depth + 1
+            try:
+                return compile_(self, sig)
+            finally:
+                held.depth -= 1
+        with open(lock_path, "a") as fh:
+            fcntl.flock(fh, fcntl.LOCK_EX)
+            held.depth = 1
+            try:
+                return compile_(self, sig)
+            finally:
+                held.depth = 0
+                fcntl.flock(fh, fcntl.LOCK_UN)
+
+    Dispatcher.compile = compile_one_at_a_time
+
+
+_serialise_numba_compiles_across_workers()

@@ -196,23 +196,20 @@ def test_bad_cam_input_is_a_located_user_error(tmp_path, capsys):
                       "--rpm", "has none")
 
 
-def test_example_prints_the_jump_speed_both_ways():
+def test_example_prints_the_jump_speed_both_ways(capsys, monkeypatch):
     import re
-    import subprocess
-    import sys
     from pathlib import Path
 
-    from bounds import SUBPROCESS_TIMEOUT
+    from cli_helpers import run_script
 
     repo = Path(__file__).resolve().parents[1]
-    proc = subprocess.run([sys.executable, str(repo / "examples" / "cam_follower_jump.py")],
-                          cwd=repo, capture_output=True, text=True, timeout=SUBPROCESS_TIMEOUT)
-    assert proc.returncode == 0 and proc.stderr == "", proc.stderr
-    closed = float(re.search(r"closed form \(rigid follower\): (\S+) rpm", proc.stdout).group(1))
-    simulated = float(re.search(r"simulated onset of separation: (\S+) rpm",
-                                proc.stdout).group(1))
+    status, out, err = run_script(repo / "examples" / "cam_follower_jump.py", [], capsys,
+                                  monkeypatch)
+    assert status == 0 and err == "", err
+    closed = float(re.search(r"closed form \(rigid follower\): (\S+) rpm", out).group(1))
+    simulated = float(re.search(r"simulated onset of separation: (\S+) rpm", out).group(1))
     assert abs(simulated / closed - 1) <= 1e-6                 # achieved 3.4e-9
-    assert re.search(r"at 800 rpm the contact opens [1-9]\d* time", proc.stdout)
+    assert re.search(r"at 800 rpm the contact opens [1-9]\d* time", out)
 
 
 def test_a_table_beyond_the_lift_bound_is_located(tmp_path, capsys):

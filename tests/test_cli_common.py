@@ -274,12 +274,12 @@ def test_synth_limit_below_one_is_refused(capsys):
     assert "--limit: must be at least 1, got 0" in capsys.readouterr().err
 
 
-def test_crosscheck_reports_unmeasurable_ringing_instead_of_crashing(capsys):
+def test_crosscheck_reports_unmeasurable_ringing_instead_of_crashing(cli_once):
     """Variant 6 of Table 1 rings too little to count crossings: (b) cannot be measured
     (said, with why), (a), (c) stand.  (Variant 2 did too with its clearance open; the
     ringing check now closes it, and measures 1.9e-3.)"""
-    assert main(["crosscheck", "--variant", "6"]) == 0
-    out = capsys.readouterr().out
+    status, out, _ = cli_once(["crosscheck", "--variant", "6"])
+    assert status == 0
     assert "(b) ringing after beat-up: cannot be measured" in out
     assert "zero crossing(s) of the pulse response" in out
     assert "(c) harmonic forcing" in out

@@ -2,15 +2,13 @@
 
 import importlib.util
 import re
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from reference import stb_eq7
-from bounds import SUBPROCESS_TIMEOUT
+from cli_helpers import run_script
 
 REPO = Path(__file__).resolve().parents[1]
 EXAMPLE = REPO / "examples" / "stb_eq7_check.py"
@@ -23,12 +21,10 @@ def _load_example():
     return module
 
 
-def test_stb_eq7_example_runs_and_reports_agreement():
-    proc = subprocess.run([sys.executable, str(EXAMPLE)], cwd=REPO, capture_output=True,
-                          text=True, timeout=SUBPROCESS_TIMEOUT)
-    assert proc.returncode == 0, proc.stdout + proc.stderr
-    assert proc.stderr == ""
-    out = proc.stdout
+def test_stb_eq7_example_runs_and_reports_agreement(capsys, monkeypatch):
+    status, out, err = run_script(EXAMPLE, [], capsys, monkeypatch)
+    assert status == 0, out + err
+    assert err == ""
     m = re.search(r"max relative error away from poles: (\S+) \(tolerance 1e-12\)", out)
     assert m, out
     assert float(m.group(1)) <= 1e-12

@@ -160,8 +160,9 @@ def test_driveless_netlist_transient_ok_sweep_and_crosscheck_refuse(tmp_path, ca
         assert status == 2 and "no drive" in err
 
 
-def test_sley_crosscheck_still_works_without_file(capsys):
-    status, out, _ = run(["crosscheck", "--json"], capsys)
+def test_sley_crosscheck_still_works_without_file(cli_once):
+    # the same command line as tests/sley/test_cli_sley.py checks in full: run once
+    status, out, _ = cli_once(["crosscheck", "--variant", "1", "--json"])
     assert status == 0
     assert "ringing" in json.loads(out)
 

@@ -1,12 +1,9 @@
 """docs/scenes.md: its Python example runs and its CLI excerpts are what the CLI prints."""
 
 import doctest
-import os
-import subprocess
-import sys
 from pathlib import Path
 
-from bounds import SUBPROCESS_TIMEOUT
+from cli_helpers import run
 
 ROOT = Path(__file__).resolve().parents[2]
 DOC = ROOT / "docs" / "scenes.md"
@@ -19,14 +16,15 @@ def test_python_example_runs(monkeypatch):
     assert tried >= 5 and failures == 0
 
 
-def test_cli_excerpts_match():
+def test_cli_excerpts_match(capsys, monkeypatch):
     text = DOC.read_text()
-    env = dict(os.environ, COLUMNS="200")
+    monkeypatch.chdir(ROOT)
+    monkeypatch.setenv("COLUMNS", "200")
     for argv in (["scene", "examples/heald_scene.toml", "--cycle", "--points", "12",
                   "--harmonics", "6"],
                  ["reduce", "netlists/stb_heald.mcir", "--band", "10:300", "--tol", "0.01"]):
-        out = subprocess.run([sys.executable, "-m", "mechcirc", *argv], cwd=ROOT, env=env,
-                             capture_output=True, text=True, timeout=SUBPROCESS_TIMEOUT).stdout
+        status, out, err = run(argv, capsys)
+        assert status == 0, err
         for line in out.splitlines():
             if line.startswith("wrote"):
                 continue

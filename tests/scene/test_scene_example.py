@@ -1,22 +1,18 @@
 """examples/heald_scene.py runs, and what it prints holds."""
 
 import re
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
-from bounds import SUBPROCESS_TIMEOUT
+from cli_helpers import run_script
 
 ROOT = Path(__file__).resolve().parents[2]
 
 
-def test_heald_example_prints_consistent_numbers():
-    proc = subprocess.run([sys.executable, str(ROOT / "examples" / "heald_scene.py")], cwd=ROOT,
-                          capture_output=True, text=True, timeout=SUBPROCESS_TIMEOUT)
-    assert proc.returncode == 0, proc.stdout + proc.stderr
-    assert proc.stderr == ""
-    out = proc.stdout
+def test_heald_example_prints_consistent_numbers(capsys, monkeypatch):
+    status, out, err = run_script(ROOT / "examples" / "heald_scene.py", [], capsys, monkeypatch)
+    assert status == 0, out + err
+    assert err == ""
     m = re.search(r"circuit (\S+) kg·m², finite differences (\S+) kg·m²", out)
     assert m and float(m.group(1)) == pytest.approx(float(m.group(2)), rel=1e-8)
     crossings = re.findall(r"meets (\d+)·Ω = (\S+) rad/s at θ ≈ (\S+)°", out)

@@ -64,9 +64,10 @@ def test_user_errors_exit_2(argv, text, capsys, tmp_path):
     assert not list(tmp_path.iterdir())
 
 
-def test_crosscheck_json(capsys):
-    assert main(["crosscheck", "--variant", "1", "--json"]) == 0
-    doc = json.loads(capsys.readouterr().out)
+def test_crosscheck_json(cli_once):
+    status, out, _ = cli_once(["crosscheck", "--variant", "1", "--json"])
+    assert status == 0
+    doc = json.loads(out)
     assert all(r["rel_error"] < 1e-9 for r in doc["resonances"])
     assert doc["harmonic"]["rel_error"] < 0.01
     assert doc["ringing"]["rel_error"] < 0.02          # variant 1: no clearance
@@ -75,10 +76,10 @@ def test_crosscheck_json(capsys):
     assert all(r["verdict"] == "agrees" and r["rel_error"] <= r["tol"] for r in rows)
 
 
-def test_crosscheck_line_that_cannot_be_measured_says_why(capsys):
+def test_crosscheck_line_that_cannot_be_measured_says_why(cli_once):
     # variant 6 one-side: the pulse response rings out before enough zero crossings
-    assert main(["crosscheck", "--variant", "6"]) == 0
-    out = capsys.readouterr().out
+    status, out, _ = cli_once(["crosscheck", "--variant", "6"])
+    assert status == 0
     assert "(b) ringing after beat-up: cannot be measured: ringing: 2 zero crossing(s)" in out
     assert out.splitlines()[-1] == ("verdict: agrees — 5 of 6 checks agree, 0 disagree beyond "
                                     "their tolerance, 1 cannot be measured")
