@@ -16,7 +16,7 @@ the index arrays of :func:`.linkage_solver.plan`:
 * γ (constant crank speeds): R_a s_a φ̇_a² − R_b s_b φ̇_b²;
 * sliders (:mod:`.linkage`): after the 2m joint rows, one row u × d per slider
   (u its guide's direction, d = P_slider − P_guide) and one row φ_b − φ_a;
-  the crank rows come last.  Jacobian and γ as in :class:`.linkage_solver._Newton`.
+  the crank rows come last.  Jacobian and γ as in :class:`.linkage_solver.Newton`.
 
 The loop visits the targets in order; between two it takes continuation steps
 of at most ``dt_max`` (Taylor predictor from q, q̇, q̈; Newton with partial

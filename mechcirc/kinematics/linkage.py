@@ -428,12 +428,12 @@ class Linkage:
         GeometryError
             Newton does not converge (no assembly near ``near``).
         """
-        from .linkage_solver import _Newton
+        from .linkage_solver import Newton
 
         local, idx = self.local_offsets(), self._index()
         q = self.q0() if near is None else np.array(near, dtype=float)
         angles = np.array([[float(crank_angles[c.link]) for c in self.cranks]])
-        q, ok = _Newton(self._plan).newton(q[None], angles)
+        q, ok = Newton(self._plan).newton(q[None], angles)
         q = q[0]
         if not ok[0]:
             raise GeometryError(f"{self.source}: no assembly near the given coordinates for "

@@ -714,7 +714,7 @@ def _lock_error(lk, ds, t_good, t_bad):
 
 
 # ------------------------------------------------------------------ Newton
-class _Newton:
+class Newton:
     """Residual, Jacobian and γ of Φ(q, t) = 0, batched over positions (first axis).
 
     Joint rows are computed as complex numbers whose float view is the
@@ -994,7 +994,7 @@ def _solve_newton_compiled(lk, pl, t, dt_max):
 
 
 def _solve_newton(lk, pl, t, dt_max):
-    nw = _Newton(pl)
+    nw = Newton(pl)
     w1 = lk.cranks[0].omega
     wmax = float(np.max(np.abs(pl.omega)))
     nodes, at = _path(t, dt_max)

@@ -184,7 +184,7 @@ def motion_model(scene: Scene, omega: float | None = None, *,
         N = aligned_points(lk.cam, N)       # table nodes on the law's joints
     h = TWO_PI / N
     nq = scene.cycle_revolutions                 # the tables span the mechanism's cycle
-    ang, ang1, ang2, pos, vel, acc = (dict(x) for x in _rigid_tables(scene, N))
+    ang, ang1, ang2, pos, vel, acc = (dict(x) for x in rigid_tables(scene, N))
     tlink = {}
     for t in scene.torsions:
         tlink.setdefault(t.body, t.link)
@@ -428,7 +428,7 @@ def _memo(key, make):
     return _CACHE[key]
 
 
-def _rigid_tables(scene: Scene, N: int):
+def rigid_tables(scene: Scene, N: int):
     """Rotations, point positions and their first and second derivatives with respect to
     the crank angle over the mechanism's cycle (N per revolution, plus one), memoised."""
     def make():

@@ -151,10 +151,10 @@ class _Rigid:
     """J_red(θ), J_red'(θ), Q(θ) and each body's φ'(θ), φ''(θ) of the rigid mechanism."""
 
     def __init__(self, scene: Scene, N: int = 1024):
-        from .motion import _rigid_tables, dead_centre
+        from .motion import rigid_tables, dead_centre
         from .simulation import kernels_for
 
-        ang, ang1, ang2, pos, vel, acc = (dict(x) for x in _rigid_tables(scene, N))
+        ang, ang1, ang2, pos, vel, acc = (dict(x) for x in rigid_tables(scene, N))
         tlink = {}
         for t in scene.torsions:
             tlink.setdefault(t.body, t.link)
