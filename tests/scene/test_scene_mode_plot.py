@@ -9,30 +9,16 @@ import numpy as np
 import pytest
 import scipy.linalg
 from matplotlib.figure import Figure
-from test_scene_periodic import A_, C_, fourbar
-
 from mechcirc.errors import MechcircError
 from mechcirc.scene import parse_scene
 from mechcirc.scene.plots import plot_mode
+from test_scene_periodic import A_, C_, fourbar
+
+from reference.inputs import FOURBAR_SCENE
 
 K2, C2, KC, CC, I2P, I4 = 8000.0, 1.5, 2.0e5, 3.0, 0.01, 0.02
 TEXT = f'''name = "elastic coupler"
-units = "mm"
-[points]
-A = [0.0, 0.0]
-B = [40.0, 0.0]
-C = [60.0, 150.0]
-D = [200.0, 0.0]
-[ground]
-points = ["A", "D"]
-[links]
-crank = ["A", "B"]
-coupler = ["B", "C"]
-rocker = ["D", "C"]
-[[cranks]]
-link = "crank"
-omega = 60.0
-[[torsion]]
+{FOURBAR_SCENE}[[torsion]]
 name = "C2"
 link = "crank"
 body = "shaft"

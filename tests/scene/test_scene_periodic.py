@@ -6,10 +6,11 @@ import math
 
 import numpy as np
 import pytest
-
+from mechcirc.periodic import periodic, rpm_to_omega
 from mechcirc.scene import build, parse_scene
 from mechcirc.scene.cycle import drive_motion
-from mechcirc.periodic import periodic, rpm_to_omega
+
+from reference.inputs import FOURBAR_SCENE
 
 A_, B_, C_, D_ = 40.0, math.hypot(20.0, 150.0), math.hypot(140.0, 150.0), 200.0   # mm
 K4, C4, I4, I4P = 5000.0, 2.0, 0.02, 0.1
@@ -17,22 +18,7 @@ K4, C4, I4, I4P = 5000.0, 2.0, 0.02, 0.1
 
 def scene_text(drive: str) -> str:
     return f'''name = "rocker drive"
-units = "mm"
-[points]
-A = [0.0, 0.0]
-B = [40.0, 0.0]
-C = [60.0, 150.0]
-D = [200.0, 0.0]
-[ground]
-points = ["A", "D"]
-[links]
-crank = ["A", "B"]
-coupler = ["B", "C"]
-rocker = ["D", "C"]
-[[cranks]]
-link = "crank"
-omega = 60.0
-[[torsion]]
+{FOURBAR_SCENE}[[torsion]]
 name = "C4"
 link = "rocker"
 body = "sley"
