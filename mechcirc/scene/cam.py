@@ -1,22 +1,32 @@
-"""A disc cam on the main shaft driving an oscillating follower in a scene (``[cam]``).
+"""A disc cam on the main shaft driving a follower in a scene (``[cam]``).
 
-The follower is the linkage's crank (its arm pivoted to the frame); the cam
-replaces its uniform turning by the law x(θ) of a
+Oscillating follower: the follower is the linkage's crank (its arm pivoted to
+the frame); the cam replaces its uniform turning by the law x(θ) of a
 :class:`~mechcirc.motion_laws.Motion`: at cam angle θ = Ω t the arm is turned
-by x(θ) − x(0) from the pose.  The linkage is solved at that arm angle with the
-arm turning at Ω, and the rates are rescaled by the chain rule, exactly:
-with q̇ₛ = J Ω and q̈ₛ = J′ Ω² the solver's rates,
+by α = x(θ) − x(0) from the pose.
 
-    q̇ = q̇ₛ x′(θ),      q̈ = q̈ₛ x′(θ)² + q̇ₛ Ω x″(θ).
+Translating follower (roller or flat face): the follower is a block sliding on
+a fixed guide, lifted by s(θ) = x(θ) − x(0) along it; the linkage's crank is a
+link pinned to the frame in the follower's rigid part, and α(θ) is the crank
+rotation that puts the block at that lift: τ(α) = s, τ the block's travel
+along its guide, solved by Newton with the solver's exact τ′ = u·v/Ω (to
+round-off), and by the chain rule α′ = x′/τ′, α″ = (x″ − τ″ α′²)/τ′.
 
-A rate below :data:`DWELL` of the peak is the round-off of a dwell and is set
-to 0.  Everything that calls :meth:`Linkage.motion` or :meth:`Linkage.solve` (the
-circuit at θ, the cycle map, the time-domain tables) then follows the cam.
+The linkage is solved at α with the crank turning at Ω, and the rates are
+rescaled by the chain rule, exactly: with q̇ₛ = J Ω and q̈ₛ = J′ Ω² the
+solver's rates,
+
+    q̇ = q̇ₛ α′(θ),      q̈ = q̈ₛ α′(θ)² + q̇ₛ Ω α″(θ).
+
+A rate x′ below :data:`DWELL` of the peak is the round-off of a dwell and is
+set to 0.  Everything that calls :meth:`Linkage.motion` or :meth:`Linkage.solve`
+(the circuit at θ, the cycle map, the time-domain tables) then follows the cam.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -24,7 +34,7 @@ import numpy as np
 
 from ..kinematics.linkage import Linkage
 
-__all__ = ["CamLinkage", "parse_cam", "aligned_points", "DWELL"]
+__all__ = ["CamLinkage", "parse_cam", "check_follower_part", "aligned_points", "DWELL"]
 
 #: |x′(θ)| at most this fraction of its peak is the round-off of a dwell's 0: the
 #: follower is at rest there (a law's x′ is exact to ~1e-16 of its peak).
@@ -33,38 +43,112 @@ DWELL = 1e-13
 
 @dataclass(frozen=True, eq=False)
 class CamLinkage(Linkage):
-    """A :class:`Linkage` whose first crank (the follower's arm) follows a cam.
+    """A :class:`Linkage` whose first crank follows a cam (see the module).
 
     Attributes
     ----------
     cam : Motion
-        The arm's rotation x(θ) [rad] over one turn of the cam shaft.
+        The follower's motion x(θ) over one turn of the cam shaft: the arm's
+        rotation [rad], or a translating follower's lift [the pose's units].
     x0 : float
-        x(0): the pose is the arm at cam angle 0.
+        x(0): the pose is the follower at cam angle 0.
     key : tuple
         What identifies the cam, for the scene's memoised tables.
+    follower : str
+        The follower's link ("" for the first crank).
+    slider : Slider or None
+        A translating follower's prismatic pair on the frame; None: oscillating.
     """
 
     cam: object = None
     x0: float = 0.0
     key: tuple = ()
+    follower: str = ""
+    slider: object = None
 
     @cached_property
     def peak_rate(self) -> float:
-        """max |x′(θ)| over the turn (on 4096 angles) [rad per rad]."""
+        """max |x′(θ)| over the turn (on 4096 angles) [per rad]."""
         return float(np.max(np.abs(self.cam.evaluate(np.linspace(0, 2 * np.pi, 4097))[1])))
 
     def motion(self, theta, *, max_step_deg: float = 2.0, method: str = "auto"):
-        """Kinematics at cam angles ``theta`` [rad] (the arm at x(θ) − x(0)); see the module."""
+        """Kinematics at cam angles ``theta`` [rad] (the crank at α(θ)); see the module."""
         th = np.asarray(theta, dtype=float).reshape(-1)
         x, x1, x2 = self.cam.evaluate(th)
         x1 = np.where(np.abs(x1) <= DWELL * self.peak_rate, 0.0, x1)    # a dwell: at rest
-        m = Linkage.motion(self, x - self.x0, max_step_deg=max_step_deg, method=method)
+        kw = {"max_step_deg": max_step_deg, "method": method}
+        if self.slider is None:
+            a1, a2 = x1, x2
+            m = Linkage.motion(self, x - self.x0, **kw)
+        else:
+            m, a1, a2 = self._lifted(th, x - self.x0, x1, x2, kw)
         w = self.cranks[0].omega
-        qd = m.qdot * x1[:, None]
-        qdd = m.qddot * (x1 * x1)[:, None] + m.qdot * (w * x2)[:, None]
+        qd = m.qdot * a1[:, None]
+        qdd = m.qddot * (a1 * a1)[:, None] + m.qdot * (w * a2)[:, None]
         return dataclasses.replace(m, theta=th, t=th / w, qdot=qd, qddot=qdd,
-                                   parts=m.parts * x1[:, None, None])
+                                   parts=m.parts * a1[:, None, None])
+
+    def _lifted(self, th, s, x1, x2, kw):
+        """The motion at the crank rotations α that lift the follower by ``s``, and α′, α″."""
+        from ..errors import GeometryError
+
+        sl, w = self.slider, self.cranks[0].omega
+        u, p0 = np.array(sl.direction, dtype=float), self.pose[sl.point]
+
+        def travel(alpha):
+            m = Linkage.motion(self, alpha, **kw)
+            i = m.point_names.index(sl.point)
+            return m, (m.points[:, i] - p0) @ u, (m.velocities[:, i] @ u) / w, i
+
+        slope0 = travel(np.zeros(1))[2][0]
+        tol = 1e-13 * self.length_scale()
+        if not abs(slope0) > tol:
+            raise GeometryError(f"{self.source}: [cam] in the pose the crank "
+                                f"{self.cranks[0].link!r} does not move the follower "
+                                f"{self.follower!r} along its guide (a dead centre)")
+        alpha, polish = s / slope0, 2
+        for _ in range(50):
+            m, tau, slope, i = travel(alpha)
+            bad = np.flatnonzero(~(slope * slope0 > 0))
+            if bad.size:
+                raise GeometryError(
+                    f"{self.source}: [cam] at cam angle {math.degrees(th[bad[0]]):.6g}° the "
+                    f"follower {self.follower!r} lifted by {s[bad[0]]:.6g} "
+                    f"{self.units or 'units'} takes the crank {self.cranks[0].link!r} "
+                    f"through a dead centre (its travel along the guide turns back)")
+            r = tau - s
+            polish -= bool(np.max(np.abs(r)) <= tol)
+            if polish < 0:
+                break
+            alpha = alpha - r / slope
+        else:
+            raise GeometryError(f"{self.source}: [cam] the crank rotation that lifts the "
+                                f"follower {self.follower!r} by the cam's law was not found")
+        a1 = x1 / slope
+        curv = (m.accelerations[:, i] @ u) / (w * w)
+        return m, a1, (x2 - curv * a1 * a1) / slope
+
+
+def check_follower_part(scene, text: str) -> None:
+    """A translating follower must be in the rigid part of the crank it drives.
+
+    Raises
+    ------
+    NetlistError
+        The follower and the crank are in different rigid parts (an elastic
+        element between them), located at ``[cam] follower``.
+    """
+    from ..sources import located
+
+    lk = scene.linkage
+    crank = lk.cranks[0].link
+    if getattr(lk, "slider", None) is not None and not any(
+            crank in p and lk.follower in p for p in scene.parts):
+        raise located(text, scene.source, f"[cam] the translating follower {lk.follower!r} "
+                      f"and the crank {crank!r} are in different rigid parts: the cam lifts "
+                      "the follower and the crank's part moves with it, so they must be joined "
+                      "by rigid links", "cam", "follower", value=lk.follower,
+                      expected="rigid links between the follower and the crank")
 
 
 def aligned_points(cam, n: int) -> int:
@@ -79,112 +163,202 @@ def aligned_points(cam, n: int) -> int:
 
 
 #: The ``[cam]`` table's keys (see docs/scenes.md, "A cam drives the scene").
-CAM_KEYS = {"follower": "the follower's arm: the first crank of [[cranks]]",
+CAM_KEYS = {"follower": "oscillating: the first crank of [[cranks]]; roller or flat: a block "
+                        "sliding on a fixed guide",
+            "follower_type": "oscillating (default) | roller | flat",
             "law": "a motion law of mechcirc.motion_laws.LAWS", "rise": "[deg]",
             "dwell": "[deg], default 0", "return": "[deg]", "return_law": "default: law",
-            "stroke_deg": "the arm's swing [deg], nonzero",
-            "table": "CSV angle_deg,displacement: the arm's angle [deg] (instead of a law)",
+            "stroke_deg": "the arm's swing [deg], nonzero (oscillating)",
+            "stroke": "the lift [units], nonzero (roller, flat)",
+            "table": "CSV angle_deg,displacement: the arm's angle [deg] or the lift [units] "
+                     "(instead of a law)",
             "base_radius": "r_b [units], for the pressure-angle and undercut checks",
-            "roller_radius": "r_f [units], default 0", "arm": "L [units]",
-            "pivot": "D, arm pivot to cam centre [units]",
-            "pressure_limit_deg": "default 45"}
+            "roller_radius": "r_f [units], default 0", "arm": "L [units] (oscillating)",
+            "pivot": "D, arm pivot to cam centre [units] (oscillating)",
+            "offset": "e, the follower's axis from the cam's centre [units] (roller), default 0",
+            "pressure_limit_deg": "default 45 (oscillating), 30 (roller, flat)"}
+#: The keys that belong to one kind of follower only.
+_ONLY = {"stroke_deg": "oscillating", "arm": "oscillating", "pivot": "oscillating",
+         "stroke": "translating", "offset": "roller"}
 
 
-def parse_cam(text: str, source: str, raw, linkage: Linkage) -> CamLinkage:
-    """The ``[cam]`` table: the arm's law, the linkage made to follow it, the cam's checks.
+class _CamReader:
+    """Reads one ``[cam]`` table, each value located at its key on error."""
 
-    Raises
-    ------
-    NetlistError
-        A bad key or value, a follower that is not the only crank, a law whose
-        angles do not fit a turn, a cam geometry that cannot be built — at the key.
-    """
-    import math
-    import os
+    def __init__(self, text, source, raw, linkage):
+        from ..sources import located
 
-    from ..errors import InputError, MechcircWarning, warn
-    from ..motion_laws import LAWS, cam_cycle, read_motion_table
-    from ..sources import Table, brief, check_keys, finite_number, located
+        self.text, self.source, self.raw, self.lk = text, source, raw, linkage
+        self.located = located
 
-    def err(message, key, expected=None, value=None):
-        return located(text, source, message, "cam", key, value=value, expected=expected)
+    def err(self, message, key, expected=None, value=None):
+        return self.located(self.text, self.source, message, "cam", key, value=value,
+                            expected=expected)
 
-    if not isinstance(raw, dict):
-        raise located(text, source, "cam must be a table [cam]", None, "cam")
-    check_keys(text, source, Table("cam", CAM_KEYS), raw)
-    cranks = linkage.cranks
-    f = raw.get("follower")
-    if len(cranks) != 1 or f != cranks[0].link:
-        raise err(f"[cam] follower {brief(f)} must be the linkage's only crank (the arm the "
-                  f"cam swings; its omega is the cam shaft's speed)", "follower" if "follower"
-                  in raw else next(iter(raw), "follower"),
-                  expected=f'follower = "{cranks[0].link}" with one [[cranks]] entry',
-                  value=f if isinstance(f, str) else None)
-    if not cranks[0].omega > 0:
-        raise err(f"[cam] the cam shaft turns at omega = {cranks[0].omega:g} rad/s (the "
-                  f"[[cranks]] omega of {f!r}); a cam needs omega > 0", "follower",
-                  expected="omega > 0 in [[cranks]]", value=f)
+    def num(self, key, default=None, positive=True, allow_zero=False):
+        from ..sources import brief, finite_number
 
-    def num(key, default=None, positive=True, allow_zero=False):
-        v = raw.get(key, default)
+        v = self.raw.get(key, default)
         if not finite_number(v) or (positive and (v < 0 or (v == 0 and not allow_zero))):
-            raise err(f"[cam] {key} must be a finite number{' > 0' if positive else ''}"
-                      f"{' or 0' if allow_zero else ''}, got {brief(v)}",
-                      key if key in raw else "follower", expected=f"{key} = {CAM_KEYS[key]}")
+            raise self.err(f"[cam] {key} must be a finite number{' > 0' if positive else ''}"
+                           f"{' or 0' if allow_zero else ''}, got {brief(v)}",
+                           key if key in self.raw else "follower",
+                           expected=f"{key} = {CAM_KEYS[key]}")
         return float(v)
 
-    if ("table" in raw) == ("law" in raw):
-        raise err("[cam] needs exactly one of law = … (with rise, dwell, return, stroke_deg) "
-                  "or table = \"FILE.csv\"", "law" if "law" in raw else "follower",
-                  expected='law = "cycloidal" or table = "lift.csv"')
-    if "law" in raw:
+    def kind(self) -> str:
+        """``follower_type``, and the keys of the other kinds refused."""
+        from ..kinematics.cam import FOLLOWERS
+        from ..sources import brief
+
+        kind = self.raw.get("follower_type", "oscillating")
+        if kind not in FOLLOWERS:
+            raise self.err(f"[cam] follower_type {brief(kind)} is not a follower type",
+                           "follower_type", expected=" | ".join(FOLLOWERS),
+                           value=kind if isinstance(kind, str) else None)
+        for key, only in _ONLY.items():
+            if key in self.raw and only != kind and not (only == "translating"
+                                                         and kind != "oscillating"):
+                raise self.err(f"[cam] {key} is for a{'n' if only[0] == 'o' else ''} {only} "
+                               f"follower, not {kind}", key, expected=f"{key}: "
+                               f"{CAM_KEYS[key]}; follower_type = \"{kind}\" takes " + ", ".join(
+                                   k for k, o in _ONLY.items() if o == kind or (
+                                       o == "translating" and kind != "oscillating")))
+        return kind
+
+    def follower(self, kind):
+        """The follower's name and, for a translating one, its slider on the frame."""
+        from ..sources import brief
+
+        cranks, f, raw = self.lk.cranks, self.raw.get("follower"), self.raw
+        at = "follower" if "follower" in raw else next(iter(raw), "follower")
+        value = f if isinstance(f, str) else None
+        if kind == "oscillating":
+            slider = None
+            if len(cranks) != 1 or f != cranks[0].link:
+                raise self.err(f"[cam] follower {brief(f)} must be the linkage's only crank "
+                               f"(the arm the cam swings; its omega is the cam shaft's "
+                               f"speed)", at, value=value, expected=f'follower = '
+                               f'"{cranks[0].link}" with one [[cranks]] entry')
+        else:
+            slider = next((x for x in self.lk.sliders if x.link == f and x.guide == "ground"),
+                          None)
+            if slider is None or len(cranks) != 1:
+                raise self.err(f"[cam] follower {brief(f)} must be a block sliding on a guide "
+                               "fixed to the frame ([[sliders]] guide = \"ground\"), with one "
+                               "[[cranks]] entry: a link pinned to the frame that the follower "
+                               "moves", at, value=value, expected="follower = one of " + (", ".join(
+                                   x.link for x in self.lk.sliders if x.guide == "ground")
+                                   or "(no block on a fixed guide)"))
+        if not cranks[0].omega > 0:
+            raise self.err(f"[cam] the cam shaft turns at omega = {cranks[0].omega:g} rad/s "
+                           f"(the [[cranks]] omega of {cranks[0].link!r}); a cam needs "
+                           f"omega > 0", at, expected="omega > 0 in [[cranks]]", value=value)
+        return f, slider
+
+    def motion(self, kind):
+        """The follower's Motion (arm angle [rad] or lift [units]) and its memo key."""
+        import math
+        import os
+
+        from ..motion_laws import LAWS, cam_cycle, read_motion_table
+        from ..sources import brief
+
+        raw = self.raw
+        if ("table" in raw) == ("law" in raw):
+            raise self.err("[cam] needs exactly one of law = … (with rise, dwell, return, "
+                           "stroke) or table = \"FILE.csv\"",
+                           "law" if "law" in raw else "follower",
+                           expected='law = "cycloidal" or table = "lift.csv"')
+        if "table" in raw:
+            path = raw["table"]
+            if not isinstance(path, str):
+                raise self.err(f"[cam] table must be a file name, got {brief(path)}", "table")
+            if self.source != "<string>" and not os.path.isabs(path):
+                path = os.path.join(os.path.dirname(self.source), path)
+            motion = read_motion_table(path)
+            if kind == "oscillating":
+                motion = motion.scaled(math.pi / 180.0)
+            return motion, ("table", os.path.abspath(path), motion.start, motion.poly,
+                            motion.sine)
         for key in ("law", "return_law"):
             if key in raw and raw[key] not in LAWS:
-                raise err(f"[cam] {key} {brief(raw[key])} is not a motion law", key,
-                          expected=" | ".join(LAWS), value=raw[key]
-                          if isinstance(raw[key], str) else None)
-        rise, ret = num("rise"), num("return")
-        dwell, stroke = num("dwell", 0.0, allow_zero=True), num("stroke_deg", positive=False)
+                raise self.err(f"[cam] {key} {brief(raw[key])} is not a motion law", key,
+                               expected=" | ".join(LAWS), value=raw[key]
+                               if isinstance(raw[key], str) else None)
+        skey = "stroke_deg" if kind == "oscillating" else "stroke"
+        rise, ret = self.num("rise"), self.num("return")
+        dwell, stroke = self.num("dwell", 0.0, allow_zero=True), self.num(skey, positive=False)
+        h = math.radians(stroke) if kind == "oscillating" else stroke
         try:
-            motion = cam_cycle(raw["law"], rise, dwell, ret, math.radians(stroke),
-                               raw.get("return_law"))
+            motion = cam_cycle(raw["law"], rise, dwell, ret, h, raw.get("return_law"))
         except ValueError as exc:
-            key = "stroke_deg" if "stroke" in str(exc) else "rise"
-            raise err(f"[cam] {exc}".replace("stroke=", "stroke [rad] = "), key,
-                      expected="rise + dwell + return ≤ 360 degrees, stroke_deg ≠ 0") from None
-        key = ("law", raw["law"], raw.get("return_law"), rise, dwell, ret, stroke)
-    else:
-        path = raw["table"]
-        if not isinstance(path, str):
-            raise err(f"[cam] table must be a file name, got {brief(path)}", "table")
-        if source != "<string>" and not os.path.isabs(path):
-            path = os.path.join(os.path.dirname(source), path)
-        motion = read_motion_table(path).scaled(math.pi / 180.0)
-        key = ("table", os.path.abspath(path), motion.start, motion.poly, motion.sine)
-    x0 = float(motion.evaluate(0.0)[0])
-    if "base_radius" in raw:
+            key = skey if "stroke" in str(exc) else "rise"
+            raise self.err(f"[cam] {exc}".replace(
+                "stroke=", "stroke [rad] = " if kind == "oscillating" else "stroke = "), key,
+                expected=f"rise + dwell + return ≤ 360 degrees, {skey} ≠ 0") from None
+        return motion, ("law", raw["law"], raw.get("return_law"), rise, dwell, ret, stroke)
+
+    def checks(self, kind, motion):
+        """The cam's pressure-angle and undercut checks (warnings), when base_radius is given."""
+        import math
+
+        from ..errors import InputError, MechcircWarning, warn
         from ..kinematics.cam import cam_profile
 
+        geo = ("roller_radius", "arm", "pivot", "offset", "pressure_limit_deg")
+        if "base_radius" not in self.raw:
+            if any(k in self.raw for k in geo):
+                raise self.err("[cam] the geometry checks need base_radius", next(
+                    k for k in geo if k in self.raw), expected="base_radius = r_b")
+            return
+        limit = self.num("pressure_limit_deg", 45.0 if kind == "oscillating" else 30.0)
+        rf = self.num("roller_radius", 0.0, allow_zero=True)
+        if kind == "oscillating":
+            extra = {"arm": self.num("arm"), "pivot": self.num("pivot")}
+            at, hint = "base_radius", ("a base circle the arm's roller can reach "
+                                       "(|D − L| < r_b + r_f < D + L)")
+        else:
+            extra = {"offset": self.num("offset", 0.0, positive=False)}
+            at = "offset" if "offset" in self.raw else "base_radius"
+            hint = "|offset| < r_b + r_f"
         try:
-            prof = cam_profile(motion, num("base_radius"), "oscillating",
-                               roller_radius=num("roller_radius", 0.0, allow_zero=True),
-                               arm=num("arm"), pivot=num("pivot"),
-                               pressure_limit_deg=num("pressure_limit_deg", 45.0))
+            prof = cam_profile(motion, self.num("base_radius"), kind, roller_radius=rf,
+                               pressure_limit_deg=limit, **extra)
         except InputError as exc:
-            raise err(f"[cam] the cam cannot be built: {exc}", "base_radius",
-                      expected="a base circle the arm's roller can reach (|D − L| < r_b + "
-                      "r_f < D + L)") from None
+            raise self.err(f"[cam] the cam cannot be built: {exc}", at, expected=hint) from None
         for c in prof.checks:
             if not c.ok:
                 what = (f"pressure angle {math.degrees(c.value):.4g}° beyond the limit "
                         f"{math.degrees(c.limit):.4g}°" if c.name == "pressure_angle" else
                         f"undercut: smallest convex radius of the profile {c.value:.4g} "
-                        f"{linkage.units or 'units'} ≤ 0")
-                warn(f"{source}: [cam] {what} at cam angle {math.degrees(c.theta):.4g}°",
+                        f"{self.lk.units or 'units'} ≤ 0")
+                warn(f"{self.source}: [cam] {what} at cam angle {math.degrees(c.theta):.4g}°",
                      MechcircWarning)
-    elif any(k in raw for k in ("roller_radius", "arm", "pivot", "pressure_limit_deg")):
-        raise err("[cam] the geometry checks need base_radius", next(
-            k for k in ("roller_radius", "arm", "pivot", "pressure_limit_deg") if k in raw),
-            expected="base_radius = r_b with arm and pivot")
+
+
+def parse_cam(text: str, source: str, raw, linkage: Linkage) -> CamLinkage:
+    """The ``[cam]`` table: the follower's law, the linkage made to follow it, the cam's checks.
+
+    Raises
+    ------
+    NetlistError
+        A bad key or value, an unknown follower type, a follower that is not the
+        only crank (oscillating) or not a block on a fixed guide (translating),
+        a law whose angles do not fit a turn, a cam geometry that cannot be
+        built — at the key.
+    """
+    from ..sources import Table, check_keys
+
+    if not isinstance(raw, dict):
+        raise _CamReader(text, source, {}, linkage).located(
+            text, source, "cam must be a table [cam]", None, "cam")
+    check_keys(text, source, Table("cam", CAM_KEYS), raw)
+    r = _CamReader(text, source, raw, linkage)
+    kind = r.kind()
+    follower, slider = r.follower(kind)
+    motion, key = r.motion(kind)
+    r.checks(kind, motion)
     fields = {f.name: getattr(linkage, f.name) for f in dataclasses.fields(Linkage)}
-    return CamLinkage(**fields, cam=motion, x0=x0, key=key)
+    return CamLinkage(**fields, cam=motion, x0=float(motion.evaluate(0.0)[0]), key=key,
+                      follower=follower, slider=slider)

@@ -397,6 +397,10 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
                   tuple(masses), tuple(elastic), tuple(torsions), tuple(loads), drive, (),
                   source, analysis, gears=tuple(gears))
     object.__setattr__(scene, "parts", _parts(scene))
+    if "cam" in doc:
+        from .cam import check_follower_part
+
+        check_follower_part(scene, text)
     object.__setattr__(scene, "moments", parse_moments(text, source, doc.get("moments"), scene))
     object.__setattr__(scene, "simulate", parse_simulate(text, source, doc.get("simulate"),
                                                          scene))

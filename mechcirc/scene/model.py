@@ -206,7 +206,7 @@ def _drive_ratio(scene: Scene, m: _Motion) -> tuple[float, str]:
         r0_size, r0_text = r0, f"|v_{d.point}|/ω_{m.crank}"
     if r0_size <= m.tiny and getattr(scene.linkage, "cam", None) is not None:
         raise GeometryError(f"{scene.source}: at θ = {m.deg:.6g}° the cam dwells: the follower "
-                            f"{scene.linkage.cranks[0].link!r} is at rest (x'(θ) = 0), so the "
+                            f"{scene.linkage.follower!r} is at rest (x'(θ) = 0), so the "
                             f"drive on it does not move the mechanism; choose a cam angle in a "
                             f"rise or a return")
     if r0_size <= m.tiny:

@@ -553,7 +553,9 @@ def _point_accelerations(model, theta_s, ripple, ts, ys, values):
     out = {}
     for p, (fx, fy, i) in model.point_fn.items():
         q, qd = coord[i]
-        qdd = values[f"{model.coordinate[i]}.acceleration"]
+        # the drive part's coordinate is the crank angle θ (θ̈ from the ripple), not the
+        # crank body's rotation, which a cam makes swing
+        qdd = dw if i == 0 else values[f"{model.coordinate[i]}.acceleration"]
         comp = []
         for f in (fx, fy):
             fv = np.empty((ts.size, 3))
