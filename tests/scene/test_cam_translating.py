@@ -248,3 +248,22 @@ def test_an_offset_beyond_the_pressure_limit_warns_with_the_value():
 def test_a_dwell_is_refused_with_the_follower_named():
     with pytest.raises(GeometryError, match="the follower 'follower' is at rest"):
         build(load_scene(EXAMPLE), math.radians(150.0))
+
+
+def test_the_example_script_comes_within_round_off_of_the_closed_form(capsys, monkeypatch):
+    """examples/cam_follower_scene.py: every difference it prints is small, each r0 and
+    resonance equal to its closed form to the digits printed."""
+    import re
+
+    from cli_helpers import run_script
+
+    status, out, err = run_script(EXAMPLE.with_suffix(".py"), [], capsys, monkeypatch)
+    assert status == 0 and not err, err
+    kin = re.search(r"follower s (\S+) m, v (\S+) m/s, a (\S+) m/s²", out)
+    assert kin and max(float(v) for v in kin.groups()) <= 1e-12, out
+    lev = re.search(r"lever ψ (\S+) rad, ψ̇ (\S+) rad/s", out)
+    assert lev and max(float(v) for v in lev.groups()) <= 1e-12, out
+    pairs = re.findall(r"(?:r0|resonance) (\S+) \(closed form (\S+)\)", out)
+    assert len(pairs) == 4 and all(a == b for a, b in pairs), out
+    sim = re.search(r"acceleration off the law's by (\S+) m/s²", out)
+    assert sim and float(sim.group(1)) <= 1e-6, out     # the RK4 step's 7e-9 of 19.4
