@@ -323,21 +323,7 @@ def cam_cycle(law_name: str, rise: float, dwell: float, ret: float, stroke: floa
     (0.025, 0.05)
     """
     ret_law = return_law or law_name
-    for name in (law_name, ret_law):
-        if name not in LAWS:
-            raise ValueError(f"unknown motion law {name!r}; expected one of {', '.join(LAWS)}")
-    if not (math.isfinite(rise) and rise > 0 and math.isfinite(ret) and ret > 0
-            and math.isfinite(dwell) and dwell >= 0):
-        raise ValueError(f"rise and return must be > 0 and dwell >= 0 degrees, got "
-                         f"rise={rise:g}, dwell={dwell:g}, return={ret:g}")
-    if rise + dwell + ret > 360 * (1 + 1e-12):
-        raise ValueError(f"rise + dwell + return = {rise + dwell + ret:g} degrees, more than "
-                         "one revolution (360)")
-    if not (math.isfinite(stroke) and stroke != 0):
-        raise ValueError(f"stroke must be a finite nonzero number, got {stroke!r}")
-    if abs(stroke) > MAX_LIFT:
-        raise ValueError(f"stroke={stroke:g} is beyond the bound |stroke| <= {MAX_LIFT:g} "
-                         "(the drive's velocities and forces would overflow float64)")
+    _check_cycle(law_name, ret_law, rise, dwell, ret, stroke)
     b1, d1, b2 = (math.radians(v) for v in (rise, dwell, ret))
     try:        # a rise of 1e-320 degrees: 1/β⁵ is not a float64
         pieces = _piece_map(_law_pieces(law_name), 0.0, b1, stroke, True)
@@ -356,6 +342,25 @@ def cam_cycle(law_name: str, rise: float, dwell: float, ret: float, stroke: floa
             + (f" return_law={ret_law}" if return_law else ""))
     return Motion(spec, tuple(p[0] for p in pieces), tuple(p[1] for p in pieces),
                   tuple(p[2] for p in pieces))
+
+
+def _check_cycle(law_name, ret_law, rise, dwell, ret, stroke) -> None:
+    """The laws known, the angles fit one revolution, the stroke finite and nonzero."""
+    for name in (law_name, ret_law):
+        if name not in LAWS:
+            raise ValueError(f"unknown motion law {name!r}; expected one of {', '.join(LAWS)}")
+    if not (math.isfinite(rise) and rise > 0 and math.isfinite(ret) and ret > 0
+            and math.isfinite(dwell) and dwell >= 0):
+        raise ValueError(f"rise and return must be > 0 and dwell >= 0 degrees, got "
+                         f"rise={rise:g}, dwell={dwell:g}, return={ret:g}")
+    if rise + dwell + ret > 360 * (1 + 1e-12):
+        raise ValueError(f"rise + dwell + return = {rise + dwell + ret:g} degrees, more than "
+                         "one revolution (360)")
+    if not (math.isfinite(stroke) and stroke != 0):
+        raise ValueError(f"stroke must be a finite nonzero number, got {stroke!r}")
+    if abs(stroke) > MAX_LIFT:
+        raise ValueError(f"stroke={stroke:g} is beyond the bound |stroke| <= {MAX_LIFT:g} "
+                         "(the drive's velocities and forces would overflow float64)")
 
 
 # ------------------------------------------------------------------ tables
@@ -380,6 +385,21 @@ def _hermite(theta, x, dx, ddx) -> tuple:
         raise ValueError("the interpolant through the samples is not finite in float64")
     return tuple(map(tuple, c.T.tolist()))
 
+
+def _table_pieces(theta, x, slope, curvature):
+    """(polynomial pieces, the scipy spline or None): quintic Hermite with ``slope``, else
+    the periodic cubic spline."""
+    if slope is not None:
+        return _hermite(theta, x, np.asarray(slope, float), np.asarray(curvature, float)), None
+    try:
+        spl = _spline(theta, x)
+    except ValueError:                         # scipy: the slopes overflowed
+        spl = None
+    if spl is None or not np.all(np.isfinite(spl.c)):
+        raise ValueError("the spline through the table is not finite in float64 "
+                         "(displacements too large)")
+    c = spl.c                                          # (4, n−1), highest power first
+    return tuple((c[3, i], c[2, i], c[1, i], c[0, i], 0.0, 0.0) for i in range(c.shape[1])), spl
 
 def motion_table(angle_deg, displacement, spec: str = "motion=<table>", *, slope=None,
                  curvature=None) -> Motion:
@@ -416,23 +436,12 @@ def motion_table(angle_deg, displacement, spec: str = "motion=<table>", *, slope
     theta[-1] = _TAU
     x[-1] = x[0]
     hermite = slope is not None
-    if hermite:
-        poly = _hermite(theta, x, np.asarray(slope, float), np.asarray(curvature, float))
-    else:
-        try:
-            spl = _spline(theta, x)
-        except ValueError:                         # scipy: the slopes overflowed
-            spl = None
-        if spl is None or not np.all(np.isfinite(spl.c)):
-            raise ValueError("the spline through the table is not finite in float64 "
-                             "(displacements too large)")
-        c = spl.c                                          # (4, n−1), highest power first
-        poly = tuple((c[3, i], c[2, i], c[1, i], c[0, i], 0.0, 0.0) for i in range(c.shape[1]))
+    poly, spl = _table_pieces(theta, x, slope, curvature)
     if np.abs(x).max(initial=0.0) > MAX_LIFT:
         raise ValueError(f"a displacement of {np.abs(x).max():g} is beyond the bound "
                          f"{MAX_LIFT:g} (the drive's velocities and forces would overflow)")
     error, coarse = math.inf, None
-    if ang.size >= 9:
+    if ang.size >= 9:          # against the table through every other row
         keep = np.unique(np.append(np.arange(0, ang.size, 2), ang.size - 1))
         coarse = motion_table(ang[keep], x[keep], spec + " (every other row)",
                               slope=None if not hermite else np.asarray(slope)[keep],
@@ -462,43 +471,70 @@ def read_motion_table(path: str | os.PathLike, spec: str | None = None) -> Motio
     NetlistError
         At ``file:row:column`` of the first bad value, with what is expected.
     """
-    import csv
-
-    from .sources import brief, read_source, split_lines
+    from .sources import read_source
 
     source = os.fspath(path)
     text = read_source(path, "a motion table (CSV: angle_deg,displacement)")
-    rows = []
-    header = None
+    rows, header = _table_rows(text, source)
+    x = _check_revolution(rows, header, source)
+    try:
+        m = motion_table([r[0] for r in rows], x, spec or f"motion={source}")
+    except ValueError as exc:                  # 1e308 m: the slopes overflow
+        big = max(rows, key=lambda r: abs(r[1]))
+        raise NetlistError(f"{exc}; the largest displacement is {big[1]:g}", source, big[2],
+                           big[3][header[1]], f"displacements within ±{MAX_LIFT:g} whose "
+                           "slopes are finite float64 numbers") from None
+    return dataclasses.replace(m, path=source)
+
+
+def _cells(line: str, source: str, lineno: int):
+    """The CSV cells of one line and the 1-based column where each value starts."""
+    import csv
+
+    try:
+        cells = next(csv.reader([line]))
+    except csv.Error as exc:                   # a lone carriage return, a stray quote
+        raise NetlistError(f"not a CSV row ({exc})", source, lineno, 1,
+                           "comma-separated numbers") from None
+    cols, pos = [], 1
+    for cell in cells:
+        cols.append(pos + len(cell) - len(cell.lstrip()))
+        pos += len(cell) + 1
+    return cells, cols, pos
+
+
+def _header(cells, source: str, lineno: int) -> tuple:
+    """(index of angle_deg, index of displacement, the column names) of the header row."""
+    from .sources import brief
+
+    names = [c.strip().lower() for c in cells]
+    for need in ("angle_deg", "displacement"):
+        if need not in names:
+            found = ", ".join(brief(n[:40]) for n in names[:4])
+            raise NetlistError(f"the header has no column {need!r} (found {found}"
+                               f"{', ...' if len(names) > 4 else ''})", source, lineno, 1,
+                               "a first line 'angle_deg,displacement'")
+    return names.index("angle_deg"), names.index("displacement"), names
+
+
+def _table_rows(text: str, source: str):
+    """The rows (angle, displacement, line, columns) of a motion table and its header."""
+    from .sources import split_lines
+
+    rows, header = [], None
     for lineno, line in enumerate(split_lines(text), start=1):
         if not line.strip() or line.lstrip().startswith("#"):
             continue
-        try:
-            cells = next(csv.reader([line]))
-        except csv.Error as exc:                   # a lone carriage return, a stray quote
-            raise NetlistError(f"not a CSV row ({exc})", source, lineno, 1,
-                               "comma-separated numbers") from None
-        cols = []
-        pos = 1
-        for cell in cells:                           # 1-based column of each cell
-            cols.append(pos + len(cell) - len(cell.lstrip()))
-            pos += len(cell) + 1
+        cells, cols, pos = _cells(line, source, lineno)
         if header is None:
-            names = [c.strip().lower() for c in cells]
-            for need in ("angle_deg", "displacement"):
-                if need not in names:
-                    found = ", ".join(brief(n[:40]) for n in names[:4])
-                    raise NetlistError(f"the header has no column {need!r} (found {found}"
-                                       f"{', ...' if len(names) > 4 else ''})", source,
-                                       lineno, 1,
-                                       "a first line 'angle_deg,displacement'")
-            header = (names.index("angle_deg"), names.index("displacement"))
+            header = _header(cells, source, lineno)
             continue
         values = []
-        for j in header:
+        for j in header[:2]:
             if j >= len(cells):
-                raise NetlistError(f"row has {len(cells)} column(s), the header {len(names)}",
-                                   source, lineno, pos, f"{len(names)} comma-separated values")
+                raise NetlistError(f"row has {len(cells)} column(s), the header "
+                                   f"{len(header[2])}", source, lineno, pos,
+                                   f"{len(header[2])} comma-separated values")
             try:
                 v = float(cells[j])
             except ValueError:
@@ -515,6 +551,11 @@ def read_motion_table(path: str | os.PathLike, spec: str | None = None) -> Motio
                                f"(line {prev[2]})", source, lineno, cols[header[0]],
                                "angles strictly increasing over one revolution")
         rows.append((values[0], values[1], lineno, cols))
+    return rows, header
+
+
+def _check_revolution(rows, header, source: str) -> np.ndarray:
+    """The displacements, once the rows are enough, span one turn and meet at its ends."""
     if header is None or len(rows) < 4:
         raise NetlistError(f"the table has {len(rows)} row(s)", source, 0, 0,
                            "a header 'angle_deg,displacement' and at least 4 rows covering "
@@ -536,11 +577,4 @@ def read_motion_table(path: str | os.PathLike, spec: str | None = None) -> Motio
                            f"{tol:.3g} = {PERIODIC_TOLERANCE:g} of the range)", source,
                            last[2], last[3][header[1]],
                            "the same displacement at both ends of the revolution")
-    try:
-        m = motion_table([r[0] for r in rows], x, spec or f"motion={source}")
-    except ValueError as exc:                  # 1e308 m: the slopes overflow
-        big = max(rows, key=lambda r: abs(r[1]))
-        raise NetlistError(f"{exc}; the largest displacement is {big[1]:g}", source, big[2],
-                           big[3][header[1]], f"displacements within ±{MAX_LIFT:g} whose "
-                           "slopes are finite float64 numbers") from None
-    return dataclasses.replace(m, path=source)
+    return x

@@ -248,6 +248,27 @@ def cam_profile(motion, base_radius: float, follower: str = "roller", *,
     >>> round(math.degrees(cam.check("pressure_angle").value), 4)
     17.8466
     """
+    rb, rf, e, arm, pivot, pressure_limit = _inputs(
+        motion, follower, base_radius, roller_radius, offset, arm, pivot, points,
+        pressure_limit_deg)
+    theta = np.linspace(0.0, 2 * math.pi, int(points))
+    x0 = float(np.min(motion.evaluate(theta)[0]))
+
+    def geo(t):
+        return _geometry(motion, t, follower, rb, rf, e, arm, pivot, x0)
+
+    s, ds, dds, P, C, phi, kappa, rho = geo(theta)
+    if follower == "oscillating":
+        _check_swing(theta, s, rb + rf, arm, pivot)
+    checks = _checks(geo, theta, follower, phi, kappa, rho, rf, pressure_limit)
+    return CamProfile(follower, rb, rf, e, float(arm), float(pivot), theta, s, ds, dds,
+                      None if P is None else P[0], None if P is None else P[1], C[0], C[1],
+                      phi, None if follower == "flat" else rho + rf, rho, checks)
+
+
+def _inputs(motion, follower, base_radius, roller_radius, offset, arm, pivot, points,
+            pressure_limit_deg):
+    """The checked (r_b, r_f, e, L, D, pressure limit [rad]) of :func:`cam_profile`."""
     if follower not in FOLLOWERS:
         raise InputError(f"unknown follower {follower!r}; expected one of {', '.join(FOLLOWERS)}")
     if getattr(motion, "period", None) != 2 * math.pi:
@@ -285,24 +306,24 @@ def cam_profile(motion, base_radius: float, follower: str = "roller", *,
     if not 0 < limit_deg < 90:
         raise InputError(f"the pressure-angle limit must be between 0 and 90 degrees, got "
                          f"{limit_deg:g}")
-    pressure_limit = math.radians(limit_deg)
-    theta = np.linspace(0.0, 2 * math.pi, int(points))
-    x0 = float(np.min(motion.evaluate(theta)[0]))
+    return rb, rf, e, arm, pivot, math.radians(limit_deg)
 
-    def geo(t):
-        return _geometry(motion, t, follower, rb, rf, e, arm, pivot, x0)
 
-    s, ds, dds, P, C, phi, kappa, rho = geo(theta)
-    if follower == "oscillating":
-        psi0 = math.acos((pivot ** 2 + arm ** 2 - rp * rp) / (2 * pivot * arm))
-        psi = psi0 + s
-        if np.any((psi <= 0) | (psi >= math.pi)):
-            i = int(np.argmax(np.abs(psi - math.pi / 2)))
-            raise InputError(f"the arm angle ψ = {math.degrees(psi[i]):.3f}° at θ = "
-                             f"{math.degrees(theta[i]):.3f}° (ψ₀ = {math.degrees(psi0):.3f}° "
-                             f"plus the lift) leaves (0°, 180°): the arm would swing through "
-                             f"the line from its pivot to the cam's centre")
-    # Worst pressure angle; smallest convex radius of the profile = largest curvature.
+def _check_swing(theta, s, rp, arm, pivot):
+    """The oscillating arm stays on one side of the line from its pivot to the cam's centre."""
+    psi0 = math.acos((pivot ** 2 + arm ** 2 - rp * rp) / (2 * pivot * arm))
+    psi = psi0 + s
+    if np.any((psi <= 0) | (psi >= math.pi)):
+        i = int(np.argmax(np.abs(psi - math.pi / 2)))
+        raise InputError(f"the arm angle ψ = {math.degrees(psi[i]):.3f}° at θ = "
+                         f"{math.degrees(theta[i]):.3f}° (ψ₀ = {math.degrees(psi0):.3f}° "
+                         f"plus the lift) leaves (0°, 180°): the arm would swing through "
+                         f"the line from its pivot to the cam's centre")
+
+
+def _checks(geo, theta, follower, phi, kappa, rho, rf, pressure_limit) -> tuple:
+    """The worst pressure angle and the smallest convex radius of the profile (the largest
+    curvature), each refined between the grid points."""
     t_phi, phi_max = _refine_max(lambda t: abs(float(geo(np.array([t]))[5][0])), theta,
                                  np.abs(phi))
     checks = [CamCheck("pressure_angle", phi_max <= pressure_limit, phi_max, t_phi,
@@ -310,15 +331,11 @@ def cam_profile(motion, base_radius: float, follower: str = "roller", *,
     if follower == "flat":
         t_rho, neg = _refine_max(lambda t: -float(geo(np.array([t]))[7][0]), theta, -rho)
         checks.append(CamCheck("undercut", -neg > 0, -neg, t_rho, 0.0))
-        rho_pitch = None
     else:
-        rho_pitch = rho + rf
         t_k, k_max = _refine_max(lambda t: float(geo(np.array([t]))[6][0]), theta, kappa)
         worst = 1.0 / k_max - rf if k_max > 0 else math.inf
         checks.append(CamCheck("undercut", worst > 0, worst, t_k, 0.0))
-    return CamProfile(follower, rb, rf, e, float(arm), float(pivot), theta, s, ds, dds,
-                      None if P is None else P[0], None if P is None else P[1], C[0], C[1],
-                      phi, rho_pitch, rho, tuple(checks))
+    return tuple(checks)
 
 
 # ------------------------------------------------------------------ export
