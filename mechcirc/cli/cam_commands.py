@@ -110,10 +110,28 @@ def _mm(v: float) -> str:
 
 
 def cmd_cam(args) -> int:
-    import numpy as np
-
-    from ..errors import InputError
     from ..kinematics.cam import cam_profile, save_profile
+
+    _check_args(args)
+    motion, what = _motion(args)
+    cam = cam_profile(motion, args.base_radius, args.follower,
+                      roller_radius=args.roller_radius or 0.0, offset=args.offset or 0.0,
+                      arm=args.arm or 0.0, pivot=args.pivot or 0.0, points=args.points,
+                      pressure_limit_deg=args.pressure_limit)
+    warnings = _warnings(cam)
+    save_profile(cam, args.output, args.svg)
+    if args.json:
+        print_json(_as_json(cam, motion, warnings))
+    else:
+        _report(cam, what, [p for p in (args.output, args.svg) if p])
+    for w in warnings:
+        print(f"warning: {w}", file=sys.stderr)
+    return 0
+
+
+def _check_args(args) -> None:
+    """The output paths, and the options each follower needs or does not take."""
+    from ..errors import InputError
 
     check_output_paths(args.output, args.svg)
     if args.svg and not args.svg.lower().endswith(".svg"):
@@ -128,11 +146,10 @@ def cmd_cam(args) -> int:
         if getattr(args, name) is not None:
             raise InputError(f"--{name.replace('_', '-')} does not apply to a {args.follower} "
                              "follower (see 'mechcirc cam --help')")
-    motion, what = _motion(args)
-    cam = cam_profile(motion, args.base_radius, args.follower,
-                      roller_radius=args.roller_radius or 0.0, offset=args.offset or 0.0,
-                      arm=args.arm or 0.0, pivot=args.pivot or 0.0, points=args.points,
-                      pressure_limit_deg=args.pressure_limit)
+
+
+def _warnings(cam) -> list:
+    """A failed pressure-angle or undercut check, in words, with its value."""
     phi, cut = cam.check("pressure_angle"), cam.check("undercut")
     warnings = []
     if not phi.ok:
@@ -143,48 +160,53 @@ def cmd_cam(args) -> int:
     if not cut.ok:
         why = (f"the roller radius {cam.roller_radius:g} mm exceeds the pitch curve's radius "
                f"of curvature {cut.value + cam.roller_radius:.4g} mm there, so the profile's "
-               if args.follower != "flat" else "the profile's radius of curvature r_b + s + s'' ")
+               if cam.follower != "flat" else "the profile's radius of curvature r_b + s + s'' ")
         warnings.append(f"undercut at θ = {math.degrees(cut.theta):.3f}°: {why}is "
                         f"{cut.value:.4g} mm; the cam cannot give this motion (enlarge the "
                         "base circle or lengthen the rise)")
-    save_profile(cam, args.output, args.svg)
-    if args.json:
-        print_json({
-            "motion": motion.spec, "follower": cam.follower, "base_radius": cam.base_radius,
-            "roller_radius": cam.roller_radius, "offset": cam.offset, "arm": cam.arm,
-            "pivot": cam.pivot, "unit": "mm",
-            "checks": {c.name: {"ok": c.ok, "theta_deg": math.degrees(c.theta),
-                                **({"value_deg": math.degrees(c.value),
-                                    "limit_deg": math.degrees(c.limit)}
-                                   if c.name == "pressure_angle" else {"value": c.value})}
-                       for c in cam.checks},
-            "warnings": warnings,
-            "profile": {"theta_deg": np.degrees(cam.theta), "x": cam.x, "y": cam.y,
-                        "pressure_angle_deg": np.degrees(cam.pressure_angle),
-                        "radius_of_curvature": cam.rho}})
-    else:
-        kind = {"roller": f"translating roller r_f = {cam.roller_radius:g} mm, offset "
-                          f"{cam.offset:g} mm",
-                "flat": "translating flat face",
-                "oscillating": f"oscillating roller r_f = {cam.roller_radius:g} mm, arm "
-                               f"{cam.arm:g} mm, pivot {cam.pivot:g} mm"}[cam.follower]
-        print(f"cam: {what}")
-        print(f"  follower: {kind}; base circle r_b = {cam.base_radius:g} mm; "
-              f"{cam.theta.size} cam angles")
-        print(f"  pressure angle: max |φ| = {math.degrees(phi.value):.4f}° at θ = "
-              f"{math.degrees(phi.theta):.3f}° (limit {math.degrees(phi.limit):g}°"
-              + ("" if phi.ok else ", EXCEEDED") + ")")
-        pitch = "" if cam.rho_pitch is None else \
-            f" (pitch curve {_mm(cut.value + cam.roller_radius)} mm)"
-        print(f"  radius of curvature: smallest convex {_mm(cut.value)} mm at θ = "
-              f"{math.degrees(cut.theta):.3f}°{pitch}")
-        if cam.follower == "flat":       # the contact runs along the face by x = s'
-            print(f"  contact on the face from x = {_mm(cam.dlift.min())} to "
-                  f"{_mm(cam.dlift.max())} mm of its axis")
-        print(f"  undercut: {'no' if cut.ok else 'YES'}")
-        written = [p for p in (args.output, args.svg) if p]
-        if written:
-            print(f"  wrote {', '.join(written)}")
-    for w in warnings:
-        print(f"warning: {w}", file=sys.stderr)
-    return 0
+    return warnings
+
+
+def _as_json(cam, motion, warnings) -> dict:
+    """The ``--json`` document: the cam, its checks, warnings and profile."""
+    import numpy as np
+
+    return {
+        "motion": motion.spec, "follower": cam.follower, "base_radius": cam.base_radius,
+        "roller_radius": cam.roller_radius, "offset": cam.offset, "arm": cam.arm,
+        "pivot": cam.pivot, "unit": "mm",
+        "checks": {c.name: {"ok": c.ok, "theta_deg": math.degrees(c.theta),
+                            **({"value_deg": math.degrees(c.value),
+                                "limit_deg": math.degrees(c.limit)}
+                               if c.name == "pressure_angle" else {"value": c.value})}
+                   for c in cam.checks},
+        "warnings": warnings,
+        "profile": {"theta_deg": np.degrees(cam.theta), "x": cam.x, "y": cam.y,
+                    "pressure_angle_deg": np.degrees(cam.pressure_angle),
+                    "radius_of_curvature": cam.rho}}
+
+
+def _report(cam, what: str, written: list) -> None:
+    """The text report: the follower, the worst pressure angle and curvature, the files."""
+    phi, cut = cam.check("pressure_angle"), cam.check("undercut")
+    kind = {"roller": f"translating roller r_f = {cam.roller_radius:g} mm, offset "
+                      f"{cam.offset:g} mm",
+            "flat": "translating flat face",
+            "oscillating": f"oscillating roller r_f = {cam.roller_radius:g} mm, arm "
+                           f"{cam.arm:g} mm, pivot {cam.pivot:g} mm"}[cam.follower]
+    print(f"cam: {what}")
+    print(f"  follower: {kind}; base circle r_b = {cam.base_radius:g} mm; "
+          f"{cam.theta.size} cam angles")
+    print(f"  pressure angle: max |φ| = {math.degrees(phi.value):.4f}° at θ = "
+          f"{math.degrees(phi.theta):.3f}° (limit {math.degrees(phi.limit):g}°"
+          + ("" if phi.ok else ", EXCEEDED") + ")")
+    pitch = "" if cam.rho_pitch is None else \
+        f" (pitch curve {_mm(cut.value + cam.roller_radius)} mm)"
+    print(f"  radius of curvature: smallest convex {_mm(cut.value)} mm at θ = "
+          f"{math.degrees(cut.theta):.3f}°{pitch}")
+    if cam.follower == "flat":       # the contact runs along the face by x = s'
+        print(f"  contact on the face from x = {_mm(cam.dlift.min())} to "
+              f"{_mm(cam.dlift.max())} mm of its axis")
+    print(f"  undercut: {'no' if cut.ok else 'YES'}")
+    if written:
+        print(f"  wrote {', '.join(written)}")
