@@ -235,8 +235,20 @@ def follower(motion, rpm: float, mass: float, spring: float, preload: float,
     r = transient(circuit, revolutions * period, dt if dt is not None else period / 7200,
                   rpm=rpm, rtol=rtol)
     omega = 2 * math.pi * rpm / 60
+    lo, ang = _least_contact(r, circuit.elements[0], omega)
+    theta = omega * r.time
+    z0 = preload / spring
+    return FollowerResult(rpm=float(rpm), omega_shaft=omega, angle_deg=np.degrees(theta),
+                          lift=motion.evaluate(theta)[0], rise=r.x[:, r.nodes.index("f")] - z0,
+                          contact_force=r.element_force("kc"), min_contact=lo,
+                          min_contact_angle_deg=math.degrees(ang) % 360.0,
+                          separations=list(r.separations), transient=r)
+
+
+def _least_contact(r, kc, omega) -> tuple:
+    """(least contact force [N], its shaft angle [rad]) of the run ``r``: the least sample,
+    refined by the parabola through it and its neighbours; the far flank refused."""
     i_cam, i_f = r.nodes.index("cam"), r.nodes.index("f")
-    kc = circuit.elements[0]
     half = kc.backlash / 2
     e = r.x[:, i_cam] - r.x[:, i_f]
     if np.any(e < -half):
@@ -252,14 +264,7 @@ def follower(motion, rpm: float, mass: float, spring: float, preload: float,
             off = 0.5 * (a - c) / den
             lo = float(b - 0.25 * (a - c) * off)
             ang += omega * off * (r.time[1] - r.time[0])
-    theta = omega * r.time
-    z0 = preload / spring
-    return FollowerResult(rpm=float(rpm), omega_shaft=omega, angle_deg=np.degrees(theta),
-                          lift=motion.evaluate(theta)[0], rise=r.x[:, i_f] - z0,
-                          contact_force=r.element_force("kc"), min_contact=lo,
-                          min_contact_angle_deg=math.degrees(ang) % 360.0,
-                          separations=list(r.separations), transient=r)
-
+    return lo, ang
 
 def separation_speed(motion, mass, spring, preload, damping=0.0, *, contact,
                      contact_damping=0.0, bracket, rtol=1e-10, dt=None,
