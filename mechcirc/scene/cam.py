@@ -100,30 +100,46 @@ class CamLinkage(Linkage):
             i = m.point_names.index(sl.point)
             return m, (m.points[:, i] - p0) @ u, (m.velocities[:, i] @ u) / w, i
 
-        slope0 = travel(np.zeros(1))[2][0]
-        tol = 1e-13 * self.length_scale()
+        alpha = np.zeros_like(s)
+        m, tau, slope, i = travel(alpha)
+        slope0, tol, crank = slope[0], 1e-13 * self.length_scale(), self.cranks[0].link
         if not abs(slope0) > tol:
-            raise GeometryError(f"{self.source}: [cam] in the pose the crank "
-                                f"{self.cranks[0].link!r} does not move the follower "
-                                f"{self.follower!r} along its guide (a dead centre)")
-        alpha, polish = s / slope0, 2
-        for _ in range(50):
-            m, tau, slope, i = travel(alpha)
-            bad = np.flatnonzero(~(slope * slope0 > 0))
-            if bad.size:
-                raise GeometryError(
-                    f"{self.source}: [cam] at cam angle {math.degrees(th[bad[0]]):.6g}° the "
-                    f"follower {self.follower!r} lifted by {s[bad[0]]:.6g} "
-                    f"{self.units or 'units'} takes the crank {self.cranks[0].link!r} "
-                    f"through a dead centre (its travel along the guide turns back)")
+            raise GeometryError(f"{self.source}: [cam] in the pose the crank {crank!r} does not "
+                                f"move the follower {self.follower!r} along its guide (a dead "
+                                "centre)")
+        polish = 2                       # two more steps once converged: round-off level
+        for _ in range(60):
             r = tau - s
             polish -= bool(np.max(np.abs(r)) <= tol)
             if polish < 0:
                 break
-            alpha = alpha - r / slope
+            step, trial, why = -r / slope, None, ""
+            for _ in range(40):          # damped: halve the step until the linkage assembles
+                try:
+                    trial = travel(alpha + step)
+                except GeometryError as exc:
+                    trial, why = None, str(exc)
+                else:
+                    if np.all(trial[2] * slope0 > 0):
+                        break
+                    trial, why = None, "its travel along the guide turns back: a dead centre"
+                step = 0.5 * step
+            if trial is None:
+                k = int(np.argmax(np.abs(r)))
+                raise GeometryError(
+                    f"{self.source}: [cam] no rotation of the crank {crank!r} lifts the "
+                    f"follower {self.follower!r} by {s[k]:.6g} {self.units or 'units'} (cam "
+                    f"angle {math.degrees(th[k]):.6g}°): the linkage locks or passes a dead "
+                    f"centre before ({why})")
+            alpha = alpha + step
+            m, tau, slope, i = trial
         else:
-            raise GeometryError(f"{self.source}: [cam] the crank rotation that lifts the "
-                                f"follower {self.follower!r} by the cam's law was not found")
+            k = int(np.argmax(np.abs(tau - s)))
+            raise GeometryError(
+                f"{self.source}: [cam] no rotation of the crank {crank!r} was found that lifts "
+                f"the follower {self.follower!r} by {s[k]:.6g} {self.units or 'units'} (cam "
+                f"angle {math.degrees(th[k]):.6g}°; the nearest lifts it by {tau[k]:.6g}): the "
+                "lift is beyond what the linkage can reach")
         a1 = x1 / slope
         curv = (m.accelerations[:, i] @ u) / (w * w)
         return m, a1, (x2 - curv * a1 * a1) / slope

@@ -284,3 +284,21 @@ def test_a_lift_table_lifts_the_follower_through_its_rows(tmp_path):
     m = lk.motion(np.radians(deg))
     f = m.point_names.index("F")
     assert np.max(np.abs(m.points[:, f, 1] - lift)) <= 1e-12 * 12.0   # achieved ~1e-15
+
+
+def test_a_long_lift_is_reached_by_damped_newton_and_a_lift_out_of_reach_is_refused():
+    """A 300 mm lift takes the lever to 69° (its lock, the push rod horizontal, is at 75.5°,
+    a lift of 343.6 mm), beyond where the first, linear guess lands; 400 mm is out of reach."""
+    th = np.radians([60.0, 100.0])
+    text = _bad("stroke = 20.0", "stroke = 300.0").replace("base_radius = 40.0",
+                                                             "base_radius = 2000.0")
+    lk = parse_scene(text, "long.toml").linkage
+    m = lk.motion(th)
+    s = 15.0 * cycloidal(th)[0]                      # the law of h = 20 mm, scaled to 300 mm
+    psi = lever(s, 0 * s, 0 * s)[0]
+    assert np.max(np.abs(m.q[:, 3 * lk._index()["lever"] + 2] - psi)) <= 1e-12
+    assert math.degrees(psi[1]) > 65.0
+    lk = parse_scene(text.replace("stroke = 300.0", "stroke = 400.0"), "far.toml").linkage
+    with pytest.raises(GeometryError, match=r"lifts the follower 'follower' by 388\.466 mm .*"
+                                            r"beyond what the linkage can reach"):
+        lk.motion(th)
