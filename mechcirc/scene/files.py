@@ -54,7 +54,8 @@ same ``omega``), or cranks geared to the first (``[[gears]]``: crank, ratio =
 ω_crank/ω_first, optional mesh stiffness and damping: a torsion rod between the
 crank and its gear's body); the time-domain tables ``[[moments]]``,
 ``[simulate]`` and ``[shaft]`` are read by :mod:`.simfile`; ``[cam]`` (a disc cam
-swinging the only crank, an oscillating follower, by a motion law) by :mod:`.cam`.
+moving an oscillating follower, the only crank, or a translating one, a block on a
+fixed guide, by a motion law) by :mod:`.cam`.
 
 Structure.  Releasing the elastic links and torsion rods splits the moving
 bodies into *rigid parts* (bodies joined through joints other than ground
