@@ -302,3 +302,28 @@ def test_a_long_lift_is_reached_by_damped_newton_and_a_lift_out_of_reach_is_refu
     with pytest.raises(GeometryError, match=r"lifts the follower 'follower' by 388\.466 mm .*"
                                             r"beyond what the linkage can reach"):
         lk.motion(th)
+
+
+def test_a_flat_face_follower_moves_alike_and_its_undercut_is_warned_with_the_value():
+    """follower_type = "flat": the same lift (the face changes the cam, not the follower's
+    motion); with r_b = 5 mm the face's profile radius r_b + s + s'' (the law written here,
+    its least on 200,001 cam angles) is negative: an undercut warning with that value."""
+    text = _bad('follower_type = "roller"', 'follower_type = "flat"').replace(
+        "roller_radius = 12.0\noffset = 0.0\n", "").replace("base_radius = 40.0",
+                                                            "base_radius = 5.0")
+    with warnings.catch_warnings(record=True) as got:
+        warnings.simplefilter("always")
+        scene = parse_scene(text, "flat.toml")
+    th = np.linspace(0.0, 2 * math.pi, 200_001)
+    s, _, s2 = (1e3 * v for v in cycloidal(th))
+    rho = 5.0 + s + s2
+    i = int(np.argmin(rho))
+    msgs = [str(w.message) for w in got if issubclass(w.category, MechcircWarning)]
+    assert len(msgs) == 1 and "undercut" in msgs[0], msgs
+    # two equal minima: in the rise and at its mirror image in the return, 300° − θ
+    at = [f"{math.degrees(t):.4g}°" for t in (th[i], math.radians(300.0) - th[i])]
+    assert f"{rho[i]:.4g} mm" in msgs[0] and any(a in msgs[0] for a in at), (at, msgs)
+    theta = np.radians([30.0, 100.0, 250.0])
+    f = list(scene.linkage.pose).index("F")
+    lift = scene.linkage.motion(theta).points[:, f, 1]
+    assert np.max(np.abs(lift - 1e3 * cycloidal(theta)[0])) <= 1e-12 * 20.0
