@@ -360,10 +360,9 @@ def sweep_sensitivity(circuit: Circuit, omega, names=None) -> SweepSensitivity:
     omega = np.atleast_1d(np.asarray(omega, dtype=float))
     column = {name: k for k, name in enumerate(stamped)}
     slopes = _param_slopes(circuit, stamped) if set(names) & circuit.params.keys() else {}
-    m, n_nodes = omega.size, len(system.nodes)
+    m = omega.size
     K = np.empty(m, complex)
     dK = {name: np.zeros(m, complex) for name in names}   # 0: carries no force
-    index = {nd: i for i, nd in enumerate(system.nodes)}
     # Chunks of ω: the solutions of one chunk are held (≤ 2**20 values), never all.
     chunk = max(1, 2**20 // (system.size + len(stamped) + 1))
     for at in range(0, m, chunk):
@@ -371,21 +370,31 @@ def sweep_sensitivity(circuit: Circuit, omega, names=None) -> SweepSensitivity:
         sol = nodal.solve(system, w)
         assert sol.x is not None            # kept by default
         K[at:at + w.size] = sol.K
-        xe = np.concatenate([sol.x, np.zeros((w.size, 1), complex)], axis=1)
-        with np.errstate(all="ignore"):
-            S = y * (1j * w[:, None]) ** (-power.astype(float))
-            dv = xe[:, ei] - xe[:, ej]
-            parts = [-S * dv * dv]
-            for k, lv in enumerate(system.levers):
-                dp = xe[:, index.get(lv.p1, -1)] - xe[:, index.get(lv.p2, -1)]
-                parts.append((-2 * lv.ratio * xe[:, n_nodes + k] * dp)[:, None])
-            dK_all = np.concatenate(parts, axis=1)
-            for name in names:
-                if name in column:
-                    dK[name][at:at + w.size] = dK_all[:, column[name]]
-                elif name in slopes:
+        dK_all = _adjoint_products(system, sol.x, w, (ei, ej, y, power))
+        for name in names:
+            if name in column:
+                dK[name][at:at + w.size] = dK_all[:, column[name]]
+            elif name in slopes:
+                with np.errstate(all="ignore"):
                     dK[name][at:at + w.size] = dK_all @ slopes[name]
     return SweepSensitivity(omega, K, circuit.drive, {k: value[k] for k in names}, dK)
+
+
+def _adjoint_products(system, x, w, stamps) -> np.ndarray:
+    """∂K/∂(value) of every stamped element, then every lever ratio, at the ω ``w``
+    from the nodal solutions ``x`` (rows), shape (ω, elements + levers)."""
+    ei, ej, y, power = stamps
+    n_nodes = len(system.nodes)
+    index = {nd: i for i, nd in enumerate(system.nodes)}
+    xe = np.concatenate([x, np.zeros((w.size, 1), complex)], axis=1)
+    with np.errstate(all="ignore"):
+        S = y * (1j * w[:, None]) ** (-power.astype(float))
+        dv = xe[:, ei] - xe[:, ej]
+        parts = [-S * dv * dv]
+        for k, lv in enumerate(system.levers):
+            dp = xe[:, index.get(lv.p1, -1)] - xe[:, index.get(lv.p2, -1)]
+            parts.append((-2 * lv.ratio * xe[:, n_nodes + k] * dp)[:, None])
+        return np.concatenate(parts, axis=1)
 
 
 def _root_sensitivity(system, M, D, Ks, pinv_GT, S, V, dV, y, power) -> np.ndarray:
