@@ -15,6 +15,11 @@ _UNITS = {"eps4T": "1/s^2", "eps2P": "1/s^2", "eps4P": "1/s^2", "eps5P": "1/s^2"
 
 
 def register(sub) -> None:
+    _register_simulate(sub)
+    _register_crosscheck(sub)
+
+
+def _register_simulate(sub) -> None:
     p = sub.add_parser(
         "simulate", help="sley beat-up dynamics (Mrázek, Tables 1 and 2) in the time domain",
         description="Integrate the sley model (eq. 4 one-side, eq. 9 both-sides; the "
@@ -38,6 +43,19 @@ def register(sub) -> None:
     p.add_argument("--via-scene", action="store_true",
                    help="accepted for old scripts and ignored: the presets always run as "
                         "their scenes (examples/mrazek_*.toml plus the variant's values)")
+    _sley_arguments(p)
+    p.add_argument("--plot", metavar="IMAGE", help="plot eps2P, eps4P, eps4T, M2V (Figs. 4-9)")
+    p.add_argument("--json", action="store_true", help="print one JSON document")
+    p.add_argument("--shaft", action="store_true",
+                   help="scene: the dynamic main shaft of its [shaft] table (flywheel, motor) "
+                        "turning the rigid mechanism: speed fluctuation, motor torque, start-up")
+    p.add_argument("--flywheel", type=real(least=0.0, unit="kg·m²"), metavar="J",
+                   help="with --shaft: the flywheel's inertia [kg·m²] (default the file's)")
+    p.set_defaults(func=cmd_simulate)
+
+
+def _sley_arguments(p) -> None:
+    """simulate's options for the sley presets and the integration."""
     p.add_argument("--drive", choices=("one-side", "both-sides"), default="one-side",
                    help="Table 1 (one-side, default) or Table 2 (both-sides)")
     p.add_argument("--variant", default="3", metavar="N",
@@ -68,15 +86,9 @@ def register(sub) -> None:
     p.add_argument("--points", type=count(16, MAX_POINTS_PER_REVOLUTION), metavar="N",
                    help="output points per revolution (default 7200, i.e. 0.05 deg)")
     p.add_argument("-o", "--output", metavar="CSV", help="write the curves as CSV")
-    p.add_argument("--plot", metavar="IMAGE", help="plot eps2P, eps4P, eps4T, M2V (Figs. 4-9)")
-    p.add_argument("--json", action="store_true", help="print one JSON document")
-    p.add_argument("--shaft", action="store_true",
-                   help="scene: the dynamic main shaft of its [shaft] table (flywheel, motor) "
-                        "turning the rigid mechanism: speed fluctuation, motor torque, start-up")
-    p.add_argument("--flywheel", type=real(least=0.0, unit="kg·m²"), metavar="J",
-                   help="with --shaft: the flywheel's inertia [kg·m²] (default the file's)")
-    p.set_defaults(func=cmd_simulate)
 
+
+def _register_crosscheck(sub) -> None:
     p = sub.add_parser(
         "crosscheck", help="linearised sley against its mechanical circuit (resonances, Q0)",
         description="(a) resonances (K = 0) of the sley's netlist at crank angle theta "
