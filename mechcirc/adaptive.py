@@ -70,12 +70,39 @@ def adaptive_sweep(circuit: Circuit, omega_min: float, omega_max: float, *,
     100 times dearer per element); ``result.notes`` then says so, with the bound.
     """
     from . import limits
-    from .errors import InputError, SolverError
+    from .errors import InputError
 
     if not 0 < omega_min < omega_max:
         raise InputError(f"need 0 < omega_min < omega_max, got {omega_min} and {omega_max}")
     max_points = limits.MAX_ADAPTIVE_POINTS if max_points is None else max_points
     notes: list[str] = []
+    omega, zeros, poles = _start_grid(circuit, omega_min, omega_max, initial, notes)
+    first = sweep(circuit, omega, method=method)
+    size = max(1, len(circuit.elements) + len(circuit.levers))
+    bound = limits.MAX_ADAPTIVE_WORK if first.method == "sp" else limits.MAX_ADAPTIVE_NODAL_WORK
+    evaluations = bound // size          # K evaluations the bound allows on this network
+    work = (f"work bound of {bound:,} element evaluations ({evaluations:,} evaluations of K "
+            f"on this network of {size:,} elements and levers, method {first.method})")
+    if 3 * omega.size > evaluations:
+        raise InputError(f"adaptive sweep: its starting grid of {omega.size:,} points is over "
+                         f"the {work}; start from fewer points or a narrower band, or sweep "
+                         "a fixed grid")
+
+    def smooth(w):
+        return _smooth(sweep(circuit, w, method=method), zeros, poles)
+
+    omega = _refine(omega, _smooth(first, zeros, poles), smooth, tol,
+                    (max_points, evaluations, work), notes)
+    result = sweep(circuit, omega, method=method)
+    return result.with_notes(tuple(notes)) if notes else result
+
+
+def _start_grid(circuit, omega_min, omega_max, initial, notes):
+    """The starting grid: ``initial`` log points and points around each resonance
+    found below 1.5 ``omega_max``; and the undamped zeros and poles of K (divided
+    out of |K| before the grid is refined)."""
+    from .errors import SolverError
+
     grid = [np.geomspace(omega_min, omega_max, initial)]
     try:
         found = circuit.resonances(omega_max=omega_max * 1.5)
@@ -93,35 +120,31 @@ def adaptive_sweep(circuit: Circuit, omega_min: float, omega_max: float, *,
         half = max(r.zeta * r.omega, 1e-6 * r.omega)
         offsets = np.array([0, 0.25, 0.5, 1, 2, 4]) * half
         grid.append(centre + np.concatenate([-offsets[1:], offsets]))
-    zeros, poles = np.array(zeros), np.array(poles)
-
-    def smooth(result: Sweep) -> np.ndarray:
-        w = result.omega[:, None]
-        with np.errstate(all="ignore"):
-            log = np.log(np.abs(result.K))
-            if poles.size:
-                log = log + np.log(np.abs(1 - (w / poles) ** 2)).sum(axis=1)
-            if zeros.size:
-                log = log - np.log(np.abs(1 - (w / zeros) ** 2)).sum(axis=1)
-        return log
-
     omega = np.unique(np.concatenate(grid))
-    omega = omega[(omega >= omega_min) & (omega <= omega_max)]
-    first = sweep(circuit, omega, method=method)
-    size = max(1, len(circuit.elements) + len(circuit.levers))
-    bound = limits.MAX_ADAPTIVE_WORK if first.method == "sp" else limits.MAX_ADAPTIVE_NODAL_WORK
-    evaluations = bound // size          # K evaluations the bound allows on this network
-    work = (f"work bound of {bound:,} element evaluations ({evaluations:,} evaluations of K "
-            f"on this network of {size:,} elements and levers, method {first.method})")
-    if 3 * omega.size > evaluations:
-        raise InputError(f"adaptive sweep: its starting grid of {omega.size:,} points is over "
-                         f"the {work}; start from fewer points or a narrower band, or sweep "
-                         "a fixed grid")
-    values = smooth(first)
+    return omega[(omega >= omega_min) & (omega <= omega_max)], np.array(zeros), np.array(poles)
+
+
+def _smooth(result: Sweep, zeros, poles) -> np.ndarray:
+    """log |K| with the undamped zeros and poles divided out."""
+    w = result.omega[:, None]
+    with np.errstate(all="ignore"):
+        log = np.log(np.abs(result.K))
+        if poles.size:
+            log = log + np.log(np.abs(1 - (w / poles) ** 2)).sum(axis=1)
+        if zeros.size:
+            log = log - np.log(np.abs(1 - (w / zeros) ** 2)).sum(axis=1)
+    return log
+
+
+def _refine(omega, values, smooth, tol, budget, notes):
+    """Split every interval whose midpoint deviates from the log–log interpolation
+    of its ends by more than ``tol``, until none does or the ``budget``
+    (points, K evaluations, its description) is spent (said in ``notes``)."""
+    max_points, evaluations, work = budget
     # The midpoint of each interval (geometric mean) and its value, kept between
     # rounds: a round evaluates only the two new midpoints of each split interval.
     mid = np.sqrt(omega[:-1] * omega[1:])
-    mid_values = smooth(sweep(circuit, mid, method=method))
+    mid_values = smooth(mid)
     used = omega.size + mid.size
     while True:
         with np.errstate(all="ignore"):
@@ -130,7 +153,7 @@ def adaptive_sweep(circuit: Circuit, omega_min: float, omega_max: float, *,
         deviation = np.where(np.isnan(deviation), 0.0, deviation)
         split = np.flatnonzero(deviation > tol)
         if split.size == 0:
-            break
+            return omega
         # A split adds a point and two midpoints; the final sweep evaluates every point.
         room_points = max_points - omega.size
         room_work = (evaluations - used - omega.size) // 3
@@ -141,19 +164,17 @@ def adaptive_sweep(circuit: Circuit, omega_min: float, omega_max: float, *,
             notes.append(f"{which} reached: {split.size - room} interval(s) still deviate "
                          f"by more than tol = {tol:g} (largest {deviation.max():.3g})")
             if room == 0:
-                break
-            split = split[np.argsort(deviation[split])[::-1][:room]]
-            split.sort()
+                return omega
+            split = np.sort(split[np.argsort(deviation[split])[::-1][:room]])
         new = mid[split]
         left, right = np.sqrt(omega[split] * new), np.sqrt(new * omega[split + 1])
         omega = np.insert(omega, split + 1, new)
         if full:                 # the last round: its new midpoints would not be used
-            break
+            return omega
         values = np.insert(values, split + 1, mid_values[split])
-        fresh = smooth(sweep(circuit, np.concatenate([left, right]), method=method))
+        fresh = smooth(np.concatenate([left, right]))
         used += 2 * split.size
         mid[split], mid_values[split] = left, fresh[:split.size]
         mid = np.insert(mid, split + 1, right)
         mid_values = np.insert(mid_values, split + 1, fresh[split.size:])
-    result = sweep(circuit, omega, method=method)
-    return result.with_notes(tuple(notes)) if notes else result
+

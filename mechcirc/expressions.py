@@ -271,26 +271,7 @@ def evaluate(expr: Expr, params: Mapping[str, float], *, source: str = "<string>
             except (ValueError, OverflowError):
                 fail(f"{node.value}({x!r}) is undefined or out of range", node)
         a, b = values.pop(id(node.args[0])), values.pop(id(node.args[1]))
-        try:
-            if k == "+":
-                r = a + b
-            elif k == "-":
-                r = a - b
-            elif k == "*":
-                r = a * b
-            elif k == "/":
-                r = a / b
-            else:
-                r = a ** b
-        except ZeroDivisionError:
-            fail("division by zero" if k == "/" else f"{a!r} ** {b!r} divides by zero", node)
-        except OverflowError:
-            fail(f"{a!r} {k} {b!r} overflows float64", node)
-        if isinstance(r, complex):
-            fail(f"{a!r} ** {b!r} is not a real number", node)
-        if math.isinf(r) and not (math.isinf(a) or math.isinf(b)):
-            fail(f"{a!r} {k} {b!r} overflows float64", node)
-        return r
+        return _binary(k, a, b, lambda message: fail(message, node))
 
     # Operands first (iteratively: see postorder), so errors come left to right.
     if tangent is None:
@@ -304,6 +285,31 @@ def evaluate(expr: Expr, params: Mapping[str, float], *, source: str = "<string>
         slopes[id(node)] = _slope(node, args, r, [slopes.pop(id(a)) for a in node.args],
                                   tangent)
     return values[id(expr)], slopes[id(expr)]
+
+
+def _binary(k: str, a: float, b: float, fail) -> float:
+    """``a k b`` in float64; ``fail(message)`` for a division by zero, an overflow or
+    a power that is not real."""
+    try:
+        if k == "+":
+            r = a + b
+        elif k == "-":
+            r = a - b
+        elif k == "*":
+            r = a * b
+        elif k == "/":
+            r = a / b
+        else:
+            r = a ** b
+    except ZeroDivisionError:
+        fail("division by zero" if k == "/" else f"{a!r} ** {b!r} divides by zero")
+    except OverflowError:
+        fail(f"{a!r} {k} {b!r} overflows float64")
+    if isinstance(r, complex):
+        fail(f"{a!r} ** {b!r} is not a real number")
+    if math.isinf(r) and not (math.isinf(a) or math.isinf(b)):
+        fail(f"{a!r} {k} {b!r} overflows float64")
+    return r
 
 
 #: d f(x) / dx of each function, from x and f(x).

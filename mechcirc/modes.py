@@ -167,6 +167,26 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
     # once per problem (only levers need them).
     pinv = {kind: np.linalg.pinv(G.T) if system.levers else None
             for kind, G in (("resonance", G_held), ("antiresonance", G_released))}
+    roots = _normalised(pairs, M, D, Ks, G_held, G_released)
+    # The arithmetic for many roots at once: CHUNK roots of one kind (one constraint set).
+    values: list = [None] * len(roots)
+    stamps = (ei, ej, y, power, slopes, mass, spring, damper)
+    for kind in ("resonance", "antiresonance"):
+        idx = [i for i, (r, *_) in enumerate(roots) if r.kind == kind]
+        for lo in range(0, len(idx), _CHUNK):
+            part = idx[lo:lo + _CHUNK]
+            S = np.array([roots[i][1] for i in part])
+            V = np.column_stack([roots[i][2] for i in part])
+            for i, vals in zip(part, _chunk_values(system, (M, D, Ks), pinv[kind], S, V,
+                                                   stamps)):
+                values[i] = vals
+    return [_mode(r, repeated, vals, p_rel, p_zeta, shared)
+            for (r, _, _, repeated), (vals, p_rel, p_zeta) in zip(roots, values)]
+
+
+def _normalised(pairs, M, D, Ks, G_held, G_released) -> list:
+    """``(root, s, v, repeated)`` of every pair, the vector scaled to 1 at its largest
+    entry (band roots get theirs by inverse iteration)."""
     roots = []
     for r, v, repeated in pairs:
         s = complex(-r.zeta * r.omega, r.omega_d)
@@ -177,51 +197,47 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
         v = v / v[top]
         v[top] = 1.0                        # exactly (a complex quotient may miss by an ulp)
         roots.append((r, s, v, repeated))
-    # The arithmetic for many roots at once: CHUNK roots of one kind (one constraint set).
-    values: list = [None] * len(roots)
-    for kind in ("resonance", "antiresonance"):
-        idx = [i for i, (r, *_) in enumerate(roots) if r.kind == kind]
-        for lo in range(0, len(idx), _CHUNK):
-            part = idx[lo:lo + _CHUNK]
-            S = np.array([roots[i][1] for i in part])
-            V = np.column_stack([roots[i][2] for i in part])
-            Ve = np.vstack([V, np.zeros((1, len(part)))])
-            dV = Ve[ei] - Ve[ej]
-            dS = _root_sensitivity(system, M, D, Ks, pinv[kind], S, V, dV, y, power)
-            rel, zeta = _omega_zeta(S, dS)
-            p_rel = {p: _omega_zeta(S, row @ dS) for p, row in slopes.items()}
-            wn = np.abs(S)
-            a2 = dV.real ** 2 + dV.imag ** 2
-            stored = np.where(mass[:, None], 0.5 * y[:, None] * a2,
-                              np.where(spring[:, None], 0.5 * y[:, None] * a2 / wn ** 2, 0.0))
-            total = stored.sum(axis=0)
-            energy = stored[~damper] / total
-            dissipation = y[damper, None] * a2[damper] / (2 * wn * total)
-            force = y[:, None] * _law_powers(S, -power) * dV
-            for c, i in enumerate(part):
-                values[i] = ({"sensitivity": rel[:, c], "zeta_sensitivity": zeta[:, c],
-                              "shape": V[:, c], "energy": energy[:, c],
-                              "dissipation": dissipation[:, c], "velocity": dV[:, c],
-                              "force": force[:, c]},
-                             {p: float(x[0][c]) for p, x in p_rel.items()},
-                             {p: float(x[1][c]) for p, x in p_rel.items()})
-    out = []
-    for (r, _, _, repeated), (vals, p_rel, p_zeta) in zip(roots, values):
-        common: dict = {"param_sensitivity": p_rel, "param_zeta_sensitivity": p_zeta,
-                        "_names": shared}
-        if repeated:
-            common["note"] = ("a repeated root: its shape is one of a family (any "
-                              "combination is a mode too) and the sensitivities hold for "
-                              "this shape only")
-        if r.omega_d == 0:
-            common.pop("note", None)
-            out.append(Mode(r, note=f"overdamped (zeta = {r.zeta:.4g} >= 1, omega_d = 0): "
-                                    "a decaying motion, not a mode of vibration",
-                            _values={k: vals[k] for k in ("sensitivity", "zeta_sensitivity")},
-                            **common))
-            continue
-        out.append(Mode(r, _values=vals, **common))
-    return out
+    return roots
+
+
+def _chunk_values(system, pencil3, pinv, S, V, stamps) -> list:
+    """Sensitivities, energies, element velocities and forces of the roots ``S`` with
+    vectors ``V`` (columns), one ``(values, param_rel, param_zeta)`` per root."""
+    ei, ej, y, power, slopes, mass, spring, damper = stamps
+    M, D, Ks = pencil3
+    Ve = np.vstack([V, np.zeros((1, S.size))])
+    dV = Ve[ei] - Ve[ej]
+    dS = _root_sensitivity(system, M, D, Ks, pinv, S, V, dV, y, power)
+    rel, zeta = _omega_zeta(S, dS)
+    p_rel = {p: _omega_zeta(S, row @ dS) for p, row in slopes.items()}
+    wn = np.abs(S)
+    a2 = dV.real ** 2 + dV.imag ** 2
+    stored = np.where(mass[:, None], 0.5 * y[:, None] * a2,
+                      np.where(spring[:, None], 0.5 * y[:, None] * a2 / wn ** 2, 0.0))
+    total = stored.sum(axis=0)
+    energy = stored[~damper] / total
+    dissipation = y[damper, None] * a2[damper] / (2 * wn * total)
+    force = y[:, None] * _law_powers(S, -power) * dV
+    return [({"sensitivity": rel[:, c], "zeta_sensitivity": zeta[:, c], "shape": V[:, c],
+              "energy": energy[:, c], "dissipation": dissipation[:, c],
+              "velocity": dV[:, c], "force": force[:, c]},
+             {p: float(x[0][c]) for p, x in p_rel.items()},
+             {p: float(x[1][c]) for p, x in p_rel.items()}) for c in range(S.size)]
+
+
+def _mode(r, repeated, vals, p_rel, p_zeta, shared) -> Mode:
+    common: dict = {"param_sensitivity": p_rel, "param_zeta_sensitivity": p_zeta,
+                    "_names": shared}
+    if r.omega_d == 0:
+        return Mode(r, note=f"overdamped (zeta = {r.zeta:.4g} >= 1, omega_d = 0): "
+                            "a decaying motion, not a mode of vibration",
+                    _values={k: vals[k] for k in ("sensitivity", "zeta_sensitivity")},
+                    **common)
+    if repeated:
+        common["note"] = ("a repeated root: its shape is one of a family (any "
+                          "combination is a mode too) and the sensitivities hold for "
+                          "this shape only")
+    return Mode(r, _values=vals, **common)
 
 
 def _stamped(system) -> tuple:
@@ -344,10 +360,9 @@ def sweep_sensitivity(circuit: Circuit, omega, names=None) -> SweepSensitivity:
     omega = np.atleast_1d(np.asarray(omega, dtype=float))
     column = {name: k for k, name in enumerate(stamped)}
     slopes = _param_slopes(circuit, stamped) if set(names) & circuit.params.keys() else {}
-    m, n_nodes = omega.size, len(system.nodes)
+    m = omega.size
     K = np.empty(m, complex)
     dK = {name: np.zeros(m, complex) for name in names}   # 0: carries no force
-    index = {nd: i for i, nd in enumerate(system.nodes)}
     # Chunks of ω: the solutions of one chunk are held (≤ 2**20 values), never all.
     chunk = max(1, 2**20 // (system.size + len(stamped) + 1))
     for at in range(0, m, chunk):
@@ -355,21 +370,31 @@ def sweep_sensitivity(circuit: Circuit, omega, names=None) -> SweepSensitivity:
         sol = nodal.solve(system, w)
         assert sol.x is not None            # kept by default
         K[at:at + w.size] = sol.K
-        xe = np.concatenate([sol.x, np.zeros((w.size, 1), complex)], axis=1)
-        with np.errstate(all="ignore"):
-            S = y * (1j * w[:, None]) ** (-power.astype(float))
-            dv = xe[:, ei] - xe[:, ej]
-            parts = [-S * dv * dv]
-            for k, lv in enumerate(system.levers):
-                dp = xe[:, index.get(lv.p1, -1)] - xe[:, index.get(lv.p2, -1)]
-                parts.append((-2 * lv.ratio * xe[:, n_nodes + k] * dp)[:, None])
-            dK_all = np.concatenate(parts, axis=1)
-            for name in names:
-                if name in column:
-                    dK[name][at:at + w.size] = dK_all[:, column[name]]
-                elif name in slopes:
+        dK_all = _adjoint_products(system, sol.x, w, (ei, ej, y, power))
+        for name in names:
+            if name in column:
+                dK[name][at:at + w.size] = dK_all[:, column[name]]
+            elif name in slopes:
+                with np.errstate(all="ignore"):
                     dK[name][at:at + w.size] = dK_all @ slopes[name]
     return SweepSensitivity(omega, K, circuit.drive, {k: value[k] for k in names}, dK)
+
+
+def _adjoint_products(system, x, w, stamps) -> np.ndarray:
+    """∂K/∂(value) of every stamped element, then every lever ratio, at the ω ``w``
+    from the nodal solutions ``x`` (rows), shape (ω, elements + levers)."""
+    ei, ej, y, power = stamps
+    n_nodes = len(system.nodes)
+    index = {nd: i for i, nd in enumerate(system.nodes)}
+    xe = np.concatenate([x, np.zeros((w.size, 1), complex)], axis=1)
+    with np.errstate(all="ignore"):
+        S = y * (1j * w[:, None]) ** (-power.astype(float))
+        dv = xe[:, ei] - xe[:, ej]
+        parts = [-S * dv * dv]
+        for k, lv in enumerate(system.levers):
+            dp = xe[:, index.get(lv.p1, -1)] - xe[:, index.get(lv.p2, -1)]
+            parts.append((-2 * lv.ratio * xe[:, n_nodes + k] * dp)[:, None])
+        return np.concatenate(parts, axis=1)
 
 
 def _root_sensitivity(system, M, D, Ks, pinv_GT, S, V, dV, y, power) -> np.ndarray:

@@ -338,12 +338,25 @@ class _Parser:
             raise NetlistError(f"the netlist has about {statements} statements, the limit is "
                                f"{MAX_STATEMENTS}", self.source, 0, 0,
                                "a smaller network (see 'mechcirc reduce')")
-        parsed: list = []               # _Line, or a list of consecutive plain lines
+        parsed = self._split(lines)
+        unknown = sorted(set(self.overrides) - set(self.param_lines))
+        if unknown:
+            raise NetlistError(f"no .param named {', '.join(map(repr, unknown))} to set",
+                               self.source, 0, 0,
+                               "one of " + (", ".join(self.param_lines) or "(none defined)"))
+        self._build(parsed)
+        self._check_complete(parsed)
+        self._check_initial()
+        return self._circuit()
+
+    def _split(self, lines: list[str]) -> list:
+        """First pass: every line split (a ``_Line``, or a list of consecutive plain
+        element lines kept as their matches, see _FAST, built in the second pass),
+        and where each parameter is defined, so a use-before-definition can name
+        the line."""
+        parsed: list = []
         run = None
         fast = _FAST.fullmatch
-        # First pass: split every line, and note where each parameter is defined
-        # so a use-before-definition can name the line.  A plain element line
-        # (see _FAST) is kept as its match, to be built in the second pass.
         for lineno, raw in enumerate(lines, start=1):
             if len(raw) > MAX_LINE_LENGTH:
                 raise NetlistError(f"line is {len(raw)} characters long, the limit is "
@@ -369,20 +382,18 @@ class _Parser:
                 for tok in line.tokens[1:]:
                     name = tok.text.split("=", 1)[0]
                     self.param_lines.setdefault(name, lineno)
-        unknown = sorted(set(self.overrides) - set(self.param_lines))
-        if unknown:
-            raise NetlistError(f"no .param named {', '.join(map(repr, unknown))} to set",
-                               self.source, 0, 0,
-                               "one of " + (", ".join(self.param_lines) or "(none defined)"))
+        return parsed
+
+    def _build(self, parsed: list) -> None:
+        """Second pass: the parameters first, then every other statement."""
         for line in parsed:
             if type(line) is _Line and line.tokens[0].text.lower() == ".param":
                 self.param(line)
         handlers = {"mass": self.element, "spring": self.element, "damper": self.element,
                     "lever": self.lever, "drive": self.drive, ".ic": self.ic}
-        fast_elements = self.fast_elements
         for line in parsed:
             if type(line) is list:
-                fast_elements(line)
+                self.fast_elements(line)
                 continue
             keyword = line.tokens[0].text.lower()
             if keyword == ".param":
@@ -396,6 +407,8 @@ class _Parser:
                            line.tokens[0].col,
                            "one of .param, .ic, mass, spring, damper, lever, drive")
             handler(line, keyword)
+
+    def _check_complete(self, parsed: list) -> None:
         if not parsed:
             raise NetlistError("the file has no statements, only comments and blank lines",
                                self.source, 0, 0, "element lines and one 'drive' line")
@@ -406,6 +419,9 @@ class _Parser:
         if not self.elements:
             raise NetlistError("the netlist has no elements", self.source, 0, 0,
                                "mass, spring or damper lines")
+
+    def _check_initial(self) -> None:
+        """Each ``.ic`` names a node some element uses, other than the frame, once."""
         known: set[str] = set()
         if self.initial:
             known = {n for e in self.elements for n in (e.n1, e.n2)}
@@ -425,6 +441,8 @@ class _Parser:
                                    f"{seen_ic[node]})", self.source, lineno, col,
                                    "one .ic line per node")
             seen_ic[node] = lineno
+
+    def _circuit(self) -> Circuit:
         name = Path(self.source).stem if self.source != "<string>" else "circuit"
         drive = self.drives[0] if self.drives else None
         if drive is not None and drive.motion is None:

@@ -299,50 +299,16 @@ def _solve(circuit, motion, amp, Omega, tol, harmonics, method,
     """
     Omega = np.atleast_1d(np.asarray(Omega, dtype=float))
     S = Omega.size
-    notes: list[str] = []
     N = np.zeros(S, dtype=int)
     error = np.zeros(S)
     table_error = np.zeros(S)
     rows: list = [None] * S                    # (V, Qk, sweep, index in the sweep)
     pending = np.arange(S)
     kmax = max(64, 4 * harmonics) if harmonics else 64
-    coarse = getattr(motion, "coarse", None)
     while pending.size:
-        c = motion.fourier(kmax)
-        k = np.arange(1, kmax + 1)
-        sw = circuit.sweep(np.outer(Omega[pending], k).ravel(), method=method)
-        Qu = _unit_force(sw.K).reshape(pending.size, kmax)
-        V = 2 * Omega[pending, None] * c[None, :]
-        Qk = V * Qu
-        with np.errstate(invalid="ignore"):
-            mag = np.abs(Qk)
-        mag[~np.isfinite(mag)] = 0.0          # unbounded terms are reported apart
-        beyond = np.array([_tail_beyond(m) for m in mag])
-        # The scale max|Q(θ)| from the first 512 harmonics: the rest moves it by at most
-        # their Σ|Q_k|, a small fraction wherever a tolerance can be met at all.
-        head = Qk[:, :512]
-        scale = _peaks(np.where(np.isfinite(head), head, 0.0), fine=False)[0]
-        done = (beyond <= 0.25 * tol * scale) | bool(harmonics) | (kmax >= max_harmonics)
-        tail = np.cumsum(mag[:, ::-1], axis=1)[:, ::-1]         # Σ_{k' ≥ k}
-        tail = np.concatenate([tail[:, 1:], np.zeros((pending.size, 1))], axis=1) \
-            + beyond[:, None]
-        if harmonics:
-            n = np.full(pending.size, min(harmonics, kmax))
-        else:
-            ok = tail <= tol * scale[:, None]
-            n = np.where(ok.any(axis=1), np.argmax(ok, axis=1) + 1, kmax)
-        used = k[None, :] <= n[:, None]
-        err = tail[np.arange(pending.size), n - 1]
-        errK = sw.error.reshape(Qk.shape)
-        err = err + np.sum(np.where(used & np.isfinite(errK), errK, 0.0) * mag, axis=1)
-        interp = np.zeros(pending.size)
-        if coarse is not None:
-            dQ = np.abs(2 * Omega[pending, None] * (c - coarse.fourier(kmax)) * Qu)
-            interp = np.sum(np.where(used & np.isfinite(dQ), dQ, 0.0), axis=1)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            e = np.where(scale > 0, (err + interp) / scale,
-                         np.where(err + interp == 0, 0.0, np.inf))
-            from_table = np.where(scale > 0, interp / scale, 0.0)
+        n, e, from_table, V, Qk, sw, done = _harmonics_round(
+            circuit, motion, Omega[pending], kmax, tol, harmonics, method,
+            done_anyway=bool(harmonics) or kmax >= max_harmonics)
         for j in np.flatnonzero(done):
             i = pending[j]
             N[i], error[i], table_error[i] = n[j], e[j], from_table[j]
@@ -364,22 +330,72 @@ def _solve(circuit, motion, amp, Omega, tol, harmonics, method,
             U[i, :v.size] = sw.velocity(name)[at:at + v.size] * (v / amp)
         return F, U
 
-    if np.any(error > tol):
-        i = int(np.argmax(error > tol))
-        if table_error[i] >= 0.5 * error[i]:
-            why = (f"{table_error[i]:.2g} of it is the table's interpolation, estimated from "
-                   "the spline through every other row: give a finer table")
-        elif math.isinf(error[i]):
-            why = ("|Q_k| falls about as slowly as 1/k, too slowly to bound the tail: the force "
-                   "itself jumps, as where a mass at the drive follows a law whose "
-                   "acceleration jumps; the sum shows Gibbs overshoot at the jumps")
-        else:
-            why = ("the force's harmonics fall off slowly: a mass or a stiff path at the "
-                   "drive sees the jumps of the motion's acceleration or jerk; ask a larger "
-                   "tolerance or smooth the motion")
-        notes.append(f"the error asked for ({tol:g}) is not met with {int(N[i])} harmonics: "
-                     f"estimated {error[i]:.3g} ({why})")
+    notes = _not_met(N, error, table_error, tol)
     return N, Vs, Qs, Ks, error, notes, responses
+
+
+def _harmonics_round(circuit, motion, Omega, kmax, tol, harmonics, method, done_anyway):
+    """One round of :func:`_solve` at the speeds ``Omega`` with ``kmax`` harmonics:
+    per speed the harmonics needed ``n``, the relative error ``e`` (of it, the
+    table's interpolation ``from_table``), the amplitudes V and Qk (shape
+    (speeds, kmax)), the sweep, and which speeds are ``done``."""
+    P = Omega.size
+    c = motion.fourier(kmax)
+    k = np.arange(1, kmax + 1)
+    sw = circuit.sweep(np.outer(Omega, k).ravel(), method=method)
+    Qu = _unit_force(sw.K).reshape(P, kmax)
+    V = 2 * Omega[:, None] * c[None, :]
+    Qk = V * Qu
+    with np.errstate(invalid="ignore"):
+        mag = np.abs(Qk)
+    mag[~np.isfinite(mag)] = 0.0          # unbounded terms are reported apart
+    beyond = np.array([_tail_beyond(m) for m in mag])
+    # The scale max|Q(θ)| from the first 512 harmonics: the rest moves it by at most
+    # their Σ|Q_k|, a small fraction wherever a tolerance can be met at all.
+    head = Qk[:, :512]
+    scale = _peaks(np.where(np.isfinite(head), head, 0.0), fine=False)[0]
+    done = (beyond <= 0.25 * tol * scale) | done_anyway
+    tail = np.cumsum(mag[:, ::-1], axis=1)[:, ::-1]         # Σ_{k' ≥ k}
+    tail = np.concatenate([tail[:, 1:], np.zeros((P, 1))], axis=1) + beyond[:, None]
+    if harmonics:
+        n = np.full(P, min(harmonics, kmax))
+    else:
+        ok = tail <= tol * scale[:, None]
+        n = np.where(ok.any(axis=1), np.argmax(ok, axis=1) + 1, kmax)
+    used = k[None, :] <= n[:, None]
+    err = tail[np.arange(P), n - 1]
+    errK = sw.error.reshape(Qk.shape)
+    err = err + np.sum(np.where(used & np.isfinite(errK), errK, 0.0) * mag, axis=1)
+    interp = np.zeros(P)
+    coarse = getattr(motion, "coarse", None)
+    if coarse is not None:
+        dQ = np.abs(2 * Omega[:, None] * (c - coarse.fourier(kmax)) * Qu)
+        interp = np.sum(np.where(used & np.isfinite(dQ), dQ, 0.0), axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        e = np.where(scale > 0, (err + interp) / scale,
+                     np.where(err + interp == 0, 0.0, np.inf))
+        from_table = np.where(scale > 0, interp / scale, 0.0)
+    return n, e, from_table, V, Qk, sw, done
+
+
+def _not_met(N, error, table_error, tol) -> list[str]:
+    """The note (at most one) when a speed's estimated error is over ``tol``, with why."""
+    if not np.any(error > tol):
+        return []
+    i = int(np.argmax(error > tol))
+    if table_error[i] >= 0.5 * error[i]:
+        why = (f"{table_error[i]:.2g} of it is the table's interpolation, estimated from "
+               "the spline through every other row: give a finer table")
+    elif math.isinf(error[i]):
+        why = ("|Q_k| falls about as slowly as 1/k, too slowly to bound the tail: the force "
+               "itself jumps, as where a mass at the drive follows a law whose "
+               "acceleration jumps; the sum shows Gibbs overshoot at the jumps")
+    else:
+        why = ("the force's harmonics fall off slowly: a mass or a stiff path at the "
+               "drive sees the jumps of the motion's acceleration or jerk; ask a larger "
+               "tolerance or smooth the motion")
+    return [f"the error asked for ({tol:g}) is not met with {int(N[i])} harmonics: "
+            f"estimated {error[i]:.3g} ({why})"]
 
 
 def _resonances(circuit, omega_max, notes):
@@ -463,17 +479,7 @@ def periodic(circuit: Circuit, rpm: float, *, motion=None, tol: float = TOL,
     w = k * Omega
     V, Qk, K = V[0], Qk[0], K[0]
     found = _resonances(circuit, (N + 1) * Omega * (1 + near), notes)
-    nearest = np.full(N, np.nan)
-    distance = np.full(N, np.nan)
-    unbounded = set(np.flatnonzero(~np.isfinite(Qk) & (np.abs(V) > 0)) + 1)
-    vmax = float(np.max(np.abs(V))) if N else 0.0
-    for wn, zeta, err in found:
-        d = (w - wn) / wn
-        closer = np.isnan(distance) | (np.abs(d) < np.abs(distance))
-        nearest[closer], distance[closer] = wn, d[closer]
-        if zeta <= UNDAMPED_ZETA:
-            hit = (np.abs(d) <= max(err, 4e-16)) & (np.abs(V) > 1e-13 * vmax)
-            unbounded |= set(np.flatnonzero(hit) + 1)
+    nearest, distance, unbounded = _nearest(found, w, V, Qk)
     theta = 2 * np.pi * np.arange(points) / points
     x, dx, _ = motion.evaluate(theta)
     forces, velocities = {}, {}
@@ -501,6 +507,24 @@ def periodic(circuit: Circuit, rpm: float, *, motion=None, tol: float = TOL,
         unbounded=tuple(sorted(int(i) for i in unbounded)), near_fraction=near,
         forces=forces, velocities=velocities, notes=tuple(notes),
         units=units_of(circuit.drive))
+
+
+def _nearest(found, w, V, Qk):
+    """For each harmonic ω = ``w``: the nearest resonance of ``found`` and the relative
+    distance to it, and the harmonics (numbered from 1) whose force is unbounded
+    (an infinite term, or on an undamped resonance within its error)."""
+    nearest = np.full(w.size, np.nan)
+    distance = np.full(w.size, np.nan)
+    unbounded = set(np.flatnonzero(~np.isfinite(Qk) & (np.abs(V) > 0)) + 1)
+    vmax = float(np.max(np.abs(V))) if w.size else 0.0
+    for wn, zeta, err in found:
+        d = (w - wn) / wn
+        closer = np.isnan(distance) | (np.abs(d) < np.abs(distance))
+        nearest[closer], distance[closer] = wn, d[closer]
+        if zeta <= UNDAMPED_ZETA:
+            hit = (np.abs(d) <= max(err, 4e-16)) & (np.abs(V) > 1e-13 * vmax)
+            unbounded |= set(np.flatnonzero(hit) + 1)
+    return nearest, distance, unbounded
 
 
 # ------------------------------------------------------------------ the speed map

@@ -10,7 +10,14 @@ from ._common import check_output_paths, count, load_with_warnings, print_json, 
 
 
 def register(sub) -> None:
-    from .circuit_commands import band_omega, positive_omega
+    _register_forces(sub)
+    _register_compare(sub)
+    _register_formula(sub)
+    _register_study(sub)
+
+
+def _register_forces(sub) -> None:
+    from .circuit_commands import positive_omega
 
     p = sub.add_parser(
         "forces", help="force and velocity of every element at one frequency",
@@ -27,6 +34,10 @@ def register(sub) -> None:
     p.add_argument("--plot", metavar="IMAGE", help="bar chart of |Q| per element (PNG, SVG, PDF)")
     p.add_argument("--json", action="store_true", help="print one JSON document")
     p.set_defaults(func=cmd_forces)
+
+
+def _register_compare(sub) -> None:
+    from .circuit_commands import band_omega
 
     p = sub.add_parser(
         "compare", help="a measured mobility (Touchstone .s1p) against the model's",
@@ -46,6 +57,8 @@ def register(sub) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON document")
     p.set_defaults(func=cmd_compare)
 
+
+def _register_formula(sub) -> None:
     p = sub.add_parser(
         "formula", help="K(ω) in closed form (SymPy), nested as the reduction tree",
         description="The kinematic characteristic K(ω) [m/(N·s)] as a formula built from "
@@ -61,6 +74,8 @@ def register(sub) -> None:
                    help="substitute the values (exact rationals); only omega stays a symbol")
     p.set_defaults(func=cmd_formula)
 
+
+def _register_study(sub) -> None:
     p = sub.add_parser(
         "study", help="a parameter grid or sample, on local cores or a Dask cluster",
         description="Run a parameter study described by a TOML file (see docs/ecosystem.md): "

@@ -15,6 +15,11 @@ _UNITS = {"eps4T": "1/s^2", "eps2P": "1/s^2", "eps4P": "1/s^2", "eps5P": "1/s^2"
 
 
 def register(sub) -> None:
+    _register_simulate(sub)
+    _register_crosscheck(sub)
+
+
+def _register_simulate(sub) -> None:
     p = sub.add_parser(
         "simulate", help="sley beat-up dynamics (Mrázek, Tables 1 and 2) in the time domain",
         description="Integrate the sley model (eq. 4 one-side, eq. 9 both-sides; the "
@@ -38,6 +43,19 @@ def register(sub) -> None:
     p.add_argument("--via-scene", action="store_true",
                    help="accepted for old scripts and ignored: the presets always run as "
                         "their scenes (examples/mrazek_*.toml plus the variant's values)")
+    _sley_arguments(p)
+    p.add_argument("--plot", metavar="IMAGE", help="plot eps2P, eps4P, eps4T, M2V (Figs. 4-9)")
+    p.add_argument("--json", action="store_true", help="print one JSON document")
+    p.add_argument("--shaft", action="store_true",
+                   help="scene: the dynamic main shaft of its [shaft] table (flywheel, motor) "
+                        "turning the rigid mechanism: speed fluctuation, motor torque, start-up")
+    p.add_argument("--flywheel", type=real(least=0.0, unit="kg·m²"), metavar="J",
+                   help="with --shaft: the flywheel's inertia [kg·m²] (default the file's)")
+    p.set_defaults(func=cmd_simulate)
+
+
+def _sley_arguments(p) -> None:
+    """simulate's options for the sley presets and the integration."""
     p.add_argument("--drive", choices=("one-side", "both-sides"), default="one-side",
                    help="Table 1 (one-side, default) or Table 2 (both-sides)")
     p.add_argument("--variant", default="3", metavar="N",
@@ -68,15 +86,9 @@ def register(sub) -> None:
     p.add_argument("--points", type=count(16, MAX_POINTS_PER_REVOLUTION), metavar="N",
                    help="output points per revolution (default 7200, i.e. 0.05 deg)")
     p.add_argument("-o", "--output", metavar="CSV", help="write the curves as CSV")
-    p.add_argument("--plot", metavar="IMAGE", help="plot eps2P, eps4P, eps4T, M2V (Figs. 4-9)")
-    p.add_argument("--json", action="store_true", help="print one JSON document")
-    p.add_argument("--shaft", action="store_true",
-                   help="scene: the dynamic main shaft of its [shaft] table (flywheel, motor) "
-                        "turning the rigid mechanism: speed fluctuation, motor torque, start-up")
-    p.add_argument("--flywheel", type=real(least=0.0, unit="kg·m²"), metavar="J",
-                   help="with --shaft: the flywheel's inertia [kg·m²] (default the file's)")
-    p.set_defaults(func=cmd_simulate)
 
+
+def _register_crosscheck(sub) -> None:
     p = sub.add_parser(
         "crosscheck", help="linearised sley against its mechanical circuit (resonances, Q0)",
         description="(a) resonances (K = 0) of the sley's netlist at crank angle theta "
@@ -290,24 +302,9 @@ def cmd_simulate(args) -> int:
 
 def cmd_crosscheck(args) -> int:
     if args.file is not None:
-        if str(args.file).endswith(".toml"):
-            from .scene_commands import cmd_crosscheck_scene
-
-            return cmd_crosscheck_scene(args)
-        if args.netlist:        # nothing is built from a netlist FILE: refuse, not ignore
-            from ..errors import InputError
-
-            raise InputError(f"--netlist writes the netlist built from a scene or a sley "
-                             f"preset; '{args.file}' is a netlist already, and it is "
-                             "the one checked (leave out --netlist)")
-        from .transient_commands import cmd_crosscheck_netlist
-
-        return cmd_crosscheck_netlist(args)
-    import numpy as np
-
-    from ..errors import SolverError
+        return _crosscheck_file(args)
     from ..sley import ParameterError, preset
-    from ..sley.crosscheck import harmonic_check, resonance_check, ringing_check
+    from ..sley.crosscheck import crosscheck_sley
 
     check_output_paths(args.netlist)
     params = preset(args.drive, args.variant)
@@ -321,113 +318,63 @@ def cmd_crosscheck(args) -> int:
         theta0 = math.radians(args.theta)
     from ..progress import Progress
 
-    bar = Progress(4, "crosscheck").__enter__()      # drawn on a terminal after 1 s
-    checks = {False: resonance_check(params, theta0, damping=False)}
-    bar.update()
-    checks[True] = resonance_check(params, theta0, damping=True)
-    bar.update()
+    with Progress(4, "crosscheck") as bar:      # drawn on a terminal after 1 s
+        doc, netlist = crosscheck_sley(params, theta0, on_step=bar.update)
     if args.netlist:
         from ..outputs import atomic_open
 
         with atomic_open(args.netlist) as fh:
-            fh.write(checks[True].netlist)
-    from ..sley.crosscheck import TOL_HARMONIC, TOL_RESONANCE, TOL_RINGING
-    from ..verdict import judge, summarise, summary_line, verdict_text
-
-    ring_params = params
-    ring_notes = []
-    if params.M0 <= 0:
-        ring_params = ring_params.replace(M0=500.0)
-        ring_notes.append("variant has M0 = 0; used M0 = 500 N m for the pulse")
-    if params.clearance > 0:
-        ring_params = ring_params.replace(clearance=0.0)
-        ring_notes.append(f"clearance {params.clearance:g} rad closed for the ringing (with it "
-                          "the motion is nonlinear and rings below the linear prediction)")
-    why = None
-    try:
-        ring = ringing_check(ring_params)
-    except SolverError as exc:      # (b) cannot be measured; (a) and (c) still stand
-        ring, why = None, str(exc)
-    bar.update()
-    omegas = np.array(sorted([0.5 * checks[False].eigen[0], checks[False].eigen[0],
-                              checks[False].eigen[-1]]))
-    harm = harmonic_check(params, theta0, omegas)
-    bar.update()
-    bar.__exit__(None, None, None)
-    res_rows = []
-    for d, c in checks.items():
-        row = {"damping": d, "eigen_omega": list(c.eigen), "eigen_omega_d": list(c.eigen_d),
-               "circuit_omega": list(c.circuit), "circuit_omega_d": list(c.circuit_d),
-               "rel_error": c.rel_error, "how": c.how}
-        judge(row, c.rel_error, TOL_RESONANCE)
-        if len(c.circuit) != len(c.eigen):
-            row["why"] = (f"{len(c.circuit)} resonances of the netlist against {len(c.eigen)} "
-                          "modes of the linearised model")
-        res_rows.append(row)
-    ring_row = {"theta_mid_deg": math.degrees(ring.theta_mid) if ring else None,
-                "omega_measured": ring.omega_measured if ring else None,
-                "omega_predicted": ring.omega_predicted if ring else None,
-                "rel_error": ring.rel_error if ring else None, "notes": ring_notes}
-    judge(ring_row, ring.rel_error if ring else None, TOL_RINGING, why)
-    harm_rows = [judge({"omega": float(w), "q0_time": float(qt), "q0_circuit": float(qc),
-                        "rel_error": float(abs(qt - qc) / qc)},
-                       float(abs(qt - qc) / qc), TOL_HARMONIC)
-                 for w, qt, qc in zip(harm.omega, harm.q0_time, harm.q0_circuit)]
-    summary = summarise(res_rows + [ring_row] + harm_rows)
-    doc = {
-        "label": params.label, "theta_deg": math.degrees(theta0),
-        "verdict": summary["verdict"], "summary": summary,
-        "resonances": res_rows, "ringing": ring_row,
-        "harmonic": {"omega": harm.omega, "q0_time": harm.q0_time,
-                     "q0_circuit": harm.q0_circuit, "rel_error": harm.rel_error,
-                     "how": harm.how, "rows": harm_rows},
-    }
+            fh.write(netlist)
     if args.json:
         print_json(doc)
-        return summary["exit"]
-    print(f"{params.label}, linearised at crank angle {math.degrees(theta0):.4f} deg")
+    else:
+        _print_sley_crosscheck(doc)
+    return doc["summary"]["exit"]
+
+
+def _crosscheck_file(args) -> int:
+    """``crosscheck FILE``: a scene (``.toml``) or a netlist."""
+    if str(args.file).endswith(".toml"):
+        from .scene_commands import cmd_crosscheck_scene
+
+        return cmd_crosscheck_scene(args)
+    if args.netlist:        # nothing is built from a netlist FILE: refuse, not ignore
+        from ..errors import InputError
+
+        raise InputError(f"--netlist writes the netlist built from a scene or a sley "
+                         f"preset; '{args.file}' is a netlist already, and it is "
+                         "the one checked (leave out --netlist)")
+    from .transient_commands import cmd_crosscheck_netlist
+
+    return cmd_crosscheck_netlist(args)
+
+
+def _print_sley_crosscheck(doc: dict) -> None:
+    from ..verdict import summary_line, verdict_text
+
+    print(f"{doc['label']}, linearised at crank angle {doc['theta_deg']:.4f} deg")
     print("(a) resonances K = 0 of the netlist against the eigenfrequencies [rad/s]")
-    for row, (d, c) in zip(res_rows, checks.items()):
-        tag = "damped  " if d else "undamped"
-        for e, ed, w, wd in zip(c.eigen, c.eigen_d, c.circuit, c.circuit_d):
+    for row in doc["resonances"]:
+        tag = "damped  " if row["damping"] else "undamped"
+        for e, ed, w, wd in zip(row["eigen_omega"], row["eigen_omega_d"],
+                                row["circuit_omega"], row["circuit_omega_d"]):
             print(f"    {tag} eigen {e:14.8f} (d {ed:12.6f})   circuit {w:14.8f} "
                   f"(d {wd:12.6f})")
-        print(f"    {tag} largest relative difference {c.rel_error:.2e} ({c.how}): "
-              f"{verdict_text(row)}")
-    if ring is None:
-        print(f"(b) ringing after beat-up: {verdict_text(ring_row)}")
+        print(f"    {tag} largest relative difference {row['rel_error']:.2e} "
+              f"({row['how']}): {verdict_text(row)}")
+    ring = doc["ringing"]
+    if ring["omega_measured"] is None:
+        print(f"(b) ringing after beat-up: {verdict_text(ring)}")
     else:
-        print(f"(b) ringing after beat-up at {math.degrees(ring.theta_mid):.1f} deg: measured "
-              f"{ring.omega_measured:.3f} rad/s, predicted {ring.omega_predicted:.3f} rad/s, "
-              f"difference {ring.rel_error:.2e}: {verdict_text(ring_row)}")
-    for n in ring_notes:
+        print(f"(b) ringing after beat-up at {ring['theta_mid_deg']:.1f} deg: measured "
+              f"{ring['omega_measured']:.3f} rad/s, predicted {ring['omega_predicted']:.3f} "
+              f"rad/s, difference {ring['rel_error']:.2e}: {verdict_text(ring)}")
+    for n in ring["notes"]:
         print(f"    note: {n}")
     print("(c) harmonic forcing of the linear model, |Q0|/V0 [N m s/rad]")
-    for row in harm_rows:
+    for row in doc["harmonic"]["rows"]:
         print(f"    omega {row['omega']:10.3f}: time domain {row['q0_time']:.6g}, circuit "
               f"{row['q0_circuit']:.6g}, difference {row['rel_error']:.2e}: "
               f"{verdict_text(row)}")
-    print(f"    ({harm.how})")
-    print(summary_line(summary))
-    return summary["exit"]
-    print(f"{params.label}, linearised at crank angle {math.degrees(theta0):.4f} deg")
-    print("(a) resonances K = 0 of the netlist against the eigenfrequencies [rad/s]")
-    for d, c in checks.items():
-        tag = "damped  " if d else "undamped"
-        for e, ed, w, wd in zip(c.eigen, c.eigen_d, c.circuit, c.circuit_d):
-            print(f"    {tag} eigen {e:14.8f} (d {ed:12.6f})   circuit {w:14.8f} "
-                  f"(d {wd:12.6f})")
-        print(f"    {tag} largest relative difference {c.rel_error:.2e} ({c.how})")
-    if ring is None:
-        print("(b) ringing after beat-up: not measured (see the note)")
-    else:
-        print(f"(b) ringing after beat-up at {math.degrees(ring.theta_mid):.1f} deg: measured "
-              f"{ring.omega_measured:.3f} rad/s, predicted {ring.omega_predicted:.3f} rad/s, "
-              f"difference {100 * ring.rel_error:.2f} %")
-    for n in ring_notes:
-        print(f"    note: {n}")
-    print("(c) harmonic forcing of the linear model, |Q0|/V0 [N m s/rad]")
-    for w, qt, qc in zip(harm.omega, harm.q0_time, harm.q0_circuit):
-        print(f"    omega {w:10.3f}: time domain {qt:.6g}, circuit {qc:.6g}")
-    print(f"    largest relative difference {harm.rel_error:.2e} ({harm.how})")
-    return 0
+    print(f"    ({doc['harmonic']['how']})")
+    print(summary_line(doc["summary"]))

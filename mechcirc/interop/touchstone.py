@@ -131,39 +131,8 @@ def read_touchstone_one_port(path: str | os.PathLike) -> tuple[NDArray[np.float6
                                "a Touchstone 1.1 file (option line '# Hz Z RI R 1' and data)")
         if options is None:
             options = _parse_options([], source, number, col)
-        scale, param, fmt, R = options
-        fields = stripped.split()
-        if len(fields) != 3:
-            raise NetlistError(f"data line has {len(fields)} numbers", source, number, col,
-                               "3 numbers for a one-port: frequency and two parts of one value")
-        try:
-            f, a, b = (float(x) for x in fields)
-        except ValueError:
-            bad = next(x for x in fields if not _is_float(x))
-            raise NetlistError(f"{bad!r} is not a number", source, number,
-                               col + stripped.find(bad), "a decimal number") from None
-        if not all(math.isfinite(x) for x in (f, a, b)):
-            raise NetlistError("data line has a number that is not finite", source, number, col,
-                               "finite numbers")
-        f *= scale
-        if f < 0:
-            raise NetlistError(f"frequency {fields[0]} is negative", source, number, col,
-                               "a frequency ≥ 0")
-        if f <= last_f:
-            raise NetlistError(f"frequency {fields[0]} does not increase", source, number, col,
-                               "frequencies in strictly increasing order")
+        f, K = _data_line(stripped, options, source, number, col, last_f)
         last_f = f
-        value = _complex(a, b, fmt)
-        with np.errstate(all="ignore"):
-            if param == "s":
-                K = R * (1 + value) / (1 - value) if value != 1 else complex(math.inf)
-            elif param == "z":
-                K = R * value
-            else:
-                K = R / value if value != 0 else complex(math.inf)
-        if not (math.isfinite(K.real) and math.isfinite(K.imag)):
-            raise NetlistError("the value gives an infinite mobility K", source, number, col,
-                               "a finite value")
         freqs.append(f)
         values.append(K)
     if not freqs:
@@ -172,6 +141,44 @@ def read_touchstone_one_port(path: str | os.PathLike) -> tuple[NDArray[np.float6
     omega = 2 * math.pi * np.asarray(freqs, dtype=float)
     name = os.path.splitext(os.path.basename(source))[0]
     return omega, np.asarray(values, dtype=complex), name
+
+
+def _data_line(stripped: str, options, source: str, number: int, col: int,
+               last_f: float) -> tuple[float, complex]:
+    """A one-port data line: its frequency [Hz] and the mobility K it gives."""
+    scale, param, fmt, R = options
+    fields = stripped.split()
+    if len(fields) != 3:
+        raise NetlistError(f"data line has {len(fields)} numbers", source, number, col,
+                           "3 numbers for a one-port: frequency and two parts of one value")
+    try:
+        f, a, b = (float(x) for x in fields)
+    except ValueError:
+        bad = next(x for x in fields if not _is_float(x))
+        raise NetlistError(f"{bad!r} is not a number", source, number,
+                           col + stripped.find(bad), "a decimal number") from None
+    if not all(math.isfinite(x) for x in (f, a, b)):
+        raise NetlistError("data line has a number that is not finite", source, number, col,
+                           "finite numbers")
+    f *= scale
+    if f < 0:
+        raise NetlistError(f"frequency {fields[0]} is negative", source, number, col,
+                           "a frequency ≥ 0")
+    if f <= last_f:
+        raise NetlistError(f"frequency {fields[0]} does not increase", source, number, col,
+                           "frequencies in strictly increasing order")
+    value = _complex(a, b, fmt)
+    with np.errstate(all="ignore"):
+        if param == "s":
+            K = R * (1 + value) / (1 - value) if value != 1 else complex(math.inf)
+        elif param == "z":
+            K = R * value
+        else:
+            K = R / value if value != 0 else complex(math.inf)
+    if not (math.isfinite(K.real) and math.isfinite(K.imag)):
+        raise NetlistError("the value gives an infinite mobility K", source, number, col,
+                           "a finite value")
+    return f, K
 
 
 def _is_float(token: str) -> bool:

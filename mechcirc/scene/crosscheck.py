@@ -128,11 +128,28 @@ def crosscheck_scene(scene: Scene, theta: float, *, steps_per_period: float = 40
                  model.naux())
     dev = rec_y - y0[None, :]
     dt = h * sample
+    rows = _ringing_rows(found, dev, dt, n)
+    notes.append(f"time domain: RK4 ({backend}), step {h:.3g} s ({steps_per_period:g} per "
+                 f"period of the fastest mode), {nsamp} samples over {periods:g} periods of the "
+                 f"slowest resonance, crank all but stopped (Ω = {omega_slow:.3g} rad/s)")
+    frows = []
+    if forced:
+        # free modes of the time-domain motion (for the fit), from the whole kick record
+        frows = _forced_rows(built, found, model, kern, theta, _modes(dev, dt), h)
+        notes.append("forced: drive speed rippled by A cos(ω t) (A/ω = 1e-7 rad) at 0.5 and "
+                     "0.9 × the lowest resonance, between resonances and 1.5 × the highest; "
+                     "the drive's force fitted to the ripple plus the ringing's free modes")
+    return SceneCrosscheck(scene.source, math.degrees(theta), rows, tuple(notes), frows)
+
+
+def _ringing_rows(found, dev, dt, n) -> list:
+    """One judged row per resonance of ``found``: its ω and ζ against the nearest
+    underdamped mode fitted to the kick's record ``dev`` (step ``dt``, ``n`` parts)."""
     rows = []
     for r in found:
         # fit over three periods of this resonance from the kick (a fast, damped mode has
         # died out later), at least enough samples for the 2n-dimensional map
-        m = min(nsamp, max(4 * n + 4, int(math.ceil(3 * 2 * math.pi / r.omega / dt)) + 1))
+        m = min(len(dev), max(4 * n + 4, int(math.ceil(3 * 2 * math.pi / r.omega / dt)) + 1))
         modes = _modes(dev[:m], dt)
         if not modes:
             rows.append(judge({"omega": r.omega, "zeta": r.zeta, "ringing_omega": None,
@@ -143,28 +160,26 @@ def crosscheck_scene(scene: Scene, theta: float, *, steps_per_period: float = 40
         rel = float(abs(w - r.omega) / r.omega)
         rows.append(judge({"omega": r.omega, "zeta": r.zeta, "ringing_omega": float(w),
                            "ringing_zeta": float(z), "rel_error": rel}, rel, TOL_RINGING))
-    notes.append(f"time domain: RK4 ({backend}), step {h:.3g} s ({steps_per_period:g} per "
-                 f"period of the fastest mode), {nsamp} samples over {periods:g} periods of the "
-                 f"slowest resonance, crank all but stopped (Ω = {omega_slow:.3g} rad/s)")
-    frows = []
-    if forced:
-        # free modes of the time-domain motion (for the fit), from the whole kick record
-        free = _modes(dev, dt)
-        ws = sorted(r.omega for r in found)
-        probe = [0.5 * ws[0], 0.9 * ws[0]]
-        probe += [math.sqrt(a * b) for a, b in zip(ws, ws[1:])]
-        probe.append(1.5 * ws[-1])
-        sw = circuit.sweep(np.array(probe))
-        for w, q0 in zip(probe, sw.Q0):
-            qt = _forced_amplitude(model, kern, theta, w, free, h, built.drive_ratio)
-            v0 = abs(circuit.drive.amplitude)
-            rel = float(abs(qt * v0 - abs(q0)) / abs(q0))
-            frows.append(judge({"omega": float(w), "Q0_circuit": float(abs(q0)),
-                                "Q0_time": float(qt * v0), "rel_error": rel}, rel, TOL_FORCED))
-        notes.append("forced: drive speed rippled by A cos(ω t) (A/ω = 1e-7 rad) at 0.5 and "
-                     "0.9 × the lowest resonance, between resonances and 1.5 × the highest; "
-                     "the drive's force fitted to the ripple plus the ringing's free modes")
-    return SceneCrosscheck(scene.source, math.degrees(theta), rows, tuple(notes), frows)
+    return rows
+
+
+def _forced_rows(built, found, model, kern, theta, free, h) -> list:
+    """|Q0| of the circuit against the forced response of the time domain, judged, at
+    0.5 and 0.9 × the lowest resonance, between resonances and 1.5 × the highest."""
+    circuit = built.circuit
+    ws = sorted(r.omega for r in found)
+    probe = [0.5 * ws[0], 0.9 * ws[0]]
+    probe += [math.sqrt(a * b) for a, b in zip(ws, ws[1:])]
+    probe.append(1.5 * ws[-1])
+    sw = circuit.sweep(np.array(probe))
+    rows = []
+    for w, q0 in zip(probe, sw.Q0):
+        qt = _forced_amplitude(model, kern, theta, w, free, h, built.drive_ratio)
+        v0 = abs(circuit.drive.amplitude)
+        rel = float(abs(qt * v0 - abs(q0)) / abs(q0))
+        rows.append(judge({"omega": float(w), "Q0_circuit": float(abs(q0)),
+                           "Q0_time": float(qt * v0), "rel_error": rel}, rel, TOL_FORCED))
+    return rows
 
 
 def _forced_amplitude(model, kern, theta, w, free, h, r0):

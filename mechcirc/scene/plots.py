@@ -92,30 +92,10 @@ def plot_mode(scene, theta: float, n: int = 1, *, kind: str = "resonance", ax=No
 
     import numpy as np
 
-    from ..errors import MechcircError
-    from ..modes import modes
-    from .model import build
-
     if kind not in ("resonance", "antiresonance"):
         raise ValueError(f"kind must be 'resonance' or 'antiresonance', got {kind!r}")
-    model = build(scene, theta)
-    found = [m for m in modes(model.circuit) if m.resonance.kind == kind]
-    if not (isinstance(n, int) and 1 <= n <= len(found)):
-        raise MechcircError(f"{scene.source}: no {kind} {n} at θ = {math.degrees(theta):.6g}°: "
-                            f"the circuit has {len(found)} (ask 1 to {len(found)})")
-    mode = found[n - 1]
-    if not mode.shape:
-        raise MechcircError(f"{scene.source}: {kind} {n} has no shape: {mode.note}")
+    mode, state, raw = _mode_displacements(scene, theta, n, kind)
     lk = scene.linkage
-    state = lk.solve(float(theta))
-    nodes = list(model.parts)
-    scale_si = scene.length_scale
-    raw = {}
-    for p in state.points:
-        part = scene.part_of_point(p)
-        xi = 0.0 if part is None else mode.shape.get(nodes[part], 0.0).real
-        raw[p] = xi * np.asarray(state.velocities[p], float) * scale_si / (
-            lk.cranks[0].omega * model.drive_ratio)
     big = max(float(np.hypot(*d)) for d in raw.values())
     k = exaggeration * lk.length_scale() / big if big > 0 else 0.0
     if ax is None:
@@ -141,3 +121,34 @@ def plot_mode(scene, theta: float, n: int = 1, *, kind: str = "resonance", ax=No
     ax.set_xlabel(f"x [{lk.units}]")
     ax.set_ylabel(f"y [{lk.units}]")
     return ax
+
+
+def _mode_displacements(scene, theta: float, n: int, kind: str):
+    """Mode ``n`` of ``kind`` at ``theta``, the linkage's state there, and each point's
+    displacement in the mode [linkage units] (see :func:`plot_mode`)."""
+    import math
+
+    import numpy as np
+
+    from ..errors import MechcircError
+    from ..modes import modes
+    from .model import build
+
+    model = build(scene, theta)
+    found = [m for m in modes(model.circuit) if m.resonance.kind == kind]
+    if not (isinstance(n, int) and 1 <= n <= len(found)):
+        raise MechcircError(f"{scene.source}: no {kind} {n} at θ = {math.degrees(theta):.6g}°: "
+                            f"the circuit has {len(found)} (ask 1 to {len(found)})")
+    mode = found[n - 1]
+    if not mode.shape:
+        raise MechcircError(f"{scene.source}: {kind} {n} has no shape: {mode.note}")
+    lk = scene.linkage
+    state = lk.solve(float(theta))
+    nodes = list(model.parts)
+    raw = {}
+    for p in state.points:
+        part = scene.part_of_point(p)
+        xi = 0.0 if part is None else mode.shape.get(nodes[part], 0.0).real
+        raw[p] = xi * np.asarray(state.velocities[p], float) * scene.length_scale / (
+            lk.cranks[0].omega * model.drive_ratio)
+    return mode, state, raw

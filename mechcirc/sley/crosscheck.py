@@ -27,8 +27,13 @@ from .models import SleyParameters
 #: over every preset with the clearance closed; (c) achieved ≤ 1.7e-6 (DOP853, rtol 1e-9).
 TOL_RESONANCE, TOL_RINGING, TOL_HARMONIC = 1e-12, 1e-2, 1e-5
 
+#: Beat-up moment [N·m] of the pulse that makes the sley ring in check (b), for a
+#: variant that has none (M0 = 0): the ringing frequency does not depend on it.
+RINGING_M0 = 500.0
+
 __all__ = ["resonance_check", "ringing_check", "harmonic_check", "ResonanceCheck",
-           "RingingCheck", "HarmonicCheck", "circuit_resonances"]
+           "RingingCheck", "HarmonicCheck", "circuit_resonances", "crosscheck_sley",
+           "RINGING_M0"]
 
 
 @dataclass(frozen=True)
@@ -288,3 +293,88 @@ def harmonic_check(params: SleyParameters, theta0: float, omegas) -> HarmonicChe
     q_circ = np.abs(to_circuit(params, theta0, velocity=1.0).sweep(omegas).Q0)
     rel = float(np.max(np.abs(q_time - q_circ) / q_circ))
     return HarmonicCheck(omegas, q_time, q_circ, rel, "netlist sweep Q0")
+
+
+def _ringing_row(params: SleyParameters) -> dict:
+    """Check (b) as a judged row; a variant without beat-up pulse gets :data:`RINGING_M0`,
+    and the clearance is closed (with it the motion is nonlinear and rings below the
+    linear prediction); both said in ``notes``."""
+    from ..errors import SolverError
+    from ..verdict import judge
+
+    notes = []
+    if params.M0 <= 0:
+        params = params.replace(M0=RINGING_M0)
+        notes.append(f"variant has M0 = 0; used M0 = {RINGING_M0:g} N m for the pulse")
+    if params.clearance > 0:
+        notes.append(f"clearance {params.clearance:g} rad closed for the ringing (with it "
+                     "the motion is nonlinear and rings below the linear prediction)")
+        params = params.replace(clearance=0.0)
+    try:
+        ring, why = ringing_check(params), None
+    except SolverError as exc:      # (b) cannot be measured; (a) and (c) still stand
+        ring, why = None, str(exc)
+    row = {"theta_mid_deg": math.degrees(ring.theta_mid) if ring else None,
+           "omega_measured": ring.omega_measured if ring else None,
+           "omega_predicted": ring.omega_predicted if ring else None,
+           "rel_error": ring.rel_error if ring else None, "notes": notes}
+    return judge(row, ring.rel_error if ring else None, TOL_RINGING, why)
+
+
+def crosscheck_sley(params: SleyParameters, theta0: float, *, on_step=None):
+    """The three cross-checks of the sley at crank angle ``theta0`` [rad], judged.
+
+    Parameters
+    ----------
+    params : SleyParameters
+        The sley (a preset or its variant).
+    theta0 : float
+        Crank angle of the linearisation [rad].
+    on_step : callable, optional
+        Called with no argument after each of the four computations (progress).
+
+    Returns
+    -------
+    doc : dict
+        JSON-ready: ``label``, ``theta_deg``, ``verdict``, ``summary``
+        (:func:`mechcirc.verdict.summarise`), ``resonances`` (undamped and damped
+        rows of (a)), ``ringing`` (the row of (b)) and ``harmonic`` (c), each row
+        with its ``verdict``.
+    netlist : str
+        The damped netlist whose resonances were compared in (a).
+    """
+    from ..verdict import judge, summarise
+
+    step = on_step or (lambda: None)
+    checks = {}
+    for damping in (False, True):
+        checks[damping] = resonance_check(params, theta0, damping=damping)
+        step()
+    res_rows = []
+    for d, c in checks.items():
+        row = {"damping": d, "eigen_omega": list(c.eigen), "eigen_omega_d": list(c.eigen_d),
+               "circuit_omega": list(c.circuit), "circuit_omega_d": list(c.circuit_d),
+               "rel_error": c.rel_error, "how": c.how}
+        judge(row, c.rel_error, TOL_RESONANCE)
+        if len(c.circuit) != len(c.eigen):
+            row["why"] = (f"{len(c.circuit)} resonances of the netlist against {len(c.eigen)} "
+                          "modes of the linearised model")
+        res_rows.append(row)
+    ring_row = _ringing_row(params)
+    step()
+    eigen = checks[False].eigen
+    harm = harmonic_check(params, theta0, np.array(sorted([0.5 * eigen[0], eigen[0],
+                                                           eigen[-1]])))
+    step()
+    harm_rows = [judge({"omega": float(w), "q0_time": float(qt), "q0_circuit": float(qc),
+                        "rel_error": float(abs(qt - qc) / qc)},
+                       float(abs(qt - qc) / qc), TOL_HARMONIC)
+                 for w, qt, qc in zip(harm.omega, harm.q0_time, harm.q0_circuit)]
+    summary = summarise(res_rows + [ring_row] + harm_rows)
+    doc = {"label": params.label, "theta_deg": math.degrees(theta0),
+           "verdict": summary["verdict"], "summary": summary,
+           "resonances": res_rows, "ringing": ring_row,
+           "harmonic": {"omega": harm.omega, "q0_time": harm.q0_time,
+                        "q0_circuit": harm.q0_circuit, "rel_error": harm.rel_error,
+                        "how": harm.how, "rows": harm_rows}}
+    return doc, checks[True].netlist

@@ -244,27 +244,28 @@ def to_circuit(params: SleyParameters, theta0: float, *, lever: bool = False,
     mu = _coupling(p, theta0)
     mu2 = mu * mu
     v = p.omega if velocity is None else velocity
-    elements = [Element("spring", "C2", "shaft", "crank", p.C2)]
-    if damping and p.k2 > 0:
-        elements.append(Element("damper", "k2", "shaft", "crank", p.k2))
-    elements.append(Element("mass", "J2", "crank", "0", p.I2P + p.I4 * mu2))
+    elements: list[Element] = []
     levers = []
     eta = 1.0 if lever else mu2
+
+    def rod(tag: str, a: str, b: str, c: float, k: float, eta: float = 1.0):
+        """Rod ``tag``: rigidity C ∥ damping k between nodes a and b."""
+        elements.append(Element("spring", f"C{tag}", a, b, c, eta))
+        if damping and k > 0:
+            elements.append(Element("damper", f"k{tag}", a, b, k, eta))
 
     def rocker_side(crank: str, rocker: str, c: float, k: float, tag: str):
         if lever:
             levers.append(Lever(f"L{tag}", crank, "0", rocker, "0", abs(mu)))
         else:
             rocker = crank
-        elements.append(Element("spring", f"C{tag}", rocker, "sley", c, eta))
-        if damping and k > 0:
-            elements.append(Element("damper", f"k{tag}", rocker, "sley", k, eta))
+        rod(tag, rocker, "sley", c, k, eta)
 
+    rod("2", "shaft", "crank", p.C2, p.k2)
+    elements.append(Element("mass", "J2", "crank", "0", p.I2P + p.I4 * mu2))
     rocker_side("crank", "rocker", p.C4, p.k4, "4")
     if p.drive == "both-sides":
-        elements.append(Element("spring", "C5", "shaft", "crank5", p.C5))
-        if damping and p.k5 > 0:
-            elements.append(Element("damper", "k5", "shaft", "crank5", p.k5))
+        rod("5", "shaft", "crank5", p.C5, p.k5)
         elements.append(Element("mass", "J5", "crank5", "0", p.I5P + p.I7 * mu2))
         rocker_side("crank5", "rocker7", p.C7, p.k7, "7")
     elements.append(Element("mass", "I4P", "sley", "0", p.I4P, eta))
