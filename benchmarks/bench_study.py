@@ -84,6 +84,15 @@ def memory(n):
           f"load {load:.1f} before, {os.getloadavg()[0]:.1f} after")
 
 
+def _cpu(pid):
+    """CPU seconds (user + system) used so far by process ``pid`` and its children."""
+    import psutil                 # a dependency of dask.distributed
+
+    proc = psutil.Process(pid)
+    total = sum(proc.cpu_times()[:2])
+    return total + sum(sum(c.cpu_times()[:2]) for c in proc.children(recursive=True))
+
+
 def cluster_scaling(n, repeats):
     import socket
     import subprocess
@@ -124,15 +133,21 @@ def cluster_scaling(n, repeats):
                         while len(c.scheduler_info()["workers"]) != k:
                             time.sleep(0.2)
                     before = os.getloadavg()[0]
-                    t0 = time.perf_counter()
+                    cpu0 = [_cpu(p.pid) for p in procs]
+                    t0, c0 = time.perf_counter(), time.process_time()
                     res = run_study(s, output=Path(tmp) / f"out{k}.parquet", scheduler=address,
                                     keep_rows=False)
-                    wall = time.perf_counter() - t0
+                    wall, client = time.perf_counter() - t0, time.process_time() - c0
+                    sched, *work = [_cpu(p.pid) - c for p, c in zip(procs, cpu0)]
                     times[k].append(wall)
                     print(f"  repeat {r + 1}, {k} worker(s): {wall:7.1f} s, "
                           f"{n / wall:8.0f} points/s (workers {res.workers}, failed "
                           f"{res.failed}); load {before:.1f} before, "
                           f"{os.getloadavg()[0]:.1f} after", flush=True)
+                    # CPU seconds by role, which the load does not change much: the
+                    # client's and the scheduler's share bounds what 2 cores can give.
+                    print(f"    CPU: client {client:.1f} s, scheduler {sched:.1f} s, workers "
+                          f"{' + '.join(f'{w:.1f}' for w in work)} s", flush=True)
                 print(f"  ratio of this pair: {times[1][-1] / times[2][-1]:.2f}x (goal ≥ 1.7)",
                       flush=True)
     finally:

@@ -88,6 +88,7 @@ from __future__ import annotations
 
 import contextlib
 import csv
+import io
 import itertools
 import math
 import os
@@ -998,17 +999,54 @@ def read_rows(path: str | os.PathLike, columns: list[str]) -> list[dict]:
 
 def _todo(spec: StudySpec, have: set, size: int):
     """The points not in ``have``, in batches of ``size``, made as they are taken (a
-    million points are not held as dicts at once)."""
-    batch = []
+    million points are not held at once): each ``(indices, values)``, two arrays, so
+    that a task travels to a worker as a few kilobytes of numbers, not dicts."""
+    import numpy as np
+
+    index: list[int] = []
+    values: list[tuple[float, ...]] = []
     for i, p in enumerate(spec.points):
         if i in have:
             continue
-        batch.append((i, dict(zip(spec.params, p))))
-        if len(batch) == size:
-            yield batch
-            batch = []
-    if batch:
-        yield batch
+        index.append(i)
+        values.append(p)
+        if len(index) == size:
+            yield np.array(index, dtype=np.int64), np.array(values, dtype=float)
+            index, values = [], []
+    if index:
+        yield np.array(index, dtype=np.int64), np.array(values, dtype=float)
+
+
+@dataclass
+class _TaskOut:
+    """What a task sends back: its rows already written as journal lines (made on
+    the worker, so the study's own process only appends text), the failed rows,
+    and all rows only when they are asked for."""
+
+    text: str
+    n: int
+    bad: list
+    rows: list | None
+    K: object = None
+
+
+def _run_task(spec: StudySpec, points, curves: bool, keep: bool, lines: bool) -> _TaskOut:
+    """One task on a worker: :func:`run_batch` of ``points`` (``(indices, values)``
+    from :func:`_todo`), its journal lines made here."""
+    index, values = points
+    batch = [(int(i), dict(zip(spec.params, v))) for i, v in zip(index.tolist(),
+                                                                  values.tolist())]
+    rows, K = run_batch(spec, batch, curves) if curves else (run_batch(spec, batch), None)
+    text = ""
+    if lines:
+        buf = io.StringIO()
+        w = csv.writer(buf)
+        for r in rows:
+            fields = _fields(r, spec.columns)
+            w.writerow([*fields, _crc(fields)])
+        text = buf.getvalue()
+    bad = [r for r in rows if r["status"] != "ok"]
+    return _TaskOut(text, len(rows), bad, rows if keep or curves else None, K)
 
 
 def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
@@ -1096,36 +1134,31 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
         rows = list(done) if keep_rows else [r for r in done if r["status"] != "ok"]
         count, failed = len(done), sum(r["status"] != "ok" for r in done)
         sink = None
+        task = (curves is not None, keep_rows, bool(output))
 
-        def take(batch_rows) -> None:
+        def take(out: _TaskOut) -> None:
             nonlocal sink, count, failed
             if curves is not None:
-                batch_rows, K = batch_rows
-                write_curves(batch_rows, K)
-            batch_rows = list(batch_rows)
-            count += len(batch_rows)
-            bad = [r for r in batch_rows if r["status"] != "ok"]
-            failed += len(bad)
-            rows.extend(batch_rows if keep_rows else bad)
+                write_curves(out.rows, out.K)
+            count += out.n
+            failed += len(out.bad)
+            rows.extend(out.rows if keep_rows else out.bad)
             if output:
                 if sink is None:
                     sink = _open_journal(journal, spec, done)
-                w = csv.writer(sink)
-                for r in batch_rows:
-                    fields = _fields(r, columns)
-                    w.writerow([*fields, _crc(fields)])
+                sink.write(out.text)
                 sink.flush()
             if on_rows is not None:
-                on_rows(len(batch_rows))
+                on_rows(out.n)
 
         try:
             if client is not None:
                 executor, n_workers = "dask", _run_dask(spec, have, n_todo, client,
-                                                        batch_size, take, curves is not None)
+                                                        batch_size, take, task)
             else:
                 executor, n_workers = _run_local(spec, have, n_todo,
                                                  workers or os.cpu_count() or 1,
-                                                 batch_size, take, curves is not None)
+                                                 batch_size, take, task)
         finally:
             if sink is not None:
                 sink.close()
@@ -1329,7 +1362,8 @@ def _write_output(output, parquet: bool, spec: StudySpec, journal: str) -> None:
     """The whole table, in index order, with its provenance: Parquet with it in the
     file's metadata, or CSV with the sidecar ``OUTPUT.meta.json``, the two
     replaced together (sidecar first) or not at all.  The rows come from the
-    journal a chunk at a time (:func:`_journal_in_order`)."""
+    journal a chunk at a time (:func:`_journal_in_order`), as the CSV lines they
+    already are there."""
     import json
 
     from .outputs import OutputSet
@@ -1343,23 +1377,39 @@ def _write_output(output, parquet: bool, spec: StudySpec, journal: str) -> None:
         with open(out.path(sidecar_path(output)), "w", encoding="utf-8") as fh:
             json.dump(record, fh, indent=1, ensure_ascii=False)
             fh.write("\n")
-        with open(out.path(output), "w", newline="", encoding="utf-8") as fh:
-            w = csv.writer(fh)
-            w.writerow(columns)
-            for records in chunks:
-                w.writerows(records)
+        with open(out.path(output), "wb") as fh:
+            head = io.StringIO()
+            csv.writer(head).writerow(columns)
+            fh.write(head.getvalue().encode("utf-8"))
+            for lines in chunks:
+                fh.write(b"".join(lines))
             fh.flush()
             os.fsync(fh.fileno())
 
 
+def _verified(line: bytes, width: int) -> bytes | None:
+    """A journal line's CSV row (its cells, without the checksum, ending in CRLF as
+    the csv module writes it), or None if the checksum does not match."""
+    import zlib
+
+    body, _, crc = line.rstrip(b"\r\n").rpartition(b",")
+    if b'"' in body:                     # quoted cells: split them as csv does
+        rec = next(csv.reader([line.decode("utf-8")]))
+        ok = len(rec) == width + 1 and rec[-1] == _crc(rec[:-1])
+    else:                                   # the cells are the text between commas
+        ok = (body.count(b",") == width - 1 and
+              crc == b"%08x" % zlib.crc32(body.replace(b",", b"\x1f")))
+    return body + b"\r\n" if ok else None
+
+
 def _journal_in_order(journal: str, width: int, chunk: int = 65536):
-    """The rows of a finished journal in index order, as lists of cells (the checksum
-    dropped), ``chunk`` rows at a time; a second row of one point is left out.
+    """The rows of a finished journal in index order, as CSV lines (bytes, the
+    checksum dropped), ``chunk`` rows at a time; a second row of one point is left out.
 
     Only the index and the byte offset of each row are held (16 bytes a row):
-    the rows are read back in order by seeking, so writing a million rows takes
-    no more memory than a chunk of them.  Each row is one line
-    (:func:`_fields`), and is checked against its CRC again.
+    the rows are read back in order (by seeking, unless the journal is already in
+    order), so writing a million rows takes no more memory than a chunk of them.
+    Each row is one line (:func:`_fields`), and is checked against its CRC again.
     """
     from array import array
 
@@ -1381,16 +1431,18 @@ def _journal_in_order(journal: str, width: int, chunk: int = 65536):
         first = np.ones(idx.size, dtype=bool)
         first[1:] = idx[1:] != idx[:-1]
         offs = offs[first]
+        in_order = bool(np.all(np.diff(offs) > 0))
         for start in range(0, offs.size, chunk):
-            records = []
+            lines = []
             for off in offs[start:start + chunk].tolist():
-                fh.seek(off)
-                rec = next(csv.reader([fh.readline().decode("utf-8")]))
-                if len(rec) != width + 1 or rec[-1] != _crc(rec[:-1]):
+                if not in_order or fh.tell() != off:
+                    fh.seek(off)
+                row = _verified(fh.readline(), width)
+                if row is None:
                     raise MechcircError(f"{journal}: the row at byte {off} changed on disk "
                                         "while the study ran; run it again with --resume")
-                records.append(rec[:-1])
-            yield records
+                lines.append(row)
+            yield lines
 
 
 def journal_path(output: str | os.PathLike) -> str:
@@ -1407,28 +1459,30 @@ def _require_pyarrow():
 
 
 def _write_parquet(path, columns: list[str], chunks, record: dict) -> None:
-    """The table as Parquet from chunks of rows (lists of cells as in the journal),
-    one row group a chunk; empty cells are nulls.  The file's key-value metadata
-    ``mechcirc`` holds ``record`` (JSON), and each field its ``unit``."""
+    """The table as Parquet from chunks of rows (CSV lines as in the journal), one
+    row group a chunk, parsed by pyarrow; empty cells are nulls.  The file's
+    key-value metadata ``mechcirc`` holds ``record`` (JSON), and each field its
+    ``unit``."""
     import json
 
     import pyarrow as pa
+    import pyarrow.csv as pcsv
     import pyarrow.parquet as pq
 
     types = {c: pa.string() if c in ("status", "error") else
              pa.int64() if c in ("index", "n_flagged") else pa.float64() for c in columns}
-    convert = {c: str if c in ("status", "error") else
-               int if c in ("index", "n_flagged") else float for c in columns}
     units = record["units"]
     schema = pa.schema([pa.field(c, types[c], metadata=None if units[c] is None else
                                  {"unit": units[c]}) for c in columns],
                        metadata={"mechcirc": json.dumps(record, ensure_ascii=False)})
+    read = pcsv.ReadOptions(column_names=columns)
+    convert = pcsv.ConvertOptions(column_types=types, null_values=[""],
+                                  strings_can_be_null=True)
     with pq.ParquetWriter(path, schema) as writer:
-        for records in chunks:
-            cells = list(zip(*records))
-            writer.write_table(pa.table(
-                {c: pa.array([convert[c](x) if x != "" else None for x in cells[k]],
-                             type=types[c]) for k, c in enumerate(columns)}, schema=schema))
+        for lines in chunks:
+            table = pcsv.read_csv(pa.BufferReader(b"".join(lines)), read_options=read,
+                                  convert_options=convert)
+            writer.write_table(table.cast(schema))
 
 
 def _read_parquet(path):
@@ -1558,12 +1612,12 @@ def task_size(spec: StudySpec, n_points: int, n_workers: int,
 
 
 def _run_local(spec, have, n_todo, n_workers, batch_size, take,
-               curves: bool = False) -> tuple[str, int]:
+               task: tuple) -> tuple[str, int]:
     size = task_size(spec, n_todo, n_workers, batch_size)
     if n_workers <= 1 or n_todo <= size:
         # One batch or one worker: starting processes would cost more than it saves.
         for batch in _todo(spec, have, size):
-            take(run_batch(spec, batch, curves))
+            take(_run_task(spec, batch, *task))
         return "inline", 1
     from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
@@ -1575,7 +1629,7 @@ def _run_local(spec, have, n_todo, n_workers, batch_size, take,
             # A few tasks per worker in flight, the next made as one finishes: the
             # points of a large study are never all in memory as tasks.
             for batch in _todo(spec, have, size):
-                pending.add(pool.submit(run_batch, light, batch, curves))
+                pending.add(pool.submit(_run_task, light, batch, *task))
                 if len(pending) >= 2 * n_workers:
                     finished, pending = wait(pending, return_when=FIRST_COMPLETED)
                     for fut in finished:
@@ -1658,7 +1712,7 @@ def _dask_client(scheduler: str, timeout: float):
     return client
 
 
-def _run_dask(spec, have, n_todo, client, batch_size, take, curves: bool = False) -> int:
+def _run_dask(spec, have, n_todo, client, batch_size, take, task: tuple) -> int:
     from distributed import as_completed
 
     try:
@@ -1672,13 +1726,13 @@ def _run_dask(spec, have, n_todo, client, batch_size, take, curves: bool = False
                                 "started") from None
         # A few tasks per worker thread in flight, the next submitted as one finishes.
         batches = _todo(spec, have, size)
-        futures = as_completed([client.submit(run_batch, spec_future, batch, curves, pure=False)
+        futures = as_completed([client.submit(_run_task, spec_future, batch, *task, pure=False)
                                 for batch in itertools.islice(batches, 4 * n_workers)])
         for fut in futures:
             take(fut.result())
             batch = next(batches, None)
             if batch is not None:
-                futures.add(client.submit(run_batch, spec_future, batch, curves, pure=False))
+                futures.add(client.submit(_run_task, spec_future, batch, *task, pure=False))
         return n_workers
     finally:
         client.close()
