@@ -86,18 +86,10 @@ def designs(netlist: "str | Circuit", params: dict | None = None, *,
     >>> [round(r.omega, 9) for r in d.resonances().list(1)]
     [20.0]
     """
-    from .netlist import expressions_of, parse
+    from .netlist import expressions_of
 
-    if isinstance(netlist, Circuit):
-        circuit, text = netlist, None
-    else:
-        text = netlist
-        circuit = _PARSED.get((text, source))
-        if circuit is None:
-            circuit = parse(text, source=source)
-            if len(_PARSED) >= 8:
-                _PARSED.pop(next(iter(_PARSED)))
-            _PARSED[text, source] = circuit
+    circuit, text = (netlist, None) if isinstance(netlist, Circuit) \
+        else (_parsed(netlist, source), netlist)
     exprs = expressions_of(circuit)
     params = dict(params or {})
     if params and exprs is None:
@@ -108,6 +100,25 @@ def designs(netlist: "str | Circuit", params: dict | None = None, *,
         raise NetlistError(f"no .param named {', '.join(map(repr, unknown))} to set",
                            circuit.source, 0, 0,
                            "one of " + (", ".join(circuit.params) or "(none defined)"))
+    arrays, D = _param_arrays(params)
+    return _build(circuit, text, exprs, arrays, D)
+
+
+def _parsed(text: str, source: str) -> Circuit:
+    """The circuit of a netlist text, parsed once for the last few texts (:data:`_PARSED`)."""
+    from .netlist import parse
+
+    circuit = _PARSED.get((text, source))
+    if circuit is None:
+        circuit = parse(text, source=source)
+        if len(_PARSED) >= 8:
+            _PARSED.pop(next(iter(_PARSED)))
+        _PARSED[text, source] = circuit
+    return circuit
+
+
+def _param_arrays(params: dict) -> tuple[dict, int]:
+    """The ``params=`` values as float arrays, and D; one-dimensional, of one length."""
     arrays = {}
     for name, v in params.items():
         a = np.asarray(v, dtype=float)
@@ -118,8 +129,7 @@ def designs(netlist: "str | Circuit", params: dict | None = None, *,
     if len(sizes) > 1:
         raise InputError("params= arrays have different lengths: " + ", ".join(
             f"{n} {a.size}" for n, a in arrays.items() if a.ndim == 1))
-    D = sizes.pop() if sizes else 1
-    return _build(circuit, text, exprs, arrays, D)
+    return arrays, (sizes.pop() if sizes else 1)
 
 
 def from_circuits(circuits) -> "Designs":
