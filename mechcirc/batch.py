@@ -326,9 +326,10 @@ class Designs:
         D, W = self.size, omega.size
         batched = np.flatnonzero(self.valid)
         p = self.plan(batched) if batched.size else None
-        if p is None:
-            batched = batched[:0]
+        if p is None:                   # not series–parallel: the nodal path, stacked
             K, err = np.empty((D, W), dtype=complex), np.empty((D, W))
+            batched, K[batched], err[batched] = _nodal_sweep(self, batched, omega) \
+                if batched.size else (batched, K[:0], err[:0])
         else:
             from .reduction import evaluate_designs
 
@@ -425,6 +426,86 @@ class Designs:
             if sweep.omega[i] == lo and sweep.omega[j] == hi:
                 ends = sweep.K[:, [i, j]]
         return _extremes(self, lo, hi, resonances, ends)
+
+
+def _nodal_sweep(ds: Designs, which: NDArray, omega: NDArray):
+    """K and its error bound of designs ``which`` of a network that is not
+    series–parallel, by the nodal path of :func:`mechcirc.nodal.solve` with the
+    designs' A(ω) stacked: one batched inverse per chunk of (design, ω) points, each
+    refined by :func:`mechcirc.nodal._refined` with the residual and sensitivities
+    of :class:`~mechcirc._nodal_residual.Pattern` at the design's values.
+
+    Only small systems (the single path's dense solver), ω > 0 and the template's
+    lever ratios; a design with a point the single path would treat further (no
+    contracting refinement: the double-double LU; a singular point) is left out.
+    Returns ``(designs solved, K, error)``, shapes (D',), (D', W), (D', W).
+    """
+    from copy import copy
+
+    from . import nodal
+    from ._dd import split
+    from ._nodal_residual import pattern, residual_rounding
+    from ._nodal_solvers import DENSE_LIMIT
+    from .errors import TopologyError
+    from .resonances import _element_patterns
+
+    none = (which[:0], np.empty((0, omega.size), complex), np.empty((0, omega.size)))
+    try:
+        system = ds.circuit.nodal
+    except TopologyError:
+        return none
+    lev = {lv.name: i for i, lv in enumerate(ds.circuit.levers)}
+    for lv in system.levers:                 # the lever stamps are the template's
+        which = which[ds.ratios[lev[lv.name], which] == lv.ratio]
+    n, nn, W = system.size, len(system.nodes), omega.size
+    if n > DENSE_LIMIT or not which.size or not (omega > 0).all():
+        return none
+    row = {e.name: i for i, e in enumerate(ds.circuit.elements)}
+    el = np.array([row[e.name] for e in system.elements], dtype=np.int64)
+    S = (ds.values[el][:, which] * ds.eta[el][:, which]).T               # (D', E)
+    B = _element_patterns(system)
+    parts = []
+    for kind in ("damper", "mass", "spring"):
+        X = np.zeros((which.size, n, n))
+        X[:, :nn, :nn] = (S @ B[kind].reshape(len(el), -1)).reshape(-1, nn, nn)
+        parts.append(X)
+    parts[0] += system.C.toarray()
+    pat, rhs, eps = pattern(system), system.injection(), np.finfo(float).eps
+    design, w = np.repeat(np.arange(which.size), W), np.tile(omega, which.size)
+    K, err = np.empty(design.size, complex), np.empty(design.size)
+
+    def at(p):                               # the pattern at the values of points p
+        v = copy(pat)
+        v.e_val = S[design[p]]
+        with np.errstate(all="ignore"):
+            v.e_vs = split(v.e_val)
+        v.e_m, v.e_k, v.e_c = (np.where(pat.e_kind == i, v.e_val, 0.0) for i in range(3))
+        return v
+
+    # Chunks as the single path's (nodal._sweep): the same memory per chunk.
+    chunk = max(1, min(2 ** 21 // (n * n), nodal._CHUNK_TERMS // (pat.n_terms + n)))
+    for start in range(0, design.size, chunk):
+        pts = np.arange(start, min(start + chunk, design.size))
+        A = nodal.combine(*(X[design[pts]] for X in parts), w[pts, None, None])
+        try:
+            inv = np.linalg.inv(A)
+        except np.linalg.LinAlgError:        # a design singular at some ω: one by one
+            K[pts], err[pts] = np.nan, np.nan
+            continue
+        xh, xl, est, rho = nodal._refined(
+            lambda r, rows=slice(None), inv=inv: np.einsum("kij,kj->ki", inv[rows], r),
+            lambda p, xh, xl, rhs: at(p).residual(w[p], xh, xl, rhs), pts, rhs, system,
+            True, 4)
+        K[pts] = nodal._difference_dd(system, xh, xl)
+        rounding = residual_rounding(system, at(pts).sensitivities(w[pts], xh + xl, K[pts])[0])
+        e = np.where((rho >= 0.5) & (est > 16 * rounding), np.inf, est)
+        with np.errstate(invalid="ignore"):
+            done = (e <= np.maximum(16 * eps, 16 * rounding)) & np.isfinite(K[pts])
+            e = np.maximum(e + rounding + eps / 2, eps)
+        err[pts] = np.where(done & (e < 1.0), e, np.nan)
+    K, err = K.reshape(-1, W), err.reshape(-1, W)
+    ok = ~np.isnan(err).any(axis=1)
+    return which[ok], K[ok], err[ok]
 
 
 def _spread(rows: NDArray, where: NDArray, D: int) -> NDArray:
