@@ -11,14 +11,16 @@ the result, :class:`Designs`, evaluates
   compiled series–parallel plan (:meth:`mechcirc.reduction.Plan.with_values`
   and :func:`mechcirc.reduction.evaluate_designs`: one design is the single
   sweep, the same code; without numba the same plan's tree evaluated by numpy
-  over the designs, the single path's numbers);
+  over the designs, the single path's numbers); a network that is not
+  series–parallel on the nodal path with the designs' A(ω) stacked, refined
+  point by point as the single nodal sweep refines (:func:`_nodal_sweep`);
 * the exact resonances of every design from stacked eigenvalue problems, one
   LAPACK call per stack, each root polished (:meth:`Designs.resonances`);
 * the true extremes of |K| and |Q0| over a band (:meth:`Designs.extremes`).
 
 A design the batch cannot take (a value that is not a positive finite
-number, a topology that changes with the values, a network that is not
-series–parallel, a mass matrix too close to singular for the resonances) is
+number, a topology that changes with the values, a nodal point that needs more
+than the float64 refinement, a mass matrix too close to singular for the resonances) is
 evaluated by the single-design path (:meth:`Designs.design` gives its
 :class:`~mechcirc.circuit.Circuit`); the results say which and how many.
 :func:`from_circuits` makes the designs of circuits built in code (a scene
@@ -314,7 +316,8 @@ class Designs:
         """K, Q0, v0, error bound and flags of every design at each ω [rad/s].
 
         The valid designs of a series–parallel network go through the compiled
-        plan (without numba: numpy over the designs) in one pass; the others (``DesignSweep.single``) through
+        plan (without numba: numpy over the designs) in one pass, those of a
+        nodal network stacked (:func:`_nodal_sweep`); the others (``DesignSweep.single``) through
         :func:`mechcirc.sweep` one by one.  Each row equals the single
         design's :class:`~mechcirc.Sweep` (K, error and flags).
         """
