@@ -450,7 +450,6 @@ def _nodal_sweep(ds: Designs, which: NDArray, omega: NDArray):
     from ._nodal_residual import pattern, residual_rounding
     from ._nodal_solvers import DENSE_LIMIT
     from .errors import TopologyError
-    from .resonances import _element_patterns
 
     none = (which[:0], np.empty((0, omega.size), complex), np.empty((0, omega.size)))
     try:
@@ -460,29 +459,21 @@ def _nodal_sweep(ds: Designs, which: NDArray, omega: NDArray):
     lev = {lv.name: i for i, lv in enumerate(ds.circuit.levers)}
     for lv in system.levers:                 # the lever stamps are the template's
         which = which[ds.ratios[lev[lv.name], which] == lv.ratio]
-    n, nn, W = system.size, len(system.nodes), omega.size
+    n, W = system.size, omega.size
     if n > DENSE_LIMIT or not which.size or not (omega > 0).all():
         return none
-    row = {e.name: i for i, e in enumerate(ds.circuit.elements)}
-    el = np.array([row[e.name] for e in system.elements], dtype=np.int64)
-    S = (ds.values[el][:, which] * ds.eta[el][:, which]).T               # (D', E)
-    B = _element_patterns(system)
-    parts = []
-    for kind in ("damper", "mass", "spring"):
-        X = np.zeros((which.size, n, n))
-        X[:, :nn, :nn] = (S @ B[kind].reshape(len(el), -1)).reshape(-1, nn, nn)
-        parts.append(X)
-    parts[0] += system.C.toarray()
+    S, parts = _stacked_matrices(ds, system, which)
     pat, rhs, eps = pattern(system), system.injection(), np.finfo(float).eps
     design, w = np.repeat(np.arange(which.size), W), np.tile(omega, which.size)
     K, err = np.empty(design.size, complex), np.empty(design.size)
 
+    with np.errstate(all="ignore"):          # the Pattern's element tables, per design
+        tables = (S, *split(S), *(np.where(pat.e_kind == i, S, 0.0) for i in range(3)))
+
     def at(p):                               # the pattern at the values of points p
         v = copy(pat)
-        v.e_val = S[design[p]]
-        with np.errstate(all="ignore"):
-            v.e_vs = split(v.e_val)
-        v.e_m, v.e_k, v.e_c = (np.where(pat.e_kind == i, v.e_val, 0.0) for i in range(3))
+        v.e_val, high, low, v.e_m, v.e_k, v.e_c = (t[design[p]] for t in tables)
+        v.e_vs = (high, low)
         return v
 
     # Chunks as the single path's (nodal._sweep): the same memory per chunk.
@@ -509,6 +500,24 @@ def _nodal_sweep(ds: Designs, which: NDArray, omega: NDArray):
     K, err = K.reshape(-1, W), err.reshape(-1, W)
     ok = ~np.isnan(err).any(axis=1)
     return which[ok], K[ok], err[ok]
+
+
+def _stacked_matrices(ds: Designs, system, which: NDArray):
+    """The value·η of the nodal system's elements in designs ``which`` (D', E), and their
+    D + C, M and Kₛ as dense stacks (D', n, n), from the element stamp patterns."""
+    from .resonances import _element_patterns
+
+    row = {e.name: i for i, e in enumerate(ds.circuit.elements)}
+    el = np.array([row[e.name] for e in system.elements], dtype=np.int64)
+    S = (ds.values[el][:, which] * ds.eta[el][:, which]).T
+    B, n, nn = _element_patterns(system), system.size, len(system.nodes)
+    parts = []
+    for kind in ("damper", "mass", "spring"):
+        X = np.zeros((which.size, n, n))
+        X[:, :nn, :nn] = (S @ B[kind].reshape(len(el), -1)).reshape(-1, nn, nn)
+        parts.append(X)
+    parts[0] += system.C.toarray()
+    return S, parts
 
 
 def _spread(rows: NDArray, where: NDArray, D: int) -> NDArray:
