@@ -186,13 +186,9 @@ def cycle_map(scene: Scene, *, points: int = 72, harmonics: int = 5,
 
 
 def _cycle_batches(scene: Scene, theta, motion, reflect: str):
-    """The designs of every crank angle as batches ``[(Designs, angle indices)]``, and the
-    angles where the scene cannot be linearised (index → why).
-
-    Every crank angle is one design of the same network: the angles whose circuit
-    :func:`_cycle_designs` forms from the motion's arrays go in one batch; the
-    others (near a dead centre, a topology of their own) through build.
-    """
+    """Every crank angle as a design: ``[(Designs, angle indices)]``, from
+    :func:`_cycle_designs` and, for the angles it leaves (near a dead centre, a
+    topology of their own), from build; and the angles build refuses (index → why)."""
     n = len(theta)
     batch, alone = _cycle_designs(scene, motion, reflect) if _BATCHED else (None, range(n))
     states = motion.states() if len(alone) else []
@@ -297,15 +293,9 @@ def _cycle_designs(scene: Scene, motion, reflect: str):
 
 
 def _clear_angles(scene: Scene, m):
-    """(Angles where every decision of build is clear by ``_MARGIN``, the element ratios).
-
-    The decisions: the drive and every rigid part moving, each part's joint
-    constraints of full rank but one, each element moving or at rest, the rods
-    on one body turning alike.
-    """
-    def clear(size):                     # True where build's decision is not close
-        return (size > m.tiny * _MARGIN) | (size < m.tiny / _MARGIN)
-
+    """(Angles where each decision of build is clear by ``_MARGIN``: the drive and every
+    part moving, each part's constraints of rank 3·len(part) − 1, each element moving or
+    at rest, rods on one body turning alike; the element ratios)."""
     ok = np.ones(m.tiny.shape, dtype=bool)
     for t in scene.torsions:       # build refuses rods on one body turning differently
         ok &= m.ang[t.link] == m.ang[t.body]
@@ -320,8 +310,8 @@ def _clear_angles(scene: Scene, m):
         ok &= ((s > thr * _MARGIN) | (s < thr / _MARGIN)).all(axis=1) & \
             (3 * len(part) - rank == 1)
     found = element_ratios(scene, m, r0)
-    for _, size in found.values():
-        ok &= clear(size)
+    for _, size in found.values():      # moving or at rest, not close to the threshold
+        ok &= (size > m.tiny * _MARGIN) | (size < m.tiny / _MARGIN)
     return ok, found
 
 

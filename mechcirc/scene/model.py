@@ -148,12 +148,9 @@ def build(scene: Scene, theta: float, *, reflect: Literal["eta", "lever"] = "eta
 
 @dataclass(frozen=True)
 class _Motion:
-    """The rigid motion in SI, per unit crank speed, and the scale of "at rest".
-
-    At one angle (a point's vectors of shape (2,), rates scalars) or at n
-    angles at once (shapes (n, 2) and (n,)): the formulas below are written
-    once and broadcast over the angles, for :func:`build` and the cycle map.
-    """
+    """The rigid motion in SI, per unit crank speed, and the scale of "at rest": at one
+    angle (vectors (2,), rates scalars) or n at once ((n, 2), (n,)), for build and the
+    cycle map alike (the formulas below broadcast)."""
 
     deg: object      # crank rotation [deg]
     pos: dict        # point -> position [m]
@@ -457,11 +454,8 @@ def part_speeds(scene: Scene, part, m: _Motion) -> dict:
     bodies = scene.bodies
     tbodies = {t.body for t in scene.torsions}
     sizes = {f"ω_{b}/ω_{m.crank}": (np.abs(m.ang[b]) * m.Lc, m.ang[b]) for b in part}
-    for b in part:
-        if b not in tbodies:
-            for p in bodies[b]:
-                v = _norm(m.vel[p])
-                sizes[f"|v_{p}|/ω_{m.crank}"] = (v, v)
+    sizes.update((f"|v_{p}|/ω_{m.crank}", (_norm(m.vel[p]),) * 2)
+                 for b in part if b not in tbodies for p in bodies[b])
     return sizes
 
 
