@@ -449,12 +449,11 @@ def _nodal_sweep(ds: Designs, which: NDArray, omega: NDArray):
     from ._dd import split
     from ._nodal_residual import pattern, residual_rounding
     from ._nodal_solvers import DENSE_LIMIT
-    from .errors import TopologyError
 
     none = (which[:0], np.empty((0, omega.size), complex), np.empty((0, omega.size)))
     try:
         system = ds.circuit.nodal
-    except TopologyError:
+    except MechcircError:                    # each design alone says what is wrong
         return none
     lev = {lv.name: i for i, lv in enumerate(ds.circuit.levers)}
     for lv in system.levers:                 # the lever stamps are the template's
