@@ -431,6 +431,11 @@ class Designs:
         return _extremes(self, lo, hi, resonances, ends)
 
 
+#: Designs stacked on the nodal path at a time: their D + C, M and Kₛ hold at most
+#: this many entries each (2²¹: 48 MB for the three).
+_STACK_ENTRIES = 2 ** 21
+
+
 def _nodal_sweep(ds: Designs, which: NDArray, omega: NDArray):
     """K and its error bound of designs ``which`` of a network that is not
     series–parallel, by the nodal path of :func:`mechcirc.nodal.solve` with the
@@ -461,6 +466,10 @@ def _nodal_sweep(ds: Designs, which: NDArray, omega: NDArray):
     n, W = system.size, omega.size
     if n > DENSE_LIMIT or not which.size or not (omega > 0).all():
         return none
+    group = max(1, _STACK_ENTRIES // (n * n))
+    if which.size > group:
+        out = [_nodal_sweep(ds, which[i:i + group], omega) for i in range(0, which.size, group)]
+        return tuple(np.concatenate(x) for x in zip(*out))
     S, parts = _stacked_matrices(ds, system, which)
     pat, rhs, eps = pattern(system), system.injection(), np.finfo(float).eps
     design, w = np.repeat(np.arange(which.size), W), np.tile(omega, which.size)

@@ -409,6 +409,19 @@ def test_nodal_designs_stacked_are_the_single_nodal_sweep(params, n_single):
         np.testing.assert_array_equal(flags[d], ref.flags)
 
 
+def test_nodal_designs_in_groups_are_the_same(monkeypatch):
+    import mechcirc.batch as batch
+
+    params = {"k5": np.geomspace(1e3, 1e6, 7), "m1": np.linspace(0.5, 3, 7)}
+    omega = np.geomspace(10, 1e4, 30)
+    whole = designs(BRIDGE, params).sweep(omega)
+    monkeypatch.setattr(batch, "_STACK_ENTRIES", 2 * 25)     # 2 designs a group (n = 5)
+    grouped = designs(BRIDGE, params).sweep(omega)
+    assert whole.single.size == grouped.single.size == 0
+    np.testing.assert_array_equal(grouped.K, whole.K)
+    np.testing.assert_array_equal(grouped.error, whole.error)
+
+
 def test_nodal_designs_at_omega_zero_are_left_to_the_single_path():
     # ω = 0 (A(ω) not finite) is the single path's convention: the stack takes none.
     text = BRIDGE.replace("damper d1 e 0 {c}", "")
