@@ -22,7 +22,14 @@ It checks that both agree (K, roots) and prints the per-design times and their
 ratio (goal ≤ 2×).  The compiled kernel is loaded before timing.  It prints; it
 asserts nothing.  Run from the repository root::
 
-    python benchmarks/bench_batch.py [--big] [--repeats N] [--no-numba]
+    python benchmarks/bench_batch.py [--big] [--repeats N] [--no-numba] [--nodal]
+
+``--nodal``: instead, a bridge network (not series–parallel: the nodal path)
+over a grid of three parameters, D = 100 and 1,000 designs, 200 ω, K with its
+error bound and flags: ``Designs.sweep`` (the designs' A(ω) stacked, one batched
+inverse per chunk of points) against the same designs one by one through
+``mechcirc.sweep`` (what ``Designs.sweep`` did before), same run, with the
+largest difference of K and of the error bound between the two.
 
 ``--no-numba`` hides numba (``sys.modules["numba"] = None`` before mechcirc is
 imported), as in an install without it: the batch then runs in numpy.
@@ -133,6 +140,44 @@ def core(eta, omega, text):
     return s, flags, r, ex
 
 
+BRIDGE = """\
+.param k5=3e4 m1=1.2 c=5
+drive V a 0 velocity=0.1
+mass  ma a 0 0.5
+spring k1 a b 1e5
+spring k2 a c 6e4
+spring k5 b c {k5}
+mass  m1 b 0 {m1}
+mass  m2 c 0 0.8
+damper d1 c 0 {c}
+"""
+
+
+def nodal(repeats):
+    """The bridge's designs stacked on the nodal path against one by one (see --nodal)."""
+    for D in (100, 1_000):
+        n = round(D ** (1 / 3))
+        g = np.meshgrid(np.geomspace(1e3, 1e6, n), np.linspace(0.5, 3, n),
+                        np.geomspace(1e-2, 50, D // (n * n)))
+        params = dict(zip(("k5", "m1", "c"), (x.ravel() for x in g)))
+        ds = designs(BRIDGE, params)
+        times: list = [[], []]
+        for _ in range(repeats):             # alternated
+            t_b, s = cpu(lambda p=params: designs(BRIDGE, p).sweep(OMEGA), 1)
+            t_1, ref = cpu(lambda ds=ds: [mechcirc.sweep(ds.design(d), OMEGA)
+                                          for d in range(ds.size)], 1)
+            times[0].append(t_b)
+            times[1].append(t_1)
+        t_b, t_1 = (float(np.median(t)) for t in times)
+        dK = max(float(np.max(np.abs(s.K[d] - r.K) / np.abs(r.K))) for d, r in enumerate(ref))
+        de = max(float(np.max(np.abs(s.error[d] - r.error) / r.error))
+                 for d, r in enumerate(ref))
+        print(f"D = {ds.size:>5,}: stacked {1e3 * t_b / ds.size:6.3f} ms/design, one by one "
+              f"{1e3 * t_1 / ds.size:6.3f} ms/design, ratio {t_1 / t_b:4.2f}x; stacked "
+              f"{ds.size - s.single.size}/{ds.size}; K differs by {dK:.1e}, error bound by "
+              f"{de:.1e} (relative)")
+
+
 def cpu(fn, repeats):
     times = []
     for _ in range(repeats):
@@ -146,6 +191,8 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--big", action="store_true", help="also 1e5 designs")
     ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--nodal", action="store_true",
+                    help="a bridge network on the nodal path: stacked against one by one")
     ap.add_argument("--no-numba", action="store_true",
                     help="hide numba (read before import, see the docstring)")
     args = ap.parse_args()
@@ -160,6 +207,10 @@ def main():
     print(f"{platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}, "
           f"numpy {np.__version__}, scipy {scipy.__version__}, {compiled}; "
           f"load {os.getloadavg()[0]:.2f}")
+    if args.nodal:
+        nodal(args.repeats)
+        print(f"load after: {os.getloadavg()[0]:.2f}")
+        return
     rng = np.random.default_rng(21)
     core(tuple(rng.uniform(0.7, 1.1, (4, 10))), OMEGA, text)        # load the kernel
     sizes = [1_000, 10_000] + ([100_000] if args.big else [])

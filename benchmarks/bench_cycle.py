@@ -2,7 +2,8 @@
 
 ``examples/heald_scene.toml`` over ``--points`` crank angles (default 360), 5
 harmonics: ``cycle_map`` as shipped (the circuits of all angles formed at once
-from the linkage's motion arrays, one batch) against the reference path in the
+by build's ratio formulas on the linkage's motion arrays, one batch) against
+the reference path in the
 same run (``mechcirc.scene.cycle._BATCHED = False``: one ``scene.build`` per
 angle, the angles' circuits then one batch too).  CPU time
 (``time.process_time``), median of ``--repeats`` alternated runs after a

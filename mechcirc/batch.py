@@ -11,14 +11,16 @@ the result, :class:`Designs`, evaluates
   compiled series–parallel plan (:meth:`mechcirc.reduction.Plan.with_values`
   and :func:`mechcirc.reduction.evaluate_designs`: one design is the single
   sweep, the same code; without numba the same plan's tree evaluated by numpy
-  over the designs, the single path's numbers);
+  over the designs, the single path's numbers); a network that is not
+  series–parallel on the nodal path with the designs' A(ω) stacked, refined
+  point by point as the single nodal sweep refines (:func:`_nodal_sweep`);
 * the exact resonances of every design from stacked eigenvalue problems, one
   LAPACK call per stack, each root polished (:meth:`Designs.resonances`);
 * the true extremes of |K| and |Q0| over a band (:meth:`Designs.extremes`).
 
 A design the batch cannot take (a value that is not a positive finite
-number, a topology that changes with the values, a network that is not
-series–parallel, a mass matrix too close to singular for the resonances) is
+number, a topology that changes with the values, a nodal point that needs more
+than the float64 refinement, a mass matrix too close to singular for the resonances) is
 evaluated by the single-design path (:meth:`Designs.design` gives its
 :class:`~mechcirc.circuit.Circuit`); the results say which and how many.
 :func:`from_circuits` makes the designs of circuits built in code (a scene
@@ -86,18 +88,10 @@ def designs(netlist: "str | Circuit", params: dict | None = None, *,
     >>> [round(r.omega, 9) for r in d.resonances().list(1)]
     [20.0]
     """
-    from .netlist import expressions_of, parse
+    from .netlist import expressions_of
 
-    if isinstance(netlist, Circuit):
-        circuit, text = netlist, None
-    else:
-        text = netlist
-        circuit = _PARSED.get((text, source))
-        if circuit is None:
-            circuit = parse(text, source=source)
-            if len(_PARSED) >= 8:
-                _PARSED.pop(next(iter(_PARSED)))
-            _PARSED[text, source] = circuit
+    circuit, text = (netlist, None) if isinstance(netlist, Circuit) \
+        else (_parsed(netlist, source), netlist)
     exprs = expressions_of(circuit)
     params = dict(params or {})
     if params and exprs is None:
@@ -108,6 +102,25 @@ def designs(netlist: "str | Circuit", params: dict | None = None, *,
         raise NetlistError(f"no .param named {', '.join(map(repr, unknown))} to set",
                            circuit.source, 0, 0,
                            "one of " + (", ".join(circuit.params) or "(none defined)"))
+    arrays, D = _param_arrays(params)
+    return _build(circuit, text, exprs, arrays, D)
+
+
+def _parsed(text: str, source: str) -> Circuit:
+    """The circuit of a netlist text, parsed once for the last few texts (:data:`_PARSED`)."""
+    from .netlist import parse
+
+    circuit = _PARSED.get((text, source))
+    if circuit is None:
+        circuit = parse(text, source=source)
+        if len(_PARSED) >= 8:
+            _PARSED.pop(next(iter(_PARSED)))
+        _PARSED[text, source] = circuit
+    return circuit
+
+
+def _param_arrays(params: dict) -> tuple[dict, int]:
+    """The ``params=`` values as float arrays, and D; one-dimensional, of one length."""
     arrays = {}
     for name, v in params.items():
         a = np.asarray(v, dtype=float)
@@ -118,8 +131,7 @@ def designs(netlist: "str | Circuit", params: dict | None = None, *,
     if len(sizes) > 1:
         raise InputError("params= arrays have different lengths: " + ", ".join(
             f"{n} {a.size}" for n, a in arrays.items() if a.ndim == 1))
-    D = sizes.pop() if sizes else 1
-    return _build(circuit, text, exprs, arrays, D)
+    return arrays, (sizes.pop() if sizes else 1)
 
 
 def from_circuits(circuits) -> "Designs":
@@ -304,7 +316,8 @@ class Designs:
         """K, Q0, v0, error bound and flags of every design at each ω [rad/s].
 
         The valid designs of a series–parallel network go through the compiled
-        plan (without numba: numpy over the designs) in one pass; the others (``DesignSweep.single``) through
+        plan (without numba: numpy over the designs) in one pass, those of a
+        nodal network stacked (:func:`_nodal_sweep`); the others (``DesignSweep.single``) through
         :func:`mechcirc.sweep` one by one.  Each row equals the single
         design's :class:`~mechcirc.Sweep` (K, error and flags).
         """
@@ -316,9 +329,10 @@ class Designs:
         D, W = self.size, omega.size
         batched = np.flatnonzero(self.valid)
         p = self.plan(batched) if batched.size else None
-        if p is None:
-            batched = batched[:0]
+        if p is None:                   # not series–parallel: the nodal path, stacked
             K, err = np.empty((D, W), dtype=complex), np.empty((D, W))
+            batched, K[batched], err[batched] = _nodal_sweep(self, batched, omega) \
+                if batched.size else (batched, K[:0], err[:0])
         else:
             from .reduction import evaluate_designs
 
@@ -415,6 +429,103 @@ class Designs:
             if sweep.omega[i] == lo and sweep.omega[j] == hi:
                 ends = sweep.K[:, [i, j]]
         return _extremes(self, lo, hi, resonances, ends)
+
+
+#: Designs stacked on the nodal path at a time: their D + C, M and Kₛ hold at most
+#: this many entries each (2²¹: 48 MB for the three).
+_STACK_ENTRIES = 2 ** 21
+
+
+def _nodal_sweep(ds: Designs, which: NDArray, omega: NDArray):
+    """K and its error bound of designs ``which`` of a network that is not
+    series–parallel, by the nodal path of :func:`mechcirc.nodal.solve` with the
+    designs' A(ω) stacked: one batched inverse per chunk of (design, ω) points, each
+    refined by :func:`mechcirc.nodal._refined` with the residual and sensitivities
+    of :class:`~mechcirc._nodal_residual.Pattern` at the design's values.
+
+    Only small systems (the single path's dense solver), ω > 0 and the template's
+    lever ratios; a design with a point the single path would treat further (no
+    contracting refinement: the double-double LU; a singular point) is left out.
+    Returns ``(designs solved, K, error)``, shapes (D',), (D', W), (D', W).
+    """
+    from copy import copy
+
+    from . import nodal
+    from ._dd import split
+    from ._nodal_residual import pattern, residual_rounding
+    from ._nodal_solvers import DENSE_LIMIT
+
+    none = (which[:0], np.empty((0, omega.size), complex), np.empty((0, omega.size)))
+    try:
+        system = ds.circuit.nodal
+    except MechcircError:                    # each design alone says what is wrong
+        return none
+    lev = {lv.name: i for i, lv in enumerate(ds.circuit.levers)}
+    for lv in system.levers:                 # the lever stamps are the template's
+        which = which[ds.ratios[lev[lv.name], which] == lv.ratio]
+    n, W = system.size, omega.size
+    if n > DENSE_LIMIT or not which.size or not (omega > 0).all():
+        return none
+    group = max(1, _STACK_ENTRIES // (n * n))
+    if which.size > group:
+        out = [_nodal_sweep(ds, which[i:i + group], omega) for i in range(0, which.size, group)]
+        return tuple(np.concatenate(x) for x in zip(*out))
+    S, parts = _stacked_matrices(ds, system, which)
+    pat, rhs, eps = pattern(system), system.injection(), np.finfo(float).eps
+    design, w = np.repeat(np.arange(which.size), W), np.tile(omega, which.size)
+    K, err = np.empty(design.size, complex), np.empty(design.size)
+
+    with np.errstate(all="ignore"):          # the Pattern's element tables, per design
+        tables = (S, *split(S), *(np.where(pat.e_kind == i, S, 0.0) for i in range(3)))
+
+    def at(p):                               # the pattern at the values of points p
+        v = copy(pat)
+        v.e_val, high, low, v.e_m, v.e_k, v.e_c = (t[design[p]] for t in tables)
+        v.e_vs = (high, low)
+        return v
+
+    # Chunks as the single path's (nodal._sweep): the same memory per chunk.
+    chunk = max(1, min(2 ** 21 // (n * n), nodal._CHUNK_TERMS // (pat.n_terms + n)))
+    for start in range(0, design.size, chunk):
+        pts = np.arange(start, min(start + chunk, design.size))
+        A = nodal.combine(*(X[design[pts]] for X in parts), w[pts, None, None])
+        try:
+            inv = np.linalg.inv(A)
+        except np.linalg.LinAlgError:        # a design singular at some ω: one by one
+            K[pts], err[pts] = np.nan, np.nan
+            continue
+        xh, xl, est, rho = nodal._refined(
+            lambda r, rows=slice(None), inv=inv: np.einsum("kij,kj->ki", inv[rows], r),
+            lambda p, xh, xl, rhs: at(p).residual(w[p], xh, xl, rhs), pts, rhs, system,
+            True, 4)
+        K[pts] = nodal._difference_dd(system, xh, xl)
+        rounding = residual_rounding(system, at(pts).sensitivities(w[pts], xh + xl, K[pts])[0])
+        e = np.where((rho >= 0.5) & (est > 16 * rounding), np.inf, est)
+        with np.errstate(invalid="ignore"):
+            done = (e <= np.maximum(16 * eps, 16 * rounding)) & np.isfinite(K[pts])
+            e = np.maximum(e + rounding + eps / 2, eps)
+        err[pts] = np.where(done & (e < 1.0), e, np.nan)
+    K, err = K.reshape(-1, W), err.reshape(-1, W)
+    ok = ~np.isnan(err).any(axis=1)
+    return which[ok], K[ok], err[ok]
+
+
+def _stacked_matrices(ds: Designs, system, which: NDArray):
+    """The value·η of the nodal system's elements in designs ``which`` (D', E), and their
+    D + C, M and Kₛ as dense stacks (D', n, n), from the element stamp patterns."""
+    from .resonances import _element_patterns
+
+    row = {e.name: i for i, e in enumerate(ds.circuit.elements)}
+    el = np.array([row[e.name] for e in system.elements], dtype=np.int64)
+    S = (ds.values[el][:, which] * ds.eta[el][:, which]).T
+    B, n, nn = _element_patterns(system), system.size, len(system.nodes)
+    parts = []
+    for kind in ("damper", "mass", "spring"):
+        X = np.zeros((which.size, n, n))
+        X[:, :nn, :nn] = (S @ B[kind].reshape(len(el), -1)).reshape(-1, nn, nn)
+        parts.append(X)
+    parts[0] += system.C.toarray()
+    return S, parts
 
 
 def _spread(rows: NDArray, where: NDArray, D: int) -> NDArray:

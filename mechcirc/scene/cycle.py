@@ -21,11 +21,12 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import NDArray
 
-from ..batch import from_circuits
+from ..batch import Designs, from_circuits
 from ..errors import GeometryError, InputError, SolverError
 from ..motion_laws import Motion, motion_table
 from .files import Scene
-from .model import build
+from .model import (RANK_TOL, build, drive_ratio, element_ratios, part_singular_values,
+                    part_speeds, scaled_motion)
 
 __all__ = ["CycleMap", "cycle_map", "drive_motion"]
 
@@ -161,17 +162,37 @@ def cycle_map(scene: Scene, *, points: int = 72, harmonics: int = 5,
                             f"is no cycle to map ({exc})") from None
     hs = np.arange(1, harmonics + 1)
     omega_shaft = abs(scene.omega_shaft) / scene.cycle_revolutions   # the cycle's fundamental
+    parts, skipped = _cycle_batches(scene, theta, motion, reflect)
     Q0 = np.full((points, harmonics), np.nan, dtype=complex)
     res: list = [()] * points
     anti: list = [()] * points
-    skipped = {}
-    rotational = scene.drive.link is not None
-    # Every crank angle is one design of the same network (issue 21): the angles
-    # whose circuit _cycle_designs forms from the motion's arrays go in one batch;
-    # the others (near a dead centre, a topology of their own) through build.
-    batch, alone = _cycle_designs(scene, motion, reflect) if _BATCHED else (None, range(points))
+    for part, where in parts:
+        found = part.resonances()
+        with np.errstate(all="ignore"):
+            q = part.sweep(hs * omega_shaft).Q0
+        for d in range(part.size):
+            i = int(where[d])
+            if d in found.failed:
+                raise SolverError(found.failed[d])
+            rows = found.list(d)
+            res[i] = tuple(r for r in rows if r.kind == "resonance")
+            anti[i] = tuple(r for r in rows if r.kind == "antiresonance")
+            Q0[i] = q[d]
+    if progress is not None:
+        for i in range(points):
+            progress(i + 1, points)
+    return CycleMap(theta, res, anti, hs, omega_shaft, Q0, skipped,
+                    scene.drive.link is not None, scene.cycle)
+
+
+def _cycle_batches(scene: Scene, theta, motion, reflect: str):
+    """Every crank angle as a design: ``[(Designs, angle indices)]``, from
+    :func:`_cycle_designs` and, for the angles it leaves (near a dead centre, a
+    topology of their own), from build; and the angles build refuses (index → why)."""
+    n = len(theta)
+    batch, alone = _cycle_designs(scene, motion, reflect) if _BATCHED else (None, range(n))
     states = motion.states() if len(alone) else []
-    circuits, single = [], []
+    circuits, single, skipped = [], [], {}
     for i in alone:
         try:
             circuits.append(build(scene, theta[i], state=states[i], reflect=reflect).circuit)
@@ -189,22 +210,7 @@ def cycle_map(scene: Scene, *, points: int = 72, harmonics: int = 5,
                 parts[0] = (_joined(parts[0][0], ds), np.concatenate([parts[0][1], where]))
             else:
                 parts.append((ds, where))
-    for part, where in parts:
-        found = part.resonances()
-        with np.errstate(all="ignore"):
-            q = part.sweep(hs * omega_shaft).Q0
-        for d in range(part.size):
-            i = int(where[d])
-            if d in found.failed:
-                raise SolverError(found.failed[d])
-            rows = found.list(d)
-            res[i] = tuple(r for r in rows if r.kind == "resonance")
-            anti[i] = tuple(r for r in rows if r.kind == "antiresonance")
-            Q0[i] = q[d]
-    if progress is not None:
-        for i in range(points):
-            progress(i + 1, points)
-    return CycleMap(theta, res, anti, hs, omega_shaft, Q0, skipped, rotational, scene.cycle)
+    return parts, skipped
 
 
 #: Batch the crank angles (False: one scene.build per angle, the reference path).
@@ -236,95 +242,28 @@ def _cycle_designs(scene: Scene, motion, reflect: str):
 
     :func:`~mechcirc.scene.build` at one angle gives the network (elements,
     nodes, what is left out); at every other angle only the reflection factors
-    change, η = r² with r each element's velocity ratio to the drive, computed
-    here from the motion's arrays for all angles at once, as build computes it
-    at one: the speed of a mass's point or a link's ω, the elongation rate of
-    an elastic link along it (its moving end), a load's point along its line,
-    each per unit drive velocity.  The angles where build would decide
-    differently, or nearly so (a ratio within ``_MARGIN`` of "at rest", a
-    rigid part whose joint constraints are within ``_MARGIN`` of losing rank),
-    are returned for build to do one by one.  Only ``reflect="eta"`` on a
-    linkage of pin joints; else every angle goes to build.  As a check, the
-    ratios at the template's angle must equal build's to 1e-12, else the same.
+    change, η = r² with r each element's velocity ratio to the drive, from
+    build's own formulas (:func:`~mechcirc.scene.model.element_ratios`)
+    evaluated on the motion's arrays for all angles at once.  The angles where
+    build would decide differently, or nearly so (a ratio within ``_MARGIN``
+    of "at rest", a rigid part whose joint constraints are within
+    ``_MARGIN`` of losing rank), are returned for build to do one by one.
+    Only ``reflect="eta"`` on a linkage without sliders; else every angle
+    goes to build.  As a check, the ratios at the template's angle must equal
+    build's to 1e-12, else the same.
 
     Returns ``((Designs, angle indices), angles for build)``.
     """
-    from ..batch import Designs
-    from .model import ZERO_RATIO
-
-    n = len(motion.theta)
-    every = range(n)
+    every = range(len(motion.theta))
     lk = scene.linkage
-    if reflect != "eta" or getattr(lk, "sliders", ()):
+    if reflect != "eta" or getattr(lk, "sliders", ()) or \
+            not set(lk.ground) <= set(motion.point_names):
         return None, every
-    L, omega = scene.length_scale, lk.cranks[0].omega
-    pi = {p: k for k, p in enumerate(motion.point_names)}
-    pos = motion.points * L                                   # (n, P, 2), as build scales
-    vel = motion.velocities * L / omega
-    ang = dict(zip(motion.link_names, (motion.angular_velocities / omega).T))
-    for g in lk.ground:
-        if g not in pi:
-            return None, every
-    for t in scene.torsions:
-        ang[t.body] = ang[t.link]
-    ok = np.ones(n, dtype=bool)
-    for t in scene.torsions:       # build refuses rods on one body turning differently
-        ok &= ang[t.link] == ang[t.body]
-    Lc = lk.length_scale() * L
-    speed = np.hypot(vel[..., 0], vel[..., 1])                 # (n, P)
-    S_all = np.maximum(speed.max(axis=1),
-                       np.max(np.abs(np.array(list(ang.values()))), axis=0) * Lc)
-    tiny = ZERO_RATIO * S_all
-
-    def clear(size):                     # True where build's decision is not close
-        return (size > tiny * _MARGIN) | (size < tiny / _MARGIN)
-
-    d = scene.drive
-    if d.link is not None:
-        r0, r0_size = ang[d.link], np.abs(ang[d.link]) * Lc
-    else:
-        r0 = r0_size = speed[:, pi[d.point]]
-    ok &= r0_size > tiny * _MARGIN
-    bodies = scene.bodies
-    tbodies = {t.body for t in scene.torsions}
-    for part in scene.parts:
-        sizes = [np.abs(ang[b]) * Lc for b in part] + \
-            [speed[:, pi[p]] for b in part if b not in tbodies for p in bodies[b]]
-        ok &= np.max(sizes, axis=0) > tiny * _MARGIN
-        ok &= _part_rank_clear(lk, part, bodies, pos, pi, Lc)
-    with np.errstate(all="ignore"):
-        ratio, size = {}, {}
-        for ms in scene.masses:
-            if ms.kind == "mass":
-                if ms.point in lk.ground:
-                    continue
-                size[ms.name] = speed[:, pi[ms.point]]
-                ratio[ms.name] = size[ms.name] / np.abs(r0)
-            else:
-                ratio[ms.name] = ang[ms.link] / r0
-                size[ms.name] = np.abs(ang[ms.link]) * Lc
-        for e in scene.elastic:
-            a, b = lk.links[e.link]
-            u = pos[:, pi[b]] - pos[:, pi[a]]
-            u = u / np.hypot(u[:, 0], u[:, 1])[:, None]
-            end = a if b in lk.ground else b
-            ratio[e.name] = np.sum(u * vel[:, pi[end]], axis=1) / r0
-        for t in scene.torsions:
-            ratio[t.name] = ang[t.link] / r0
-            size[t.name] = np.abs(ang[t.link]) * Lc
-        for ld in scene.loads:
-            if ld.anchor is not None:
-                u = pos[:, pi[ld.anchor]] - pos[:, pi[ld.point]]
-                ok &= np.hypot(u[:, 0], u[:, 1]) > 0
-            else:
-                u = np.broadcast_to(np.array(ld.direction, float), (n, 2))
-            u = u / np.hypot(u[:, 0], u[:, 1])[:, None]
-            ratio[ld.name] = np.sum(u * vel[:, pi[ld.point]], axis=1) / r0
-        for name in ratio:
-            if name not in size:
-                size[name] = np.abs(ratio[name] * r0)
-            ok &= clear(size[name])
-    ok &= np.isfinite(r0)
+    m = scaled_motion(scene, np.degrees(motion.theta),
+                      dict(zip(motion.point_names, np.swapaxes(motion.points, 0, 1))),
+                      dict(zip(motion.point_names, np.swapaxes(motion.velocities, 0, 1))),
+                      dict(zip(motion.link_names, motion.angular_velocities.T)))
+    ok, found = _clear_angles(scene, m)
     if not ok.any():
         return None, every
     i0 = int(np.argmax(ok))
@@ -333,64 +272,47 @@ def _cycle_designs(scene: Scene, motion, reflect: str):
     except GeometryError:
         return None, every
     dropped = {name for name, _ in template.dropped}
+    if set(found) != set(template.ratios) or template.circuit.levers:
+        return None, every
     for name, r in template.ratios.items():          # the check against build
-        mine = ratio.get(name)
-        if mine is None or not abs(mine[i0] - r) <= 1e-12 * max(abs(r), 1e-300):
+        if not abs(found[name][0][i0] - r) <= 1e-12 * max(abs(r), 1e-300):
             return None, every
-    for name in ratio:
-        if name not in template.ratios:
-            return None, every
-        ok &= (size[name] > tiny) == (name not in dropped)  # the same elements left out
+        ok &= (found[name][1] > m.tiny) == (name not in dropped)  # the same elements left out
+    where = np.flatnonzero(ok)
     source = {}
     for e in scene.elastic + scene.torsions + scene.loads:
         source[e.name] = source[e.name + "_d"] = e.name
     c = template.circuit
-    try:
-        eta = np.array([ratio[source.get(e.name, e.name)] ** 2 for e in c.elements])
-    except KeyError:
-        return None, every
-    if c.levers:
-        return None, every
-    where = np.flatnonzero(ok)
-    eta = eta[:, where]
-    E, D = len(c.elements), where.size
-    values = np.repeat(np.array([[e.value] for e in c.elements]), D, axis=1)
+    eta = np.array([found[source.get(e.name, e.name)][0][where] ** 2 for e in c.elements])
+    values = np.repeat(np.array([[e.value] for e in c.elements]), where.size, axis=1)
     with np.errstate(all="ignore"):
         valid = (np.isfinite(values * eta) & (values * eta > 0)).all(axis=0)
-    ds = Designs(c, {}, values.reshape(E, D), eta, np.zeros((0, D)),
-                 np.full(D, float(c.drive.amplitude)), valid, None)
+    ds = Designs(c, {}, values, eta, np.zeros((0, where.size)),
+                 np.full(where.size, float(c.drive.amplitude)), valid, None)
     return (ds, where), np.flatnonzero(~ok).tolist()
 
 
-def _part_rank_clear(lk, part, bodies, pos, pi, Lc):
-    """Per angle: the part's pin-joint constraints have rank 3·len(part) − 1 (one
-    velocity field) with no singular value within ``_MARGIN`` of build's rank
-    threshold (1e-9 of the largest): the rows of ``model._check_part``, stacked."""
-    n = pos.shape[0]
-    cols = {b: 3 * i for i, b in enumerate(part)}
-    rows = []
-    for p in sorted({p for b in part for p in bodies[b]}):
-        on = [b for b in part if p in bodies[b]]
-        members = (["ground"] if p in lk.ground else []) + on
-        for other in members[1:]:
-            for axis in range(2):
-                row = np.zeros((n, 3 * len(part)))
-                for body, sign in ((members[0], 1.0), (other, -1.0)):
-                    if body == "ground":
-                        continue
-                    j = cols[body]
-                    row[:, j + axis] += sign
-                    arm = (pos[:, pi[p]] - pos[:, pi[bodies[body][0]]]) / Lc
-                    # (_PERP @ arm)[axis]: (-arm_y, arm_x)
-                    row[:, j + 2] += sign * (-arm[:, 1] if axis == 0 else arm[:, 0])
-                rows.append(row)
-    if not rows:
-        return np.full(n, len(part) * 3 == 1)
-    s = np.linalg.svd(np.stack(rows, axis=1), compute_uv=False)       # (n, k) descending
-    thr = 1e-9 * s[:, :1]
-    clear = ((s > thr * _MARGIN) | (s < thr / _MARGIN)).all(axis=1)
-    rank = (s > thr).sum(axis=1)
-    return clear & (3 * len(part) - rank == 1)
+def _clear_angles(scene: Scene, m):
+    """(Angles where each decision of build is clear by ``_MARGIN``: the drive and every
+    part moving, each part's constraints of rank 3·len(part) − 1, each element moving or
+    at rest, rods on one body turning alike; the element ratios)."""
+    ok = np.ones(m.tiny.shape, dtype=bool)
+    for t in scene.torsions:       # build refuses rods on one body turning differently
+        ok &= m.ang[t.link] == m.ang[t.body]
+    r0, r0_size, _ = drive_ratio(scene, m)
+    ok &= (r0_size > m.tiny * _MARGIN) & np.isfinite(r0)
+    for part in scene.parts:
+        speeds = [size for size, _ in part_speeds(scene, part, m).values()]
+        ok &= np.max(speeds, axis=0) > m.tiny * _MARGIN
+        s = part_singular_values(scene, part, m)                 # (n, k) descending
+        thr = RANK_TOL * s[:, :1]
+        rank = (s > thr).sum(axis=1)
+        ok &= ((s > thr * _MARGIN) | (s < thr / _MARGIN)).all(axis=1) & \
+            (3 * len(part) - rank == 1)
+    found = element_ratios(scene, m, r0)
+    for _, size in found.values():      # moving or at rest, not close to the threshold
+        ok &= (size > m.tiny * _MARGIN) | (size < m.tiny / _MARGIN)
+    return ok, found
 
 
 def plot_cycle(cmap: CycleMap, ax=None, *, fig=None, unit: str = "rad/s"):
@@ -477,40 +399,49 @@ def drive_motion(scene: Scene, theta: float, *, samples: int = DRIVE_SAMPLES) ->
     """
     if isinstance(samples, bool) or not isinstance(samples, int) or samples < 16:
         raise ValueError(f"samples must be an integer ≥ 16, got {samples!r}")
-    lk, d = scene.linkage, scene.drive
+    lk = scene.linkage
     th = np.linspace(0.0, 2 * math.pi, samples + 1)
     try:
         km = lk.motion(th)
     except GeometryError as exc:
         raise GeometryError(f"{scene.source}: the crank cannot make a full revolution, so the "
                             f"drive has no periodic motion ({exc})") from None
-    w = lk.cranks[0].omega
-    pts = km.points
-    if np.max(np.abs(pts[-1] - pts[0])) > 1e-9 * lk.length_scale():
+    if np.max(np.abs(km.points[-1] - km.points[0])) > 1e-9 * lk.length_scale():
         raise GeometryError(f"{scene.source}: the linkage is not back at its pose after one "
                             "turn of the first crank, so the drive's motion is not periodic "
                             "in the crank angle")
-    if d.link is not None:
-        link = {t.body: t.link for t in scene.torsions}.get(d.link, d.link)
-        j = km.link_names.index(link)
-        x = np.unwrap(km.q[:, 3 * j + 2])
-        dx, ddx = km.qdot[:, 3 * j + 2] / w, km.qddot[:, 3 * j + 2] / w ** 2
-        what = f"angle of link {link}"
-        turns = (x[-1] - x[0]) / (2 * math.pi)          # whole turns per revolution
-        x, dx = x - turns * th, dx - turns
-        if round(turns):
-            what += f", less its steady rotation ({round(turns):+d} turn per revolution)"
-            if np.max(np.abs(dx)) <= 1e-12 * abs(turns):      # the crank itself: rounding
-                x, dx, ddx = (np.zeros_like(x) for _ in range(3))
-                what += "; nothing is left: it turns at the crank's steady speed"
-    else:
-        L = scene.length_scale
-        i = km.point_names.index(d.point)
-        v0 = lk.solve(float(theta)).velocities[d.point]
-        u = np.asarray(v0, float) / np.hypot(*v0)
-        x = pts[:, i] @ u * L
-        dx = km.velocities[:, i] @ u * (L / w)
-        ddx = km.accelerations[:, i] @ u * (L / w ** 2)
-        what = f"displacement of point {d.point} along ({u[0]:.6g}, {u[1]:.6g})"
+    x, dx, ddx, what = (_link_drive(scene, km, th) if scene.drive.link is not None
+                        else _point_drive(scene, km, theta))
     return motion_table(np.degrees(th), x - x[0], f"motion from the linkage: {what}, "
                         f"{samples} samples", slope=dx, curvature=ddx)
+
+
+def _link_drive(scene: Scene, km, th):
+    """x, dx/dθ, d²x/dθ² and a description of a link drive's angle over the samples ``th``."""
+    w = scene.linkage.cranks[0].omega
+    link = {t.body: t.link for t in scene.torsions}.get(scene.drive.link, scene.drive.link)
+    j = km.link_names.index(link)
+    x = np.unwrap(km.q[:, 3 * j + 2])
+    dx, ddx = km.qdot[:, 3 * j + 2] / w, km.qddot[:, 3 * j + 2] / w ** 2
+    what = f"angle of link {link}"
+    turns = (x[-1] - x[0]) / (2 * math.pi)          # whole turns per revolution
+    x, dx = x - turns * th, dx - turns
+    if round(turns):
+        what += f", less its steady rotation ({round(turns):+d} turn per revolution)"
+        if np.max(np.abs(dx)) <= 1e-12 * abs(turns):      # the crank itself: rounding
+            x, dx, ddx = (np.zeros_like(x) for _ in range(3))
+            what += "; nothing is left: it turns at the crank's steady speed"
+    return x, dx, ddx, what
+
+
+def _point_drive(scene: Scene, km, theta):
+    """The same for a point drive: its displacement along its velocity at ``theta``."""
+    lk, d = scene.linkage, scene.drive
+    w, L = lk.cranks[0].omega, scene.length_scale
+    i = km.point_names.index(d.point)
+    v0 = lk.solve(float(theta)).velocities[d.point]
+    u = np.asarray(v0, float) / np.hypot(*v0)
+    x = km.points[:, i] @ u * L
+    dx = km.velocities[:, i] @ u * (L / w)
+    ddx = km.accelerations[:, i] @ u * (L / w ** 2)
+    return x, dx, ddx, f"displacement of point {d.point} along ({u[0]:.6g}, {u[1]:.6g})"

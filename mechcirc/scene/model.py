@@ -46,7 +46,6 @@ __all__ = ["SceneCircuit", "build", "build_needed", "ZERO_RATIO"]
 #: A velocity ratio below this fraction of the scene's largest one counts as zero.
 ZERO_RATIO = 1e-9
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
-_PERP = np.array([[0.0, -1.0], [1.0, 0.0]])
 
 
 @dataclass(frozen=True, eq=False)
@@ -149,15 +148,58 @@ def build(scene: Scene, theta: float, *, reflect: Literal["eta", "lever"] = "eta
 
 @dataclass(frozen=True)
 class _Motion:
-    """The rigid motion at θ in SI, per unit crank speed, and the scale of "at rest"."""
+    """The rigid motion in SI, per unit crank speed, and the scale of "at rest": at one
+    angle (vectors (2,), rates scalars) or n at once ((n, 2), (n,)), for build and the
+    cycle map alike (the formulas below broadcast)."""
 
-    deg: float
+    deg: object      # crank rotation [deg]
     pos: dict        # point -> position [m]
     vel: dict        # point -> velocity per unit crank speed [m/rad]
     ang: dict        # link or torsion body -> angular velocity per unit crank speed [1]
     Lc: float        # the linkage's length scale [m]
-    tiny: float      # a velocity ratio at most this is zero (ZERO_RATIO × the largest)
+    tiny: object     # a velocity ratio at most this is zero (ZERO_RATIO × the largest)
     crank: str
+
+
+def scaled_motion(scene: Scene, deg, points: dict, velocities: dict, angular: dict) -> _Motion:
+    """The rigid motion of ``scene`` scaled to SI and per unit crank speed.
+
+    ``points``, ``velocities`` (point → vector [length], [length/s]) and
+    ``angular`` (link → ω [rad/s]) at one crank angle ``deg`` or at an array
+    of them (vectors (n, 2), rates (n,)).  A torsion rod's body turns with
+    its link.
+    """
+    lk = scene.linkage
+    L, omega = scene.length_scale, lk.cranks[0].omega
+    pos = {p: np.asarray(x, float) * L for p, x in points.items()}
+    vel = {p: np.asarray(v, float) * L / omega for p, v in velocities.items()}
+    ang = {l: w / omega for l, w in angular.items()}
+    for t in scene.torsions:
+        ang[t.body] = ang[t.link]
+    Lc = lk.length_scale() * L
+    S_all = np.maximum(np.max([_norm(v) for v in vel.values()], axis=0),
+                       np.max([np.abs(w) for w in ang.values()], axis=0) * Lc)
+    crank = "cam" if getattr(lk, "cam", None) is not None else lk.cranks[0].link
+    return _Motion(deg, pos, vel, ang, Lc, ZERO_RATIO * S_all, crank)
+
+
+def _norm(v):
+    """|v| over the last axis (of length 2)."""
+    return np.hypot(v[..., 0], v[..., 1])
+
+
+def _unit(v):
+    return v / _norm(v)[..., None]
+
+
+def _dot(u, v):
+    """u·v over the last axis, as ``u @ v`` rounds it (one angle or many alike)."""
+    return (u[..., None, :] @ v[..., :, None])[..., 0, 0]
+
+
+def _perp(v):
+    """v turned by +90°."""
+    return np.stack([-v[..., 1], v[..., 0]], axis=-1)
 
 
 def _motion(scene: Scene, theta: float, state) -> _Motion:
@@ -172,38 +214,64 @@ def _motion(scene: Scene, theta: float, state) -> _Motion:
                 f"{scene.source}: at crank rotation θ = {deg:.6g}° the rigid mechanism "
                 f"cannot be linearised: the linkage cannot be assembled there or passes a "
                 f"position where its velocity ratios to the crank are infinite ({exc})") from None
-    L = scene.length_scale
-    omega = lk.cranks[0].omega
-    tbody_link = {t.body: t.link for t in scene.torsions}
-    pos = {p: np.asarray(x, float) * L for p, x in state.points.items()}
-    vel = {p: np.asarray(v, float) * L / omega for p, v in state.velocities.items()}
-    ang = {l: w / omega for l, w in state.angular_velocities.items()}
-    for body, link in tbody_link.items():
-        ang[body] = ang[link]
+    m = scaled_motion(scene, deg, state.points, state.velocities, state.angular_velocities)
+    ang = m.ang
     for t in scene.torsions:          # rods sharing a body: a redundant, consistent loop only
         if abs(ang[t.link] - ang[t.body]) > 1e-9 * max(abs(ang[t.body]), 1e-300) \
                 and abs(ang[t.link] - ang[t.body]) > 1e-12:
+            link = [u.link for u in scene.torsions if u.body == t.body][-1]
             raise GeometryError(
                 f"{scene.source}: at θ = {deg:.6g}° the links {t.link!r} and "
-                f"{tbody_link[t.body]!r} of the rods on body {t.body!r} turn at different "
+                f"{link!r} of the rods on body {t.body!r} turn at different "
                 f"rates ({ang[t.link]:.6g} and {ang[t.body]:.6g} per unit crank speed): the "
                 f"rigid mechanism's redundant constraint is not consistent")
-    Lc = lk.length_scale() * L
-    S_all = max(max(np.hypot(*v) for v in vel.values()),
-                max(abs(w) for w in ang.values()) * Lc)
-    crank = "cam" if getattr(lk, "cam", None) is not None else lk.cranks[0].link
-    return _Motion(deg, pos, vel, ang, Lc, ZERO_RATIO * S_all, crank)
+    return m
+
+
+def drive_ratio(scene: Scene, m: _Motion):
+    """(r₀, its size as a speed, its name): the drive's velocity per unit crank speed."""
+    d = scene.drive
+    if d.link is not None:
+        return m.ang[d.link], np.abs(m.ang[d.link]) * m.Lc, f"ω_{d.link}/ω_{m.crank}"
+    r0 = _norm(m.vel[d.point])
+    return r0, r0, f"|v_{d.point}|/ω_{m.crank}"
+
+
+def element_ratios(scene: Scene, m: _Motion, r0) -> dict:
+    """Element name → (velocity ratio to the drive, its size as a speed [m/rad]).
+
+    A mass's point speed or a link's ω; an elastic link's elongation rate
+    along it (its moving end); a torsion rod's twist rate; a load's point
+    along its line; each per unit drive velocity ``r0``.  Masses at ground
+    points are not listed.  NaN for a load whose point meets its anchor.
+    """
+    lk = scene.linkage
+    out = {}
+    with np.errstate(invalid="ignore", divide="ignore"):
+        for ms in scene.masses:
+            if ms.kind != "mass":
+                out[ms.name] = (m.ang[ms.link] / r0, np.abs(m.ang[ms.link]) * m.Lc)
+            elif ms.point not in lk.ground:
+                size = _norm(m.vel[ms.point])
+                out[ms.name] = (size / np.abs(r0), size)
+        for e in scene.elastic:
+            a, b = lk.links[e.link]
+            c = _dot(_unit(m.pos[b] - m.pos[a]), m.vel[a if b in lk.ground else b]) / r0
+            out[e.name] = (c, np.abs(c * r0))
+        for t in scene.torsions:
+            out[t.name] = (m.ang[t.link] / r0, np.abs(m.ang[t.link]) * m.Lc)
+        for ld in scene.loads:
+            u = m.pos[ld.anchor] - m.pos[ld.point] if ld.anchor is not None \
+                else np.array(ld.direction, float)
+            c = _dot(_unit(u), m.vel[ld.point]) / r0
+            out[ld.name] = (c, np.abs(c * r0))
+    return out
 
 
 def _drive_ratio(scene: Scene, m: _Motion) -> tuple[float, str]:
     """r₀, the drive's velocity per unit crank speed, and its name; refused at rest."""
-    d = scene.drive
-    if d.link is not None:
-        r0, r0_size = m.ang[d.link], abs(m.ang[d.link]) * m.Lc
-        r0_text = f"ω_{d.link}/ω_{m.crank}"
-    else:
-        r0 = float(np.hypot(*m.vel[d.point]))
-        r0_size, r0_text = r0, f"|v_{d.point}|/ω_{m.crank}"
+    r0, r0_size, r0_text = drive_ratio(scene, m)
+    r0 = float(r0)
     if r0_size <= m.tiny and getattr(scene.linkage, "cam", None) is not None:
         raise GeometryError(f"{scene.source}: at θ = {m.deg:.6g}° the cam dwells: the follower "
                             f"{scene.linkage.follower!r} is at rest (x'(θ) = 0), so the "
@@ -228,7 +296,7 @@ def _part_nodes(scene: Scene, m: _Motion) -> tuple[list[str], dict]:
         used.add(name)
         node_of_part.append(name)
         parts[name] = part
-        _check_part(scene, part, m.pos, m.vel, m.ang, m.Lc, m.tiny, m.deg, m.crank)
+        _check_part(scene, part, m)
     return node_of_part, parts
 
 
@@ -245,6 +313,7 @@ class _Builder:
         self.ratios: dict[str, float] = {}
         self.dropped: list[tuple[str, str]] = []
         self.notes: dict[str, str] = {}      # element -> "what = ratio", for the text
+        self.found = element_ratios(scene, m, r0)     # name -> (ratio, size)
         self.names_used = {"0", *node_of_part}
         self.element_names = {x.name for x in scene.masses} | {scene.drive.name} | {
             x.name + suffix for x in (*scene.elastic, *scene.torsions, *scene.loads)
@@ -271,21 +340,18 @@ class _Builder:
 
     def masses(self) -> None:
         """A mass element a moving mass or inertia (kinetic energy, reflected to the drive)."""
-        m, r0, ground = self.m, self.r0, self.scene.linkage.ground
+        m, ground = self.m, self.scene.linkage.ground
         for ms in self.scene.masses:
             if ms.kind == "mass":
                 if ms.point in ground:
                     self.dropped.append((ms.name, f"at ground point {ms.point!r}: it does "
                                                   "not move"))
                     continue
-                r = float(np.hypot(*m.vel[ms.point])) / abs(r0)
-                size, node = r * abs(r0), self.node_of_point(ms.point)
-                what = f"|v_{ms.point}|/v_drive"
+                node, what = self.node_of_point(ms.point), f"|v_{ms.point}|/v_drive"
             else:
-                r = m.ang[ms.link] / r0
-                size = abs(m.ang[ms.link]) * m.Lc
                 node = self.node_of_part[self.part_of_body[ms.link]]
                 what = f"ω_{ms.link}/v_drive"
+            r, size = (float(x) for x in self.found[ms.name])
             self.ratios[ms.name] = r
             if size <= m.tiny:
                 self.dropped.append((ms.name, f"at rest at this θ ({what} = {r:.3g})"))
@@ -296,37 +362,26 @@ class _Builder:
 
     def _elastic(self) -> list:
         """(element, node a, node b, ratio c, size, what) of every spring, rod and load."""
-        scene, m, r0 = self.scene, self.m, self.r0
+        scene, m = self.scene, self.m
         lk = scene.linkage
         out = []
         for e in scene.elastic:
             a, b = lk.links[e.link]
-            u = m.pos[b] - m.pos[a]
-            u = u / np.hypot(*u)
-            ca, cb = float(u @ m.vel[a]), float(u @ m.vel[b])
-            c = (cb if b not in lk.ground else ca) / r0
-            out.append((e, self.node_of_point(a), self.node_of_point(b), c, abs(c * r0),
+            out.append((e, self.node_of_point(a), self.node_of_point(b),
                         f"elongation rate of {e.link} / v_drive"))
         for t in scene.torsions:
-            c = m.ang[t.link] / r0
             out.append((t, self.node_of_part[self.part_of_body[t.link]],
-                        self.node_of_part[self.part_of_body[t.body]], c,
-                        abs(m.ang[t.link]) * m.Lc,
+                        self.node_of_part[self.part_of_body[t.body]],
                         f"ω_{t.link}/v_drive (twist rate of the rod per unit drive velocity)"))
         for ld in scene.loads:
-            if ld.anchor is not None:
-                u = m.pos[ld.anchor] - m.pos[ld.point]
-                if np.hypot(*u) == 0:
-                    raise GeometryError(
-                        f"{scene.source}: at θ = {m.deg:.6g}° load {ld.name!r}'s point "
-                        f"{ld.point!r} coincides with its anchor {ld.anchor!r}")
-            else:
-                u = np.array(ld.direction, float)
-            u = u / np.hypot(*u)
-            c = float(u @ m.vel[ld.point]) / r0
-            out.append((ld, self.node_of_point(ld.point), "0", c, abs(c * r0),
+            if ld.anchor is not None and not np.any(m.pos[ld.anchor] != m.pos[ld.point]):
+                raise GeometryError(
+                    f"{scene.source}: at θ = {m.deg:.6g}° load {ld.name!r}'s point "
+                    f"{ld.point!r} coincides with its anchor {ld.anchor!r}")
+            out.append((ld, self.node_of_point(ld.point), "0",
                         f"velocity of {ld.point} along the load / v_drive"))
-        return out
+        return [(el, na, nb, *(float(x) for x in self.found[el.name]), what)
+                for el, na, nb, what in out]
 
     def springs(self) -> list[tuple[str, str]]:
         """Springs and dampers of the elastic elements that deform; their node pairs."""
@@ -375,74 +430,87 @@ def _netlist(scene, circuit, deg, r0, r0_text, parts, b: _Builder) -> str:
     return write(circuit, head, comments=notes)
 
 
-def _check_part(scene, part, pos, vel, ang, Lc, tiny, deg, crank):
+def _check_part(scene, part, m: _Motion):
     """Refuse a part at rest (dead centre) or at a singular position of its own."""
-    lk = scene.linkage
+    sizes = part_speeds(scene, part, m)
+    key = max(sizes, key=lambda k: sizes[k][0])
+    if sizes[key][0] <= m.tiny:
+        raise GeometryError(
+            f"{scene.source}: at θ = {m.deg:.6g}° the rigid part {{{', '.join(part)}}} is at "
+            f"rest in the rigid motion (a dead centre: its largest velocity ratio {key} is "
+            f"{float(sizes[key][1]):.3g}), so it is decoupled from the drive and the "
+            f"linearised circuit is singular; choose another crank angle")
+    s = part_singular_values(scene, part, m)
+    nullity = 3 * len(part) - int(np.sum(s > RANK_TOL * s.max(initial=0.0)))
+    if nullity != 1:
+        raise GeometryError(
+            f"{scene.source}: at θ = {m.deg:.6g}° the rigid part {{{', '.join(part)}}} is at a "
+            f"singular position of its own ({nullity} independent velocity fields instead of "
+            f"1), so its velocity ratios are not unique; choose another crank angle")
+
+
+def part_speeds(scene: Scene, part, m: _Motion) -> dict:
+    """A rigid part's velocity ratios to the crank: name → (size as a speed, value)."""
     bodies = scene.bodies
     tbodies = {t.body for t in scene.torsions}
-    sizes = {f"ω_{b}/ω_{crank}": (abs(ang[b]) * Lc, ang[b]) for b in part}
-    for b in part:
-        if b in tbodies:
-            continue
-        for p in bodies[b]:
-            sizes[f"|v_{p}|/ω_{crank}"] = (float(np.hypot(*vel[p])), float(np.hypot(*vel[p])))
-    key = max(sizes, key=lambda k: sizes[k][0])
-    if sizes[key][0] <= tiny:
-        raise GeometryError(
-            f"{scene.source}: at θ = {deg:.6g}° the rigid part {{{', '.join(part)}}} is at rest "
-            f"in the rigid motion (a dead centre: its largest velocity ratio {key} is "
-            f"{sizes[key][1]:.3g}), so it is decoupled from the drive and the linearised "
-            f"circuit is singular; choose another crank angle")
-    # Numerical degrees of freedom of the part at θ: null space of its joint constraints.
+    sizes = {f"ω_{b}/ω_{m.crank}": (np.abs(m.ang[b]) * m.Lc, m.ang[b]) for b in part}
+    sizes.update((f"|v_{p}|/ω_{m.crank}", (_norm(m.vel[p]),) * 2)
+                 for b in part if b not in tbodies for p in bodies[b])
+    return sizes
+
+
+#: A part's joint constraints lose rank where a singular value is below this
+#: fraction of the largest.
+RANK_TOL = 1e-9
+
+
+def part_singular_values(scene: Scene, part, m: _Motion):
+    """Singular values of a rigid part's joint constraints (pins, sliders, rigid gear
+    meshes) on its bodies' velocities (x', y', φ'·Lc each), shape (..., k): rank
+    3·len(part) − 1 means one velocity field (one degree of freedom)."""
+    from .files import gear_meshes
+
+    lk, bodies, Lc = scene.linkage, scene.bodies, m.Lc
     cols = {b: 3 * i for i, b in enumerate(part)}
-    origin = {b: pos[bodies[b][0]] for b in part}
+    shape = np.shape(next(iter(m.pos.values())))[:-1] + (3 * len(part),)
+    origin = {b: m.pos[bodies[b][0]] for b in part}
     rows = []
-    for p in {p for b in part for p in bodies[b]}:
-        on = [b for b in part if p in bodies[b]]
-        members = (["ground"] if p in lk.ground else []) + on
+
+    def row(*entries):        # (body, sign, x-y coefficients or None, φ coefficient)
+        r = np.zeros(shape)
+        for body, sign, xy, turn in entries:
+            if body != "ground":
+                j = cols[body]
+                if xy is not None:
+                    r[..., j:j + 2] += sign * xy
+                r[..., j + 2] += sign * turn
+        rows.append(r)
+
+    for p in sorted({p for b in part for p in bodies[b]}):
+        members = (["ground"] if p in lk.ground else []) + [b for b in part if p in bodies[b]]
         for other in members[1:]:
+            arms = {b: _perp((m.pos[p] - origin[b]) / Lc) for b in (members[0], other)
+                    if b != "ground"}
             for axis in range(2):
-                row = np.zeros(3 * len(part))
-                for body, sign in ((members[0], 1.0), (other, -1.0)):
-                    if body == "ground":
-                        continue
-                    j = cols[body]
-                    row[j + axis] += sign
-                    arm = (pos[p] - origin[body]) / Lc
-                    row[j + 2] += sign * (_PERP @ arm)[axis]
-                rows.append(row)
+                e = np.eye(2)[axis]
+                row(*((b, sign, e, arms[b][..., axis]) for b, sign in
+                      ((members[0], 1.0), (other, -1.0)) if b != "ground"))
     for x in lk.sliders:               # a slider: no relative turning, no motion across the guide
         if x.link not in part or not (x.guide in cols or x.guide == "ground"):
             continue
-        u = pos[x.line[1]] - pos[x.line[0]] if x.guide != "ground" else np.array(x.direction)
-        n = _PERP @ (u / np.hypot(*u))
-        turn, across = np.zeros(3 * len(part)), np.zeros(3 * len(part))
-        for body, sign in ((x.link, 1.0), (x.guide, -1.0)):
-            if body == "ground":
-                continue
-            j = cols[body]
-            turn[j + 2] = sign
-            across[j:j + 2] += sign * n
-            across[j + 2] += sign * n @ (_PERP @ ((pos[x.point] - origin[body]) / Lc))
-        rows += [turn, across]
-    from .files import gear_meshes
-
+        u = m.pos[x.line[1]] - m.pos[x.line[0]] if x.guide != "ground" \
+            else np.array(x.direction, float)
+        n = _perp(_unit(u))
+        pair = [(b, sign) for b, sign in ((x.link, 1.0), (x.guide, -1.0)) if b != "ground"]
+        row(*((b, sign, None, 1.0) for b, sign in pair))
+        row(*((b, sign, n, _dot(n, _perp((m.pos[x.point] - origin[b]) / Lc)))
+              for b, sign in pair))
     for a, b, ratio in gear_meshes(scene):       # a rigid mesh: ω_a − ratio · ω_b = 0
         if a in cols:
-            row = np.zeros(3 * len(part))
-            row[cols[a] + 2], row[cols[b] + 2] = 1.0, -ratio
-            rows.append(row)
-    if rows:
-        s = np.linalg.svd(np.array(rows), compute_uv=False)
-        rank = int(np.sum(s > 1e-9 * s.max()))
-    else:
-        rank = 0
-    nullity = 3 * len(part) - rank
-    if nullity != 1:
-        raise GeometryError(
-            f"{scene.source}: at θ = {deg:.6g}° the rigid part {{{', '.join(part)}}} is at a "
-            f"singular position of its own ({nullity} independent velocity fields instead of "
-            f"1), so its velocity ratios are not unique; choose another crank angle")
+            row((a, 1.0, None, 1.0), (b, -ratio, None, 1.0))
+    if not rows:
+        return np.zeros(shape[:-1] + (0,))
+    return np.linalg.svd(np.stack(rows, axis=-2), compute_uv=False)
 
 
 def _check_connected(scene, node_of_part, edges, dropped, deg):

@@ -75,8 +75,9 @@ def test_cycle_arguments_are_checked():
 def test_cycle_batch_forms_every_angle_as_build_does():
     # The circuits of the batched cycle map (the η of every element at every angle)
     # against scene.build at each angle, on the heald scene (no angle left to build)
-    # and on a sley scene whose θ = 0 is a dead centre (that angle left to build,
-    # which refuses it; the others batched).
+    # on the geared FNF six-bar (its rigid gear mesh in the parts' rank check; the
+    # cycle two revolutions) and on a sley scene whose θ = 0 is a dead centre (that
+    # angle left to build, which refuses it; the others batched).
     from mechcirc.scene.cycle import _cycle_designs
     from mechcirc.sley import preset
 
@@ -84,9 +85,10 @@ def test_cycle_batch_forms_every_angle_as_build_does():
     p = preset("one-side", 1)
     front = p.fourbar().dead_centres()[0].theta
     scenes = [(load_scene(root / "examples" / "heald_scene.toml"), 72, []),
+              (load_scene(root / "examples" / "fnf_sixbar_scene.toml"), 24, []),
               (parse_scene(helpers.sley_scene_text(p, front)), 12, [0])]
     for scene, n, left in scenes:
-        theta = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
+        theta = np.linspace(0.0, scene.cycle, n, endpoint=False)
         motion = scene.linkage.motion(theta)
         (ds, where), alone = _cycle_designs(scene, motion, "eta")
         assert list(alone) == left and sorted(where.tolist() + left) == list(range(n))
