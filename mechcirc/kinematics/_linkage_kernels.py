@@ -32,8 +32,12 @@ import math
 import numpy as np
 
 from .._jit import decorators
+from . import _dyad_forms
 
-HAVE_NUMBA, _jit, _ = decorators(bool(globals().get("_FORCE_PYTHON")))
+HAVE_NUMBA, _jit, _jit_inline = decorators(bool(globals().get("_FORCE_PYTHON")))
+# the dyads' closed forms, written once for numpy and compiled here
+_rrr = _jit_inline(_dyad_forms.rrr)
+_solve2 = _jit_inline(_dyad_forms.solve2)
 
 #: Status codes of :func:`newton_path`.
 OK, SINGULAR_POSE, LOCK, BRANCH_JUMP = 0, 1, 2, 3
@@ -374,10 +378,10 @@ def dyads_path(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, ro
                Q, QD, QDD, PARTS, margin):
     """Closed-form RRR dyads at every time in ``t``, one position at a time.
 
-    The same formulas as :class:`.linkage_solver._DyadSolver` (which documents
-    them), as scalar complex arithmetic.  Per dyad d: links L[d], carriers K[d]
-    (−1: the ground), outer joints X[d] (the pose point for the ground, else the
-    offset in the carrier's frame), lengths ln[d], assembly side sign[d],
+    The closed forms of :mod:`._dyad_forms` (RRR only), compiled, as the
+    vectorised :class:`.linkage_solver._DyadSolver` runs them on arrays.  Per
+    dyad d: links L[d], carriers K[d] (−1: the ground), outer joints X[d] (the
+    pose point for the ground, else the offset in the carrier's frame), lengths ln[d], assembly side sign[d],
     rot[d] = e^{−i·pose angle}/length, arm[d] = the link frame's origin from
     its outer joint in the link's frame, ang[d] = the links' pose angles.
     Fills Q, QD, QDD, PARTS and margin (the smallest |sin| of a dyad's inner
@@ -408,13 +412,8 @@ def dyads_path(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, ro
             K1, K2 = K[d, 0], K[d, 1]
             x1 = X[d, 0] if K1 < 0 else r[K1] + E[K1] * X[d, 0]
             x2 = X[d, 1] if K2 < 0 else r[K2] + E[K2] * X[d, 1]
-            e = x2 - x1
-            d2 = e.real * e.real + e.imag * e.imag
-            dd = math.sqrt(d2)
             l1, l2 = ln[d, 0], ln[d, 1]
-            x = (l1 * l1 - l2 * l2 + d2) / (2.0 * dd)
-            h2 = l1 * l1 - x * x
-            x3 = x1 + e * complex(x, sign[d] * math.sqrt(max(h2, 0.0))) / dd
+            x3, h2 = _rrr(x1, x2, l1, l2, sign[d])
             r1 = x3 - x1
             r2 = x3 - x2
             s = abs(_im_conj(r1, r2)) / (l1 * l2)
@@ -454,13 +453,8 @@ def dyads_path(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, ro
                 K1, K2 = K[d, 0], K[d, 1]
                 v1 = 0j if K1 < 0 else v[K1] + 1j * w[K1] * E[K1] * X[d, 0]
                 v2 = 0j if K2 < 0 else v[K2] + 1j * w[K2] * E[K2] * X[d, 1]
-                b = -1j * (v2 - v1)
-                r1 = r1s[d]
-                r2 = r2s[d]
-                D = _im_conj(r2, r1)
                 L1, L2 = L[d, 0], L[d, 1]
-                w[L1] = _im_conj(r2, b) / D
-                w[L2] = _im_conj(r1, b) / D
+                w[L1], w[L2] = _solve2(1j * r1s[d], -1j * r2s[d], v2 - v1)
                 v[L1] = v1 + 1j * w[L1] * E[L1] * arm[d, 0]
                 v[L2] = v2 + 1j * w[L2] * E[L2] * arm[d, 1]
             for i in range(nb):
@@ -484,10 +478,7 @@ def dyads_path(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, ro
             r1 = r1s[d]
             r2 = r2s[d]
             L1, L2 = L[d, 0], L[d, 1]
-            b = -1j * (a2 - a1 + wt[L1] ** 2 * r1 - wt[L2] ** 2 * r2)
-            D = _im_conj(r2, r1)
-            al[L1] = _im_conj(r2, b) / D
-            al[L2] = _im_conj(r1, b) / D
+            al[L1], al[L2] = _solve2(1j * r1, -1j * r2, a2 - a1 + wt[L1] ** 2 * r1 - wt[L2] ** 2 * r2)
             a[L1] = a1 + (1j * al[L1] - wt[L1] ** 2) * E[L1] * arm[d, 0]
             a[L2] = a2 + (1j * al[L2] - wt[L2] ** 2) * E[L2] * arm[d, 1]
         for i in range(nb):
