@@ -41,7 +41,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .. import _jit
-from ..errors import GeometryError
+from ..errors import GeometryError, NetlistError
 from ._dyad_forms import rpr, rrp, rrr, solve2
 
 __all__ = ["LinkageMotion", "LinkageState", "MAX_CONTINUATION_STEPS", "plan", "motion"]
@@ -526,8 +526,33 @@ def motion(lk, pl: _Plan, theta, *, max_step_deg: float = 2.0, method: str = "au
         q, qd, qdd, parts = _solve_newton_compiled(lk, pl, t, dt_max)
     else:
         q, qd, qdd, parts = _solve_newton(lk, pl, t, dt_max)
-    return LinkageMotion(thetas, t, q, qd, qdd, parts, tuple(lk.pose), lk.link_names,
-                         tuple(c.link for c in lk.cranks), use, pl)
+    out = LinkageMotion(thetas, t, q, qd, qdd, parts, tuple(lk.pose), lk.link_names,
+                        tuple(c.link for c in lk.cranks), use, pl)
+    for s in lk.sliders:
+        if s.stroke:
+            _check_stroke(lk, s, out)
+    return out
+
+
+def _check_stroke(lk, s, m):
+    """A slider past its stroke at some position: an error located at ``stroke``."""
+    names = m.point_names
+    P, G1, G2 = (m.points[:, names.index(p)] for p in (s.point, *s.line))
+    u = G2 - G1
+    along = np.sum((P - G1) * u, axis=1) / np.hypot(u[:, 0], u[:, 1])
+    lo, hi = s.stroke
+    over = np.maximum(lo - along, along - hi)
+    bad = ~(over <= 1e-9 * lk.length_scale())
+    if np.any(bad):
+        k = int(np.argmax(bad))
+        end = f"min {lo:g}" if along[k] < lo else f"max {hi:g}"
+        raise NetlistError(
+            f"slider {s.link!r} leaves its guide at θ = {math.degrees(m.theta[k]):.6g}° (the "
+            f"first position asked beyond it): its point {s.point!r} is at {along[k]:.6g} "
+            f"along {s.line[0]}→{s.line[1]}, {over[k]:.6g} beyond the stroke's {end}",
+            lk.source, *s.stroke_at,
+            expected=f"a stroke containing {along[k]:.6g}, or crank angles that keep "
+                     f"{s.point!r} within [{lo:g}, {hi:g}]")
 
 
 # ------------------------------------------------------------ dyads, closed form
