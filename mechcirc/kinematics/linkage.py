@@ -59,7 +59,9 @@ moving link)::
                                          # the block's only point)
 
 The guide line G1→G2 is fixed in the guide's frame; in the pose ``point``
-must lie on it (else "off its guide", with the distance).  A prismatic pair counts as one pair in
+must lie on it (else "off its guide", with the distance).  An optional
+``stroke = [min, max]`` bounds ``point`` along the line from its first point;
+a position beyond it is a located error.  A prismatic pair counts as one pair in
 Grübler's formula, W = 3·n − 2·(p_revolute + p_prismatic), and gives two
 constraint rows: the block's point on the line, u_g × (P − G) = 0, and no
 relative turning, φ_block − φ_guide = 0.
@@ -357,16 +359,17 @@ class Linkage:
 
     @property
     def solver(self) -> str:
-        """``"dyads"`` (closed form per RRR dyad) or ``"newton"``: how :meth:`motion` solves."""
+        """``"dyads"`` (closed form per RRR, RRP or RPR dyad) or ``"newton"``: how
+        :meth:`motion` solves."""
         return self._plan.method
 
     def motion(self, theta: float | NDArray, *, max_step_deg: float = 2.0,
                method: str = "auto"):
         """Kinematics at first-crank rotations ``theta`` [rad] as arrays (a :class:`LinkageMotion`).
 
-        The fast path: no per-position objects.  A linkage made of RRR dyads
-        only (a four-bar, a Watt or Stephenson six-bar) is solved in closed
-        form, vectorised; any other by warm-started, batched Newton with the
+        The fast path: no per-position objects.  A linkage made of dyads only
+        (RRR: a four-bar, a Watt or Stephenson six-bar; RRP, RPR: a
+        slider-crank, a quick return) is solved in closed form, vectorised; any other by warm-started, batched Newton with the
         analytic Jacobian (see :mod:`.linkage_solver`).
 
         Parameters
@@ -385,6 +388,9 @@ class Linkage:
             The linkage locks (no assembly, or a singular Jacobian) — the
             message gives the first θ where it does — or the continuation
             jumped to another branch.
+        NetlistError
+            A slider passes its ``stroke`` at one of the positions (located
+            at the ``stroke`` key in the file).
         """
         from .linkage_solver import motion
 

@@ -2,14 +2,17 @@
 
 Two solvers, chosen per linkage once (:func:`plan`):
 
-* ``"dyads"`` — when every Assur group is an RRR dyad (two links, three
-  revolute pairs: one inside, one to a known body on each link), each group is
-  solved in closed form, vectorised over all crank positions: the inner joint
-  is the intersection of two circles on the side of the line through the
-  outer joints where the pose puts it (the assembly mode, which fixes the
-  branch for good); the link angular velocities and accelerations come from
-  one 2×2 system per group, written out by Cramer's rule.  A four-bar costs
-  about as much as :meth:`FourBar.evaluate`.
+* ``"dyads"`` — when every Assur group is a dyad (two links, three pairs:
+  one inside, one to a known body on each link) with at most one slider —
+  RRR, RRP (the slider an outer pair) or RPR (the slider inside) — each group
+  is solved in closed form (:mod:`._dyad_forms`), vectorised over all crank
+  positions: the RRR inner joint is the intersection of two circles, the RRP
+  one of a circle and the guide's line, on the side where the pose puts it
+  (the assembly mode, which fixes the branch for good); the RPR links turn
+  so that the outer joints keep their distance across the sliding line.  The
+  link rates (and the slide's) come from one 2×2 system per group, written
+  out by Cramer's rule.  A four-bar costs about as much as
+  :meth:`FourBar.evaluate`.
 * ``"newton"`` — any other structure (a class-III group, say): Newton on the
   constraint equations Φ(q, t) = 0 with the analytic Jacobian, assembled from
   index arrays built once.  A sequential continuation visits coarse nodes at
@@ -20,8 +23,8 @@ Two solvers, chosen per linkage once (:func:`plan`):
   velocities and accelerations come from two batched linear solves.
 
 With numba installed (the ``fast`` extra) both run as one compiled loop over
-the positions instead (:mod:`._linkage_kernels`): the dyads' closed form per
-position, and Newton as a sequential continuation through every target,
+the positions instead (:mod:`._linkage_kernels`): the RRR dyads' closed form per
+position (with sliders the numpy form above runs), and Newton as a sequential continuation through every target,
 warm-started from the previous one, q̇ and q̈ from the LU of J at each
 converged q — the same cost per position at 360 positions as at 3,600.
 ``mechcirc._jit.COMPILED = False`` keeps the numpy versions (tests run both).
