@@ -1083,14 +1083,11 @@ def _solve_newton_compiled(lk, pl, t, dt_max):
 
 def _solve_newton(lk, pl, t, dt_max):
     nw = Newton(pl)
-    w1 = lk.cranks[0].omega
-    wmax = float(np.max(np.abs(pl.omega)))
     nodes, at = _path(t, dt_max)
     first = nw.step(pl.q0, pl.omega * 0.0)
     if first is None:
         raise GeometryError(f"{lk.source}: the linkage is singular in its pose "
                             f"(constraint Jacobian not invertible)")
-    q, qdot, qddot, sign = first
     # The sequential continuation visits only the nodes it needs (consecutive
     # kept nodes at most dt_max apart along the path); every other node is
     # solved afterwards in one batch from the kept node before it.
@@ -1100,24 +1097,38 @@ def _solve_newton(lk, pl, t, dt_max):
         if k == len(nodes) - 1 or arc[k + 1] - arc[keep[-1]] > dt_max * (1 + 1e-12):
             keep.append(k)
     keep = np.array(keep)
-    Qk = np.empty((len(keep), nw.n))
+    kept = _kept_nodes(lk, nw, nodes[keep], first, dt_max)
+    return _targets(lk, nw, t, nodes, keep, at, kept, first[3], dt_max)
+
+
+def _kept_nodes(lk, nw, T_keep, first, dt_max):
+    """The continuation through the kept nodes at times ``T_keep`` (the first the pose).
+
+    Returns (q, q̇, q̈, parts, exact) per node; ``exact``: solved in a block,
+    polished, with batched derivatives (a target on one is taken as it is).
+    """
+    pl = nw.pl
+    w1 = lk.cranks[0].omega
+    wmax = float(np.max(np.abs(pl.omega)))
+    q, qdot, qddot, sign = first
+    Qk = np.empty((len(T_keep), nw.n))
     Qdk, Qddk = np.empty_like(Qk), np.empty_like(Qk)
     Qk[0], Qdk[0], Qddk[0] = q, qdot, qddot
     # nodes solved by a block are final (polished, with batched derivatives):
     # a target on one is taken as it is
-    exact = np.zeros(len(keep), dtype=bool)
-    Pk = np.empty((len(keep), nw.n, len(pl.crank_idx)))
+    exact = np.zeros(len(T_keep), dtype=bool)
+    Pk = np.empty((len(T_keep), nw.n, len(pl.crank_idx)))
     t_now = 0.0
     j, block = 1, 16
-    while j < len(keep):
+    while j < len(T_keep):
         if block > 1:
             # Blocks of nodes together: Taylor predictors from the last solved
             # node, batched Newton and derivatives, accepted only if every node
             # keeps the sign of det J and sits within 1 % of the size of the
             # Taylor step from the node before it (another assembly is a size
             # away); otherwise the block shrinks down to single steps.
-            jj = min(len(keep), j + block)
-            T = nodes[keep[j:jj]]
+            jj = min(len(T_keep), j + block)
+            T = T_keep[j:jj]
             got = _block(nw, q, qdot, qddot, t_now, T, sign, pl)
             if got is not None:
                 Qk[j:jj], Qdk[j:jj], Qddk[j:jj], Pk[j:jj] = got
@@ -1127,7 +1138,7 @@ def _solve_newton(lk, pl, t, dt_max):
                 continue
             block //= 2
             continue
-        t_target = nodes[keep[j]]
+        t_target = T_keep[j]
         while t_now != t_target:
             dt = max(-dt_max, min(dt_max, t_target - t_now))
             while True:
@@ -1152,6 +1163,14 @@ def _solve_newton(lk, pl, t, dt_max):
             t_now = t_now + dt
         Qk[j], Qdk[j], Qddk[j] = q, qdot, qddot
         j, block = j + 1, 2
+    return Qk, Qdk, Qddk, Pk, exact
+
+
+def _targets(lk, nw, t, nodes, keep, at, kept, sign, dt_max):
+    """Every target from the kept nodes around it; see the comment below."""
+    pl = nw.pl
+    w1 = lk.cranks[0].omega
+    Qk, Qdk, Qddk, Pk, exact = kept
     # Every target lies between two kept nodes (or is one): quintic Hermite
     # interpolation from their q, q̇, q̈ (error ~ h⁶ q⁽⁶⁾/720, about 1e-12 of
     # the size at the default spacing), then batched Newton — usually one
