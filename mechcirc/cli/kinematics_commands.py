@@ -10,6 +10,19 @@ from ._common import (MAX_LENGTH, MAX_OMEGA, check_output_paths, count, print_js
 
 
 def register(sub) -> None:
+    """The kinematics sub-commands, each with its options."""
+    _register_fourbar(sub)
+    _register_frame(sub)
+    _register_synth(sub)
+    _register_linkage(sub)
+
+    from . import cam_commands
+
+    cam_commands.register(sub)      # the cam command lives in its own module
+
+
+def _register_fourbar(sub) -> None:
+    """``fourbar``: the closed-form four-bar."""
     p = sub.add_parser(
         "fourbar", help="four-bar dead centres, swing, transmission angle and ε4T",
         description="Closed-form four-bar analysis: Grashof class, dead centres, swing Ψ, "
@@ -31,6 +44,9 @@ def register(sub) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON document")
     p.set_defaults(func=cmd_fourbar)
 
+
+def _register_frame(sub) -> None:
+    """``frame``: the four-bar's bearing forces and shaking (eq. 7)."""
     p = sub.add_parser(
         "frame", help="four-bar frame loading: bearing forces, shaking force and moments (eq. 7)",
         description="Kineto-static analysis of a four-bar at constant crank speed (patent "
@@ -85,6 +101,9 @@ def register(sub) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON document")
     p.set_defaults(func=cmd_frame)
 
+
+def _register_synth(sub) -> None:
+    """``synth``: beat-up four-bar synthesis and export."""
     p = sub.add_parser(
         "synth", help="beat-up four-bar synthesis after patent CN104178888",
         description="Explore crank-rockers meeting every criterion of the patent "
@@ -146,6 +165,9 @@ def register(sub) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON document")
     p.set_defaults(func=cmd_synth)
 
+
+def _register_linkage(sub) -> None:
+    """``linkage``: a TOML linkage at one θ."""
     p = sub.add_parser(
         "linkage", help="positions, velocities and conditional-stop velocities of a TOML linkage",
         description="Solve a planar linkage (revolute joints and sliders) with any number of "
@@ -161,10 +183,6 @@ def register(sub) -> None:
                    help="draw the linkage at θ with the paths of its points")
     p.add_argument("--json", action="store_true", help="print one JSON document")
     p.set_defaults(func=cmd_linkage)
-
-    from . import cam_commands
-
-    cam_commands.register(sub)      # the cam command lives in its own module
 
 
 def _vector(option, n, *, nonneg=False):
