@@ -247,10 +247,25 @@ omega = {W2!r}
 """
 
 
-def test_slider_on_a_turning_guide_against_the_closed_form(backend):
+def _slot_slides_in_the_block(text):
+    """The same motion with the roles swapped: the slotted crank's point O slides along a
+    line C–K of the block (the known body carries the slider's point, the dyad's link the
+    guide)."""
+    kx = O_SLOT[0] + 30 * math.cos(BETA0)
+    ky = O_SLOT[1] + 30 * math.sin(BETA0)
+    return text.replace("C = [", f"K = [{kx!r}, {ky!r}]\nC = [").replace(
+        'block = ["C"]', 'block = ["C", "K"]').replace(
+        'link = "block"\nguide = "slot"\nline = ["O", "S"]',
+        'link = "slot"\nguide = "block"\nline = ["C", "K"]\npoint = "O"')
+
+
+@pytest.mark.parametrize("swap", [False, True])
+def test_slider_on_a_turning_guide_against_the_closed_form(backend, swap):
     """C = O + σ u(β), β = β0 + ω2 t, |C − B| = l: σ = u·(B − O) − sqrt(l² − (u × (B − O))²)
     (the root of the pose), differentiated by SymPy; the conditional-stop parts add up."""
-    lk = parse_linkage(_slotted_text())
+    text = _slotted_text()
+    lk = parse_linkage(_slot_slides_in_the_block(text) if swap else text)
+    assert "K" in lk.pose if swap else "K" not in lk.pose
     assert [d.kind for d in lk._plan.dyads] == ["RRP"]
     m = lk.motion(TH, method=backend)
     t = sp.symbols("t", real=True)
