@@ -384,85 +384,6 @@ def _im_conj(a, b):
 
 
 @_jit
-def _dyad_positions(tk, geo, E, r, phi, r1s, r2s):
-    """Positions at time ``tk`` into E, r, phi (and each dyad's r1, r2); returns the margin."""
-    crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, rot, arm = geo
-    for j in range(crank_idx.shape[0]):
-        ci = crank_idx[j]
-        phi[ci] = omega[j] * tk
-        E[ci] = complex(math.cos(phi[ci]), math.sin(phi[ci]))
-        r[ci] = pivot[j] + E[ci] * crank_arm[j]
-    mg = math.inf
-    for d in range(L.shape[0]):
-        K1, K2 = K[d, 0], K[d, 1]
-        x1 = X[d, 0] if K1 < 0 else r[K1] + E[K1] * X[d, 0]
-        x2 = X[d, 1] if K2 < 0 else r[K2] + E[K2] * X[d, 1]
-        l1, l2 = ln[d, 0], ln[d, 1]
-        x3, h2 = _rrr(x1, x2, l1, l2, sign[d])
-        r1 = x3 - x1
-        r2 = x3 - x2
-        s = abs(_im_conj(r1, r2)) / (l1 * l2)
-        if not (h2 >= 0.0 and s < math.inf):
-            s = -1.0
-        mg = min(mg, s)
-        r1s[d] = r1
-        r2s[d] = r2
-        for side in range(2):
-            Ls = L[d, side]
-            rr = r1 if side == 0 else r2
-            xp = x1 if side == 0 else x2
-            phi[Ls] = math.atan2(rr.imag, rr.real) - ang[d, side]
-            E[Ls] = rr * rot[d, side]
-            r[Ls] = xp + E[Ls] * arm[d, side]
-    return mg
-
-
-@_jit
-def _dyad_velocities(c, geo, E, r1s, r2s, w, v):
-    """ω and origin velocities into w, v with only crank ``c`` turning (conditional stop)."""
-    crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, rot, arm = geo
-    for i in range(w.shape[0]):
-        w[i] = 0.0
-        v[i] = 0.0
-    for j in range(crank_idx.shape[0]):
-        ci = crank_idx[j]
-        wj = omega[j] if j == c else 0.0
-        w[ci] = wj
-        v[ci] = 1j * wj * E[ci] * crank_arm[j]
-    for d in range(L.shape[0]):
-        K1, K2 = K[d, 0], K[d, 1]
-        v1 = 0j if K1 < 0 else v[K1] + 1j * w[K1] * E[K1] * X[d, 0]
-        v2 = 0j if K2 < 0 else v[K2] + 1j * w[K2] * E[K2] * X[d, 1]
-        L1, L2 = L[d, 0], L[d, 1]
-        w[L1], w[L2] = _solve2(1j * r1s[d], -1j * r2s[d], v2 - v1)
-        v[L1] = v1 + 1j * w[L1] * E[L1] * arm[d, 0]
-        v[L2] = v2 + 1j * w[L2] * E[L2] * arm[d, 1]
-
-
-@_jit
-def _dyad_accelerations(geo, E, r1s, r2s, wt, al, a):
-    """α and origin accelerations into al, a for the angular velocities ``wt``."""
-    crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, rot, arm = geo
-    for i in range(al.shape[0]):
-        al[i] = 0.0
-        a[i] = 0.0
-    for j in range(crank_idx.shape[0]):
-        ci = crank_idx[j]
-        a[ci] = -wt[ci] ** 2 * E[ci] * crank_arm[j]
-    for d in range(L.shape[0]):
-        K1, K2 = K[d, 0], K[d, 1]
-        a1 = 0j if K1 < 0 else a[K1] + (1j * al[K1] - wt[K1] ** 2) * E[K1] * X[d, 0]
-        a2 = 0j if K2 < 0 else a[K2] + (1j * al[K2] - wt[K2] ** 2) * E[K2] * X[d, 1]
-        r1 = r1s[d]
-        r2 = r2s[d]
-        L1, L2 = L[d, 0], L[d, 1]
-        al[L1], al[L2] = _solve2(1j * r1, -1j * r2,
-                                 a2 - a1 + wt[L1] ** 2 * r1 - wt[L2] ** 2 * r2)
-        a[L1] = a1 + (1j * al[L1] - wt[L1] ** 2) * E[L1] * arm[d, 0]
-        a[L2] = a2 + (1j * al[L2] - wt[L2] ** 2) * E[L2] * arm[d, 1]
-
-
-@_jit
 def dyads_path(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, rot, arm,
                Q, QD, QDD, PARTS, margin):
     """Closed-form RRR dyads at every time in ``t``, one position at a time.
@@ -470,14 +391,15 @@ def dyads_path(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, ro
     The closed forms of :mod:`._dyad_forms` (RRR only), compiled, as the
     vectorised :class:`.linkage_solver._DyadSolver` runs them on arrays.  Per
     dyad d: links L[d], carriers K[d] (−1: the ground), outer joints X[d] (the
-    pose point for the ground, else the offset in the carrier's frame),
-    lengths ln[d], assembly side sign[d], rot[d] = e^{−i·pose angle}/length,
-    arm[d] = the link frame's origin from its outer joint in the link's frame,
-    ang[d] = the links' pose angles.  Fills Q, QD, QDD, PARTS and margin (the
-    smallest |sin| of a dyad's inner angle, −1 where it cannot assemble).
+    pose point for the ground, else the offset in the carrier's frame), lengths ln[d], assembly side sign[d],
+    rot[d] = e^{−i·pose angle}/length, arm[d] = the link frame's origin from
+    its outer joint in the link's frame, ang[d] = the links' pose angles.
+    Fills Q, QD, QDD, PARTS and margin (the smallest |sin| of a dyad's inner
+    angle, −1 where it cannot assemble).
     """
-    geo = (crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, rot, arm)
+    N = t.shape[0]
     nb = Q.shape[1] // 3
+    nc = crank_idx.shape[0]
     nd = L.shape[0]
     E = np.empty(nb, dtype=np.complex128)
     r = np.empty(nb, dtype=np.complex128)
@@ -489,19 +411,62 @@ def dyads_path(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, ro
     wt = np.empty(nb)
     al = np.empty(nb)
     a = np.empty(nb, dtype=np.complex128)
-    for k in range(t.shape[0]):
-        margin[k] = _dyad_positions(t[k], geo, E, r, phi, r1s, r2s)
+    for k in range(N):
+        for j in range(nc):
+            ci = crank_idx[j]
+            phi[ci] = omega[j] * t[k]
+            E[ci] = complex(math.cos(phi[ci]), math.sin(phi[ci]))
+            r[ci] = pivot[j] + E[ci] * crank_arm[j]
+        mg = math.inf
+        for d in range(nd):
+            K1, K2 = K[d, 0], K[d, 1]
+            x1 = X[d, 0] if K1 < 0 else r[K1] + E[K1] * X[d, 0]
+            x2 = X[d, 1] if K2 < 0 else r[K2] + E[K2] * X[d, 1]
+            l1, l2 = ln[d, 0], ln[d, 1]
+            x3, h2 = _rrr(x1, x2, l1, l2, sign[d])
+            r1 = x3 - x1
+            r2 = x3 - x2
+            s = abs(_im_conj(r1, r2)) / (l1 * l2)
+            if not (h2 >= 0.0 and s < math.inf):
+                s = -1.0
+            mg = min(mg, s)
+            r1s[d] = r1
+            r2s[d] = r2
+            for side in range(2):
+                Ls = L[d, side]
+                rr = r1 if side == 0 else r2
+                xp = x1 if side == 0 else x2
+                phi[Ls] = math.atan2(rr.imag, rr.real) - ang[d, side]
+                E[Ls] = rr * rot[d, side]
+                r[Ls] = xp + E[Ls] * arm[d, side]
+        margin[k] = mg
         for i in range(nb):
             Q[k, 3 * i] = r[i].real
             Q[k, 3 * i + 1] = r[i].imag
             Q[k, 3 * i + 2] = phi[i]
+        # velocities, one crank at a time (conditional stop): they add up
+        for i in range(nb):
             wt[i] = 0.0
             QD[k, 3 * i] = 0.0
             QD[k, 3 * i + 1] = 0.0
             QD[k, 3 * i + 2] = 0.0
-        # velocities, one crank at a time (conditional stop): they add up
-        for c in range(crank_idx.shape[0]):
-            _dyad_velocities(c, geo, E, r1s, r2s, w, v)
+        for c in range(nc):
+            for i in range(nb):
+                w[i] = 0.0
+                v[i] = 0.0
+            for j in range(nc):
+                ci = crank_idx[j]
+                wj = omega[j] if j == c else 0.0
+                w[ci] = wj
+                v[ci] = 1j * wj * E[ci] * crank_arm[j]
+            for d in range(nd):
+                K1, K2 = K[d, 0], K[d, 1]
+                v1 = 0j if K1 < 0 else v[K1] + 1j * w[K1] * E[K1] * X[d, 0]
+                v2 = 0j if K2 < 0 else v[K2] + 1j * w[K2] * E[K2] * X[d, 1]
+                L1, L2 = L[d, 0], L[d, 1]
+                w[L1], w[L2] = _solve2(1j * r1s[d], -1j * r2s[d], v2 - v1)
+                v[L1] = v1 + 1j * w[L1] * E[L1] * arm[d, 0]
+                v[L2] = v2 + 1j * w[L2] * E[L2] * arm[d, 1]
             for i in range(nb):
                 PARTS[k, 3 * i, c] = v[i].real
                 PARTS[k, 3 * i + 1, c] = v[i].imag
@@ -510,7 +475,22 @@ def dyads_path(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, ro
                 QD[k, 3 * i + 1] += v[i].imag
                 QD[k, 3 * i + 2] += w[i]
                 wt[i] += w[i]
-        _dyad_accelerations(geo, E, r1s, r2s, wt, al, a)
+        for i in range(nb):
+            al[i] = 0.0
+            a[i] = 0.0
+        for j in range(nc):
+            ci = crank_idx[j]
+            a[ci] = -wt[ci] ** 2 * E[ci] * crank_arm[j]
+        for d in range(nd):
+            K1, K2 = K[d, 0], K[d, 1]
+            a1 = 0j if K1 < 0 else a[K1] + (1j * al[K1] - wt[K1] ** 2) * E[K1] * X[d, 0]
+            a2 = 0j if K2 < 0 else a[K2] + (1j * al[K2] - wt[K2] ** 2) * E[K2] * X[d, 1]
+            r1 = r1s[d]
+            r2 = r2s[d]
+            L1, L2 = L[d, 0], L[d, 1]
+            al[L1], al[L2] = _solve2(1j * r1, -1j * r2, a2 - a1 + wt[L1] ** 2 * r1 - wt[L2] ** 2 * r2)
+            a[L1] = a1 + (1j * al[L1] - wt[L1] ** 2) * E[L1] * arm[d, 0]
+            a[L2] = a2 + (1j * al[L2] - wt[L2] ** 2) * E[L2] * arm[d, 1]
         for i in range(nb):
             QDD[k, 3 * i] = a[i].real
             QDD[k, 3 * i + 1] = a[i].imag
