@@ -395,7 +395,9 @@ def dyads_path(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, ro
     rot[d] = e^{−i·pose angle}/length, arm[d] = the link frame's origin from
     its outer joint in the link's frame, ang[d] = the links' pose angles.
     Fills Q, QD, QDD, PARTS and margin (the smallest |sin| of a dyad's inner
-    angle, −1 where it cannot assemble).
+    angle, −1 where it cannot assemble).  One function on purpose: moved into
+    compiled helpers (inlined or not) its parts took 2 ms of CPU instead of
+    0.9 ms for 3,600 four-bar positions.
     """
     N = t.shape[0]
     nb = Q.shape[1] // 3
