@@ -7,6 +7,7 @@
   differentiated by SymPy.
 """
 
+import functools
 import math
 
 import numpy as np
@@ -54,6 +55,7 @@ omega = {{omega}}
 TH = np.linspace(0.0, 2 * math.pi, 37)
 
 
+@functools.lru_cache(maxsize=None)
 def _slider_crank_reference(omega):
     """x(θ), ẋ, ẍ of the block from the closed form (l from the pose), θ = ω t."""
     th, t = sp.symbols("theta t", real=True)
@@ -112,29 +114,37 @@ omega = 12.0
 """
 
 
-def test_inverted_slider_crank_quick_return_against_the_closed_form(backend):
-    lk = parse_linkage(_shaper_text())
-    assert [d.kind for d in lk._plan.dyads] == ["RPR"]
-    m = lk.motion(TH, method=backend)
+@functools.lru_cache(maxsize=None)
+def _shaper_reference():
+    """B and its two derivatives, ψ̇ and ψ̈, ṡ at TH (θ = θ0 + 12 t), by SymPy."""
     t = sp.symbols("t", real=True)
     th = TH0 + 12.0 * t
     psi = sp.atan2(O2Y + RC * sp.sin(th), RC * sp.cos(th))
     bx, by = RR * sp.cos(psi), RR * sp.sin(psi)
     s = sp.sqrt((RC * sp.cos(th)) ** 2 + (O2Y + RC * sp.sin(th)) ** 2)   # A along the rocker
+    T = TH / 12.0
+
+    def f(expr, order):
+        return sp.lambdify(t, sp.diff(expr, t, order), "numpy")(T)
+
+    return ([(f(bx, o), f(by, o)) for o in range(3)], [f(psi, o) for o in (1, 2)], f(s, 1))
+
+
+def test_inverted_slider_crank_quick_return_against_the_closed_form(backend):
+    lk = parse_linkage(_shaper_text())
+    assert [d.kind for d in lk._plan.dyads] == ["RPR"]
+    m = lk.motion(TH, method=backend)
+    B, fpsi, fs = _shaper_reference()
     k = m.point_names.index("B")
     j = m.link_names.index("rocker")
     jb = m.link_names.index("block")
-    T = TH / 12.0
     for order, got in enumerate((m.points, m.velocities, m.accelerations)):
-        for comp, expr in ((0, bx), (1, by)):
-            ref = sp.lambdify(t, sp.diff(expr, t, order), "numpy")(T)
-            assert np.max(np.abs(got[:, k, comp] - ref)) <= 1e-14 * RR * 12.0 ** order
-    fpsi = [sp.lambdify(t, sp.diff(psi, t, o), "numpy")(T) for o in (1, 2)]
+        for comp in (0, 1):
+            assert np.max(np.abs(got[:, k, comp] - B[order][comp])) <= 1e-14 * RR * 12.0 ** order
     assert np.max(np.abs(m.qdot[:, 3 * j + 2] - fpsi[0])) <= 1e-14 * 12.0
     assert np.max(np.abs(m.qddot[:, 3 * j + 2] - fpsi[1])) <= 1e-14 * 144.0
     # the block turns with the rocker; its point slides along it by s(θ)
     assert np.max(np.abs(m.qdot[:, 3 * jb + 2] - m.qdot[:, 3 * j + 2])) <= 1e-14 * 12.0
-    fs = sp.lambdify(t, sp.diff(s, t), "numpy")(T)
     a_idx, o4 = m.point_names.index("A"), np.array([0.0, 0.0])
     u = (m.points[:, k] - o4) / RR
     rel = m.velocities[:, a_idx] - (m.points[:, a_idx] - o4)[:, ::-1] * [-1, 1] * \
@@ -247,6 +257,21 @@ omega = {W2!r}
 """
 
 
+@functools.lru_cache(maxsize=None)
+def _slotted_reference():
+    """C and its two time derivatives at TH (θ = ω1 t), by SymPy."""
+    t = sp.symbols("t", real=True)
+    th, beta = W1 * t, BETA0 + W2 * t
+    ux, uy = sp.cos(beta), sp.sin(beta)
+    wx, wy = R * sp.cos(th) - O_SLOT[0], R * sp.sin(th) - O_SLOT[1]       # B − O
+    c0 = (O_SLOT[0] + SIG0 * math.cos(BETA0) - R, O_SLOT[1] + SIG0 * math.sin(BETA0))
+    ll = sp.sqrt(sp.Float(c0[0], 30) ** 2 + sp.Float(c0[1], 30) ** 2)
+    sig = ux * wx + uy * wy - sp.sqrt(ll ** 2 - (ux * wy - uy * wx) ** 2)
+    cx, cy = O_SLOT[0] + sig * ux, O_SLOT[1] + sig * uy
+    return [tuple(sp.lambdify(t, sp.diff(e, t, o), "numpy")(TH / W1) for e in (cx, cy))
+            for o in range(3)]
+
+
 def _slot_slides_in_the_block(text):
     """The same motion with the roles swapped: the slotted crank's point O slides along a
     line C–K of the block (the known body carries the slider's point, the dyad's link the
@@ -268,19 +293,12 @@ def test_slider_on_a_turning_guide_against_the_closed_form(backend, swap):
     assert "K" in lk.pose if swap else "K" not in lk.pose
     assert [d.kind for d in lk._plan.dyads] == ["RRP"]
     m = lk.motion(TH, method=backend)
-    t = sp.symbols("t", real=True)
-    th, beta = W1 * t, BETA0 + W2 * t
-    ux, uy = sp.cos(beta), sp.sin(beta)
-    wx, wy = R * sp.cos(th) - O_SLOT[0], R * sp.sin(th) - O_SLOT[1]       # B − O
-    c0 = (O_SLOT[0] + SIG0 * math.cos(BETA0) - R, O_SLOT[1] + SIG0 * math.sin(BETA0))
-    ll = sp.sqrt(sp.Float(c0[0], 30) ** 2 + sp.Float(c0[1], 30) ** 2)
-    sig = ux * wx + uy * wy - sp.sqrt(ll ** 2 - (ux * wy - uy * wx) ** 2)
-    cx, cy = O_SLOT[0] + sig * ux, O_SLOT[1] + sig * uy
+    C = _slotted_reference()
     k = m.point_names.index("C")
     T = TH / W1
     for order, got in enumerate((m.points, m.velocities, m.accelerations)):
-        for comp, expr in ((0, cx), (1, cy)):
-            ref = sp.lambdify(t, sp.diff(expr, t, order), "numpy")(T)
+        for comp in (0, 1):
+            ref = C[order][comp]
             # achieved 4.5e-15 of 2R·ω1^k (dyads and Newton); the goal is 1e-12
             assert np.max(np.abs(got[:, k, comp] - ref)) <= 1e-14 * 2 * R * W1 ** order
     j = m.link_names.index("block")
