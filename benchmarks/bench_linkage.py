@@ -135,7 +135,23 @@ def old_solve(lk, thetas, max_step_deg=2.0, use_fsolve=False):
                                        fprime=lambda x: lk._jac(x, local, idx, rows),
                                        full_output=True, xtol=1e-13)
             return sol, ier == 1
-        return lk._newton(q, angles, local, idx, rows, tol)
+        # the first release's Newton (the Linkage method it was, written out here)
+        previous = np.inf
+        for k in range(30):
+            r = lk._phi(q, angles, local, idx, rows)
+            size = np.max(np.abs(r))
+            if size < tol:
+                return q, True
+            if k >= 2 and size > previous:
+                return q, False
+            previous = size
+            try:
+                q = q - np.linalg.solve(lk._jac(q, local, idx, rows), r)
+            except np.linalg.LinAlgError:
+                return q, False
+            if not np.all(np.isfinite(q)):
+                return q, False
+        return q, np.max(np.abs(lk._phi(q, angles, local, idx, rows))) < tol
 
     q, t_now = lk.q0(), 0.0
     J, qdot, qddot, parts = derivatives(q)

@@ -1,16 +1,17 @@
-"""Benchmark: linkages with sliders (prismatic joints), compiled Newton against its baselines.
+"""Benchmark: linkages with sliders (prismatic joints), closed-form dyads against Newton.
 
 Measured in one run, on the same machine, per position at 360 and 3,600
 positions over one turn:
 
-* an offset slider-crank (r = 40, l = 150, e = 10) and the crank-shaper quick
-  return (``examples/quick_return.toml``, a slider on a link and one on the
-  frame): ``Linkage.motion`` (the compiled Newton loop when numba is
-  installed) against the batched numpy Newton (``mechcirc._jit.COMPILED =
-  False``, what sliders ran on before the compiled loop had prismatic rows);
+* an offset slider-crank (r = 40, l = 150, e = 10, an RRP dyad) and the
+  crank-shaper quick return (``examples/quick_return.toml``: an RPR and an
+  RRP dyad): ``Linkage.motion`` (the closed-form dyads, vectorised numpy)
+  against what sliders ran on before the closed forms, ``method="newton"``
+  (the compiled Newton loop when numba is installed) and the batched numpy
+  Newton (``mechcirc._jit.COMPILED = False``);
 * the slider-crank's closed form x = r cos θ + sqrt(l² − (r sin θ + e)²) with
   its two derivatives, vectorised numpy: the floor;
-* the FNF six-bar (revolute only, compiled Newton) for scale.
+* the FNF six-bar (revolute, a class-III group: compiled Newton) for scale.
 
 Medians of several repeats; the machine is shared, so read the ratios.
 
@@ -74,23 +75,25 @@ def main() -> None:
     cases = {"slider-crank": parse_linkage(SLIDER_CRANK, "slider-crank"),
              "quick return": load_linkage(ROOT / "examples" / "quick_return.toml"),
              "FNF six-bar": load_linkage(ROOT / "examples" / "fnf_sixbar.toml")}
-    print("per position [µs]        N   compiled   numpy Newton   ratio   closed form")
+    print("per position [µs]        N      dyads   compiled Newton   numpy Newton   "
+          "Newton/dyads   closed form")
     for N in (360, 3600):
         th = np.linspace(0.0, 2 * math.pi, N)
         for name, lk in cases.items():
-            def run(lk=lk, th=th):
-                return lk.motion(th).points
+            def run(lk=lk, th=th, method="auto"):
+                return lk.motion(th, method=method).points
             _jit.COMPILED = None
-            run()                                  # compile / load the cache once
-            fast = median_time(run)
+            run(method="newton")                   # compile / load the cache once
+            dyads = median_time(run) if lk.solver == "dyads" else math.nan
+            fast = median_time(lambda run=run: run(method="newton"))
             _jit.COMPILED = False
-            slow = median_time(run, 3)
+            slow = median_time(lambda run=run: run(method="newton"), 3)
             _jit.COMPILED = None
             floor = median_time(lambda th=th: closed_form(th)) if name == "slider-crank" \
                 else None
             extra = f"{floor / N * 1e6:10.2f}" if floor is not None else ""
-            print(f"{name:<18} {N:6d} {fast / N * 1e6:10.1f} {slow / N * 1e6:14.1f} "
-                  f"{slow / fast:7.1f}x  {extra}")
+            print(f"{name:<18} {N:6d} {dyads / N * 1e6:10.1f} {fast / N * 1e6:17.1f} "
+                  f"{slow / N * 1e6:14.1f} {fast / dyads:13.1f}x  {extra}")
     lk = cases["slider-crank"]
     m = lk.motion(np.linspace(0.0, 2 * math.pi, 3600))
     k = m.point_names.index("C")

@@ -10,6 +10,19 @@ from ._common import (MAX_LENGTH, MAX_OMEGA, check_output_paths, count, print_js
 
 
 def register(sub) -> None:
+    """The kinematics sub-commands, each with its options."""
+    _register_fourbar(sub)
+    _register_frame(sub)
+    _register_synth(sub)
+    _register_linkage(sub)
+
+    from . import cam_commands
+
+    cam_commands.register(sub)      # the cam command lives in its own module
+
+
+def _register_fourbar(sub) -> None:
+    """``fourbar``: the closed-form four-bar."""
     p = sub.add_parser(
         "fourbar", help="four-bar dead centres, swing, transmission angle and ε4T",
         description="Closed-form four-bar analysis: Grashof class, dead centres, swing Ψ, "
@@ -31,6 +44,9 @@ def register(sub) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON document")
     p.set_defaults(func=cmd_fourbar)
 
+
+def _register_frame(sub) -> None:
+    """``frame``: the four-bar's bearing forces and shaking (eq. 7)."""
     p = sub.add_parser(
         "frame", help="four-bar frame loading: bearing forces, shaking force and moments (eq. 7)",
         description="Kineto-static analysis of a four-bar at constant crank speed (patent "
@@ -85,6 +101,9 @@ def register(sub) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON document")
     p.set_defaults(func=cmd_frame)
 
+
+def _register_synth(sub) -> None:
+    """``synth``: beat-up four-bar synthesis and export."""
     p = sub.add_parser(
         "synth", help="beat-up four-bar synthesis after patent CN104178888",
         description="Explore crank-rockers meeting every criterion of the patent "
@@ -146,6 +165,9 @@ def register(sub) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON document")
     p.set_defaults(func=cmd_synth)
 
+
+def _register_linkage(sub) -> None:
+    """``linkage``: a TOML linkage at one θ."""
     p = sub.add_parser(
         "linkage", help="positions, velocities and conditional-stop velocities of a TOML linkage",
         description="Solve a planar linkage (revolute joints and sliders) with any number of "
@@ -161,10 +183,6 @@ def register(sub) -> None:
                    help="draw the linkage at θ with the paths of its points")
     p.add_argument("--json", action="store_true", help="print one JSON document")
     p.set_defaults(func=cmd_linkage)
-
-    from . import cam_commands
-
-    cam_commands.register(sub)      # the cam command lives in its own module
 
 
 def _vector(option, n, *, nonneg=False):
@@ -291,16 +309,7 @@ def cmd_frame(args) -> int:
     cols = res.columns()
     summary = res.summary()
     if args.output:
-        from ..outputs import atomic_open
-
-        names = list(cols)
-        with atomic_open(args.output, "w", newline="") as fh:
-            fh.write(f"# mechcirc frame: a={args.crank:g} b={args.coupler:g} c={args.rocker:g} "
-                     f"d={args.frame:g} {args.unit}, omega={omega:.10g} rad/s; "
-                     f"{res.CONVENTION}\n")
-            fh.write(",".join(names) + "\n")
-            for row in zip(*(cols[n] for n in names)):
-                fh.write(",".join(repr(float(v)) for v in row) + "\n")
+        _write_frame_csv(args, res, cols, omega)
     if args.plot:
         from ..kinematics.plots import plot_shaking
         save_figure(plot_shaking(res), args.plot)
@@ -312,7 +321,13 @@ def cmd_frame(args) -> int:
                     "convention": res.CONVENTION, "summary": summary,
                     "columns": {n: v.tolist() for n, v in cols.items()}})
         return 0
-    front, back = fb.dead_centres()
+    _print_frame(args, fb, res, summary, omega)
+    return 0
+
+
+def _print_frame(args, fb, res, summary, omega) -> None:
+    """The ``frame`` command's table: each load's extremes and where the crank is."""
+    front, _ = fb.dead_centres()
     print(f"frame loading of the four-bar a={args.crank:g} b={args.coupler:g} "
           f"c={args.rocker:g} d={args.frame:g} {args.unit} at ω = {omega:.6g} rad/s "
           f"({omega * 60 / (2 * math.pi):.6g} rpm), {args.points} crank angles; front dead "
@@ -331,7 +346,20 @@ def cmd_frame(args) -> int:
     print(f"  the printed eq. 7's T_d would differ from this T_d by up to "
           f"{summary['T_d_printed_minus_T_d_max_abs_Nm']:.4g} N·m here (column T_d_printed_Nm "
           f"of the CSV).")
-    return 0
+
+
+def _write_frame_csv(args, res, cols, omega) -> None:
+    """Every angle's loads as CSV under a header of the lengths and the sign convention."""
+    from ..outputs import atomic_open
+
+    names = list(cols)
+    with atomic_open(args.output, "w", newline="") as fh:
+        fh.write(f"# mechcirc frame: a={args.crank:g} b={args.coupler:g} c={args.rocker:g} "
+                 f"d={args.frame:g} {args.unit}, omega={omega:.10g} rad/s; "
+                 f"{res.CONVENTION}\n")
+        fh.write(",".join(names) + "\n")
+        for row in zip(*(cols[n] for n in names)):
+            fh.write(",".join(repr(float(v)) for v in row) + "\n")
 
 
 def cmd_synth(args) -> int:
@@ -371,6 +399,12 @@ def cmd_synth(args) -> int:
         for name, n_rejected in res.rejected.items():
             print(f"  {name:20s} rejects {n_rejected} of {res.explored}", file=sys.stderr)
         return 2
+    _print_designs(args, res, exported)
+    return 0
+
+
+def _print_designs(args, res, exported) -> None:
+    """The ``synth`` command's table of designs, then the exported files."""
     print(res.message + ".")
     what = "margin" if args.objective == "margin" else "ratio"
     print(f"{'#':>2} {'a':>6} {'b':>7} {'c':>7} {'d':>7} {'Ψ°':>6} {'γ1°':>6} {'γmin°':>6} "
@@ -397,7 +431,6 @@ def cmd_synth(args) -> int:
         print("  (the scene has the sley inertia and the torsion rods; the beat-up moment "
               + ("is its [[moments]] table)" if args.beat_moment and reader_takes_moments()
                  else "is written as a comment: this scene format has no crank-angle loads)"))
-    return 0
 
 
 def cmd_linkage(args) -> int:

@@ -48,6 +48,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import GeometryError
+from ._dyad_forms import rrr
 
 __all__ = ["FourBar", "FourBarState", "DeadCentre", "TransmissionRange"]
 
@@ -318,6 +319,14 @@ class FourBar:
         cos_psi = (c * c + e2 - b * b) / (2.0 * c * np.sqrt(e2))
         return bx, by, cos_psi
 
+    def _rocker(self, bx, by):
+        """Rocker angle (wrapped) with B at (bx, by) from D: C is the inner joint of the
+        RRR dyad D–C–B, by the closed form the linkage solver uses (:func:`._dyad_forms.rrr`);
+        branch +1 puts C clockwise of the ray D → B."""
+        with np.errstate(divide="ignore", invalid="ignore"):
+            c_d, _ = rrr(0j, bx + 1j * by, self.rocker, self.coupler, -self.branch)
+        return np.angle(c_d)
+
     def _check(self, theta, cos_psi):
         bad = ~(np.abs(cos_psi) <= 1.0 + 1e-12)
         if np.any(bad):
@@ -333,8 +342,7 @@ class FourBar:
         lo, hi = self.crank_range()
         span = hi - lo
         th = np.linspace(lo + 1e-9 * span, hi - 1e-9 * span, 1441)
-        bx, by, cos_psi = self._raw(th)
-        raw = np.arctan2(by, bx) - self.branch * np.arccos(np.clip(cos_psi, -1.0, 1.0))
+        raw = self._rocker(*self._raw(th)[:2])
         if self._turns:
             raw = raw - th
         un = np.unwrap(raw)
@@ -367,8 +375,7 @@ class FourBar:
         a, b, c = self.crank, self.coupler, self.rocker
         bx, by, cos_psi = self._raw(theta)
         self._check(theta, cos_psi)
-        psi = np.arccos(np.clip(cos_psi, -1.0, 1.0))
-        raw = np.arctan2(by, bx) - self.branch * psi
+        raw = self._rocker(bx, by)
         ref = self._ref + theta if self._turns else self._ref
         phi4 = ref + _wrap(raw - ref)
         # (bx, by) is B relative to D and C = D + c e^{iφ4}: coupler direction B→C

@@ -280,7 +280,20 @@ def frame_loading(fourbar: FourBar, theta: ArrayLike, omega: float, *,
     F = np.stack([c4 * F_local[:, 0] - s4 * F_local[:, 1],
                   s4 * F_local[:, 0] + c4 * F_local[:, 1]], axis=-1)
 
-    # unknowns x = [FAx, FAy, FBx, FBy, FCx, FCy, FDx, FDy, T]
+    M, rhs = _equilibrium(k, crank, coupler, rocker, F, g)
+    x = np.linalg.solve(M, rhs[..., None])[..., 0]
+    F_A, F_B, F_C, F_D, T = x[:, 0:2], x[:, 2:4], x[:, 4:6], x[:, 6:8], x[:, 8]
+    AD = k["D"] - k["A"]
+    T_a = _cross(AD, -F_D) - T
+    T_d = _cross(-AD, -F_A) - T
+    return FrameLoading(theta, float(omega), F_A, F_B, F_C, F_D, T, F,
+                        -(F_A + F_D), T_a, T_d)
+
+
+def _equilibrium(k, crank, coupler, rocker, F, g):
+    """The 9×9 d'Alembert equilibrium of the three links per angle: (M, rhs), with
+    unknowns [FAx, FAy, FBx, FBy, FCx, FCy, FDx, FDy, T] (k: :func:`link_kinematics`)."""
+    n = len(F)
     M = np.zeros((n, 9, 9))
     rhs = np.zeros((n, 9))
 
@@ -313,13 +326,7 @@ def frame_loading(fourbar: FourBar, theta: ArrayLike, omega: float, *,
     moment_row(8, 6, k["D"] - k["G4"])
     rhs[:, 8] = rocker.inertia * k["al4"] - _cross(k["P"] - k["G4"], F)
 
-    x = np.linalg.solve(M, rhs[..., None])[..., 0]
-    F_A, F_B, F_C, F_D, T = x[:, 0:2], x[:, 2:4], x[:, 4:6], x[:, 6:8], x[:, 8]
-    AD = k["D"] - k["A"]
-    T_a = _cross(AD, -F_D) - T
-    T_d = _cross(-AD, -F_A) - T
-    return FrameLoading(theta, float(omega), F_A, F_B, F_C, F_D, T, F,
-                        -(F_A + F_D), T_a, T_d)
+    return M, rhs
 
 
 def beat_up_force(fourbar: FourBar, peak: tuple[float, float], window_deg: float = 40.0,

@@ -59,7 +59,9 @@ moving link)::
                                          # the block's only point)
 
 The guide line G1→G2 is fixed in the guide's frame; in the pose ``point``
-must lie on it (else "off its guide", with the distance).  A prismatic pair counts as one pair in
+must lie on it (else "off its guide", with the distance).  An optional
+``stroke = [min, max]`` bounds ``point`` along the line from its first point;
+a position beyond it is a located error.  A prismatic pair counts as one pair in
 Grübler's formula, W = 3·n − 2·(p_revolute + p_prismatic), and gives two
 constraint rows: the block's point on the line, u_g × (P − G) = 0, and no
 relative turning, φ_block − φ_guide = 0.
@@ -99,6 +101,8 @@ class Slider:
 
     The line passes through the pose of ``point`` (a point of ``link``) along
     the unit vector ``direction`` (pose coordinates), from the guide's points ``line``.
+    ``stroke`` bounds ``point``'s place along it, measured from ``line[0]``
+    towards ``line[1]``; :meth:`Linkage.motion` refuses a position beyond it.
     """
 
     link: str
@@ -106,6 +110,8 @@ class Slider:
     point: str
     direction: tuple
     line: tuple = ()
+    stroke: tuple = ()        # (min, max) along line[0] → line[1] from line[0]; () = any
+    stroke_at: tuple = (0, 0)  # (line, col) of ``stroke`` in the file, for its errors
 
     @property
     def pair(self) -> str:
@@ -353,16 +359,17 @@ class Linkage:
 
     @property
     def solver(self) -> str:
-        """``"dyads"`` (closed form per RRR dyad) or ``"newton"``: how :meth:`motion` solves."""
+        """``"dyads"`` (closed form per RRR, RRP or RPR dyad) or ``"newton"``: how
+        :meth:`motion` solves."""
         return self._plan.method
 
     def motion(self, theta: float | NDArray, *, max_step_deg: float = 2.0,
                method: str = "auto"):
         """Kinematics at first-crank rotations ``theta`` [rad] as arrays (a :class:`LinkageMotion`).
 
-        The fast path: no per-position objects.  A linkage made of RRR dyads
-        only (a four-bar, a Watt or Stephenson six-bar) is solved in closed
-        form, vectorised; any other by warm-started, batched Newton with the
+        The fast path: no per-position objects.  A linkage made of dyads only
+        (RRR: a four-bar, a Watt or Stephenson six-bar; RRP, RPR: a
+        slider-crank, a quick return) is solved in closed form, vectorised; any other by warm-started, batched Newton with the
         analytic Jacobian (see :mod:`.linkage_solver`).
 
         Parameters
@@ -381,6 +388,9 @@ class Linkage:
             The linkage locks (no assembly, or a singular Jacobian) — the
             message gives the first θ where it does — or the continuation
             jumped to another branch.
+        NetlistError
+            A slider passes its ``stroke`` at one of the positions (located
+            at the ``stroke`` key in the file).
         """
         from .linkage_solver import motion
 
@@ -467,7 +477,9 @@ TABLES = {
     "sliders": Table("sliders", {"link": "the sliding link",
                                  "guide": "\"ground\" or the link it slides on",
                                  "line": "[two points of the guide] along the guide",
-                                 "point": "the sliding link's point on the line"}, array=True),
+                                 "point": "the sliding link's point on the line",
+                                 "stroke": "[min, max]: where the point may be along the "
+                                           "line, from its first point"}, array=True),
 }
 
 
@@ -666,8 +678,30 @@ def _read_sliders(raw: list, pose, links, ground_pts, text: str, source: str) ->
                           f"{abs(off):.6g} from the line {line[0]}–{line[1]} in the pose",
                           "sliders", "point" if "point" in x else "line", occurrence=n,
                           expected=f"{point!r} on the line through {line[0]!r} and {line[1]!r}")
-        out.append(Slider(lname, guide, point, (float(u[0]), float(u[1])), tuple(line)))
+        stroke, at = _read_stroke(x, n, float(u @ (pose[point] - pose[line[0]])), lname,
+                                  text, source)
+        out.append(Slider(lname, guide, point, (float(u[0]), float(u[1])), tuple(line),
+                          stroke, at))
     return out
+
+
+def _read_stroke(x: dict, n: int, s0: float, lname: str, text: str, source: str):
+    """A slider's ``stroke = [min, max]`` (min < max, the pose's place s0 inside) and its
+    (line, col); ``((), (0, 0))`` without one."""
+    if "stroke" not in x:
+        return (), (0, 0)
+    raw = x["stroke"]
+    if not (isinstance(raw, list) and len(raw) == 2 and all(finite_number(v) for v in raw)
+            and raw[0] < raw[1]):
+        raise located(text, source, f"slider {lname!r}: stroke must be [min, max] with "
+                      f"min < max, got {brief(raw)}", "sliders", "stroke", occurrence=n,
+                      expected="two finite numbers, the lower first")
+    lo, hi = float(raw[0]), float(raw[1])
+    if not lo <= s0 <= hi:
+        raise located(text, source, f"slider {lname!r} starts off its stroke: its point is at "
+                      f"{s0:.6g} along the line in the pose, outside [{lo:g}, {hi:g}]",
+                      "sliders", "stroke", occurrence=n, expected=f"a stroke containing {s0:.6g}")
+    return (lo, hi), locate(text, "sliders", "stroke", occurrence=n)
 
 
 def _read_units(doc: dict, text: str, source: str) -> str:

@@ -2,14 +2,17 @@
 
 Two solvers, chosen per linkage once (:func:`plan`):
 
-* ``"dyads"`` — when every Assur group is an RRR dyad (two links, three
-  revolute pairs: one inside, one to a known body on each link), each group is
-  solved in closed form, vectorised over all crank positions: the inner joint
-  is the intersection of two circles on the side of the line through the
-  outer joints where the pose puts it (the assembly mode, which fixes the
-  branch for good); the link angular velocities and accelerations come from
-  one 2×2 system per group, written out by Cramer's rule.  A four-bar costs
-  about as much as :meth:`FourBar.evaluate`.
+* ``"dyads"`` — when every Assur group is a dyad (two links, three pairs:
+  one inside, one to a known body on each link) with at most one slider —
+  RRR, RRP (the slider an outer pair) or RPR (the slider inside) — each group
+  is solved in closed form (:mod:`._dyad_forms`), vectorised over all crank
+  positions: the RRR inner joint is the intersection of two circles, the RRP
+  one of a circle and the guide's line, on the side where the pose puts it
+  (the assembly mode, which fixes the branch for good); the RPR links turn
+  so that the outer joints keep their distance across the sliding line.  The
+  link rates (and the slide's) come from one 2×2 system per group, written
+  out by Cramer's rule.  A four-bar costs about as much as
+  :meth:`FourBar.evaluate`.
 * ``"newton"`` — any other structure (a class-III group, say): Newton on the
   constraint equations Φ(q, t) = 0 with the analytic Jacobian, assembled from
   index arrays built once.  A sequential continuation visits coarse nodes at
@@ -20,8 +23,8 @@ Two solvers, chosen per linkage once (:func:`plan`):
   velocities and accelerations come from two batched linear solves.
 
 With numba installed (the ``fast`` extra) both run as one compiled loop over
-the positions instead (:mod:`._linkage_kernels`): the dyads' closed form per
-position, and Newton as a sequential continuation through every target,
+the positions instead (:mod:`._linkage_kernels`): the RRR dyads' closed form per
+position (with sliders the numpy form above runs), and Newton as a sequential continuation through every target,
 warm-started from the previous one, q̇ and q̈ from the LU of J at each
 converged q — the same cost per position at 360 positions as at 3,600.
 ``mechcirc._jit.COMPILED = False`` keeps the numpy versions (tests run both).
@@ -41,7 +44,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .. import _jit
-from ..errors import GeometryError
+from ..errors import GeometryError, NetlistError
+from ._dyad_forms import rpr, rrp, rrr, solve2
 
 __all__ = ["LinkageMotion", "LinkageState", "MAX_CONTINUATION_STEPS", "plan", "motion"]
 
@@ -263,17 +267,6 @@ class LinkageMotion:
 
 # ------------------------------------------------------------------- structure
 @dataclass(frozen=True)
-class _Dyad:
-    links: tuple          # (L1, L2) link indices
-    inner: str            # the joint between them
-    outer: tuple          # (P1 on L1, P2 on L2)
-    known: tuple          # body index carrying P1 and P2 (-1: ground)
-    l1: float             # |P3 − P1| and |P3 − P2| from the pose
-    l2: float
-    sign: float           # side of P1→P2 on which P3 lies in the pose
-
-
-@dataclass(frozen=True)
 class _Plan:
     method: str
     nb: int                              # moving links
@@ -342,7 +335,7 @@ def plan(lk) -> _Plan:
                               dtype=float).reshape(-1, 2),
                   gu=u / np.hypot(u[:, 0], u[:, 1])[:, None] if len(sl) else u,
                   bs=np.array([local[s.link][s.point] for s in sl], dtype=float).reshape(-1, 2))
-    dyads = None if sl else _dyads(lk, idx)
+    dyads = _dyads(lk, idx)
     if dyads is None:
         return _Plan("newton", **common)
     order = tuple(("crank", j) for j in range(len(lk.cranks))) + \
@@ -350,45 +343,99 @@ def plan(lk) -> _Plan:
     return _Plan("dyads", dyads=dyads, order=order, **common)
 
 
+@dataclass(frozen=True)
+class _Dyad:
+    """One class-II group solved in closed form (see :mod:`._dyad_forms`).
+
+    ``kind`` "RRR": links L1, L2 meet at the revolute ``inner``; each turns
+    about its outer joint on a known body.  "RRP": L1 turns about its outer
+    joint, L2 meets it at ``inner`` and slides, without turning, on the known
+    body K2 (its guide, or the block it guides): ``inner`` runs along the
+    line through ``at`` (its pose place in K2's frame) along ``u``.  "RPR":
+    L1 and L2 slide on one another along ``u`` (turning together), each
+    turning about its outer joint; ``h0`` is the outer joints' distance
+    across the line.
+    """
+
+    kind: str
+    links: tuple          # (L1, L2) link indices
+    inner: str            # the joint between them (the slider's pair for RPR)
+    outer: tuple          # (P1 on L1, P2 on L2; for RRP the slider's pair)
+    known: tuple          # body index carrying P1 and P2 (-1: ground)
+    l1: float             # |P3 − P1| (RRR, RRP) and |P3 − P2| (RRR) from the pose
+    l2: float
+    sign: float           # the assembly side in the pose (see the forms)
+    u: complex = 0j       # sliding direction, pose coordinates (RRP, RPR)
+    at: complex = 0j      # RRP: the inner joint in K2's frame in the pose
+    h0: float = 0.0       # RPR
+
+
 def _dyads(lk, idx):
-    """The Assur groups as RRR dyads in solving order, or None if one is not."""
+    """The Assur groups as RRR, RRP and RPR dyads in solving order, or None if one is not."""
     try:
         groups = lk.assur_groups()
     except GeometryError:
         return None
-    joints = lk.joints()
+    pairs = lk.pairs()
+    slides = {s.pair: s for s in lk.sliders}
     known = {"ground"} | {c.link for c in lk.cranks}
     out = []
     for g in groups:
         if g.group_class != 2 or len(g.internal_pairs) != 1 or len(g.external_pairs) != 2:
             return None
-        L1, L2 = g.links
         (P3,) = g.internal_pairs
-        if set(joints[P3]) != {L1, L2}:
+        if set(pairs[P3]) != set(g.links):
             return None
-        outer, carriers = [], []
-        for L in (L1, L2):
-            mine = [p for p in g.external_pairs if L in joints[p]]
-            if len(mine) != 1:
+        outer = {}
+        for L in g.links:
+            mine = [p for p in g.external_pairs if L in pairs[p]]
+            others = [b for b in pairs[mine[0]] if b != L] if len(mine) == 1 else []
+            if not others or not all(b in known for b in others):
                 return None
-            p = mine[0]
-            others = [b for b in joints[p] if b != L]
-            if not others or not all(b in known for b in others) or \
-                    any(b in (L1, L2) for b in others):
-                return None
-            outer.append(p)
-            carriers.append(-1 if others[0] == "ground" else idx[others[0]])
-        P1, P2 = outer
-        x1, x2, x3 = lk.pose[P1], lk.pose[P2], lk.pose[P3]
-        e, r = x2 - x1, x3 - x1
-        cross = e[0] * r[1] - e[1] * r[0]
-        l1, l2 = float(np.hypot(*(x3 - x1))), float(np.hypot(*(x3 - x2)))
-        if l1 == 0 or l2 == 0 or abs(cross) <= 1e-9 * l1 * float(np.hypot(*e)):
-            return None           # degenerate or singular in the pose: let Newton say so
-        out.append(_Dyad((idx[L1], idx[L2]), P3, (P1, P2), tuple(carriers), l1, l2,
-                         math.copysign(1.0, cross)))
-        known |= {L1, L2}
+            outer[L] = (mine[0], -1 if others[0] == "ground" else idx[others[0]])
+        prism = [L for L in g.links if outer[L][0] in slides]
+        if len(prism) + (P3 in slides) > 1:
+            return None           # two sliders in one dyad: Newton
+        L1, L2 = sorted(g.links, key=lambda L: L in prism)    # a sliding outer pair on L2
+        dy = _dyad(lk, slides, P3, (idx[L1], idx[L2]), outer[L1], outer[L2])
+        if dy is None:
+            return None
+        out.append(dy)
+        known |= set(g.links)
     return tuple(out)
+
+
+def _dyad(lk, slides, P3, links, o1, o2):
+    """The :class:`_Dyad` of one group, or None when it is singular in the pose."""
+    (P1, K1), (P2, K2) = o1, o2
+    x1, scale = lk.pose[P1], lk.length_scale()
+    if P3 in slides:                                           # RPR
+        s = slides[P3]
+        u = complex(*s.direction)
+        d0 = complex(*(lk.pose[P2] - x1)) / u              # (along, across) u
+        if abs(d0.real) <= 1e-9 * scale:
+            return None
+        return _Dyad("RPR", links, P3, (P1, P2), (K1, K2), 0.0, 0.0,
+                     math.copysign(1.0, d0.real), u, 0j, d0.imag)
+    x3 = lk.pose[P3]
+    l1 = float(np.hypot(*(x3 - x1)))
+    if P2 in slides:                                           # RRP
+        s = slides[P2]
+        u = complex(*s.direction)
+        along = complex(*(x3 - x1)) / u
+        if l1 == 0 or abs(along.real) <= 1e-9 * l1:
+            return None
+        name = lk.link_names[K2] if K2 >= 0 else "ground"
+        at = x3 - (lk.pose[lk.links[name][0]] if K2 >= 0 else 0.0)
+        return _Dyad("RRP", links, P3, (P1, P2), (K1, K2), l1, 0.0,
+                     math.copysign(1.0, along.real), u, complex(*at))
+    x2 = lk.pose[P2]
+    e, r = x2 - x1, x3 - x1
+    cross = e[0] * r[1] - e[1] * r[0]
+    l2 = float(np.hypot(*(x3 - x2)))
+    if l1 == 0 or l2 == 0 or abs(cross) <= 1e-9 * l1 * float(np.hypot(*e)):
+        return None           # degenerate or singular in the pose: let Newton say so
+    return _Dyad("RRR", links, P3, (P1, P2), (K1, K2), l1, l2, math.copysign(1.0, cross))
 
 
 # ------------------------------------------------------------------ helpers
@@ -482,8 +529,33 @@ def motion(lk, pl: _Plan, theta, *, max_step_deg: float = 2.0, method: str = "au
         q, qd, qdd, parts = _solve_newton_compiled(lk, pl, t, dt_max)
     else:
         q, qd, qdd, parts = _solve_newton(lk, pl, t, dt_max)
-    return LinkageMotion(thetas, t, q, qd, qdd, parts, tuple(lk.pose), lk.link_names,
-                         tuple(c.link for c in lk.cranks), use, pl)
+    out = LinkageMotion(thetas, t, q, qd, qdd, parts, tuple(lk.pose), lk.link_names,
+                        tuple(c.link for c in lk.cranks), use, pl)
+    for s in lk.sliders:
+        if s.stroke:
+            _check_stroke(lk, s, out)
+    return out
+
+
+def _check_stroke(lk, s, m):
+    """A slider past its stroke at some position: an error located at ``stroke``."""
+    names = m.point_names
+    P, G1, G2 = (m.points[:, names.index(p)] for p in (s.point, *s.line))
+    u = G2 - G1
+    along = np.sum((P - G1) * u, axis=1) / np.hypot(u[:, 0], u[:, 1])
+    lo, hi = s.stroke
+    over = np.maximum(lo - along, along - hi)
+    bad = ~(over <= 1e-9 * lk.length_scale())
+    if np.any(bad):
+        k = int(np.argmax(bad))
+        end = f"min {lo:g}" if along[k] < lo else f"max {hi:g}"
+        raise NetlistError(
+            f"slider {s.link!r} leaves its guide at θ = {math.degrees(m.theta[k]):.6g}° (the "
+            f"first position asked beyond it): its point {s.point!r} is at {along[k]:.6g} "
+            f"along {s.line[0]}→{s.line[1]}, {over[k]:.6g} beyond the stroke's {end}",
+            lk.source, *s.stroke_at,
+            expected=f"a stroke containing {along[k]:.6g}, or crank angles that keep "
+                     f"{s.point!r} within [{lo:g}, {hi:g}]")
 
 
 # ------------------------------------------------------------ dyads, closed form
@@ -498,9 +570,12 @@ def _dot(a, b):
 
 
 class _DyadSolver:
-    """Closed-form RRR dyads, vectorised over positions (see the module docstring).
+    """Closed-form dyads (:mod:`._dyad_forms`), vectorised over positions.
 
-    Per link L: angle φ_L (N,), origin r_L (N,) complex, ω_L, v_L, α_L, a_L.
+    Per body (the ground last, at index −1): angle φ (N,), e^{iφ}, origin r
+    (N,) complex, ω, v, α, a.  A dyad's rates solve one 2×2 system
+    x·c1 + y·c2 = b whose columns come from the positions: (ω1, ω2) for RRR,
+    (ω1, σ̇) for RRP, (ω, σ̇) for RPR, σ the slide.
     """
 
     def __init__(self, lk, pl):
@@ -509,22 +584,27 @@ class _DyadSolver:
         self.local = [{p: complex(*x) for p, x in local[n].items()} for n in lk.link_names]
         self.pose = {p: complex(*x) for p, x in lk.pose.items()}
         self.crank_arm = [-self.local[pl.crank_idx[j]][c.pivot] for j, c in enumerate(lk.cranks)]
-        # per dyad: the inner joint's offset from each outer joint in the pose,
-        # and its angle; offsets of the outer joints in their carriers' frames
+        # per dyad: the outer joints in their carriers' frames (X2: the inner
+        # joint's for RRP), the pose angles of P3 − P1 and P3 − P2, and each
+        # link's origin from its anchor (P1; P2, or P3 for RRP) in its frame
         self.geo = []
         for dy in pl.dyads:
-            (L1, L2), (P1, P2) = dy.links, dy.outer
-            z3 = self.pose[dy.inner]
-            self.geo.append((math.atan2((z3 - self.pose[P1]).imag, (z3 - self.pose[P1]).real),
-                             math.atan2((z3 - self.pose[P2]).imag, (z3 - self.pose[P2]).real),
-                             -self.local[L1][P1], -self.local[L2][P2]))
+            (L1, L2), (P1, P2), (K1, K2) = dy.links, dy.outer, dy.known
+            z1, z3 = self.pose[P1], self.pose[dy.inner] if dy.kind != "RPR" else 0j
+            X1 = z1 if K1 == -1 else self.local[K1][P1]
+            X2 = dy.at if dy.kind == "RRP" else \
+                self.pose[P2] if K2 == -1 else self.local[K2][P2]
+            a2 = dy.inner if dy.kind == "RRP" else P2
+            ang = (float(np.angle(z3 - z1)),
+                   float(np.angle(z3 - self.pose[P2])) if dy.kind == "RRR" else 0.0)
+            self.geo.append((X1, X2, ang, -self.local[L1][P1], -self.local[L2][a2]))
 
     def positions(self, t):
         pl, lk = self.pl, self.lk
         N = len(t)
-        E = np.empty((pl.nb, N), dtype=complex)          # e^{iφ}
-        phi = np.empty((pl.nb, N))
-        r = np.empty((pl.nb, N), dtype=complex)
+        E = np.ones((pl.nb + 1, N), dtype=complex)          # e^{iφ}; the ground last
+        phi = np.zeros((pl.nb + 1, N))
+        r = np.zeros((pl.nb + 1, N), dtype=complex)
         inner = []
         margin = np.full(N, np.inf)
         for j, c in enumerate(lk.cranks):
@@ -532,90 +612,100 @@ class _DyadSolver:
             phi[ci] = pl.omega[j] * t
             E[ci] = np.exp(1j * phi[ci])
             r[ci] = self.pose[c.pivot] + E[ci] * self.crank_arm[j]
-        for dy, (ang1, ang2, arm1, arm2) in zip(pl.dyads, self.geo):
-            (L1, L2), (P1, P2), (K1, K2) = dy.links, dy.outer, dy.known
-            x1 = self.pose[P1] if K1 == -1 else r[K1] + E[K1] * self.local[K1][P1]
-            x2 = self.pose[P2] if K2 == -1 else r[K2] + E[K2] * self.local[K2][P2]
-            e = x2 - x1
-            d2 = e.real * e.real + e.imag * e.imag
+        for dy, (X1, X2, ang, arm1, arm2) in zip(pl.dyads, self.geo):
+            (L1, L2), (K1, K2) = dy.links, dy.known
+            x1, x2 = r[K1] + E[K1] * X1, r[K2] + E[K2] * X2
             with np.errstate(all="ignore"):
-                d = np.sqrt(d2)
-                x = (dy.l1 * dy.l1 - dy.l2 * dy.l2 + d2) / (2.0 * d)
-                h2 = dy.l1 * dy.l1 - x * x
-                x3 = x1 + e * (x + 1j * dy.sign * np.sqrt(np.maximum(h2, 0.0))) / d
-            r1, r2 = x3 - x1, x3 - x2
-            # sin of the angle between the links at the inner joint: 0 when the
-            # dyad is stretched or folded (its Jacobian is singular there)
-            sin_ = np.abs(_im_conj(r1, r2)) / (dy.l1 * dy.l2)
+                if dy.kind == "RPR":
+                    E1, h2 = rpr(x1, x2, dy.h0, dy.u, dy.sign)
+                    e, u = x2 - x1, E1 * dy.u
+                    sin_ = np.abs(_dot(u, e)) / np.abs(e)    # 0: the links across the line
+                    phi[L1] = phi[L2] = np.angle(E1)
+                    E[L1] = E[L2] = E1
+                    rates = (x1, x2, x2, 1j * e, u, e)
+                elif dy.kind == "RRP":
+                    u = E[K2] * dy.u
+                    x3, h2 = rrp(x1, dy.l1, x2, u, dy.sign)
+                    r1 = x3 - x1
+                    sin_ = np.abs(_dot(u, r1)) / dy.l1       # 0: the rod across the guide
+                    phi[L1], E[L1] = np.angle(r1) - ang[0], r1 * (np.exp(-1j * ang[0]) / dy.l1)
+                    phi[L2], E[L2] = phi[K2], E[K2]
+                    rates = (x1, x3, x3, 1j * r1, -u, r1)
+                else:
+                    x3, h2 = rrr(x1, x2, dy.l1, dy.l2, dy.sign)
+                    r1, r2 = x3 - x1, x3 - x2
+                    # sin of the angle between the links at the inner joint: 0 when
+                    # the dyad is stretched or folded (its Jacobian is singular there)
+                    sin_ = np.abs(_im_conj(r1, r2)) / (dy.l1 * dy.l2)
+                    # |r1|, |r2| are the links' lengths by construction (to rounding)
+                    phi[L1], E[L1] = np.angle(r1) - ang[0], r1 * (np.exp(-1j * ang[0]) / dy.l1)
+                    phi[L2], E[L2] = np.angle(r2) - ang[1], r2 * (np.exp(-1j * ang[1]) / dy.l2)
+                    rates = (x1, x2, x2, 1j * r1, -1j * r2, r1, r2)
             m = np.where(h2 >= 0, sin_, -1.0)
             margin = np.minimum(margin, np.where(np.isfinite(m), m, -1.0))
-            for L, xp, rr, ang, arm, ln in ((L1, x1, r1, ang1, arm1, dy.l1),
-                                            (L2, x2, r2, ang2, arm2, dy.l2)):
-                phi[L] = np.angle(rr) - ang
-                # |rr| is the link's length by construction (to rounding)
-                E[L] = rr * (complex(math.cos(ang), -math.sin(ang)) / ln)
-                r[L] = xp + E[L] * arm
-            inner.append((x1, x2, r1, r2))
+            r[L1] = x1 + E[L1] * arm1
+            r[L2] = rates[2] + E[L2] * arm2
+            inner.append(rates)
         return phi, E, r, inner, margin
 
-    def velocities(self, E, inner, w_cranks):
-        """(ω (nb, N), origin velocity (nb, N) complex) for crank speeds ``w_cranks``."""
+    def velocities(self, E, r, inner, w_cranks):
+        """(ω, origin velocity (complex), σ̇ per dyad), for crank speeds ``w_cranks``."""
         pl, lk = self.pl, self.lk
-        N = E.shape[1]
-        w = np.zeros((pl.nb, N))
-        v = np.zeros((pl.nb, N), dtype=complex)
+        w = np.zeros(E.shape)
+        v = np.zeros(E.shape, dtype=complex)
         for j in range(len(lk.cranks)):
             ci = pl.crank_idx[j]
             w[ci] = w_cranks[j]
-            v[ci] = 1j * w_cranks[j] * E[ci] * self.crank_arm[j]
-        for dy, (_, _, r1, r2), (_, _, arm1, arm2) in zip(pl.dyads, inner, self.geo):
-            (L1, L2), (P1, P2), (K1, K2) = dy.links, dy.outer, dy.known
-            v1 = 0.0 if K1 == -1 else v[K1] + 1j * w[K1] * E[K1] * self.local[K1][P1]
-            v2 = 0.0 if K2 == -1 else v[K2] + 1j * w[K2] * E[K2] * self.local[K2][P2]
-            # i(ω1 r1 − ω2 r2) = v2 − v1
-            w[L1], w[L2] = _cramer(r1, r2, -1j * (v2 - v1))
-            v[L1] = v1 + 1j * w[L1] * E[L1] * arm1
-            v[L2] = v2 + 1j * w[L2] * E[L2] * arm2
-        return w, v
+            v[ci] = 1j * w_cranks[j] * (r[ci] - self.pose[lk.cranks[j].pivot])
+        sdot = []
+        for dy, (x1, y2, o2, c1, c2, *_) in zip(pl.dyads, inner):
+            (L1, L2), (K1, K2) = dy.links, dy.known
+            v1 = v[K1] + 1j * w[K1] * (x1 - r[K1])
+            x, y = solve2(c1, c2, v[K2] + 1j * w[K2] * (y2 - r[K2]) - v1)
+            w[L1], w[L2] = x, (y if dy.kind == "RRR" else x if dy.kind == "RPR" else w[K2])
+            sdot.append(y)
+            v[L1] = v1 + 1j * w[L1] * (r[L1] - x1)
+            vo2 = v1 + 1j * x * (o2 - x1) if dy.kind == "RRP" else \
+                v[K2] + 1j * w[K2] * (o2 - r[K2])
+            v[L2] = vo2 + 1j * w[L2] * (r[L2] - o2)
+        return w, v, sdot
 
-    def accelerations(self, E, inner, w):
+    def accelerations(self, E, r, inner, w, sdot):
         pl, lk = self.pl, self.lk
-        N = E.shape[1]
-        al = np.zeros((pl.nb, N))
-        a = np.zeros((pl.nb, N), dtype=complex)
+        al = np.zeros(E.shape)
+        a = np.zeros(E.shape, dtype=complex)
         for j in range(len(lk.cranks)):
             ci = pl.crank_idx[j]
-            a[ci] = -w[ci] ** 2 * E[ci] * self.crank_arm[j]
-        for dy, (_, _, r1, r2), (_, _, arm1, arm2) in zip(pl.dyads, inner, self.geo):
-            (L1, L2), (P1, P2), (K1, K2) = dy.links, dy.outer, dy.known
-            a1 = 0.0 if K1 == -1 else \
-                a[K1] + (1j * al[K1] - w[K1] ** 2) * E[K1] * self.local[K1][P1]
-            a2 = 0.0 if K2 == -1 else \
-                a[K2] + (1j * al[K2] - w[K2] ** 2) * E[K2] * self.local[K2][P2]
-            # i(α1 r1 − α2 r2) = a2 − a1 + ω1² r1 − ω2² r2
-            rhs = a2 - a1 + w[L1] ** 2 * r1 - w[L2] ** 2 * r2
-            al[L1], al[L2] = _cramer(r1, r2, -1j * rhs)
-            a[L1] = a1 + (1j * al[L1] - w[L1] ** 2) * E[L1] * arm1
-            a[L2] = a2 + (1j * al[L2] - w[L2] ** 2) * E[L2] * arm2
+            a[ci] = -w[ci] ** 2 * (r[ci] - self.pose[lk.cranks[j].pivot])
+        for dy, (x1, y2, o2, c1, c2, *rr), s in zip(pl.dyads, inner, sdot):
+            (L1, L2), (K1, K2) = dy.links, dy.known
+            a1 = a[K1] + (1j * al[K1] - w[K1] ** 2) * (x1 - r[K1])
+            b = a[K2] + (1j * al[K2] - w[K2] ** 2) * (y2 - r[K2]) - a1
+            if dy.kind == "RRR":        # i(α1 r1 − α2 r2) = a2 − a1 + ω1² r1 − ω2² r2
+                b = b + w[L1] ** 2 * rr[0] - w[L2] ** 2 * rr[1]
+            elif dy.kind == "RRP":      # iα1 r1 − σ̈u = a_K − a1 + ω1² r1 + 2iω_K σ̇ u
+                b = b + w[L1] ** 2 * rr[0] - 2j * w[K2] * s * c2
+            else:                       # iα e + σ̈u = a2 − a1 + ω² e − 2iω σ̇ u
+                b = b + w[L1] ** 2 * rr[0] - 2j * w[L1] * s * c2
+            x, y = solve2(c1, c2, b)
+            al[L1], al[L2] = x, (y if dy.kind == "RRR" else x if dy.kind == "RPR" else al[K2])
+            a[L1] = a1 + (1j * al[L1] - w[L1] ** 2) * (r[L1] - x1)
+            ao2 = a1 + (1j * x - w[L1] ** 2) * (o2 - x1) if dy.kind == "RRP" else \
+                a[K2] + (1j * al[K2] - w[K2] ** 2) * (o2 - r[K2])
+            a[L2] = ao2 + (1j * al[L2] - w[L2] ** 2) * (r[L2] - o2)
         return al, a
-
-
-def _cramer(r1, r2, b):
-    """Real (x1, x2) with x1·r1 − x2·r2 = b (complex)."""
-    D = _im_conj(r2, r1)
-    return _im_conj(r2, b) / D, _im_conj(r1, b) / D
 
 
 _SINGULAR = 1e-10
 
 
 def _pack(r, phi):
-    """(nb, N) complex origins and (nb, N) angles → q rows (N, 3 nb)."""
-    nb, N = r.shape
+    """(nb + 1, N) complex origins and angles (the ground last) → q rows (N, 3 nb)."""
+    nb, N = r.shape[0] - 1, r.shape[1]
     out = np.empty((N, nb, 3))
-    out[:, :, 0] = r.real.T
-    out[:, :, 1] = r.imag.T
-    out[:, :, 2] = phi.T
+    out[:, :, 0] = r[:nb].real.T
+    out[:, :, 1] = r[:nb].imag.T
+    out[:, :, 2] = phi[:nb].T
     return out.reshape(N, 3 * nb)
 
 
@@ -623,7 +713,8 @@ def _solve_dyads(lk, pl, t, dt_max):
     ds = pl.cache.get("dyads")
     if ds is None:
         ds = pl.cache["dyads"] = _DyadSolver(lk, pl)
-    compiled = _compiled()
+    # the compiled loop knows RRR dyads only; with sliders the numpy closed form
+    compiled = _compiled() and all(d.kind == "RRR" for d in pl.dyads)
     if compiled:
         out = _dyads_compiled(ds, t)
         margin = out[-1]
@@ -647,20 +738,18 @@ def _solve_dyads(lk, pl, t, dt_max):
         return out[:4]
     nc = len(lk.cranks)
     N = len(t)
+    w, v, sdot = ds.velocities(E, r, inner, pl.omega)
+    qd = _pack(v, w)
     if nc == 1:                     # one crank: its part is the whole velocity
-        w, v = ds.velocities(E, inner, pl.omega)
-        qd = _pack(v, w)
         parts = qd[:, :, None]
     else:
         parts = np.empty((N, 3 * pl.nb, nc))
         for j in range(nc):
             wc = np.zeros(nc)
             wc[j] = pl.omega[j]
-            wj, vj = ds.velocities(E, inner, wc)
+            wj, vj, _ = ds.velocities(E, r, inner, wc)
             parts[:, :, j] = _pack(vj, wj)
-        w, v = ds.velocities(E, inner, pl.omega)
-        qd = _pack(v, w)
-    al, a = ds.accelerations(E, inner, w)
+    al, a = ds.accelerations(E, r, inner, w, sdot)
     return _pack(r, phi), qd, _pack(a, al), parts
 
 
@@ -672,9 +761,8 @@ def _dyads_compiled(ds, t):
     if args is None:
         pl, lk = ds.pl, ds.lk
         dy = pl.dyads
-        X = np.array([[ds.pose[P] if k == -1 else ds.local[k][P]
-                       for P, k in zip(d.outer, d.known)] for d in dy], dtype=complex)
-        ang = np.array([[g[0], g[1]] for g in ds.geo])
+        X = np.array([[g[0], g[1]] for g in ds.geo], dtype=complex)
+        ang = np.array([g[2] for g in ds.geo])
         ln = np.array([[d.l1, d.l2] for d in dy])
         rot = (np.cos(ang) - 1j * np.sin(ang)) / ln
         args = ds._kernel_args = (
@@ -684,7 +772,7 @@ def _dyads_compiled(ds, t):
             np.array([d.links for d in dy], dtype=np.int64).reshape(-1, 2),
             np.array([d.known for d in dy], dtype=np.int64).reshape(-1, 2), X.reshape(-1, 2),
             ln.reshape(-1, 2), np.array([d.sign for d in dy]), ang.reshape(-1, 2),
-            rot.reshape(-1, 2), np.array([[g[2], g[3]] for g in ds.geo],
+            rot.reshape(-1, 2), np.array([[g[3], g[4]] for g in ds.geo],
                                          dtype=complex).reshape(-1, 2))
     N, n, nc = len(t), 3 * ds.pl.nb, len(ds.pl.crank_idx)
     Q, QD, QDD = np.empty((N, n)), np.empty((N, n)), np.empty((N, n))
@@ -995,14 +1083,11 @@ def _solve_newton_compiled(lk, pl, t, dt_max):
 
 def _solve_newton(lk, pl, t, dt_max):
     nw = Newton(pl)
-    w1 = lk.cranks[0].omega
-    wmax = float(np.max(np.abs(pl.omega)))
     nodes, at = _path(t, dt_max)
     first = nw.step(pl.q0, pl.omega * 0.0)
     if first is None:
         raise GeometryError(f"{lk.source}: the linkage is singular in its pose "
                             f"(constraint Jacobian not invertible)")
-    q, qdot, qddot, sign = first
     # The sequential continuation visits only the nodes it needs (consecutive
     # kept nodes at most dt_max apart along the path); every other node is
     # solved afterwards in one batch from the kept node before it.
@@ -1012,24 +1097,38 @@ def _solve_newton(lk, pl, t, dt_max):
         if k == len(nodes) - 1 or arc[k + 1] - arc[keep[-1]] > dt_max * (1 + 1e-12):
             keep.append(k)
     keep = np.array(keep)
-    Qk = np.empty((len(keep), nw.n))
+    kept = _kept_nodes(lk, nw, nodes[keep], first, dt_max)
+    return _targets(lk, nw, t, nodes, keep, at, kept, first[3], dt_max)
+
+
+def _kept_nodes(lk, nw, T_keep, first, dt_max):
+    """The continuation through the kept nodes at times ``T_keep`` (the first the pose).
+
+    Returns (q, q̇, q̈, parts, exact) per node; ``exact``: solved in a block,
+    polished, with batched derivatives (a target on one is taken as it is).
+    """
+    pl = nw.pl
+    w1 = lk.cranks[0].omega
+    wmax = float(np.max(np.abs(pl.omega)))
+    q, qdot, qddot, sign = first
+    Qk = np.empty((len(T_keep), nw.n))
     Qdk, Qddk = np.empty_like(Qk), np.empty_like(Qk)
     Qk[0], Qdk[0], Qddk[0] = q, qdot, qddot
     # nodes solved by a block are final (polished, with batched derivatives):
     # a target on one is taken as it is
-    exact = np.zeros(len(keep), dtype=bool)
-    Pk = np.empty((len(keep), nw.n, len(pl.crank_idx)))
+    exact = np.zeros(len(T_keep), dtype=bool)
+    Pk = np.empty((len(T_keep), nw.n, len(pl.crank_idx)))
     t_now = 0.0
     j, block = 1, 16
-    while j < len(keep):
+    while j < len(T_keep):
         if block > 1:
             # Blocks of nodes together: Taylor predictors from the last solved
             # node, batched Newton and derivatives, accepted only if every node
             # keeps the sign of det J and sits within 1 % of the size of the
             # Taylor step from the node before it (another assembly is a size
             # away); otherwise the block shrinks down to single steps.
-            jj = min(len(keep), j + block)
-            T = nodes[keep[j:jj]]
+            jj = min(len(T_keep), j + block)
+            T = T_keep[j:jj]
             got = _block(nw, q, qdot, qddot, t_now, T, sign, pl)
             if got is not None:
                 Qk[j:jj], Qdk[j:jj], Qddk[j:jj], Pk[j:jj] = got
@@ -1039,7 +1138,7 @@ def _solve_newton(lk, pl, t, dt_max):
                 continue
             block //= 2
             continue
-        t_target = nodes[keep[j]]
+        t_target = T_keep[j]
         while t_now != t_target:
             dt = max(-dt_max, min(dt_max, t_target - t_now))
             while True:
@@ -1064,6 +1163,14 @@ def _solve_newton(lk, pl, t, dt_max):
             t_now = t_now + dt
         Qk[j], Qdk[j], Qddk[j] = q, qdot, qddot
         j, block = j + 1, 2
+    return Qk, Qdk, Qddk, Pk, exact
+
+
+def _targets(lk, nw, t, nodes, keep, at, kept, sign, dt_max):
+    """Every target from the kept nodes around it; see the comment below."""
+    pl = nw.pl
+    w1 = lk.cranks[0].omega
+    Qk, Qdk, Qddk, Pk, exact = kept
     # Every target lies between two kept nodes (or is one): quintic Hermite
     # interpolation from their q, q̇, q̈ (error ~ h⁶ q⁽⁶⁾/720, about 1e-12 of
     # the size at the default spacing), then batched Newton — usually one

@@ -474,6 +474,36 @@ def synthesize(load: Literal["light", "medium", "heavy"] = "medium",
     then re-evaluated directly (:func:`evaluate_design`) and any whose direct
     evaluation disagrees is dropped.
     """
+    fixed, s_range = _checked(load, objective, fixed, swing, swing_range, b_a_range, d_a_range,
+                              step, crank_step, swing_step)
+    lo, hi = ((fixed["crank"],) * 2 if "crank" in fixed else LOAD_CRANK_MM[load])
+    axes = _grid_axes(fixed, swing, s_range, (lo, hi), b_a_range, d_a_range, step, crank_step,
+                      swing_step)
+    swings = axes[1]
+    space = _Space(fixed, b_a_range, d_a_range, (lo, hi), s_range, swing)
+    grid, cols, valid, passes = _screened_grid(space, fixed, s_range, *axes)
+    explored = int(valid.sum())
+    rejected = {name: int((valid & ~p).sum()) for name, p in passes.items()}
+    ok = valid.copy()
+    for p in passes.values():
+        ok &= p
+
+    if not ok.any():
+        conflicts = _conflicts(passes, valid)
+        return SynthesisResult((), _OBJECTIVES[objective], load, tuple(swings.tolist()),
+                               explored, rejected, conflicts, s_range, fixed, refine)
+
+    designs = _candidates(grid, cols, ok, space, objective, limit, load, s_range,
+                          (lo, hi) if "crank" in fixed else None, refine)
+    designs.sort(key=lambda d: -d.objective if objective == "margin" else d.objective)
+    return SynthesisResult(tuple(designs), _OBJECTIVES[objective], load,
+                           tuple(swings.tolist()), explored, rejected, (), s_range, fixed,
+                           refine)
+
+
+def _checked(load, objective, fixed, swing, swing_range, b_a_range, d_a_range, step,
+             crank_step, swing_step):
+    """The arguments of :func:`synthesize` checked: (fixed lengths, swing range)."""
     if load not in LOAD_CRANK_MM:
         raise GeometryError(f"unknown load {load!r}; expected one of "
                             f"{', '.join(LOAD_CRANK_MM)}")
@@ -502,7 +532,13 @@ def synthesize(load: Literal["light", "medium", "heavy"] = "medium",
             raise GeometryError(f"{name} must be 1 < low ≤ high < 1000, got {tuple(rng)}")
     if not (step > 0 and crank_step > 0 and swing_step > 0):
         raise GeometryError("step, crank_step and swing_step must be > 0")
-    lo, hi = ((fixed["crank"],) * 2 if "crank" in fixed else LOAD_CRANK_MM[load])
+    return fixed, s_range
+
+
+def _grid_axes(fixed, swing, s_range, crank_range, b_a_range, d_a_range, step, crank_step,
+               swing_step):
+    """The grid's cranks [mm], swings [deg], b/a and d/a, refused when empty or too large."""
+    lo, hi = crank_range
 
     def size(a, b, h):
         return math.floor((b - a + 1e-9) / h) + 1
@@ -526,8 +562,15 @@ def synthesize(load: Literal["light", "medium", "heavy"] = "medium",
     if n_grid > 20_000_000:
         raise GeometryError(f"synthesis grid of {n_grid:.3g} points is too large (limit 2e7); "
                             f"use larger steps or narrower ranges")
+    return cranks, swings, b_as, d_as
 
-    space = _Space(fixed, b_a_range, d_a_range, (lo, hi), s_range, swing)
+
+def _screened_grid(space, fixed, s_range, cranks, swings, b_as, d_as):
+    """Every grid point (both eq. (10) roots) screened by the closed forms.
+
+    Returns ((A, PSI, BA, OTHER, ROOT, CA, DA), the screen's columns, the
+    valid mask, each criterion's pass mask).
+    """
     A, PSI, BA, OTHER = (g.ravel() for g in np.meshgrid(
         cranks, np.radians(swings), [np.nan] if "coupler" in fixed else b_as,
         [np.nan] if {"rocker", "frame"} & set(fixed) else d_as, indexing="ij"))
@@ -540,23 +583,18 @@ def synthesize(load: Literal["light", "medium", "heavy"] = "medium",
     CA, DA = space.split(X, OTHER)
     cols = _screen(A, PSI, BA, CA, DA)
     valid = cols.pop("_valid")
-    explored = int(valid.sum())
     passes = {name: cols[name][0] & valid for name in _SHAPE_CRITERIA}
     psi_deg = np.degrees(PSI)
     passes["swing"] = valid & (psi_deg >= s_range[0] - 1e-9) & (psi_deg <= s_range[1] + 1e-9)
     if space.limits_in_ratio:
         # a fixed length makes a ratio follow the crank: keep it in its range
         passes["ratio_ranges"] = valid & space.in_ranges(BA, DA)
-    rejected = {name: int((valid & ~p).sum()) for name, p in passes.items()}
-    ok = valid.copy()
-    for p in passes.values():
-        ok &= p
+    return (A, PSI, BA, OTHER, ROOT, CA, DA), cols, valid, passes
 
-    if not ok.any():
-        conflicts = _conflicts(passes, valid)
-        return SynthesisResult((), _OBJECTIVES[objective], load, tuple(swings.tolist()),
-                               explored, rejected, conflicts, s_range, fixed, refine)
 
+def _candidates(grid, cols, ok, space, objective, limit, load, s_range, crank_range, refine):
+    """The passing grid points, best first, evaluated directly (and refined): one per shape."""
+    A, PSI, BA, OTHER, ROOT, CA, DA = grid
     idx = np.flatnonzero(ok)
     if objective == "margin":
         score = np.min(np.stack([cols[n][1][idx] for n in _SHAPE_CRITERIA]), axis=0)
@@ -571,7 +609,6 @@ def synthesize(load: Literal["light", "medium", "heavy"] = "medium",
     def better(x, y):
         return x >= y if objective == "margin" else x <= y
 
-    crank_range = (lo, hi) if "crank" in fixed else None
     designs, seen = [], set()
     for k in order:
         a = float(A[k])
@@ -610,10 +647,7 @@ def synthesize(load: Literal["light", "medium", "heavy"] = "medium",
         designs.append(des)
         if len(designs) >= limit:
             break
-    designs.sort(key=lambda d: -d.objective if objective == "margin" else d.objective)
-    return SynthesisResult(tuple(designs), _OBJECTIVES[objective], load,
-                           tuple(swings.tolist()), explored, rejected, (), s_range, fixed,
-                           refine)
+    return designs
 
 
 #: Two designs whose b/a, c/a and d/a agree to this (relative) are one shape: the
