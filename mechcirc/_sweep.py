@@ -370,7 +370,8 @@ def point_flags(K, Q0, v0, error) -> NDArray[np.int8]:
     return flags
 
 
-def sweep(circuit: Circuit, omega: ArrayLike, *, method: Method = "auto") -> Sweep:
+def sweep(circuit: Circuit, omega: ArrayLike, *, method: Method = "auto",
+          refine: bool = True) -> Sweep:
     """Evaluate ``circuit`` at each angular frequency in ``omega`` [rad/s].
 
     Parameters
@@ -383,6 +384,12 @@ def sweep(circuit: Circuit, omega: ArrayLike, *, method: Method = "auto") -> Swe
         :class:`~mechcirc.errors.NotSeriesParallelError` if the network is
         not reducible); ``"nodal"``: nodal analysis; ``"auto"``: the tree
         where it exists, nodal analysis otherwise.
+    refine : bool
+        Nodal analysis only (the tree has no solve to refine): iterative
+        refinement of each solution with residuals in double-double (the
+        default; K then correct to about its rounding), or ``False`` for one
+        plain solve per ω, faster, with a relative error of about eps·cond(A(ω)).
+        Either way ``error`` is the estimate of the error of the K returned.
 
     Returns
     -------
@@ -424,7 +431,7 @@ def sweep(circuit: Circuit, omega: ArrayLike, *, method: Method = "auto") -> Swe
                 raise
         else:
             return _sweep_tree(circuit, tree, omega)
-    return _sweep_nodal(circuit, omega)
+    return _sweep_nodal(circuit, omega, refine)
 
 
 def _real_omega(omega: ArrayLike) -> NDArray[np.float64]:
@@ -470,14 +477,15 @@ def _sweep_tree(circuit: Circuit, tree: Node, omega) -> Sweep:
                  name=circuit.name, tree=tree, circuit=circuit)
 
 
-def _sweep_nodal(circuit: Circuit, omega) -> Sweep:
+def _sweep_nodal(circuit: Circuit, omega, refine: bool = True) -> Sweep:
     from . import nodal
 
-    # One refined solve gives K and its error estimate (the last refinement
-    # correction, see nodal.Solution), dense and sparse alike; nodal.solve
-    # already applies the singular-point convention, and the neighbours decide
-    # any point it left undetermined.
-    K, err = nodal.mobility_and_error(circuit.nodal, omega)
+    # One solve gives K and its error estimate (the last refinement correction,
+    # or the first one unrefined, see nodal.Solution), dense and sparse alike;
+    # nodal.solve already applies the singular-point convention, and the
+    # neighbours decide any point it left undetermined.
+    solved = nodal.solve(circuit.nodal, omega, refine=refine, keep_x=False)
+    K, err = solved.K, solved.error
     singular = ~np.isfinite(K) & (omega > 0)
     K = _nodal_singular_limits(circuit.nodal, K, omega)
     err = np.where(singular, np.inf, err)
