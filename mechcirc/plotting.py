@@ -469,21 +469,25 @@ def plot_comparison(comparison, name: str = "circuit", measured: str = "measured
 
 
 def plot_study(result, params, column: str, name: str = "study", title: str | None = None, *,
-               ax=None):
+               ax=None, units=None):
     """A study's ``column`` against its parameters; returns ``ax`` when given, else the Figure.
 
     One parameter: the column against it (points joined in order of the
     parameter).  Two or more: a scatter of the first two parameters coloured
     by the column (log colours when it spans more than two decades).  Failed
-    points are drawn as grey crosses.
+    points are drawn as grey crosses.  ``units`` maps column and parameter
+    names to their units, as the study gives them
+    (:func:`mechcirc.study.column_units` of its spec); labels go without a
+    unit where it has none (a count, or no ``units``).
     """
     import numpy as np
 
+    def label(key):
+        u = (units or {}).get(key)
+        return f"{key} [{u}]" if u and u != "1" else key
+
     ok = [r for r in result.rows if r["status"] == "ok" and r.get(column, "") != ""]
     bad = [r for r in result.rows if r["status"] != "ok"]
-    unit = {"K_abs_min": " [m/(N·s)]", "K_abs_max": " [m/(N·s)]", "Q0_abs_max": " [N]",
-            "omega_at_Q0_max": " [rad/s]", "n_flagged": ""}.get(
-        column, " [rad/s]" if "resonance" in column or column.startswith("omega") else "")
     fig, ax, made = _axes(ax, (6.5, 4.5))
     if len(params) == 1:
         p = params[0]
@@ -495,8 +499,8 @@ def plot_study(result, params, column: str, name: str = "study", title: str | No
                 ax.set_yscale("log")
         for r in bad:
             ax.axvline(r[p], color="0.6", lw=0.8, ls=":")
-        ax.set_xlabel(p)
-        ax.set_ylabel(column + unit)
+        ax.set_xlabel(label(p))
+        ax.set_ylabel(label(column))
     else:
         from matplotlib.colors import LogNorm
 
@@ -508,13 +512,13 @@ def plot_study(result, params, column: str, name: str = "study", title: str | No
         norm = LogNorm() if finite.any() and np.all(c[finite] > 0) and \
             c[finite].max() > 100 * c[finite].min() else None
         sc = ax.scatter(x[finite], y[finite], c=c[finite], norm=norm, s=18, cmap="viridis")
-        fig.colorbar(sc, ax=ax, label=column + unit)
+        fig.colorbar(sc, ax=ax, label=label(column))
         if bad:
             ax.plot([r[px] for r in bad], [r[py] for r in bad], "x", color="0.5",
                     label="failed point")
             ax.legend(loc="best", fontsize="small")
-        ax.set_xlabel(px)
-        ax.set_ylabel(py)
+        ax.set_xlabel(label(px))
+        ax.set_ylabel(label(py))
     ax.grid(True, which="both", alpha=0.3)
     ax.set_title(title or f"{name}: {column} over {len(result.rows)} points")
     if made:

@@ -79,17 +79,21 @@ def test_format_follows_the_extension(tmp_path, capsys, ext, magic):
 
 
 def test_study_plot_one_parameter():
-    from mechcirc.study import parse_spec, run_study
+    from mechcirc.study import column_units, parse_spec, run_study
 
     spec = parse_spec({"netlist": str(STB), "analysis": "resonances",
                        "grid": {"eta1": [0.7, 0.8, 0.9]}})
     result = run_study(spec, workers=1)
-    fig = plot_study(result, spec.params, "resonance_1")
+    fig = plot_study(result, spec.params, "resonance_1", units=column_units(spec))
     ax = fig.axes[0]
     x, y = ax.lines[0].get_data()
     assert list(x) == [0.7, 0.8, 0.9]
     assert list(y) == [r["resonance_1"] for r in result.rows]
     assert ax.get_ylabel() == "resonance_1 [rad/s]" and ax.get_xlabel() == "eta1"
+    # The units are the study's: a mass parameter [kg] and a count [1] (no unit shown).
+    units = {"eta1": "kg", "resonance_1": "1"}
+    ax3 = plot_study(result, spec.params, "resonance_1", ax=_axes()[1], units=units)
+    assert ax3.get_xlabel() == "eta1 [kg]" and ax3.get_ylabel() == "resonance_1"
     fig2, ax2 = _axes()
     assert plot_study(result, spec.params, "resonance_1", ax=ax2) is ax2
     assert list(ax2.lines[0].get_ydata()) == list(y)
