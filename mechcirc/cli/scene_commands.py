@@ -346,12 +346,38 @@ def cmd_simulate_scene(args) -> int:
           f"{result.wall_time * 1e3:.1f} ms")
     print(f"error estimate {est}, periodicity {per} (relative change of the extrema at half "
           f"the step / from the previous revolution)")
-    print(f"{'quantity':<28} {'min':>14} {'max':>14}")
-    for k, (lo, hi) in result.extrema.items():
-        print(f"{k:<28} {lo:>14.6g} {hi:>14.6g}")
+    _print_extrema(scene, result.extrema)
     for n in result.notes:
         print(f"note: {n}")
     return 0
+
+
+def _quantity_unit(scene, key: str, keys) -> str:
+    """The unit of a scene output ``key`` (``BODY.acceleration``, ``ELEMENT.force``, an alias,
+    a shaft curve); ``keys`` are all the outputs (a point has ``_x``/``_y`` components)."""
+    aliases = dict(scene.simulate.aliases) if scene.simulate is not None else {}
+    name, _, what = aliases.get(key, key).rpartition(".")
+    torsion = name in {t.name for t in scene.torsions}
+    if what in ("acceleration_x", "acceleration_y") or (
+            what == "acceleration" and f"{name}.acceleration_x" in keys):
+        return "m/s²"                               # a point's (translational)
+    if what in ("acceleration", "rigid_acceleration") or key == "acceleration":
+        return "rad/s²"
+    if what == "force":
+        return "N·m" if torsion else "N"
+    if what == "deformation":
+        return "rad" if torsion else "m"
+    if what == "moment" and name == "drive":        # the generalised force of the drive
+        return "N·m" if scene.drive.link is not None else "N"
+    return {"moment": "N·m", "speed": "rad/s", "motor_torque": "N·m",
+            "load_torque": "N·m"}.get(what or key, "")
+
+
+def _print_extrema(scene, extrema: dict) -> None:
+    """The table of each output's least and largest value over the cycle, with its unit."""
+    print(f"{'quantity':<28} {'min':>14} {'max':>14}  unit")
+    for k, (lo, hi) in extrema.items():
+        print(f"{k:<28} {lo:>14.6g} {hi:>14.6g}  {_quantity_unit(scene, k, extrema)}")
 
 
 def _shaft(args, scene) -> int:
@@ -408,9 +434,7 @@ def _shaft(args, scene) -> int:
     if r.startup_time is not None:
         print(f"start-up from rest: within 1 % of ω_mean of the steady band after "
               f"{r.startup_time:.4g} s")
-    print(f"{'quantity':<28} {'min':>14} {'max':>14}")
-    for k, v in curves.items():
-        print(f"{k:<28} {float(v.min()):>14.6g} {float(v.max()):>14.6g}")
+    _print_extrema(scene, {k: (float(v.min()), float(v.max())) for k, v in curves.items()})
     for n in r.notes:
         print(f"note: {n}")
     return 0
