@@ -252,13 +252,17 @@ def _decade_label(x, pos=None) -> str:
 
 
 def _light_log_axes(axes, max_minor_decades: float = 3.0) -> None:
-    """Cheaper log axes: decade labels as plain text, and no minor ticks on a y axis
-    spanning more than ``max_minor_decades`` decades.
+    """Cheaper log axes: decade labels as plain text, no minor ticks on a y axis
+    spanning more than ``max_minor_decades`` decades, and the minor grid of a
+    shared log x axis drawn as one line collection per panel.
 
     matplotlib's default labels are mathtext (its parser is built on first use)
     and every minor tick is an object drawn with its grid line: on a sweep's
-    |K| and |Q0| panels, spanning 4–10 decades, they cost more than the curves.
-    Minor labels of an axis spanning less than a decade are left as they are.
+    |K| and |Q0| panels, spanning 4–10 decades, they cost more than the curves,
+    and the x axis's 2…9 × 10ⁿ minor ticks, made for each panel, half the
+    saving of the figure.  The minor grid lines stay where they were (same
+    positions and style); only the short minor tick marks go.  Minor labels of
+    an axis spanning less than a decade are left as they are.
     """
     import math
 
@@ -272,6 +276,20 @@ def _light_log_axes(axes, max_minor_decades: float = 3.0) -> None:
             lo, hi = a.get_ylim()
             if lo > 0 and math.log10(hi / lo) > max_minor_decades:
                 a.yaxis.set_minor_locator(NullLocator())
+    lo, hi = axes[0].get_xlim()
+    if axes[0].get_xscale() != "log" or not 0 < lo < hi or math.log10(hi / lo) <= 1:
+        return
+    from matplotlib import rcParams
+    from matplotlib.collections import LineCollection
+
+    at = [k * 10.0 ** e for e in range(math.floor(math.log10(lo)), math.ceil(math.log10(hi)))
+          for k in range(2, 10) if lo <= k * 10.0 ** e <= hi]
+    axes[0].xaxis.set_minor_locator(NullLocator())     # shared by the panels
+    for a in axes:
+        a.add_collection(LineCollection(
+            [[(x, 0), (x, 1)] for x in at], transform=a.get_xaxis_transform(),
+            colors=rcParams["grid.color"], linewidths=rcParams["grid.linewidth"],
+            linestyles=rcParams["grid.linestyle"], alpha=0.3, zorder=1.5), autolim=False)
 
 
 def _draw_K(ax, omega, absK, positive, flags, units):
