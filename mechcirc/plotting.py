@@ -213,20 +213,13 @@ def plot_sweep(result, title: str | None = None, resonances=(), peak=None, *, ax
     ax_p.set_yticks([-180, -90, 0, 90, 180])
     ax_q.loglog(omega[positive], absR[positive], color="C1")
     ax_q.set_ylabel(f"|v0| = |F0·K| [{units['v']}]" if force_drive else f"|Q0| [{units['Q']}]")
-    own = in_unit(result.omega, unit)
-    for a, (label, values) in zip(axes[3:], extra.items()):
-        with np.errstate(all="ignore"):
-            a.loglog(own[own > 0], np.asarray(values)[own > 0], color="C4")
-        a.set_ylabel(label)
+    _extra_panels(axes[3:], in_unit(result.omega, unit), extra)
     axes[-1].set_xlabel(xlabel)
     _mark_resonances(tuple(axes), resonances, ax_q, per_unit)
     _mark_peak(ax_q, peak, unit, units["Q"])
     for a in axes:
         a.grid(True, which="both", alpha=0.3)
-    amp = result.drive.amplitude
-    what = (f"velocity response v0 = F0·K to the force drive F0 = {amp:g} {units['Q']}"
-            if force_drive else f"force amplitude Q0 = V0/K, V0 = {amp:g} {units['v']}")
-    fig.suptitle(title or f"{result.name}: kinematic characteristic K = v/Q\nand {what}")
+    fig.suptitle(title or _sweep_title(result, units, force_drive))
     _light_log_axes(axes)
     # Fixed margins that hold every label (the panels share x: no tick labels
     # between them), so neither tight_layout nor a tight bounding box at
@@ -235,6 +228,23 @@ def plot_sweep(result, title: str | None = None, resonances=(), peak=None, *, ax
     fig.subplots_adjust(left=0.13, right=0.97, hspace=0.08, top=1 - 0.85 / height,
                         bottom=0.55 / height)
     return fig
+
+
+def _extra_panels(axes, own, extra: dict) -> None:
+    """The ``extra`` panels of :func:`plot_sweep`, on the sweep's own points ``own``."""
+    import numpy as np
+
+    for a, (label, values) in zip(axes, extra.items()):
+        with np.errstate(all="ignore"):
+            a.loglog(own[own > 0], np.asarray(values)[own > 0], color="C4")
+        a.set_ylabel(label)
+
+
+def _sweep_title(result, units: dict, force_drive: bool) -> str:
+    amp = result.drive.amplitude
+    what = (f"velocity response v0 = F0·K to the force drive F0 = {amp:g} {units['Q']}"
+            if force_drive else f"force amplitude Q0 = V0/K, V0 = {amp:g} {units['v']}")
+    return f"{result.name}: kinematic characteristic K = v/Q\nand {what}"
 
 
 _SUPERSCRIPT = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")

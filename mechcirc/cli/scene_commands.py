@@ -269,7 +269,6 @@ def cmd_simulate_scene(args) -> int:
 
     from ..errors import MechcircError
     from ..scene import load_scene
-    from ..scene.simfile import apply_overrides
     from ..scene.simulation import SceneAccuracyWarning, simulate_scene
 
     if args.rtol is not None and args.method in ("rk4", "rk4-python"):
@@ -280,20 +279,7 @@ def cmd_simulate_scene(args) -> int:
                             "use --rtol")
     check_output_paths(args.output, plots=(args.plot,) if args.plot else (),
                        reads=(args.scene,))
-    scene = load_scene(args.scene)
-    over = {}
-    for item in args.set:
-        name, sep, value = item.partition("=")
-        if not sep:
-            raise MechcircError(f"--set expects NAME=VALUE, got {item!r}")
-        try:
-            over[name.strip()] = float(value)
-        except ValueError:
-            raise MechcircError(f"--set {name.strip()}: {value!r} is not a number") from None
-    if args.omega is not None:
-        over["omega"] = args.omega
-    if over:
-        scene = apply_overrides(scene, over)
+    scene = _with_overrides(args, load_scene(args.scene))
     if getattr(args, "shaft", False) or getattr(args, "flywheel", None) is not None:
         return _shaft(args, scene)
     from ..progress import Progress
@@ -320,15 +306,9 @@ def cmd_simulate_scene(args) -> int:
             if bar is not None:
                 bar.__exit__(None, None, None)
     if args.output:
-        from ..outputs import atomic_open
-
-        cols = result.columns()
-        with atomic_open(args.output, "w", newline="") as fh:
-            fh.write(f"# {scene.name} ({args.scene}); revolution {result.revolution}; "
-                     f"omega = {result.omega!r} rad/s\n")
-            fh.write(",".join(cols) + "\n")
-            for row in zip(*cols.values()):
-                fh.write(",".join(repr(float(v)) for v in row) + "\n")
+        _write_columns(args.output, f"# {scene.name} ({args.scene}); revolution "
+                       f"{result.revolution}; omega = {result.omega!r} rad/s", result.columns(),
+                       result.columns().values())
     if args.plot:
         from ..scene.plots import plot_motion
 
@@ -350,6 +330,36 @@ def cmd_simulate_scene(args) -> int:
     for n in result.notes:
         print(f"note: {n}")
     return 0
+
+
+def _with_overrides(args, scene):
+    """``scene`` with ``--set NAME=VALUE`` and ``--omega`` applied."""
+    from ..errors import MechcircError
+    from ..scene.simfile import apply_overrides
+
+    over = {}
+    for item in args.set:
+        name, sep, value = item.partition("=")
+        if not sep:
+            raise MechcircError(f"--set expects NAME=VALUE, got {item!r}")
+        try:
+            over[name.strip()] = float(value)
+        except ValueError:
+            raise MechcircError(f"--set {name.strip()}: {value!r} is not a number") from None
+    if args.omega is not None:
+        over["omega"] = args.omega
+    return apply_overrides(scene, over) if over else scene
+
+
+def _write_columns(path, comment: str, names, cols) -> None:
+    """A CSV of equal-length columns (a comment line, the names, rows of repr floats)."""
+    from ..outputs import atomic_open
+
+    with atomic_open(path, "w", newline="") as fh:
+        fh.write(comment + "\n")
+        fh.write(",".join(names) + "\n")
+        for row in zip(*cols):
+            fh.write(",".join(repr(float(v)) for v in row) + "\n")
 
 
 def _quantity_unit(scene, key: str, keys) -> str:
@@ -405,15 +415,10 @@ def _shaft(args, scene) -> int:
               **{f"{b}.acceleration": v for b, v in r.body_accelerations.items()},
               **{a: r.body_accelerations[b] for a, b in aliases.items()}}
     if args.output:
-        from ..outputs import atomic_open
-
-        with atomic_open(args.output, "w", newline="") as fh:
-            fh.write(f"# {scene.name} ({args.scene}); steady cycle of the dynamic main shaft, "
-                     f"flywheel {r.flywheel!r} kg·m²\n")
-            fh.write(",".join(["theta_deg", "time", *curves]) + "\n")
-            for i in range(r.theta.size):
-                fh.write(",".join(repr(float(v)) for v in (
-                    np.degrees(r.theta[i]), r.time[i], *(c[i] for c in curves.values()))) + "\n")
+        _write_columns(args.output, f"# {scene.name} ({args.scene}); steady cycle of the "
+                       f"dynamic main shaft, flywheel {r.flywheel!r} kg·m²",
+                       ["theta_deg", "time", *curves],
+                       [np.degrees(r.theta), r.time, *curves.values()])
     if args.json:
         doc = r.summary()
         doc.update(file=args.scene, output=args.output, notes=list(r.notes),
