@@ -37,7 +37,11 @@ def register(sub) -> None:
                    help="write the series–parallel reduction out step by step, with the "
                         "lever reflections (K/r², m·r²) and each element's value·η")
     p.set_defaults(func=cmd_check)
+    _register_sweep(sub)
+    _register_resonances(sub)
 
+
+def _register_sweep(sub) -> None:
     p = sub.add_parser(
         "sweep", help="K(ω) and Q0(ω) over a frequency range",
         description="Sweep the kinematic characteristic K = v/Q [m/(N·s)] and the "
@@ -86,6 +90,8 @@ def register(sub) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON document")
     p.set_defaults(func=cmd_sweep)
 
+
+def _register_resonances(sub) -> None:
     p = sub.add_parser(
         "resonances", help="exact resonances (K = 0) and anti-resonances (K = ∞)",
         description="Natural frequencies seen from the drive, from the network's "
