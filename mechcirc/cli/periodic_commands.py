@@ -130,25 +130,18 @@ def _scene(args):
 def _one_speed(args, circuit, elements, motion) -> int:
     import numpy as np
 
-    from ..outputs import OutputSet
     from ..periodic import periodic
 
     r = periodic(circuit, args.rpm, motion=motion, tol=args.tol, harmonics=args.harmonics,
                  points=args.angles, elements=elements, near=args.near, method=args.method)
     unit, vu = r.units["Q"], r.units["v"]
-    with OutputSet() as out:
-        if args.output:
-            cols = [r.angle_deg, r.x, r.v, r.Q]
-            head = ["angle_deg", "x", "v", "Q"]
-            for name in elements:
-                cols += [r.forces.get(name, np.full_like(r.Q, np.nan)),
-                         r.velocities.get(name, np.full_like(r.Q, np.nan))]
-                head += [f"F_{name}", f"v_{name}"]
-            with open(out.path(args.output), "w", newline="") as fh:
-                fh.write(",".join(head) + "\n")
-                np.savetxt(fh, np.column_stack(cols), delimiter=",", fmt="%.17g")
-        if args.plot:
-            save_figure(r.plot(), args.plot, out.path(args.plot))
+    cols = [r.angle_deg, r.x, r.v, r.Q]
+    head = ["angle_deg", "x", "v", "Q"]
+    for name in elements:
+        cols += [r.forces.get(name, np.full_like(r.Q, np.nan)),
+                 r.velocities.get(name, np.full_like(r.Q, np.nan))]
+        head += [f"F_{name}", f"v_{name}"]
+    _write_outputs(args, head, cols, r.plot)
     rows = [{"k": int(k), "omega": float(w), "velocity": complex(v),
              "amplitude": float(abs(q)), "phase_deg": float(np.degrees(np.angle(q))),
              "nearest_resonance": float(n), "distance": float(d), "near": bool(nr)}
@@ -201,24 +194,15 @@ def _one_speed(args, circuit, elements, motion) -> int:
 def _speed_map(args, circuit, elements, motion) -> int:
     import numpy as np
 
-    from ..outputs import OutputSet
     from ..periodic import speed_map
 
     m = speed_map(circuit, args.rpm_min, args.rpm_max, args.points, motion=motion, tol=args.tol,
                   harmonics=args.harmonics, elements=elements, method=args.method)
     unit = m.units["Q"]
-    with OutputSet() as out:
-        if args.output:
-            cols = [m.rpm, m.peak, m.harmonics, m.error]
-            head = ["rpm", "peak_Q", "harmonics", "error"]
-            for name in elements:
-                cols.append(m.element_peaks[name])
-                head.append(f"peak_{name}")
-            with open(out.path(args.output), "w", newline="") as fh:
-                fh.write(",".join(head) + "\n")
-                np.savetxt(fh, np.column_stack(cols), delimiter=",", fmt="%.17g")
-        if args.plot:
-            save_figure(m.plot(), args.plot, out.path(args.plot))
+    _write_outputs(args, ["rpm", "peak_Q", "harmonics", "error"] +
+                   [f"peak_{name}" for name in elements],
+                   [m.rpm, m.peak, m.harmonics, m.error] +
+                   [m.element_peaks[name] for name in elements], m.plot)
     crossings = [{"rpm": r, "k": k, "omega_n": w, "zeta": z, "weight": wt}
                  for r, k, w, z, wt in m.crossings]
     if args.json:
@@ -246,6 +230,22 @@ def _speed_map(args, circuit, elements, motion) -> int:
     if len(strong) > 30:
         print(f"    ... {len(strong) - 30} more (--json lists all)")
     return _print_notes_and_outputs(m.notes, args)
+
+
+def _write_outputs(args, head: list, cols: list, plot) -> None:
+    """``-o CSV`` (the columns ``cols`` named ``head``, %.17g) and ``--plot`` (the figure
+    ``plot()`` makes), all or none written."""
+    import numpy as np
+
+    from ..outputs import OutputSet
+
+    with OutputSet() as out:
+        if args.output:
+            with open(out.path(args.output), "w", newline="") as fh:
+                fh.write(",".join(head) + "\n")
+                np.savetxt(fh, np.column_stack(cols), delimiter=",", fmt="%.17g")
+        if args.plot:
+            save_figure(plot(), args.plot, out.path(args.plot))
 
 
 def _print_notes_and_outputs(notes, args) -> int:
