@@ -305,47 +305,58 @@ def _modes_unchecked(M, D, Ks, G, damped: bool, omega_max=None, vectors: bool = 
     if not (math.isfinite(w_ref) and w_ref > 0):
         raise SolverError(f"resonances: the stiffness and mass scales ({scale_k:.3g} N/m, "
                           f"{scale_m:.3g} kg) are too far apart for float64", status="range")
-    eps = np.finfo(float).eps
     if not damped:
-        lam, direct, U = _undamped(Mr / scale_m, Kr / scale_k, vectors)  # λ = (ω / w_ref)²
-        up = lam > 1e-11 * max(1.0, lam.max(initial=0.0))
-        lam, U = lam[up], (U[:, up] if vectors else None)
-        s = 1j * w_ref * np.sqrt(lam)
-        err = eps * (lam.max(initial=1.0) / lam) * 4
-        # Weyl's bound holds for the scaled matrix, not through a static
-        # condensation or an eigen-decomposition of M (their rounding is
-        # amplified by the condition of the condensed block): not a bound
-        # then, and these roots are always polished on K (column 2).
-        must = np.full(s.size, 0.0 if direct else 1.0)
+        s, err, must, U = _undamped_roots(Mr / scale_m, Kr / scale_k, w_ref, vectors)
     else:
         with np.errstate(all="ignore"):
             scaled = (Mr / scale_m, Dr / (scale_m * w_ref), Kr / scale_k)
         if not all(np.isfinite(X).all() for X in scaled):
             raise SolverError("resonances: the damping, mass and stiffness scales are too far "
                               "apart for float64", status="range")
-        s_all, U = _damped(*scaled, vectors=vectors)
-        s_all = s_all * w_ref
-        # Rigid-body (zero) roots come out of QZ split by about sqrt(eps)·w_ref.
-        keep = np.flatnonzero((np.abs(s_all) > 1e-6 * w_ref)
-                              & (s_all.imag >= -1e-12 * np.abs(s_all)))
-        s = s_all[keep]
-        U = U[:, keep] if vectors else None
-        mag = np.abs(s)
-        err = eps * 1e2 * (mag.max(initial=1.0) / mag)
-        if s.size > 1 or s_all.size > 1:
-            # Coalescing roots (critical damping, ζ → 1): a root at relative
-            # distance δ from another moves by about eps/δ, and a double root
-            # by about sqrt(eps) — far more than the simple-root estimate.
-            gap = np.abs(s[:, None] - s_all[None, :])
-            gap[np.arange(s.size), keep] = np.inf
-            with np.errstate(divide="ignore"):
-                near = np.minimum(np.sqrt(eps), eps / (gap.min(axis=1) / mag))
-            err = np.maximum(err, 10 * near)
-        s = np.where(np.abs(s.imag) <= 1e-12 * np.abs(s), s.real + 0j, s)
-    if damped:
+        s, err, U = _damped_roots(scaled, w_ref, vectors)
         must = np.ones(s.size)
     roots = np.column_stack([s, err, must]) if s.size else np.zeros((0, 3), dtype=complex)
     return roots, (Z @ U if vectors else None)
+
+
+def _undamped_roots(M, K, w_ref: float, vectors: bool):
+    """``(s, error, must polish, vectors)`` of the scaled undamped pencil (λ = (ω/w_ref)²)."""
+    eps = np.finfo(float).eps
+    lam, direct, U = _undamped(M, K, vectors)
+    up = lam > 1e-11 * max(1.0, lam.max(initial=0.0))
+    lam, U = lam[up], (U[:, up] if vectors else None)
+    s = 1j * w_ref * np.sqrt(lam)
+    err = eps * (lam.max(initial=1.0) / lam) * 4
+    # Weyl's bound holds for the scaled matrix, not through a static
+    # condensation or an eigen-decomposition of M (their rounding is
+    # amplified by the condition of the condensed block): not a bound
+    # then, and these roots are always polished on K (column 2).
+    return s, err, np.full(s.size, 0.0 if direct else 1.0), U
+
+
+def _damped_roots(scaled, w_ref: float, vectors: bool):
+    """``(s, error, vectors)`` of the scaled damped pencil, rigid-body roots left out."""
+    eps = np.finfo(float).eps
+    s_all, U = _damped(*scaled, vectors=vectors)
+    s_all = s_all * w_ref
+    # Rigid-body (zero) roots come out of QZ split by about sqrt(eps)·w_ref.
+    keep = np.flatnonzero((np.abs(s_all) > 1e-6 * w_ref)
+                          & (s_all.imag >= -1e-12 * np.abs(s_all)))
+    s = s_all[keep]
+    U = U[:, keep] if vectors else None
+    mag = np.abs(s)
+    err = eps * 1e2 * (mag.max(initial=1.0) / mag)
+    if s.size > 1 or s_all.size > 1:
+        # Coalescing roots (critical damping, ζ → 1): a root at relative
+        # distance δ from another moves by about eps/δ, and a double root
+        # by about sqrt(eps) — far more than the simple-root estimate.
+        gap = np.abs(s[:, None] - s_all[None, :])
+        gap[np.arange(s.size), keep] = np.inf
+        with np.errstate(divide="ignore"):
+            near = np.minimum(np.sqrt(eps), eps / (gap.min(axis=1) / mag))
+        err = np.maximum(err, 10 * near)
+    s = np.where(np.abs(s.imag) <= 1e-12 * np.abs(s), s.real + 0j, s)
+    return s, err, U
 
 
 def _band_modes(M, D, K, omega_max: float) -> np.ndarray:
