@@ -797,11 +797,22 @@ def batched_roots(ds, omega_max: float | None = None):
     S = (ds.values[el_rows][:, which] * ds.eta[el_rows][:, which]).T      # (D', E)
     problems = [_stacked_problem(constraint_basis(G, n_nodes).toarray(), B, S, damped, omega_max)
                 for G in (G_held, G_released)]
+    (w_h, e_h, _), (w_r, e_r, _) = problems
+    keep = np.flatnonzero(_without_shared_roots(problems, damped))
+    if not keep.size:
+        return None
+    if damped:                        # already polished (on the matrices): sort and go
+        return (which[keep], *_sorted_damped(w_h[keep], w_r[keep], e_h[keep], e_r[keep]))
+    return _polished_designs(ds, which[keep], w_h[keep], e_h[keep], w_r[keep], e_r[keep],
+                             omega_max)
+
+
+def _without_shared_roots(problems, damped: bool) -> np.ndarray:
+    """The designs solved in both stacked problems with no mode in both (it cancels in
+    K, :func:`_cancel`: left to the single path)."""
     (w_h, e_h, ok_h), (w_r, e_r, ok_r) = problems
-    ok = ok_h & ok_r
-    # A mode in both problems cancels in K (_cancel): left to the single path.  Damped
-    # roots are compared with the eigen-solver's estimates (eps·1e2·|s|max/|s|), as
-    # find_resonances compares them before polishing.
+    # Damped roots are compared with the eigen-solver's estimates
+    # (eps·1e2·|s|max/|s|), as find_resonances compares them before polishing.
     with np.errstate(all="ignore"):
         if damped:
             e_h, e_r = (np.maximum(e, 1e2 * np.finfo(float).eps * np.nanmax(
@@ -809,22 +820,21 @@ def batched_roots(ds, omega_max: float | None = None):
                 for e, x in ((e_h, w_h), (e_r, w_r)))
         close = np.abs(w_r[:, None, :] - w_h[:, :, None]) / np.abs(w_h[:, :, None]) < \
             1e3 * (e_h[:, :, None] + e_r[:, None, :])
-    ok &= ~close.any(axis=(1, 2))
-    keep = np.flatnonzero(ok)
-    if not keep.size:
-        return None
-    if damped:                        # already polished (on the matrices): sort and go
-        return (which[keep], *_sorted_damped(w_h[keep], w_r[keep], problems[0][1][keep],
-                                             problems[1][1][keep]))
-    w = np.concatenate([w_h[keep], w_r[keep]], axis=1)
-    e0 = np.concatenate([e_h[keep], e_r[keep]], axis=1)
+    return ok_h & ok_r & ~close.any(axis=(1, 2))
+
+
+def _polished_designs(ds, which, w_h, e_h, w_r, e_r, omega_max):
+    """:func:`batched_roots`' result for undamped designs: the roots of both problems
+    merged, polished on each design's K by :func:`_secant_designs` and sorted."""
+    w = np.concatenate([w_h, w_r], axis=1)
+    e0 = np.concatenate([e_h, e_r], axis=1)
     pole = np.zeros(w.shape, dtype=bool)
     pole[:, w_h.shape[1]:] = True
     # The roots first, the empty slots (beyond omega_max, rigid) last and cut off.
     order = np.argsort(np.where(np.isfinite(w), w, np.inf), axis=1, kind="stable")
     width = int(np.isfinite(w).sum(axis=1).max(initial=0))
     w, e0, pole = (np.take_along_axis(x, order, 1)[:, :width] for x in (w, e0, pole))
-    p = ds.plan(which[keep])
+    p = ds.plan(which)
     if p is None:
         return None
     w, err = _secant_designs(p, w, pole, e0)
@@ -836,7 +846,7 @@ def batched_roots(ds, omega_max: float | None = None):
     take = np.take_along_axis
     w, pole, err = take(w, order, 1), take(pole, order, 1), take(err, order, 1)
     err = np.where(np.isfinite(w), err, np.nan)
-    return which[keep], pole, 1j * w, err
+    return which, pole, 1j * w, err
 
 
 def _element_patterns(system) -> dict[str, np.ndarray]:
