@@ -993,21 +993,7 @@ def _stacked_damped(M: np.ndarray, Dm: np.ndarray, K: np.ndarray, omega_max):
     Ms = np.where(ok[:, None, None], Ms, eye)
     Ds = np.where(ok[:, None, None], Ds, 0.0)
     Ks = np.where(ok[:, None, None], Ks, eye)
-    try:
-        chol = np.linalg.cholesky(Ms)
-    except np.linalg.LinAlgError:
-        for d in range(n):
-            try:
-                np.linalg.cholesky(Ms[d])
-            except np.linalg.LinAlgError:
-                ok[d] = False
-        Ms = np.where(ok[:, None, None], Ms, eye)
-        chol = np.linalg.cholesky(Ms)
-    Linv = _lower_inverse(chol)
-    with np.errstate(all="ignore"):
-        lam_min = 1.0 / np.sum(Linv * Linv, axis=(1, 2))
-    ok &= lam_min > 1e-13 * np.sqrt(np.sum(Ms * Ms, axis=(1, 2)))
-    Minv = np.swapaxes(Linv, 1, 2) @ Linv
+    Ms, Minv = _stacked_mass_inverse(Ms, ok)
     A = np.zeros((n, 2 * k, 2 * k))
     A[:, :k, k:] = eye
     A[:, k:, :k] = -(Minv @ Ks)
@@ -1020,21 +1006,7 @@ def _stacked_damped(M: np.ndarray, Dm: np.ndarray, K: np.ndarray, omega_max):
         gap = np.abs(sig[:, :, None] - sig[:, None, :])
         gap[:, np.arange(2 * k), np.arange(2 * k)] = np.inf
         near = np.minimum(np.sqrt(eps), eps / (gap.min(axis=2) / mag))
-    sig = np.where(live, sig, 1.0 + 0j)
-    step = np.zeros(sig.shape)
-    for _ in range(3):
-        P = sig[..., None, None] ** 2 * Ms[:, None] + sig[..., None, None] * Ds[:, None] + \
-            Ks[:, None]
-        dP = 2 * sig[..., None, None] * Ms[:, None] + Ds[:, None]
-        with np.errstate(all="ignore"):
-            try:
-                t = np.trace(np.linalg.solve(P, dP), axis1=-2, axis2=-1)
-            except np.linalg.LinAlgError:                 # exactly on a root
-                break
-            delta = 1.0 / t
-        good = np.isfinite(delta) & live
-        sig = np.where(good, sig - delta, sig)
-        step = np.where(good, np.abs(delta), 0.0)
+    sig, step = _newton_det(np.where(live, sig, 1.0 + 0j), live, Ms, Ds, Ks)
     mag = np.abs(sig)
     with np.errstate(all="ignore"):
         # Newton on det P in float64 cannot beat the rounding of P(s) itself, about
@@ -1050,6 +1022,47 @@ def _stacked_damped(M: np.ndarray, Dm: np.ndarray, K: np.ndarray, omega_max):
         s[beyond] = np.nan
         err[beyond] = np.nan
     return s, err, ok
+
+
+def _stacked_mass_inverse(Ms: np.ndarray, ok: np.ndarray) -> tuple:
+    """``(Ms, M⁻¹)`` of a stack of mass matrices by Cholesky; ``ok`` (updated in place)
+    loses the designs whose matrix is not safely definite (replaced by I in Ms)."""
+    n, k = Ms.shape[0], Ms.shape[1]
+    try:
+        chol = np.linalg.cholesky(Ms)
+    except np.linalg.LinAlgError:
+        for d in range(n):
+            try:
+                np.linalg.cholesky(Ms[d])
+            except np.linalg.LinAlgError:
+                ok[d] = False
+        Ms = np.where(ok[:, None, None], Ms, np.eye(k))
+        chol = np.linalg.cholesky(Ms)
+    Linv = _lower_inverse(chol)
+    with np.errstate(all="ignore"):
+        lam_min = 1.0 / np.sum(Linv * Linv, axis=(1, 2))
+    ok &= lam_min > 1e-13 * np.sqrt(np.sum(Ms * Ms, axis=(1, 2)))
+    return Ms, np.swapaxes(Linv, 1, 2) @ Linv
+
+
+def _newton_det(sig, live, Ms, Ds, Ks, steps: int = 3) -> tuple:
+    """Newton on det P(s), s ← s − 1/tr(P(s)⁻¹ P'(s)), for the ``live`` roots ``sig`` of
+    each design; returns the roots and the size of the last step."""
+    step = np.zeros(sig.shape)
+    for _ in range(steps):
+        P = sig[..., None, None] ** 2 * Ms[:, None] + sig[..., None, None] * Ds[:, None] + \
+            Ks[:, None]
+        dP = 2 * sig[..., None, None] * Ms[:, None] + Ds[:, None]
+        with np.errstate(all="ignore"):
+            try:
+                t = np.trace(np.linalg.solve(P, dP), axis1=-2, axis2=-1)
+            except np.linalg.LinAlgError:                 # exactly on a root
+                break
+            delta = 1.0 / t
+        good = np.isfinite(delta) & live
+        sig = np.where(good, sig - delta, sig)
+        step = np.where(good, np.abs(delta), 0.0)
+    return sig, step
 
 
 def _lower_inverse(L: np.ndarray) -> np.ndarray:
