@@ -121,7 +121,6 @@ def cmd_scene(args) -> int:
 
         with atomic_open(args.output, "w", encoding="utf-8") as fh:
             fh.write(model.netlist if reduced is None else reduced.netlist)
-    unit = "rad/s" if model.rotational else "m/s"
     if args.json:
         print_json({
             "file": args.file, "theta_deg": args.theta, "drive_ratio": model.drive_ratio,
@@ -132,6 +131,13 @@ def cmd_scene(args) -> int:
             "netlist": model.netlist, "output": args.output,
             "reduced": None if reduced is None else reduced.as_dict()})
         return 0
+    _print_scene(args, scene, model, found, reduced, drawn is not None)
+    return 0
+
+
+def _print_scene(args, scene, model, found, reduced, drawn: bool) -> None:
+    """What ``mechcirc scene --theta`` prints without ``--json``."""
+    unit = "rad/s" if model.rotational else "m/s"
     print(f"{args.file}: scene {scene.name!r} at θ = {args.theta:g}° "
           f"(drive {unit}, drive ratio r0 = {model.drive_ratio:.6g})")
     for node, part in model.parts.items():
@@ -154,9 +160,8 @@ def cmd_scene(args) -> int:
             print(f"  {step}")
     if args.output:
         print(f"wrote {args.output}" + (" (reduced)" if reduced is not None else ""))
-    if drawn is not None:
+    if drawn:
         print(f"resonance {args.mode} drawn on the linkage into {args.plot}")
-    return 0
 
 
 def _cycle(args, scene) -> int:
