@@ -396,20 +396,8 @@ def plot_transient(result, nodes=None, what: str = "x", elements=None, title: st
         word = "moment" if u["Q"] == "N·m" else "force"
         axes[1].set_ylabel(f"element {word} [{u['Q']}]")
         axes[1].legend(loc="best", fontsize="small")
-    index = {name: i for i, name in enumerate(result.nodes)}
-    for a, (name, (n1, n2, B)) in zip(axes[1 + bool(forces):], gaps):
-        e = sum(sign * result.x[:, index[m]] for sign, m in ((1, n1), (-1, n2)) if m in index)
-        e = np.broadcast_to(e, t.shape)
-        a.plot(t, e, color="C0", label=f"x({n1}) − x({n2})")
-        for y in (B / 2, -B / 2):
-            a.axhline(y, color="C3", lw=0.8, ls="--",
-                      label=f"clearance ±B/2 = ±{B / 2:.4g} {u['x']}" if y > 0 else None)
-        if name in result.elements:
-            contact = result.force[:, result.elements.index(name)] != 0
-            a.fill_between(t, 0, 1, where=contact, step="mid", color="C1", alpha=0.15,
-                           transform=a.get_xaxis_transform(), label="contact")
-        a.set_ylabel(f"deformation {name} [{u['x']}]")
-        a.legend(loc="best", fontsize="small")
+    for a, gap in zip(axes[1 + bool(forces):], gaps):
+        _clearance_panel(a, result, *gap)
     axes[-1].set_xlabel("t [s]")
     for a in axes:
         a.grid(True, alpha=0.3)
@@ -417,6 +405,27 @@ def plot_transient(result, nodes=None, what: str = "x", elements=None, title: st
     if len(fig.axes) == n:              # a layout of ours only, not of the caller's axes
         fig.tight_layout()
     return fig
+
+
+def _clearance_panel(a, result, name: str, gap: tuple) -> None:
+    """A spring's deformation with its clearance band ±B/2 and its contact phases shaded."""
+    import numpy as np
+
+    n1, n2, B = gap
+    t, u = result.time, result.units
+    index = {m: i for i, m in enumerate(result.nodes)}
+    e = sum(sign * result.x[:, index[m]] for sign, m in ((1, n1), (-1, n2)) if m in index)
+    e = np.broadcast_to(e, t.shape)
+    a.plot(t, e, color="C0", label=f"x({n1}) − x({n2})")
+    for y in (B / 2, -B / 2):
+        a.axhline(y, color="C3", lw=0.8, ls="--",
+                  label=f"clearance ±B/2 = ±{B / 2:.4g} {u['x']}" if y > 0 else None)
+    if name in result.elements:
+        contact = result.force[:, result.elements.index(name)] != 0
+        a.fill_between(t, 0, 1, where=contact, step="mid", color="C1", alpha=0.15,
+                       transform=a.get_xaxis_transform(), label="contact")
+    a.set_ylabel(f"deformation {name} [{u['x']}]")
+    a.legend(loc="best", fontsize="small")
 
 
 #: Colour of each element kind in force plots (bars and legend swatches alike).
