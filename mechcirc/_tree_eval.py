@@ -265,18 +265,11 @@ def _leaf_table() -> tuple:
 _LEAF_SLOT, _LEAF_COEF = _leaf_table()
 
 
-def plan(root: Node) -> Plan:
-    """The evaluation plan of ``root``, built once per tree (linear in its size).
-
-    Each node's leaves are folded into three coefficients by the element laws
-    (:func:`~mechcirc.circuit.law_terms`), with the constants of their error
-    terms, exactly as :func:`evaluate`'s numpy path forms them at every call
-    (the same IEEE operations in the same order, here vectorised over the
-    leaves and, for a batch of designs, over the designs: :meth:`Plan.with_values`).
-    """
-    found = _PLANS.get(root)
-    if found is not None:
-        return found
+def _flat_nodes(root: Node) -> tuple:
+    """The tree in postorder as flat lists: ``(kind, kids, kstart, leaf_of, leaf_el,
+    levers)``, kind 0 series, 1 parallel, 2 lever, 3 a lone leaf; node i's internal
+    children are ``kids[kstart[i]:kstart[i + 1]]``; leaf j is ``leaf_el[j]`` of node
+    ``leaf_of[j]``."""
     kind: list[int] = []
     kids: list[int] = []
     kstart = [0]
@@ -320,6 +313,22 @@ def plan(root: Node) -> Plan:
         index[id(node)] = me
     if type(root) is Leaf:
         lone_leaf(root.element)
+    return kind, kids, kstart, leaf_of, leaf_el, levers
+
+
+def plan(root: Node) -> Plan:
+    """The evaluation plan of ``root``, built once per tree (linear in its size).
+
+    Each node's leaves are folded into three coefficients by the element laws
+    (:func:`~mechcirc.circuit.law_terms`), with the constants of their error
+    terms, exactly as :func:`evaluate`'s numpy path forms them at every call
+    (the same IEEE operations in the same order, here vectorised over the
+    leaves and, for a batch of designs, over the designs: :meth:`Plan.with_values`).
+    """
+    found = _PLANS.get(root)
+    if found is not None:
+        return found
+    kind, kids, kstart, leaf_of, leaf_el, levers = _flat_nodes(root)
     kind_a = np.array(kind, dtype=np.int8)
     kstart_a = np.array(kstart, dtype=np.int64)
     kids_a = np.array(kids, dtype=np.int64)
