@@ -29,3 +29,21 @@ def test_torsion_scene(key, unit):
 def test_spring_scene(key, unit):
     scene = load_scene(ROOT / "examples" / "heald_scene.toml")
     assert _quantity_unit(scene, key, {key}) == unit
+
+
+ROTARY = """drive W T 0 velocity=2 rad/s
+mass J1 T 0 0.02 kg*m^2
+spring k1 T A 2e4 N*m/rad
+mass J2 A 0 0.1 kg*m^2
+damper c2 A 0 3 N*m*s/rad
+"""
+
+
+def test_mode_table_of_a_rotary_drive_in_rad_per_s_and_newton_metres(tmp_path, capsys):
+    from cli_helpers import run
+
+    path = tmp_path / "rotary.mcir"
+    path.write_text(ROTARY)
+    status, out, err = run(["resonances", path, "--modes"], capsys)
+    assert status == 0, err
+    assert "|v| [rad/s]" in out and "|Q| [N·m]" in out and "[m/s]" not in out

@@ -495,6 +495,7 @@ def _panel_label(key: str, units: dict) -> str:
 
 
 def cmd_resonances(args) -> int:
+    from ..circuit import units_of
     from ..outputs import OutputSet
     from ..resonances import Resonances
     from ..units import FREQUENCY_UNITS, in_unit
@@ -550,7 +551,7 @@ def cmd_resonances(args) -> int:
         if m.note and (m.shape or not args.modes):   # else the mode table says it
             print(f"  note: {m.note}")
         if args.modes:
-            _print_mode(m, kinds)
+            _print_mode(m, kinds, units_of(circuit.drive))
         if args.sensitivity:
             _print_sensitivity(m, kinds)
     if args.plot:
@@ -572,7 +573,7 @@ def _mode_doc(m) -> dict:
             "force": {n: [q.real, q.imag] for n, q in m.force.items()}}
 
 
-def _print_mode(m, kinds) -> None:
+def _print_mode(m, kinds, units: dict) -> None:
     import cmath
     import math
 
@@ -582,8 +583,8 @@ def _print_mode(m, kinds) -> None:
     print(f"  {'node':<10} {'|v|':>10} {'phase [deg]':>12}")
     for n, v in m.shape.items():
         print(f"  {n:<10} {abs(v):>10.4g} {math.degrees(cmath.phase(v)) if v else 0:>12.4g}")
-    print(f"  {'element':<10} {'kind':<7} {'energy':>8} {'zeta part':>10} {'|v| [m/s]':>10} "
-          f"{'|Q| [N]':>10}")
+    print(f"  {'element':<10} {'kind':<7} {'energy':>8} {'zeta part':>10} "
+          f"{'|v| [' + units['v'] + ']':>10} {'|Q| [' + units['Q'] + ']':>10}")
     for name, v in m.velocity.items():
         energy = f"{100 * m.energy[name]:.3g} %" if m.energy.get(name, 0) > 1e-12 else \
             "0 %" if name in m.energy else ""
