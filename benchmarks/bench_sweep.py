@@ -12,6 +12,13 @@ prints; it asserts nothing.  Run from the repository root::
     python benchmarks/bench_sweep.py            # full run
     python benchmarks/bench_sweep.py --quick    # fewer repeats, up to 10,000 elements
     python benchmarks/bench_sweep.py --gc-off   # (b) without the cyclic garbage collector
+    python benchmarks/bench_sweep.py --refine   # (c) only
+
+(c) Nodal refinement on and off (``sweep(method="nodal", refine=...)``, the
+    CLI's ``--refine/--no-refine``) on the ladders of (b) and a stiff chain,
+    401 points: the time of each (best of, wall) in the same run, the ratio, how far the
+    plain solve lands from the refined one (the refined K is checked against
+    mpmath in tests/test_sweep_refine.py) beside the plain solve's own estimate.
 """
 
 from __future__ import annotations
@@ -175,21 +182,57 @@ def bench_ladders(sizes, repeats, gc_off=False):
     return rows
 
 
+STIFF = """drive V a 0 velocity=1
+mass m1 a 0 1e-3
+spring k1 a b 1e9
+mass m2 b 0 1e3
+spring k2 b c 1e2
+mass m3 c 0 1e-2
+damper d1 c 0 0.5
+"""
+
+
+def bench_refine(repeats):
+    print(f"(c) nodal sweep, 401 points, refined (default) against --no-refine, best of {repeats}")
+    print(f"    {'network':>16} {'refined':>10} {'plain':>10} {'ratio':>6} "
+          f"{'|plain-refined|':>16} {'plain estimate':>15}")
+    omega = np.geomspace(1.0, 1e5, 401)
+    for name, text in (("stiff chain (6)", STIFF), ("ladder 45", ladder(45)),
+                       ("ladder 999", ladder(999)), ("ladder 9,999", ladder(9_999))):
+        c = mechcirc.parse(text)
+        c.sweep(omega[:2], method="nodal")          # pattern, solver and kernels built once
+        times = {}
+        for refine in (True, False):
+            times[refine], times[refine, "s"] = best_of(
+                lambda r=refine: c.sweep(omega, method="nodal", refine=r), repeats)
+        a, b = times[True, "s"], times[False, "s"]
+        with np.errstate(all="ignore"):
+            diff = np.nanmax(np.abs(b.K - a.K) / np.abs(a.K))
+        print(f"    {name:>16} {times[True] * 1e3:>8.1f}ms {times[False] * 1e3:>8.1f}ms "
+              f"{times[True] / times[False]:>5.2f}x {diff:>16.2g} {np.nanmax(b.error):>15.2g}")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="fewer repeats and sizes")
     parser.add_argument("--gc-off", action="store_true",
                         help="(b) with Python's cyclic garbage collector disabled while timing")
+    parser.add_argument("--refine", action="store_true", help="only (c), refinement on/off")
     args = parser.parse_args()
     print(f"mechcirc {mechcirc.__version__}, Python {platform.python_version()}, "
           f"numpy {np.__version__}, {platform.machine()}, {os.cpu_count()} CPUs, "
           f"{platform.processor() or platform.platform()}")
+    if args.refine:
+        bench_refine(2 if args.quick else 5)
+        return
     if args.quick:
         bench_sweep(1_000_000, 2)
         bench_ladders([100, 1_000, 10_000], 2, args.gc_off)
+        bench_refine(2)
     else:
         bench_sweep(1_000_000, 15)
         bench_ladders([100, 1_000, 10_000, 100_000], 5, args.gc_off)
+        bench_refine(5)
 
 
 if __name__ == "__main__":

@@ -370,7 +370,8 @@ def point_flags(K, Q0, v0, error) -> NDArray[np.int8]:
     return flags
 
 
-def sweep(circuit: Circuit, omega: ArrayLike, *, method: Method = "auto") -> Sweep:
+def sweep(circuit: Circuit, omega: ArrayLike, *, method: Method = "auto",
+          refine: bool = True) -> Sweep:
     """Evaluate ``circuit`` at each angular frequency in ``omega`` [rad/s].
 
     Parameters
@@ -383,6 +384,12 @@ def sweep(circuit: Circuit, omega: ArrayLike, *, method: Method = "auto") -> Swe
         :class:`~mechcirc.errors.NotSeriesParallelError` if the network is
         not reducible); ``"nodal"``: nodal analysis; ``"auto"``: the tree
         where it exists, nodal analysis otherwise.
+    refine : bool
+        Nodal analysis only (the tree has no solve to refine): iterative
+        refinement of each solution with residuals in double-double (the
+        default; K then correct to about its rounding), or ``False`` for one
+        plain solve per ω, faster, with a relative error of about eps·cond(A(ω)).
+        Either way ``error`` is the estimate of the error of the K returned.
 
     Returns
     -------
@@ -424,7 +431,7 @@ def sweep(circuit: Circuit, omega: ArrayLike, *, method: Method = "auto") -> Swe
                 raise
         else:
             return _sweep_tree(circuit, tree, omega)
-    return _sweep_nodal(circuit, omega)
+    return _sweep_nodal(circuit, omega, refine)
 
 
 def _real_omega(omega: ArrayLike) -> NDArray[np.float64]:
@@ -470,14 +477,15 @@ def _sweep_tree(circuit: Circuit, tree: Node, omega) -> Sweep:
                  name=circuit.name, tree=tree, circuit=circuit)
 
 
-def _sweep_nodal(circuit: Circuit, omega) -> Sweep:
+def _sweep_nodal(circuit: Circuit, omega, refine: bool = True) -> Sweep:
     from . import nodal
 
-    # One refined solve gives K and its error estimate (the last refinement
-    # correction, see nodal.Solution), dense and sparse alike; nodal.solve
-    # already applies the singular-point convention, and the neighbours decide
-    # any point it left undetermined.
-    K, err = nodal.mobility_and_error(circuit.nodal, omega)
+    # One solve gives K and its error estimate (the last refinement correction,
+    # or the first one unrefined, see nodal.Solution), dense and sparse alike;
+    # nodal.solve already applies the singular-point convention, and the
+    # neighbours decide any point it left undetermined.
+    solved = nodal.solve(circuit.nodal, omega, refine=refine, keep_x=False)
+    K, err = solved.K, solved.error
     singular = ~np.isfinite(K) & (omega > 0)
     K = _nodal_singular_limits(circuit.nodal, K, omega)
     err = np.where(singular, np.inf, err)
@@ -606,19 +614,9 @@ def peak(result: "Sweep | Circuit", omega_min: float | None = None,
     >>> print(peak(c, 10, 1000))   # doctest: +NORMALIZE_WHITESPACE
     max |Q0| = inf (undamped resonance at omega = 100 rad/s)
     """
-    if isinstance(result, Sweep):
-        circuit = result.circuit
-        grid = result
-        lo = float(result.omega.min()) if omega_min is None else float(omega_min)
-        hi = float(result.omega.max()) if omega_max is None else float(omega_max)
-        method = result.method
-    else:
-        circuit, grid = result, None
-        if omega_min is None or omega_max is None:
-            raise ValueError("peak(circuit, ...) needs omega_min and omega_max")
-        lo, hi = float(omega_min), float(omega_max)
-    if not 0 <= lo < hi < math.inf:
-        raise ValueError(f"need 0 <= omega_min < omega_max < inf, got {lo} and {hi}")
+    circuit, grid, lo, hi = _peak_band(result, omega_min, omega_max)
+    if grid is not None:
+        method = grid.method
     if quantity is None:
         quantity = "v0" if circuit.drive.kind == "force" else "Q0"
     if quantity not in ("Q0", "v0", "K", "S"):
@@ -627,27 +625,8 @@ def peak(result: "Sweep | Circuit", omega_min: float | None = None,
         # Q0 is the applied force: constant.
         return Peak(quantity, abs(circuit.drive.amplitude), lo, False, (),
                     abs(circuit.drive.amplitude), lo)
-    # Q0 = V0/K is unbounded at zeros of K ("resonance"); v0 = F0·K and K at
-    # poles ("antiresonance").
-    kind = "resonance" if quantity in ("Q0", "S") else "antiresonance"
-    found = []
-    if resonances is not None:
-        found = [r for r in resonances if r.kind == kind and lo * (1 - 1e-12) <= r.omega
-                 and r.omega <= hi * (1 + 1e-9)]
-    elif len(circuit.elements) <= PEAK_RESONANCE_LIMIT:
-        try:
-            found = [r for r in circuit.resonances(omega_max=hi * (1 + 1e-9))
-                     if r.kind == kind and lo * (1 - 1e-12) <= r.omega]
-        except Exception:   # e.g. refused by the eigen-solver: grid search only
-            found = []
+    found = _peak_roots(circuit, lo, hi, quantity, resonances)
     undamped = tuple(r.omega for r in found if r.zeta <= UNDAMPED_ZETA)
-
-    def magnitude(w):
-        s = sweep(circuit, np.atleast_1d(np.asarray(w, dtype=float)), method=method)
-        with np.errstate(all="ignore"):
-            q = np.abs(getattr(s, quantity))
-        return np.where(np.isfinite(q), q, np.inf)
-
     if grid is None:
         grid = sweep(circuit, np.geomspace(max(lo, hi * 1e-12), hi, 401) if lo > 0
                      else np.linspace(lo, hi, 401), method=method)
@@ -666,7 +645,59 @@ def peak(result: "Sweep | Circuit", omega_min: float | None = None,
         centre = r.omega_d if r.omega_d > 0 else r.omega
         half = max(r.zeta * r.omega, 1e-9 * r.omega)
         brackets.append((centre - 4 * half, centre + 4 * half))
-    best_value, best_omega = g_value, g_omega
+    best_value, best_omega = _peak_search(circuit, method, quantity, lo, hi, brackets,
+                                          g_value, g_omega, xtol)
+    if math.isinf(best_value):
+        # An exact pole the eigen-solver did not report as undamped (or could
+        # not be run): unbounded all the same.
+        return Peak(quantity, math.inf, best_omega, True, (best_omega,), g_value, g_omega)
+    return Peak(quantity, best_value, best_omega, False, (), g_value, g_omega)
+
+
+def _peak_band(result, omega_min, omega_max) -> tuple:
+    """``(circuit, sweep or None, lo, hi)`` of :func:`peak`'s arguments, checked."""
+    if isinstance(result, Sweep):
+        circuit, grid = result.circuit, result
+        lo = float(result.omega.min()) if omega_min is None else float(omega_min)
+        hi = float(result.omega.max()) if omega_max is None else float(omega_max)
+    else:
+        circuit, grid = result, None
+        if omega_min is None or omega_max is None:
+            raise ValueError("peak(circuit, ...) needs omega_min and omega_max")
+        lo, hi = float(omega_min), float(omega_max)
+    if not 0 <= lo < hi < math.inf:
+        raise ValueError(f"need 0 <= omega_min < omega_max < inf, got {lo} and {hi}")
+    return circuit, grid, lo, hi
+
+
+def _peak_roots(circuit, lo: float, hi: float, quantity: str, resonances) -> list:
+    """The roots of ``circuit`` in [lo, hi] where |quantity| may be unbounded: zeros of K
+    ("resonance") for Q0 and S, poles ("antiresonance") for v0 and K; from
+    ``resonances`` when given, else computed (not above :data:`PEAK_RESONANCE_LIMIT`
+    elements, nor where the eigen-solver refuses)."""
+    kind = "resonance" if quantity in ("Q0", "S") else "antiresonance"
+    if resonances is not None:
+        return [r for r in resonances if r.kind == kind and lo * (1 - 1e-12) <= r.omega
+                and r.omega <= hi * (1 + 1e-9)]
+    if len(circuit.elements) > PEAK_RESONANCE_LIMIT:
+        return []
+    try:
+        return [r for r in circuit.resonances(omega_max=hi * (1 + 1e-9))
+                if r.kind == kind and lo * (1 - 1e-12) <= r.omega]
+    except Exception:   # e.g. refused by the eigen-solver: grid search only
+        return []
+
+
+def _peak_search(circuit, method, quantity, lo, hi, brackets, best_value, best_omega, xtol):
+    """The largest |quantity| of the band's ends, the grid's best and a bounded Brent
+    search in each bracket: ``(value, omega)``."""
+
+    def magnitude(w):
+        s = sweep(circuit, np.atleast_1d(np.asarray(w, dtype=float)), method=method)
+        with np.errstate(all="ignore"):
+            q = np.abs(getattr(s, quantity))
+        return np.where(np.isfinite(q), q, np.inf)
+
     for a in (lo, hi):
         v = float(magnitude(a)[0])
         if not best_value >= v:
@@ -685,8 +716,4 @@ def peak(result: "Sweep | Circuit", omega_min: float | None = None,
         v = -float(res.fun)
         if v > best_value or not np.isfinite(best_value):
             best_value, best_omega = v, float(res.x)
-    if math.isinf(best_value):
-        # An exact pole the eigen-solver did not report as undamped (or could
-        # not be run): unbounded all the same.
-        return Peak(quantity, math.inf, best_omega, True, (best_omega,), g_value, g_omega)
-    return Peak(quantity, best_value, best_omega, False, (), g_value, g_omega)
+    return best_value, best_omega

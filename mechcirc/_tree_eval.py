@@ -90,33 +90,56 @@ def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: boo
             if kernel is not None:
                 return _evaluate_compiled(kernel, p, omega, error, condition)
     if not keep and _mode == "auto":
-        # Fast pass with numpy's reciprocal as is; it gives NaN for 1/0 where
-        # 1/0 = ∞ is wanted, and a NaN never disappears downstream: the points
-        # that end non-finite are evaluated again with the exact special cases.
-        out = evaluate(root, omega, error=error, condition=condition, designs=designs,
-                       _mode="fast")
-        K = out[0] if isinstance(out, tuple) else out
-        bad = ~np.isfinite(K)
-        sub = None
-        if designs is not None:           # again the whole rows of those designs
-            bad = np.broadcast_to(bad.any(axis=1)[:, None], bad.shape)
-            rows = bad[:, 0]
-            sub = tuple({k: v[rows] for k, v in d.items()} for d in designs)
-        if bad.any():
-            w = omega[bad] if sub is None else omega[bad].reshape(-1, omega.shape[1])
-            again = evaluate(root, w, error=error, condition=condition, designs=sub,
-                             _mode="checked")
-            if sub is not None:
-                again = tuple(a.ravel() for a in again) if isinstance(again, tuple) \
-                    else again.ravel()
-            if isinstance(out, tuple):
-                K[bad], out[1][bad] = again
-            else:
-                K[bad] = again
-        return out
-    checked = _mode != "fast"
-    values: dict[int, _Value] = {}
+        return _fast_then_checked(root, omega, error, condition, designs)
     track = error or condition
+    top, values = _postorder_values(root, omega, track, keep, _mode != "fast", designs)
+    K = top.complex()
+    if keep:
+        return K, {k: v.complex() for k, v in values.items()}
+    if track:
+        # ``rho`` bounds the error relative to the computed |K̂|; relative to the
+        # true |K| ≥ |K̂|(1 − ρ) it is ρ / (1 − ρ).
+        with np.errstate(all="ignore"):
+            rho = _through_reciprocal(np.atleast_1d(np.asarray(top.rho, dtype=float)))
+        rho = np.broadcast_to(rho, omega.shape).astype(float)
+        rho[np.isnan(rho)] = np.inf
+        return K, (rho / _U if condition and not error else rho)
+    return K
+
+
+def _fast_then_checked(root, omega, error, condition, designs):
+    """:func:`evaluate` by the fast pass (numpy's reciprocal as is), then again with the
+    exact special cases at the points that end non-finite.
+
+    The fast pass gives NaN for 1/0 where 1/0 = ∞ is wanted, and a NaN never
+    disappears downstream, so only those points (whole rows of designs) are redone.
+    """
+    out = evaluate(root, omega, error=error, condition=condition, designs=designs,
+                   _mode="fast")
+    K = out[0] if isinstance(out, tuple) else out
+    bad = ~np.isfinite(K)
+    sub = None
+    if designs is not None:           # again the whole rows of those designs
+        bad = np.broadcast_to(bad.any(axis=1)[:, None], bad.shape)
+        rows = bad[:, 0]
+        sub = tuple({k: v[rows] for k, v in d.items()} for d in designs)
+    if bad.any():
+        w = omega[bad] if sub is None else omega[bad].reshape(-1, omega.shape[1])
+        again = evaluate(root, w, error=error, condition=condition, designs=sub,
+                         _mode="checked")
+        if sub is not None:
+            again = tuple(a.ravel() for a in again) if isinstance(again, tuple) \
+                else again.ravel()
+        if isinstance(out, tuple):
+            K[bad], out[1][bad] = again
+        else:
+            K[bad] = again
+    return out
+
+
+def _postorder_values(root, omega, track: bool, keep: bool, checked: bool, designs):
+    """``(value of the root, values of the nodes kept)``: the tree evaluated bottom up."""
+    values: dict[int, _Value] = {}
     with np.errstate(all="ignore"):
         inv_omega = 1.0 / omega
         for node in postorder(root):
@@ -138,18 +161,7 @@ def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: boo
                     values.pop(id(c), None)
             values[id(node)] = val
         top = _value_of(root, values, omega, inv_omega, track, designs)
-    K = top.complex()
-    if keep:
-        return K, {k: v.complex() for k, v in values.items()}
-    if track:
-        # ``rho`` bounds the error relative to the computed |K̂|; relative to the
-        # true |K| ≥ |K̂|(1 − ρ) it is ρ / (1 − ρ).
-        with np.errstate(all="ignore"):
-            rho = _through_reciprocal(np.atleast_1d(np.asarray(top.rho, dtype=float)))
-        rho = np.broadcast_to(rho, omega.shape).astype(float)
-        rho[np.isnan(rho)] = np.inf
-        return K, (rho / _U if condition and not error else rho)
-    return K
+    return top, values
 
 
 #: The compiled plan (:mod:`mechcirc._sp_kernel`) evaluates when numba is installed
@@ -253,18 +265,11 @@ def _leaf_table() -> tuple:
 _LEAF_SLOT, _LEAF_COEF = _leaf_table()
 
 
-def plan(root: Node) -> Plan:
-    """The evaluation plan of ``root``, built once per tree (linear in its size).
-
-    Each node's leaves are folded into three coefficients by the element laws
-    (:func:`~mechcirc.circuit.law_terms`), with the constants of their error
-    terms, exactly as :func:`evaluate`'s numpy path forms them at every call
-    (the same IEEE operations in the same order, here vectorised over the
-    leaves and, for a batch of designs, over the designs: :meth:`Plan.with_values`).
-    """
-    found = _PLANS.get(root)
-    if found is not None:
-        return found
+def _flat_nodes(root: Node) -> tuple:
+    """The tree in postorder as flat lists: ``(kind, kids, kstart, leaf_of, leaf_el,
+    levers)``, kind 0 series, 1 parallel, 2 lever, 3 a lone leaf; node i's internal
+    children are ``kids[kstart[i]:kstart[i + 1]]``; leaf j is ``leaf_el[j]`` of node
+    ``leaf_of[j]``."""
     kind: list[int] = []
     kids: list[int] = []
     kstart = [0]
@@ -308,6 +313,22 @@ def plan(root: Node) -> Plan:
         index[id(node)] = me
     if type(root) is Leaf:
         lone_leaf(root.element)
+    return kind, kids, kstart, leaf_of, leaf_el, levers
+
+
+def plan(root: Node) -> Plan:
+    """The evaluation plan of ``root``, built once per tree (linear in its size).
+
+    Each node's leaves are folded into three coefficients by the element laws
+    (:func:`~mechcirc.circuit.law_terms`), with the constants of their error
+    terms, exactly as :func:`evaluate`'s numpy path forms them at every call
+    (the same IEEE operations in the same order, here vectorised over the
+    leaves and, for a batch of designs, over the designs: :meth:`Plan.with_values`).
+    """
+    found = _PLANS.get(root)
+    if found is not None:
+        return found
+    kind, kids, kstart, leaf_of, leaf_el, levers = _flat_nodes(root)
     kind_a = np.array(kind, dtype=np.int8)
     kstart_a = np.array(kstart, dtype=np.int64)
     kids_a = np.array(kids, dtype=np.int64)
@@ -518,29 +539,14 @@ def _combine(node, values: dict, omega, inv_omega, track: bool = False,
     A leaf group takes part where its sum is nonzero; over designs (arrays of
     positive finite values·η, each term nonzero and all of one sign) where it has leaves."""
     series = isinstance(node, Series)
-    real = im_inv = im_omega = 0.0      # leaf terms: real + j(im_inv/ω + im_omega·ω)
-    n_real = n_inv = n_omega = 0
-    parts: list[_Value] = []
-    for c in node.children:
-        if isinstance(c, Leaf):
-            slot, term = _leaf_term(c.element, series, designs=designs)
-            if slot == 0:
-                real += term
-                n_real += 1
-            elif slot > 0:
-                im_omega += term
-                n_omega += 1
-            else:
-                im_inv += term
-                n_inv += 1
-        else:
-            parts.append(values[id(c)])
+    sums, counts, parts = _leaf_groups(node, values, series, designs)
+    real, im_inv, im_omega = sums       # leaf terms: real + j(im_inv/ω + im_omega·ω)
     if not series:
         terms = [v.reciprocal(checked) for v in parts]
     else:
         terms = parts
     if designs is not None:
-        has_real, has_inv, has_omega = n_real > 0, n_inv > 0, n_omega > 0
+        has_real, has_inv, has_omega = (n > 0 for n in counts)
     else:
         has_real, has_inv, has_omega = bool(real), bool(im_inv), bool(im_omega)
     imag = None
@@ -576,29 +582,8 @@ def _combine(node, values: dict, omega, inv_omega, track: bool = False,
             cplx.imag += imag
         total = _Value(False, cplx)
     if track:
-        m = len(parts) + (real != 0) + (im_inv != 0) + (im_omega != 0)
-        mu = m * _U
-        # Leaf groups: n same-signed scalars summed (n·u), value·η and 1/s (2u),
-        # times ω or 1/ω (2u).
-        bound = None
-        if has_inv:
-            bound = (abs(im_inv) * ((n_inv + 4) * _U + mu)) * inv_omega
-        if has_omega:
-            t = (abs(im_omega) * ((n_omega + 4) * _U + mu)) * omega
-            bound = t if bound is None else np.add(bound, t, out=bound)
-        for v in parts:
-            if series:
-                t = v.rho + mu
-                t *= v.mag
-            else:
-                t = _through_reciprocal(v.rho)
-                t += _U_RECIP + mu
-                t /= v.mag
-            bound = t if bound is None else np.add(bound, t, out=bound)
-        if bound is None:
-            bound = np.zeros(omega.shape)
-        if has_real:
-            bound += abs(real) * ((n_real + 2) * _U + mu)
+        bound = _sum_bound(series, parts, sums, counts, (has_real, has_inv, has_omega),
+                           omega, inv_omega)
         mag = np.abs(total.array)
         inv = np.reciprocal(mag)
         bound *= inv
@@ -612,6 +597,54 @@ def _combine(node, values: dict, omega, inv_omega, track: bool = False,
             total.mag, total.rho = inv, rho
         return total
     return total if series else total.reciprocal(checked)
+
+
+def _leaf_groups(node, values: dict, series: bool, designs) -> tuple:
+    """``([real, im_inv, im_omega], [their leaf counts], the values of the other children)``
+    of ``node``: its leaves summed by slot, real + j(im_inv/ω + im_omega·ω)."""
+    sums: list = [0.0, 0.0, 0.0]
+    counts = [0, 0, 0]
+    parts: list[_Value] = []
+    for c in node.children:
+        if isinstance(c, Leaf):
+            slot, term = _leaf_term(c.element, series, designs=designs)
+            i = 0 if slot == 0 else (2 if slot > 0 else 1)
+            sums[i] += term
+            counts[i] += 1
+        else:
+            parts.append(values[id(c)])
+    return sums, counts, parts
+
+
+def _sum_bound(series: bool, parts, sums, counts, has, omega, inv_omega):
+    """Σ |tᵢ| (ρᵢ + m·u) of a node's terms (see :func:`evaluate`), before dividing by |S|."""
+    real, im_inv, im_omega = sums
+    n_real, n_inv, n_omega = counts
+    has_real, has_inv, has_omega = has
+    m = len(parts) + (real != 0) + (im_inv != 0) + (im_omega != 0)
+    mu = m * _U
+    # Leaf groups: n same-signed scalars summed (n·u), value·η and 1/s (2u),
+    # times ω or 1/ω (2u).
+    bound = None
+    if has_inv:
+        bound = (abs(im_inv) * ((n_inv + 4) * _U + mu)) * inv_omega
+    if has_omega:
+        t = (abs(im_omega) * ((n_omega + 4) * _U + mu)) * omega
+        bound = t if bound is None else np.add(bound, t, out=bound)
+    for v in parts:
+        if series:
+            t = v.rho + mu
+            t *= v.mag
+        else:
+            t = _through_reciprocal(v.rho)
+            t += _U_RECIP + mu
+            t /= v.mag
+        bound = t if bound is None else np.add(bound, t, out=bound)
+    if bound is None:
+        bound = np.zeros(omega.shape)
+    if has_real:
+        bound += abs(real) * ((n_real + 2) * _U + mu)
+    return bound
 
 
 def _through_reciprocal(rho: NDArray) -> NDArray:

@@ -299,14 +299,14 @@ class Circuit:
         require_nonsingular(system)
         return system
 
-    def sweep(self, omega: ArrayLike, method: Method = "auto") -> Sweep:
+    def sweep(self, omega: ArrayLike, method: Method = "auto", *, refine: bool = True) -> Sweep:
         """K(ω), Q0(ω) and per-element forces over ``omega`` [rad/s].
 
-        See :func:`mechcirc.sweep`.
+        See :func:`mechcirc.sweep` (``refine``: nodal analysis only).
         """
         from ._sweep import sweep
 
-        return sweep(self, omega, method=method)
+        return sweep(self, omega, method=method, refine=refine)
 
     def resonances(self, omega_max: float | None = None) -> list[Resonance]:
         """Zeros and poles of K(ω) up to ``omega_max`` [rad/s].

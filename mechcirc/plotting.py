@@ -213,20 +213,13 @@ def plot_sweep(result, title: str | None = None, resonances=(), peak=None, *, ax
     ax_p.set_yticks([-180, -90, 0, 90, 180])
     ax_q.loglog(omega[positive], absR[positive], color="C1")
     ax_q.set_ylabel(f"|v0| = |F0·K| [{units['v']}]" if force_drive else f"|Q0| [{units['Q']}]")
-    own = in_unit(result.omega, unit)
-    for a, (label, values) in zip(axes[3:], extra.items()):
-        with np.errstate(all="ignore"):
-            a.loglog(own[own > 0], np.asarray(values)[own > 0], color="C4")
-        a.set_ylabel(label)
+    _extra_panels(axes[3:], in_unit(result.omega, unit), extra)
     axes[-1].set_xlabel(xlabel)
     _mark_resonances(tuple(axes), resonances, ax_q, per_unit)
     _mark_peak(ax_q, peak, unit, units["Q"])
     for a in axes:
         a.grid(True, which="both", alpha=0.3)
-    amp = result.drive.amplitude
-    what = (f"velocity response v0 = F0·K to the force drive F0 = {amp:g} {units['Q']}"
-            if force_drive else f"force amplitude Q0 = V0/K, V0 = {amp:g} {units['v']}")
-    fig.suptitle(title or f"{result.name}: kinematic characteristic K = v/Q\nand {what}")
+    fig.suptitle(title or _sweep_title(result, units, force_drive))
     _light_log_axes(axes)
     # Fixed margins that hold every label (the panels share x: no tick labels
     # between them), so neither tight_layout nor a tight bounding box at
@@ -235,6 +228,23 @@ def plot_sweep(result, title: str | None = None, resonances=(), peak=None, *, ax
     fig.subplots_adjust(left=0.13, right=0.97, hspace=0.08, top=1 - 0.85 / height,
                         bottom=0.55 / height)
     return fig
+
+
+def _extra_panels(axes, own, extra: dict) -> None:
+    """The ``extra`` panels of :func:`plot_sweep`, on the sweep's own points ``own``."""
+    import numpy as np
+
+    for a, (label, values) in zip(axes, extra.items()):
+        with np.errstate(all="ignore"):
+            a.loglog(own[own > 0], np.asarray(values)[own > 0], color="C4")
+        a.set_ylabel(label)
+
+
+def _sweep_title(result, units: dict, force_drive: bool) -> str:
+    amp = result.drive.amplitude
+    what = (f"velocity response v0 = F0·K to the force drive F0 = {amp:g} {units['Q']}"
+            if force_drive else f"force amplitude Q0 = V0/K, V0 = {amp:g} {units['v']}")
+    return f"{result.name}: kinematic characteristic K = v/Q\nand {what}"
 
 
 _SUPERSCRIPT = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
@@ -252,13 +262,17 @@ def _decade_label(x, pos=None) -> str:
 
 
 def _light_log_axes(axes, max_minor_decades: float = 3.0) -> None:
-    """Cheaper log axes: decade labels as plain text, and no minor ticks on a y axis
-    spanning more than ``max_minor_decades`` decades.
+    """Cheaper log axes: decade labels as plain text, no minor ticks on a y axis
+    spanning more than ``max_minor_decades`` decades, and the minor grid of a
+    shared log x axis drawn as one line collection per panel.
 
     matplotlib's default labels are mathtext (its parser is built on first use)
     and every minor tick is an object drawn with its grid line: on a sweep's
-    |K| and |Q0| panels, spanning 4–10 decades, they cost more than the curves.
-    Minor labels of an axis spanning less than a decade are left as they are.
+    |K| and |Q0| panels, spanning 4–10 decades, they cost more than the curves,
+    and the x axis's 2…9 × 10ⁿ minor ticks, made for each panel, half the
+    saving of the figure.  The minor grid lines stay where they were (same
+    positions and style); only the short minor tick marks go.  Minor labels of
+    an axis spanning less than a decade are left as they are.
     """
     import math
 
@@ -272,6 +286,20 @@ def _light_log_axes(axes, max_minor_decades: float = 3.0) -> None:
             lo, hi = a.get_ylim()
             if lo > 0 and math.log10(hi / lo) > max_minor_decades:
                 a.yaxis.set_minor_locator(NullLocator())
+    lo, hi = axes[0].get_xlim()
+    if axes[0].get_xscale() != "log" or not 0 < lo < hi or math.log10(hi / lo) <= 1:
+        return
+    from matplotlib import rcParams
+    from matplotlib.collections import LineCollection
+
+    at = [k * 10.0 ** e for e in range(math.floor(math.log10(lo)), math.ceil(math.log10(hi)))
+          for k in range(2, 10) if lo <= k * 10.0 ** e <= hi]
+    axes[0].xaxis.set_minor_locator(NullLocator())     # shared by the panels
+    for a in axes:
+        a.add_collection(LineCollection(
+            [[(x, 0), (x, 1)] for x in at], transform=a.get_xaxis_transform(),
+            colors=rcParams["grid.color"], linewidths=rcParams["grid.linewidth"],
+            linestyles=rcParams["grid.linestyle"], alpha=0.3, zorder=1.5), autolim=False)
 
 
 def _draw_K(ax, omega, absK, positive, flags, units):
@@ -368,20 +396,8 @@ def plot_transient(result, nodes=None, what: str = "x", elements=None, title: st
         word = "moment" if u["Q"] == "N·m" else "force"
         axes[1].set_ylabel(f"element {word} [{u['Q']}]")
         axes[1].legend(loc="best", fontsize="small")
-    index = {name: i for i, name in enumerate(result.nodes)}
-    for a, (name, (n1, n2, B)) in zip(axes[1 + bool(forces):], gaps):
-        e = sum(sign * result.x[:, index[m]] for sign, m in ((1, n1), (-1, n2)) if m in index)
-        e = np.broadcast_to(e, t.shape)
-        a.plot(t, e, color="C0", label=f"x({n1}) − x({n2})")
-        for y in (B / 2, -B / 2):
-            a.axhline(y, color="C3", lw=0.8, ls="--",
-                      label=f"clearance ±B/2 = ±{B / 2:.4g} {u['x']}" if y > 0 else None)
-        if name in result.elements:
-            contact = result.force[:, result.elements.index(name)] != 0
-            a.fill_between(t, 0, 1, where=contact, step="mid", color="C1", alpha=0.15,
-                           transform=a.get_xaxis_transform(), label="contact")
-        a.set_ylabel(f"deformation {name} [{u['x']}]")
-        a.legend(loc="best", fontsize="small")
+    for a, gap in zip(axes[1 + bool(forces):], gaps):
+        _clearance_panel(a, result, *gap)
     axes[-1].set_xlabel("t [s]")
     for a in axes:
         a.grid(True, alpha=0.3)
@@ -389,6 +405,27 @@ def plot_transient(result, nodes=None, what: str = "x", elements=None, title: st
     if len(fig.axes) == n:              # a layout of ours only, not of the caller's axes
         fig.tight_layout()
     return fig
+
+
+def _clearance_panel(a, result, name: str, gap: tuple) -> None:
+    """A spring's deformation with its clearance band ±B/2 and its contact phases shaded."""
+    import numpy as np
+
+    n1, n2, B = gap
+    t, u = result.time, result.units
+    index = {m: i for i, m in enumerate(result.nodes)}
+    e = sum(sign * result.x[:, index[m]] for sign, m in ((1, n1), (-1, n2)) if m in index)
+    e = np.broadcast_to(e, t.shape)
+    a.plot(t, e, color="C0", label=f"x({n1}) − x({n2})")
+    for y in (B / 2, -B / 2):
+        a.axhline(y, color="C3", lw=0.8, ls="--",
+                  label=f"clearance ±B/2 = ±{B / 2:.4g} {u['x']}" if y > 0 else None)
+    if name in result.elements:
+        contact = result.force[:, result.elements.index(name)] != 0
+        a.fill_between(t, 0, 1, where=contact, step="mid", color="C1", alpha=0.15,
+                       transform=a.get_xaxis_transform(), label="contact")
+    a.set_ylabel(f"deformation {name} [{u['x']}]")
+    a.legend(loc="best", fontsize="small")
 
 
 #: Colour of each element kind in force plots (bars and legend swatches alike).
@@ -469,21 +506,25 @@ def plot_comparison(comparison, name: str = "circuit", measured: str = "measured
 
 
 def plot_study(result, params, column: str, name: str = "study", title: str | None = None, *,
-               ax=None):
+               ax=None, units=None):
     """A study's ``column`` against its parameters; returns ``ax`` when given, else the Figure.
 
     One parameter: the column against it (points joined in order of the
     parameter).  Two or more: a scatter of the first two parameters coloured
     by the column (log colours when it spans more than two decades).  Failed
-    points are drawn as grey crosses.
+    points are drawn as grey crosses.  ``units`` maps column and parameter
+    names to their units, as the study gives them
+    (:func:`mechcirc.study.column_units` of its spec); labels go without a
+    unit where it has none (a count, or no ``units``).
     """
     import numpy as np
 
+    def label(key):
+        u = (units or {}).get(key)
+        return f"{key} [{u}]" if u and u != "1" else key
+
     ok = [r for r in result.rows if r["status"] == "ok" and r.get(column, "") != ""]
     bad = [r for r in result.rows if r["status"] != "ok"]
-    unit = {"K_abs_min": " [m/(N·s)]", "K_abs_max": " [m/(N·s)]", "Q0_abs_max": " [N]",
-            "omega_at_Q0_max": " [rad/s]", "n_flagged": ""}.get(
-        column, " [rad/s]" if "resonance" in column or column.startswith("omega") else "")
     fig, ax, made = _axes(ax, (6.5, 4.5))
     if len(params) == 1:
         p = params[0]
@@ -495,8 +536,8 @@ def plot_study(result, params, column: str, name: str = "study", title: str | No
                 ax.set_yscale("log")
         for r in bad:
             ax.axvline(r[p], color="0.6", lw=0.8, ls=":")
-        ax.set_xlabel(p)
-        ax.set_ylabel(column + unit)
+        ax.set_xlabel(label(p))
+        ax.set_ylabel(label(column))
     else:
         from matplotlib.colors import LogNorm
 
@@ -508,13 +549,13 @@ def plot_study(result, params, column: str, name: str = "study", title: str | No
         norm = LogNorm() if finite.any() and np.all(c[finite] > 0) and \
             c[finite].max() > 100 * c[finite].min() else None
         sc = ax.scatter(x[finite], y[finite], c=c[finite], norm=norm, s=18, cmap="viridis")
-        fig.colorbar(sc, ax=ax, label=column + unit)
+        fig.colorbar(sc, ax=ax, label=label(column))
         if bad:
             ax.plot([r[px] for r in bad], [r[py] for r in bad], "x", color="0.5",
                     label="failed point")
             ax.legend(loc="best", fontsize="small")
-        ax.set_xlabel(px)
-        ax.set_ylabel(py)
+        ax.set_xlabel(label(px))
+        ax.set_ylabel(label(py))
     ax.grid(True, which="both", alpha=0.3)
     ax.set_title(title or f"{name}: {column} over {len(result.rows)} points")
     if made:

@@ -305,47 +305,58 @@ def _modes_unchecked(M, D, Ks, G, damped: bool, omega_max=None, vectors: bool = 
     if not (math.isfinite(w_ref) and w_ref > 0):
         raise SolverError(f"resonances: the stiffness and mass scales ({scale_k:.3g} N/m, "
                           f"{scale_m:.3g} kg) are too far apart for float64", status="range")
-    eps = np.finfo(float).eps
     if not damped:
-        lam, direct, U = _undamped(Mr / scale_m, Kr / scale_k, vectors)  # λ = (ω / w_ref)²
-        up = lam > 1e-11 * max(1.0, lam.max(initial=0.0))
-        lam, U = lam[up], (U[:, up] if vectors else None)
-        s = 1j * w_ref * np.sqrt(lam)
-        err = eps * (lam.max(initial=1.0) / lam) * 4
-        # Weyl's bound holds for the scaled matrix, not through a static
-        # condensation or an eigen-decomposition of M (their rounding is
-        # amplified by the condition of the condensed block): not a bound
-        # then, and these roots are always polished on K (column 2).
-        must = np.full(s.size, 0.0 if direct else 1.0)
+        s, err, must, U = _undamped_roots(Mr / scale_m, Kr / scale_k, w_ref, vectors)
     else:
         with np.errstate(all="ignore"):
             scaled = (Mr / scale_m, Dr / (scale_m * w_ref), Kr / scale_k)
         if not all(np.isfinite(X).all() for X in scaled):
             raise SolverError("resonances: the damping, mass and stiffness scales are too far "
                               "apart for float64", status="range")
-        s_all, U = _damped(*scaled, vectors=vectors)
-        s_all = s_all * w_ref
-        # Rigid-body (zero) roots come out of QZ split by about sqrt(eps)·w_ref.
-        keep = np.flatnonzero((np.abs(s_all) > 1e-6 * w_ref)
-                              & (s_all.imag >= -1e-12 * np.abs(s_all)))
-        s = s_all[keep]
-        U = U[:, keep] if vectors else None
-        mag = np.abs(s)
-        err = eps * 1e2 * (mag.max(initial=1.0) / mag)
-        if s.size > 1 or s_all.size > 1:
-            # Coalescing roots (critical damping, ζ → 1): a root at relative
-            # distance δ from another moves by about eps/δ, and a double root
-            # by about sqrt(eps) — far more than the simple-root estimate.
-            gap = np.abs(s[:, None] - s_all[None, :])
-            gap[np.arange(s.size), keep] = np.inf
-            with np.errstate(divide="ignore"):
-                near = np.minimum(np.sqrt(eps), eps / (gap.min(axis=1) / mag))
-            err = np.maximum(err, 10 * near)
-        s = np.where(np.abs(s.imag) <= 1e-12 * np.abs(s), s.real + 0j, s)
-    if damped:
+        s, err, U = _damped_roots(scaled, w_ref, vectors)
         must = np.ones(s.size)
     roots = np.column_stack([s, err, must]) if s.size else np.zeros((0, 3), dtype=complex)
     return roots, (Z @ U if vectors else None)
+
+
+def _undamped_roots(M, K, w_ref: float, vectors: bool):
+    """``(s, error, must polish, vectors)`` of the scaled undamped pencil (λ = (ω/w_ref)²)."""
+    eps = np.finfo(float).eps
+    lam, direct, U = _undamped(M, K, vectors)
+    up = lam > 1e-11 * max(1.0, lam.max(initial=0.0))
+    lam, U = lam[up], (U[:, up] if vectors else None)
+    s = 1j * w_ref * np.sqrt(lam)
+    err = eps * (lam.max(initial=1.0) / lam) * 4
+    # Weyl's bound holds for the scaled matrix, not through a static
+    # condensation or an eigen-decomposition of M (their rounding is
+    # amplified by the condition of the condensed block): not a bound
+    # then, and these roots are always polished on K (column 2).
+    return s, err, np.full(s.size, 0.0 if direct else 1.0), U
+
+
+def _damped_roots(scaled, w_ref: float, vectors: bool):
+    """``(s, error, vectors)`` of the scaled damped pencil, rigid-body roots left out."""
+    eps = np.finfo(float).eps
+    s_all, U = _damped(*scaled, vectors=vectors)
+    s_all = s_all * w_ref
+    # Rigid-body (zero) roots come out of QZ split by about sqrt(eps)·w_ref.
+    keep = np.flatnonzero((np.abs(s_all) > 1e-6 * w_ref)
+                          & (s_all.imag >= -1e-12 * np.abs(s_all)))
+    s = s_all[keep]
+    U = U[:, keep] if vectors else None
+    mag = np.abs(s)
+    err = eps * 1e2 * (mag.max(initial=1.0) / mag)
+    if s.size > 1 or s_all.size > 1:
+        # Coalescing roots (critical damping, ζ → 1): a root at relative
+        # distance δ from another moves by about eps/δ, and a double root
+        # by about sqrt(eps) — far more than the simple-root estimate.
+        gap = np.abs(s[:, None] - s_all[None, :])
+        gap[np.arange(s.size), keep] = np.inf
+        with np.errstate(divide="ignore"):
+            near = np.minimum(np.sqrt(eps), eps / (gap.min(axis=1) / mag))
+        err = np.maximum(err, 10 * near)
+    s = np.where(np.abs(s.imag) <= 1e-12 * np.abs(s), s.real + 0j, s)
+    return s, err, U
 
 
 def _band_modes(M, D, K, omega_max: float) -> np.ndarray:
@@ -786,11 +797,22 @@ def batched_roots(ds, omega_max: float | None = None):
     S = (ds.values[el_rows][:, which] * ds.eta[el_rows][:, which]).T      # (D', E)
     problems = [_stacked_problem(constraint_basis(G, n_nodes).toarray(), B, S, damped, omega_max)
                 for G in (G_held, G_released)]
+    (w_h, e_h, _), (w_r, e_r, _) = problems
+    keep = np.flatnonzero(_without_shared_roots(problems, damped))
+    if not keep.size:
+        return None
+    if damped:                        # already polished (on the matrices): sort and go
+        return (which[keep], *_sorted_damped(w_h[keep], w_r[keep], e_h[keep], e_r[keep]))
+    return _polished_designs(ds, which[keep], w_h[keep], e_h[keep], w_r[keep], e_r[keep],
+                             omega_max)
+
+
+def _without_shared_roots(problems, damped: bool) -> np.ndarray:
+    """The designs solved in both stacked problems with no mode in both (it cancels in
+    K, :func:`_cancel`: left to the single path)."""
     (w_h, e_h, ok_h), (w_r, e_r, ok_r) = problems
-    ok = ok_h & ok_r
-    # A mode in both problems cancels in K (_cancel): left to the single path.  Damped
-    # roots are compared with the eigen-solver's estimates (eps·1e2·|s|max/|s|), as
-    # find_resonances compares them before polishing.
+    # Damped roots are compared with the eigen-solver's estimates
+    # (eps·1e2·|s|max/|s|), as find_resonances compares them before polishing.
     with np.errstate(all="ignore"):
         if damped:
             e_h, e_r = (np.maximum(e, 1e2 * np.finfo(float).eps * np.nanmax(
@@ -798,22 +820,21 @@ def batched_roots(ds, omega_max: float | None = None):
                 for e, x in ((e_h, w_h), (e_r, w_r)))
         close = np.abs(w_r[:, None, :] - w_h[:, :, None]) / np.abs(w_h[:, :, None]) < \
             1e3 * (e_h[:, :, None] + e_r[:, None, :])
-    ok &= ~close.any(axis=(1, 2))
-    keep = np.flatnonzero(ok)
-    if not keep.size:
-        return None
-    if damped:                        # already polished (on the matrices): sort and go
-        return (which[keep], *_sorted_damped(w_h[keep], w_r[keep], problems[0][1][keep],
-                                             problems[1][1][keep]))
-    w = np.concatenate([w_h[keep], w_r[keep]], axis=1)
-    e0 = np.concatenate([e_h[keep], e_r[keep]], axis=1)
+    return ok_h & ok_r & ~close.any(axis=(1, 2))
+
+
+def _polished_designs(ds, which, w_h, e_h, w_r, e_r, omega_max):
+    """:func:`batched_roots`' result for undamped designs: the roots of both problems
+    merged, polished on each design's K by :func:`_secant_designs` and sorted."""
+    w = np.concatenate([w_h, w_r], axis=1)
+    e0 = np.concatenate([e_h, e_r], axis=1)
     pole = np.zeros(w.shape, dtype=bool)
     pole[:, w_h.shape[1]:] = True
     # The roots first, the empty slots (beyond omega_max, rigid) last and cut off.
     order = np.argsort(np.where(np.isfinite(w), w, np.inf), axis=1, kind="stable")
     width = int(np.isfinite(w).sum(axis=1).max(initial=0))
     w, e0, pole = (np.take_along_axis(x, order, 1)[:, :width] for x in (w, e0, pole))
-    p = ds.plan(which[keep])
+    p = ds.plan(which)
     if p is None:
         return None
     w, err = _secant_designs(p, w, pole, e0)
@@ -825,7 +846,7 @@ def batched_roots(ds, omega_max: float | None = None):
     take = np.take_along_axis
     w, pole, err = take(w, order, 1), take(pole, order, 1), take(err, order, 1)
     err = np.where(np.isfinite(w), err, np.nan)
-    return which[keep], pole, 1j * w, err
+    return which, pole, 1j * w, err
 
 
 def _element_patterns(system) -> dict[str, np.ndarray]:
@@ -972,21 +993,7 @@ def _stacked_damped(M: np.ndarray, Dm: np.ndarray, K: np.ndarray, omega_max):
     Ms = np.where(ok[:, None, None], Ms, eye)
     Ds = np.where(ok[:, None, None], Ds, 0.0)
     Ks = np.where(ok[:, None, None], Ks, eye)
-    try:
-        chol = np.linalg.cholesky(Ms)
-    except np.linalg.LinAlgError:
-        for d in range(n):
-            try:
-                np.linalg.cholesky(Ms[d])
-            except np.linalg.LinAlgError:
-                ok[d] = False
-        Ms = np.where(ok[:, None, None], Ms, eye)
-        chol = np.linalg.cholesky(Ms)
-    Linv = _lower_inverse(chol)
-    with np.errstate(all="ignore"):
-        lam_min = 1.0 / np.sum(Linv * Linv, axis=(1, 2))
-    ok &= lam_min > 1e-13 * np.sqrt(np.sum(Ms * Ms, axis=(1, 2)))
-    Minv = np.swapaxes(Linv, 1, 2) @ Linv
+    Ms, Minv = _stacked_mass_inverse(Ms, ok)
     A = np.zeros((n, 2 * k, 2 * k))
     A[:, :k, k:] = eye
     A[:, k:, :k] = -(Minv @ Ks)
@@ -999,21 +1006,7 @@ def _stacked_damped(M: np.ndarray, Dm: np.ndarray, K: np.ndarray, omega_max):
         gap = np.abs(sig[:, :, None] - sig[:, None, :])
         gap[:, np.arange(2 * k), np.arange(2 * k)] = np.inf
         near = np.minimum(np.sqrt(eps), eps / (gap.min(axis=2) / mag))
-    sig = np.where(live, sig, 1.0 + 0j)
-    step = np.zeros(sig.shape)
-    for _ in range(3):
-        P = sig[..., None, None] ** 2 * Ms[:, None] + sig[..., None, None] * Ds[:, None] + \
-            Ks[:, None]
-        dP = 2 * sig[..., None, None] * Ms[:, None] + Ds[:, None]
-        with np.errstate(all="ignore"):
-            try:
-                t = np.trace(np.linalg.solve(P, dP), axis1=-2, axis2=-1)
-            except np.linalg.LinAlgError:                 # exactly on a root
-                break
-            delta = 1.0 / t
-        good = np.isfinite(delta) & live
-        sig = np.where(good, sig - delta, sig)
-        step = np.where(good, np.abs(delta), 0.0)
+    sig, step = _newton_det(np.where(live, sig, 1.0 + 0j), live, Ms, Ds, Ks)
     mag = np.abs(sig)
     with np.errstate(all="ignore"):
         # Newton on det P in float64 cannot beat the rounding of P(s) itself, about
@@ -1029,6 +1022,47 @@ def _stacked_damped(M: np.ndarray, Dm: np.ndarray, K: np.ndarray, omega_max):
         s[beyond] = np.nan
         err[beyond] = np.nan
     return s, err, ok
+
+
+def _stacked_mass_inverse(Ms: np.ndarray, ok: np.ndarray) -> tuple:
+    """``(Ms, M⁻¹)`` of a stack of mass matrices by Cholesky; ``ok`` (updated in place)
+    loses the designs whose matrix is not safely definite (replaced by I in Ms)."""
+    n, k = Ms.shape[0], Ms.shape[1]
+    try:
+        chol = np.linalg.cholesky(Ms)
+    except np.linalg.LinAlgError:
+        for d in range(n):
+            try:
+                np.linalg.cholesky(Ms[d])
+            except np.linalg.LinAlgError:
+                ok[d] = False
+        Ms = np.where(ok[:, None, None], Ms, np.eye(k))
+        chol = np.linalg.cholesky(Ms)
+    Linv = _lower_inverse(chol)
+    with np.errstate(all="ignore"):
+        lam_min = 1.0 / np.sum(Linv * Linv, axis=(1, 2))
+    ok &= lam_min > 1e-13 * np.sqrt(np.sum(Ms * Ms, axis=(1, 2)))
+    return Ms, np.swapaxes(Linv, 1, 2) @ Linv
+
+
+def _newton_det(sig, live, Ms, Ds, Ks, steps: int = 3) -> tuple:
+    """Newton on det P(s), s ← s − 1/tr(P(s)⁻¹ P'(s)), for the ``live`` roots ``sig`` of
+    each design; returns the roots and the size of the last step."""
+    step = np.zeros(sig.shape)
+    for _ in range(steps):
+        P = sig[..., None, None] ** 2 * Ms[:, None] + sig[..., None, None] * Ds[:, None] + \
+            Ks[:, None]
+        dP = 2 * sig[..., None, None] * Ms[:, None] + Ds[:, None]
+        with np.errstate(all="ignore"):
+            try:
+                t = np.trace(np.linalg.solve(P, dP), axis1=-2, axis2=-1)
+            except np.linalg.LinAlgError:                 # exactly on a root
+                break
+            delta = 1.0 / t
+        good = np.isfinite(delta) & live
+        sig = np.where(good, sig - delta, sig)
+        step = np.where(good, np.abs(delta), 0.0)
+    return sig, step
 
 
 def _lower_inverse(L: np.ndarray) -> np.ndarray:

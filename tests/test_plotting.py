@@ -35,7 +35,16 @@ def test_sweep_axes_label_decades_in_plain_text(stb_sweep):
     assert "10³" in labels and not any("$" in t for t in labels)
     lo, hi = ax_k.get_ylim()
     assert np.log10(hi / lo) > 3 and len(ax_k.yaxis.get_minorticklocs()) == 0
-    assert len(ax_q.xaxis.get_minorticklocs()) > 0      # the frequency axis keeps them
+    # The frequency axis keeps its minor grid, as one line collection per panel
+    # at 2…9 × 10ⁿ inside the view.
+    lo, hi = ax_q.get_xlim()
+    want = sorted(x for x in np.outer(np.arange(2, 10), 10.0 ** np.arange(-1, 5)).ravel()
+                  if lo <= x <= hi)
+    assert len(want) > 10
+    for ax in fig.axes:
+        (lc,) = [c for c in ax.collections if type(c).__name__ == "LineCollection"]
+        got = sorted(seg[0, 0] for seg in lc.get_segments())
+        np.testing.assert_allclose(got, want, rtol=1e-12)
 
 
 def test_bode_panels_draw_K_phase_and_Q0(stb_sweep):
@@ -79,17 +88,21 @@ def test_format_follows_the_extension(tmp_path, capsys, ext, magic):
 
 
 def test_study_plot_one_parameter():
-    from mechcirc.study import parse_spec, run_study
+    from mechcirc.study import column_units, parse_spec, run_study
 
     spec = parse_spec({"netlist": str(STB), "analysis": "resonances",
                        "grid": {"eta1": [0.7, 0.8, 0.9]}})
     result = run_study(spec, workers=1)
-    fig = plot_study(result, spec.params, "resonance_1")
+    fig = plot_study(result, spec.params, "resonance_1", units=column_units(spec))
     ax = fig.axes[0]
     x, y = ax.lines[0].get_data()
     assert list(x) == [0.7, 0.8, 0.9]
     assert list(y) == [r["resonance_1"] for r in result.rows]
     assert ax.get_ylabel() == "resonance_1 [rad/s]" and ax.get_xlabel() == "eta1"
+    # The units are the study's: a mass parameter [kg] and a count [1] (no unit shown).
+    units = {"eta1": "kg", "resonance_1": "1"}
+    ax3 = plot_study(result, spec.params, "resonance_1", ax=_axes()[1], units=units)
+    assert ax3.get_xlabel() == "eta1 [kg]" and ax3.get_ylabel() == "resonance_1"
     fig2, ax2 = _axes()
     assert plot_study(result, spec.params, "resonance_1", ax=ax2) is ax2
     assert list(ax2.lines[0].get_ydata()) == list(y)

@@ -37,7 +37,11 @@ def register(sub) -> None:
                    help="write the series–parallel reduction out step by step, with the "
                         "lever reflections (K/r², m·r²) and each element's value·η")
     p.set_defaults(func=cmd_check)
+    _register_sweep(sub)
+    _register_resonances(sub)
 
+
+def _register_sweep(sub) -> None:
     p = sub.add_parser(
         "sweep", help="K(ω) and Q0(ω) over a frequency range",
         description="Sweep the kinematic characteristic K = v/Q [m/(N·s)] and the "
@@ -64,6 +68,11 @@ def register(sub) -> None:
     p.add_argument("--adaptive", action="store_true",
                    help="refine the grid around resonances and wherever |K| or |Q0| "
                         "bends (--points is then the starting grid)")
+    p.add_argument("--refine", action=argparse.BooleanOptionalAction, default=True,
+                   help="nodal analysis: refine each solution with residuals in double-"
+                        "double (the default, K to about its rounding); --no-refine: one "
+                        "plain solve per point, faster, error about eps·cond(A) (the "
+                        "'error' estimate says how large); no effect on the tree")
     p.add_argument("--tol", type=real(above=0.0, most=1.0), default=0.005,
                    help="adaptive: largest relative midpoint deviation (default 0.005)")
     p.add_argument("--sensitivity", action="append", metavar="NAME", default=[],
@@ -81,6 +90,8 @@ def register(sub) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON document")
     p.set_defaults(func=cmd_sweep)
 
+
+def _register_resonances(sub) -> None:
     p = sub.add_parser(
         "resonances", help="exact resonances (K = 0) and anti-resonances (K = ∞)",
         description="Natural frequencies seen from the drive, from the network's "
@@ -251,41 +262,13 @@ def _resonance_rows(found) -> list[dict]:
 
 
 def cmd_sweep(args) -> int:
-    import numpy as np
-
-    from ..outputs import OutputSet
-
     check_output_paths(args.output, args.touchstone, plots=(args.plot,), reads=(args.file,))
-    if args.touchstone:
-        from pathlib import Path
-
-        from ..errors import MechcircError
-
-        if Path(args.touchstone).suffix.lower() != ".s1p":
-            # K seen by one drive is a one-port: a .s2p name would promise a
-            # 2-port file that scikit-rf then cannot read.
-            raise MechcircError(
-                f"{args.touchstone}: --touchstone writes K at the drive, a one-port: name "
-                "the file .s1p (a 2-port of two nodes is mechcirc.interop.skrf.two_port)")
+    _check_touchstone_name(args.touchstone)
     circuit, warns = load_with_warnings(args.file)
     omega = _omega_grid(args)
-    if args.adaptive:
-        from ..adaptive import adaptive_sweep
-
-        if omega[0] <= 0:
-            from ..errors import MechcircError
-
-            raise MechcircError("--adaptive needs --omega-min > 0")
-        # By nodal analysis a point costs ~0.1 ms or more, so its budget is smaller;
-        # the work (points × elements) is bounded in adaptive_sweep on either path.
-        budget = MAX_ADAPTIVE_NODAL_POINTS if args.method == "nodal" else MAX_ADAPTIVE_POINTS
-        result = adaptive_sweep(circuit, omega[0], omega[-1], tol=args.tol,
-                                initial=max(2, min(args.points, budget)), method=args.method,
-                                max_points=budget)
-    else:
-        result = circuit.sweep(omega, method=args.method)
+    result = _run_sweep(args, circuit, omega)
     extra = _responses(result, args.node, args.element)
-    found = everything = None
+    everything = None
     if args.plot or args.json:
         from ..errors import SolverError
 
@@ -300,22 +283,66 @@ def cmd_sweep(args) -> int:
         from ..modes import sweep_sensitivity
 
         sens = sweep_sensitivity(circuit, result.omega, args.sensitivity)
-    from .._sweep import FLAG_SINGULAR
-    from ..units import FREQUENCY_UNITS, in_unit
-
-    from .._sweep import PEAK_RESONANCE_LIMIT, peak
+    from .._sweep import FLAG_SINGULAR, PEAK_RESONANCE_LIMIT, peak
 
     pk = peak(result, resonances=everything if len(circuit.elements) <= PEAK_RESONANCE_LIMIT
               else None)
     singular = [float(w) for w in result.omega[result.flags == FLAG_SINGULAR]]
     notes = list(getattr(result, "notes", ()))
     if singular:
-        fname = FREQUENCY_UNITS[args.unit][0]
+        from ..units import FREQUENCY_UNITS
+
         notes.append(f"{len(singular)} point(s) exactly on a pole or zero of K "
-                     f"({fname} = {_some_omega(singular, unit=args.unit)} {args.unit}): there "
+                     f"({FREQUENCY_UNITS[args.unit][0]} = "
+                     f"{_some_omega(singular, unit=args.unit)} {args.unit}): there "
                      "K is +inf·j or 0 and Q0 is 0 or +inf·j (flag 1)")
     for w in warns:
         print(f"warning: {w}", file=sys.stderr)
+    dropped = _write_sweep_outputs(args, result, extra, sens, found, pk)
+    if args.json:
+        print_json(_sweep_doc(args, result, extra, sens, found, pk, singular, notes, warns))
+        return 0
+    _print_sweep(args, result, extra, sens, pk, notes, dropped)
+    return 0
+
+
+def _check_touchstone_name(path) -> None:
+    from pathlib import Path
+
+    from ..errors import MechcircError
+
+    if path and Path(path).suffix.lower() != ".s1p":
+        # K seen by one drive is a one-port: a .s2p name would promise a
+        # 2-port file that scikit-rf then cannot read.
+        raise MechcircError(
+            f"{path}: --touchstone writes K at the drive, a one-port: name "
+            "the file .s1p (a 2-port of two nodes is mechcirc.interop.skrf.two_port)")
+
+
+def _run_sweep(args, circuit, omega):
+    """The sweep on the grid, or on an adaptive grid from it (``--adaptive``)."""
+    from ..errors import MechcircError
+
+    if not args.adaptive:
+        return circuit.sweep(omega, method=args.method, refine=args.refine)
+    from ..adaptive import adaptive_sweep
+
+    if omega[0] <= 0:
+        raise MechcircError("--adaptive needs --omega-min > 0")
+    if not args.refine:
+        raise MechcircError("--no-refine applies to a fixed grid, not with --adaptive")
+    # By nodal analysis a point costs ~0.1 ms or more, so its budget is smaller;
+    # the work (points × elements) is bounded in adaptive_sweep on either path.
+    budget = MAX_ADAPTIVE_NODAL_POINTS if args.method == "nodal" else MAX_ADAPTIVE_POINTS
+    return adaptive_sweep(circuit, omega[0], omega[-1], tol=args.tol,
+                          initial=max(2, min(args.points, budget)), method=args.method,
+                          max_points=budget)
+
+
+def _write_sweep_outputs(args, result, extra, sens, found, pk) -> int:
+    """CSV, Touchstone and plot, all or none; returns the points left out of the Touchstone."""
+    from ..outputs import OutputSet
+
     dropped = 0
     with OutputSet() as out:
         if args.output:
@@ -327,45 +354,53 @@ def cmd_sweep(args) -> int:
             from ..interop.skrf import write_touchstone
 
             dropped = write_touchstone(out.path(args.touchstone), result.omega, result.K,
-                                       name=circuit.name)
+                                       name=result.name)
         if args.plot:
             from ..plotting import plot_sweep
 
-            units = result.units
-            panels = {_panel_label(key, units): values for key, values in extra.items()}
+            panels = {_panel_label(key, result.units): values for key, values in extra.items()}
             save_figure(plot_sweep(result, resonances=found, peak=pk, unit=args.unit,
                                    extra=panels), args.plot, out.path(args.plot), tight=False)
-    n_flag = int(np.count_nonzero(result.flags))
-    n_points = len(result.omega)
-    if args.json:
-        doc = {
-            "file": args.file, "name": circuit.name, "method": result.method,
-            "points": n_points, "omega": result.omega,
-            "K": {"re": result.K.real, "im": result.K.imag},
-            "Q0": {"re": result.Q0.real, "im": result.Q0.imag},
-            "flags": result.flags, "n_flagged": n_flag, "warnings": warns,
-            "resonances": _resonance_rows(found),
-            "peak": _peak_doc(pk), "singular_omega": singular, "notes": notes,
-        }
-        if extra:
-            doc["responses"] = extra
-        if result.drive.kind == "force":
-            doc["v0"] = {"re": result.v0.real, "im": result.v0.imag}
-        if sens is not None:
-            doc["sensitivity"] = {name: {"value": sens.value[name], "quantity": sens.quantity,
-                                         "derivative": sens.derivative(name),
-                                         "relative": sens.relative(name)}
-                                  for name in sens.dK}
-        print_json(doc)
-        return 0
-    absK = np.abs(result.K)
-    absQ = np.abs(result.Q0)
+    return dropped
+
+
+def _sweep_doc(args, result, extra, sens, found, pk, singular, notes, warns) -> dict:
+    """The ``sweep --json`` document."""
+    import numpy as np
+
+    doc = {
+        "file": args.file, "name": result.name, "method": result.method,
+        "points": len(result.omega), "omega": result.omega,
+        "K": {"re": result.K.real, "im": result.K.imag},
+        "Q0": {"re": result.Q0.real, "im": result.Q0.imag},
+        "flags": result.flags, "n_flagged": int(np.count_nonzero(result.flags)),
+        "warnings": warns, "resonances": _resonance_rows(found),
+        "peak": _peak_doc(pk), "singular_omega": singular, "notes": notes,
+    }
+    if extra:
+        doc["responses"] = extra
+    if result.drive.kind == "force":
+        doc["v0"] = {"re": result.v0.real, "im": result.v0.imag}
+    if sens is not None:
+        doc["sensitivity"] = {name: {"value": sens.value[name], "quantity": sens.quantity,
+                                     "derivative": sens.derivative(name),
+                                     "relative": sens.relative(name)}
+                              for name in sens.dK}
+    return doc
+
+
+def _print_sweep(args, result, extra, sens, pk, notes, dropped) -> None:
+    """The summary ``sweep`` prints without ``--json``."""
+    import numpy as np
+
+    from ..units import FREQUENCY_UNITS, in_unit
+
+    units, unit = result.units, args.unit
     how = "adaptive grid points" if args.adaptive else "points"
-    units = result.units
-    print(f"{args.file}: {n_points} {how}, {FREQUENCY_UNITS[args.unit][0]} "
-          f"{in_unit(result.omega[0], args.unit):g} .. {in_unit(result.omega[-1], args.unit):g} "
-          f"{args.unit}, method {result.method}")
+    print(f"{args.file}: {len(result.omega)} {how}, {FREQUENCY_UNITS[unit][0]} {in_unit(result.omega[0], unit):g} .. "
+          f"{in_unit(result.omega[-1], unit):g} {unit}, method {result.method}")
     with np.errstate(all="ignore"):
+        absK = np.abs(result.K)
         print(f"  |K|  {np.nanmin(absK):.4g} .. {np.nanmax(absK):.4g} {units['K']} on the grid")
         if result.drive.kind == "force":    # Q0 is the prescribed F0: show the response
             absV = np.abs(result.v0)
@@ -373,15 +408,17 @@ def cmd_sweep(args) -> int:
                   f"grid (velocity response v0 = F0·K to the force drive F0 = "
                   f"{result.drive.amplitude:g} {units['Q']})")
         else:
+            absQ = np.abs(result.Q0)
             print(f"  |Q0| {np.nanmin(absQ):.4g} .. {np.nanmax(absQ):.4g} {units['Q']} on the "
                   "grid")
         for key, values in extra.items():
             label = f"|{key[0]}{key[key.index('('):]}|"
             print(f"  {label:<4} {np.nanmin(values):.4g} .. {np.nanmax(values):.4g} "
                   f"{_unit_of(key, units)} on the grid")
-    print(f"  {_peak_text(pk, units, args.unit)}")
+    print(f"  {_peak_text(pk, units, unit)}")
     if sens is not None:
         _print_sweep_sensitivity(sens, result)
+    n_flag = int(np.count_nonzero(result.flags))
     if n_flag:
         print(f"  {n_flag} point(s) on or within rounding of a pole or zero of K "
               "(flagged; see the 'flag' column)")
@@ -394,8 +431,6 @@ def cmd_sweep(args) -> int:
     if dropped:
         print(f"  {dropped} point(s) with omega = 0 or a non-finite K left out of "
               f"{args.touchstone}")
-    return 0
-
 
 def _sensitivity_columns(sens) -> dict:
     """CSV columns ``d{q}_d{name}`` and ``rel{q}_{name}`` of ``sweep --sensitivity``."""
@@ -460,6 +495,7 @@ def _panel_label(key: str, units: dict) -> str:
 
 
 def cmd_resonances(args) -> int:
+    from ..circuit import units_of
     from ..outputs import OutputSet
     from ..resonances import Resonances
     from ..units import FREQUENCY_UNITS, in_unit
@@ -515,7 +551,7 @@ def cmd_resonances(args) -> int:
         if m.note and (m.shape or not args.modes):   # else the mode table says it
             print(f"  note: {m.note}")
         if args.modes:
-            _print_mode(m, kinds)
+            _print_mode(m, kinds, units_of(circuit.drive))
         if args.sensitivity:
             _print_sensitivity(m, kinds)
     if args.plot:
@@ -537,7 +573,7 @@ def _mode_doc(m) -> dict:
             "force": {n: [q.real, q.imag] for n, q in m.force.items()}}
 
 
-def _print_mode(m, kinds) -> None:
+def _print_mode(m, kinds, units: dict) -> None:
     import cmath
     import math
 
@@ -547,8 +583,8 @@ def _print_mode(m, kinds) -> None:
     print(f"  {'node':<10} {'|v|':>10} {'phase [deg]':>12}")
     for n, v in m.shape.items():
         print(f"  {n:<10} {abs(v):>10.4g} {math.degrees(cmath.phase(v)) if v else 0:>12.4g}")
-    print(f"  {'element':<10} {'kind':<7} {'energy':>8} {'zeta part':>10} {'|v| [m/s]':>10} "
-          f"{'|Q| [N]':>10}")
+    print(f"  {'element':<10} {'kind':<7} {'energy':>8} {'zeta part':>10} "
+          f"{'|v| [' + units['v'] + ']':>10} {'|Q| [' + units['Q'] + ']':>10}")
     for name, v in m.velocity.items():
         energy = f"{100 * m.energy[name]:.3g} %" if m.energy.get(name, 0) > 1e-12 else \
             "0 %" if name in m.energy else ""

@@ -244,9 +244,10 @@ def cmd_study(args) -> int:
                            curves=args.curves)
     if args.plot:
         from ..plotting import plot_study
+        from ..study import column_units
 
-        save_figure(plot_study(result, spec.params, column, name=Path(args.spec).stem),
-                    args.plot)
+        save_figure(plot_study(result, spec.params, column, name=Path(args.spec).stem,
+                               units=column_units(spec)), args.plot)
     if args.json:
         print_json({"spec": args.spec, "spec_sha256": spec.sha256,
                     "netlist": spec.netlist_source,

@@ -93,22 +93,22 @@ def cmd_periodic(args) -> int:
         raise MechcircError("the speed map needs both --rpm-min and --rpm-max, with "
                             "--rpm-min < --rpm-max")
     if args.file.lower().endswith(".toml"):
-        circuit, motion, unit = _scene(args)
+        circuit, motion = _scene(args)
     else:
         if args.theta is not None:
             raise MechcircError("--theta applies to a scene (.toml), not to a netlist")
         circuit, warns = load_with_warnings(args.file)
-        motion, unit = None, "N"
+        motion = None
         for w in warns:
             print(f"warning: {w}", file=sys.stderr)
     elements = _elements(args, circuit)
     if single:
-        return _one_speed(args, circuit, elements, motion, unit)
-    return _speed_map(args, circuit, elements, motion, unit)
+        return _one_speed(args, circuit, elements, motion)
+    return _speed_map(args, circuit, elements, motion)
 
 
 def _scene(args):
-    """A scene's circuit at --theta, the motion its rigid linkage imposes on the drive, the unit."""
+    """A scene's circuit at --theta and the motion its rigid linkage imposes on the drive."""
     import math
 
     from ..errors import MechcircError
@@ -124,31 +124,24 @@ def _scene(args):
         raise MechcircError(f"{args.file}: the drive is a force; the periodic drive imposes "
                             "the linkage's motion, which needs a velocity drive")
     model = build(scene, math.radians(theta_deg))
-    return (model.circuit, drive_motion(scene, math.radians(theta_deg)),
-            "N·m" if model.rotational else "N")
+    return model.circuit, drive_motion(scene, math.radians(theta_deg))
 
 
-def _one_speed(args, circuit, elements, motion, unit) -> int:
+def _one_speed(args, circuit, elements, motion) -> int:
     import numpy as np
 
-    from ..outputs import OutputSet
     from ..periodic import periodic
 
     r = periodic(circuit, args.rpm, motion=motion, tol=args.tol, harmonics=args.harmonics,
                  points=args.angles, elements=elements, near=args.near, method=args.method)
-    with OutputSet() as out:
-        if args.output:
-            cols = [r.angle_deg, r.x, r.v, r.Q]
-            head = ["angle_deg", "x", "v", "Q"]
-            for name in elements:
-                cols += [r.forces.get(name, np.full_like(r.Q, np.nan)),
-                         r.velocities.get(name, np.full_like(r.Q, np.nan))]
-                head += [f"F_{name}", f"v_{name}"]
-            with open(out.path(args.output), "w", newline="") as fh:
-                fh.write(",".join(head) + "\n")
-                np.savetxt(fh, np.column_stack(cols), delimiter=",", fmt="%.17g")
-        if args.plot:
-            save_figure(r.plot(), args.plot, out.path(args.plot))
+    unit, vu = r.units["Q"], r.units["v"]
+    cols = [r.angle_deg, r.x, r.v, r.Q]
+    head = ["angle_deg", "x", "v", "Q"]
+    for name in elements:
+        cols += [r.forces.get(name, np.full_like(r.Q, np.nan)),
+                 r.velocities.get(name, np.full_like(r.Q, np.nan))]
+        head += [f"F_{name}", f"v_{name}"]
+    _write_outputs(args, head, cols, r.plot)
     rows = [{"k": int(k), "omega": float(w), "velocity": complex(v),
              "amplitude": float(abs(q)), "phase_deg": float(np.degrees(np.angle(q))),
              "nearest_resonance": float(n), "distance": float(d), "near": bool(nr)}
@@ -173,8 +166,7 @@ def _one_speed(args, circuit, elements, motion, unit) -> int:
         print("  peak |Q| = inf: the steady periodic force is unbounded")
     else:
         print(f"  peak |Q| = {r.peak:.7g} {unit} at θ = {r.peak_angle_deg:.4f} deg; "
-              f"drive velocity up to {np.max(np.abs(r.v)):.4g} "
-              f"{'rad/s' if unit == 'N·m' else 'm/s'}")
+              f"drive velocity up to {np.max(np.abs(r.v)):.4g} {vu}")
     near = np.flatnonzero(r.near)
     if near.size:
         print(f"  harmonics within {args.near:.0%} of a resonance:")
@@ -185,7 +177,6 @@ def _one_speed(args, circuit, elements, motion, unit) -> int:
     else:
         print(f"  no harmonic within {args.near:.0%} of a resonance")
     top = np.argsort(-np.nan_to_num(np.abs(r.amplitude), nan=np.inf))[:8]
-    vu = "rad/s" if unit == "N·m" else "m/s"
     print(f"  {'k':>5} {'kΩ [rad/s]':>12} {f'|V_k| [{vu}]':>12} {f'|Q_k| [{unit}]':>12} "
           f"{'nearest ωn':>12} {'distance':>9}")
     for i in sorted(top):
@@ -200,26 +191,18 @@ def _one_speed(args, circuit, elements, motion, unit) -> int:
     return _print_notes_and_outputs(r.notes, args)
 
 
-def _speed_map(args, circuit, elements, motion, unit) -> int:
+def _speed_map(args, circuit, elements, motion) -> int:
     import numpy as np
 
-    from ..outputs import OutputSet
     from ..periodic import speed_map
 
     m = speed_map(circuit, args.rpm_min, args.rpm_max, args.points, motion=motion, tol=args.tol,
                   harmonics=args.harmonics, elements=elements, method=args.method)
-    with OutputSet() as out:
-        if args.output:
-            cols = [m.rpm, m.peak, m.harmonics, m.error]
-            head = ["rpm", "peak_Q", "harmonics", "error"]
-            for name in elements:
-                cols.append(m.element_peaks[name])
-                head.append(f"peak_{name}")
-            with open(out.path(args.output), "w", newline="") as fh:
-                fh.write(",".join(head) + "\n")
-                np.savetxt(fh, np.column_stack(cols), delimiter=",", fmt="%.17g")
-        if args.plot:
-            save_figure(m.plot(), args.plot, out.path(args.plot))
+    unit = m.units["Q"]
+    _write_outputs(args, ["rpm", "peak_Q", "harmonics", "error"] +
+                   [f"peak_{name}" for name in elements],
+                   [m.rpm, m.peak, m.harmonics, m.error] +
+                   [m.element_peaks[name] for name in elements], m.plot)
     crossings = [{"rpm": r, "k": k, "omega_n": w, "zeta": z, "weight": wt}
                  for r, k, w, z, wt in m.crossings]
     if args.json:
@@ -247,6 +230,22 @@ def _speed_map(args, circuit, elements, motion, unit) -> int:
     if len(strong) > 30:
         print(f"    ... {len(strong) - 30} more (--json lists all)")
     return _print_notes_and_outputs(m.notes, args)
+
+
+def _write_outputs(args, head: list, cols: list, plot) -> None:
+    """``-o CSV`` (the columns ``cols`` named ``head``, %.17g) and ``--plot`` (the figure
+    ``plot()`` makes), all or none written."""
+    import numpy as np
+
+    from ..outputs import OutputSet
+
+    with OutputSet() as out:
+        if args.output:
+            with open(out.path(args.output), "w", newline="") as fh:
+                fh.write(",".join(head) + "\n")
+                np.savetxt(fh, np.column_stack(cols), delimiter=",", fmt="%.17g")
+        if args.plot:
+            save_figure(plot(), args.plot, out.path(args.plot))
 
 
 def _print_notes_and_outputs(notes, args) -> int:

@@ -121,7 +121,6 @@ def cmd_scene(args) -> int:
 
         with atomic_open(args.output, "w", encoding="utf-8") as fh:
             fh.write(model.netlist if reduced is None else reduced.netlist)
-    unit = "rad/s" if model.rotational else "m/s"
     if args.json:
         print_json({
             "file": args.file, "theta_deg": args.theta, "drive_ratio": model.drive_ratio,
@@ -132,6 +131,13 @@ def cmd_scene(args) -> int:
             "netlist": model.netlist, "output": args.output,
             "reduced": None if reduced is None else reduced.as_dict()})
         return 0
+    _print_scene(args, scene, model, found, reduced, drawn is not None)
+    return 0
+
+
+def _print_scene(args, scene, model, found, reduced, drawn: bool) -> None:
+    """What ``mechcirc scene --theta`` prints without ``--json``."""
+    unit = "rad/s" if model.rotational else "m/s"
     print(f"{args.file}: scene {scene.name!r} at θ = {args.theta:g}° "
           f"(drive {unit}, drive ratio r0 = {model.drive_ratio:.6g})")
     for node, part in model.parts.items():
@@ -154,9 +160,8 @@ def cmd_scene(args) -> int:
             print(f"  {step}")
     if args.output:
         print(f"wrote {args.output}" + (" (reduced)" if reduced is not None else ""))
-    if drawn is not None:
+    if drawn:
         print(f"resonance {args.mode} drawn on the linkage into {args.plot}")
-    return 0
 
 
 def _cycle(args, scene) -> int:
@@ -269,7 +274,6 @@ def cmd_simulate_scene(args) -> int:
 
     from ..errors import MechcircError
     from ..scene import load_scene
-    from ..scene.simfile import apply_overrides
     from ..scene.simulation import SceneAccuracyWarning, simulate_scene
 
     if args.rtol is not None and args.method in ("rk4", "rk4-python"):
@@ -280,20 +284,7 @@ def cmd_simulate_scene(args) -> int:
                             "use --rtol")
     check_output_paths(args.output, plots=(args.plot,) if args.plot else (),
                        reads=(args.scene,))
-    scene = load_scene(args.scene)
-    over = {}
-    for item in args.set:
-        name, sep, value = item.partition("=")
-        if not sep:
-            raise MechcircError(f"--set expects NAME=VALUE, got {item!r}")
-        try:
-            over[name.strip()] = float(value)
-        except ValueError:
-            raise MechcircError(f"--set {name.strip()}: {value!r} is not a number") from None
-    if args.omega is not None:
-        over["omega"] = args.omega
-    if over:
-        scene = apply_overrides(scene, over)
+    scene = _with_overrides(args, load_scene(args.scene))
     if getattr(args, "shaft", False) or getattr(args, "flywheel", None) is not None:
         return _shaft(args, scene)
     from ..progress import Progress
@@ -320,15 +311,9 @@ def cmd_simulate_scene(args) -> int:
             if bar is not None:
                 bar.__exit__(None, None, None)
     if args.output:
-        from ..outputs import atomic_open
-
-        cols = result.columns()
-        with atomic_open(args.output, "w", newline="") as fh:
-            fh.write(f"# {scene.name} ({args.scene}); revolution {result.revolution}; "
-                     f"omega = {result.omega!r} rad/s\n")
-            fh.write(",".join(cols) + "\n")
-            for row in zip(*cols.values()):
-                fh.write(",".join(repr(float(v)) for v in row) + "\n")
+        _write_columns(args.output, f"# {scene.name} ({args.scene}); revolution "
+                       f"{result.revolution}; omega = {result.omega!r} rad/s", result.columns(),
+                       result.columns().values())
     if args.plot:
         from ..scene.plots import plot_motion
 
@@ -346,12 +331,68 @@ def cmd_simulate_scene(args) -> int:
           f"{result.wall_time * 1e3:.1f} ms")
     print(f"error estimate {est}, periodicity {per} (relative change of the extrema at half "
           f"the step / from the previous revolution)")
-    print(f"{'quantity':<28} {'min':>14} {'max':>14}")
-    for k, (lo, hi) in result.extrema.items():
-        print(f"{k:<28} {lo:>14.6g} {hi:>14.6g}")
+    _print_extrema(scene, result.extrema)
     for n in result.notes:
         print(f"note: {n}")
     return 0
+
+
+def _with_overrides(args, scene):
+    """``scene`` with ``--set NAME=VALUE`` and ``--omega`` applied."""
+    from ..errors import MechcircError
+    from ..scene.simfile import apply_overrides
+
+    over = {}
+    for item in args.set:
+        name, sep, value = item.partition("=")
+        if not sep:
+            raise MechcircError(f"--set expects NAME=VALUE, got {item!r}")
+        try:
+            over[name.strip()] = float(value)
+        except ValueError:
+            raise MechcircError(f"--set {name.strip()}: {value!r} is not a number") from None
+    if args.omega is not None:
+        over["omega"] = args.omega
+    return apply_overrides(scene, over) if over else scene
+
+
+def _write_columns(path, comment: str, names, cols) -> None:
+    """A CSV of equal-length columns (a comment line, the names, rows of repr floats)."""
+    from ..outputs import atomic_open
+
+    with atomic_open(path, "w", newline="") as fh:
+        fh.write(comment + "\n")
+        fh.write(",".join(names) + "\n")
+        for row in zip(*cols):
+            fh.write(",".join(repr(float(v)) for v in row) + "\n")
+
+
+def _quantity_unit(scene, key: str, keys) -> str:
+    """The unit of a scene output ``key`` (``BODY.acceleration``, ``ELEMENT.force``, an alias,
+    a shaft curve); ``keys`` are all the outputs (a point has ``_x``/``_y`` components)."""
+    aliases = dict(scene.simulate.aliases) if scene.simulate is not None else {}
+    name, _, what = aliases.get(key, key).rpartition(".")
+    torsion = name in {t.name for t in scene.torsions}
+    if what in ("acceleration_x", "acceleration_y") or (
+            what == "acceleration" and f"{name}.acceleration_x" in keys):
+        return "m/s²"                               # a point's (translational)
+    if what in ("acceleration", "rigid_acceleration") or key == "acceleration":
+        return "rad/s²"
+    if what == "force":
+        return "N·m" if torsion else "N"
+    if what == "deformation":
+        return "rad" if torsion else "m"
+    if what == "moment" and name == "drive":        # the generalised force of the drive
+        return "N·m" if scene.drive.link is not None else "N"
+    return {"moment": "N·m", "speed": "rad/s", "motor_torque": "N·m",
+            "load_torque": "N·m"}.get(what or key, "")
+
+
+def _print_extrema(scene, extrema: dict) -> None:
+    """The table of each output's least and largest value over the cycle, with its unit."""
+    print(f"{'quantity':<28} {'min':>14} {'max':>14}  unit")
+    for k, (lo, hi) in extrema.items():
+        print(f"{k:<28} {lo:>14.6g} {hi:>14.6g}  {_quantity_unit(scene, k, extrema)}")
 
 
 def _shaft(args, scene) -> int:
@@ -379,15 +420,10 @@ def _shaft(args, scene) -> int:
               **{f"{b}.acceleration": v for b, v in r.body_accelerations.items()},
               **{a: r.body_accelerations[b] for a, b in aliases.items()}}
     if args.output:
-        from ..outputs import atomic_open
-
-        with atomic_open(args.output, "w", newline="") as fh:
-            fh.write(f"# {scene.name} ({args.scene}); steady cycle of the dynamic main shaft, "
-                     f"flywheel {r.flywheel!r} kg·m²\n")
-            fh.write(",".join(["theta_deg", "time", *curves]) + "\n")
-            for i in range(r.theta.size):
-                fh.write(",".join(repr(float(v)) for v in (
-                    np.degrees(r.theta[i]), r.time[i], *(c[i] for c in curves.values()))) + "\n")
+        _write_columns(args.output, f"# {scene.name} ({args.scene}); steady cycle of the "
+                       f"dynamic main shaft, flywheel {r.flywheel!r} kg·m²",
+                       ["theta_deg", "time", *curves],
+                       [np.degrees(r.theta), r.time, *curves.values()])
     if args.json:
         doc = r.summary()
         doc.update(file=args.scene, output=args.output, notes=list(r.notes),
@@ -408,9 +444,7 @@ def _shaft(args, scene) -> int:
     if r.startup_time is not None:
         print(f"start-up from rest: within 1 % of ω_mean of the steady band after "
               f"{r.startup_time:.4g} s")
-    print(f"{'quantity':<28} {'min':>14} {'max':>14}")
-    for k, v in curves.items():
-        print(f"{k:<28} {float(v.min()):>14.6g} {float(v.max()):>14.6g}")
+    _print_extrema(scene, {k: (float(v.min()), float(v.max())) for k, v in curves.items()})
     for n in r.notes:
         print(f"note: {n}")
     return 0
