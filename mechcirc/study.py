@@ -175,8 +175,18 @@ _SLEY_UNITS = {"I2P": "kg·m²", "I4": "kg·m²", "I4P": "kg·m²", "I5P": "kg·
 
 def column_units(spec: StudySpec) -> dict[str, str | None]:
     """The unit of every column of ``spec``'s table (``"1"``: a count or a pure number;
-    ``""``: text; None: a ``.param`` whose unit the netlist does not fix)."""
+    ``""``: text; None: a ``.param`` whose unit the netlist does not fix).  K and Q0
+    are in the drive's units: rad/(N·m·s) and N·m for a rotary drive."""
     units = dict(zip(spec.params, spec.param_units or (None,) * len(spec.params)))
+    if spec.analysis == "sweep" and spec.netlist_text:
+        from .circuit import units_of
+        from .netlist import parse
+
+        try:
+            u = units_of(parse(spec.netlist_text, source=spec.netlist_source).drive)
+        except MechcircError:       # its points say why, row by row
+            u = units_of(None)
+        units |= {"K_abs_min": u["K"], "K_abs_max": u["K"], "Q0_abs_max": u["Q"]}
     return {c: units[c] if c in units else _UNITS.get(c, _UNITS.get(c.rsplit("_", 1)[0]))
             for c in spec.columns}
 

@@ -252,6 +252,17 @@ def test_every_column_of_every_analysis_has_a_unit(data):
         assert units["resonance_2"] == units["antiresonance_1"] == "rad/s"
 
 
+def test_a_rotary_drive_gives_the_k_and_q0_columns_rotary_units(tmp_path):
+    net = tmp_path / "rot.mcir"
+    net.write_text(".param J=0.2\ndrive W s 0 velocity=2 rad/s\nspring k s a 4e3 N*m/rad\n"
+                   "mass J a 0 J kg*m^2\n")
+    spec = parse_spec({"netlist": str(net), "analysis": "sweep",
+                       "omega": {"min": 1, "max": 1e3, "points": 5}, "grid": {"J": [0.1]}})
+    units = column_units(spec)
+    assert units["K_abs_min"] == units["K_abs_max"] == "rad/(N·m·s)"
+    assert units["Q0_abs_max"] == "N·m" and units["omega_at_K_max"] == "rad/s"
+
+
 def test_parquet_output_records_the_spec_and_units(tmp_path):
     pq = pytest.importorskip("pyarrow.parquet", reason="pyarrow is not installed")
     spec = load_spec(spec_file(tmp_path))
