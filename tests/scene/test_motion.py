@@ -19,9 +19,9 @@ SCENES = ["examples/heald_scene.toml", "examples/mrazek_one_side.toml",
 
 
 def _python_kernel():
-    from mechcirc.scene import _motion_kernels
+    from mechcirc._jit import load
 
-    return _motion_kernels.load_python()
+    return load("mechcirc.scene._motion_kernels", _FORCE_PYTHON=True)
 
 
 def _rhs_jacobians(model, theta):
