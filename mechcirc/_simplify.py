@@ -48,6 +48,17 @@ __all__ = ["BandError", "Simplified", "simplify", "parse_band", "check_band", "w
 def parse_band(text: str) -> tuple[float, float]:
     """``"W1:W2"`` → (W1, W2) [rad/s], with 0 < W1 < W2 finite.
 
+    Parameters
+    ----------
+    text : str
+        The band as ``W1:W2``, each a number with an optional unit of angular
+        frequency (as ``--omega-min``).
+
+    Returns
+    -------
+    tuple of float
+        (W1, W2) [rad/s].
+
     Raises
     ------
     BandError

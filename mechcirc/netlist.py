@@ -903,6 +903,11 @@ def parse(text: str, source: str = "<string>", *,
         If false, a netlist without a ``drive`` line is accepted and the
         circuit's ``drive`` is ``None`` (free vibration, :mod:`mechcirc.transient`).
 
+    Returns
+    -------
+    Circuit
+        The circuit (plain data: elements, levers, drive).
+
     Raises
     ------
     NetlistError
@@ -920,6 +925,20 @@ def parse(text: str, source: str = "<string>", *,
 def load(path: str | os.PathLike, *, params: Mapping[str, float] | None = None,
          require_drive: bool = True) -> Circuit:
     """Read and parse the netlist file at ``path`` (UTF-8); ``params`` as in :func:`parse`.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The netlist file (``.mcir``, UTF-8).
+    params : mapping of str to float, optional
+        Values [SI] that replace those of the named ``.param`` definitions.
+    require_drive : bool
+        If false, a netlist without a ``drive`` line is accepted.
+
+    Returns
+    -------
+    Circuit
+        As :func:`parse` of the file's text, named after the file.
 
     Raises
     ------

@@ -145,6 +145,19 @@ def find_resonances(circuit: Circuit, omega_max: float | None = None) -> Resonan
     Returns them sorted by ``omega``, as a :class:`Resonances` list (a table
     when shown).  See the module docstring for the method.
 
+    Parameters
+    ----------
+    circuit : Circuit
+        Any circuit with a drive.
+    omega_max : float, optional
+        Upper end of the band searched [rad/s]; None: no upper end (networks
+        above the dense limits need one, see the module docstring).
+
+    Returns
+    -------
+    Resonances
+        Resonances (K = 0) and anti-resonances (K = ∞), sorted by ``omega``.
+
     Examples
     --------
     >>> from mechcirc import parse

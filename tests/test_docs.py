@@ -10,7 +10,8 @@ docs/tutorial.md under "Examples in these docs"):
   normalised).
 * Any other block whose lines start with ``$ `` is a shell session: its
   ``$`` commands run in order; a plain ``mechcirc ...`` line (no pipe,
-  redirection or expansion) runs in this process with the same argv and
+  redirection or expansion; or piped only into ``head -N``/``tail -N``, whose
+  lines are then kept here) runs in this process with the same argv and
   working directory (``mechcirc.cli.main``, as ``python -m mechcirc`` does;
   it saves the interpreter start-up of every line), any other line in
   ``bash -o pipefail``, which sees the previous status as ``$?`` (``echo $?``;
@@ -142,6 +143,10 @@ def _commands(text: str):
 _SHELL_SYNTAX = set("|&;<>()$`*?[]{}~!\\'\"")
 
 
+#: ``mechcirc ... | head -N`` or ``| tail -N`` (N lines of its output): run in-process too.
+_HEAD_TAIL = re.compile(r"^(?P<cmd>[^|]*)\|\s*(?P<which>head|tail)\s+-(?P<n>\d+)\s*$")
+
+
 def _in_process_argv(cmd: str):
     """The argv of a plain ``mechcirc ...`` line, or None when it needs a shell."""
     line = cmd.replace("\\\n", " ")
@@ -153,6 +158,31 @@ def _in_process_argv(cmd: str):
     if not words or words[0] != "mechcirc" or _SHELL_SYNTAX & set(code) or "#" in code:
         return None
     return words[1:]
+
+
+def _in_process(cmd: str):
+    """``(argv, keep)`` of a line run in this process, or None when it needs a shell.
+
+    ``keep`` is None, or ``("head"|"tail", N)`` for a plain ``mechcirc`` line
+    piped into ``head -N``/``tail -N``: what the pipeline prints is those lines
+    of its standard output (standard error passes by the pipe) and, under
+    ``pipefail``, its status is mechcirc's (head and tail exit 0), so the line
+    runs in-process and the lines are kept here.
+    """
+    m = _HEAD_TAIL.match(cmd.replace("\\\n", " "))
+    if m:
+        argv = _in_process_argv(m.group("cmd"))
+        return None if argv is None else (argv, (m.group("which"), int(m.group("n"))))
+    argv = _in_process_argv(cmd)
+    return None if argv is None else (argv, None)
+
+
+def _keep_lines(text: str, keep) -> str:
+    if keep is None:
+        return text
+    lines = text.splitlines(keepends=True)
+    which, n = keep
+    return "".join(lines[:n] if which == "head" else lines[-n:] if n else [])
 
 
 def run_mechcirc(argv: list[str]) -> tuple[int, str, str]:
@@ -271,9 +301,10 @@ def _run_shell(text, marks, where, tmp, env):
     for cmd, shown in zip(_commands(text), _shown_outputs(text)):
         if cmd.lstrip().startswith("python benchmarks/"):
             continue
-        argv = _in_process_argv(cmd)
-        if argv is not None:
-            last, stdout, stderr = run_mechcirc(argv)
+        plain = _in_process(cmd)
+        if plain is not None:
+            last, stdout, stderr = run_mechcirc(plain[0])
+            stdout = _keep_lines(stdout, plain[1])
         else:
             proc = subprocess.run(["bash", "-c", f"set -o pipefail\n(exit {last})\n{cmd}"],
                                   cwd=tmp, env=env, capture_output=True, text=True,
@@ -361,6 +392,27 @@ def test_the_markers_are_known():
             m = _MARK.match(line)
             if m:
                 assert m.group(1) in ("file", "not-run", "exit", "output-varies"), (page, line)
+
+
+@pytest.mark.parametrize("cmd, want", [
+    ("mechcirc check a.mcir", (["check", "a.mcir"], None)),
+    ("mechcirc check a.mcir | tail -1", (["check", "a.mcir"], ("tail", 1))),
+    ("mechcirc check a.mcir | head -3", (["check", "a.mcir"], ("head", 3))),
+    ("mechcirc check a.mcir | grep x", None),
+    ("mechcirc check a.mcir | tail -1 | head -1", None),
+    ("mechcirc check *.mcir | tail -1", None),
+    ("cat a.mcir | tail -1", None),
+])
+def test_which_lines_run_in_process(cmd, want):
+    assert _in_process(cmd) == want
+
+
+def test_head_and_tail_keep_the_lines_the_commands_keep():
+    text = "a\nb\nc\n"
+    for which, n in (("head", 2), ("tail", 2), ("tail", 1), ("head", 5), ("tail", 0)):
+        shell = subprocess.run(["bash", "-c", f"printf 'a\\nb\\nc\\n' | {which} -{n}"],
+                               capture_output=True, text=True, check=True).stdout
+        assert _keep_lines(text, (which, n)) == shell, (which, n)
 
 
 @pytest.mark.parametrize("shown, printed, ok", [

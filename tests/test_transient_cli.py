@@ -180,7 +180,7 @@ def test_crosscheck_reports_progress_per_transient_run():
 
     import mechcirc
     from mechcirc.progress import Progress
-    from mechcirc.transient.crosscheck import crosscheck
+    from mechcirc.transient import crosscheck
 
     c = mechcirc.load(str(REPO / "netlists" / "stb_heald.mcir"))
     bar = Progress(0, "x", stream=io.StringIO(), enabled=True, delay=0.0)

@@ -141,7 +141,7 @@ def _print_separations(result, u) -> None:
 def cmd_crosscheck_netlist(args) -> int:
     """``mechcirc crosscheck FILE.mcir``: frequency domain vs transients of any netlist."""
     from ..netlist import load
-    from ..transient.crosscheck import crosscheck
+    from ..transient import crosscheck
 
     omega_max = None
     if args.omega_max is not None:

@@ -486,6 +486,18 @@ TABLES = {
 def parse_linkage(text: str, source: str = "<string>") -> Linkage:
     """Parse the TOML text of a linkage (see the module docstring).
 
+    Parameters
+    ----------
+    text : str
+        The TOML text.
+    source : str
+        Name of the text in error messages (a file name).
+
+    Returns
+    -------
+    Linkage
+        The linkage, ready to :meth:`Linkage.solve` at any crank angle.
+
     Raises
     ------
     NetlistError
@@ -715,7 +727,18 @@ def _read_units(doc: dict, text: str, source: str) -> str:
 
 
 def load_linkage(path: str | Path) -> Linkage:
-    """Read and parse a linkage TOML file (see :func:`parse_linkage`)."""
+    """Read and parse a linkage TOML file (see :func:`parse_linkage`).
+
+    Parameters
+    ----------
+    path : str or Path
+        The linkage file (TOML, UTF-8).
+
+    Returns
+    -------
+    Linkage
+        As :func:`parse_linkage`, with the file's name in its error messages.
+    """
     from ..sources import read_source
 
     text = read_source(path, "a linkage .toml")

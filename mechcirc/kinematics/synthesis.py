@@ -362,6 +362,22 @@ def evaluate_design(a: float, b: float, c: float, d: float, *,
     (default: any of 33–38 mm); ``crank_range`` [mm] overrides it (a crank
     length the user fixed).  ``swing_range`` [deg] is the swing criterion.
 
+    Parameters
+    ----------
+    a, b, c, d : float
+        Crank, coupler, rocker and frame lengths [mm].
+    load : str, optional
+        Picks the crank range of step 1 (default: any of 33–38 mm).
+    swing_range : tuple of float
+        (min, max) of the rocker's swing [deg] that passes the swing criterion.
+    crank_range : tuple of float, optional
+        (min, max) crank length [mm]; overrides the range ``load`` picks.
+
+    Returns
+    -------
+    Design
+        The criteria's values and whether each passes.
+
     Raises
     ------
     GeometryError

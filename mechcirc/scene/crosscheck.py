@@ -82,6 +82,23 @@ def crosscheck_scene(scene: Scene, theta: float, *, steps_per_period: float = 40
     """Compare the circuit's resonances at ``theta`` [rad] with the ringing after a kick,
     and (``forced``) its |Q0(ω)| with the forced response to a drive-speed ripple.
 
+    Parameters
+    ----------
+    scene : Scene
+    theta : float
+        Crank angle [rad] at which the circuit is built.
+    steps_per_period : float
+        Time steps per period of the fastest mode compared.
+    periods : float
+        Length of the ringing record, in periods of the slowest mode.
+    forced : bool
+        Also compare |Q0(ω)| with the forced response.
+
+    Returns
+    -------
+    SceneCrosscheck
+        One line per resonance (and per forcing frequency), each with its verdict.
+
     Raises
     ------
     GeometryError

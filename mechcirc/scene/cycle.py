@@ -143,6 +143,11 @@ def cycle_map(scene: Scene, *, points: int = 72, harmonics: int = 5,
     progress : callable, optional
         ``progress(done, total)`` after each crank angle (the CLI's progress bar).
 
+    Returns
+    -------
+    CycleMap
+        Resonances and |Q0| at each crank angle and harmonic.
+
     Raises
     ------
     GeometryError

@@ -357,6 +357,18 @@ def _number(text, source, value, what, table, key, n, *, positive=True, allow_ze
 def parse_scene(text: str, source: str = "<string>") -> Scene:
     """Parse the TOML text of a scene (see the module docstring).
 
+    Parameters
+    ----------
+    text : str
+        The TOML text.
+    source : str
+        Name of the text in error messages (a file name).
+
+    Returns
+    -------
+    Scene
+        The scene (plain data).
+
     Raises
     ------
     NetlistError
@@ -870,6 +882,16 @@ def _rigid_parts(lk, bodies: dict, tbodies: set, meshes=()) -> list[tuple]:
 
 def load_scene(path: str | Path) -> Scene:
     """Read and parse a scene TOML file (see :func:`parse_scene`).
+
+    Parameters
+    ----------
+    path : str or Path
+        The scene file (TOML, UTF-8).
+
+    Returns
+    -------
+    Scene
+        As :func:`parse_scene`, with the file's name in its error messages.
 
     Raises
     ------

@@ -165,6 +165,19 @@ def motion_model(scene: Scene, omega: float | None = None, *,
                  table_points: int = TABLE_POINTS) -> MotionModel:
     """Tabulate ``scene``'s kinematics and gather its energies into a :class:`MotionModel`.
 
+    Parameters
+    ----------
+    scene : Scene
+    omega : float, optional
+        Crank speed Ω [rad/s]; default: |ω| of the scene's first crank.
+    table_points : int
+        Crank angles per revolution of the kinematic tables.
+
+    Returns
+    -------
+    MotionModel
+        The tables and arrays the time-domain kernel reads.
+
     Raises
     ------
     GeometryError

@@ -247,6 +247,28 @@ def simulate_scene(scene: Scene, *, omega: float | None = None,
     turns once per period 2π/Ω; the crank angle is θ = θs + Ω t + (a/k) sin(k Ω t)
     and the rigid parts follow it with θ̈ = −a k Ω² sin(k Ω t).
 
+    Parameters
+    ----------
+    scene : Scene
+    omega, revolutions, start_deg, steps_per_period, points : optional
+        Crank speed [rad/s], revolutions, start angle [deg], RK4 steps per period of
+        the fastest mode, output points per revolution (defaults above).
+    method, rtol : optional
+        Integrator and its relative tolerance (above).
+    error_estimate : bool
+        Repeat the run at half the step and keep the relative change of the extrema.
+    model : MotionModel, optional
+        A :func:`~mechcirc.scene.motion.motion_model` of ``scene`` made before (reused).
+    revolution, omega_ripple : optional
+        The revolution tabulated, and the crank-speed ripple (above).
+    progress : callable, optional
+        ``progress(done, total)`` as the integration advances.
+
+    Returns
+    -------
+    SceneMotion
+        The tabulated revolution: crank angle, named outputs, their extrema.
+
     Raises
     ------
     MechcircError

@@ -161,6 +161,19 @@ def linearise(params: SleyParameters, theta0: float, *, mu: float | None = None)
     """The frozen-coefficient linear model of ``params`` at crank angle ``theta0`` [rad].
 
     ``mu`` overrides μ(θ0).
+
+    Parameters
+    ----------
+    params : SleyParameters
+    theta0 : float
+        Crank angle [rad].
+    mu : float, optional
+        Transmission ratio μ used instead of μ(θ0).
+
+    Returns
+    -------
+    LinearModel
+        M, C, K and the drive's coefficients at θ0.
     """
     if mu is None:
         mu = float(params.fourbar().transfer(float(theta0))[1])
@@ -174,6 +187,17 @@ def eigenfrequencies(params: SleyParameters, theta0: float) -> list[Mode]:
 
     Undamped ω_n from the generalised symmetric eigenproblem K v = ω² M v; the
     damped eigenvalues λ from the state matrix, paired with ω_n in order.
+
+    Parameters
+    ----------
+    params : SleyParameters
+    theta0 : float
+        Crank angle [rad].
+
+    Returns
+    -------
+    list of Mode
+        The modes, ascending in ω_n.
     """
     from scipy.linalg import eigh
 
@@ -281,6 +305,16 @@ def to_netlist(params: SleyParameters, theta0: float, *, lever: bool = False,
     The same parameters and errors as :func:`to_circuit`; the text starts with
     comments giving θ0, μ(θ0) and how the rocker side is reflected, and
     ``mechcirc.parse`` of it gives the same circuit.
+
+    Parameters
+    ----------
+    params, theta0, lever, damping, velocity
+        As :func:`to_circuit`.
+
+    Returns
+    -------
+    str
+        The netlist text.
     """
     from ..netlist_writer import write
 

@@ -102,7 +102,18 @@ def preset(drive: str = "one-side", variant: int = 3, **overrides) -> SleyParame
 
 
 def all_presets(**overrides) -> list[SleyParameters]:
-    """The 14 presets: Table 1 variants 1–7, then Table 2 variants 1–7."""
+    """The 14 presets: Table 1 variants 1–7, then Table 2 variants 1–7.
+
+    Parameters
+    ----------
+    **overrides
+        Parameter values applied to every preset (as :func:`preset`).
+
+    Returns
+    -------
+    list of SleyParameters
+        The 14 presets, in the order above.
+    """
     return [preset(drive, v, **overrides) for drive in ("one-side", "both-sides")
             for v in VARIANTS]
 

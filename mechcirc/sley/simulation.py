@@ -316,6 +316,19 @@ def simulate_params(params: SleyParameters, revolutions: int = 5, method: str | 
     :class:`SleyAccuracyWarning` is issued when it or
     the periodicity exceeds 1e-3, or fewer steps per period than the default
     are used.  The run is the scene's (:func:`mechcirc.scene.simulate_scene`).
+
+    Parameters
+    ----------
+    params : SleyParameters
+    revolutions, method, points_per_revolution, steps_per_period, rtol, table_points, revolution, progress
+        As :func:`simulate`.
+    error_estimate : bool
+        Repeat the run at half the step (above).
+
+    Returns
+    -------
+    SleyResult
+        The last (or the chosen) revolution, tabulated.
     """
     method = "rk4" if method is None else method
     if method not in METHODS:

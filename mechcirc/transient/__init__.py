@@ -5,17 +5,10 @@
   between drive samples when linear, with the ElastoBacklash clearance law
   (:mod:`._kernels`) otherwise.
 * :func:`crosscheck` compares resonances and |Q0| of the sweep with ringing
-  and steady-state amplitudes measured on transients (:mod:`.crosscheck`).
+  and steady-state amplitudes measured on transients (:mod:`._crosscheck`).
 """
 
+from ._crosscheck import CrossCheck, crosscheck
 from .simulate import TransientResult, Waveform, parse_drive, transient
 
-__all__ = ["transient", "TransientResult", "Waveform", "parse_drive", "crosscheck"]
-
-
-def crosscheck(*args, **kwargs):
-    """See :func:`mechcirc.transient.crosscheck.crosscheck`."""
-    # (``from . import crosscheck`` would find this function, not the module.)
-    from .crosscheck import crosscheck as run_crosscheck
-
-    return run_crosscheck(*args, **kwargs)
+__all__ = ["transient", "TransientResult", "Waveform", "parse_drive", "crosscheck", "CrossCheck"]

@@ -110,7 +110,18 @@ class Waveform:
 
 
 def parse_drive(text: str | None) -> Waveform:
-    """``harmonic:OMEGA`` | ``step`` | ``impulse`` | ``csv:PATH`` | ``rest`` (or None) → Waveform."""
+    """``harmonic:OMEGA`` | ``step`` | ``impulse`` | ``csv:PATH`` | ``rest`` (or None) → Waveform.
+
+    Parameters
+    ----------
+    text : str or None
+        The ``--drive`` text.
+
+    Returns
+    -------
+    Waveform
+        The waveform named by ``text``.
+    """
     if text is None or text == "rest":
         return Waveform("rest")
     if text in ("step", "impulse"):
@@ -335,6 +346,12 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
         revolution (netlist ``drive ... motion=``): the drive's velocity is
         Ω·dx/dθ at θ = Ωt (Ω = 2π·rpm/60), from t = 0 at θ = 0.  Required for
         such a drive unless ``drive`` is given (which then replaces the motion).
+
+    Returns
+    -------
+    TransientResult
+        Time, node displacements and velocities, element forces and the drive's
+        output on the grid.
     """
     drive = _motion_drive(circuit, drive, rpm)
     if callable(drive) and not isinstance(drive, Waveform):

@@ -19,9 +19,9 @@ SCENES = ["examples/heald_scene.toml", "examples/mrazek_one_side.toml",
 
 
 def _python_kernel():
-    from mechcirc.scene import _motion_kernels
+    from mechcirc._jit import load
 
-    return _motion_kernels.load_python()
+    return load("mechcirc.scene._motion_kernels", _FORCE_PYTHON=True)
 
 
 def _rhs_jacobians(model, theta):
@@ -117,8 +117,9 @@ def test_sley_scene_reproduces_sley(drive, variant):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("drive", ["one-side", "both-sides"])
-@pytest.mark.parametrize("variant", range(1, 8))
+@pytest.mark.parametrize("variant", [v for v in range(1, 8) if v != 6])
 def test_sley_scene_reproduces_sley_all(drive, variant):
+    """The other twelve variants (variant 6 of both drives is the test above)."""
     _compare(drive, variant)
 
 
