@@ -191,7 +191,7 @@ def measure(names=None, rtols=RTOLS):
 def markdown(rows) -> str:
     out = ["| case | rtol | estimate | true error | estimate / true | true / max\\|x\\| "
            "| said \"not reached\" |", "|---|---|---|---|---|---|---|"]
-    for name, rtol, est, true, spread, peak, said in rows:
+    for name, rtol, est, true, _, peak, said in rows:
         ratio = est / true if true > 0 else math.inf
         out.append(f"| {name} | {rtol:.0e} | {est:.2e} | {true:.2e} | {ratio:.3g} | "
                    f"{true / peak:.1e} | {'yes' if said else 'no'} |")
