@@ -397,7 +397,7 @@ def modal_run(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout, qlast):
                 qi[j] = xi
         for j in range(m):
             a = qr[j] * qr[j] + qi[j] * qi[j]
-            q2[j] = a if a > q2[j] else q2[j]
+            q2[j] = a if not a <= q2[j] else q2[j]      # (a NaN stays: it is absorbing)
         yout[k] = _wdot(wr, qr, wi, qi)
         if identity:                # column j is Re q_j: a contiguous copy
             for j in range(nre):

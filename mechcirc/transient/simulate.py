@@ -377,7 +377,7 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
     hermite = has_clear and drive.kind == "motion"
     if hermite:     # cubic Hermite: h⁴/384·max|u⁗|, from the fourth differences
         interp = float(np.abs(np.diff(u, 4)).max() / 384.0) if u.size > 4 else 0.0
-    T, nx, drive_y, x_ready, v_ready, x_ext = None, None, None, None, None, None
+    T, nx, drive_y, x_ready, v_ready, x_bound = None, None, None, None, None, None
     if has_clear:
         if not RTOL_RANGE[0] <= rtol <= RTOL_RANGE[1]:
             raise MechcircError(f"--rtol must be between {RTOL_RANGE[0]:g} and "
@@ -392,7 +392,7 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
         plans = ss.__dict__.setdefault("_modal_plans", {})
         Z = None
         if not elements:                    # node outputs only: block by block
-            x_ready, v_ready, why, dropped, drive_y, x_ext = _propagate_modal_x(
+            x_ready, v_ready, why, dropped, drive_y, x_bound = _propagate_modal_x(
                 ss.A, ss.B, z0, u_in, h, ss.Cx, w, plans, None if x_only else ss.Cv)
             if x_ready is not None:
                 Z, T, nx = None, None, None
@@ -424,13 +424,14 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
         # exact up to rounding, which adds up over the steps: ROUNDING_PER_STEP × max|x|
         # per step (against closed forms: 3e-15 … 1.5e-12 relative after 2e3 … 1e5 steps,
         # 4 … 150× below this)
-        if x_ext is None or np.any(ss.Dx):      # (the drive's direct term changes x)
-            x_ext = float(out.x.max()), float(out.x.min())
         with np.errstate(all="ignore"):
-            # max |x| as max(max x, −min x): the same number without an |x| temporary
-            # the size of x (1e7 values for 100 nodes × 1e5 steps).
-            out.error = err + ROUNDING_PER_STEP * (t.size - 1) * max(x_ext[0], -x_ext[1])
-    _require_finite(out, None if has_clear else x_ext)
+            if x_bound is None or np.any(ss.Dx):  # (the drive's direct term changes x)
+                # max |x| as max(max x, −min x): the same number without an |x|
+                # temporary the size of x (1e7 values for 100 nodes × 1e5 steps).
+                x_bound = max(float(out.x.max()), -float(out.x.min()))
+            out.error = err + ROUNDING_PER_STEP * (t.size - 1) * x_bound
+    # (linear: the error is finite only if x is; NaN and ±inf reach max|x| or its bound)
+    _require_finite(out, x_in_error=not has_clear)
     if has_clear:
         out.separations = _separations(out, circuit, drive)
     return out
@@ -489,16 +490,16 @@ def _motion_drive(circuit: Circuit, drive, rpm):
     return drive
 
 
-def _require_finite(r: TransientResult, x_extremes=None) -> None:
+def _require_finite(r: TransientResult, x_in_error: bool = False) -> None:
     """A result with a non-finite value is a failure, never a result (issue 23 item 4).
 
-    ``x_extremes``: (max, min) of ``r.x`` if already known."""
+    ``x_in_error``: ``r.error`` is finite only if ``r.x`` is (not looked at again)."""
     arrays = [a for a in (r.v, r.force, r.drive_force, r.drive_velocity) if a is not None]
-    if x_extremes is None:
+    if not x_in_error:
         arrays.append(r.x)
     # An array is finite where its max and min are (NaN and ±inf propagate to one of
     # them): two reductions instead of a boolean array as large as the outputs.
-    if math.isfinite(r.error) and all(map(math.isfinite, x_extremes or ())) and all(
+    if math.isfinite(r.error) and all(
             not a.size or (math.isfinite(float(a.max())) and math.isfinite(float(a.min())))
             for a in arrays):
         return
@@ -748,7 +749,7 @@ def _cached_plan(A, B, h, Cx, cache):
 
 def _propagate_modal_x(A, B, z0, u, h, Cx, w=None, cache=None, Cv=None):
     """x (and v with ``Cv``) by the modal path in blocks of samples: (X, V, note, dropped, y,
-    (max X, min X)).
+    bound of max|X| or None).
 
     X = Cx z and V = Cv z (None without ``Cv``) without the drive's direct
     terms; y = w·z (None without w).  Without ``Cv`` x is formed from the
@@ -756,8 +757,9 @@ def _propagate_modal_x(A, B, z0, u, h, Cx, w=None, cache=None, Cv=None):
     :func:`_propagate_modal`; with it every column is used (v needs them all)
     and ``dropped`` is 0.  (None, None, reason, 0, None) when the modal path
     refuses (or numba is not installed: the block loop is compiled only), and
-    the caller takes the general path.  The extremes of X are taken block by
-    block while each is in cache (a pass over the whole X costs 15 % of the run).
+    the caller takes the general path.  The bound of max|X| comes from the
+    modes' largest amplitudes (a pass over X costs 10–15 % of the run); None
+    where it is not finite (or near overflow), and the caller looks at X.
 
     The recurrence fills a block of modal signals, one product per output maps
     it, and the next block continues from the block's last state (blocks
@@ -788,16 +790,12 @@ def _propagate_modal_x(A, B, z0, u, h, Cx, w=None, cache=None, Cv=None):
     q = np.asarray(q0, complex).copy()
     qlast = np.empty(m, complex)
     a = 0
-    tops, bottoms = [], []
     while True:
         b = min(nt - 1, a + CHUNK)
         n = b - a + 1
         kern.modal_run(mu, g1, g2, q, u[a:b + 1], cre, cim, buf[:n], qm, wout, y[a:b + 1],
                        qlast)
         np.matmul(buf[:n], Sx, out=X[a:b + 1])
-        # max and min of x while the block is in cache (NaN propagates through both)
-        tops.append(X[a:b + 1].max())
-        bottoms.append(X[a:b + 1].min())
         if V is not None:
             np.matmul(buf[:n], Sv, out=V[a:b + 1])
         np.maximum(qmax, qm, out=qmax)
@@ -809,8 +807,16 @@ def _propagate_modal_x(A, B, z0, u, h, Cx, w=None, cache=None, Cv=None):
     if late.any() and Cv is None:
         cols = cim[late]
         dropped = float((np.abs(Cx @ T[:, cols]).max(axis=0) * qmax[late]).sum())
-    extremes = (float(np.max(tops)), float(np.min(bottoms)))
-    return X, V, note, dropped, (None if w is None else y), extremes
+    # max|x| ≤ max_i Σ_c |Sx[c, i]| · (largest |q| of column c's mode): a bound of
+    # x from the recurrence, without a pass over x (finite only if every q was)
+    col = np.zeros(ncols)
+    for cols in (cre, cim):
+        at = (cols >= 0) & (cols < ncols)
+        col[cols[at]] = qmax[at]
+    with np.errstate(all="ignore"):
+        bound = float(np.max(np.abs(Sx).T @ col, initial=0.0))
+    return X, V, note, dropped, (None if w is None else y), \
+        (bound if bound < 1e300 else None)
 
 
 def _modal_plan(A, B, h, Cx):
