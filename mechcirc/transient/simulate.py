@@ -377,7 +377,7 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
     hermite = has_clear and drive.kind == "motion"
     if hermite:     # cubic Hermite: h⁴/384·max|u⁗|, from the fourth differences
         interp = float(np.abs(np.diff(u, 4)).max() / 384.0) if u.size > 4 else 0.0
-    T, nx, drive_y, x_ready, v_ready, x_bound = None, None, None, None, None, None
+    T = nx = drive_y = x_ready = v_ready = x_bound = None
     if has_clear:
         if not RTOL_RANGE[0] <= rtol <= RTOL_RANGE[1]:
             raise MechcircError(f"--rtol must be between {RTOL_RANGE[0]:g} and "
@@ -386,31 +386,9 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
                                           drive.rate(t, amp) if drive.kind == "motion" else None)
         notes.extend(more)
     else:
-        x_only = velocities is False and not elements
-        dmap = _drive_map(ss)
-        w = None if dmap is None else dmap[0]
-        plans = ss.__dict__.setdefault("_modal_plans", {})
-        Z = None
-        if not elements:                    # node outputs only: block by block
-            x_ready, v_ready, why, dropped, drive_y, x_bound = _propagate_modal_x(
-                ss.A, ss.B, z0, u_in, h, ss.Cx, w, plans, None if x_only else ss.Cv)
-            if x_ready is not None:
-                Z, T, nx = None, None, None
-        if x_ready is None:
-            Z, T, why, nx, dropped, drive_y = _propagate_modal(
-                ss.A, ss.B, z0, u_in, h, ss.Cx, w, x_only, plans)
-        if Z is None and x_ready is None:
-            Z = _propagate(ss.A, ss.B, z0, u_in, h)
-            path = f"block propagation (modal path refused: {why})"
-        else:
-            path = why
-        method, err = ("exact (matrix exponential, first-order hold of the drive; "
-                       f"{path.split(' (')[0]})"), 0.0
-        if (x_ready is not None or (Z is not None and T is not None)) and dropped > 0 \
-                and x_only:
-            err = dropped           # x formed without the shapes' rounding-level imaginary parts
-        elif T is not None:
-            nx = None               # v and forces use every column anyway: keep x whole
+        Z, T, nx, drive_y, x_ready, v_ready, x_bound, err, path = _linear(
+            ss, z0, u_in, h, elements, velocities)
+        method = f"exact (matrix exponential, first-order hold of the drive; {path.split(' (')[0]})"
         notes.append(f"linear propagation: {path}")
     if interp > 1e-13 * float(np.abs(u).max()):      # not rounding of an exact ramp
         notes.append(f"drive interpolated by cubic Hermite between samples (exact values and "
@@ -435,6 +413,38 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
     if has_clear:
         out.separations = _separations(out, circuit, drive)
     return out
+
+
+def _linear(ss: StateSpace, z0, u_in, h, elements, velocities):
+    """The exact propagation of a linear circuit: (Z, T, nx, drive_y, x_ready, v_ready,
+    bound of max|x_ready|, error, path).
+
+    Node outputs only: the modal path block by block (:func:`_propagate_modal_x`,
+    x and v formed in it); else the modal signals (:func:`_propagate_modal`, Z = Q
+    with z = T q); else the block method (Z the states).  The error is the part of
+    x left out with the rounding-level imaginary parts of real shapes (x only).
+    """
+    x_only = velocities is False and not elements
+    dmap = _drive_map(ss)
+    w = None if dmap is None else dmap[0]
+    plans = ss.__dict__.setdefault("_modal_plans", {})
+    Z = T = nx = drive_y = x_ready = v_ready = x_bound = None
+    if not elements:                    # node outputs only: block by block
+        x_ready, v_ready, why, dropped, drive_y, x_bound = _propagate_modal_x(
+            ss.A, ss.B, z0, u_in, h, ss.Cx, w, plans, None if x_only else ss.Cv)
+    if x_ready is None:
+        Z, T, why, nx, dropped, drive_y = _propagate_modal(
+            ss.A, ss.B, z0, u_in, h, ss.Cx, w, x_only, plans)
+    path = why
+    if Z is None and x_ready is None:
+        Z = _propagate(ss.A, ss.B, z0, u_in, h)
+        path = f"block propagation (modal path refused: {why})"
+    err = 0.0
+    if (x_ready is not None or (Z is not None and T is not None)) and dropped > 0 and x_only:
+        err = dropped           # x formed without the shapes' rounding-level imaginary parts
+    elif T is not None:
+        nx = None               # v and forces use every column anyway: keep x whole
+    return Z, T, nx, drive_y, x_ready, v_ready, x_bound, err, path
 
 
 def _separations(out: TransientResult, circuit, drive):
