@@ -331,6 +331,23 @@ if HAVE_NUMBA:
 
 
 @_jit
+def _stored(cols, ncols):
+    """(modes, columns) of the entries of ``cols`` that name a stored column (0 … ncols−1)."""
+    n = 0
+    for c in cols:
+        n += 1 if 0 <= c < ncols else 0
+    modes = np.empty(n, np.int64)
+    where = np.empty(n, np.int64)
+    n = 0
+    for j in range(cols.shape[0]):
+        if 0 <= cols[j] < ncols:
+            modes[n] = j
+            where[n] = cols[j]
+            n += 1
+    return modes, where
+
+
+@_jit
 def modal_run(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout, qlast):
     """Diagonal first-order-hold recurrence q⁺ = μ q + g₁ u + g₂ (u⁺ − u), every mode.
 
@@ -374,18 +391,8 @@ def modal_run(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout, qlast):
         if cre[j] != j:
             identity = False
     nre = min(m, ncols)
-    n_im = 0                        # the imaginary parts stored: (mode, column)
-    for j in range(m):
-        if cim[j] >= 0 and cim[j] < ncols:
-            n_im += 1
-    im_mode = np.empty(n_im, np.int64)
-    im_col = np.empty(n_im, np.int64)
-    n_im = 0
-    for j in range(m):
-        if cim[j] >= 0 and cim[j] < ncols:
-            im_mode[n_im] = j
-            im_col[n_im] = cim[j]
-            n_im += 1
+    im_mode, im_col = _stored(cim, ncols)
+    n_im = im_mode.shape[0]
     for k in range(nt):
         if k > 0:
             uk = u[k - 1]
