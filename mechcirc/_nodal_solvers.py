@@ -107,35 +107,7 @@ class DDSolver:
             good = np.isfinite(mag).all(axis=(1, 2)) & (omega > 0)
             dd = d[:, :, None] * d[:, None, :]
             X = [x * dd for x in X]
-            perm = np.broadcast_to(np.arange(n), (B, n)).copy()
-            rows = np.arange(B)
-            for k in range(n):
-                p = k + np.argmax(np.abs(X[0][:, k:, k]) + np.abs(X[2][:, k:, k]), axis=1)
-                for x in X + [perm]:
-                    x[rows, k], x[rows, p] = x[rows, p], x[rows, k].copy()
-                piv = [x[:, k, k] for x in X]
-                zero = (piv[0] == 0) & (piv[2] == 0)
-                good &= ~zero
-                piv[0] = np.where(zero, 1.0, piv[0])
-                if k + 1 == n:
-                    break
-                lk = cdd_div([x[:, k + 1:, k] for x in X], [v[:, None] for v in piv])
-                for x, v in zip(X, lk):
-                    x[:, k + 1:, k] = v
-                # Only the rows and columns the update reaches (the nodal
-                # matrices are sparse: a tree fills little).
-                ri = k + 1 + np.flatnonzero(((lk[0] != 0) | (lk[2] != 0)).any(axis=0))
-                ci = k + 1 + np.flatnonzero(((X[0][:, k, k + 1:] != 0) |
-                                             (X[2][:, k, k + 1:] != 0)).any(axis=0))
-                if not (ri.size and ci.size):
-                    continue
-                at = (slice(None), ri[:, None], ci[None, :])
-                upd = cdd_mul([v[:, ri - k - 1, None] for v in lk],
-                               [x[:, None, k, ci] for x in X])
-                re = dd_sub(X[0][at], X[1][at], *upd[:2])
-                im = dd_sub(X[2][at], X[3][at], *upd[2:])
-                for x, v in zip(X, (*re, *im)):
-                    x[at] = v
+            perm = _dd_lu(X, good)
             good &= np.isfinite(X[0]).all(axis=(1, 2)) & np.isfinite(X[2]).all(axis=(1, 2))
         X, perm, d = [x[good] for x in X], perm[good], d[good]
         every = np.arange(perm.shape[0])
@@ -164,6 +136,43 @@ class DDSolver:
                             v[:, :k] = u
             return ((y[0] + y[1]) + 1j * (y[2] + y[3])) * d[rows]
         return good, solve
+
+
+def _dd_lu(X, good):
+    """LU with partial pivoting, in place, of a batch of complex matrices in double-double
+    (X = [re hi, re lo, im hi, im lo], each (batch, n, n)); returns the row permutations.
+    ``good`` is cleared where a pivot is exactly 0."""
+    B, n = X[0].shape[:2]
+    perm = np.broadcast_to(np.arange(n), (B, n)).copy()
+    rows = np.arange(B)
+    for k in range(n):
+        p = k + np.argmax(np.abs(X[0][:, k:, k]) + np.abs(X[2][:, k:, k]), axis=1)
+        for x in X + [perm]:
+            x[rows, k], x[rows, p] = x[rows, p], x[rows, k].copy()
+        piv = [x[:, k, k] for x in X]
+        zero = (piv[0] == 0) & (piv[2] == 0)
+        good &= ~zero
+        piv[0] = np.where(zero, 1.0, piv[0])
+        if k + 1 == n:
+            break
+        lk = cdd_div([x[:, k + 1:, k] for x in X], [v[:, None] for v in piv])
+        for x, v in zip(X, lk):
+            x[:, k + 1:, k] = v
+        # Only the rows and columns the update reaches (the nodal
+        # matrices are sparse: a tree fills little).
+        ri = k + 1 + np.flatnonzero(((lk[0] != 0) | (lk[2] != 0)).any(axis=0))
+        ci = k + 1 + np.flatnonzero(((X[0][:, k, k + 1:] != 0) |
+                                     (X[2][:, k, k + 1:] != 0)).any(axis=0))
+        if not (ri.size and ci.size):
+            continue
+        at = (slice(None), ri[:, None], ci[None, :])
+        upd = cdd_mul([v[:, ri - k - 1, None] for v in lk],
+                       [x[:, None, k, ci] for x in X])
+        re = dd_sub(X[0][at], X[1][at], *upd[:2])
+        im = dd_sub(X[2][at], X[3][at], *upd[2:])
+        for x, v in zip(X, (*re, *im)):
+            x[at] = v
+    return perm
 
 
 def dd_solver(system: NodalSystem) -> DDSolver:

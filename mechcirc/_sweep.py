@@ -9,6 +9,7 @@ velocity amplitude is v0 = F0 · K.
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Callable, Literal
@@ -17,7 +18,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .circuit import Circuit, Drive, units_of
-from .errors import InputError, NotSeriesParallelError
+from .errors import InputError, NotSeriesParallelError, TopologyError
 from .reduction import Node, evaluate, push_down
 
 __all__ = ["Sweep", "sweep", "Peak", "peak", "FLAG_OK", "FLAG_SINGULAR", "FLAG_NEAR_SINGULAR",
@@ -489,10 +490,37 @@ def _sweep_nodal(circuit: Circuit, omega, refine: bool = True) -> Sweep:
     singular = ~np.isfinite(K) & (omega > 0)
     K = _nodal_singular_limits(circuit.nodal, K, omega)
     err = np.where(singular, np.inf, err)
+    K, err, notes = _tree_where_no_digit(circuit, omega, K, err)
     result = Sweep(omega=omega, K=K, drive=circuit.drive, method="nodal", name=circuit.name,
-                   circuit=circuit)
+                   circuit=circuit, notes=notes)
     result._cache["error"] = err
     return result
+
+
+def _tree_where_no_digit(circuit: Circuit, omega, K, err):
+    """K from the series–parallel tree where nodal analysis knows no digit of it.
+
+    A network whose element values span 20 decades can have cond(A(ω)) of
+    1e35 even balanced (measured in mpmath), beyond the double-double LU's
+    reach (about 1e30), while K is well conditioned: nodal analysis then
+    returns a finite K with an infinite error.  Where the network is a tree,
+    its evaluation (with its own calibrated bound) replaces those points,
+    and a note says so; otherwise they stay as they are (flag 2).
+    """
+    lost = np.isfinite(K) & (K != 0) & np.isinf(err) & (omega > 0)
+    if not lost.any():
+        return K, err, ()
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")      # the nodal path already said its warnings
+            tree = circuit.tree
+    except TopologyError:                        # not a tree (or not one seen from the drive)
+        return K, err, ()
+    Kt, et = evaluate(tree, omega[lost], error=True)
+    K, err = K.copy(), err.copy()
+    K[lost], err[lost] = singular_limits(Kt, omega[lost]), et
+    return K, err, (f"K at {int(lost.sum())} ω from the series–parallel tree: nodal analysis "
+                    "knows no digit there (A(ω) beyond its double-double LU)",)
 
 
 def _nodal_singular_limits(system, K, omega, delta: float = 1e-6):

@@ -165,20 +165,11 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
         good, solve_fn = solve_with.factor(omega[every], kern)
         sel = every[good]
         if sel.size:
-            xh, xl, est, rho = _refined(solve_fn, residual, omega[sel], rhs, system, refine, steps)
-            redo = np.flatnonzero(~(est <= _STRICT_AFTER) & (solve_with.kind == "superlu"))
-            if len(redo):
-                # Diagonal pivoting was not stable enough here: partial pivoting.
-                ok2, strict_fn = solve_with.factor(omega[sel[redo]], kern, strict=True)
-                if ok2.all():
-                    xh2, xl2, est2, rho2 = _refined(strict_fn, residual, omega[sel[redo]], rhs,
-                                                    system, refine, steps)
-                    better = ~(est2 >= est[redo])
-                    take = redo[better]
-                    xh[take], est[take], rho[take] = xh2[better], est2[better], rho2[better]
-                    if xl is not None:
-                        xl[take] = xl2[better]
-            store(sel, xh, xl, est, rho)
+            refined = _refined(solve_fn, residual, omega[sel], rhs, system, refine, steps)
+            if solve_with.kind == "superlu":
+                _strict_retry(solve_with, kern, omega[sel], refined,
+                              lambda fn, w: _refined(fn, residual, w, rhs, system, refine, steps))
+            store(sel, *refined)
         if use_dd:
             # Float64 factors failed (A(ω) exactly singular as rounded to float64),
             # could not refine, or had not converged after ``steps`` (then the
@@ -199,6 +190,24 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
                 better = ~(est2 >= err[redo])
                 store(redo[better], xh2[better], xl2[better], est2[better], rho2[better])
     return K, err, S, Sd, x_all, kept, checked
+
+
+def _strict_retry(solve_with, kern, omega, refined, refine):
+    """Where SuperLU's diagonal pivoting left an estimate above :data:`_STRICT_AFTER`,
+    factor again with partial pivoting and keep the better of the two, in place in
+    ``refined`` = (xh, xl, est, rho); ``refine(solve, ω)`` refines with a solver."""
+    xh, xl, est, rho = refined
+    redo = np.flatnonzero(~(est <= _STRICT_AFTER))
+    if not len(redo):
+        return
+    ok2, strict_fn = solve_with.factor(omega[redo], kern, strict=True)
+    if ok2.all():
+        xh2, xl2, est2, rho2 = refine(strict_fn, omega[redo])
+        better = ~(est2 >= est[redo])
+        take = redo[better]
+        xh[take], est[take], rho[take] = xh2[better], est2[better], rho2[better]
+        if xl is not None:
+            xl[take] = xl2[better]
 
 
 def _difference_dd(system, xh, xl):

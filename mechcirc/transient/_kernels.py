@@ -313,6 +313,40 @@ def dopri_run(z, t0, dt, nout, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, u
     return steps
 
 
+def _wdot(wr, qr, wi, qi):
+    """Σ_j wr_j qr_j + wi_j qi_j.  Compiled with reassociation allowed, so the sum
+    is a vector sum and not a chain of dependent additions (that chain was
+    two thirds of :func:`modal_run`'s time on 100 modes); the result differs
+    from the sequential sum by rounding only."""
+    s = 0.0
+    for j in range(wr.shape[0]):
+        s += wr[j] * qr[j] + wi[j] * qi[j]
+    return s
+
+
+if HAVE_NUMBA:
+    from numba import njit
+
+    _wdot = njit(cache=True, error_model="numpy", fastmath={"reassoc", "contract"})(_wdot)
+
+
+@_jit
+def _stored(cols, ncols):
+    """(modes, columns) of the entries of ``cols`` that name a stored column (0 … ncols−1)."""
+    n = 0
+    for c in cols:
+        n += 1 if 0 <= c < ncols else 0
+    modes = np.empty(n, np.int64)
+    where = np.empty(n, np.int64)
+    n = 0
+    for j in range(cols.shape[0]):
+        if 0 <= cols[j] < ncols:
+            modes[n] = j
+            where[n] = cols[j]
+            n += 1
+    return modes, where
+
+
 @_jit
 def modal_run(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout, qlast):
     """Diagonal first-order-hold recurrence q⁺ = μ q + g₁ u + g₂ (u⁺ − u), every mode.
@@ -357,6 +391,8 @@ def modal_run(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout, qlast):
         if cre[j] != j:
             identity = False
     nre = min(m, ncols)
+    im_mode, im_col = _stored(cim, ncols)
+    n_im = im_mode.shape[0]
     for k in range(nt):
         if k > 0:
             uk = u[k - 1]
@@ -366,12 +402,10 @@ def modal_run(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout, qlast):
                 xi = mr[j] * qi[j] + mi[j] * qr[j] + ai[j] * uk + bi[j] * du
                 qr[j] = xr
                 qi[j] = xi
-        y = 0.0
         for j in range(m):
             a = qr[j] * qr[j] + qi[j] * qi[j]
-            q2[j] = max(q2[j], a)
-            y += wr[j] * qr[j] + wi[j] * qi[j]
-        yout[k] = y
+            q2[j] = a if not a <= q2[j] else q2[j]      # (a NaN stays: it is absorbing)
+        yout[k] = _wdot(wr, qr, wi, qi)
         if identity:                # column j is Re q_j: a contiguous copy
             for j in range(nre):
                 out[k, j] = qr[j]
@@ -380,10 +414,8 @@ def modal_run(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout, qlast):
                 c = cre[j]
                 if c < ncols:
                     out[k, c] = qr[j]
-        for j in range(m):
-            c = cim[j]
-            if c >= 0 and c < ncols:
-                out[k, c] = qi[j]
+        for p in range(n_im):
+            out[k, im_col[p]] = qi[im_mode[p]]
     for j in range(m):
         qmax[j] = math.sqrt(q2[j])
         qlast[j] = complex(qr[j], qi[j])

@@ -394,7 +394,7 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
     hermite = has_clear and drive.kind == "motion"
     if hermite:     # cubic Hermite: h⁴/384·max|u⁗|, from the fourth differences
         interp = float(np.abs(np.diff(u, 4)).max() / 384.0) if u.size > 4 else 0.0
-    T, nx, drive_y, x_ready, v_ready = None, None, None, None, None
+    T = nx = drive_y = x_ready = v_ready = x_bound = None
     if has_clear:
         if not RTOL_RANGE[0] <= rtol <= RTOL_RANGE[1]:
             raise MechcircError(f"--rtol must be between {RTOL_RANGE[0]:g} and "
@@ -403,31 +403,9 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
                                           drive.rate(t, amp) if drive.kind == "motion" else None)
         notes.extend(more)
     else:
-        x_only = velocities is False and not elements
-        dmap = _drive_map(ss)
-        w = None if dmap is None else dmap[0]
-        plans = ss.__dict__.setdefault("_modal_plans", {})
-        Z = None
-        if not elements:                    # node outputs only: block by block
-            x_ready, v_ready, why, dropped, drive_y = _propagate_modal_x(
-                ss.A, ss.B, z0, u_in, h, ss.Cx, w, plans, None if x_only else ss.Cv)
-            if x_ready is not None:
-                Z, T, nx = None, None, None
-        if x_ready is None:
-            Z, T, why, nx, dropped, drive_y = _propagate_modal(
-                ss.A, ss.B, z0, u_in, h, ss.Cx, w, x_only, plans)
-        if Z is None and x_ready is None:
-            Z = _propagate(ss.A, ss.B, z0, u_in, h)
-            path = f"block propagation (modal path refused: {why})"
-        else:
-            path = why
-        method, err = ("exact (matrix exponential, first-order hold of the drive; "
-                       f"{path.split(' (')[0]})"), 0.0
-        if (x_ready is not None or (Z is not None and T is not None)) and dropped > 0 \
-                and x_only:
-            err = dropped           # x formed without the shapes' rounding-level imaginary parts
-        elif T is not None:
-            nx = None               # v and forces use every column anyway: keep x whole
+        Z, T, nx, drive_y, x_ready, v_ready, x_bound, err, path = _linear(
+            ss, z0, u_in, h, elements, velocities)
+        method = f"exact (matrix exponential, first-order hold of the drive; {path.split(' (')[0]})"
         notes.append(f"linear propagation: {path}")
     if interp > 1e-13 * float(np.abs(u).max()):      # not rounding of an exact ramp
         notes.append(f"drive interpolated by cubic Hermite between samples (exact values and "
@@ -442,14 +420,48 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
         # per step (against closed forms: 3e-15 … 1.5e-12 relative after 2e3 … 1e5 steps,
         # 4 … 150× below this)
         with np.errstate(all="ignore"):
-            # max |x| as max(max x, −min x): the same number without an |x| temporary
-            # the size of x (1e7 values for 100 nodes × 1e5 steps).
-            out.error = err + ROUNDING_PER_STEP * (t.size - 1) * max(float(out.x.max()),
-                                                                     -float(out.x.min()))
-    _require_finite(out)
+            if x_bound is None or np.any(ss.Dx):  # (the drive's direct term changes x)
+                # max |x| as max(max x, −min x): the same number without an |x|
+                # temporary the size of x (1e7 values for 100 nodes × 1e5 steps).
+                x_bound = max(float(out.x.max()), -float(out.x.min()))
+            out.error = err + ROUNDING_PER_STEP * (t.size - 1) * x_bound
+    # (linear: the error is finite only if x is; NaN and ±inf reach max|x| or its bound)
+    _require_finite(out, x_in_error=not has_clear)
     if has_clear:
         out.separations = _separations(out, circuit, drive)
     return out
+
+
+def _linear(ss: StateSpace, z0, u_in, h, elements, velocities):
+    """The exact propagation of a linear circuit: (Z, T, nx, drive_y, x_ready, v_ready,
+    bound of max|x_ready|, error, path).
+
+    Node outputs only: the modal path block by block (:func:`_propagate_modal_x`,
+    x and v formed in it); else the modal signals (:func:`_propagate_modal`, Z = Q
+    with z = T q); else the block method (Z the states).  The error is the part of
+    x left out with the rounding-level imaginary parts of real shapes (x only).
+    """
+    x_only = velocities is False and not elements
+    dmap = _drive_map(ss)
+    w = None if dmap is None else dmap[0]
+    plans = ss.__dict__.setdefault("_modal_plans", {})
+    Z = T = nx = drive_y = x_ready = v_ready = x_bound = None
+    if not elements:                    # node outputs only: block by block
+        x_ready, v_ready, why, dropped, drive_y, x_bound = _propagate_modal_x(
+            ss.A, ss.B, z0, u_in, h, ss.Cx, w, plans, None if x_only else ss.Cv)
+    if x_ready is None:
+        Z, T, why, nx, dropped, drive_y = _propagate_modal(
+            ss.A, ss.B, z0, u_in, h, ss.Cx, w, x_only, plans)
+    path = why
+    if Z is None and x_ready is None:
+        Z = _propagate(ss.A, ss.B, z0, u_in, h)
+        path = f"block propagation (modal path refused: {why})"
+    err = 0.0
+    if (x_ready is not None or (Z is not None and T is not None)) and dropped > 0 and x_only:
+        err = dropped           # x formed without the shapes' rounding-level imaginary parts
+    elif T is not None:
+        nx = None               # v and forces use every column anyway: keep x whole
+    return Z, T, nx, drive_y, x_ready, v_ready, x_bound, err, path
 
 
 def _separations(out: TransientResult, circuit, drive):
@@ -505,15 +517,20 @@ def _motion_drive(circuit: Circuit, drive, rpm):
     return drive
 
 
-def _require_finite(r: TransientResult) -> None:
-    """A result with a non-finite value is a failure, never a result (issue 23 item 4)."""
-    arrays = [a for a in (r.x, r.v, r.force, r.drive_force, r.drive_velocity) if a is not None]
+def _require_finite(r: TransientResult, x_in_error: bool = False) -> None:
+    """A result with a non-finite value is a failure, never a result (issue 23 item 4).
+
+    ``x_in_error``: ``r.error`` is finite only if ``r.x`` is (not looked at again)."""
+    arrays = [a for a in (r.v, r.force, r.drive_force, r.drive_velocity) if a is not None]
+    if not x_in_error:
+        arrays.append(r.x)
     # An array is finite where its max and min are (NaN and ±inf propagate to one of
     # them): two reductions instead of a boolean array as large as the outputs.
     if math.isfinite(r.error) and all(
             not a.size or (math.isfinite(float(a.max())) and math.isfinite(float(a.min())))
             for a in arrays):
         return
+    arrays = [a for a in (r.x, r.v, r.force, r.drive_force, r.drive_velocity) if a is not None]
     bad = [np.flatnonzero(~np.isfinite(a).reshape(a.shape[0], -1).all(axis=1)) for a in arrays]
     first = min((int(b[0]) for b in bad if b.size), default=None)
     if first is None and math.isfinite(r.error):
@@ -758,7 +775,8 @@ def _cached_plan(A, B, h, Cx, cache):
 
 
 def _propagate_modal_x(A, B, z0, u, h, Cx, w=None, cache=None, Cv=None):
-    """x (and v with ``Cv``) by the modal path in blocks of samples: (X, V, note, dropped, y).
+    """x (and v with ``Cv``) by the modal path in blocks of samples: (X, V, note, dropped, y,
+    bound of max|X| or None).
 
     X = Cx z and V = Cv z (None without ``Cv``) without the drive's direct
     terms; y = w·z (None without w).  Without ``Cv`` x is formed from the
@@ -766,7 +784,9 @@ def _propagate_modal_x(A, B, z0, u, h, Cx, w=None, cache=None, Cv=None):
     :func:`_propagate_modal`; with it every column is used (v needs them all)
     and ``dropped`` is 0.  (None, None, reason, 0, None) when the modal path
     refuses (or numba is not installed: the block loop is compiled only), and
-    the caller takes the general path.
+    the caller takes the general path.  The bound of max|X| comes from the
+    modes' largest amplitudes (a pass over X costs 10–15 % of the run); None
+    where it is not finite (or near overflow), and the caller looks at X.
 
     The recurrence fills a block of modal signals, one product per output maps
     it, and the next block continues from the block's last state (blocks
@@ -775,10 +795,10 @@ def _propagate_modal_x(A, B, z0, u, h, Cx, w=None, cache=None, Cv=None):
     from . import _kernels as kern
 
     if not kern.HAVE_NUMBA or not Cx.shape[0]:
-        return None, None, "no compiled block loop", 0.0, None
+        return None, None, "no compiled block loop", 0.0, None, None
     plan = _cached_plan(A, B, h, Cx, cache)
     if isinstance(plan, str):
-        return None, None, plan, 0.0, None
+        return None, None, plan, 0.0, None, None
     (m, Vinv_k, rot, mu, g1, g2, cre, cim, nx, T, note, late) = plan
     N = A.shape[0]
     ncols = nx if Cv is None else N
@@ -814,7 +834,16 @@ def _propagate_modal_x(A, B, z0, u, h, Cx, w=None, cache=None, Cv=None):
     if late.any() and Cv is None:
         cols = cim[late]
         dropped = float((np.abs(Cx @ T[:, cols]).max(axis=0) * qmax[late]).sum())
-    return X, V, note, dropped, (None if w is None else y)
+    # max|x| ≤ max_i Σ_c |Sx[c, i]| · (largest |q| of column c's mode): a bound of
+    # x from the recurrence, without a pass over x (finite only if every q was)
+    col = np.zeros(ncols)
+    for cols in (cre, cim):
+        at = (cols >= 0) & (cols < ncols)
+        col[cols[at]] = qmax[at]
+    with np.errstate(all="ignore"):
+        bound = float(np.max(np.abs(Sx).T @ col, initial=0.0))
+    return X, V, note, dropped, (None if w is None else y), \
+        (bound if bound < 1e300 else None)
 
 
 def _modal_plan(A, B, h, Cx):
