@@ -531,8 +531,7 @@ class _Parser:
         ``"value"`` or the option's name to its token.
         """
         positional: list[_Token] = []
-        options: dict[str, _Token] = {}
-        units: dict[str, _Token] = {}
+        options, units = {}, {}
         previous = None
         for tok in line.tokens[1:]:
             if previous is not None and "=" not in tok.text and looks_like_unit(tok.text):

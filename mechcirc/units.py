@@ -178,7 +178,7 @@ def parse_unit(text: str) -> Unit:
             dim[k] += sign * power * d[k]
         i = m.end()
         if i == len(text):
-            return Unit(text, float(factor), tuple(dim))
+            return Unit(text, float(factor), (dim[0], dim[1], dim[2]))
         op = text[i]
         if op not in "*·/":
             raise UnitError(f"unexpected {op!r} in unit {text!r}", i, "'*' or '/' between units")
@@ -275,7 +275,7 @@ def parse_quantity(text: str, role: str | None = None, *, what: str = "value") -
         if re.fullmatch(r"\s*[-+]?\d+,\d+\s*\S*\s*", text):
             raise UnitError(f"{what} {text!r} has a decimal comma", 0,
                             f"a decimal point: {text.strip().replace(',', '.', 1)!r}")
-        example = {"omega": "50Hz, 50 Hz, 3000rpm or 314 (rad/s)"}.get(role, "12, 1.5e3, 500 g")
+        example = "50Hz, 50 Hz, 3000rpm or 314 (rad/s)" if role == "omega" else "12, 1.5e3, 500 g"
         noun = "a frequency" if role == "omega" else "a number with an optional unit"
         raise UnitError(f"{what} {text!r} is not {noun}", 0, f"a quantity such as {example}")
     number, unit = parts

@@ -40,6 +40,7 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass, field
+from typing import Any
 
 from ..errors import MechcircError
 from ..sources import brief, finite_number, located
@@ -146,7 +147,7 @@ def parse_simulate(text, source, table, scene) -> SimulateSettings:
         return SimulateSettings()
     if not isinstance(table, dict):
         raise located(text, source, "simulate must be a table [simulate]", None, "simulate")
-    kw = {}
+    kw: dict[str, Any] = {}
     for k, v in table.items():
         if k == "aliases":
             if not isinstance(v, dict) or not all(
