@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from .circuit import Circuit
-from ._sweep import UNDAMPED_ZETA, Sweep, sweep
+from ._sweep import UNDAMPED_ZETA, Method, Sweep, sweep
 
 __all__ = ["adaptive_sweep", "UNDAMPED_OFFSETS"]
 
@@ -33,7 +33,7 @@ UNDAMPED_OFFSETS = (1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2, 0.1)
 
 def adaptive_sweep(circuit: Circuit, omega_min: float, omega_max: float, *,
                    tol: float = 0.005, initial: int = 41, max_points: int | None = None,
-                   method: str = "auto") -> Sweep:
+                   method: Method = "auto") -> Sweep:
     """Sweep ``circuit`` over [``omega_min``, ``omega_max``] [rad/s] on an adaptive grid.
 
     Parameters

@@ -139,6 +139,9 @@ class ParameterError(MechcircError, ValueError):
 class TopologyError(MechcircError, ValueError):
     """The network cannot be analysed as asked; names the blocking nodes/elements."""
 
+    #: ``FILE:LINE:COL`` of the statement at fault, when known (the CLI shows it).
+    location: str | None = None
+
     def __init__(self, message: str, nodes=(), elements=()):
         self.message = message
         self.nodes = tuple(nodes)

@@ -14,7 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from .circuit import LAWS, Circuit
-from .reduction import Leaf, Node, Parallel, Series, leaves, postorder
+from .reduction import Leaf, Node, Parallel, Reflect, Series, leaves, postorder
 
 __all__ = ["Step", "explain", "explain_lines"]
 
@@ -68,7 +68,8 @@ def explain(circuit: Circuit) -> tuple[list[Step], str]:
         counts[kind] += 1
         label = f"{prefix[kind]}{counts[kind]}"
         labels[id(node)] = label
-        if kind == "lever":
+        operands: tuple[str, ...]
+        if isinstance(node, Reflect):
             r = node.lever.ratio
             child = name(node.child)
             text = f"{node.lever.name}[{child}]"

@@ -22,7 +22,7 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass
-from typing import Callable, Mapping
+from typing import Callable, Mapping, NoReturn, cast
 
 from .errors import NetlistError
 
@@ -66,7 +66,7 @@ class Expr:
 
     def names(self) -> set[str]:
         """Parameter names used in the expression."""
-        return {node.value for node in postorder(self) if node.kind == "name"}
+        return {cast(str, node.value) for node in postorder(self) if node.kind == "name"}
 
 
 def postorder(root: Expr) -> list[Expr]:
@@ -93,7 +93,7 @@ class _Parser:
         self.tokens = self._tokenise()
         self.pos = 0
 
-    def error(self, message: str, col: int, expected: str | None = None):
+    def error(self, message: str, col: int, expected: str | None = None) -> NoReturn:
         raise NetlistError(message, self.source, self.line, self.col0 + col + 1, expected)
 
     def _tokenise(self):
@@ -246,30 +246,30 @@ def evaluate(expr: Expr, params: Mapping[str, float], *, source: str = "<string>
     """
     base = col - 1
 
-    def fail(message: str, node: Expr, expected: str | None = None):
+    def fail(message: str, node: Expr, expected: str | None = None) -> NoReturn:
         raise NetlistError(message, source, line, base + node.col + 1, expected)
 
     values: dict[int, float] = {}
 
     def ev(node: Expr) -> float:
-        k = node.kind
+        k, v = node.kind, cast(str, node.value)   # v is a float for "num", else a str
         if k == "num":
-            return node.value
+            return cast(float, v)
         if k == "name":
-            if node.value in params:
-                return params[node.value]
-            if node.value in CONSTANTS:
-                return CONSTANTS[node.value]
-            fail(f"undefined parameter {node.value!r}", node,
+            if v in params:
+                return params[v]
+            if v in CONSTANTS:
+                return CONSTANTS[v]
+            fail(f"undefined parameter {v!r}", node,
                  "a parameter defined by an earlier .param line")
         if k == "neg":
             return -values.pop(id(node.args[0]))
         if k == "call":
             x = values.pop(id(node.args[0]))
             try:
-                return FUNCTIONS[node.value](x)
+                return FUNCTIONS[v](x)
             except (ValueError, OverflowError):
-                fail(f"{node.value}({x!r}) is undefined or out of range", node)
+                fail(f"{v}({x!r}) is undefined or out of range", node)
         a, b = values.pop(id(node.args[0])), values.pop(id(node.args[1]))
         return _binary(k, a, b, lambda message: fail(message, node))
 
@@ -371,26 +371,25 @@ def evaluate_array(expr: Expr, params: Mapping, size: int):
     global _POW
     if _POW is None:
         _POW = np.frompyfunc(_pow, 2, 1)
-    values: dict[int, object] = {}
+    values: dict[int, np.ndarray] = {}
     bad = np.zeros(size, dtype=bool)
     with np.errstate(all="ignore"):
         for node in postorder(expr):
-            k = node.kind
+            k, v = node.kind, cast(str, node.value)   # v is a float for "num", else a str
             if k == "num":
-                r = np.full(size, node.value)
+                r = np.full(size, v)
             elif k == "name":
-                if node.value in params:
-                    r = np.broadcast_to(np.asarray(params[node.value], dtype=float),
-                                        (size,)).copy()
-                elif node.value in CONSTANTS:
-                    r = np.full(size, CONSTANTS[node.value])
+                if v in params:
+                    r = np.broadcast_to(np.asarray(params[v], dtype=float), (size,)).copy()
+                elif v in CONSTANTS:
+                    r = np.full(size, CONSTANTS[v])
                 else:
-                    raise NetlistError(f"undefined parameter {node.value!r}")
+                    raise NetlistError(f"undefined parameter {v!r}")
             elif k == "neg":
                 r = -values.pop(id(node.args[0]))
             elif k == "call":
                 x = values.pop(id(node.args[0]))
-                f = FUNCTIONS[node.value]
+                f = FUNCTIONS[v]
                 r = np.empty(size)
                 for i, xi in enumerate(x.tolist()):
                     try:

@@ -40,10 +40,10 @@ import os
 import re
 import weakref
 from dataclasses import dataclass, fields
-from typing import Mapping
+from typing import Mapping, NoReturn
 from pathlib import Path
 
-from .circuit import ELEMENT_UNITS, Circuit, Drive, Element, Lever
+from .circuit import ELEMENT_UNITS, Circuit, Drive, Element, ElementKind, Lever
 from .errors import NetlistError
 from .expressions import CONSTANTS, FUNCTIONS, Expr, evaluate, parse_expression
 from .sources import read_source, split_lines
@@ -61,6 +61,8 @@ MAX_STATEMENTS = 1_000_000
 
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*|[0-9]+")
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+#: An entry of ``_Parser.expressions``: (Expr, factor), or the fast path's raw number.
+_Stored = tuple[Expr | float, float] | float
 
 #: The form of each statement, quoted in error messages.
 SYNTAX = {
@@ -106,7 +108,7 @@ _FAST = re.compile(
     + _FAST_NAME + r"[ \t]+" + _FAST_NUMBER
     + r"(?:[ \t]+([A-Za-z\u00b5\u03bc][A-Za-z0-9*/^\-\u00b7\u00b2\u00b3\u00b5\u03bc]*))?"
     + r"(?:[ \t]+eta=" + _FAST_NUMBER + r")?[ \t]*(?:[#;].*)?")
-_FAST_KINDS = {"mass": "mass", "spring": "spring", "damper": "damper"}
+_FAST_KINDS: dict[str, ElementKind] = {"mass": "mass", "spring": "spring", "damper": "damper"}
 
 _new = object.__new__
 
@@ -172,7 +174,7 @@ class _Line:
         self.source, self.lineno = source, lineno
         self.tokens = self._split(text)
 
-    def error(self, message: str, col: int, expected: str | None = None):
+    def error(self, message: str, col: int, expected: str | None = None) -> NoReturn:
         raise NetlistError(message, self.source, self.lineno, col, expected)
 
     def _split(self, text: str) -> list[_Token]:
@@ -290,8 +292,9 @@ class _Parser:
         self.drive_rotational: bool | None = None
         self.names: dict[str, int] = {}
         #: Parsed expressions and unit factors, for symbolic formulas:
-        #: ``("param", name)`` / ``(element, "value" | "eta")`` -> (Expr, factor).
-        self.expressions: dict[tuple[str, str], tuple[Expr, float]] = {}
+        #: ``("param", name)`` / ``(element, "value" | "eta")`` -> (Expr, factor); the fast
+        #: path stores ``raw`` or ``(raw, factor)`` until :func:`_materialise`.
+        self.expressions: dict[tuple[str, str], _Stored] = {}
         #: node -> {True: (element, unit), False: ...}: rotational / translational units seen.
         self.node_kinds: dict[str, dict[bool, tuple[str, str, int]]] = {}
 
@@ -355,7 +358,7 @@ class _Parser:
         and where each parameter is defined, so a use-before-definition can name
         the line."""
         parsed: list = []
-        run = None
+        run: list[tuple[int, str, re.Match[str]]] | None = None
         fast = _FAST.fullmatch
         for lineno, raw in enumerate(lines, start=1):
             if len(raw) > MAX_LINE_LENGTH:
@@ -406,7 +409,8 @@ class _Parser:
                 line.error(f"unknown keyword {word!r}{did_you_mean(word.lower(), KEYWORDS)}",
                            line.tokens[0].col,
                            "one of .param, .ic, mass, spring, damper, lever, drive")
-            handler(line, keyword)
+            else:
+                handler(line, keyword)
 
     def _check_complete(self, parsed: list) -> None:
         if not parsed:
@@ -472,8 +476,8 @@ class _Parser:
                 expected = (f"{expected}; note: mechcirc has no SPICE suffixes, "
                             f"'{unit.text}' is read as a unit")
             line.error(exc.message, unit.col + exc.offset, expected)
-        if key is not None and key in self.expressions:
-            self.expressions[key] = (self.expressions[key][0], u.factor)
+        if key is not None and isinstance(entry := self.expressions.get(key), tuple):
+            self.expressions[key] = (entry[0], u.factor)
         return out
 
     def param(self, line: _Line):
@@ -526,7 +530,8 @@ class _Parser:
         like a unit (``kg``, ``N/mm``) is that value's unit; ``units`` maps
         ``"value"`` or the option's name to its token.
         """
-        positional, options, units = [], {}, {}
+        positional: list[_Token] = []
+        options, units = {}, {}
         previous = None
         for tok in line.tokens[1:]:
             if previous is not None and "=" not in tok.text and looks_like_unit(tok.text):
@@ -568,8 +573,7 @@ class _Parser:
             end = line.tokens[-1].col + len(line.tokens[-1].text)
             last = positional[-1] if positional else None
             if missing == "VALUE" and last is not None and last.text != "0" and \
-                    split_quantity(last.text) and \
-                    _is_number(split_quantity(last.text)[0]):
+                    (quantity := split_quantity(last.text)) and _is_number(quantity[0]):
                 # 'mass m a 2': the value is there, read as node N2: a node is missing
                 line.error(f"{keyword} line is missing a node: it has {len(positional)} of "
                            f"the fields {' '.join(fields)}, and {last.text!r}, read as "
@@ -649,7 +653,7 @@ class _Parser:
                 self._note_kind(lineno, name, u, unit, m.start(7) + 1, (n1, n2))
             append(make(kind, name, n1, n2, value, eta, lineno, len(indent) + 1))
 
-    def element(self, line: _Line, kind: str):
+    def element(self, line: _Line, kind: ElementKind):
         allowed = ("eta", "backlash", "damping") if kind == "spring" else ("eta",)
         pos, opts, units = self._fields(line, kind, 4, allowed)
         name = self._new_name(line, pos[0])
@@ -744,7 +748,7 @@ class _Parser:
     def lever(self, line: _Line, kind: str):
         pos, opts, units = self._fields(line, kind, 5, ("ratio",))
         name = self._new_name(line, pos[0])
-        nodes = [self._name(line, t, "node name") for t in pos[1:5]]
+        p1, p2, s1, s2 = nodes = [self._name(line, t, "node name") for t in pos[1:5]]
         if nodes[0] == nodes[1]:
             line.error(f"both primary ends of lever {name!r} are node {nodes[0]!r}",
                        pos[2].col, "two different nodes")
@@ -755,7 +759,7 @@ class _Parser:
             line.error(f"lever {name!r} needs ratio=EXPR", line.tokens[-1].col, SYNTAX["lever"])
         ratio = self._positive(line, opts["ratio"], f"ratio of lever {name!r}", "",
                                unit_tok=units.get("ratio"), role="ratio", key=(name, "ratio"))
-        self.levers.append(Lever(name, *nodes, ratio, line.lineno, line.tokens[0].col))
+        self.levers.append(Lever(name, p1, p2, s1, s2, ratio, line.lineno, line.tokens[0].col))
 
     def drive(self, line: _Line, kind: str):
         pos, opts, units = self._fields(line, kind, 3, ("velocity", "force") + _MOTION_KEYS)

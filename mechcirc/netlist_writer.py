@@ -31,7 +31,7 @@ import os
 import re
 from collections.abc import Mapping
 
-from .circuit import Circuit, Element
+from .circuit import Circuit, Drive, Element
 
 __all__ = ["write"]
 
@@ -74,15 +74,8 @@ def write(circuit: Circuit, header: tuple[str, ...] | list[str] | str = (),
         return f"{line}   ; {notes[name]}" if notes.get(name) else line
 
     out = [f"# {line}".rstrip() for h in header for line in str(h).split("\n")]
-    d = circuit.drive
-    if d is not None:
-        how = f"{d.kind}={_number(d.amplitude)}"
-        if d.rotational:            # with its unit, so the text reads back as a rotary drive
-            how += " rad/s" if d.kind == "velocity" else " N*m"
-        if d.motion is not None:     # a table by its absolute path: the text may go elsewhere
-            how = (f"motion={os.path.abspath(d.motion.path)}" if d.motion.path
-                   else d.motion.spec)
-        out.append(noted(d.name, f"drive {_names(d.name, d.n1, d.n2)} {how}"))
+    if circuit.drive is not None:
+        out.append(noted(circuit.drive.name, _drive_line(circuit.drive)))
     elements = circuit.elements
     i = 0
     while i < len(elements):
@@ -103,6 +96,16 @@ def write(circuit: Circuit, header: tuple[str, ...] | list[str] | str = (),
     for node, x0, v0 in circuit.initial:
         out.append(f".ic {_names(node)} x={_number(x0)} v={_number(v0)}")
     return "\n".join(out) + "\n"
+
+
+def _drive_line(d: Drive) -> str:
+    """The ``drive`` statement of ``d``."""
+    how = f"{d.kind}={_number(d.amplitude)}"
+    if d.rotational:            # with its unit, so the text reads back as a rotary drive
+        how += " rad/s" if d.kind == "velocity" else " N*m"
+    if d.motion is not None:     # a table by its absolute path: the text may go elsewhere
+        how = f"motion={os.path.abspath(d.motion.path)}" if d.motion.path else d.motion.spec
+    return f"drive {_names(d.name, d.n1, d.n2)} {how}"
 
 
 def _is_companion(spring: Element, e: Element | None) -> bool:

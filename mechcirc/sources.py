@@ -7,6 +7,7 @@ import os
 import re
 import stat
 from dataclasses import dataclass
+from typing import TypeGuard
 
 from .errors import NetlistError
 
@@ -110,7 +111,7 @@ def line_col(text: str, index: int) -> tuple[int, int]:
 
 
 # ------------------------------------------------------------------ values
-def finite_number(value) -> bool:
+def finite_number(value) -> TypeGuard[float]:
     """A TOML integer or float that is a finite float64 (not a bool, not ``10**400``)."""
     if not isinstance(value, (int, float)) or isinstance(value, bool):
         return False

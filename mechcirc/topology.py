@@ -9,7 +9,7 @@
 from __future__ import annotations
 
 from collections import deque
-from typing import Sequence
+from typing import Iterator, Sequence
 
 from .circuit import FRAME, Circuit, node_names  # node_names: re-exported here
 from .errors import TopologyError
@@ -100,7 +100,7 @@ def _block_with(adj: dict[str, set[str]], a: str, b: str) -> set[frozenset]:
     disc = {a: 0}
     low = {a: 0}
     edges: list[tuple[str, str]] = []
-    stack = [(a, None, iter(adj[a]))]
+    stack: list[tuple[str, str | None, Iterator[str]]] = [(a, None, iter(adj[a]))]
     while stack:
         u, parent, it = stack[-1]
         for w in it:

@@ -178,7 +178,7 @@ def parse_unit(text: str) -> Unit:
             dim[k] += sign * power * d[k]
         i = m.end()
         if i == len(text):
-            return Unit(text, float(factor), tuple(dim))
+            return Unit(text, float(factor), (dim[0], dim[1], dim[2]))
         op = text[i]
         if op not in "*·/":
             raise UnitError(f"unexpected {op!r} in unit {text!r}", i, "'*' or '/' between units")
@@ -221,6 +221,19 @@ def in_unit(omega, unit: str = "rad/s"):
 
 _NUMBER = r"[-+]?(?:(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|inf|nan)"
 _QUANTITY = re.compile(r"\s*(" + _NUMBER + r")\s*(\S.*?)?\s*", re.IGNORECASE)
+
+
+def _not_a_quantity(text: str, role: str | None, what: str) -> UnitError:
+    """The error for a ``text`` that is not a number with an optional unit."""
+    if any(c in text for c in _MINUS_SIGNS):
+        return UnitError(f"{what} {text!r} has a Unicode minus or dash", 0,
+                         "the ASCII hyphen-minus '-', e.g. 2e-6")
+    if re.fullmatch(r"\s*[-+]?\d+,\d+\s*\S*\s*", text):
+        return UnitError(f"{what} {text!r} has a decimal comma", 0,
+                         f"a decimal point: {text.strip().replace(',', '.', 1)!r}")
+    example = "50Hz, 50 Hz, 3000rpm or 314 (rad/s)" if role == "omega" else "12, 1.5e3, 500 g"
+    noun = "a frequency" if role == "omega" else "a number with an optional unit"
+    return UnitError(f"{what} {text!r} is not {noun}", 0, f"a quantity such as {example}")
 
 
 def split_quantity(text: str) -> tuple[str, str] | None:
@@ -269,15 +282,7 @@ def parse_quantity(text: str, role: str | None = None, *, what: str = "value") -
     text = str(text)
     parts = split_quantity(text)
     if parts is None:
-        if any(c in text for c in _MINUS_SIGNS):
-            raise UnitError(f"{what} {text!r} has a Unicode minus or dash", 0,
-                            "the ASCII hyphen-minus '-', e.g. 2e-6")
-        if re.fullmatch(r"\s*[-+]?\d+,\d+\s*\S*\s*", text):
-            raise UnitError(f"{what} {text!r} has a decimal comma", 0,
-                            f"a decimal point: {text.strip().replace(',', '.', 1)!r}")
-        example = {"omega": "50Hz, 50 Hz, 3000rpm or 314 (rad/s)"}.get(role, "12, 1.5e3, 500 g")
-        noun = "a frequency" if role == "omega" else "a number with an optional unit"
-        raise UnitError(f"{what} {text!r} is not {noun}", 0, f"a quantity such as {example}")
+        raise _not_a_quantity(text, role, what)
     number, unit = parts
     value = float(number)
     if not unit:

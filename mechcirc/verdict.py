@@ -24,7 +24,7 @@ def judge(row: dict, error: float | None, tol: float, why: str | None = None) ->
     """
     if why is None and (error is None or math.isnan(error)):
         why = "no difference could be formed"
-    if why is not None:
+    if why is not None or error is None:      # (error None always has a why here)
         row.update(verdict=UNMEASURED, tol=tol, why=why)
     else:
         row.update(verdict=AGREES if error <= tol else DISAGREES, tol=tol, why="")

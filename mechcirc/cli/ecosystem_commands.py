@@ -260,7 +260,7 @@ def cmd_study(args) -> int:
     where = {"dask": f"Dask cluster {args.scheduler} ({result.workers} threads)",
              "local": f"{result.workers} local processes",
              "inline": "this process"}[result.executor]
-    model = spec.netlist_source if spec.analysis != "simulate" else \
+    model = spec.netlist_source if spec.sley is None else \
         f"the sley model, {spec.sley[0]} variant {spec.sley[1]}"
     print(f"{args.spec}: {result.count} points of {model} ({spec.analysis}) on {where}")
     if result.skipped:

@@ -205,7 +205,7 @@ def _table(result, paper_applies: bool = True) -> str:
     p = result.params
     variant = int(p.label.split()[-1]) if p.label.split()[-1:] and \
         p.label.split()[-1].isdigit() else None
-    paper = PAPER.get(p.drive, {}).get(variant, {}) if paper_applies else {}
+    paper = PAPER.get(p.drive, {}).get(variant, {}) if paper_applies and variant else {}
     speed = f"{result.wall_time * 1e3:.1f} ms"
     if result.compile_time:
         speed += f" + {result.compile_time:.2f} s compile/cache load"

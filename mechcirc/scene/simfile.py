@@ -39,7 +39,8 @@ from __future__ import annotations
 
 import math
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
+from typing import Any
 
 from ..errors import MechcircError
 from ..sources import brief, finite_number, located
@@ -146,7 +147,7 @@ def parse_simulate(text, source, table, scene) -> SimulateSettings:
         return SimulateSettings()
     if not isinstance(table, dict):
         raise located(text, source, "simulate must be a table [simulate]", None, "simulate")
-    kw = {}
+    kw: dict[str, Any] = {}
     for k, v in table.items():
         if k == "aliases":
             if not isinstance(v, dict) or not all(
@@ -216,10 +217,6 @@ def apply_overrides(scene, overrides: dict):
     MechcircError
         An unknown name or field, or a value out of range (named).
     """
-    import dataclasses
-
-
-
     masses = {m.name: m for m in scene.masses}
     groups = {"elastic": {e.name: e for e in scene.elastic},
               "torsions": {t.name: t for t in scene.torsions},
@@ -229,57 +226,64 @@ def apply_overrides(scene, overrides: dict):
     for key, value in overrides.items():
         if not (isinstance(value, float) and math.isfinite(value)):
             raise MechcircError(f"--set {key}: the value must be a finite number, got {value!r}")
-        if key == "omega":
-            if value <= 0:
-                raise MechcircError(f"--set omega must be > 0 rad/s, got {value!r}")
-            sim = dataclasses.replace(sim, omega=value)
-            continue
-        if key in ("omega_ripple.amplitude", "omega_ripple.harmonic"):
-            a, k = sim.omega_ripple or (0.0, 1)
-            if key.endswith("amplitude"):
-                if not 0 <= value < 1:
-                    raise MechcircError(f"--set {key} must be in [0, 1), got {value!r}")
-                a = value
-            else:
-                if value != int(value) or value < 1:
-                    raise MechcircError(f"--set {key} must be a whole number >= 1, got "
-                                        f"{value!r}")
-                k = int(value)
-            sim = dataclasses.replace(sim, omega_ripple=(a, k))
+        if key in ("omega", "omega_ripple.amplitude", "omega_ripple.harmonic"):
+            sim = _override_run(sim, key, value)
             continue
         name, _, fld = key.partition(".")
         if name in masses and fld in ("mass", "inertia", "value"):
             if value <= 0:
                 raise MechcircError(f"--set {key} must be > 0, got {value!r}")
-            masses[name] = dataclasses.replace(masses[name], value=value)
+            masses[name] = replace(masses[name], value=value)
             continue
         grp = next((g for g in groups.values() if name in g), None)
         if grp is not None and fld in ("stiffness", "damping", "clearance"):
             if value < 0 or (fld == "clearance" and not hasattr(grp[name], "clearance")):
                 raise MechcircError(f"--set {key}: must be ≥ 0 (and clearance applies to "
                                     f"elastic links and torsion rods), got {value!r}")
-            grp[name] = dataclasses.replace(grp[name], **{fld: value})
+            grp[name] = replace(grp[name], **{fld: value})
             continue
         if name in moments and fld in ("amplitude", "window_deg", "sigma_deg"):
-            if fld == "amplitude":
-                moments[name] = dataclasses.replace(moments[name], amplitude=value)
-            else:
-                if not 0 < value < 360:
-                    raise MechcircError(f"--set {key} must be in (0, 360) deg, got {value!r}")
-                rad = math.radians(value)
-                old = moments[name]
-                moments[name] = dataclasses.replace(
-                    old, window=rad, sigma=rad if old.sigma == old.window else old.sigma) \
-                    if fld == "window_deg" else dataclasses.replace(old, sigma=rad)
+            moments[name] = _override_moment(moments[name], key, fld, value)
             continue
         known = ["omega", "omega_ripple.amplitude/harmonic"] + [f"{n}.inertia/mass" for n in masses] + \
             [f"{n}.stiffness/damping/clearance" for g in groups.values() for n in g] + \
             [f"{n}.amplitude/window_deg/sigma_deg" for n in moments]
         raise MechcircError(f"--set {key}: no such parameter; known: {', '.join(known)}")
-    return dataclasses.replace(
+    return replace(
         scene, masses=tuple(masses.values()), elastic=tuple(groups["elastic"].values()),
         torsions=tuple(groups["torsions"].values()), loads=tuple(groups["loads"].values()),
         moments=tuple(moments.values()), simulate=sim)
+
+
+def _override_run(sim: SimulateSettings, key: str, value: float) -> SimulateSettings:
+    """``sim`` with ``omega``, ``omega_ripple.amplitude`` or ``.harmonic`` set to ``value``."""
+    if key == "omega":
+        if value <= 0:
+            raise MechcircError(f"--set omega must be > 0 rad/s, got {value!r}")
+        return replace(sim, omega=value)
+    a, k = sim.omega_ripple or (0.0, 1)
+    if key.endswith("amplitude"):
+        if not 0 <= value < 1:
+            raise MechcircError(f"--set {key} must be in [0, 1), got {value!r}")
+        a = value
+    else:
+        if value != int(value) or value < 1:
+            raise MechcircError(f"--set {key} must be a whole number >= 1, got {value!r}")
+        k = int(value)
+    return replace(sim, omega_ripple=(a, k))
+
+
+def _override_moment(old, key: str, fld: str, value: float):
+    """The moment ``old`` with ``amplitude``, ``window_deg`` or ``sigma_deg`` set to ``value``
+    (a window that was its own sigma keeps sigma equal to it)."""
+    if fld == "amplitude":
+        return replace(old, amplitude=value)
+    if not 0 < value < 360:
+        raise MechcircError(f"--set {key} must be in (0, 360) deg, got {value!r}")
+    rad = math.radians(value)
+    if fld == "window_deg":
+        return replace(old, window=rad, sigma=rad if old.sigma == old.window else old.sigma)
+    return replace(old, sigma=rad)
 
 
 # ------------------------------------------------------------------ [shaft]

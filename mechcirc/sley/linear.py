@@ -134,15 +134,16 @@ def _mck(p: SleyParameters, mu):
     else:
         n = 3
         z = np.zeros_like(mu)
+        I5P, I7, C5, C7, k5, k7 = p.second_side()
         M = np.zeros((mu.size, n, n))
-        M[:, 0, 0], M[:, 1, 1], M[:, 2, 2] = p.I2P + p.I4 * m2, p.I5P + p.I7 * m2, p.I4P
+        M[:, 0, 0], M[:, 1, 1], M[:, 2, 2] = p.I2P + p.I4 * m2, I5P + I7 * m2, p.I4P
         K = np.stack([np.stack([p.C2 + p.C4 * m2, z, -p.C4 * mu], -1),
-                      np.stack([z, p.C5 + p.C7 * m2, -p.C7 * mu], -1),
-                      np.stack([-p.C4 * mu, -p.C7 * mu, (p.C4 + p.C7) * one], -1)], -2)
+                      np.stack([z, C5 + C7 * m2, -C7 * mu], -1),
+                      np.stack([-p.C4 * mu, -C7 * mu, (p.C4 + C7) * one], -1)], -2)
         C = np.stack([np.stack([p.k2 + p.k4 * m2, z, -p.k4 * mu], -1),
-                      np.stack([z, p.k5 + p.k7 * m2, -p.k7 * mu], -1),
-                      np.stack([-p.k4 * mu, -p.k7 * mu, (p.k4 + p.k7) * one], -1)], -2)
-        kd, cd = np.array([p.C2, p.C5, 0.0]), np.array([p.k2, p.k5, 0.0])
+                      np.stack([z, k5 + k7 * m2, -k7 * mu], -1),
+                      np.stack([-p.k4 * mu, -k7 * mu, (p.k4 + k7) * one], -1)], -2)
+        kd, cd = np.array([p.C2, C5, 0.0]), np.array([p.k2, k5, 0.0])
     return M, C, K, kd, cd
 
 
@@ -289,9 +290,10 @@ def to_circuit(params: SleyParameters, theta0: float, *, lever: bool = False,
     elements.append(Element("mass", "J2", "crank", "0", p.I2P + p.I4 * mu2))
     rocker_side("crank", "rocker", p.C4, p.k4, "4")
     if p.drive == "both-sides":
-        rod("5", "shaft", "crank5", p.C5, p.k5)
-        elements.append(Element("mass", "J5", "crank5", "0", p.I5P + p.I7 * mu2))
-        rocker_side("crank5", "rocker7", p.C7, p.k7, "7")
+        I5P, I7, C5, C7, k5, k7 = p.second_side()
+        rod("5", "shaft", "crank5", C5, k5)
+        elements.append(Element("mass", "J5", "crank5", "0", I5P + I7 * mu2))
+        rocker_side("crank5", "rocker7", C7, k7, "7")
     elements.append(Element("mass", "I4P", "sley", "0", p.I4P, eta))
     return Circuit(tuple(elements),
                    Drive("V", "shaft", "0", "velocity", float(v), rotational=True),

@@ -180,6 +180,13 @@ class SleyParameters:
         """The beat-up four-bar (crank 2P, coupler 3, rocker 4, frame) as a ``FourBar``."""
         return fourbar_of_lengths(self.l2P, self.l3, self.l4, self.d, self.branch)
 
+    def second_side(self) -> tuple[float, float, float, float, float, float]:
+        """``(I5P, I7, C5, C7, k5, k7)`` of a both-sides drive (checked when it was made)."""
+        I5P, I7, C5, C7, k5, k7 = self.I5P, self.I7, self.C5, self.C7, self.k5, self.k7
+        if I5P is None or I7 is None or C5 is None or C7 is None or k5 is None or k7 is None:
+            raise ParameterError(f"the {self.drive} drive has no second crank side")
+        return I5P, I7, C5, C7, k5, k7
+
     @property
     def sigma(self) -> float:
         """σ of eq. (7) [rad]; our reading σ = α (DIGEST §2)."""

@@ -25,7 +25,9 @@ k4 = k7 = 13; ω, ϕ, M0 as in Table 1.
 
 from __future__ import annotations
 
-from .models import ParameterError, SleyParameters
+from typing import cast
+
+from .models import Drive, ParameterError, SleyParameters
 
 __all__ = ["preset", "all_presets", "PAPER", "VARIANTS", "READINGS"]
 
@@ -97,7 +99,7 @@ def preset(drive: str = "one-side", variant: int = 3, **overrides) -> SleyParame
     if isinstance(variant, bool) or variant not in VARIANTS:
         raise ParameterError(f"variant must be one of 1..7, got {variant!r}")
     row = _table1(variant) if drive == "one-side" else _table2(variant)
-    params = SleyParameters(drive=drive, label=f"{drive} variant {variant}", **row)
+    params = SleyParameters(drive=cast(Drive, drive), label=f"{drive} variant {variant}", **row)
     return params.replace(**overrides) if overrides else params
 
 

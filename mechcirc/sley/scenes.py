@@ -59,13 +59,14 @@ def scene_text(params: SleyParameters, *, revolutions: int = 5, title: str | Non
         lines += ["[[cranks]]", 'link = "crank5"', f"omega = {p.omega!r}"]
     rods = [("C2", "crank", "shaft", p.C2, p.k2), ("C4", "rocker", "sley", p.C4, p.k4)]
     if both:
-        rods += [("C5", "crank5", "shaft", p.C5, p.k5), ("C7", "rocker7", "sley", p.C7, p.k7)]
+        I5P, I7, C5, C7, k5, k7 = p.second_side()
+        rods += [("C5", "crank5", "shaft", C5, k5), ("C7", "rocker7", "sley", C7, k7)]
     for name, link, body, k, c in rods:
         lines += ["", "[[torsion]]", f'name = "{name}"', f'link = "{link}"', f'body = "{body}"',
                   f"stiffness = {k!r}", f"damping = {c!r}"] + ([cl.rstrip()] if cl else [])
     masses = [("I2P", "crank", p.I2P), ("I4", "rocker", p.I4), ("I4P", "sley", p.I4P)]
     if both:
-        masses += [("I5P", "crank5", p.I5P), ("I7", "rocker7", p.I7)]
+        masses += [("I5P", "crank5", I5P), ("I7", "rocker7", I7)]
     for name, link, v in masses:
         lines += ["", "[[masses]]", f'name = "{name}"', f'link = "{link}"', f"inertia = {v!r}"]
     if p.M0 > 0 or always_moment:
@@ -100,8 +101,9 @@ def scene_overrides(params: SleyParameters) -> dict:
            "M4.sigma_deg": math.degrees(p.sigma)}
     rods = ["C2", "C4"]
     if p.drive == "both-sides":
-        out.update({"I5P.inertia": p.I5P, "I7.inertia": p.I7, "C5.stiffness": p.C5,
-                    "C5.damping": p.k5, "C7.stiffness": p.C7, "C7.damping": p.k7})
+        I5P, I7, C5, C7, k5, k7 = p.second_side()
+        out.update({"I5P.inertia": I5P, "I7.inertia": I7, "C5.stiffness": C5,
+                    "C5.damping": k5, "C7.stiffness": C7, "C7.damping": k7})
         rods += ["C5", "C7"]
     for r in rods:
         out[f"{r}.clearance"] = p.clearance
