@@ -344,7 +344,7 @@ def cmd_simulate_scene(args) -> int:
     print(f"{args.scene}: scene {scene.name!r}, revolution {result.revolution} at "
           f"Ω = {result.omega:g} rad/s, {result.method} ({result.backend}), "
           f"{result.wall_time * 1e3:.1f} ms")
-    print(f"error estimate {est}, periodicity {per} (relative change of the extrema at half "
+    print(f"error estimate {est}, periodicity {per} (relative change of the extrema at twice "
           f"the step / from the previous revolution)")
     print(f"{'quantity':<28} {'min':>14} {'max':>14}")
     for k, (lo, hi) in result.extrema.items():

@@ -113,7 +113,7 @@ class SleyResult:
     error_estimate : float or None
         RK4 methods: the largest change of an extremum of any of the scene's
         outputs (accelerations, rod moments and twists, …) between the run at
-        the step and the run at half the step (the one returned), relative to
+        the step (the one returned) and a run at twice the step, relative to
         that quantity's largest magnitude (``docs/sley.md`` compares it with the
         true error); the scipy methods: the same change between the runs at
         rtol and rtol/100 (the one returned); None with ``error_estimate=False``.
@@ -310,9 +310,9 @@ def simulate_params(params: SleyParameters, revolutions: int = 5, method: str | 
                     error_estimate: bool = True) -> SleyResult:
     """:func:`simulate` for explicit :class:`SleyParameters` (same options).
 
-    ``error_estimate`` (rk4 methods): repeat the run at half the step, return
-    that run and keep the relative change of the extrema as
-    ``result.error_estimate`` (about three times the cost).  A
+    ``error_estimate`` (rk4 methods): repeat the run at twice the step (half the
+    steps per period) and keep the relative change of the extrema as
+    ``result.error_estimate`` (about 1.5 times the cost of the run alone).  A
     :class:`SleyAccuracyWarning` is issued when it or
     the periodicity exceeds 1e-3, or fewer steps per period than the default
     are used.  The run is the scene's (:func:`mechcirc.scene.simulate_scene`).
