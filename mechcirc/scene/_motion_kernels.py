@@ -284,10 +284,11 @@ def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, wo
 
 
 @_jit
-def regions(EI, EF, MOI, MOF, aux, work, off, reg, sw):
+def regions(FI, EI, EF, MOI, MOF, aux, work, off, reg, sw):
     """The smooth piece each force law is on, from the last right-hand side evaluated
     (``aux``, ``work``): reg[e] = −1, 0 (inside the gap), +1 for an element with a clearance
-    gap (0 for the others), reg[ne + k] = 1 inside the window of moment k, else 0; and the
+    gap (0 for the others), reg[ne + k] = 1 inside the window of moment k, else 0 (always 0
+    for a moment on the drive's part: it moves nothing that is integrated); and the
     value each edge test starts from into ``sw`` (a deformation, a window's phase).
     Returns how many switches there are (gaps and windows)."""
     ne = EI.shape[0]
@@ -307,6 +308,9 @@ def regions(EI, EF, MOI, MOF, aux, work, off, reg, sw):
     for k in range(MOI.shape[0]):
         x = work[6, MOI[k, 0]] - MOF[k, 3] + 0.5 * MOF[k, 1]
         sw[ne + k] = x
+        reg[ne + k] = 0
+        if FI[MOI[k, 1], 1] <= 0:
+            continue
         reg[ne + k] = 1 if x - TWO_PI * math.floor(x / TWO_PI) < MOF[k, 1] else 0
         count += 1
     return count
@@ -439,7 +443,7 @@ def rk4_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI
     npart = PRIG.shape[0]
     limit = PV[2]
     rhs(t0, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, k1, aux, work)
-    gaps = regions(EI, EF, MOI, MOF, aux, work, off, reg, sw0)
+    gaps = regions(FI, EI, EF, MOI, MOF, aux, work, off, reg, sw0)
     for step in range(nsteps):
         t = t0 + step * h
         t_end = t + h
@@ -451,7 +455,7 @@ def rk4_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI
             nfev += 4
             full = True
             if gaps > 0:
-                regions(EI, EF, MOI, MOF, aux, work, off, regn, sw1)
+                regions(FI, EI, EF, MOI, MOF, aux, work, off, regn, sw1)
                 changed = False
                 for e in range(nsw):
                     if regn[e] != reg[e]:
@@ -468,7 +472,7 @@ def rk4_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI
                         rk4_step(tc, hh, y, k1, k2, k3, k4, tmp, ynew, PV, FI, FF, tabs, MI_,
                                  MW, EI, EF, MOI, MOF, PRIG, BI, aux, work)
                         nfev += 3
-                        regions(EI, EF, MOI, MOF, aux, work, off, regn, sw1)
+                        regions(FI, EI, EF, MOI, MOF, aux, work, off, regn, sw1)
                     else:       # at an end of the step: keep it; aux back to ynew
                         rhs(tc + hh, ynew, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG,
                             BI, k4, aux, work)
