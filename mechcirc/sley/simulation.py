@@ -317,6 +317,39 @@ def simulate_params(params: SleyParameters, revolutions: int = 5, method: str | 
     the periodicity exceeds 1e-3, or fewer steps per period than the default
     are used.  The run is the scene's (:func:`mechcirc.scene.simulate_scene`).
     """
+    method, revolutions, steps_per_period, rtol = _checked(
+        method, revolutions, revolution, points_per_revolution, steps_per_period, rtol)
+    npts = int(points_per_revolution)
+    fb = params.fourbar()                       # GeometryError: not a crank-rocker
+    theta0 = start_angle(params)
+    phiP = fb.dead_centres()[0].theta
+    scene, model = _model(params, table_points)
+    from ..scene.simulation import SceneAccuracyWarning, simulate_scene
+
+    notes = [f"alpha = {math.degrees(params.alpha):g} deg (beat-up interval; sigma = alpha)"]
+    if params.M0 > 0:
+        notes.append("beat-up moment enters the sley equation as " +
+                     ("-M4 (eq. 4 as printed)" if params.beat_sign < 0 else
+                      "+M4 (beat_sign=+1: along the rigid acceleration at beat-up)"))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", SceneAccuracyWarning)
+        m = simulate_scene(scene, model=model, revolutions=revolutions,
+                           start_deg=math.degrees(theta0), steps_per_period=steps_per_period,
+                           points=npts, method=method, rtol=rtol, progress=progress,
+                           error_estimate=error_estimate)
+    for w in caught:
+        if issubclass(w.category, SceneAccuracyWarning):
+            text = str(w.message).split(": ", 1)[-1]
+            warnings.warn(f"{params.label or params.drive}: {text}", SleyAccuracyWarning,
+                          stacklevel=3)
+        else:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    return _result(params, model, m, theta0, phiP, notes)
+
+
+def _checked(method, revolutions, revolution, points_per_revolution, steps_per_period, rtol):
+    """The options of :func:`simulate_params`, checked (:class:`ParameterError` names the bad
+    one): (method, revolutions to integrate, steps per period or None, rtol or None)."""
     method = "rk4" if method is None else method
     if method not in METHODS:
         raise ParameterError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
@@ -345,33 +378,7 @@ def simulate_params(params: SleyParameters, revolutions: int = 5, method: str | 
             else float(steps_per_period)
         if not steps_per_period >= 1:
             raise ParameterError(f"steps_per_period must be >= 1, got {steps_per_period!r}")
-
-    npts = int(points_per_revolution)
-    fb = params.fourbar()                       # GeometryError: not a crank-rocker
-    theta0 = start_angle(params)
-    phiP = fb.dead_centres()[0].theta
-    scene, model = _model(params, table_points)
-    from ..scene.simulation import SceneAccuracyWarning, simulate_scene
-
-    notes = [f"alpha = {math.degrees(params.alpha):g} deg (beat-up interval; sigma = alpha)"]
-    if params.M0 > 0:
-        notes.append("beat-up moment enters the sley equation as " +
-                     ("-M4 (eq. 4 as printed)" if params.beat_sign < 0 else
-                      "+M4 (beat_sign=+1: along the rigid acceleration at beat-up)"))
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", SceneAccuracyWarning)
-        m = simulate_scene(scene, model=model, revolutions=revolutions,
-                           start_deg=math.degrees(theta0), steps_per_period=steps_per_period,
-                           points=npts, method=method, rtol=rtol, progress=progress,
-                           error_estimate=error_estimate)
-    for w in caught:
-        if issubclass(w.category, SceneAccuracyWarning):
-            text = str(w.message).split(": ", 1)[-1]
-            warnings.warn(f"{params.label or params.drive}: {text}", SleyAccuracyWarning,
-                          stacklevel=3)
-        else:
-            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
-    return _result(params, model, m, theta0, phiP, notes)
+    return method, revolutions, steps_per_period, rtol
 
 
 def _result(params: SleyParameters, model, m, theta0: float, phiP: float,
