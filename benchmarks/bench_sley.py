@@ -168,7 +168,7 @@ def rest(args, drive, variant, t_ref, ref, t_base, base, t_def, res, simulate, s
         ax.axhline(1e-3, color="k", lw=0.6, ls="--", label="0.1 % goal")
         ax.set_xscale("log")
         ax.set_yscale("log")
-        ax.set_xlabel("wall time per simulated revolution [ms]")
+        ax.set_xlabel("CPU time per simulated revolution [ms]")
         ax.set_ylabel("relative error of extrema of ε4P, M2V")
         ax.set_title("sley one-side variant 3, 5 revolutions: speed vs error\n"
                      "(reference solve_ivp DOP853 rtol 1e-10)")

@@ -479,34 +479,8 @@ def _run_scipy(model, kern, theta_s, revolutions, npts, method, rtol, progress, 
     from scipy.integrate import solve_ivp
 
     n = model.n_free
-    a = model.arrays
     omega = model.omega
-    args = model.kernel_args(theta_s, 1e300, ripple=ripple)
-    naux = model.naux()
-    aux = np.empty(naux)
-    work = np.zeros((9, max(a["FI"].shape[0], a["PRIG"].shape[0])))
-    rhs = kern.rhs
-    lines = [(i, float(a["FF"][r, 0]), float(a["FF"][r, 1]))
-             for i, r in enumerate(a["PRIG"][1:]) if a["FI"][r, 0] == 2]
-    bad = [0.0]
-
-    def rigid(t):
-        """The subtracted motion (lines only) and its derivative."""
-        th = theta_s + omega * t
-        y = np.zeros(2 * n)
-        yd = np.zeros(2 * n)
-        for i, c0, c1 in lines:
-            y[i], y[n + i] = c0 + c1 * th, c1 * omega
-            yd[i] = c1 * omega
-        return y, yd
-
-    def f(t, e):
-        yr, ydr = rigid(t)
-        dy = np.empty(2 * n)
-        rhs(t, e + yr, *args, dy, aux, work)
-        bad[0] = max(bad[0], aux[naux - 1])
-        return dy - ydr
-
+    f, rigid, lines, bad = _deviation_rhs(model, kern, theta_s, ripple)
     y0 = model.rigid_state(theta_s, omega + ripple[0])
     qs = np.full(n, 1e-2)                       # a bounded rotation (a rocker, the sley)
     qs[[i for i, _, _ in lines]] = 1e-4         # a twist
@@ -543,7 +517,46 @@ def _run_scipy(model, kern, theta_s, revolutions, npts, method, rtol, progress, 
     return out[0], out[1], prev, wall, bad[0] > 0, n_steps, nfev
 
 
+def _deviation_rhs(model, kern, theta_s, ripple):
+    """(f, rigid, lines, bad) for :func:`_run_scipy`: f(t, e) the derivative of the deviation
+    e = y − rigid(t)[0] from the subtracted motion (the lines of the parts whose rigid motion
+    is one: q = c0 + c1 θ), ``lines`` those parts, ``bad[0]`` the out-of-range flag seen."""
+    n = model.n_free
+    a = model.arrays
+    omega = model.omega
+    args = model.kernel_args(theta_s, 1e300, ripple=ripple)
+    naux = model.naux()
+    aux = np.empty(naux)
+    work = np.zeros((9, max(a["FI"].shape[0], a["PRIG"].shape[0])))
+    rhs = kern.rhs
+    lines = [(i, float(a["FF"][r, 0]), float(a["FF"][r, 1]))
+             for i, r in enumerate(a["PRIG"][1:]) if a["FI"][r, 0] == 2]
+    bad = [0.0]
+
+    def rigid(t):
+        """The subtracted motion (lines only) and its derivative."""
+        th = theta_s + omega * t
+        y = np.zeros(2 * n)
+        yd = np.zeros(2 * n)
+        for i, c0, c1 in lines:
+            y[i], y[n + i] = c0 + c1 * th, c1 * omega
+            yd[i] = c1 * omega
+        return y, yd
+
+    def f(t, e):
+        yr, ydr = rigid(t)
+        dy = np.empty(2 * n)
+        rhs(t, e + yr, *args, dy, aux, work)
+        bad[0] = max(bad[0], aux[naux - 1])
+        return dy - ydr
+
+    return f, rigid, lines, bad
+
+
 def _run(model, kern, theta_s, ripple, per_rev, revolutions, npts, progress):
+    """R revolutions of RK4 at ``per_rev`` steps each: (times and states tabulated on the
+    last revolution, the previous one's (times, states) or None, wall time, out-of-range
+    seen, right-hand-side evaluations)."""
     y = model.rigid_state(theta_s, model.omega + ripple[0])
     n = model.n_free
     limit = 1e3 * model.omega * max(1.0, float(np.max(np.abs(y[n:]))) / model.omega)
