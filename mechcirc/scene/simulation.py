@@ -5,7 +5,9 @@ rotation ``start_deg`` (t = 0: every part in its rigid position with its rigid
 velocity, nothing deformed); R revolutions are integrated and the last one is
 tabulated on a uniform grid against the crank angle.  The step rule is the
 sley's (``docs/sley.md``): classical RK4 with ``steps_per_period`` steps per
-period 2π/|λ|max of the fastest mode of the linearised model over the cycle.
+period 2π/|λ|max of the fastest mode of the linearised model over the cycle,
+a step cut where a force law changes piece (a clearance gap's edge, a moment's
+window; :func:`mechcirc.scene._motion_kernels.rk4_run`).
 
 Every result carries two checks (issue 11 §8):
 

@@ -20,7 +20,8 @@ Methods (those of :func:`~mechcirc.scene.simulate_scene`)
     eigenvalue |λ|max over the cycle (``steps_per_period`` steps per 2π/|λ|max);
     output points between steps by cubic Hermite interpolation.
     Clearance dead zones and the beat-up window are evaluated inside the
-    right-hand side (no restarts).  Compiled with numba when the ``fast`` extra is
+    right-hand side; a step in which a gap's edge is crossed or the window
+    opens or closes is cut there, so RK4 keeps its order through the impacts.  Compiled with numba when the ``fast`` extra is
     installed, else the same code runs as pure Python (``result.backend`` and
     ``result.notes`` say which).
 ``"rk4-python"``
