@@ -331,7 +331,37 @@ def motion_model(scene: Scene, omega: float | None = None, *,
         else:
             MI.append(angle_fn(m.link))
             MW.append(m.value)
-    # ---- elastic elements: EI = [type, law, fa, fa2, fb, fb2, part_a, part_b]
+    EI, EF, enames = _elements(scene, prig, point_fns, angle_fn, part_of)
+    MOI, MOF, mnames, centres = _moments(scene, B, part_of, angle_fn, cranks[0], cam)
+    body_names = tuple(bodies) + tuple(travel)
+    n_dyn = len(B.FI)          # functions the dynamics need; the rest only for outputs
+    BI = [angle_fn(b) if b in bodies else B.line(travel[b], 0.0, 1.0) for b in body_names]
+    pfn = {}
+    for p in lk.pose:                      # output-only: the points' linear accelerations
+        pf = point_fns(p)
+        if pf is not None:
+            pfn[p] = pf
+    arrays = {
+        "FI": np.array(B.FI, dtype=np.int64).reshape(-1, 3),
+        "FF": np.array(B.FF, dtype=float).reshape(-1, 6),
+        "tabs": np.ascontiguousarray(np.array(B.tabs)),
+        "MI": np.array(MI, dtype=np.int64), "MW": np.array(MW, dtype=float),
+        "EI": np.array(EI, dtype=np.int64).reshape(-1, 8),
+        "EF": np.array(EF, dtype=float).reshape(-1, 10),
+        "MOI": np.array(MOI, dtype=np.int64).reshape(-1, 2),
+        "MOF": np.array(MOF, dtype=float).reshape(-1, 4),
+        "PRIG": np.array(prig, dtype=np.int64), "BI": np.array(BI, dtype=np.int64),
+        "n_dyn": n_dyn}
+    return MotionModel(scene, omega, scene.parts, tuple(coords), body_names, tuple(enames),
+                       tuple(mnames), arrays, {b: f for b, f in zip(body_names, BI)}, centres,
+                       pfn)
+
+
+def _elements(scene, prig, point_fns, angle_fn, part_of):
+    """The elastic elements' kernel rows: EI = [type, law, fa, fa2, fb, fb2, part_a, part_b],
+    EF = [k, d, clearance, l0, xa, ya, xb, yb, ux, uy] (see the kernel module), names."""
+    lk = scene.linkage
+    L = scene.length_scale
     EI, EF, enames = [], [], []
 
     def law_of(el):
@@ -371,9 +401,13 @@ def motion_model(scene: Scene, omega: float | None = None, *,
         EI.append(row)
         EF.append(fl)
         enames.append(ld.name)
-    # ---- crank-angle moments
+    return EI, EF, enames
+
+
+def _moments(scene, B, part_of, angle_fn, crank0, cam):
+    """The crank-angle moments' kernel rows: MOI = [window fn, body fn],
+    MOF = [amplitude, alpha, sigma, centre], names, and each one's centre [rad]."""
     MOI, MOF, mnames, centres = [], [], [], {}
-    crank0 = cranks[0]
     for m in scene.moments:
         c = m.centre
         if isinstance(c, str):
@@ -385,28 +419,7 @@ def motion_model(scene: Scene, omega: float | None = None, *,
                     angle_fn(m.body)])
         MOF.append([m.amplitude, m.window, m.sigma, c])
         mnames.append(m.name)
-    body_names = tuple(bodies) + tuple(travel)
-    n_dyn = len(B.FI)          # functions the dynamics need; the rest only for outputs
-    BI = [angle_fn(b) if b in bodies else B.line(travel[b], 0.0, 1.0) for b in body_names]
-    pfn = {}
-    for p in lk.pose:                      # output-only: the points' linear accelerations
-        pf = point_fns(p)
-        if pf is not None:
-            pfn[p] = pf
-    arrays = {
-        "FI": np.array(B.FI, dtype=np.int64).reshape(-1, 3),
-        "FF": np.array(B.FF, dtype=float).reshape(-1, 6),
-        "tabs": np.ascontiguousarray(np.array(B.tabs)),
-        "MI": np.array(MI, dtype=np.int64), "MW": np.array(MW, dtype=float),
-        "EI": np.array(EI, dtype=np.int64).reshape(-1, 8),
-        "EF": np.array(EF, dtype=float).reshape(-1, 10),
-        "MOI": np.array(MOI, dtype=np.int64).reshape(-1, 2),
-        "MOF": np.array(MOF, dtype=float).reshape(-1, 4),
-        "PRIG": np.array(prig, dtype=np.int64), "BI": np.array(BI, dtype=np.int64),
-        "n_dyn": n_dyn}
-    return MotionModel(scene, omega, scene.parts, tuple(coords), body_names, tuple(enames),
-                       tuple(mnames), arrays, {b: f for b, f in zip(body_names, BI)}, centres,
-                       pfn)
+    return MOI, MOF, mnames, centres
 
 
 _CACHE: dict = {}
