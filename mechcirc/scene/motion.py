@@ -251,55 +251,9 @@ def motion_model(scene: Scene, omega: float | None = None, *,
             makers.append(make)
             continue
         # a part of several bodies without a crank: its own linkage, driven by a pinned link
-        cb = next((b for b in part if b not in tbodies
-                   and any(p in lk.ground for p in bodies[b])), None)
-        if cb is None:
-            raise GeometryError(f"{scene.source}: the rigid part {{{', '.join(part)}}} has no "
-                                "link pinned to the frame to serve as its coordinate")
-        coords.append(cb)
-        prig.append(B.table(-1, 0.0, h, ang[cb], ang1[cb], ang2[cb], True,
-                            _winding(ang[cb], nq)))
-        turns = cb in cranks          # a geared crank: its part repeats every turn of it
-        lo, hi = (0.0, TWO_PI) if turns else (float(ang[cb].min()), float(ang[cb].max()))
-        margin = 0.0 if turns else max(0.25 * (hi - lo), 0.05)
-        plinks = {b: lk.links[b] for b in part if b not in tbodies}
-        ppts = {p for pts in plinks.values() for p in pts}
-        piv = next(p for p in plinks[cb] if p in lk.ground)
-        sub = Linkage(f"{scene.name}:{cb}", {p: lk.pose[p] for p in ppts | {
-                          p for x in lk.sliders if x.link in plinks for p in x.line}},
-                      tuple(p for p in lk.ground if p in ppts), plinks,
-                      (Crank(cb, piv, 1.0),), scene.source,
-                      sliders=tuple(x for x in lk.sliders if x.link in plinks))
-        sidx = sub._index()
-        sub_states = None
-        for _ in range(6):
-            grid = np.linspace(lo - margin, hi + margin, B.n + 1)
-            try:
-                sub_states = sub.solve(grid)
-                break
-            except GeometryError:
-                margin *= 0.5
-        if sub_states is None:
-            raise GeometryError(f"{scene.source}: the rigid part {{{', '.join(part)}}} cannot "
-                                f"be tabulated against the rotation of {cb!r}")
-        sh = (grid[-1] - grid[0]) / B.n
-
-        def make(kind, name, i=i, cb=cb, st=sub_states, g0=float(grid[0]), sh=sh, sidx=sidx,
-                 turns=turns):
-            per = TWO_PI if turns else None
-            if kind == "angle":
-                name = tlink.get(name, name)
-                if name == cb:
-                    return B.line(i, 0.0, 1.0)
-                j = sidx[name]
-                a = np.unwrap([s.q[3 * j + 2] for s in st])
-                return B.table(i, g0, sh, a, [s.qdot[3 * j + 2] for s in st],
-                               [s.qddot[3 * j + 2] for s in st], turns,
-                               _winding(a) if turns else 0.0, per)
-            k = "xy".index(kind)
-            return B.table(i, g0, sh, [s.points[name][k] * L for s in st],
-                           [s.velocities[name][k] * L for s in st],
-                           [s.accelerations[name][k] * L for s in st], turns, 0.0, per)
+        coord, rig, make = _linkage_part(scene, B, h, i, part, tbodies, ang, ang1, ang2, tlink)
+        coords.append(coord)
+        prig.append(rig)
         makers.append(make)
 
     def need(i, kind, name):
@@ -355,6 +309,66 @@ def motion_model(scene: Scene, omega: float | None = None, *,
     return MotionModel(scene, omega, scene.parts, tuple(coords), body_names, tuple(enames),
                        tuple(mnames), arrays, {b: f for b, f in zip(body_names, BI)}, centres,
                        pfn)
+
+
+def _linkage_part(scene, B, h, i, part, tbodies, ang, ang1, ang2, tlink):
+    """Part i of several bodies without a crank: its coordinate (the rotation of a link
+    pinned to the frame), its rigid-motion function of θ, and the maker of its functions,
+    tabulated from the part's own sub-linkage driven by that link over its swing plus a
+    margin (a geared crank's part: over a turn); ``h`` the tables' step in θ."""
+    lk = scene.linkage
+    L = scene.length_scale
+    bodies = scene.bodies
+    cranks = [c.link for c in lk.cranks]
+    nq = scene.cycle_revolutions
+    cb = next((b for b in part if b not in tbodies
+               and any(p in lk.ground for p in bodies[b])), None)
+    if cb is None:
+        raise GeometryError(f"{scene.source}: the rigid part {{{', '.join(part)}}} has no "
+                            "link pinned to the frame to serve as its coordinate")
+    rig = B.table(-1, 0.0, h, ang[cb], ang1[cb], ang2[cb], True, _winding(ang[cb], nq))
+    turns = cb in cranks          # a geared crank: its part repeats every turn of it
+    lo, hi = (0.0, TWO_PI) if turns else (float(ang[cb].min()), float(ang[cb].max()))
+    margin = 0.0 if turns else max(0.25 * (hi - lo), 0.05)
+    plinks = {b: lk.links[b] for b in part if b not in tbodies}
+    ppts = {p for pts in plinks.values() for p in pts}
+    piv = next(p for p in plinks[cb] if p in lk.ground)
+    sub = Linkage(f"{scene.name}:{cb}", {p: lk.pose[p] for p in ppts | {
+                      p for x in lk.sliders if x.link in plinks for p in x.line}},
+                  tuple(p for p in lk.ground if p in ppts), plinks,
+                  (Crank(cb, piv, 1.0),), scene.source,
+                  sliders=tuple(x for x in lk.sliders if x.link in plinks))
+    sidx = sub._index()
+    sub_states = None
+    for _ in range(6):
+        grid = np.linspace(lo - margin, hi + margin, B.n + 1)
+        try:
+            sub_states = sub.solve(grid)
+            break
+        except GeometryError:
+            margin *= 0.5
+    if sub_states is None:
+        raise GeometryError(f"{scene.source}: the rigid part {{{', '.join(part)}}} cannot "
+                            f"be tabulated against the rotation of {cb!r}")
+    sh = (grid[-1] - grid[0]) / B.n
+
+    def make(kind, name, i=i, cb=cb, st=sub_states, g0=float(grid[0]), sh=sh, sidx=sidx,
+             turns=turns):
+        per = TWO_PI if turns else None
+        if kind == "angle":
+            name = tlink.get(name, name)
+            if name == cb:
+                return B.line(i, 0.0, 1.0)
+            j = sidx[name]
+            a = np.unwrap([s.q[3 * j + 2] for s in st])
+            return B.table(i, g0, sh, a, [s.qdot[3 * j + 2] for s in st],
+                           [s.qddot[3 * j + 2] for s in st], turns,
+                           _winding(a) if turns else 0.0, per)
+        k = "xy".index(kind)
+        return B.table(i, g0, sh, [s.points[name][k] * L for s in st],
+                       [s.velocities[name][k] * L for s in st],
+                       [s.accelerations[name][k] * L for s in st], turns, 0.0, per)
+    return cb, rig, make
 
 
 def _elements(scene, prig, point_fns, angle_fn, part_of):
