@@ -329,7 +329,7 @@ def cmd_simulate_scene(args) -> int:
     print(f"{args.scene}: scene {scene.name!r}, revolution {result.revolution} at "
           f"Ω = {result.omega:g} rad/s, {result.method} ({result.backend}), "
           f"{result.wall_time * 1e3:.1f} ms")
-    print(f"error estimate {est}, periodicity {per} (relative change of the extrema at half "
+    print(f"error estimate {est}, periodicity {per} (relative change of the extrema at twice "
           f"the step / from the previous revolution)")
     _print_extrema(scene, result.extrema)
     for n in result.notes:

@@ -255,9 +255,9 @@ def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, wo
         fe = force_law(EI[e, 1], EF[e, 0], EF[e, 1], EF[e, 2], de, edot)
         work[5, pa] -= fe * ga
         work[5, pb] -= fe * gb
+        aux[nb + ne + e] = de          # always: the clearance events of rk4_run read it
         if want:
             aux[nb + e] = fe
-            aux[nb + ne + e] = de
     nmo = MOI.shape[0]
     for k in range(nmo):
         fw = MOI[k, 0]
@@ -284,11 +284,142 @@ def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, wo
 
 
 @_jit
+def regions(FI, EI, EF, MOI, MOF, aux, work, off, reg, sw):
+    """The smooth piece each force law is on, from the last right-hand side evaluated
+    (``aux``, ``work``): reg[e] = −1, 0 (inside the gap), +1 for an element with a clearance
+    gap (0 for the others), reg[ne + k] = 1 inside the window of moment k, else 0 (always 0
+    for a moment on the drive's part: it moves nothing that is integrated); and the
+    value each edge test starts from into ``sw`` (a deformation, a window's phase).
+    Returns how many switches there are (gaps and windows)."""
+    ne = EI.shape[0]
+    count = 0
+    for e in range(ne):
+        cl = EF[e, 2]
+        de = aux[off + e]
+        sw[e] = de
+        reg[e] = 0
+        if EI[e, 1] == 0 or not cl > 0.0:
+            continue
+        count += 1
+        if de > cl:
+            reg[e] = 1
+        elif de < -cl:
+            reg[e] = -1
+    for k in range(MOI.shape[0]):
+        x = work[6, MOI[k, 0]] - MOF[k, 3] + 0.5 * MOF[k, 1]
+        sw[ne + k] = x
+        reg[ne + k] = 0
+        if FI[MOI[k, 1], 1] <= 0:
+            continue
+        reg[ne + k] = 1 if x - TWO_PI * math.floor(x / TWO_PI) < MOF[k, 1] else 0
+        count += 1
+    return count
+
+
+@_jit_inline
+def edge_gap(i, ne, r0, r1, v, EF, MOF):
+    """Signed distance of switch i (value v, see :func:`regions`) from the edge it crossed
+    going from piece r0 to r1: a gap's edge ±cl, a window's start (phase 0) or end (α)."""
+    if i < ne:
+        cl = EF[i, 2]
+        return v - (cl if (r0 > 0 or (r0 == 0 and r1 > 0)) else -cl)
+    if r0 == 0:                  # entering the window: the phase wrapped to [−π, π)
+        return v - TWO_PI * math.floor((v + math.pi) / TWO_PI)
+    return v - TWO_PI * math.floor(v / TWO_PI) - MOF[i - ne, 1]
+
+
+@_jit
+def rk4_step(t, hh, y, k1, k2, k3, k4, tmp, ynew, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF,
+             PRIG, BI, aux, work):
+    """One classical RK4 step of size hh from (t, y, k1 = f(y)) into ynew; k4 = f(ynew) and
+    aux are left at ynew."""
+    n = y.shape[0]
+    half = 0.5 * hh
+    for i in range(n):
+        tmp[i] = y[i] + half * k1[i]
+    rhs(t + half, tmp, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, k2, aux, work)
+    for i in range(n):
+        tmp[i] = y[i] + half * k2[i]
+    rhs(t + half, tmp, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, k3, aux, work)
+    for i in range(n):
+        tmp[i] = y[i] + hh * k3[i]
+    rhs(t + hh, tmp, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, k4, aux, work)
+    sixth = hh / 6.0
+    for i in range(n):
+        ynew[i] = y[i] + sixth * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i])
+    rhs(t + hh, ynew, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, k4, aux, work)
+
+
+@_jit
+def locate(t, hh, y, k1, ynew, k4, tmp, dy, sw0, sw1, reg, regn, PV, FI, FF, tabs, MI_, MW,
+           EI, EF, MOI, MOF, PRIG, BI, aux, work, off):
+    """Earliest fraction s ∈ (0, 1] of the step at which a force law changes piece
+    (reg → regn: an element crosses an edge of its clearance gap, a moment's window opens
+    or closes), on the step's cubic Hermite interpolant (Illinois method, to 1e-9 of the
+    step); the upper end of the bracket, so the change has happened.  ``sw0``/``sw1``:
+    the switches' values at the ends.  Returns (s, right-hand-side evaluations)."""
+    n = y.shape[0]
+    ne = EI.shape[0]
+    best = 1.0
+    count = 0
+    for e in range(reg.shape[0]):
+        if reg[e] == regn[e]:
+            continue
+        lo = 0.0
+        hi = 1.0
+        glo = edge_gap(e, ne, reg[e], regn[e], sw0[e], EF, MOF)
+        ghi = edge_gap(e, ne, reg[e], regn[e], sw1[e], EF, MOF)
+        side = 0
+        for _ in range(60):
+            if hi - lo <= 1e-9 or hi <= 0.0:
+                break
+            s = hi - ghi * (hi - lo) / (ghi - glo) if ghi != glo else 0.5 * (lo + hi)
+            if not lo < s < hi:
+                s = 0.5 * (lo + hi)
+            s2 = s * s
+            s3 = s2 * s
+            h00 = 2.0 * s3 - 3.0 * s2 + 1.0
+            h10 = s3 - 2.0 * s2 + s
+            h01 = -2.0 * s3 + 3.0 * s2
+            h11 = s3 - s2
+            for i in range(n):
+                tmp[i] = h00 * y[i] + hh * h10 * k1[i] + h01 * ynew[i] + hh * h11 * k4[i]
+            rhs(t + s * hh, tmp, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy,
+                aux, work)
+            count += 1
+            if e < ne:
+                v = aux[off + e]
+            else:
+                v = work[6, MOI[e - ne, 0]] - MOF[e - ne, 3] + 0.5 * MOF[e - ne, 1]
+            g = edge_gap(e, ne, reg[e], regn[e], v, EF, MOF)
+            if (g > 0.0) == (ghi > 0.0) and g != 0.0:
+                hi = s
+                ghi = g
+                if side == 1:
+                    glo *= 0.5
+                side = 1
+            else:
+                lo = s
+                glo = g
+                if side == -1:
+                    ghi *= 0.5
+                side = -1
+        if hi < best:
+            best = hi
+    return best, count
+
+
+@_jit
 def rk4_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_, MW, EI,
             EF, MOI, MOF, PRIG, BI, naux):
-    """``nsteps`` classical RK4 steps from t0 (y in place); cubic Hermite output, as the sley's.
+    """``nsteps`` classical RK4 steps of h from t0 (y in place); cubic Hermite output, as the
+    sley's.  A step in which a force law changes piece (an element crosses an edge of its
+    clearance gap, a moment's window opens or closes: a kink of the force) is cut where it
+    happens (:func:`locate`) and finished from there, at most 8 pieces per step, so that RK4
+    keeps its order through impacts and the beat-up.
 
-    Returns (time reached, outputs written, no blow-up, out-of-range seen).
+    Returns (time reached, outputs written, no blow-up, out-of-range seen, right-hand-side
+    evaluations).
     """
     n = y.shape[0]
     k1 = np.empty(n)
@@ -299,38 +430,69 @@ def rk4_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI
     ynew = np.empty(n)
     aux = np.empty(naux)
     work = np.zeros((9, max(FI.shape[0], PRIG.shape[0])))
+    nfev = 1
+    ne = EI.shape[0]
+    nsw = ne + MOI.shape[0]
+    off = BI.shape[0] + ne
+    reg = np.zeros(nsw, np.int64)
+    regn = np.zeros(nsw, np.int64)
+    sw0 = np.empty(nsw)
+    sw1 = np.empty(nsw)
     j = 0
-    half = 0.5 * h
-    sixth = h / 6.0
     bad = 0.0
     npart = PRIG.shape[0]
     limit = PV[2]
     rhs(t0, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, k1, aux, work)
+    gaps = regions(FI, EI, EF, MOI, MOF, aux, work, off, reg, sw0)
     for step in range(nsteps):
         t = t0 + step * h
-        for i in range(n):
-            tmp[i] = y[i] + half * k1[i]
-        rhs(t + half, tmp, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, k2, aux, work)
-        for i in range(n):
-            tmp[i] = y[i] + half * k2[i]
-        rhs(t + half, tmp, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, k3, aux, work)
-        for i in range(n):
-            tmp[i] = y[i] + h * k3[i]
-        rhs(t + h, tmp, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, k4, aux, work)
-        for i in range(n):
-            ynew[i] = y[i] + sixth * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i])
-        rhs(t + h, ynew, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, k4, aux, work)
-        if aux[naux - 1] > bad:
-            bad = aux[naux - 1]
-        j = record_hermite(rec_t, rec_y, j, t_out0, dt_out, t, h, step == nsteps - 1,
-                           y, k1, ynew, k4, n)
-        for i in range(n):
-            y[i] = ynew[i]
-            k1[i] = k4[i]
-        for i in range(npart - 1, n):
-            if not abs(y[i]) <= limit:
-                return t0 + (step + 1) * h, j, False, bad
-    return t0 + nsteps * h, j, True, bad
+        t_end = t + h
+        tc = t
+        for sub in range(8):
+            hh = t_end - tc
+            rk4_step(tc, hh, y, k1, k2, k3, k4, tmp, ynew, PV, FI, FF, tabs, MI_, MW, EI, EF,
+                     MOI, MOF, PRIG, BI, aux, work)
+            nfev += 4
+            full = True
+            if gaps > 0:
+                regions(FI, EI, EF, MOI, MOF, aux, work, off, regn, sw1)
+                changed = False
+                for e in range(nsw):
+                    if regn[e] != reg[e]:
+                        changed = True
+                if changed and sub < 7:
+                    s, used = locate(tc, hh, y, k1, ynew, k4, tmp, k2, sw0, sw1, reg, regn,
+                                     PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI,
+                                     aux, work, off)
+                    nfev += used + 1
+                    s = s + 1e-7
+                    if s * hh > 1e-9 * h and s < 1.0 - 1e-7:
+                        hh = s * hh
+                        full = False
+                        rk4_step(tc, hh, y, k1, k2, k3, k4, tmp, ynew, PV, FI, FF, tabs, MI_,
+                                 MW, EI, EF, MOI, MOF, PRIG, BI, aux, work)
+                        nfev += 3
+                        regions(FI, EI, EF, MOI, MOF, aux, work, off, regn, sw1)
+                    else:       # at an end of the step: keep it; aux back to ynew
+                        rhs(tc + hh, ynew, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG,
+                            BI, k4, aux, work)
+                for e in range(nsw):
+                    reg[e] = regn[e]
+                    sw0[e] = sw1[e]
+            if aux[naux - 1] > bad:
+                bad = aux[naux - 1]
+            j = record_hermite(rec_t, rec_y, j, t_out0, dt_out, tc, hh,
+                               full and step == nsteps - 1, y, k1, ynew, k4, n)
+            for i in range(n):
+                y[i] = ynew[i]
+                k1[i] = k4[i]
+            for i in range(npart - 1, n):
+                if not abs(y[i]) <= limit:
+                    return tc + hh, j, False, bad, nfev
+            if full:
+                break
+            tc += hh
+    return t0 + nsteps * h, j, True, bad, nfev
 
 
 @_jit

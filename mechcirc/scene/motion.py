@@ -264,55 +264,9 @@ def motion_model(scene: Scene, omega: float | None = None, *,
             makers.append(make)
             continue
         # a part of several bodies without a crank: its own linkage, driven by a pinned link
-        cb = next((b for b in part if b not in tbodies
-                   and any(p in lk.ground for p in bodies[b])), None)
-        if cb is None:
-            raise GeometryError(f"{scene.source}: the rigid part {{{', '.join(part)}}} has no "
-                                "link pinned to the frame to serve as its coordinate")
-        coords.append(cb)
-        prig.append(B.table(-1, 0.0, h, ang[cb], ang1[cb], ang2[cb], True,
-                            _winding(ang[cb], nq)))
-        turns = cb in cranks          # a geared crank: its part repeats every turn of it
-        lo, hi = (0.0, TWO_PI) if turns else (float(ang[cb].min()), float(ang[cb].max()))
-        margin = 0.0 if turns else max(0.25 * (hi - lo), 0.05)
-        plinks = {b: lk.links[b] for b in part if b not in tbodies}
-        ppts = {p for pts in plinks.values() for p in pts}
-        piv = next(p for p in plinks[cb] if p in lk.ground)
-        sub = Linkage(f"{scene.name}:{cb}", {p: lk.pose[p] for p in ppts | {
-                          p for x in lk.sliders if x.link in plinks for p in x.line}},
-                      tuple(p for p in lk.ground if p in ppts), plinks,
-                      (Crank(cb, piv, 1.0),), scene.source,
-                      sliders=tuple(x for x in lk.sliders if x.link in plinks))
-        sidx = sub._index()
-        sub_states = None
-        for _ in range(6):
-            grid = np.linspace(lo - margin, hi + margin, B.n + 1)
-            try:
-                sub_states = sub.solve(grid)
-                break
-            except GeometryError:
-                margin *= 0.5
-        if sub_states is None:
-            raise GeometryError(f"{scene.source}: the rigid part {{{', '.join(part)}}} cannot "
-                                f"be tabulated against the rotation of {cb!r}")
-        sh = (grid[-1] - grid[0]) / B.n
-
-        def make(kind, name, i=i, cb=cb, st=sub_states, g0=float(grid[0]), sh=sh, sidx=sidx,
-                 turns=turns):
-            per = TWO_PI if turns else None
-            if kind == "angle":
-                name = tlink.get(name, name)
-                if name == cb:
-                    return B.line(i, 0.0, 1.0)
-                j = sidx[name]
-                a = np.unwrap([s.q[3 * j + 2] for s in st])
-                return B.table(i, g0, sh, a, [s.qdot[3 * j + 2] for s in st],
-                               [s.qddot[3 * j + 2] for s in st], turns,
-                               _winding(a) if turns else 0.0, per)
-            k = "xy".index(kind)
-            return B.table(i, g0, sh, [s.points[name][k] * L for s in st],
-                           [s.velocities[name][k] * L for s in st],
-                           [s.accelerations[name][k] * L for s in st], turns, 0.0, per)
+        coord, rig, make = _linkage_part(scene, B, h, i, part, tbodies, ang, ang1, ang2, tlink)
+        coords.append(coord)
+        prig.append(rig)
         makers.append(make)
 
     def need(i, kind, name):
@@ -344,7 +298,97 @@ def motion_model(scene: Scene, omega: float | None = None, *,
         else:
             MI.append(angle_fn(m.link))
             MW.append(m.value)
-    # ---- elastic elements: EI = [type, law, fa, fa2, fb, fb2, part_a, part_b]
+    EI, EF, enames = _elements(scene, prig, point_fns, angle_fn, part_of)
+    MOI, MOF, mnames, centres = _moments(scene, B, part_of, angle_fn, cranks[0], cam)
+    body_names = tuple(bodies) + tuple(travel)
+    n_dyn = len(B.FI)          # functions the dynamics need; the rest only for outputs
+    BI = [angle_fn(b) if b in bodies else B.line(travel[b], 0.0, 1.0) for b in body_names]
+    pfn = {}
+    for p in lk.pose:                      # output-only: the points' linear accelerations
+        pf = point_fns(p)
+        if pf is not None:
+            pfn[p] = pf
+    arrays = {
+        "FI": np.array(B.FI, dtype=np.int64).reshape(-1, 3),
+        "FF": np.array(B.FF, dtype=float).reshape(-1, 6),
+        "tabs": np.ascontiguousarray(np.array(B.tabs)),
+        "MI": np.array(MI, dtype=np.int64), "MW": np.array(MW, dtype=float),
+        "EI": np.array(EI, dtype=np.int64).reshape(-1, 8),
+        "EF": np.array(EF, dtype=float).reshape(-1, 10),
+        "MOI": np.array(MOI, dtype=np.int64).reshape(-1, 2),
+        "MOF": np.array(MOF, dtype=float).reshape(-1, 4),
+        "PRIG": np.array(prig, dtype=np.int64), "BI": np.array(BI, dtype=np.int64),
+        "n_dyn": n_dyn}
+    return MotionModel(scene, omega, scene.parts, tuple(coords), body_names, tuple(enames),
+                       tuple(mnames), arrays, {b: f for b, f in zip(body_names, BI)}, centres,
+                       pfn)
+
+
+def _linkage_part(scene, B, h, i, part, tbodies, ang, ang1, ang2, tlink):
+    """Part i of several bodies without a crank: its coordinate (the rotation of a link
+    pinned to the frame), its rigid-motion function of θ, and the maker of its functions,
+    tabulated from the part's own sub-linkage driven by that link over its swing plus a
+    margin (a geared crank's part: over a turn); ``h`` the tables' step in θ."""
+    lk = scene.linkage
+    L = scene.length_scale
+    bodies = scene.bodies
+    cranks = [c.link for c in lk.cranks]
+    nq = scene.cycle_revolutions
+    cb = next((b for b in part if b not in tbodies
+               and any(p in lk.ground for p in bodies[b])), None)
+    if cb is None:
+        raise GeometryError(f"{scene.source}: the rigid part {{{', '.join(part)}}} has no "
+                            "link pinned to the frame to serve as its coordinate")
+    rig = B.table(-1, 0.0, h, ang[cb], ang1[cb], ang2[cb], True, _winding(ang[cb], nq))
+    turns = cb in cranks          # a geared crank: its part repeats every turn of it
+    lo, hi = (0.0, TWO_PI) if turns else (float(ang[cb].min()), float(ang[cb].max()))
+    margin = 0.0 if turns else max(0.25 * (hi - lo), 0.05)
+    plinks = {b: lk.links[b] for b in part if b not in tbodies}
+    ppts = {p for pts in plinks.values() for p in pts}
+    piv = next(p for p in plinks[cb] if p in lk.ground)
+    sub = Linkage(f"{scene.name}:{cb}", {p: lk.pose[p] for p in ppts | {
+                      p for x in lk.sliders if x.link in plinks for p in x.line}},
+                  tuple(p for p in lk.ground if p in ppts), plinks,
+                  (Crank(cb, piv, 1.0),), scene.source,
+                  sliders=tuple(x for x in lk.sliders if x.link in plinks))
+    sidx = sub._index()
+    sub_states = None
+    for _ in range(6):
+        grid = np.linspace(lo - margin, hi + margin, B.n + 1)
+        try:
+            sub_states = sub.solve(grid)
+            break
+        except GeometryError:
+            margin *= 0.5
+    if sub_states is None:
+        raise GeometryError(f"{scene.source}: the rigid part {{{', '.join(part)}}} cannot "
+                            f"be tabulated against the rotation of {cb!r}")
+    sh = (grid[-1] - grid[0]) / B.n
+
+    def make(kind, name, i=i, cb=cb, st=sub_states, g0=float(grid[0]), sh=sh, sidx=sidx,
+             turns=turns):
+        per = TWO_PI if turns else None
+        if kind == "angle":
+            name = tlink.get(name, name)
+            if name == cb:
+                return B.line(i, 0.0, 1.0)
+            j = sidx[name]
+            a = np.unwrap([s.q[3 * j + 2] for s in st])
+            return B.table(i, g0, sh, a, [s.qdot[3 * j + 2] for s in st],
+                           [s.qddot[3 * j + 2] for s in st], turns,
+                           _winding(a) if turns else 0.0, per)
+        k = "xy".index(kind)
+        return B.table(i, g0, sh, [s.points[name][k] * L for s in st],
+                       [s.velocities[name][k] * L for s in st],
+                       [s.accelerations[name][k] * L for s in st], turns, 0.0, per)
+    return cb, rig, make
+
+
+def _elements(scene, prig, point_fns, angle_fn, part_of):
+    """The elastic elements' kernel rows: EI = [type, law, fa, fa2, fb, fb2, part_a, part_b],
+    EF = [k, d, clearance, l0, xa, ya, xb, yb, ux, uy] (see the kernel module), names."""
+    lk = scene.linkage
+    L = scene.length_scale
     EI, EF, enames = [], [], []
 
     def law_of(el):
@@ -384,9 +428,13 @@ def motion_model(scene: Scene, omega: float | None = None, *,
         EI.append(row)
         EF.append(fl)
         enames.append(ld.name)
-    # ---- crank-angle moments
+    return EI, EF, enames
+
+
+def _moments(scene, B, part_of, angle_fn, crank0, cam):
+    """The crank-angle moments' kernel rows: MOI = [window fn, body fn],
+    MOF = [amplitude, alpha, sigma, centre], names, and each one's centre [rad]."""
     MOI, MOF, mnames, centres = [], [], [], {}
-    crank0 = cranks[0]
     for m in scene.moments:
         c = m.centre
         if isinstance(c, str):
@@ -398,28 +446,7 @@ def motion_model(scene: Scene, omega: float | None = None, *,
                     angle_fn(m.body)])
         MOF.append([m.amplitude, m.window, m.sigma, c])
         mnames.append(m.name)
-    body_names = tuple(bodies) + tuple(travel)
-    n_dyn = len(B.FI)          # functions the dynamics need; the rest only for outputs
-    BI = [angle_fn(b) if b in bodies else B.line(travel[b], 0.0, 1.0) for b in body_names]
-    pfn = {}
-    for p in lk.pose:                      # output-only: the points' linear accelerations
-        pf = point_fns(p)
-        if pf is not None:
-            pfn[p] = pf
-    arrays = {
-        "FI": np.array(B.FI, dtype=np.int64).reshape(-1, 3),
-        "FF": np.array(B.FF, dtype=float).reshape(-1, 6),
-        "tabs": np.ascontiguousarray(np.array(B.tabs)),
-        "MI": np.array(MI, dtype=np.int64), "MW": np.array(MW, dtype=float),
-        "EI": np.array(EI, dtype=np.int64).reshape(-1, 8),
-        "EF": np.array(EF, dtype=float).reshape(-1, 10),
-        "MOI": np.array(MOI, dtype=np.int64).reshape(-1, 2),
-        "MOF": np.array(MOF, dtype=float).reshape(-1, 4),
-        "PRIG": np.array(prig, dtype=np.int64), "BI": np.array(BI, dtype=np.int64),
-        "n_dyn": n_dyn}
-    return MotionModel(scene, omega, scene.parts, tuple(coords), body_names, tuple(enames),
-                       tuple(mnames), arrays, {b: f for b, f in zip(body_names, BI)}, centres,
-                       pfn)
+    return MOI, MOF, mnames, centres
 
 
 _CACHE: dict = {}

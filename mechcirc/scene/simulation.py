@@ -5,16 +5,18 @@ rotation ``start_deg`` (t = 0: every part in its rigid position with its rigid
 velocity, nothing deformed); R revolutions are integrated and the last one is
 tabulated on a uniform grid against the crank angle.  The step rule is the
 sley's (``docs/sley.md``): classical RK4 with ``steps_per_period`` steps per
-period 2π/|λ|max of the fastest mode of the linearised model over the cycle.
+period 2π/|λ|max of the fastest mode of the linearised model over the cycle,
+a step cut where a force law changes piece (a clearance gap's edge, a moment's
+window; :func:`mechcirc.scene._motion_kernels.rk4_run`).
 
 Every result carries two checks (issue 11 §8):
 
 * ``error_estimate`` — the largest change of any tabulated extremum when the
-  whole run is repeated at half the step, relative to that quantity's largest
-  magnitude; the half-step run is the one returned (for RK4 the change is about
-  15/16 of the coarse run's error, about 15× the returned run's); for the scipy
-  methods, its change from the run at rtol of the run at rtol/100, which is the
-  one returned;
+  whole run is repeated at twice the step (half the ``steps_per_period``),
+  relative to that quantity's largest magnitude; the run at the step is the one
+  returned (for RK4 the change is about 15× its error in the asymptotic regime,
+  1.2–3× with impacts); for the scipy methods, its change from the run at rtol of
+  the run at rtol/100, which is the one returned;
 * ``periodicity`` — the same change from the previous revolution (needs R ≥ 2).
 
 A :class:`~mechcirc.errors.MechcircWarning` is issued (and a note kept) when
@@ -278,6 +280,39 @@ def simulate_scene(scene: Scene, *, omega: float | None = None,
     SolverError
         The integration diverged or needs too many steps.
     """
+    o = _options(scene, omega, revolutions, start_deg, steps_per_period, points, method,
+                 rtol, revolution, omega_ripple)
+    if model is None or (o.omega is not None and model.omega != float(o.omega)):
+        model = motion_model(scene, o.omega)
+    ripple = (0.0, 0.0) if o.ripple is None or o.ripple[0] == 0.0 else \
+        (float(o.ripple[0]) * model.omega, float(o.ripple[1]) * model.omega)
+    kern, backend = kernels_for(method)
+    notes = [NO_NUMBA_NOTE] if backend == "python" and method != "rk4-python" else []
+    compile_time = _warm_up(model, kern) if backend == "numba" else 0.0
+    ctx = (scene, o, model, kern, math.radians(o.start_deg), ripple, progress)
+    if method in SCIPY_METHODS:
+        return _simulate_scipy(ctx, error_estimate, notes, compile_time)
+    return _simulate_rk4(ctx, backend, error_estimate, notes, compile_time)
+
+
+@dataclass(frozen=True)
+class _Options:
+    """The checked options of one :func:`simulate_scene` call (file defaults applied)."""
+
+    omega: float | None
+    revolutions: int
+    start_deg: float
+    spp: float
+    npts: int
+    ripple: tuple | None
+    method: str
+    rtol: float | None
+
+
+def _options(scene, omega, revolutions, start_deg, spp, npts, method, rtol, revolution,
+             ripple) -> _Options:
+    """Options from the call, else the scene's ``[simulate]`` table, else the defaults;
+    each checked (a :class:`MechcircError` names the bad one)."""
     cfg = scene.simulate
 
     def pick(v, k, d):
@@ -288,11 +323,11 @@ def simulate_scene(scene: Scene, *, omega: float | None = None,
     omega = pick(omega, "omega", None)
     revolutions = int(pick(revolutions, "revolutions", DEFAULT_REVOLUTIONS))
     start_deg = float(pick(start_deg, "start_deg", 0.0))
-    spp = float(pick(steps_per_period, "steps_per_period", DEFAULT_STEPS_PER_PERIOD))
-    npts = int(pick(points, "points", DEFAULT_POINTS))
-    ripple_rel = pick(omega_ripple, "omega_ripple", None)
-    if ripple_rel is not None:
-        amp_rel, harmonic = ripple_rel
+    spp = float(pick(spp, "steps_per_period", DEFAULT_STEPS_PER_PERIOD))
+    npts = int(pick(npts, "points", DEFAULT_POINTS))
+    ripple = pick(ripple, "omega_ripple", None)
+    if ripple is not None:
+        amp_rel, harmonic = ripple
         if not (math.isfinite(amp_rel) and 0.0 <= amp_rel < 1.0):
             raise MechcircError(f"omega_ripple amplitude must be in [0, 1) (relative to Ω), "
                                 f"got {amp_rel!r}")
@@ -312,78 +347,87 @@ def simulate_scene(scene: Scene, *, omega: float | None = None,
         raise MechcircError(f"steps_per_period must be ≥ 1, got {spp!r}")
     if npts < 16:
         raise MechcircError(f"points must be ≥ 16, got {npts}")
-    scipy_method = method in SCIPY_METHODS
-    if scipy_method:
+    if method in SCIPY_METHODS:
         rtol = 1e-10 if rtol is None else float(rtol)
         if not 1e-14 <= rtol < 1:
             raise MechcircError(f"rtol must be in [1e-14, 1), got {rtol!r}")
     elif rtol is not None:
         raise MechcircError(f"rtol applies to the scipy methods, not {method}; use "
                             "steps_per_period")
-    if model is None or (omega is not None and model.omega != float(omega)):
-        model = motion_model(scene, omega)
+    return _Options(omega, revolutions, start_deg, spp, npts, ripple, method, rtol)
+
+
+def _simulate_scipy(ctx, error_estimate, notes, compile_time):
+    """:func:`simulate_scene` with a scipy method: the run at rtol/100 returned, its change
+    from the run at rtol the error estimate (about the error of the run at rtol, ~100×
+    the returned one's, so it bounds it); about 2.5× the cost of one run."""
+    scene, o, model, kern, theta_s, ripple, progress = ctx
+    rtol, method = o.rtol, o.method
+    ref_tol = max(rtol / 100, SCIPY_RTOL_FLOOR)
+    if not error_estimate or ref_tol > rtol / 10:
+        ref_tol = rtol
+    run = _run_scipy(model, kern, theta_s, o.revolutions, o.npts, method, ref_tol, progress,
+                     ripple)
+    ts, ys, prev, wall, bad, n_steps, nfev = run
+    coarse, text = None, f"{method}, rtol {rtol:g}"
+    if ref_tol < rtol:
+        coarse = _run_scipy(model, kern, theta_s, o.revolutions, o.npts, method, rtol, None,
+                            ripple)
+        n_steps, nfev = n_steps + coarse[5], nfev + coarse[6]
+        text = (f"{method}, rtol {ref_tol:g} (error estimate: its change from the run at "
+                f"rtol {rtol:g})")
+    elif error_estimate:
+        notes.append(f"no error estimate: rtol {rtol:g} leaves no tighter reference "
+                     f"(solve_ivp's floor is {SCIPY_RTOL_FLOOR:g})")
+    return _finish(scene, scene.simulate, model, kern, theta_s, ripple, ts, ys, prev,
+                   None if coarse is None else coarse[:5], wall, bad, n_steps, nfev,
+                   method, "scipy", 0, notes + [text], [], o.revolutions, compile_time)
+
+
+def _simulate_rk4(ctx, backend, error_estimate, notes, compile_time):
+    """:func:`simulate_scene` with RK4: the run at ``steps_per_period`` is returned; the
+    error estimate is its change from a run at half as many steps (twice the step).
+
+    For RK4 in its asymptotic regime that change is ~15× the returned run's error, so it
+    bounds it with margin; with clearances (impacts) the ratio falls to ~1.2–3, still a
+    bound (measured: ``benchmarks/calib_sley_estimate.py``, ``docs/sley.md``).  The
+    estimate costs half a run more.
+    """
+    scene, o, model, kern, theta_s, ripple, progress = ctx
+    spp, revolutions, warn = o.spp, o.revolutions, []
     period = scene.cycle / model.omega       # one revolution, or the cycle of geared cranks
-    ripple = (0.0, 0.0) if ripple_rel is None or ripple_rel[0] == 0.0 else \
-        (float(ripple_rel[0]) * model.omega, float(ripple_rel[1]) * model.omega)
-    kern, backend = kernels_for(method)
-    notes, warn = [], []
-    if backend == "python" and method != "rk4-python":
-        notes.append(NO_NUMBA_NOTE)
-    compile_time = _warm_up(model, kern) if backend == "numba" else 0.0
-    theta_s = math.radians(start_deg)
-    if scipy_method:
-        # Error estimate: the run at rtol against one at rtol/100, which is
-        # returned (the difference is about the error of the run at rtol, ~100×
-        # the returned one's, so it bounds it); about 2.5× the cost of one run.
-        ref_tol = max(rtol / 100, SCIPY_RTOL_FLOOR)
-        if not error_estimate or ref_tol > rtol / 10:
-            ref_tol = rtol
-        run = _run_scipy(model, kern, theta_s, revolutions, npts, method, ref_tol, progress,
-                         ripple)
-        ts, ys, prev, wall, bad, n_steps, nfev = run
-        coarse, text = None, f"{method}, rtol {rtol:g}"
-        if ref_tol < rtol:
-            coarse = _run_scipy(model, kern, theta_s, revolutions, npts, method, rtol, None,
-                                ripple)
-            n_steps, nfev = n_steps + coarse[5], nfev + coarse[6]
-            text = (f"{method}, rtol {ref_tol:g} (error estimate: its change from the run at "
-                    f"rtol {rtol:g})")
-        elif error_estimate:
-            notes.append(f"no error estimate: rtol {rtol:g} leaves no tighter reference "
-                         f"(solve_ivp's floor is {SCIPY_RTOL_FLOOR:g})")
-        return _finish(scene, cfg, model, kern, theta_s, ripple, ts, ys, prev,
-                       None if coarse is None else coarse[:5], wall, bad, n_steps, nfev,
-                       method, "scipy", 0, notes + [text], warn, revolutions, compile_time)
     rate = max_rate(model)
-    need = period * rate * spp / TWO_PI    # steps per cycle
+    need = period * rate * spp / TWO_PI    # steps per cycle of the returned run
     if need > MAX_STEPS_PER_REV:
         raise SolverError(f"the stiffest linearised mode (|λ| = {rate:.4g} 1/s) needs {need:.3g} "
                           f"RK4 steps per revolution at steps_per_period={spp:g}, more than "
                           f"the limit {MAX_STEPS_PER_REV:.0e}: lower the stiffest rigidity "
                           "(stiffness), raise the inertias, or use method='LSODA'",
                           status="too-stiff")
-    per_rev = max(int(math.ceil(need)), 16)
+    per_rev = max(2 * int(math.ceil(need / 2)), 16)          # even: the estimate's is half
     if spp < DEFAULT_STEPS_PER_PERIOD:
         warn.append(f"{spp:g} steps per period of the fastest mode, fewer than the default "
                     f"{DEFAULT_STEPS_PER_PERIOD}: expect a larger error")
-    # Error estimate: the run at half the step is returned and the estimate is its
-    # change from the run at the step.  For RK4 in its asymptotic regime that change
-    # is ~15/16 of the coarse run's error, ~15x the returned run's, so it bounds it
-    # with margin (measured: benchmarks/calib_sley_estimate.py, docs/sley.md).
-    other, n_steps = None, per_rev * revolutions
+    ts, ys, prev, wall, bad, nfev = _run(model, kern, theta_s, ripple, per_rev, revolutions,
+                                         o.npts, progress)
+    n_steps = per_rev * revolutions
+    other = None
     if error_estimate:
-        other = _run(model, kern, theta_s, ripple, per_rev, revolutions, npts, None)
-        per_rev, spp = 2 * per_rev, 2 * spp
-    ts, ys, prev, wall, bad = _run(model, kern, theta_s, ripple, per_rev, revolutions, npts,
-                                   progress)
-    n_steps += per_rev * revolutions if error_estimate else 0
+        try:
+            other = _run(model, kern, theta_s, ripple, per_rev // 2, revolutions, o.npts, None)
+            nfev += other[5]
+        except SolverError:
+            other = "diverged"
+            warn.append(f"the error estimate's run at {spp / 2:g} steps per period diverged: "
+                        "no estimate; raise steps_per_period")
+        n_steps += per_rev // 2 * revolutions
     notes.append(f"RK4 step {period / per_rev:.4g} s ({per_rev} steps per revolution, "
                  f"{spp:g} per period of the fastest mode |λ| = {rate:.5g} 1/s)"
                  + (" (error estimate: its change from the run at twice the step)"
                     if error_estimate else ""))
-    return _finish(scene, cfg, model, kern, theta_s, ripple, ts, ys, prev, other, wall, bad,
-                   n_steps, 4 * n_steps + revolutions * (2 if error_estimate else 1),
-                   method, backend, per_rev, notes, warn, revolutions, compile_time)
+    return _finish(scene, scene.simulate, model, kern, theta_s, ripple, ts, ys, prev, other,
+                   wall, bad, n_steps, nfev, o.method, backend, per_rev, notes, warn,
+                   revolutions, compile_time)
 
 
 def _finish(scene, cfg, model, kern, theta_s, ripple, ts, ys, prev, other, wall, bad, n_steps,
@@ -398,7 +442,7 @@ def _finish(scene, cfg, model, kern, theta_s, ripple, ts, ys, prev, other, wall,
         periodicity = _rel_change(extrema, {k: (float(v.min()), float(v.max()))
                                             for k, v in pout.items()})
     est = None
-    if other is not None:
+    if other is not None and not isinstance(other, str):     # "diverged": no estimate
         fout = _outputs(model, kern, theta_s, ripple, other[0], other[1])
         est = _rel_change(extrema, {k: (float(v.min()), float(v.max()))
                                     for k, v in fout.items()})
@@ -429,7 +473,7 @@ def _finish(scene, cfg, model, kern, theta_s, ripple, ts, ys, prev, other, wall,
         warn.append("a part left the range its kinematics are tabulated over (the values "
                     "there are extrapolated)")
     if est is not None and est > ACCURACY_GOAL:
-        warn.append(f"error estimate {est:.2g} (change of the extrema at half the step) > "
+        warn.append(f"error estimate {est:.2g} (change of the extrema at twice the step) > "
                     f"{ACCURACY_GOAL:g}: raise steps_per_period")
     if periodicity is not None and periodicity > ACCURACY_GOAL:
         warn.append(f"not yet periodic: the extrema changed by {periodicity:.2g} (relative) "
@@ -459,34 +503,8 @@ def _run_scipy(model, kern, theta_s, revolutions, npts, method, rtol, progress, 
     from scipy.integrate import solve_ivp
 
     n = model.n_free
-    a = model.arrays
     omega = model.omega
-    args = model.kernel_args(theta_s, 1e300, ripple=ripple)
-    naux = model.naux()
-    aux = np.empty(naux)
-    work = np.zeros((9, max(a["FI"].shape[0], a["PRIG"].shape[0])))
-    rhs = kern.rhs
-    lines = [(i, float(a["FF"][r, 0]), float(a["FF"][r, 1]))
-             for i, r in enumerate(a["PRIG"][1:]) if a["FI"][r, 0] == 2]
-    bad = [0.0]
-
-    def rigid(t):
-        """The subtracted motion (lines only) and its derivative."""
-        th = theta_s + omega * t
-        y = np.zeros(2 * n)
-        yd = np.zeros(2 * n)
-        for i, c0, c1 in lines:
-            y[i], y[n + i] = c0 + c1 * th, c1 * omega
-            yd[i] = c1 * omega
-        return y, yd
-
-    def f(t, e):
-        yr, ydr = rigid(t)
-        dy = np.empty(2 * n)
-        rhs(t, e + yr, *args, dy, aux, work)
-        bad[0] = max(bad[0], aux[naux - 1])
-        return dy - ydr
-
+    f, rigid, lines, bad = _deviation_rhs(model, kern, theta_s, ripple)
     y0 = model.rigid_state(theta_s, omega + ripple[0])
     qs = np.full(n, 1e-2)                       # a bounded rotation (a rocker, the sley)
     qs[[i for i, _, _ in lines]] = 1e-4         # a twist
@@ -523,7 +541,46 @@ def _run_scipy(model, kern, theta_s, revolutions, npts, method, rtol, progress, 
     return out[0], out[1], prev, wall, bad[0] > 0, n_steps, nfev
 
 
+def _deviation_rhs(model, kern, theta_s, ripple):
+    """(f, rigid, lines, bad) for :func:`_run_scipy`: f(t, e) the derivative of the deviation
+    e = y − rigid(t)[0] from the subtracted motion (the lines of the parts whose rigid motion
+    is one: q = c0 + c1 θ), ``lines`` those parts, ``bad[0]`` the out-of-range flag seen."""
+    n = model.n_free
+    a = model.arrays
+    omega = model.omega
+    args = model.kernel_args(theta_s, 1e300, ripple=ripple)
+    naux = model.naux()
+    aux = np.empty(naux)
+    work = np.zeros((9, max(a["FI"].shape[0], a["PRIG"].shape[0])))
+    rhs = kern.rhs
+    lines = [(i, float(a["FF"][r, 0]), float(a["FF"][r, 1]))
+             for i, r in enumerate(a["PRIG"][1:]) if a["FI"][r, 0] == 2]
+    bad = [0.0]
+
+    def rigid(t):
+        """The subtracted motion (lines only) and its derivative."""
+        th = theta_s + omega * t
+        y = np.zeros(2 * n)
+        yd = np.zeros(2 * n)
+        for i, c0, c1 in lines:
+            y[i], y[n + i] = c0 + c1 * th, c1 * omega
+            yd[i] = c1 * omega
+        return y, yd
+
+    def f(t, e):
+        yr, ydr = rigid(t)
+        dy = np.empty(2 * n)
+        rhs(t, e + yr, *args, dy, aux, work)
+        bad[0] = max(bad[0], aux[naux - 1])
+        return dy - ydr
+
+    return f, rigid, lines, bad
+
+
 def _run(model, kern, theta_s, ripple, per_rev, revolutions, npts, progress):
+    """R revolutions of RK4 at ``per_rev`` steps each: (times and states tabulated on the
+    last revolution, the previous one's (times, states) or None, wall time, out-of-range
+    seen, right-hand-side evaluations)."""
     y = model.rigid_state(theta_s, model.omega + ripple[0])
     n = model.n_free
     limit = 1e3 * model.omega * max(1.0, float(np.max(np.abs(y[n:]))) / model.omega)
@@ -534,7 +591,7 @@ def _run(model, kern, theta_s, ripple, per_rev, revolutions, npts, progress):
     prev = (np.empty(npts), np.empty((npts, y.size))) if revolutions >= 2 else None
     dummy = np.empty((0, y.size)), np.empty(0)
     naux = model.naux()
-    bad = False
+    bad, nfev = False, 0
     t0 = time.perf_counter()
     for r in range(revolutions):
         last = r == revolutions - 1
@@ -544,16 +601,16 @@ def _run(model, kern, theta_s, ripple, per_rev, revolutions, npts, progress):
             rt, ry = prev
         else:
             ry, rt = dummy
-        t_end, rows, ok, flag = kern.rk4_run(y, r * period, h, per_rev, r * period,
-                                             period / npts, ry, rt, *args, naux)
-        bad = bad or flag > 0
+        t_end, rows, ok, flag, used = kern.rk4_run(y, r * period, h, per_rev, r * period,
+                                                   period / npts, ry, rt, *args, naux)
+        bad, nfev = bad or flag > 0, nfev + used
         if not ok:
             raise SolverError(f"RK4 diverged at t = {t_end:.6g} s (revolution {r + 1}) with "
                               f"step {h:.3g} s: raise steps_per_period", status="diverged")
         if progress is not None:
             progress(r + 1, revolutions)
     wall = time.perf_counter() - t0
-    return rec[1], rec[0], prev, wall, bad
+    return rec[1], rec[0], prev, wall, bad, nfev
 
 
 def _point_accelerations(model, theta_s, ripple, ts, ys, values):

@@ -20,7 +20,8 @@ Methods (those of :func:`~mechcirc.scene.simulate_scene`)
     eigenvalue |λ|max over the cycle (``steps_per_period`` steps per 2π/|λ|max);
     output points between steps by cubic Hermite interpolation.
     Clearance dead zones and the beat-up window are evaluated inside the
-    right-hand side (no restarts).  Compiled with numba when the ``fast`` extra is
+    right-hand side; a step in which a gap's edge is crossed or the window
+    opens or closes is cut there, so RK4 keeps its order through the impacts.  Compiled with numba when the ``fast`` extra is
     installed, else the same code runs as pure Python (``result.backend`` and
     ``result.notes`` say which).
 ``"rk4-python"``
@@ -113,7 +114,7 @@ class SleyResult:
     error_estimate : float or None
         RK4 methods: the largest change of an extremum of any of the scene's
         outputs (accelerations, rod moments and twists, …) between the run at
-        the step and the run at half the step (the one returned), relative to
+        the step (the one returned) and a run at twice the step, relative to
         that quantity's largest magnitude (``docs/sley.md`` compares it with the
         true error); the scipy methods: the same change between the runs at
         rtol and rtol/100 (the one returned); None with ``error_estimate=False``.
@@ -310,9 +311,9 @@ def simulate_params(params: SleyParameters, revolutions: int = 5, method: str | 
                     error_estimate: bool = True) -> SleyResult:
     """:func:`simulate` for explicit :class:`SleyParameters` (same options).
 
-    ``error_estimate`` (rk4 methods): repeat the run at half the step, return
-    that run and keep the relative change of the extrema as
-    ``result.error_estimate`` (about three times the cost).  A
+    ``error_estimate`` (rk4 methods): repeat the run at twice the step (half the
+    steps per period) and keep the relative change of the extrema as
+    ``result.error_estimate`` (about 1.5 times the cost of the run alone).  A
     :class:`SleyAccuracyWarning` is issued when it or
     the periodicity exceeds 1e-3, or fewer steps per period than the default
     are used.  The run is the scene's (:func:`mechcirc.scene.simulate_scene`).
@@ -330,6 +331,39 @@ def simulate_params(params: SleyParameters, revolutions: int = 5, method: str | 
     SleyResult
         The last (or the chosen) revolution, tabulated.
     """
+    method, revolutions, steps_per_period, rtol = _checked(
+        method, revolutions, revolution, points_per_revolution, steps_per_period, rtol)
+    npts = int(points_per_revolution)
+    fb = params.fourbar()                       # GeometryError: not a crank-rocker
+    theta0 = start_angle(params)
+    phiP = fb.dead_centres()[0].theta
+    scene, model = _model(params, table_points)
+    from ..scene.simulation import SceneAccuracyWarning, simulate_scene
+
+    notes = [f"alpha = {math.degrees(params.alpha):g} deg (beat-up interval; sigma = alpha)"]
+    if params.M0 > 0:
+        notes.append("beat-up moment enters the sley equation as " +
+                     ("-M4 (eq. 4 as printed)" if params.beat_sign < 0 else
+                      "+M4 (beat_sign=+1: along the rigid acceleration at beat-up)"))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", SceneAccuracyWarning)
+        m = simulate_scene(scene, model=model, revolutions=revolutions,
+                           start_deg=math.degrees(theta0), steps_per_period=steps_per_period,
+                           points=npts, method=method, rtol=rtol, progress=progress,
+                           error_estimate=error_estimate)
+    for w in caught:
+        if issubclass(w.category, SceneAccuracyWarning):
+            text = str(w.message).split(": ", 1)[-1]
+            warnings.warn(f"{params.label or params.drive}: {text}", SleyAccuracyWarning,
+                          stacklevel=3)
+        else:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    return _result(params, model, m, theta0, phiP, notes)
+
+
+def _checked(method, revolutions, revolution, points_per_revolution, steps_per_period, rtol):
+    """The options of :func:`simulate_params`, checked (:class:`ParameterError` names the bad
+    one): (method, revolutions to integrate, steps per period or None, rtol or None)."""
     method = "rk4" if method is None else method
     if method not in METHODS:
         raise ParameterError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
@@ -358,33 +392,7 @@ def simulate_params(params: SleyParameters, revolutions: int = 5, method: str | 
             else float(steps_per_period)
         if not steps_per_period >= 1:
             raise ParameterError(f"steps_per_period must be >= 1, got {steps_per_period!r}")
-
-    npts = int(points_per_revolution)
-    fb = params.fourbar()                       # GeometryError: not a crank-rocker
-    theta0 = start_angle(params)
-    phiP = fb.dead_centres()[0].theta
-    scene, model = _model(params, table_points)
-    from ..scene.simulation import SceneAccuracyWarning, simulate_scene
-
-    notes = [f"alpha = {math.degrees(params.alpha):g} deg (beat-up interval; sigma = alpha)"]
-    if params.M0 > 0:
-        notes.append("beat-up moment enters the sley equation as " +
-                     ("-M4 (eq. 4 as printed)" if params.beat_sign < 0 else
-                      "+M4 (beat_sign=+1: along the rigid acceleration at beat-up)"))
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", SceneAccuracyWarning)
-        m = simulate_scene(scene, model=model, revolutions=revolutions,
-                           start_deg=math.degrees(theta0), steps_per_period=steps_per_period,
-                           points=npts, method=method, rtol=rtol, progress=progress,
-                           error_estimate=error_estimate)
-    for w in caught:
-        if issubclass(w.category, SceneAccuracyWarning):
-            text = str(w.message).split(": ", 1)[-1]
-            warnings.warn(f"{params.label or params.drive}: {text}", SleyAccuracyWarning,
-                          stacklevel=3)
-        else:
-            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
-    return _result(params, model, m, theta0, phiP, notes)
+    return method, revolutions, steps_per_period, rtol
 
 
 def _result(params: SleyParameters, model, m, theta0: float, phiP: float,
