@@ -448,11 +448,7 @@ def _nodal_sweep(ds: Designs, which: NDArray, omega: NDArray):
     contracting refinement: the double-double LU; a singular point) is left out.
     Returns ``(designs solved, K, error)``, shapes (D',), (D', W), (D', W).
     """
-    from copy import copy
-
-    from . import nodal
-    from ._dd import split
-    from ._nodal_residual import pattern, residual_rounding
+    from ._nodal_residual import residual_rounding
     from ._nodal_solvers import DENSE_LIMIT
 
     none = (which[:0], np.empty((0, omega.size), complex), np.empty((0, omega.size)))
@@ -471,9 +467,43 @@ def _nodal_sweep(ds: Designs, which: NDArray, omega: NDArray):
         out = [_nodal_sweep(ds, which[i:i + group], omega) for i in range(0, which.size, group)]
         return tuple(np.concatenate(x) for x in zip(*out))
     S, parts = _stacked_matrices(ds, system, which)
-    pat, rhs, eps = pattern(system), system.injection(), np.finfo(float).eps
     design, w = np.repeat(np.arange(which.size), W), np.tile(omega, which.size)
-    K, err = np.empty(design.size, complex), np.empty(design.size)
+    K, est, rho, sens, _ = _stacked_solve(system, S, parts, design, w)
+    eps = np.finfo(float).eps
+    rounding = residual_rounding(system, sens)
+    e = np.where((rho >= 0.5) & (est > 16 * rounding), np.inf, est)
+    with np.errstate(invalid="ignore"):
+        done = (e <= np.maximum(16 * eps, 16 * rounding)) & np.isfinite(K)
+        e = np.maximum(e + rounding + eps / 2, eps)
+    err = np.where(done & (e < 1.0), e, np.nan)
+    K, err = K.reshape(-1, W), err.reshape(-1, W)
+    ok = ~np.isnan(err).any(axis=1)
+    return which[ok], K[ok], err[ok]
+
+
+def _stacked_solve(system, S: NDArray, parts: list, design: NDArray, w: NDArray):
+    """The refined nodal solve of :func:`mechcirc.nodal.solve` at points (design, ω) of
+    stacked designs: ``S`` and ``parts`` from :func:`_stacked_matrices`, ``design[i]``
+    the row of point i in them, ``w[i]`` its ω (real, or complex: ω = −js for the
+    resonances' polishing).  One batched inverse per chunk, each solution refined by
+    :func:`mechcirc.nodal._refined` with the residual and sensitivities of
+    :class:`~mechcirc._nodal_residual.Pattern` at the design's values.
+
+    Returns ``(K, estimate, contraction, S, S_data)`` per point as the single path's
+    ``nodal._sweep`` has them before its singular-point treatment; K NaN in a chunk
+    with an exactly singular A.
+    """
+    from copy import copy
+
+    from . import nodal
+    from ._dd import split
+    from ._nodal_residual import pattern
+
+    n, m = system.size, design.size
+    pat, rhs = pattern(system), system.injection()
+    K = np.full(m, complex(np.nan, np.nan))
+    est, rho = np.full(m, np.inf), np.zeros(m)
+    sens, sens_data = np.full(m, np.nan), np.full(m, np.nan)
 
     with np.errstate(all="ignore"):          # the Pattern's element tables, per design
         tables = (S, *split(S), *(np.where(pat.e_kind == i, S, 0.0) for i in range(3)))
@@ -486,28 +516,20 @@ def _nodal_sweep(ds: Designs, which: NDArray, omega: NDArray):
 
     # Chunks as the single path's (nodal._sweep): the same memory per chunk.
     chunk = max(1, min(2 ** 21 // (n * n), nodal._CHUNK_TERMS // (pat.n_terms + n)))
-    for start in range(0, design.size, chunk):
-        pts = np.arange(start, min(start + chunk, design.size))
+    for start in range(0, m, chunk):
+        pts = np.arange(start, min(start + chunk, m))
         A = nodal.combine(*(X[design[pts]] for X in parts), w[pts, None, None])
         try:
             inv = np.linalg.inv(A)
         except np.linalg.LinAlgError:        # a design singular at some ω: one by one
-            K[pts], err[pts] = np.nan, np.nan
             continue
-        xh, xl, est, rho = nodal._refined(
+        xh, xl, est[pts], rho[pts] = nodal._refined(
             lambda r, rows=slice(None), inv=inv: np.einsum("kij,kj->ki", inv[rows], r),
             lambda p, xh, xl, rhs: at(p).residual(w[p], xh, xl, rhs), pts, rhs, system,
             True, 4)
         K[pts] = nodal._difference_dd(system, xh, xl)
-        rounding = residual_rounding(system, at(pts).sensitivities(w[pts], xh + xl, K[pts])[0])
-        e = np.where((rho >= 0.5) & (est > 16 * rounding), np.inf, est)
-        with np.errstate(invalid="ignore"):
-            done = (e <= np.maximum(16 * eps, 16 * rounding)) & np.isfinite(K[pts])
-            e = np.maximum(e + rounding + eps / 2, eps)
-        err[pts] = np.where(done & (e < 1.0), e, np.nan)
-    K, err = K.reshape(-1, W), err.reshape(-1, W)
-    ok = ~np.isnan(err).any(axis=1)
-    return which[ok], K[ok], err[ok]
+        sens[pts], sens_data[pts] = at(pts).sensitivities(w[pts], xh + xl, K[pts])
+    return K, est, rho, sens, sens_data
 
 
 def _stacked_matrices(ds: Designs, system, which: NDArray):
