@@ -581,3 +581,15 @@ def test_nodal_designs_extremes_from_the_stacked_roots():
         assert ex.K_max[d] == kmax.value
         if math.isinf(kmax.value):
             assert ex.omega_at_K_max[d] == pytest.approx(kmax.omega, rel=1e-12)
+
+
+def test_a_balanced_bridge_design_is_left_to_the_single_path():
+    # k1/m1 = k2/m2 (1e5/(4/3) = 6e4/0.8): the bridge balances, a mode of the held and
+    # the released network coincide and cancel in K; find_resonances cancels it, the
+    # stack leaves that design to it (counted), the other stays stacked.
+    text = BRIDGE.replace("damper d1 e 0 {c}\n", "").replace("lever L c 0 e 0 ratio=r\n", "") \
+        .replace("mass  m2 e 0 0.8", "mass  m2 c 0 0.8")
+    params = {"m1": np.array([1.2, 4 / 3])}
+    res = designs(text, params).resonances()
+    np.testing.assert_array_equal(res.single, [1])
+    _assert_resonances_as_single(text, params, res, None, None)
