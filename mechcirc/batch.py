@@ -363,7 +363,11 @@ class Designs:
         secant on the design's own K(ω) (the plan, compiled or in numpy, with its error
         bound); damped, the companion matrices in one stacked ``eigvals`` call,
         every root polished by Newton on det(s²M + sD + K)
-        (:func:`mechcirc.resonances.batched_roots`).  The others (a mass matrix
+        (:func:`mechcirc.resonances.batched_roots`).  A network that is not
+        series–parallel: the same stacked eigenproblems, every root polished as
+        :func:`~mechcirc.resonances.find_resonances` polishes it, the complex
+        secant on the design's own K(s) from the stacked nodal solve
+        (:func:`_nodal_roots`).  The others (a mass matrix
         too close to singular, levers whose ratio varies, a mode in both the
         held and released problems) go through
         :func:`mechcirc.resonances.find_resonances` one by one (``single``).
