@@ -496,8 +496,8 @@ def _stacked_solve(system, S: NDArray, parts: list, design: NDArray, w: NDArray)
     :class:`~mechcirc._nodal_residual.Pattern` at the design's values.
 
     Returns ``(K, estimate, contraction, S, S_data)`` per point as the single path's
-    ``nodal._sweep`` has them before its singular-point treatment; K NaN in a chunk
-    with an exactly singular A.
+    ``nodal._sweep`` has them before its singular-point treatment; K NaN where A is
+    exactly singular.
     """
     from copy import copy
 
@@ -527,8 +527,19 @@ def _stacked_solve(system, S: NDArray, parts: list, design: NDArray, w: NDArray)
         A = nodal.combine(*(X[design[pts]] for X in parts), w[pts, None, None])
         try:
             inv = np.linalg.inv(A)
-        except np.linalg.LinAlgError:        # a design singular at some ω: one by one
-            continue
+        except np.linalg.LinAlgError:
+            # A point exactly singular: NaN there, the others kept, as the single
+            # path's dense solver does (rare; only on the failure path).
+            inv = np.full(A.shape, np.nan, dtype=complex)
+            for k in range(A.shape[0]):
+                try:
+                    inv[k] = np.linalg.inv(A[k])
+                except np.linalg.LinAlgError:
+                    pass
+            good = np.isfinite(inv).all(axis=(1, 2))
+            pts, inv = pts[good], inv[good]
+            if not pts.size:
+                continue
         xh, xl, est[pts], rho[pts] = nodal._refined(
             lambda r, rows=slice(None), inv=inv: np.einsum("kij,kj->ki", inv[rows], r),
             lambda p, xh, xl, rhs: at(p).residual(w[p], xh, xl, rhs), pts, rhs, system,
