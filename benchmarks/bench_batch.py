@@ -30,7 +30,8 @@ error bound and flags: ``Designs.sweep`` (the designs' A(ω) stacked, one batche
 inverse per chunk of points) against the same designs one by one through
 ``mechcirc.sweep`` (what ``Designs.sweep`` did before), same run, with the
 largest difference of K and of the error bound between the two; then the
-resonances of the bridge (damped, and without its damper), D = 100 and 1,000
+resonances of the bridge (damped; without its damper; and undamped with a mass
+across the bridge, whose roots are all polished), D = 100 and 1,000
 over a grid of two parameters: ``Designs.resonances`` (stacked eigenproblems,
 every root polished on its design's K by the stacked nodal solve) against
 ``find_resonances`` one design at a time (timed on 100 designs of the grid),
@@ -190,7 +191,10 @@ def nodal_resonances(repeats, alone=100):
 
     from mechcirc.resonances import find_resonances
 
-    for label, text in (("damped", BRIDGE), ("undamped", BRIDGE.replace("damper d1 c 0 {c}\n", ""))):
+    undamped = BRIDGE.replace("damper d1 c 0 {c}\n", "")
+    # a mass across the bridge: a mass matrix that is not diagonal, every root polished
+    across = undamped.replace("mass  m2 c 0 0.8", "mass  m2 c 0 0.8\nmass  m3 b c 0.3")
+    for label, text in (("damped", BRIDGE), ("undamped", undamped), ("across", across)):
         for D in (100, 1_000):
             n = round(D ** 0.5)
             g = np.meshgrid(np.geomspace(1e3, 1e6, n), np.linspace(0.5, 3, D // n))
