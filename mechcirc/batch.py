@@ -646,9 +646,9 @@ def _nodal_group_roots(ds: Designs, system, held, which: NDArray, omega_max):
     s, err = s0.copy(), e0.copy()
     if todo.any():
         d, r = np.nonzero(todo)
-        rows = which[keep]
-        s[d, r], err[d, r] = _polish_nodal(ds, system, held, rows, d, s0[d, r], pole[d, r],
-                                           e0[d, r], damped)
+        stacks = [(system, S, parts, 1.0), (held, *_stacked_matrices(ds, held, which), -1.0)]
+        s[d, r], err[d, r] = _polish_nodal(stacks, keep[d], s0[d, r], pole[d, r], e0[d, r],
+                                           damped)
     if not damped:
         s = 1j * np.abs(s.imag)
     else:
@@ -666,20 +666,20 @@ def _nodal_group_roots(ds: Designs, system, held, which: NDArray, omega_max):
     return which[keep], pole, s, np.where(live, err, np.nan)
 
 
-def _polish_nodal(ds: Designs, system, held, rows: NDArray, design: NDArray, s0: NDArray,
-                  pole: NDArray, e0: NDArray, damped: bool):
-    """:func:`mechcirc.resonances._secant` for roots of many designs: design
-    ``rows[design[i]]``'s root ``s0[i]`` polished by the complex secant on its own K(s)
-    (anti-resonances ``pole``: on 1/K = −q of the held system), g and its bound as
+def _polish_nodal(stacks: list, design: NDArray, s0: NDArray, pole: NDArray, e0: NDArray,
+                  damped: bool):
+    """:func:`mechcirc.resonances._secant` for roots of many designs: the root ``s0[i]``
+    of the design in row ``design[i]`` of the stacks polished by the complex secant on
+    its own K(s) (anti-resonances ``pole``: on 1/K = −q of the held system), g and its
+    bound as
     :func:`mechcirc.resonances._g_and_delta` has them, from :func:`_stacked_solve` at
-    every root at once.  Returns ``(s, relative error)``.
+    every root at once.  ``stacks``: ``(system, S, parts, sign)`` of the network and of
+    its drive-held system (:func:`_stacked_matrices`).  Returns ``(s, relative error)``.
     """
     from ._nodal_residual import residual_rounding, total_error
     from .resonances import _secant_steps
 
     eps = np.finfo(float).eps
-    stacks = [(system, *_stacked_matrices(ds, system, rows), 1.0),
-              (held, *_stacked_matrices(ds, held, rows), -1.0)]
 
     def g_and_delta(x):
         g = np.full(x.shape, np.nan, dtype=complex)

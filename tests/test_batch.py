@@ -504,7 +504,7 @@ def test_nodal_designs_resonances_are_find_resonances(variant, monkeypatch):
         _ = ds.circuit.tree
     polished = []
     monkeypatch.setattr(batch, "_polish_nodal",
-                        lambda *a, f=batch._polish_nodal: polished.append(a[4].size) or f(*a))
+                        lambda *a, f=batch._polish_nodal: polished.append(a[1].size) or f(*a))
     for omega_max in (None,) if variant == "damped" else (None, 300.0):
         res = ds.resonances(omega_max=omega_max)
         assert res.single.size == 0 and not res.failed        # all stacked
