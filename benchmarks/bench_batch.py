@@ -29,7 +29,13 @@ over a grid of three parameters, D = 100 and 1,000 designs, 200 ω, K with its
 error bound and flags: ``Designs.sweep`` (the designs' A(ω) stacked, one batched
 inverse per chunk of points) against the same designs one by one through
 ``mechcirc.sweep`` (what ``Designs.sweep`` did before), same run, with the
-largest difference of K and of the error bound between the two.
+largest difference of K and of the error bound between the two; then the
+resonances of the bridge (damped; without its damper; and undamped with a mass
+across the bridge, whose roots are all polished), D = 100 and 1,000
+over a grid of two parameters: ``Designs.resonances`` (stacked eigenproblems,
+every root polished on its design's K by the stacked nodal solve) against
+``find_resonances`` one design at a time (timed on 100 designs of the grid),
+same run, per design, with the largest difference of ω between the two.
 
 ``--no-numba`` hides numba (``sys.modules["numba"] = None`` before mechcirc is
 imported), as in an install without it: the batch then runs in numpy.
@@ -176,6 +182,46 @@ def nodal(repeats):
               f"{1e3 * t_1 / ds.size:6.3f} ms/design, ratio {t_1 / t_b:4.2f}x; stacked "
               f"{ds.size - s.single.size}/{ds.size}; K differs by {dK:.1e}, error bound by "
               f"{de:.1e} (relative)")
+    nodal_resonances(repeats)
+
+
+def nodal_resonances(repeats, alone=100):
+    """Resonances of the bridge's designs: stacked against one by one (see --nodal)."""
+    import warnings
+
+    from mechcirc.resonances import find_resonances
+
+    undamped = BRIDGE.replace("damper d1 c 0 {c}\n", "")
+    # a mass across the bridge: a mass matrix that is not diagonal, every root polished
+    across = undamped.replace("mass  m2 c 0 0.8", "mass  m2 c 0 0.8\nmass  m3 b c 0.3")
+    for label, text in (("damped", BRIDGE), ("undamped", undamped), ("across", across)):
+        for D in (100, 1_000):
+            n = round(D ** 0.5)
+            g = np.meshgrid(np.geomspace(1e3, 1e6, n), np.linspace(0.5, 3, D // n))
+            params = dict(zip(("k5", "m1"), (x.ravel() for x in g)))
+            ds = designs(text, params)
+            part = np.linspace(0, ds.size - 1, min(alone, ds.size)).astype(int)
+
+            def one_by_one(ds=ds, part=part):
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    return [find_resonances(ds.design(d)) for d in part]
+
+            times: list = [[], []]
+            for _ in range(repeats):             # alternated
+                t_b, res = cpu(lambda p=params, t=text: designs(t, p).resonances(), 1)
+                t_1, ref = cpu(one_by_one, 1)
+                times[0].append(t_b / ds.size)
+                times[1].append(t_1 / part.size)
+            t_b, t_1 = (float(np.median(t)) for t in times)
+            dw = max((abs(a.omega - b.omega) / b.omega for d, r in zip(part, ref)
+                      for a, b in zip(res.list(d), r)), default=0.0)
+            same = all([a.kind for a in res.list(d)] == [b.kind for b in r]
+                       for d, r in zip(part, ref))
+            print(f"resonances, {label:>8}, D = {ds.size:>5,}: stacked {1e3 * t_b:6.3f} "
+                  f"ms/design, one by one {1e3 * t_1:6.3f} ms/design ({part.size} designs), "
+                  f"ratio {t_1 / t_b:5.1f}x; stacked {ds.size - res.single.size}/{ds.size}; "
+                  f"kinds {'equal' if same else 'DIFFER'}, ω differs by {dw:.1e} (relative)")
 
 
 def cpu(fn, repeats):

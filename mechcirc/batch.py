@@ -363,7 +363,11 @@ class Designs:
         secant on the design's own K(ω) (the plan, compiled or in numpy, with its error
         bound); damped, the companion matrices in one stacked ``eigvals`` call,
         every root polished by Newton on det(s²M + sD + K)
-        (:func:`mechcirc.resonances.batched_roots`).  The others (a mass matrix
+        (:func:`mechcirc.resonances.batched_roots`).  A network that is not
+        series–parallel: the same stacked eigenproblems, every root polished as
+        :func:`~mechcirc.resonances.find_resonances` polishes it, the complex
+        secant on the design's own K(s) from the stacked nodal solve
+        (:func:`_nodal_roots`).  The others (a mass matrix
         too close to singular, levers whose ratio varies, a mode in both the
         held and released problems) go through
         :func:`mechcirc.resonances.find_resonances` one by one (``single``).
@@ -374,6 +378,8 @@ class Designs:
 
         D = self.size
         found = batched_roots(self, omega_max)
+        if found is None:
+            found = _nodal_roots(self, omega_max)
         which, pole, w, err = found if found is not None else (np.zeros(0, dtype=np.int64),) * 4
         single = np.setdiff1d(np.arange(D), which)
         failed: dict[int, str] = {}
@@ -448,11 +454,7 @@ def _nodal_sweep(ds: Designs, which: NDArray, omega: NDArray):
     contracting refinement: the double-double LU; a singular point) is left out.
     Returns ``(designs solved, K, error)``, shapes (D',), (D', W), (D', W).
     """
-    from copy import copy
-
-    from . import nodal
-    from ._dd import split
-    from ._nodal_residual import pattern, residual_rounding
+    from ._nodal_residual import residual_rounding
     from ._nodal_solvers import DENSE_LIMIT
 
     none = (which[:0], np.empty((0, omega.size), complex), np.empty((0, omega.size)))
@@ -471,9 +473,43 @@ def _nodal_sweep(ds: Designs, which: NDArray, omega: NDArray):
         out = [_nodal_sweep(ds, which[i:i + group], omega) for i in range(0, which.size, group)]
         return tuple(np.concatenate(x) for x in zip(*out))
     S, parts = _stacked_matrices(ds, system, which)
-    pat, rhs, eps = pattern(system), system.injection(), np.finfo(float).eps
     design, w = np.repeat(np.arange(which.size), W), np.tile(omega, which.size)
-    K, err = np.empty(design.size, complex), np.empty(design.size)
+    K, est, rho, sens, _ = _stacked_solve(system, S, parts, design, w)
+    eps = np.finfo(float).eps
+    rounding = residual_rounding(system, sens)
+    e = np.where((rho >= 0.5) & (est > 16 * rounding), np.inf, est)
+    with np.errstate(invalid="ignore"):
+        done = (e <= np.maximum(16 * eps, 16 * rounding)) & np.isfinite(K)
+        e = np.maximum(e + rounding + eps / 2, eps)
+    err = np.where(done & (e < 1.0), e, np.nan)
+    K, err = K.reshape(-1, W), err.reshape(-1, W)
+    ok = ~np.isnan(err).any(axis=1)
+    return which[ok], K[ok], err[ok]
+
+
+def _stacked_solve(system, S: NDArray, parts: list, design: NDArray, w: NDArray):
+    """The refined nodal solve of :func:`mechcirc.nodal.solve` at points (design, ω) of
+    stacked designs: ``S`` and ``parts`` from :func:`_stacked_matrices`, ``design[i]``
+    the row of point i in them, ``w[i]`` its ω (real, or complex: ω = −js for the
+    resonances' polishing).  One batched inverse per chunk, each solution refined by
+    :func:`mechcirc.nodal._refined` with the residual and sensitivities of
+    :class:`~mechcirc._nodal_residual.Pattern` at the design's values.
+
+    Returns ``(K, estimate, contraction, S, S_data)`` per point as the single path's
+    ``nodal._sweep`` has them before its singular-point treatment; K NaN where A is
+    exactly singular.
+    """
+    from copy import copy
+
+    from . import nodal
+    from ._dd import split
+    from ._nodal_residual import pattern
+
+    n, m = system.size, design.size
+    pat, rhs = pattern(system), system.injection()
+    K = np.full(m, complex(np.nan, np.nan))
+    est, rho = np.full(m, np.inf), np.zeros(m)
+    sens, sens_data = np.full(m, np.nan), np.full(m, np.nan)
 
     with np.errstate(all="ignore"):          # the Pattern's element tables, per design
         tables = (S, *split(S), *(np.where(pat.e_kind == i, S, 0.0) for i in range(3)))
@@ -486,28 +522,203 @@ def _nodal_sweep(ds: Designs, which: NDArray, omega: NDArray):
 
     # Chunks as the single path's (nodal._sweep): the same memory per chunk.
     chunk = max(1, min(2 ** 21 // (n * n), nodal._CHUNK_TERMS // (pat.n_terms + n)))
-    for start in range(0, design.size, chunk):
-        pts = np.arange(start, min(start + chunk, design.size))
+    for start in range(0, m, chunk):
+        pts = np.arange(start, min(start + chunk, m))
         A = nodal.combine(*(X[design[pts]] for X in parts), w[pts, None, None])
         try:
             inv = np.linalg.inv(A)
-        except np.linalg.LinAlgError:        # a design singular at some ω: one by one
-            K[pts], err[pts] = np.nan, np.nan
-            continue
-        xh, xl, est, rho = nodal._refined(
+        except np.linalg.LinAlgError:
+            # A point exactly singular: NaN there, the others kept, as the single
+            # path's dense solver does (rare; only on the failure path).
+            inv = np.full(A.shape, np.nan, dtype=complex)
+            for k in range(A.shape[0]):
+                try:
+                    inv[k] = np.linalg.inv(A[k])
+                except np.linalg.LinAlgError:
+                    pass
+            good = np.isfinite(inv).all(axis=(1, 2))
+            pts, inv = pts[good], inv[good]
+            if not pts.size:
+                continue
+        xh, xl, est[pts], rho[pts] = nodal._refined(
             lambda r, rows=slice(None), inv=inv: np.einsum("kij,kj->ki", inv[rows], r),
             lambda p, xh, xl, rhs: at(p).residual(w[p], xh, xl, rhs), pts, rhs, system,
             True, 4)
         K[pts] = nodal._difference_dd(system, xh, xl)
-        rounding = residual_rounding(system, at(pts).sensitivities(w[pts], xh + xl, K[pts])[0])
-        e = np.where((rho >= 0.5) & (est > 16 * rounding), np.inf, est)
-        with np.errstate(invalid="ignore"):
-            done = (e <= np.maximum(16 * eps, 16 * rounding)) & np.isfinite(K[pts])
-            e = np.maximum(e + rounding + eps / 2, eps)
-        err[pts] = np.where(done & (e < 1.0), e, np.nan)
-    K, err = K.reshape(-1, W), err.reshape(-1, W)
-    ok = ~np.isnan(err).any(axis=1)
-    return which[ok], K[ok], err[ok]
+        sens[pts], sens_data[pts] = at(pts).sensitivities(w[pts], xh + xl, K[pts])
+    return K, est, rho, sens, sens_data
+
+
+def _nodal_roots(ds: Designs, omega_max):
+    """:func:`mechcirc.resonances.batched_roots` for a network that is not
+    series–parallel: the roots of the valid designs with the template's lever ratios,
+    stacked in groups of :data:`_STACK_ENTRIES`; None when it solves none.
+
+    Each group: the stacked eigenproblems of :func:`~mechcirc.resonances._stacked_problem`
+    (drive held: resonances; released: anti-resonances), every root then polished as
+    :func:`~mechcirc.resonances.find_resonances` polishes it (:func:`_polish_nodal`).
+    Returns ``(designs, pole, s, error)`` as ``batched_roots`` does.
+    """
+    from . import nodal
+    from ._nodal_solvers import DENSE_LIMIT
+
+    try:
+        _ = ds.circuit.tree
+        return None                          # series–parallel: batched_roots takes it
+    except NotSeriesParallelError:
+        pass
+    except MechcircError:
+        return None
+    try:
+        system = ds.circuit.nodal
+        held = nodal.held(system)
+    except MechcircError:                    # each design alone says what is wrong
+        return None
+    which = np.flatnonzero(ds.valid)
+    lev = {lv.name: i for i, lv in enumerate(ds.circuit.levers)}
+    for lv in system.levers:                 # the constraint basis is the template's
+        which = which[ds.ratios[lev[lv.name], which] == lv.ratio]
+    if not which.size or held.size > DENSE_LIMIT:
+        return None
+    group = max(1, _STACK_ENTRIES // (held.size * held.size))
+    found = [f for f in (_nodal_group_roots(ds, system, held, which[i:i + group], omega_max)
+                         for i in range(0, which.size, group)) if f is not None]
+    if not found:
+        return None
+    R = max(f[2].shape[1] for f in found)
+
+    def pad(x, fill):
+        return np.concatenate([np.pad(f[x], ((0, 0), (0, R - f[x].shape[1])),
+                                      constant_values=fill) for f in found])
+    return (np.concatenate([f[0] for f in found]), pad(1, False),
+            pad(2, complex(np.nan, np.nan)), pad(3, np.nan))
+
+
+def _nodal_group_roots(ds: Designs, system, held, which: NDArray, omega_max):
+    """:func:`_nodal_roots` for one group of designs ``which``."""
+    from .resonances import (MAX_UNKNOWNS, MAX_UNKNOWNS_DAMPED, _POLISH_BELOW,
+                             _element_patterns, _stacked_problem, constraint_basis, pencil)
+
+    eps = np.finfo(float).eps
+    *_, G_released, G_held, damped = pencil(system)
+    B, nn = _element_patterns(system), len(system.nodes)
+    S, parts = _stacked_matrices(ds, system, which)
+    roots = []
+    for G in (G_held, G_released):
+        Z = constraint_basis(G, nn).toarray()
+        if Z.shape[1] > (MAX_UNKNOWNS_DAMPED if damped else MAX_UNKNOWNS):
+            return None
+        x, e, ok = _stacked_problem(Z, B, S, damped, omega_max)
+        if damped:
+            # find_resonances polishes every damped root
+            must = np.ones(which.size, dtype=bool)
+            # and compares held and released with the eigen-solver's estimates
+            with np.errstate(all="ignore"):
+                e_cmp = np.maximum(e, 1e2 * eps * np.nanmax(np.abs(x), axis=1, initial=1.0)
+                                   [:, None] / np.abs(x))
+        else:
+            # _undamped's bound eps·λmax/λ stands (no polishing below _POLISH_BELOW)
+            # only for a diagonal mass matrix without massless directions.
+            P = Z.T @ B["mass"] @ Z
+            k = P.shape[1]
+            diagonal = not np.any(P * (1 - np.eye(k)))
+            mass = S @ P[:, np.arange(k), np.arange(k)] if k else np.ones((which.size, 1))
+            must = ~(diagonal & (mass > 1e-13 * mass.max(axis=1, initial=0.0)[:, None])
+                     .all(axis=1))
+            x, e_cmp = 1j * x, e
+        roots.append((x, e, e_cmp, ok, must))
+    (s_h, e_h, c_h, ok_h, must_h), (s_r, e_r, c_r, ok_r, must_r) = roots
+    # A mode in both problems cancels in K (resonances._cancel): the single path's.
+    with np.errstate(all="ignore"):
+        close = np.abs(s_r[:, None, :] - s_h[:, :, None]) / np.abs(s_h[:, :, None]) < \
+            1e3 * (c_h[:, :, None] + c_r[:, None, :])
+    keep = np.flatnonzero(ok_h & ok_r & ~close.any(axis=(1, 2)))
+    if not keep.size:
+        return None
+    s0 = np.concatenate([s_h[keep], s_r[keep]], axis=1)
+    e0 = np.concatenate([e_h[keep], e_r[keep]], axis=1)
+    pole = np.zeros(s0.shape, dtype=bool)
+    pole[:, s_h.shape[1]:] = True
+    must = np.concatenate([np.repeat(must_h[keep, None], s_h.shape[1], 1),
+                           np.repeat(must_r[keep, None], s_r.shape[1], 1)], axis=1)
+    have = np.isfinite(s0)
+    todo = have & (must | (e0 > _POLISH_BELOW)) if not damped else have
+    s, err = s0.copy(), e0.copy()
+    if todo.any():
+        d, r = np.nonzero(todo)
+        stacks = [(system, S, parts, 1.0), (held, *_stacked_matrices(ds, held, which), -1.0)]
+        s[d, r], err[d, r] = _polish_nodal(stacks, keep[d], s0[d, r], pole[d, r], e0[d, r],
+                                           damped)
+    if not damped:
+        s = 1j * np.abs(s.imag)
+    else:
+        s = np.where(np.abs(s.imag) <= err * np.abs(s), s.real + 0j, s)
+    err = np.maximum(err, eps)
+    if omega_max is not None:
+        s = np.where(np.abs(s) <= omega_max, s, np.nan)
+    mag = np.abs(s)
+    live = np.isfinite(mag)
+    # Sorted as find_resonances sorts: by ω, then kind ("antiresonance" first).
+    order = np.lexsort((~pole, np.where(live, mag, np.inf)), axis=-1)
+    width = int(live.sum(axis=1).max(initial=0))
+    pole, s, err, live = (np.take_along_axis(x, order, 1)[:, :width]
+                          for x in (pole, s, err, live))
+    return which[keep], pole, s, np.where(live, err, np.nan)
+
+
+def _polish_nodal(stacks: list, design: NDArray, s0: NDArray, pole: NDArray, e0: NDArray,
+                  damped: bool):
+    """:func:`mechcirc.resonances._secant` for roots of many designs: the root ``s0[i]``
+    of the design in row ``design[i]`` of the stacks polished by the complex secant on
+    its own K(s) (anti-resonances ``pole``: on 1/K = −q of the held system), g and its
+    bound as
+    :func:`mechcirc.resonances._g_and_delta` has them, from :func:`_stacked_solve` at
+    every root at once.  ``stacks``: ``(system, S, parts, sign)`` of the network and of
+    its drive-held system (:func:`_stacked_matrices`).  Returns ``(s, relative error)``.
+    """
+    from ._nodal_residual import residual_rounding, total_error
+    from .resonances import _secant_steps
+
+    eps = np.finfo(float).eps
+
+    def g_and_delta(x):
+        g = np.full(x.shape, np.nan, dtype=complex)
+        dg = np.full(x.shape, np.inf)
+        for want, (sys_, S, parts, sign) in zip((~pole, pole), stacks):
+            if want.any():
+                K, est, rho, sens, sens_data = _stacked_solve(sys_, S, parts, design[want],
+                                                              -1j * x[want])
+                rounding = residual_rounding(sys_, sens)
+                est = np.where((rho >= 0.5) & (est > 16 * rounding), np.inf, est)
+                with np.errstate(all="ignore"):
+                    dK = total_error(sens_data, est + rounding) * np.abs(K)
+                g[want] = sign * K
+                dg[want] = 4 * np.maximum(dK, eps * np.abs(K))
+        return g, dg
+
+    h = np.maximum(np.abs(s0) * np.maximum(e0, 1e-9), 1e-300)
+    a, b = s0 - h * (1 if damped else 1j), s0.copy()
+    ga, _ = g_and_delta(a)
+    gb, db = g_and_delta(b)
+    with np.errstate(all="ignore"):
+        g0, slope0 = gb, (gb - ga) / (b - a)
+    active = np.isfinite(ga) & np.isfinite(gb)
+
+    def admissible(c):
+        if not damped:
+            c = 1j * c.imag                       # undamped: roots on the jω axis
+        return c, np.isfinite(c)
+
+    b, db, step, slope = _secant_steps(g_and_delta, admissible, a, ga, b, gb, db, active)
+    with np.errstate(all="ignore"):
+        err = (db / np.abs(slope) + step) / np.abs(b)
+        moved = np.abs(b - s0) / np.abs(s0)
+        newton = np.abs(g0 / slope0) / np.abs(s0)
+    # As _secant: the eigen-solver's root where the secant wandered off, its estimate
+    # at least the Newton step there.
+    bad = ~np.isfinite(err) | ~np.isfinite(b) | (moved > 1e-3)
+    newton = np.where(np.isfinite(newton), 10 * newton, 0.0)
+    return np.where(bad, s0, b), np.where(bad, np.maximum(e0, newton), np.maximum(err, eps))
 
 
 def _stacked_matrices(ds: Designs, system, which: NDArray):
