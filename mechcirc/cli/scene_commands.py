@@ -294,7 +294,8 @@ def cmd_simulate_scene(args) -> int:
         over["omega"] = args.omega
     if over:
         scene = apply_overrides(scene, over)
-    if getattr(args, "shaft", False) or getattr(args, "flywheel", None) is not None:
+    if getattr(args, "shaft", False) or getattr(args, "flywheel", None) is not None \
+            or getattr(args, "rigid", False):
         return _shaft(args, scene)
     from ..progress import Progress
 
@@ -367,17 +368,18 @@ def _shaft(args, scene) -> int:
         if getattr(args, flag, None) is not None:
             raise MechcircError(f"--{flag.replace('_', '-')} does not apply to --shaft")
     if not args.shaft:
-        raise MechcircError("--flywheel applies with --shaft")
+        raise MechcircError(f"--{'rigid' if args.rigid else 'flywheel'} applies with --shaft")
     with warnings.catch_warnings(record=True):
         warnings.simplefilter("always", ShaftWarning)     # kept in the notes, printed below
-        r = simulate_shaft(scene, flywheel=args.flywheel, points=args.points or 720)
+        r = simulate_shaft(scene, flywheel=args.flywheel, points=args.points or 720,
+                           rigid=args.rigid)
     aliases = {a: t.rsplit(".", 1)[0] for a, t in (scene.simulate.aliases.items()
                if scene.simulate is not None else ())
                if t.endswith("acceleration") and t.rsplit(".", 1)[0] in r.body_accelerations}
     curves = {"speed": r.speed, "acceleration": r.acceleration, "motor_torque": r.motor_torque,
               "load_torque": r.load_torque,
               **{f"{b}.acceleration": v for b, v in r.body_accelerations.items()},
-              **{a: r.body_accelerations[b] for a, b in aliases.items()}}
+              **{a: r.body_accelerations[b] for a, b in aliases.items()}, **r.values}
     if args.output:
         from ..outputs import atomic_open
 
@@ -408,12 +410,26 @@ def _shaft(args, scene) -> int:
     if r.startup_time is not None:
         print(f"start-up from rest: within 1 % of ω_mean of the steady band after "
               f"{r.startup_time:.4g} s")
-    print(f"{'quantity':<28} {'min':>14} {'max':>14}")
+    print(f"{'quantity':<28} {'min':>14} {'max':>14}  unit")
     for k, v in curves.items():
-        print(f"{k:<28} {float(v.min()):>14.6g} {float(v.max()):>14.6g}")
+        print(f"{k:<28} {float(v.min()):>14.6g} {float(v.max()):>14.6g}  {_unit(k, scene)}")
     for n in r.notes:
         print(f"note: {n}")
     return 0
+
+
+def _unit(name: str, scene) -> str:
+    """The unit of a ``--shaft`` output column."""
+    fixed = {"speed": "rad/s", "acceleration": "rad/s²", "motor_torque": "N·m",
+             "load_torque": "N·m"}
+    if name in fixed:
+        return fixed[name]
+    head, _, kind = name.rpartition(".")
+    linear = head.endswith(".travel") or any(e.name == head for e in scene.elastic) or any(
+        ld.name == head for ld in scene.loads)
+    return {"acceleration": "m/s²" if linear else "rad/s²", "moment": "N·m",
+            "force": "N" if linear else "N·m", "deformation": "m" if linear else "rad"
+            }.get(kind, "rad/s²")
 
 
 # ------------------------------------------------------------- crosscheck SCENE.toml

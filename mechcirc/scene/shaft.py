@@ -230,9 +230,6 @@ class _RigidShaft:
     def rest(self, theta, w=0.0):
         return np.empty(0)
 
-    def load_torque(self, theta, w, z):
-        return -self.rig.Q(theta)
-
     def samples(self, th, w, z, acc):
         """(load torque, body accelerations, element values) over the cycle's samples."""
         rig = self.rig
@@ -283,10 +280,6 @@ class _ElasticShaft:
     def rest(self, theta, w=0.0):
         """z of the rigid motion at θ turning at w (at rest: w = 0)."""
         return self.model.rigid_state(theta, w)
-
-    def load_torque(self, theta, w, z):
-        self.deriv(theta, w, z)
-        return -self.c * self.work[5, 0]
 
     def samples(self, th, w, z, acc):
         """(load torque, body accelerations, element values) over the cycle's samples."""
@@ -353,19 +346,30 @@ def _drive_inertia(eq: _ElasticShaft, theta: float) -> float:
     return float(eq.work[3, 0])
 
 
-def _over_cycle(eq, th0, cycle, x0, rtol, scale, dense=False):
+#: Right-hand side evaluations one cycle of the shaft may take.
+MAX_CALLS = 200_000
+
+
+def _over_cycle(eq, th0, cycle, x0, rtol, scale, dense=False, floor=1e-6):
     """One cycle in θ from θ0 of Y = [θ̇, t, z] (dY/dθ = Ẏ/θ̇), x0 = [θ̇, z] at θ0; stops
-    where θ̇ falls to 1e-6 of the motor's speed scale (a stall)."""
+    where θ̇ falls to ``floor`` × the motor's speed scale (a stall)."""
     from scipy.integrate import solve_ivp
 
+    calls = [0]
+
     def f(th, Y):
+        calls[0] += 1
+        if calls[0] > MAX_CALLS or not math.isfinite(Y[0]):
+            raise SolverError(f"a cycle of the shaft needed more than {MAX_CALLS} evaluations "
+                              f"(at θ = {math.degrees(th):.6g}°, speed {Y[0]:.6g} rad/s)",
+                              status="too-many-steps")
         out = np.empty(Y.size)
         out[0], out[1] = eq.deriv(th, Y[0], Y[2:], out[2:]), 1.0
         out /= Y[0]
         return out
 
     def stall(th, Y):
-        return Y[0] - 1e-6 * scale
+        return Y[0] - floor * scale
     stall.terminal = True
     n = eq.n
     atol = rtol * 1e-3 * np.concatenate((
@@ -405,16 +409,23 @@ def _steady_state(eq, th0, cycle, w0, rtol, scale):
     method from the rigid cycle's speed and rigid state; (x, largest residual)."""
     from scipy.optimize import root
 
-    def G(x):
-        sol = _over_cycle(eq, th0, cycle, x, rtol, scale)
-        if sol.status == 1:
+    def G(x):         # below 1 % of the rigid cycle's speed the shaft counts as stalled
+        try:
+            sol = _over_cycle(eq, th0, cycle, x, rtol, scale, floor=0.01 * w0 / scale)
+        except SolverError:
+            sol = None
+        if sol is None or sol.status == 1:
             return np.concatenate(([-x[0]], np.zeros(2 * eq.n)))
         Y = sol.y[:, -1]
         return np.concatenate(([Y[0] - x[0]], Y[2:] - x[1:] - eq.shift))
 
     x = np.concatenate(([w0], eq.rest(th0, w0)))
     x = x + G(x)                        # a cycle settles the fast elastic transient
-    res = root(G, x, method="hybr", options={"xtol": 1e-13})
+    res = root(G, x, method="hybr", options={"xtol": 1e-13, "maxfev": 12 * (x.size + 1)})
+    if not res.success:
+        raise SolverError(f"no steady cycle of the elastic mechanism on the shaft: {res.message} "
+                          f"(speed {x[0]:.6g} rad/s at the last cycle's start)",
+                          status="no-steady-cycle")
     return res.x, float(np.max(np.abs(res.fun) / np.concatenate((
         [scale], np.full(eq.n, 1.0), np.full(eq.n, scale)))))
 
@@ -458,7 +469,8 @@ def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float 
     motor = shaft.motor
     th0, cyc = math.radians(shaft.start_deg), rig.cycle
     scale = max(abs(motor.sync_speed) if motor.kind == "kloss" else max(motor.speeds), 1e-300)
-    T0, L0 = motor.scalar_torque(0.0), eq.load_torque(th0, 0.0, eq.rest(th0))
+    # at rest the elastic elements carry the loads statically: the rigid mechanism's torque
+    T0, L0 = motor.scalar_torque(0.0), -rig.Q(th0)
     if startup and T0 - L0 <= 0:
         raise MechcircError(
             f"{scene.source}: the motor cannot start the mechanism: its starting torque "
