@@ -422,12 +422,14 @@ def _steady_state(eq, th0, cycle, w0, rtol, scale):
     x = np.concatenate(([w0], eq.rest(th0, w0)))
     x = x + G(x)                        # a cycle settles the fast elastic transient
     res = root(G, x, method="hybr", options={"xtol": 1e-13, "maxfev": 12 * (x.size + 1)})
-    if not res.success:
-        raise SolverError(f"no steady cycle of the elastic mechanism on the shaft: {res.message} "
-                          f"(speed {x[0]:.6g} rad/s at the last cycle's start)",
-                          status="no-steady-cycle")
-    return res.x, float(np.max(np.abs(res.fun) / np.concatenate((
+    resid = float(np.max(np.abs(res.fun) / np.concatenate((
         [scale], np.full(eq.n, 1.0), np.full(eq.n, scale)))))
+    # hybr may stop short of xtol where the map's rounding (~rtol) is all that is left
+    if not res.success and not resid <= 100 * rtol:
+        raise SolverError(f"no steady cycle of the elastic mechanism on the shaft: {res.message} "
+                          f"(speed {x[0]:.6g} rad/s at the last cycle's start, residual "
+                          f"{resid:.2g})", status="no-steady-cycle")
+    return res.x, resid
 
 
 def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float | None = None,

@@ -139,12 +139,13 @@ def _speed_gap(a, b):
 
 @pytest.mark.slow
 def test_stiff_links_tend_to_the_rigid_shaft():
-    """With the rod 10× and 100× stiffer the steady cycle's speed approaches the rigid
-    shaft's (θ the only degree of freedom) as 1/k."""
+    """With the rod 10× stiffer the steady cycle's speed approaches the rigid shaft's (θ the
+    only degree of freedom) about as 1/k: measured 1.56e-4 and 9.97e-6 of ω_s at k = 3e6
+    and 3e7 N/m (ratio 0.064; at 3e8, 1.98e-6: the rigid tables' own interpolation)."""
     rigid = simulate_shaft(scene(), points=90, startup=False, rigid=True)
     gaps = [_speed_gap(simulate_shaft(scene(k), points=90, startup=False), rigid)
-            for k in (3.0e7, 3.0e8)]
-    assert gaps[1] <= 0.2 * gaps[0] and gaps[1] <= 1e-5, gaps
+            for k in (3.0e6, 3.0e7)]
+    assert gaps[1] <= 0.1 * gaps[0] and gaps[1] <= 2e-5, gaps
 
 
 @pytest.mark.slow
@@ -156,10 +157,8 @@ def test_a_large_flywheel_tends_to_the_constant_speed_simulation():
     gaps = []
     for jf in (1.0e3, 1.0e4):
         r = simulate_shaft(scene(flywheel=jf), points=90, startup=False)
-        c = simulate_scene(r_scene := scene(flywheel=jf), omega=r.omega_mean, start_deg=START,
-                           points=90, method="DOP853", rtol=1e-10, revolutions=4,
-                           error_estimate=False)
-        del r_scene
+        c = simulate_scene(scene(flywheel=jf), omega=r.omega_mean, start_deg=START, points=90,
+                           method="DOP853", rtol=1e-10, revolutions=4, error_estimate=False)
         order = np.argsort((math.radians(START) + r.theta) % (2 * math.pi), kind="stable")
         f = r.values["k_rod.force"][order]
         want = c.values["k_rod.force"]
