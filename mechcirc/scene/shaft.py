@@ -1,7 +1,11 @@
-"""A dynamic main shaft: a flywheel and a motor characteristic turning a scene's rigid mechanism.
+"""A dynamic main shaft: a flywheel and a motor characteristic turning a scene's mechanism.
 
-The first crank's rotation θ becomes a state.  With every elastic element
-rigid, the mechanism's kinetic energy is ½ J_red(θ) θ̇², J_red = Σ m |∂x/∂θ|²
+The first crank's rotation θ becomes a state.  With elastic parts (the default when
+the scene has any), θ joins the free parts' coordinates of :mod:`.motion` and the
+drive's part gets (J_f + m₀) θ̈ + ½ m₀' θ̇² = T_motor(θ̇) + Q₀, m₀ and Q₀ its inertia and
+the elastic elements' and moments' generalised force on it from the time domain's
+right-hand side (:class:`_ElasticShaft`).  With every elastic element
+rigid (``rigid=True``), the mechanism's kinetic energy is ½ J_red(θ) θ̇², J_red = Σ m |∂x/∂θ|²
 + Σ J (∂φ/∂θ)² over the scene's masses and inertias (the rigid-motion tables of
 :mod:`.motion`), and Lagrange II gives
 
@@ -478,13 +482,27 @@ def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float 
             f"{scene.source}: the motor cannot start the mechanism: its starting torque "
             f"T(0) = {T0:.6g} N·m does not exceed the load torque "
             f"{L0:.6g} N·m at the start angle {shaft.start_deg:g}°")
+    x0, sol = _steady_cycle(scene, eq, rig, motor, th0, rtol, scale, mean_load, peak, notes)
+    motion = _tabulate(scene, eq, sol, th0, cyc, points, Jf, motor)
+    if not startup:
+        return ShaftMotion(**motion, notes=tuple(notes))
+    up = _startup(scene, eq, shaft, th0, cyc, x0[0], motion, rtol, scale, peak)
+    notes.append(f"steady cycle by shooting (DOP853 in θ, rtol {rtol:g}); start-up from rest "
+                 f"over {up.pop('cycles')} cycles")
+    return ShaftMotion(**motion, **up, notes=tuple(notes))
+
+
+def _steady_cycle(scene, eq, rig, motor, th0, rtol, scale, mean_load, peak, notes):
+    """The steady cycle from θ0: ([θ̇, z] at θ0, its dense solution over the cycle)."""
+    cyc = rig.cycle
 
     def fail():
         raise MechcircError(
             f"{scene.source}: no steady cycle: the motor (largest torque "
             f"{motor.peak_torque:.6g} N·m) cannot keep the mechanism turning against the mean "
-            f"load torque {mean_load:.6g} N·m, peak {peak:.6g} N·m, with flywheel {Jf:g} kg·m²")
-    w0 = _steady_speed(_RigidShaft(rig, Jf, motor.scalar_torque), th0, cyc,
+            f"load torque {mean_load:.6g} N·m, peak {peak:.6g} N·m, with flywheel "
+            f"{eq.Jf:g} kg·m²")
+    w0 = _steady_speed(_RigidShaft(rig, eq.Jf, motor.scalar_torque), th0, cyc,
                        max(rtol, 1e-7) if eq.n else rtol, scale,     # elastic: a first guess
                        _balance(motor, mean_load, scale), fail)
     x0 = np.array([w0])
@@ -496,13 +514,7 @@ def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float 
     if sol.status != 0:
         raise SolverError(f"{scene.source}: the steady cycle stalls at θ = "
                           f"{math.degrees(sol.t[-1]):.6g}°", status="stalled")
-    motion = _tabulate(scene, eq, sol, th0, cyc, points, Jf, motor)
-    if not startup:
-        return ShaftMotion(**motion, notes=tuple(notes))
-    up = _startup(scene, eq, shaft, th0, cyc, x0[0], motion, rtol, scale, peak)
-    notes.append(f"steady cycle by shooting (DOP853 in θ, rtol {rtol:g}); start-up from rest "
-                 f"over {up.pop('cycles')} cycles")
-    return ShaftMotion(**motion, **up, notes=tuple(notes))
+    return x0, sol
 
 
 def _tabulate(scene, eq, sol, th0, cyc, points, Jf, motor):
