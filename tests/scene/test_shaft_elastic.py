@@ -163,4 +163,22 @@ def test_a_large_flywheel_tends_to_the_constant_speed_simulation():
         f = r.values["k_rod.force"][order]
         want = c.values["k_rod.force"]
         gaps.append(float(np.max(np.abs(f - want)) / np.max(np.abs(want))))
-    assert gaps[1] <= 0.2 * gaps[0] and gaps[1] <= 1e-4, gaps
+    # measured 3.217e-6 and 3.217e-7 of the peak force (δ = 2.9e-6, 2.9e-7)
+    assert gaps[1] <= 0.15 * gaps[0] and gaps[1] <= 1e-6, gaps
+
+
+@pytest.mark.slow
+def test_cli_prints_the_elastic_forces_with_units(tmp_path, capsys):
+    from cli_helpers import assert_user_error, run
+
+    path = tmp_path / "slider_shaft.toml"
+    path.write_text(open("examples/slider_crank_scene.toml", encoding="utf-8").read() + EXTRA,
+                    encoding="utf-8")
+    status, out, err = run(["simulate", str(path), "--shaft", "--points", "90"], capsys)
+    assert status == 0, err
+    rows = {ln.split()[0]: ln.split() for ln in out.splitlines() if ln.split()}
+    assert rows["k_rod.force"][-1] == "N" and rows["k_rod.deformation"][-1] == "m"
+    assert rows["speed"][-1] == "rad/s" and rows["motor_torque"][-1] == "N·m"
+    assert rows["block.travel.acceleration"][-1] == "m/s²"
+    assert 0 < float(rows["k_rod.force"][2]) < 300          # about 227 N (docs)
+    assert_user_error(["simulate", str(path), "--rigid"], capsys, "--rigid applies with --shaft")
