@@ -375,7 +375,8 @@ def _shaft(args, scene) -> int:
                            rigid=args.rigid)
     aliases = {a: t.rsplit(".", 1)[0] for a, t in (scene.simulate.aliases.items()
                if scene.simulate is not None else ())
-               if t.endswith("acceleration") and t.rsplit(".", 1)[0] in r.body_accelerations}
+               if t.endswith("acceleration") and t.rsplit(".", 1)[0] in r.body_accelerations
+               and (not r.values or not t.endswith(".rigid_acceleration"))}   # elastic: not rigid
     curves = {"speed": r.speed, "acceleration": r.acceleration, "motor_torque": r.motor_torque,
               "load_torque": r.load_torque,
               **{f"{b}.acceleration": v for b, v in r.body_accelerations.items()},
