@@ -285,7 +285,8 @@ def cmd_simulate_scene(args) -> int:
     check_output_paths(args.output, plots=(args.plot,) if args.plot else (),
                        reads=(args.scene,))
     scene = _with_overrides(args, load_scene(args.scene))
-    if getattr(args, "shaft", False) or getattr(args, "flywheel", None) is not None:
+    if getattr(args, "shaft", False) or getattr(args, "flywheel", None) is not None \
+            or getattr(args, "rigid", False):
         return _shaft(args, scene)
     from ..progress import Progress
 
@@ -373,9 +374,9 @@ def _quantity_unit(scene, key: str, keys) -> str:
     aliases = dict(scene.simulate.aliases) if scene.simulate is not None else {}
     name, _, what = aliases.get(key, key).rpartition(".")
     torsion = name in {t.name for t in scene.torsions}
-    if what in ("acceleration_x", "acceleration_y") or (
-            what == "acceleration" and f"{name}.acceleration_x" in keys):
-        return "m/s²"                               # a point's (translational)
+    if what in ("acceleration_x", "acceleration_y") or (what == "acceleration" and (
+            f"{name}.acceleration_x" in keys or name.endswith(".travel"))):
+        return "m/s²"                               # a point's or a block's travel
     if what in ("acceleration", "rigid_acceleration") or key == "acceleration":
         return "rad/s²"
     if what == "force":
@@ -408,17 +409,19 @@ def _shaft(args, scene) -> int:
         if getattr(args, flag, None) is not None:
             raise MechcircError(f"--{flag.replace('_', '-')} does not apply to --shaft")
     if not args.shaft:
-        raise MechcircError("--flywheel applies with --shaft")
+        raise MechcircError(f"--{'rigid' if args.rigid else 'flywheel'} applies with --shaft")
     with warnings.catch_warnings(record=True):
         warnings.simplefilter("always", ShaftWarning)     # kept in the notes, printed below
-        r = simulate_shaft(scene, flywheel=args.flywheel, points=args.points or 720)
+        r = simulate_shaft(scene, flywheel=args.flywheel, points=args.points or 720,
+                           rigid=args.rigid)
     aliases = {a: t.rsplit(".", 1)[0] for a, t in (scene.simulate.aliases.items()
                if scene.simulate is not None else ())
-               if t.endswith("acceleration") and t.rsplit(".", 1)[0] in r.body_accelerations}
+               if t.endswith("acceleration") and t.rsplit(".", 1)[0] in r.body_accelerations
+               and (not r.values or not t.endswith(".rigid_acceleration"))}   # elastic: not rigid
     curves = {"speed": r.speed, "acceleration": r.acceleration, "motor_torque": r.motor_torque,
               "load_torque": r.load_torque,
               **{f"{b}.acceleration": v for b, v in r.body_accelerations.items()},
-              **{a: r.body_accelerations[b] for a, b in aliases.items()}}
+              **{a: r.body_accelerations[b] for a, b in aliases.items()}, **r.values}
     if args.output:
         _write_columns(args.output, f"# {scene.name} ({args.scene}); steady cycle of the "
                        f"dynamic main shaft, flywheel {r.flywheel!r} kg·m²",

@@ -48,7 +48,10 @@ def _register_simulate(sub) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON document")
     p.add_argument("--shaft", action="store_true",
                    help="scene: the dynamic main shaft of its [shaft] table (flywheel, motor) "
-                        "turning the rigid mechanism: speed fluctuation, motor torque, start-up")
+                        "turning the mechanism with its elastic parts: speed fluctuation, "
+                        "motor torque, elastic forces, start-up")
+    p.add_argument("--rigid", action="store_true",
+                   help="with --shaft: every elastic element rigid (θ the only DOF)")
     p.add_argument("--flywheel", type=real(least=0.0, unit="kg·m²"), metavar="J",
                    help="with --shaft: the flywheel's inertia [kg·m²] (default the file's)")
     p.set_defaults(func=cmd_simulate)

@@ -1,7 +1,11 @@
-"""A dynamic main shaft: a flywheel and a motor characteristic turning a scene's rigid mechanism.
+"""A dynamic main shaft: a flywheel and a motor characteristic turning a scene's mechanism.
 
-The first crank's rotation θ becomes a state.  With every elastic element
-rigid, the mechanism's kinetic energy is ½ J_red(θ) θ̇², J_red = Σ m |∂x/∂θ|²
+The first crank's rotation θ becomes a state.  With elastic parts (the default when
+the scene has any), θ joins the free parts' coordinates of :mod:`.motion` and the
+drive's part gets (J_f + m₀) θ̈ + ½ m₀' θ̇² = T_motor(θ̇) + Q₀, m₀ and Q₀ its inertia and
+the elastic elements' and moments' generalised force on it from the time domain's
+right-hand side (:class:`_ElasticShaft`).  With every elastic element
+rigid (``rigid=True``), the mechanism's kinetic energy is ½ J_red(θ) θ̇², J_red = Σ m |∂x/∂θ|²
 + Σ J (∂φ/∂θ)² over the scene's masses and inertias (the rigid-motion tables of
 :mod:`.motion`), and Lagrange II gives
 
@@ -69,10 +73,12 @@ class ShaftMotion:
     speed, acceleration : ndarray
         θ̇ [rad/s] and θ̈ [rad/s²] over the cycle.
     motor_torque, load_torque : ndarray
-        T_motor(θ̇) and −Q(θ), the moments' torque the shaft must give [N·m].
+        T_motor(θ̇) and −Q, the torque the shaft must give against the moments (rigid) or
+        against the moments and elastic elements acting on the drive's part [N·m].
     body_accelerations : dict[str, ndarray]
-        Every link's and torsion body's angular acceleration [rad/s²] in the rigid
-        motion over the cycle: φ''(θ) θ̇² + φ'(θ) θ̈.
+        Every link's and torsion body's angular acceleration [rad/s²] over the cycle
+        (rigid: φ''(θ) θ̇² + φ'(θ) θ̈; elastic: each part's own motion, a block's travel
+        ``BLOCK.travel`` in m/s²).
     omega_min, omega_max, omega_mean : float
         Extremes and time mean (cycle / its period) of the speed [rad/s].
     delta : float
@@ -85,6 +91,11 @@ class ShaftMotion:
     startup_t, startup_speed : ndarray
         The start-up curve (empty without one).
     notes : tuple of str
+    values : dict[str, ndarray]
+        Elastic scenes: ``ELEMENT.force`` [N or N·m], ``ELEMENT.deformation`` [m or rad]
+        and ``MOMENT.moment`` [N·m] over the cycle (empty when rigid).
+    states : ndarray
+        Elastic scenes: the free parts' [q, q̇] at each θ (rows); shape (points, 0) rigid.
     """
 
     name: str
@@ -106,6 +117,8 @@ class ShaftMotion:
     startup_t: np.ndarray = field(default_factory=lambda: np.empty(0))
     startup_speed: np.ndarray = field(default_factory=lambda: np.empty(0))
     notes: tuple = ()
+    values: dict = field(default_factory=dict)
+    states: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
 
     def summary(self) -> dict:
         """The scalar results and extremes, JSON-ready."""
@@ -203,8 +216,229 @@ def reduced_inertia(scene: Scene, theta) -> np.ndarray:
     return r.J(th - r.cycle * np.floor(th / r.cycle))
 
 
+class _RigidShaft:
+    """The shaft's equation on the rigid mechanism: no state beyond θ, θ̇ (z is empty)."""
+
+    n = 0
+    shift = np.empty(0)
+
+    def __init__(self, rig: _Rigid, Jf: float, tq):
+        self.rig, self.Jf, self.tq = rig, Jf, tq
+
+    def deriv(self, theta, w, z, dz=None):
+        """θ̈ at θ, θ̇ = w (nothing to write into ``dz``)."""
+        rig = self.rig
+        J, dJ = rig.J.at(rig.wrap(theta))
+        return (self.tq(w) + rig.Q(theta) - 0.5 * dJ * w * w) / (self.Jf + J)
+
+    def rest(self, theta, w=0.0):
+        return np.empty(0)
+
+    def samples(self, th, w, z, acc):
+        """(load torque, body accelerations, element values) over the cycle's samples."""
+        rig = self.rig
+        u = np.array([rig.wrap(a) for a in th])
+        bodies = {b: rig.rate[b](u, slope=True) * w * w + rig.rate[b](u) * acc
+                  for b in rig.bodies}
+        return np.array([-rig.Q(a) for a in th]), bodies, {}
+
+
+class _ElasticShaft:
+    """The scene's time-domain model (:mod:`.motion`, its kernel's right-hand side) with the
+    drive's part turned by the shaft's θ: the free parts' z = [q, q̇] and
+
+        (J_f + c² m₀(cθ)) θ̈ + ½ c³ m₀'(cθ) θ̇² = T_motor(θ̇) + c Q₀(θ, θ̇, z)
+
+    (q₀ = c θ the drive's coordinate, m₀ its part's inertia, Q₀ the generalised force of the
+    elastic elements and moments on it: rows 3–5 of the kernel's work array)."""
+
+    def __init__(self, scene: Scene, Jf: float, tq):
+        from .motion import motion_model
+        from .simulation import kernels_for
+
+        self.model = m = motion_model(scene)
+        a = m.arrays
+        r = a["PRIG"][0]
+        if a["FI"][r, 0] != 2 or a["FF"][r, 0] != 0.0:
+            raise MechcircError(f"{scene.source}: the drive's part does not turn in proportion "
+                                "to the main shaft; a dynamic shaft cannot drive it")
+        self.c, self.n, self.Jf, self.tq = float(a["FF"][r, 1]), m.n_free, Jf, tq
+        self.kern = kernels_for("rk4")[0]
+        self.args = m.kernel_args(0.0, 1e300)
+        self.oargs = m.kernel_args(0.0, 1e300, outputs=True)
+        self.aux, self.dz = np.empty(m.naux()), np.empty(2 * m.n_free)
+        self.work = np.zeros((9, max(a["FI"].shape[0], a["PRIG"].shape[0])))
+        n = self.n
+        self.shift = np.concatenate([m.rigid_state(scene.cycle)[:n] - m.rigid_state(0.0)[:n],
+                                     np.zeros(n)])
+
+    def deriv(self, theta, w, z, dz=None, args=None):
+        """θ̈ at θ, θ̇ = w and the free parts' state z; ż into ``dz`` when given."""
+        args = self.args if args is None else args
+        args[0][0], args[0][1] = w, theta           # the crank at θ, θ̇ = w (t = 0)
+        self.kern.rhs(0.0, z, *args, self.dz if dz is None else dz, self.aux, self.work)
+        c, wk = self.c, self.work
+        return (self.tq(w) + c * wk[5, 0] - 0.5 * wk[4, 0] * c ** 3 * w * w) / \
+            (self.Jf + c * c * wk[3, 0])
+
+    def rest(self, theta, w=0.0):
+        """z of the rigid motion at θ turning at w (at rest: w = 0)."""
+        return self.model.rigid_state(theta, w)
+
+    def samples(self, th, w, z, acc):
+        """(load torque, body accelerations, element values) over the cycle's samples."""
+        m, a, c = self.model, self.model.arrays, self.c
+        nb, ne = len(m.bodies), len(m.elements)
+        out = np.empty((th.size, m.naux()))
+        load = np.empty(th.size)
+        for i in range(th.size):
+            self.deriv(th[i], w[i], np.ascontiguousarray(z[i]), args=self.oargs)
+            out[i] = self.aux
+            load[i] = -c * self.work[5, 0]
+        bodies = {}
+        for k, b in enumerate(m.bodies):
+            f = m.body_fn[b]
+            v = out[:, k].copy()
+            if a["FI"][f, 1] == 0:          # on the drive's part: the kernel took θ̈ = 0
+                args = (a["FI"][f, 0], a["tabs"], a["FI"][f, 2], *a["FF"][f])
+                v += np.array([self.kern.feval(*args, c * t)[1] for t in th]) * c * acc
+            bodies[b] = v
+        values = {f"{e}.{kind}": out[:, nb + j + off].copy() for j, e in enumerate(m.elements)
+                  for kind, off in (("force", 0), ("deformation", ne))}
+        values.update({f"{mo}.moment": out[:, nb + 2 * ne + 1 + j].copy()
+                       for j, mo in enumerate(m.moments)})
+        return load, bodies, values
+
+
+def _prepare(scene: Scene, shaft, flywheel, points, rigid):
+    """Checks of the options → (shaft, J_f, rigid tables, equations, peak load, mean load)."""
+    shaft = shaft or scene.shaft
+    if shaft is None:
+        raise MechcircError(f"{scene.source}: no [shaft] table: give the flywheel and motor "
+                            "(docs/scenes.md, \"A dynamic main shaft\")")
+    Jf = shaft.flywheel if flywheel is None else float(flywheel)
+    if not (math.isfinite(Jf) and Jf >= 0):
+        raise MechcircError(f"flywheel must be a number ≥ 0 kg·m², got {flywheel!r}")
+    if isinstance(points, bool) or not isinstance(points, int) or points < 16:
+        raise MechcircError(f"points must be an integer ≥ 16, got {points!r}")
+    rig = _Rigid(scene)
+    if rig.J_range[0] + Jf <= 0:
+        raise MechcircError(f"{scene.source}: the shaft has no inertia (flywheel 0 and no mass "
+                            "of the mechanism moves with the crank)")
+    motor = shaft.motor
+    eq = _RigidShaft(rig, Jf, motor.scalar_torque)
+    if not rigid and scene.parts and len(scene.parts) > 1:
+        eq = _ElasticShaft(scene, Jf, motor.scalar_torque)
+        if eq.Jf + eq.c ** 2 * min(_drive_inertia(eq, t) for t in (0.0, 1.0, 2.0)) <= 0:
+            raise MechcircError(f"{scene.source}: the shaft has no inertia of its own (flywheel "
+                                "0 and no mass on the drive's part): give [shaft] flywheel > 0")
+    grid = np.linspace(0.0, rig.cycle, 4 * points, endpoint=False)
+    load = np.array([-rig.Q(t) for t in grid])
+    peak = float(load.max())
+    if motor.peak_torque < peak:
+        text = (f"the motor's largest torque {motor.peak_torque:.6g} N·m (breakdown) is below "
+                f"the peak load torque {peak:.6g} N·m at θ = "
+                f"{math.degrees(grid[int(load.argmax())]):.4g}°: only the flywheel and the "
+                "mechanism's inertia carry the shaft through it")
+        warnings.warn(f"{scene.source}: {text}", ShaftWarning, stacklevel=3)
+        return shaft, Jf, rig, eq, peak, float(np.mean(load)), ["warning: " + text]
+    return shaft, Jf, rig, eq, peak, float(np.mean(load)), []
+
+
+def _drive_inertia(eq: _ElasticShaft, theta: float) -> float:
+    eq.deriv(theta, 0.0, eq.rest(theta))
+    return float(eq.work[3, 0])
+
+
+#: Right-hand side evaluations one cycle of the shaft may take.
+MAX_CALLS = 200_000
+
+
+def _over_cycle(eq, th0, cycle, x0, rtol, scale, dense=False, floor=1e-6):
+    """One cycle in θ from θ0 of Y = [θ̇, t, z] (dY/dθ = Ẏ/θ̇), x0 = [θ̇, z] at θ0; stops
+    where θ̇ falls to ``floor`` × the motor's speed scale (a stall)."""
+    from scipy.integrate import solve_ivp
+
+    calls = [0]
+
+    def f(th, Y):
+        calls[0] += 1
+        if calls[0] > MAX_CALLS or not math.isfinite(Y[0]):
+            raise SolverError(f"a cycle of the shaft needed more than {MAX_CALLS} evaluations "
+                              f"(at θ = {math.degrees(th):.6g}°, speed {Y[0]:.6g} rad/s)",
+                              status="too-many-steps")
+        out = np.empty(Y.size)
+        out[0], out[1] = eq.deriv(th, Y[0], Y[2:], out[2:]), 1.0
+        out /= Y[0]
+        return out
+
+    def stall(th, Y):
+        return Y[0] - floor * scale
+    stall.terminal = True
+    n = eq.n
+    atol = rtol * 1e-3 * np.concatenate((
+        [scale, scale], np.full(n, 1e-2), np.full(n, 1e-2 * scale)))
+    return solve_ivp(f, (th0, th0 + cycle), np.concatenate(([x0[0], 0.0], x0[1:])),
+                     method="DOP853", rtol=rtol, atol=atol, events=stall, dense_output=dense)
+
+
+def _steady_speed(eq, th0, cycle, rtol, scale, guess, fail):
+    """The rigid steady cycle's speed at θ0: the zero of (speed after a cycle − before) by
+    Brent's method, bracketed outward from ``guess``; ``fail()`` raises when none is found."""
+    from scipy.optimize import brentq
+
+    def gap(w0):
+        sol = _over_cycle(eq, th0, cycle, [w0], rtol, scale)
+        return -w0 if sol.status == 1 else sol.y[0, -1] - w0
+
+    lo, hi = 0.5 * guess, guess * 1.02 + 1e-9 * scale
+    glo, ghi = gap(lo), gap(hi)
+    for _ in range(40):
+        if glo > 0 and ghi < 0:
+            break
+        if glo <= 0:
+            lo *= 0.5
+            glo = gap(lo)
+        if ghi >= 0:
+            hi = hi * 1.1 + 1e-3 * scale
+            ghi = gap(hi)
+    else:
+        fail()
+    return brentq(gap, lo, hi, xtol=1e-13 * scale, rtol=4 * np.finfo(float).eps)
+
+
+def _steady_state(eq, th0, cycle, w0, rtol, scale):
+    """The elastic steady cycle's [θ̇, z] at θ0: the fixed point of the cycle map (after one
+    cycle θ̇ and z as before, positions shifted by their windings) by scipy's hybrid Powell
+    method from the rigid cycle's speed and rigid state; (x, largest residual)."""
+    from scipy.optimize import root
+
+    def G(x):         # below 1 % of the rigid cycle's speed the shaft counts as stalled
+        try:
+            sol = _over_cycle(eq, th0, cycle, x, rtol, scale, floor=0.01 * w0 / scale)
+        except SolverError:
+            sol = None
+        if sol is None or sol.status == 1:
+            return np.concatenate(([-x[0]], np.zeros(2 * eq.n)))
+        Y = sol.y[:, -1]
+        return np.concatenate(([Y[0] - x[0]], Y[2:] - x[1:] - eq.shift))
+
+    x = np.concatenate(([w0], eq.rest(th0, w0)))
+    x = x + G(x)                        # a cycle settles the fast elastic transient
+    res = root(G, x, method="hybr", options={"xtol": 1e-13, "maxfev": 12 * (x.size + 1)})
+    resid = float(np.max(np.abs(res.fun) / np.concatenate((
+        [scale], np.full(eq.n, 1.0), np.full(eq.n, scale)))))
+    # hybr may stop short of xtol where the map's rounding (~rtol) is all that is left
+    if not res.success and not resid <= 100 * rtol:
+        raise SolverError(f"no steady cycle of the elastic mechanism on the shaft: {res.message} "
+                          f"(speed {x[0]:.6g} rad/s at the last cycle's start, residual "
+                          f"{resid:.2g})", status="no-steady-cycle")
+    return res.x, resid
+
+
 def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float | None = None,
-                   points: int = 720, startup: bool = True, rtol: float = 1e-10) -> ShaftMotion:
+                   points: int = 720, startup: bool = True, rtol: float = 1e-10,
+                   rigid: bool = False) -> ShaftMotion:
     """The main shaft turned by the motor through the flywheel: steady cycle and start-up.
 
     Parameters
@@ -220,6 +454,10 @@ def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float 
         Also integrate the start-up from rest (in time, until the steady cycle).
     rtol : float
         Relative tolerance of the DOP853 integrations.
+    rigid : bool
+        Treat every elastic element as rigid (θ the only degree of freedom) even when the
+        scene has elastic parts; by default a scene with elastic parts is simulated with
+        them (θ coupled to the free parts of :mod:`.motion`).
 
     Returns
     -------
@@ -233,129 +471,97 @@ def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float 
         message gives the torques); the start-up did not reach the steady
         cycle within ``max_time``.
     """
-    from scipy.integrate import solve_ivp
-    from scipy.optimize import brentq
-
-    shaft = shaft or scene.shaft
-    if shaft is None:
-        raise MechcircError(f"{scene.source}: no [shaft] table: give the flywheel and motor "
-                            "(docs/scenes.md, \"A dynamic main shaft\")")
-    Jf = shaft.flywheel if flywheel is None else float(flywheel)
-    if not (math.isfinite(Jf) and Jf >= 0):
-        raise MechcircError(f"flywheel must be a number ≥ 0 kg·m², got {flywheel!r}")
-    if isinstance(points, bool) or not isinstance(points, int) or points < 16:
-        raise MechcircError(f"points must be an integer ≥ 16, got {points!r}")
-    rig = _Rigid(scene)
+    shaft, Jf, rig, eq, peak, mean_load, notes = _prepare(scene, shaft, flywheel, points, rigid)
     motor = shaft.motor
-    T = motor.torque
-    th0 = math.radians(shaft.start_deg)
-    cyc = rig.cycle
-    notes = []
-    if rig.J_range[0] + Jf <= 0:
-        raise MechcircError(f"{scene.source}: the shaft has no inertia (flywheel 0 and no mass "
-                            "of the mechanism moves with the crank)")
-    grid = np.linspace(0.0, cyc, 4 * points, endpoint=False)
-    load = np.array([-rig.Q(t) for t in grid])
-    peak = float(load.max())
-    if motor.peak_torque < peak:
-        text = (f"the motor's largest torque {motor.peak_torque:.6g} N·m (breakdown) is below "
-                f"the peak load torque {peak:.6g} N·m at θ = "
-                f"{math.degrees(grid[int(load.argmax())]):.4g}°: only the flywheel and the "
-                "mechanism's inertia carry the shaft through it")
-        notes.append("warning: " + text)
-        warnings.warn(f"{scene.source}: {text}", ShaftWarning, stacklevel=2)
-
-    tq = motor.scalar_torque
-
-    def accel(theta, w):
-        J, dJ = rig.J.at(rig.wrap(theta))
-        return (tq(w) + rig.Q(theta) - 0.5 * dJ * w * w) / (Jf + J)
-
-    if startup and tq(0.0) + rig.Q(th0) <= 0:
+    th0, cyc = math.radians(shaft.start_deg), rig.cycle
+    scale = max(abs(motor.sync_speed) if motor.kind == "kloss" else max(motor.speeds), 1e-300)
+    # at rest the elastic elements carry the loads statically: the rigid mechanism's torque
+    T0, L0 = motor.scalar_torque(0.0), -rig.Q(th0)
+    if startup and T0 - L0 <= 0:
         raise MechcircError(
             f"{scene.source}: the motor cannot start the mechanism: its starting torque "
-            f"T(0) = {tq(0.0):.6g} N·m does not exceed the load torque "
-            f"{-rig.Q(th0):.6g} N·m at the start angle {shaft.start_deg:g}°")
-    # ---- the steady cycle: speed after one cycle = speed before (in θ: dω/dθ = θ̈/ω)
-    scale = max(abs(motor.sync_speed) if motor.kind == "kloss" else max(motor.speeds), 1e-300)
+            f"T(0) = {T0:.6g} N·m does not exceed the load torque "
+            f"{L0:.6g} N·m at the start angle {shaft.start_deg:g}°")
+    x0, sol = _steady_cycle(scene, eq, rig, motor, th0, rtol, scale, mean_load, peak, notes)
+    motion = _tabulate(scene, eq, sol, th0, cyc, points, Jf, motor)
+    if not startup:
+        return ShaftMotion(**motion, notes=tuple(notes))
+    up = _startup(scene, eq, shaft, th0, cyc, x0[0], motion, rtol, scale, peak)
+    notes.append(f"steady cycle by shooting (DOP853 in θ, rtol {rtol:g}); start-up from rest "
+                 f"over {up.pop('cycles')} cycles")
+    return ShaftMotion(**motion, **up, notes=tuple(notes))
 
-    def stall(th, y):
-        return y[0] - 1e-6 * scale
-    stall.terminal = True
 
-    def over_cycle(w0, dense=False):
-        sol = solve_ivp(lambda th, y: [accel(th, y[0]) / y[0], 1.0 / y[0]], (th0, th0 + cyc),
-                        [w0, 0.0], method="DOP853", rtol=rtol, atol=rtol * 1e-3 * scale,
-                        events=stall, dense_output=dense)
-        return sol
+def _steady_cycle(scene, eq, rig, motor, th0, rtol, scale, mean_load, peak, notes):
+    """The steady cycle from θ0: ([θ̇, z] at θ0, its dense solution over the cycle)."""
+    cyc = rig.cycle
 
-    def gap(w0):
-        sol = over_cycle(w0)
-        if sol.status == 1:             # stalled within the cycle
-            return -w0
-        return sol.y[0, -1] - w0
-
-    wmean = _balance(motor, float(np.mean(load)), scale)
-    lo, hi = 0.5 * wmean, wmean * 1.02 + 1e-9 * scale
-    glo, ghi = gap(lo), gap(hi)
-    for _ in range(40):
-        if glo > 0 and ghi < 0:
-            break
-        if glo <= 0:
-            lo *= 0.5
-            glo = gap(lo)
-        if ghi >= 0:
-            hi = hi * 1.1 + 1e-3 * scale
-            ghi = gap(hi)
-    else:
+    def fail():
         raise MechcircError(
             f"{scene.source}: no steady cycle: the motor (largest torque "
             f"{motor.peak_torque:.6g} N·m) cannot keep the mechanism turning against the mean "
-            f"load torque {float(np.mean(load)):.6g} N·m, peak {peak:.6g} N·m, with "
-            f"flywheel {Jf:g} kg·m²")
-    w0 = brentq(gap, lo, hi, xtol=1e-13 * scale, rtol=4 * np.finfo(float).eps)
-    sol = over_cycle(w0, dense=True)
+            f"load torque {mean_load:.6g} N·m, peak {peak:.6g} N·m, with flywheel "
+            f"{eq.Jf:g} kg·m²")
+    w0 = _steady_speed(_RigidShaft(rig, eq.Jf, motor.scalar_torque), th0, cyc,
+                       max(rtol, 1e-7) if eq.n else rtol, scale,     # elastic: a first guess
+                       _balance(motor, mean_load, scale), fail)
+    x0 = np.array([w0])
+    if eq.n:
+        x0, resid = _steady_state(eq, th0, cyc, w0, rtol, scale)
+        notes.append(f"elastic steady cycle: {2 * eq.n} elastic states beside θ̇, cycle map "
+                     f"residual {resid:.2g} (relative)")
+    sol = _over_cycle(eq, th0, cyc, x0, rtol, scale, dense=True)
     if sol.status != 0:
         raise SolverError(f"{scene.source}: the steady cycle stalls at θ = "
                           f"{math.degrees(sol.t[-1]):.6g}°", status="stalled")
+    return x0, sol
+
+
+def _tabulate(scene, eq, sol, th0, cyc, points, Jf, motor):
+    """The steady cycle on ``points`` uniform θ samples → ShaftMotion's fields."""
     th = th0 + np.linspace(0.0, cyc, points + 1)
-    w, tt = sol.sol(th)
-    period = float(tt[-1])
-    th, w, tt = th[:-1], w[:-1], tt[:-1]
-    acc = np.array([accel(a, b) for a, b in zip(th, w)])
-    u = np.array([rig.wrap(a) for a in th])
-    bodies = {b: rig.rate[b](u, slope=True) * w * w + rig.rate[b](u) * acc
-              for b in rig.bodies}
-    # the extremes of the speed: on the samples, refined on the dense output
+    Y = sol.sol(th)
+    period = float(Y[1, -1])
+    th, Y = th[:-1], Y[:, :-1]
+    w, tt, z = Y[0], Y[1], Y[2:].T
+    acc = np.array([eq.deriv(a, b, np.ascontiguousarray(c)) for a, b, c in zip(th, w, z)])
+    load, bodies, values = eq.samples(th, w, z, acc)
     wmin, wmax = _extremes(lambda x: sol.sol(x)[0], th, w)
     mean = cyc / period
-    motion = dict(name=scene.name, source=scene.source, flywheel=Jf, theta=th - th0, time=tt,
-                  speed=w, acceleration=acc, motor_torque=np.asarray(T(w), float),
-                  load_torque=np.array([-rig.Q(a) for a in th]), body_accelerations=bodies,
-                  omega_min=wmin, omega_max=wmax, omega_mean=mean,
-                  delta=(wmax - wmin) / mean, period=period)
-    if not startup:
-        return ShaftMotion(**motion, notes=tuple(notes))
-    # ---- the start-up from rest, in time
-    band = (wmin - 0.01 * mean, wmax + 0.01 * mean)
-    ts, ws = [0.0], [0.0]
-    t, y = 0.0, np.array([th0, 0.0])
-    k = 0
-    segments = []
+    return dict(name=scene.name, source=scene.source, flywheel=Jf, theta=th - th0, time=tt,
+                speed=w, acceleration=acc, motor_torque=np.asarray(motor.torque(w), float),
+                load_torque=load, body_accelerations=bodies, omega_min=wmin, omega_max=wmax,
+                omega_mean=mean, delta=(wmax - wmin) / mean, period=period, values=values,
+                states=np.ascontiguousarray(z))
+
+
+def _startup(scene, eq, shaft, th0, cyc, w0, motion, rtol, scale, peak):
+    """The start-up from rest, in time, cycle by cycle until the speed at a cycle's start is
+    within 1e-5 ω_mean of the steady cycle's → startup_time, startup_t, startup_speed."""
+    from scipy.integrate import solve_ivp
+    from scipy.optimize import brentq
+
+    mean, n = motion["omega_mean"], eq.n
+    ts, ws, segments = [0.0], [0.0], []
+    t, y, k = 0.0, np.concatenate(([th0, 0.0], eq.rest(th0))), 0
+    atol = rtol * 1e-3 * np.concatenate(([scale, scale], np.full(n, 1e-2),
+                                         np.full(n, 1e-2 * scale)))
+
+    def f(_, y):
+        out = np.empty(y.size)
+        out[0], out[1] = y[1], eq.deriv(y[0], y[1], y[2:], out[2:])
+        return out
+
+    def stopped(_, y):
+        return y[1] + 1e-9 * scale
+    stopped.terminal = True
     while True:
         k += 1
-        target = th0 + k * cyc
 
-        def reached(_, y, target=target):
+        def reached(_, y, target=th0 + k * cyc):
             return y[0] - target
         reached.terminal = True
-
-        def stopped(_, y):
-            return y[1] + 1e-9 * scale
-        stopped.terminal = True
-        span = shaft.max_time - t
-        s = solve_ivp(lambda _, y: [y[1], accel(y[0], y[1])], (t, t + span), y,
-                      method="DOP853", rtol=rtol, atol=rtol * 1e-3 * scale,
+        s = solve_ivp(f, (t, shaft.max_time), y, method="DOP853", rtol=rtol, atol=atol,
                       events=(reached, stopped), dense_output=True)
         tk = np.linspace(t, s.t[-1], 65)[1:]
         ts.extend(tk)
@@ -366,8 +572,8 @@ def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float 
             raise MechcircError(
                 f"{scene.source}: the start-up stalls at t = {t:.4g} s, θ = "
                 f"{math.degrees(y[0]):.5g}°: the motor's largest torque "
-                f"{motor.peak_torque:.6g} N·m is below the peak load torque {peak:.6g} N·m "
-                f"and the flywheel ({Jf:g} kg·m²) does not carry it through")
+                f"{shaft.motor.peak_torque:.6g} N·m is below the peak load torque {peak:.6g} "
+                f"N·m and the flywheel ({motion['flywheel']:g} kg·m²) does not carry it through")
         if s.status != 1:
             raise MechcircError(
                 f"{scene.source}: the start-up did not reach the steady cycle within max_time "
@@ -376,17 +582,15 @@ def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float 
         if abs(y[1] - w0) <= 1e-3 * 0.01 * mean:     # settled well inside the band
             break
     ts, ws = np.array(ts), np.array(ws)
+    band = (motion["omega_min"] - 0.01 * mean, motion["omega_max"] + 0.01 * mean)
     out = np.flatnonzero((ws < band[0]) | (ws > band[1]))
     t_up = 0.0
     if out.size:                  # the last crossing into the band, on the dense output
         i = int(out[-1])
-        f = next(sol for t0, sol in reversed(segments) if t0 <= ts[i])
+        fi = next(sol for t0, sol in reversed(segments) if t0 <= ts[i])
         bound = band[0] if ws[i] < band[0] else band[1]
-        t_up = float(brentq(lambda x: f(x)[1] - bound, ts[i], ts[i + 1], xtol=1e-14))
-    notes.append(f"steady cycle by shooting (DOP853 in θ, rtol {rtol:g}); start-up from rest "
-                 f"over {k} cycles")
-    return ShaftMotion(**motion, startup_time=t_up, startup_t=ts, startup_speed=ws,
-                       notes=tuple(notes))
+        t_up = float(brentq(lambda x: fi(x)[1] - bound, ts[i], ts[i + 1], xtol=1e-14))
+    return dict(startup_time=t_up, startup_t=ts, startup_speed=ws, cycles=k)
 
 
 def _balance(motor: Motor, torque: float, scale: float) -> float:

@@ -178,7 +178,7 @@ def test_sley_shaft_matches_an_independent_sympy_derivation():
 
     rhs = sympy_reference()
     scene = parse_scene(FOURBAR)
-    r = simulate_shaft(scene, points=180)
+    r = simulate_shaft(scene, points=180, rigid=True)      # the torsion rod C4 rigid
     th0 = math.radians(10.0)
     keep = r.startup_t <= 0.3
     sol = solve_ivp(rhs, (0, 0.3), [th0, 0.0], method="DOP853", rtol=1e-12, atol=1e-12,
@@ -217,7 +217,7 @@ def test_breakdown_below_the_peak_load_warns_and_stalls_without_a_flywheel():
         "flywheel = 0.05", "flywheel = 0.0")
     with pytest.warns(ShaftWarning, match="below the peak load torque"):
         with pytest.raises(MechcircError, match="no steady cycle|stalls"):
-            simulate_shaft(parse_scene(text))
+            simulate_shaft(parse_scene(text), rigid=True)
 
 
 @pytest.mark.parametrize("line, message", [
