@@ -96,7 +96,7 @@ import random
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
+from typing import Callable, TextIO
 
 from .errors import MechcircError, NetlistError
 from .limits import (MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS, MAX_STUDY_POINTS,
@@ -1113,7 +1113,41 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
         the scheduler cannot be reached or has no worker (nothing is written).
     """
 
-    columns = spec.columns
+    parquet = _check_run(spec, output, scheduler, connect_timeout, resume, curves)
+    keep_rows = keep_rows or not output
+    with _lock(output) if output else contextlib.nullcontext(), \
+            _curve_writer(curves, spec) as write_curves:
+        # Rows are journalled as they finish to a CSV beside the output, each with
+        # a checksum; the output itself is written whole at the end (atomically),
+        # so an existing file stays as it was until the new table is complete.
+        journal = journal_path(output) if output else None
+        done = _resumed_rows(spec, output, journal, parquet) if resume and output and journal \
+            else []
+        have = {r["index"] for r in done}
+        # Connect before the journal is touched: a failed start leaves no file.
+        client = _dask_client(scheduler, connect_timeout) if scheduler else None
+        take = _Take(spec, journal, done, keep_rows, write_curves if curves is not None
+                     else None, on_rows)
+        task = (curves is not None, keep_rows, bool(output))
+        try:
+            executor, n_workers = _execute(spec, have, client, workers, batch_size, take, task)
+        finally:
+            take.close()
+        take.rows.sort(key=lambda r: r["index"])
+        if output and journal:
+            if take.sink is None:           # nothing ran: the journal holds the kept rows
+                _open_journal(journal, spec, done).close()
+            _write_output(output, parquet, spec, journal)
+            with contextlib.suppress(FileNotFoundError):
+                os.unlink(journal)
+    return StudyResult(spec.columns, take.rows, executor, n_workers, len(done), take.failed,
+                       take.count)
+
+
+def _check_run(spec: StudySpec, output, scheduler, connect_timeout, resume: bool,
+               curves) -> bool:
+    """Refuse :func:`run_study` settings that cannot work, before anything is written;
+    whether the output is Parquet."""
     parquet = bool(output) and str(output).lower().endswith(".parquet")
     if parquet:
         _require_pyarrow()
@@ -1121,7 +1155,6 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
                           0 < connect_timeout <= 3600):
         raise MechcircError(f"connect_timeout must be from 0 to 3600 s, got "
                             f"{brief(connect_timeout)}")
-    keep_rows = keep_rows or not output
     if curves is not None:
         if spec.analysis != "sweep":
             raise MechcircError(f"curves of K(omega) need analysis = \"sweep\" (an omega grid); "
@@ -1130,56 +1163,52 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
             raise MechcircError("curves cannot be resumed (the points kept would have "
                                 "none): run the study again without --resume")
         _require_pyarrow()
-    with _lock(output) if output else contextlib.nullcontext(), \
-            _curve_writer(curves, spec) as write_curves:
-        # Rows are journalled as they finish to a CSV beside the output, each with
-        # a checksum; the output itself is written whole at the end (atomically),
-        # so an existing file stays as it was until the new table is complete.
-        journal = journal_path(output) if output else None
-        done = _resumed_rows(spec, output, journal, parquet) if resume and output else []
-        have = {r["index"] for r in done}
-        n_todo = len(spec.points) - len(have)
-        # Connect before the journal is touched: a failed start leaves no file.
-        client = _dask_client(scheduler, connect_timeout) if scheduler else None
-        rows = list(done) if keep_rows else [r for r in done if r["status"] != "ok"]
-        count, failed = len(done), sum(r["status"] != "ok" for r in done)
-        sink = None
-        task = (curves is not None, keep_rows, bool(output))
+    return parquet
 
-        def take(out: _TaskOut) -> None:
-            nonlocal sink, count, failed
-            if curves is not None:
-                write_curves(out.rows, out.K)
-            count += out.n
-            failed += len(out.bad)
-            rows.extend(out.rows if keep_rows else out.bad)
-            if output:
-                if sink is None:
-                    sink = _open_journal(journal, spec, done)
-                sink.write(out.text)
-                sink.flush()
-            if on_rows is not None:
-                on_rows(out.n)
 
-        try:
-            if client is not None:
-                executor, n_workers = "dask", _run_dask(spec, have, n_todo, client,
-                                                        batch_size, take, task)
-            else:
-                executor, n_workers = _run_local(spec, have, n_todo,
-                                                 workers or os.cpu_count() or 1,
-                                                 batch_size, take, task)
-        finally:
-            if sink is not None:
-                sink.close()
-        rows.sort(key=lambda r: r["index"])
-        if output:
-            if sink is None:                # nothing ran: the journal holds the kept rows
-                _open_journal(journal, spec, done).close()
-            _write_output(output, parquet, spec, journal)
-            with contextlib.suppress(FileNotFoundError):
-                os.unlink(journal)
-    return StudyResult(columns, rows, executor, n_workers, len(done), failed, count)
+class _Take:
+    """Takes each finished task in the study's process: its curves written, its
+    rows counted and kept (all, or the failed ones), its journal lines appended
+    to the journal (opened with the kept rows when the first task finishes), and
+    progress reported."""
+
+    def __init__(self, spec: StudySpec, journal: str | None, done: list[dict],
+                 keep_rows: bool, write_curves: Callable | None,
+                 on_rows: Callable[[int], None] | None):
+        self.spec, self.journal, self.done = spec, journal, done
+        self.keep_rows, self.write_curves, self.on_rows = keep_rows, write_curves, on_rows
+        self.rows = list(done) if keep_rows else [r for r in done if r["status"] != "ok"]
+        self.count, self.failed = len(done), sum(r["status"] != "ok" for r in done)
+        self.sink: TextIO | None = None
+
+    def __call__(self, out: _TaskOut) -> None:
+        if self.write_curves is not None:
+            self.write_curves(out.rows, out.K)
+        self.count += out.n
+        self.failed += len(out.bad)
+        self.rows.extend((out.rows or []) if self.keep_rows else out.bad)
+        if self.journal:
+            if self.sink is None:
+                self.sink = _open_journal(self.journal, self.spec, self.done)
+            self.sink.write(out.text)
+            self.sink.flush()
+        if self.on_rows is not None:
+            self.on_rows(out.n)
+
+    def close(self) -> None:
+        if self.sink is not None:
+            self.sink.close()
+
+
+def _execute(spec: StudySpec, have: set, client, workers: int | None,
+             batch_size: int | None, take: _Take, task: tuple) -> tuple[str, int]:
+    """Run the points not in ``have`` on the Dask ``client`` if given, else on the
+    local cores; the executor's name and its number of workers."""
+    n_todo = len(spec.points) - len(have)
+    if client is not None:
+        return "dask", _run_dask(spec, have, n_todo, client, batch_size, take, task)
+    return _run_local(spec, have, n_todo, workers or os.cpu_count() or 1, batch_size, take,
+                      task)
 
 
 @contextlib.contextmanager
@@ -1316,7 +1345,7 @@ def _journal_spec(journal: str) -> str | None:
     return canonical
 
 
-def _open_journal(journal: str, spec: StudySpec, done: list[dict]):
+def _open_journal(journal: str, spec: StudySpec, done: list[dict]) -> TextIO:
     """A fresh journal holding the spec and the verified rows, open for appending.
 
     A resumed journal is rewritten, not appended to: its last line may lack
