@@ -523,6 +523,30 @@ def _sample_file(table: dict, base: Path, analysis: str, roles: dict):
     Every cell is checked before anything runs; a fault is a :class:`NetlistError`
     at the file's row (line) and column.
     """
+    path = _sample_path(table, base)
+    source = str(path)
+    try:
+        header, records = (_parquet_records if source.lower().endswith(".parquet")
+                           else _csv_records)(path)
+    except NetlistError as exc:
+        _fail(("sample", "file"), f"sample file {source!r}: {exc.message}")
+    if analysis == "simulate":
+        known, what = _sley_names(), "a sley parameter"
+    else:
+        known, what = set(roles), "a .param of the netlist"
+    names = _sample_header(header, source, known, what)
+    if not records:
+        raise NetlistError("has a header but no rows of values", source, 0, 0,
+                           "one row per point")
+    if len(records) > MAX_POINTS:
+        raise NetlistError(f"has {len(records):,} rows, the limit is {MAX_POINTS:,}", source)
+    points = tuple(_sample_row(cells, names, source, line, roles) for line, cells in records)
+    canon = {"method": "file", "columns": list(names), "file_sha256": _file_sha256(path)}
+    return names, points, canon
+
+
+def _sample_path(table: dict, base: Path) -> Path:
+    """The path of ``[sample] file`` (relative to the spec file), a .csv or .parquet."""
     extra = sorted(set(table) - {"file"})
     if extra:
         _fail(("sample", extra[0]), f"[sample] with file takes no {extra[0]!r} (the file "
@@ -534,19 +558,14 @@ def _sample_file(table: dict, base: Path, analysis: str, roles: dict):
         path = path.relative_to(Path.cwd())
     except ValueError:
         pass
-    source = str(path)
-    if not source.lower().endswith((".csv", ".parquet")):
+    if not str(path).lower().endswith((".csv", ".parquet")):
         _fail(("sample", "file"), f"sample.file must name a .csv or .parquet file, got "
                                   f"{brief(table['file'])}")
-    try:
-        header, records = (_parquet_records if source.lower().endswith(".parquet")
-                           else _csv_records)(path)
-    except NetlistError as exc:
-        _fail(("sample", "file"), f"sample file {source!r}: {exc.message}")
-    if analysis == "simulate":
-        known, what = _sley_names(), "a sley parameter"
-    else:
-        known, what = set(roles), "a .param of the netlist"
+    return path
+
+
+def _sample_header(header: list, source: str, known: set[str], what: str) -> tuple[str, ...]:
+    """The parameters a sample file's header names: each named once, each ``known``."""
     for j, (name, col) in enumerate(header):
         if not name:
             raise NetlistError(f"column {j + 1} has no name", source, 1, col,
@@ -560,39 +579,36 @@ def _sample_file(table: dict, base: Path, analysis: str, roles: dict):
             raise NetlistError(f"column {shown} is not {what}"
                                f"{did_you_mean(name, sorted(known))}", source, 1, col,
                                f"some of {', '.join(sorted(known)) or 'none'}")
-    names = tuple(h for h, _ in header)
-    if not records:
-        raise NetlistError("has a header but no rows of values", source, 0, 0,
-                           "one row per point")
-    if len(records) > MAX_POINTS:
-        raise NetlistError(f"has {len(records):,} rows, the limit is {MAX_POINTS:,}", source)
-    points = []
-    for line, cells in records:
-        if len(cells) != len(names):
-            missing = f" (no value for {', '.join(names[len(cells):])})" \
-                if len(cells) < len(names) else ""
-            raise NetlistError(f"{len(cells)} values, the header names {len(names)} "
-                               f"columns{missing}", source, line, cells[-1][1] if cells else 1)
-        row = []
-        for (text, col), name in zip(cells, names):
-            try:
-                value = float(text) if isinstance(text, str) else text
-            except ValueError:
-                value = None
-            if value is None or isinstance(value, bool) or not math.isfinite(value):
-                unit = roles.get(name, (None,))[0]
-                raise NetlistError(f"column {name}: {brief(text)} is not a finite number",
-                                   source, line, col, f"a number [{unit}]" if unit else
-                                   "a number")
-            reason = roles.get(name, ("", None))[1]
-            if reason and not value > 0:
-                raise NetlistError(f"column {name}: {value:g} is not allowed: {name} is "
-                                   f"{reason}, which must be > 0", source, line, col,
-                                   "a positive number")
-            row.append(value)
-        points.append(tuple(row))
-    canon = {"method": "file", "columns": list(names), "file_sha256": _file_sha256(path)}
-    return names, tuple(points), canon
+    return tuple(h for h, _ in header)
+
+
+def _sample_row(cells: list, names: tuple[str, ...], source: str, line: int,
+                roles: dict) -> tuple[float, ...]:
+    """The values of a sample file's row (``cells``: (text, column) each), every cell a
+    finite number, and > 0 where its parameter must be (``roles``)."""
+    if len(cells) != len(names):
+        missing = f" (no value for {', '.join(names[len(cells):])})" \
+            if len(cells) < len(names) else ""
+        raise NetlistError(f"{len(cells)} values, the header names {len(names)} "
+                           f"columns{missing}", source, line, cells[-1][1] if cells else 1)
+    row = []
+    for (text, col), name in zip(cells, names):
+        try:
+            value = float(text) if isinstance(text, str) else text
+        except ValueError:
+            value = None
+        if value is None or isinstance(value, bool) or not math.isfinite(value):
+            unit = roles.get(name, (None,))[0]
+            raise NetlistError(f"column {name}: {brief(text)} is not a finite number",
+                               source, line, col, f"a number [{unit}]" if unit else
+                               "a number")
+        reason = roles.get(name, ("", None))[1]
+        if reason and not value > 0:
+            raise NetlistError(f"column {name}: {value:g} is not allowed: {name} is "
+                               f"{reason}, which must be > 0", source, line, col,
+                               "a positive number")
+        row.append(value)
+    return tuple(row)
 
 
 def _file_sha256(path) -> str:
@@ -801,46 +817,13 @@ def run_batch(spec: StudySpec, batch: list[tuple[int, dict[str, float]]],
     own, and a point that fails is a row with its error.  Each row is the
     same whatever the batch it is in.
     """
-    import warnings
-
     import numpy as np
 
     rows = [{"index": i, **v, "status": "ok", "error": ""} for i, v in batch]
-    K = None
     if spec.analysis == "simulate":
         return [_simulate_row(spec, row, v) for row, (_, v) in zip(rows, batch)]
     try:
-        from .batch import designs
-
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            ds = designs(spec.netlist_text, {n: [v[n] for _, v in batch] for n in spec.params},
-                         source=spec.netlist_source)
-            if spec.analysis == "sweep":
-                lo, hi, n, log = spec.omega
-                omega = np.geomspace(lo, hi, n) if log else np.linspace(lo, hi, n)
-                s = ds.sweep(omega)
-                K = s.K
-                flagged = np.count_nonzero(s.flags, axis=1)
-                ex = ds.extremes(omega, ds.resonances(omega_max=hi * (1 + 1e-9)), s)
-                failed = {**ex.failed, **s.failed}
-                for d, row in enumerate(rows):
-                    # Exact extremes over the band: 0 and inf at a zero or pole of K
-                    # in it, named by its ω (issue 21 §4), not the grid's values.
-                    row.update(K_abs_min=float(ex.K_min[d]), omega_at_K_min=float(
-                        ex.omega_at_K_min[d]), K_abs_max=float(ex.K_max[d]),
-                        omega_at_K_max=float(ex.omega_at_K_max[d]),
-                        Q0_abs_max=float(ex.Q0_max[d]),
-                        omega_at_Q0_max=float(ex.omega_at_Q0_max[d]),
-                        n_flagged=int(flagged[d]))
-            else:
-                res = ds.resonances(omega_max=spec.omega_max)
-                failed = res.failed
-                for d, row in enumerate(rows):
-                    for kind in ("resonance", "antiresonance"):
-                        ws = res.omega[d, :res.count[d]][res.kind[d, :res.count[d]] == kind]
-                        for i in range(spec.n_resonances):
-                            row[f"{kind}_{i + 1}"] = float(ws[i]) if i < ws.size else math.nan
+        ds, K, failed = _design_rows(spec, rows, batch)
     except Exception as exc:  # noqa: BLE001 - a study records every failure
         if len(batch) > 1:          # find the point at fault: each on its own
             alone = [run_batch(spec, [point], curves) for point in batch]
@@ -848,17 +831,67 @@ def run_batch(spec: StudySpec, batch: list[tuple[int, dict[str, float]]],
                 return [r[0] for r in alone]
             return [r[0][0] for r in alone], np.concatenate([r[1] for r in alone])
         message = f"{type(exc).__name__}: {exc}".replace("\n", " ")
-        rows, K = [{**row, "status": "error", "error": message} for row in rows], None
+        rows, K, failed = [{**row, "status": "error", "error": message} for row in rows], None, {}
     for d, message in failed.items():
         rows[d] = {"index": rows[d]["index"], **batch[d][1], "status": "error",
                    "error": _failure(ds, d, message)}
     if not curves:
         return rows
-    if K is None:
-        K = np.full((len(rows), spec.omega[2]), np.nan, dtype=complex)
-    K = np.array(K)
+    K = np.full((len(rows), _omega_grid(spec).size), np.nan + 0j) if K is None else np.array(K)
     K[[r["status"] != "ok" for r in rows]] = np.nan
     return rows, K
+
+
+def _design_rows(spec: StudySpec, rows: list[dict], batch: list[tuple[int, dict[str, float]]]):
+    """Fill ``rows`` (a sweep's extremes, or the resonances) from one
+    :func:`mechcirc.batch.designs` batch of the points; the designs, K on the ω
+    grid (a sweep, else None) and the points the batch could not take
+    (``{row: message}``)."""
+    import warnings
+
+    import numpy as np
+
+    from .batch import designs
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ds = designs(spec.netlist_text, {n: [v[n] for _, v in batch] for n in spec.params},
+                     source=spec.netlist_source)
+        if spec.analysis != "sweep":
+            res = ds.resonances(omega_max=spec.omega_max)
+            for d, row in enumerate(rows):
+                for kind in ("resonance", "antiresonance"):
+                    ws = res.omega[d, :res.count[d]][res.kind[d, :res.count[d]] == kind]
+                    for i in range(spec.n_resonances):
+                        row[f"{kind}_{i + 1}"] = float(ws[i]) if i < ws.size else math.nan
+            return ds, None, res.failed
+        omega = _omega_grid(spec)
+        s = ds.sweep(omega)
+        flagged = np.count_nonzero(s.flags, axis=1)
+        ex = ds.extremes(omega, ds.resonances(omega_max=_band(spec)[1] * (1 + 1e-9)), s)
+    for d, row in enumerate(rows):
+        # Exact extremes over the band: 0 and inf at a zero or pole of K in it,
+        # named by its ω, not the grid's values.
+        row.update(K_abs_min=float(ex.K_min[d]), omega_at_K_min=float(ex.omega_at_K_min[d]),
+                   K_abs_max=float(ex.K_max[d]), omega_at_K_max=float(ex.omega_at_K_max[d]),
+                   Q0_abs_max=float(ex.Q0_max[d]),
+                   omega_at_Q0_max=float(ex.omega_at_Q0_max[d]), n_flagged=int(flagged[d]))
+    return ds, s.K, {**ex.failed, **s.failed}
+
+
+def _band(spec: StudySpec) -> tuple[float, float, int, bool]:
+    """``spec.omega``: (min, max, points, log) of a sweep study's ω grid."""
+    if spec.omega is None:
+        raise MechcircError(f"{spec.spec_source}: analysis {spec.analysis!r} has no omega grid")
+    return spec.omega
+
+
+def _omega_grid(spec: StudySpec):
+    """The ω grid of a sweep study [rad/s]: ``spec.omega``'s points, geometric with log."""
+    import numpy as np
+
+    lo, hi, n, log = _band(spec)
+    return np.geomspace(lo, hi, n) if log else np.linspace(lo, hi, n)
 
 
 def _failure(ds, d: int, message: str) -> str:
@@ -1227,8 +1260,7 @@ def _curve_writer(path, spec: StudySpec):
 
     from .outputs import atomic_path
 
-    lo, hi, n, log = spec.omega
-    omega = np.geomspace(lo, hi, n) if log else np.linspace(lo, hi, n)
+    omega = _omega_grid(spec)
     record = provenance(spec)
     k_unit = record["units"]["K_abs_min"]
     record["curves"] = ("long format: one row per design and omega; design is the "
