@@ -96,7 +96,7 @@ import random
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable, TextIO
+from typing import Callable, NoReturn, TextIO
 
 from .errors import MechcircError, NetlistError
 from .limits import (MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS, MAX_STUDY_POINTS,
@@ -128,7 +128,7 @@ class StudySpec:
     omega_max: float | None = None
     spec_source: str = "<spec>"
     #: ``analysis = "simulate"``: (drive, variant, revolutions, points_per_revolution).
-    sley: tuple | None = None
+    sley: tuple[str, int, int, int] | None = None
     #: The resolved spec as canonical JSON (sorted keys, defaults filled in, the
     #: netlist and a sample file by their SHA-256): what ``resume`` compares.
     canonical: str = "{}"
@@ -151,7 +151,7 @@ class StudySpec:
         if self.analysis == "sweep":
             return head + _SWEEP_COLUMNS
         if self.analysis == "simulate":
-            return head + [f"{q}_{end}" for q in _SLEY_QUANTITIES[self.sley[0]]
+            return head + [f"{q}_{end}" for q in _SLEY_QUANTITIES[_preset(self)[0]]
                            for end in ("min", "max")]
         n = self.n_resonances
         return head + [f"resonance_{i}" for i in range(1, n + 1)] + \
@@ -199,7 +199,7 @@ class _SpecError(Exception):
         self.message, self.path = message, tuple(str(p) for p in path)
 
 
-def _fail(path, message: str):
+def _fail(path, message: str) -> NoReturn:
     raise _SpecError(message, tuple(path))
 
 
@@ -368,7 +368,7 @@ def _parse_spec(data: dict, source: str, base: Path) -> StudySpec:
     n_res = _integer(("resonances",), data.get("resonances", 3), "resonances", 1, 100)
     omega_max = _omega(("omega_max",), data["omega_max"], "omega_max") \
         if "omega_max" in data else None
-    sley = None
+    sley: tuple[str, int, int, int] | None = None
     if analysis == "simulate":
         sley = _sley_settings(data.get("sley", {}), names, kind)
         units = tuple(_SLEY_UNITS.get(n) for n in names)
@@ -376,9 +376,9 @@ def _parse_spec(data: dict, source: str, base: Path) -> StudySpec:
         _check_params(roles, path, names, kind)
         units = tuple(roles[n][0] for n in names)
     canon = {"analysis": analysis, "sample": canon, "rows": ROWS_VERSION}
-    if analysis == "sweep":
+    if omega is not None:                       # analysis == "sweep"
         canon["omega"] = dict(zip(("min", "max", "points", "log"), omega))
-    elif analysis == "resonances":
+    elif sley is None:                          # analysis == "resonances"
         canon.update(resonances=n_res, omega_max=omega_max)
     else:
         canon["sley"] = dict(zip(("drive", "variant", "revolutions", "points_per_revolution"),
@@ -701,13 +701,13 @@ def _param_roles(text: str, path) -> dict[str, tuple[str | None, str | None]]:
     the netlist does not fix it (a parameter inside expressions).  Parsed once,
     not per point.
     """
-    from .circuit import ELEMENT_UNITS
+    from .circuit import ELEMENT_UNITS, Drive, Element
     from .netlist import expressions_of, parse
     from .sources import split_lines
     from .units import looks_like_unit
 
     circuit = parse(text, source=str(path))
-    owners = {e.name: e for e in circuit.elements}
+    owners: dict[str, Element | Drive] = {e.name: e for e in circuit.elements}
     if circuit.drive is not None:
         owners[circuit.drive.name] = circuit.drive
     lines = split_lines(text)
@@ -726,7 +726,7 @@ def _param_roles(text: str, path) -> dict[str, tuple[str | None, str | None]]:
                 (i for i, w in enumerate(words) if w.startswith(role + "=")), len(words))
             after = words[at + 1] if at + 1 < len(words) else ""
             unit = after if "=" not in after and looks_like_unit(after) else \
-                ELEMENT_UNITS.get(getattr(el, "kind", None), defaults.get(role))
+                ELEMENT_UNITS.get(el.kind, defaults.get(role))
         elif role in ("eta", "ratio"):
             unit = "1"
         uses.setdefault(expr.value, set()).add(unit)
@@ -755,7 +755,7 @@ def _sley_names() -> set[str]:
     return {f.name for f in fields(SleyParameters)} - {"drive", "label", "branch", "beat_sign"}
 
 
-def _sley_settings(table, names, kind: str) -> tuple:
+def _sley_settings(table, names, kind: str) -> tuple[str, int, int, int]:
     if not isinstance(table, dict):
         _fail(("sley",), "[sley] must be a table (drive, variant, revolutions, "
                          "points_per_revolution)")
@@ -774,7 +774,8 @@ def _sley_settings(table, names, kind: str) -> tuple:
     if bad:
         _fail((kind,), f"{', '.join(bad)} is not a sley parameter{did_you_mean(bad[0], known)}"
                        f" (expected some of {', '.join(sorted(known))})")
-    return (drive, *settings)
+    variant, revolutions, ppr = settings
+    return drive, variant, revolutions, ppr
 
 
 def load_spec(path: str | os.PathLike) -> StudySpec:
@@ -886,6 +887,14 @@ def _band(spec: StudySpec) -> tuple[float, float, int, bool]:
     return spec.omega
 
 
+def _preset(spec: StudySpec) -> tuple[str, int, int, int]:
+    """``spec.sley``: (drive, variant, revolutions, points_per_revolution) of a sley study."""
+    if spec.sley is None:
+        raise MechcircError(f"{spec.spec_source}: analysis {spec.analysis!r} has no [sley] "
+                            "preset")
+    return spec.sley
+
+
 def _omega_grid(spec: StudySpec):
     """The ω grid of a sweep study [rad/s]: ``spec.omega``'s points, geometric with log."""
     import numpy as np
@@ -912,7 +921,7 @@ def _simulate_row(spec: StudySpec, row: dict, values: dict) -> dict:
 
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            drive, variant, revolutions, ppr = spec.sley
+            drive, variant, revolutions, ppr = _preset(spec)
             result = simulate(drive, variant, revolutions=revolutions,
                               points_per_revolution=ppr, **values)
             for q in _SLEY_QUANTITIES[drive]:
@@ -971,7 +980,7 @@ def _crc(fields: list[str]) -> str:
 
 def _row(columns: list[str], rec: list[str]) -> dict | None:
     """The row of a CSV record, or None if a field does not have its column's syntax."""
-    row = {}
+    row: dict[str, str | int | float] = {}
     try:
         for name, text in zip(columns, rec, strict=True):
             if name == "status":
@@ -981,9 +990,9 @@ def _row(columns: list[str], rec: list[str]) -> dict | None:
             elif name == "error":
                 row[name] = text
             elif name in ("index", "n_flagged"):
-                row[name] = int(text) if text else ""
-                if name == "index" and (row[name] == "" or row[name] < 0):
+                if name == "index" and (not text or int(text) < 0):
                     return None
+                row[name] = int(text) if text else ""
             else:
                 row[name] = float(text) if text else ""
     except ValueError:
