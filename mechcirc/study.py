@@ -96,7 +96,7 @@ import random
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
+from typing import Callable, NoReturn, TextIO
 
 from .errors import MechcircError, NetlistError
 from .limits import (MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS, MAX_STUDY_POINTS,
@@ -128,7 +128,7 @@ class StudySpec:
     omega_max: float | None = None
     spec_source: str = "<spec>"
     #: ``analysis = "simulate"``: (drive, variant, revolutions, points_per_revolution).
-    sley: tuple | None = None
+    sley: tuple[str, int, int, int] | None = None
     #: The resolved spec as canonical JSON (sorted keys, defaults filled in, the
     #: netlist and a sample file by their SHA-256): what ``resume`` compares.
     canonical: str = "{}"
@@ -151,7 +151,7 @@ class StudySpec:
         if self.analysis == "sweep":
             return head + _SWEEP_COLUMNS
         if self.analysis == "simulate":
-            return head + [f"{q}_{end}" for q in _SLEY_QUANTITIES[self.sley[0]]
+            return head + [f"{q}_{end}" for q in _SLEY_QUANTITIES[_preset(self)[0]]
                            for end in ("min", "max")]
         n = self.n_resonances
         return head + [f"resonance_{i}" for i in range(1, n + 1)] + \
@@ -199,7 +199,7 @@ class _SpecError(Exception):
         self.message, self.path = message, tuple(str(p) for p in path)
 
 
-def _fail(path, message: str):
+def _fail(path, message: str) -> NoReturn:
     raise _SpecError(message, tuple(path))
 
 
@@ -368,7 +368,7 @@ def _parse_spec(data: dict, source: str, base: Path) -> StudySpec:
     n_res = _integer(("resonances",), data.get("resonances", 3), "resonances", 1, 100)
     omega_max = _omega(("omega_max",), data["omega_max"], "omega_max") \
         if "omega_max" in data else None
-    sley = None
+    sley: tuple[str, int, int, int] | None = None
     if analysis == "simulate":
         sley = _sley_settings(data.get("sley", {}), names, kind)
         units = tuple(_SLEY_UNITS.get(n) for n in names)
@@ -376,9 +376,9 @@ def _parse_spec(data: dict, source: str, base: Path) -> StudySpec:
         _check_params(roles, path, names, kind)
         units = tuple(roles[n][0] for n in names)
     canon = {"analysis": analysis, "sample": canon, "rows": ROWS_VERSION}
-    if analysis == "sweep":
+    if omega is not None:                       # analysis == "sweep"
         canon["omega"] = dict(zip(("min", "max", "points", "log"), omega))
-    elif analysis == "resonances":
+    elif sley is None:                          # analysis == "resonances"
         canon.update(resonances=n_res, omega_max=omega_max)
     else:
         canon["sley"] = dict(zip(("drive", "variant", "revolutions", "points_per_revolution"),
@@ -523,6 +523,30 @@ def _sample_file(table: dict, base: Path, analysis: str, roles: dict):
     Every cell is checked before anything runs; a fault is a :class:`NetlistError`
     at the file's row (line) and column.
     """
+    path = _sample_path(table, base)
+    source = str(path)
+    try:
+        header, records = (_parquet_records if source.lower().endswith(".parquet")
+                           else _csv_records)(path)
+    except NetlistError as exc:
+        _fail(("sample", "file"), f"sample file {source!r}: {exc.message}")
+    if analysis == "simulate":
+        known, what = _sley_names(), "a sley parameter"
+    else:
+        known, what = set(roles), "a .param of the netlist"
+    names = _sample_header(header, source, known, what)
+    if not records:
+        raise NetlistError("has a header but no rows of values", source, 0, 0,
+                           "one row per point")
+    if len(records) > MAX_POINTS:
+        raise NetlistError(f"has {len(records):,} rows, the limit is {MAX_POINTS:,}", source)
+    points = tuple(_sample_row(cells, names, source, line, roles) for line, cells in records)
+    canon = {"method": "file", "columns": list(names), "file_sha256": _file_sha256(path)}
+    return names, points, canon
+
+
+def _sample_path(table: dict, base: Path) -> Path:
+    """The path of ``[sample] file`` (relative to the spec file), a .csv or .parquet."""
     extra = sorted(set(table) - {"file"})
     if extra:
         _fail(("sample", extra[0]), f"[sample] with file takes no {extra[0]!r} (the file "
@@ -534,19 +558,14 @@ def _sample_file(table: dict, base: Path, analysis: str, roles: dict):
         path = path.relative_to(Path.cwd())
     except ValueError:
         pass
-    source = str(path)
-    if not source.lower().endswith((".csv", ".parquet")):
+    if not str(path).lower().endswith((".csv", ".parquet")):
         _fail(("sample", "file"), f"sample.file must name a .csv or .parquet file, got "
                                   f"{brief(table['file'])}")
-    try:
-        header, records = (_parquet_records if source.lower().endswith(".parquet")
-                           else _csv_records)(path)
-    except NetlistError as exc:
-        _fail(("sample", "file"), f"sample file {source!r}: {exc.message}")
-    if analysis == "simulate":
-        known, what = _sley_names(), "a sley parameter"
-    else:
-        known, what = set(roles), "a .param of the netlist"
+    return path
+
+
+def _sample_header(header: list, source: str, known: set[str], what: str) -> tuple[str, ...]:
+    """The parameters a sample file's header names: each named once, each ``known``."""
     for j, (name, col) in enumerate(header):
         if not name:
             raise NetlistError(f"column {j + 1} has no name", source, 1, col,
@@ -560,39 +579,36 @@ def _sample_file(table: dict, base: Path, analysis: str, roles: dict):
             raise NetlistError(f"column {shown} is not {what}"
                                f"{did_you_mean(name, sorted(known))}", source, 1, col,
                                f"some of {', '.join(sorted(known)) or 'none'}")
-    names = tuple(h for h, _ in header)
-    if not records:
-        raise NetlistError("has a header but no rows of values", source, 0, 0,
-                           "one row per point")
-    if len(records) > MAX_POINTS:
-        raise NetlistError(f"has {len(records):,} rows, the limit is {MAX_POINTS:,}", source)
-    points = []
-    for line, cells in records:
-        if len(cells) != len(names):
-            missing = f" (no value for {', '.join(names[len(cells):])})" \
-                if len(cells) < len(names) else ""
-            raise NetlistError(f"{len(cells)} values, the header names {len(names)} "
-                               f"columns{missing}", source, line, cells[-1][1] if cells else 1)
-        row = []
-        for (text, col), name in zip(cells, names):
-            try:
-                value = float(text) if isinstance(text, str) else text
-            except ValueError:
-                value = None
-            if value is None or isinstance(value, bool) or not math.isfinite(value):
-                unit = roles.get(name, (None,))[0]
-                raise NetlistError(f"column {name}: {brief(text)} is not a finite number",
-                                   source, line, col, f"a number [{unit}]" if unit else
-                                   "a number")
-            reason = roles.get(name, ("", None))[1]
-            if reason and not value > 0:
-                raise NetlistError(f"column {name}: {value:g} is not allowed: {name} is "
-                                   f"{reason}, which must be > 0", source, line, col,
-                                   "a positive number")
-            row.append(value)
-        points.append(tuple(row))
-    canon = {"method": "file", "columns": list(names), "file_sha256": _file_sha256(path)}
-    return names, tuple(points), canon
+    return tuple(h for h, _ in header)
+
+
+def _sample_row(cells: list, names: tuple[str, ...], source: str, line: int,
+                roles: dict) -> tuple[float, ...]:
+    """The values of a sample file's row (``cells``: (text, column) each), every cell a
+    finite number, and > 0 where its parameter must be (``roles``)."""
+    if len(cells) != len(names):
+        missing = f" (no value for {', '.join(names[len(cells):])})" \
+            if len(cells) < len(names) else ""
+        raise NetlistError(f"{len(cells)} values, the header names {len(names)} "
+                           f"columns{missing}", source, line, cells[-1][1] if cells else 1)
+    row = []
+    for (text, col), name in zip(cells, names):
+        try:
+            value = float(text) if isinstance(text, str) else text
+        except ValueError:
+            value = None
+        if value is None or isinstance(value, bool) or not math.isfinite(value):
+            unit = roles.get(name, (None,))[0]
+            raise NetlistError(f"column {name}: {brief(text)} is not a finite number",
+                               source, line, col, f"a number [{unit}]" if unit else
+                               "a number")
+        reason = roles.get(name, ("", None))[1]
+        if reason and not value > 0:
+            raise NetlistError(f"column {name}: {value:g} is not allowed: {name} is "
+                               f"{reason}, which must be > 0", source, line, col,
+                               "a positive number")
+        row.append(value)
+    return tuple(row)
 
 
 def _file_sha256(path) -> str:
@@ -685,13 +701,13 @@ def _param_roles(text: str, path) -> dict[str, tuple[str | None, str | None]]:
     the netlist does not fix it (a parameter inside expressions).  Parsed once,
     not per point.
     """
-    from .circuit import ELEMENT_UNITS
+    from .circuit import ELEMENT_UNITS, Drive, Element
     from .netlist import expressions_of, parse
     from .sources import split_lines
     from .units import looks_like_unit
 
     circuit = parse(text, source=str(path))
-    owners = {e.name: e for e in circuit.elements}
+    owners: dict[str, Element | Drive] = {e.name: e for e in circuit.elements}
     if circuit.drive is not None:
         owners[circuit.drive.name] = circuit.drive
     lines = split_lines(text)
@@ -710,7 +726,7 @@ def _param_roles(text: str, path) -> dict[str, tuple[str | None, str | None]]:
                 (i for i, w in enumerate(words) if w.startswith(role + "=")), len(words))
             after = words[at + 1] if at + 1 < len(words) else ""
             unit = after if "=" not in after and looks_like_unit(after) else \
-                ELEMENT_UNITS.get(getattr(el, "kind", None), defaults.get(role))
+                ELEMENT_UNITS.get(el.kind, defaults.get(role))
         elif role in ("eta", "ratio"):
             unit = "1"
         uses.setdefault(expr.value, set()).add(unit)
@@ -739,7 +755,7 @@ def _sley_names() -> set[str]:
     return {f.name for f in fields(SleyParameters)} - {"drive", "label", "branch", "beat_sign"}
 
 
-def _sley_settings(table, names, kind: str) -> tuple:
+def _sley_settings(table, names, kind: str) -> tuple[str, int, int, int]:
     if not isinstance(table, dict):
         _fail(("sley",), "[sley] must be a table (drive, variant, revolutions, "
                          "points_per_revolution)")
@@ -758,7 +774,8 @@ def _sley_settings(table, names, kind: str) -> tuple:
     if bad:
         _fail((kind,), f"{', '.join(bad)} is not a sley parameter{did_you_mean(bad[0], known)}"
                        f" (expected some of {', '.join(sorted(known))})")
-    return (drive, *settings)
+    variant, revolutions, ppr = settings
+    return drive, variant, revolutions, ppr
 
 
 def load_spec(path: str | os.PathLike) -> StudySpec:
@@ -801,46 +818,13 @@ def run_batch(spec: StudySpec, batch: list[tuple[int, dict[str, float]]],
     own, and a point that fails is a row with its error.  Each row is the
     same whatever the batch it is in.
     """
-    import warnings
-
     import numpy as np
 
     rows = [{"index": i, **v, "status": "ok", "error": ""} for i, v in batch]
-    K = None
     if spec.analysis == "simulate":
         return [_simulate_row(spec, row, v) for row, (_, v) in zip(rows, batch)]
     try:
-        from .batch import designs
-
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            ds = designs(spec.netlist_text, {n: [v[n] for _, v in batch] for n in spec.params},
-                         source=spec.netlist_source)
-            if spec.analysis == "sweep":
-                lo, hi, n, log = spec.omega
-                omega = np.geomspace(lo, hi, n) if log else np.linspace(lo, hi, n)
-                s = ds.sweep(omega)
-                K = s.K
-                flagged = np.count_nonzero(s.flags, axis=1)
-                ex = ds.extremes(omega, ds.resonances(omega_max=hi * (1 + 1e-9)), s)
-                failed = {**ex.failed, **s.failed}
-                for d, row in enumerate(rows):
-                    # Exact extremes over the band: 0 and inf at a zero or pole of K
-                    # in it, named by its ω (issue 21 §4), not the grid's values.
-                    row.update(K_abs_min=float(ex.K_min[d]), omega_at_K_min=float(
-                        ex.omega_at_K_min[d]), K_abs_max=float(ex.K_max[d]),
-                        omega_at_K_max=float(ex.omega_at_K_max[d]),
-                        Q0_abs_max=float(ex.Q0_max[d]),
-                        omega_at_Q0_max=float(ex.omega_at_Q0_max[d]),
-                        n_flagged=int(flagged[d]))
-            else:
-                res = ds.resonances(omega_max=spec.omega_max)
-                failed = res.failed
-                for d, row in enumerate(rows):
-                    for kind in ("resonance", "antiresonance"):
-                        ws = res.omega[d, :res.count[d]][res.kind[d, :res.count[d]] == kind]
-                        for i in range(spec.n_resonances):
-                            row[f"{kind}_{i + 1}"] = float(ws[i]) if i < ws.size else math.nan
+        ds, K, failed = _design_rows(spec, rows, batch)
     except Exception as exc:  # noqa: BLE001 - a study records every failure
         if len(batch) > 1:          # find the point at fault: each on its own
             alone = [run_batch(spec, [point], curves) for point in batch]
@@ -848,17 +832,75 @@ def run_batch(spec: StudySpec, batch: list[tuple[int, dict[str, float]]],
                 return [r[0] for r in alone]
             return [r[0][0] for r in alone], np.concatenate([r[1] for r in alone])
         message = f"{type(exc).__name__}: {exc}".replace("\n", " ")
-        rows, K = [{**row, "status": "error", "error": message} for row in rows], None
+        rows, K, failed = [{**row, "status": "error", "error": message} for row in rows], None, {}
     for d, message in failed.items():
         rows[d] = {"index": rows[d]["index"], **batch[d][1], "status": "error",
                    "error": _failure(ds, d, message)}
     if not curves:
         return rows
-    if K is None:
-        K = np.full((len(rows), spec.omega[2]), np.nan, dtype=complex)
-    K = np.array(K)
+    K = np.full((len(rows), _omega_grid(spec).size), np.nan + 0j) if K is None else np.array(K)
     K[[r["status"] != "ok" for r in rows]] = np.nan
     return rows, K
+
+
+def _design_rows(spec: StudySpec, rows: list[dict], batch: list[tuple[int, dict[str, float]]]):
+    """Fill ``rows`` (a sweep's extremes, or the resonances) from one
+    :func:`mechcirc.batch.designs` batch of the points; the designs, K on the ω
+    grid (a sweep, else None) and the points the batch could not take
+    (``{row: message}``)."""
+    import warnings
+
+    import numpy as np
+
+    from .batch import designs
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ds = designs(spec.netlist_text, {n: [v[n] for _, v in batch] for n in spec.params},
+                     source=spec.netlist_source)
+        if spec.analysis != "sweep":
+            res = ds.resonances(omega_max=spec.omega_max)
+            for d, row in enumerate(rows):
+                for kind in ("resonance", "antiresonance"):
+                    ws = res.omega[d, :res.count[d]][res.kind[d, :res.count[d]] == kind]
+                    for i in range(spec.n_resonances):
+                        row[f"{kind}_{i + 1}"] = float(ws[i]) if i < ws.size else math.nan
+            return ds, None, res.failed
+        omega = _omega_grid(spec)
+        s = ds.sweep(omega)
+        flagged = np.count_nonzero(s.flags, axis=1)
+        ex = ds.extremes(omega, ds.resonances(omega_max=_band(spec)[1] * (1 + 1e-9)), s)
+    for d, row in enumerate(rows):
+        # Exact extremes over the band: 0 and inf at a zero or pole of K in it,
+        # named by its ω, not the grid's values.
+        row.update(K_abs_min=float(ex.K_min[d]), omega_at_K_min=float(ex.omega_at_K_min[d]),
+                   K_abs_max=float(ex.K_max[d]), omega_at_K_max=float(ex.omega_at_K_max[d]),
+                   Q0_abs_max=float(ex.Q0_max[d]),
+                   omega_at_Q0_max=float(ex.omega_at_Q0_max[d]), n_flagged=int(flagged[d]))
+    return ds, s.K, {**ex.failed, **s.failed}
+
+
+def _band(spec: StudySpec) -> tuple[float, float, int, bool]:
+    """``spec.omega``: (min, max, points, log) of a sweep study's ω grid."""
+    if spec.omega is None:
+        raise MechcircError(f"{spec.spec_source}: analysis {spec.analysis!r} has no omega grid")
+    return spec.omega
+
+
+def _preset(spec: StudySpec) -> tuple[str, int, int, int]:
+    """``spec.sley``: (drive, variant, revolutions, points_per_revolution) of a sley study."""
+    if spec.sley is None:
+        raise MechcircError(f"{spec.spec_source}: analysis {spec.analysis!r} has no [sley] "
+                            "preset")
+    return spec.sley
+
+
+def _omega_grid(spec: StudySpec):
+    """The ω grid of a sweep study [rad/s]: ``spec.omega``'s points, geometric with log."""
+    import numpy as np
+
+    lo, hi, n, log = _band(spec)
+    return np.geomspace(lo, hi, n) if log else np.linspace(lo, hi, n)
 
 
 def _failure(ds, d: int, message: str) -> str:
@@ -879,7 +921,7 @@ def _simulate_row(spec: StudySpec, row: dict, values: dict) -> dict:
 
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            drive, variant, revolutions, ppr = spec.sley
+            drive, variant, revolutions, ppr = _preset(spec)
             result = simulate(drive, variant, revolutions=revolutions,
                               points_per_revolution=ppr, **values)
             for q in _SLEY_QUANTITIES[drive]:
@@ -938,7 +980,7 @@ def _crc(fields: list[str]) -> str:
 
 def _row(columns: list[str], rec: list[str]) -> dict | None:
     """The row of a CSV record, or None if a field does not have its column's syntax."""
-    row = {}
+    row: dict[str, str | int | float] = {}
     try:
         for name, text in zip(columns, rec, strict=True):
             if name == "status":
@@ -948,9 +990,9 @@ def _row(columns: list[str], rec: list[str]) -> dict | None:
             elif name == "error":
                 row[name] = text
             elif name in ("index", "n_flagged"):
-                row[name] = int(text) if text else ""
-                if name == "index" and (row[name] == "" or row[name] < 0):
+                if name == "index" and (not text or int(text) < 0):
                     return None
+                row[name] = int(text) if text else ""
             else:
                 row[name] = float(text) if text else ""
     except ValueError:
@@ -1113,7 +1155,41 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
         the scheduler cannot be reached or has no worker (nothing is written).
     """
 
-    columns = spec.columns
+    parquet = _check_run(spec, output, scheduler, connect_timeout, resume, curves)
+    keep_rows = keep_rows or not output
+    with _lock(output) if output else contextlib.nullcontext(), \
+            _curve_writer(curves, spec) as write_curves:
+        # Rows are journalled as they finish to a CSV beside the output, each with
+        # a checksum; the output itself is written whole at the end (atomically),
+        # so an existing file stays as it was until the new table is complete.
+        journal = journal_path(output) if output else None
+        done = _resumed_rows(spec, output, journal, parquet) if resume and output and journal \
+            else []
+        have = {r["index"] for r in done}
+        # Connect before the journal is touched: a failed start leaves no file.
+        client = _dask_client(scheduler, connect_timeout) if scheduler else None
+        take = _Take(spec, journal, done, keep_rows, write_curves if curves is not None
+                     else None, on_rows)
+        task = (curves is not None, keep_rows, bool(output))
+        try:
+            executor, n_workers = _execute(spec, have, client, workers, batch_size, take, task)
+        finally:
+            take.close()
+        take.rows.sort(key=lambda r: r["index"])
+        if output and journal:
+            if take.sink is None:           # nothing ran: the journal holds the kept rows
+                _open_journal(journal, spec, done).close()
+            _write_output(output, parquet, spec, journal)
+            with contextlib.suppress(FileNotFoundError):
+                os.unlink(journal)
+    return StudyResult(spec.columns, take.rows, executor, n_workers, len(done), take.failed,
+                       take.count)
+
+
+def _check_run(spec: StudySpec, output, scheduler, connect_timeout, resume: bool,
+               curves) -> bool:
+    """Refuse :func:`run_study` settings that cannot work, before anything is written;
+    whether the output is Parquet."""
     parquet = bool(output) and str(output).lower().endswith(".parquet")
     if parquet:
         _require_pyarrow()
@@ -1121,7 +1197,6 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
                           0 < connect_timeout <= 3600):
         raise MechcircError(f"connect_timeout must be from 0 to 3600 s, got "
                             f"{brief(connect_timeout)}")
-    keep_rows = keep_rows or not output
     if curves is not None:
         if spec.analysis != "sweep":
             raise MechcircError(f"curves of K(omega) need analysis = \"sweep\" (an omega grid); "
@@ -1130,56 +1205,52 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
             raise MechcircError("curves cannot be resumed (the points kept would have "
                                 "none): run the study again without --resume")
         _require_pyarrow()
-    with _lock(output) if output else contextlib.nullcontext(), \
-            _curve_writer(curves, spec) as write_curves:
-        # Rows are journalled as they finish to a CSV beside the output, each with
-        # a checksum; the output itself is written whole at the end (atomically),
-        # so an existing file stays as it was until the new table is complete.
-        journal = journal_path(output) if output else None
-        done = _resumed_rows(spec, output, journal, parquet) if resume and output else []
-        have = {r["index"] for r in done}
-        n_todo = len(spec.points) - len(have)
-        # Connect before the journal is touched: a failed start leaves no file.
-        client = _dask_client(scheduler, connect_timeout) if scheduler else None
-        rows = list(done) if keep_rows else [r for r in done if r["status"] != "ok"]
-        count, failed = len(done), sum(r["status"] != "ok" for r in done)
-        sink = None
-        task = (curves is not None, keep_rows, bool(output))
+    return parquet
 
-        def take(out: _TaskOut) -> None:
-            nonlocal sink, count, failed
-            if curves is not None:
-                write_curves(out.rows, out.K)
-            count += out.n
-            failed += len(out.bad)
-            rows.extend(out.rows if keep_rows else out.bad)
-            if output:
-                if sink is None:
-                    sink = _open_journal(journal, spec, done)
-                sink.write(out.text)
-                sink.flush()
-            if on_rows is not None:
-                on_rows(out.n)
 
-        try:
-            if client is not None:
-                executor, n_workers = "dask", _run_dask(spec, have, n_todo, client,
-                                                        batch_size, take, task)
-            else:
-                executor, n_workers = _run_local(spec, have, n_todo,
-                                                 workers or os.cpu_count() or 1,
-                                                 batch_size, take, task)
-        finally:
-            if sink is not None:
-                sink.close()
-        rows.sort(key=lambda r: r["index"])
-        if output:
-            if sink is None:                # nothing ran: the journal holds the kept rows
-                _open_journal(journal, spec, done).close()
-            _write_output(output, parquet, spec, journal)
-            with contextlib.suppress(FileNotFoundError):
-                os.unlink(journal)
-    return StudyResult(columns, rows, executor, n_workers, len(done), failed, count)
+class _Take:
+    """Takes each finished task in the study's process: its curves written, its
+    rows counted and kept (all, or the failed ones), its journal lines appended
+    to the journal (opened with the kept rows when the first task finishes), and
+    progress reported."""
+
+    def __init__(self, spec: StudySpec, journal: str | None, done: list[dict],
+                 keep_rows: bool, write_curves: Callable | None,
+                 on_rows: Callable[[int], None] | None):
+        self.spec, self.journal, self.done = spec, journal, done
+        self.keep_rows, self.write_curves, self.on_rows = keep_rows, write_curves, on_rows
+        self.rows = list(done) if keep_rows else [r for r in done if r["status"] != "ok"]
+        self.count, self.failed = len(done), sum(r["status"] != "ok" for r in done)
+        self.sink: TextIO | None = None
+
+    def __call__(self, out: _TaskOut) -> None:
+        if self.write_curves is not None:
+            self.write_curves(out.rows, out.K)
+        self.count += out.n
+        self.failed += len(out.bad)
+        self.rows.extend((out.rows or []) if self.keep_rows else out.bad)
+        if self.journal:
+            if self.sink is None:
+                self.sink = _open_journal(self.journal, self.spec, self.done)
+            self.sink.write(out.text)
+            self.sink.flush()
+        if self.on_rows is not None:
+            self.on_rows(out.n)
+
+    def close(self) -> None:
+        if self.sink is not None:
+            self.sink.close()
+
+
+def _execute(spec: StudySpec, have: set, client, workers: int | None,
+             batch_size: int | None, take: _Take, task: tuple) -> tuple[str, int]:
+    """Run the points not in ``have`` on the Dask ``client`` if given, else on the
+    local cores; the executor's name and its number of workers."""
+    n_todo = len(spec.points) - len(have)
+    if client is not None:
+        return "dask", _run_dask(spec, have, n_todo, client, batch_size, take, task)
+    return _run_local(spec, have, n_todo, workers or os.cpu_count() or 1, batch_size, take,
+                      task)
 
 
 @contextlib.contextmanager
@@ -1198,8 +1269,7 @@ def _curve_writer(path, spec: StudySpec):
 
     from .outputs import atomic_path
 
-    lo, hi, n, log = spec.omega
-    omega = np.geomspace(lo, hi, n) if log else np.linspace(lo, hi, n)
+    omega = _omega_grid(spec)
     record = provenance(spec)
     k_unit = record["units"]["K_abs_min"]
     record["curves"] = ("long format: one row per design and omega; design is the "
@@ -1316,7 +1386,7 @@ def _journal_spec(journal: str) -> str | None:
     return canonical
 
 
-def _open_journal(journal: str, spec: StudySpec, done: list[dict]):
+def _open_journal(journal: str, spec: StudySpec, done: list[dict]) -> TextIO:
     """A fresh journal holding the spec and the verified rows, open for appending.
 
     A resumed journal is rewritten, not appended to: its last line may lack
