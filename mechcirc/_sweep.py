@@ -129,8 +129,12 @@ class Sweep:
         if "error" in self._cache:
             return self._cache["error"]
         if self.method == "sp":
-            err = _chunked(lambda w: evaluate(self.tree, w, error=True)[1], self.omega, float)
+            if (tree := self.tree) is None:
+                raise _missing("reduction tree")
+            err = _chunked(lambda w: evaluate(tree, w, error=True)[1], self.omega, float)
         else:
+            if self.circuit is None:
+                raise _missing("circuit")
             err = _nodal_errors(self.circuit.nodal, self.omega)
         return singular_error(self.K, err)
 
@@ -307,10 +311,14 @@ class Sweep:
 
     def _element_responses(self) -> dict:
         if self.method == "sp":
-            _, values = evaluate(self.tree, self.omega, keep=True)
-            return push_down(self.tree, values, self.Q0, self.v0, self.omega)
+            if (tree := self.tree) is None:
+                raise _missing("reduction tree")
+            _, values = evaluate(tree, self.omega, keep=True)
+            return push_down(tree, values, self.Q0, self.v0, self.omega)
         from . import nodal
 
+        if self.circuit is None:
+            raise _missing("circuit")
         return nodal.element_response(self.circuit.nodal, self.omega, self.Q0)
 
 
@@ -369,6 +377,11 @@ def point_flags(K, Q0, v0, error) -> NDArray[np.int8]:
     exact |= ~np.isfinite(v0)
     flags[exact] = FLAG_SINGULAR
     return flags
+
+
+def _missing(what: str) -> InputError:
+    """The error for a :class:`Sweep` built by hand without the ``what`` a query needs."""
+    return InputError(f"this Sweep was built without its {what}, which this query needs")
 
 
 def sweep(circuit: Circuit, omega: ArrayLike, *, method: Method = "auto",

@@ -572,10 +572,10 @@ def _combine(node, values: dict, omega, inv_omega, track: bool = False,
                 cplx += v.array
     if has_real:
         cplx = np.full(omega.shape, real, dtype=complex) if cplx is None else cplx + real
-    if cplx is None and imag is None:
-        # Every term was exactly 0 (a value·η of ∞ gives 1/∞ = 0): the sum is 0.
-        imag = np.zeros(omega.shape)
     if cplx is None:
+        if imag is None:
+            # Every term was exactly 0 (a value·η of ∞ gives 1/∞ = 0): the sum is 0.
+            imag = np.zeros(omega.shape)
         total = _Value(True, imag)
     else:
         if imag is not None:

@@ -243,6 +243,8 @@ class Circuit:
     ----------
     elements : tuple of Element
     drive : Drive
+        None only in a circuit read with ``require_drive=False`` (a transient
+        with initial conditions and no drive).
     levers : tuple of Lever
     name : str
         A short name (the netlist's file stem), used in titles.
@@ -378,8 +380,9 @@ class Circuit:
         if self.levers:
             parts.append(f"{len(self.levers)} lever{'s' if len(self.levers) != 1 else ''}")
         d = self.drive
-        return (f"<Circuit {self.name!r}: {', '.join(parts) or 'no elements'}; "
-                f"{d.kind} drive {d.name!r} {d.amplitude:g} between {d.n1!r} and {d.n2!r}>")
+        driven = "no drive" if d is None else \
+            f"{d.kind} drive {d.name!r} {d.amplitude:g} between {d.n1!r} and {d.n2!r}"
+        return f"<Circuit {self.name!r}: {', '.join(parts) or 'no elements'}; {driven}>"
 
     def _repr_html_(self) -> str:
         import html
@@ -396,8 +399,8 @@ class Circuit:
     @property
     def nodes(self) -> list[str]:
         """All node names, frame first, then in order of appearance."""
-        return list(dict.fromkeys([FRAME, *node_names(self.elements, self.levers),
-                                   self.drive.n1, self.drive.n2]))
+        ends = () if self.drive is None else (self.drive.n1, self.drive.n2)
+        return list(dict.fromkeys([FRAME, *node_names(self.elements, self.levers), *ends]))
 
 
 def node_names(elements, levers=()) -> list[str]:

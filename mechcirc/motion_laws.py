@@ -73,10 +73,10 @@ _DEG = 6  # polynomial coefficients per piece: τ⁰ … τ⁵
 
 
 # ------------------------------------------------------------------ the laws
-def _integrate(pieces) -> list:
-    """Displacement pieces ``(u0, a[6], B, w, φ)`` from acceleration pieces
-    ``(u0, u1, p[4], B, w, φ)`` (s'' = Σ pₘ tᵐ + B sin(w t + φ), t = u − u0), with
-    s and s' continuous from s(0) = s'(0) = 0."""
+def _integrate(pieces) -> tuple[list, float]:
+    """Displacement pieces ``(u0, a[6], B, w, φ)`` and the end displacement from
+    acceleration pieces ``(u0, u1, p[4], B, w, φ)`` (s'' = Σ pₘ tᵐ + B sin(w t + φ),
+    t = u − u0), with s and s' continuous from s(0) = s'(0) = 0."""
     out, s0, v0 = [], 0.0, 0.0
     for u0, u1, p, B, w, phi in pieces:
         a = [s0, v0] + [0.0] * (_DEG - 2)
@@ -521,7 +521,8 @@ def _table_rows(text: str, source: str):
     """The rows (angle, displacement, line, columns) of a motion table and its header."""
     from .sources import split_lines
 
-    rows, header = [], None
+    rows: list[tuple] = []
+    header = None
     for lineno, line in enumerate(split_lines(text), start=1):
         if not line.strip() or line.lstrip().startswith("#"):
             continue

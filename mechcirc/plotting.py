@@ -88,7 +88,7 @@ def _label_resonances(ax, resonances, per_unit: float) -> None:
     trans = blended_transform_factory(ax.transData, ax.transAxes)
     scale = np.log if ax.get_xscale() == "log" else (lambda v: v)
     lo, hi = (scale(v) for v in ax.get_xlim())
-    last = []                                   # per row: position of its last label
+    last: list[float] = []                      # per row: position of its last label
     for w in sorted((r.omega_d or r.omega) / per_unit for r in resonances):
         pos = (scale(w) - lo) / (hi - lo) if w > 0 and hi != lo else 0.0
         row = next((i for i, p in enumerate(last) if pos - p >= LABEL_GAP), len(last))

@@ -347,7 +347,8 @@ def _undamped_roots(M, K, w_ref: float, vectors: bool):
     return s, err, np.full(s.size, 0.0 if direct else 1.0), U
 
 
-def _damped_roots(scaled, w_ref: float, vectors: bool):
+def _damped_roots(scaled: tuple[np.ndarray, np.ndarray, np.ndarray], w_ref: float,
+                  vectors: bool):
     """``(s, error, vectors)`` of the scaled damped pencil, rigid-body roots left out."""
     eps = np.finfo(float).eps
     s_all, U = _damped(*scaled, vectors=vectors)
@@ -615,7 +616,7 @@ def _cancel(held: np.ndarray, released: np.ndarray):
     return keep_h, keep_r
 
 
-def _make(kind: str, s: complex, err: float) -> Resonance:
+def _make(kind: Literal["resonance", "antiresonance"], s: complex, err: float) -> Resonance:
     s = complex(s)
     wn = abs(s)
     return Resonance(kind, float(wn), float(abs(s.imag)),

@@ -274,12 +274,12 @@ def count(least: int = 1, most: int | None = None, *, why: str = ""):
             value = int(text)
         except ValueError:
             try:
-                value = float(text)
+                number = float(text)
             except ValueError:
                 raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
-            if not (math.isfinite(value) and value.is_integer()):
+            if not (math.isfinite(number) and number.is_integer()):
                 raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
-            value = int(value)
+            value = int(number)
         if value < least:
             raise argparse.ArgumentTypeError(f"must be at least {least}, got {text}")
         if most is not None and value > most:

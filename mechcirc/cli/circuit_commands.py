@@ -512,7 +512,7 @@ def cmd_resonances(args) -> int:
         found = circuit.resonances(omega_max=args.omega_max)
     for w in warns:
         print(f"warning: {w}", file=sys.stderr)
-    if args.plot:
+    if args.plot and modes is not None:     # --plot found the modes above
         from ..plotting import plot_modes
 
         if len(modes) > MAX_MODE_PANELS:

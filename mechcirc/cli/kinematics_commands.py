@@ -224,8 +224,9 @@ MAX_LENGTH_RATIO = 1e6
 def _check_length_ratio(args) -> None:
     from ..errors import InputError
 
-    lengths = {n: getattr(args, n) for n in ("crank", "coupler", "rocker", "frame")}
-    lo, hi = min(lengths, key=lengths.get), max(lengths, key=lengths.get)
+    lengths: dict[str, float] = {n: getattr(args, n) for n in ("crank", "coupler", "rocker",
+                                                             "frame")}
+    lo, hi = min(lengths, key=lengths.__getitem__), max(lengths, key=lengths.__getitem__)
     if lengths[hi] > MAX_LENGTH_RATIO * lengths[lo]:
         raise InputError(f"--{hi} {lengths[hi]:g} is more than {MAX_LENGTH_RATIO:g} times "
                          f"--{lo} {lengths[lo]:g}; the four-bar's angles would be lost to "

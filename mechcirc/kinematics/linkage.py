@@ -251,7 +251,8 @@ class Linkage:
                 for combo in itertools.combinations(remaining, size):
                     S = set(combo)
                     pairs = 0
-                    ext, inner = [], []
+                    outer_pairs: list[str] = []
+                    inner_pairs: list[str] = []
                     for p, members in joints.items():
                         inside = [m for m in members if m in S]
                         outside = [m for m in members if m in known]
@@ -260,9 +261,9 @@ class Linkage:
                         m = len(inside) + len(outside)
                         if m >= 2:
                             pairs += m - 1
-                            (ext if outside else inner).append(p)
+                            (outer_pairs if outside else inner_pairs).append(p)
                     if 3 * size == 2 * pairs:
-                        found = (combo, tuple(inner), tuple(ext))
+                        found = (combo, tuple(inner_pairs), tuple(outer_pairs))
                         break
                 if found:
                     break
@@ -616,7 +617,7 @@ def _read_cranks(raw_cranks: list, links, ground_pts, text: str, source: str) ->
     """[[cranks]]: each a known link, driven once, about one ground pivot, at omega ≠ 0."""
     if not isinstance(raw_cranks, list) or not raw_cranks:
         raise NetlistError("no [[cranks]]: at least one driving crank is needed", source)
-    cranks = []
+    cranks: list[Crank] = []
     for n, c in enumerate(raw_cranks):
         check_keys(text, source, TABLES["cranks"], c, n)
         lname = c.get("link")

@@ -323,13 +323,13 @@ def solve_eq10(swing: float, b_a: float, *, c_a: float | None = None,
     GeometryError
         Neither or both of ``c_a`` and ``d_a`` given, or b/a ≤ 1, or Ψ outside (0, π).
     """
-    if (c_a is None) == (d_a is None):
+    given = c_a if c_a is not None else d_a
+    if given is None or (c_a is not None and d_a is not None):
         raise GeometryError("solve_eq10 needs exactly one of c_a and d_a")
     if not b_a > 1:
         raise GeometryError(f"eq. (10) needs b/a > 1 (a crank shorter than the coupler), got {b_a}")
     if not 0 < swing < math.pi:
         raise GeometryError(f"swing must be in (0, π) rad, got {swing}")
-    given = c_a if c_a is not None else d_a
     roots = []
     for u in _eq10_roots_squared(swing, b_a, float(given)):
         if not np.isfinite(u):

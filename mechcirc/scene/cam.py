@@ -27,12 +27,16 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..kinematics.linkage import Linkage
+from ..kinematics.linkage import Linkage, Slider
+
+if TYPE_CHECKING:
+    from ..motion_laws import Motion
 
 __all__ = ["CamLinkage", "parse_cam", "check_follower_part", "aligned_points", "DWELL"]
 
@@ -60,11 +64,11 @@ class CamLinkage(Linkage):
         A translating follower's prismatic pair on the frame; None: oscillating.
     """
 
-    cam: object = None
+    cam: Motion = field(kw_only=True)
     x0: float = 0.0
     key: tuple = ()
     follower: str = ""
-    slider: object = None
+    slider: Slider | None = None
 
     @cached_property
     def peak_rate(self) -> float:
@@ -76,7 +80,7 @@ class CamLinkage(Linkage):
         th = np.asarray(theta, dtype=float).reshape(-1)
         x, x1, x2 = self.cam.evaluate(th)
         x1 = np.where(np.abs(x1) <= DWELL * self.peak_rate, 0.0, x1)    # a dwell: at rest
-        kw = {"max_step_deg": max_step_deg, "method": method}
+        kw: dict[str, Any] = {"max_step_deg": max_step_deg, "method": method}
         if self.slider is None:
             a1, a2 = x1, x2
             m = Linkage.motion(self, x - self.x0, **kw)

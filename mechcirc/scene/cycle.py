@@ -25,7 +25,7 @@ from ..batch import Designs, from_circuits
 from ..errors import GeometryError, InputError, SolverError
 from ..motion_laws import Motion, motion_table
 from .files import Scene
-from .model import (RANK_TOL, build, drive_ratio, element_ratios, part_singular_values,
+from .model import (RANK_TOL, ReflectMode, build, drive_ratio, element_ratios, part_singular_values,
                     part_speeds, scaled_motion)
 
 __all__ = ["CycleMap", "cycle_map", "drive_motion"]
@@ -127,7 +127,7 @@ class CycleMap:
 
 
 def cycle_map(scene: Scene, *, points: int = 72, harmonics: int = 5,
-              reflect: str = "eta", progress=None) -> CycleMap:
+              reflect: ReflectMode = "eta", progress=None) -> CycleMap:
     """Resonances and |Q0| at the first ``harmonics`` shaft harmonics at ``points`` crank angles.
 
     Parameters
@@ -190,7 +190,7 @@ def cycle_map(scene: Scene, *, points: int = 72, harmonics: int = 5,
                     scene.drive.link is not None, scene.cycle)
 
 
-def _cycle_batches(scene: Scene, theta, motion, reflect: str):
+def _cycle_batches(scene: Scene, theta, motion, reflect: ReflectMode):
     """Every crank angle as a design: ``[(Designs, angle indices)]``, from
     :func:`_cycle_designs` and, for the angles it leaves (near a dead centre, a
     topology of their own), from build; and the angles build refuses (index → why)."""
@@ -242,7 +242,7 @@ def _same_network(a, b) -> bool:
     return shape(a.circuit) == shape(b.circuit)
 
 
-def _cycle_designs(scene: Scene, motion, reflect: str):
+def _cycle_designs(scene: Scene, motion, reflect: ReflectMode):
     """The circuits of the scene at every angle of ``motion`` as one batch of designs.
 
     :func:`~mechcirc.scene.build` at one angle gives the network (elements,
@@ -261,7 +261,7 @@ def _cycle_designs(scene: Scene, motion, reflect: str):
     """
     every = range(len(motion.theta))
     lk = scene.linkage
-    if reflect != "eta" or getattr(lk, "sliders", ()) or \
+    if reflect != "eta" or lk.sliders or \
             not set(lk.ground) <= set(motion.point_names):
         return None, every
     m = scaled_motion(scene, np.degrees(motion.theta),

@@ -71,6 +71,7 @@ import os
 import re
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Literal, TypeGuard
 
 from ..errors import GeometryError, NetlistError
 from ..kinematics.linkage import TABLES as LINKAGE_TABLES
@@ -208,7 +209,7 @@ class SceneDrive:
     """
 
     name: str
-    kind: str
+    kind: Literal["velocity", "force"]
     amplitude: float
     link: str | None = None
     point: str | None = None
@@ -319,7 +320,7 @@ def _hide_scene_tables(text: str) -> str:
             hiding = m.group(1).split(".")[0].strip('"') in SCENE_TABLES
         elif top:
             k = key.match(line)
-            hiding = bool(k) and k.group(1) in SCENE_TABLES
+            hiding = k is not None and k.group(1) in SCENE_TABLES
         out.append("" if hiding else line)
     return "\n".join(out) + "\n"
 
@@ -329,7 +330,7 @@ _ROLE_OF = {"[N/m]": "spring", "[N·m/rad]": "spring", "[N·s/m]": "damper",
             "[N·m·s/rad]": "damper", "[kg]": "mass", "[kg·m²]": "mass", "[deg]": "angle"}
 
 
-def _named(value, names) -> bool:
+def _named(value, names) -> TypeGuard[str]:
     """``value`` is a string among ``names`` (a list or a number in the file is no name)."""
     return isinstance(value, str) and value in names
 
@@ -476,10 +477,10 @@ class _SceneReader:
     def number(self, value, what, table, key, n, **kw) -> float:
         return _number(self.text, self.source, value, what, table, key, n, **kw)
 
-    def elastic(self) -> list:
+    def elastic(self) -> list[ElasticLink]:
         """[[elastic]]: binary rigid links of the linkage made axial springs."""
         links, cranks = self.linkage.links, self.linkage.cranks
-        elastic = []
+        elastic: list[ElasticLink] = []
         for n, e in self.entries("elastic"):
             lname = e.get("link")
             if not _named(lname, links):
@@ -717,7 +718,7 @@ class _SceneReader:
         if ("velocity" in dr) == ("force" in dr):
             raise self.err("[drive] needs exactly one of velocity = V0 or force = F0",
                            "drive", "force" if "force" in dr else next(iter(dr), "link"))
-        kind = "velocity" if "velocity" in dr else "force"
+        kind: Literal["velocity", "force"] = "velocity" if "velocity" in dr else "force"
         amp = self.number(dr[kind], f"drive {kind} amplitude", "drive", kind, 0,
                           positive=False)
         dname = dr.get("name", "V")

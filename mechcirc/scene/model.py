@@ -41,6 +41,9 @@ from ..circuit import Circuit, Drive, Element, Lever
 from ..errors import GeometryError, InputError
 from .files import Scene
 
+#: How a lever is reflected into the circuit (see :func:`build`).
+ReflectMode = Literal["eta", "lever"]
+
 __all__ = ["SceneCircuit", "build", "build_needed", "ZERO_RATIO"]
 
 #: A velocity ratio below this fraction of the scene's largest one counts as zero.
@@ -90,7 +93,7 @@ class SceneCircuit:
         return next(iter(self.parts))
 
 
-def build(scene: Scene, theta: float, *, reflect: Literal["eta", "lever"] = "eta",
+def build(scene: Scene, theta: float, *, reflect: ReflectMode = "eta",
           state=None) -> SceneCircuit:
     """The mechanical circuit of ``scene`` linearised at crank rotation ``theta`` [rad].
 
@@ -157,7 +160,7 @@ class _Motion:
     vel: dict        # point -> velocity per unit crank speed [m/rad]
     ang: dict        # link or torsion body -> angular velocity per unit crank speed [1]
     Lc: float        # the linkage's length scale [m]
-    tiny: object     # a velocity ratio at most this is zero (ZERO_RATIO × the largest)
+    tiny: np.floating | np.ndarray  # a velocity ratio at most this is zero (ZERO_RATIO × the largest)
     crank: str
 
 
@@ -272,7 +275,9 @@ def _drive_ratio(scene: Scene, m: _Motion) -> tuple[float, str]:
     """r₀, the drive's velocity per unit crank speed, and its name; refused at rest."""
     r0, r0_size, r0_text = drive_ratio(scene, m)
     r0 = float(r0)
-    if r0_size <= m.tiny and getattr(scene.linkage, "cam", None) is not None:
+    from .cam import CamLinkage
+
+    if r0_size <= m.tiny and isinstance(scene.linkage, CamLinkage):
         raise GeometryError(f"{scene.source}: at θ = {m.deg:.6g}° the cam dwells: the follower "
                             f"{scene.linkage.follower!r} is at rest (x'(θ) = 0), so the "
                             f"drive on it does not move the mechanism; choose a cam angle in a "
@@ -304,7 +309,7 @@ class _Builder:
     """The circuit's elements and levers, built as objects, with each one's ratio."""
 
     def __init__(self, scene: Scene, m: _Motion, r0: float, node_of_part: list,
-                 reflect: str):
+                 reflect: ReflectMode):
         self.scene, self.m, self.r0, self.node_of_part = scene, m, r0, node_of_part
         self.reflect = reflect
         self.part_of_body = scene.part_of_body()
@@ -531,7 +536,7 @@ def _check_connected(scene, node_of_part, edges, dropped, deg):
 
 
 def build_needed(scene: Scene, theta: float | None = None, *,
-                 reflect: Literal["eta", "lever"] = "eta"):
+                 reflect: ReflectMode = "eta"):
     """The model the scene asks for: built at θ and, with a band, reduced to what it needs.
 
     Parameters
@@ -566,7 +571,7 @@ def build_needed(scene: Scene, theta: float | None = None, *,
                                 "[analysis]")
         theta = math.radians(a.theta_deg)
     model = build(scene, theta, reflect=reflect)
-    if a.band is None:
+    if a.band is None or a.tol is None:      # the file gives both or neither
         return model, None
     if a.output is not None and a.output not in {e.name for e in model.circuit.elements}:
         why = dict(model.dropped).get(a.output.removesuffix("_d"), "not in the circuit")
