@@ -37,7 +37,7 @@ import scipy.linalg as la
 
 from ..circuit import Circuit, units_of
 from ..errors import MechcircError
-from .model import StateSpace, backlash_elements, state_space
+from .model import StateSpace, _incidence, backlash_elements, state_space
 
 __all__ = ["Waveform", "TransientResult", "transient", "parse_drive", "MAX_SAMPLES"]
 
@@ -1058,11 +1058,7 @@ def _clearance_setup(ss: StateSpace, circuit):
     dv = np.zeros(E)
     prm = np.zeros((E, 3))
     for k, (e, comp) in enumerate(clear):
-        ge = np.zeros(len(ss.nodes))
-        if e.n1 in index:
-            ge[index[e.n1]] += 1.0
-        if e.n2 in index:
-            ge[index[e.n2]] -= 1.0
+        ge = _incidence(index, e.n1, e.n2, len(ss.nodes))
         cx[k], dx[k] = ge @ ss.Cx, ge @ ss.Dx
         cv[k], dv[k] = ge @ ss.Cv, ge @ ss.Dv
         prm[k] = _law_params(e, comp)
@@ -1101,7 +1097,6 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes,
     velocities = velocities or bool(want) or bool(clear)
     X = affine(ss.Cx, ss.Dx, cols=nx, Cz=x_ready)
     V = affine(ss.Cv, ss.Dv, ss.Ev, Cz=v_ready) if velocities else None
-    comp_of = {comp.name: e.name for e, comp in clear.values() if comp is not None}
     index = {n: i for i, n in enumerate(ss.nodes)}
     def diff(Y, e):
         out = np.zeros(Y.shape[0])
@@ -1114,6 +1109,7 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes,
     law_cache = {}
     for name, (e, comp) in clear.items():
         law_cache[name] = _law_forces(e, comp, diff(X, e), diff(V, e))
+    Acc = None
     need_acc = (want and any(e.kind == "mass" for e in circuit.elements)) or \
         (ss.kind == "velocity" and bool(clear))
     if need_acc:
@@ -1123,8 +1119,46 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes,
         for j, name in enumerate(clear):        # the clearance forces drive the masses too
             Acc += np.outer(law_cache[name][0], ss.Cv @ ss.extra[:, j])
 
-    # Differences across every element at once: two column gathers.
     els = circuit.elements if want else ()
+    force, dvm = _element_forces(els, index, X, V, Acc, clear, law_cache, t.size)
+    drive_force = drive_velocity = None
+    if ss.kind == "velocity":
+        # Q = h·(M a + D v + K x + Σ g_e f_e): contract with h first (vectors only).
+        a, b, c = ss.M.T @ ss.h, ss.D.T @ ss.h, ss.K.T @ ss.h
+        if clear:
+            Q = Acc @ a + V @ b + X @ c
+        else:                   # one vector: h·(M a + D v + K x) is affine in z
+            Q = affine(*_drive_map(ss), Cz=drive_y)
+        for name, (e, _comp) in clear.items():
+            ge = _incidence(index, e.n1, e.n2, len(ss.nodes))
+            Q = Q + law_cache[name][0] * (ge @ ss.h)
+        drive_force = Q
+    elif ss.kind == "force":
+        drive_velocity = affine(*_drive_map(ss), Cz=drive_y)
+    if ss.Ev.any() and drive.kind not in ("rest", "impulse"):
+        notes.append("some nodes carry neither mass nor damping: their velocities use the "
+                     "drive's derivative estimated from the samples")
+    err_total = err
+    return TransientResult(time=t, nodes=ss.nodes, x=X, v=V, elements=tuple(e.name for e in els),
+                           force=force,
+                           dv=dvm, drive_kind=ss.kind,
+                           drive=u_true if ss.kind is not None else None,
+                           drive_force=drive_force, drive_velocity=drive_velocity,
+                           error=err_total, method=method, notes=notes, name=circuit.name,
+                           drive_name=circuit.drive.name if circuit.drive is not None else None,
+                           units=units_of(circuit.drive),
+                           clearances={e.name: (e.n1, e.n2, e.backlash)
+                                       for e, _ in backlash_elements(circuit)},
+                           waveform=drive.label if ss.kind is not None else None)
+
+
+def _element_forces(els, index: dict, X, V, Acc, clear: dict, law_cache: dict, n_t: int):
+    """(force, velocity difference) of every element in ``els``, (n_t, len(els)) each.
+
+    Linear elements: value·η times the difference across them of x (springs),
+    v (dampers) or a (masses), two column gathers for all; clearance springs and
+    their companion dampers: their law's forces ``law_cache[spring name]``.
+    """
     i1 = np.array([index.get(e.n1, -1) for e in els], dtype=int)
     i2 = np.array([index.get(e.n2, -1) for e in els], dtype=int)
 
@@ -1136,56 +1170,21 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes,
         out -= second
         return out
 
-    dvm = across(V) if V is not None else np.zeros((t.size, 0))
+    dvm = across(V) if V is not None else np.zeros((n_t, 0))
     scale = np.array([e.value * e.eta for e in els])
     kinds = np.array([e.kind for e in els])
-    force = np.zeros((t.size, len(els)))
-    if (kinds == "spring").any():
-        sel = np.flatnonzero(kinds == "spring")
-        force[:, sel] = across(X)[:, sel] * scale[sel]
-    sel = np.flatnonzero(kinds == "damper")
-    force[:, sel] = dvm[:, sel] * scale[sel]
-    if (kinds == "mass").any():
-        sel = np.flatnonzero(kinds == "mass")
-        force[:, sel] = across(Acc)[:, sel] * scale[sel]
-    names = [e.name for e in els]
+    force = np.zeros((n_t, len(els)))
+    for kind, Y in (("spring", X), ("damper", None), ("mass", Acc)):
+        sel = np.flatnonzero(kinds == kind)
+        if sel.size:
+            force[:, sel] = (dvm if Y is None else across(Y))[:, sel] * scale[sel]
+    comp_of = {comp.name: e.name for e, comp in clear.values() if comp is not None}
     for j, e in enumerate(els):
         if e.name in clear or e.name in comp_of:
             sp = clear[e.name][0] if e.name in clear else clear[comp_of[e.name]][0]
             total, spring = law_cache[sp.name]
             force[:, j] = spring if e.name == sp.name else total - spring
-    drive_force = drive_velocity = None
-    if ss.kind == "velocity":
-        # Q = h·(M a + D v + K x + Σ g_e f_e): contract with h first (vectors only).
-        a, b, c = ss.M.T @ ss.h, ss.D.T @ ss.h, ss.K.T @ ss.h
-        if clear:
-            Q = Acc @ a + V @ b + X @ c
-        else:                   # one vector: h·(M a + D v + K x) is affine in z
-            Q = affine(*_drive_map(ss), Cz=drive_y)
-        for name, (e, _comp) in clear.items():
-            ge = np.zeros(len(ss.nodes))
-            if e.n1 in index:
-                ge[index[e.n1]] += 1.0
-            if e.n2 in index:
-                ge[index[e.n2]] -= 1.0
-            Q = Q + law_cache[name][0] * (ge @ ss.h)
-        drive_force = Q
-    elif ss.kind == "force":
-        drive_velocity = affine(*_drive_map(ss), Cz=drive_y)
-    if ss.Ev.any() and drive.kind not in ("rest", "impulse"):
-        notes.append("some nodes carry neither mass nor damping: their velocities use the "
-                     "drive's derivative estimated from the samples")
-    err_total = err
-    return TransientResult(time=t, nodes=ss.nodes, x=X, v=V, elements=tuple(names), force=force,
-                           dv=dvm, drive_kind=ss.kind,
-                           drive=u_true if ss.kind is not None else None,
-                           drive_force=drive_force, drive_velocity=drive_velocity,
-                           error=err_total, method=method, notes=notes, name=circuit.name,
-                           drive_name=circuit.drive.name if circuit.drive is not None else None,
-                           units=units_of(circuit.drive),
-                           clearances={e.name: (e.n1, e.n2, e.backlash)
-                                       for e, _ in backlash_elements(circuit)},
-                           waveform=drive.label if ss.kind is not None else None)
+    return force, dvm
 
 
 def _law_forces(spring, comp, e, w):
