@@ -34,6 +34,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass, field
+from typing import Literal
 
 import numpy as np
 
@@ -104,7 +105,7 @@ def matrix_pencil(y: np.ndarray, dt: float, rel: float = 1e-9, max_order: int = 
     return s, amps
 
 
-def _variant(circuit: Circuit, kind: str) -> Circuit:
+def _variant(circuit: Circuit, kind: Literal["velocity", "force"]) -> Circuit:
     d = circuit.drive
     if d.kind == kind:
         new = d
@@ -324,6 +325,7 @@ def crosscheck(circuit: Circuit, omega_max: float | None = None,
             if progress is not None:
                 progress.update()
         y = run.drive_force if d.kind == "velocity" else run.drive_velocity
+        assert y is not None            # a driven circuit's run has the drive's output
         t = run.time
         # the time domain's own rounding of y (heavily weighted small states)
         tol = max(tol, _output_rounding(circuit, w, t.size - 1, d.amplitude) / exp)
@@ -331,7 +333,7 @@ def crosscheck(circuit: Circuit, omega_max: float | None = None,
         c = np.linalg.lstsq(basis, y, rcond=None)[0]
         measured = math.hypot(c[0], c[1])
         row["measured"] = float(measured)
-        row["rel_error"] = float(abs(measured - exp) / exp)
-        row["periodic_deviation"] = float(np.abs(y - basis @ c).max() / max(measured, 1e-300))
-        judge(row, max(row["rel_error"], row["periodic_deviation"]), tol)
+        rel = row["rel_error"] = float(abs(measured - exp) / exp)
+        dev = row["periodic_deviation"] = float(np.abs(y - basis @ c).max() / max(measured, 1e-300))
+        judge(row, max(rel, dev), tol)
     return out

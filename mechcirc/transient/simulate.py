@@ -30,7 +30,7 @@ import dataclasses
 import math
 import warnings
 from dataclasses import dataclass, field
-from typing import Callable
+from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
 import scipy.linalg as la
@@ -38,6 +38,9 @@ import scipy.linalg as la
 from ..circuit import Circuit, units_of
 from ..errors import MechcircError
 from .model import StateSpace, _incidence, backlash_elements, state_space
+
+if TYPE_CHECKING:  # pragma: no cover - annotations only
+    from ..motion_laws import Motion
 
 __all__ = ["Waveform", "TransientResult", "transient", "parse_drive", "MAX_SAMPLES"]
 
@@ -74,7 +77,7 @@ class Waveform:
     times: tuple = ()
     values: tuple = ()
     func: Callable | None = field(default=None, compare=False)
-    motion: object = None
+    motion: Motion | None = None
 
     def sample(self, t: np.ndarray, amplitude: float) -> np.ndarray:
         if self.kind in ("rest", "impulse"):
@@ -86,11 +89,14 @@ class Waveform:
         if self.kind == "samples":
             return np.interp(t, np.asarray(self.times), np.asarray(self.values))
         if self.kind == "motion":
-            return amplitude * self.omega * self.motion.evaluate(self.omega * t)[1]
+            return amplitude * self.omega * self._motion().evaluate(self.omega * t)[1]
         if self.kind == "callable":
-            out = np.asarray(self.func(t), dtype=float)
+            func = self.func
+            if func is None:
+                raise ValueError("a 'callable' waveform needs func")
+            out = np.asarray(func(t), dtype=np.float64)
             if out.shape != t.shape:
-                out = np.array([float(self.func(float(s))) for s in t])
+                out = np.array([float(func(float(s))) for s in t])
             if not np.all(np.isfinite(out)):
                 raise MechcircError("the drive function returned a non-finite value")
             return out
@@ -98,7 +104,12 @@ class Waveform:
 
     def rate(self, t: np.ndarray, amplitude: float) -> np.ndarray:
         """du/dt of a ``"motion"`` waveform: amplitude · Ω² d²x/dθ² at θ = Ωt."""
-        return amplitude * self.omega ** 2 * self.motion.evaluate(self.omega * t)[2]
+        return amplitude * self.omega ** 2 * self._motion().evaluate(self.omega * t)[2]
+
+    def _motion(self) -> Motion:
+        if self.motion is None:
+            raise ValueError("a 'motion' waveform needs motion")
+        return self.motion
 
     @property
     def label(self) -> str:
@@ -148,7 +159,8 @@ def read_csv_drive(path: str) -> Waveform:
     from ..sources import read_source
 
     text = read_source(path, "a CSV file of drive samples (time,value)")
-    times, values = [], []
+    times: list[float] = []
+    values: list[float] = []
     for lineno, row in enumerate(csv.reader(text.splitlines()), start=1):
         if not row or not "".join(row).strip() or row[0].lstrip().startswith("#"):
             continue
@@ -196,7 +208,7 @@ class TransientResult:
     time: np.ndarray
     nodes: tuple
     x: np.ndarray
-    v: np.ndarray
+    v: np.ndarray | None
     elements: tuple
     force: np.ndarray
     dv: np.ndarray
@@ -214,7 +226,7 @@ class TransientResult:
     separations: list = field(default_factory=list)
     waveform: str | None = None
 
-    def node(self, name: str) -> tuple[np.ndarray, np.ndarray]:
+    def node(self, name: str) -> tuple[np.ndarray, np.ndarray | None]:
         """(x, v) of node ``name``."""
         i = self.nodes.index(name)
         return self.x[:, i], (self.v[:, i] if self.v is not None else None)
@@ -472,18 +484,21 @@ def _separations(out: TransientResult, circuit, drive):
 
     found = []
     index = {n: i for i, n in enumerate(out.nodes)}
+    v = out.v
+    if v is None:                   # (a run with clearances always forms v)
+        raise ValueError("the separations need the node velocities")
     for e, comp in backlash_elements(circuit):
         rel = [np.zeros(out.time.size), np.zeros(out.time.size)]
         for node, sign in ((e.n1, 1.0), (e.n2, -1.0)):
             if node in index:
                 rel[0] = rel[0] + sign * out.x[:, index[node]]
-                rel[1] = rel[1] + sign * out.v[:, index[node]]
+                rel[1] = rel[1] + sign * v[:, index[node]]
         found += separations(out.time, rel[0], rel[1], *_law_params(e, comp), e.name,
                              drive.omega if drive.kind == "motion" else None)
     return sorted(found, key=lambda s: s.t_open)
 
 
-def _law_params(spring, comp):
+def _law_params(spring, comp) -> tuple[float, float, float]:
     """(c, d, B) of a clearance spring and its companion damper."""
     d = comp.value * comp.eta if comp is not None else spring.damping * spring.eta
     return spring.value * spring.eta, d, spring.backlash
@@ -581,7 +596,7 @@ def _model(circuit: Circuit, linearise: bool) -> StateSpace:
     return ss
 
 
-def _drive_map(ss: StateSpace):
+def _drive_map(ss: StateSpace) -> tuple[np.ndarray, Any, Any] | None:
     """(w, Du, Dud): the drive's output (velocity of a force drive, force of a
     velocity drive) is w·z + Du·u + Dud·u̇ when the network is linear; None
     without a drive."""
@@ -1062,9 +1077,12 @@ def _clearance_setup(ss: StateSpace, circuit):
         cx[k], dx[k] = ge @ ss.Cx, ge @ ss.Dx
         cv[k], dv[k] = ge @ ss.Cv, ge @ ss.Dv
         prm[k] = _law_params(e, comp)
-    mats = kern.kernel_args(ss.A, ss.B, cx, dx, cv, dv, ss.extra, prm)
+    extra = ss.extra
+    if extra is None:
+        raise ValueError("the model was built without its clearance elements' force map")
+    mats = kern.kernel_args(ss.A, ss.B, cx, dx, cv, dv, extra, prm)
     # A with every contact closed: A + Σ_e extra_e ⊗ (c_e cx_e + d_e cv_e).
-    closed = ss.A + ss.extra @ (prm[:, :1] * cx + prm[:, 1:2] * cv)
+    closed = ss.A + extra @ (prm[:, :1] * cx + prm[:, 1:2] * cv)
     w_max = float(np.abs(np.linalg.eigvals(closed)).max()) if N else 0.0
     return mats, w_max
 
@@ -1122,19 +1140,21 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes,
     els = circuit.elements if want else ()
     force, dvm = _element_forces(els, index, X, V, Acc, clear, law_cache, t.size)
     drive_force = drive_velocity = None
+    # linear: the drive's output is one vector, h·(M a + D v + K x) or g·v, affine in z
+    dmap = _drive_map(ss) if ss.kind == "force" or not clear else None
     if ss.kind == "velocity":
-        # Q = h·(M a + D v + K x + Σ g_e f_e): contract with h first (vectors only).
-        a, b, c = ss.M.T @ ss.h, ss.D.T @ ss.h, ss.K.T @ ss.h
-        if clear:
+        if dmap is None:
+            # Q = h·(M a + D v + K x + Σ g_e f_e): contract with h first (vectors only).
+            a, b, c = ss.M.T @ ss.h, ss.D.T @ ss.h, ss.K.T @ ss.h
             Q = Acc @ a + V @ b + X @ c
-        else:                   # one vector: h·(M a + D v + K x) is affine in z
-            Q = affine(*_drive_map(ss), Cz=drive_y)
+        else:
+            Q = affine(*dmap, Cz=drive_y)
         for name, (e, _comp) in clear.items():
             ge = _incidence(index, e.n1, e.n2, len(ss.nodes))
             Q = Q + law_cache[name][0] * (ge @ ss.h)
         drive_force = Q
-    elif ss.kind == "force":
-        drive_velocity = affine(*_drive_map(ss), Cz=drive_y)
+    elif dmap is not None:
+        drive_velocity = affine(*dmap, Cz=drive_y)
     if ss.Ev.any() and drive.kind not in ("rest", "impulse"):
         notes.append("some nodes carry neither mass nor damping: their velocities use the "
                      "drive's derivative estimated from the samples")
