@@ -913,17 +913,7 @@ def _modal_plan(A, B, h, Cx):
     small[:, 1, 2] = 1.0
     E = la.expm(small)
     mu, g1, g2 = E[:, 0, 0], h * E[:, 0, 1] * b, h * E[:, 0, 2] * b
-    # A posteriori: the modal one-step map against the exact one.
-    Phi, G1, G2 = discretise(A, B, h)
-    mu_all = np.exp(lam * h)
-    Phi_m = ((V * mu_all) @ Vinv).real
-    scale = max(float(np.abs(Phi).max()), 1e-300)
-    dev = float(np.abs(Phi_m - Phi).max()) / scale
-    gscale = max(float(np.abs(G1).max()), float(np.abs(G2).max()), 1e-300)
-    g1_m = 2 * (Vk[:, ~real[keep]] @ g1[~real[keep]]).real + (Vk[:, real[keep]] @ g1[real[keep]]).real
-    g2_m = 2 * (Vk[:, ~real[keep]] @ g2[~real[keep]]).real + (Vk[:, real[keep]] @ g2[real[keep]]).real
-    if np.abs(B).max() > 0:
-        dev = max(dev, float(max(np.abs(g1_m - G1).max(), np.abs(g2_m - G2).max())) / gscale)
+    dev = _modal_deviation(A, B, h, lam, V, Vinv, Vk, ~real[keep], g1, g2)
     if not (dev <= MODAL_CHECK_TOL):
         return (f"modal one-step map differs from the exponential's by {dev:.1e} "
                 f"(> {MODAL_CHECK_TOL:.0e}; eigenvector condition {cond:.1e})")
@@ -954,6 +944,21 @@ def _modal_plan(A, B, h, Cx):
     if late.any():
         note += f"; {int(late.sum())} of {int(is_c.sum())} oscillating modes with real shapes"
     return (m, Vinv_k, rot, mu, g1, g2, cre, cim, nx, T, note + ")", late)
+
+
+def _modal_deviation(A, B, h, lam, V, Vinv, Vk, cplx, g1, g2) -> float:
+    """A posteriori check of a modal plan: the largest difference of its one-step map
+    (Φ, Γ₁, Γ₂ from the kept modes ``Vk``, complex where ``cplx``) from the
+    exponential's, relative to the largest entry of each."""
+    Phi, G1, G2 = discretise(A, B, h)
+    Phi_m = ((V * np.exp(lam * h)) @ Vinv).real
+    dev = float(np.abs(Phi_m - Phi).max()) / max(float(np.abs(Phi).max()), 1e-300)
+    if np.abs(B).max() > 0:
+        gscale = max(float(np.abs(G1).max()), float(np.abs(G2).max()), 1e-300)
+        for g, G in ((g1, G1), (g2, G2)):
+            g_m = 2 * (Vk[:, cplx] @ g[cplx]).real + (Vk[:, ~cplx] @ g[~cplx]).real
+            dev = max(dev, float(np.abs(g_m - G).max()) / gscale)
+    return dev
 
 
 def _modal_states(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout):
@@ -1014,22 +1019,7 @@ def _nonlinear(ss: StateSpace, circuit, z0, t, u, rtol, rate=None):
                                 "(the network is too stiff for it)")
         return out
 
-    # Absolute tolerance scaled to the solution, state by state: rtol × the
-    # state's peak over the run, from a loose pilot run (repeated once if the
-    # start's scale was far off: a run from rest has none).
-    scale = max(float(np.abs(z0).max()), 0.0) or 1.0
-    pilot_tol = max(rtol, 1e-4)
-    for _ in range(2):
-        peak = np.abs(run(pilot_tol, np.full(N, pilot_tol * scale), hmax)).max(axis=0)
-        new = float(peak.max())
-        if not (math.isfinite(new) and new > 0) or 0.1 * scale <= new <= 10 * scale:
-            break
-        scale = new
-    if math.isfinite(float(peak.max())) and peak.max() > 0:
-        floor = 1e-6 * peak.max()
-        atol = rtol * np.maximum(peak, floor)
-    else:
-        atol = np.full(N, rtol * scale)
+    atol = _absolute_tolerance(run, z0, rtol, hmax)
     # Error estimate: the run asked for, and a reference at a REF_TOL× tighter
     # tolerance and 1/REF_H of the largest step (a run whose steps are limited
     # by hmax or by the drive's samples, as at loose tolerances, would
@@ -1057,6 +1047,25 @@ def _nonlinear(ss: StateSpace, circuit, z0, t, u, rtol, rate=None):
                      "not reached (the error adds up over the steps and contacts); a smaller "
                      "--rtol reduces it")
     return Z, method, err, notes
+
+
+def _absolute_tolerance(run: Callable, z0: np.ndarray, rtol: float, hmax: float) -> np.ndarray:
+    """Absolute tolerance scaled to the solution, state by state: rtol × the
+    state's peak over the run, from a loose pilot ``run(tol, atol, hmax)``
+    (repeated once if the start's scale was far off: a run from rest has none)."""
+    N = z0.size
+    scale = max(float(np.abs(z0).max()), 0.0) or 1.0
+    pilot_tol = max(rtol, 1e-4)
+    for _ in range(2):
+        peak = np.abs(run(pilot_tol, np.full(N, pilot_tol * scale), hmax)).max(axis=0)
+        new = float(peak.max())
+        if not (math.isfinite(new) and new > 0) or 0.1 * scale <= new <= 10 * scale:
+            break
+        scale = new
+    if math.isfinite(float(peak.max())) and peak.max() > 0:
+        floor = 1e-6 * peak.max()
+        return rtol * np.maximum(peak, floor)
+    return np.full(N, rtol * scale)
 
 
 def _clearance_setup(ss: StateSpace, circuit):
