@@ -781,11 +781,17 @@ def _propagate_modal(A, B, z0, u, h, Cx=None, w=None, x_only=False, cache=None):
     wout = np.zeros(N) if w is None else np.asarray(w, dtype=float) @ T
     y = np.empty(nt)
     _modal_states(mu, g1, g2, q0, np.ascontiguousarray(u, float), cre, cim, Q, qmax, wout, y)
-    dropped = 0.0
-    if late.any():
-        cols = cim[late]
-        dropped = float((np.abs(Cx @ T[:, cols]).max(axis=0) * qmax[late]).sum())
+    dropped = _dropped(Cx, T, cim, late, qmax)
     return Q, T, note, (nx if Cx is not None else N), dropped, (None if w is None else y)
+
+
+def _dropped(Cx, T, cim, late, qmax) -> float:
+    """Bound of what the Im columns of the real-shaped modes ``late`` add to any x:
+    Σ max|Cx T_col| · max_k |q_col| (``qmax``: each mode's largest |q|)."""
+    if not late.any():
+        return 0.0
+    cols = cim[late]
+    return float((np.abs(Cx @ T[:, cols]).max(axis=0) * qmax[late]).sum())
 
 
 #: Samples per block of the fused x-only modal path: the modal signals of a
@@ -862,20 +868,21 @@ def _propagate_modal_x(A, B, z0, u, h, Cx, w=None, cache=None, Cv=None):
         if b >= nt - 1:
             break
         a = b
-    dropped = 0.0
-    if late.any() and Cv is None:
-        cols = cim[late]
-        dropped = float((np.abs(Cx @ T[:, cols]).max(axis=0) * qmax[late]).sum())
-    # max|x| ≤ max_i Σ_c |Sx[c, i]| · (largest |q| of column c's mode): a bound of
-    # x from the recurrence, without a pass over x (finite only if every q was)
+    dropped = _dropped(Cx, T, cim, late, qmax) if Cv is None else 0.0
+    return X, V, note, dropped, (None if w is None else y), _x_bound(Sx, qmax, cre, cim)
+
+
+def _x_bound(Sx, qmax, cre, cim) -> float | None:
+    """max|x| ≤ max_i Σ_c |Sx[c, i]| · (largest |q| of column c's mode): a bound of
+    x from the recurrence, without a pass over x (None unless finite and < 1e300)."""
+    ncols = Sx.shape[0]
     col = np.zeros(ncols)
     for cols in (cre, cim):
         at = (cols >= 0) & (cols < ncols)
         col[cols[at]] = qmax[at]
     with np.errstate(all="ignore"):
         bound = float(np.max(np.abs(Sx).T @ col, initial=0.0))
-    return X, V, note, dropped, (None if w is None else y), \
-        (bound if bound < 1e300 else None)
+    return bound if bound < 1e300 else None
 
 
 def _modal_plan(A, B, h, Cx):
