@@ -392,20 +392,26 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
     out = _outputs(ss, circuit, t, Z, u, u_in, h, drive, method, err, interp, notes,
                    elements, T, velocities, nx, drive_y, x_ready, v_ready)
     if not has_clear:
-        # exact up to rounding, which adds up over the steps: ROUNDING_PER_STEP × max|x|
-        # per step (against closed forms: 3e-15 … 1.5e-12 relative after 2e3 … 1e5 steps,
-        # 4 … 150× below this)
-        with np.errstate(all="ignore"):
-            if x_bound is None or np.any(ss.Dx):  # (the drive's direct term changes x)
-                # max |x| as max(max x, −min x): the same number without an |x|
-                # temporary the size of x (1e7 values for 100 nodes × 1e5 steps).
-                x_bound = max(float(out.x.max()), -float(out.x.min()))
-            out.error = err + ROUNDING_PER_STEP * (t.size - 1) * x_bound
+        out.error = _linear_error(out, ss, err, x_bound)
     # (linear: the error is finite only if x is; NaN and ±inf reach max|x| or its bound)
     _require_finite(out, x_in_error=not has_clear)
     if has_clear:
         out.separations = _separations(out, circuit, drive)
     return out
+
+
+def _linear_error(out: TransientResult, ss: StateSpace, err: float,
+                  x_bound: float | None) -> float:
+    """Error of an exact (linear) run: ``err`` plus rounding, which adds up over
+    the steps: ROUNDING_PER_STEP × max|x| per step (against closed forms: 3e-15 …
+    1.5e-12 relative after 2e3 … 1e5 steps, 4 … 150× below this).  ``x_bound``
+    bounds max|x| (None: look at x)."""
+    with np.errstate(all="ignore"):
+        if x_bound is None or np.any(ss.Dx):  # (the drive's direct term changes x)
+            # max |x| as max(max x, −min x): the same number without an |x|
+            # temporary the size of x (1e7 values for 100 nodes × 1e5 steps).
+            x_bound = max(float(out.x.max()), -float(out.x.min()))
+        return err + ROUNDING_PER_STEP * (out.time.size - 1) * x_bound
 
 
 def _waveform(circuit: Circuit, drive, rpm) -> Waveform:
@@ -488,14 +494,20 @@ def _separations(out: TransientResult, circuit, drive):
     if v is None:                   # (a run with clearances always forms v)
         raise ValueError("the separations need the node velocities")
     for e, comp in backlash_elements(circuit):
-        rel = [np.zeros(out.time.size), np.zeros(out.time.size)]
-        for node, sign in ((e.n1, 1.0), (e.n2, -1.0)):
-            if node in index:
-                rel[0] = rel[0] + sign * out.x[:, index[node]]
-                rel[1] = rel[1] + sign * v[:, index[node]]
-        found += separations(out.time, rel[0], rel[1], *_law_params(e, comp), e.name,
+        found += separations(out.time, _across(out.x, index, e), _across(v, index, e),
+                             *_law_params(e, comp), e.name,
                              drive.omega if drive.kind == "motion" else None)
     return sorted(found, key=lambda s: s.t_open)
+
+
+def _across(Y, index: dict, e) -> np.ndarray:
+    """Y(n1) − Y(n2) across element ``e`` at every sample (a node not in ``index``: 0)."""
+    out = np.zeros(Y.shape[0])
+    if e.n1 in index:
+        out = out + Y[:, index[e.n1]]
+    if e.n2 in index:
+        out = out - Y[:, index[e.n2]]
+    return out
 
 
 def _law_params(spring, comp) -> tuple[float, float, float]:
@@ -1132,17 +1144,8 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes,
     X = affine(ss.Cx, ss.Dx, cols=nx, Cz=x_ready)
     V = affine(ss.Cv, ss.Dv, ss.Ev, Cz=v_ready) if velocities else None
     index = {n: i for i, n in enumerate(ss.nodes)}
-    def diff(Y, e):
-        out = np.zeros(Y.shape[0])
-        if e.n1 in index:
-            out = out + Y[:, index[e.n1]]
-        if e.n2 in index:
-            out = out - Y[:, index[e.n2]]
-        return out
-
-    law_cache = {}
-    for name, (e, comp) in clear.items():
-        law_cache[name] = _law_forces(e, comp, diff(X, e), diff(V, e))
+    law_cache = {name: _law_forces(e, comp, _across(X, index, e), _across(V, index, e))
+                 for name, (e, comp) in clear.items()}
     Acc = None
     need_acc = (want and any(e.kind == "mass" for e in circuit.elements)) or \
         (ss.kind == "velocity" and bool(clear))
