@@ -157,22 +157,10 @@ def state_space(circuit: Circuit, *, linearise: bool = False) -> StateSpace:
     # v = d/dt x = Cx ż + Dx u̇ = Cx A z + Cx B u + Dx u̇
     Cv = Cx @ A
     Dv = Cx @ Bv
-    h = None
-    if kind is not None:
-        # Q from the residual r = M a + D v + K x = Gᵀ μ + g Q (consistent, exact).
-        h = la.pinv(np.hstack([G.T, g[:, None]]))[-1]
-    # Clearance elements: their force f_e (n1 → n2) acts as −g_e f_e on the left side.
+    # Q from the residual r = M a + D v + K x = Gᵀ μ + g Q (consistent, exact).
+    h = la.pinv(np.hstack([G.T, g[:, None]]))[-1] if kind is not None else None
     massive = n0 == 0 and ns == 0
-    extra = None
-    if clear:
-        if not massive:
-            raise MechcircError(
-                "clearances (backlash=) need mass at every node of the network "
-                "(this one has massless nodes); add small masses or remove the clearance")
-        extra = np.zeros((N, len(clear)))
-        for j, (e, _) in enumerate(clear):
-            ge = _incidence(index, e.n1, e.n2, n)
-            extra[n1:2 * n1, j] = M11_inv @ (Y[:, :n1].T @ (T.T @ (-ge)))
+    extra = _clearance_map(clear, index, N, M11_inv, Y[:, :n1], T, massive) if clear else None
     z0, notes = _initial(circuit, nodes, index, Cx, Cv, N, vel)
     return StateSpace(tuple(nodes), tuple(work.elements), kind, A, Bv, Cx, Dx, Cv, Dv, Dx,
                       M, D, K, g, h, massive, (z0, tuple(notes)), tuple(sorted(drop)),
@@ -305,6 +293,21 @@ def _dynamics(My, Dy, Ky, Fyu, Fyx, n1: int, n0: int, vel: bool):
     if vel:
         Bv[iX] = 1.0
     return A, Bv, M11_inv
+
+
+def _clearance_map(clear: list, index: dict, N: int, M11_inv, Y1, T, massive: bool):
+    """(N, E): state rate per unit force of each clearance element (its force f_e,
+    n1 → n2, acts as −g_e f_e on the left side); every coordinate needs mass."""
+    if not massive:
+        raise MechcircError(
+            "clearances (backlash=) need mass at every node of the network "
+            "(this one has massless nodes); add small masses or remove the clearance")
+    n1 = Y1.shape[1]
+    extra = np.zeros((N, len(clear)))
+    for j, (e, _) in enumerate(clear):
+        ge = _incidence(index, e.n1, e.n2, T.shape[0])
+        extra[n1:2 * n1, j] = M11_inv @ (Y1.T @ (T.T @ (-ge)))
+    return extra
 
 
 def _initial(circuit, nodes, index, Cx, Cv, N, vel):
