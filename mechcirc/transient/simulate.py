@@ -936,22 +936,39 @@ def _modal_plan(A, B, h, Cx):
     if not (dev <= MODAL_CHECK_TOL):
         return (f"modal one-step map differs from the exponential's by {dev:.1e} "
                 f"(> {MODAL_CHECK_TOL:.0e}; eigenvector condition {cond:.1e})")
-    # Real columns: Re q_j for every kept mode, Im q_j for the complex ones.
     is_c = ~real[keep]
     real_shape = np.zeros(m, bool)
     rot = np.ones(m, complex)
     if Cx is not None and Cx.shape[0]:
-        phi = Cx @ Vk
-        rot = np.exp(-0.5j * np.angle((phi * phi).sum(axis=0)))
-        rot[~is_c] = 1.0
-        shape_norm = np.abs(phi).max(axis=0)
-        real_shape = is_c & (np.abs((phi * rot).imag).max(axis=0) <= REAL_SHAPE_TOL * shape_norm)
-        rot[~real_shape] = 1.0
+        rot, real_shape = _real_shapes(Cx @ Vk, is_c)
         Vk, g1, g2 = Vk * rot, g1 / rot, g2 / rot     # z = v q unchanged (q0 / rot)
+    late = is_c & real_shape
+    cre, cim, nx, T = _real_columns(Vk, is_c, late)
+    note = f"modal (eigenvector condition {cond:.1e}, one-step map checked to {dev:.1e}"
+    if late.any():
+        note += f"; {int(late.sum())} of {int(is_c.sum())} oscillating modes with real shapes"
+    return (m, Vinv_k, rot, mu, g1, g2, cre, cim, nx, T, note + ")", late)
+
+
+def _real_shapes(phi: np.ndarray, is_c: np.ndarray):
+    """(rotation, real) of the complex modes whose shapes ``phi`` (columns) are real
+    after a phase rotation (classical damping); rotation 1 for the others."""
+    rot = np.exp(-0.5j * np.angle((phi * phi).sum(axis=0)))
+    rot[~is_c] = 1.0
+    shape_norm = np.abs(phi).max(axis=0)
+    real_shape = is_c & (np.abs((phi * rot).imag).max(axis=0) <= REAL_SHAPE_TOL * shape_norm)
+    rot[~real_shape] = 1.0
+    return rot, real_shape
+
+
+def _real_columns(Vk: np.ndarray, is_c: np.ndarray, late: np.ndarray):
+    """Real columns of the modal signals: Re q_j of every kept mode (``cre``), Im q_j of
+    the complex ones (``cim``, −1 for real modes), the ``late`` ones last; the first
+    ``nx`` columns carry x.  Returns (cre, cim, nx, T) with z = T · columns."""
+    m, N = is_c.size, Vk.shape[0]
     cre = np.arange(m)
     cim = np.full(m, -1)
-    late = is_c & real_shape
-    early = is_c & ~real_shape
+    early = is_c & ~late
     cim[early] = m + np.arange(int(early.sum()))
     cim[late] = m + int(early.sum()) + np.arange(int(late.sum()))
     nx = m + int(early.sum())
@@ -959,10 +976,7 @@ def _modal_plan(A, B, h, Cx):
     T[:, cre[~is_c]] = Vk[:, ~is_c].real
     T[:, cre[is_c]] = 2 * Vk[:, is_c].real
     T[:, cim[is_c]] = -2 * Vk[:, is_c].imag
-    note = f"modal (eigenvector condition {cond:.1e}, one-step map checked to {dev:.1e}"
-    if late.any():
-        note += f"; {int(late.sum())} of {int(is_c.sum())} oscillating modes with real shapes"
-    return (m, Vinv_k, rot, mu, g1, g2, cre, cim, nx, T, note + ")", late)
+    return cre, cim, nx, T
 
 
 def _modal_deviation(A, B, h, lam, V, Vinv, Vk, cplx, g1, g2) -> float:
