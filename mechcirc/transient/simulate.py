@@ -1191,13 +1191,11 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes,
     if ss.Ev.any() and drive.kind not in ("rest", "impulse"):
         notes.append("some nodes carry neither mass nor damping: their velocities use the "
                      "drive's derivative estimated from the samples")
-    err_total = err
     return TransientResult(time=t, nodes=ss.nodes, x=X, v=V, elements=tuple(e.name for e in els),
-                           force=force,
-                           dv=dvm, drive_kind=ss.kind,
+                           force=force, dv=dvm, drive_kind=ss.kind,
                            drive=u_true if ss.kind is not None else None,
                            drive_force=drive_force, drive_velocity=drive_velocity,
-                           error=err_total, method=method, notes=notes, name=circuit.name,
+                           error=err, method=method, notes=notes, name=circuit.name,
                            drive_name=circuit.drive.name if circuit.drive is not None else None,
                            units=units_of(circuit.drive),
                            clearances={e.name: (e.n1, e.n2, e.backlash)
