@@ -33,13 +33,16 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import warnings
 from dataclasses import dataclass, field
+from typing import Literal
 
 import numpy as np
 
 from ..circuit import Circuit
 from ..errors import MechcircError
 from ..verdict import DISAGREES, judge, summarise
+from .model import backlash_elements
 from .simulate import transient
 
 __all__ = ["CrossCheck", "crosscheck", "matrix_pencil"]
@@ -104,7 +107,7 @@ def matrix_pencil(y: np.ndarray, dt: float, rel: float = 1e-9, max_order: int = 
     return s, amps
 
 
-def _variant(circuit: Circuit, kind: str) -> Circuit:
+def _variant(circuit: Circuit, kind: Literal["velocity", "force"]) -> Circuit:
     d = circuit.drive
     if d.kind == kind:
         new = d
@@ -183,36 +186,39 @@ def _ringing(circuit, kind, modes, others, out, progress):
         third = y.size // 3
         s, parts = _poles(y, dt), (_poles(y[:2 * third], dt), _poles(y[third:], dt))
         for r in group:
-            row = rows[id(r)]
-            expected = _pole(r)
-            near = min((abs(_pole(o) - expected) for o in others), default=math.inf)
-            if near < CANCEL * abs(expected):
-                judge(row, None, TOL_RINGING,
-                      f"an anti-resonance/resonance {near / abs(expected):.1e} away (relative)"
-                      " nearly cancels it at the drive: it hardly rings there")
-                continue
-            tol = max(TOL_RINGING, 10 * r.error)
-            if s.size == 0:
-                # the frequency domain has a mode at the port; the record shows no ringing
-                row.update(verdict=DISAGREES, tol=tol,
-                           why="no ringing at all in the impulse response")
-                continue
-            best = _nearest(s, expected, dt)
-            spread = max((abs(_nearest(p, expected, dt) - best) if p.size else math.inf)
-                         for p in parts) / abs(expected)
-            row["ringing_omega"] = float(best.imag)
-            row["decay"] = float(-best.real)
-            row["rel_error"] = float(abs(best - expected) / abs(expected))
-            sigma = r.zeta * r.omega
-            if sigma > 0:
-                row["decay_rel_error"] = float(abs(-best.real - sigma) / sigma)
-            if not spread <= MAX_SPREAD:
-                judge(row, None, tol, f"too weak in the record to be measured: its pole moves "
-                                      f"by {spread:.1e} (relative) between the whole record "
-                                      "and its first or last two thirds")
-                continue
-            judge(row, row["rel_error"], max(tol, 100 * spread))
+            _judge_mode(rows[id(r)], r, others, s, parts, dt)
     out.resonances.extend(rows[id(r)] for r in modes)
+
+
+def _judge_mode(row: dict, r, others, s: np.ndarray, parts: tuple, dt: float) -> None:
+    """Judge mode ``r`` by the poles ``s`` of the whole record and ``parts`` of its thirds."""
+    expected = _pole(r)
+    near = min((abs(_pole(o) - expected) for o in others), default=math.inf)
+    if near < CANCEL * abs(expected):
+        judge(row, None, TOL_RINGING,
+              f"an anti-resonance/resonance {near / abs(expected):.1e} away (relative)"
+              " nearly cancels it at the drive: it hardly rings there")
+        return
+    tol = max(TOL_RINGING, 10 * r.error)
+    if s.size == 0:
+        # the frequency domain has a mode at the port; the record shows no ringing
+        row.update(verdict=DISAGREES, tol=tol, why="no ringing at all in the impulse response")
+        return
+    best = _nearest(s, expected, dt)
+    spread = max((abs(_nearest(p, expected, dt) - best) if p.size else math.inf)
+                 for p in parts) / abs(expected)
+    row["ringing_omega"] = float(best.imag)
+    row["decay"] = float(-best.real)
+    rel = row["rel_error"] = float(abs(best - expected) / abs(expected))
+    sigma = r.zeta * r.omega
+    if sigma > 0:
+        row["decay_rel_error"] = float(abs(-best.real - sigma) / sigma)
+    if not spread <= MAX_SPREAD:
+        judge(row, None, tol, f"too weak in the record to be measured: its pole moves "
+                              f"by {spread:.1e} (relative) between the whole record "
+                              "and its first or last two thirds")
+        return
+    judge(row, rel, max(tol, 100 * spread))
 
 
 def _output_rounding(circuit, w, steps, amp):
@@ -270,14 +276,10 @@ def crosscheck(circuit: Circuit, omega_max: float | None = None,
     if circuit.drive is None:
         raise MechcircError("crosscheck needs a drive line in the netlist (the port whose "
                             "K(ω) is checked); 'mechcirc transient' runs without one")
-    from .model import backlash_elements
-
     out = CrossCheck(circuit.name, circuit.drive.kind)
     if backlash_elements(circuit):
         out.notes.append("clearances (backlash=) taken as closed in both domains: the "
                          "frequency domain is linearised with contact closed")
-    import warnings
-
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         res = circuit.resonances(None)
@@ -299,10 +301,18 @@ def crosscheck(circuit: Circuit, omega_max: float | None = None,
         if modes:
             _ringing(circuit, kind, modes, [r for r in res if r.kind != kind], out, progress)
     # (b) steady state at several ω, one near the first resonance.
-    d = circuit.drive
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")         # already reported above
         sweep = circuit.sweep(np.array(omegas))
+    _steady(circuit, omegas, sweep, out, progress)
+    return out
+
+
+def _steady(circuit: Circuit, omegas: list, sweep, out: CrossCheck, progress) -> None:
+    """Judge the periodic response at each of ``omegas`` against ``sweep`` into
+    ``out.steady_state``: amplitude of the drive's output fitted over three periods."""
+    d = circuit.drive
+    assert d is not None                # (checked by crosscheck)
     expected = np.abs(sweep.Q0 if d.kind == "velocity" else sweep.v0)
     for w, exp, err in zip(omegas, expected, sweep.error):
         row = {"omega": float(w), "expected": float(exp), "measured": None,
@@ -324,6 +334,7 @@ def crosscheck(circuit: Circuit, omega_max: float | None = None,
             if progress is not None:
                 progress.update()
         y = run.drive_force if d.kind == "velocity" else run.drive_velocity
+        assert y is not None            # a driven circuit's run has the drive's output
         t = run.time
         # the time domain's own rounding of y (heavily weighted small states)
         tol = max(tol, _output_rounding(circuit, w, t.size - 1, d.amplitude) / exp)
@@ -331,7 +342,6 @@ def crosscheck(circuit: Circuit, omega_max: float | None = None,
         c = np.linalg.lstsq(basis, y, rcond=None)[0]
         measured = math.hypot(c[0], c[1])
         row["measured"] = float(measured)
-        row["rel_error"] = float(abs(measured - exp) / exp)
-        row["periodic_deviation"] = float(np.abs(y - basis @ c).max() / max(measured, 1e-300))
-        judge(row, max(row["rel_error"], row["periodic_deviation"]), tol)
-    return out
+        rel = row["rel_error"] = float(abs(measured - exp) / exp)
+        dev = row["periodic_deviation"] = float(np.abs(y - basis @ c).max() / max(measured, 1e-300))
+        judge(row, max(rel, dev), tol)

@@ -199,6 +199,44 @@ _D = np.array([-12715105075 / 11282082432, 0.0, 87487479700 / 32700410799,
                -1453857185 / 822651844, 69997945 / 29380423])
 
 
+@_jit_inline
+def kink_theta(t, hh, z, y5, xi, xv, dx, vi, vv, dv, prm, t0, dt, u):
+    """Fraction of the step t → t + hh (states z → y5) at which the first clearance
+    element changes branch (secant on its switching function), or 2.0 if none does."""
+    theta = 2.0
+    for k in range(prm.shape[0]):
+        c0, ga0, gs0, gm0 = switch_state(t, z, xi, xv, dx, vi, vv, dv, prm, t0, dt, u, k)
+        c1, ga1, gs1, gm1 = switch_state(t + hh, y5, xi, xv, dx, vi, vv, dv, prm, t0, dt, u, k)
+        if c0 != c1:
+            if (c0 == 0) != (c1 == 0):
+                g0, g1 = ga0, ga1
+            elif abs(c0) == 3 or abs(c1) == 3:
+                g0, g1 = gs0, gs1
+            else:
+                g0, g1 = gm0, gm1
+            th = g0 / (g0 - g1) if g0 != g1 else 0.5
+            if th < 0.0 or th > 1.0 or math.isnan(th):
+                th = 0.5
+            if th < theta:
+                theta = th
+    return theta
+
+
+@_jit_inline
+def dense_output(z, y5, K, hh, th, coefD, row):
+    """Dormand-Prince's continuous extension at the fraction ``th`` of the step, into ``row``."""
+    s1 = 1.0 - th
+    for i in range(z.shape[0]):
+        ydiff = y5[i] - z[i]
+        bspl = hh * K[0, i] - ydiff
+        r4 = ydiff - hh * K[6, i] - bspl
+        r5 = 0.0
+        for r in range(7):
+            r5 += coefD[r] * K[r, i]
+        r5 *= hh
+        row[i] = z[i] + th * (ydiff + s1 * (bspl + th * (r4 + s1 * r5)))
+
+
 @_jit
 def dopri_run(z, t0, dt, nout, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, u, rtol, atol,
               hmax, coefA, coefB5, coefB4, coefC, coefD, dense, out, kink_tol=0.0):
@@ -256,24 +294,7 @@ def dopri_run(z, t0, dt, nout, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, u
         # shorten the step to end just past the switch (secant on its switching
         # function), so the law is smooth inside every step.
         if err <= 1.0 and hh > kink_tol:
-            theta = 2.0
-            for k in range(prm.shape[0]):
-                c0, ga0, gs0, gm0 = switch_state(t, z, xi, xv, dx, vi, vv, dv, prm, t0, dt,
-                                                 u, k)
-                c1, ga1, gs1, gm1 = switch_state(t + hh, y5, xi, xv, dx, vi, vv, dv, prm, t0,
-                                                 dt, u, k)
-                if c0 != c1:
-                    if (c0 == 0) != (c1 == 0):
-                        g0, g1 = ga0, ga1
-                    elif abs(c0) == 3 or abs(c1) == 3:
-                        g0, g1 = gs0, gs1
-                    else:
-                        g0, g1 = gm0, gm1
-                    th = g0 / (g0 - g1) if g0 != g1 else 0.5
-                    if th < 0.0 or th > 1.0 or math.isnan(th):
-                        th = 0.5
-                    if th < theta:
-                        theta = th
+            theta = kink_theta(t, hh, z, y5, xi, xv, dx, vi, vv, dv, prm, t0, dt, u)
             if theta < 2.0:
                 h_new = hh * min(1.0, theta * 1.001 + 1e-3)
                 if h_new < 0.999 * hh:
@@ -284,19 +305,8 @@ def dopri_run(z, t0, dt, nout, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, u
             t_new = stop if last else t + hh
             # outputs inside (t, t_new]: continuous extension
             while k_out < nout and t0 + k_out * dt <= t_new + 1e-12 * abs(t_new):
-                th = (t0 + k_out * dt - t) / hh
-                if th > 1.0:
-                    th = 1.0
-                s1 = 1.0 - th
-                for i in range(N):
-                    ydiff = y5[i] - z[i]
-                    bspl = hh * K[0, i] - ydiff
-                    r4 = ydiff - hh * K[6, i] - bspl
-                    r5 = 0.0
-                    for r in range(7):
-                        r5 += coefD[r] * K[r, i]
-                    r5 *= hh
-                    out[k_out, i] = z[i] + th * (ydiff + s1 * (bspl + th * (r4 + s1 * r5)))
+                dense_output(z, y5, K, hh, min((t0 + k_out * dt - t) / hh, 1.0), coefD,
+                             out[k_out])
                 k_out += 1
             t = t_new
             for i in range(N):

@@ -22,6 +22,7 @@ and output maps x = Cx z + Dx u, v = Cv z + Dv u + Ev u̇.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -111,51 +112,13 @@ def state_space(circuit: Circuit, *, linearise: bool = False) -> StateSpace:
     reading); otherwise the clearance springs and their companion dampers are
     left out of A and their forces enter through ``extra``.
     """
-    from ..nodal import assemble
-
-    clear = [] if linearise else backlash_elements(circuit)
-    drop = {e.name for e, _ in clear} | {c.name for _, c in clear if c is not None}
-    if drop:
-        import dataclasses
-
-        kept = tuple(e for e in circuit.elements if e.name not in drop)
-        work = dataclasses.replace(circuit, elements=kept) if kept else None
-    else:
-        work = circuit
-    if work is None:
-        raise MechcircError("the circuit has only clearance elements; add a mass")
-    count = len({nd for e in work.elements for nd in (e.n1, e.n2)}) + len(work.levers)
-    if count > MAX_NODES:
-        raise MechcircError(f"the network has {count} nodes and levers; transients are limited "
-                            f"to {MAX_NODES} (dense matrices); reduce it first "
-                            "('mechcirc reduce')")
-    system = assemble(work, whole=True)
-    nodes = list(system.nodes)
-    for e, _ in clear:                      # clearance-only nodes still need a coordinate
-        for nd in (e.n1, e.n2):
-            if nd != "0" and nd not in nodes:
-                nodes.append(nd)
+    clear, drop, work = _working(circuit, linearise)
+    nodes, index, M, D, K, G = _node_matrices(work, clear)
     n = len(nodes)
-    nn = len(system.nodes)
-    M = np.zeros((n, n))
-    D = np.zeros((n, n))
-    K = np.zeros((n, n))
-    # dense first, then sliced: slicing a scipy sparse matrix costs more than
-    # the whole (small) dense copy
-    M[:nn, :nn] = system.M.toarray()[:nn, :nn]
-    D[:nn, :nn] = system.D.toarray()[:nn, :nn]
-    K[:nn, :nn] = system.Ks.toarray()[:nn, :nn]
-    G = np.zeros((len(system.levers), n))
-    if system.levers:
-        G[:, :nn] = system.C.toarray()[nn:, :nn]
-    index = {nd: i for i, nd in enumerate(nodes)}
     d = circuit.drive
     g = np.zeros(n)
     if d is not None:
-        if d.n1 in index:
-            g[index[d.n1]] += 1.0
-        if d.n2 in index:
-            g[index[d.n2]] -= 1.0
+        g = _incidence(index, d.n1, d.n2, n)
         if not g.any():
             raise TopologyError(f"drive {d.name!r} connects nodes no element uses")
     kind = d.kind if d is not None else None
@@ -163,20 +126,7 @@ def state_space(circuit: Circuit, *, linearise: bool = False) -> StateSpace:
     Cons = np.vstack([G, g[None, :]]) if vel else G
     T = _null(Cons, n)
     nq = T.shape[1]
-    if vel:
-        # Minimum-kinetic-energy particular solution: [M Cᵀ; C 0][p; μ] = [0; e].
-        nc = Cons.shape[0]
-        KKT = np.block([[M, Cons.T], [Cons, np.zeros((nc, nc))]])
-        rhs = np.zeros(n + nc)
-        rhs[-1] = 1.0
-        sol = la.lstsq(KKT, rhs)[0]
-        p = sol[:n]
-        if np.abs(Cons @ p - rhs[n:]).max() > 1e-8 * max(1.0, np.abs(p).max()):
-            raise TopologyError(f"the velocity drive {d.name!r} contradicts the levers "
-                                "(its nodes' relative motion is fixed by them)")
-        # remove any part of p that T could carry and that has mass (keeps TᵀMp = 0)
-    else:
-        p = np.zeros(n)
+    p = _particular(M, Cons, d.name) if vel and d is not None else np.zeros(n)
     Mq, Dq, Kq = (T.T @ X @ T for X in (M, D, K))
     # Generalised force per unit drive value u and per unit drive displacement X.
     if kind == "force":
@@ -185,13 +135,107 @@ def state_space(circuit: Circuit, *, linearise: bool = False) -> StateSpace:
         Fu, Fx = -(T.T @ D @ p), -(T.T @ K @ p)
     else:
         Fu, Fx = np.zeros(nq), np.zeros(nq)
-    I = np.eye(nq)
-    B1, B0 = _split(Mq, I)
+    B1, B0 = _split(Mq, np.eye(nq))
     Bd, Bs = _split(Dq, B0)
     n1, n0, ns = B1.shape[1], Bd.shape[1], Bs.shape[1]
-    # Static condensation of the coordinates with neither mass nor damping.
     Y = np.hstack([B1, Bd])
-    if ns:
+    Ky, Fyu, Fyx, S_y, S_u, S_x = _condense(Kq, Fu, Fx, Y, Bs)
+    My = Y.T @ Mq @ Y
+    Dy = Y.T @ Dq @ Y
+    A, Bv, M11_inv = _dynamics(My, Dy, Ky, Fyu, Fyx, n1, n0, vel)
+    N = A.shape[0]
+    # Outputs.  q = B1 y1 + Bd y0 + Bs s, with z = [y1, v1, y0, (X)].
+    Qz = np.zeros((nq, N))
+    Qz[:, :n1] = B1 + Bs @ S_y[:, :n1]
+    Qz[:, 2 * n1:2 * n1 + n0] = Bd + Bs @ S_y[:, n1:]
+    if vel:
+        Qz[:, N - 1] += Bs @ S_x
+    Cx = T @ Qz
+    Dx = T @ (Bs @ S_u)
+    if vel:
+        Cx[:, N - 1] += p
+    # v = d/dt x = Cx ż + Dx u̇ = Cx A z + Cx B u + Dx u̇
+    Cv = Cx @ A
+    Dv = Cx @ Bv
+    # Q from the residual r = M a + D v + K x = Gᵀ μ + g Q (consistent, exact).
+    h = la.pinv(np.hstack([G.T, g[:, None]]))[-1] if kind is not None else None
+    massive = n0 == 0 and ns == 0
+    extra = _clearance_map(clear, index, N, M11_inv, Y[:, :n1], T, massive) if clear else None
+    z0, notes = _initial(circuit, nodes, index, Cx, Cv, N, vel)
+    return StateSpace(tuple(nodes), tuple(work.elements), kind, A, Bv, Cx, Dx, Cv, Dv, Dx,
+                      M, D, K, g, h, massive, (z0, tuple(notes)), tuple(sorted(drop)),
+                      extra)
+
+
+def _working(circuit: Circuit, linearise: bool) -> tuple[list, set, Circuit]:
+    """(clearance pairs, names dropped, the circuit without them), size-checked."""
+    clear = [] if linearise else backlash_elements(circuit)
+    drop = {e.name for e, _ in clear} | {c.name for _, c in clear if c is not None}
+    kept = tuple(e for e in circuit.elements if e.name not in drop)
+    if drop and not kept:
+        raise MechcircError("the circuit has only clearance elements; add a mass")
+    work = dataclasses.replace(circuit, elements=kept) if drop else circuit
+    count = len({nd for e in work.elements for nd in (e.n1, e.n2)}) + len(work.levers)
+    if count > MAX_NODES:
+        raise MechcircError(f"the network has {count} nodes and levers; transients are limited "
+                            f"to {MAX_NODES} (dense matrices); reduce it first "
+                            "('mechcirc reduce')")
+    return clear, drop, work
+
+
+def _node_matrices(work: Circuit, clear: list):
+    """Node list and index, dense M, D, Kₛ and lever rows G (clearance-only nodes appended)."""
+    from ..nodal import assemble
+
+    system = assemble(work, whole=True)
+    nodes = list(system.nodes)
+    for e, _ in clear:                      # clearance-only nodes still need a coordinate
+        for nd in (e.n1, e.n2):
+            if nd != "0" and nd not in nodes:
+                nodes.append(nd)
+    n = len(nodes)
+    nn = len(system.nodes)
+    # dense first, then sliced: slicing a scipy sparse matrix costs more than
+    # the whole (small) dense copy
+    M, D, K = (np.zeros((n, n)) for _ in range(3))
+    for X, S in ((M, system.M), (D, system.D), (K, system.Ks)):
+        X[:nn, :nn] = S.toarray()[:nn, :nn]
+    G = np.zeros((len(system.levers), n))
+    if system.levers:
+        G[:, :nn] = system.C.toarray()[nn:, :nn]
+    index = {nd: i for i, nd in enumerate(nodes)}
+    return nodes, index, M, D, K, G
+
+
+def _incidence(index: dict, n1: str, n2: str, n: int) -> np.ndarray:
+    """e_n1 − e_n2 over the coordinates ``index`` (nodes not in it add nothing)."""
+    g = np.zeros(n)
+    if n1 in index:
+        g[index[n1]] += 1.0
+    if n2 in index:
+        g[index[n2]] -= 1.0
+    return g
+
+
+def _particular(M: np.ndarray, Cons: np.ndarray, name: str) -> np.ndarray:
+    """Minimum-kinetic-energy p with Cons p = e_last: [M Cᵀ; C 0][p; μ] = [0; e]."""
+    n, nc = M.shape[0], Cons.shape[0]
+    KKT = np.block([[M, Cons.T], [Cons, np.zeros((nc, nc))]])
+    rhs = np.zeros(n + nc)
+    rhs[-1] = 1.0
+    p = la.lstsq(KKT, rhs)[0][:n]
+    if np.abs(Cons @ p - rhs[n:]).max() > 1e-8 * max(1.0, np.abs(p).max()):
+        raise TopologyError(f"the velocity drive {name!r} contradicts the levers "
+                            "(its nodes' relative motion is fixed by them)")
+    return p
+
+
+def _condense(Kq, Fu, Fx, Y, Bs):
+    """Static condensation of the coordinates ``Bs`` (neither mass nor damping).
+
+    Returns Ky, Fyu, Fyx on the kept coordinates ``Y`` and s = S_y y + S_u u + S_x X.
+    """
+    if Bs.shape[1]:
         Kss = Bs.T @ Kq @ Bs
         try:
             Kss_inv = la.inv(Kss)
@@ -200,18 +244,19 @@ def state_space(circuit: Circuit, *, linearise: bool = False) -> StateSpace:
         except la.LinAlgError:
             raise TopologyError("some nodes carry neither mass nor damping and are not held "
                                 "by springs (their motion is undetermined)") from None
-        S_y = -Kss_inv @ (Bs.T @ Kq @ Y)          # s = S_y y + S_u u + S_x X
+        S_y = -Kss_inv @ (Bs.T @ Kq @ Y)
         S_u = Kss_inv @ (Bs.T @ Fu)
         S_x = Kss_inv @ (Bs.T @ Fx)
     else:
-        S_y = np.zeros((0, n1 + n0))
+        S_y = np.zeros((0, Y.shape[1]))
         S_u = S_x = np.zeros(0)
-    Ky = Y.T @ Kq @ Y + (Y.T @ Kq @ Bs) @ S_y
-    Fyu = Y.T @ Fu - (Y.T @ Kq @ Bs) @ S_u
-    Fyx = Y.T @ Fx - (Y.T @ Kq @ Bs) @ S_x
-    My = Y.T @ Mq @ Y
-    Dy = Y.T @ Dq @ Y
-    # z = [y1, v1, y0, (X)]
+    KyS = Y.T @ Kq @ Bs
+    return (Y.T @ Kq @ Y + KyS @ S_y, Y.T @ Fu - KyS @ S_u, Y.T @ Fx - KyS @ S_x,
+            S_y, S_u, S_x)
+
+
+def _dynamics(My, Dy, Ky, Fyu, Fyx, n1: int, n0: int, vel: bool):
+    """A, B over z = [y1, v1, y0, (X)] and M₁₁⁻¹ (y1 massive, y0 damped only)."""
     N = 2 * n1 + n0 + (1 if vel else 0)
     A = np.zeros((N, N))
     Bv = np.zeros(N)
@@ -231,7 +276,7 @@ def state_space(circuit: Circuit, *, linearise: bool = False) -> StateSpace:
     A[i_y1, i_v1] = np.eye(n1)
     A[i_y0] = dy0_z
     Bv[i_y0] = dy0_u
-    extra = None
+    M11_inv = np.zeros((0, 0))
     if n1:
         M11_inv = la.inv(My[:n1, :n1])
         acc_z = np.zeros((n1, N))
@@ -247,49 +292,22 @@ def state_space(circuit: Circuit, *, linearise: bool = False) -> StateSpace:
         Bv[i_v1] = M11_inv @ acc_u
     if vel:
         Bv[iX] = 1.0
-    # Outputs.  q = B1 y1 + Bd y0 + Bs s.
-    Qz = np.zeros((nq, N))
-    Qz[:, i_y1] = B1
-    Qz[:, i_y0] = Bd
-    Qu = np.zeros(nq)
-    if ns:
-        Qz[:, i_y1] += Bs @ S_y[:, :n1]
-        Qz[:, i_y0] += Bs @ S_y[:, n1:]
-        if vel:
-            Qz[:, iX] += Bs @ S_x
-        Qu = Bs @ S_u
-    Cx = T @ Qz
-    Dx = T @ Qu
-    if vel:
-        Cx[:, iX] += p
-    # v = d/dt x = Cx ż + Dx u̇ = Cx A z + Cx B u + Dx u̇
-    Cv = Cx @ A
-    Dv = Cx @ Bv
-    Ev = Dx
-    h = None
-    if kind is not None:
-        # Q from the residual r = M a + D v + K x = Gᵀ μ + g Q (consistent, exact).
-        W = np.hstack([G.T, g[:, None]])
-        h = la.pinv(W)[-1]
-    # Clearance elements: their force f_e (n1 → n2) acts as −g_e f_e on the left side.
-    massive = n0 == 0 and ns == 0
-    if clear:
-        if not massive:
-            raise MechcircError(
-                "clearances (backlash=) need mass at every node of the network "
-                "(this one has massless nodes); add small masses or remove the clearance")
-        extra = np.zeros((N, len(clear)))
-        for j, (e, _) in enumerate(clear):
-            ge = np.zeros(n)
-            if e.n1 in index:
-                ge[index[e.n1]] += 1.0
-            if e.n2 in index:
-                ge[index[e.n2]] -= 1.0
-            extra[i_v1, j] = M11_inv @ (Y[:, :n1].T @ (T.T @ (-ge)))
-    z0, notes = _initial(circuit, nodes, index, Cx, Cv, N, vel)
-    return StateSpace(tuple(nodes), tuple(work.elements), kind, A, Bv, Cx, Dx, Cv, Dv, Ev,
-                      M, D, K, g, h, massive, (z0, tuple(notes)), tuple(sorted(drop)),
-                      extra)
+    return A, Bv, M11_inv
+
+
+def _clearance_map(clear: list, index: dict, N: int, M11_inv, Y1, T, massive: bool):
+    """(N, E): state rate per unit force of each clearance element (its force f_e,
+    n1 → n2, acts as −g_e f_e on the left side); every coordinate needs mass."""
+    if not massive:
+        raise MechcircError(
+            "clearances (backlash=) need mass at every node of the network "
+            "(this one has massless nodes); add small masses or remove the clearance")
+    n1 = Y1.shape[1]
+    extra = np.zeros((N, len(clear)))
+    for j, (e, _) in enumerate(clear):
+        ge = _incidence(index, e.n1, e.n2, T.shape[0])
+        extra[n1:2 * n1, j] = M11_inv @ (Y1.T @ (T.T @ (-ge)))
+    return extra
 
 
 def _initial(circuit, nodes, index, Cx, Cv, N, vel):

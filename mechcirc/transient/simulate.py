@@ -30,14 +30,17 @@ import dataclasses
 import math
 import warnings
 from dataclasses import dataclass, field
-from typing import Callable
+from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
 import scipy.linalg as la
 
 from ..circuit import Circuit, units_of
 from ..errors import MechcircError
-from .model import StateSpace, backlash_elements, state_space
+from .model import StateSpace, _incidence, backlash_elements, state_space
+
+if TYPE_CHECKING:  # pragma: no cover - annotations only
+    from ..motion_laws import Motion
 
 __all__ = ["Waveform", "TransientResult", "transient", "parse_drive", "MAX_SAMPLES"]
 
@@ -74,7 +77,7 @@ class Waveform:
     times: tuple = ()
     values: tuple = ()
     func: Callable | None = field(default=None, compare=False)
-    motion: object = None
+    motion: Motion | None = None
 
     def sample(self, t: np.ndarray, amplitude: float) -> np.ndarray:
         if self.kind in ("rest", "impulse"):
@@ -86,11 +89,14 @@ class Waveform:
         if self.kind == "samples":
             return np.interp(t, np.asarray(self.times), np.asarray(self.values))
         if self.kind == "motion":
-            return amplitude * self.omega * self.motion.evaluate(self.omega * t)[1]
+            return amplitude * self.omega * self._motion().evaluate(self.omega * t)[1]
         if self.kind == "callable":
-            out = np.asarray(self.func(t), dtype=float)
+            func = self.func
+            if func is None:
+                raise ValueError("a 'callable' waveform needs func")
+            out = np.asarray(func(t), dtype=np.float64)
             if out.shape != t.shape:
-                out = np.array([float(self.func(float(s))) for s in t])
+                out = np.array([float(func(float(s))) for s in t])
             if not np.all(np.isfinite(out)):
                 raise MechcircError("the drive function returned a non-finite value")
             return out
@@ -98,7 +104,12 @@ class Waveform:
 
     def rate(self, t: np.ndarray, amplitude: float) -> np.ndarray:
         """du/dt of a ``"motion"`` waveform: amplitude · Ω² d²x/dθ² at θ = Ωt."""
-        return amplitude * self.omega ** 2 * self.motion.evaluate(self.omega * t)[2]
+        return amplitude * self.omega ** 2 * self._motion().evaluate(self.omega * t)[2]
+
+    def _motion(self) -> Motion:
+        if self.motion is None:
+            raise ValueError("a 'motion' waveform needs motion")
+        return self.motion
 
     @property
     def label(self) -> str:
@@ -148,7 +159,8 @@ def read_csv_drive(path: str) -> Waveform:
     from ..sources import read_source
 
     text = read_source(path, "a CSV file of drive samples (time,value)")
-    times, values = [], []
+    times: list[float] = []
+    values: list[float] = []
     for lineno, row in enumerate(csv.reader(text.splitlines()), start=1):
         if not row or not "".join(row).strip() or row[0].lstrip().startswith("#"):
             continue
@@ -196,7 +208,7 @@ class TransientResult:
     time: np.ndarray
     nodes: tuple
     x: np.ndarray
-    v: np.ndarray
+    v: np.ndarray | None
     elements: tuple
     force: np.ndarray
     dv: np.ndarray
@@ -214,7 +226,7 @@ class TransientResult:
     separations: list = field(default_factory=list)
     waveform: str | None = None
 
-    def node(self, name: str) -> tuple[np.ndarray, np.ndarray]:
+    def node(self, name: str) -> tuple[np.ndarray, np.ndarray | None]:
         """(x, v) of node ``name``."""
         i = self.nodes.index(name)
         return self.x[:, i], (self.v[:, i] if self.v is not None else None)
@@ -353,22 +365,72 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
         Time, node displacements and velocities, element forces and the drive's
         output on the grid.
     """
+    drive = _waveform(circuit, drive, rpm)
+    d = circuit.drive
+    amp = (d.amplitude if d is not None else 0.0) if amplitude is None else float(amplitude)
+    t = _grid(t_end, dt, drive)
+    h = t[1] - t[0]
+    ss = _model(circuit, linearise)
+    notes = list(ss.initial[1])
+    u = drive.sample(t, amp)
+    ss, z0, u_in = _start(ss, drive, amp, u, steady, circuit, linearise, notes)
+    has_clear = bool(backlash_elements(circuit)) and not linearise
+    T = nx = drive_y = x_ready = v_ready = x_bound = None
+    if has_clear:
+        if not RTOL_RANGE[0] <= rtol <= RTOL_RANGE[1]:
+            raise MechcircError(f"--rtol must be between {RTOL_RANGE[0]:g} and "
+                                f"{RTOL_RANGE[1]:g}, got {rtol:g}")
+        Z, method, err, more = _nonlinear(ss, circuit, z0, t, u_in, rtol,
+                                          drive.rate(t, amp) if drive.kind == "motion" else None)
+        notes.extend(more)
+    else:
+        Z, T, nx, drive_y, x_ready, v_ready, x_bound, err, path = _linear(
+            ss, z0, u_in, h, elements, velocities)
+        method = f"exact (matrix exponential, first-order hold of the drive; {path.split(' (')[0]})"
+        notes.append(f"linear propagation: {path}")
+    interp = _interpolation(u, drive, has_clear and drive.kind == "motion", notes)
+    out = _outputs(ss, circuit, t, Z, u, u_in, h, drive, method, err, interp, notes,
+                   elements, T, velocities, nx, drive_y, x_ready, v_ready)
+    if not has_clear:
+        out.error = _linear_error(out, ss, err, x_bound)
+    # (linear: the error is finite only if x is; NaN and ±inf reach max|x| or its bound)
+    _require_finite(out, x_in_error=not has_clear)
+    if has_clear:
+        out.separations = _separations(out, circuit, drive)
+    return out
+
+
+def _linear_error(out: TransientResult, ss: StateSpace, err: float,
+                  x_bound: float | None) -> float:
+    """Error of an exact (linear) run: ``err`` plus rounding, which adds up over
+    the steps: ROUNDING_PER_STEP × max|x| per step (against closed forms: 3e-15 …
+    1.5e-12 relative after 2e3 … 1e5 steps, 4 … 150× below this).  ``x_bound``
+    bounds max|x| (None: look at x)."""
+    with np.errstate(all="ignore"):
+        if x_bound is None or np.any(ss.Dx):  # (the drive's direct term changes x)
+            # max |x| as max(max x, −min x): the same number without an |x|
+            # temporary the size of x (1e7 values for 100 nodes × 1e5 steps).
+            x_bound = max(float(out.x.max()), -float(out.x.min()))
+        return err + ROUNDING_PER_STEP * (out.time.size - 1) * x_bound
+
+
+def _waveform(circuit: Circuit, drive, rpm) -> Waveform:
+    """``drive`` (Waveform, text, callable or None, or the motion at ``rpm``) as a Waveform."""
     drive = _motion_drive(circuit, drive, rpm)
     if callable(drive) and not isinstance(drive, Waveform):
         drive = Waveform("callable", func=drive)
     elif not isinstance(drive, Waveform):
         drive = parse_drive(drive)
-    d = circuit.drive
-    notes = []
-    if d is None and drive.kind != "rest":
+    if circuit.drive is None and drive.kind != "rest":
         raise MechcircError(f"the netlist has no drive line, so --drive {drive.kind} has "
                             "nothing to act on (add 'drive NAME N1 N2 force=F0')")
-    amp = (d.amplitude if d is not None else 0.0) if amplitude is None else float(amplitude)
-    t = _grid(t_end, dt, drive)
-    h = t[1] - t[0]
-    ss = _model(circuit, linearise)
-    notes.extend(ss.initial[1])
-    u = drive.sample(t, amp)
+    return drive
+
+
+def _start(ss: StateSpace, drive: Waveform, amp: float, u, steady: bool, circuit,
+           linearise: bool, notes: list):
+    """(model, z(0), drive samples fed to it): the impulse's jump, the periodic start,
+    and a harmonic drive as two more states; what this implies is added to ``notes``."""
     z0 = ss.initial[0].copy()
     if drive.kind == "impulse":
         # u = amp·δ(t) in ż = A z + B u: the state jumps by B·amp.  A force impulse
@@ -386,50 +448,8 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
         # Exact: the sinusoid is generated by two more states (an undamped
         # oscillator), so no interpolation of the drive is needed at all.
         ss, z0 = _with_oscillator(ss, z0, drive.omega, amp)
-        u_in = np.zeros_like(u)
-    else:
-        u_in = u
-    has_clear = bool(backlash_elements(circuit)) and not linearise
-    interp = _interpolation_error(u, drive)
-    hermite = has_clear and drive.kind == "motion"
-    if hermite:     # cubic Hermite: h⁴/384·max|u⁗|, from the fourth differences
-        interp = float(np.abs(np.diff(u, 4)).max() / 384.0) if u.size > 4 else 0.0
-    T = nx = drive_y = x_ready = v_ready = x_bound = None
-    if has_clear:
-        if not RTOL_RANGE[0] <= rtol <= RTOL_RANGE[1]:
-            raise MechcircError(f"--rtol must be between {RTOL_RANGE[0]:g} and "
-                                f"{RTOL_RANGE[1]:g}, got {rtol:g}")
-        Z, method, err, more = _nonlinear(ss, circuit, z0, t, u_in, rtol,
-                                          drive.rate(t, amp) if drive.kind == "motion" else None)
-        notes.extend(more)
-    else:
-        Z, T, nx, drive_y, x_ready, v_ready, x_bound, err, path = _linear(
-            ss, z0, u_in, h, elements, velocities)
-        method = f"exact (matrix exponential, first-order hold of the drive; {path.split(' (')[0]})"
-        notes.append(f"linear propagation: {path}")
-    if interp > 1e-13 * float(np.abs(u).max()):      # not rounding of an exact ramp
-        notes.append(f"drive interpolated by cubic Hermite between samples (exact values and "
-                     f"rates of the motion): its error is at most {interp:.3g} "
-                     "(h⁴/384·max|u⁗|, from the samples' fourth differences)" if hermite else
-                     f"drive interpolated linearly between samples: its error is at most "
-                     f"{interp:.3g} (h²/8·max|ü|, from the samples' second differences)")
-    out = _outputs(ss, circuit, t, Z, u, u_in, h, drive, method, err, interp, notes,
-                   elements, T, velocities, nx, drive_y, x_ready, v_ready)
-    if not has_clear:
-        # exact up to rounding, which adds up over the steps: ROUNDING_PER_STEP × max|x|
-        # per step (against closed forms: 3e-15 … 1.5e-12 relative after 2e3 … 1e5 steps,
-        # 4 … 150× below this)
-        with np.errstate(all="ignore"):
-            if x_bound is None or np.any(ss.Dx):  # (the drive's direct term changes x)
-                # max |x| as max(max x, −min x): the same number without an |x|
-                # temporary the size of x (1e7 values for 100 nodes × 1e5 steps).
-                x_bound = max(float(out.x.max()), -float(out.x.min()))
-            out.error = err + ROUNDING_PER_STEP * (t.size - 1) * x_bound
-    # (linear: the error is finite only if x is; NaN and ±inf reach max|x| or its bound)
-    _require_finite(out, x_in_error=not has_clear)
-    if has_clear:
-        out.separations = _separations(out, circuit, drive)
-    return out
+        return ss, z0, np.zeros_like(u)
+    return ss, z0, u
 
 
 def _linear(ss: StateSpace, z0, u_in, h, elements, velocities):
@@ -470,18 +490,27 @@ def _separations(out: TransientResult, circuit, drive):
 
     found = []
     index = {n: i for i, n in enumerate(out.nodes)}
+    v = out.v
+    if v is None:                   # (a run with clearances always forms v)
+        raise ValueError("the separations need the node velocities")
     for e, comp in backlash_elements(circuit):
-        rel = [np.zeros(out.time.size), np.zeros(out.time.size)]
-        for node, sign in ((e.n1, 1.0), (e.n2, -1.0)):
-            if node in index:
-                rel[0] = rel[0] + sign * out.x[:, index[node]]
-                rel[1] = rel[1] + sign * out.v[:, index[node]]
-        found += separations(out.time, rel[0], rel[1], *_law_params(e, comp), e.name,
+        found += separations(out.time, _across(out.x, index, e), _across(v, index, e),
+                             *_law_params(e, comp), e.name,
                              drive.omega if drive.kind == "motion" else None)
     return sorted(found, key=lambda s: s.t_open)
 
 
-def _law_params(spring, comp):
+def _across(Y, index: dict, e) -> np.ndarray:
+    """Y(n1) − Y(n2) across element ``e`` at every sample (a node not in ``index``: 0)."""
+    out = np.zeros(Y.shape[0])
+    if e.n1 in index:
+        out = out + Y[:, index[e.n1]]
+    if e.n2 in index:
+        out = out - Y[:, index[e.n2]]
+    return out
+
+
+def _law_params(spring, comp) -> tuple[float, float, float]:
     """(c, d, B) of a clearance spring and its companion damper."""
     d = comp.value * comp.eta if comp is not None else spring.damping * spring.eta
     return spring.value * spring.eta, d, spring.backlash
@@ -579,7 +608,7 @@ def _model(circuit: Circuit, linearise: bool) -> StateSpace:
     return ss
 
 
-def _drive_map(ss: StateSpace):
+def _drive_map(ss: StateSpace) -> tuple[np.ndarray, Any, Any] | None:
     """(w, Du, Dud): the drive's output (velocity of a force drive, force of a
     velocity drive) is w·z + Du·u + Dud·u̇ when the network is linear; None
     without a drive."""
@@ -623,10 +652,25 @@ def _with_oscillator(ss: StateSpace, z0, omega: float, amp: float):
     return new, np.concatenate([z0, [0.0, 1.0]])
 
 
-def _interpolation_error(u: np.ndarray, drive: Waveform) -> float:
-    if drive.kind in ("rest", "step", "impulse", "harmonic") or u.size < 3:
-        return 0.0
-    return float(np.abs(np.diff(u, 2)).max() / 8.0)
+def _interpolation(u: np.ndarray, drive: Waveform, hermite: bool, notes: list) -> float:
+    """Bound of the drive's interpolation error between samples (noted unless rounding).
+
+    ``hermite``: cubic Hermite (the clearance integrator with a motion drive),
+    h⁴/384·max|u⁗| from the fourth differences; else linear (h²/8·max|ü|).
+    """
+    if hermite:
+        interp = float(np.abs(np.diff(u, 4)).max() / 384.0) if u.size > 4 else 0.0
+    elif drive.kind in ("rest", "step", "impulse", "harmonic") or u.size < 3:
+        interp = 0.0
+    else:
+        interp = float(np.abs(np.diff(u, 2)).max() / 8.0)
+    if interp > 1e-13 * float(np.abs(u).max()):      # not rounding of an exact ramp
+        notes.append(f"drive interpolated by cubic Hermite between samples (exact values and "
+                     f"rates of the motion): its error is at most {interp:.3g} "
+                     "(h⁴/384·max|u⁗|, from the samples' fourth differences)" if hermite else
+                     f"drive interpolated linearly between samples: its error is at most "
+                     f"{interp:.3g} (h²/8·max|ü|, from the samples' second differences)")
+    return interp
 
 
 def discretise(A: np.ndarray, B: np.ndarray, h: float):
@@ -749,11 +793,17 @@ def _propagate_modal(A, B, z0, u, h, Cx=None, w=None, x_only=False, cache=None):
     wout = np.zeros(N) if w is None else np.asarray(w, dtype=float) @ T
     y = np.empty(nt)
     _modal_states(mu, g1, g2, q0, np.ascontiguousarray(u, float), cre, cim, Q, qmax, wout, y)
-    dropped = 0.0
-    if late.any():
-        cols = cim[late]
-        dropped = float((np.abs(Cx @ T[:, cols]).max(axis=0) * qmax[late]).sum())
+    dropped = _dropped(Cx, T, cim, late, qmax)
     return Q, T, note, (nx if Cx is not None else N), dropped, (None if w is None else y)
+
+
+def _dropped(Cx, T, cim, late, qmax) -> float:
+    """Bound of what the Im columns of the real-shaped modes ``late`` add to any x:
+    Σ max|Cx T_col| · max_k |q_col| (``qmax``: each mode's largest |q|)."""
+    if not late.any():
+        return 0.0
+    cols = cim[late]
+    return float((np.abs(Cx @ T[:, cols]).max(axis=0) * qmax[late]).sum())
 
 
 #: Samples per block of the fused x-only modal path: the modal signals of a
@@ -830,20 +880,21 @@ def _propagate_modal_x(A, B, z0, u, h, Cx, w=None, cache=None, Cv=None):
         if b >= nt - 1:
             break
         a = b
-    dropped = 0.0
-    if late.any() and Cv is None:
-        cols = cim[late]
-        dropped = float((np.abs(Cx @ T[:, cols]).max(axis=0) * qmax[late]).sum())
-    # max|x| ≤ max_i Σ_c |Sx[c, i]| · (largest |q| of column c's mode): a bound of
-    # x from the recurrence, without a pass over x (finite only if every q was)
+    dropped = _dropped(Cx, T, cim, late, qmax) if Cv is None else 0.0
+    return X, V, note, dropped, (None if w is None else y), _x_bound(Sx, qmax, cre, cim)
+
+
+def _x_bound(Sx, qmax, cre, cim) -> float | None:
+    """max|x| ≤ max_i Σ_c |Sx[c, i]| · (largest |q| of column c's mode): a bound of
+    x from the recurrence, without a pass over x (None unless finite and < 1e300)."""
+    ncols = Sx.shape[0]
     col = np.zeros(ncols)
     for cols in (cre, cim):
         at = (cols >= 0) & (cols < ncols)
         col[cols[at]] = qmax[at]
     with np.errstate(all="ignore"):
         bound = float(np.max(np.abs(Sx).T @ col, initial=0.0))
-    return X, V, note, dropped, (None if w is None else y), \
-        (bound if bound < 1e300 else None)
+    return bound if bound < 1e300 else None
 
 
 def _modal_plan(A, B, h, Cx):
@@ -881,36 +932,43 @@ def _modal_plan(A, B, h, Cx):
     small[:, 1, 2] = 1.0
     E = la.expm(small)
     mu, g1, g2 = E[:, 0, 0], h * E[:, 0, 1] * b, h * E[:, 0, 2] * b
-    # A posteriori: the modal one-step map against the exact one.
-    Phi, G1, G2 = discretise(A, B, h)
-    mu_all = np.exp(lam * h)
-    Phi_m = ((V * mu_all) @ Vinv).real
-    scale = max(float(np.abs(Phi).max()), 1e-300)
-    dev = float(np.abs(Phi_m - Phi).max()) / scale
-    gscale = max(float(np.abs(G1).max()), float(np.abs(G2).max()), 1e-300)
-    g1_m = 2 * (Vk[:, ~real[keep]] @ g1[~real[keep]]).real + (Vk[:, real[keep]] @ g1[real[keep]]).real
-    g2_m = 2 * (Vk[:, ~real[keep]] @ g2[~real[keep]]).real + (Vk[:, real[keep]] @ g2[real[keep]]).real
-    if np.abs(B).max() > 0:
-        dev = max(dev, float(max(np.abs(g1_m - G1).max(), np.abs(g2_m - G2).max())) / gscale)
+    dev = _modal_deviation(A, B, h, lam, V, Vinv, Vk, ~real[keep], g1, g2)
     if not (dev <= MODAL_CHECK_TOL):
         return (f"modal one-step map differs from the exponential's by {dev:.1e} "
                 f"(> {MODAL_CHECK_TOL:.0e}; eigenvector condition {cond:.1e})")
-    # Real columns: Re q_j for every kept mode, Im q_j for the complex ones.
     is_c = ~real[keep]
     real_shape = np.zeros(m, bool)
     rot = np.ones(m, complex)
     if Cx is not None and Cx.shape[0]:
-        phi = Cx @ Vk
-        rot = np.exp(-0.5j * np.angle((phi * phi).sum(axis=0)))
-        rot[~is_c] = 1.0
-        shape_norm = np.abs(phi).max(axis=0)
-        real_shape = is_c & (np.abs((phi * rot).imag).max(axis=0) <= REAL_SHAPE_TOL * shape_norm)
-        rot[~real_shape] = 1.0
+        rot, real_shape = _real_shapes(Cx @ Vk, is_c)
         Vk, g1, g2 = Vk * rot, g1 / rot, g2 / rot     # z = v q unchanged (q0 / rot)
+    late = is_c & real_shape
+    cre, cim, nx, T = _real_columns(Vk, is_c, late)
+    note = f"modal (eigenvector condition {cond:.1e}, one-step map checked to {dev:.1e}"
+    if late.any():
+        note += f"; {int(late.sum())} of {int(is_c.sum())} oscillating modes with real shapes"
+    return (m, Vinv_k, rot, mu, g1, g2, cre, cim, nx, T, note + ")", late)
+
+
+def _real_shapes(phi: np.ndarray, is_c: np.ndarray):
+    """(rotation, real) of the complex modes whose shapes ``phi`` (columns) are real
+    after a phase rotation (classical damping); rotation 1 for the others."""
+    rot = np.exp(-0.5j * np.angle((phi * phi).sum(axis=0)))
+    rot[~is_c] = 1.0
+    shape_norm = np.abs(phi).max(axis=0)
+    real_shape = is_c & (np.abs((phi * rot).imag).max(axis=0) <= REAL_SHAPE_TOL * shape_norm)
+    rot[~real_shape] = 1.0
+    return rot, real_shape
+
+
+def _real_columns(Vk: np.ndarray, is_c: np.ndarray, late: np.ndarray):
+    """Real columns of the modal signals: Re q_j of every kept mode (``cre``), Im q_j of
+    the complex ones (``cim``, −1 for real modes), the ``late`` ones last; the first
+    ``nx`` columns carry x.  Returns (cre, cim, nx, T) with z = T · columns."""
+    m, N = is_c.size, Vk.shape[0]
     cre = np.arange(m)
     cim = np.full(m, -1)
-    late = is_c & real_shape
-    early = is_c & ~real_shape
+    early = is_c & ~late
     cim[early] = m + np.arange(int(early.sum()))
     cim[late] = m + int(early.sum()) + np.arange(int(late.sum()))
     nx = m + int(early.sum())
@@ -918,10 +976,22 @@ def _modal_plan(A, B, h, Cx):
     T[:, cre[~is_c]] = Vk[:, ~is_c].real
     T[:, cre[is_c]] = 2 * Vk[:, is_c].real
     T[:, cim[is_c]] = -2 * Vk[:, is_c].imag
-    note = f"modal (eigenvector condition {cond:.1e}, one-step map checked to {dev:.1e}"
-    if late.any():
-        note += f"; {int(late.sum())} of {int(is_c.sum())} oscillating modes with real shapes"
-    return (m, Vinv_k, rot, mu, g1, g2, cre, cim, nx, T, note + ")", late)
+    return cre, cim, nx, T
+
+
+def _modal_deviation(A, B, h, lam, V, Vinv, Vk, cplx, g1, g2) -> float:
+    """A posteriori check of a modal plan: the largest difference of its one-step map
+    (Φ, Γ₁, Γ₂ from the kept modes ``Vk``, complex where ``cplx``) from the
+    exponential's, relative to the largest entry of each."""
+    Phi, G1, G2 = discretise(A, B, h)
+    Phi_m = ((V * np.exp(lam * h)) @ Vinv).real
+    dev = float(np.abs(Phi_m - Phi).max()) / max(float(np.abs(Phi).max()), 1e-300)
+    if np.abs(B).max() > 0:
+        gscale = max(float(np.abs(G1).max()), float(np.abs(G2).max()), 1e-300)
+        for g, G in ((g1, G1), (g2, G2)):
+            g_m = 2 * (Vk[:, cplx] @ g[cplx]).real + (Vk[:, ~cplx] @ g[~cplx]).real
+            dev = max(dev, float(np.abs(g_m - G).max()) / gscale)
+    return dev
 
 
 def _modal_states(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout):
@@ -982,22 +1052,7 @@ def _nonlinear(ss: StateSpace, circuit, z0, t, u, rtol, rate=None):
                                 "(the network is too stiff for it)")
         return out
 
-    # Absolute tolerance scaled to the solution, state by state: rtol × the
-    # state's peak over the run, from a loose pilot run (repeated once if the
-    # start's scale was far off: a run from rest has none).
-    scale = max(float(np.abs(z0).max()), 0.0) or 1.0
-    pilot_tol = max(rtol, 1e-4)
-    for _ in range(2):
-        peak = np.abs(run(pilot_tol, np.full(N, pilot_tol * scale), hmax)).max(axis=0)
-        new = float(peak.max())
-        if not (math.isfinite(new) and new > 0) or 0.1 * scale <= new <= 10 * scale:
-            break
-        scale = new
-    if math.isfinite(float(peak.max())) and peak.max() > 0:
-        floor = 1e-6 * peak.max()
-        atol = rtol * np.maximum(peak, floor)
-    else:
-        atol = np.full(N, rtol * scale)
+    atol = _absolute_tolerance(run, z0, rtol, hmax)
     # Error estimate: the run asked for, and a reference at a REF_TOL× tighter
     # tolerance and 1/REF_H of the largest step (a run whose steps are limited
     # by hmax or by the drive's samples, as at loose tolerances, would
@@ -1027,6 +1082,25 @@ def _nonlinear(ss: StateSpace, circuit, z0, t, u, rtol, rate=None):
     return Z, method, err, notes
 
 
+def _absolute_tolerance(run: Callable, z0: np.ndarray, rtol: float, hmax: float) -> np.ndarray:
+    """Absolute tolerance scaled to the solution, state by state: rtol × the
+    state's peak over the run, from a loose pilot ``run(tol, atol, hmax)``
+    (repeated once if the start's scale was far off: a run from rest has none)."""
+    N = z0.size
+    scale = max(float(np.abs(z0).max()), 0.0) or 1.0
+    pilot_tol = max(rtol, 1e-4)
+    for _ in range(2):
+        peak = np.abs(run(pilot_tol, np.full(N, pilot_tol * scale), hmax)).max(axis=0)
+        new = float(peak.max())
+        if not (math.isfinite(new) and new > 0) or 0.1 * scale <= new <= 10 * scale:
+            break
+        scale = new
+    if math.isfinite(float(peak.max())) and peak.max() > 0:
+        floor = 1e-6 * peak.max()
+        return rtol * np.maximum(peak, floor)
+    return np.full(N, rtol * scale)
+
+
 def _clearance_setup(ss: StateSpace, circuit):
     """(kernel matrices, largest |eigenvalue| with every contact closed) for :func:`_nonlinear`."""
     from . import _kernels as kern
@@ -1041,17 +1115,16 @@ def _clearance_setup(ss: StateSpace, circuit):
     dv = np.zeros(E)
     prm = np.zeros((E, 3))
     for k, (e, comp) in enumerate(clear):
-        ge = np.zeros(len(ss.nodes))
-        if e.n1 in index:
-            ge[index[e.n1]] += 1.0
-        if e.n2 in index:
-            ge[index[e.n2]] -= 1.0
+        ge = _incidence(index, e.n1, e.n2, len(ss.nodes))
         cx[k], dx[k] = ge @ ss.Cx, ge @ ss.Dx
         cv[k], dv[k] = ge @ ss.Cv, ge @ ss.Dv
         prm[k] = _law_params(e, comp)
-    mats = kern.kernel_args(ss.A, ss.B, cx, dx, cv, dv, ss.extra, prm)
+    extra = ss.extra
+    if extra is None:
+        raise ValueError("the model was built without its clearance elements' force map")
+    mats = kern.kernel_args(ss.A, ss.B, cx, dx, cv, dv, extra, prm)
     # A with every contact closed: A + Σ_e extra_e ⊗ (c_e cx_e + d_e cv_e).
-    closed = ss.A + ss.extra @ (prm[:, :1] * cx + prm[:, 1:2] * cv)
+    closed = ss.A + extra @ (prm[:, :1] * cx + prm[:, 1:2] * cv)
     w_max = float(np.abs(np.linalg.eigvals(closed)).max()) if N else 0.0
     return mats, w_max
 
@@ -1084,19 +1157,10 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes,
     velocities = velocities or bool(want) or bool(clear)
     X = affine(ss.Cx, ss.Dx, cols=nx, Cz=x_ready)
     V = affine(ss.Cv, ss.Dv, ss.Ev, Cz=v_ready) if velocities else None
-    comp_of = {comp.name: e.name for e, comp in clear.values() if comp is not None}
     index = {n: i for i, n in enumerate(ss.nodes)}
-    def diff(Y, e):
-        out = np.zeros(Y.shape[0])
-        if e.n1 in index:
-            out = out + Y[:, index[e.n1]]
-        if e.n2 in index:
-            out = out - Y[:, index[e.n2]]
-        return out
-
-    law_cache = {}
-    for name, (e, comp) in clear.items():
-        law_cache[name] = _law_forces(e, comp, diff(X, e), diff(V, e))
+    law_cache = {name: _law_forces(e, comp, _across(X, index, e), _across(V, index, e))
+                 for name, (e, comp) in clear.items()}
+    Acc = None
     need_acc = (want and any(e.kind == "mass" for e in circuit.elements)) or \
         (ss.kind == "velocity" and bool(clear))
     if need_acc:
@@ -1106,8 +1170,46 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes,
         for j, name in enumerate(clear):        # the clearance forces drive the masses too
             Acc += np.outer(law_cache[name][0], ss.Cv @ ss.extra[:, j])
 
-    # Differences across every element at once: two column gathers.
     els = circuit.elements if want else ()
+    force, dvm = _element_forces(els, index, X, V, Acc, clear, law_cache, t.size)
+    drive_force = drive_velocity = None
+    # linear: the drive's output is one vector, h·(M a + D v + K x) or g·v, affine in z
+    dmap = _drive_map(ss) if ss.kind == "force" or not clear else None
+    if ss.kind == "velocity":
+        if dmap is None:
+            # Q = h·(M a + D v + K x + Σ g_e f_e): contract with h first (vectors only).
+            a, b, c = ss.M.T @ ss.h, ss.D.T @ ss.h, ss.K.T @ ss.h
+            Q = Acc @ a + V @ b + X @ c
+        else:
+            Q = affine(*dmap, Cz=drive_y)
+        for name, (e, _comp) in clear.items():
+            ge = _incidence(index, e.n1, e.n2, len(ss.nodes))
+            Q = Q + law_cache[name][0] * (ge @ ss.h)
+        drive_force = Q
+    elif dmap is not None:
+        drive_velocity = affine(*dmap, Cz=drive_y)
+    if ss.Ev.any() and drive.kind not in ("rest", "impulse"):
+        notes.append("some nodes carry neither mass nor damping: their velocities use the "
+                     "drive's derivative estimated from the samples")
+    return TransientResult(time=t, nodes=ss.nodes, x=X, v=V, elements=tuple(e.name for e in els),
+                           force=force, dv=dvm, drive_kind=ss.kind,
+                           drive=u_true if ss.kind is not None else None,
+                           drive_force=drive_force, drive_velocity=drive_velocity,
+                           error=err, method=method, notes=notes, name=circuit.name,
+                           drive_name=circuit.drive.name if circuit.drive is not None else None,
+                           units=units_of(circuit.drive),
+                           clearances={e.name: (e.n1, e.n2, e.backlash)
+                                       for e, _ in backlash_elements(circuit)},
+                           waveform=drive.label if ss.kind is not None else None)
+
+
+def _element_forces(els, index: dict, X, V, Acc, clear: dict, law_cache: dict, n_t: int):
+    """(force, velocity difference) of every element in ``els``, (n_t, len(els)) each.
+
+    Linear elements: value·η times the difference across them of x (springs),
+    v (dampers) or a (masses), two column gathers for all; clearance springs and
+    their companion dampers: their law's forces ``law_cache[spring name]``.
+    """
     i1 = np.array([index.get(e.n1, -1) for e in els], dtype=int)
     i2 = np.array([index.get(e.n2, -1) for e in els], dtype=int)
 
@@ -1119,56 +1221,21 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes,
         out -= second
         return out
 
-    dvm = across(V) if V is not None else np.zeros((t.size, 0))
+    dvm = across(V) if V is not None else np.zeros((n_t, 0))
     scale = np.array([e.value * e.eta for e in els])
     kinds = np.array([e.kind for e in els])
-    force = np.zeros((t.size, len(els)))
-    if (kinds == "spring").any():
-        sel = np.flatnonzero(kinds == "spring")
-        force[:, sel] = across(X)[:, sel] * scale[sel]
-    sel = np.flatnonzero(kinds == "damper")
-    force[:, sel] = dvm[:, sel] * scale[sel]
-    if (kinds == "mass").any():
-        sel = np.flatnonzero(kinds == "mass")
-        force[:, sel] = across(Acc)[:, sel] * scale[sel]
-    names = [e.name for e in els]
+    force = np.zeros((n_t, len(els)))
+    for kind, Y in (("spring", X), ("damper", None), ("mass", Acc)):
+        sel = np.flatnonzero(kinds == kind)
+        if sel.size:
+            force[:, sel] = (dvm if Y is None else across(Y))[:, sel] * scale[sel]
+    comp_of = {comp.name: e.name for e, comp in clear.values() if comp is not None}
     for j, e in enumerate(els):
         if e.name in clear or e.name in comp_of:
             sp = clear[e.name][0] if e.name in clear else clear[comp_of[e.name]][0]
             total, spring = law_cache[sp.name]
             force[:, j] = spring if e.name == sp.name else total - spring
-    drive_force = drive_velocity = None
-    if ss.kind == "velocity":
-        # Q = h·(M a + D v + K x + Σ g_e f_e): contract with h first (vectors only).
-        a, b, c = ss.M.T @ ss.h, ss.D.T @ ss.h, ss.K.T @ ss.h
-        if clear:
-            Q = Acc @ a + V @ b + X @ c
-        else:                   # one vector: h·(M a + D v + K x) is affine in z
-            Q = affine(*_drive_map(ss), Cz=drive_y)
-        for name, (e, _comp) in clear.items():
-            ge = np.zeros(len(ss.nodes))
-            if e.n1 in index:
-                ge[index[e.n1]] += 1.0
-            if e.n2 in index:
-                ge[index[e.n2]] -= 1.0
-            Q = Q + law_cache[name][0] * (ge @ ss.h)
-        drive_force = Q
-    elif ss.kind == "force":
-        drive_velocity = affine(*_drive_map(ss), Cz=drive_y)
-    if ss.Ev.any() and drive.kind not in ("rest", "impulse"):
-        notes.append("some nodes carry neither mass nor damping: their velocities use the "
-                     "drive's derivative estimated from the samples")
-    err_total = err
-    return TransientResult(time=t, nodes=ss.nodes, x=X, v=V, elements=tuple(names), force=force,
-                           dv=dvm, drive_kind=ss.kind,
-                           drive=u_true if ss.kind is not None else None,
-                           drive_force=drive_force, drive_velocity=drive_velocity,
-                           error=err_total, method=method, notes=notes, name=circuit.name,
-                           drive_name=circuit.drive.name if circuit.drive is not None else None,
-                           units=units_of(circuit.drive),
-                           clearances={e.name: (e.n1, e.n2, e.backlash)
-                                       for e, _ in backlash_elements(circuit)},
-                           waveform=drive.label if ss.kind is not None else None)
+    return force, dvm
 
 
 def _law_forces(spring, comp, e, w):
