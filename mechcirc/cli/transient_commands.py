@@ -98,8 +98,10 @@ def cmd_transient(args) -> int:
     w = max([10] + [len(n) for n in result.nodes + result.elements])
     print(f"{'node':>{w}} {'x(end) [' + u['x'] + ']':>14} {'v(end) [' + u['v'] + ']':>14} "
           f"{'max|x| [' + u['x'] + ']':>14}")
+    v = result.v
+    assert v is not None            # the CLI always asks for the velocities
     for i, n in enumerate(result.nodes):
-        print(f"{n:>{w}} {result.x[-1, i]:14.6g} {result.v[-1, i]:14.6g} "
+        print(f"{n:>{w}} {result.x[-1, i]:14.6g} {v[-1, i]:14.6g} "
               f"{abs(result.x[:, i]).max():14.6g}")
     print(f"{'element':>{w}} {'max|F| [' + u['Q'] + ']':>14}")
     for j, e in enumerate(result.elements):
