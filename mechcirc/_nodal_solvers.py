@@ -206,21 +206,27 @@ class DenseSolver:
         A = combine(self.dc, self.m, self.k, np.asarray(omega)[:, None, None])
         good = np.isfinite(A).all(axis=(1, 2))
         A = A[good]
-        try:
-            inv = np.linalg.inv(A)
-        except np.linalg.LinAlgError:
-            # Some matrix of the batch is exactly singular: invert one by one and
-            # leave that frequency as NaN (rare; only on the failure path).
-            inv = np.full(A.shape, np.nan, dtype=complex)
-            for k in range(A.shape[0]):
-                try:
-                    inv[k] = np.linalg.inv(A[k])
-                except np.linalg.LinAlgError:
-                    pass
-            ok = np.isfinite(inv).all(axis=(1, 2))
+        inv, ok = stacked_inverse(A)
+        if ok is not None:
             good[np.flatnonzero(good)[~ok]] = False
             inv = inv[ok]
         return good, lambda r, rows=slice(None): np.einsum("kij,kj->ki", inv[rows], r)
+
+
+def stacked_inverse(A):
+    """Inverses of the stacked matrices ``A`` (k, n, n), and None; or, when one is
+    exactly singular, the matrices inverted one by one with NaN for those, and the
+    mask of the inverted ones (rare; only on the failure path)."""
+    try:
+        return np.linalg.inv(A), None
+    except np.linalg.LinAlgError:
+        inv = np.full(A.shape, np.nan, dtype=complex)
+        for k in range(A.shape[0]):
+            try:
+                inv[k] = np.linalg.inv(A[k])
+            except np.linalg.LinAlgError:
+                pass
+        return inv, np.isfinite(inv).all(axis=(1, 2))
 
 
 #: The sparse path uses a banded LU when the half band width kl after a reverse

@@ -504,6 +504,7 @@ def _stacked_solve(system, S: NDArray, parts: list, design: NDArray, w: NDArray)
     from . import nodal
     from ._dd import split
     from ._nodal_residual import pattern
+    from ._nodal_solvers import stacked_inverse
 
     n, m = system.size, design.size
     pat, rhs = pattern(system), system.injection()
@@ -525,18 +526,10 @@ def _stacked_solve(system, S: NDArray, parts: list, design: NDArray, w: NDArray)
     for start in range(0, m, chunk):
         pts = np.arange(start, min(start + chunk, m))
         A = nodal.combine(*(X[design[pts]] for X in parts), w[pts, None, None])
-        try:
-            inv = np.linalg.inv(A)
-        except np.linalg.LinAlgError:
-            # A point exactly singular: NaN there, the others kept, as the single
-            # path's dense solver does (rare; only on the failure path).
-            inv = np.full(A.shape, np.nan, dtype=complex)
-            for k in range(A.shape[0]):
-                try:
-                    inv[k] = np.linalg.inv(A[k])
-                except np.linalg.LinAlgError:
-                    pass
-            good = np.isfinite(inv).all(axis=(1, 2))
+        # A point exactly singular: NaN there, the others kept, as the single
+        # path's dense solver does.
+        inv, good = stacked_inverse(A)
+        if good is not None:
             pts, inv = pts[good], inv[good]
             if not pts.size:
                 continue
