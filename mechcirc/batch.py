@@ -446,7 +446,7 @@ def _nodal_sweep(ds: Designs, which: NDArray, omega: NDArray):
     """K and its error bound of designs ``which`` of a network that is not
     series–parallel, by the nodal path of :func:`mechcirc.nodal.solve` with the
     designs' A(ω) stacked: one batched inverse per chunk of (design, ω) points, each
-    refined by :func:`mechcirc.nodal._refined` with the residual and sensitivities
+    refined by :func:`mechcirc.nodal.refine_dd` with the residual and sensitivities
     of :class:`~mechcirc._nodal_residual.Pattern` at the design's values.
 
     Only small systems (the single path's dense solver), ω > 0 and the template's
@@ -492,7 +492,7 @@ def _stacked_solve(system, S: NDArray, parts: list, design: NDArray, w: NDArray)
     stacked designs: ``S`` and ``parts`` from :func:`_stacked_matrices`, ``design[i]``
     the row of point i in them, ``w[i]`` its ω (real, or complex: ω = −js for the
     resonances' polishing).  One batched inverse per chunk, each solution refined by
-    :func:`mechcirc.nodal._refined` with the residual and sensitivities of
+    :func:`mechcirc.nodal.refine_dd` with the residual and sensitivities of
     :class:`~mechcirc._nodal_residual.Pattern` at the design's values.
 
     Returns ``(K, estimate, contraction, S, S_data)`` per point as the single path's
@@ -533,11 +533,11 @@ def _stacked_solve(system, S: NDArray, parts: list, design: NDArray, w: NDArray)
             pts, inv = pts[good], inv[good]
             if not pts.size:
                 continue
-        xh, xl, est[pts], rho[pts] = nodal._refined(
+        xh, xl, est[pts], rho[pts] = nodal.refine_dd(
             lambda r, rows=slice(None), inv=inv: np.einsum("kij,kj->ki", inv[rows], r),
             lambda p, xh, xl, rhs: at(p).residual(w[p], xh, xl, rhs), pts, rhs, system,
             True, 4)
-        K[pts] = nodal._difference_dd(system, xh, xl)
+        K[pts] = nodal.difference_dd(system, xh, xl)
         sens[pts], sens_data[pts] = at(pts).sensitivities(w[pts], xh + xl, K[pts])
     return K, est, rho, sens, sens_data
 
@@ -547,7 +547,7 @@ def _nodal_roots(ds: Designs, omega_max):
     series–parallel: the roots of the valid designs with the template's lever ratios,
     stacked in groups of :data:`_STACK_ENTRIES`; None when it solves none.
 
-    Each group: the stacked eigenproblems of :func:`~mechcirc.resonances._stacked_problem`
+    Each group: the stacked eigenproblems of :func:`~mechcirc.resonances.stacked_problem`
     (drive held: resonances; released: anti-resonances), every root then polished as
     :func:`~mechcirc.resonances.find_resonances` polishes it (:func:`_polish_nodal`).
     Returns ``(designs, pole, s, error)`` as ``batched_roots`` does.
@@ -589,19 +589,19 @@ def _nodal_roots(ds: Designs, omega_max):
 
 def _nodal_group_roots(ds: Designs, system, held, which: NDArray, omega_max):
     """:func:`_nodal_roots` for one group of designs ``which``."""
-    from .resonances import (MAX_UNKNOWNS, MAX_UNKNOWNS_DAMPED, _POLISH_BELOW,
-                             _element_patterns, _stacked_problem, constraint_basis, pencil)
+    from .resonances import (MAX_UNKNOWNS, MAX_UNKNOWNS_DAMPED, POLISH_BELOW,
+                             element_patterns, stacked_problem, constraint_basis, pencil)
 
     eps = np.finfo(float).eps
     *_, G_released, G_held, damped = pencil(system)
-    B, nn = _element_patterns(system), len(system.nodes)
+    B, nn = element_patterns(system), len(system.nodes)
     S, parts = _stacked_matrices(ds, system, which)
     roots = []
     for G in (G_held, G_released):
         Z = constraint_basis(G, nn).toarray()
         if Z.shape[1] > (MAX_UNKNOWNS_DAMPED if damped else MAX_UNKNOWNS):
             return None
-        x, e, ok = _stacked_problem(Z, B, S, damped, omega_max)
+        x, e, ok = stacked_problem(Z, B, S, damped, omega_max)
         if damped:
             # find_resonances polishes every damped root
             must = np.ones(which.size, dtype=bool)
@@ -610,7 +610,7 @@ def _nodal_group_roots(ds: Designs, system, held, which: NDArray, omega_max):
                 e_cmp = np.maximum(e, 1e2 * eps * np.nanmax(np.abs(x), axis=1, initial=1.0)
                                    [:, None] / np.abs(x))
         else:
-            # _undamped's bound eps·λmax/λ stands (no polishing below _POLISH_BELOW)
+            # _undamped's bound eps·λmax/λ stands (no polishing below POLISH_BELOW)
             # only for a diagonal mass matrix without massless directions.
             P = Z.T @ B["mass"] @ Z
             k = P.shape[1]
@@ -635,7 +635,7 @@ def _nodal_group_roots(ds: Designs, system, held, which: NDArray, omega_max):
     must = np.concatenate([np.repeat(must_h[keep, None], s_h.shape[1], 1),
                            np.repeat(must_r[keep, None], s_r.shape[1], 1)], axis=1)
     have = np.isfinite(s0)
-    todo = have & (must | (e0 > _POLISH_BELOW)) if not damped else have
+    todo = have & (must | (e0 > POLISH_BELOW)) if not damped else have
     s, err = s0.copy(), e0.copy()
     if todo.any():
         d, r = np.nonzero(todo)
@@ -670,7 +670,7 @@ def _polish_nodal(stacks: list, design: NDArray, s0: NDArray, pole: NDArray, e0:
     its drive-held system (:func:`_stacked_matrices`).  Returns ``(s, relative error)``.
     """
     from ._nodal_residual import residual_rounding, total_error
-    from .resonances import _secant_steps
+    from .resonances import secant_steps
 
     eps = np.finfo(float).eps
 
@@ -702,7 +702,7 @@ def _polish_nodal(stacks: list, design: NDArray, s0: NDArray, pole: NDArray, e0:
             c = 1j * c.imag                       # undamped: roots on the jω axis
         return c, np.isfinite(c)
 
-    b, db, step, slope = _secant_steps(g_and_delta, admissible, a, ga, b, gb, db, active)
+    b, db, step, slope = secant_steps(g_and_delta, admissible, a, ga, b, gb, db, active)
     with np.errstate(all="ignore"):
         err = (db / np.abs(slope) + step) / np.abs(b)
         moved = np.abs(b - s0) / np.abs(s0)
@@ -717,12 +717,12 @@ def _polish_nodal(stacks: list, design: NDArray, s0: NDArray, pole: NDArray, e0:
 def _stacked_matrices(ds: Designs, system, which: NDArray):
     """The value·η of the nodal system's elements in designs ``which`` (D', E), and their
     D + C, M and Kₛ as dense stacks (D', n, n), from the element stamp patterns."""
-    from .resonances import _element_patterns
+    from .resonances import element_patterns
 
     row = {e.name: i for i, e in enumerate(ds.circuit.elements)}
     el = np.array([row[e.name] for e in system.elements], dtype=np.int64)
     S = (ds.values[el][:, which] * ds.eta[el][:, which]).T
-    B, n, nn = _element_patterns(system), system.size, len(system.nodes)
+    B, n, nn = element_patterns(system), system.size, len(system.nodes)
     parts = []
     for kind in ("damper", "mass", "spring"):
         X = np.zeros((which.size, n, n))

@@ -144,7 +144,7 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
     use_dd = refine and n <= DD_LIMIT and not np.iscomplexobj(omega)
 
     def store(sel, xh, xl, est, rho):
-        K[sel] = _difference_dd(system, xh, xl)
+        K[sel] = difference_dd(system, xh, xl)
         x = xh + xl if xl is not None else xh
         S[sel], Sd[sel] = pat.sensitivities(omega[sel], x, K[sel], kern)
         # A refinement that stalls (corrections not shrinking: the factors
@@ -165,10 +165,10 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
         good, solve_fn = solve_with.factor(omega[every], kern)
         sel = every[good]
         if sel.size:
-            refined = _refined(solve_fn, residual, omega[sel], rhs, system, refine, steps)
+            refined = refine_dd(solve_fn, residual, omega[sel], rhs, system, refine, steps)
             if solve_with.kind == "superlu":
                 _strict_retry(solve_with, kern, omega[sel], refined,
-                              lambda fn, w: _refined(fn, residual, w, rhs, system, refine, steps))
+                              lambda fn, w: refine_dd(fn, residual, w, rhs, system, refine, steps))
             store(sel, *refined)
         if use_dd:
             # Float64 factors failed (A(ω) exactly singular as rounded to float64),
@@ -185,7 +185,7 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
                 redo = todo[at:at + dd.max_chunk]
                 ok2, dd_fn = dd.factor(omega[redo])
                 redo = redo[ok2]
-                xh2, xl2, est2, rho2 = _refined(dd_fn, residual, omega[redo], rhs, system, refine,
+                xh2, xl2, est2, rho2 = refine_dd(dd_fn, residual, omega[redo], rhs, system, refine,
                                                 steps)
                 better = ~(est2 >= err[redo])
                 store(redo[better], xh2[better], xl2[better], est2[better], rho2[better])
@@ -210,7 +210,7 @@ def _strict_retry(solve_with, kern, omega, refined, refine):
             xl[take] = xl2[better]
 
 
-def _difference_dd(system, xh, xl):
+def difference_dd(system, xh, xl):
     """K = x_a − x_b from x = xh + xl, rounded once."""
     zero = np.zeros(xh.shape[0], dtype=complex)
     ah = xh[:, system.a] if system.a >= 0 else zero
@@ -309,7 +309,7 @@ def _backward_error(system, omega: float, x: NDArray) -> float:
         return float(np.max(np.where(np.abs(ax) == 0, 0.0, eta), initial=0.0))
 
 
-def _refined(solve_fn, residual, omega, rhs, system, refine: bool, steps: int):
+def refine_dd(solve_fn, residual, omega, rhs, system, refine: bool, steps: int):
     """x from one solve and up to ``steps`` refinement steps.
 
     Returns (xh, xl, relative error of K, contraction of the last step):
@@ -371,7 +371,7 @@ def _estimate(system, xh, xl, d, prev, r):
         npv = np.maximum(np.max(np.abs(xh if prev is None else prev), axis=-1), tiny * nx)
         rho = np.where(npv > 0, nd / npv, 0.0)
         own = np.minimum(rho, 1.0) if prev is not None else 1.0
-        K = np.abs(_difference_dd(system, xh, xl))
+        K = np.abs(difference_dd(system, xh, xl))
         dK = np.abs(system.difference(d))
         # The drive's own components: a norm over all of d would mix scales
         # (a lever of ratio 1e150 puts velocities 1e150 apart).

@@ -624,7 +624,7 @@ def _make(kind: Literal["resonance", "antiresonance"], s: complex, err: float) -
 
 
 #: Roots whose eigen-solver bound is below this are not polished on K (undamped).
-_POLISH_BELOW = 1e-13
+POLISH_BELOW = 1e-13
 
 
 def _polish(system, roots: list, damped: bool) -> list[Resonance]:
@@ -636,7 +636,7 @@ def _polish(system, roots: list, damped: bool) -> list[Resonance]:
     |δg| / |g'(s)| with δg the absolute error of g = K (or 1/K) at the root
     (K is refined in double-double; δK its estimate, at least eps·|K|,
     times a safety factor of 4), plus the last secant step.  Undamped roots whose eigenvalue bound (Weyl:
-    eps·λ_max/λ) is already below :data:`_POLISH_BELOW` keep it; a root the
+    eps·λ_max/λ) is already below :data:`POLISH_BELOW` keep it; a root the
     secant does not confirm (it leaves for another root) keeps its
     eigen-solver value and estimate.
     """
@@ -645,7 +645,7 @@ def _polish(system, roots: list, damped: bool) -> list[Resonance]:
     s0 = np.array([complex(s) for _, s, _, _ in roots])
     e0 = np.array([float(np.real(e)) for _, _, e, _ in roots])
     must = np.array([float(np.real(f)) > 0 for _, _, _, f in roots])
-    todo = np.flatnonzero((e0 > _POLISH_BELOW) | must) if not damped else np.arange(s0.size)
+    todo = np.flatnonzero((e0 > POLISH_BELOW) | must) if not damped else np.arange(s0.size)
     s_new, e_new = s0.copy(), e0.copy()
     if todo.size:
         pole = np.array([kinds[i] == "antiresonance" for i in todo])
@@ -692,7 +692,7 @@ def _held(system):
     return _HELD[key][1]
 
 
-def _secant_steps(g_and_delta, admissible, a, ga, b, gb, db, active, iterations: int = 12):
+def secant_steps(g_and_delta, admissible, a, ga, b, gb, db, active, iterations: int = 12):
     """Secant steps on g from the points a, b, element-wise over arrays of roots.
 
     ``g_and_delta(x)`` gives g and the bound of its error at x; ``admissible(c)``
@@ -743,7 +743,7 @@ def _secant(system, s0: np.ndarray, pole: np.ndarray, e0: np.ndarray, damped: bo
             c = 1j * c.imag                       # undamped: roots on the jω axis
         return c, np.isfinite(c)
 
-    b, db, step, slope = _secant_steps(lambda x: _g_and_delta(system, x, pole), admissible,
+    b, db, step, slope = secant_steps(lambda x: _g_and_delta(system, x, pole), admissible,
                                        a, ga, b, gb, db, active)
     with np.errstate(all="ignore"):
         err = (db / np.abs(slope) + step) / np.abs(b)
@@ -806,10 +806,10 @@ def batched_roots(ds, omega_max: float | None = None):
         return None
     n_nodes = len(system.nodes)
     *_, G_released, G_held, _ = pencil(system)
-    B = _element_patterns(system)
+    B = element_patterns(system)
     el_rows = np.array([row[e.name] for e in system.elements], dtype=np.int64)
     S = (ds.values[el_rows][:, which] * ds.eta[el_rows][:, which]).T      # (D', E)
-    problems = [_stacked_problem(constraint_basis(G, n_nodes).toarray(), B, S, damped, omega_max)
+    problems = [stacked_problem(constraint_basis(G, n_nodes).toarray(), B, S, damped, omega_max)
                 for G in (G_held, G_released)]
     (w_h, e_h, _), (w_r, e_r, _) = problems
     keep = np.flatnonzero(_without_shared_roots(problems, damped))
@@ -863,7 +863,7 @@ def _polished_designs(ds, which, w_h, e_h, w_r, e_r, omega_max):
     return which, pole, 1j * w, err
 
 
-def _element_patterns(system) -> dict[str, np.ndarray]:
+def element_patterns(system) -> dict[str, np.ndarray]:
     """Each element's stamp pattern B_e over the node rows, by kind, shape (E, n, n).
 
     M = Σ_e (value·η)_e B_e (the entries :func:`mechcirc.nodal.stamps` gives
@@ -888,7 +888,7 @@ def _element_patterns(system) -> dict[str, np.ndarray]:
     return B
 
 
-def _stacked_problem(Z, B, S, damped: bool, omega_max):
+def stacked_problem(Z, B, S, damped: bool, omega_max):
     """The roots of one stacked eigenproblem (constraint basis ``Z``, patterns ``B``,
     element values ``S`` per design): :func:`_stacked_damped` or :func:`_stacked_modes`."""
     if damped:
@@ -1176,7 +1176,7 @@ def _secant_designs(p, w0: np.ndarray, pole: np.ndarray, e0: np.ndarray):
     with np.errstate(all="ignore"):
         g0, slope0 = gb, (gb - ga) / (b - a)
     active = have & np.isfinite(ga) & np.isfinite(gb)
-    b, db, step, slope = _secant_steps(g_and_delta, lambda c: (c, np.isfinite(c) & (c > 0)),
+    b, db, step, slope = secant_steps(g_and_delta, lambda c: (c, np.isfinite(c) & (c > 0)),
                                        a, ga, b, gb, db, active)
     with np.errstate(all="ignore"):
         err = (db / np.abs(slope) + step) / np.abs(b)

@@ -118,7 +118,7 @@ def state_space(circuit: Circuit, *, linearise: bool = False) -> StateSpace:
     d = circuit.drive
     g = np.zeros(n)
     if d is not None:
-        g = _incidence(index, d.n1, d.n2, n)
+        g = incidence(index, d.n1, d.n2, n)
         if not g.any():
             raise TopologyError(f"drive {d.name!r} connects nodes no element uses")
     kind = d.kind if d is not None else None
@@ -207,7 +207,7 @@ def _node_matrices(work: Circuit, clear: list):
     return nodes, index, M, D, K, G
 
 
-def _incidence(index: dict, n1: str, n2: str, n: int) -> np.ndarray:
+def incidence(index: dict, n1: str, n2: str, n: int) -> np.ndarray:
     """e_n1 − e_n2 over the coordinates ``index`` (nodes not in it add nothing)."""
     g = np.zeros(n)
     if n1 in index:
@@ -305,7 +305,7 @@ def _clearance_map(clear: list, index: dict, N: int, M11_inv, Y1, T, massive: bo
     n1 = Y1.shape[1]
     extra = np.zeros((N, len(clear)))
     for j, (e, _) in enumerate(clear):
-        ge = _incidence(index, e.n1, e.n2, T.shape[0])
+        ge = incidence(index, e.n1, e.n2, T.shape[0])
         extra[n1:2 * n1, j] = M11_inv @ (Y1.T @ (T.T @ (-ge)))
     return extra
 

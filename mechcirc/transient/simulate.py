@@ -37,7 +37,7 @@ import scipy.linalg as la
 
 from ..circuit import Circuit, units_of
 from ..errors import MechcircError
-from .model import StateSpace, _incidence, backlash_elements, state_space
+from .model import StateSpace, incidence, backlash_elements, state_space
 
 if TYPE_CHECKING:  # pragma: no cover - annotations only
     from ..motion_laws import Motion
@@ -1115,7 +1115,7 @@ def _clearance_setup(ss: StateSpace, circuit):
     dv = np.zeros(E)
     prm = np.zeros((E, 3))
     for k, (e, comp) in enumerate(clear):
-        ge = _incidence(index, e.n1, e.n2, len(ss.nodes))
+        ge = incidence(index, e.n1, e.n2, len(ss.nodes))
         cx[k], dx[k] = ge @ ss.Cx, ge @ ss.Dx
         cv[k], dv[k] = ge @ ss.Cv, ge @ ss.Dv
         prm[k] = _law_params(e, comp)
@@ -1183,7 +1183,7 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes,
         else:
             Q = affine(*dmap, Cz=drive_y)
         for name, (e, _comp) in clear.items():
-            ge = _incidence(index, e.n1, e.n2, len(ss.nodes))
+            ge = incidence(index, e.n1, e.n2, len(ss.nodes))
             Q = Q + law_cache[name][0] * (ge @ ss.h)
         drive_force = Q
     elif dmap is not None:
