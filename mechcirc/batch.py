@@ -661,7 +661,7 @@ def _nodal_group_roots(ds: Designs, system, held, which: NDArray, omega_max):
 
 def _polish_nodal(stacks: list, design: NDArray, s0: NDArray, pole: NDArray, e0: NDArray,
                   damped: bool):
-    """:func:`mechcirc.resonances._secant` for roots of many designs: the root ``s0[i]``
+    """:func:`mechcirc.resonances.secant_polish` for roots of many designs: the root ``s0[i]``
     of the design in row ``design[i]`` of the stacks polished by the complex secant on
     its own K(s) (anti-resonances ``pole``: on 1/K = −q of the held system), g and its
     bound as
@@ -670,7 +670,7 @@ def _polish_nodal(stacks: list, design: NDArray, s0: NDArray, pole: NDArray, e0:
     its drive-held system (:func:`_stacked_matrices`).  Returns ``(s, relative error)``.
     """
     from ._nodal_residual import residual_rounding, total_error
-    from .resonances import secant_steps
+    from .resonances import secant_polish
 
     eps = np.finfo(float).eps
 
@@ -689,29 +689,7 @@ def _polish_nodal(stacks: list, design: NDArray, s0: NDArray, pole: NDArray, e0:
                 dg[want] = 4 * np.maximum(dK, eps * np.abs(K))
         return g, dg
 
-    h = np.maximum(np.abs(s0) * np.maximum(e0, 1e-9), 1e-300)
-    a, b = s0 - h * (1 if damped else 1j), s0.copy()
-    ga, _ = g_and_delta(a)
-    gb, db = g_and_delta(b)
-    with np.errstate(all="ignore"):
-        g0, slope0 = gb, (gb - ga) / (b - a)
-    active = np.isfinite(ga) & np.isfinite(gb)
-
-    def admissible(c):
-        if not damped:
-            c = 1j * c.imag                       # undamped: roots on the jω axis
-        return c, np.isfinite(c)
-
-    b, db, step, slope = secant_steps(g_and_delta, admissible, a, ga, b, gb, db, active)
-    with np.errstate(all="ignore"):
-        err = (db / np.abs(slope) + step) / np.abs(b)
-        moved = np.abs(b - s0) / np.abs(s0)
-        newton = np.abs(g0 / slope0) / np.abs(s0)
-    # As _secant: the eigen-solver's root where the secant wandered off, its estimate
-    # at least the Newton step there.
-    bad = ~np.isfinite(err) | ~np.isfinite(b) | (moved > 1e-3)
-    newton = np.where(np.isfinite(newton), 10 * newton, 0.0)
-    return np.where(bad, s0, b), np.where(bad, np.maximum(e0, newton), np.maximum(err, eps))
+    return secant_polish(g_and_delta, s0, e0, damped)
 
 
 def _stacked_matrices(ds: Designs, system, which: NDArray):

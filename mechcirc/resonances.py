@@ -729,11 +729,18 @@ def secant_steps(g_and_delta, admissible, a, ga, b, gb, db, active, iterations: 
 
 def _secant(system, s0: np.ndarray, pole: np.ndarray, e0: np.ndarray, damped: bool):
     """Complex secant iteration from the eigen-solver's roots; returns (s, relative error)."""
+    return secant_polish(lambda x: _g_and_delta(system, x, pole), s0, e0, damped)
+
+
+def secant_polish(g_and_delta, s0: np.ndarray, e0: np.ndarray, damped: bool):
+    """The roots ``s0`` (eigen-solver's estimate ``e0``) polished by the complex secant
+    on ``g_and_delta(s) -> (g, bound of g)``; returns (s, relative error).  Used for one
+    circuit (:func:`_secant`) and for the roots of many designs (:mod:`mechcirc.batch`)."""
     eps = np.finfo(float).eps
     h = np.maximum(np.abs(s0) * np.maximum(e0, 1e-9), 1e-300)
     a, b = s0 - h * (1 if damped else 1j), s0.copy()
-    ga, _ = _g_and_delta(system, a, pole)
-    gb, db = _g_and_delta(system, b, pole)
+    ga, _ = g_and_delta(a)
+    gb, db = g_and_delta(b)
     with np.errstate(all="ignore"):
         g0, slope0 = gb, (gb - ga) / (b - a)
     active = np.isfinite(ga) & np.isfinite(gb)
@@ -743,8 +750,7 @@ def _secant(system, s0: np.ndarray, pole: np.ndarray, e0: np.ndarray, damped: bo
             c = 1j * c.imag                       # undamped: roots on the jω axis
         return c, np.isfinite(c)
 
-    b, db, step, slope = secant_steps(lambda x: _g_and_delta(system, x, pole), admissible,
-                                       a, ga, b, gb, db, active)
+    b, db, step, slope = secant_steps(g_and_delta, admissible, a, ga, b, gb, db, active)
     with np.errstate(all="ignore"):
         err = (db / np.abs(slope) + step) / np.abs(b)
     # Keep the eigen-solver's root where the secant wandered off (to another root,
