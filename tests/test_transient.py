@@ -306,8 +306,6 @@ def test_python_backend_matches_compiled():
     from mechcirc.transient.model import state_space
     ss = state_space(c)
     z0 = ss.initial[0]
-    for mod in (kern, py):
-        pass
     args = _kernel_args(c, ss)
     outs = []
     for mod in (kern, py):
