@@ -27,8 +27,10 @@ written here from the element values:
   outputs: mechcirc's integrator (Dormand–Prince 5(4), compiled when numba
   is installed, its error estimate included) at rtol 1e-3 … 1e-12.
 
-Peers on both: scipy's RK45, DOP853, Radau, BDF and LSODA at the same rtol
-(atol = rtol × 1e-3 × the solution's scale).  Error: the largest |x − x_ref|
+Peers on both: scipy's RK45, DOP853, Radau, BDF and LSODA, and SUNDIALS
+CVODE (Adams and BDF, through scikit-sundae when it is installed:
+``pip install scikit-sundae``) at the same rtol (atol = rtol × 1e-3 × the
+solution's scale), all with the same Python right-hand side.  Error: the largest |x − x_ref|
 over all masses and outputs over the largest |x_ref|.  Times are medians of
 CPU time (``time.process_time``) over ``--repeat`` runs, after one warm run.
 
@@ -57,7 +59,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 import mechcirc  # noqa: E402
-from mechcirc import _jit, nodal, reduction  # noqa: E402
+from mechcirc import _jit, _tree_eval, nodal, reduction  # noqa: E402
 from mechcirc.transient import transient  # noqa: E402
 
 RTOLS = [10.0 ** -k for k in range(3, 13)]
@@ -123,7 +125,7 @@ def ladder_numpy(ks, ms, r, omega) -> np.ndarray:
 
 def frequency_domain(sizes, repeat: int) -> list[dict]:
     omega = np.geomspace(2 * np.pi * 0.1, 2 * np.pi * 1e3, 401)
-    have_kernel = reduction._kernel() is not None
+    have_kernel = _tree_eval.compiled_evaluator() is not None
     rows = []
     for n in sizes:
         ks, ms, r = ladder(n)
@@ -218,6 +220,21 @@ def rhs_of(n: int, springs, force_at_last: float):
     return rhs
 
 
+def cvode_runner(rhs, y0, t, method: str, rtol: float, atol: float):
+    """A CVODE run (scikit-sundae) on the same Python right-hand side, or None if not installed."""
+    try:
+        from sksundae.cvode import CVODE
+    except ImportError:
+        return None
+
+    def fill(tt, y, yp):
+        yp[:] = rhs(tt, y)
+
+    def run():
+        return CVODE(fill, method=method, rtol=rtol, atol=atol).solve(t, y0)
+    return run
+
+
 def time_domain(repeat: int, quick: bool) -> list[dict]:
     from scipy.integrate import solve_ivp
 
@@ -271,6 +288,16 @@ def time_domain(repeat: int, quick: bool) -> list[dict]:
                 c, sol = cpu(run, 1, warm=False) if rtol < 1e-8 else cpu(run, repeat)
                 err = error(sol.y[:n].T) if sol.success else float("nan")
                 rows.append({"domain": domain, "method": f"scipy {method}", "who": "peer",
+                             "rtol": rtol, "cpu": c, "error": err})
+                show(rows[-1])
+        for method in ("Adams", "BDF"):
+            for rtol in rtols:
+                run = cvode_runner(rhs, y0, t, method, rtol, rtol * 1e-3 * scale)
+                if run is None:
+                    break
+                c, sol = cpu(run, 1, warm=False) if rtol < 1e-8 else cpu(run, repeat)
+                err = error(sol.y[:, :n]) if sol.success else float("nan")
+                rows.append({"domain": domain, "method": f"CVODE {method}", "who": "peer",
                              "rtol": rtol, "cpu": c, "error": err})
                 show(rows[-1])
     return rows
@@ -330,7 +357,7 @@ def main() -> int:
     ap.add_argument("--plot", default=str(ROOT / "docs" / "performance_work_precision.png"))
     args = ap.parse_args()
     print(f"python {platform.python_version()}, numpy {np.__version__}, numba "
-          f"{'yes' if reduction._kernel() is not None else 'no'}; load average "
+          f"{'yes' if _tree_eval.compiled_evaluator() is not None else 'no'}; load average "
           f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} cores; CPU medians of {args.repeat}")
     transient(mechcirc.parse(chain(10, 0.002)[0], require_drive=False), 0.01, 1e-3)
     print(f"{'domain':<34} {'method':<44} {'rtol':>7} {'CPU s':>10} {'error':>9}", flush=True)
