@@ -466,6 +466,16 @@ def read_motion_table(path: str | os.PathLike, spec: str | None = None) -> Motio
     :data:`PERIODIC_TOLERANCE` of the range, every value finite.  Nothing in
     the file is executed.
 
+    Parameters
+    ----------
+    path : str or PathLike
+    spec : str, optional
+        How the table was named (the motion's label).
+
+    Returns
+    -------
+    Motion
+
     Raises
     ------
     NetlistError

@@ -203,6 +203,14 @@ def table_error(params: SleyParameters | None = None, n: int = 1024,
 
     The table is the scene model's rotation of the rocker against the crank's.
 
+    Parameters
+    ----------
+    params : SleyParameters, optional
+        Default: Table 1 variant 3.
+    n : int
+        Table intervals.
+    samples : int
+
     Returns
     -------
     dict
