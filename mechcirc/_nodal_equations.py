@@ -224,19 +224,15 @@ def combine(dc, m, k, omega):
 
     Parameters
     ----------
-    dc : ndarray
-        D + C [N·s/m].
-    m : ndarray
-        M [kg].
-    k : ndarray
-        Kₛ [N/m].
+    dc, m, k : ndarray
+        D + C, M and Kₛ.
     omega : float or ndarray
         ω [rad/s].
 
     Returns
     -------
     ndarray of complex
-        A(ω) [N·s/m], the broadcast shape.
+        A(ω), of the broadcast shape.
     """
     with np.errstate(over="ignore", invalid="ignore"):
         return dc + 1j * susceptance(m, k, omega)

@@ -157,6 +157,10 @@ def plot_sweep(result, title: str | None = None, resonances=(), peak=None, *, ax
 
     Parameters
     ----------
+    result : Sweep
+    title : str, optional
+    resonances : sequence of Resonance
+    peak : Peak, optional
     ax : matplotlib Axes, optional
         Draw only |K| (with the flags and resonance lines) on this Axes and
         return it.
@@ -343,6 +347,11 @@ def plot_transient(result, nodes=None, what: str = "x", elements=None, title: st
 
     Parameters
     ----------
+    result : TransientResult
+    nodes : sequence of str, optional
+    what : {"x", "v"}
+    elements : sequence of str, optional
+    title : str, optional
     ax : matplotlib Axes, optional
         Draw only the nodes' panel there and return it.
     fig : matplotlib Figure, optional

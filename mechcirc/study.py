@@ -1181,6 +1181,8 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
 
     Parameters
     ----------
+    spec : StudySpec
+        From :func:`load_spec` or :func:`parse_spec`.
     output : path, optional
         CSV file (or ``.parquet``, needs pyarrow), written whole and
         atomically at the end in index order, with the spec and the unit of

@@ -5,8 +5,8 @@ docs/api.md (with the sub-modules pdoc adds by itself), and must be every
 public module of the package (no leading underscore in its dotted name).  A module's public functions and classes are
 the names in its ``__all__`` (without one: the public names it defines, as
 pdoc shows them).  A function needs a one-line summary, a ``Parameters``
-section when it takes parameters (``self`` aside), a ``Returns`` section when
-its body returns a value and a ``Yields`` section when it yields; a class
+section naming its parameters (``self`` and private ones aside), a ``Returns``
+section when its body returns a value and a ``Yields`` section when it yields; a class
 needs a summary of its own.  The sections are read by numpydoc's
 ``NumpyDocString`` when numpydoc is installed (the ``docs`` extra), else by
 the same rule on section underlines.
@@ -97,24 +97,39 @@ def returns_and_yields(fn) -> tuple[bool, bool]:
     return found[0], found[1]
 
 
-def sections(doc: str) -> tuple[bool, set[str]]:
-    """(has a summary, the non-empty sections) of a numpydoc docstring."""
+def sections(doc: str) -> tuple[bool, set[str], set[str]]:
+    """(has a summary, the non-empty sections, the parameter names) of a numpydoc docstring."""
     try:
         from numpydoc.docscrape import NumpyDocString
     except ImportError:
-        return bool(doc.strip()) and not _SECTION.match(doc), set(_SECTION.findall(doc))
+        found = set(_SECTION.findall(doc))
+        names = set()
+        if "Parameters" in found:        # its entries: the lines at the section's indentation
+            body = re.split(r"^[ \t]*Parameters\n[ \t]*-{3,}[ \t]*\n", doc, flags=re.M)[1]
+            body = _SECTION.split(body)[0]
+            names = {n for ln in body.splitlines() if ln and not ln[0].isspace()
+                     for n in ln.split(" : ")[0].split(",")}
+        return bool(doc.strip()) and not _SECTION.match(doc), found, _bare(names)
     parsed = NumpyDocString(doc)
     return any(ln.strip() for ln in parsed["Summary"]), {
-        s for s in ("Parameters", "Returns", "Yields") if parsed[s]}
+        s for s in ("Parameters", "Returns", "Yields") if parsed[s]}, _bare(
+        n for p in parsed["Parameters"] for n in p.name.split(","))
+
+
+def _bare(names) -> set[str]:
+    return {n.strip().lstrip("*") for n in names}
 
 
 def docstring_problems(fn) -> list[str]:
-    """What ``fn``'s docstring lacks of a summary, Parameters, Returns and Yields."""
-    summary, found = sections(inspect.getdoc(fn) or "")
+    """What ``fn``'s docstring lacks of a summary, Parameters (naming every parameter but
+    ``self``, ``cls`` and private ones), Returns and Yields."""
+    summary, found, named = sections(inspect.getdoc(fn) or "")
     problems = [] if summary else ["a one-line summary"]
     params = [p for p in inspect.signature(fn).parameters if p not in ("self", "cls")]
     if params and "Parameters" not in found:
         problems.append("a Parameters section")
+    elif missing := [p for p in params if p not in named and not p.startswith("_")]:
+        problems.append(f"parameters {', '.join(missing)} in Parameters")
     returns, yields = returns_and_yields(fn)
     if returns and "Returns" not in found:
         problems.append("a Returns section")
@@ -167,6 +182,10 @@ def test_every_public_class_has_a_summary():
     ('def f():\n    """Summary."""\n    def g():\n        return 1\n', []),
     ('def f(x):\n    """Summary.\n\n    Parameters\n    ----------\n    x : int\n    """\n'
      '    return None\n', []),
+    ('def f(x, y, *z, _w=1):\n    """Summary.\n\n    Parameters\n    ----------\n    x : int\n'
+     '        Not y : int.\n    """\n', ["parameters y, z in Parameters"]),
+    ('def f(x, y, *z):\n    """Summary.\n\n    Parameters\n    ----------\n    x, y : int\n'
+     '    *z : int\n\n    Returns\n    -------\n    None\n    """\n', []),
     ('def f():\n    """Returns\n    -------\n    int\n    """\n    return 1\n',
      ["a one-line summary"]),
     ('def f():\n    """Summary.\n\n    Returns\n    -------\n    int\n    """\n    yield 1\n',
@@ -175,9 +194,9 @@ def test_every_public_class_has_a_summary():
      '    yield x\n', ["a Parameters section", "a Yields section"]),
 ])
 def test_the_check_can_fail(source, want, tmp_path):
-    """The check itself: a value returned without Returns, parameters without Parameters,
-    no summary, a generator without Yields (also under a decorator); a nested function's
-    return and ``return None`` are not values."""
+    """The check itself: a value returned without Returns, parameters without Parameters or
+    missing from it, no summary, a generator without Yields (also under a decorator); a
+    nested function's return and ``return None`` are not values."""
     path = tmp_path / "m.py"
     path.write_text(source)
     spec = importlib.util.spec_from_file_location("m_api_check", path)

@@ -477,8 +477,12 @@ def synthesize(load: Literal["light", "medium", "heavy"] = "medium",
         Ranges of b/a and d/a explored, in steps of ``step``; c/a follows
         from eq. (10).  d/a is also capped by d < 180 mm.  The refinement
         stays inside them.
+    step : float
+        Grid step of b/a and d/a [1].
     crank_step : float
         Crank lengths explored within the load's range [mm].
+    swing_step : float
+        Grid step of the swing [deg].
     swing_range : (float, float), optional
         Admissible swing [deg] (default the patent's 23–26°): the swing
         criterion and the grid.

@@ -40,14 +40,15 @@ def hermite_table(h, f, f1, f2):
 
     Parameters
     ----------
-    h : float or ndarray
-        Interval widths.
+    h : float
+        The (uniform) interval width.
     f, f1, f2 : ndarray
         Values, first and second derivatives at the nodes, shape (n + 1,).
 
     Returns
     -------
     ndarray, shape (n, 6)
+        a0 … a5 of each piece, in powers of the offset from its left node.
     """
     f, f1, f2 = (np.asarray(a, float) for a in (f, f1, f2))
     a0, a1, a2 = f[:-1], f1[:-1], 0.5 * f2[:-1]

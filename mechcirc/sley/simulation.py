@@ -274,6 +274,9 @@ def simulate(drive: str = "one-side", variant: int = 3, revolutions: int = 5,
         stops after it (later revolutions cannot change it).
     progress : callable, optional
         ``progress(done, total)`` after each revolution.
+    error_estimate : bool
+        Also run at twice the step (scipy methods: rtol/100) for
+        ``SleyResult.error_estimate``.
     **overrides
         :class:`SleyParameters` fields, e.g. ``alpha=math.radians(30)``,
         ``clearance=0.01``, ``omega=120``.
@@ -332,7 +335,7 @@ def simulate_params(params: SleyParameters, revolutions: int = 5, method: str | 
     revolutions, method, points_per_revolution, steps_per_period, rtol, table_points, revolution, progress
         As :func:`simulate`.
     error_estimate : bool
-        Repeat the run at half the step (above).
+        Repeat the run at twice the step (above).
 
     Returns
     -------
