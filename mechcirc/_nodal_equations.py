@@ -113,6 +113,18 @@ def assemble(circuit: Circuit, whole: bool = False) -> NodalSystem:
     them.  ``a`` and ``b`` index the drive's nodes (−1 where a node is the
     reference or there is no drive).
 
+    Parameters
+    ----------
+    circuit : Circuit
+        The network.
+    whole : bool
+        Keep every element and lever (see above).
+
+    Returns
+    -------
+    NodalSystem
+        Nodes, levers, elements, the unloaded ones and the sparse M, D, Kₛ, C.
+
     Raises
     ------
     TopologyError
@@ -173,6 +185,18 @@ def stamps(elements, levers, index: dict[str, int]):
     follow the ``max(index) + 1`` node rows, in order.  The numeric matrices
     (:func:`assemble`) and the symbolic ones (:mod:`mechcirc.interop.formula`)
     are both built from these entries.
+
+    Parameters
+    ----------
+    elements : sequence of Element
+    levers : sequence of Lever
+    index : dict[str, int]
+        Node name → row (−1: the reference).
+
+    Yields
+    ------
+    tuple
+        ``(kind, row, col, sign, source, ratio)``.
     """
     n_nodes = sum(1 for i in index.values() if i >= 0)
     for e in elements:
@@ -197,6 +221,18 @@ def combine(dc, m, k, omega):
     aligned nonzeros of a sparse pattern, in any float precision) and
     ``omega`` broadcasts against them.  Entries beyond float64 (ω·m above
     1.8e308) come out non-finite; callers flag them.
+
+    Parameters
+    ----------
+    dc, m, k : ndarray
+        D + C, M and Kₛ.
+    omega : float or ndarray
+        ω [rad/s].
+
+    Returns
+    -------
+    ndarray of complex
+        A(ω), of the broadcast shape.
     """
     with np.errstate(over="ignore", invalid="ignore"):
         return dc + 1j * susceptance(m, k, omega)
@@ -209,7 +245,20 @@ def susceptance(m, k, omega):
 
 
 def dense_matrices(system: NodalSystem, omega: ArrayLike) -> NDArray[np.complex128]:
-    """A(ω) for each ω as one dense array of shape (n_ω, n, n)."""
+    """A(ω) for each ω as one dense array of shape (n_ω, n, n).
+
+    Parameters
+    ----------
+    system : NodalSystem
+        From :func:`assemble`.
+    omega : array_like
+        ω [rad/s], shape (n_ω,).
+
+    Returns
+    -------
+    ndarray of complex, shape (n_ω, n, n)
+        A(ω) [N·s/m].
+    """
     omega = np.asarray(omega)
     omega = omega.astype(complex if np.iscomplexobj(omega) else float).reshape(-1, 1, 1)
     dc = (system.D + system.C).toarray()
@@ -224,6 +273,16 @@ def held(system: NodalSystem) -> NodalSystem:
     without the near-singular A at an anti-resonance.  Like a lever, the
     constraint goes into the symmetric C block; the drive of the returned
     system points at q (``a = n``, ``b = −1``).
+
+    Parameters
+    ----------
+    system : NodalSystem
+        From :func:`assemble`, with a drive.
+
+    Returns
+    -------
+    NodalSystem
+        One unknown larger, driven at q.
     """
     import scipy.sparse as sp
 

@@ -626,6 +626,8 @@ def peak(result: "Sweep | Circuit", omega_min: float | None = None,
     ----------
     result : Sweep or Circuit
         A sweep (its band and grid are used unless given) or a circuit.
+    omega_min, omega_max : float, optional
+        The band [rad/s] (needed with a circuit).
     quantity : {"Q0", "v0", "K", "S"}, optional
         ``"S"`` (1/K) gives the smallest |K| as 1/value.  Default: ``"Q0"`` for a velocity drive, ``"v0"`` for a force drive.
     resonances : list of Resonance, optional
@@ -635,6 +637,8 @@ def peak(result: "Sweep | Circuit", omega_min: float | None = None,
         Relative tolerance in ω asked of the Brent search.  |q| is flat at its
         maximum, so the value is right to about machine precision while ω is
         located to about √eps ≈ 1e-8 relative (the rounding of |q| hides it).
+    method : {"auto", "sp", "nodal"}
+        As :func:`sweep` (a sweep's own method when ``result`` is a sweep).
 
     Returns
     -------

@@ -114,7 +114,16 @@ def _format(root: Node) -> str:
 
 
 def leaves(root: Node) -> Iterator[Element]:
-    """The elements under ``root``, left to right."""
+    """The elements under ``root``, left to right.
+
+    Parameters
+    ----------
+    root : Node
+
+    Yields
+    ------
+    Element
+    """
     stack = [root]
     while stack:
         node = stack.pop()
@@ -127,7 +136,16 @@ def leaves(root: Node) -> Iterator[Element]:
 
 
 def depth(root: Node) -> int:
-    """Number of levels of the tree (a leaf alone: 1)."""
+    """Number of levels of the tree (a leaf alone: 1).
+
+    Parameters
+    ----------
+    root : Node
+
+    Returns
+    -------
+    int
+    """
     deepest, stack = 1, [(root, 1)]
     while stack:
         node, d = stack.pop()
@@ -140,7 +158,16 @@ def depth(root: Node) -> int:
 
 
 def postorder(root: Node) -> list[Node]:
-    """Every node of the tree, children before their parent (iterative)."""
+    """Every node of the tree, children before their parent (iterative).
+
+    Parameters
+    ----------
+    root : Node
+
+    Returns
+    -------
+    list of Node
+    """
     order, stack = [], [root]
     while stack:
         node = stack.pop()

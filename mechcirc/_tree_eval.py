@@ -54,6 +54,23 @@ def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: boo
     as the single design's evaluation.  The values must be positive and finite
     (a leaf group is then present exactly where it has leaves).
 
+    Parameters
+    ----------
+    root : Node
+        The series–parallel tree.
+    omega : array_like
+        ω [rad/s].
+    keep, condition, error : bool
+        As above.
+    designs : tuple of (dict, dict), optional
+        ``(scaled, ratios)`` of D designs.
+
+    Returns
+    -------
+    ndarray of complex or tuple
+        K [m/(N·s)]; ``(K, values)`` with ``keep``, ``(K, bound)`` with ``error`` or
+        ``condition``.
+
     Notes
     -----
     Leaves are not evaluated one by one: the leaves of a series node add up
@@ -175,7 +192,12 @@ _KERNEL: list = []
 
 
 def compiled_evaluator():
-    """The compiled plan evaluator, or None without numba (imported on first use)."""
+    """The compiled plan evaluator, or None without numba (imported on first use).
+
+    Returns
+    -------
+    callable or None
+    """
     if not _KERNEL:
         from . import _sp_kernel
 
@@ -324,6 +346,14 @@ def plan(root: Node) -> Plan:
     terms, exactly as :func:`evaluate`'s numpy path forms them at every call
     (the same IEEE operations in the same order, here vectorised over the
     leaves and, for a batch of designs, over the designs: :meth:`Plan.with_values`).
+
+    Parameters
+    ----------
+    root : Node
+
+    Returns
+    -------
+    Plan
     """
     found = _PLANS.get(root)
     if found is not None:
@@ -417,6 +447,22 @@ def evaluate_designs(p: Plan, omega: NDArray, error: bool = False, kernel=None):
     (D = 1) is the single sweep.  Without numba (or with ``mechcirc._jit.COMPILED``
     False) a plan that carries :attr:`Plan.numpy` is evaluated by :func:`evaluate`
     over its designs, in chunks of rows (the same numbers); RuntimeError otherwise.
+
+    Parameters
+    ----------
+    p : Plan
+        From :func:`plan`, with the designs' values.
+    omega : ndarray
+        ω [rad/s], shape (W,) or (D, W).
+    error : bool
+        Also the bound of the relative error.
+    kernel : callable, optional
+        The compiled evaluator (:func:`compiled_evaluator` when None).
+
+    Returns
+    -------
+    tuple of (ndarray, ndarray or None)
+        K [m/(N·s)] and the bound, shape (D, W).
     """
     if kernel is None and _jit.COMPILED is not False:
         kernel = compiled_evaluator()
@@ -687,6 +733,23 @@ def push_down(root: Node, values: dict, Q: NDArray, v: NDArray,
 
     Series children share Q, parallel children share v, a lever scales
     v by r and Q by 1/r.  Returns ``{element name: (Q, v)}`` arrays over ω.
+
+    Parameters
+    ----------
+    root : Node
+    values : dict
+        ``id(node)`` → K, from ``evaluate(root, omega, keep=True)``.
+    Q : ndarray
+        The root's force [N].
+    v : ndarray
+        The root's velocity [m/s].
+    omega : ndarray
+        ω [rad/s].
+
+    Returns
+    -------
+    dict[str, tuple of ndarray]
+        Element name → (Q, v).
     """
     out: dict[str, tuple] = {}
     stack = [(root, Q, v)]

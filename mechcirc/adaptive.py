@@ -38,6 +38,9 @@ def adaptive_sweep(circuit: Circuit, omega_min: float, omega_max: float, *,
 
     Parameters
     ----------
+    circuit : Circuit
+    omega_min, omega_max : float
+        The band [rad/s].
     tol : float
         Largest relative deviation [1] of |K| (undamped poles and zeros divided
         out) at an interval's midpoint from the log–log interpolation of its ends.
@@ -47,6 +50,8 @@ def adaptive_sweep(circuit: Circuit, omega_min: float, omega_max: float, *,
         Upper bound on the number of points (default
         :data:`~mechcirc.limits.MAX_ADAPTIVE_POINTS`); reaching it is recorded
         in ``result.notes``.
+    method : {"auto", "sp", "nodal"}
+        As :func:`mechcirc.sweep`.
 
     Returns
     -------

@@ -139,6 +139,14 @@ def from_circuits(circuits) -> "Designs":
     drive, in the same order, differing only in values, η, ratios and amplitude),
     e.g. a scene linearised at each crank angle.
 
+    Parameters
+    ----------
+    circuits : sequence of Circuit
+
+    Returns
+    -------
+    Designs
+
     Raises
     ------
     InputError

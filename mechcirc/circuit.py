@@ -131,6 +131,19 @@ def law_terms(kind: str, scaled_value, admittance: bool = False) -> tuple:
     ZeroDivisionError (callers hold ``np.errstate``).  Exactly one term is nonzero.
     Series–parallel reduction adds these terms over a node's leaves; nodal
     analysis stamps the same laws (``nodal.stamps``).
+
+    Parameters
+    ----------
+    kind : {"m", "k", "c"}
+    scaled_value : float or ndarray
+        value·η.
+    admittance : bool
+        The terms of 1/K instead of K.
+
+    Returns
+    -------
+    tuple of 3
+        ``(real, inv, omega)``.
     """
     law = LAWS.get(kind)
     if law is None:
@@ -153,6 +166,20 @@ def element_mobility(kind: str, scaled_value: float, omega: ArrayLike) -> NDArra
 
     ω = 0 gives K = ∞ for a mass and 0 for a spring (no warnings are raised;
     callers flag non-finite results).
+
+    Parameters
+    ----------
+    kind : {"m", "k", "c"}
+        Mass, spring or damper.
+    scaled_value : float
+        value·η [kg, N/m or N·s/m].
+    omega : array_like
+        ω [rad/s].
+
+    Returns
+    -------
+    ndarray of complex
+        K(ω) [m/(N·s)].
     """
     law = LAWS.get(kind)
     if law is None:
@@ -226,6 +253,14 @@ def units_of(drive: Drive | None) -> dict[str, str]:
 
     Translational: m/s, N, m, m/(N·s); rotary (``drive.rotational``): rad/s,
     N·m, rad, rad/(N·m·s).
+
+    Parameters
+    ----------
+    drive : Drive or None
+
+    Returns
+    -------
+    dict[str, str]
     """
     if drive is not None and drive.rotational:
         return {"v": "rad/s", "Q": "N·m", "x": "rad", "K": "rad/(N·m·s)"}
@@ -404,7 +439,17 @@ class Circuit:
 
 
 def node_names(elements, levers=()) -> list[str]:
-    """The node names of ``elements`` and ``levers``, in order of first appearance."""
+    """The node names of ``elements`` and ``levers``, in order of first appearance.
+
+    Parameters
+    ----------
+    elements : sequence of Element
+    levers : sequence of Lever
+
+    Returns
+    -------
+    list of str
+    """
     seen: dict[str, None] = {}
     for e in elements:
         seen.setdefault(e.n1)

@@ -44,7 +44,17 @@ _QUOTED = re.compile(r"""(?<!\w)(['"])((?:\\.|(?!\1)[^\\\n])*)\1(?!\w)""")
 
 
 def clip(text: str, limit: int = MAX_QUOTED) -> str:
-    """``text`` cut to about ``limit`` characters, ending ``… (N characters)`` when cut."""
+    """``text`` cut to about ``limit`` characters, ending ``… (N characters)`` when cut.
+
+    Parameters
+    ----------
+    text : str
+    limit : int
+
+    Returns
+    -------
+    str
+    """
     if len(text) <= limit:
         return text
     return f"{text[:max(limit - 25, 10)]}… ({len(text):,} characters)"
@@ -53,7 +63,16 @@ def clip(text: str, limit: int = MAX_QUOTED) -> str:
 def shorten(message: str) -> str:
     """``message`` with every quoted piece of user text longer than :data:`MAX_QUOTED`
     cut to its first 50 and last 25 characters and its length, and the whole at most
-    :data:`MAX_MESSAGE` characters: an error line stays a line."""
+    :data:`MAX_MESSAGE` characters: an error line stays a line.
+
+    Parameters
+    ----------
+    message : str
+
+    Returns
+    -------
+    str
+    """
     if len(message) <= MAX_QUOTED:
         return message
 

@@ -46,6 +46,14 @@ def explain(circuit: Circuit) -> tuple[list[Step], str]:
 
     Raises :class:`~mechcirc.errors.NotSeriesParallelError` when the network
     has no series–parallel tree (nodal analysis has no steps to show).
+
+    Parameters
+    ----------
+    circuit : Circuit
+
+    Returns
+    -------
+    tuple of (list of Step, str)
     """
     tree = circuit.tree
     labels: dict[int, str] = {}
@@ -88,7 +96,16 @@ def explain(circuit: Circuit) -> tuple[list[Step], str]:
 
 
 def explain_lines(circuit: Circuit) -> list[str]:
-    """:func:`explain` as printable lines (what ``mechcirc check --explain`` shows)."""
+    """:func:`explain` as printable lines (what ``mechcirc check --explain`` shows).
+
+    Parameters
+    ----------
+    circuit : Circuit
+
+    Returns
+    -------
+    list of str
+    """
     steps, root = explain(circuit)
     d = circuit.drive
     lines = [f"K seen by drive {d.name} between {d.n1} and {d.n2}, "

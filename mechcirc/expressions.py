@@ -74,6 +74,14 @@ def postorder(root: Expr) -> list[Expr]:
 
     Iterative: a flat sum of thousands of terms nests as deep as it is long
     (``((1 + 1) + 1) + ...``), beyond Python's recursion limit.
+
+    Parameters
+    ----------
+    root : Expr
+
+    Returns
+    -------
+    list of Expr
     """
     out: list[Expr] = []
     stack: list[tuple[Expr, bool]] = [(root, False)]
@@ -219,6 +227,18 @@ def parse_expression(text: str, *, source: str = "<string>", line: int = 0,
                      col: int = 1) -> Expr:
     """Parse ``text`` into an :class:`Expr`; ``col`` is where ``text`` starts (1-based).
 
+    Parameters
+    ----------
+    text : str
+    source : str
+        File name for errors.
+    line, col : int
+        Where ``text`` starts.
+
+    Returns
+    -------
+    Expr
+
     Raises
     ------
     NetlistError
@@ -243,6 +263,22 @@ def evaluate(expr: Expr, params: Mapping[str, float], *, source: str = "<string>
     variable; names not given have 0), returns ``(value, derivative)``: the
     exact derivative of the expression, carried through every operation by the
     rules of calculus (forward mode), as sensitivities need it.
+
+    Parameters
+    ----------
+    expr : Expr
+    params : Mapping[str, float]
+    source : str
+        File name for errors.
+    line, col : int
+        Where the expression text starts.
+    tangent : Mapping[str, float], optional
+        Derivatives of the parameters.
+
+    Returns
+    -------
+    float or tuple of (float, float)
+        The value, or ``(value, derivative)`` with ``tangent``.
     """
     base = col - 1
 
@@ -365,6 +401,18 @@ def evaluate_array(expr: Expr, params: Mapping, size: int):
     one to get the located error).  The operators are numpy's IEEE operations, as
     :func:`evaluate`'s; the functions are applied value by value with the same
     ``math`` functions, so each design's value is the one :func:`evaluate` gives.
+
+    Parameters
+    ----------
+    expr : Expr
+    params : Mapping[str, float or ndarray]
+    size : int
+        Number of designs.
+
+    Returns
+    -------
+    tuple of (ndarray, ndarray of bool)
+        ``(values, bad)``, shape (size,).
     """
     import numpy as np
 

@@ -80,6 +80,14 @@ def element_forces(circuit: Circuit, omega: float, *, method: Method = "auto"
                    ) -> tuple[list[ElementForce], complex, complex, int]:
     """Q and v of every loaded element at ``omega`` [rad/s].
 
+    Parameters
+    ----------
+    circuit : Circuit
+    omega : float
+        ω [rad/s].
+    method : {"auto", "sp", "nodal"}
+        As :func:`mechcirc.sweep`.
+
     Returns
     -------
     rows : list of ElementForce

@@ -22,6 +22,13 @@ def write_sweep_csv(result, path, *, unit: str = "rad/s", extra: dict | None = N
     appears whole or not at all, pass a temporary path from
     :func:`mechcirc.outputs.atomic_path` or :class:`mechcirc.outputs.OutputSet`
     (as ``mechcirc sweep -o`` does).
+
+    Parameters
+    ----------
+    result : Sweep
+    path : str or PathLike
+    unit : {"rad/s", "Hz", "rpm"}
+    extra : dict[str, ndarray], optional
     """
     name = FREQUENCY_UNITS[unit][0]
     columns = [result.omega, result.K.real, result.K.imag, result.Q0.real,

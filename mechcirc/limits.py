@@ -61,7 +61,22 @@ FORMULA_SECONDS = 20.0
 
 
 def check_count(value, what: str, limit: int, *, least: int = 1, why: str = "") -> int:
-    """``value`` as an int in ``least..limit``, or :class:`InputError` naming the limit."""
+    """``value`` as an int in ``least..limit``, or :class:`InputError` naming the limit.
+
+    Parameters
+    ----------
+    value : object
+    what : str
+        What it counts (in the message).
+    limit, least : int
+        The bounds.
+    why : str
+        Why the limit (in the message).
+
+    Returns
+    -------
+    int
+    """
     if isinstance(value, bool) or not isinstance(value, int):
         try:
             as_float = float(value)

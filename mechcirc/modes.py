@@ -138,6 +138,16 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
     The roots are those of :func:`~mechcirc.resonances.find_resonances` (same
     order, same values); see the module docstring for what each mode holds.
 
+    Parameters
+    ----------
+    circuit : Circuit
+    omega_max : float, optional
+        [rad/s]; None: every root.
+
+    Returns
+    -------
+    list of Mode
+
     Examples
     --------
     >>> from mechcirc import parse
@@ -329,6 +339,10 @@ def sweep_sensitivity(circuit: Circuit, omega, names=None) -> SweepSensitivity:
         Angular frequencies [rad/s], > 0.
     names : iterable of str, optional
         Elements, levers or ``.param`` values; default every one.
+
+    Returns
+    -------
+    SweepSensitivity
 
     Raises
     ------

@@ -310,6 +310,8 @@ def cam_cycle(law_name: str, rise: float, dwell: float, ret: float, stroke: floa
     stroke : float
         Lift h [m or rad]; any finite nonzero number (negative: the follower
         moves down first).
+    return_law : str, optional
+        One of :data:`LAWS` for the return.
 
     Returns
     -------
@@ -420,6 +422,8 @@ def motion_table(angle_deg, displacement, spec: str = "motion=<table>", *, slope
         within :data:`PERIODIC_TOLERANCE` of the range (then set equal).
     spec : str
         What to call it (the netlist's ``motion=PATH``).
+    slope, curvature : array_like, optional
+        dx/dθ [per rad] and d²x/dθ² [per rad²] at every row.
 
     Returns
     -------
@@ -465,6 +469,16 @@ def read_motion_table(path: str | os.PathLike, spec: str | None = None) -> Motio
     first + 360, within 1e-9°), the two ends' displacements must meet within
     :data:`PERIODIC_TOLERANCE` of the range, every value finite.  Nothing in
     the file is executed.
+
+    Parameters
+    ----------
+    path : str or PathLike
+    spec : str, optional
+        The motion's ``spec`` (default ``motion=PATH``).
+
+    Returns
+    -------
+    Motion
 
     Raises
     ------

@@ -872,6 +872,14 @@ def expressions_of(circuit: Circuit) -> dict | None:
     Maps ``("param", NAME)`` and ``(ELEMENT, "value" | "eta" | "ratio" |
     "velocity" | "force")`` to ``(Expr, unit factor)``; the SI value is the
     expression's value times the factor.  ``None`` for circuits built in code.
+
+    Parameters
+    ----------
+    circuit : Circuit
+
+    Returns
+    -------
+    dict or None
     """
     expressions = _EXPRESSIONS.get(id(circuit))
     if expressions is not None:

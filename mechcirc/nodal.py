@@ -40,7 +40,18 @@ __all__ = ["NodalSystem", "Solution", "assemble", "stamps", "combine", "matrix",
 
 
 def matrix(system: NodalSystem, omega: float):
-    """A(ω) = D + C + j(ωM − Kₛ/ω) of ``system`` as a sparse CSC matrix."""
+    """A(ω) = D + C + j(ωM − Kₛ/ω) of ``system`` as a sparse CSC matrix.
+
+    Parameters
+    ----------
+    system : NodalSystem
+    omega : float
+        [rad/s].
+
+    Returns
+    -------
+    scipy.sparse.csc_matrix
+    """
     return pattern(system).csc(float(omega))
 
 
@@ -236,6 +247,25 @@ def solve(system: NodalSystem, omega: ArrayLike, *, refine: bool = True,
     triangular solve, done for a chunk of frequencies at once.  With
     ``keep_x=False`` the solutions are not kept (``Solution.x`` is None),
     which bounds the memory of long sweeps of large networks.
+
+    Parameters
+    ----------
+    system : NodalSystem
+    omega : array_like
+        [rad/s].
+    refine : bool
+        Iterative refinement.
+    steps : int
+        Most refinement steps.
+    limits : bool
+        Apply the singular-point convention (K = ∞·j at a pole, 0 at a zero).
+    keep_x : bool
+        Keep the solutions.
+
+    Returns
+    -------
+    Solution
+        x, K [m/(N·s)], its relative error, the singular points.
     """
     omega = np.asarray(omega, dtype=float).reshape(-1)
     ok = np.isfinite(omega) & (omega > 0)
@@ -430,6 +460,17 @@ def solve_unit(system: NodalSystem, omega: ArrayLike, *, refine: bool = True
 
     Frequencies where A is exactly singular, or ω is 0 or ∞ (where A is not
     finite), give rows of NaN; callers flag them.
+
+    Parameters
+    ----------
+    system : NodalSystem
+    omega : array_like
+        [rad/s].
+    refine : bool
+
+    Returns
+    -------
+    ndarray of complex
     """
     return cast(NDArray[np.complex128], solve(system, omega, refine=refine).x)
 
@@ -444,6 +485,17 @@ def evaluate_complex(system: NodalSystem, s: ArrayLike
     rounding and the sensitivity to rounding the data, eps × Σ|x_r a_rc x_c|):
     used to polish resonances on the circuit's own K.  NaN where A(s) is
     singular.
+
+    Parameters
+    ----------
+    system : NodalSystem
+    s : array_like of complex
+        [rad/s].
+
+    Returns
+    -------
+    tuple of (ndarray of complex, ndarray)
+        K(s) [m/(N·s)] and its absolute error.
     """
     s = np.asarray(s, dtype=complex).reshape(-1)
     omega = -1j * s
@@ -454,7 +506,18 @@ def evaluate_complex(system: NodalSystem, s: ArrayLike
 
 
 def mobility(system: NodalSystem, omega: ArrayLike) -> NDArray[np.complex128]:
-    """K(ω) [m/(N·s)] seen by the drive, by nodal analysis."""
+    """K(ω) [m/(N·s)] seen by the drive, by nodal analysis.
+
+    Parameters
+    ----------
+    system : NodalSystem
+    omega : array_like
+        [rad/s].
+
+    Returns
+    -------
+    ndarray of complex
+    """
     return solve(system, omega, keep_x=False).K
 
 
@@ -463,6 +526,16 @@ def mobility_and_error(system: NodalSystem, omega: ArrayLike
     """K(ω) [m/(N·s)] and its estimated relative error, from one refined solve.
 
     See :class:`Solution` for the estimate and the singular-point convention.
+
+    Parameters
+    ----------
+    system : NodalSystem
+    omega : array_like
+        [rad/s].
+
+    Returns
+    -------
+    tuple of (ndarray of complex, ndarray)
     """
     s = solve(system, omega, keep_x=False)
     return s.K, s.error

@@ -36,6 +36,10 @@ _DESCRIPTORS = ("/dev/stdout", "/dev/stderr", "/dev/fd/", "/proc/self/fd/")
 def output_target(path: str | os.PathLike) -> tuple[Path, bool]:
     """The file that writing ``path`` changes, and whether it is a stream written in place.
 
+    Parameters
+    ----------
+    path : str or PathLike
+
     Returns
     -------
     target : Path
@@ -123,6 +127,15 @@ def atomic_path(path: str | os.PathLike):
     (``KeyboardInterrupt`` included) the temporary file is removed.  A symbolic
     link is followed; a FIFO or character device is yielded itself, to be
     written in place (:func:`output_target`).
+
+    Parameters
+    ----------
+    path : str or PathLike
+
+    Yields
+    ------
+    Path
+        The temporary file (or the stream) to write.
     """
     target, stream = output_target(path)
     if stream:
@@ -141,7 +154,20 @@ def atomic_path(path: str | os.PathLike):
 
 @contextlib.contextmanager
 def atomic_open(path: str | os.PathLike, mode: str = "w", **kwargs):
-    """Open a temporary file for writing; it replaces ``path`` when the block ends cleanly."""
+    """Open a temporary file for writing; it replaces ``path`` when the block ends cleanly.
+
+    Parameters
+    ----------
+    path : str or PathLike
+    mode : str
+        A write mode of :func:`open`.
+    **kwargs
+        Further arguments of :func:`open`.
+
+    Yields
+    ------
+    file object
+    """
     with atomic_path(path) as tmp:
         with open(tmp, mode, **kwargs) as fh:
             yield fh

@@ -58,7 +58,16 @@ UNDAMPED_ZETA = 1e-12
 
 
 def rpm_to_omega(rpm: float) -> float:
-    """Shaft speed [rev/min] to angular frequency Ω [rad/s]."""
+    """Shaft speed [rev/min] to angular frequency Ω [rad/s].
+
+    Parameters
+    ----------
+    rpm : float
+
+    Returns
+    -------
+    float
+    """
     return rpm * 2 * math.pi / 60
 
 

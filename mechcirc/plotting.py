@@ -157,6 +157,10 @@ def plot_sweep(result, title: str | None = None, resonances=(), peak=None, *, ax
 
     Parameters
     ----------
+    result : Sweep
+    title : str, optional
+    resonances : sequence of Resonance
+    peak : Peak, optional
     ax : matplotlib Axes, optional
         Draw only |K| (with the flags and resonance lines) on this Axes and
         return it.
@@ -343,6 +347,11 @@ def plot_transient(result, nodes=None, what: str = "x", elements=None, title: st
 
     Parameters
     ----------
+    result : TransientResult
+    nodes : sequence of str, optional
+    what : {"x", "v"}
+    elements : sequence of str, optional
+    title : str, optional
     ax : matplotlib Axes, optional
         Draw only the nodes' panel there and return it.
     fig : matplotlib Figure, optional
@@ -441,6 +450,20 @@ def plot_forces(rows, omega: float, name: str = "circuit", title: str | None = N
     ``units``: :func:`mechcirc.circuit.units_of` of the circuit's drive (default
     translational: N; a rotary drive's moments are in N·m).
     Returns ``ax`` when given, else the new Figure.
+
+    Parameters
+    ----------
+    rows : list of ElementForce
+    omega : float
+        [rad/s].
+    name : str
+    title : str, optional
+    ax : matplotlib.axes.Axes, optional
+    units : dict, optional
+
+    Returns
+    -------
+    matplotlib.axes.Axes or matplotlib.figure.Figure
     """
     import numpy as np
     from matplotlib.patches import Patch
@@ -477,6 +500,20 @@ def plot_comparison(comparison, name: str = "circuit", measured: str = "measured
     Two panels, on ``fig`` when given (else a new Figure); returns the Figure.
     ``units``: :func:`mechcirc.circuit.units_of` of the model's drive (default
     translational: |K| in m/(N·s); rotary: rad/(N·m·s)).
+
+    Parameters
+    ----------
+    comparison : Comparison
+        From :func:`mechcirc.interop.skrf.compare`.
+    name, measured : str
+        Legend labels.
+    title : str, optional
+    fig : matplotlib.figure.Figure, optional
+    units : dict, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
     """
     import numpy as np
 
@@ -516,6 +553,21 @@ def plot_study(result, params, column: str, name: str = "study", title: str | No
     names to their units, as the study gives them
     (:func:`mechcirc.study.column_units` of its spec); labels go without a
     unit where it has none (a count, or no ``units``).
+
+    Parameters
+    ----------
+    result : StudyResult
+    params : sequence of str
+        The parameter columns.
+    column : str
+    name : str
+    title : str, optional
+    ax : matplotlib.axes.Axes, optional
+    units : dict[str, str], optional
+
+    Returns
+    -------
+    matplotlib.axes.Axes or matplotlib.figure.Figure
     """
     import numpy as np
 
@@ -571,6 +623,16 @@ def plot_periodic(result, title: str | None = None, *, fig=None):
 
     Two panels on ``fig`` (a new Figure by default), which is returned.
     Harmonics near a resonance are drawn in red.
+
+    Parameters
+    ----------
+    result : PeriodicResult
+    title : str, optional
+    fig : matplotlib.figure.Figure, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
     """
     import numpy as np
 
@@ -627,7 +689,19 @@ def plot_speed_map(result, title: str | None = None, *, ax=None, min_weight: flo
     :class:`mechcirc.periodic.SpeedMap`), with a line at each speed where a harmonic
     meets a resonance (k·Ω = ωₙ) whose share of the drive velocity is at least
     ``min_weight``, labelled by k (in ``result.units``: N·m for a rotary drive).
-    Returns ``ax`` when given, else the Figure."""
+    Returns ``ax`` when given, else the Figure.
+
+    Parameters
+    ----------
+    result : SpeedMap
+    title : str, optional
+    ax : matplotlib.axes.Axes, optional
+    min_weight : float
+
+    Returns
+    -------
+    matplotlib.axes.Axes or matplotlib.figure.Figure
+    """
     import numpy as np
 
     from .circuit import units_of
@@ -669,6 +743,17 @@ def plot_mode(mode, name: str = "circuit", title: str | None = None, *, ax=None)
     The nodes in the netlist's order on x; the real part of the normalised
     velocity (the largest is 1) joined by a line, and for a damped mode its
     modulus as a dashed envelope.  Returns ``ax`` when given, else the new Figure.
+
+    Parameters
+    ----------
+    mode : Mode
+    name : str
+    title : str, optional
+    ax : matplotlib.axes.Axes, optional
+
+    Returns
+    -------
+    matplotlib.axes.Axes or matplotlib.figure.Figure
     """
     import numpy as np
 
@@ -702,7 +787,18 @@ def plot_mode(mode, name: str = "circuit", title: str | None = None, *, ax=None)
 
 def plot_modes(found, name: str = "circuit", *, fig=None):
     """One panel per mode of ``found`` (from :func:`mechcirc.modes.modes`) by
-    :func:`plot_mode`, stacked, on ``fig`` when given (else a new Figure); returns the Figure."""
+    :func:`plot_mode`, stacked, on ``fig`` when given (else a new Figure); returns the Figure.
+
+    Parameters
+    ----------
+    found : list of Mode
+    name : str
+    fig : matplotlib.figure.Figure, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     fig = fig if fig is not None else _figure(
         (max(6.0, 0.45 * max((len(m.shape) for m in found), default=0) + 2),
          2.6 * max(len(found), 1)))

@@ -62,6 +62,15 @@ def reduce_circuit(circuit: Circuit) -> Reduction:
     Warns :class:`~mechcirc.errors.UnloadedElementWarning` naming elements on
     no path between the terminals.
 
+    Parameters
+    ----------
+    circuit : Circuit
+
+    Returns
+    -------
+    Reduction
+        The tree and the unloaded elements.
+
     Raises
     ------
     TopologyError
@@ -90,7 +99,23 @@ def reduce_circuit(circuit: Circuit) -> Reduction:
 
 def reduce_network(elements, levers, a: str, b: str, *, drive_line: int = 0,
                    source: str = "<string>") -> Reduction:
-    """Series–parallel reduction of ``elements`` and ``levers`` seen between nodes ``a`` and ``b``."""
+    """Series–parallel reduction of ``elements`` and ``levers`` seen between nodes ``a`` and ``b``.
+
+    Parameters
+    ----------
+    elements : sequence of Element
+    levers : sequence of Lever
+    a, b : str
+        The terminals.
+    drive_line : int
+        The drive's line, for errors.
+    source : str
+        File name, for errors.
+
+    Returns
+    -------
+    Reduction
+    """
     unloaded: list[str] = []
     if not levers:
         # The common case, without the per-element ``_Edge`` records.

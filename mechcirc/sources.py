@@ -28,6 +28,16 @@ def read_bytes(path: str | os.PathLike, expected: str) -> bytes:
     ``MAX_INPUT_BYTES + 1`` bytes are ever read, so a file that grows while
     it is read cannot exhaust memory either.
 
+    Parameters
+    ----------
+    path : str or PathLike
+    expected : str
+        What the file should be, for messages.
+
+    Returns
+    -------
+    bytes
+
     Raises
     ------
     NetlistError
@@ -67,6 +77,15 @@ def read_source(path: str | os.PathLike, expected: str) -> str:
     ``expected`` names what the file should be (e.g. ``"a .mcir netlist"``),
     for the messages.
 
+    Parameters
+    ----------
+    path : str or PathLike
+    expected : str
+
+    Returns
+    -------
+    str
+
     Raises
     ------
     NetlistError
@@ -96,6 +115,14 @@ def split_lines(text: str) -> list[str]:
     (U+0085) or U+2028/U+2029 is a character of its line, not a line break,
     so a reported line number always names a line that ``wc -l`` and an
     editor show (TOML agrees: only LF and CRLF end a line there).
+
+    Parameters
+    ----------
+    text : str
+
+    Returns
+    -------
+    list of str
     """
     lines = text.split("\n")
     if lines and lines[-1] == "":
@@ -104,7 +131,17 @@ def split_lines(text: str) -> list[str]:
 
 
 def line_col(text: str, index: int) -> tuple[int, int]:
-    """1-based (line, column) of the character at ``index`` (lines as :func:`split_lines`)."""
+    """1-based (line, column) of the character at ``index`` (lines as :func:`split_lines`).
+
+    Parameters
+    ----------
+    text : str
+    index : int
+
+    Returns
+    -------
+    tuple of (int, int)
+    """
     index = max(0, min(index, len(text)))
     line = text.count("\n", 0, index) + 1
     return line, index - (text.rfind("\n", 0, index) + 1) + 1
@@ -112,7 +149,16 @@ def line_col(text: str, index: int) -> tuple[int, int]:
 
 # ------------------------------------------------------------------ values
 def finite_number(value) -> TypeGuard[float]:
-    """A TOML integer or float that is a finite float64 (not a bool, not ``10**400``)."""
+    """A TOML integer or float that is a finite float64 (not a bool, not ``10**400``).
+
+    Parameters
+    ----------
+    value : object
+
+    Returns
+    -------
+    bool
+    """
     if not isinstance(value, (int, float)) or isinstance(value, bool):
         return False
     try:
@@ -124,7 +170,19 @@ def finite_number(value) -> TypeGuard[float]:
 def number_error(value, what: str, *, positive: bool = False,
                  allow_zero: bool = False) -> tuple[str, str] | None:
     """None for a finite number (> 0 with ``positive``, ≥ 0 with ``allow_zero`` too),
-    else ``(message, what is right)`` for the located error of every reader."""
+    else ``(message, what is right)`` for the located error of every reader.
+
+    Parameters
+    ----------
+    value : object
+    what : str
+        The value's name, for the message.
+    positive, allow_zero : bool
+
+    Returns
+    -------
+    tuple of (str, str) or None
+    """
     ok = finite_number(value)
     if ok and positive:
         ok = value > 0 or (allow_zero and value == 0)
@@ -135,7 +193,16 @@ def number_error(value, what: str, *, positive: bool = False,
 
 
 def brief(value) -> str:
-    """``repr(value)`` cut short for a message (a 400-digit integer is not a message)."""
+    """``repr(value)`` cut short for a message (a 400-digit integer is not a message).
+
+    Parameters
+    ----------
+    value : object
+
+    Returns
+    -------
+    str
+    """
     text = repr(value)
     return text if len(text) <= 60 else text[:57] + "..."
 
@@ -145,7 +212,17 @@ _HEADER = re.compile(r"^\s*\[\[?\s*([^\]]+?)\s*\]\]?\s*(#.*)?$")
 
 
 def load_toml(text: str, source: str) -> dict:
-    """Parse TOML ``text``; a syntax error becomes a :class:`NetlistError` at its line and column."""
+    """Parse TOML ``text``; a syntax error becomes a :class:`NetlistError` at its line and column.
+
+    Parameters
+    ----------
+    text, source : str
+        The file's text and name, for errors.
+
+    Returns
+    -------
+    dict
+    """
     import tomllib
 
     try:
@@ -170,6 +247,18 @@ def locate(text: str, section: str | None, key: str, value: str | None = None,
 
     ``section=None`` means the top level.  With ``value``, the column of that
     quoted string on the line.  (0, 0) when not found.
+
+    Parameters
+    ----------
+    text : str
+    section : str or None
+    key : str
+    value : str, optional
+    occurrence : int
+
+    Returns
+    -------
+    tuple of (int, int)
     """
     in_section = section is None
     seen = -1
@@ -200,6 +289,15 @@ def locate_path(text: str, path: tuple[str, ...]) -> tuple[int, int]:
     Tries ``[a.b]`` then ``c = …``; ``[a]`` then ``b = {c = …}`` (the column of
     ``c`` on that line when it is there); the header ``[a.b.c]`` itself (or
     the first ``[a.b.c.x]``); and so on up to the top level.  (0, 0) when nothing matches.
+
+    Parameters
+    ----------
+    text : str
+    path : tuple of str
+
+    Returns
+    -------
+    tuple of (int, int)
     """
     path = tuple(str(p) for p in path)
     for cut in range(len(path) - 1, -1, -1):
@@ -224,7 +322,24 @@ def locate_path(text: str, path: tuple[str, ...]) -> tuple[int, int]:
 
 def located(text: str, source: str, message: str, section: str | None, key: str,
             value=None, occurrence: int = 0, expected: str | None = None) -> NetlistError:
-    """A :class:`NetlistError` placed at ``key`` of ``[section]`` (see :func:`locate`)."""
+    """A :class:`NetlistError` placed at ``key`` of ``[section]`` (see :func:`locate`).
+
+    Parameters
+    ----------
+    text, source : str
+        The file's text and name, for errors.
+    message : str
+    section : str or None
+    key : str
+    value : str, optional
+    occurrence : int
+    expected : str, optional
+        What would be right.
+
+    Returns
+    -------
+    NetlistError
+    """
     line, col = locate(text, section, key, value if isinstance(value, str) else None,
                        occurrence)
     return NetlistError(message, source, line, col, expected)
@@ -272,6 +387,16 @@ def unknown_key(table: Table, entry: dict, occurrence: int = 0) -> tuple[str, st
     """``(key, message)`` for the first key of ``entry`` that ``table`` does not declare.
 
     None when every key is declared.
+
+    Parameters
+    ----------
+    table : Table
+    entry : dict
+    occurrence : int
+
+    Returns
+    -------
+    tuple of (str, str) or None
     """
     for key in entry:
         if key not in table.keys:
@@ -288,6 +413,15 @@ def did_you_mean(word: str, choices) -> str:
     A choice that differs only in case comes first (``b`` → ``B``), then the
     nearest by difflib's ratio, then one that begins ``word`` or that ``word``
     begins (``maximum`` → ``max``).
+
+    Parameters
+    ----------
+    word : str
+    choices : iterable of str
+
+    Returns
+    -------
+    str
     """
     import difflib
 
@@ -302,6 +436,16 @@ def did_you_mean(word: str, choices) -> str:
 
 def check_keys(text: str, source: str, table: Table, entry: dict, occurrence: int = 0) -> None:
     """Refuse an undeclared key of ``entry`` (see :func:`unknown_key`) at its line and column.
+
+    Parameters
+    ----------
+    text, source : str
+        The file's text and name, for errors.
+    table : Table
+        The declared keys.
+    entry : dict
+    occurrence : int
+        Which ``[[table]]`` entry (0-based).
 
     Raises
     ------

@@ -176,7 +176,16 @@ _SLEY_UNITS = {"I2P": "kg·m²", "I4": "kg·m²", "I4P": "kg·m²", "I5P": "kg·
 def column_units(spec: StudySpec) -> dict[str, str | None]:
     """The unit of every column of ``spec``'s table (``"1"``: a count or a pure number;
     ``""``: text; None: a ``.param`` whose unit the netlist does not fix).  K and Q0
-    are in the drive's units: rad/(N·m·s) and N·m for a rotary drive."""
+    are in the drive's units: rad/(N·m·s) and N·m for a rotary drive.
+
+    Parameters
+    ----------
+    spec : StudySpec
+
+    Returns
+    -------
+    dict[str, str or None]
+    """
     units = dict(zip(spec.params, spec.param_units or (None,) * len(spec.params)))
     if spec.analysis == "sweep" and spec.netlist_text:
         from .circuit import units_of
@@ -283,6 +292,19 @@ def parse_spec(data: dict, *, source: str = "<spec>", base: Path | None = None,
 
     ``text`` is the TOML text ``data`` was read from; with it, errors carry
     the line and column of the key at fault.
+
+    Parameters
+    ----------
+    data : dict
+    source : str
+        File name, for errors.
+    base : Path, optional
+        The folder relative paths start from (default: the current one).
+    text : str, optional
+
+    Returns
+    -------
+    StudySpec
 
     Raises
     ------
@@ -781,6 +803,14 @@ def _sley_settings(table, names, kind: str) -> tuple[str, int, int, int]:
 def load_spec(path: str | os.PathLike) -> StudySpec:
     """Read a study TOML file (see the module docstring).
 
+    Parameters
+    ----------
+    path : str or PathLike
+
+    Returns
+    -------
+    StudySpec
+
     Raises
     ------
     NetlistError
@@ -796,12 +826,32 @@ def load_spec(path: str | os.PathLike) -> StudySpec:
 
 
 def study_points(spec: StudySpec) -> list[tuple[int, dict[str, float]]]:
-    """``(index, {param: value})`` for every point, in order."""
+    """``(index, {param: value})`` for every point, in order.
+
+    Parameters
+    ----------
+    spec : StudySpec
+
+    Returns
+    -------
+    list of (int, dict[str, float])
+    """
     return [(i, dict(zip(spec.params, p))) for i, p in enumerate(spec.points)]
 
 
 def run_point(spec: StudySpec, index: int, values: dict[str, float]) -> dict:
-    """One row of the table (errors caught and recorded, never raised): a batch of one."""
+    """One row of the table (errors caught and recorded, never raised): a batch of one.
+
+    Parameters
+    ----------
+    spec : StudySpec
+    index : int
+    values : dict[str, float]
+
+    Returns
+    -------
+    dict
+    """
     return run_batch(spec, [(index, values)])[0]
 
 
@@ -817,6 +867,17 @@ def run_batch(spec: StudySpec, batch: list[tuple[int, dict[str, float]]],
     stacked eigenproblems; a point the batch cannot take is computed on its
     own, and a point that fails is a row with its error.  Each row is the
     same whatever the batch it is in.
+
+    Parameters
+    ----------
+    spec : StudySpec
+    batch : list of (int, dict[str, float])
+        ``(index, values)`` of each point.
+    curves : bool
+
+    Returns
+    -------
+    list of dict or tuple of (list of dict, ndarray)
     """
     import numpy as np
 
@@ -1009,6 +1070,15 @@ def read_rows(path: str | os.PathLike, columns: list[str]) -> list[dict]:
     check, or do not parse are left out (their points run again), and so is
     a second row for the same point.
 
+    Parameters
+    ----------
+    path : str or PathLike
+    columns : list of str
+
+    Returns
+    -------
+    list of dict
+
     Raises
     ------
     MechcircError
@@ -1111,6 +1181,8 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
 
     Parameters
     ----------
+    spec : StudySpec
+        From :func:`load_spec` or :func:`parse_spec`.
     output : path, optional
         CSV file (or ``.parquet``, needs pyarrow), written whole and
         atomically at the end in index order, with the spec and the unit of
@@ -1147,6 +1219,11 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
         field's metadata, the spec (:func:`provenance`) in the file's.  Rows
         come a task at a time (one row group each, in the order tasks
         finish); failed points have none.  Not with ``resume``.
+
+    Returns
+    -------
+    StudyResult
+        Columns, rows (or the failed ones), executor, workers, counts.
 
     Raises
     ------
@@ -1412,6 +1489,14 @@ def provenance(spec: StudySpec) -> dict:
     what ``--resume`` compares), ``spec_text`` (the spec file as written),
     ``spec_file``, ``netlist``, ``units`` (every column's unit) and the
     ``mechcirc`` version.
+
+    Parameters
+    ----------
+    spec : StudySpec
+
+    Returns
+    -------
+    dict
     """
     import json
 
@@ -1424,7 +1509,16 @@ def provenance(spec: StudySpec) -> dict:
 
 
 def sidecar_path(output: str | os.PathLike) -> str:
-    """The provenance file of a CSV table: ``OUTPUT.meta.json`` (see :func:`provenance`)."""
+    """The provenance file of a CSV table: ``OUTPUT.meta.json`` (see :func:`provenance`).
+
+    Parameters
+    ----------
+    output : str or PathLike
+
+    Returns
+    -------
+    str
+    """
     return f"{os.fspath(output)}.meta.json"
 
 
@@ -1526,7 +1620,16 @@ def _journal_in_order(journal: str, width: int, chunk: int = 65536):
 
 
 def journal_path(output: str | os.PathLike) -> str:
-    """Where a study writing ``output`` journals its rows while it runs: ``OUTPUT.partial.csv``."""
+    """Where a study writing ``output`` journals its rows while it runs: ``OUTPUT.partial.csv``.
+
+    Parameters
+    ----------
+    output : str or PathLike
+
+    Returns
+    -------
+    str
+    """
     return f"{os.fspath(output)}.partial.csv"
 
 

@@ -25,6 +25,16 @@ def reachable(adj: dict[str, set[str]], start: str, blocked: str | None = None) 
     whole map to a ``networkx.Graph`` each time made ``Circuit.tree`` 2.5–3.5×
     slower on a 300-lever network (1.6–2.5 s against 0.6–0.9 s), while the
     search itself only visits the (small) component it returns.
+
+    Parameters
+    ----------
+    adj : dict[str, set of str]
+    start : str
+    blocked : str, optional
+
+    Returns
+    -------
+    set of str
     """
     seen = {start}
     queue = deque([start])
@@ -44,6 +54,15 @@ def force_groups(elements, levers) -> list[list[tuple[str, str]]]:
     pairs of the clique of its four terminals, which a lever couples all together.
     Group ``i < len(elements)`` is ``elements[i]``, group ``len(elements) + k`` is
     ``levers[k]``.
+
+    Parameters
+    ----------
+    elements : sequence of Element
+    levers : sequence of Lever
+
+    Returns
+    -------
+    list of list of (str, str)
     """
     groups = [[(e.n1, e.n2)] for e in elements]
     for lv in levers:
@@ -58,6 +77,19 @@ def loaded_groups(groups: Sequence[Sequence[tuple[str, str]]], a: str, b: str,
 
     Each group is a list of node pairs that belong together: one pair for a
     two-pole, the pairs of a clique for a lever (its four terminals are coupled).
+
+    Parameters
+    ----------
+    groups : sequence of sequence of (str, str)
+    a, b : str
+    drive_line : int
+        For errors.
+    source : str
+        For errors.
+
+    Returns
+    -------
+    list of int
 
     Raises
     ------
@@ -139,6 +171,10 @@ def check_frame_paths(circuit: Circuit) -> None:
     secondary nodes but not the two sides.  The drive's nodes count as
     referenced when the circuit has no frame node at all (a free-floating
     network driven between two of its own nodes).
+
+    Parameters
+    ----------
+    circuit : Circuit
     """
     if not circuit.levers:
         return          # only a lever can leave a node unreferenced

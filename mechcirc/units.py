@@ -120,7 +120,16 @@ class Unit:
 
 
 def looks_like_unit(text: str) -> bool:
-    """True if ``text`` is meant as a unit (starts with a letter; only unit characters)."""
+    """True if ``text`` is meant as a unit (starts with a letter; only unit characters).
+
+    Parameters
+    ----------
+    text : str
+
+    Returns
+    -------
+    bool
+    """
     return bool(text) and (text[0].isascii() and text[0].isalpha() or text[0] in "µμ") and \
         all(c.isascii() and (c.isalnum() or c in "*/^-") or c in "·²³µμ" for c in text)
 
@@ -143,12 +152,29 @@ def _atom(name: str):
 
 def is_rotational(unit: "Unit") -> bool | None:
     """True for an inertia, torsional rigidity or rotary damping; False for the
-    translational mass, stiffness or damping; None for anything else."""
+    translational mass, stiffness or damping; None for anything else.
+
+    Parameters
+    ----------
+    unit : Unit
+
+    Returns
+    -------
+    bool or None
+    """
     return True if unit.dim in _ROTATIONAL else False if unit.dim in _TRANSLATIONAL else None
 
 
 def parse_unit(text: str) -> Unit:
     """Parse ``text`` (see the module docstring) into a :class:`Unit`.
+
+    Parameters
+    ----------
+    text : str
+
+    Returns
+    -------
+    Unit
 
     Raises
     ------
@@ -189,6 +215,17 @@ def parse_unit(text: str) -> Unit:
 def convert(value: float, unit: Unit, role: str) -> float:
     """``value`` in ``unit`` converted to SI, after checking the unit fits ``role``.
 
+    Parameters
+    ----------
+    value : float
+    unit : Unit
+    role : str
+        A key of :data:`ROLES`.
+
+    Returns
+    -------
+    float
+
     Raises
     ------
     UnitError
@@ -215,7 +252,17 @@ FREQUENCY_UNITS = {"rad/s": ("omega", 1.0), "Hz": ("f", 2 * math.pi),
 
 def in_unit(omega, unit: str = "rad/s"):
     """Angular frequency ``omega`` [rad/s] (a number or an array) in ``unit`` of
-    :data:`FREQUENCY_UNITS` (``"rad/s"``, ``"Hz"`` or ``"rpm"``)."""
+    :data:`FREQUENCY_UNITS` (``"rad/s"``, ``"Hz"`` or ``"rpm"``).
+
+    Parameters
+    ----------
+    omega : float or ndarray
+    unit : {"rad/s", "Hz", "rpm"}
+
+    Returns
+    -------
+    float or ndarray
+    """
     return omega / FREQUENCY_UNITS[unit][1]
 
 
@@ -241,6 +288,14 @@ def split_quantity(text: str) -> tuple[str, str] | None:
 
     ``"500g"`` and ``"500 g"`` both give ``("500", "g")``.  Only the shape is
     checked here; :func:`parse_quantity` checks the unit.
+
+    Parameters
+    ----------
+    text : str
+
+    Returns
+    -------
+    tuple of (str, str) or None
     """
     m = _QUANTITY.fullmatch(text)
     if m is None:
@@ -264,6 +319,10 @@ def parse_quantity(text: str, role: str | None = None, *, what: str = "value") -
         ``"mass"``, ...); None accepts any unit and converts it to SI.
     what : str
         What the value is, for messages.
+
+    Returns
+    -------
+    float
 
     Raises
     ------
@@ -311,6 +370,14 @@ _MINUS_SIGNS = "\u2212\u2013\u2014\u2012\u2010"
 
 def parse_omega(text: str) -> float:
     """An angular frequency [rad/s] from ``"314"``, ``"314 rad/s"``, ``"50Hz"``, ``"3000 rpm"``.
+
+    Parameters
+    ----------
+    text : str
+
+    Returns
+    -------
+    float
 
     Raises
     ------

@@ -21,6 +21,17 @@ def judge(row: dict, error: float | None, tol: float, why: str | None = None) ->
 
     ``error`` is the relative difference of the two domains (∞ disagrees);
     ``why`` (or a missing / NaN ``error``) makes the line ``cannot be measured``.
+
+    Parameters
+    ----------
+    row : dict
+    error : float or None
+    tol : float
+    why : str, optional
+
+    Returns
+    -------
+    dict
     """
     if why is None and (error is None or math.isnan(error)):
         why = "no difference could be formed"
@@ -37,6 +48,14 @@ def summarise(rows) -> dict:
     ``disagrees`` (exit status 3) if any line disagrees; otherwise ``agrees``
     (exit 0) — with the number of lines that could not be measured said, and
     ``cannot be measured`` when none could.
+
+    Parameters
+    ----------
+    rows : iterable of dict
+
+    Returns
+    -------
+    dict
     """
     rows = list(rows)
     n = {v: sum(r["verdict"] == v for r in rows) for v in (AGREES, DISAGREES, UNMEASURED)}
@@ -46,7 +65,16 @@ def summarise(rows) -> dict:
 
 
 def verdict_text(row: dict) -> str:
-    """``agrees (≤ tol)`` / ``DISAGREES (> tol)`` / ``cannot be measured: why`` for one row."""
+    """``agrees (≤ tol)`` / ``DISAGREES (> tol)`` / ``cannot be measured: why`` for one row.
+
+    Parameters
+    ----------
+    row : dict
+
+    Returns
+    -------
+    str
+    """
     if row["verdict"] == UNMEASURED:
         return f"cannot be measured: {row['why']}"
     sign = "≤" if row["verdict"] == AGREES else ">"
@@ -55,7 +83,17 @@ def verdict_text(row: dict) -> str:
 
 
 def summary_line(s: dict) -> str:
-    """The last line of every cross-check's printout."""
+    """The last line of every cross-check's printout.
+
+    Parameters
+    ----------
+    s : dict
+        From :func:`summarise`.
+
+    Returns
+    -------
+    str
+    """
     total = s["agree"] + s["disagree"] + s["unmeasured"]
     word = {AGREES: "agrees", DISAGREES: "DISAGREES", UNMEASURED: "cannot be measured"}
     return (f"verdict: {word[s['verdict']]} — {s['agree']} of {total} checks agree, "

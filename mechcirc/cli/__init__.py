@@ -55,7 +55,12 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    """Build the argument parser with every sub-command registered."""
+    """Build the argument parser with every sub-command registered.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+    """
     parser = _Parser(
         prog="mechcirc",
         description="Dynamic analysis of mechanisms with mechanical circuits: "
@@ -81,7 +86,18 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run the command line; return the exit status (also used by ``python -m mechcirc``)."""
+    """Run the command line; return the exit status (also used by ``python -m mechcirc``).
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        The arguments (``sys.argv[1:]`` when None).
+
+    Returns
+    -------
+    int
+        0 success, 1 internal failure, 2 user error, 130 interrupted.
+    """
     import signal
     import sys
     import threading

@@ -270,6 +270,11 @@ def formula(circuit: "Circuit", *, expand: bool = False, numeric: bool = False):
     numeric : bool
         Substitute every symbol but ω by its value (exact rationals).
 
+    Returns
+    -------
+    sympy.Expr
+        K(ω), in the symbols of the element names and ``omega``.
+
     Examples
     --------
     >>> import mechcirc
@@ -281,7 +286,18 @@ def formula(circuit: "Circuit", *, expand: bool = False, numeric: bool = False):
 
 
 def formula_and_values(circuit: "Circuit", *, expand: bool = False, numeric: bool = False):
-    """``(formula(circuit, ...), symbol_values(circuit))`` built once."""
+    """``(formula(circuit, ...), symbol_values(circuit))`` built once.
+
+    Parameters
+    ----------
+    circuit : Circuit
+    expand, numeric : bool
+        As :func:`formula`.
+
+    Returns
+    -------
+    tuple of (sympy.Expr, dict)
+    """
     b = _Builder(circuit)
     K = b.build()
     if numeric:
@@ -293,7 +309,16 @@ def formula_and_values(circuit: "Circuit", *, expand: bool = False, numeric: boo
 
 
 def symbol_values(circuit: "Circuit") -> dict:
-    """``{Symbol: value}`` of every symbol :func:`formula` uses except ω (SI, exact rationals)."""
+    """``{Symbol: value}`` of every symbol :func:`formula` uses except ω (SI, exact rationals).
+
+    Parameters
+    ----------
+    circuit : Circuit
+
+    Returns
+    -------
+    dict[sympy.Symbol, sympy.Rational]
+    """
     b = _Builder(circuit)
     b.build()
     return dict(b.values)

@@ -49,6 +49,16 @@ def reference_mobility(Z: ArrayLike) -> float:
     """A power of two [m/(N·s)] near the geometric mean of the finite nonzero |Z|.
 
     Used as the Touchstone/S-parameter reference: division by it is exact.
+
+    Parameters
+    ----------
+    Z : array_like
+        Mobilities [m/(N·s)].
+
+    Returns
+    -------
+    float
+        1.0 when no |Z| is finite and nonzero.
     """
     mag = np.abs(np.asarray(Z))
     mag = mag[np.isfinite(mag) & (mag > 0)]
@@ -114,6 +124,23 @@ def write_touchstone(path: str | os.PathLike, omega: ArrayLike, Z: ArrayLike, *,
     number of points left out because ω ≤ 0 or Z is not finite.
 
     Written atomically (temporary file, then rename).
+
+    Parameters
+    ----------
+    path : str or PathLike
+    omega : array_like
+        ω [rad/s], shape (n,).
+    Z : array_like
+        Shape (n,) or (n, p, p) [m/(N·s)].
+    name : str
+        The file's comment line.
+    R : float, optional
+        Reference mobility (:func:`reference_mobility` when None).
+
+    Returns
+    -------
+    int
+        Points left out.
     """
     from ..outputs import atomic_open
 
@@ -149,6 +176,14 @@ def read_mobility(path: str | os.PathLike) -> tuple[NDArray[np.float64], NDArray
     :func:`mechcirc.interop.touchstone.read_touchstone_one_port`, never by
     ``skrf.Network(path)``, which would unpickle a file that is a pickle and
     so run code from it.
+
+    Parameters
+    ----------
+    path : str or PathLike
+
+    Returns
+    -------
+    tuple of (ndarray, ndarray of complex, str)
     """
     from .touchstone import read_touchstone_one_port
 
@@ -170,6 +205,18 @@ def two_port_z(circuit: "Circuit", P1: str, P2: str, S1: str, S2: str,
     passive network of its elements and levers.  Nodal analysis, mobility
     analogy (see :mod:`mechcirc.nodal`); levers enter as in
     :func:`mechcirc.nodal.assemble`.
+
+    Parameters
+    ----------
+    circuit : Circuit
+    P1, P2, S1, S2 : str
+        The nodes of port 1 and port 2.
+    omega : array_like
+        ω [rad/s].
+
+    Returns
+    -------
+    ndarray of complex, shape (n, 2, 2)
 
     Raises
     ------
@@ -227,6 +274,21 @@ def two_port(circuit: "Circuit", P1: str, P2: str, S1: str, S2: str, omega: Arra
     See :func:`two_port_z` for the conventions; frequencies are f = ω/(2π)
     [Hz].  ``z0`` is the reference mobility of the stored S parameters
     (default: a power of two near the typical |Z|).
+
+    Parameters
+    ----------
+    circuit : Circuit
+    P1, P2, S1, S2 : str
+        The nodes of port 1 and port 2.
+    omega : array_like
+        ω [rad/s].
+    z0 : float, optional
+        Reference mobility [m/(N·s)].
+
+    Returns
+    -------
+    skrf.Network
+        The points with ω > 0 and finite Z.
     """
     import skrf
 
@@ -297,6 +359,21 @@ def compare(circuit: "Circuit", path: str | os.PathLike, *, method: "Method" = "
 
     ``omega_min`` / ``omega_max`` [rad/s] keep only the measured points in
     that band (a band with no point is an error).
+
+    Parameters
+    ----------
+    circuit : Circuit
+    path : str or PathLike
+        The ``.s1p`` file.
+    method : {"auto", "sp", "nodal"}
+        As :func:`mechcirc.sweep`.
+    omega_min, omega_max : float, optional
+        The band [rad/s].
+
+    Returns
+    -------
+    Comparison
+        ω, model and measured K, their relative difference, dB and phase, flags.
     """
     omega, K_meas, _ = read_mobility(path)
     keep = np.ones(omega.shape, dtype=bool)

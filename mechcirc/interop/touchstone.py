@@ -99,6 +99,14 @@ def read_touchstone_one_port(path: str | os.PathLike) -> tuple[NDArray[np.float6
     ``name`` is the file's stem.  Frequencies must be finite, non-negative and
     strictly increasing; every value must give a finite K.
 
+    Parameters
+    ----------
+    path : str or PathLike
+
+    Returns
+    -------
+    tuple of (ndarray, ndarray of complex, str)
+
     Raises
     ------
     NetlistError

@@ -345,6 +345,14 @@ def profile_csv(cam: CamProfile) -> str:
     One row per cam angle (the last repeats the first, 360° on); the radius of
     curvature is the profile's (+ convex, ``inf`` where straight).  A ``#``
     line first says what cam it is.
+
+    Parameters
+    ----------
+    cam : CamProfile
+
+    Returns
+    -------
+    str
     """
     rows = [(f"# mechcirc cam: {cam.follower} follower, base radius {cam.base_radius!r}, roller "
             f"radius {cam.roller_radius!r}, offset {cam.offset!r}, arm {cam.arm!r}, pivot "
@@ -361,6 +369,14 @@ def profile_svg(cam: CamProfile) -> str:
     A closed polyline of the profile, the base circle dashed and a cross at the
     cam's centre; the drawing's ``width``/``height`` are in mm, so it prints
     at scale 1:1.
+
+    Parameters
+    ----------
+    cam : CamProfile
+
+    Returns
+    -------
+    str
     """
     r = max(float(np.max(np.hypot(cam.x, cam.y))), cam.base_radius)
     m = 0.05 * r
@@ -385,6 +401,12 @@ def save_profile(cam: CamProfile, csv: str | None = None, svg: str | None = None
 
     Each file is written to a temporary file beside it and renamed when every
     one is complete (:class:`~mechcirc.outputs.OutputSet`).
+
+    Parameters
+    ----------
+    cam : CamProfile
+    csv, svg : str, optional
+        The file paths (None: not written).
     """
     from ..outputs import OutputSet
 

@@ -188,6 +188,21 @@ def link_kinematics(fourbar: FourBar, theta: ArrayLike, omega: float, crank: Lin
     Returns a dict of (n, 2) arrays ``A B C D G2 G3 G4 P`` [m], ``vG2 vG3 vG4
     vP`` [m/s], ``aG2 aG3 aG4`` [m/s²], and (n,) arrays ``phi2 phi3 phi4``
     [rad], ``w2 w3 w4`` [rad/s], ``al2 al3 al4`` [rad/s²].
+
+    Parameters
+    ----------
+    fourbar : FourBar
+    theta : array_like
+        Crank angles [rad], shape (n,).
+    omega : float
+        Crank speed [rad/s].
+    crank, coupler, rocker : LinkMass
+    reed_point : tuple of float
+        The reed point in the rocker's frame [m].
+
+    Returns
+    -------
+    dict[str, ndarray]
     """
     theta = np.atleast_1d(np.asarray(theta, dtype=float))
     st = fourbar.evaluate(theta)

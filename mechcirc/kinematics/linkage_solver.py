@@ -296,7 +296,17 @@ class _Plan:
 
 
 def plan(lk) -> _Plan:
-    """Structure of ``lk`` compiled to index arrays, and the solver that fits it."""
+    """Structure of ``lk`` compiled to index arrays, and the solver that fits it.
+
+    Parameters
+    ----------
+    lk : Linkage
+
+    Returns
+    -------
+    _Plan
+        Dyads, or Newton's method when the structure has no dyad order.
+    """
     names = lk.link_names
     idx = {n: i for i, n in enumerate(names)}
     nb = len(names)
@@ -514,7 +524,23 @@ def _point_kinematics(pl, q, qdot, qddot, parts):
 
 
 def motion(lk, pl: _Plan, theta, *, max_step_deg: float = 2.0, method: str = "auto"):
-    """Solve ``lk`` at first-crank rotations ``theta`` [rad] (1-D array); see the module."""
+    """Solve ``lk`` at first-crank rotations ``theta`` [rad] (1-D array); see the module.
+
+    Parameters
+    ----------
+    lk : Linkage
+    pl : _Plan
+        From :func:`plan`.
+    theta : ndarray
+    max_step_deg : float
+        The largest continuation step [deg].
+    method : {"auto", "dyads", "newton"}
+        ``"auto"``: the plan's solver.
+
+    Returns
+    -------
+    LinkageMotion
+    """
     thetas = np.asarray(theta, dtype=float).reshape(-1)
     t, dt_max = _times(lk, thetas, max_step_deg)
     use = pl.method if method == "auto" else method

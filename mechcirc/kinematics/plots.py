@@ -31,6 +31,19 @@ def plot_fourbar(fourbar, omega: float | None = None, n: int = 721, *, fig=None)
     """φ4, μ, ν (or ε4T = ν ω² when ``omega`` [rad/s] is given) and γ against θ.
 
     Dead centres are marked on every panel when the linkage is a crank-rocker.
+
+    Parameters
+    ----------
+    fourbar : FourBar
+    omega : float, optional
+        Crank speed [rad/s].
+    n : int
+        Points over a revolution.
+    fig : matplotlib.figure.Figure, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
     """
     lo, hi = fourbar.crank_range()
     th = np.linspace(lo, hi, n)
@@ -79,6 +92,15 @@ def draw_design(design, ax):
     """The four-bar of ``design`` on ``ax``: both dead-centre positions and the swing arc.
 
     Lengths in mm; A at the origin, D on the x axis.  Returns ``ax``.
+
+    Parameters
+    ----------
+    design : Design
+    ax : matplotlib.axes.Axes
+
+    Returns
+    -------
+    matplotlib.axes.Axes
     """
     fb = design.fourbar()
     front, back = fb.dead_centres()
@@ -111,6 +133,17 @@ def plot_synthesis(designs, n: int = 721, fig=None):
     Right: transmission angle and dimensionless rocker acceleration ν against θ
     for every design, θ measured from each design's front dead centre so the
     curves line up.  Draws on ``fig`` when given; returns the figure.
+
+    Parameters
+    ----------
+    designs : sequence of Design
+    n : int
+        Points over a revolution.
+    fig : matplotlib.figure.Figure, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
     """
     if fig is None:
         from matplotlib.figure import Figure
@@ -141,7 +174,17 @@ def plot_synthesis(designs, n: int = 721, fig=None):
 
 
 def plot_frame_loading(result, *, fig=None):
-    """Shaking force (components and magnitude), driving torque and shaking moments against θ."""
+    """Shaking force (components and magnitude), driving torque and shaking moments against θ.
+
+    Parameters
+    ----------
+    result : FrameLoading
+    fig : matplotlib.figure.Figure, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     fig, ax = _figure(3, 1, (7, 8), fig)
     deg = np.degrees(result.theta)
     S = result.shaking_force
@@ -169,6 +212,15 @@ def plot_shaking(result, fig=None):
     crank angle, the bearing forces |F_A| and |F_D|, and the driving torque
     with the shaking moments T_a, T_d.  Draws on ``fig`` (a matplotlib
     ``Figure``) when given, else on a new one; returns the figure.
+
+    Parameters
+    ----------
+    result : FrameLoading
+    fig : matplotlib.figure.Figure, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
     """
     if fig is None:
         from matplotlib.figure import Figure
@@ -218,6 +270,18 @@ def plot_linkage(linkage, state, paths=None, *, ax=None, fig=None):
 
     On ``ax`` when given (and then returns it), else on ``fig`` or a new Figure
     (returned).
+
+    Parameters
+    ----------
+    linkage : Linkage
+    state : LinkageState
+    paths : dict[str, ndarray], optional
+    ax : matplotlib.axes.Axes, optional
+    fig : matplotlib.figure.Figure, optional
+
+    Returns
+    -------
+    matplotlib.axes.Axes or matplotlib.figure.Figure
     """
     if ax is not None:
         a = ax

@@ -246,7 +246,19 @@ def dead_centre_angles(b_a, c_a, d_a):
 
 
 def acceleration_ratio_eq5(b_a, mu1, mu2):
-    """Eq. (5): |Φ1''/Φ2''| = ((b/a + 1)/(b/a − 1)) · sin μ2 / sin μ1 [1]."""
+    """Eq. (5): |Φ1''/Φ2''| = ((b/a + 1)/(b/a − 1)) · sin μ2 / sin μ1 [1].
+
+    Parameters
+    ----------
+    b_a : float or ndarray
+        b/a.
+    mu1, mu2 : float or ndarray
+        Angles BCD at the front and back dead centres [rad].
+
+    Returns
+    -------
+    float or ndarray
+    """
     b_a = np.asarray(b_a, dtype=float)
     return (b_a + 1) / (b_a - 1) * np.sin(mu2) / np.sin(mu1)
 
@@ -257,6 +269,17 @@ def eq10_residual(psi, b_a, c_a, d_a):
     (M − P)² + (N − P)² − 2 cos Ψ (M − P)(N − P) + cos² Ψ − 1 with
     M = (b/a − 1)²/(2(c/a)(d/a)), N = (b/a + 1)²/(2(c/a)(d/a)),
     P = (c² + d²)/(2cd); Ψ [rad].
+
+    Parameters
+    ----------
+    psi : float or ndarray
+        Ψ [rad].
+    b_a, c_a, d_a : float or ndarray
+        b/a, c/a, d/a.
+
+    Returns
+    -------
+    float or ndarray
     """
     two_cd = 2 * c_a * d_a
     M = (b_a - 1) ** 2 / two_cd
@@ -454,8 +477,12 @@ def synthesize(load: Literal["light", "medium", "heavy"] = "medium",
         Ranges of b/a and d/a explored, in steps of ``step``; c/a follows
         from eq. (10).  d/a is also capped by d < 180 mm.  The refinement
         stays inside them.
+    step : float
+        Grid step of b/a and d/a [1].
     crank_step : float
         Crank lengths explored within the load's range [mm].
+    swing_step : float
+        Grid step of the swing [deg].
     swing_range : (float, float), optional
         Admissible swing [deg] (default the patent's 23–26°): the swing
         criterion and the grid.

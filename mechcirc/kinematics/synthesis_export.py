@@ -96,7 +96,19 @@ def _header(design, k):
 
 
 def linkage_toml(design, k: int = 1, omega: float = 100.0) -> str:
-    """The design as a linkage TOML (lengths in mm, crank speed ``omega`` [rad/s])."""
+    """The design as a linkage TOML (lengths in mm, crank speed ``omega`` [rad/s]).
+
+    Parameters
+    ----------
+    design : Design
+    k : int
+        The design's number (in the header).
+    omega : float
+
+    Returns
+    -------
+    str
+    """
     pts = "\n".join(f"{p} = [{x!r}, {y!r}]" for p, (x, y) in _pose(design).items())
     return (_header(design, k) +
             f'name = "beat-up four-bar {k}"\nunits = "mm"\n\n[points]\n{pts}\n\n'
@@ -106,7 +118,20 @@ def linkage_toml(design, k: int = 1, omega: float = 100.0) -> str:
 
 
 def scene_toml(design, k: int = 1, opts: SceneOptions = SceneOptions()) -> str:
-    """The design as a scene TOML: shaft -C2- four-bar -C4- sley (see the module docstring)."""
+    """The design as a scene TOML: shaft -C2- four-bar -C4- sley (see the module docstring).
+
+    Parameters
+    ----------
+    design : Design
+    k : int
+        The design's number (in the header).
+    opts : SceneOptions
+        Speed, inertias, rods.
+
+    Returns
+    -------
+    str
+    """
     o = opts
     front, _ = design.fourbar().dead_centres()
     return (linkage_toml(design, k, o.omega) + f'''
@@ -154,6 +179,12 @@ def export_designs(designs, directory, opts: SceneOptions = SceneOptions()) -> l
     Every file is written to a temporary name and renamed when all are
     written (:class:`~mechcirc.outputs.OutputSet`): an error leaves none.
     The folder must exist.
+
+    Parameters
+    ----------
+    designs : sequence of Design
+    directory : str or Path
+    opts : SceneOptions
 
     Returns
     -------
@@ -203,6 +234,12 @@ def _beat_up(o, front):
 
 
 def reader_takes_moments() -> bool:
+    """Whether the scene reader takes a ``[[moments]]`` table.
+
+    Returns
+    -------
+    bool
+    """
     from ..scene.files import SCENE_TABLES
 
     return "moments" in SCENE_TABLES

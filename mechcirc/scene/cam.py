@@ -152,6 +152,12 @@ class CamLinkage(Linkage):
 def check_follower_part(scene, text: str) -> None:
     """A translating follower must be in the rigid part of the crank it drives.
 
+    Parameters
+    ----------
+    scene : Scene
+    text : str
+        The scene file's text, to locate the error.
+
     Raises
     ------
     NetlistError
@@ -174,7 +180,18 @@ def check_follower_part(scene, text: str) -> None:
 def aligned_points(cam, n: int) -> int:
     """The fewest intervals per turn, from ``n`` to 4n, that put a node on every joint of the
     ``cam``'s pieces (where a derivative of x jumps; a quintic Hermite table across one
-    is ~60 times less accurate), else ``n``."""
+    is ~60 times less accurate), else ``n``.
+
+    Parameters
+    ----------
+    cam : Motion
+        The follower's law.
+    n : int
+
+    Returns
+    -------
+    int
+    """
     u = np.asarray(cam.start, dtype=float) / (2 * np.pi)
     for k in range(n, 4 * n + 1):
         if np.all(np.abs(u * k - np.round(u * k)) <= 1e-9):
@@ -359,6 +376,19 @@ class _CamReader:
 
 def parse_cam(text: str, source: str, raw, linkage: Linkage) -> CamLinkage:
     """The ``[cam]`` table: the follower's law, the linkage made to follow it, the cam's checks.
+
+    Parameters
+    ----------
+    text : str
+    source : str
+        File name, for errors.
+    raw : dict
+        The ``[cam]`` table.
+    linkage : Linkage
+
+    Returns
+    -------
+    CamLinkage
 
     Raises
     ------

@@ -246,6 +246,8 @@ class Scene:
     parts : tuple of tuple of str
         The rigid parts left when the elastic elements are released (bodies:
         links and torsion bodies); the part holding the drive comes first.
+        Built from the rest when given as ``()`` (raises GeometryError when
+        a part does not have one degree of freedom).
     source : str
     """
 
@@ -265,6 +267,10 @@ class Scene:
     simulate: object = None
     gears: tuple = ()
     shaft: object = None
+
+    def __post_init__(self):
+        if not self.parts:       # the rigid parts follow from the rest (checks each has 1 DOF)
+            object.__setattr__(self, "parts", _parts(self))
 
     @property
     def cycle_revolutions(self) -> int:
@@ -410,7 +416,6 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
     scene = Scene(str(doc.get("name", linkage.name)), linkage, units, LENGTH_UNITS[units],
                   tuple(masses), tuple(elastic), tuple(torsions), tuple(loads), drive, (),
                   source, analysis, gears=tuple(gears))
-    object.__setattr__(scene, "parts", _parts(scene))
     if "cam" in doc:
         from .cam import check_follower_part
 

@@ -36,7 +36,20 @@ _LAWS = {"elastobacklash": 1, "dead-zone": 2}
 
 
 def hermite_table(h, f, f1, f2):
-    """Quintic Hermite pieces (n, 6) through values, slopes and curvatures at n + 1 nodes."""
+    """Quintic Hermite pieces (n, 6) through values, slopes and curvatures at n + 1 nodes.
+
+    Parameters
+    ----------
+    h : float
+        The (uniform) interval width.
+    f, f1, f2 : ndarray
+        Values, first and second derivatives at the nodes, shape (n + 1,).
+
+    Returns
+    -------
+    ndarray, shape (n, 6)
+        a0 … a5 of each piece, in powers of the offset from its left node.
+    """
     f, f1, f2 = (np.asarray(a, float) for a in (f, f1, f2))
     a0, a1, a2 = f[:-1], f1[:-1], 0.5 * f2[:-1]
     r0 = f[1:] - (a0 + a1 * h + a2 * h * h)
@@ -499,6 +512,15 @@ def rigid_tables(scene: Scene, N: int):
 def dead_centre(scene: Scene, kind: str = "front") -> float:
     """Crank rotation from the pose [rad, in [0, 2π)] where the crank and its coupler are
     extended (``"front"``) or folded (``"back"``); memoised per linkage.
+
+    Parameters
+    ----------
+    scene : Scene
+    kind : {"front", "back"}
+
+    Returns
+    -------
+    float
 
     Raises
     ------

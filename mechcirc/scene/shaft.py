@@ -210,7 +210,18 @@ class _Rigid:
 
 
 def reduced_inertia(scene: Scene, theta) -> np.ndarray:
-    """J_red(θ) [kg·m²] of the scene's rigid mechanism at first-crank rotations ``theta``."""
+    """J_red(θ) [kg·m²] of the scene's rigid mechanism at first-crank rotations ``theta``.
+
+    Parameters
+    ----------
+    scene : Scene
+    theta : float or ndarray
+        [rad].
+
+    Returns
+    -------
+    ndarray
+    """
     r = _Rigid(scene)
     th = np.asarray(theta, float)
     return r.J(th - r.cycle * np.floor(th / r.cycle))

@@ -92,7 +92,19 @@ def _num(text, source, value, what, table, key, n, *, positive=True):
 
 
 def parse_moments(text, source, table, scene) -> tuple:
-    """The ``[[moments]]`` entries, checked against the scene's bodies."""
+    """The ``[[moments]]`` entries, checked against the scene's bodies.
+
+    Parameters
+    ----------
+    text, source : str
+        The file's text and name, for errors.
+    table : list of dict or None
+    scene : Scene
+
+    Returns
+    -------
+    tuple of Moment
+    """
     if table is None:
         return ()
     if not isinstance(table, list) or not all(isinstance(x, dict) for x in table):
@@ -142,7 +154,19 @@ def parse_moments(text, source, table, scene) -> tuple:
 
 
 def parse_simulate(text, source, table, scene) -> SimulateSettings:
-    """The optional ``[simulate]`` table."""
+    """The optional ``[simulate]`` table.
+
+    Parameters
+    ----------
+    text, source : str
+        The file's text and name, for errors.
+    table : dict or None
+    scene : Scene
+
+    Returns
+    -------
+    SimulateSettings
+    """
     if table is None:
         return SimulateSettings()
     if not isinstance(table, dict):
@@ -211,6 +235,15 @@ def apply_overrides(scene, overrides: dict):
     ``damping``, ``clearance`` of an elastic link, torsion rod or load;
     ``amplitude``, ``window_deg``, ``sigma_deg`` of a moment.  ``omega`` sets the
     crank speed of the run.
+
+    Parameters
+    ----------
+    scene : Scene
+    overrides : dict[str, float]
+
+    Returns
+    -------
+    Scene
 
     Raises
     ------
@@ -345,6 +378,20 @@ def kloss_motor(*, sync_speed: float, breakdown_torque: float,
     Kloss's formula through the rated point gives s_b = s_n (λ + √(λ² − 1)),
     λ = T_b/T_n (the stable branch: s_n < s_b).
 
+    Parameters
+    ----------
+    sync_speed : float
+        ω_s [rad/s].
+    breakdown_torque : float
+        T_b [N·m].
+    breakdown_slip : float, optional
+    rated_power, rated_speed : float, optional
+        [W], [rad/s].
+
+    Returns
+    -------
+    Motor
+
     Raises
     ------
     MechcircError
@@ -377,6 +424,14 @@ def kloss_motor(*, sync_speed: float, breakdown_torque: float,
 
 def table_motor(speeds, torques) -> Motor:
     """A motor given as a table of torque [N·m] against speed [rad/s] (linear between points).
+
+    Parameters
+    ----------
+    speeds, torques : sequence of float
+
+    Returns
+    -------
+    Motor
 
     Raises
     ------
@@ -412,6 +467,17 @@ _KEYS = {"flywheel": "J_f [kg·m²] on the main shaft, ≥ 0", "motor": '"kloss"
 
 def parse_shaft(text: str, source: str, table, scene) -> Shaft:
     """The scene file's ``[shaft]`` table (see the module docstring); errors at file:line:col.
+
+    Parameters
+    ----------
+    text, source : str
+        The file's text and name, for errors.
+    table : dict
+    scene : Scene
+
+    Returns
+    -------
+    Shaft
 
     Raises
     ------

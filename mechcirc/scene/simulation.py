@@ -160,6 +160,15 @@ def linear_matrices(model: MotionModel, theta: float):
     M is the diagonal of the kinetic energy; K and D are Σ k ∇δ ∇δᵀ, Σ d ∇δ ∇δᵀ
     over the elastic elements with ∇δ by central differences of the kernel's
     deformations (pre-load and velocity-squared terms excluded, as in the circuit).
+
+    Parameters
+    ----------
+    model : MotionModel
+    theta : float
+
+    Returns
+    -------
+    tuple of 3 ndarray
     """
     kern = kernels_for("rk4")[0]           # compiled when numba is importable
     n = model.n_free
@@ -205,7 +214,18 @@ _RATES: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
 
 def max_rate(model: MotionModel, samples: int = 72) -> float:
     """Largest |λ| of the linearised model over a revolution [1/s] (sets the RK4 step);
-    memoised per model (a model is immutable)."""
+    memoised per model (a model is immutable).
+
+    Parameters
+    ----------
+    model : MotionModel
+    samples : int
+        Crank angles over the revolution.
+
+    Returns
+    -------
+    float
+    """
     key = _RATES.get(model, {})
     if samples not in key:
         key[samples] = _max_rate(model, samples)

@@ -82,6 +82,15 @@ def circuit_resonances(circuit, omega_max: float):
     changes of Im K(ω) of an *undamped* circuit on a log grid from
     ``circuit.sweep`` that are not poles and refines them with
     ``scipy.optimize.brentq``.
+
+    Parameters
+    ----------
+    circuit : Circuit
+    omega_max : float
+
+    Returns
+    -------
+    tuple of (tuple, str)
     """
     try:
         res = circuit.resonances(omega_max=omega_max)
@@ -114,6 +123,16 @@ def resonance_check(params: SleyParameters, theta0: float, *,
     Undamped (default): ω_n of K v = ω² M v against the zeros of K(ω).  Damped:
     |λ| and Im λ of the state matrix against ω_n = |s| and ω_d of the circuit's
     complex resonances.
+
+    Parameters
+    ----------
+    params : SleyParameters
+    theta0 : float
+    damping : bool
+
+    Returns
+    -------
+    ResonanceCheck
     """
     modes = eigenfrequencies(params, theta0)
     if damping:
@@ -166,6 +185,18 @@ def ringing_check(params: SleyParameters, *, half_periods: int = 4, revolutions:
     periods from the first crossing after the window, and compared with the
     lowest damped natural frequency of the linearised model at the crank angle
     in the middle of that stretch.
+
+    Parameters
+    ----------
+    params : SleyParameters
+    half_periods : int
+    revolutions : int
+    method : str, optional
+        As :func:`mechcirc.sley.simulate`.
+
+    Returns
+    -------
+    RingingCheck
 
     Raises
     ------
@@ -286,7 +317,20 @@ def _modes(lin):
 
 
 def harmonic_check(params: SleyParameters, theta0: float, omegas) -> HarmonicCheck:
-    """(c): time-domain harmonic forcing of the linear model against |Q0| of the netlist."""
+    """(c): time-domain harmonic forcing of the linear model against |Q0| of the netlist.
+
+    Parameters
+    ----------
+    params : SleyParameters
+    theta0 : float
+        Crank angle [rad].
+    omegas : array_like
+        Forcing frequencies [rad/s].
+
+    Returns
+    -------
+    HarmonicCheck
+    """
     lin = linearise(params, theta0)
     omegas = np.asarray(omegas, dtype=float)
     q_time = np.array([forced_amplitude(lin, w) for w in omegas])

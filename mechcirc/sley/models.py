@@ -213,7 +213,16 @@ class SleyParameters:
 
 
 def start_angle(params: SleyParameters) -> float:
-    """First crank angle θ0 in [0, 2π) with ν(θ0) = 0 (zero rigid sley acceleration) [rad]."""
+    """First crank angle θ0 in [0, 2π) with ν(θ0) = 0 (zero rigid sley acceleration) [rad].
+
+    Parameters
+    ----------
+    params : SleyParameters
+
+    Returns
+    -------
+    float
+    """
     return _start_angle(params.l2P, params.l3, params.l4, params.d, params.branch)
 
 

@@ -203,6 +203,14 @@ def table_error(params: SleyParameters | None = None, n: int = 1024,
 
     The table is the scene model's rotation of the rocker against the crank's.
 
+    Parameters
+    ----------
+    params : SleyParameters, optional
+        Default: Table 1 variant 3.
+    n : int
+        Table intervals.
+    samples : int
+
     Returns
     -------
     dict
@@ -266,6 +274,9 @@ def simulate(drive: str = "one-side", variant: int = 3, revolutions: int = 5,
         stops after it (later revolutions cannot change it).
     progress : callable, optional
         ``progress(done, total)`` after each revolution.
+    error_estimate : bool
+        Also run at twice the step (scipy methods: rtol/100) for
+        ``SleyResult.error_estimate``.
     **overrides
         :class:`SleyParameters` fields, e.g. ``alpha=math.radians(30)``,
         ``clearance=0.01``, ``omega=120``.
@@ -324,7 +335,7 @@ def simulate_params(params: SleyParameters, revolutions: int = 5, method: str | 
     revolutions, method, points_per_revolution, steps_per_period, rtol, table_points, revolution, progress
         As :func:`simulate`.
     error_estimate : bool
-        Repeat the run at half the step (above).
+        Repeat the run at twice the step (above).
 
     Returns
     -------

@@ -143,6 +143,19 @@ def follower_circuit(motion, mass, spring, preload, damping=0.0, *, contact,
     Elements ``kc`` (the contact: a clearance), ``m``, ``k``, ``c`` (when
     damping > 0); the ``.ic`` start is the static equilibrium with both the
     spring and the contact carrying the preload (module text).
+
+    Parameters
+    ----------
+    motion : Motion
+        The lift s(θ) [m].
+    mass, spring, preload, damping : float
+        As :func:`jump_speed`.
+    contact, contact_damping : float
+        Contact stiffness [N/m] and damping [N·s/m].
+
+    Returns
+    -------
+    Circuit
     """
     from ..netlist import parse
 
@@ -278,6 +291,27 @@ def separation_speed(motion, mass, spring, preload, damping=0.0, *, contact,
     brentq proceeds about as bisection does (some 20 runs).  Its resolution is
     the rounding of the contact's deflection: k_c × ~1e-16 m of position
     (1e-5 N at k_c = 1e11 N/m, about 1e-7 of the speed in the example).
+
+    Parameters
+    ----------
+    motion : Motion
+        The lift s(θ) [m].
+    mass, spring, preload, damping : float
+        As :func:`jump_speed`.
+    contact, contact_damping : float
+        Contact stiffness [N/m] and damping [N·s/m].
+    bracket : tuple of (float, float)
+        [rev/min].
+    rtol : float
+        Of the integration.
+    dt : float, optional
+        Output step [s].
+    xtol : float
+        Of the root.
+
+    Returns
+    -------
+    float
     """
     from scipy.optimize import brentq
 

@@ -75,7 +75,16 @@ class StateSpace:
 
 
 def backlash_elements(circuit: Circuit) -> list[tuple[Element, Element | None]]:
-    """(spring, companion damper or None) for every spring with a clearance ≥ 1e-10."""
+    """(spring, companion damper or None) for every spring with a clearance ≥ 1e-10.
+
+    Parameters
+    ----------
+    circuit : Circuit
+
+    Returns
+    -------
+    list of (Element, Element or None)
+    """
     by_name = {e.name: e for e in circuit.elements}
     out = []
     for e in circuit.elements:
@@ -111,6 +120,15 @@ def state_space(circuit: Circuit, *, linearise: bool = False) -> StateSpace:
     With ``linearise`` the clearances are taken closed (the frequency domain's
     reading); otherwise the clearance springs and their companion dampers are
     left out of A and their forces enter through ``extra``.
+
+    Parameters
+    ----------
+    circuit : Circuit
+    linearise : bool
+
+    Returns
+    -------
+    StateSpace
     """
     clear, drop, work = _working(circuit, linearise)
     nodes, index, M, D, K, G = _node_matrices(work, clear)
