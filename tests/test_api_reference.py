@@ -68,7 +68,8 @@ def documented_modules() -> list[str]:
 def public_modules() -> set[str]:
     """Every module of the package without a leading underscore in its dotted name."""
     return {"mechcirc"} | {m.name for m in pkgutil.walk_packages(mechcirc.__path__, "mechcirc.")
-                           if not any(p.startswith("_") for p in m.name.split("."))}
+                           if not any(p.startswith("_") for p in m.name.split("."))
+                           and not m.name.startswith("mechcirc.cli.")}
 
 
 def code_of(fn):

@@ -12,13 +12,6 @@ _LAWS = ("harmonic", "cycloidal", "modified_sine", "modified_trapezoid", "polyno
 
 
 def register(sub) -> None:
-    """Register ``mechcirc cam``.
-
-    Parameters
-    ----------
-    sub : argparse._SubParsersAction
-        The ``add_subparsers()`` of the ``mechcirc`` parser.
-    """
     p = sub.add_parser(
         "cam", help="disc cam profile, pressure angle, radius of curvature, undercut; CSV/SVG",
         description="Profile of a disc cam turning counter-clockwise and driving a translating "
@@ -117,18 +110,6 @@ def _mm(v: float) -> str:
 
 
 def cmd_cam(args) -> int:
-    """``mechcirc cam``: a disc cam's profile, pressure angle and curvature.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed command line.
-
-    Returns
-    -------
-    int
-        The exit status (0: success).
-    """
     from ..kinematics.cam import cam_profile, save_profile
 
     _check_args(args)

@@ -25,13 +25,6 @@ omega_value.__name__ = "frequency"
 
 
 def register(sub) -> None:
-    """Register ``check``, ``sweep`` and ``resonances``.
-
-    Parameters
-    ----------
-    sub : argparse._SubParsersAction
-        The ``add_subparsers()`` of the ``mechcirc`` parser.
-    """
     p = sub.add_parser(
         "check", help="parse a netlist and show its elements and reduction tree",
         description="Parse a netlist, list elements and nodes, warnings, and the "
@@ -126,13 +119,7 @@ def _register_resonances(sub) -> None:
 
 
 def add_unit_option(p) -> None:
-    """``--unit rad/s|Hz|rpm``: the unit of every frequency a command shows.
-
-    Parameters
-    ----------
-    p : argparse.ArgumentParser
-        A sub-command's parser.
-    """
+    """``--unit rad/s|Hz|rpm``: the unit of every frequency a command shows."""
     p.add_argument("--unit", choices=("rad/s", "Hz", "rpm"), default="rad/s",
                    help="show frequencies in rad/s (omega, the default), Hz (f = omega/2 pi) "
                         "or rpm (n = 60 omega/2 pi): tables, CSV columns and plot axes "
@@ -151,18 +138,6 @@ def _tree_and_unloaded(circuit) -> tuple[str, tuple[str, ...]]:
 
 
 def cmd_check(args) -> int:
-    """``mechcirc check NETLIST``: parse a netlist and report its circuit.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed command line.
-
-    Returns
-    -------
-    int
-        The exit status (0: success).
-    """
     circuit, warns = load_with_warnings(args.file)
     elements = [
         {"name": e.name, "kind": e.kind, "n1": e.n1, "n2": e.n2, "value": e.value,
@@ -287,18 +262,6 @@ def _resonance_rows(found) -> list[dict]:
 
 
 def cmd_sweep(args) -> int:
-    """``mechcirc sweep NETLIST``: K(ω) and Q0(ω) over a grid.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed command line.
-
-    Returns
-    -------
-    int
-        The exit status (0: success).
-    """
     check_output_paths(args.output, args.touchstone, plots=(args.plot,), reads=(args.file,))
     _check_touchstone_name(args.touchstone)
     circuit, warns = load_with_warnings(args.file)
@@ -532,18 +495,6 @@ def _panel_label(key: str, units: dict) -> str:
 
 
 def cmd_resonances(args) -> int:
-    """``mechcirc resonances NETLIST``: the exact resonances and antiresonances.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed command line.
-
-    Returns
-    -------
-    int
-        The exit status (0: success).
-    """
     from ..circuit import units_of
     from ..outputs import OutputSet
     from ..resonances import Resonances

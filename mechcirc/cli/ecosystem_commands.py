@@ -10,13 +10,6 @@ from ._common import check_output_paths, count, load_with_warnings, print_json, 
 
 
 def register(sub) -> None:
-    """Register ``forces``, ``compare``, ``formula`` and ``study``.
-
-    Parameters
-    ----------
-    sub : argparse._SubParsersAction
-        The ``add_subparsers()`` of the ``mechcirc`` parser.
-    """
     _register_forces(sub)
     _register_compare(sub)
     _register_formula(sub)
@@ -122,18 +115,6 @@ def _register_study(sub) -> None:
 
 
 def cmd_forces(args) -> int:
-    """``mechcirc forces NETLIST``: the force table at one ω.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed command line.
-
-    Returns
-    -------
-    int
-        The exit status (0: success).
-    """
     from ..circuit import units_of
     from ..forces import element_forces
     check_output_paths(plots=(args.plot,), reads=(args.file,))
@@ -178,18 +159,6 @@ def _deg(x: float) -> float:
 
 
 def cmd_compare(args) -> int:
-    """``mechcirc compare``: a netlist's K(ω) against a measured one.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed command line.
-
-    Returns
-    -------
-    int
-        The exit status (0: success).
-    """
     from ..circuit import units_of
     from ..interop.skrf import compare
     check_output_paths(plots=(args.plot,), reads=(args.file, args.measured))
@@ -224,18 +193,6 @@ def cmd_compare(args) -> int:
 
 
 def cmd_formula(args) -> int:
-    """``mechcirc formula NETLIST``: K(ω) as a SymPy formula.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed command line.
-
-    Returns
-    -------
-    int
-        The exit status (0: success).
-    """
     from ..interop.formula import formula_and_values
     from ..limits import FORMULA_SECONDS
     from ._common import time_limit
@@ -263,18 +220,6 @@ def cmd_formula(args) -> int:
 
 
 def cmd_study(args) -> int:
-    """``mechcirc study SPEC``: a parameter study.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed command line.
-
-    Returns
-    -------
-    int
-        The exit status (0: success).
-    """
     from ..errors import MechcircError
     from ..progress import Progress
     from ..study import column_units, load_spec, run_study, sidecar_path

@@ -10,13 +10,7 @@ from ._common import (MAX_LENGTH, MAX_OMEGA, check_output_paths, count, print_js
 
 
 def register(sub) -> None:
-    """The kinematics sub-commands, each with its options.
-
-    Parameters
-    ----------
-    sub : argparse._SubParsersAction
-        The ``add_subparsers()`` of the ``mechcirc`` parser.
-    """
+    """The kinematics sub-commands, each with its options."""
     _register_fourbar(sub)
     _register_frame(sub)
     _register_synth(sub)
@@ -240,18 +234,6 @@ def _check_length_ratio(args) -> None:
 
 
 def cmd_fourbar(args) -> int:
-    """``mechcirc fourbar``: a four-bar's dead centres, swing and transmission angle.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed command line.
-
-    Returns
-    -------
-    int
-        The exit status (0: success).
-    """
     from ..kinematics import FourBar
 
     check_output_paths(plots=(args.plot,))
@@ -302,18 +284,6 @@ def cmd_fourbar(args) -> int:
 
 
 def cmd_frame(args) -> int:
-    """``mechcirc frame``: the frame loading of a four-bar.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed command line.
-
-    Returns
-    -------
-    int
-        The exit status (0: success).
-    """
     import numpy as np
 
     from ..errors import MechcircError
@@ -394,18 +364,6 @@ def _write_frame_csv(args, res, cols, omega) -> None:
 
 
 def cmd_synth(args) -> int:
-    """``mechcirc synth``: beat-up four-bar synthesis.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed command line.
-
-    Returns
-    -------
-    int
-        The exit status (0: success).
-    """
     import sys
     from pathlib import Path
 
@@ -477,18 +435,6 @@ def _print_designs(args, res, exported) -> None:
 
 
 def cmd_linkage(args) -> int:
-    """``mechcirc linkage FILE``: a planar linkage's motion.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed command line.
-
-    Returns
-    -------
-    int
-        The exit status (0: success).
-    """
     import numpy as np
 
     from ..kinematics import load_linkage

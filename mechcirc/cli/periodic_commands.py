@@ -17,13 +17,6 @@ from ._common import (
 
 
 def register(sub) -> None:
-    """Register ``mechcirc periodic``.
-
-    Parameters
-    ----------
-    sub : argparse._SubParsersAction
-        The ``add_subparsers()`` of the ``mechcirc`` parser.
-    """
     p = sub.add_parser(
         "periodic", help="drive force over one revolution at machine speed; speed map",
         description="Steady-state periodic force of a drive given by its motion over one "
@@ -87,18 +80,6 @@ def _elements(args, circuit):
 
 
 def cmd_periodic(args) -> int:
-    """``mechcirc periodic``: the drive force over a revolution; a speed map.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed command line.
-
-    Returns
-    -------
-    int
-        The exit status (0: success).
-    """
     from ..errors import MechcircError
 
     check_output_paths(args.output, plots=(args.plot,), reads=(args.file,))

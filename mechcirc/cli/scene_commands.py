@@ -10,13 +10,6 @@ from ._common import check_output_paths, count, print_json, real, save_figure
 
 
 def register(sub) -> None:
-    """Register ``scene`` and ``reduce``.
-
-    Parameters
-    ----------
-    sub : argparse._SubParsersAction
-        The ``add_subparsers()`` of the ``mechcirc`` parser.
-    """
     p = sub.add_parser(
         "scene", help="a scene (linkage + masses + elastic links) to its mechanical circuit",
         description="Linearise a scene file at a crank angle into a netlist (--theta),\n"
@@ -83,18 +76,6 @@ def register(sub) -> None:
 
 
 def cmd_scene(args) -> int:
-    """``mechcirc scene FILE``: a scene's circuit at a crank angle, or its cycle map.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed command line.
-
-    Returns
-    -------
-    int
-        The exit status (0: success).
-    """
     from ..errors import MechcircError
 
     plots = (args.plot,) if args.plot else ()
@@ -245,18 +226,6 @@ def _cycle(args, scene) -> int:
 
 
 def cmd_reduce(args) -> int:
-    """``mechcirc reduce``: model only what the output needs in a band.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed command line.
-
-    Returns
-    -------
-    int
-        The exit status (0: success).
-    """
     from ..errors import MechcircError
     from ..netlist import load
     from .._simplify import parse_band, simplify
@@ -300,18 +269,7 @@ def cmd_reduce(args) -> int:
 
 # ------------------------------------------------------------ simulate SCENE.toml
 def cmd_simulate_scene(args) -> int:
-    """``mechcirc simulate SCENE.toml``: the scene's motion over whole revolutions.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed command line.
-
-    Returns
-    -------
-    int
-        The exit status (0: success).
-    """
+    """``mechcirc simulate SCENE.toml``: the scene's motion over whole revolutions."""
     import warnings
 
     from ..errors import MechcircError
@@ -497,18 +455,7 @@ def _shaft(args, scene) -> int:
 
 # ------------------------------------------------------------- crosscheck SCENE.toml
 def cmd_crosscheck_scene(args) -> int:
-    """``mechcirc crosscheck SCENE.toml --theta DEG``.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed command line.
-
-    Returns
-    -------
-    int
-        The exit status (0: success).
-    """
+    """``mechcirc crosscheck SCENE.toml --theta DEG``."""
     from ..errors import MechcircError
 
     if not args.file.endswith(".toml"):

@@ -15,13 +15,6 @@ _UNITS = {"eps4T": "1/s^2", "eps2P": "1/s^2", "eps4P": "1/s^2", "eps5P": "1/s^2"
 
 
 def register(sub) -> None:
-    """Register ``simulate`` and ``crosscheck``.
-
-    Parameters
-    ----------
-    sub : argparse._SubParsersAction
-        The ``add_subparsers()`` of the ``mechcirc`` parser.
-    """
     _register_simulate(sub)
     _register_crosscheck(sub)
 
@@ -260,18 +253,6 @@ def _write_csv(result, path) -> None:
 
 # ----------------------------------------------------------------- handlers
 def cmd_simulate(args) -> int:
-    """``mechcirc simulate``: a sley preset (or a scene) in the time domain.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed command line.
-
-    Returns
-    -------
-    int
-        The exit status (0: success).
-    """
     if args.scene is not None:
         from .scene_commands import cmd_simulate_scene
 
@@ -323,18 +304,6 @@ def cmd_simulate(args) -> int:
 
 
 def cmd_crosscheck(args) -> int:
-    """``mechcirc crosscheck``: a linearised sley (scene, netlist) against its circuit.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed command line.
-
-    Returns
-    -------
-    int
-        The exit status (0: success).
-    """
     if args.file is not None:
         return _crosscheck_file(args)
     from ..sley import ParameterError, preset

@@ -10,13 +10,6 @@ from ._common import check_output_paths, print_json, save_figure
 
 
 def register(sub) -> None:
-    """Register ``mechcirc transient``.
-
-    Parameters
-    ----------
-    sub : argparse._SubParsersAction
-        The ``add_subparsers()`` of the ``mechcirc`` parser.
-    """
     p = sub.add_parser(
         "transient", help="time response of a netlist (exact for linear circuits; backlash)",
         description="Integrate a netlist from its .ic state: node displacements and "
@@ -66,18 +59,6 @@ def _positive(name, value):
 
 
 def cmd_transient(args) -> int:
-    """``mechcirc transient NETLIST``: the time-domain response.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed command line.
-
-    Returns
-    -------
-    int
-        The exit status (0: success).
-    """
     from ..netlist import load
     from ..outputs import OutputSet
     from ..transient import transient
@@ -160,18 +141,7 @@ def _print_separations(result, u) -> None:
 
 
 def cmd_crosscheck_netlist(args) -> int:
-    """``mechcirc crosscheck FILE.mcir``: frequency domain vs transients of any netlist.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        The parsed command line.
-
-    Returns
-    -------
-    int
-        The exit status (0: success).
-    """
+    """``mechcirc crosscheck FILE.mcir``: frequency domain vs transients of any netlist."""
     from ..netlist import load
     from ..transient import crosscheck
 
