@@ -282,7 +282,8 @@ class Designs:
                               for i, e in enumerate(c.elements)),
             levers=tuple(replace(lv, ratio=float(self.ratios[i, d]))
                          for i, lv in enumerate(c.levers)),
-            drive=replace(c.drive, amplitude=float(self.amplitude[d])))
+            drive=None if c.drive is None else replace(c.drive,
+                                                       amplitude=float(self.amplitude[d])))
 
     # -- the batched series–parallel plan ----------------------------------
     def plan(self, which: NDArray):
@@ -350,8 +351,8 @@ class Designs:
                 K[d], err[d] = np.nan, np.inf
                 failed[d] = str(exc)
         err = singular_error(K, err)
-        return DesignSweep(omega, K, err, self.circuit.drive.kind, self.amplitude[:, None],
-                           single, failed)
+        kind = self.circuit.require_drive().kind
+        return DesignSweep(omega, K, err, kind, self.amplitude[:, None], single, failed)
 
     def resonances(self, omega_max: float | None = None) -> "DesignResonances":
         """Resonances and anti-resonances of every design up to ``omega_max`` [rad/s].
@@ -380,7 +381,8 @@ class Designs:
         found = batched_roots(self, omega_max)
         if found is None:
             found = _nodal_roots(self, omega_max)
-        which, pole, w, err = found if found is not None else (np.zeros(0, dtype=np.int64),) * 4
+        none: NDArray = np.zeros(0, dtype=np.int64)
+        which, pole, w, err = found if found is not None else (none,) * 4
         single = np.setdiff1d(np.arange(D), which)
         failed: dict[int, str] = {}
         alone: dict[int, list] = {}
@@ -525,7 +527,8 @@ def _stacked_solve(system, S: NDArray, parts: list, design: NDArray, w: NDArray)
     chunk = max(1, min(2 ** 21 // (n * n), nodal._CHUNK_TERMS // (pat.n_terms + n)))
     for start in range(0, m, chunk):
         pts = np.arange(start, min(start + chunk, m))
-        A = nodal.combine(*(X[design[pts]] for X in parts), w[pts, None, None])
+        dc, ms, ks = (X[design[pts]] for X in parts)
+        A = nodal.combine(dc, ms, ks, w[pts, None, None])
         # A point exactly singular: NaN there, the others kept, as the single
         # path's dense solver does.
         inv, good = stacked_inverse(A)
@@ -800,7 +803,8 @@ class DesignResonances:
         """Design ``d``'s roots as :class:`~mechcirc.resonances.Resonance` objects."""
         from .resonances import Resonance
 
-        return [Resonance(str(self.kind[d, i]), float(self.omega[d, i]),
+        return [Resonance("antiresonance" if self.kind[d, i] == "antiresonance" else
+                          "resonance", float(self.omega[d, i]),
                           float(self.omega_d[d, i]), float(self.zeta[d, i]),
                           float(self.error[d, i])) for i in range(int(self.count[d]))]
 
@@ -860,7 +864,7 @@ def _extremes(ds: Designs, lo: float, hi: float, res: DesignResonances,
             singular = 0.0 if name == "min" else np.inf
             out[f"K_{name}"][fast] = np.where(first >= 0, singular, edge_v)
             out[f"omega_at_K_{name}"][fast] = np.where(first >= 0, w_first, edge_w)
-        if ds.circuit.drive.kind == "force":
+        if ds.circuit.require_drive().kind == "force":
             out["Q0_max"][fast] = amp
             out["omega_at_Q0_max"][fast] = lo
         else:

@@ -90,7 +90,7 @@ def explain(circuit: Circuit) -> tuple[list[Step], str]:
 def explain_lines(circuit: Circuit) -> list[str]:
     """:func:`explain` as printable lines (what ``mechcirc check --explain`` shows)."""
     steps, root = explain(circuit)
-    d = circuit.drive
+    d = circuit.require_drive()
     lines = [f"K seen by drive {d.name} between {d.n1} and {d.n2}, "
              f"reduced in {len(steps)} step(s)"]
     loaded = {e.name for e in leaves(circuit.tree)}

@@ -193,7 +193,7 @@ def resonance_pairs(circuit: Circuit, omega_max: float | None = None,
 
         from .errors import UnloadedElementWarning
 
-        d = circuit.drive
+        d = circuit.require_drive()
         warnings.warn(
             f"{len(system.unloaded)} element(s) lie on no path between the drive's nodes "
             f"{d.n1!r} and {d.n2!r} and carry no force: {', '.join(system.unloaded)}",
