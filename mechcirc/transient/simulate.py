@@ -1045,7 +1045,7 @@ def _nonlinear(ss: StateSpace, circuit, z0, t, u, rtol, rate=None):
         out = np.empty((t.size, N))
         z = z0.astype(float).copy()
         steps = kern.dopri_run(z, 0.0, h, t.size, *mats, u, tol, atol, hm,
-                               kern._A, kern._B5, kern._B4, kern._C, kern._D, dense, out,
+                               kern._A, kern._B4, kern._C, kern._D, dense, out,
                                1e-6 * hm)
         if steps < 0:
             raise MechcircError("the clearance integrator's step fell below 1e-14 s "
