@@ -149,10 +149,11 @@ def from_circuits(circuits) -> "Designs":
         raise InputError("from_circuits needs at least one circuit")
     first = circuits[0]
 
-    def shape(c):
+    def shape(c: Circuit):
+        d = c.require_drive()
         return ([(e.kind, e.name, e.n1, e.n2) for e in c.elements],
                 [(lv.name, lv.p1, lv.p2, lv.s1, lv.s2) for lv in c.levers],
-                (c.drive.name, c.drive.n1, c.drive.n2, c.drive.kind))
+                (d.name, d.n1, d.n2, d.kind))
 
     ref = shape(first)
     for i, c in enumerate(circuits[1:], start=1):
@@ -163,7 +164,7 @@ def from_circuits(circuits) -> "Designs":
     etas = np.array([[e.eta for e in c.elements] for c in circuits], dtype=float).T
     ratios = np.array([[lv.ratio for lv in c.levers] for c in circuits], dtype=float).T \
         .reshape(len(first.levers), len(circuits))
-    amplitude = np.array([c.drive.amplitude for c in circuits], dtype=float)
+    amplitude = np.array([c.require_drive().amplitude for c in circuits], dtype=float)
     with np.errstate(all="ignore"):
         scaled = values * etas
         valid = (np.isfinite(scaled) & (scaled > 0)).all(axis=0) & \

@@ -63,3 +63,9 @@ def test_require_drive_returns_the_drive():
     c = parse(NET + "drive V a 0 force=2\n")
     assert c.require_drive() is c.drive
     assert c.require_drive().amplitude == 2.0
+
+
+def test_designs_from_circuits_name_the_missing_drive():
+    from mechcirc.batch import from_circuits
+
+    _no_drive(lambda c: from_circuits([c, c]))
