@@ -138,6 +138,7 @@ def assemble(circuit: Circuit, whole: bool = False) -> NodalSystem:
         elements, levers = tuple(circuit.elements), tuple(circuit.levers)
     else:
         check_frame_paths(circuit)
+        d = circuit.require_drive()
         groups = force_groups(circuit.elements, circuit.levers)
         kept = set(loaded_groups(groups, d.n1, d.n2, drive_line=d.line,
                                  source=circuit.source))

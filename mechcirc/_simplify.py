@@ -382,7 +382,7 @@ def simplify(circuit: Circuit, band, tol: float, *, output: str | None = None,
     if grid.size == 0:
         raise MechcircError("the output is zero or infinite at every check point of the band")
     search = _Search(circuit, grid, y_full, output, protect)
-    drive = circuit.drive
+    drive = circuit.require_drive()
     taken = {e.name for e in circuit.elements} | {lv.name for lv in circuit.levers} | \
         {drive.name}
     current, steps, error = _exact_first(search, taken, tol)

@@ -487,7 +487,7 @@ def singular_limits(K: NDArray[np.complex128], omega) -> NDArray[np.complex128]:
 
 def _sweep_tree(circuit: Circuit, tree: Node, omega) -> Sweep:
     K = singular_limits(_chunked(lambda w: evaluate(tree, w), omega, complex), omega)
-    return Sweep(omega=omega, K=K, drive=circuit.drive, method="sp",
+    return Sweep(omega=omega, K=K, drive=circuit.require_drive(), method="sp",
                  name=circuit.name, tree=tree, circuit=circuit)
 
 
@@ -504,7 +504,7 @@ def _sweep_nodal(circuit: Circuit, omega, refine: bool = True) -> Sweep:
     K = _nodal_singular_limits(circuit.nodal, K, omega)
     err = np.where(singular, np.inf, err)
     K, err, notes = _tree_where_no_digit(circuit, omega, K, err)
-    result = Sweep(omega=omega, K=K, drive=circuit.drive, method="nodal", name=circuit.name,
+    result = Sweep(omega=omega, K=K, drive=circuit.require_drive(), method="nodal", name=circuit.name,
                    circuit=circuit, notes=notes)
     result._cache["error"] = err
     return result

@@ -157,10 +157,11 @@ def from_circuits(circuits) -> "Designs":
         raise InputError("from_circuits needs at least one circuit")
     first = circuits[0]
 
-    def shape(c):
+    def shape(c: Circuit):
+        d = c.require_drive()
         return ([(e.kind, e.name, e.n1, e.n2) for e in c.elements],
                 [(lv.name, lv.p1, lv.p2, lv.s1, lv.s2) for lv in c.levers],
-                (c.drive.name, c.drive.n1, c.drive.n2, c.drive.kind))
+                (d.name, d.n1, d.n2, d.kind))
 
     ref = shape(first)
     for i, c in enumerate(circuits[1:], start=1):
@@ -171,7 +172,7 @@ def from_circuits(circuits) -> "Designs":
     etas = np.array([[e.eta for e in c.elements] for c in circuits], dtype=float).T
     ratios = np.array([[lv.ratio for lv in c.levers] for c in circuits], dtype=float).T \
         .reshape(len(first.levers), len(circuits))
-    amplitude = np.array([c.drive.amplitude for c in circuits], dtype=float)
+    amplitude = np.array([c.require_drive().amplitude for c in circuits], dtype=float)
     with np.errstate(all="ignore"):
         scaled = values * etas
         valid = (np.isfinite(scaled) & (scaled > 0)).all(axis=0) & \
@@ -290,7 +291,8 @@ class Designs:
                               for i, e in enumerate(c.elements)),
             levers=tuple(replace(lv, ratio=float(self.ratios[i, d]))
                          for i, lv in enumerate(c.levers)),
-            drive=replace(c.drive, amplitude=float(self.amplitude[d])))
+            drive=None if c.drive is None else replace(c.drive,
+                                                       amplitude=float(self.amplitude[d])))
 
     # -- the batched series–parallel plan ----------------------------------
     def plan(self, which: NDArray):
@@ -358,8 +360,8 @@ class Designs:
                 K[d], err[d] = np.nan, np.inf
                 failed[d] = str(exc)
         err = singular_error(K, err)
-        return DesignSweep(omega, K, err, self.circuit.drive.kind, self.amplitude[:, None],
-                           single, failed)
+        kind = self.circuit.require_drive().kind
+        return DesignSweep(omega, K, err, kind, self.amplitude[:, None], single, failed)
 
     def resonances(self, omega_max: float | None = None) -> "DesignResonances":
         """Resonances and anti-resonances of every design up to ``omega_max`` [rad/s].
@@ -388,7 +390,8 @@ class Designs:
         found = batched_roots(self, omega_max)
         if found is None:
             found = _nodal_roots(self, omega_max)
-        which, pole, w, err = found if found is not None else (np.zeros(0, dtype=np.int64),) * 4
+        none: NDArray = np.zeros(0, dtype=np.int64)
+        which, pole, w, err = found if found is not None else (none,) * 4
         single = np.setdiff1d(np.arange(D), which)
         failed: dict[int, str] = {}
         alone: dict[int, list] = {}
@@ -533,7 +536,8 @@ def _stacked_solve(system, S: NDArray, parts: list, design: NDArray, w: NDArray)
     chunk = max(1, min(2 ** 21 // (n * n), nodal._CHUNK_TERMS // (pat.n_terms + n)))
     for start in range(0, m, chunk):
         pts = np.arange(start, min(start + chunk, m))
-        A = nodal.combine(*(X[design[pts]] for X in parts), w[pts, None, None])
+        dc, ms, ks = (X[design[pts]] for X in parts)
+        A = nodal.combine(dc, ms, ks, w[pts, None, None])
         # A point exactly singular: NaN there, the others kept, as the single
         # path's dense solver does.
         inv, good = stacked_inverse(A)
@@ -808,7 +812,8 @@ class DesignResonances:
         """Design ``d``'s roots as :class:`~mechcirc.resonances.Resonance` objects."""
         from .resonances import Resonance
 
-        return [Resonance(str(self.kind[d, i]), float(self.omega[d, i]),
+        return [Resonance("antiresonance" if self.kind[d, i] == "antiresonance" else
+                          "resonance", float(self.omega[d, i]),
                           float(self.omega_d[d, i]), float(self.zeta[d, i]),
                           float(self.error[d, i])) for i in range(int(self.count[d]))]
 
@@ -868,7 +873,7 @@ def _extremes(ds: Designs, lo: float, hi: float, res: DesignResonances,
             singular = 0.0 if name == "min" else np.inf
             out[f"K_{name}"][fast] = np.where(first >= 0, singular, edge_v)
             out[f"omega_at_K_{name}"][fast] = np.where(first >= 0, w_first, edge_w)
-        if ds.circuit.drive.kind == "force":
+        if ds.circuit.require_drive().kind == "force":
             out["Q0_max"][fast] = amp
             out["omega_at_Q0_max"][fast] = lo
         else:

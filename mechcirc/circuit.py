@@ -277,9 +277,10 @@ class Circuit:
     Attributes
     ----------
     elements : tuple of Element
-    drive : Drive
+    drive : Drive or None
         None only in a circuit read with ``require_drive=False`` (a transient
-        with initial conditions and no drive).
+        with initial conditions and no drive); analyses that need the drive
+        take it from :meth:`require_drive`.
     levers : tuple of Lever
     name : str
         A short name (the netlist's file stem), used in titles.
@@ -299,12 +300,28 @@ class Circuit:
     """
 
     elements: tuple[Element, ...]
-    drive: Drive
+    drive: Drive | None
     levers: tuple[Lever, ...] = ()
     name: str = "circuit"
     source: str = "<string>"
     params: dict = field(default_factory=dict, compare=False)
     initial: tuple = ()
+
+    def require_drive(self) -> Drive:
+        """The drive; a :class:`~mechcirc.errors.NetlistError` if the circuit has none.
+
+        Every analysis seen from the drive (K(ω), resonances, the reduction
+        tree) takes the drive from here, so a circuit read with
+        ``require_drive=False`` fails with a message, not an ``AttributeError``.
+        """
+        if self.drive is None:
+            from .errors import NetlistError
+
+            raise NetlistError(f"circuit {self.name!r} has no drive, and this analysis is "
+                               "seen from one", self.source, 0, 0,
+                               "one line 'drive NAME N1 N2 velocity=V0' (a netlist without "
+                               "a drive can only be integrated: 'mechcirc transient')")
+        return self.drive
 
     @cached_property
     def _reduction(self) -> Reduction:

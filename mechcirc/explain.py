@@ -107,7 +107,7 @@ def explain_lines(circuit: Circuit) -> list[str]:
     list of str
     """
     steps, root = explain(circuit)
-    d = circuit.drive
+    d = circuit.require_drive()
     lines = [f"K seen by drive {d.name} between {d.n1} and {d.n2}, "
              f"reduced in {len(steps)} step(s)"]
     loaded = {e.name for e in leaves(circuit.tree)}

@@ -391,7 +391,7 @@ def sweep_sensitivity(circuit: Circuit, omega, names=None) -> SweepSensitivity:
             elif name in slopes:
                 with np.errstate(all="ignore"):
                     dK[name][at:at + w.size] = dK_all @ slopes[name]
-    return SweepSensitivity(omega, K, circuit.drive, {k: value[k] for k in names}, dK)
+    return SweepSensitivity(omega, K, circuit.require_drive(), {k: value[k] for k in names}, dK)
 
 
 def _adjoint_products(system, x, w, stamps) -> np.ndarray:

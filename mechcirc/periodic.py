@@ -222,8 +222,9 @@ def _prepared(circuit: Circuit, motion):
         raise MechcircError(f"drive {drive.name!r} is a force drive; a motion is imposed "
                             "by a velocity drive")
     if drive.amplitude == 0 or not math.isfinite(drive.amplitude):
-        circuit = dataclasses.replace(circuit, drive=dataclasses.replace(drive, amplitude=1.0))
-    return circuit, motion, circuit.drive.amplitude
+        drive = dataclasses.replace(drive, amplitude=1.0)
+        circuit = dataclasses.replace(circuit, drive=drive)
+    return circuit, motion, drive.amplitude
 
 
 def _on_grid(Qk: np.ndarray, n: int) -> np.ndarray:

@@ -78,7 +78,7 @@ def reduce_circuit(circuit: Circuit) -> Reduction:
         not series–parallel reducible; names the nodes and elements to blame.
     """
     check_frame_paths(circuit)
-    d = circuit.drive
+    d = circuit.require_drive()
     # Reduction creates many small objects and no reference cycles; the cyclic
     # collector re-scanning them made large netlists super-linear (100k elements:
     # 5.5 s with it, 1.9 s without, see docs/performance.md).

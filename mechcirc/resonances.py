@@ -193,7 +193,7 @@ def resonance_pairs(circuit: Circuit, omega_max: float | None = None,
 
         from .errors import UnloadedElementWarning
 
-        d = circuit.drive
+        d = circuit.require_drive()
         warnings.warn(
             f"{len(system.unloaded)} element(s) lie on no path between the drive's nodes "
             f"{d.n1!r} and {d.n2!r} and carry no force: {', '.join(system.unloaded)}",
@@ -430,7 +430,7 @@ def _band_modes(M, D, K, omega_max: float) -> np.ndarray:
 def _band_modes_undamped(M, K, omega_max: float, v0: np.ndarray) -> np.ndarray | None:
     """The undamped band: roots s = jω, ω ≤ ``omega_max``, of K v = ω² M v, or None.
 
-    The roots in the band are counted first (:func:`count_undamped_roots`), so
+    The roots in the band are counted first (:func:`_inertia_counts`), so
     that a band holding too many is refused at once with their number, and the
     symmetric pencil is then solved by shift-invert Lanczos
     (``scipy.sparse.linalg.eigsh``, one factorisation of K − σM at
@@ -517,15 +517,6 @@ def _inertia_counts(M, K, omega_max: float) -> tuple[int, int] | None:
     if lo is None or hi is None:
         return None
     return lo, hi
-
-
-def count_undamped_roots(M, K, omega_max: float) -> int | None:
-    """How many natural frequencies 1e-6·omega_max < ω < omega_max the pencil (K, M) has.
-
-    See :func:`_inertia_counts`; None when the count cannot be had.
-    """
-    counts = _inertia_counts(M, K, omega_max)
-    return None if counts is None else counts[1] - counts[0]
 
 
 def _undamped(M: np.ndarray, K: np.ndarray, vectors: bool = False) -> tuple:

@@ -183,7 +183,7 @@ def check_frame_paths(circuit: Circuit) -> None:
     g = nx.Graph()
     g.add_edges_from((e.n1, e.n2) for e in circuit.elements)
     g.add_edges_from(p for lv in circuit.levers for p in ((lv.p1, lv.p2), (lv.s1, lv.s2)))
-    d = circuit.drive
+    d = circuit.require_drive()
     g.add_edge(d.n1, d.n2)
     referenced = nx.node_connected_component(g, FRAME if FRAME in g else d.n1)
     lever_nodes = {n for lv in circuit.levers for n in (lv.p1, lv.p2, lv.s1, lv.s2)}

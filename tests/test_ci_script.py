@@ -1,8 +1,8 @@
-"""``.ci/run``: the exit status of the test run is the CI's, and no tests is a failure.
+"""``.ci/run``: the tests' exit status and mypy's both decide CI; no tests is a failure.
 
 The script is run with stand-ins for ``python3``, ``python`` and ``pip`` first on
-PATH (nothing is installed): the stand-in ``python -m pytest`` exits with the
-status under test.
+PATH (nothing is installed): the stand-in ``python -m pytest`` and ``python -m mypy``
+exit with the statuses under test (mypy's arguments are logged).
 """
 
 from __future__ import annotations
@@ -18,24 +18,32 @@ ROOT = Path(__file__).resolve().parents[1]
 STAND_IN = """#!/bin/sh
 case "$*" in
   "-m venv "*) mkdir -p "$3/bin" && : > "$3/bin/activate" ;;
-  *pytest*) exit "$PYTEST_STATUS" ;;
+  "-m pytest"*) exit "$PYTEST_STATUS" ;;
+  "-m mypy "*) echo "$*" >> "$TMPDIR/mypy_args"; exit "$MYPY_STATUS" ;;
 esac
 exit 0
 """
 
 
-@pytest.mark.parametrize("pytest_status, ci_status", [(0, 0), (1, 1), (5, 5)])
-def test_ci_status_follows_pytest_and_no_tests_collected_fails(tmp_path, pytest_status,
-                                                               ci_status):
+@pytest.mark.parametrize("pytest_status, mypy_status, ci_status", [
+    (0, 0, 0), (1, 0, 1), (5, 0, 5), (0, 1, 1), (0, 2, 2), (1, 1, 1), (5, 1, 5)])
+def test_ci_status_follows_pytest_and_mypy_and_no_tests_collected_fails(
+        tmp_path, pytest_status, mypy_status, ci_status):
     bin_dir = tmp_path / "bin"
     bin_dir.mkdir()
     for name in ("python3", "python", "pip"):
         (bin_dir / name).write_text(STAND_IN)
         (bin_dir / name).chmod(0o755)
     env = {**os.environ, "PATH": f"{bin_dir}{os.pathsep}{os.environ['PATH']}",
-           "PYTEST_STATUS": str(pytest_status), "TMPDIR": str(tmp_path)}
+           "PYTEST_STATUS": str(pytest_status), "MYPY_STATUS": str(mypy_status),
+           "TMPDIR": str(tmp_path)}
     proc = subprocess.run(["bash", str(ROOT / ".ci" / "run")], env=env, capture_output=True,
                           text=True, timeout=60, check=False)
     assert proc.returncode == ci_status, proc.stderr
-    if pytest_status == 5:
-        assert "collected no tests" in proc.stderr
+    assert ("collected no tests" in proc.stderr) == (pytest_status == 5)
+    assert ("mypy found type errors" in proc.stderr) == (mypy_status != 0)
+    # mypy checks the package, after the tests, with a fresh cache in the run's temp dir
+    args = (tmp_path / "mypy_args").read_text().split()
+    assert args[:2] == ["-m", "mypy"] and args[-1] == "mechcirc"
+    cache = Path(args[args.index("--cache-dir") + 1])
+    assert cache.parent.parent == tmp_path and not cache.exists()

@@ -205,14 +205,6 @@ def join_spaced_quantities(argv: list[str]) -> list[str]:
     return out
 
 
-#: The --json convention for non-finite numbers (docs/cli.md): the bare tokens
-#: ``Infinity``, ``-Infinity`` and ``NaN``, as Python's json module writes and
-#: reads them; ``json.loads`` and ``pandas.read_json`` give floats, so numeric
-#: arrays stay numeric.  (Strict RFC 8259 readers such as jq need
-#: ``sub("NaN"; "null")``-style preprocessing; the flags say which points these are.)
-JSON_NONFINITE = "Infinity/-Infinity/NaN tokens"
-
-
 # ------------------------------------------------------------------ option values
 # One validator for every number the command line takes: argparse calls it,
 # so a bad value is a usage error (exit 2) naming the option, before any work.
@@ -325,7 +317,13 @@ def _longest_list(obj, depth: int = 0) -> int:
 
 
 def print_json(document) -> None:
-    """Print one JSON document on stdout (non-finite floats as Infinity, -Infinity, NaN)."""
+    """Print one JSON document on stdout (non-finite floats as Infinity, -Infinity, NaN).
+
+    The bare tokens are the --json convention for non-finite numbers (docs/cli.md):
+    Python's json module writes and reads them, ``json.loads`` and
+    ``pandas.read_json`` give floats, so numeric arrays stay numeric.  (Strict
+    RFC 8259 readers such as jq need ``sub("NaN"; "null")``-style preprocessing.)
+    """
     doc = _jsonable(document)
     # json.dump and indented output go through json's pure-Python encoder, one
     # write per number; a long document is encoded compact in one go by the C

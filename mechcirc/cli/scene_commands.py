@@ -98,10 +98,10 @@ def cmd_scene(args) -> int:
     if args.reduce and scene.analysis.band is None:
         raise MechcircError(f"{args.file}: --reduce needs band = [W1, W2] and tol = T in the "
                             "file's [analysis] table")
-    if args.theta is None and scene.analysis.theta_deg is None:
+    theta_deg = args.theta if args.theta is not None else scene.analysis.theta_deg
+    if theta_deg is None:
         raise MechcircError(f"{args.file}: give --theta DEG or --cycle (the file has no "
                             "[analysis] theta_deg)")
-    theta_deg = args.theta if args.theta is not None else scene.analysis.theta_deg
     if args.reduce:
         model, reduced = build_needed(scene, math.radians(theta_deg), reflect=args.reflect)
     else:

@@ -293,7 +293,7 @@ def _cycle_designs(scene: Scene, motion, reflect: ReflectMode):
     with np.errstate(all="ignore"):
         valid = (np.isfinite(values * eta) & (values * eta > 0)).all(axis=0)
     ds = Designs(c, {}, values, eta, np.zeros((0, where.size)),
-                 np.full(where.size, float(c.drive.amplitude)), valid, None)
+                 np.full(where.size, float(c.require_drive().amplitude)), valid, None)
     return (ds, where), np.flatnonzero(~ok).tolist()
 
 

@@ -168,7 +168,7 @@ class _Rigid:
         from .simulation import kernels_for
 
         ang, ang1, ang2, pos, vel, acc = (dict(x) for x in rigid_tables(scene, N))
-        tlink = {}
+        tlink: dict[str, str] = {}
         for t in scene.torsions:
             tlink.setdefault(t.body, t.link)
         for b, l in tlink.items():
@@ -337,7 +337,7 @@ def _prepare(scene: Scene, shaft, flywheel, points, rigid):
         raise MechcircError(f"{scene.source}: the shaft has no inertia (flywheel 0 and no mass "
                             "of the mechanism moves with the crank)")
     motor = shaft.motor
-    eq = _RigidShaft(rig, Jf, motor.scalar_torque)
+    eq: _RigidShaft | _ElasticShaft = _RigidShaft(rig, Jf, motor.scalar_torque)
     if not rigid and scene.parts and len(scene.parts) > 1:
         eq = _ElasticShaft(scene, Jf, motor.scalar_torque)
         if eq.Jf + eq.c ** 2 * min(_drive_inertia(eq, t) for t in (0.0, 1.0, 2.0)) <= 0:

@@ -700,7 +700,7 @@ def _rel_change(a: dict, b: dict) -> float:
     """Largest change of an extremum between two runs, relative to the largest magnitude of
     that quantity; quantities below 1e-6 of the largest of their kind (acceleration, force,
     …) are rounding noise (a translating body's rotation) and are skipped."""
-    kind_scale = {}
+    kind_scale: dict[str, float] = {}
     for k, (lo, hi) in a.items():
         kind = k.rsplit(".", 1)[-1]
         kind_scale[kind] = max(kind_scale.get(kind, 0.0), abs(lo), abs(hi))

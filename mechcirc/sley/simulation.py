@@ -159,9 +159,9 @@ class SleyResult:
         """Output arrays by name, crank angle in degrees first (for CSV)."""
         cols = {"crank_angle_deg": np.degrees(self.crank_angle), "eps2P": self.eps2P,
                 "eps4P": self.eps4P, "eps4T": self.eps4T, "M2V": self.M2V}
-        if self.eps5P is not None:
-            cols["eps5P"] = self.eps5P
-            cols["M5V"] = self.M5V
+        for name, col in (("eps5P", self.eps5P), ("M5V", self.M5V)):
+            if col is not None:             # the second crank's side (variants with one)
+                cols[name] = col
         cols["M4"] = self.M4
         return cols
 

@@ -108,7 +108,7 @@ def matrix_pencil(y: np.ndarray, dt: float, rel: float = 1e-9, max_order: int = 
 
 
 def _variant(circuit: Circuit, kind: Literal["velocity", "force"]) -> Circuit:
-    d = circuit.drive
+    d = circuit.require_drive()
     if d.kind == kind:
         new = d
     else:

@@ -178,7 +178,8 @@ def switch_state(t, z, xi, xv, dx, vi, vv, dv, prm, t0, dt, u, k):
     return 0, min(half - e, e + half), 1.0, 1.0
 
 
-# Dormand–Prince 5(4) coefficients.
+# Dormand–Prince 5(4) coefficients; the 5th-order weights are the last row of _A (the
+# last stage is taken at the 5th-order solution: FSAL), so they are not stored twice.
 _C = np.array([0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0, 1.0])
 _A = np.array([
     [0, 0, 0, 0, 0, 0],
@@ -188,7 +189,6 @@ _A = np.array([
     [19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729, 0, 0],
     [9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656, 0],
     [35 / 384, 0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84]])
-_B5 = np.array([35 / 384, 0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84, 0])
 _B4 = np.array([5179 / 57600, 0, 7571 / 16695, 393 / 640, -92097 / 339200, 187 / 2100, 1 / 40])
 
 
@@ -239,7 +239,7 @@ def dense_output(z, y5, K, hh, th, coefD, row):
 
 @_jit
 def dopri_run(z, t0, dt, nout, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, u, rtol, atol,
-              hmax, coefA, coefB5, coefB4, coefC, coefD, dense, out, kink_tol=0.0):
+              hmax, coefA, coefB4, coefC, coefD, dense, out, kink_tol=0.0):
     """Integrate from t0 and store z at t0 + k dt (k < nout) in ``out``; returns the step count.
 
     A step is accepted when the embedded error, scaled by atol_i + rtol |z_i|

@@ -521,7 +521,7 @@ def _motion_drive(circuit: Circuit, drive, rpm):
     from ..errors import NetlistError
 
     d = circuit.drive
-    motion = getattr(d, "motion", None)
+    motion = d.motion if d is not None else None
     if rpm is not None:
         if not (isinstance(rpm, (int, float)) and math.isfinite(rpm) and rpm > 0):
             raise MechcircError(f"--rpm must be a finite shaft speed > 0 rev/min, got {rpm!r}")
@@ -537,8 +537,8 @@ def _motion_drive(circuit: Circuit, drive, rpm):
         from ..periodic import rpm_to_omega
 
         return Waveform("motion", omega=rpm_to_omega(float(rpm)), motion=motion)
-    if motion is not None and drive is None:
-        raise NetlistError(f"drive {d.name!r} moves by {motion.spec.split()[0]} over one "
+    if d is not None and d.motion is not None and drive is None:
+        raise NetlistError(f"drive {d.name!r} moves by {d.motion.spec.split()[0]} over one "
                            "revolution of the shaft, and no shaft speed is given",
                            circuit.source or "<string>", d.line, d.col,
                            "a shaft speed: --rpm RPM (transient(..., rpm=RPM)), or a "
@@ -1045,7 +1045,7 @@ def _nonlinear(ss: StateSpace, circuit, z0, t, u, rtol, rate=None):
         out = np.empty((t.size, N))
         z = z0.astype(float).copy()
         steps = kern.dopri_run(z, 0.0, h, t.size, *mats, u, tol, atol, hm,
-                               kern._A, kern._B5, kern._B4, kern._C, kern._D, dense, out,
+                               kern._A, kern._B4, kern._C, kern._D, dense, out,
                                1e-6 * hm)
         if steps < 0:
             raise MechcircError("the clearance integrator's step fell below 1e-14 s "
