@@ -59,7 +59,10 @@ def sley_scene(params: SleyParameters, *, revolutions: int = 5):
     C = (p.d + p.l4 * math.cos(phi4), p.l4 * math.sin(phi4))
     sides = [("", "A", "B", "C", "D", "rocker")] + ([("5", "E", "F", "G", "H", "rocker7")]
                                                     if both else [])
-    pose, links, ground, cranks = {}, {}, (), ()
+    pose: dict = {}
+    links: dict = {}
+    ground: tuple[str, ...] = ()
+    cranks: tuple[Crank, ...] = ()
     for n, a, b, c, d, rocker in sides:
         pose.update({a: (0.0, 0.0), b: (p.l2P, 0.0), c: C, d: (p.d, 0.0)})
         links.update({"crank" + n: (a, b), "coupler" + n: (b, c), rocker: (d, c)})
