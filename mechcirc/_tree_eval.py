@@ -602,18 +602,31 @@ def _combine(node, values: dict, omega, inv_omega, track: bool = False,
 def _leaf_groups(node, values: dict, series: bool, designs) -> tuple:
     """``([real, im_inv, im_omega], [their leaf counts], the values of the other children)``
     of ``node``: its leaves summed by slot, real + j(im_inv/ω + im_omega·ω)."""
+    parts = [values[id(c)] for c in node.children if not isinstance(c, Leaf)]
+    if designs is None:
+        # A single design's sums depend on the node alone: folded once per tree.
+        found = _GROUPS.get(node)
+        if found is None:
+            found = _GROUPS[node] = _fold_leaves(node, series, None)
+        return found[0], found[1], parts
+    sums, counts = _fold_leaves(node, series, designs)
+    return sums, counts, parts
+
+
+#: node -> its leaf sums and counts (:func:`_leaf_groups` of a single design).
+_GROUPS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
+def _fold_leaves(node, series: bool, designs) -> tuple[list, list]:
     sums: list = [0.0, 0.0, 0.0]
     counts = [0, 0, 0]
-    parts: list[_Value] = []
     for c in node.children:
         if isinstance(c, Leaf):
             slot, term = _leaf_term(c.element, series, designs=designs)
             i = 0 if slot == 0 else (2 if slot > 0 else 1)
             sums[i] += term
             counts[i] += 1
-        else:
-            parts.append(values[id(c)])
-    return sums, counts, parts
+    return sums, counts
 
 
 def _sum_bound(series: bool, parts, sums, counts, has, omega, inv_omega):
@@ -659,8 +672,9 @@ def _through_reciprocal(rho: NDArray) -> NDArray:
     out = rho * rho
     out *= 2.0
     out += rho
-    big = ~(rho <= 0.5)
-    if big.any():
+    # One reduction instead of a mask and its any(): max() is NaN if any ρ is.
+    if rho.size and not rho.max() <= 0.5:
+        big = ~(rho <= 0.5)
         out[big] = rho[big] / (1.0 - rho[big])
         out[~(rho < 1.0)] = np.inf
     return out
