@@ -86,7 +86,8 @@ def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: boo
     elif not keep and _mode == "auto" and _jit.COMPILED is not False:
         p = plan(root)
         if _jit.COMPILED or _KERNEL or p.kind.size * omega.size >= KERNEL_MIN_WORK:
-            kernel = compiled_evaluator()
+            # By default never wait for numba to compile: numpy until it is cached.
+            kernel = compiled_evaluator(compile=bool(_jit.COMPILED or _KERNEL))
             if kernel is not None:
                 return _evaluate_compiled(kernel, p, omega, error, condition)
     if not keep and _mode == "auto":
@@ -166,21 +167,75 @@ def _postorder_values(root, omega, track: bool, keep: bool, checked: bool, desig
 
 #: The compiled plan (:mod:`mechcirc._sp_kernel`) evaluates when numba is installed
 #: and ``mechcirc._jit.COMPILED`` is None (default), once the kernel is loaded or when
-#: a call has at least :data:`KERNEL_MIN_WORK` node-points; True always; False never.
+#: a call has at least :data:`KERNEL_MIN_WORK` node-points and numba has the kernel
+#: in its disk cache; True always; False never.
 #: Importing numba and loading the compiled kernel from its cache takes about
 #: 1 s once per process (0.7–1.1 s measured): below this many plan nodes × ω
-#: points (about 0.15 s of the numpy path) a sweep does not start it.
+#: points (about 0.15 s of the numpy path) a sweep does not start it.  Compiling
+#: it (a fresh install) takes 4–11 s of CPU: the default path does not wait for
+#: that, it runs numpy while a process of its own compiles the kernel into the cache.
 KERNEL_MIN_WORK = 5_000_000
 _KERNEL: list = []
+_WARMING: list = []
 
 
-def compiled_evaluator():
-    """The compiled plan evaluator, or None without numba (imported on first use)."""
+def compiled_evaluator(compile: bool = True):
+    """The compiled plan evaluator, or None without numba (imported on first use).
+
+    With ``compile=False``, None also while numba would have to compile it
+    (it is not in numba's disk cache yet): then a detached Python process
+    compiles it into the cache (started once per process, :func:`warm_kernel`),
+    and a later call loads it from there.
+    """
     if not _KERNEL:
         from . import _sp_kernel
 
-        _KERNEL.append(_sp_kernel.evaluate_plan if _sp_kernel.HAVE_NUMBA else None)
+        if compile or not _sp_kernel.HAVE_NUMBA or _in_cache(_sp_kernel.evaluate_plan):
+            _KERNEL.append(_sp_kernel.evaluate_plan if _sp_kernel.HAVE_NUMBA else None)
+        else:
+            if not _WARMING:
+                _WARMING.append(_start_warming())
+            return None
     return _KERNEL[0]
+
+
+def _in_cache(dispatcher) -> bool:
+    """Whether numba's disk cache holds a compiled ``dispatcher`` for its current source."""
+    try:
+        return bool(dispatcher._cache._cache_file._load_index())
+    except Exception:       # numba's private cache layout changed: load (compile) as before
+        return True
+
+
+def _start_warming():
+    """Start :func:`warm_kernel` in a detached Python process (output discarded)."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    env = dict(os.environ)
+    # The child imports this copy of mechcirc (a checkout on sys.path, not installed).
+    here = str(Path(__file__).resolve().parents[1])
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (here, env.get("PYTHONPATH")) if p)
+    try:
+        return subprocess.Popen(
+            [sys.executable, "-c", "from mechcirc._tree_eval import warm_kernel; warm_kernel()"],
+            env=env, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL, start_new_session=True)
+    except OSError:         # no process to spare: the numpy path goes on regardless
+        return None
+
+
+def warm_kernel() -> None:
+    """Compile the plan evaluator into numba's disk cache (the argument types a sweep uses)."""
+    from .circuit import Circuit, Drive
+
+    c = Circuit((Element("spring", "k", "a", "b", 1.0), Element("mass", "m", "b", "0", 1.0),
+                 Element("damper", "c", "a", "0", 1.0)), Drive("V", "a", "0", "velocity", 1.0))
+    kernel = compiled_evaluator()
+    if kernel is not None:
+        _evaluate_compiled(kernel, plan(c.tree), np.array([1.0, 2.0]), True, False)
 
 
 @dataclass(frozen=True, eq=False)
