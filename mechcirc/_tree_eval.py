@@ -176,55 +176,25 @@ def _postorder_values(root, omega, track: bool, keep: bool, checked: bool, desig
 #: that, it runs numpy while a process of its own compiles the kernel into the cache.
 KERNEL_MIN_WORK = 5_000_000
 _KERNEL: list = []
-_WARMING: list = []
 
 
 def compiled_evaluator(compile: bool = True):
     """The compiled plan evaluator, or None without numba (imported on first use).
 
     With ``compile=False``, None also while numba would have to compile it
-    (it is not in numba's disk cache yet): then a detached Python process
-    compiles it into the cache (started once per process, :func:`warm_kernel`),
+    (it is not in numba's disk cache yet): then a detached process compiles it
+    into the cache (:func:`warm_kernel`, :func:`mechcirc._jit.warm_in_background`)
     and a later call loads it from there.
     """
     if not _KERNEL:
         from . import _sp_kernel
 
-        if compile or not _sp_kernel.HAVE_NUMBA or _in_cache(_sp_kernel.evaluate_plan):
+        if compile or not _sp_kernel.HAVE_NUMBA or _jit.in_cache(_sp_kernel.evaluate_plan):
             _KERNEL.append(_sp_kernel.evaluate_plan if _sp_kernel.HAVE_NUMBA else None)
         else:
-            if not _WARMING:
-                _WARMING.append(_start_warming())
+            _jit.warm_in_background("from mechcirc._tree_eval import warm_kernel; warm_kernel()")
             return None
     return _KERNEL[0]
-
-
-def _in_cache(dispatcher) -> bool:
-    """Whether numba's disk cache holds a compiled ``dispatcher`` for its current source."""
-    try:
-        return bool(dispatcher._cache._cache_file._load_index())
-    except Exception:       # numba's private cache layout changed: load (compile) as before
-        return True
-
-
-def _start_warming():
-    """Start :func:`warm_kernel` in a detached Python process (output discarded)."""
-    import os
-    import subprocess
-    import sys
-    from pathlib import Path
-
-    env = dict(os.environ)
-    # The child imports this copy of mechcirc (a checkout on sys.path, not installed).
-    here = str(Path(__file__).resolve().parents[1])
-    env["PYTHONPATH"] = os.pathsep.join(p for p in (here, env.get("PYTHONPATH")) if p)
-    try:
-        return subprocess.Popen(
-            [sys.executable, "-c", "from mechcirc._tree_eval import warm_kernel; warm_kernel()"],
-            env=env, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-            stderr=subprocess.DEVNULL, start_new_session=True)
-    except OSError:         # no process to spare: the numpy path goes on regardless
-        return None
 
 
 def warm_kernel() -> None:

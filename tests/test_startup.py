@@ -9,6 +9,7 @@ path gives the numpy path's numbers, bit for bit, while numba's cache is cold.
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -38,15 +39,18 @@ def test_a_sweep_with_flags_loads_no_scipy_matplotlib_or_numba():
 
 @pytest.fixture
 def cold_kernel(monkeypatch):
-    """The default path as in a fresh process whose numba cache does not hold the kernel;
-    returns the list of warm-up processes started (recorded, none run)."""
+    """The default path as in a fresh process whose numba cache holds no kernel;
+    returns the list of warm-up statements started (recorded, none run)."""
+    from mechcirc import nodal
+
     started = []
     monkeypatch.setattr(_jit, "COMPILED", None)
     monkeypatch.setattr(_tree_eval, "_KERNEL", [])
-    monkeypatch.setattr(_tree_eval, "_WARMING", [])
+    monkeypatch.setattr(nodal, "_KERNELS", [])
     monkeypatch.setattr(_tree_eval, "KERNEL_MIN_WORK", 1)      # every call is "large"
-    monkeypatch.setattr(_tree_eval, "_in_cache", lambda dispatcher: False)
-    monkeypatch.setattr(_tree_eval, "_start_warming", lambda: started.append(1) or "started")
+    monkeypatch.setattr(nodal, "KERNEL_MIN_WORK", 1)
+    monkeypatch.setattr(_jit, "in_cache", lambda *dispatchers: False)
+    monkeypatch.setattr(_jit, "warm_in_background", started.append)
     return started
 
 
@@ -81,13 +85,15 @@ def test_a_cold_kernel_is_not_waited_for(cold_kernel):
         assert reduction.evaluate(c.tree, omega).tobytes() == K0.tobytes()
         s = c.sweep(omega[2:])
         assert s.error.tobytes() == _numpy_path(c.tree, omega[2:], True)[1].tobytes()
-    assert cold_kernel == [1]                  # one warm-up process, started once
-    assert _tree_eval._KERNEL == []            # and nothing compiled here
+    # A warm-up process asked for (once per process: warm_in_background's own
+    # set, replaced here by the recording list), nothing compiled here.
+    assert set(cold_kernel) == {"from mechcirc._tree_eval import warm_kernel; warm_kernel()"}
+    assert _tree_eval._KERNEL == []
 
 
 def test_a_cached_kernel_is_loaded(cold_kernel, monkeypatch):
     pytest.importorskip("numba")
-    monkeypatch.setattr(_tree_eval, "_in_cache", lambda dispatcher: True)
+    monkeypatch.setattr(_jit, "in_cache", lambda *dispatchers: True)
     c = mechcirc.load(STB)
     omega = np.linspace(10, 1000, 40)
     K, rho = reduction.evaluate(c.tree, omega, error=True)
@@ -105,5 +111,48 @@ def test_the_cache_check_sees_numbas_index():
     def never_compiled(x):      # defined here, compiled nowhere: not in any cache
         return x + 0.5
 
-    assert _tree_eval._in_cache(never_compiled) is False
-    assert _tree_eval._in_cache(object()) is True      # no cache to ask: load as before
+    assert _jit.in_cache(never_compiled) is False
+    assert _jit.in_cache(object()) is True      # no cache to ask: load as before
+
+
+def test_a_cold_nodal_sweep_runs_numpy(cold_kernel):
+    pytest.importorskip("numba")
+    from mechcirc import nodal
+
+    # A bridge (not series-parallel) past the dense limit: the sparse path.
+    n = nodal.DENSE_LIMIT + 10
+    lines = ["drive V a 0 velocity=1", "damper c a 0 2", "spring kb a n5 300"]
+    lines += [f"mass m{i} {'a' if i == 0 else f'n{i}'} n{i + 1} {1 + i % 3}\n"
+              f"spring k{i} n{i + 1} 0 {1e3 + i}" for i in range(n)]
+    c = mechcirc.parse("\n".join(lines))
+    omega = np.geomspace(1.0, 1e3, 30)
+    K = nodal.mobility(c.nodal, omega)
+    saved = _jit.COMPILED
+    _jit.COMPILED = False
+    try:
+        K0 = nodal.mobility(c.nodal, omega)
+    finally:
+        _jit.COMPILED = saved
+    assert K.tobytes() == K0.tobytes()
+    assert set(cold_kernel) == {"from mechcirc.nodal import warm_kernels; warm_kernels()"}
+    assert nodal._KERNELS == []
+
+
+def test_the_warm_up_statements_run(cold_kernel):
+    pytest.importorskip("numba")
+    from mechcirc import nodal
+
+    c = mechcirc.load(STB)
+    reduction.evaluate(c.tree, np.linspace(10, 1000, 5))
+    lines = ["drive V a 0 velocity=1", "damper c a 0 2"]
+    lines += [f"mass m{i} {'a' if i == 0 else f'n{i}'} n{i + 1} 1\nspring k{i} n{i + 1} 0 1e3"
+              for i in range(nodal.DENSE_LIMIT + 5)]
+    nodal.mobility(mechcirc.parse("\n".join(lines)).nodal, np.array([1.0, 2.0]))
+    assert len(set(cold_kernel)) == 2
+    # Each as the detached process runs it, here with numba's JIT off (the same
+    # calls as plain Python, no compile): they import and run without error.
+    env = {**os.environ, "NUMBA_DISABLE_JIT": "1", "PYTHONPATH": str(ROOT)}
+    for statement in sorted(set(cold_kernel)):
+        done = subprocess.run([sys.executable, "-c", statement], cwd=ROOT, env=env,
+                              capture_output=True, text=True, timeout=600)
+        assert done.returncode == 0, done.stderr[-2000:]
