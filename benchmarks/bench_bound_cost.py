@@ -21,6 +21,7 @@ CPU).  It asserts nothing.  Run from the repository root::
 
     python benchmarks/bench_bound_cost.py
     python benchmarks/bench_bound_cost.py --compile
+    python benchmarks/bench_bound_cost.py --compare /path/to/other/checkout
 """
 
 from __future__ import annotations
@@ -97,11 +98,12 @@ t = T(); _tree_eval.warm_kernel(); print(T() - t)
 """
 
 
-def child(code: str, args: list[str], env: dict) -> str:
-    src = code.replace("BENCH", repr(str(ROOT / "benchmarks"))).replace("ROOT", repr(str(ROOT)))
+def child(code: str, args: list[str], env: dict, tree: Path = ROOT) -> str:
+    """Run ``code`` in a fresh process importing the mechcirc of ``tree``; its last line."""
+    src = code.replace("BENCH", repr(str(ROOT / "benchmarks"))).replace("ROOT", repr(str(tree)))
     src = src.replace("WITH_KERNEL", repr(env.get("_WITH_KERNEL") == "1"))
-    done = subprocess.run([sys.executable, "-c", src, *args], cwd=ROOT, env=env,
-                          capture_output=True, text=True)
+    done = subprocess.run([sys.executable, "-c", src, *args], cwd=tree,
+                          env=dict(env, PYTHONPATH=str(tree)), capture_output=True, text=True)
     if done.returncode:
         raise SystemExit(done.stderr[-2000:])
     return done.stdout.strip().splitlines()[-1]
@@ -110,6 +112,8 @@ def child(code: str, args: list[str], env: dict) -> str:
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=21)
+    ap.add_argument("--compare", metavar="DIR",
+                    help="another checkout (e.g. before a change): its cases run alongside")
     ap.add_argument("--compile", action="store_true",
                     help="also time numba's cold compile and cached load (≈ 10 s CPU)")
     args = ap.parse_args()
@@ -121,20 +125,24 @@ def main() -> int:
         pass
     print(f"load average {os.getloadavg()[0]:.1f}; medians of {args.repeat} calls, CPU ms, "
           "each case in a fresh process")
+    trees = [("", ROOT)] + ([(" [compare]", Path(args.compare).resolve())] if args.compare
+                            else [])
     for case in ("45", "999", "stb_heald"):
         repeat = args.repeat if case != "999" else max(5, args.repeat // 3)
-        r = json.loads(child(CHILD, [case, str(repeat)], env))
-        ms = {k: v * 1e3 for k, v in r.items()}
-        label = f"ladder of {case}" if case != "stb_heald" else "stb_heald.mcir"
-        line = (f"{label:<15} default: K {ms['default K']:.3f}, K+bound "
-                f"{ms['default K+bound']:.3f} ({r['default K+bound'] / r['default K']:.2f}x K)")
-        if "floor" in r:
-            line += (f"; floor {ms['floor']:.3f}, default K / floor "
-                     f"{r['default K'] / r['floor']:.2f}x (first call {ms['first']:.3f})")
-        print(line)
-        if "compiled K" in r:
-            print(f"{'':<15} compiled plan: K {ms['compiled K']:.3f}, K+bound "
-                  f"{ms['compiled K+bound']:.3f} ({r['compiled K+bound'] / r['compiled K']:.2f}x K)")
+        for tag, tree in trees:
+            r = json.loads(child(CHILD, [case, str(repeat)], env, tree))
+            ms = {k: v * 1e3 for k, v in r.items()}
+            label = (f"ladder of {case}" if case != "stb_heald" else "stb_heald.mcir") + tag
+            line = (f"{label:<25} default: K {ms['default K']:.3f}, K+bound "
+                    f"{ms['default K+bound']:.3f} ({r['default K+bound'] / r['default K']:.2f}x K)")
+            if "floor" in r:
+                line += (f"; floor {ms['floor']:.3f}, default K / floor "
+                         f"{r['default K'] / r['floor']:.2f}x (first call {ms['first']:.3f})")
+            print(line)
+            if "compiled K" in r:
+                print(f"{'':<25} compiled plan: K {ms['compiled K']:.3f}, K+bound "
+                      f"{ms['compiled K+bound']:.3f} "
+                      f"({r['compiled K+bound'] / r['compiled K']:.2f}x K)")
     if args.compile and env.get("_WITH_KERNEL"):
         with tempfile.TemporaryDirectory() as cache:
             env_c = dict(env, NUMBA_CACHE_DIR=cache)
