@@ -91,14 +91,19 @@ def warm_in_background(statement: str) -> None:
         return
     _WARMING.add(statement)
     import os
+    import site
     import subprocess
     import sys
     from pathlib import Path
 
     env = dict(os.environ)
-    # The child imports this copy of mechcirc (a checkout on sys.path, not installed).
+    # The child imports this copy of mechcirc: a checkout goes first on its path
+    # (an installed copy is found as it is; its site directory is not put
+    # ahead of the standard library).
     here = str(Path(__file__).resolve().parents[1])
-    env["PYTHONPATH"] = os.pathsep.join(p for p in (here, env.get("PYTHONPATH")) if p)
+    sites = {str(Path(d).resolve()) for d in [*site.getsitepackages(), site.getusersitepackages()]}
+    if here not in sites:
+        env["PYTHONPATH"] = os.pathsep.join(p for p in (here, env.get("PYTHONPATH")) if p)
     try:
         subprocess.Popen([sys.executable, "-c", statement], env=env,
                          stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,

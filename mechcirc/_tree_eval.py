@@ -442,9 +442,12 @@ def evaluate_designs(p: Plan, omega: NDArray, error: bool = False, kernel=None):
     (D = 1) is the single sweep.  Without numba (or with ``mechcirc._jit.COMPILED``
     False) a plan that carries :attr:`Plan.numpy` is evaluated by :func:`evaluate`
     over its designs, in chunks of rows (the same numbers); RuntimeError otherwise.
+    By default (``COMPILED`` None) such a plan is not compiled for: where numba's
+    cache does not hold the kernel yet, numpy runs (see :func:`compiled_evaluator`).
     """
     if kernel is None and _jit.COMPILED is not False:
-        kernel = compiled_evaluator()
+        # Not compiled here by default where numpy can stand in (see evaluate).
+        kernel = compiled_evaluator(compile=bool(_jit.COMPILED or _KERNEL) or p.numpy is None)
     omega = np.ascontiguousarray(np.atleast_2d(np.asarray(omega, dtype=float)))
     D = p.designs
     if omega.shape[0] not in (1, D):

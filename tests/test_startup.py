@@ -156,3 +156,37 @@ def test_the_warm_up_statements_run(cold_kernel):
         done = subprocess.run([sys.executable, "-c", statement], cwd=ROOT, env=env,
                               capture_output=True, text=True, timeout=600)
         assert done.returncode == 0, done.stderr[-2000:]
+
+
+def test_a_cold_kernel_batch_of_designs_runs_numpy(cold_kernel):
+    pytest.importorskip("numba")
+    from mechcirc import designs
+
+    text = (".param k=1000\nmass m a b 1\nspring s b 0 k\ndamper c a 0 0.3\n"
+            "mass m2 a 0 2\ndrive V a 0 velocity=1\n")
+    params = {"k": np.geomspace(1e2, 1e4, 5)}
+    omega = np.linspace(10, 1000, 40)
+    s = designs(text, params).sweep(omega)
+    assert _tree_eval._KERNEL == []            # nothing compiled here
+    assert set(cold_kernel) == {"from mechcirc._tree_eval import warm_kernel; warm_kernel()"}
+    _jit.COMPILED = False
+    ref = designs(text, params).sweep(omega)
+    assert s.K.tobytes() == ref.K.tobytes() and s.error.tobytes() == ref.error.tobytes()
+
+
+def test_warm_in_background_runs_once_in_a_process_importing_this_copy(tmp_path, monkeypatch):
+    import time
+
+    monkeypatch.setattr(_jit, "_WARMING", set())
+    out = tmp_path / "where.txt"
+    statement = ("import pathlib, mechcirc._jit as j; "
+                 f"pathlib.Path({str(out)!r}).open('a').write(j.__file__ + '\\n')")
+    _jit.warm_in_background(statement)
+    _jit.warm_in_background(statement)          # once per process: not started again
+    assert _jit._WARMING == {statement}
+    for _ in range(6000):                       # a detached child: wait for its file
+        if out.exists() and out.read_text().endswith("\n"):
+            break
+        time.sleep(0.1)
+    lines = out.read_text().splitlines()
+    assert lines == [str(Path(_jit.__file__).resolve())]
