@@ -143,10 +143,8 @@ def _postorder_values(root, omega, track: bool, keep: bool, checked: bool, desig
     values: dict[int, _Value] = {}
     with np.errstate(all="ignore"):
         inv_omega = 1.0 / omega
-        for node in postorder(root):
-            if isinstance(node, Leaf):
-                continue
-            if isinstance(node, Reflect):
+        for node, reflect, kid_ids, groups in _internal_postorder(root):
+            if reflect:
                 child = _value_of(node.child, values, omega, inv_omega, track, designs)
                 r = None if designs is None else designs[1][node.lever.name]
                 val = _Value(child.imaginary, node.lever.reflect(child.array, r))
@@ -155,14 +153,38 @@ def _postorder_values(root, omega, track: bool, keep: bool, checked: bool, desig
                     # (a full array even over a single leaf, whose ρ is a scalar)
                     val.rho = np.broadcast_to(child.rho + 2 * _U, omega.shape).copy()
             else:
-                val = _combine(node, values, omega, inv_omega, track, keep, checked, designs)
+                val = _combine(node, values, omega, inv_omega, track, keep, checked, designs,
+                               None if designs is not None else groups)
             if not keep:
-                kids = node.children if isinstance(node, (Series, Parallel)) else (node.child,)
-                for c in kids:
-                    values.pop(id(c), None)
+                for k in kid_ids:
+                    values.pop(k, None)
             values[id(node)] = val
         top = _value_of(root, values, omega, inv_omega, track, designs)
     return top, values
+
+
+#: root -> its internal nodes in postorder, each ``(node, is a lever, ids of its
+#: children, its leaf groups)`` (:func:`_internal_postorder`).
+_ORDERS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
+def _internal_postorder(root) -> list:
+    """The series, parallel and lever nodes of ``root``, children first, built once per
+    tree: with the ids of each node's children and, for a series or parallel node,
+    its leaves folded for a single design with the ids of its other children
+    (``(sums, counts, ids)``, see :func:`_leaf_groups`)."""
+    found = _ORDERS.get(root) if not isinstance(root, Leaf) else []
+    if found is None:
+        found = []
+        for n in postorder(root):
+            if isinstance(n, Reflect):
+                found.append((n, True, (id(n.child),), None))
+            elif not isinstance(n, Leaf):
+                groups = (*_fold_leaves(n, isinstance(n, Series), None),
+                          tuple(id(c) for c in n.children if not isinstance(c, Leaf)))
+                found.append((n, False, tuple(id(c) for c in n.children), groups))
+        _ORDERS[root] = found
+    return found
 
 
 #: The compiled plan (:mod:`mechcirc._sp_kernel`) evaluates when numba is installed
@@ -561,13 +583,14 @@ def _leaf_term(e: Element, series: bool, fast: bool = False,
 
 
 def _combine(node, values: dict, omega, inv_omega, track: bool = False,
-             keep: bool = True, checked: bool = True, designs: tuple | None = None) -> _Value:
+             keep: bool = True, checked: bool = True, designs: tuple | None = None,
+             groups: tuple | None = None) -> _Value:
     """Series: K = Σ K_i.  Parallel: 1/K = Σ 1/K_i.  Leaves are grouped by kind.
 
     A leaf group takes part where its sum is nonzero; over designs (arrays of
     positive finite values·η, each term nonzero and all of one sign) where it has leaves."""
     series = isinstance(node, Series)
-    sums, counts, parts = _leaf_groups(node, values, series, designs)
+    sums, counts, parts = _leaf_groups(node, values, series, designs, groups)
     real, im_inv, im_omega = sums       # leaf terms: real + j(im_inv/ω + im_omega·ω)
     if not series:
         terms = [v.reciprocal(checked) for v in parts]
@@ -627,22 +650,16 @@ def _combine(node, values: dict, omega, inv_omega, track: bool = False,
     return total if series else total.reciprocal(checked)
 
 
-def _leaf_groups(node, values: dict, series: bool, designs) -> tuple:
+def _leaf_groups(node, values: dict, series: bool, designs, groups=None) -> tuple:
     """``([real, im_inv, im_omega], [their leaf counts], the values of the other children)``
-    of ``node``: its leaves summed by slot, real + j(im_inv/ω + im_omega·ω)."""
-    parts = [values[id(c)] for c in node.children if not isinstance(c, Leaf)]
-    if designs is None:
-        # A single design's sums depend on the node alone: folded once per tree.
-        found = _GROUPS.get(node)
-        if found is None:
-            found = _GROUPS[node] = _fold_leaves(node, series, None)
-        return found[0], found[1], parts
+    of ``node``: its leaves summed by slot, real + j(im_inv/ω + im_omega·ω).
+    ``groups``: the sums and counts of a single design, already folded, and the
+    ids of the other children (:func:`_internal_postorder`)."""
+    if groups is not None:
+        sums, counts, ids = groups
+        return sums, counts, [values[k] for k in ids]
     sums, counts = _fold_leaves(node, series, designs)
-    return sums, counts, parts
-
-
-#: node -> its leaf sums and counts (:func:`_leaf_groups` of a single design).
-_GROUPS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+    return sums, counts, [values[id(c)] for c in node.children if not isinstance(c, Leaf)]
 
 
 def _fold_leaves(node, series: bool, designs) -> tuple[list, list]:
