@@ -83,13 +83,12 @@ def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: boo
     if designs is not None:
         D = next(iter(designs[0].values())).shape[0]
         omega = np.broadcast_to(omega, (D, omega.shape[-1]))
-    elif not keep and _mode == "auto" and _jit.COMPILED is not False:
-        p = plan(root)
-        if _jit.COMPILED or _KERNEL or p.kind.size * omega.size >= KERNEL_MIN_WORK:
-            # By default never wait for numba to compile: numpy until it is cached.
-            kernel = compiled_evaluator(compile=bool(_jit.COMPILED or _KERNEL))
-            if kernel is not None:
-                return _evaluate_compiled(kernel, p, omega, error, condition)
+    elif not keep and _mode == "auto" and _jit.COMPILED is not False and (
+            _jit.COMPILED or _KERNEL or _plan_size(root) * omega.size >= KERNEL_MIN_WORK):
+        # By default never wait for numba to compile: numpy until it is cached.
+        kernel = compiled_evaluator(compile=bool(_jit.COMPILED or _KERNEL))
+        if kernel is not None:
+            return _evaluate_compiled(kernel, plan(root), omega, error, condition)
     if not keep and _mode == "auto":
         return _fast_then_checked(root, omega, error, condition, designs)
     track = error or condition
@@ -168,6 +167,16 @@ def _postorder_values(root, omega, track: bool, keep: bool, checked: bool, desig
 _ORDERS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
 
 
+def _plan_size(root) -> int:
+    """The number of nodes of :func:`plan` (internal nodes, and each leaf alone at
+    the root or under a lever) without building the plan."""
+    if isinstance(root, Leaf):
+        return 1
+    order = _internal_postorder(root)
+    return len(order) + sum(1 for n, reflect, _, _ in order
+                            if reflect and isinstance(n.child, Leaf))
+
+
 def _internal_postorder(root) -> list:
     """The series, parallel and lever nodes of ``root``, children first, built once per
     tree: with the ids of each node's children and, for a series or parallel node,
@@ -180,7 +189,7 @@ def _internal_postorder(root) -> list:
             if isinstance(n, Reflect):
                 found.append((n, True, (id(n.child),), None))
             elif not isinstance(n, Leaf):
-                groups = (*_fold_leaves(n, isinstance(n, Series), None),
+                groups = (*_fold_leaves(n, isinstance(n, Series), None, fast=True),
                           tuple(id(c) for c in n.children if not isinstance(c, Leaf)))
                 found.append((n, False, tuple(id(c) for c in n.children), groups))
         _ORDERS[root] = found
@@ -662,12 +671,12 @@ def _leaf_groups(node, values: dict, series: bool, designs, groups=None) -> tupl
     return sums, counts, [values[id(c)] for c in node.children if not isinstance(c, Leaf)]
 
 
-def _fold_leaves(node, series: bool, designs) -> tuple[list, list]:
+def _fold_leaves(node, series: bool, designs, fast: bool = False) -> tuple[list, list]:
     sums: list = [0.0, 0.0, 0.0]
     counts = [0, 0, 0]
     for c in node.children:
         if isinstance(c, Leaf):
-            slot, term = _leaf_term(c.element, series, designs=designs)
+            slot, term = _leaf_term(c.element, series, fast, designs)
             i = 0 if slot == 0 else (2 if slot > 0 else 1)
             sums[i] += term
             counts[i] += 1

@@ -190,3 +190,11 @@ def test_warm_in_background_runs_once_in_a_process_importing_this_copy(tmp_path,
         time.sleep(0.1)
     lines = out.read_text().splitlines()
     assert lines == [str(Path(_jit.__file__).resolve())]
+
+
+def test_the_kernel_decision_counts_the_plan_without_building_it():
+    # KERNEL_MIN_WORK is plan nodes × points: the count must be the plan's own.
+    for c in _corpus() + [mechcirc.parse("drive V a 0 velocity=1\nmass m a 0 2\n"),
+                          mechcirc.parse("drive V a 0 velocity=1\nlever L a 0 b 0 ratio=0.5\n"
+                                         "spring k b 0 100\nmass m a 0 1\n")]:
+        assert _tree_eval._plan_size(c.tree) == _tree_eval.plan(c.tree).kind.size
