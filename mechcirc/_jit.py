@@ -72,8 +72,17 @@ def load(name: str, **flags):
 def in_cache(*dispatchers) -> bool:
     """Whether numba's disk cache holds each of these compiled functions for its current source.
 
-    True also where the cache cannot be asked (numba's private layout
-    changed): the caller then loads, or compiles, as it would without the check.
+    Parameters
+    ----------
+    *dispatchers : numba Dispatcher
+        Functions decorated with ``njit(cache=True)``; nothing is compiled or loaded.
+
+    Returns
+    -------
+    bool
+        True if every one is in the cache; True also where the cache cannot
+        be asked (numba's private layout changed): the caller then loads, or
+        compiles, as it would without the check.
     """
     try:
         return all(bool(d._cache._cache_file._load_index()) for d in dispatchers)
@@ -85,8 +94,15 @@ _WARMING: set = set()
 
 
 def warm_in_background(statement: str) -> None:
-    """Run ``statement`` (Python that compiles kernels into numba's cache) in a detached
-    process of its own, output discarded; once per statement and process."""
+    """Run ``statement`` in a detached Python process of its own, once per statement and process.
+
+    Parameters
+    ----------
+    statement : str
+        Python code (a constant of the caller, never user text) that compiles
+        kernels into numba's disk cache; its output is discarded and nobody
+        waits for it.
+    """
     if statement in _WARMING:
         return
     _WARMING.add(statement)

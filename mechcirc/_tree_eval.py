@@ -212,10 +212,18 @@ _KERNEL: list = []
 def compiled_evaluator(compile: bool = True):
     """The compiled plan evaluator, or None without numba (imported on first use).
 
-    With ``compile=False``, None also while numba would have to compile it
-    (it is not in numba's disk cache yet): then a detached process compiles it
-    into the cache (:func:`warm_kernel`, :func:`mechcirc._jit.warm_in_background`)
-    and a later call loads it from there.
+    Parameters
+    ----------
+    compile : bool
+        False: do not wait for numba to compile it.  Where it is not in
+        numba's disk cache yet, return None and let a detached process compile
+        it into the cache (:func:`warm_kernel`,
+        :func:`mechcirc._jit.warm_in_background`); a later call loads it from there.
+
+    Returns
+    -------
+    callable or None
+        :func:`mechcirc._sp_kernel.evaluate_plan`, or None.
     """
     if not _KERNEL:
         from . import _sp_kernel
