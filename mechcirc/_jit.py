@@ -103,14 +103,15 @@ def warm_in_background(statement: str) -> None:
         kernels into numba's disk cache; its output is discarded and nobody
         waits for it.
     """
-    if statement in _WARMING:
-        return
-    _WARMING.add(statement)
     import os
     import site
     import subprocess
     import sys
     from pathlib import Path
+
+    if statement in _WARMING or getattr(sys, "frozen", False) or not sys.executable:
+        return              # (a frozen application's executable is not a Python)
+    _WARMING.add(statement)
 
     env = dict(os.environ)
     # The child imports this copy of mechcirc: a checkout goes first on its path
