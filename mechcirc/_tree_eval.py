@@ -100,12 +100,12 @@ def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: boo
     if designs is not None:
         D = next(iter(designs[0].values())).shape[0]
         omega = np.broadcast_to(omega, (D, omega.shape[-1]))
-    elif not keep and _mode == "auto" and _jit.COMPILED is not False:
-        p = plan(root)
-        if _jit.COMPILED or _KERNEL or p.kind.size * omega.size >= KERNEL_MIN_WORK:
-            kernel = compiled_evaluator()
-            if kernel is not None:
-                return _evaluate_compiled(kernel, p, omega, error, condition)
+    elif not keep and _mode == "auto" and _jit.COMPILED is not False and (
+            _jit.COMPILED or _KERNEL or _plan_size(root) * omega.size >= KERNEL_MIN_WORK):
+        # By default never wait for numba to compile: numpy until it is cached.
+        kernel = compiled_evaluator(compile=bool(_jit.COMPILED or _KERNEL))
+        if kernel is not None:
+            return _evaluate_compiled(kernel, plan(root), omega, error, condition)
     if not keep and _mode == "auto":
         return _fast_then_checked(root, omega, error, condition, designs)
     track = error or condition
@@ -159,10 +159,8 @@ def _postorder_values(root, omega, track: bool, keep: bool, checked: bool, desig
     values: dict[int, _Value] = {}
     with np.errstate(all="ignore"):
         inv_omega = 1.0 / omega
-        for node in postorder(root):
-            if isinstance(node, Leaf):
-                continue
-            if isinstance(node, Reflect):
+        for node, reflect, kid_ids, groups in _internal_postorder(root):
+            if reflect:
                 child = _value_of(node.child, values, omega, inv_omega, track, designs)
                 r = None if designs is None else designs[1][node.lever.name]
                 val = _Value(child.imaginary, node.lever.reflect(child.array, r))
@@ -171,38 +169,99 @@ def _postorder_values(root, omega, track: bool, keep: bool, checked: bool, desig
                     # (a full array even over a single leaf, whose ρ is a scalar)
                     val.rho = np.broadcast_to(child.rho + 2 * _U, omega.shape).copy()
             else:
-                val = _combine(node, values, omega, inv_omega, track, keep, checked, designs)
+                val = _combine(node, values, omega, inv_omega, track, keep, checked, designs,
+                               None if designs is not None else groups)
             if not keep:
-                kids = node.children if isinstance(node, (Series, Parallel)) else (node.child,)
-                for c in kids:
-                    values.pop(id(c), None)
+                for k in kid_ids:
+                    values.pop(k, None)
             values[id(node)] = val
         top = _value_of(root, values, omega, inv_omega, track, designs)
     return top, values
 
 
+#: root -> its internal nodes in postorder, each ``(node, is a lever, ids of its
+#: children, its leaf groups)`` (:func:`_internal_postorder`).
+_ORDERS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
+def _plan_size(root) -> int:
+    """The number of nodes of :func:`plan` (internal nodes, and each leaf alone at
+    the root or under a lever) without building the plan."""
+    if isinstance(root, Leaf):
+        return 1
+    order = _internal_postorder(root)
+    return len(order) + sum(1 for n, reflect, _, _ in order
+                            if reflect and isinstance(n.child, Leaf))
+
+
+def _internal_postorder(root) -> list:
+    """The series, parallel and lever nodes of ``root``, children first, built once per
+    tree: with the ids of each node's children and, for a series or parallel node,
+    its leaves folded for a single design with the ids of its other children
+    (``(sums, counts, ids)``, see :func:`_leaf_groups`)."""
+    found = _ORDERS.get(root) if not isinstance(root, Leaf) else []
+    if found is None:
+        found = []
+        for n in postorder(root):
+            if isinstance(n, Reflect):
+                found.append((n, True, (id(n.child),), None))
+            elif not isinstance(n, Leaf):
+                groups = (*_fold_leaves(n, isinstance(n, Series), None, fast=True),
+                          tuple(id(c) for c in n.children if not isinstance(c, Leaf)))
+                found.append((n, False, tuple(id(c) for c in n.children), groups))
+        _ORDERS[root] = found
+    return found
+
+
 #: The compiled plan (:mod:`mechcirc._sp_kernel`) evaluates when numba is installed
 #: and ``mechcirc._jit.COMPILED`` is None (default), once the kernel is loaded or when
-#: a call has at least :data:`KERNEL_MIN_WORK` node-points; True always; False never.
+#: a call has at least :data:`KERNEL_MIN_WORK` node-points and numba has the kernel
+#: in its disk cache; True always; False never.
 #: Importing numba and loading the compiled kernel from its cache takes about
 #: 1 s once per process (0.7–1.1 s measured): below this many plan nodes × ω
-#: points (about 0.15 s of the numpy path) a sweep does not start it.
+#: points (about 0.15 s of the numpy path) a sweep does not start it.  Compiling
+#: it (a fresh install) takes 4–11 s of CPU: the default path does not wait for
+#: that, it runs numpy while a process of its own compiles the kernel into the cache.
 KERNEL_MIN_WORK = 5_000_000
 _KERNEL: list = []
 
 
-def compiled_evaluator():
+def compiled_evaluator(compile: bool = True):
     """The compiled plan evaluator, or None without numba (imported on first use).
+
+    Parameters
+    ----------
+    compile : bool
+        False: do not wait for numba to compile it.  Where it is not in
+        numba's disk cache yet, return None and let a detached process compile
+        it into the cache (:func:`warm_kernel`,
+        :func:`mechcirc._jit.warm_in_background`); a later call loads it from there.
 
     Returns
     -------
     callable or None
+        :func:`mechcirc._sp_kernel.evaluate_plan`, or None.
     """
     if not _KERNEL:
         from . import _sp_kernel
 
-        _KERNEL.append(_sp_kernel.evaluate_plan if _sp_kernel.HAVE_NUMBA else None)
+        if compile or not _sp_kernel.HAVE_NUMBA or _jit.in_cache(_sp_kernel.evaluate_plan):
+            _KERNEL.append(_sp_kernel.evaluate_plan if _sp_kernel.HAVE_NUMBA else None)
+        else:
+            _jit.warm_in_background("from mechcirc._tree_eval import warm_kernel; warm_kernel()")
+            return None
     return _KERNEL[0]
+
+
+def warm_kernel() -> None:
+    """Compile the plan evaluator into numba's disk cache (the argument types a sweep uses)."""
+    from .circuit import Circuit, Drive
+
+    c = Circuit((Element("spring", "k", "a", "b", 1.0), Element("mass", "m", "b", "0", 1.0),
+                 Element("damper", "c", "a", "0", 1.0)), Drive("V", "a", "0", "velocity", 1.0))
+    kernel = compiled_evaluator()
+    if kernel is not None:
+        _evaluate_compiled(kernel, plan(c.tree), np.array([1.0, 2.0]), True, False)
 
 
 @dataclass(frozen=True, eq=False)
@@ -447,6 +506,8 @@ def evaluate_designs(p: Plan, omega: NDArray, error: bool = False, kernel=None):
     (D = 1) is the single sweep.  Without numba (or with ``mechcirc._jit.COMPILED``
     False) a plan that carries :attr:`Plan.numpy` is evaluated by :func:`evaluate`
     over its designs, in chunks of rows (the same numbers); RuntimeError otherwise.
+    By default (``COMPILED`` None) such a plan is not compiled for: where numba's
+    cache does not hold the kernel yet, numpy runs (see :func:`compiled_evaluator`).
 
     Parameters
     ----------
@@ -465,7 +526,8 @@ def evaluate_designs(p: Plan, omega: NDArray, error: bool = False, kernel=None):
         K [m/(N·s)] and the bound, shape (D, W).
     """
     if kernel is None and _jit.COMPILED is not False:
-        kernel = compiled_evaluator()
+        # Not compiled here by default where numpy can stand in (see evaluate).
+        kernel = compiled_evaluator(compile=bool(_jit.COMPILED or _KERNEL) or p.numpy is None)
     omega = np.ascontiguousarray(np.atleast_2d(np.asarray(omega, dtype=float)))
     D = p.designs
     if omega.shape[0] not in (1, D):
@@ -579,13 +641,14 @@ def _leaf_term(e: Element, series: bool, fast: bool = False,
 
 
 def _combine(node, values: dict, omega, inv_omega, track: bool = False,
-             keep: bool = True, checked: bool = True, designs: tuple | None = None) -> _Value:
+             keep: bool = True, checked: bool = True, designs: tuple | None = None,
+             groups: tuple | None = None) -> _Value:
     """Series: K = Σ K_i.  Parallel: 1/K = Σ 1/K_i.  Leaves are grouped by kind.
 
     A leaf group takes part where its sum is nonzero; over designs (arrays of
     positive finite values·η, each term nonzero and all of one sign) where it has leaves."""
     series = isinstance(node, Series)
-    sums, counts, parts = _leaf_groups(node, values, series, designs)
+    sums, counts, parts = _leaf_groups(node, values, series, designs, groups)
     real, im_inv, im_omega = sums       # leaf terms: real + j(im_inv/ω + im_omega·ω)
     if not series:
         terms = [v.reciprocal(checked) for v in parts]
@@ -645,21 +708,28 @@ def _combine(node, values: dict, omega, inv_omega, track: bool = False,
     return total if series else total.reciprocal(checked)
 
 
-def _leaf_groups(node, values: dict, series: bool, designs) -> tuple:
+def _leaf_groups(node, values: dict, series: bool, designs, groups=None) -> tuple:
     """``([real, im_inv, im_omega], [their leaf counts], the values of the other children)``
-    of ``node``: its leaves summed by slot, real + j(im_inv/ω + im_omega·ω)."""
+    of ``node``: its leaves summed by slot, real + j(im_inv/ω + im_omega·ω).
+    ``groups``: the sums and counts of a single design, already folded, and the
+    ids of the other children (:func:`_internal_postorder`)."""
+    if groups is not None:
+        sums, counts, ids = groups
+        return sums, counts, [values[k] for k in ids]
+    sums, counts = _fold_leaves(node, series, designs)
+    return sums, counts, [values[id(c)] for c in node.children if not isinstance(c, Leaf)]
+
+
+def _fold_leaves(node, series: bool, designs, fast: bool = False) -> tuple[list, list]:
     sums: list = [0.0, 0.0, 0.0]
     counts = [0, 0, 0]
-    parts: list[_Value] = []
     for c in node.children:
         if isinstance(c, Leaf):
-            slot, term = _leaf_term(c.element, series, designs=designs)
+            slot, term = _leaf_term(c.element, series, fast, designs)
             i = 0 if slot == 0 else (2 if slot > 0 else 1)
             sums[i] += term
             counts[i] += 1
-        else:
-            parts.append(values[id(c)])
-    return sums, counts, parts
+    return sums, counts
 
 
 def _sum_bound(series: bool, parts, sums, counts, has, omega, inv_omega):
@@ -705,8 +775,9 @@ def _through_reciprocal(rho: NDArray) -> NDArray:
     out = rho * rho
     out *= 2.0
     out += rho
-    big = ~(rho <= 0.5)
-    if big.any():
+    # One reduction instead of a mask and its any(): max() is NaN if any ρ is.
+    if rho.size and not rho.max() <= 0.5:
+        big = ~(rho <= 0.5)
         out[big] = rho[big] / (1.0 - rho[big])
         out[~(rho < 1.0)] = np.inf
     return out

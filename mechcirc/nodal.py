@@ -96,10 +96,12 @@ _CHUNK_TERMS = 2 ** 17
 #: With :data:`mechcirc._jit.COMPILED` None (the default) a sweep of the sparse
 #: path uses the compiled kernels (:mod:`mechcirc._nodal_kernels`) only from
 #: this many unknowns × ω points on: importing numba and loading the kernels
-#: from their cache costs about 0.6 s once per process (and compiling them in
-#: a fresh environment about 12 s), while the numpy path takes about 1 µs per
-#: unknown and point (about 3× the compiled one).  Decided per sweep from its
-#: size alone, so the same call always takes the same path.
+#: from their cache costs about 0.6 s once per process, while the numpy path
+#: takes about 1 µs per unknown and point (about 3× the compiled one).  Decided
+#: per sweep from its size, so the same call always takes the same path (the
+#: kernels compute the numpy path's numbers, to the bit); until numba's cache
+#: holds them (compiling takes 7–12 s) the sweep runs numpy and a process of its
+#: own compiles them (:func:`mechcirc._jit.warm_in_background`).
 KERNEL_MIN_WORK = 1_000_000
 _KERNELS: list = []
 
@@ -113,10 +115,35 @@ def kernels(work: int = 0):
     if _jit.COMPILED is False or (_jit.COMPILED is None and work < KERNEL_MIN_WORK):
         return None
     if not _KERNELS:
-        from . import _nodal_kernels
+        from . import _nodal_kernels as k
 
-        _KERNELS.append(_nodal_kernels if _nodal_kernels.HAVE_NUMBA else None)
+        if k.HAVE_NUMBA and _jit.COMPILED is None and not _jit.in_cache(
+                k.residual, k.sensitivities, k.band_assemble_factor, k.band_solve_perm):
+            # Not compiled yet: numpy now (the same numbers), the kernels compiled
+            # into numba's cache by a process of their own for a later sweep.
+            _jit.warm_in_background("from mechcirc.nodal import warm_kernels; warm_kernels()")
+            return None
+        _KERNELS.append(k if k.HAVE_NUMBA else None)
     return _KERNELS[0]
+
+
+def warm_kernels() -> None:
+    """Compile the sparse path's kernels into numba's disk cache: a sweep of a
+    banded ladder (past :data:`DENSE_LIMIT` unknowns) with the kernels forced on."""
+    from .circuit import Circuit, Drive, Element
+
+    n = DENSE_LIMIT + 8
+    elements = [Element("damper", "c", "n0", "0", 1.0)]
+    for i in range(n):
+        elements += [Element("mass", f"m{i}", f"n{i}", f"n{i + 1}", 1.0),
+                     Element("spring", f"k{i}", f"n{i + 1}", "0", 1e3)]
+    system = assemble(Circuit(tuple(elements), Drive("V", "n0", "0", "velocity", 1.0)))
+    saved = _jit.COMPILED
+    _jit.COMPILED = True
+    try:
+        mobility(system, np.array([1.0, 2.0]))
+    finally:
+        _jit.COMPILED = saved
 
 
 def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,

@@ -1,0 +1,200 @@
+"""What a single command pays before it computes: lazy imports and no compile wait.
+
+The speed itself is measured by ``benchmarks/bench_startup.py`` and
+``benchmarks/bench_bound_cost.py``; these tests check only what those
+speed-ups must not change: which modules a sweep loads, and that the default
+path gives the numpy path's numbers, bit for bit, while numba's cache is cold.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import mechcirc
+from mechcirc import _jit, _tree_eval, reduction
+
+ROOT = Path(__file__).resolve().parents[1]
+STB = ROOT / "netlists" / "stb_heald.mcir"
+
+
+def test_a_sweep_with_flags_loads_no_scipy_matplotlib_or_numba():
+    # load + sweep + error bound + flags: the frequency-domain core is numpy only.
+    code = (
+        "import sys, json, numpy as np, mechcirc\n"
+        f"c = mechcirc.load({str(STB)!r})\n"
+        "s = c.sweep(np.linspace(10, 1000, 400)); s.flags; s.error\n"
+        "print(json.dumps(sorted({m.split('.')[0] for m in sys.modules})))\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, cwd=ROOT, timeout=600)
+    loaded = set(json.loads(out.stdout))
+    assert not loaded & {"scipy", "matplotlib", "numba", "networkx", "pandas"}, loaded
+
+
+@pytest.fixture
+def cold_kernel(monkeypatch):
+    """The default path as in a fresh process whose numba cache holds no kernel;
+    returns the list of warm-up statements started (recorded, none run)."""
+    from mechcirc import nodal
+
+    started = []
+    monkeypatch.setattr(_jit, "COMPILED", None)
+    monkeypatch.setattr(_tree_eval, "_KERNEL", [])
+    monkeypatch.setattr(nodal, "_KERNELS", [])
+    monkeypatch.setattr(_tree_eval, "KERNEL_MIN_WORK", 1)      # every call is "large"
+    monkeypatch.setattr(nodal, "KERNEL_MIN_WORK", 1)
+    monkeypatch.setattr(_jit, "in_cache", lambda *dispatchers: False)
+    monkeypatch.setattr(_jit, "warm_in_background", started.append)
+    return started
+
+
+def _numpy_path(tree, omega, error):
+    saved = _jit.COMPILED
+    _jit.COMPILED = False
+    try:
+        return reduction.evaluate(tree, omega, error=error)
+    finally:
+        _jit.COMPILED = saved
+
+
+def _corpus():
+    sys.path.insert(0, str(ROOT / "tests"))
+    from reference import sp_corpus
+
+    rng = np.random.default_rng(26)
+    trees = [sp_corpus.random_tree(rng, int(rng.integers(1, 30)), damped=d)
+             for _ in range(15) for d in (0.0, 0.3)]
+    return [sp_corpus.to_circuit(t) for t in trees] + \
+        [mechcirc.load(ROOT / "netlists" / n) for n in ("stb_heald.mcir", "heald_damped.mcir")]
+
+
+def test_a_cold_kernel_is_not_waited_for(cold_kernel):
+    pytest.importorskip("numba")
+    omega = np.concatenate([[0.0, np.inf], np.geomspace(1e-2, 1e4, 50)])
+    for c in _corpus():
+        K, rho = reduction.evaluate(c.tree, omega, error=True)
+        K0, rho0 = _numpy_path(c.tree, omega, True)
+        # Not the compiled kernel (a few ulps apart), the numpy path itself, to the bit.
+        assert K.tobytes() == K0.tobytes() and rho.tobytes() == rho0.tobytes()
+        assert reduction.evaluate(c.tree, omega).tobytes() == K0.tobytes()
+        s = c.sweep(omega[2:])
+        assert s.error.tobytes() == _numpy_path(c.tree, omega[2:], True)[1].tobytes()
+    # A warm-up process asked for (once per process: warm_in_background's own
+    # set, replaced here by the recording list), nothing compiled here.
+    assert set(cold_kernel) == {"from mechcirc._tree_eval import warm_kernel; warm_kernel()"}
+    assert _tree_eval._KERNEL == []
+
+
+def test_a_cached_kernel_is_loaded(cold_kernel, monkeypatch):
+    pytest.importorskip("numba")
+    monkeypatch.setattr(_jit, "in_cache", lambda *dispatchers: True)
+    c = mechcirc.load(STB)
+    omega = np.linspace(10, 1000, 40)
+    K, rho = reduction.evaluate(c.tree, omega, error=True)
+    assert _tree_eval._KERNEL and _tree_eval._KERNEL[0] is not None
+    assert cold_kernel == []
+    _jit.COMPILED = True
+    K1, rho1 = reduction.evaluate(c.tree, omega, error=True)
+    assert K.tobytes() == K1.tobytes() and rho.tobytes() == rho1.tobytes()
+
+
+def test_the_cache_check_sees_numbas_index():
+    numba = pytest.importorskip("numba")
+
+    @numba.njit(cache=True)
+    def never_compiled(x):      # defined here, compiled nowhere: not in any cache
+        return x + 0.5
+
+    assert _jit.in_cache(never_compiled) is False
+    assert _jit.in_cache(object()) is True      # no cache to ask: load as before
+
+
+def test_a_cold_nodal_sweep_runs_numpy(cold_kernel):
+    pytest.importorskip("numba")
+    from mechcirc import nodal
+
+    # A bridge (not series-parallel) past the dense limit: the sparse path.
+    n = nodal.DENSE_LIMIT + 10
+    lines = ["drive V a 0 velocity=1", "damper c a 0 2", "spring kb a n5 300"]
+    lines += [f"mass m{i} {'a' if i == 0 else f'n{i}'} n{i + 1} {1 + i % 3}\n"
+              f"spring k{i} n{i + 1} 0 {1e3 + i}" for i in range(n)]
+    c = mechcirc.parse("\n".join(lines))
+    omega = np.geomspace(1.0, 1e3, 30)
+    K = nodal.mobility(c.nodal, omega)
+    saved = _jit.COMPILED
+    _jit.COMPILED = False
+    try:
+        K0 = nodal.mobility(c.nodal, omega)
+    finally:
+        _jit.COMPILED = saved
+    assert K.tobytes() == K0.tobytes()
+    assert set(cold_kernel) == {"from mechcirc.nodal import warm_kernels; warm_kernels()"}
+    assert nodal._KERNELS == []
+
+
+def test_the_warm_up_statements_run(cold_kernel):
+    pytest.importorskip("numba")
+    from mechcirc import nodal
+
+    c = mechcirc.load(STB)
+    reduction.evaluate(c.tree, np.linspace(10, 1000, 5))
+    lines = ["drive V a 0 velocity=1", "damper c a 0 2"]
+    lines += [f"mass m{i} {'a' if i == 0 else f'n{i}'} n{i + 1} 1\nspring k{i} n{i + 1} 0 1e3"
+              for i in range(nodal.DENSE_LIMIT + 5)]
+    nodal.mobility(mechcirc.parse("\n".join(lines)).nodal, np.array([1.0, 2.0]))
+    assert len(set(cold_kernel)) == 2
+    # Each as the detached process runs it, here with numba's JIT off (the same
+    # calls as plain Python, no compile): they import and run without error.
+    env = {**os.environ, "NUMBA_DISABLE_JIT": "1", "PYTHONPATH": str(ROOT)}
+    for statement in sorted(set(cold_kernel)):
+        done = subprocess.run([sys.executable, "-c", statement], cwd=ROOT, env=env,
+                              capture_output=True, text=True, timeout=600)
+        assert done.returncode == 0, done.stderr[-2000:]
+
+
+def test_a_cold_kernel_batch_of_designs_runs_numpy(cold_kernel):
+    pytest.importorskip("numba")
+    from mechcirc import designs
+
+    text = (".param k=1000\nmass m a b 1\nspring s b 0 k\ndamper c a 0 0.3\n"
+            "mass m2 a 0 2\ndrive V a 0 velocity=1\n")
+    params = {"k": np.geomspace(1e2, 1e4, 5)}
+    omega = np.linspace(10, 1000, 40)
+    s = designs(text, params).sweep(omega)
+    assert _tree_eval._KERNEL == []            # nothing compiled here
+    assert set(cold_kernel) == {"from mechcirc._tree_eval import warm_kernel; warm_kernel()"}
+    _jit.COMPILED = False
+    ref = designs(text, params).sweep(omega)
+    assert s.K.tobytes() == ref.K.tobytes() and s.error.tobytes() == ref.error.tobytes()
+
+
+def test_warm_in_background_runs_once_in_a_process_importing_this_copy(tmp_path, monkeypatch):
+    import time
+
+    monkeypatch.setattr(_jit, "_WARMING", set())
+    out = tmp_path / "where.txt"
+    statement = ("import pathlib, mechcirc._jit as j; "
+                 f"pathlib.Path({str(out)!r}).open('a').write(j.__file__ + '\\n')")
+    _jit.warm_in_background(statement)
+    _jit.warm_in_background(statement)          # once per process: not started again
+    assert _jit._WARMING == {statement}
+    for _ in range(6000):                       # a detached child: wait for its file
+        if out.exists() and out.read_text().endswith("\n"):
+            break
+        time.sleep(0.1)
+    lines = out.read_text().splitlines()
+    assert lines == [str(Path(_jit.__file__).resolve())]
+
+
+def test_the_kernel_decision_counts_the_plan_without_building_it():
+    # KERNEL_MIN_WORK is plan nodes × points: the count must be the plan's own.
+    for c in _corpus() + [mechcirc.parse("drive V a 0 velocity=1\nmass m a 0 2\n"),
+                          mechcirc.parse("drive V a 0 velocity=1\nlever L a 0 b 0 ratio=0.5\n"
+                                         "spring k b 0 100\nmass m a 0 1\n")]:
+        assert _tree_eval._plan_size(c.tree) == _tree_eval.plan(c.tree).kind.size
