@@ -434,8 +434,9 @@ def _simulate_rk4(ctx, backend, error_estimate, notes, compile_time):
         n_steps += per_rev // 2 * revolutions
     if auto:
         out = _outputs(model, kern, theta_s, ripple, main[0], main[1])
-        est = None if isinstance(other, str) else _rel_change(
-            _extrema(out), _extrema(_outputs(model, kern, theta_s, ripple, *other[:2])))
+        if not isinstance(other, str):
+            other_ext = _extrema(_outputs(model, kern, theta_s, ripple, *other[:2]))
+        est = None if other_ext is None else _rel_change(_extrema(out), other_ext)
         if est is None or est > ACCURACY_GOAL:     # not good enough: twice as many steps
             notes.append(f"the run at {spp:g} steps per period had an error estimate of "
                          + ("none (its run at twice the step diverged)" if est is None
