@@ -422,7 +422,15 @@ def _simulate_rk4(ctx, backend, error_estimate, notes, compile_time):
     def run(p, prog=None):
         return _run(model, kern, theta_s, ripple, p, revolutions, o.npts, prog)
 
-    main = run(per_rev, progress)
+    try:
+        main = run(per_rev, progress)
+    except SolverError:
+        if not auto:
+            raise
+        notes.append(f"the run at {spp:g} steps per period diverged: run at {2 * spp:g}")
+        auto, spp = False, 2 * spp
+        per_rev = _steps_per_cycle(period, rate, spp)
+        main = run(per_rev, progress)
     n_steps, nfev = per_rev * revolutions, main[5]
     other = out = other_ext = None
     if error_estimate:
@@ -437,7 +445,9 @@ def _simulate_rk4(ctx, backend, error_estimate, notes, compile_time):
         if not isinstance(other, str):
             other_ext = _extrema(_outputs(model, kern, theta_s, ripple, *other[:2]))
         est = None if other_ext is None else _rel_change(_extrema(out), other_ext)
-        if est is None or est > ACCURACY_GOAL:     # not good enough: twice as many steps
+        need2 = period * rate * 2 * spp / TWO_PI
+        if (est is None or est > ACCURACY_GOAL) and need2 <= MAX_STEPS_PER_REV:
+            # not good enough: twice as many steps (beyond the limit: keep it, warned)
             notes.append(f"the run at {spp:g} steps per period had an error estimate of "
                          + ("none (its run at twice the step diverged)" if est is None
                             else f"{est:.2g}") + f" > {ACCURACY_GOAL:g}: run again at "
