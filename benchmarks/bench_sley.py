@@ -114,7 +114,7 @@ def rest(args, drive, variant, t_ref, ref, t_base, base, t_def, res, simulate, s
     e_def = errors(res, ref)
     print(f"\nreference DOP853 rtol 1e-10: {t_ref:.3f} s, nfev {ref.nfev}")
     print(f"baseline  DOP853 rtol 1e-8 : {t_base * 1e3:.1f} ms (median of 3), nfev {base.nfev}")
-    spp = next(n for n in reversed(res.notes) if "per period of the fastest" in n)
+    spp = next(n for n in res.notes if n.startswith("RK4 step"))
     spp = spp.split(" per period of the fastest")[0].rsplit(", ", 1)[-1]
     print(f"default   rk4 ({res.backend}, {spp} steps/period chosen, with its error estimate "
           f"{res.error_estimate:.1e}): {t_def * 1e3:.2f} ms (median of 20), {res.n_steps} steps "
