@@ -56,3 +56,18 @@ def test_without_the_estimate_the_default_is_50_steps_per_period():
     b = simulate_scene(scene, revolutions=1, points=PTS, error_estimate=False,
                        steps_per_period=50)
     assert a.extrema == b.extrema and a.n_steps == b.n_steps
+
+
+@pytest.mark.filterwarnings("ignore::mechcirc.errors.SceneAccuracyWarning")
+def test_default_keeps_the_run_at_25_when_50_would_pass_the_step_limit(monkeypatch):
+    import mechcirc.scene.simulation as sim
+
+    scene = load_scene("examples/fnf_sixbar_scene.toml")
+    kw = dict(revolutions=2, points=PTS)
+    at25 = simulate_scene(scene, steps_per_period=25, **kw)
+    assert at25.error_estimate > ACCURACY_GOAL
+    monkeypatch.setattr(sim, "MAX_STEPS_PER_REV", at25.steps_per_revolution + 10)
+    with pytest.warns(sim.SceneAccuracyWarning, match="error estimate"):
+        r = simulate_scene(scene, **kw)
+    assert r.extrema == at25.extrema and r.error_estimate == at25.error_estimate
+    assert r.steps_per_revolution == at25.steps_per_revolution
