@@ -85,7 +85,8 @@ def _sley_arguments(p) -> None:
     p.add_argument("--rtol", type=real(above=0.0, most=1.0), metavar="TOL",
                    help="relative tolerance of the scipy methods (default 1e-10)")
     p.add_argument("--steps-per-period", type=real(least=1.0, most=1e6), metavar="N",
-                   help="rk4 steps per period of the fastest mode (default 50)")
+                   help="rk4 steps per period of the fastest mode (default: 25, or 50 "
+                        "if the error estimate at 25 exceeds 1e-3)")
     p.add_argument("--points", type=count(16, MAX_POINTS_PER_REVOLUTION), metavar="N",
                    help="output points per revolution (default 7200, i.e. 0.05 deg)")
     p.add_argument("-o", "--output", metavar="CSV", help="write the curves as CSV")

@@ -42,7 +42,12 @@ from .motion import MotionModel, motion_model
 __all__ = ["SceneMotion", "simulate_scene", "linear_matrices", "max_rate", "ACCURACY_GOAL"]
 
 TWO_PI = 2.0 * math.pi
+#: RK4 steps per period of the fastest mode without an error estimate (and the second try
+#: of the default with one).
 DEFAULT_STEPS_PER_PERIOD = 50
+#: The default's first try with the error estimate on (kept if its estimate is within the
+#: accuracy goal, else the run at twice as many steps is returned).
+AUTO_STEPS_PER_PERIOD = 25
 DEFAULT_POINTS = 7200
 DEFAULT_REVOLUTIONS = 5
 MAX_STEPS_PER_REV = 20_000_000
@@ -257,7 +262,10 @@ def simulate_scene(scene: Scene, *, omega: float | None = None,
     """Simulate ``scene`` over ``revolutions`` turns of the crank and tabulate the last.
 
     Parameters default to the scene's ``[simulate]`` table, then Ω from its
-    crank, 5 revolutions, start 0°, 50 steps per period, 7200 points.
+    crank, 5 revolutions, start 0°, 7200 points, and RK4 steps per period of the fastest
+    mode chosen for the accuracy goal: 25 when the error estimate (from the run at 12.5)
+    is at most :data:`ACCURACY_GOAL`, else 50 (its estimate from the run at 25); 50
+    without the estimate.
     ``method`` is ``"rk4"`` (numba when importable), ``"rk4-python"``, or one of
     scipy's ``"DOP853"``, ``"RK45"``, ``"LSODA"`` at relative tolerance ``rtol``
     (default 1e-10; the same right-hand side, integrated in the deviations from the
@@ -322,7 +330,7 @@ class _Options:
     omega: float | None
     revolutions: int
     start_deg: float
-    spp: float
+    spp: float | None
     npts: int
     ripple: tuple | None
     method: str
@@ -343,7 +351,7 @@ def _options(scene, omega, revolutions, start_deg, spp, npts, method, rtol, revo
     omega = pick(omega, "omega", None)
     revolutions = int(pick(revolutions, "revolutions", DEFAULT_REVOLUTIONS))
     start_deg = float(pick(start_deg, "start_deg", 0.0))
-    spp = float(pick(spp, "steps_per_period", DEFAULT_STEPS_PER_PERIOD))
+    spp = pick(spp, "steps_per_period", None)          # None: chosen for the accuracy goal
     npts = int(pick(npts, "points", DEFAULT_POINTS))
     ripple = pick(ripple, "omega_ripple", None)
     if ripple is not None:
@@ -363,8 +371,10 @@ def _options(scene, omega, revolutions, start_deg, spp, npts, method, rtol, revo
             raise MechcircError(f"revolution must be an integer in 1..{revolutions}, "
                                 f"got {revolution!r}")
         revolutions = int(revolution)       # later revolutions cannot change this one
-    if not spp >= 1:
-        raise MechcircError(f"steps_per_period must be ≥ 1, got {spp!r}")
+    if spp is not None:
+        spp = float(spp)
+        if not spp >= 1:
+            raise MechcircError(f"steps_per_period must be ≥ 1, got {spp!r}")
     if npts < 16:
         raise MechcircError(f"points must be ≥ 16, got {npts}")
     if method in SCIPY_METHODS:
@@ -409,63 +419,112 @@ def _simulate_rk4(ctx, backend, error_estimate, notes, compile_time):
     error estimate is its change from a run at half as many steps (twice the step).
 
     For RK4 in its asymptotic regime that change is ~15× the returned run's error, so it
-    bounds it with margin; with clearances (impacts) the ratio falls to ~1.2–3, still a
-    bound (measured: ``benchmarks/calib_sley_estimate.py``, ``docs/sley.md``).  The
-    estimate costs half a run more.
+    bounds it with margin (the steps are cut at the force laws' kinks, so the order holds
+    through impacts; measured: ``benchmarks/calib_sley_estimate.py``, ``docs/sley.md``).
+    The estimate costs half a run more.  With no ``steps_per_period`` given (and the
+    estimate on) the step is chosen for the accuracy goal: the run at
+    :data:`AUTO_STEPS_PER_PERIOD` is returned when its estimate is at most
+    :data:`ACCURACY_GOAL`, else the run at twice as many steps, with its change from the
+    first as the estimate.
     """
     scene, o, model, kern, theta_s, ripple, progress = ctx
-    spp, revolutions, warn = o.spp, o.revolutions, []
+    revolutions, warn = o.revolutions, []
     period = scene.cycle / model.omega       # one revolution, or the cycle of geared cranks
     rate = max_rate(model)
-    need = period * rate * spp / TWO_PI    # steps per cycle of the returned run
-    if need > MAX_STEPS_PER_REV:
-        raise SolverError(f"the stiffest linearised mode (|λ| = {rate:.4g} 1/s) needs {need:.3g} "
-                          f"RK4 steps per revolution at steps_per_period={spp:g}, more than "
-                          f"the limit {MAX_STEPS_PER_REV:.0e}: lower the stiffest rigidity "
-                          "(stiffness), raise the inertias, or use method='LSODA'",
-                          status="too-stiff")
-    per_rev = max(2 * int(math.ceil(need / 2)), 16)          # even: the estimate's is half
-    if spp < DEFAULT_STEPS_PER_PERIOD:
-        warn.append(f"{spp:g} steps per period of the fastest mode, fewer than the default "
-                    f"{DEFAULT_STEPS_PER_PERIOD}: expect a larger error")
-    ts, ys, prev, wall, bad, nfev = _run(model, kern, theta_s, ripple, per_rev, revolutions,
-                                         o.npts, progress)
-    n_steps = per_rev * revolutions
-    other = None
+    auto = o.spp is None and error_estimate
+    spp = o.spp if o.spp is not None else \
+        (AUTO_STEPS_PER_PERIOD if auto else DEFAULT_STEPS_PER_PERIOD)
+    per_rev = _steps_per_cycle(period, rate, spp)
+    if o.spp is not None and spp < AUTO_STEPS_PER_PERIOD:
+        warn.append(f"{spp:g} steps per period of the fastest mode, fewer than the "
+                    f"{AUTO_STEPS_PER_PERIOD} the default starts from: expect a larger error")
+
+    def run(p, prog=None):
+        return _run(model, kern, theta_s, ripple, p, revolutions, o.npts, prog)
+
+    try:
+        main = run(per_rev, progress)
+    except SolverError:
+        if not auto:
+            raise
+        notes.append(f"the run at {spp:g} steps per period diverged: run at {2 * spp:g}")
+        auto, spp = False, 2 * spp
+        per_rev = _steps_per_cycle(period, rate, spp)
+        main = run(per_rev, progress)
+    n_steps, nfev = per_rev * revolutions, main[5]
+    other = out = other_ext = None
     if error_estimate:
         try:
-            other = _run(model, kern, theta_s, ripple, per_rev // 2, revolutions, o.npts, None)
+            other = run(per_rev // 2)
             nfev += other[5]
         except SolverError:
             other = "diverged"
-            warn.append(f"the error estimate's run at {spp / 2:g} steps per period diverged: "
-                        "no estimate; raise steps_per_period")
         n_steps += per_rev // 2 * revolutions
+    if auto:
+        out = _outputs(model, kern, theta_s, ripple, main[0], main[1])
+        if not isinstance(other, str):
+            other_ext = _extrema(_outputs(model, kern, theta_s, ripple, *other[:2]))
+        est = None if other_ext is None else _rel_change(_extrema(out), other_ext)
+        need2 = period * rate * 2 * spp / TWO_PI
+        if (est is None or est > ACCURACY_GOAL) and need2 <= MAX_STEPS_PER_REV:
+            # not good enough: twice as many steps (beyond the limit: keep it, warned)
+            notes.append(f"the run at {spp:g} steps per period had an error estimate of "
+                         + ("none (its run at twice the step diverged)" if est is None
+                            else f"{est:.2g}") + f" > {ACCURACY_GOAL:g}: run again at "
+                         f"{2 * spp:g}")
+            other, other_ext, out = main, _extrema(out), None
+            spp, per_rev = 2 * spp, _steps_per_cycle(period, rate, 2 * spp)
+            main = run(per_rev)
+            n_steps, nfev = n_steps + per_rev * revolutions, nfev + main[5]
+    if other == "diverged":
+        warn.append(f"the error estimate's run at {spp / 2:g} steps per period diverged: "
+                    "no estimate; raise steps_per_period")
+    ts, ys, prev, wall, bad = main[:5]
     notes.append(f"RK4 step {period / per_rev:.4g} s ({per_rev} steps per revolution, "
                  f"{spp:g} per period of the fastest mode |λ| = {rate:.5g} 1/s)"
                  + (" (error estimate: its change from the run at twice the step)"
                     if error_estimate else ""))
     return _finish(scene, scene.simulate, model, kern, theta_s, ripple, ts, ys, prev, other,
                    wall, bad, n_steps, nfev, o.method, backend, per_rev, notes, warn,
-                   revolutions, compile_time)
+                   revolutions, compile_time, out=out, other_extrema=other_ext)
+
+
+def _steps_per_cycle(period, rate, spp):
+    """RK4 steps per cycle at ``spp`` steps per period of the fastest mode (even, so that
+    the estimate's run has half as many; at least 16); refused above the limit."""
+    need = period * rate * spp / TWO_PI
+    if need > MAX_STEPS_PER_REV:
+        raise SolverError(f"the stiffest linearised mode (|λ| = {rate:.4g} 1/s) needs {need:.3g} "
+                          f"RK4 steps per revolution at steps_per_period={spp:g}, more than "
+                          f"the limit {MAX_STEPS_PER_REV:.0e}: lower the stiffest rigidity "
+                          "(stiffness), raise the inertias, or use method='LSODA'",
+                          status="too-stiff")
+    return max(2 * int(math.ceil(need / 2)), 16)
+
+
+def _extrema(out: dict) -> dict:
+    return {k: (float(v.min()), float(v.max())) for k, v in out.items()}
 
 
 def _finish(scene, cfg, model, kern, theta_s, ripple, ts, ys, prev, other, wall, bad, n_steps,
             nfev,
-            method, backend, per_rev, notes, warn, revolutions, compile_time):
-    """Outputs, extrema, the checks and the warnings of one run → :class:`SceneMotion`."""
-    out = _outputs(model, kern, theta_s, ripple, ts, ys)
-    extrema = {k: (float(v.min()), float(v.max())) for k, v in out.items()}
+            method, backend, per_rev, notes, warn, revolutions, compile_time, out=None,
+            other_extrema=None):
+    """Outputs, extrema, the checks and the warnings of one run → :class:`SceneMotion`
+    (``out``, ``other_extrema``: this run's outputs and the other run's extrema when
+    already evaluated)."""
+    if out is None:
+        out = _outputs(model, kern, theta_s, ripple, ts, ys)
+    extrema = _extrema(out)
     periodicity = None
     if prev is not None:
         pout = _outputs(model, kern, theta_s, ripple, *prev)
-        periodicity = _rel_change(extrema, {k: (float(v.min()), float(v.max()))
-                                            for k, v in pout.items()})
+        periodicity = _rel_change(extrema, _extrema(pout))
     est = None
     if other is not None and not isinstance(other, str):     # "diverged": no estimate
-        fout = _outputs(model, kern, theta_s, ripple, other[0], other[1])
-        est = _rel_change(extrema, {k: (float(v.min()), float(v.max()))
-                                    for k, v in fout.items()})
+        if other_extrema is None:
+            other_extrema = _extrema(_outputs(model, kern, theta_s, ripple, other[0], other[1]))
+        est = _rel_change(extrema, other_extrema)
         bad = bad or other[4]
     crank = crank_angle(model.omega, theta_s, ripple, ts)[0] % scene.cycle
     wrap = np.flatnonzero(np.diff(crank) < 0)

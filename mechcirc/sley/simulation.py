@@ -59,7 +59,8 @@ METHODS = ("rk4", "rk4-python", "DOP853", "RK45", "LSODA")
 _SCIPY_METHODS = ("DOP853", "RK45", "LSODA")
 TWO_PI = 2.0 * math.pi
 
-#: Default RK4 steps per period of the fastest linearised mode.
+#: RK4 steps per period of the fastest linearised mode without the error estimate (with
+#: it, the default is chosen for the accuracy goal: :func:`mechcirc.scene.simulate_scene`).
 DEFAULT_STEPS_PER_PERIOD = 50
 #: Default output points per revolution (0.05° in crank angle).
 DEFAULT_POINTS = 7200
@@ -263,8 +264,9 @@ def simulate(drive: str = "one-side", variant: int = 3, revolutions: int = 5,
     points_per_revolution : int
         Uniform output grid in crank angle (default 7200, i.e. 0.05°).
     steps_per_period : float, optional
-        RK4 steps per period 2π/|λ|max of the fastest linearised mode
-        (default 50); more is more accurate.
+        RK4 steps per period 2π/|λ|max of the fastest linearised mode; more is more
+        accurate.  Default: chosen for the accuracy goal (25 when the error estimate is
+        then at most :data:`ACCURACY_GOAL`, else 50; 50 without the estimate).
     rtol : float, optional
         Relative tolerance of the scipy methods (default 1e-10).
     table_points : int
@@ -399,10 +401,11 @@ def _checked(method, revolutions, revolution, points_per_revolution, steps_per_p
         if rtol is not None:
             raise ParameterError(f"rtol applies to the scipy methods, not {method}; "
                                  "use steps_per_period")
-        steps_per_period = DEFAULT_STEPS_PER_PERIOD if steps_per_period is None \
-            else float(steps_per_period)
-        if not steps_per_period >= 1:
-            raise ParameterError(f"steps_per_period must be >= 1, got {steps_per_period!r}")
+        if steps_per_period is not None:        # None: the scene's default step rule
+            steps_per_period = float(steps_per_period)
+            if not steps_per_period >= 1:
+                raise ParameterError(f"steps_per_period must be >= 1, got "
+                                     f"{steps_per_period!r}")
     return method, revolutions, steps_per_period, rtol
 
 
