@@ -1156,11 +1156,11 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
         done = _resumed_rows(spec, output, journal, parquet) if resume and journal else []
         take = _Take(spec, journal, done, keep_rows or not output,
                      write_curves if curves is not None else None, on_rows)
-        executor, n_workers = _execute(spec, done, (scheduler, connect_timeout), workers, batch_size,
-                                       take, (curves is not None, take.keep_rows, bool(output)))
+        task = (curves is not None, take.keep_rows, bool(output))
+        run = _execute(spec, done, (scheduler, connect_timeout), workers, batch_size, take, task)
         if journal:
             _publish(output, parquet, spec, journal, take, done)
-    return take.result(executor, n_workers)
+    return take.result(*run)
 
 
 def _publish(output, parquet: bool, spec: StudySpec, journal: str, take, done: list) -> None:
