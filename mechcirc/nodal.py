@@ -109,11 +109,12 @@ def kernels(work: int = 0):
 
 
 def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
-           keep: NDArray | None):
-    """Factor, solve and refine at each ω (real or complex, already checked), chunk by chunk.
+           keep: NDArray | None, at: NDArray | None = None):
+    """Factor, solve and refine at each ω (real or complex, already checked) of ``omega[at]``
+    (default all), chunk by chunk.
 
     Returns (K, error of the solve, S, S_data, x rows or None, the rows of x
-    at ``keep``, the points tried in double-double).  What does not change
+    at ``keep``), NaN and inf off ``at``.  What does not change
     with ω — the pattern, the solver's choice and ordering, the residual's
     plan — comes from :func:`pattern` and :func:`solver`.  The compiled
     kernels serve the sparse path at real ω (:func:`kernels`).
@@ -121,8 +122,9 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
     pat = pattern(system)
     rhs = system.injection()
     solve_with = solver(system)
+    at = np.arange(omega.size) if at is None else at
     kern = None if solve_with.kind == "dense" or np.iscomplexobj(omega) \
-        else kernels(system.size * omega.size)
+        else kernels(system.size * at.size)
     out = _Solved(system, pat, kern, omega, keep)
 
     def residual(w, xh, xl, rhs):
@@ -136,8 +138,8 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
         else _CHUNK_TERMS // max(1, pat.n_terms + system.size)
     chunk = max(1, min(solve_with.max_chunk, terms))
     use_dd = refine and system.size <= DD_LIMIT and not np.iscomplexobj(omega)
-    for start in range(0, omega.size, chunk):
-        every = np.arange(start, min(start + chunk, omega.size))
+    for start in range(0, at.size, chunk):
+        every = at[start:start + chunk]
         good, solve_fn = solve_with.factor(omega[every], kern)
         sel = every[good]
         if sel.size:
@@ -147,7 +149,7 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
             out.store(sel, *r)
         if use_dd:
             out.dd_retry(every, refined)
-    return out.K, out.err, out.S, out.Sd, out.x_all, out.kept, out.checked
+    return out.K, out.err, out.S, out.Sd, out.x_all, out.kept
 
 
 class _Solved:
@@ -161,7 +163,6 @@ class _Solved:
         self.S, self.Sd = np.full(m, np.nan), np.full(m, np.nan)
         self.x_all = np.full((m, system.size), complex(np.nan, np.nan)) if keep is None else None
         self.kept: dict[int, NDArray] = {}
-        self.checked = np.zeros(m, dtype=bool)
 
     def store(self, sel, xh, xl, est, rho) -> None:
         """K, its sensitivities and error estimate, and x, at the points ``sel``."""
@@ -192,7 +193,6 @@ class _Solved:
         done = np.isfinite(err) & (err <= np.maximum(
             16 * np.finfo(float).eps, 16 * residual_rounding(self.system, self.S[every])))
         todo = every[~done]
-        self.checked[todo] = True
         dd = dd_solver(self.system)
         for at in range(0, todo.size, dd.max_chunk):
             redo = todo[at:at + dd.max_chunk]
@@ -250,25 +250,12 @@ def solve(system: NodalSystem, omega: ArrayLike, *, refine: bool = True,
     """
     omega = np.asarray(omega, dtype=float).reshape(-1)
     ok = np.isfinite(omega) & (omega > 0)
-    idx = np.flatnonzero(ok)
-    m = omega.size
-    K = np.full(m, complex(np.nan, np.nan))
-    err = np.full(m, np.inf)
-    S = np.full(m, np.nan)
-    Sd = np.full(m, np.nan)
-    x = np.full((m, system.size), complex(np.nan, np.nan)) if keep_x else None
-    kept: dict[int, NDArray] = {}
-    checked = np.zeros(m, dtype=bool)
-    if idx.size:
-        Ki, ei, Si, Sdi, xi, kept_i, ci = _sweep(system, omega[idx], refine, steps,
-                                                 None if keep_x else np.ones(idx.size, bool))
-        K[idx], err[idx], S[idx], Sd[idx], checked[idx] = Ki, ei, Si, Sdi, ci
-        if x is not None:
-            x[idx] = xi
-        else:
-            # Only the rows needed at singular points are kept.
-            sing = ~np.isfinite(Ki) | (ei >= 1.0)
-            kept = {int(idx[k]): v for k, v in kept_i.items() if sing[k]}
+    K, err, S, Sd, x, kept = _sweep(system, omega, refine, steps, None if keep_x else ok,
+                                    np.flatnonzero(ok))
+    if not keep_x:
+        # Only the rows needed at singular points are kept.
+        sing = ~np.isfinite(K) | (err >= 1.0)
+        kept = {i: v for i, v in kept.items() if sing[i]}
     # A(ω) exactly singular: a singular point.  A refinement that does not
     # contract (float64 factors, or even the double-double LU: cond(A)
     # beyond about 1e30) says no more than "no digit known": K stays finite
@@ -458,7 +445,7 @@ def evaluate_complex(system: NodalSystem, s: ArrayLike
     """
     s = np.asarray(s, dtype=complex).reshape(-1)
     omega = -1j * s
-    K, est, S, Sd, _, _, _ = _sweep(system, omega, True, 4, None)
+    K, est, S, Sd, _, _ = _sweep(system, omega, True, 4, None)
     est = total_error(Sd, est + residual_rounding(system, S))
     with np.errstate(all="ignore"):
         return K, est * np.abs(K)
