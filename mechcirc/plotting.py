@@ -379,7 +379,11 @@ def plot_transient(result, nodes=None, what: str = "x", elements=None, title: st
     names = _known("node", nodes, result.nodes) if nodes is not None \
         else list(result.nodes)[:MAX_NODES]
     forces = _known("element", elements or (), result.elements)
-    title = title or f"{result.name}: transient, {_transient_drive(result)}"
+    drive = (f"{result.drive_kind} drive {result.drive_name}" if result.drive_name
+             else "no drive")
+    if result.drive_name and getattr(result, "waveform", None):
+        drive += f", {result.waveform}"
+    title = title or f"{result.name}: transient, {drive}"
     if ax is not None:
         _nodes_panel(ax, result, names, what)
         ax.set_xlabel("t [s]")
@@ -402,15 +406,6 @@ def plot_transient(result, nodes=None, what: str = "x", elements=None, title: st
     if len(fig.axes) == n:              # a layout of ours only, not of the caller's axes
         fig.tight_layout()
     return fig
-
-
-def _transient_drive(result) -> str:
-    """The drive of a transient in words, with its waveform."""
-    drive = (f"{result.drive_kind} drive {result.drive_name}" if result.drive_name
-             else "no drive")
-    if result.drive_name and getattr(result, "waveform", None):
-        drive += f", {result.waveform}"
-    return drive
 
 
 def _nodes_panel(a, result, names, what: str) -> None:
