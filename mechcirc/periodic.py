@@ -472,10 +472,10 @@ def periodic(circuit: Circuit, rpm: float, *, motion=None, tol: float = TOL,
         raise MechcircError(f"points must be an integer from 4 to 1000000, got {points!r}")
     circuit, motion, amp = _prepared(circuit, motion)
     solved = _solve(circuit, motion, amp, rpm_to_omega(rpm), tol, harmonics, method)
-    return _at_angles(circuit, motion, float(rpm), solved, points, elements, near, tol)
+    return _at_angles(circuit, motion, rpm, solved, points, elements, near, tol)
 
 
-def _at_angles(circuit, motion, rpm: float, solved, points: int, elements, near: float,
+def _at_angles(circuit, motion, rpm, solved, points: int, elements, near: float,
                tol: float) -> PeriodicResult:
     """The result of :func:`periodic` from the harmonics ``solved`` at one speed."""
     Omega = rpm_to_omega(rpm)
@@ -506,7 +506,7 @@ def _at_angles(circuit, motion, rpm: float, solved, points: int, elements, near:
             forces[name], velocities[name] = _on_grid(f[0], points), _on_grid(u[0], points)
     near_mask = np.abs(np.nan_to_num(distance, nan=np.inf)) <= near
     return PeriodicResult(
-        name=circuit.name, rpm=rpm, omega_shaft=Omega, angle_deg=np.degrees(theta),
+        name=circuit.name, rpm=float(rpm), omega_shaft=Omega, angle_deg=np.degrees(theta),
         Q=Q, x=x, v=Omega * dx, k=k, omega=w, V=V, amplitude=Qk, K=K, nearest=nearest,
         distance=distance, near=near_mask, resonances=tuple((wn, z) for wn, z, _ in found),
         peak=peak, peak_angle_deg=math.degrees(peak_theta), error=error, tol=tol,
