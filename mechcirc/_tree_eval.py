@@ -106,8 +106,7 @@ def _relative_to_true(rho, shape) -> NDArray:
 
 
 def _auto(root: Node, omega, error: bool, condition: bool, designs):
-    """:func:`evaluate` by the compiled plan when it is asked for or the work is large
-    (one design), else :func:`_fast_then_checked`."""
+    """The compiled plan if asked for or worth it (one design), else :func:`_fast_then_checked`."""
     if designs is None and _jit.COMPILED is not False:
         p = plan(root)
         if _jit.COMPILED or _KERNEL or p.kind.size * omega.size >= KERNEL_MIN_WORK:
@@ -587,8 +586,7 @@ def _combine(node, values: dict, omega, inv_omega, track: bool = False,
 
 
 def _add_terms(terms, imag, own: bool):
-    """``(imag, cplx)``: the sums of the imaginary (X of K = jX) and the complex
-    ``terms``, ``imag`` added to; None where there is none (copies if ``own``)."""
+    """``(imag + Σ imaginary terms' X, Σ complex terms)``, None where none (copies if ``own``)."""
     cplx = None
     for v in terms:
         if v.imaginary:
@@ -605,8 +603,7 @@ def _add_terms(terms, imag, own: bool):
 
 
 def _with_bound(total: _Value, bound, series: bool, checked: bool) -> _Value:
-    """A node's value from the sum ``total`` with its magnitude and the bound of its
-    relative error, from ``bound`` (Σ|tᵢ|(ρᵢ + m·u)); a parallel node's is the reciprocal."""
+    """The node's value (reciprocal in parallel) with |K| and ρ from Σ|tᵢ|(ρᵢ + m·u)."""
     mag = np.abs(total.array)
     inv = np.reciprocal(mag)
     bound *= inv

@@ -90,8 +90,7 @@ def adaptive_sweep(circuit: Circuit, omega_min: float, omega_max: float, *,
 
 
 def _work_bound(circuit: Circuit, method: str, n_start: int) -> tuple[int, str]:
-    """``(K evaluations the work bound allows on this network, the bound in words)``;
-    InputError if a starting grid of ``n_start`` points is over it."""
+    """``(K evaluations allowed, the bound in words)``; InputError if ``n_start`` is over it."""
     from . import limits
     from .errors import InputError
 

@@ -634,8 +634,7 @@ def _nodal_group_roots(ds: Designs, system, held, which: NDArray, omega_max):
 
 
 def _pencil_roots(Z, B: dict, S, damped: bool, omega_max):
-    """``(roots, errors, errors to compare, ok, must polish)`` of the stacked designs on
-    the constraint basis ``Z``; None when it has too many unknowns."""
+    """``(roots, errors, errors to compare, ok, must polish)`` on basis ``Z``; None: too big."""
     from .resonances import MAX_UNKNOWNS, MAX_UNKNOWNS_DAMPED, stacked_problem
 
     if Z.shape[1] > (MAX_UNKNOWNS_DAMPED if damped else MAX_UNKNOWNS):
@@ -660,8 +659,7 @@ def _pencil_roots(Z, B: dict, S, damped: bool, omega_max):
 
 
 def _sorted_roots(pole, s, err) -> tuple:
-    """``(pole, s, err)`` of each design sorted as find_resonances sorts: by ω, then kind
-    ("antiresonance" first), NaN ones last and cut; err NaN where there is no root."""
+    """``(pole, s, err)`` per design in find_resonances' order (ω, antiresonance first)."""
     mag = np.abs(s)
     live = np.isfinite(mag)
     order = np.lexsort((~pole, np.where(live, mag, np.inf)), axis=-1)

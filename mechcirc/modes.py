@@ -373,8 +373,7 @@ def sweep_sensitivity(circuit: Circuit, omega, names=None) -> SweepSensitivity:
 
 
 def _values_named(circuit: Circuit, names) -> tuple[dict, list]:
-    """``(value of every element, lever and .param, the names asked, default all)``;
-    InputError for a name that is none of them."""
+    """``(every element's, lever's and .param's value, the names asked (default all), checked)``."""
     from .errors import InputError
 
     value = {e.name: e.value for e in circuit.elements} | \

@@ -334,8 +334,7 @@ def _adjacency(U: list, W: list, E: list, N: int):
 
 
 def _series_step(n: int, adj: list, U: list, W: list, E: list):
-    """Join the two edges at node ``n`` into one series run; ``(u, w, merged)``: its
-    ends, and whether it was merged in parallel with an edge already between them."""
+    """Join node ``n``'s two edges in series: ``(u, w, merged in parallel with an edge u–w)``."""
     an = adj[n]
     (u, e1), (w, e2) = an.items()          # far ends u (of e1) and w (of e2)
     s1 = 1 if W[e1] == n else -1           # e1 runs u -> n ?
