@@ -395,9 +395,8 @@ def sweep(circuit: Circuit, omega: ArrayLike, *, method: Method = "auto",
         Angular frequencies [rad/s], ≥ 0 (the seeds' main-shaft frequency).
     method : {"auto", "sp", "nodal"}
         ``"sp"``: series–parallel reduction tree (raises
-        :class:`~mechcirc.errors.NotSeriesParallelError` if the network is
-        not reducible); ``"nodal"``: nodal analysis; ``"auto"``: the tree
-        where it exists, nodal analysis otherwise.
+        :class:`~mechcirc.errors.NotSeriesParallelError` if the network is not reducible);
+        ``"nodal"``: nodal analysis; ``"auto"``: the tree where it exists, nodal analysis otherwise.
     refine : bool
         Nodal analysis only (the tree has no solve to refine): iterative
         refinement of each solution with residuals in double-double (the
@@ -414,8 +413,7 @@ def sweep(circuit: Circuit, omega: ArrayLike, *, method: Method = "auto",
     Raises
     ------
     InputError
-        ``omega`` is complex, not numbers, or not one-dimensional; ``method``
-        is unknown.
+        ``omega`` is complex, not numbers, or not one-dimensional; ``method`` is unknown.
 
     Notes
     -----
@@ -670,6 +668,12 @@ def peak(result: "Sweep | Circuit", omega_min: float | None = None,
         # Q0 is the applied force: constant.
         return Peak(quantity, abs(circuit.drive.amplitude), lo, False, (),
                     abs(circuit.drive.amplitude), lo)
+    return _located_peak(circuit, grid, lo, hi, quantity, method, xtol, resonances)
+
+
+def _located_peak(circuit, grid, lo: float, hi: float, quantity: str, method: Method,
+                  xtol: float, resonances) -> Peak:
+    """:func:`peak` once its arguments are checked: the exact roots, the grid, Brent searches."""
     found = _peak_roots(circuit, lo, hi, quantity, resonances)
     undamped = tuple(r.omega for r in found if r.zeta <= UNDAMPED_ZETA)
     if grid is None:

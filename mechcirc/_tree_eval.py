@@ -89,39 +89,48 @@ def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: boo
 
     where a leaf group of n same-signed scalars has ρ = (n + 2)·u, a reciprocal
     turns ρ into ρ/(1 − ρ) + 4u (taken as ρ + 2ρ² + 4u while ρ ≤ 1/2; ∞ from ρ ≥ 1 on:
-    no digit is known) and a
-    lever's division by r² adds 2u.  ρ is carried relative to the computed
-    values, so only the rounding of each addition (the m·u term) is first order.  Cancellation at a node
-    (Σ|tᵢ| ≫ |S|) raises the bound there; the children's errors are weighted by
-    |tᵢ|/|S|, not multiplied down the tree, so a deep ladder with no
-    cancellation keeps a bound of a few hundred u.
+    no digit is known) and a lever's division by r² adds 2u.  ρ is carried relative to
+    the computed values, so only the rounding of each addition (the m·u term) is first
+    order.  Cancellation at a node (Σ|tᵢ| ≫ |S|) raises the bound there; the children's
+    errors are weighted by |tᵢ|/|S|, not multiplied down the tree, so a deep ladder with
+    no cancellation keeps a bound of a few hundred u.
     """
     omega = np.asarray(omega, dtype=float)
     if designs is not None:
         D = next(iter(designs[0].values())).shape[0]
         omega = np.broadcast_to(omega, (D, omega.shape[-1]))
-    elif not keep and _mode == "auto" and _jit.COMPILED is not False and (
-            _jit.COMPILED or _KERNEL or _plan_size(root) * omega.size >= KERNEL_MIN_WORK):
-        # By default never wait for numba to compile: numpy until it is cached.
-        kernel = compiled_evaluator(compile=bool(_jit.COMPILED or _KERNEL))
-        if kernel is not None:
-            return _evaluate_compiled(kernel, plan(root), omega, error, condition)
     if not keep and _mode == "auto":
-        return _fast_then_checked(root, omega, error, condition, designs)
+        return _auto(root, omega, error, condition, designs)
     track = error or condition
     top, values = _postorder_values(root, omega, track, keep, _mode != "fast", designs)
     K = top.complex()
     if keep:
         return K, {k: v.complex() for k, v in values.items()}
     if track:
-        # ``rho`` bounds the error relative to the computed |K̂|; relative to the
-        # true |K| ≥ |K̂|(1 − ρ) it is ρ / (1 − ρ).
-        with np.errstate(all="ignore"):
-            rho = _through_reciprocal(np.atleast_1d(np.asarray(top.rho, dtype=float)))
-        rho = np.broadcast_to(rho, omega.shape).astype(float)
-        rho[np.isnan(rho)] = np.inf
+        rho = _relative_to_true(top.rho, omega.shape)
         return K, (rho / _U if condition and not error else rho)
     return K
+
+
+def _relative_to_true(rho, shape) -> NDArray:
+    """The bound ``rho`` relative to the computed |K̂| made relative to the true |K|."""
+    # relative to the true |K| ≥ |K̂|(1 − ρ) it is ρ / (1 − ρ)
+    with np.errstate(all="ignore"):
+        rho = _through_reciprocal(np.atleast_1d(np.asarray(rho, dtype=float)))
+    rho = np.broadcast_to(rho, shape).astype(float)
+    rho[np.isnan(rho)] = np.inf
+    return rho
+
+
+def _auto(root: Node, omega, error: bool, condition: bool, designs):
+    """The compiled plan if asked for or worth it (one design), else :func:`_fast_then_checked`."""
+    if designs is None and _jit.COMPILED is not False and (
+            _jit.COMPILED or _KERNEL or _plan_size(root) * omega.size >= KERNEL_MIN_WORK):
+        # By default never wait for numba to compile: numpy until it is cached.
+        kernel = compiled_evaluator(compile=bool(_jit.COMPILED or _KERNEL))
+        if kernel is not None:
+            return _evaluate_compiled(kernel, plan(root), omega, error, condition)
+    return _fast_then_checked(root, omega, error, condition, designs)
 
 
 def _fast_then_checked(root, omega, error, condition, designs):
@@ -663,22 +672,10 @@ def _combine(node, values: dict, omega, inv_omega, track: bool = False,
         imag = inv_omega * im_inv
     if has_omega:
         imag = omega * im_omega if imag is None else imag + omega * im_omega
-    cplx = None
     # A parallel node's terms are fresh reciprocals, and without ``keep`` a
     # child's value is dropped after this sum: the first term's array is then
     # reused in place instead of copied.
-    own = keep and series
-    for v in terms:
-        if v.imaginary:
-            if imag is None:
-                imag = v.array.copy() if own else v.array
-            else:
-                imag += v.array
-        else:
-            if cplx is None:
-                cplx = v.array.copy() if own else v.array
-            else:
-                cplx += v.array
+    imag, cplx = _add_terms(terms, imag, keep and series)
     if has_real:
         cplx = np.full(omega.shape, real, dtype=complex) if cplx is None else cplx + real
     if cplx is None:
@@ -693,19 +690,41 @@ def _combine(node, values: dict, omega, inv_omega, track: bool = False,
     if track:
         bound = _sum_bound(series, parts, sums, counts, (has_real, has_inv, has_omega),
                            omega, inv_omega)
-        mag = np.abs(total.array)
-        inv = np.reciprocal(mag)
-        bound *= inv
-        rho = bound
-        if series:
-            total.mag, total.rho = mag, rho
-        else:
-            total = total.reciprocal(checked)
-            rho = _through_reciprocal(rho)
-            rho += _U_RECIP
-            total.mag, total.rho = inv, rho
-        return total
+        return _with_bound(total, bound, series, checked)
     return total if series else total.reciprocal(checked)
+
+
+def _add_terms(terms, imag, own: bool):
+    """``(imag + Σ imaginary terms' X, Σ complex terms)``, None where none (copies if ``own``)."""
+    cplx = None
+    for v in terms:
+        if v.imaginary:
+            if imag is None:
+                imag = v.array.copy() if own else v.array
+            else:
+                imag += v.array
+        else:
+            if cplx is None:
+                cplx = v.array.copy() if own else v.array
+            else:
+                cplx += v.array
+    return imag, cplx
+
+
+def _with_bound(total: _Value, bound, series: bool, checked: bool) -> _Value:
+    """The node's value (reciprocal in parallel) with |K| and ρ from Σ|tᵢ|(ρᵢ + m·u)."""
+    mag = np.abs(total.array)
+    inv = np.reciprocal(mag)
+    bound *= inv
+    rho = bound
+    if series:
+        total.mag, total.rho = mag, rho
+    else:
+        total = total.reciprocal(checked)
+        rho = _through_reciprocal(rho)
+        rho += _U_RECIP
+        total.mag, total.rho = inv, rho
+    return total
 
 
 def _leaf_groups(node, values: dict, series: bool, designs, groups=None) -> tuple:

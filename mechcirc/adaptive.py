@@ -83,15 +83,7 @@ def adaptive_sweep(circuit: Circuit, omega_min: float, omega_max: float, *,
     notes: list[str] = []
     omega, zeros, poles = _start_grid(circuit, omega_min, omega_max, initial, notes)
     first = sweep(circuit, omega, method=method)
-    size = max(1, len(circuit.elements) + len(circuit.levers))
-    bound = limits.MAX_ADAPTIVE_WORK if first.method == "sp" else limits.MAX_ADAPTIVE_NODAL_WORK
-    evaluations = bound // size          # K evaluations the bound allows on this network
-    work = (f"work bound of {bound:,} element evaluations ({evaluations:,} evaluations of K "
-            f"on this network of {size:,} elements and levers, method {first.method})")
-    if 3 * omega.size > evaluations:
-        raise InputError(f"adaptive sweep: its starting grid of {omega.size:,} points is over "
-                         f"the {work}; start from fewer points or a narrower band, or sweep "
-                         "a fixed grid")
+    evaluations, work = _work_bound(circuit, first.method, omega.size)
 
     def smooth(w):
         return _smooth(sweep(circuit, w, method=method), zeros, poles)
@@ -100,6 +92,23 @@ def adaptive_sweep(circuit: Circuit, omega_min: float, omega_max: float, *,
                     (max_points, evaluations, work), notes)
     result = sweep(circuit, omega, method=method)
     return result.with_notes(tuple(notes)) if notes else result
+
+
+def _work_bound(circuit: Circuit, method: str, n_start: int) -> tuple[int, str]:
+    """``(K evaluations allowed, the bound in words)``; InputError if ``n_start`` is over it."""
+    from . import limits
+    from .errors import InputError
+
+    size = max(1, len(circuit.elements) + len(circuit.levers))
+    bound = limits.MAX_ADAPTIVE_WORK if method == "sp" else limits.MAX_ADAPTIVE_NODAL_WORK
+    evaluations = bound // size
+    work = (f"work bound of {bound:,} element evaluations ({evaluations:,} evaluations of K "
+            f"on this network of {size:,} elements and levers, method {method})")
+    if 3 * n_start > evaluations:
+        raise InputError(f"adaptive sweep: its starting grid of {n_start:,} points is over "
+                         f"the {work}; start from fewer points or a narrower band, or sweep "
+                         "a fixed grid")
+    return evaluations, work
 
 
 def _start_grid(circuit, omega_min, omega_max, initial, notes):

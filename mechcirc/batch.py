@@ -601,8 +601,7 @@ def _nodal_roots(ds: Designs, omega_max):
 
 def _nodal_group_roots(ds: Designs, system, held, which: NDArray, omega_max):
     """:func:`_nodal_roots` for one group of designs ``which``."""
-    from .resonances import (MAX_UNKNOWNS, MAX_UNKNOWNS_DAMPED, POLISH_BELOW,
-                             element_patterns, stacked_problem, constraint_basis, pencil)
+    from .resonances import POLISH_BELOW, constraint_basis, element_patterns, pencil
 
     eps = np.finfo(float).eps
     *_, G_released, G_held, damped = pencil(system)
@@ -610,28 +609,10 @@ def _nodal_group_roots(ds: Designs, system, held, which: NDArray, omega_max):
     S, parts = _stacked_matrices(ds, system, which)
     roots = []
     for G in (G_held, G_released):
-        Z = constraint_basis(G, nn).toarray()
-        if Z.shape[1] > (MAX_UNKNOWNS_DAMPED if damped else MAX_UNKNOWNS):
+        found = _pencil_roots(constraint_basis(G, nn).toarray(), B, S, damped, omega_max)
+        if found is None:
             return None
-        x, e, ok = stacked_problem(Z, B, S, damped, omega_max)
-        if damped:
-            # find_resonances polishes every damped root
-            must = np.ones(which.size, dtype=bool)
-            # and compares held and released with the eigen-solver's estimates
-            with np.errstate(all="ignore"):
-                e_cmp = np.maximum(e, 1e2 * eps * np.nanmax(np.abs(x), axis=1, initial=1.0)
-                                   [:, None] / np.abs(x))
-        else:
-            # _undamped's bound eps·λmax/λ stands (no polishing below POLISH_BELOW)
-            # only for a diagonal mass matrix without massless directions.
-            P = Z.T @ B["mass"] @ Z
-            k = P.shape[1]
-            diagonal = not np.any(P * (1 - np.eye(k)))
-            mass = S @ P[:, np.arange(k), np.arange(k)] if k else np.ones((which.size, 1))
-            must = ~(diagonal & (mass > 1e-13 * mass.max(axis=1, initial=0.0)[:, None])
-                     .all(axis=1))
-            x, e_cmp = 1j * x, e
-        roots.append((x, e, e_cmp, ok, must))
+        roots.append(found)
     (s_h, e_h, c_h, ok_h, must_h), (s_r, e_r, c_r, ok_r, must_r) = roots
     # A mode in both problems cancels in K (resonances._cancel): the single path's.
     with np.errstate(all="ignore"):
@@ -661,14 +642,43 @@ def _nodal_group_roots(ds: Designs, system, held, which: NDArray, omega_max):
     err = np.maximum(err, eps)
     if omega_max is not None:
         s = np.where(np.abs(s) <= omega_max, s, np.nan)
+    return (which[keep], *_sorted_roots(pole, s, err))
+
+
+def _pencil_roots(Z, B: dict, S, damped: bool, omega_max):
+    """``(roots, errors, errors to compare, ok, must polish)`` on basis ``Z``; None: too big."""
+    from .resonances import MAX_UNKNOWNS, MAX_UNKNOWNS_DAMPED, stacked_problem
+
+    if Z.shape[1] > (MAX_UNKNOWNS_DAMPED if damped else MAX_UNKNOWNS):
+        return None
+    x, e, ok = stacked_problem(Z, B, S, damped, omega_max)
+    if damped:
+        # find_resonances polishes every damped root
+        must = np.ones(S.shape[0], dtype=bool)
+        # and compares held and released with the eigen-solver's estimates
+        with np.errstate(all="ignore"):
+            e_cmp = np.maximum(e, 1e2 * np.finfo(float).eps
+                               * np.nanmax(np.abs(x), axis=1, initial=1.0)[:, None] / np.abs(x))
+        return x, e, e_cmp, ok, must
+    # _undamped's bound eps·λmax/λ stands (no polishing below POLISH_BELOW)
+    # only for a diagonal mass matrix without massless directions.
+    P = Z.T @ B["mass"] @ Z
+    k = P.shape[1]
+    diagonal = not np.any(P * (1 - np.eye(k)))
+    mass = S @ P[:, np.arange(k), np.arange(k)] if k else np.ones((S.shape[0], 1))
+    must = ~(diagonal & (mass > 1e-13 * mass.max(axis=1, initial=0.0)[:, None]).all(axis=1))
+    return 1j * x, e, e, ok, must
+
+
+def _sorted_roots(pole, s, err) -> tuple:
+    """``(pole, s, err)`` per design in find_resonances' order (ω, antiresonance first)."""
     mag = np.abs(s)
     live = np.isfinite(mag)
-    # Sorted as find_resonances sorts: by ω, then kind ("antiresonance" first).
     order = np.lexsort((~pole, np.where(live, mag, np.inf)), axis=-1)
     width = int(live.sum(axis=1).max(initial=0))
     pole, s, err, live = (np.take_along_axis(x, order, 1)[:, :width]
                           for x in (pole, s, err, live))
-    return which[keep], pole, s, np.where(live, err, np.nan)
+    return pole, s, np.where(live, err, np.nan)
 
 
 def _polish_nodal(stacks: list, design: NDArray, s0: NDArray, pole: NDArray, e0: NDArray,

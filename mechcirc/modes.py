@@ -359,18 +359,10 @@ def sweep_sensitivity(circuit: Circuit, omega, names=None) -> SweepSensitivity:
     (0.5, 0.5)
     """
     from . import nodal
-    from .errors import InputError
 
     system = circuit.nodal
     ei, ej, y, power, stamped = _stamped(system)
-    value = {e.name: e.value for e in circuit.elements} | \
-        {lv.name: lv.ratio for lv in circuit.levers} | \
-        {p: float(v) for p, v in circuit.params.items()}
-    names = list(value) if names is None else list(dict.fromkeys(names))
-    unknown = [n for n in names if n not in value]
-    if unknown:
-        raise InputError(f"no element, lever or .param named {unknown[0]!r}; there are: "
-                         f"{', '.join(value)}")
+    value, names = _values_named(circuit, names)
     omega = np.atleast_1d(np.asarray(omega, dtype=float))
     column = {name: k for k, name in enumerate(stamped)}
     slopes = _param_slopes(circuit, stamped) if set(names) & circuit.params.keys() else {}
@@ -392,6 +384,21 @@ def sweep_sensitivity(circuit: Circuit, omega, names=None) -> SweepSensitivity:
                 with np.errstate(all="ignore"):
                     dK[name][at:at + w.size] = dK_all @ slopes[name]
     return SweepSensitivity(omega, K, circuit.require_drive(), {k: value[k] for k in names}, dK)
+
+
+def _values_named(circuit: Circuit, names) -> tuple[dict, list]:
+    """``(every element's, lever's and .param's value, the names asked (default all), checked)``."""
+    from .errors import InputError
+
+    value = {e.name: e.value for e in circuit.elements} | \
+        {lv.name: lv.ratio for lv in circuit.levers} | \
+        {p: float(v) for p, v in circuit.params.items()}
+    names = list(value) if names is None else list(dict.fromkeys(names))
+    unknown = [n for n in names if n not in value]
+    if unknown:
+        raise InputError(f"no element, lever or .param named {unknown[0]!r}; there are: "
+                         f"{', '.join(value)}")
+    return value, names
 
 
 def _adjoint_products(system, x, w, stamps) -> np.ndarray:

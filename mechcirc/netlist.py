@@ -277,6 +277,27 @@ def _unbrace(text: str, col: int) -> tuple[str, int]:
     return text, col
 
 
+def _check_count(line: _Line, keyword: str, npos: int, positional: list) -> None:
+    """A clear error when a statement has fewer or more than ``npos`` positional fields."""
+    if len(positional) < npos:
+        fields = SYNTAX[keyword].split()[1:1 + npos]
+        missing = fields[len(positional)]
+        end = line.tokens[-1].col + len(line.tokens[-1].text)
+        last = positional[-1] if positional else None
+        if missing == "VALUE" and last is not None and last.text != "0" and \
+                (quantity := split_quantity(last.text)) and _is_number(quantity[0]):
+            # 'mass m a 2': the value is there, read as node N2: a node is missing
+            line.error(f"{keyword} line is missing a node: it has {len(positional)} of "
+                       f"the fields {' '.join(fields)}, and {last.text!r}, read as "
+                       f"{fields[len(positional) - 1]}, looks like the VALUE", last.col,
+                       SYNTAX[keyword])
+        line.error(f"{keyword} line is missing {missing}", end, SYNTAX[keyword])
+    if len(positional) > npos:
+        extra = positional[npos]
+        line.error(f"unexpected {extra.text!r}: {keyword} takes {npos} fields",
+                   extra.col, SYNTAX[keyword])
+
+
 class _Parser:
     def __init__(self, text: str, source: str, overrides: Mapping[str, float] | None = None,
                  require_drive: bool = True):
@@ -567,23 +588,7 @@ class _Parser:
                 positional.append(tok)
                 if len(positional) - 1 == _VALUE_INDEX.get(keyword) and "value" not in units:
                     previous = "value"
-        if len(positional) < npos:
-            fields = SYNTAX[keyword].split()[1:1 + npos]
-            missing = fields[len(positional)]
-            end = line.tokens[-1].col + len(line.tokens[-1].text)
-            last = positional[-1] if positional else None
-            if missing == "VALUE" and last is not None and last.text != "0" and \
-                    (quantity := split_quantity(last.text)) and _is_number(quantity[0]):
-                # 'mass m a 2': the value is there, read as node N2: a node is missing
-                line.error(f"{keyword} line is missing a node: it has {len(positional)} of "
-                           f"the fields {' '.join(fields)}, and {last.text!r}, read as "
-                           f"{fields[len(positional) - 1]}, looks like the VALUE", last.col,
-                           SYNTAX[keyword])
-            line.error(f"{keyword} line is missing {missing}", end, SYNTAX[keyword])
-        if len(positional) > npos:
-            extra = positional[npos]
-            line.error(f"unexpected {extra.text!r}: {keyword} takes {npos} fields",
-                       extra.col, SYNTAX[keyword])
+        _check_count(line, keyword, npos, positional)
         return positional, options, units
 
     def _name(self, line: _Line, tok: _Token, what: str) -> str:

@@ -147,87 +147,98 @@ def warm_kernels() -> None:
 
 
 def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
-           keep: NDArray | None):
-    """Factor, solve and refine at each ω (real or complex, already checked), chunk by chunk.
+           keep: NDArray | None, at: NDArray | None = None):
+    """Factor, solve and refine at each ω (real or complex, already checked) of ``omega[at]``
+    (default all), chunk by chunk.
 
     Returns (K, error of the solve, S, S_data, x rows or None, the rows of x
-    at ``keep``, the points tried in double-double).  What does not change
+    at ``keep``), NaN and inf off ``at``.  What does not change
     with ω — the pattern, the solver's choice and ordering, the residual's
     plan — comes from :func:`pattern` and :func:`solver`.  The compiled
     kernels serve the sparse path at real ω (:func:`kernels`).
     """
-    n = system.size
-    m = omega.size
     pat = pattern(system)
     rhs = system.injection()
-    K = np.full(m, complex(np.nan, np.nan))
-    err = np.full(m, np.inf)
-    S = np.full(m, np.nan)
-    Sd = np.full(m, np.nan)
-    x_all = np.full((m, n), complex(np.nan, np.nan)) if keep is None else None
-    kept = {}
-    checked = np.zeros(m, dtype=bool)
     solve_with = solver(system)
+    at = np.arange(omega.size) if at is None else at
     kern = None if solve_with.kind == "dense" or np.iscomplexobj(omega) \
-        else kernels(n * omega.size)
+        else kernels(system.size * at.size)
+    out = _Solved(system, pat, kern, omega, keep)
 
     def residual(w, xh, xl, rhs):
         return pat.residual(w, xh, xl, rhs, kern)
 
-    if kern is not None:
-        # Compiled: no (ω, term) temporaries; the chunk's (ω, n) arrays stay in cache.
-        chunk = max(1, min(solve_with.max_chunk, 2 ** 16 // max(1, n)))
-    else:
-        chunk = max(1, min(solve_with.max_chunk, _CHUNK_TERMS // max(1, pat.n_terms + n)))
-    use_dd = refine and n <= DD_LIMIT and not np.iscomplexobj(omega)
+    def refined(solve_fn, w):
+        return refine_dd(solve_fn, residual, w, rhs, system, refine, steps)
 
-    def store(sel, xh, xl, est, rho):
-        K[sel] = difference_dd(system, xh, xl)
+    # Compiled: no (ω, term) temporaries; the chunk's (ω, n) arrays stay in cache.
+    terms = 2 ** 16 // max(1, system.size) if kern is not None \
+        else _CHUNK_TERMS // max(1, pat.n_terms + system.size)
+    chunk = max(1, min(solve_with.max_chunk, terms))
+    use_dd = refine and system.size <= DD_LIMIT and not np.iscomplexobj(omega)
+    for start in range(0, at.size, chunk):
+        every = at[start:start + chunk]
+        good, solve_fn = solve_with.factor(omega[every], kern)
+        sel = every[good]
+        if sel.size:
+            r = refined(solve_fn, omega[sel])
+            if solve_with.kind == "superlu":
+                _strict_retry(solve_with, kern, omega[sel], r, refined)
+            out.store(sel, *r)
+        if use_dd:
+            out.dd_retry(every, refined)
+    return out.K, out.err, out.S, out.Sd, out.x_all, out.kept
+
+
+class _Solved:
+    """What :func:`_sweep` finds at each ω, stored chunk by chunk."""
+
+    def __init__(self, system: NodalSystem, pat, kern, omega: NDArray, keep: NDArray | None):
+        m = omega.size
+        self.system, self.pat, self.kern, self.omega, self.keep = system, pat, kern, omega, keep
+        self.K = np.full(m, complex(np.nan, np.nan))
+        self.err = np.full(m, np.inf)
+        self.S, self.Sd = np.full(m, np.nan), np.full(m, np.nan)
+        self.x_all = np.full((m, system.size), complex(np.nan, np.nan)) if keep is None else None
+        self.kept: dict[int, NDArray] = {}
+
+    def store(self, sel, xh, xl, est, rho) -> None:
+        """K, its sensitivities and error estimate, and x, at the points ``sel``."""
+        self.K[sel] = difference_dd(self.system, xh, xl)
         x = xh + xl if xl is not None else xh
-        S[sel], Sd[sel] = pat.sensitivities(omega[sel], x, K[sel], kern)
+        self.S[sel], self.Sd[sel] = self.pat.sensitivities(self.omega[sel], x, self.K[sel],
+                                                           self.kern)
         # A refinement that stalls (corrections not shrinking: the factors
         # are too inaccurate, cond(A)·u ≳ 1) has not converged, unless it
         # stalls at the residual's own rounding: its last correction says
         # nothing of the error (seen: 2.8e-9 and 2.8e-12 with corrections of
         # 1e-11 and 2.6e-16 on a stiff tree, cond(A) ≈ 1e17).  No estimate: inf.
-        floor = 16 * residual_rounding(system, S[sel])
-        err[sel] = np.where((rho >= 0.5) & (est > floor), np.inf, est)
-        if x_all is not None:
-            x_all[sel] = x
-        elif keep is not None:
-            for k in np.flatnonzero(keep[sel]):
-                kept[int(sel[k])] = x[k]
+        floor = 16 * residual_rounding(self.system, self.S[sel])
+        self.err[sel] = np.where((rho >= 0.5) & (est > floor), np.inf, est)
+        if self.x_all is not None:
+            self.x_all[sel] = x
+        elif self.keep is not None:
+            for k in np.flatnonzero(self.keep[sel]):
+                self.kept[int(sel[k])] = x[k]
 
-    for start in range(0, m, chunk):
-        every = np.arange(start, min(start + chunk, m))
-        good, solve_fn = solve_with.factor(omega[every], kern)
-        sel = every[good]
-        if sel.size:
-            refined = refine_dd(solve_fn, residual, omega[sel], rhs, system, refine, steps)
-            if solve_with.kind == "superlu":
-                _strict_retry(solve_with, kern, omega[sel], refined,
-                              lambda fn, w: refine_dd(fn, residual, w, rhs, system, refine, steps))
-            store(sel, *refined)
-        if use_dd:
-            # Float64 factors failed (A(ω) exactly singular as rounded to float64),
-            # could not refine, or had not converged after ``steps`` (then the
-            # last correction is not a safe estimate: 6.6e-14 for a true
-            # 1.7e-13 on a stiff tree): the double-double LU.
-            done = np.isfinite(err[every]) & (
-                err[every] <= np.maximum(16 * np.finfo(float).eps,
-                                         16 * residual_rounding(system, S[every])))
-            todo = every[~done]
-            checked[todo] = True
-            dd = dd_solver(system)
-            for at in range(0, todo.size, dd.max_chunk):
-                redo = todo[at:at + dd.max_chunk]
-                ok2, dd_fn = dd.factor(omega[redo])
-                redo = redo[ok2]
-                xh2, xl2, est2, rho2 = refine_dd(dd_fn, residual, omega[redo], rhs, system, refine,
-                                                steps)
-                better = ~(est2 >= err[redo])
-                store(redo[better], xh2[better], xl2[better], est2[better], rho2[better])
-    return K, err, S, Sd, x_all, kept, checked
+    def dd_retry(self, every, refined) -> None:
+        """Solve again with the double-double LU where float64 did not converge."""
+        # Float64 factors failed (A(ω) exactly singular as rounded to float64),
+        # could not refine, or had not converged after ``steps`` (then the
+        # last correction is not a safe estimate: 6.6e-14 for a true
+        # 1.7e-13 on a stiff tree): the double-double LU.
+        err = self.err[every]
+        done = np.isfinite(err) & (err <= np.maximum(
+            16 * np.finfo(float).eps, 16 * residual_rounding(self.system, self.S[every])))
+        todo = every[~done]
+        dd = dd_solver(self.system)
+        for at in range(0, todo.size, dd.max_chunk):
+            redo = todo[at:at + dd.max_chunk]
+            ok2, dd_fn = dd.factor(self.omega[redo])
+            redo = redo[ok2]
+            xh2, xl2, est2, rho2 = refined(dd_fn, self.omega[redo])
+            better = ~(est2 >= self.err[redo])
+            self.store(redo[better], xh2[better], xl2[better], est2[better], rho2[better])
 
 
 def _strict_retry(solve_with, kern, omega, refined, refine):
@@ -296,25 +307,12 @@ def solve(system: NodalSystem, omega: ArrayLike, *, refine: bool = True,
     """
     omega = np.asarray(omega, dtype=float).reshape(-1)
     ok = np.isfinite(omega) & (omega > 0)
-    idx = np.flatnonzero(ok)
-    m = omega.size
-    K = np.full(m, complex(np.nan, np.nan))
-    err = np.full(m, np.inf)
-    S = np.full(m, np.nan)
-    Sd = np.full(m, np.nan)
-    x = np.full((m, system.size), complex(np.nan, np.nan)) if keep_x else None
-    kept: dict[int, NDArray] = {}
-    checked = np.zeros(m, dtype=bool)
-    if idx.size:
-        Ki, ei, Si, Sdi, xi, kept_i, ci = _sweep(system, omega[idx], refine, steps,
-                                                 None if keep_x else np.ones(idx.size, bool))
-        K[idx], err[idx], S[idx], Sd[idx], checked[idx] = Ki, ei, Si, Sdi, ci
-        if x is not None:
-            x[idx] = xi
-        else:
-            # Only the rows needed at singular points are kept.
-            sing = ~np.isfinite(Ki) | (ei >= 1.0)
-            kept = {int(idx[k]): v for k, v in kept_i.items() if sing[k]}
+    K, err, S, Sd, x, kept = _sweep(system, omega, refine, steps, None if keep_x else ok,
+                                    np.flatnonzero(ok))
+    if not keep_x:
+        # Only the rows needed at singular points are kept.
+        sing = ~np.isfinite(K) | (err >= 1.0)
+        kept = {i: v for i, v in kept.items() if sing[i]}
     # A(ω) exactly singular: a singular point.  A refinement that does not
     # contract (float64 factors, or even the double-double LU: cond(A)
     # beyond about 1e30) says no more than "no digit known": K stays finite
@@ -526,7 +524,7 @@ def evaluate_complex(system: NodalSystem, s: ArrayLike
     """
     s = np.asarray(s, dtype=complex).reshape(-1)
     omega = -1j * s
-    K, est, S, Sd, _, _, _ = _sweep(system, omega, True, 4, None)
+    K, est, S, Sd, _, _ = _sweep(system, omega, True, 4, None)
     est = total_error(Sd, est + residual_rounding(system, S))
     with np.errstate(all="ignore"):
         return K, est * np.abs(K)

@@ -481,9 +481,15 @@ def periodic(circuit: Circuit, rpm: float, *, motion=None, tol: float = TOL,
     if not (isinstance(points, numbers.Integral) and 4 <= points <= 1_000_000):
         raise MechcircError(f"points must be an integer from 4 to 1000000, got {points!r}")
     circuit, motion, amp = _prepared(circuit, motion)
+    solved = _solve(circuit, motion, amp, rpm_to_omega(rpm), tol, harmonics, method)
+    return _at_angles(circuit, motion, rpm, solved, points, elements, near, tol)
+
+
+def _at_angles(circuit, motion, rpm, solved, points: int, elements, near: float,
+               tol: float) -> PeriodicResult:
+    """The result of :func:`periodic` from the harmonics ``solved`` at one speed."""
     Omega = rpm_to_omega(rpm)
-    N, V, Qk, K, error, notes, responses = _solve(circuit, motion, amp, Omega, tol, harmonics,
-                                               method)
+    N, V, Qk, K, error, notes, responses = solved
     N, error = int(N[0]), float(error[0])
     k = np.arange(1, N + 1)
     w = k * Omega
@@ -493,8 +499,8 @@ def periodic(circuit: Circuit, rpm: float, *, motion=None, tol: float = TOL,
     theta = 2 * np.pi * np.arange(points) / points
     x, dx, _ = motion.evaluate(theta)
     forces, velocities = {}, {}
-    if unbounded:
-        ks = sorted(int(i) for i in unbounded)
+    ks = sorted(int(i) for i in unbounded)
+    if ks:
         notes.append("harmonic(s) " + ", ".join(
             f"k = {i} (ω = {i * Omega:.10g} rad/s)" for i in ks) +
             " fall exactly on an undamped resonance: the steady periodic force is unbounded "
@@ -514,9 +520,27 @@ def periodic(circuit: Circuit, rpm: float, *, motion=None, tol: float = TOL,
         Q=Q, x=x, v=Omega * dx, k=k, omega=w, V=V, amplitude=Qk, K=K, nearest=nearest,
         distance=distance, near=near_mask, resonances=tuple((wn, z) for wn, z, _ in found),
         peak=peak, peak_angle_deg=math.degrees(peak_theta), error=error, tol=tol,
-        unbounded=tuple(sorted(int(i) for i in unbounded)), near_fraction=near,
+        unbounded=tuple(ks), near_fraction=near,
         forces=forces, velocities=velocities, notes=tuple(notes),
         units=units_of(circuit.drive))
+
+
+def _peak_or_inf(Qk, unbounded):
+    """Peak over the cycle of each row of harmonics ``Qk``; inf where ``unbounded``."""
+    return np.where(unbounded, math.inf, _peaks(np.where(unbounded[:, None], 0.0, Qk))[0])
+
+
+def _crossings(found, motion, kmax: int, rpm_min: float, rpm_max: float) -> list:
+    """(rpm, k, ω_n, ζ, weight) where harmonic k of the motion meets a resonance, by speed."""
+    crossings = []
+    c = np.abs(motion.fourier(kmax))
+    weight = c / c.max() if c.max() > 0 else c
+    for wn, zeta, _ in found:
+        for k in range(1, kmax + 1):
+            r = wn / k * 60 / (2 * math.pi)
+            if rpm_min <= r <= rpm_max:
+                crossings.append((r, k, wn, zeta, float(weight[k - 1])))
+    return sorted(crossings)
 
 
 def _nearest(found, w, V, Qk):
@@ -578,12 +602,9 @@ def speed_map(circuit: Circuit, rpm_min: float, rpm_max: float, points: int = 20
                                                 method)
         unbounded = ~np.all(np.isfinite(Qk), axis=1)
         used[part], error[part] = n, np.where(unbounded, math.inf, err)
-        peak[part] = np.where(unbounded, math.inf,
-                              _peaks(np.where(unbounded[:, None], 0.0, Qk))[0])
+        peak[part] = _peak_or_inf(Qk, unbounded)
         for name in elements:
-            f = responses(name)[0]
-            element_peaks[name][part] = np.where(
-                unbounded, math.inf, _peaks(np.where(unbounded[:, None], 0.0, f))[0])
+            element_peaks[name][part] = _peak_or_inf(responses(name)[0], unbounded)
     unbounded = ~np.isfinite(peak)
     short = (error > tol) & ~unbounded
     if short.any():
@@ -595,15 +616,7 @@ def speed_map(circuit: Circuit, rpm_min: float, rpm_max: float, points: int = 20
         notes.append(f"{int(unbounded.sum())} speed(s) put a harmonic exactly on an undamped "
                      "resonance: the peak force is unbounded there (inf)")
     found = _resonances(circuit, kmax * rpm_to_omega(rpm_max) * (1 + 1e-9), notes)
-    crossings = []
-    c = np.abs(motion.fourier(kmax))
-    weight = c / c.max() if c.max() > 0 else c
-    for wn, zeta, _ in found:
-        for k in range(1, kmax + 1):
-            r = wn / k * 60 / (2 * math.pi)
-            if rpm_min <= r <= rpm_max:
-                crossings.append((r, k, wn, zeta, float(weight[k - 1])))
-    crossings.sort()
+    crossings = _crossings(found, motion, kmax, rpm_min, rpm_max)
     return SpeedMap(name=circuit.name, rpm=rpm, peak=peak, harmonics=used, error=error,
                     crossings=tuple(crossings), element_peaks=element_peaks,
                     notes=tuple(notes), units=units_of(circuit.drive))

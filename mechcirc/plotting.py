@@ -180,37 +180,39 @@ def plot_sweep(result, title: str | None = None, resonances=(), peak=None, *, ax
     -------
     The Axes given as ``ax``, or the Figure of the panels.
     """
+    curves = _sweep_curves(result, resonances if refine else (), unit)
+    if ax is not None:
+        _draw_K(ax, result, curves, resonances, unit, mark=True)
+        ax.set_title(title or f"{result.name}: kinematic characteristic K = v/Q")
+        return ax
+    return _bode_figure(fig, result, curves, resonances, peak, unit, dict(extra or {}), title)
+
+
+def _sweep_curves(result, resonances, unit: str):
+    """(ω in ``unit``, |K|, arg K [deg], |response|, flags), refined around ``resonances``."""
     import numpy as np
 
+    from .units import in_unit
+
+    w, K, flags, R = _refined(result, resonances)
+    with np.errstate(all="ignore"):
+        return in_unit(w, unit), np.abs(K), np.degrees(np.angle(K)), np.abs(R), flags
+
+
+def _bode_figure(fig, result, curves, resonances, peak, unit: str, extra: dict, title):
+    """The panels of :func:`plot_sweep`: |K|, arg K, the response, ``extra``."""
     from .circuit import units_of
     from .units import FREQUENCY_UNITS, in_unit
 
-    per_unit = FREQUENCY_UNITS[unit][1]
-    xlabel = {"rad/s": "ω [rad/s]", "Hz": "f [Hz]", "rpm": "n [rpm]"}[unit]
     units = units_of(getattr(result, "drive", None))
     force_drive = getattr(result.drive, "kind", "velocity") == "force"
-    w, K, flags, R = _refined(result, resonances if refine else ())
-    omega = in_unit(w, unit)
+    omega, _, phase, absR, _ = curves
     positive = omega > 0
-    with np.errstate(all="ignore"):
-        absK = np.abs(K)
-        absR = np.abs(R)
-        phase = np.degrees(np.angle(K))
-    if ax is not None:
-        _draw_K(ax, omega, absK, positive, flags, units)
-        _mark_resonances((ax,), resonances, ax, per_unit)
-        _label_resonances(ax, resonances, per_unit)
-        ax.set_xlabel(xlabel)
-        ax.grid(True, which="both", alpha=0.3)
-        ax.set_title(title or f"{result.name}: kinematic characteristic K = v/Q")
-        return ax
-    extra = dict(extra or {})
     fig = fig if fig is not None else _figure((7, 8 + 2.2 * len(extra)))
     axes = fig.subplots(3 + len(extra), 1, sharex=True,
                         gridspec_kw={"height_ratios": [3, 2, 3] + [2] * len(extra)})
     ax_k, ax_p, ax_q = axes[:3]
-    _draw_K(ax_k, omega, absK, positive, flags, units)
-    _label_resonances(ax_k, resonances, per_unit)
+    _draw_K(ax_k, result, curves, resonances, unit)
     ax_p.semilogx(omega[positive], phase[positive], color="C2")
     ax_p.set_ylabel("arg K [deg]")
     ax_p.set_ylim(-190, 190)
@@ -218,8 +220,8 @@ def plot_sweep(result, title: str | None = None, resonances=(), peak=None, *, ax
     ax_q.loglog(omega[positive], absR[positive], color="C1")
     ax_q.set_ylabel(f"|v0| = |F0·K| [{units['v']}]" if force_drive else f"|Q0| [{units['Q']}]")
     _extra_panels(axes[3:], in_unit(result.omega, unit), extra)
-    axes[-1].set_xlabel(xlabel)
-    _mark_resonances(tuple(axes), resonances, ax_q, per_unit)
+    axes[-1].set_xlabel(_FREQUENCY_LABEL[unit])
+    _mark_resonances(tuple(axes), resonances, ax_q, FREQUENCY_UNITS[unit][1])
     _mark_peak(ax_q, peak, unit, units["Q"])
     for a in axes:
         a.grid(True, which="both", alpha=0.3)
@@ -232,6 +234,9 @@ def plot_sweep(result, title: str | None = None, resonances=(), peak=None, *, ax
     fig.subplots_adjust(left=0.13, right=0.97, hspace=0.08, top=1 - 0.85 / height,
                         bottom=0.55 / height)
     return fig
+
+
+_FREQUENCY_LABEL = {"rad/s": "ω [rad/s]", "Hz": "f [Hz]", "rpm": "n [rpm]"}
 
 
 def _extra_panels(axes, own, extra: dict) -> None:
@@ -306,15 +311,27 @@ def _light_log_axes(axes, max_minor_decades: float = 3.0) -> None:
             linestyles=rcParams["grid.linestyle"], alpha=0.3, zorder=1.5), autolim=False)
 
 
-def _draw_K(ax, omega, absK, positive, flags, units):
+def _draw_K(ax, result, curves, resonances, unit: str, mark: bool = False):
+    """|K| on ``ax`` with its flagged points and the roots' labels (and lines if ``mark``)."""
     import numpy as np
 
+    from .circuit import units_of
+    from .units import FREQUENCY_UNITS
+
+    omega, absK, _, _, flags = curves
+    positive = omega > 0
     ax.loglog(omega[positive], absK[positive], color="C0")
-    ax.set_ylabel(f"|K| [{units['K']}]")
+    ax.set_ylabel(f"|K| [{units_of(getattr(result, 'drive', None))['K']}]")
     flagged = positive & (flags != 0) & np.isfinite(absK) & (absK > 0)
     if flagged.any():
         ax.loglog(omega[flagged], absK[flagged], "x", color="C3", label="flagged point")
         ax.legend(loc="best", fontsize="small")
+    per_unit = FREQUENCY_UNITS[unit][1]
+    if mark:
+        _mark_resonances((ax,), resonances, ax, per_unit)
+        ax.set_xlabel(_FREQUENCY_LABEL[unit])
+        ax.grid(True, which="both", alpha=0.3)
+    _label_resonances(ax, resonances, per_unit)
 
 
 #: Most clearance (backlash) panels of a transient plot, and most nodes drawn by default.
@@ -368,7 +385,6 @@ def plot_transient(result, nodes=None, what: str = "x", elements=None, title: st
 
         raise MechcircError(f"what={what!r}: expected 'x' or 'v' (v only when the transient "
                             "kept velocities)")
-    u = result.units
     names = _known("node", nodes, result.nodes) if nodes is not None \
         else list(result.nodes)[:MAX_NODES]
     forces = _known("element", elements or (), result.elements)
@@ -377,19 +393,8 @@ def plot_transient(result, nodes=None, what: str = "x", elements=None, title: st
     if result.drive_name and getattr(result, "waveform", None):
         drive += f", {result.waveform}"
     title = title or f"{result.name}: transient, {drive}"
-    t = result.time
-
-    def nodes_panel(a):
-        data = result.x if what == "x" else result.v
-        for n in names:
-            a.plot(t, data[:, result.nodes.index(n)], label=f"{what}({n})")
-        a.set_ylabel(f"displacement x [{u['x']}]" if what == "x"
-                     else f"velocity v [{u['v']}]")
-        if names:
-            a.legend(loc="best", fontsize="small")
-
     if ax is not None:
-        nodes_panel(ax)
+        _nodes_panel(ax, result, names, what)
         ax.set_xlabel("t [s]")
         ax.set_title(title)
         ax.grid(True, alpha=0.3)
@@ -398,13 +403,9 @@ def plot_transient(result, nodes=None, what: str = "x", elements=None, title: st
     n = 1 + bool(forces) + len(gaps)
     fig = fig if fig is not None else _figure((8, 3 + 2.2 * n))
     axes = np.atleast_1d(fig.subplots(n, 1, sharex=True, squeeze=False)[:, 0])
-    nodes_panel(axes[0])
+    _nodes_panel(axes[0], result, names, what)
     if forces:
-        for e in forces:
-            axes[1].plot(t, result.force[:, result.elements.index(e)], label=f"F({e})")
-        word = "moment" if u["Q"] == "N·m" else "force"
-        axes[1].set_ylabel(f"element {word} [{u['Q']}]")
-        axes[1].legend(loc="best", fontsize="small")
+        _forces_panel(axes[1], result, forces)
     for a, gap in zip(axes[1 + bool(forces):], gaps):
         _clearance_panel(a, result, *gap)
     axes[-1].set_xlabel("t [s]")
@@ -414,6 +415,26 @@ def plot_transient(result, nodes=None, what: str = "x", elements=None, title: st
     if len(fig.axes) == n:              # a layout of ours only, not of the caller's axes
         fig.tight_layout()
     return fig
+
+
+def _nodes_panel(a, result, names, what: str) -> None:
+    """The displacement (``what="x"``) or velocity of the nodes ``names`` against time."""
+    data = result.x if what == "x" else result.v
+    for n in names:
+        a.plot(result.time, data[:, result.nodes.index(n)], label=f"{what}({n})")
+    a.set_ylabel(f"displacement x [{result.units['x']}]" if what == "x"
+                 else f"velocity v [{result.units['v']}]")
+    if names:
+        a.legend(loc="best", fontsize="small")
+
+
+def _forces_panel(a, result, forces) -> None:
+    """The forces (moments) of the elements ``forces`` against time."""
+    for e in forces:
+        a.plot(result.time, result.force[:, result.elements.index(e)], label=f"F({e})")
+    word = "moment" if result.units["Q"] == "N·m" else "force"
+    a.set_ylabel(f"element {word} [{result.units['Q']}]")
+    a.legend(loc="best", fontsize="small")
 
 
 def _clearance_panel(a, result, name: str, gap: tuple) -> None:

@@ -300,27 +300,13 @@ def _series_parallel_runs(n1s: list, n2s: list, nodes: list, a: str, b: str):
     if a not in ids or b not in ids or a == b:
         return None
     ia, ib = ids[a], ids[b]
-    N = len(ids)
     E = list(nodes)
-    # adj[n] maps each neighbour of node n to the one edge between them (a second
-    # edge between the same two nodes is merged in parallel at once).
-    adj: list[dict] = [{} for _ in range(N)]
-    alive = 0
-    for eid in range(len(E)):
-        u, w = U[eid], W[eid]
-        if u == w:
-            return None
-        au = adj[u]
-        old = au.get(w)
-        if old is not None:
-            _merge_parallel(old, u, E[eid], U, W, E)
-            E[eid] = None
-            continue
-        au[w] = eid
-        adj[w][u] = eid
-        alive += 1
+    built = _adjacency(U, W, E, len(ids))
+    if built is None:
+        return None
+    adj, alive = built
     dangling: list = []
-    queue: deque[int] = deque(range(N))
+    queue: deque[int] = deque(range(len(ids)))
     pop, push = queue.popleft, queue.append
     while queue:
         n = pop()
@@ -329,26 +315,8 @@ def _series_parallel_runs(n1s: list, n2s: list, nodes: list, a: str, b: str):
         an = adj[n]
         deg = len(an)
         if deg == 2:
-            (u, e1), (w, e2) = an.items()          # far ends u (of e1) and w (of e2)
-            s1 = 1 if W[e1] == n else -1           # e1 runs u -> n ?
-            s2 = 1 if U[e2] == n else -1           # e2 runs n -> w ?
-            an.clear()
-            au, aw = adj[u], adj[w]
-            del au[n], aw[n]
-            # The series run u -> w, kept in e1's slot.
-            run, flip = _join(E[e1], s1, E[e2], s2, True)
-            E[e2] = None
-            alive -= 1
-            start, end = (w, u) if flip else (u, w)
-            old = au.get(w)
-            if old is not None:
-                E[e1] = None
-                _merge_parallel(old, start, run, U, W, E)
-                alive -= 1
-            else:
-                U[e1], W[e1], E[e1] = start, end, run
-                au[w] = e1
-                aw[u] = e1
+            u, w, merged = _series_step(n, adj, U, W, E)
+            alive -= 2 if merged else 1
             push(u)
             push(w)
         elif deg == 1:
@@ -366,6 +334,52 @@ def _series_parallel_runs(n1s: list, n2s: list, nodes: list, a: str, b: str):
     if sign < 0:
         node = Series((node,), (-1,))
     return node, dangling
+
+
+def _adjacency(U: list, W: list, E: list, N: int):
+    """``(adj, edges alive)`` of the edges U[i] → W[i] on N nodes, or None on a self-loop."""
+    # adj[n] maps each neighbour of node n to the one edge between them (a second
+    # edge between the same two nodes is merged in parallel at once).
+    adj: list[dict] = [{} for _ in range(N)]
+    alive = 0
+    for eid in range(len(E)):
+        u, w = U[eid], W[eid]
+        if u == w:
+            return None
+        au = adj[u]
+        old = au.get(w)
+        if old is not None:
+            _merge_parallel(old, u, E[eid], U, W, E)
+            E[eid] = None
+            continue
+        au[w] = eid
+        adj[w][u] = eid
+        alive += 1
+    return adj, alive
+
+
+def _series_step(n: int, adj: list, U: list, W: list, E: list):
+    """Join node ``n``'s two edges in series: ``(u, w, merged in parallel with an edge u–w)``."""
+    an = adj[n]
+    (u, e1), (w, e2) = an.items()          # far ends u (of e1) and w (of e2)
+    s1 = 1 if W[e1] == n else -1           # e1 runs u -> n ?
+    s2 = 1 if U[e2] == n else -1           # e2 runs n -> w ?
+    an.clear()
+    au, aw = adj[u], adj[w]
+    del au[n], aw[n]
+    # The series run u -> w, kept in e1's slot.
+    run, flip = _join(E[e1], s1, E[e2], s2, True)
+    E[e2] = None
+    start, end = (w, u) if flip else (u, w)
+    old = au.get(w)
+    if old is not None:
+        E[e1] = None
+        _merge_parallel(old, start, run, U, W, E)
+        return u, w, True
+    U[e1], W[e1], E[e1] = start, end, run
+    au[w] = e1
+    aw[u] = e1
+    return u, w, False
 
 
 def _merge_parallel(old: int, u: int, node, U: list, W: list, E: list) -> None:
@@ -473,18 +487,22 @@ def _series_parallel(edges: list[_Edge], a: str, b: str):
         del adj[n]
         add(u, w, _Binary("s", node1, s1, node2, s2))
     if len(store) != 1:
-        blocking_nodes = sorted(n for n, es in adj.items() if es and n not in (a, b))
-        names = sorted(el.name for _, _, node in store.values()
-                       for el in leaves(_flatten(node)))
-        raise NotSeriesParallelError(
-            f"the network is not series–parallel reducible between {a!r} and {b!r}: "
-            f"nodes {_some(blocking_nodes)} and elements {_some(names)} form a "
-            "bridge (use nodal analysis)", nodes=blocking_nodes, elements=names)
+        raise _not_reducible(store, adj, a, b)
     (n1, n2, node), = store.values()
     if n1 == a:
         return node
     # Root oriented b -> a: wrap so that the tree's orientation is a -> b.
     return _Binary("s", node, -1, None, 0)
+
+
+def _not_reducible(store: dict, adj: dict, a: str, b: str) -> NotSeriesParallelError:
+    """The error naming the nodes and elements left when the reduction stops short."""
+    blocking_nodes = sorted(n for n, es in adj.items() if es and n not in (a, b))
+    names = sorted(el.name for _, _, node in store.values() for el in leaves(_flatten(node)))
+    return NotSeriesParallelError(
+        f"the network is not series–parallel reducible between {a!r} and {b!r}: "
+        f"nodes {_some(blocking_nodes)} and elements {_some(names)} form a "
+        "bridge (use nodal analysis)", nodes=blocking_nodes, elements=names)
 
 
 def _some(names: list[str], limit: int = 12) -> str:

@@ -1184,41 +1184,36 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
     spec : StudySpec
         From :func:`load_spec` or :func:`parse_spec`.
     output : path, optional
-        CSV file (or ``.parquet``, needs pyarrow), written whole and
-        atomically at the end in index order, with the spec and the unit of
-        every column (Parquet metadata; for CSV the sidecar
-        ``OUTPUT.meta.json``); an existing file is kept until then.
-        Meanwhile rows are journalled, each with a checksum, to
-        ``OUTPUT.partial.csv`` (:func:`journal_path`), removed at the end, and
-        ``OUTPUT.lock`` keeps a second study from writing the same output.
-        The output is written from the journal, a chunk of rows at a time.
+        CSV file (or ``.parquet``, needs pyarrow), written whole and atomically at the end in
+        index order, with the spec and the unit of every column (Parquet metadata; for CSV the
+        sidecar ``OUTPUT.meta.json``); an existing file is kept until then. Meanwhile rows are
+        journalled, each with a checksum, to ``OUTPUT.partial.csv`` (:func:`journal_path`),
+        removed at the end, and ``OUTPUT.lock`` keeps a second study from writing the same
+        output. The output is written from the journal, a chunk of rows at a time.
     scheduler : str, optional
-        Address of a Dask scheduler (``tcp://host:8786``); by default the
-        local cores run the study.
+        Address of a Dask scheduler (``tcp://host:8786``); by default the local cores run the
+        study.
     workers : int, optional
         Local processes (default: all cores); 1 runs in this process.
     resume : bool
-        Keep the verified rows of the journal (or of a finished ``output``)
-        and run only the missing points; refused when they were made from
-        another spec.
+        Keep the verified rows of the journal (or of a finished ``output``) and run only the
+        missing points; refused when they were made from another spec.
     batch_size : int, optional
         Points per task (default: sized from memory, :func:`task_size`).
     connect_timeout : float
-        Seconds to wait for the Dask scheduler, and then for its first worker,
-        before giving up.
+        Seconds to wait for the Dask scheduler, and then for its first worker, before giving up.
     on_rows : callable, optional
         Called with the number of rows each time a batch finishes (progress).
     keep_rows : bool
-        Return every row (default); False keeps only the failed ones in memory
-        (with ``output``, for studies too large to hold: the table is the file).
+        Return every row (default); False keeps only the failed ones in memory (with ``output``,
+        for studies too large to hold: the table is the file).
     curves : path, optional
-        Also write K(ω) of every point (a sweep) to this Parquet file (needs
-        pyarrow), in long format: one row per point and ω, columns ``design``
-        (the table's ``index``), ``omega`` [rad/s], ``K_re`` and ``K_im``
-        [m/(N·s), or rad/(N·m·s) for a rotary drive]; the units in each
-        field's metadata, the spec (:func:`provenance`) in the file's.  Rows
-        come a task at a time (one row group each, in the order tasks
-        finish); failed points have none.  Not with ``resume``.
+        Also write K(ω) of every point (a sweep) to this Parquet file (needs pyarrow), in long
+        format: one row per point and ω, columns ``design`` (the table's ``index``), ``omega``
+        [rad/s], ``K_re`` and ``K_im`` [m/(N·s), or rad/(N·m·s) for a rotary drive]; the units
+        in each field's metadata, the spec (:func:`provenance`) in the file's.  Rows come a task
+        at a time (one row group each, in the order tasks finish); failed points have none.  Not
+        with ``resume``.
 
     Returns
     -------
@@ -1228,39 +1223,33 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
     Raises
     ------
     MechcircError
-        Another study holds ``output``; ``resume`` finds rows of another spec;
-        the scheduler cannot be reached or has no worker (nothing is written).
+        Another study holds ``output``; ``resume`` finds rows of another spec; the scheduler
+        cannot be reached or has no worker (nothing is written).
     """
-
     parquet = _check_run(spec, output, scheduler, connect_timeout, resume, curves)
-    keep_rows = keep_rows or not output
     with _lock(output) if output else contextlib.nullcontext(), \
             _curve_writer(curves, spec) as write_curves:
-        # Rows are journalled as they finish to a CSV beside the output, each with
-        # a checksum; the output itself is written whole at the end (atomically),
-        # so an existing file stays as it was until the new table is complete.
         journal = journal_path(output) if output else None
-        done = _resumed_rows(spec, output, journal, parquet) if resume and output and journal \
-            else []
-        have = {r["index"] for r in done}
-        # Connect before the journal is touched: a failed start leaves no file.
-        client = _dask_client(scheduler, connect_timeout) if scheduler else None
-        take = _Take(spec, journal, done, keep_rows, write_curves if curves is not None
-                     else None, on_rows)
-        task = (curves is not None, keep_rows, bool(output))
-        try:
-            executor, n_workers = _execute(spec, have, client, workers, batch_size, take, task)
-        finally:
-            take.close()
-        take.rows.sort(key=lambda r: r["index"])
-        if output and journal:
-            if take.sink is None:           # nothing ran: the journal holds the kept rows
-                _open_journal(journal, spec, done).close()
-            _write_output(output, parquet, spec, journal)
-            with contextlib.suppress(FileNotFoundError):
-                os.unlink(journal)
-    return StudyResult(spec.columns, take.rows, executor, n_workers, len(done), take.failed,
-                       take.count)
+        done = _resumed_rows(spec, output, journal, parquet) if resume and journal else []
+        take = _Take(spec, journal, done, keep_rows or not output,
+                     write_curves if curves is not None else None, on_rows)
+        task = (curves is not None, take.keep_rows, bool(output))
+        run = _execute(spec, done, (scheduler, connect_timeout), workers, batch_size, take, task)
+        if journal:
+            _publish(output, parquet, spec, journal, take, done)
+    return take.result(*run)
+
+
+def _publish(output, parquet: bool, spec: StudySpec, journal: str, take, done: list) -> None:
+    """Write ``output`` whole (atomically) from the journal, then remove the journal."""
+    # Rows are journalled as they finish to a CSV beside the output, each with
+    # a checksum; the output itself is written whole at the end, so an
+    # existing file stays as it was until the new table is complete.
+    if take.sink is None:           # nothing ran: the journal holds the kept rows
+        _open_journal(journal, spec, done).close()
+    _write_output(output, parquet, spec, journal)
+    with contextlib.suppress(FileNotFoundError):
+        os.unlink(journal)
 
 
 def _check_run(spec: StudySpec, output, scheduler, connect_timeout, resume: bool,
@@ -1318,16 +1307,28 @@ class _Take:
         if self.sink is not None:
             self.sink.close()
 
+    def result(self, executor: str, n_workers: int) -> StudyResult:
+        self.rows.sort(key=lambda r: r["index"])
+        return StudyResult(self.spec.columns, self.rows, executor, n_workers, len(self.done),
+                           self.failed, self.count)
 
-def _execute(spec: StudySpec, have: set, client, workers: int | None,
+
+def _execute(spec: StudySpec, done: list, dask: tuple, workers: int | None,
              batch_size: int | None, take: _Take, task: tuple) -> tuple[str, int]:
-    """Run the points not in ``have`` on the Dask ``client`` if given, else on the
-    local cores; the executor's name and its number of workers."""
+    """Run the points not in ``done`` on the Dask scheduler ``dask`` = (address,
+    timeout) if given, else on the local cores, then close ``take``; the
+    executor's name and its number of workers."""
+    have = {r["index"] for r in done}
     n_todo = len(spec.points) - len(have)
-    if client is not None:
-        return "dask", _run_dask(spec, have, n_todo, client, batch_size, take, task)
-    return _run_local(spec, have, n_todo, workers or os.cpu_count() or 1, batch_size, take,
-                      task)
+    # Connect before the journal is touched: a failed start leaves no file.
+    client = _dask_client(*dask) if dask[0] else None
+    try:
+        if client is not None:
+            return "dask", _run_dask(spec, have, n_todo, client, batch_size, take, task)
+        return _run_local(spec, have, n_todo, workers or os.cpu_count() or 1, batch_size, take,
+                          task)
+    finally:
+        take.close()
 
 
 @contextlib.contextmanager

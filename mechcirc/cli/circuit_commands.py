@@ -496,7 +496,6 @@ def _panel_label(key: str, units: dict) -> str:
 
 def cmd_resonances(args) -> int:
     from ..circuit import units_of
-    from ..outputs import OutputSet
     from ..resonances import Resonances
     from ..units import FREQUENCY_UNITS, in_unit
 
@@ -513,28 +512,9 @@ def cmd_resonances(args) -> int:
     for w in warns:
         print(f"warning: {w}", file=sys.stderr)
     if args.plot and modes is not None:     # --plot found the modes above
-        from ..plotting import plot_modes
-
-        if len(modes) > MAX_MODE_PANELS:
-            warns.append(f"--plot draws the lowest {MAX_MODE_PANELS} of {len(modes)} modes "
-                         "(give --omega-max for fewer)")
-            print(f"warning: {warns[-1]}", file=sys.stderr)
-        with OutputSet() as out:
-            save_figure(plot_modes(modes[:MAX_MODE_PANELS], circuit.name), args.plot,
-                        out.path(args.plot))
+        _plot_modes(args, circuit, modes, warns)
     if args.json:
-        rows = _resonance_rows(found)
-        for row, m in zip(rows, modes or ()):
-            if args.modes:
-                row.update(_mode_doc(m))
-            if args.sensitivity:
-                row.update(element_sensitivity=m.sensitivity, param_sensitivity=m.param_sensitivity,
-                           zeta_sensitivity=m.zeta_sensitivity,
-                           param_zeta_sensitivity=m.param_zeta_sensitivity)
-            if m.note:
-                row["note"] = m.note
-        print_json({"file": args.file, "name": circuit.name, "resonances": rows})
-        return 0
+        return _print_resonances_json(args, circuit, found, modes)
     print(f"{args.file}: {sum(r.kind == 'resonance' for r in found)} resonances (K = 0), "
           f"{sum(r.kind == 'antiresonance' for r in found)} anti-resonances (K = ∞)"
           + (f" up to {in_unit(args.omega_max, args.unit):g} {args.unit}" if args.omega_max
@@ -556,6 +536,36 @@ def cmd_resonances(args) -> int:
             _print_sensitivity(m, kinds)
     if args.plot:
         print(f"  plot written to {args.plot}")
+    return 0
+
+
+def _plot_modes(args, circuit, modes, warns: list) -> None:
+    """``resonances --plot``: the lowest :data:`MAX_MODE_PANELS` mode shapes, one panel each."""
+    from ..outputs import OutputSet
+    from ..plotting import plot_modes
+
+    if len(modes) > MAX_MODE_PANELS:
+        warns.append(f"--plot draws the lowest {MAX_MODE_PANELS} of {len(modes)} modes "
+                     "(give --omega-max for fewer)")
+        print(f"warning: {warns[-1]}", file=sys.stderr)
+    with OutputSet() as out:
+        save_figure(plot_modes(modes[:MAX_MODE_PANELS], circuit.name), args.plot,
+                    out.path(args.plot))
+
+
+def _print_resonances_json(args, circuit, found, modes) -> int:
+    """``resonances --json``: the roots, with their modes and sensitivities when asked."""
+    rows = _resonance_rows(found)
+    for row, m in zip(rows, modes or ()):
+        if args.modes:
+            row.update(_mode_doc(m))
+        if args.sensitivity:
+            row.update(element_sensitivity=m.sensitivity, param_sensitivity=m.param_sensitivity,
+                       zeta_sensitivity=m.zeta_sensitivity,
+                       param_zeta_sensitivity=m.param_zeta_sensitivity)
+        if m.note:
+            row["note"] = m.note
+    print_json({"file": args.file, "name": circuit.name, "resonances": rows})
     return 0
 
 

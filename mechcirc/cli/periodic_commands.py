@@ -142,21 +142,8 @@ def _one_speed(args, circuit, elements, motion) -> int:
                  r.velocities.get(name, np.full_like(r.Q, np.nan))]
         head += [f"F_{name}", f"v_{name}"]
     _write_outputs(args, head, cols, r.plot)
-    rows = [{"k": int(k), "omega": float(w), "velocity": complex(v),
-             "amplitude": float(abs(q)), "phase_deg": float(np.degrees(np.angle(q))),
-             "nearest_resonance": float(n), "distance": float(d), "near": bool(nr)}
-            for k, w, v, q, n, d, nr in zip(r.k, r.omega, r.V, r.amplitude, r.nearest,
-                                            r.distance, r.near)]
     if args.json:
-        print_json({"file": args.file, "name": r.name, "unit": unit, "rpm": r.rpm,
-                    "omega_shaft": r.omega_shaft, "angle_deg": r.angle_deg, "x": r.x,
-                    "v": r.v, "Q": r.Q, "peak": r.peak, "peak_angle_deg": r.peak_angle_deg,
-                    "error": r.error, "tol": r.tol, "n_harmonics": r.harmonics,
-                    "harmonics": rows,
-                    "resonances": [{"omega": w, "zeta": z} for w, z in r.resonances],
-                    "unbounded": list(r.unbounded), "forces": r.forces,
-                    "velocities": r.velocities, "notes": list(r.notes)})
-        return 0
+        return _print_one_speed_json(args, r)
     d = circuit.drive
     print(f"{args.file}: drive {d.name} {(motion or d.motion).spec} at {r.rpm:g} rpm "
           f"(Ω = {r.omega_shaft:.6g} rad/s)")
@@ -189,6 +176,26 @@ def _one_speed(args, circuit, elements, motion) -> int:
         if f is not None:
             print(f"  element {name}: peak |force| {np.max(np.abs(f)):.6g} {unit}")
     return _print_notes_and_outputs(r.notes, args)
+
+
+def _print_one_speed_json(args, r) -> int:
+    """The periodic result ``r`` at one speed as JSON, every harmonic listed."""
+    import numpy as np
+
+    rows = [{"k": int(k), "omega": float(w), "velocity": complex(v),
+             "amplitude": float(abs(q)), "phase_deg": float(np.degrees(np.angle(q))),
+             "nearest_resonance": float(n), "distance": float(d), "near": bool(nr)}
+            for k, w, v, q, n, d, nr in zip(r.k, r.omega, r.V, r.amplitude, r.nearest,
+                                            r.distance, r.near)]
+    print_json({"file": args.file, "name": r.name, "unit": r.units["Q"], "rpm": r.rpm,
+                "omega_shaft": r.omega_shaft, "angle_deg": r.angle_deg, "x": r.x,
+                "v": r.v, "Q": r.Q, "peak": r.peak, "peak_angle_deg": r.peak_angle_deg,
+                "error": r.error, "tol": r.tol, "n_harmonics": r.harmonics,
+                "harmonics": rows,
+                "resonances": [{"omega": w, "zeta": z} for w, z in r.resonances],
+                "unbounded": list(r.unbounded), "forces": r.forces,
+                "velocities": r.velocities, "notes": list(r.notes)})
+    return 0
 
 
 def _speed_map(args, circuit, elements, motion) -> int:

@@ -348,16 +348,15 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
         and ``velocities=False`` only the displacements ``x`` and the drive's
         output are formed (``v`` is None): half the output work of a linear run.
     steady : bool
-        Start in the periodic steady state of a harmonic drive instead of the
-        ``.ic`` state (linear circuits, or ``linearise``): the state that
-        returns after every period, z(0) = amp · Im[(iωI − A)⁻¹ B], so no
-        ring-down has to be waited for.  Refused when ω is a natural
-        frequency of an undamped part (no periodic state exists).
+        Start in the periodic steady state of a harmonic drive instead of the ``.ic``
+        state (linear circuits, or ``linearise``): the state that returns after every
+        period, z(0) = amp · Im[(iωI − A)⁻¹ B], so no ring-down has to be waited for.
+        Refused when ω is a natural frequency of an undamped part (no periodic state exists).
     rpm : float, optional
-        Shaft speed [rev/min] of a drive given by its motion over one
-        revolution (netlist ``drive ... motion=``): the drive's velocity is
-        Ω·dx/dθ at θ = Ωt (Ω = 2π·rpm/60), from t = 0 at θ = 0.  Required for
-        such a drive unless ``drive`` is given (which then replaces the motion).
+        Shaft speed [rev/min] of a drive given by its motion over one revolution
+        (netlist ``drive ... motion=``): the drive's velocity is Ω·dx/dθ at θ = Ωt
+        (Ω = 2π·rpm/60), from t = 0 at θ = 0.  Required for such a drive unless
+        ``drive`` is given (which then replaces the motion).
 
     Returns
     -------
@@ -366,37 +365,49 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
         output on the grid.
     """
     drive = _waveform(circuit, drive, rpm)
-    d = circuit.drive
-    amp = (d.amplitude if d is not None else 0.0) if amplitude is None else float(amplitude)
+    amp = getattr(circuit.drive, "amplitude", 0.0) if amplitude is None else float(amplitude)
     t = _grid(t_end, dt, drive)
-    h = t[1] - t[0]
     ss = _model(circuit, linearise)
     notes = list(ss.initial[1])
     u = drive.sample(t, amp)
     ss, z0, u_in = _start(ss, drive, amp, u, steady, circuit, linearise, notes)
-    has_clear = bool(backlash_elements(circuit)) and not linearise
-    T = nx = drive_y = x_ready = v_ready = x_bound = None
-    if has_clear:
-        if not RTOL_RANGE[0] <= rtol <= RTOL_RANGE[1]:
-            raise MechcircError(f"--rtol must be between {RTOL_RANGE[0]:g} and "
-                                f"{RTOL_RANGE[1]:g}, got {rtol:g}")
-        Z, method, err, more = _nonlinear(ss, circuit, z0, t, u_in, rtol,
-                                          drive.rate(t, amp) if drive.kind == "motion" else None)
-        notes.extend(more)
-    else:
-        Z, T, nx, drive_y, x_ready, v_ready, x_bound, err, path = _linear(
-            ss, z0, u_in, h, elements, velocities)
-        method = f"exact (matrix exponential, first-order hold of the drive; {path.split(' (')[0]})"
-        notes.append(f"linear propagation: {path}")
-    interp = _interpolation(u, drive, has_clear and drive.kind == "motion", notes)
+    if backlash_elements(circuit) and not linearise:
+        return _clearance_run(ss, circuit, z0, t, (u, u_in), drive, amp, rtol, notes,
+                              elements, velocities)
+    return _linear_run(ss, circuit, z0, t, (u, u_in), drive, notes, elements, velocities)
+
+
+def _clearance_run(ss, circuit, z0, t, us, drive, amp, rtol, notes, elements, velocities):
+    """A run with clearances: the adaptive integrator, its outputs and separations."""
+    if not RTOL_RANGE[0] <= rtol <= RTOL_RANGE[1]:
+        raise MechcircError(f"--rtol must be between {RTOL_RANGE[0]:g} and "
+                            f"{RTOL_RANGE[1]:g}, got {rtol:g}")
+    u, u_in = us
+    Z, method, err, more = _nonlinear(ss, circuit, z0, t, u_in, rtol,
+                                      drive.rate(t, amp) if drive.kind == "motion" else None)
+    notes.extend(more)
+    interp = _interpolation(u, drive, drive.kind == "motion", notes)
+    out = _outputs(ss, circuit, t, Z, u, u_in, t[1] - t[0], drive, method, err, interp, notes,
+                   elements, None, velocities)
+    _require_finite(out)
+    out.separations = _separations(out, circuit, drive)
+    return out
+
+
+def _linear_run(ss, circuit, z0, t, us, drive, notes, elements, velocities):
+    """A linear run: exact propagation, its outputs and their error."""
+    u, u_in = us
+    h = t[1] - t[0]
+    Z, T, nx, drive_y, x_ready, v_ready, x_bound, err, path = _linear(
+        ss, z0, u_in, h, elements, velocities)
+    method = f"exact (matrix exponential, first-order hold of the drive; {path.split(' (')[0]})"
+    notes.append(f"linear propagation: {path}")
+    interp = _interpolation(u, drive, False, notes)
     out = _outputs(ss, circuit, t, Z, u, u_in, h, drive, method, err, interp, notes,
                    elements, T, velocities, nx, drive_y, x_ready, v_ready)
-    if not has_clear:
-        out.error = _linear_error(out, ss, err, x_bound)
+    out.error = _linear_error(out, ss, err, x_bound)
     # (linear: the error is finite only if x is; NaN and ±inf reach max|x| or its bound)
-    _require_finite(out, x_in_error=not has_clear)
-    if has_clear:
-        out.separations = _separations(out, circuit, drive)
+    _require_finite(out, x_in_error=True)
     return out
 
 
@@ -1161,9 +1172,8 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes,
     law_cache = {name: _law_forces(e, comp, _across(X, index, e), _across(V, index, e))
                  for name, (e, comp) in clear.items()}
     Acc = None
-    need_acc = (want and any(e.kind == "mass" for e in circuit.elements)) or \
-        (ss.kind == "velocity" and bool(clear))
-    if need_acc:
+    if (want and any(e.kind == "mass" for e in circuit.elements)) or \
+            (ss.kind == "velocity" and bool(clear)):
         # a = C_v ż + D_v u̇, with ż = A z + B u (+ the clearance forces): C_v A is
         # formed once, so the cost is one (n_t × N) · (N × n) product.
         Acc = affine(ss.Cv @ ss.A, ss.Cv @ ss.B, ss.Dv)
@@ -1172,22 +1182,8 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes,
 
     els = circuit.elements if want else ()
     force, dvm = _element_forces(els, index, X, V, Acc, clear, law_cache, t.size)
-    drive_force = drive_velocity = None
-    # linear: the drive's output is one vector, h·(M a + D v + K x) or g·v, affine in z
-    dmap = _drive_map(ss) if ss.kind == "force" or not clear else None
-    if ss.kind == "velocity":
-        if dmap is None:
-            # Q = h·(M a + D v + K x + Σ g_e f_e): contract with h first (vectors only).
-            a, b, c = ss.M.T @ ss.h, ss.D.T @ ss.h, ss.K.T @ ss.h
-            Q = Acc @ a + V @ b + X @ c
-        else:
-            Q = affine(*dmap, Cz=drive_y)
-        for name, (e, _comp) in clear.items():
-            ge = incidence(index, e.n1, e.n2, len(ss.nodes))
-            Q = Q + law_cache[name][0] * (ge @ ss.h)
-        drive_force = Q
-    elif dmap is not None:
-        drive_velocity = affine(*dmap, Cz=drive_y)
+    drive_force, drive_velocity = _drive_output(ss, affine, drive_y, index, X, V, Acc, clear,
+                                                law_cache)
     if ss.Ev.any() and drive.kind not in ("rest", "impulse"):
         notes.append("some nodes carry neither mass nor damping: their velocities use the "
                      "drive's derivative estimated from the samples")
@@ -1201,6 +1197,24 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes,
                            clearances={e.name: (e.n1, e.n2, e.backlash)
                                        for e, _ in backlash_elements(circuit)},
                            waveform=drive.label if ss.kind is not None else None)
+
+
+def _drive_output(ss, affine, drive_y, index, X, V, Acc, clear: dict, law_cache: dict):
+    """(force, velocity) the drive delivers, one of them None; ``affine`` as in :func:`_outputs`."""
+    # linear: the drive's output is one vector, h·(M a + D v + K x) or g·v, affine in z
+    dmap = _drive_map(ss) if ss.kind == "force" or not clear else None
+    if ss.kind != "velocity":
+        return None, (affine(*dmap, Cz=drive_y) if dmap is not None else None)
+    if dmap is None:
+        # Q = h·(M a + D v + K x + Σ g_e f_e): contract with h first (vectors only).
+        a, b, c = ss.M.T @ ss.h, ss.D.T @ ss.h, ss.K.T @ ss.h
+        Q = Acc @ a + V @ b + X @ c
+    else:
+        Q = affine(*dmap, Cz=drive_y)
+    for name, (e, _comp) in clear.items():
+        ge = incidence(index, e.n1, e.n2, len(ss.nodes))
+        Q = Q + law_cache[name][0] * (ge @ ss.h)
+    return Q, None
 
 
 def _element_forces(els, index: dict, X, V, Acc, clear: dict, law_cache: dict, n_t: int):
