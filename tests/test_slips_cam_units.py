@@ -55,3 +55,14 @@ def test_periodic_prints_rotary_units(tmp_path, capsys):
                              "--harmonics", "40"], capsys)
     assert status == 0, err        # the translational cam is unchanged
     assert "|Q_k| [N]" in text and "up to 6 m/s" in text and "N·m" not in text
+
+
+@pytest.mark.parametrize("text, stroke", [(ROTARY, "20 deg"), (ROTARY, "0.3"),
+                                          (LINEAR, "0.1")])
+def test_written_cam_netlist_reads_back_with_its_units(text, stroke):
+    from mechcirc.netlist_writer import write
+
+    c = parse(text.format(stroke=stroke))
+    back = parse(write(c))          # the writer gives SI numbers without units
+    assert back.drive.rotational is c.drive.rotational
+    assert back.drive.motion.spec == c.drive.motion.spec
