@@ -67,6 +67,10 @@ class Sweep:
         from it on first use).
     notes : tuple of str
         What the caller should know about the result (e.g. a point budget hit).
+    refine : bool
+        Whether the nodal solves were refined (``sweep(..., refine=)``); the
+        follow-up evaluations (:meth:`peak`, :meth:`plot`'s points near roots,
+        :meth:`node_velocity`) solve the same way.
     """
 
     omega: NDArray[np.float64]
@@ -77,12 +81,13 @@ class Sweep:
     tree: Node | None = None
     circuit: Circuit | None = field(default=None, repr=False)
     notes: tuple[str, ...] = ()
+    refine: bool = True
     _cache: dict = field(default_factory=dict, repr=False)
 
     def with_notes(self, notes: tuple[str, ...]) -> "Sweep":
         """The same sweep with ``notes`` (e.g. an adaptive grid's budget) added."""
         return Sweep(self.omega, self.K, self.drive, self.method, self.name, self.tree,
-                     self.circuit, self.notes + tuple(notes))
+                     self.circuit, self.notes + tuple(notes), self.refine)
 
     def __getstate__(self):
         # The tree nests as deep as the network (a ladder of 10⁵ elements is
@@ -173,7 +178,7 @@ class Sweep:
             from .nodal import solve_unit
 
             with np.errstate(all="ignore"):
-                self._cache["nodes"] = solve_unit(system, self.omega) * self.Q0[:, None]
+                self._cache["nodes"] = solve_unit(system, self.omega, refine=self.refine) * self.Q0[:, None]
         return self._cache["nodes"][:, list(system.nodes).index(name)]
 
     def peak(self, quantity: str | None = None) -> "Peak":
@@ -502,8 +507,8 @@ def _sweep_nodal(circuit: Circuit, omega, refine: bool = True) -> Sweep:
     K = _nodal_singular_limits(circuit.nodal, K, omega)
     err = np.where(singular, np.inf, err)
     K, err, notes = _tree_where_no_digit(circuit, omega, K, err)
-    result = Sweep(omega=omega, K=K, drive=circuit.require_drive(), method="nodal", name=circuit.name,
-                   circuit=circuit, notes=notes)
+    result = Sweep(omega=omega, K=K, drive=circuit.require_drive(), method="nodal",
+                   name=circuit.name, circuit=circuit, notes=notes, refine=refine)
     result._cache["error"] = err
     return result
 
@@ -658,6 +663,7 @@ def peak(result: "Sweep | Circuit", omega_min: float | None = None,
     max |Q0| = inf (undamped resonance at omega = 100 rad/s)
     """
     circuit, grid, lo, hi = _peak_band(result, omega_min, omega_max)
+    refine = True if grid is None else grid.refine
     if grid is not None:
         method = grid.method
     if quantity is None:
@@ -678,7 +684,7 @@ def _located_peak(circuit, grid, lo: float, hi: float, quantity: str, method: Me
     undamped = tuple(r.omega for r in found if r.zeta <= UNDAMPED_ZETA)
     if grid is None:
         grid = sweep(circuit, np.geomspace(max(lo, hi * 1e-12), hi, 401) if lo > 0
-                     else np.linspace(lo, hi, 401), method=method)
+                     else np.linspace(lo, hi, 401), method=method, refine=refine)
     q_grid = np.abs(getattr(grid, quantity))
     finite = np.isfinite(q_grid)
     i_grid = int(np.argmax(np.where(finite, q_grid, -1.0)))
@@ -695,7 +701,7 @@ def _located_peak(circuit, grid, lo: float, hi: float, quantity: str, method: Me
         half = max(r.zeta * r.omega, 1e-9 * r.omega)
         brackets.append((centre - 4 * half, centre + 4 * half))
     best_value, best_omega = _peak_search(circuit, method, quantity, lo, hi, brackets,
-                                          g_value, g_omega, xtol)
+                                          g_value, g_omega, xtol, refine)
     if math.isinf(best_value):
         # An exact pole the eigen-solver did not report as undamped (or could
         # not be run): unbounded all the same.
@@ -737,12 +743,14 @@ def _peak_roots(circuit, lo: float, hi: float, quantity: str, resonances) -> lis
         return []
 
 
-def _peak_search(circuit, method, quantity, lo, hi, brackets, best_value, best_omega, xtol):
+def _peak_search(circuit, method, quantity, lo, hi, brackets, best_value, best_omega, xtol,
+                 refine=True):
     """The largest |quantity| of the band's ends, the grid's best and a bounded Brent
-    search in each bracket: ``(value, omega)``."""
+    search in each bracket (solved as ``sweep(..., refine=refine)``): ``(value, omega)``."""
 
     def magnitude(w):
-        s = sweep(circuit, np.atleast_1d(np.asarray(w, dtype=float)), method=method)
+        s = sweep(circuit, np.atleast_1d(np.asarray(w, dtype=float)), method=method,
+                  refine=refine)
         with np.errstate(all="ignore"):
             q = np.abs(getattr(s, quantity))
         return np.where(np.isfinite(q), q, np.inf)

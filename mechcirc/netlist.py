@@ -470,7 +470,7 @@ class _Parser:
     def _circuit(self) -> Circuit:
         name = Path(self.source).stem if self.source != "<string>" else "circuit"
         drive = self.drives[0] if self.drives else None
-        if drive is not None and drive.motion is None:
+        if drive is not None:
             rot = self.drive_rotational
             if rot is None:     # rotary when its nodes carry rotary units only
                 kinds = [self.node_kinds.get(n, {}) for n in (drive.n1, drive.n2)]
@@ -829,6 +829,8 @@ class _Parser:
                 v = self.expr(line, t.text, t.col, defined=self.params)
                 if key == "stroke":
                     v = self.with_unit(line, v, units.get(key), "displacement")
+                    if key in units:    # an angle: a rotary drive (a length: translational)
+                        self.drive_rotational = _unit(units[key].text).dim == (0, 0, 0)
                 elif key in units:
                     v = math.degrees(self.with_unit(line, v, units[key], "angle"))
                 values[key] = v

@@ -105,6 +105,8 @@ def _drive_line(d: Drive) -> str:
         how += " rad/s" if d.kind == "velocity" else " N*m"
     if d.motion is not None:     # a table by its absolute path: the text may go elsewhere
         how = f"motion={os.path.abspath(d.motion.path)}" if d.motion.path else d.motion.spec
+        if d.rotational and not d.motion.path:      # an angular stroke reads back rotary
+            how = re.sub(r"(stroke=\S+)", r"\1 rad", how, count=1)
     return f"drive {_names(d.name, d.n1, d.n2)} {how}"
 
 

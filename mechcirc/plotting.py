@@ -71,7 +71,8 @@ def _refined(result, resonances):
     new = new[(new > lo) & (new < hi) & ~np.isin(new, omega)]
     if not new.size:
         return omega, K, flags, R
-    extra = circuit.sweep(new, method=result.method)      # the circuit's own delegate
+    extra = circuit.sweep(new, method=result.method,     # the circuit's own delegate
+                          refine=getattr(result, "refine", True))
     order = np.argsort(np.concatenate([omega, new]), kind="stable")
     return tuple(np.concatenate([a, b])[order] for a, b in
                  ((omega, new), (K, extra.K), (flags, extra.flags),

@@ -559,14 +559,16 @@ def motion(lk, pl: _Plan, theta, *, max_step_deg: float = 2.0, method: str = "au
                         tuple(c.link for c in lk.cranks), use, pl)
     for s in lk.sliders:
         if s.stroke:
-            _check_stroke(lk, s, out)
+            check_stroke(lk, s, thetas, *(out.points[:, out.point_names.index(p)]
+                                          for p in (s.point, *s.line)))
     return out
 
 
-def _check_stroke(lk, s, m):
-    """A slider past its stroke at some position: an error located at ``stroke``."""
-    names = m.point_names
-    P, G1, G2 = (m.points[:, names.index(p)] for p in (s.point, *s.line))
+def check_stroke(lk, s, theta, P, G1, G2, what: str = "position asked") -> None:
+    """Raise the located error of slider ``s`` if its point ``P`` leaves its stroke at
+    any of the crank rotations ``theta`` [rad] (``P``, ``G1``, ``G2``: (n, 2) positions
+    of its point and guide line, in the linkage's units); ``what`` names a position in
+    the message ("the first position asked beyond it")."""
     u = G2 - G1
     along = np.sum((P - G1) * u, axis=1) / np.hypot(u[:, 0], u[:, 1])
     lo, hi = s.stroke
@@ -576,8 +578,8 @@ def _check_stroke(lk, s, m):
         k = int(np.argmax(bad))
         end = f"min {lo:g}" if along[k] < lo else f"max {hi:g}"
         raise NetlistError(
-            f"slider {s.link!r} leaves its guide at θ = {math.degrees(m.theta[k]):.6g}° (the "
-            f"first position asked beyond it): its point {s.point!r} is at {along[k]:.6g} "
+            f"slider {s.link!r} leaves its guide at θ = {math.degrees(theta[k]):.6g}° (the "
+            f"first {what} beyond it): its point {s.point!r} is at {along[k]:.6g} "
             f"along {s.line[0]}→{s.line[1]}, {over[k]:.6g} beyond the stroke's {end}",
             lk.source, *s.stroke_at,
             expected=f"a stroke containing {along[k]:.6g}, or crank angles that keep "

@@ -253,15 +253,15 @@ def _cycle_designs(scene: Scene, motion, reflect: ReflectMode):
     build would decide differently, or nearly so (a ratio within ``_MARGIN``
     of "at rest", a rigid part whose joint constraints are within
     ``_MARGIN`` of losing rank), are returned for build to do one by one.
-    Only ``reflect="eta"`` on a linkage without sliders; else every angle
-    goes to build.  As a check, the ratios at the template's angle must equal
-    build's to 1e-12, else the same.
+    Only ``reflect="eta"`` on a linkage (or a cam) whose sliders, if any, run
+    on fixed guides; else every angle goes to build.  As a check, the ratios
+    at the template's angle must equal build's to 1e-12, else the same.
 
     Returns ``((Designs, angle indices), angles for build)``.
     """
     every = range(len(motion.theta))
     lk = scene.linkage
-    if reflect != "eta" or lk.sliders or \
+    if reflect != "eta" or any(s.guide != "ground" for s in lk.sliders) or \
             not set(lk.ground) <= set(motion.point_names):
         return None, every
     m = scaled_motion(scene, np.degrees(motion.theta),

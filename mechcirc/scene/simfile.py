@@ -121,7 +121,7 @@ def parse_moments(text, source, table, scene) -> tuple:
                            k, occurrence=n,
                            expected="name, body, amplitude, window_deg, sigma_deg, centre")
         body = m.get("body")
-        if body not in bodies:
+        if not isinstance(body, str) or body not in bodies:
             raise located(text, source, f"[[moments]] #{n + 1}: body {body!r} is not a rigid link "
                        "or torsion body", "moments", "body" if "body" in m else "amplitude",
                        occurrence=n, expected=f"one of {', '.join(bodies)}")

@@ -533,9 +533,12 @@ def _finish(scene, cfg, model, kern, theta_s, ripple, ts, ys, prev, other, wall,
     crank = crank[order]
     ts, ys = ts[order], ys[order]
     values = {k: v[order] for k, v in out.items()}
-    for k, v in _point_accelerations(model, theta_s, ripple, ts, ys, values).items():
+    positions: dict = {}
+    for k, v in _point_accelerations(model, theta_s, ripple, ts, ys, values,
+                                     positions).items():
         values[k] = v
         extrema[k] = (float(v.min()), float(v.max()))
+    _check_strokes(scene, crank, positions)
     aliases = dict(cfg.aliases) if cfg is not None else {}
     for alias, target in aliases.items():
         if target.endswith(".rigid_acceleration"):
@@ -692,10 +695,11 @@ def _run(model, kern, theta_s, ripple, per_rev, revolutions, npts, progress):
     return rec[1], rec[0], prev, wall, bad, nfev
 
 
-def _point_accelerations(model, theta_s, ripple, ts, ys, values):
+def _point_accelerations(model, theta_s, ripple, ts, ys, values, positions=None):
     """``POINT.acceleration`` (magnitude) and ``POINT.acceleration_x``/``_y`` [m/s²] of every
     point on a moving part: a = f''(q) q̇² + f'(q) q̈ for its tabulated position f of its
-    part's coordinate q (q̈: the acceleration of the part's coordinate body)."""
+    part's coordinate q (q̈: the acceleration of the part's coordinate body); each point's
+    positions f(q) (n, 2) [m] go into ``positions`` when given."""
     if not model.point_fn:
         return {}
     kern = kernels_for("rk4")[0]
@@ -719,10 +723,27 @@ def _point_accelerations(model, theta_s, ripple, ts, ys, values):
             fv = np.empty((ts.size, 3))
             kern.eval_many(*_fargs(a, f), np.ascontiguousarray(q), fv)
             comp.append(fv[:, 2] * qd * qd + fv[:, 1] * qdd)
+            if positions is not None:
+                positions.setdefault(p, []).append(fv[:, 0].copy())
         out[f"{p}.acceleration"] = np.hypot(comp[0], comp[1])
         out[f"{p}.acceleration_x"] = comp[0]
         out[f"{p}.acceleration_y"] = comp[1]
     return out
+
+
+def _check_strokes(scene, crank, positions: dict) -> None:
+    """Every slider with a ``stroke`` checked at every output sample of the simulated
+    (elastic) motion: the located error of the linkage's stroke check at the first
+    crank angle where its point is past it (ground points stay at the pose)."""
+    from ..kinematics.linkage_solver import check_stroke
+
+    lk, L = scene.linkage, scene.length_scale
+    for s in lk.sliders:
+        if s.stroke:
+            P, G1, G2 = (np.column_stack(positions[p]) / L if p in positions else
+                         np.broadcast_to(np.asarray(lk.pose[p], float), (crank.size, 2))
+                         for p in (s.point, *s.line))
+            check_stroke(lk, s, crank, P, G1, G2, "output sample of the simulation")
 
 
 def crank_angle(omega, theta_s, ripple, t):

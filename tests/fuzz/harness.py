@@ -32,10 +32,15 @@ from mechcirc.errors import MechcircError, NetlistError
 
 ROOT = Path(__file__).resolve().parents[2]
 NETLIST_SEEDS = sorted((ROOT / "netlists").glob("*.mcir"))
-#: Linkage files seed the linkage property; scene files (a [drive] table) only the CLI.
+#: Linkage files seed the linkage property; scene files (a [drive] table) the scene
+#: reader and the CLI.  The docs' examples too (sliders with a ``stroke``, rocker
+#: drives, their deliberately wrong files), after examples/ (SCENE_SEEDS[0] stays).
+_DOCS_TOML = sorted((ROOT / "docs" / "examples").glob("*.toml"))
 SCENE_SEEDS = sorted(p for p in (ROOT / "examples").glob("*.toml")
-                     if "\n[drive]" in p.read_text())
-TOML_SEEDS = sorted(p for p in (ROOT / "examples").glob("*.toml") if p not in SCENE_SEEDS)
+                     if "\n[drive]" in p.read_text()) + \
+    [p for p in _DOCS_TOML if "\n[drive]" in p.read_text()]
+TOML_SEEDS = sorted(p for p in (ROOT / "examples").glob("*.toml") if p not in SCENE_SEEDS) + \
+    [p for p in _DOCS_TOML if p not in SCENE_SEEDS and "\n[points]" in p.read_text()]
 
 
 @functools.lru_cache(maxsize=None)
@@ -540,7 +545,6 @@ def cli_files(workdir: Path, rng: random.Random | None = None) -> list[str]:
 
 
 # ---------------------------------------------------------------- files of every kind (issue 16)
-SCENE_SEED = ROOT / "examples" / "heald_scene.toml"
 STUDY_SEED = ROOT / "examples" / "study_stb.toml"
 
 #: Characters that str.splitlines() takes for line breaks and editors do not.
@@ -677,7 +681,7 @@ def file_input(rng: random.Random, kind: str) -> bytes:
     if kind == "linkage":
         return toml_file_input(rng, rng.choice(TOML_SEEDS))
     if kind == "scene":
-        return toml_file_input(rng, SCENE_SEED)
+        return toml_file_input(rng, rng.choice(SCENE_SEEDS))
     if kind == "study":
         return toml_file_input(rng, STUDY_SEED)
     return touchstone_input(rng)
