@@ -663,7 +663,6 @@ def peak(result: "Sweep | Circuit", omega_min: float | None = None,
     max |Q0| = inf (undamped resonance at omega = 100 rad/s)
     """
     circuit, grid, lo, hi = _peak_band(result, omega_min, omega_max)
-    refine = True if grid is None else grid.refine
     if grid is not None:
         method = grid.method
     if quantity is None:
@@ -680,6 +679,7 @@ def peak(result: "Sweep | Circuit", omega_min: float | None = None,
 def _located_peak(circuit, grid, lo: float, hi: float, quantity: str, method: Method,
                   xtol: float, resonances) -> Peak:
     """:func:`peak` once its arguments are checked: the exact roots, the grid, Brent searches."""
+    refine = True if grid is None else grid.refine     # solve as the sweep did
     found = _peak_roots(circuit, lo, hi, quantity, resonances)
     undamped = tuple(r.omega for r in found if r.zeta <= UNDAMPED_ZETA)
     if grid is None:

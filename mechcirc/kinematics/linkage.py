@@ -111,7 +111,7 @@ class Slider:
     direction: tuple
     line: tuple = ()
     stroke: tuple = ()        # (min, max) along line[0] → line[1] from line[0]; () = any
-    stroke_at: tuple = (0, 0)  # (line, col) of ``stroke`` in the file, for its errors
+    stroke_at: tuple[int, int] = (0, 0)  # (line, col) of ``stroke`` in the file, for its errors
 
     @property
     def pair(self) -> str:

@@ -559,8 +559,8 @@ def motion(lk, pl: _Plan, theta, *, max_step_deg: float = 2.0, method: str = "au
                         tuple(c.link for c in lk.cranks), use, pl)
     for s in lk.sliders:
         if s.stroke:
-            check_stroke(lk, s, thetas, *(out.points[:, out.point_names.index(p)]
-                                          for p in (s.point, *s.line)))
+            P, G1, G2 = (out.points[:, out.point_names.index(p)] for p in (s.point, *s.line))
+            check_stroke(lk, s, thetas, P, G1, G2)
     return out
 
 
@@ -581,7 +581,7 @@ def check_stroke(lk, s, theta, P, G1, G2, what: str = "position asked") -> None:
             f"slider {s.link!r} leaves its guide at θ = {math.degrees(theta[k]):.6g}° (the "
             f"first {what} beyond it): its point {s.point!r} is at {along[k]:.6g} "
             f"along {s.line[0]}→{s.line[1]}, {over[k]:.6g} beyond the stroke's {end}",
-            lk.source, *s.stroke_at,
+            lk.source, s.stroke_at[0], s.stroke_at[1],
             expected=f"a stroke containing {along[k]:.6g}, or crank angles that keep "
                      f"{s.point!r} within [{lo:g}, {hi:g}]")
 
