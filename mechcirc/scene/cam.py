@@ -38,7 +38,8 @@ from ..kinematics.linkage import Linkage, Slider
 if TYPE_CHECKING:
     from ..motion_laws import Motion
 
-__all__ = ["CamLinkage", "parse_cam", "check_follower_part", "aligned_points", "DWELL"]
+__all__ = ["CamLinkage", "parse_cam", "check_follower_part", "aligned_points", "DWELL",
+           "ContactReport", "contact_report", "scene_jump_speed"]
 
 #: |x′(θ)| at most this fraction of its peak is the round-off of a dwell's 0: the
 #: follower is at rest there (a law's x′ is exact to ~1e-16 of its peak).
@@ -62,6 +63,10 @@ class CamLinkage(Linkage):
         The follower's link ("" for the first crank).
     slider : Slider or None
         A translating follower's prismatic pair on the frame; None: oscillating.
+    contact : str
+        The ``[[elastic]]`` element that is the cam's contact when it can open
+        ("" : the follower is kinematic); ``spring`` [N/m] and ``preload`` [N]
+        are then the follower spring's (see "The contact that can open").
     """
 
     cam: Motion = field(kw_only=True)
@@ -69,6 +74,9 @@ class CamLinkage(Linkage):
     key: tuple = ()
     follower: str = ""
     slider: Slider | None = None
+    contact: str = ""
+    spring: float = 0.0
+    preload: float = 0.0
 
     @cached_property
     def peak_rate(self) -> float:
@@ -169,6 +177,92 @@ def check_follower_part(scene, text: str) -> None:
                       "the follower and the crank's part moves with it, so they must be joined "
                       "by rigid links", "cam", "follower", value=lk.follower,
                       expected="rigid links between the follower and the crank")
+    if getattr(lk, "contact", ""):
+        _open_contact(scene, text)
+
+
+#: The follower spring's element name when the contact can open (a [[loads]]-like spring).
+SPRING = "follower_spring"
+
+
+def contact_geometry(scene):
+    """(contact element, follower point, unit vector cam block → follower, pose distance [m],
+    half-gap [m]) of a scene whose cam contact can open; see :func:`_open_contact`."""
+    lk, L = scene.linkage, scene.length_scale
+    el = next(e for e in scene.elastic if e.name == lk.contact)
+    a, b = lk.links[el.link]
+    cam_part = scene.part_of_body()[lk.cranks[0].link]
+    if scene.part_of_point(a) != cam_part:
+        a, b = b, a
+    d = (lk.pose[b] - lk.pose[a]) * L
+    dist = float(np.hypot(*d))
+    s = lk.cam.evaluate(np.linspace(0.0, 2 * np.pi, 4097))[0] - lk.x0
+    return el, b, d / dist, dist, float(np.abs(s).max()) * L + lk.preload / lk.spring
+
+
+def _open_contact(scene, text):
+    """Check the contact that can open and add the follower spring to ``scene.loads``.
+
+    The contact is an ``[[elastic]]`` link from a point of the cam's part (the block
+    the cam lifts) to a point P of another part, P on a block sliding on a guide fixed
+    to the frame along the contact's line; the spring acts at P along that line.
+    """
+    from ..sources import located
+    from .files import Load
+
+    lk = scene.linkage
+
+    def err(msg, expected):
+        return located(text, scene.source, f"[cam] contact {lk.contact!r} {msg}",
+                       "cam", "contact", value=lk.contact, expected=expected)
+
+    el = next((e for e in scene.elastic if e.name == lk.contact), None)
+    if el is None:
+        raise err("is not an [[elastic]] element", "one of " + (", ".join(
+            e.name for e in scene.elastic) or "(no [[elastic]] element)"))
+    if el.clearance:
+        raise err("has a clearance: the contact's gap is set by the cam (it pushes only)",
+                  "no clearance on the contact's [[elastic]] entry")
+    a, b = lk.links[el.link]
+    cam_part = scene.part_of_body()[lk.cranks[0].link]
+    parts = {scene.part_of_point(a), scene.part_of_point(b)}
+    if cam_part not in parts or None in parts or len(parts) != 2:
+        raise err("must join the cam's block (the part the cam drives) to the follower, a "
+                  "part of its own", "an [[elastic]] link from the block the cam lifts to "
+                  "the follower's block")
+    _, p, u, _, _ = contact_geometry(scene)
+    guide = [x for x in lk.sliders if x.guide == "ground" and p in lk.links[x.link]]
+    if not guide or abs(float(np.cross(np.asarray(guide[0].direction, float), u))) > 1e-9:
+        raise err(f"must be along the guide of the follower's point {p!r} (a block sliding "
+                  "on a guide fixed to the frame)", "the follower on a guide along the "
+                  "contact's line")
+    if any(x.name == SPRING for x in (*scene.masses, *scene.elastic, *scene.torsions,
+                                       *scene.loads)):
+        raise err(f"needs the element name {SPRING!r} for its spring", f"no element named "
+                  f"{SPRING!r}")
+    spring = Load(SPRING, p, lk.spring, 0.0, direction=(float(u[0]), float(u[1])))
+    object.__setattr__(scene, "loads", (*scene.loads, spring))
+
+
+def open_contact_rows(scene, EI, EF, enames, point_fns) -> None:
+    """The kernel rows of the contact that can open, in place (see the module).
+
+    The contact's row gets the one-sided law: ElastoBacklash with half-gap G/2 =
+    max lift + F₀/k and a free length that leaves it pushing F₀ in the pose, so its
+    far flank is G away; the spring's row (a load along the rigid motion) becomes an
+    absolute spring from an anchor on the line, pushing F₀ + k y.
+    """
+    lk, L = scene.linkage, scene.length_scale
+    el, p, u, dist, half = contact_geometry(scene)
+    i = enames.index(el.name)
+    EI[i][1] = 1                                        # ElastoBacklash
+    EF[i][2], EF[i][3] = half, dist + half + lk.preload / el.stiffness
+    j = enames.index(SPRING)
+    fx, fy, part = point_fns(p)
+    anchor = lk.pose[p] * L + u                         # 1 m beyond P along the line
+    EI[j] = [1, 0, -1, -1, fx, fy, 0, part]
+    EF[j] = [lk.spring, 0.0, 0.0, 1.0 + lk.preload / lk.spring, float(anchor[0]),
+             float(anchor[1]), 0.0, 0.0, 0.0, 0.0]
 
 
 def aligned_points(cam, n: int) -> int:
@@ -196,7 +290,11 @@ CAM_KEYS = {"follower": "oscillating: the first crank of [[cranks]]; roller or f
             "roller_radius": "r_f [units], default 0", "arm": "L [units] (oscillating)",
             "pivot": "D, arm pivot to cam centre [units] (oscillating)",
             "offset": "e, the follower's axis from the cam's centre [units] (roller), default 0",
-            "pressure_limit_deg": "default 45 (oscillating), 30 (roller, flat)"}
+            "pressure_limit_deg": "default 45 (oscillating), 30 (roller, flat)",
+            "contact": "an [[elastic]] link from the cam's block to the follower: it pushes "
+                       "only, so the follower can leave the cam (roller, flat)",
+            "spring": "the follower spring [N/m] > 0, with contact",
+            "preload": "the follower spring's force at the bottom of the lift [N] >= 0"}
 #: The keys that belong to one kind of follower only.
 _ONLY = {"stroke_deg": "oscillating", "arm": "oscillating", "pivot": "oscillating",
          "stroke": "translating", "offset": "roller"}
@@ -319,6 +417,27 @@ class _CamReader:
                 expected=f"rise + dwell + return ≤ 360 degrees, {skey} ≠ 0") from None
         return motion, ("law", raw["law"], raw.get("return_law"), rise, dwell, ret, stroke)
 
+    def contact(self, kind) -> dict:
+        """``contact``, ``spring``, ``preload``: the contact that can open, if asked for."""
+        from ..sources import brief
+
+        raw = self.raw
+        if "contact" not in raw:
+            for key in ("spring", "preload"):
+                if key in raw:
+                    raise self.err(f"[cam] {key} is the follower spring's, for a contact that "
+                                   "can open", key, expected='contact = "NAME" (an '
+                                   "[[elastic]] link from the cam's block to the follower)")
+            return {}
+        c = raw["contact"]
+        if kind == "oscillating" or not isinstance(c, str):
+            raise self.err(f"[cam] contact {brief(c)}: the contact that can open is an "
+                           "[[elastic]] link's name, for a translating follower (roller or "
+                           "flat)", "contact", expected='contact = "NAME" with follower_type '
+                           '= "roller" or "flat"', value=c if isinstance(c, str) else None)
+        return {"contact": c, "spring": self.num("spring"),
+                "preload": self.num("preload", allow_zero=True)}
+
     def checks(self, kind, motion):
         """The cam's pressure-angle and undercut checks (warnings), when base_radius is given."""
         import math
@@ -381,4 +500,141 @@ def parse_cam(text: str, source: str, raw, linkage: Linkage) -> CamLinkage:
     r.checks(kind, motion)
     fields = {f.name: getattr(linkage, f.name) for f in dataclasses.fields(Linkage)}
     return CamLinkage(**fields, cam=motion, x0=float(motion.evaluate(0.0)[0]), key=key,
-                      follower=follower, slider=slider)
+                      follower=follower, slider=slider, **r.contact(kind))
+
+
+@dataclass(frozen=True)
+class ContactReport:
+    """The cam contact over a simulated revolution (plain data); see :func:`contact_report`.
+
+    Attributes
+    ----------
+    angle_deg : ndarray
+        Cam angle [deg] of each sample.
+    contact_force : ndarray
+        The force the cam gives the follower [N] (0 while the contact is open).
+    travel : ndarray
+        The follower's rise from the pose [m].
+    min_contact, min_contact_angle_deg : float
+        The least force the contact spring would carry, k_c × its compression
+        (negative once the follower has left the cam), refined between samples
+        by a parabola, and where [deg].
+    separations : tuple of (float, float)
+        Each opening of the contact: the cam angle it opens at and how long it
+        stays open [deg].
+    """
+
+    angle_deg: np.ndarray
+    contact_force: np.ndarray
+    travel: np.ndarray
+    min_contact: float
+    min_contact_angle_deg: float
+    separations: tuple
+
+
+def contact_report(scene, sm) -> ContactReport:
+    """The contact force, separations and least contact force of a simulated cam scene.
+
+    Parameters
+    ----------
+    scene : Scene
+        A scene whose ``[cam]`` has a ``contact`` (it can open).
+    sm : SceneMotion
+        Its :func:`~mechcirc.scene.simulate_scene` result.
+
+    Returns
+    -------
+    ContactReport
+
+    Raises
+    ------
+    MechcircError
+        The scene's contact cannot open, or the follower left the cam by the whole
+        gap the model gives it (2 × (stroke + preload/spring)).
+    """
+    from ..errors import MechcircError
+    from ..transient.follower import least_sample
+
+    lk = scene.linkage
+    if not getattr(lk, "contact", ""):
+        raise MechcircError(f"{scene.source}: the scene's [cam] has no contact that can open "
+                            "(contact = NAME)")
+    el, _, _, _, half = contact_geometry(scene)
+    e = sm.values[f"{el.name}.deformation"]
+    if np.any(e > half):
+        raise MechcircError(f"{scene.source}: the follower left the cam by more than the "
+                            f"model's gap ({2 * half:g} m): the contact's far flank was hit")
+    squeeze = -el.stiffness * (e + half)
+    lo, at = least_sample(squeeze, periodic=True)
+    deg = np.degrees(sm.crank_angle)
+    step = 360.0 / deg.size
+    open_ = sm.values[f"{el.name}.force"] >= 0.0
+    seps = []
+    if open_.any() and not open_.all():
+        k0 = int(np.argmin(open_))                 # start the scan where the contact is closed
+        run = None
+        for k in range(k0, k0 + deg.size + 1):
+            o = open_[k % deg.size]
+            if o and run is None:
+                run = k
+            elif not o and run is not None:
+                seps.append((float(deg[run % deg.size]), (k - run) * step))
+                run = None
+        seps.sort()
+    elif open_.all():
+        seps.append((0.0, 360.0))
+    return ContactReport(deg, -sm.values[f"{el.name}.force"],
+                         -sm.values[f"{SPRING}.deformation"] - lk.preload / lk.spring, lo,
+                         float((deg[0] + at * step) % 360.0), tuple(seps))
+
+
+def scene_jump_speed(scene, omegas, **simulate) -> tuple:
+    """The cam shaft speed at which the simulated contact force first reaches zero.
+
+    The scene is simulated (:func:`~mechcirc.scene.simulate_scene`, one revolution
+    from the pose, ``simulate`` passed on) at the two shaft speeds ``omegas``, both
+    below the jump; its least contact force N(Ω) (:func:`contact_report`) is
+    extrapolated to 0 linearly in Ω².  For a rigid follower N = F₀ + k s + mΩ² s″
+    at a fixed cam angle is linear in Ω², and the least over the angle bends only a
+    little: from 0.998 and 0.999 of the jump speed the extrapolation is ~2e-8 off
+    (the cycloidal cam of docs/cams.md); just below the jump the contact force
+    nears 0, where a fixed step is least accurate, which is why it is not sought
+    there.
+
+    Parameters
+    ----------
+    scene : Scene
+        A scene whose ``[cam]`` has a contact that can open.
+    omegas : (float, float)
+        Two shaft speeds [rad/s] below the jump.
+    **simulate
+        Keywords of :func:`~mechcirc.scene.simulate_scene` (not ``omega``).
+
+    Returns
+    -------
+    omega, least : float, tuple of float
+        The jump speed [rad/s] and the least contact force [N] at each of ``omegas``.
+
+    Raises
+    ------
+    MechcircError
+        The contact opens at one of ``omegas`` (its least force is not positive).
+    """
+    from ..errors import MechcircError
+    from .motion import motion_model
+    from .simulation import simulate_scene
+
+    simulate = {"revolutions": 1, "error_estimate": False, **simulate}
+    simulate.setdefault("model", motion_model(scene))
+    least = []
+    for w in omegas:
+        lo = contact_report(scene, simulate_scene(scene, omega=w, **simulate)).min_contact
+        if not lo > 0:
+            raise MechcircError(f"{scene.source}: at {w:g} rad/s the least contact force is "
+                                f"{lo:g} N: give two speeds below the jump")
+        least.append(lo)
+    (wa, wb), (na, nb) = omegas, least
+    if na == nb:
+        raise MechcircError(f"{scene.source}: the least contact force is the same at both "
+                            "speeds: give two different speeds below the jump")
+    return math.sqrt(wa * wa + (wb * wb - wa * wa) * na / (na - nb)), tuple(least)
