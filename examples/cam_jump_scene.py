@@ -15,7 +15,7 @@ from pathlib import Path
 
 from mechcirc.motion_laws import cam_cycle
 from mechcirc.scene import load_scene, simulate_scene
-from mechcirc.scene.cam import contact_report, scene_jump_speed
+from mechcirc.scene.jump import contact_report, scene_jump_speed
 from mechcirc.transient.follower import jump_speed
 
 scene = load_scene(Path(__file__).resolve().with_name("cam_jump_scene.toml"))

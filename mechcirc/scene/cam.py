@@ -39,7 +39,7 @@ if TYPE_CHECKING:
     from ..motion_laws import Motion
 
 __all__ = ["CamLinkage", "parse_cam", "check_follower_part", "aligned_points", "DWELL",
-           "ContactReport", "contact_report", "scene_jump_speed"]
+           "contact_geometry", "open_contact_rows", "SPRING"]
 
 #: |x′(θ)| at most this fraction of its peak is the round-off of a dwell's 0: the
 #: follower is at rest there (a law's x′ is exact to ~1e-16 of its peak).
@@ -157,8 +157,12 @@ class CamLinkage(Linkage):
         return m, a1, (x2 - curv * a1 * a1) / slope
 
 
-def check_follower_part(scene, text: str) -> None:
+def check_follower_part(scene, text: str) -> dict | None:
     """A translating follower must be in the rigid part of the crank it drives.
+
+    With a contact that can open, the contact is checked too, and the follower
+    spring is returned as the keywords of a :class:`~mechcirc.scene.files.Load`
+    (the scene adds it to its loads); else None.
 
     Raises
     ------
@@ -177,8 +181,7 @@ def check_follower_part(scene, text: str) -> None:
                       "the follower and the crank's part moves with it, so they must be joined "
                       "by rigid links", "cam", "follower", value=lk.follower,
                       expected="rigid links between the follower and the crank")
-    if getattr(lk, "contact", ""):
-        _open_contact(scene, text)
+    return _open_contact(scene, text) if getattr(lk, "contact", "") else None
 
 
 #: The follower spring's element name when the contact can open (a [[loads]]-like spring).
@@ -200,15 +203,14 @@ def contact_geometry(scene):
     return el, b, d / dist, dist, float(np.abs(s).max()) * L + lk.preload / lk.spring
 
 
-def _open_contact(scene, text):
-    """Check the contact that can open and add the follower spring to ``scene.loads``.
+def _open_contact(scene, text) -> dict:
+    """Check the contact that can open; the follower spring's Load keywords.
 
     The contact is an ``[[elastic]]`` link from a point of the cam's part (the block
     the cam lifts) to a point P of another part, P on a block sliding on a guide fixed
     to the frame along the contact's line; the spring acts at P along that line.
     """
     from ..sources import located
-    from .files import Load
 
     lk = scene.linkage
 
@@ -240,8 +242,8 @@ def _open_contact(scene, text):
                                        *scene.loads)):
         raise err(f"needs the element name {SPRING!r} for its spring", f"no element named "
                   f"{SPRING!r}")
-    spring = Load(SPRING, p, lk.spring, 0.0, direction=(float(u[0]), float(u[1])))
-    object.__setattr__(scene, "loads", (*scene.loads, spring))
+    return {"name": SPRING, "point": p, "stiffness": lk.spring, "damping": 0.0,
+            "direction": (float(u[0]), float(u[1]))}
 
 
 def open_contact_rows(scene, EI, EF, enames, point_fns) -> None:
@@ -502,139 +504,3 @@ def parse_cam(text: str, source: str, raw, linkage: Linkage) -> CamLinkage:
     return CamLinkage(**fields, cam=motion, x0=float(motion.evaluate(0.0)[0]), key=key,
                       follower=follower, slider=slider, **r.contact(kind))
 
-
-@dataclass(frozen=True)
-class ContactReport:
-    """The cam contact over a simulated revolution (plain data); see :func:`contact_report`.
-
-    Attributes
-    ----------
-    angle_deg : ndarray
-        Cam angle [deg] of each sample.
-    contact_force : ndarray
-        The force the cam gives the follower [N] (0 while the contact is open).
-    travel : ndarray
-        The follower's rise from the pose [m].
-    min_contact, min_contact_angle_deg : float
-        The least force the contact spring would carry, k_c × its compression
-        (negative once the follower has left the cam), refined between samples
-        by a parabola, and where [deg].
-    separations : tuple of (float, float)
-        Each opening of the contact: the cam angle it opens at and how long it
-        stays open [deg].
-    """
-
-    angle_deg: np.ndarray
-    contact_force: np.ndarray
-    travel: np.ndarray
-    min_contact: float
-    min_contact_angle_deg: float
-    separations: tuple
-
-
-def contact_report(scene, sm) -> ContactReport:
-    """The contact force, separations and least contact force of a simulated cam scene.
-
-    Parameters
-    ----------
-    scene : Scene
-        A scene whose ``[cam]`` has a ``contact`` (it can open).
-    sm : SceneMotion
-        Its :func:`~mechcirc.scene.simulate_scene` result.
-
-    Returns
-    -------
-    ContactReport
-
-    Raises
-    ------
-    MechcircError
-        The scene's contact cannot open, or the follower left the cam by the whole
-        gap the model gives it (2 × (stroke + preload/spring)).
-    """
-    from ..errors import MechcircError
-    from ..transient.follower import least_sample
-
-    lk = scene.linkage
-    if not getattr(lk, "contact", ""):
-        raise MechcircError(f"{scene.source}: the scene's [cam] has no contact that can open "
-                            "(contact = NAME)")
-    el, _, _, _, half = contact_geometry(scene)
-    e = sm.values[f"{el.name}.deformation"]
-    if np.any(e > half):
-        raise MechcircError(f"{scene.source}: the follower left the cam by more than the "
-                            f"model's gap ({2 * half:g} m): the contact's far flank was hit")
-    squeeze = -el.stiffness * (e + half)
-    lo, at = least_sample(squeeze, periodic=True)
-    deg = np.degrees(sm.crank_angle)
-    step = 360.0 / deg.size
-    open_ = sm.values[f"{el.name}.force"] >= 0.0
-    seps = []
-    if open_.any() and not open_.all():
-        k0 = int(np.argmin(open_))                 # start the scan where the contact is closed
-        run = None
-        for k in range(k0, k0 + deg.size + 1):
-            o = open_[k % deg.size]
-            if o and run is None:
-                run = k
-            elif not o and run is not None:
-                seps.append((float(deg[run % deg.size]), (k - run) * step))
-                run = None
-        seps.sort()
-    elif open_.all():
-        seps.append((0.0, 360.0))
-    return ContactReport(deg, -sm.values[f"{el.name}.force"],
-                         -sm.values[f"{SPRING}.deformation"] - lk.preload / lk.spring, lo,
-                         float((deg[0] + at * step) % 360.0), tuple(seps))
-
-
-def scene_jump_speed(scene, omegas, **simulate) -> tuple:
-    """The cam shaft speed at which the simulated contact force first reaches zero.
-
-    The scene is simulated (:func:`~mechcirc.scene.simulate_scene`, one revolution
-    from the pose, ``simulate`` passed on) at the two shaft speeds ``omegas``, both
-    below the jump; its least contact force N(Ω) (:func:`contact_report`) is
-    extrapolated to 0 linearly in Ω².  For a rigid follower N = F₀ + k s + mΩ² s″
-    at a fixed cam angle is linear in Ω², and the least over the angle bends only a
-    little: from 0.998 and 0.999 of the jump speed the extrapolation is ~2e-8 off
-    (the cycloidal cam of docs/cams.md); just below the jump the contact force
-    nears 0, where a fixed step is least accurate, which is why it is not sought
-    there.
-
-    Parameters
-    ----------
-    scene : Scene
-        A scene whose ``[cam]`` has a contact that can open.
-    omegas : (float, float)
-        Two shaft speeds [rad/s] below the jump.
-    **simulate
-        Keywords of :func:`~mechcirc.scene.simulate_scene` (not ``omega``).
-
-    Returns
-    -------
-    omega, least : float, tuple of float
-        The jump speed [rad/s] and the least contact force [N] at each of ``omegas``.
-
-    Raises
-    ------
-    MechcircError
-        The contact opens at one of ``omegas`` (its least force is not positive).
-    """
-    from ..errors import MechcircError
-    from .motion import motion_model
-    from .simulation import simulate_scene
-
-    simulate = {"revolutions": 1, "error_estimate": False, **simulate}
-    simulate.setdefault("model", motion_model(scene))
-    least = []
-    for w in omegas:
-        lo = contact_report(scene, simulate_scene(scene, omega=w, **simulate)).min_contact
-        if not lo > 0:
-            raise MechcircError(f"{scene.source}: at {w:g} rad/s the least contact force is "
-                                f"{lo:g} N: give two speeds below the jump")
-        least.append(lo)
-    (wa, wb), (na, nb) = omegas, least
-    if na == nb:
-        raise MechcircError(f"{scene.source}: the least contact force is the same at both "
-                            "speeds: give two different speeds below the jump")
-    return math.sqrt(wa * wa + (wb * wb - wa * wa) * na / (na - nb)), tuple(least)

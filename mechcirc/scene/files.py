@@ -414,7 +414,9 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
     if "cam" in doc:
         from .cam import check_follower_part
 
-        check_follower_part(scene, text)
+        spring = check_follower_part(scene, text)     # a contact that can open: its spring
+        if spring:
+            object.__setattr__(scene, "loads", (*scene.loads, Load(**spring)))
     object.__setattr__(scene, "moments", parse_moments(text, source, doc.get("moments"), scene))
     object.__setattr__(scene, "simulate", parse_simulate(text, source, doc.get("simulate"),
                                                          scene))

@@ -27,7 +27,7 @@ from cli_helpers import assert_user_error
 from mechcirc.errors import NetlistError
 from mechcirc.motion_laws import cam_cycle
 from mechcirc.scene import parse_scene, simulate_scene
-from mechcirc.scene.cam import contact_report, scene_jump_speed
+from mechcirc.scene.jump import contact_report, scene_jump_speed
 from mechcirc.transient.follower import jump_speed
 
 ROOT = Path(__file__).resolve().parents[2]
