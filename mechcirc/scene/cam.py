@@ -234,7 +234,8 @@ def _open_contact(scene, text) -> dict:
                   "the follower's block")
     _, p, u, _, _ = contact_geometry(scene)
     guide = [x for x in lk.sliders if x.guide == "ground" and p in lk.links[x.link]]
-    if not guide or abs(float(np.cross(np.asarray(guide[0].direction, float), u))) > 1e-9:
+    g = np.asarray(guide[0].direction, float) if guide else None
+    if g is None or abs(float(g[0] * u[1] - g[1] * u[0])) > 1e-9:
         raise err(f"must be along the guide of the follower's point {p!r} (a block sliding "
                   "on a guide fixed to the frame)", "the follower on a guide along the "
                   "contact's line")
