@@ -44,6 +44,21 @@ where the pitch curve is convex with 0 < ρ < r_f.  The flat face touches the
 cam at x = s' along the face (the fixed frame), so the profile is
 R(−θ)(s', r_b + s), of radius of curvature r_b + s + s'', and undercuts where
 that is ≤ 0; its pressure angle is 0.
+
+``oscillating_flat``
+    A flat face on an arm pivoted at A = (D, 0), the face's line through the
+    pivot, at the angle ψ = ψ₀ + s from A→O (sin ψ₀ = r_b / D: at s = 0 it
+    touches the base circle).  In the cam's frame the face is the line
+    m·X = p with m at the angle φ = π/2 − ψ − θ and p = D sin ψ, the face's
+    distance from O; the profile is its envelope, X = p m + (dp/dφ) m⊥, of
+    radius of curvature ρ = p + d²p/dφ², with dφ/dθ = −(1 + s′):
+
+        ρ = p + (p_θθ φ_θ − p_θ φ_θθ) / φ_θ³,   p_θ = D cos ψ s′,
+        p_θθ = D (cos ψ s″ − sin ψ s′²),  φ_θ = −(1 + s′),  φ_θθ = −s″,
+
+    an undercut where ρ ≤ 0 (or where 1 + s′ = 0, the face's normal turning
+    back).  The contact point moves with the arm perpendicular to the face (the
+    face passes through the pivot), so the pressure angle is 0.
 """
 
 from __future__ import annotations
@@ -65,10 +80,13 @@ __all__ = [
     "save_profile",
 ]
 
-#: The follower kinds :func:`cam_profile` takes.
+#: The follower kinds a scene's ``[cam]`` takes; :func:`cam_profile` also takes
+#: ``"oscillating_flat"`` (a flat face on a pivoted arm).
 FOLLOWERS = ("roller", "flat", "oscillating")
+_FACES = ("flat", "oscillating_flat")
 #: Default pressure-angle limits [deg]: translating, oscillating (Norton, ch. 8).
-PRESSURE_LIMIT_DEG = {"roller": 30.0, "flat": 30.0, "oscillating": 45.0}
+PRESSURE_LIMIT_DEG = {"roller": 30.0, "flat": 30.0, "oscillating": 45.0,
+                      "oscillating_flat": 45.0}
 
 
 @dataclass(frozen=True)
@@ -162,6 +180,17 @@ def _geometry(motion, theta, follower, rb, rf, e, arm, pivot, x0):
 
     if follower == "flat":
         return s, ds, dds, None, to_cam(ds, rb + s), np.zeros_like(s), None, rb + s + dds
+    if follower == "oscillating_flat":
+        psi = math.asin(rb / pivot) + s
+        p = pivot * np.sin(psi)
+        p1, p2 = pivot * np.cos(psi) * ds, pivot * (np.cos(psi) * dds - np.sin(psi) * ds ** 2)
+        f1, f2 = -(1.0 + ds), -dds
+        with np.errstate(divide="ignore", invalid="ignore"):
+            pf = p1 / f1
+            rho = p + (p2 * f1 - p1 * f2) / f1 ** 3
+        phi = 0.5 * math.pi - psi - theta
+        m, t = np.array([np.cos(phi), np.sin(phi)]), np.array([-np.sin(phi), np.cos(phi)])
+        return s, ds, dds, None, p * m + pf * t, np.zeros_like(s), None, rho
     if follower == "roller":
         d = math.sqrt((rb + rf) ** 2 - e * e)
         B = np.array([np.full_like(s, e), d + s])
@@ -216,14 +245,15 @@ def cam_profile(motion, base_radius: float, follower: str = "roller", *,
         grid of ``points``) touches the base circle.
     base_radius : float
         r_b > 0, the cam's smallest radius, where x is least.
-    follower : {"roller", "flat", "oscillating"}
+    follower : {"roller", "flat", "oscillating", "oscillating_flat"}
         See the module text for the geometry of each.
     roller_radius : float
-        r_f ≥ 0 (a knife edge at 0); ignored for ``flat``.
+        r_f ≥ 0 (a knife edge at 0); ignored for the flat faces.
     offset : float
         e, the translating roller's axis from O (|e| < r_b + r_f).
     arm, pivot : float
-        L and D of the oscillating follower, |D − L| < r_b + r_f < D + L.
+        L and D of the oscillating follower, |D − L| < r_b + r_f < D + L; the
+        oscillating flat face takes D > r_b only.
     points : int
         Number of cam angles from 0 to 360° inclusive (≥ 8).
     pressure_limit_deg : float, optional
@@ -260,17 +290,20 @@ def cam_profile(motion, base_radius: float, follower: str = "roller", *,
     s, ds, dds, P, C, phi, kappa, rho = geo(theta)
     if follower == "oscillating":
         _check_swing(theta, s, rb + rf, arm, pivot)
+    elif follower == "oscillating_flat":
+        _check_swing(theta, s, rb, 0.0, pivot)
     checks = _checks(geo, theta, follower, phi, kappa, rho, rf, pressure_limit)
     return CamProfile(follower, rb, rf, e, float(arm), float(pivot), theta, s, ds, dds,
                       None if P is None else P[0], None if P is None else P[1], C[0], C[1],
-                      phi, None if follower == "flat" else rho + rf, rho, checks)
+                      phi, None if follower in _FACES else rho + rf, rho, checks)
 
 
 def _inputs(motion, follower, base_radius, roller_radius, offset, arm, pivot, points,
             pressure_limit_deg):
     """The checked (r_b, r_f, e, L, D, pressure limit [rad]) of :func:`cam_profile`."""
-    if follower not in FOLLOWERS:
-        raise InputError(f"unknown follower {follower!r}; expected one of {', '.join(FOLLOWERS)}")
+    if follower not in FOLLOWERS + ("oscillating_flat",):
+        raise InputError(f"unknown follower {follower!r}; expected one of "
+                         f"{', '.join(FOLLOWERS)}, oscillating_flat")
     if getattr(motion, "period", None) != 2 * math.pi:
         raise InputError("the motion must be a Motion over one turn of the cam (period 2π; "
                          "build it with cam_cycle, motion_table or read_motion_table)")
@@ -285,9 +318,15 @@ def _inputs(motion, follower, base_radius, roller_radius, offset, arm, pivot, po
         raise InputError(f"the roller radius must be ≥ 0, got {rf:g}")
     if int(points) < 8:
         raise InputError(f"points must be at least 8, got {points}")
-    if follower == "flat":
+    if follower in _FACES:
         rf = 0.0
-    if follower != "oscillating":
+    if follower == "oscillating_flat":
+        arm = 0.0
+        if not pivot > rb:
+            raise InputError(f"the pivot distance D = {pivot:g} must be more than the base "
+                             f"radius r_b = {rb:g} (the face through the pivot touches the "
+                             "base circle at sin ψ₀ = r_b / D)")
+    elif follower != "oscillating":
         arm = pivot = 0.0
     rp = rb + rf
     if follower == "roller" and abs(e) >= rp:
@@ -310,8 +349,10 @@ def _inputs(motion, follower, base_radius, roller_radius, offset, arm, pivot, po
 
 
 def _check_swing(theta, s, rp, arm, pivot):
-    """The oscillating arm stays on one side of the line from its pivot to the cam's centre."""
-    psi0 = math.acos((pivot ** 2 + arm ** 2 - rp * rp) / (2 * pivot * arm))
+    """The oscillating arm stays on one side of the line from its pivot to the cam's centre
+    (``arm`` 0: the flat face through the pivot, sin ψ₀ = r_b / D)."""
+    psi0 = math.asin(rp / pivot) if arm == 0 else \
+        math.acos((pivot ** 2 + arm ** 2 - rp * rp) / (2 * pivot * arm))
     psi = psi0 + s
     if np.any((psi <= 0) | (psi >= math.pi)):
         i = int(np.argmax(np.abs(psi - math.pi / 2)))
@@ -328,7 +369,7 @@ def _checks(geo, theta, follower, phi, kappa, rho, rf, pressure_limit) -> tuple:
                                  np.abs(phi))
     checks = [CamCheck("pressure_angle", phi_max <= pressure_limit, phi_max, t_phi,
                        pressure_limit)]
-    if follower == "flat":
+    if follower in _FACES:
         t_rho, neg = _refine_max(lambda t: -float(geo(np.array([t]))[7][0]), theta, -rho)
         checks.append(CamCheck("undercut", -neg > 0, -neg, t_rho, 0.0))
     else:

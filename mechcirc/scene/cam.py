@@ -38,7 +38,8 @@ from ..kinematics.linkage import Linkage, Slider
 if TYPE_CHECKING:
     from ..motion_laws import Motion
 
-__all__ = ["CamLinkage", "parse_cam", "check_follower_part", "aligned_points", "DWELL"]
+__all__ = ["CamLinkage", "parse_cam", "check_follower_part", "aligned_points", "DWELL",
+           "contact_geometry", "open_contact_rows", "SPRING"]
 
 #: |x′(θ)| at most this fraction of its peak is the round-off of a dwell's 0: the
 #: follower is at rest there (a law's x′ is exact to ~1e-16 of its peak).
@@ -62,6 +63,10 @@ class CamLinkage(Linkage):
         The follower's link ("" for the first crank).
     slider : Slider or None
         A translating follower's prismatic pair on the frame; None: oscillating.
+    contact : str
+        The ``[[elastic]]`` element that is the cam's contact when it can open
+        ("" : the follower is kinematic); ``spring`` [N/m] and ``preload`` [N]
+        are then the follower spring's (see "The contact that can open").
     """
 
     cam: Motion = field(kw_only=True)
@@ -69,6 +74,9 @@ class CamLinkage(Linkage):
     key: tuple = ()
     follower: str = ""
     slider: Slider | None = None
+    contact: str = ""
+    spring: float = 0.0
+    preload: float = 0.0
 
     @cached_property
     def peak_rate(self) -> float:
@@ -149,14 +157,23 @@ class CamLinkage(Linkage):
         return m, a1, (x2 - curv * a1 * a1) / slope
 
 
-def check_follower_part(scene, text: str) -> None:
+def check_follower_part(scene, text: str) -> dict | None:
     """A translating follower must be in the rigid part of the crank it drives.
+
+    With a contact that can open, the contact is checked too, and the follower
+    spring is returned as the keywords of a :class:`~mechcirc.scene.files.Load`
+    (the scene adds it to its loads); else None.
 
     Parameters
     ----------
     scene : Scene
     text : str
         The scene file's text, to locate the error.
+
+    Returns
+    -------
+    dict or None
+        The follower spring's :class:`~mechcirc.scene.files.Load` keywords, or None.
 
     Raises
     ------
@@ -175,6 +192,91 @@ def check_follower_part(scene, text: str) -> None:
                       "the follower and the crank's part moves with it, so they must be joined "
                       "by rigid links", "cam", "follower", value=lk.follower,
                       expected="rigid links between the follower and the crank")
+    return _open_contact(scene, text) if getattr(lk, "contact", "") else None
+
+
+#: The follower spring's element name when the contact can open (a [[loads]]-like spring).
+SPRING = "follower_spring"
+
+
+def contact_geometry(scene):
+    """(contact element, follower point, unit vector cam block → follower, pose distance [m],
+    half-gap [m]) of a scene whose cam contact can open; see :func:`_open_contact`."""
+    lk, L = scene.linkage, scene.length_scale
+    el = next(e for e in scene.elastic if e.name == lk.contact)
+    a, b = lk.links[el.link]
+    cam_part = scene.part_of_body()[lk.cranks[0].link]
+    if scene.part_of_point(a) != cam_part:
+        a, b = b, a
+    d = (lk.pose[b] - lk.pose[a]) * L
+    dist = float(np.hypot(*d))
+    s = lk.cam.evaluate(np.linspace(0.0, 2 * np.pi, 4097))[0] - lk.x0
+    return el, b, d / dist, dist, float(np.abs(s).max()) * L + lk.preload / lk.spring
+
+
+def _open_contact(scene, text) -> dict:
+    """Check the contact that can open; the follower spring's Load keywords.
+
+    The contact is an ``[[elastic]]`` link from a point of the cam's part (the block
+    the cam lifts) to a point P of another part, P on a block sliding on a guide fixed
+    to the frame along the contact's line; the spring acts at P along that line.
+    """
+    from ..sources import located
+
+    lk = scene.linkage
+
+    def err(msg, expected):
+        return located(text, scene.source, f"[cam] contact {lk.contact!r} {msg}",
+                       "cam", "contact", value=lk.contact, expected=expected)
+
+    el = next((e for e in scene.elastic if e.name == lk.contact), None)
+    if el is None:
+        raise err("is not an [[elastic]] element", "one of " + (", ".join(
+            e.name for e in scene.elastic) or "(no [[elastic]] element)"))
+    if el.clearance:
+        raise err("has a clearance: the contact's gap is set by the cam (it pushes only)",
+                  "no clearance on the contact's [[elastic]] entry")
+    a, b = lk.links[el.link]
+    cam_part = scene.part_of_body()[lk.cranks[0].link]
+    parts = {scene.part_of_point(a), scene.part_of_point(b)}
+    if cam_part not in parts or None in parts or len(parts) != 2:
+        raise err("must join the cam's block (the part the cam drives) to the follower, a "
+                  "part of its own", "an [[elastic]] link from the block the cam lifts to "
+                  "the follower's block")
+    _, p, u, _, _ = contact_geometry(scene)
+    guide = [x for x in lk.sliders if x.guide == "ground" and p in lk.links[x.link]]
+    g = np.asarray(guide[0].direction, float) if guide else None
+    if g is None or abs(float(g[0] * u[1] - g[1] * u[0])) > 1e-9:
+        raise err(f"must be along the guide of the follower's point {p!r} (a block sliding "
+                  "on a guide fixed to the frame)", "the follower on a guide along the "
+                  "contact's line")
+    if any(x.name == SPRING for x in (*scene.masses, *scene.elastic, *scene.torsions,
+                                       *scene.loads)):
+        raise err(f"needs the element name {SPRING!r} for its spring", f"no element named "
+                  f"{SPRING!r}")
+    return {"name": SPRING, "point": p, "stiffness": lk.spring, "damping": 0.0,
+            "direction": (float(u[0]), float(u[1]))}
+
+
+def open_contact_rows(scene, EI, EF, enames, point_fns) -> None:
+    """The kernel rows of the contact that can open, in place (see the module).
+
+    The contact's row gets the one-sided law: ElastoBacklash with half-gap G/2 =
+    max lift + F₀/k and a free length that leaves it pushing F₀ in the pose, so its
+    far flank is G away; the spring's row (a load along the rigid motion) becomes an
+    absolute spring from an anchor on the line, pushing F₀ + k y.
+    """
+    lk, L = scene.linkage, scene.length_scale
+    el, p, u, dist, half = contact_geometry(scene)
+    i = enames.index(el.name)
+    EI[i][1] = 1                                        # ElastoBacklash
+    EF[i][2], EF[i][3] = half, dist + half + lk.preload / el.stiffness
+    j = enames.index(SPRING)
+    fx, fy, part = point_fns(p)
+    anchor = lk.pose[p] * L + u                         # 1 m beyond P along the line
+    EI[j] = [1, 0, -1, -1, fx, fy, 0, part]
+    EF[j] = [lk.spring, 0.0, 0.0, 1.0 + lk.preload / lk.spring, float(anchor[0]),
+             float(anchor[1]), 0.0, 0.0, 0.0, 0.0]
 
 
 def aligned_points(cam, n: int) -> int:
@@ -213,7 +315,11 @@ CAM_KEYS = {"follower": "oscillating: the first crank of [[cranks]]; roller or f
             "roller_radius": "r_f [units], default 0", "arm": "L [units] (oscillating)",
             "pivot": "D, arm pivot to cam centre [units] (oscillating)",
             "offset": "e, the follower's axis from the cam's centre [units] (roller), default 0",
-            "pressure_limit_deg": "default 45 (oscillating), 30 (roller, flat)"}
+            "pressure_limit_deg": "default 45 (oscillating), 30 (roller, flat)",
+            "contact": "an [[elastic]] link from the cam's block to the follower: it pushes "
+                       "only, so the follower can leave the cam (roller, flat)",
+            "spring": "the follower spring [N/m] > 0, with contact",
+            "preload": "the follower spring's force at the bottom of the lift [N] >= 0"}
 #: The keys that belong to one kind of follower only.
 _ONLY = {"stroke_deg": "oscillating", "arm": "oscillating", "pivot": "oscillating",
          "stroke": "translating", "offset": "roller"}
@@ -336,6 +442,27 @@ class _CamReader:
                 expected=f"rise + dwell + return ≤ 360 degrees, {skey} ≠ 0") from None
         return motion, ("law", raw["law"], raw.get("return_law"), rise, dwell, ret, stroke)
 
+    def contact(self, kind) -> dict:
+        """``contact``, ``spring``, ``preload``: the contact that can open, if asked for."""
+        from ..sources import brief
+
+        raw = self.raw
+        if "contact" not in raw:
+            for key in ("spring", "preload"):
+                if key in raw:
+                    raise self.err(f"[cam] {key} is the follower spring's, for a contact that "
+                                   "can open", key, expected='contact = "NAME" (an '
+                                   "[[elastic]] link from the cam's block to the follower)")
+            return {}
+        c = raw["contact"]
+        if kind == "oscillating" or not isinstance(c, str):
+            raise self.err(f"[cam] contact {brief(c)}: the contact that can open is an "
+                           "[[elastic]] link's name, for a translating follower (roller or "
+                           "flat)", "contact", expected='contact = "NAME" with follower_type '
+                           '= "roller" or "flat"', value=c if isinstance(c, str) else None)
+        return {"contact": c, "spring": self.num("spring"),
+                "preload": self.num("preload", allow_zero=True)}
+
     def checks(self, kind, motion):
         """The cam's pressure-angle and undercut checks (warnings), when base_radius is given."""
         import math
@@ -411,4 +538,5 @@ def parse_cam(text: str, source: str, raw, linkage: Linkage) -> CamLinkage:
     r.checks(kind, motion)
     fields = {f.name: getattr(linkage, f.name) for f in dataclasses.fields(Linkage)}
     return CamLinkage(**fields, cam=motion, x0=float(motion.evaluate(0.0)[0]), key=key,
-                      follower=follower, slider=slider)
+                      follower=follower, slider=slider, **r.contact(kind))
+

@@ -419,20 +419,22 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
     if "cam" in doc:
         from .cam import check_follower_part
 
-        check_follower_part(scene, text)
+        spring = check_follower_part(scene, text)     # a contact that can open: its spring
+        if spring:
+            object.__setattr__(scene, "loads", (*scene.loads, Load(**spring)))
     object.__setattr__(scene, "moments", parse_moments(text, source, doc.get("moments"), scene))
     object.__setattr__(scene, "simulate", parse_simulate(text, source, doc.get("simulate"),
                                                          scene))
     if "shaft" in doc:
         from .simfile import parse_shaft
 
-        if "cam" in doc:
+        if "cam" in doc and (len(scene.parts) > 1 or getattr(linkage, "contact", "")):
             first = next(iter(doc["shaft"]), "") if isinstance(doc["shaft"], dict) else ""
-            raise located(text, source, "a dynamic [shaft] with a [cam] is not supported: the "
-                          "cam's law is given against a shaft turning at constant speed",
-                          "shaft", first, expected="remove [shaft] (the cam shaft turns at the "
-                          "[[cranks]] omega)")
-
+            raise located(text, source, "a dynamic [shaft] with a [cam] takes a rigid "
+                          "mechanism only (the cam's part alone, no [[elastic]] or "
+                          "[[torsion]] element): the cam's law drives its part in "
+                          "proportion to no shaft coordinate", "shaft", first,
+                          expected="remove [shaft] or the elastic elements")
         object.__setattr__(scene, "shaft", parse_shaft(text, source, doc["shaft"], scene))
     return scene
 

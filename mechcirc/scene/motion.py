@@ -441,6 +441,10 @@ def _elements(scene, prig, point_fns, angle_fn, part_of):
         EI.append(row)
         EF.append(fl)
         enames.append(ld.name)
+    if getattr(lk, "contact", ""):        # a cam contact that can open (scene/cam.py)
+        from .cam import open_contact_rows
+
+        open_contact_rows(scene, EI, EF, enames, point_fns)
     return EI, EF, enames
 
 

@@ -41,7 +41,8 @@ import numpy as np
 
 from ..errors import MechcircError
 
-__all__ = ["FollowerResult", "follower", "follower_circuit", "jump_speed", "separation_speed"]
+__all__ = ["FollowerResult", "follower", "follower_circuit", "jump_speed", "separation_speed",
+           "least_sample"]
 
 #: Grid of the minimum over the cam angle (refined by Brent between its points).
 GRID = 4096
@@ -267,17 +268,23 @@ def _least_contact(r, kc, omega) -> tuple:
     if np.any(e < -half):
         raise MechcircError("the follower left the cam by more than the model's reach "
                             f"({2 * half:g} m): the far flank of the contact was hit")
-    pen = kc.value * (e - half)
-    i = int(np.argmin(pen))
-    lo, ang = float(pen[i]), omega * r.time[i]
-    if 0 < i < pen.size - 1:            # parabola through the three samples about the least
-        a, b, c = pen[i - 1], pen[i], pen[i + 1]
+    lo, at = least_sample(kc.value * (e - half))
+    return lo, omega * (r.time[0] + at * (r.time[1] - r.time[0]))
+
+
+def least_sample(values, periodic: bool = False) -> tuple:
+    """(least value, where in samples): the least sample refined by the parabola through it
+    and its neighbours (``periodic``: the last sample's neighbour is the first)."""
+    v = np.asarray(values, dtype=float)
+    i = int(np.argmin(v))
+    lo, at = float(v[i]), float(i)
+    if periodic or 0 < i < v.size - 1:
+        a, b, c = v[i - 1], v[i], v[(i + 1) % v.size]
         den = a - 2 * b + c
         if den > 0:
             off = 0.5 * (a - c) / den
-            lo = float(b - 0.25 * (a - c) * off)
-            ang += omega * off * (r.time[1] - r.time[0])
-    return lo, ang
+            lo, at = float(b - 0.25 * (a - c) * off), i + off
+    return lo, at
 
 def separation_speed(motion, mass, spring, preload, damping=0.0, *, contact,
                      contact_damping=0.0, bracket, rtol=1e-10, dt=None,

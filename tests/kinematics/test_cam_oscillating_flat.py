@@ -1,0 +1,137 @@
+"""The oscillating flat-faced follower of ``cam_profile`` against an envelope built here.
+
+The reference never calls mechcirc.kinematics.cam: the face is the line through the
+pivot A = (D, 0) along the arm, direction (−cos ψ, sin ψ), ψ = asin(r_b/D) + s(θ)
+with the cycloidal law written out; it is turned into the cam's frame by R(−θ), and
+the profile is its envelope — the point on the line where the line's derivative in
+θ vanishes too (n·X = p, n′·X = p′, the derivatives by mpmath.diff at 30 digits) —
+with the radius of curvature from the parametric formula on that envelope
+(|X′|³ / (X′ × X″), mpmath.diff again) and, signed, as the rate the contact point
+runs along the face per turn of the face's normal.  Profile to 1e-9 of r_b, ρ to 1e-8
+relative; the pressure angle is 0 (the contact point of a face through the pivot
+moves perpendicular to the face) and the base circle and the top dwell are circles.
+"""
+
+import math
+
+import mpmath
+import numpy as np
+import pytest
+
+from mechcirc.errors import InputError
+from mechcirc.kinematics.cam import cam_profile
+from mechcirc.motion_laws import cam_cycle
+
+RB, D, H = 40.0, 100.0, math.radians(12.0)
+RISE, DWELL, RET = (math.radians(d) for d in (120.0, 60.0, 120.0))
+mpmath.mp.dps = 30
+
+
+def s_of(th):
+    """The cycloidal rise / dwell / return / dwell of the arm [rad], by hand (mpmath)."""
+    th = mpmath.mpf(th) % (2 * mpmath.pi)
+    if th < RISE:
+        u = th / RISE
+        return H * (u - mpmath.sin(2 * mpmath.pi * u) / (2 * mpmath.pi))
+    if th < RISE + DWELL:
+        return mpmath.mpf(H)
+    if th < RISE + DWELL + RET:
+        u = (th - RISE - DWELL) / RET
+        return H * (1 - u + mpmath.sin(2 * mpmath.pi * u) / (2 * mpmath.pi))
+    return mpmath.mpf(0)
+
+
+def line(th):
+    """(n, p) of the face in the cam's frame at cam angle th: n·X = p."""
+    psi = mpmath.asin(RB / mpmath.mpf(D)) + s_of(th)
+    dx, dy = -mpmath.cos(psi), mpmath.sin(psi)                    # along the face
+    nx, ny = dy, -dx                                              # a normal to it
+    p = nx * D                                                    # n·A, A = (D, 0)
+    c, s = mpmath.cos(th), mpmath.sin(th)
+    return (nx * c + ny * s, -nx * s + ny * c), p                 # R(−θ) n, p unchanged
+
+
+def envelope(th):
+    (nx, ny), p = line(th)
+    dnx = mpmath.diff(lambda t: line(t)[0][0], th)
+    dny = mpmath.diff(lambda t: line(t)[0][1], th)
+    dp = mpmath.diff(lambda t: line(t)[1], th)
+    det = nx * dny - ny * dnx
+    return (p * dny - ny * dp) / det, (nx * dp - p * dnx) / det
+
+
+def radius(th):
+    x1 = mpmath.diff(lambda t: envelope(t)[0], th)
+    y1 = mpmath.diff(lambda t: envelope(t)[1], th)
+    x2 = mpmath.diff(lambda t: envelope(t)[0], th, 2)
+    y2 = mpmath.diff(lambda t: envelope(t)[1], th, 2)
+    return -(x1 * x1 + y1 * y1) ** 1.5 / (x1 * y2 - y1 * x2)      # + convex (clockwise)
+
+
+def signed_radius(th):
+    """The rate at which the contact point runs along the face per turn of its normal,
+    (X′·u)/φ′ (u the face's direction, φ the normal's angle): the radius, negative where
+    the envelope runs back (an undercut)."""
+    (nx, ny), _ = line(th)
+    dnx = mpmath.diff(lambda t: line(t)[0][0], th)
+    dny = mpmath.diff(lambda t: line(t)[0][1], th)
+    x1 = mpmath.diff(lambda t: envelope(t)[0], th)
+    y1 = mpmath.diff(lambda t: envelope(t)[1], th)
+    return (-ny * x1 + nx * y1) / (nx * dny - ny * dnx)
+
+
+@pytest.fixture(scope="module")
+def cam():
+    return cam_profile(cam_cycle("cycloidal", 120, 60, 120, H), RB, "oscillating_flat",
+                       pivot=D, points=361)
+
+
+@pytest.mark.parametrize("deg", [20.0, 55.0, 90.0, 110.0, 200.0, 250.0, 290.0])
+def test_profile_and_curvature_against_the_envelope(cam, deg):
+    i = int(round(deg))
+    assert cam.theta[i] == pytest.approx(math.radians(deg), abs=1e-15)
+    th = mpmath.mpf(cam.theta[i])
+    x, y = envelope(th)
+    assert abs(cam.x[i] - float(x)) <= 1e-9 * RB and abs(cam.y[i] - float(y)) <= 1e-9 * RB
+    assert cam.rho[i] == pytest.approx(float(radius(th)), rel=1e-8)
+    assert cam.rho[i] == pytest.approx(float(signed_radius(th)), rel=1e-8)
+    assert cam.pressure_angle[i] == 0.0
+
+
+def test_dwells_are_circles(cam):
+    low = cam.theta > math.radians(305)
+    top = (cam.theta > math.radians(125)) & (cam.theta < math.radians(175))
+    assert np.allclose(np.hypot(cam.x[low], cam.y[low]), RB, rtol=0, atol=1e-12)
+    assert np.allclose(cam.rho[low], RB, rtol=1e-14)
+    r_top = D * math.sin(math.asin(RB / D) + H)
+    assert np.allclose(np.hypot(cam.x[top], cam.y[top]), r_top, rtol=0, atol=1e-12)
+    assert np.allclose(cam.rho[top], r_top, rtol=1e-14)
+
+
+def test_undercut_where_the_radius_turns_negative():
+    """A fast swing undercuts: the check's value is the least ρ, refined, against the
+    reference's at its angle."""
+    fast = cam_profile(cam_cycle("cycloidal", 60, 120, 60, math.radians(5.0)), RB,
+                       "oscillating_flat", pivot=D, points=721)
+    chk = fast.check("undercut")
+    assert not chk.ok and chk.value < 0
+    assert chk.value == pytest.approx(float(radius_fast(chk.theta)), rel=1e-7)
+    assert cam_profile(cam_cycle("cycloidal", 120, 60, 120, H), RB, "oscillating_flat",
+                       pivot=D).check("undercut").ok
+
+
+def radius_fast(theta):
+    global RISE, DWELL, RET, H
+    saved = RISE, DWELL, RET, H
+    RISE, DWELL, RET = (math.radians(d) for d in (60.0, 120.0, 60.0))
+    H = math.radians(5.0)
+    try:
+        return signed_radius(mpmath.mpf(theta))
+    finally:
+        RISE, DWELL, RET, H = saved
+
+
+def test_pivot_inside_the_base_circle_is_refused():
+    with pytest.raises(InputError, match="pivot distance D = 30 must be more than"):
+        cam_profile(cam_cycle("cycloidal", 120, 60, 120, H), RB, "oscillating_flat",
+                    pivot=30.0)
