@@ -200,8 +200,19 @@ SPRING = "follower_spring"
 
 
 def contact_geometry(scene):
-    """(contact element, follower point, unit vector cam block → follower, pose distance [m],
-    half-gap [m]) of a scene whose cam contact can open; see :func:`_open_contact`."""
+    """The geometry of a scene's cam contact that can open (see :func:`open_contact_rows`).
+
+    Parameters
+    ----------
+    scene : Scene
+        A cam scene with ``[cam] contact``.
+
+    Returns
+    -------
+    tuple
+        (contact element, follower point, unit vector cam block → follower,
+        pose distance [m], half-gap [m]).
+    """
     lk, L = scene.linkage, scene.length_scale
     el = next(e for e in scene.elastic if e.name == lk.contact)
     a, b = lk.links[el.link]
@@ -265,6 +276,17 @@ def open_contact_rows(scene, EI, EF, enames, point_fns) -> None:
     max lift + F₀/k and a free length that leaves it pushing F₀ in the pose, so its
     far flank is G away; the spring's row (a load along the rigid motion) becomes an
     absolute spring from an anchor on the line, pushing F₀ + k y.
+
+    Parameters
+    ----------
+    scene : Scene
+        A cam scene with ``[cam] contact``.
+    EI, EF : list
+        The kernel's integer and float rows of the scene's elements (changed in place).
+    enames : list of str
+        The elements' names, in the rows' order.
+    point_fns : callable
+        ``point_fns(point)`` → (x function, y function, part) of a point's motion.
     """
     lk, L = scene.linkage, scene.length_scale
     el, p, u, dist, half = contact_geometry(scene)

@@ -428,7 +428,7 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
     if "shaft" in doc:
         from .simfile import parse_shaft
 
-        if "cam" in doc and (len(scene.parts) > 1 or getattr(linkage, "contact", "")):
+        if "cam" in doc and (len(scene.parts) > 1 or getattr(linkage, "contact", None)):
             first = next(iter(doc["shaft"]), "") if isinstance(doc["shaft"], dict) else ""
             raise located(text, source, "a dynamic [shaft] with a [cam] takes a rigid "
                           "mechanism only (the cam's part alone, no [[elastic]] or "

@@ -273,8 +273,20 @@ def _least_contact(r, kc, omega) -> tuple:
 
 
 def least_sample(values, periodic: bool = False) -> tuple:
-    """(least value, where in samples): the least sample refined by the parabola through it
-    and its neighbours (``periodic``: the last sample's neighbour is the first)."""
+    """The least sample refined by the parabola through it and its neighbours.
+
+    Parameters
+    ----------
+    values : array_like
+        Samples, equally spaced.
+    periodic : bool
+        The last sample's neighbour is the first.
+
+    Returns
+    -------
+    tuple of float
+        (least value, where, in samples).
+    """
     v = np.asarray(values, dtype=float)
     i = int(np.argmin(v))
     lo, at = float(v[i]), float(i)
