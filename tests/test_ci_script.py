@@ -13,6 +13,8 @@ from pathlib import Path
 
 import pytest
 
+from bounds import SUBPROCESS_TIMEOUT
+
 ROOT = Path(__file__).resolve().parents[1]
 
 STAND_IN = """#!/bin/sh
@@ -35,7 +37,7 @@ def test_ci_status_follows_pytest_and_no_tests_collected_fails(tmp_path, pytest_
     env = {**os.environ, "PATH": f"{bin_dir}{os.pathsep}{os.environ['PATH']}",
            "PYTEST_STATUS": str(pytest_status), "TMPDIR": str(tmp_path)}
     proc = subprocess.run(["bash", str(ROOT / ".ci" / "run")], env=env, capture_output=True,
-                          text=True, timeout=60, check=False)
+                          text=True, timeout=SUBPROCESS_TIMEOUT, check=False)
     assert proc.returncode == ci_status, proc.stderr
     if pytest_status == 5:
         assert "collected no tests" in proc.stderr
