@@ -6,6 +6,7 @@ is reproducible: CI and a developer see the same examples.  Set
 database of failures) when hunting for new cases.
 """
 
+import contextlib
 import os
 
 import pytest
@@ -17,34 +18,67 @@ settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 
 
 @pytest.fixture(scope="session")
-def cli_once():
+def cli_once(tmp_path_factory):
     """``cli_once(argv)``: (status, stdout, stderr) of ``mechcirc ARGV`` in-process, run once.
 
     For long commands (a full ``crosscheck``) that several test files check
     with the same argv: the first caller runs it, the others read the same
-    output.  Only for commands that read shipped inputs and nothing a test
-    patches (no ``monkeypatch`` in effect while it runs).
+    output.  Under xdist the workers share it through a file in the run's
+    base temporary folder (a worker that finds another running the command
+    waits for its result instead of running it a second time).  Only for
+    commands that read shipped inputs and nothing a test patches (no
+    ``monkeypatch`` in effect while it runs).
     """
-    import contextlib
+    import hashlib
     import io
+    import json
 
     from mechcirc.cli import main
 
     done: dict[tuple[str, ...], tuple[int, str, str]] = {}
+    shared = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        shared = shared.parent                  # the folder every worker of this run sees
+
+    def execute(key):
+        out, err = io.StringIO(), io.StringIO()
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+            try:
+                status = main(list(key))
+            except SystemExit as exc:
+                status = exc.code
+        return status, out.getvalue(), err.getvalue()
 
     def run(argv):
         key = tuple(map(str, argv))
         if key not in done:
-            out, err = io.StringIO(), io.StringIO()
-            with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-                try:
-                    status = main(list(key))
-                except SystemExit as exc:
-                    status = exc.code
-            done[key] = (status, out.getvalue(), err.getvalue())
+            name = hashlib.sha256(json.dumps(key).encode()).hexdigest()[:16]
+            path = shared / f"cli-once-{name}.json"
+            with _exclusive(shared / f"cli-once-{name}.lock"):
+                if path.exists():
+                    done[key] = tuple(json.loads(path.read_text(encoding="utf-8")))
+                else:
+                    done[key] = execute(key)
+                    path.write_text(json.dumps(done[key]), encoding="utf-8")
         return done[key]
 
     return run
+
+
+@contextlib.contextmanager
+def _exclusive(lock_path):
+    """Hold an exclusive lock on ``lock_path`` (one xdist worker at a time; none off POSIX)."""
+    try:
+        import fcntl
+    except ImportError:
+        yield
+        return
+    with open(lock_path, "a") as fh:
+        fcntl.flock(fh, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(fh, fcntl.LOCK_UN)
 
 
 def _serialise_numba_compiles_across_workers():

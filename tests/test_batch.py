@@ -14,8 +14,8 @@ from mechcirc.batch import designs
 from mechcirc.errors import InputError, NetlistError, NotSeriesParallelError
 from mechcirc.expressions import evaluate, evaluate_array, parse_expression
 from mechcirc.resonances import find_resonances
+from reference.inputs import STB
 
-STB = Path(__file__).resolve().parents[1] / "netlists" / "stb_heald.mcir"
 OMEGA = np.geomspace(10, 1e4, 200)
 
 # Masses to the frame (a regular mass matrix: the Cholesky path), a lever whose

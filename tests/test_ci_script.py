@@ -13,6 +13,8 @@ from pathlib import Path
 
 import pytest
 
+from bounds import SUBPROCESS_TIMEOUT
+
 ROOT = Path(__file__).resolve().parents[1]
 
 STAND_IN = """#!/bin/sh
@@ -38,7 +40,7 @@ def test_ci_status_follows_pytest_and_mypy_and_no_tests_collected_fails(
            "PYTEST_STATUS": str(pytest_status), "MYPY_STATUS": str(mypy_status),
            "TMPDIR": str(tmp_path)}
     proc = subprocess.run(["bash", str(ROOT / ".ci" / "run")], env=env, capture_output=True,
-                          text=True, timeout=60, check=False)
+                          text=True, timeout=SUBPROCESS_TIMEOUT, check=False)
     assert proc.returncode == ci_status, proc.stderr
     assert ("collected no tests" in proc.stderr) == (pytest_status == 5)
     assert ("mypy found type errors" in proc.stderr) == (mypy_status != 0)

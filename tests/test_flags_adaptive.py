@@ -10,6 +10,7 @@ from scipy.optimize import minimize_scalar
 import mechcirc
 from mechcirc.adaptive import adaptive_sweep
 from mechcirc import FLAG_NEAR_SINGULAR, FLAG_OK, FLAG_SINGULAR
+from reference.inputs import STB
 
 SERIES_LC = "drive V a 0 velocity=1\nmass m a b 1\nspring k b 0 1\n"   # K = j(ω − 1/ω)
 
@@ -104,7 +105,7 @@ mass m2 c 0 0.5
 
 def test_adaptive_sweep_does_not_chase_undamped_peaks():
     """Issue 11 §6: the STB netlist took 20,000 points and flagged 18,480."""
-    c = mechcirc.load("netlists/stb_heald.mcir")
+    c = mechcirc.load(STB)
     s = adaptive_sweep(c, 10, 1e4)
     assert len(s.omega) < 500                      # measured: 111
     assert np.count_nonzero(s.flags) == 0

@@ -19,9 +19,10 @@ import pytest
 from mechcirc.cli import main
 from mechcirc.outputs import OutputSet, atomic_open, atomic_path
 from bounds import SUBPROCESS_TIMEOUT
+from reference.inputs import STB
 
 ROOT = Path(__file__).resolve().parents[1]
-NETLIST = ROOT / "netlists" / "stb_heald.mcir"
+NETLIST = STB
 
 
 def _temporaries(folder: Path, name: str) -> list[Path]:

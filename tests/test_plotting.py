@@ -242,7 +242,7 @@ def test_sweep_plot_marks_resonances_by_default():
     """Sweep.plot(ax=) draws the circuit's resonances in the band unless told not to."""
     from matplotlib.figure import Figure
 
-    c = mechcirc.load(str(REPO / "netlists" / "stb_heald.mcir"))
+    c = mechcirc.load(STB)
     s = c.sweep(np.geomspace(10, 1e4, 200))
     bare = Figure().add_subplot()
     s.plot(ax=bare, resonances=())

@@ -14,6 +14,7 @@ from mechcirc.errors import TopologyError, UnloadedElementWarning
 
 from reference import stb_eq7
 from strategies import count_leaves, networks, reference_K_and_cancellation, to_netlist
+from reference.inputs import STB
 
 
 def _random_stb_params(rng):
@@ -25,7 +26,7 @@ def _random_stb_params(rng):
 
 
 def test_stb_tree_has_the_structure_of_eq_1():
-    c = mechcirc.load("netlists/stb_heald.mcir")
+    c = mechcirc.load(STB)
     assert str(c.tree) == ("m1 + m2 + m3 + m4 + (k4 | (m5 + k5) | "
                            "(m6 + m7 + m8 + m9 + m10 + m11 + m12 + k0))")
 
@@ -142,7 +143,7 @@ def test_disconnected_drive_is_an_error():
 
 
 def test_force_and_velocity_pushed_down_obey_the_element_laws():
-    c = mechcirc.load("netlists/stb_heald.mcir")
+    c = mechcirc.load(STB)
     omega = np.geomspace(5, 5e3, 40)
     s = c.sweep(omega)
     for e in c.elements:

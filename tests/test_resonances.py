@@ -10,6 +10,7 @@ import mechcirc
 from reference import stb_eq7
 from reference.networks import damped_ladder_lines, grid_text
 from mechcirc.errors import NetlistError
+from reference.inputs import STB
 
 
 def _chain(N, k=100.0, m=1.0):
@@ -68,7 +69,7 @@ def _roots_in_omega_squared(poly, degree):
 
 def test_stb_against_the_roots_of_eq_7():
     """Resonances are the zeros of eq. (7)'s numerator, anti-resonances of its denominator."""
-    c = mechcirc.load("netlists/stb_heald.mcir")
+    c = mechcirc.load(STB)
     p = {k: float(v) for k, v in c.params.items() if k.startswith("eta")}
     values = {e.name: e.value for e in c.elements}
     p.update({k: v for k, v in values.items() if k.startswith("m")})

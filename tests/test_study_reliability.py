@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from cli_helpers import assert_user_error, run
+from reference.inputs import STB
 
 from mechcirc.errors import MechcircError, NetlistError
 from mechcirc.study import (
@@ -24,7 +25,6 @@ from mechcirc.study import (
 )
 
 REPO = Path(__file__).resolve().parents[1]
-STB = REPO / "netlists" / "stb_heald.mcir"
 OMEGA = {"min": 10, "max": 2000, "points": 30, "log": True}
 
 

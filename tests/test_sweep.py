@@ -18,6 +18,7 @@ from scipy.optimize import minimize_scalar
 import mechcirc
 from mechcirc import FLAG_NEAR_SINGULAR, FLAG_SINGULAR, peak
 from reference import sp_corpus as corpus
+from reference.inputs import STB
 
 U = np.finfo(float).eps / 2
 
@@ -187,7 +188,7 @@ def test_undamped_peak_is_unbounded_and_named():
 
 def test_stb_peak_is_unbounded_not_the_grid_max():
     """Issue 11 §4: 6307 N on 400 points, 1.5e8 N on 2e6 points; the truth is ∞."""
-    c = mechcirc.load("netlists/stb_heald.mcir")
+    c = mechcirc.load(STB)
     s = c.sweep(np.geomspace(10, 1e4, 400))
     p = s.peak()
     assert p.unbounded and p.value == math.inf
@@ -222,7 +223,7 @@ def test_damped_peak_located_to_1e_6(m, k, c):
 
 @pytest.mark.parametrize("method", ["sp", "nodal"])
 def test_sweep_pickles(method):
-    c = mechcirc.load("netlists/stb_heald.mcir")
+    c = mechcirc.load(STB)
     s = c.sweep(np.geomspace(10, 1e4, 50), method=method)
     name = c.elements[0].name
     force = s.force(name)

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from mechcirc import cli
+from reference.inputs import STB
 
 REPO = Path(__file__).resolve().parents[1]
 NETLISTS = sorted(REPO.glob("netlists/*.mcir")) + sorted(REPO.glob("examples/*.mcir"))
@@ -182,7 +183,7 @@ def test_crosscheck_reports_progress_per_transient_run():
     from mechcirc.progress import Progress
     from mechcirc.transient import crosscheck
 
-    c = mechcirc.load(str(REPO / "netlists" / "stb_heald.mcir"))
+    c = mechcirc.load(STB)
     bar = Progress(0, "x", stream=io.StringIO(), enabled=True, delay=0.0)
     with bar:
         result = crosscheck(c, progress=bar)

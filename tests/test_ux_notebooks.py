@@ -9,12 +9,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 from cli_helpers import run
+from reference.inputs import STB as STB_PATH
 
 import mechcirc
 from mechcirc.resonances import Resonances, find_resonances
 
 REPO = Path(__file__).resolve().parents[1]
-STB = str(REPO / "netlists" / "stb_heald.mcir")
+STB = str(STB_PATH)
 
 # mass m between a and b, spring k from b to the frame, velocity drive V0 at a:
 # K = 1/(jωm) + jω/k, the spring's force Q = V0/K, node b's velocity v_b = Q·jω/k.

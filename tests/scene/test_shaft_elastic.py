@@ -71,9 +71,19 @@ def sympy_reference(k=3.0e6, d=300.0):
             sum(sp.diff(dT, x) * y for x, y in zip(q, qd))
         gen = (Qm + Mw) if i == 0 else 0
         eqs.append(sp.Eq(ddt - sp.diff(T, a) + sp.diff(V, a) + sp.diff(Ray, b), gen))
-    sol = sp.solve(eqs, acc, dict=True)[0]
-    f = sp.lambdify((th, s, thd, sd, Qm, Mw), [sol[acc[0]], sol[acc[1]]], "math")
-    force = sp.lambdify((th, s, thd, sd), k * delta + d * ddot, "math")
+    # The equations are linear in the accelerations, M(q) a = b(q, q̇): M and b are
+    # lambdified (common subexpressions shared) and the 2 × 2 system solved numerically,
+    # the same accelerations as a symbolic solve without its minute-long expression swell.
+    M, b = sp.linear_eq_to_matrix([e.lhs - e.rhs for e in eqs], acc)
+    mass = sp.lambdify((th, s), M, "numpy", cse=True)
+    rest = sp.lambdify((th, s, thd, sd, Qm, Mw), b, "numpy", cse=True)
+
+    def f(theta, s_, thetadot, sdot, q_motor, m_window):
+        a = np.linalg.solve(np.asarray(mass(theta, s_), float),
+                            np.asarray(rest(theta, s_, thetadot, sdot, q_motor, m_window),
+                                       float).ravel())
+        return float(a[0]), float(a[1])
+    force = sp.lambdify((th, s, thd, sd), k * delta + d * ddot, "math", cse=True)
 
     def motor(w):
         slip = (WS - w) / WS

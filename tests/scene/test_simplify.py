@@ -8,6 +8,7 @@ import pytest
 import mechcirc
 from mechcirc.errors import MechcircError
 from mechcirc import BandError, parse_band, simplify
+from reference.inputs import STB
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -21,7 +22,7 @@ def _rel_err(full, reduced_text, omega, output=None):
 
 
 def test_stb_heald_mass_chain_collapses_exactly_to_eq6():
-    c = mechcirc.load(ROOT / "netlists" / "stb_heald.mcir")
+    c = mechcirc.load(STB)
     r = simplify(c, (10.0, 3000.0), 1e-12)
     assert r.error <= 1e-12
     assert r.elements_after < r.elements_before
