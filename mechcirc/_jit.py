@@ -19,6 +19,9 @@ it takes a kernel only when numba's disk cache holds it (:func:`in_cache`;
 loading takes about 1 s, compiling 4–11 s of CPU), and otherwise runs its
 numpy path while a detached Python process compiles the kernel into the
 cache (:func:`warm_in_background`), for the next call or the next process.
+The environment variable ``MECHCIRC_NO_WARM=1`` turns that process off (the
+numpy path then runs until something compiles the kernel in-process, e.g.
+``COMPILED = True``); the test suite sets it, as it compiles its kernels itself.
 """
 
 from __future__ import annotations
@@ -109,7 +112,8 @@ def warm_in_background(statement: str) -> None:
     import sys
     from pathlib import Path
 
-    if statement in _WARMING or getattr(sys, "frozen", False) or not sys.executable:
+    if (statement in _WARMING or getattr(sys, "frozen", False) or not sys.executable
+            or os.environ.get("MECHCIRC_NO_WARM", "") not in ("", "0")):
         return              # (a frozen application's executable is not a Python)
     _WARMING.add(statement)
 

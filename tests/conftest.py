@@ -15,6 +15,10 @@ from hypothesis import settings
 settings.register_profile("ci", derandomize=True, database=None)
 settings.register_profile("explore", derandomize=False)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
+# No detached numba warm-up processes from the code under test: the suite compiles
+# its kernels itself (see _numba_compile_lock below), and a background compile would
+# load the machine outside the suite's own accounting.
+os.environ.setdefault("MECHCIRC_NO_WARM", "1")
 
 
 @pytest.fixture(scope="session")

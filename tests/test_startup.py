@@ -178,6 +178,7 @@ def test_warm_in_background_runs_once_in_a_process_importing_this_copy(tmp_path,
     import time
 
     monkeypatch.setattr(_jit, "_WARMING", set())
+    monkeypatch.delenv("MECHCIRC_NO_WARM", raising=False)      # (the suite sets it)
     out = tmp_path / "where.txt"
     statement = ("import pathlib, mechcirc._jit as j; "
                  f"pathlib.Path({str(out)!r}).open('a').write(j.__file__ + '\\n')")
@@ -190,6 +191,20 @@ def test_warm_in_background_runs_once_in_a_process_importing_this_copy(tmp_path,
         time.sleep(0.1)
     lines = out.read_text().splitlines()
     assert lines == [str(Path(_jit.__file__).resolve())]
+
+
+def test_no_warm_up_process_when_the_environment_says_so(monkeypatch):
+    import subprocess
+
+    started = []
+    monkeypatch.setattr(_jit, "_WARMING", set())
+    monkeypatch.setattr(subprocess, "Popen", lambda *a, **k: started.append(a))
+    monkeypatch.setenv("MECHCIRC_NO_WARM", "1")
+    _jit.warm_in_background("pass")
+    assert started == [] and _jit._WARMING == set()
+    monkeypatch.setenv("MECHCIRC_NO_WARM", "0")               # 0 or empty: warm as usual
+    _jit.warm_in_background("pass")
+    assert len(started) == 1 and _jit._WARMING == {"pass"}
 
 
 def test_the_kernel_decision_counts_the_plan_without_building_it():
