@@ -24,8 +24,11 @@ name                       criterion                                        equa
 patent calls the acute angle between coupler and rocker the transmission
 angle, so eq. (2) is applied to ``min(μ1, 180° − μ1)`` (our reading; it makes
 no difference when μ1 ≤ 90°).  Eq. (5), |Φ1''/Φ2''| = ((β + 1)/(β − 1))·
-(sin μ2 / sin μ1), is used only to screen a grid quickly; every design that is
-returned is re-evaluated directly with :class:`~mechcirc.kinematics.FourBar`.
+(sin μ2 / sin μ1), is used only to screen a grid quickly: :func:`synthesize`
+screens its grid with closed forms (eq. 1, 3, 5, 8, 9 and the swing from the
+dead-centre triangles), vectorised, then re-evaluates the best screened designs
+directly (:func:`evaluate_design`, with :class:`~mechcirc.kinematics.FourBar`)
+and drops any whose direct evaluation disagrees.
 
 Eq. (10), the law of cosines at D for the two dead-centre triangles, is
 quadratic in κ² (and, by symmetry, in δ²)::
@@ -429,12 +432,10 @@ _OBJECTIVES = {
 _FIXABLE = ("crank", "coupler", "rocker", "frame")
 
 
-def synthesize(load: Literal["light", "medium", "heavy"] = "medium",
-               swing: float | None = None, *,
-               objective: Literal["margin", "ratio"] = "margin",
-               limit: int = 10, b_a_range=(1.5, 8.0), d_a_range=(1.5, 8.0),
-               step: float = 0.05, crank_step: float = 0.5,
-               swing_step: float = 0.5, swing_range: tuple | None = None,
+def synthesize(load: Literal["light", "medium", "heavy"] = "medium", swing: float | None = None,
+               *, objective: Literal["margin", "ratio"] = "margin", limit: int = 10,
+               b_a_range=(1.5, 8.0), d_a_range=(1.5, 8.0), step: float = 0.05,
+               crank_step: float = 0.5, swing_step: float = 0.5, swing_range: tuple | None = None,
                fixed: dict | None = None, refine: bool = True) -> SynthesisResult:
     """Explore the patent's feasible region and rank the designs that meet every criterion.
 
@@ -451,24 +452,19 @@ def synthesize(load: Literal["light", "medium", "heavy"] = "medium",
     limit : int
         Number of designs returned (distinct shapes).
     b_a_range, d_a_range : (float, float)
-        Ranges of b/a and d/a explored, in steps of ``step``; c/a follows
-        from eq. (10).  d/a is also capped by d < 180 mm.  The refinement
-        stays inside them.
+        Ranges of b/a and d/a explored, in steps of ``step`` (c/a from eq. (10);
+        d < 180 mm caps d/a); the refinement stays inside them.
     crank_step : float
         Crank lengths explored within the load's range [mm].
     swing_range : (float, float), optional
-        Admissible swing [deg] (default the patent's 23–26°): the swing
-        criterion and the grid.
+        Admissible swing [deg] of the criterion and the grid (default 23–26°).
     fixed : dict, optional
-        Lengths held fixed [mm], by name among "crank", "coupler", "rocker",
-        "frame" (not both rocker and frame).  A fixed crank replaces the
-        load's range.
+        Lengths held fixed [mm] by name: "crank" (replaces the load's range),
+        "coupler", "rocker" or "frame" (not both of the last two).
     refine : bool
-        After the grid, improve each candidate with a bounded Nelder–Mead
-        search (``scipy.optimize.minimize``) on the same objective over the
-        free parameters (crank, swing, b/a and d/a or c/a), c/a or d/a
-        following from eq. (10); a refined design replaces its grid point only
-        when its direct evaluation is feasible and at least as good.
+        After the grid, improve each candidate by a bounded Nelder–Mead search
+        on the objective over the free parameters (c/a or d/a from eq. (10)),
+        kept when its direct evaluation is feasible and at least as good.
 
     Returns
     -------
@@ -480,41 +476,22 @@ def synthesize(load: Literal["light", "medium", "heavy"] = "medium",
     Raises
     ------
     GeometryError
-        Unknown load, a swing outside (0°, 180°), a bad fixed length, or an
-        empty grid.
-
-    Notes
-    -----
-    The grid is screened with closed forms (eq. 1, 3, 5, 8, 9 and the swing
-    from the dead-centre triangles), vectorised; the best screened designs are
-    then re-evaluated directly (:func:`evaluate_design`) and any whose direct
-    evaluation disagrees is dropped.
+        Unknown load, a swing outside (0°, 180°), a bad fixed length, an empty grid.
     """
     fixed, s_range = _checked(load, objective, fixed, swing, swing_range, b_a_range, d_a_range,
                               step, crank_step, swing_step)
-    lo, hi = ((fixed["crank"],) * 2 if "crank" in fixed else LOAD_CRANK_MM[load])
-    axes = _grid_axes(fixed, swing, s_range, (lo, hi), b_a_range, d_a_range, step, crank_step,
-                      swing_step)
-    swings = axes[1]
-    space = _Space(fixed, b_a_range, d_a_range, (lo, hi), s_range, swing)
+    crank_range = (fixed["crank"],) * 2 if "crank" in fixed else LOAD_CRANK_MM[load]
+    axes = _grid_axes(fixed, swing, s_range, crank_range, b_a_range, d_a_range, step,
+                      crank_step, swing_step)
+    space = _Space(fixed, b_a_range, d_a_range, crank_range, s_range, swing)
     grid, cols, valid, passes = _screened_grid(space, fixed, s_range, *axes)
-    explored = int(valid.sum())
     rejected = {name: int((valid & ~p).sum()) for name, p in passes.items()}
-    ok = valid.copy()
-    for p in passes.values():
-        ok &= p
-
-    if not ok.any():
-        conflicts = _conflicts(passes, valid)
-        return SynthesisResult((), _OBJECTIVES[objective], load, tuple(swings.tolist()),
-                               explored, rejected, conflicts, s_range, fixed, refine)
-
+    ok = np.logical_and.reduce([valid, *passes.values()])
     designs = _candidates(grid, cols, ok, space, objective, limit, load, s_range,
-                          (lo, hi) if "crank" in fixed else None, refine)
-    designs.sort(key=lambda d: -d.objective if objective == "margin" else d.objective)
+                          crank_range if "crank" in fixed else None, refine)
     return SynthesisResult(tuple(designs), _OBJECTIVES[objective], load,
-                           tuple(swings.tolist()), explored, rejected, (), s_range, fixed,
-                           refine)
+                           tuple(axes[1].tolist()), int(valid.sum()), rejected,
+                           () if ok.any() else _conflicts(passes, valid), s_range, fixed, refine)
 
 
 def _checked(load, objective, fixed, swing, swing_range, b_a_range, d_a_range, step,
@@ -609,7 +586,7 @@ def _screened_grid(space, fixed, s_range, cranks, swings, b_as, d_as):
 
 
 def _candidates(grid, cols, ok, space, objective, limit, load, s_range, crank_range, refine):
-    """The passing grid points, best first, evaluated directly (and refined): one per shape."""
+    """The passing grid points evaluated directly (and refined), one per shape, best first."""
     A, PSI, BA, OTHER, ROOT, CA, DA = grid
     idx = np.flatnonzero(ok)
     if objective == "margin":
@@ -663,6 +640,7 @@ def _candidates(grid, cols, ok, space, objective, limit, load, s_range, crank_ra
         designs.append(des)
         if len(designs) >= limit:
             break
+    designs.sort(key=lambda d: -d.objective if objective == "margin" else d.objective)
     return designs
 
 
