@@ -696,30 +696,10 @@ class _Space:
         """Lengths (a, b, c, d) [mm] of the refined design, or None."""
         from scipy.optimize import minimize
 
-        free, x0, bounds = [], [], []
-        for name, value, rng, is_free in (
-                ("a", a, self.crank_range, self.crank_range[1] > self.crank_range[0]),
-                ("psi", psi, tuple(math.radians(v) for v in self.swing_range),
-                 self.swing is None and self.swing_range[1] > self.swing_range[0]),
-                ("ba", ba, self.b_a_range, "coupler" not in self.fixed),
-                ("other", other, self.d_a_range, not {"rocker", "frame"} & set(self.fixed))):
-            if is_free:
-                free.append(name)
-                x0.append(value)
-                bounds.append(rng)
+        base = {"a": a, "psi": psi, "ba": ba, "other": other}
+        free, x0, bounds = self.free_parameters(base)
         if not free:
             return None
-        base = {"a": a, "psi": psi, "ba": ba, "other": other}
-
-        def lengths(x):
-            p = dict(base, **dict(zip(free, x)))
-            A = np.array([p["a"]])
-            BA, OTHER = self.ratios(A, np.array([p["ba"]]), np.array([p["other"]]))
-            u = _eq10_roots_squared(np.array([p["psi"]]), BA, OTHER)[root]
-            with np.errstate(invalid="ignore"):
-                CA, DA = self.split(np.sqrt(u), OTHER)
-            return A, np.array([p["psi"]]), BA, CA, DA
-
         f = self.fixed
         (b0, b1), (d0, d1) = self.b_a_range, self.d_a_range
 
@@ -750,7 +730,32 @@ class _Space:
                        options={"xatol": 1e-8, "fatol": 1e-11, "maxiter": 2000})
         if not np.isfinite(res.fun) or res.fun >= 1e3:
             return None
-        A, _, BA, CA, DA = lengths(res.x)
+        return self.lengths(dict(base, **dict(zip(free, res.x))), root)
+
+    def free_parameters(self, p):
+        """The search's free parameters among ``p`` (a, psi, ba, other): their names,
+        start values and bounds."""
+        free, x0, bounds = [], [], []
+        for name, rng, is_free in (
+                ("a", self.crank_range, self.crank_range[1] > self.crank_range[0]),
+                ("psi", tuple(math.radians(v) for v in self.swing_range),
+                 self.swing is None and self.swing_range[1] > self.swing_range[0]),
+                ("ba", self.b_a_range, "coupler" not in self.fixed),
+                ("other", self.d_a_range, not {"rocker", "frame"} & set(self.fixed))):
+            if is_free:
+                free.append(name)
+                x0.append(p[name])
+                bounds.append(rng)
+        return free, x0, bounds
+
+    def lengths(self, p, root):
+        """Lengths (a, b, c, d) [mm] at the parameters ``p``, c/a or d/a from root
+        ``root`` of eq. (10)."""
+        A = np.array([p["a"]])
+        BA, OTHER = self.ratios(A, np.array([p["ba"]]), np.array([p["other"]]))
+        u = _eq10_roots_squared(np.array([p["psi"]]), BA, OTHER)[root]
+        with np.errstate(invalid="ignore"):
+            CA, DA = self.split(np.sqrt(u), OTHER)
         a = float(A[0])
         return a, a * float(BA[0]), a * float(CA[0]), a * float(DA[0])
 
