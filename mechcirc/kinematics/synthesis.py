@@ -388,13 +388,21 @@ def evaluate_design(a: float, b: float, c: float, d: float, *,
     """
     fb = FourBar(a, b, c, d)
     front, back = fb.dead_centres()            # raises for a non-crank-rocker
-    lo, hi = crank_range or (LOAD_CRANK_MM[load] if load else (33.0, 38.0))
-    s_lo, s_hi = swing_range
+    crank_range = crank_range or (LOAD_CRANK_MM[load] if load else (33.0, 38.0))
     mu1, mu2 = (math.degrees(x) for x in dead_centre_angles(b / a, c / a, d / a))
-    gamma1 = min(mu1, 180.0 - mu1)
-    gmin = math.degrees(fb.transmission_range().gamma_min)
-    ratio = abs(back.nu) / abs(front.nu)
     swing = math.degrees(fb.swing())
+    crit = _criteria(a, b, c, d, min(mu1, 180.0 - mu1),
+                     math.degrees(fb.transmission_range().gamma_min),
+                     abs(back.nu) / abs(front.nu), swing, crank_range, swing_range)
+    return Design(a, b, c, d, crit, mu1, mu2, front.nu, back.nu, swing)
+
+
+def _criteria(a, b, c, d, gamma1, gmin, ratio, swing, crank_range, swing_range):
+    """The patent's criteria judged for lengths a, b, c, d [mm] with front transmission
+    angle ``gamma1``, least one ``gmin``, swing ``swing`` [deg] and acceleration ratio
+    ``ratio``; a value exactly on the closed crank or swing range passes."""
+    lo, hi = crank_range
+    s_lo, s_hi = swing_range
     bound = (b / a) * (360.0 / swing) / (2 * math.pi)
     crit = {
         "crank_length": _crit("crank_length", a, f"{lo:g}–{hi:g} mm",
@@ -418,7 +426,7 @@ def evaluate_design(a: float, b: float, c: float, d: float, *,
         cr = crit[name]
         if cr.margin == 0.0 or abs(cr.margin) < 1e-9:
             crit[name] = Criterion(cr.name, cr.value, cr.limit, True, 0.0)
-    return Design(a, b, c, d, crit, mu1, mu2, front.nu, back.nu, swing)
+    return crit
 
 
 # --------------------------------------------------------------- synthesis
