@@ -382,11 +382,7 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
     doc = load_toml(text, source)
     check_keys(text, source, TABLES[None], doc)
     linkage = parse_linkage(_hide_scene_tables(text), source)
-    units = doc.get("units")
-    if not _named(units, LENGTH_UNITS):
-        raise located(text, source, f"a scene needs units = \"m\", \"cm\" or \"mm\" (the length "
-                   f"unit of [points]), got {units!r}", None, "units",
-                   expected="units = \"mm\" (masses and stiffnesses are SI)")
+    units = _length_unit(text, source, doc)
     if "cam" in doc:                  # a cam swings the first crank (scene/cam.py)
         from .cam import parse_cam
 
@@ -404,9 +400,6 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
     drive = r.drive(bodies, rigid_points)
     circuit_names = r.circuit_names(masses, elastic, torsions, loads, drive)
     analysis = _analysis(text, source, doc.get("analysis"), circuit_names)
-
-    from .simfile import parse_moments, parse_simulate
-
     scene = Scene(str(doc.get("name", linkage.name)), linkage, units, LENGTH_UNITS[units],
                   tuple(masses), tuple(elastic), tuple(torsions), tuple(loads), drive, (),
                   source, analysis, gears=tuple(gears))
@@ -415,6 +408,24 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
         from .cam import check_follower_part
 
         check_follower_part(scene, text)
+    _read_dynamics(scene, text, source, doc)
+    return scene
+
+
+def _length_unit(text: str, source: str, doc: dict) -> str:
+    """The scene's ``units``, the length unit of [points] (refused unless m, cm or mm)."""
+    units = doc.get("units")
+    if not _named(units, LENGTH_UNITS):
+        raise located(text, source, f"a scene needs units = \"m\", \"cm\" or \"mm\" (the length "
+                   f"unit of [points]), got {units!r}", None, "units",
+                   expected="units = \"mm\" (masses and stiffnesses are SI)")
+    return units
+
+
+def _read_dynamics(scene: Scene, text: str, source: str, doc: dict) -> None:
+    """The tables of the time domain into ``scene``: [[moments]], [simulate], [shaft]."""
+    from .simfile import parse_moments, parse_simulate
+
     object.__setattr__(scene, "moments", parse_moments(text, source, doc.get("moments"), scene))
     object.__setattr__(scene, "simulate", parse_simulate(text, source, doc.get("simulate"),
                                                          scene))
@@ -429,7 +440,6 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
                           "[[cranks]] omega)")
 
         object.__setattr__(scene, "shaft", parse_shaft(text, source, doc["shaft"], scene))
-    return scene
 
 
 class _SceneReader:
