@@ -10,6 +10,11 @@ from ._common import check_output_paths, count, print_json, real, save_figure
 
 
 def register(sub) -> None:
+    _register_scene(sub)
+    _register_reduce(sub)
+
+
+def _register_scene(sub) -> None:
     p = sub.add_parser(
         "scene", help="a scene (linkage + masses + elastic links) to its mechanical circuit",
         description="Linearise a scene file at a crank angle into a netlist (--theta),\n"
@@ -49,6 +54,8 @@ def register(sub) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON document")
     p.set_defaults(func=cmd_scene)
 
+
+def _register_reduce(sub) -> None:
     p = sub.add_parser(
         "reduce", help="model only what the output needs in a frequency band",
         description="Remove or merge elements of a netlist that do not matter for the "
