@@ -277,11 +277,8 @@ def cmd_reduce(args) -> int:
 # ------------------------------------------------------------ simulate SCENE.toml
 def cmd_simulate_scene(args) -> int:
     """``mechcirc simulate SCENE.toml``: the scene's motion over whole revolutions."""
-    import warnings
-
     from ..errors import MechcircError
     from ..scene import load_scene
-    from ..scene.simulation import SceneAccuracyWarning, simulate_scene
 
     if args.rtol is not None and args.method in ("rk4", "rk4-python"):
         raise MechcircError(f"--rtol applies to the scipy methods (DOP853, RK45, LSODA), not "
@@ -295,29 +292,7 @@ def cmd_simulate_scene(args) -> int:
     if getattr(args, "shaft", False) or getattr(args, "flywheel", None) is not None \
             or getattr(args, "rigid", False):
         return _shaft(args, scene)
-    from ..progress import Progress
-
-    bar = None
-
-    def progress(done, total):
-        nonlocal bar
-        if bar is None:
-            bar = Progress(total, scene.name)
-        bar.update(done - bar.done)
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", SceneAccuracyWarning)   # kept in notes, printed below
-        try:
-            result = simulate_scene(scene, revolutions=args.revolutions,
-                                    start_deg=args.start_deg,
-                                    steps_per_period=args.steps_per_period, points=args.points,
-                                    method=args.method, rtol=args.rtol,
-                                    revolution=args.revolution,
-                                    error_estimate=not args.no_error_estimate,
-                                    progress=progress)
-        finally:
-            if bar is not None:
-                bar.__exit__(None, None, None)
+    result = _simulate_with_bar(args, scene)
     if args.output:
         _write_columns(args.output, f"# {scene.name} ({args.scene}); revolution "
                        f"{result.revolution}; omega = {result.omega!r} rad/s", result.columns(),
@@ -332,6 +307,44 @@ def cmd_simulate_scene(args) -> int:
         doc["output"] = args.output
         print_json(doc)
         return 0
+    _print_motion(args, scene, result)
+    return 0
+
+
+def _simulate_with_bar(args, scene):
+    """:func:`simulate_scene` as the options say, with a progress bar on a terminal; the
+    accuracy warnings stay in the result's notes."""
+    import warnings
+
+    from ..progress import Progress
+    from ..scene.simulation import SceneAccuracyWarning, simulate_scene
+
+    bar = None
+
+    def progress(done, total):
+        nonlocal bar
+        if bar is None:
+            bar = Progress(total, scene.name)
+        bar.update(done - bar.done)
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", SceneAccuracyWarning)   # kept in notes, printed in the report
+        try:
+            result = simulate_scene(scene, revolutions=args.revolutions,
+                                    start_deg=args.start_deg,
+                                    steps_per_period=args.steps_per_period, points=args.points,
+                                    method=args.method, rtol=args.rtol,
+                                    revolution=args.revolution,
+                                    error_estimate=not args.no_error_estimate,
+                                    progress=progress)
+        finally:
+            if bar is not None:
+                bar.__exit__(None, None, None)
+    return result
+
+
+def _print_motion(args, scene, result) -> None:
+    """The text report of a scene's motion: run, accuracy, extrema and notes."""
     est = "not computed" if result.error_estimate is None else f"{result.error_estimate:.2g}"
     per = "n/a (1 revolution)" if result.periodicity is None else f"{result.periodicity:.2g}"
     print(f"{args.scene}: scene {scene.name!r}, revolution {result.revolution} at "
@@ -342,7 +355,6 @@ def cmd_simulate_scene(args) -> int:
     _print_extrema(scene, result.extrema)
     for n in result.notes:
         print(f"note: {n}")
-    return 0
 
 
 def _with_overrides(args, scene):
