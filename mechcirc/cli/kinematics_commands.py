@@ -140,6 +140,16 @@ def _register_synth(sub) -> None:
                    metavar="DEG", help="grid step of the swing (default 0.5°)")
     p.add_argument("--no-refine", action="store_true",
                    help="report the grid's designs without the continuous refinement")
+    _register_synth_export(p)
+    p.add_argument("--plot", metavar="IMAGE",
+                   help="the best design drawn at both dead centres with its swing, beside "
+                        "the transmission angle and rocker acceleration against θ")
+    p.add_argument("--json", action="store_true", help="print one JSON document")
+    p.set_defaults(func=cmd_synth)
+
+
+def _register_synth_export(p) -> None:
+    """``synth --export``: the directory and what goes into the exported files."""
     p.add_argument("--export", metavar="DIR",
                    help="write DIR/design_K.linkage.toml and DIR/design_K.scene.toml per design")
     p.add_argument("--omega", type=real(above=0.0, most=MAX_OMEGA, unit="rad/s"),
@@ -159,11 +169,6 @@ def _register_synth(sub) -> None:
                                               most=1e30), default=default,
                        metavar="X", help=f"exported scene: {what} (default {default:g}, "
                        f"Mrázek's one-side variant 1)")
-    p.add_argument("--plot", metavar="IMAGE",
-                   help="the best design drawn at both dead centres with its swing, beside "
-                        "the transmission angle and rocker acceleration against θ")
-    p.add_argument("--json", action="store_true", help="print one JSON document")
-    p.set_defaults(func=cmd_synth)
 
 
 def _register_linkage(sub) -> None:

@@ -10,6 +10,11 @@ from ._common import check_output_paths, count, print_json, real, save_figure
 
 
 def register(sub) -> None:
+    _register_scene(sub)
+    _register_reduce(sub)
+
+
+def _register_scene(sub) -> None:
     p = sub.add_parser(
         "scene", help="a scene (linkage + masses + elastic links) to its mechanical circuit",
         description="Linearise a scene file at a crank angle into a netlist (--theta),\n"
@@ -49,6 +54,8 @@ def register(sub) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON document")
     p.set_defaults(func=cmd_scene)
 
+
+def _register_reduce(sub) -> None:
     p = sub.add_parser(
         "reduce", help="model only what the output needs in a frequency band",
         description="Remove or merge elements of a netlist that do not matter for the "
@@ -270,11 +277,8 @@ def cmd_reduce(args) -> int:
 # ------------------------------------------------------------ simulate SCENE.toml
 def cmd_simulate_scene(args) -> int:
     """``mechcirc simulate SCENE.toml``: the scene's motion over whole revolutions."""
-    import warnings
-
     from ..errors import MechcircError
     from ..scene import load_scene
-    from ..scene.simulation import SceneAccuracyWarning, simulate_scene
 
     if args.rtol is not None and args.method in ("rk4", "rk4-python"):
         raise MechcircError(f"--rtol applies to the scipy methods (DOP853, RK45, LSODA), not "
@@ -288,29 +292,7 @@ def cmd_simulate_scene(args) -> int:
     if getattr(args, "shaft", False) or getattr(args, "flywheel", None) is not None \
             or getattr(args, "rigid", False):
         return _shaft(args, scene)
-    from ..progress import Progress
-
-    bar = None
-
-    def progress(done, total):
-        nonlocal bar
-        if bar is None:
-            bar = Progress(total, scene.name)
-        bar.update(done - bar.done)
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", SceneAccuracyWarning)   # kept in notes, printed below
-        try:
-            result = simulate_scene(scene, revolutions=args.revolutions,
-                                    start_deg=args.start_deg,
-                                    steps_per_period=args.steps_per_period, points=args.points,
-                                    method=args.method, rtol=args.rtol,
-                                    revolution=args.revolution,
-                                    error_estimate=not args.no_error_estimate,
-                                    progress=progress)
-        finally:
-            if bar is not None:
-                bar.__exit__(None, None, None)
+    result = _simulate_with_bar(args, scene)
     if args.output:
         _write_columns(args.output, f"# {scene.name} ({args.scene}); revolution "
                        f"{result.revolution}; omega = {result.omega!r} rad/s", result.columns(),
@@ -325,6 +307,44 @@ def cmd_simulate_scene(args) -> int:
         doc["output"] = args.output
         print_json(doc)
         return 0
+    _print_motion(args, scene, result)
+    return 0
+
+
+def _simulate_with_bar(args, scene):
+    """:func:`simulate_scene` as the options say, with a progress bar on a terminal; the
+    accuracy warnings stay in the result's notes."""
+    import warnings
+
+    from ..progress import Progress
+    from ..scene.simulation import SceneAccuracyWarning, simulate_scene
+
+    bar = None
+
+    def progress(done, total):
+        nonlocal bar
+        if bar is None:
+            bar = Progress(total, scene.name)
+        bar.update(done - bar.done)
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", SceneAccuracyWarning)   # kept in notes, printed in the report
+        try:
+            result = simulate_scene(scene, revolutions=args.revolutions,
+                                    start_deg=args.start_deg,
+                                    steps_per_period=args.steps_per_period, points=args.points,
+                                    method=args.method, rtol=args.rtol,
+                                    revolution=args.revolution,
+                                    error_estimate=not args.no_error_estimate,
+                                    progress=progress)
+        finally:
+            if bar is not None:
+                bar.__exit__(None, None, None)
+    return result
+
+
+def _print_motion(args, scene, result) -> None:
+    """The text report of a scene's motion: run, accuracy, extrema and notes."""
     est = "not computed" if result.error_estimate is None else f"{result.error_estimate:.2g}"
     per = "n/a (1 revolution)" if result.periodicity is None else f"{result.periodicity:.2g}"
     print(f"{args.scene}: scene {scene.name!r}, revolution {result.revolution} at "
@@ -335,7 +355,6 @@ def cmd_simulate_scene(args) -> int:
     _print_extrema(scene, result.extrema)
     for n in result.notes:
         print(f"note: {n}")
-    return 0
 
 
 def _with_overrides(args, scene):

@@ -65,6 +65,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
@@ -282,11 +283,8 @@ def cam_profile(motion, base_radius: float, follower: str = "roller", *,
         motion, follower, base_radius, roller_radius, offset, arm, pivot, points,
         pressure_limit_deg)
     theta = np.linspace(0.0, 2 * math.pi, int(points))
-    x0 = float(np.min(motion.evaluate(theta)[0]))
-
-    def geo(t):
-        return _geometry(motion, t, follower, rb, rf, e, arm, pivot, x0)
-
+    geo = partial(_geometry, motion, follower=follower, rb=rb, rf=rf, e=e, arm=arm, pivot=pivot,
+                  x0=float(np.min(motion.evaluate(theta)[0])))    # of the cam angle(s) t
     s, ds, dds, P, C, phi, kappa, rho = geo(theta)
     if follower == "oscillating":
         _check_swing(theta, s, rb + rf, arm, pivot)

@@ -281,20 +281,9 @@ def frame_loading(fourbar: FourBar, theta: ArrayLike, omega: float, *,
     if not (math.isfinite(omega) and omega > 0):
         raise GeometryError(f"crank speed ω must be finite and > 0 rad/s, got {omega}")
     theta = np.atleast_1d(np.asarray(theta, dtype=float))
-    n = theta.size
     k = link_kinematics(fourbar, theta, omega, crank, coupler, rocker, reed_point)
     g = np.asarray(gravity, dtype=float)
-    if reed_force is None:
-        F_local = np.zeros((n, 2))
-    else:
-        F_local = np.asarray(reed_force(theta), dtype=float)
-        if F_local.shape != (n, 2):
-            raise GeometryError(f"reed_force(theta) must return an array of shape ({n}, 2) "
-                                f"[N, rocker frame], got {F_local.shape}")
-    c4, s4 = np.cos(k["phi4"]), np.sin(k["phi4"])
-    F = np.stack([c4 * F_local[:, 0] - s4 * F_local[:, 1],
-                  s4 * F_local[:, 0] + c4 * F_local[:, 1]], axis=-1)
-
+    F = _reed_in_world(reed_force, theta, k["phi4"])
     M, rhs = _equilibrium(k, crank, coupler, rocker, F, g)
     x = np.linalg.solve(M, rhs[..., None])[..., 0]
     F_A, F_B, F_C, F_D, T = x[:, 0:2], x[:, 2:4], x[:, 4:6], x[:, 6:8], x[:, 8]
@@ -303,6 +292,22 @@ def frame_loading(fourbar: FourBar, theta: ArrayLike, omega: float, *,
     T_d = _cross(-AD, -F_A) - T
     return FrameLoading(theta, float(omega), F_A, F_B, F_C, F_D, T, F,
                         -(F_A + F_D), T_a, T_d)
+
+
+def _reed_in_world(reed_force, theta, phi4):
+    """The reed force (n, 2) [N] in world axes: ``reed_force(theta)``, given in the
+    rocker's frame (at rocker angle ``phi4``), turned; zero without one."""
+    n = theta.size
+    if reed_force is None:
+        F_local = np.zeros((n, 2))
+    else:
+        F_local = np.asarray(reed_force(theta), dtype=float)
+        if F_local.shape != (n, 2):
+            raise GeometryError(f"reed_force(theta) must return an array of shape ({n}, 2) "
+                                f"[N, rocker frame], got {F_local.shape}")
+    c4, s4 = np.cos(phi4), np.sin(phi4)
+    return np.stack([c4 * F_local[:, 0] - s4 * F_local[:, 1],
+                     s4 * F_local[:, 0] + c4 * F_local[:, 1]], axis=-1)
 
 
 def _equilibrium(k, crank, coupler, rocker, F, g):

@@ -824,9 +824,24 @@ def _lock_error(lk, ds, t_good, t_bad):
             hi = mid
         if abs(hi - lo) * abs(w1) < 1e-12:
             break
-    raise GeometryError(
-        f"{lk.source}: the linkage locks near θ = {math.degrees(hi * w1):.6g}° (first crank "
+    raise _lock(lk, hi * w1)
+
+
+def _lock(lk, theta):
+    """The error of a linkage that locks near crank rotation ``theta`` [rad]."""
+    return GeometryError(
+        f"{lk.source}: the linkage locks near θ = {math.degrees(theta):.6g}° (first crank "
         f"rotation from the pose): no assembly beyond it on this branch")
+
+
+def _branch_jump(lk, theta0, theta1):
+    """The error of a position that changed branch between crank rotations ``theta0`` and
+    ``theta1`` [rad]."""
+    return GeometryError(
+        f"{lk.source}: branch jump between θ = {math.degrees(theta0):.6g}° "
+        f"and {math.degrees(theta1):.6g}°: the position passed a "
+        f"singular configuration (det J changed sign); reduce max_step_deg "
+        f"or the linkage reaches a change point there")
 
 
 # ------------------------------------------------------------------ Newton
@@ -1097,15 +1112,9 @@ def _solve_newton_compiled(lk, pl, t, dt_max):
         raise GeometryError(f"{lk.source}: the linkage is singular in its pose "
                             f"(constraint Jacobian not invertible)")
     if status == K.LOCK:
-        raise GeometryError(
-            f"{lk.source}: the linkage locks near θ = {math.degrees(info[0] * w1):.6g}° "
-            f"(first crank rotation from the pose): no assembly beyond it on this branch")
+        raise _lock(lk, info[0] * w1)
     if status == K.BRANCH_JUMP:
-        raise GeometryError(
-            f"{lk.source}: branch jump between θ = {math.degrees(info[0] * w1):.6g}° "
-            f"and {math.degrees(info[1] * w1):.6g}°: the position passed a "
-            f"singular configuration (det J changed sign); reduce max_step_deg "
-            f"or the linkage reaches a change point there")
+        raise _branch_jump(lk, info[0] * w1, info[1] * w1)
     return Q, QD, QDD, parts
 
 
@@ -1136,8 +1145,6 @@ def _kept_nodes(lk, nw, T_keep, first, dt_max):
     polished, with batched derivatives (a target on one is taken as it is).
     """
     pl = nw.pl
-    w1 = lk.cranks[0].omega
-    wmax = float(np.max(np.abs(pl.omega)))
     q, qdot, qddot, sign = first
     Qk = np.empty((len(T_keep), nw.n))
     Qdk, Qddk = np.empty_like(Qk), np.empty_like(Qk)
@@ -1166,32 +1173,35 @@ def _kept_nodes(lk, nw, T_keep, first, dt_max):
                 continue
             block //= 2
             continue
-        t_target = T_keep[j]
-        while t_now != t_target:
-            dt = max(-dt_max, min(dt_max, t_target - t_now))
-            while True:
-                guess = q + qdot * dt + 0.5 * qddot * dt * dt
-                res = nw.step(guess, pl.omega * (t_now + dt))
-                if res is not None:
-                    break
-                dt *= 0.5
-                if abs(dt) * wmax < 1e-9:
-                    th_lock = (t_now + 2 * dt) * w1
-                    raise GeometryError(
-                        f"{lk.source}: the linkage locks near θ = "
-                        f"{math.degrees(th_lock):.6g}° (first crank rotation from the "
-                        f"pose): no assembly beyond it on this branch")
-            if res[3] != sign:
-                raise GeometryError(
-                    f"{lk.source}: branch jump between θ = {math.degrees(t_now * w1):.6g}° "
-                    f"and {math.degrees((t_now + dt) * w1):.6g}°: the position passed a "
-                    f"singular configuration (det J changed sign); reduce max_step_deg "
-                    f"or the linkage reaches a change point there")
-            q, qdot, qddot, _ = res
-            t_now = t_now + dt
+        q, qdot, qddot, t_now = _steps_to(lk, nw, q, qdot, qddot, t_now, T_keep[j], sign,
+                                          dt_max)
         Qk[j], Qdk[j], Qddk[j] = q, qdot, qddot
         j, block = j + 1, 2
     return Qk, Qdk, Qddk, Pk, exact
+
+
+def _steps_to(lk, nw, q, qdot, qddot, t_now, t_target, sign, dt_max):
+    """Single Newton steps of at most ``dt_max`` from the node (q, q̇, q̈) at ``t_now`` to
+    ``t_target``, each from a Taylor predictor, halved until it assembles; the node there
+    and ``t_target``.  Raises where the linkage locks or changes branch (``sign`` of det J)."""
+    pl = nw.pl
+    w1 = lk.cranks[0].omega
+    wmax = float(np.max(np.abs(pl.omega)))
+    while t_now != t_target:
+        dt = max(-dt_max, min(dt_max, t_target - t_now))
+        while True:
+            guess = q + qdot * dt + 0.5 * qddot * dt * dt
+            res = nw.step(guess, pl.omega * (t_now + dt))
+            if res is not None:
+                break
+            dt *= 0.5
+            if abs(dt) * wmax < 1e-9:
+                raise _lock(lk, (t_now + 2 * dt) * w1)
+        if res[3] != sign:
+            raise _branch_jump(lk, t_now * w1, (t_now + dt) * w1)
+        q, qdot, qddot, _ = res
+        t_now = t_now + dt
+    return q, qdot, qddot, t_now
 
 
 def _targets(lk, nw, t, nodes, keep, at, kept, sign, dt_max):

@@ -24,8 +24,11 @@ name                       criterion                                        equa
 patent calls the acute angle between coupler and rocker the transmission
 angle, so eq. (2) is applied to ``min(μ1, 180° − μ1)`` (our reading; it makes
 no difference when μ1 ≤ 90°).  Eq. (5), |Φ1''/Φ2''| = ((β + 1)/(β − 1))·
-(sin μ2 / sin μ1), is used only to screen a grid quickly; every design that is
-returned is re-evaluated directly with :class:`~mechcirc.kinematics.FourBar`.
+(sin μ2 / sin μ1), is used only to screen a grid quickly: :func:`synthesize`
+screens its grid with closed forms (eq. 1, 3, 5, 8, 9 and the swing from the
+dead-centre triangles), vectorised, then re-evaluates the best screened designs
+directly (:func:`evaluate_design`, with :class:`~mechcirc.kinematics.FourBar`)
+and drops any whose direct evaluation disagrees.
 
 Eq. (10), the law of cosines at D for the two dead-centre triangles, is
 quadratic in κ² (and, by symmetry, in δ²)::
@@ -408,13 +411,21 @@ def evaluate_design(a: float, b: float, c: float, d: float, *,
     """
     fb = FourBar(a, b, c, d)
     front, back = fb.dead_centres()            # raises for a non-crank-rocker
-    lo, hi = crank_range or (LOAD_CRANK_MM[load] if load else (33.0, 38.0))
-    s_lo, s_hi = swing_range
+    crank_range = crank_range or (LOAD_CRANK_MM[load] if load else (33.0, 38.0))
     mu1, mu2 = (math.degrees(x) for x in dead_centre_angles(b / a, c / a, d / a))
-    gamma1 = min(mu1, 180.0 - mu1)
-    gmin = math.degrees(fb.transmission_range().gamma_min)
-    ratio = abs(back.nu) / abs(front.nu)
     swing = math.degrees(fb.swing())
+    crit = _criteria(a, b, c, d, min(mu1, 180.0 - mu1),
+                     math.degrees(fb.transmission_range().gamma_min),
+                     abs(back.nu) / abs(front.nu), swing, crank_range, swing_range)
+    return Design(a, b, c, d, crit, mu1, mu2, front.nu, back.nu, swing)
+
+
+def _criteria(a, b, c, d, gamma1, gmin, ratio, swing, crank_range, swing_range):
+    """The patent's criteria judged for lengths a, b, c, d [mm] with front transmission
+    angle ``gamma1``, least one ``gmin``, swing ``swing`` [deg] and acceleration ratio
+    ``ratio``; a value exactly on the closed crank or swing range passes."""
+    lo, hi = crank_range
+    s_lo, s_hi = swing_range
     bound = (b / a) * (360.0 / swing) / (2 * math.pi)
     crit = {
         "crank_length": _crit("crank_length", a, f"{lo:g}–{hi:g} mm",
@@ -438,7 +449,7 @@ def evaluate_design(a: float, b: float, c: float, d: float, *,
         cr = crit[name]
         if cr.margin == 0.0 or abs(cr.margin) < 1e-9:
             crit[name] = Criterion(cr.name, cr.value, cr.limit, True, 0.0)
-    return Design(a, b, c, d, crit, mu1, mu2, front.nu, back.nu, swing)
+    return crit
 
 
 # --------------------------------------------------------------- synthesis
@@ -452,12 +463,10 @@ _OBJECTIVES = {
 _FIXABLE = ("crank", "coupler", "rocker", "frame")
 
 
-def synthesize(load: Literal["light", "medium", "heavy"] = "medium",
-               swing: float | None = None, *,
-               objective: Literal["margin", "ratio"] = "margin",
-               limit: int = 10, b_a_range=(1.5, 8.0), d_a_range=(1.5, 8.0),
-               step: float = 0.05, crank_step: float = 0.5,
-               swing_step: float = 0.5, swing_range: tuple | None = None,
+def synthesize(load: Literal["light", "medium", "heavy"] = "medium", swing: float | None = None,
+               *, objective: Literal["margin", "ratio"] = "margin", limit: int = 10,
+               b_a_range=(1.5, 8.0), d_a_range=(1.5, 8.0), step: float = 0.05,
+               crank_step: float = 0.5, swing_step: float = 0.5, swing_range: tuple | None = None,
                fixed: dict | None = None, refine: bool = True) -> SynthesisResult:
     """Explore the patent's feasible region and rank the designs that meet every criterion.
 
@@ -474,9 +483,8 @@ def synthesize(load: Literal["light", "medium", "heavy"] = "medium",
     limit : int
         Number of designs returned (distinct shapes).
     b_a_range, d_a_range : (float, float)
-        Ranges of b/a and d/a explored, in steps of ``step``; c/a follows
-        from eq. (10).  d/a is also capped by d < 180 mm.  The refinement
-        stays inside them.
+        Ranges of b/a and d/a explored, in steps of ``step`` (c/a from eq. (10);
+        d < 180 mm caps d/a); the refinement stays inside them.
     step : float
         Grid step of b/a and d/a [1].
     crank_step : float
@@ -484,18 +492,14 @@ def synthesize(load: Literal["light", "medium", "heavy"] = "medium",
     swing_step : float
         Grid step of the swing [deg].
     swing_range : (float, float), optional
-        Admissible swing [deg] (default the patent's 23–26°): the swing
-        criterion and the grid.
+        Admissible swing [deg] of the criterion and the grid (default 23–26°).
     fixed : dict, optional
-        Lengths held fixed [mm], by name among "crank", "coupler", "rocker",
-        "frame" (not both rocker and frame).  A fixed crank replaces the
-        load's range.
+        Lengths held fixed [mm] by name: "crank" (replaces the load's range),
+        "coupler", "rocker" or "frame" (not both of the last two).
     refine : bool
-        After the grid, improve each candidate with a bounded Nelder–Mead
-        search (``scipy.optimize.minimize``) on the same objective over the
-        free parameters (crank, swing, b/a and d/a or c/a), c/a or d/a
-        following from eq. (10); a refined design replaces its grid point only
-        when its direct evaluation is feasible and at least as good.
+        After the grid, improve each candidate by a bounded Nelder–Mead search
+        on the objective over the free parameters (c/a or d/a from eq. (10)),
+        kept when its direct evaluation is feasible and at least as good.
 
     Returns
     -------
@@ -507,41 +511,22 @@ def synthesize(load: Literal["light", "medium", "heavy"] = "medium",
     Raises
     ------
     GeometryError
-        Unknown load, a swing outside (0°, 180°), a bad fixed length, or an
-        empty grid.
-
-    Notes
-    -----
-    The grid is screened with closed forms (eq. 1, 3, 5, 8, 9 and the swing
-    from the dead-centre triangles), vectorised; the best screened designs are
-    then re-evaluated directly (:func:`evaluate_design`) and any whose direct
-    evaluation disagrees is dropped.
+        Unknown load, a swing outside (0°, 180°), a bad fixed length, an empty grid.
     """
     fixed, s_range = _checked(load, objective, fixed, swing, swing_range, b_a_range, d_a_range,
                               step, crank_step, swing_step)
-    lo, hi = ((fixed["crank"],) * 2 if "crank" in fixed else LOAD_CRANK_MM[load])
-    axes = _grid_axes(fixed, swing, s_range, (lo, hi), b_a_range, d_a_range, step, crank_step,
-                      swing_step)
-    swings = axes[1]
-    space = _Space(fixed, b_a_range, d_a_range, (lo, hi), s_range, swing)
+    crank_range = (fixed["crank"],) * 2 if "crank" in fixed else LOAD_CRANK_MM[load]
+    axes = _grid_axes(fixed, swing, s_range, crank_range, b_a_range, d_a_range, step,
+                      crank_step, swing_step)
+    space = _Space(fixed, b_a_range, d_a_range, crank_range, s_range, swing)
     grid, cols, valid, passes = _screened_grid(space, fixed, s_range, *axes)
-    explored = int(valid.sum())
     rejected = {name: int((valid & ~p).sum()) for name, p in passes.items()}
-    ok = valid.copy()
-    for p in passes.values():
-        ok &= p
-
-    if not ok.any():
-        conflicts = _conflicts(passes, valid)
-        return SynthesisResult((), _OBJECTIVES[objective], load, tuple(swings.tolist()),
-                               explored, rejected, conflicts, s_range, fixed, refine)
-
+    ok = np.logical_and.reduce([valid, *passes.values()])
     designs = _candidates(grid, cols, ok, space, objective, limit, load, s_range,
-                          (lo, hi) if "crank" in fixed else None, refine)
-    designs.sort(key=lambda d: -d.objective if objective == "margin" else d.objective)
+                          crank_range if "crank" in fixed else None, refine)
     return SynthesisResult(tuple(designs), _OBJECTIVES[objective], load,
-                           tuple(swings.tolist()), explored, rejected, (), s_range, fixed,
-                           refine)
+                           tuple(axes[1].tolist()), int(valid.sum()), rejected,
+                           () if ok.any() else _conflicts(passes, valid), s_range, fixed, refine)
 
 
 def _checked(load, objective, fixed, swing, swing_range, b_a_range, d_a_range, step,
@@ -636,7 +621,7 @@ def _screened_grid(space, fixed, s_range, cranks, swings, b_as, d_as):
 
 
 def _candidates(grid, cols, ok, space, objective, limit, load, s_range, crank_range, refine):
-    """The passing grid points, best first, evaluated directly (and refined): one per shape."""
+    """The passing grid points evaluated directly (and refined), one per shape, best first."""
     A, PSI, BA, OTHER, ROOT, CA, DA = grid
     idx = np.flatnonzero(ok)
     if objective == "margin":
@@ -690,6 +675,7 @@ def _candidates(grid, cols, ok, space, objective, limit, load, s_range, crank_ra
         designs.append(des)
         if len(designs) >= limit:
             break
+    designs.sort(key=lambda d: -d.objective if objective == "margin" else d.objective)
     return designs
 
 
@@ -745,30 +731,10 @@ class _Space:
         """Lengths (a, b, c, d) [mm] of the refined design, or None."""
         from scipy.optimize import minimize
 
-        free, x0, bounds = [], [], []
-        for name, value, rng, is_free in (
-                ("a", a, self.crank_range, self.crank_range[1] > self.crank_range[0]),
-                ("psi", psi, tuple(math.radians(v) for v in self.swing_range),
-                 self.swing is None and self.swing_range[1] > self.swing_range[0]),
-                ("ba", ba, self.b_a_range, "coupler" not in self.fixed),
-                ("other", other, self.d_a_range, not {"rocker", "frame"} & set(self.fixed))):
-            if is_free:
-                free.append(name)
-                x0.append(value)
-                bounds.append(rng)
+        base = {"a": a, "psi": psi, "ba": ba, "other": other}
+        free, x0, bounds = self.free_parameters(base)
         if not free:
             return None
-        base = {"a": a, "psi": psi, "ba": ba, "other": other}
-
-        def lengths(x):
-            p = dict(base, **dict(zip(free, x)))
-            A = np.array([p["a"]])
-            BA, OTHER = self.ratios(A, np.array([p["ba"]]), np.array([p["other"]]))
-            u = _eq10_roots_squared(np.array([p["psi"]]), BA, OTHER)[root]
-            with np.errstate(invalid="ignore"):
-                CA, DA = self.split(np.sqrt(u), OTHER)
-            return A, np.array([p["psi"]]), BA, CA, DA
-
         f = self.fixed
         (b0, b1), (d0, d1) = self.b_a_range, self.d_a_range
 
@@ -799,7 +765,32 @@ class _Space:
                        options={"xatol": 1e-8, "fatol": 1e-11, "maxiter": 2000})
         if not np.isfinite(res.fun) or res.fun >= 1e3:
             return None
-        A, _, BA, CA, DA = lengths(res.x)
+        return self.lengths(dict(base, **dict(zip(free, res.x))), root)
+
+    def free_parameters(self, p):
+        """The search's free parameters among ``p`` (a, psi, ba, other): their names,
+        start values and bounds."""
+        free, x0, bounds = [], [], []
+        for name, rng, is_free in (
+                ("a", self.crank_range, self.crank_range[1] > self.crank_range[0]),
+                ("psi", tuple(math.radians(v) for v in self.swing_range),
+                 self.swing is None and self.swing_range[1] > self.swing_range[0]),
+                ("ba", self.b_a_range, "coupler" not in self.fixed),
+                ("other", self.d_a_range, not {"rocker", "frame"} & set(self.fixed))):
+            if is_free:
+                free.append(name)
+                x0.append(p[name])
+                bounds.append(rng)
+        return free, x0, bounds
+
+    def lengths(self, p, root):
+        """Lengths (a, b, c, d) [mm] at the parameters ``p``, c/a or d/a from root
+        ``root`` of eq. (10)."""
+        A = np.array([p["a"]])
+        BA, OTHER = self.ratios(A, np.array([p["ba"]]), np.array([p["other"]]))
+        u = _eq10_roots_squared(np.array([p["psi"]]), BA, OTHER)[root]
+        with np.errstate(invalid="ignore"):
+            CA, DA = self.split(np.sqrt(u), OTHER)
         a = float(A[0])
         return a, a * float(BA[0]), a * float(CA[0]), a * float(DA[0])
 

@@ -108,44 +108,18 @@ def crosscheck_scene(scene: Scene, theta: float, *, steps_per_period: float = 40
     """
     from . import build
     from .motion import motion_model
-    from .simfile import apply_overrides
-    from .simulation import kernels_for
 
-    notes = []
-    gaps = {f"{x.name}.clearance": 0.0 for x in (*scene.elastic, *scene.torsions) if x.clearance}
-    if gaps:
-        scene = apply_overrides(scene, gaps)
-        notes.append("clearances closed for the check (the circuit has none): "
-                     + ", ".join(k.split(".")[0] for k in gaps))
+    scene, notes = _clearances_closed(scene)
     built = build(scene, theta)
-    circuit = built.circuit
-    found = [r for r in circuit.resonances() if r.kind == "resonance"]
+    found = [r for r in built.circuit.resonances() if r.kind == "resonance"]
     if not found:
         raise MechcircError(f"{scene.source}: the circuit at θ = {math.degrees(theta):.6g}° has "
                             "no resonance to compare")
     omega_slow = scene.omega_shaft * 1e-9
     model = motion_model(scene, omega_slow)
-    n = model.n_free
-    rate = max(r.omega for r in found)          # the fastest mode sets the step
-    w_min = min(r.omega for r in found)
-    h = 2 * math.pi / rate / steps_per_period
-    sample = max(1, int(steps_per_period // 16))
-    nsamp = int(math.ceil(periods * 2 * math.pi / w_min / (h * sample))) + 1
-    nsamp = max(nsamp, 4 * n + 4)
-    kern, backend = kernels_for("rk4")
-    y0 = model.rigid_state(theta)
-    # kick: a velocity on every free part, sized so the deflections stay ~1e-7 of a radian
-    kick = 1e-7 * rate * np.array([1.0 + 0.37 * i for i in range(n)])
-    y = y0.copy()
-    y[n:] += kick
-    args = model.kernel_args(theta, 1e300)
-    rec_y = np.empty((nsamp, 2 * n))
-    rec_t = np.empty(nsamp)
-    kern.rk4_run(y, 0.0, h, (nsamp - 1) * sample, 0.0, h * sample, rec_y, rec_t, *args,
-                 model.naux())
-    dev = rec_y - y0[None, :]
-    dt = h * sample
-    rows = _ringing_rows(found, dev, dt, n)
+    dev, dt, h, nsamp, kern, backend = _kick_record(model, theta, found, steps_per_period,
+                                                    periods)
+    rows = _ringing_rows(found, dev, dt, model.n_free)
     notes.append(f"time domain: RK4 ({backend}), step {h:.3g} s ({steps_per_period:g} per "
                  f"period of the fastest mode), {nsamp} samples over {periods:g} periods of the "
                  f"slowest resonance, crank all but stopped (Ω = {omega_slow:.3g} rad/s)")
@@ -157,6 +131,46 @@ def crosscheck_scene(scene: Scene, theta: float, *, steps_per_period: float = 40
                      "0.9 × the lowest resonance, between resonances and 1.5 × the highest; "
                      "the drive's force fitted to the ripple plus the ringing's free modes")
     return SceneCrosscheck(scene.source, math.degrees(theta), rows, tuple(notes), frows)
+
+
+def _clearances_closed(scene):
+    """The scene with every clearance closed (the circuit has none) and the notes saying
+    so: the scene itself and no note if it has no clearance."""
+    from .simfile import apply_overrides
+
+    gaps = {f"{x.name}.clearance": 0.0 for x in (*scene.elastic, *scene.torsions) if x.clearance}
+    if not gaps:
+        return scene, []
+    return apply_overrides(scene, gaps), ["clearances closed for the check (the circuit has "
+                                          "none): " + ", ".join(k.split(".")[0] for k in gaps)]
+
+
+def _kick_record(model, theta, found, steps_per_period, periods):
+    """The motion's deviation from the rigid state at ``theta`` after a kick, a velocity on
+    every free part sized so the deflections stay ~1e-7 of a radian, by RK4 at
+    ``steps_per_period`` steps per period of the fastest resonance of ``found`` over
+    ``periods`` periods of the slowest: (record, its sample interval, step, samples,
+    kernels, their backend)."""
+    from .simulation import kernels_for
+
+    n = model.n_free
+    rate = max(r.omega for r in found)          # the fastest mode sets the step
+    w_min = min(r.omega for r in found)
+    h = 2 * math.pi / rate / steps_per_period
+    sample = max(1, int(steps_per_period // 16))
+    nsamp = int(math.ceil(periods * 2 * math.pi / w_min / (h * sample))) + 1
+    nsamp = max(nsamp, 4 * n + 4)
+    kern, backend = kernels_for("rk4")
+    y0 = model.rigid_state(theta)
+    kick = 1e-7 * rate * np.array([1.0 + 0.37 * i for i in range(n)])
+    y = y0.copy()
+    y[n:] += kick
+    args = model.kernel_args(theta, 1e300)
+    rec_y = np.empty((nsamp, 2 * n))
+    rec_t = np.empty(nsamp)
+    kern.rk4_run(y, 0.0, h, (nsamp - 1) * sample, 0.0, h * sample, rec_y, rec_t, *args,
+                 model.naux())
+    return rec_y - y0[None, :], h * sample, h, nsamp, kern, backend
 
 
 def _ringing_rows(found, dev, dt, n) -> list:

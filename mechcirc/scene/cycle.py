@@ -168,13 +168,24 @@ def cycle_map(scene: Scene, *, points: int = 72, harmonics: int = 5,
     hs = np.arange(1, harmonics + 1)
     omega_shaft = abs(scene.omega_shaft) / scene.cycle_revolutions   # the cycle's fundamental
     parts, skipped = _cycle_batches(scene, theta, motion, reflect)
-    Q0 = np.full((points, harmonics), np.nan, dtype=complex)
+    res, anti, Q0 = _batch_roots(parts, points, hs * omega_shaft)
+    if progress is not None:
+        for i in range(points):
+            progress(i + 1, points)
+    return CycleMap(theta, res, anti, hs, omega_shaft, Q0, skipped,
+                    scene.drive.link is not None, scene.cycle)
+
+
+def _batch_roots(parts, points: int, omegas):
+    """Resonances, anti-resonances and Q0 at ``omegas`` of each of ``points`` crank angles,
+    from the batches ``parts`` (``[(Designs, angle indices)]``, :func:`_cycle_batches`)."""
+    Q0 = np.full((points, len(omegas)), np.nan, dtype=complex)
     res: list = [()] * points
     anti: list = [()] * points
     for part, where in parts:
         found = part.resonances()
         with np.errstate(all="ignore"):
-            q = part.sweep(hs * omega_shaft).Q0
+            q = part.sweep(omegas).Q0
         for d in range(part.size):
             i = int(where[d])
             if d in found.failed:
@@ -183,11 +194,7 @@ def cycle_map(scene: Scene, *, points: int = 72, harmonics: int = 5,
             res[i] = tuple(r for r in rows if r.kind == "resonance")
             anti[i] = tuple(r for r in rows if r.kind == "antiresonance")
             Q0[i] = q[d]
-    if progress is not None:
-        for i in range(points):
-            progress(i + 1, points)
-    return CycleMap(theta, res, anti, hs, omega_shaft, Q0, skipped,
-                    scene.drive.link is not None, scene.cycle)
+    return res, anti, Q0
 
 
 def _cycle_batches(scene: Scene, theta, motion, reflect: ReflectMode):

@@ -388,11 +388,7 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
     doc = load_toml(text, source)
     check_keys(text, source, TABLES[None], doc)
     linkage = parse_linkage(_hide_scene_tables(text), source)
-    units = doc.get("units")
-    if not _named(units, LENGTH_UNITS):
-        raise located(text, source, f"a scene needs units = \"m\", \"cm\" or \"mm\" (the length "
-                   f"unit of [points]), got {units!r}", None, "units",
-                   expected="units = \"mm\" (masses and stiffnesses are SI)")
+    units = _length_unit(text, source, doc)
     if "cam" in doc:                  # a cam swings the first crank (scene/cam.py)
         from .cam import parse_cam
 
@@ -410,9 +406,6 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
     drive = r.drive(bodies, rigid_points)
     circuit_names = r.circuit_names(masses, elastic, torsions, loads, drive)
     analysis = _analysis(text, source, doc.get("analysis"), circuit_names)
-
-    from .simfile import parse_moments, parse_simulate
-
     scene = Scene(str(doc.get("name", linkage.name)), linkage, units, LENGTH_UNITS[units],
                   tuple(masses), tuple(elastic), tuple(torsions), tuple(loads), drive, (),
                   source, analysis, gears=tuple(gears))
@@ -422,13 +415,31 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
         spring = check_follower_part(scene, text)     # a contact that can open: its spring
         if spring:
             object.__setattr__(scene, "loads", (*scene.loads, Load(**spring)))
+    _read_dynamics(scene, text, source, doc)
+    return scene
+
+
+def _length_unit(text: str, source: str, doc: dict) -> str:
+    """The scene's ``units``, the length unit of [points] (refused unless m, cm or mm)."""
+    units = doc.get("units")
+    if not _named(units, LENGTH_UNITS):
+        raise located(text, source, f"a scene needs units = \"m\", \"cm\" or \"mm\" (the length "
+                   f"unit of [points]), got {units!r}", None, "units",
+                   expected="units = \"mm\" (masses and stiffnesses are SI)")
+    return units
+
+
+def _read_dynamics(scene: Scene, text: str, source: str, doc: dict) -> None:
+    """The tables of the time domain into ``scene``: [[moments]], [simulate], [shaft]."""
+    from .simfile import parse_moments, parse_simulate
+
     object.__setattr__(scene, "moments", parse_moments(text, source, doc.get("moments"), scene))
     object.__setattr__(scene, "simulate", parse_simulate(text, source, doc.get("simulate"),
                                                          scene))
     if "shaft" in doc:
         from .simfile import parse_shaft
 
-        if "cam" in doc and (len(scene.parts) > 1 or getattr(linkage, "contact", None)):
+        if "cam" in doc and (len(scene.parts) > 1 or getattr(scene.linkage, "contact", None)):
             first = next(iter(doc["shaft"]), "") if isinstance(doc["shaft"], dict) else ""
             raise located(text, source, "a dynamic [shaft] with a [cam] takes a rigid "
                           "mechanism only (the cam's part alone, no [[elastic]] or "
@@ -436,7 +447,6 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
                           "proportion to no shaft coordinate", "shaft", first,
                           expected="remove [shaft] or the elastic elements")
         object.__setattr__(scene, "shaft", parse_shaft(text, source, doc["shaft"], scene))
-    return scene
 
 
 class _SceneReader:
@@ -556,8 +566,6 @@ class _SceneReader:
         A gear with ``stiffness`` adds its mesh as a torsion rod (to ``torsions``)
         between the crank and the gear's body.
         """
-        from fractions import Fraction
-
         cranks = self.linkage.cranks
         w1, names = cranks[0].omega, [c.link for c in cranks]
         gears = {}
@@ -569,41 +577,8 @@ class _SceneReader:
                                "crank" if "crank" in g else next(iter(g), "crank"),
                                value=c if isinstance(c, str) else None, occurrence=n,
                                expected=f"one of {', '.join(names[1:]) or '(none: one crank)'}")
-            ratio = self.number(g.get("ratio"), f"gear ratio of {c!r} (ω_{c}/ω_{names[0]})",
-                                "gears", "ratio" if "ratio" in g else "crank", n,
-                                positive=False)
-            if ratio == 0:
-                raise self.err(f"[[gears]] #{n + 1}: gear ratio 0 would stop crank {c!r}",
-                               "gears", "ratio", occurrence=n,
-                               expected="ratio = ω_crank/ω_main, e.g. -1.5 for 3:2 reversed")
-            frac = Fraction(ratio).limit_denominator(1000)
-            if abs(float(frac) - ratio) > 1e-12 * abs(ratio):
-                raise self.err(f"[[gears]] #{n + 1}: gear ratio {ratio!r} is not a ratio of "
-                               "whole numbers (tooth counts) with a denominator ≤ 1000, so the "
-                               "mechanism would never repeat its cycle", "gears", "ratio",
-                               occurrence=n, expected="e.g. ratio = -1.5 (z1/z2 = 30/20)")
-            w = next(x.omega for x in cranks if x.link == c)
-            if abs(w - ratio * w1) > 1e-12 * abs(w):
-                raise self.err(f"[[gears]] #{n + 1}: crank {c!r} has omega = {w:g} rad/s in "
-                               f"[[cranks]] but the gear ratio {ratio:g} makes it "
-                               f"{ratio * w1:g} rad/s", "gears", "ratio", occurrence=n,
-                               expected=f"ratio = {w / w1:g}, or omega = {ratio * w1:g}")
-            body = None
-            if "stiffness" in g or "body" in g or "damping" in g:
-                body = g.get("body", f"gear_{c}")
-                if not isinstance(body, str) or not _IDENT.fullmatch(body) \
-                        or body in self.linkage.links or body == "ground" \
-                        or body in {t.body for t in torsions}:
-                    raise self.err(f"[[gears]] #{n + 1}: body {body!r} must be a new name",
-                                   "gears", "body" if "body" in g else "crank", occurrence=n,
-                                   expected="an identifier for the gear on the crank's shaft")
-                name = self.new_name(None, "gears", "crank", n, f"mesh_{c}")
-                k = self.number(g.get("stiffness"), f"mesh stiffness of {c!r} [N·m/rad]",
-                                "gears", "stiffness" if "stiffness" in g else "crank", n)
-                d = self.number(g.get("damping", 0.0), f"mesh damping of {c!r} [N·m·s/rad]",
-                                "gears", "damping", n, allow_zero=True)
-                piv = next(x.pivot for x in cranks if x.link == c)
-                torsions.append(Torsion(name, c, body, piv, k, d))
+            ratio, frac = self.gear_ratio(n, g, c)
+            body = self.gear_mesh(n, g, c, torsions)
             gears[c] = Gear(c, float(ratio), (frac.numerator, frac.denominator), body)
         for n, cr in enumerate(cranks[1:], start=1):
             if cr.link not in gears and cr.omega != w1:
@@ -614,6 +589,55 @@ class _SceneReader:
                                expected=f'[[gears]] crank = "{cr.link}", ratio = '
                                         f"{cr.omega / w1:g}")
         return list(gears.values())
+
+    def gear_ratio(self, n: int, g: dict, c: str) -> tuple:
+        """Gear #n's ratio ω_c/ω_main, a ratio of tooth counts that agrees with the cranks'
+        omegas, and that ratio as a fraction."""
+        from fractions import Fraction
+
+        cranks = self.linkage.cranks
+        w1, names = cranks[0].omega, [x.link for x in cranks]
+        ratio = self.number(g.get("ratio"), f"gear ratio of {c!r} (ω_{c}/ω_{names[0]})",
+                            "gears", "ratio" if "ratio" in g else "crank", n,
+                            positive=False)
+        if ratio == 0:
+            raise self.err(f"[[gears]] #{n + 1}: gear ratio 0 would stop crank {c!r}",
+                           "gears", "ratio", occurrence=n,
+                           expected="ratio = ω_crank/ω_main, e.g. -1.5 for 3:2 reversed")
+        frac = Fraction(ratio).limit_denominator(1000)
+        if abs(float(frac) - ratio) > 1e-12 * abs(ratio):
+            raise self.err(f"[[gears]] #{n + 1}: gear ratio {ratio!r} is not a ratio of "
+                           "whole numbers (tooth counts) with a denominator ≤ 1000, so the "
+                           "mechanism would never repeat its cycle", "gears", "ratio",
+                           occurrence=n, expected="e.g. ratio = -1.5 (z1/z2 = 30/20)")
+        w = next(x.omega for x in cranks if x.link == c)
+        if abs(w - ratio * w1) > 1e-12 * abs(w):
+            raise self.err(f"[[gears]] #{n + 1}: crank {c!r} has omega = {w:g} rad/s in "
+                           f"[[cranks]] but the gear ratio {ratio:g} makes it "
+                           f"{ratio * w1:g} rad/s", "gears", "ratio", occurrence=n,
+                           expected=f"ratio = {w / w1:g}, or omega = {ratio * w1:g}")
+        return ratio, frac
+
+    def gear_mesh(self, n: int, g: dict, c: str, torsions: list) -> str | None:
+        """Gear #n's body, with its mesh (stiffness, damping) added to ``torsions`` as a
+        rod from crank ``c``; None for a rigid gear."""
+        if not ("stiffness" in g or "body" in g or "damping" in g):
+            return None
+        body = g.get("body", f"gear_{c}")
+        if not isinstance(body, str) or not _IDENT.fullmatch(body) \
+                or body in self.linkage.links or body == "ground" \
+                or body in {t.body for t in torsions}:
+            raise self.err(f"[[gears]] #{n + 1}: body {body!r} must be a new name",
+                           "gears", "body" if "body" in g else "crank", occurrence=n,
+                           expected="an identifier for the gear on the crank's shaft")
+        name = self.new_name(None, "gears", "crank", n, f"mesh_{c}")
+        k = self.number(g.get("stiffness"), f"mesh stiffness of {c!r} [N·m/rad]",
+                        "gears", "stiffness" if "stiffness" in g else "crank", n)
+        d = self.number(g.get("damping", 0.0), f"mesh damping of {c!r} [N·m·s/rad]",
+                        "gears", "damping", n, allow_zero=True)
+        piv = next(x.pivot for x in self.linkage.cranks if x.link == c)
+        torsions.append(Torsion(name, c, body, piv, k, d))
+        return body
 
     def masses(self, bodies: set, rigid_points: set, elastic_links: set) -> list:
         """[[masses]]: a mass at a point of a rigid link, or the inertia of a body."""

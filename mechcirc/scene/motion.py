@@ -198,150 +198,186 @@ def motion_model(scene: Scene, omega: float | None = None, *,
         kinematics cannot be tabulated.
     """
     lk = scene.linkage
-    L = scene.length_scale
-    w1 = lk.cranks[0].omega
-    omega = abs(w1) if omega is None else float(omega)
+    omega = abs(lk.cranks[0].omega) if omega is None else float(omega)
     if not (math.isfinite(omega) and omega > 0):
         raise ValueError(f"omega must be a finite number > 0 rad/s, got {omega!r}")
-    N = int(table_points)
-    if getattr(lk, "cam", None) is not None and N == TABLE_POINTS:
-        from .cam import aligned_points
-
-        N = aligned_points(lk.cam, N)       # table nodes on the law's joints
-    h = TWO_PI / N
-    nq = scene.cycle_revolutions                 # the tables span the mechanism's cycle
-    ang, ang1, ang2, pos, vel, acc = (dict(x) for x in rigid_tables(scene, N))
-    tlink = {}
-    for t in scene.torsions:
-        tlink.setdefault(t.body, t.link)
-    for b, l in tlink.items():
-        ang[b], ang1[b], ang2[b] = ang[l], ang1[l], ang2[l]
-    B = _Builder(N * nq, scene.cycle)
-    bodies = scene.bodies
-    tbodies = set(tlink)
-    cranks = [c.link for c in lk.cranks]
-    fn = {}            # (part, "angle"/"x"/"y", name) → function index, made on demand
-    makers = []        # part → maker(kind, name) → function index
-    prig, coords = [], []
-    travel = {}        # "BLOCK.travel" → its part: a block's travel s is an output body [m]
     cam = getattr(lk, "cam", None) is not None    # a cam swings the crank: tabulate it too
-    for i, part in enumerate(scene.parts):
-        crank = cranks[0] if cranks[0] in part else None    # a geared crank alone: below
-        if crank is not None:
-            coords.append(crank)
-            prig.append(B.line(-1, 0.0, 1.0))
-
-            def make(kind, name, i=i, crank=crank):
-                if kind == "angle":
-                    return B.line(i, 0.0, 1.0) if name == crank and not cam else B.table(
-                        i, 0.0, h, ang[name], ang1[name], ang2[name], True,
-                        _winding(ang[name], nq))
-                k = "xy".index(kind)
-                return B.table(i, 0.0, h, pos[name][:, k], vel[name][:, k], acc[name][:, k],
-                               True)
-            makers.append(make)
-            continue
-        slide = next((x for x in lk.sliders if part == (x.link,) and x.guide == "ground"), None)
-        if slide is not None:
-            # a block on a fixed guide: its coordinate is its travel s along the guide
-            # [m], every point at pose + s·u, no turning
-            b, u = slide.link, np.array(slide.direction)
-            coords.append(f"{b}.travel")
-            travel[f"{b}.travel"] = i
-            p0 = lk.pose[slide.point] * L
-            prig.append(B.table(-1, 0.0, h, (pos[slide.point] - p0) @ u,
-                                vel[slide.point] @ u, acc[slide.point] @ u, True))
-
-            def make(kind, name, i=i, u=u):
-                if kind == "angle":
-                    return B.line(i, 0.0, 0.0)
-                k = "xy".index(kind)
-                return B.line(i, float(lk.pose[name][k] * L), float(u[k]))
-            makers.append(make)
-            continue
-        if len(part) == 1:
-            b = part[0]
-            coords.append(b)
-            prig.append(B.table(-1, 0.0, h, ang[b], ang1[b], ang2[b], True,
-                                _winding(ang[b], nq)))
-            piv = next((p for p in bodies[b] if p in lk.ground), None)
-
-            def make(kind, name, i=i, piv=piv):
-                if kind == "angle":
-                    return B.line(i, 0.0, 1.0)
-                o = lk.pose[piv] * L
-                r = lk.pose[name] * L - o
-                rad, a0 = float(np.hypot(*r)), float(math.atan2(r[1], r[0]))
-                k = "xy".index(kind)
-                return B.circle(i, float(o[k]), rad, a0 - k * 0.5 * math.pi)
-            makers.append(make)
-            continue
-        # a part of several bodies without a crank: its own linkage, driven by a pinned link
-        coord, rig, make = _linkage_part(scene, B, h, i, part, tbodies, ang, ang1, ang2, tlink)
-        coords.append(coord)
-        prig.append(rig)
-        makers.append(make)
-
-    def need(i, kind, name):
-        key = (i, kind, name)
-        if key not in fn:
-            fn[key] = makers[i](kind, name)
-        return fn[key]
-
-    part_of = scene.part_of_body()
-
-    def angle_fn(body):
-        return need(part_of[body], "angle", body)
-
-    def point_fns(p):
-        i = scene.part_of_point(p)
-        if i is None:
-            return None
-        return need(i, "x", p), need(i, "y", p), i
-
-    # ---- kinetic energy
-    MI, MW = [], []
-    for m in scene.masses:
-        if m.kind == "mass":
-            pf = point_fns(m.point)
-            if pf is None:
-                continue
-            MI += [pf[0], pf[1]]
-            MW += [m.value, m.value]
-        else:
-            MI.append(angle_fn(m.link))
-            MW.append(m.value)
-    EI, EF, enames = _elements(scene, prig, point_fns, angle_fn, part_of)
-    MOI, MOF, mnames, centres = _moments(scene, B, part_of, angle_fn, cranks[0], cam)
+    N = _table_points(lk, int(table_points))
+    h = TWO_PI / N
+    tables, tlink = _body_tables(scene, N)
+    B = _Builder(N * scene.cycle_revolutions, scene.cycle)
+    crank = lk.cranks[0].link
+    coords, prig, makers = zip(*[_part_functions(scene, B, h, i, part, tables, tlink, cam)
+                                 for i, part in enumerate(scene.parts)])
+    bodies = scene.bodies
+    travel = {c: i for i, c in enumerate(coords) if c not in bodies}   # "BLOCK.travel" [m]
+    fns = _OnDemand(scene, makers)
+    MI, MW = _inertias(scene, fns)
+    EI, EF, enames = _elements(scene, prig, fns.point, fns.angle, fns.part_of)
+    MOI, MOF, mnames, centres = _moments(scene, B, fns.part_of, fns.angle, crank, cam)
     body_names = tuple(bodies) + tuple(travel)
     n_dyn = len(B.FI)          # functions the dynamics need; the rest only for outputs
-    BI = [angle_fn(b) if b in bodies else B.line(travel[b], 0.0, 1.0) for b in body_names]
-    pfn = {}
-    for p in lk.pose:                      # output-only: the points' linear accelerations
-        pf = point_fns(p)
-        if pf is not None:
-            pfn[p] = pf
-    arrays = {
-        "FI": np.array(B.FI, dtype=np.int64).reshape(-1, 3),
-        "FF": np.array(B.FF, dtype=float).reshape(-1, 6),
-        "tabs": np.ascontiguousarray(np.array(B.tabs)),
-        "MI": np.array(MI, dtype=np.int64), "MW": np.array(MW, dtype=float),
-        "EI": np.array(EI, dtype=np.int64).reshape(-1, 8),
-        "EF": np.array(EF, dtype=float).reshape(-1, 10),
-        "MOI": np.array(MOI, dtype=np.int64).reshape(-1, 2),
-        "MOF": np.array(MOF, dtype=float).reshape(-1, 4),
-        "PRIG": np.array(prig, dtype=np.int64), "BI": np.array(BI, dtype=np.int64),
-        "n_dyn": n_dyn}
+    BI = [fns.angle(b) if b in bodies else B.line(travel[b], 0.0, 1.0) for b in body_names]
+    pfn = {p: pf for p in lk.pose if (pf := fns.point(p)) is not None}   # output-only
+    arrays = _kernel_arrays(B, n_dyn, dict(MI=MI, MW=MW, EI=EI, EF=EF, MOI=MOI, MOF=MOF,
+                                           PRIG=prig, BI=BI))
     return MotionModel(scene, omega, scene.parts, tuple(coords), body_names, tuple(enames),
                        tuple(mnames), arrays, {b: f for b, f in zip(body_names, BI)}, centres,
                        pfn)
 
 
-def _linkage_part(scene, B, h, i, part, tbodies, ang, ang1, ang2, tlink):
+def _table_points(lk, n):
+    """Table intervals per revolution: ``n``, or with a cam and the default count, the
+    count nearest it that puts table nodes on the cam law's joints."""
+    law = getattr(lk, "cam", None)
+    if law is None or n != TABLE_POINTS:
+        return n
+    from .cam import aligned_points
+
+    return aligned_points(law, n)
+
+
+def _body_tables(scene, N):
+    """:func:`rigid_tables` as dicts (rotation, its two θ-derivatives, point position,
+    velocity, acceleration), a torsion body given its link's, and body → link of the rods."""
+    ang, ang1, ang2, pos, vel, acc = (dict(x) for x in rigid_tables(scene, N))
+    tlink: dict[str, str] = {}
+    for t in scene.torsions:
+        tlink.setdefault(t.body, t.link)
+    for b, l in tlink.items():
+        ang[b], ang1[b], ang2[b] = ang[l], ang1[l], ang2[l]
+    return (ang, ang1, ang2, pos, vel, acc), tlink
+
+
+def _part_functions(scene, B, h, i, part, tables, tlink, cam):
+    """Part i's coordinate, its rigid-motion function of θ and the maker of its functions
+    (kind "angle", "x" or "y", name) → function index, by the kind of part."""
+    lk = scene.linkage
+    crank = lk.cranks[0].link
+    slide = next((x for x in lk.sliders if part == (x.link,) and x.guide == "ground"), None)
+    if crank in part:                        # a geared crank alone: a linkage part
+        return _crank_part(scene, B, h, i, crank, tables, cam)
+    if slide is not None:
+        return _block_part(scene, B, h, i, slide, tables)
+    if len(part) == 1:
+        return _pivoted_part(scene, B, h, i, part[0], tables)
+    return _linkage_part(scene, B, h, i, part, tables, tlink)
+
+
+def _crank_part(scene, B, h, i, crank, tables, cam):
+    """The crank's part: its coordinate θ, turning with the crank (a cam's crank, the
+    follower, swings: tabulated like its other bodies); returns (coordinate, rigid-motion
+    function, maker of the part's functions)."""
+    ang, ang1, ang2, pos, vel, acc = tables
+    nq = scene.cycle_revolutions
+
+    def make(kind, name):
+        if kind == "angle":
+            return B.line(i, 0.0, 1.0) if name == crank and not cam else B.table(
+                i, 0.0, h, ang[name], ang1[name], ang2[name], True, _winding(ang[name], nq))
+        k = "xy".index(kind)
+        return B.table(i, 0.0, h, pos[name][:, k], vel[name][:, k], acc[name][:, k], True)
+    return crank, B.line(-1, 0.0, 1.0), make
+
+
+def _block_part(scene, B, h, i, slide, tables):
+    """A block on a fixed guide: its coordinate is its travel s along the guide [m], every
+    point at pose + s·u, no turning; returns as :func:`_crank_part`."""
+    lk, L = scene.linkage, scene.length_scale
+    pos, vel, acc = tables[3:]
+    p, u = slide.point, np.array(slide.direction)
+    rig = B.table(-1, 0.0, h, (pos[p] - lk.pose[p] * L) @ u, vel[p] @ u, acc[p] @ u, True)
+
+    def make(kind, name):
+        if kind == "angle":
+            return B.line(i, 0.0, 0.0)
+        k = "xy".index(kind)
+        return B.line(i, float(lk.pose[name][k] * L), float(u[k]))
+    return f"{slide.link}.travel", rig, make
+
+
+def _pivoted_part(scene, B, h, i, b, tables):
+    """A lone body: its coordinate is its rotation, its points on circles about its frame
+    pivot; returns as :func:`_crank_part`."""
+    lk, L = scene.linkage, scene.length_scale
+    ang, ang1, ang2 = tables[:3]
+    rig = B.table(-1, 0.0, h, ang[b], ang1[b], ang2[b], True,
+                  _winding(ang[b], scene.cycle_revolutions))
+    piv = next((p for p in scene.bodies[b] if p in lk.ground), None)
+
+    def make(kind, name):
+        if kind == "angle":
+            return B.line(i, 0.0, 1.0)
+        o = lk.pose[piv] * L
+        r = lk.pose[name] * L - o
+        rad, a0 = float(np.hypot(*r)), float(math.atan2(r[1], r[0]))
+        k = "xy".index(kind)
+        return B.circle(i, float(o[k]), rad, a0 - k * 0.5 * math.pi)
+    return b, rig, make
+
+
+class _OnDemand:
+    """Function indices made once, on demand, by the parts' makers: a body's rotation,
+    a point's x and y with its part (None for a frame point)."""
+
+    def __init__(self, scene, makers):
+        self.scene, self.makers, self.made = scene, makers, {}
+        self.part_of = scene.part_of_body()
+
+    def need(self, i, kind, name):
+        key = (i, kind, name)
+        if key not in self.made:
+            self.made[key] = self.makers[i](kind, name)
+        return self.made[key]
+
+    def angle(self, body):
+        return self.need(self.part_of[body], "angle", body)
+
+    def point(self, p):
+        i = self.scene.part_of_point(p)
+        return None if i is None else (self.need(i, "x", p), self.need(i, "y", p), i)
+
+
+def _inertias(scene, fns):
+    """The kinetic energy's rows: MI function indices (a point mass's x and y, an
+    inertia's rotation), MW their masses [kg] or inertias [kg·m²]."""
+    MI, MW = [], []
+    for m in scene.masses:
+        if m.kind != "mass":
+            MI.append(fns.angle(m.link))
+            MW.append(m.value)
+        elif (pf := fns.point(m.point)) is not None:
+            MI += [pf[0], pf[1]]
+            MW += [m.value, m.value]
+    return MI, MW
+
+
+#: The kernel's row arrays: dtype and row width (None: flat).
+_ROWS = {"MI": (np.int64, None), "MW": (float, None), "EI": (np.int64, 8), "EF": (float, 10),
+         "MOI": (np.int64, 2), "MOF": (float, 4), "PRIG": (np.int64, None),
+         "BI": (np.int64, None)}
+
+
+def _kernel_arrays(B, n_dyn, rows):
+    """The kernel's arrays: the functions of ``B``, the ``rows`` as :data:`_ROWS` says, and
+    ``n_dyn``, how many functions the dynamics need."""
+    arrays = {"FI": np.array(B.FI, dtype=np.int64).reshape(-1, 3),
+              "FF": np.array(B.FF, dtype=float).reshape(-1, 6),
+              "tabs": np.ascontiguousarray(np.array(B.tabs))}
+    for k, (dtype, width) in _ROWS.items():
+        a = np.array(rows[k], dtype=dtype)
+        arrays[k] = a if width is None else a.reshape(-1, width)
+    arrays["n_dyn"] = n_dyn
+    return arrays
+
+
+def _linkage_part(scene, B, h, i, part, tables, tlink):
     """Part i of several bodies without a crank: its coordinate (the rotation of a link
     pinned to the frame), its rigid-motion function of θ, and the maker of its functions,
     tabulated from the part's own sub-linkage driven by that link over its swing plus a
     margin (a geared crank's part: over a turn); ``h`` the tables' step in θ."""
+    ang, ang1, ang2 = tables[:3]
+    tbodies = set(tlink)
     lk = scene.linkage
     L = scene.length_scale
     bodies = scene.bodies

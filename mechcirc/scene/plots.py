@@ -92,8 +92,6 @@ def plot_mode(scene, theta: float, n: int = 1, *, kind: str = "resonance", ax=No
 
     import numpy as np
 
-    if kind not in ("resonance", "antiresonance"):
-        raise ValueError(f"kind must be 'resonance' or 'antiresonance', got {kind!r}")
     mode, state, raw = _mode_displacements(scene, theta, n, kind)
     lk = scene.linkage
     big = max(float(np.hypot(*d)) for d in raw.values())
@@ -102,25 +100,32 @@ def plot_mode(scene, theta: float, n: int = 1, *, kind: str = "resonance", ax=No
         from matplotlib.figure import Figure
 
         ax = Figure(figsize=(7, 6)).add_subplot()
+    _draw_displaced(ax, scene, state, {p: k * np.asarray(d) for p, d in raw.items()})
+    r = mode.resonance
+    ax.set_title(f"{kind} {n}: ωn = {r.omega:.6g} rad/s, ζ = {r.zeta:.3g}, at θ = "
+                 f"{math.degrees(theta):.6g}° (largest displacement drawn "
+                 f"{exaggeration:.0%} of the linkage)", fontsize=9)
+    ax.set(aspect="equal", xlabel=f"x [{lk.units}]", ylabel=f"y [{lk.units}]")
+    return ax
+
+
+def _draw_displaced(ax, scene, state, moves):
+    """The linkage in ``state`` (grey) and its points displaced by ``moves`` (point →
+    displacement [linkage units]), elastic links dashed; the ground points as triangles."""
+    import numpy as np
+
+    lk = scene.linkage
     elastic = {e.link for e in scene.elastic}
     for link, pts in lk.links.items():
         ring = list(pts) + ([pts[0]] if len(pts) > 2 else [])
         rigid = np.array([state.points[p] for p in ring])
-        moved = rigid + k * np.array([raw[p] for p in ring])
+        moved = rigid + np.array([moves[p] for p in ring])
         ls = "--" if link in elastic else "-"
         ax.plot(*rigid.T, color="0.7", lw=1.5, ls=ls, gid=f"rigid:{link}")
         ax.plot(*moved.T, "o" + ls, color="C0" if link not in elastic else "C3", ms=3,
                 lw=1.5, gid=f"mode:{link}")
     g = np.array([state.points[p] for p in lk.ground])
     ax.plot(*g.T, "k^", ms=7, gid="ground")
-    r = mode.resonance
-    ax.set_title(f"{kind} {n}: ωn = {r.omega:.6g} rad/s, ζ = {r.zeta:.3g}, at θ = "
-                 f"{math.degrees(theta):.6g}° (largest displacement drawn "
-                 f"{exaggeration:.0%} of the linkage)", fontsize=9)
-    ax.set_aspect("equal")
-    ax.set_xlabel(f"x [{lk.units}]")
-    ax.set_ylabel(f"y [{lk.units}]")
-    return ax
 
 
 def _mode_displacements(scene, theta: float, n: int, kind: str):
@@ -134,6 +139,8 @@ def _mode_displacements(scene, theta: float, n: int, kind: str):
     from ..modes import modes
     from .model import build
 
+    if kind not in ("resonance", "antiresonance"):
+        raise ValueError(f"kind must be 'resonance' or 'antiresonance', got {kind!r}")
     model = build(scene, theta)
     found = [m for m in modes(model.circuit) if m.resonance.kind == kind]
     if not (isinstance(n, int) and 1 <= n <= len(found)):

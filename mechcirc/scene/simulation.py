@@ -252,10 +252,9 @@ def _max_rate(model: MotionModel, samples: int) -> float:
     return float(max(rates))
 
 
-def simulate_scene(scene: Scene, *, omega: float | None = None,
-                   revolutions: int | None = None, start_deg: float | None = None,
-                   steps_per_period: float | None = None, points: int | None = None,
-                   method: str = "rk4", error_estimate: bool = True,
+def simulate_scene(scene: Scene, *, omega: float | None = None, revolutions: int | None = None,
+                   start_deg: float | None = None, steps_per_period: float | None = None,
+                   points: int | None = None, method: str = "rk4", error_estimate: bool = True,
                    model: MotionModel | None = None, rtol: float | None = None,
                    revolution: int | None = None, omega_ripple: tuple | None = None,
                    progress: Callable[[int, int], None] | None = None) -> SceneMotion:
@@ -263,19 +262,13 @@ def simulate_scene(scene: Scene, *, omega: float | None = None,
 
     Parameters default to the scene's ``[simulate]`` table, then Ω from its
     crank, 5 revolutions, start 0°, 7200 points, and RK4 steps per period of the fastest
-    mode chosen for the accuracy goal: 25 when the error estimate (from the run at 12.5)
-    is at most :data:`ACCURACY_GOAL`, else 50 (its estimate from the run at 25); 50
-    without the estimate.
-    ``method`` is ``"rk4"`` (numba when importable), ``"rk4-python"``, or one of
-    scipy's ``"DOP853"``, ``"RK45"``, ``"LSODA"`` at relative tolerance ``rtol``
-    (default 1e-10; the same right-hand side, integrated in the deviations from the
-    rigid motion so that the tolerance applies to the deformations).
-    ``revolution`` tabulates that revolution (1 … R) instead of the last; the
-    integration stops after it.  ``omega_ripple`` = (a, k) (default the file's
-    ``omega_ripple = {amplitude = a, harmonic = k}``, else none): the crank speed
-    is Ω (1 + a cos(k Ω t)), 0 ≤ a < 1, k a whole number ≥ 1, so the crank still
-    turns once per period 2π/Ω; the crank angle is θ = θs + Ω t + (a/k) sin(k Ω t)
-    and the rigid parts follow it with θ̈ = −a k Ω² sin(k Ω t).
+    mode for the accuracy goal: 25 when the error estimate (from the run at 12.5) is at
+    most :data:`ACCURACY_GOAL`, else 50 (estimated from 25); 50 without the estimate.
+    ``omega_ripple`` = (a, k) (default the file's ``omega_ripple = {amplitude = a,
+    harmonic = k}``, else none): the crank speed is Ω (1 + a cos(k Ω t)), 0 ≤ a < 1,
+    k a whole number ≥ 1, so the crank still turns once per period 2π/Ω; the crank
+    angle is θ = θs + Ω t + (a/k) sin(k Ω t) and the rigid parts follow it with
+    θ̈ = −a k Ω² sin(k Ω t).
 
     Parameters
     ----------
@@ -284,13 +277,17 @@ def simulate_scene(scene: Scene, *, omega: float | None = None,
         Crank speed [rad/s], revolutions, start angle [deg], RK4 steps per period of
         the fastest mode, output points per revolution (defaults above).
     method, rtol : optional
-        Integrator and its relative tolerance (above).
+        ``"rk4"`` (numba when importable), ``"rk4-python"``, or scipy's ``"DOP853"``,
+        ``"RK45"``, ``"LSODA"`` at relative tolerance ``rtol`` (default 1e-10; the
+        same right-hand side, in the deviations from the rigid motion so that the
+        tolerance applies to the deformations).
     error_estimate : bool
         Repeat the run at half the step and keep the relative change of the extrema.
     model : MotionModel, optional
         A :func:`~mechcirc.scene.motion.motion_model` of ``scene`` made before (reused).
     revolution, omega_ripple : optional
-        The revolution tabulated, and the crank-speed ripple (above).
+        The revolution tabulated (1 … R; the integration stops after it), and the
+        crank-speed ripple (above).
     progress : callable, optional
         ``progress(done, total)`` as the integration advances.
 
@@ -310,17 +307,30 @@ def simulate_scene(scene: Scene, *, omega: float | None = None,
     """
     o = _options(scene, omega, revolutions, start_deg, steps_per_period, points, method,
                  rtol, revolution, omega_ripple)
-    if model is None or (o.omega is not None and model.omega != float(o.omega)):
-        model = motion_model(scene, o.omega)
-    ripple = (0.0, 0.0) if o.ripple is None or o.ripple[0] == 0.0 else \
-        (float(o.ripple[0]) * model.omega, float(o.ripple[1]) * model.omega)
-    kern, backend = kernels_for(method)
-    notes = [NO_NUMBA_NOTE] if backend == "python" and method != "rk4-python" else []
-    compile_time = _warm_up(model, kern) if backend == "numba" else 0.0
+    model, ripple = _model_at(scene, o, model)
+    kern, backend, notes, compile_time = _ready_kernels(method, model)
     ctx = (scene, o, model, kern, math.radians(o.start_deg), ripple, progress)
     if method in SCIPY_METHODS:
         return _simulate_scipy(ctx, error_estimate, notes, compile_time)
     return _simulate_rk4(ctx, backend, error_estimate, notes, compile_time)
+
+
+def _model_at(scene, o, model):
+    """The motion model at the run's Ω (``model`` when it is one) and the crank-speed
+    ripple (A, ν) [rad/s] of the options ``o``."""
+    if model is None or (o.omega is not None and model.omega != float(o.omega)):
+        model = motion_model(scene, o.omega)
+    ripple = (0.0, 0.0) if o.ripple is None or o.ripple[0] == 0.0 else \
+        (float(o.ripple[0]) * model.omega, float(o.ripple[1]) * model.omega)
+    return model, ripple
+
+
+def _ready_kernels(method, model):
+    """The kernels of ``method``, their backend, the notes on it (numba missing) and the
+    time spent compiling them for ``model`` [s]."""
+    kern, backend = kernels_for(method)
+    notes = [NO_NUMBA_NOTE] if backend == "python" and method != "rk4-python" else []
+    return kern, backend, notes, (_warm_up(model, kern) if backend == "numba" else 0.0)
 
 
 @dataclass(frozen=True)

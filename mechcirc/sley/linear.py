@@ -269,35 +269,41 @@ def to_circuit(params: SleyParameters, theta0: float, *, lever: bool = False,
     mu = _coupling(p, theta0)
     mu2 = mu * mu
     v = p.omega if velocity is None else velocity
-    elements: list[Element] = []
-    levers = []
-    eta = 1.0 if lever else mu2
-
-    def rod(tag: str, a: str, b: str, c: float, k: float, eta: float = 1.0):
-        """Rod ``tag``: rigidity C ∥ damping k between nodes a and b."""
-        elements.append(Element("spring", f"C{tag}", a, b, c, eta))
-        if damping and k > 0:
-            elements.append(Element("damper", f"k{tag}", a, b, k, eta))
-
-    def rocker_side(crank: str, rocker: str, c: float, k: float, tag: str):
-        if lever:
-            levers.append(Lever(f"L{tag}", crank, "0", rocker, "0", abs(mu)))
-        else:
-            rocker = crank
-        rod(tag, rocker, "sley", c, k, eta)
-
-    rod("2", "shaft", "crank", p.C2, p.k2)
-    elements.append(Element("mass", "J2", "crank", "0", p.I2P + p.I4 * mu2))
-    rocker_side("crank", "rocker", p.C4, p.k4, "4")
+    elements, levers = _drive_side(("2", "4"), ("crank", "rocker"), p.I2P + p.I4 * mu2,
+                                   (p.C2, p.k2, p.C4, p.k4), mu, lever, damping)
     if p.drive == "both-sides":
         I5P, I7, C5, C7, k5, k7 = p.second_side()
-        rod("5", "shaft", "crank5", C5, k5)
-        elements.append(Element("mass", "J5", "crank5", "0", I5P + I7 * mu2))
-        rocker_side("crank5", "rocker7", C7, k7, "7")
-    elements.append(Element("mass", "I4P", "sley", "0", p.I4P, eta))
+        more = _drive_side(("5", "7"), ("crank5", "rocker7"), I5P + I7 * mu2,
+                           (C5, k5, C7, k7), mu, lever, damping)
+        elements, levers = elements + more[0], levers + more[1]
+    elements.append(Element("mass", "I4P", "sley", "0", p.I4P, 1.0 if lever else mu2))
     return Circuit(tuple(elements),
                    Drive("V", "shaft", "0", "velocity", float(v), rotational=True),
                    tuple(levers), name="sley", source=f"<sley {p.label or p.drive}>")
+
+
+def _drive_side(tags, nodes, inertia, rods, mu, lever, damping):
+    """One side of the drive: rod ``tags[0]`` from the shaft to the crank node
+    ``nodes[0]``, its inertia J (crank plus reflected rocker) to the frame, and rod
+    ``tags[1]`` on to the sley, behind an ideal lever of ratio |μ| at the rocker node
+    ``nodes[1]`` (``lever``) or reflected through η = μ²; ``rods`` = (C, k) of both.
+    Returns (elements, levers)."""
+    (crank, rocker), (c, k, c_r, k_r) = nodes, rods
+    elements = _rod(tags[0], "shaft", crank, c, k, 1.0, damping)
+    elements.append(Element("mass", f"J{tags[0]}", crank, "0", inertia))
+    levers = [Lever(f"L{tags[1]}", crank, "0", rocker, "0", abs(mu))] if lever else []
+    elements += _rod(tags[1], rocker if lever else crank, "sley", c_r, k_r,
+                     1.0 if lever else mu * mu, damping)
+    return elements, levers
+
+
+def _rod(tag: str, a: str, b: str, c: float, k: float, eta: float, damping: bool) -> list:
+    """Rod ``tag``: rigidity C ∥ damping k (with ``damping`` and k > 0) between nodes
+    a and b, reflected through ``eta``."""
+    out = [Element("spring", f"C{tag}", a, b, c, eta)]
+    if damping and k > 0:
+        out.append(Element("damper", f"k{tag}", a, b, k, eta))
+    return out
 
 
 def to_netlist(params: SleyParameters, theta0: float, *, lever: bool = False,

@@ -242,19 +242,17 @@ def table_error(params: SleyParameters | None = None, n: int = 1024,
 # ----------------------------------------------------------------- simulate
 def simulate(drive: str = "one-side", variant: int = 3, revolutions: int = 5,
              method: str | None = None, *, params: SleyParameters | None = None,
-             points_per_revolution: int = DEFAULT_POINTS,
-             steps_per_period: float | None = None, rtol: float | None = None,
-             table_points: int = 1024, revolution: int | None = None,
+             points_per_revolution: int = DEFAULT_POINTS, steps_per_period: float | None = None,
+             rtol: float | None = None, table_points: int = 1024, revolution: int | None = None,
              progress: Callable[[int, int], None] | None = None,
              error_estimate: bool = True, **overrides) -> SleyResult:
     """Simulate a preset variant (Table 1 or 2) or given parameters over R revolutions.
 
     Parameters
     ----------
-    drive : {"one-side", "both-sides"}
-        Table 1 (eq. 4) or Table 2 (eq. 9); ignored when ``params`` is given.
-    variant : int
-        Preset 1 … 7; ignored when ``params`` is given.
+    drive, variant : {"one-side", "both-sides"}, int
+        Table 1 (eq. 4) or Table 2 (eq. 9), and its preset 1 … 7; ignored when
+        ``params`` is given.
     revolutions : int
         R ≥ 1 revolutions from the start; the last one is tabulated.
     method : str, optional
@@ -264,16 +262,14 @@ def simulate(drive: str = "one-side", variant: int = 3, revolutions: int = 5,
     points_per_revolution : int
         Uniform output grid in crank angle (default 7200, i.e. 0.05°).
     steps_per_period : float, optional
-        RK4 steps per period 2π/|λ|max of the fastest linearised mode; more is more
-        accurate.  Default: chosen for the accuracy goal (25 when the error estimate is
-        then at most :data:`ACCURACY_GOAL`, else 50; 50 without the estimate).
+        RK4 steps per period 2π/|λ|max of the fastest linearised mode (default: 25 when
+        the error estimate is then at most :data:`ACCURACY_GOAL`, else 50; 50 without it).
     rtol : float, optional
         Relative tolerance of the scipy methods (default 1e-10).
     table_points : int
         Intervals of the φ4/μ/ν table (default 1024).
     revolution : int, optional
-        Tabulate this revolution (1 … R) instead of the last; the integration
-        stops after it (later revolutions cannot change it).
+        Tabulate this revolution (1 … R) instead of the last; the integration stops after it.
     progress : callable, optional
         ``progress(done, total)`` after each revolution.
     error_estimate : bool
@@ -294,8 +290,7 @@ def simulate(drive: str = "one-side", variant: int = 3, revolutions: int = 5,
     GeometryError
         The four-bar cannot be assembled or is not a crank-rocker.
     SolverError
-        The integration failed or would need too many steps (the message says
-        what to change).
+        The integration failed or would need too many steps (the message says how).
 
     Examples
     --------
@@ -303,17 +298,21 @@ def simulate(drive: str = "one-side", variant: int = 3, revolutions: int = 5,
     >>> [round(x) for x in r.extrema["eps4T"]]
     [-2319, 2915]
     """
-    if params is None:
-        from .presets import preset
-
-        params = preset(drive, variant, **overrides)
-    elif overrides:
-        params = params.replace(**overrides)
-    return simulate_params(params, revolutions, method,
-                           points_per_revolution=points_per_revolution,
+    return simulate_params(_parameters(drive, variant, params, overrides), revolutions,
+                           method, points_per_revolution=points_per_revolution,
                            steps_per_period=steps_per_period, rtol=rtol,
                            table_points=table_points, revolution=revolution,
                            progress=progress, error_estimate=error_estimate)
+
+
+def _parameters(drive: str, variant: int, params: SleyParameters | None,
+                overrides: dict) -> SleyParameters:
+    """``params`` or else the preset ``drive``/``variant``, with the ``overrides``."""
+    if params is None:
+        from .presets import preset
+
+        return preset(drive, variant, **overrides)
+    return params.replace(**overrides) if overrides else params
 
 
 def simulate_params(params: SleyParameters, revolutions: int = 5, method: str | None = None,
