@@ -25,6 +25,20 @@ __all__ = ["evaluate", "evaluate_designs", "push_down", "plan", "Plan", "compile
            "KERNEL_MIN_WORK"]
 
 
+# The rounding-error bound of :func:`evaluate`.  A node forms S = Σ tᵢ from m terms (its
+# leaf groups and its children; in parallel the terms are admittances 1/Kᵢ), each term known
+# to a relative error ρᵢ, so that
+#
+#     |Ŝ − S| ≤ Σ |tᵢ| (ρᵢ + m·u),     ρ(S) = that / |S|,
+#
+# where a leaf group of n same-signed scalars has ρ = (n + 2)·u, a reciprocal turns ρ into
+# ρ/(1 − ρ) + 4u (taken as ρ + 2ρ² + 4u while ρ ≤ 1/2; ∞ from ρ ≥ 1 on: no digit is known)
+# and a lever's division by r² adds 2u.  ρ is carried relative to the computed values, so
+# only the rounding of each addition (the m·u term) is first order.  Cancellation at a node
+# (Σ|tᵢ| ≫ |S|) raises the bound there; the children's errors are weighted by |tᵢ|/|S|, not
+# multiplied down the tree, so a deep ladder with no cancellation keeps a bound of a few
+# hundred u.
+
 #: Unit roundoff of float64 (half the machine epsilon): the relative error of
 #: one correctly rounded operation.
 _U = np.finfo(float).eps / 2
@@ -37,21 +51,18 @@ def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: boo
              error: bool = False, designs: tuple | None = None, _mode: str = "auto"):
     """K(ω) [m/(N·s)] of the tree at each ω [rad/s], vectorised.
 
-    With ``keep=True`` returns ``(K, values)`` where ``values`` maps
-    ``id(node)`` to the K of every series, parallel and lever node, for
-    :func:`push_down`.  With ``error=True`` returns ``(K, bound)``: a running
-    forward bound of the relative rounding error of K at each ω (see Notes).
-    ``condition=True`` is the same bound divided by the unit roundoff (kept
-    for callers of the former condition number).  Exact poles and zeros give
-    ±inf or 0 without warnings (their bound is inf); ``inf - inf`` gives NaN
-    (callers flag it).
+    ``keep=True`` returns ``(K, values)``, ``values`` mapping ``id(node)`` to the K of
+    every series, parallel and lever node, for :func:`push_down`.  ``error=True``
+    returns ``(K, bound)``, a running forward bound of the relative rounding error of K
+    at each ω (see Notes); ``condition=True`` gives that bound divided by the unit
+    roundoff (for callers of the former condition number).  Exact poles and zeros give
+    ±inf or 0 without warnings (bound inf); ``inf - inf`` gives NaN (callers flag it).
 
-    ``designs=(scaled, ratios)`` evaluates D designs of the tree's topology in
-    one numpy pass: ``scaled`` maps each leaf's element name to its value·η and
-    ``ratios`` each lever's name to its ratio, arrays of shape (D, 1) that
-    broadcast against ω (shape (W,), or (D, W) for each design's own points);
-    K and the bound then have shape (D, W), each row the same IEEE operations
-    as the single design's evaluation.  The values must be positive and finite
+    ``designs=(scaled, ratios)`` evaluates D designs of the tree's topology in one numpy
+    pass: ``scaled`` maps each leaf's element name to its value·η, ``ratios`` each
+    lever's name to its ratio, arrays of shape (D, 1) broadcasting against ω ((W,), or
+    (D, W) for each design's own points); K and the bound are then (D, W), each row the
+    same IEEE operations as the single design's.  The values must be positive and finite
     (a leaf group is then present exactly where it has leaves).
 
     Parameters
@@ -73,27 +84,12 @@ def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: boo
 
     Notes
     -----
-    Leaves are not evaluated one by one: the leaves of a series node add up
-    to ``r + j(a/ω + b·ω)`` and those of a parallel node to an admittance
-    ``g + j(c·ω + d/ω)``, so each node costs a few array operations whatever
-    its number of leaves.  A lossless sub-network (no dampers) has a purely
-    imaginary K = jX and is computed in real arithmetic on X, which is about
-    four times cheaper than complex arithmetic and keeps 1/0 = ∞, 1/∞ = 0.
-
-    The error bound follows the rounding through every sum, first order in the
-    unit roundoff u.  A node forms S = Σ tᵢ from m terms (its leaf groups and its
-    children; in parallel the terms are admittances 1/Kᵢ), each term known to a
-    relative error ρᵢ, so that
-
-        |Ŝ − S| ≤ Σ |tᵢ| (ρᵢ + m·u),     ρ(S) = that / |S|,
-
-    where a leaf group of n same-signed scalars has ρ = (n + 2)·u, a reciprocal
-    turns ρ into ρ/(1 − ρ) + 4u (taken as ρ + 2ρ² + 4u while ρ ≤ 1/2; ∞ from ρ ≥ 1 on:
-    no digit is known) and a lever's division by r² adds 2u.  ρ is carried relative to
-    the computed values, so only the rounding of each addition (the m·u term) is first
-    order.  Cancellation at a node (Σ|tᵢ| ≫ |S|) raises the bound there; the children's
-    errors are weighted by |tᵢ|/|S|, not multiplied down the tree, so a deep ladder with
-    no cancellation keeps a bound of a few hundred u.
+    The leaves of a series node add up to ``r + j(a/ω + b·ω)``, those of a parallel node
+    to an admittance ``g + j(c·ω + d/ω)``, so a node costs a few array operations
+    whatever its number of leaves.  A lossless sub-network (no dampers) has K = jX,
+    computed in real arithmetic on X (about four times cheaper; keeps 1/0 = ∞, 1/∞ = 0).
+    The error bound follows the rounding through every sum, first order in the unit
+    roundoff u; its rules are stated beside ``_U`` in this module's source.
     """
     omega = np.asarray(omega, dtype=float)
     if designs is not None:
