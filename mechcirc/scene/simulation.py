@@ -260,9 +260,8 @@ def simulate_scene(scene: Scene, *, omega: float | None = None, revolutions: int
                    progress: Callable[[int, int], None] | None = None) -> SceneMotion:
     """Simulate ``scene`` over ``revolutions`` turns of the crank and tabulate the last.
 
-    Parameters default to the scene's ``[simulate]`` table, then Ω from its
-    crank, 5 revolutions, start 0°, 7200 points, and RK4 steps per period of the fastest
-    mode for the accuracy goal: 25 when the error estimate (from the run at 12.5) is at
+    Parameters default to the scene's ``[simulate]`` table, then Ω from its crank, 5
+    revolutions, start 0°, 7200 points, and RK4 steps per period of the fastest mode: 25 when the error estimate (from the run at 12.5) is at
     most :data:`ACCURACY_GOAL`, else 50 (estimated from 25); 50 without the estimate.
     ``omega_ripple`` = (a, k) (default the file's ``omega_ripple = {amplitude = a,
     harmonic = k}``, else none): the crank speed is Ω (1 + a cos(k Ω t)), 0 ≤ a < 1,
@@ -430,12 +429,11 @@ def _simulate_rk4(ctx, backend, error_estimate, notes, compile_time):
 
     For RK4 in its asymptotic regime that change is ~15× the returned run's error, so it
     bounds it with margin (the steps are cut at the force laws' kinks, so the order holds
-    through impacts; measured: ``benchmarks/calib_sley_estimate.py``, ``docs/sley.md``).
-    The estimate costs half a run more.  With no ``steps_per_period`` given (and the
-    estimate on) the step is chosen for the accuracy goal: the run at
-    :data:`AUTO_STEPS_PER_PERIOD` is returned when its estimate is at most
-    :data:`ACCURACY_GOAL`, else the run at twice as many steps, with its change from the
-    first as the estimate.
+    through impacts; measured: ``benchmarks/calib_sley_estimate.py``, ``docs/sley.md``);
+    it costs half a run more.  With no ``steps_per_period`` (estimate on) the step is
+    chosen for the accuracy goal: the run at :data:`AUTO_STEPS_PER_PERIOD` is returned
+    when its estimate is at most :data:`ACCURACY_GOAL`, else the run at twice as many
+    steps, with its change from the first as the estimate.
     """
     scene, o, model, kern, theta_s, ripple, progress = ctx
     revolutions, warn = o.revolutions, []
@@ -464,24 +462,15 @@ def _simulate_rk4(ctx, backend, error_estimate, notes, compile_time):
     n_steps, nfev = per_rev * revolutions, main[5]
     other = out = other_ext = None
     if error_estimate:
-        try:
-            other = run(per_rev // 2)
-            nfev += other[5]
-        except SolverError:
-            other = "diverged"
+        other = _half_step_run(run, per_rev)
+        nfev += 0 if isinstance(other, str) else other[5]
         n_steps += per_rev // 2 * revolutions
     if auto:
-        out = _outputs(model, kern, theta_s, ripple, main[0], main[1])
-        if not isinstance(other, str):
-            other_ext = _extrema(_outputs(model, kern, theta_s, ripple, *other[:2]))
-        est = None if other_ext is None else _rel_change(_extrema(out), other_ext)
+        out, other_ext, est = _auto_estimate(model, kern, theta_s, ripple, main, other)
         need2 = period * rate * 2 * spp / TWO_PI
         if (est is None or est > ACCURACY_GOAL) and need2 <= MAX_STEPS_PER_REV:
             # not good enough: twice as many steps (beyond the limit: keep it, warned)
-            notes.append(f"the run at {spp:g} steps per period had an error estimate of "
-                         + ("none (its run at twice the step diverged)" if est is None
-                            else f"{est:.2g}") + f" > {ACCURACY_GOAL:g}: run again at "
-                         f"{2 * spp:g}")
+            notes.append(_rerun_note(spp, est))
             other, other_ext, out = main, _extrema(out), None
             spp, per_rev = 2 * spp, _steps_per_cycle(period, rate, 2 * spp)
             main = run(per_rev)
@@ -490,13 +479,43 @@ def _simulate_rk4(ctx, backend, error_estimate, notes, compile_time):
         warn.append(f"the error estimate's run at {spp / 2:g} steps per period diverged: "
                     "no estimate; raise steps_per_period")
     ts, ys, prev, wall, bad = main[:5]
-    notes.append(f"RK4 step {period / per_rev:.4g} s ({per_rev} steps per revolution, "
-                 f"{spp:g} per period of the fastest mode |λ| = {rate:.5g} 1/s)"
-                 + (" (error estimate: its change from the run at twice the step)"
-                    if error_estimate else ""))
+    notes.append(_step_note(period, per_rev, spp, rate, error_estimate))
     return _finish(scene, scene.simulate, model, kern, theta_s, ripple, ts, ys, prev, other,
                    wall, bad, n_steps, nfev, o.method, backend, per_rev, notes, warn,
                    revolutions, compile_time, out=out, other_extrema=other_ext)
+
+
+def _half_step_run(run, per_rev):
+    """The error estimate's run at ``per_rev // 2`` steps, or ``"diverged"``."""
+    try:
+        return run(per_rev // 2)
+    except SolverError:
+        return "diverged"
+
+
+def _auto_estimate(model, kern, theta_s, ripple, main, other):
+    """The outputs of the run ``main``, the extrema of the run ``other`` at twice the step
+    (None when it diverged) and the estimate: their relative change (None without it)."""
+    out, other_ext = _outputs(model, kern, theta_s, ripple, main[0], main[1]), None
+    if not isinstance(other, str):
+        other_ext = _extrema(_outputs(model, kern, theta_s, ripple, *other[:2]))
+    est = None if other_ext is None else _rel_change(_extrema(out), other_ext)
+    return out, other_ext, est
+
+
+def _rerun_note(spp, est):
+    """The note that the run at ``spp`` missed the accuracy goal (estimate ``est``)."""
+    return (f"the run at {spp:g} steps per period had an error estimate of "
+            + ("none (its run at twice the step diverged)" if est is None else f"{est:.2g}")
+            + f" > {ACCURACY_GOAL:g}: run again at {2 * spp:g}")
+
+
+def _step_note(period, per_rev, spp, rate, error_estimate):
+    """The note stating the RK4 step of the returned run."""
+    return (f"RK4 step {period / per_rev:.4g} s ({per_rev} steps per revolution, "
+            f"{spp:g} per period of the fastest mode |λ| = {rate:.5g} 1/s)"
+            + (" (error estimate: its change from the run at twice the step)"
+               if error_estimate else ""))
 
 
 def _steps_per_cycle(period, rate, spp):
