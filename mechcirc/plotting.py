@@ -355,13 +355,12 @@ def plot_transient(result, nodes=None, what: str = "x", elements=None, title: st
                    *, ax=None, fig=None):
     """A transient (:class:`mechcirc.transient.TransientResult`) against time.
 
-    Panels: the displacement x (or, ``what="v"``, velocity) of ``nodes``
-    (default the first :data:`MAX_NODES`) in the drive's units (m or rad, m/s
-    or rad/s); the forces of ``elements`` (names; N or N·m) when given; and for
-    each spring with a clearance (at most :data:`MAX_CLEARANCE_PANELS`) its
-    deformation x(n1) − x(n2) with the band ±B/2 inside which it transmits
-    nothing and the contact phases (the spring's force is not 0) shaded.  The
-    title names the netlist and the drive.
+    Panels: the displacement x (or, ``what="v"``, velocity) of ``nodes`` (default the
+    first :data:`MAX_NODES`) in the drive's units (m or rad, m/s or rad/s); the forces
+    of ``elements`` (names; N or N·m) when given; and for each spring with a clearance
+    (at most :data:`MAX_CLEARANCE_PANELS`) its deformation x(n1) − x(n2) with the band
+    ±B/2 inside which it transmits nothing and the contact phases (the spring's force
+    is not 0) shaded.  The title names the netlist and the drive.
 
     Parameters
     ----------
@@ -389,11 +388,7 @@ def plot_transient(result, nodes=None, what: str = "x", elements=None, title: st
     names = _known("node", nodes, result.nodes) if nodes is not None \
         else list(result.nodes)[:MAX_NODES]
     forces = _known("element", elements or (), result.elements)
-    drive = (f"{result.drive_kind} drive {result.drive_name}" if result.drive_name
-             else "no drive")
-    if result.drive_name and getattr(result, "waveform", None):
-        drive += f", {result.waveform}"
-    title = title or f"{result.name}: transient, {drive}"
+    title = title or _transient_title(result)
     if ax is not None:
         _nodes_panel(ax, result, names, what)
         ax.set_xlabel("t [s]")
@@ -416,6 +411,15 @@ def plot_transient(result, nodes=None, what: str = "x", elements=None, title: st
     if len(fig.axes) == n:              # a layout of ours only, not of the caller's axes
         fig.tight_layout()
     return fig
+
+
+def _transient_title(result) -> str:
+    """The default title of :func:`plot_transient`: the netlist and the drive."""
+    drive = (f"{result.drive_kind} drive {result.drive_name}" if result.drive_name
+             else "no drive")
+    if result.drive_name and getattr(result, "waveform", None):
+        drive += f", {result.waveform}"
+    return f"{result.name}: transient, {drive}"
 
 
 def _nodes_panel(a, result, names, what: str) -> None:
@@ -591,51 +595,64 @@ def plot_study(result, params, column: str, name: str = "study", title: str | No
     -------
     matplotlib.axes.Axes or matplotlib.figure.Figure
     """
-    import numpy as np
-
-    def label(key):
-        u = (units or {}).get(key)
-        return f"{key} [{u}]" if u and u != "1" else key
-
     ok = [r for r in result.rows if r["status"] == "ok" and r.get(column, "") != ""]
     bad = [r for r in result.rows if r["status"] != "ok"]
     fig, ax, made = _axes(ax, (6.5, 4.5))
     if len(params) == 1:
-        p = params[0]
-        pts = sorted((r[p], r[column]) for r in ok)
-        if pts:
-            x, y = np.array(pts, dtype=float).T
-            ax.plot(x, y, "o-", ms=3)
-            if np.all(y > 0) and y.max() > 100 * y.min():
-                ax.set_yscale("log")
-        for r in bad:
-            ax.axvline(r[p], color="0.6", lw=0.8, ls=":")
-        ax.set_xlabel(label(p))
-        ax.set_ylabel(label(column))
+        _study_line(ax, ok, bad, params[0], column, units)
     else:
-        from matplotlib.colors import LogNorm
-
-        px, py = params[:2]
-        x = np.array([r[px] for r in ok], dtype=float)
-        y = np.array([r[py] for r in ok], dtype=float)
-        c = np.array([r[column] for r in ok], dtype=float)
-        finite = np.isfinite(c)
-        norm = LogNorm() if finite.any() and np.all(c[finite] > 0) and \
-            c[finite].max() > 100 * c[finite].min() else None
-        sc = ax.scatter(x[finite], y[finite], c=c[finite], norm=norm, s=18, cmap="viridis")
-        fig.colorbar(sc, ax=ax, label=label(column))
-        if bad:
-            ax.plot([r[px] for r in bad], [r[py] for r in bad], "x", color="0.5",
-                    label="failed point")
-            ax.legend(loc="best", fontsize="small")
-        ax.set_xlabel(label(px))
-        ax.set_ylabel(label(py))
+        _study_scatter(fig, ax, ok, bad, params[:2], column, units)
     ax.grid(True, which="both", alpha=0.3)
     ax.set_title(title or f"{name}: {column} over {len(result.rows)} points")
     if made:
         fig.tight_layout()
         return fig
     return ax
+
+
+def _unit_label(key: str, units) -> str:
+    """``key [unit]`` from ``units``, or ``key`` alone where it has none (or unit "1")."""
+    u = (units or {}).get(key)
+    return f"{key} [{u}]" if u and u != "1" else key
+
+
+def _study_line(ax, ok, bad, p, column, units) -> None:
+    """:func:`plot_study` of one parameter ``p``: the column against it, in its order."""
+    import numpy as np
+
+    pts = sorted((r[p], r[column]) for r in ok)
+    if pts:
+        x, y = np.array(pts, dtype=float).T
+        ax.plot(x, y, "o-", ms=3)
+        if np.all(y > 0) and y.max() > 100 * y.min():
+            ax.set_yscale("log")
+    for r in bad:
+        ax.axvline(r[p], color="0.6", lw=0.8, ls=":")
+    ax.set_xlabel(_unit_label(p, units))
+    ax.set_ylabel(_unit_label(column, units))
+
+
+def _study_scatter(fig, ax, ok, bad, params, column, units) -> None:
+    """:func:`plot_study` of two parameters: a scatter coloured by the column (log colours
+    when it spans more than two decades), the failed points as grey crosses."""
+    import numpy as np
+    from matplotlib.colors import LogNorm
+
+    px, py = params
+    x = np.array([r[px] for r in ok], dtype=float)
+    y = np.array([r[py] for r in ok], dtype=float)
+    c = np.array([r[column] for r in ok], dtype=float)
+    finite = np.isfinite(c)
+    norm = LogNorm() if finite.any() and np.all(c[finite] > 0) and \
+        c[finite].max() > 100 * c[finite].min() else None
+    sc = ax.scatter(x[finite], y[finite], c=c[finite], norm=norm, s=18, cmap="viridis")
+    fig.colorbar(sc, ax=ax, label=_unit_label(column, units))
+    if bad:
+        ax.plot([r[px] for r in bad], [r[py] for r in bad], "x", color="0.5",
+                label="failed point")
+        ax.legend(loc="best", fontsize="small")
+    ax.set_xlabel(_unit_label(px, units))
+    ax.set_ylabel(_unit_label(py, units))
 
 
 def plot_periodic(result, title: str | None = None, *, fig=None):
@@ -664,17 +681,7 @@ def plot_periodic(result, title: str | None = None, *, fig=None):
     word = "moment" if u["Q"] == "N·m" else "force"
     fig = fig if fig is not None else _figure((11, 4.2))
     ax_q, ax_s = fig.subplots(1, 2, gridspec_kw={"width_ratios": [3, 2]})
-    ax_q.plot(result.angle_deg, result.Q, color="C0", label="Q(θ), drive")
-    for name, f in result.forces.items():
-        ax_q.plot(result.angle_deg, f, lw=0.9, label=f"{name}")
-    if result.unbounded:
-        ax_q.text(0.5, 0.5, "unbounded: harmonic on an undamped resonance",
-                  transform=ax_q.transAxes, ha="center", color="C3")
-    ax_q.set_xlabel("crank angle θ [deg]")
-    ax_q.set_ylabel(f"{word} [{u['Q']}]")
-    ax_q.set_xlim(0, 360)
-    ax_q.grid(True, alpha=0.3)
-    ax_q.legend(loc="best", fontsize="small")
+    _periodic_angle_panel(ax_q, result, f"{word} [{u['Q']}]")
     with np.errstate(all="ignore"):
         amp = np.abs(result.amplitude)
     top = float(np.max(amp[np.isfinite(amp)], initial=0.0))
@@ -704,6 +711,21 @@ def plot_periodic(result, title: str | None = None, *, fig=None):
                           f"{result.error:.1g})")
     fig.tight_layout()
     return fig
+
+
+def _periodic_angle_panel(ax, result, ylabel: str) -> None:
+    """:func:`plot_periodic`'s left panel: Q(θ) and the element forces over the crank angle."""
+    ax.plot(result.angle_deg, result.Q, color="C0", label="Q(θ), drive")
+    for name, f in result.forces.items():
+        ax.plot(result.angle_deg, f, lw=0.9, label=f"{name}")
+    if result.unbounded:
+        ax.text(0.5, 0.5, "unbounded: harmonic on an undamped resonance",
+                transform=ax.transAxes, ha="center", color="C3")
+    ax.set_xlabel("crank angle θ [deg]")
+    ax.set_ylabel(ylabel)
+    ax.set_xlim(0, 360)
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="best", fontsize="small")
 
 
 def plot_speed_map(result, title: str | None = None, *, ax=None, min_weight: float = 1e-3):
