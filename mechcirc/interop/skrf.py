@@ -224,33 +224,14 @@ def two_port_z(circuit: "Circuit", P1: str, P2: str, S1: str, S2: str,
         If a port node is not in the circuit, the frame ``"0"`` is missing,
         or the network is singular (a part not tied to the frame).
     """
-    from ..circuit import FRAME
     from ..nodal import assemble, dense_matrices
-    from ..topology import node_names
 
     # The whole network (assemble(..., whole=True)): the drive's loaded part is
     # not enough, a two-port needs every element, including those reached only
     # from the second port.
     omega = np.atleast_1d(np.asarray(omega, dtype=float))
     system = assemble(circuit, whole=True)
-    names = set(system.nodes) | set(node_names(circuit.elements, circuit.levers))
-    for port in (P1, P2, S1, S2):
-        if port not in names:
-            raise TopologyError(f"port node {port!r} is not a node of the circuit "
-                                f"(nodes: {', '.join(sorted(names))})", nodes=(port,))
-    if P1 == P2 or S1 == S2:
-        raise TopologyError("each port needs two different nodes", nodes=(P1, P2, S1, S2))
-    if FRAME not in names:
-        raise TopologyError("the circuit has no frame node '0' to refer velocities to")
-    index = {n: i for i, n in enumerate(system.nodes)}
-    index[FRAME] = -1
-    n = system.size
-    rhs = np.zeros((2, n))
-    for j, (a, b) in enumerate(((P1, P2), (S1, S2))):
-        if index[a] >= 0:
-            rhs[j, index[a]] += 1.0
-        if index[b] >= 0:
-            rhs[j, index[b]] -= 1.0
+    rhs = _port_incidence(circuit, system, P1, P2, S1, S2)
     Z = np.full((omega.size, 2, 2), np.nan, dtype=complex)
     ok = np.isfinite(omega) & (omega > 0)
     if ok.any():
@@ -265,6 +246,32 @@ def two_port_z(circuit: "Circuit", P1: str, P2: str, S1: str, S2: str,
             raise TopologyError("the network is singular at every frequency asked (a part "
                                 "not tied to the frame, or levers in parallel)")
     return Z
+
+
+def _port_incidence(circuit, system, P1, P2, S1, S2) -> NDArray[np.float64]:
+    """The (2, n) rows of +1 at each port's first node and −1 at its second among the
+    nodal ``system``'s unknowns (the frame has none); a TopologyError for bad ports."""
+    from ..circuit import FRAME
+    from ..topology import node_names
+
+    names = set(system.nodes) | set(node_names(circuit.elements, circuit.levers))
+    for port in (P1, P2, S1, S2):
+        if port not in names:
+            raise TopologyError(f"port node {port!r} is not a node of the circuit "
+                                f"(nodes: {', '.join(sorted(names))})", nodes=(port,))
+    if P1 == P2 or S1 == S2:
+        raise TopologyError("each port needs two different nodes", nodes=(P1, P2, S1, S2))
+    if FRAME not in names:
+        raise TopologyError("the circuit has no frame node '0' to refer velocities to")
+    index = {n: i for i, n in enumerate(system.nodes)}
+    index[FRAME] = -1
+    rhs = np.zeros((2, system.size))
+    for j, (a, b) in enumerate(((P1, P2), (S1, S2))):
+        if index[a] >= 0:
+            rhs[j, index[a]] += 1.0
+        if index[b] >= 0:
+            rhs[j, index[b]] -= 1.0
+    return rhs
 
 
 def two_port(circuit: "Circuit", P1: str, P2: str, S1: str, S2: str, omega: ArrayLike, *,
