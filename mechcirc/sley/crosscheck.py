@@ -207,22 +207,10 @@ def ringing_check(params: SleyParameters, *, half_periods: int = 4, revolutions:
     """
     from ..errors import SolverError
     from .models import ParameterError
-    from .simulation import simulate_params
 
     if params.M0 <= 0:
         raise ParameterError("the ringing check needs a beat-up moment M0 > 0")
-    import warnings
-
-    from .simulation import SleyAccuracyWarning
-
-    npts = 14400
-    # the difference of two runs with the same transient: periodicity is not needed here
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", SleyAccuracyWarning)
-        a = simulate_params(params, revolutions, method, points_per_revolution=npts,
-                            error_estimate=False)
-        b = simulate_params(params.replace(M0=0.0), revolutions, method,
-                            points_per_revolution=npts, error_estimate=False)
+    a, b = _with_and_without_pulse(params, revolutions, method)
     end = a.phiP + params.alpha / 2
     rel = (a.crank_angle - end) % (2 * math.pi)
     order = np.argsort(rel)
@@ -243,6 +231,24 @@ def ringing_check(params: SleyParameters, *, half_periods: int = 4, revolutions:
     theta_mid = (end + 0.5 * (cross[0] + cross[-1])) % (2 * math.pi)
     w_pred = eigenfrequencies(params, theta_mid)[0].omega_d
     return RingingCheck(theta_mid, w_meas, w_pred, abs(w_meas - w_pred) / w_pred)
+
+
+def _with_and_without_pulse(params: SleyParameters, revolutions: int, method):
+    """The simulations of :func:`ringing_check`: with the beat-up moment M0 and with M0 = 0
+    (14,400 points per revolution, no error estimate)."""
+    import warnings
+
+    from .simulation import SleyAccuracyWarning, simulate_params
+
+    npts = 14400
+    # the difference of two runs with the same transient: periodicity is not needed here
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", SleyAccuracyWarning)
+        a = simulate_params(params, revolutions, method, points_per_revolution=npts,
+                            error_estimate=False)
+        b = simulate_params(params.replace(M0=0.0), revolutions, method,
+                            points_per_revolution=npts, error_estimate=False)
+    return a, b
 
 
 @dataclass(frozen=True)
