@@ -288,26 +288,7 @@ def evaluate(expr: Expr, params: Mapping[str, float], *, source: str = "<string>
     values: dict[int, float] = {}
 
     def ev(node: Expr) -> float:
-        k, v = node.kind, cast(str, node.value)   # v is a float for "num", else a str
-        if k == "num":
-            return cast(float, v)
-        if k == "name":
-            if v in params:
-                return params[v]
-            if v in CONSTANTS:
-                return CONSTANTS[v]
-            fail(f"undefined parameter {v!r}", node,
-                 "a parameter defined by an earlier .param line")
-        if k == "neg":
-            return -values.pop(id(node.args[0]))
-        if k == "call":
-            x = values.pop(id(node.args[0]))
-            try:
-                return FUNCTIONS[v](x)
-            except (ValueError, OverflowError):
-                fail(f"{v}({x!r}) is undefined or out of range", node)
-        a, b = values.pop(id(node.args[0])), values.pop(id(node.args[1]))
-        return _binary(k, a, b, lambda message: fail(message, node))
+        return _node_value(node, params, values, fail)
 
     # Operands first (iteratively: see postorder), so errors come left to right.
     if tangent is None:
@@ -321,6 +302,31 @@ def evaluate(expr: Expr, params: Mapping[str, float], *, source: str = "<string>
         slopes[id(node)] = _slope(node, args, r, [slopes.pop(id(a)) for a in node.args],
                                   tangent)
     return values[id(expr)], slopes[id(expr)]
+
+
+def _node_value(node: Expr, params: Mapping[str, float], values: dict, fail) -> float:
+    """The value of ``node`` for :func:`evaluate`, its operands popped from ``values``
+    (by ``id``); ``fail(message, node, expected=None)`` raises the located error."""
+    k, v = node.kind, cast(str, node.value)   # v is a float for "num", else a str
+    if k == "num":
+        return cast(float, v)
+    if k == "name":
+        if v in params:
+            return params[v]
+        if v in CONSTANTS:
+            return CONSTANTS[v]
+        fail(f"undefined parameter {v!r}", node,
+             "a parameter defined by an earlier .param line")
+    if k == "neg":
+        return -values.pop(id(node.args[0]))
+    if k == "call":
+        x = values.pop(id(node.args[0]))
+        try:
+            return FUNCTIONS[v](x)
+        except (ValueError, OverflowError):
+            fail(f"{v}({x!r}) is undefined or out of range", node)
+    a, b = values.pop(id(node.args[0])), values.pop(id(node.args[1]))
+    return _binary(k, a, b, lambda message: fail(message, node))
 
 
 def _binary(k: str, a: float, b: float, fail) -> float:
@@ -436,14 +442,7 @@ def evaluate_array(expr: Expr, params: Mapping, size: int):
             elif k == "neg":
                 r = -values.pop(id(node.args[0]))
             elif k == "call":
-                x = values.pop(id(node.args[0]))
-                f = FUNCTIONS[v]
-                r = np.empty(size)
-                for i, xi in enumerate(x.tolist()):
-                    try:
-                        r[i] = f(xi)
-                    except (ValueError, OverflowError):
-                        r[i] = math.nan
+                r = _each(FUNCTIONS[v], values.pop(id(node.args[0])))
             else:
                 a, b = values.pop(id(node.args[0])), values.pop(id(node.args[1]))
                 if k == "**":             # Python's pow, as evaluate (numpy's may differ by an ulp)
@@ -454,6 +453,19 @@ def evaluate_array(expr: Expr, params: Mapping, size: int):
             bad |= ~np.isfinite(r)
             values[id(node)] = r
     return values[id(expr)], bad
+
+
+def _each(f: Callable[[float], float], x):
+    """``f`` applied value by value to the array ``x``, NaN where it raises."""
+    import numpy as np
+
+    r = np.empty(x.size)
+    for i, xi in enumerate(x.tolist()):
+        try:
+            r[i] = f(xi)
+        except (ValueError, OverflowError):
+            r[i] = math.nan
+    return r
 
 
 def _number_hint(bad: str, number: str, glued: str = "") -> str:
