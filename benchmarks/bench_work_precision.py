@@ -29,7 +29,7 @@ written here from the element values:
 
 Peers on both: scipy's RK45, DOP853, Radau, BDF and LSODA, and SUNDIALS
 CVODE (Adams and BDF, through scikit-sundae when it is installed:
-``pip install scikit-sundae``) at the same rtol (atol = rtol × 1e-3 × the
+the ``bench`` extra) at the same rtol (atol = rtol × 1e-3 × the
 solution's scale), all with the same Python right-hand side.  Error: the largest |x − x_ref|
 over all masses and outputs over the largest |x_ref|.  Times are medians of
 CPU time (``time.process_time``) over ``--repeat`` runs, after one warm run.
