@@ -137,17 +137,8 @@ def assemble(circuit: Circuit, whole: bool = False) -> NodalSystem:
     if whole:
         elements, levers = tuple(circuit.elements), tuple(circuit.levers)
     else:
-        check_frame_paths(circuit)
+        elements, levers, unloaded = _loaded_part(circuit)
         d = circuit.require_drive()
-        groups = force_groups(circuit.elements, circuit.levers)
-        kept = set(loaded_groups(groups, d.n1, d.n2, drive_line=d.line,
-                                 source=circuit.source))
-        n_el = len(circuit.elements)
-        elements = tuple(e for i, e in enumerate(circuit.elements) if i in kept)
-        levers = tuple(lv for i, lv in enumerate(circuit.levers) if n_el + i in kept)
-        unloaded = tuple(e.name for i, e in enumerate(circuit.elements) if i not in kept) + \
-            tuple(lv.name for i, lv in enumerate(circuit.levers) if n_el + i not in kept)
-
     names = node_names(elements, levers)
     reference = FRAME if FRAME in names or d is None or not names else d.n2
     nodes = tuple(n for n in names if n != reference)
@@ -169,6 +160,20 @@ def assemble(circuit: Circuit, whole: bool = False) -> NodalSystem:
     return NodalSystem(nodes, levers, elements, unloaded, M, D, Ks, C,
                        index.get(d.n1, -1) if d else -1, index.get(d.n2, -1) if d else -1,
                        stamped)
+
+
+def _loaded_part(circuit: Circuit) -> tuple[tuple, tuple, tuple[str, ...]]:
+    """(elements, levers, names of the rest): the part of ``circuit`` its drive loads, checked."""
+    check_frame_paths(circuit)
+    d = circuit.require_drive()
+    groups = force_groups(circuit.elements, circuit.levers)
+    kept = set(loaded_groups(groups, d.n1, d.n2, drive_line=d.line, source=circuit.source))
+    n_el = len(circuit.elements)
+    elements = tuple(e for i, e in enumerate(circuit.elements) if i in kept)
+    levers = tuple(lv for i, lv in enumerate(circuit.levers) if n_el + i in kept)
+    unloaded = tuple(e.name for i, e in enumerate(circuit.elements) if i not in kept) + \
+        tuple(lv.name for i, lv in enumerate(circuit.levers) if n_el + i not in kept)
+    return elements, levers, unloaded
 
 
 #: The four matrices of a nodal system, in the order of :class:`NodalSystem`.

@@ -47,9 +47,8 @@ def adaptive_sweep(circuit: Circuit, omega_min: float, omega_max: float, *,
     initial : int
         Points of the starting logarithmic grid.
     max_points : int, optional
-        Upper bound on the number of points (default
-        :data:`~mechcirc.limits.MAX_ADAPTIVE_POINTS`); reaching it is recorded
-        in ``result.notes``.
+        Upper bound on the number of points (default :data:`~mechcirc.limits.MAX_ADAPTIVE_POINTS`);
+        reaching it is recorded in ``result.notes``.
     method : {"auto", "sp", "nodal"}
         As :func:`mechcirc.sweep`.
 

@@ -313,20 +313,8 @@ def solve(system: NodalSystem, omega: ArrayLike, *, refine: bool = True,
         # Only the rows needed at singular points are kept.
         sing = ~np.isfinite(K) | (err >= 1.0)
         kept = {i: v for i, v in kept.items() if sing[i]}
-    # A(ω) exactly singular: a singular point.  A refinement that does not
-    # contract (float64 factors, or even the double-double LU: cond(A)
-    # beyond about 1e30) says no more than "no digit known": K stays finite
-    # with an infinite error (flag 2), never a pole, unless the iterate's
-    # backward error says A(ω) is singular within rounding.  The
-    # residual-rounding bound below is a worst case and not used here.
-    singular = ok & ~np.isfinite(K)
     rows: Any = x if keep_x else kept
-    for i in np.flatnonzero(ok & (err >= 1.0) & np.isfinite(K)):
-        # Singular if the iterate's element-wise backward error says A(ω) is
-        # within rounding of its values of a singular matrix; a stiff
-        # network's garbage iterate is not (seen with the double-double LU
-        # too, cond(A) beyond 1e30 at regular ω of a tree).
-        singular[i] = _backward_error(system, omega[i], rows[i]) <= SINGULAR_BACKWARD
+    singular = _singular(system, omega, ok, K, err, rows)
     with np.errstate(all="ignore"):
         # + the rounding of K to float64 (u), which the refinement's
         # estimate of the double-double K does not include.
@@ -335,6 +323,25 @@ def solve(system: NodalSystem, omega: ArrayLike, *, refine: bool = True,
     if limits:
         K, err = _singular_points(system, omega, rows, K, err, singular, steps)
     return Solution(x, K, err, singular)
+
+
+def _singular(system: NodalSystem, omega, ok, K, err, rows) -> np.ndarray:
+    """Where A(ω) is singular: K not finite, or no digit known and the iterate ``rows[i]``
+    a null vector within rounding."""
+    # A(ω) exactly singular: a singular point.  A refinement that does not
+    # contract (float64 factors, or even the double-double LU: cond(A)
+    # beyond about 1e30) says no more than "no digit known": K stays finite
+    # with an infinite error (flag 2), never a pole, unless the iterate's
+    # backward error says A(ω) is singular within rounding.  The
+    # residual-rounding bound in solve is a worst case and not used here.
+    singular = ok & ~np.isfinite(K)
+    for i in np.flatnonzero(ok & (err >= 1.0) & np.isfinite(K)):
+        # Singular if the iterate's element-wise backward error says A(ω) is
+        # within rounding of its values of a singular matrix; a stiff
+        # network's garbage iterate is not (seen with the double-double LU
+        # too, cond(A) beyond 1e30 at regular ω of a tree).
+        singular[i] = _backward_error(system, omega[i], rows[i]) <= SINGULAR_BACKWARD
+    return singular
 
 
 #: A point whose refinement by float64 factors does not contract is singular

@@ -1173,9 +1173,8 @@ def _run_task(spec: StudySpec, points, curves: bool, keep: bool, lines: bool) ->
 
 def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
               scheduler: str | None = None, workers: int | None = None, resume: bool = False,
-              batch_size: int | None = None, connect_timeout: float = 10.0,
+              batch_size: int | None = None, connect_timeout: float = 10.0, keep_rows: bool = True,
               on_rows: Callable[[int], None] | None = None,
-              keep_rows: bool = True,
               curves: str | os.PathLike | None = None) -> StudyResult:
     """Run every point of ``spec``; return the rows (and write them to ``output``).
 
@@ -1184,15 +1183,12 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
     spec : StudySpec
         From :func:`load_spec` or :func:`parse_spec`.
     output : path, optional
-        CSV file (or ``.parquet``, needs pyarrow), written whole and atomically at the end in
-        index order, with the spec and the unit of every column (Parquet metadata; for CSV the
-        sidecar ``OUTPUT.meta.json``); an existing file is kept until then. Meanwhile rows are
-        journalled, each with a checksum, to ``OUTPUT.partial.csv`` (:func:`journal_path`),
-        removed at the end, and ``OUTPUT.lock`` keeps a second study from writing the same
-        output. The output is written from the journal, a chunk of rows at a time.
+        CSV (or ``.parquet``, needs pyarrow) written atomically at the end (an existing file is kept
+        until then) from the journal, in index order and in chunks, with the spec and column units
+        (Parquet metadata or sidecar ``OUTPUT.meta.json``).  Rows are journalled with checksums to
+        ``OUTPUT.partial.csv`` (:func:`journal_path`), removed at the end.
     scheduler : str, optional
-        Address of a Dask scheduler (``tcp://host:8786``); by default the local cores run the
-        study.
+        Dask scheduler address (``tcp://host:8786``); by default the local cores run the study.
     workers : int, optional
         Local processes (default: all cores); 1 runs in this process.
     resume : bool
@@ -1201,19 +1197,18 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
     batch_size : int, optional
         Points per task (default: sized from memory, :func:`task_size`).
     connect_timeout : float
-        Seconds to wait for the Dask scheduler, and then for its first worker, before giving up.
-    on_rows : callable, optional
-        Called with the number of rows each time a batch finishes (progress).
+        Seconds to wait for the Dask scheduler, then for its first worker, before giving up.
     keep_rows : bool
         Return every row (default); False keeps only the failed ones in memory (with ``output``,
         for studies too large to hold: the table is the file).
+    on_rows : callable, optional
+        Called with the number of rows each time a batch finishes (progress).
     curves : path, optional
-        Also write K(ω) of every point (a sweep) to this Parquet file (needs pyarrow), in long
-        format: one row per point and ω, columns ``design`` (the table's ``index``), ``omega``
-        [rad/s], ``K_re`` and ``K_im`` [m/(N·s), or rad/(N·m·s) for a rotary drive]; the units
-        in each field's metadata, the spec (:func:`provenance`) in the file's.  Rows come a task
-        at a time (one row group each, in the order tasks finish); failed points have none.  Not
-        with ``resume``.
+        Also write K(ω) of every point (a sweep) to this Parquet file (needs pyarrow), long
+        format: a row per point and ω, columns ``design`` (the table's ``index``), ``omega``
+        [rad/s], ``K_re``, ``K_im`` [m/(N·s), or rad/(N·m·s) for a rotary drive]; units in the
+        fields' metadata, the spec (:func:`provenance`) in the file's.  One row group per task,
+        in the order tasks finish; failed points have none.  Not with ``resume``.
 
     Returns
     -------
@@ -1223,18 +1218,16 @@ def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
     Raises
     ------
     MechcircError
-        Another study holds ``output``; ``resume`` finds rows of another spec; the scheduler
-        cannot be reached or has no worker (nothing is written).
+        Another study holds ``output`` (its ``OUTPUT.lock``); ``resume`` finds rows of another spec;
+        the scheduler cannot be reached or has no worker (nothing is written).
     """
     parquet = _check_run(spec, output, scheduler, connect_timeout, resume, curves)
     with _lock(output) if output else contextlib.nullcontext(), \
             _curve_writer(curves, spec) as write_curves:
         journal = journal_path(output) if output else None
         done = _resumed_rows(spec, output, journal, parquet) if resume and journal else []
-        take = _Take(spec, journal, done, keep_rows or not output,
-                     write_curves if curves is not None else None, on_rows)
-        task = (curves is not None, take.keep_rows, bool(output))
-        run = _execute(spec, done, (scheduler, connect_timeout), workers, batch_size, take, task)
+        take = _Take(spec, journal, done, keep_rows or not output, write_curves, on_rows)
+        run = _execute(spec, done, (scheduler, connect_timeout), workers, batch_size, take)
         if journal:
             _publish(output, parquet, spec, journal, take, done)
     return take.result(*run)
@@ -1289,6 +1282,11 @@ class _Take:
         self.count, self.failed = len(done), sum(r["status"] != "ok" for r in done)
         self.sink: TextIO | None = None
 
+    @property
+    def task(self) -> tuple:
+        """What each task returns besides its failed rows: (curves, all rows, journal text)."""
+        return (self.write_curves is not None, self.keep_rows, bool(self.journal))
+
     def __call__(self, out: _TaskOut) -> None:
         if self.write_curves is not None:
             self.write_curves(out.rows, out.K)
@@ -1314,7 +1312,7 @@ class _Take:
 
 
 def _execute(spec: StudySpec, done: list, dask: tuple, workers: int | None,
-             batch_size: int | None, take: _Take, task: tuple) -> tuple[str, int]:
+             batch_size: int | None, take: _Take) -> tuple[str, int]:
     """Run the points not in ``done`` on the Dask scheduler ``dask`` = (address,
     timeout) if given, else on the local cores, then close ``take``; the
     executor's name and its number of workers."""
@@ -1324,9 +1322,9 @@ def _execute(spec: StudySpec, done: list, dask: tuple, workers: int | None,
     client = _dask_client(*dask) if dask[0] else None
     try:
         if client is not None:
-            return "dask", _run_dask(spec, have, n_todo, client, batch_size, take, task)
+            return "dask", _run_dask(spec, have, n_todo, client, batch_size, take, take.task)
         return _run_local(spec, have, n_todo, workers or os.cpu_count() or 1, batch_size, take,
-                          task)
+                          take.task)
     finally:
         take.close()
 
@@ -1335,9 +1333,9 @@ def _execute(spec: StudySpec, done: list, dask: tuple, workers: int | None,
 def _curve_writer(path, spec: StudySpec):
     """``write(rows, K)`` appending a task's K(ω) curves to the Parquet file ``path``
     (long format, see :func:`run_study`), which appears only if the block ends
-    cleanly; a no-op without ``path``."""
+    cleanly; None without ``path``."""
     if path is None:
-        yield lambda rows, K: None
+        yield None
         return
     import json
 

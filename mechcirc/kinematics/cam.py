@@ -241,9 +241,8 @@ def cam_profile(motion, base_radius: float, follower: str = "roller", *,
     Parameters
     ----------
     motion : Motion
-        The follower's motion x(θ) [length; rad for ``oscillating``], θ the
-        cam angle, the cam turning counter-clockwise; its lowest point (on the
-        grid of ``points``) touches the base circle.
+        The follower's motion x(θ) [length; rad if ``oscillating``] of the cam angle θ (cam turning
+        counter-clockwise); its lowest point on the grid of ``points`` touches the base circle.
     base_radius : float
         r_b > 0, the cam's smallest radius, where x is least.
     follower : {"roller", "flat", "oscillating", "oscillating_flat"}
@@ -279,9 +278,8 @@ def cam_profile(motion, base_radius: float, follower: str = "roller", *,
     >>> round(math.degrees(cam.check("pressure_angle").value), 4)
     17.8466
     """
-    rb, rf, e, arm, pivot, pressure_limit = _inputs(
-        motion, follower, base_radius, roller_radius, offset, arm, pivot, points,
-        pressure_limit_deg)
+    rb, rf, e, arm, pivot, pressure_limit = _inputs(motion, follower, base_radius, roller_radius,
+                                                    offset, arm, pivot, points, pressure_limit_deg)
     theta = np.linspace(0.0, 2 * math.pi, int(points))
     geo = partial(_geometry, motion, follower=follower, rb=rb, rf=rf, e=e, arm=arm, pivot=pivot,
                   x0=float(np.min(motion.evaluate(theta)[0])))    # of the cam angle(s) t

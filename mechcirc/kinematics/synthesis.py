@@ -475,8 +475,7 @@ def synthesize(load: Literal["light", "medium", "heavy"] = "medium", swing: floa
     load : {"light", "medium", "heavy"}
         Loom class; fixes the crank range (step 1).
     swing : float, optional
-        Swing Ψ [deg], exactly; default: every ``swing_step`` over ``swing_range``.
-        It is still judged by the swing criterion (``swing_range``).
+        Swing Ψ [deg], fixed (still judged by ``swing_range``); default: the grid of ``swing_step``.
     objective : {"margin", "ratio"}
         "margin" (default): maximise the smallest relative margin of the
         shape criteria; "ratio": minimise |Φ2''|/|Φ1''|.
@@ -497,25 +496,22 @@ def synthesize(load: Literal["light", "medium", "heavy"] = "medium", swing: floa
         Lengths held fixed [mm] by name: "crank" (replaces the load's range),
         "coupler", "rocker" or "frame" (not both of the last two).
     refine : bool
-        After the grid, improve each candidate by a bounded Nelder–Mead search
-        on the objective over the free parameters (c/a or d/a from eq. (10)),
-        kept when its direct evaluation is feasible and at least as good.
+        Improve each grid candidate by a bounded Nelder–Mead search of the objective over the free
+        parameters (c/a or d/a, eq. (10)); kept if feasible when evaluated directly and no worse.
 
     Returns
     -------
     SynthesisResult
-        Designs best first, one per shape (b/a, c/a, d/a: scaled copies are
-        dropped), each with its binding criteria; if none is feasible,
-        ``conflicts`` names the criteria that cannot hold together.
+        Designs best first, one per shape b/a, c/a, d/a (scaled copies dropped), each with its
+        binding criteria; if none is feasible, ``conflicts`` names the criteria in conflict.
 
     Raises
     ------
     GeometryError
         Unknown load, a swing outside (0°, 180°), a bad fixed length, an empty grid.
     """
-    fixed, s_range = _checked(load, objective, fixed, swing, swing_range, b_a_range, d_a_range,
-                              step, crank_step, swing_step)
-    crank_range = (fixed["crank"],) * 2 if "crank" in fixed else LOAD_CRANK_MM[load]
+    fixed, s_range, crank_range = _checked(load, objective, fixed, swing, swing_range, b_a_range,
+                                           d_a_range, step, crank_step, swing_step)
     axes = _grid_axes(fixed, swing, s_range, crank_range, b_a_range, d_a_range, step,
                       crank_step, swing_step)
     space = _Space(fixed, b_a_range, d_a_range, crank_range, s_range, swing)
@@ -531,7 +527,7 @@ def synthesize(load: Literal["light", "medium", "heavy"] = "medium", swing: floa
 
 def _checked(load, objective, fixed, swing, swing_range, b_a_range, d_a_range, step,
              crank_step, swing_step):
-    """The arguments of :func:`synthesize` checked: (fixed lengths, swing range)."""
+    """The arguments of :func:`synthesize` checked: (fixed lengths, swing range, crank range)."""
     if load not in LOAD_CRANK_MM:
         raise GeometryError(f"unknown load {load!r}; expected one of "
                             f"{', '.join(LOAD_CRANK_MM)}")
@@ -560,7 +556,7 @@ def _checked(load, objective, fixed, swing, swing_range, b_a_range, d_a_range, s
             raise GeometryError(f"{name} must be 1 < low ≤ high < 1000, got {tuple(rng)}")
     if not (step > 0 and crank_step > 0 and swing_step > 0):
         raise GeometryError("step, crank_step and swing_step must be > 0")
-    return fixed, s_range
+    return fixed, s_range, (fixed["crank"],) * 2 if "crank" in fixed else LOAD_CRANK_MM[load]
 
 
 def _grid_axes(fixed, swing, s_range, crank_range, b_a_range, d_a_range, step, crank_step,

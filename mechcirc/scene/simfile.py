@@ -500,6 +500,14 @@ def parse_shaft(text: str, source: str, table, scene) -> Shaft:
         return float(v)
 
     flywheel = num("flywheel", 0.0, zero=True)
+    motor = _shaft_motor(text, source, table, num)
+    start = num("start_deg", 0.0, positive=False)
+    return Shaft(flywheel, motor, start, num("max_time", 120.0))
+
+
+def _shaft_motor(text: str, source: str, table: dict, num):
+    """The ``[shaft]`` motor: its kind checked against the keys given, then built (``num``
+    reads a checked number)."""
     kind = table.get("motor")
     if kind not in ("kloss", "table"):
         raise located(text, source, f"[shaft] motor must be \"kloss\" or \"table\", got "
@@ -528,5 +536,4 @@ def parse_shaft(text: str, source: str, table, scene) -> Shaft:
         if hasattr(exc, "line"):
             raise
         raise located(text, source, f"[shaft] {exc}", "shaft", "motor") from None
-    start = num("start_deg", 0.0, positive=False)
-    return Shaft(flywheel, motor, start, num("max_time", 120.0))
+    return motor

@@ -46,32 +46,14 @@ def sley_scene(params: SleyParameters, *, revolutions: int = 5):
     Scene
         Posed with the crank at angle 0, the run starting at θ0 where ν = 0.
     """
-    import numpy as np
-
-    from ..kinematics.linkage import Crank, Linkage
     from ..scene.files import Scene, SceneDrive, SceneMass, Torsion
     from ..scene.simfile import Moment, SimulateSettings
     from .models import start_angle
 
     p = params
     both = p.drive == "both-sides"
-    phi4 = p.fourbar().transfer(0.0)[0]
-    C = (p.d + p.l4 * math.cos(phi4), p.l4 * math.sin(phi4))
-    sides = [("", "A", "B", "C", "D", "rocker")] + ([("5", "E", "F", "G", "H", "rocker7")]
-                                                    if both else [])
-    pose: dict = {}
-    links: dict = {}
-    ground: tuple[str, ...] = ()
-    cranks: tuple[Crank, ...] = ()
-    for n, a, b, c, d, rocker in sides:
-        pose.update({a: (0.0, 0.0), b: (p.l2P, 0.0), c: C, d: (p.d, 0.0)})
-        links.update({"crank" + n: (a, b), "coupler" + n: (b, c), rocker: (d, c)})
-        ground += (a, d)
-        cranks += (Crank("crank" + n, a, float(p.omega)),)
-    name = f"mrazek {p.drive}"
-    source = f"<sley {p.label or p.drive}>"
-    linkage = Linkage(name, {k: np.array(v, dtype=float) for k, v in pose.items()}, ground,
-                      links, cranks, source, "m")
+    name, source = f"mrazek {p.drive}", f"<sley {p.label or p.drive}>"
+    linkage = _sley_linkage(p, name, source)
     rods = [("C2", "crank", "shaft", "A", p.C2, p.k2), ("C4", "rocker", "sley", "D", p.C4, p.k4)]
     masses = [("I2P", "crank", p.I2P), ("I4", "rocker", p.I4), ("I4P", "sley", p.I4P)]
     if both:
@@ -91,6 +73,29 @@ def sley_scene(params: SleyParameters, *, revolutions: int = 5):
         simulate=SimulateSettings(revolutions=revolutions,
                                   start_deg=math.degrees(start_angle(p)),
                                   aliases=dict(ALIASES[p.drive])))
+
+
+def _sley_linkage(p: SleyParameters, name: str, source: str):
+    """The four-bar(s) of ``p`` posed with the crank at angle 0, each crank driven at ω."""
+    import numpy as np
+
+    from ..kinematics.linkage import Crank, Linkage
+
+    phi4 = p.fourbar().transfer(0.0)[0]
+    C = (p.d + p.l4 * math.cos(phi4), p.l4 * math.sin(phi4))
+    sides = [("", "A", "B", "C", "D", "rocker")] + ([("5", "E", "F", "G", "H", "rocker7")]
+                                                    if p.drive == "both-sides" else [])
+    pose: dict = {}
+    links: dict = {}
+    ground: tuple[str, ...] = ()
+    cranks: tuple[Crank, ...] = ()
+    for n, a, b, c, d, rocker in sides:
+        pose.update({a: (0.0, 0.0), b: (p.l2P, 0.0), c: C, d: (p.d, 0.0)})
+        links.update({"crank" + n: (a, b), "coupler" + n: (b, c), rocker: (d, c)})
+        ground += (a, d)
+        cranks += (Crank("crank" + n, a, float(p.omega)),)
+    return Linkage(name, {k: np.array(v, dtype=float) for k, v in pose.items()}, ground,
+                   links, cranks, source, "m")
 
 
 def scene_overrides(params: SleyParameters) -> dict:

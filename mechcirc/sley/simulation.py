@@ -251,8 +251,7 @@ def simulate(drive: str = "one-side", variant: int = 3, revolutions: int = 5,
     Parameters
     ----------
     drive, variant : {"one-side", "both-sides"}, int
-        Table 1 (eq. 4) or Table 2 (eq. 9), and its preset 1 … 7; ignored when
-        ``params`` is given.
+        Table 1 (eq. 4) or Table 2 (eq. 9), and its preset 1 … 7; ignored when ``params`` is given.
     revolutions : int
         R ≥ 1 revolutions from the start; the last one is tabulated.
     method : str, optional
@@ -273,11 +272,9 @@ def simulate(drive: str = "one-side", variant: int = 3, revolutions: int = 5,
     progress : callable, optional
         ``progress(done, total)`` after each revolution.
     error_estimate : bool
-        Also run at twice the step (scipy methods: rtol/100) for
-        ``SleyResult.error_estimate``.
+        Also run at twice the step (scipy methods: rtol/100) for ``SleyResult.error_estimate``.
     **overrides
-        :class:`SleyParameters` fields, e.g. ``alpha=math.radians(30)``,
-        ``clearance=0.01``, ``omega=120``.
+        :class:`SleyParameters` fields, e.g. ``alpha=math.radians(30)``, ``clearance=0.01``.
 
     Returns
     -------

@@ -162,7 +162,22 @@ def state_space(circuit: Circuit, *, linearise: bool = False) -> StateSpace:
     Dy = Y.T @ Dq @ Y
     A, Bv, M11_inv = _dynamics(My, Dy, Ky, Fyu, Fyx, n1, n0, vel)
     N = A.shape[0]
-    # Outputs.  q = B1 y1 + Bd y0 + Bs s, with z = [y1, v1, y0, (X)].
+    Cx, Dx, Cv, Dv = _outputs(T, B1, Bd, Bs, (S_y, S_u, S_x), p, A, Bv, vel)
+    # Q from the residual r = M a + D v + K x = Gᵀ μ + g Q (consistent, exact).
+    h = la.pinv(np.hstack([G.T, g[:, None]]))[-1] if kind is not None else None
+    massive = n0 == 0 and ns == 0
+    extra = _clearance_map(clear, index, N, M11_inv, Y[:, :n1], T, massive) if clear else None
+    z0, notes = _initial(circuit, nodes, index, Cx, Cv, N, vel)
+    return StateSpace(tuple(nodes), tuple(work.elements), kind, A, Bv, Cx, Dx, Cv, Dv, Dx,
+                      M, D, K, g, h, massive, (z0, tuple(notes)), tuple(sorted(drop)),
+                      extra)
+
+
+def _outputs(T, B1, Bd, Bs, S, p, A, Bv, vel):
+    """(Cx, Dx, Cv, Dv): node displacements and velocities from the state z and drive u."""
+    S_y, S_u, S_x = S
+    nq, N, n1, n0 = T.shape[1], A.shape[0], B1.shape[1], Bd.shape[1]
+    # q = B1 y1 + Bd y0 + Bs s, with z = [y1, v1, y0, (X)].
     Qz = np.zeros((nq, N))
     Qz[:, :n1] = B1 + Bs @ S_y[:, :n1]
     Qz[:, 2 * n1:2 * n1 + n0] = Bd + Bs @ S_y[:, n1:]
@@ -173,16 +188,7 @@ def state_space(circuit: Circuit, *, linearise: bool = False) -> StateSpace:
     if vel:
         Cx[:, N - 1] += p
     # v = d/dt x = Cx ż + Dx u̇ = Cx A z + Cx B u + Dx u̇
-    Cv = Cx @ A
-    Dv = Cx @ Bv
-    # Q from the residual r = M a + D v + K x = Gᵀ μ + g Q (consistent, exact).
-    h = la.pinv(np.hstack([G.T, g[:, None]]))[-1] if kind is not None else None
-    massive = n0 == 0 and ns == 0
-    extra = _clearance_map(clear, index, N, M11_inv, Y[:, :n1], T, massive) if clear else None
-    z0, notes = _initial(circuit, nodes, index, Cx, Cv, N, vel)
-    return StateSpace(tuple(nodes), tuple(work.elements), kind, A, Bv, Cx, Dx, Cv, Dv, Dx,
-                      M, D, K, g, h, massive, (z0, tuple(notes)), tuple(sorted(drop)),
-                      extra)
+    return Cx, Dx, Cx @ A, Cx @ Bv
 
 
 def _working(circuit: Circuit, linearise: bool) -> tuple[list, set, Circuit]:
