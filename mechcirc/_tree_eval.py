@@ -142,8 +142,8 @@ def _fast_then_checked(root, omega, error, condition, designs):
     bad = ~np.isfinite(K)
     sub = None
     if designs is not None:           # again the whole rows of those designs
-        bad = np.broadcast_to(bad.any(axis=1)[:, None], bad.shape)
-        rows = bad[:, 0]
+        rows = bad.any(axis=1)        # (all False on an empty grid of ω)
+        bad = np.broadcast_to(rows[:, None], bad.shape)
         sub = tuple({k: v[rows] for k, v in d.items()} for d in designs)
     if bad.any():
         w = omega[bad] if sub is None else omega[bad].reshape(-1, omega.shape[1])

@@ -612,3 +612,17 @@ def test_a_balanced_bridge_design_is_left_to_the_single_path():
     res = designs(text, params).resonances()
     np.testing.assert_array_equal(res.single, [1])
     _assert_resonances_as_single(text, params, res, None, None)
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_designs_on_an_empty_grid(monkeypatch, compiled):
+    # A study's band can leave no grid point to evaluate (its extremes then come
+    # from the exact roots): the numpy path of many designs indexed its first
+    # column and raised IndexError there; the compiled path returned (D, 0).
+    from mechcirc import _jit
+
+    monkeypatch.setattr(_jit, "COMPILED", compiled)
+    ds = designs(STB.read_text(), {"eta1": [0.7, 0.8, 0.9]})
+    s = ds.sweep(np.array([]))
+    assert s.K.shape == (3, 0)
+    assert ds.sweep(np.array([50.0])).K.shape == (3, 1)
