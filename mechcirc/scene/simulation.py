@@ -128,11 +128,12 @@ NO_NUMBA_NOTE = ("numba is not importable (install the 'fast' extra: pip install
 COLD_NOTE = ("numba's cache does not hold the compiled kernels yet: ran the same RK4 as "
              "Python while a background process compiles them for the next run")
 _WARM = False
-# Compiles the kernels a default run and a scipy method take into numba's disk cache.
+# Compiles the kernels a default run and a scipy method take into numba's disk cache
+# (a short, coarse run of each: the compiled code does not depend on the step).
 _WARM_STATEMENT = ("import mechcirc._jit as j; j.COMPILED = True; "
                    "from mechcirc.sley.simulation import simulate; "
-                   "simulate(revolutions=1, error_estimate=False); "
-                   "simulate(revolutions=1, method='DOP853', error_estimate=False)")
+                   "simulate(revolutions=1, error_estimate=False, steps_per_period=5); "
+                   "simulate(revolutions=1, method='DOP853', error_estimate=False, rtol=1e-3)")
 
 
 def kernels_for(method):
