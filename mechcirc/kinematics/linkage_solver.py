@@ -551,7 +551,7 @@ def motion(lk, pl: _Plan, theta, *, max_step_deg: float = 2.0, method: str = "au
                             f"use method='newton'")
     if use == "dyads":
         q, qd, qdd, parts = _solve_dyads(lk, pl, t, dt_max)
-    elif _compiled():
+    elif _compiled("newton_path"):
         q, qd, qdd, parts = _solve_newton_compiled(lk, pl, t, dt_max)
     else:
         q, qd, qdd, parts = _solve_newton(lk, pl, t, dt_max)
@@ -742,7 +742,7 @@ def _solve_dyads(lk, pl, t, dt_max):
     if ds is None:
         ds = pl.cache["dyads"] = _DyadSolver(lk, pl)
     # the compiled loop knows RRR dyads only; with sliders the numpy closed form
-    compiled = _compiled() and all(d.kind == "RRR" for d in pl.dyads)
+    compiled = _compiled("dyads_path") and all(d.kind == "RRR" for d in pl.dyads)
     if compiled:
         out = _dyads_compiled(ds, t)
         margin = out[-1]
@@ -1085,14 +1085,32 @@ class Newton:
         return q[0], qdot, qddot, sign
 
 
-def _compiled() -> bool:
-    """The compiled sequential Newton (numba) when it is importable, unless
-    ``mechcirc._jit.COMPILED`` says otherwise (False: the batched numpy path)."""
+def _compiled(kernel: str) -> bool:
+    """Whether to run the compiled loop ``kernel`` of :mod:`._linkage_kernels` (numba;
+    plain Python without it when ``mechcirc._jit.COMPILED`` is True) rather than the
+    batched numpy path.  With COMPILED None (default) only once numba's disk cache holds
+    it: until then numpy runs while a detached process compiles both loops
+    (:func:`mechcirc._jit.warm_in_background`); False: numpy."""
     if _jit.COMPILED is False:
         return False
-    from . import _linkage_kernels
+    from . import _linkage_kernels as K
 
-    return _linkage_kernels.HAVE_NUMBA or bool(_jit.COMPILED)
+    if not K.HAVE_NUMBA or _jit.COMPILED or _jit.in_cache(getattr(K, kernel)):
+        return K.HAVE_NUMBA or bool(_jit.COMPILED)
+    _jit.warm_in_background(_WARM_STATEMENT)
+    return False
+
+
+# Compiles both loops into numba's disk cache: a four-bar solved by each method.
+_WARM_STATEMENT = (
+    "import numpy as np, mechcirc._jit as j; j.COMPILED = True\n"
+    "from mechcirc.kinematics import parse_linkage\n"
+    "lk = parse_linkage('[points]\\nA = [0.0, 0.0]\\nB = [1.0, 0.0]\\nC = [3.0, 2.0]\\n"
+    "D = [4.0, 0.0]\\n[ground]\\npoints = [\"A\", \"D\"]\\n[links]\\ncrank = [\"A\", \"B\"]\\n"
+    "coupler = [\"B\", \"C\"]\\nrocker = [\"D\", \"C\"]\\n[[cranks]]\\nlink = \"crank\"\\n"
+    "omega = 10.0\\n')\n"
+    "for method in ('dyads', 'newton'):\n"
+    "    lk.motion(np.linspace(0.0, 1.0, 5), method=method)\n")
 
 
 def _solve_newton_compiled(lk, pl, t, dt_max):

@@ -35,6 +35,7 @@ from typing import Callable
 
 import numpy as np
 
+from .. import _jit
 from ..errors import MechcircError, SceneAccuracyWarning, SolverError
 from .files import Scene
 from .motion import MotionModel, motion_model
@@ -124,18 +125,35 @@ METHODS = ("rk4", "rk4-python", "DOP853", "RK45", "LSODA")
 SCIPY_METHODS = ("DOP853", "RK45", "LSODA")
 NO_NUMBA_NOTE = ("numba is not importable (install the 'fast' extra: pip install "
                  "'mechcirc[fast]'); ran the same RK4 as pure Python, about 100x slower")
+COLD_NOTE = ("numba's cache does not hold the compiled kernels yet: ran the same RK4 as "
+             "Python while a background process compiles them for the next run")
 _WARM = False
+# Compiles the kernels a default run and a scipy method take into numba's disk cache
+# (a short, coarse run of each: the compiled code does not depend on the step).
+_WARM_STATEMENT = ("import mechcirc._jit as j; j.COMPILED = True; "
+                   "from mechcirc.sley.simulation import simulate; "
+                   "simulate(revolutions=1, error_estimate=False, steps_per_period=5); "
+                   "simulate(revolutions=1, method='DOP853', error_estimate=False, rtol=1e-3)")
 
 
 def kernels_for(method):
     """(kernel module, backend name): compiled for ``"rk4"`` (and the scipy methods' right-hand
-    side) when numba is importable, else the pure-Python copy."""
+    side) when numba is importable, else the pure-Python copy.
+
+    With :data:`mechcirc._jit.COMPILED` None (default) the compiled kernels are taken only
+    once numba's disk cache holds them; until then the Python copy runs and a detached
+    process compiles them (:func:`mechcirc._jit.warm_in_background`).  True compiles them
+    here if need be; False always gives the Python copy.
+    """
     global _PYK
-    if method != "rk4-python":
+    if method != "rk4-python" and _jit.COMPILED is not False:
         from . import _motion_kernels as k
 
-        if k.HAVE_NUMBA:
+        if k.HAVE_NUMBA and (_jit.COMPILED or _jit.in_cache(
+                k.rk4_run, k.outputs, k.eval_many, *((k.rhs,) if method in SCIPY_METHODS else ()))):
             return k, "numba"
+        if k.HAVE_NUMBA:
+            _jit.warm_in_background(_WARM_STATEMENT)
     if _PYK is None:
         from . import _motion_kernels as k
 
@@ -325,10 +343,13 @@ def _model_at(scene, o, model):
 
 
 def _ready_kernels(method, model):
-    """The kernels of ``method``, their backend, the notes on it (numba missing) and the
-    time spent compiling them for ``model`` [s]."""
+    """The kernels of ``method``, their backend, the notes on it (numba missing, or not
+    compiled yet) and the time spent compiling them for ``model`` [s]."""
+    from . import _motion_kernels as k
+
     kern, backend = kernels_for(method)
-    notes = [NO_NUMBA_NOTE] if backend == "python" and method != "rk4-python" else []
+    notes = [] if backend == "numba" or method == "rk4-python" or _jit.COMPILED is False else \
+        [COLD_NOTE if k.HAVE_NUMBA else NO_NUMBA_NOTE]
     return kern, backend, notes, (_warm_up(model, kern) if backend == "numba" else 0.0)
 
 

@@ -35,6 +35,7 @@ from typing import TYPE_CHECKING, Any, Callable
 import numpy as np
 import scipy.linalg as la
 
+from .. import _jit
 from ..circuit import Circuit, units_of
 from ..errors import MechcircError
 from .model import StateSpace, incidence, backlash_elements, state_space
@@ -853,7 +854,7 @@ def _propagate_modal_x(A, B, z0, u, h, Cx, w=None, cache=None, Cv=None):
     it, and the next block continues from the block's last state (blocks
     share their boundary sample, computed twice, identically).
     """
-    from . import _kernels as kern
+    kern = _kernels()
 
     if not kern.HAVE_NUMBA or not Cx.shape[0]:
         return None, None, "no compiled block loop", 0.0, None, None
@@ -990,6 +991,38 @@ def _real_columns(Vk: np.ndarray, is_c: np.ndarray, late: np.ndarray):
     return cre, cim, nx, T
 
 
+_PYTHON_KERNELS: list = []
+# Compiles the kernels into numba's disk cache: a clearance run (dopri_run, law_many)
+# and a driven linear one (modal_run).
+_WARM_STATEMENT = (
+    "import mechcirc, mechcirc._jit as j; j.COMPILED = True\n"
+    "from mechcirc.transient.simulate import transient\n"
+    "transient(mechcirc.parse('mass m a 0 1\\nspring k a 0 1e4 backlash=0.02\\n"
+    ".ic a v=0.5\\n', require_drive=False), 0.01, 1e-3)\n"
+    "transient(mechcirc.parse('mass m a b 1\\nspring k b 0 1e4\\ndamper c a 0 1\\n"
+    "drive V a 0 velocity=1\\n'), 0.01, 1e-3)\n")
+
+
+def _kernels():
+    """The module :mod:`._kernels`, or its pure-Python copy (``HAVE_NUMBA`` False: the
+    modal path refuses, the block recurrence and the clearance integrator run as Python).
+
+    The copy where ``mechcirc._jit.COMPILED`` is False, and where it is None (default)
+    while numba's disk cache does not hold the kernels; then a detached process
+    compiles them for a later call (:func:`mechcirc._jit.warm_in_background`).
+    """
+    from . import _kernels as kern
+
+    if not kern.HAVE_NUMBA or _jit.COMPILED or (_jit.COMPILED is None and _jit.in_cache(
+            kern.dopri_run, kern.modal_run, kern.law_many)):
+        return kern
+    if _jit.COMPILED is None:
+        _jit.warm_in_background(_WARM_STATEMENT)
+    if not _PYTHON_KERNELS:
+        _PYTHON_KERNELS.append(kern.load_python())
+    return _PYTHON_KERNELS[0]
+
+
 def _modal_deviation(A, B, h, lam, V, Vinv, Vk, cplx, g1, g2) -> float:
     """A posteriori check of a modal plan: the largest difference of its one-step map
     (Φ, Γ₁, Γ₂ from the kept modes ``Vk``, complex where ``cplx``) from the
@@ -1006,7 +1039,7 @@ def _modal_deviation(A, B, h, lam, V, Vinv, Vk, cplx, g1, g2) -> float:
 
 
 def _modal_states(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout):
-    from . import _kernels as kern
+    kern = _kernels()
 
     if kern.HAVE_NUMBA:
         kern.modal_run(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout,
@@ -1036,7 +1069,7 @@ def _modal_states(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout):
 def _nonlinear(ss: StateSpace, circuit, z0, t, u, rtol, rate=None):
     """The clearance integrator; ``rate``: the drive's exact derivative at the samples
     (then the drive is interpolated by cubic Hermite between them, else linearly)."""
-    from . import _kernels as kern
+    kern = _kernels()
 
     N = ss.size
     h = t[1] - t[0]
@@ -1114,7 +1147,7 @@ def _absolute_tolerance(run: Callable, z0: np.ndarray, rtol: float, hmax: float)
 
 def _clearance_setup(ss: StateSpace, circuit):
     """(kernel matrices, largest |eigenvalue| with every contact closed) for :func:`_nonlinear`."""
-    from . import _kernels as kern
+    kern = _kernels()
 
     clear = backlash_elements(circuit)
     index = {n: i for i, n in enumerate(ss.nodes)}
@@ -1253,7 +1286,7 @@ def _element_forces(els, index: dict, X, V, Acc, clear: dict, law_cache: dict, n
 
 
 def _law_forces(spring, comp, e, w):
-    from . import _kernels as kern
+    kern = _kernels()
 
     c, d, b = _law_params(spring, comp)
     total = np.empty(e.size)

@@ -1,0 +1,147 @@
+"""The time-domain kernels (scene motion, linkage solver, transients) are not waited for.
+
+With ``mechcirc._jit.COMPILED`` None a caller takes a kernel only when numba's
+disk cache holds it; otherwise it runs the Python (or numpy) path, whose numbers
+are those of ``COMPILED = False`` to the bit, and starts one background warm-up.
+The cache and the warm-up are replaced here as in tests/test_startup.py; the
+warm-up statements themselves are run with numba's JIT off.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import mechcirc
+from mechcirc import _jit
+from mechcirc.kinematics import linkage_solver, parse_linkage
+from mechcirc.scene import load_scene, simulate_scene
+from mechcirc.scene import simulation as scene_sim
+from mechcirc.transient import simulate as transient_sim
+from mechcirc.transient.simulate import transient
+
+ROOT = Path(__file__).resolve().parents[1]
+FOURBAR = """
+[points]
+A = [0.0, 0.0]
+B = [29.0, 0.0]
+C = [150.0, 160.0]
+D = [189.0, 0.0]
+[ground]
+points = ["A", "D"]
+[links]
+crank = ["A", "B"]
+coupler = ["B", "C"]
+rocker = ["D", "C"]
+[[cranks]]
+link = "crank"
+omega = 100.0
+"""
+BACKLASH = "mass m a 0 1\nspring k a 0 1e4 backlash=0.02\n.ic a v=0.5\n"
+LINEAR = "mass m a b 1\nspring k b 0 1e4\ndamper c a 0 3\ndrive V a 0 velocity=1\n"
+
+
+@pytest.fixture
+def cache(monkeypatch):
+    """``cache(held)``: numba's cache holds every kernel (True) or none; returns the
+    list of warm-up statements started (recorded, none run)."""
+    pytest.importorskip("numba")
+    started = []
+    monkeypatch.setattr(_jit, "COMPILED", None)
+    monkeypatch.setattr(_jit, "warm_in_background", started.append)
+
+    def set_cache(held):
+        monkeypatch.setattr(_jit, "in_cache", lambda *dispatchers: held)
+        return started
+
+    return set_cache
+
+
+def _with_compiled(flag, fn):
+    saved = _jit.COMPILED
+    _jit.COMPILED = flag
+    try:
+        return fn()
+    finally:
+        _jit.COMPILED = saved
+
+
+def _scene_run():
+    scene = load_scene(ROOT / "examples" / "cam_follower_scene.toml")
+    return simulate_scene(scene, revolutions=1, error_estimate=False, points=32,
+                          steps_per_period=25)
+
+
+def test_a_cold_scene_kernel_runs_python(cache):
+    started = cache(False)
+    r = _scene_run()
+    assert r.backend == "python" and scene_sim.COLD_NOTE in r.notes
+    ref = _with_compiled(False, _scene_run)
+    assert ref.backend == "python" and scene_sim.COLD_NOTE not in ref.notes
+    assert r.values.keys() == ref.values.keys() and len(r.values) > 3
+    for name in r.values:
+        assert np.asarray(r.values[name]).tobytes() == np.asarray(ref.values[name]).tobytes()
+    # (each started once per process; the scene's rigid motion asks the linkage solver)
+    assert set(started) == {scene_sim._WARM_STATEMENT, linkage_solver._WARM_STATEMENT}
+
+
+def test_a_cached_scene_kernel_is_compiled(cache):
+    from mechcirc.scene import _motion_kernels
+
+    started = cache(True)
+    assert scene_sim.kernels_for("rk4") == (_motion_kernels, "numba")
+    assert scene_sim.kernels_for("DOP853") == (_motion_kernels, "numba")
+    assert scene_sim.kernels_for("rk4-python")[1] == "python"
+    assert started == []
+    cache(False)
+    assert _with_compiled(True, lambda: scene_sim.kernels_for("rk4")) == (_motion_kernels, "numba")
+    assert started == []                    # forced: compiled here, nothing started
+
+
+@pytest.mark.parametrize("method", ["dyads", "newton"])
+def test_a_cold_linkage_kernel_runs_numpy(cache, method):
+    started = cache(False)
+    lk = parse_linkage(FOURBAR)
+    theta = np.linspace(0.0, 2 * np.pi, 181)
+    m = lk.motion(theta, method=method)
+    ref = _with_compiled(False, lambda: parse_linkage(FOURBAR).motion(theta, method=method))
+    for field in ("q", "qdot", "qddot", "parts"):
+        assert getattr(m, field).tobytes() == getattr(ref, field).tobytes()
+    assert set(started) == {linkage_solver._WARM_STATEMENT}
+    cache(True)
+    assert linkage_solver._compiled("newton_path") and linkage_solver._compiled("dyads_path")
+    assert set(started) == {linkage_solver._WARM_STATEMENT}
+
+
+@pytest.mark.parametrize("net", [BACKLASH, LINEAR])
+def test_a_cold_transient_kernel_runs_python(cache, net):
+    from mechcirc.transient import _kernels
+
+    started = cache(False)
+    run = lambda: transient(mechcirc.parse(net, require_drive=False), 0.05, 1e-3)  # noqa: E731
+    r = run()
+    ref = _with_compiled(False, run)
+    assert r.time.tobytes() == ref.time.tobytes()
+    assert r.node("a")[0].tobytes() == ref.node("a")[0].tobytes()
+    assert r.node("a")[1].tobytes() == ref.node("a")[1].tobytes()
+    assert set(started) == {transient_sim._WARM_STATEMENT}
+    assert transient_sim._kernels() is not _kernels and not transient_sim._kernels().HAVE_NUMBA
+    cache(True)
+    assert transient_sim._kernels() is _kernels
+
+
+def test_the_time_domain_warm_up_statements_run():
+    # As the detached process runs each, with numba's JIT off (the same calls as
+    # plain Python, nothing compiled): they import and run without error.
+    pytest.importorskip("numba")
+    env = {**os.environ, "NUMBA_DISABLE_JIT": "1", "PYTHONPATH": str(ROOT)}
+    statements = "\n".join([scene_sim._WARM_STATEMENT, linkage_solver._WARM_STATEMENT,
+                            transient_sim._WARM_STATEMENT, "print('ran')"])
+    done = subprocess.run([sys.executable, "-c", statements], cwd=ROOT, env=env,
+                          capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0 and done.stdout == "ran\n", done.stderr[-2000:]
