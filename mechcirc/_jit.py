@@ -19,9 +19,10 @@ it takes a kernel only when numba's disk cache holds it (:func:`in_cache`;
 loading takes about 1 s, compiling 4–11 s of CPU), and otherwise runs its
 numpy path while a detached Python process compiles the kernel into the
 cache (:func:`warm_in_background`), for the next call or the next process.
-The environment variable ``MECHCIRC_NO_WARM=1`` turns that process off (the
-numpy path then runs until something compiles the kernel in-process, e.g.
-``COMPILED = True``); the test suite sets it, as it compiles its kernels itself.
+The environment variable ``MECHCIRC_NO_WARM=1`` turns that rule off: no
+detached process, and a kernel is compiled in-process on its first use, as
+numba does by default (a cluster, or a run that would rather wait once than
+run the slower path); the test suite sets it, for its subprocesses too.
 """
 
 from __future__ import annotations
@@ -84,9 +85,13 @@ def in_cache(*dispatchers) -> bool:
     -------
     bool
         True if every one is in the cache; True also where the cache cannot
-        be asked (numba's private layout changed): the caller then loads, or
-        compiles, as it would without the check.
+        be asked (numba's private layout changed) or ``MECHCIRC_NO_WARM`` is
+        set: the caller then loads, or compiles, as it would without the check.
     """
+    import os
+
+    if os.environ.get("MECHCIRC_NO_WARM", "") not in ("", "0"):
+        return True
     try:
         return all(bool(d._cache._cache_file._load_index()) for d in dispatchers)
     except Exception:

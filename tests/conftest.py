@@ -15,9 +15,10 @@ from hypothesis import settings
 settings.register_profile("ci", derandomize=True, database=None)
 settings.register_profile("explore", derandomize=False)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
-# No detached numba warm-up processes from the code under test: the suite compiles
-# its kernels itself (see _numba_compile_lock below), and a background compile would
-# load the machine outside the suite's own accounting.
+# The no-wait rule off (mechcirc._jit): no detached numba warm-up processes (they would
+# load the machine outside the suite's own accounting), and the kernels compiled
+# in-process on first use, under the lock below, in the CLI subprocesses too;
+# tests/test_startup.py and tests/test_nowait.py patch the rule's checks to test it.
 os.environ.setdefault("MECHCIRC_NO_WARM", "1")
 
 
@@ -136,24 +137,3 @@ def _serialise_numba_compiles_across_workers():
 
 _serialise_numba_compiles_across_workers()
 
-
-def _compile_the_time_domain_kernels_in_the_suite():
-    """The scene, linkage and transient kernels are compiled in-process, as before the
-    no-wait rule: with a cold numba cache their default path would run them as Python
-    (the scene kernel ~100× slower than compiled) in every test that simulates.  Their
-    cache check says "held" (numba then compiles, under the lock above); the sweeps'
-    kernels keep the default rule.  tests/test_nowait.py patches the check itself."""
-    from mechcirc import _jit
-
-    check = _jit.in_cache
-    modules = {"mechcirc.scene._motion_kernels", "mechcirc.kinematics._linkage_kernels",
-               "mechcirc.transient._kernels"}
-
-    def in_cache(*dispatchers):
-        return all(getattr(getattr(d, "py_func", None), "__module__", None) in modules
-                   for d in dispatchers) or check(*dispatchers)
-
-    _jit.in_cache = in_cache
-
-
-_compile_the_time_domain_kernels_in_the_suite()

@@ -104,8 +104,9 @@ def test_a_cached_kernel_is_loaded(cold_kernel, monkeypatch):
     assert K.tobytes() == K1.tobytes() and rho.tobytes() == rho1.tobytes()
 
 
-def test_the_cache_check_sees_numbas_index():
+def test_the_cache_check_sees_numbas_index(monkeypatch):
     numba = pytest.importorskip("numba")
+    monkeypatch.delenv("MECHCIRC_NO_WARM", raising=False)     # (the suite sets it)
 
     @numba.njit(cache=True)
     def never_compiled(x):      # defined here, compiled nowhere: not in any cache
@@ -113,6 +114,8 @@ def test_the_cache_check_sees_numbas_index():
 
     assert _jit.in_cache(never_compiled) is False
     assert _jit.in_cache(object()) is True      # no cache to ask: load as before
+    monkeypatch.setenv("MECHCIRC_NO_WARM", "1")  # the rule off: compile on first use
+    assert _jit.in_cache(never_compiled) is True
 
 
 def test_a_cold_nodal_sweep_runs_numpy(cold_kernel):
@@ -194,6 +197,8 @@ def test_warm_in_background_runs_once_in_a_process_importing_this_copy(tmp_path,
 
 
 def test_no_warm_up_process_when_the_environment_says_so(monkeypatch):
+    # MECHCIRC_NO_WARM=1: no detached process, and every kernel counts as cached
+    # (compiled in-process on first use, numba's own default).
     import subprocess
 
     started = []
