@@ -86,8 +86,11 @@ def test_a_cold_scene_kernel_runs_python(cache):
     assert r.values.keys() == ref.values.keys() and len(r.values) > 3
     for name in r.values:
         assert np.asarray(r.values[name]).tobytes() == np.asarray(ref.values[name]).tobytes()
-    # (each started once per process; the scene's rigid motion asks the linkage solver)
-    assert set(started) == {scene_sim._WARM_STATEMENT, linkage_solver._WARM_STATEMENT}
+    # The scene's warm-up asked for; the linkage solver's too unless this process
+    # already holds its compiled kernels (the scene's rigid motion asks for them, and
+    # which earlier test loaded them depends on the order the suite runs in).
+    assert scene_sim._WARM_STATEMENT in started
+    assert set(started) <= {scene_sim._WARM_STATEMENT, linkage_solver._WARM_STATEMENT}
 
 
 def test_a_cached_scene_kernel_is_compiled(cache):
