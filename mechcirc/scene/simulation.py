@@ -279,8 +279,8 @@ def simulate_scene(scene: Scene, *, omega: float | None = None, revolutions: int
     """Simulate ``scene`` over ``revolutions`` turns of the crank and tabulate the last.
 
     Parameters default to the scene's ``[simulate]`` table, then Ω from its crank, 5
-    revolutions, start 0°, 7200 points, and RK4 steps per period of the fastest mode: 25 when the error estimate (from the run at 12.5) is at
-    most :data:`ACCURACY_GOAL`, else 50 (estimated from 25); 50 without the estimate.
+    revolutions, start 0°, 7200 points, RK4 steps per period of the fastest mode: 25 if
+    the estimate (run at 12.5) is within :data:`ACCURACY_GOAL`, else 50; 50 without it.
     ``omega_ripple`` = (a, k) (default the file's ``omega_ripple = {amplitude = a,
     harmonic = k}``, else none): the crank speed is Ω (1 + a cos(k Ω t)), 0 ≤ a < 1,
     k a whole number ≥ 1, so the crank still turns once per period 2π/Ω; the crank
