@@ -58,7 +58,7 @@ def test_crosscheck_says_disagrees_and_exits_3(monkeypatch, capsys):
     record still rings) is said on its line and in the verdict, with exit status 3."""
     import mechcirc.transient.simulate as sim
 
-    monkeypatch.setattr(sim, "_periodic_start", lambda ss, *a: np.zeros(ss.size))
+    monkeypatch.setattr(sim, "periodic_start", lambda ss, *a: np.zeros(ss.size))
     path = REPO / "netlists/stb_heald.mcir"
     status, out, _ = run(["crosscheck", path], capsys)
     assert status == 3

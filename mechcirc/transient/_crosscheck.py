@@ -233,16 +233,16 @@ def _output_rounding(circuit, w, steps, amp):
     from .simulate import (
         ROUNDING_PER_STEP,
         Waveform,
-        _drive_map,
-        _model,
-        _periodic_start,
-        _with_oscillator,
+        drive_map,
+        state_model,
+        periodic_start,
+        with_oscillator,
     )
 
-    ss = _model(circuit, True)
-    z0 = _periodic_start(ss, Waveform("harmonic", omega=w), amp, circuit, True)
-    aug, z0 = _with_oscillator(ss, z0, w, amp)
-    row = _drive_map(aug)[0]
+    ss = state_model(circuit, True)
+    z0 = periodic_start(ss, Waveform("harmonic", omega=w), amp, circuit, True)
+    aug, z0 = with_oscillator(ss, z0, w, amp)
+    row = drive_map(aug)[0]
     V = np.linalg.eig(aug.A)[1]
     q = np.linalg.solve(V, z0.astype(complex))
     reach = np.abs(row) @ np.abs(V)
