@@ -1038,22 +1038,29 @@ def _stacked_damped(M: np.ndarray, Dm: np.ndarray, K: np.ndarray, omega_max):
 def _stacked_mass_inverse(Ms: np.ndarray, ok: np.ndarray) -> tuple:
     """``(Ms, M⁻¹)`` of a stack of mass matrices by Cholesky; ``ok`` (updated in place)
     loses the designs whose matrix is not safely definite (replaced by I in Ms)."""
-    n, k = Ms.shape[0], Ms.shape[1]
+    Ms, Linv = _stacked_cholesky_inverse(Ms, ok)
+    return Ms, np.swapaxes(Linv, 1, 2) @ Linv
+
+
+def _stacked_cholesky_inverse(Ms: np.ndarray, ok: np.ndarray) -> tuple:
+    """``(Ms, L⁻¹)`` with Ms = L Lᵀ for a stack of symmetric matrices; ``ok`` (updated in
+    place) loses the designs whose matrix is not safely definite (replaced by I in Ms):
+    Cholesky fails, or its least eigenvalue 1/‖L⁻¹‖²_F is below 1e-13 ‖M‖_F."""
     try:
         chol = np.linalg.cholesky(Ms)
-    except np.linalg.LinAlgError:
-        for d in range(n):
+    except np.linalg.LinAlgError:                  # one of them is not definite: which?
+        for d in range(Ms.shape[0]):
             try:
                 np.linalg.cholesky(Ms[d])
             except np.linalg.LinAlgError:
                 ok[d] = False
-        Ms = np.where(ok[:, None, None], Ms, np.eye(k))
+        Ms = np.where(ok[:, None, None], Ms, np.eye(Ms.shape[1]))
         chol = np.linalg.cholesky(Ms)
     Linv = _lower_inverse(chol)
     with np.errstate(all="ignore"):
         lam_min = 1.0 / np.sum(Linv * Linv, axis=(1, 2))
     ok &= lam_min > 1e-13 * np.sqrt(np.sum(Ms * Ms, axis=(1, 2)))
-    return Ms, np.swapaxes(Linv, 1, 2) @ Linv
+    return Ms, Linv
 
 
 def _newton_det(sig, live, Ms, Ds, Ks, steps: int = 3) -> tuple:
@@ -1117,21 +1124,8 @@ def _undamped_stack(M: np.ndarray, K: np.ndarray, n0: int):
         except np.linalg.LinAlgError:              # a massless part without stiffness
             return np.full((D, r), np.nan), np.zeros(D, dtype=bool)
         Kc = Kc - np.swapaxes(Knr, 1, 2) @ X
-    try:
-        chol = np.linalg.cholesky(Mrr)
-    except np.linalg.LinAlgError:                  # one of them is not definite: which?
-        for d in range(D):
-            try:
-                np.linalg.cholesky(Mrr[d])
-            except np.linalg.LinAlgError:
-                regular[d] = False
-        Mrr = np.where(regular[:, None, None], Mrr, np.eye(r))
-        chol = np.linalg.cholesky(Mrr)
-    Linv = _lower_inverse(chol)
-    with np.errstate(all="ignore"):
-        lam_min = 1.0 / np.sum(Linv * Linv, axis=(1, 2))
+    _, Linv = _stacked_cholesky_inverse(Mrr, regular)
     regular &= np.isfinite(Kc).all(axis=(1, 2)) & np.isfinite(Linv).all(axis=(1, 2))
-    regular &= lam_min > 1e-13 * np.sqrt(np.sum(Mrr * Mrr, axis=(1, 2)))
     if not regular.all():
         Kc = np.where(regular[:, None, None], Kc, 0.0)
         Linv = np.where(regular[:, None, None], Linv, 0.0)
