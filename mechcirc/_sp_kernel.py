@@ -47,10 +47,8 @@ def _recip(a, b):
 
 @jit
 def _through_reciprocal(rho):
-    """A bound of the relative error of 1/x̂ given that of x̂, ρ/(1 − ρ): ρ + 2ρ² for
-    ρ ≤ 1/2 (≥ ρ/(1 − ρ) there, without a division), ∞ from ρ ≥ 1 on and for NaN."""
-    if rho <= 0.5:
-        return rho + 2.0 * rho * rho
+    """A bound of the relative error of 1/x̂ given that of x̂, ρ/(1 − ρ), ∞ from
+    ρ ≥ 1 on and for NaN."""
     if rho < 1.0:
         return rho / (1.0 - rho)
     return math.inf

@@ -32,7 +32,7 @@ __all__ = ["evaluate", "evaluate_designs", "push_down", "plan", "Plan", "compile
 #     |Ŝ − S| ≤ Σ |tᵢ| (ρᵢ + m·u),     ρ(S) = that / |S|,
 #
 # where a leaf group of n same-signed scalars has ρ = (n + 2)·u, a reciprocal turns ρ into
-# ρ/(1 − ρ) + 4u (taken as ρ + 2ρ² + 4u while ρ ≤ 1/2; ∞ from ρ ≥ 1 on: no digit is known)
+# ρ/(1 − ρ) + 4u (∞ from ρ ≥ 1 on: no digit is known)
 # and a lever's division by r² adds 2u.  ρ is carried relative to the computed values, so
 # only the rounding of each addition (the m·u term) is first order.  Cancellation at a node
 # (Σ|tᵢ| ≫ |S|) raises the bound there; the children's errors are weighted by |tᵢ|/|S|, not
@@ -160,13 +160,16 @@ def _fast_then_checked(root, omega, error, condition, designs):
 
 
 def _postorder_values(root, omega, track: bool, keep: bool, checked: bool, designs):
-    """``(value of the root, values of the nodes kept)``: the tree evaluated bottom up."""
+    """``(value of the root, values of the nodes kept)``: the tree evaluated bottom up, the
+    values of a node's internal children on top of a stack when it is reached."""
     values: dict[int, _Value] = {}
+    stack: list[_Value] = []
     with np.errstate(all="ignore"):
         inv_omega = 1.0 / omega
-        for node, reflect, kid_ids, groups in _internal_postorder(root):
+        for node, reflect, n_kids, groups in _internal_postorder(root):
             if reflect:
-                child = _value_of(node.child, values, omega, inv_omega, track, designs)
+                child = stack.pop() if n_kids else \
+                    _leaf_value(node.child.element, omega, inv_omega, track, designs)
                 r = None if designs is None else designs[1][node.lever.name]
                 val = _Value(child.imaginary, node.lever.reflect(child.array, r))
                 if track:
@@ -174,18 +177,24 @@ def _postorder_values(root, omega, track: bool, keep: bool, checked: bool, desig
                     # (a full array even over a single leaf, whose ρ is a scalar)
                     val.rho = np.broadcast_to(child.rho + 2 * _U, omega.shape).copy()
             else:
-                val = _combine(node, values, omega, inv_omega, track, keep, checked, designs,
-                               None if designs is not None else groups)
-            if not keep:
-                for k in kid_ids:
-                    values.pop(k, None)
-            values[id(node)] = val
-        top = _value_of(root, values, omega, inv_omega, track, designs)
+                if n_kids:
+                    parts = stack[-n_kids:]
+                    del stack[-n_kids:]
+                else:
+                    parts = []
+                if designs is not None:
+                    groups = _leaf_groups(node, designs)
+                val = _combine(parts, omega, inv_omega, track, keep, checked, groups)
+            stack.append(val)
+            if keep:
+                values[id(node)] = val
+        top = stack[-1] if stack else _leaf_value(root.element, omega, inv_omega, track,
+                                                  designs)
     return top, values
 
 
-#: root -> its internal nodes in postorder, each ``(node, is a lever, ids of its
-#: children, its leaf groups)`` (:func:`_internal_postorder`).
+#: root -> its internal nodes in postorder, each ``(node, is a lever, its number of
+#: internal children, its leaf groups)`` (:func:`_internal_postorder`).
 _ORDERS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
 
 
@@ -201,19 +210,17 @@ def _plan_size(root) -> int:
 
 def _internal_postorder(root) -> list:
     """The series, parallel and lever nodes of ``root``, children first, built once per
-    tree: with the ids of each node's children and, for a series or parallel node,
-    its leaves folded for a single design with the ids of its other children
-    (``(sums, counts, ids)``, see :func:`_leaf_groups`)."""
+    tree: ``(node, is a lever, its number of internal children, its leaf groups)``, a
+    series or parallel node's leaves folded for a single design (:func:`_leaf_groups`)."""
     found = _ORDERS.get(root) if not isinstance(root, Leaf) else []
     if found is None:
         found = []
         for n in postorder(root):
             if isinstance(n, Reflect):
-                found.append((n, True, (id(n.child),), None))
+                found.append((n, True, 0 if isinstance(n.child, Leaf) else 1, None))
             elif not isinstance(n, Leaf):
-                groups = (*_fold_leaves(n, isinstance(n, Series), None, fast=True),
-                          tuple(id(c) for c in n.children if not isinstance(c, Leaf)))
-                found.append((n, False, tuple(id(c) for c in n.children), groups))
+                found.append((n, False, sum(1 for c in n.children if not isinstance(c, Leaf)),
+                              _leaf_groups(n, None)))
         _ORDERS[root] = found
     return found
 
@@ -596,22 +603,20 @@ class _Value:
         return _Value(False, _reciprocal(self.array))
 
 
-def _value_of(node: Node, values: dict, omega, inv_omega, track: bool = False,
-              designs: tuple | None = None) -> _Value:
-    if isinstance(node, Leaf):
-        e = node.element
-        real, inv, om = law_terms(e.kind, _scaled(e, designs))
-        if LAWS[e.kind].power < 0:
-            v = _Value(True, inv_omega * inv)
-        elif LAWS[e.kind].power > 0:
-            v = _Value(True, omega * om)
-        else:
-            v = _Value(False, np.full(omega.shape, real, dtype=complex))
-        if track:
-            v.mag = np.abs(v.array)
-            v.rho = 4 * _U      # value·η, 1/s, 1/ω and the product
-        return v
-    return values[id(node)]
+def _leaf_value(e: Element, omega, inv_omega, track: bool = False,
+                designs: tuple | None = None) -> _Value:
+    """K of a leaf standing alone (the root, or under a lever)."""
+    real, inv, om = law_terms(e.kind, _scaled(e, designs))
+    if LAWS[e.kind].power < 0:
+        v = _Value(True, inv_omega * inv)
+    elif LAWS[e.kind].power > 0:
+        v = _Value(True, omega * om)
+    else:
+        v = _Value(False, np.full(omega.shape, real, dtype=complex))
+    if track:
+        v.mag = np.abs(v.array)
+        v.rho = 4 * _U      # value·η, 1/s, 1/ω and the product
+    return v
 
 
 def _scaled(e: Element, designs: tuple | None = None):
@@ -645,24 +650,13 @@ def _leaf_term(e: Element, series: bool, fast: bool = False,
     return slot, (real if slot == 0 else om if slot > 0 else inv)
 
 
-def _combine(node, values: dict, omega, inv_omega, track: bool = False,
-             keep: bool = True, checked: bool = True, designs: tuple | None = None,
-             groups: tuple | None = None) -> _Value:
-    """Series: K = Σ K_i.  Parallel: 1/K = Σ 1/K_i.  Leaves are grouped by kind.
-
-    A leaf group takes part where its sum is nonzero; over designs (arrays of
-    positive finite values·η, each term nonzero and all of one sign) where it has leaves."""
-    series = isinstance(node, Series)
-    sums, counts, parts = _leaf_groups(node, values, series, designs, groups)
+def _combine(parts: list, omega, inv_omega, track: bool, keep: bool, checked: bool,
+             groups: tuple) -> _Value:
+    """Series: K = Σ K_i.  Parallel: 1/K = Σ 1/K_i, over the node's internal children's
+    values ``parts`` and its leaf groups ``groups`` (:func:`_leaf_groups`)."""
+    series, sums, counts, has, bterms = groups
     real, im_inv, im_omega = sums       # leaf terms: real + j(im_inv/ω + im_omega·ω)
-    if not series:
-        terms = [v.reciprocal(checked) for v in parts]
-    else:
-        terms = parts
-    if designs is not None:
-        has_real, has_inv, has_omega = (n > 0 for n in counts)
-    else:
-        has_real, has_inv, has_omega = bool(real), bool(im_inv), bool(im_omega)
+    has_real, has_inv, has_omega = has
     imag = None
     if has_inv:
         imag = inv_omega * im_inv
@@ -671,7 +665,24 @@ def _combine(node, values: dict, omega, inv_omega, track: bool = False,
     # A parallel node's terms are fresh reciprocals, and without ``keep`` a
     # child's value is dropped after this sum: the first term's array is then
     # reused in place instead of copied.
-    imag, cplx = _add_terms(terms, imag, keep and series)
+    own = keep and series
+    cplx = None
+    for v in parts:
+        a = v.array
+        if v.imaginary:
+            if not series:
+                a = -1.0 / a                # 1/(jX) = j(-1/X)
+            if imag is None:
+                imag = a.copy() if own else a
+            else:
+                imag += a
+        else:
+            if not series:
+                a = _reciprocal(a) if checked else np.reciprocal(a)
+            if cplx is None:
+                cplx = a.copy() if own else a
+            else:
+                cplx += a
     if has_real:
         cplx = np.full(omega.shape, real, dtype=complex) if cplx is None else cplx + real
     if cplx is None:
@@ -684,27 +695,12 @@ def _combine(node, values: dict, omega, inv_omega, track: bool = False,
             cplx.imag += imag
         total = _Value(False, cplx)
     if track:
-        bound = _sum_bound(series, parts, sums, counts, (has_real, has_inv, has_omega),
-                           omega, inv_omega)
+        mu, terms = bterms if bterms is not None else \
+            (_node_mu(sums, len(parts)), _leaf_bound_terms(sums, counts, len(parts)))
+        bound = _sum_bound(series, parts, mu, _leaf_bound(terms, has, omega, inv_omega),
+                           omega.shape)
         return _with_bound(total, bound, series, checked)
     return total if series else total.reciprocal(checked)
-
-
-def _add_terms(terms, imag, own: bool):
-    """``(imag + Σ imaginary terms' X, Σ complex terms)``, None where none (copies if ``own``)."""
-    cplx = None
-    for v in terms:
-        if v.imaginary:
-            if imag is None:
-                imag = v.array.copy() if own else v.array
-            else:
-                imag += v.array
-        else:
-            if cplx is None:
-                cplx = v.array.copy() if own else v.array
-            else:
-                cplx += v.array
-    return imag, cplx
 
 
 def _with_bound(total: _Value, bound, series: bool, checked: bool) -> _Value:
@@ -723,16 +719,18 @@ def _with_bound(total: _Value, bound, series: bool, checked: bool) -> _Value:
     return total
 
 
-def _leaf_groups(node, values: dict, series: bool, designs, groups=None) -> tuple:
-    """``([real, im_inv, im_omega], [their leaf counts], the values of the other children)``
-    of ``node``: its leaves summed by slot, real + j(im_inv/ω + im_omega·ω).
-    ``groups``: the sums and counts of a single design, already folded, and the
-    ids of the other children (:func:`_internal_postorder`)."""
-    if groups is not None:
-        sums, counts, ids = groups
-        return sums, counts, [values[k] for k in ids]
-    sums, counts = _fold_leaves(node, series, designs)
-    return sums, counts, [values[id(c)] for c in node.children if not isinstance(c, Leaf)]
+def _leaf_groups(node, designs) -> tuple:
+    """``(series, sums, counts, has, bound terms)`` of a series or parallel ``node``: its
+    leaves summed by slot, real + j(im_inv/ω + im_omega·ω) (``sums``, of ``counts``
+    leaves), which of the three take part, and (one design) ``(m·u, the leaves' share
+    of the bound)`` (:func:`_leaf_bound_terms`; None over designs: formed when asked)."""
+    series = isinstance(node, Series)
+    sums, counts = _fold_leaves(node, series, designs, fast=designs is None)
+    if designs is not None:
+        return series, sums, counts, tuple(n > 0 for n in counts), None
+    n_parts = sum(1 for c in node.children if not isinstance(c, Leaf))
+    return series, sums, counts, tuple(bool(t) for t in sums), \
+        (_node_mu(sums, n_parts), _leaf_bound_terms(sums, counts, n_parts))
 
 
 def _fold_leaves(node, series: bool, designs, fast: bool = False) -> tuple[list, list]:
@@ -747,21 +745,43 @@ def _fold_leaves(node, series: bool, designs, fast: bool = False) -> tuple[list,
     return sums, counts
 
 
-def _sum_bound(series: bool, parts, sums, counts, has, omega, inv_omega):
-    """Σ |tᵢ| (ρᵢ + m·u) of a node's terms (see :func:`evaluate`), before dividing by |S|."""
+def _node_mu(sums, n_parts: int):
+    """m·u of a node's sum: m terms, its internal children and its nonzero leaf groups."""
     real, im_inv, im_omega = sums
-    n_real, n_inv, n_omega = counts
+    return (n_parts + (real != 0) + (im_inv != 0) + (im_omega != 0)) * _U
+
+
+def _leaf_bound_terms(sums, counts, n_parts: int) -> tuple:
+    """``(real, inv, omega)`` coefficients of the leaf groups' share of Σ |tᵢ| (ρᵢ + m·u)
+    (see :func:`evaluate`): the share is real + inv/ω + omega·ω.
+
+    A group of n same-signed scalars summed has ρ = n·u, and 2u more for value·η and 1/s,
+    and 2u more (the imaginary groups) for the product with ω or 1/ω."""
+    mu = _node_mu(sums, n_parts)
+    return tuple(abs(t) * ((n + extra) * _U + mu)
+                 for t, n, extra in zip(sums, counts, (2, 4, 4)))
+
+
+def _leaf_bound(terms, has, omega, inv_omega):
+    """The leaf groups' share of a node's bound over ω from :func:`_leaf_bound_terms`
+    (None where the node has no leaves)."""
+    b_real, b_inv, b_omega = terms
     has_real, has_inv, has_omega = has
-    m = len(parts) + (real != 0) + (im_inv != 0) + (im_omega != 0)
-    mu = m * _U
-    # Leaf groups: n same-signed scalars summed (n·u), value·η and 1/s (2u),
-    # times ω or 1/ω (2u).
     bound = None
     if has_inv:
-        bound = (abs(im_inv) * ((n_inv + 4) * _U + mu)) * inv_omega
+        bound = b_inv * inv_omega
     if has_omega:
-        t = (abs(im_omega) * ((n_omega + 4) * _U + mu)) * omega
+        t = b_omega * omega
         bound = t if bound is None else np.add(bound, t, out=bound)
+    if has_real:
+        bound = np.full(omega.shape, b_real) if bound is None else np.add(bound, b_real,
+                                                                        out=bound)
+    return bound
+
+
+def _sum_bound(series: bool, parts, mu, bound, shape):
+    """Σ |tᵢ| (ρᵢ + m·u) of a node's terms (see :func:`evaluate`), before dividing by |S|:
+    ``bound`` (the leaf groups' share, or None) plus that of the internal children."""
     for v in parts:
         if series:
             t = v.rho + mu
@@ -772,29 +792,22 @@ def _sum_bound(series: bool, parts, sums, counts, has, omega, inv_omega):
             t /= v.mag
         bound = t if bound is None else np.add(bound, t, out=bound)
     if bound is None:
-        bound = np.zeros(omega.shape)
-    if has_real:
-        bound += abs(real) * ((n_real + 2) * _U + mu)
+        bound = np.zeros(shape)
     return bound
 
 
 def _through_reciprocal(rho: NDArray) -> NDArray:
-    """A bound of the relative error of 1/x̂ given |x̂ − x| ≤ ρ|x̂|, ρ / (1 − ρ): as
-    ρ + 2ρ² for ρ ≤ 1/2 (no smaller there), ∞ from ρ ≥ 1 on (and for NaN).
+    """A bound of the relative error of 1/x̂ given |x̂ − x| ≤ ρ|x̂|: ρ / (1 − ρ), ∞ from
+    ρ ≥ 1 on (a zero denominator; NaN stays NaN).
 
     Callers hold ``np.errstate(all="ignore")``; :mod:`mechcirc._sp_kernel` computes the same.
     """
     if not (isinstance(rho, np.ndarray) and rho.ndim):
         # A scalar ρ (a leaf's, constant in ω: fuzz seed 599): work on an array.
         rho = np.atleast_1d(np.asarray(rho, dtype=float))
-    out = rho * rho
-    out *= 2.0
-    out += rho
-    # One reduction instead of a mask and its any(): max() is NaN if any ρ is.
-    if rho.size and not rho.max() <= 0.5:
-        big = ~(rho <= 0.5)
-        out[big] = rho[big] / (1.0 - rho[big])
-        out[~(rho < 1.0)] = np.inf
+    out = 1.0 - rho
+    np.maximum(out, 0.0, out=out)
+    np.divide(rho, out, out=out)
     return out
 
 
