@@ -103,7 +103,7 @@ def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: boo
     if keep:
         return K, {k: v.complex() for k, v in values.items()}
     if track:
-        rho = _relative_to_true(top.rho, omega.shape)
+        rho = _relative_to_true(top.relative()[0], omega.shape)
         return K, (rho / _U if condition and not error else rho)
     return K
 
@@ -173,9 +173,10 @@ def _postorder_values(root, omega, track: bool, keep: bool, checked: bool, desig
                 r = None if designs is None else designs[1][node.lever.name]
                 val = _Value(child.imaginary, node.lever.reflect(child.array, r))
                 if track:
-                    val.mag = node.lever.reflect(child.mag, r)
+                    rho, mag = child.relative()
+                    val.mag = node.lever.reflect(mag, r)
                     # (a full array even over a single leaf, whose ρ is a scalar)
-                    val.rho = np.broadcast_to(child.rho + 2 * _U, omega.shape).copy()
+                    val.rho = np.broadcast_to(rho + 2 * _U, omega.shape).copy()
             else:
                 if n_kids:
                     parts = stack[-n_kids:]
@@ -580,13 +581,32 @@ def _evaluate_numpy(numpy: tuple, omega: NDArray, D: int, error: bool):
 class _Value:
     """K of a node: ``array`` is X with K = jX when ``imaginary``, else K itself.
 
-    With error tracking, ``mag`` is |K| and ``rho`` the bound of its relative error.
+    With error tracking, ``mag`` is |K| and ``rho`` the bound of its relative error
+    (:meth:`relative`); a series or parallel node leaves them unformed and keeps
+    those of its sum S instead: ``sum_mag`` |S| and ``sum_err`` the bound of |Ŝ − S|,
+    K being S (series) or 1/S (parallel, ``recip``).
     """
 
-    __slots__ = ("imaginary", "array", "mag", "rho")
+    __slots__ = ("imaginary", "array", "mag", "rho", "sum_err", "sum_mag", "recip")
 
     def __init__(self, imaginary: bool, array: NDArray, mag=None, rho=None):
         self.imaginary, self.array, self.mag, self.rho = imaginary, array, mag, rho
+        self.sum_mag: Any = None
+        self.sum_err: Any = None
+        self.recip = False
+
+    def relative(self) -> tuple:
+        """``(ρ, |K|)``: the bound of K's relative error and |K|."""
+        if self.rho is None:
+            E, A = self.sum_err, self.sum_mag
+            with np.errstate(all="ignore"):
+                if self.recip:       # ρ(1/S) = ρ(S)/(1 − ρ(S)) + 4u, |1/S| = 1/|S|
+                    self.rho = _over_excess(E, A)
+                    self.rho += _U_RECIP
+                    self.mag = np.reciprocal(A)
+                else:
+                    self.rho, self.mag = E / A, A
+        return self.rho, self.mag
 
     def complex(self) -> NDArray[np.complex128]:
         if not self.imaginary:
@@ -694,28 +714,16 @@ def _combine(parts: list, omega, inv_omega, track: bool, keep: bool, checked: bo
         if imag is not None:
             cplx.imag += imag
         total = _Value(False, cplx)
-    if track:
-        mu, terms = bterms if bterms is not None else \
-            (_node_mu(sums, len(parts)), _leaf_bound_terms(sums, counts, len(parts)))
-        bound = _sum_bound(series, parts, mu, _leaf_bound(terms, has, omega, inv_omega),
-                           omega.shape)
-        return _with_bound(total, bound, series, checked)
-    return total if series else total.reciprocal(checked)
-
-
-def _with_bound(total: _Value, bound, series: bool, checked: bool) -> _Value:
-    """The node's value (reciprocal in parallel) with |K| and ρ from Σ|tᵢ|(ρᵢ + m·u)."""
+    if not track:
+        return total if series else total.reciprocal(checked)
+    mu, terms = bterms if bterms is not None else \
+        (_node_mu(sums, len(parts)), _leaf_bound_terms(sums, counts, len(parts)))
+    bound = _sum_bound(series, parts, mu, _leaf_bound(terms, has, omega, inv_omega),
+                       omega.shape)
     mag = np.abs(total.array)
-    inv = np.reciprocal(mag)
-    bound *= inv
-    rho = bound
-    if series:
-        total.mag, total.rho = mag, rho
-    else:
+    if not series:
         total = total.reciprocal(checked)
-        rho = _through_reciprocal(rho)
-        rho += _U_RECIP
-        total.mag, total.rho = inv, rho
+    total.sum_err, total.sum_mag, total.recip = bound, mag, not series
     return total
 
 
@@ -783,13 +791,21 @@ def _sum_bound(series: bool, parts, mu, bound, shape):
     """Σ |tᵢ| (ρᵢ + m·u) of a node's terms (see :func:`evaluate`), before dividing by |S|:
     ``bound`` (the leaf groups' share, or None) plus that of the internal children."""
     for v in parts:
-        if series:
-            t = v.rho + mu
-            t *= v.mag
-        else:
-            t = _through_reciprocal(v.rho)
+        if v.rho is None and v.recip is series:
+            # The term is 1/S of the child's sum S (a parallel child's K, or the
+            # admittance of a series child): |1/S| (ρ(S)/(1 − ρ(S)) + 4u + m·u).
+            t = _over_excess(v.sum_err, v.sum_mag)
             t += _U_RECIP + mu
-            t /= v.mag
+            t /= v.sum_mag
+        else:
+            rho, mag = v.relative()
+            if series:
+                t = rho + mu
+                t *= mag
+            else:
+                t = _through_reciprocal(rho)
+                t += _U_RECIP + mu
+                t /= mag
         bound = t if bound is None else np.add(bound, t, out=bound)
     if bound is None:
         bound = np.zeros(shape)
@@ -808,6 +824,14 @@ def _through_reciprocal(rho: NDArray) -> NDArray:
     out = 1.0 - rho
     np.maximum(out, 0.0, out=out)
     np.divide(rho, out, out=out)
+    return out
+
+
+def _over_excess(E: NDArray, A: NDArray) -> NDArray:
+    """ρ/(1 − ρ) for ρ = E/A, as E/(A − E): ∞ where E ≥ A (a zero denominator)."""
+    out = A - E
+    np.maximum(out, 0.0, out=out)
+    np.divide(E, out, out=out)
     return out
 
 
