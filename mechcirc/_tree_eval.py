@@ -113,8 +113,9 @@ def _relative_to_true(rho, shape) -> NDArray:
     # relative to the true |K| ≥ |K̂|(1 − ρ) it is ρ / (1 − ρ)
     with np.errstate(all="ignore"):
         rho = _through_reciprocal(np.atleast_1d(np.asarray(rho, dtype=float)))
-    rho = np.broadcast_to(rho, shape).astype(float)
-    rho[np.isnan(rho)] = np.inf
+    if rho.shape != shape:          # (a fresh array of that shape otherwise)
+        rho = np.broadcast_to(rho, shape).astype(float)
+    np.copyto(rho, np.inf, where=np.isnan(rho))
     return rho
 
 
@@ -139,6 +140,8 @@ def _fast_then_checked(root, omega, error, condition, designs):
     out = evaluate(root, omega, error=error, condition=condition, designs=designs,
                    _mode="fast")
     K = out[0] if isinstance(out, tuple) else out
+    if np.isfinite(K).all():
+        return out
     bad = ~np.isfinite(K)
     sub = None
     if designs is not None:           # again the whole rows of those designs
