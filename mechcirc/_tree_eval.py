@@ -669,8 +669,9 @@ def _leaf_term(e: Element, series: bool, fast: bool = False,
         try:
             real, inv, om = law_terms(e.kind, e.value * e.eta, admittance=not series)
         except ZeroDivisionError:
-            real, inv, om = (float(t) for t in
-                             law_terms(e.kind, _scaled(e), admittance=not series))
+            with np.errstate(divide="ignore"):     # 1/0 = ∞ (flagged), not a warning
+                real, inv, om = (float(t) for t in
+                                 law_terms(e.kind, _scaled(e), admittance=not series))
     else:
         real, inv, om = law_terms(e.kind, _scaled(e, designs), admittance=not series)
     p = LAWS[e.kind].power
