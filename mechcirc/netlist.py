@@ -858,6 +858,13 @@ class _Parser:
         if not os.path.exists(path):
             line.error(f"motion table {path!r} does not exist", tok.col,
                        "a CSV file angle_deg,displacement, its path relative to the netlist")
+        if "motion" in units:       # the table's displacements: m (translational) or rad (rotary)
+            unit = units["motion"]
+            if self.with_unit(line, 1.0, unit, "displacement") != 1.0:
+                line.error(f"a motion table's displacements are read as they are, in SI; "
+                           f"{unit.text!r} would scale them", unit.col,
+                           "m (a translational drive) or rad (a rotary drive)")
+            self.drive_rotational = _unit(unit.text).dim == (0, 0, 0)
         return read_motion_table(path, spec=f"motion={path}")
 
 
