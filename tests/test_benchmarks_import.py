@@ -7,13 +7,16 @@ script's syntax tree, without running it: ``import mechcirc.x``,
 must import and name something that exists, and every attribute chain read
 or assigned on a mechcirc module (``mechcirc.scene.cycle._BATCHED = False``)
 must resolve.  ``from bench_x import y`` between scripts must name a
-top-level definition of the sibling script (or of tests/reference).
+top-level definition of the sibling script (or of tests/reference).  A call
+of a mechcirc function that spells out its arguments must fit the function's
+signature.
 """
 
 from __future__ import annotations
 
 import ast
 import importlib
+import inspect
 import types
 from pathlib import Path
 
@@ -117,6 +120,52 @@ def mechcirc_references(tree: ast.AST) -> tuple[list[str], list[tuple[str, str]]
     return dotted, siblings
 
 
+def bad_calls(tree: ast.AST) -> list[str]:
+    """Calls of mechcirc functions whose arguments the function's signature refuses
+    (a required argument added, a keyword renamed), for calls that spell out every
+    argument (no ``*args`` / ``**kwargs``).
+
+    Parameters
+    ----------
+    tree : ast.AST
+        The parsed script.
+
+    Returns
+    -------
+    list of str
+        ``"line N: name(...): why"`` for each refused call.
+    """
+    aliases: dict[str, str] = {}
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for a in node.names:
+                if a.name.split(".")[0] == "mechcirc":
+                    aliases[a.asname or "mechcirc"] = a.name if a.asname else "mechcirc"
+        elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module and \
+                node.module.split(".")[0] == "mechcirc":
+            for a in node.names:
+                aliases[a.asname or a.name] = f"{node.module}.{a.name}"
+    out = []
+    for node in ast.walk(tree):
+        if not isinstance(node, ast.Call) or any(isinstance(a, ast.Starred) for a in node.args) \
+                or any(k.arg is None for k in node.keywords):
+            continue
+        chain = _chain(node.func)
+        if not chain or chain[0] not in aliases:
+            continue
+        name = ".".join([aliases[chain[0]], *chain[1:]])
+        try:
+            fn = _resolve(name)
+            if not inspect.isfunction(fn):
+                continue            # classes, methods of values: not checked
+            inspect.signature(fn).bind(*node.args, **{k.arg: k.value for k in node.keywords})
+        except (AttributeError, ImportError):
+            continue                # reported as a missing name
+        except TypeError as exc:
+            out.append(f"line {node.lineno}: {name}(...): {exc}")
+    return out
+
+
 @pytest.mark.parametrize("script", SCRIPTS, ids=lambda p: p.name)
 def test_benchmark_compiles_and_its_mechcirc_names_exist(script):
     text = script.read_text(encoding="utf-8")
@@ -132,6 +181,7 @@ def test_benchmark_compiles_and_its_mechcirc_names_exist(script):
         path = _local(module)
         if path is None or name not in _top_level_names(path):
             missing.append(f"{module}.{name}: not defined in {path}")
+    missing += bad_calls(ast.parse(text))
     assert not missing, f"{script.name} uses names that do not exist:\n" + "\n".join(missing)
 
 
@@ -152,3 +202,9 @@ def test_the_check_sees_a_renamed_name():
     assert sorted(set(bad)) == ["mechcirc.no_such_module", "mechcirc.no_such_module.f",
                                 "mechcirc.reduction.no_such_function",
                                 "mechcirc.scene.cycle._NO_SUCH_SWITCH"]
+    calls = ast.parse("from mechcirc.kinematics import linkage_solver\n"
+                      "import mechcirc.reduction as red\n"
+                      "linkage_solver._compiled()\nlinkage_solver._compiled('dyads_path')\n"
+                      "red.reduce_circuit(c, no_such_keyword=1)\nred.reduce_circuit(*a)\n")
+    found = bad_calls(calls)
+    assert [f.split(":")[0] for f in found] == ["line 3", "line 5"], found
