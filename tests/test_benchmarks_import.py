@@ -78,6 +78,21 @@ def _local(module: str) -> Path | None:
     return None
 
 
+def _aliases(tree: ast.AST) -> dict[str, str]:
+    """Each local name a script binds to a mechcirc module or name -> its dotted name."""
+    aliases: dict[str, str] = {}
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for a in node.names:
+                if a.name.split(".")[0] == "mechcirc":
+                    aliases[a.asname or "mechcirc"] = a.name if a.asname else "mechcirc"
+        elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module and \
+                node.module.split(".")[0] == "mechcirc":
+            for a in node.names:
+                aliases[a.asname or a.name] = f"{node.module}.{a.name}"
+    return aliases
+
+
 def mechcirc_references(tree: ast.AST) -> tuple[list[str], list[tuple[str, str]]]:
     """The dotted mechcirc names a script uses, and its ``(sibling module, name)`` imports.
 
@@ -91,22 +106,15 @@ def mechcirc_references(tree: ast.AST) -> tuple[list[str], list[tuple[str, str]]
     tuple
         ``(dotted names, [(module, name), ...])``.
     """
-    aliases: dict[str, str] = {}        # local name -> dotted mechcirc name
-    dotted: list[str] = []
+    aliases = _aliases(tree)
+    dotted: list[str] = [name for name in aliases.values() if name != "mechcirc"]
     siblings: list[tuple[str, str]] = []
     for node in ast.walk(tree):
         if isinstance(node, ast.Import):
-            for a in node.names:
-                if a.name.split(".")[0] == "mechcirc":
-                    dotted.append(a.name)
-                    aliases[a.asname or "mechcirc"] = a.name if a.asname else "mechcirc"
-        elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
-            for a in node.names:
-                if node.module.split(".")[0] == "mechcirc":
-                    dotted.append(f"{node.module}.{a.name}")
-                    aliases[a.asname or a.name] = f"{node.module}.{a.name}"
-                elif _local(node.module):
-                    siblings.append((node.module, a.name))
+            dotted.extend(a.name for a in node.names if a.name.split(".")[0] == "mechcirc")
+        elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module and \
+                _local(node.module):
+            siblings.extend((node.module, a.name) for a in node.names)
         elif isinstance(node, ast.Call) and _chain(node.func) in (["importlib", "import_module"],
                                                                   ["import_module"]):
             arg = node.args[0] if node.args else None
@@ -135,16 +143,7 @@ def bad_calls(tree: ast.AST) -> list[str]:
     list of str
         ``"line N: name(...): why"`` for each refused call.
     """
-    aliases: dict[str, str] = {}
-    for node in ast.walk(tree):
-        if isinstance(node, ast.Import):
-            for a in node.names:
-                if a.name.split(".")[0] == "mechcirc":
-                    aliases[a.asname or "mechcirc"] = a.name if a.asname else "mechcirc"
-        elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module and \
-                node.module.split(".")[0] == "mechcirc":
-            for a in node.names:
-                aliases[a.asname or a.name] = f"{node.module}.{a.name}"
+    aliases = _aliases(tree)
     out = []
     for node in ast.walk(tree):
         if not isinstance(node, ast.Call) or any(isinstance(a, ast.Starred) for a in node.args) \
