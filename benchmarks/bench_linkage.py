@@ -205,7 +205,7 @@ def main() -> None:
             _jit.COMPILED = None
 
     lk4.motion(theta[:10], method="newton")                  # compile (or load) the kernel
-    compiled = linkage_solver._compiled()
+    compiled = linkage_solver._compiled("newton_path")
     t_closed, t_dyads = interleaved(lambda: fb.evaluate(theta), lambda: lk4.motion(theta),
                                     repeat=100, label="dyads")
     t_closed2, t_newton4 = interleaved(lambda: fb.evaluate(theta),

@@ -149,11 +149,13 @@ class Sweep:
         return point_flags(self.K, self.Q0, self.v0, self.error)
 
     def force(self, name: str) -> NDArray[np.complex128]:
-        """Force amplitude Q [N] through element ``name`` (from its n1 to its n2)."""
+        """Force amplitude Q [N] through element ``name`` (from its n1 to its n2); a nodal
+        sweep solves as it did (:attr:`refine`)."""
         return self._element(name)[0]
 
     def velocity(self, name: str) -> NDArray[np.complex128]:
-        """Velocity difference amplitude v = v(n1) − v(n2) [m/s] across element ``name``."""
+        """Velocity difference amplitude v = v(n1) − v(n2) [m/s] across element ``name``; a
+        nodal sweep solves as it did (:attr:`refine`)."""
         return self._element(name)[1]
 
     def node_velocity(self, name: str) -> NDArray[np.complex128]:
@@ -324,7 +326,7 @@ class Sweep:
 
         if self.circuit is None:
             raise _missing("circuit")
-        return nodal.element_response(self.circuit.nodal, self.omega, self.Q0)
+        return nodal.element_response(self.circuit.nodal, self.omega, self.Q0, refine=self.refine)
 
 
 # The per-point quantities of a sweep from K, written once for a sweep (shape (n,),

@@ -40,7 +40,7 @@ from .errors import InputError, MechcircError, NetlistError, NotSeriesParallelEr
 from ._sweep import (UNDAMPED_ZETA, drive_force, drive_velocity, point_flags,
                     singular_error)
 
-__all__ = ["designs", "from_circuits", "Designs", "DesignSweep", "DesignResonances",
+__all__ = ["designs", "from_circuits", "network_shape", "Designs", "DesignSweep", "DesignResonances",
            "DesignExtremes"]
 
 
@@ -134,6 +134,28 @@ def _param_arrays(params: dict) -> tuple[dict, int]:
     return arrays, (sizes.pop() if sizes else 1)
 
 
+def network_shape(circuit: Circuit) -> tuple:
+    """What two designs of one network share: elements, levers and drive by kind, name and nodes.
+
+    Values, η, lever ratios and the drive amplitude are left out, so two circuits
+    with equal shapes are designs of one network (:func:`from_circuits`).
+
+    Parameters
+    ----------
+    circuit : Circuit
+        A driven circuit.
+
+    Returns
+    -------
+    tuple
+        ``(elements, levers, drive)`` as lists and a tuple of plain values, comparable with ``==``.
+    """
+    d = circuit.require_drive()
+    return ([(e.kind, e.name, e.n1, e.n2) for e in circuit.elements],
+            [(lv.name, lv.p1, lv.p2, lv.s1, lv.s2) for lv in circuit.levers],
+            (d.name, d.n1, d.n2, d.kind))
+
+
 def from_circuits(circuits) -> "Designs":
     """The designs of several circuits of one topology (the same elements, levers and
     drive, in the same order, differing only in values, η, ratios and amplitude),
@@ -156,16 +178,9 @@ def from_circuits(circuits) -> "Designs":
     if not circuits:
         raise InputError("from_circuits needs at least one circuit")
     first = circuits[0]
-
-    def shape(c: Circuit):
-        d = c.require_drive()
-        return ([(e.kind, e.name, e.n1, e.n2) for e in c.elements],
-                [(lv.name, lv.p1, lv.p2, lv.s1, lv.s2) for lv in c.levers],
-                (d.name, d.n1, d.n2, d.kind))
-
-    ref = shape(first)
+    ref = network_shape(first)
     for i, c in enumerate(circuits[1:], start=1):
-        if shape(c) != ref:
+        if network_shape(c) != ref:
             raise InputError(f"circuit {i} ({c.name}) differs in topology from circuit 0 "
                              f"({first.name}): not designs of one network")
     values = np.array([[e.value for e in c.elements] for c in circuits], dtype=float).T

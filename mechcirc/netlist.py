@@ -676,25 +676,19 @@ class _Parser:
         eta = self._positive(line, opts["eta"], f"eta of {name!r}", "",
                              unit_tok=units.get("eta"), role="eta", key=(name, "eta")) \
             if "eta" in opts else 1.0
-        backlash = damping = 0.0
-        if "backlash" in opts:
-            tok = opts["backlash"]
-            backlash = self.expr(line, tok.text, tok.col, defined=self.params,
-                                 key=(name, "backlash"))
-            backlash = self.with_unit(line, backlash, units.get("backlash"), "displacement",
-                                      (name, "backlash"))
-            if not backlash >= 0:
-                line.error(f"backlash of {name!r} must be >= 0, got {backlash:g}", tok.col,
-                           "a total clearance >= 0 (length or angle)")
-        if "damping" in opts:
-            tok = opts["damping"]
-            damping = self.expr(line, tok.text, tok.col, defined=self.params,
-                                key=(name, "damping"))
-            damping = self.with_unit(line, damping, units.get("damping"), "damper",
-                                     (name, "damping"))
-            if not damping >= 0:
-                line.error(f"damping of {name!r} must be >= 0 N·s/m, got {damping:g}",
-                           tok.col, "a damping coefficient >= 0")
+        spring = {"backlash": 0.0, "damping": 0.0}
+        for key, role, unit, expected in (
+                ("backlash", "displacement", "", "a total clearance >= 0 (length or angle)"),
+                ("damping", "damper", " N·s/m", "a damping coefficient >= 0")):
+            if key in opts:
+                tok = opts[key]
+                x = self.expr(line, tok.text, tok.col, defined=self.params, key=(name, key))
+                x = self.with_unit(line, x, units.get(key), role, (name, key))
+                if not x >= 0:
+                    line.error(f"{key} of {name!r} must be >= 0{unit}, got {x:g}", tok.col,
+                               expected)
+                spring[key] = x
+        backlash, damping = spring["backlash"], spring["damping"]
         self.elements.append(Element(kind, name, n1, n2, value, eta, line.lineno,
                                      line.tokens[0].col, backlash, damping))
         if damping > 0:
@@ -858,6 +852,13 @@ class _Parser:
         if not os.path.exists(path):
             line.error(f"motion table {path!r} does not exist", tok.col,
                        "a CSV file angle_deg,displacement, its path relative to the netlist")
+        if "motion" in units:       # the table's displacements: m (translational) or rad (rotary)
+            unit = units["motion"]
+            if self.with_unit(line, 1.0, unit, "displacement") != 1.0:
+                line.error(f"a motion table's displacements are read as they are, in SI; "
+                           f"{unit.text!r} would scale them", unit.col,
+                           "m (a translational drive) or rad (a rotary drive)")
+            self.drive_rotational = _unit(unit.text).dim == (0, 0, 0)
         return read_motion_table(path, spec=f"motion={path}")
 
 

@@ -107,6 +107,8 @@ def _drive_line(d: Drive) -> str:
         how = f"motion={os.path.abspath(d.motion.path)}" if d.motion.path else d.motion.spec
         if d.rotational and not d.motion.path:      # an angular stroke reads back rotary
             how = re.sub(r"(stroke=\S+)", r"\1 rad", how, count=1)
+        elif d.rotational:                          # a table of angles reads back rotary
+            how += " rad"
     return f"drive {_names(d.name, d.n1, d.n2)} {how}"
 
 

@@ -581,10 +581,12 @@ def mobility_unrefined(system: NodalSystem, omega: ArrayLike) -> NDArray[np.comp
     return solve(system, omega, refine=False, limits=False, keep_x=False).K
 
 
-def element_response(system: NodalSystem, omega: ArrayLike, scale: NDArray) -> dict[str, tuple]:
-    """``{name: (Q, v)}`` for every loaded element, for a drive force ``scale`` [N] per ω."""
+def element_response(system: NodalSystem, omega: ArrayLike, scale: NDArray, *,
+                     refine: bool = True) -> dict[str, tuple]:
+    """``{name: (Q, v)}`` for every loaded element, for a drive force ``scale`` [N] per ω
+    (solved with or without ``refine``, as :func:`solve_unit`)."""
     omega = np.asarray(omega, dtype=float)
-    x = solve_unit(system, omega)
+    x = solve_unit(system, omega, refine=refine)
     index = {n: i for i, n in enumerate(system.nodes)}
     out = {}
     with np.errstate(all="ignore"):

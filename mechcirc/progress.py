@@ -16,7 +16,9 @@ __all__ = ["Progress"]
 class Progress:
     """Count ``total`` steps; draw ``label [#####.....] done/total  rate  eta`` when it is worth it.
 
-    Use as a context manager; :meth:`update` adds finished steps.
+    Use as a context manager; :meth:`update` adds finished steps, or pass the bar
+    itself as a ``progress(done, total)`` callback (the total may be unknown at
+    construction: ``Progress(0, label)``).
     """
 
     def __init__(self, total: int, label: str = "", *, stream=None, delay: float = 1.0,
@@ -42,6 +44,19 @@ class Progress:
             return
         self._last = now
         self._draw(now)
+
+    def __call__(self, done: int, total: int) -> None:
+        """Set the total and the finished count, for APIs that report ``progress(done, total)``.
+
+        Parameters
+        ----------
+        done : int
+            Steps finished so far.
+        total : int
+            Steps in all.
+        """
+        self.total = max(int(total), 0)
+        self.update(done - self.done)
 
     def _draw(self, now: float) -> None:
         frac = self.done / self.total if self.total else 1.0

@@ -47,15 +47,6 @@ class _Edge:
     node: Node
 
 
-class _Binary:
-    """Binary series/parallel node used while reducing (flattened afterwards)."""
-
-    __slots__ = ("kind", "a", "b", "sign_a", "sign_b")
-
-    def __init__(self, kind, a, sign_a, b, sign_b):
-        self.kind, self.a, self.sign_a, self.b, self.sign_b = kind, a, sign_a, b, sign_b
-
-
 def reduce_circuit(circuit: Circuit) -> Reduction:
     """Reduce ``circuit`` between its drive's terminals.
 
@@ -156,7 +147,7 @@ def _reduce(edges: list[_Edge], levers: list[Lever], a: str, b: str,
             sign = 1 if (t, s) == (lv.s1, lv.s2) else -1
             keep = set(range(len(edges))) - set(sub_ids)
             edges = [edges[i] for i in sorted(keep)]
-            edges.append(_Edge(lv.p1, lv.p2, Reflect(_flatten(child), lv, sign)))
+            edges.append(_Edge(lv.p1, lv.p2, Reflect(child, lv, sign)))
             gone = {id(m) for m in sub_levers} | {id(lv)}
             levers = [m for m in levers if id(m) not in gone]
             changed = True
@@ -181,7 +172,8 @@ def _reduce_edges(n1s: list, n2s: list, nodes: list, a: str, b: str, unloaded: l
     goes.  If that does not end in one edge between ``a`` and ``b`` (an
     unloaded part that is not itself series–parallel, a bridge, terminals
     that are not connected), the network is pruned to the drive's biconnected
-    block first and reduced again, which also words the error.
+    block first and the same pass runs again, now naming what is left if it
+    stops short.
     """
     found = _series_parallel_runs(n1s, n2s, nodes, a, b)
     if found is not None:
@@ -191,7 +183,11 @@ def _reduce_edges(n1s: list, n2s: list, nodes: list, a: str, b: str, unloaded: l
         return root
     edges = [_Edge(u, w, node) for u, w, node in zip(n1s, n2s, nodes)]
     edges = _prune(edges, a, b, unloaded, drive_line, source)
-    return _flatten(_series_parallel(edges, a, b))
+    root, dangling = _series_parallel_runs([e.n1 for e in edges], [e.n2 for e in edges],
+                                           [e.node for e in edges], a, b, explain=True)
+    for node in dangling:
+        unloaded.extend(el.name for el in leaves(_close(node, 1)[0]))
+    return root
 
 
 class _Run:
@@ -290,19 +286,26 @@ def _join(x, sx: int, y, sy: int, series: bool):
     return _Run(series, [x, y], [sx, sy]), False
 
 
-def _series_parallel_runs(n1s: list, n2s: list, nodes: list, a: str, b: str):
+def _series_parallel_runs(n1s: list, n2s: list, nodes: list, a: str, b: str,
+                          explain: bool = False):
     """Dangling-branch stripping and series/parallel reduction in one worklist
     pass on integer node ids.  Returns ``(root oriented a → b, dangling
-    two-poles)``, or None when it does not end in one edge between a and b."""
+    two-poles)``, or None when it does not end in one edge between a and b;
+    with ``explain``, raises instead the error naming the nodes and elements
+    left (:func:`_not_reducible`)."""
     ids: dict = {}
     U = [ids.setdefault(x, len(ids)) for x in n1s]
     W = [ids.setdefault(x, len(ids)) for x in n2s]
     if a not in ids or b not in ids or a == b:
+        if explain:
+            raise _not_reducible(list(ids), nodes, a, b)
         return None
     ia, ib = ids[a], ids[b]
     E = list(nodes)
     built = _adjacency(U, W, E, len(ids))
     if built is None:
+        if explain:
+            raise _not_reducible(list(ids), nodes, a, b)
         return None
     adj, alive = built
     dangling: list = []
@@ -329,6 +332,9 @@ def _series_parallel_runs(n1s: list, n2s: list, nodes: list, a: str, b: str):
             push(far)
     eid = adj[ia].get(ib)
     if alive != 1 or eid is None:
+        if explain:
+            raise _not_reducible([x for x, i in ids.items() if adj[i]],
+                                 [_close(e, 1)[0] for e in E if e is not None], a, b)
         return None
     node, sign = _close(E[eid], 1 if U[eid] == ia else -1)
     if sign < 0:
@@ -432,73 +438,15 @@ def _prune(edges: list[_Edge], a: str, b: str, unloaded: list[str], drive_line: 
                              source=source))
     for i, e in enumerate(edges):
         if i not in kept:
-            unloaded.extend(el.name for el in leaves(_flatten(e.node)))
+            unloaded.extend(el.name for el in leaves(e.node))
     return [e for i, e in enumerate(edges) if i in kept]
 
 
-def _series_parallel(edges: list[_Edge], a: str, b: str):
-    """Worklist series/parallel reduction; returns the root node oriented a → b."""
-    store: dict[int, list] = {}     # id -> [n1, n2, node]
-    adj: dict[str, dict[int, None]] = {}
-    pair: dict[frozenset, int] = {}
-    next_id = 0
-    queue: deque[str] = deque()
-
-    def add(n1, n2, node):
-        nonlocal next_id
-        key = frozenset((n1, n2))
-        old = pair.get(key)
-        if old is not None:
-            o = store[old]
-            o[2] = _Binary("p", o[2], 1, node, 1 if o[0] == n1 else -1)
-            queue.append(n1)    # their degrees changed
-            queue.append(n2)
-            return
-        eid = next_id
-        next_id += 1
-        store[eid] = [n1, n2, node]
-        adj.setdefault(n1, {})[eid] = None
-        adj.setdefault(n2, {})[eid] = None
-        pair[key] = eid
-        queue.append(n1)
-        queue.append(n2)
-
-    def remove(eid):
-        n1, n2, _ = store.pop(eid)
-        del adj[n1][eid]
-        del adj[n2][eid]
-        del pair[frozenset((n1, n2))]
-
-    for e in edges:
-        add(e.n1, e.n2, e.node)
-    while queue:
-        n = queue.popleft()
-        if n in (a, b) or n not in adj or len(adj[n]) != 2:
-            continue
-        e1, e2 = adj[n]
-        u1, w1, node1 = store[e1]
-        u2, w2, node2 = store[e2]
-        u = w1 if u1 == n else u1          # far end of e1
-        w = w2 if u2 == n else u2          # far end of e2
-        s1 = 1 if w1 == n else -1          # e1 runs u -> n ?
-        s2 = 1 if u2 == n else -1          # e2 runs n -> w ?
-        remove(e1)
-        remove(e2)
-        del adj[n]
-        add(u, w, _Binary("s", node1, s1, node2, s2))
-    if len(store) != 1:
-        raise _not_reducible(store, adj, a, b)
-    (n1, n2, node), = store.values()
-    if n1 == a:
-        return node
-    # Root oriented b -> a: wrap so that the tree's orientation is a -> b.
-    return _Binary("s", node, -1, None, 0)
-
-
-def _not_reducible(store: dict, adj: dict, a: str, b: str) -> NotSeriesParallelError:
-    """The error naming the nodes and elements left when the reduction stops short."""
-    blocking_nodes = sorted(n for n, es in adj.items() if es and n not in (a, b))
-    names = sorted(el.name for _, _, node in store.values() for el in leaves(_flatten(node)))
+def _not_reducible(nodes: list[str], parts: list, a: str, b: str) -> NotSeriesParallelError:
+    """The error naming the nodes and the elements (under ``parts``) left when the reduction
+    stops short."""
+    blocking_nodes = sorted(n for n in nodes if n not in (a, b))
+    names = sorted(el.name for part in parts for el in leaves(part))
     return NotSeriesParallelError(
         f"the network is not series–parallel reducible between {a!r} and {b!r}: "
         f"nodes {_some(blocking_nodes)} and elements {_some(names)} form a "
@@ -510,87 +458,3 @@ def _some(names: list[str], limit: int = 12) -> str:
     if len(names) <= limit:
         return ", ".join(names)
     return ", ".join(names[:limit]) + f" and {len(names) - limit} more"
-
-
-def _flatten(root) -> Node:
-    """Turn the binary reduction nodes into flat Series/Parallel tuples.
-
-    Iterative (ladders nest deeper than the recursion limit); nested nodes of
-    the same kind merge, keeping path order and orientation signs.  Linear in
-    the number of nodes: each maximal run of binary nodes of one kind (a
-    "head" and everything it absorbs) is gathered once into one flat node, so
-    n elements in parallel or in series cost O(n), not O(n²) as merging the
-    flattened children pairwise would.
-    """
-    if not isinstance(root, _Binary):
-        return root
-    done: dict[int, Node] = {}
-    gathered: dict[int, list] = {}
-    stack = [(root, False)]
-    while stack:
-        head, expanded = stack.pop()
-        if id(head) in done:
-            continue
-        if not expanded:
-            items = gathered[id(head)] = _gather(head)
-            stack.append((head, True))
-            stack.extend((c, False) for c, _ in items
-                         if isinstance(c, _Binary) and id(c) not in done)
-            continue
-        children: list = []
-        signs: list[int] = []
-        for child, sign in gathered.pop(id(head)):
-            if isinstance(child, _Binary):
-                child = done[id(child)]
-            if sign < 0 and isinstance(child, (Series, Parallel)):
-                # Flip the child instead of marking it reversed, so that only
-                # leaves and lever reflections carry orientation signs and series
-                # chains print in path order.
-                child, sign = _reversed(child), 1
-            same = (isinstance(child, Series) and head.kind == "s") or \
-                   (isinstance(child, Parallel) and head.kind == "p")
-            if same:        # only when a head collapsed to a node of this kind
-                children.extend(child.children)
-                signs.extend(s * sign for s in child.signs)
-            else:
-                children.append(child)
-                signs.append(sign)
-        if len(children) == 1 and signs[0] == 1:
-            done[id(head)] = children[0]
-        else:
-            cls = Series if head.kind == "s" else Parallel
-            done[id(head)] = cls(tuple(children), tuple(signs))
-    return done[id(root)]
-
-
-def _gather(head: _Binary) -> list:
-    """The operands of the run of ``head.kind`` binary nodes under ``head``, in
-    path order with their signs; operands of the other kind stay binary."""
-    kind = head.kind
-    out = []
-    stack = [(head, 1)]
-    while stack:
-        node, sign = stack.pop()
-        if isinstance(node, _Binary) and node.kind == kind:
-            items = [(c, s * sign) for c, s in _binary_items(node)]
-            if kind == "s" and sign < 0:
-                items.reverse()
-            stack.extend(reversed(items))
-        else:
-            out.append((node, sign))
-    return out
-
-
-def _reversed(node):
-    """The same two-pole with n1 and n2 exchanged."""
-    signs = tuple(-s for s in node.signs)
-    if isinstance(node, Series):
-        return Series(node.children[::-1], signs[::-1])
-    return Parallel(node.children, signs)
-
-
-def _binary_items(node: _Binary):
-    items = [(node.a, node.sign_a)]
-    if node.b is not None:
-        items.append((node.b, node.sign_b))
-    return items

@@ -626,3 +626,20 @@ def test_designs_on_an_empty_grid(monkeypatch, compiled):
     s = ds.sweep(np.array([]))
     assert s.K.shape == (3, 0)
     assert ds.sweep(np.array([50.0])).K.shape == (3, 1)
+
+
+def test_network_shape_ignores_values_and_sees_nodes_names_and_drive():
+    from mechcirc.batch import from_circuits, network_shape
+
+    a = parse(LEVER)
+    b = parse(LEVER.replace(".param r=2 m=1.5", ".param r=3 m=2.5").replace("velocity=0.2",
+                                                                             "velocity=0.7"))
+    assert network_shape(a) == network_shape(b)
+    assert from_circuits([a, b]).values.shape[1] == 2
+    for changed in (LEVER.replace("spring k2 c 0", "spring k2 c b"),       # a node
+                    LEVER.replace("mass  m2", "mass  m3"),                 # a name
+                    LEVER.replace("velocity=0.2", "force=0.2"),            # the drive kind
+                    LEVER.replace("lever L b 0 c 0", "lever L b 0 0 c")):  # a lever's ends
+        assert network_shape(parse(changed)) != network_shape(a)
+        with pytest.raises(InputError, match="differs in topology"):
+            from_circuits([a, parse(changed)])

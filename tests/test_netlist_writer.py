@@ -178,3 +178,26 @@ def test_rotary_drive_reads_back_rotary(drive):
     assert units_of(back.drive) == units_of(c.drive)
     plain = parse("drive V a 0 velocity=2.5\nmass m a 0 1\n")
     assert not parse(write(plain)).drive.rotational
+
+
+def test_rotary_motion_table_reads_back_rotary(tmp_path):
+    """A table has no stroke to carry the unit: ``motion=PATH rad`` says the displacements
+    are angles; the writer adds it for a rotary drive whose elements carry no units."""
+    table = tmp_path / "lift.csv"
+    table.write_text("angle_deg,displacement\n0,0\n90,0.05\n180,0.1\n270,0.05\n360,0\n")
+    rotary = parse(f"drive W p 0 motion={table} rad\nmass J p 0 0.2\nspring k p 0 5e3\n")
+    by_nodes = parse(f"drive W p 0 motion={table}\nmass J p 0 0.2 kg*m^2\nspring k p 0 5e3 N*m/rad\n")
+    for c in (rotary, by_nodes):
+        assert c.drive.rotational
+        text = write(c)
+        assert text.splitlines()[0] == f"drive W p 0 motion={table} rad"
+        back = parse(text)
+        assert back.drive.rotational and back.drive.motion == c.drive.motion
+    plain = parse(f"drive V a 0 motion={table} m\nmass m a 0 1\n")
+    assert not plain.drive.rotational and not parse(write(plain)).drive.rotational
+    assert write(plain).splitlines()[0] == f"drive V a 0 motion={table}"
+    for unit, why in (("mm", "would scale them"), ("deg", "would scale them"),
+                      ("kg", "needs length or angle")):
+        with pytest.raises(NetlistError, match=why) as exc:
+            parse(f"drive V a 0 motion={table} {unit}\nmass m a 0 1\n")
+        assert exc.value.col == len(f"drive V a 0 motion={table} ") + 1

@@ -65,3 +65,23 @@ def test_plot_and_node_velocity_solve_unrefined(spy, monkeypatch):
     assert units == [False]
     ref = real_unit(c.nodal, s.omega, refine=False)[:, list(c.nodal.nodes).index("b")]
     assert np.array_equal(v, ref * s.Q0)
+
+
+@pytest.mark.parametrize("refine", [False, True])
+def test_element_force_and_velocity_solve_as_the_sweep_did(monkeypatch, refine):
+    c = parse(NET)
+    s = sweep(c, np.geomspace(10, 1000, 20), method="nodal", refine=refine)
+    units = []
+    real_unit = nodal.solve_unit
+    monkeypatch.setattr(nodal, "solve_unit",
+                        lambda sys, w, **kw: units.append(kw.get("refine", True)) or
+                        real_unit(sys, w, **kw))
+    Q, v = s.force("k1"), s.velocity("k1")
+    assert units == [refine]            # one solve, cached for both, with the sweep's choice
+    # k1 runs a -> b: v is the difference of the node velocities of the same solve, and
+    # Q = k v / (jω) for a spring of k = 1e4 N/m.
+    x = real_unit(c.nodal, s.omega, refine=refine) * s.Q0[:, None]
+    nodes = list(c.nodal.nodes)
+    ref_v = x[:, nodes.index("a")] - x[:, nodes.index("b")]
+    assert np.allclose(v, ref_v, rtol=1e-14, atol=0)
+    assert np.allclose(Q, 1e4 * ref_v / (1j * s.omega), rtol=1e-12, atol=0)

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import sys
 
 from ..limits import MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS, MAX_SCIPY_REVOLUTIONS
 from ._common import check_output_paths, count, print_json, real, save_figure
@@ -127,25 +126,6 @@ def _register_crosscheck(sub) -> None:
 
 
 # ------------------------------------------------------------------ helpers
-class _Progress:
-    """A one-line progress bar on stderr, only when stderr is a terminal."""
-
-    def __init__(self, label: str):
-        self.label = label
-        self.active = sys.stderr.isatty()
-
-    def __call__(self, done: int, total: int) -> None:
-        if not self.active:
-            return
-        width = 30
-        filled = int(width * done / total)
-        sys.stderr.write(f"\r{self.label} [{'#' * filled}{'.' * (width - filled)}] "
-                         f"{done}/{total}")
-        if done == total:
-            sys.stderr.write("\r" + " " * (len(self.label) + width + 16) + "\r")
-        sys.stderr.flush()
-
-
 #: Names --set cannot take (it sets numbers), and what to use instead.
 _NOT_NUMBERS = {"drive": "choose the layout with --drive one-side|both-sides",
                 "variant": "choose the table row with --variant 1-7|all",
@@ -286,8 +266,10 @@ def cmd_simulate(args) -> int:
     except ValueError:
         raise ParameterError(f"--variant must be 1-7 or 'all', got {args.variant!r}") from None
     params = preset(args.drive, variant, **over)
-    progress = _Progress(f"{params.label}")
-    result = simulate_params(params, args.revolutions, args.method, progress=progress, **opts)
+    from ..progress import Progress
+
+    with Progress(0, params.label) as bar:     # total set by the first progress(done, total)
+        result = simulate_params(params, args.revolutions, args.method, progress=bar, **opts)
     if args.output:
         _write_csv(result, args.output)
     if args.plot:

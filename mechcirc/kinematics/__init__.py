@@ -7,7 +7,7 @@ numpy and scipy only; nothing here imports matplotlib (see :mod:`.plots`).
 
 from .cam import CamCheck, CamProfile, cam_profile
 from .fourbar import DeadCentre, FourBar, FourBarState, TransmissionRange
-from .frame_loading import FrameLoading, LinkMass, beat_up_force, frame_loading
+from ._frame_loading import FrameLoading, LinkMass, beat_up_force, frame_loading
 from .linkage import Crank, Linkage, LinkageMotion, LinkageState, load_linkage, parse_linkage
 from .synthesis import Design, SynthesisResult, evaluate_design, solve_eq10, synthesize
 

@@ -384,6 +384,39 @@ def _im_conj(a, b):
 
 
 @_jit
+def _dyads_accelerations(crank_idx, crank_arm, L, K, X, arm, EK, R1, R2, QD, QDD):
+    """Fill QDD: the dyads' accelerations at every position k, from its unit vectors
+    EK[k] (e^{iφ} of each body), inner-joint vectors R1[k], R2[k] and total speeds
+    (the φ columns of QD[k])."""
+    nb = EK.shape[1]
+    al = np.empty(nb)
+    a = np.empty(nb, dtype=np.complex128)
+    for k in range(EK.shape[0]):
+        E = EK[k]
+        for i in range(nb):
+            al[i] = 0.0
+            a[i] = 0.0
+        for j in range(crank_idx.shape[0]):
+            ci = crank_idx[j]
+            a[ci] = -QD[k, 3 * ci + 2] ** 2 * E[ci] * crank_arm[j]
+        for d in range(L.shape[0]):
+            K1, K2 = K[d, 0], K[d, 1]
+            L1, L2 = L[d, 0], L[d, 1]
+            w1, w2 = QD[k, 3 * L1 + 2], QD[k, 3 * L2 + 2]
+            a1 = 0j if K1 < 0 else a[K1] + (1j * al[K1] - QD[k, 3 * K1 + 2] ** 2) * E[K1] * X[d, 0]
+            a2 = 0j if K2 < 0 else a[K2] + (1j * al[K2] - QD[k, 3 * K2 + 2] ** 2) * E[K2] * X[d, 1]
+            r1 = R1[k, d]
+            r2 = R2[k, d]
+            al[L1], al[L2] = _solve2(1j * r1, -1j * r2, a2 - a1 + w1 ** 2 * r1 - w2 ** 2 * r2)
+            a[L1] = a1 + (1j * al[L1] - w1 ** 2) * E[L1] * arm[d, 0]
+            a[L2] = a2 + (1j * al[L2] - w2 ** 2) * E[L2] * arm[d, 1]
+        for i in range(nb):
+            QDD[k, 3 * i] = a[i].real
+            QDD[k, 3 * i + 1] = a[i].imag
+            QDD[k, 3 * i + 2] = al[i]
+
+
+@_jit
 def dyads_path(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, rot, arm,
                Q, QD, QDD, PARTS, margin):
     """Closed-form RRR dyads at every time in ``t``, one position at a time.
@@ -395,9 +428,10 @@ def dyads_path(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, ro
     rot[d] = e^{−i·pose angle}/length, arm[d] = the link frame's origin from
     its outer joint in the link's frame, ang[d] = the links' pose angles.
     Fills Q, QD, QDD, PARTS and margin (the smallest |sin| of a dyad's inner
-    angle, −1 where it cannot assemble).  One function on purpose: moved into
-    compiled helpers (inlined or not) its parts took 2 ms of CPU instead of
-    0.9 ms for 3,600 four-bar positions.
+    angle, −1 where it cannot assemble).  The accelerations come after the loop,
+    in one call over all positions (:func:`_dyads_accelerations`, from the
+    unit vectors and inner-joint vectors kept per position): a compiled helper
+    called once per position, or inlined, measured slower.
     """
     N = t.shape[0]
     nb = Q.shape[1] // 3
@@ -406,13 +440,11 @@ def dyads_path(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, ro
     E = np.empty(nb, dtype=np.complex128)
     r = np.empty(nb, dtype=np.complex128)
     phi = np.empty(nb)
-    r1s = np.empty(nd, dtype=np.complex128)
-    r2s = np.empty(nd, dtype=np.complex128)
+    EK = np.empty((N, nb), dtype=np.complex128)         # per position, for the accelerations
+    R1 = np.empty((N, nd), dtype=np.complex128)
+    R2 = np.empty((N, nd), dtype=np.complex128)
     w = np.empty(nb)
     v = np.empty(nb, dtype=np.complex128)
-    wt = np.empty(nb)
-    al = np.empty(nb)
-    a = np.empty(nb, dtype=np.complex128)
     for k in range(N):
         for j in range(nc):
             ci = crank_idx[j]
@@ -432,8 +464,8 @@ def dyads_path(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, ro
             if not (h2 >= 0.0 and s < math.inf):
                 s = -1.0
             mg = min(mg, s)
-            r1s[d] = r1
-            r2s[d] = r2
+            R1[k, d] = r1
+            R2[k, d] = r2
             for side in range(2):
                 Ls = L[d, side]
                 rr = r1 if side == 0 else r2
@@ -443,12 +475,12 @@ def dyads_path(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, ro
                 r[Ls] = xp + E[Ls] * arm[d, side]
         margin[k] = mg
         for i in range(nb):
+            EK[k, i] = E[i]
             Q[k, 3 * i] = r[i].real
             Q[k, 3 * i + 1] = r[i].imag
             Q[k, 3 * i + 2] = phi[i]
         # velocities, one crank at a time (conditional stop): they add up
         for i in range(nb):
-            wt[i] = 0.0
             QD[k, 3 * i] = 0.0
             QD[k, 3 * i + 1] = 0.0
             QD[k, 3 * i + 2] = 0.0
@@ -466,7 +498,7 @@ def dyads_path(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, ro
                 v1 = 0j if K1 < 0 else v[K1] + 1j * w[K1] * E[K1] * X[d, 0]
                 v2 = 0j if K2 < 0 else v[K2] + 1j * w[K2] * E[K2] * X[d, 1]
                 L1, L2 = L[d, 0], L[d, 1]
-                w[L1], w[L2] = _solve2(1j * r1s[d], -1j * r2s[d], v2 - v1)
+                w[L1], w[L2] = _solve2(1j * R1[k, d], -1j * R2[k, d], v2 - v1)
                 v[L1] = v1 + 1j * w[L1] * E[L1] * arm[d, 0]
                 v[L2] = v2 + 1j * w[L2] * E[L2] * arm[d, 1]
             for i in range(nb):
@@ -476,24 +508,4 @@ def dyads_path(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, ro
                 QD[k, 3 * i] += v[i].real
                 QD[k, 3 * i + 1] += v[i].imag
                 QD[k, 3 * i + 2] += w[i]
-                wt[i] += w[i]
-        for i in range(nb):
-            al[i] = 0.0
-            a[i] = 0.0
-        for j in range(nc):
-            ci = crank_idx[j]
-            a[ci] = -wt[ci] ** 2 * E[ci] * crank_arm[j]
-        for d in range(nd):
-            K1, K2 = K[d, 0], K[d, 1]
-            a1 = 0j if K1 < 0 else a[K1] + (1j * al[K1] - wt[K1] ** 2) * E[K1] * X[d, 0]
-            a2 = 0j if K2 < 0 else a[K2] + (1j * al[K2] - wt[K2] ** 2) * E[K2] * X[d, 1]
-            r1 = r1s[d]
-            r2 = r2s[d]
-            L1, L2 = L[d, 0], L[d, 1]
-            al[L1], al[L2] = _solve2(1j * r1, -1j * r2, a2 - a1 + wt[L1] ** 2 * r1 - wt[L2] ** 2 * r2)
-            a[L1] = a1 + (1j * al[L1] - wt[L1] ** 2) * E[L1] * arm[d, 0]
-            a[L2] = a2 + (1j * al[L2] - wt[L2] ** 2) * E[L2] * arm[d, 1]
-        for i in range(nb):
-            QDD[k, 3 * i] = a[i].real
-            QDD[k, 3 * i + 1] = a[i].imag
-            QDD[k, 3 * i + 2] = al[i]
+    _dyads_accelerations(crank_idx, crank_arm, L, K, X, arm, EK, R1, R2, QD, QDD)

@@ -21,7 +21,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import NDArray
 
-from ..batch import Designs, from_circuits
+from ..batch import Designs, from_circuits, network_shape
 from ..errors import GeometryError, InputError, SolverError
 from ..motion_laws import Motion, motion_table
 from .files import Scene
@@ -242,11 +242,7 @@ def _joined(a, b):
 
 def _same_network(a, b) -> bool:
     """Whether two Designs have the same elements, levers and drive (names, kinds, nodes)."""
-    def shape(c):
-        return ([(e.kind, e.name, e.n1, e.n2) for e in c.elements],
-                [(lv.name, lv.p1, lv.p2, lv.s1, lv.s2) for lv in c.levers],
-                (c.drive.name, c.drive.n1, c.drive.n2, c.drive.kind))
-    return shape(a.circuit) == shape(b.circuit)
+    return network_shape(a.circuit) == network_shape(b.circuit)
 
 
 def _cycle_designs(scene: Scene, motion, reflect: ReflectMode):

@@ -11,8 +11,7 @@ import numpy as np
 import pytest
 
 from mechcirc.errors import GeometryError
-from mechcirc.kinematics import FourBar
-from mechcirc.kinematics.frame_loading import LinkMass, frame_loading
+from mechcirc.kinematics import FourBar, LinkMass, frame_loading
 
 FB = FourBar(0.035, 0.0578, 0.1556, 0.16275)          # a beat-up crank-rocker [m]
 OMEGA = 2 * math.pi * 600 / 60                         # 600 rpm
@@ -163,3 +162,17 @@ def test_bad_inputs():
         frame_loading(FB, [0.0, 1.0], 10.0, reed_force=lambda th: np.zeros(2))
     with pytest.raises(GeometryError, match="mass"):
         LinkMass(-1.0)
+
+
+def test_frame_loading_is_the_function_and_no_module_shadows_it():
+    """``mechcirc.kinematics.frame_loading`` is the function (its module is private,
+    ``_frame_loading``), imported either way; the API reference documents the function."""
+    import importlib
+
+    import mechcirc.kinematics as kin
+    from mechcirc.kinematics import frame_loading as f
+
+    assert f is frame_loading is kin.frame_loading and callable(f)
+    assert "frame_loading" in kin.__all__ and f.__module__ == "mechcirc.kinematics._frame_loading"
+    with pytest.raises(ModuleNotFoundError):
+        importlib.import_module("mechcirc.kinematics.frame_loading")
