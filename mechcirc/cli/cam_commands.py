@@ -15,11 +15,13 @@ def register(sub) -> None:
     p = sub.add_parser(
         "cam", help="disc cam profile, pressure angle, radius of curvature, undercut; CSV/SVG",
         description="Profile of a disc cam turning counter-clockwise and driving a translating "
-                    "roller, a translating flat face or an oscillating roller follower, from a "
+                    "roller, a translating flat face, an oscillating roller or an oscillating "
+                    "flat face (through the arm's pivot) follower, from a "
                     "motion law cycle (rise, dwell, return, and the rest of the turn dwelling "
                     "at the bottom) or a lift table. Lengths in mm, angles in degrees; the "
                     "stroke and a table's lift are in mm, or degrees of the arm for "
-                    "--follower oscillating. See docs/kinematics.md, 'Cams'.",
+                    "--follower oscillating and oscillating_flat. See docs/kinematics.md, "
+                    "'Cams'.",
         epilog="Example: mechcirc cam --law cycloidal --rise 120 --dwell 60 --return 120 "
                "--stroke 20 --base-radius 40 --roller-radius 10 -o profile.csv "
                "--svg profile.svg",
@@ -42,8 +44,9 @@ def register(sub) -> None:
                         "follower falls first)")
     p.add_argument("--base-radius", type=real(above=0.0, most=MAX_LENGTH, unit="mm"),
                    required=True, metavar="MM", help="base circle radius r_b [mm]")
-    p.add_argument("--follower", choices=("roller", "flat", "oscillating"), default="roller",
-                   help="translating roller (default), translating flat face, oscillating roller")
+    p.add_argument("--follower", choices=("roller", "flat", "oscillating", "oscillating_flat"),
+                   default="roller", help="translating roller (default), translating flat "
+                   "face, oscillating roller, oscillating flat face (needs --pivot)")
     p.add_argument("--roller-radius", type=real(least=0.0, most=MAX_LENGTH, unit="mm"),
                    metavar="MM", help="roller radius r_f [mm] (0: a knife edge)")
     p.add_argument("--offset", type=real(most=MAX_LENGTH), metavar="MM",
@@ -69,8 +72,9 @@ def _motion(args):
     from ..errors import InputError
     from ..motion_laws import cam_cycle, read_motion_table
 
-    scale = math.pi / 180 if args.follower == "oscillating" else 1.0
-    unit = "°" if args.follower == "oscillating" else " mm"
+    osc = args.follower.startswith("oscillating")
+    scale = math.pi / 180 if osc else 1.0
+    unit = "°" if osc else " mm"
     if args.motion:
         given = [o for o in ("rise", "dwell", "ret", "low_dwell", "stroke", "return_law")
                  if getattr(args, o) is not None]
@@ -136,12 +140,15 @@ def _check_args(args) -> None:
     check_output_paths(args.output, args.svg)
     if args.svg and not args.svg.lower().endswith(".svg"):
         raise InputError(f"--svg {args.svg}: the drawing is SVG; give a file ending in .svg")
-    if args.follower != "flat" and args.roller_radius is None:
+    if args.follower not in ("flat", "oscillating_flat") and args.roller_radius is None:
         raise InputError(f"a {args.follower} follower needs --roller-radius (0 for a knife edge)")
     if args.follower == "oscillating" and (args.arm is None or args.pivot is None):
         raise InputError("an oscillating follower needs --arm and --pivot")
+    if args.follower == "oscillating_flat" and args.pivot is None:
+        raise InputError("an oscillating_flat follower needs --pivot (the face turns about it)")
     unused = {"flat": ("roller_radius", "arm", "pivot"), "roller": ("arm", "pivot"),
-              "oscillating": ("offset",)}[args.follower]
+              "oscillating": ("offset",),
+              "oscillating_flat": ("roller_radius", "arm", "offset")}[args.follower]
     for name in unused:
         if getattr(args, name) is not None:
             raise InputError(f"--{name.replace('_', '-')} does not apply to a {args.follower} "
@@ -160,7 +167,8 @@ def _warnings(cam) -> list:
     if not cut.ok:
         why = (f"the roller radius {cam.roller_radius:g} mm exceeds the pitch curve's radius "
                f"of curvature {cut.value + cam.roller_radius:.4g} mm there, so the profile's "
-               if cam.follower != "flat" else "the profile's radius of curvature r_b + s + s'' ")
+               if cam.rho_pitch is not None else "the profile's radius of curvature "
+               + ("r_b + s + s'' " if cam.follower == "flat" else ""))
         warnings.append(f"undercut at θ = {math.degrees(cut.theta):.3f}°: {why}is "
                         f"{cut.value:.4g} mm; the cam cannot give this motion (enlarge the "
                         "base circle or lengthen the rise)")
@@ -193,7 +201,8 @@ def _report(cam, what: str, written: list) -> None:
                       f"{cam.offset:g} mm",
             "flat": "translating flat face",
             "oscillating": f"oscillating roller r_f = {cam.roller_radius:g} mm, arm "
-                           f"{cam.arm:g} mm, pivot {cam.pivot:g} mm"}[cam.follower]
+                           f"{cam.arm:g} mm, pivot {cam.pivot:g} mm",
+            "oscillating_flat": f"oscillating flat face, pivot {cam.pivot:g} mm"}[cam.follower]
     print(f"cam: {what}")
     print(f"  follower: {kind}; base circle r_b = {cam.base_radius:g} mm; "
           f"{cam.theta.size} cam angles")

@@ -301,14 +301,58 @@ def cmd_simulate_scene(args) -> int:
         from ..scene.plots import plot_motion
 
         save_figure(plot_motion(result), args.plot)
+    contact = _cam_contact(scene, result)
     if args.json:
         doc = result.summary()
         doc["file"] = args.scene
         doc["output"] = args.output
+        if contact is not None:
+            doc["cam_contact"] = contact
         print_json(doc)
         return 0
     _print_motion(args, scene, result)
+    if contact is not None:
+        _print_contact(scene, contact)
     return 0
+
+
+def _cam_contact(scene, result) -> dict | None:
+    """The cam contact report of a scene whose follower can jump, as plain data (None: the
+    scene has no such contact); a follower that flew across the whole gap is warned about
+    (``flight``) and its report is {"flight": message}."""
+    from ..scene.jump import contact_report, flight
+
+    if not getattr(scene.linkage, "contact", ""):
+        return None
+    flew = flight(scene, result, warn=True)
+    if flew:
+        return {"flight": flew}
+    rep = contact_report(scene, result)
+    L = scene.length_scale
+    return {"contact": scene.linkage.contact, "min_contact_N": rep.min_contact,
+            "min_contact_angle_deg": rep.min_contact_angle_deg,
+            "travel": [float(rep.travel.min() / L), float(rep.travel.max() / L)],
+            "travel_unit": scene.units or "m",
+            "max_contact_N": float(rep.contact_force.max()),
+            "separations": [{"angle_deg": a, "duration_deg": d} for a, d in rep.separations]}
+
+
+def _print_contact(scene, c: dict) -> None:
+    """The text of the cam contact report (:func:`_cam_contact`)."""
+    if "flight" in c:
+        print("cam contact: no report (the follower flew across the model's whole gap; see "
+              "the warning)")
+        return
+    u = c["travel_unit"]
+    print(f"cam contact {c['contact']!r}: least contact force {c['min_contact_N']:.6g} N at "
+          f"{c['min_contact_angle_deg']:.2f}° (k_c × compression: below 0 the follower has "
+          f"left the cam), largest {c['max_contact_N']:.6g} N; follower travel "
+          f"{c['travel'][0]:.6g} … {c['travel'][1]:.6g} {u}")
+    seps = c["separations"]
+    if not seps:
+        print("  the contact stays closed")
+    for s in seps:
+        print(f"  opens at {s['angle_deg']:7.2f}° for {s['duration_deg']:6.2f}°")
 
 
 def _simulate_with_bar(args, scene):

@@ -1,9 +1,12 @@
 """A disc cam on the main shaft driving a follower in a scene (``[cam]``).
 
-Oscillating follower: the follower is the linkage's crank (its arm pivoted to
+Oscillating follower (a roller on the arm, or ``oscillating_flat``: a flat face
+through the arm's pivot): the follower is the linkage's crank (its arm pivoted to
 the frame); the cam replaces its uniform turning by the law x(θ) of a
 :class:`~mechcirc.motion_laws.Motion`: at cam angle θ = Ω t the arm is turned
-by α = x(θ) − x(0) from the pose.
+by α = x(θ) − x(0) from the pose (either face; the face changes the cam's
+profile, checked by :func:`~mechcirc.kinematics.cam.cam_profile`, not the arm's
+motion).
 
 Translating follower (roller or flat face): the follower is a block sliding on
 a fixed guide, lifted by s(θ) = x(θ) − x(0) along it; the linkage's crank is a
@@ -326,7 +329,8 @@ def aligned_points(cam, n: int) -> int:
 #: The ``[cam]`` table's keys (see docs/scenes.md, "A cam drives the scene").
 CAM_KEYS = {"follower": "oscillating: the first crank of [[cranks]]; roller or flat: a block "
                         "sliding on a fixed guide",
-            "follower_type": "oscillating (default) | roller | flat",
+            "follower_type": "oscillating (default: a roller on the arm) | oscillating_flat "
+                             "(a flat face on the arm) | roller | flat",
             "law": "a motion law of mechcirc.motion_laws.LAWS", "rise": "[deg]",
             "dwell": "[deg], default 0", "return": "[deg]", "return_law": "default: law",
             "stroke_deg": "the arm's swing [deg], nonzero (oscillating)",
@@ -335,16 +339,21 @@ CAM_KEYS = {"follower": "oscillating: the first crank of [[cranks]]; roller or f
                      "(instead of a law)",
             "base_radius": "r_b [units], for the pressure-angle and undercut checks",
             "roller_radius": "r_f [units], default 0", "arm": "L [units] (oscillating)",
-            "pivot": "D, arm pivot to cam centre [units] (oscillating)",
+            "pivot": "D, arm pivot to cam centre [units] (oscillating, oscillating_flat)",
             "offset": "e, the follower's axis from the cam's centre [units] (roller), default 0",
             "pressure_limit_deg": "default 45 (oscillating), 30 (roller, flat)",
             "contact": "an [[elastic]] link from the cam's block to the follower: it pushes "
                        "only, so the follower can leave the cam (roller, flat)",
             "spring": "the follower spring [N/m] > 0, with contact",
             "preload": "the follower spring's force at the bottom of the lift [N] >= 0"}
-#: The keys that belong to one kind of follower only.
-_ONLY = {"stroke_deg": "oscillating", "arm": "oscillating", "pivot": "oscillating",
-         "stroke": "translating", "offset": "roller"}
+#: The keys that belong to some kinds of follower only: (what they are for, those kinds).
+_ONLY = {"stroke_deg": ("oscillating", ("oscillating", "oscillating_flat")),
+         "arm": ("oscillating roller", ("oscillating",)),
+         "pivot": ("oscillating", ("oscillating", "oscillating_flat")),
+         "stroke": ("translating", ("roller", "flat")), "offset": ("roller", ("roller",)),
+         "roller_radius": ("roller", ("oscillating", "roller", "flat"))}
+#: The follower types of a scene's [cam].
+KINDS = ("oscillating", "oscillating_flat", "roller", "flat")
 
 
 class _CamReader:
@@ -373,22 +382,19 @@ class _CamReader:
 
     def kind(self) -> str:
         """``follower_type``, and the keys of the other kinds refused."""
-        from ..kinematics.cam import FOLLOWERS
         from ..sources import brief
 
         kind = self.raw.get("follower_type", "oscillating")
-        if kind not in FOLLOWERS:
+        if kind not in KINDS:
             raise self.err(f"[cam] follower_type {brief(kind)} is not a follower type",
-                           "follower_type", expected=" | ".join(FOLLOWERS),
+                           "follower_type", expected=" | ".join(KINDS),
                            value=kind if isinstance(kind, str) else None)
-        for key, only in _ONLY.items():
-            if key in self.raw and only != kind and not (only == "translating"
-                                                         and kind != "oscillating"):
-                raise self.err(f"[cam] {key} is for a{'n' if only[0] == 'o' else ''} {only} "
+        for key, (what, kinds) in _ONLY.items():
+            if key in self.raw and kind not in kinds:
+                raise self.err(f"[cam] {key} is for a{'n' if what[0] == 'o' else ''} {what} "
                                f"follower, not {kind}", key, expected=f"{key}: "
-                               f"{CAM_KEYS[key]}; follower_type = \"{kind}\" takes " + ", ".join(
-                                   k for k, o in _ONLY.items() if o == kind or (
-                                       o == "translating" and kind != "oscillating")))
+                               f"{CAM_KEYS[key]}; follower_type = \"{kind}\" takes " + (", ".join(
+                                   k for k, (_, ks) in _ONLY.items() if kind in ks) or "none"))
         return kind
 
     def follower(self, kind):
@@ -398,7 +404,7 @@ class _CamReader:
         cranks, f, raw = self.lk.cranks, self.raw.get("follower"), self.raw
         at = "follower" if "follower" in raw else next(iter(raw), "follower")
         value = f if isinstance(f, str) else None
-        if kind == "oscillating":
+        if kind.startswith("oscillating"):
             slider = None
             if len(cranks) != 1 or f != cranks[0].link:
                 raise self.err(f"[cam] follower {brief(f)} must be the linkage's only crank "
@@ -442,7 +448,7 @@ class _CamReader:
             if self.source != "<string>" and not os.path.isabs(path):
                 path = os.path.join(os.path.dirname(self.source), path)
             motion = read_motion_table(path)
-            if kind == "oscillating":
+            if kind.startswith("oscillating"):
                 motion = motion.scaled(math.pi / 180.0)
             return motion, ("table", os.path.abspath(path), motion.start, motion.poly,
                             motion.sine)
@@ -451,16 +457,17 @@ class _CamReader:
                 raise self.err(f"[cam] {key} {brief(raw[key])} is not a motion law", key,
                                expected=" | ".join(LAWS), value=raw[key]
                                if isinstance(raw[key], str) else None)
-        skey = "stroke_deg" if kind == "oscillating" else "stroke"
+        osc = kind.startswith("oscillating")
+        skey = "stroke_deg" if osc else "stroke"
         rise, ret = self.num("rise"), self.num("return")
         dwell, stroke = self.num("dwell", 0.0, allow_zero=True), self.num(skey, positive=False)
-        h = math.radians(stroke) if kind == "oscillating" else stroke
+        h = math.radians(stroke) if osc else stroke
         try:
             motion = cam_cycle(raw["law"], rise, dwell, ret, h, raw.get("return_law"))
         except ValueError as exc:
             key = skey if "stroke" in str(exc) else "rise"
             raise self.err(f"[cam] {exc}".replace(
-                "stroke=", "stroke [rad] = " if kind == "oscillating" else "stroke = "), key,
+                "stroke=", "stroke [rad] = " if osc else "stroke = "), key,
                 expected=f"rise + dwell + return ≤ 360 degrees, {skey} ≠ 0") from None
         return motion, ("law", raw["law"], raw.get("return_law"), rise, dwell, ret, stroke)
 
@@ -477,7 +484,7 @@ class _CamReader:
                                    "[[elastic]] link from the cam's block to the follower)")
             return {}
         c = raw["contact"]
-        if kind == "oscillating" or not isinstance(c, str):
+        if kind.startswith("oscillating") or not isinstance(c, str):
             raise self.err(f"[cam] contact {brief(c)}: the contact that can open is an "
                            "[[elastic]] link's name, for a translating follower (roller or "
                            "flat)", "contact", expected='contact = "NAME" with follower_type '
@@ -498,12 +505,15 @@ class _CamReader:
                 raise self.err("[cam] the geometry checks need base_radius", next(
                     k for k in geo if k in self.raw), expected="base_radius = r_b")
             return
-        limit = self.num("pressure_limit_deg", 45.0 if kind == "oscillating" else 30.0)
+        limit = self.num("pressure_limit_deg", 45.0 if kind.startswith("oscillating") else 30.0)
         rf = self.num("roller_radius", 0.0, allow_zero=True)
         if kind == "oscillating":
             extra = {"arm": self.num("arm"), "pivot": self.num("pivot")}
             at, hint = "base_radius", ("a base circle the arm's roller can reach "
                                        "(|D − L| < r_b + r_f < D + L)")
+        elif kind == "oscillating_flat":
+            extra = {"pivot": self.num("pivot")}
+            at, hint = "pivot", "a pivot farther from the cam's centre than r_b (D > r_b)"
         else:
             extra = {"offset": self.num("offset", 0.0, positive=False)}
             at = "offset" if "offset" in self.raw else "base_radius"

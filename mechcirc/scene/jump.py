@@ -16,7 +16,7 @@ import numpy as np
 
 from .cam import SPRING, contact_geometry
 
-__all__ = ["ContactReport", "contact_report", "scene_jump_speed"]
+__all__ = ["ContactReport", "contact_report", "flight", "JumpSpeed", "scene_jump_speed"]
 
 
 @dataclass(frozen=True)
@@ -66,7 +66,7 @@ def contact_report(scene, sm) -> ContactReport:
     ------
     MechcircError
         The scene's contact cannot open, or the follower left the cam by the whole
-        gap the model gives it (2 × (stroke + preload/spring)).
+        gap the model gives it (2 × (stroke + preload/spring), see :func:`flight`).
     """
     from ..errors import MechcircError
     from ..transient.follower import least_sample
@@ -75,11 +75,11 @@ def contact_report(scene, sm) -> ContactReport:
     if not getattr(lk, "contact", ""):
         raise MechcircError(f"{scene.source}: the scene's [cam] has no contact that can open "
                             "(contact = NAME)")
+    flew = flight(scene, sm)
+    if flew:
+        raise MechcircError(flew)
     el, _, _, _, half = contact_geometry(scene)
     e = sm.values[f"{el.name}.deformation"]
-    if np.any(e > half):
-        raise MechcircError(f"{scene.source}: the follower left the cam by more than the "
-                            f"model's gap ({2 * half:g} m): the contact's far flank was hit")
     squeeze = -el.stiffness * (e + half)
     lo, at = least_sample(squeeze, periodic=True)
     deg = np.degrees(sm.crank_angle)
@@ -104,53 +104,148 @@ def contact_report(scene, sm) -> ContactReport:
                          float((deg[0] + at * step) % 360.0), tuple(seps))
 
 
-def scene_jump_speed(scene, omegas, **simulate) -> tuple:
-    """The cam shaft speed at which the simulated contact force first reaches zero.
+@dataclass(frozen=True)
+class JumpSpeed:
+    """The jump speed of a cam scene (plain data); see :func:`scene_jump_speed`.
 
-    The scene is simulated (:func:`~mechcirc.scene.simulate_scene`, one revolution
-    from the pose, ``simulate`` passed on) at the two shaft speeds ``omegas``, both
-    below the jump; its least contact force N(Ω) (:func:`contact_report`) is
-    extrapolated to 0 linearly in Ω².  For a rigid follower N = F₀ + k s + mΩ² s″
-    at a fixed cam angle is linear in Ω², and the least over the angle bends only a
-    little: from 0.998 and 0.999 of the jump speed the extrapolation is ~2e-8 off
-    (the cycloidal cam of docs/cams.md); just below the jump the contact force
-    nears 0, where a fixed step is least accurate, which is why it is not sought
-    there.
+    Attributes
+    ----------
+    omega : float
+        The shaft speed [rad/s] at which the least contact force reaches 0, to ``rtol``.
+    bracket : (float, float)
+        The last speeds [rad/s] with the contact closed and open about it.
+    least : (float, float)
+        The least contact force [N] at each end of ``bracket`` (> 0, ≤ 0).
+    runs : int
+        How many one-revolution simulations the search took.
+    rtol : float
+        The root's relative tolerance.
+    """
+
+    omega: float
+    bracket: tuple
+    least: tuple
+    runs: int
+    rtol: float
+
+
+def flight(scene, sm, warn: bool = False) -> str:
+    """Did the follower fly across the whole gap the model gives it?
+
+    The contact's law has its far flank 2 × (stroke + preload/spring) from the cam
+    (:func:`~mechcirc.scene.cam.open_contact_rows`); a follower that gets there hits
+    it, and the motion past that is not a free flight.
 
     Parameters
     ----------
     scene : Scene
         A scene whose ``[cam]`` has a contact that can open.
-    omegas : (float, float)
-        Two shaft speeds [rad/s] below the jump.
+    sm : SceneMotion
+        Its :func:`~mechcirc.scene.simulate_scene` result.
+    warn : bool
+        Also issue the message as a :class:`~mechcirc.errors.MechcircWarning`.
+
+    Returns
+    -------
+    str
+        The message (the largest departure from the cam, the gap, the cam angle), or
+        "" when the follower stayed within the gap.
+    """
+    from ..errors import MechcircWarning
+    from ..errors import warn as issue
+
+    el, _, _, _, half = contact_geometry(scene)
+    e = sm.values[f"{el.name}.deformation"]
+    k = int(np.argmax(e))
+    if not e[k] > half:
+        return ""
+    unit, L = scene.units or "m", scene.length_scale
+    msg = (f"{scene.source}: the follower left the cam by {(e[k] + half) / L:.6g} {unit} at "
+           f"cam angle {math.degrees(sm.crank_angle[k]):.2f}°, more than the model's gap "
+           f"{2 * half / L:.6g} {unit} (2 × (stroke + preload/spring)): it hit the contact's "
+           "far flank, so the motion from there on is not the follower's free flight; lower "
+           "the speed or raise the spring or its preload")
+    if warn:
+        issue(msg, MechcircWarning)
+    return msg
+
+
+def scene_jump_speed(scene, bracket=None, *, rtol: float = 1e-9, grow: float = 1.05,
+                     **simulate) -> JumpSpeed:
+    """The cam shaft speed at which the simulated least contact force reaches zero.
+
+    N(Ω), the least contact force over one revolution from the pose
+    (:func:`contact_report` of :func:`~mechcirc.scene.simulate_scene`), is positive
+    while the follower stays on the cam and ≤ 0 once it leaves it.  A bracket
+    [Ω_lo, Ω_hi] with N(Ω_lo) > 0 ≥ N(Ω_hi) is found by stepping from the scene's
+    shaft speed by the factor ``grow`` (up while the contact holds, down while it
+    opens), unless given; then scipy's ``brentq`` finds the root to |ΔΩ| ≤ rtol Ω.
+    Nothing assumes the shape of N(Ω): beyond the jump it falls steeply (the contact
+    spring's k_c × the gap), a kink at the root, so brentq proceeds about as bisection
+    does (some 25 runs from a 5 % bracket to 1e-9).
+
+    Parameters
+    ----------
+    scene : Scene
+        A scene whose ``[cam]`` has a contact that can open.
+    bracket : (float, float), optional
+        Two shaft speeds [rad/s], the contact closed at the first and open at the second.
+    rtol : float
+        The root's relative tolerance (≥ 4 × machine epsilon).
+    grow : float
+        The factor (> 1) the bracket's search steps by.
     **simulate
         Keywords of :func:`~mechcirc.scene.simulate_scene` (not ``omega``).
 
     Returns
     -------
-    omega, least : float, tuple of float
-        The jump speed [rad/s] and the least contact force [N] at each of ``omegas``.
+    JumpSpeed
 
     Raises
     ------
     MechcircError
-        The contact opens at one of ``omegas`` (its least force is not positive).
+        A given bracket that does not hold the jump, or no bracket found within 100
+        steps (the contact opens at every speed, or at none up to grow¹⁰⁰ Ω).
     """
+    from scipy.optimize import brentq
+
     from ..errors import MechcircError
     from .motion import motion_model
     from .simulation import simulate_scene
 
+    if not (math.isfinite(rtol) and 4 * np.finfo(float).eps <= rtol < 1) or not grow > 1:
+        raise MechcircError(f"scene_jump_speed: rtol = {rtol!r} must be in [4 eps, 1) and "
+                            f"grow = {grow!r} > 1")
     simulate = {"revolutions": 1, "error_estimate": False, **simulate}
     simulate.setdefault("model", motion_model(scene))
-    least = []
-    for w in omegas:
-        lo = contact_report(scene, simulate_scene(scene, omega=w, **simulate)).min_contact
-        if not lo > 0:
-            raise MechcircError(f"{scene.source}: at {w:g} rad/s the least contact force is "
-                                f"{lo:g} N: give two speeds below the jump")
-        least.append(lo)
-    (wa, wb), (na, nb) = omegas, least
-    if na == nb:
-        raise MechcircError(f"{scene.source}: the least contact force is the same at both "
-                            "speeds: give two different speeds below the jump")
-    return math.sqrt(wa * wa + (wb * wb - wa * wa) * na / (na - nb)), tuple(least)
+    seen: dict = {}
+
+    def least(w):
+        if w not in seen:
+            sm = simulate_scene(scene, omega=w, **simulate)
+            seen[w] = contact_report(scene, sm).min_contact
+        return seen[w]
+
+    if bracket is not None:
+        lo, hi = (float(w) for w in bracket)
+        if not (0 < lo < hi and least(lo) > 0 >= least(hi)):
+            raise MechcircError(f"{scene.source}: the bracket ({lo:g}, {hi:g}) rad/s does not "
+                                "hold the jump: the least contact force must be > 0 at the "
+                                "first speed and <= 0 at the second")
+    else:
+        lo = hi = scene.linkage.cranks[0].omega
+        for _ in range(100):
+            if least(lo) > 0 >= least(hi) and lo < hi:
+                break
+            if least(hi) > 0:
+                lo, hi = hi, hi * grow
+            else:
+                lo, hi = lo / grow, lo
+        else:
+            raise MechcircError(f"{scene.source}: no speed between {lo:g} and {hi:g} rad/s "
+                                "where the follower starts to leave the cam")
+    w = brentq(least, lo, hi, xtol=1e-300, rtol=rtol)
+    below = [v for v in seen if v <= w and seen[v] > 0]
+    above = [v for v in seen if v >= w and not seen[v] > 0]
+    a, b = max(below, default=lo), min(above, default=hi)
+    return JumpSpeed(float(w), (a, b), (seen[a], seen[b]), len(seen), rtol)

@@ -127,3 +127,46 @@ def test_a_rise_or_return_too_short_for_float64_is_a_user_error(angle, capsys):
             "--base-radius", "40", "--roller-radius", "10"]
     argv[argv.index(angle) + 1] = "1e-320"
     assert_user_error(argv, capsys, "too short")
+
+
+FLAT = ["cam", "--law", "cycloidal", "--rise", "120", "--dwell", "60", "--return", "120",
+        "--stroke", "8", "--base-radius", "40", "--follower", "oscillating_flat"]
+
+
+def test_an_oscillating_flat_face_reports_the_curvature_written_out_here(capsys):
+    """--follower oscillating_flat: the smallest radius of curvature printed against
+    ρ = p + (p_θθ φ_θ − p_θ φ_θθ)/φ_θ³ of the face's line through the pivot (p = D sin ψ,
+    ψ = asin(r_b/D) + s, φ_θ = −(1 + s′)), the cycloidal law written out on 2e6 angles;
+    the 4 decimals shown (the CLI refines its extreme between its 721 angles)."""
+    status, out, err = run(FLAT + ["--pivot", "130"], capsys)
+    assert status == 0 and err == "", err
+    h, b1, d1 = math.radians(8.0), math.radians(120.0), math.radians(60.0)
+    th = np.linspace(0.0, 2 * math.pi, 2_000_001)
+    s, s1, s2 = (np.zeros_like(th) for _ in range(3))
+    for lo, sign in ((0.0, 1.0), (b1 + d1, -1.0)):
+        on = (th >= lo) & (th < lo + b1)
+        u = (th[on] - lo) / b1
+        s[on] = h * (u - np.sin(2 * np.pi * u) / (2 * np.pi)) if sign > 0 else \
+            h * (1 - u + np.sin(2 * np.pi * u) / (2 * np.pi))
+        s1[on] = sign * h / b1 * (1 - np.cos(2 * np.pi * u))
+        s2[on] = sign * 2 * np.pi * h / b1 ** 2 * np.sin(2 * np.pi * u)
+    s[(th >= b1) & (th < b1 + d1)] = h
+    psi = math.asin(40.0 / 130.0) + s
+    p = 130.0 * np.sin(psi)
+    p1 = 130.0 * np.cos(psi) * s1
+    p2 = 130.0 * (np.cos(psi) * s2 - np.sin(psi) * s1 ** 2)
+    f1, f2 = -(1.0 + s1), -s2
+    rho = p + (p2 * f1 - p1 * f2) / f1 ** 3
+    assert "follower: oscillating flat face, pivot 130 mm" in out
+    assert f"smallest convex {rho.min():.4f} mm" in out, (rho.min(), out)
+    assert "max |φ| = 0.0000°" in out and "undercut: no" in out
+
+
+@pytest.mark.parametrize("extra, needle", [
+    ([], "needs --pivot"),
+    (["--pivot", "130", "--arm", "50"], "--arm does not apply"),
+    (["--pivot", "130", "--roller-radius", "5"], "--roller-radius does not apply"),
+    (["--pivot", "30"], "must be more than the base radius"),
+])
+def test_an_oscillating_flat_face_refuses_bad_options(extra, needle, capsys):
+    assert_user_error(FLAT + extra, capsys, needle)

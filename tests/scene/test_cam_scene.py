@@ -29,6 +29,11 @@ from mechcirc.scene.motion import motion_model
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLE = ROOT / "examples" / "cam_heald_scene.toml"
 TEXT = EXAMPLE.read_text()
+#: The same scene with a flat face on the arm (follower_type = "oscillating_flat", the face
+#: through the pivot 130 mm from the cam's centre): the arm moves by the same law.
+FLAT = TEXT.replace("roller_radius = 12.0\narm = 100.0\n", "").replace(
+    "[cam]\n", '[cam]\nfollower_type = "oscillating_flat"\n')
+SCENES = {"roller": TEXT, "oscillating_flat": FLAT}
 L_ARM, XH, YH0 = 0.300, 0.310, -0.400             # the example's geometry [m]
 H, W = math.radians(8.0), 26.0                    # the lever's swing [rad], cam shaft [rad/s]
 B1, D1, B2 = (math.radians(v) for v in (120.0, 60.0, 120.0))
@@ -82,15 +87,16 @@ _L2 = (sp.Float(XH, 30) - L_ARM) ** 2 + sp.Float(YH0, 30) ** 2
 Y = _AY - sp.sqrt(_L2 - (XH - _AX) ** 2)            # the heald on its guide, rigid rod
 
 
+@pytest.mark.parametrize("face", SCENES)
 @pytest.mark.parametrize("deg", [30.0, 60.0, 100.0, 200.0, 250.0])
-def test_circuit_at_theta_against_the_sympy_linearisation(deg):
+def test_circuit_at_theta_against_the_sympy_linearisation(deg, face):
     theta = math.radians(deg)
     x, x1, _ = (float(v[0]) for v in cycloidal([theta]))
     at = {psi: sp.Float(x, 30)}
     y1 = float(sp.diff(Y, psi).subs(at).evalf(30))
     ux, uy = XH - float(_AX.subs(at).evalf(30)), float(Y.subs(at).evalf(30) - _AY.subs(at))
     c_rod = uy * y1 / math.hypot(ux, uy)              # u·v_H per unit lever speed
-    sc = build(load_scene(EXAMPLE), theta)
+    sc = build(parse_scene(SCENES[face], str(EXAMPLE)), theta)
     assert abs(sc.drive_ratio - x1) <= 1e-12 * H / B1 * 2
     el = {e.name: e for e in sc.circuit.elements}
     # achieved ≤ 1.1e-15 relative on the ratios, 2.2e-16 on the resonance (goal 1e-8)
@@ -195,10 +201,11 @@ def _lagrange_reference(times):
     return y[0], acc, force
 
 
-def test_simulation_over_a_revolution_against_the_equation_of_motion():
+@pytest.mark.parametrize("face", SCENES)
+def test_simulation_over_a_revolution_against_the_equation_of_motion(face):
     from mechcirc.scene import simulate_scene
 
-    sm = simulate_scene(load_scene(EXAMPLE), revolutions=1, steps_per_period=400, points=720,
+    sm = simulate_scene(parse_scene(SCENES[face], str(EXAMPLE)), revolutions=1, steps_per_period=400, points=720,
                         error_estimate=False)
     y, ydd, F = _lagrange_reference(sm.time)
     # the frame's travel is along the guide, pointing down: s = −(y − y0)
