@@ -5,7 +5,8 @@ stiff contact (1e11 N/m) that pushes only.  The closed form of a rigid follower:
 contact force N = F0 + k s + m Ω² s'' first reaches zero at the shaft speed
 Ω* = min over θ of sqrt((F0 + k s)/(−m s'')).  The scene's jump speed is the root of
 its least contact force over one simulated turn: bracketed by steps of 5 % from the
-scene's 600 rpm, then found by brentq to 1e-9 (without the closed form).  Then one
+scene's 600 rpm, then a secant in Omega^2 through runs where the contact holds, to
+1e-8 (without the closed form).  Then one
 turn at 800 rpm: the contact opens.
 
 Run from the repository root:  python examples/cam_jump_scene.py
@@ -25,7 +26,7 @@ w = rpm * math.pi / 30
 print(f"jump speed, closed form (rigid follower): {rpm:.6f} rpm, contact force 0 at "
       f"{angle:.3f} deg")
 got = scene_jump_speed(scene, steps_per_period=200)
-print(f"jump speed, scene (brentq, rtol {got.rtol:g}, {got.runs} runs of one turn): "
+print(f"jump speed, scene (secant, rtol {got.rtol:g}, {got.runs} runs of one turn): "
       f"{got.omega * 30 / math.pi:.6f} rpm")
 print(f"relative difference: {abs(got.omega / w - 1):.0e} (goal 1e-6)")
 
