@@ -13,7 +13,8 @@ docs/tutorial.md under "Examples in these docs"):
   redirection or expansion; or piped only into ``head -N``/``tail -N``, whose
   lines are then kept here) runs in this process with the same argv and
   working directory (``mechcirc.cli.main``, as ``python -m mechcirc`` does;
-  it saves the interpreter start-up of every line), any other line in
+  it saves the interpreter start-up of every line), and so does a plain
+  ``python examples/NAME.py ...`` line (run as ``__main__`` by ``runpy``); any other line in
   ``bash -o pipefail``, which sees the previous status as ``$?`` (``echo $?``;
   each line is its own ``bash``, so ``cd`` or a variable does not carry over);
   each ``mechcirc`` command must exit 0, or the status of an
@@ -118,6 +119,11 @@ def _workdir(tmp: Path) -> Path:
     shim = bin_dir / "mechcirc"
     shim.write_text(f"#!/bin/sh\nexec {sys.executable} -m mechcirc \"$@\"\n")
     shim.chmod(0o755)
+    # ``python`` in a shell line is this interpreter (the one with mechcirc's
+    # dependencies, numba among them), not the first ``python`` on the PATH.
+    python = bin_dir / "python"
+    python.write_text(f"#!/bin/sh\nexec {sys.executable} \"$@\"\n")
+    python.chmod(0o755)
     return bin_dir
 
 
@@ -183,6 +189,47 @@ def _keep_lines(text: str, keep) -> str:
     lines = text.splitlines(keepends=True)
     which, n = keep
     return "".join(lines[:n] if which == "head" else lines[-n:] if n else [])
+
+
+def _example_argv(cmd: str):
+    """``[script, args...]`` of a plain ``python examples/NAME.py ...`` line, or None."""
+    argv = _in_process_argv(re.sub(r"^\s*python(?=\s)", "mechcirc", cmd))
+    if argv and argv[0].startswith("examples/") and argv[0].endswith(".py"):
+        return argv
+    return None
+
+
+def run_example(argv: list[str]) -> tuple[int, str, str]:
+    """``python examples/NAME.py ARGS`` in this process: ``(exit status, stdout, stderr)``.
+
+    The script runs as ``__main__`` (:func:`runpy.run_path`) with ``sys.argv``
+    set, so a docs page showing an example's output checks what the script
+    prints without a second interpreter importing numpy, scipy and the
+    compiled kernels again; an exception escaping it is a failure (status 1,
+    the traceback on stderr), as a real run would show.
+    """
+    import contextlib
+    import io
+    import runpy
+    import traceback
+
+    out, err = io.StringIO(), io.StringIO()
+    saved = sys.argv
+    sys.argv = list(argv)
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            runpy.run_path(argv[0], run_name="__main__")
+            status = 0
+        except SystemExit as exc:
+            status = exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
+            if exc.code is not None and not isinstance(exc.code, int):
+                print(exc.code, file=sys.stderr)
+        except BaseException:               # noqa: BLE001 - a traceback is a failure here
+            traceback.print_exc()
+            status = 1
+        finally:
+            sys.argv = saved
+    return status, out.getvalue(), err.getvalue()
 
 
 def run_mechcirc(argv: list[str]) -> tuple[int, str, str]:
@@ -301,10 +348,12 @@ def _run_shell(text, marks, where, tmp, env):
     for cmd, shown in zip(_commands(text), _shown_outputs(text)):
         if cmd.lstrip().startswith("python benchmarks/"):
             continue
-        plain = _in_process(cmd)
+        plain, example = _in_process(cmd), _example_argv(cmd)
         if plain is not None:
             last, stdout, stderr = run_mechcirc(plain[0])
             stdout = _keep_lines(stdout, plain[1])
+        elif example is not None:
+            last, stdout, stderr = run_example(example)
         else:
             proc = subprocess.run(["bash", "-c", f"set -o pipefail\n(exit {last})\n{cmd}"],
                                   cwd=tmp, env=env, capture_output=True, text=True,
@@ -405,6 +454,31 @@ def test_the_markers_are_known():
 ])
 def test_which_lines_run_in_process(cmd, want):
     assert _in_process(cmd) == want
+
+
+@pytest.mark.parametrize("cmd, want", [
+    ("python examples/heald_design.py", ["examples/heald_design.py"]),
+    ("python examples/a.py --x 1", ["examples/a.py", "--x", "1"]),
+    ("python benchmarks/bench_batch.py", None),
+    ("python examples/a.py > out.txt", None),
+    ("python -c 'print(1)'", None),
+    ("mechcirc check a.mcir", None),
+])
+def test_which_example_lines_run_in_process(cmd, want):
+    assert _example_argv(cmd) == want
+
+
+def test_in_process_example_gives_its_output_and_status(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    script = tmp_path / "examples" / "x.py"
+    script.parent.mkdir()
+    script.write_text("import sys\nprint('args', sys.argv[1:])\n"
+                      "print('note', file=sys.stderr)\nsys.exit(int(sys.argv[1]))\n")
+    assert run_example(["examples/x.py", "3"]) == (3, "args ['3']\n", "note\n")
+    assert run_example(["examples/x.py", "0"])[0] == 0
+    script.write_text("raise ValueError('bad')\n")
+    status, out, err = run_example(["examples/x.py"])
+    assert status == 1 and "ValueError: bad" in err
 
 
 def test_head_and_tail_keep_the_lines_the_commands_keep():
