@@ -14,7 +14,8 @@ docs/tutorial.md under "Examples in these docs"):
   lines are then kept here) runs in this process with the same argv and
   working directory (``mechcirc.cli.main``, as ``python -m mechcirc`` does;
   it saves the interpreter start-up of every line), and so does a plain
-  ``python examples/NAME.py ...`` line (run as ``__main__`` by ``runpy``); any other line in
+  ``python examples/NAME.py ...`` line (``run_script`` of ``tests/cli_helpers.py``:
+  ``runpy`` in the page's folder); any other line in
   ``bash -o pipefail``, which sees the previous status as ``$?`` (``echo $?``;
   each line is its own ``bash``, so ``cd`` or a variable does not carry over);
   each ``mechcirc`` command must exit 0, or the status of an
@@ -58,6 +59,7 @@ from pathlib import Path
 import pytest
 
 from bounds import SUBPROCESS_TIMEOUT
+from cli_helpers import run_script
 
 REPO = Path(__file__).resolve().parents[1]
 PAGES = [REPO / "README.md"] + sorted((REPO / "docs").glob("*.md"))
@@ -199,39 +201,6 @@ def _example_argv(cmd: str):
     return None
 
 
-def run_example(argv: list[str]) -> tuple[int, str, str]:
-    """``python examples/NAME.py ARGS`` in this process: ``(exit status, stdout, stderr)``.
-
-    The script runs as ``__main__`` (:func:`runpy.run_path`) with ``sys.argv``
-    set, so a docs page showing an example's output checks what the script
-    prints without a second interpreter importing numpy, scipy and the
-    compiled kernels again; an exception escaping it is a failure (status 1,
-    the traceback on stderr), as a real run would show.
-    """
-    import contextlib
-    import io
-    import runpy
-    import traceback
-
-    out, err = io.StringIO(), io.StringIO()
-    saved = sys.argv
-    sys.argv = list(argv)
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        try:
-            runpy.run_path(argv[0], run_name="__main__")
-            status = 0
-        except SystemExit as exc:
-            status = exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
-            if exc.code is not None and not isinstance(exc.code, int):
-                print(exc.code, file=sys.stderr)
-        except BaseException:               # noqa: BLE001 - a traceback is a failure here
-            traceback.print_exc()
-            status = 1
-        finally:
-            sys.argv = saved
-    return status, out.getvalue(), err.getvalue()
-
-
 def run_mechcirc(argv: list[str]) -> tuple[int, str, str]:
     """``mechcirc ARGV`` in this process: ``(exit status, stdout, stderr)``.
 
@@ -332,7 +301,7 @@ def output_mismatch(shown: list[str], actual: str) -> str | None:
             f"({len(have)} lines)\n{first}\n--- printed ---\n" + "\n".join(have[:40]))
 
 
-def _run_shell(text, marks, where, tmp, env):
+def _run_shell(text, marks, where, tmp, env, fixtures):
     """Run a block's ``$`` commands in order, as one shell session would.
 
     A plain ``mechcirc ...`` line (no pipe, redirection or expansion) runs
@@ -353,7 +322,8 @@ def _run_shell(text, marks, where, tmp, env):
             last, stdout, stderr = run_mechcirc(plain[0])
             stdout = _keep_lines(stdout, plain[1])
         elif example is not None:
-            last, stdout, stderr = run_example(example)
+            fixtures[0].readouterr()                # what earlier blocks printed is not its output
+            last, stdout, stderr = run_script(tmp / example[0], example[1:], *fixtures, cwd=tmp)
         else:
             proc = subprocess.run(["bash", "-c", f"set -o pipefail\n(exit {last})\n{cmd}"],
                                   cwd=tmp, env=env, capture_output=True, text=True,
@@ -370,7 +340,7 @@ def _run_shell(text, marks, where, tmp, env):
     return failures
 
 
-def _run_page(page: Path, tmp: Path):
+def _run_page(page: Path, tmp: Path, fixtures):
     bin_dir = _workdir(tmp)
     env = dict(os.environ, PYTHONPATH=str(REPO), MPLBACKEND="Agg",
                PATH=f"{bin_dir}{os.pathsep}{os.environ.get('PATH', '')}")
@@ -405,7 +375,7 @@ def _run_page(page: Path, tmp: Path):
                 if runner.failures:
                     failures.append(f"{where}: doctest failed\n" + "".join(report))
             elif kind == "shell":
-                failures += _run_shell(text, marks, where, tmp, env)
+                failures += _run_shell(text, marks, where, tmp, env, fixtures)
     finally:
         os.chdir(old)
     return failures
@@ -413,8 +383,8 @@ def _run_page(page: Path, tmp: Path):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("page", PAGES, ids=[p.name for p in PAGES])
-def test_every_fenced_example_runs(page, tmp_path):
-    failures = _run_page(page, tmp_path)
+def test_every_fenced_example_runs(page, tmp_path, capsys, monkeypatch):
+    failures = _run_page(page, tmp_path, (capsys, monkeypatch))
     assert not failures, "\n\n".join(failures)
 
 
@@ -468,17 +438,15 @@ def test_which_example_lines_run_in_process(cmd, want):
     assert _example_argv(cmd) == want
 
 
-def test_in_process_example_gives_its_output_and_status(tmp_path, monkeypatch):
-    monkeypatch.chdir(tmp_path)
+def test_an_example_runs_in_process_in_the_pages_folder(tmp_path, capsys, monkeypatch):
     script = tmp_path / "examples" / "x.py"
     script.parent.mkdir()
-    script.write_text("import sys\nprint('args', sys.argv[1:])\n"
+    script.write_text("import os, sys\nprint('args', sys.argv[1:], os.getcwd())\n"
                       "print('note', file=sys.stderr)\nsys.exit(int(sys.argv[1]))\n")
-    assert run_example(["examples/x.py", "3"]) == (3, "args ['3']\n", "note\n")
-    assert run_example(["examples/x.py", "0"])[0] == 0
-    script.write_text("raise ValueError('bad')\n")
-    status, out, err = run_example(["examples/x.py"])
-    assert status == 1 and "ValueError: bad" in err
+    print("printed before")
+    capsys.readouterr()
+    status, out, err = run_script(script, ["3"], capsys, monkeypatch, cwd=tmp_path)
+    assert (status, out, err) == (3, f"args ['3'] {tmp_path}\n", "note\n")
 
 
 def test_head_and_tail_keep_the_lines_the_commands_keep():
