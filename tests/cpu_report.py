@@ -12,7 +12,8 @@ import sys
 
 def main(path, top=20):
     rows = []
-    for name in sorted(glob.glob(f"{glob.escape(path)}.*")):
+    base = glob.escape(path)
+    for name in sorted(glob.glob(f"{base}.gw*") + glob.glob(f"{base}.main")):
         with open(name, encoding="utf-8") as fh:
             for line in fh:
                 node, own, kids = line.rstrip("\n").split("\t")
