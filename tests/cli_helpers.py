@@ -27,11 +27,11 @@ def assert_user_error(argv, capsys, *needles):
     return err
 
 
-def run_script(path, argv, capsys, monkeypatch):
+def run_script(path, argv, capsys, monkeypatch, cwd=None):
     """(status, stdout, stderr) of ``python PATH ARGV`` run in this process.
 
-    The script runs as ``__main__`` from the repository root (its working
-    directory in the tests), with ``sys.argv`` set: what the interpreter does,
+    The script runs as ``__main__`` from ``cwd`` (by default the repository
+    root, its working directory in the tests), with ``sys.argv`` set: what the interpreter does,
     without its start-up and the imports of numpy, scipy and the numba cache
     (about 0.5-1 s of CPU per script).  Warnings the script raises are printed
     to stderr as the interpreter would show them (deprecations only from the
@@ -43,7 +43,7 @@ def run_script(path, argv, capsys, monkeypatch):
     from pathlib import Path
 
     path = Path(path)
-    monkeypatch.chdir(path.resolve().parents[1])
+    monkeypatch.chdir(path.resolve().parents[1] if cwd is None else cwd)
     monkeypatch.setattr(sys, "argv", [str(path), *map(str, argv)])
     monkeypatch.syspath_prepend(str(path.parent))        # as the interpreter puts it first
     with warnings.catch_warnings(record=True) as caught:

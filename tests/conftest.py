@@ -137,3 +137,34 @@ def _serialise_numba_compiles_across_workers():
 
 _serialise_numba_compiles_across_workers()
 
+
+
+def _cpu_seconds():
+    """(this process, its waited-for children) user + system CPU seconds so far."""
+    import resource
+
+    me, kids = (resource.getrusage(who) for who in (resource.RUSAGE_SELF,
+                                                      resource.RUSAGE_CHILDREN))
+    return me.ru_utime + me.ru_stime, kids.ru_utime + kids.ru_stime
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_protocol(item, nextitem):
+    """With ``MECHCIRC_TEST_CPU=PATH``: the CPU seconds of every test, appended to PATH.
+
+    One line per test (setup, call and teardown together): node id, CPU of
+    the worker process, CPU of the subprocesses it waited for (a CLI or an
+    example run by ``subprocess``), tab-separated.  Each xdist worker writes
+    its own ``PATH.<worker>`` file.  Off (nothing measured) without the
+    variable; ``python tests/cpu_report.py PATH`` sums and ranks the files.
+    """
+    path = os.environ.get("MECHCIRC_TEST_CPU")
+    if not path:
+        yield
+        return
+    before = _cpu_seconds()
+    yield
+    after = _cpu_seconds()
+    worker = os.environ.get("PYTEST_XDIST_WORKER", "main")
+    with open(f"{path}.{worker}", "a", encoding="utf-8") as fh:
+        fh.write(f"{item.nodeid}\t{after[0] - before[0]:.3f}\t{after[1] - before[1]:.3f}\n")

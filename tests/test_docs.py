@@ -13,7 +13,9 @@ docs/tutorial.md under "Examples in these docs"):
   redirection or expansion; or piped only into ``head -N``/``tail -N``, whose
   lines are then kept here) runs in this process with the same argv and
   working directory (``mechcirc.cli.main``, as ``python -m mechcirc`` does;
-  it saves the interpreter start-up of every line), any other line in
+  it saves the interpreter start-up of every line), and so does a plain
+  ``python examples/NAME.py ...`` line (``run_script`` of ``tests/cli_helpers.py``:
+  ``runpy`` in the page's folder); any other line in
   ``bash -o pipefail``, which sees the previous status as ``$?`` (``echo $?``;
   each line is its own ``bash``, so ``cd`` or a variable does not carry over);
   each ``mechcirc`` command must exit 0, or the status of an
@@ -57,6 +59,7 @@ from pathlib import Path
 import pytest
 
 from bounds import SUBPROCESS_TIMEOUT
+from cli_helpers import run_script
 
 REPO = Path(__file__).resolve().parents[1]
 PAGES = [REPO / "README.md"] + sorted((REPO / "docs").glob("*.md"))
@@ -118,6 +121,11 @@ def _workdir(tmp: Path) -> Path:
     shim = bin_dir / "mechcirc"
     shim.write_text(f"#!/bin/sh\nexec {sys.executable} -m mechcirc \"$@\"\n")
     shim.chmod(0o755)
+    # ``python`` in a shell line is this interpreter (the one with mechcirc's
+    # dependencies, numba among them), not the first ``python`` on the PATH.
+    python = bin_dir / "python"
+    python.write_text(f"#!/bin/sh\nexec {sys.executable} \"$@\"\n")
+    python.chmod(0o755)
     return bin_dir
 
 
@@ -183,6 +191,14 @@ def _keep_lines(text: str, keep) -> str:
     lines = text.splitlines(keepends=True)
     which, n = keep
     return "".join(lines[:n] if which == "head" else lines[-n:] if n else [])
+
+
+def _example_argv(cmd: str):
+    """``[script, args...]`` of a plain ``python examples/NAME.py ...`` line, or None."""
+    argv = _in_process_argv(re.sub(r"^\s*python(?=\s)", "mechcirc", cmd))
+    if argv and argv[0].startswith("examples/") and argv[0].endswith(".py"):
+        return argv
+    return None
 
 
 def run_mechcirc(argv: list[str]) -> tuple[int, str, str]:
@@ -285,7 +301,7 @@ def output_mismatch(shown: list[str], actual: str) -> str | None:
             f"({len(have)} lines)\n{first}\n--- printed ---\n" + "\n".join(have[:40]))
 
 
-def _run_shell(text, marks, where, tmp, env):
+def _run_shell(text, marks, where, tmp, env, fixtures):
     """Run a block's ``$`` commands in order, as one shell session would.
 
     A plain ``mechcirc ...`` line (no pipe, redirection or expansion) runs
@@ -301,10 +317,13 @@ def _run_shell(text, marks, where, tmp, env):
     for cmd, shown in zip(_commands(text), _shown_outputs(text)):
         if cmd.lstrip().startswith("python benchmarks/"):
             continue
-        plain = _in_process(cmd)
+        plain, example = _in_process(cmd), _example_argv(cmd)
         if plain is not None:
             last, stdout, stderr = run_mechcirc(plain[0])
             stdout = _keep_lines(stdout, plain[1])
+        elif example is not None:
+            fixtures[0].readouterr()                # what earlier blocks printed is not its output
+            last, stdout, stderr = run_script(tmp / example[0], example[1:], *fixtures, cwd=tmp)
         else:
             proc = subprocess.run(["bash", "-c", f"set -o pipefail\n(exit {last})\n{cmd}"],
                                   cwd=tmp, env=env, capture_output=True, text=True,
@@ -321,7 +340,7 @@ def _run_shell(text, marks, where, tmp, env):
     return failures
 
 
-def _run_page(page: Path, tmp: Path):
+def _run_page(page: Path, tmp: Path, fixtures):
     bin_dir = _workdir(tmp)
     env = dict(os.environ, PYTHONPATH=str(REPO), MPLBACKEND="Agg",
                PATH=f"{bin_dir}{os.pathsep}{os.environ.get('PATH', '')}")
@@ -356,7 +375,7 @@ def _run_page(page: Path, tmp: Path):
                 if runner.failures:
                     failures.append(f"{where}: doctest failed\n" + "".join(report))
             elif kind == "shell":
-                failures += _run_shell(text, marks, where, tmp, env)
+                failures += _run_shell(text, marks, where, tmp, env, fixtures)
     finally:
         os.chdir(old)
     return failures
@@ -364,8 +383,8 @@ def _run_page(page: Path, tmp: Path):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("page", PAGES, ids=[p.name for p in PAGES])
-def test_every_fenced_example_runs(page, tmp_path):
-    failures = _run_page(page, tmp_path)
+def test_every_fenced_example_runs(page, tmp_path, capsys, monkeypatch):
+    failures = _run_page(page, tmp_path, (capsys, monkeypatch))
     assert not failures, "\n\n".join(failures)
 
 
@@ -405,6 +424,29 @@ def test_the_markers_are_known():
 ])
 def test_which_lines_run_in_process(cmd, want):
     assert _in_process(cmd) == want
+
+
+@pytest.mark.parametrize("cmd, want", [
+    ("python examples/heald_design.py", ["examples/heald_design.py"]),
+    ("python examples/a.py --x 1", ["examples/a.py", "--x", "1"]),
+    ("python benchmarks/bench_batch.py", None),
+    ("python examples/a.py > out.txt", None),
+    ("python -c 'print(1)'", None),
+    ("mechcirc check a.mcir", None),
+])
+def test_which_example_lines_run_in_process(cmd, want):
+    assert _example_argv(cmd) == want
+
+
+def test_an_example_runs_in_process_in_the_pages_folder(tmp_path, capsys, monkeypatch):
+    script = tmp_path / "examples" / "x.py"
+    script.parent.mkdir()
+    script.write_text("import os, sys\nprint('args', sys.argv[1:], os.getcwd())\n"
+                      "print('note', file=sys.stderr)\nsys.exit(int(sys.argv[1]))\n")
+    print("printed before")
+    capsys.readouterr()
+    status, out, err = run_script(script, ["3"], capsys, monkeypatch, cwd=tmp_path)
+    assert (status, out, err) == (3, f"args ['3'] {tmp_path}\n", "note\n")
 
 
 def test_head_and_tail_keep_the_lines_the_commands_keep():

@@ -1,0 +1,35 @@
+"""Rank the per-test CPU written by the suite with ``MECHCIRC_TEST_CPU=PATH``.
+
+``python tests/cpu_report.py PATH [N]`` reads every ``PATH.<worker>`` file
+(tests/conftest.py writes them) and prints the total CPU of the tests (the
+worker processes and the subprocesses they waited for), the CPU of tests
+that spawned subprocesses, and the N (default 20) most expensive tests.
+"""
+
+import glob
+import sys
+
+
+def main(path, top=20):
+    rows = []
+    base = glob.escape(path)
+    for name in sorted(glob.glob(f"{base}.gw*") + glob.glob(f"{base}.main")):
+        with open(name, encoding="utf-8") as fh:
+            for line in fh:
+                node, own, kids = line.rstrip("\n").split("\t")
+                rows.append((float(own) + float(kids), float(own), float(kids), node))
+    rows.sort(reverse=True)
+    total = sum(r[0] for r in rows)
+    spawning = [r for r in rows if r[2] > 0.05]
+    print(f"{len(rows)} tests, {total:.1f} s CPU "
+          f"({sum(r[1] for r in rows):.1f} s in the workers, "
+          f"{sum(r[2] for r in rows):.1f} s in subprocesses)")
+    print(f"{len(spawning)} tests spawned subprocesses using "
+          f"{sum(r[2] for r in spawning):.1f} s CPU")
+    print(f"top {top} (total = worker + subprocesses, seconds):")
+    for cpu, own, kids, node in rows[:top]:
+        print(f"{cpu:8.2f} = {own:7.2f} + {kids:7.2f}  {node}")
+
+
+if __name__ == "__main__":
+    main(sys.argv[1], int(sys.argv[2]) if len(sys.argv) > 2 else 20)
