@@ -230,7 +230,7 @@ def reduced_inertia(scene: Scene, theta) -> np.ndarray:
 class _RigidShaft:
     """The shaft's equation on the rigid mechanism: no state beyond θ, θ̇ (z is empty)."""
 
-    n = 0
+    n = steps = 0
     shift = np.empty(0)
 
     def __init__(self, rig: _Rigid, Jf: float, tq):
@@ -443,7 +443,7 @@ def _over_cycle(eq, th0, cycle, x0, rtol, scale, dense=False, floor=1e-6):
     where θ̇ falls to ``floor`` × the motor's speed scale (a stall)."""
     from scipy.integrate import solve_ivp
 
-    if getattr(eq, "steps", 0):
+    if eq.steps:
         h = cycle / eq.steps
         rec, drec = eq.run(np.concatenate(([x0[0], 0.0], x0[1:])), True, th0, h, eq.steps,
                            floor * scale)
