@@ -311,9 +311,32 @@ class _ElasticShaft:
         """z of the rigid motion at θ turning at w (at rest: w = 0)."""
         return self.model.rigid_state(theta, w)
 
+    def check_strokes(self, th, z):
+        """Every slider with a ``stroke`` checked at every sample of the cycle (crank rotations
+        ``th``, free parts' states ``z``) by the linkage's ``check_stroke``, as the
+        constant-speed simulation does: its located error where a point is past its stroke."""
+        from ..kinematics.linkage_solver import check_stroke
+
+        m, a = self.model, self.model.arrays
+        lk, L = m.scene.linkage, m.scene.length_scale
+        coord = {0: self.c * th, **{i + 1: z[:, i] for i in range(self.n)}}
+
+        def at(p):
+            if p not in m.point_fn:                       # a ground point: at the pose
+                return np.broadcast_to(np.asarray(lk.pose[p], float), (th.size, 2))
+            fx, fy, i = m.point_fn[p]
+            return np.column_stack([[self.kern.feval(a["FI"][f, 0], a["tabs"], a["FI"][f, 2],
+                                                     *a["FF"][f], q)[0] for q in coord[i]]
+                                    for f in (fx, fy)]) / L
+        for sl in lk.sliders:
+            if sl.stroke:
+                check_stroke(lk, sl, th, *(at(p) for p in (sl.point, *sl.line)),
+                             "sample of the shaft's steady cycle")
+
     def samples(self, th, w, z, acc):
         """(load torque, body accelerations, element values) over the cycle's samples."""
         m, a, c = self.model, self.model.arrays, self.c
+        self.check_strokes(th, z)
         nb, ne = len(m.bodies), len(m.elements)
         out = np.empty((th.size, m.naux()))
         load = np.empty(th.size)
@@ -729,7 +752,7 @@ def _startup_steps(scene, eq, shaft, th0, cyc, w0, motion, rtol, scale, peak):
         while th0 + (k + 1) * cyc <= rec[-1, 0]:
             k += 1
             i = int(np.searchsorted(rec[:, 0], th0 + k * cyc))
-            tk = brentq(lambda x, k=k: run.sol(x)[0] - th0 - k * cyc, run.t[i - 1], run.t[i],
+            tk = brentq(lambda x, k=k, run=run: run.sol(x)[0] - th0 - k * cyc, run.t[i - 1], run.t[i],
                         xtol=1e-14)
             if abs(run.sol(tk)[1] - w0) <= 1e-3 * 0.01 * mean:     # settled well inside
                 done = tk

@@ -15,7 +15,6 @@ can jump on the shaft: tests/scene/test_shaft_cam.py.
 import math
 
 import numpy as np
-import pytest
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
