@@ -631,7 +631,7 @@ def _steady_cycle(scene, eq, rig, motor, th0, rtol, scale, mean_load, peak, note
             f"load torque {mean_load:.6g} N·m, peak {peak:.6g} N·m, with flywheel "
             f"{eq.Jf:g} kg·m²")
     w0 = _steady_speed(_RigidShaft(rig, eq.Jf, motor.scalar_torque), th0, cyc,
-                       max(rtol, 1e-7) if eq.n else rtol, scale,     # elastic: a first guess
+                       max(rtol, 1e-5) if eq.n else rtol, scale,     # elastic: a first guess
                        _balance(motor, mean_load, scale), fail)
     x0 = np.array([w0])
     if eq.n and spp is not None:
