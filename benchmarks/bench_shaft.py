@@ -46,7 +46,8 @@ def main():
         for label, kw in (("rk4 (compiled)", {}),
                           ("DOP853 rtol 1e-8", dict(method="DOP853", rtol=1e-8)),
                           ("DOP853 rtol 1e-10", dict(method="DOP853", rtol=1e-10))):
-            r, t = timed(lambda kw=kw: simulate_shaft(make(), points=360, startup=startup, **kw))
+            r, t = timed(lambda kw=kw, make=make, up=startup: simulate_shaft(
+                make(), points=360, startup=up, **kw))
             times[label] = t
             gap = float(np.max(np.abs(r.speed - ref.speed))) / ws
             print(f"  {label:18s} {t:8.2f} s   speed gap {gap:.2e} of ω_s   start-up "
