@@ -6,7 +6,8 @@ Scenes: the elastic slider-crank of tests/scene/test_shaft_elastic.py (Kloss mot
 0.01 kg·m², process moment) and the cam follower that jumps of tests/scene/test_shaft_cam.py
 (contact 1e8 N/m).  Each: the steady cycle and the start-up (slider-crank) or the steady
 cycle (cam); the accuracy of each run is its speed's largest gap over the cycle from a
-DOP853 run at rtol 1e-12 (relative to ω_s).  The kernels are compiled (or loaded) first.
+DOP853 run at rtol 1e-12 (relative to ω_s).  The kernels are compiled (or loaded) first;
+the times are this process's CPU seconds.
 
 Run from the repository root: ``python benchmarks/bench_shaft.py``.
 """
@@ -25,9 +26,10 @@ from mechcirc.scene.shaft import simulate_shaft, warm_up  # noqa: E402
 
 
 def timed(fn):
-    t = time.perf_counter()
+    """(result, CPU seconds of this process: the machine may be shared, wall time varies)."""
+    t = time.process_time()
     out = fn()
-    return out, time.perf_counter() - t
+    return out, time.process_time() - t
 
 
 def main():
@@ -50,7 +52,7 @@ def main():
                 make(), points=360, startup=up, **kw))
             times[label] = t
             gap = float(np.max(np.abs(r.speed - ref.speed))) / ws
-            print(f"  {label:18s} {t:8.2f} s   speed gap {gap:.2e} of ω_s   start-up "
+            print(f"  {label:18s} {t:8.2f} s CPU   speed gap {gap:.2e} of ω_s   start-up "
                   f"{r.startup_time}")
         base = times["rk4 (compiled)"]
         print(f"  speed-up: {times['DOP853 rtol 1e-8'] / base:.1f}× over DOP853 rtol 1e-8, "

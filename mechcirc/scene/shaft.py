@@ -494,7 +494,7 @@ def _over_cycle(eq, th0, cycle, x0, rtol, scale, dense=False, floor=1e-6):
                      method="DOP853", rtol=rtol, atol=atol, events=stall, dense_output=dense)
 
 
-def _steady_speed(eq, th0, cycle, rtol, scale, guess, fail):
+def _steady_speed(eq, th0, cycle, rtol, scale, guess, fail, xtol=1e-13):
     """The rigid steady cycle's speed at θ0: the zero of (speed after a cycle − before) by
     Brent's method, bracketed outward from ``guess``; ``fail()`` raises when none is found."""
     from scipy.optimize import brentq
@@ -516,7 +516,7 @@ def _steady_speed(eq, th0, cycle, rtol, scale, guess, fail):
             ghi = gap(hi)
     else:
         fail()
-    return brentq(gap, lo, hi, xtol=1e-13 * scale, rtol=4 * np.finfo(float).eps)
+    return brentq(gap, lo, hi, xtol=xtol * scale, rtol=4 * np.finfo(float).eps)
 
 
 def _steady_state(eq, th0, cycle, w0, rtol, scale):
@@ -632,7 +632,7 @@ def _steady_cycle(scene, eq, rig, motor, th0, rtol, scale, mean_load, peak, note
             f"{eq.Jf:g} kg·m²")
     w0 = _steady_speed(_RigidShaft(rig, eq.Jf, motor.scalar_torque), th0, cyc,
                        max(rtol, 1e-5) if eq.n else rtol, scale,     # elastic: a first guess
-                       _balance(motor, mean_load, scale), fail)
+                       _balance(motor, mean_load, scale), fail, 1e-5 if eq.n else 1e-13)
     x0 = np.array([w0])
     if eq.n and spp is not None:
         from .simulation import max_rate
