@@ -527,3 +527,104 @@ def load_python():
     mod.__dict__["_FORCE_PYTHON"] = True
     spec.loader.exec_module(mod)
     return mod
+
+
+# ---------------------------------------------------------------------------------------------
+# The dynamic main shaft (mechcirc.scene.shaft): the drive's part turned by the shaft's θ, a
+# state beside the free parts', the scene's right-hand side above supplying the forces on it.
+# MP = [0, ω_s, T_b, s_b] (Kloss) or [1, 0, 0, 0, n, speeds (n), torques (n)] (a table).
+
+
+@_jit_inline
+def motor_torque(MP, w):
+    """The motor's torque T(ω) [N·m]: Kloss's 2 T_b s s_b/(s² + s_b²), s = (ω_s − ω)/ω_s, or
+    the table linear between its points and along its end segments beyond them."""
+    if MP[0] == 0.0:
+        s = (MP[1] - w) / MP[1]
+        return 2.0 * MP[2] * s * MP[3] / (s * s + MP[3] * MP[3])
+    n = int(MP[4])
+    i = 1
+    while i < n - 1 and w > MP[5 + i]:
+        i += 1
+    x0 = MP[4 + i]
+    y0 = MP[4 + n + i]
+    return y0 + (w - x0) * (MP[5 + n + i] - y0) / (MP[5 + i] - x0)
+
+
+@_jit
+def shaft_rhs(Y, in_theta, Jf, c, MP, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI,
+              dY, aux, work):
+    """dY of the shaft and the free parts: in θ (``in_theta``) Y = [θ̇, t, z] and dY/dθ, θ the
+    independent variable in PV[1]; in time Y = [θ, θ̇, z] and dY/dt.  z = [q, q̇] of the free
+    parts (:func:`rhs` at the crank's θ, θ̇ with t = 0) and, q₀ = c θ the drive's coordinate,
+
+        (J_f + c² m₀) θ̈ = T_motor(θ̇) + c Q₀ − ½ c³ m₀' θ̇²    (work rows 3–5, column 0).
+
+    Returns θ̈."""
+    if in_theta:
+        w = Y[0]
+    else:
+        PV[1] = Y[0]
+        w = Y[1]
+    PV[0] = w
+    rhs(0.0, Y[2:], PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dY[2:], aux, work)
+    acc = (motor_torque(MP, w) + c * work[5, 0] - 0.5 * work[4, 0] * c * c * c * w * w) / \
+        (Jf + c * c * work[3, 0])
+    if in_theta:
+        for i in range(2, Y.shape[0]):
+            dY[i] /= w
+        dY[0] = acc / w
+        dY[1] = 1.0 / w
+    else:
+        dY[0] = w
+        dY[1] = acc
+    return acc
+
+
+@_jit
+def shaft_run(Y, in_theta, s0, h, nsteps, floor, rec, drec, Jf, c, MP, PV, FI, FF, tabs, MI_,
+              MW, EI, EF, MOI, MOF, PRIG, BI, naux):
+    """``nsteps`` classical RK4 steps of h of :func:`shaft_rhs` from s0 (θ or t); rec[k], drec[k]
+    = Y and dY after k steps (for cubic Hermite output).  Stops early where the speed falls
+    below ``floor`` or is not finite.  Returns the steps done."""
+    n = Y.shape[0]
+    k2 = np.empty(n)
+    k3 = np.empty(n)
+    k4 = np.empty(n)
+    tmp = np.empty(n)
+    aux = np.empty(naux)
+    work = np.zeros((9, max(FI.shape[0], PRIG.shape[0])))
+    sp = 0 if in_theta else 1
+    if in_theta:
+        PV[1] = s0
+    shaft_rhs(Y, in_theta, Jf, c, MP, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI,
+              drec[0], aux, work)
+    for i in range(n):
+        rec[0, i] = Y[i]
+    for k in range(nsteps):
+        s = s0 + k * h
+        y = rec[k]
+        k1 = drec[k]
+        for i in range(n):
+            tmp[i] = y[i] + 0.5 * h * k1[i]
+        if in_theta:
+            PV[1] = s + 0.5 * h
+        shaft_rhs(tmp, in_theta, Jf, c, MP, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG,
+                  BI, k2, aux, work)
+        for i in range(n):
+            tmp[i] = y[i] + 0.5 * h * k2[i]
+        shaft_rhs(tmp, in_theta, Jf, c, MP, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG,
+                  BI, k3, aux, work)
+        for i in range(n):
+            tmp[i] = y[i] + h * k3[i]
+        if in_theta:
+            PV[1] = s0 + (k + 1) * h
+        shaft_rhs(tmp, in_theta, Jf, c, MP, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG,
+                  BI, k4, aux, work)
+        for i in range(n):
+            rec[k + 1, i] = y[i] + h / 6.0 * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i])
+        if not rec[k + 1, sp] >= floor:       # a stall (or a blow-up: not finite)
+            return k + 1
+        shaft_rhs(rec[k + 1], in_theta, Jf, c, MP, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF,
+                  PRIG, BI, drec[k + 1], aux, work)
+    return nsteps

@@ -439,13 +439,6 @@ def _read_dynamics(scene: Scene, text: str, source: str, doc: dict) -> None:
     if "shaft" in doc:
         from .simfile import parse_shaft
 
-        if "cam" in doc and (len(scene.parts) > 1 or getattr(scene.linkage, "contact", None)):
-            first = next(iter(doc["shaft"]), "") if isinstance(doc["shaft"], dict) else ""
-            raise located(text, source, "a dynamic [shaft] with a [cam] takes a rigid "
-                          "mechanism only (the cam's part alone, no [[elastic]] or "
-                          "[[torsion]] element): the cam's law drives its part in "
-                          "proportion to no shaft coordinate", "shaft", first,
-                          expected="remove [shaft] or the elastic elements")
         object.__setattr__(scene, "shaft", parse_shaft(text, source, doc["shaft"], scene))
 
 

@@ -230,7 +230,7 @@ def reduced_inertia(scene: Scene, theta) -> np.ndarray:
 class _RigidShaft:
     """The shaft's equation on the rigid mechanism: no state beyond θ, θ̇ (z is empty)."""
 
-    n = 0
+    n = steps = 0
     shift = np.empty(0)
 
     def __init__(self, rig: _Rigid, Jf: float, tq):
@@ -263,7 +263,7 @@ class _ElasticShaft:
     (q₀ = c θ the drive's coordinate, m₀ its part's inertia, Q₀ the generalised force of the
     elastic elements and moments on it: rows 3–5 of the kernel's work array)."""
 
-    def __init__(self, scene: Scene, Jf: float, tq):
+    def __init__(self, scene: Scene, Jf: float, motor: Motor):
         from .motion import motion_model
         from .simulation import kernels_for
 
@@ -273,8 +273,11 @@ class _ElasticShaft:
         if a["FI"][r, 0] != 2 or a["FF"][r, 0] != 0.0:
             raise MechcircError(f"{scene.source}: the drive's part does not turn in proportion "
                                 "to the main shaft; a dynamic shaft cannot drive it")
-        self.c, self.n, self.Jf, self.tq = float(a["FF"][r, 1]), m.n_free, Jf, tq
+        self.c, self.n, self.Jf = float(a["FF"][r, 1]), m.n_free, Jf
+        self.tq = motor.scalar_torque
         self.kern = kernels_for("rk4")[0]
+        self.run_kern = _shaft_kernels()
+        self.MP, self.steps = motor.params, 0     # steps per cycle of the RK4 runs (0: scipy)
         self.args = m.kernel_args(0.0, 1e300)
         self.oargs = m.kernel_args(0.0, 1e300, outputs=True)
         self.aux, self.dz = np.empty(m.naux()), np.empty(2 * m.n_free)
@@ -292,13 +295,48 @@ class _ElasticShaft:
         return (self.tq(w) + c * wk[5, 0] - 0.5 * wk[4, 0] * c ** 3 * w * w) / \
             (self.Jf + c * c * wk[3, 0])
 
+    def run(self, Y, in_theta, s0, h, nsteps, floor):
+        """``nsteps`` RK4 steps of h of the shaft and free parts from s0 (Y = [θ̇, t, z] in θ,
+        or [θ, θ̇, z] in time: ``shaft_run`` of :mod:`._motion_kernels`) → (Y, dY) rows, fewer
+        than ``nsteps + 1`` where the speed fell below ``floor``."""
+        rec = np.empty((nsteps + 1, len(Y)))
+        drec = np.empty_like(rec)
+        args = self.model.kernel_args(0.0, 1e300)
+        done = self.run_kern.shaft_run(np.array(Y, float), bool(in_theta), float(s0), float(h),
+                                       int(nsteps), float(floor), rec, drec, self.Jf, self.c,
+                                       self.MP, *args, self.model.naux())
+        return rec[:done + 1], drec[:done + 1]
+
     def rest(self, theta, w=0.0):
         """z of the rigid motion at θ turning at w (at rest: w = 0)."""
         return self.model.rigid_state(theta, w)
 
+    def check_strokes(self, th, z):
+        """Every slider with a ``stroke`` checked at every sample of the cycle (crank rotations
+        ``th``, free parts' states ``z``) by the linkage's ``check_stroke``, as the
+        constant-speed simulation does: its located error where a point is past its stroke."""
+        from ..kinematics.linkage_solver import check_stroke
+
+        m, a = self.model, self.model.arrays
+        lk, L = m.scene.linkage, m.scene.length_scale
+        coord = {0: self.c * th, **{i + 1: z[:, i] for i in range(self.n)}}
+
+        def at(p):
+            if p not in m.point_fn:                       # a ground point: at the pose
+                return np.broadcast_to(np.asarray(lk.pose[p], float), (th.size, 2))
+            fx, fy, i = m.point_fn[p]
+            return np.column_stack([[self.kern.feval(a["FI"][f, 0], a["tabs"], a["FI"][f, 2],
+                                                     *a["FF"][f], q)[0] for q in coord[i]]
+                                    for f in (fx, fy)]) / L
+        for sl in lk.sliders:
+            if sl.stroke:
+                check_stroke(lk, sl, th, *(at(p) for p in (sl.point, *sl.line)),
+                             "sample of the shaft's steady cycle")
+
     def samples(self, th, w, z, acc):
         """(load torque, body accelerations, element values) over the cycle's samples."""
         m, a, c = self.model, self.model.arrays, self.c
+        self.check_strokes(th, z)
         nb, ne = len(m.bodies), len(m.elements)
         out = np.empty((th.size, m.naux()))
         load = np.empty(th.size)
@@ -321,6 +359,46 @@ class _ElasticShaft:
         return load, bodies, values
 
 
+_WARM_STATEMENT = ("import mechcirc._jit as j; j.COMPILED = True; "
+                   "from mechcirc.scene.shaft import warm_up; warm_up()")
+
+
+def _shaft_kernels():
+    """The kernel module whose ``shaft_run`` the elastic shaft calls: compiled when numba's
+    disk cache holds it (or :data:`mechcirc._jit.COMPILED` is True), else the Python copy
+    while a detached process compiles it (the no-wait rule of :mod:`mechcirc._jit`)."""
+    from .. import _jit
+    from .simulation import kernels_for
+
+    if _jit.COMPILED is not False:
+        from . import _motion_kernels as k
+
+        if k.HAVE_NUMBA and (_jit.COMPILED or _jit.in_cache(k.shaft_run)):
+            return k
+        if k.HAVE_NUMBA:
+            _jit.warm_in_background(_WARM_STATEMENT)
+    return kernels_for("rk4-python")[0]
+
+
+def warm_up() -> None:
+    """Compile the shaft's kernel (``shaft_run``) into numba's disk cache on a two-step run of
+    a shaft with nothing on it (the arguments' types are those of every scene).
+
+    Returns
+    -------
+    None
+    """
+    from . import _motion_kernels as k
+
+    i8 = np.int64
+    rec = np.empty((3, 2))
+    k.shaft_run(np.array([1.0, 0.0]), True, 0.0, 0.1, 2, 0.0, rec, np.empty_like(rec), 1.0, 1.0,
+                np.array([0.0, 10.0, 1.0, 0.2]), np.zeros(8), np.array([[2, -1, 0]], i8),
+                np.array([[0.0, 1.0, 0.0, 0.0, 1.0, 0.0]]), np.zeros((1, 2, 6)),
+                np.zeros(0, i8), np.zeros(0), np.zeros((0, 8), i8), np.zeros((0, 10)),
+                np.zeros((0, 2), i8), np.zeros((0, 4)), np.array([0], i8), np.zeros(0, i8), 4)
+
+
 def _prepare(scene: Scene, shaft, flywheel, points, rigid):
     """Checks of the options → (shaft, J_f, rigid tables, equations, peak load, mean load)."""
     shaft = shaft or scene.shaft
@@ -339,7 +417,7 @@ def _prepare(scene: Scene, shaft, flywheel, points, rigid):
     motor = shaft.motor
     eq: _RigidShaft | _ElasticShaft = _RigidShaft(rig, Jf, motor.scalar_torque)
     if not rigid and scene.parts and len(scene.parts) > 1:
-        eq = _ElasticShaft(scene, Jf, motor.scalar_torque)
+        eq = _ElasticShaft(scene, Jf, motor)
         if eq.Jf + eq.c ** 2 * min(_drive_inertia(eq, t) for t in (0.0, 1.0, 2.0)) <= 0:
             raise MechcircError(f"{scene.source}: the shaft has no inertia of its own (flywheel "
                                 "0 and no mass on the drive's part): give [shaft] flywheel > 0")
@@ -361,8 +439,26 @@ def _drive_inertia(eq: _ElasticShaft, theta: float) -> float:
     return float(eq.work[3, 0])
 
 
+#: RK4 steps per period of the fastest linearised mode (elastic shaft, ``method="rk4"``).
+STEPS_PER_PERIOD = 100
+
 #: Right-hand side evaluations one cycle of the shaft may take.
 MAX_CALLS = 200_000
+
+
+class _Steps:
+    """A fixed-step run as solve_ivp's result: ``status`` (1: stalled), ``t``, ``y`` (columns)
+    and ``sol`` (cubic Hermite between the steps, from the values and derivatives)."""
+
+    def __init__(self, t, rec, drec, status):
+        self.t, self.y, self.status, self._d, self._sp = t, rec.T, status, drec.T, None
+
+    def sol(self, x):
+        if self._sp is None:
+            from scipy.interpolate import CubicHermiteSpline
+
+            self._sp = CubicHermiteSpline(self.t, self.y, self._d, axis=1)
+        return self._sp(x)
 
 
 def _over_cycle(eq, th0, cycle, x0, rtol, scale, dense=False, floor=1e-6):
@@ -370,6 +466,11 @@ def _over_cycle(eq, th0, cycle, x0, rtol, scale, dense=False, floor=1e-6):
     where θ̇ falls to ``floor`` × the motor's speed scale (a stall)."""
     from scipy.integrate import solve_ivp
 
+    if eq.steps:
+        h = cycle / eq.steps
+        rec, drec = eq.run(np.concatenate(([x0[0], 0.0], x0[1:])), True, th0, h, eq.steps,
+                           floor * scale)
+        return _Steps(th0 + h * np.arange(rec.shape[0]), rec, drec, int(rec.shape[0] <= eq.steps))
     calls = [0]
 
     def f(th, Y):
@@ -393,7 +494,7 @@ def _over_cycle(eq, th0, cycle, x0, rtol, scale, dense=False, floor=1e-6):
                      method="DOP853", rtol=rtol, atol=atol, events=stall, dense_output=dense)
 
 
-def _steady_speed(eq, th0, cycle, rtol, scale, guess, fail):
+def _steady_speed(eq, th0, cycle, rtol, scale, guess, fail, xtol=1e-13):
     """The rigid steady cycle's speed at θ0: the zero of (speed after a cycle − before) by
     Brent's method, bracketed outward from ``guess``; ``fail()`` raises when none is found."""
     from scipy.optimize import brentq
@@ -415,7 +516,7 @@ def _steady_speed(eq, th0, cycle, rtol, scale, guess, fail):
             ghi = gap(hi)
     else:
         fail()
-    return brentq(gap, lo, hi, xtol=1e-13 * scale, rtol=4 * np.finfo(float).eps)
+    return brentq(gap, lo, hi, xtol=xtol * scale, rtol=4 * np.finfo(float).eps)
 
 
 def _steady_state(eq, th0, cycle, w0, rtol, scale):
@@ -449,7 +550,8 @@ def _steady_state(eq, th0, cycle, w0, rtol, scale):
 
 def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float | None = None,
                    points: int = 720, startup: bool = True, rtol: float = 1e-10,
-                   rigid: bool = False) -> ShaftMotion:
+                   rigid: bool = False, method: str = "rk4",
+                   steps_per_period: float = STEPS_PER_PERIOD) -> ShaftMotion:
     """The main shaft turned by the motor through the flywheel: steady cycle and start-up.
 
     Parameters
@@ -469,6 +571,13 @@ def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float 
         Treat every elastic element as rigid (θ the only degree of freedom) even when the
         scene has elastic parts; by default a scene with elastic parts is simulated with
         them (θ coupled to the free parts of :mod:`.motion`).
+    method : {"rk4", "DOP853"}
+        Elastic scenes: ``"rk4"`` integrates the shaft with the free parts in one compiled loop
+        (classical RK4 at fixed steps: in θ over the cycle, in time for the start-up);
+        ``"DOP853"`` by scipy's solve_ivp at ``rtol`` (the same equations, called from Python
+        at every step).  The rigid shaft is always integrated by DOP853.
+    steps_per_period : float
+        ``"rk4"``: steps per period of the fastest linearised mode at the steady speed.
 
     Returns
     -------
@@ -482,6 +591,10 @@ def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float 
         message gives the torques); the start-up did not reach the steady
         cycle within ``max_time``.
     """
+    if method not in ("rk4", "DOP853"):
+        raise MechcircError(f"method must be 'rk4' or 'DOP853', got {method!r}")
+    if not (isinstance(steps_per_period, (int, float)) and steps_per_period >= 4):
+        raise MechcircError(f"steps_per_period must be a number ≥ 4, got {steps_per_period!r}")
     shaft, Jf, rig, eq, peak, mean_load, notes = _prepare(scene, shaft, flywheel, points, rigid)
     motor = shaft.motor
     th0, cyc = math.radians(shaft.start_deg), rig.cycle
@@ -493,18 +606,22 @@ def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float 
             f"{scene.source}: the motor cannot start the mechanism: its starting torque "
             f"T(0) = {T0:.6g} N·m does not exceed the load torque "
             f"{L0:.6g} N·m at the start angle {shaft.start_deg:g}°")
-    x0, sol = _steady_cycle(scene, eq, rig, motor, th0, rtol, scale, mean_load, peak, notes)
+    x0, sol = _steady_cycle(scene, eq, rig, motor, th0, rtol, scale, mean_load, peak, notes,
+                            steps_per_period if method == "rk4" else None)
     motion = _tabulate(scene, eq, sol, th0, cyc, points, Jf, motor)
     if not startup:
         return ShaftMotion(**motion, notes=tuple(notes))
-    up = _startup(scene, eq, shaft, th0, cyc, x0[0], motion, rtol, scale, peak)
-    notes.append(f"steady cycle by shooting (DOP853 in θ, rtol {rtol:g}); start-up from rest "
-                 f"over {up.pop('cycles')} cycles")
+    up = (_startup_steps if eq.steps else _startup)(scene, eq, shaft, th0, cyc, x0[0], motion,
+                                                    rtol, scale, peak)
+    how = f"RK4 in θ, {eq.steps} steps a cycle" if eq.steps else f"DOP853 in θ, rtol {rtol:g}"
+    notes.append(f"steady cycle by shooting ({how}); start-up from rest over "
+                 f"{up.pop('cycles')} cycles")
     return ShaftMotion(**motion, **up, notes=tuple(notes))
 
 
-def _steady_cycle(scene, eq, rig, motor, th0, rtol, scale, mean_load, peak, notes):
-    """The steady cycle from θ0: ([θ̇, z] at θ0, its dense solution over the cycle)."""
+def _steady_cycle(scene, eq, rig, motor, th0, rtol, scale, mean_load, peak, notes, spp):
+    """The steady cycle from θ0: ([θ̇, z] at θ0, its dense solution over the cycle); elastic
+    with ``spp`` given: by the compiled RK4 at ``spp`` steps per period of the fastest mode."""
     cyc = rig.cycle
 
     def fail():
@@ -514,9 +631,16 @@ def _steady_cycle(scene, eq, rig, motor, th0, rtol, scale, mean_load, peak, note
             f"load torque {mean_load:.6g} N·m, peak {peak:.6g} N·m, with flywheel "
             f"{eq.Jf:g} kg·m²")
     w0 = _steady_speed(_RigidShaft(rig, eq.Jf, motor.scalar_torque), th0, cyc,
-                       max(rtol, 1e-7) if eq.n else rtol, scale,     # elastic: a first guess
-                       _balance(motor, mean_load, scale), fail)
+                       max(rtol, 1e-5) if eq.n else rtol, scale,     # elastic: a first guess
+                       _balance(motor, mean_load, scale), fail, 1e-5 if eq.n else 1e-13)
     x0 = np.array([w0])
+    if eq.n and spp is not None:
+        from .simulation import max_rate
+
+        eq.steps = max(int(math.ceil(cyc * max_rate(eq.model) * spp / (2 * math.pi * w0))), 64)
+        backend = "compiled" if getattr(eq.run_kern, "HAVE_NUMBA", False) else "Python copy"
+        notes.append(f"RK4 in θ with the elastic parts, {eq.steps} steps a cycle ({spp:g} per "
+                     f"period of the fastest mode), {backend}")
     if eq.n:
         x0, resid = _steady_state(eq, th0, cyc, w0, rtol, scale)
         notes.append(f"elastic steady cycle: {2 * eq.n} elastic states beside θ̇, cycle map "
@@ -602,6 +726,59 @@ def _startup(scene, eq, shaft, th0, cyc, w0, motion, rtol, scale, peak):
         bound = band[0] if ws[i] < band[0] else band[1]
         t_up = float(brentq(lambda x: fi(x)[1] - bound, ts[i], ts[i + 1], xtol=1e-14))
     return dict(startup_time=t_up, startup_t=ts, startup_speed=ws, cycles=k)
+
+
+def _startup_steps(scene, eq, shaft, th0, cyc, w0, motion, rtol, scale, peak):
+    """:func:`_startup` by the compiled RK4 in time, at the time step of the steady cycle's
+    θ step, one cycle's steps at a time; the cycle's starts and the band's last crossing
+    located on the cubic Hermite between the steps."""
+    from scipy.optimize import brentq
+
+    mean, h = motion["omega_mean"], cyc / eq.steps / w0
+    ts, ws, runs = [0.0], [0.0], []
+    t, Y, k = 0.0, np.concatenate(([th0, 0.0], eq.rest(th0))), 0
+    every = max(eq.steps // 64, 1)
+    while True:
+        rec, drec = eq.run(Y, False, t, h, eq.steps, -1e-9 * scale)
+        run = _Steps(t + h * np.arange(rec.shape[0]), rec, drec, 0)
+        runs.append(run)
+        if rec.shape[0] <= eq.steps:
+            raise MechcircError(
+                f"{scene.source}: the start-up stalls at t = {run.t[-1]:.4g} s, θ = "
+                f"{math.degrees(rec[-1, 0]):.5g}°: the motor's largest torque "
+                f"{shaft.motor.peak_torque:.6g} N·m is below the peak load torque {peak:.6g} "
+                f"N·m and the flywheel ({motion['flywheel']:g} kg·m²) does not carry it through")
+        done = None
+        while th0 + (k + 1) * cyc <= rec[-1, 0]:
+            k += 1
+            i = int(np.searchsorted(rec[:, 0], th0 + k * cyc))
+            tk = brentq(lambda x, k=k, run=run: run.sol(x)[0] - th0 - k * cyc, run.t[i - 1], run.t[i],
+                        xtol=1e-14)
+            if abs(run.sol(tk)[1] - w0) <= 1e-3 * 0.01 * mean:     # settled well inside
+                done = tk
+                break
+        keep = run.t[1:] if done is None else np.append(run.t[1:][run.t[1:] < done], done)
+        keep = keep[::-1][::every][::-1]
+        ts.extend(keep)
+        ws.extend(run.sol(keep)[1])
+        if done is not None:
+            break
+        t, Y = float(run.t[-1]), rec[-1]
+        if t >= shaft.max_time:
+            raise MechcircError(
+                f"{scene.source}: the start-up did not reach the steady cycle within max_time "
+                f"= {shaft.max_time:g} s (speed {Y[1]:.6g} rad/s against the steady "
+                f"{w0:.6g} rad/s at the cycle's start): raise [shaft] max_time")
+    ts_, ws_ = np.array(ts), np.array(ws)
+    band = (motion["omega_min"] - 0.01 * mean, motion["omega_max"] + 0.01 * mean)
+    out = np.flatnonzero((ws_ < band[0]) | (ws_ > band[1]))
+    t_up = 0.0
+    if out.size:                  # the last crossing into the band, on the Hermite
+        i = int(out[-1])
+        fi = next(r.sol for r in reversed(runs) if r.t[0] <= ts_[i])
+        bound = band[0] if ws_[i] < band[0] else band[1]
+        t_up = float(brentq(lambda x: fi(x)[1] - bound, ts_[i], ts_[i + 1], xtol=1e-14))
+    return dict(startup_time=t_up, startup_t=ts_, startup_speed=ws_, cycles=k)
 
 
 def _balance(motor: Motor, torque: float, scale: float) -> float:

@@ -40,6 +40,7 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 from typing import Any
 
 from ..errors import MechcircError
@@ -337,28 +338,27 @@ class Motor:
     speeds: tuple = ()
     torques: tuple = ()
 
+    @cached_property
+    def params(self):
+        """The characteristic as the shaft kernel's array (``motor_torque`` in
+        :mod:`._motion_kernels`, where the law is written)."""
+        import numpy as np
+
+        if self.kind == "kloss":
+            return np.array([0.0, self.sync_speed, self.breakdown_torque, self.breakdown_slip])
+        return np.array([1.0, 0.0, 0.0, 0.0, len(self.speeds), *self.speeds, *self.torques])
+
     def torque(self, omega):
         """T(ω) [N·m] at shaft speed(s) ``omega`` [rad/s]."""
         import numpy as np
 
         w = np.asarray(omega, float)
-        if self.kind == "kloss":
-            s = (self.sync_speed - w) / self.sync_speed
-            sb = self.breakdown_slip
-            return 2.0 * self.breakdown_torque * s * sb / (s * s + sb * sb)
-        x, y = np.asarray(self.speeds), np.asarray(self.torques)
-        out = np.interp(w, x, y)
-        lo, hi = w < x[0], w > x[-1]
-        out = np.where(lo, y[0] + (w - x[0]) * (y[1] - y[0]) / (x[1] - x[0]), out)
-        return np.where(hi, y[-1] + (w - x[-1]) * (y[-1] - y[-2]) / (x[-1] - x[-2]), out)
+        P, law = self.params, _motor_law()
+        return np.array([law(P, x) for x in w.ravel()]).reshape(w.shape)
 
     def scalar_torque(self, w: float) -> float:
         """T(ω) at one speed (the integrators' fast path)."""
-        if self.kind == "kloss":
-            s = (self.sync_speed - w) / self.sync_speed
-            sb = self.breakdown_slip
-            return 2.0 * self.breakdown_torque * s * sb / (s * s + sb * sb)
-        return float(self.torque(w))
+        return _motor_law()(self.params, w)
 
     @property
     def peak_torque(self) -> float:
@@ -366,6 +366,20 @@ class Motor:
         if self.kind == "kloss":
             return self.breakdown_torque if self.breakdown_slip <= 1 else float(self.torque(0.0))
         return float(max(self.torques))
+
+
+_LAW = None
+
+
+def _motor_law():
+    """The motor law of the shaft kernel, as plain Python (a scalar call without numba's
+    dispatch)."""
+    global _LAW
+    if _LAW is None:
+        from ._motion_kernels import load_python
+
+        _LAW = load_python().motor_torque
+    return _LAW
 
 
 def kloss_motor(*, sync_speed: float, breakdown_torque: float,

@@ -192,3 +192,30 @@ def test_cli_prints_the_elastic_forces_with_units(tmp_path, capsys):
     assert rows["block.travel.acceleration"][-1] == "m/s²"
     assert 0 < float(rows["k_rod.force"][2]) < 300          # about 227 N (docs)
     assert_user_error(["simulate", str(path), "--rigid"], capsys, "--rigid applies with --shaft")
+
+
+@pytest.mark.slow
+def test_a_stroke_is_checked_at_every_sample_of_the_shaft_cycle():
+    """The block's rigid travel stays below 189.7367 mm (closed form) but the elastic rod on
+    the shaft lets it reach about 189.80 mm: a stroke [100, 189.77] is left at a sample of
+    the steady cycle, reported (located at the stroke) where the unbounded run says."""
+    import re
+
+    from mechcirc.errors import NetlistError
+
+    th = np.linspace(0, 2 * math.pi, 200001)
+    assert (R * np.cos(th) + np.sqrt(L0 ** 2 - (Y_G - R * np.sin(th)) ** 2)).max() < 0.18976
+    free = simulate_shaft(scene(), points=180, startup=False)
+    x = 189.666295470958 + free.states[:, 0] * 1000           # the block's place [mm]
+    first = int(np.argmax(x > 189.77))
+    assert x[first] > 189.77
+    text = open("examples/slider_crank_scene.toml", encoding="utf-8").read() + EXTRA
+    text = text.replace('line = ["G1", "G2"]\n', 'line = ["G1", "G2"]\nstroke = [100.0, 189.77]\n')
+    with pytest.raises(NetlistError, match="sample of the shaft's steady cycle") as exc:
+        simulate_shaft(parse_scene(text, "stroke.toml"), points=180, startup=False)
+    msg = str(exc.value)
+    assert msg.startswith("stroke.toml:33:") and "slider 'block'" in msg
+    deg, along = (float(v) for v in re.search(r"θ = ([\d.]+)°.* at ([\d.]+) along", msg)
+                  .groups())
+    assert deg == pytest.approx(START + math.degrees(free.theta[first]), abs=1e-3)
+    assert along == pytest.approx(x[first], abs=1e-3)
