@@ -167,8 +167,8 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
 
     # Compiled: no (ω, term) temporaries; the chunk's (ω, n) arrays stay in cache.
     # numpy: the residual's (ω, term) temporaries bound its pieces.
-    terms = 2 ** 16 // max(1, system.size) if kern is not None \
-        else _CHUNK_TERMS // max(1, pat.n_terms + system.size)
+    terms = max(1, 2 ** 16 // max(1, system.size) if kern is not None
+                else _CHUNK_TERMS // max(1, pat.n_terms + system.size))
 
     def residual(w, xh, xl, rhs):
         if kern is not None or w.size <= terms:
@@ -183,7 +183,7 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
     # The numpy banded LU loops over the columns in Python: as many ω at once
     # as its memory bound allows (the residual goes in pieces, above).
     chunk = solve_with.batch_chunk if kern is None and solve_with.kind == "band" \
-        and solve_with.batch_chunk else max(1, min(solve_with.max_chunk, terms))
+        and solve_with.batch_chunk else min(solve_with.max_chunk, terms)
     use_dd = refine and system.size <= DD_LIMIT and not np.iscomplexobj(omega)
     for start in range(0, at.size, chunk):
         every = at[start:start + chunk]

@@ -457,3 +457,17 @@ def test_small_narrow_networks_are_banded_and_exact_against_mpmath(monkeypatch):
     # Achieved: 0 (K correctly rounded here); 1e-15 as the large ladders' test.
     assert np.all(true <= 1e-15), true
     assert np.all(err >= true)
+
+
+def test_a_residual_of_more_terms_than_a_chunk_goes_one_point_at_a_time(monkeypatch):
+    """Past ``_CHUNK_TERMS`` residual terms (a 99,999-element ladder on the numpy path)
+    the residual goes one ω per piece (never a step of zero), the same numbers bit for bit."""
+    monkeypatch.setattr(mechcirc._jit, "COMPILED", False)
+    text, K_ref = _lever_ladder(100, seed=2)
+    system = mechcirc.parse(text).nodal
+    K, err = mechcirc.nodal.mobility_and_error(system, _LADDER_OMEGA)
+    monkeypatch.setattr(mechcirc.nodal, "_CHUNK_TERMS", 1)
+    K1, err1 = mechcirc.nodal.mobility_and_error(system, _LADDER_OMEGA)
+    assert K1.tobytes() == K.tobytes() and err1.tobytes() == err.tobytes()
+    ref = np.array([K_ref(w) for w in _LADDER_OMEGA])
+    assert np.all(np.abs(K1 - ref) <= 1e-15 * np.abs(ref))
