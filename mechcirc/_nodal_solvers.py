@@ -18,7 +18,8 @@ from ._nodal_residual import Pattern, pattern
 
 __all__ = ["solver", "dd_solver", "balance", "DENSE_LIMIT", "DD_LIMIT", "BAND_MAX"]
 
-#: Systems with at most this many unknowns use batched dense solves.
+#: Systems with at most this many unknowns use batched dense solves (or
+#: batched banded LUs, :data:`SMALL_BAND`).
 DENSE_LIMIT = 60
 #: Memory bound for one chunk of batched dense matrices [bytes].
 _CHUNK_BYTES = 32 * 2**20
@@ -181,7 +182,7 @@ def dd_solver(system: NodalSystem) -> DDSolver:
 
 
 def solver(system: NodalSystem):
-    """The solver of ``system`` (dense batch or sparse), built once per system."""
+    """The solver of ``system`` (dense batch, banded or sparse), built once per system."""
     def build(s):
         if s.size > DENSE_LIMIT:
             return SparseSolver(pattern(s))
@@ -357,7 +358,9 @@ class SparseSolver:
     kl, a banded LU with partial pivoting when kl ≤ :data:`BAND_MAX`
     (chains, ladders and narrow strips: the ladder's band is 1 wide) — the
     compiled kernels of :mod:`mechcirc._nodal_kernels` when numba is
-    installed, LAPACK's ``zgbtrf``/``zgbtrs`` otherwise; for wider bands
+    installed, otherwise :func:`band_lu_batch` (vectorised over ω) up to
+    :data:`DENSE_LIMIT` unknowns and LAPACK's ``zgbtrf``/``zgbtrs`` per ω
+    past it; for wider bands
     (grids: the 30×30 grid's band is 30) SuperLU (``scipy.sparse.linalg.
     splu``) on A permuted symmetrically by a minimum-degree ordering of
     Aᵀ + A found once from the pattern, in its symmetric mode (diagonal

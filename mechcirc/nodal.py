@@ -4,7 +4,7 @@ The system A(ω) x = e_a − e_b, A(ω) = D + C + j(ωM − Kₛ/ω), and K = x_
 are written once, in :mod:`mechcirc._nodal_equations` (:func:`stamps`,
 :func:`assemble`, :func:`combine`, re-exported here).
 :func:`solve` solves A(ω) x = e_a − e_b: small systems as
-batched dense solves, large ones by a sparse LU per ω on a fixed pattern
+batched dense solves (or batched banded LUs where the band is narrow), large ones by a sparse LU per ω on a fixed pattern
 (a banded LU where the band is narrow, SuperLU otherwise; the choice and
 the ordering made once from the pattern, see :class:`SparseSolver`).  Each
 solution is refined with residuals in double-double arithmetic reusing the
@@ -287,7 +287,8 @@ def solve(system: NodalSystem, omega: ArrayLike, *, refine: bool = True,
     """Solve A(ω) x = e_a − e_b at each ω, refined, with an error estimate of K.
 
     Small systems (≤ :data:`DENSE_LIMIT` unknowns) are solved as batched dense
-    systems; large ones by a sparse LU per ω on the fixed pattern (the choice
+    systems, or as batched banded LUs where the band is narrow
+    (:data:`mechcirc._nodal_solvers.SMALL_BAND`); large ones by a sparse LU per ω on the fixed pattern (the choice
     of solver and its ordering made once, deterministically: see
     :class:`SparseSolver`).  Refinement reuses the factors: each step is one
     residual in double-double arithmetic (:meth:`Pattern.residual`) and one
