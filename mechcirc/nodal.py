@@ -227,7 +227,9 @@ class _Solved:
         if self.x_all is not None:
             self.x_all[sel] = x
         elif self.keep is not None:
-            for k in np.flatnonzero(self.keep[sel]):
+            # Only the rows :func:`solve` may need: where no digit of K is known.
+            maybe = self.keep[sel] & ~(np.isfinite(self.K[sel]) & (self.err[sel] < 1.0))
+            for k in np.flatnonzero(maybe):
                 self.kept[int(sel[k])] = x[k]
 
     def dd_retry(self, every, refined) -> None:
