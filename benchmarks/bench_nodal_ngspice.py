@@ -127,6 +127,8 @@ def main() -> int:
             times[col], s = cpu(lambda r=refine, t=text: mechcirc.parse(t).sweep(
                 omega, method="nodal", refine=r), rep)
             results[col] = s.K
+            print(f"# {n:,} elements, {col}: {times[col] * 1e3:.1f} ms", file=sys.stderr,
+                  flush=True)                 # what a long run has measured so far
         _jit.COMPILED = None
         if spice is not None:
             lines = spice_lines(ks, ms)
