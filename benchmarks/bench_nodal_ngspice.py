@@ -94,12 +94,15 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", default="45,99,999,9999,99999")
     ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--no-spice", action="store_true", help="mechcirc only")
     ap.add_argument("--mp-max", type=int, default=999,
                     help="largest ladder checked against mpmath")
     args = ap.parse_args()
     sizes = [int(s) for s in args.sizes.split(",")]
     omega = 2 * np.pi * np.geomspace(0.1, 1e3, 401)
     try:
+        if args.no_spice:
+            raise OSError("--no-spice")
         spice = Spice()
     except OSError as exc:
         spice = None
