@@ -481,7 +481,7 @@ def _nodal_sweep(ds: Designs, which: NDArray, omega: NDArray):
     Returns ``(designs solved, K, error)``, shapes (D',), (D', W), (D', W).
     """
     from ._nodal_residual import residual_rounding
-    from ._nodal_solvers import DENSE_LIMIT
+    from ._nodal_solvers import solver
 
     none = (which[:0], np.empty((0, omega.size), complex), np.empty((0, omega.size)))
     try:
@@ -492,7 +492,7 @@ def _nodal_sweep(ds: Designs, which: NDArray, omega: NDArray):
     for lv in system.levers:                 # the lever stamps are the template's
         which = which[ds.ratios[lev[lv.name], which] == lv.ratio]
     n, W = system.size, omega.size
-    if n > DENSE_LIMIT or not which.size or not (omega > 0).all():
+    if solver(system).kind != "dense" or not which.size or not (omega > 0).all():
         return none
     group = max(1, _STACK_ENTRIES // (n * n))
     if which.size > group:

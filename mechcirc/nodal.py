@@ -4,7 +4,7 @@ The system A(ω) x = e_a − e_b, A(ω) = D + C + j(ωM − Kₛ/ω), and K = x_
 are written once, in :mod:`mechcirc._nodal_equations` (:func:`stamps`,
 :func:`assemble`, :func:`combine`, re-exported here).
 :func:`solve` solves A(ω) x = e_a − e_b: small systems as
-batched dense solves, large ones by a sparse LU per ω on a fixed pattern
+batched dense solves (or batched banded LUs where the band is narrow), large ones by a sparse LU per ω on a fixed pattern
 (a banded LU where the band is narrow, SuperLU otherwise; the choice and
 the ordering made once from the pattern, see :class:`SparseSolver`).  Each
 solution is refined with residuals in double-double arithmetic reusing the
@@ -165,16 +165,25 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
         else kernels(system.size * at.size)
     out = _Solved(system, pat, kern, omega, keep)
 
+    # Compiled: no (ω, term) temporaries; the chunk's (ω, n) arrays stay in cache.
+    # numpy: the residual's (ω, term) temporaries bound its pieces.
+    terms = max(1, 2 ** 16 // max(1, system.size) if kern is not None
+                else _CHUNK_TERMS // max(1, pat.n_terms + system.size))
+
     def residual(w, xh, xl, rhs):
-        return pat.residual(w, xh, xl, rhs, kern)
+        if kern is not None or w.size <= terms:
+            return pat.residual(w, xh, xl, rhs, kern)
+        return np.concatenate([pat.residual(w[i:i + terms], xh[i:i + terms],
+                                            None if xl is None else xl[i:i + terms], rhs)
+                               for i in range(0, w.size, terms)])
 
     def refined(solve_fn, w):
         return refine_dd(solve_fn, residual, w, rhs, system, refine, steps)
 
-    # Compiled: no (ω, term) temporaries; the chunk's (ω, n) arrays stay in cache.
-    terms = 2 ** 16 // max(1, system.size) if kern is not None \
-        else _CHUNK_TERMS // max(1, pat.n_terms + system.size)
-    chunk = max(1, min(solve_with.max_chunk, terms))
+    # The numpy banded LU loops over the columns in Python: as many ω at once
+    # as its memory bound allows (the residual goes in pieces, above).
+    chunk = solve_with.batch_chunk if kern is None and solve_with.kind == "band" \
+        and solve_with.batch_chunk else min(solve_with.max_chunk, terms)
     use_dd = refine and system.size <= DD_LIMIT and not np.iscomplexobj(omega)
     for start in range(0, at.size, chunk):
         every = at[start:start + chunk]
@@ -218,7 +227,9 @@ class _Solved:
         if self.x_all is not None:
             self.x_all[sel] = x
         elif self.keep is not None:
-            for k in np.flatnonzero(self.keep[sel]):
+            # Only the rows :func:`solve` may need: where no digit of K is known.
+            maybe = self.keep[sel] & ~(np.isfinite(self.K[sel]) & (self.err[sel] < 1.0))
+            for k in np.flatnonzero(maybe):
                 self.kept[int(sel[k])] = x[k]
 
     def dd_retry(self, every, refined) -> None:
@@ -278,7 +289,8 @@ def solve(system: NodalSystem, omega: ArrayLike, *, refine: bool = True,
     """Solve A(ω) x = e_a − e_b at each ω, refined, with an error estimate of K.
 
     Small systems (≤ :data:`DENSE_LIMIT` unknowns) are solved as batched dense
-    systems; large ones by a sparse LU per ω on the fixed pattern (the choice
+    systems, or as batched banded LUs where the band is narrow
+    (:data:`mechcirc._nodal_solvers.SMALL_BAND`); large ones by a sparse LU per ω on the fixed pattern (the choice
     of solver and its ordering made once, deterministically: see
     :class:`SparseSolver`).  Refinement reuses the factors: each step is one
     residual in double-double arithmetic (:meth:`Pattern.residual`) and one

@@ -1,0 +1,163 @@
+"""Nodal ladders end to end against libngspice, 45 … 99,999 elements (both mechcirc paths).
+
+For the ladders of ``bench_sp_sweep.py --e2e`` (springs k ∈ [1e4, 2e4] N/m
+in series, masses m ∈ [0.2, 1.2] kg to the frame, a damper 1e-3 N·s/m at the
+end) of 45, 99, 999, 9,999 and 99,999 elements, at the 401 frequencies of
+``.ac dec 100 0.1 1k``, it times in the same run (CPU medians):
+
+* ``mechcirc.parse(text).sweep(ω, method="nodal")`` (refined: the default)
+  and with ``refine=False``, each on the numpy path (``_jit.COMPILED =
+  False``: what ``pip install .`` gives, and what a fresh process runs
+  while numba compiles) and on the compiled path (numba's kernels loaded
+  before timing: a warm cache);
+* libngspice through ctypes on the analogous electrical ladder (circuit
+  load, ``run``, reading V(a)), as ``bench_sp_sweep.py --e2e`` does;
+
+and prints the ratios to libngspice.  Accuracy, against the ladder's
+continued fraction in mpmath (40 digits) at ngspice's own frequencies, is
+printed for the sizes up to ``--mp-max`` elements: the largest relative
+error of K of each mechcirc variant and of ngspice.
+
+Run from the repository root::
+
+    python benchmarks/bench_nodal_ngspice.py [--sizes 45,99,999,9999,99999] [--repeats 5]
+
+It prints; it asserts nothing.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from bench_sp_sweep import NgSpice, ladder_netlist, ladder_numbers, spice_lines  # noqa: E402
+
+import mechcirc  # noqa: E402
+from mechcirc import _jit, nodal  # noqa: E402
+
+
+def cpu(fn, repeats):
+    """Median CPU time [s] of ``fn()`` and its last result."""
+    times, out = [], None
+    for _ in range(repeats):
+        t0 = time.process_time()
+        out = fn()
+        times.append(time.process_time() - t0)
+    return float(np.median(times)), out
+
+
+def mp_ladder(ks, ms, r, omega):
+    """K(ω) of the ladder as its continued fraction in mpmath (40 digits)."""
+    import mpmath
+
+    out = np.empty(omega.size, dtype=complex)
+    with mpmath.workdps(40):
+        ks = [mpmath.mpf(float(k)) for k in ks]
+        ms = [mpmath.mpf(float(m)) for m in ms]
+        for i, w in enumerate(omega):
+            jw = mpmath.mpc(0, mpmath.mpf(float(w)))
+            K = 1 / mpmath.mpf(r)                       # the damper's mobility
+            for k, m in zip(ks[::-1], ms[::-1]):
+                K = jw / k + 1 / (jw * m + 1 / K)
+            out[i] = complex(K)
+    return out
+
+
+class Spice(NgSpice):
+    """:class:`NgSpice` that also keeps the run's frequencies [rad/s] (``last_omega``)."""
+
+    def ac(self, lines):
+        ct = self.ctypes
+        arr = (ct.c_char_p * (len(lines) + 1))(*[x.encode() for x in lines], None)
+        self.lib.ngSpice_Circ(arr)
+        self.lib.ngSpice_Command(b"run")
+        out = []
+        for name in (b"a", b"frequency"):
+            v = self.lib.ngGet_Vec_Info(name).contents
+            raw = np.ctypeslib.as_array(ct.cast(v.v_compdata, ct.POINTER(ct.c_double)),
+                                        shape=(2 * v.v_length,))
+            out.append(raw[0::2] + 1j * raw[1::2])
+        self.last_omega = 2 * np.pi * out[1].real
+        self.lib.ngSpice_Command(b"destroy all")
+        self.lib.ngSpice_Command(b"remcirc")
+        return out[0]
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--sizes", default="45,99,999,9999,99999")
+    ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--no-spice", action="store_true", help="mechcirc only")
+    ap.add_argument("--mp-max", type=int, default=999,
+                    help="largest ladder checked against mpmath")
+    args = ap.parse_args()
+    sizes = [int(s) for s in args.sizes.split(",")]
+    omega = 2 * np.pi * np.geomspace(0.1, 1e3, 401)
+    try:
+        if args.no_spice:
+            raise OSError("--no-spice")
+        spice = Spice()
+    except OSError as exc:
+        spice = None
+        print(f"# libngspice not available ({exc}): mechcirc only")
+    print(f"# {os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}; numpy {np.__version__}; "
+          f"401 points; CPU medians of {args.repeats} (1 at 99,999 elements)")
+    cols = ["numpy refined", "numpy plain", "compiled refined", "compiled plain"]
+    print("| elements | " + " | ".join(f"{c} ms" for c in cols) + " | libngspice ms | "
+          + " | ".join(f"{c} / ngspice" for c in cols) + " |")
+    print("|---:" * (2 * len(cols) + 2) + "|")
+    errors = []
+    for n in sizes:
+        ks, ms = ladder_numbers(n)
+        text = ladder_netlist(ks, ms)
+        rep = args.repeats if n < 50_000 else 1
+        times, results = {}, {}
+        for col in cols:
+            compiled = col.startswith("compiled")
+            refine = col.endswith("refined")
+            _jit.COMPILED = compiled
+            if compiled and nodal.kernels(10 ** 9) is None:
+                times[col] = np.nan
+                continue
+            mechcirc.parse(text).sweep(omega[:3], method="nodal", refine=refine)   # load kernels
+            times[col], s = cpu(lambda r=refine, t=text: mechcirc.parse(t).sweep(
+                omega, method="nodal", refine=r), rep)
+            results[col] = s.K
+            print(f"# {n:,} elements, {col}: {times[col] * 1e3:.1f} ms", file=sys.stderr,
+                  flush=True)                 # what a long run has measured so far
+        _jit.COMPILED = None
+        if spice is not None:
+            lines = spice_lines(ks, ms)
+            t_s, K_sp = cpu(lambda x=lines: spice.ac(x), rep)
+            w_sp = spice.last_omega
+        else:
+            t_s, K_sp, w_sp = np.nan, None, None
+        print(f"| {n:,} | " + " | ".join(f"{times[c] * 1e3:.1f}" for c in cols)
+              + f" | {t_s * 1e3:.1f} | " + " | ".join(f"{times[c] / t_s:.2f}" for c in cols)
+              + " |", flush=True)
+        if n <= args.mp_max:
+            ref = mp_ladder(ks, ms, 1e-3, omega)
+            row = {c: float(np.max(np.abs(K / ref - 1))) for c, K in results.items()}
+            if K_sp is not None:
+                ref_sp = mp_ladder(ks, ms, 1e-3, w_sp)
+                row["libngspice"] = float(np.nanmax(np.abs(K_sp / ref_sp - 1)))
+                row["ngspice NaN"] = int(np.sum(~np.isfinite(K_sp)))
+            errors.append((n, row))
+    if errors:
+        print("\nlargest relative error of K against mpmath (40 digits):")
+        for n, row in errors:
+            print(f"  {n:,} elements: " + ", ".join(
+                f"{k} {v:.1e}" if isinstance(v, float) else f"{k} {v}" for k, v in row.items()))
+    print(f"# load {os.getloadavg()[0]:.1f}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
