@@ -37,7 +37,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 NETLIST = "netlists/stb_heald.mcir"
-SWEEP = ["sweep", NETLIST, "--omega-min", "10", "--omega-max", "1000", "--points", "400"]
+SWEEP = ["sweep", NETLIST, "--omega-min", "10", "--omega-max", "10000", "--points", "400",
+         "--log"]
 
 
 def cases(tmp: Path) -> list[tuple[str, list[str], float | None]]:
@@ -47,8 +48,10 @@ def cases(tmp: Path) -> list[tuple[str, list[str], float | None]]:
         ("python -c pass (floor)", ["-c", "pass"], None),
         ("python -c 'import numpy' (floor)", ["-c", "import numpy"], None),
         ("mechcirc --help", m + ["--help"], 0.15),
-        ("mechcirc sweep stb_heald, 400 points", m + SWEEP, 0.3),
-        ("  ... with a PNG", m + SWEEP + ["--plot", str(tmp / "sweep.png")], 1.0),
+        ("mechcirc sweep stb_heald, 400 points, CSV", m + SWEEP + ["-o", str(tmp / "x.csv")],
+         0.3),
+        ("  ... with a PNG", m + SWEEP + ["-o", str(tmp / "x.csv"), "--plot",
+                                          str(tmp / "sweep.png")], 1.0),
     ]
 
 

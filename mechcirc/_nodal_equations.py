@@ -51,8 +51,12 @@ class NodalSystem:
         The elements that carry force.
     unloaded : tuple of str
         Elements and levers on no path between the drive's nodes.
+    n : int
+        Number of unknowns (also :attr:`size`).
     M, D, Ks, C : scipy.sparse.csr_matrix, shape (n, n)
-        Mass [kg], damping [N·s/m], stiffness [N/m] and lever matrices.
+        Mass [kg], damping [N·s/m], stiffness [N/m] and lever matrices, built
+        from ``stamps`` on first use (scipy is imported only then; the dense
+        arrays of small systems come from :meth:`dense` without it).
     a, b : int
         Indices of the drive's nodes, −1 for the reference node.
     stamps : dict
@@ -64,10 +68,7 @@ class NodalSystem:
     levers: tuple[Lever, ...]
     elements: tuple[Element, ...]
     unloaded: tuple[str, ...]
-    M: Any
-    D: Any
-    Ks: Any
-    C: Any
+    n: int
     a: int
     b: int
     stamps: dict
@@ -75,7 +76,76 @@ class NodalSystem:
     @property
     def size(self) -> int:
         """Number of unknowns (node velocities and lever forces)."""
-        return self.M.shape[0]
+        return self.n
+
+    M = property(lambda self: self.sparse("mass"), doc="Mass matrix [kg] (sparse).")
+    D = property(lambda self: self.sparse("damper"), doc="Damping matrix [N·s/m] (sparse).")
+    Ks = property(lambda self: self.sparse("spring"), doc="Stiffness matrix [N/m] (sparse).")
+    C = property(lambda self: self.sparse("lever"), doc="Lever matrix (sparse).")
+
+    def sparse(self, kind: str) -> Any:
+        """The matrix of ``kind`` (one of :data:`KINDS`) as a ``scipy.sparse.csr_matrix``.
+
+        Parameters
+        ----------
+        kind : str
+            ``"mass"``, ``"damper"``, ``"spring"`` or ``"lever"``.
+
+        Returns
+        -------
+        scipy.sparse.csr_matrix
+            Shape (n, n), the stamps summed; built once.
+        """
+        def build(system):
+            import scipy.sparse as sp
+
+            r, c, v = system.stamps[kind]
+            return sp.csr_matrix((v, (r, c)), shape=(system.n, system.n))
+
+        return self.cached("_sparse_" + kind, build)
+
+    def dense(self, kind: str) -> NDArray[np.float64]:
+        """The matrix of ``kind`` as a dense array, without scipy (small systems).
+
+        The stamps are summed in their order, as the sparse matrix sums them.
+
+        Parameters
+        ----------
+        kind : str
+            ``"mass"``, ``"damper"``, ``"spring"`` or ``"lever"``.
+
+        Returns
+        -------
+        ndarray, shape (n, n)
+            Equal to ``self.sparse(kind).toarray()``; built once.
+        """
+        def build(system):
+            r, c, v = system.stamps[kind]
+            out = np.zeros((system.n, system.n))
+            np.add.at(out, (np.asarray(r, dtype=np.intp), np.asarray(c, dtype=np.intp)),
+                      np.asarray(v, dtype=float))
+            return out
+
+        return self.cached("_dense_" + kind, build)
+
+    def diagonal(self, kind: str) -> NDArray[np.float64]:
+        """The diagonal of the matrix of ``kind``, summed from the stamps without scipy.
+
+        Parameters
+        ----------
+        kind : str
+            ``"mass"``, ``"damper"``, ``"spring"`` or ``"lever"``.
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            Equal to ``self.sparse(kind).diagonal()``.
+        """
+        r, c, v = (np.asarray(x) for x in self.stamps[kind])
+        on = r == c
+        out = np.zeros(self.n)
+        np.add.at(out, r[on].astype(np.intp), v[on].astype(float))
+        return out
 
     def cached(self, key: str, build):
         """``build(self)``, built once per system and kept beside the fields under ``key``."""
@@ -144,8 +214,6 @@ def assemble(circuit: Circuit, whole: bool = False) -> NodalSystem:
     nodes = tuple(n for n in names if n != reference)
     index = {n: i for i, n in enumerate(nodes)}
     index[reference] = -1
-    import scipy.sparse as sp
-
     n = len(nodes) + len(levers)
     triplets: dict[str, tuple[list, list, list]] = {k: ([], [], []) for k in KINDS}
     for kind, row, col, sign, source, ratio in stamps(elements, levers, index):
@@ -154,10 +222,8 @@ def assemble(circuit: Circuit, whole: bool = False) -> NodalSystem:
         cols.append(col)
         vals.append(sign * (source.ratio if ratio else 1.0) if kind == "lever"
                     else sign * source.value * source.eta)
-    M, D, Ks, C = (sp.csr_matrix((v, (r, c)), shape=(n, n))
-                   for r, c, v in (triplets[k] for k in KINDS))
     stamped = {kind: tuple(np.asarray(a) for a in t) for kind, t in triplets.items()}
-    return NodalSystem(nodes, levers, elements, unloaded, M, D, Ks, C,
+    return NodalSystem(nodes, levers, elements, unloaded, n,
                        index.get(d.n1, -1) if d else -1, index.get(d.n2, -1) if d else -1,
                        stamped)
 
@@ -267,8 +333,8 @@ def dense_matrices(system: NodalSystem, omega: ArrayLike) -> NDArray[np.complex1
     """
     omega = np.asarray(omega)
     omega = omega.astype(complex if np.iscomplexobj(omega) else float).reshape(-1, 1, 1)
-    dc = (system.D + system.C).toarray()
-    return combine(dc, system.M.toarray(), system.Ks.toarray(), omega)
+    dc = system.dense("damper") + system.dense("lever")
+    return combine(dc, system.dense("mass"), system.dense("spring"), omega)
 
 
 def held(system: NodalSystem) -> NodalSystem:
@@ -290,8 +356,6 @@ def held(system: NodalSystem) -> NodalSystem:
     NodalSystem
         One unknown larger, driven at q.
     """
-    import scipy.sparse as sp
-
     n = system.size
     rows, cols, vals = (list(v) for v in system.stamps["lever"])
     for i, s in ((system.a, 1.0), (system.b, -1.0)):
@@ -302,8 +366,6 @@ def held(system: NodalSystem) -> NodalSystem:
     stamped = dict(system.stamps)
     stamped["lever"] = (np.asarray(rows, dtype=int), np.asarray(cols, dtype=int),
                         np.asarray(vals, dtype=float))
-    grow = [sp.csr_matrix((v, (r, c)), shape=(n + 1, n + 1))
-            for r, c, v in (stamped[k] for k in KINDS)]
     return NodalSystem(system.nodes, system.levers, system.elements, system.unloaded,
-                       grow[0], grow[1], grow[2], grow[3], n, -1, stamped)
+                       n + 1, n, -1, stamped)
 

@@ -215,8 +215,8 @@ class DenseSolver:
     kind = "dense"
 
     def __init__(self, system: NodalSystem):
-        self.dc = (system.D + system.C).toarray()
-        self.m, self.k = system.M.toarray(), system.Ks.toarray()
+        self.dc = system.dense("damper") + system.dense("lever")
+        self.m, self.k = system.dense("mass"), system.dense("spring")
         n = system.size
         self.max_chunk = max(1, _CHUNK_BYTES // (16 * n * n))
 

@@ -634,7 +634,8 @@ def require_nonsingular(system: NodalSystem) -> None:
     trial = [0.731 * scale, 1.913 * scale]
     judged, overflow = None, False
     if system.size <= DENSE_LIMIT:
-        absdiag = [np.abs(p.diagonal()) for p in (system.D + system.C, system.M, system.Ks)]
+        absdiag = [np.abs(system.diagonal("damper") + system.diagonal("lever")),
+                   np.abs(system.diagonal("mass")), np.abs(system.diagonal("spring"))]
         for w, A in zip(trial, dense_matrices(system, trial)):
             if not np.isfinite(A).all():
                 return          # values at float64's edge: the sweep flags such points
@@ -679,7 +680,7 @@ def require_nonsingular(system: NodalSystem) -> None:
 def _frequency_scale(system: NodalSystem) -> float:
     """A characteristic ω [rad/s] of the system: sqrt(trace Kₛ / trace M), or 1."""
     # Sum after scaling by the largest entry: masses near 1e308 would overflow.
-    dm, dk = np.abs(system.M.diagonal()), np.abs(system.Ks.diagonal())
+    dm, dk = np.abs(system.diagonal("mass")), np.abs(system.diagonal("spring"))
     if dm.size and dm.max() > 0 and dk.max() > 0:
         mm, mk = dm.max(), dk.max()
         with np.errstate(all="ignore"):

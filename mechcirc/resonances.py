@@ -12,7 +12,8 @@ Method.  The nodal matrices give the quadratic eigenproblem
 drive constraint v_a = v_b) imposed exactly by projecting onto their null
 space.  Undamped networks: massless directions are condensed out statically
 (exact) and the symmetric problem Kₛ v = ω² M v is solved by
-``scipy.linalg.eigvalsh`` (error bound eps·λ_max/λ, Weyl).  Damped networks:
+``numpy.linalg.eigvalsh`` (error bound eps·λ_max/λ, Weyl; small networks need
+no scipy).  Damped networks:
 the problem is linearised to a 2n generalised eigenproblem solved by QZ
 (``scipy.linalg.eig``); s = −ζωₙ ± jωₙ√(1 − ζ²).  Networks above the dense
 limits are solved in a band ``omega_max``: undamped ones by counting the
@@ -40,7 +41,6 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
-import scipy.linalg as la
 
 from .circuit import Circuit
 from .errors import InputError, NetlistError, SolverError
@@ -198,7 +198,10 @@ def resonance_pairs(circuit: Circuit, omega_max: float | None = None,
             f"{len(system.unloaded)} element(s) lie on no path between the drive's nodes "
             f"{d.n1!r} and {d.n2!r} and carry no force: {', '.join(system.unloaded)}",
             UnloadedElementWarning, stacklevel=3)
-    M, D, Ks, G_released, G_held, damped = pencil(system)
+    from .nodal import DENSE_LIMIT
+
+    # Small networks: dense matrices from the stamps, and no scipy for undamped ones.
+    M, D, Ks, G_released, G_held, damped = pencil(system, dense=system.size <= DENSE_LIMIT)
     released, v_released = _modes(M, D, Ks, G_released, damped, omega_max, vectors)
     held, v_held = _modes(M, D, Ks, G_held, damped, omega_max, vectors)
     keep_h, keep_r = _cancel(held, released)
@@ -224,50 +227,73 @@ def _repeats(s: np.ndarray, i: int) -> bool:
     return int(np.count_nonzero(np.abs(s - s[i]) <= 1e-9 * abs(s[i]))) > 1
 
 
-def pencil(system) -> tuple:
+def pencil(system, dense: bool = False) -> tuple:
     """``(M, D, Kₛ, G_released, G_held, damped)``: the node blocks of the nodal
-    matrices (sparse) and the constraint rows (dense) of the two eigenproblems —
-    the lever constraints, and for the held drive also v_a − v_b = 0."""
+    matrices (sparse; dense arrays with ``dense``) and the constraint rows (dense)
+    of the two eigenproblems — the lever constraints, and for the held drive also
+    v_a − v_b = 0."""
     n_nodes = len(system.nodes)
     # Lever constraints are the rows of C below the node block; the lever forces
     # themselves drop out once the velocities are confined to the constraints' null space.
-    G_levers = system.C[n_nodes:, :n_nodes].toarray()
-    M, D, Ks = (X[:n_nodes, :n_nodes] for X in (system.M, system.D, system.Ks))
+    if dense:
+        G_levers = system.dense("lever")[n_nodes:, :n_nodes]
+        M, D, Ks = (system.dense(k)[:n_nodes, :n_nodes] for k in ("mass", "damper", "spring"))
+    else:
+        G_levers = system.C[n_nodes:, :n_nodes].toarray()
+        M, D, Ks = (X[:n_nodes, :n_nodes] for X in (system.M, system.D, system.Ks))
     drive_row = np.zeros((1, n_nodes))
     if system.a >= 0:
         drive_row[0, system.a] = 1.0
     if system.b >= 0:
         drive_row[0, system.b] = -1.0
-    damped = D.nnz > 0 and bool(np.any(D.data))
+    damped = bool(np.any(D)) if dense else D.nnz > 0 and bool(np.any(D.data))
     return M, D, Ks, G_levers, np.vstack([G_levers, drive_row]), damped
 
 
-def constraint_basis(G: np.ndarray, n: int):
+def constraint_basis(G: np.ndarray, n: int, dense: bool = False):
     """A basis Z (sparse, n × (n − rank G)) of the null space of the constraint rows ``G``.
 
     Each constraint eliminates one unknown (pivot chosen by a column-pivoted
     QR of G), so Z is the identity with the eliminated unknowns expressed in
-    the others: projections Zᵀ X Z stay sparse and cheap.
+    the others: projections Zᵀ X Z stay sparse and cheap.  With ``dense``, Z is
+    a dense array; a single row (the drive's constraint, no levers) is then
+    eliminated without scipy: its pivot is the entry of largest magnitude, as
+    the pivoted QR chooses it.
     """
-    import scipy.sparse as sp
-
     if G.shape[0] == 0:
+        if dense:
+            return np.eye(n)
+        import scipy.sparse as sp
+
         return sp.identity(n, format="csr")
-    _, r, perm = la.qr(G, mode="economic", pivoting=True)
-    rank = int(np.sum(np.abs(np.diag(r)) > 1e-12 * np.abs(r).max()))
+    if dense and G.shape[0] == 1:
+        perm = np.argsort(-np.abs(G[0]), kind="stable")
+        rank = int(abs(G[0, perm[0]]) > 0)
+    else:
+        import scipy.linalg as la
+
+        _, r, perm = la.qr(G, mode="economic", pivoting=True)
+        rank = int(np.sum(np.abs(np.diag(r)) > 1e-12 * np.abs(r).max()))
     pivots = np.sort(perm[:rank])
-    free = np.setdiff1d(np.arange(n), pivots)
-    if free.size == 0:
-        return sp.csr_matrix((n, 0))
+    keep = np.ones(n, dtype=bool)
+    keep[pivots] = False
+    free = np.flatnonzero(keep)       # not setdiff1d: its np.unique imports numpy.ma
     # G_p v_p + G_f v_f = 0  ->  v_p = -G_p⁺ G_f v_f (exact for consistent constraints)
     Gp, Gf = G[:, pivots], G[:, free]
-    elim = -la.lstsq(Gp, Gf)[0]
+    # rcond: scipy's lstsq default (eps), which this used before.
+    elim = -np.linalg.lstsq(Gp, Gf, rcond=np.finfo(float).eps)[0] if free.size \
+        else np.zeros((rank, 0))
     rows, cols = np.nonzero(elim)
     r = np.concatenate([free, pivots[rows]])
     c = np.concatenate([np.arange(free.size), cols])
     v = np.concatenate([np.ones(free.size), elim[rows, cols]])
-    Z = sp.csr_matrix((v, (r, c)), shape=(n, free.size))
-    return Z
+    if dense:
+        Z = np.zeros((n, free.size))
+        Z[r, c] = v
+        return Z
+    import scipy.sparse as sp
+
+    return sp.csr_matrix((v, (r, c)), shape=(n, free.size))
 
 
 def _modes(M, D, Ks, G, damped: bool, omega_max=None, vectors: bool = False):
@@ -291,9 +317,10 @@ def _modes_unchecked(M, D, Ks, G, damped: bool, omega_max=None, vectors: bool = 
     by shift-invert Arnoldi (:func:`_band_modes`, no vectors); without a band
     they are refused.
     """
-    Z = constraint_basis(G, M.shape[0])
+    dense = isinstance(M, np.ndarray)
+    Z = constraint_basis(G, M.shape[0], dense=dense)
     limit = MAX_UNKNOWNS_DAMPED if damped else MAX_UNKNOWNS
-    if Z.shape[1] > limit:
+    if Z.shape[1] > limit and not dense:
         if omega_max is not None and math.isfinite(omega_max) and omega_max > 0:
             with np.errstate(all="ignore"):
                 Mr, Dr, Kr = ((Z.T @ X @ Z).tocsc() for X in (M, D, Ks))
@@ -304,7 +331,8 @@ def _modes_unchecked(M, D, Ks, G, damped: bool, omega_max=None, vectors: bool = 
             "unless a band omega_max is given; give omega_max, sweep K(ω) instead, or "
             "reduce the network", status="size")
     with np.errstate(all="ignore"):
-        Mr, Dr, Kr = ((Z.T @ X @ Z).toarray() for X in (M, D, Ks))
+        Mr, Dr, Kr = ((Z.T @ X @ Z) if dense else (Z.T @ X @ Z).toarray()
+                      for X in (M, D, Ks))
     if Mr.shape[0] == 0:
         return np.zeros((0, 3), dtype=complex), np.zeros((M.shape[0], 0)) if vectors else None
     if not (np.isfinite(Mr).all() and np.isfinite(Dr).all() and np.isfinite(Kr).all()):
@@ -534,7 +562,7 @@ def _undamped(M: np.ndarray, K: np.ndarray, vectors: bool = False) -> tuple:
         mu = np.diag(M)
         V = None
     else:
-        mu, V = la.eigh(M)
+        mu, V = np.linalg.eigh(M)
     massive = mu > 1e-13 * max(mu.max(initial=0.0), 1e-300)
     direct = V is None and bool(massive.all())
     none = (np.zeros(0), direct, np.zeros((M.shape[0], 0)) if vectors else None)
@@ -547,18 +575,18 @@ def _undamped(M: np.ndarray, K: np.ndarray, vectors: bool = False) -> tuple:
     else:
         R, N = V[:, massive], V[:, ~massive]
         Krr, Knn, Knr = R.T @ K @ R, N.T @ K @ N, N.T @ K @ R
-    X = la.lstsq(Knn, Knr)[0] if Knn.size else np.zeros((0, Krr.shape[0]))
+    X = np.linalg.lstsq(Knn, Knr, rcond=np.finfo(float).eps)[0] if Knn.size else np.zeros((0, Krr.shape[0]))
     Kc = Krr - Knr.T @ X
     if Kc.shape[0] == 0:
         return none
     # Symmetric scaling by the masses gives a standard symmetric eigenproblem.
     d = 1.0 / np.sqrt(mu[massive])
     A = Kc * d[:, None] * d[None, :]
-    lam = la.eigvalsh((A + A.T) / 2)
+    lam = np.linalg.eigvalsh((A + A.T) / 2)
     if not vectors:
         return lam, direct, None
     # The vectors by their own call: the roots stay those find_resonances reports, to the bit.
-    Y = la.eigh((A + A.T) / 2, driver="evd")[1]      # divide and conquer: the fastest here
+    Y = np.linalg.eigh((A + A.T) / 2)[1]      # divide and conquer (LAPACK syevd)
     Ur = Y * d[:, None]
     Un = -X @ Ur                     # the massless directions follow statically
     if V is None:
@@ -578,7 +606,9 @@ def _damped(M, D, K, vectors: bool = False) -> tuple:
     eye, zero = np.eye(n), np.zeros((n, n))
     A = np.block([[zero, eye], [-K, -D]])
     B = np.block([[eye, zero], [zero, M]])
-    out = la.eig(A, B, right=vectors, homogeneous_eigvals=True)
+    from scipy.linalg import eig            # QZ: numpy has no generalised eig
+
+    out = eig(A, B, right=vectors, homogeneous_eigvals=True)
     alpha, beta = out[0] if vectors else out
     finite = np.abs(beta) > 1e-12 * np.abs(alpha)
     s = alpha[finite] / beta[finite]

@@ -218,3 +218,97 @@ def test_the_kernel_decision_counts_the_plan_without_building_it():
                           mechcirc.parse("drive V a 0 velocity=1\nlever L a 0 b 0 ratio=0.5\n"
                                          "spring k b 0 100\nmass m a 0 1\n")]:
         assert _tree_eval._plan_size(c.tree) == _tree_eval.plan(c.tree).kind.size
+
+
+def _cli_modules(tmp_path, *extra):
+    """The modules a ``mechcirc sweep`` of the bundled netlist loaded, and its output."""
+    argv = ["mechcirc", "sweep", str(STB), "--omega-min", "10", "--omega-max", "10000",
+            "--points", "400", "--log", "-o", str(tmp_path / "x.csv"), *extra]
+    code = ("import sys, json, runpy\n"
+            f"sys.argv = {argv!r}\n"
+            "try:\n    runpy.run_module('mechcirc', run_name='__main__')\n"
+            "except SystemExit as e:\n    status = e.code\n"
+            "print(json.dumps([status, sorted(sys.modules)]))\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, cwd=ROOT, timeout=600)
+    *shown, last = out.stdout.splitlines()
+    status, modules = json.loads(last)
+    return status, set(modules), "\n".join(shown)
+
+
+def test_the_sweep_command_with_its_exact_peak_loads_no_scipy(tmp_path):
+    status, modules, shown = _cli_modules(tmp_path)
+    assert status == 0
+    # The exact peak was computed (the resonances), with numpy only.
+    assert "undamped resonance at omega = 706.4543132, 915.0454617, 3641.187913" in shown
+    tops = {m.split(".")[0] for m in modules}
+    assert not tops & {"scipy", "matplotlib", "pandas", "networkx"}, tops
+    assert "numpy.ma" not in modules        # np.unique / setdiff1d would import it
+
+
+def test_the_sweep_plot_uses_no_pyplot_and_no_scipy(tmp_path):
+    status, modules, _ = _cli_modules(tmp_path, "--plot", str(tmp_path / "x.png"))
+    assert status == 0 and (tmp_path / "x.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert "matplotlib.backends.backend_agg" in modules
+    assert not {"matplotlib.pyplot", "scipy"} & modules
+
+
+def _systems():
+    from mechcirc import nodal
+
+    for c in _corpus():
+        s = nodal.assemble(c)
+        yield s
+        yield nodal.held(s)
+        yield nodal.assemble(c, whole=True)
+
+
+def test_the_scipy_free_dense_matrices_are_the_sparse_ones():
+    from mechcirc.nodal import KINDS
+
+    n_lever = 0
+    for s in _systems():
+        n_lever += bool(len(s.stamps["lever"][0]))
+        for k in KINDS:
+            # Summed in the same order: equal to the bit (sign of zero aside).
+            assert np.array_equal(s.dense(k), s.sparse(k).toarray())
+            assert np.array_equal(s.diagonal(k), s.sparse(k).diagonal())
+        assert s.size == s.M.shape[0] == s.dense("mass").shape[0]
+    assert n_lever >= 3                       # the corpus has levers, and held systems
+
+
+def test_the_scipy_free_constraint_basis_is_the_pivoted_qr_one():
+    from mechcirc.resonances import constraint_basis
+
+    rng = np.random.default_rng(7)
+    rows = [np.array([[1.0, 0, -1, 0]]), np.array([[0, -1.0, 0, 1]]),
+            np.array([[0.0, 0, 0, 0]]), np.array([[0.0, 1, 0, 0]])]
+    rows += [np.where(rng.random((1, 6)) < 0.4, 0.0, rng.standard_normal((1, 6)))
+             for _ in range(30)]
+    rows += [np.round(rng.standard_normal((1, 5)), 1) for _ in range(30)]    # ties
+    for G in rows + [np.zeros((0, 4))]:
+        n = G.shape[1]
+        Zd, Zs = constraint_basis(G, n, dense=True), constraint_basis(G, n).toarray()
+        assert Zd.shape == Zs.shape and np.array_equal(Zd, Zs), G
+        if Zd.size:
+            assert np.abs(G @ Zd).max(initial=0.0) <= 1e-15 * np.abs(G).max(initial=1.0)
+
+
+def test_small_undamped_resonances_without_scipy_agree_with_the_sparse_path(monkeypatch):
+    from mechcirc import nodal
+    from mechcirc.resonances import find_resonances
+
+    compared = 0
+    for c in _corpus():
+        if any(e.kind == "damper" for e in c.elements) or c.nodal.size > nodal.DENSE_LIMIT:
+            continue
+        dense = find_resonances(c)
+        with monkeypatch.context() as m:
+            m.setattr(nodal, "DENSE_LIMIT", -1)          # the sparse (scipy) pencil
+            ref = find_resonances(c)
+        assert [r.kind for r in dense] == [r.kind for r in ref]
+        for a, b in zip(dense, ref):
+            # Both are polished on K; they differ only by where polishing started.
+            assert abs(a.omega - b.omega) <= (a.error + b.error) * b.omega, (a, b)
+        compared += len(ref)
+    assert compared >= 20

@@ -390,6 +390,14 @@ def save_figure(fig, path, into=None, tight: bool = True) -> None:
     fmt = Path(path).suffix.lstrip(".").lower() or "png"
     if fmt not in PLOT_FORMATS:     # commands check first; this guards any that forget
         check_output_paths(plots=(path,))
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    if fmt == "png" and type(fig.canvas) is FigureCanvasBase:
+        # The Agg canvas at once (no pyplot, no backend switch): a command's figure
+        # is a bare Figure, saved once.
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+        FigureCanvasAgg(fig)
     if into is not None:
         fig.savefig(into, format=fmt, dpi=120, bbox_inches="tight" if tight else None)
         return
