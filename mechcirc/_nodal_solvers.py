@@ -354,7 +354,8 @@ class SparseSolver:
 
     The choice is made from the pattern alone, so that the same network
     gives the same factorisation, bit for bit, on every run: after a reverse
-    Cuthill–McKee ordering of the (symmetric) pattern, of half band width
+    Cuthill–McKee ordering of the (symmetric) pattern (past :data:`DENSE_LIMIT`
+    unknowns; smaller systems keep their own order), of half band width
     kl, a banded LU with partial pivoting when kl ≤ :data:`BAND_MAX`
     (chains, ladders and narrow strips: the ladder's band is 1 wide) — the
     compiled kernels of :mod:`mechcirc._nodal_kernels` when numba is
@@ -374,15 +375,20 @@ class SparseSolver:
     def __init__(self, pat: Pattern, band_max: int | None = None):
         """``band_max``: the widest band solved as one (default :data:`BAND_MAX`); a
         narrower one given leaves ``kind`` "wide" for wider bands (no SuperLU set up)."""
-        import scipy.sparse as sp
-        from scipy.sparse.csgraph import reverse_cuthill_mckee
-
         self.pat = pat
         n = pat.n
         nnz = pat.indices.size
-        ones = np.ones(nnz)
-        A = sp.csc_matrix((ones, pat.indices, pat.indptr), shape=(n, n))
-        p = np.asarray(reverse_cuthill_mckee(A.tocsr(), symmetric_mode=True))
+        if n <= DENSE_LIMIT:
+            # Small systems keep their own order: no scipy on a sweep's path for
+            # the ordering alone (a command's start-up), and a band that only
+            # an ordering would make narrow is solved densely (solver()).
+            p = np.arange(n)
+        else:
+            import scipy.sparse as sp
+            from scipy.sparse.csgraph import reverse_cuthill_mckee
+
+            A = sp.csr_matrix((np.ones(nnz), pat.indices, pat.indptr), shape=(n, n))
+            p = np.asarray(reverse_cuthill_mckee(A, symmetric_mode=True))
         q = np.empty_like(p)
         q[p] = np.arange(n)
         cols = np.repeat(np.arange(n), np.diff(pat.indptr))
@@ -406,9 +412,11 @@ class SparseSolver:
             chunk = _BAND_BYTES // max(1, 16 * n * self.band_rows)
             self.batch_chunk = chunk if chunk >= BATCH_MIN and n <= DENSE_LIMIT else 0
         else:
+            import scipy.sparse as sp
             from scipy.sparse.linalg import splu
 
             self.kind = "superlu"
+            A = sp.csc_matrix((np.ones(nnz), pat.indices, pat.indptr), shape=(n, n))
             # The ordering depends on the pattern only: find it on a
             # nonsingular matrix of the same pattern (the diagonal does not
             # enter a minimum-degree ordering of Aᵀ + A).
