@@ -529,6 +529,27 @@ def outputs(ts, ys, out, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI):
 
 
 @_jit
+def output_extrema(ts, ys, ext, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI):
+    """The least (row 0) and largest (row 1) of each aux column over the stored states,
+    as :func:`outputs` would give them row by row (a NaN stays NaN)."""
+    n = ys.shape[1]
+    dy = np.empty(n)
+    aux = np.empty(ext.shape[1])
+    work = np.zeros((9, max(FI.shape[0], PRIG.shape[0])))
+    for j in range(ext.shape[1]):
+        ext[0, j] = np.inf
+        ext[1, j] = -np.inf
+    for i in range(ts.shape[0]):
+        rhs(ts[i], ys[i], PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, work)
+        for j in range(ext.shape[1]):
+            v = aux[j]
+            if v < ext[0, j] or v != v:
+                ext[0, j] = v
+            if v > ext[1, j] or v != v:
+                ext[1, j] = v
+
+
+@_jit
 def eval_many(kind, tabs, ti, a, b, c, lo, h, w, qs, out):
     """One function at many coordinates: out[i] = (value, first, second derivative)."""
     for i in range(qs.shape[0]):

@@ -150,7 +150,8 @@ def kernels_for(method):
         from . import _motion_kernels as k
 
         if k.HAVE_NUMBA and (_jit.COMPILED or _jit.in_cache(
-                k.rk4_run, k.outputs, k.eval_many, *((k.rhs,) if method in SCIPY_METHODS else ()))):
+                k.rk4_run, k.outputs, k.output_extrema, k.eval_many,
+                *((k.rhs,) if method in SCIPY_METHODS else ()))):
             return k, "numba"
         if k.HAVE_NUMBA:
             _jit.warm_in_background(_WARM_STATEMENT)
@@ -173,6 +174,7 @@ def _warm_up(model, kern) -> float:
                  model.naux())
     oargs = model.kernel_args(0.0, 1e300, outputs=True)
     kern.outputs(np.zeros(1), np.array([y]), np.empty((1, model.naux())), *oargs)
+    kern.output_extrema(np.zeros(1), np.array([y]), np.empty((2, model.naux())), *oargs)
     _WARM = True
     return time.perf_counter() - t0
 
@@ -519,7 +521,7 @@ def _auto_estimate(model, kern, theta_s, ripple, main, other):
     (None when it diverged) and the estimate: their relative change (None without it)."""
     out, other_ext = _outputs(model, kern, theta_s, ripple, main[0], main[1]), None
     if not isinstance(other, str):
-        other_ext = _extrema(_outputs(model, kern, theta_s, ripple, *other[:2]))
+        other_ext = _output_extrema(model, kern, theta_s, ripple, *other[:2])
     est = None if other_ext is None else _rel_change(_extrema(out), other_ext)
     return out, other_ext, est
 
@@ -568,12 +570,11 @@ def _finish(scene, cfg, model, kern, theta_s, ripple, ts, ys, prev, other, wall,
     extrema = _extrema(out)
     periodicity = None
     if prev is not None:
-        pout = _outputs(model, kern, theta_s, ripple, *prev)
-        periodicity = _rel_change(extrema, _extrema(pout))
+        periodicity = _rel_change(extrema, _output_extrema(model, kern, theta_s, ripple, *prev))
     est = None
     if other is not None and not isinstance(other, str):     # "diverged": no estimate
         if other_extrema is None:
-            other_extrema = _extrema(_outputs(model, kern, theta_s, ripple, other[0], other[1]))
+            other_extrema = _output_extrema(model, kern, theta_s, ripple, other[0], other[1])
         est = _rel_change(extrema, other_extrema)
         bad = bad or other[4]
     crank = crank_angle(model.omega, theta_s, ripple, ts)[0] % scene.cycle
@@ -811,19 +812,25 @@ def _outputs(model, kern, theta_s, ripple, ts, ys):
     args = model.kernel_args(theta_s, 1e300, outputs=True, ripple=ripple)
     out = np.empty((ts.size, model.naux()))
     kern.outputs(np.ascontiguousarray(ts), np.ascontiguousarray(ys), out, *args)
-    nb, ne, nm = len(model.bodies), len(model.elements), len(model.moments)
-    vals = {}
-    for i, b in enumerate(model.bodies):
-        vals[f"{b}.acceleration"] = out[:, i].copy()
-    for i, e in enumerate(model.elements):
-        vals[f"{e}.force"] = out[:, nb + i].copy()
-    for i, e in enumerate(model.elements):
-        vals[f"{e}.deformation"] = out[:, nb + ne + i].copy()
-    vals["drive.moment"] = out[:, nb + 2 * ne].copy()
-    for i, m in enumerate(model.moments):
-        vals[f"{m}.moment"] = out[:, nb + 2 * ne + 1 + i].copy()
-    del nm
-    return vals
+    return {name: out[:, j].copy() for j, name in enumerate(_aux_names(model))}
+
+
+def _output_extrema(model, kern, theta_s, ripple, ts, ys):
+    """``_extrema(_outputs(...))`` of a run, evaluated in the kernel without the tables."""
+    args = model.kernel_args(theta_s, 1e300, outputs=True, ripple=ripple)
+    ext = np.empty((2, model.naux()))
+    kern.output_extrema(np.ascontiguousarray(ts), np.ascontiguousarray(ys), ext, *args)
+    return {name: (float(ext[0, j]), float(ext[1, j]))
+            for j, name in enumerate(_aux_names(model))}
+
+
+def _aux_names(model):
+    """The names of the kernel's output columns, in order (the last, the out-of-range
+    flag, has none)."""
+    return ([f"{b}.acceleration" for b in model.bodies]
+            + [f"{e}.force" for e in model.elements]
+            + [f"{e}.deformation" for e in model.elements] + ["drive.moment"]
+            + [f"{m}.moment" for m in model.moments])
 
 
 def _rel_change(a: dict, b: dict) -> float:
