@@ -543,9 +543,9 @@ def output_extrema(ts, ys, ext, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRI
         rhs(ts[i], ys[i], PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, work)
         for j in range(ext.shape[1]):
             v = aux[j]
-            if v < ext[0, j] or v != v:
+            if v < ext[0, j] or math.isnan(v):
                 ext[0, j] = v
-            if v > ext[1, j] or v != v:
+            if v > ext[1, j] or math.isnan(v):
                 ext[1, j] = v
 
 
