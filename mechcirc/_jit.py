@@ -51,8 +51,10 @@ def decorators(force_python: bool = False, nrt: bool = True):
         except ImportError:          # the "fast" extra is not installed
             pass
         else:
+            flags = {} if nrt else {"_nrt": False}
+
             def jit(fn):
-                return njit(cache=True, error_model="numpy", _nrt=nrt)(fn)
+                return njit(cache=True, error_model="numpy", **flags)(fn)
 
             def jit_inline(fn):
                 return njit(cache=True, error_model="numpy", inline="always")(fn)

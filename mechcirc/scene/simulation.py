@@ -300,7 +300,9 @@ def simulate_scene(scene: Scene, *, omega: float | None = None, revolutions: int
         Crank speed [rad/s], revolutions, start angle [deg], RK4 steps per period of
         the fastest mode, output points per revolution (defaults above).
     method, rtol : optional
-        ``"rk4"`` (numba when importable), ``"rk4-python"``, or scipy's ``"DOP853"``,
+        ``"rk4"`` (numba when importable), ``"rk4-python"``, ``"rk8"`` (the 8th-order
+        formula of DOP853 at a fixed step, the same stepper: 8 steps per period of the
+        fastest mode, or 16 when the estimate at 8 exceeds the goal), or scipy's ``"DOP853"``,
         ``"RK45"``, ``"LSODA"`` at relative tolerance ``rtol`` (default 1e-10; the
         same right-hand side, in the deviations from the rigid motion so that the
         tolerance applies to the deformations).
