@@ -37,16 +37,24 @@ def _identity(fn):
     return fn
 
 
-def decorators(force_python: bool = False):
-    """``(have_numba, jit, jit_inline)`` for a kernel module."""
+def decorators(force_python: bool = False, nrt: bool = True):
+    """``(have_numba, jit, jit_inline)`` for a kernel module.
+
+    ``nrt=False``: for a kernel that allocates nothing and only reads and writes the
+    arrays it is given (a right-hand side called millions of times): compiled without
+    numba's reference counting, which otherwise costs an atomic increment and decrement
+    of every array argument on every call (half the time of the scene's right-hand side).
+    """
     if not force_python:
         try:
             from numba import njit
         except ImportError:          # the "fast" extra is not installed
             pass
         else:
+            flags = {} if nrt else {"_nrt": False}
+
             def jit(fn):
-                return njit(cache=True, error_model="numpy")(fn)
+                return njit(cache=True, error_model="numpy", **flags)(fn)
 
             def jit_inline(fn):
                 return njit(cache=True, error_model="numpy", inline="always")(fn)

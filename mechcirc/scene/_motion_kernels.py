@@ -38,6 +38,8 @@ from .._ode import record_hermite
 from ..transient._kernels import elasto_backlash
 
 HAVE_NUMBA, _jit, _jit_inline = decorators(bool(globals().get("_FORCE_PYTHON")))
+# the kernels that allocate nothing, called per step or per evaluation: no reference counting
+_leaf = decorators(bool(globals().get("_FORCE_PYTHON")), nrt=False)[1]
 
 TWO_PI = 2.0 * math.pi
 # function columns: FI = [kind, part, table]; FF = [a, b, c, lo, h, w]
@@ -115,7 +117,7 @@ def force_law(law, k, d, cl, e, edot):
     return d * edot
 
 
-@_jit
+@_leaf
 def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, work):
     """Derivatives of y = [q_1..q_n, q̇_1..q̇_n] into dy; outputs into aux.
 
@@ -283,7 +285,7 @@ def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, wo
     aux[nb + 2 * ne + 1 + nmo] = bad
 
 
-@_jit
+@_leaf
 def regions(FI, EI, EF, MOI, MOF, aux, work, off, reg, sw):
     """The smooth piece each force law is on, from the last right-hand side evaluated
     (``aux``, ``work``): reg[e] = −1, 0 (inside the gap), +1 for an element with a clearance
@@ -328,29 +330,33 @@ def edge_gap(i, ne, r0, r1, v, EF, MOF):
     return v - TWO_PI * math.floor(v / TWO_PI) - MOF[i - ne, 1]
 
 
-@_jit
-def rk4_step(t, hh, y, k1, k2, k3, k4, tmp, ynew, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF,
-             PRIG, BI, aux, work):
-    """One classical RK4 step of size hh from (t, y, k1 = f(y)) into ynew; k4 = f(ynew) and
-    aux are left at ynew."""
+@_leaf
+def rk_step(t, hh, y, K, tmp, ynew, TA, TB, TC, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF,
+            PRIG, BI, aux, work):
+    """One explicit Runge-Kutta step of size hh from (t, y, K[0] = f(y)) into ynew, with the
+    Butcher tableau (TA, TB, TC) of s stages (RK4, or the 8th-order one of DOP853 run at a
+    fixed step); K[1 .. s-1] the stages, K[s] = f(ynew) and aux are left at ynew."""
     n = y.shape[0]
-    half = 0.5 * hh
-    for i in range(n):
-        tmp[i] = y[i] + half * k1[i]
-    rhs(t + half, tmp, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, k2, aux, work)
-    for i in range(n):
-        tmp[i] = y[i] + half * k2[i]
-    rhs(t + half, tmp, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, k3, aux, work)
-    for i in range(n):
-        tmp[i] = y[i] + hh * k3[i]
-    rhs(t + hh, tmp, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, k4, aux, work)
-    sixth = hh / 6.0
-    for i in range(n):
-        ynew[i] = y[i] + sixth * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i])
-    rhs(t + hh, ynew, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, k4, aux, work)
+    s = TB.shape[0]
+    for i in range(1, s):
+        for m in range(n):
+            acc = 0.0
+            for j in range(i):
+                if TA[i, j] != 0.0:
+                    acc += TA[i, j] * K[j, m]
+            tmp[m] = y[m] + hh * acc
+        rhs(t + TC[i] * hh, tmp, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, K[i],
+            aux, work)
+    for m in range(n):
+        acc = 0.0
+        for j in range(s):
+            if TB[j] != 0.0:
+                acc += TB[j] * K[j, m]
+        ynew[m] = y[m] + hh * acc
+    rhs(t + hh, ynew, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, K[s], aux, work)
 
 
-@_jit
+@_leaf
 def locate(t, hh, y, k1, ynew, k4, tmp, dy, sw0, sw1, reg, regn, PV, FI, FF, tabs, MI_, MW,
            EI, EF, MOI, MOF, PRIG, BI, aux, work, off):
     """Earliest fraction s ∈ (0, 1] of the step at which a force law changes piece
@@ -409,23 +415,29 @@ def locate(t, hh, y, k1, ynew, k4, tmp, dy, sw0, sw1, reg, regn, PV, FI, FF, tab
     return best, count
 
 
+#: The classical RK4 tableau (A, b, c), for :func:`rk4_run`.
+RK4_A = np.array([[0.0, 0.0, 0.0, 0.0], [0.5, 0.0, 0.0, 0.0], [0.0, 0.5, 0.0, 0.0],
+                  [0.0, 0.0, 1.0, 0.0]])
+RK4_B = np.array([1.0 / 6.0, 1.0 / 3.0, 1.0 / 3.0, 1.0 / 6.0])
+RK4_C = np.array([0.0, 0.5, 0.5, 1.0])
+
+
 @_jit
-def rk4_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_, MW, EI,
-            EF, MOI, MOF, PRIG, BI, naux):
-    """``nsteps`` classical RK4 steps of h from t0 (y in place); cubic Hermite output, as the
-    sley's.  A step in which a force law changes piece (an element crosses an edge of its
-    clearance gap, a moment's window opens or closes: a kink of the force) is cut where it
-    happens (:func:`locate`) and finished from there, at most 8 pieces per step, so that RK4
-    keeps its order through impacts and the beat-up.
+def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_, MW, EI,
+           EF, MOI, MOF, PRIG, BI, naux, TA, TB, TC):
+    """``nsteps`` explicit Runge-Kutta steps of h from t0 (y in place) with the tableau (TA, TB,
+    TC) (:func:`rk_step`); cubic Hermite output, as the sley's.  A step in which a force law
+    changes piece (an element crosses an edge of its clearance gap, a moment's window opens
+    or closes: a kink of the force) is cut where it happens (:func:`locate`) and finished
+    from there, at most 8 pieces per step, so that the method keeps its order through
+    impacts and the beat-up.
 
     Returns (time reached, outputs written, no blow-up, out-of-range seen, right-hand-side
     evaluations).
     """
     n = y.shape[0]
-    k1 = np.empty(n)
-    k2 = np.empty(n)
-    k3 = np.empty(n)
-    k4 = np.empty(n)
+    s = TB.shape[0]
+    K = np.zeros((s + 1, n))
     tmp = np.empty(n)
     ynew = np.empty(n)
     aux = np.empty(naux)
@@ -442,7 +454,7 @@ def rk4_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI
     bad = 0.0
     npart = PRIG.shape[0]
     limit = PV[2]
-    rhs(t0, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, k1, aux, work)
+    rhs(t0, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, K[0], aux, work)
     gaps = regions(FI, EI, EF, MOI, MOF, aux, work, off, reg, sw0)
     for step in range(nsteps):
         t = t0 + step * h
@@ -450,9 +462,9 @@ def rk4_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI
         tc = t
         for sub in range(8):
             hh = t_end - tc
-            rk4_step(tc, hh, y, k1, k2, k3, k4, tmp, ynew, PV, FI, FF, tabs, MI_, MW, EI, EF,
-                     MOI, MOF, PRIG, BI, aux, work)
-            nfev += 4
+            rk_step(tc, hh, y, K, tmp, ynew, TA, TB, TC, PV, FI, FF, tabs, MI_, MW, EI, EF,
+                    MOI, MOF, PRIG, BI, aux, work)
+            nfev += s
             full = True
             if gaps > 0:
                 regions(FI, EI, EF, MOI, MOF, aux, work, off, regn, sw1)
@@ -461,31 +473,31 @@ def rk4_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI
                     if regn[e] != reg[e]:
                         changed = True
                 if changed and sub < 7:
-                    s, used = locate(tc, hh, y, k1, ynew, k4, tmp, k2, sw0, sw1, reg, regn,
-                                     PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI,
-                                     aux, work, off)
+                    cut, used = locate(tc, hh, y, K[0], ynew, K[s], tmp, K[1], sw0, sw1, reg,
+                                       regn, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG,
+                                       BI, aux, work, off)
                     nfev += used + 1
-                    s = s + 1e-7
-                    if s * hh > 1e-9 * h and s < 1.0 - 1e-7:
-                        hh = s * hh
+                    cut = cut + 1e-7
+                    if cut * hh > 1e-9 * h and cut < 1.0 - 1e-7:
+                        hh = cut * hh
                         full = False
-                        rk4_step(tc, hh, y, k1, k2, k3, k4, tmp, ynew, PV, FI, FF, tabs, MI_,
-                                 MW, EI, EF, MOI, MOF, PRIG, BI, aux, work)
-                        nfev += 3
+                        rk_step(tc, hh, y, K, tmp, ynew, TA, TB, TC, PV, FI, FF, tabs, MI_,
+                                MW, EI, EF, MOI, MOF, PRIG, BI, aux, work)
+                        nfev += s - 1
                         regions(FI, EI, EF, MOI, MOF, aux, work, off, regn, sw1)
                     else:       # at an end of the step: keep it; aux back to ynew
                         rhs(tc + hh, ynew, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG,
-                            BI, k4, aux, work)
+                            BI, K[s], aux, work)
                 for e in range(nsw):
                     reg[e] = regn[e]
                     sw0[e] = sw1[e]
             if aux[naux - 1] > bad:
                 bad = aux[naux - 1]
             j = record_hermite(rec_t, rec_y, j, t_out0, dt_out, tc, hh,
-                               full and step == nsteps - 1, y, k1, ynew, k4, n)
+                               full and step == nsteps - 1, y, K[0], ynew, K[s], n)
             for i in range(n):
                 y[i] = ynew[i]
-                k1[i] = k4[i]
+                K[0, i] = K[s, i]
             for i in range(npart - 1, n):
                 if not abs(y[i]) <= limit:
                     return tc + hh, j, False, bad, nfev
@@ -493,6 +505,14 @@ def rk4_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI
                 break
             tc += hh
     return t0 + nsteps * h, j, True, bad, nfev
+
+
+@_jit
+def rk4_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_, MW, EI,
+            EF, MOI, MOF, PRIG, BI, naux):
+    """:func:`rk_run` with the classical RK4 tableau (same arguments but the tableau)."""
+    return rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_, MW,
+                  EI, EF, MOI, MOF, PRIG, BI, naux, RK4_A, RK4_B, RK4_C)
 
 
 @_jit
@@ -506,6 +526,27 @@ def outputs(ts, ys, out, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI):
         rhs(ts[i], ys[i], PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, work)
         for j in range(out.shape[1]):
             out[i, j] = aux[j]
+
+
+@_jit
+def output_extrema(ts, ys, ext, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI):
+    """The least (row 0) and largest (row 1) of each aux column over the stored states,
+    as :func:`outputs` would give them row by row (a NaN stays NaN)."""
+    n = ys.shape[1]
+    dy = np.empty(n)
+    aux = np.empty(ext.shape[1])
+    work = np.zeros((9, max(FI.shape[0], PRIG.shape[0])))
+    for j in range(ext.shape[1]):
+        ext[0, j] = np.inf
+        ext[1, j] = -np.inf
+    for i in range(ts.shape[0]):
+        rhs(ts[i], ys[i], PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, work)
+        for j in range(ext.shape[1]):
+            v = aux[j]
+            if v < ext[0, j] or math.isnan(v):
+                ext[0, j] = v
+            if v > ext[1, j] or math.isnan(v):
+                ext[1, j] = v
 
 
 @_jit

@@ -49,6 +49,8 @@ DEFAULT_STEPS_PER_PERIOD = 50
 #: The default's first try with the error estimate on (kept if its estimate is within the
 #: accuracy goal, else the run at twice as many steps is returned).
 AUTO_STEPS_PER_PERIOD = 25
+#: The same two for ``method="rk8"`` (the 8th-order steps are three times as long).
+RK8_STEPS_PER_PERIOD = (8, 16)
 DEFAULT_POINTS = 7200
 DEFAULT_REVOLUTIONS = 5
 MAX_STEPS_PER_REV = 20_000_000
@@ -121,7 +123,7 @@ class SceneMotion:
 
 _PYK = None
 #: Methods of :func:`simulate_scene`: the fixed-step RK4 kernel, and scipy's adaptive ones.
-METHODS = ("rk4", "rk4-python", "DOP853", "RK45", "LSODA")
+METHODS = ("rk4", "rk4-python", "rk8", "DOP853", "RK45", "LSODA")
 SCIPY_METHODS = ("DOP853", "RK45", "LSODA")
 NO_NUMBA_NOTE = ("numba is not importable (install the 'fast' extra: pip install "
                  "'mechcirc[fast]'); ran the same RK4 as pure Python, about 100x slower")
@@ -150,7 +152,8 @@ def kernels_for(method):
         from . import _motion_kernels as k
 
         if k.HAVE_NUMBA and (_jit.COMPILED or _jit.in_cache(
-                k.rk4_run, k.outputs, k.eval_many, *((k.rhs,) if method in SCIPY_METHODS else ()))):
+                k.rk4_run, k.rk_run, k.outputs, k.output_extrema, k.eval_many,
+                *((k.rhs,) if method in SCIPY_METHODS else ()))):
             return k, "numba"
         if k.HAVE_NUMBA:
             _jit.warm_in_background(_WARM_STATEMENT)
@@ -171,8 +174,11 @@ def _warm_up(model, kern) -> float:
     args = model.kernel_args(0.0, 1e300)
     kern.rk4_run(y, 0.0, 1e-9, 2, 0.0, 1e-9, np.empty((1, y.size)), np.empty(1), *args,
                  model.naux())
+    kern.rk_run(y, 0.0, 1e-9, 2, 0.0, 1e-9, np.empty((1, y.size)), np.empty(1), *args,
+                model.naux(), *_tableau("rk8"))
     oargs = model.kernel_args(0.0, 1e300, outputs=True)
     kern.outputs(np.zeros(1), np.array([y]), np.empty((1, model.naux())), *oargs)
+    kern.output_extrema(np.zeros(1), np.array([y]), np.empty((2, model.naux())), *oargs)
     _WARM = True
     return time.perf_counter() - t0
 
@@ -294,7 +300,9 @@ def simulate_scene(scene: Scene, *, omega: float | None = None, revolutions: int
         Crank speed [rad/s], revolutions, start angle [deg], RK4 steps per period of
         the fastest mode, output points per revolution (defaults above).
     method, rtol : optional
-        ``"rk4"`` (numba when importable), ``"rk4-python"``, or scipy's ``"DOP853"``,
+        ``"rk4"`` (numba when importable), ``"rk4-python"``, ``"rk8"`` (the 8th-order
+        formula of DOP853 at a fixed step, the same stepper: 8 steps per period of the
+        fastest mode, or 16 when the estimate at 8 exceeds the goal), or scipy's ``"DOP853"``,
         ``"RK45"``, ``"LSODA"`` at relative tolerance ``rtol`` (default 1e-10; the
         same right-hand side, in the deviations from the rigid motion so that the
         tolerance applies to the deformations).
@@ -461,15 +469,17 @@ def _simulate_rk4(ctx, backend, error_estimate, notes, compile_time):
     period = scene.cycle / model.omega       # one revolution, or the cycle of geared cranks
     rate = max_rate(model)
     auto = o.spp is None and error_estimate
-    spp = o.spp if o.spp is not None else \
-        (AUTO_STEPS_PER_PERIOD if auto else DEFAULT_STEPS_PER_PERIOD)
+    first, second = RK8_STEPS_PER_PERIOD if o.method == "rk8" else \
+        (AUTO_STEPS_PER_PERIOD, DEFAULT_STEPS_PER_PERIOD)
+    spp = o.spp if o.spp is not None else (first if auto else second)
     per_rev = _steps_per_cycle(period, rate, spp)
-    if o.spp is not None and spp < AUTO_STEPS_PER_PERIOD:
+    if o.spp is not None and spp < first:
         warn.append(f"{spp:g} steps per period of the fastest mode, fewer than the "
-                    f"{AUTO_STEPS_PER_PERIOD} the default starts from: expect a larger error")
+                    f"{first} the default starts from: expect a larger error")
+    tableau = _tableau(o.method)
 
     def run(p, prog=None):
-        return _run(model, kern, theta_s, ripple, p, revolutions, o.npts, prog)
+        return _run(model, kern, theta_s, ripple, p, revolutions, o.npts, prog, tableau)
 
     try:
         main = run(per_rev, progress)
@@ -500,7 +510,7 @@ def _simulate_rk4(ctx, backend, error_estimate, notes, compile_time):
         warn.append(f"the error estimate's run at {spp / 2:g} steps per period diverged: "
                     "no estimate; raise steps_per_period")
     ts, ys, prev, wall, bad = main[:5]
-    notes.append(_step_note(period, per_rev, spp, rate, error_estimate))
+    notes.append(_step_note(period, per_rev, spp, rate, error_estimate, o.method))
     return _finish(scene, scene.simulate, model, kern, theta_s, ripple, ts, ys, prev, other,
                    wall, bad, n_steps, nfev, o.method, backend, per_rev, notes, warn,
                    revolutions, compile_time, out=out, other_extrema=other_ext)
@@ -519,7 +529,7 @@ def _auto_estimate(model, kern, theta_s, ripple, main, other):
     (None when it diverged) and the estimate: their relative change (None without it)."""
     out, other_ext = _outputs(model, kern, theta_s, ripple, main[0], main[1]), None
     if not isinstance(other, str):
-        other_ext = _extrema(_outputs(model, kern, theta_s, ripple, *other[:2]))
+        other_ext = _output_extrema(model, kern, theta_s, ripple, *other[:2])
     est = None if other_ext is None else _rel_change(_extrema(out), other_ext)
     return out, other_ext, est
 
@@ -531,9 +541,9 @@ def _rerun_note(spp, est):
             + f" > {ACCURACY_GOAL:g}: run again at {2 * spp:g}")
 
 
-def _step_note(period, per_rev, spp, rate, error_estimate):
-    """The note stating the RK4 step of the returned run."""
-    return (f"RK4 step {period / per_rev:.4g} s ({per_rev} steps per revolution, "
+def _step_note(period, per_rev, spp, rate, error_estimate, method="rk4"):
+    """The note stating the RK4 (or RK8) step of the returned run."""
+    return (f"{'RK8' if method == 'rk8' else 'RK4'} step {period / per_rev:.4g} s ({per_rev} steps per revolution, "
             f"{spp:g} per period of the fastest mode |λ| = {rate:.5g} 1/s)"
             + (" (error estimate: its change from the run at twice the step)"
                if error_estimate else ""))
@@ -568,12 +578,11 @@ def _finish(scene, cfg, model, kern, theta_s, ripple, ts, ys, prev, other, wall,
     extrema = _extrema(out)
     periodicity = None
     if prev is not None:
-        pout = _outputs(model, kern, theta_s, ripple, *prev)
-        periodicity = _rel_change(extrema, _extrema(pout))
+        periodicity = _rel_change(extrema, _output_extrema(model, kern, theta_s, ripple, *prev))
     est = None
     if other is not None and not isinstance(other, str):     # "diverged": no estimate
         if other_extrema is None:
-            other_extrema = _extrema(_outputs(model, kern, theta_s, ripple, other[0], other[1]))
+            other_extrema = _output_extrema(model, kern, theta_s, ripple, other[0], other[1])
         est = _rel_change(extrema, other_extrema)
         bad = bad or other[4]
     crank = crank_angle(model.omega, theta_s, ripple, ts)[0] % scene.cycle
@@ -709,10 +718,25 @@ def _deviation_rhs(model, kern, theta_s, ripple):
     return f, rigid, lines, bad
 
 
-def _run(model, kern, theta_s, ripple, per_rev, revolutions, npts, progress):
-    """R revolutions of RK4 at ``per_rev`` steps each: (times and states tabulated on the
-    last revolution, the previous one's (times, states) or None, wall time, out-of-range
-    seen, right-hand-side evaluations)."""
+def _tableau(method):
+    """The Butcher tableau (A, b, c) of an explicit method: RK4's, or for ``"rk8"`` the
+    8th-order formula of Dormand and Prince's DOP853 (scipy's coefficients), run at a
+    fixed step (its 12 stages cost three RK4 steps)."""
+    if method != "rk8":
+        from ._motion_kernels import RK4_A, RK4_B, RK4_C
+
+        return RK4_A, RK4_B, RK4_C
+    from scipy.integrate import DOP853
+
+    s = DOP853.n_stages
+    return (np.ascontiguousarray(DOP853.A[:s, :s]), np.ascontiguousarray(DOP853.B),
+            np.ascontiguousarray(DOP853.C[:s]))
+
+
+def _run(model, kern, theta_s, ripple, per_rev, revolutions, npts, progress, tableau=None):
+    """R revolutions of RK4 (or the explicit ``tableau``) at ``per_rev`` steps each: (times
+    and states tabulated on the last revolution, the previous one's (times, states) or None,
+    wall time, out-of-range seen, right-hand-side evaluations)."""
     y = model.rigid_state(theta_s, model.omega + ripple[0])
     n = model.n_free
     limit = 1e3 * model.omega * max(1.0, float(np.max(np.abs(y[n:]))) / model.omega)
@@ -733,8 +757,9 @@ def _run(model, kern, theta_s, ripple, per_rev, revolutions, npts, progress):
             rt, ry = prev
         else:
             ry, rt = dummy
-        t_end, rows, ok, flag, used = kern.rk4_run(y, r * period, h, per_rev, r * period,
-                                                   period / npts, ry, rt, *args, naux)
+        t_end, rows, ok, flag, used = kern.rk_run(y, r * period, h, per_rev, r * period,
+                                                  period / npts, ry, rt, *args, naux,
+                                                  *(tableau or _tableau("rk4")))
         bad, nfev = bad or flag > 0, nfev + used
         if not ok:
             raise SolverError(f"RK4 diverged at t = {t_end:.6g} s (revolution {r + 1}) with "
@@ -811,19 +836,25 @@ def _outputs(model, kern, theta_s, ripple, ts, ys):
     args = model.kernel_args(theta_s, 1e300, outputs=True, ripple=ripple)
     out = np.empty((ts.size, model.naux()))
     kern.outputs(np.ascontiguousarray(ts), np.ascontiguousarray(ys), out, *args)
-    nb, ne, nm = len(model.bodies), len(model.elements), len(model.moments)
-    vals = {}
-    for i, b in enumerate(model.bodies):
-        vals[f"{b}.acceleration"] = out[:, i].copy()
-    for i, e in enumerate(model.elements):
-        vals[f"{e}.force"] = out[:, nb + i].copy()
-    for i, e in enumerate(model.elements):
-        vals[f"{e}.deformation"] = out[:, nb + ne + i].copy()
-    vals["drive.moment"] = out[:, nb + 2 * ne].copy()
-    for i, m in enumerate(model.moments):
-        vals[f"{m}.moment"] = out[:, nb + 2 * ne + 1 + i].copy()
-    del nm
-    return vals
+    return {name: out[:, j].copy() for j, name in enumerate(_aux_names(model))}
+
+
+def _output_extrema(model, kern, theta_s, ripple, ts, ys):
+    """``_extrema(_outputs(...))`` of a run, evaluated in the kernel without the tables."""
+    args = model.kernel_args(theta_s, 1e300, outputs=True, ripple=ripple)
+    ext = np.empty((2, model.naux()))
+    kern.output_extrema(np.ascontiguousarray(ts), np.ascontiguousarray(ys), ext, *args)
+    return {name: (float(ext[0, j]), float(ext[1, j]))
+            for j, name in enumerate(_aux_names(model))}
+
+
+def _aux_names(model):
+    """The names of the kernel's output columns, in order (the last, the out-of-range
+    flag, has none)."""
+    return ([f"{b}.acceleration" for b in model.bodies]
+            + [f"{e}.force" for e in model.elements]
+            + [f"{e}.deformation" for e in model.elements] + ["drive.moment"]
+            + [f"{m}.moment" for m in model.moments])
 
 
 def _rel_change(a: dict, b: dict) -> float:

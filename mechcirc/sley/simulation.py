@@ -343,9 +343,9 @@ def simulate_params(params: SleyParameters, revolutions: int = 5, method: str | 
     method, revolutions, steps_per_period, rtol = _checked(
         method, revolutions, revolution, points_per_revolution, steps_per_period, rtol)
     npts = int(points_per_revolution)
-    fb = params.fourbar()                       # GeometryError: not a crank-rocker
+    params.fourbar()                            # GeometryError: not a crank-rocker
     theta0 = start_angle(params)
-    phiP = fb.dead_centres()[0].theta
+    phiP = _linkage_constants(params.l2P, params.l3, params.l4, params.d, params.branch)[0]
     scene, model = _model(params, table_points)
     from ..scene.simulation import SceneAccuracyWarning, simulate_scene
 
@@ -414,7 +414,8 @@ def _result(params: SleyParameters, model, m, theta0: float, phiP: float,
     w = params.omega
     fb = params.fourbar()
     eps4T = fb.evaluate(crank).nu * w ** 2
-    nlo, nhi = _nu_range(params.l2P, params.l3, params.l4, params.d, params.branch)
+    _, sley_off, nlo, nhi = _linkage_constants(params.l2P, params.l3, params.l4, params.d,
+                                               params.branch)
     extrema = {"eps2P": m.extrema["eps2P"], "eps4P": m.extrema["eps4P"],
                "eps4T": (nlo * w ** 2, nhi * w ** 2), "M2V": m.extrema["M2V"]}
     eps5P = M5V = None
@@ -426,8 +427,6 @@ def _result(params: SleyParameters, model, m, theta0: float, phiP: float,
     coord = list(model.coordinate[1:])
     n = len(coord)
     phi2 = theta0 + w * m.time
-    ph = fb.evaluate(np.linspace(0.0, TWO_PI, 721)).phi4
-    sley_off = fb.transfer(0.0)[0] - 0.5 * (ph.max() + ph.min())
     cols = []
     for name in (("crank", "crank5") if both else ("crank",)):
         i = coord.index(name)
@@ -451,11 +450,16 @@ ALIAS_NAMES = ("eps2P", "eps4P", "eps5P", "eps4T", "M2V", "M5V")
 
 
 @lru_cache(maxsize=64)
-def _nu_range(l2P, l3, l4, d, branch):
+def _linkage_constants(l2P, l3, l4, d, branch):
+    """(beat-up crank angle φP, offset of the sley's mid-swing from its pose angle, the
+    extrema of ν) of the four-bar: what each call would otherwise recompute."""
     from .models import fourbar_of_lengths
 
-    (_, lo), (_, hi) = fourbar_of_lengths(l2P, l3, l4, d, branch).nu_extrema()
-    return lo, hi
+    fb = fourbar_of_lengths(l2P, l3, l4, d, branch)
+    (_, lo), (_, hi) = fb.nu_extrema()
+    ph = fb.evaluate(np.linspace(0.0, TWO_PI, 721)).phi4
+    sley_off = fb.transfer(0.0)[0] - 0.5 * (ph.max() + ph.min())
+    return fb.dead_centres()[0].theta, sley_off, lo, hi
 
 
 # -------------------------------------------------------------------- batch
