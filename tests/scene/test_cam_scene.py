@@ -236,11 +236,13 @@ def test_a_lift_table_drives_the_lever_through_its_rows(tmp_path):
     assert np.max(np.abs(np.unwrap(m.q[:, 3 * j + 2]) - np.radians(lift))) <= 1e-13
 
 
-def test_a_dynamic_shaft_with_a_cam_is_refused_at_the_shaft():
-    text = TEXT + "\n[shaft]\nflywheel = 1.0\n"
-    with pytest.raises(NetlistError, match=r"dynamic \[shaft\] with a \[cam\]") as exc:
-        parse_scene(text, "s.toml")
-    assert exc.value.line == text.splitlines().index("[shaft]") + 2     # its first key
+def test_a_dynamic_shaft_with_a_cam_is_read():
+    """A [shaft] beside a [cam] with elastic parts is no longer refused at the table (the
+    simulation against hand equations is tests/scene/test_shaft_cam.py)."""
+    text = TEXT + ('\n[shaft]\nflywheel = 1.0\nmotor = "kloss"\nsync_speed = 21.0\n'
+                   'breakdown_torque = 2.0\nbreakdown_slip = 0.2\n')
+    scene = parse_scene(text, "s.toml")
+    assert scene.shaft is not None and scene.shaft.flywheel == 1.0
 
 
 def test_a_moment_window_is_in_cam_angle():
