@@ -314,3 +314,26 @@ def test_time_limit_stops_cpu_work_and_says_so():
         while time.process_time() - start < 5.0:        # CPU work, bounded by CPU time
             pass
     assert time.process_time() - start < 5.0            # stopped by the limit, not the loop
+
+
+def test_a_package_warning_raised_again_during_a_command_is_not_printed_twice(capsys,
+                                                                              monkeypatch):
+    """msl_backlash's unloaded elements are reported when the netlist is read; the exact
+    peak's resonance search raises the same warning again, which used to reach stderr as a
+    raw Python warning line (file:line: UnloadedElementWarning: ...) after the output."""
+    import warnings
+
+    from cli_helpers import run
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        # What Python does outside pytest (which records warnings instead of printing).
+        sys.stderr.write(warnings.formatwarning(message, category, filename, lineno, line))
+
+    monkeypatch.setattr(warnings, "showwarning", show)
+
+    status, out, err = run(["sweep", "examples/msl_backlash.mcir", "--omega-min", "1",
+                            "--omega-max", "100", "--points", "20"], capsys)
+    assert status == 0
+    lines = [line for line in err.splitlines() if "lie on no path" in line]
+    assert len(lines) == 1 and lines[0].startswith("warning: "), err
+    assert "UnloadedElementWarning" not in err and ".py:" not in err, err

@@ -85,13 +85,43 @@ def run_handler(args) -> int:
     """
     import warnings
 
+    from ..errors import MechcircWarning
+
+    _SHOWN.clear()
     with warnings.catch_warnings(record=True) as caught:
         status = _run(args)
     for w in caught:
         if status == EXIT_USER and issubclass(w.category, RuntimeWarning):
             continue
+        if issubclass(w.category, MechcircWarning):
+            # The package's own warnings read as the command's: one "warning:" line
+            # each, and not again when the command already printed that message.
+            if str(w.message) not in _SHOWN:
+                warning_lines([str(w.message)])
+            continue
         warnings.showwarning(w.message, w.category, w.filename, w.lineno)
     return status
+
+
+#: The warning messages a command printed (:func:`warning_lines`), so that
+#: :func:`run_handler` does not print a warning raised again later a second time.
+_SHOWN: set[str] = set()
+
+
+def warning_lines(messages) -> None:
+    """Print each message on stderr as ``warning: MESSAGE``, once per command run.
+
+    Parameters
+    ----------
+    messages : iterable of str
+        The warnings' texts.
+    """
+    for text in messages:
+        text = str(text)
+        if text in _SHOWN:
+            continue
+        _SHOWN.add(text)
+        print(f"warning: {text}", file=sys.stderr)
 
 
 def _run(args) -> int:

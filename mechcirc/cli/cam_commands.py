@@ -4,9 +4,8 @@ from __future__ import annotations
 
 import argparse
 import math
-import sys
 
-from ._common import MAX_LENGTH, check_output_paths, count, print_json, real
+from ._common import MAX_LENGTH, check_output_paths, count, print_json, real, warning_lines
 
 _LAWS = ("harmonic", "cycloidal", "modified_sine", "modified_trapezoid", "polynomial_345")
 
@@ -128,8 +127,7 @@ def cmd_cam(args) -> int:
         print_json(_as_json(cam, motion, warnings))
     else:
         _report(cam, what, [p for p in (args.output, args.svg) if p])
-    for w in warnings:
-        print(f"warning: {w}", file=sys.stderr)
+    warning_lines(warnings)
     return 0
 
 

@@ -4,13 +4,23 @@ from __future__ import annotations
 
 import argparse
 import math
-import sys
 
-from ..limits import (MAX_ADAPTIVE_NODAL_POINTS, MAX_ADAPTIVE_POINTS, MAX_JSON_POINTS,
-                      MAX_NODAL_POINTS, MAX_PLOT_POINTS, MAX_SWEEP_POINTS)
-from ._common import (check_output_paths, load_with_warnings, print_json, real,
-                      save_figure)
-
+from ..limits import (
+    MAX_ADAPTIVE_NODAL_POINTS,
+    MAX_ADAPTIVE_POINTS,
+    MAX_JSON_POINTS,
+    MAX_NODAL_POINTS,
+    MAX_PLOT_POINTS,
+    MAX_SWEEP_POINTS,
+)
+from ._common import (
+    check_output_paths,
+    load_with_warnings,
+    print_json,
+    real,
+    save_figure,
+    warning_lines,
+)
 
 #: argparse type: an angular frequency [rad/s], or with a unit (``50Hz``, ``3000rpm``); the
 #: command checks the range (a sweep's --omega-min/--omega-max together).
@@ -167,8 +177,7 @@ def cmd_check(args) -> int:
     if getattr(args, "explain", False):
         from ..explain import explain_lines
 
-        for w in warns:
-            print(f"warning: {w}", file=sys.stderr)
+        warning_lines(warns)
         print(f"{args.file}: {len(elements)} elements, {len(levers)} levers, "
               f"{len(circuit.nodes)} nodes")
         print("\n".join(explain_lines(circuit)))
@@ -192,8 +201,7 @@ def cmd_check(args) -> int:
               f"{e.value:<{wv}g}{eta}".rstrip())
     for lv in circuit.levers:
         print(f"  lever   {lv.name:<{wn}} {lv.p1}-{lv.p2} -> {lv.s1}-{lv.s2}  ratio={lv.ratio:g}")
-    for w in warns:
-        print(f"warning: {w}", file=sys.stderr)
+    warning_lines(warns)
     print(f"K = {tree}")
     return 0
 
@@ -296,8 +304,7 @@ def cmd_sweep(args) -> int:
                      f"({FREQUENCY_UNITS[args.unit][0]} = "
                      f"{_some_omega(singular, unit=args.unit)} {args.unit}): there "
                      "K is +inf·j or 0 and Q0 is 0 or +inf·j (flag 1)")
-    for w in warns:
-        print(f"warning: {w}", file=sys.stderr)
+    warning_lines(warns)
     dropped = _write_sweep_outputs(args, result, extra, sens, found, pk)
     if args.json:
         print_json(_sweep_doc(args, result, extra, sens, found, pk, singular, notes, warns))
@@ -509,8 +516,7 @@ def cmd_resonances(args) -> int:
         found = [m.resonance for m in modes]
     else:
         found = circuit.resonances(omega_max=args.omega_max)
-    for w in warns:
-        print(f"warning: {w}", file=sys.stderr)
+    warning_lines(warns)
     if args.plot and modes is not None:     # --plot found the modes above
         _plot_modes(args, circuit, modes, warns)
     if args.json:
@@ -547,7 +553,7 @@ def _plot_modes(args, circuit, modes, warns: list) -> None:
     if len(modes) > MAX_MODE_PANELS:
         warns.append(f"--plot draws the lowest {MAX_MODE_PANELS} of {len(modes)} modes "
                      "(give --omega-max for fewer)")
-        print(f"warning: {warns[-1]}", file=sys.stderr)
+        warning_lines(warns[-1:])
     with OutputSet() as out:
         save_figure(plot_modes(modes[:MAX_MODE_PANELS], circuit.name), args.plot,
                     out.path(args.plot))

@@ -3,10 +3,17 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
-from ._common import check_output_paths, count, load_with_warnings, print_json, real, save_figure
+from ._common import (
+    check_output_paths,
+    count,
+    load_with_warnings,
+    print_json,
+    real,
+    save_figure,
+    warning_lines,
+)
 
 
 def register(sub) -> None:
@@ -120,8 +127,7 @@ def cmd_forces(args) -> int:
     check_output_paths(plots=(args.plot,), reads=(args.file,))
     circuit, warns = load_with_warnings(args.file)
     rows, K, Q0, flag = element_forces(circuit, args.omega, method=args.method)
-    for w in warns:
-        print(f"warning: {w}", file=sys.stderr)
+    warning_lines(warns)
     if args.plot:
         from ..plotting import plot_forces
 
@@ -166,8 +172,7 @@ def cmd_compare(args) -> int:
     result = compare(circuit, args.measured, method=args.method,
                      omega_min=args.omega_min, omega_max=args.omega_max)
     summary = result.summary()
-    for w in warns:
-        print(f"warning: {w}", file=sys.stderr)
+    warning_lines(warns)
     if args.plot:
         from ..plotting import plot_comparison
 
@@ -198,8 +203,7 @@ def cmd_formula(args) -> int:
     from ._common import time_limit
 
     circuit, warns = load_with_warnings(args.file)
-    for w in warns:
-        print(f"warning: {w}", file=sys.stderr)
+    warning_lines(warns)
     with time_limit(FORMULA_SECONDS, "the symbolic formula", "evaluate K numerically "
                     "instead: mechcirc sweep FILE --method nodal, or mechcirc forces FILE "
                     "--omega W"):

@@ -4,7 +4,6 @@ the operating-speed map of its peak."""
 from __future__ import annotations
 
 import argparse
-import sys
 
 from ._common import (
     check_output_paths,
@@ -13,6 +12,7 @@ from ._common import (
     print_json,
     real,
     save_figure,
+    warning_lines,
 )
 
 
@@ -99,8 +99,7 @@ def cmd_periodic(args) -> int:
             raise MechcircError("--theta applies to a scene (.toml), not to a netlist")
         circuit, warns = load_with_warnings(args.file)
         motion = None
-        for w in warns:
-            print(f"warning: {w}", file=sys.stderr)
+        warning_lines(warns)
     elements = _elements(args, circuit)
     if single:
         return _one_speed(args, circuit, elements, motion)
