@@ -49,3 +49,14 @@ def test_ci_status_follows_pytest_and_mypy_and_no_tests_collected_fails(
     assert args[:2] == ["-m", "mypy"] and args[-1] == "mechcirc"
     cache = Path(args[args.index("--cache-dir") + 1])
     assert cache.parent.parent == tmp_path and not cache.exists()
+
+
+def test_no_two_test_files_share_a_name():
+    """The test folders are not packages, so pytest imports each file by its base name: two
+    test_x.py in different folders make the second an 'import file mismatch' error, which
+    fails the run (it happened once after two branches each added one)."""
+    from collections import Counter
+
+    tests = Path(__file__).resolve().parent
+    names = Counter(p.name for p in tests.rglob("test_*.py"))
+    assert not [n for n, c in names.items() if c > 1], names.most_common(3)
