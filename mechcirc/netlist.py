@@ -799,7 +799,7 @@ class _Parser:
 
     def motion(self, line: _Line, opts: dict, units: dict):
         """The :class:`~mechcirc.motion_laws.Motion` of ``drive ... motion=``: a law or a table."""
-        from .motion_laws import LAWS, cam_cycle, read_motion_table
+        from .motion_laws import LAWS, read_motion_table
 
         tok = opts["motion"]
         for key in ("velocity", "force"):
@@ -812,36 +812,7 @@ class _Parser:
             line.error(f"unknown motion law {text!r}", tok.col,
                        "one of " + ", ".join(LAWS) + ", or a table file such as lift.csv")
         if text in LAWS:
-            values = {}
-            for key in ("rise", "dwell", "return", "stroke"):
-                if key not in opts:
-                    if key == "dwell":
-                        values[key] = 0.0
-                        continue
-                    line.error(f"motion={text} needs {key}=", tok.col, SYNTAX["drive"])
-                t = opts[key]
-                v = self.expr(line, t.text, t.col, defined=self.params)
-                if key == "stroke":
-                    v = self.with_unit(line, v, units.get(key), "displacement")
-                    if key in units:    # an angle: a rotary drive (a length: translational)
-                        self.drive_rotational = _unit(units[key].text).dim == (0, 0, 0)
-                elif key in units:
-                    v = math.degrees(self.with_unit(line, v, units[key], "angle"))
-                values[key] = v
-            ret_law = None
-            if "return_law" in opts:
-                ret_law = opts["return_law"].text
-                if ret_law not in LAWS:
-                    line.error(f"unknown motion law {ret_law!r}", opts["return_law"].col,
-                               "one of " + ", ".join(LAWS))
-            try:
-                return cam_cycle(text, values["rise"], values["dwell"], values["return"],
-                                 values["stroke"], return_law=ret_law)
-            except ValueError as exc:
-                bad = "stroke" if "stroke" in str(exc) else "rise"
-                line.error(str(exc), opts[bad].col if bad in opts else tok.col,
-                           "rise + dwell + return <= 360 degrees, rise and return > 0, "
-                           "a nonzero stroke")
+            return self._motion_law(line, opts, units, tok)
         for key in _MOTION_KEYS[1:]:
             if key in opts:
                 line.error(f"option {key!r} belongs to a motion law, not a table",
@@ -860,6 +831,42 @@ class _Parser:
                            "m (a translational drive) or rad (a rotary drive)")
             self.drive_rotational = _unit(unit.text).dim == (0, 0, 0)
         return read_motion_table(path, spec=f"motion={path}")
+
+    def _motion_law(self, line: _Line, opts: dict, units: dict, tok):
+        """The :class:`~mechcirc.motion_laws.Motion` of ``motion=LAW`` with its angles and stroke."""
+        from .motion_laws import LAWS, cam_cycle
+
+        text = tok.text
+        values = {}
+        for key in ("rise", "dwell", "return", "stroke"):
+            if key not in opts:
+                if key == "dwell":
+                    values[key] = 0.0
+                    continue
+                line.error(f"motion={text} needs {key}=", tok.col, SYNTAX["drive"])
+            t = opts[key]
+            v = self.expr(line, t.text, t.col, defined=self.params)
+            if key == "stroke":
+                v = self.with_unit(line, v, units.get(key), "displacement")
+                if key in units:    # an angle: a rotary drive (a length: translational)
+                    self.drive_rotational = _unit(units[key].text).dim == (0, 0, 0)
+            elif key in units:
+                v = math.degrees(self.with_unit(line, v, units[key], "angle"))
+            values[key] = v
+        ret_law = None
+        if "return_law" in opts:
+            ret_law = opts["return_law"].text
+            if ret_law not in LAWS:
+                line.error(f"unknown motion law {ret_law!r}", opts["return_law"].col,
+                           "one of " + ", ".join(LAWS))
+        try:
+            return cam_cycle(text, values["rise"], values["dwell"], values["return"],
+                             values["stroke"], return_law=ret_law)
+        except ValueError as exc:
+            bad = "stroke" if "stroke" in str(exc) else "rise"
+            line.error(str(exc), opts[bad].col if bad in opts else tok.col,
+                       "rise + dwell + return <= 360 degrees, rise and return > 0, "
+                       "a nonzero stroke")
 
 
 # Parsed expressions of each circuit parse() made, for symbolic formulas

@@ -632,28 +632,9 @@ def require_nonsingular(system: NodalSystem) -> None:
             f"{', '.join(system.unloaded[:12]) or 'none'})", elements=system.unloaded)
     scale = _frequency_scale(system)
     trial = [0.731 * scale, 1.913 * scale]
-    judged, overflow = None, False
-    if system.size <= DENSE_LIMIT:
-        absdiag = [np.abs(system.diagonal("damper") + system.diagonal("lever")),
-                   np.abs(system.diagonal("mass")), np.abs(system.diagonal("spring"))]
-        for w, A in zip(trial, dense_matrices(system, trial)):
-            if not np.isfinite(A).all():
-                return          # values at float64's edge: the sweep flags such points
-            # Judge the balanced matrix: a lever of ratio 1e-8 puts entries of
-            # 1e-8 beside 1, every value scaled by 1e-100 puts admittances of
-            # 1e-100 beside the lever's ±1, and the raw singular values then
-            # look singular.
-            diag = absdiag[0] + w * absdiag[1] + absdiag[2] / w
-            d = balance(np.abs(A)[None], diag[None])[0]
-            with np.errstate(all="ignore"):
-                A = A * d[:, None] * d[None, :]
-            if not np.isfinite(A).all():    # values over ~600 decades (a lever ratio of
-                overflow = True             # 1e300): balancing overflows; the solve decides
-                continue
-            sv = np.linalg.svd(A, compute_uv=False)
-            if sv[-1] > 1e-13 * sv[0]:
-                return
-            judged = A
+    regular, judged, overflow = _dense_verdict(system, trial)
+    if regular:
+        return
     s = solve(system, trial, limits=False)
     for i, w in enumerate(trial):
         # Values over ~600 decades: an iterate with no digit known (not even
@@ -675,6 +656,41 @@ def require_nonsingular(system: NodalSystem) -> None:
         f"are not determined): {', '.join(culprits[:12])}; check for levers in parallel "
         "or nodes tied only by levers", nodes=[c for c in culprits if not c.startswith("lever")],
         elements=[c[6:] for c in culprits if c.startswith("lever")])
+
+
+def _dense_verdict(system: NodalSystem, trial):
+    """(regular, judged, overflow) of a small system by the singular values at ``trial``.
+
+    ``regular``: a trial ω's balanced matrix is clearly nonsingular (or at
+    float64's edge, which the sweep flags); ``judged``: the last balanced
+    matrix that looked singular, for naming the null vector (None when none
+    was judged: large systems, or balancing overflowed); ``overflow``:
+    balancing overflowed (values over ~600 decades, such as a lever ratio of
+    1e300), so the refined solve decides.
+    """
+    judged, overflow = None, False
+    if system.size > DENSE_LIMIT:
+        return False, judged, overflow
+    absdiag = [np.abs(system.diagonal("damper") + system.diagonal("lever")),
+               np.abs(system.diagonal("mass")), np.abs(system.diagonal("spring"))]
+    for w, A in zip(trial, dense_matrices(system, trial)):
+        if not np.isfinite(A).all():
+            return True, judged, overflow   # values at float64's edge: the sweep flags them
+        # Judge the balanced matrix: a lever of ratio 1e-8 puts entries of 1e-8
+        # beside 1, every value scaled by 1e-100 puts admittances of 1e-100 beside
+        # the lever's ±1, and the raw singular values then look singular.
+        diag = absdiag[0] + w * absdiag[1] + absdiag[2] / w
+        d = balance(np.abs(A)[None], diag[None])[0]
+        with np.errstate(all="ignore"):
+            A = A * d[:, None] * d[None, :]
+        if not np.isfinite(A).all():
+            overflow = True
+            continue
+        sv = np.linalg.svd(A, compute_uv=False)
+        if sv[-1] > 1e-13 * sv[0]:
+            return True, judged, overflow
+        judged = A
+    return False, judged, overflow
 
 
 def _frequency_scale(system: NodalSystem) -> float:

@@ -179,15 +179,8 @@ def scene_jump_speed(scene, bracket=None, *, rtol: float = 1e-8, grow: float = 1
     while the follower stays on the cam and ≤ 0 once it leaves it.  First a bracket
     [Ω_lo, Ω_hi] with N(Ω_lo) > 0 ≥ N(Ω_hi) is found by stepping from the scene's
     shaft speed by the factor ``grow`` (up while the contact holds, down while it
-    opens), unless given.  Then a secant iteration in Ω² on the side where the
-    contact holds: the two newest speeds with N > 0 give the root of the line
-    through them, and the next two runs are at 0.998 and 0.999 of that root, until
-    two roots agree to ``rtol``.  For a rigid follower N = F₀ + k s + mΩ² s″ at a
-    fixed cam angle is linear in Ω², so the secant converges in a few steps; it
-    stays off N ≈ 0 because there the contact law bends within a step and a
-    fixed-step run's least force falls to 0 early (a bisection on N's sign would
-    land below the root by the step: 2e-5 at 200 steps per period).  Every root is
-    kept inside the bracket, which each run narrows.
+    opens), unless given; then secants in Ω² through runs where the contact holds
+    (:func:`_secant_in_omega_squared`), until two roots agree to ``rtol``.
 
     Parameters
     ----------
@@ -232,6 +225,25 @@ def scene_jump_speed(scene, bracket=None, *, rtol: float = 1e-8, grow: float = 1
         return seen[w]
 
     lo, hi = _jump_bracket(scene, bracket, grow, least)
+    w, lo, hi = _secant_in_omega_squared(scene, seen, least, lo, hi, rtol)
+    return JumpSpeed(float(w), (lo, hi), (seen[lo], seen[hi]), len(seen), rtol)
+
+
+def _secant_in_omega_squared(scene, seen, least, lo, hi, rtol):
+    """The root of N(Ω²) by secants through runs that hold, at 0.998/0.999 of each root.
+
+    The two newest speeds with N > 0 give the root of the line through them; the
+    next two runs are at 0.998 and 0.999 of it.  For a rigid follower N = F₀ + k s
+    + mΩ² s″ at a fixed cam angle is linear in Ω², so this settles in a few steps.
+    It stays off N ≈ 0 on purpose: there the contact law bends within a step and a
+    fixed-step run's least force falls to 0 early (a bisection on N's sign lands
+    below the root by the step: 2e-5 at 200 steps per period).  Every root is kept
+    inside the bracket, which each run narrows.  ``seen`` maps the speeds run so
+    far to their least contact force; ``least`` runs one more.  Returns the root
+    and the narrowed bracket (lo, hi).
+    """
+    from ..errors import MechcircError
+
     w, previous = math.nan, math.inf
     for _ in range(20):
         held = sorted(v for v in seen if seen[v] > 0)
@@ -243,7 +255,7 @@ def scene_jump_speed(scene, bracket=None, *, rtol: float = 1e-8, grow: float = 1
             w2 = wb * wb + (wb * wb - wa * wa) * nb / (na - nb) if na > nb else math.nan
             w = math.sqrt(w2) if lo * lo < w2 < hi * hi else math.sqrt((lo * lo + hi * hi) / 2)
             if abs(w - previous) <= rtol * w:
-                break
+                return w, lo, hi
             previous = w
         for f in ((0.998, 0.999) if len(held) >= 2 else (1.0,)):
             v = max(lo, min(hi, f * w))
@@ -251,10 +263,8 @@ def scene_jump_speed(scene, bracket=None, *, rtol: float = 1e-8, grow: float = 1
                 lo = max(lo, v)
             else:
                 hi = min(hi, v)
-    else:
-        raise MechcircError(f"{scene.source}: the jump speed did not settle to rtol {rtol:g} "
-                            f"in 20 secant steps (last {w:g} rad/s)")
-    return JumpSpeed(float(w), (lo, hi), (seen[lo], seen[hi]), len(seen), rtol)
+    raise MechcircError(f"{scene.source}: the jump speed did not settle to rtol {rtol:g} "
+                        f"in 20 secant steps (last {w:g} rad/s)")
 
 
 def _jump_bracket(scene, bracket, grow, least):
