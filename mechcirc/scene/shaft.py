@@ -599,13 +599,8 @@ def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float 
     motor = shaft.motor
     th0, cyc = math.radians(shaft.start_deg), rig.cycle
     scale = max(abs(motor.sync_speed) if motor.kind == "kloss" else max(motor.speeds), 1e-300)
-    # at rest the elastic elements carry the loads statically: the rigid mechanism's torque
-    T0, L0 = motor.scalar_torque(0.0), -rig.Q(th0)
-    if startup and T0 - L0 <= 0:
-        raise MechcircError(
-            f"{scene.source}: the motor cannot start the mechanism: its starting torque "
-            f"T(0) = {T0:.6g} N·m does not exceed the load torque "
-            f"{L0:.6g} N·m at the start angle {shaft.start_deg:g}°")
+    if startup:
+        _require_start(scene, shaft, rig, th0)
     x0, sol = _steady_cycle(scene, eq, rig, motor, th0, rtol, scale, mean_load, peak, notes,
                             steps_per_period if method == "rk4" else None)
     motion = _tabulate(scene, eq, sol, th0, cyc, points, Jf, motor)
@@ -617,6 +612,20 @@ def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float 
     notes.append(f"steady cycle by shooting ({how}); start-up from rest over "
                  f"{up.pop('cycles')} cycles")
     return ShaftMotion(**motion, **up, notes=tuple(notes))
+
+
+def _require_start(scene, shaft, rig, th0) -> None:
+    """Refuse a motor whose starting torque does not exceed the load at the start angle.
+
+    At rest the elastic elements carry the loads statically: the rigid
+    mechanism's torque is the load.
+    """
+    T0, L0 = shaft.motor.scalar_torque(0.0), -rig.Q(th0)
+    if T0 - L0 <= 0:
+        raise MechcircError(
+            f"{scene.source}: the motor cannot start the mechanism: its starting torque "
+            f"T(0) = {T0:.6g} N·m does not exceed the load torque "
+            f"{L0:.6g} N·m at the start angle {shaft.start_deg:g}°")
 
 
 def _steady_cycle(scene, eq, rig, motor, th0, rtol, scale, mean_load, peak, notes, spp):
