@@ -47,7 +47,8 @@ def hermite_point(out, s, h, y, f0, ynew, f1, n, m):
         dq = ynew[i] - y[i]
         out[i] = y[i] + w1 * dq + h * (v0 * f0[i] + v1 * f1[i]) + \
             hh * (a0 * f0[m + i] + a1 * f1[m + i])
-        out[m + i] = g * dq / h + dv0 * f0[i] + dv1 * f1[i] + h * (da0 * f0[m + i] + da1 * f1[m + i])
+        out[m + i] = g * dq / h + dv0 * f0[i] + dv1 * f1[i] + \
+            h * (da0 * f0[m + i] + da1 * f1[m + i])
 
 
 @_jit_inline

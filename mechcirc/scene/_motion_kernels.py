@@ -361,9 +361,10 @@ def locate(t, hh, y, k1, ynew, k4, tmp, dy, sw0, sw1, reg, regn, PV, FI, FF, tab
            EI, EF, MOI, MOF, PRIG, BI, aux, work, off, m):
     """Earliest fraction s ∈ (0, 1] of the step at which a force law changes piece
     (reg → regn: an element crosses an edge of its clearance gap, a moment's window opens
-    or closes), on the step's Hermite interpolant (:func:`mechcirc._ode.hermite_point`, quintic
-    in the positions for m > 0; Illinois method, to 1e-9 of the step); the upper end of the bracket, so the change has happened.  ``sw0``/``sw1``:
-    the switches' values at the ends.  Returns (s, right-hand-side evaluations)."""
+    or closes), on the step's Hermite interpolant (:func:`mechcirc._ode.hermite_point`,
+    quintic in the positions for m > 0; Illinois method, to 1e-9 of the step); the upper
+    end of the bracket, so the change has happened.  ``sw0``/``sw1``: the switches' values
+    at the ends.  Returns (s, right-hand-side evaluations)."""
     n = y.shape[0]
     ne = EI.shape[0]
     best = 1.0

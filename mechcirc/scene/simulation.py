@@ -736,9 +736,9 @@ def _tableau(method):
 
 
 def _run(model, kern, theta_s, ripple, per_rev, revolutions, npts, progress, tableau=None):
-    """R revolutions of RK4 (or the explicit ``tableau``, :func:`_tableau`) at ``per_rev`` steps each: (times
-    and states tabulated on the last revolution, the previous one's (times, states) or None,
-    wall time, out-of-range seen, right-hand-side evaluations)."""
+    """R revolutions of RK4 (or the explicit ``tableau``, :func:`_tableau`) at ``per_rev``
+    steps each: (times and states tabulated on the last revolution, the previous one's
+    (times, states) or None, wall time, out-of-range seen, right-hand-side evaluations)."""
     y = model.rigid_state(theta_s, model.omega + ripple[0])
     n = model.n_free
     limit = 1e3 * model.omega * max(1.0, float(np.max(np.abs(y[n:]))) / model.omega)
