@@ -130,6 +130,16 @@ def rest(args, drive, variant, t_ref, ref, t_base, base, t_def, res, simulate, s
         t, r = timed(lambda spp=spp: simulate(drive, variant, REVS, steps_per_period=spp), 10)
         rows.append(("rk4 numba", f"{spp} steps/period", t, r.nfev, errors(r, ref)))
     rows.append(("rk4 numba", "default", t_def, res.nfev, e_def))
+    # rk8 (DOP853's 8th-order formula at a fixed step, quintic output), with its estimate
+    for spp in (4, 6, 8, 12, 16, None):
+        t, r = timed(lambda spp=spp: simulate(drive, variant, REVS, method="rk8",
+                                              steps_per_period=spp), 10)
+        e = errors(r, ref)
+        rows.append(("rk8 numba", "default" if spp is None else f"{spp} steps/period", t,
+                     r.nfev, e))
+        print(f"rk8 {rows[-1][1]}: {t_base / t:.0f}x the baseline, peak error "
+              f"{max(e['eps4P'], e['M2V']):.1e}, its estimate {r.error_estimate:.1e}"
+              f" ({'bounds' if r.error_estimate >= max(e.values()) else 'BELOW'} the error)")
     t, r = timed(lambda: simulate(drive, variant, REVS, method="rk4-python"), 1)
     rows.append(("rk4 python", "default", t, r.nfev, errors(r, ref)))
     for method, tols in (("DOP853", (1e-6, 1e-8, 1e-10)), ("RK45", (1e-6, 1e-8)),

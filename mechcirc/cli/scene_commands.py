@@ -280,11 +280,11 @@ def cmd_simulate_scene(args) -> int:
     from ..errors import MechcircError
     from ..scene import load_scene
 
-    if args.rtol is not None and args.method in ("rk4", "rk4-python"):
+    if args.rtol is not None and args.method in ("rk4", "rk4-python", "rk8"):
         raise MechcircError(f"--rtol applies to the scipy methods (DOP853, RK45, LSODA), not "
                             f"{args.method}; use --steps-per-period")
-    if args.steps_per_period is not None and args.method not in ("rk4", "rk4-python"):
-        raise MechcircError(f"--steps-per-period applies to the rk4 methods, not {args.method}; "
+    if args.steps_per_period is not None and args.method not in ("rk4", "rk4-python", "rk8"):
+        raise MechcircError(f"--steps-per-period applies to rk4 and rk8, not {args.method}; "
                             "use --rtol")
     check_output_paths(args.output, plots=(args.plot,) if args.plot else (),
                        reads=(args.scene,))

@@ -8,7 +8,7 @@ import math
 from ..limits import MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS, MAX_SCIPY_REVOLUTIONS
 from ._common import check_output_paths, count, print_json, real, save_figure
 
-_METHODS = ("rk4", "rk4-python", "DOP853", "RK45", "LSODA")   # = mechcirc.sley.METHODS
+_METHODS = ("rk4", "rk4-python", "rk8", "DOP853", "RK45", "LSODA")   # = mechcirc.sley.METHODS
 _UNITS = {"eps4T": "1/s^2", "eps2P": "1/s^2", "eps4P": "1/s^2", "eps5P": "1/s^2",
           "M2V": "N m", "M5V": "N m"}
 
@@ -80,12 +80,13 @@ def _sley_arguments(p) -> None:
                         "(repeatable)")
     p.add_argument("--method", choices=_METHODS, default="rk4",
                    help="integrator (default rk4: numba if installed, else pure Python; "
+                        "rk8: DOP853's 8th-order formula at a fixed step; "
                         "DOP853, RK45, LSODA: scipy's, with --rtol)")
     p.add_argument("--rtol", type=real(above=0.0, most=1.0), metavar="TOL",
                    help="relative tolerance of the scipy methods (default 1e-10)")
     p.add_argument("--steps-per-period", type=real(least=1.0, most=1e6), metavar="N",
-                   help="rk4 steps per period of the fastest mode (default: 25, or 50 "
-                        "if the error estimate at 25 exceeds 1e-3)")
+                   help="rk4 or rk8 steps per period of the fastest mode (default: 25, or 50 "
+                        "if the error estimate at 25 exceeds 1e-3; rk8: 8, or 16)")
     p.add_argument("--points", type=count(16, MAX_POINTS_PER_REVOLUTION), metavar="N",
                    help="output points per revolution (default 7200, i.e. 0.05 deg)")
     p.add_argument("-o", "--output", metavar="CSV", help="write the curves as CSV")
@@ -158,7 +159,8 @@ def _overrides(args) -> dict:
 
 
 def _options(args) -> dict:
-    if args.method not in ("rk4", "rk4-python") and args.revolutions > MAX_SCIPY_REVOLUTIONS:
+    fixed_step = args.method in ("rk4", "rk4-python", "rk8")
+    if not fixed_step and args.revolutions > MAX_SCIPY_REVOLUTIONS:
         from ..errors import InputError
 
         raise InputError(f"--revolutions {args.revolutions} with --method {args.method}: the "

@@ -34,7 +34,7 @@ import math
 import numpy as np
 
 from .._jit import decorators
-from .._ode import record_hermite
+from .._ode import hermite_point, record_hermite
 from ..transient._kernels import elasto_backlash
 
 HAVE_NUMBA, _jit, _jit_inline = decorators(bool(globals().get("_FORCE_PYTHON")))
@@ -358,12 +358,13 @@ def rk_step(t, hh, y, K, tmp, ynew, TA, TB, TC, PV, FI, FF, tabs, MI_, MW, EI, E
 
 @_leaf
 def locate(t, hh, y, k1, ynew, k4, tmp, dy, sw0, sw1, reg, regn, PV, FI, FF, tabs, MI_, MW,
-           EI, EF, MOI, MOF, PRIG, BI, aux, work, off):
+           EI, EF, MOI, MOF, PRIG, BI, aux, work, off, m):
     """Earliest fraction s ∈ (0, 1] of the step at which a force law changes piece
     (reg → regn: an element crosses an edge of its clearance gap, a moment's window opens
-    or closes), on the step's cubic Hermite interpolant (Illinois method, to 1e-9 of the
-    step); the upper end of the bracket, so the change has happened.  ``sw0``/``sw1``:
-    the switches' values at the ends.  Returns (s, right-hand-side evaluations)."""
+    or closes), on the step's Hermite interpolant (:func:`mechcirc._ode.hermite_point`,
+    quintic in the positions for m > 0; Illinois method, to 1e-9 of the step); the upper
+    end of the bracket, so the change has happened.  ``sw0``/``sw1``: the switches' values
+    at the ends.  Returns (s, right-hand-side evaluations)."""
     n = y.shape[0]
     ne = EI.shape[0]
     best = 1.0
@@ -382,14 +383,7 @@ def locate(t, hh, y, k1, ynew, k4, tmp, dy, sw0, sw1, reg, regn, PV, FI, FF, tab
             s = hi - ghi * (hi - lo) / (ghi - glo) if ghi != glo else 0.5 * (lo + hi)
             if not lo < s < hi:
                 s = 0.5 * (lo + hi)
-            s2 = s * s
-            s3 = s2 * s
-            h00 = 2.0 * s3 - 3.0 * s2 + 1.0
-            h10 = s3 - 2.0 * s2 + s
-            h01 = -2.0 * s3 + 3.0 * s2
-            h11 = s3 - s2
-            for i in range(n):
-                tmp[i] = h00 * y[i] + hh * h10 * k1[i] + h01 * ynew[i] + hh * h11 * k4[i]
+            hermite_point(tmp, s, hh, y, k1, ynew, k4, n, m)
             rhs(t + s * hh, tmp, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy,
                 aux, work)
             count += 1
@@ -424,9 +418,11 @@ RK4_C = np.array([0.0, 0.5, 0.5, 1.0])
 
 @_jit
 def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_, MW, EI,
-           EF, MOI, MOF, PRIG, BI, naux, TA, TB, TC):
+           EF, MOI, MOF, PRIG, BI, naux, TA, TB, TC, quintic):
     """``nsteps`` explicit Runge-Kutta steps of h from t0 (y in place) with the tableau (TA, TB,
-    TC) (:func:`rk_step`); cubic Hermite output, as the sley's.  A step in which a force law
+    TC) (:func:`rk_step`); output between the steps by Hermite interpolation, cubic, or with
+    ``quintic`` quintic in the positions q (y = [q, q̇]; :func:`mechcirc._ode.hermite_point`),
+    for a method of higher order than the cubic's 4.  A step in which a force law
     changes piece (an element crosses an edge of its clearance gap, a moment's window opens
     or closes: a kink of the force) is cut where it happens (:func:`locate`) and finished
     from there, at most 8 pieces per step, so that the method keeps its order through
@@ -436,6 +432,7 @@ def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_
     evaluations).
     """
     n = y.shape[0]
+    m = n // 2 if quintic else 0
     s = TB.shape[0]
     K = np.zeros((s + 1, n))
     tmp = np.empty(n)
@@ -475,7 +472,7 @@ def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_
                 if changed and sub < 7:
                     cut, used = locate(tc, hh, y, K[0], ynew, K[s], tmp, K[1], sw0, sw1, reg,
                                        regn, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG,
-                                       BI, aux, work, off)
+                                       BI, aux, work, off, m)
                     nfev += used + 1
                     cut = cut + 1e-7
                     if cut * hh > 1e-9 * h and cut < 1.0 - 1e-7:
@@ -494,7 +491,7 @@ def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_
             if aux[naux - 1] > bad:
                 bad = aux[naux - 1]
             j = record_hermite(rec_t, rec_y, j, t_out0, dt_out, tc, hh,
-                               full and step == nsteps - 1, y, K[0], ynew, K[s], n)
+                               full and step == nsteps - 1, y, K[0], ynew, K[s], n, m)
             for i in range(n):
                 y[i] = ynew[i]
                 K[0, i] = K[s, i]
@@ -512,7 +509,7 @@ def rk4_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI
             EF, MOI, MOF, PRIG, BI, naux):
     """:func:`rk_run` with the classical RK4 tableau (same arguments but the tableau)."""
     return rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_, MW,
-                  EI, EF, MOI, MOF, PRIG, BI, naux, RK4_A, RK4_B, RK4_C)
+                  EI, EF, MOI, MOF, PRIG, BI, naux, RK4_A, RK4_B, RK4_C, False)
 
 
 @_jit

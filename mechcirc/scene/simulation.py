@@ -719,24 +719,26 @@ def _deviation_rhs(model, kern, theta_s, ripple):
 
 
 def _tableau(method):
-    """The Butcher tableau (A, b, c) of an explicit method: RK4's, or for ``"rk8"`` the
-    8th-order formula of Dormand and Prince's DOP853 (scipy's coefficients), run at a
-    fixed step (its 12 stages cost three RK4 steps)."""
+    """The Butcher tableau (A, b, c) of an explicit method and whether its output between the
+    steps is quintic in the positions: RK4's (cubic output, its order 4), or for ``"rk8"`` the
+    8th-order formula of Dormand and Prince's DOP853 (scipy's coefficients), run at a fixed
+    step (its 12 stages cost three RK4 steps), with quintic output (error O(h⁶) in the
+    positions, O(h⁵) in the speeds)."""
     if method != "rk8":
         from ._motion_kernels import RK4_A, RK4_B, RK4_C
 
-        return RK4_A, RK4_B, RK4_C
+        return RK4_A, RK4_B, RK4_C, False
     from scipy.integrate import DOP853
 
     s = DOP853.n_stages
     return (np.ascontiguousarray(DOP853.A[:s, :s]), np.ascontiguousarray(DOP853.B),
-            np.ascontiguousarray(DOP853.C[:s]))
+            np.ascontiguousarray(DOP853.C[:s]), True)
 
 
 def _run(model, kern, theta_s, ripple, per_rev, revolutions, npts, progress, tableau=None):
-    """R revolutions of RK4 (or the explicit ``tableau``) at ``per_rev`` steps each: (times
-    and states tabulated on the last revolution, the previous one's (times, states) or None,
-    wall time, out-of-range seen, right-hand-side evaluations)."""
+    """R revolutions of RK4 (or the explicit ``tableau``, :func:`_tableau`) at ``per_rev``
+    steps each: (times and states tabulated on the last revolution, the previous one's
+    (times, states) or None, wall time, out-of-range seen, right-hand-side evaluations)."""
     y = model.rigid_state(theta_s, model.omega + ripple[0])
     n = model.n_free
     limit = 1e3 * model.omega * max(1.0, float(np.max(np.abs(y[n:]))) / model.omega)

@@ -307,3 +307,36 @@ def test_rk4_error_estimate_bounds_the_returned_runs_error(variant):
             assert r.scene_extrema == alone.scene_extrema
             assert true < _rel_change(coarse.scene_extrema, ref.scene_extrema)
             assert 2 * r.n_steps == 3 * alone.n_steps
+
+
+@pytest.mark.filterwarnings("ignore:.*not yet periodic")
+def test_cli_simulate_method_rk8(tmp_path, capsys):
+    """``mechcirc simulate --method rk8`` on a preset and on a scene file: the table's
+    extrema equal the library's rk8 run, --steps-per-period is taken, --rtol refused (2)."""
+    from pathlib import Path
+
+    import json
+
+    from mechcirc import cli
+    from mechcirc.scene import load_scene, simulate_scene
+
+    assert cli.main(["simulate", "--method", "rk8", "--revolutions", "2", "--points", "720",
+                     "--steps-per-period", "12", "--json"]) == 0
+    got = json.loads(capsys.readouterr().out)
+    want = simulate("one-side", 3, revolutions=2, method="rk8", steps_per_period=12,
+                    points_per_revolution=720)
+    assert got["method"] == "rk8"
+    for k in ("eps4P", "M2V"):
+        assert got["extrema"][k] == pytest.approx(list(want.extrema[k]), rel=1e-12)
+    scene = Path(__file__).resolve().parents[2] / "examples" / "slider_crank_scene.toml"
+    out = tmp_path / "run.csv"
+    assert cli.main(["simulate", str(scene), "--method", "rk8", "--revolutions", "2",
+                     "--points", "360", "-o", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "rk8 (" in text and "RK8 step" in text and out.exists()
+    m = simulate_scene(load_scene(scene), revolutions=2, points=360, method="rk8")
+    lo, hi = m.extrema["k_rod.force"]
+    row = next(r for r in text.splitlines() if r.startswith("k_rod.force"))
+    assert [float(v) for v in row.split()[1:3]] == pytest.approx([lo, hi], rel=1e-5)
+    assert cli.main(["simulate", "--method", "rk8", "--rtol", "1e-6"]) == 2
+    assert "rtol applies to the scipy methods, not rk8" in capsys.readouterr().err
