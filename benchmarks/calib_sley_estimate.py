@@ -7,9 +7,12 @@ and the true error of the returned run's extrema against DOP853 at rtol 1e-12
 same way as the estimate (every output, relative to its largest magnitude).
 The goal: estimate / true >= 1.  ``spp``: the steps per period of the returned run (the
 default chooses 25, or 50 when the estimate at 25 exceeds 1e-3).
-Run: python benchmarks/calib_sley_estimate.py
+Run: python benchmarks/calib_sley_estimate.py [--method rk4|rk8] [--sweep]
+(``--method rk8``: the 8th-order fixed-step method with its quintic output,
+default steps 8 or 16 per period.)
 """
 
+import sys
 import warnings
 from pathlib import Path
 
@@ -33,20 +36,24 @@ for name in ("heald_scene", "slider_crank_scene", "fnf_sixbar_scene", "cam_heald
         CASES.append((name, lambda n=name: load_scene(EX / f"{n}.toml"), {}))
 
 
+METHOD = sys.argv[sys.argv.index("--method") + 1] if "--method" in sys.argv else "rk4"
+if METHOD not in ("rk4", "rk8"):
+    raise SystemExit(f"--method must be rk4 or rk8, not {METHOD!r}")
+print(f"method {METHOD}")
 print(f"{'case':<32} {'spp':>4} {'estimate':>9} {'true err':>9} {'est/true':>9} {'periodic':>9}"
       "  warned")
 for label, make, kw in CASES:
     scene = make()
     with warnings.catch_warnings(record=True) as w:
         warnings.simplefilter("always")
-        r = simulate_scene(scene, **kw)
+        r = simulate_scene(scene, **kw, method=METHOD)
     kw.pop("steps_per_period", None)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         ref = simulate_scene(scene, **kw, method="DOP853", rtol=1e-12, error_estimate=False)
     true = _rel_change(r.extrema, ref.extrema)
     per = "-" if r.periodicity is None else f"{r.periodicity:9.2g}"
-    spp = next(n for n in r.notes if n.startswith("RK4 step"))
+    spp = next(n for n in r.notes if n.startswith(("RK4 step", "RK8 step")))
     spp = spp.split(" per period of the fastest")[0].rsplit(", ", 1)[-1]   # the one returned
     print(f"{label:<32} {spp:>4} {r.error_estimate:9.2g} {true:9.2g} "
           f"{r.error_estimate / true:9.3g} "
@@ -64,7 +71,8 @@ if __name__ == "__main__" and "--sweep" in __import__("sys").argv:
                 ref = simulate_scene(scene, revolutions=2, points=1800, method="DOP853",
                                      rtol=1e-12, error_estimate=False)
                 for spp in (8, 20, 50, 100):
-                    r = simulate_scene(scene, revolutions=2, points=1800, steps_per_period=spp)
+                    r = simulate_scene(scene, revolutions=2, points=1800, steps_per_period=spp,
+                                       method=METHOD)
                     true = _rel_change(r.extrema, ref.extrema)
                     ratios.append(r.error_estimate / true)
                     print(f"{drive:<10} {variant} {spp:3d} {r.error_estimate:9.2g} {true:9.2g} "
