@@ -19,6 +19,7 @@ import functools
 from pathlib import Path
 
 import networkx as nx
+from package_source import package_trees
 
 import mechcirc
 
@@ -59,7 +60,7 @@ def _imports(path: Path, modules: set[str]):
     """(target module, lazy?, delegate?) for every import of a mechcirc module in ``path``."""
     name = _module_name(path)
     package = name if path.name == "__init__.py" else name.rpartition(".")[0]
-    tree = ast.parse(path.read_text(encoding="utf-8"))
+    tree = package_trees()[path]
     found = []
 
     def visit(node, lazy, delegate=False):

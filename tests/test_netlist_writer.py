@@ -54,7 +54,11 @@ def test_shipped_netlist_round_trips(path):
 
 
 # ----------------------------------------------------------------- generated circuits
-_names = st.from_regex(r"[A-Za-z_][A-Za-z0-9_]{0,6}|[1-9][0-9]{0,3}", fullmatch=True)
+_name_text = st.from_regex(r"[A-Za-z_][A-Za-z0-9_]{0,6}|[1-9][0-9]{0,3}", fullmatch=True)
+# The same strategy behind deferred(): fresh() below filters it once per name, and a
+# filter of from_regex(...) itself would rebuild the regex strategy every time (that
+# rebuilding was most of this file's CPU); the names drawn are the same.
+_names = st.deferred(lambda: _name_text)
 _positive = st.floats(min_value=5e-324, max_value=1.7976931348623157e308,
                       allow_nan=False, allow_infinity=False)
 _finite = st.floats(allow_nan=False, allow_infinity=False)

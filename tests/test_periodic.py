@@ -244,7 +244,15 @@ def test_against_the_transients_steady_state():
                    elements=False, velocities=False)
     last = tr.time >= 11 * T - 1e-12
     th = (W * tr.time[last]) % (2 * np.pi)
-    Q = (np.exp(1j * np.outer(th, r.k)) @ r.amplitude).real
+    # Q(θ) = Re Σ_{k=1..N} Q_k z^k, z = e^{jθ}, summed by Horner's rule (|z| = 1: stable;
+    # 0.1 s where the 20,001 × 1,805 matrix of e^{jkθ} took 4.5 s).  Measured: within
+    # 1.3e-16 of peak of a 30-digit mpmath sum at 7 angles, 3.4e-15 of the matrix sum.
+    assert np.array_equal(r.k, np.arange(1, len(r.k) + 1))
+    z = np.exp(1j * th)
+    acc = np.zeros_like(z)
+    for a in r.amplitude[::-1]:
+        acc = acc * z + a
+    Q = (acc * z).real
     assert np.max(np.abs(tr.drive_force[last] - Q)) <= 1e-6 * r.peak
 
 

@@ -13,6 +13,7 @@ references written here independently of mechcirc.
   with the lever held, sqrt((k_rod η_r + k_warp η_w)/(m η_m)).
 """
 
+import functools
 import math
 import warnings
 from pathlib import Path
@@ -177,6 +178,16 @@ def _lagrange_reference(times):
     """The frame's height y(t), ÿ(t) and the rod's force, from its equation of motion written
     here: M ÿ = −(k (ℓ − l₀) + c ℓ̇) ∂ℓ/∂y − k_w (y − y_rigid(ψ)), the lever at ψ = x(Ω t)
     (the load's deformation is the frame's departure from its rigid motion)."""
+    sol, parts = _lagrange_solution(float(times.max()))
+    y = sol.sol(times)
+    acc, force = parts(times, y[0], y[1])
+    return y[0], acc, force
+
+
+@functools.cache
+def _lagrange_solution(t_end):
+    """The reference's dense solution to ``t_end`` and its right-hand side, solved once
+    (both follower faces move the frame by the same law: the same equation, same span)."""
     from scipy.integrate import solve_ivp
 
     l0 = math.hypot(XH - L_ARM, YH0)
@@ -194,11 +205,9 @@ def _lagrange_reference(times):
         return (-force * ell_y - K_W * (y - y_rigid)) / M_H, force
 
     sol = solve_ivp(lambda tt, s: [s[1], parts(tt, s[0], s[1])[0][0]],
-                    (0.0, float(times.max())), [YH0, 0.0], method="DOP853", rtol=1e-12,
+                    (0.0, t_end), [YH0, 0.0], method="DOP853", rtol=1e-12,
                     atol=1e-15, dense_output=True, max_step=2 * math.pi / W / 720)
-    y = sol.sol(times)
-    acc, force = parts(times, y[0], y[1])
-    return y[0], acc, force
+    return sol, parts
 
 
 @pytest.mark.parametrize("face", SCENES)
