@@ -22,6 +22,22 @@ settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 os.environ.setdefault("MECHCIRC_NO_WARM", "1")
 
 
+@pytest.fixture(autouse=True)
+def _cwd_is_kept():
+    """Every test leaves the working directory as it found it.
+
+    A test that changed it for good (a monkeypatch.chdir undone to the wrong
+    folder once did) would run the rest of its worker from elsewhere, and
+    child processes started there import whatever ``mechcirc`` that folder holds.
+    """
+    before = os.getcwd()
+    yield
+    after = os.getcwd()
+    if after != before:
+        os.chdir(before)
+        pytest.fail(f"the test left the working directory at {after} (was {before})")
+
+
 @pytest.fixture(scope="session")
 def cli_once(tmp_path_factory):
     """``cli_once(argv)``: (status, stdout, stderr) of ``mechcirc ARGV`` in-process, run once.

@@ -346,8 +346,10 @@ def _run_page(page: Path, tmp: Path, fixtures):
                PATH=f"{bin_dir}{os.pathsep}{os.environ.get('PATH', '')}")
     namespace: dict = {"__name__": "__doc_example__"}
     failures = []
-    old = Path.cwd()
-    os.chdir(tmp)
+    # The test's monkeypatch owns the working directory: the example scripts run by
+    # run_script chdir through it too, and it restores the original one at teardown
+    # (an os.chdir back here would be undone by that teardown, leaving the worker in tmp).
+    fixtures[1].chdir(tmp)
     try:
         for line, info, text, marks in blocks(page):
             kind = _kind(info, text, marks)
@@ -377,7 +379,7 @@ def _run_page(page: Path, tmp: Path, fixtures):
             elif kind == "shell":
                 failures += _run_shell(text, marks, where, tmp, env, fixtures)
     finally:
-        os.chdir(old)
+        fixtures[1].undo()
     return failures
 
 

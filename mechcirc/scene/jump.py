@@ -232,7 +232,7 @@ def scene_jump_speed(scene, bracket=None, *, rtol: float = 1e-8, grow: float = 1
 def _secant_in_omega_squared(scene, seen, least, lo, hi, rtol):
     """The root of N(Ω²) by secants through runs that hold, at 0.998/0.999 of each root.
 
-    The two newest speeds with N > 0 give the root of the line through them; the
+    The two fastest runs with N > 0 give the root of the line through them; the
     next two runs are at 0.998 and 0.999 of it.  For a rigid follower N = F₀ + k s
     + mΩ² s″ at a fixed cam angle is linear in Ω², so this settles in a few steps.
     It stays off N ≈ 0 on purpose: there the contact law bends within a step and a
