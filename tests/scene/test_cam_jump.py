@@ -23,14 +23,15 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
-
-from cli_helpers import assert_user_error, run
 from mechcirc.errors import MechcircError, NetlistError
 from mechcirc.motion_laws import cam_cycle
 from mechcirc.scene import parse_scene, simulate_scene
 from mechcirc.scene.jump import contact_report, scene_jump_speed
 from mechcirc.transient.follower import jump_speed
+from scipy.integrate import solve_ivp
+
+from cli_helpers import assert_user_error, run
+from reference.cam_lift import cycloidal_cycle
 
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLE = ROOT / "examples" / "cam_jump_scene.toml"
@@ -95,18 +96,7 @@ def test_a_bad_jump_search_is_refused(bracket, kw, needle):
 
 def _lift1(th):
     """s, s' of the same law at one angle (scalar, for the reference's right-hand side)."""
-    th = th % (2 * math.pi)
-    if th < RISE:
-        u = th / RISE
-        return H * (u - math.sin(2 * math.pi * u) / (2 * math.pi)), \
-            H / RISE * (1 - math.cos(2 * math.pi * u))
-    if th < RISE + DWELL:
-        return H, 0.0
-    if th < RISE + DWELL + RET:
-        u = (th - RISE - DWELL) / RET
-        return H * (1 - u + math.sin(2 * math.pi * u) / (2 * math.pi)), \
-            -H / RET * (1 - math.cos(2 * math.pi * u))
-    return 0.0, 0.0
+    return cycloidal_cycle(th, H, RISE, DWELL, RET)
 
 
 def _reference(omega, kc, dc, t):

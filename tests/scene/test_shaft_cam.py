@@ -20,10 +20,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
-
 from mechcirc.scene import parse_scene
 from mechcirc.scene.shaft import simulate_shaft
+from scipy.integrate import solve_ivp
+
+from reference.cam_lift import cycloidal_cycle
 
 ROOT = Path(__file__).resolve().parents[2]
 TEXT = (ROOT / "examples" / "cam_jump_scene.toml").read_text(encoding="utf-8")
@@ -50,18 +51,7 @@ def scene():
 
 def lift(th):
     """s, s′ of the cycloidal rise 100°, dwell 80°, return 80°, dwell (by hand)."""
-    th = th % (2 * math.pi)
-    if th < RISE:
-        u = th / RISE
-        return H * (u - math.sin(2 * math.pi * u) / (2 * math.pi)), \
-            H / RISE * (1 - math.cos(2 * math.pi * u))
-    if th < RISE + DWELL:
-        return H, 0.0
-    if th < RISE + DWELL + RET:
-        u = (th - RISE - DWELL) / RET
-        return H * (1 - u + math.sin(2 * math.pi * u) / (2 * math.pi)), \
-            -H / RET * (1 - math.cos(2 * math.pi * u))
-    return 0.0, 0.0
+    return cycloidal_cycle(th, H, RISE, DWELL, RET)
 
 
 def push(th, w, y, yd):
