@@ -837,6 +837,12 @@ class _Parser:
         from .motion_laws import LAWS, cam_cycle
 
         text = tok.text
+        for key in ("motion", "return_law"):
+            if key in units:        # a unit glued to a law name would be dropped unread
+                line.error(f"{key}={opts[key].text} is a law's name and takes no unit, "
+                           f"got {units[key].text!r} after it", units[key].col,
+                           "the stroke's unit after stroke= (stroke=20 mm, stroke=30 deg); "
+                           "the angles after rise=, dwell=, return= (degrees by default)")
         values = {}
         for key in ("rise", "dwell", "return", "stroke"):
             if key not in opts:
