@@ -154,10 +154,12 @@ def is_number(text: str) -> bool:
     Parameters
     ----------
     text : str
+        A field of an input file (a netlist token, a Touchstone number).
 
     Returns
     -------
     bool
+        False where ``float`` raises ``ValueError``.
     """
     try:
         float(text)

@@ -284,11 +284,8 @@ def two_port(circuit: "Circuit", P1: str, P2: str, S1: str, S2: str, omega: Arra
 
     Parameters
     ----------
-    circuit : Circuit
-    P1, P2, S1, S2 : str
-        The nodes of port 1 and port 2.
-    omega : array_like
-        ω [rad/s].
+    circuit, P1, P2, S1, S2, omega
+        As :func:`two_port_z`.
     z0 : float, optional
         Reference mobility [m/(N·s)].
 
