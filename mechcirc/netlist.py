@@ -46,7 +46,7 @@ from pathlib import Path
 from .circuit import ELEMENT_UNITS, Circuit, Drive, Element, ElementKind, Lever
 from .errors import NetlistError
 from .expressions import CONSTANTS, FUNCTIONS, Expr, evaluate, parse_expression
-from .sources import read_source, split_lines
+from .sources import is_number, read_source, split_lines
 from .units import (UnitError, convert, is_rotational, looks_like_unit, parse_unit,
                     split_quantity)
 
@@ -80,13 +80,6 @@ SYNTAX = {
 
 #: The options of a drive with ``motion=`` (a table takes only ``motion``).
 _MOTION_KEYS = ("motion", "rise", "dwell", "return", "stroke", "return_law")
-
-def _is_number(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
 
 
 #: Where the first positional field that carries a value is (elements: VALUE).
@@ -285,7 +278,7 @@ def _check_count(line: _Line, keyword: str, npos: int, positional: list) -> None
         end = line.tokens[-1].col + len(line.tokens[-1].text)
         last = positional[-1] if positional else None
         if missing == "VALUE" and last is not None and last.text != "0" and \
-                (quantity := split_quantity(last.text)) and _is_number(quantity[0]):
+                (quantity := split_quantity(last.text)) and is_number(quantity[0]):
             # 'mass m a 2': the value is there, read as node N2: a node is missing
             line.error(f"{keyword} line is missing a node: it has {len(positional)} of "
                        f"the fields {' '.join(fields)}, and {last.text!r}, read as "
@@ -837,6 +830,12 @@ class _Parser:
         from .motion_laws import LAWS, cam_cycle
 
         text = tok.text
+        for key in ("motion", "return_law"):
+            if key in units:        # a unit glued to a law name would be dropped unread
+                line.error(f"{key}={opts[key].text} is a law's name and takes no unit, "
+                           f"got {units[key].text!r} after it", units[key].col,
+                           "the stroke's unit after stroke= (stroke=20 mm, stroke=30 deg); "
+                           "the angles after rise=, dwell=, return= (degrees by default)")
         values = {}
         for key in ("rise", "dwell", "return", "stroke"):
             if key not in opts:

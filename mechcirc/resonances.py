@@ -824,7 +824,6 @@ def batched_roots(ds, omega_max: float | None = None):
         return None
     cand = ds.valid.copy()
     row = {e.name: i for i, e in enumerate(ds.circuit.elements)}
-    damped = bool(system.D.nnz and np.any(system.D.data))
     for lv in system.levers:                          # the projection depends on them
         i = next(j for j, m in enumerate(ds.circuit.levers) if m.name == lv.name)
         cand &= ds.ratios[i] == lv.ratio
@@ -832,11 +831,13 @@ def batched_roots(ds, omega_max: float | None = None):
     if not which.size:
         return None
     n_nodes = len(system.nodes)
-    *_, G_released, G_held, _ = pencil(system)
+    # Dense, as element_patterns: without scipy when no lever needs a pivoted QR.
+    *_, G_released, G_held, damped = pencil(system, dense=True)
     B = element_patterns(system)
     el_rows = np.array([row[e.name] for e in system.elements], dtype=np.int64)
     S = (ds.values[el_rows][:, which] * ds.eta[el_rows][:, which]).T      # (D', E)
-    problems = [stacked_problem(constraint_basis(G, n_nodes).toarray(), B, S, damped, omega_max)
+    problems = [stacked_problem(constraint_basis(G, n_nodes, dense=True), B, S, damped,
+                                omega_max)
                 for G in (G_held, G_released)]
     (w_h, e_h, _), (w_r, e_r, _) = problems
     keep = np.flatnonzero(_without_shared_roots(problems, damped))

@@ -13,7 +13,7 @@ from .errors import NetlistError
 
 __all__ = ["read_source", "read_bytes", "MAX_INPUT_BYTES", "split_lines", "line_col",
            "finite_number", "brief", "load_toml", "locate", "locate_path", "located", "Table",
-           "unknown_key", "check_keys", "number_error", "did_you_mean"]
+           "unknown_key", "check_keys", "number_error", "did_you_mean", "is_number"]
 
 #: The largest input file mechcirc reads [bytes].  A netlist of the statement
 #: limit is far below this; anything larger is refused before it is read.
@@ -148,6 +148,26 @@ def line_col(text: str, index: int) -> tuple[int, int]:
 
 
 # ------------------------------------------------------------------ values
+def is_number(text: str) -> bool:
+    """Whether ``float(text)`` reads ``text`` (``inf`` and ``nan`` included).
+
+    Parameters
+    ----------
+    text : str
+        A field of an input file (a netlist token, a Touchstone number).
+
+    Returns
+    -------
+    bool
+        False where ``float`` raises ``ValueError``.
+    """
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
 def finite_number(value) -> TypeGuard[float]:
     """A TOML integer or float that is a finite float64 (not a bool, not ``10**400``).
 

@@ -162,7 +162,12 @@ def _warnings(cam) -> list:
                         f"{math.degrees(phi.theta):.3f}° exceeds the limit "
                         f"{math.degrees(phi.limit):g}° (a larger base circle, a longer rise or "
                         "an offset lowers it)")
-    if not cut.ok:
+    if not cut.ok and cut.value == -math.inf:       # the oscillating face turns back
+        warnings.append(f"undercut at θ = {math.degrees(cut.theta):.3f}°: the face stops "
+                        "turning against the cam there (1 + dψ/dθ = 0), so its contact point "
+                        "runs off to infinity; the cam cannot give this motion (a longer "
+                        "return or rise, or a smaller swing)")
+    elif not cut.ok:
         why = (f"the roller radius {cam.roller_radius:g} mm exceeds the pitch curve's radius "
                f"of curvature {cut.value + cam.roller_radius:.4g} mm there, so the profile's "
                if cam.rho_pitch is not None else "the profile's radius of curvature "

@@ -36,11 +36,17 @@ def _register_forces(sub) -> None:
     p.add_argument("file", help="netlist file (.mcir)")
     p.add_argument("--omega", type=positive_omega, required=True, metavar="W",
                    help="angular frequency: rad/s, or with a unit: 50Hz, 3000rpm")
+    _method_plot_json(p, "bar chart of |Q| per element (PNG, SVG, PDF)", cmd_forces)
+
+
+def _method_plot_json(p, plot: str, func) -> None:
+    """The options ``forces`` and ``compare`` end with: --method, --plot (``plot``: what it
+    draws), --json; and the command's function."""
     p.add_argument("--method", choices=("auto", "sp", "nodal"), default="auto",
                    help="series–parallel tree, nodal analysis, or auto (default)")
-    p.add_argument("--plot", metavar="IMAGE", help="bar chart of |Q| per element (PNG, SVG, PDF)")
+    p.add_argument("--plot", metavar="IMAGE", help=plot)
     p.add_argument("--json", action="store_true", help="print one JSON document")
-    p.set_defaults(func=cmd_forces)
+    p.set_defaults(func=func)
 
 
 def _register_compare(sub) -> None:
@@ -58,11 +64,7 @@ def _register_compare(sub) -> None:
                    help="compare only from this angular frequency [rad/s] (or 5Hz, 300rpm)")
     p.add_argument("--omega-max", type=band_omega, metavar="W2",
                    help="compare only up to this angular frequency [rad/s] (or 50Hz, 3000rpm)")
-    p.add_argument("--method", choices=("auto", "sp", "nodal"), default="auto",
-                   help="series–parallel tree, nodal analysis, or auto (default)")
-    p.add_argument("--plot", metavar="IMAGE", help="overlay |K| and phase (PNG, SVG or PDF)")
-    p.add_argument("--json", action="store_true", help="print one JSON document")
-    p.set_defaults(func=cmd_compare)
+    _method_plot_json(p, "overlay |K| and phase (PNG, SVG or PDF)", cmd_compare)
 
 
 def _register_formula(sub) -> None:

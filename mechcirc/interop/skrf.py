@@ -32,6 +32,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import MechcircError, TopologyError
+from .touchstone import read_touchstone_one_port
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..circuit import Circuit
@@ -168,26 +169,10 @@ def write_touchstone(path: str | os.PathLike, omega: ArrayLike, Z: ArrayLike, *,
     return dropped
 
 
-def read_mobility(path: str | os.PathLike) -> tuple[NDArray[np.float64], NDArray[np.complex128], str]:
-    """Read a one-port Touchstone file: ``(omega [rad/s], K [m/(N·s)], name)``.
-
-    The file's Z parameter is taken as the mobility (S, Y or Z; RI, MA or DB;
-    any reference R > 0).  The file is parsed as text by
-    :func:`mechcirc.interop.touchstone.read_touchstone_one_port`, never by
-    ``skrf.Network(path)``, which would unpickle a file that is a pickle and
-    so run code from it.
-
-    Parameters
-    ----------
-    path : str or PathLike
-
-    Returns
-    -------
-    tuple of (ndarray, ndarray of complex, str)
-    """
-    from .touchstone import read_touchstone_one_port
-
-    return read_touchstone_one_port(path)
+#: Read a one-port Touchstone file as ``(omega [rad/s], K [m/(N·s)], name)``: the
+#: text parser of :mod:`mechcirc.interop.touchstone` under this module's name, never
+#: ``skrf.Network(path)``, which would unpickle a file that is a pickle.
+read_mobility = read_touchstone_one_port
 
 
 # --------------------------------------------------------------------------
@@ -284,11 +269,8 @@ def two_port(circuit: "Circuit", P1: str, P2: str, S1: str, S2: str, omega: Arra
 
     Parameters
     ----------
-    circuit : Circuit
-    P1, P2, S1, S2 : str
-        The nodes of port 1 and port 2.
-    omega : array_like
-        ω [rad/s].
+    circuit, P1, P2, S1, S2, omega
+        As :func:`two_port_z`.
     z0 : float, optional
         Reference mobility [m/(N·s)].
 

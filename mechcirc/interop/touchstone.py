@@ -33,7 +33,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import NetlistError
-from ..sources import read_source, split_lines
+from ..sources import is_number, read_source, split_lines
 
 __all__ = ["read_touchstone_one_port"]
 
@@ -162,7 +162,7 @@ def _data_line(stripped: str, options, source: str, number: int, col: int,
     try:
         f, a, b = (float(x) for x in fields)
     except ValueError:
-        bad = next(x for x in fields if not _is_float(x))
+        bad = next(x for x in fields if not is_number(x))
         raise NetlistError(f"{bad!r} is not a number", source, number,
                            col + stripped.find(bad), "a decimal number") from None
     if not all(math.isfinite(x) for x in (f, a, b)):
@@ -187,11 +187,3 @@ def _data_line(stripped: str, options, source: str, number: int, col: int,
         raise NetlistError("the value gives an infinite mobility K", source, number, col,
                            "a finite value")
     return f, K
-
-
-def _is_float(token: str) -> bool:
-    try:
-        float(token)
-    except ValueError:
-        return False
-    return True

@@ -365,7 +365,10 @@ def _checks(geo, theta, follower, phi, kappa, rho, rf, pressure_limit) -> tuple:
                                  np.abs(phi))
     checks = [CamCheck("pressure_angle", phi_max <= pressure_limit, phi_max, t_phi,
                        pressure_limit)]
-    if follower in _FACES:
+    turn_back = _turns_back(geo, theta) if follower == "oscillating_flat" else None
+    if turn_back is not None:           # ρ → ±∞ there: no least radius, the profile has none
+        checks.append(CamCheck("undercut", False, -math.inf, turn_back, 0.0))
+    elif follower in _FACES:
         t_rho, neg = _refine_max(lambda t: -float(geo(np.array([t]))[7][0]), theta, -rho)
         checks.append(CamCheck("undercut", -neg > 0, -neg, t_rho, 0.0))
     else:
@@ -373,6 +376,26 @@ def _checks(geo, theta, follower, phi, kappa, rho, rf, pressure_limit) -> tuple:
         worst = 1.0 / k_max - rf if k_max > 0 else math.inf
         checks.append(CamCheck("undercut", worst > 0, worst, t_k, 0.0))
     return tuple(checks)
+
+
+def _turns_back(geo, theta) -> float | None:
+    """The first cam angle where the oscillating flat face stops turning against the cam,
+    1 + s′ = 0 (its contact point runs off to infinity, ρ ~ 1/(1 + s′)³ changes sign),
+    or None where 1 + s′ > 0 over the whole turn."""
+    from scipy.optimize import brentq
+
+    def turn(t):
+        return 1.0 + float(geo(np.array([t]))[1][0])
+
+    rate = 1.0 + geo(theta)[1]
+    t_min, neg = _refine_max(lambda t: -turn(t), theta, -rate)
+    if neg < 0:
+        return None
+    i = int(np.argmax(rate <= 0)) if np.any(rate <= 0) else int(np.searchsorted(theta, t_min))
+    hi = float(theta[i]) if rate[i] <= 0 else t_min
+    if i == 0 or turn(hi) == 0:
+        return hi
+    return float(brentq(turn, float(theta[i - 1]), hi, xtol=1e-15, rtol=4 * np.finfo(float).eps))
 
 
 # ------------------------------------------------------------------ export

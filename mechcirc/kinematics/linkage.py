@@ -417,10 +417,8 @@ class Linkage:
 
         Raises
         ------
-        GeometryError
-            The linkage locks (no assembly, or a singular Jacobian) — the
-            message gives the first θ where it does — or the continuation
-            jumped to another branch.
+        GeometryError, NetlistError
+            As :meth:`motion`, which this wraps.
         """
         scalar = np.ndim(theta) == 0
         m = self.motion(theta, max_step_deg=max_step_deg, method=method)

@@ -18,13 +18,18 @@ import numpy as np
 __all__ = ["plot_fourbar", "plot_synthesis", "draw_design", "plot_frame_loading", "plot_shaking", "plot_linkage"]
 
 
-def _figure(rows, cols, size, fig=None):
+def _blank(size, fig=None):
+    """``fig``, or a new constrained-layout Figure of ``size`` (no pyplot)."""
     if fig is None:
         from matplotlib.figure import Figure
 
         fig = Figure(figsize=size, layout="constrained")
-    axes = fig.subplots(rows, cols, squeeze=False)
-    return fig, axes
+    return fig
+
+
+def _figure(rows, cols, size, fig=None):
+    fig = _blank(size, fig)
+    return fig, fig.subplots(rows, cols, squeeze=False)
 
 
 def plot_fourbar(fourbar, omega: float | None = None, n: int = 721, *, fig=None):
@@ -145,10 +150,7 @@ def plot_synthesis(designs, n: int = 721, fig=None):
     -------
     matplotlib.figure.Figure
     """
-    if fig is None:
-        from matplotlib.figure import Figure
-
-        fig = Figure(figsize=(12, 7), layout="constrained")
+    fig = _blank((12, 7), fig)
     grid = fig.add_gridspec(2, 2, width_ratios=(1, 1.3))
     draw_design(designs[0], fig.add_subplot(grid[:, 0]))
     ax = [fig.add_subplot(grid[0, 1]), None]
@@ -222,11 +224,7 @@ def plot_shaking(result, fig=None):
     -------
     matplotlib.figure.Figure
     """
-    if fig is None:
-        from matplotlib.figure import Figure
-
-        fig = Figure(figsize=(10, 8), layout="constrained")
-    ax = fig.subplots(2, 2, squeeze=False)
+    fig, ax = _figure(2, 2, (10, 8), fig)
     deg = np.degrees(result.theta)
     S = result.shaking_force
     mag = result.shaking_force_magnitude

@@ -527,6 +527,8 @@ class _CamReader:
             if not c.ok:
                 what = (f"pressure angle {math.degrees(c.value):.4g}° beyond the limit "
                         f"{math.degrees(c.limit):.4g}°" if c.name == "pressure_angle" else
+                        "undercut: the face stops turning against the cam (1 + dψ/dθ = 0), "
+                        "its contact point runs off to infinity" if c.value == -math.inf else
                         f"undercut: smallest convex radius of the profile {c.value:.4g} "
                         f"{self.lk.units or 'units'} ≤ 0")
                 warn(f"{self.source}: [cam] {what} at cam angle {math.degrees(c.theta):.4g}°",

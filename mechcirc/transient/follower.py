@@ -313,12 +313,8 @@ def separation_speed(motion, mass, spring, preload, damping=0.0, *, contact,
 
     Parameters
     ----------
-    motion : Motion
-        The lift s(θ) [m].
-    mass, spring, preload, damping : float
-        As :func:`jump_speed`.
-    contact, contact_damping : float
-        Contact stiffness [N/m] and damping [N·s/m].
+    motion, mass, spring, preload, damping, contact, contact_damping
+        As :func:`follower`, which this runs.
     bracket : tuple of (float, float)
         [rev/min].
     rtol : float

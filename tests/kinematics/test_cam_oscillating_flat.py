@@ -131,6 +131,31 @@ def radius_fast(theta):
         RISE, DWELL, RET, H = saved
 
 
+def test_a_face_that_turns_back_has_no_least_radius():
+    """Where 1 + s′ = 0 the face stops turning against the cam: the reference's ρ runs
+    through ±∞ there (opposite signs, |ρ| > 1e8 r_b at 1e-6 rad either side), so the
+    check reports −∞ at that angle (closed form of the cycloidal return), not a grid
+    point's huge value (it reported −6.3e21 at 220° for a 40° swing)."""
+    h, ret = math.radians(50.0), math.radians(60.0)
+    cam = cam_profile(cam_cycle("cycloidal", 60, 120, 60, h), RB, "oscillating_flat",
+                      pivot=D)
+    chk = cam.check("undercut")
+    # return from 180°: s′ = −(h/β)(1 − cos 2πu), u = (θ − 180°)/β; 1 + s′ = 0 first at
+    u = math.acos(1.0 - ret / h) / (2 * math.pi)
+    theta_star = math.pi + ret * u
+    assert not chk.ok and chk.value == -math.inf
+    assert chk.theta == pytest.approx(theta_star, abs=1e-12)
+    global RISE, DWELL, RET, H
+    saved = RISE, DWELL, RET, H
+    RISE, DWELL, RET, H = math.radians(60.0), math.radians(120.0), ret, h
+    try:
+        before, after = (float(signed_radius(mpmath.mpf(theta_star) + d))
+                         for d in (-1e-6, 1e-6))
+    finally:
+        RISE, DWELL, RET, H = saved
+    assert before * after < 0 and min(abs(before), abs(after)) > 1e8 * RB
+
+
 def test_pivot_inside_the_base_circle_is_refused():
     with pytest.raises(InputError, match="pivot distance D = 30 must be more than"):
         cam_profile(cam_cycle("cycloidal", 120, 60, 120, H), RB, "oscillating_flat",

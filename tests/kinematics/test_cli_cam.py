@@ -170,3 +170,20 @@ def test_an_oscillating_flat_face_reports_the_curvature_written_out_here(capsys)
 ])
 def test_an_oscillating_flat_face_refuses_bad_options(extra, needle, capsys):
     assert_user_error(FLAT + extra, capsys, needle)
+
+
+def test_an_oscillating_face_that_turns_back_is_named_not_given_a_radius(capsys):
+    """A 50° swing returned in 60°: 1 + s′ = 0 at 180° + 60°·acos(1 − 60/50)/(2π)
+    (the cycloidal return written out); the warning says the face turns back there,
+    the JSON value is −Infinity."""
+    argv = ["cam", "--law", "cycloidal", "--rise", "60", "--dwell", "120", "--return", "60",
+            "--stroke", "50", "--base-radius", "40", "--follower", "oscillating_flat",
+            "--pivot", "100"]
+    theta = 180.0 + 60.0 * math.acos(1.0 - 60.0 / 50.0) / (2 * math.pi)
+    status, out, err = run(argv, capsys)
+    assert status == 0 and "undercut: YES" in out
+    assert f"warning: undercut at θ = {theta:.3f}°: the face stops turning" in err
+    status, out, _ = run(argv + ["--json"], capsys)
+    check = json.loads(out)["checks"]["undercut"]
+    assert status == 0 and check["value"] == -math.inf and not check["ok"]
+    assert check["theta_deg"] == pytest.approx(theta, abs=1e-9)

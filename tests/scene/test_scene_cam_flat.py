@@ -118,3 +118,21 @@ def test_bad_flat_face_tables_are_located(text, key, needles, tmp_path, capsys):
     f = tmp_path / "bad.toml"
     f.write_text(text)
     assert_user_error(["scene", f, "--theta", "60"], capsys, "bad.toml:", *needles)
+
+
+def test_a_face_that_turns_back_is_warned_at_its_angle():
+    """A 70° swing returned over 120°: 1 + s′ = 0 first at 180° + 120°·acos(1 − 120/70)/(2π)
+    (the cycloidal return written out); the warning names that angle, not a radius."""
+    import re
+    import warnings
+
+    from mechcirc.errors import MechcircWarning
+
+    text = re.sub(r"stroke_deg = [0-9.]+", "stroke_deg = 70.0", FLAT)
+    with warnings.catch_warnings(record=True) as got:
+        warnings.simplefilter("always")
+        parse_scene(text, "big.toml")
+    msgs = [str(w.message) for w in got if issubclass(w.category, MechcircWarning)]
+    at = 180.0 + 120.0 * math.acos(1.0 - 120.0 / 70.0) / (2 * math.pi)
+    assert len(msgs) == 1 and "the face stops turning against the cam" in msgs[0], msgs
+    assert f"at cam angle {at:.4g}°" in msgs[0], (at, msgs)
