@@ -139,8 +139,7 @@ def parse_drive(text: str | None) -> Waveform:
     if text in ("step", "impulse"):
         return Waveform(text)
     if text.startswith("harmonic:"):
-        from ..units import OMEGA_UNITS  # noqa: F401  (units accepted as in --omega-*)
-        from ..units import parse_omega
+        from ..units import parse_omega     # units accepted as in --omega-*
 
         try:
             omega = parse_omega(text[len("harmonic:"):])
@@ -636,8 +635,6 @@ def drive_map(ss: StateSpace) -> tuple[np.ndarray, Any, Any] | None:
 
 def with_oscillator(ss: StateSpace, z0, omega: float, amp: float):
     """ss with states w = (sin ωt, cos ωt) appended and the drive u = amp·w₁ folded in."""
-    import dataclasses
-
     N = ss.size
     A = np.zeros((N + 2, N + 2))
     A[:N, :N] = ss.A
