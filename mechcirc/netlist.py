@@ -46,7 +46,7 @@ from pathlib import Path
 from .circuit import ELEMENT_UNITS, Circuit, Drive, Element, ElementKind, Lever
 from .errors import NetlistError
 from .expressions import CONSTANTS, FUNCTIONS, Expr, evaluate, parse_expression
-from .sources import is_number, read_source, split_lines
+from .sources import did_you_mean, is_number, read_source, split_lines
 from .units import (UnitError, convert, is_rotational, looks_like_unit, parse_unit,
                     split_quantity)
 
@@ -417,8 +417,6 @@ class _Parser:
                 continue
             handler = handlers.get(keyword)
             if handler is None:
-                from .sources import did_you_mean
-
                 word = line.tokens[0].text
                 line.error(f"unknown keyword {word!r}{did_you_mean(word.lower(), KEYWORDS)}",
                            line.tokens[0].col,
@@ -556,8 +554,6 @@ class _Parser:
             head = tok.text.split("=", 1)[0]
             if "=" in tok.text and _IDENT.fullmatch(head):
                 if head not in allowed:
-                    from .sources import did_you_mean
-
                     line.error(f"unknown option {head!r} for {keyword}"
                                f"{did_you_mean(head, allowed)}", tok.col,
                                " or ".join(f"{a}=EXPR" for a in allowed) if allowed
