@@ -150,7 +150,7 @@ class StudySpec:
     @property
     def sha256(self) -> str:
         """SHA-256 of :attr:`canonical`: two specs with the same hash run the same points."""
-        return hashlib.sha256(self.canonical.encode("utf-8")).hexdigest()
+        return _sha256(self.canonical)
 
     @property
     def columns(self) -> list[str]:
@@ -560,7 +560,8 @@ def _sample_file(table: dict, base: Path, analysis: str, roles: dict):
     if len(records) > MAX_POINTS:
         raise NetlistError(f"has {len(records):,} rows, the limit is {MAX_POINTS:,}", source)
     points = tuple(_sample_row(cells, names, source, line, roles) for line, cells in records)
-    canon = {"method": "file", "columns": list(names), "file_sha256": _file_sha256(path)}
+    canon = {"method": "file", "columns": list(names),
+             "file_sha256": _sha256(read_bytes(path, "a sample file"))}
     return names, points, canon
 
 
@@ -624,10 +625,6 @@ def _sample_row(cells: list, names: tuple[str, ...], source: str, line: int,
                                "a positive number")
         row.append(value)
     return tuple(row)
-
-
-def _file_sha256(path) -> str:
-    return _sha256(read_bytes(path, "a sample file"))
 
 
 def _csv_records(path):
