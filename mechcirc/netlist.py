@@ -597,6 +597,16 @@ class _Parser:
         self.names[name] = line.lineno
         return name
 
+    def _two_ends(self, line: _Line, pos: list[_Token], what: str) -> tuple[str, str, str]:
+        """The new name and the two nodes (they must differ) of an element or drive line."""
+        name = self._new_name(line, pos[0])
+        n1 = self._name(line, pos[1], "node name")
+        n2 = self._name(line, pos[2], "node name")
+        if n1 == n2:
+            line.error(f"both ends of {what} {name!r} are node {n1!r}", pos[2].col,
+                       "two different nodes")
+        return name, n1, n2
+
     def _positive(self, line: _Line, tok: _Token, what: str, unit: str, *,
                   unit_tok: _Token | None = None, role: str | None = None,
                   key: tuple[str, str] | None = None) -> float:
@@ -650,12 +660,7 @@ class _Parser:
     def element(self, line: _Line, kind: ElementKind):
         allowed = ("eta", "backlash", "damping") if kind == "spring" else ("eta",)
         pos, opts, units = self._fields(line, kind, 4, allowed)
-        name = self._new_name(line, pos[0])
-        n1 = self._name(line, pos[1], "node name")
-        n2 = self._name(line, pos[2], "node name")
-        if n1 == n2:
-            line.error(f"both ends of {kind} {name!r} are node {n1!r}", pos[2].col,
-                       "two different nodes")
+        name, n1, n2 = self._two_ends(line, pos, kind)
         value = self._positive(line, pos[3], f"{kind} {name!r}", ELEMENT_UNITS[kind],
                                unit_tok=units.get("value"), role=kind, key=(name, "value"))
         if "value" in units:
@@ -755,12 +760,7 @@ class _Parser:
             first = self.drives[0]
             line.error(f"a second drive; the netlist already has {first.name!r} on line "
                        f"{first.line}", line.tokens[0].col, "exactly one drive")
-        name = self._new_name(line, pos[0])
-        n1 = self._name(line, pos[1], "node name")
-        n2 = self._name(line, pos[2], "node name")
-        if n1 == n2:
-            line.error(f"both ends of drive {name!r} are node {n1!r}", pos[2].col,
-                       "two different nodes")
+        name, n1, n2 = self._two_ends(line, pos, "drive")
         if "motion" in opts:
             self.drives.append(Drive(name, n1, n2, "velocity", 1.0, line.lineno,
                                      line.tokens[0].col, self.motion(line, opts, units)))
