@@ -59,6 +59,7 @@ def explain(circuit: Circuit) -> tuple[list[Step], str]:
     labels: dict[int, str] = {}
     counts = {"series": 0, "parallel": 0, "lever": 0}
     prefix = {"series": "S", "parallel": "P", "lever": "R"}
+    kinds = {Series: "series", Parallel: "parallel", Reflect: "lever"}
     steps: list[Step] = []
 
     def name(node: Node) -> str:
@@ -67,12 +68,7 @@ def explain(circuit: Circuit) -> tuple[list[Step], str]:
     for node in postorder(tree):
         if isinstance(node, Leaf):
             continue
-        if isinstance(node, Series):
-            kind = "series"
-        elif isinstance(node, Parallel):
-            kind = "parallel"
-        else:
-            kind = "lever"
+        kind = kinds[type(node)]
         counts[kind] += 1
         label = f"{prefix[kind]}{counts[kind]}"
         labels[id(node)] = label

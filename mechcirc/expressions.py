@@ -20,6 +20,7 @@ characters and :data:`MAX_DEPTH` levels of nesting; overflow is an error.
 from __future__ import annotations
 
 import math
+import operator
 import re
 from dataclasses import dataclass
 from typing import Callable, Mapping, NoReturn, cast
@@ -27,7 +28,7 @@ from typing import Callable, Mapping, NoReturn, cast
 from .errors import NetlistError
 
 __all__ = ["Expr", "parse_expression", "evaluate", "evaluate_array", "postorder", "FUNCTIONS", "CONSTANTS",
-           "MAX_LENGTH", "MAX_DEPTH"]
+           "OPERATORS", "MAX_LENGTH", "MAX_DEPTH"]
 
 #: Longest expression accepted [characters]; longer text is refused at once.
 MAX_LENGTH = 10_000
@@ -41,6 +42,10 @@ FUNCTIONS: dict[str, Callable[[float], float]] = {
     "degrees": math.degrees,
 }
 CONSTANTS: dict[str, float] = {"pi": math.pi}
+#: The binary operators of the grammar (``^`` is parsed as ``**``); they apply as well
+#: to numpy arrays and SymPy expressions.
+OPERATORS: dict[str, Callable] = {"+": operator.add, "-": operator.sub, "*": operator.mul,
+                                  "/": operator.truediv, "**": operator.pow}
 
 _TOKEN = re.compile(r"""
     (?P<ws>\s+)
@@ -333,16 +338,7 @@ def _binary(k: str, a: float, b: float, fail) -> float:
     """``a k b`` in float64; ``fail(message)`` for a division by zero, an overflow or
     a power that is not real."""
     try:
-        if k == "+":
-            r = a + b
-        elif k == "-":
-            r = a - b
-        elif k == "*":
-            r = a * b
-        elif k == "/":
-            r = a / b
-        else:
-            r = a ** b
+        r = OPERATORS[k](a, b)
     except ZeroDivisionError:
         fail("division by zero" if k == "/" else f"{a!r} ** {b!r} divides by zero")
     except OverflowError:
@@ -397,8 +393,6 @@ def _pow(a: float, b: float) -> float:
     return math.nan if isinstance(r, complex) else r
 
 
-_POW = None
-
 def evaluate_array(expr: Expr, params: Mapping, size: int):
     """``expr`` over ``size`` designs at once: ``params`` maps names to arrays of shape
     (size,) (or floats).  Returns ``(values, bad)``: float64 arrays of shape (size,)
@@ -422,9 +416,6 @@ def evaluate_array(expr: Expr, params: Mapping, size: int):
     """
     import numpy as np
 
-    global _POW
-    if _POW is None:
-        _POW = np.frompyfunc(_pow, 2, 1)
     values: dict[int, np.ndarray] = {}
     bad = np.zeros(size, dtype=bool)
     with np.errstate(all="ignore"):
@@ -446,10 +437,9 @@ def evaluate_array(expr: Expr, params: Mapping, size: int):
             else:
                 a, b = values.pop(id(node.args[0])), values.pop(id(node.args[1]))
                 if k == "**":             # Python's pow, as evaluate (numpy's may differ by an ulp)
-                    r = _POW(a, b).astype(float)
+                    r = np.frompyfunc(_pow, 2, 1)(a, b).astype(float)
                 else:
-                    r = (np.add if k == "+" else np.subtract if k == "-" else np.multiply
-                         if k == "*" else np.divide)(a, b)
+                    r = OPERATORS[k](a, b)
             bad |= ~np.isfinite(r)
             values[id(node)] = r
     return values[id(expr)], bad

@@ -46,7 +46,7 @@ from pathlib import Path
 from .circuit import ELEMENT_UNITS, Circuit, Drive, Element, ElementKind, Lever
 from .errors import NetlistError
 from .expressions import CONSTANTS, FUNCTIONS, Expr, evaluate, parse_expression
-from .sources import is_number, read_source, split_lines
+from .sources import did_you_mean, is_number, read_source, split_lines
 from .units import (UnitError, convert, is_rotational, looks_like_unit, parse_unit,
                     split_quantity)
 
@@ -417,8 +417,6 @@ class _Parser:
                 continue
             handler = handlers.get(keyword)
             if handler is None:
-                from .sources import did_you_mean
-
                 word = line.tokens[0].text
                 line.error(f"unknown keyword {word!r}{did_you_mean(word.lower(), KEYWORDS)}",
                            line.tokens[0].col,
@@ -556,8 +554,6 @@ class _Parser:
             head = tok.text.split("=", 1)[0]
             if "=" in tok.text and _IDENT.fullmatch(head):
                 if head not in allowed:
-                    from .sources import did_you_mean
-
                     line.error(f"unknown option {head!r} for {keyword}"
                                f"{did_you_mean(head, allowed)}", tok.col,
                                " or ".join(f"{a}=EXPR" for a in allowed) if allowed
@@ -600,6 +596,16 @@ class _Parser:
                        tok.col, "a unique name")
         self.names[name] = line.lineno
         return name
+
+    def _two_ends(self, line: _Line, pos: list[_Token], what: str) -> tuple[str, str, str]:
+        """The new name and the two nodes (they must differ) of an element or drive line."""
+        name = self._new_name(line, pos[0])
+        n1 = self._name(line, pos[1], "node name")
+        n2 = self._name(line, pos[2], "node name")
+        if n1 == n2:
+            line.error(f"both ends of {what} {name!r} are node {n1!r}", pos[2].col,
+                       "two different nodes")
+        return name, n1, n2
 
     def _positive(self, line: _Line, tok: _Token, what: str, unit: str, *,
                   unit_tok: _Token | None = None, role: str | None = None,
@@ -654,12 +660,7 @@ class _Parser:
     def element(self, line: _Line, kind: ElementKind):
         allowed = ("eta", "backlash", "damping") if kind == "spring" else ("eta",)
         pos, opts, units = self._fields(line, kind, 4, allowed)
-        name = self._new_name(line, pos[0])
-        n1 = self._name(line, pos[1], "node name")
-        n2 = self._name(line, pos[2], "node name")
-        if n1 == n2:
-            line.error(f"both ends of {kind} {name!r} are node {n1!r}", pos[2].col,
-                       "two different nodes")
+        name, n1, n2 = self._two_ends(line, pos, kind)
         value = self._positive(line, pos[3], f"{kind} {name!r}", ELEMENT_UNITS[kind],
                                unit_tok=units.get("value"), role=kind, key=(name, "value"))
         if "value" in units:
@@ -759,12 +760,7 @@ class _Parser:
             first = self.drives[0]
             line.error(f"a second drive; the netlist already has {first.name!r} on line "
                        f"{first.line}", line.tokens[0].col, "exactly one drive")
-        name = self._new_name(line, pos[0])
-        n1 = self._name(line, pos[1], "node name")
-        n2 = self._name(line, pos[2], "node name")
-        if n1 == n2:
-            line.error(f"both ends of drive {name!r} are node {n1!r}", pos[2].col,
-                       "two different nodes")
+        name, n1, n2 = self._two_ends(line, pos, "drive")
         if "motion" in opts:
             self.drives.append(Drive(name, n1, n2, "velocity", 1.0, line.lineno,
                                      line.tokens[0].col, self.motion(line, opts, units)))

@@ -351,7 +351,9 @@ def located(text: str, source: str, message: str, section: str | None, key: str,
     message : str
     section : str or None
     key : str
-    value : str, optional
+    value : object, optional
+        The offending value, looked for on the key's line when it is a str
+        (anything else, e.g. a number where a name belongs, is not looked for).
     occurrence : int
     expected : str, optional
         What would be right.

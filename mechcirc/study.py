@@ -88,21 +88,31 @@ from __future__ import annotations
 
 import contextlib
 import csv
+import hashlib
 import io
 import itertools
+import json
 import math
 import os
 import random
 import re
-from dataclasses import dataclass, field
+import warnings
+import zlib
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Callable, NoReturn, TextIO
 
+import numpy as np
+
+from .circuit import ELEMENT_UNITS, Drive, Element, units_of
 from .errors import MechcircError, NetlistError
 from .limits import (MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS, MAX_STUDY_POINTS,
                      MAX_STUDY_SWEEP_POINTS, MAX_STUDY_WORK)
 from .sources import (Table, brief, did_you_mean, finite_number, load_toml, locate_path,
-                      number_error, unknown_key)
+                      number_error, read_bytes, read_source, split_lines, unknown_key)
+from .netlist import SYNTAX, expressions_of, parse
+from .outputs import OutputSet, atomic_open, atomic_path
+from .units import looks_like_unit, parse_omega
 
 __all__ = ["StudySpec", "load_spec", "parse_spec", "study_points", "run_point", "run_batch",
            "run_study", "StudyResult", "read_rows", "journal_path", "sidecar_path",
@@ -140,9 +150,7 @@ class StudySpec:
     @property
     def sha256(self) -> str:
         """SHA-256 of :attr:`canonical`: two specs with the same hash run the same points."""
-        import hashlib
-
-        return hashlib.sha256(self.canonical.encode("utf-8")).hexdigest()
+        return _sha256(self.canonical)
 
     @property
     def columns(self) -> list[str]:
@@ -188,9 +196,6 @@ def column_units(spec: StudySpec) -> dict[str, str | None]:
     """
     units = dict(zip(spec.params, spec.param_units or (None,) * len(spec.params)))
     if spec.analysis == "sweep" and spec.netlist_text:
-        from .circuit import units_of
-        from .netlist import parse
-
         try:
             u = units_of(parse(spec.netlist_text, source=spec.netlist_source).drive)
         except MechcircError:       # its points say why, row by row
@@ -213,8 +218,6 @@ def _fail(path, message: str) -> NoReturn:
 
 
 def _omega(path, value, what) -> float:
-    from .units import parse_omega
-
     if isinstance(value, bool):
         _fail(path, f"{what} must be a number [rad/s] or a string such as '50Hz'")
     if isinstance(value, (int, float)):
@@ -272,7 +275,6 @@ def _axis(name, value) -> list[float]:
     lo = _number((*path, "min"), value["min"], f"grid.{name}.min")
     hi = _number((*path, "max"), value["max"], f"grid.{name}.max")
     num = value["num"]
-    import numpy as np
 
     if value.get("log", False):
         if lo <= 0 or hi <= 0:
@@ -313,8 +315,6 @@ def parse_spec(data: dict, *, source: str = "<spec>", base: Path | None = None,
     MechcircError
         Without ``text``: the same message after the source's name.
     """
-    from dataclasses import replace
-
     try:
         return replace(_parse_spec(data, source, base or Path(".")), spec_text=text or "")
     except _SpecError as exc:
@@ -412,15 +412,11 @@ def _parse_spec(data: dict, source: str, base: Path) -> StudySpec:
 
 
 def _sha256(text: str | bytes) -> str:
-    import hashlib
-
     return hashlib.sha256(text.encode("utf-8") if isinstance(text, str) else text).hexdigest()
 
 
 def _canonical(data) -> str:
     """One line of JSON, keys sorted, floats as ``repr``: equal specs give equal text."""
-    import json
-
     return json.dumps(data, sort_keys=True, separators=(",", ":"), ensure_ascii=True,
                       allow_nan=False)
 
@@ -434,13 +430,7 @@ def _read_netlist(data: dict, base: Path) -> tuple[str, Path]:
     """
     if "netlist" not in data or not isinstance(data["netlist"], str):
         _fail(("netlist",), "needs netlist = \"PATH\" (relative to the spec file)")
-    path = Path(os.path.normpath(base / data["netlist"]))
-    try:
-        path = path.relative_to(Path.cwd())
-    except ValueError:
-        pass
-    from .netlist import SYNTAX
-    from .sources import read_source, split_lines
+    path = _spec_relative(base, data["netlist"])
 
     try:
         text = read_source(path, "a .mcir netlist")
@@ -455,6 +445,15 @@ def _read_netlist(data: dict, base: Path) -> tuple[str, Path]:
                                     f"{', '.join(SYNTAX)}")
             break
     return text, path
+
+
+def _spec_relative(base: Path, name: str) -> Path:
+    """The file ``name`` of a spec in the folder ``base``, relative to the current
+    folder when it lies below it (as errors and provenance show it)."""
+    path = Path(os.path.normpath(base / name))
+    with contextlib.suppress(ValueError):       # not below the current folder
+        return path.relative_to(Path.cwd())
+    return path
 
 
 def _grid(grid) -> tuple[tuple[str, ...], tuple[tuple[float, ...], ...], dict]:
@@ -506,9 +505,7 @@ def _sample(table, kind: str) -> tuple[tuple[str, ...], tuple[tuple[float, ...],
         return names, tuple(tuple(math.exp(rng.uniform(math.log(lo), math.log(hi))) if log
                                   else rng.uniform(lo, hi) for lo, hi, log in bounds)
                             for _ in range(n)), canon
-    import warnings
 
-    import numpy as np
     from scipy.stats import qmc
 
     with warnings.catch_warnings():     # Sobol: n not a power of 2 loses balance (docs say so)
@@ -563,7 +560,8 @@ def _sample_file(table: dict, base: Path, analysis: str, roles: dict):
     if len(records) > MAX_POINTS:
         raise NetlistError(f"has {len(records):,} rows, the limit is {MAX_POINTS:,}", source)
     points = tuple(_sample_row(cells, names, source, line, roles) for line, cells in records)
-    canon = {"method": "file", "columns": list(names), "file_sha256": _file_sha256(path)}
+    canon = {"method": "file", "columns": list(names),
+             "file_sha256": _sha256(read_bytes(path, "a sample file"))}
     return names, points, canon
 
 
@@ -575,11 +573,7 @@ def _sample_path(table: dict, base: Path) -> Path:
                                     "holds the points)")
     if not isinstance(table["file"], str):
         _fail(("sample", "file"), "sample.file must be a path (relative to the spec file)")
-    path = Path(os.path.normpath(base / table["file"]))
-    try:
-        path = path.relative_to(Path.cwd())
-    except ValueError:
-        pass
+    path = _spec_relative(base, table["file"])
     if not str(path).lower().endswith((".csv", ".parquet")):
         _fail(("sample", "file"), f"sample.file must name a .csv or .parquet file, got "
                                   f"{brief(table['file'])}")
@@ -633,16 +627,8 @@ def _sample_row(cells: list, names: tuple[str, ...], source: str, line: int,
     return tuple(row)
 
 
-def _file_sha256(path) -> str:
-    from .sources import read_bytes
-
-    return _sha256(read_bytes(path, "a sample file"))
-
-
 def _csv_records(path):
     """(header, records) of a CSV sample file: [(name, col)], [(line, [(text, col)])]."""
-    from .sources import read_source, split_lines
-
     lines = split_lines(read_source(path, "a CSV file of parameter columns"))
     records = []
     for lineno, line in enumerate(lines, 1):
@@ -673,10 +659,6 @@ def _parquet_records(path):
     except ImportError:
         raise NetlistError("reading Parquet needs pyarrow (pip install pyarrow); or give a "
                            "CSV file", os.fspath(path)) from None
-    import io
-
-    from .sources import read_bytes
-
     try:
         table = pq.read_table(io.BytesIO(read_bytes(path, "a Parquet file")))
     except NetlistError:
@@ -723,11 +705,6 @@ def _param_roles(text: str, path) -> dict[str, tuple[str | None, str | None]]:
     the netlist does not fix it (a parameter inside expressions).  Parsed once,
     not per point.
     """
-    from .circuit import ELEMENT_UNITS, Drive, Element
-    from .netlist import expressions_of, parse
-    from .sources import split_lines
-    from .units import looks_like_unit
-
     circuit = parse(text, source=str(path))
     owners: dict[str, Element | Drive] = {e.name: e for e in circuit.elements}
     if circuit.drive is not None:
@@ -817,8 +794,6 @@ def load_spec(path: str | os.PathLike) -> StudySpec:
         The file is missing, not UTF-8, not valid TOML, or has a fault, with
         its line and column.
     """
-    from .sources import read_source
-
     source = os.fspath(path)
     text = read_source(path, "a study .toml")
     data = load_toml(text, source)
@@ -879,8 +854,6 @@ def run_batch(spec: StudySpec, batch: list[tuple[int, dict[str, float]]],
     -------
     list of dict or tuple of (list of dict, ndarray)
     """
-    import numpy as np
-
     rows = [{"index": i, **v, "status": "ok", "error": ""} for i, v in batch]
     if spec.analysis == "simulate":
         return [_simulate_row(spec, row, v) for row, (_, v) in zip(rows, batch)]
@@ -909,10 +882,6 @@ def _design_rows(spec: StudySpec, rows: list[dict], batch: list[tuple[int, dict[
     :func:`mechcirc.batch.designs` batch of the points; the designs, K on the ω
     grid (a sweep, else None) and the points the batch could not take
     (``{row: message}``)."""
-    import warnings
-
-    import numpy as np
-
     from .batch import designs
 
     with warnings.catch_warnings():
@@ -958,8 +927,6 @@ def _preset(spec: StudySpec) -> tuple[str, int, int, int]:
 
 def _omega_grid(spec: StudySpec):
     """The ω grid of a sweep study [rad/s]: ``spec.omega``'s points, geometric with log."""
-    import numpy as np
-
     lo, hi, n, log = _band(spec)
     return np.geomspace(lo, hi, n) if log else np.linspace(lo, hi, n)
 
@@ -975,8 +942,6 @@ def _failure(ds, d: int, message: str) -> str:
 
 def _simulate_row(spec: StudySpec, row: dict, values: dict) -> dict:
     """One row of a sley study (errors caught and recorded, never raised)."""
-    import warnings
-
     try:
         from .sley import simulate
 
@@ -1034,8 +999,6 @@ _CHECK = "crc32"
 
 
 def _crc(fields: list[str]) -> str:
-    import zlib
-
     return f"{zlib.crc32(chr(31).join(fields).encode('utf-8')):08x}"
 
 
@@ -1123,8 +1086,6 @@ def _todo(spec: StudySpec, have: set, size: int):
     """The points not in ``have``, in batches of ``size``, made as they are taken (a
     million points are not held at once): each ``(indices, values)``, two arrays, so
     that a task travels to a worker as a few kilobytes of numbers, not dicts."""
-    import numpy as np
-
     index: list[int] = []
     values: list[tuple[float, ...]] = []
     for i, p in enumerate(spec.points):
@@ -1337,13 +1298,9 @@ def _curve_writer(path, spec: StudySpec):
     if path is None:
         yield None
         return
-    import json
 
-    import numpy as np
     import pyarrow as pa
     import pyarrow.parquet as pq
-
-    from .outputs import atomic_path
 
     omega = _omega_grid(spec)
     record = provenance(spec)
@@ -1404,8 +1361,6 @@ def _resumed_rows(spec: StudySpec, output, journal: str, parquet: bool) -> list[
 
 def _same_spec(where: str, recorded: str | None, spec: StudySpec) -> None:
     """Refuse to resume from ``where`` unless it records ``spec`` (its canonical text)."""
-    import json
-
     if recorded is None:
         raise MechcircError(f"{where}: records no study spec (written by another program or "
                             "an older mechcirc), so its rows cannot be checked against this "
@@ -1468,8 +1423,6 @@ def _open_journal(journal: str, spec: StudySpec, done: list[dict]) -> TextIO:
     A resumed journal is rewritten, not appended to: its last line may lack
     its terminator.
     """
-    from .outputs import atomic_open
-
     columns = spec.columns
     with atomic_open(journal, "w", newline="", encoding="utf-8") as fh:
         fh.write(f"{_SPEC_LINE} sha256={spec.sha256} {spec.canonical}\n")
@@ -1497,8 +1450,6 @@ def provenance(spec: StudySpec) -> dict:
     -------
     dict
     """
-    import json
-
     from . import __version__
 
     return {"mechcirc": __version__, "spec_sha256": spec.sha256,
@@ -1522,8 +1473,6 @@ def sidecar_path(output: str | os.PathLike) -> str:
 
 
 def _sidecar_spec(output) -> str | None:
-    import json
-
     try:
         with open(sidecar_path(output), encoding="utf-8") as fh:
             return _canonical(json.load(fh)["spec"])
@@ -1537,10 +1486,6 @@ def _write_output(output, parquet: bool, spec: StudySpec, journal: str) -> None:
     replaced together (sidecar first) or not at all.  The rows come from the
     journal a chunk at a time (:func:`_journal_in_order`), as the CSV lines they
     already are there."""
-    import json
-
-    from .outputs import OutputSet
-
     columns, record = spec.columns, provenance(spec)
     chunks = _journal_in_order(journal, len(columns))
     with OutputSet() as out:
@@ -1563,8 +1508,6 @@ def _write_output(output, parquet: bool, spec: StudySpec, journal: str) -> None:
 def _verified(line: bytes, width: int) -> bytes | None:
     """A journal line's CSV row (its cells, without the checksum, ending in CRLF as
     the csv module writes it), or None if the checksum does not match."""
-    import zlib
-
     body, _, crc = line.rstrip(b"\r\n").rpartition(b",")
     if b'"' in body:                     # quoted cells: split them as csv does
         rec = next(csv.reader([line.decode("utf-8")]))
@@ -1585,8 +1528,6 @@ def _journal_in_order(journal: str, width: int, chunk: int = 65536):
     Each row is one line (:func:`_fields`), and is checked against its CRC again.
     """
     from array import array
-
-    import numpy as np
 
     index, offset = array("q"), array("q")
     with open(journal, "rb") as fh:
@@ -1645,8 +1586,6 @@ def _write_parquet(path, columns: list[str], chunks, record: dict) -> None:
     row group a chunk, parsed by pyarrow; empty cells are nulls.  The file's
     key-value metadata ``mechcirc`` holds ``record`` (JSON), and each field its
     ``unit``."""
-    import json
-
     import pyarrow as pa
     import pyarrow.csv as pcsv
     import pyarrow.parquet as pq
@@ -1669,8 +1608,6 @@ def _write_parquet(path, columns: list[str], chunks, record: dict) -> None:
 
 def _read_parquet(path):
     """The recorded canonical spec (or None) and the table of a study's Parquet file."""
-    import json
-
     import pyarrow.parquet as pq
 
     try:
@@ -1763,8 +1700,6 @@ def _for_workers(spec: StudySpec) -> StudySpec:
     """The spec without its point list: each batch carries its own points, and the
     spec is pickled once per batch (a million points would otherwise travel with
     every batch)."""
-    from dataclasses import replace
-
     return replace(spec, points=())
 
 

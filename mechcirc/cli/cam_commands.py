@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import math
 
+from ..errors import InputError
 from ._common import MAX_LENGTH, check_output_paths, count, print_json, real, warning_lines
 
 _LAWS = ("harmonic", "cycloidal", "modified_sine", "modified_trapezoid", "polynomial_345")
@@ -68,7 +69,6 @@ def register(sub) -> None:
 
 
 def _motion(args):
-    from ..errors import InputError
     from ..motion_laws import cam_cycle, read_motion_table
 
     osc = args.follower.startswith("oscillating")
@@ -133,8 +133,6 @@ def cmd_cam(args) -> int:
 
 def _check_args(args) -> None:
     """The output paths, and the options each follower needs or does not take."""
-    from ..errors import InputError
-
     check_output_paths(args.output, args.svg)
     if args.svg and not args.svg.lower().endswith(".svg"):
         raise InputError(f"--svg {args.svg}: the drawing is SVG; give a file ending in .svg")

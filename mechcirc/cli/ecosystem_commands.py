@@ -217,11 +217,10 @@ def cmd_formula(args) -> int:
         else:
             text = f"K(omega) = {K}"
     print(text)
-    if not args.numeric:
-        if values:
-            print("where (SI values; K in m/(N·s), omega in rad/s):")
-            for sym in sorted(values, key=lambda s: s.name):
-                print(f"  {sym.name} = {values[sym]} ({float(values[sym]):g})")
+    if not args.numeric and values:
+        print("where (SI values; K in m/(N·s), omega in rad/s):")
+        for sym in sorted(values, key=lambda s: s.name):
+            print(f"  {sym.name} = {values[sym]} ({float(values[sym]):g})")
     return 0
 
 

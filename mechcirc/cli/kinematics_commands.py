@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import math
 
+from ..errors import InputError, MechcircError
 from ._common import (MAX_LENGTH, MAX_OMEGA, check_output_paths, count, print_json, real,
                       save_figure)
 
@@ -227,8 +228,6 @@ MAX_LENGTH_RATIO = 1e6
 
 
 def _check_length_ratio(args) -> None:
-    from ..errors import InputError
-
     lengths: dict[str, float] = {n: getattr(args, n) for n in ("crank", "coupler", "rocker",
                                                              "frame")}
     lo, hi = min(lengths, key=lengths.__getitem__), max(lengths, key=lengths.__getitem__)
@@ -291,7 +290,6 @@ def cmd_fourbar(args) -> int:
 def cmd_frame(args) -> int:
     import numpy as np
 
-    from ..errors import MechcircError
     from ..kinematics import FourBar, LinkMass, beat_up_force, frame_loading
 
     check_output_paths(args.output, plots=(args.plot,))
@@ -372,7 +370,6 @@ def cmd_synth(args) -> int:
     import sys
     from pathlib import Path
 
-    from ..errors import MechcircError
     from ..kinematics import synthesize
     from ..kinematics.synthesis_export import SceneOptions, export_designs
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 
+from ..errors import MechcircError
 from ._common import (
     check_output_paths,
     count,
@@ -64,8 +65,6 @@ def register(sub) -> None:
 
 
 def _elements(args, circuit):
-    from ..errors import MechcircError
-
     if not args.elements:
         return []
     names = [e.name for e in circuit.elements]
@@ -80,8 +79,6 @@ def _elements(args, circuit):
 
 
 def cmd_periodic(args) -> int:
-    from ..errors import MechcircError
-
     check_output_paths(args.output, plots=(args.plot,), reads=(args.file,))
     single = args.rpm is not None
     ranged = args.rpm_min is not None or args.rpm_max is not None
@@ -110,7 +107,6 @@ def _scene(args):
     """A scene's circuit at --theta and the motion its rigid linkage imposes on the drive."""
     import math
 
-    from ..errors import MechcircError
     from ..scene import build, load_scene
     from ..scene.cycle import drive_motion
 

@@ -6,6 +6,7 @@ import argparse
 import math
 import sys
 
+from ..errors import MechcircError
 from ._common import check_output_paths, print_json, save_figure
 
 
@@ -52,8 +53,6 @@ def register(sub) -> None:
 
 
 def _positive(name, value):
-    from ..errors import MechcircError
-
     if value is not None and not (math.isfinite(value) and value > 0):
         raise MechcircError(f"{name} must be a finite number > 0, got {value:g}")
 
@@ -68,15 +67,11 @@ def cmd_transient(args) -> int:
     _positive("--dt", args.dt)
     _positive("--rtol", args.rtol)
     if args.amplitude is not None and not math.isfinite(args.amplitude):
-        from ..errors import MechcircError
-
         raise MechcircError(f"--amplitude must be finite, got {args.amplitude:g}")
     circuit = load(args.file, require_drive=False)
     result = transient(circuit, args.t_end, args.dt, args.drive, amplitude=args.amplitude,
                        rtol=args.rtol, rpm=args.rpm)
     if args.element and not args.plot:
-        from ..errors import MechcircError
-
         raise MechcircError("--element NAME draws a panel of the plot: give --plot IMAGE too")
     fig = result.plot(elements=args.element) if args.plot else None   # names checked here
     with OutputSet() as out:
@@ -152,7 +147,6 @@ def cmd_crosscheck_netlist(args) -> int:
         try:
             omega_max = parse_omega(args.omega_max)
         except Exception as exc:  # noqa: BLE001 - a user error, reported as such
-            from ..errors import MechcircError
 
             raise MechcircError(f"--omega-max {args.omega_max!r}: {exc}") from None
         _positive("--omega-max", omega_max)

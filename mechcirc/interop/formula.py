@@ -79,7 +79,7 @@ class _Builder:
 
     def _expr(self, tree):
         """A netlist Expr as SymPy, parameters resolved (iterative: long sums)."""
-        from ..expressions import postorder
+        from ..expressions import OPERATORS, postorder
 
         sp = self.sp
         funcs = {"sqrt": sp.sqrt, "sin": sp.sin, "cos": sp.cos, "tan": sp.tan, "exp": sp.exp,
@@ -98,9 +98,7 @@ class _Builder:
             elif k == "call":
                 v = funcs[node.value](out[id(node.args[0])])
             else:
-                a, b = out[id(node.args[0])], out[id(node.args[1])]
-                v = {"+": a + b, "-": a - b, "*": a * b, "/": a / b}.get(k) if k != "**" \
-                    else a ** b
+                v = OPERATORS[k](out[id(node.args[0])], out[id(node.args[1])])
             out[id(node)] = v
         return out[id(tree)]
 

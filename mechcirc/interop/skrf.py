@@ -91,18 +91,25 @@ def to_skrf(sweep: "Sweep", *, z0: float | None = None):
         where K is not finite (or ω ≤ 0) are left out; ``network.comments``
         states the unit and how many points were dropped.
     """
+    return _network(np.asarray(sweep.omega, dtype=float),
+                    np.asarray(sweep.K, dtype=complex).reshape(-1, 1, 1), z0, sweep.name,
+                    f"{sweep.name} mobility K [m/(N*s)]",
+                    "no sweep point has ω > 0 and a finite K; nothing to convert")
+
+
+def _network(omega, Z, z0, name: str, title: str, empty: str, extra: tuple = ()):
+    """The points of Z(ω) with ω > 0 and finite Z as an ``skrf.Network`` called ``title``,
+    with the unit's comments (and the lines ``extra``); ``empty`` is the error's
+    message when there is none."""
     import skrf
 
-    omega = np.asarray(sweep.omega, dtype=float)
-    Z = np.asarray(sweep.K, dtype=complex).reshape(-1, 1, 1)
     keep = _finite_points(omega, Z)
     if not keep.any():
-        raise MechcircError("no sweep point has ω > 0 and a finite K; nothing to convert")
+        raise MechcircError(empty)
     R = reference_mobility(Z[keep]) if z0 is None else float(z0)
-    comments = _comments(sweep.name, int((~keep).sum()), R)
+    comments = [*_comments(name, int((~keep).sum()), R), *extra]
     freq = skrf.Frequency.from_f(omega[keep] / (2 * math.pi), unit="hz")
-    return skrf.Network.from_z(Z[keep], frequency=freq, z0=R,
-                               name=f"{sweep.name} mobility K [m/(N*s)]",
+    return skrf.Network.from_z(Z[keep], frequency=freq, z0=R, name=title,
                                comments="\n".join(comments))
 
 
@@ -279,20 +286,11 @@ def two_port(circuit: "Circuit", P1: str, P2: str, S1: str, S2: str, omega: Arra
     skrf.Network
         The points with ω > 0 and finite Z.
     """
-    import skrf
-
     omega = np.atleast_1d(np.asarray(omega, dtype=float))
-    Z = two_port_z(circuit, P1, P2, S1, S2, omega)
-    keep = _finite_points(omega, Z)
-    if not keep.any():
-        raise MechcircError("no frequency gives finite Z parameters")
-    R = reference_mobility(Z[keep]) if z0 is None else float(z0)
-    comments = _comments(circuit.name, int((~keep).sum()), R)
-    comments.append(f"port 1: {P1}-{P2}, port 2: {S1}-{S2}; drive removed")
-    freq = skrf.Frequency.from_f(omega[keep] / (2 * math.pi), unit="hz")
-    return skrf.Network.from_z(Z[keep], frequency=freq, z0=R,
-                               name=f"{circuit.name} two-port mobility [m/(N*s)]",
-                               comments="\n".join(comments))
+    return _network(omega, two_port_z(circuit, P1, P2, S1, S2, omega), z0, circuit.name,
+                    f"{circuit.name} two-port mobility [m/(N*s)]",
+                    "no frequency gives finite Z parameters",
+                    (f"port 1: {P1}-{P2}, port 2: {S1}-{S2}; drive removed",))
 
 
 # --------------------------------------------------------------------------

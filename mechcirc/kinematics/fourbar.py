@@ -391,9 +391,7 @@ class FourBar:
 
     def rocker_angle(self, theta: ArrayLike):
         """Rocker angle φ4 [rad] at crank angle ``theta`` [rad] (float in, float out)."""
-        if isinstance(theta, (float, int)):
-            return self.transfer(theta)[0]
-        return self.evaluate(theta).phi4
+        return self._out(theta, "phi4")
 
     def coupler_angle(self, theta: ArrayLike):
         """Coupler angle φ3 [rad], direction B→C, at crank angle ``theta`` [rad]."""
@@ -401,15 +399,11 @@ class FourBar:
 
     def mu(self, theta: ArrayLike):
         """Rocker velocity ratio μ = dφ4/dθ [1] at crank angle ``theta`` [rad]."""
-        if isinstance(theta, (float, int)):
-            return self.transfer(theta)[1]
-        return self.evaluate(theta).mu
+        return self._out(theta, "mu")
 
     def nu(self, theta: ArrayLike):
         """Rocker acceleration ratio ν = d²φ4/dθ² [1/rad] at crank angle ``theta`` [rad]."""
-        if isinstance(theta, (float, int)):
-            return self.transfer(theta)[2]
-        return self.evaluate(theta).nu
+        return self._out(theta, "nu")
 
     def coupler_mu(self, theta: ArrayLike):
         """Coupler velocity ratio dφ3/dθ [1] at crank angle ``theta`` [rad]."""
@@ -441,8 +435,13 @@ class FourBar:
         return self.nu(theta) * (omega * omega)
 
     def _out(self, theta, name):
-        value = getattr(self.evaluate(theta), name)
-        return float(value) if isinstance(theta, (float, int)) else value
+        """Field ``name`` of :meth:`evaluate`; at one angle a float, φ4, μ and ν from
+        :meth:`transfer` (which refuses the singular positions)."""
+        if not isinstance(theta, (float, int)):
+            return getattr(self.evaluate(theta), name)
+        if name in ("phi4", "mu", "nu"):
+            return self.transfer(theta)[("phi4", "mu", "nu").index(name)]
+        return float(getattr(self.evaluate(theta), name))
 
     def transfer(self, theta: float) -> tuple[float, float, float]:
         """(φ4 [rad], μ [1], ν [1/rad]) at one crank angle ``theta`` [rad], as floats.

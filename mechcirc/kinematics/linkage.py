@@ -296,12 +296,8 @@ class Linkage:
 
     def constraint_rows(self) -> list[tuple[str, str, str]]:
         """Constraint rows: list of (point, body_a, body_b) with body_a possibly 'ground'."""
-        rows = []
-        for p, members in self.joints().items():
-            first = members[0]
-            for other in members[1:]:
-                rows.append((p, first, other))
-        return rows
+        return [(p, members[0], other) for p, members in self.joints().items()
+                for other in members[1:]]
 
     # ----------------------------------------------------------- kinematics
     def q0(self) -> NDArray[np.float64]:

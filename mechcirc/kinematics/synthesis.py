@@ -548,9 +548,8 @@ def _checked(load, objective, fixed, swing, swing_range, b_a_range, d_a_range, s
     s_range = tuple(float(x) for x in (swing_range or SWING_RANGE_DEG))
     if not (len(s_range) == 2 and 0 < s_range[0] <= s_range[1] < 180):
         raise GeometryError(f"swing range must be 0 < low ≤ high < 180 degrees, got {s_range}")
-    if swing is not None:
-        if not 0 < swing < 180:
-            raise GeometryError(f"swing must be in (0°, 180°), got {swing}°")
+    if swing is not None and not 0 < swing < 180:
+        raise GeometryError(f"swing must be in (0°, 180°), got {swing}°")
     for name, rng in (("b_a_range", b_a_range), ("d_a_range", d_a_range)):
         if not (len(rng) == 2 and 1 < rng[0] <= rng[1] < 1e3):
             raise GeometryError(f"{name} must be 1 < low ≤ high < 1000, got {tuple(rng)}")

@@ -30,13 +30,16 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ..errors import GeometryError, InputError, MechcircWarning, warn
 from ..kinematics.linkage import Linkage, Slider
+from ..sources import Table, brief, check_keys, finite_number, located
 
 if TYPE_CHECKING:
     from ..motion_laws import Motion
@@ -105,8 +108,6 @@ class CamLinkage(Linkage):
 
     def _lifted(self, th, s, x1, x2, kw):
         """The motion at the crank rotations α that lift the follower by ``s``, and α′, α″."""
-        from ..errors import GeometryError
-
         sl, w = self.slider, self.cranks[0].omega
         u, p0 = np.array(sl.direction, dtype=float), self.pose[sl.point]
 
@@ -184,8 +185,6 @@ def check_follower_part(scene, text: str) -> dict | None:
         The follower and the crank are in different rigid parts (an elastic
         element between them), located at ``[cam] follower``.
     """
-    from ..sources import located
-
     lk = scene.linkage
     crank = lk.cranks[0].link
     if getattr(lk, "slider", None) is not None and not any(
@@ -235,8 +234,6 @@ def _open_contact(scene, text) -> dict:
     the cam lifts) to a point P of another part, P on a block sliding on a guide fixed
     to the frame along the contact's line; the spring acts at P along that line.
     """
-    from ..sources import located
-
     lk = scene.linkage
 
     def err(msg, expected):
@@ -360,18 +357,13 @@ class _CamReader:
     """Reads one ``[cam]`` table, each value located at its key on error."""
 
     def __init__(self, text, source, raw, linkage):
-        from ..sources import located
-
         self.text, self.source, self.raw, self.lk = text, source, raw, linkage
-        self.located = located
 
     def err(self, message, key, expected=None, value=None):
-        return self.located(self.text, self.source, message, "cam", key, value=value,
-                            expected=expected)
+        return located(self.text, self.source, message, "cam", key, value=value,
+                       expected=expected)
 
     def num(self, key, default=None, positive=True, allow_zero=False):
-        from ..sources import brief, finite_number
-
         v = self.raw.get(key, default)
         if not finite_number(v) or (positive and (v < 0 or (v == 0 and not allow_zero))):
             raise self.err(f"[cam] {key} must be a finite number{' > 0' if positive else ''}"
@@ -382,13 +374,11 @@ class _CamReader:
 
     def kind(self) -> str:
         """``follower_type``, and the keys of the other kinds refused."""
-        from ..sources import brief
-
         kind = self.raw.get("follower_type", "oscillating")
         if kind not in KINDS:
             raise self.err(f"[cam] follower_type {brief(kind)} is not a follower type",
                            "follower_type", expected=" | ".join(KINDS),
-                           value=kind if isinstance(kind, str) else None)
+                           value=kind)
         for key, (what, kinds) in _ONLY.items():
             if key in self.raw and kind not in kinds:
                 raise self.err(f"[cam] {key} is for a{'n' if what[0] == 'o' else ''} {what} "
@@ -399,17 +389,14 @@ class _CamReader:
 
     def follower(self, kind):
         """The follower's name and, for a translating one, its slider on the frame."""
-        from ..sources import brief
-
         cranks, f, raw = self.lk.cranks, self.raw.get("follower"), self.raw
         at = "follower" if "follower" in raw else next(iter(raw), "follower")
-        value = f if isinstance(f, str) else None
         if kind.startswith("oscillating"):
             slider = None
             if len(cranks) != 1 or f != cranks[0].link:
                 raise self.err(f"[cam] follower {brief(f)} must be the linkage's only crank "
                                f"(the arm the cam swings; its omega is the cam shaft's "
-                               f"speed)", at, value=value, expected=f'follower = '
+                               f"speed)", at, value=f, expected=f'follower = '
                                f'"{cranks[0].link}" with one [[cranks]] entry')
         else:
             slider = next((x for x in self.lk.sliders if x.link == f and x.guide == "ground"),
@@ -418,22 +405,18 @@ class _CamReader:
                 raise self.err(f"[cam] follower {brief(f)} must be a block sliding on a guide "
                                "fixed to the frame ([[sliders]] guide = \"ground\"), with one "
                                "[[cranks]] entry: a link pinned to the frame that the follower "
-                               "moves", at, value=value, expected="follower = one of " + (", ".join(
+                               "moves", at, value=f, expected="follower = one of " + (", ".join(
                                    x.link for x in self.lk.sliders if x.guide == "ground")
                                    or "(no block on a fixed guide)"))
         if not cranks[0].omega > 0:
             raise self.err(f"[cam] the cam shaft turns at omega = {cranks[0].omega:g} rad/s "
                            f"(the [[cranks]] omega of {cranks[0].link!r}); a cam needs "
-                           f"omega > 0", at, expected="omega > 0 in [[cranks]]", value=value)
+                           f"omega > 0", at, expected="omega > 0 in [[cranks]]", value=f)
         return f, slider
 
     def motion(self, kind):
         """The follower's Motion (arm angle [rad] or lift [units]) and its memo key."""
-        import math
-        import os
-
         from ..motion_laws import LAWS, cam_cycle, read_motion_table
-        from ..sources import brief
 
         raw = self.raw
         if ("table" in raw) == ("law" in raw):
@@ -455,8 +438,7 @@ class _CamReader:
         for key in ("law", "return_law"):
             if key in raw and raw[key] not in LAWS:
                 raise self.err(f"[cam] {key} {brief(raw[key])} is not a motion law", key,
-                               expected=" | ".join(LAWS), value=raw[key]
-                               if isinstance(raw[key], str) else None)
+                               expected=" | ".join(LAWS), value=raw[key])
         osc = kind.startswith("oscillating")
         skey = "stroke_deg" if osc else "stroke"
         rise, ret = self.num("rise"), self.num("return")
@@ -473,8 +455,6 @@ class _CamReader:
 
     def contact(self, kind) -> dict:
         """``contact``, ``spring``, ``preload``: the contact that can open, if asked for."""
-        from ..sources import brief
-
         raw = self.raw
         if "contact" not in raw:
             for key in ("spring", "preload"):
@@ -488,15 +468,12 @@ class _CamReader:
             raise self.err(f"[cam] contact {brief(c)}: the contact that can open is an "
                            "[[elastic]] link's name, for a translating follower (roller or "
                            "flat)", "contact", expected='contact = "NAME" with follower_type '
-                           '= "roller" or "flat"', value=c if isinstance(c, str) else None)
+                           '= "roller" or "flat"', value=c)
         return {"contact": c, "spring": self.num("spring"),
                 "preload": self.num("preload", allow_zero=True)}
 
     def checks(self, kind, motion):
         """The cam's pressure-angle and undercut checks (warnings), when base_radius is given."""
-        import math
-
-        from ..errors import InputError, MechcircWarning, warn
         from ..kinematics.cam import cam_profile
 
         geo = ("roller_radius", "arm", "pivot", "offset", "pressure_limit_deg")
@@ -559,11 +536,8 @@ def parse_cam(text: str, source: str, raw, linkage: Linkage) -> CamLinkage:
         a law whose angles do not fit a turn, a cam geometry that cannot be
         built — at the key.
     """
-    from ..sources import Table, check_keys
-
     if not isinstance(raw, dict):
-        raise _CamReader(text, source, {}, linkage).located(
-            text, source, "cam must be a table [cam]", None, "cam")
+        raise located(text, source, "cam must be a table [cam]", None, "cam")
     check_keys(text, source, Table("cam", CAM_KEYS), raw)
     r = _CamReader(text, source, raw, linkage)
     kind = r.kind()

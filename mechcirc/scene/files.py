@@ -480,8 +480,8 @@ class _SceneReader:
         p = entry.get(key)
         if not _named(p, points):
             raise self.err(f"[[{table}]] #{n + 1}: {key} {p!r} does not exist in "
-                           f"[points]", table, key, value=p if isinstance(p, str) else None,
-                           occurrence=n, expected=f"one of {', '.join(points)}")
+                           f"[points]", table, key, value=p, occurrence=n,
+                           expected=f"one of {', '.join(points)}")
         return p
 
     def number(self, value, what, table, key, n, **kw) -> float:
@@ -495,8 +495,8 @@ class _SceneReader:
             lname = e.get("link")
             if not _named(lname, links):
                 raise self.err(f"elastic link {lname!r} is not in the linkage's [links]",
-                               "elastic", "link", value=lname if isinstance(lname, str) else None,
-                               occurrence=n, expected=f"one of {', '.join(links)}")
+                               "elastic", "link", value=lname, occurrence=n,
+                               expected=f"one of {', '.join(links)}")
             if len(links[lname]) != 2:
                 raise self.err(f"elastic link {lname!r} has {len(links[lname])} points; "
                                "only a binary link can be an axial spring", "elastic", "link",
@@ -526,8 +526,7 @@ class _SceneReader:
             if not _named(lname, links) or lname in elastic_links:
                 raise self.err(
                     f"torsion rod #{n + 1}: link {lname!r} is not a rigid link of [links]",
-                    "torsion", "link", value=lname if isinstance(lname, str) else None,
-                    occurrence=n,
+                    "torsion", "link", value=lname, occurrence=n,
                     expected=f"one of {', '.join(l for l in links if l not in elastic_links)}")
             pivots = [p for p in links[lname] if p in ground]
             pivot = t.get("pivot", pivots[0] if len(pivots) == 1 else None)
@@ -568,7 +567,7 @@ class _SceneReader:
                 raise self.err(f"[[gears]] #{n + 1}: crank {c!r} is not a crank after the first "
                                "(the main shaft) or is geared twice", "gears",
                                "crank" if "crank" in g else next(iter(g), "crank"),
-                               value=c if isinstance(c, str) else None, occurrence=n,
+                               value=c, occurrence=n,
                                expected=f"one of {', '.join(names[1:]) or '(none: one crank)'}")
             ratio, frac = self.gear_ratio(n, g, c)
             body = self.gear_mesh(n, g, c, torsions)
@@ -668,7 +667,7 @@ class _SceneReader:
                     "its end points)") if _named(lname, elastic_links) else ""
             raise self.err(f"[[masses]] #{n + 1}: link {lname!r} is not a rigid "
                            f"link or torsion body{hint}", "masses", "link",
-                           value=lname if isinstance(lname, str) else None, occurrence=n,
+                           value=lname, occurrence=n,
                            expected=f"one of {', '.join(sorted(bodies))}")
         if "mass" in m or "inertia" not in m:
             raise self.err(f"[[masses]] #{n + 1} on a link takes inertia = … "
@@ -706,8 +705,7 @@ class _SceneReader:
             anchor = ld["anchor"]
             if not _named(anchor, self.linkage.ground):
                 raise self.err(f"load #{n + 1}: anchor {anchor!r} is not a ground "
-                               "point", "loads", "anchor", occurrence=n,
-                               value=anchor if isinstance(anchor, str) else None,
+                               "point", "loads", "anchor", occurrence=n, value=anchor,
                                expected=f"one of {', '.join(self.linkage.ground)}")
             return anchor, None
         d = ld["direction"]
@@ -796,8 +794,7 @@ def _analysis(text, source, table, circuit_names) -> Analysis:
     output = table.get("output")
     if output is not None and not _named(output, circuit_names):
         raise located(text, source, f"[analysis] output {output!r} is not an element of the "
-                   "scene's circuit", "analysis", "output",
-                   value=output if isinstance(output, str) else None,
+                   "scene's circuit", "analysis", "output", value=output,
                    expected=f"one of {', '.join(sorted(circuit_names))}")
     band = None
     if "band" in table:

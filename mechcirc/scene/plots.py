@@ -3,6 +3,10 @@
 
 from __future__ import annotations
 
+import math
+
+import numpy as np
+
 __all__ = ["plot_mode", "plot_motion"]
 
 
@@ -22,7 +26,6 @@ def plot_motion(result, names=None, fig=None):
     -------
     matplotlib.figure.Figure
     """
-    import numpy as np
     from matplotlib.figure import Figure
 
     fig = fig or Figure(figsize=(8, 7))
@@ -88,10 +91,6 @@ def plot_mode(scene, theta: float, n: int = 1, *, kind: str = "resonance", ax=No
         No such mode (the message says how many there are), or it is
         overdamped (no shape).
     """
-    import math
-
-    import numpy as np
-
     mode, state, raw = _mode_displacements(scene, theta, n, kind)
     lk = scene.linkage
     big = max(float(np.hypot(*d)) for d in raw.values())
@@ -112,8 +111,6 @@ def plot_mode(scene, theta: float, n: int = 1, *, kind: str = "resonance", ax=No
 def _draw_displaced(ax, scene, state, moves):
     """The linkage in ``state`` (grey) and its points displaced by ``moves`` (point →
     displacement [linkage units]), elastic links dashed; the ground points as triangles."""
-    import numpy as np
-
     lk = scene.linkage
     elastic = {e.link for e in scene.elastic}
     for link, pts in lk.links.items():
@@ -131,10 +128,6 @@ def _draw_displaced(ax, scene, state, moves):
 def _mode_displacements(scene, theta: float, n: int, kind: str):
     """Mode ``n`` of ``kind`` at ``theta``, the linkage's state there, and each point's
     displacement in the mode [linkage units] (see :func:`plot_mode`)."""
-    import math
-
-    import numpy as np
-
     from ..errors import MechcircError
     from ..modes import modes
     from .model import build

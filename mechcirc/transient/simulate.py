@@ -139,8 +139,7 @@ def parse_drive(text: str | None) -> Waveform:
     if text in ("step", "impulse"):
         return Waveform(text)
     if text.startswith("harmonic:"):
-        from ..units import OMEGA_UNITS  # noqa: F401  (units accepted as in --omega-*)
-        from ..units import parse_omega
+        from ..units import parse_omega     # units accepted as in --omega-*
 
         try:
             omega = parse_omega(text[len("harmonic:"):])
@@ -387,8 +386,8 @@ def _clearance_run(ss, circuit, z0, t, us, drive, amp, rtol, notes, elements, ve
     Z, method, err, more = _nonlinear(ss, circuit, z0, t, u_in, rtol,
                                       drive.rate(t, amp) if drive.kind == "motion" else None)
     notes.extend(more)
-    interp = _interpolation(u, drive, drive.kind == "motion", notes)
-    out = _outputs(ss, circuit, t, Z, u, u_in, t[1] - t[0], drive, method, err, interp, notes,
+    _interpolation(u, drive, drive.kind == "motion", notes)
+    out = _outputs(ss, circuit, t, Z, u, u_in, t[1] - t[0], drive, method, err, notes,
                    elements, None, velocities)
     _require_finite(out)
     out.separations = _separations(out, circuit, drive)
@@ -403,9 +402,9 @@ def _linear_run(ss, circuit, z0, t, us, drive, notes, elements, velocities):
         ss, z0, u_in, h, elements, velocities)
     method = f"exact (matrix exponential, first-order hold of the drive; {path.split(' (')[0]})"
     notes.append(f"linear propagation: {path}")
-    interp = _interpolation(u, drive, False, notes)
-    out = _outputs(ss, circuit, t, Z, u, u_in, h, drive, method, err, interp, notes,
-                   elements, T, velocities, nx, drive_y, x_ready, v_ready)
+    _interpolation(u, drive, False, notes)
+    out = _outputs(ss, circuit, t, Z, u, u_in, h, drive, method, err, notes, elements, T,
+                   velocities, nx, drive_y, x_ready, v_ready)
     out.error = _linear_error(out, ss, err, x_bound)
     # (linear: the error is finite only if x is; NaN and ±inf reach max|x| or its bound)
     _require_finite(out, x_in_error=True)
@@ -636,8 +635,6 @@ def drive_map(ss: StateSpace) -> tuple[np.ndarray, Any, Any] | None:
 
 def with_oscillator(ss: StateSpace, z0, omega: float, amp: float):
     """ss with states w = (sin ωt, cos ωt) appended and the drive u = amp·w₁ folded in."""
-    import dataclasses
-
     N = ss.size
     A = np.zeros((N + 2, N + 2))
     A[:N, :N] = ss.A
@@ -1173,7 +1170,7 @@ def _clearance_setup(ss: StateSpace, circuit):
     return mats, w_max
 
 
-def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, interp, notes, want=True,
+def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, notes, want=True,
              T=None, velocities=True, nx=None, drive_y=None, x_ready=None,
              v_ready=None) -> TransientResult:
     """Outputs from the states: z = Z[k] (or modal coordinates, z = T Z[k]).
