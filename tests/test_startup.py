@@ -244,6 +244,8 @@ def test_the_sweep_command_with_its_exact_peak_loads_no_scipy(tmp_path):
     tops = {m.split(".")[0] for m in modules}
     assert not tops & {"scipy", "matplotlib", "pandas", "networkx"}, tops
     assert "numpy.ma" not in modules        # np.unique / setdiff1d would import it
+    # Only the sweep's own command module is imported and its parsers built.
+    assert {m for m in modules if m.endswith("_commands")} == {"mechcirc.cli.circuit_commands"}
 
 
 def test_the_sweep_plot_uses_no_pyplot_and_no_scipy(tmp_path):
@@ -312,3 +314,63 @@ def test_small_undamped_resonances_without_scipy_agree_with_the_sparse_path(monk
             assert abs(a.omega - b.omega) <= (a.error + b.error) * b.omega, (a, b)
         compared += len(ref)
     assert compared >= 20
+
+
+def _subcommands(parser):
+    import argparse
+
+    return next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction)).choices
+
+
+def test_the_command_table_names_the_module_of_every_command():
+    # mechcirc CMD builds only COMMANDS[CMD]'s parsers: the table must say where
+    # each command is registered, and name every one.
+    import argparse
+    import importlib
+
+    from mechcirc.cli import COMMAND_MODULES, COMMANDS
+
+    where = {}
+    for name in COMMAND_MODULES:
+        sub = argparse.ArgumentParser().add_subparsers()
+        importlib.import_module(name).register(sub)
+        where.update(dict.fromkeys(sub.choices, name))
+    assert COMMANDS == where
+
+
+def test_a_commands_own_parser_reads_and_helps_as_the_full_one():
+    import shlex
+
+    from mechcirc.cli import COMMANDS, build_parser
+
+    full = build_parser()
+    for name in COMMANDS:
+        own = build_parser(name)
+        assert list(_subcommands(own)) == [c for c in _subcommands(full)
+                                           if COMMANDS[c] == COMMANDS[name]]
+        assert _subcommands(own)[name].format_help() == _subcommands(full)[name].format_help()
+        # The example of the command's help, parsed by both: the same values.
+        line = next(t for t in (_subcommands(full)[name].epilog or "").splitlines()
+                    if "mechcirc " in t)
+        argv = shlex.split(line.split("mechcirc ", 1)[1])
+        assert vars(own.parse_args(argv)) == vars(full.parse_args(argv))
+
+
+@pytest.mark.parametrize("argv", [
+    ["sweep", "x.mcir", "--omega-min", "1", "--omega-max", "2", "--plto", "a.png"],
+    ["sweep", "--points", "many", "x.mcir"],
+    ["sweep", "x.mcir"],
+    ["--debug", "resonances", "x.mcir", "--omega-maks", "3"],
+    ["transient", "--bogus"],
+    ["swep", "x.mcir"],
+])
+def test_a_usage_error_reads_as_with_the_full_parser(argv, capsys):
+    from mechcirc.cli import build_parser, main
+
+    with pytest.raises(SystemExit) as exit_:
+        main(argv)
+    got = capsys.readouterr().err
+    with pytest.raises(SystemExit) as full_exit:
+        build_parser().parse_args(argv)
+    assert exit_.value.code == full_exit.value.code == 2
+    assert got == capsys.readouterr().err and "error" in got
