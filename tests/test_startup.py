@@ -374,3 +374,41 @@ def test_a_usage_error_reads_as_with_the_full_parser(argv, capsys):
         build_parser().parse_args(argv)
     assert exit_.value.code == full_exit.value.code == 2
     assert got == capsys.readouterr().err and "error" in got
+
+
+def test_the_sweep_figure_builds_only_the_ticks_it_shows_and_one_legend(tmp_path):
+    # The PNG command's figure: the log axes' major ticks are the decades inside
+    # the view (a Tick object each, none beyond), labelled as before; the |Q0|
+    # panel has one legend with the roots' lines and the peak's markers.
+    import math
+
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from mechcirc._sweep import peak
+    from mechcirc.plotting import plot_sweep
+
+    c = mechcirc.load(STB)
+    s = c.sweep(np.geomspace(10, 1e4, 400))
+    found = c.resonances(omega_max=1e4 * (1 + 1e-9))
+    fig = plot_sweep(s, resonances=found, peak=peak(s, resonances=found))
+    FigureCanvasAgg(fig).draw()
+    ax_k, ax_p, ax_q = fig.axes
+    for axis in (ax_k.xaxis, ax_q.xaxis, ax_k.yaxis, ax_q.yaxis):
+        lo, hi = sorted(axis.get_view_interval())
+        locs = list(axis.get_majorticklocs())
+        exponents = [math.log10(t) for t in locs]
+        decades = range(math.ceil(math.log10(lo)), math.floor(math.log10(hi)) + 1)
+        # every decade, or (a tall axis) every other one: all inside the view
+        assert all(lo <= t <= hi for t in locs)
+        assert {round(e) for e in exponents} <= set(decades)
+        assert max(abs(e - round(e)) for e in exponents) < 1e-12
+        assert len(locs) >= len(decades) // 2 >= 1
+        assert len(axis.majorTicks) == len(locs)
+        shown = [t.label1.get_text() for t in axis.majorTicks if t.label1.get_visible()]
+        assert all(t.startswith("10") for t in shown)
+    assert list(ax_q.xaxis.get_majorticklocs()) == [10.0, 100.0, 1e3, 1e4]
+    assert [t.get_text() for t in ax_q.get_xticklabels()] == ["10¹", "10²", "10³", "10⁴"]
+    assert list(ax_p.yaxis.get_majorticklocs()) == [-180, -90, 0, 90, 180]
+    assert [t.get_text() for t in ax_q.get_legend().get_texts()] == \
+        ["resonance (K = 0)", "anti-resonance (K = ∞)", "|Q0| = ∞ (undamped)"]
+    assert ax_k.get_legend() is None and ax_p.get_legend() is None
