@@ -412,3 +412,33 @@ def test_the_sweep_figure_builds_only_the_ticks_it_shows_and_one_legend(tmp_path
     assert [t.get_text() for t in ax_q.get_legend().get_texts()] == \
         ["resonance (K = 0)", "anti-resonance (K = ∞)", "|Q0| = ∞ (undamped)"]
     assert ax_k.get_legend() is None and ax_p.get_legend() is None
+
+
+@pytest.mark.parametrize("unit", ["rad/s", "Hz"])
+def test_the_csv_rows_are_those_numpy_savetxt_writes(tmp_path, unit):
+    # The sweep CSV formats its rows itself (faster): byte for byte what
+    # np.savetxt writes for the same columns, also for a force drive, an extra
+    # column with nan and tiny values, and the flags of points on a pole.
+    import io
+    import math
+
+    from mechcirc.io_csv import write_sweep_csv
+
+    f = mechcirc.parse("drive F a 0 force=2\nmass m a 0 1\nspring k a 0 1e4\ndamper d a 0 0.5")
+    for circuit, omega in ((mechcirc.load(STB), np.geomspace(10, 1e4, 400)),
+                           (f, np.concatenate([[0.0], np.linspace(1, 200, 250), [100.0]]))):
+        s = circuit.sweep(omega)
+        extra = {"x": np.abs(s.K) * 1e-300, "y": np.where(omega > 50, np.nan, omega)}
+        write_sweep_csv(s, tmp_path / "s.csv", unit=unit, extra=extra)
+        columns = [omega / (1 if unit == "rad/s" else 2 * math.pi), s.K.real, s.K.imag,
+                   s.Q0.real, s.Q0.imag]
+        columns += [s.v0.real, s.v0.imag] if circuit is f else []
+        columns += [extra["x"], extra["y"], s.flags]
+        ref = io.StringIO()
+        np.savetxt(ref, np.column_stack(columns), delimiter=",",
+                   fmt=["%.17g"] * (len(columns) - 1) + ["%d"])
+        header, *rows = (tmp_path / "s.csv").read_text().splitlines(keepends=True)
+        assert header.startswith("omega," if unit == "rad/s" else "f_Hz,")
+        assert header.endswith(",x,y,flag\n")
+        assert "".join(rows) == ref.getvalue()
+    assert s.flags.any()                # the force drive's grid has flagged points
