@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import contextlib
-import json
 import math
 import os
 import signal
@@ -354,6 +353,8 @@ def print_json(document) -> None:
     ``pandas.read_json`` give floats, so numeric arrays stay numeric.  (Strict
     RFC 8259 readers such as jq need ``sub("NaN"; "null")``-style preprocessing.)
     """
+    import json         # here: a command that prints no JSON does not load it
+
     doc = _jsonable(document)
     # json.dump and indented output go through json's pure-Python encoder, one
     # write per number; a long document is encoded compact in one go by the C
