@@ -4,9 +4,12 @@ Each command runs in a fresh Python process (``python -m mechcirc ...``, the
 way a user runs it); its CPU time (user + system, from ``resource.getrusage``
 of the finished child) is taken over ``--repeat`` runs (default 7, at least
 5) and the median, lowest and highest are printed with the goal.  In the same
-run, interleaved with the commands, two floors are timed the same way: the
-bare interpreter (``python -c pass``) and ``python -c "import numpy"`` — what
-any command of a numpy program pays before it does anything.
+run, interleaved with the commands, three floors are timed the same way: the
+bare interpreter (``python -c pass``), ``python -c "import numpy"`` — what
+any command of a numpy program pays before it does anything — and numpy with
+matplotlib's ``Figure`` and Agg canvas (imported, one canvas made), what any
+command that draws a PNG pays.  Each command is printed with its ratio to its
+floor and what it costs beyond it (medians).
 
 Bytecode is written once, by an untimed first run of each command, to a
 cache directory of the run (``PYTHONPYCACHEPREFIX``; an installed package
@@ -41,17 +44,26 @@ SWEEP = ["sweep", NETLIST, "--omega-min", "10", "--omega-max", "10000", "--point
          "--log"]
 
 
-def cases(tmp: Path) -> list[tuple[str, list[str], float | None]]:
-    """``(label, argv after python, goal in s CPU or None for a floor)``."""
+PASS, NUMPY, MPL = ("python -c pass (floor)", "python -c 'import numpy' (floor)",
+                    "python -c 'import numpy, matplotlib Figure, Agg' (floor)")
+#: numpy, matplotlib.figure and the Agg canvas, as the PNG command loads them
+MPL_CODE = ("import numpy; from matplotlib.figure import Figure; "
+            "from matplotlib.backends.backend_agg import FigureCanvasAgg; "
+            "FigureCanvasAgg(Figure())")
+
+
+def cases(tmp: Path) -> list[tuple[str, list[str], float | None, str | None]]:
+    """``(label, argv after python, goal in s CPU or None for a floor, its floor's label)``."""
     m = ["-m", "mechcirc"]
     return [
-        ("python -c pass (floor)", ["-c", "pass"], None),
-        ("python -c 'import numpy' (floor)", ["-c", "import numpy"], None),
-        ("mechcirc --help", m + ["--help"], 0.15),
+        (PASS, ["-c", "pass"], None, None),
+        (NUMPY, ["-c", "import numpy"], None, None),
+        (MPL, ["-c", MPL_CODE], None, None),
+        ("mechcirc --help", m + ["--help"], 0.15, PASS),
         ("mechcirc sweep stb_heald, 400 points, CSV", m + SWEEP + ["-o", str(tmp / "x.csv")],
-         0.3),
+         0.3, NUMPY),
         ("  ... with a PNG", m + SWEEP + ["-o", str(tmp / "x.csv"), "--plot",
-                                          str(tmp / "sweep.png")], 1.0),
+                                          str(tmp / "sweep.png")], 1.0, MPL),
     ]
 
 
@@ -93,21 +105,27 @@ def main() -> int:
           f"{scipy.__version__}, matplotlib {matplotlib.__version__}; "
           f"load average {os.getloadavg()[0]:.1f}; median of {repeat} fresh processes, CPU s")
     with tempfile.TemporaryDirectory() as tmp:
-        todo = [(label + tag, argv, goal, envs[tag]) for label, argv, goal in cases(Path(tmp))
+        todo = [(label + tag, argv, goal, floor, envs[tag])
+                for label, argv, goal, floor in cases(Path(tmp))
                 for tag in envs if goal is not None or not tag]
-        times: dict[str, list[float]] = {label: [] for label, _, _, _ in todo}
-        for _label, argv, _, env in todo:       # warm the OS file cache, not timed
+        times: dict[str, list[float]] = {label: [] for label, *_ in todo}
+        for _label, argv, _, _, env in todo:    # warm the OS file cache, not timed
             cpu_of(argv, env)
         for _ in range(repeat):                 # interleaved: load changes hit all alike
-            for label, argv, _, env in todo:
+            for label, argv, _, _, env in todo:
                 times[label].append(cpu_of(argv, env))
     width = max(len(label) for label in times)
-    for label, _, goal, _ in todo:
+    median = {label: statistics.median(t) for label, t in times.items()}
+    for label, _, goal, floor, _ in todo:
         t = times[label]
-        med = statistics.median(t)
+        med = median[label]
         verdict = "" if goal is None else \
             f"  goal <= {goal:.2f} s: {'met' if med <= goal else 'NOT met'} ({med / goal:.2f}x)"
         print(f"{label:<{width}}  median {med:.3f} s (min {min(t):.3f}, max {max(t):.3f}){verdict}")
+        if floor is not None:
+            print(f"{'':<{width}}  {med / median[floor]:.2f}x its floor "
+                  f"({floor.replace(' (floor)', '')}), "
+                  f"{med - median[floor]:+.3f} s beyond it")
     print(f"load average after: {os.getloadavg()[0]:.1f}")
     shutil.rmtree(cache, ignore_errors=True)
     return 0

@@ -43,17 +43,18 @@ def write_sweep_csv(result, path, *, unit: str = "rad/s", extra: dict | None = N
         header += f",{key}"
     columns.append(result.flags)
     n = len(result.omega)
-    # Formatting 17 digits is the slow part (about 5 s per million rows): in
-    # blocks, so that a terminal shows progress on long sweeps, and stacking the
-    # columns one block at a time keeps memory bounded (10^7 points would
-    # otherwise need a 640 MB table).
+    # Formatting 17 digits is the slow part: in blocks, so that a terminal shows
+    # progress on long sweeps, and stacking the columns one block at a time keeps
+    # memory bounded (10^7 points would otherwise need a 640 MB table).  Each
+    # block is one string: the rows as np.savetxt writes them (the same format,
+    # on the same float64 values) at about half its cost.
     block = 100_000
+    row = ",".join(["%.17g"] * (len(columns) - 1) + ["%d"]) + "\n"
     with open(path, "w", newline="") as fh, Progress(n, "CSV") as bar:
         fh.write(header + ",flag\n")
-        fmt = ["%.17g"] * (len(columns) - 1) + ["%d"]
         for start in range(0, n, block):
             table = np.column_stack([c[start:start + block] for c in columns])
             if unit != "rad/s":         # per block: no second array of n frequencies
                 table[:, 0] = in_unit(table[:, 0], unit)
-            np.savetxt(fh, table, delimiter=",", fmt=fmt)
+            fh.write("".join([row % tuple(r) for r in table.tolist()]))
             bar.update(len(table))

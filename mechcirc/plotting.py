@@ -99,8 +99,10 @@ def _label_resonances(ax, resonances, per_unit: float) -> None:
                 bbox={"boxstyle": "round,pad=0.15", "fc": "white", "ec": "none", "alpha": 0.8})
 
 
-def _mark_resonances(axes, resonances, legend_ax, per_unit: float = 1.0):
-    """Vertical lines at each root's ω (``per_unit`` rad/s per unit of the x axis)."""
+def _mark_resonances(axes, resonances, legend_ax, per_unit: float = 1.0,
+                     legend: bool = True):
+    """Vertical lines at each root's ω (``per_unit`` rad/s per unit of the x axis);
+    ``legend=False`` leaves ``legend_ax``'s legend to the caller (made once)."""
     labelled = set()
     for r in resonances:
         style = "-" if r.kind == "resonance" else "--"
@@ -110,7 +112,7 @@ def _mark_resonances(axes, resonances, legend_ax, per_unit: float = 1.0):
         for ax in axes:
             ax.axvline((r.omega_d or r.omega) / per_unit, color="0.5", lw=0.8, ls=style,
                        label=label if ax is legend_ax else None)
-    if resonances:
+    if resonances and legend:
         legend_ax.legend(loc="best", fontsize="small")
 
 
@@ -222,7 +224,9 @@ def _bode_figure(fig, result, curves, resonances, peak, unit: str, extra: dict, 
     ax_q.set_ylabel(f"|v0| = |F0·K| [{units['v']}]" if force_drive else f"|Q0| [{units['Q']}]")
     _extra_panels(axes[3:], in_unit(result.omega, unit), extra)
     axes[-1].set_xlabel(_FREQUENCY_LABEL[unit])
-    _mark_resonances(tuple(axes), resonances, ax_q, FREQUENCY_UNITS[unit][1])
+    # One legend on the |Q0| panel for the roots' lines and the peak (made once).
+    _mark_resonances(tuple(axes), resonances, ax_q, FREQUENCY_UNITS[unit][1],
+                     legend=peak is None or peak.quantity != "Q0")
     _mark_peak(ax_q, peak, unit, units["Q"])
     for a in axes:
         a.grid(True, which="both", alpha=0.3)
@@ -271,10 +275,41 @@ def _decade_label(x, pos=None) -> str:
     return f"{x:g}"
 
 
+def _in_view(locator):
+    """``locator`` giving only the ticks inside the view (matplotlib's log locators add
+    a decade or more beyond each end, each a Tick object built, never drawn)."""
+    from matplotlib.ticker import Locator
+
+    class InView(Locator):
+        def __init__(self, base):
+            self.base = base
+
+        def set_axis(self, axis):
+            super().set_axis(axis)
+            self.base.set_axis(axis)
+
+        def __call__(self):
+            lo, hi = sorted(self.axis.get_view_interval())
+            slack = 1e-10 * (hi - lo)
+            return [t for t in self.base() if lo - slack <= t <= hi + slack]
+
+        def tick_values(self, vmin, vmax):
+            return self.base.tick_values(vmin, vmax)
+
+        def nonsingular(self, v0, v1):
+            return self.base.nonsingular(v0, v1)
+
+        def view_limits(self, vmin, vmax):
+            return self.base.view_limits(vmin, vmax)
+
+    return locator if type(locator).__name__ == "InView" else InView(locator)
+
+
 def _light_log_axes(axes, max_minor_decades: float = 3.0) -> None:
     """Cheaper log axes: decade labels as plain text, no minor ticks on a y axis
-    spanning more than ``max_minor_decades`` decades, and the minor grid of a
-    shared log x axis drawn as one line collection per panel.
+    spanning more than ``max_minor_decades`` decades, major ticks only inside the
+    view, and the minor grid of a shared log x axis drawn as one line collection
+    per panel.
 
     matplotlib's default labels are mathtext (its parser is built on first use)
     and every minor tick is an object drawn with its grid line: on a sweep's
@@ -291,8 +326,10 @@ def _light_log_axes(axes, max_minor_decades: float = 3.0) -> None:
     for a in axes:
         if a.get_xscale() == "log":
             a.xaxis.set_major_formatter(FuncFormatter(_decade_label))
+            a.xaxis.set_major_locator(_in_view(a.xaxis.get_major_locator()))
         if a.get_yscale() == "log":
             a.yaxis.set_major_formatter(FuncFormatter(_decade_label))
+            a.yaxis.set_major_locator(_in_view(a.yaxis.get_major_locator()))
             lo, hi = a.get_ylim()
             if lo > 0 and math.log10(hi / lo) > max_minor_decades:
                 a.yaxis.set_minor_locator(NullLocator())

@@ -244,6 +244,8 @@ def test_the_sweep_command_with_its_exact_peak_loads_no_scipy(tmp_path):
     tops = {m.split(".")[0] for m in modules}
     assert not tops & {"scipy", "matplotlib", "pandas", "networkx"}, tops
     assert "numpy.ma" not in modules        # np.unique / setdiff1d would import it
+    # Only the sweep's own command module is imported and its parsers built.
+    assert {m for m in modules if m.endswith("_commands")} == {"mechcirc.cli.circuit_commands"}
 
 
 def test_the_sweep_plot_uses_no_pyplot_and_no_scipy(tmp_path):
@@ -312,3 +314,131 @@ def test_small_undamped_resonances_without_scipy_agree_with_the_sparse_path(monk
             assert abs(a.omega - b.omega) <= (a.error + b.error) * b.omega, (a, b)
         compared += len(ref)
     assert compared >= 20
+
+
+def _subcommands(parser):
+    import argparse
+
+    return next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction)).choices
+
+
+def test_the_command_table_names_the_module_of_every_command():
+    # mechcirc CMD builds only COMMANDS[CMD]'s parsers: the table must say where
+    # each command is registered, and name every one.
+    import argparse
+    import importlib
+
+    from mechcirc.cli import COMMAND_MODULES, COMMANDS
+
+    where = {}
+    for name in COMMAND_MODULES:
+        sub = argparse.ArgumentParser().add_subparsers()
+        importlib.import_module(name).register(sub)
+        where.update(dict.fromkeys(sub.choices, name))
+    assert COMMANDS == where
+
+
+def test_a_commands_own_parser_reads_and_helps_as_the_full_one():
+    import shlex
+
+    from mechcirc.cli import COMMANDS, build_parser
+
+    full = build_parser()
+    for name in COMMANDS:
+        own = build_parser(name)
+        assert list(_subcommands(own)) == [c for c in _subcommands(full)
+                                           if COMMANDS[c] == COMMANDS[name]]
+        assert _subcommands(own)[name].format_help() == _subcommands(full)[name].format_help()
+        # The example of the command's help, parsed by both: the same values.
+        line = next(t for t in (_subcommands(full)[name].epilog or "").splitlines()
+                    if "mechcirc " in t)
+        argv = shlex.split(line.split("mechcirc ", 1)[1])
+        assert vars(own.parse_args(argv)) == vars(full.parse_args(argv))
+
+
+@pytest.mark.parametrize("argv", [
+    ["sweep", "x.mcir", "--omega-min", "1", "--omega-max", "2", "--plto", "a.png"],
+    ["sweep", "--points", "many", "x.mcir"],
+    ["sweep", "x.mcir"],
+    ["--debug", "resonances", "x.mcir", "--omega-maks", "3"],
+    ["transient", "--bogus"],
+    ["swep", "x.mcir"],
+])
+def test_a_usage_error_reads_as_with_the_full_parser(argv, capsys):
+    from mechcirc.cli import build_parser, main
+
+    with pytest.raises(SystemExit) as exit_:
+        main(argv)
+    got = capsys.readouterr().err
+    with pytest.raises(SystemExit) as full_exit:
+        build_parser().parse_args(argv)
+    assert exit_.value.code == full_exit.value.code == 2
+    assert got == capsys.readouterr().err and "error" in got
+
+
+def test_the_sweep_figure_builds_only_the_ticks_it_shows_and_one_legend(tmp_path):
+    # The PNG command's figure: the log axes' major ticks are the decades inside
+    # the view (a Tick object each, none beyond), labelled as before; the |Q0|
+    # panel has one legend with the roots' lines and the peak's markers.
+    import math
+
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from mechcirc._sweep import peak
+    from mechcirc.plotting import plot_sweep
+
+    c = mechcirc.load(STB)
+    s = c.sweep(np.geomspace(10, 1e4, 400))
+    found = c.resonances(omega_max=1e4 * (1 + 1e-9))
+    fig = plot_sweep(s, resonances=found, peak=peak(s, resonances=found))
+    FigureCanvasAgg(fig).draw()
+    ax_k, ax_p, ax_q = fig.axes
+    for axis in (ax_k.xaxis, ax_q.xaxis, ax_k.yaxis, ax_q.yaxis):
+        lo, hi = sorted(axis.get_view_interval())
+        locs = list(axis.get_majorticklocs())
+        exponents = [math.log10(t) for t in locs]
+        decades = range(math.ceil(math.log10(lo)), math.floor(math.log10(hi)) + 1)
+        # every decade, or (a tall axis) every other one: all inside the view
+        assert all(lo <= t <= hi for t in locs)
+        assert {round(e) for e in exponents} <= set(decades)
+        assert max(abs(e - round(e)) for e in exponents) < 1e-12
+        assert len(locs) >= len(decades) // 2 >= 1
+        assert len(axis.majorTicks) == len(locs)
+        shown = [t.label1.get_text() for t in axis.majorTicks if t.label1.get_visible()]
+        assert all(t.startswith("10") for t in shown)
+    assert list(ax_q.xaxis.get_majorticklocs()) == [10.0, 100.0, 1e3, 1e4]
+    assert [t.get_text() for t in ax_q.get_xticklabels()] == ["10¹", "10²", "10³", "10⁴"]
+    assert list(ax_p.yaxis.get_majorticklocs()) == [-180, -90, 0, 90, 180]
+    assert [t.get_text() for t in ax_q.get_legend().get_texts()] == \
+        ["resonance (K = 0)", "anti-resonance (K = ∞)", "|Q0| = ∞ (undamped)"]
+    assert ax_k.get_legend() is None and ax_p.get_legend() is None
+
+
+@pytest.mark.parametrize("unit", ["rad/s", "Hz"])
+def test_the_csv_rows_are_those_numpy_savetxt_writes(tmp_path, unit):
+    # The sweep CSV formats its rows itself (faster): byte for byte what
+    # np.savetxt writes for the same columns, also for a force drive, an extra
+    # column with nan and tiny values, and the flags of points on a pole.
+    import io
+    import math
+
+    from mechcirc.io_csv import write_sweep_csv
+
+    f = mechcirc.parse("drive F a 0 force=2\nmass m a 0 1\nspring k a 0 1e4\ndamper d a 0 0.5")
+    for circuit, omega in ((mechcirc.load(STB), np.geomspace(10, 1e4, 400)),
+                           (f, np.concatenate([[0.0], np.linspace(1, 200, 250), [100.0]]))):
+        s = circuit.sweep(omega)
+        extra = {"x": np.abs(s.K) * 1e-300, "y": np.where(omega > 50, np.nan, omega)}
+        write_sweep_csv(s, tmp_path / "s.csv", unit=unit, extra=extra)
+        columns = [omega / (1 if unit == "rad/s" else 2 * math.pi), s.K.real, s.K.imag,
+                   s.Q0.real, s.Q0.imag]
+        columns += [s.v0.real, s.v0.imag] if circuit is f else []
+        columns += [extra["x"], extra["y"], s.flags]
+        ref = io.StringIO()
+        np.savetxt(ref, np.column_stack(columns), delimiter=",",
+                   fmt=["%.17g"] * (len(columns) - 1) + ["%d"])
+        header, *rows = (tmp_path / "s.csv").read_text().splitlines(keepends=True)
+        assert header.startswith("omega," if unit == "rad/s" else "f_Hz,")
+        assert header.endswith(",x,y,flag\n")
+        assert "".join(rows) == ref.getvalue()
+    assert s.flags.any()                # the force drive's grid has flagged points

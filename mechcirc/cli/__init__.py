@@ -6,7 +6,8 @@ call, print or write, and return an exit status.  Only this package prints or
 exits.  Exit status: 0 success, 1 internal failure, 2 user error.
 
 Handlers import numpy, matplotlib and friends inside their bodies, so
-``mechcirc --help`` stays fast.
+``mechcirc --help`` stays fast; a command line that names its command builds
+only the parsers of that command's module (:data:`COMMANDS`).
 """
 
 from __future__ import annotations
@@ -26,6 +27,22 @@ COMMAND_MODULES: list[str] = [
     "mechcirc.cli.transient_commands",
     "mechcirc.cli.periodic_commands",
 ]
+
+#: Each sub-command's module (of :data:`COMMAND_MODULES`): ``mechcirc sweep ...``
+#: imports and builds that module's parsers only.  A command missing here, or
+#: registered elsewhere, still works: the full parser takes over (see
+#: :class:`_OneModuleParser`); ``tests/test_cli_common.py`` keeps the table exact.
+COMMANDS: dict[str, str] = {
+    **dict.fromkeys(("check", "sweep", "resonances"), "mechcirc.cli.circuit_commands"),
+    **dict.fromkeys(("fourbar", "frame", "synth", "linkage", "cam"),
+                    "mechcirc.cli.kinematics_commands"),
+    **dict.fromkeys(("simulate", "crosscheck"), "mechcirc.cli.sley_commands"),
+    **dict.fromkeys(("forces", "compare", "formula", "study"),
+                    "mechcirc.cli.ecosystem_commands"),
+    **dict.fromkeys(("scene", "reduce"), "mechcirc.cli.scene_commands"),
+    "transient": "mechcirc.cli.transient_commands",
+    "periodic": "mechcirc.cli.periodic_commands",
+}
 
 
 class _Parser(argparse.ArgumentParser):
@@ -54,14 +71,35 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {shorten(message)} (see '{self.prog} --help')\n")
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """Build the argument parser with every sub-command registered.
+class _Retry(Exception):
+    """A parser of one module's commands met an error: parse again with every command."""
+
+
+class _OneModuleParser(_Parser):
+    """The parser of one module's commands: any error is raised as :class:`_Retry`, so the
+    full parser parses the line again and reports it as it always has."""
+
+    def error(self, message):
+        raise _Retry(message)
+
+
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """Build the argument parser with every sub-command registered (or ``command``'s module's).
+
+    Parameters
+    ----------
+    command : str, optional
+        A sub-command of :data:`COMMANDS`: only its module's commands are
+        registered, and a usage error raises ``_Retry`` instead of exiting
+        (:func:`main` then parses with the full parser).  None (or an unknown
+        name): every command.
 
     Returns
     -------
     argparse.ArgumentParser
     """
-    parser = _Parser(
+    modules = [COMMANDS[command]] if command in COMMANDS else COMMAND_MODULES
+    parser = (_OneModuleParser if command in COMMANDS else _Parser)(
         prog="mechcirc",
         description="Dynamic analysis of mechanisms with mechanical circuits: "
                     "netlists to K(ω) = v/Q and Q0 = V0/K, kinematics, sley dynamics.",
@@ -74,13 +112,13 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--debug", action="store_true",
                         help="show the full traceback of an internal error")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for name in COMMAND_MODULES:
+    for name in modules:
         importlib.import_module(name).register(sub)
     # --debug is global, but the internal-error hint says "run again with --debug",
     # which users append after the command: each command takes it too.  SUPPRESS
     # keeps a command's parser from resetting a --debug given before the command.
-    for command in {id(p): p for p in sub.choices.values()}.values():
-        command.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
+    for each in {id(p): p for p in sub.choices.values()}.values():
+        each.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
                              help="show the full traceback of an internal error")
     return parser
 
@@ -108,9 +146,16 @@ def main(argv: list[str] | None = None) -> int:
     try:
         from ._common import join_spaced_quantities, run_handler, sigterm_unwinds
 
-        parser = build_parser()
-        args = parser.parse_args(join_spaced_quantities(sys.argv[1:] if argv is None
-                                                        else argv))
+        argv = join_spaced_quantities(sys.argv[1:] if argv is None else argv)
+        # The command is the first word that is not an option (the top level's
+        # options, --help, --version and --debug, take no value).
+        command = next((a for a in argv if not a.startswith("-")), None)
+        try:
+            parser = build_parser(command)
+            args = parser.parse_args(argv)
+        except _Retry:
+            parser = build_parser()
+            args = parser.parse_args(argv)
         if not getattr(args, "func", None):
             parser.print_help()
             return 2

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import contextlib
-import json
 import math
 import os
 import signal
@@ -354,6 +353,8 @@ def print_json(document) -> None:
     ``pandas.read_json`` give floats, so numeric arrays stay numeric.  (Strict
     RFC 8259 readers such as jq need ``sub("NaN"; "null")``-style preprocessing.)
     """
+    import json         # here: a command that prints no JSON does not load it
+
     doc = _jsonable(document)
     # json.dump and indented output go through json's pure-Python encoder, one
     # write per number; a long document is encoded compact in one go by the C
@@ -428,11 +429,12 @@ def save_figure(fig, path, into=None, tight: bool = True) -> None:
         from matplotlib.backends.backend_agg import FigureCanvasAgg
 
         FigureCanvasAgg(fig)
-    if into is not None:
-        fig.savefig(into, format=fmt, dpi=120, bbox_inches="tight" if tight else None)
-        return
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format=fmt, dpi=120, bbox_inches="tight" if tight else None)
+    # PNG: zlib level 3, not PIL's 6: the same pixels, encoded in about half the
+    # time (a sweep's figure: 27 against 47 ms) for an 11 % larger file.
+    options = {"pil_kwargs": {"compress_level": 3}} if fmt == "png" else {}
+    with contextlib.nullcontext(into) if into is not None else atomic_path(path) as tmp:
+        fig.savefig(tmp, format=fmt, dpi=120, bbox_inches="tight" if tight else None,
+                    **options)
 
 
 def load_with_warnings(path):
