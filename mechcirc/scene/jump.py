@@ -143,7 +143,8 @@ def flight(scene, sm, warn: bool = False) -> str:
     sm : SceneMotion
         Its :func:`~mechcirc.scene.simulate_scene` result.
     warn : bool
-        Also issue the message as a :class:`~mechcirc.errors.MechcircWarning`.
+        Also issue the message as a :class:`~mechcirc.errors.FollowerFlightWarning`, at the
+        caller's line (:func:`~mechcirc.scene.simulate_scene` does).
 
     Returns
     -------
@@ -151,7 +152,7 @@ def flight(scene, sm, warn: bool = False) -> str:
         The message (the largest departure from the cam, the gap, the cam angle), or
         "" when the follower stayed within the gap.
     """
-    from ..errors import MechcircWarning
+    from ..errors import FollowerFlightWarning
     from ..errors import warn as issue
 
     el, _, _, _, half = contact_geometry(scene)
@@ -166,7 +167,7 @@ def flight(scene, sm, warn: bool = False) -> str:
            "far flank, so the motion from there on is not the follower's free flight; lower "
            "the speed or raise the spring or its preload")
     if warn:
-        issue(msg, MechcircWarning)
+        issue(msg, FollowerFlightWarning)
     return msg
 
 

@@ -280,3 +280,29 @@ def test_hermite_point_reproduces_polynomials_and_converges_at_its_order():
     # observed orders, measured: quintic 6.18 (q), 5.19 (q̇); cubic 4.18, 3.97
     assert abs(p5[0] - 6) < 0.35 and abs(p5[1] - 5) < 0.35, p5
     assert abs(p3[0] - 4) < 0.35 and abs(p3[1] - 4) < 0.35, p3
+
+
+def test_simulate_scene_warns_of_a_follower_flying_across_its_gap_at_the_callers_line():
+    """A weak follower spring (100 N/m, 0.5 N preload) thrown off the cam at 300 rad/s: the
+    library call itself warns (FollowerFlightWarning, attributed to this line), with the
+    message ``flight`` returns; the shipped scene (600 rpm) does not."""
+    from pathlib import Path
+
+    from mechcirc.errors import FollowerFlightWarning
+    from mechcirc.scene.jump import flight
+
+    path = Path(__file__).resolve().parents[2] / "examples" / "cam_jump_scene.toml"
+    text = path.read_text(encoding="utf-8")
+    weak = text.replace("spring = 5.0e3 ", "spring = 100.0 ").replace("preload = 50.0 ",
+                                                                        "preload = 0.5 ")
+    assert weak != text
+    scene = parse_scene(weak, str(path))
+    with pytest.warns(FollowerFlightWarning) as caught:
+        sm = simulate_scene(scene, omega=300.0, revolutions=1, error_estimate=False)
+    (w,) = [c for c in caught if issubclass(c.category, FollowerFlightWarning)]
+    assert w.filename == __file__
+    assert str(w.message) == flight(scene, sm) and "left the cam by" in str(w.message)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", FollowerFlightWarning)
+        simulate_scene(parse_scene(text, str(path)), revolutions=1, error_estimate=False,
+                       points=720)
