@@ -69,7 +69,7 @@ def main(argv=None) -> int:
     est = res.error_estimate
     print(f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
     print(f"default  rk4 ({res.backend}): {1e3 * med(t_def):7.2f} ms CPU (median of "
-          f"{len(t_def)}), {res.steps_per_revolution} steps/revolution, nfev {res.nfev}")
+          f"{len(t_def)}), {res.n_steps} RK4 steps (both runs), nfev {res.nfev}")
     print(f"baseline DOP853 rtol 1e-8: {1e3 * med(t_base):7.1f} ms CPU (median of "
           f"{len(t_base)}), nfev {dop853().nfev}")
     print(f"speed-up {ratio:.1f}x (goal >= 50x)")

@@ -11,13 +11,17 @@ window; :func:`mechcirc.scene._motion_kernels.rk4_run`).
 
 Every result carries two checks (issue 11 §8):
 
-* ``error_estimate`` — the largest change of any tabulated extremum when the
-  whole run is repeated at twice the step (half the ``steps_per_period``),
-  relative to that quantity's largest magnitude; the run at the step is the one
-  returned (for RK4 the change is about 15× its error in the asymptotic regime,
-  1.2–3× with impacts); for the scipy methods, its change from the run at rtol of
+* ``error_estimate`` — the largest change of any tabulated extremum between the
+  run at the step (the one returned) and a run at twice the step (half the
+  ``steps_per_period``), relative to that quantity's largest magnitude, compared
+  on every k-th output point (:data:`CHECK_POINTS_PER_PERIOD`); the run at twice
+  the step covers every revolution and the run at the step the last
+  :data:`ESTIMATE_REVOLUTIONS`, from the other's state at their start (for RK4
+  the change is about 15× the returned run's error; measured 3.6–16×,
+  ``docs/sley.md``); for the scipy methods, its change from the run at rtol of
   the run at rtol/100, which is the one returned;
-* ``periodicity`` — the same change from the previous revolution (needs R ≥ 2).
+* ``periodicity`` — the same change from the previous revolution (needs R ≥ 2),
+  of the run at twice the step when there is one.
 
 A :class:`~mechcirc.errors.MechcircWarning` is issued (and a note kept) when
 either exceeds 1e-3, when fewer steps per period than the default are asked
@@ -479,36 +483,40 @@ def _simulate_rk4(ctx, backend, error_estimate, notes, compile_time):
     rule = _step_rule(scene, o, model, error_estimate)
     tableau = _tableau(o.method)
 
-    def run(spp, prog=None, last=1, per_rev=None, start=None):
-        per_rev = per_rev or _steps_per_cycle(rule.period, rule.rate, spp)
+    def run(per_rev, prog=None, last=1, start=None):
         return _run(model, kern, theta_s, ripple, per_rev, o.revolutions, o.npts, prog,
                     tableau, (last, rule.stride), start)
 
-    spp, main = _first_run(run, rule, progress, notes)
-    auto = rule.auto and spp == rule.spp
-    n_steps, nfev = main[6] * o.revolutions, main[5]
-    other = out = other_ext = None
-    if error_estimate:
-        other = _half_step_run(run, main, rule.stride)
-        nfev += 0 if isinstance(other, str) else other[5]
-        n_steps += main[6] // 2 * (o.revolutions - main[7][0])
-    if auto:
-        out, other_ext, est = _auto_estimate(model, kern, theta_s, ripple, main, other,
-                                             rule.stride)
+    def steps(spp):
+        return _steps_per_cycle(rule.period, rule.rate, spp)
+
+    spp, main, other = _first_runs(run, steps, rule, progress, notes, error_estimate)
+    start = other[7] if isinstance(other, tuple) else None
+    first = start[0] if start else 0
+    n_steps, nfev = main[6] * (o.revolutions - first), main[5]
+    if isinstance(other, tuple):
+        n_steps, nfev = n_steps + other[6] * o.revolutions, nfev + other[5]
+    tab = _crank_order(scene, model, theta_s, ripple, main[0], rule.stride)
+    out, other_ext, periodicity = _estimate_run_extrema(model, kern, theta_s, ripple, main,
+                                                        other, tab)
+    if rule.auto and spp == rule.spp:
+        est = None if other_ext is None else _rel_change(_extrema(out, tab[2]), other_ext)
         if (est is None or est > ACCURACY_GOAL) and \
                 rule.period * rule.rate * 2 * spp / TWO_PI <= MAX_STEPS_PER_REV:
-            # not good enough: twice as many steps (beyond the limit: keep it, warned)
+            # not good enough: twice as many steps (beyond the limit: keep it, warned), from
+            # the same state as the run at spp
             notes.append(_rerun_note(spp, est))
-            other, other_ext, out = main, _extrema(out, rule.stride), None
-            spp, main = 2 * spp, run(2 * spp)
-            n_steps, nfev = n_steps + main[6] * o.revolutions, nfev + main[5]
+            other, other_ext = main, _extrema(out, tab[2])
+            spp, main, out = 2 * spp, run(steps(2 * spp), start=start), None
+            n_steps, nfev = n_steps + main[6] * (o.revolutions - first), nfev + main[5]
     if other == "diverged":
         rule.warn.append(f"the error estimate's run at {spp / 2:g} steps per period diverged: "
                          "no estimate; raise steps_per_period")
     notes.append(_step_note(rule.period, main[6], spp, rule.rate, error_estimate, o.method))
     return _finish(scene, model, kern, theta_s, ripple, main, other,
                    (n_steps, nfev, o.method, backend, main[6], o.revolutions, compile_time),
-                   notes, rule.warn, out=out, other_extrema=other_ext, stride=rule.stride)
+                   notes, rule.warn, out=out, other_extrema=other_ext, tab=tab,
+                   periodicity=periodicity)
 
 
 @dataclass
@@ -552,38 +560,54 @@ def _step_rule(scene, o, model, error_estimate) -> _StepRule:
     return _StepRule(period, rate, spp, auto, stride, warn)
 
 
-def _first_run(run, rule, progress, notes):
-    """(steps per period, run) of the first run; in the automatic rule a run that diverges
-    is repeated at twice as many steps (noted)."""
+def _first_runs(run, steps, rule, progress, notes, error_estimate):
+    """(steps per period, the run returned, the estimate's run): with the estimate, the run
+    at half the steps over every revolution (the estimate's run), then the run at the
+    step over the last :data:`ESTIMATE_REVOLUTIONS` from the first's state at their start;
+    without it, the one run (the estimate's run None).  In the automatic rule a run that
+    diverges is repeated at twice as many steps (noted)."""
     try:
-        return rule.spp, run(rule.spp, progress)
+        return (rule.spp, *_paired_runs(run, steps(rule.spp), progress, rule.stride,
+                                        error_estimate))
     except SolverError:
         if not rule.auto:
             raise
         notes.append(f"the run at {rule.spp:g} steps per period diverged: run at "
                      f"{2 * rule.spp:g}")
-        return 2 * rule.spp, run(2 * rule.spp, progress)
+        return (2 * rule.spp, *_paired_runs(run, steps(2 * rule.spp), progress, rule.stride,
+                                            error_estimate))
 
 
-def _half_step_run(run, main, stride):
-    """The error estimate's run at half the steps of the run ``main`` over the last
-    :data:`ESTIMATE_REVOLUTIONS` revolutions, from ``main``'s state at their start (its last
-    revolution on every ``stride``-th output point), or ``"diverged"``."""
+def _paired_runs(run, per_rev, progress, stride, error_estimate):
+    """(run at ``per_rev`` steps per revolution, the estimate's run at half as many, or
+    ``"diverged"``, or None without the estimate) (:func:`_first_runs`).
+
+    The revolutions before the last :data:`ESTIMATE_REVOLUTIONS` only bring the motion
+    to its periodic state: the error committed there is damped by the time the tabulated
+    revolution is reached (a motion that keeps it is not periodic, which the periodicity
+    check reports), so they are integrated once, at the estimate's step."""
+    if not error_estimate:
+        return run(per_rev, progress), None
     try:
-        return run(None, last=stride, per_rev=main[6] // 2, start=main[7])
+        coarse = run(per_rev // 2, progress, last=stride)
     except SolverError:
-        return "diverged"
+        return run(per_rev, progress), "diverged"
+    return run(per_rev, start=coarse[7]), coarse
 
 
-def _auto_estimate(model, kern, theta_s, ripple, main, other, stride):
-    """The outputs of the run ``main``, the extrema of the run ``other`` at twice the step
-    (None when it diverged) and the estimate: their relative change on every
-    ``stride``-th output point (None without it)."""
-    out, other_ext = _outputs(model, kern, theta_s, ripple, main[0], main[1]), None
-    if not isinstance(other, str):
-        other_ext = _output_extrema(model, kern, theta_s, ripple, *other[:2])
-    est = None if other_ext is None else _rel_change(_extrema(out, stride), other_ext)
-    return out, other_ext, est
+def _estimate_run_extrema(model, kern, theta_s, ripple, main, other, tab):
+    """The outputs of the run ``main`` in the crank-angle order of ``tab``
+    (:func:`_crank_order`), the extrema of the estimate's run ``other`` on its last
+    revolution and its periodicity (the change of its extrema from its previous
+    revolution; None with fewer than two), both on the points it was recorded at (None,
+    None when it diverged or was not run)."""
+    out = _outputs(model, kern, theta_s, ripple, main[0][tab[1]], main[1][tab[1]])
+    if not isinstance(other, tuple):
+        return out, None, None
+    last = _output_extrema(model, kern, theta_s, ripple, *other[:2])
+    periodicity = None if other[2] is None else \
+        _rel_change(last, _output_extrema(model, kern, theta_s, ripple, *other[2]))
+    return out, last, periodicity
 
 
 def _rerun_note(spp, est):
@@ -614,36 +638,41 @@ def _steps_per_cycle(period, rate, spp):
     return max(2 * int(math.ceil(need / 2)), 16)
 
 
-def _extrema(out: dict, stride: int = 1) -> dict:
-    if stride > 1:
-        return {k: (float(v[::stride].min()), float(v[::stride].max())) for k, v in out.items()}
+def _extrema(out: dict, sub=None) -> dict:
+    """(min, max) of each output, or of its samples at the positions ``sub``."""
+    if sub is not None:
+        return {k: (float(v[sub].min()), float(v[sub].max())) for k, v in out.items()}
     return {k: (float(v.min()), float(v.max())) for k, v in out.items()}
 
 
 def _finish(scene, model, kern, theta_s, ripple, main, other, counts, notes, warn, out=None,
-            other_extrema=None, stride=1):
+            other_extrema=None, tab=None, periodicity=None):
     """Outputs, extrema, the checks and the warnings of one run → :class:`SceneMotion`.
 
     ``main`` is the run (:func:`_run`'s tuple), ``other`` the estimate's (or None, or
     ``"diverged"``), ``counts`` = (steps, evaluations, method, backend, steps per
     revolution, revolutions, compile time); ``out``, ``other_extrema``: this run's outputs
-    and the other run's extrema when already evaluated; the checks compare the extrema on
-    every ``stride``-th output point (the other runs are recorded there)."""
+    (in the order of ``tab``) and the other run's extrema when already evaluated,
+    ``periodicity`` when measured on the estimate's run (else from ``main``'s previous
+    revolution); ``tab`` (:func:`_crank_order`): the checks compare the extrema on the
+    points the other runs were recorded at."""
     ts, ys, prev, wall, bad = main[:5]
     n_steps, nfev, method, backend, per_rev, revolutions, compile_time = counts
+    crank, order, sub = tab or _crank_order(scene, model, theta_s, ripple, ts)
+    ts, ys = ts[order], ys[order]
     if out is None:
         out = _outputs(model, kern, theta_s, ripple, ts, ys)
     extrema = _extrema(out)
-    check = _extrema(out, stride) if stride > 1 else extrema
-    periodicity = est = None
-    if prev is not None:
+    check = extrema if sub is None else _extrema(out, sub)
+    est = None
+    if periodicity is None and prev is not None:
         periodicity = _rel_change(check, _output_extrema(model, kern, theta_s, ripple, *prev))
     if other is not None and not isinstance(other, str):     # "diverged": no estimate
         if other_extrema is None:
             other_extrema = _output_extrema(model, kern, theta_s, ripple, other[0], other[1])
         est = _rel_change(check, other_extrema)
         bad = bad or other[4]
-    crank, ts, ys, values = _by_crank_angle(scene, model, theta_s, ripple, ts, ys, out)
+    values = out
     _add_points_and_aliases(scene, model, theta_s, ripple, crank, ts, ys, values, extrema)
     warn = warn + _check_warnings(bad, est, periodicity)
     for w in warn:
@@ -654,14 +683,15 @@ def _finish(scene, model, kern, theta_s, ripple, main, other, counts, notes, war
                        ts, ys, compile_time)
 
 
-def _by_crank_angle(scene, model, theta_s, ripple, ts, ys, out):
-    """The revolution's samples reordered by ascending crank angle mod the cycle:
-    (crank angle, times, states, outputs)."""
+def _crank_order(scene, model, theta_s, ripple, ts, stride=1):
+    """(ascending crank angle mod the cycle, the order of the samples at times ``ts`` that
+    gives it, and the positions in that order of every ``stride``-th sample in time, or
+    None for every sample)."""
     crank = crank_angle(model.omega, theta_s, ripple, ts)[0] % scene.cycle
     wrap = np.flatnonzero(np.diff(crank) < 0)
     order = np.roll(np.arange(crank.size), -(int(wrap[0]) + 1)) if wrap.size == 1 \
         else np.argsort(crank, kind="stable")
-    return crank[order], ts[order], ys[order], {k: v[order] for k, v in out.items()}
+    return crank[order], order, (np.flatnonzero(order % stride == 0) if stride > 1 else None)
 
 
 def _add_points_and_aliases(scene, model, theta_s, ripple, crank, ts, ys, values, extrema):
@@ -945,7 +975,8 @@ def _outputs(model, kern, theta_s, ripple, ts, ys):
     args = model.kernel_args(theta_s, 1e300, outputs=True, ripple=ripple)
     out = np.empty((ts.size, model.naux()))
     kern.outputs(np.ascontiguousarray(ts), np.ascontiguousarray(ys), out, *args)
-    return {name: out[:, j].copy() for j, name in enumerate(_aux_names(model))}
+    cols = out.T.copy()             # one copy: each output a contiguous row
+    return {name: cols[j] for j, name in enumerate(_aux_names(model))}
 
 
 def _output_extrema(model, kern, theta_s, ripple, ts, ys):

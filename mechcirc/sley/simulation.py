@@ -323,9 +323,9 @@ def simulate_params(params: SleyParameters, revolutions: int = 5, method: str | 
                     error_estimate: bool = True) -> SleyResult:
     """:func:`simulate` for explicit :class:`SleyParameters` (same options).
 
-    ``error_estimate`` (rk4 methods): repeat the run at twice the step (half the
-    steps per period) and keep the relative change of the extrema as
-    ``result.error_estimate`` (about 1.5 times the cost of the run alone).  A
+    ``error_estimate`` (rk4 methods): a run at twice the step (half the steps per
+    period) beside the returned one, and the relative change of the extrema as
+    ``result.error_estimate`` (:func:`mechcirc.scene.simulate_scene`).  A
     :class:`SleyAccuracyWarning` is issued when it or
     the periodicity exceeds 1e-3, or fewer steps per period than the default
     are used.  The run is the scene's (:func:`mechcirc.scene.simulate_scene`).
