@@ -44,7 +44,8 @@ from ..errors import MechcircError, SceneAccuracyWarning, SolverError
 from .files import Scene
 from .motion import MotionModel, motion_model
 
-__all__ = ["SceneMotion", "simulate_scene", "linear_matrices", "max_rate", "ACCURACY_GOAL"]
+__all__ = ["SceneMotion", "simulate_scene", "flight", "linear_matrices", "max_rate",
+           "ACCURACY_GOAL"]
 
 TWO_PI = 2.0 * math.pi
 #: RK4 steps per period of the fastest mode without an error estimate (and the second try
@@ -336,7 +337,7 @@ def simulate_scene(scene: Scene, *, omega: float | None = None, revolutions: int
     SceneAccuracyWarning
         An error estimate or periodicity above :data:`ACCURACY_GOAL` (and in the notes).
     FollowerFlightWarning
-        A cam follower flew across the whole gap of its contact (:func:`.jump.flight`).
+        A cam follower flew across the whole gap of its contact (:func:`flight`).
     """
     o = _options(scene, omega, revolutions, start_deg, steps_per_period, points, method,
                  rtol, revolution, omega_ripple)
@@ -348,10 +349,51 @@ def simulate_scene(scene: Scene, *, omega: float | None = None, revolutions: int
     else:
         result = _simulate_rk4(ctx, backend, error_estimate, notes, compile_time)
     if getattr(scene.linkage, "contact", ""):          # a cam follower that can jump
-        from .jump import flight
-
         flight(scene, result, warn=True)
     return result
+
+
+def flight(scene, sm, warn: bool = False) -> str:
+    """Did the follower fly across the whole gap the model gives it?
+
+    The contact's law has its far flank 2 × (stroke + preload/spring) from the cam
+    (:func:`~mechcirc.scene.cam.open_contact_rows`); a follower that gets there hits
+    it, and the motion past that is not a free flight.
+
+    Parameters
+    ----------
+    scene : Scene
+        A scene whose ``[cam]`` has a contact that can open.
+    sm : SceneMotion
+        Its :func:`~mechcirc.scene.simulate_scene` result.
+    warn : bool
+        Also issue the message as a :class:`~mechcirc.errors.FollowerFlightWarning`, at the
+        caller's line (:func:`simulate_scene` does).
+
+    Returns
+    -------
+    str
+        The message (the largest departure from the cam, the gap, the cam angle), or
+        "" when the follower stayed within the gap.
+    """
+    from ..errors import FollowerFlightWarning
+    from ..errors import warn as issue
+    from .cam import contact_geometry
+
+    el, _, _, _, half = contact_geometry(scene)
+    e = sm.values[f"{el.name}.deformation"]
+    k = int(np.argmax(e))
+    if not e[k] > half:
+        return ""
+    unit, L = scene.units or "m", scene.length_scale
+    msg = (f"{scene.source}: the follower left the cam by {(e[k] + half) / L:.6g} {unit} at "
+           f"cam angle {math.degrees(sm.crank_angle[k]):.2f}°, more than the model's gap "
+           f"{2 * half / L:.6g} {unit} (2 × (stroke + preload/spring)): it hit the contact's "
+           "far flank, so the motion from there on is not the follower's free flight; lower "
+           "the speed or raise the spring or its preload")
+    if warn:
+        issue(msg, FollowerFlightWarning)
+    return msg
 
 
 def _model_at(scene, o, model):
