@@ -83,7 +83,10 @@ class SceneMotion:
     error_estimate, periodicity : float or None
         Relative (see the module docstring); None when not computed.
     n_steps, nfev : int
+        Steps and right-hand-side evaluations of every run of the call (the error
+        estimate's included).
     wall_time : float
+        Wall time of the integration [s], every run of the call.
     method, backend : str
     notes : tuple of str
     """
@@ -302,19 +305,16 @@ def simulate_scene(scene: Scene, *, omega: float | None = None, revolutions: int
         Crank speed [rad/s], revolutions, start angle [deg], RK4 steps per period of
         the fastest mode, output points per revolution (defaults above).
     method, rtol : optional
-        ``"rk4"`` (numba when importable), ``"rk4-python"``, ``"rk8"`` (the 8th-order
-        formula of DOP853 at a fixed step, the same stepper: 8 steps per period of the
-        fastest mode, or 16 when the estimate at 8 exceeds the goal), or scipy's ``"DOP853"``,
-        ``"RK45"``, ``"LSODA"`` at relative tolerance ``rtol`` (default 1e-10; the
-        same right-hand side, in the deviations from the rigid motion so that the
-        tolerance applies to the deformations).
+        ``"rk4"`` (numba when importable), ``"rk4-python"``, ``"rk8"`` (DOP853's 8th-order
+        formula at a fixed step: 8, else 16 steps per period), or scipy's ``"DOP853"``,
+        ``"RK45"``, ``"LSODA"`` at ``rtol`` (default 1e-10; in the deviations from the
+        rigid motion, so that the tolerance applies to the deformations).
     error_estimate : bool
-        Repeat the run at half the step and keep the relative change of the extrema.
+        Also a run at twice the step, and the change of the extrema (module docstring).
     model : MotionModel, optional
         A :func:`~mechcirc.scene.motion.motion_model` of ``scene`` made before (reused).
     revolution, omega_ripple : optional
-        The revolution tabulated (1 … R; the integration stops after it), and the
-        crank-speed ripple (above).
+        The revolution tabulated (1 … R: the integration stops there); the ripple (above).
     progress : callable, optional
         ``progress(done, total)`` as the integration advances.
 
@@ -325,19 +325,15 @@ def simulate_scene(scene: Scene, *, omega: float | None = None, revolutions: int
 
     Raises
     ------
-    MechcircError
-        A bad option (names it).
-    GeometryError
-        The rigid mechanism cannot turn a full revolution.
-    SolverError
-        The integration diverged or needs too many steps.
+    MechcircError, GeometryError, SolverError
+        A bad option (named); a mechanism that cannot turn a revolution; a run that
+        diverged or needs too many steps.
 
     Warns
     -----
-    SceneAccuracyWarning
-        An error estimate or periodicity above :data:`ACCURACY_GOAL` (and in the notes).
-    FollowerFlightWarning
-        A cam follower flew across the whole gap of its contact (:func:`flight`).
+    SceneAccuracyWarning, FollowerFlightWarning
+        An estimate or periodicity above :data:`ACCURACY_GOAL` (also in the notes); a cam
+        follower that flew across the whole gap of its contact (:func:`flight`).
     """
     o = _options(scene, omega, revolutions, start_deg, steps_per_period, points, method,
                  rtol, revolution, omega_ripple)
@@ -345,12 +341,8 @@ def simulate_scene(scene: Scene, *, omega: float | None = None, revolutions: int
     kern, backend, notes, compile_time = _ready_kernels(method, model)
     ctx = (scene, o, model, kern, math.radians(o.start_deg), ripple, progress)
     if method in SCIPY_METHODS:
-        result = _simulate_scipy(ctx, error_estimate, notes, compile_time)
-    else:
-        result = _simulate_rk4(ctx, backend, error_estimate, notes, compile_time)
-    if getattr(scene.linkage, "contact", ""):          # a cam follower that can jump
-        flight(scene, result, warn=True)
-    return result
+        return _simulate_scipy(ctx, error_estimate, notes, compile_time)
+    return _simulate_rk4(ctx, backend, error_estimate, notes, compile_time)
 
 
 def flight(scene, sm, warn: bool = False) -> str:
@@ -535,9 +527,10 @@ def _simulate_rk4(ctx, backend, error_estimate, notes, compile_time):
     spp, main, other = _first_runs(run, steps, rule, progress, notes, error_estimate)
     start = other[7] if isinstance(other, tuple) else None
     first = start[0] if start else 0
-    n_steps, nfev = main[6] * (o.revolutions - first), main[5]
+    n_steps, nfev, wall = main[6] * (o.revolutions - first), main[5], 0.0
     if isinstance(other, tuple):
         n_steps, nfev = n_steps + other[6] * o.revolutions, nfev + other[5]
+        wall = other[3]
     tab = _crank_order(scene, model, theta_s, ripple, main[0], rule.stride)
     out, other_ext, periodicity = _estimate_run_extrema(model, kern, theta_s, ripple, main,
                                                         other, tab)
@@ -549,12 +542,14 @@ def _simulate_rk4(ctx, backend, error_estimate, notes, compile_time):
             # the same state as the run at spp
             notes.append(_rerun_note(spp, est))
             other, other_ext = main, _extrema(out, tab[2])
+            wall += main[3]
             spp, main, out = 2 * spp, run(steps(2 * spp), start=start), None
             n_steps, nfev = n_steps + main[6] * (o.revolutions - first), nfev + main[5]
     if other == "diverged":
         rule.warn.append(f"the error estimate's run at {spp / 2:g} steps per period diverged: "
                          "no estimate; raise steps_per_period")
     notes.append(_step_note(rule.period, main[6], spp, rule.rate, error_estimate, o.method))
+    main = (*main[:3], wall + main[3], *main[4:])
     return _finish(scene, model, kern, theta_s, ripple, main, other,
                    (n_steps, nfev, o.method, backend, main[6], o.revolutions, compile_time),
                    notes, rule.warn, out=out, other_extrema=other_ext, tab=tab,
@@ -719,10 +714,13 @@ def _finish(scene, model, kern, theta_s, ripple, main, other, counts, notes, war
     warn = warn + _check_warnings(bad, est, periodicity)
     for w in warn:
         warnings.warn(f"{scene.source}: {w}", SceneAccuracyWarning, stacklevel=3)
-    return SceneMotion(scene.name, scene.source, model.omega, crank, values, extrema,
-                       revolutions, est, periodicity, n_steps, nfev, wall,
-                       method, backend, per_rev, tuple(notes + [f"warning: {w}" for w in warn]),
-                       ts, ys, compile_time)
+    result = SceneMotion(scene.name, scene.source, model.omega, crank, values, extrema,
+                         revolutions, est, periodicity, n_steps, nfev, wall, method, backend,
+                         per_rev, tuple(notes + [f"warning: {w}" for w in warn]), ts, ys,
+                         compile_time)
+    if getattr(scene.linkage, "contact", ""):          # a cam follower that can jump
+        flight(scene, result, warn=True)               # (at the caller's line)
+    return result
 
 
 def _crank_order(scene, model, theta_s, ripple, ts, stride=1):
