@@ -123,7 +123,8 @@ class SleyResult:
         true error); the scipy methods: the same change between the runs at
         rtol and rtol/100 (the one returned); None with ``error_estimate=False``.
     periodicity : float or None
-        The same change from the previous revolution (None for R = 1).
+        The same change from the previous revolution, of the run at twice the step
+        when there is one (None for R = 1).
     scene_extrema : dict
         The scene's own outputs ``BODY.acceleration``, ``ELEMENT.force``,
         ``ELEMENT.deformation``, ``drive.moment``, ``M4.moment`` -> (min, max).
