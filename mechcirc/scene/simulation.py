@@ -942,12 +942,14 @@ def _point_accelerations(model, theta_s, ripple, ts, ys, values, positions=None)
     a = model.arrays
     n = model.n_free
     th, w, dw = crank_angle(model.omega, theta_s, ripple, ts)
-    r0 = a["PRIG"][0]
-    q0 = np.empty((ts.size, 3))
-    kern.eval_many(*_fargs(a, r0), np.ascontiguousarray(th), q0)
-    coord = {0: (q0[:, 0], q0[:, 1] * w)}
-    for i in range(1, n + 1):
-        coord[i] = (ys[:, i - 1], ys[:, n + i - 1])
+    coord: dict = {}
+    for i in {i for _, _, i in model.point_fn.values()}:     # (q contiguous, q̇) of each part
+        if i == 0:
+            q0 = np.empty((ts.size, 3))
+            kern.eval_many(*_fargs(a, a["PRIG"][0]), np.ascontiguousarray(th), q0)
+            coord[0] = (q0[:, 0].copy(), q0[:, 1] * w)
+        else:
+            coord[i] = (np.ascontiguousarray(ys[:, i - 1]), ys[:, n + i - 1])
     out = {}
     for p, (fx, fy, i) in model.point_fn.items():
         q, qd = coord[i]
@@ -957,7 +959,7 @@ def _point_accelerations(model, theta_s, ripple, ts, ys, values, positions=None)
         comp = []
         for f in (fx, fy):
             fv = np.empty((ts.size, 3))
-            kern.eval_many(*_fargs(a, f), np.ascontiguousarray(q), fv)
+            kern.eval_many(*_fargs(a, f), q, fv)
             comp.append(fv[:, 2] * qd * qd + fv[:, 1] * qdd)
             if positions is not None:
                 positions.setdefault(p, []).append(fv[:, 0].copy())
