@@ -27,6 +27,7 @@ __all__ = [
     "SceneAccuracyWarning",
     "SleyAccuracyWarning",
     "ShaftWarning",
+    "FollowerFlightWarning",
     "MAX_QUOTED",
     "clip",
     "shorten",
@@ -202,6 +203,11 @@ class UnitMixWarning(MechcircWarning):
 
 class SceneAccuracyWarning(MechcircWarning):
     """A time-domain result may be inaccurate (the message says which check failed)."""
+
+
+class FollowerFlightWarning(MechcircWarning):
+    """A cam follower flew across the whole gap of its contact model (the motion past it is
+    not a free flight)."""
 
 
 class ShaftWarning(MechcircWarning):

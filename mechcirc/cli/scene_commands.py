@@ -318,13 +318,13 @@ def cmd_simulate_scene(args) -> int:
 
 def _cam_contact(scene, result) -> dict | None:
     """The cam contact report of a scene whose follower can jump, as plain data (None: the
-    scene has no such contact); a follower that flew across the whole gap is warned about
-    (``flight``) and its report is {"flight": message}."""
+    scene has no such contact); a follower that flew across the whole gap (``flight``:
+    ``simulate_scene`` has warned of it) has the report {"flight": message}."""
     from ..scene.jump import contact_report, flight
 
     if not getattr(scene.linkage, "contact", ""):
         return None
-    flew = flight(scene, result, warn=True)
+    flew = flight(scene, result)
     if flew:
         return {"flight": flew}
     rep = contact_report(scene, result)

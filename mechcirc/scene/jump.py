@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .cam import SPRING, contact_geometry
+from .simulation import flight
 
 __all__ = ["ContactReport", "contact_report", "flight", "JumpSpeed", "scene_jump_speed"]
 
@@ -127,47 +128,6 @@ class JumpSpeed:
     least: tuple
     runs: int
     rtol: float
-
-
-def flight(scene, sm, warn: bool = False) -> str:
-    """Did the follower fly across the whole gap the model gives it?
-
-    The contact's law has its far flank 2 × (stroke + preload/spring) from the cam
-    (:func:`~mechcirc.scene.cam.open_contact_rows`); a follower that gets there hits
-    it, and the motion past that is not a free flight.
-
-    Parameters
-    ----------
-    scene : Scene
-        A scene whose ``[cam]`` has a contact that can open.
-    sm : SceneMotion
-        Its :func:`~mechcirc.scene.simulate_scene` result.
-    warn : bool
-        Also issue the message as a :class:`~mechcirc.errors.MechcircWarning`.
-
-    Returns
-    -------
-    str
-        The message (the largest departure from the cam, the gap, the cam angle), or
-        "" when the follower stayed within the gap.
-    """
-    from ..errors import MechcircWarning
-    from ..errors import warn as issue
-
-    el, _, _, _, half = contact_geometry(scene)
-    e = sm.values[f"{el.name}.deformation"]
-    k = int(np.argmax(e))
-    if not e[k] > half:
-        return ""
-    unit, L = scene.units or "m", scene.length_scale
-    msg = (f"{scene.source}: the follower left the cam by {(e[k] + half) / L:.6g} {unit} at "
-           f"cam angle {math.degrees(sm.crank_angle[k]):.2f}°, more than the model's gap "
-           f"{2 * half / L:.6g} {unit} (2 × (stroke + preload/spring)): it hit the contact's "
-           "far flank, so the motion from there on is not the follower's free flight; lower "
-           "the speed or raise the spring or its preload")
-    if warn:
-        issue(msg, MechcircWarning)
-    return msg
 
 
 def scene_jump_speed(scene, bracket=None, *, rtol: float = 1e-8, grow: float = 1.05,

@@ -11,13 +11,17 @@ window; :func:`mechcirc.scene._motion_kernels.rk4_run`).
 
 Every result carries two checks (issue 11 §8):
 
-* ``error_estimate`` — the largest change of any tabulated extremum when the
-  whole run is repeated at twice the step (half the ``steps_per_period``),
-  relative to that quantity's largest magnitude; the run at the step is the one
-  returned (for RK4 the change is about 15× its error in the asymptotic regime,
-  1.2–3× with impacts); for the scipy methods, its change from the run at rtol of
+* ``error_estimate`` — the largest change of any tabulated extremum between the
+  run at the step (the one returned) and a run at twice the step (half the
+  ``steps_per_period``), relative to that quantity's largest magnitude, compared
+  on every k-th output point (:data:`CHECK_POINTS_PER_PERIOD`); the run at twice
+  the step covers every revolution and the run at the step the last
+  :data:`ESTIMATE_REVOLUTIONS`, from the other's state at their start (for RK4
+  the change is about 15× the returned run's error; measured 3.6–16×,
+  ``docs/sley.md``); for the scipy methods, its change from the run at rtol of
   the run at rtol/100, which is the one returned;
-* ``periodicity`` — the same change from the previous revolution (needs R ≥ 2).
+* ``periodicity`` — the same change from the previous revolution (needs R ≥ 2),
+  of the run at twice the step when there is one.
 
 A :class:`~mechcirc.errors.MechcircWarning` is issued (and a note kept) when
 either exceeds 1e-3, when fewer steps per period than the default are asked
@@ -40,7 +44,8 @@ from ..errors import MechcircError, SceneAccuracyWarning, SolverError
 from .files import Scene
 from .motion import MotionModel, motion_model
 
-__all__ = ["SceneMotion", "simulate_scene", "linear_matrices", "max_rate", "ACCURACY_GOAL"]
+__all__ = ["SceneMotion", "simulate_scene", "flight", "linear_matrices", "max_rate",
+           "ACCURACY_GOAL"]
 
 TWO_PI = 2.0 * math.pi
 #: RK4 steps per period of the fastest mode without an error estimate (and the second try
@@ -78,7 +83,10 @@ class SceneMotion:
     error_estimate, periodicity : float or None
         Relative (see the module docstring); None when not computed.
     n_steps, nfev : int
+        Steps and right-hand-side evaluations of every run of the call (the error
+        estimate's included).
     wall_time : float
+        Wall time of the integration [s], every run of the call.
     method, backend : str
     notes : tuple of str
     """
@@ -288,10 +296,7 @@ def simulate_scene(scene: Scene, *, omega: float | None = None, revolutions: int
     revolutions, start 0°, 7200 points, RK4 steps per period of the fastest mode: 25 if
     the estimate (run at 12.5) is within :data:`ACCURACY_GOAL`, else 50; 50 without it.
     ``omega_ripple`` = (a, k) (default the file's ``omega_ripple = {amplitude = a,
-    harmonic = k}``, else none): the crank speed is Ω (1 + a cos(k Ω t)), 0 ≤ a < 1,
-    k a whole number ≥ 1, so the crank still turns once per period 2π/Ω; the crank
-    angle is θ = θs + Ω t + (a/k) sin(k Ω t) and the rigid parts follow it with
-    θ̈ = −a k Ω² sin(k Ω t).
+    harmonic = k}``, else none): the crank speed Ω (1 + a cos(k Ω t)) (:func:`crank_angle`).
 
     Parameters
     ----------
@@ -300,19 +305,16 @@ def simulate_scene(scene: Scene, *, omega: float | None = None, revolutions: int
         Crank speed [rad/s], revolutions, start angle [deg], RK4 steps per period of
         the fastest mode, output points per revolution (defaults above).
     method, rtol : optional
-        ``"rk4"`` (numba when importable), ``"rk4-python"``, ``"rk8"`` (the 8th-order
-        formula of DOP853 at a fixed step, the same stepper: 8 steps per period of the
-        fastest mode, or 16 when the estimate at 8 exceeds the goal), or scipy's ``"DOP853"``,
-        ``"RK45"``, ``"LSODA"`` at relative tolerance ``rtol`` (default 1e-10; the
-        same right-hand side, in the deviations from the rigid motion so that the
-        tolerance applies to the deformations).
+        ``"rk4"`` (numba when importable), ``"rk4-python"``, ``"rk8"`` (DOP853's 8th-order
+        formula at a fixed step: 8, else 16 steps per period), or scipy's ``"DOP853"``,
+        ``"RK45"``, ``"LSODA"`` at ``rtol`` (default 1e-10; in the deviations from the
+        rigid motion, so that the tolerance applies to the deformations).
     error_estimate : bool
-        Repeat the run at half the step and keep the relative change of the extrema.
+        Also a run at twice the step, and the change of the extrema (module docstring).
     model : MotionModel, optional
         A :func:`~mechcirc.scene.motion.motion_model` of ``scene`` made before (reused).
     revolution, omega_ripple : optional
-        The revolution tabulated (1 … R; the integration stops after it), and the
-        crank-speed ripple (above).
+        The revolution tabulated (1 … R: the integration stops there); the ripple (above).
     progress : callable, optional
         ``progress(done, total)`` as the integration advances.
 
@@ -323,12 +325,15 @@ def simulate_scene(scene: Scene, *, omega: float | None = None, revolutions: int
 
     Raises
     ------
-    MechcircError
-        A bad option (names it).
-    GeometryError
-        The rigid mechanism cannot turn a full revolution.
-    SolverError
-        The integration diverged or needs too many steps.
+    MechcircError, GeometryError, SolverError
+        A bad option (named); a mechanism that cannot turn a revolution; a run that
+        diverged or needs too many steps.
+
+    Warns
+    -----
+    SceneAccuracyWarning, FollowerFlightWarning
+        An estimate or periodicity above :data:`ACCURACY_GOAL` (also in the notes); a cam
+        follower that flew across the whole gap of its contact (:func:`flight`).
     """
     o = _options(scene, omega, revolutions, start_deg, steps_per_period, points, method,
                  rtol, revolution, omega_ripple)
@@ -338,6 +343,49 @@ def simulate_scene(scene: Scene, *, omega: float | None = None, revolutions: int
     if method in SCIPY_METHODS:
         return _simulate_scipy(ctx, error_estimate, notes, compile_time)
     return _simulate_rk4(ctx, backend, error_estimate, notes, compile_time)
+
+
+def flight(scene, sm, warn: bool = False) -> str:
+    """Did the follower fly across the whole gap the model gives it?
+
+    The contact's law has its far flank 2 × (stroke + preload/spring) from the cam
+    (:func:`~mechcirc.scene.cam.open_contact_rows`); a follower that gets there hits
+    it, and the motion past that is not a free flight.
+
+    Parameters
+    ----------
+    scene : Scene
+        A scene whose ``[cam]`` has a contact that can open.
+    sm : SceneMotion
+        Its :func:`~mechcirc.scene.simulate_scene` result.
+    warn : bool
+        Also issue the message as a :class:`~mechcirc.errors.FollowerFlightWarning`, at the
+        caller's line (:func:`simulate_scene` does).
+
+    Returns
+    -------
+    str
+        The message (the largest departure from the cam, the gap, the cam angle), or
+        "" when the follower stayed within the gap.
+    """
+    from ..errors import FollowerFlightWarning
+    from ..errors import warn as issue
+    from .cam import contact_geometry
+
+    el, _, _, _, half = contact_geometry(scene)
+    e = sm.values[f"{el.name}.deformation"]
+    k = int(np.argmax(e))
+    if not e[k] > half:
+        return ""
+    unit, L = scene.units or "m", scene.length_scale
+    msg = (f"{scene.source}: the follower left the cam by {(e[k] + half) / L:.6g} {unit} at "
+           f"cam angle {math.degrees(sm.crank_angle[k]):.2f}°, more than the model's gap "
+           f"{2 * half / L:.6g} {unit} (2 × (stroke + preload/spring)): it hit the contact's "
+           "far flank, so the motion from there on is not the follower's free flight; lower "
+           "the speed or raise the spring or its preload")
+    if warn:
+        issue(msg, FollowerFlightWarning)
+    return msg
 
 
 def _model_at(scene, o, model):
@@ -447,14 +495,15 @@ def _simulate_scipy(ctx, error_estimate, notes, compile_time):
     elif error_estimate:
         notes.append(f"no error estimate: rtol {rtol:g} leaves no tighter reference "
                      f"(solve_ivp's floor is {SCIPY_RTOL_FLOOR:g})")
-    return _finish(scene, scene.simulate, model, kern, theta_s, ripple, ts, ys, prev,
-                   None if coarse is None else coarse[:5], wall, bad, n_steps, nfev,
-                   method, "scipy", 0, notes + [text], [], o.revolutions, compile_time)
+    return _finish(scene, model, kern, theta_s, ripple, (ts, ys, prev, wall, bad),
+                   None if coarse is None else coarse[:5],
+                   (n_steps, nfev, method, "scipy", 0, o.revolutions, compile_time),
+                   notes + [text], [])
 
 
 def _simulate_rk4(ctx, backend, error_estimate, notes, compile_time):
-    """:func:`simulate_scene` with RK4: the run at ``steps_per_period`` is returned; the
-    error estimate is its change from a run at half as many steps (twice the step).
+    """:func:`simulate_scene` with RK4 (or RK8): the run at ``steps_per_period`` is returned;
+    the error estimate is its change from a run at half as many steps (twice the step).
 
     For RK4 in its asymptotic regime that change is ~15× the returned run's error, so it
     bounds it with margin (the steps are cut at the force laws' kinks, so the order holds
@@ -465,73 +514,137 @@ def _simulate_rk4(ctx, backend, error_estimate, notes, compile_time):
     steps, with its change from the first as the estimate.
     """
     scene, o, model, kern, theta_s, ripple, progress = ctx
-    revolutions, warn = o.revolutions, []
-    period = scene.cycle / model.omega       # one revolution, or the cycle of geared cranks
+    rule = _step_rule(scene, o, model, error_estimate)
+    tableau = _tableau(o.method)
+
+    def run(per_rev, prog=None, last=1, start=None):
+        return _run(model, kern, theta_s, ripple, per_rev, o.revolutions, o.npts, prog,
+                    tableau, (last, rule.stride), start)
+
+    def steps(spp):
+        return _steps_per_cycle(rule.period, rule.rate, spp)
+
+    spp, main, other = _first_runs(run, steps, rule, progress, notes, error_estimate)
+    start = other[7] if isinstance(other, tuple) else None
+    first = start[0] if start else 0
+    n_steps, nfev, wall = main[6] * (o.revolutions - first), main[5], 0.0
+    if isinstance(other, tuple):
+        n_steps, nfev = n_steps + other[6] * o.revolutions, nfev + other[5]
+        wall = other[3]
+    tab = _crank_order(scene, model, theta_s, ripple, main[0], rule.stride)
+    out, other_ext, periodicity = _estimate_run_extrema(model, kern, theta_s, ripple, main,
+                                                        other, tab)
+    if rule.auto and spp == rule.spp:
+        est = None if other_ext is None else _rel_change(_extrema(out, tab[2]), other_ext)
+        if (est is None or est > ACCURACY_GOAL) and \
+                rule.period * rule.rate * 2 * spp / TWO_PI <= MAX_STEPS_PER_REV:
+            # not good enough: twice as many steps (beyond the limit: keep it, warned), from
+            # the same state as the run at spp
+            notes.append(_rerun_note(spp, est))
+            other, other_ext = main, _extrema(out, tab[2])
+            wall += main[3]
+            spp, main, out = 2 * spp, run(steps(2 * spp), start=start), None
+            n_steps, nfev = n_steps + main[6] * (o.revolutions - first), nfev + main[5]
+    if other == "diverged":
+        rule.warn.append(f"the error estimate's run at {spp / 2:g} steps per period diverged: "
+                         "no estimate; raise steps_per_period")
+    notes.append(_step_note(rule.period, main[6], spp, rule.rate, error_estimate, o.method))
+    main = (*main[:3], wall + main[3], *main[4:])
+    return _finish(scene, model, kern, theta_s, ripple, main, other,
+                   (n_steps, nfev, o.method, backend, main[6], o.revolutions, compile_time),
+                   notes, rule.warn, out=out, other_extrema=other_ext, tab=tab,
+                   periodicity=periodicity)
+
+
+@dataclass
+class _StepRule:
+    """The fixed-step rule of one RK run (:func:`_step_rule`)."""
+
+    period: float           # one revolution, or the cycle of geared cranks [s]
+    rate: float             # |λ|max [1/s]
+    spp: float              # steps per period of the fastest mode of the first run
+    auto: bool              # the step chosen for the accuracy goal (first try, then twice)
+    stride: int             # the checks compare the extrema on every stride-th output point
+    warn: list
+
+
+#: The error estimate's run at twice the step covers the last this many revolutions, from
+#: the returned run's state at their start: the error a run commits before them has been
+#: damped by the time the tabulated revolution is reached (a motion that keeps it is not
+#: periodic, and the periodicity check says so).
+ESTIMATE_REVOLUTIONS = 2
+#: The error estimate and the periodicity compare the extrema of two runs on the same
+#: output points, at least this many per period of the fastest mode (every k-th point of
+#: a finer grid: both runs sampled alike, so the change measured is the runs' change).
+CHECK_POINTS_PER_PERIOD = 40
+
+
+def _step_rule(scene, o, model, error_estimate) -> _StepRule:
+    """The step rule of :func:`_simulate_rk4` for the options ``o``; too few steps per period
+    asked for is a warning (in the rule's ``warn``)."""
+    period = scene.cycle / model.omega
     rate = max_rate(model)
     auto = o.spp is None and error_estimate
     first, second = RK8_STEPS_PER_PERIOD if o.method == "rk8" else \
         (AUTO_STEPS_PER_PERIOD, DEFAULT_STEPS_PER_PERIOD)
     spp = o.spp if o.spp is not None else (first if auto else second)
-    per_rev = _steps_per_cycle(period, rate, spp)
+    warn = []
     if o.spp is not None and spp < first:
         warn.append(f"{spp:g} steps per period of the fastest mode, fewer than the "
                     f"{first} the default starts from: expect a larger error")
-    tableau = _tableau(o.method)
+    per_fast = o.npts * TWO_PI / (rate * period) if rate > 0 else o.npts
+    stride = max(1, int(per_fast // CHECK_POINTS_PER_PERIOD))
+    return _StepRule(period, rate, spp, auto, stride, warn)
 
-    def run(p, prog=None):
-        return _run(model, kern, theta_s, ripple, p, revolutions, o.npts, prog, tableau)
 
+def _first_runs(run, steps, rule, progress, notes, error_estimate):
+    """(steps per period, the run returned, the estimate's run): with the estimate, the run
+    at half the steps over every revolution (the estimate's run), then the run at the
+    step over the last :data:`ESTIMATE_REVOLUTIONS` from the first's state at their start;
+    without it, the one run (the estimate's run None).  In the automatic rule a run that
+    diverges is repeated at twice as many steps (noted)."""
     try:
-        main = run(per_rev, progress)
+        return (rule.spp, *_paired_runs(run, steps(rule.spp), progress, rule.stride,
+                                        error_estimate))
     except SolverError:
-        if not auto:
+        if not rule.auto:
             raise
-        notes.append(f"the run at {spp:g} steps per period diverged: run at {2 * spp:g}")
-        auto, spp = False, 2 * spp
-        per_rev = _steps_per_cycle(period, rate, spp)
-        main = run(per_rev, progress)
-    n_steps, nfev = per_rev * revolutions, main[5]
-    other = out = other_ext = None
-    if error_estimate:
-        other = _half_step_run(run, per_rev)
-        nfev += 0 if isinstance(other, str) else other[5]
-        n_steps += per_rev // 2 * revolutions
-    if auto:
-        out, other_ext, est = _auto_estimate(model, kern, theta_s, ripple, main, other)
-        need2 = period * rate * 2 * spp / TWO_PI
-        if (est is None or est > ACCURACY_GOAL) and need2 <= MAX_STEPS_PER_REV:
-            # not good enough: twice as many steps (beyond the limit: keep it, warned)
-            notes.append(_rerun_note(spp, est))
-            other, other_ext, out = main, _extrema(out), None
-            spp, per_rev = 2 * spp, _steps_per_cycle(period, rate, 2 * spp)
-            main = run(per_rev)
-            n_steps, nfev = n_steps + per_rev * revolutions, nfev + main[5]
-    if other == "diverged":
-        warn.append(f"the error estimate's run at {spp / 2:g} steps per period diverged: "
-                    "no estimate; raise steps_per_period")
-    ts, ys, prev, wall, bad = main[:5]
-    notes.append(_step_note(period, per_rev, spp, rate, error_estimate, o.method))
-    return _finish(scene, scene.simulate, model, kern, theta_s, ripple, ts, ys, prev, other,
-                   wall, bad, n_steps, nfev, o.method, backend, per_rev, notes, warn,
-                   revolutions, compile_time, out=out, other_extrema=other_ext)
+        notes.append(f"the run at {rule.spp:g} steps per period diverged: run at "
+                     f"{2 * rule.spp:g}")
+        return (2 * rule.spp, *_paired_runs(run, steps(2 * rule.spp), progress, rule.stride,
+                                            error_estimate))
 
 
-def _half_step_run(run, per_rev):
-    """The error estimate's run at ``per_rev // 2`` steps, or ``"diverged"``."""
+def _paired_runs(run, per_rev, progress, stride, error_estimate):
+    """(run at ``per_rev`` steps per revolution, the estimate's run at half as many, or
+    ``"diverged"``, or None without the estimate) (:func:`_first_runs`).
+
+    The revolutions before the last :data:`ESTIMATE_REVOLUTIONS` only bring the motion
+    to its periodic state: the error committed there is damped by the time the tabulated
+    revolution is reached (a motion that keeps it is not periodic, which the periodicity
+    check reports), so they are integrated once, at the estimate's step."""
+    if not error_estimate:
+        return run(per_rev, progress), None
     try:
-        return run(per_rev // 2)
+        coarse = run(per_rev // 2, progress, last=stride)
     except SolverError:
-        return "diverged"
+        return run(per_rev, progress), "diverged"
+    return run(per_rev, start=coarse[7]), coarse
 
 
-def _auto_estimate(model, kern, theta_s, ripple, main, other):
-    """The outputs of the run ``main``, the extrema of the run ``other`` at twice the step
-    (None when it diverged) and the estimate: their relative change (None without it)."""
-    out, other_ext = _outputs(model, kern, theta_s, ripple, main[0], main[1]), None
-    if not isinstance(other, str):
-        other_ext = _output_extrema(model, kern, theta_s, ripple, *other[:2])
-    est = None if other_ext is None else _rel_change(_extrema(out), other_ext)
-    return out, other_ext, est
+def _estimate_run_extrema(model, kern, theta_s, ripple, main, other, tab):
+    """The outputs of the run ``main`` in the crank-angle order of ``tab``
+    (:func:`_crank_order`), the extrema of the estimate's run ``other`` on its last
+    revolution and its periodicity (the change of its extrema from its previous
+    revolution; None with fewer than two), both on the points it was recorded at (None,
+    None when it diverged or was not run)."""
+    out = _outputs(model, kern, theta_s, ripple, main[0][tab[1]], main[1][tab[1]])
+    if not isinstance(other, tuple):
+        return out, None, None
+    last = _output_extrema(model, kern, theta_s, ripple, *other[:2])
+    periodicity = None if other[2] is None else \
+        _rel_change(last, _output_extrema(model, kern, theta_s, ripple, *other[2]))
+    return out, last, periodicity
 
 
 def _rerun_note(spp, est):
@@ -562,44 +675,76 @@ def _steps_per_cycle(period, rate, spp):
     return max(2 * int(math.ceil(need / 2)), 16)
 
 
-def _extrema(out: dict) -> dict:
+def _extrema(out: dict, sub=None) -> dict:
+    """(min, max) of each output, or of its samples at the positions ``sub``."""
+    if sub is not None:
+        return {k: (float(v[sub].min()), float(v[sub].max())) for k, v in out.items()}
     return {k: (float(v.min()), float(v.max())) for k, v in out.items()}
 
 
-def _finish(scene, cfg, model, kern, theta_s, ripple, ts, ys, prev, other, wall, bad, n_steps,
-            nfev,
-            method, backend, per_rev, notes, warn, revolutions, compile_time, out=None,
-            other_extrema=None):
-    """Outputs, extrema, the checks and the warnings of one run → :class:`SceneMotion`
-    (``out``, ``other_extrema``: this run's outputs and the other run's extrema when
-    already evaluated)."""
+def _finish(scene, model, kern, theta_s, ripple, main, other, counts, notes, warn, out=None,
+            other_extrema=None, tab=None, periodicity=None):
+    """Outputs, extrema, the checks and the warnings of one run → :class:`SceneMotion`.
+
+    ``main`` is the run (:func:`_run`'s tuple), ``other`` the estimate's (or None, or
+    ``"diverged"``), ``counts`` = (steps, evaluations, method, backend, steps per
+    revolution, revolutions, compile time); ``out``, ``other_extrema``: this run's outputs
+    (in the order of ``tab``) and the other run's extrema when already evaluated,
+    ``periodicity`` when measured on the estimate's run (else from ``main``'s previous
+    revolution); ``tab`` (:func:`_crank_order`): the checks compare the extrema on the
+    points the other runs were recorded at."""
+    ts, ys, prev, wall, bad = main[:5]
+    n_steps, nfev, method, backend, per_rev, revolutions, compile_time = counts
+    crank, order, sub = tab or _crank_order(scene, model, theta_s, ripple, ts)
+    ts, ys = ts[order], ys[order]
     if out is None:
         out = _outputs(model, kern, theta_s, ripple, ts, ys)
     extrema = _extrema(out)
-    periodicity = None
-    if prev is not None:
-        periodicity = _rel_change(extrema, _output_extrema(model, kern, theta_s, ripple, *prev))
+    check = extrema if sub is None else _extrema(out, sub)
     est = None
+    if periodicity is None and prev is not None:
+        periodicity = _rel_change(check, _output_extrema(model, kern, theta_s, ripple, *prev))
     if other is not None and not isinstance(other, str):     # "diverged": no estimate
         if other_extrema is None:
             other_extrema = _output_extrema(model, kern, theta_s, ripple, other[0], other[1])
-        est = _rel_change(extrema, other_extrema)
+        est = _rel_change(check, other_extrema)
         bad = bad or other[4]
+    values = out
+    _add_points_and_aliases(scene, model, theta_s, ripple, crank, ts, ys, values, extrema)
+    warn = warn + _check_warnings(bad, est, periodicity)
+    for w in warn:
+        warnings.warn(f"{scene.source}: {w}", SceneAccuracyWarning, stacklevel=3)
+    result = SceneMotion(scene.name, scene.source, model.omega, crank, values, extrema,
+                         revolutions, est, periodicity, n_steps, nfev, wall, method, backend,
+                         per_rev, tuple(notes + [f"warning: {w}" for w in warn]), ts, ys,
+                         compile_time)
+    if getattr(scene.linkage, "contact", ""):          # a cam follower that can jump
+        flight(scene, result, warn=True)               # (at the caller's line)
+    return result
+
+
+def _crank_order(scene, model, theta_s, ripple, ts, stride=1):
+    """(ascending crank angle mod the cycle, the order of the samples at times ``ts`` that
+    gives it, and the positions in that order of every ``stride``-th sample in time, or
+    None for every sample)."""
     crank = crank_angle(model.omega, theta_s, ripple, ts)[0] % scene.cycle
     wrap = np.flatnonzero(np.diff(crank) < 0)
     order = np.roll(np.arange(crank.size), -(int(wrap[0]) + 1)) if wrap.size == 1 \
         else np.argsort(crank, kind="stable")
-    crank = crank[order]
-    ts, ys = ts[order], ys[order]
-    values = {k: v[order] for k, v in out.items()}
+    return crank[order], order, (np.flatnonzero(order % stride == 0) if stride > 1 else None)
+
+
+def _add_points_and_aliases(scene, model, theta_s, ripple, crank, ts, ys, values, extrema):
+    """The points' accelerations and the ``[simulate.aliases]`` added to ``values`` and
+    ``extrema`` (in place); every slider's stroke checked on the samples."""
     positions: dict = {}
     for k, v in _point_accelerations(model, theta_s, ripple, ts, ys, values,
                                      positions).items():
         values[k] = v
         extrema[k] = (float(v.min()), float(v.max()))
     _check_strokes(scene, crank, positions)
-    aliases = dict(cfg.aliases) if cfg is not None else {}
-    for alias, target in aliases.items():
+    cfg = scene.simulate
+    for alias, target in (dict(cfg.aliases) if cfg is not None else {}).items():
         if target.endswith(".rigid_acceleration"):
             body = target.rsplit(".", 1)[0]
             values[alias], extrema[alias] = _rigid_acceleration(model, body, crank,
@@ -610,6 +755,12 @@ def _finish(scene, cfg, model, kern, theta_s, ripple, ts, ys, prev, other, wall,
         else:
             raise MechcircError(f"{scene.source}: alias {alias!r} names {target!r}, which is "
                                 f"not an output (outputs: {', '.join(values)})")
+
+
+def _check_warnings(bad, est, periodicity) -> list:
+    """The accuracy warnings of a run: a part out of its tables' range, an error estimate or
+    a periodicity above :data:`ACCURACY_GOAL`."""
+    warn = []
     if bad:
         warn.append("a part left the range its kinematics are tabulated over (the values "
                     "there are extrapolated)")
@@ -619,12 +770,7 @@ def _finish(scene, cfg, model, kern, theta_s, ripple, ts, ys, prev, other, wall,
     if periodicity is not None and periodicity > ACCURACY_GOAL:
         warn.append(f"not yet periodic: the extrema changed by {periodicity:.2g} (relative) "
                     f"from the previous revolution > {ACCURACY_GOAL:g}: raise revolutions")
-    for w in warn:
-        warnings.warn(f"{scene.source}: {w}", SceneAccuracyWarning, stacklevel=3)
-    return SceneMotion(scene.name, scene.source, model.omega, crank, values, extrema,
-                       revolutions, est, periodicity, n_steps, nfev, wall,
-                       method, backend, per_rev, tuple(notes + [f"warning: {w}" for w in warn]),
-                       ts, ys, compile_time)
+    return warn
 
 
 #: Smallest rtol solve_ivp honours (100 × machine epsilon).
@@ -735,32 +881,45 @@ def _tableau(method):
             np.ascontiguousarray(DOP853.C[:s]), True)
 
 
-def _run(model, kern, theta_s, ripple, per_rev, revolutions, npts, progress, tableau=None):
+def _run(model, kern, theta_s, ripple, per_rev, revolutions, npts, progress, tableau=None,
+         strides=(1, 1), start=None):
     """R revolutions of RK4 (or the explicit ``tableau``, :func:`_tableau`) at ``per_rev``
     steps each: (times and states tabulated on the last revolution, the previous one's
-    (times, states) or None, wall time, out-of-range seen, right-hand-side evaluations)."""
+    (times, states) or None, wall time, out-of-range seen, right-hand-side evaluations,
+    ``per_rev``, (r, state) at the start of revolution r = max(R − :data:`ESTIMATE_REVOLUTIONS`,
+    0)).  The last revolution is tabulated on every ``strides[0]``-th of the ``npts`` output
+    points, the previous one on every ``strides[1]``-th.  ``start`` = (r, state): begin at
+    the start of revolution r (0-based) in that state instead of the rigid start."""
     y = model.rigid_state(theta_s, model.omega + ripple[0])
     n = model.n_free
     limit = 1e3 * model.omega * max(1.0, float(np.max(np.abs(y[n:]))) / model.omega)
     args = model.kernel_args(theta_s, limit, ripple=ripple)
     period = model.scene.cycle / model.omega
     h = period / per_rev
-    rec = np.empty((npts, y.size)), np.empty(npts)
-    prev = (np.empty(npts), np.empty((npts, y.size))) if revolutions >= 2 else None
+    (n_last, dt_last), (n_prev, dt_prev) = ((-(-npts // k), period / npts * k) for k in strides)
+    rec = np.empty((n_last, y.size)), np.empty(n_last)
+    prev = (np.empty(n_prev), np.empty((n_prev, y.size))) if revolutions >= 2 else None
     dummy = np.empty((0, y.size)), np.empty(0)
     naux = model.naux()
     bad, nfev = False, 0
+    first, keep = 0, max(revolutions - ESTIMATE_REVOLUTIONS, 0)
+    if start is not None:
+        first, y = start[0], start[1].copy()
+    kept = (keep, y.copy())
     t0 = time.perf_counter()
-    for r in range(revolutions):
+    for r in range(first, revolutions):
+        if r == keep:
+            kept = (keep, y.copy())
         last = r == revolutions - 1
+        dt = dt_last
         if last:
             ry, rt = rec
         elif r == revolutions - 2:
-            rt, ry = prev
+            (rt, ry), dt = prev, dt_prev
         else:
             ry, rt = dummy
         t_end, rows, ok, flag, used = kern.rk_run(y, r * period, h, per_rev, r * period,
-                                                  period / npts, ry, rt, *args, naux,
+                                                  dt, ry, rt, *args, naux,
                                                   *(tableau or _tableau("rk4")))
         bad, nfev = bad or flag > 0, nfev + used
         if not ok:
@@ -769,7 +928,7 @@ def _run(model, kern, theta_s, ripple, per_rev, revolutions, npts, progress, tab
         if progress is not None:
             progress(r + 1, revolutions)
     wall = time.perf_counter() - t0
-    return rec[1], rec[0], prev, wall, bad, nfev
+    return rec[1], rec[0], prev, wall, bad, nfev, per_rev, kept
 
 
 def _point_accelerations(model, theta_s, ripple, ts, ys, values, positions=None):
@@ -783,12 +942,14 @@ def _point_accelerations(model, theta_s, ripple, ts, ys, values, positions=None)
     a = model.arrays
     n = model.n_free
     th, w, dw = crank_angle(model.omega, theta_s, ripple, ts)
-    r0 = a["PRIG"][0]
-    q0 = np.empty((ts.size, 3))
-    kern.eval_many(*_fargs(a, r0), np.ascontiguousarray(th), q0)
-    coord = {0: (q0[:, 0], q0[:, 1] * w)}
-    for i in range(1, n + 1):
-        coord[i] = (ys[:, i - 1], ys[:, n + i - 1])
+    coord: dict = {}
+    for i in {i for _, _, i in model.point_fn.values()}:     # (q contiguous, q̇) of each part
+        if i == 0:
+            q0 = np.empty((ts.size, 3))
+            kern.eval_many(*_fargs(a, a["PRIG"][0]), np.ascontiguousarray(th), q0)
+            coord[0] = (q0[:, 0].copy(), q0[:, 1] * w)
+        else:
+            coord[i] = (np.ascontiguousarray(ys[:, i - 1]), ys[:, n + i - 1])
     out = {}
     for p, (fx, fy, i) in model.point_fn.items():
         q, qd = coord[i]
@@ -798,7 +959,7 @@ def _point_accelerations(model, theta_s, ripple, ts, ys, values, positions=None)
         comp = []
         for f in (fx, fy):
             fv = np.empty((ts.size, 3))
-            kern.eval_many(*_fargs(a, f), np.ascontiguousarray(q), fv)
+            kern.eval_many(*_fargs(a, f), q, fv)
             comp.append(fv[:, 2] * qd * qd + fv[:, 1] * qdd)
             if positions is not None:
                 positions.setdefault(p, []).append(fv[:, 0].copy())
@@ -825,7 +986,25 @@ def _check_strokes(scene, crank, positions: dict) -> None:
 
 def crank_angle(omega, theta_s, ripple, t):
     """(θ, θ̇, θ̈) of the crank at times ``t``: θ = θs + Ω t + (A/ν) sin(ν t), the speed
-    Ω + A cos(ν t) (``ripple`` = (A, ν); A = 0: constant speed)."""
+    Ω + A cos(ν t) (``ripple`` = (A, ν); A = 0: constant speed).
+
+    ``simulate_scene``'s ``omega_ripple`` = (a, k) is A = a Ω, ν = k Ω with 0 ≤ a < 1 and
+    k a whole number ≥ 1, so the crank still turns once per period 2π/Ω and the rigid
+    parts follow it with θ̈ = −a k Ω² sin(k Ω t).
+
+    Parameters
+    ----------
+    omega, theta_s : float
+        Mean crank speed Ω [rad/s] and the start angle θs [rad].
+    ripple : tuple of 2 float
+        (A, ν) [rad/s]; A = 0: none.
+    t : array_like
+        Times [s].
+
+    Returns
+    -------
+    tuple of 3 ndarray
+    """
     t = np.asarray(t, float)
     amp, nu = ripple
     if amp == 0.0:
@@ -838,7 +1017,8 @@ def _outputs(model, kern, theta_s, ripple, ts, ys):
     args = model.kernel_args(theta_s, 1e300, outputs=True, ripple=ripple)
     out = np.empty((ts.size, model.naux()))
     kern.outputs(np.ascontiguousarray(ts), np.ascontiguousarray(ys), out, *args)
-    return {name: out[:, j].copy() for j, name in enumerate(_aux_names(model))}
+    cols = out.T.copy()             # one copy: each output a contiguous row
+    return {name: cols[j] for j, name in enumerate(_aux_names(model))}
 
 
 def _output_extrema(model, kern, theta_s, ripple, ts, ys):

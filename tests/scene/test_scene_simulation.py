@@ -280,3 +280,62 @@ def test_hermite_point_reproduces_polynomials_and_converges_at_its_order():
     # observed orders, measured: quintic 6.18 (q), 5.19 (q̇); cubic 4.18, 3.97
     assert abs(p5[0] - 6) < 0.35 and abs(p5[1] - 5) < 0.35, p5
     assert abs(p3[0] - 4) < 0.35 and abs(p3[1] - 4) < 0.35, p3
+
+
+def test_simulate_scene_warns_of_a_follower_flying_across_its_gap_at_the_callers_line():
+    """A weak follower spring (100 N/m, 0.5 N preload) thrown off the cam at 300 rad/s: the
+    library call itself warns (FollowerFlightWarning, attributed to this line), with the
+    message ``flight`` returns; the shipped scene (600 rpm) does not."""
+    from pathlib import Path
+
+    from mechcirc.errors import FollowerFlightWarning
+    from mechcirc.scene.simulation import flight
+
+    path = Path(__file__).resolve().parents[2] / "examples" / "cam_jump_scene.toml"
+    text = path.read_text(encoding="utf-8")
+    weak = text.replace("spring = 5.0e3 ", "spring = 100.0 ").replace("preload = 50.0 ",
+                                                                        "preload = 0.5 ")
+    assert weak != text
+    scene = parse_scene(weak, str(path))
+    with pytest.warns(FollowerFlightWarning) as caught:
+        sm = simulate_scene(scene, omega=300.0, revolutions=1, error_estimate=False)
+    (w,) = [c for c in caught if issubclass(c.category, FollowerFlightWarning)]
+    assert w.filename == __file__
+    assert str(w.message) == flight(scene, sm) and "left the cam by" in str(w.message)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", FollowerFlightWarning)
+        simulate_scene(parse_scene(text, str(path)), revolutions=1, error_estimate=False,
+                       points=720)
+
+
+def test_the_default_estimate_on_a_subgrid_after_a_coarse_spin_up_bounds_the_true_error():
+    """The sley scene (one-side, variant 3), 3 revolutions, 3600 points (80 a period of the
+    fastest mode: the checks compare every 2nd): the estimate's run at 12.5 steps per
+    period covers the 3 revolutions, the returned run at 25 the last 2.  Its true error,
+    against DOP853 at rtol 1e-10 (about 1e-8 off, docs/sley.md), is within the estimate,
+    and the estimate is the change from that coarse run made on its own, compared on
+    every 2nd point in time."""
+    from mechcirc.scene.simulation import _rel_change
+    from mechcirc.sley.scenes import preset_scene
+
+    scene = preset_scene("one-side", 3)
+    kw = dict(revolutions=3, points=3600)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        r = simulate_scene(scene, **kw)
+        coarse = simulate_scene(scene, steps_per_period=12.5, error_estimate=False, **kw)
+        ref = simulate_scene(scene, method="DOP853", rtol=1e-10, error_estimate=False, **kw)
+    per_rev = r.steps_per_revolution
+    assert coarse.steps_per_revolution == per_rev // 2
+    assert r.n_steps == per_rev // 2 * 3 + per_rev * 2
+    true = _rel_change(r.extrema, ref.extrema)
+    assert 0 < true <= 1e-4 and true <= r.error_estimate <= 1e-3, (true, r.error_estimate)
+
+    def every_2nd(res):
+        sub = np.argsort(res.time, kind="stable")[::2]
+        return {k: (float(v[sub].min()), float(v[sub].max())) for k, v in res.values.items()
+                if k.endswith((".acceleration", ".force", ".deformation", ".moment"))
+                and "." in k and k.split(".")[0] not in ("B", "C")}
+
+    change = _rel_change(every_2nd(r), every_2nd(coarse))
+    assert abs(change - r.error_estimate) <= 1e-9 * change, (change, r.error_estimate)
