@@ -18,9 +18,18 @@ continued fraction in mpmath (40 digits) at ngspice's own frequencies, is
 printed for the sizes up to ``--mp-max`` elements: the largest relative
 error of K of each mechcirc variant and of ngspice.
 
+With ``--breakdown`` it prints instead where one default sweep's CPU time
+goes on each path (medians of ``--repeats``): parsing, assembly, the
+pattern and the regularity check, the factorisations, the solves with their
+factors, the double-double residuals, the error estimates and the
+sensitivities, each timed around its function.  The rest of the total is
+the Python between them; past 60 unknowns the regularity check's own trial
+solve is counted both in it and in the rows of its phases.
+
 Run from the repository root::
 
     python benchmarks/bench_nodal_ngspice.py [--sizes 45,99,999,9999,99999] [--repeats 5]
+    python benchmarks/bench_nodal_ngspice.py --breakdown [--sizes 45,99,999]
 
 It prints; it asserts nothing.
 """
@@ -90,16 +99,77 @@ class Spice(NgSpice):
         return out[0]
 
 
+def breakdown(sizes, omega, repeats) -> None:
+    """Print where a default sweep's CPU time goes, by phase, on both paths."""
+    import functools
+
+    from mechcirc import _nodal_equations, _nodal_residual, _nodal_solvers
+
+    spent: dict[str, float] = {}
+
+    def timed(owner, name, label, wrap_result=None):
+        fn = getattr(owner, name)
+
+        @functools.wraps(fn)
+        def run(*a, **k):
+            t0 = time.process_time()
+            out = fn(*a, **k)
+            spent[label] = spent.get(label, 0.0) + time.process_time() - t0
+            return wrap_result(out) if wrap_result else out
+        setattr(owner, name, run)
+
+    def solves(out):                            # time the solves with the factors too
+        good, fn = out
+        box = type("Solves", (), {"solve": staticmethod(fn)})
+        timed(box, "solve", "solves")
+        return good, box.solve
+
+    timed(mechcirc, "parse", "parse")
+    timed(_nodal_equations, "assemble", "assemble")
+    nodal.assemble = _nodal_equations.assemble
+    timed(_nodal_residual.Pattern, "__init__", "pattern")
+    timed(nodal, "require_nonsingular", "regularity check")
+    for cls in (_nodal_solvers.SparseSolver, _nodal_solvers.DenseSolver):
+        timed(cls, "factor", "factor", solves)
+    timed(_nodal_residual.Pattern, "residual", "dd residual")
+    timed(nodal, "_estimate", "estimate")
+    timed(_nodal_residual.Pattern, "sensitivities", "sensitivities")
+    for n in sizes:
+        text = ladder_netlist(*ladder_numbers(n))
+        for compiled in (False, True):
+            _jit.COMPILED = compiled
+            if compiled and nodal.kernels(10 ** 9) is None:
+                continue
+            mechcirc.parse(text).sweep(omega, method="nodal")
+            runs = []
+            for _ in range(repeats):
+                spent.clear()
+                t0 = time.process_time()
+                mechcirc.parse(text).sweep(omega, method="nodal")
+                spent["total"] = time.process_time() - t0
+                runs.append(dict(spent))
+            keys = ["total"] + [k for k in runs[0] if k != "total"]
+            print(f"{n:,} elements, {'compiled' if compiled else 'numpy'} (ms): " + ", ".join(
+                f"{k} {np.median([r.get(k, 0.0) for r in runs]) * 1e3:.2f}" for k in keys),
+                flush=True)
+    _jit.COMPILED = None
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", default="45,99,999,9999,99999")
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--no-spice", action="store_true", help="mechcirc only")
+    ap.add_argument("--breakdown", action="store_true",
+                    help="where a default sweep's time goes, by phase (no libngspice)")
     ap.add_argument("--mp-max", type=int, default=999,
                     help="largest ladder checked against mpmath")
     args = ap.parse_args()
     sizes = [int(s) for s in args.sizes.split(",")]
     omega = 2 * np.pi * np.geomspace(0.1, 1e3, 401)
+    if args.breakdown:
+        breakdown(sizes, omega, args.repeats)
+        return 0
     try:
         if args.no_spice:
             raise OSError("--no-spice")

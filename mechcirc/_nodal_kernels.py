@@ -39,6 +39,45 @@ def _add(acc, bk, th_r, tl_r, th_i, tl_i):
     acc[bk, 3] += ea + tl_i
 
 
+@_jit_inline
+def _element_term(v, vh, vl, ar, ai, br, bi, alr, ali, blr, bli, has_lo):
+    """v·(a − b) in double-double, (re_hi, re_lo, im_hi, im_lo): a = (ar + j ai) +
+    (alr + j ali) and b likewise, the difference by TwoSum, the product by TwoProduct."""
+    dh_r, dl_r = _two_sum(ar, -br)
+    dh_i, dl_i = _two_sum(ai, -bi)
+    if has_lo:
+        # Renormalised: the low parts of x_i ≈ x_j are ~u|x|, not ~u|d|.
+        dh_r, dl_r = _two_sum(dh_r, dl_r + (alr - blr))
+        dh_i, dl_i = _two_sum(dh_i, dl_i + (ali - bli))
+    th_r, tl_r = _two_prod(v, vh, vl, dh_r)
+    th_i, tl_i = _two_prod(v, vh, vl, dh_i)
+    return th_r, tl_r + v * dl_r, th_i, tl_i + v * dl_i
+
+
+@_jit_inline
+def _row_residual(acc, r, w, wh, wl, b):
+    """b − (A x)_r rounded to complex parts, from row r's sums by kind in ``acc``:
+    (A x)_r = S_c + S_l + j(ω S_m − S_k/ω) in double-double."""
+    m_ = 4 * r
+    wm_rh, wm_rl = _dd_mul_d(acc[m_, 0], acc[m_, 1], w, wh, wl)
+    wm_ih, wm_il = _dd_mul_d(acc[m_, 2], acc[m_, 3], w, wh, wl)
+    kw_rh, kw_rl = _dd_div_d(acc[m_ + 1, 0], acc[m_ + 1, 1], w, wh, wl)
+    kw_ih, kw_il = _dd_div_d(acc[m_ + 1, 2], acc[m_ + 1, 3], w, wh, wl)
+    su_rh, su_rl = _dd_add(wm_rh, wm_rl, -kw_rh, -kw_rl)
+    su_ih, su_il = _dd_add(wm_ih, wm_il, -kw_ih, -kw_il)
+    g_rh, g_rl = _dd_add(acc[m_ + 2, 0], acc[m_ + 2, 1], acc[m_ + 3, 0], acc[m_ + 3, 1])
+    g_ih, g_il = _dd_add(acc[m_ + 2, 2], acc[m_ + 2, 3], acc[m_ + 3, 2], acc[m_ + 3, 3])
+    ax_rh, ax_rl = _dd_add(g_rh, g_rl, -su_ih, -su_il)
+    ax_ih, ax_il = _dd_add(g_ih, g_il, su_rh, su_rl)
+    rr_h, rr_l = _dd_add(b, 0.0, -ax_rh, -ax_rl)
+    ri_h, ri_l = -ax_ih, -ax_il
+    if not np.isfinite(rr_l) and np.isfinite(rr_h):
+        rr_l = 0.0
+    if not np.isfinite(ri_l) and np.isfinite(ri_h):
+        ri_l = 0.0
+    return rr_h + rr_l, ri_h + ri_l
+
+
 @_jit
 def residual(omega, xr, xi, xlr, xli, has_lo, rhs, b_i, b_j, b_s,
              e_i, e_j, e_val, e_vh, e_vl, s_col, s_val, s_vh, s_vl, acc, out_r, out_i):
@@ -53,70 +92,34 @@ def residual(omega, xr, xi, xlr, xli, has_lo, rhs, b_i, b_j, b_s,
     re_hi, re_lo, im_hi, im_lo).
     """
     n_w, n = out_r.shape
-    n_el = e_i.size
-    n_s = s_col.size
     drop = 4 * n
-    t = np.empty((n_el, 4))
+    t = np.empty((e_i.size, 4))
     for k in range(n_w):
         w = omega[k]
         wh, wl = _split(w)
         acc[:] = 0.0
-        for e in range(n_el):                   # +y·(x_i − x_j), formed once
-            i = e_i[e]
-            j = e_j[e]
-            v, vh, vl = e_val[e], e_vh[e], e_vl[e]
-            dh_r, dl_r = _two_sum(xr[k, i], -xr[k, j])
-            dh_i, dl_i = _two_sum(xi[k, i], -xi[k, j])
-            if has_lo:
-                # Renormalised: the low parts of x_i ≈ x_j are ~u|x|, not ~u|d|.
-                dh_r, dl_r = _two_sum(dh_r, dl_r + (xlr[k, i] - xlr[k, j]))
-                dh_i, dl_i = _two_sum(dh_i, dl_i + (xli[k, i] - xli[k, j]))
-            th_r, tl_r = _two_prod(v, vh, vl, dh_r)
-            th_i, tl_i = _two_prod(v, vh, vl, dh_i)
-            tl_r = tl_r + v * dl_r
-            tl_i = tl_i + v * dl_i
-            t[e, 0] = th_r
-            t[e, 1] = tl_r
-            t[e, 2] = th_i
-            t[e, 3] = tl_i
+        for e in range(e_i.size):               # +y·(x_i − x_j), formed once
+            i, j = e_i[e], e_j[e]
+            t[e, 0], t[e, 1], t[e, 2], t[e, 3] = _element_term(
+                e_val[e], e_vh[e], e_vl[e], xr[k, i], xi[k, i], xr[k, j], xi[k, j],
+                xlr[k, i], xli[k, i], xlr[k, j], xli[k, j], has_lo)
             if b_i[e] != drop:
-                _add(acc, b_i[e], th_r, tl_r, th_i, tl_i)
-        for e in range(n_el):                   # −y·(x_i − x_j) into the second row
+                _add(acc, b_i[e], t[e, 0], t[e, 1], t[e, 2], t[e, 3])
+        for e in range(e_i.size):               # −y·(x_i − x_j) into the second row
             if b_j[e] != drop:
                 _add(acc, b_j[e], -t[e, 0], -t[e, 1], -t[e, 2], -t[e, 3])
-        for s in range(n_s):
-            bk = b_s[s]
-            if bk == drop:
-                continue
+        for s in range(s_col.size):
             c = s_col[s]
-            v, vh, vl = s_val[s], s_vh[s], s_vl[s]
-            th_r, tl_r = _two_prod(v, vh, vl, xr[k, c])
-            th_i, tl_i = _two_prod(v, vh, vl, xi[k, c])
-            if has_lo:
-                tl_r = tl_r + v * xlr[k, c]
-                tl_i = tl_i + v * xli[k, c]
-            _add(acc, bk, th_r, tl_r, th_i, tl_i)
+            if b_s[s] != drop:
+                v = s_val[s]
+                th_r, tl_r = _two_prod(v, s_vh[s], s_vl[s], xr[k, c])
+                th_i, tl_i = _two_prod(v, s_vh[s], s_vl[s], xi[k, c])
+                if has_lo:
+                    tl_r = tl_r + v * xlr[k, c]
+                    tl_i = tl_i + v * xli[k, c]
+                _add(acc, b_s[s], th_r, tl_r, th_i, tl_i)
         for r in range(n):
-            m_ = 4 * r
-            # ω S_m − S_k/ω, then A x = S_c + S_l + j·sus, then b − A x.
-            wm_rh, wm_rl = _dd_mul_d(acc[m_, 0], acc[m_, 1], w, wh, wl)
-            wm_ih, wm_il = _dd_mul_d(acc[m_, 2], acc[m_, 3], w, wh, wl)
-            kw_rh, kw_rl = _dd_div_d(acc[m_ + 1, 0], acc[m_ + 1, 1], w, wh, wl)
-            kw_ih, kw_il = _dd_div_d(acc[m_ + 1, 2], acc[m_ + 1, 3], w, wh, wl)
-            su_rh, su_rl = _dd_add(wm_rh, wm_rl, -kw_rh, -kw_rl)
-            su_ih, su_il = _dd_add(wm_ih, wm_il, -kw_ih, -kw_il)
-            g_rh, g_rl = _dd_add(acc[m_ + 2, 0], acc[m_ + 2, 1], acc[m_ + 3, 0], acc[m_ + 3, 1])
-            g_ih, g_il = _dd_add(acc[m_ + 2, 2], acc[m_ + 2, 3], acc[m_ + 3, 2], acc[m_ + 3, 3])
-            ax_rh, ax_rl = _dd_add(g_rh, g_rl, -su_ih, -su_il)
-            ax_ih, ax_il = _dd_add(g_ih, g_il, su_rh, su_rl)
-            rr_h, rr_l = _dd_add(rhs[r], 0.0, -ax_rh, -ax_rl)
-            ri_h, ri_l = -ax_ih, -ax_il
-            if not np.isfinite(rr_l) and np.isfinite(rr_h):
-                rr_l = 0.0
-            if not np.isfinite(ri_l) and np.isfinite(ri_h):
-                ri_l = 0.0
-            out_r[k, r] = rr_h + rr_l
-            out_i[k, r] = ri_h + ri_l
+            out_r[k, r], out_i[k, r] = _row_residual(acc, r, w, wh, wl, rhs[r])
 
 
 @_jit_inline

@@ -89,8 +89,13 @@ class Solution:
 #: factorised again with partial pivoting (:class:`SparseSolver`).
 _STRICT_AFTER = 1e-10
 
-#: Work per chunk of frequencies: about this many (ω, term) pairs at once.
-_CHUNK_TERMS = 2 ** 17
+#: Work per chunk of frequencies on the numpy path: about this many (ω, term)
+#: pairs at once (the residual's temporaries then stay near the caches: at 2¹⁵
+#: the numpy sweep of a 999-element ladder took 0.86× the time it took at 2¹⁷,
+#: of a 9,999-element one 0.91×).
+_CHUNK_TERMS = 2 ** 15
+#: The same for the compiled kernels, in (ω, unknown) pairs: no (ω, term) temporaries.
+_KERNEL_CHUNK = 2 ** 16
 
 
 #: With :data:`mechcirc._jit.COMPILED` None (the default) a sweep of the sparse
@@ -98,8 +103,12 @@ _CHUNK_TERMS = 2 ** 17
 #: this many unknowns × ω points on: importing numba and loading the kernels
 #: from their cache costs about 0.6 s once per process, while the numpy path
 #: takes about 1 µs per unknown and point (about 3× the compiled one).  Decided
-#: per sweep from its size, so the same call always takes the same path (the
-#: kernels compute the numpy path's numbers, to the bit); until numba's cache
+#: per sweep from its size, so the same call always takes the same path and
+#: gives the same bits: the residual kernel computes the numpy residual to the
+#: bit, but the banded LUs differ in rounding (the kernel's against numpy's or
+#: LAPACK's), so that K can differ in its last bit and the error estimate, which
+#: starts from the first solve's error, by up to 16× (seen on ladders of 45 … 999
+#: elements, the estimates between 2.2e-16 and 3.6e-15 on both); until numba's cache
 #: holds them (compiling takes 7–12 s) the sweep runs numpy and a process of its
 #: own compiles them (:func:`mechcirc._jit.warm_in_background`).
 KERNEL_MIN_WORK = 1_000_000
@@ -167,7 +176,7 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
 
     # Compiled: no (ω, term) temporaries; the chunk's (ω, n) arrays stay in cache.
     # numpy: the residual's (ω, term) temporaries bound its pieces.
-    terms = max(1, 2 ** 16 // max(1, system.size) if kern is not None
+    terms = max(1, _KERNEL_CHUNK // max(1, system.size) if kern is not None
                 else _CHUNK_TERMS // max(1, pat.n_terms + system.size))
 
     def residual(w, xh, xl, rhs):
@@ -242,6 +251,8 @@ class _Solved:
         done = np.isfinite(err) & (err <= np.maximum(
             16 * np.finfo(float).eps, 16 * residual_rounding(self.system, self.S[every])))
         todo = every[~done]
+        if not todo.size:
+            return                  # (nothing to redo: the double-double LU not even built)
         dd = dd_solver(self.system)
         for at in range(0, todo.size, dd.max_chunk):
             redo = todo[at:at + dd.max_chunk]
