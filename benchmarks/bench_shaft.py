@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tests" / "scene"))
+sys.path[:0] = [str(ROOT / "tests" / "scene"), str(ROOT / "tests")]
 
 import mechcirc._jit as jit  # noqa: E402
 from mechcirc.scene.shaft import simulate_shaft, warm_up  # noqa: E402

@@ -277,7 +277,8 @@ class _ElasticShaft:
         self.tq = motor.scalar_torque
         self.kern = kernels_for("rk4")[0]
         self.run_kern = _shaft_kernels()
-        self.MP, self.steps = motor.params, 0     # steps per cycle of the RK4 runs (0: scipy)
+        self.MP, self.steps = motor.params, 0     # steps per cycle of rk_run (0: scipy)
+        self.tableau = self.run_kern.tableau("rk4")
         self.args = m.kernel_args(0.0, 1e300)
         self.oargs = m.kernel_args(0.0, 1e300, outputs=True)
         self.aux, self.dz = np.empty(m.naux()), np.empty(2 * m.n_free)
@@ -295,17 +296,24 @@ class _ElasticShaft:
         return (self.tq(w) + c * wk[5, 0] - 0.5 * wk[4, 0] * c ** 3 * w * w) / \
             (self.Jf + c * c * wk[3, 0])
 
-    def run(self, Y, in_theta, s0, h, nsteps, floor):
-        """``nsteps`` RK4 steps of h of the shaft and free parts from s0 (Y = [θ̇, t, z] in θ,
-        or [θ, θ̇, z] in time: ``shaft_run`` of :mod:`._motion_kernels`) → (Y, dY) rows, fewer
-        than ``nsteps + 1`` where the speed fell below ``floor``."""
-        rec = np.empty((nsteps + 1, len(Y)))
-        drec = np.empty_like(rec)
-        args = self.model.kernel_args(0.0, 1e300)
-        done = self.run_kern.shaft_run(np.array(Y, float), bool(in_theta), float(s0), float(h),
-                                       int(nsteps), float(floor), rec, drec, self.Jf, self.c,
-                                       self.MP, *args, self.model.naux())
-        return rec[:done + 1], drec[:done + 1]
+    def run(self, Y, in_theta, s0, h, nsteps, floor, record=True):
+        """``nsteps`` steps of h of the shaft and free parts from s0 (Y = [θ̇, t, z] in θ, or
+        [θ, θ̇, z] in time) by the scene's stepper (``rk_run`` of :mod:`._motion_kernels` with
+        ``self.tableau``), stopping where the speed falls below ``floor`` → :class:`_Run`
+        (the states at the steps' starts when ``record``, else the last only)."""
+        Yk = _to_kernel(np.array(Y, float), in_theta, self.n)
+        PV = np.concatenate((self.args[0], [1.0 if in_theta else 2.0, self.Jf, self.c, floor],
+                             self.MP))
+        rec_y = np.empty((nsteps + 1 if record else 0, Yk.size))
+        rec_t = np.empty(rec_y.shape[0])
+        t_end, j, ok, _, _ = self.run_kern.rk_run(Yk, float(s0), float(h), int(nsteps),
+                                                  float(s0), float(h), rec_y, rec_t, PV,
+                                                  *self.args[1:], self.model.naux(),
+                                                  *self.tableau)
+        ts, ys = rec_t[:j], rec_y[:j]
+        if not ok or not j:
+            ts, ys = np.append(ts, t_end), np.vstack((ys, Yk))
+        return _Run(self, in_theta, ts, ys, int(not ok), floor)
 
     def rest(self, theta, w=0.0):
         """z of the rigid motion at θ turning at w (at rest: w = 0)."""
@@ -364,7 +372,7 @@ _WARM_STATEMENT = ("import mechcirc._jit as j; j.COMPILED = True; "
 
 
 def _shaft_kernels():
-    """The kernel module whose ``shaft_run`` the elastic shaft calls: compiled when numba's
+    """The kernel module whose ``rk_run`` the elastic shaft calls: compiled when numba's
     disk cache holds it (or :data:`mechcirc._jit.COMPILED` is True), else the Python copy
     while a detached process compiles it (the no-wait rule of :mod:`mechcirc._jit`)."""
     from .. import _jit
@@ -373,7 +381,7 @@ def _shaft_kernels():
     if _jit.COMPILED is not False:
         from . import _motion_kernels as k
 
-        if k.HAVE_NUMBA and (_jit.COMPILED or _jit.in_cache(k.shaft_run)):
+        if k.HAVE_NUMBA and (_jit.COMPILED or _jit.in_cache(k.rk_run)):
             return k
         if k.HAVE_NUMBA:
             _jit.warm_in_background(_WARM_STATEMENT)
@@ -381,8 +389,9 @@ def _shaft_kernels():
 
 
 def warm_up() -> None:
-    """Compile the shaft's kernel (``shaft_run``) into numba's disk cache on a two-step run of
-    a shaft with nothing on it (the arguments' types are those of every scene).
+    """Compile the shaft's kernel (the scene's ``rk_run``) into numba's disk cache on a
+    two-step run of a shaft with nothing on it (the arguments' types are those of every
+    scene and method).
 
     Returns
     -------
@@ -391,12 +400,12 @@ def warm_up() -> None:
     from . import _motion_kernels as k
 
     i8 = np.int64
-    rec = np.empty((3, 2))
-    k.shaft_run(np.array([1.0, 0.0]), True, 0.0, 0.1, 2, 0.0, rec, np.empty_like(rec), 1.0, 1.0,
-                np.array([0.0, 10.0, 1.0, 0.2]), np.zeros(8), np.array([[2, -1, 0]], i8),
-                np.array([[0.0, 1.0, 0.0, 0.0, 1.0, 0.0]]), np.zeros((1, 2, 6)),
-                np.zeros(0, i8), np.zeros(0), np.zeros((0, 8), i8), np.zeros((0, 10)),
-                np.zeros((0, 2), i8), np.zeros((0, 4)), np.array([0], i8), np.zeros(0, i8), 4)
+    PV = np.concatenate((np.zeros(8), [1.0, 1.0, 1.0, 0.0, 0.0, 10.0, 1.0, 0.2]))
+    k.rk_run(np.array([0.0, 1.0]), 0.0, 0.1, 2, 0.0, 0.1, np.empty((3, 2)), np.empty(3), PV,
+             np.array([[2, -1, 0]], i8), np.array([[0.0, 1.0, 0.0, 0.0, 1.0, 0.0]]),
+             np.zeros((1, 2, 6)), np.zeros(0, i8), np.zeros(0), np.zeros((0, 8), i8),
+             np.zeros((0, 10)), np.zeros((0, 2), i8), np.zeros((0, 4)), np.array([0], i8),
+             np.zeros(0, i8), 4, *k.tableau("rk4"))
 
 
 def _prepare(scene: Scene, shaft, flywheel, points, rigid):
@@ -439,26 +448,56 @@ def _drive_inertia(eq: _ElasticShaft, theta: float) -> float:
     return float(eq.work[3, 0])
 
 
-#: RK4 steps per period of the fastest linearised mode (elastic shaft, ``method="rk4"``).
-STEPS_PER_PERIOD = 100
+#: Steps per period of the fastest linearised mode of the elastic shaft, by method.
+STEPS_PER_PERIOD = {"rk4": 100, "rk8": 16}
 
 #: Right-hand side evaluations one cycle of the shaft may take.
 MAX_CALLS = 200_000
 
 
-class _Steps:
-    """A fixed-step run as solve_ivp's result: ``status`` (1: stalled), ``t``, ``y`` (columns)
-    and ``sol`` (cubic Hermite between the steps, from the values and derivatives)."""
+def _to_kernel(Y, in_theta, n):
+    """A shaft state as :func:`._motion_kernels.shaft_rhs` takes it, from [θ̇, t, q, q̇] (in θ)
+    or [θ, θ̇, q, q̇] (in time); rows for a 2-d ``Y``."""
+    Y = np.asarray(Y, float)
+    if not in_theta:
+        return np.concatenate((Y[..., :1], Y[..., 2:2 + n], Y[..., 1:2], Y[..., 2 + n:]), -1)
+    u = 1.0 / Y[..., :1]
+    return np.concatenate((Y[..., 1:2], Y[..., 2:2 + n], u, Y[..., 2 + n:] * u), -1)
 
-    def __init__(self, t, rec, drec, status):
-        self.t, self.y, self.status, self._d, self._sp = t, rec.T, status, drec.T, None
+
+def _from_kernel(Y, in_theta, n):
+    """The inverse of :func:`_to_kernel`."""
+    if not in_theta:
+        return np.concatenate((Y[..., :1], Y[..., 1 + n:2 + n], Y[..., 1:1 + n],
+                               Y[..., 2 + n:]), -1)
+    w = 1.0 / Y[..., 1 + n:2 + n]
+    return np.concatenate((w, Y[..., :1], Y[..., 1:1 + n], Y[..., 2 + n:] * w), -1)
+
+
+class _Run:
+    """A fixed-step run of the shaft as solve_ivp's result: ``status`` (1: stalled), ``t``,
+    ``y`` (columns [θ̇, t, z] in θ, [θ, θ̇, z] in time) at the steps' starts, and ``sol(x)``:
+    one step of the same method from the last step's start before x (the run's own accuracy
+    at any x, kinks located in it)."""
+
+    def __init__(self, eq, in_theta, ts, yk, status, floor):
+        self.eq, self.in_theta, self.floor, self.status = eq, in_theta, floor, status
+        self.t, self._yk = ts, yk
+        self.y = _from_kernel(yk, in_theta, eq.n).T
 
     def sol(self, x):
-        if self._sp is None:
-            from scipy.interpolate import CubicHermiteSpline
-
-            self._sp = CubicHermiteSpline(self.t, self.y, self._d, axis=1)
-        return self._sp(x)
+        x = np.asarray(x, float)
+        out = np.empty((self.y.shape[0], x.size))
+        idx = np.clip(np.searchsorted(self.t, x.ravel(), "right") - 1, 0, self.t.size - 1)
+        for c, (xi, i) in enumerate(zip(x.ravel(), idx)):
+            h = xi - self.t[i]
+            if h == 0.0:
+                out[:, c] = self.y[:, i]
+                continue
+            r = self.eq.run(_from_kernel(self._yk[i], self.in_theta, self.eq.n),
+                            self.in_theta, self.t[i], h, 1, -math.inf, record=False)
+            out[:, c] = r.y[:, -1]
+        return out.reshape((-1,) + x.shape)
 
 
 def _over_cycle(eq, th0, cycle, x0, rtol, scale, dense=False, floor=1e-6):
@@ -467,10 +506,8 @@ def _over_cycle(eq, th0, cycle, x0, rtol, scale, dense=False, floor=1e-6):
     from scipy.integrate import solve_ivp
 
     if eq.steps:
-        h = cycle / eq.steps
-        rec, drec = eq.run(np.concatenate(([x0[0], 0.0], x0[1:])), True, th0, h, eq.steps,
-                           floor * scale)
-        return _Steps(th0 + h * np.arange(rec.shape[0]), rec, drec, int(rec.shape[0] <= eq.steps))
+        return eq.run(np.concatenate(([x0[0], 0.0], x0[1:])), True, th0, cycle / eq.steps,
+                      eq.steps, floor * scale, record=dense)
     calls = [0]
 
     def f(th, Y):
@@ -551,7 +588,7 @@ def _steady_state(eq, th0, cycle, w0, rtol, scale):
 def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float | None = None,
                    points: int = 720, startup: bool = True, rtol: float = 1e-10,
                    rigid: bool = False, method: str = "rk4",
-                   steps_per_period: float = STEPS_PER_PERIOD) -> ShaftMotion:
+                   steps_per_period: float | None = None) -> ShaftMotion:
     """The main shaft turned by the motor through the flywheel: steady cycle and start-up.
 
     Parameters
@@ -571,13 +608,16 @@ def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float 
         Treat every elastic element as rigid (θ the only degree of freedom) even when the
         scene has elastic parts; by default a scene with elastic parts is simulated with
         them (θ coupled to the free parts of :mod:`.motion`).
-    method : {"rk4", "DOP853"}
-        Elastic scenes: ``"rk4"`` integrates the shaft with the free parts in one compiled loop
-        (classical RK4 at fixed steps: in θ over the cycle, in time for the start-up);
-        ``"DOP853"`` by scipy's solve_ivp at ``rtol`` (the same equations, called from Python
-        at every step).  The rigid shaft is always integrated by DOP853.
-    steps_per_period : float
-        ``"rk4"``: steps per period of the fastest linearised mode at the steady speed.
+    method : {"rk4", "rk8", "DOP853"}
+        Elastic scenes: ``"rk4"`` or ``"rk8"`` integrate the shaft with the free parts by the
+        scene's compiled stepper (classical RK4, or DOP853's 8th-order formula, at fixed
+        steps: in θ over the cycle, in time for the start-up; the kinks of clearance gaps
+        and moment windows located inside the steps); ``"DOP853"`` by scipy's solve_ivp at
+        ``rtol`` (the same equations, called from Python at every step).  The rigid shaft
+        is always integrated by DOP853.
+    steps_per_period : float, optional
+        ``"rk4"``/``"rk8"``: steps per period of the fastest linearised mode at the steady
+        speed (default :data:`STEPS_PER_PERIOD` of the method).
 
     Returns
     -------
@@ -591,9 +631,12 @@ def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float 
         message gives the torques); the start-up did not reach the steady
         cycle within ``max_time``.
     """
-    if method not in ("rk4", "DOP853"):
-        raise MechcircError(f"method must be 'rk4' or 'DOP853', got {method!r}")
-    if not (isinstance(steps_per_period, (int, float)) and steps_per_period >= 4):
+    if method not in ("rk4", "rk8", "DOP853"):
+        raise MechcircError(f"method must be 'rk4', 'rk8' or 'DOP853', got {method!r}")
+    if steps_per_period is None:
+        steps_per_period = STEPS_PER_PERIOD.get(method, 4)
+    if isinstance(steps_per_period, bool) or not (
+            isinstance(steps_per_period, (int, float)) and steps_per_period >= 4):
         raise MechcircError(f"steps_per_period must be a number ≥ 4, got {steps_per_period!r}")
     shaft, Jf, rig, eq, peak, mean_load, notes = _prepare(scene, shaft, flywheel, points, rigid)
     motor = shaft.motor
@@ -601,14 +644,17 @@ def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float 
     scale = max(abs(motor.sync_speed) if motor.kind == "kloss" else max(motor.speeds), 1e-300)
     if startup:
         _require_start(scene, shaft, rig, th0)
+    if isinstance(eq, _ElasticShaft) and method != "DOP853":
+        eq.tableau = eq.run_kern.tableau(method)
     x0, sol = _steady_cycle(scene, eq, rig, motor, th0, rtol, scale, mean_load, peak, notes,
-                            steps_per_period if method == "rk4" else None)
+                            None if method == "DOP853" else steps_per_period)
     motion = _tabulate(scene, eq, sol, th0, cyc, points, Jf, motor)
     if not startup:
         return ShaftMotion(**motion, notes=tuple(notes))
     up = (_startup_steps if eq.steps else _startup)(scene, eq, shaft, th0, cyc, x0[0], motion,
                                                     rtol, scale, peak)
-    how = f"RK4 in θ, {eq.steps} steps a cycle" if eq.steps else f"DOP853 in θ, rtol {rtol:g}"
+    how = f"{method.upper()} in θ, {eq.steps} steps a cycle" if eq.steps else \
+        f"DOP853 in θ, rtol {rtol:g}"
     notes.append(f"steady cycle by shooting ({how}); start-up from rest over "
                  f"{up.pop('cycles')} cycles")
     return ShaftMotion(**motion, **up, notes=tuple(notes))
@@ -630,7 +676,8 @@ def _require_start(scene, shaft, rig, th0) -> None:
 
 def _steady_cycle(scene, eq, rig, motor, th0, rtol, scale, mean_load, peak, notes, spp):
     """The steady cycle from θ0: ([θ̇, z] at θ0, its dense solution over the cycle); elastic
-    with ``spp`` given: by the compiled RK4 at ``spp`` steps per period of the fastest mode."""
+    with ``spp`` given: by the compiled stepper (``eq.tableau``) at ``spp`` steps per period
+    of the fastest mode."""
     cyc = rig.cycle
 
     def fail():
@@ -648,8 +695,9 @@ def _steady_cycle(scene, eq, rig, motor, th0, rtol, scale, mean_load, peak, note
 
         eq.steps = max(int(math.ceil(cyc * max_rate(eq.model) * spp / (2 * math.pi * w0))), 64)
         backend = "compiled" if getattr(eq.run_kern, "HAVE_NUMBA", False) else "Python copy"
-        notes.append(f"RK4 in θ with the elastic parts, {eq.steps} steps a cycle ({spp:g} per "
-                     f"period of the fastest mode), {backend}")
+        name = "RK8" if eq.tableau[3] else "RK4"
+        notes.append(f"{name} in θ with the elastic parts, {eq.steps} steps a cycle ({spp:g} "
+                     f"per period of the fastest mode), {backend}")
     if eq.n:
         x0, resid = _steady_state(eq, th0, cyc, w0, rtol, scale)
         notes.append(f"elastic steady cycle: {2 * eq.n} elastic states beside θ̇, cycle map "
@@ -748,10 +796,10 @@ def _startup_steps(scene, eq, shaft, th0, cyc, w0, motion, rtol, scale, peak):
     t, Y, k = 0.0, np.concatenate(([th0, 0.0], eq.rest(th0))), 0
     every = max(eq.steps // 64, 1)
     while True:
-        rec, drec = eq.run(Y, False, t, h, eq.steps, -1e-9 * scale)
-        run = _Steps(t + h * np.arange(rec.shape[0]), rec, drec, 0)
+        run = eq.run(Y, False, t, h, eq.steps, -1e-9 * scale)
+        rec = run.y.T
         runs.append(run)
-        if rec.shape[0] <= eq.steps:
+        if run.status:
             raise MechcircError(
                 f"{scene.source}: the start-up stalls at t = {run.t[-1]:.4g} s, θ = "
                 f"{math.degrees(rec[-1, 0]):.5g}°: the motor's largest torque "
