@@ -703,3 +703,20 @@ def shaft_rhs(t, Y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dY, a
             dY[1 + i] = zy[nf + i]
             dY[npart + 1 + i] = zd[nf + i]
     return acc
+
+
+@_jit
+def shaft_load(ths, out, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, naux):
+    """The drive's part at rest at each crank rotation ths[i] with no free parts (the rigid
+    shaft's model): out[i] = (m₀, m₀', Q₀) (work rows 3–5 of :func:`rhs`)."""
+    y = np.empty(0)
+    dy = np.empty(0)
+    aux = np.empty(naux)
+    work = np.zeros((9, max(FI.shape[0], PRIG.shape[0])))
+    for i in range(ths.shape[0]):
+        PV[0] = 0.0
+        PV[1] = ths[i]
+        rhs(0.0, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, work)
+        out[i, 0] = work[3, 0]
+        out[i, 1] = work[4, 0]
+        out[i, 2] = work[5, 0]

@@ -227,31 +227,68 @@ def reduced_inertia(scene: Scene, theta) -> np.ndarray:
     return r.J(th - r.cycle * np.floor(th / r.cycle))
 
 
-class _RigidShaft:
-    """The shaft's equation on the rigid mechanism: no state beyond θ, θ̇ (z is empty)."""
+def rigid_model(scene: Scene, N: int = 1024):
+    """The rigid mechanism as the scene kernel's model of one part, the drive's, whose
+    coordinate is the shaft's θ: every mass's x(θ), y(θ) and every inertia's rotation φ(θ)
+    (a torsion body's: its link's) a quintic Hermite table of the rigid motion with weight m
+    or J, so that the kernel's m₀ = J_red(θ) = Σ m |∂x/∂θ|² + Σ J (∂φ/∂θ)² and Q₀ the moments'
+    Σ M ∂φ/∂θ: the rigid shaft's equation is the elastic one's with no free parts.
 
-    n = steps = 0
-    shift = np.empty(0)
+    Parameters
+    ----------
+    scene : Scene
+    N : int
+        Table nodes per crank revolution.
 
-    def __init__(self, rig: _Rigid, Jf: float, tq):
-        self.rig, self.Jf, self.tq = rig, Jf, tq
+    Returns
+    -------
+    MotionModel
+    """
+    from .motion import MotionModel, dead_centre, hermite_table, rigid_tables
 
-    def deriv(self, theta, w, z, dz=None):
-        """θ̈ at θ, θ̇ = w (nothing to write into ``dz``)."""
-        rig = self.rig
-        J, dJ = rig.J.at(rig.wrap(theta))
-        return (self.tq(w) + rig.Q(theta) - 0.5 * dJ * w * w) / (self.Jf + J)
+    ang, ang1, ang2, pos, vel, acc = (dict(x) for x in rigid_tables(scene, N))
+    for t in scene.torsions:
+        for d in (ang, ang1, ang2):
+            d.setdefault(t.body, d[t.link])
+    cyc, nodes = scene.cycle, N * scene.cycle_revolutions
+    h = cyc / nodes
+    FI, FF, tabs = [[2, -1, 0]], [[0.0, 1.0, 0.0, 0.0, 1.0, 0.0]], [np.zeros((nodes, 6))]
 
-    def rest(self, theta, w=0.0):
-        return np.empty(0)
-
-    def samples(self, th, w, z, acc):
-        """(load torque, body accelerations, element values) over the cycle's samples."""
-        rig = self.rig
-        u = np.array([rig.wrap(a) for a in th])
-        bodies = {b: rig.rate[b](u, slope=True) * w * w + rig.rate[b](u) * acc
-                  for b in rig.bodies}
-        return np.array([-rig.Q(a) for a in th]), bodies, {}
+    def table(f, f1, f2, turns=False):
+        w = round((f[-1] - f[0]) / (2 * math.pi)) * 2 * math.pi / cyc if turns else 0.0
+        q = h * np.arange(f.size)
+        tabs.append(hermite_table(h, f - w * q, f1 - w, f2))
+        FI.append([0, 0, len(tabs) - 1])
+        FF.append([0.0, 0.0, cyc, 0.0, h, w])
+        return len(FI) - 1
+    MI, MW = [], []
+    for m in scene.masses:
+        if m.kind == "mass":
+            for k in (0, 1):
+                MI.append(table(pos[m.point][:, k], vel[m.point][:, k], acc[m.point][:, k]))
+                MW.append(m.value)
+        else:
+            MI.append(table(ang[m.link], ang1[m.link], ang2[m.link], True))
+            MW.append(m.value)
+    MOI, MOF = [], []
+    for mo in scene.moments:
+        c = mo.centre
+        if isinstance(c, str):
+            c = dead_centre(scene, "front" if c.startswith("front") else "back")
+        FI.append([2, 0, 0])                    # the window's angle: θ itself
+        FF.append([0.0, 1.0, 0.0, 0.0, 1.0, 0.0])
+        MOI.append([len(FI) - 1, table(ang[mo.body], ang1[mo.body], ang2[mo.body], True)])
+        MOF.append([mo.amplitude, mo.window, mo.sigma, float(c)])
+    i8 = np.int64
+    arrays = {"FI": np.array(FI, i8), "FF": np.array(FF, float), "tabs": np.array(tabs),
+              "MI": np.array(MI, i8), "MW": np.array(MW, float),
+              "EI": np.zeros((0, 8), i8), "EF": np.zeros((0, 10)),
+              "MOI": np.array(MOI, i8).reshape(-1, 2), "MOF": np.array(MOF).reshape(-1, 4),
+              "PRIG": np.array([0], i8), "BI": np.zeros(0, i8), "n_dyn": len(FI)}
+    return MotionModel(scene=scene, omega=abs(scene.linkage.cranks[0].omega),
+                       parts=((),), coordinate=("",), bodies=(), elements=(),
+                       moments=tuple(mo.name for mo in scene.moments), arrays=arrays,
+                       body_fn={}, centre={})
 
 
 class _ElasticShaft:
@@ -263,11 +300,11 @@ class _ElasticShaft:
     (q₀ = c θ the drive's coordinate, m₀ its part's inertia, Q₀ the generalised force of the
     elastic elements and moments on it: rows 3–5 of the kernel's work array)."""
 
-    def __init__(self, scene: Scene, Jf: float, motor: Motor):
+    def __init__(self, scene: Scene, Jf: float, motor: Motor, model=None):
         from .motion import motion_model
         from .simulation import kernels_for
 
-        self.model = m = motion_model(scene)
+        self.model = m = motion_model(scene) if model is None else model
         a = m.arrays
         r = a["PRIG"][0]
         if a["FI"][r, 0] != 2 or a["FF"][r, 0] != 0.0:
@@ -296,18 +333,18 @@ class _ElasticShaft:
         return (self.tq(w) + c * wk[5, 0] - 0.5 * wk[4, 0] * c ** 3 * w * w) / \
             (self.Jf + c * c * wk[3, 0])
 
-    def run(self, Y, in_theta, s0, h, nsteps, floor, record=True):
+    def run(self, Y, in_theta, s0, h, nsteps, floor, record=True, every=1):
         """``nsteps`` steps of h of the shaft and free parts from s0 (Y = [θ̇, t, z] in θ, or
         [θ, θ̇, z] in time) by the scene's stepper (``rk_run`` of :mod:`._motion_kernels` with
         ``self.tableau``), stopping where the speed falls below ``floor`` → :class:`_Run`
-        (the states at the steps' starts when ``record``, else the last only)."""
+        (the states at every ``every``-th step's start when ``record``, else the last only)."""
         Yk = _to_kernel(np.array(Y, float), in_theta, self.n)
         PV = np.concatenate((self.args[0], [1.0 if in_theta else 2.0, self.Jf, self.c, floor],
                              self.MP))
-        rec_y = np.empty((nsteps + 1 if record else 0, Yk.size))
+        rec_y = np.empty((nsteps // every + 1 if record else 0, Yk.size))
         rec_t = np.empty(rec_y.shape[0])
         t_end, j, ok, _, _ = self.run_kern.rk_run(Yk, float(s0), float(h), int(nsteps),
-                                                  float(s0), float(h), rec_y, rec_t, PV,
+                                                  float(s0), float(h * every), rec_y, rec_t, PV,
                                                   *self.args[1:], self.model.naux(),
                                                   *self.tableau)
         ts, ys = rec_t[:j], rec_y[:j]
@@ -367,6 +404,30 @@ class _ElasticShaft:
         return load, bodies, values
 
 
+class _RigidShaft(_ElasticShaft):
+    """The shaft's equation on the rigid mechanism: the kernel's on :func:`rigid_model` (no
+    state beyond θ, θ̇: z is empty)."""
+
+    def __init__(self, scene: Scene, rig: _Rigid, Jf: float, motor: Motor):
+        super().__init__(scene, Jf, motor, rigid_model(scene))
+        self.rig = rig
+
+    def load(self, th):
+        """The load torque −Q(θ) [N·m] of the moments at crank rotations ``th`` (array)."""
+        th = np.ascontiguousarray(th, float)
+        out = np.empty((th.size, 3))
+        self.run_kern.shaft_load(th, out, *self.args, self.model.naux())
+        return -out[:, 2]
+
+    def samples(self, th, w, z, acc):
+        """(load torque, body accelerations, element values) over the cycle's samples."""
+        rig = self.rig
+        u = th - rig.cycle * np.floor(th / rig.cycle)
+        bodies = {b: rig.rate[b](u, slope=True) * w * w + rig.rate[b](u) * acc
+                  for b in rig.bodies}
+        return self.load(th), bodies, {}
+
+
 _WARM_STATEMENT = ("import mechcirc._jit as j; j.COMPILED = True; "
                    "from mechcirc.scene.shaft import warm_up; warm_up()")
 
@@ -409,7 +470,8 @@ def warm_up() -> None:
 
 
 def _prepare(scene: Scene, shaft, flywheel, points, rigid):
-    """Checks of the options → (shaft, J_f, rigid tables, equations, peak load, mean load)."""
+    """Checks of the options → (shaft, J_f, rigid tables, equations, the rigid ones, peak
+    load, mean load, notes)."""
     shaft = shaft or scene.shaft
     if shaft is None:
         raise MechcircError(f"{scene.source}: no [shaft] table: give the flywheel and motor "
@@ -424,14 +486,15 @@ def _prepare(scene: Scene, shaft, flywheel, points, rigid):
         raise MechcircError(f"{scene.source}: the shaft has no inertia (flywheel 0 and no mass "
                             "of the mechanism moves with the crank)")
     motor = shaft.motor
-    eq: _RigidShaft | _ElasticShaft = _RigidShaft(rig, Jf, motor.scalar_torque)
+    req = _RigidShaft(scene, rig, Jf, motor)
+    eq: _ElasticShaft = req
     if not rigid and scene.parts and len(scene.parts) > 1:
         eq = _ElasticShaft(scene, Jf, motor)
         if eq.Jf + eq.c ** 2 * min(_drive_inertia(eq, t) for t in (0.0, 1.0, 2.0)) <= 0:
             raise MechcircError(f"{scene.source}: the shaft has no inertia of its own (flywheel "
                                 "0 and no mass on the drive's part): give [shaft] flywheel > 0")
     grid = np.linspace(0.0, rig.cycle, 4 * points, endpoint=False)
-    load = np.array([-rig.Q(t) for t in grid])
+    load = req.load(grid)
     peak = float(load.max())
     if motor.peak_torque < peak:
         text = (f"the motor's largest torque {motor.peak_torque:.6g} N·m (breakdown) is below "
@@ -439,8 +502,8 @@ def _prepare(scene: Scene, shaft, flywheel, points, rigid):
                 f"{math.degrees(grid[int(load.argmax())]):.4g}°: only the flywheel and the "
                 "mechanism's inertia carry the shaft through it")
         warnings.warn(f"{scene.source}: {text}", ShaftWarning, stacklevel=3)
-        return shaft, Jf, rig, eq, peak, float(np.mean(load)), ["warning: " + text]
-    return shaft, Jf, rig, eq, peak, float(np.mean(load)), []
+        return shaft, Jf, rig, eq, req, peak, float(np.mean(load)), ["warning: " + text]
+    return shaft, Jf, rig, eq, req, peak, float(np.mean(load)), []
 
 
 def _drive_inertia(eq: _ElasticShaft, theta: float) -> float:
@@ -450,6 +513,9 @@ def _drive_inertia(eq: _ElasticShaft, theta: float) -> float:
 
 #: Steps per period of the fastest linearised mode of the elastic shaft, by method.
 STEPS_PER_PERIOD = {"rk4": 100, "rk8": 16}
+
+#: Steps per cycle of the rigid shaft for each step per period (it has no elastic mode).
+RIGID_STEPS = 16
 
 #: Right-hand side evaluations one cycle of the shaft may take.
 MAX_CALLS = 200_000
@@ -498,6 +564,15 @@ class _Run:
                             self.in_theta, self.t[i], h, 1, -math.inf, record=False)
             out[:, c] = r.y[:, -1]
         return out.reshape((-1,) + x.shape)
+
+    def grid(self, cycle, points):
+        """The states at ``points`` + 1 uniform steps over the cycle from the run's start (in
+        θ), each the end of a step of the method: the cycle rerun at the smallest multiple
+        of ``points`` steps not below the run's."""
+        k = max(-(-self.eq.steps // points), 1)
+        r = self.eq.run(self.y[:, 0], self.in_theta, self.t[0], cycle / (points * k),
+                        points * k, -math.inf, every=k)
+        return r.y
 
 
 def _over_cycle(eq, th0, cycle, x0, rtol, scale, dense=False, floor=1e-6):
@@ -638,15 +713,16 @@ def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float 
     if isinstance(steps_per_period, bool) or not (
             isinstance(steps_per_period, (int, float)) and steps_per_period >= 4):
         raise MechcircError(f"steps_per_period must be a number ≥ 4, got {steps_per_period!r}")
-    shaft, Jf, rig, eq, peak, mean_load, notes = _prepare(scene, shaft, flywheel, points, rigid)
+    shaft, Jf, rig, eq, req, peak, mean_load, notes = _prepare(scene, shaft, flywheel, points,
+                                                               rigid)
     motor = shaft.motor
     th0, cyc = math.radians(shaft.start_deg), rig.cycle
     scale = max(abs(motor.sync_speed) if motor.kind == "kloss" else max(motor.speeds), 1e-300)
     if startup:
-        _require_start(scene, shaft, rig, th0)
+        _require_start(scene, shaft, req, th0)
     if isinstance(eq, _ElasticShaft) and method != "DOP853":
         eq.tableau = eq.run_kern.tableau(method)
-    x0, sol = _steady_cycle(scene, eq, rig, motor, th0, rtol, scale, mean_load, peak, notes,
+    x0, sol = _steady_cycle(scene, eq, req, motor, th0, rtol, scale, mean_load, peak, notes,
                             None if method == "DOP853" else steps_per_period)
     motion = _tabulate(scene, eq, sol, th0, cyc, points, Jf, motor)
     if not startup:
@@ -660,13 +736,13 @@ def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float 
     return ShaftMotion(**motion, **up, notes=tuple(notes))
 
 
-def _require_start(scene, shaft, rig, th0) -> None:
+def _require_start(scene, shaft, req, th0) -> None:
     """Refuse a motor whose starting torque does not exceed the load at the start angle.
 
     At rest the elastic elements carry the loads statically: the rigid
     mechanism's torque is the load.
     """
-    T0, L0 = shaft.motor.scalar_torque(0.0), -rig.Q(th0)
+    T0, L0 = shaft.motor.scalar_torque(0.0), float(req.load([th0])[0])
     if T0 - L0 <= 0:
         raise MechcircError(
             f"{scene.source}: the motor cannot start the mechanism: its starting torque "
@@ -674,11 +750,11 @@ def _require_start(scene, shaft, rig, th0) -> None:
             f"{L0:.6g} N·m at the start angle {shaft.start_deg:g}°")
 
 
-def _steady_cycle(scene, eq, rig, motor, th0, rtol, scale, mean_load, peak, notes, spp):
+def _steady_cycle(scene, eq, req, motor, th0, rtol, scale, mean_load, peak, notes, spp):
     """The steady cycle from θ0: ([θ̇, z] at θ0, its dense solution over the cycle); elastic
     with ``spp`` given: by the compiled stepper (``eq.tableau``) at ``spp`` steps per period
-    of the fastest mode."""
-    cyc = rig.cycle
+    of the fastest mode.  ``req``: the rigid shaft's equations (the elastic's first guess)."""
+    cyc = req.rig.cycle
 
     def fail():
         raise MechcircError(
@@ -686,7 +762,9 @@ def _steady_cycle(scene, eq, rig, motor, th0, rtol, scale, mean_load, peak, note
             f"{motor.peak_torque:.6g} N·m) cannot keep the mechanism turning against the mean "
             f"load torque {mean_load:.6g} N·m, peak {peak:.6g} N·m, with flywheel "
             f"{eq.Jf:g} kg·m²")
-    w0 = _steady_speed(_RigidShaft(rig, eq.Jf, motor.scalar_torque), th0, cyc,
+    if spp is not None:
+        req.tableau, req.steps = eq.tableau, max(int(math.ceil(RIGID_STEPS * spp)), 64)
+    w0 = _steady_speed(req, th0, cyc,
                        max(rtol, 1e-5) if eq.n else rtol, scale,     # elastic: a first guess
                        _balance(motor, mean_load, scale), fail, 1e-5 if eq.n else 1e-13)
     x0 = np.array([w0])
@@ -712,7 +790,7 @@ def _steady_cycle(scene, eq, rig, motor, th0, rtol, scale, mean_load, peak, note
 def _tabulate(scene, eq, sol, th0, cyc, points, Jf, motor):
     """The steady cycle on ``points`` uniform θ samples → ShaftMotion's fields."""
     th = th0 + np.linspace(0.0, cyc, points + 1)
-    Y = sol.sol(th)
+    Y = sol.grid(cyc, points) if isinstance(sol, _Run) else sol.sol(th)
     period = float(Y[1, -1])
     th, Y = th[:-1], Y[:, :-1]
     w, tt, z = Y[0], Y[1], Y[2:].T
