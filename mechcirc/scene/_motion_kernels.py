@@ -706,17 +706,22 @@ def shaft_rhs(t, Y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dY, a
 
 
 @_jit
-def shaft_load(ths, out, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, naux):
-    """The drive's part at rest at each crank rotation ths[i] with no free parts (the rigid
-    shaft's model): out[i] = (m₀, m₀', Q₀) (work rows 3–5 of :func:`rhs`)."""
-    y = np.empty(0)
-    dy = np.empty(0)
+def shaft_eval(ys, out, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, naux):
+    """The shaft's equations (:func:`shaft_rhs` in time, PV[8] = 2) at the states ys[i] =
+    [θ, q, θ̇, q̇]: out[i] = [aux (naux), θ̈, T_motor(θ̇), m₀, m₀', Q₀]."""
+    n = ys.shape[1]
+    dY = np.empty(n)
     aux = np.empty(naux)
     work = np.zeros((9, max(FI.shape[0], PRIG.shape[0])))
-    for i in range(ths.shape[0]):
-        PV[0] = 0.0
-        PV[1] = ths[i]
-        rhs(0.0, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, work)
-        out[i, 0] = work[3, 0]
-        out[i, 1] = work[4, 0]
-        out[i, 2] = work[5, 0]
+    zy = np.empty(2 * PRIG.shape[0] - 2)
+    zd = np.empty(zy.shape[0])
+    for i in range(ys.shape[0]):
+        acc = shaft_rhs(0.0, ys[i], PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dY,
+                        aux, work, zy, zd)
+        for j in range(naux):
+            out[i, j] = aux[j]
+        out[i, naux] = acc
+        out[i, naux + 1] = motor_torque(PV, PV[0], 12)
+        out[i, naux + 2] = work[3, 0]
+        out[i, naux + 3] = work[4, 0]
+        out[i, naux + 4] = work[5, 0]

@@ -133,7 +133,7 @@ class ShaftMotion:
 
 
 class _Cubic:
-    """Cubic Hermite pieces on uniform nodes from values and slopes, with a fast scalar path."""
+    """Cubic Hermite pieces on uniform nodes from values and slopes."""
 
     def __init__(self, h, f, f1):
         f, f1 = np.asarray(f, float), np.asarray(f1, float)
@@ -141,14 +141,6 @@ class _Cubic:
         self.h, self.n = h, f.size - 1
         self.c = np.column_stack([f[:-1], f1[:-1], (3 * d - 2 * f1[:-1] - f1[1:]) / h,
                                   (f1[:-1] + f1[1:] - 2 * d) / (h * h)])
-        self.rows = self.c.tolist()
-
-    def at(self, u):
-        """(value, slope) at one u in [0, n h]."""
-        i = min(int(u / self.h), self.n - 1)
-        s = u - i * self.h
-        a0, a1, a2, a3 = self.rows[i]
-        return a0 + s * (a1 + s * (a2 + s * a3)), a1 + s * (2.0 * a2 + s * 3.0 * a3)
 
     def __call__(self, u, slope=False):
         u = np.asarray(u, float)
@@ -161,11 +153,10 @@ class _Cubic:
 
 
 class _Rigid:
-    """J_red(θ), J_red'(θ), Q(θ) and each body's φ'(θ), φ''(θ) of the rigid mechanism."""
+    """J_red(θ), J_red'(θ) and each body's φ'(θ), φ''(θ) of the rigid mechanism."""
 
     def __init__(self, scene: Scene, N: int = 1024):
-        from .motion import rigid_tables, dead_centre
-        from .simulation import kernels_for
+        from .motion import rigid_tables
 
         ang, ang1, ang2, pos, vel, acc = (dict(x) for x in rigid_tables(scene, N))
         tlink: dict[str, str] = {}
@@ -190,23 +181,6 @@ class _Rigid:
         self.bodies = tuple(scene.bodies)
         self.rate = {b: _Cubic(h, ang1[b], ang2[b]) for b in self.bodies}
         self.J_range = (float(J.min()), float(J.max()))
-        self.moments = []
-        for mo in scene.moments:
-            c = mo.centre
-            if isinstance(c, str):
-                c = dead_centre(scene, "front" if c.startswith("front") else "back")
-            self.moments.append((mo.amplitude, mo.window, mo.sigma, float(c),
-                                 self.rate[mo.body]))
-        self._wm = kernels_for("rk4-python")[0].window_moment
-
-    def wrap(self, theta):
-        return theta - self.cycle * math.floor(theta / self.cycle)
-
-    def Q(self, theta: float) -> float:
-        """Generalised force of the moments on θ [N·m]."""
-        u = self.wrap(theta)
-        return sum(self._wm(a, al, sg, c, theta) * rate.at(u)[0]
-                   for a, al, sg, c, rate in self.moments)
 
 
 def reduced_inertia(scene: Scene, theta) -> np.ndarray:
@@ -311,27 +285,30 @@ class _ElasticShaft:
             raise MechcircError(f"{scene.source}: the drive's part does not turn in proportion "
                                 "to the main shaft; a dynamic shaft cannot drive it")
         self.c, self.n, self.Jf = float(a["FF"][r, 1]), m.n_free, Jf
-        self.tq = motor.scalar_torque
         self.kern = kernels_for("rk4")[0]
         self.run_kern = _shaft_kernels()
         self.MP, self.steps = motor.params, 0     # steps per cycle of rk_run (0: scipy)
         self.tableau = self.run_kern.tableau("rk4")
         self.args = m.kernel_args(0.0, 1e300)
         self.oargs = m.kernel_args(0.0, 1e300, outputs=True)
-        self.aux, self.dz = np.empty(m.naux()), np.empty(2 * m.n_free)
-        self.work = np.zeros((9, max(a["FI"].shape[0], a["PRIG"].shape[0])))
         n = self.n
+        self.PVt = np.concatenate((self.args[0], [2.0, Jf, self.c, -math.inf], self.MP))
+        self.aux, self.dY, self.Y = np.empty(m.naux()), np.empty(2 * n + 2), np.empty(2 * n + 2)
+        self.work = np.zeros((9, max(a["FI"].shape[0], a["PRIG"].shape[0])))
+        self.zy, self.zd = np.empty(2 * n), np.empty(2 * n)
         self.shift = np.concatenate([m.rigid_state(scene.cycle)[:n] - m.rigid_state(0.0)[:n],
                                      np.zeros(n)])
 
-    def deriv(self, theta, w, z, dz=None, args=None):
-        """θ̈ at θ, θ̇ = w and the free parts' state z; ż into ``dz`` when given."""
-        args = self.args if args is None else args
-        args[0][0], args[0][1] = w, theta           # the crank at θ, θ̇ = w (t = 0)
-        self.kern.rhs(0.0, z, *args, self.dz if dz is None else dz, self.aux, self.work)
-        c, wk = self.c, self.work
-        return (self.tq(w) + c * wk[5, 0] - 0.5 * wk[4, 0] * c ** 3 * w * w) / \
-            (self.Jf + c * c * wk[3, 0])
+    def deriv(self, theta, w, z, dz=None):
+        """θ̈ at θ, θ̇ = w and the free parts' state z (the kernel's ``shaft_rhs`` in time);
+        ż into ``dz`` when given."""
+        n, Y, dY = self.n, self.Y, self.dY
+        Y[0], Y[1:1 + n], Y[1 + n], Y[2 + n:] = theta, z[:n], w, z[n:]
+        acc = self.kern.shaft_rhs(0.0, Y, self.PVt, *self.args[1:], dY, self.aux, self.work,
+                                  self.zy, self.zd)
+        if dz is not None:
+            dz[:n], dz[n:] = dY[1:1 + n], dY[2 + n:]
+        return acc
 
     def run(self, Y, in_theta, s0, h, nsteps, floor, record=True, every=1):
         """``nsteps`` steps of h of the shaft and free parts from s0 (Y = [θ̇, t, z] in θ, or
@@ -351,6 +328,18 @@ class _ElasticShaft:
         if not ok or not j:
             ts, ys = np.append(ts, t_end), np.vstack((ys, Yk))
         return _Run(self, in_theta, ts, ys, int(not ok), floor)
+
+    def evaluate(self, th, w, z):
+        """The equations at crank rotations ``th``, speeds ``w`` and free parts' states ``z``
+        (rows), in one kernel call (``shaft_eval``): rows [aux, θ̈, T_motor, m₀, m₀', Q₀]."""
+        th = np.asarray(th, float)
+        Y = _to_kernel(np.column_stack((th, np.broadcast_to(w, th.shape),
+                                        np.reshape(z, (th.size, 2 * self.n)))), False, self.n)
+        PV = np.concatenate((self.oargs[0], [2.0, self.Jf, self.c, -math.inf], self.MP))
+        out = np.empty((th.size, self.model.naux() + 5))
+        self.run_kern.shaft_eval(np.ascontiguousarray(Y), out, PV, *self.oargs[1:],
+                                 self.model.naux())
+        return out
 
     def rest(self, theta, w=0.0):
         """z of the rigid motion at θ turning at w (at rest: w = 0)."""
@@ -378,17 +367,12 @@ class _ElasticShaft:
                 check_stroke(lk, sl, th, *(at(p) for p in (sl.point, *sl.line)),
                              "sample of the shaft's steady cycle")
 
-    def samples(self, th, w, z, acc):
-        """(load torque, body accelerations, element values) over the cycle's samples."""
+    def samples(self, th, w, z, acc, out):
+        """(body accelerations, element values) over the cycle's samples (``out``: their
+        :meth:`evaluate`)."""
         m, a, c = self.model, self.model.arrays, self.c
         self.check_strokes(th, z)
         nb, ne = len(m.bodies), len(m.elements)
-        out = np.empty((th.size, m.naux()))
-        load = np.empty(th.size)
-        for i in range(th.size):
-            self.deriv(th[i], w[i], np.ascontiguousarray(z[i]), args=self.oargs)
-            out[i] = self.aux
-            load[i] = -c * self.work[5, 0]
         bodies = {}
         for k, b in enumerate(m.bodies):
             f = m.body_fn[b]
@@ -401,7 +385,7 @@ class _ElasticShaft:
                   for kind, off in (("force", 0), ("deformation", ne))}
         values.update({f"{mo}.moment": out[:, nb + 2 * ne + 1 + j].copy()
                        for j, mo in enumerate(m.moments)})
-        return load, bodies, values
+        return bodies, values
 
 
 class _RigidShaft(_ElasticShaft):
@@ -414,18 +398,16 @@ class _RigidShaft(_ElasticShaft):
 
     def load(self, th):
         """The load torque −Q(θ) [N·m] of the moments at crank rotations ``th`` (array)."""
-        th = np.ascontiguousarray(th, float)
-        out = np.empty((th.size, 3))
-        self.run_kern.shaft_load(th, out, *self.args, self.model.naux())
-        return -out[:, 2]
+        th = np.asarray(th, float)
+        return -self.evaluate(th, 0.0, np.empty((th.size, 0)))[:, -1]
 
-    def samples(self, th, w, z, acc):
-        """(load torque, body accelerations, element values) over the cycle's samples."""
+    def samples(self, th, w, z, acc, out):
+        """(body accelerations, element values) over the cycle's samples."""
         rig = self.rig
         u = th - rig.cycle * np.floor(th / rig.cycle)
         bodies = {b: rig.rate[b](u, slope=True) * w * w + rig.rate[b](u) * acc
                   for b in rig.bodies}
-        return self.load(th), bodies, {}
+        return bodies, {}
 
 
 _WARM_STATEMENT = ("import mechcirc._jit as j; j.COMPILED = True; "
@@ -490,7 +472,10 @@ def _prepare(scene: Scene, shaft, flywheel, points, rigid):
     eq: _ElasticShaft = req
     if not rigid and scene.parts and len(scene.parts) > 1:
         eq = _ElasticShaft(scene, Jf, motor)
-        if eq.Jf + eq.c ** 2 * min(_drive_inertia(eq, t) for t in (0.0, 1.0, 2.0)) <= 0:
+        th = np.array([0.0, 1.0, 2.0])
+        with np.errstate(divide="ignore", invalid="ignore"):     # θ̈ of no inertia: unused
+            m0 = eq.evaluate(th, 0.0, [eq.rest(t) for t in th])[:, -3]
+        if eq.Jf + eq.c ** 2 * float(m0.min()) <= 0:
             raise MechcircError(f"{scene.source}: the shaft has no inertia of its own (flywheel "
                                 "0 and no mass on the drive's part): give [shaft] flywheel > 0")
     grid = np.linspace(0.0, rig.cycle, 4 * points, endpoint=False)
@@ -504,11 +489,6 @@ def _prepare(scene: Scene, shaft, flywheel, points, rigid):
         warnings.warn(f"{scene.source}: {text}", ShaftWarning, stacklevel=3)
         return shaft, Jf, rig, eq, req, peak, float(np.mean(load)), ["warning: " + text]
     return shaft, Jf, rig, eq, req, peak, float(np.mean(load)), []
-
-
-def _drive_inertia(eq: _ElasticShaft, theta: float) -> float:
-    eq.deriv(theta, 0.0, eq.rest(theta))
-    return float(eq.work[3, 0])
 
 
 #: Steps per period of the fastest linearised mode of the elastic shaft, by method.
@@ -794,13 +774,14 @@ def _tabulate(scene, eq, sol, th0, cyc, points, Jf, motor):
     period = float(Y[1, -1])
     th, Y = th[:-1], Y[:, :-1]
     w, tt, z = Y[0], Y[1], Y[2:].T
-    acc = np.array([eq.deriv(a, b, np.ascontiguousarray(c)) for a, b, c in zip(th, w, z)])
-    load, bodies, values = eq.samples(th, w, z, acc)
+    out = eq.evaluate(th, w, z)
+    acc = out[:, -5]
+    bodies, values = eq.samples(th, w, z, acc, out)
     wmin, wmax = _extremes(lambda x: sol.sol(x)[0], th, w)
     mean = cyc / period
     return dict(name=scene.name, source=scene.source, flywheel=Jf, theta=th - th0, time=tt,
-                speed=w, acceleration=acc, motor_torque=np.asarray(motor.torque(w), float),
-                load_torque=load, body_accelerations=bodies, omega_min=wmin, omega_max=wmax,
+                speed=w, acceleration=acc, motor_torque=out[:, -4].copy(),
+                load_torque=-eq.c * out[:, -1], body_accelerations=bodies, omega_min=wmin, omega_max=wmax,
                 omega_mean=mean, delta=(wmax - wmin) / mean, period=period, values=values,
                 states=np.ascontiguousarray(z))
 
@@ -923,7 +904,7 @@ def _balance(motor: Motor, torque: float, scale: float) -> float:
     top = motor.sync_speed if motor.kind == "kloss" else motor.speeds[-1]
     ws = np.linspace(0.0, top, 401)
     tq = motor.torque(ws) - torque
-    i = int(np.argmax(motor.torque(ws)))
+    i = int(np.argmax(tq))
     for j in range(i, 400):
         if tq[j] > 0 >= tq[j + 1]:
             return float(brentq(lambda w: float(motor.torque(w)) - torque, ws[j], ws[j + 1]))
