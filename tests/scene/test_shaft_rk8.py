@@ -73,3 +73,26 @@ def test_the_kinks_of_a_clearance_are_located_inside_the_shaft_steps():
 def test_bad_methods_and_steps_are_refused(kw, message):
     with pytest.raises(MechcircError, match=message):
         simulate_shaft(scene(), **kw)
+
+
+def test_cli_takes_the_method_and_refuses_what_does_not_apply(tmp_path, capsys):
+    """`simulate --shaft --method rk8 --steps-per-period N` runs the rk8 stepper (its note);
+    a scipy method other than DOP853 and a step count below 4 exit 2 with the reason."""
+    import json
+
+    from cli_helpers import assert_user_error, run
+
+    scene = tmp_path / "heald.toml"
+    scene.write_text(open("examples/cam_heald_scene.toml", encoding="utf-8").read()
+                     + '\n[shaft]\nflywheel = 0.05\nmotor = "kloss"\nsync_speed = 21.0\n'
+                     'breakdown_torque = 2.0\nbreakdown_slip = 0.2\n', encoding="utf-8")
+    status, out, err = run(["simulate", str(scene), "--shaft", "--method", "rk8",
+                            "--steps-per-period", "8", "--points", "90", "--json"], capsys)
+    assert status == 0, err
+    doc = json.loads(out)
+    assert any("RK8 in θ" in n and "8 per period" in n for n in doc["notes"])
+    assert 0 < doc["delta"] < 0.1
+    assert_user_error(["simulate", str(scene), "--shaft", "--method", "RK45"], capsys,
+                      "--method RK45 does not apply to --shaft")
+    assert_user_error(["simulate", str(scene), "--shaft", "--method", "rk8",
+                       "--steps-per-period", "2"], capsys, "steps_per_period must be a number ≥ 4")
