@@ -1,4 +1,5 @@
-"""Right-hand side of a scene's equations of motion (Lagrange II) and a fixed-step RK4 loop.
+"""Right-hand side of a scene's equations of motion (Lagrange II) and its fixed-step
+explicit Runge-Kutta stepper (RK4 or RK8), which also runs the dynamic main shaft.
 
 Written once for any scene, on plain arrays built by :mod:`mechcirc.scene.motion`;
 compiled with numba when it is importable (the ``fast`` extra), else plain

@@ -17,8 +17,9 @@ characteristic referred to the main shaft: an induction motor by Kloss's
 formula T = 2 T_b / (s/s_b + s_b/s), s = (ω_s − ω)/ω_s, or a table.
 
 :func:`simulate_shaft` finds the **steady cycle** (a periodic solution: the
-speed after one cycle equals the speed before it, found by Brent's method on
-the cycle map, integrated in θ by DOP853) and the **start-up** from rest
+state after one cycle equals the state before it, found by shooting on the cycle
+map, integrated in θ by the scene's stepper, RK4 or RK8, or by DOP853) and the
+**start-up** from rest
 (integrated in time until the speed reaches the steady cycle), and returns a
 :class:`ShaftMotion`: the speed over the cycle, δ = (ω_max − ω_min)/ω_mean
 (ω_mean the time mean), the motor and load torques, every body's angular
@@ -845,9 +846,9 @@ def _startup(scene, eq, shaft, th0, cyc, w0, motion, rtol, scale, peak):
 
 
 def _startup_steps(scene, eq, shaft, th0, cyc, w0, motion, rtol, scale, peak):
-    """:func:`_startup` by the compiled RK4 in time, at the time step of the steady cycle's
+    """:func:`_startup` by the scene's stepper in time, at the time step of the steady cycle's
     θ step, one cycle's steps at a time; the cycle's starts and the band's last crossing
-    located on the cubic Hermite between the steps."""
+    located by Brent's method on the run's :meth:`_Run.sol`."""
     from scipy.optimize import brentq
 
     mean, h = motion["omega_mean"], cyc / eq.steps / w0
