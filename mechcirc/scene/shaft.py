@@ -305,8 +305,8 @@ class _ElasticShaft:
         ż into ``dz`` when given."""
         n, Y, dY = self.n, self.Y, self.dY
         Y[0], Y[1:1 + n], Y[1 + n], Y[2 + n:] = theta, z[:n], w, z[n:]
-        acc = self.kern.shaft_rhs(0.0, Y, self.PVt, *self.args[1:], dY, self.aux, self.work,
-                                  self.zy, self.zd)
+        acc = self.run_kern.shaft_rhs(0.0, Y, self.PVt, *self.args[1:], dY, self.aux,
+                                      self.work, self.zy, self.zd)
         if dz is not None:
             dz[:n], dz[n:] = dY[1:1 + n], dY[2 + n:]
         return acc
@@ -416,7 +416,8 @@ _WARM_STATEMENT = ("import mechcirc._jit as j; j.COMPILED = True; "
 
 
 def _shaft_kernels():
-    """The kernel module whose ``rk_run`` the elastic shaft calls: compiled when numba's
+    """The kernel module whose ``rk_run``, ``shaft_eval`` and ``shaft_rhs`` the shaft calls:
+    compiled when numba's
     disk cache holds it (or :data:`mechcirc._jit.COMPILED` is True), else the Python copy
     while a detached process compiles it (the no-wait rule of :mod:`mechcirc._jit`)."""
     from .. import _jit
@@ -425,7 +426,8 @@ def _shaft_kernels():
     if _jit.COMPILED is not False:
         from . import _motion_kernels as k
 
-        if k.HAVE_NUMBA and (_jit.COMPILED or _jit.in_cache(k.rk_run)):
+        if k.HAVE_NUMBA and (_jit.COMPILED or _jit.in_cache(k.rk_run, k.shaft_eval,
+                                                                   k.shaft_rhs)):
             return k
         if k.HAVE_NUMBA:
             _jit.warm_in_background(_WARM_STATEMENT)
@@ -433,9 +435,9 @@ def _shaft_kernels():
 
 
 def warm_up() -> None:
-    """Compile the shaft's kernel (the scene's ``rk_run``) into numba's disk cache on a
-    two-step run of a shaft with nothing on it (the arguments' types are those of every
-    scene and method).
+    """Compile the shaft's kernels (the scene's ``rk_run``, ``shaft_eval`` and ``shaft_rhs``)
+    into numba's disk cache on a two-step run of a shaft with nothing on it (the arguments'
+    types are those of every scene and method).
 
     Returns
     -------
@@ -445,11 +447,16 @@ def warm_up() -> None:
 
     i8 = np.int64
     PV = np.concatenate((np.zeros(8), [1.0, 1.0, 1.0, 0.0, 0.0, 10.0, 1.0, 0.2]))
+    arrays = (np.array([[2, -1, 0]], i8), np.array([[0.0, 1.0, 0.0, 0.0, 1.0, 0.0]]),
+              np.zeros((1, 2, 6)), np.zeros(0, i8), np.zeros(0), np.zeros((0, 8), i8),
+              np.zeros((0, 10)), np.zeros((0, 2), i8), np.zeros((0, 4)), np.array([0], i8),
+              np.zeros(0, i8))
     k.rk_run(np.array([0.0, 1.0]), 0.0, 0.1, 2, 0.0, 0.1, np.empty((3, 2)), np.empty(3), PV,
-             np.array([[2, -1, 0]], i8), np.array([[0.0, 1.0, 0.0, 0.0, 1.0, 0.0]]),
-             np.zeros((1, 2, 6)), np.zeros(0, i8), np.zeros(0), np.zeros((0, 8), i8),
-             np.zeros((0, 10)), np.zeros((0, 2), i8), np.zeros((0, 4)), np.array([0], i8),
-             np.zeros(0, i8), 4, *k.tableau("rk4"))
+             *arrays, 4, *k.tableau("rk4"))
+    PV[8] = 2.0
+    k.shaft_eval(np.array([[0.0, 1.0]]), np.empty((1, 9)), PV, *arrays, 4)
+    k.shaft_rhs(0.0, np.array([0.0, 1.0]), PV, *arrays, np.empty(2), np.empty(4),
+                np.zeros((9, 1)), np.empty(0), np.empty(0))
 
 
 def _prepare(scene: Scene, shaft, flywheel, points, rigid):
