@@ -647,10 +647,11 @@ def shaft_speed(Y, PV, npart):
     return 1.0 / Y[npart] if Y[npart] != 0.0 else 0.0
 
 
-@_leaf
+@_jit_inline
 def deriv(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, work, zy, zd):
     """The derivatives :func:`rk_run` integrates: the scene's :func:`rhs`, or the shaft's
-    :func:`shaft_rhs` when PV says so (``zy``, ``zd``: its scratch)."""
+    :func:`shaft_rhs` when PV says so (``zy``, ``zd``: its scratch).  Inlined into its
+    callers, so the scene's steps call :func:`rhs` as directly as before."""
     if shaft_mode(PV) == 0:
         rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, work)
     else:
