@@ -106,7 +106,8 @@ def shaft_rows(repeat):
     def sim(rtol):
         # the rigid mechanism, as measured in docs/performance.md (the elastic shaft,
         # now the default, calls the kernel from Python at every step)
-        return simulate_shaft(scene, flywheel=0.1, startup=False, rtol=rtol, rigid=True)
+        return simulate_shaft(scene, flywheel=0.1, startup=False, rtol=rtol, rigid=True,
+                              method="DOP853")
 
     ref = sim(1e-13)
     rows = []

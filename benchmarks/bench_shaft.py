@@ -1,17 +1,27 @@
-"""The elastic dynamic main shaft: the compiled RK4 loop (``method="rk4"``) against scipy's
-DOP853 on the same equations (the scene kernel's right-hand side called from Python at every
-step), timed in the same run.
+"""The dynamic main shaft: the scene's compiled stepper (``method="rk4"`` / ``"rk8"``) against
+scipy's DOP853 at rtol 1e-8 on the same equations (the same kernel right-hand side, called
+from Python at every step), at equal accuracy, timed in the same run.
 
-Scenes: the elastic slider-crank of tests/scene/test_shaft_elastic.py (Kloss motor, flywheel
-0.01 kg·m², process moment) and the cam follower that jumps of tests/scene/test_shaft_cam.py
-(contact 1e8 N/m).  Each: the steady cycle and the start-up (slider-crank) or the steady
-cycle (cam); the accuracy of each run is its speed's largest gap over the cycle from a
-DOP853 run at rtol 1e-12 (relative to ω_s).  The kernels are compiled (or loaded) first;
-the times are this process's CPU seconds.
+Cases (steady cycle only, 360 samples):
 
-Run from the repository root: ``python benchmarks/bench_shaft.py``.
+* the elastic slider-crank of tests/scene/test_shaft_elastic.py (Kloss motor, flywheel
+  0.01 kg·m², a process moment window on the crank);
+* the cam follower whose contact opens (tests/scene/test_shaft_cam.py, contact 1e8 N/m);
+* the rigid one-side sley on a 0.1 kg·m² flywheel (``rigid=True``; examples/sley_flywheel.py).
+
+The error of a run is the largest gap of its speed over the cycle from a DOP853 run at
+rtol 1e-12, relative to that run's mean speed.  Each time is the median of ``--repeat``
+runs' CPU seconds of this process (``time.process_time``; the machine may be shared), the
+kernels compiled (or loaded) first.  The ratio at equal accuracy: DOP853 rtol 1e-8 against
+the cheapest rk4/rk8 run whose error is at most DOP853's.
+
+Run from the repository root: ``python benchmarks/bench_shaft.py [--repeat N]``.
 """
 
+import argparse
+import importlib.util
+import os
+import statistics
 import sys
 import time
 from pathlib import Path
@@ -19,44 +29,79 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tests" / "scene"))
+sys.path[:0] = [str(ROOT / "tests" / "scene"), str(ROOT / "tests")]
 
 import mechcirc._jit as jit  # noqa: E402
+from mechcirc.scene import parse_scene  # noqa: E402
 from mechcirc.scene.shaft import simulate_shaft, warm_up  # noqa: E402
 
 
-def timed(fn):
-    """(result, CPU seconds of this process: the machine may be shared, wall time varies)."""
-    t = time.process_time()
-    out = fn()
-    return out, time.process_time() - t
+def sley():
+    spec = importlib.util.spec_from_file_location("sley_flywheel",
+                                                  ROOT / "examples" / "sley_flywheel.py")
+    ex = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(ex)
+    path = ROOT / "examples" / "mrazek_one_side.toml"
+    return parse_scene(path.read_text(encoding="utf-8") + ex.SHAFT, str(path))
 
 
-def main():
+def cases():
     import test_shaft_cam as cam
     import test_shaft_elastic as sc
 
+    return [("elastic slider-crank", sc.scene, {}, (4, 6, 8, 16), (50, 100, 200)),
+            ("cam follower, contact opens", cam.scene, {}, (8, 16, 32, 64), (100, 200, 400)),
+            ("rigid one-side sley", sley, dict(flywheel=0.1, rigid=True), (4, 8),
+             (8, 16, 32))]
+
+
+def timed(fn, repeat):
+    """(last result, median CPU seconds of ``repeat`` runs)."""
+    times = []
+    for _ in range(repeat):
+        t = time.process_time()
+        out = fn()
+        times.append(time.process_time() - t)
+    return out, statistics.median(times)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--case", type=int, action="append", help="only these cases (0, 1, 2)")
+    args = ap.parse_args(argv)
     jit.COMPILED = True
     warm_up()
-    cases = [("elastic slider-crank", sc.scene, sc.WS, True),
-             ("cam follower jump", cam.scene, cam.WS, False)]
-    for name, make, ws, startup in cases:
-        simulate_shaft(make(), points=90, startup=False)            # compile / load once
-        ref = simulate_shaft(make(), points=360, startup=False, method="DOP853", rtol=1e-12)
-        print(f"{name}:")
-        times = {}
-        for label, kw in (("rk4 (compiled)", {}),
-                          ("DOP853 rtol 1e-8", dict(method="DOP853", rtol=1e-8)),
-                          ("DOP853 rtol 1e-10", dict(method="DOP853", rtol=1e-10))):
-            r, t = timed(lambda kw=kw, make=make, up=startup: simulate_shaft(
-                make(), points=360, startup=up, **kw))
-            times[label] = t
-            gap = float(np.max(np.abs(r.speed - ref.speed))) / ws
-            print(f"  {label:18s} {t:8.2f} s CPU   speed gap {gap:.2e} of ω_s   start-up "
-                  f"{r.startup_time}")
-        base = times["rk4 (compiled)"]
-        print(f"  speed-up: {times['DOP853 rtol 1e-8'] / base:.1f}× over DOP853 rtol 1e-8, "
-              f"{times['DOP853 rtol 1e-10'] / base:.1f}× over rtol 1e-10")
+    print(f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores; CPU medians of "
+          f"{args.repeat}; error: speed over the cycle / mean speed, against DOP853 rtol 1e-12")
+    for k, (name, make, kw, spp8, spp4) in enumerate(cases()):
+        if args.case and k not in args.case:
+            continue
+        scene = make()
+        simulate_shaft(scene, points=90, startup=False, method="rk8", **kw)   # compile once
+        ref = simulate_shaft(scene, points=360, startup=False, method="DOP853", rtol=1e-12, **kw)
+        print(f"\n{name}\n  {'method':8s} {'setting':22s} {'CPU [ms]':>10s} {'error':>9s}")
+        rows = []
+        runs = [("DOP853", "rtol 1e-8", dict(method="DOP853", rtol=1e-8))]
+        runs += [("rk8", f"{s} steps/period", dict(method="rk8", steps_per_period=s))
+                 for s in spp8]
+        runs += [("rk4", f"{s} steps/period", dict(method="rk4", steps_per_period=s))
+                 for s in spp4]
+        for method, setting, opts in runs:
+            r, t = timed(lambda opts=opts, scene=scene, kw=kw: simulate_shaft(
+                scene, points=360, startup=False, **opts, **kw), args.repeat)
+            err = float(np.max(np.abs(r.speed - ref.speed))) / ref.omega_mean
+            rows.append((method, setting, t, err))
+            print(f"  {method:8s} {setting:22s} {t * 1e3:10.2f} {err:9.1e}")
+        _, _, tb, eb = rows[0]
+        for m in ("rk8", "rk4"):
+            ok = [r for r in rows if r[0] == m and r[3] <= eb]
+            if not ok:
+                print(f"  {m}: no run reached DOP853 rtol 1e-8's error {eb:.1e}")
+                continue
+            best = min(ok, key=lambda r: r[2])
+            print(f"  at equal error: DOP853 rtol 1e-8 ({eb:.1e}, {tb * 1e3:.1f} ms) / {m} "
+                  f"{best[1]} ({best[3]:.1e}, {best[2] * 1e3:.2f} ms) = {tb / best[2]:.1f}x")
 
 
 if __name__ == "__main__":

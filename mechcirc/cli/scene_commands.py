@@ -468,15 +468,20 @@ def _shaft(args, scene) -> int:
     from ..errors import MechcircError
     from ..scene.shaft import ShaftWarning, simulate_shaft
 
-    for flag in ("revolutions", "revolution", "steps_per_period", "rtol", "plot"):
+    for flag in ("revolutions", "revolution", "plot"):
         if getattr(args, flag, None) is not None:
             raise MechcircError(f"--{flag.replace('_', '-')} does not apply to --shaft")
     if not args.shaft:
         raise MechcircError(f"--{'rigid' if args.rigid else 'flywheel'} applies with --shaft")
+    if args.method not in ("rk4", "rk8", "DOP853"):
+        raise MechcircError(f"--method {args.method} does not apply to --shaft: use rk4, rk8 "
+                            "(fixed steps, --steps-per-period) or DOP853 (--rtol)")
     with warnings.catch_warnings(record=True):
         warnings.simplefilter("always", ShaftWarning)     # kept in the notes, printed below
         r = simulate_shaft(scene, flywheel=args.flywheel, points=args.points or 720,
-                           rigid=args.rigid)
+                           rigid=args.rigid, method=args.method,
+                           steps_per_period=args.steps_per_period,
+                           **({} if args.rtol is None else {"rtol": args.rtol}))
     aliases = {a: t.rsplit(".", 1)[0] for a, t in (scene.simulate.aliases.items()
                if scene.simulate is not None else ())
                if t.endswith("acceleration") and t.rsplit(".", 1)[0] in r.body_accelerations

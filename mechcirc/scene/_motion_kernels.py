@@ -1,4 +1,5 @@
-"""Right-hand side of a scene's equations of motion (Lagrange II) and a fixed-step RK4 loop.
+"""Right-hand side of a scene's equations of motion (Lagrange II) and its fixed-step
+explicit Runge-Kutta stepper (RK4 or RK8), which also runs the dynamic main shaft.
 
 Written once for any scene, on plain arrays built by :mod:`mechcirc.scene.motion`;
 compiled with numba when it is importable (the ``fast`` extra), else plain
@@ -286,11 +287,12 @@ def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, wo
 
 
 @_leaf
-def regions(FI, EI, EF, MOI, MOF, aux, work, off, reg, sw):
+def regions(FI, EI, EF, MOI, MOF, aux, work, off, reg, sw, first):
     """The smooth piece each force law is on, from the last right-hand side evaluated
     (``aux``, ``work``): reg[e] = −1, 0 (inside the gap), +1 for an element with a clearance
     gap (0 for the others), reg[ne + k] = 1 inside the window of moment k, else 0 (always 0
-    for a moment on the drive's part: it moves nothing that is integrated); and the
+    for a moment on a part below ``first``: 1 for a scene, whose drive's part 0 moves nothing
+    that is integrated; 0 for the shaft, which integrates it); and the
     value each edge test starts from into ``sw`` (a deformation, a window's phase).
     Returns how many switches there are (gaps and windows)."""
     ne = EI.shape[0]
@@ -311,7 +313,7 @@ def regions(FI, EI, EF, MOI, MOF, aux, work, off, reg, sw):
         x = work[6, MOI[k, 0]] - MOF[k, 3] + 0.5 * MOF[k, 1]
         sw[ne + k] = x
         reg[ne + k] = 0
-        if FI[MOI[k, 1], 1] <= 0:
+        if FI[MOI[k, 1], 1] < first:
             continue
         reg[ne + k] = 1 if x - TWO_PI * math.floor(x / TWO_PI) < MOF[k, 1] else 0
         count += 1
@@ -332,10 +334,11 @@ def edge_gap(i, ne, r0, r1, v, EF, MOF):
 
 @_leaf
 def rk_step(t, hh, y, K, tmp, ynew, TA, TB, TC, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF,
-            PRIG, BI, aux, work):
+            PRIG, BI, aux, work, zy, zd):
     """One explicit Runge-Kutta step of size hh from (t, y, K[0] = f(y)) into ynew, with the
     Butcher tableau (TA, TB, TC) of s stages (RK4, or the 8th-order one of DOP853 run at a
-    fixed step); K[1 .. s-1] the stages, K[s] = f(ynew) and aux are left at ynew."""
+    fixed step); K[1 .. s-1] the stages, K[s] = f(ynew) and aux are left at ynew.  f is
+    :func:`deriv` (the scene's :func:`rhs`, or the shaft's; ``zy``, ``zd`` its scratch)."""
     n = y.shape[0]
     s = TB.shape[0]
     for i in range(1, s):
@@ -345,20 +348,21 @@ def rk_step(t, hh, y, K, tmp, ynew, TA, TB, TC, PV, FI, FF, tabs, MI_, MW, EI, E
                 if TA[i, j] != 0.0:
                     acc += TA[i, j] * K[j, m]
             tmp[m] = y[m] + hh * acc
-        rhs(t + TC[i] * hh, tmp, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, K[i],
-            aux, work)
+        deriv(t + TC[i] * hh, tmp, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, K[i],
+              aux, work, zy, zd)
     for m in range(n):
         acc = 0.0
         for j in range(s):
             if TB[j] != 0.0:
                 acc += TB[j] * K[j, m]
         ynew[m] = y[m] + hh * acc
-    rhs(t + hh, ynew, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, K[s], aux, work)
+    deriv(t + hh, ynew, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, K[s], aux, work,
+          zy, zd)
 
 
 @_leaf
 def locate(t, hh, y, k1, ynew, k4, tmp, dy, sw0, sw1, reg, regn, PV, FI, FF, tabs, MI_, MW,
-           EI, EF, MOI, MOF, PRIG, BI, aux, work, off, m):
+           EI, EF, MOI, MOF, PRIG, BI, aux, work, off, m, zy, zd):
     """Earliest fraction s ∈ (0, 1] of the step at which a force law changes piece
     (reg → regn: an element crosses an edge of its clearance gap, a moment's window opens
     or closes), on the step's Hermite interpolant (:func:`mechcirc._ode.hermite_point`,
@@ -384,8 +388,8 @@ def locate(t, hh, y, k1, ynew, k4, tmp, dy, sw0, sw1, reg, regn, PV, FI, FF, tab
             if not lo < s < hi:
                 s = 0.5 * (lo + hi)
             hermite_point(tmp, s, hh, y, k1, ynew, k4, n, m)
-            rhs(t + s * hh, tmp, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy,
-                aux, work)
+            deriv(t + s * hh, tmp, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy,
+                  aux, work, zy, zd)
             count += 1
             if e < ne:
                 v = aux[off + e]
@@ -416,6 +420,31 @@ RK4_B = np.array([1.0 / 6.0, 1.0 / 3.0, 1.0 / 3.0, 1.0 / 6.0])
 RK4_C = np.array([0.0, 0.5, 0.5, 1.0])
 
 
+def tableau(method):
+    """The Butcher tableau (A, b, c) of an explicit method for :func:`rk_run` and whether its
+    output between the steps is quintic in the positions.
+
+    Parameters
+    ----------
+    method : {"rk4", "rk8"}
+        The classical RK4 (cubic output, its order 4), or the 8th-order formula of Dormand
+        and Prince's DOP853 (scipy's coefficients) run at a fixed step (12 stages), with
+        quintic output (error O(h⁶) in the positions, O(h⁵) in their rates).
+
+    Returns
+    -------
+    tuple
+        (A, b, c, quintic).
+    """
+    if method != "rk8":
+        return RK4_A, RK4_B, RK4_C, False
+    from scipy.integrate import DOP853
+
+    s = DOP853.n_stages
+    return (np.ascontiguousarray(DOP853.A[:s, :s]), np.ascontiguousarray(DOP853.B),
+            np.ascontiguousarray(DOP853.C[:s]), True)
+
+
 @_jit
 def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_, MW, EI,
            EF, MOI, MOF, PRIG, BI, naux, TA, TB, TC, quintic):
@@ -428,8 +457,12 @@ def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_
     from there, at most 8 pieces per step, so that the method keeps its order through
     impacts and the beat-up.
 
-    Returns (time reached, outputs written, no blow-up, out-of-range seen, right-hand-side
-    evaluations).
+    The same loop runs the dynamic main shaft's equations (:func:`shaft_rhs`, PV[8] ≠ 0): its
+    state [positions, their rates] as the scene's, and it stops at a step's end where the
+    shaft's speed is not ≥ PV[11] (a stall) instead of the scene's speed limit PV[2].
+
+    Returns (time reached, outputs written, no blow-up (no stall), out-of-range seen,
+    right-hand-side evaluations).
     """
     n = y.shape[0]
     m = n // 2 if quintic else 0
@@ -439,6 +472,9 @@ def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_
     ynew = np.empty(n)
     aux = np.empty(naux)
     work = np.zeros((9, max(FI.shape[0], PRIG.shape[0])))
+    zy = np.empty(2 * PRIG.shape[0] - 2)
+    zd = np.empty(zy.shape[0])
+    shaft = shaft_mode(PV)
     nfev = 1
     ne = EI.shape[0]
     nsw = ne + MOI.shape[0]
@@ -451,8 +487,9 @@ def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_
     bad = 0.0
     npart = PRIG.shape[0]
     limit = PV[2]
-    rhs(t0, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, K[0], aux, work)
-    gaps = regions(FI, EI, EF, MOI, MOF, aux, work, off, reg, sw0)
+    deriv(t0, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, K[0], aux, work, zy, zd)
+    first = 0 if shaft else 1
+    gaps = regions(FI, EI, EF, MOI, MOF, aux, work, off, reg, sw0, first)
     for step in range(nsteps):
         t = t0 + step * h
         t_end = t + h
@@ -460,11 +497,11 @@ def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_
         for sub in range(8):
             hh = t_end - tc
             rk_step(tc, hh, y, K, tmp, ynew, TA, TB, TC, PV, FI, FF, tabs, MI_, MW, EI, EF,
-                    MOI, MOF, PRIG, BI, aux, work)
+                    MOI, MOF, PRIG, BI, aux, work, zy, zd)
             nfev += s
             full = True
             if gaps > 0:
-                regions(FI, EI, EF, MOI, MOF, aux, work, off, regn, sw1)
+                regions(FI, EI, EF, MOI, MOF, aux, work, off, regn, sw1, first)
                 changed = False
                 for e in range(nsw):
                     if regn[e] != reg[e]:
@@ -472,19 +509,19 @@ def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_
                 if changed and sub < 7:
                     cut, used = locate(tc, hh, y, K[0], ynew, K[s], tmp, K[1], sw0, sw1, reg,
                                        regn, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG,
-                                       BI, aux, work, off, m)
+                                       BI, aux, work, off, m, zy, zd)
                     nfev += used + 1
                     cut = cut + 1e-7
                     if cut * hh > 1e-9 * h and cut < 1.0 - 1e-7:
                         hh = cut * hh
                         full = False
                         rk_step(tc, hh, y, K, tmp, ynew, TA, TB, TC, PV, FI, FF, tabs, MI_,
-                                MW, EI, EF, MOI, MOF, PRIG, BI, aux, work)
+                                MW, EI, EF, MOI, MOF, PRIG, BI, aux, work, zy, zd)
                         nfev += s - 1
-                        regions(FI, EI, EF, MOI, MOF, aux, work, off, regn, sw1)
+                        regions(FI, EI, EF, MOI, MOF, aux, work, off, regn, sw1, first)
                     else:       # at an end of the step: keep it; aux back to ynew
-                        rhs(tc + hh, ynew, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG,
-                            BI, K[s], aux, work)
+                        deriv(tc + hh, ynew, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF,
+                              PRIG, BI, K[s], aux, work, zy, zd)
                 for e in range(nsw):
                     reg[e] = regn[e]
                     sw0[e] = sw1[e]
@@ -495,9 +532,13 @@ def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_
             for i in range(n):
                 y[i] = ynew[i]
                 K[0, i] = K[s, i]
-            for i in range(npart - 1, n):
-                if not abs(y[i]) <= limit:
+            if shaft:
+                if not shaft_speed(y, PV, npart) >= PV[11]:
                     return tc + hh, j, False, bad, nfev
+            else:
+                for i in range(npart - 1, n):
+                    if not abs(y[i]) <= limit:
+                        return tc + hh, j, False, bad, nfev
             if full:
                 break
             tc += hh
@@ -569,100 +610,120 @@ def load_python():
 
 # ---------------------------------------------------------------------------------------------
 # The dynamic main shaft (mechcirc.scene.shaft): the drive's part turned by the shaft's θ, a
-# state beside the free parts', the scene's right-hand side above supplying the forces on it.
-# MP = [0, ω_s, T_b, s_b] (Kloss) or [1, 0, 0, 0, n, speeds (n), torques (n)] (a table).
+# state beside the free parts', the scene's right-hand side above supplying the forces on it;
+# integrated by rk_run like a scene.  PV (shaft_args in mechcirc.scene.shaft) = the scene's
+# PV, then [8] 1 (in θ) or 2 (in time), [9] J_f, [10] c, [11] the speed floor, [12:] MP:
+# [0, ω_s, T_b, s_b] (Kloss) or [1, 0, 0, 0, n, speeds (n), torques (n)] (a table).
 
 
 @_jit_inline
-def motor_torque(MP, w):
-    """The motor's torque T(ω) [N·m]: Kloss's 2 T_b s s_b/(s² + s_b²), s = (ω_s − ω)/ω_s, or
-    the table linear between its points and along its end segments beyond them."""
-    if MP[0] == 0.0:
-        s = (MP[1] - w) / MP[1]
-        return 2.0 * MP[2] * s * MP[3] / (s * s + MP[3] * MP[3])
-    n = int(MP[4])
+def motor_torque(MP, w, o=0):
+    """The motor's torque T(ω) [N·m] (its parameters at MP[o:]): Kloss's
+    2 T_b s s_b/(s² + s_b²), s = (ω_s − ω)/ω_s, or the table linear between its points and
+    along its end segments beyond them."""
+    if MP[o] == 0.0:
+        s = (MP[o + 1] - w) / MP[o + 1]
+        return 2.0 * MP[o + 2] * s * MP[o + 3] / (s * s + MP[o + 3] * MP[o + 3])
+    n = int(MP[o + 4])
     i = 1
-    while i < n - 1 and w > MP[5 + i]:
+    while i < n - 1 and w > MP[o + 5 + i]:
         i += 1
-    x0 = MP[4 + i]
-    y0 = MP[4 + n + i]
-    return y0 + (w - x0) * (MP[5 + n + i] - y0) / (MP[5 + i] - x0)
+    x0 = MP[o + 4 + i]
+    y0 = MP[o + 4 + n + i]
+    return y0 + (w - x0) * (MP[o + 5 + n + i] - y0) / (MP[o + 5 + i] - x0)
 
 
-@_jit
-def shaft_rhs(Y, in_theta, Jf, c, MP, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI,
-              dY, aux, work):
-    """dY of the shaft and the free parts: in θ (``in_theta``) Y = [θ̇, t, z] and dY/dθ, θ the
-    independent variable in PV[1]; in time Y = [θ, θ̇, z] and dY/dt.  z = [q, q̇] of the free
-    parts (:func:`rhs` at the crank's θ, θ̇ with t = 0) and, q₀ = c θ the drive's coordinate,
+@_jit_inline
+def shaft_mode(PV):
+    """0 for a scene, 1 for the shaft in θ, 2 for the shaft in time (PV[8])."""
+    return int(PV[8]) if PV.shape[0] > 8 else 0
+
+
+@_jit_inline
+def shaft_speed(Y, PV, npart):
+    """The shaft's speed θ̇ from its state (in θ: 1/t', 0 for t' = 0; in time: θ̇)."""
+    if PV[8] != 1.0:
+        return Y[npart]
+    return 1.0 / Y[npart] if Y[npart] != 0.0 else 0.0
+
+
+@_jit_inline
+def deriv(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, work, zy, zd):
+    """The derivatives :func:`rk_run` integrates: the scene's :func:`rhs`, or the shaft's
+    :func:`shaft_rhs` when PV says so (``zy``, ``zd``: its scratch).  Inlined into its
+    callers, so the scene's steps call :func:`rhs` as directly as before."""
+    if shaft_mode(PV) == 0:
+        rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, work)
+    else:
+        shaft_rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, work,
+                  zy, zd)
+
+
+@_leaf
+def shaft_rhs(t, Y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dY, aux, work, zy,
+              zd):
+    """dY of the shaft and the free parts (q, q̇ = z, :func:`rhs` at the crank's θ, θ̇ with
+    t = 0), q₀ = c θ the drive's coordinate and
 
         (J_f + c² m₀) θ̈ = T_motor(θ̇) + c Q₀ − ½ c³ m₀' θ̇²    (work rows 3–5, column 0).
 
-    Returns θ̈."""
+    In time (PV[8] = 2): Y = [θ, q, θ̇, q̇] and dY/dt.  In θ (PV[8] = 1, θ = t the
+    independent variable): Y = [t, q, t', q'] with ' = d/dθ (t' = 1/θ̇, q' = q̇/θ̇) and
+    dY/dθ = [t', q', −θ̈ t'³, t'² (q̈ − θ̈ q')]: positions and their rates in both, so that
+    the step's output is quintic in the positions (:func:`mechcirc._ode.hermite_point`).
+    ``zy``, ``zd``: scratch for z and ż.  Returns θ̈."""
+    npart = PRIG.shape[0]
+    nf = npart - 1
+    in_theta = PV[8] == 1.0
     if in_theta:
-        w = Y[0]
+        PV[1] = t
+        u = Y[npart]
+        w = 1.0 / u
     else:
         PV[1] = Y[0]
-        w = Y[1]
+        w = Y[npart]
+        u = 1.0
     PV[0] = w
-    rhs(0.0, Y[2:], PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dY[2:], aux, work)
-    acc = (motor_torque(MP, w) + c * work[5, 0] - 0.5 * work[4, 0] * c * c * c * w * w) / \
-        (Jf + c * c * work[3, 0])
+    for i in range(nf):
+        zy[i] = Y[1 + i]
+        zy[nf + i] = Y[npart + 1 + i] * w if in_theta else Y[npart + 1 + i]
+    rhs(0.0, zy, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, zd, aux, work)
+    c = PV[10]
+    acc = (motor_torque(PV, w, 12) + c * work[5, 0] - 0.5 * work[4, 0] * c * c * c * w * w) / \
+        (PV[9] + c * c * work[3, 0])
     if in_theta:
-        for i in range(2, Y.shape[0]):
-            dY[i] /= w
-        dY[0] = acc / w
-        dY[1] = 1.0 / w
+        u2 = u * u
+        dY[0] = u
+        dY[npart] = -acc * u2 * u
+        for i in range(nf):
+            dY[1 + i] = Y[npart + 1 + i]
+            dY[npart + 1 + i] = u2 * (zd[nf + i] - acc * Y[npart + 1 + i])
     else:
         dY[0] = w
-        dY[1] = acc
+        dY[npart] = acc
+        for i in range(nf):
+            dY[1 + i] = zy[nf + i]
+            dY[npart + 1 + i] = zd[nf + i]
     return acc
 
 
 @_jit
-def shaft_run(Y, in_theta, s0, h, nsteps, floor, rec, drec, Jf, c, MP, PV, FI, FF, tabs, MI_,
-              MW, EI, EF, MOI, MOF, PRIG, BI, naux):
-    """``nsteps`` classical RK4 steps of h of :func:`shaft_rhs` from s0 (θ or t); rec[k], drec[k]
-    = Y and dY after k steps (for cubic Hermite output).  Stops early where the speed falls
-    below ``floor`` or is not finite.  Returns the steps done."""
-    n = Y.shape[0]
-    k2 = np.empty(n)
-    k3 = np.empty(n)
-    k4 = np.empty(n)
-    tmp = np.empty(n)
+def shaft_eval(ys, out, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, naux):
+    """The shaft's equations (:func:`shaft_rhs` in time, PV[8] = 2) at the states ys[i] =
+    [θ, q, θ̇, q̇]: out[i] = [aux (naux), θ̈, T_motor(θ̇), m₀, m₀', Q₀]."""
+    n = ys.shape[1]
+    dY = np.empty(n)
     aux = np.empty(naux)
     work = np.zeros((9, max(FI.shape[0], PRIG.shape[0])))
-    sp = 0 if in_theta else 1
-    if in_theta:
-        PV[1] = s0
-    shaft_rhs(Y, in_theta, Jf, c, MP, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI,
-              drec[0], aux, work)
-    for i in range(n):
-        rec[0, i] = Y[i]
-    for k in range(nsteps):
-        s = s0 + k * h
-        y = rec[k]
-        k1 = drec[k]
-        for i in range(n):
-            tmp[i] = y[i] + 0.5 * h * k1[i]
-        if in_theta:
-            PV[1] = s + 0.5 * h
-        shaft_rhs(tmp, in_theta, Jf, c, MP, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG,
-                  BI, k2, aux, work)
-        for i in range(n):
-            tmp[i] = y[i] + 0.5 * h * k2[i]
-        shaft_rhs(tmp, in_theta, Jf, c, MP, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG,
-                  BI, k3, aux, work)
-        for i in range(n):
-            tmp[i] = y[i] + h * k3[i]
-        if in_theta:
-            PV[1] = s0 + (k + 1) * h
-        shaft_rhs(tmp, in_theta, Jf, c, MP, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG,
-                  BI, k4, aux, work)
-        for i in range(n):
-            rec[k + 1, i] = y[i] + h / 6.0 * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i])
-        if not rec[k + 1, sp] >= floor:       # a stall (or a blow-up: not finite)
-            return k + 1
-        shaft_rhs(rec[k + 1], in_theta, Jf, c, MP, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF,
-                  PRIG, BI, drec[k + 1], aux, work)
-    return nsteps
+    zy = np.empty(2 * PRIG.shape[0] - 2)
+    zd = np.empty(zy.shape[0])
+    for i in range(ys.shape[0]):
+        acc = shaft_rhs(0.0, ys[i], PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dY,
+                        aux, work, zy, zd)
+        for j in range(naux):
+            out[i, j] = aux[j]
+        out[i, naux] = acc
+        out[i, naux + 1] = motor_torque(PV, PV[0], 12)
+        out[i, naux + 2] = work[3, 0]
+        out[i, naux + 3] = work[4, 0]
+        out[i, naux + 4] = work[5, 0]

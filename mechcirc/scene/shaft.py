@@ -17,8 +17,9 @@ characteristic referred to the main shaft: an induction motor by Kloss's
 formula T = 2 T_b / (s/s_b + s_b/s), s = (ω_s − ω)/ω_s, or a table.
 
 :func:`simulate_shaft` finds the **steady cycle** (a periodic solution: the
-speed after one cycle equals the speed before it, found by Brent's method on
-the cycle map, integrated in θ by DOP853) and the **start-up** from rest
+state after one cycle equals the state before it, found by shooting on the cycle
+map, integrated in θ by the scene's stepper, RK4 or RK8, or by DOP853) and the
+**start-up** from rest
 (integrated in time until the speed reaches the steady cycle), and returns a
 :class:`ShaftMotion`: the speed over the cycle, δ = (ω_max − ω_min)/ω_mean
 (ω_mean the time mean), the motor and load torques, every body's angular
@@ -133,7 +134,7 @@ class ShaftMotion:
 
 
 class _Cubic:
-    """Cubic Hermite pieces on uniform nodes from values and slopes, with a fast scalar path."""
+    """Cubic Hermite pieces on uniform nodes from values and slopes."""
 
     def __init__(self, h, f, f1):
         f, f1 = np.asarray(f, float), np.asarray(f1, float)
@@ -141,14 +142,6 @@ class _Cubic:
         self.h, self.n = h, f.size - 1
         self.c = np.column_stack([f[:-1], f1[:-1], (3 * d - 2 * f1[:-1] - f1[1:]) / h,
                                   (f1[:-1] + f1[1:] - 2 * d) / (h * h)])
-        self.rows = self.c.tolist()
-
-    def at(self, u):
-        """(value, slope) at one u in [0, n h]."""
-        i = min(int(u / self.h), self.n - 1)
-        s = u - i * self.h
-        a0, a1, a2, a3 = self.rows[i]
-        return a0 + s * (a1 + s * (a2 + s * a3)), a1 + s * (2.0 * a2 + s * 3.0 * a3)
 
     def __call__(self, u, slope=False):
         u = np.asarray(u, float)
@@ -161,11 +154,10 @@ class _Cubic:
 
 
 class _Rigid:
-    """J_red(θ), J_red'(θ), Q(θ) and each body's φ'(θ), φ''(θ) of the rigid mechanism."""
+    """J_red(θ), J_red'(θ) and each body's φ'(θ), φ''(θ) of the rigid mechanism."""
 
     def __init__(self, scene: Scene, N: int = 1024):
-        from .motion import rigid_tables, dead_centre
-        from .simulation import kernels_for
+        from .motion import rigid_tables
 
         ang, ang1, ang2, pos, vel, acc = (dict(x) for x in rigid_tables(scene, N))
         tlink: dict[str, str] = {}
@@ -190,23 +182,6 @@ class _Rigid:
         self.bodies = tuple(scene.bodies)
         self.rate = {b: _Cubic(h, ang1[b], ang2[b]) for b in self.bodies}
         self.J_range = (float(J.min()), float(J.max()))
-        self.moments = []
-        for mo in scene.moments:
-            c = mo.centre
-            if isinstance(c, str):
-                c = dead_centre(scene, "front" if c.startswith("front") else "back")
-            self.moments.append((mo.amplitude, mo.window, mo.sigma, float(c),
-                                 self.rate[mo.body]))
-        self._wm = kernels_for("rk4-python")[0].window_moment
-
-    def wrap(self, theta):
-        return theta - self.cycle * math.floor(theta / self.cycle)
-
-    def Q(self, theta: float) -> float:
-        """Generalised force of the moments on θ [N·m]."""
-        u = self.wrap(theta)
-        return sum(self._wm(a, al, sg, c, theta) * rate.at(u)[0]
-                   for a, al, sg, c, rate in self.moments)
 
 
 def reduced_inertia(scene: Scene, theta) -> np.ndarray:
@@ -227,31 +202,68 @@ def reduced_inertia(scene: Scene, theta) -> np.ndarray:
     return r.J(th - r.cycle * np.floor(th / r.cycle))
 
 
-class _RigidShaft:
-    """The shaft's equation on the rigid mechanism: no state beyond θ, θ̇ (z is empty)."""
+def rigid_model(scene: Scene, N: int = 1024):
+    """The rigid mechanism as the scene kernel's model of one part, the drive's, whose
+    coordinate is the shaft's θ: every mass's x(θ), y(θ) and every inertia's rotation φ(θ)
+    (a torsion body's: its link's) a quintic Hermite table of the rigid motion with weight m
+    or J, so that the kernel's m₀ = J_red(θ) = Σ m |∂x/∂θ|² + Σ J (∂φ/∂θ)² and Q₀ the moments'
+    Σ M ∂φ/∂θ: the rigid shaft's equation is the elastic one's with no free parts.
 
-    n = steps = 0
-    shift = np.empty(0)
+    Parameters
+    ----------
+    scene : Scene
+    N : int
+        Table nodes per crank revolution.
 
-    def __init__(self, rig: _Rigid, Jf: float, tq):
-        self.rig, self.Jf, self.tq = rig, Jf, tq
+    Returns
+    -------
+    MotionModel
+    """
+    from .motion import MotionModel, dead_centre, hermite_table, rigid_tables
 
-    def deriv(self, theta, w, z, dz=None):
-        """θ̈ at θ, θ̇ = w (nothing to write into ``dz``)."""
-        rig = self.rig
-        J, dJ = rig.J.at(rig.wrap(theta))
-        return (self.tq(w) + rig.Q(theta) - 0.5 * dJ * w * w) / (self.Jf + J)
+    ang, ang1, ang2, pos, vel, acc = (dict(x) for x in rigid_tables(scene, N))
+    for t in scene.torsions:
+        for d in (ang, ang1, ang2):
+            d.setdefault(t.body, d[t.link])
+    cyc, nodes = scene.cycle, N * scene.cycle_revolutions
+    h = cyc / nodes
+    FI, FF, tabs = [[2, -1, 0]], [[0.0, 1.0, 0.0, 0.0, 1.0, 0.0]], [np.zeros((nodes, 6))]
 
-    def rest(self, theta, w=0.0):
-        return np.empty(0)
-
-    def samples(self, th, w, z, acc):
-        """(load torque, body accelerations, element values) over the cycle's samples."""
-        rig = self.rig
-        u = np.array([rig.wrap(a) for a in th])
-        bodies = {b: rig.rate[b](u, slope=True) * w * w + rig.rate[b](u) * acc
-                  for b in rig.bodies}
-        return np.array([-rig.Q(a) for a in th]), bodies, {}
+    def table(f, f1, f2, turns=False):
+        w = round((f[-1] - f[0]) / (2 * math.pi)) * 2 * math.pi / cyc if turns else 0.0
+        q = h * np.arange(f.size)
+        tabs.append(hermite_table(h, f - w * q, f1 - w, f2))
+        FI.append([0, 0, len(tabs) - 1])
+        FF.append([0.0, 0.0, cyc, 0.0, h, w])
+        return len(FI) - 1
+    MI, MW = [], []
+    for m in scene.masses:
+        if m.kind == "mass":
+            for k in (0, 1):
+                MI.append(table(pos[m.point][:, k], vel[m.point][:, k], acc[m.point][:, k]))
+                MW.append(m.value)
+        else:
+            MI.append(table(ang[m.link], ang1[m.link], ang2[m.link], True))
+            MW.append(m.value)
+    MOI, MOF = [], []
+    for mo in scene.moments:
+        c = mo.centre
+        if isinstance(c, str):
+            c = dead_centre(scene, "front" if c.startswith("front") else "back")
+        FI.append([2, 0, 0])                    # the window's angle: θ itself
+        FF.append([0.0, 1.0, 0.0, 0.0, 1.0, 0.0])
+        MOI.append([len(FI) - 1, table(ang[mo.body], ang1[mo.body], ang2[mo.body], True)])
+        MOF.append([mo.amplitude, mo.window, mo.sigma, float(c)])
+    i8 = np.int64
+    arrays = {"FI": np.array(FI, i8), "FF": np.array(FF, float), "tabs": np.array(tabs),
+              "MI": np.array(MI, i8), "MW": np.array(MW, float),
+              "EI": np.zeros((0, 8), i8), "EF": np.zeros((0, 10)),
+              "MOI": np.array(MOI, i8).reshape(-1, 2), "MOF": np.array(MOF).reshape(-1, 4),
+              "PRIG": np.array([0], i8), "BI": np.zeros(0, i8), "n_dyn": len(FI)}
+    return MotionModel(scene=scene, omega=abs(scene.linkage.cranks[0].omega),
+                       parts=((),), coordinate=("",), bodies=(), elements=(),
+                       moments=tuple(mo.name for mo in scene.moments), arrays=arrays,
+                       body_fn={}, centre={})
 
 
 class _ElasticShaft:
@@ -263,49 +275,72 @@ class _ElasticShaft:
     (q₀ = c θ the drive's coordinate, m₀ its part's inertia, Q₀ the generalised force of the
     elastic elements and moments on it: rows 3–5 of the kernel's work array)."""
 
-    def __init__(self, scene: Scene, Jf: float, motor: Motor):
+    def __init__(self, scene: Scene, Jf: float, motor: Motor, model=None):
         from .motion import motion_model
         from .simulation import kernels_for
 
-        self.model = m = motion_model(scene)
+        self.model = m = motion_model(scene) if model is None else model
         a = m.arrays
         r = a["PRIG"][0]
         if a["FI"][r, 0] != 2 or a["FF"][r, 0] != 0.0:
             raise MechcircError(f"{scene.source}: the drive's part does not turn in proportion "
                                 "to the main shaft; a dynamic shaft cannot drive it")
         self.c, self.n, self.Jf = float(a["FF"][r, 1]), m.n_free, Jf
-        self.tq = motor.scalar_torque
         self.kern = kernels_for("rk4")[0]
         self.run_kern = _shaft_kernels()
-        self.MP, self.steps = motor.params, 0     # steps per cycle of the RK4 runs (0: scipy)
+        self.MP, self.steps = motor.params, 0     # steps per cycle of rk_run (0: scipy)
+        self.tableau = self.run_kern.tableau("rk4")
         self.args = m.kernel_args(0.0, 1e300)
         self.oargs = m.kernel_args(0.0, 1e300, outputs=True)
-        self.aux, self.dz = np.empty(m.naux()), np.empty(2 * m.n_free)
-        self.work = np.zeros((9, max(a["FI"].shape[0], a["PRIG"].shape[0])))
         n = self.n
+        self.PVt = np.concatenate((self.args[0], [2.0, Jf, self.c, -math.inf], self.MP))
+        self.aux, self.dY, self.Y = np.empty(m.naux()), np.empty(2 * n + 2), np.empty(2 * n + 2)
+        self.work = np.zeros((9, max(a["FI"].shape[0], a["PRIG"].shape[0])))
+        self.zy, self.zd = np.empty(2 * n), np.empty(2 * n)
         self.shift = np.concatenate([m.rigid_state(scene.cycle)[:n] - m.rigid_state(0.0)[:n],
                                      np.zeros(n)])
 
-    def deriv(self, theta, w, z, dz=None, args=None):
-        """θ̈ at θ, θ̇ = w and the free parts' state z; ż into ``dz`` when given."""
-        args = self.args if args is None else args
-        args[0][0], args[0][1] = w, theta           # the crank at θ, θ̇ = w (t = 0)
-        self.kern.rhs(0.0, z, *args, self.dz if dz is None else dz, self.aux, self.work)
-        c, wk = self.c, self.work
-        return (self.tq(w) + c * wk[5, 0] - 0.5 * wk[4, 0] * c ** 3 * w * w) / \
-            (self.Jf + c * c * wk[3, 0])
+    def deriv(self, theta, w, z, dz=None):
+        """θ̈ at θ, θ̇ = w and the free parts' state z (the kernel's ``shaft_rhs`` in time);
+        ż into ``dz`` when given."""
+        n, Y, dY = self.n, self.Y, self.dY
+        Y[0], Y[1:1 + n], Y[1 + n], Y[2 + n:] = theta, z[:n], w, z[n:]
+        acc = self.run_kern.shaft_rhs(0.0, Y, self.PVt, *self.args[1:], dY, self.aux,
+                                      self.work, self.zy, self.zd)
+        if dz is not None:
+            dz[:n], dz[n:] = dY[1:1 + n], dY[2 + n:]
+        return acc
 
-    def run(self, Y, in_theta, s0, h, nsteps, floor):
-        """``nsteps`` RK4 steps of h of the shaft and free parts from s0 (Y = [θ̇, t, z] in θ,
-        or [θ, θ̇, z] in time: ``shaft_run`` of :mod:`._motion_kernels`) → (Y, dY) rows, fewer
-        than ``nsteps + 1`` where the speed fell below ``floor``."""
-        rec = np.empty((nsteps + 1, len(Y)))
-        drec = np.empty_like(rec)
-        args = self.model.kernel_args(0.0, 1e300)
-        done = self.run_kern.shaft_run(np.array(Y, float), bool(in_theta), float(s0), float(h),
-                                       int(nsteps), float(floor), rec, drec, self.Jf, self.c,
-                                       self.MP, *args, self.model.naux())
-        return rec[:done + 1], drec[:done + 1]
+    def run(self, Y, in_theta, s0, h, nsteps, floor, record=True, every=1):
+        """``nsteps`` steps of h of the shaft and free parts from s0 (Y = [θ̇, t, z] in θ, or
+        [θ, θ̇, z] in time) by the scene's stepper (``rk_run`` of :mod:`._motion_kernels` with
+        ``self.tableau``), stopping where the speed falls below ``floor`` → :class:`_Run`
+        (the states at every ``every``-th step's start when ``record``, else the last only)."""
+        Yk = _to_kernel(np.array(Y, float), in_theta, self.n)
+        PV = np.concatenate((self.args[0], [1.0 if in_theta else 2.0, self.Jf, self.c, floor],
+                             self.MP))
+        rec_y = np.empty((nsteps // every + 1 if record else 0, Yk.size))
+        rec_t = np.empty(rec_y.shape[0])
+        t_end, j, ok, _, _ = self.run_kern.rk_run(Yk, float(s0), float(h), int(nsteps),
+                                                  float(s0), float(h * every), rec_y, rec_t, PV,
+                                                  *self.args[1:], self.model.naux(),
+                                                  *self.tableau)
+        ts, ys = rec_t[:j], rec_y[:j]
+        if not ok or not j:
+            ts, ys = np.append(ts, t_end), np.vstack((ys, Yk))
+        return _Run(self, in_theta, ts, ys, int(not ok), floor)
+
+    def evaluate(self, th, w, z):
+        """The equations at crank rotations ``th``, speeds ``w`` and free parts' states ``z``
+        (rows), in one kernel call (``shaft_eval``): rows [aux, θ̈, T_motor, m₀, m₀', Q₀]."""
+        th = np.asarray(th, float)
+        Y = _to_kernel(np.column_stack((th, np.broadcast_to(w, th.shape),
+                                        np.reshape(z, (th.size, 2 * self.n)))), False, self.n)
+        PV = np.concatenate((self.oargs[0], [2.0, self.Jf, self.c, -math.inf], self.MP))
+        out = np.empty((th.size, self.model.naux() + 5))
+        self.run_kern.shaft_eval(np.ascontiguousarray(Y), out, PV, *self.oargs[1:],
+                                 self.model.naux())
+        return out
 
     def rest(self, theta, w=0.0):
         """z of the rigid motion at θ turning at w (at rest: w = 0)."""
@@ -333,17 +368,12 @@ class _ElasticShaft:
                 check_stroke(lk, sl, th, *(at(p) for p in (sl.point, *sl.line)),
                              "sample of the shaft's steady cycle")
 
-    def samples(self, th, w, z, acc):
-        """(load torque, body accelerations, element values) over the cycle's samples."""
+    def samples(self, th, w, z, acc, out):
+        """(body accelerations, element values) over the cycle's samples (``out``: their
+        :meth:`evaluate`)."""
         m, a, c = self.model, self.model.arrays, self.c
         self.check_strokes(th, z)
         nb, ne = len(m.bodies), len(m.elements)
-        out = np.empty((th.size, m.naux()))
-        load = np.empty(th.size)
-        for i in range(th.size):
-            self.deriv(th[i], w[i], np.ascontiguousarray(z[i]), args=self.oargs)
-            out[i] = self.aux
-            load[i] = -c * self.work[5, 0]
         bodies = {}
         for k, b in enumerate(m.bodies):
             f = m.body_fn[b]
@@ -356,7 +386,29 @@ class _ElasticShaft:
                   for kind, off in (("force", 0), ("deformation", ne))}
         values.update({f"{mo}.moment": out[:, nb + 2 * ne + 1 + j].copy()
                        for j, mo in enumerate(m.moments)})
-        return load, bodies, values
+        return bodies, values
+
+
+class _RigidShaft(_ElasticShaft):
+    """The shaft's equation on the rigid mechanism: the kernel's on :func:`rigid_model` (no
+    state beyond θ, θ̇: z is empty)."""
+
+    def __init__(self, scene: Scene, rig: _Rigid, Jf: float, motor: Motor):
+        super().__init__(scene, Jf, motor, rigid_model(scene))
+        self.rig = rig
+
+    def load(self, th):
+        """The load torque −Q(θ) [N·m] of the moments at crank rotations ``th`` (array)."""
+        th = np.asarray(th, float)
+        return -self.evaluate(th, 0.0, np.empty((th.size, 0)))[:, -1]
+
+    def samples(self, th, w, z, acc, out):
+        """(body accelerations, element values) over the cycle's samples."""
+        rig = self.rig
+        u = th - rig.cycle * np.floor(th / rig.cycle)
+        bodies = {b: rig.rate[b](u, slope=True) * w * w + rig.rate[b](u) * acc
+                  for b in rig.bodies}
+        return bodies, {}
 
 
 _WARM_STATEMENT = ("import mechcirc._jit as j; j.COMPILED = True; "
@@ -364,7 +416,8 @@ _WARM_STATEMENT = ("import mechcirc._jit as j; j.COMPILED = True; "
 
 
 def _shaft_kernels():
-    """The kernel module whose ``shaft_run`` the elastic shaft calls: compiled when numba's
+    """The kernel module whose ``rk_run``, ``shaft_eval`` and ``shaft_rhs`` the shaft calls:
+    compiled when numba's
     disk cache holds it (or :data:`mechcirc._jit.COMPILED` is True), else the Python copy
     while a detached process compiles it (the no-wait rule of :mod:`mechcirc._jit`)."""
     from .. import _jit
@@ -373,7 +426,8 @@ def _shaft_kernels():
     if _jit.COMPILED is not False:
         from . import _motion_kernels as k
 
-        if k.HAVE_NUMBA and (_jit.COMPILED or _jit.in_cache(k.shaft_run)):
+        if k.HAVE_NUMBA and (_jit.COMPILED or _jit.in_cache(k.rk_run, k.shaft_eval,
+                                                                   k.shaft_rhs)):
             return k
         if k.HAVE_NUMBA:
             _jit.warm_in_background(_WARM_STATEMENT)
@@ -381,8 +435,9 @@ def _shaft_kernels():
 
 
 def warm_up() -> None:
-    """Compile the shaft's kernel (``shaft_run``) into numba's disk cache on a two-step run of
-    a shaft with nothing on it (the arguments' types are those of every scene).
+    """Compile the shaft's kernels (the scene's ``rk_run``, ``shaft_eval`` and ``shaft_rhs``)
+    into numba's disk cache on a two-step run of a shaft with nothing on it (the arguments'
+    types are those of every scene and method).
 
     Returns
     -------
@@ -391,16 +446,22 @@ def warm_up() -> None:
     from . import _motion_kernels as k
 
     i8 = np.int64
-    rec = np.empty((3, 2))
-    k.shaft_run(np.array([1.0, 0.0]), True, 0.0, 0.1, 2, 0.0, rec, np.empty_like(rec), 1.0, 1.0,
-                np.array([0.0, 10.0, 1.0, 0.2]), np.zeros(8), np.array([[2, -1, 0]], i8),
-                np.array([[0.0, 1.0, 0.0, 0.0, 1.0, 0.0]]), np.zeros((1, 2, 6)),
-                np.zeros(0, i8), np.zeros(0), np.zeros((0, 8), i8), np.zeros((0, 10)),
-                np.zeros((0, 2), i8), np.zeros((0, 4)), np.array([0], i8), np.zeros(0, i8), 4)
+    PV = np.concatenate((np.zeros(8), [1.0, 1.0, 1.0, 0.0, 0.0, 10.0, 1.0, 0.2]))
+    arrays = (np.array([[2, -1, 0]], i8), np.array([[0.0, 1.0, 0.0, 0.0, 1.0, 0.0]]),
+              np.zeros((1, 2, 6)), np.zeros(0, i8), np.zeros(0), np.zeros((0, 8), i8),
+              np.zeros((0, 10)), np.zeros((0, 2), i8), np.zeros((0, 4)), np.array([0], i8),
+              np.zeros(0, i8))
+    k.rk_run(np.array([0.0, 1.0]), 0.0, 0.1, 2, 0.0, 0.1, np.empty((3, 2)), np.empty(3), PV,
+             *arrays, 4, *k.tableau("rk4"))
+    PV[8] = 2.0
+    k.shaft_eval(np.array([[0.0, 1.0]]), np.empty((1, 9)), PV, *arrays, 4)
+    k.shaft_rhs(0.0, np.array([0.0, 1.0]), PV, *arrays, np.empty(2), np.empty(4),
+                np.zeros((9, 1)), np.empty(0), np.empty(0))
 
 
 def _prepare(scene: Scene, shaft, flywheel, points, rigid):
-    """Checks of the options → (shaft, J_f, rigid tables, equations, peak load, mean load)."""
+    """Checks of the options → (shaft, J_f, rigid tables, equations, the rigid ones, peak
+    load, mean load, notes)."""
     shaft = shaft or scene.shaft
     if shaft is None:
         raise MechcircError(f"{scene.source}: no [shaft] table: give the flywheel and motor "
@@ -415,14 +476,18 @@ def _prepare(scene: Scene, shaft, flywheel, points, rigid):
         raise MechcircError(f"{scene.source}: the shaft has no inertia (flywheel 0 and no mass "
                             "of the mechanism moves with the crank)")
     motor = shaft.motor
-    eq: _RigidShaft | _ElasticShaft = _RigidShaft(rig, Jf, motor.scalar_torque)
+    req = _RigidShaft(scene, rig, Jf, motor)
+    eq: _ElasticShaft = req
     if not rigid and scene.parts and len(scene.parts) > 1:
         eq = _ElasticShaft(scene, Jf, motor)
-        if eq.Jf + eq.c ** 2 * min(_drive_inertia(eq, t) for t in (0.0, 1.0, 2.0)) <= 0:
+        th = np.array([0.0, 1.0, 2.0])
+        with np.errstate(divide="ignore", invalid="ignore"):     # θ̈ of no inertia: unused
+            m0 = eq.evaluate(th, 0.0, [eq.rest(t) for t in th])[:, -3]
+        if eq.Jf + eq.c ** 2 * float(m0.min()) <= 0:
             raise MechcircError(f"{scene.source}: the shaft has no inertia of its own (flywheel "
                                 "0 and no mass on the drive's part): give [shaft] flywheel > 0")
     grid = np.linspace(0.0, rig.cycle, 4 * points, endpoint=False)
-    load = np.array([-rig.Q(t) for t in grid])
+    load = req.load(grid)
     peak = float(load.max())
     if motor.peak_torque < peak:
         text = (f"the motor's largest torque {motor.peak_torque:.6g} N·m (breakdown) is below "
@@ -430,35 +495,72 @@ def _prepare(scene: Scene, shaft, flywheel, points, rigid):
                 f"{math.degrees(grid[int(load.argmax())]):.4g}°: only the flywheel and the "
                 "mechanism's inertia carry the shaft through it")
         warnings.warn(f"{scene.source}: {text}", ShaftWarning, stacklevel=3)
-        return shaft, Jf, rig, eq, peak, float(np.mean(load)), ["warning: " + text]
-    return shaft, Jf, rig, eq, peak, float(np.mean(load)), []
+        return shaft, Jf, rig, eq, req, peak, float(np.mean(load)), ["warning: " + text]
+    return shaft, Jf, rig, eq, req, peak, float(np.mean(load)), []
 
 
-def _drive_inertia(eq: _ElasticShaft, theta: float) -> float:
-    eq.deriv(theta, 0.0, eq.rest(theta))
-    return float(eq.work[3, 0])
+#: Steps per period of the fastest linearised mode of the elastic shaft, by method.
+STEPS_PER_PERIOD = {"rk4": 100, "rk8": 16}
 
-
-#: RK4 steps per period of the fastest linearised mode (elastic shaft, ``method="rk4"``).
-STEPS_PER_PERIOD = 100
+#: Steps per cycle of the rigid shaft for each step per period (it has no elastic mode).
+RIGID_STEPS = 16
 
 #: Right-hand side evaluations one cycle of the shaft may take.
 MAX_CALLS = 200_000
 
 
-class _Steps:
-    """A fixed-step run as solve_ivp's result: ``status`` (1: stalled), ``t``, ``y`` (columns)
-    and ``sol`` (cubic Hermite between the steps, from the values and derivatives)."""
+def _to_kernel(Y, in_theta, n):
+    """A shaft state as :func:`._motion_kernels.shaft_rhs` takes it, from [θ̇, t, q, q̇] (in θ)
+    or [θ, θ̇, q, q̇] (in time); rows for a 2-d ``Y``."""
+    Y = np.asarray(Y, float)
+    if not in_theta:
+        return np.concatenate((Y[..., :1], Y[..., 2:2 + n], Y[..., 1:2], Y[..., 2 + n:]), -1)
+    u = 1.0 / Y[..., :1]
+    return np.concatenate((Y[..., 1:2], Y[..., 2:2 + n], u, Y[..., 2 + n:] * u), -1)
 
-    def __init__(self, t, rec, drec, status):
-        self.t, self.y, self.status, self._d, self._sp = t, rec.T, status, drec.T, None
+
+def _from_kernel(Y, in_theta, n):
+    """The inverse of :func:`_to_kernel`."""
+    if not in_theta:
+        return np.concatenate((Y[..., :1], Y[..., 1 + n:2 + n], Y[..., 1:1 + n],
+                               Y[..., 2 + n:]), -1)
+    w = 1.0 / Y[..., 1 + n:2 + n]
+    return np.concatenate((w, Y[..., :1], Y[..., 1:1 + n], Y[..., 2 + n:] * w), -1)
+
+
+class _Run:
+    """A fixed-step run of the shaft as solve_ivp's result: ``status`` (1: stalled), ``t``,
+    ``y`` (columns [θ̇, t, z] in θ, [θ, θ̇, z] in time) at the steps' starts, and ``sol(x)``:
+    one step of the same method from the last step's start before x (the run's own accuracy
+    at any x, kinks located in it)."""
+
+    def __init__(self, eq, in_theta, ts, yk, status, floor):
+        self.eq, self.in_theta, self.floor, self.status = eq, in_theta, floor, status
+        self.t, self._yk = ts, yk
+        self.y = _from_kernel(yk, in_theta, eq.n).T
 
     def sol(self, x):
-        if self._sp is None:
-            from scipy.interpolate import CubicHermiteSpline
+        x = np.asarray(x, float)
+        out = np.empty((self.y.shape[0], x.size))
+        idx = np.clip(np.searchsorted(self.t, x.ravel(), "right") - 1, 0, self.t.size - 1)
+        for c, (xi, i) in enumerate(zip(x.ravel(), idx)):
+            h = xi - self.t[i]
+            if h == 0.0:
+                out[:, c] = self.y[:, i]
+                continue
+            r = self.eq.run(_from_kernel(self._yk[i], self.in_theta, self.eq.n),
+                            self.in_theta, self.t[i], h, 1, -math.inf, record=False)
+            out[:, c] = r.y[:, -1]
+        return out.reshape((-1,) + x.shape)
 
-            self._sp = CubicHermiteSpline(self.t, self.y, self._d, axis=1)
-        return self._sp(x)
+    def grid(self, cycle, points):
+        """The states at ``points`` + 1 uniform steps over the cycle from the run's start (in
+        θ), each the end of a step of the method: the cycle rerun at the smallest multiple
+        of ``points`` steps not below the run's."""
+        k = max(-(-self.eq.steps // points), 1)
+        r = self.eq.run(self.y[:, 0], self.in_theta, self.t[0], cycle / (points * k),
+                        points * k, -math.inf, every=k)
+        return r.y
 
 
 def _over_cycle(eq, th0, cycle, x0, rtol, scale, dense=False, floor=1e-6):
@@ -467,10 +569,8 @@ def _over_cycle(eq, th0, cycle, x0, rtol, scale, dense=False, floor=1e-6):
     from scipy.integrate import solve_ivp
 
     if eq.steps:
-        h = cycle / eq.steps
-        rec, drec = eq.run(np.concatenate(([x0[0], 0.0], x0[1:])), True, th0, h, eq.steps,
-                           floor * scale)
-        return _Steps(th0 + h * np.arange(rec.shape[0]), rec, drec, int(rec.shape[0] <= eq.steps))
+        return eq.run(np.concatenate(([x0[0], 0.0], x0[1:])), True, th0, cycle / eq.steps,
+                      eq.steps, floor * scale, record=dense)
     calls = [0]
 
     def f(th, Y):
@@ -551,7 +651,7 @@ def _steady_state(eq, th0, cycle, w0, rtol, scale):
 def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float | None = None,
                    points: int = 720, startup: bool = True, rtol: float = 1e-10,
                    rigid: bool = False, method: str = "rk4",
-                   steps_per_period: float = STEPS_PER_PERIOD) -> ShaftMotion:
+                   steps_per_period: float | None = None) -> ShaftMotion:
     """The main shaft turned by the motor through the flywheel: steady cycle and start-up.
 
     Parameters
@@ -571,13 +671,16 @@ def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float 
         Treat every elastic element as rigid (θ the only degree of freedom) even when the
         scene has elastic parts; by default a scene with elastic parts is simulated with
         them (θ coupled to the free parts of :mod:`.motion`).
-    method : {"rk4", "DOP853"}
-        Elastic scenes: ``"rk4"`` integrates the shaft with the free parts in one compiled loop
-        (classical RK4 at fixed steps: in θ over the cycle, in time for the start-up);
-        ``"DOP853"`` by scipy's solve_ivp at ``rtol`` (the same equations, called from Python
-        at every step).  The rigid shaft is always integrated by DOP853.
-    steps_per_period : float
-        ``"rk4"``: steps per period of the fastest linearised mode at the steady speed.
+    method : {"rk4", "rk8", "DOP853"}
+        Elastic scenes: ``"rk4"`` or ``"rk8"`` integrate the shaft with the free parts by the
+        scene's compiled stepper (classical RK4, or DOP853's 8th-order formula, at fixed
+        steps: in θ over the cycle, in time for the start-up; the kinks of clearance gaps
+        and moment windows located inside the steps); ``"DOP853"`` by scipy's solve_ivp at
+        ``rtol`` (the same equations, called from Python at every step).  The rigid shaft
+        is always integrated by DOP853.
+    steps_per_period : float, optional
+        ``"rk4"``/``"rk8"``: steps per period of the fastest linearised mode at the steady
+        speed (default :data:`STEPS_PER_PERIOD` of the method).
 
     Returns
     -------
@@ -591,36 +694,43 @@ def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float 
         message gives the torques); the start-up did not reach the steady
         cycle within ``max_time``.
     """
-    if method not in ("rk4", "DOP853"):
-        raise MechcircError(f"method must be 'rk4' or 'DOP853', got {method!r}")
-    if not (isinstance(steps_per_period, (int, float)) and steps_per_period >= 4):
+    if method not in ("rk4", "rk8", "DOP853"):
+        raise MechcircError(f"method must be 'rk4', 'rk8' or 'DOP853', got {method!r}")
+    if steps_per_period is None:
+        steps_per_period = STEPS_PER_PERIOD.get(method, 4)
+    if isinstance(steps_per_period, bool) or not (
+            isinstance(steps_per_period, (int, float)) and steps_per_period >= 4):
         raise MechcircError(f"steps_per_period must be a number ≥ 4, got {steps_per_period!r}")
-    shaft, Jf, rig, eq, peak, mean_load, notes = _prepare(scene, shaft, flywheel, points, rigid)
+    shaft, Jf, rig, eq, req, peak, mean_load, notes = _prepare(scene, shaft, flywheel, points,
+                                                               rigid)
     motor = shaft.motor
     th0, cyc = math.radians(shaft.start_deg), rig.cycle
     scale = max(abs(motor.sync_speed) if motor.kind == "kloss" else max(motor.speeds), 1e-300)
     if startup:
-        _require_start(scene, shaft, rig, th0)
-    x0, sol = _steady_cycle(scene, eq, rig, motor, th0, rtol, scale, mean_load, peak, notes,
-                            steps_per_period if method == "rk4" else None)
+        _require_start(scene, shaft, req, th0)
+    if isinstance(eq, _ElasticShaft) and method != "DOP853":
+        eq.tableau = eq.run_kern.tableau(method)
+    x0, sol = _steady_cycle(scene, eq, req, motor, th0, rtol, scale, mean_load, peak, notes,
+                            None if method == "DOP853" else steps_per_period)
     motion = _tabulate(scene, eq, sol, th0, cyc, points, Jf, motor)
     if not startup:
         return ShaftMotion(**motion, notes=tuple(notes))
     up = (_startup_steps if eq.steps else _startup)(scene, eq, shaft, th0, cyc, x0[0], motion,
                                                     rtol, scale, peak)
-    how = f"RK4 in θ, {eq.steps} steps a cycle" if eq.steps else f"DOP853 in θ, rtol {rtol:g}"
+    how = f"{method.upper()} in θ, {eq.steps} steps a cycle" if eq.steps else \
+        f"DOP853 in θ, rtol {rtol:g}"
     notes.append(f"steady cycle by shooting ({how}); start-up from rest over "
                  f"{up.pop('cycles')} cycles")
     return ShaftMotion(**motion, **up, notes=tuple(notes))
 
 
-def _require_start(scene, shaft, rig, th0) -> None:
+def _require_start(scene, shaft, req, th0) -> None:
     """Refuse a motor whose starting torque does not exceed the load at the start angle.
 
     At rest the elastic elements carry the loads statically: the rigid
     mechanism's torque is the load.
     """
-    T0, L0 = shaft.motor.scalar_torque(0.0), -rig.Q(th0)
+    T0, L0 = shaft.motor.scalar_torque(0.0), float(req.load([th0])[0])
     if T0 - L0 <= 0:
         raise MechcircError(
             f"{scene.source}: the motor cannot start the mechanism: its starting torque "
@@ -628,10 +738,11 @@ def _require_start(scene, shaft, rig, th0) -> None:
             f"{L0:.6g} N·m at the start angle {shaft.start_deg:g}°")
 
 
-def _steady_cycle(scene, eq, rig, motor, th0, rtol, scale, mean_load, peak, notes, spp):
+def _steady_cycle(scene, eq, req, motor, th0, rtol, scale, mean_load, peak, notes, spp):
     """The steady cycle from θ0: ([θ̇, z] at θ0, its dense solution over the cycle); elastic
-    with ``spp`` given: by the compiled RK4 at ``spp`` steps per period of the fastest mode."""
-    cyc = rig.cycle
+    with ``spp`` given: by the compiled stepper (``eq.tableau``) at ``spp`` steps per period
+    of the fastest mode.  ``req``: the rigid shaft's equations (the elastic's first guess)."""
+    cyc = req.rig.cycle
 
     def fail():
         raise MechcircError(
@@ -639,7 +750,9 @@ def _steady_cycle(scene, eq, rig, motor, th0, rtol, scale, mean_load, peak, note
             f"{motor.peak_torque:.6g} N·m) cannot keep the mechanism turning against the mean "
             f"load torque {mean_load:.6g} N·m, peak {peak:.6g} N·m, with flywheel "
             f"{eq.Jf:g} kg·m²")
-    w0 = _steady_speed(_RigidShaft(rig, eq.Jf, motor.scalar_torque), th0, cyc,
+    if spp is not None:
+        req.tableau, req.steps = eq.tableau, max(int(math.ceil(RIGID_STEPS * spp)), 64)
+    w0 = _steady_speed(req, th0, cyc,
                        max(rtol, 1e-5) if eq.n else rtol, scale,     # elastic: a first guess
                        _balance(motor, mean_load, scale), fail, 1e-5 if eq.n else 1e-13)
     x0 = np.array([w0])
@@ -648,8 +761,9 @@ def _steady_cycle(scene, eq, rig, motor, th0, rtol, scale, mean_load, peak, note
 
         eq.steps = max(int(math.ceil(cyc * max_rate(eq.model) * spp / (2 * math.pi * w0))), 64)
         backend = "compiled" if getattr(eq.run_kern, "HAVE_NUMBA", False) else "Python copy"
-        notes.append(f"RK4 in θ with the elastic parts, {eq.steps} steps a cycle ({spp:g} per "
-                     f"period of the fastest mode), {backend}")
+        name = "RK8" if eq.tableau[3] else "RK4"
+        notes.append(f"{name} in θ with the elastic parts, {eq.steps} steps a cycle ({spp:g} "
+                     f"per period of the fastest mode), {backend}")
     if eq.n:
         x0, resid = _steady_state(eq, th0, cyc, w0, rtol, scale)
         notes.append(f"elastic steady cycle: {2 * eq.n} elastic states beside θ̇, cycle map "
@@ -664,17 +778,18 @@ def _steady_cycle(scene, eq, rig, motor, th0, rtol, scale, mean_load, peak, note
 def _tabulate(scene, eq, sol, th0, cyc, points, Jf, motor):
     """The steady cycle on ``points`` uniform θ samples → ShaftMotion's fields."""
     th = th0 + np.linspace(0.0, cyc, points + 1)
-    Y = sol.sol(th)
+    Y = sol.grid(cyc, points) if isinstance(sol, _Run) else sol.sol(th)
     period = float(Y[1, -1])
     th, Y = th[:-1], Y[:, :-1]
     w, tt, z = Y[0], Y[1], Y[2:].T
-    acc = np.array([eq.deriv(a, b, np.ascontiguousarray(c)) for a, b, c in zip(th, w, z)])
-    load, bodies, values = eq.samples(th, w, z, acc)
+    out = eq.evaluate(th, w, z)
+    acc = out[:, -5]
+    bodies, values = eq.samples(th, w, z, acc, out)
     wmin, wmax = _extremes(lambda x: sol.sol(x)[0], th, w)
     mean = cyc / period
     return dict(name=scene.name, source=scene.source, flywheel=Jf, theta=th - th0, time=tt,
-                speed=w, acceleration=acc, motor_torque=np.asarray(motor.torque(w), float),
-                load_torque=load, body_accelerations=bodies, omega_min=wmin, omega_max=wmax,
+                speed=w, acceleration=acc, motor_torque=out[:, -4].copy(),
+                load_torque=-eq.c * out[:, -1], body_accelerations=bodies, omega_min=wmin, omega_max=wmax,
                 omega_mean=mean, delta=(wmax - wmin) / mean, period=period, values=values,
                 states=np.ascontiguousarray(z))
 
@@ -738,9 +853,9 @@ def _startup(scene, eq, shaft, th0, cyc, w0, motion, rtol, scale, peak):
 
 
 def _startup_steps(scene, eq, shaft, th0, cyc, w0, motion, rtol, scale, peak):
-    """:func:`_startup` by the compiled RK4 in time, at the time step of the steady cycle's
+    """:func:`_startup` by the scene's stepper in time, at the time step of the steady cycle's
     θ step, one cycle's steps at a time; the cycle's starts and the band's last crossing
-    located on the cubic Hermite between the steps."""
+    located by Brent's method on the run's :meth:`_Run.sol`."""
     from scipy.optimize import brentq
 
     mean, h = motion["omega_mean"], cyc / eq.steps / w0
@@ -748,10 +863,10 @@ def _startup_steps(scene, eq, shaft, th0, cyc, w0, motion, rtol, scale, peak):
     t, Y, k = 0.0, np.concatenate(([th0, 0.0], eq.rest(th0))), 0
     every = max(eq.steps // 64, 1)
     while True:
-        rec, drec = eq.run(Y, False, t, h, eq.steps, -1e-9 * scale)
-        run = _Steps(t + h * np.arange(rec.shape[0]), rec, drec, 0)
+        run = eq.run(Y, False, t, h, eq.steps, -1e-9 * scale)
+        rec = run.y.T
         runs.append(run)
-        if rec.shape[0] <= eq.steps:
+        if run.status:
             raise MechcircError(
                 f"{scene.source}: the start-up stalls at t = {run.t[-1]:.4g} s, θ = "
                 f"{math.degrees(rec[-1, 0]):.5g}°: the motor's largest torque "
@@ -797,7 +912,7 @@ def _balance(motor: Motor, torque: float, scale: float) -> float:
     top = motor.sync_speed if motor.kind == "kloss" else motor.speeds[-1]
     ws = np.linspace(0.0, top, 401)
     tq = motor.torque(ws) - torque
-    i = int(np.argmax(motor.torque(ws)))
+    i = int(np.argmax(tq))
     for j in range(i, 400):
         if tq[j] > 0 >= tq[j + 1]:
             return float(brentq(lambda w: float(motor.torque(w)) - torque, ws[j], ws[j + 1]))
