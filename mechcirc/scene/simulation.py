@@ -183,7 +183,7 @@ def _warm_up(model, kern) -> float:
     kern.rk4_run(y, 0.0, 1e-9, 2, 0.0, 1e-9, np.empty((1, y.size)), np.empty(1), *args,
                  model.naux())
     kern.rk_run(y, 0.0, 1e-9, 2, 0.0, 1e-9, np.empty((1, y.size)), np.empty(1), *args,
-                model.naux(), *_tableau("rk8"))
+                model.naux(), *_tableau_of("rk8"))
     oargs = model.kernel_args(0.0, 1e300, outputs=True)
     kern.outputs(np.zeros(1), np.array([y]), np.empty((1, model.naux())), *oargs)
     kern.output_extrema(np.zeros(1), np.array([y]), np.empty((2, model.naux())), *oargs)
@@ -515,7 +515,7 @@ def _simulate_rk4(ctx, backend, error_estimate, notes, compile_time):
     """
     scene, o, model, kern, theta_s, ripple, progress = ctx
     rule = _step_rule(scene, o, model, error_estimate)
-    tableau = _tableau(o.method)
+    tableau = _tableau_of(o.method)
 
     def run(per_rev, prog=None, last=1, start=None):
         return _run(model, kern, theta_s, ripple, per_rev, o.revolutions, o.npts, prog,
@@ -864,26 +864,16 @@ def _deviation_rhs(model, kern, theta_s, ripple):
     return f, rigid, lines, bad
 
 
-def _tableau(method):
-    """The Butcher tableau (A, b, c) of an explicit method and whether its output between the
-    steps is quintic in the positions: RK4's (cubic output, its order 4), or for ``"rk8"`` the
-    8th-order formula of Dormand and Prince's DOP853 (scipy's coefficients), run at a fixed
-    step (its 12 stages cost three RK4 steps), with quintic output (error O(h⁶) in the
-    positions, O(h⁵) in the speeds)."""
-    if method != "rk8":
-        from ._motion_kernels import RK4_A, RK4_B, RK4_C
+def _tableau_of(method):
+    """:func:`mechcirc.scene._motion_kernels.tableau` (imported when first needed)."""
+    from ._motion_kernels import tableau
 
-        return RK4_A, RK4_B, RK4_C, False
-    from scipy.integrate import DOP853
-
-    s = DOP853.n_stages
-    return (np.ascontiguousarray(DOP853.A[:s, :s]), np.ascontiguousarray(DOP853.B),
-            np.ascontiguousarray(DOP853.C[:s]), True)
+    return tableau(method)
 
 
 def _run(model, kern, theta_s, ripple, per_rev, revolutions, npts, progress, tableau=None,
          strides=(1, 1), start=None):
-    """R revolutions of RK4 (or the explicit ``tableau``, :func:`_tableau`) at ``per_rev``
+    """R revolutions of RK4 (or the explicit ``tableau``, :func:`~mechcirc.scene._motion_kernels.tableau`) at ``per_rev``
     steps each: (times and states tabulated on the last revolution, the previous one's
     (times, states) or None, wall time, out-of-range seen, right-hand-side evaluations,
     ``per_rev``, (r, state) at the start of revolution r = max(R − :data:`ESTIMATE_REVOLUTIONS`,
@@ -920,7 +910,7 @@ def _run(model, kern, theta_s, ripple, per_rev, revolutions, npts, progress, tab
             ry, rt = dummy
         t_end, rows, ok, flag, used = kern.rk_run(y, r * period, h, per_rev, r * period,
                                                   dt, ry, rt, *args, naux,
-                                                  *(tableau or _tableau("rk4")))
+                                                  *(tableau or _tableau_of("rk4")))
         bad, nfev = bad or flag > 0, nfev + used
         if not ok:
             raise SolverError(f"RK4 diverged at t = {t_end:.6g} s (revolution {r + 1}) with "
