@@ -10,6 +10,7 @@ Re-exported by :mod:`mechcirc.reduction`.
 
 from __future__ import annotations
 
+import math
 import weakref
 from dataclasses import dataclass
 from typing import Any
@@ -50,7 +51,8 @@ _U_RECIP = 4 * _U
 # Python or numpy scalar operand of a ufunc at every call, which costs about half the
 # operation itself on a few hundred points (measured 1.67 against 1.11 µs for ω·x at
 # 401 points); a 0-d float64 array gives the same IEEE results.
-_ZERO, _ONE, _MINUS_ONE, _U_RECIP_0D = (np.array(x) for x in (0.0, 1.0, -1.0, _U_RECIP))
+_ZERO, _ONE, _MINUS_ONE, _U_RECIP_0D, _INF = (np.array(x) for x in
+                                              (0.0, 1.0, -1.0, _U_RECIP, np.inf))
 
 
 def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: bool = False,
@@ -98,31 +100,40 @@ def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: boo
     roundoff u; its rules are stated beside ``_U`` in this module's source.
     """
     omega = np.asarray(omega, dtype=float)
+    if omega.ndim == 0 and (error or condition) and not keep:
+        # (the bound's running sums are arrays: one point as a 1-element array)
+        K, rho = evaluate(root, omega[None], error=error, condition=condition,
+                          designs=designs, _mode=_mode)
+        return K.reshape(()), rho.reshape(())
     if designs is not None:
         D = next(iter(designs[0].values())).shape[0]
         omega = np.broadcast_to(omega, (D, omega.shape[-1]))
     if not keep and _mode == "auto":
         return _auto(root, omega, error, condition, designs)
     track = error or condition
-    top, values = _postorder_values(root, omega, track, keep, _mode != "fast", designs)
+    top, values, scratch = _postorder_values(root, omega, track, keep, _mode != "fast",
+                                          designs)
     K = top.complex()
     if keep:
         return K, {k: v.complex() for k, v in values.items()}
     if track:
-        rho = _relative_to_true(top.relative()[0], omega.shape)
+        with np.errstate(all="ignore"):
+            rho = _relative_to_true(top.relative()[0], omega.shape)
+        lost = scratch.check() if scratch is not None else None
+        if lost is not None:
+            rho[lost] = np.inf
         return K, (rho / _U if condition and not error else rho)
     return K
 
 
 def _relative_to_true(rho, shape) -> NDArray:
-    """The bound ``rho`` relative to the computed |K̂| made relative to the true |K|."""
+    """The bound ``rho`` relative to the computed |K̂| made relative to the true |K|, ∞
+    for NaN (the caller holds ``np.errstate(all="ignore")``)."""
     # relative to the true |K| ≥ |K̂|(1 − ρ) it is ρ / (1 − ρ)
-    with np.errstate(all="ignore"):
-        rho = _through_reciprocal(np.atleast_1d(np.asarray(rho, dtype=float)))
+    rho = _through_reciprocal(np.atleast_1d(np.asarray(rho, dtype=float)))
     if rho.shape != shape:          # (a fresh array of that shape otherwise)
         rho = np.broadcast_to(rho, shape).astype(float)
-    np.copyto(rho, np.inf, where=np.isnan(rho))
-    return rho
+    return np.fmin(rho, _INF, out=rho)          # (fmin: NaN → ∞)
 
 
 def _auto(root: Node, omega, error: bool, condition: bool, designs):
@@ -169,13 +180,16 @@ def _fast_then_checked(root, omega, error, condition, designs):
 
 
 def _postorder_values(root, omega, track: bool, keep: bool, checked: bool, designs):
-    """``(value of the root, values of the nodes kept)``: the tree evaluated bottom up, the
-    values of a node's internal children on top of a stack when it is reached."""
+    """``(value of the root, values of the nodes kept, the bound's :class:`_Scratch`
+    or None)``: the tree evaluated bottom up, the values of a node's internal children
+    on top of a stack when it is reached."""
     values: dict[int, _Value] = {}
     stack: list[_Value] = []
+    order = _internal_postorder(root)
+    scratch = _Scratch(omega.shape) if track and order else None
     with np.errstate(all="ignore"):
         inv_omega = _ONE / omega
-        for node, reflect, n_kids, groups in _internal_postorder(root):
+        for node, reflect, n_kids, groups in order:
             if reflect:
                 child = stack.pop() if n_kids else \
                     _leaf_value(node.child.element, omega, inv_omega, track, designs)
@@ -194,13 +208,13 @@ def _postorder_values(root, omega, track: bool, keep: bool, checked: bool, desig
                     parts = []
                 if designs is not None:
                     groups = _leaf_groups(node, designs)
-                val = _combine(parts, omega, inv_omega, track, keep, checked, groups)
+                val = _combine(parts, omega, inv_omega, track, keep, checked, groups, scratch)
             stack.append(val)
             if keep:
                 values[id(node)] = val
         top = stack[-1] if stack else _leaf_value(root.element, omega, inv_omega, track,
                                                   designs)
-    return top, values
+    return top, values, scratch
 
 
 #: root -> its internal nodes in postorder, each ``(node, is a lever, its number of
@@ -605,16 +619,16 @@ class _Value:
         self.recip = False
 
     def relative(self) -> tuple:
-        """``(ρ, |K|)``: the bound of K's relative error and |K|."""
+        """``(ρ, |K|)``: the bound of K's relative error and |K| (the caller holds
+        ``np.errstate(all="ignore")``)."""
         if self.rho is None:
             E, A = self.sum_err, self.sum_mag
-            with np.errstate(all="ignore"):
-                if self.recip:       # ρ(1/S) = ρ(S)/(1 − ρ(S)) + 4u, |1/S| = 1/|S|
-                    self.rho = _over_excess(E, A)
-                    self.rho += _U_RECIP_0D
-                    self.mag = np.reciprocal(A)
-                else:
-                    self.rho, self.mag = E / A, A
+            if self.recip:       # ρ(1/S) = ρ(S)/(1 − ρ(S)) + 4u, |1/S| = 1/|S|
+                self.rho = _over_excess(E, A)
+                self.rho += _U_RECIP_0D
+                self.mag = np.reciprocal(A)
+            else:
+                self.rho, self.mag = E / A, A
         return self.rho, self.mag
 
     def complex(self) -> NDArray[np.complex128]:
@@ -681,7 +695,7 @@ def _leaf_term(e: Element, series: bool, fast: bool = False,
 
 
 def _combine(parts: list, omega, inv_omega, track: bool, keep: bool, checked: bool,
-             groups: list) -> _Value:
+             groups: list, scratch: "_Scratch | None" = None) -> _Value:
     """Series: K = Σ K_i.  Parallel: 1/K = Σ 1/K_i, over the node's internal children's
     values ``parts`` and its leaf groups ``groups`` (:func:`_leaf_groups`)."""
     series, sums, counts, has, bterms = groups
@@ -728,11 +742,13 @@ def _combine(parts: list, omega, inv_omega, track: bool, keep: bool, checked: bo
         return total if series else total.reciprocal(checked)
     if bterms is None:         # (kept for the next call with one design)
         mu = _node_mu(sums, len(parts))
-        bterms = groups[4] = (mu, np.array(_U_RECIP + mu),
-                              _leaf_bound_terms(sums, counts, len(parts)))
+        # (0-d arrays: see _ZERO)
+        bterms = groups[4] = (np.asarray(mu), np.asarray(_U_RECIP + mu), tuple(
+            np.asarray(t) for t in _leaf_bound_terms(sums, counts, len(parts))))
     mu, c, terms = bterms
+    assert scratch is not None
     bound = _sum_bound(series, parts, mu, c, _leaf_bound(terms, has, omega, inv_omega),
-                       omega.shape)
+                       omega.shape, scratch)
     mag = np.abs(total.array)
     if not series:
         total = total.reciprocal(checked)
@@ -798,7 +814,7 @@ def _leaf_bound(terms, has, omega, inv_omega):
     return bound
 
 
-def _sum_bound(series: bool, parts, mu, c, bound, shape):
+def _sum_bound(series: bool, parts, mu, c, bound, shape, scratch: "_Scratch"):
     """Σ |tᵢ| (ρᵢ + m·u) of a node's terms (see :func:`evaluate`), before dividing by |S|:
     ``bound`` (the leaf groups' share, or None) plus that of the internal children
     (``c`` = 4u + m·u, a reciprocal's rounding and the sum's)."""
@@ -806,7 +822,14 @@ def _sum_bound(series: bool, parts, mu, c, bound, shape):
         if v.rho is None and v.recip is series:
             # The term is 1/S of the child's sum S (a parallel child's K, or the
             # admittance of a series child): |1/S| (ρ(S)/(1 − ρ(S)) + 4u + m·u).
-            t = _over_excess(v.sum_err, v.sum_mag)
+            if bound is None:        # (the node's bound from here on: clamped now)
+                t = _over_excess(v.sum_err, v.sum_mag)
+            else:
+                # ρ/(1 − ρ) = E/(|S| − E) unclamped, in a scratch row: negative exactly
+                # where E > |S| (no digit known; ∞ in the clamp), which the scratch
+                # finds for all the rows at once (:class:`_Scratch`).
+                t = np.subtract(v.sum_mag, v.sum_err, out=scratch.row())
+                np.divide(v.sum_err, t, out=t)
             t += c
             t /= v.sum_mag
         else:
@@ -822,6 +845,40 @@ def _sum_bound(series: bool, parts, mu, c, bound, shape):
     if bound is None:
         bound = np.zeros(shape)
     return bound
+
+
+#: Elements of :class:`_Scratch`'s buffer (64 kB: a few rows of a few hundred ω, in cache).
+_SCRATCH = 1 << 13
+
+
+class _Scratch:
+    """Scratch rows for the terms E/(|S| − E) of :func:`_sum_bound`, checked a buffer at
+    a time: where a row is negative (E > |S|: the sum has no digit known), the bound
+    at the root is ∞ (what clamping |S| − E at 0 gives, one pass per term), one
+    reduction per buffer instead."""
+
+    __slots__ = ("buf", "used", "lost")
+
+    def __init__(self, shape: tuple):
+        n = max(1, _SCRATCH // max(1, math.prod(shape)))
+        self.buf = np.empty((n, *shape))
+        self.used = 0
+        self.lost: NDArray | None = None
+
+    def row(self) -> NDArray:
+        if self.used == len(self.buf):
+            self.check()
+        self.used += 1
+        return self.buf[self.used - 1, ...]       # (a view, also of a 0-d row)
+
+    def check(self) -> NDArray | None:
+        """The points where a row so far was negative (or None); frees the rows."""
+        part, self.used = self.buf[:self.used], 0
+        # (fmin: a NaN row, whose point is NaN, hence flagged, anyway, hides no other)
+        if part.size and np.fmin.reduce(part, axis=None) < 0:
+            neg = (part < 0).any(axis=0)
+            self.lost = neg if self.lost is None else self.lost | neg
+        return self.lost
 
 
 def _through_reciprocal(rho: NDArray) -> NDArray:
