@@ -876,7 +876,7 @@ class _Scratch:
         part, self.used = self.buf[:self.used], 0
         # (fmin: a NaN row, whose point is NaN, hence flagged, anyway, hides no other)
         if part.size and np.fmin.reduce(part, axis=None) < 0:
-            neg = (part < 0).any(axis=0)
+            neg = np.asarray((part < 0).any(axis=0))
             self.lost = neg if self.lost is None else self.lost | neg
         return self.lost
 
