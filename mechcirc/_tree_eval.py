@@ -10,7 +10,6 @@ Re-exported by :mod:`mechcirc.reduction`.
 
 from __future__ import annotations
 
-import math
 import weakref
 from dataclasses import dataclass
 from typing import Any
@@ -111,17 +110,13 @@ def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: boo
     if not keep and _mode == "auto":
         return _auto(root, omega, error, condition, designs)
     track = error or condition
-    top, values, scratch = _postorder_values(root, omega, track, keep, _mode != "fast",
-                                          designs)
+    top, values = _postorder_values(root, omega, track, keep, _mode != "fast", designs)
     K = top.complex()
     if keep:
         return K, {k: v.complex() for k, v in values.items()}
     if track:
         with np.errstate(all="ignore"):
             rho = _relative_to_true(top.relative()[0], omega.shape)
-        lost = scratch.check() if scratch is not None else None
-        if lost is not None:
-            rho[lost] = np.inf
         return K, (rho / _U if condition and not error else rho)
     return K
 
@@ -180,16 +175,13 @@ def _fast_then_checked(root, omega, error, condition, designs):
 
 
 def _postorder_values(root, omega, track: bool, keep: bool, checked: bool, designs):
-    """``(value of the root, values of the nodes kept, the bound's :class:`_Scratch`
-    or None)``: the tree evaluated bottom up, the values of a node's internal children
-    on top of a stack when it is reached."""
+    """``(value of the root, values of the nodes kept)``: the tree evaluated bottom up, the
+    values of a node's internal children on top of a stack when it is reached."""
     values: dict[int, _Value] = {}
     stack: list[_Value] = []
-    order = _internal_postorder(root)
-    scratch = _Scratch(omega.shape) if track and order else None
     with np.errstate(all="ignore"):
         inv_omega = _ONE / omega
-        for node, reflect, n_kids, groups in order:
+        for node, reflect, n_kids, groups in _internal_postorder(root):
             if reflect:
                 child = stack.pop() if n_kids else \
                     _leaf_value(node.child.element, omega, inv_omega, track, designs)
@@ -208,13 +200,13 @@ def _postorder_values(root, omega, track: bool, keep: bool, checked: bool, desig
                     parts = []
                 if designs is not None:
                     groups = _leaf_groups(node, designs)
-                val = _combine(parts, omega, inv_omega, track, keep, checked, groups, scratch)
+                val = _combine(parts, omega, inv_omega, track, keep, checked, groups)
             stack.append(val)
             if keep:
                 values[id(node)] = val
         top = stack[-1] if stack else _leaf_value(root.element, omega, inv_omega, track,
                                                   designs)
-    return top, values, scratch
+    return top, values
 
 
 #: root -> its internal nodes in postorder, each ``(node, is a lever, its number of
@@ -695,7 +687,7 @@ def _leaf_term(e: Element, series: bool, fast: bool = False,
 
 
 def _combine(parts: list, omega, inv_omega, track: bool, keep: bool, checked: bool,
-             groups: list, scratch: "_Scratch | None" = None) -> _Value:
+             groups: list) -> _Value:
     """Series: K = Σ K_i.  Parallel: 1/K = Σ 1/K_i, over the node's internal children's
     values ``parts`` and its leaf groups ``groups`` (:func:`_leaf_groups`)."""
     series, sums, counts, has, bterms = groups
@@ -746,9 +738,8 @@ def _combine(parts: list, omega, inv_omega, track: bool, keep: bool, checked: bo
         bterms = groups[4] = (np.asarray(mu), np.asarray(_U_RECIP + mu), tuple(
             np.asarray(t) for t in _leaf_bound_terms(sums, counts, len(parts))))
     mu, c, terms = bterms
-    assert scratch is not None
     bound = _sum_bound(series, parts, mu, c, _leaf_bound(terms, has, omega, inv_omega),
-                       omega.shape, scratch)
+                       omega.shape)
     mag = np.abs(total.array)
     if not series:
         total = total.reciprocal(checked)
@@ -814,7 +805,7 @@ def _leaf_bound(terms, has, omega, inv_omega):
     return bound
 
 
-def _sum_bound(series: bool, parts, mu, c, bound, shape, scratch: "_Scratch"):
+def _sum_bound(series: bool, parts, mu, c, bound, shape):
     """Σ |tᵢ| (ρᵢ + m·u) of a node's terms (see :func:`evaluate`), before dividing by |S|:
     ``bound`` (the leaf groups' share, or None) plus that of the internal children
     (``c`` = 4u + m·u, a reciprocal's rounding and the sum's)."""
@@ -822,14 +813,7 @@ def _sum_bound(series: bool, parts, mu, c, bound, shape, scratch: "_Scratch"):
         if v.rho is None and v.recip is series:
             # The term is 1/S of the child's sum S (a parallel child's K, or the
             # admittance of a series child): |1/S| (ρ(S)/(1 − ρ(S)) + 4u + m·u).
-            if bound is None:        # (the node's bound from here on: clamped now)
-                t = _over_excess(v.sum_err, v.sum_mag)
-            else:
-                # ρ/(1 − ρ) = E/(|S| − E) unclamped, in a scratch row: negative exactly
-                # where E > |S| (no digit known; ∞ in the clamp), which the scratch
-                # finds for all the rows at once (:class:`_Scratch`).
-                t = np.subtract(v.sum_mag, v.sum_err, out=scratch.row())
-                np.divide(v.sum_err, t, out=t)
+            t = _over_excess(v.sum_err, v.sum_mag)
             t += c
             t /= v.sum_mag
         else:
@@ -845,40 +829,6 @@ def _sum_bound(series: bool, parts, mu, c, bound, shape, scratch: "_Scratch"):
     if bound is None:
         bound = np.zeros(shape)
     return bound
-
-
-#: Elements of :class:`_Scratch`'s buffer (64 kB: a few rows of a few hundred ω, in cache).
-_SCRATCH = 1 << 13
-
-
-class _Scratch:
-    """Scratch rows for the terms E/(|S| − E) of :func:`_sum_bound`, checked a buffer at
-    a time: where a row is negative (E > |S|: the sum has no digit known), the bound
-    at the root is ∞ (what clamping |S| − E at 0 gives, one pass per term), one
-    reduction per buffer instead."""
-
-    __slots__ = ("buf", "used", "lost")
-
-    def __init__(self, shape: tuple):
-        n = max(1, _SCRATCH // max(1, math.prod(shape)))
-        self.buf = np.empty((n, *shape))
-        self.used = 0
-        self.lost: NDArray | None = None
-
-    def row(self) -> NDArray:
-        if self.used == len(self.buf):
-            self.check()
-        self.used += 1
-        return self.buf[self.used - 1, ...]       # (a view, also of a 0-d row)
-
-    def check(self) -> NDArray | None:
-        """The points where a row so far was negative (or None); frees the rows."""
-        part, self.used = self.buf[:self.used], 0
-        # (fmin: a NaN row, whose point is NaN, hence flagged, anyway, hides no other)
-        if part.size and np.fmin.reduce(part, axis=None) < 0:
-            neg = np.asarray((part < 0).any(axis=0))
-            self.lost = neg if self.lost is None else self.lost | neg
-        return self.lost
 
 
 def _through_reciprocal(rho: NDArray) -> NDArray:
