@@ -10,6 +10,8 @@ times, interleaved and as medians of CPU time:
   K with its error bound (what ``Sweep.error`` and ``Sweep.flags`` compute);
   its first call (the tree's leaf sums folded once) is shown apart;
 * the numpy path (``COMPILED`` False), K and K + bound;
+* the default path at a single ω, K and K + bound: the part of each call's cost
+  that does not depend on the number of points (numpy's per-call overhead);
 * then, once the default path has been timed (a loaded kernel serves every
   later call), the compiled plan (``COMPILED`` True), K and K + bound, when
   numba is installed (its load is not timed).
@@ -72,6 +74,10 @@ fns = {"default K": run(None, False), "default K+bound": run(None, True)}
 if floor is not None:
     fns["floor"] = floor
 fns["numpy K"], fns["numpy K+bound"] = run(False, False), run(False, True)
+# The same at a single ω: what the calls cost whatever the number of points.
+one = omega[len(omega) // 2:len(omega) // 2 + 1]
+for key, err in (("one K", False), ("one K+bound", True)):
+    fns[key] = (lambda err: lambda: reduction.evaluate(tree, one, error=err))(err)
 
 def timed(fns):
     times = {k: [] for k in fns}
@@ -147,6 +153,10 @@ def main() -> int:
                          f"{r['default K'] / r['floor']:.2f}x (goal <= {GOAL_FLOOR}x; "
                          f"first call {ms['first']:.3f})")
             print(line)
+            print(f"{'':<25} at one ω: K {ms['one K']:.3f}, K+bound {ms['one K+bound']:.3f} "
+                  f"({r['one K'] / r['default K']:.0%} and "
+                  f"{r['one K+bound'] / r['default K+bound']:.0%} of the times at "
+                  f"{'400' if case == 'stb_heald' else '401'} ω)")
             if "compiled K" in r:
                 print(f"{'':<25} compiled plan: K {ms['compiled K']:.3f}, K+bound "
                       f"{ms['compiled K+bound']:.3f} "
