@@ -124,3 +124,25 @@ def test_one_point_has_the_bound_of_an_array_of_one(monkeypatch):
     K0, rho0 = reduction.evaluate(c.tree, np.float64(omega[0]), error=True)
     assert K0.shape == rho0.shape == ()
     assert K0 == K1[0] and rho0 == rho1[0]
+
+
+@pytest.mark.parametrize("chunk", [None, 7])
+def test_a_sweep_with_error_has_the_numbers_of_error_asked_afterwards(monkeypatch, chunk):
+    # sweep(error=True) takes K and its bound from one pass over the tree; the
+    # Sweep asked for its error afterwards evaluates the tree again.  The same
+    # numbers either way, also in chunks of ω (7 points: 11 = 7 + 4).
+    from mechcirc import _sweep
+
+    if chunk is not None:
+        monkeypatch.setattr(_sweep, "CHUNK_POINTS", chunk)
+    monkeypatch.setattr(_jit, "COMPILED", False)
+    _, c, omega = _ladder_at_an_inner_zero()
+    omega = np.concatenate([[0.0], omega[:21:4], omega[21:], [np.inf]])   # 0 and ∞ too
+    one = c.sweep(omega, error=True)
+    assert "error" in one._cache                  # computed with K, not afterwards
+    two = c.sweep(omega)
+    assert "error" not in two._cache
+    np.testing.assert_array_equal(one.K, two.K)
+    np.testing.assert_array_equal(one.error, two.error)
+    np.testing.assert_array_equal(one.flags, two.flags)
+    assert np.isinf(one.error).sum() >= 2 and np.isfinite(one.error).sum() >= 3
