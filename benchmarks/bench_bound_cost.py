@@ -10,6 +10,10 @@ times, interleaved and as medians of CPU time:
   K with its error bound (what ``Sweep.error`` and ``Sweep.flags`` compute);
   its first call (the tree's leaf sums folded once) is shown apart;
 * the numpy path (``COMPILED`` False), K and K + bound;
+* the default path at a single ω, K and K + bound: the part of each call's cost
+  that does not depend on the number of points (numpy's per-call overhead);
+* a sweep, the sweep and then its flags (``Sweep.error`` evaluates the tree
+  again), and ``sweep(..., error=True)`` and its flags (one pass);
 * then, once the default path has been timed (a loaded kernel serves every
   later call), the compiled plan (``COMPILED`` True), K and K + bound, when
   numba is installed (its load is not timed).
@@ -38,7 +42,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 
 CHILD = r"""
-import json, sys, time
+import inspect, json, sys, time
 import numpy as np
 sys.path.insert(0, BENCH)
 import mechcirc
@@ -72,6 +76,16 @@ fns = {"default K": run(None, False), "default K+bound": run(None, True)}
 if floor is not None:
     fns["floor"] = floor
 fns["numpy K"], fns["numpy K+bound"] = run(False, False), run(False, True)
+# A Sweep, and its flags asked afterwards (the tree evaluated again), or taken from
+# the sweep's own pass (sweep(..., error=True), where this version has it).
+fns["sweep"] = lambda: mechcirc.sweep(c, omega)
+fns["sweep, flags"] = lambda: mechcirc.sweep(c, omega).flags
+if "error" in inspect.signature(mechcirc.sweep).parameters:
+    fns["sweep(error), flags"] = lambda: mechcirc.sweep(c, omega, error=True).flags
+# The same at a single ω: what the calls cost whatever the number of points.
+one = omega[len(omega) // 2:len(omega) // 2 + 1]
+for key, err in (("one K", False), ("one K+bound", True)):
+    fns[key] = (lambda err: lambda: reduction.evaluate(tree, one, error=err))(err)
 
 def timed(fns):
     times = {k: [] for k in fns}
@@ -146,6 +160,16 @@ def main() -> int:
                 line += (f"; floor {ms['floor']:.3f}, default K / floor "
                          f"{r['default K'] / r['floor']:.2f}x (goal <= {GOAL_FLOOR}x; "
                          f"first call {ms['first']:.3f})")
+            print(line)
+            print(f"{'':<25} at one ω: K {ms['one K']:.3f}, K+bound {ms['one K+bound']:.3f} "
+                  f"({r['one K'] / r['default K']:.0%} and "
+                  f"{r['one K+bound'] / r['default K+bound']:.0%} of the times at "
+                  f"{'400' if case == 'stb_heald' else '401'} ω)")
+            line = (f"{'':<25} sweep {ms['sweep']:.3f}, then its flags {ms['sweep, flags']:.3f} "
+                    f"({r['sweep, flags'] / r['sweep']:.2f}x)")
+            if "sweep(error), flags" in r:
+                line += (f"; sweep(error=True) + flags {ms['sweep(error), flags']:.3f} "
+                         f"({r['sweep(error), flags'] / r['sweep']:.2f}x)")
             print(line)
             if "compiled K" in r:
                 print(f"{'':<25} compiled plan: K {ms['compiled K']:.3f}, K+bound "

@@ -353,14 +353,16 @@ class Circuit:
         require_nonsingular(system)
         return system
 
-    def sweep(self, omega: ArrayLike, method: Method = "auto", *, refine: bool = True) -> Sweep:
+    def sweep(self, omega: ArrayLike, method: Method = "auto", *, refine: bool = True,
+              error: bool = False) -> Sweep:
         """K(ω), Q0(ω) and per-element forces over ``omega`` [rad/s].
 
-        See :func:`mechcirc.sweep` (``refine``: nodal analysis only).
+        See :func:`mechcirc.sweep` (``refine``: nodal analysis only; ``error``:
+        the tree's error bound in the same pass as K).
         """
         from ._sweep import sweep
 
-        return sweep(self, omega, method=method, refine=refine)
+        return sweep(self, omega, method=method, refine=refine, error=error)
 
     def resonances(self, omega_max: float | None = None) -> list[Resonance]:
         """Zeros and poles of K(ω) up to ``omega_max`` [rad/s].

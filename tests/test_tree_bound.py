@@ -82,3 +82,67 @@ def test_bound_holds_where_inner_sums_cancel(path):
     assert np.all(est[fin] >= true[fin])
     big = fin & (true > U)
     assert np.min(est[big] / true[big]) >= 2.0
+
+
+def _ladder_at_an_inner_zero():
+    """A lossless 60-rung ladder whose innermost sum k + m (spring and mass in series)
+    is zero at ω₀ = √(k/m): within a few ulps of ω₀ its bound E exceeds the computed
+    |Ŝ| > 0, 119 terms 1/S below the root; then 3 points away from it."""
+    rng = np.random.default_rng(26)
+    expr = corpus.ladder(rng, 120, r=None)
+    inner = expr
+    while inner[1][1][0] == "p":               # ("s", [spring, ("p", [mass, inner])])
+        inner = inner[1][1][1][1]
+    (_, _, k), (_, _, m) = inner[1]
+    w0 = float(np.sqrt(k / m))
+    near = w0 * (1 + np.arange(-10, 11) * 1e-16)
+    omega = np.concatenate([near, [w0 * (1 - 1e-3), w0 * (1 + 1e-3), 10.0 * w0]])
+    return expr, corpus.to_circuit(expr), omega
+
+
+def test_a_sum_with_no_digit_known_makes_the_bound_infinite(monkeypatch):
+    monkeypatch.setattr(_jit, "COMPILED", False)
+    expr, c, omega = _ladder_at_an_inner_zero()
+    K, rho = reduction.evaluate(c.tree, omega, error=True)
+    # Near ω₀ no digit of the inner sum is known: the bound is ∞ (the rule
+    # ρ(1/x̂) = ρ/(1 − ρ), ∞ from ρ ≥ 1 on), although K is finite there.  (Without
+    # the clamp of |Ŝ| − E at 0, 19 of these 21 points get a finite 2.8e-13 …
+    # 2.9e-13 at the root, the term E/(|Ŝ| − E) being negative; the other two
+    # reach ∞ through Ŝ = 0 by themselves.)
+    assert np.isfinite(K).all()
+    assert np.all(rho[:21] == np.inf)
+    # Away from it a finite bound of the true error (mpmath, 40 digits).
+    true = corpus.true_error(K[21:], corpus.reference(expr, omega[21:]))
+    assert np.all(np.isfinite(rho[21:])) and np.all(rho[21:] >= true)
+    assert np.all(rho[21:] < 1e-11)           # measured 7.9e-16 … 6.3e-13
+
+
+def test_one_point_has_the_bound_of_an_array_of_one(monkeypatch):
+    monkeypatch.setattr(_jit, "COMPILED", False)
+    _, c, omega = _ladder_at_an_inner_zero()
+    K1, rho1 = reduction.evaluate(c.tree, omega[:1], error=True)
+    K0, rho0 = reduction.evaluate(c.tree, np.float64(omega[0]), error=True)
+    assert K0.shape == rho0.shape == ()
+    assert K0 == K1[0] and rho0 == rho1[0]
+
+
+@pytest.mark.parametrize("chunk", [None, 7])
+def test_a_sweep_with_error_has_the_numbers_of_error_asked_afterwards(monkeypatch, chunk):
+    # sweep(error=True) takes K and its bound from one pass over the tree; the
+    # Sweep asked for its error afterwards evaluates the tree again.  The same
+    # numbers either way, also in chunks of ω (7 points: 11 = 7 + 4).
+    from mechcirc import _sweep
+
+    if chunk is not None:
+        monkeypatch.setattr(_sweep, "CHUNK_POINTS", chunk)
+    monkeypatch.setattr(_jit, "COMPILED", False)
+    _, c, omega = _ladder_at_an_inner_zero()
+    omega = np.concatenate([[0.0], omega[:21:4], omega[21:], [np.inf]])   # 0 and ∞ too
+    one = c.sweep(omega, error=True)
+    assert "error" in one._cache                  # computed with K, not afterwards
+    two = c.sweep(omega)
+    assert "error" not in two._cache
+    np.testing.assert_array_equal(one.K, two.K)
+    np.testing.assert_array_equal(one.error, two.error)
+    np.testing.assert_array_equal(one.flags, two.flags)
+    assert np.isinf(one.error).sum() >= 2 and np.isfinite(one.error).sum() >= 3
