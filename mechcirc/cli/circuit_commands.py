@@ -331,7 +331,7 @@ def _run_sweep(args, circuit, omega):
     from ..errors import MechcircError
 
     if not args.adaptive:
-        return circuit.sweep(omega, method=args.method, refine=args.refine)
+        return circuit.sweep(omega, method=args.method, refine=args.refine, error=True)
     from ..adaptive import adaptive_sweep
 
     if omega[0] <= 0:
