@@ -98,3 +98,18 @@ def test_velocity_drive_error_bounds_true_error():
     true = max(np.abs(xa - sol.y[0]).max(), np.abs(xb - sol.y[1]).max())
     assert true > 1e-6
     assert true <= r.error <= 30 * true                      # bound; 13x here
+
+
+def test_block_path_error_bounds_true_error():
+    # Critical damping: the modal path is refused (a defective A), so the
+    # drive's gain is formed by the block fallback too.
+    c = 2 * math.sqrt(K * M)
+    net = f"mass m1 a 0 {M}\nspring k1 a 0 {K!r}\ndamper c1 a 0 {c!r}\ndrive F a 0 force=1\n"
+    r = transient(mechcirc.parse(net), 1.0, 2e-2, drive=_force)
+    assert any("block propagation" in n for n in r.notes)
+    sol = solve_ivp(lambda t, z: [z[1], (_force(t) - K * z[0] - c * z[1]) / M],
+                    (0, r.time[-1]), [0, 0], method="DOP853", rtol=1e-12, atol=1e-15,
+                    t_eval=r.time)
+    true = np.abs(r.node("a")[0] - sol.y[0]).max()
+    assert true > 1e-5
+    assert true <= r.error <= 30 * true                          # bound; 3.4x here

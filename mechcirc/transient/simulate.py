@@ -434,12 +434,19 @@ def _drive_gain(ss: StateSpace, h: float, nt: int) -> float:
     ∫₀ᵀ |g(τ)| dτ + |Dx|, g(τ) = Cx e^{Aτ} B the response of x to a unit impulse of u.
 
     (The worst δu is ±1 with the sign of g(t − τ), so the bound is reached.)  The
-    integral is the trapezoid rule on the run's grid, g_k = Cx Φᵏ B formed in blocks
-    of L ≈ √nt columns (memory N·L): a cost like that of the run itself.
+    integral is the trapezoid rule on the run's grid, g_k = Cx Φᵏ B by the modal
+    path (the run's plan, a cost like the run's x), else in blocks of L ≈ √nt
+    columns (memory N·L).
     """
     N = ss.A.shape[0]
     if N == 0 or nt < 2:
         return float(np.abs(ss.Dx).max(initial=0.0))
+    plans = ss.__dict__.setdefault("_modal_plans", {})
+    g = _propagate_modal_x(ss.A, ss.B, ss.B, np.zeros(nt), h, ss.Cx, None, plans)[0]
+    if g is not None:
+        g = np.abs(g)
+        total = g.sum(axis=0) - 0.5 * (g[0] + g[-1])
+        return float((h * total + np.abs(ss.Dx)).max(initial=0.0))
     Phi = discretise(ss.A, ss.B, h)[0]
     L = max(1, min(nt, int(math.sqrt(nt)) + 1))
     W = np.empty((N, L))
