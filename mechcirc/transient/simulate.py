@@ -10,7 +10,8 @@ the drive, with u taken piecewise linear (first-order hold):
 Φ, Γ₁, Γ₂ from one matrix exponential of the augmented matrix
 [[A h, B h, 0], [0, 0, 1], [0, 0, 0]] (``scipy.linalg.expm``).  The only error
 is the drive's interpolation between samples, bounded by h²/8 · max|ü|,
-estimated from the second differences of the samples and reported.  The
+estimated from the second differences of the samples, and carried to x in
+the reported error (:func:`_drive_gain`).  The
 recurrence runs in blocks of L ≈ √n steps, all blocks advanced together, so
 its cost is matrix products instead of one Python step per sample.
 
@@ -196,7 +197,9 @@ class TransientResult:
     ``elements`` order; ``drive_force`` (velocity drive) or ``drive_velocity``
     (force drive) [nt] or None; ``drive`` the drive's value u(t) [nt] (None
     without a drive); ``error`` an estimate of the largest error of ``x``
-    [same unit] and ``notes`` what the run had to say.  ``drive_name``, ``units``
+    [same unit] (a linear run's includes the drive's interpolation error carried
+    to x through the worst-case gain; a run with clearances only notes it) and
+    ``notes`` what the run had to say.  ``drive_name``, ``units``
     (:func:`mechcirc.circuit.units_of` of the drive: m or rad, N or N·m, ...)
     and ``clearances`` (spring name -> (n1, n2, total clearance B)) and ``waveform``
     (the drive's :attr:`Waveform.label`) serve the labels and :meth:`plot`.  ``separations``
