@@ -113,3 +113,12 @@ def test_block_path_error_bounds_true_error():
     true = np.abs(r.node("a")[0] - sol.y[0]).max()
     assert true > 1e-5
     assert true <= r.error <= 30 * true                          # bound; 3.4x here
+
+
+def test_clearance_run_says_the_drive_bound_is_not_in_its_error():
+    # With a clearance x is not linear in the drive: no gain exists to carry
+    # the bound, and the notes say so instead of the error silently leaving it out.
+    net = SDOF.replace(f"spring k1 a 0 {K!r}", f"spring k1 a 0 {K!r} backlash=1e-3")
+    r = transient(mechcirc.parse(net), 0.2, 2e-2, drive=_force, rtol=1e-6)
+    assert any("interpolated linearly" in n for n in r.notes)
+    assert any("not in the error estimate" in n for n in r.notes)
