@@ -10,7 +10,8 @@ the drive, with u taken piecewise linear (first-order hold):
 Φ, Γ₁, Γ₂ from one matrix exponential of the augmented matrix
 [[A h, B h, 0], [0, 0, 1], [0, 0, 0]] (``scipy.linalg.expm``).  The only error
 is the drive's interpolation between samples, bounded by h²/8 · max|ü|,
-estimated from the second differences of the samples and reported.  The
+estimated from the second differences of the samples, and carried to x in
+the reported error (:func:`_drive_gain`).  The
 recurrence runs in blocks of L ≈ √n steps, all blocks advanced together, so
 its cost is matrix products instead of one Python step per sample.
 
@@ -196,7 +197,9 @@ class TransientResult:
     ``elements`` order; ``drive_force`` (velocity drive) or ``drive_velocity``
     (force drive) [nt] or None; ``drive`` the drive's value u(t) [nt] (None
     without a drive); ``error`` an estimate of the largest error of ``x``
-    [same unit] and ``notes`` what the run had to say.  ``drive_name``, ``units``
+    [same unit] (a linear run's includes the drive's interpolation error carried
+    to x through the worst-case gain; a run with clearances only notes it) and
+    ``notes`` what the run had to say.  ``drive_name``, ``units``
     (:func:`mechcirc.circuit.units_of` of the drive: m or rad, N or N·m, ...)
     and ``clearances`` (spring name -> (n1, n2, total clearance B)) and ``waveform``
     (the drive's :attr:`Waveform.label`) serve the labels and :meth:`plot`.  ``separations``
@@ -386,7 +389,9 @@ def _clearance_run(ss, circuit, z0, t, us, drive, amp, rtol, notes, elements, ve
     Z, method, err, more = _nonlinear(ss, circuit, z0, t, u_in, rtol,
                                       drive.rate(t, amp) if drive.kind == "motion" else None)
     notes.extend(more)
-    _interpolation(u, drive, drive.kind == "motion", notes)
+    if _interpolation(t, u, drive, drive.kind == "motion", notes) > 0.0:
+        notes.append("the drive's interpolation error is not in the error estimate (the "
+                     "clearances make x not linear in the drive)")
     out = _outputs(ss, circuit, t, Z, u, u_in, t[1] - t[0], drive, method, err, notes,
                    elements, None, velocities)
     _require_finite(out)
@@ -402,10 +407,12 @@ def _linear_run(ss, circuit, z0, t, us, drive, notes, elements, velocities):
         ss, z0, u_in, h, elements, velocities)
     method = f"exact (matrix exponential, first-order hold of the drive; {path.split(' (')[0]})"
     notes.append(f"linear propagation: {path}")
-    _interpolation(u, drive, False, notes)
+    interp = _interpolation(t, u, drive, False, notes)
     out = _outputs(ss, circuit, t, Z, u, u_in, h, drive, method, err, notes, elements, T,
                    velocities, nx, drive_y, x_ready, v_ready)
     out.error = _linear_error(out, ss, err, x_bound)
+    if interp > 0.0:        # the drive's interpolation error, carried to x
+        out.error += interp * _drive_gain(ss, h, t.size)
     # (linear: the error is finite only if x is; NaN and ±inf reach max|x| or its bound)
     _require_finite(out, x_in_error=True)
     return out
@@ -423,6 +430,43 @@ def _linear_error(out: TransientResult, ss: StateSpace, err: float,
             # temporary the size of x (1e7 values for 100 nodes × 1e5 steps).
             x_bound = max(float(out.x.max()), -float(out.x.min()))
         return err + ROUNDING_PER_STEP * (out.time.size - 1) * x_bound
+
+
+def _drive_gain(ss: StateSpace, h: float, nt: int) -> float:
+    """Largest |x| any drive error |δu| ≤ 1 can cause over the run: max over nodes of
+    ∫₀ᵀ |g(τ)| dτ + |Dx|, g(τ) = Cx e^{Aτ} B the response of x to a unit impulse of u.
+
+    (The worst δu is ±1 with the sign of g(t − τ), so the bound is reached.)  The
+    integral is the trapezoid rule on the run's grid, g_k = Cx Φᵏ B by the modal
+    path (the run's plan, a cost like the run's x), else in blocks of L ≈ √nt
+    columns (memory N·L).
+    """
+    N = ss.A.shape[0]
+    if N == 0 or nt < 2:
+        return float(np.abs(ss.Dx).max(initial=0.0))
+    plans = ss.__dict__.setdefault("_modal_plans", {})
+    g = _propagate_modal_x(ss.A, ss.B, ss.B, np.zeros(nt), h, ss.Cx, None, plans)[0]
+    if g is not None:
+        g = np.abs(g)
+        total = g.sum(axis=0) - 0.5 * (g[0] + g[-1])
+        return float((h * total + np.abs(ss.Dx)).max(initial=0.0))
+    Phi = discretise(ss.A, ss.B, h)[0]
+    L = max(1, min(nt, int(math.sqrt(nt)) + 1))
+    W = np.empty((N, L))
+    W[:, 0] = ss.B
+    for m in range(1, L):
+        W[:, m] = Phi @ W[:, m - 1]
+    PhiL = np.linalg.matrix_power(Phi, L)
+    total = np.zeros(ss.Cx.shape[0])
+    for start in range(0, nt, L):
+        G = np.abs(ss.Cx @ W[:, :min(L, nt - start)])
+        total += G.sum(axis=1)
+        if start == 0:
+            total -= 0.5 * G[:, 0]
+        if start + L >= nt:
+            total -= 0.5 * G[:, -1]
+        W = PhiL @ W
+    return float((h * total + np.abs(ss.Dx)).max(initial=0.0))
 
 
 def _waveform(circuit: Circuit, drive, rpm) -> Waveform:
@@ -661,16 +705,26 @@ def with_oscillator(ss: StateSpace, z0, omega: float, amp: float):
     return new, np.concatenate([z0, [0.0, 1.0]])
 
 
-def _interpolation(u: np.ndarray, drive: Waveform, hermite: bool, notes: list) -> float:
+def _interpolation(t: np.ndarray, u: np.ndarray, drive: Waveform, hermite: bool,
+                   notes: list) -> float:
     """Bound of the drive's interpolation error between samples (noted unless rounding).
 
     ``hermite``: cubic Hermite (the clearance integrator with a motion drive),
-    h⁴/384·max|u⁗| from the fourth differences; else linear (h²/8·max|ü|).
+    h⁴/384·max|u⁗| from the fourth differences; a table (``"samples"``): exact,
+    the largest gap between the table and the grid's linear interpolation, at
+    the table's points (both are piecewise linear); else linear (h²/8·max|ü|).
     """
+    how = "h²/8·max|ü|, from the samples' second differences"
     if hermite:
         interp = float(np.abs(np.diff(u, 4)).max() / 384.0) if u.size > 4 else 0.0
     elif drive.kind in ("rest", "step", "impulse", "harmonic") or u.size < 3:
         interp = 0.0
+    elif drive.kind == "samples":
+        knots, values = np.asarray(drive.times), np.asarray(drive.values)
+        inside = (knots > t[0]) & (knots < t[-1])
+        gap = np.abs(values[inside] - np.interp(knots[inside], t, u))
+        interp = float(gap.max(initial=0.0))
+        how = "exact: the largest gap at the table's points"
     else:
         interp = float(np.abs(np.diff(u, 2)).max() / 8.0)
     if interp > 1e-13 * float(np.abs(u).max()):      # not rounding of an exact ramp
@@ -678,7 +732,9 @@ def _interpolation(u: np.ndarray, drive: Waveform, hermite: bool, notes: list) -
                      f"rates of the motion): its error is at most {interp:.3g} "
                      "(h⁴/384·max|u⁗|, from the samples' fourth differences)" if hermite else
                      f"drive interpolated linearly between samples: its error is at most "
-                     f"{interp:.3g} (h²/8·max|ü|, from the samples' second differences)")
+                     f"{interp:.3g} ({how})")
+    else:
+        interp = 0.0
     return interp
 
 
