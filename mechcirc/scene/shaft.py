@@ -219,7 +219,7 @@ def rigid_model(scene: Scene, N: int = 1024):
     -------
     MotionModel
     """
-    from .motion import MotionModel, dead_centre, hermite_table, rigid_tables
+    from .motion import dead_centre, hermite_table, rigid_tables
 
     ang, ang1, ang2, pos, vel, acc = (dict(x) for x in rigid_tables(scene, N))
     for t in scene.torsions:
@@ -254,6 +254,14 @@ def rigid_model(scene: Scene, N: int = 1024):
         FF.append([0.0, 1.0, 0.0, 0.0, 1.0, 0.0])
         MOI.append([len(FI) - 1, table(ang[mo.body], ang1[mo.body], ang2[mo.body], True)])
         MOF.append([mo.amplitude, mo.window, mo.sigma, float(c)])
+    return _one_part_model(scene, FI, FF, tabs, MI, MW, MOI, MOF)
+
+
+def _one_part_model(scene: Scene, FI, FF, tabs, MI, MW, MOI, MOF):
+    """The :class:`~mechcirc.scene.motion.MotionModel` of :func:`rigid_model`'s tables: one
+    part (the drive's), no elastic elements."""
+    from .motion import MotionModel
+
     i8 = np.int64
     arrays = {"FI": np.array(FI, i8), "FF": np.array(FF, float), "tabs": np.array(tabs),
               "MI": np.array(MI, i8), "MW": np.array(MW, float),
@@ -668,16 +676,13 @@ def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float 
     rtol : float
         Relative tolerance of the DOP853 integrations.
     rigid : bool
-        Treat every elastic element as rigid (θ the only degree of freedom) even when the
-        scene has elastic parts; by default a scene with elastic parts is simulated with
-        them (θ coupled to the free parts of :mod:`.motion`).
+        Treat every elastic element as rigid (θ the only degree of freedom); by default
+        the elastic parts are simulated, coupled to θ (the free parts of :mod:`.motion`).
     method : {"rk4", "rk8", "DOP853"}
-        Elastic scenes: ``"rk4"`` or ``"rk8"`` integrate the shaft with the free parts by the
-        scene's compiled stepper (classical RK4, or DOP853's 8th-order formula, at fixed
-        steps: in θ over the cycle, in time for the start-up; the kinks of clearance gaps
-        and moment windows located inside the steps); ``"DOP853"`` by scipy's solve_ivp at
-        ``rtol`` (the same equations, called from Python at every step).  The rigid shaft
-        is always integrated by DOP853.
+        ``"rk4"``/``"rk8"``: the scene's compiled stepper at fixed steps (classical RK4 or
+        DOP853's 8th-order formula; in θ over the cycle, in time for the start-up; kinks of
+        clearance gaps and moment windows located inside the steps); ``"DOP853"``: scipy's
+        solve_ivp at ``rtol``.  The rigid shaft takes the same paths (:func:`rigid_model`).
     steps_per_period : float, optional
         ``"rk4"``/``"rk8"``: steps per period of the fastest linearised mode at the steady
         speed (default :data:`STEPS_PER_PERIOD` of the method).
@@ -689,18 +694,11 @@ def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float 
     Raises
     ------
     MechcircError
-        No ``[shaft]``; the motor cannot start the mechanism from rest at the
-        start angle, or stalls during the start-up or the steady cycle (the
-        message gives the torques); the start-up did not reach the steady
-        cycle within ``max_time``.
+        No ``[shaft]``; the motor cannot start the mechanism from rest at the start angle,
+        or stalls during the start-up or the steady cycle (the message gives the torques);
+        the start-up did not reach the steady cycle within ``max_time``.
     """
-    if method not in ("rk4", "rk8", "DOP853"):
-        raise MechcircError(f"method must be 'rk4', 'rk8' or 'DOP853', got {method!r}")
-    if steps_per_period is None:
-        steps_per_period = STEPS_PER_PERIOD.get(method, 4)
-    if isinstance(steps_per_period, bool) or not (
-            isinstance(steps_per_period, (int, float)) and steps_per_period >= 4):
-        raise MechcircError(f"steps_per_period must be a number ≥ 4, got {steps_per_period!r}")
+    spp = _checked_method(method, steps_per_period)       # None for DOP853
     shaft, Jf, rig, eq, req, peak, mean_load, notes = _prepare(scene, shaft, flywheel, points,
                                                                rigid)
     motor = shaft.motor
@@ -708,20 +706,36 @@ def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float 
     scale = max(abs(motor.sync_speed) if motor.kind == "kloss" else max(motor.speeds), 1e-300)
     if startup:
         _require_start(scene, shaft, req, th0)
-    if isinstance(eq, _ElasticShaft) and method != "DOP853":
+    if method != "DOP853":
         eq.tableau = eq.run_kern.tableau(method)
-    x0, sol = _steady_cycle(scene, eq, req, motor, th0, rtol, scale, mean_load, peak, notes,
-                            None if method == "DOP853" else steps_per_period)
+    x0, sol = _steady_cycle(scene, eq, req, motor, th0, rtol, scale, mean_load, peak, notes, spp)
     motion = _tabulate(scene, eq, sol, th0, cyc, points, Jf, motor)
     if not startup:
         return ShaftMotion(**motion, notes=tuple(notes))
     up = (_startup_steps if eq.steps else _startup)(scene, eq, shaft, th0, cyc, x0[0], motion,
                                                     rtol, scale, peak)
-    how = f"{method.upper()} in θ, {eq.steps} steps a cycle" if eq.steps else \
-        f"DOP853 in θ, rtol {rtol:g}"
-    notes.append(f"steady cycle by shooting ({how}); start-up from rest over "
-                 f"{up.pop('cycles')} cycles")
+    notes.append(_how(method, eq.steps, rtol, up.pop("cycles")))
     return ShaftMotion(**motion, **up, notes=tuple(notes))
+
+
+def _how(method: str, steps: int, rtol: float, cycles: int) -> str:
+    """The note of how :func:`simulate_shaft` integrated the steady cycle and start-up."""
+    how = f"{method.upper()} in θ, {steps} steps a cycle" if steps else \
+        f"DOP853 in θ, rtol {rtol:g}"
+    return f"steady cycle by shooting ({how}); start-up from rest over {cycles} cycles"
+
+
+def _checked_method(method, steps_per_period) -> float | None:
+    """``steps_per_period`` of :func:`simulate_shaft` (its method's default when None; None
+    for DOP853), with the method checked."""
+    if method not in ("rk4", "rk8", "DOP853"):
+        raise MechcircError(f"method must be 'rk4', 'rk8' or 'DOP853', got {method!r}")
+    if steps_per_period is None:
+        steps_per_period = STEPS_PER_PERIOD.get(method, 4)
+    if isinstance(steps_per_period, bool) or not (
+            isinstance(steps_per_period, (int, float)) and steps_per_period >= 4):
+        raise MechcircError(f"steps_per_period must be a number ≥ 4, got {steps_per_period!r}")
+    return None if method == "DOP853" else steps_per_period
 
 
 def _require_start(scene, shaft, req, th0) -> None:
