@@ -305,6 +305,38 @@ def _rates(nb, geo, omega, work, J, piv, qd, qdd, parts, e):
         qdd[i] = e[i]
 
 
+@_jit_inline
+def _store_target(k, q, qd, qdd, parts, Q, QD, QDD, PARTS):
+    """Target k reached: its q, q̇, q̈ and the conditional-stop parts into row k."""
+    for i in range(q.shape[0]):
+        Q[k, i] = q[i]
+        QD[k, i] = qd[i]
+        QDD[k, i] = qdd[i]
+        for c in range(parts.shape[1]):
+            PARTS[k, i, c] = parts[i, c]
+
+
+@_jit_inline
+def _continuation_step(q, qd, qdd, trial, t_now, dt, t_new, nb, geo, crank_idx, omega, tol,
+                       wmax, work, r, J, piv):
+    """One continuation step of dt from (t_now, q) to t_new: Taylor predictor from q, q̇, q̈
+    into ``trial``, then Newton (:func:`_converge`); the step halves while Newton fails.
+
+    Returns (sign of det J at the converged ``trial``, its time), or (0, the lock time
+    estimate) when the step has shrunk to nothing (a lock).
+    """
+    while True:
+        for i in range(q.shape[0]):
+            trial[i] = q[i] + dt * (qd[i] + 0.5 * dt * qdd[i])
+        sgn = _converge(trial, t_new, nb, geo, crank_idx, omega, tol, work, r, J, piv)
+        if sgn != 0.0:
+            return sgn, t_new
+        dt *= 0.5
+        t_new = t_now + dt
+        if abs(dt) * wmax < 1e-9:
+            return 0.0, t_now + 2.0 * dt
+
+
 @_jit
 def newton_path(q0, targets, ia, ib, sa, sb, crank_idx, omega, tol, dt_max, wmax,
                 Q, QD, QDD, PARTS, info, ga, gb, gs, gu, bs):
@@ -343,29 +375,17 @@ def newton_path(q0, targets, ia, ib, sa, sb, crank_idx, omega, tol, dt_max, wmax
         t_new = targets[k]
         dt = t_new - t_now
         if dt == 0.0:
-            for i in range(n):
-                Q[k, i] = q[i]
-                QD[k, i] = qd[i]
-                QDD[k, i] = qdd[i]
-                for c in range(nc):
-                    PARTS[k, i, c] = parts[i, c]
+            _store_target(k, q, qd, qdd, parts, Q, QD, QDD, PARTS)
             k += 1
             continue
         if dt > dt_max or dt < -dt_max:
             dt = dt_max if dt > 0.0 else -dt_max
             t_new = t_now + dt
-        # one continuation step of dt from t_now, halving on failure
-        while True:
-            for i in range(n):
-                trial[i] = q[i] + dt * (qd[i] + 0.5 * dt * qdd[i])
-            sgn = _converge(trial, t_new, nb, geo, crank_idx, omega, tol, work, r, J, piv)
-            if sgn != 0.0:
-                break
-            dt *= 0.5
-            t_new = t_now + dt
-            if abs(dt) * wmax < 1e-9:
-                info[0] = t_now + 2.0 * dt
-                return LOCK
+        sgn, t_new = _continuation_step(q, qd, qdd, trial, t_now, dt, t_new, nb, geo, crank_idx,
+                                        omega, tol, wmax, work, r, J, piv)
+        if sgn == 0.0:
+            info[0] = t_new
+            return LOCK
         if sgn != sign0:
             info[0] = t_now
             info[1] = t_new
@@ -416,6 +436,84 @@ def _dyads_accelerations(crank_idx, crank_arm, L, K, X, arm, EK, R1, R2, QD, QDD
             QDD[k, 3 * i + 2] = al[i]
 
 
+@_jit_inline
+def _dyads_positions(k, tk, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, rot,
+                     arm, E, r, phi, Q, EK, R1, R2, margin):
+    """Position k (time tk) of :func:`dyads_path`: the cranks, then each dyad by its closed
+    form, into Q[k], margin[k] and the unit vectors E (EK[k]), the joint positions r and the
+    inner-joint vectors R1[k], R2[k] the rates are computed from."""
+    for j in range(crank_idx.shape[0]):
+        ci = crank_idx[j]
+        phi[ci] = omega[j] * tk
+        E[ci] = complex(math.cos(phi[ci]), math.sin(phi[ci]))
+        r[ci] = pivot[j] + E[ci] * crank_arm[j]
+    mg = math.inf
+    for d in range(L.shape[0]):
+        K1, K2 = K[d, 0], K[d, 1]
+        x1 = X[d, 0] if K1 < 0 else r[K1] + E[K1] * X[d, 0]
+        x2 = X[d, 1] if K2 < 0 else r[K2] + E[K2] * X[d, 1]
+        l1, l2 = ln[d, 0], ln[d, 1]
+        x3, h2 = _rrr(x1, x2, l1, l2, sign[d])
+        r1 = x3 - x1
+        r2 = x3 - x2
+        s = abs(_im_conj(r1, r2)) / (l1 * l2)
+        if not (h2 >= 0.0 and s < math.inf):
+            s = -1.0
+        mg = min(mg, s)
+        R1[k, d] = r1
+        R2[k, d] = r2
+        for side in range(2):
+            Ls = L[d, side]
+            rr = r1 if side == 0 else r2
+            xp = x1 if side == 0 else x2
+            phi[Ls] = math.atan2(rr.imag, rr.real) - ang[d, side]
+            E[Ls] = rr * rot[d, side]
+            r[Ls] = xp + E[Ls] * arm[d, side]
+    margin[k] = mg
+    for i in range(E.shape[0]):
+        EK[k, i] = E[i]
+        Q[k, 3 * i] = r[i].real
+        Q[k, 3 * i + 1] = r[i].imag
+        Q[k, 3 * i + 2] = phi[i]
+
+
+@_jit_inline
+def _dyads_velocities(k, crank_idx, omega, crank_arm, L, K, X, arm, E, R1, R2, w, v, QD,
+                      PARTS):
+    """Velocities at position k of :func:`dyads_path`, one crank at a time (conditional
+    stop: PARTS[k, :, c]), and their sum QD[k]; w, v: work (n bodies)."""
+    nb = E.shape[0]
+    nc = crank_idx.shape[0]
+    for i in range(nb):
+        QD[k, 3 * i] = 0.0
+        QD[k, 3 * i + 1] = 0.0
+        QD[k, 3 * i + 2] = 0.0
+    for c in range(nc):
+        for i in range(nb):
+            w[i] = 0.0
+            v[i] = 0.0
+        for j in range(nc):
+            ci = crank_idx[j]
+            wj = omega[j] if j == c else 0.0
+            w[ci] = wj
+            v[ci] = 1j * wj * E[ci] * crank_arm[j]
+        for d in range(L.shape[0]):
+            K1, K2 = K[d, 0], K[d, 1]
+            v1 = 0j if K1 < 0 else v[K1] + 1j * w[K1] * E[K1] * X[d, 0]
+            v2 = 0j if K2 < 0 else v[K2] + 1j * w[K2] * E[K2] * X[d, 1]
+            L1, L2 = L[d, 0], L[d, 1]
+            w[L1], w[L2] = _solve2(1j * R1[k, d], -1j * R2[k, d], v2 - v1)
+            v[L1] = v1 + 1j * w[L1] * E[L1] * arm[d, 0]
+            v[L2] = v2 + 1j * w[L2] * E[L2] * arm[d, 1]
+        for i in range(nb):
+            PARTS[k, 3 * i, c] = v[i].real
+            PARTS[k, 3 * i + 1, c] = v[i].imag
+            PARTS[k, 3 * i + 2, c] = w[i]
+            QD[k, 3 * i] += v[i].real
+            QD[k, 3 * i + 1] += v[i].imag
+            QD[k, 3 * i + 2] += w[i]
+
+
 @_jit
 def dyads_path(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, rot, arm,
                Q, QD, QDD, PARTS, margin):
@@ -435,7 +533,6 @@ def dyads_path(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, ro
     """
     N = t.shape[0]
     nb = Q.shape[1] // 3
-    nc = crank_idx.shape[0]
     nd = L.shape[0]
     E = np.empty(nb, dtype=np.complex128)
     r = np.empty(nb, dtype=np.complex128)
@@ -446,66 +543,8 @@ def dyads_path(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, ro
     w = np.empty(nb)
     v = np.empty(nb, dtype=np.complex128)
     for k in range(N):
-        for j in range(nc):
-            ci = crank_idx[j]
-            phi[ci] = omega[j] * t[k]
-            E[ci] = complex(math.cos(phi[ci]), math.sin(phi[ci]))
-            r[ci] = pivot[j] + E[ci] * crank_arm[j]
-        mg = math.inf
-        for d in range(nd):
-            K1, K2 = K[d, 0], K[d, 1]
-            x1 = X[d, 0] if K1 < 0 else r[K1] + E[K1] * X[d, 0]
-            x2 = X[d, 1] if K2 < 0 else r[K2] + E[K2] * X[d, 1]
-            l1, l2 = ln[d, 0], ln[d, 1]
-            x3, h2 = _rrr(x1, x2, l1, l2, sign[d])
-            r1 = x3 - x1
-            r2 = x3 - x2
-            s = abs(_im_conj(r1, r2)) / (l1 * l2)
-            if not (h2 >= 0.0 and s < math.inf):
-                s = -1.0
-            mg = min(mg, s)
-            R1[k, d] = r1
-            R2[k, d] = r2
-            for side in range(2):
-                Ls = L[d, side]
-                rr = r1 if side == 0 else r2
-                xp = x1 if side == 0 else x2
-                phi[Ls] = math.atan2(rr.imag, rr.real) - ang[d, side]
-                E[Ls] = rr * rot[d, side]
-                r[Ls] = xp + E[Ls] * arm[d, side]
-        margin[k] = mg
-        for i in range(nb):
-            EK[k, i] = E[i]
-            Q[k, 3 * i] = r[i].real
-            Q[k, 3 * i + 1] = r[i].imag
-            Q[k, 3 * i + 2] = phi[i]
-        # velocities, one crank at a time (conditional stop): they add up
-        for i in range(nb):
-            QD[k, 3 * i] = 0.0
-            QD[k, 3 * i + 1] = 0.0
-            QD[k, 3 * i + 2] = 0.0
-        for c in range(nc):
-            for i in range(nb):
-                w[i] = 0.0
-                v[i] = 0.0
-            for j in range(nc):
-                ci = crank_idx[j]
-                wj = omega[j] if j == c else 0.0
-                w[ci] = wj
-                v[ci] = 1j * wj * E[ci] * crank_arm[j]
-            for d in range(nd):
-                K1, K2 = K[d, 0], K[d, 1]
-                v1 = 0j if K1 < 0 else v[K1] + 1j * w[K1] * E[K1] * X[d, 0]
-                v2 = 0j if K2 < 0 else v[K2] + 1j * w[K2] * E[K2] * X[d, 1]
-                L1, L2 = L[d, 0], L[d, 1]
-                w[L1], w[L2] = _solve2(1j * R1[k, d], -1j * R2[k, d], v2 - v1)
-                v[L1] = v1 + 1j * w[L1] * E[L1] * arm[d, 0]
-                v[L2] = v2 + 1j * w[L2] * E[L2] * arm[d, 1]
-            for i in range(nb):
-                PARTS[k, 3 * i, c] = v[i].real
-                PARTS[k, 3 * i + 1, c] = v[i].imag
-                PARTS[k, 3 * i + 2, c] = w[i]
-                QD[k, 3 * i] += v[i].real
-                QD[k, 3 * i + 1] += v[i].imag
-                QD[k, 3 * i + 2] += w[i]
+        _dyads_positions(k, t[k], crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang,
+                         rot, arm, E, r, phi, Q, EK, R1, R2, margin)
+        _dyads_velocities(k, crank_idx, omega, crank_arm, L, K, X, arm, E, R1, R2, w, v, QD,
+                          PARTS)
     _dyads_accelerations(crank_idx, crank_arm, L, K, X, arm, EK, R1, R2, QD, QDD)
