@@ -35,6 +35,10 @@ from .._jit import decorators
 from . import _dyad_forms
 
 HAVE_NUMBA, _jit, _jit_inline = decorators(bool(globals().get("_FORCE_PYTHON")))
+# A piece that allocates nothing (a pass over the positions, a step of the continuation):
+# compiled without reference counting, which inlined into a loop would cost an atomic
+# increment and decrement of every array argument per call (dyads_path measured 3x slower).
+_leaf = decorators(bool(globals().get("_FORCE_PYTHON")), nrt=False)[1]
 # the dyads' closed forms, written once for numpy and compiled here
 _rrr = _jit_inline(_dyad_forms.rrr)
 _solve2 = _jit_inline(_dyad_forms.solve2)
@@ -305,7 +309,7 @@ def _rates(nb, geo, omega, work, J, piv, qd, qdd, parts, e):
         qdd[i] = e[i]
 
 
-@_jit_inline
+@_leaf
 def _store_target(k, q, qd, qdd, parts, Q, QD, QDD, PARTS):
     """Target k reached: its q, q̇, q̈ and the conditional-stop parts into row k."""
     for i in range(q.shape[0]):
@@ -316,7 +320,7 @@ def _store_target(k, q, qd, qdd, parts, Q, QD, QDD, PARTS):
             PARTS[k, i, c] = parts[i, c]
 
 
-@_jit_inline
+@_leaf
 def _continuation_step(q, qd, qdd, trial, t_now, dt, t_new, nb, geo, crank_idx, omega, tol,
                        wmax, work, r, J, piv):
     """One continuation step of dt from (t_now, q) to t_new: Taylor predictor from q, q̇, q̈
@@ -436,82 +440,85 @@ def _dyads_accelerations(crank_idx, crank_arm, L, K, X, arm, EK, R1, R2, QD, QDD
             QDD[k, 3 * i + 2] = al[i]
 
 
-@_jit_inline
-def _dyads_positions(k, tk, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, rot,
-                     arm, E, r, phi, Q, EK, R1, R2, margin):
-    """Position k (time tk) of :func:`dyads_path`: the cranks, then each dyad by its closed
-    form, into Q[k], margin[k] and the unit vectors E (EK[k]), the joint positions r and the
-    inner-joint vectors R1[k], R2[k] the rates are computed from."""
-    for j in range(crank_idx.shape[0]):
-        ci = crank_idx[j]
-        phi[ci] = omega[j] * tk
-        E[ci] = complex(math.cos(phi[ci]), math.sin(phi[ci]))
-        r[ci] = pivot[j] + E[ci] * crank_arm[j]
-    mg = math.inf
-    for d in range(L.shape[0]):
-        K1, K2 = K[d, 0], K[d, 1]
-        x1 = X[d, 0] if K1 < 0 else r[K1] + E[K1] * X[d, 0]
-        x2 = X[d, 1] if K2 < 0 else r[K2] + E[K2] * X[d, 1]
-        l1, l2 = ln[d, 0], ln[d, 1]
-        x3, h2 = _rrr(x1, x2, l1, l2, sign[d])
-        r1 = x3 - x1
-        r2 = x3 - x2
-        s = abs(_im_conj(r1, r2)) / (l1 * l2)
-        if not (h2 >= 0.0 and s < math.inf):
-            s = -1.0
-        mg = min(mg, s)
-        R1[k, d] = r1
-        R2[k, d] = r2
-        for side in range(2):
-            Ls = L[d, side]
-            rr = r1 if side == 0 else r2
-            xp = x1 if side == 0 else x2
-            phi[Ls] = math.atan2(rr.imag, rr.real) - ang[d, side]
-            E[Ls] = rr * rot[d, side]
-            r[Ls] = xp + E[Ls] * arm[d, side]
-    margin[k] = mg
-    for i in range(E.shape[0]):
-        EK[k, i] = E[i]
-        Q[k, 3 * i] = r[i].real
-        Q[k, 3 * i + 1] = r[i].imag
-        Q[k, 3 * i + 2] = phi[i]
-
-
-@_jit_inline
-def _dyads_velocities(k, crank_idx, omega, crank_arm, L, K, X, arm, E, R1, R2, w, v, QD,
-                      PARTS):
-    """Velocities at position k of :func:`dyads_path`, one crank at a time (conditional
-    stop: PARTS[k, :, c]), and their sum QD[k]; w, v: work (n bodies)."""
-    nb = E.shape[0]
-    nc = crank_idx.shape[0]
-    for i in range(nb):
-        QD[k, 3 * i] = 0.0
-        QD[k, 3 * i + 1] = 0.0
-        QD[k, 3 * i + 2] = 0.0
-    for c in range(nc):
-        for i in range(nb):
-            w[i] = 0.0
-            v[i] = 0.0
-        for j in range(nc):
+@_leaf
+def _dyads_positions(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, rot, arm,
+                     E, r, phi, Q, EK, R1, R2, margin):
+    """The positions of :func:`dyads_path` at every time t[k]: the cranks, then each dyad by
+    its closed form, into Q[k] and margin[k], with the unit vectors e^{iφ} of the bodies
+    (EK[k]) and the inner-joint vectors (R1[k], R2[k]) the rates are computed from.
+    E, r, phi: work (n bodies)."""
+    for k in range(t.shape[0]):
+        for j in range(crank_idx.shape[0]):
             ci = crank_idx[j]
-            wj = omega[j] if j == c else 0.0
-            w[ci] = wj
-            v[ci] = 1j * wj * E[ci] * crank_arm[j]
+            phi[ci] = omega[j] * t[k]
+            E[ci] = complex(math.cos(phi[ci]), math.sin(phi[ci]))
+            r[ci] = pivot[j] + E[ci] * crank_arm[j]
+        mg = math.inf
         for d in range(L.shape[0]):
             K1, K2 = K[d, 0], K[d, 1]
-            v1 = 0j if K1 < 0 else v[K1] + 1j * w[K1] * E[K1] * X[d, 0]
-            v2 = 0j if K2 < 0 else v[K2] + 1j * w[K2] * E[K2] * X[d, 1]
-            L1, L2 = L[d, 0], L[d, 1]
-            w[L1], w[L2] = _solve2(1j * R1[k, d], -1j * R2[k, d], v2 - v1)
-            v[L1] = v1 + 1j * w[L1] * E[L1] * arm[d, 0]
-            v[L2] = v2 + 1j * w[L2] * E[L2] * arm[d, 1]
+            x1 = X[d, 0] if K1 < 0 else r[K1] + E[K1] * X[d, 0]
+            x2 = X[d, 1] if K2 < 0 else r[K2] + E[K2] * X[d, 1]
+            l1, l2 = ln[d, 0], ln[d, 1]
+            x3, h2 = _rrr(x1, x2, l1, l2, sign[d])
+            r1 = x3 - x1
+            r2 = x3 - x2
+            s = abs(_im_conj(r1, r2)) / (l1 * l2)
+            if not (h2 >= 0.0 and s < math.inf):
+                s = -1.0
+            mg = min(mg, s)
+            R1[k, d] = r1
+            R2[k, d] = r2
+            for side in range(2):
+                Ls = L[d, side]
+                rr = r1 if side == 0 else r2
+                xp = x1 if side == 0 else x2
+                phi[Ls] = math.atan2(rr.imag, rr.real) - ang[d, side]
+                E[Ls] = rr * rot[d, side]
+                r[Ls] = xp + E[Ls] * arm[d, side]
+        margin[k] = mg
+        for i in range(E.shape[0]):
+            EK[k, i] = E[i]
+            Q[k, 3 * i] = r[i].real
+            Q[k, 3 * i + 1] = r[i].imag
+            Q[k, 3 * i + 2] = phi[i]
+
+
+@_leaf
+def _dyads_velocities(crank_idx, omega, crank_arm, L, K, X, arm, EK, R1, R2, w, v, QD, PARTS):
+    """The velocities of :func:`dyads_path` at every position k (unit vectors EK[k],
+    inner-joint vectors R1[k], R2[k]), one crank at a time (conditional stop:
+    PARTS[k, :, c]), and their sum QD[k].  w, v: work (n bodies)."""
+    nb = EK.shape[1]
+    nc = crank_idx.shape[0]
+    for k in range(EK.shape[0]):
         for i in range(nb):
-            PARTS[k, 3 * i, c] = v[i].real
-            PARTS[k, 3 * i + 1, c] = v[i].imag
-            PARTS[k, 3 * i + 2, c] = w[i]
-            QD[k, 3 * i] += v[i].real
-            QD[k, 3 * i + 1] += v[i].imag
-            QD[k, 3 * i + 2] += w[i]
+            QD[k, 3 * i] = 0.0
+            QD[k, 3 * i + 1] = 0.0
+            QD[k, 3 * i + 2] = 0.0
+        for c in range(nc):
+            for i in range(nb):
+                w[i] = 0.0
+                v[i] = 0.0
+            for j in range(nc):
+                ci = crank_idx[j]
+                wj = omega[j] if j == c else 0.0
+                w[ci] = wj
+                v[ci] = 1j * wj * EK[k, ci] * crank_arm[j]
+            for d in range(L.shape[0]):
+                K1, K2 = K[d, 0], K[d, 1]
+                v1 = 0j if K1 < 0 else v[K1] + 1j * w[K1] * EK[k, K1] * X[d, 0]
+                v2 = 0j if K2 < 0 else v[K2] + 1j * w[K2] * EK[k, K2] * X[d, 1]
+                L1, L2 = L[d, 0], L[d, 1]
+                w[L1], w[L2] = _solve2(1j * R1[k, d], -1j * R2[k, d], v2 - v1)
+                v[L1] = v1 + 1j * w[L1] * EK[k, L1] * arm[d, 0]
+                v[L2] = v2 + 1j * w[L2] * EK[k, L2] * arm[d, 1]
+            for i in range(nb):
+                PARTS[k, 3 * i, c] = v[i].real
+                PARTS[k, 3 * i + 1, c] = v[i].imag
+                PARTS[k, 3 * i + 2, c] = w[i]
+                QD[k, 3 * i] += v[i].real
+                QD[k, 3 * i + 1] += v[i].imag
+                QD[k, 3 * i + 2] += w[i]
 
 
 @_jit
@@ -529,7 +536,8 @@ def dyads_path(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, ro
     angle, −1 where it cannot assemble).  The accelerations come after the loop,
     in one call over all positions (:func:`_dyads_accelerations`, from the
     unit vectors and inner-joint vectors kept per position): a compiled helper
-    called once per position, or inlined, measured slower.
+    called once per position, or inlined, measured slower; so are the positions
+    and the velocities (:func:`_dyads_positions`, :func:`_dyads_velocities`).
     """
     N = t.shape[0]
     nb = Q.shape[1] // 3
@@ -540,11 +548,8 @@ def dyads_path(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, ro
     EK = np.empty((N, nb), dtype=np.complex128)         # per position, for the accelerations
     R1 = np.empty((N, nd), dtype=np.complex128)
     R2 = np.empty((N, nd), dtype=np.complex128)
-    w = np.empty(nb)
-    v = np.empty(nb, dtype=np.complex128)
-    for k in range(N):
-        _dyads_positions(k, t[k], crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang,
-                         rot, arm, E, r, phi, Q, EK, R1, R2, margin)
-        _dyads_velocities(k, crank_idx, omega, crank_arm, L, K, X, arm, E, R1, R2, w, v, QD,
-                          PARTS)
+    _dyads_positions(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, rot, arm,
+                     E, r, phi, Q, EK, R1, R2, margin)
+    _dyads_velocities(crank_idx, omega, crank_arm, L, K, X, arm, EK, R1, R2, np.empty(nb),
+                      np.empty(nb, dtype=np.complex128), QD, PARTS)
     _dyads_accelerations(crank_idx, crank_arm, L, K, X, arm, EK, R1, R2, QD, QDD)

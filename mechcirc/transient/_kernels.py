@@ -26,6 +26,11 @@ import numpy as np
 from .._jit import decorators
 
 HAVE_NUMBA, _jit, _jit_inline = decorators(bool(globals().get("_FORCE_PYTHON")))
+# A piece of a kernel that allocates nothing (a loop, or a step of one): compiled without
+# reference counting.  Inlined (inline="always") into a kernel that counts references, its
+# array arguments would cost an atomic increment and decrement per call: modal_run's
+# sample loop as such a helper measured 4.8x slower.
+_leaf = decorators(bool(globals().get("_FORCE_PYTHON")), nrt=False)[1]
 
 B_EPS = 1e-10
 
@@ -237,7 +242,7 @@ def dense_output(z, y5, K, hh, th, coefD, row):
         row[i] = z[i] + th * (ydiff + s1 * (bspl + th * (r4 + s1 * r5)))
 
 
-@_jit_inline
+@_leaf
 def dopri_stages(t, hh, z, K, ytmp, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, t0, dt, u,
                  coefA, coefC):
     """Stages 2–7 of a Dormand–Prince step of hh from (t, z; K[0] = f(z)) into K[1 .. 6];
@@ -252,7 +257,7 @@ def dopri_stages(t, hh, z, K, ytmp, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, p
             u, K[s])
 
 
-@_jit_inline
+@_leaf
 def step_error(z, ytmp, y5, K, hh, coefB4, atol, rtol):
     """The step's embedded error: RMS of (5th − 4th-order solution) scaled by
     atol_i + rtol max(|z_i|, |ŷ_i|); copies the 5th-order solution ``ytmp`` into ``y5``."""
@@ -269,7 +274,7 @@ def step_error(z, ytmp, y5, K, hh, coefB4, atol, rtol):
     return math.sqrt(err / N)
 
 
-@_jit_inline
+@_leaf
 def accept_step(t, t_new, hh, z, y5, K, t0, dt, nout, k_out, coefD, out):
     """Take the step t → t_new: the outputs inside (t, t_new] by the continuous extension
     (from row ``k_out`` on), then z ← y5 and K[0] ← K[6] (FSAL).  Returns the next output row."""
@@ -378,32 +383,38 @@ def _stored(cols, ncols):
     return modes, where
 
 
-@_jit_inline
-def _modal_step(uk, du, mr, mi, ar, ai, br, bi, qr, qi):
-    """One sample of every mode's recurrence q ← μ q + g₁ u_k + g₂ Δu, on split arrays
-    (μ = mr + j mi, g₁ = ar + j ai, g₂ = br + j bi, q = qr + j qi)."""
-    for j in range(mr.shape[0]):
-        xr = mr[j] * qr[j] - mi[j] * qi[j] + ar[j] * uk + br[j] * du
-        xi = mr[j] * qi[j] + mi[j] * qr[j] + ai[j] * uk + bi[j] * du
-        qr[j] = xr
-        qi[j] = xi
-
-
-@_jit_inline
-def _store_modes(out, k, qr, qi, identity, cre, im_mode, im_col):
-    """The stored columns of sample k into row k of ``out``: Re q_j in column cre[j] (if
-    stored; ``identity``: column j is Re q_j), Im q of mode im_mode[p] in column im_col[p]."""
+@_leaf
+def _modal_samples(u, mr, mi, ar, ai, br, bi, qr, qi, wr, wi, q2, identity, cre, im_mode,
+                   im_col, out, yout):
+    """The sample loop of :func:`modal_run` on its split arrays (μ = mr + j mi, g₁ = ar +
+    j ai, g₂ = br + j bi, q = qr + j qi from q0 on, output weights wr, wi): q updated in
+    place, q2 the running max of |q|², rows of ``out`` (Re q_j in column cre[j] if stored,
+    ``identity``: column j; Im q of mode im_mode[p] in column im_col[p]) and ``yout``."""
+    m = mr.shape[0]
     ncols = out.shape[1]
-    if identity:                # column j is Re q_j: a contiguous copy
-        for j in range(min(qr.shape[0], ncols)):
-            out[k, j] = qr[j]
-    else:
-        for j in range(qr.shape[0]):
-            c = cre[j]
-            if c < ncols:
-                out[k, c] = qr[j]
-    for p in range(im_mode.shape[0]):
-        out[k, im_col[p]] = qi[im_mode[p]]
+    for k in range(u.shape[0]):
+        if k > 0:
+            uk = u[k - 1]
+            du = u[k] - uk
+            for j in range(m):
+                xr = mr[j] * qr[j] - mi[j] * qi[j] + ar[j] * uk + br[j] * du
+                xi = mr[j] * qi[j] + mi[j] * qr[j] + ai[j] * uk + bi[j] * du
+                qr[j] = xr
+                qi[j] = xi
+        for j in range(m):
+            a = qr[j] * qr[j] + qi[j] * qi[j]
+            q2[j] = a if not a <= q2[j] else q2[j]      # (a NaN stays: it is absorbing)
+        yout[k] = _wdot(wr, qr, wi, qi)
+        if identity:                # column j is Re q_j: a contiguous copy
+            for j in range(min(m, ncols)):
+                out[k, j] = qr[j]
+        else:
+            for j in range(m):
+                c = cre[j]
+                if c < ncols:
+                    out[k, c] = qr[j]
+        for p in range(im_mode.shape[0]):
+            out[k, im_col[p]] = qi[im_mode[p]]
 
 
 @_jit
@@ -419,7 +430,6 @@ def modal_run(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout, qlast):
     next samples continues.  Real arithmetic on split arrays, so the per-mode
     update vectorises.
     """
-    nt = u.shape[0]
     m = mu.shape[0]
     ncols = out.shape[1]
     mr = np.empty(m)
@@ -450,14 +460,8 @@ def modal_run(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout, qlast):
         if cre[j] != j:
             identity = False
     im_mode, im_col = _stored(cim, ncols)
-    for k in range(nt):
-        if k > 0:
-            _modal_step(u[k - 1], u[k] - u[k - 1], mr, mi, ar, ai, br, bi, qr, qi)
-        for j in range(m):
-            a = qr[j] * qr[j] + qi[j] * qi[j]
-            q2[j] = a if not a <= q2[j] else q2[j]      # (a NaN stays: it is absorbing)
-        yout[k] = _wdot(wr, qr, wi, qi)
-        _store_modes(out, k, qr, qi, identity, cre, im_mode, im_col)
+    _modal_samples(u, mr, mi, ar, ai, br, bi, qr, qi, wr, wi, q2, identity, cre, im_mode,
+                   im_col, out, yout)
     for j in range(m):
         qmax[j] = math.sqrt(q2[j])
         qlast[j] = complex(qr[j], qi[j])
