@@ -221,6 +221,31 @@ def _store(s, nb, series, has_c, re, im, cr, ci, ai):
 
 
 @jit
+def _merge(nb, real, has_c, has_i, cr, ci, ai):
+    """A node's sums made one: its real leaf term ``real`` (if any: nonzero or NaN) into the
+    complex sum (cr, ci), then the imaginary sum ``ai`` into ci where both exist; a node
+    with neither sums to 0 (an imaginary sum).  Returns (has_c, has_i, with_real)."""
+    with_real = real != 0.0 or math.isnan(real)
+    if with_real:
+        if has_c:
+            for j in range(nb):
+                cr[j] += real
+        else:
+            for j in range(nb):
+                cr[j] = real
+                ci[j] = 0.0
+            has_c = True
+    if not has_c and not has_i:
+        for j in range(nb):
+            ai[j] = 0.0
+        has_i = True
+    if has_c and has_i:
+        for j in range(nb):
+            ci[j] += ai[j]
+    return has_c, has_i, with_real
+
+
+@jit
 def _store_with_error(s, leaf, nb, series, has_c, have_b, with_real, extra, re, im, mg, ig,
                       rh, cr, ci, ai, bb):
     """:func:`_store` with the node's magnitude, its reciprocal and its error bound ρ."""
@@ -321,24 +346,7 @@ def _evaluate_design(omega, kind, cplx, c_real, c_inv, c_om, e_real, e_inv, e_om
             else:
                 has_i, has_c = _children(i, nb, series, kstart, kids, slot, cplx, re, im,
                                          ai, cr, ci, has_i, has_c)
-            real = c_real[i]
-            with_real = real != 0.0 or math.isnan(real)
-            if with_real:
-                if has_c:
-                    for j in range(nb):
-                        cr[j] += real
-                else:
-                    for j in range(nb):
-                        cr[j] = real
-                        ci[j] = 0.0
-                    has_c = True
-            if not has_c and not has_i:
-                for j in range(nb):
-                    ai[j] = 0.0
-                has_i = True
-            if has_c and has_i:
-                for j in range(nb):
-                    ci[j] += ai[j]
+            has_c, has_i, with_real = _merge(nb, c_real[i], has_c, has_i, cr, ci, ai)
             if want_error:
                 _store_with_error(s, k == 3, nb, series, has_c, have_b, with_real,
                                   e_real[i] if with_real else 0.0, re, im, mg, ig, rh, cr, ci,

@@ -125,7 +125,7 @@ def _relative_to_true(rho, shape) -> NDArray:
     """The bound ``rho`` relative to the computed |K̂| made relative to the true |K|, ∞
     for NaN (the caller holds ``np.errstate(all="ignore")``)."""
     # relative to the true |K| ≥ |K̂|(1 − ρ) it is ρ / (1 − ρ)
-    rho = _through_reciprocal(np.atleast_1d(np.asarray(rho, dtype=float)))
+    rho = through_reciprocal(np.atleast_1d(np.asarray(rho, dtype=float)))
     if rho.shape != shape:          # (a fresh array of that shape otherwise)
         rho = np.broadcast_to(rho, shape).astype(float)
     return np.fmin(rho, _INF, out=rho)          # (fmin: NaN → ∞)
@@ -822,7 +822,7 @@ def _sum_bound(series: bool, parts, mu, c, bound, shape):
                 t = rho + mu
                 t *= mag
             else:
-                t = _through_reciprocal(rho)
+                t = through_reciprocal(rho)
                 t += c
                 t /= mag
         bound = t if bound is None else np.add(bound, t, out=bound)
@@ -831,11 +831,22 @@ def _sum_bound(series: bool, parts, mu, c, bound, shape):
     return bound
 
 
-def _through_reciprocal(rho: NDArray) -> NDArray:
-    """A bound of the relative error of 1/x̂ given |x̂ − x| ≤ ρ|x̂|: ρ / (1 − ρ), ∞ from
-    ρ ≥ 1 on (a zero denominator; NaN stays NaN).
+def through_reciprocal(rho: NDArray) -> NDArray:
+    """A bound of the relative error of 1/x̂ given |x̂ − x| ≤ ρ|x̂|: ρ / (1 − ρ).
 
-    Callers hold ``np.errstate(all="ignore")``; :mod:`mechcirc._sp_kernel` computes the same.
+    The one reciprocal rule of the error bounds (the tree's parallel nodes, the
+    resonances' anti-resonance function −1/X); :mod:`mechcirc._sp_kernel` computes
+    the same in its compiled loop.  Callers hold ``np.errstate(all="ignore")``.
+
+    Parameters
+    ----------
+    rho : ndarray or float
+        The bound ρ of the relative error of x̂.
+
+    Returns
+    -------
+    ndarray
+        ρ / (1 − ρ), at least 1-d; ∞ from ρ ≥ 1 on (a zero denominator), NaN for NaN.
     """
     if not (isinstance(rho, np.ndarray) and rho.ndim):
         # A scalar ρ (a leaf's, constant in ω: fuzz seed 599): work on an array.

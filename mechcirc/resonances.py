@@ -1176,6 +1176,7 @@ def _secant_designs(p, w0: np.ndarray, pole: np.ndarray, e0: np.ndarray):
     their estimates.  g and the bound of its error come from one evaluation of
     every design's plan at its own points.  Returns ``(ω, relative error)``.
     """
+    from ._tree_eval import through_reciprocal
     from .reduction import evaluate_designs
 
     eps = np.finfo(float).eps
@@ -1187,7 +1188,8 @@ def _secant_designs(p, w0: np.ndarray, pole: np.ndarray, e0: np.ndarray):
         with np.errstate(all="ignore"):
             X = K.imag
             g = np.where(pole, -1.0 / X, X)
-            rho = np.where(pole, rho + 2 * rho * rho + 4 * eps / 2, rho)
+            # g = −1/X: the tree's reciprocal rule, and the division's rounding (4u)
+            rho = np.where(pole, through_reciprocal(rho) + 4 * eps / 2, rho)
             dg = 4 * np.maximum(rho * np.abs(g), eps * np.abs(g))
         return g, dg
 

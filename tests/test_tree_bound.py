@@ -23,7 +23,7 @@ def test_reciprocal_rule_is_the_worst_case():
     # The same rule from a sum's bound E and its magnitude A (ρ = E/A).
     E, A = rho * 3.7, np.full(rho.shape, 3.7)
     with np.errstate(all="ignore"):
-        got = _tree_eval._through_reciprocal(rho)
+        got = _tree_eval.through_reciprocal(rho)
         via_sum = _tree_eval._over_excess(E, A)
     with mpmath.workdps(40):
         worst = np.array([float(mpmath.mpf(r) / (1 - mpmath.mpf(r))) for r in rho])
@@ -36,7 +36,7 @@ def test_reciprocal_rule_is_the_worst_case():
     assert np.all(got <= worst * (1 + 2 * U))     # and it is that bound, not looser
     # No digit known: from ρ = 1 on, and for NaN, the bound is infinite (or NaN, flagged).
     with np.errstate(all="ignore"):
-        out = _tree_eval._through_reciprocal(np.array([1.0, 1.5, np.inf, np.nan]))
+        out = _tree_eval.through_reciprocal(np.array([1.0, 1.5, np.inf, np.nan]))
         out2 = _tree_eval._over_excess(np.array([3.7, 5.0, np.inf]), np.full(3, 3.7))
     assert np.all(np.isinf(out[:3])) and np.isnan(out[3])
     assert np.all(np.isinf(out2))

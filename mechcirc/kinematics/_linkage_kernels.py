@@ -35,6 +35,10 @@ from .._jit import decorators
 from . import _dyad_forms
 
 HAVE_NUMBA, _jit, _jit_inline = decorators(bool(globals().get("_FORCE_PYTHON")))
+# A piece that allocates nothing (a pass over the positions, a step of the continuation):
+# compiled without reference counting, which inlined into a loop would cost an atomic
+# increment and decrement of every array argument per call (dyads_path measured 3x slower).
+_leaf = decorators(bool(globals().get("_FORCE_PYTHON")), nrt=False)[1]
 # the dyads' closed forms, written once for numpy and compiled here
 _rrr = _jit_inline(_dyad_forms.rrr)
 _solve2 = _jit_inline(_dyad_forms.solve2)
@@ -305,6 +309,38 @@ def _rates(nb, geo, omega, work, J, piv, qd, qdd, parts, e):
         qdd[i] = e[i]
 
 
+@_leaf
+def _store_target(k, q, qd, qdd, parts, Q, QD, QDD, PARTS):
+    """Target k reached: its q, q̇, q̈ and the conditional-stop parts into row k."""
+    for i in range(q.shape[0]):
+        Q[k, i] = q[i]
+        QD[k, i] = qd[i]
+        QDD[k, i] = qdd[i]
+        for c in range(parts.shape[1]):
+            PARTS[k, i, c] = parts[i, c]
+
+
+@_leaf
+def _continuation_step(q, qd, qdd, trial, t_now, dt, t_new, nb, geo, crank_idx, omega, tol,
+                       wmax, work, r, J, piv):
+    """One continuation step of dt from (t_now, q) to t_new: Taylor predictor from q, q̇, q̈
+    into ``trial``, then Newton (:func:`_converge`); the step halves while Newton fails.
+
+    Returns (sign of det J at the converged ``trial``, its time), or (0, the lock time
+    estimate) when the step has shrunk to nothing (a lock).
+    """
+    while True:
+        for i in range(q.shape[0]):
+            trial[i] = q[i] + dt * (qd[i] + 0.5 * dt * qdd[i])
+        sgn = _converge(trial, t_new, nb, geo, crank_idx, omega, tol, work, r, J, piv)
+        if sgn != 0.0:
+            return sgn, t_new
+        dt *= 0.5
+        t_new = t_now + dt
+        if abs(dt) * wmax < 1e-9:
+            return 0.0, t_now + 2.0 * dt
+
+
 @_jit
 def newton_path(q0, targets, ia, ib, sa, sb, crank_idx, omega, tol, dt_max, wmax,
                 Q, QD, QDD, PARTS, info, ga, gb, gs, gu, bs):
@@ -343,29 +379,17 @@ def newton_path(q0, targets, ia, ib, sa, sb, crank_idx, omega, tol, dt_max, wmax
         t_new = targets[k]
         dt = t_new - t_now
         if dt == 0.0:
-            for i in range(n):
-                Q[k, i] = q[i]
-                QD[k, i] = qd[i]
-                QDD[k, i] = qdd[i]
-                for c in range(nc):
-                    PARTS[k, i, c] = parts[i, c]
+            _store_target(k, q, qd, qdd, parts, Q, QD, QDD, PARTS)
             k += 1
             continue
         if dt > dt_max or dt < -dt_max:
             dt = dt_max if dt > 0.0 else -dt_max
             t_new = t_now + dt
-        # one continuation step of dt from t_now, halving on failure
-        while True:
-            for i in range(n):
-                trial[i] = q[i] + dt * (qd[i] + 0.5 * dt * qdd[i])
-            sgn = _converge(trial, t_new, nb, geo, crank_idx, omega, tol, work, r, J, piv)
-            if sgn != 0.0:
-                break
-            dt *= 0.5
-            t_new = t_now + dt
-            if abs(dt) * wmax < 1e-9:
-                info[0] = t_now + 2.0 * dt
-                return LOCK
+        sgn, t_new = _continuation_step(q, qd, qdd, trial, t_now, dt, t_new, nb, geo, crank_idx,
+                                        omega, tol, wmax, work, r, J, piv)
+        if sgn == 0.0:
+            info[0] = t_new
+            return LOCK
         if sgn != sign0:
             info[0] = t_now
             info[1] = t_new
@@ -416,43 +440,21 @@ def _dyads_accelerations(crank_idx, crank_arm, L, K, X, arm, EK, R1, R2, QD, QDD
             QDD[k, 3 * i + 2] = al[i]
 
 
-@_jit
-def dyads_path(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, rot, arm,
-               Q, QD, QDD, PARTS, margin):
-    """Closed-form RRR dyads at every time in ``t``, one position at a time.
-
-    The closed forms of :mod:`._dyad_forms` (RRR only), compiled, as the
-    vectorised :class:`.linkage_solver._DyadSolver` runs them on arrays.  Per
-    dyad d: links L[d], carriers K[d] (−1: the ground), outer joints X[d] (the
-    pose point for the ground, else the offset in the carrier's frame), lengths ln[d], assembly side sign[d],
-    rot[d] = e^{−i·pose angle}/length, arm[d] = the link frame's origin from
-    its outer joint in the link's frame, ang[d] = the links' pose angles.
-    Fills Q, QD, QDD, PARTS and margin (the smallest |sin| of a dyad's inner
-    angle, −1 where it cannot assemble).  The accelerations come after the loop,
-    in one call over all positions (:func:`_dyads_accelerations`, from the
-    unit vectors and inner-joint vectors kept per position): a compiled helper
-    called once per position, or inlined, measured slower.
-    """
-    N = t.shape[0]
-    nb = Q.shape[1] // 3
-    nc = crank_idx.shape[0]
-    nd = L.shape[0]
-    E = np.empty(nb, dtype=np.complex128)
-    r = np.empty(nb, dtype=np.complex128)
-    phi = np.empty(nb)
-    EK = np.empty((N, nb), dtype=np.complex128)         # per position, for the accelerations
-    R1 = np.empty((N, nd), dtype=np.complex128)
-    R2 = np.empty((N, nd), dtype=np.complex128)
-    w = np.empty(nb)
-    v = np.empty(nb, dtype=np.complex128)
-    for k in range(N):
-        for j in range(nc):
+@_leaf
+def _dyads_positions(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, rot, arm,
+                     E, r, phi, Q, EK, R1, R2, margin):
+    """The positions of :func:`dyads_path` at every time t[k]: the cranks, then each dyad by
+    its closed form, into Q[k] and margin[k], with the unit vectors e^{iφ} of the bodies
+    (EK[k]) and the inner-joint vectors (R1[k], R2[k]) the rates are computed from.
+    E, r, phi: work (n bodies)."""
+    for k in range(t.shape[0]):
+        for j in range(crank_idx.shape[0]):
             ci = crank_idx[j]
             phi[ci] = omega[j] * t[k]
             E[ci] = complex(math.cos(phi[ci]), math.sin(phi[ci]))
             r[ci] = pivot[j] + E[ci] * crank_arm[j]
         mg = math.inf
-        for d in range(nd):
+        for d in range(L.shape[0]):
             K1, K2 = K[d, 0], K[d, 1]
             x1 = X[d, 0] if K1 < 0 else r[K1] + E[K1] * X[d, 0]
             x2 = X[d, 1] if K2 < 0 else r[K2] + E[K2] * X[d, 1]
@@ -474,12 +476,21 @@ def dyads_path(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, ro
                 E[Ls] = rr * rot[d, side]
                 r[Ls] = xp + E[Ls] * arm[d, side]
         margin[k] = mg
-        for i in range(nb):
+        for i in range(E.shape[0]):
             EK[k, i] = E[i]
             Q[k, 3 * i] = r[i].real
             Q[k, 3 * i + 1] = r[i].imag
             Q[k, 3 * i + 2] = phi[i]
-        # velocities, one crank at a time (conditional stop): they add up
+
+
+@_leaf
+def _dyads_velocities(crank_idx, omega, crank_arm, L, K, X, arm, EK, R1, R2, w, v, QD, PARTS):
+    """The velocities of :func:`dyads_path` at every position k (unit vectors EK[k],
+    inner-joint vectors R1[k], R2[k]), one crank at a time (conditional stop:
+    PARTS[k, :, c]), and their sum QD[k].  w, v: work (n bodies)."""
+    nb = EK.shape[1]
+    nc = crank_idx.shape[0]
+    for k in range(EK.shape[0]):
         for i in range(nb):
             QD[k, 3 * i] = 0.0
             QD[k, 3 * i + 1] = 0.0
@@ -492,15 +503,15 @@ def dyads_path(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, ro
                 ci = crank_idx[j]
                 wj = omega[j] if j == c else 0.0
                 w[ci] = wj
-                v[ci] = 1j * wj * E[ci] * crank_arm[j]
-            for d in range(nd):
+                v[ci] = 1j * wj * EK[k, ci] * crank_arm[j]
+            for d in range(L.shape[0]):
                 K1, K2 = K[d, 0], K[d, 1]
-                v1 = 0j if K1 < 0 else v[K1] + 1j * w[K1] * E[K1] * X[d, 0]
-                v2 = 0j if K2 < 0 else v[K2] + 1j * w[K2] * E[K2] * X[d, 1]
+                v1 = 0j if K1 < 0 else v[K1] + 1j * w[K1] * EK[k, K1] * X[d, 0]
+                v2 = 0j if K2 < 0 else v[K2] + 1j * w[K2] * EK[k, K2] * X[d, 1]
                 L1, L2 = L[d, 0], L[d, 1]
                 w[L1], w[L2] = _solve2(1j * R1[k, d], -1j * R2[k, d], v2 - v1)
-                v[L1] = v1 + 1j * w[L1] * E[L1] * arm[d, 0]
-                v[L2] = v2 + 1j * w[L2] * E[L2] * arm[d, 1]
+                v[L1] = v1 + 1j * w[L1] * EK[k, L1] * arm[d, 0]
+                v[L2] = v2 + 1j * w[L2] * EK[k, L2] * arm[d, 1]
             for i in range(nb):
                 PARTS[k, 3 * i, c] = v[i].real
                 PARTS[k, 3 * i + 1, c] = v[i].imag
@@ -508,4 +519,37 @@ def dyads_path(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, ro
                 QD[k, 3 * i] += v[i].real
                 QD[k, 3 * i + 1] += v[i].imag
                 QD[k, 3 * i + 2] += w[i]
+
+
+@_jit
+def dyads_path(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, rot, arm,
+               Q, QD, QDD, PARTS, margin):
+    """Closed-form RRR dyads at every time in ``t``, one position at a time.
+
+    The closed forms of :mod:`._dyad_forms` (RRR only), compiled, as the
+    vectorised :class:`.linkage_solver._DyadSolver` runs them on arrays.  Per
+    dyad d: links L[d], carriers K[d] (−1: the ground), outer joints X[d] (the
+    pose point for the ground, else the offset in the carrier's frame), lengths ln[d], assembly side sign[d],
+    rot[d] = e^{−i·pose angle}/length, arm[d] = the link frame's origin from
+    its outer joint in the link's frame, ang[d] = the links' pose angles.
+    Fills Q, QD, QDD, PARTS and margin (the smallest |sin| of a dyad's inner
+    angle, −1 where it cannot assemble).  The accelerations come after the loop,
+    in one call over all positions (:func:`_dyads_accelerations`, from the
+    unit vectors and inner-joint vectors kept per position): a compiled helper
+    called once per position, or inlined, measured slower; so are the positions
+    and the velocities (:func:`_dyads_positions`, :func:`_dyads_velocities`).
+    """
+    N = t.shape[0]
+    nb = Q.shape[1] // 3
+    nd = L.shape[0]
+    E = np.empty(nb, dtype=np.complex128)
+    r = np.empty(nb, dtype=np.complex128)
+    phi = np.empty(nb)
+    EK = np.empty((N, nb), dtype=np.complex128)         # per position, for the accelerations
+    R1 = np.empty((N, nd), dtype=np.complex128)
+    R2 = np.empty((N, nd), dtype=np.complex128)
+    _dyads_positions(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, rot, arm,
+                     E, r, phi, Q, EK, R1, R2, margin)
+    _dyads_velocities(crank_idx, omega, crank_arm, L, K, X, arm, EK, R1, R2, np.empty(nb),
+                      np.empty(nb, dtype=np.complex128), QD, PARTS)
     _dyads_accelerations(crank_idx, crank_arm, L, K, X, arm, EK, R1, R2, QD, QDD)

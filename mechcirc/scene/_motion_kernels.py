@@ -118,23 +118,25 @@ def force_law(law, k, d, cl, e, edot):
     return d * edot
 
 
-@_leaf
-def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, work):
-    """Derivatives of y = [q_1..q_n, q̇_1..q̇_n] into dy; outputs into aux.
+@_jit_inline
+def fn_at(f, FI, FF, tabs, q):
+    """:func:`feval` of function f (its row of FI and FF) at coordinate q."""
+    return feval(FI[f, 0], tabs, FI[f, 2], FF[f, 0], FF[f, 1], FF[f, 2], FF[f, 3], FF[f, 4],
+                 FF[f, 5], q)
 
-    aux = [body accelerations (B) | element forces (E) | deformations (E) |
-    drive moment | moments (Mo) | out-of-range flag].
+
+@_jit_inline
+def crank_motion(PV, t):
+    """The crank's (angle, speed, acceleration) at time t and the (angle, speed) the loads'
+    rigid reference follows.
+
+    θ = θs + Ω t + (A/ν) sin(ν t) (a speed ripple A cos(ν t); A = 0: constant).  A load's
+    reference is the rigid motion at the crank angle (PV[7] = 0), or at the mean motion
+    θs + Ω t (PV[7] = 1: a load to the frame under a small ripple, as the circuit).
     """
-    npart = PRIG.shape[0]
-    n = npart - 1
-    nf = int(PV[3])
-    want = PV[4] != 0.0
-    # the crank: θ = θs + Ω t + (A/ν) sin(ν t) (a speed ripple A cos(ν t); A = 0: constant)
     amp = PV[5]
     theta = PV[1] + PV[0] * t
     omega = PV[0]
-    # a load's reference: the rigid motion at the crank angle (PV[7] = 0), or at the mean
-    # motion θs + Ω t (PV[7] = 1: a load to the frame under a small ripple, as the circuit)
     th_load = theta
     w_load = omega
     accel = 0.0
@@ -147,11 +149,18 @@ def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, wo
         if PV[7] == 0.0:
             th_load = theta
             w_load = omega
-    # work rows: 0 q, 1 qd, 2 qdd, 3 m, 4 m', 5 Q, then fv, f1, f2 over functions
-    bad = 0
-    r = PRIG[0]
-    v0, d0, dd0, b0 = feval(FI[r, 0], tabs, FI[r, 2], FF[r, 0], FF[r, 1], FF[r, 2], FF[r, 3],
-                            FF[r, 4], FF[r, 5], theta)
+    return theta, omega, accel, th_load, w_load
+
+
+@_jit_inline
+def part_kinematics(y, theta, omega, accel, nf, FI, FF, tabs, MI_, MW, PRIG, work):
+    """Every part's coordinate, rate (work rows 0, 1; the drive's part 0 also its
+    acceleration, row 2, from its prescribed ψ_0(θ)), every function of them with its
+    derivatives (rows 6–8), each part's mass m and dm/dq (rows 3, 4) and a zero generalised
+    force (row 5).  Returns the out-of-range flag of the functions."""
+    npart = PRIG.shape[0]
+    n = npart - 1
+    v0, d0, dd0, b0 = fn_at(PRIG[0], FI, FF, tabs, theta)
     work[0, 0] = v0
     work[1, 0] = d0 * omega
     work[2, 0] = dd0 * omega * omega + d0 * accel
@@ -162,6 +171,7 @@ def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, wo
         work[3, j] = 0.0
         work[4, j] = 0.0
         work[5, j] = 0.0
+    bad = 0
     for f in range(nf):
         p = FI[f, 1]
         if p < 0:           # a rigid-motion function of θ: evaluated where needed
@@ -173,8 +183,7 @@ def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, wo
             work[7, f] = b1
             work[8, f] = 0.0
             continue
-        a, b1, b2, bb = feval(FI[f, 0], tabs, FI[f, 2], FF[f, 0], FF[f, 1], FF[f, 2],
-                              FF[f, 3], FF[f, 4], FF[f, 5], arg)
+        a, b1, b2, bb = fn_at(f, FI, FF, tabs, arg)
         work[6, f] = a
         work[7, f] = b1
         work[8, f] = b2
@@ -184,76 +193,91 @@ def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, wo
         p = FI[f, 1]
         work[3, p] += MW[k] * work[7, f] * work[7, f]
         work[4, p] += 2.0 * MW[k] * work[7, f] * work[8, f]
-    nb = BI.shape[0]
+    return bad
+
+
+@_jit_inline
+def length_element(e, EI, EF, work):
+    """(δ, ∂δ/∂q_a, ∂δ/∂q_b) of a length element e: δ = |P_b − P_a| − ℓ0, a side without
+    functions a fixed point."""
+    ga = 0.0
+    gb = 0.0
+    if EI[e, 2] >= 0:
+        xa = work[6, EI[e, 2]]
+        ya = work[6, EI[e, 3]]
+    else:
+        xa = EF[e, 4]
+        ya = EF[e, 5]
+    if EI[e, 4] >= 0:
+        xb = work[6, EI[e, 4]]
+        yb = work[6, EI[e, 5]]
+    else:
+        xb = EF[e, 6]
+        yb = EF[e, 7]
+    dx = xb - xa
+    dyy = yb - ya
+    ln = math.sqrt(dx * dx + dyy * dyy)
+    ux = dx / ln
+    uy = dyy / ln
+    de = ln - EF[e, 3]
+    if EI[e, 2] >= 0:
+        ga = -(ux * work[7, EI[e, 2]] + uy * work[7, EI[e, 3]])
+    if EI[e, 4] >= 0:
+        gb = ux * work[7, EI[e, 4]] + uy * work[7, EI[e, 5]]
+    return de, ga, gb
+
+
+@_jit_inline
+def load_element(e, EI, EF, FI, FF, tabs, th_load, w_load, work):
+    """(δ, ∂δ/∂q_b, rigid part of δ̇) of a load e on point P of part b (functions fb, fb2):
+    along u, δ = u·(P − P_rig), or toward anchor A, δ = |A − P_rig| − |A − P|; P_rig the same
+    functions at the part's rigid coordinate (function fa of θ) at the loads' reference."""
+    fx = EI[e, 4]
+    fy = EI[e, 5]
+    qr, qr1, qr2, bb = fn_at(EI[e, 2], FI, FF, tabs, th_load)
+    xr, xr1, xr2, bb = fn_at(fx, FI, FF, tabs, qr)
+    yr, yr1, yr2, bb = fn_at(fy, FI, FF, tabs, qr)
+    vxr = xr1 * qr1 * w_load
+    vyr = yr1 * qr1 * w_load
+    if EI[e, 0] == 2:
+        ux = EF[e, 8]
+        uy = EF[e, 9]
+        de = ux * (work[6, fx] - xr) + uy * (work[6, fy] - yr)
+        gb = ux * work[7, fx] + uy * work[7, fy]
+        return de, gb, -(ux * vxr + uy * vyr)
+    ax = EF[e, 4]
+    ay = EF[e, 5]
+    dxr = ax - xr
+    dyr = ay - yr
+    lr = math.sqrt(dxr * dxr + dyr * dyr)
+    dx = ax - work[6, fx]
+    dyy = ay - work[6, fy]
+    ln = math.sqrt(dx * dx + dyy * dyy)
+    gb = (dx * work[7, fx] + dyy * work[7, fy]) / ln
+    return lr - ln, gb, -(dxr * vxr + dyr * vyr) / lr
+
+
+@_jit_inline
+def element_forces(want, nb, EI, EF, FI, FF, tabs, th_load, w_load, aux, work):
+    """Each element's deformation δ (into aux) and force f (into aux if ``want``), and its
+    generalised forces −f ∂δ/∂q on its two parts (work row 5)."""
     ne = EI.shape[0]
     for e in range(ne):
         typ = EI[e, 0]
         pa = EI[e, 6]
         pb = EI[e, 7]
         ga = 0.0
-        gb = 0.0
         rate_rig = 0.0
-        if typ == 0:
+        if typ == 0:                # a twist δ = f_b − f_a
             fa = EI[e, 2]
             fb = EI[e, 4]
             de = work[6, fb] - work[6, fa]
             ga = -work[7, fa]
             gb = work[7, fb]
         elif typ == 1:
-            if EI[e, 2] >= 0:
-                xa = work[6, EI[e, 2]]
-                ya = work[6, EI[e, 3]]
-            else:
-                xa = EF[e, 4]
-                ya = EF[e, 5]
-            if EI[e, 4] >= 0:
-                xb = work[6, EI[e, 4]]
-                yb = work[6, EI[e, 5]]
-            else:
-                xb = EF[e, 6]
-                yb = EF[e, 7]
-            dx = xb - xa
-            dyy = yb - ya
-            ln = math.sqrt(dx * dx + dyy * dyy)
-            ux = dx / ln
-            uy = dyy / ln
-            de = ln - EF[e, 3]
-            if EI[e, 2] >= 0:
-                ga = -(ux * work[7, EI[e, 2]] + uy * work[7, EI[e, 3]])
-            if EI[e, 4] >= 0:
-                gb = ux * work[7, EI[e, 4]] + uy * work[7, EI[e, 5]]
+            de, ga, gb = length_element(e, EI, EF, work)
         else:
-            # a load: P on part pb (functions fb, fb2); P_rig = same functions at the rigid
-            # coordinate of that part (fa: the part's rigid-coordinate function of θ)
-            fx = EI[e, 4]
-            fy = EI[e, 5]
-            rr = EI[e, 2]
-            qr, qr1, qr2, bb = feval(FI[rr, 0], tabs, FI[rr, 2], FF[rr, 0], FF[rr, 1],
-                                     FF[rr, 2], FF[rr, 3], FF[rr, 4], FF[rr, 5], th_load)
-            xr, xr1, xr2, bb = feval(FI[fx, 0], tabs, FI[fx, 2], FF[fx, 0], FF[fx, 1],
-                                     FF[fx, 2], FF[fx, 3], FF[fx, 4], FF[fx, 5], qr)
-            yr, yr1, yr2, bb = feval(FI[fy, 0], tabs, FI[fy, 2], FF[fy, 0], FF[fy, 1],
-                                     FF[fy, 2], FF[fy, 3], FF[fy, 4], FF[fy, 5], qr)
-            vxr = xr1 * qr1 * w_load
-            vyr = yr1 * qr1 * w_load
-            if typ == 2:
-                ux = EF[e, 8]
-                uy = EF[e, 9]
-                de = ux * (work[6, fx] - xr) + uy * (work[6, fy] - yr)
-                gb = ux * work[7, fx] + uy * work[7, fy]
-                rate_rig = -(ux * vxr + uy * vyr)
-            else:
-                ax = EF[e, 4]
-                ay = EF[e, 5]
-                dxr = ax - xr
-                dyr = ay - yr
-                lr = math.sqrt(dxr * dxr + dyr * dyr)
-                dx = ax - work[6, fx]
-                dyy = ay - work[6, fy]
-                ln = math.sqrt(dx * dx + dyy * dyy)
-                de = lr - ln
-                gb = (dx * work[7, fx] + dyy * work[7, fy]) / ln
-                rate_rig = -(dxr * vxr + dyr * vyr) / lr
+            de, gb, rate_rig = load_element(e, EI, EF, FI, FF, tabs, th_load, w_load, work)
         edot = ga * work[1, pa] + gb * work[1, pb] + rate_rig
         fe = force_law(EI[e, 1], EF[e, 0], EF[e, 1], EF[e, 2], de, edot)
         work[5, pa] -= fe * ga
@@ -261,20 +285,26 @@ def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, wo
         aux[nb + ne + e] = de          # always: the clearance events of rk4_run read it
         if want:
             aux[nb + e] = fe
-    nmo = MOI.shape[0]
-    for k in range(nmo):
+
+
+@_jit_inline
+def window_moments(off, FI, MOI, MOF, aux, work):
+    """Each crank-angle moment (:func:`window_moment`) into aux[off + k] and its generalised
+    force M ∂φ/∂q on its body's part (work row 5)."""
+    for k in range(MOI.shape[0]):
         fw = MOI[k, 0]
         fbd = MOI[k, 1]
         mval = window_moment(MOF[k, 0], MOF[k, 1], MOF[k, 2], MOF[k, 3], work[6, fw])
         work[5, FI[fbd, 1]] += mval * work[7, fbd]
-        aux[nb + 2 * ne + 1 + k] = mval
-    for i in range(1, npart):
-        work[2, i] = (work[5, i] - 0.5 * work[4, i] * work[1, i] * work[1, i]) / work[3, i]
-        dy[i - 1] = work[1, i]
-        dy[n + i - 1] = work[2, i]
-    if not want:
-        aux[nb + 2 * ne + 1 + nmo] = bad
-        return
+        aux[off + k] = mval
+
+
+@_jit_inline
+def body_outputs(nf, ne, FI, BI, aux, work):
+    """Each body's angular acceleration f' q̈ + f'' q̇² into aux[0 .. B) (0 for a body of the
+    rigid motion, function ≥ nf) and the drive's moment m q̈ + ½ m' q̇² − Q of part 0 after
+    them."""
+    nb = BI.shape[0]
     aux[nb + 2 * ne] = work[3, 0] * work[2, 0] + 0.5 * work[4, 0] * work[1, 0] * work[1, 0] - work[5, 0]
     for k in range(nb):
         f = BI[k]
@@ -283,6 +313,33 @@ def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, wo
             aux[k] = work[7, f] * work[2, p] + work[8, f] * work[1, p] * work[1, p]
         else:
             aux[k] = 0.0
+
+
+@_leaf
+def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, work):
+    """Derivatives of y = [q_1..q_n, q̇_1..q̇_n] into dy; outputs into aux.
+
+    aux = [body accelerations (B) | element forces (E) | deformations (E) |
+    drive moment | moments (Mo) | out-of-range flag].  work rows: 0 q, 1 q̇, 2 q̈, 3 m,
+    4 m', 5 Q, then 6–8 each function's value and first and second derivatives.
+    """
+    npart = PRIG.shape[0]
+    n = npart - 1
+    nf = int(PV[3])
+    want = PV[4] != 0.0
+    nb = BI.shape[0]
+    ne = EI.shape[0]
+    nmo = MOI.shape[0]
+    theta, omega, accel, th_load, w_load = crank_motion(PV, t)
+    bad = part_kinematics(y, theta, omega, accel, nf, FI, FF, tabs, MI_, MW, PRIG, work)
+    element_forces(want, nb, EI, EF, FI, FF, tabs, th_load, w_load, aux, work)
+    window_moments(nb + 2 * ne + 1, FI, MOI, MOF, aux, work)
+    for i in range(1, npart):
+        work[2, i] = (work[5, i] - 0.5 * work[4, i] * work[1, i] * work[1, i]) / work[3, i]
+        dy[i - 1] = work[1, i]
+        dy[n + i - 1] = work[2, i]
+    if want:
+        body_outputs(nf, ne, FI, BI, aux, work)
     aux[nb + 2 * ne + 1 + nmo] = bad
 
 

@@ -26,6 +26,11 @@ import numpy as np
 from .._jit import decorators
 
 HAVE_NUMBA, _jit, _jit_inline = decorators(bool(globals().get("_FORCE_PYTHON")))
+# A piece of a kernel that allocates nothing (a loop, or a step of one): compiled without
+# reference counting.  Inlined (inline="always") into a kernel that counts references, its
+# array arguments would cost an atomic increment and decrement per call: modal_run's
+# sample loop as such a helper measured 4.8x slower.
+_leaf = decorators(bool(globals().get("_FORCE_PYTHON")), nrt=False)[1]
 
 B_EPS = 1e-10
 
@@ -237,6 +242,51 @@ def dense_output(z, y5, K, hh, th, coefD, row):
         row[i] = z[i] + th * (ydiff + s1 * (bspl + th * (r4 + s1 * r5)))
 
 
+@_leaf
+def dopri_stages(t, hh, z, K, ytmp, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, t0, dt, u,
+                 coefA, coefC):
+    """Stages 2–7 of a Dormand–Prince step of hh from (t, z; K[0] = f(z)) into K[1 .. 6];
+    ``ytmp`` is left at the 5th-order solution (the last stage is taken there: FSAL)."""
+    for s in range(1, 7):
+        for i in range(z.shape[0]):
+            acc = z[i]
+            for r in range(s):
+                acc += hh * coefA[s, r] * K[r, i]
+            ytmp[i] = acc
+        rhs(t + coefC[s] * hh, ytmp, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, t0, dt,
+            u, K[s])
+
+
+@_leaf
+def step_error(z, ytmp, y5, K, hh, coefB4, atol, rtol):
+    """The step's embedded error: RMS of (5th − 4th-order solution) scaled by
+    atol_i + rtol max(|z_i|, |ŷ_i|); copies the 5th-order solution ``ytmp`` into ``y5``."""
+    N = z.shape[0]
+    err = 0.0
+    for i in range(N):
+        a4 = z[i]
+        for r in range(7):
+            a4 += hh * coefB4[r] * K[r, i]
+        y5[i] = ytmp[i]
+        sc = atol[i] + rtol * max(abs(z[i]), abs(ytmp[i]))
+        q = (ytmp[i] - a4) / sc
+        err += q * q
+    return math.sqrt(err / N)
+
+
+@_leaf
+def accept_step(t, t_new, hh, z, y5, K, t0, dt, nout, k_out, coefD, out):
+    """Take the step t → t_new: the outputs inside (t, t_new] by the continuous extension
+    (from row ``k_out`` on), then z ← y5 and K[0] ← K[6] (FSAL).  Returns the next output row."""
+    while k_out < nout and t0 + k_out * dt <= t_new + 1e-12 * abs(t_new):
+        dense_output(z, y5, K, hh, min((t0 + k_out * dt - t) / hh, 1.0), coefD, out[k_out])
+        k_out += 1
+    for i in range(z.shape[0]):
+        z[i] = y5[i]
+        K[0, i] = K[6, i]
+    return k_out
+
+
 @_jit
 def dopri_run(z, t0, dt, nout, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, u, rtol, atol,
               hmax, coefA, coefB4, coefC, coefD, dense, out, kink_tol=0.0):
@@ -270,25 +320,9 @@ def dopri_run(z, t0, dt, nout, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, u
             last = True
         else:
             hh = h
-        for s in range(1, 7):
-            for i in range(N):
-                acc = z[i]
-                for r in range(s):
-                    acc += hh * coefA[s, r] * K[r, i]
-                ytmp[i] = acc
-            rhs(t + coefC[s] * hh, ytmp, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, t0, dt,
-                u, K[s])
-        # ytmp now holds the 5th-order solution (the last stage is at it: FSAL)
-        err = 0.0
-        for i in range(N):
-            a4 = z[i]
-            for r in range(7):
-                a4 += hh * coefB4[r] * K[r, i]
-            y5[i] = ytmp[i]
-            sc = atol[i] + rtol * max(abs(z[i]), abs(ytmp[i]))
-            q = (ytmp[i] - a4) / sc
-            err += q * q
-        err = math.sqrt(err / N)
+        dopri_stages(t, hh, z, K, ytmp, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, t0, dt,
+                     u, coefA, coefC)
+        err = step_error(z, ytmp, y5, K, hh, coefB4, atol, rtol)
         steps += 1
         # Kink location: if a clearance element changes branch inside the step,
         # shorten the step to end just past the switch (secant on its switching
@@ -298,20 +332,12 @@ def dopri_run(z, t0, dt, nout, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, u
             if theta < 2.0:
                 h_new = hh * min(1.0, theta * 1.001 + 1e-3)
                 if h_new < 0.999 * hh:
-                    hh_retry = h_new
-                    h = hh_retry
+                    h = h_new
                     continue
         if err <= 1.0:
             t_new = stop if last else t + hh
-            # outputs inside (t, t_new]: continuous extension
-            while k_out < nout and t0 + k_out * dt <= t_new + 1e-12 * abs(t_new):
-                dense_output(z, y5, K, hh, min((t0 + k_out * dt - t) / hh, 1.0), coefD,
-                             out[k_out])
-                k_out += 1
+            k_out = accept_step(t, t_new, hh, z, y5, K, t0, dt, nout, k_out, coefD, out)
             t = t_new
-            for i in range(N):
-                z[i] = y5[i]
-                K[0, i] = K[6, i]
             fac = 5.0 if err == 0.0 else min(5.0, 0.9 * err ** -0.2)
             if not last or dense:
                 h = min(hmax, hh * fac)
@@ -357,6 +383,40 @@ def _stored(cols, ncols):
     return modes, where
 
 
+@_leaf
+def _modal_samples(u, mr, mi, ar, ai, br, bi, qr, qi, wr, wi, q2, identity, cre, im_mode,
+                   im_col, out, yout):
+    """The sample loop of :func:`modal_run` on its split arrays (μ = mr + j mi, g₁ = ar +
+    j ai, g₂ = br + j bi, q = qr + j qi from q0 on, output weights wr, wi): q updated in
+    place, q2 the running max of |q|², rows of ``out`` (Re q_j in column cre[j] if stored,
+    ``identity``: column j; Im q of mode im_mode[p] in column im_col[p]) and ``yout``."""
+    m = mr.shape[0]
+    ncols = out.shape[1]
+    for k in range(u.shape[0]):
+        if k > 0:
+            uk = u[k - 1]
+            du = u[k] - uk
+            for j in range(m):
+                xr = mr[j] * qr[j] - mi[j] * qi[j] + ar[j] * uk + br[j] * du
+                xi = mr[j] * qi[j] + mi[j] * qr[j] + ai[j] * uk + bi[j] * du
+                qr[j] = xr
+                qi[j] = xi
+        for j in range(m):
+            a = qr[j] * qr[j] + qi[j] * qi[j]
+            q2[j] = a if not a <= q2[j] else q2[j]      # (a NaN stays: it is absorbing)
+        yout[k] = _wdot(wr, qr, wi, qi)
+        if identity:                # column j is Re q_j: a contiguous copy
+            for j in range(min(m, ncols)):
+                out[k, j] = qr[j]
+        else:
+            for j in range(m):
+                c = cre[j]
+                if c < ncols:
+                    out[k, c] = qr[j]
+        for p in range(im_mode.shape[0]):
+            out[k, im_col[p]] = qi[im_mode[p]]
+
+
 @_jit
 def modal_run(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout, qlast):
     """Diagonal first-order-hold recurrence q⁺ = μ q + g₁ u + g₂ (u⁺ − u), every mode.
@@ -370,7 +430,6 @@ def modal_run(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout, qlast):
     next samples continues.  Real arithmetic on split arrays, so the per-mode
     update vectorises.
     """
-    nt = u.shape[0]
     m = mu.shape[0]
     ncols = out.shape[1]
     mr = np.empty(m)
@@ -400,32 +459,9 @@ def modal_run(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout, qlast):
     for j in range(m):
         if cre[j] != j:
             identity = False
-    nre = min(m, ncols)
     im_mode, im_col = _stored(cim, ncols)
-    n_im = im_mode.shape[0]
-    for k in range(nt):
-        if k > 0:
-            uk = u[k - 1]
-            du = u[k] - uk
-            for j in range(m):
-                xr = mr[j] * qr[j] - mi[j] * qi[j] + ar[j] * uk + br[j] * du
-                xi = mr[j] * qi[j] + mi[j] * qr[j] + ai[j] * uk + bi[j] * du
-                qr[j] = xr
-                qi[j] = xi
-        for j in range(m):
-            a = qr[j] * qr[j] + qi[j] * qi[j]
-            q2[j] = a if not a <= q2[j] else q2[j]      # (a NaN stays: it is absorbing)
-        yout[k] = _wdot(wr, qr, wi, qi)
-        if identity:                # column j is Re q_j: a contiguous copy
-            for j in range(nre):
-                out[k, j] = qr[j]
-        else:
-            for j in range(m):
-                c = cre[j]
-                if c < ncols:
-                    out[k, c] = qr[j]
-        for p in range(n_im):
-            out[k, im_col[p]] = qi[im_mode[p]]
+    _modal_samples(u, mr, mi, ar, ai, br, bi, qr, qi, wr, wi, q2, identity, cre, im_mode,
+                   im_col, out, yout)
     for j in range(m):
         qmax[j] = math.sqrt(q2[j])
         qlast[j] = complex(qr[j], qi[j])
