@@ -3,7 +3,8 @@
 ``python tests/cpu_report.py PATH [N]`` reads every ``PATH.<worker>`` file
 (tests/conftest.py writes them) and prints the total CPU of the tests (the
 worker processes and the subprocesses they waited for), the CPU of tests
-that spawned subprocesses, and the N (default 20) most expensive tests.
+that spawned subprocesses, the numba compilation and the tests that paid for
+it, and the N (default 20) most expensive tests.
 """
 
 import glob
@@ -16,8 +17,9 @@ def main(path, top=20):
     for name in sorted(glob.glob(f"{base}.gw*") + glob.glob(f"{base}.main")):
         with open(name, encoding="utf-8") as fh:
             for line in fh:
-                node, own, kids = line.rstrip("\n").split("\t")
-                rows.append((float(own) + float(kids), float(own), float(kids), node))
+                node, own, kids, *jit = line.rstrip("\n").split("\t")
+                rows.append((float(own) + float(kids), float(own), float(kids), node,
+                             float(jit[0]) if jit else 0.0))
     rows.sort(reverse=True)
     total = sum(r[0] for r in rows)
     spawning = [r for r in rows if r[2] > 0.05]
@@ -26,8 +28,13 @@ def main(path, top=20):
           f"{sum(r[2] for r in rows):.1f} s in subprocesses)")
     print(f"{len(spawning)} tests spawned subprocesses using "
           f"{sum(r[2] for r in spawning):.1f} s CPU")
+    compiling = sorted((r for r in rows if r[4] > 0.05), key=lambda r: -r[4])
+    print(f"{len(compiling)} tests compiled numba kernels (or loaded them from its cache) "
+          f"using {sum(r[4] for r in compiling):.1f} s of the workers' CPU; the first {top}:")
+    for r in compiling[:top]:
+        print(f"{r[4]:8.2f} of {r[0]:7.2f}  {r[3]}")
     print(f"top {top} (total = worker + subprocesses, seconds):")
-    for cpu, own, kids, node in rows[:top]:
+    for cpu, own, kids, node, _ in rows[:top]:
         print(f"{cpu:8.2f} = {own:7.2f} + {kids:7.2f}  {node}")
 
 

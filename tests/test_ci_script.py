@@ -60,3 +60,20 @@ def test_no_two_test_files_share_a_name():
     tests = Path(__file__).resolve().parent
     names = Counter(p.name for p in tests.rglob("test_*.py"))
     assert not [n for n, c in names.items() if c > 1], names.most_common(3)
+
+
+def test_ci_runs_the_readmes_test_command():
+    """.ci/run installs and tests as the README's test command does (the install and the
+    pytest line after the virtualenv is made and activated, word for word)."""
+    import re
+
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    block = re.search(r"Install with the test extra and run the tests:\s*```\n(.*?)\n```",
+                      readme, re.S)
+    assert block, "README.md: the test command's block was not found"
+    steps = [s.strip() for s in block.group(1).split("&&")]
+    assert steps[0].startswith("python3.11 -m venv ") and steps[1].startswith(". ")
+    command = " && ".join(steps[2:])              # e.g. pip install ".[test]" && python -m pytest -q
+    assert command.startswith("pip install ") and command.endswith("python -m pytest -q")
+    ci = (ROOT / ".ci" / "run").read_text(encoding="utf-8")
+    assert re.search(rf"^{re.escape(command)}$", ci, re.M), (command, ci)
