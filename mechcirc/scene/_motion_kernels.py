@@ -282,7 +282,7 @@ def element_forces(want, nb, EI, EF, FI, FF, tabs, th_load, w_load, aux, work):
         fe = force_law(EI[e, 1], EF[e, 0], EF[e, 1], EF[e, 2], de, edot)
         work[5, pa] -= fe * ga
         work[5, pb] -= fe * gb
-        aux[nb + ne + e] = de          # always: the clearance events of rk4_run read it
+        aux[nb + ne + e] = de          # always: the clearance events of rk_run read it
         if want:
             aux[nb + e] = fe
 
@@ -470,7 +470,7 @@ def locate(t, hh, y, k1, ynew, k4, tmp, dy, sw0, sw1, reg, regn, PV, FI, FF, tab
     return best, count
 
 
-#: The classical RK4 tableau (A, b, c), for :func:`rk4_run`.
+#: The classical RK4 tableau (A, b, c), for :func:`rk_run`.
 RK4_A = np.array([[0.0, 0.0, 0.0, 0.0], [0.5, 0.0, 0.0, 0.0], [0.0, 0.5, 0.0, 0.0],
                   [0.0, 0.0, 1.0, 0.0]])
 RK4_B = np.array([1.0 / 6.0, 1.0 / 3.0, 1.0 / 3.0, 1.0 / 6.0])
@@ -600,14 +600,6 @@ def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_
                 break
             tc += hh
     return t0 + nsteps * h, j, True, bad, nfev
-
-
-@_jit
-def rk4_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_, MW, EI,
-            EF, MOI, MOF, PRIG, BI, naux):
-    """:func:`rk_run` with the classical RK4 tableau (same arguments but the tableau)."""
-    return rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_, MW,
-                  EI, EF, MOI, MOF, PRIG, BI, naux, RK4_A, RK4_B, RK4_C, False)
 
 
 @_jit

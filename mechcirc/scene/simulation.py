@@ -7,7 +7,7 @@ tabulated on a uniform grid against the crank angle.  The step rule is the
 sley's (``docs/sley.md``): classical RK4 with ``steps_per_period`` steps per
 period 2π/|λ|max of the fastest mode of the linearised model over the cycle,
 a step cut where a force law changes piece (a clearance gap's edge, a moment's
-window; :func:`mechcirc.scene._motion_kernels.rk4_run`).
+window; :func:`mechcirc.scene._motion_kernels.rk_run`).
 
 Every result carries two checks (issue 11 §8):
 
@@ -160,7 +160,7 @@ def kernels_for(method):
         from . import _motion_kernels as k
 
         if k.HAVE_NUMBA and (_jit.COMPILED or _jit.in_cache(
-                k.rk4_run, k.rk_run, k.outputs, k.output_extrema, k.eval_many,
+                k.rk_run, k.outputs, k.output_extrema, k.eval_many,
                 *((k.rhs,) if method in SCIPY_METHODS else ()))):
             return k, "numba"
         if k.HAVE_NUMBA:
@@ -180,10 +180,9 @@ def _warm_up(model, kern) -> float:
     t0 = time.perf_counter()
     y = model.rigid_state(0.0)
     args = model.kernel_args(0.0, 1e300)
-    kern.rk4_run(y, 0.0, 1e-9, 2, 0.0, 1e-9, np.empty((1, y.size)), np.empty(1), *args,
-                 model.naux())
-    kern.rk_run(y, 0.0, 1e-9, 2, 0.0, 1e-9, np.empty((1, y.size)), np.empty(1), *args,
-                model.naux(), *_tableau_of("rk8"))
+    for method in ("rk4", "rk8"):           # (one compiled signature for both)
+        kern.rk_run(y, 0.0, 1e-9, 2, 0.0, 1e-9, np.empty((1, y.size)), np.empty(1), *args,
+                    model.naux(), *_tableau_of(method))
     oargs = model.kernel_args(0.0, 1e300, outputs=True)
     kern.outputs(np.zeros(1), np.array([y]), np.empty((1, model.naux())), *oargs)
     kern.output_extrema(np.zeros(1), np.array([y]), np.empty((2, model.naux())), *oargs)
