@@ -56,5 +56,23 @@ def write_sweep_csv(result, path, *, unit: str = "rad/s", extra: dict | None = N
             table = np.column_stack([c[start:start + block] for c in columns])
             if unit != "rad/s":         # per block: no second array of n frequencies
                 table[:, 0] = in_unit(table[:, 0], unit)
-            fh.write("".join([row % tuple(r) for r in table.tolist()]))
+            fh.write(format_rows(table, row))
             bar.update(len(table))
+
+
+def format_rows(table, row: str) -> str:
+    """The rows of ``table`` (2-D) as one string, each ``row % values`` (np.savetxt's output
+    for that format, at about half its cost).
+
+    Parameters
+    ----------
+    table : ndarray
+        The block of rows.
+    row : str
+        A printf-style format of one row, newline included.
+
+    Returns
+    -------
+    str
+    """
+    return "".join([row % tuple(r) for r in table.tolist()])

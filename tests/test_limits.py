@@ -172,11 +172,13 @@ def _csv_peak(n: int, tmp_path, monkeypatch) -> int:
     """tracemalloc peak [bytes] of write_sweep_csv for an n-point sweep already computed."""
     import tracemalloc
 
+    from mechcirc import io_csv
     from mechcirc.io_csv import write_sweep_csv
 
-    # Formatting is not what is measured (and is slow under tracemalloc): savetxt
-    # only records the block it is given; the buffers the writer builds are measured.
-    monkeypatch.setattr(np, "savetxt", lambda fh, X, **kw: fh.write(f"{X.shape}\n"))
+    # Formatting is not what is measured (and is slow under tracemalloc): the row
+    # formatter only records the block it is given; the buffers the writer builds are
+    # measured.
+    monkeypatch.setattr(io_csv, "format_rows", lambda X, row: f"{X.shape}\n")
     s = mechcirc.load(STB).sweep(np.geomspace(1.0, 1e4, n))
     _ = s.flags, s.Q0, s.v0                       # computed before measuring
     tracemalloc.start()
