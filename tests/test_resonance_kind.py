@@ -26,6 +26,11 @@ CASES = {
     "undamped_grid": lambda: mechcirc.parse(grid_text(3)),
     # One dof: a zero of K at sqrt(k/m) = 10 rad/s and no pole.
     "one_dof": lambda: mechcirc.parse("drive V a 0 velocity=1\nmass m a b 1\nspring k b 0 100\n"),
+    # A root shared by both eigenproblems: the antisymmetric mode b = -c
+    # (omega^2 = (100 + 2*50)/1) leaves a at rest, held or released, and cancels in K.
+    "shared_root": lambda: mechcirc.parse(
+        "drive V a 0 velocity=1\nspring k1 a b 100\nspring k2 a c 100\nmass mb b 0 1\n"
+        "mass mc c 0 1\nspring kbc b c 50\n"),
 }
 
 
@@ -50,6 +55,18 @@ def test_kind_roots_against_closed_form():
     assert [r.kind for r in res] == ["resonance"]
     assert math.isclose(res[0].omega, 10.0, rel_tol=1e-14)
     assert find_resonances(c, kind="antiresonance") == []
+
+
+def test_shared_root_cancels_for_each_kind():
+    # Closed form: K = 1/Q0 with Q0 = 2 / (1/(j w m) + j w / k) (the two branches
+    # k-m in parallel, kbc carries no force when b and c move alike): a zero of
+    # K at sqrt(k/m) = 10 rad/s, no pole above 0, nothing at sqrt(200).
+    c = CASES["shared_root"]()
+    res = find_resonances(c, kind="resonance")
+    assert [r.kind for r in res] == ["resonance"]
+    assert math.isclose(res[0].omega, 10.0, rel_tol=1e-14)
+    assert not any(math.isclose(r.omega, math.sqrt(200), rel_tol=1e-6)
+                   for r in find_resonances(c, kind="antiresonance"))
 
 
 def test_kind_cases_are_not_empty():
