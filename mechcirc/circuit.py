@@ -41,7 +41,7 @@ if TYPE_CHECKING:  # pragma: no cover - annotations of the delegates only
     from .motion_laws import Motion
     from .nodal import NodalSystem
     from .reduction import Node, Reduction
-    from .resonances import Resonance
+    from .resonances import Kind, Resonance
     from ._sweep import Method, Sweep
 
 __all__ = ["Element", "Lever", "Drive", "Circuit", "element_mobility", "law_terms", "FRAME",
@@ -364,14 +364,15 @@ class Circuit:
 
         return sweep(self, omega, method=method, refine=refine, error=error)
 
-    def resonances(self, omega_max: float | None = None) -> list[Resonance]:
-        """Zeros and poles of K(ω) up to ``omega_max`` [rad/s].
+    def resonances(self, omega_max: float | None = None,
+                   kind: Kind | None = None) -> list[Resonance]:
+        """Zeros and poles of K(ω) up to ``omega_max`` [rad/s] (``kind``: only those).
 
         See :func:`mechcirc.resonances.find_resonances`.
         """
         from .resonances import find_resonances
 
-        return find_resonances(self, omega_max=omega_max)
+        return find_resonances(self, omega_max=omega_max, kind=kind)
 
     def modes(self, omega_max: float | None = None) -> list:
         """The mode shape, energy shares and sensitivities of every root up to ``omega_max``.

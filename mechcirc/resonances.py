@@ -60,6 +60,10 @@ MAX_UNKNOWNS_DAMPED = 500
 MAX_BAND_ROOTS = 192
 
 
+#: The two kinds of root of K: a zero and a pole.
+Kind = Literal["resonance", "antiresonance"]
+
+
 @dataclass(frozen=True)
 class Resonance:
     """A zero (``"resonance"``) or pole (``"antiresonance"``) of K(ω).
@@ -78,7 +82,7 @@ class Resonance:
         Estimated relative error of ``omega`` [1].
     """
 
-    kind: Literal["resonance", "antiresonance"]
+    kind: Kind
     omega: float
     omega_d: float
     zeta: float
@@ -139,7 +143,8 @@ class Resonances(list):
         return f"<table>{head}{rows}</table>"
 
 
-def find_resonances(circuit: Circuit, omega_max: float | None = None) -> Resonances:
+def find_resonances(circuit: Circuit, omega_max: float | None = None,
+                    kind: Kind | None = None) -> Resonances:
     """All resonances and anti-resonances of ``circuit`` up to ``omega_max`` [rad/s].
 
     Returns them sorted by ``omega``, as a :class:`Resonances` list (a table
@@ -152,6 +157,10 @@ def find_resonances(circuit: Circuit, omega_max: float | None = None) -> Resonan
     omega_max : float, optional
         Upper end of the band searched [rad/s]; None: no upper end (networks
         above the dense limits need one, see the module docstring).
+    kind : {"resonance", "antiresonance"}, optional
+        Only the roots of this kind (only they are polished: half the work
+        when the other kind is not wanted); None: both.  The roots reported
+        are bit-identical to those of ``kind=None`` of that kind.
 
     Returns
     -------
@@ -165,23 +174,27 @@ def find_resonances(circuit: Circuit, omega_max: float | None = None) -> Resonan
     >>> [(r.kind, round(r.omega, 12)) for r in c.resonances()]
     [('resonance', 10.0)]
     """
-    return Resonances(r for r, _ in resonance_pairs(circuit, omega_max))
+    return Resonances(r for r, _ in resonance_pairs(circuit, omega_max, kind=kind))
 
 
 def resonance_pairs(circuit: Circuit, omega_max: float | None = None,
-                    vectors: bool = False) -> list:
+                    vectors: bool = False, kind: Kind | None = None) -> list:
     """:func:`find_resonances` as ``(Resonance, v)`` pairs, sorted as there.
 
     ``v`` is the root's eigenvector from the eigen-solve, the node velocities
     of ``circuit.nodal.nodes`` (the drive held for a resonance, released for
     an anti-resonance; unnormalised); None without ``vectors``, and for roots
-    found by the band solver (which computes no vectors).  With ``vectors``
+    found by the band solver (which computes no vectors).  ``kind`` as in
+    :func:`find_resonances` (both eigenproblems are still solved: roots shared
+    by them cancel).  With ``vectors``
     the pairs are triples ``(Resonance, v, repeated)``, ``repeated`` true
     where the eigenproblem has another root within 1e-9 (relative) of this
     one (then v is one vector of a family).
     """
     if omega_max is not None and not omega_max > 0:     # NaN would report nothing, silently
         raise InputError(f"omega_max must be > 0 rad/s or None, got {omega_max!r}")
+    if kind not in (None, "resonance", "antiresonance"):
+        raise InputError(f"kind must be 'resonance', 'antiresonance' or None, got {kind!r}")
     for e in circuit.elements:
         if not math.isfinite(e.value * e.eta):
             raise NetlistError(f"{e.kind} {e.name!r}: value × eta = {e.value:g} × {e.eta:g} "
@@ -210,6 +223,9 @@ def resonance_pairs(circuit: Circuit, omega_max: float | None = None,
     vecs = [(None if V is None else V[:, i], vectors and _repeats(found[:, 0], int(i)))
             for V, keep, found in ((v_held, keep_h, held), (v_released, keep_r, released))
             for i in np.flatnonzero(keep)]
+    if kind is not None:            # root by root: the others' polish changes nothing here
+        vecs = [v for v, t in zip(vecs, roots) if t[0] == kind]
+        roots = [t for t in roots if t[0] == kind]
     if omega_max is not None:
         # A little beyond the band: polishing may move a root across its edge.
         inside = [abs(t[1]) <= omega_max * (1 + 1e-6) for t in roots]
@@ -637,7 +653,7 @@ def _cancel(held: np.ndarray, released: np.ndarray):
     return keep_h, keep_r
 
 
-def _make(kind: Literal["resonance", "antiresonance"], s: complex, err: float) -> Resonance:
+def _make(kind: Kind, s: complex, err: float) -> Resonance:
     s = complex(s)
     wn = abs(s)
     return Resonance(kind, float(wn), float(abs(s.imag)),
