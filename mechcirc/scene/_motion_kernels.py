@@ -258,9 +258,10 @@ def load_element(e, EI, EF, FI, FF, tabs, th_load, w_load, work):
 
 
 @_jit_inline
-def element_forces(want, nb, EI, EF, FI, FF, tabs, th_load, w_load, aux, work):
+def element_forces(want, nb, EI, EF, FI, FF, tabs, th_load, w_load, aux, work, xo):
     """Each element's deformation δ (into aux) and force f (into aux if ``want``), and its
-    generalised forces −f ∂δ/∂q on its two parts (work row 5)."""
+    generalised forces −f ∂δ/∂q on its two parts (work row 5); its rate δ̇ into aux[xo + e]
+    when aux is that long (:func:`rk_run`'s, for :func:`regions`)."""
     ne = EI.shape[0]
     for e in range(ne):
         typ = EI[e, 0]
@@ -283,6 +284,8 @@ def element_forces(want, nb, EI, EF, FI, FF, tabs, th_load, w_load, aux, work):
         work[5, pa] -= fe * ga
         work[5, pb] -= fe * gb
         aux[nb + ne + e] = de          # always: the clearance events of rk_run read it
+        if aux.shape[0] > xo + e:      # rk_run's longer aux: the rates, for regions' release
+            aux[xo + e] = edot
         if want:
             aux[nb + e] = fe
 
@@ -332,7 +335,8 @@ def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, wo
     nmo = MOI.shape[0]
     theta, omega, accel, th_load, w_load = crank_motion(PV, t)
     bad = part_kinematics(y, theta, omega, accel, nf, FI, FF, tabs, MI_, MW, PRIG, work)
-    element_forces(want, nb, EI, EF, FI, FF, tabs, th_load, w_load, aux, work)
+    element_forces(want, nb, EI, EF, FI, FF, tabs, th_load, w_load, aux, work,
+                   nb + 2 * ne + 2 + nmo)
     window_moments(nb + 2 * ne + 1, FI, MOI, MOF, aux, work)
     for i in range(1, npart):
         work[2, i] = (work[5, i] - 0.5 * work[4, i] * work[1, i] * work[1, i]) / work[3, i]
@@ -347,18 +351,23 @@ def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, wo
 def regions(FI, EI, EF, MOI, MOF, aux, work, off, reg, sw, first):
     """The smooth piece each force law is on, from the last right-hand side evaluated
     (``aux``, ``work``): reg[e] = −1, 0 (inside the gap), +1 for an element with a clearance
-    gap (0 for the others), reg[ne + k] = 1 inside the window of moment k, else 0 (always 0
+    gap (0 for the others; ±2 released, ±3 damping capped for ElastoBacklash in contact:
+    :func:`contact_piece`), reg[ne + k] = 1 inside the window of moment k, else 0 (always 0
     for a moment on a part below ``first``: 1 for a scene, whose drive's part 0 moves nothing
     that is integrated; 0 for the shaft, which integrates it); and the
-    value each edge test starts from into ``sw`` (a deformation, a window's phase).
+    value each edge test starts from into ``sw`` (a deformation, a window's phase), then
+    each element's rate δ̇ (``sw`` of length switches + E; ``aux`` :func:`rk_run`'s).
     Returns how many switches there are (gaps and windows)."""
     ne = EI.shape[0]
+    nsw = ne + MOI.shape[0]
+    xo = off + ne + 2 + MOI.shape[0]
     count = 0
     for e in range(ne):
         cl = EF[e, 2]
         de = aux[off + e]
         sw[e] = de
         reg[e] = 0
+        sw[nsw + e] = aux[xo + e]
         if EI[e, 1] == 0 or not cl > 0.0:
             continue
         count += 1
@@ -366,6 +375,8 @@ def regions(FI, EI, EF, MOI, MOF, aux, work, off, reg, sw, first):
             reg[e] = 1
         elif de < -cl:
             reg[e] = -1
+        if EI[e, 1] == 1 and reg[e] != 0:    # ElastoBacklash: released, or damping capped
+            reg[e] *= contact_piece(reg[e], de, aux[xo + e], EF[e, 0], EF[e, 1], cl)
     for k in range(MOI.shape[0]):
         x = work[6, MOI[k, 0]] - MOF[k, 3] + 0.5 * MOF[k, 1]
         sw[ne + k] = x
@@ -378,11 +389,32 @@ def regions(FI, EI, EF, MOI, MOF, aux, work, off, reg, sw, first):
 
 
 @_jit_inline
-def edge_gap(i, ne, r0, r1, v, EF, MOF):
-    """Signed distance of switch i (value v, see :func:`regions`) from the edge it crossed
-    going from piece r0 to r1: a gap's edge ±cl, a window's start (phase 0) or end (α)."""
+def contact_piece(side, e, edot, k, d, cl):
+    """Piece of ElastoBacklash (:func:`force_law`, law 1) in contact on ``side`` (±1) at
+    deformation e, rate edot: 1 pushing k(e ∓ cl) + d ė, 2 released (that would-be force
+    pulls), 3 the damping part capped at the spring part (force 2k(e ∓ cl))."""
+    fc = k * (e - side * cl)
+    fd = d * edot
+    if side * (fc + fd) <= 0.0:
+        return 2
+    if side * (fd - fc) >= 0.0:
+        return 3
+    return 1
+
+
+@_jit_inline
+def edge_gap(i, ne, r0, r1, v, vd, EF, MOF):
+    """Signed distance of switch i (value v, rate vd, see :func:`regions`) from the edge it
+    crossed going from piece r0 to r1: a gap's edge ±cl, a window's start (phase 0) or end
+    (α); within one side of a contact (:func:`contact_piece`) the would-be force k(e ∓ cl)
+    + d ė (released) or d ė − k(e ∓ cl) (capped)."""
     if i < ne:
         cl = EF[i, 2]
+        if r0 * r1 > 0:               # same side, another piece of the contact's law
+            side = 1.0 if r0 > 0 else -1.0
+            fc = EF[i, 0] * (v - side * cl)
+            fd = EF[i, 1] * vd
+            return fc + fd if abs(r0) == 2 or abs(r1) == 2 else fd - fc
         return v - (cl if (r0 > 0 or (r0 == 0 and r1 > 0)) else -cl)
     if r0 == 0:                  # entering the window: the phase wrapped to [−π, π)
         return v - TWO_PI * math.floor((v + math.pi) / TWO_PI)
@@ -428,15 +460,20 @@ def locate(t, hh, y, k1, ynew, k4, tmp, dy, sw0, sw1, reg, regn, PV, FI, FF, tab
     at the ends.  Returns (s, right-hand-side evaluations)."""
     n = y.shape[0]
     ne = EI.shape[0]
+    nsw = reg.shape[0]
+    xo = off + ne + 2 + MOI.shape[0]
     best = 1.0
     count = 0
-    for e in range(reg.shape[0]):
+    for e in range(nsw):
         if reg[e] == regn[e]:
             continue
         lo = 0.0
         hi = 1.0
-        glo = edge_gap(e, ne, reg[e], regn[e], sw0[e], EF, MOF)
-        ghi = edge_gap(e, ne, reg[e], regn[e], sw1[e], EF, MOF)
+        r0 = reg[e]
+        r1 = regn[e]
+        vd = 0.0
+        glo = edge_gap(e, ne, r0, r1, sw0[e], sw0[nsw + e] if e < ne else 0.0, EF, MOF)
+        ghi = edge_gap(e, ne, r0, r1, sw1[e], sw1[nsw + e] if e < ne else 0.0, EF, MOF)
         side = 0
         for _ in range(60):
             if hi - lo <= 1e-9 or hi <= 0.0:
@@ -450,9 +487,10 @@ def locate(t, hh, y, k1, ynew, k4, tmp, dy, sw0, sw1, reg, regn, PV, FI, FF, tab
             count += 1
             if e < ne:
                 v = aux[off + e]
+                vd = aux[xo + e]
             else:
                 v = work[6, MOI[e - ne, 0]] - MOF[e - ne, 3] + 0.5 * MOF[e - ne, 1]
-            g = edge_gap(e, ne, reg[e], regn[e], v, EF, MOF)
+            g = edge_gap(e, ne, r0, r1, v, vd, EF, MOF)
             if (g > 0.0) == (ghi > 0.0) and g != 0.0:
                 hi = s
                 ghi = g
@@ -527,7 +565,7 @@ def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_
     K = np.zeros((s + 1, n))
     tmp = np.empty(n)
     ynew = np.empty(n)
-    aux = np.empty(naux)
+    aux = np.empty(naux + EI.shape[0])     # + the elements' rates, for regions
     work = np.zeros((9, max(FI.shape[0], PRIG.shape[0])))
     zy = np.empty(2 * PRIG.shape[0] - 2)
     zd = np.empty(zy.shape[0])
@@ -538,8 +576,8 @@ def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_
     off = BI.shape[0] + ne
     reg = np.zeros(nsw, np.int64)
     regn = np.zeros(nsw, np.int64)
-    sw0 = np.empty(nsw)
-    sw1 = np.empty(nsw)
+    sw0 = np.empty(nsw + ne)
+    sw1 = np.empty(nsw + ne)
     j = 0
     bad = 0.0
     npart = PRIG.shape[0]
