@@ -75,26 +75,28 @@ def in_theta(th, Y):
 @pytest.mark.slow
 def test_cam_follower_jump_on_the_shaft_matches_the_hand_equations():
     """The steady cycle at the default step.  The contact's opening and landing are kinks
-    inside RK4 steps (not located), so the errors depend on where the steps fall rather than
-    shrinking as h⁴; measured over two step counts (14,882 and 14,883 steps a cycle) and at
-    400 steps per period: the shaft's speed 1.8e-8 … 5.7e-8 of ω_s, the time 5.6e-10 … 3.3e-9
-    of the period, the follower's travel 9.1e-6 … 2.5e-5 of its largest (≤ 5e-7 m), the
-    state after the cycle in the reference 1.3e-8 of the travel and 2.2e-9 of ω_s, the load
-    torque N s′ 1.9e-5 … 6.4e-5 of its peak, the contact's push 1.5e-3 … 7.3e-3 of its peak
-    (the landing's 14 kN impact, where the travel error is multiplied by k_c = 1e8 N/m)."""
+    the stepper locates (the release where the would-be push k_c c + d_c ċ reaches 0), so
+    the default RK4 keeps its order through them; measured at the default 100 steps per
+    period (14,883 steps a cycle): the shaft's speed 8.3e-11 of ω_s, the time 1.5e-11 of the
+    period, the follower's travel 8.4e-8 of its largest (≤ 5e-7 m), the state after the
+    cycle in the reference 3.6e-11 of ω_s and 1.0e-10 of the travel, the load torque N s′
+    1.1e-7 of its peak, the contact's push 2.5e-5 of its peak (the landing's 14 kN impact,
+    where the travel error is multiplied by k_c = 1e8 N/m).  Before the release was
+    located these were 1.8e-8 … 5.7e-8 (speed), 9.1e-6 … 2.5e-5 (travel), 1.5e-3 … 7.3e-3
+    (push).  Asserted with a margin of 10 or more over what is measured."""
     r = simulate_shaft(scene(), points=720, startup=False)
     x0 = [r.speed[0], 0.0, r.states[0, 0], r.states[0, 1]]
     ref = solve_ivp(in_theta, (0.0, 2 * math.pi), x0, method="DOP853", rtol=1e-12,
                     atol=[1e-12, 1e-15, 1e-15, 1e-12], dense_output=True)
     Y = ref.sol(r.theta)
     travel = np.max(np.abs(Y[2]))
-    assert np.max(np.abs(Y[0] - r.speed)) <= 2e-7 * WS
-    assert np.max(np.abs(Y[1] - r.time)) <= 1e-8 * r.period
-    assert np.max(np.abs(Y[2] - r.states[:, 0])) <= 5e-5 * travel
-    assert abs(ref.y[0, -1] - x0[0]) <= 1e-8 * WS and abs(ref.y[2, -1] - x0[2]) <= 1e-7 * travel
+    assert np.max(np.abs(Y[0] - r.speed)) <= 1e-9 * WS
+    assert np.max(np.abs(Y[1] - r.time)) <= 2e-10 * r.period
+    assert np.max(np.abs(Y[2] - r.states[:, 0])) <= 1e-6 * travel
+    assert abs(ref.y[0, -1] - x0[0]) <= 1e-9 * WS and abs(ref.y[2, -1] - x0[2]) <= 2e-9 * travel
     assert abs(ref.y[1, -1] - r.period) <= 1e-8 * r.period
     n, s1 = np.array([push(t, w, y, yd) for t, w, y, yd in zip(r.theta, Y[0], Y[2], Y[3])]).T
     # the follower leaves the cam (no push over part of the turn) and lands on it again
     assert np.count_nonzero(n == 0) > 100 and n[-1] > 0
-    assert np.max(np.abs(n + r.values["contact.force"])) <= 1.5e-2 * np.max(n)
-    assert np.max(np.abs(n * s1 - r.load_torque)) <= 2e-4 * np.max(np.abs(n * s1))
+    assert np.max(np.abs(n + r.values["contact.force"])) <= 3e-4 * np.max(n)
+    assert np.max(np.abs(n * s1 - r.load_torque)) <= 2e-6 * np.max(np.abs(n * s1))
