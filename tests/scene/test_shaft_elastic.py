@@ -106,6 +106,23 @@ def rigid_travel(theta):
 
 
 @pytest.mark.slow
+def reference_cycle(rhs, r):
+    """The steady cycle ``r`` of :func:`simulate_shaft` checked in the SymPy equations ``rhs``:
+    one revolution in θ from the state the code found, by DOP853 at rtol 1e-12.  Returns
+    (the solution, that state [θ̇, s, ṡ, t], the solution at ``r.theta``)."""
+    from scipy.integrate import solve_ivp
+
+    th0 = math.radians(START)
+    x0 = [r.speed[0], r.states[0, 0], r.states[0, 1], 0.0]
+
+    def in_theta(theta, z):
+        a0, v, a1 = rhs(theta, z)
+        return [a0 / z[0], v / z[0], a1 / z[0], 1.0 / z[0]]
+    ref = solve_ivp(in_theta, (th0, th0 + 2 * math.pi), x0, method="DOP853", rtol=1e-12,
+                    atol=1e-14, dense_output=True)
+    return ref, x0, ref.sol(th0 + r.theta)
+
+
 def test_elastic_shaft_matches_an_independent_sympy_derivation():
     """Steady cycle (speed, rod force, periodicity) and start-up against the SymPy
     equations integrated by DOP853 at rtol 1e-12: ≤ 1e-6 over the revolution."""
@@ -114,15 +131,7 @@ def test_elastic_shaft_matches_an_independent_sympy_derivation():
     rhs, force = sympy_reference()
     r = simulate_shaft(scene(), points=180)
     th0 = math.radians(START)
-    # the steady cycle: one revolution in θ from the state the code found
-    x0 = [r.speed[0], r.states[0, 0], r.states[0, 1], 0.0]
-
-    def in_theta(theta, z):
-        a0, v, a1 = rhs(theta, z)
-        return [a0 / z[0], v / z[0], a1 / z[0], 1.0 / z[0]]
-    ref = solve_ivp(in_theta, (th0, th0 + 2 * math.pi), x0, method="DOP853", rtol=1e-12,
-                    atol=1e-14, dense_output=True)
-    Y = ref.sol(th0 + r.theta)
+    ref, x0, Y = reference_cycle(rhs, r)
     assert np.max(np.abs(Y[0] - r.speed)) <= 1e-6 * WS
     assert np.max(np.abs(Y[3] - r.time)) <= 1e-6 * r.period
     # the state the code found repeats after the revolution in the reference equations

@@ -2,16 +2,14 @@
 independent SymPy derivation, and the kinks inside the shaft's steps located (the order kept
 across impacts of a clearance gap)."""
 
-import math
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
 
 from mechcirc.errors import MechcircError
 from mechcirc.scene import parse_scene
 from mechcirc.scene.shaft import simulate_shaft
-from test_shaft_elastic import EXTRA, START, WS, scene, sympy_reference
+from test_shaft_elastic import EXTRA, WS, reference_cycle, scene, sympy_reference
 
 
 @pytest.mark.slow
@@ -25,15 +23,7 @@ def test_rk8_steady_cycle_matches_the_sympy_derivation():
     rhs, _ = sympy_reference()
     r = simulate_shaft(scene(), points=90, startup=False, method="rk8")
     assert any("RK8" in n for n in r.notes)
-    th0 = math.radians(START)
-    x0 = [r.speed[0], r.states[0, 0], r.states[0, 1], 0.0]
-
-    def in_theta(theta, z):
-        a0, v, a1 = rhs(theta, z)
-        return [a0 / z[0], v / z[0], a1 / z[0], 1.0 / z[0]]
-    ref = solve_ivp(in_theta, (th0, th0 + 2 * math.pi), x0, method="DOP853", rtol=1e-12,
-                    atol=1e-14, dense_output=True)
-    Y = ref.sol(th0 + r.theta)
+    ref, x0, Y = reference_cycle(rhs, r)
     assert np.max(np.abs(Y[0] - r.speed)) <= 1e-10 * WS
     assert np.max(np.abs(Y[3] - r.time)) <= 1e-10 * r.period
     assert abs(ref.y[0, -1] - x0[0]) <= 1e-10 * WS
