@@ -197,23 +197,23 @@ def part_kinematics(y, theta, omega, accel, nf, FI, FF, tabs, MI_, MW, PRIG, wor
 
 
 @_jit_inline
+def end_point(e, side, EI, EF, work):
+    """(x, y) of end ``side`` (0: P_a, 1: P_b) of length element e: its functions' values
+    (EI[e, 2 + 2 side], EI[e, 3 + 2 side]), or without functions the fixed point in EF."""
+    c = 2 + 2 * side
+    if EI[e, c] >= 0:
+        return work[6, EI[e, c]], work[6, EI[e, c + 1]]
+    return EF[e, c + 2], EF[e, c + 3]
+
+
+@_jit_inline
 def length_element(e, EI, EF, work):
     """(δ, ∂δ/∂q_a, ∂δ/∂q_b) of a length element e: δ = |P_b − P_a| − ℓ0, a side without
     functions a fixed point."""
     ga = 0.0
     gb = 0.0
-    if EI[e, 2] >= 0:
-        xa = work[6, EI[e, 2]]
-        ya = work[6, EI[e, 3]]
-    else:
-        xa = EF[e, 4]
-        ya = EF[e, 5]
-    if EI[e, 4] >= 0:
-        xb = work[6, EI[e, 4]]
-        yb = work[6, EI[e, 5]]
-    else:
-        xb = EF[e, 6]
-        yb = EF[e, 7]
+    xa, ya = end_point(e, 0, EI, EF, work)
+    xb, yb = end_point(e, 1, EI, EF, work)
     dx = xb - xa
     dyy = yb - ya
     ln = math.sqrt(dx * dx + dyy * dyy)
