@@ -27,6 +27,28 @@ def assert_user_error(argv, capsys, *needles):
     return err
 
 
+def assert_cam_key_error(text, key, needles, tmp_path, capsys):
+    """A scene whose ``[cam]`` table is bad at ``key``: ``parse_scene`` raises a located
+    NetlistError at that key's line inside ``[cam]`` holding every needle, and
+    ``mechcirc scene`` on the file exits 2 saying the same."""
+    import pytest
+
+    from mechcirc.errors import NetlistError
+    from mechcirc.scene import parse_scene
+
+    with pytest.raises(NetlistError) as exc:
+        parse_scene(text, "bad.toml")
+    lines = text.splitlines()
+    cam = lines.index("[cam]")
+    line = next(i for i, ln in enumerate(lines[cam:], cam + 1) if ln.startswith(key + " ="))
+    assert exc.value.line == line, str(exc.value)
+    for n in needles:
+        assert n in str(exc.value), str(exc.value)
+    f = tmp_path / "bad.toml"
+    f.write_text(text)
+    assert_user_error(["scene", f, "--theta", "60"], capsys, "bad.toml:", *needles)
+
+
 def run_script(path, argv, capsys, monkeypatch, cwd=None):
     """(status, stdout, stderr) of ``python PATH ARGV`` run in this process.
 

@@ -24,7 +24,7 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from cli_helpers import assert_user_error
+from cli_helpers import assert_cam_key_error
 from mechcirc.errors import GeometryError, MechcircWarning, NetlistError
 from mechcirc.scene import build, load_scene, parse_scene
 
@@ -206,18 +206,7 @@ def _bad(old, new):
     ("stroke = 20.0", "stroke = 0.0", "stroke", ["stroke"]),
 ])
 def test_bad_cam_tables_are_located(old, new, key, needles, tmp_path, capsys):
-    text = _bad(old, new)
-    with pytest.raises(NetlistError) as exc:
-        parse_scene(text, "bad.toml")
-    cam = text.splitlines().index("[cam]")
-    line = next(i for i, ln in enumerate(text.splitlines()[cam:], cam + 1)
-                if ln.startswith(key + " ="))
-    assert exc.value.line == line, str(exc.value)
-    for n in needles:
-        assert n in str(exc.value), str(exc.value)
-    f = tmp_path / "bad.toml"
-    f.write_text(text)
-    assert_user_error(["scene", f, "--theta", "60"], capsys, "bad.toml:", *needles)
+    assert_cam_key_error(_bad(old, new), key, needles, tmp_path, capsys)
 
 
 def test_an_elastic_push_rod_is_refused_at_the_follower(tmp_path, capsys):

@@ -24,8 +24,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from cli_helpers import assert_user_error, run
-from mechcirc.errors import NetlistError
+from cli_helpers import assert_cam_key_error, run
 from mechcirc.kinematics.cam import cam_profile
 from mechcirc.scene import parse_scene
 
@@ -107,17 +106,7 @@ def _bad(old, new):
      "follower_type", ["not a follower type", "oscillating_flat"]),
 ])
 def test_bad_flat_face_tables_are_located(text, key, needles, tmp_path, capsys):
-    with pytest.raises(NetlistError) as exc:
-        parse_scene(text, "bad.toml")
-    lines = text.splitlines()
-    cam = lines.index("[cam]")
-    line = next(i for i, ln in enumerate(lines[cam:], cam + 1) if ln.startswith(key + " ="))
-    assert exc.value.line == line, str(exc.value)
-    for n in needles:
-        assert n in str(exc.value), str(exc.value)
-    f = tmp_path / "bad.toml"
-    f.write_text(text)
-    assert_user_error(["scene", f, "--theta", "60"], capsys, "bad.toml:", *needles)
+    assert_cam_key_error(text, key, needles, tmp_path, capsys)
 
 
 def test_a_face_that_turns_back_is_warned_at_its_angle():
