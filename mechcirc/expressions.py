@@ -163,19 +163,19 @@ class _Parser:
             self.error(f"expression nested more than {MAX_DEPTH} levels deep", col)
         return depth + 1
 
-    def expr(self, depth: int) -> Expr:
-        left = self.term(depth)
-        while self.peek()[1] in ("+", "-") and self.peek()[0] == "op":
+    def _chain(self, depth: int, ops: tuple[str, str], operand: Callable[[int], Expr]) -> Expr:
+        """``operand (op operand)*`` for the operators ``ops``, grouped from the left."""
+        left = operand(depth)
+        while self.peek()[1] in ops and self.peek()[0] == "op":
             _, op, col = self.take()
-            left = Expr(op, col, None, (left, self.term(depth)))
+            left = Expr(op, col, None, (left, operand(depth)))
         return left
 
+    def expr(self, depth: int) -> Expr:
+        return self._chain(depth, ("+", "-"), self.term)
+
     def term(self, depth: int) -> Expr:
-        left = self.unary(depth)
-        while self.peek()[1] in ("*", "/") and self.peek()[0] == "op":
-            _, op, col = self.take()
-            left = Expr(op, col, None, (left, self.unary(depth)))
-        return left
+        return self._chain(depth, ("*", "/"), self.unary)
 
     def unary(self, depth: int) -> Expr:
         kind, tok, col = self.peek()
