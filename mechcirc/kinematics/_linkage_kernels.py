@@ -47,6 +47,12 @@ _solve2 = _jit_inline(_dyad_forms.solve2)
 OK, SINGULAR_POSE, LOCK, BRANCH_JUMP = 0, 1, 2, 3
 
 
+@_jit_inline
+def _turn(c, s, x, y):
+    """(x, y) turned by the angle whose cosine and sine are ``c``, ``s``."""
+    return c * x - s * y, s * x + c * y
+
+
 @_jit
 def _sides(q, nb, ia, ib, sa, sb, cs, sn, R):
     """R(φ) s of both sides of every joint row into R (m, 4): (Rax, Ray, Rbx, Rby)."""
@@ -56,17 +62,13 @@ def _sides(q, nb, ia, ib, sa, sb, cs, sn, R):
     for k in range(ia.shape[0]):
         a, b = ia[k], ib[k]
         if a < nb:
-            R[k, 0] = cs[a] * sa[k, 0] - sn[a] * sa[k, 1]
-            R[k, 1] = sn[a] * sa[k, 0] + cs[a] * sa[k, 1]
+            R[k, 0], R[k, 1] = _turn(cs[a], sn[a], sa[k, 0], sa[k, 1])
         else:
-            R[k, 0] = sa[k, 0]
-            R[k, 1] = sa[k, 1]
+            R[k, 0], R[k, 1] = sa[k, 0], sa[k, 1]
         if b < nb:
-            R[k, 2] = cs[b] * sb[k, 0] - sn[b] * sb[k, 1]
-            R[k, 3] = sn[b] * sb[k, 0] + cs[b] * sb[k, 1]
+            R[k, 2], R[k, 3] = _turn(cs[b], sn[b], sb[k, 0], sb[k, 1])
         else:
-            R[k, 2] = sb[k, 0]
-            R[k, 3] = sb[k, 1]
+            R[k, 2], R[k, 3] = sb[k, 0], sb[k, 1]
 
 
 @_jit
@@ -75,12 +77,9 @@ def _prism(q, nb, ga, gb, gs, gu, bs, cs, sn, P):
     for k in range(ga.shape[0]):
         a, b = ga[k], gb[k]
         ca, sa_ = (cs[a], sn[a]) if a < nb else (1.0, 0.0)
-        P[k, 0] = ca * gu[k, 0] - sa_ * gu[k, 1]
-        P[k, 1] = sa_ * gu[k, 0] + ca * gu[k, 1]
-        P[k, 2] = ca * gs[k, 0] - sa_ * gs[k, 1]
-        P[k, 3] = sa_ * gs[k, 0] + ca * gs[k, 1]
-        P[k, 4] = cs[b] * bs[k, 0] - sn[b] * bs[k, 1]
-        P[k, 5] = sn[b] * bs[k, 0] + cs[b] * bs[k, 1]
+        P[k, 0], P[k, 1] = _turn(ca, sa_, gu[k, 0], gu[k, 1])
+        P[k, 2], P[k, 3] = _turn(ca, sa_, gs[k, 0], gs[k, 1])
+        P[k, 4], P[k, 5] = _turn(cs[b], sn[b], bs[k, 0], bs[k, 1])
         P[k, 6] = q[3 * b] + P[k, 4] - P[k, 2]
         P[k, 7] = q[3 * b + 1] + P[k, 5] - P[k, 3]
         if a < nb:
