@@ -122,29 +122,26 @@ def kernel_args(A, B, cx, dx, cv, dv, extra, prm):
 
 
 @_jit_inline
+def _row_dot(start, val, idx, i, z):
+    """``start`` + row i of a matrix packed by :func:`pack_rows` times z, summed in order."""
+    acc = start
+    for j in range(idx.shape[1]):
+        acc += val[i, j] * z[idx[i, j]]
+    return acc
+
+
+@_jit_inline
 def rhs(t, z, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, t0, dt, u, dz):
     """dz = A z + B u(t) + Σ_e extra[:, e] · f_e(cx_e·z + dx_e u, cv_e·z + dv_e u).
 
     A, cx, cv and the columns of extra as :func:`pack_rows` gives them.
     """
     ut = drive_at(t, t0, dt, u)
-    N = z.shape[0]
-    wa = Ai.shape[1]
-    for i in range(N):
-        acc = B[i] * ut
-        for j in range(wa):
-            acc += Av[i, j] * z[Ai[i, j]]
-        dz[i] = acc
-    E = prm.shape[0]
-    wx = xi.shape[1]
-    wv = vi.shape[1]
-    for k in range(E):
-        e = dx[k] * ut
-        for j in range(wx):
-            e += xv[k, j] * z[xi[k, j]]
-        w = dv[k] * ut
-        for j in range(wv):
-            w += vv[k, j] * z[vi[k, j]]
+    for i in range(z.shape[0]):
+        dz[i] = _row_dot(B[i] * ut, Av, Ai, i, z)
+    for k in range(prm.shape[0]):
+        e = _row_dot(dx[k] * ut, xv, xi, k, z)
+        w = _row_dot(dv[k] * ut, vv, vi, k, z)
         f, fc = elasto_backlash(e, w, prm[k, 0], prm[k, 1], prm[k, 2])
         if f != 0.0:
             for j in range(ei.shape[1]):
@@ -160,12 +157,8 @@ def switch_state(t, z, xi, xv, dx, vi, vv, dv, prm, t0, dt, u, k):
     The law is smooth inside one code; a change of code is a kink.
     """
     ut = drive_at(t, t0, dt, u)
-    e = dx[k] * ut
-    for j in range(xi.shape[1]):
-        e += xv[k, j] * z[xi[k, j]]
-    w = dv[k] * ut
-    for j in range(vi.shape[1]):
-        w += vv[k, j] * z[vi[k, j]]
+    e = _row_dot(dx[k] * ut, xv, xi, k, z)
+    w = _row_dot(dv[k] * ut, vv, vi, k, z)
     c, d, b = prm[k, 0], prm[k, 1], prm[k, 2]
     half = 0.5 * b
     if abs(b) <= B_EPS:
