@@ -13,7 +13,8 @@ from .errors import NetlistError
 
 __all__ = ["read_source", "read_bytes", "MAX_INPUT_BYTES", "split_lines", "line_col",
            "finite_number", "brief", "load_toml", "locate", "locate_path", "located", "Table",
-           "unknown_key", "check_keys", "number_error", "did_you_mean", "is_number"]
+           "unknown_key", "check_keys", "number_error", "checked_number", "did_you_mean",
+           "is_number"]
 
 #: The largest input file mechcirc reads [bytes].  A netlist of the statement
 #: limit is far below this; anything larger is refused before it is read.
@@ -210,6 +211,45 @@ def number_error(value, what: str, *, positive: bool = False,
         return None
     need = "a finite number" + ("" if not positive else " ≥ 0" if allow_zero else " > 0")
     return f"{what} must be {need}, got {brief(value)}", need
+
+
+def checked_number(text: str, source: str, value, what: str, section: str | None, key: str,
+                   occurrence: int = 0, *, positive: bool = False, allow_zero: bool = False,
+                   expected: str | None = None) -> float:
+    """``float(value)`` if :func:`number_error` accepts it, else its error located at ``key``.
+
+    Parameters
+    ----------
+    text, source : str
+        The file's text and name, for errors.
+    value : object
+        The value read from the file.
+    what : str
+        The value's name, for the message.
+    section : str or None
+        The table holding ``key`` (see :func:`located`).
+    key : str
+    occurrence : int
+        Which ``[[section]]`` entry (see :func:`located`).
+    positive, allow_zero : bool
+        As :func:`number_error`.
+    expected : str, optional
+        What would be right (default: :func:`number_error`'s, e.g. "a finite number > 0").
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    NetlistError
+        At ``key``'s line and column when ``value`` is not such a number.
+    """
+    bad = number_error(value, what, positive=positive, allow_zero=allow_zero)
+    if bad:
+        raise located(text, source, bad[0], section, key, occurrence=occurrence,
+                      expected=bad[1] if expected is None else expected)
+    return float(value)
 
 
 def brief(value) -> str:

@@ -99,3 +99,17 @@ def test_number_error_is_one_message_for_every_reader():
     assert number_error(-1, "c", positive=True, allow_zero=True)[1] == "a finite number ≥ 0"
     msg, _ = number_error(10 ** 400, "m")
     assert len(msg) < 120 and msg.endswith("...")      # a 400-digit integer, cut short
+
+
+def test_checked_number_returns_the_float_or_raises_at_the_entrys_key():
+    from mechcirc.sources import checked_number
+
+    text = "[[m]]\nk = 1\n[[m]]\nk = -2\n"
+    assert checked_number(text, "f.toml", 3, "k", "m", "k", positive=True) == 3.0
+    with pytest.raises(NetlistError) as e:
+        checked_number(text, "f.toml", -2, "k of #2", "m", "k", 1, positive=True)
+    assert (e.value.line, e.value.col) == (4, 1)
+    assert "k of #2 must be a finite number > 0, got -2" in str(e.value)
+    assert "expected a finite number > 0" in str(e.value)
+    with pytest.raises(NetlistError, match=r"expected k = a stiffness"):
+        checked_number(text, "f.toml", "x", "k", "m", "k", expected="k = a stiffness")

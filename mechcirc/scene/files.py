@@ -76,7 +76,7 @@ from typing import Literal, TypeGuard
 from ..errors import GeometryError, NetlistError
 from ..kinematics.linkage import TABLES as LINKAGE_TABLES
 from ..kinematics.linkage import Linkage, parse_linkage
-from ..sources import (Table, brief, check_keys, finite_number, load_toml, number_error,
+from ..sources import (Table, brief, check_keys, checked_number, finite_number, load_toml,
                        split_lines)
 from ..sources import located
 
@@ -355,10 +355,8 @@ def _number(text, source, value, what, table, key, n, *, positive=True, allow_ze
         if role == "angle" and parts and parts[1]:
             converted = math.degrees(converted)
         value = converted
-    bad = number_error(value, what, positive=positive, allow_zero=allow_zero)
-    if bad:
-        raise located(text, source, bad[0], table, key, occurrence=n, expected=bad[1])
-    return float(value)
+    return checked_number(text, source, value, what, table, key, n, positive=positive,
+                          allow_zero=allow_zero)
 
 
 def parse_scene(text: str, source: str = "<string>") -> Scene:

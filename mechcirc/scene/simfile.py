@@ -44,7 +44,7 @@ from functools import cached_property
 from typing import Any
 
 from ..errors import MechcircError
-from ..sources import brief, finite_number, located
+from ..sources import brief, checked_number, finite_number, located
 
 __all__ = ["Moment", "SimulateSettings", "parse_moments", "parse_simulate", "OUTPUT_KINDS",
            "apply_overrides", "Motor", "Shaft", "kloss_motor", "table_motor", "parse_shaft"]
@@ -79,17 +79,6 @@ class SimulateSettings:
     aliases: dict = field(default_factory=dict)
     #: (amplitude a, harmonic k): crank speed Ω (1 + a cos(k Ω t)); None: constant.
     omega_ripple: tuple | None = None
-
-
-def _num(text, source, value, what, table, key, n, *, positive=True):
-    ok = finite_number(value)
-    if ok and positive:
-        ok = value > 0
-    if not ok:
-        need = "a finite number" + (" > 0" if positive else "")
-        raise located(text, source, f"{what} must be {need}, got {brief(value)}", table, key,
-                   occurrence=n, expected=need)
-    return float(value)
 
 
 def parse_moments(text, source, table, scene) -> tuple:
@@ -132,15 +121,17 @@ def parse_moments(text, source, table, scene) -> tuple:
                        "unused name", "moments", "name" if "name" in m else "body",
                        occurrence=n, expected="an identifier not used by another element")
         taken.add(name)
-        amp = _num(text, source, m.get("amplitude"), f"amplitude of {name!r} [N·m]", "moments",
-                   "amplitude" if "amplitude" in m else "body", n, positive=False)
-        alpha = _num(text, source, m.get("window_deg"), f"window_deg of {name!r} [deg]",
-                     "moments", "window_deg" if "window_deg" in m else "body", n)
+        amp = checked_number(text, source, m.get("amplitude"), f"amplitude of {name!r} [N·m]",
+                             "moments", "amplitude" if "amplitude" in m else "body", n)
+        alpha = checked_number(text, source, m.get("window_deg"), f"window_deg of {name!r} [deg]",
+                               "moments", "window_deg" if "window_deg" in m else "body", n,
+                               positive=True)
         if alpha >= 360:
             raise located(text, source, f"window_deg of {name!r} must be < 360, got {alpha!r}",
                        "moments", "window_deg", occurrence=n, expected="0 < window_deg < 360")
-        sigma = _num(text, source, m.get("sigma_deg", alpha), f"sigma_deg of {name!r} [deg]",
-                     "moments", "sigma_deg", n)
+        sigma = checked_number(text, source, m.get("sigma_deg", alpha),
+                               f"sigma_deg of {name!r} [deg]", "moments", "sigma_deg", n,
+                               positive=True)
         centre = m.get("centre", "front-dead-centre")
         if isinstance(centre, str):
             if centre not in ("front-dead-centre", "back-dead-centre"):
@@ -148,8 +139,8 @@ def parse_moments(text, source, table, scene) -> tuple:
                            "centre", occurrence=n, expected='"front-dead-centre", '
                            '"back-dead-centre" or a crank rotation from the pose [deg]')
         else:
-            centre = math.radians(_num(text, source, centre, f"centre of {name!r} [deg]",
-                                       "moments", "centre", n, positive=False))
+            centre = math.radians(checked_number(text, source, centre, f"centre of {name!r} [deg]",
+                                                 "moments", "centre", n))
         out.append(Moment(name, body, amp, math.radians(alpha), math.radians(sigma), centre))
     return tuple(out)
 
@@ -184,10 +175,9 @@ def parse_simulate(text, source, table, scene) -> SimulateSettings:
                            expected='eps2P = "crank.acceleration"')
             kw["aliases"] = dict(v)
         elif k in ("omega", "steps_per_period"):
-            kw[k] = _num(text, source, v, f"[simulate] {k}", "simulate", k, 0)
+            kw[k] = checked_number(text, source, v, f"[simulate] {k}", "simulate", k, positive=True)
         elif k == "start_deg":
-            kw[k] = _num(text, source, v, "[simulate] start_deg", "simulate", k, 0,
-                         positive=False)
+            kw[k] = checked_number(text, source, v, "[simulate] start_deg", "simulate", k)
         elif k in ("revolutions", "points"):
             if isinstance(v, bool) or not isinstance(v, int) or v < (1 if k == "revolutions"
                                                                       else 16):
@@ -505,13 +495,10 @@ def parse_shaft(text: str, source: str, table, scene) -> Shaft:
     check_keys(text, source, Table("shaft", _KEYS), table)
 
     def num(key, default=None, positive=True, zero=False):
-        v = table.get(key, default)
-        if not (finite_number(v) and (v > 0 or (zero and v == 0) or not positive)):
-            need = "a finite number" + ((" ≥ 0" if zero else " > 0") if positive else "")
-            raise located(text, source, f"[shaft] {key} must be {need}, got {brief(v)}",
-                          "shaft", key if key in table else next(iter(table), key),
-                          expected=f"{key} = … ({_KEYS[key]})")
-        return float(v)
+        return checked_number(text, source, table.get(key, default), f"[shaft] {key}", "shaft",
+                              key if key in table else next(iter(table), key),
+                              positive=positive, allow_zero=zero,
+                              expected=f"{key} = … ({_KEYS[key]})")
 
     flywheel = num("flywheel", 0.0, zero=True)
     motor = _shaft_motor(text, source, table, num)
