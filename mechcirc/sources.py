@@ -216,21 +216,12 @@ def number_error(value, what: str, *, positive: bool = False,
 def checked_number(text: str, source: str, value, what: str, section: str | None, key: str,
                    occurrence: int = 0, *, positive: bool = False, allow_zero: bool = False,
                    expected: str | None = None) -> float:
-    """``float(value)`` if :func:`number_error` accepts it, else its error located at ``key``.
+    """``float(value)`` if :func:`number_error` accepts it, else its error :func:`located`.
 
     Parameters
     ----------
-    text, source : str
-        The file's text and name, for errors.
-    value : object
-        The value read from the file.
-    what : str
-        The value's name, for the message.
-    section : str or None
-        The table holding ``key`` (see :func:`located`).
-    key : str
-    occurrence : int
-        Which ``[[section]]`` entry (see :func:`located`).
+    text, source, value, what, section, key, occurrence
+        As :func:`located` and :func:`number_error`.
     positive, allow_zero : bool
         As :func:`number_error`.
     expected : str, optional
@@ -239,11 +230,6 @@ def checked_number(text: str, source: str, value, what: str, section: str | None
     Returns
     -------
     float
-
-    Raises
-    ------
-    NetlistError
-        At ``key``'s line and column when ``value`` is not such a number.
     """
     bad = number_error(value, what, positive=positive, allow_zero=allow_zero)
     if bad:
