@@ -7,7 +7,12 @@ Cases (steady cycle only, 360 samples):
 * the elastic slider-crank of tests/scene/test_shaft_elastic.py (Kloss motor, flywheel
   0.01 kg·m², a process moment window on the crank);
 * the cam follower whose contact opens (tests/scene/test_shaft_cam.py, contact 1e8 N/m);
-* the rigid one-side sley on a 0.1 kg·m² flywheel (``rigid=True``; examples/sley_flywheel.py).
+* the rigid one-side sley on a 0.1 kg·m² flywheel (``rigid=True``; examples/sley_flywheel.py);
+* the elastic slider-crank with a 2 µm dead zone in its rod (tests/scene/test_shaft_rk8.py:
+  four impacts a cycle).
+
+``--rigid`` runs every case rigid (``rigid=True``).  Each case also times the default
+(``method=None``: RK4 at 100 steps per period with elastic parts, rk8 at 16 rigid).
 
 The error of a run is the largest gap of its speed over the cycle from a DOP853 run at
 rtol 1e-12, relative to that run's mean speed.  Each time is the median of ``--repeat``
@@ -48,11 +53,14 @@ def sley():
 def cases():
     import test_shaft_cam as cam
     import test_shaft_elastic as sc
+    import test_shaft_rk8 as gap
 
     return [("elastic slider-crank", sc.scene, {}, (4, 6, 8, 16), (50, 100, 200)),
             ("cam follower, contact opens", cam.scene, {}, (8, 16, 32, 64), (100, 200, 400)),
-            ("rigid one-side sley", sley, dict(flywheel=0.1, rigid=True), (4, 8),
-             (8, 16, 32))]
+            ("rigid one-side sley", sley, dict(flywheel=0.1, rigid=True), (4, 8, 16),
+             (8, 16, 32, 100)),
+            ("slider-crank, 2 µm dead zone", gap.gap_scene, {}, (8, 12, 16, 24, 32),
+             (50, 100, 200))]
 
 
 def timed(fn, repeat):
@@ -68,7 +76,8 @@ def timed(fn, repeat):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=3)
-    ap.add_argument("--case", type=int, action="append", help="only these cases (0, 1, 2)")
+    ap.add_argument("--case", type=int, action="append", help="only these cases (0-3)")
+    ap.add_argument("--rigid", action="store_true", help="every case rigid")
     args = ap.parse_args(argv)
     jit.COMPILED = True
     warm_up()
@@ -78,11 +87,13 @@ def main(argv=None):
         if args.case and k not in args.case:
             continue
         scene = make()
+        kw = dict(kw, rigid=True) if args.rigid else kw
         simulate_shaft(scene, points=90, startup=False, method="rk8", **kw)   # compile once
         ref = simulate_shaft(scene, points=360, startup=False, method="DOP853", rtol=1e-12, **kw)
-        print(f"\n{name}\n  {'method':8s} {'setting':22s} {'CPU [ms]':>10s} {'error':>9s}")
+        print(f"\n{name}{' (rigid)' if args.rigid else ''}\n  {'method':8s} {'setting':22s} {'CPU [ms]':>10s} {'error':>9s}")
         rows = []
-        runs = [("DOP853", "rtol 1e-8", dict(method="DOP853", rtol=1e-8))]
+        runs = [("DOP853", "rtol 1e-8", dict(method="DOP853", rtol=1e-8)),
+                ("default", "method=None", {})]
         runs += [("rk8", f"{s} steps/period", dict(method="rk8", steps_per_period=s))
                  for s in spp8]
         runs += [("rk4", f"{s} steps/period", dict(method="rk4", steps_per_period=s))

@@ -412,11 +412,10 @@ def sweep(circuit: Circuit, omega: ArrayLike, *, method: Method = "auto",
         Either way ``error`` is the estimate of the error of the K returned.
     error : bool
         Series–parallel tree: also the error bound (hence ``flags``) in the
-        same pass over the tree as K: the sweep and its flags then cost about
-        1.7–2.3× a sweep alone (measured on ladders), where asking
-        ``Sweep.error`` or ``flags`` afterwards evaluates the tree again
-        (2.7–3.3×).  The same numbers either way.  Nodal analysis has its
-        estimate from its solve in any case.
+        same pass over the tree as K, where asking ``Sweep.error`` or
+        ``flags`` afterwards evaluates the tree again (the costs of both:
+        docs/performance.md).  The same numbers either way.  Nodal analysis
+        has its estimate from its solve in any case.
 
     Returns
     -------

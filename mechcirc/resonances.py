@@ -80,6 +80,9 @@ class Resonance:
         Damping ratio −Re s / |s| [1] (0 when undamped).
     error : float
         Estimated relative error of ``omega`` [1].
+
+    ``f_hz`` is ωₙ/2π; any frequency in Hz or rpm: :func:`mechcirc.units.in_unit`,
+    e.g. ``in_unit(r.omega_d, "Hz")``, or the table of :meth:`Resonances.table`.
     """
 
     kind: Kind
@@ -92,11 +95,6 @@ class Resonance:
     def f_hz(self) -> float:
         """Natural frequency ωₙ / 2π [Hz]."""
         return self.omega / (2 * math.pi)
-
-    @property
-    def fd_hz(self) -> float:
-        """Damped natural frequency ω_d / 2π [Hz]."""
-        return self.omega_d / (2 * math.pi)
 
 
 class Resonances(list):

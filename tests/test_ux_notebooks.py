@@ -95,6 +95,22 @@ def test_resonance_table_in_rpm_and_hz():
     assert float(hz[1].split()[1]) == pytest.approx(20 / (2 * math.pi), rel=1e-9)
 
 
+def test_resonance_table_in_hz_shows_the_damped_frequency():
+    """TWO with a damper c = 8 beside the spring: K = 0 where m s² + c s + k = 0, so
+    s = −2 ± j√396 (ζ = 0.1); the Hz table's f and f_d columns are 20/2π and √396/2π,
+    and in_unit gives the same f_d from one root (what ``Resonance.fd_hz`` gave)."""
+    from mechcirc.units import in_unit
+
+    found = find_resonances(mechcirc.parse(TWO + "damper c b 0 8\n"), kind="resonance")
+    (r,) = found                # (the anti-resonance: a first-order mode, k/c = 100 rad/s)
+    assert r.zeta == pytest.approx(0.1, rel=1e-12)
+    f, f_d = (float(v) for v in found.table("Hz")[1].split()[1:3])
+    assert f == pytest.approx(20 / (2 * math.pi), rel=1e-9)
+    assert f_d == pytest.approx(math.sqrt(396.0) / (2 * math.pi), rel=1e-9)
+    assert in_unit(r.omega_d, "Hz") == pytest.approx(math.sqrt(396.0) / (2 * math.pi),
+                                                     rel=1e-13)
+
+
 def test_cli_resonance_table_is_the_library_table(capsys):
     status, out, _ = run(["resonances", STB, "--omega-max", "5000"], capsys)
     assert status == 0

@@ -280,17 +280,21 @@ def cmd_simulate_scene(args) -> int:
     from ..errors import MechcircError
     from ..scene import load_scene
 
-    if args.rtol is not None and args.method in ("rk4", "rk4-python", "rk8"):
+    shaft = getattr(args, "shaft", False) or getattr(args, "flywheel", None) is not None \
+        or getattr(args, "rigid", False)
+    if args.method is None and not shaft:       # the shaft's default: by its mode (rk4/rk8)
+        args.method = "rk4"
+    fixed = args.method in (None, "rk4", "rk4-python", "rk8")
+    if args.rtol is not None and fixed:
         raise MechcircError(f"--rtol applies to the scipy methods (DOP853, RK45, LSODA), not "
-                            f"{args.method}; use --steps-per-period")
-    if args.steps_per_period is not None and args.method not in ("rk4", "rk4-python", "rk8"):
+                            f"{args.method or 'the default rk4/rk8'}; use --steps-per-period")
+    if args.steps_per_period is not None and not fixed:
         raise MechcircError(f"--steps-per-period applies to rk4 and rk8, not {args.method}; "
                             "use --rtol")
     check_output_paths(args.output, plots=(args.plot,) if args.plot else (),
                        reads=(args.scene,))
     scene = _with_overrides(args, load_scene(args.scene))
-    if getattr(args, "shaft", False) or getattr(args, "flywheel", None) is not None \
-            or getattr(args, "rigid", False):
+    if shaft:
         return _shaft(args, scene)
     result = _simulate_with_bar(args, scene)
     if args.output:
@@ -473,7 +477,7 @@ def _shaft(args, scene) -> int:
             raise MechcircError(f"--{flag.replace('_', '-')} does not apply to --shaft")
     if not args.shaft:
         raise MechcircError(f"--{'rigid' if args.rigid else 'flywheel'} applies with --shaft")
-    if args.method not in ("rk4", "rk8", "DOP853"):
+    if args.method not in (None, "rk4", "rk8", "DOP853"):
         raise MechcircError(f"--method {args.method} does not apply to --shaft: use rk4, rk8 "
                             "(fixed steps, --steps-per-period) or DOP853 (--rtol)")
     with warnings.catch_warnings(record=True):

@@ -78,15 +78,17 @@ def _sley_arguments(p) -> None:
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="override a parameter in SI units, e.g. --set clearance=0.002 "
                         "(repeatable)")
-    p.add_argument("--method", choices=_METHODS, default="rk4",
-                   help="integrator (default rk4: numba if installed, else pure Python; "
+    p.add_argument("--method", choices=_METHODS,
+                   help="integrator (default rk4, and rk8 for a rigid --shaft; numba if "
+                        "installed, else pure Python; "
                         "rk8: DOP853's 8th-order formula at a fixed step; "
                         "DOP853, RK45, LSODA: scipy's, with --rtol)")
     p.add_argument("--rtol", type=real(above=0.0, most=1.0), metavar="TOL",
                    help="relative tolerance of the scipy methods (default 1e-10)")
     p.add_argument("--steps-per-period", type=real(least=1.0, most=1e6), metavar="N",
                    help="rk4 or rk8 steps per period of the fastest mode (default: 25, or 50 "
-                        "if the error estimate at 25 exceeds 1e-3; rk8: 8, or 16)")
+                        "if the error estimate at 25 exceeds 1e-3; rk8: 8, or 16; --shaft: "
+                        "rk4 100, rk8 16)")
     p.add_argument("--points", type=count(16, MAX_POINTS_PER_REVOLUTION), metavar="N",
                    help="output points per revolution (default 7200, i.e. 0.05 deg)")
     p.add_argument("-o", "--output", metavar="CSV", help="write the curves as CSV")
@@ -248,6 +250,7 @@ def cmd_simulate(args) -> int:
                              "the rigid sley acceleration is zero, as the paper")
     args.revolutions = 5 if args.revolutions is None else args.revolutions
     args.points = 7200 if args.points is None else args.points
+    args.method = args.method or "rk4"
     check_output_paths(args.output, plots=(args.plot,))
     over = _overrides(args)
     if args.omega is not None:

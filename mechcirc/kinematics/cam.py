@@ -399,6 +399,18 @@ def _turns_back(geo, theta) -> float | None:
 
 
 # ------------------------------------------------------------------ export
+def _exportable(cam: CamProfile, files: str = "the profile") -> None:
+    """Refuse to export a profile that does not exist: where an oscillating flat face turns
+    back (1 + s′ = 0) its contact point is at infinity and the envelope is no cam."""
+    cut = cam.check("undercut")
+    if cut.value == -math.inf:
+        raise InputError(
+            f"{files} not written: the oscillating flat face turns back at θ = "
+            f"{math.degrees(cut.theta):.3f}° (1 + dψ/dθ = 0), where its contact point runs off "
+            "to infinity, so there is no cam profile to export (a longer return or rise, or "
+            "a smaller swing, gives one)")
+
+
 def profile_csv(cam: CamProfile) -> str:
     """The profile as CSV text: ``theta_deg,x,y,pressure_angle_deg,radius_of_curvature``.
 
@@ -413,7 +425,14 @@ def profile_csv(cam: CamProfile) -> str:
     Returns
     -------
     str
+
+    Raises
+    ------
+    InputError
+        The profile does not exist: an oscillating flat face that turns back (the
+        ``undercut`` check at −∞; the message gives the angle).
     """
+    _exportable(cam)
     rows = [(f"# mechcirc cam: {cam.follower} follower, base radius {cam.base_radius!r}, roller "
             f"radius {cam.roller_radius!r}, offset {cam.offset!r}, arm {cam.arm!r}, pivot "
             f"{cam.pivot!r}; cam frame, cam turning counter-clockwise"),
@@ -437,7 +456,13 @@ def profile_svg(cam: CamProfile) -> str:
     Returns
     -------
     str
+
+    Raises
+    ------
+    InputError
+        As :func:`profile_csv`.
     """
+    _exportable(cam)
     r = max(float(np.max(np.hypot(cam.x, cam.y))), cam.base_radius)
     m = 0.05 * r
     w = 2 * (r + m)
@@ -467,8 +492,16 @@ def save_profile(cam: CamProfile, csv: str | None = None, svg: str | None = None
     cam : CamProfile
     csv, svg : str, optional
         The file paths (None: not written).
+
+    Raises
+    ------
+    InputError
+        As :func:`profile_csv`, before any file is opened.
     """
     from ..outputs import OutputSet
+
+    if csv or svg:
+        _exportable(cam, " and ".join(str(p) for p in (csv, svg) if p))
 
     with OutputSet() as out:
         for target, text in ((csv, profile_csv), (svg, profile_svg)):

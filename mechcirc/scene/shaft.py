@@ -510,6 +510,11 @@ def _prepare(scene: Scene, shaft, flywheel, points, rigid):
 #: Steps per period of the fastest linearised mode of the elastic shaft, by method.
 STEPS_PER_PERIOD = {"rk4": 100, "rk8": 16}
 
+#: :func:`simulate_shaft`'s method when none is given, by mode (bench_shaft.py, measured in
+#: docs/performance.md): rigid, rk8 reaches RK4's error at 100 steps per period for less CPU;
+#: elastic, across clearance gaps rk8's error does not fall steadily with its step.
+DEFAULT_METHOD = {"rigid": "rk8", "elastic": "rk4"}
+
 #: Steps per cycle of the rigid shaft for each step per period (it has no elastic mode).
 RIGID_STEPS = 16
 
@@ -658,7 +663,7 @@ def _steady_state(eq, th0, cycle, w0, rtol, scale):
 
 def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float | None = None,
                    points: int = 720, startup: bool = True, rtol: float = 1e-10,
-                   rigid: bool = False, method: str = "rk4",
+                   rigid: bool = False, method: str | None = None,
                    steps_per_period: float | None = None) -> ShaftMotion:
     """The main shaft turned by the motor through the flywheel: steady cycle and start-up.
 
@@ -678,11 +683,13 @@ def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float 
     rigid : bool
         Treat every elastic element as rigid (θ the only degree of freedom); by default
         the elastic parts are simulated, coupled to θ (the free parts of :mod:`.motion`).
-    method : {"rk4", "rk8", "DOP853"}
+    method : {"rk4", "rk8", "DOP853"}, optional
         ``"rk4"``/``"rk8"``: the scene's compiled stepper at fixed steps (classical RK4 or
         DOP853's 8th-order formula; in θ over the cycle, in time for the start-up; kinks of
         clearance gaps and moment windows located inside the steps); ``"DOP853"``: scipy's
         solve_ivp at ``rtol``.  The rigid shaft takes the same paths (:func:`rigid_model`).
+        Default (None): :data:`DEFAULT_METHOD`, ``"rk4"`` with elastic parts, ``"rk8"`` for
+        the rigid shaft.
     steps_per_period : float, optional
         ``"rk4"``/``"rk8"``: steps per period of the fastest linearised mode at the steady
         speed (default :data:`STEPS_PER_PERIOD` of the method).
@@ -698,9 +705,10 @@ def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float 
         or stalls during the start-up or the steady cycle (the message gives the torques);
         the start-up did not reach the steady cycle within ``max_time``.
     """
-    spp = _checked_method(method, steps_per_period)       # None for DOP853
     shaft, Jf, rig, eq, req, peak, mean_load, notes = _prepare(scene, shaft, flywheel, points,
                                                                rigid)
+    method = method or DEFAULT_METHOD["elastic" if eq.n else "rigid"]
+    spp = _checked_method(method, steps_per_period)       # None for DOP853
     motor = shaft.motor
     th0, cyc = math.radians(shaft.start_deg), rig.cycle
     scale = max(abs(motor.sync_speed) if motor.kind == "kloss" else max(motor.speeds), 1e-300)

@@ -156,6 +156,30 @@ def test_a_face_that_turns_back_has_no_least_radius():
     assert before * after < 0 and min(abs(before), abs(after)) > 1e8 * RB
 
 
+def test_a_face_that_turns_back_is_not_exported(tmp_path):
+    """The cam above has no profile (its contact point at infinity at θ*, the grid's points
+    near it 1e4 r_b out): the CSV, the SVG and save_profile refuse it with θ* (closed form)
+    and write nothing; a cam whose face keeps turning exports as before."""
+    from mechcirc.kinematics.cam import profile_csv, profile_svg, save_profile
+
+    h, ret = math.radians(50.0), math.radians(60.0)
+    cam = cam_profile(cam_cycle("cycloidal", 60, 120, 60, h), RB, "oscillating_flat",
+                      pivot=D)
+    theta_star = math.degrees(math.pi + ret * math.acos(1.0 - ret / h) / (2 * math.pi))
+    needle = f"turns back at θ = {theta_star:.3f}°"
+    for export in (profile_csv, profile_svg):
+        with pytest.raises(InputError, match=needle):
+            export(cam)
+    csv, svg = tmp_path / "p.csv", tmp_path / "p.svg"
+    with pytest.raises(InputError, match=f"p.csv and .*p.svg not written: .*{needle}"):
+        save_profile(cam, str(csv), str(svg))
+    assert list(tmp_path.iterdir()) == []
+    fine = cam_profile(cam_cycle("cycloidal", 60, 120, 60, math.radians(5.0)), RB,
+                       "oscillating_flat", pivot=D)
+    save_profile(fine, str(csv))
+    assert csv.read_text() == profile_csv(fine)
+
+
 def test_pivot_inside_the_base_circle_is_refused():
     with pytest.raises(InputError, match="pivot distance D = 30 must be more than"):
         cam_profile(cam_cycle("cycloidal", 120, 60, 120, H), RB, "oscillating_flat",

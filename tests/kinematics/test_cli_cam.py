@@ -172,7 +172,7 @@ def test_an_oscillating_flat_face_refuses_bad_options(extra, needle, capsys):
     assert_user_error(FLAT + extra, capsys, needle)
 
 
-def test_an_oscillating_face_that_turns_back_is_named_not_given_a_radius(capsys):
+def test_an_oscillating_face_that_turns_back_is_named_not_given_a_radius(tmp_path, capsys):
     """A 50° swing returned in 60°: 1 + s′ = 0 at 180° + 60°·acos(1 − 60/50)/(2π)
     (the cycloidal return written out); the warning says the face turns back there,
     the JSON value is −Infinity."""
@@ -187,3 +187,8 @@ def test_an_oscillating_face_that_turns_back_is_named_not_given_a_radius(capsys)
     check = json.loads(out)["checks"]["undercut"]
     assert status == 0 and check["value"] == -math.inf and not check["ok"]
     assert check["theta_deg"] == pytest.approx(theta, abs=1e-9)
+    # its profile is not exported: exit 2 naming the angle, neither file written
+    out_csv, out_svg = tmp_path / "p.csv", tmp_path / "p.svg"
+    assert_user_error(argv + ["-o", out_csv, "--svg", out_svg], capsys,
+                      f"turns back at θ = {theta:.3f}°", "not written")
+    assert list(tmp_path.iterdir()) == []
