@@ -22,6 +22,7 @@ side.  Its resonances (K = 0 with the drive held) are the eigenfrequencies.
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -133,8 +134,6 @@ def __getattr__(name: str):
     """
     if name != "Mode":
         raise AttributeError(f"module {__package__!r} has no attribute {name!r}")
-    import warnings
-
     warnings.warn("mechcirc.sley.Mode is renamed SleyMode (a mode of the linearised sley; "
                   "mechcirc.modes.Mode is a circuit's mode with its shape); the old name goes "
                   "in the next release", DeprecationWarning, stacklevel=2)

@@ -14,7 +14,7 @@ from mechcirc.sley import SleyMode, eigenfrequencies, linearise, preset
 def test_former_name_warns_and_is_the_same_class():
     for module in ("mechcirc.sley", "mechcirc.sley.linear"):
         with pytest.warns(DeprecationWarning, match="renamed SleyMode") as caught:
-            cls = getattr(importlib.import_module(module), "Mode")
+            cls = importlib.import_module(module).Mode
         assert cls is SleyMode
         assert caught[0].filename == __file__          # points at the caller's line
     with pytest.warns(DeprecationWarning):
