@@ -42,6 +42,7 @@ import numpy as np
 
 from .circuit import Circuit, units_of
 from .errors import MechcircError
+from .units import convert_frequency
 
 __all__ = ["PeriodicResult", "SpeedMap", "periodic", "rpm_to_omega", "speed_map"]
 
@@ -58,7 +59,10 @@ UNDAMPED_ZETA = 1e-12
 
 
 def rpm_to_omega(rpm: float) -> float:
-    """Shaft speed [rev/min] to angular frequency Ω [rad/s].
+    """Shaft speed [rev/min] to angular frequency Ω [rad/s]: ``Ω = 2π·rpm/60``.
+
+    The shorthand the speed-domain functions use for
+    ``units.convert_frequency(rpm, "rpm", "rad/s")`` (the one conversion).
 
     Parameters
     ----------
@@ -68,7 +72,7 @@ def rpm_to_omega(rpm: float) -> float:
     -------
     float
     """
-    return rpm * 2 * math.pi / 60
+    return convert_frequency(rpm, "rpm", "rad/s")
 
 
 @dataclass
@@ -537,7 +541,7 @@ def _crossings(found, motion, kmax: int, rpm_min: float, rpm_max: float) -> list
     weight = c / c.max() if c.max() > 0 else c
     for wn, zeta, _ in found:
         for k in range(1, kmax + 1):
-            r = wn / k * 60 / (2 * math.pi)
+            r = convert_frequency(wn / k, "rad/s", "rpm")
             if rpm_min <= r <= rpm_max:
                 crossings.append((r, k, wn, zeta, float(weight[k - 1])))
     return sorted(crossings)

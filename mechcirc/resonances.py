@@ -94,7 +94,7 @@ class Resonance:
     @property
     def f_hz(self) -> float:
         """Natural frequency ωₙ / 2π [Hz]."""
-        return self.omega / (2 * math.pi)
+        return in_unit(self.omega, "Hz")
 
 
 class Resonances(list):

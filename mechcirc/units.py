@@ -40,7 +40,8 @@ from .errors import UnitError
 
 __all__ = ["Unit", "UnitError", "ATOMS", "PREFIXES", "PREFIXABLE", "ROLES", "parse_unit",
            "looks_like_unit", "convert", "parse_quantity", "split_quantity", "parse_omega",
-           "OMEGA_UNITS", "is_rotational", "SPICE_SUFFIXES", "FREQUENCY_UNITS", "in_unit"]
+           "OMEGA_UNITS", "is_rotational", "SPICE_SUFFIXES", "FREQUENCY_UNITS", "in_unit",
+           "convert_frequency"]
 
 # Dimensions are exponents of (kg, m, s).
 _MASS, _LENGTH, _TIME = (1, 0, 0), (0, 1, 0), (0, 0, 1)
@@ -48,16 +49,21 @@ _FORCE = (1, 1, -2)
 _NONE = (0, 0, 0)
 _FREQ = (0, 0, -1)
 
+#: rad/s per Hz and per rpm, the one source of these factors (:data:`ATOMS`,
+#: :data:`OMEGA_UNITS`, :data:`FREQUENCY_UNITS`, :func:`convert_frequency`): Hz and
+#: rpm count revolutions (2π rad) per second and per minute, ω = 2π·f = 2π·n/60.
+_HZ, _RPM = 2 * math.pi, 2 * math.pi / 60
+
 #: Known atoms: SI factor and dimension (kg, m, s exponents).  Factors are
 #: exact ratios ``(numerator, denominator)`` combined as fractions (only
-#: ``deg`` is a float), so ``kg*mm^2`` is exactly 1e-6.
+#: ``deg``, ``Hz`` and ``rpm`` are floats), so ``kg*mm^2`` is exactly 1e-6.
 ATOMS: dict[str, tuple[tuple[int, int] | float, tuple[int, int, int]]] = {
     "kg": ((1, 1), _MASS), "g": ((1, 1000), _MASS), "t": ((1000, 1), _MASS),
     "N": ((1, 1), _FORCE), "kN": ((1000, 1), _FORCE),
     "m": ((1, 1), _LENGTH), "mm": ((1, 1000), _LENGTH), "cm": ((1, 100), _LENGTH),
     "s": ((1, 1), _TIME), "ms": ((1, 1000), _TIME),
     "rad": ((1, 1), _NONE), "deg": (math.pi / 180, _NONE),
-    "Hz": (2 * math.pi, _FREQ), "rpm": (2 * math.pi / 60, _FREQ),
+    "Hz": (_HZ, _FREQ), "rpm": (_RPM, _FREQ),
     "min": ((60, 1), _TIME), "h": ((3600, 1), _TIME),
 }
 
@@ -241,18 +247,54 @@ def convert(value: float, unit: Unit, role: str) -> float:
 
 
 #: Units accepted for angular frequencies (a subset of the grammar, quoted in messages).
-OMEGA_UNITS = {"rad/s": 1.0, "Hz": 2 * math.pi, "kHz": 2000 * math.pi,
-               "rpm": 2 * math.pi / 60, "1/s": 1.0}
+OMEGA_UNITS = {"rad/s": 1.0, "Hz": _HZ, "kHz": 1000 * _HZ, "rpm": _RPM, "1/s": 1.0}
 
 #: Units in which a frequency is shown: unit -> (column name, rad/s per unit).
 #: Hz and rpm count revolutions: f = ω/2π, n = 60·ω/2π (docs/units.md).
-FREQUENCY_UNITS = {"rad/s": ("omega", 1.0), "Hz": ("f", 2 * math.pi),
-                   "rpm": ("n", 2 * math.pi / 60)}
+FREQUENCY_UNITS = {"rad/s": ("omega", 1.0), "Hz": ("f", _HZ), "rpm": ("n", _RPM)}
+
+
+def convert_frequency(value, from_unit: str = "rad/s", to_unit: str = "rad/s"):
+    """``value`` (a number or an array) in ``from_unit`` converted to ``to_unit``.
+
+    The one conversion between angular frequency [rad/s], frequency [Hz] and
+    shaft speed [rpm], through rad/s with the factors of :data:`FREQUENCY_UNITS`
+    (ω = 2π·f = 2π·n/60): ``value · factor(from_unit) / factor(to_unit)``, the
+    same numbers as :func:`parse_quantity` gives for ``"600rpm"`` or ``"50Hz"``.
+
+    Parameters
+    ----------
+    value : float or ndarray
+    from_unit, to_unit : {"rad/s", "Hz", "rpm"}
+        The keys of :data:`FREQUENCY_UNITS`.
+
+    Returns
+    -------
+    float or ndarray
+
+    Raises
+    ------
+    UnitError
+        For another unit, naming the three.
+
+    Examples
+    --------
+    >>> convert_frequency(3000, "rpm", "rad/s") == 100 * math.pi
+    True
+    >>> convert_frequency(50 * 2 * math.pi, to_unit="Hz")
+    50.0
+    """
+    try:
+        (_, a), (_, b) = FREQUENCY_UNITS[from_unit], FREQUENCY_UNITS[to_unit]
+    except KeyError:
+        bad = to_unit if from_unit in FREQUENCY_UNITS else from_unit
+        raise UnitError(f"unknown frequency unit {bad!r}", 0, "rad/s, Hz or rpm") from None
+    return value * a / b
 
 
 def in_unit(omega, unit: str = "rad/s"):
     """Angular frequency ``omega`` [rad/s] (a number or an array) in ``unit`` of
-    :data:`FREQUENCY_UNITS` (``"rad/s"``, ``"Hz"`` or ``"rpm"``).
+    :data:`FREQUENCY_UNITS`: ``convert_frequency(omega, "rad/s", unit)``.
 
     Parameters
     ----------
@@ -263,7 +305,7 @@ def in_unit(omega, unit: str = "rad/s"):
     -------
     float or ndarray
     """
-    return omega / FREQUENCY_UNITS[unit][1]
+    return convert_frequency(omega, "rad/s", unit)
 
 
 _NUMBER = r"[-+]?(?:(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|inf|nan)"

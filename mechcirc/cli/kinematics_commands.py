@@ -6,6 +6,7 @@ import argparse
 import math
 
 from ..errors import InputError, MechcircError
+from ..units import convert_frequency
 from ._common import (MAX_LENGTH, MAX_OMEGA, check_output_paths, count, print_json, real,
                       save_figure)
 
@@ -300,7 +301,7 @@ def cmd_frame(args) -> int:
         raise MechcircError(
             f"frame loading needs a crank-rocker whose crank turns fully; this four-bar is a "
             f"{fb.grashof_class} {fb.linkage_type} (see mechcirc fourbar)")
-    omega = args.omega if args.omega is not None else args.rpm * 2 * math.pi / 60
+    omega = args.omega if args.omega is not None else convert_frequency(args.rpm, "rpm", "rad/s")
     m2, m3, m4 = args.mass
     links = {name: LinkMass(m, tuple(x * k for x in getattr(args, f"{name}_com")),
                             getattr(args, f"{name}_inertia"))
@@ -321,7 +322,7 @@ def cmd_frame(args) -> int:
         print_json({"fourbar": {"crank": args.crank, "coupler": args.coupler,
                                 "rocker": args.rocker, "frame": args.frame,
                                 "unit": args.unit, "branch": fb.branch},
-                    "omega": omega, "rpm": omega * 60 / (2 * math.pi),
+                    "omega": omega, "rpm": convert_frequency(omega, "rad/s", "rpm"),
                     "convention": res.CONVENTION, "summary": summary,
                     "columns": {n: v.tolist() for n, v in cols.items()}})
         return 0
@@ -334,7 +335,7 @@ def _print_frame(args, fb, res, summary, omega) -> None:
     front, _ = fb.dead_centres()
     print(f"frame loading of the four-bar a={args.crank:g} b={args.coupler:g} "
           f"c={args.rocker:g} d={args.frame:g} {args.unit} at ω = {omega:.6g} rad/s "
-          f"({omega * 60 / (2 * math.pi):.6g} rpm), {args.points} crank angles; front dead "
+          f"({convert_frequency(omega, 'rad/s', 'rpm'):.6g} rpm), {args.points} crank angles; front dead "
           f"centre θ = {math.degrees(front.theta):.3f}°")
     print(f"  {'quantity':34s} {'min':>11s} {'at θ':>8s} {'max':>11s} {'at θ':>8s}")
     labels = {"S_abs_N": "|S| shaking force on the frame [N]",

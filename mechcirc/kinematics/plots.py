@@ -15,6 +15,8 @@ import math
 
 import numpy as np
 
+from ..units import convert_frequency
+
 __all__ = ["plot_fourbar", "plot_synthesis", "draw_design", "plot_frame_loading", "plot_shaking", "plot_linkage"]
 
 
@@ -259,7 +261,7 @@ def plot_shaking(result, fig=None):
     for a in (ax[1, 0], ax[1, 1]):
         a.legend(fontsize="small", loc="best")
     fig.suptitle(f"frame loading at ω = {result.omega:.4g} rad/s "
-                 f"({result.omega * 60 / (2 * math.pi):.4g} rpm)")
+                 f"({convert_frequency(result.omega, 'rad/s', 'rpm'):.4g} rpm)")
     return fig
 
 

@@ -11,11 +11,13 @@ The beat-up interval α defaults to 10° (not printed in the paper; σ = α; fit
 printed cells, docs/sley.md).
 """
 
-from .linear import LinearModel, Mode, eigenfrequencies, linearise, to_circuit, to_netlist
+from .linear import (LinearModel, SleyMode, eigenfrequencies, linearise, to_circuit,
+                     to_netlist)
+from .linear import __getattr__  # noqa: F401  (Mode, the former name of SleyMode, warns)
 from .models import DEFAULT_ALPHA_DEG, ParameterError, SleyParameters
 from .presets import PAPER, all_presets, preset
 from .simulation import METHODS, SleyResult, simulate, simulate_batch, simulate_params
 
 __all__ = ["SleyParameters", "ParameterError", "DEFAULT_ALPHA_DEG", "preset", "all_presets",
            "PAPER", "simulate", "simulate_params", "simulate_batch", "SleyResult", "METHODS",
-           "linearise", "eigenfrequencies", "to_circuit", "to_netlist", "LinearModel", "Mode"]
+           "linearise", "eigenfrequencies", "to_circuit", "to_netlist", "LinearModel", "SleyMode"]

@@ -288,7 +288,7 @@ def forced_amplitude(lin, omega: float, cycles_settle: int | None = None,
 
     n = lin.M.shape[0]
     minv = 1.0 / np.diag(lin.M)
-    slow = min(abs(m.eigenvalue.real) for m in _modes(lin))
+    slow = min(abs(lm.real) for lm in _eigenvalues(lin))
     period = 2 * math.pi / omega
     if cycles_settle is None:           # transient below e^-12 of its start
         cycles_settle = int(math.ceil(12.0 / max(slow, 1e-9) / period))
@@ -314,12 +314,10 @@ def forced_amplitude(lin, omega: float, cycles_settle: int | None = None,
     return float(abs(c))
 
 
-def _modes(lin):
-    from .linear import Mode
-
+def _eigenvalues(lin):
+    """The eigenvalues λ of ż = A z with Im λ > 0 [1/s]: one per oscillating mode."""
     lam = np.linalg.eigvals(lin.state_matrix())
-    lam = lam[lam.imag > 0]
-    return [Mode(abs(lm), lm.imag, -lm.real / abs(lm), complex(lm)) for lm in lam]
+    return lam[lam.imag > 0]
 
 
 def harmonic_check(params: SleyParameters, theta0: float, omegas) -> HarmonicCheck:

@@ -40,6 +40,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import MechcircError
+from ..units import convert_frequency
 
 __all__ = ["FollowerResult", "follower", "follower_circuit", "jump_speed", "separation_speed",
            "least_sample"]
@@ -134,7 +135,7 @@ def jump_speed(motion, mass: float, spring: float, preload: float,
                                     "below 1e12 rad/s")
         omega = brentq(lowest, hi / 2 if hi > 1 else 0.0, hi, xtol=1e-14, rtol=1e-15)
         theta = _min_over_angle(lambda t: need(t, omega))[1]
-    return omega * 60 / (2 * math.pi), math.degrees(theta)
+    return convert_frequency(omega, "rad/s", "rpm"), math.degrees(theta)
 
 
 def follower_circuit(motion, mass, spring, preload, damping=0.0, *, contact,
@@ -248,7 +249,7 @@ def follower(motion, rpm: float, mass: float, spring: float, preload: float,
     period = 60 / rpm if isinstance(rpm, (int, float)) and rpm > 0 else math.nan
     r = transient(circuit, revolutions * period, dt if dt is not None else period / 7200,
                   rpm=rpm, rtol=rtol)
-    omega = 2 * math.pi * rpm / 60
+    omega = convert_frequency(rpm, "rpm", "rad/s")
     lo, ang = _least_contact(r, circuit.elements[0], omega)
     theta = omega * r.time
     z0 = preload / spring
