@@ -348,21 +348,24 @@ def residual_rounding(system, S, double: bool = True):
     With ``double=False``, the float64 residual of the unrefined solve
     (:meth:`Pattern.residual` with ``exact=False``): K − K̂ = xᵀ r exactly
     (A complex symmetric, r = b − A x̂), and the computed r̂ differs from r
-    by the rounding of each element current t_e = y_e·(x_i − x_j) (at most
-    3u|t_e| per component: the difference, the admittance ωm or k/ω, the
-    product, the other component of y being 0) and of each row's sum of m
-    terms (γ_{m−1} Σ|t| per component), ×√2 for the modulus of a complex
-    error.  Through x, Σ_e |t_e| (|x_i| + |x_j|) + Σ_levers |v x_c||x_r| = S
-    |K| and Σ_e |t_e||x_i − x_j| ≤ S |K|, so |xᵀ(r − r̂)|/|K| ≤
-    √2 (m + 3) u S (1 + O(m u)), bounded here by 4 (m + 4) u S with m the
-    most terms of a row; the rounding of b − Ax̂ itself (u |x̂|ᵀ|r̂|) is
-    added by the caller, which has r̂.
+    by the rounding of each element current t_e = y_e·(x_i − x_j), at most
+    γ₃|t_e| (each component of the difference, of the admittance ωm, k/ω or
+    c — the other component of y is 0 — and of the product rounded once;
+    a lever stamp's v·x_c once), and of each row's sum of m terms, at most
+    γ_{m−1}·Σ|t| (componentwise, and so for the modulus: Minkowski); γ_k =
+    k u/(1 − k u).  A current enters its two rows with opposite signs, so
+    its rounding reaches xᵀ r through x_i − x_j, a row's through x_r:
+    |xᵀ(r − r̂)| ≤ (γ₃ + γ_{m−1}(1 + γ₃))·S|K| with S|K| = Σ_e |t_e|(|x_i| +
+    |x_j|) + Σ_levers |v x_c||x_r| (:meth:`Pattern.sensitivities`), to first
+    order in x − x̂; bounded here by (m + 3)·u·S with m the most terms of a
+    row.  The rounding of b − A x̂ itself (u |x̂|ᵀ|r̂|) is added by the
+    caller, which has r̂.
     """
     pat = pattern(system)
     u = np.finfo(float).eps / 2
     with np.errstate(all="ignore"):
         out = 4 * (pat.max_terms + 4) * u * u * S if double else \
-            4 * (pat.max_row_terms + 4) * u * S
+            (pat.max_row_terms + 3) * u * S
     return np.where(np.isnan(out), np.inf, out)
 
 

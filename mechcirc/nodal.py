@@ -72,7 +72,9 @@ class Solution:
         correction of the iterative refinement, plus its own uncertainty
         (the observed contraction × the correction's size), plus the
         residual's rounding in double-double, floored at the rounding to
-        float64; ``inf`` where the refinement does not contract or stalls
+        float64 (unrefined on the numpy path: the first correction from a
+        float64 residual plus the bound on its rounding,
+        :func:`mechcirc._nodal_residual.residual_rounding`); ``inf`` where the refinement does not contract or stalls
         even with double-double factors (:class:`DDSolver`, up to
         :data:`DD_LIMIT` unknowns), or A(ω) is not finite.
     singular : ndarray of bool, shape (n_ω,)

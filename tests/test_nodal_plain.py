@@ -109,8 +109,8 @@ def test_float64_residual_within_its_bound(text):
             err = abs(complex(float(tr), float(ti)))
             assert err <= bound[k], (trial, w, err, bound[k])
             worst = max(worst, err / bound[k])
-    # Not vacuous: the largest error reaches 0.079 (levers) and 0.046 (ladder) of it.
-    assert worst > 1e-3
+    # Not vacuous: the largest error reaches 0.33 (levers) and 0.22 (ladder) of it.
+    assert worst > 0.02
 
 
 @pytest.mark.parametrize("compiled", [False, True], ids=["numpy", "compiled"])
@@ -132,8 +132,8 @@ def test_unrefined_ladder_within_its_estimate(compiled):
         _jit.COMPILED = saved
     rel = np.abs(plain.K / ref - 1)
     assert rel.max() > 1e-13                     # the trade is real (seen 1.5e-12)
-    # Measured: at most 0.49 of the estimate (numpy, float64 residual) and 0.85
-    # (compiled, double-double residual); the largest estimate 1.4e-11 and 3.0e-12.
+    # Measured: at most 0.50 of the estimate (numpy, float64 residual) and 0.85
+    # (compiled, double-double residual); the largest estimate 3.5e-12 and 3.0e-12.
     assert np.all(rel <= plain.error)
     assert plain.error.max() <= 1e-9
     assert np.all(plain.error >= refined.error)
