@@ -183,10 +183,6 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
                 else _CHUNK_TERMS // max(1, pat.n_terms + system.size))
 
     def residual(w, xh, xl, rhs, exact=True):
-        # The unrefined solve's estimate takes the float64 residual on the numpy
-        # path (a sixth of the double-double one's work there); the compiled
-        # double-double residual costs less than it, and is kept.
-        exact = exact or kern is not None
         if kern is not None or w.size <= terms or not exact:
             return pat.residual(w, xh, xl, rhs, kern, exact)
         return np.concatenate([pat.residual(w[i:i + terms], xh[i:i + terms],
@@ -194,7 +190,11 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
                                for i in range(0, w.size, terms)])
 
     def refined(solve_fn, w):
-        return refine_dd(solve_fn, residual, w, rhs, system, refine, steps)
+        # The unrefined solve's estimate takes the float64 residual on the numpy
+        # path (a sixth of the double-double one's work there); the compiled
+        # double-double residual costs less than it, and is kept.
+        return refine_dd(solve_fn, residual, w, rhs, system, refine, steps,
+                         float64=kern is None)
 
     # The numpy banded LU loops over the columns in Python: as many ω at once
     # as its memory bound allows (the residual goes in pieces, above).
@@ -406,20 +406,27 @@ def _backward_error(system, omega: float, x: NDArray) -> float:
         return float(np.max(np.where(np.abs(ax) == 0, 0.0, eta), initial=0.0))
 
 
-def refine_dd(solve_fn, residual, omega, rhs, system, refine: bool, steps: int):
+def refine_dd(solve_fn, residual, omega, rhs, system, refine: bool, steps: int,
+              float64: bool = False):
     """x from one solve and up to ``steps`` refinement steps.
 
     Returns (xh, xl, relative error of K, contraction of the last step):
-    x = xh + xl in double-double (xl None without refinement).
+    x = xh + xl in double-double (xl None without refinement).  ``float64``:
+    without refinement, the estimate from a float64 residual
+    (``residual(..., exact=False)``), the rounding of b − A x̂ included
+    (that of the terms is added by the caller, which has S).
     """
     eps = np.finfo(float).eps
     b = np.broadcast_to(rhs.astype(complex), (omega.size, rhs.size))
     x0 = solve_fn(b)
     if not refine:
         # No refinement: the first correction is still the error estimate, from
-        # a float64 residual (a sixth of the double-double one's work); its
-        # rounding is bounded in solve (residual_rounding, double=False) and here
-        # (that of b − A x̂ itself, u |x̂|ᵀ|r̂| / |K|).
+        # a double-double residual or a float64 one (a sixth of its work); the
+        # latter's rounding is bounded in _Solved.store (residual_rounding,
+        # double=False) and here (that of b − A x̂ itself, u |x̂|ᵀ|r̂| / |K|).
+        if not float64:
+            r = residual(omega, x0, None, rhs)
+            return (x0, None, *_estimate(system, x0, None, solve_fn(r), None, r))
         r = residual(omega, x0, None, rhs, exact=False)
         est, rho = _estimate(system, x0, None, solve_fn(r), None, r)
         with np.errstate(all="ignore"):
