@@ -174,8 +174,7 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
     at = np.arange(omega.size) if at is None else at
     kern = None if solve_with.kind == "dense" or np.iscomplexobj(omega) \
         else kernels(system.size * at.size)
-    out = _Solved(system, pat, kern, omega, keep)
-    out.float64_residual = not refine and kern is None
+    out = _Solved(system, pat, kern, omega, keep, float64_residual=not refine and kern is None)
 
     # Compiled: no (ω, term) temporaries; the chunk's (ω, n) arrays stay in cache.
     # numpy: the residual's (ω, term) temporaries bound its pieces.
@@ -218,7 +217,8 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
 class _Solved:
     """What :func:`_sweep` finds at each ω, stored chunk by chunk."""
 
-    def __init__(self, system: NodalSystem, pat, kern, omega: NDArray, keep: NDArray | None):
+    def __init__(self, system: NodalSystem, pat, kern, omega: NDArray, keep: NDArray | None,
+                 float64_residual: bool = False):
         m = omega.size
         self.system, self.pat, self.kern, self.omega, self.keep = system, pat, kern, omega, keep
         self.K = np.full(m, complex(np.nan, np.nan))
@@ -228,7 +228,7 @@ class _Solved:
         self.kept: dict[int, NDArray] = {}
         #: The estimates come from a float64 residual (:func:`refine_dd`, unrefined):
         #: its rounding, bounded by :func:`residual_rounding`, is added.
-        self.float64_residual = False
+        self.float64_residual = float64_residual
 
     def store(self, sel, xh, xl, est, rho) -> None:
         """K, its sensitivities and error estimate, and x, at the points ``sel``."""
