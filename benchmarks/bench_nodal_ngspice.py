@@ -132,6 +132,13 @@ def breakdown(sizes, omega, repeats) -> None:
     for cls in (_nodal_solvers.SparseSolver, _nodal_solvers.DenseSolver):
         timed(cls, "factor", "factor", solves)
     timed(_nodal_residual.Pattern, "residual", "dd residual")
+    passes = {"first": 0, "later": 0}
+    timed_residual = _nodal_residual.Pattern.residual
+
+    def counted(self, omega, xh, xl, *a, **k):     # ω per pass: first step, later steps
+        passes["first" if xl is None else "later"] += len(omega)
+        return timed_residual(self, omega, xh, xl, *a, **k)
+    _nodal_residual.Pattern.residual = counted
     timed(nodal, "_estimate", "estimate")
     timed(_nodal_residual.Pattern, "sensitivities", "sensitivities")
     for n in sizes:
@@ -144,13 +151,15 @@ def breakdown(sizes, omega, repeats) -> None:
             runs = []
             for _ in range(repeats):
                 spent.clear()
+                passes.update(first=0, later=0)
                 t0 = time.process_time()
                 mechcirc.parse(text).sweep(omega, method="nodal")
                 spent["total"] = time.process_time() - t0
                 runs.append(dict(spent))
             keys = ["total"] + [k for k in runs[0] if k != "total"]
             print(f"{n:,} elements, {'compiled' if compiled else 'numpy'} (ms): " + ", ".join(
-                f"{k} {np.median([r.get(k, 0.0) for r in runs]) * 1e3:.2f}" for k in keys),
+                f"{k} {np.median([r.get(k, 0.0) for r in runs]) * 1e3:.2f}" for k in keys)
+                + f"; residual ω: {passes['first']} first step, {passes['later']} later",
                 flush=True)
     _jit.COMPILED = None
 

@@ -125,10 +125,23 @@ class Pattern:
         self.k_bs = np.minimum(self.s_row * 4 + 3, 4 * n).astype(np.int64)
         self.n_terms = 2 * E + self.s_row.size
         self.max_terms = int(counts.max(initial=0))
+        # The float64 residual (:meth:`residual` with ``exact=False``) sums each
+        # row's terms at once: the terms sorted by row, and where each row starts.
+        rows = np.concatenate([self.e_i, self.e_j, self.s_row])
+        self.f_order = np.argsort(rows, kind="stable")
+        self.f_rows, self.f_start, per_row = np.unique(rows[self.f_order], return_index=True,
+                                                       return_counts=True)
+        self.max_row_terms = int(per_row[self.f_rows < n].max(initial=0))   # (not the frame's)
 
     def residual(self, omega: NDArray, xh: NDArray, xl: NDArray | None,
-                 rhs: NDArray, kern=None) -> NDArray[np.complex128]:
+                 rhs: NDArray, kern=None, exact: bool = True) -> NDArray[np.complex128]:
         """b − A(ω) x for each ω (rows of x = xh + xl), in double-double, rounded at the end.
+
+        With ``exact=False`` (the unrefined solve's error estimate) in float64
+        instead, from the same element currents y·(x_i − x_j) (each rounded
+        about three times: the difference, the admittance, the product) summed
+        row by row (:func:`residual_rounding` with ``double=False`` bounds what
+        that rounding does to K); ``xl`` and ``kern`` are not used.
 
         The same A(ω) as :func:`combine`: (A x)_r = Σ dampers + Σ levers +
         jω Σ masses − j Σ springs / ω, each sum Σ ±value·(x_i − x_j) exact to
@@ -139,9 +152,22 @@ class Pattern:
         kernel: the same operations in the same order.
         """
         with np.errstate(all="ignore"):
+            if not exact:
+                return self._residual_float64(omega, xh, rhs)
             if kern is not None and not np.iscomplexobj(omega):
                 return self._residual_compiled(kern, omega, xh, xl, rhs)
             return self._residual(omega, xh, xl, rhs)
+
+    def _residual_float64(self, omega, x, rhs):
+        c, n = x.shape
+        xe = np.concatenate([x.astype(complex, copy=False), np.zeros((c, 1), complex)], axis=1)
+        t = combine(self.e_c, self.e_m, self.e_k, np.asarray(omega)[:, None]) * \
+            (xe[:, self.e_i] - xe[:, self.e_j])
+        terms = np.concatenate([t, -t, self.s_val * xe[:, self.s_col]], axis=1)
+        ax = np.zeros((c, n + 1), dtype=complex)
+        if self.f_rows.size:
+            ax[:, self.f_rows] = np.add.reduceat(terms[:, self.f_order], self.f_start, axis=1)
+        return rhs[None, :] - ax[:, :n]
 
     def _residual(self, omega, xh, xl, rhs):
         c, n = xh.shape
@@ -311,18 +337,35 @@ def pattern(system: NodalSystem) -> Pattern:
     return system.cached("_pattern", Pattern)
 
 
-def residual_rounding(system, S):
-    """Relative error of K left by residuals rounded in double-double.
+def residual_rounding(system, S, double: bool = True):
+    """Relative error of K left by residuals rounded in double-double (or float64).
 
     Each residual row is summed to about (terms + 4)·u² × Σ_e |y_e (x_i − x_j)|
     (+ its lever stamps; u = 2⁻⁵³), which K (through the adjoint solution,
     x itself) feels as that times S (:meth:`Pattern.sensitivities`); the
     refinement cannot see it.
+
+    With ``double=False``, the float64 residual of the unrefined solve
+    (:meth:`Pattern.residual` with ``exact=False``): K − K̂ = xᵀ r exactly
+    (A complex symmetric, r = b − A x̂), and the computed r̂ differs from r
+    by the rounding of each element current t_e = y_e·(x_i − x_j), at most
+    γ₃|t_e| (each component of the difference, of the admittance ωm, k/ω or
+    c — the other component of y is 0 — and of the product rounded once;
+    a lever stamp's v·x_c once), and of each row's sum of m terms, at most
+    γ_{m−1}·Σ|t| (componentwise, and so for the modulus: Minkowski); γ_k =
+    k u/(1 − k u).  A current enters its two rows with opposite signs, so
+    its rounding reaches xᵀ r through x_i − x_j, a row's through x_r:
+    |xᵀ(r − r̂)| ≤ (γ₃ + γ_{m−1}(1 + γ₃))·S|K| with S|K| = Σ_e |t_e|(|x_i| +
+    |x_j|) + Σ_levers |v x_c||x_r| (:meth:`Pattern.sensitivities`), to first
+    order in x − x̂; bounded here by (m + 3)·u·S with m the most terms of a
+    row.  The rounding of b − A x̂ itself (u |x̂|ᵀ|r̂|) is added by the
+    caller, which has r̂.
     """
     pat = pattern(system)
-    u2 = (np.finfo(float).eps / 2) ** 2
+    u = np.finfo(float).eps / 2
     with np.errstate(all="ignore"):
-        out = 4 * (pat.max_terms + 4) * u2 * S
+        out = 4 * (pat.max_terms + 4) * u * u * S if double else \
+            (pat.max_row_terms + 3) * u * S
     return np.where(np.isnan(out), np.inf, out)
 
 

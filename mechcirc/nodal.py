@@ -72,7 +72,9 @@ class Solution:
         correction of the iterative refinement, plus its own uncertainty
         (the observed contraction × the correction's size), plus the
         residual's rounding in double-double, floored at the rounding to
-        float64; ``inf`` where the refinement does not contract or stalls
+        float64 (unrefined on the numpy path: the first correction from a
+        float64 residual plus the bound on its rounding,
+        :func:`mechcirc._nodal_residual.residual_rounding`); ``inf`` where the refinement does not contract or stalls
         even with double-double factors (:class:`DDSolver`, up to
         :data:`DD_LIMIT` unknowns), or A(ω) is not finite.
     singular : ndarray of bool, shape (n_ω,)
@@ -172,22 +174,26 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
     at = np.arange(omega.size) if at is None else at
     kern = None if solve_with.kind == "dense" or np.iscomplexobj(omega) \
         else kernels(system.size * at.size)
-    out = _Solved(system, pat, kern, omega, keep)
+    out = _Solved(system, pat, kern, omega, keep, float64_residual=not refine and kern is None)
 
     # Compiled: no (ω, term) temporaries; the chunk's (ω, n) arrays stay in cache.
     # numpy: the residual's (ω, term) temporaries bound its pieces.
     terms = max(1, _KERNEL_CHUNK // max(1, system.size) if kern is not None
                 else _CHUNK_TERMS // max(1, pat.n_terms + system.size))
 
-    def residual(w, xh, xl, rhs):
-        if kern is not None or w.size <= terms:
-            return pat.residual(w, xh, xl, rhs, kern)
+    def residual(w, xh, xl, rhs, exact=True):
+        if kern is not None or w.size <= terms or not exact:
+            return pat.residual(w, xh, xl, rhs, kern, exact)
         return np.concatenate([pat.residual(w[i:i + terms], xh[i:i + terms],
                                             None if xl is None else xl[i:i + terms], rhs)
                                for i in range(0, w.size, terms)])
 
     def refined(solve_fn, w):
-        return refine_dd(solve_fn, residual, w, rhs, system, refine, steps)
+        # The unrefined solve's estimate takes the float64 residual on the numpy
+        # path (a sixth of the double-double one's work there); the compiled
+        # double-double residual costs less than it, and is kept.
+        return refine_dd(solve_fn, residual, w, rhs, system, refine, steps,
+                         float64=kern is None)
 
     # The numpy banded LU loops over the columns in Python: as many ω at once
     # as its memory bound allows (the residual goes in pieces, above).
@@ -211,7 +217,8 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
 class _Solved:
     """What :func:`_sweep` finds at each ω, stored chunk by chunk."""
 
-    def __init__(self, system: NodalSystem, pat, kern, omega: NDArray, keep: NDArray | None):
+    def __init__(self, system: NodalSystem, pat, kern, omega: NDArray, keep: NDArray | None,
+                 float64_residual: bool = False):
         m = omega.size
         self.system, self.pat, self.kern, self.omega, self.keep = system, pat, kern, omega, keep
         self.K = np.full(m, complex(np.nan, np.nan))
@@ -219,6 +226,9 @@ class _Solved:
         self.S, self.Sd = np.full(m, np.nan), np.full(m, np.nan)
         self.x_all = np.full((m, system.size), complex(np.nan, np.nan)) if keep is None else None
         self.kept: dict[int, NDArray] = {}
+        #: The estimates come from a float64 residual (:func:`refine_dd`, unrefined):
+        #: its rounding, bounded by :func:`residual_rounding`, is added.
+        self.float64_residual = float64_residual
 
     def store(self, sel, xh, xl, est, rho) -> None:
         """K, its sensitivities and error estimate, and x, at the points ``sel``."""
@@ -232,6 +242,8 @@ class _Solved:
         # nothing of the error (seen: 2.8e-9 and 2.8e-12 with corrections of
         # 1e-11 and 2.6e-16 on a stiff tree, cond(A) ≈ 1e17).  No estimate: inf.
         floor = 16 * residual_rounding(self.system, self.S[sel])
+        if self.float64_residual:
+            est = est + residual_rounding(self.system, self.S[sel], double=False)
         self.err[sel] = np.where((rho >= 0.5) & (est > floor), np.inf, est)
         if self.x_all is not None:
             self.x_all[sel] = x
@@ -394,19 +406,33 @@ def _backward_error(system, omega: float, x: NDArray) -> float:
         return float(np.max(np.where(np.abs(ax) == 0, 0.0, eta), initial=0.0))
 
 
-def refine_dd(solve_fn, residual, omega, rhs, system, refine: bool, steps: int):
+def refine_dd(solve_fn, residual, omega, rhs, system, refine: bool, steps: int,
+              float64: bool = False):
     """x from one solve and up to ``steps`` refinement steps.
 
     Returns (xh, xl, relative error of K, contraction of the last step):
-    x = xh + xl in double-double (xl None without refinement).
+    x = xh + xl in double-double (xl None without refinement).  ``float64``:
+    without refinement, the estimate from a float64 residual
+    (``residual(..., exact=False)``), the rounding of b − A x̂ included
+    (that of the terms is added by the caller, which has S).
     """
     eps = np.finfo(float).eps
     b = np.broadcast_to(rhs.astype(complex), (omega.size, rhs.size))
     x0 = solve_fn(b)
     if not refine:
-        # No refinement: the first correction is still the error estimate.
-        r = residual(omega, x0, None, rhs)
-        return (x0, None, *_estimate(system, x0, None, solve_fn(r), None, r))
+        # No refinement: the first correction is still the error estimate, from
+        # a double-double residual or a float64 one (a sixth of its work); the
+        # latter's rounding is bounded in _Solved.store (residual_rounding,
+        # double=False) and here (that of b − A x̂ itself, u |x̂|ᵀ|r̂| / |K|).
+        if not float64:
+            r = residual(omega, x0, None, rhs)
+            return (x0, None, *_estimate(system, x0, None, solve_fn(r), None, r))
+        r = residual(omega, x0, None, rhs, exact=False)
+        est, rho = _estimate(system, x0, None, solve_fn(r), None, r)
+        with np.errstate(all="ignore"):
+            own = eps / 2 * np.sum(np.abs(x0) * np.abs(r), axis=-1) / \
+                np.abs(system.difference(x0))
+        return x0, None, est + np.where(np.isnan(own), np.inf, own), rho
     xh, xl = x0.copy(), np.zeros_like(x0)
     prev = x0
     est = np.full(omega.size, np.inf)

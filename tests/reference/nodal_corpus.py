@@ -244,9 +244,9 @@ def cases(size: str = "small", seed: int = 0, keep=None):
                 yield "ladders", sp_corpus.to_circuit(expr), omega, omega * math.inf, tree_ref(expr)
 
 
-def measure(size: str = "small", seed: int = 0, keep=None):
+def measure(size: str = "small", seed: int = 0, keep=None, refine: bool = True):
     """Rows (family, ω, K, error, flag, true error, distance) over the corpus
-    (or its cases ``keep``, see :func:`cases`).
+    (or its cases ``keep``, see :func:`cases`); ``refine=False``: the plain solve.
 
     The true error |K − K_ref| / |K_ref| in mpmath; NaN where K is ±∞·j or 0
     (flag 1) or the reference is infinite (A(ω) exactly singular)."""
@@ -257,7 +257,7 @@ def measure(size: str = "small", seed: int = 0, keep=None):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             c = mechcirc.parse(net) if isinstance(net, str) else net
-            s = c.sweep(omega, method="nodal")
+            s = c.sweep(omega, method="nodal", refine=refine)
         K, err, flags = s.K, s.error, s.flags
         with mpmath.workdps(DIGITS):
             for w, k, e, f, d in zip(omega, K, err, flags, dist):
