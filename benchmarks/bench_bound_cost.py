@@ -174,7 +174,7 @@ def main() -> int:
             if "compiled K" in r:
                 print(f"{'':<25} compiled plan: K {ms['compiled K']:.3f}, K+bound "
                       f"{ms['compiled K+bound']:.3f} "
-                      f"({r['compiled K+bound'] / r['compiled K']:.2f}x K)")
+                      f"({r['compiled K+bound'] / r['compiled K']:.2f}x K, goal <= {GOAL_BOUND}x)")
     if args.compile and env.get("_WITH_KERNEL"):
         with tempfile.TemporaryDirectory() as cache:
             env_c = dict(env, NUMBA_CACHE_DIR=cache)

@@ -146,3 +146,26 @@ def test_a_sweep_with_error_has_the_numbers_of_error_asked_afterwards(monkeypatc
     np.testing.assert_array_equal(one.error, two.error)
     np.testing.assert_array_equal(one.flags, two.flags)
     assert np.isinf(one.error).sum() >= 2 and np.isfinite(one.error).sum() >= 3
+
+
+@pytest.mark.parametrize("scale", [1e200, 1e-200])
+def test_compiled_bound_where_a_square_would_overflow_or_underflow(monkeypatch, scale):
+    # The compiled plan forms |S| = √(a² + b²) without a branch and redoes with hypot
+    # the points whose larger part is outside [1e-150, 1e150]; here every sum is there
+    # (its squares are ∞ or 0): the bound is the numpy path's and holds against mpmath.
+    pytest.importorskip("numba")
+    omega = np.array([0.5, 1.0, 3.0])
+    # damper 1/c and spring jω/k of one size (scale), a lever and a mass around them
+    expr = ("p", [("s", [("leaf", "damper", 1 / scale), ("leaf", "spring", 1 / scale)]),
+                  ("lever", 2.0, ("s", [("leaf", "damper", 2 / scale),
+                                        ("leaf", "spring", 3 / scale)]))])
+    c = corpus.to_circuit(expr)
+    monkeypatch.setattr(_jit, "COMPILED", True)
+    K1, r1 = reduction.evaluate(c.tree, omega, error=True)
+    monkeypatch.setattr(_jit, "COMPILED", False)
+    K0, r0 = reduction.evaluate(c.tree, omega, error=True)
+    assert np.all(np.isfinite(r1)) and np.all(r1 > 0)
+    np.testing.assert_allclose(K1, K0, rtol=2e-14, atol=0)
+    np.testing.assert_allclose(r1, r0, rtol=1e-12)
+    true = corpus.true_error(K1, corpus.reference(expr, omega))
+    assert np.all(r1 >= true)
