@@ -4,12 +4,18 @@ Each command runs in a fresh Python process (``python -m mechcirc ...``, the
 way a user runs it); its CPU time (user + system, from ``resource.getrusage``
 of the finished child) is taken over ``--repeat`` runs (default 7, at least
 5) and the median, lowest and highest are printed with the goal.  In the same
-run, interleaved with the commands, three floors are timed the same way: the
+run, interleaved with the commands, four floors are timed the same way: the
 bare interpreter (``python -c pass``), ``python -c "import numpy"`` — what
-any command of a numpy program pays before it does anything — and numpy with
-matplotlib's ``Figure`` and Agg canvas (imported, one canvas made), what any
-command that draws a PNG pays.  Each command is printed with its ratio to its
-floor and what it costs beyond it (medians).
+any command of a numpy program pays before it does anything — the same with
+``OPENBLAS_NUM_THREADS=1``, as the command line starts numpy unless the user
+chose a BLAS thread count (OpenBLAS then starts no pool of threads), and numpy
+with matplotlib's ``Figure`` and Agg canvas (imported, one canvas made), what
+any command that draws a PNG pays.  Each command is printed with its ratio to
+its floor and what it costs beyond it (medians); the sweep also with what it
+costs beyond the one-thread numpy floor.  The BLAS thread variables
+(``OPENBLAS_NUM_THREADS``, ``GOTO_NUM_THREADS``, ``OMP_NUM_THREADS``) are
+removed from the environment of every timed process, so each runs as in a
+user's default environment.
 
 Bytecode is written once, by an untimed first run of each command, to a
 cache directory of the run (``PYTHONPYCACHEPREFIX``; an installed package
@@ -46,24 +52,29 @@ SWEEP = ["sweep", NETLIST, "--omega-min", "10", "--omega-max", "10000", "--point
 
 PASS, NUMPY, MPL = ("python -c pass (floor)", "python -c 'import numpy' (floor)",
                     "python -c 'import numpy, matplotlib Figure, Agg' (floor)")
+NUMPY1 = "OPENBLAS_NUM_THREADS=1 python -c 'import numpy' (floor)"
+#: What OpenBLAS reads for its thread count: taken out of every timed process's environment.
+BLAS_THREADS = ("OPENBLAS_NUM_THREADS", "GOTO_NUM_THREADS", "OMP_NUM_THREADS")
 #: numpy, matplotlib.figure and the Agg canvas, as the PNG command loads them
 MPL_CODE = ("import numpy; from matplotlib.figure import Figure; "
             "from matplotlib.backends.backend_agg import FigureCanvasAgg; "
             "FigureCanvasAgg(Figure())")
 
 
-def cases(tmp: Path) -> list[tuple[str, list[str], float | None, str | None]]:
-    """``(label, argv after python, goal in s CPU or None for a floor, its floor's label)``."""
+def cases(tmp: Path) -> list[tuple[str, list[str], float | None, tuple[str, ...], dict]]:
+    """``(label, argv after python, goal in s CPU or None for a floor, its floors' labels,
+    extra environment)``; the first floor is the one the ratio is taken to."""
     m = ["-m", "mechcirc"]
     return [
-        (PASS, ["-c", "pass"], None, None),
-        (NUMPY, ["-c", "import numpy"], None, None),
-        (MPL, ["-c", MPL_CODE], None, None),
-        ("mechcirc --help", m + ["--help"], 0.15, PASS),
+        (PASS, ["-c", "pass"], None, (), {}),
+        (NUMPY, ["-c", "import numpy"], None, (), {}),
+        (NUMPY1, ["-c", "import numpy"], None, (), {"OPENBLAS_NUM_THREADS": "1"}),
+        (MPL, ["-c", MPL_CODE], None, (), {}),
+        ("mechcirc --help", m + ["--help"], 0.15, (PASS,), {}),
         ("mechcirc sweep stb_heald, 400 points, CSV", m + SWEEP + ["-o", str(tmp / "x.csv")],
-         0.3, NUMPY),
+         0.3, (NUMPY, NUMPY1), {}),
         ("  ... with a PNG", m + SWEEP + ["-o", str(tmp / "x.csv"), "--plot",
-                                          str(tmp / "sweep.png")], 1.0, MPL),
+                                          str(tmp / "sweep.png")], 1.0, (MPL,), {}),
     ]
 
 
@@ -96,6 +107,8 @@ def main() -> int:
         env = dict(os.environ, PYTHONPATH=str(tree), MPLBACKEND="Agg",
                    PYTHONPYCACHEPREFIX=cache)
         env.pop("PYTHONDONTWRITEBYTECODE", None)
+        for name in BLAS_THREADS:
+            env.pop(name, None)
         envs[tag] = env
     import matplotlib
     import numpy
@@ -105,8 +118,8 @@ def main() -> int:
           f"{scipy.__version__}, matplotlib {matplotlib.__version__}; "
           f"load average {os.getloadavg()[0]:.1f}; median of {repeat} fresh processes, CPU s")
     with tempfile.TemporaryDirectory() as tmp:
-        todo = [(label + tag, argv, goal, floor, envs[tag])
-                for label, argv, goal, floor in cases(Path(tmp))
+        todo = [(label + tag, argv, goal, floors, dict(envs[tag], **extra))
+                for label, argv, goal, floors, extra in cases(Path(tmp))
                 for tag in envs if goal is not None or not tag]
         times: dict[str, list[float]] = {label: [] for label, *_ in todo}
         for _label, argv, _, _, env in todo:    # warm the OS file cache, not timed
@@ -116,16 +129,19 @@ def main() -> int:
                 times[label].append(cpu_of(argv, env))
     width = max(len(label) for label in times)
     median = {label: statistics.median(t) for label, t in times.items()}
-    for label, _, goal, floor, _ in todo:
+    for label, _, goal, floors, _ in todo:
         t = times[label]
         med = median[label]
         verdict = "" if goal is None else \
             f"  goal <= {goal:.2f} s: {'met' if med <= goal else 'NOT met'} ({med / goal:.2f}x)"
         print(f"{label:<{width}}  median {med:.3f} s (min {min(t):.3f}, max {max(t):.3f}){verdict}")
-        if floor is not None:
+        if floors:
+            floor, *others = floors
             print(f"{'':<{width}}  {med / median[floor]:.2f}x its floor "
                   f"({floor.replace(' (floor)', '')}), "
-                  f"{med - median[floor]:+.3f} s beyond it")
+                  f"{med - median[floor]:+.3f} s beyond it"
+                  + "".join(f"; {med - median[o]:+.3f} s beyond {o.replace(' (floor)', '')}"
+                            for o in others))
     print(f"load average after: {os.getloadavg()[0]:.1f}")
     shutil.rmtree(cache, ignore_errors=True)
     return 0

@@ -442,3 +442,54 @@ def test_the_csv_rows_are_those_numpy_savetxt_writes(tmp_path, unit):
         assert header.endswith(",x,y,flag\n")
         assert "".join(rows) == ref.getvalue()
     assert s.flags.any()                # the force drive's grid has flagged points
+
+
+_BLAS_CHILD = """
+import json, os, sys
+sys.argv = ["mechcirc", "check", {stb!r}]
+import mechcirc.cli as cli
+numpy_then = []
+set_blas = cli.one_blas_thread
+def spy(environ):
+    numpy_then.append("numpy" in sys.modules)
+    return set_blas(environ)
+cli.one_blas_thread = spy
+status = cli.main()
+print(json.dumps([status, os.environ.get("OPENBLAS_NUM_THREADS"), numpy_then,
+                  "numpy" in sys.modules]))
+"""
+
+
+@pytest.mark.parametrize("given", [None, "3"])
+def test_the_command_line_asks_for_one_blas_thread_unless_the_user_chose(given):
+    # The process's own command line sets OPENBLAS_NUM_THREADS=1 before numpy is
+    # imported (OpenBLAS reads it then), and keeps a value the user set.
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("OPENBLAS_NUM_THREADS", "GOTO_NUM_THREADS", "OMP_NUM_THREADS")}
+    if given is not None:
+        env["OPENBLAS_NUM_THREADS"] = given
+    out = subprocess.run([sys.executable, "-c", _BLAS_CHILD.format(stb=str(STB))],
+                         capture_output=True, text=True, check=True, cwd=ROOT, env=env,
+                         timeout=600)
+    status, threads, numpy_then, numpy_after = json.loads(out.stdout.splitlines()[-1])
+    assert status == 0 and numpy_then == [False] and numpy_after
+    assert threads == ("1" if given is None else given)
+
+
+def test_one_blas_thread_leaves_a_users_choice_and_a_host_program_alone(monkeypatch, capsys):
+    from mechcirc.cli import BLAS_THREAD_VARIABLES, main, one_blas_thread
+
+    env: dict[str, str] = {}
+    assert one_blas_thread(env) and env == {"OPENBLAS_NUM_THREADS": "1"}
+    for name in BLAS_THREAD_VARIABLES:      # any count the user gave OpenBLAS stands
+        env = {name: "2"}
+        assert not one_blas_thread(env) and env == {name: "2"}
+    # A program calling main(argv), or main() after numpy is loaded: its environment
+    # is not touched.
+    for name in BLAS_THREAD_VARIABLES:
+        monkeypatch.delenv(name, raising=False)
+    assert main(["check", str(STB)]) == 0
+    monkeypatch.setattr(sys, "argv", ["mechcirc", "check", str(STB)])
+    assert main() == 0
+    capsys.readouterr()
+    assert not set(BLAS_THREAD_VARIABLES) & set(os.environ)
