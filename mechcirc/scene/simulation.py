@@ -679,12 +679,17 @@ def _extrema(out: dict, sub=None) -> dict:
     stacked, so that one reduction of each kind serves them all)."""
     if not out:
         return {}
-    rows = out.rows if isinstance(out, _Rows) and len(out) == len(out.rows) else \
-        np.stack(list(out.values()))
+    whole = out if isinstance(out, _Rows) and len(out) == len(out.rows) else None
+    if whole is not None and sub is not None and whole.last[0] is sub:
+        return dict(whole.last[1])              # the same samples' extrema again
+    rows = whole.rows if whole is not None else np.stack(list(out.values()))
     if sub is not None:
-        rows = rows[:, sub]
+        rows = np.take(rows, sub, axis=1)
     lo, hi = rows.min(axis=1).tolist(), rows.max(axis=1).tolist()
-    return {k: (a, b) for k, a, b in zip(out, lo, hi)}
+    ext = {k: (a, b) for k, a, b in zip(out, lo, hi)}
+    if whole is not None and sub is not None:
+        whole.last = (sub, dict(ext))
+    return ext
 
 
 def _finish(scene, model, kern, theta_s, ripple, main, other, counts, notes, warn, out=None,
@@ -1026,6 +1031,8 @@ class _Rows(dict):
     :func:`_extrema` takes them all in one reduction of each kind."""
 
     rows: np.ndarray
+    #: (positions, extrema) of :func:`_extrema`'s last call on a subset of the samples.
+    last: tuple = (None, None)
 
 
 def _output_extrema(model, kern, theta_s, ripple, ts, ys):
