@@ -186,6 +186,9 @@ def _warm_up(model, kern) -> float:
     oargs = model.kernel_args(0.0, 1e300, outputs=True)
     kern.outputs(np.zeros(1), np.array([y]), np.empty((1, model.naux())), *oargs)
     kern.output_extrema(np.zeros(1), np.array([y]), np.empty((2, model.naux())), *oargs)
+    one = np.zeros(1)
+    kern.point_samples(*_fargs(model.arrays, model.arrays["PRIG"][0]), one, one, one,
+                       np.empty(1), np.empty(1))
     _WARM = True
     return time.perf_counter() - t0
 
