@@ -45,7 +45,7 @@ def main(argv=None) -> int:
 
     warnings.simplefilter("ignore")
     # Both compiled, in this process if numba's cache does not hold them yet: by default a
-    # call whose kernel is not cached runs the Python copy (and the baseline, 8x slower so,
+    # call whose kernel is not cached runs the Python copy (and the baseline, about 7x slower so,
     # would inflate the ratio; a first run of this script on a fresh checkout gave 224x).
     jit.COMPILED = True
     simulate("one-side", 3, 5)                          # compile / cache load
