@@ -684,6 +684,16 @@ def eval_many(kind, tabs, ti, a, b, c, lo, h, w, qs, out):
         out[i, 2] = d2
 
 
+@_jit
+def point_samples(kind, tabs, ti, a, b, c, lo, h, w, qs, qd, qdd, pos, acc):
+    """One coordinate of a point at many samples of its part's motion (q, q̇, q̈): its value
+    f(q) into pos[i] and its acceleration f''(q) q̇² + f'(q) q̈ into acc[i]."""
+    for i in range(qs.shape[0]):
+        v, d1, d2, bad = feval(kind, tabs, ti, a, b, c, lo, h, w, qs[i])
+        pos[i] = v
+        acc[i] = d2 * qd[i] * qd[i] + d1 * qdd[i]
+
+
 def load_python():
     """A fresh copy of this module that never uses numba."""
     import importlib.util

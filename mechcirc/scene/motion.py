@@ -104,13 +104,14 @@ class MotionModel:
 
     def kernel_args(self, theta_s: float, limit: float, *, outputs: bool = False,
                     ripple: tuple = (0.0, 0.0), loads_on_mean: bool = False):
-        """The kernel's array arguments; ``outputs``: evaluate the output-only functions too;
+        """The kernel's array arguments; ``outputs``: evaluate the functions of the bodies'
+        outputs too (not the points', which the kernel's outputs do not need);
         ``ripple`` = (A, ν): the crank speed is Ω + A cos(ν t) [rad/s] (default constant);
         ``loads_on_mean``: a load's reference is the rigid motion at the mean crank angle
         θs + Ω t instead of the actual one (a load to the frame, as in the circuit)."""
         a = self.arrays
         pv = np.array([self.omega, float(theta_s), float(limit),
-                       float(a["FI"].shape[0] if outputs else a["n_dyn"]),
+                       float(a.get("n_out", a["FI"].shape[0]) if outputs else a["n_dyn"]),
                        1.0 if outputs else 0.0, float(ripple[0]), float(ripple[1]),
                        1.0 if loads_on_mean else 0.0])
         return (pv, a["FI"], a["FF"], a["tabs"], a["MI"], a["MW"], a["EI"], a["EF"], a["MOI"],
@@ -218,9 +219,11 @@ def motion_model(scene: Scene, omega: float | None = None, *,
     body_names = tuple(bodies) + tuple(travel)
     n_dyn = len(B.FI)          # functions the dynamics need; the rest only for outputs
     BI = [fns.angle(b) if b in bodies else B.line(travel[b], 0.0, 1.0) for b in body_names]
+    n_out = len(B.FI)          # and the bodies' outputs; the points' are evaluated apart
     pfn = {p: pf for p in lk.pose if (pf := fns.point(p)) is not None}   # output-only
     arrays = _kernel_arrays(B, n_dyn, dict(MI=MI, MW=MW, EI=EI, EF=EF, MOI=MOI, MOF=MOF,
                                            PRIG=prig, BI=BI))
+    arrays["n_out"] = n_out
     return MotionModel(scene, omega, scene.parts, tuple(coords), body_names, tuple(enames),
                        tuple(mnames), arrays, {b: f for b, f in zip(body_names, BI)}, centres,
                        pfn)

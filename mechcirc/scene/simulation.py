@@ -160,7 +160,7 @@ def kernels_for(method):
         from . import _motion_kernels as k
 
         if k.HAVE_NUMBA and (_jit.COMPILED or _jit.in_cache(
-                k.rk_run, k.outputs, k.output_extrema, k.eval_many,
+                k.rk_run, k.outputs, k.output_extrema, k.eval_many, k.point_samples,
                 *((k.rhs,) if method in SCIPY_METHODS else ()))):
             return k, "numba"
         if k.HAVE_NUMBA:
@@ -186,6 +186,9 @@ def _warm_up(model, kern) -> float:
     oargs = model.kernel_args(0.0, 1e300, outputs=True)
     kern.outputs(np.zeros(1), np.array([y]), np.empty((1, model.naux())), *oargs)
     kern.output_extrema(np.zeros(1), np.array([y]), np.empty((2, model.naux())), *oargs)
+    one = np.zeros(1)
+    kern.point_samples(*_fargs(model.arrays, model.arrays["PRIG"][0]), one, one, one,
+                       np.empty(1), np.empty(1))
     _WARM = True
     return time.perf_counter() - t0
 
@@ -675,10 +678,21 @@ def _steps_per_cycle(period, rate, spp):
 
 
 def _extrema(out: dict, sub=None) -> dict:
-    """(min, max) of each output, or of its samples at the positions ``sub``."""
+    """(min, max) of each output, or of its samples at the positions ``sub`` (the outputs
+    stacked, so that one reduction of each kind serves them all)."""
+    if not out:
+        return {}
+    whole = out if isinstance(out, _Rows) and len(out) == len(out.rows) else None
+    if whole is not None and sub is not None and whole.last[0] is sub:
+        return dict(whole.last[1])              # the same samples' extrema again
+    rows = whole.rows if whole is not None else np.stack(list(out.values()))
     if sub is not None:
-        return {k: (float(v[sub].min()), float(v[sub].max())) for k, v in out.items()}
-    return {k: (float(v.min()), float(v.max())) for k, v in out.items()}
+        rows = np.take(rows, sub, axis=1)
+    lo, hi = rows.min(axis=1).tolist(), rows.max(axis=1).tolist()
+    ext = {k: (a, b) for k, a, b in zip(out, lo, hi)}
+    if whole is not None and sub is not None:
+        whole.last = (sub, dict(ext))
+    return ext
 
 
 def _finish(scene, model, kern, theta_s, ripple, main, other, counts, notes, warn, out=None,
@@ -708,7 +722,7 @@ def _finish(scene, model, kern, theta_s, ripple, main, other, counts, notes, war
             other_extrema = _output_extrema(model, kern, theta_s, ripple, other[0], other[1])
         est = _rel_change(check, other_extrema)
         bad = bad or other[4]
-    values = out
+    values = dict(out)
     _add_points_and_aliases(scene, model, theta_s, ripple, crank, ts, ys, values, extrema)
     warn = warn + _check_warnings(bad, est, periodicity)
     for w in warn:
@@ -932,26 +946,28 @@ def _point_accelerations(model, theta_s, ripple, ts, ys, values, positions=None)
     n = model.n_free
     th, w, dw = crank_angle(model.omega, theta_s, ripple, ts)
     coord: dict = {}
-    for i in {i for _, _, i in model.point_fn.values()}:     # (q contiguous, q̇) of each part
+    for i in {i for _, _, i in model.point_fn.values()}:     # (q, q̇) of each part, contiguous
         if i == 0:
             q0 = np.empty((ts.size, 3))
             kern.eval_many(*_fargs(a, a["PRIG"][0]), np.ascontiguousarray(th), q0)
             coord[0] = (q0[:, 0].copy(), q0[:, 1] * w)
         else:
-            coord[i] = (np.ascontiguousarray(ys[:, i - 1]), ys[:, n + i - 1])
+            coord[i] = (np.ascontiguousarray(ys[:, i - 1]),
+                        np.ascontiguousarray(ys[:, n + i - 1]))
     out = {}
     for p, (fx, fy, i) in model.point_fn.items():
         q, qd = coord[i]
         # the drive part's coordinate is the crank angle θ (θ̈ from the ripple), not the
         # crank body's rotation, which a cam makes swing
-        qdd = dw if i == 0 else values[f"{model.coordinate[i]}.acceleration"]
+        qdd = np.ascontiguousarray(dw if i == 0 else
+                                   values[f"{model.coordinate[i]}.acceleration"])
         comp = []
         for f in (fx, fy):
-            fv = np.empty((ts.size, 3))
-            kern.eval_many(*_fargs(a, f), q, fv)
-            comp.append(fv[:, 2] * qd * qd + fv[:, 1] * qdd)
+            pos, acc = np.empty(ts.size), np.empty(ts.size)
+            kern.point_samples(*_fargs(a, f), q, qd, qdd, pos, acc)
+            comp.append(acc)
             if positions is not None:
-                positions.setdefault(p, []).append(fv[:, 0].copy())
+                positions.setdefault(p, []).append(pos)
         out[f"{p}.acceleration"] = np.hypot(comp[0], comp[1])
         out[f"{p}.acceleration_x"] = comp[0]
         out[f"{p}.acceleration_y"] = comp[1]
@@ -1007,7 +1023,19 @@ def _outputs(model, kern, theta_s, ripple, ts, ys):
     out = np.empty((ts.size, model.naux()))
     kern.outputs(np.ascontiguousarray(ts), np.ascontiguousarray(ys), out, *args)
     cols = out.T.copy()             # one copy: each output a contiguous row
-    return {name: cols[j] for j, name in enumerate(_aux_names(model))}
+    names = _aux_names(model)
+    rows = _Rows(zip(names, cols))
+    rows.rows = cols[:len(names)]
+    return rows
+
+
+class _Rows(dict):
+    """Outputs by name, the j-th row j of the 2-D array ``rows`` (:func:`_outputs`), so that
+    :func:`_extrema` takes them all in one reduction of each kind."""
+
+    rows: np.ndarray
+    #: (positions, extrema) of :func:`_extrema`'s last call on a subset of the samples.
+    last: tuple = (None, None)
 
 
 def _output_extrema(model, kern, theta_s, ripple, ts, ys):
@@ -1076,9 +1104,19 @@ def _rigid_acceleration(model, body, crank, ripple=(0.0, 0.0), ts=None):
         vals = (gv[:, 2] * qv[:, 1] ** 2 + gv[:, 1] * qv[:, 2]) * w ** 2 + gv[:, 1] * qv[:, 1] * dw
         return vals, (float(vals.min()), float(vals.max()))
     ext = []
+    memo = _REFINED.setdefault(model, {})
     for sgn, i in ((1.0, int(np.argmin(vals))), (-1.0, int(np.argmax(vals)))):
         lo, hi = crank[max(i - 1, 0)], crank[min(i + 1, crank.size - 1)]
-        res = minimize_scalar(lambda t, sgn=sgn: sgn * acc(t), bounds=(lo, hi), method="bounded",
-                              options={"xatol": 1e-12})
-        ext.append(sgn * min(res.fun, sgn * vals[i]))
+        key = (body, sgn, float(lo), float(hi))
+        if key not in memo:     # a function of the model and the bracket alone
+            if len(memo) > 64:
+                memo.clear()
+            memo[key] = minimize_scalar(lambda t, sgn=sgn: sgn * acc(t), bounds=(lo, hi),
+                                        method="bounded", options={"xatol": 1e-12}).fun
+        ext.append(sgn * min(memo[key], sgn * vals[i]))
     return vals, (float(ext[0]), float(ext[1]))
+
+
+#: :func:`_rigid_acceleration`'s Brent-refined extrema by model, (body, sign, bracket): the
+#: same crank-angle grid of the same model (a repeated or a preset's call) refines once.
+_REFINED: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()

@@ -339,3 +339,32 @@ def test_the_default_estimate_on_a_subgrid_after_a_coarse_spin_up_bounds_the_tru
 
     change = _rel_change(every_2nd(r), every_2nd(coarse))
     assert abs(change - r.error_estimate) <= 1e-9 * change, (change, r.error_estimate)
+
+
+def test_output_pass_skips_the_points_functions():
+    """The kernel's output pass evaluates the functions of the dynamics and of the bodies
+    (``n_out``), not the points' (computed apart): every output is the same as with every
+    function evaluated, at perturbed states of a scene whose points have functions of their
+    own (the heald scene: 6 of its 34)."""
+    from pathlib import Path
+
+    from mechcirc.scene import load_scene
+    from mechcirc.scene.motion import motion_model
+    from mechcirc.scene.simulation import kernels_for
+
+    ex = Path(__file__).resolve().parents[2] / "examples"
+    model = motion_model(load_scene(ex / "heald_scene.toml"))
+    a = model.arrays
+    assert a["n_dyn"] <= a["n_out"] < a["FI"].shape[0]
+    rng = np.random.default_rng(3)
+    ts = np.linspace(0.0, 0.05, 40)
+    ys = np.array([model.rigid_state(model.omega * t) for t in ts])
+    ys *= 1.0 + 1e-3 * rng.standard_normal(ys.shape)
+    args = model.kernel_args(0.0, 1e300, outputs=True)
+    every = (args[0].copy(), *args[1:])
+    every[0][3] = a["FI"].shape[0]
+    kern = kernels_for("rk4")[0]
+    got, full = (np.empty((ts.size, model.naux())) for _ in range(2))
+    kern.outputs(ts, ys, got, *args)
+    kern.outputs(ts, ys, full, *every)
+    np.testing.assert_array_equal(got, full)
