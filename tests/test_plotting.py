@@ -36,15 +36,22 @@ def test_sweep_axes_label_decades_in_plain_text(stb_sweep):
     lo, hi = ax_k.get_ylim()
     assert np.log10(hi / lo) > 3 and len(ax_k.yaxis.get_minorticklocs()) == 0
     # The frequency axis keeps its minor grid, as one line collection per panel
-    # at 2…9 × 10ⁿ inside the view.
+    # at 2…9 × 10ⁿ inside the view; the panels above the last (no x tick labels)
+    # have no x Tick objects: their decades' grid lines are in that collection
+    # and their tick marks one line of markers, at the last panel's ticks.
     lo, hi = ax_q.get_xlim()
     want = sorted(x for x in np.outer(np.arange(2, 10), 10.0 ** np.arange(-1, 5)).ravel()
                   if lo <= x <= hi)
-    assert len(want) > 10
+    decades = [10.0 ** e for e in range(-1, 6) if lo <= 10.0 ** e <= hi]
+    assert len(want) > 10 and list(ax_q.xaxis.get_majorticklocs()) == decades
     for ax in fig.axes:
         (lc,) = [c for c in ax.collections if type(c).__name__ == "LineCollection"]
         got = sorted(seg[0, 0] for seg in lc.get_segments())
-        np.testing.assert_allclose(got, want, rtol=1e-12)
+        np.testing.assert_allclose(got, sorted(want + decades * (ax is not ax_q)), rtol=1e-12)
+    for ax in (ax_k, ax_p):
+        assert len(ax.xaxis.get_majorticklocs()) == 0 and ax.get_xlim() == (lo, hi)
+        (marks,) = [line for line in ax.lines if line.get_marker() == 3]     # TICKDOWN
+        assert list(marks.get_xdata()) == decades
 
 
 def test_bode_panels_draw_K_phase_and_Q0(stb_sweep):
@@ -85,6 +92,36 @@ def test_format_follows_the_extension(tmp_path, capsys, ext, magic):
     assert cli.main(["sweep", str(STB), "--omega-min", "10", "--omega-max", "1e4", "--log",
                      "--points", "50", "--plot", str(path)]) == 0
     assert path.read_bytes()[:len(magic)] == magic
+
+
+def test_save_png_writes_the_pixels_savefig_draws(stb_sweep, tmp_path):
+    """save_png's file, decoded by PIL, has the pixels, size and metadata of
+    matplotlib's own PNG of the same draw: glyphs unhinted unless matplotlibrc
+    sets text.hinting (then as set), with and without the tight bounding box."""
+    from matplotlib import rc_context
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from PIL import Image
+
+    from mechcirc.plotting import save_png
+
+    _, s, found = stb_sweep
+    pixels = {}
+    for hinting, box in ((None, None), ("native", "tight")):
+        # a new figure for each draw: matplotlib caches text sizes per renderer,
+        # whatever the hinting
+        with rc_context({"text.hinting": hinting} if hinting else {}):
+            save_png(FigureCanvasAgg(plot_sweep(s, resonances=found)).figure,
+                     tmp_path / "ours.png", dpi=120, bbox_inches=box)
+        with rc_context({"text.hinting": hinting or "none"}):
+            plot_sweep(s, resonances=found).savefig(tmp_path / "mpl.png", dpi=120,
+                                                    bbox_inches=box)
+        ours, ref = Image.open(tmp_path / "ours.png"), Image.open(tmp_path / "mpl.png")
+        assert ours.mode == ref.mode == "RGBA" and ours.size == ref.size
+        assert ours.info == ref.info and ours.info["Software"].startswith("Matplotlib")
+        pixels[hinting] = np.asarray(ours)
+        np.testing.assert_array_equal(pixels[hinting], np.asarray(ref))
+    assert pixels[None].shape == (960, 840, 4)                 # 7 × 8 in at 120 dpi
+    assert pixels["native"].shape[0] < 960                     # cropped to what is drawn
 
 
 def test_study_plot_one_parameter():

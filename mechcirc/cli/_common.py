@@ -429,12 +429,14 @@ def save_figure(fig, path, into=None, tight: bool = True) -> None:
         from matplotlib.backends.backend_agg import FigureCanvasAgg
 
         FigureCanvasAgg(fig)
-    # PNG: zlib level 3, not PIL's 6: the same pixels, encoded in about half the
-    # time (a sweep's figure: 27 against 47 ms) for an 11 % larger file.
-    options = {"pil_kwargs": {"compress_level": 3}} if fmt == "png" else {}
+    from ..plotting import save_png     # PNG: the same pixels, encoded faster than by PIL
+
+    box = "tight" if tight else None
     with contextlib.nullcontext(into) if into is not None else atomic_path(path) as tmp:
-        fig.savefig(tmp, format=fmt, dpi=120, bbox_inches="tight" if tight else None,
-                    **options)
+        if fmt == "png":
+            save_png(fig, tmp, dpi=120, bbox_inches=box)
+        else:
+            fig.savefig(tmp, format=fmt, dpi=120, bbox_inches=box)
 
 
 def load_with_warnings(path):
