@@ -19,6 +19,8 @@ follows the extension given to :func:`mechcirc.cli._common.save_figure`
 
 from __future__ import annotations
 
+import math
+
 __all__ = ["plot_sweep", "plot_transient", "plot_forces", "plot_comparison", "plot_study", "plot_periodic",
            "plot_speed_map", "plot_mode", "plot_modes"]
 
@@ -101,17 +103,21 @@ def _label_resonances(ax, resonances, per_unit: float) -> None:
 
 def _mark_resonances(axes, resonances, legend_ax, per_unit: float = 1.0,
                      legend: bool = True):
-    """Vertical lines at each root's ω (``per_unit`` rad/s per unit of the x axis);
-    ``legend=False`` leaves ``legend_ax``'s legend to the caller (made once)."""
-    labelled = set()
-    for r in resonances:
-        style = "-" if r.kind == "resonance" else "--"
-        label = None if r.kind in labelled else ("resonance (K = 0)" if r.kind == "resonance"
-                                                  else "anti-resonance (K = ∞)")
-        labelled.add(r.kind)
+    """Vertical lines at each root's ω (``per_unit`` rad/s per unit of the x axis), one
+    line per kind and panel (the roots' lines joined by NaN breaks, as ``axvline``
+    would draw each); ``legend=False`` leaves ``legend_ax``'s legend to the caller
+    (made once)."""
+    from matplotlib.lines import Line2D
+
+    for kind in dict.fromkeys(r.kind for r in resonances):     # in order of appearance
+        at = [(r.omega_d or r.omega) / per_unit for r in resonances if r.kind == kind]
+        x = [v for w in at for v in (w, w, math.nan)]
         for ax in axes:
-            ax.axvline((r.omega_d or r.omega) / per_unit, color="0.5", lw=0.8, ls=style,
-                       label=label if ax is legend_ax else None)
+            ax.add_line(Line2D(
+                x, [0.0, 1.0, math.nan] * len(at), transform=ax.get_xaxis_transform(),
+                color="0.5", lw=0.8, ls="-" if kind == "resonance" else "--",
+                label=("resonance (K = 0)" if kind == "resonance" else "anti-resonance (K = ∞)")
+                if ax is legend_ax else ""))
     if resonances and legend:
         legend_ax.legend(loc="best", fontsize="small")
 
@@ -266,8 +272,6 @@ _SUPERSCRIPT = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
 
 def _decade_label(x, pos=None) -> str:
     """``10⁻³`` for a power of ten, ``%g`` otherwise: plain text, not mathtext."""
-    import math
-
     if x > 0:
         e = round(math.log10(x))
         if abs(x / 10.0 ** e - 1) < 1e-9:
@@ -319,8 +323,6 @@ def _light_log_axes(axes, max_minor_decades: float = 3.0) -> None:
     positions and style); only the short minor tick marks go.  Minor labels of
     an axis spanning less than a decade are left as they are.
     """
-    import math
-
     from matplotlib.ticker import FuncFormatter, NullLocator
 
     for a in axes:
@@ -337,14 +339,34 @@ def _light_log_axes(axes, max_minor_decades: float = 3.0) -> None:
     if axes[0].get_xscale() != "log" or not 0 < lo < hi or math.log10(hi / lo) <= 1:
         return
     from matplotlib import rcParams
+    from matplotlib.axis import Ticker
     from matplotlib.collections import LineCollection
+    from matplotlib.lines import Line2D
+    from matplotlib.ticker import NullFormatter
 
     at = [k * 10.0 ** e for e in range(math.floor(math.log10(lo)), math.ceil(math.log10(hi)))
           for k in range(2, 10) if lo <= k * 10.0 ** e <= hi]
     axes[0].xaxis.set_minor_locator(NullLocator())     # shared by the panels
+    decades = list(axes[-1].xaxis.get_majorticklocs())
     for a in axes:
+        grid = at
+        if a is not axes[-1]:
+            # A panel above the last shows no x tick labels: its own Ticker without
+            # Tick objects (the limits stay shared); its decades' grid lines join the
+            # collection and their tick marks are one line of tick markers.
+            a.xaxis.major = Ticker()
+            a.xaxis.set_major_locator(NullLocator())
+            a.xaxis.set_major_formatter(NullFormatter())
+            grid = at + decades
+            direction = rcParams["xtick.direction"]
+            a.add_artist(Line2D(
+                decades, [0] * len(decades), ls="none", transform=a.get_xaxis_transform(),
+                # matplotlib's TICKUP (2), "|" or TICKDOWN (3), as its ticks use them
+                marker=2 if direction == "in" else "|" if direction == "inout" else 3,
+                markersize=rcParams["xtick.major.size"], color=rcParams["xtick.color"],
+                markeredgewidth=rcParams["xtick.major.width"], clip_on=False, zorder=2.01))
         a.add_collection(LineCollection(
-            [[(x, 0), (x, 1)] for x in at], transform=a.get_xaxis_transform(),
+            [[(x, 0), (x, 1)] for x in grid], transform=a.get_xaxis_transform(),
             colors=rcParams["grid.color"], linewidths=rcParams["grid.linewidth"],
             linestyles=rcParams["grid.linestyle"], alpha=0.3, zorder=1.5), autolim=False)
 

@@ -21,6 +21,20 @@ def stb_sweep():
     return c, c.sweep(omega), c.resonances(omega_max=1e4)
 
 
+def _root_marks(ax, style=None) -> list:
+    """x of the roots' vertical lines on ``ax`` (with line style ``style``, or any):
+    lines of segments (x, 0)–(x, 1) in the axes' height, broken by NaN."""
+    out = []
+    for line in ax.lines:
+        x, y = (np.asarray(v, float) for v in line.get_data())
+        if y.size and np.array_equal(y, np.tile([0, 1, np.nan], max(y.size // 3, 1)),
+                                     equal_nan=True):
+            assert np.array_equal(x[0::3], x[1::3]) and np.isnan(x[2::3]).all()
+            if style is None or line.get_linestyle() == style:
+                out += list(x[0::3])
+    return sorted(out)
+
+
 def test_sweep_axes_label_decades_in_plain_text(stb_sweep):
     """Decades as 10ⁿ text (no mathtext parse), no minor ticks on a y axis over 3 decades."""
     from mechcirc.plotting import _decade_label
@@ -36,15 +50,22 @@ def test_sweep_axes_label_decades_in_plain_text(stb_sweep):
     lo, hi = ax_k.get_ylim()
     assert np.log10(hi / lo) > 3 and len(ax_k.yaxis.get_minorticklocs()) == 0
     # The frequency axis keeps its minor grid, as one line collection per panel
-    # at 2…9 × 10ⁿ inside the view.
+    # at 2…9 × 10ⁿ inside the view; the panels above the last (no x tick labels)
+    # have no x Tick objects: their decades' grid lines are in that collection
+    # and their tick marks one line of markers, at the last panel's ticks.
     lo, hi = ax_q.get_xlim()
     want = sorted(x for x in np.outer(np.arange(2, 10), 10.0 ** np.arange(-1, 5)).ravel()
                   if lo <= x <= hi)
-    assert len(want) > 10
+    decades = [10.0 ** e for e in range(-1, 6) if lo <= 10.0 ** e <= hi]
+    assert len(want) > 10 and list(ax_q.xaxis.get_majorticklocs()) == decades
     for ax in fig.axes:
         (lc,) = [c for c in ax.collections if type(c).__name__ == "LineCollection"]
         got = sorted(seg[0, 0] for seg in lc.get_segments())
-        np.testing.assert_allclose(got, want, rtol=1e-12)
+        np.testing.assert_allclose(got, sorted(want + decades * (ax is not ax_q)), rtol=1e-12)
+    for ax in (ax_k, ax_p):
+        assert len(ax.xaxis.get_majorticklocs()) == 0 and ax.get_xlim() == (lo, hi)
+        (marks,) = [line for line in ax.lines if line.get_marker() == 3]     # TICKDOWN
+        assert list(marks.get_xdata()) == decades
 
 
 def test_bode_panels_draw_K_phase_and_Q0(stb_sweep):
@@ -59,11 +80,12 @@ def test_bode_panels_draw_K_phase_and_Q0(stb_sweep):
     np.testing.assert_array_equal(y, np.abs(s.K))
     np.testing.assert_allclose(ax_p.lines[0].get_ydata(), np.degrees(np.angle(s.K)))
     np.testing.assert_array_equal(ax_q.lines[0].get_ydata(), np.abs(s.Q0))
-    # one vertical marker per resonance in every panel, at its frequency
+    # one vertical marker per root in every panel, at its frequency: solid for a
+    # resonance, dashed for an anti-resonance
     for ax in fig.axes:
-        marks = sorted(line.get_xdata()[0] for line in ax.lines[1:]
-                       if len(set(line.get_xdata())) == 1)
-        assert marks == pytest.approx(sorted(r.omega_d or r.omega for r in found))
+        for style, kind in (("-", "resonance"), ("--", "antiresonance")):
+            assert _root_marks(ax, style) == pytest.approx(
+                sorted(r.omega_d or r.omega for r in found if r.kind == kind), rel=1e-12)
 
 
 def test_force_bars_are_the_table(stb_sweep):
@@ -124,9 +146,7 @@ def test_plot_sweep_on_a_given_axes(stb_sweep):
     fig, ax = _axes()
     assert plot_sweep(s, ax=ax, resonances=found, refine=False) is ax
     np.testing.assert_array_equal(ax.lines[0].get_ydata(), np.abs(s.K))
-    marks = sorted(line.get_xdata()[0] for line in ax.lines[1:]
-                   if len(set(line.get_xdata())) == 1)
-    assert marks == pytest.approx(sorted(r.omega_d or r.omega for r in found))
+    assert _root_marks(ax) == pytest.approx(sorted(r.omega_d or r.omega for r in found))
     assert s.plot(ax=_axes()[1]) is not None
 
 
@@ -250,9 +270,8 @@ def test_sweep_plot_marks_resonances_by_default():
     assert s.plot(ax=marked) is marked
     inband = [r.omega for r in c.resonances(omega_max=1e4) if r.omega >= 10]
     assert inband
-    xs = sorted(float(np.atleast_1d(ln.get_xdata())[0]) for ln in marked.lines[len(bare.lines):])
-    assert len(marked.lines) - len(bare.lines) == len(inband)
-    assert xs == pytest.approx(sorted(inband), rel=1e-12)
+    assert _root_marks(bare) == []
+    assert _root_marks(marked) == pytest.approx(sorted(inband), rel=1e-12)
 
 
 def test_sweep_plot_is_refined_around_the_exact_roots(stb_sweep):
