@@ -291,7 +291,8 @@ def simulate_scene(scene: Scene, *, omega: float | None = None, revolutions: int
                    points: int | None = None, method: str = "rk4", error_estimate: bool = True,
                    model: MotionModel | None = None, rtol: float | None = None,
                    revolution: int | None = None, omega_ripple: tuple | None = None,
-                   progress: Callable[[int, int], None] | None = None) -> SceneMotion:
+                   progress: Callable[[int, int], None] | None = None,
+                   exact_rigid: bool = True) -> SceneMotion:
     """Simulate ``scene`` over ``revolutions`` turns of the crank and tabulate the last.
 
     Parameters default to the scene's ``[simulate]`` table, then Ω from its crank, 5
@@ -319,6 +320,10 @@ def simulate_scene(scene: Scene, *, omega: float | None = None, revolutions: int
         The revolution tabulated (1 … R: the integration stops there); the ripple (above).
     progress : callable, optional
         ``progress(done, total)`` as the integration advances.
+    exact_rigid : bool
+        Refine the extrema of the ``BODY.rigid_acceleration`` aliases to the exact extreme
+        (Brent on the tables); False: the output samples' extrema (for a caller that takes
+        them from elsewhere, as the sley does from the closed form).
 
     Returns
     -------
@@ -338,7 +343,7 @@ def simulate_scene(scene: Scene, *, omega: float | None = None, revolutions: int
         follower that flew across the whole gap of its contact (:func:`flight`).
     """
     o = _options(scene, omega, revolutions, start_deg, steps_per_period, points, method,
-                 rtol, revolution, omega_ripple)
+                 rtol, revolution, omega_ripple, exact_rigid)
     model, ripple = _model_at(scene, o, model)
     kern, backend, notes, compile_time = _ready_kernels(method, model)
     ctx = (scene, o, model, kern, math.radians(o.start_deg), ripple, progress)
@@ -423,10 +428,11 @@ class _Options:
     ripple: tuple | None
     method: str
     rtol: float | None
+    exact_rigid: bool = True
 
 
 def _options(scene, omega, revolutions, start_deg, spp, npts, method, rtol, revolution,
-             ripple) -> _Options:
+             ripple, exact_rigid=True) -> _Options:
     """Options from the call, else the scene's ``[simulate]`` table, else the defaults;
     each checked (a :class:`MechcircError` names the bad one)."""
     cfg = scene.simulate
@@ -472,7 +478,8 @@ def _options(scene, omega, revolutions, start_deg, spp, npts, method, rtol, revo
     elif rtol is not None:
         raise MechcircError(f"rtol applies to the scipy methods, not {method}; use "
                             "steps_per_period")
-    return _Options(omega, revolutions, start_deg, spp, npts, ripple, method, rtol)
+    return _Options(omega, revolutions, start_deg, spp, npts, ripple, method, rtol,
+                    bool(exact_rigid))
 
 
 def _simulate_scipy(ctx, error_estimate, notes, compile_time):
@@ -500,7 +507,7 @@ def _simulate_scipy(ctx, error_estimate, notes, compile_time):
     return _finish(scene, model, kern, theta_s, ripple, (ts, ys, prev, wall, bad),
                    None if coarse is None else coarse[:5],
                    (n_steps, nfev, method, "scipy", 0, o.revolutions, compile_time),
-                   notes + [text], [])
+                   notes + [text], [], exact_rigid=o.exact_rigid)
 
 
 def _simulate_rk4(ctx, backend, error_estimate, notes, compile_time):
@@ -555,7 +562,7 @@ def _simulate_rk4(ctx, backend, error_estimate, notes, compile_time):
     return _finish(scene, model, kern, theta_s, ripple, main, other,
                    (n_steps, nfev, o.method, backend, main[6], o.revolutions, compile_time),
                    notes, rule.warn, out=out, other_extrema=other_ext, tab=tab,
-                   periodicity=periodicity)
+                   periodicity=periodicity, exact_rigid=o.exact_rigid)
 
 
 @dataclass
@@ -696,7 +703,7 @@ def _extrema(out: dict, sub=None) -> dict:
 
 
 def _finish(scene, model, kern, theta_s, ripple, main, other, counts, notes, warn, out=None,
-            other_extrema=None, tab=None, periodicity=None):
+            other_extrema=None, tab=None, periodicity=None, exact_rigid=True):
     """Outputs, extrema, the checks and the warnings of one run → :class:`SceneMotion`.
 
     ``main`` is the run (:func:`_run`'s tuple), ``other`` the estimate's (or None, or
@@ -705,7 +712,7 @@ def _finish(scene, model, kern, theta_s, ripple, main, other, counts, notes, war
     (in the order of ``tab``) and the other run's extrema when already evaluated,
     ``periodicity`` when measured on the estimate's run (else from ``main``'s previous
     revolution); ``tab`` (:func:`_crank_order`): the checks compare the extrema on the
-    points the other runs were recorded at."""
+    points the other runs were recorded at; ``exact_rigid`` as :func:`simulate_scene`."""
     ts, ys, prev, wall, bad = main[:5]
     n_steps, nfev, method, backend, per_rev, revolutions, compile_time = counts
     crank, order, sub = tab or _crank_order(scene, model, theta_s, ripple, ts)
@@ -723,7 +730,8 @@ def _finish(scene, model, kern, theta_s, ripple, main, other, counts, notes, war
         est = _rel_change(check, other_extrema)
         bad = bad or other[4]
     values = dict(out)
-    _add_points_and_aliases(scene, model, theta_s, ripple, crank, ts, ys, values, extrema)
+    _add_points_and_aliases(scene, model, theta_s, ripple, crank, ts, ys, values, extrema,
+                            exact_rigid)
     warn = warn + _check_warnings(bad, est, periodicity)
     for w in warn:
         warnings.warn(f"{scene.source}: {w}", SceneAccuracyWarning, stacklevel=3)
@@ -747,9 +755,11 @@ def _crank_order(scene, model, theta_s, ripple, ts, stride=1):
     return crank[order], order, (np.flatnonzero(order % stride == 0) if stride > 1 else None)
 
 
-def _add_points_and_aliases(scene, model, theta_s, ripple, crank, ts, ys, values, extrema):
+def _add_points_and_aliases(scene, model, theta_s, ripple, crank, ts, ys, values, extrema,
+                            exact_rigid=True):
     """The points' accelerations and the ``[simulate.aliases]`` added to ``values`` and
-    ``extrema`` (in place); every slider's stroke checked on the samples."""
+    ``extrema`` (in place; rigid accelerations' extrema refined when ``exact_rigid``);
+    every slider's stroke checked on the samples."""
     positions: dict = {}
     for k, v in _point_accelerations(model, theta_s, ripple, ts, ys, values,
                                      positions).items():
@@ -761,7 +771,7 @@ def _add_points_and_aliases(scene, model, theta_s, ripple, crank, ts, ys, values
         if target.endswith(".rigid_acceleration"):
             body = target.rsplit(".", 1)[0]
             values[alias], extrema[alias] = _rigid_acceleration(model, body, crank,
-                                                                ripple, ts)
+                                                                ripple, ts, exact_rigid)
         elif target in values:
             values[alias] = values[target]
             extrema[alias] = extrema[target]
@@ -1074,9 +1084,9 @@ def _rel_change(a: dict, b: dict) -> float:
     return worst
 
 
-def _rigid_acceleration(model, body, crank, ripple=(0.0, 0.0), ts=None):
+def _rigid_acceleration(model, body, crank, ripple=(0.0, 0.0), ts=None, refine=True):
     """Angular acceleration of ``body`` in the rigid motion at the crank angles, and its
-    exact extrema (grid, then Brent-refined on the tables)."""
+    exact extrema (grid, then Brent-refined on the tables; without ``refine``, the grid's)."""
     from scipy.optimize import minimize_scalar
 
     kern = kernels_for("rk4-python")[0]
@@ -1102,6 +1112,7 @@ def _rigid_acceleration(model, body, crank, ripple=(0.0, 0.0), ts=None):
         # its extrema are those of the samples (the output grid sets their accuracy)
         _, w, dw = crank_angle(model.omega, 0.0, ripple, ts)
         vals = (gv[:, 2] * qv[:, 1] ** 2 + gv[:, 1] * qv[:, 2]) * w ** 2 + gv[:, 1] * qv[:, 1] * dw
+    if ripple[0] != 0.0 or not refine:
         return vals, (float(vals.min()), float(vals.max()))
     ext = []
     memo = _REFINED.setdefault(model, {})

@@ -363,7 +363,7 @@ def simulate_params(params: SleyParameters, revolutions: int = 5, method: str | 
         m = simulate_scene(scene, model=model, revolutions=revolutions,
                            start_deg=math.degrees(theta0), steps_per_period=steps_per_period,
                            points=npts, method=method, rtol=rtol, progress=progress,
-                           error_estimate=error_estimate)
+                           error_estimate=error_estimate, exact_rigid=False)
     for w in caught:
         if issubclass(w.category, SceneAccuracyWarning):
             text = str(w.message).split(": ", 1)[-1]
@@ -417,7 +417,8 @@ def _result(params: SleyParameters, model, m, theta0: float, phiP: float,
     both = params.drive == "both-sides"
     w = params.omega
     # the rigid rocker's ν ω² from the scene's tables (within 6e-10 of the closed form's ν,
-    # table_error()); its extrema below from the closed form
+    # table_error()); its extrema below from the closed form (the scene is asked not to
+    # refine its own: exact_rigid=False)
     eps4T = v["eps4T"]
     _, sley_off, nlo, nhi = _linkage_constants(params.l2P, params.l3, params.l4, params.d,
                                                params.branch)

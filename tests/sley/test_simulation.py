@@ -340,3 +340,38 @@ def test_cli_simulate_method_rk8(tmp_path, capsys):
     assert [float(v) for v in row.split()[1:3]] == pytest.approx([lo, hi], rel=1e-5)
     assert cli.main(["simulate", "--method", "rk8", "--rtol", "1e-6"]) == 2
     assert "rtol applies to the scipy methods, not rk8" in capsys.readouterr().err
+
+
+@pytest.mark.filterwarnings("ignore")           # two revolutions: not yet periodic (warned)
+def test_sley_without_the_scenes_eps4T_refinement_is_the_scene_call_unchanged():
+    """The sley asks the scene not to refine eps4T's extrema (it takes the closed form's):
+    every array and extremum it returns is the plain scene call's (the refinement on), and
+    only the scene's own eps4T extrema differ: refined, at least as extreme as the samples',
+    and equal to the closed form's within the tables' interpolation error."""
+    from mechcirc.scene import simulate_scene
+    from mechcirc.sley.scenes import sley_scene
+    from mechcirc.sley.simulation import start_angle
+
+    p = preset("one-side", 3)
+    r = simulate(params=p, revolutions=2, points_per_revolution=720)
+    kw = dict(revolutions=2, start_deg=math.degrees(start_angle(p)), points=720)
+    full = simulate_scene(sley_scene(p), **kw)
+    quick = simulate_scene(sley_scene(p), exact_rigid=False, **kw)
+    for name, col in (("eps2P", r.eps2P), ("eps4P", r.eps4P), ("eps4T", r.eps4T),
+                      ("M2V", r.M2V), ("M4.moment", r.M4)):
+        assert np.array_equal(col, full.values[name]), name
+    for k, v in r.scene_extrema.items():
+        assert v == full.extrema[k], k
+    for k in ("eps2P", "eps4P", "M2V"):
+        assert r.extrema[k] == full.extrema[k]
+    assert (r.error_estimate, r.periodicity) == (full.error_estimate, full.periodicity)
+    assert np.array_equal(r.crank_angle, full.crank_angle)
+    lo, hi = quick.extrema["eps4T"]
+    assert (lo, hi) == (float(full.values["eps4T"].min()), float(full.values["eps4T"].max()))
+    flo, fhi = full.extrema["eps4T"]
+    assert flo <= lo and fhi >= hi and (flo, fhi) != (lo, hi)    # the 720-point grid misses
+    nlo, nhi = ref.nu_range()                  # the closed form, written out in the tests
+    w2 = p.omega ** 2
+    scale = max(abs(nlo), abs(nhi)) * w2
+    assert abs(flo - nlo * w2) <= 1e-9 * scale      # measured 1.4e-10 (lo), 4.3e-11 (hi)
+    assert abs(fhi - nhi * w2) <= 1e-9 * scale
