@@ -474,6 +474,8 @@ def locate(t, hh, y, k1, ynew, k4, tmp, dy, sw0, sw1, reg, regn, PV, FI, FF, tab
         vd = 0.0
         glo = edge_gap(e, ne, r0, r1, sw0[e], sw0[nsw + e] if e < ne else 0.0, EF, MOF)
         ghi = edge_gap(e, ne, r0, r1, sw1[e], sw1[nsw + e] if e < ne else 0.0, EF, MOF)
+        if ghi == 0.0:      # on the edge at the step's end: the change is there, no cut
+            continue
         side = 0
         for _ in range(60):
             if hi - lo <= 1e-9 or hi <= 0.0:
@@ -605,20 +607,40 @@ def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_
                     cut, used = locate(tc, hh, y, K[0], ynew, K[s], tmp, K[1], sw0, sw1, reg,
                                        regn, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG,
                                        BI, aux, work, off, m, zy, zd)
-                    nfev += used + 1
+                    nfev += used
                     cut = cut + 1e-7
                     if cut * hh > 1e-9 * h and cut < 1.0 - 1e-7:
-                        hh = cut * hh
                         full = False
-                        rk_step(tc, hh, y, K, tmp, ynew, TA, TB, TC, PV, FI, FF, tabs, MI_,
-                                MW, EI, EF, MOI, MOF, PRIG, BI, aux, work, zy, zd)
-                        nfev += s - 1
-                        regions(FI, EI, EF, MOI, MOF, aux, work, off, regn, sw1, first)
-                    else:       # at an end of the step: keep it; aux back to ynew
+                        # the cut was found on the interpolant of a step across the kink, of
+                        # low order there: placed again on the cut step's own (smooth up to
+                        # the kink), until the kink is at its end or it ends before the kink
+                        for _ in range(4):
+                            hh = cut * hh
+                            rk_step(tc, hh, y, K, tmp, ynew, TA, TB, TC, PV, FI, FF, tabs,
+                                    MI_, MW, EI, EF, MOI, MOF, PRIG, BI, aux, work, zy, zd)
+                            nfev += s - 1
+                            regions(FI, EI, EF, MOI, MOF, aux, work, off, regn, sw1, first)
+                            changed = False
+                            for e in range(nsw):
+                                if regn[e] != reg[e]:
+                                    changed = True
+                            if not changed:     # cut before the kink: the next piece finds it
+                                break
+                            cut, used = locate(tc, hh, y, K[0], ynew, K[s], tmp, K[1], sw0,
+                                               sw1, reg, regn, PV, FI, FF, tabs, MI_, MW, EI,
+                                               EF, MOI, MOF, PRIG, BI, aux, work, off, m, zy,
+                                               zd)
+                            nfev += used
+                            cut = cut + 1e-7
+                            if not ((1.0 - cut) * hh > 1e-7 * h and cut * hh > 1e-9 * h):
+                                break       # as close as the first cut's own tolerance
+                    if changed:     # at an end of the step, or located again: aux at ynew
+                        nfev += 1
                         deriv(tc + hh, ynew, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF,
                               PRIG, BI, K[s], aux, work, zy, zd)
                 for e in range(nsw):
                     reg[e] = regn[e]
+                for e in range(nsw + ne):       # the switches' values and the rates
                     sw0[e] = sw1[e]
             if aux[naux - 1] > bad:
                 bad = aux[naux - 1]
