@@ -456,8 +456,9 @@ def locate(t, hh, y, k1, ynew, k4, tmp, dy, sw0, sw1, reg, regn, PV, FI, FF, tab
     (reg → regn: an element crosses an edge of its clearance gap, a moment's window opens
     or closes), on the step's Hermite interpolant (:func:`mechcirc._ode.hermite_point`,
     quintic in the positions for m > 0; Illinois method, to 1e-9 of the step); the upper
-    end of the bracket, so the change has happened.  ``sw0``/``sw1``: the switches' values
-    at the ends.  Returns (s, right-hand-side evaluations)."""
+    end of the bracket, so the change has happened; 1 for a switch exactly on its edge at
+    the step's end.  ``sw0``/``sw1``: the switches' values at the ends.  Returns (s,
+    right-hand-side evaluations)."""
     n = y.shape[0]
     ne = EI.shape[0]
     nsw = reg.shape[0]
@@ -550,9 +551,10 @@ def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_
     ``quintic`` quintic in the positions q (y = [q, q̇]; :func:`mechcirc._ode.hermite_point`),
     for a method of higher order than the cubic's 4.  A step in which a force law
     changes piece (an element crosses an edge of its clearance gap, a moment's window opens
-    or closes: a kink of the force) is cut where it happens (:func:`locate`) and finished
-    from there, at most 8 pieces per step, so that the method keeps its order through
-    impacts and the beat-up.
+    or closes: a kink of the force) is cut where it happens (:func:`locate`, then again on
+    the cut step's own interpolant, the first being of low order across the kink) and
+    finished from there, at most 8 pieces per step, so that the method keeps its order
+    through impacts and the beat-up.
 
     The same loop runs the dynamic main shaft's equations (:func:`shaft_rhs`, PV[8] ≠ 0): its
     state [positions, their rates] as the scene's, and it stops at a step's end where the
