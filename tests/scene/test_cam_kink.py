@@ -29,8 +29,8 @@ def _speed_error(r) -> float:
 def test_rk8_converges_through_the_contact_release():
     """rk8 at 4, 8, 16 steps per period: measured 6.0e-9, 7.7e-13, 4.0e-14 (×7800, ×19;
     32 steps: 1.3e-14, the floor of rounding and of the reference).  With the release
-    located on the interpolant of the step across it only, and a switch's rate not carried
-    to the next step's search, the same runs gave 5.0e-8, 2.6e-8, 3.8e-10 (32: 4.4e-11);
+    located on the interpolant of the step across it only (not placed again on the cut
+    step's own), the same runs gave 5.0e-8, 2.6e-8, 3.8e-10 (32: 4.4e-11);
     before the release was located at all 4.0e-6, 5.1e-8, 2.3e-7 at 8, 16, 32 (against the
     code's own DOP853 path at rtol 1e-12, 360 samples): no convergence.  Asserted: each
     halving of the step divides the error by ≥ 6 and the 16-step error is ≤ 2e-13 (5x
