@@ -456,8 +456,9 @@ def locate(t, hh, y, k1, ynew, k4, tmp, dy, sw0, sw1, reg, regn, PV, FI, FF, tab
     (reg → regn: an element crosses an edge of its clearance gap, a moment's window opens
     or closes), on the step's Hermite interpolant (:func:`mechcirc._ode.hermite_point`,
     quintic in the positions for m > 0; Illinois method, to 1e-9 of the step); the upper
-    end of the bracket, so the change has happened.  ``sw0``/``sw1``: the switches' values
-    at the ends.  Returns (s, right-hand-side evaluations)."""
+    end of the bracket, so the change has happened; 1 for a switch exactly on its edge at
+    the step's end.  ``sw0``/``sw1``: the switches' values at the ends.  Returns (s,
+    right-hand-side evaluations)."""
     n = y.shape[0]
     ne = EI.shape[0]
     nsw = reg.shape[0]
@@ -474,6 +475,8 @@ def locate(t, hh, y, k1, ynew, k4, tmp, dy, sw0, sw1, reg, regn, PV, FI, FF, tab
         vd = 0.0
         glo = edge_gap(e, ne, r0, r1, sw0[e], sw0[nsw + e] if e < ne else 0.0, EF, MOF)
         ghi = edge_gap(e, ne, r0, r1, sw1[e], sw1[nsw + e] if e < ne else 0.0, EF, MOF)
+        if ghi == 0.0:      # on the edge at the step's end: the change is there, no cut
+            continue
         side = 0
         for _ in range(60):
             if hi - lo <= 1e-9 or hi <= 0.0:
@@ -548,9 +551,10 @@ def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_
     ``quintic`` quintic in the positions q (y = [q, q̇]; :func:`mechcirc._ode.hermite_point`),
     for a method of higher order than the cubic's 4.  A step in which a force law
     changes piece (an element crosses an edge of its clearance gap, a moment's window opens
-    or closes: a kink of the force) is cut where it happens (:func:`locate`) and finished
-    from there, at most 8 pieces per step, so that the method keeps its order through
-    impacts and the beat-up.
+    or closes: a kink of the force) is cut where it happens (:func:`locate`, then again on
+    the cut step's own interpolant, the first being of low order across the kink) and
+    finished from there, at most 8 pieces per step, so that the method keeps its order
+    through impacts and the beat-up.
 
     The same loop runs the dynamic main shaft's equations (:func:`shaft_rhs`, PV[8] ≠ 0): its
     state [positions, their rates] as the scene's, and it stops at a step's end where the
@@ -605,20 +609,40 @@ def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_
                     cut, used = locate(tc, hh, y, K[0], ynew, K[s], tmp, K[1], sw0, sw1, reg,
                                        regn, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG,
                                        BI, aux, work, off, m, zy, zd)
-                    nfev += used + 1
+                    nfev += used
                     cut = cut + 1e-7
                     if cut * hh > 1e-9 * h and cut < 1.0 - 1e-7:
-                        hh = cut * hh
                         full = False
-                        rk_step(tc, hh, y, K, tmp, ynew, TA, TB, TC, PV, FI, FF, tabs, MI_,
-                                MW, EI, EF, MOI, MOF, PRIG, BI, aux, work, zy, zd)
-                        nfev += s - 1
-                        regions(FI, EI, EF, MOI, MOF, aux, work, off, regn, sw1, first)
-                    else:       # at an end of the step: keep it; aux back to ynew
+                        # the cut was found on the interpolant of a step across the kink, of
+                        # low order there: placed again on the cut step's own (smooth up to
+                        # the kink), until the kink is at its end or it ends before the kink
+                        for _ in range(4):
+                            hh = cut * hh
+                            rk_step(tc, hh, y, K, tmp, ynew, TA, TB, TC, PV, FI, FF, tabs,
+                                    MI_, MW, EI, EF, MOI, MOF, PRIG, BI, aux, work, zy, zd)
+                            nfev += s - 1
+                            regions(FI, EI, EF, MOI, MOF, aux, work, off, regn, sw1, first)
+                            changed = False
+                            for e in range(nsw):
+                                if regn[e] != reg[e]:
+                                    changed = True
+                            if not changed:     # cut before the kink: the next piece finds it
+                                break
+                            cut, used = locate(tc, hh, y, K[0], ynew, K[s], tmp, K[1], sw0,
+                                               sw1, reg, regn, PV, FI, FF, tabs, MI_, MW, EI,
+                                               EF, MOI, MOF, PRIG, BI, aux, work, off, m, zy,
+                                               zd)
+                            nfev += used
+                            cut = cut + 1e-7
+                            if not ((1.0 - cut) * hh > 1e-7 * h and cut * hh > 1e-9 * h):
+                                break       # as close as the first cut's own tolerance
+                    if changed:     # at an end of the step, or located again: aux at ynew
+                        nfev += 1
                         deriv(tc + hh, ynew, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF,
                               PRIG, BI, K[s], aux, work, zy, zd)
                 for e in range(nsw):
                     reg[e] = regn[e]
+                for e in range(nsw + ne):       # the switches' values and the rates
                     sw0[e] = sw1[e]
             if aux[naux - 1] > bad:
                 bad = aux[naux - 1]

@@ -27,14 +27,17 @@ def _speed_error(r) -> float:
 
 
 def test_rk8_converges_through_the_contact_release():
-    """rk8 at 8, 16, 32 steps per period: measured 2.6e-8, 3.8e-10, 4.4e-11 (×69, ×8.5).
-    Before the release was located the same rk8 runs gave 4.0e-6, 5.1e-8, 2.3e-7 (against
-    the code's own DOP853 path at rtol 1e-12, 360 samples): no convergence, the error rising
-    from 16 to 32.  Asserted: each halving of the step divides the error by ≥ 6 and the
-    32-step error is ≤ 2e-10 (4.5x margin)."""
+    """rk8 at 4, 8, 16 steps per period: measured 6.0e-9, 7.7e-13, 4.0e-14 (×7800, ×19;
+    32 steps: 1.3e-14, the floor of rounding and of the reference).  With the release
+    located on the interpolant of the step across it only (not placed again on the cut
+    step's own), the same runs gave 5.0e-8, 2.6e-8, 3.8e-10 (32: 4.4e-11);
+    before the release was located at all 4.0e-6, 5.1e-8, 2.3e-7 at 8, 16, 32 (against the
+    code's own DOP853 path at rtol 1e-12, 360 samples): no convergence.  Asserted: each
+    halving of the step divides the error by ≥ 6 and the 16-step error is ≤ 2e-13 (5x
+    margin)."""
     sc = scene()
     err = [_speed_error(simulate_shaft(sc, points=90, startup=False, method="rk8",
-                                       steps_per_period=s)) for s in (8, 16, 32)]
+                                       steps_per_period=s)) for s in (4, 8, 16)]
     assert err[0] / err[1] >= 6.0
     assert err[1] / err[2] >= 6.0
-    assert err[2] <= 2e-10
+    assert err[2] <= 2e-13
