@@ -246,8 +246,9 @@ def body_tables(scene: Scene, N: int):
     Parameters
     ----------
     scene : Scene
+        The scene whose rigid mechanism is tabulated over its cycle.
     N : int
-        Table nodes per crank revolution.
+        Intervals per crank revolution (the tables have N · revolutions + 1 rows).
 
     Returns
     -------
