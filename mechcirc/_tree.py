@@ -17,41 +17,43 @@ __all__ = ["Leaf", "Series", "Parallel", "Reflect", "Node", "Reduction", "leaves
            "postorder"]
 
 
+class _Printed:
+    """What every tree node shares: it prints as its nested expression (:func:`_format`)."""
+
+    __slots__ = ()
+
+    def __str__(self) -> str:
+        return _format(self)
+
+
 @dataclass(frozen=True, eq=False)
-class Leaf:
+class Leaf(_Printed):
     """One element of the circuit."""
 
     element: Element
 
-    def __str__(self) -> str:
-        return _format(self)
+
+@dataclass(frozen=True, eq=False)
+class _Branches(_Printed):
+    """The fields :class:`Series` and :class:`Parallel` share (``signs``: see Series)."""
+
+    children: tuple["Node", ...]
+    signs: tuple[int, ...]
 
 
 @dataclass(frozen=True, eq=False)
-class Series:
+class Series(_Branches):
     """Children carrying the same force; ``signs[i]`` is +1 where child i's
     orientation (n1 → n2) agrees with this node's, −1 where it is reversed."""
 
-    children: tuple["Node", ...]
-    signs: tuple[int, ...]
-
-    def __str__(self) -> str:
-        return _format(self)
-
 
 @dataclass(frozen=True, eq=False)
-class Parallel:
+class Parallel(_Branches):
     """Children sharing the same velocity difference; ``signs`` as in :class:`Series`."""
 
-    children: tuple["Node", ...]
-    signs: tuple[int, ...]
-
-    def __str__(self) -> str:
-        return _format(self)
-
 
 @dataclass(frozen=True, eq=False)
-class Reflect:
+class Reflect(_Printed):
     """A sub-network seen through a lever: K_primary = K_child / ratio².
 
     ``sign`` is −1 when the child's orientation runs from the lever's ``s2``
@@ -61,9 +63,6 @@ class Reflect:
     child: "Node"
     lever: Lever
     sign: int = 1
-
-    def __str__(self) -> str:
-        return _format(self)
 
 
 Node = Union[Leaf, Series, Parallel, Reflect]
@@ -77,7 +76,7 @@ class Reduction:
     unloaded: tuple[str, ...]
 
 
-def _format(root: Node) -> str:
+def _format(root: _Printed) -> str:
     """Nested expression: series ``a + b``, parallel ``a | b``, lever ``L[...]``.
 
     Iterative, so trees deeper than Python's recursion limit still print.

@@ -312,6 +312,24 @@ def count(least: int = 1, most: int | None = None, *, why: str = ""):
     return parse
 
 
+def add_handler(p, func, *, json: bool = True) -> None:
+    """End a command's parser: its ``--json`` option (listed last in its help) and its handler.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The command's parser, with its other options added.
+    func : callable
+        The handler: takes the parsed arguments, returns the exit status.
+    json : bool, optional
+        Add ``--json`` (print one JSON document); False for a command without it,
+        or one that lists ``--json`` before other options (it adds it itself).
+    """
+    if json:
+        p.add_argument("--json", action="store_true", help="print one JSON document")
+    p.set_defaults(func=func)
+
+
 #: The largest angular frequency the command line accepts [rad/s] (ω² stays finite).
 MAX_OMEGA = 1e100
 #: The largest length the command line accepts (products of four stay finite).

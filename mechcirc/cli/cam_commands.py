@@ -6,7 +6,8 @@ import argparse
 import math
 
 from ..errors import InputError
-from ._common import MAX_LENGTH, check_output_paths, count, print_json, real, warning_lines
+from ._common import (MAX_LENGTH, add_handler, check_output_paths, count, print_json, real,
+                      warning_lines)
 
 _LAWS = ("harmonic", "cycloidal", "modified_sine", "modified_trapezoid", "polynomial_345")
 
@@ -64,8 +65,7 @@ def register(sub) -> None:
                    help="cam angles from 0 to 360° inclusive (default 721)")
     p.add_argument("-o", "--output", metavar="CSV", help="write the profile as CSV")
     p.add_argument("--svg", metavar="SVG", help="draw the profile as SVG (mm)")
-    p.add_argument("--json", action="store_true", help="print one JSON document")
-    p.set_defaults(func=cmd_cam)
+    add_handler(p, cmd_cam)
 
 
 def _motion(args):

@@ -13,14 +13,8 @@ from ..limits import (
     MAX_PLOT_POINTS,
     MAX_SWEEP_POINTS,
 )
-from ._common import (
-    check_output_paths,
-    load_with_warnings,
-    print_json,
-    real,
-    save_figure,
-    warning_lines,
-)
+from ._common import (add_handler, check_output_paths, load_with_warnings, print_json, real,
+                      save_figure, warning_lines)
 
 #: argparse type: an angular frequency [rad/s], or with a unit (``50Hz``, ``3000rpm``); the
 #: command checks the range (a sweep's --omega-min/--omega-max together).
@@ -35,6 +29,11 @@ omega_value.__name__ = "frequency"
 
 
 def register(sub) -> None:
+    for add in (_register_check, _register_sweep, _register_resonances):
+        add(sub)
+
+
+def _register_check(sub) -> None:
     p = sub.add_parser(
         "check", help="parse a netlist and show its elements and reduction tree",
         description="Parse a netlist, list elements and nodes, warnings, and the "
@@ -46,9 +45,7 @@ def register(sub) -> None:
     p.add_argument("--explain", action="store_true",
                    help="write the series–parallel reduction out step by step, with the "
                         "lever reflections (K/r², m·r²) and each element's value·η")
-    p.set_defaults(func=cmd_check)
-    _register_sweep(sub)
-    _register_resonances(sub)
+    add_handler(p, cmd_check, json=False)
 
 
 def _register_sweep(sub) -> None:
@@ -97,8 +94,7 @@ def _register_sweep(sub) -> None:
     p.add_argument("--element", action="append", default=[], metavar="NAME",
                    help="also the force amplitude through this element (CSV column "
                         "Q_abs(NAME); a plot panel); repeatable")
-    p.add_argument("--json", action="store_true", help="print one JSON document")
-    p.set_defaults(func=cmd_sweep)
+    add_handler(p, cmd_sweep)
 
 
 def _register_resonances(sub) -> None:
@@ -124,8 +120,7 @@ def _register_resonances(sub) -> None:
     p.add_argument("--plot", metavar="IMAGE",
                    help="plot the mode shapes (PNG, SVG or PDF)")
     add_unit_option(p)
-    p.add_argument("--json", action="store_true", help="print one JSON document")
-    p.set_defaults(func=cmd_resonances)
+    add_handler(p, cmd_resonances)
 
 
 def add_unit_option(p) -> None:

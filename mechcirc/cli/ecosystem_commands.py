@@ -5,22 +5,13 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ._common import (
-    check_output_paths,
-    count,
-    load_with_warnings,
-    print_json,
-    real,
-    save_figure,
-    warning_lines,
-)
+from ._common import (add_handler, check_output_paths, count, load_with_warnings, print_json, real,
+                      save_figure, warning_lines)
 
 
 def register(sub) -> None:
-    _register_forces(sub)
-    _register_compare(sub)
-    _register_formula(sub)
-    _register_study(sub)
+    for add in (_register_forces, _register_compare, _register_formula, _register_study):
+        add(sub)
 
 
 def _register_forces(sub) -> None:
@@ -45,8 +36,7 @@ def _method_plot_json(p, plot: str, func) -> None:
     p.add_argument("--method", choices=("auto", "sp", "nodal"), default="auto",
                    help="series–parallel tree, nodal analysis, or auto (default)")
     p.add_argument("--plot", metavar="IMAGE", help=plot)
-    p.add_argument("--json", action="store_true", help="print one JSON document")
-    p.set_defaults(func=func)
+    add_handler(p, func)
 
 
 def _register_compare(sub) -> None:
@@ -81,7 +71,7 @@ def _register_formula(sub) -> None:
                    help="one fraction, numerator and denominator multiplied out")
     p.add_argument("--numeric", action="store_true",
                    help="substitute the values (exact rationals); only omega stays a symbol")
-    p.set_defaults(func=cmd_formula)
+    add_handler(p, cmd_formula, json=False)
 
 
 def _register_study(sub) -> None:
@@ -119,8 +109,7 @@ def _register_study(sub) -> None:
     p.add_argument("--plot-column", metavar="NAME",
                    help="the column to plot (default Q0_abs_max for sweeps, resonance_1 "
                         "for resonance tables)")
-    p.add_argument("--json", action="store_true", help="print one JSON document")
-    p.set_defaults(func=cmd_study)
+    add_handler(p, cmd_study)
 
 
 def cmd_forces(args) -> int:

@@ -7,20 +7,18 @@ import math
 
 from ..errors import InputError, MechcircError
 from ..units import convert_frequency
-from ._common import (MAX_LENGTH, MAX_OMEGA, check_output_paths, count, print_json, real,
-                      save_figure)
+from ._common import (MAX_LENGTH, MAX_OMEGA, add_handler, check_output_paths, count, print_json,
+                      real, save_figure)
 
 
 def register(sub) -> None:
     """The kinematics sub-commands, each with its options."""
-    _register_fourbar(sub)
-    _register_frame(sub)
-    _register_synth(sub)
-    _register_linkage(sub)
-
     from . import cam_commands
 
-    cam_commands.register(sub)      # the cam command lives in its own module
+    # the cam command lives in its own module
+    for add in (_register_fourbar, _register_frame, _register_synth, _register_linkage,
+                cam_commands.register):
+        add(sub)
 
 
 def _register_fourbar(sub) -> None:
@@ -43,8 +41,7 @@ def _register_fourbar(sub) -> None:
     p.add_argument("--branch", type=int, choices=(1, -1), default=1,
                    help="assembly mode (default +1; see docs/kinematics.md)")
     p.add_argument("--plot", metavar="IMAGE", help="plot φ4, μ, ν (or ε4T) and γ against θ")
-    p.add_argument("--json", action="store_true", help="print one JSON document")
-    p.set_defaults(func=cmd_fourbar)
+    add_handler(p, cmd_fourbar)
 
 
 def _register_frame(sub) -> None:
@@ -100,8 +97,7 @@ def _register_frame(sub) -> None:
     p.add_argument("-o", "--output", metavar="CSV", help="write every angle's loads as CSV")
     p.add_argument("--plot", metavar="IMAGE", help="shaking force polar curve and magnitude "
                    "(patent Figs. 5–6), bearing forces, torque and shaking moments")
-    p.add_argument("--json", action="store_true", help="print one JSON document")
-    p.set_defaults(func=cmd_frame)
+    add_handler(p, cmd_frame)
 
 
 def _register_synth(sub) -> None:
@@ -146,8 +142,7 @@ def _register_synth(sub) -> None:
     p.add_argument("--plot", metavar="IMAGE",
                    help="the best design drawn at both dead centres with its swing, beside "
                         "the transmission angle and rocker acceleration against θ")
-    p.add_argument("--json", action="store_true", help="print one JSON document")
-    p.set_defaults(func=cmd_synth)
+    add_handler(p, cmd_synth)
 
 
 def _register_synth_export(p) -> None:
@@ -188,8 +183,7 @@ def _register_linkage(sub) -> None:
                    help="rotation of the first crank from the pose [deg] (default 0)")
     p.add_argument("--plot", metavar="IMAGE",
                    help="draw the linkage at θ with the paths of its points")
-    p.add_argument("--json", action="store_true", help="print one JSON document")
-    p.set_defaults(func=cmd_linkage)
+    add_handler(p, cmd_linkage)
 
 
 def _vector(option, n, *, nonneg=False):

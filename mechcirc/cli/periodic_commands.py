@@ -6,15 +6,8 @@ from __future__ import annotations
 import argparse
 
 from ..errors import MechcircError
-from ._common import (
-    check_output_paths,
-    count,
-    load_with_warnings,
-    print_json,
-    real,
-    save_figure,
-    warning_lines,
-)
+from ._common import (add_handler, check_output_paths, count, load_with_warnings, print_json, real,
+                      save_figure, warning_lines)
 
 
 def register(sub) -> None:
@@ -60,8 +53,7 @@ def register(sub) -> None:
                    help="how K is evaluated (default auto)")
     p.add_argument("-o", "--output", metavar="CSV", help="write the table as CSV")
     p.add_argument("--plot", metavar="IMAGE", help="plot (PNG, SVG or PDF)")
-    p.add_argument("--json", action="store_true", help="print one JSON document")
-    p.set_defaults(func=cmd_periodic)
+    add_handler(p, cmd_periodic)
 
 
 def _elements(args, circuit):

@@ -6,12 +6,12 @@ import argparse
 import math
 
 from ..limits import MAX_CYCLE_POINTS
-from ._common import check_output_paths, count, print_json, real, save_figure
+from ._common import add_handler, check_output_paths, count, print_json, real, save_figure
 
 
 def register(sub) -> None:
-    _register_scene(sub)
-    _register_reduce(sub)
+    for add in (_register_scene, _register_reduce):
+        add(sub)
 
 
 def _register_scene(sub) -> None:
@@ -51,8 +51,7 @@ def _register_scene(sub) -> None:
     p.add_argument("--unit", choices=("rad/s", "Hz"), default="rad/s",
                    help="--cycle --plot: frequency unit of the plot (default rad/s, as the "
                         "table)")
-    p.add_argument("--json", action="store_true", help="print one JSON document")
-    p.set_defaults(func=cmd_scene)
+    add_handler(p, cmd_scene)
 
 
 def _register_reduce(sub) -> None:
@@ -78,8 +77,7 @@ def _register_reduce(sub) -> None:
     p.add_argument("--points", type=int, default=2000, metavar="N",
                    help="log-spaced check points over the band (default 2000; two more "
                         "beside each resonance in the band)")
-    p.add_argument("--json", action="store_true", help="print one JSON document")
-    p.set_defaults(func=cmd_reduce)
+    add_handler(p, cmd_reduce)
 
 
 def cmd_scene(args) -> int:

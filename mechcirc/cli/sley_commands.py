@@ -6,7 +6,7 @@ import argparse
 import math
 
 from ..limits import MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS, MAX_SCIPY_REVOLUTIONS
-from ._common import check_output_paths, count, print_json, real, save_figure
+from ._common import add_handler, check_output_paths, count, print_json, real, save_figure
 
 _METHODS = ("rk4", "rk4-python", "rk8", "DOP853", "RK45", "LSODA")   # = mechcirc.sley.METHODS
 _UNITS = {"eps4T": "1/s^2", "eps2P": "1/s^2", "eps4P": "1/s^2", "eps5P": "1/s^2",
@@ -14,8 +14,8 @@ _UNITS = {"eps4T": "1/s^2", "eps2P": "1/s^2", "eps4P": "1/s^2", "eps5P": "1/s^2"
 
 
 def register(sub) -> None:
-    _register_simulate(sub)
-    _register_crosscheck(sub)
+    for add in (_register_simulate, _register_crosscheck):
+        add(sub)
 
 
 def _register_simulate(sub) -> None:
@@ -53,7 +53,7 @@ def _register_simulate(sub) -> None:
                    help="with --shaft: every elastic element rigid (θ the only DOF)")
     p.add_argument("--flywheel", type=real(least=0.0, unit="kg·m²"), metavar="J",
                    help="with --shaft: the flywheel's inertia [kg·m²] (default the file's)")
-    p.set_defaults(func=cmd_simulate)
+    add_handler(p, cmd_simulate, json=False)
 
 
 def _sley_arguments(p) -> None:
@@ -124,8 +124,7 @@ def _register_crosscheck(sub) -> None:
     p.add_argument("--netlist", metavar="FILE",
                    help="also write the netlist built from the scene or the sley preset "
                         "(refused with a netlist FILE: that file is the netlist used)")
-    p.add_argument("--json", action="store_true", help="print one JSON document")
-    p.set_defaults(func=cmd_crosscheck)
+    add_handler(p, cmd_crosscheck)
 
 
 # ------------------------------------------------------------------ helpers

@@ -7,7 +7,7 @@ import math
 import sys
 
 from ..errors import MechcircError
-from ._common import check_output_paths, print_json, save_figure
+from ._common import add_handler, check_output_paths, print_json, save_figure
 
 
 def register(sub) -> None:
@@ -48,8 +48,7 @@ def register(sub) -> None:
                         "band ±B/2 and contact phases, and the --element forces")
     p.add_argument("--element", action="append", metavar="NAME",
                    help="with --plot: a panel of this element's force (repeatable)")
-    p.add_argument("--json", action="store_true", help="print one JSON document")
-    p.set_defaults(func=cmd_transient)
+    add_handler(p, cmd_transient)
 
 
 def _positive(name, value):

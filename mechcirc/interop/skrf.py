@@ -32,6 +32,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import MechcircError, TopologyError
+from ..units import in_unit
 from .touchstone import read_touchstone_one_port
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -108,7 +109,7 @@ def _network(omega, Z, z0, name: str, title: str, empty: str, extra: tuple = ())
         raise MechcircError(empty)
     R = reference_mobility(Z[keep]) if z0 is None else float(z0)
     comments = [*_comments(name, int((~keep).sum()), R), *extra]
-    freq = skrf.Frequency.from_f(omega[keep] / (2 * math.pi), unit="hz")
+    freq = skrf.Frequency.from_f(in_unit(omega[keep], "Hz"), unit="hz")
     return skrf.Network.from_z(Z[keep], frequency=freq, z0=R, name=title,
                                comments="\n".join(comments))
 
@@ -169,7 +170,7 @@ def write_touchstone(path: str | os.PathLike, omega: ArrayLike, Z: ArrayLike, *,
         for w, z in zip(omega[keep], Z[keep] / R):
             # Touchstone v1 order: two-ports N11 N21 N12 N22; larger: row by row.
             entries = z.T.ravel() if p == 2 else z.ravel()
-            fields = [repr(float(w / (2 * math.pi)))]
+            fields = [repr(float(in_unit(w, "Hz")))]
             for value in entries:
                 fields += [repr(float(value.real)), repr(float(value.imag))]
             fh.write(" ".join(fields) + "\n")

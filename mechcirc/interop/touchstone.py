@@ -34,6 +34,7 @@ from numpy.typing import NDArray
 
 from ..errors import NetlistError
 from ..sources import is_number, read_source, split_lines
+from ..units import convert_frequency
 
 __all__ = ["read_touchstone_one_port"]
 
@@ -146,7 +147,7 @@ def read_touchstone_one_port(path: str | os.PathLike) -> tuple[NDArray[np.float6
     if not freqs:
         raise NetlistError("has no data lines", source, 0, 0,
                            "lines of 'frequency value value' after the option line")
-    omega = 2 * math.pi * np.asarray(freqs, dtype=float)
+    omega = convert_frequency(np.asarray(freqs, dtype=float), "Hz")
     name = os.path.splitext(os.path.basename(source))[0]
     return omega, np.asarray(values, dtype=complex), name
 

@@ -24,6 +24,7 @@ from numpy.typing import NDArray
 from ..batch import Designs, from_circuits, network_shape
 from ..errors import GeometryError, InputError, SolverError
 from ..motion_laws import Motion, motion_table
+from ..units import in_unit
 from .files import Scene
 from .model import (RANK_TOL, ReflectMode, build, drive_ratio, element_ratios, part_singular_values,
                     part_speeds, scaled_motion)
@@ -343,19 +344,19 @@ def plot_cycle(cmap: CycleMap, ax=None, *, fig=None, unit: str = "rad/s"):
 
         fig = Figure(figsize=(8, 7))
     a1, a2 = fig.subplots(2, 1, sharex=True)
-    scale = 1.0 if unit == "rad/s" else 1 / (2 * math.pi)
     deg = np.degrees(cmap.theta)
     W = cmap.natural_frequencies()
     for k in range(W.shape[1]):
-        a1.plot(deg, W[:, k] * scale, ".-", ms=3, label=f"resonance {k + 1}")
+        a1.plot(deg, in_unit(W[:, k], unit), ".-", ms=3, label=f"resonance {k + 1}")
     for h in cmap.harmonics:
-        a1.axhline(h * cmap.omega_shaft * scale, color="0.6", lw=0.7, ls=":")
-        a1.annotate(f"{h}·Ω", (1.0, h * cmap.omega_shaft * scale), xycoords=("axes fraction",
+        line = in_unit(h * cmap.omega_shaft, unit)
+        a1.axhline(line, color="0.6", lw=0.7, ls=":")
+        a1.annotate(f"{h}·Ω", (1.0, line), xycoords=("axes fraction",
                     "data"), xytext=(2, 0), textcoords="offset points", fontsize=7,
                     va="center", color="0.4")
     crossings = cmap.crossings()
     for n, c in enumerate(crossings):
-        a1.plot(c["theta_deg"], c["omega"] * scale, "kx", ms=6,
+        a1.plot(c["theta_deg"], in_unit(c["omega"], unit), "kx", ms=6,
                 label="resonance = h·Ω" if n == 0 else None)
     a1.set_ylabel(f"natural frequency [{unit}]  (dotted: h·Ω)")
     a1.set_title("resonances (K = 0, drive held) over the cycle; × where one meets h·Ω")

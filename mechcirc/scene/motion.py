@@ -205,7 +205,7 @@ def motion_model(scene: Scene, omega: float | None = None, *,
     cam = getattr(lk, "cam", None) is not None    # a cam swings the crank: tabulate it too
     N = _table_points(lk, int(table_points))
     h = TWO_PI / N
-    tables, tlink = _body_tables(scene, N)
+    tables, tlink = body_tables(scene, N)
     B = _Builder(N * scene.cycle_revolutions, scene.cycle)
     crank = lk.cranks[0].link
     coords, prig, makers = zip(*[_part_functions(scene, B, h, i, part, tables, tlink, cam)
@@ -240,9 +240,25 @@ def _table_points(lk, n):
     return aligned_points(law, n)
 
 
-def _body_tables(scene, N):
-    """:func:`rigid_tables` as dicts (rotation, its two θ-derivatives, point position,
-    velocity, acceleration), a torsion body given its link's, and body → link of the rods."""
+def body_tables(scene: Scene, N: int):
+    """:func:`rigid_tables` as dicts, a torsion body given its link's rotation tables.
+
+    Parameters
+    ----------
+    scene : Scene
+        The scene whose rigid mechanism is tabulated over its cycle.
+    N : int
+        Intervals per crank revolution (the tables have N · revolutions + 1 rows).
+
+    Returns
+    -------
+    tables : tuple of dict
+        Rotation, its first and second θ-derivatives (body → array; a torsion
+        body's are its link's), point position, velocity and acceleration
+        (point → array of shape (nodes + 1, 2)).
+    tlink : dict
+        Body → link of the torsion rods (the first rod of a body).
+    """
     ang, ang1, ang2, pos, vel, acc = (dict(x) for x in rigid_tables(scene, N))
     tlink: dict[str, str] = {}
     for t in scene.torsions:

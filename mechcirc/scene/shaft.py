@@ -157,14 +157,9 @@ class _Rigid:
     """J_red(θ), J_red'(θ) and each body's φ'(θ), φ''(θ) of the rigid mechanism."""
 
     def __init__(self, scene: Scene, N: int = 1024):
-        from .motion import rigid_tables
+        from .motion import body_tables
 
-        ang, ang1, ang2, pos, vel, acc = (dict(x) for x in rigid_tables(scene, N))
-        tlink: dict[str, str] = {}
-        for t in scene.torsions:
-            tlink.setdefault(t.body, t.link)
-        for b, l in tlink.items():
-            ang1[b], ang2[b] = ang1[l], ang2[l]
+        (_, ang1, ang2, _, vel, acc), _ = body_tables(scene, N)
         self.cycle = scene.cycle
         nodes = N * scene.cycle_revolutions
         h = self.cycle / nodes
@@ -219,12 +214,9 @@ def rigid_model(scene: Scene, N: int = 1024):
     -------
     MotionModel
     """
-    from .motion import dead_centre, hermite_table, rigid_tables
+    from .motion import body_tables, dead_centre, hermite_table
 
-    ang, ang1, ang2, pos, vel, acc = (dict(x) for x in rigid_tables(scene, N))
-    for t in scene.torsions:
-        for d in (ang, ang1, ang2):
-            d.setdefault(t.body, d[t.link])
+    (ang, ang1, ang2, pos, vel, acc), _ = body_tables(scene, N)
     cyc, nodes = scene.cycle, N * scene.cycle_revolutions
     h = cyc / nodes
     FI, FF, tabs = [[2, -1, 0]], [[0.0, 1.0, 0.0, 0.0, 1.0, 0.0]], [np.zeros((nodes, 6))]
