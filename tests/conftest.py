@@ -130,6 +130,9 @@ def _exclusive(lock_path):
 
 #: CPU seconds this process spent in numba's compiler so far (outermost compiles only).
 _COMPILE_CPU = [0.0]
+#: With ``MECHCIRC_TEST_CPU``: one line per ``Dispatcher.compile`` call of the current test
+#: (kernel, signature, compiled / loaded / had, CPU seconds, nesting depth).
+_COMPILES: list[str] = []
 
 
 def _wrap_numba_compile():
@@ -173,7 +176,7 @@ def _wrap_numba_compile():
         if depth:                                   # a callee, compiled under our lock
             held.depth = depth + 1
             try:
-                return compile_(self, sig)
+                return logged(self, sig)
             finally:
                 held.depth -= 1
         with contextlib.ExitStack() as stack:
@@ -184,11 +187,26 @@ def _wrap_numba_compile():
             t0 = time.process_time()
             held.depth = 1
             try:
-                return compile_(self, sig)
+                return logged(self, sig)
             finally:
                 held.depth = 0
                 _COMPILE_CPU[0] += time.process_time() - t0
 
+    def compile_logged(self, sig):
+        """``compile``, noting in :data:`_COMPILES` whether it compiled or loaded from the cache."""
+        before = sum(self._cache_misses.values()), sum(self._cache_hits.values())
+        t0 = time.process_time()
+        try:
+            return compile_(self, sig)
+        finally:
+            fn = self.py_func
+            missed = sum(self._cache_misses.values()) - before[0]
+            hit = sum(self._cache_hits.values()) - before[1]
+            what = "compiled" if missed else "loaded" if hit else "had"
+            _COMPILES.append(f"{fn.__module__}.{fn.__qualname__}\t{sig}\t{what}"
+                             f"\t{time.process_time() - t0:.3f}\t{held.depth}")
+
+    logged = compile_logged if os.environ.get("MECHCIRC_TEST_CPU") else compile_
     Dispatcher.compile = compile_one_at_a_time
 
 
@@ -227,3 +245,7 @@ def pytest_runtest_protocol(item, nextitem):
     with open(f"{path}.{worker}", "a", encoding="utf-8") as fh:
         fh.write(f"{item.nodeid}\t{after[0] - before[0]:.3f}\t{after[1] - before[1]:.3f}"
                  f"\t{compiled:.3f}\n")
+    if _COMPILES:
+        with open(f"{path}.{worker}.jit", "a", encoding="utf-8") as fh:
+            fh.writelines(f"{item.nodeid}\t{line}\n" for line in _COMPILES)
+        _COMPILES.clear()
