@@ -249,3 +249,49 @@ def pytest_runtest_protocol(item, nextitem):
         with open(f"{path}.{worker}.jit", "a", encoding="utf-8") as fh:
             fh.writelines(f"{item.nodeid}\t{line}\n" for line in _COMPILES)
         _COMPILES.clear()
+
+
+def pytest_configure(config):
+    """Under xdist with bytecode writing off: each test module's assert rewriting done once per run.
+
+    pytest rewrites the asserts of every test module it imports and caches the
+    result beside the module, unless ``PYTHONDONTWRITEBYTECODE`` is set (as
+    in CI): then both workers rewrite all of them, 6.3 s of CPU each
+    (``--collect-only --assert=rewrite`` against ``--assert=plain``, one
+    process).  Here the workers share the rewritten code through the run's
+    base temporary folder: the first worker to reach a module rewrites it
+    under a file lock and writes pytest's own cached form there; the other
+    reads it (pytest's reader checks the source's size and hash).  What the
+    asserts check and report is unchanged; with bytecode writing on, or
+    without xdist, pytest's own cache is left to work as it does.
+    """
+    import sys
+
+    if not (sys.dont_write_bytecode and os.environ.get("PYTEST_XDIST_WORKER")
+            and config.option.basetemp):
+        return
+    try:
+        from _pytest.assertion import rewrite as rw
+
+        rewrite_, read, write = rw._rewrite_test, rw._read_pyc, rw._write_pyc
+        state = config.stash[rw.assertstate_key]
+    except (ImportError, AttributeError, KeyError):  # another pytest: rewrite as it does
+        return
+    import hashlib
+    from pathlib import Path
+
+    shared = Path(config.option.basetemp).parent    # the folder every worker of this run sees
+
+    def rewrite_once(fn, cfg):
+        pyc = shared / f"rewritten-{hashlib.sha256(str(fn).encode()).hexdigest()[:16]}{rw.PYC_TAIL}"
+        with _exclusive(pyc.with_suffix(".lock")):
+            co = read(fn, pyc)
+            if co is not None:
+                import importlib.util
+
+                return importlib.util.source_hash(fn.read_bytes()), co
+            source_hash, co = rewrite_(fn, cfg)
+            write(state, co, source_hash, pyc)
+            return source_hash, co
+
+    rw._rewrite_test = rewrite_once
