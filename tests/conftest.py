@@ -130,6 +130,9 @@ def _exclusive(lock_path):
 
 #: CPU seconds this process spent in numba's compiler so far (outermost compiles only).
 _COMPILE_CPU = [0.0]
+#: With ``MECHCIRC_TEST_CPU``: one line per ``Dispatcher.compile`` call of the current test
+#: (kernel, signature, compiled / loaded / had, CPU seconds, nesting depth).
+_COMPILES: list[str] = []
 
 
 def _wrap_numba_compile():
@@ -173,7 +176,7 @@ def _wrap_numba_compile():
         if depth:                                   # a callee, compiled under our lock
             held.depth = depth + 1
             try:
-                return compile_(self, sig)
+                return logged(self, sig)
             finally:
                 held.depth -= 1
         with contextlib.ExitStack() as stack:
@@ -184,11 +187,26 @@ def _wrap_numba_compile():
             t0 = time.process_time()
             held.depth = 1
             try:
-                return compile_(self, sig)
+                return logged(self, sig)
             finally:
                 held.depth = 0
                 _COMPILE_CPU[0] += time.process_time() - t0
 
+    def compile_logged(self, sig):
+        """``compile``, noting in :data:`_COMPILES` whether it compiled or loaded from the cache."""
+        before = sum(self._cache_misses.values()), sum(self._cache_hits.values())
+        t0 = time.process_time()
+        try:
+            return compile_(self, sig)
+        finally:
+            fn = self.py_func
+            missed = sum(self._cache_misses.values()) - before[0]
+            hit = sum(self._cache_hits.values()) - before[1]
+            what = "compiled" if missed else "loaded" if hit else "had"
+            _COMPILES.append(f"{fn.__module__}.{fn.__qualname__}\t{sig}\t{what}"
+                             f"\t{time.process_time() - t0:.3f}\t{held.depth}")
+
+    logged = compile_logged if os.environ.get("MECHCIRC_TEST_CPU") else compile_
     Dispatcher.compile = compile_one_at_a_time
 
 
@@ -227,3 +245,53 @@ def pytest_runtest_protocol(item, nextitem):
     with open(f"{path}.{worker}", "a", encoding="utf-8") as fh:
         fh.write(f"{item.nodeid}\t{after[0] - before[0]:.3f}\t{after[1] - before[1]:.3f}"
                  f"\t{compiled:.3f}\n")
+    if _COMPILES:
+        with open(f"{path}.{worker}.jit", "a", encoding="utf-8") as fh:
+            fh.writelines(f"{item.nodeid}\t{line}\n" for line in _COMPILES)
+        _COMPILES.clear()
+
+
+def pytest_configure(config):
+    """Under xdist with bytecode writing off: each test module's assert rewriting done once per run.
+
+    pytest rewrites the asserts of every test module it imports and caches the
+    result beside the module, unless ``PYTHONDONTWRITEBYTECODE`` is set (as
+    in CI): then both workers rewrite all of them, 6.3 s of CPU each
+    (``--collect-only --assert=rewrite`` against ``--assert=plain``, one
+    process).  Here the workers share the rewritten code through the run's
+    base temporary folder: the first worker to reach a module rewrites it
+    under a file lock and writes pytest's own cached form there; the other
+    reads it (pytest's reader checks the source's size and hash).  What the
+    asserts check and report is unchanged; with bytecode writing on, or
+    without xdist, pytest's own cache is left to work as it does.
+    """
+    import sys
+
+    if not (sys.dont_write_bytecode and os.environ.get("PYTEST_XDIST_WORKER")
+            and config.option.basetemp):
+        return
+    try:
+        from _pytest.assertion import rewrite as rw
+
+        rewrite_, read, write = rw._rewrite_test, rw._read_pyc, rw._write_pyc
+        state = config.stash[rw.assertstate_key]
+    except (ImportError, AttributeError, KeyError):  # another pytest: rewrite as it does
+        return
+    import hashlib
+    from pathlib import Path
+
+    shared = Path(config.option.basetemp).parent    # the folder every worker of this run sees
+
+    def rewrite_once(fn, cfg):
+        pyc = shared / f"rewritten-{hashlib.sha256(str(fn).encode()).hexdigest()[:16]}{rw.PYC_TAIL}"
+        with _exclusive(pyc.with_suffix(".lock")):
+            co = read(fn, pyc)
+            if co is not None:
+                import importlib.util
+
+                return importlib.util.source_hash(fn.read_bytes()), co
+            source_hash, co = rewrite_(fn, cfg)
+            write(state, co, source_hash, pyc)
+            return source_hash, co
+
+    rw._rewrite_test = rewrite_once
