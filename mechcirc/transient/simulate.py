@@ -996,7 +996,8 @@ def _modal_plan(A, B, h, Cx):
     small[:, 0, 1] = 1.0
     small[:, 1, 2] = 1.0
     E = la.expm(small)
-    mu, g1, g2 = E[:, 0, 0], h * E[:, 0, 1] * b, h * E[:, 0, 2] * b
+    # mu contiguous: the compiled modal_run then has one signature, not two (A and C layouts)
+    mu, g1, g2 = E[:, 0, 0].copy(), h * E[:, 0, 1] * b, h * E[:, 0, 2] * b
     dev = _modal_deviation(A, B, h, lam, V, Vinv, Vk, ~real[keep], g1, g2)
     if not (dev <= MODAL_CHECK_TOL):
         return (f"modal one-step map differs from the exponential's by {dev:.1e} "
