@@ -88,10 +88,10 @@ def test_cli_takes_the_method_and_refuses_what_does_not_apply(tmp_path, capsys):
                        "--steps-per-period", "2"], capsys, "steps_per_period must be a number ≥ 4")
 
 
-def test_the_default_method_is_rk8_for_the_rigid_shaft_and_rk4_with_elastic_parts():
+def test_the_default_method_is_rk8_for_the_rigid_and_the_elastic_shaft():
     """Without ``method``: the rigid shaft runs rk8 (16 × 16 = 256 steps a cycle), the
-    elastic one RK4 at 100 steps per period (rk8's error across clearance gaps does not fall
-    steadily with its step: docs/performance.md).  The rigid default's speed against DOP853
+    elastic one rk8 at 16 steps per period (its accuracy: the SymPy test above; across a
+    clearance gap: test_rk8_clearance.py).  The rigid default's speed against DOP853
     at rtol 1e-12 on the same equations (those are checked against SymPy in test_shaft.py):
     measured 3.6e-11 of the mean speed (RK4 at 100 steps per period, the default before:
     3.7e-11, in 1.5-1.9x the CPU); asserted at 1e-9."""
@@ -102,12 +102,12 @@ def test_the_default_method_is_rk8_for_the_rigid_shaft_and_rk4_with_elastic_part
                          rtol=1e-12)
     assert np.max(np.abs(rigid.speed - ref.speed)) <= 1e-9 * ref.omega_mean
     elastic = simulate_shaft(scene(), points=90, startup=False)
-    assert any("RK4 in θ with the elastic parts" in n and "(100 per period" in n
+    assert any("RK8 in θ with the elastic parts" in n and "(16 per period" in n
                for n in elastic.notes)
 
 
 def test_cli_resolves_the_shaft_default_by_mode(tmp_path, capsys):
-    """`simulate --shaft` without --method: rk8 for --rigid, RK4 with the elastic rod (the
+    """`simulate --shaft` without --method: rk8 for --rigid and with the elastic rod (the
     notes say which); --rtol with the default fixed-step method exits 2; a scene without
     --shaft keeps RK4 (its result's method)."""
     import json
@@ -118,7 +118,7 @@ def test_cli_resolves_the_shaft_default_by_mode(tmp_path, capsys):
     path.write_text(open("examples/slider_crank_scene.toml", encoding="utf-8").read() + EXTRA,
                     encoding="utf-8")
     base = ["simulate", str(path), "--shaft", "--points", "90", "--json"]
-    for extra, needle in (([], "RK4 in θ with the elastic parts"), (["--rigid"], "RK8 in θ")):
+    for extra, needle in (([], "RK8 in θ with the elastic parts"), (["--rigid"], "RK8 in θ")):
         status, out, err = run(base + extra, capsys)
         assert status == 0, err
         assert any(needle in n for n in json.loads(out)["notes"])
