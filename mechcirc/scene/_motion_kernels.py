@@ -543,6 +543,54 @@ def tableau(method):
             np.ascontiguousarray(DOP853.C[:s]), True)
 
 
+@_jit_inline
+def switched(reg, regn, nsw):
+    """Whether any of the ``nsw`` force-law pieces in ``regn`` differs from ``reg``."""
+    for e in range(nsw):
+        if regn[e] != reg[e]:
+            return True
+    return False
+
+
+@_leaf
+def cut_at_kink(tc, hh, h, y, K, tmp, ynew, sw0, sw1, reg, regn, TA, TB, TC, PV, FI, FF, tabs,
+                MI_, MW, EI, EF, MOI, MOF, PRIG, BI, aux, work, off, m, zy, zd, first, nsw):
+    """:func:`rk_run`'s step from ``tc`` of ``hh`` (of the run's ``h``), in which a force law
+    changed piece, cut at the kink: located on the step's interpolant (:func:`locate`), then,
+    that interpolant being of low order across the kink, again on the cut step's own (smooth
+    up to the kink), at most 4 times, until the kink is at the cut step's end (to the first
+    cut's tolerance) or that step ends before it (the next piece finds it).  ``ynew``, ``K``
+    and ``regn``/``sw1`` hold the cut step.
+
+    Returns (the cut step's length, whether it is the whole step, whether its end has other
+    pieces than its start, right-hand-side evaluations used).
+    """
+    s = TB.shape[0]
+    cut, used = locate(tc, hh, y, K[0], ynew, K[s], tmp, K[1], sw0, sw1, reg, regn, PV, FI, FF,
+                       tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, aux, work, off, m, zy, zd)
+    cut = cut + 1e-7
+    if not (cut * hh > 1e-9 * h and cut < 1.0 - 1e-7):
+        return hh, True, True, used
+    changed = True
+    for _ in range(4):
+        hh = cut * hh
+        rk_step(tc, hh, y, K, tmp, ynew, TA, TB, TC, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI,
+                MOF, PRIG, BI, aux, work, zy, zd)
+        used += s - 1
+        regions(FI, EI, EF, MOI, MOF, aux, work, off, regn, sw1, first)
+        changed = switched(reg, regn, nsw)
+        if not changed:     # cut before the kink: the next piece finds it
+            break
+        more, extra = locate(tc, hh, y, K[0], ynew, K[s], tmp, K[1], sw0, sw1, reg, regn, PV,
+                             FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, aux, work, off,
+                             m, zy, zd)
+        used += extra
+        cut = more + 1e-7
+        if not ((1.0 - cut) * hh > 1e-7 * h and cut * hh > 1e-9 * h):
+            break       # as close as the first cut's own tolerance
+    return hh, False, changed, used
+
+
 @_jit
 def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_, MW, EI,
            EF, MOI, MOF, PRIG, BI, naux, TA, TB, TC, quintic):
@@ -601,41 +649,13 @@ def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_
             full = True
             if gaps > 0:
                 regions(FI, EI, EF, MOI, MOF, aux, work, off, regn, sw1, first)
-                changed = False
-                for e in range(nsw):
-                    if regn[e] != reg[e]:
-                        changed = True
+                changed = switched(reg, regn, nsw)
                 if changed and sub < 7:
-                    cut, used = locate(tc, hh, y, K[0], ynew, K[s], tmp, K[1], sw0, sw1, reg,
-                                       regn, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG,
-                                       BI, aux, work, off, m, zy, zd)
+                    hh, full, changed, used = cut_at_kink(
+                        tc, hh, h, y, K, tmp, ynew, sw0, sw1, reg, regn, TA, TB, TC, PV, FI,
+                        FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, aux, work, off, m, zy,
+                        zd, first, nsw)
                     nfev += used
-                    cut = cut + 1e-7
-                    if cut * hh > 1e-9 * h and cut < 1.0 - 1e-7:
-                        full = False
-                        # the cut was found on the interpolant of a step across the kink, of
-                        # low order there: placed again on the cut step's own (smooth up to
-                        # the kink), until the kink is at its end or it ends before the kink
-                        for _ in range(4):
-                            hh = cut * hh
-                            rk_step(tc, hh, y, K, tmp, ynew, TA, TB, TC, PV, FI, FF, tabs,
-                                    MI_, MW, EI, EF, MOI, MOF, PRIG, BI, aux, work, zy, zd)
-                            nfev += s - 1
-                            regions(FI, EI, EF, MOI, MOF, aux, work, off, regn, sw1, first)
-                            changed = False
-                            for e in range(nsw):
-                                if regn[e] != reg[e]:
-                                    changed = True
-                            if not changed:     # cut before the kink: the next piece finds it
-                                break
-                            cut, used = locate(tc, hh, y, K[0], ynew, K[s], tmp, K[1], sw0,
-                                               sw1, reg, regn, PV, FI, FF, tabs, MI_, MW, EI,
-                                               EF, MOI, MOF, PRIG, BI, aux, work, off, m, zy,
-                                               zd)
-                            nfev += used
-                            cut = cut + 1e-7
-                            if not ((1.0 - cut) * hh > 1e-7 * h and cut * hh > 1e-9 * h):
-                                break       # as close as the first cut's own tolerance
                     if changed:     # at an end of the step, or located again: aux at ynew
                         nfev += 1
                         deriv(tc + hh, ynew, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF,
