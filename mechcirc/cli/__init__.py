@@ -132,9 +132,10 @@ def one_blas_thread(environ) -> bool:
     """Ask OpenBLAS for one thread, unless the user chose a count; True when it was set.
 
     A command's arrays are small, and OpenBLAS starts its pool of threads when
-    numpy is imported: on two cores that costs about 25 ms of CPU time at each
-    start (a third of what a sweep of the bundled netlist costs beyond
-    ``import numpy``), and idle pool threads spin on a busy machine.  Called by
+    numpy is imported: on two cores that costs 25-100 ms of CPU time at each
+    start (``import numpy`` measured 0.254 against 0.155 s on a quiet machine,
+    0.209 against 0.185 s at load 9), as much as a sweep of the bundled netlist
+    costs beyond ``import numpy``.  Called by
     :func:`main` for the process's own command line, before numpy is imported
     (afterwards the variable would change nothing but the environment of the
     processes the command starts), never by ``import mechcirc``.
