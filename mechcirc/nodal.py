@@ -174,7 +174,11 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
     at = np.arange(omega.size) if at is None else at
     kern = None if solve_with.kind == "dense" or np.iscomplexobj(omega) \
         else kernels(system.size * at.size)
-    out = _Solved(system, pat, kern, omega, keep, float64_residual=not refine and kern is None)
+    # Unrefined on the numpy path: the error estimate from a float64 residual (a
+    # sixth of the double-double one's work there; the compiled double-double
+    # residual costs less than it, and is kept).
+    float64 = not refine and kern is None
+    out = _Solved(system, pat, kern, omega, keep, float64_residual=float64)
 
     # Compiled: no (ω, term) temporaries; the chunk's (ω, n) arrays stay in cache.
     # numpy: the residual's (ω, term) temporaries bound its pieces.
@@ -182,18 +186,15 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
                 else _CHUNK_TERMS // max(1, pat.n_terms + system.size))
 
     def residual(w, xh, xl, rhs, exact=True):
-        if kern is not None or w.size <= terms or not exact:
+        if kern is not None or w.size <= terms:
             return pat.residual(w, xh, xl, rhs, kern, exact)
         return np.concatenate([pat.residual(w[i:i + terms], xh[i:i + terms],
-                                            None if xl is None else xl[i:i + terms], rhs)
+                                            None if xl is None else xl[i:i + terms], rhs,
+                                            None, exact)
                                for i in range(0, w.size, terms)])
 
     def refined(solve_fn, w):
-        # The unrefined solve's estimate takes the float64 residual on the numpy
-        # path (a sixth of the double-double one's work there); the compiled
-        # double-double residual costs less than it, and is kept.
-        return refine_dd(solve_fn, residual, w, rhs, system, refine, steps,
-                         float64=kern is None)
+        return refine_dd(solve_fn, residual, w, rhs, system, refine, steps, float64=float64)
 
     # The numpy banded LU loops over the columns in Python: as many ω at once
     # as its memory bound allows (the residual goes in pieces, above).
