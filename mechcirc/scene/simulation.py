@@ -543,16 +543,17 @@ def _simulate_rk4(ctx, backend, error_estimate, notes, compile_time):
     tab = _crank_order(scene, model, theta_s, ripple, main[0], rule.stride)
     out, other_ext, periodicity = _estimate_run_extrema(model, kern, theta_s, ripple, main,
                                                         other, tab)
+    check = _extrema(out, tab[2])       # the checks' samples of this run, as _finish's
     if rule.auto and spp == rule.spp:
-        est = None if other_ext is None else _rel_change(_extrema(out, tab[2]), other_ext)
+        est = None if other_ext is None else _rel_change(check, other_ext)
         if (est is None or est > ACCURACY_GOAL) and \
                 rule.period * rule.rate * 2 * spp / TWO_PI <= MAX_STEPS_PER_REV:
             # not good enough: twice as many steps (beyond the limit: keep it, warned), from
             # the same state as the run at spp
             notes.append(_rerun_note(spp, est))
-            other, other_ext = main, _extrema(out, tab[2])
+            other, other_ext = main, check
             wall += main[3]
-            spp, main, out = 2 * spp, run(steps(2 * spp), start=start), None
+            spp, main, out, check = 2 * spp, run(steps(2 * spp), start=start), None, None
             n_steps, nfev = n_steps + main[6] * (o.revolutions - first), nfev + main[5]
     if other == "diverged":
         rule.warn.append(f"the error estimate's run at {spp / 2:g} steps per period diverged: "
@@ -562,7 +563,7 @@ def _simulate_rk4(ctx, backend, error_estimate, notes, compile_time):
     return _finish(scene, model, kern, theta_s, ripple, main, other,
                    (n_steps, nfev, o.method, backend, main[6], o.revolutions, compile_time),
                    notes, rule.warn, out=out, other_extrema=other_ext, tab=tab,
-                   periodicity=periodicity, exact_rigid=o.exact_rigid)
+                   periodicity=periodicity, exact_rigid=o.exact_rigid, check=check)
 
 
 @dataclass
@@ -689,21 +690,18 @@ def _extrema(out: dict, sub=None) -> dict:
     stacked, so that one reduction of each kind serves them all)."""
     if not out:
         return {}
-    whole = out if isinstance(out, _Rows) and len(out) == len(out.rows) else None
-    if whole is not None and sub is not None and whole.last[0] is sub:
-        return dict(whole.last[1])              # the same samples' extrema again
-    rows = whole.rows if whole is not None else np.stack(list(out.values()))
+    if isinstance(out, _Rows) and len(out) == len(out.rows):
+        rows = out.rows
+    else:
+        rows = np.stack(list(out.values()))
     if sub is not None:
         rows = np.take(rows, sub, axis=1)
     lo, hi = rows.min(axis=1).tolist(), rows.max(axis=1).tolist()
-    ext = {k: (a, b) for k, a, b in zip(out, lo, hi)}
-    if whole is not None and sub is not None:
-        whole.last = (sub, dict(ext))
-    return ext
+    return {k: (a, b) for k, a, b in zip(out, lo, hi)}
 
 
 def _finish(scene, model, kern, theta_s, ripple, main, other, counts, notes, warn, out=None,
-            other_extrema=None, tab=None, periodicity=None, exact_rigid=True):
+            other_extrema=None, tab=None, periodicity=None, exact_rigid=True, check=None):
     """Outputs, extrema, the checks and the warnings of one run → :class:`SceneMotion`.
 
     ``main`` is the run (:func:`_run`'s tuple), ``other`` the estimate's (or None, or
@@ -712,7 +710,8 @@ def _finish(scene, model, kern, theta_s, ripple, main, other, counts, notes, war
     (in the order of ``tab``) and the other run's extrema when already evaluated,
     ``periodicity`` when measured on the estimate's run (else from ``main``'s previous
     revolution); ``tab`` (:func:`_crank_order`): the checks compare the extrema on the
-    points the other runs were recorded at; ``exact_rigid`` as :func:`simulate_scene`."""
+    points the other runs were recorded at (``check``: ``out``'s extrema there, when
+    already taken); ``exact_rigid`` as :func:`simulate_scene`."""
     ts, ys, prev, wall, bad = main[:5]
     n_steps, nfev, method, backend, per_rev, revolutions, compile_time = counts
     crank, order, sub = tab or _crank_order(scene, model, theta_s, ripple, ts)
@@ -720,7 +719,10 @@ def _finish(scene, model, kern, theta_s, ripple, main, other, counts, notes, war
     if out is None:
         out = _outputs(model, kern, theta_s, ripple, ts, ys)
     extrema = _extrema(out)
-    check = extrema if sub is None else _extrema(out, sub)
+    if sub is None:
+        check = extrema
+    elif check is None:
+        check = _extrema(out, sub)
     est = None
     if periodicity is None and prev is not None:
         periodicity = _rel_change(check, _output_extrema(model, kern, theta_s, ripple, *prev))
@@ -1044,8 +1046,6 @@ class _Rows(dict):
     :func:`_extrema` takes them all in one reduction of each kind."""
 
     rows: np.ndarray
-    #: (positions, extrema) of :func:`_extrema`'s last call on a subset of the samples.
-    last: tuple = (None, None)
 
 
 def _output_extrema(model, kern, theta_s, ripple, ts, ys):
