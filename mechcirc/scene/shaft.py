@@ -502,11 +502,11 @@ def _prepare(scene: Scene, shaft, flywheel, points, rigid):
 #: Steps per period of the fastest linearised mode of the elastic shaft, by method.
 STEPS_PER_PERIOD = {"rk4": 100, "rk8": 16}
 
-#: :func:`simulate_shaft`'s method when none is given, by mode (bench_shaft.py, measured in
+#: :func:`simulate_shaft`'s method when none is given (bench_shaft.py, measured in
 #: docs/performance.md): rigid, rk8 reaches RK4's error at 100 steps per period for less CPU;
 #: elastic, rk8 at 16 steps per period is 1.3-1.6x cheaper than RK4 at 100 and 40-120x
 #: more accurate on the benchmark's three elastic cases (clearance gaps included).
-DEFAULT_METHOD = {"rigid": "rk8", "elastic": "rk8"}
+DEFAULT_METHOD = "rk8"
 
 #: Steps per cycle of the rigid shaft for each step per period (it has no elastic mode).
 RIGID_STEPS = 16
@@ -700,7 +700,7 @@ def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float 
     """
     shaft, Jf, rig, eq, req, peak, mean_load, notes = _prepare(scene, shaft, flywheel, points,
                                                                rigid)
-    method = method or DEFAULT_METHOD["elastic" if eq.n else "rigid"]
+    method = method or DEFAULT_METHOD
     spp = _checked_method(method, steps_per_period)       # None for DOP853
     motor = shaft.motor
     th0, cyc = math.radians(shaft.start_deg), rig.cycle

@@ -123,7 +123,7 @@ def test_cli_resolves_the_shaft_default_by_mode(tmp_path, capsys):
         assert status == 0, err
         assert any(needle in n for n in json.loads(out)["notes"])
     assert_user_error(base + ["--rtol", "1e-8"], capsys, "--rtol applies to the scipy methods",
-                      "not the default rk4/rk8")
+                      "not the default rk8")
     status, out, err = run(["simulate", str(path), "--revolutions", "1", "--points", "90",
                             "--no-error-estimate", "--json"], capsys)
     assert status == 0, err
