@@ -92,7 +92,7 @@ def _independent_check(des, load):
     th = np.linspace(0, 2 * math.pi, 100001)
     phi4 = fb.rocker_angle(th)
     swing = math.degrees(phi4.max() - phi4.min())
-    gamma = fb.transmission_angle(th)
+    gamma = fb.evaluate(th).gamma
     front, back = fb.dead_centres()
     cos_front = (c * c + (a + b) ** 2 - d * d) / (2 * c * (a + b))
     g1 = math.degrees(math.acos(abs(cos_front)))
