@@ -46,13 +46,10 @@ from typing import Any
 from ..errors import MechcircError
 from ..sources import brief, checked_number, finite_number, located
 
-__all__ = ["Moment", "SimulateSettings", "parse_moments", "parse_simulate", "OUTPUT_KINDS",
+__all__ = ["Moment", "SimulateSettings", "parse_moments", "parse_simulate",
            "apply_overrides", "Motor", "Shaft", "kloss_motor", "table_motor", "parse_shaft"]
 
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
-#: Output quantities: BODY.acceleration, BODY.rigid_acceleration, ELEMENT.force,
-#: ELEMENT.deformation, drive.moment.
-OUTPUT_KINDS = ("acceleration", "rigid_acceleration", "force", "deformation", "moment")
 
 
 @dataclass(frozen=True)
