@@ -154,15 +154,17 @@ _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 
 def is_name(value) -> TypeGuard[str]:
     """Whether ``value`` is a name: a str of ASCII letters, digits and ``_``, not
-    starting with a digit (a netlist parameter, a scene's element or body).
+    starting with a digit.
 
     Parameters
     ----------
     value : object
+        A TOML value or a netlist token: a parameter's, element's, body's name.
 
     Returns
     -------
     bool
+        False for anything but a str.
     """
     return isinstance(value, str) and _NAME.fullmatch(value) is not None
 
