@@ -78,7 +78,7 @@ from ..kinematics.linkage import TABLES as LINKAGE_TABLES
 from ..kinematics.linkage import Linkage, parse_linkage
 from ..sources import (Table, brief, check_keys, checked_number, finite_number, load_toml,
                        split_lines)
-from ..sources import TOML_HEADER, is_name, located
+from ..sources import TOML_HEADER, is_name, located, read_source
 
 __all__ = ["Scene", "Analysis", "Gear", "SceneMass", "ElasticLink", "Torsion", "Load", "SceneDrive",
            "parse_scene", "load_scene", "LENGTH_UNITS", "SCENE_TABLES"]
@@ -362,10 +362,8 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
 
     Parameters
     ----------
-    text : str
-        The TOML text.
-    source : str
-        Name of the text in error messages (a file name).
+    text, source : str
+        As for :func:`~mechcirc.kinematics.linkage.parse_linkage`.
 
     Returns
     -------
@@ -916,7 +914,5 @@ def load_scene(path: str | Path) -> Scene:
     NetlistError
         The file is missing or unreadable, or has an error.
     """
-    from ..sources import read_source
-
     text = read_source(path, "a scene .toml")
     return parse_scene(text, os.fspath(path))
