@@ -46,7 +46,7 @@ from pathlib import Path
 from .circuit import ELEMENT_UNITS, Circuit, Drive, Element, ElementKind, Lever
 from .errors import NetlistError
 from .expressions import CONSTANTS, FUNCTIONS, Expr, evaluate, parse_expression
-from .sources import did_you_mean, is_number, read_source, split_lines
+from .sources import did_you_mean, is_name, is_number, read_source, split_lines
 from .units import (UnitError, convert, is_rotational, looks_like_unit, parse_unit,
                     split_quantity)
 
@@ -60,7 +60,6 @@ MAX_LINE_LENGTH = 100_000
 MAX_STATEMENTS = 1_000_000
 
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*|[0-9]+")
-_IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 #: An entry of ``_Parser.expressions``: (Expr, factor), or the fast path's raw number.
 _Stored = tuple[Expr | float, float] | float
 
@@ -511,7 +510,7 @@ class _Parser:
             if "=" not in tok.text:
                 line.error(f"{tok.text!r} is not NAME=EXPR", tok.col, SYNTAX[".param"])
             name, rhs = tok.text.split("=", 1)
-            if not _IDENT.fullmatch(name):
+            if not is_name(name):
                 line.error(f"{name!r} is not a valid parameter name", tok.col,
                            "a letter or '_' followed by letters, digits or '_'")
             if name in CONSTANTS or name in FUNCTIONS:
@@ -552,7 +551,7 @@ class _Parser:
                 continue
             previous = None
             head = tok.text.split("=", 1)[0]
-            if "=" in tok.text and _IDENT.fullmatch(head):
+            if "=" in tok.text and is_name(head):
                 if head not in allowed:
                     line.error(f"unknown option {head!r} for {keyword}"
                                f"{did_you_mean(head, allowed)}", tok.col,

@@ -149,6 +149,26 @@ def line_col(text: str, index: int) -> tuple[int, int]:
 
 
 # ------------------------------------------------------------------ values
+_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+
+
+def is_name(value) -> TypeGuard[str]:
+    """Whether ``value`` is a name: a str of ASCII letters, digits and ``_``, not
+    starting with a digit.
+
+    Parameters
+    ----------
+    value : object
+        A TOML value or a netlist token: a parameter's, element's, body's name.
+
+    Returns
+    -------
+    bool
+        False for anything but a str.
+    """
+    return isinstance(value, str) and _NAME.fullmatch(value) is not None
+
+
 def is_number(text: str) -> bool:
     """Whether ``float(text)`` reads ``text`` (``inf`` and ``nan`` included).
 
@@ -254,7 +274,8 @@ def brief(value) -> str:
 
 
 # ------------------------------------------------------------------ TOML with places
-_HEADER = re.compile(r"^\s*\[\[?\s*([^\]]+?)\s*\]\]?\s*(#.*)?$")
+#: A TOML table header line, ``[a.b]`` or ``[[a]]`` (group 1: its name), with a comment.
+TOML_HEADER = re.compile(r"^\s*\[\[?\s*([^\]]+?)\s*\]\]?\s*(#.*)?$")
 
 
 def load_toml(text: str, source: str) -> dict:
@@ -310,7 +331,7 @@ def locate(text: str, section: str | None, key: str, value: str | None = None,
     seen = -1
     key_re = re.compile(r'^\s*["\']?' + re.escape(key) + r'["\']?\s*=')
     for n, line in enumerate(split_lines(text), start=1):
-        m = _HEADER.match(line)
+        m = TOML_HEADER.match(line)
         if m:
             in_section = False                     # top-level keys end at the first header
             if section is not None and m.group(1).replace(" ", "") == section:
@@ -359,7 +380,7 @@ def locate_path(text: str, path: tuple[str, ...]) -> tuple[int, int]:
             return line, col
         name = ".".join(path[:cut + 1])
         for n, ln in enumerate(split_lines(text), start=1):
-            m = _HEADER.match(ln)
+            m = TOML_HEADER.match(ln)
             # [a.b] itself, or the first [a.b.x] (which makes [a.b] without a header)
             if m and (m.group(1).replace(" ", "") + ".").startswith(name + "."):
                 return n, ln.index("[") + 1

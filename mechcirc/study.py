@@ -114,7 +114,7 @@ from .netlist import SYNTAX, expressions_of, parse
 from .outputs import OutputSet, atomic_open, atomic_path
 from .units import looks_like_unit, parse_omega
 
-__all__ = ["StudySpec", "load_spec", "parse_spec", "study_points", "run_point", "run_batch",
+__all__ = ["StudySpec", "load_spec", "parse_spec", "run_batch",
            "run_study", "StudyResult", "read_rows", "journal_path", "sidecar_path",
            "provenance", "column_units", "SAMPLE_METHODS"]
 
@@ -349,7 +349,7 @@ TABLES = {
 }
 
 #: The version of what a row holds, part of the canonical spec: raise it whenever
-#: :func:`run_point` computes a column differently, so that ``resume`` refuses to
+#: :func:`run_batch` computes a column differently, so that ``resume`` refuses to
 #: mix rows of the old computation with the new.
 ROWS_VERSION = 2     # 2: true extremes of |K| over the band with their ω (batched core)
 
@@ -800,34 +800,6 @@ def load_spec(path: str | os.PathLike) -> StudySpec:
     return parse_spec(data, source=source, base=Path(source).resolve().parent, text=text)
 
 
-def study_points(spec: StudySpec) -> list[tuple[int, dict[str, float]]]:
-    """``(index, {param: value})`` for every point, in order.
-
-    Parameters
-    ----------
-    spec : StudySpec
-
-    Returns
-    -------
-    list of (int, dict[str, float])
-    """
-    return [(i, dict(zip(spec.params, p))) for i, p in enumerate(spec.points)]
-
-
-def run_point(spec: StudySpec, index: int, values: dict[str, float]) -> dict:
-    """One row of the table (errors caught and recorded, never raised): a batch of one.
-
-    Parameters
-    ----------
-    spec : StudySpec
-    index : int
-    values : dict[str, float]
-
-    Returns
-    -------
-    dict
-    """
-    return run_batch(spec, [(index, values)])[0]
 
 
 def run_batch(spec: StudySpec, batch: list[tuple[int, dict[str, float]]],
@@ -932,7 +904,7 @@ def _omega_grid(spec: StudySpec):
 
 
 def _failure(ds, d: int, message: str) -> str:
-    """The row's error: the single path's exception, named as run_point names it."""
+    """The row's error: the single path's exception, named as the single path names it."""
     try:
         ds.design(d)
     except Exception as exc:  # noqa: BLE001

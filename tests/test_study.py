@@ -533,10 +533,10 @@ def test_study_file_errors_carry_file_line(tmp_path, table, line, fragment):
 def test_a_point_whose_batch_cannot_be_built_is_an_error_row():
     # A StudySpec built by hand is not checked: a netlist that does not parse
     # fails the whole batch, and each point then records the parser's error.
-    from mechcirc.study import StudySpec, run_batch, run_point
+    from mechcirc.study import StudySpec, run_batch
 
     spec = StudySpec("not a netlist\n", "x.mcir", "resonances", ("a",), ((1.0,), (2.0,)))
-    row = run_point(spec, 0, {"a": 1.0})
+    row = run_batch(spec, [(0, {"a": 1.0})])[0]
     assert row["status"] == "error" and row["error"].startswith("NetlistError: ")
     rows = run_batch(spec, [(0, {"a": 1.0}), (1, {"a": 2.0})])
     assert [r["status"] for r in rows] == ["error", "error"] and rows[1]["a"] == 2.0

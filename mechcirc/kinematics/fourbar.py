@@ -393,10 +393,6 @@ class FourBar:
         """Rocker angle φ4 [rad] at crank angle ``theta`` [rad] (float in, float out)."""
         return self._out(theta, "phi4")
 
-    def coupler_angle(self, theta: ArrayLike):
-        """Coupler angle φ3 [rad], direction B→C, at crank angle ``theta`` [rad]."""
-        return self._out(theta, "phi3")
-
     def mu(self, theta: ArrayLike):
         """Rocker velocity ratio μ = dφ4/dθ [1] at crank angle ``theta`` [rad]."""
         return self._out(theta, "mu")
@@ -404,18 +400,6 @@ class FourBar:
     def nu(self, theta: ArrayLike):
         """Rocker acceleration ratio ν = d²φ4/dθ² [1/rad] at crank angle ``theta`` [rad]."""
         return self._out(theta, "nu")
-
-    def coupler_mu(self, theta: ArrayLike):
-        """Coupler velocity ratio dφ3/dθ [1] at crank angle ``theta`` [rad]."""
-        return self._out(theta, "mu3")
-
-    def coupler_nu(self, theta: ArrayLike):
-        """Coupler acceleration ratio d²φ3/dθ² [1/rad] at crank angle ``theta`` [rad]."""
-        return self._out(theta, "nu3")
-
-    def transmission_angle(self, theta: ArrayLike):
-        """Transmission angle γ [rad] (acute angle between coupler and rocker) at ``theta`` [rad]."""
-        return self._out(theta, "gamma")
 
     def interior_angle(self, theta: ArrayLike):
         """Angle BCD between coupler and rocker, in [0, π] [rad], at ``theta`` [rad].

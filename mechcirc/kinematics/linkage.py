@@ -453,7 +453,7 @@ class Linkage:
 # ------------------------------------------------------------------ parsing
 # The located-TOML helpers are shared with the scene and study readers.
 from ..sources import Table, check_keys, load_toml  # noqa: E402
-from ..sources import brief, finite_number, locate, located  # noqa: E402
+from ..sources import brief, finite_number, locate, located, read_source  # noqa: E402
 
 #: The tables of a linkage file, declared once (see :class:`mechcirc.sources.Table`);
 #: ``[points]`` and ``[links]`` map names of the user's choice.
@@ -734,7 +734,5 @@ def load_linkage(path: str | Path) -> Linkage:
     Linkage
         As :func:`parse_linkage`, with the file's name in its error messages.
     """
-    from ..sources import read_source
-
     text = read_source(path, "a linkage .toml")
     return parse_linkage(text, os.fspath(path))

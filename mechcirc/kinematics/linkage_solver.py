@@ -193,25 +193,15 @@ class LinkageMotion:
     def _points(self):
         return _point_kinematics(self._plan, self.q, self.qdot, self.qddot, self.parts)
 
-    @property
-    def points(self) -> NDArray[np.float64]:
-        """Every named point, shape (N, P, 2) [length]."""
-        return self._points[0]
-
-    @property
-    def velocities(self) -> NDArray[np.float64]:
-        """Point velocities, shape (N, P, 2) [length/s]."""
-        return self._points[1]
-
-    @property
-    def accelerations(self) -> NDArray[np.float64]:
-        """Point accelerations, shape (N, P, 2) [length/s²]."""
-        return self._points[2]
-
-    @property
-    def contributions(self) -> NDArray[np.float64]:
-        """Point velocities with every other crank stopped, (n_cranks, N, P, 2) [length/s]."""
-        return self._points[3]
+    points = property(lambda self: self._points[0],
+                      doc="Every named point, shape (N, P, 2) [length].")
+    velocities = property(lambda self: self._points[1],
+                          doc="Point velocities, shape (N, P, 2) [length/s].")
+    accelerations = property(lambda self: self._points[2],
+                             doc="Point accelerations, shape (N, P, 2) [length/s²].")
+    contributions = property(lambda self: self._points[3],
+                             doc="Point velocities with every other crank stopped, "
+                                 "(n_cranks, N, P, 2) [length/s].")
 
     def __len__(self) -> int:
         return len(self.theta)

@@ -57,7 +57,7 @@ from .fourbar import FourBar
 
 __all__ = [
     "LOAD_CRANK_MM", "CRITERIA", "Criterion", "Design", "SynthesisResult",
-    "dead_centre_angles", "acceleration_ratio_eq5", "eq10_residual", "solve_eq10",
+    "dead_centre_angles", "acceleration_ratio_eq5", "solve_eq10",
     "evaluate_design", "synthesize",
 ]
 
@@ -265,31 +265,6 @@ def acceleration_ratio_eq5(b_a, mu1, mu2):
     b_a = np.asarray(b_a, dtype=float)
     return (b_a + 1) / (b_a - 1) * np.sin(mu2) / np.sin(mu1)
 
-
-def eq10_residual(psi, b_a, c_a, d_a):
-    """Left-hand side of eq. (10), exactly as the patent writes it [1].
-
-    (M − P)² + (N − P)² − 2 cos Ψ (M − P)(N − P) + cos² Ψ − 1 with
-    M = (b/a − 1)²/(2(c/a)(d/a)), N = (b/a + 1)²/(2(c/a)(d/a)),
-    P = (c² + d²)/(2cd); Ψ [rad].
-
-    Parameters
-    ----------
-    psi : float or ndarray
-        Ψ [rad].
-    b_a, c_a, d_a : float or ndarray
-        b/a, c/a, d/a.
-
-    Returns
-    -------
-    float or ndarray
-    """
-    two_cd = 2 * c_a * d_a
-    M = (b_a - 1) ** 2 / two_cd
-    N = (b_a + 1) ** 2 / two_cd
-    P = (c_a ** 2 + d_a ** 2) / two_cd
-    cp = math.cos(psi) if np.ndim(psi) == 0 else np.cos(psi)
-    return (M - P) ** 2 + (N - P) ** 2 - 2 * cp * (M - P) * (N - P) + cp * cp - 1
 
 
 def _eq10_quadratic(cp, sp2, b_a, other):

@@ -122,9 +122,8 @@ def scene_toml(design, k: int = 1, opts: SceneOptions = SceneOptions()) -> str:
 
     Parameters
     ----------
-    design : Design
-    k : int
-        The design's number (in the header).
+    design, k
+        As for :func:`linkage_toml`.
     opts : SceneOptions
         Speed, inertias, rods.
 

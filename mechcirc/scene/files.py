@@ -78,7 +78,7 @@ from ..kinematics.linkage import TABLES as LINKAGE_TABLES
 from ..kinematics.linkage import Linkage, parse_linkage
 from ..sources import (Table, brief, check_keys, checked_number, finite_number, load_toml,
                        split_lines)
-from ..sources import located
+from ..sources import TOML_HEADER, is_name, located, read_source
 
 __all__ = ["Scene", "Analysis", "Gear", "SceneMass", "ElasticLink", "Torsion", "Load", "SceneDrive",
            "parse_scene", "load_scene", "LENGTH_UNITS", "SCENE_TABLES"]
@@ -127,7 +127,6 @@ TABLES = {
 }
 #: Clearance laws of an elastic link or torsion rod (docs/scenes.md, "In the time domain").
 CLEARANCE_LAWS = ("elastobacklash", "dead-zone")
-_IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 
 
 @dataclass(frozen=True)
@@ -316,11 +315,10 @@ class Scene:
 
 def _hide_scene_tables(text: str) -> str:
     """The text with the scene tables blanked (line numbers kept), for the linkage parser."""
-    header = re.compile(r"^\s*\[\[?\s*([^\]]+?)\s*\]\]?\s*(#.*)?$")
     key = re.compile(r'^\s*"?([A-Za-z0-9_-]+)"?\s*=')
     out, hiding, top = [], False, True
     for line in split_lines(text):
-        m = header.match(line)
+        m = TOML_HEADER.match(line)
         if m:
             top = False
             hiding = m.group(1).split(".")[0].strip('"') in SCENE_TABLES
@@ -364,10 +362,8 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
 
     Parameters
     ----------
-    text : str
-        The TOML text.
-    source : str
-        Name of the text in error messages (a file name).
+    text, source : str
+        As for :func:`~mechcirc.kinematics.linkage.parse_linkage`.
 
     Returns
     -------
@@ -453,7 +449,7 @@ class _SceneReader:
     def new_name(self, name, table, key, n, default=None) -> str:
         """A valid element name not used before (``default`` when none is given)."""
         name = default if name is None else name
-        if not isinstance(name, str) or not _IDENT.fullmatch(name):
+        if not is_name(name):
             raise self.err(f"[[{table}]] #{n + 1}: name {name!r} is not a valid "
                            f"element name", table, key, occurrence=n,
                            expected="letters, digits and '_', not starting with a digit")
@@ -534,7 +530,7 @@ class _SceneReader:
                                "pivot" if "pivot" in t else "link", occurrence=n,
                                expected="pivot = one of the link's ground pivots")
             body = t.get("body")
-            if not isinstance(body, str) or not _IDENT.fullmatch(body) or body in links \
+            if not is_name(body) or body in links \
                     or body == "ground":
                 raise self.err(f"torsion rod #{n + 1}: body {body!r} must be a new name "
                                "(not a link or 'ground'; several rods may share one body)",
@@ -614,7 +610,7 @@ class _SceneReader:
         if not ("stiffness" in g or "body" in g or "damping" in g):
             return None
         body = g.get("body", f"gear_{c}")
-        if not isinstance(body, str) or not _IDENT.fullmatch(body) \
+        if not is_name(body) \
                 or body in self.linkage.links or body == "ground" \
                 or body in {t.body for t in torsions}:
             raise self.err(f"[[gears]] #{n + 1}: body {body!r} must be a new name",
@@ -742,7 +738,7 @@ class _SceneReader:
         amp = self.number(dr[kind], f"drive {kind} amplitude", "drive", kind, 0,
                           positive=False)
         dname = dr.get("name", "V")
-        if not isinstance(dname, str) or not _IDENT.fullmatch(dname) or dname in self.names:
+        if not is_name(dname) or dname in self.names:
             raise self.err(f"[drive] name {dname!r} is not a valid unused element name",
                            "drive", "name")
         return SceneDrive(dname, kind, amp, link=dr.get("link"), point=dr.get("point"))
@@ -918,7 +914,5 @@ def load_scene(path: str | Path) -> Scene:
     NetlistError
         The file is missing or unreadable, or has an error.
     """
-    from ..sources import read_source
-
     text = read_source(path, "a scene .toml")
     return parse_scene(text, os.fspath(path))

@@ -31,7 +31,6 @@ drive translational (m/s, N, m/(N·s)).
 from __future__ import annotations
 
 import math
-import re
 from dataclasses import dataclass
 from typing import Literal
 
@@ -39,6 +38,7 @@ import numpy as np
 
 from ..circuit import Circuit, Drive, Element, Lever
 from ..errors import GeometryError, InputError
+from ..sources import is_name
 from .files import Scene
 
 #: How a lever is reflected into the circuit (see :func:`build`).
@@ -48,7 +48,6 @@ __all__ = ["SceneCircuit", "build", "build_needed", "ZERO_RATIO"]
 
 #: A velocity ratio below this fraction of the scene's largest one counts as zero.
 ZERO_RATIO = 1e-9
-_IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 
 
 @dataclass(frozen=True, eq=False)
@@ -295,7 +294,7 @@ def _part_nodes(scene: Scene, m: _Motion) -> tuple[list[str], dict]:
     node_of_part, parts = [], {}
     used = {"0"}
     for i, part in enumerate(scene.parts):
-        name = part[0] if _IDENT.fullmatch(part[0]) else f"part{i}"
+        name = part[0] if is_name(part[0]) else f"part{i}"
         while name in used:
             name = f"{name}_{i}"
         used.add(name)

@@ -55,7 +55,7 @@ from .files import Scene
 from .simfile import Motor, Shaft, kloss_motor, parse_shaft, table_motor  # noqa: F401
 
 __all__ = ["Motor", "Shaft", "ShaftMotion", "kloss_motor", "table_motor", "parse_shaft",
-           "reduced_inertia", "simulate_shaft", "ShaftWarning"]
+           "simulate_shaft", "ShaftWarning"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -178,23 +178,6 @@ class _Rigid:
         self.rate = {b: _Cubic(h, ang1[b], ang2[b]) for b in self.bodies}
         self.J_range = (float(J.min()), float(J.max()))
 
-
-def reduced_inertia(scene: Scene, theta) -> np.ndarray:
-    """J_red(θ) [kg·m²] of the scene's rigid mechanism at first-crank rotations ``theta``.
-
-    Parameters
-    ----------
-    scene : Scene
-    theta : float or ndarray
-        [rad].
-
-    Returns
-    -------
-    ndarray
-    """
-    r = _Rigid(scene)
-    th = np.asarray(theta, float)
-    return r.J(th - r.cycle * np.floor(th / r.cycle))
 
 
 def rigid_model(scene: Scene, N: int = 1024):

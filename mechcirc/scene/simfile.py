@@ -38,21 +38,16 @@ revolution, so the crank still turns once per period 2π/Ω).  The crank angle i
 from __future__ import annotations
 
 import math
-import re
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 from typing import Any
 
 from ..errors import MechcircError
-from ..sources import brief, checked_number, finite_number, located
+from ..sources import brief, checked_number, finite_number, is_name, located
 
-__all__ = ["Moment", "SimulateSettings", "parse_moments", "parse_simulate", "OUTPUT_KINDS",
+__all__ = ["Moment", "SimulateSettings", "parse_moments", "parse_simulate",
            "apply_overrides", "Motor", "Shaft", "kloss_motor", "table_motor", "parse_shaft"]
 
-_IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
-#: Output quantities: BODY.acceleration, BODY.rigid_acceleration, ELEMENT.force,
-#: ELEMENT.deformation, drive.moment.
-OUTPUT_KINDS = ("acceleration", "rigid_acceleration", "force", "deformation", "moment")
 
 
 @dataclass(frozen=True)
@@ -116,7 +111,7 @@ def parse_moments(text, source, table, scene) -> tuple:
                        "or torsion body", "moments", "body" if "body" in m else "amplitude",
                        occurrence=n, expected=f"one of {', '.join(bodies)}")
         name = m.get("name", f"M_{body}")
-        if not isinstance(name, str) or not _IDENT.fullmatch(name) or name in taken:
+        if not is_name(name) or name in taken:
             raise located(text, source, f"[[moments]] #{n + 1}: name {name!r} is not a valid "
                        "unused name", "moments", "name" if "name" in m else "body",
                        occurrence=n, expected="an identifier not used by another element")
@@ -167,7 +162,7 @@ def parse_simulate(text, source, table, scene) -> SimulateSettings:
     for k, v in table.items():
         if k == "aliases":
             if not isinstance(v, dict) or not all(
-                    isinstance(a, str) and _IDENT.fullmatch(a) and isinstance(b, str)
+                    is_name(a) and isinstance(b, str)
                     and "." in b for a, b in v.items()):
                 raise located(text, source, "[simulate.aliases] maps names to \"THING.quantity\" "
                            "strings", "simulate.aliases", next(iter(v), "aliases")

@@ -29,13 +29,9 @@ from typing import cast
 
 from .models import Drive, ParameterError, SleyParameters
 
-__all__ = ["preset", "all_presets", "PAPER", "VARIANTS", "READINGS"]
+__all__ = ["preset", "all_presets", "PAPER", "VARIANTS"]
 
 VARIANTS = tuple(range(1, 8))
-
-READINGS = ("k2 = 7 kg·m²/s where Table 1 lost it (variants 1-5, 7); Table 1 variant 6 "
-            "C4 = 1e4 (printed 10^6); alpha = sigma = 10 deg (fitted) unless overridden; "
-            "branch +1 (eps4T in [-2319, 2915] at omega = 100)")
 
 # Rows shared by both tables: omega [rad/s], clearance [rad], M0 [N m], I4P [kg m^2]
 _OMEGA = {1: 100.0, 2: 100.0, 3: 100.0, 4: 100.0, 5: 100.0, 6: 100.0, 7: 40.0}

@@ -61,7 +61,7 @@ def test_mu_nu_against_finite_differences(geom, branch):
     theta = np.linspace(0.05, 2 * math.pi, 61)
     h = 1e-4
     p = {k: fb.rocker_angle(theta + k * h) for k in (-2, -1, 0, 1, 2)}
-    q = {k: fb.coupler_angle(theta + k * h) for k in (-2, -1, 0, 1, 2)}
+    q = {k: fb.evaluate(theta + k * h).phi3 for k in (-2, -1, 0, 1, 2)}
     # fourth-order central differences
     d1 = lambda f: (f[-2] - 8 * f[-1] + 8 * f[1] - f[2]) / (12 * h)
     d2 = lambda f: (-f[-2] + 16 * f[-1] - 30 * f[0] + 16 * f[1] - f[2]) / (12 * h * h)
@@ -69,10 +69,9 @@ def test_mu_nu_against_finite_differences(geom, branch):
     scale_nu = np.max(np.abs(fb.nu(theta)))
     np.testing.assert_allclose(fb.mu(theta), d1(p), rtol=0, atol=1e-8 * scale_mu)
     np.testing.assert_allclose(fb.nu(theta), d2(p), rtol=0, atol=1e-5 * scale_nu)
-    np.testing.assert_allclose(fb.coupler_mu(theta), d1(q), rtol=0,
-                               atol=1e-8 * np.max(np.abs(fb.coupler_mu(theta))))
-    np.testing.assert_allclose(fb.coupler_nu(theta), d2(q), rtol=0,
-                               atol=1e-5 * np.max(np.abs(fb.coupler_nu(theta))))
+    st = fb.evaluate(theta)
+    np.testing.assert_allclose(st.mu3, d1(q), rtol=0, atol=1e-8 * np.max(np.abs(st.mu3)))
+    np.testing.assert_allclose(st.nu3, d2(q), rtol=0, atol=1e-5 * np.max(np.abs(st.nu3)))
 
 
 def test_mrazek_theoretical_rocker_acceleration():
@@ -164,16 +163,16 @@ def test_transmission_angle_range_against_grid():
     for geom in ((35.0, 110.0, 120.0, 150.0), MRAZEK, (30.0, 50.0, 45.0, 15.0)):
         fb = FourBar(*geom)
         th = np.linspace(0, 2 * math.pi, 200001)
-        g = fb.transmission_angle(th)
+        g = fb.evaluate(th).gamma
         tr = fb.transmission_range()
         assert tr.gamma_min == pytest.approx(g.min(), abs=1e-9)
         # γ has a kink at 90°, so the grid can miss the top by |dγ/dθ|·Δθ/2 (< 1e-4 here)
         assert g.max() <= tr.gamma_max + 1e-12
         assert tr.gamma_max - g.max() < 1e-4
         for t in tr.theta_at_min:
-            assert fb.transmission_angle(t) == pytest.approx(tr.gamma_min, abs=1e-12)
+            assert float(fb.evaluate(t).gamma) == pytest.approx(tr.gamma_min, abs=1e-12)
         for t in tr.theta_at_max:
-            assert fb.transmission_angle(t) == pytest.approx(tr.gamma_max, abs=1e-12)
+            assert float(fb.evaluate(t).gamma) == pytest.approx(tr.gamma_max, abs=1e-12)
         # γ is the acute version of the interior angle BCD (law of cosines)
         np.testing.assert_allclose(g, np.minimum(fb.interior_angle(th),
                                                  math.pi - fb.interior_angle(th)), atol=1e-12)
@@ -207,8 +206,8 @@ def test_locking_names_the_crank_angle():
     with pytest.raises(GeometryError, match="crank-rocker only"):
         fb.dead_centres()
     # the reachable window's ends are where the coupler and rocker line up (γ → 0)
-    assert fb.transmission_angle(lo + 1e-9) < 1e-3
-    assert fb.transmission_angle(hi - 1e-9) < 1e-3
+    assert float(fb.evaluate(lo + 1e-9).gamma) < 1e-3
+    assert float(fb.evaluate(hi - 1e-9).gamma) < 1e-3
 
 
 # ------------------------------------------------------------- change points

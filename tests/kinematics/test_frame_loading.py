@@ -33,7 +33,7 @@ def _reed(theta):
 def _positions(theta):
     """Link angles and centre-of-mass / reed positions from the closed-form positions."""
     a, b, d = FB.crank, FB.coupler, FB.frame
-    phi3, phi4 = FB.coupler_angle(theta), FB.rocker_angle(theta)
+    phi3, phi4 = FB.evaluate(theta).phi3, FB.rocker_angle(theta)
 
     def place(origin, phi, uv):
         return origin + np.stack([np.cos(phi) * uv[0] - np.sin(phi) * uv[1],
@@ -149,7 +149,7 @@ def test_massless_coupler_is_a_two_force_member():
     theta = np.linspace(0, 2 * math.pi, 73)
     r = frame_loading(FB, theta, OMEGA, crank=CRANK, rocker=ROCKER,
                       reed_force=_reed, reed_point=REED_POINT)
-    phi3 = FB.coupler_angle(theta)
+    phi3 = FB.evaluate(theta).phi3
     along = np.stack([np.cos(phi3), np.sin(phi3)], axis=-1)
     np.testing.assert_allclose(_cross(along, r.F_B), 0.0, atol=1e-9 * np.max(np.abs(r.F_B)))
     np.testing.assert_allclose(r.F_B, r.F_C, rtol=0, atol=1e-9 * np.max(np.abs(r.F_B)))

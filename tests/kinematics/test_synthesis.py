@@ -12,7 +12,7 @@ import pytest
 from mechcirc.errors import GeometryError
 from mechcirc.kinematics import FourBar
 from mechcirc.kinematics.synthesis import (LOAD_CRANK_MM, acceleration_ratio_eq5,
-                                           dead_centre_angles, eq10_residual,
+                                           dead_centre_angles,
                                            evaluate_design, solve_eq10, synthesize)
 
 
@@ -54,6 +54,16 @@ def test_eq1_is_the_interior_angle_at_the_dead_centres():
         assert float(mu2) == pytest.approx(fb.interior_angle(back.theta), abs=1e-9)
 
 
+def eq10_residual(psi, b_a, c_a, d_a):
+    """Left-hand side of the patent's eq. (10) exactly as it is written:
+    (M − P)² + (N − P)² − 2 cos Ψ (M − P)(N − P) + cos² Ψ − 1 with
+    M = (b/a − 1)²/(2(c/a)(d/a)), N = (b/a + 1)²/(2(c/a)(d/a)), P = (c² + d²)/(2cd)."""
+    two_cd = 2 * c_a * d_a
+    M, N, P = (b_a - 1) ** 2 / two_cd, (b_a + 1) ** 2 / two_cd, (c_a ** 2 + d_a ** 2) / two_cd
+    cp = math.cos(psi)
+    return (M - P) ** 2 + (N - P) ** 2 - 2 * cp * (M - P) * (N - P) + cp * cp - 1
+
+
 def test_eq10_vanishes_at_the_linkage_swing_and_solves_back():
     for fb in _random_crank_rockers(30, seed=3):
         psi = fb.swing()
@@ -92,7 +102,7 @@ def _independent_check(des, load):
     th = np.linspace(0, 2 * math.pi, 100001)
     phi4 = fb.rocker_angle(th)
     swing = math.degrees(phi4.max() - phi4.min())
-    gamma = fb.transmission_angle(th)
+    gamma = fb.evaluate(th).gamma
     front, back = fb.dead_centres()
     cos_front = (c * c + (a + b) ** 2 - d * d) / (2 * c * (a + b))
     g1 = math.degrees(math.acos(abs(cos_front)))
