@@ -198,10 +198,12 @@ def linear(n=100, steps=100_000, dt=1e-3, repeat=3):
           f"{steps + 1} x {n} array filled with zeros {mcpu['write']:.3f} s CPU")
     goal_x = mcpu["lsim"] / mcpu["x"]
     near = mcpu["x"] / mcpu["ceiling"]
+    # The ceiling clause stands in for 20x only where 20x is out of reach: lsim / ceiling < 20.
+    reach = mcpu["lsim"] / mcpu["ceiling"]
+    clause = ("met" if near <= 1.5 else "not met") if reach < 20 else "does not apply"
     print(f"  goal: lsim / mechcirc >= 20x ({goal_x:.1f}x: {'met' if goal_x >= 20 else 'not met'})"
           f" or mechcirc within 1.5x of the ceiling when lsim / ceiling < 20 "
-          f"(lsim / ceiling {mcpu['lsim'] / mcpu['ceiling']:.1f}x; mechcirc / ceiling "
-          f"{near:.2f}x: {'met' if near <= 1.5 else 'not met'}), CPU times")
+          f"(lsim / ceiling {reach:.1f}x; mechcirc / ceiling {near:.2f}x: {clause}), CPU times")
     print(f"  ratios in CPU time, x of all nodes: lsim / mechcirc "
           f"{mcpu['lsim'] / mcpu['x']:.1f}x; DOP853 / mechcirc {mcpu['dop'] / mcpu['x']:.1f}x; "
           f"first call on a new circuit: "
