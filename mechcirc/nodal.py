@@ -438,26 +438,35 @@ def refine_dd(solve_fn, residual, omega, rhs, system, refine: bool, steps: int,
             own = eps / 2 * np.sum(np.abs(x0) * np.abs(r), axis=-1) / \
                 np.abs(system.difference(x0))
         return x0, None, est + np.where(np.isnan(own), np.inf, own), rho
-    xh, xl = x0.copy(), np.zeros_like(x0)
+    xh, xl = x0, np.zeros_like(x0)
     prev = x0
     est = np.full(omega.size, np.inf)
     rho = np.zeros(omega.size)
     active = np.arange(omega.size)
     for step in range(steps):
         # Only the points not yet converged take a further step (their
-        # factors chosen by ``rows``).
-        rows = None if active.size == omega.size else active
-        xa, xla = xh[active], (xl[active] if step else None)
-        r = residual(omega[active], xa, xla, rhs)
-        d = solve_fn(r, *(() if rows is None else (rows,)))
-        est[active], rho[active] = _estimate(system, xa, xla, d, prev[active] if step else None,
-                                             r)
-        with np.errstate(all="ignore"):
-            s, e = two_sum(xa, d)
-        xh[active] = s
-        xl[active] = e if xla is None else xla + e
-        prev = prev.copy() if step == 0 else prev
-        prev[active] = d
+        # factors chosen by ``rows``); while all do, the arrays are used whole
+        # (the same values as indexed by ``active``, without the copies).
+        if active.size == omega.size:
+            xa, xla = xh, (xl if step else None)
+            r = residual(omega, xa, xla, rhs)
+            d = solve_fn(r)
+            est, rho = _estimate(system, xa, xla, d, prev if step else None, r)
+            with np.errstate(all="ignore"):
+                xh, e = two_sum(xa, d)
+            xl = e if xla is None else xla + e
+            prev = d
+        else:
+            xa, xla = xh[active], (xl[active] if step else None)
+            r = residual(omega[active], xa, xla, rhs)
+            d = solve_fn(r, active)
+            est[active], rho[active] = _estimate(system, xa, xla, d,
+                                                 prev[active] if step else None, r)
+            with np.errstate(all="ignore"):
+                s, e = two_sum(xa, d)
+            xh[active] = s
+            xl[active] = e if xla is None else xla + e
+            prev[active] = d
         # est bounds the error before this correction; after it, the error is
         # smaller still (by the contraction): stop once est is near rounding.
         active = active[est[active] > 16 * eps]
@@ -660,8 +669,9 @@ def require_nonsingular(system: NodalSystem) -> None:
     """Raise if A(ω) is singular at every frequency (checked at two generic ω).
 
     Dense systems are first judged by the smallest singular value of the
-    balanced matrix (:func:`_balance`), and the null vector names the
-    undetermined unknowns.  Where that does not clear a system, or it is
+    matrix, as it is and then balanced (:func:`_balance`; balancing only
+    keeps a regular matrix from looking singular), and the null vector of the
+    balanced one names the undetermined unknowns.  Where that does not clear a system, or it is
     large, the refined solve decides (in double-double where float64 factors
     cannot refine, see :class:`DDSolver`): the system is regular at a trial
     ω if the solve gives a finite K and its solution's element-wise backward
@@ -703,8 +713,9 @@ def require_nonsingular(system: NodalSystem) -> None:
 def _dense_verdict(system: NodalSystem, trial):
     """(regular, judged, overflow) of a small system by the singular values at ``trial``.
 
-    ``regular``: a trial ω's balanced matrix is clearly nonsingular (or at
-    float64's edge, which the sweep flags); ``judged``: the last balanced
+    ``regular``: a trial ω's matrix, as it is or balanced, is clearly
+    nonsingular (:func:`_clearly_regular`; or at float64's edge, which the
+    sweep flags); ``judged``: the last balanced
     matrix that looked singular, for naming the null vector (None when none
     was judged: large systems, or balancing overflowed); ``overflow``:
     balancing overflowed (values over ~600 decades, such as a lever ratio of
