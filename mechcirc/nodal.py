@@ -493,7 +493,7 @@ def _estimate(system, xh, xl, d, prev, r):
     with np.errstate(all="ignore"):
         nd = np.max(np.abs(d), axis=-1)
         nx = np.max(np.abs(xh), axis=-1)
-        npv = np.maximum(np.max(np.abs(xh if prev is None else prev), axis=-1), tiny * nx)
+        npv = np.maximum(nx if prev is None else np.max(np.abs(prev), axis=-1), tiny * nx)
         rho = np.where(npv > 0, nd / npv, 0.0)
         own = np.minimum(rho, 1.0) if prev is not None else 1.0
         K = np.abs(difference_dd(system, xh, xl))
