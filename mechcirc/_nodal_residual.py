@@ -249,22 +249,19 @@ class Pattern:
         return out
 
     def _residual_compiled(self, kern, omega, xh, xl, rhs):
+        # The kernel reads the parts of x in place (no copies padded with the
+        # reference's zero column) and writes the complex residual itself.
         c, n = xh.shape
-        z = np.zeros((c, 1))
-        xr = np.concatenate([xh.real, z], axis=1)
-        xi = np.concatenate([xh.imag, z], axis=1)
-        if xl is not None:
-            xlr = np.concatenate([xl.real, z], axis=1)
-            xli = np.concatenate([xl.imag, z], axis=1)
-        else:
-            xlr = xli = xr
-        out_r, out_i = np.empty((c, n)), np.empty((c, n))
-        kern.residual(np.ascontiguousarray(omega, dtype=float), xr, xi, xlr, xli,
-                      xl is not None, np.asarray(rhs, dtype=float), self.k_bi, self.k_bj,
-                      self.k_bs, self.e_i, self.e_j, self.e_val, self.e_vs[0], self.e_vs[1],
-                      self.s_col, self.s_val, self.s_vs[0], self.s_vs[1],
-                      np.zeros((4 * n + 4, 4)), out_r, out_i)
-        return out_r + 1j * out_i
+        xh = np.asarray(xh, dtype=complex)
+        xl = None if xl is None else np.asarray(xl, dtype=complex)
+        low = xh if xl is None else xl
+        out = np.empty((c, n), dtype=complex)
+        kern.residual(np.ascontiguousarray(omega, dtype=float), xh.real, xh.imag, low.real,
+                      low.imag, xl is not None, np.asarray(rhs, dtype=float), self.k_bi,
+                      self.k_bj, self.k_bs, self.e_i, self.e_j, self.e_val, self.e_vs[0],
+                      self.e_vs[1], self.s_col, self.s_val, self.s_vs[0], self.s_vs[1],
+                      np.zeros((4 * n + 4, 4)), out)
+        return out
 
     def sensitivities(self, omega: NDArray, x: NDArray, K: NDArray,
                       kern=None, data: bool = True) -> tuple[NDArray, NDArray | None]:
@@ -299,9 +296,8 @@ class Pattern:
             scale = np.where((scale > 0) & np.isfinite(scale), scale, 1.0)
             if kern is not None and not np.iscomplexobj(omega):
                 S, Sd = np.empty(c), np.empty(c)
-                xe = np.concatenate([np.asarray(x, dtype=complex), np.zeros((c, 1), complex)],
-                                    axis=1)
-                kern.sensitivities(np.asarray(omega, dtype=float), xe, scale, self.e_i,
+                kern.sensitivities(np.asarray(omega, dtype=float),
+                                   np.ascontiguousarray(x, dtype=complex), scale, self.e_i,
                                    self.e_j, self.e_m, self.e_k, self.e_c, self.s_row,
                                    self.s_col, self.s_val, self.l_p1, self.l_p2, self.l_col,
                                    self.l_r, S, Sd)
