@@ -157,10 +157,14 @@ def breakdown(sizes, omega, repeats) -> None:
                 spent["total"] = time.process_time() - t0
                 runs.append(dict(spent))
             keys = ["total"] + [k for k in runs[0] if k != "total"]
+            first, later = passes["first"], passes["later"]       # (the last sweep's)
+            # What does not scale with the points: the same call at one ω.
+            one = cpu(lambda t=text: mechcirc.parse(t).sweep(omega[200:201], method="nodal"),
+                      repeats)[0]
             print(f"{n:,} elements, {'compiled' if compiled else 'numpy'} (ms): " + ", ".join(
                 f"{k} {np.median([r.get(k, 0.0) for r in runs]) * 1e3:.2f}" for k in keys)
-                + f"; residual ω: {passes['first']} first step, {passes['later']} later",
-                flush=True)
+                + f"; residual ω: {first} first step, {later} later"
+                + f"; the same call at 1 ω: {one * 1e3:.2f}", flush=True)
     _jit.COMPILED = None
 
 

@@ -120,11 +120,12 @@ class NodalSystem:
             Equal to ``self.sparse(kind).toarray()``; built once.
         """
         def build(system):
+            # bincount adds each entry's weights in their order from 0.0, as
+            # np.add.at into zeros does (the same bits), at a fraction of its cost.
             r, c, v = system.stamps[kind]
-            out = np.zeros((system.n, system.n))
-            np.add.at(out, (np.asarray(r, dtype=np.intp), np.asarray(c, dtype=np.intp)),
-                      np.asarray(v, dtype=float))
-            return out
+            n = system.n
+            flat = np.asarray(r, dtype=np.intp) * n + np.asarray(c, dtype=np.intp)
+            return np.bincount(flat, np.asarray(v, dtype=float), n * n).reshape(n, n)
 
         return self.cached("_dense_" + kind, build)
 

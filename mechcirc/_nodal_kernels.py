@@ -78,20 +78,35 @@ def _row_residual(acc, r, w, wh, wl, b):
     return rr_h + rr_l, ri_h + ri_l
 
 
+@_jit_inline
+def _at(x, k, i, n):
+    """x[k, i], and +0.0 for the reference (i = n, a column x does not have)."""
+    return x[k, i] if i < n else 0.0
+
+
+@_jit_inline
+def _atc(x, k, i, n):
+    """x[k, i] of a complex x, and 0 for the reference (i = n)."""
+    return x[k, i] if i < n else 0j
+
+
 @_jit
 def residual(omega, xr, xi, xlr, xli, has_lo, rhs, b_i, b_j, b_s,
-             e_i, e_j, e_val, e_vh, e_vl, s_col, s_val, s_vh, s_vl, acc, out_r, out_i):
-    """b − A(ω) x into ``out_r``/``out_i`` (shape (n_ω, n)); x = (xr + j xi) + (xlr + j xli).
+             e_i, e_j, e_val, e_vh, e_vl, s_col, s_val, s_vh, s_vl, acc, out):
+    """b − A(ω) x into ``out`` (complex, shape (n_ω, n)); x = (xr + j xi) + (xlr + j xli).
 
-    ``x*`` have one extra zero column (index n, the reference).  ``b_i``,
+    ``x*`` (real, shape (n_ω, n), any strides: the parts of complex arrays)
+    read +0.0 at index n, the reference.  ``b_i``,
     ``b_j``, ``b_s`` are the buckets 4·row + kind (kind: mass, spring,
     damper, lever) of +element e, −element e and lever stamp s (4·n: the
     reference's row, dropped).  Each bucket receives its terms in the numpy
     code's order — the + terms by element, then the − terms, then the lever
     stamps — and adds them by TwoSum into ``acc`` (4·n + 4 rows of
-    re_hi, re_lo, im_hi, im_lo).
+    re_hi, re_lo, im_hi, im_lo).  Each residual, rounded to its real parts
+    re and im, is stored as numpy forms ``re + 1j * im`` (re + (0·im − 0),
+    0 + (0 + im)), so a signed zero or a NaN comes out as the numpy code's.
     """
-    n_w, n = out_r.shape
+    n_w, n = out.shape
     drop = 4 * n
     t = np.empty((e_i.size, 4))
     for k in range(n_w):
@@ -101,8 +116,9 @@ def residual(omega, xr, xi, xlr, xli, has_lo, rhs, b_i, b_j, b_s,
         for e in range(e_i.size):               # +y·(x_i − x_j), formed once
             i, j = e_i[e], e_j[e]
             t[e, 0], t[e, 1], t[e, 2], t[e, 3] = _element_term(
-                e_val[e], e_vh[e], e_vl[e], xr[k, i], xi[k, i], xr[k, j], xi[k, j],
-                xlr[k, i], xli[k, i], xlr[k, j], xli[k, j], has_lo)
+                e_val[e], e_vh[e], e_vl[e], _at(xr, k, i, n), _at(xi, k, i, n),
+                _at(xr, k, j, n), _at(xi, k, j, n), _at(xlr, k, i, n), _at(xli, k, i, n),
+                _at(xlr, k, j, n), _at(xli, k, j, n), has_lo)
             if b_i[e] != drop:
                 _add(acc, b_i[e], t[e, 0], t[e, 1], t[e, 2], t[e, 3])
         for e in range(e_i.size):               # −y·(x_i − x_j) into the second row
@@ -119,7 +135,8 @@ def residual(omega, xr, xi, xlr, xli, has_lo, rhs, b_i, b_j, b_s,
                     tl_i = tl_i + v * xli[k, c]
                 _add(acc, b_s[s], th_r, tl_r, th_i, tl_i)
         for r in range(n):
-            out_r[k, r], out_i[k, r] = _row_residual(acc, r, w, wh, wl, rhs[r])
+            re, im = _row_residual(acc, r, w, wh, wl, rhs[r])
+            out[k, r] = complex(re + (0.0 * im - 0.0), 0.0 + (0.0 + im))
 
 
 @_jit_inline
@@ -232,8 +249,11 @@ def _mag(z):
 @_jit
 def sensitivities(omega, x, scale, e_i, e_j, e_m, e_k, e_c, s_row, s_col, s_val,
                   l_p1, l_p2, l_col, l_r, S, Sd):
-    """S and S_data of :meth:`mechcirc._nodal_residual.Pattern.sensitivities` for x/scale (real ω)."""
-    n_w, n1 = x.shape
+    """S and S_data of :meth:`mechcirc._nodal_residual.Pattern.sensitivities` for x/scale (real ω).
+
+    ``x`` (complex, shape (n_ω, n)) reads 0 at index n, the reference.
+    """
+    n_w, n = x.shape
     for k in range(n_w):
         w = omega[k]
         f = 1.0 / scale[k]
@@ -242,8 +262,8 @@ def sensitivities(omega, x, scale, e_i, e_j, e_m, e_k, e_c, s_row, s_col, s_val,
         for e in range(e_i.size):
             # One of c, m, k is nonzero: |c + j(ωm − k/ω)| without a hypot.
             y = abs(e_c[e]) + abs(w * e_m[e] - e_k[e] / w)
-            xi = x[k, e_i[e]] * f
-            xj = x[k, e_j[e]] * f
+            xi = _atc(x, k, e_i[e], n) * f
+            xj = _atc(x, k, e_j[e], n) * f
             a = _mag(xi) + _mag(xj)
             d = _mag(xi - xj)
             acc += y * a * d
@@ -251,7 +271,7 @@ def sensitivities(omega, x, scale, e_i, e_j, e_m, e_k, e_c, s_row, s_col, s_val,
         for s in range(s_row.size):
             acc += abs(s_val[s]) * _mag(x[k, s_row[s]] * f) * _mag(x[k, s_col[s]] * f)
         for v in range(l_r.size):
-            accd += 2 * l_r[v] * _mag(x[k, l_p1[v]] * f - x[k, l_p2[v]] * f) * \
-                _mag(x[k, l_col[v]] * f)
+            accd += 2 * l_r[v] * _mag(_atc(x, k, l_p1[v], n) * f - _atc(x, k, l_p2[v], n) * f) \
+                * _mag(x[k, l_col[v]] * f)
         S[k] = acc
         Sd[k] = accd

@@ -10,6 +10,8 @@ operations in the same order, where the caller passes them (``kern``).
 
 from __future__ import annotations
 
+from functools import cached_property
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -49,7 +51,7 @@ class Pattern:
                  for i in range(4)]
         self.m, self.k, self.dc = parts[0], parts[2], parts[1] + parts[3]
         self._elements(system)
-        self._plan(system)
+        self._plan()
 
     def csc(self, omega: float):
         """A(ω) as a ``scipy.sparse.csc_matrix`` on the fixed pattern."""
@@ -68,8 +70,8 @@ class Pattern:
         self.e_i = np.array([at(e.n1) for e in els], dtype=np.int64)
         self.e_j = np.array([at(e.n2) for e in els], dtype=np.int64)
         self.e_val = np.array([e.value * e.eta for e in els], dtype=float)
-        kind = np.array([e.kind for e in els])
-        self.e_kind = np.select([kind == "mass", kind == "spring"], [0, 1], 2).astype(np.int64)
+        code = {"mass": 0, "spring": 1}
+        self.e_kind = np.array([code.get(e.kind, 2) for e in els], dtype=np.int64)
         self.e_m = np.where(self.e_kind == 0, self.e_val, 0.0)
         self.e_k = np.where(self.e_kind == 1, self.e_val, 0.0)
         self.e_c = np.where(self.e_kind == 2, self.e_val, 0.0)
@@ -85,20 +87,43 @@ class Pattern:
         self.s_col = lc.astype(np.int64)
         self.s_val = lval.astype(float)
 
-    def _plan(self, system: NodalSystem) -> None:
-        """Terms of b − A x and their summation order, per (row, kind) bucket.
+    def _plan(self) -> None:
+        """What every residual needs: the split values, the compiled kernel's buckets, and
+        the most terms of a bucket and of a row (:func:`residual_rounding`).
 
-        Terms: +y·d of each element into its first node's row, −y·d into its
-        second's (the reference row dropped), v·x_c of each lever stamp.  A
-        bucket is (row, kind) with kinds mass, spring, damper, lever; buckets
-        are ranked by their number of terms, so that the s-th terms of all
-        buckets with more than s terms form one slot, added in one
-        vectorised double-double step.
+        A bucket is (row, kind) with kinds mass, spring, damper, lever, its
+        terms +y·d of each element into its first node's row, −y·d into its
+        second's (the reference row dropped) and v·x_c of each lever stamp.
+        The numpy residuals' summation plans are built on first use
+        (:attr:`slot_plan`, :attr:`row_plan`): a sweep on the compiled path
+        needs neither, a refined one not the second.
         """
         n, E = self.n, self.e_i.size
         with np.errstate(all="ignore"):
             self.e_vs = split(self.e_val)
             self.s_vs = split(self.s_val)
+        # The compiled kernel adds each bucket's terms in the same order: the
+        # + terms by element, then the − terms, then the lever stamps.
+        self.k_bi = np.minimum(self.e_i * 4 + self.e_kind, 4 * n).astype(np.int64)
+        self.k_bj = np.minimum(self.e_j * 4 + self.e_kind, 4 * n).astype(np.int64)
+        self.k_bs = np.minimum(self.s_row * 4 + 3, 4 * n).astype(np.int64)
+        self.n_terms = 2 * E + self.s_row.size
+        count = np.bincount(np.concatenate([self.k_bi, self.k_bj, self.k_bs]),
+                            minlength=4 * n + 1)
+        self.max_terms = int(count[:4 * n].max(initial=0))     # (not the reference's)
+        rows = np.concatenate([self.e_i, self.e_j, self.s_row])
+        self.max_row_terms = int(np.bincount(rows, minlength=n + 1)[:n].max(initial=0))
+
+    @cached_property
+    def slot_plan(self) -> tuple[list[NDArray], NDArray]:
+        """(slots, buckets): the double-double residual's summation order.
+
+        Buckets are ranked by their number of terms, so that the s-th terms
+        of all buckets with more than s terms form one slot (the terms'
+        indices, by rank), added in one vectorised double-double step;
+        ``buckets`` is the bucket of each rank.
+        """
+        n = self.n
         bucket = np.concatenate([self.e_i * 4 + self.e_kind, self.e_j * 4 + self.e_kind,
                                  self.s_row * 4 + 3])
         term = np.arange(bucket.size)
@@ -113,25 +138,20 @@ class Pattern:
         r, term = r[srt], term[srt]
         first = np.searchsorted(r, np.arange(uniq.size))
         pos = np.arange(r.size) - first[r]
-        self.slots = []
+        slots = []
         for s in range(int(counts.max(initial=0))):
             sel = pos == s
-            self.slots.append(term[sel][np.argsort(r[sel], kind="stable")])
-        self.buckets = uniq[order]             # bucket of each rank
-        # The compiled kernel adds each bucket's terms in the same order: the
-        # + terms by element, then the − terms, then the lever stamps.
-        self.k_bi = np.minimum(self.e_i * 4 + self.e_kind, 4 * n).astype(np.int64)
-        self.k_bj = np.minimum(self.e_j * 4 + self.e_kind, 4 * n).astype(np.int64)
-        self.k_bs = np.minimum(self.s_row * 4 + 3, 4 * n).astype(np.int64)
-        self.n_terms = 2 * E + self.s_row.size
-        self.max_terms = int(counts.max(initial=0))
-        # The float64 residual (:meth:`residual` with ``exact=False``) sums each
-        # row's terms at once: the terms sorted by row, and where each row starts.
+            slots.append(term[sel][np.argsort(r[sel], kind="stable")])
+        return slots, uniq[order]
+
+    @cached_property
+    def row_plan(self) -> tuple[NDArray, NDArray, NDArray]:
+        """(order, rows, start): the float64 residual (:meth:`residual` with ``exact=False``)
+        sums each row's terms at once: the terms sorted by row, the rows, where each starts."""
         rows = np.concatenate([self.e_i, self.e_j, self.s_row])
-        self.f_order = np.argsort(rows, kind="stable")
-        self.f_rows, self.f_start, per_row = np.unique(rows[self.f_order], return_index=True,
-                                                       return_counts=True)
-        self.max_row_terms = int(per_row[self.f_rows < n].max(initial=0))   # (not the frame's)
+        order = np.argsort(rows, kind="stable")
+        f_rows, f_start = np.unique(rows[order], return_index=True)
+        return order, f_rows, f_start
 
     def residual(self, omega: NDArray, xh: NDArray, xl: NDArray | None,
                  rhs: NDArray, kern=None, exact: bool = True) -> NDArray[np.complex128]:
@@ -165,8 +185,9 @@ class Pattern:
             (xe[:, self.e_i] - xe[:, self.e_j])
         terms = np.concatenate([t, -t, self.s_val * xe[:, self.s_col]], axis=1)
         ax = np.zeros((c, n + 1), dtype=complex)
-        if self.f_rows.size:
-            ax[:, self.f_rows] = np.add.reduceat(terms[:, self.f_order], self.f_start, axis=1)
+        f_order, f_rows, f_start = self.row_plan
+        if f_rows.size:
+            ax[:, f_rows] = np.add.reduceat(terms[:, f_order], f_start, axis=1)
         return rhs[None, :] - ax[:, :n]
 
     def _residual(self, omega, xh, xl, rhs):
@@ -192,14 +213,15 @@ class Pattern:
         T_l = np.concatenate([p_l, -p_l, q_l], axis=1)
         S_h = np.zeros((c, 4 * n), dtype=complex)
         S_l = np.zeros((c, 4 * n), dtype=complex)
-        if self.slots:
-            acc_h, acc_l = T_h[:, self.slots[0]], T_l[:, self.slots[0]]
-            for s in self.slots[1:]:
+        slots, buckets = self.slot_plan
+        if slots:
+            acc_h, acc_l = T_h[:, slots[0]], T_l[:, slots[0]]
+            for s in slots[1:]:
                 k = s.size
                 a, e = two_sum(acc_h[:, :k], T_h[:, s])
                 acc_h[:, :k] = a
                 acc_l[:, :k] += e + T_l[:, s]
-            S_h[:, self.buckets], S_l[:, self.buckets] = acc_h, acc_l
+            S_h[:, buckets], S_l[:, buckets] = acc_h, acc_l
         S_h, S_l = S_h.reshape(c, n, 4), S_l.reshape(c, n, 4)
         w = np.asarray(omega)[:, None]
         m_h, m_l = S_h[..., 0], S_l[..., 0]
@@ -227,25 +249,22 @@ class Pattern:
         return out
 
     def _residual_compiled(self, kern, omega, xh, xl, rhs):
+        # The kernel reads the parts of x in place (no copies padded with the
+        # reference's zero column) and writes the complex residual itself.
         c, n = xh.shape
-        z = np.zeros((c, 1))
-        xr = np.concatenate([xh.real, z], axis=1)
-        xi = np.concatenate([xh.imag, z], axis=1)
-        if xl is not None:
-            xlr = np.concatenate([xl.real, z], axis=1)
-            xli = np.concatenate([xl.imag, z], axis=1)
-        else:
-            xlr = xli = xr
-        out_r, out_i = np.empty((c, n)), np.empty((c, n))
-        kern.residual(np.ascontiguousarray(omega, dtype=float), xr, xi, xlr, xli,
-                      xl is not None, np.asarray(rhs, dtype=float), self.k_bi, self.k_bj,
-                      self.k_bs, self.e_i, self.e_j, self.e_val, self.e_vs[0], self.e_vs[1],
-                      self.s_col, self.s_val, self.s_vs[0], self.s_vs[1],
-                      np.zeros((4 * n + 4, 4)), out_r, out_i)
-        return out_r + 1j * out_i
+        xh = np.asarray(xh, dtype=complex)
+        xl = None if xl is None else np.asarray(xl, dtype=complex)
+        low = xh if xl is None else xl
+        out = np.empty((c, n), dtype=complex)
+        kern.residual(np.ascontiguousarray(omega, dtype=float), xh.real, xh.imag, low.real,
+                      low.imag, xl is not None, np.asarray(rhs, dtype=float), self.k_bi,
+                      self.k_bj, self.k_bs, self.e_i, self.e_j, self.e_val, self.e_vs[0],
+                      self.e_vs[1], self.s_col, self.s_val, self.s_vs[0], self.s_vs[1],
+                      np.zeros((4 * n + 4, 4)), out)
+        return out
 
     def sensitivities(self, omega: NDArray, x: NDArray, K: NDArray,
-                      kern=None) -> tuple[NDArray, NDArray]:
+                      kern=None, data: bool = True) -> tuple[NDArray, NDArray | None]:
         """(S/|K|, S_data/|K|) for each ω: the sensitivity of K to rounding the stamps and the data.
 
         S = Σ_e |y_e| |x_i − x_j| (|x_i| + |x_j|) + Σ_levers |v · x_r · x_c|:
@@ -267,7 +286,8 @@ class Pattern:
         cancellation that a bound stamp by stamp would count many times over.
         Both are computed with x scaled to max-norm 1 (no overflow where x
         and K are near float64's limits), and divided by |K|.  With ``kern``
-        and real ω, by the compiled kernel.
+        and real ω, by the compiled kernel.  ``data=False``: S alone (S_data None
+        on the numpy path; a sweep's error needs only S).
         """
         w = np.asarray(omega)[:, None]
         c = x.shape[0]
@@ -276,9 +296,8 @@ class Pattern:
             scale = np.where((scale > 0) & np.isfinite(scale), scale, 1.0)
             if kern is not None and not np.iscomplexobj(omega):
                 S, Sd = np.empty(c), np.empty(c)
-                xe = np.concatenate([np.asarray(x, dtype=complex), np.zeros((c, 1), complex)],
-                                    axis=1)
-                kern.sensitivities(np.asarray(omega, dtype=float), xe, scale, self.e_i,
+                kern.sensitivities(np.asarray(omega, dtype=float),
+                                   np.ascontiguousarray(x, dtype=complex), scale, self.e_i,
                                    self.e_j, self.e_m, self.e_k, self.e_c, self.s_row,
                                    self.s_col, self.s_val, self.l_p1, self.l_p2, self.l_col,
                                    self.l_r, S, Sd)
@@ -294,11 +313,13 @@ class Pattern:
             if self.s_row.size:
                 S = S + np.abs(self.s_val) @ (ax[:, self.s_row] * ax[:, self.s_col]).T \
                     if c else S
+            f = scale / np.abs(K)
+            if not data:
+                return S * f * scale, None
             Sd = np.einsum("ij,ij->i", y, d * d)
             if self.l_r.size:
                 dl = np.abs(xe[:, self.l_p1] - xe[:, self.l_p2])
                 Sd = Sd + np.sum(2 * self.l_r * dl * ax[:, self.l_col], axis=1)
-            f = scale / np.abs(K)
             return S * f * scale, Sd * f * scale
 
 

@@ -295,6 +295,7 @@ def band_lu_batch(G, n, kl):
         for j in range(n):
             z = G[j, kl]
             b = np.abs(z.real) + np.abs(z.imag)
+            pivoted = False                 # (no swap to test for in the batch)
             for s in range(1, min(kl, n - 1 - j) + 1):
                 z = G[j + s, kl - s]
                 m = np.abs(z.real) + np.abs(z.imag)
@@ -302,8 +303,9 @@ def band_lu_batch(G, n, kl):
                 if take.any():
                     b = np.where(take, m, b)
                     piv[j][take] = s
+                    pivoted = True
             best[j] = b
-            for s in range(1, kl + 1):
+            for s in range(1, kl + 1 if pivoted else 1):
                 swap = piv[j] == s
                 if swap.any():
                     top, low = G[j, kl:], G[j + s, kl - s:e - s]
@@ -331,10 +333,11 @@ def band_solve_batch(G, piv, x, n, kl):
     kl : int
         Half band width.
     """
+    swapped = np.any(piv != 0, axis=1)       # the columns with a row swap in the batch
     with np.errstate(all="ignore"):
         for j in range(n - 1):
             pj = piv[j]
-            for s in range(1, kl + 1):
+            for s in range(1, kl + 1 if swapped[j] else 1):
                 swap = pj == s
                 if swap.any():
                     keep = x[j].copy()

@@ -158,12 +158,13 @@ def warm_kernels() -> None:
 
 
 def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
-           keep: NDArray | None, at: NDArray | None = None):
+           keep: NDArray | None, at: NDArray | None = None, data: bool = False):
     """Factor, solve and refine at each ω (real or complex, already checked) of ``omega[at]``
     (default all), chunk by chunk.
 
     Returns (K, error of the solve, S, S_data, x rows or None, the rows of x
-    at ``keep``), NaN and inf off ``at``.  What does not change
+    at ``keep``), NaN and inf off ``at``; S_data (:meth:`Pattern.sensitivities`)
+    only with ``data``, NaN otherwise (a sweep's error does not use it).  What does not change
     with ω — the pattern, the solver's choice and ordering, the residual's
     plan — comes from :func:`pattern` and :func:`solver`.  The compiled
     kernels serve the sparse path at real ω (:func:`kernels`).
@@ -178,7 +179,7 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
     # sixth of the double-double one's work there; the compiled double-double
     # residual costs less than it, and is kept).
     float64 = not refine and kern is None
-    out = _Solved(system, pat, kern, omega, keep, float64_residual=float64)
+    out = _Solved(system, pat, kern, omega, keep, float64_residual=float64, data=data)
 
     # Compiled: no (ω, term) temporaries; the chunk's (ω, n) arrays stay in cache.
     # numpy: the residual's (ω, term) temporaries bound its pieces.
@@ -219,7 +220,7 @@ class _Solved:
     """What :func:`_sweep` finds at each ω, stored chunk by chunk."""
 
     def __init__(self, system: NodalSystem, pat, kern, omega: NDArray, keep: NDArray | None,
-                 float64_residual: bool = False):
+                 float64_residual: bool = False, data: bool = False):
         m = omega.size
         self.system, self.pat, self.kern, self.omega, self.keep = system, pat, kern, omega, keep
         self.K = np.full(m, complex(np.nan, np.nan))
@@ -230,13 +231,16 @@ class _Solved:
         #: The estimates come from a float64 residual (:func:`refine_dd`, unrefined):
         #: its rounding, bounded by :func:`residual_rounding`, is added.
         self.float64_residual = float64_residual
+        self.data = data                # S_data too (:func:`evaluate_complex`)
 
     def store(self, sel, xh, xl, est, rho) -> None:
         """K, its sensitivities and error estimate, and x, at the points ``sel``."""
         self.K[sel] = difference_dd(self.system, xh, xl)
         x = xh + xl if xl is not None else xh
-        self.S[sel], self.Sd[sel] = self.pat.sensitivities(self.omega[sel], x, self.K[sel],
-                                                           self.kern)
+        self.S[sel], Sd = self.pat.sensitivities(self.omega[sel], x, self.K[sel], self.kern,
+                                                 self.data)
+        if Sd is not None:
+            self.Sd[sel] = Sd
         # A refinement that stalls (corrections not shrinking: the factors
         # are too inaccurate, cond(A)·u ≳ 1) has not converged, unless it
         # stalls at the residual's own rounding: its last correction says
@@ -434,26 +438,35 @@ def refine_dd(solve_fn, residual, omega, rhs, system, refine: bool, steps: int,
             own = eps / 2 * np.sum(np.abs(x0) * np.abs(r), axis=-1) / \
                 np.abs(system.difference(x0))
         return x0, None, est + np.where(np.isnan(own), np.inf, own), rho
-    xh, xl = x0.copy(), np.zeros_like(x0)
+    xh, xl = x0, np.zeros_like(x0)
     prev = x0
     est = np.full(omega.size, np.inf)
     rho = np.zeros(omega.size)
     active = np.arange(omega.size)
     for step in range(steps):
         # Only the points not yet converged take a further step (their
-        # factors chosen by ``rows``).
-        rows = None if active.size == omega.size else active
-        xa, xla = xh[active], (xl[active] if step else None)
-        r = residual(omega[active], xa, xla, rhs)
-        d = solve_fn(r, *(() if rows is None else (rows,)))
-        est[active], rho[active] = _estimate(system, xa, xla, d, prev[active] if step else None,
-                                             r)
-        with np.errstate(all="ignore"):
-            s, e = two_sum(xa, d)
-        xh[active] = s
-        xl[active] = e if xla is None else xla + e
-        prev = prev.copy() if step == 0 else prev
-        prev[active] = d
+        # factors chosen by ``rows``); while all do, the arrays are used whole
+        # (the same values as indexed by ``active``, without the copies).
+        if active.size == omega.size:
+            xa, xla = xh, (xl if step else None)
+            r = residual(omega, xa, xla, rhs)
+            d = solve_fn(r)
+            est, rho = _estimate(system, xa, xla, d, prev if step else None, r)
+            with np.errstate(all="ignore"):
+                xh, e = two_sum(xa, d)
+            xl = e if xla is None else xla + e
+            prev = d
+        else:
+            xa, xla = xh[active], (xl[active] if step else None)
+            r = residual(omega[active], xa, xla, rhs)
+            d = solve_fn(r, active)
+            est[active], rho[active] = _estimate(system, xa, xla, d,
+                                                 prev[active] if step else None, r)
+            with np.errstate(all="ignore"):
+                s, e = two_sum(xa, d)
+            xh[active] = s
+            xl[active] = e if xla is None else xla + e
+            prev[active] = d
         # est bounds the error before this correction; after it, the error is
         # smaller still (by the contraction): stop once est is near rounding.
         active = active[est[active] > 16 * eps]
@@ -480,7 +493,7 @@ def _estimate(system, xh, xl, d, prev, r):
     with np.errstate(all="ignore"):
         nd = np.max(np.abs(d), axis=-1)
         nx = np.max(np.abs(xh), axis=-1)
-        npv = np.maximum(np.max(np.abs(xh if prev is None else prev), axis=-1), tiny * nx)
+        npv = np.maximum(nx if prev is None else np.max(np.abs(prev), axis=-1), tiny * nx)
         rho = np.where(npv > 0, nd / npv, 0.0)
         own = np.minimum(rho, 1.0) if prev is not None else 1.0
         K = np.abs(difference_dd(system, xh, xl))
@@ -581,7 +594,7 @@ def evaluate_complex(system: NodalSystem, s: ArrayLike
     """
     s = np.asarray(s, dtype=complex).reshape(-1)
     omega = -1j * s
-    K, est, S, Sd, _, _ = _sweep(system, omega, True, 4, None)
+    K, est, S, Sd, _, _ = _sweep(system, omega, True, 4, None, data=True)
     est = total_error(Sd, est + residual_rounding(system, S))
     with np.errstate(all="ignore"):
         return K, est * np.abs(K)
@@ -656,8 +669,9 @@ def require_nonsingular(system: NodalSystem) -> None:
     """Raise if A(ω) is singular at every frequency (checked at two generic ω).
 
     Dense systems are first judged by the smallest singular value of the
-    balanced matrix (:func:`_balance`), and the null vector names the
-    undetermined unknowns.  Where that does not clear a system, or it is
+    matrix, as it is and then balanced (:func:`_balance`; balancing only
+    keeps a regular matrix from looking singular), and the null vector of the
+    balanced one names the undetermined unknowns.  Where that does not clear a system, or it is
     large, the refined solve decides (in double-double where float64 factors
     cannot refine, see :class:`DDSolver`): the system is regular at a trial
     ω if the solve gives a finite K and its solution's element-wise backward
@@ -699,8 +713,9 @@ def require_nonsingular(system: NodalSystem) -> None:
 def _dense_verdict(system: NodalSystem, trial):
     """(regular, judged, overflow) of a small system by the singular values at ``trial``.
 
-    ``regular``: a trial ω's balanced matrix is clearly nonsingular (or at
-    float64's edge, which the sweep flags); ``judged``: the last balanced
+    ``regular``: a trial ω's matrix, as it is or balanced, is clearly
+    nonsingular (:func:`_clearly_regular`; or at float64's edge, which the
+    sweep flags); ``judged``: the last balanced
     matrix that looked singular, for naming the null vector (None when none
     was judged: large systems, or balancing overflowed); ``overflow``:
     balancing overflowed (values over ~600 decades, such as a lever ratio of
@@ -714,6 +729,8 @@ def _dense_verdict(system: NodalSystem, trial):
     for w, A in zip(trial, dense_matrices(system, trial)):
         if not np.isfinite(A).all():
             return True, judged, overflow   # values at float64's edge: the sweep flags them
+        if _clearly_regular(A):
+            return True, judged, overflow   # (balancing only keeps a regular A from looking singular)
         # Judge the balanced matrix: a lever of ratio 1e-8 puts entries of 1e-8
         # beside 1, every value scaled by 1e-100 puts admittances of 1e-100 beside
         # the lever's ±1, and the raw singular values then look singular.
@@ -724,11 +741,16 @@ def _dense_verdict(system: NodalSystem, trial):
         if not np.isfinite(A).all():
             overflow = True
             continue
-        sv = np.linalg.svd(A, compute_uv=False)
-        if sv[-1] > 1e-13 * sv[0]:
+        if _clearly_regular(A):
             return True, judged, overflow
         judged = A
     return False, judged, overflow
+
+
+def _clearly_regular(A) -> bool:
+    """σ_min(A) > 1e-13 σ_max(A): A is nonsingular, far beyond the SVD's rounding (≈ u σ_max)."""
+    sv = np.linalg.svd(A, compute_uv=False)
+    return bool(sv[-1] > 1e-13 * sv[0])
 
 
 def _frequency_scale(system: NodalSystem) -> float:
