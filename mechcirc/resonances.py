@@ -96,6 +96,18 @@ class Resonance:
         """Natural frequency ωₙ / 2π [Hz]."""
         return in_unit(self.omega, "Hz")
 
+    def as_dict(self) -> dict:
+        """Plain data for JSON output: the fields and ``f_hz``, in the one order every
+        command writes them (``kind``, ``omega``, ``f_hz``, ``omega_d``, ``zeta``, ``error``).
+
+        Returns
+        -------
+        dict
+            str → str or float.
+        """
+        return {"kind": self.kind, "omega": self.omega, "f_hz": self.f_hz,
+                "omega_d": self.omega_d, "zeta": self.zeta, "error": self.error}
+
 
 class Resonances(list):
     """A list of :class:`Resonance` (sorted by ω) that shows itself as a table.

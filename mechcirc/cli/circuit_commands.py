@@ -259,11 +259,6 @@ def _peak_text(pk, units: dict, unit: str = "rad/s") -> str:
             f"{pk.grid_value:.4g} {q})")
 
 
-def _resonance_rows(found) -> list[dict]:
-    return [{"kind": r.kind, "omega": r.omega, "f_hz": r.f_hz, "omega_d": r.omega_d,
-             "zeta": r.zeta, "error": r.error} for r in found]
-
-
 def cmd_sweep(args) -> int:
     check_output_paths(args.output, args.touchstone, plots=(args.plot,), reads=(args.file,))
     _check_touchstone_name(args.touchstone)
@@ -376,7 +371,7 @@ def _sweep_doc(args, result, extra, sens, found, pk, singular, notes, warns) -> 
         "K": {"re": result.K.real, "im": result.K.imag},
         "Q0": {"re": result.Q0.real, "im": result.Q0.imag},
         "flags": result.flags, "n_flagged": int(np.count_nonzero(result.flags)),
-        "warnings": warns, "resonances": _resonance_rows(found),
+        "warnings": warns, "resonances": [r.as_dict() for r in found],
         "peak": _peak_doc(pk), "singular_omega": singular, "notes": notes,
     }
     if extra:
@@ -556,7 +551,7 @@ def _plot_modes(args, circuit, modes, warns: list) -> None:
 
 def _print_resonances_json(args, circuit, found, modes) -> int:
     """``resonances --json``: the roots, with their modes and sensitivities when asked."""
-    rows = _resonance_rows(found)
+    rows = [r.as_dict() for r in found]
     for row, m in zip(rows, modes or ()):
         if args.modes:
             row.update(_mode_doc(m))

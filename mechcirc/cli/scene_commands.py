@@ -131,8 +131,7 @@ def cmd_scene(args) -> int:
             "file": args.file, "theta_deg": args.theta, "drive_ratio": model.drive_ratio,
             "rotational": model.rotational, "parts": {k: list(v) for k, v in model.parts.items()},
             "ratios": model.ratios, "dropped": [{"name": n, "why": w} for n, w in model.dropped],
-            "resonances": [{"kind": r.kind, "omega": r.omega, "f_hz": r.f_hz, "zeta": r.zeta}
-                           for r in found],
+            "resonances": [r.as_dict() for r in found],
             "netlist": model.netlist, "output": args.output,
             "reduced": None if reduced is None else reduced.as_dict()})
         return 0

@@ -111,7 +111,7 @@ class CycleMap:
     def as_dict(self) -> dict:
         """Plain data for JSON output."""
         def res(row):
-            return [{"omega": r.omega, "f_hz": r.f_hz, "zeta": r.zeta} for r in row]
+            return [r.as_dict() for r in row]
 
         return {
             "omega_shaft": self.omega_shaft,

@@ -127,16 +127,17 @@ class SleyMode:
         return convert_frequency(self.omega_n, "rad/s", "Hz")
 
 
-def __getattr__(name: str):
+def __getattr__(name: str, module: str = __name__, stacklevel: int = 2):
     """``Mode``, the former name of :class:`SleyMode`, for one release (a DeprecationWarning).
 
-    Also the package's (``mechcirc.sley.Mode``).
+    Also the package's (``mechcirc.sley.Mode``), which passes its own ``module`` name
+    (the one an AttributeError names) and the ``stacklevel`` of its caller.
     """
     if name != "Mode":
-        raise AttributeError(f"module {__package__!r} has no attribute {name!r}")
-    warnings.warn("mechcirc.sley.Mode is renamed SleyMode (a mode of the linearised sley; "
+        raise AttributeError(f"module {module!r} has no attribute {name!r}")
+    warnings.warn(f"{module}.Mode is renamed SleyMode (a mode of the linearised sley; "
                   "mechcirc.modes.Mode is a circuit's mode with its shape); the old name goes "
-                  "in the next release", DeprecationWarning, stacklevel=2)
+                  "in the next release", DeprecationWarning, stacklevel=stacklevel)
     return SleyMode
 
 
