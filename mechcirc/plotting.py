@@ -401,12 +401,13 @@ MAX_CLEARANCE_PANELS, MAX_NODES = 4, 8
 def _known(kind: str, names, known) -> list:
     """``names`` (checked against ``known``, a clear error naming them otherwise)."""
     from .errors import MechcircError
+    from .sources import did_you_mean
 
     names = list(names)
     bad = [n for n in names if n not in known]
     if bad:
-        raise MechcircError(f"unknown {kind} {bad[0]!r}; the transient has "
-                            f"{', '.join(known) or 'none'}")
+        raise MechcircError(f"unknown {kind} {bad[0]!r}{did_you_mean(bad[0], known)} (the "
+                            f"transient has {', '.join(known) or 'none'})")
     return names
 
 

@@ -246,8 +246,9 @@ class TransientResult:
             xmax = float(np.nanmax(np.abs(self.x))) if self.x.size else 0.0
             qmax = float(np.nanmax(np.abs(self.force))) if self.force.size else 0.0
         return (f"<TransientResult {self.name!r}: {len(t)} samples, {span}, method "
-                f"{self.method}, {len(self.nodes)} nodes (max |x| {xmax:.4g}), "
-                f"{len(self.elements)} elements (max |force| {qmax:.4g}), "
+                f"{self.method}, {len(self.nodes)} nodes (max |x| {xmax:.4g} "
+                f"{self.units['x']}), {len(self.elements)} elements (max |force| "
+                f"{qmax:.4g} {self.units['Q']}), "
                 f"error {self.error:.2g}" + (f", {len(self.notes)} note(s)>" if self.notes
                                               else ">"))
 

@@ -1,0 +1,82 @@
+"""A new user's pass over issue 26's slips and units: what each still got wrong
+(each test failed before its fix)."""
+
+import math
+import warnings
+
+import pytest
+from cli_helpers import assert_user_error, run
+
+import mechcirc
+from mechcirc.errors import MechcircError
+from mechcirc.study import parse_spec
+from mechcirc.transient import transient
+
+ROTARY = """# rotary drive with a clearance
+drive W p 0 velocity=2 rad/s
+mass Jcrank p 0 0.05 kg*m^2
+spring kshaft p q 2.0e4 N*m/rad backlash=0.5 deg damping=5 N*m*s/rad
+mass Jsley q 0 0.8 kg*m^2
+damper cs q 0 1.5 N*m*s/rad
+"""
+
+
+def test_the_backlash_warning_gives_its_unit(tmp_path, capsys):
+    """0.5° is π/360 rad; a translational clearance of 0.2 mm is 0.0002 m."""
+    f = tmp_path / "rot.mcir"
+    f.write_text(ROTARY)
+    status, _, err = run(["check", f], capsys)
+    assert status == 0
+    assert f"spring 'kshaft' has backlash={math.pi / 360:g} rad: the frequency domain" in err
+    f.write_text("drive V p 0 velocity=0.1\nmass m p 0 1\n"
+                 "spring k p q 1e5 backlash=0.2 mm damping=5\nmass m2 q 0 2\n")
+    status, _, err = run(["check", f], capsys)
+    assert status == 0 and "spring 'k' has backlash=0.0002 m: the frequency domain" in err
+
+
+def test_transient_summary_repr_gives_units(tmp_path):
+    """A velocity step of 2 rad/s held for 0.2 s turns the driven node 0.4 rad: the summary
+    says rad and N·m for a rotary drive."""
+    f = tmp_path / "rot.mcir"
+    f.write_text(ROTARY.replace(" backlash=0.5 deg damping=5 N*m*s/rad", ""))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        r = transient(mechcirc.load(f), 0.2, drive="step")
+    text = repr(r)
+    assert "(max |x| 0.4 rad)" in text and "N·m)" in text and len(text) < 400
+
+
+def test_a_spice_deck_is_told_what_else_to_change_at_its_first_error(tmp_path, capsys):
+    """The '*' comment of a SPICE deck stops the parse at line 1: the error says there what
+    the rest needs too (statements and numbers without suffixes); a deck with a title line
+    and a SPICE name says so from its name (the text is not quoted)."""
+    deck = tmp_path / "filter.mcir"
+    deck.write_text("* SPICE deck\nL1 a b 1m\nC1 b 0 1u\n")
+    assert_user_error(["check", deck], capsys, "filter.mcir:1:1:", "'#' or ';'",
+                      "without SPICE suffixes (3e3 or 3 kN/m, not 3k)")
+    deck = tmp_path / "filter.cir"
+    deck.write_text("RC filter title\nL1 a b 1m\nC1 b 0 1u\n.end\n")
+    err = assert_user_error(["check", deck], capsys, "filter.cir:1:1: error: not a netlist",
+                            "the name is a SPICE deck's", "not 3k")
+    assert "RC filter" not in err
+    plain = tmp_path / "notes.txt"
+    plain.write_text("RC filter title\n")
+    err = assert_user_error(["check", plain], capsys, "not a netlist")
+    assert "SPICE" not in err
+
+
+def test_an_unknown_range_key_is_named():
+    spec = {"netlist": "netlists/stb_heald.mcir", "omega": {"min": 10, "max": 1e3, "points": 5},
+            "sample": {"n": 3, "params": {"eta1": {"min": 1, "maximum": 2}}}}
+    with pytest.raises(MechcircError, match=r"must be \{min, max\[, log\]\}: unknown key "
+                                            r"'maximum'; did you mean 'max'\?"):
+        parse_spec(spec, source="t.toml")
+
+
+def test_transient_element_panel_suggests_the_nearest(tmp_path, capsys):
+    f = tmp_path / "rot.mcir"
+    f.write_text(ROTARY)
+    png = tmp_path / "t.png"
+    assert_user_error(["transient", f, "--t-end", "0.01", "--plot", png, "--element", "kshft"],
+                      capsys, "unknown element 'kshft'; did you mean 'kshaft'?")
+    assert not png.exists()
