@@ -1,6 +1,7 @@
 """A new user's pass over issue 26's slips and units: what each still got wrong
 (each test failed before its fix)."""
 
+import json
 import math
 import warnings
 
@@ -80,3 +81,31 @@ def test_transient_element_panel_suggests_the_nearest(tmp_path, capsys):
     assert_user_error(["transient", f, "--t-end", "0.01", "--plot", png, "--element", "kshft"],
                       capsys, "unknown element 'kshft'; did you mean 'kshaft'?")
     assert not png.exists()
+
+
+def test_scene_cycle_and_theta_show_rpm(tmp_path, capsys):
+    """--unit rpm on a scene: n = 60·ω/2π in the table, the shaft speed, the CSV's columns
+    (named n_res…) and the --theta list; the values are the rad/s run's, converted here."""
+    import numpy as np
+
+    base = ["scene", "examples/heald_scene.toml", "--cycle", "--points", "4", "--harmonics", "1"]
+    rad, rpm = tmp_path / "rad.csv", tmp_path / "rpm.csv"
+    status, out_rad, _ = run(base + ["-o", rad], capsys)
+    assert status == 0
+    status, out, _ = run(base + ["-o", rpm, "--unit", "rpm", "--plot", tmp_path / "c.png"],
+                         capsys)
+    assert status == 0 and "resonances [rpm]" in out and "n_r1" in out
+    assert f"shaft Ω = {60 * 60 / (2 * math.pi):g} rpm" in out       # Ω = 60 rad/s
+    assert rpm.read_text().splitlines()[0].startswith("theta_deg,n_res1,")
+    a = np.loadtxt(rad, delimiter=",", skiprows=1)
+    b = np.loadtxt(rpm, delimiter=",", skiprows=1)
+    res = [i for i, c in enumerate(rad.read_text().splitlines()[0].split(",")) if "_res" in c]
+    assert np.allclose(b[:, res], a[:, res] * 60 / (2 * np.pi), rtol=1e-9)
+    assert np.array_equal(np.delete(a, res, axis=1), np.delete(b, res, axis=1))
+    status, out, _ = run(["scene", "examples/heald_scene.toml", "--theta", "40", "--json"],
+                         capsys)
+    first = json.loads(out)["resonances"][0]
+    status, out, _ = run(["scene", "examples/heald_scene.toml", "--theta", "40", "--unit",
+                          "rpm"], capsys)
+    assert status == 0
+    assert f"{first['kind']:<14} {first['omega'] * 60 / (2 * math.pi):12.6g} rpm" in out
