@@ -109,3 +109,23 @@ def test_scene_cycle_and_theta_show_rpm(tmp_path, capsys):
                           "rpm"], capsys)
     assert status == 0
     assert f"{first['kind']:<14} {first['omega'] * 60 / (2 * math.pi):12.6g} rpm" in out
+
+
+def test_mode_plot_titles_follow_unit(tmp_path, capsys):
+    """k | m with k = 4·10⁴ N/m, m = 1 kg: the undamped anti-resonance at ω = 200 rad/s is
+    n = 60·200/2π rpm in the panel's title under --unit rpm (was always rad/s)."""
+    from matplotlib.figure import Figure
+
+    from mechcirc.modes import modes
+    from mechcirc.plotting import plot_modes
+
+    f = tmp_path / "km.mcir"
+    f.write_text("drive V a 0 velocity=1\nspring k a 0 4e4\nmass m a 0 1\n")
+    found = modes(mechcirc.load(f))
+    fig = plot_modes(found, "km", fig=Figure(), unit="rpm")
+    title = fig.axes[0].get_title()
+    assert title == f"km: antiresonance n = {200 * 60 / (2 * math.pi):.6g} rpm", title
+    assert plot_modes(found, "km", fig=Figure()).axes[0].get_title() == \
+        f"km: antiresonance ω = 200 rad/s ({200 / (2 * math.pi):.4g} Hz)"
+    status, out, _ = run(["resonances", f, "--unit", "Hz", "--plot", tmp_path / "m.png"], capsys)
+    assert status == 0 and (tmp_path / "m.png").exists()

@@ -545,7 +545,7 @@ def _plot_modes(args, circuit, modes, warns: list) -> None:
                      "(give --omega-max for fewer)")
         warning_lines(warns[-1:])
     with OutputSet() as out:
-        save_figure(plot_modes(modes[:MAX_MODE_PANELS], circuit.name), args.plot,
+        save_figure(plot_modes(modes[:MAX_MODE_PANELS], circuit.name, unit=args.unit), args.plot,
                     out.path(args.plot))
 
 
