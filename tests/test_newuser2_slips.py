@@ -129,3 +129,12 @@ def test_mode_plot_titles_follow_unit(tmp_path, capsys):
         f"km: antiresonance ω = 200 rad/s ({200 / (2 * math.pi):.4g} Hz)"
     status, out, _ = run(["resonances", f, "--unit", "Hz", "--plot", tmp_path / "m.png"], capsys)
     assert status == 0 and (tmp_path / "m.png").exists()
+
+
+def test_crosscheck_steady_state_header_gives_units(tmp_path, capsys):
+    f = tmp_path / "rot.mcir"
+    f.write_text(ROTARY.replace(" backlash=0.5 deg damping=5 N*m*s/rad", ""))
+    status, out, _ = run(["crosscheck", f], capsys)
+    assert status == 0
+    assert "(b) |Q0| [N·m] from the sweep vs the harmonic transient started in its periodic " \
+        "steady state, at ω [rad/s]" in out
