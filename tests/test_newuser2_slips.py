@@ -138,3 +138,25 @@ def test_crosscheck_steady_state_header_gives_units(tmp_path, capsys):
     assert status == 0
     assert "(b) |Q0| [N·m] from the sweep vs the harmonic transient started in its periodic " \
         "steady state, at ω [rad/s]" in out
+
+
+@pytest.mark.parametrize("text, needle", [
+    (".param stiff=3\ndrive V a 0 velocity=1\nspring k a 0 {stif}\n",
+     "3:15: error: undefined parameter 'stif'; did you mean 'stiff'?"),
+    ("drive V a 0 velocity=1\nspring k a 0 {3*sqr(2)}\n",
+     "2:17: error: unknown function 'sqr'; did you mean 'sqrt'?"),
+    ("drive V a 0 velocity=1\nspring k a 0 3 N/mmm\n",
+     "2:18: error: unknown unit 'mmm'; did you mean 'mm'?"),
+])
+def test_netlist_names_suggest_the_nearest(text, needle, tmp_path, capsys):
+    f = tmp_path / "t.mcir"
+    f.write_text(text)
+    assert_user_error(["check", f], capsys, needle)
+
+
+def test_sensitivity_name_suggests_the_nearest(tmp_path, capsys):
+    f = tmp_path / "t.mcir"
+    f.write_text(".param stiff=3e4\ndrive V a 0 velocity=1\nspring k a 0 {stiff}\nmass m a 0 1\n")
+    assert_user_error(["sweep", f, "--omega-min", "1", "--omega-max", "2", "--sensitivity",
+                       "stif"], capsys, "no element, lever or .param named 'stif'; did you "
+                                        "mean 'stiff'? (there are: k, m, stiff)")
