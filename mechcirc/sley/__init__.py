@@ -26,4 +26,4 @@ def __getattr__(name: str):
     """``mechcirc.sley.Mode``, the former name of :class:`SleyMode` (see :mod:`.linear`)."""
     from . import linear
 
-    return linear.__getattr__(name, __name__, stacklevel=3)
+    return linear.renamed(name, __name__)

@@ -127,12 +127,34 @@ class SleyMode:
         return convert_frequency(self.omega_n, "rad/s", "Hz")
 
 
-def __getattr__(name: str, module: str = __name__, stacklevel: int = 2):
-    """``Mode``, the former name of :class:`SleyMode`, for one release (a DeprecationWarning).
+def __getattr__(name: str):
+    """``Mode``, the former name of :class:`SleyMode`, for one release (a DeprecationWarning)."""
+    return renamed(name, __name__)
 
-    Also the package's (``mechcirc.sley.Mode``), which passes its own ``module`` name
-    (the one an AttributeError names) and the ``stacklevel`` of its caller.
+
+def renamed(name: str, module: str) -> type[SleyMode]:
+    """A module ``__getattr__``'s answer for ``name`` (this module's and the package's).
+
+    Parameters
+    ----------
+    name : str
+        The attribute asked for: ``Mode``, the former name of :class:`SleyMode`, gives
+        that class with a DeprecationWarning (one release); any other name raises.
+    module : str
+        The module asked (``mechcirc.sley`` or ``mechcirc.sley.linear``): the one the
+        warning and the AttributeError name.
+
+    Returns
+    -------
+    type
+        :class:`SleyMode`.
+
+    Raises
+    ------
+    AttributeError
+        For any other name.
     """
+    stacklevel = 3          # the caller of the module's __getattr__
     if name != "Mode":
         raise AttributeError(f"module {module!r} has no attribute {name!r}")
     warnings.warn(f"{module}.Mode is renamed SleyMode (a mode of the linearised sley; "
