@@ -160,3 +160,18 @@ def test_sensitivity_name_suggests_the_nearest(tmp_path, capsys):
     assert_user_error(["sweep", f, "--omega-min", "1", "--omega-max", "2", "--sensitivity",
                        "stif"], capsys, "no element, lever or .param named 'stif'; did you "
                                         "mean 'stiff'? (there are: k, m, stiff)")
+
+
+def test_a_slice_of_resonances_is_still_a_table():
+    """k | m (ωₙ = 200 rad/s) in series with a second k2 | m2 (ωₙ = 100 rad/s): a slice
+    shows the same table rows as the whole list; an index is one Resonance."""
+    from mechcirc.resonances import Resonance, Resonances
+
+    c = mechcirc.parse("drive V a 0 velocity=1\nspring k a b 4e4\nmass m a b 1\n"
+                       "spring k2 b 0 1e4\nmass m2 b 0 1\n")
+    found = c.resonances()
+    part = found[1:]
+    assert isinstance(part, Resonances) and isinstance(found[0], Resonance)
+    assert repr(part).splitlines() == [repr(found).splitlines()[0],
+                                       *repr(found).splitlines()[2:]]
+    assert "<table>" in part._repr_html_()
