@@ -175,3 +175,16 @@ def test_a_slice_of_resonances_is_still_a_table():
     assert repr(part).splitlines() == [repr(found).splitlines()[0],
                                        *repr(found).splitlines()[2:]]
     assert "<table>" in part._repr_html_()
+
+
+def test_periodic_prints_its_frequencies_in_unit(capsys):
+    """The rocker drive at 300 rpm: Ω is 300 rpm itself, the 7th harmonic 2100 rpm, and the
+    resonance 223.607 rad/s is 60·223.607/2π = 2135.29 rpm."""
+    argv = ["periodic", "docs/examples/rocker_drive.toml", "--theta", "30", "--rpm", "300"]
+    status, out_rad, _ = run(argv, capsys)
+    assert status == 0 and "(Ω = 31.4159 rad/s)" in out_rad
+    status, out, _ = run(argv + ["--unit", "rpm"], capsys)
+    assert status == 0 and "(Ω = 300 rpm)" in out
+    w = float(out_rad.split("resonance ωn = ")[1].split(" rad/s")[0])
+    assert f"k = 7: kΩ = 2100 rpm, resonance ωn = {w * 60 / (2 * math.pi):.6g} rpm" in out
+    assert "kΩ [rpm]" in out
