@@ -188,3 +188,28 @@ def test_periodic_prints_its_frequencies_in_unit(capsys):
     w = float(out_rad.split("resonance ωn = ")[1].split(" rad/s")[0])
     assert f"k = 7: kΩ = 2100 rpm, resonance ωn = {w * 60 / (2 * math.pi):.6g} rpm" in out
     assert "kΩ [rpm]" in out
+
+
+def test_mode_and_sensitivity_tables_align_long_names(tmp_path, capsys):
+    """A 21-character element name: every row of the element and sensitivity tables has its
+    kind column where its header has it (it was pushed right by the name's overflow)."""
+    f = tmp_path / "t.mcir"
+    f.write_text("drive W p 0 velocity=2 rad/s\nmass Jcrank p 0 0.05 kg*m^2\n"
+                 "spring kshaft_long_name_here p q 2e4 N*m/rad\nmass Jsley q 0 0.8 kg*m^2\n"
+                 "damper cs q 0 1.5 N*m*s/rad\n")
+    status, out, _ = run(["resonances", f, "--modes", "--sensitivity"], capsys)
+    assert status == 0
+    lines = out.splitlines()
+    tables = [i for i, s in enumerate(lines) if s.startswith(("  element ", "  name "))]
+    assert len(tables) >= 4
+    for i in tables:
+        col = lines[i].index("kind")
+        rows = []
+        for s in lines[i + 1:]:
+            if not s.startswith("  ") or s.startswith(("  to raise", "  name ", "  ...")):
+                break
+            rows.append(s)
+        assert len(rows) == 4
+        for s in rows:
+            assert s[col - 1] == " " and s[col] != " ", (lines[i], s)
+            assert s[2:col].rstrip() in ("Jcrank", "kshaft_long_name_here", "Jsley", "cs")

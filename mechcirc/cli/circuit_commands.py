@@ -586,16 +586,19 @@ def _print_mode(m, kinds, units: dict) -> None:
     if not m.shape:
         print(f"  no mode shape: {m.note}")
         return
-    print(f"  {'node':<10} {'|v|':>10} {'phase [deg]':>12}")
+    # Name columns as wide as the longest name (at least 10), as in 'check'.
+    wn = max([10] + [len(n) for n in m.shape])
+    we = max([10] + [len(n) for n in m.velocity])
+    print(f"  {'node':<{wn}} {'|v|':>10} {'phase [deg]':>12}")
     for n, v in m.shape.items():
-        print(f"  {n:<10} {abs(v):>10.4g} {math.degrees(cmath.phase(v)) if v else 0:>12.4g}")
-    print(f"  {'element':<10} {'kind':<7} {'energy':>8} {'zeta part':>10} "
+        print(f"  {n:<{wn}} {abs(v):>10.4g} {math.degrees(cmath.phase(v)) if v else 0:>12.4g}")
+    print(f"  {'element':<{we}} {'kind':<7} {'energy':>8} {'zeta part':>10} "
           f"{'|v| [' + units['v'] + ']':>10} {'|Q| [' + units['Q'] + ']':>10}")
     for name, v in m.velocity.items():
         energy = f"{100 * m.energy[name]:.3g} %" if m.energy.get(name, 0) > 1e-12 else \
             "0 %" if name in m.energy else ""
         zeta = f"{m.dissipation[name]:.4g}" if name in m.dissipation else ""
-        print(f"  {name:<10} {kinds[name]:<7} {energy:>8} {zeta:>10} {abs(v):>10.4g} "
+        print(f"  {name:<{we}} {kinds[name]:<7} {energy:>8} {zeta:>10} {abs(v):>10.4g} "
               f"{abs(m.force[name]):>10.4g}")
 
 
@@ -618,9 +621,10 @@ def _print_sensitivity(m, kinds, shown: int = 10) -> None:
             break
     if moves:
         print("  to raise omega by 10 % (linear estimate): " + ", or ".join(moves))
-    print(f"  {'name':<10} {'kind':<7} {'(p/omega) d(omega)/dp':>22} {'p d(zeta)/dp':>13}")
+    w = max([10] + [len(name) for name, _, _ in ranked[:shown]])
+    print(f"  {'name':<{w}} {'kind':<7} {'(p/omega) d(omega)/dp':>22} {'p d(zeta)/dp':>13}")
     zeta = m.zeta_sensitivity | m.param_zeta_sensitivity
     for name, kind, x in ranked[:shown]:
-        print(f"  {name:<10} {kind:<7} {x:>+22.4g} {zeta[name]:>+13.3g}")
+        print(f"  {name:<{w}} {kind:<7} {x:>+22.4g} {zeta[name]:>+13.3g}")
     if len(ranked) > shown:
         print(f"  ... and {len(ranked) - shown} smaller (--json gives every one)")
