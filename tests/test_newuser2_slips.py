@@ -213,3 +213,19 @@ def test_mode_and_sensitivity_tables_align_long_names(tmp_path, capsys):
         for s in rows:
             assert s[col - 1] == " " and s[col] != " ", (lines[i], s)
             assert s[2:col].rstrip() in ("Jcrank", "kshaft_long_name_here", "Jsley", "cs")
+
+
+def test_json_of_sweep_and_transient_names_units(tmp_path, capsys):
+    """A consumer of the JSON of a rotary circuit learns that Q0 is in N·m (it could not)."""
+    f = tmp_path / "rot.mcir"
+    f.write_text(ROTARY.replace(" backlash=0.5 deg damping=5 N*m*s/rad", ""))
+    rotary = {"v": "rad/s", "Q": "N·m", "x": "rad", "K": "rad/(N·m·s)"}
+    status, out, _ = run(["sweep", f, "--omega-min", "1", "--omega-max", "10", "--points", "3",
+                          "--json"], capsys)
+    assert status == 0 and json.loads(out)["units"] == {"omega": "rad/s", **rotary}
+    status, out, _ = run(["transient", f, "--t-end", "0.01", "--json"], capsys)
+    assert status == 0 and json.loads(out)["units"] == {"t": "s", **rotary}
+    status, out, _ = run(["sweep", "netlists/stb_heald.mcir", "--omega-min", "1",
+                          "--omega-max", "10", "--points", "3", "--json"], capsys)
+    assert json.loads(out)["units"] == {"omega": "rad/s", "v": "m/s", "Q": "N", "x": "m",
+                                        "K": "m/(N·s)"}

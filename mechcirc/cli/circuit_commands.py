@@ -373,6 +373,7 @@ def _sweep_doc(args, result, extra, sens, found, pk, singular, notes, warns) -> 
         "flags": result.flags, "n_flagged": int(np.count_nonzero(result.flags)),
         "warnings": warns, "resonances": [r.as_dict() for r in found],
         "peak": _peak_doc(pk), "singular_omega": singular, "notes": notes,
+        "units": {"omega": "rad/s", **result.units},
     }
     if extra:
         doc["responses"] = extra

@@ -263,7 +263,8 @@ class TransientResult:
                "drive": ({"force": self.drive_force} if self.drive_force is not None else
                          {"velocity": self.drive_velocity} if self.drive_velocity is not None
                          else {}),
-               "error": self.error, "method": self.method, "notes": list(self.notes)}
+               "error": self.error, "method": self.method, "notes": list(self.notes),
+               "units": {"t": "s", **self.units}}
         if self.clearances:
             doc["separations"] = [dataclasses.asdict(s) for s in self.separations]
         return doc
