@@ -204,7 +204,9 @@ class _Parser:
         if kind == "name":
             if self.peek()[1] == "(" and self.peek()[0] == "op":
                 if tok not in FUNCTIONS:
-                    self.error(f"unknown function {tok!r}", col,
+                    from .sources import did_you_mean
+
+                    self.error(f"unknown function {tok!r}{did_you_mean(tok, FUNCTIONS)}", col,
                                "one of " + ", ".join(sorted(FUNCTIONS)))
                 self.take()
                 arg = self.expr(self._deeper(depth, col))
@@ -320,7 +322,9 @@ def _node_value(node: Expr, params: Mapping[str, float], values: dict, fail) -> 
             return params[v]
         if v in CONSTANTS:
             return CONSTANTS[v]
-        fail(f"undefined parameter {v!r}", node,
+        from .sources import did_you_mean
+
+        fail(f"undefined parameter {v!r}{did_you_mean(v, [*params, *CONSTANTS])}", node,
              "a parameter defined by an earlier .param line")
     if k == "neg":
         return -values.pop(id(node.args[0]))

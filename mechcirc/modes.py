@@ -396,8 +396,10 @@ def _values_named(circuit: Circuit, names) -> tuple[dict, list]:
     names = list(value) if names is None else list(dict.fromkeys(names))
     unknown = [n for n in names if n not in value]
     if unknown:
-        raise InputError(f"no element, lever or .param named {unknown[0]!r}; there are: "
-                         f"{', '.join(value)}")
+        from .sources import did_you_mean
+
+        raise InputError(f"no element, lever or .param named {unknown[0]!r}"
+                         f"{did_you_mean(unknown[0], value)} (there are: {', '.join(value)})")
     return value, names
 
 

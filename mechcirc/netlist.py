@@ -222,13 +222,19 @@ def _glued(tok: _Token) -> tuple[_Token, _Token | None]:
 #: SPICE and spreadsheet habits, checked on each line before parsing it.
 _DASHES = "\u2212\u2013\u2014\u2012\u2010"
 
+#: What a SPICE deck must change, said at its first error (not one slip a run).
+_SPICE_NOTE = ("mechcirc writes its statements as mass, spring, damper, lever, drive and its "
+               "numbers without SPICE suffixes (3e3 or 3 kN/m, not 3k)")
+#: File name endings of SPICE decks.
+_SPICE_SUFFIXES = (".cir", ".sp", ".spi", ".spice", ".net", ".ckt")
+
 
 def _check_slips(line: "_Line", raw: str) -> None:
     """Name the common slips (spaces around '=', Unicode minus, decimal comma, '*' comments)."""
     toks = line.tokens
     if toks and toks[0].text.startswith("*"):
         line.error("'*' does not start a comment in mechcirc (it does in SPICE)", toks[0].col,
-                   "'#' or ';' to start a comment")
+                   "'#' or ';' to start a comment; if this is a SPICE deck, " + _SPICE_NOTE)
     for i, tok in enumerate(toks):
         if tok.text == "=" or (tok.text.startswith("=") and i > 0) or \
                 (tok.text.endswith("=") and i + 1 < len(toks)):
@@ -257,9 +263,11 @@ def _check_first_keyword(line: _Line) -> None:
     import difflib
 
     if not difflib.get_close_matches(word, KEYWORDS, n=1, cutoff=0.6):
+        spice = str(line.source).lower().endswith(_SPICE_SUFFIXES)
         line.error("not a netlist: its first statement does not begin with a netlist "
                    "keyword (the file's text is not shown)", line.tokens[0].col,
-                   "a .mcir netlist, whose statements begin with one of " + ", ".join(KEYWORDS))
+                   "a .mcir netlist, whose statements begin with one of " + ", ".join(KEYWORDS)
+                   + ("; the name is a SPICE deck's: " + _SPICE_NOTE if spice else ""))
 
 
 def _unbrace(text: str, col: int) -> tuple[str, int]:

@@ -401,12 +401,13 @@ MAX_CLEARANCE_PANELS, MAX_NODES = 4, 8
 def _known(kind: str, names, known) -> list:
     """``names`` (checked against ``known``, a clear error naming them otherwise)."""
     from .errors import MechcircError
+    from .sources import did_you_mean
 
     names = list(names)
     bad = [n for n in names if n not in known]
     if bad:
-        raise MechcircError(f"unknown {kind} {bad[0]!r}; the transient has "
-                            f"{', '.join(known) or 'none'}")
+        raise MechcircError(f"unknown {kind} {bad[0]!r}{did_you_mean(bad[0], known)} (the "
+                            f"transient has {', '.join(known) or 'none'})")
     return names
 
 
@@ -840,7 +841,8 @@ def plot_speed_map(result, title: str | None = None, *, ax=None, min_weight: flo
     return ax
 
 
-def plot_mode(mode, name: str = "circuit", title: str | None = None, *, ax=None):
+def plot_mode(mode, name: str = "circuit", title: str | None = None, *, ax=None,
+              unit: str = "rad/s"):
     """A mode shape (a :class:`mechcirc.modes.Mode`): each node's velocity along the circuit.
 
     The nodes in the netlist's order on x; the real part of the normalised
@@ -853,6 +855,8 @@ def plot_mode(mode, name: str = "circuit", title: str | None = None, *, ax=None)
     name : str
     title : str, optional
     ax : matplotlib.axes.Axes, optional
+    unit : {"rad/s", "Hz", "rpm"}
+        The frequency in the title: ω [rad/s] with f [Hz] (default), f [Hz] or n [rpm].
 
     Returns
     -------
@@ -860,14 +864,21 @@ def plot_mode(mode, name: str = "circuit", title: str | None = None, *, ax=None)
     """
     import numpy as np
 
+    from .units import in_unit
+
     fig, ax, made = _axes(ax, (max(5.0, 0.45 * len(mode.shape) + 2), 3.5))
     r = mode.resonance
-    label = f"{r.kind} ω = {r.omega:.6g} rad/s ({r.f_hz:.4g} Hz)" + \
-        (f", ζ = {r.zeta:.3g}" if r.zeta else "")
+    at = (f"ω = {r.omega:.6g} rad/s ({r.f_hz:.4g} Hz)" if unit == "rad/s" else
+          f"{'f' if unit == 'Hz' else 'n'} = {in_unit(r.omega, unit):.6g} {unit}")
+    label = f"{r.kind} {at}" + (f", ζ = {r.zeta:.3g}" if r.zeta else "")
     ax.set_title(title or f"{name}: {label}")
-    if not mode.shape:
-        ax.text(0.5, 0.5, mode.note, ha="center", va="center", transform=ax.transAxes,
-                wrap=True)
+    if not mode.shape:           # an overdamped root: its note, on an empty panel
+        import textwrap
+
+        ax.text(0.5, 0.5, textwrap.fill(mode.note, 60), ha="center", va="center",
+                transform=ax.transAxes)
+        ax.set_xticks([])
+        ax.set_yticks([])
         return fig if made else ax
     v = np.array(list(mode.shape.values()), dtype=complex)
     x = np.arange(v.size)
@@ -888,7 +899,7 @@ def plot_mode(mode, name: str = "circuit", title: str | None = None, *, ax=None)
     return ax
 
 
-def plot_modes(found, name: str = "circuit", *, fig=None):
+def plot_modes(found, name: str = "circuit", *, fig=None, unit: str = "rad/s"):
     """One panel per mode of ``found`` (from :func:`mechcirc.modes.modes`) by
     :func:`plot_mode`, stacked, on ``fig`` when given (else a new Figure); returns the Figure.
 
@@ -897,6 +908,8 @@ def plot_modes(found, name: str = "circuit", *, fig=None):
     found : list of Mode
     name : str
     fig : matplotlib.figure.Figure, optional
+    unit : {"rad/s", "Hz", "rpm"}
+        The frequency unit of the panels' titles (:func:`plot_mode`).
 
     Returns
     -------
@@ -907,6 +920,6 @@ def plot_modes(found, name: str = "circuit", *, fig=None):
          2.6 * max(len(found), 1)))
     axes = fig.subplots(max(len(found), 1), 1, squeeze=False)[:, 0]
     for mode, ax in zip(found, axes):
-        plot_mode(mode, name, ax=ax)
+        plot_mode(mode, name, ax=ax, unit=unit)
     fig.tight_layout()
     return fig

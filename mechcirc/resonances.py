@@ -96,14 +96,31 @@ class Resonance:
         """Natural frequency ωₙ / 2π [Hz]."""
         return in_unit(self.omega, "Hz")
 
+    def as_dict(self) -> dict:
+        """Plain data for JSON output: the fields and ``f_hz``, in the one order every
+        command writes them (``kind``, ``omega``, ``f_hz``, ``omega_d``, ``zeta``, ``error``).
+
+        Returns
+        -------
+        dict
+            str → str or float.
+        """
+        return {"kind": self.kind, "omega": self.omega, "f_hz": self.f_hz,
+                "omega_d": self.omega_d, "zeta": self.zeta, "error": self.error}
+
 
 class Resonances(list):
     """A list of :class:`Resonance` (sorted by ω) that shows itself as a table.
 
-    It is a plain ``list`` in every other respect (indexing, slicing to a
-    list, pickling).  ``repr`` and ``_repr_html_`` (notebooks) give the table
-    ``mechcirc resonances`` prints; :meth:`table` gives it in Hz or rpm.
+    It is a plain ``list`` in every other respect (indexing, pickling); a
+    slice is a Resonances too (``found[:3]`` shows as a table).  ``repr`` and
+    ``_repr_html_`` (notebooks) give the table ``mechcirc resonances`` prints;
+    :meth:`table` gives it in Hz or rpm.
     """
+
+    def __getitem__(self, i):
+        got = super().__getitem__(i)
+        return Resonances(got) if isinstance(i, slice) else got
 
     def table(self, unit: str = "rad/s") -> list[str]:
         """The table's lines: header, then one line per root; frequencies in ``unit``.

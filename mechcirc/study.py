@@ -528,7 +528,8 @@ def _random_range(kind, name, r) -> tuple[float, float, bool]:
             set(r) - {"min", "max", "log"}:
         extra = sorted(map(str, set(r) - {"min", "max", "log"})) if isinstance(r, dict) else []
         _fail(where, f"{kind}.params.{name} must be {{min, max[, log]}}"
-                     f"{did_you_mean(extra[0], ('min', 'max', 'log')) if extra else ''}")
+                     + (f": unknown key {extra[0]!r}"
+                        f"{did_you_mean(extra[0], ('min', 'max', 'log'))}" if extra else ""))
     lo = _number((*where, "min"), r["min"], f"{kind}.params.{name}.min")
     hi = _number((*where, "max"), r["max"], f"{kind}.params.{name}.max")
     if not lo <= hi or (r.get("log") and lo <= 0):

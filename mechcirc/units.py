@@ -201,7 +201,10 @@ def parse_unit(text: str) -> Unit:
         atom = m.group(1)
         found = _atom(atom)
         if found is None:
-            raise UnitError(f"unknown unit {atom!r}", i, f"one of {known}")
+            from .sources import did_you_mean
+
+            raise UnitError(f"unknown unit {atom!r}{did_you_mean(atom, ATOMS)}", i,
+                            f"one of {known}")
         power = int(m.group(2)) if m.group(2) else 2 if m.group(3) else 3 if m.group(4) else 1
         f, d = found
         f = Fraction(*f) if isinstance(f, tuple) else f

@@ -344,7 +344,7 @@ BAD = [
     ("mass m1 a 0 -2\ndrive V a 0 velocity=1\n",
      "1:13: error: mass 'm1' must be > 0 kg, got -2 (expected a positive value)"),
     (".param m=2\nmass m1 a 0 mm\ndrive V a 0 velocity=1\n",
-     "2:13: error: undefined parameter 'mm' (expected a parameter defined by an earlier "
+     "2:13: error: undefined parameter 'mm'; did you mean 'm'? (expected a parameter defined by an earlier "
      ".param line)"),
     ("mass m1 a 0 2\nspring m1 a 0 5\ndrive V a 0 velocity=1\n",
      "2:8: error: element name 'm1' is already used on line 1 (expected a unique name)"),

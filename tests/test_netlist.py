@@ -199,8 +199,8 @@ def _outcome(text, *, fast):
     ("damper c1 a 0 0",
      "t.mcir:2:15: error: damper 'c1' must be > 0 N·s/m, got 0 (expected a positive value)"),
     ("mass m1 a 0 5 kgg",
-     "t.mcir:2:15: error: unknown unit 'kgg' (expected one of kg, g, t, N, kN, m, mm, cm, s, "
-     "ms, rad, deg, Hz, rpm, min, h and prefixed g/m/s/N/Hz/rad)"),
+     "t.mcir:2:15: error: unknown unit 'kgg'; did you mean 'kg'? (expected one of kg, g, t, N, "
+     "kN, m, mm, cm, s, ms, rad, deg, Hz, rpm, min, h and prefixed g/m/s/N/Hz/rad)"),
     ("mass m1 a 0 5 N/m",
      "t.mcir:2:15: error: unit 'N/m' is a stiffness; a mass value needs mass or moment of "
      "inertia (expected mass (kg, g, t) or moment of inertia (kg*m^2))"),

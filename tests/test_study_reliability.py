@@ -413,7 +413,7 @@ def test_a_parquet_sample_file(tmp_path):
     ({"analysis": "resonance", "grid": {"eta1": [1.0]}}, "did you mean 'resonances'?"),
     ({"grid": {"eta1": {"mn": 1, "max": 2, "num": 3}}}, "got max, mn, num; did you mean 'min'?"),
     ({"sample": {"n": 3, "params": {"eta1": {"mni": 1, "max": 2}}}},
-     "sample.params.eta1 must be {min, max[, log]}; did you mean 'min'?"),
+     "sample.params.eta1 must be {min, max[, log]}: unknown key 'mni'; did you mean 'min'?"),
 ])
 def test_bad_spec_keys_suggest_the_nearest(data, fragment):
     base = {"netlist": str(STB), "omega": OMEGA, "grid": {"eta1": [0.8]}}

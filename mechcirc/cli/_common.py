@@ -459,6 +459,7 @@ def load_with_warnings(path):
     """Load and reduce a netlist, returning the circuit and the warnings raised."""
     import warnings
 
+    from ..circuit import units_of
     from ..errors import NotSeriesParallelError
     from ..netlist import load
 
@@ -470,7 +471,8 @@ def load_with_warnings(path):
         except NotSeriesParallelError:
             _ = circuit.nodal   # nodal analysis takes over; its own errors surface here
     messages = [str(w.message) for w in caught]
-    messages += [f"spring {e.name!r} has backlash={e.backlash:g}: the frequency domain takes "
+    x = units_of(circuit.drive)["x"]
+    messages += [f"spring {e.name!r} has backlash={e.backlash:g} {x}: the frequency domain takes "
                  "its contact as closed (linearised); 'mechcirc transient' integrates the gap"
                  for e in circuit.elements if e.kind == "spring" and e.backlash >= 1e-10]
     return circuit, messages

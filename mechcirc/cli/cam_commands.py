@@ -177,9 +177,16 @@ def _warnings(cam) -> list:
 
 
 def _as_json(cam, motion, warnings) -> dict:
-    """The ``--json`` document: the cam, its checks, warnings and profile."""
+    """The ``--json`` document: the cam, its checks, warnings and profile.
+
+    ``turned_back`` is true where an oscillating flat face turns back (the undercut
+    check at −∞, its angle in ``checks``): no cam gives that motion, so ``profile``
+    is null, as the export refuses it, rather than the envelope's points running off
+    to infinity.
+    """
     import numpy as np
 
+    turned_back = cam.check("undercut").value == -math.inf
     return {
         "motion": motion.spec, "follower": cam.follower, "base_radius": cam.base_radius,
         "roller_radius": cam.roller_radius, "offset": cam.offset, "arm": cam.arm,
@@ -189,10 +196,10 @@ def _as_json(cam, motion, warnings) -> dict:
                                 "limit_deg": math.degrees(c.limit)}
                                if c.name == "pressure_angle" else {"value": c.value})}
                    for c in cam.checks},
-        "warnings": warnings,
-        "profile": {"theta_deg": np.degrees(cam.theta), "x": cam.x, "y": cam.y,
-                    "pressure_angle_deg": np.degrees(cam.pressure_angle),
-                    "radius_of_curvature": cam.rho}}
+        "warnings": warnings, "turned_back": turned_back,
+        "profile": None if turned_back else {
+            "theta_deg": np.degrees(cam.theta), "x": cam.x, "y": cam.y,
+            "pressure_angle_deg": np.degrees(cam.pressure_angle), "radius_of_curvature": cam.rho}}
 
 
 def _report(cam, what: str, written: list) -> None:

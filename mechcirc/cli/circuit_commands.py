@@ -259,11 +259,6 @@ def _peak_text(pk, units: dict, unit: str = "rad/s") -> str:
             f"{pk.grid_value:.4g} {q})")
 
 
-def _resonance_rows(found) -> list[dict]:
-    return [{"kind": r.kind, "omega": r.omega, "f_hz": r.f_hz, "omega_d": r.omega_d,
-             "zeta": r.zeta, "error": r.error} for r in found]
-
-
 def cmd_sweep(args) -> int:
     check_output_paths(args.output, args.touchstone, plots=(args.plot,), reads=(args.file,))
     _check_touchstone_name(args.touchstone)
@@ -376,8 +371,9 @@ def _sweep_doc(args, result, extra, sens, found, pk, singular, notes, warns) -> 
         "K": {"re": result.K.real, "im": result.K.imag},
         "Q0": {"re": result.Q0.real, "im": result.Q0.imag},
         "flags": result.flags, "n_flagged": int(np.count_nonzero(result.flags)),
-        "warnings": warns, "resonances": _resonance_rows(found),
+        "warnings": warns, "resonances": [r.as_dict() for r in found],
         "peak": _peak_doc(pk), "singular_omega": singular, "notes": notes,
+        "units": {"omega": "rad/s", **result.units},
     }
     if extra:
         doc["responses"] = extra
@@ -550,13 +546,13 @@ def _plot_modes(args, circuit, modes, warns: list) -> None:
                      "(give --omega-max for fewer)")
         warning_lines(warns[-1:])
     with OutputSet() as out:
-        save_figure(plot_modes(modes[:MAX_MODE_PANELS], circuit.name), args.plot,
+        save_figure(plot_modes(modes[:MAX_MODE_PANELS], circuit.name, unit=args.unit), args.plot,
                     out.path(args.plot))
 
 
 def _print_resonances_json(args, circuit, found, modes) -> int:
     """``resonances --json``: the roots, with their modes and sensitivities when asked."""
-    rows = _resonance_rows(found)
+    rows = [r.as_dict() for r in found]
     for row, m in zip(rows, modes or ()):
         if args.modes:
             row.update(_mode_doc(m))
@@ -591,16 +587,19 @@ def _print_mode(m, kinds, units: dict) -> None:
     if not m.shape:
         print(f"  no mode shape: {m.note}")
         return
-    print(f"  {'node':<10} {'|v|':>10} {'phase [deg]':>12}")
+    # Name columns as wide as the longest name (at least 10), as in 'check'.
+    wn = max([10] + [len(n) for n in m.shape])
+    we = max([10] + [len(n) for n in m.velocity])
+    print(f"  {'node':<{wn}} {'|v|':>10} {'phase [deg]':>12}")
     for n, v in m.shape.items():
-        print(f"  {n:<10} {abs(v):>10.4g} {math.degrees(cmath.phase(v)) if v else 0:>12.4g}")
-    print(f"  {'element':<10} {'kind':<7} {'energy':>8} {'zeta part':>10} "
+        print(f"  {n:<{wn}} {abs(v):>10.4g} {math.degrees(cmath.phase(v)) if v else 0:>12.4g}")
+    print(f"  {'element':<{we}} {'kind':<7} {'energy':>8} {'zeta part':>10} "
           f"{'|v| [' + units['v'] + ']':>10} {'|Q| [' + units['Q'] + ']':>10}")
     for name, v in m.velocity.items():
         energy = f"{100 * m.energy[name]:.3g} %" if m.energy.get(name, 0) > 1e-12 else \
             "0 %" if name in m.energy else ""
         zeta = f"{m.dissipation[name]:.4g}" if name in m.dissipation else ""
-        print(f"  {name:<10} {kinds[name]:<7} {energy:>8} {zeta:>10} {abs(v):>10.4g} "
+        print(f"  {name:<{we}} {kinds[name]:<7} {energy:>8} {zeta:>10} {abs(v):>10.4g} "
               f"{abs(m.force[name]):>10.4g}")
 
 
@@ -623,9 +622,10 @@ def _print_sensitivity(m, kinds, shown: int = 10) -> None:
             break
     if moves:
         print("  to raise omega by 10 % (linear estimate): " + ", or ".join(moves))
-    print(f"  {'name':<10} {'kind':<7} {'(p/omega) d(omega)/dp':>22} {'p d(zeta)/dp':>13}")
+    w = max([10] + [len(name) for name, _, _ in ranked[:shown]])
+    print(f"  {'name':<{w}} {'kind':<7} {'(p/omega) d(omega)/dp':>22} {'p d(zeta)/dp':>13}")
     zeta = m.zeta_sensitivity | m.param_zeta_sensitivity
     for name, kind, x in ranked[:shown]:
-        print(f"  {name:<10} {kind:<7} {x:>+22.4g} {zeta[name]:>+13.3g}")
+        print(f"  {name:<{w}} {kind:<7} {x:>+22.4g} {zeta[name]:>+13.3g}")
     if len(ranked) > shown:
         print(f"  ... and {len(ranked) - shown} smaller (--json gives every one)")

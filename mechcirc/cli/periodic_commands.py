@@ -53,6 +53,9 @@ def register(sub) -> None:
                    help="how K is evaluated (default auto)")
     p.add_argument("-o", "--output", metavar="CSV", help="write the table as CSV")
     p.add_argument("--plot", metavar="IMAGE", help="plot (PNG, SVG or PDF)")
+    p.add_argument("--unit", choices=("rad/s", "Hz", "rpm"), default="rad/s",
+                   help="unit of the frequencies printed: shaft speed Ω, harmonics kΩ, "
+                        "resonances ωn (default rad/s; --json stays in rad/s)")
     add_handler(p, cmd_periodic)
 
 
@@ -118,10 +121,16 @@ def _one_speed(args, circuit, elements, motion) -> int:
     import numpy as np
 
     from ..periodic import periodic
+    from ..units import in_unit
 
     r = periodic(circuit, args.rpm, motion=motion, tol=args.tol, harmonics=args.harmonics,
                  points=args.angles, elements=elements, near=args.near, method=args.method)
     unit, vu = r.units["Q"], r.units["v"]
+    fu = args.unit
+
+    def inu(w):
+        return in_unit(w, fu)
+
     cols = [r.angle_deg, r.x, r.v, r.Q]
     head = ["angle_deg", "x", "v", "Q"]
     for name in elements:
@@ -133,7 +142,7 @@ def _one_speed(args, circuit, elements, motion) -> int:
         return _print_one_speed_json(args, r)
     d = circuit.drive
     print(f"{args.file}: drive {d.name} {(motion or d.motion).spec} at {r.rpm:g} rpm "
-          f"(Ω = {r.omega_shaft:.6g} rad/s)")
+          f"(Ω = {inu(r.omega_shaft):.6g} {fu})")
     print(f"  {r.harmonics} harmonics; estimated error {r.error:.2g} of the peak "
           f"(asked {r.tol:g})")
     if r.unbounded:
@@ -145,17 +154,17 @@ def _one_speed(args, circuit, elements, motion) -> int:
     if near.size:
         print(f"  harmonics within {args.near:.0%} of a resonance:")
         for i in near:
-            print(f"    k = {r.k[i]}: kΩ = {r.omega[i]:.6g} rad/s, resonance "
-                  f"ωn = {r.nearest[i]:.6g} rad/s ({r.distance[i]:+.2%}), "
+            print(f"    k = {r.k[i]}: kΩ = {inu(r.omega[i]):.6g} {fu}, resonance "
+                  f"ωn = {inu(r.nearest[i]):.6g} {fu} ({r.distance[i]:+.2%}), "
                   f"|Q_k| = {abs(r.amplitude[i]):.4g} {unit}")
     else:
         print(f"  no harmonic within {args.near:.0%} of a resonance")
     top = np.argsort(-np.nan_to_num(np.abs(r.amplitude), nan=np.inf))[:8]
-    print(f"  {'k':>5} {'kΩ [rad/s]':>12} {f'|V_k| [{vu}]':>12} {f'|Q_k| [{unit}]':>12} "
+    print(f"  {'k':>5} {f'kΩ [{fu}]':>12} {f'|V_k| [{vu}]':>12} {f'|Q_k| [{unit}]':>12} "
           f"{'nearest ωn':>12} {'distance':>9}")
     for i in sorted(top):
-        print(f"  {r.k[i]:>5} {r.omega[i]:>12.6g} {abs(r.V[i]):>12.4g} "
-              f"{abs(r.amplitude[i]):>12.4g} {r.nearest[i]:>12.6g} {r.distance[i]:>+9.2%}")
+        print(f"  {r.k[i]:>5} {inu(r.omega[i]):>12.6g} {abs(r.V[i]):>12.4g} "
+              f"{abs(r.amplitude[i]):>12.4g} {inu(r.nearest[i]):>12.6g} {r.distance[i]:>+9.2%}")
     if r.harmonics > top.size:
         print(f"  (the {top.size} largest of {r.harmonics} harmonics; --json lists all)")
     for name in elements:
@@ -189,6 +198,7 @@ def _speed_map(args, circuit, elements, motion) -> int:
     import numpy as np
 
     from ..periodic import speed_map
+    from ..units import in_unit
 
     m = speed_map(circuit, args.rpm_min, args.rpm_max, args.points, motion=motion, tol=args.tol,
                   harmonics=args.harmonics, elements=elements, method=args.method)
@@ -219,7 +229,8 @@ def _speed_map(args, circuit, elements, motion) -> int:
     print(f"  speeds where a harmonic meets a resonance (k·Ω = ωn; {len(strong)} of "
           f"{len(crossings)} with a harmonic of at least 1e-3 of the drive velocity):")
     for c in strong[:30]:
-        print(f"    {c['rpm']:10.6g} rpm: k = {c['k']:>3}, ωn = {c['omega_n']:.6g} rad/s "
+        print(f"    {c['rpm']:10.6g} rpm: k = {c['k']:>3}, ωn = "
+              f"{in_unit(c['omega_n'], args.unit):.6g} {args.unit} "
               f"(ζ = {c['zeta']:.3g}, harmonic weight {c['weight']:.2g})")
     if len(strong) > 30:
         print(f"    ... {len(strong) - 30} more (--json lists all)")

@@ -48,9 +48,9 @@ def _register_scene(sub) -> None:
     p.add_argument("--mode", type=count(1, 10_000), metavar="N",
                    help="--theta: draw resonance N (drive held; 1 = lowest) on the linkage "
                         "into --plot")
-    p.add_argument("--unit", choices=("rad/s", "Hz"), default="rad/s",
-                   help="--cycle --plot: frequency unit of the plot (default rad/s, as the "
-                        "table)")
+    p.add_argument("--unit", choices=("rad/s", "Hz", "rpm"), default="rad/s",
+                   help="frequency unit of the tables, the --cycle CSV's column names and "
+                        "plot (default rad/s)")
     add_handler(p, cmd_scene)
 
 
@@ -131,8 +131,7 @@ def cmd_scene(args) -> int:
             "file": args.file, "theta_deg": args.theta, "drive_ratio": model.drive_ratio,
             "rotational": model.rotational, "parts": {k: list(v) for k, v in model.parts.items()},
             "ratios": model.ratios, "dropped": [{"name": n, "why": w} for n, w in model.dropped],
-            "resonances": [{"kind": r.kind, "omega": r.omega, "f_hz": r.f_hz, "zeta": r.zeta}
-                           for r in found],
+            "resonances": [r.as_dict() for r in found],
             "netlist": model.netlist, "output": args.output,
             "reduced": None if reduced is None else reduced.as_dict()})
         return 0
@@ -142,6 +141,8 @@ def cmd_scene(args) -> int:
 
 def _print_scene(args, scene, model, found, reduced, drawn: bool) -> None:
     """What ``mechcirc scene --theta`` prints without ``--json``."""
+    from ..units import in_unit
+
     unit = "rad/s" if model.rotational else "m/s"
     print(f"{args.file}: scene {scene.name!r} at θ = {args.theta:g}° "
           f"(drive {unit}, drive ratio r0 = {model.drive_ratio:.6g})")
@@ -155,7 +156,10 @@ def _print_scene(args, scene, model, found, reduced, drawn: bool) -> None:
     print("resonances (K = 0) and anti-resonances (K = ∞):")
     for r in found:
         z = f"  zeta={r.zeta:.4g}" if r.zeta else ""
-        print(f"  {r.kind:<14} {r.omega:12.6g} rad/s  {r.f_hz:10.5g} Hz{z}")
+        if args.unit == "rad/s":
+            print(f"  {r.kind:<14} {r.omega:12.6g} rad/s  {r.f_hz:10.5g} Hz{z}")
+        else:
+            print(f"  {r.kind:<14} {in_unit(r.omega, args.unit):12.6g} {args.unit}{z}")
     if reduced is not None:
         what = "K at the drive" if reduced.output is None else f"the force in {reduced.output}"
         print(f"reduced for {what} over ω ∈ [{reduced.band[0]:g}, {reduced.band[1]:g}] rad/s: "
@@ -175,6 +179,7 @@ def _cycle(args, scene) -> int:
     from ..errors import MechcircError
     from ..outputs import OutputSet
     from ..scene.cycle import cycle_map, plot_cycle
+    from ..units import FREQUENCY_UNITS, in_unit
 
     if args.points < 2 or args.points > 100_000:
         raise MechcircError(f"--points must be between 2 and 100000, got {args.points}")
@@ -186,13 +191,16 @@ def _cycle(args, scene) -> int:
         cmap = cycle_map(scene, points=args.points, harmonics=args.harmonics,
                          reflect=args.reflect, progress=lambda done, total: bar.update(1))
     W = cmap.natural_frequencies()
+    u = args.unit
+    name = FREQUENCY_UNITS[u][0]
     with OutputSet() as out:
         if args.output:
             with open(out.path(args.output), "w", encoding="utf-8", newline="") as fh:
-                cols = ["theta_deg"] + [f"omega_res{k + 1}" for k in range(W.shape[1])] + \
+                cols = ["theta_deg"] + [f"{name}_res{k + 1}" for k in range(W.shape[1])] + \
                     [f"abs_Q0_h{h}" for h in cmap.harmonics]
                 fh.write(",".join(cols) + "\n")
-                table = np.column_stack([np.degrees(cmap.theta), W, np.abs(cmap.Q0)])
+                table = np.column_stack([np.degrees(cmap.theta), in_unit(W, args.unit),
+                                         np.abs(cmap.Q0)])
                 np.savetxt(fh, table, delimiter=",", fmt="%.10g")
         if args.plot:
             fig = plot_cycle(cmap, unit=args.unit)
@@ -204,23 +212,25 @@ def _cycle(args, scene) -> int:
         return 0
     unit = "N·m" if cmap.rotational else "N"
     print(f"{args.file}: scene {scene.name!r}, {len(cmap.theta)} crank angles, shaft "
-          f"Ω = {cmap.omega_shaft:g} rad/s")
-    head = "  θ [deg]  " + " ".join(f"{'ω_r' + str(k + 1):>10}" for k in range(W.shape[1])) + \
-        "  " + " ".join(f"{'|Q0| h=' + str(h):>11}" for h in cmap.harmonics)
-    print(f"resonances [rad/s] and |Q0| [{unit}] at h·Ω:")
+          f"Ω = {in_unit(cmap.omega_shaft, u):g} {u}")
+    sym = {"rad/s": "ω", "Hz": "f", "rpm": "n"}[u]
+    head = "  θ [deg]  " + " ".join(f"{sym + '_r' + str(k + 1):>10}" for k in range(W.shape[1])) \
+        + "  " + " ".join(f"{'|Q0| h=' + str(h):>11}" for h in cmap.harmonics)
+    print(f"resonances [{u}] and |Q0| [{unit}] at h·Ω:")
     print(head)
     for i, th in enumerate(cmap.theta):
         if i in cmap.skipped:
             print(f"  {math.degrees(th):7.2f}  skipped: {cmap.skipped[i]}")
             continue
-        print(f"  {math.degrees(th):7.2f}  " + " ".join(f"{w:10.5g}" for w in W[i]) + "  "
+        print(f"  {math.degrees(th):7.2f}  " + " ".join(f"{w:10.5g}" for w in in_unit(W[i], u))
+              + "  "
               + " ".join(f"{abs(q):11.4g}" for q in cmap.Q0[i]))
     cross = cmap.crossings()
     if cross:
         print("a resonance meets a shaft harmonic at:")
         for c in cross:
             print(f"  θ ≈ {c['theta_deg']:7.2f}°: resonance {c['mode'] + 1} = "
-                  f"{c['harmonic']}·Ω = {c['omega']:g} rad/s")
+                  f"{c['harmonic']}·Ω = {in_unit(c['omega'], u):g} {u}")
     else:
         print("no resonance meets a harmonic h·Ω (h ≤ "
               f"{cmap.harmonics[-1]}) over the cycle")

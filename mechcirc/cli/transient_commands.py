@@ -173,9 +173,12 @@ def cmd_crosscheck_netlist(args) -> int:
         print(f"{head}  ringing {r['ringing_omega']:12.6g}  decay {r['decay']:.5g} 1/s "
               f"(expected {r['decay_expected']:.5g})  rel. diff {r['rel_error']:.2e}: "
               f"{verdict_text(r)}")
-    label = "|Q0|" if result.drive_kind == "velocity" else "|v0|"
+    from ..circuit import units_of
+
+    u = units_of(circuit.drive)
+    label = f"|Q0| [{u['Q']}]" if result.drive_kind == "velocity" else f"|v0| [{u['v']}]"
     print(f"(b) {label} from the sweep vs the harmonic transient started in its periodic "
-          "steady state")
+          "steady state, at ω [rad/s]")
     for s in result.steady_state:
         if s["measured"] is None:
             print(f"    ω {s['omega']:12.6g}: {verdict_text(s)}")

@@ -111,7 +111,7 @@ class CycleMap:
     def as_dict(self) -> dict:
         """Plain data for JSON output."""
         def res(row):
-            return [{"omega": r.omega, "f_hz": r.f_hz, "zeta": r.zeta} for r in row]
+            return [r.as_dict() for r in row]
 
         return {
             "omega_shaft": self.omega_shaft,
@@ -330,12 +330,15 @@ def plot_cycle(cmap: CycleMap, ax=None, *, fig=None, unit: str = "rad/s"):
     Two stacked panels on ``fig`` (a new ``matplotlib.figure.Figure`` by
     default; pyplot and the backend are left alone); returns the Figure.
     ``unit`` is the frequency unit of the upper panel, ``"rad/s"`` (as the
-    table) or ``"Hz"``.  Every line is labelled: each resonance branch, each
+    table), ``"Hz"`` or ``"rpm"``.  Every line is labelled: each resonance branch, each
     harmonic line h·Ω and the crossings.  ``ax`` is accepted for the common
     convention but the plot needs two panels: pass ``fig=`` instead.
     """
-    if unit not in ("rad/s", "Hz"):
-        raise ValueError(f"unit must be 'rad/s' or 'Hz', got {unit!r}")
+    from ..units import FREQUENCY_UNITS
+
+    if unit not in FREQUENCY_UNITS:
+        raise ValueError(f"unit must be one of {', '.join(map(repr, FREQUENCY_UNITS))}, "
+                         f"got {unit!r}")
     if ax is not None and fig is None:
         fig = ax.figure
         fig.delaxes(ax)

@@ -13,7 +13,6 @@ printed cells, docs/sley.md).
 
 from .linear import (LinearModel, SleyMode, eigenfrequencies, linearise, to_circuit,
                      to_netlist)
-from .linear import __getattr__  # noqa: F401  (Mode, the former name of SleyMode, warns)
 from .models import DEFAULT_ALPHA_DEG, ParameterError, SleyParameters
 from .presets import PAPER, all_presets, preset
 from .simulation import METHODS, SleyResult, simulate, simulate_batch, simulate_params
@@ -21,3 +20,10 @@ from .simulation import METHODS, SleyResult, simulate, simulate_batch, simulate_
 __all__ = ["SleyParameters", "ParameterError", "DEFAULT_ALPHA_DEG", "preset", "all_presets",
            "PAPER", "simulate", "simulate_params", "simulate_batch", "SleyResult", "METHODS",
            "linearise", "eigenfrequencies", "to_circuit", "to_netlist", "LinearModel", "SleyMode"]
+
+
+def __getattr__(name: str):
+    """``mechcirc.sley.Mode``, the former name of :class:`SleyMode` (see :mod:`.linear`)."""
+    from . import linear
+
+    return linear.renamed(name, __name__)

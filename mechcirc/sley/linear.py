@@ -128,15 +128,38 @@ class SleyMode:
 
 
 def __getattr__(name: str):
-    """``Mode``, the former name of :class:`SleyMode`, for one release (a DeprecationWarning).
+    """``Mode``, the former name of :class:`SleyMode`, for one release (a DeprecationWarning)."""
+    return renamed(name, __name__)
 
-    Also the package's (``mechcirc.sley.Mode``).
+
+def renamed(name: str, module: str) -> type[SleyMode]:
+    """A module ``__getattr__``'s answer for ``name`` (this module's and the package's).
+
+    Parameters
+    ----------
+    name : str
+        The attribute asked for: ``Mode``, the former name of :class:`SleyMode`, gives
+        that class with a DeprecationWarning (one release); any other name raises.
+    module : str
+        The module asked (``mechcirc.sley`` or ``mechcirc.sley.linear``): the one the
+        warning and the AttributeError name.
+
+    Returns
+    -------
+    type
+        :class:`SleyMode`.
+
+    Raises
+    ------
+    AttributeError
+        For any other name.
     """
+    stacklevel = 3          # the caller of the module's __getattr__
     if name != "Mode":
-        raise AttributeError(f"module {__package__!r} has no attribute {name!r}")
-    warnings.warn("mechcirc.sley.Mode is renamed SleyMode (a mode of the linearised sley; "
+        raise AttributeError(f"module {module!r} has no attribute {name!r}")
+    warnings.warn(f"{module}.Mode is renamed SleyMode (a mode of the linearised sley; "
                   "mechcirc.modes.Mode is a circuit's mode with its shape); the old name goes "
-                  "in the next release", DeprecationWarning, stacklevel=2)
+                  "in the next release", DeprecationWarning, stacklevel=stacklevel)
     return SleyMode
 
 

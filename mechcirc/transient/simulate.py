@@ -246,8 +246,9 @@ class TransientResult:
             xmax = float(np.nanmax(np.abs(self.x))) if self.x.size else 0.0
             qmax = float(np.nanmax(np.abs(self.force))) if self.force.size else 0.0
         return (f"<TransientResult {self.name!r}: {len(t)} samples, {span}, method "
-                f"{self.method}, {len(self.nodes)} nodes (max |x| {xmax:.4g}), "
-                f"{len(self.elements)} elements (max |force| {qmax:.4g}), "
+                f"{self.method}, {len(self.nodes)} nodes (max |x| {xmax:.4g} "
+                f"{self.units['x']}), {len(self.elements)} elements (max |force| "
+                f"{qmax:.4g} {self.units['Q']}), "
                 f"error {self.error:.2g}" + (f", {len(self.notes)} note(s)>" if self.notes
                                               else ">"))
 
@@ -262,7 +263,8 @@ class TransientResult:
                "drive": ({"force": self.drive_force} if self.drive_force is not None else
                          {"velocity": self.drive_velocity} if self.drive_velocity is not None
                          else {}),
-               "error": self.error, "method": self.method, "notes": list(self.notes)}
+               "error": self.error, "method": self.method, "notes": list(self.notes),
+               "units": {"t": "s", **self.units}}
         if self.clearances:
             doc["separations"] = [dataclasses.asdict(s) for s in self.separations]
         return doc
