@@ -367,10 +367,15 @@ def test_transient_plot_units_forces_and_clearance_band(msl_transient):
 def test_transient_plot_keeps_the_callers_axes_and_names_units(msl_transient):
     from matplotlib.figure import Figure
 
+    from mechcirc.errors import MechcircError
+
     fig = Figure()
-    mine = fig.add_subplot(3, 1, 1)
+    top, bottom = fig.subfigures(2, 1)
+    mine = top.add_subplot()
     mine.plot([0, 1], [0, 1])
-    assert msl_transient.plot(fig=fig) is fig
+    with pytest.raises(MechcircError, match="plot_transient.*already holds 1 Axes.*subfigure"):
+        msl_transient.plot(fig=fig)            # its panels would cover the caller's
+    assert msl_transient.plot(fig=bottom) is bottom
     assert mine in fig.axes and len(mine.lines) == 1 and len(fig.axes) == 3
     _, ax = _axes()
     assert msl_transient.plot(ax=ax, what="v") is ax
