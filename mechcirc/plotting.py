@@ -297,7 +297,7 @@ def _bode_figure(fig, result, curves, resonances, peak, unit: str, extra: dict, 
     # Fixed margins that hold every label (the panels share x: no tick labels
     # between them), so neither tight_layout nor a tight bounding box at
     # saving has to measure every tick label once more (≈ 0.3 s each).
-    height = fig.get_figheight()
+    height = fig.bbox.height / fig.dpi      # [in]; a SubFigure's own, not its parent's
     fig.subplots_adjust(left=0.13, right=0.97, hspace=0.08, top=1 - 0.85 / height,
                         bottom=0.55 / height)
     return fig
@@ -493,7 +493,6 @@ def plot_transient(result, nodes=None, what: str = "x", elements=None, title: st
     -------
     The Axes given as ``ax``, or the Figure of the panels.
     """
-    import numpy as np
 
     if what not in ("x", "v") or (what == "v" and result.v is None):
         from .errors import MechcircError
