@@ -29,13 +29,15 @@ follows the extension given to :func:`mechcirc.cli._common.save_figure`
 from __future__ import annotations
 
 import math
+from typing import Literal
 
 __all__ = ["new_panels", "plot_sweep", "plot_transient", "plot_forces", "plot_comparison", "plot_study", "plot_periodic",
            "plot_speed_map", "plot_mode", "plot_modes"]
 
 
 def new_panels(fig, rows: int = 1, cols: int = 1, *, caller: str, figsize=(8.0, 6.0),
-               layout: str | None = None, **subplots_kw):
+               layout: Literal["constrained", "compressed", "tight"] | None = None,
+               **subplots_kw):
     """The ``rows`` × ``cols`` panels of a plot, on ``fig`` or on a new Figure.
 
     The one place a plot function gets its Figure.  Panels are never drawn
