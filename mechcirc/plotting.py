@@ -84,7 +84,7 @@ def new_panels(fig, rows: int = 1, cols: int = 1, *, caller: str, figsize=(8.0, 
 
         raise InputError(
             f"{caller}: the figure given as fig= already holds {len(fig.axes)} Axes and "
-            f"{len(fig.subfigs)} subfigures; its {rows}×{cols} panels would cover them. "
+            f"{len(fig.subfigs)} subfigures; the plot's {rows}×{cols} panels would cover them. "
             "Pass fig=None (a new Figure), an empty Figure, or an empty subfigure of yours "
             "(fig.subfigures()); a single panel goes on ax=")
     return fig, fig.subplots(rows, cols, squeeze=False, **subplots_kw)
