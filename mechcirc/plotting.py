@@ -6,10 +6,19 @@ One convention for every plot function of mechcirc:
   returns that Axes (for notebooks: ``fig, ax = plt.subplots(); plot_forces(rows, 300,
   ax=ax)``); without one it makes a new ``matplotlib.figure.Figure`` and
   returns it;
-* a multi-panel plot takes ``fig=None`` (and returns the Figure it drew on);
-* nothing here touches pyplot's state or calls ``matplotlib.use``: figures
-  are built with the object-oriented ``Figure``, so a notebook's backend is
-  left alone and the CLI saves with ``fig.savefig``.
+* a multi-panel plot takes ``fig=None`` and returns the Figure it drew on.
+  Its panels come from :func:`new_panels`: a new Figure by default, or the
+  *empty* Figure or SubFigure given, which they fill (its size and layout
+  engine stay the caller's).  A figure already holding Axes is refused with
+  an :class:`~mechcirc.errors.InputError` rather than drawn over: pass
+  ``fig=None`` or an empty subfigure of yours (``fig.subfigures()``).  Given
+  ``ax=``, a multi-panel plot draws its main panel there and returns that
+  Axes (:func:`plot_sweep`, :func:`plot_transient`,
+  :func:`mechcirc.scene.cycle.plot_cycle`);
+* nothing here deletes, clears or moves what the caller drew, touches
+  pyplot's state or calls ``matplotlib.use``: figures are built with the
+  object-oriented ``Figure``, so a notebook's backend is left alone and the
+  CLI saves with ``fig.savefig``.
 
 Every axis carries its unit, the title names the netlist, and the file format
 follows the extension given to :func:`mechcirc.cli._common.save_figure`
@@ -20,24 +29,73 @@ follows the extension given to :func:`mechcirc.cli._common.save_figure`
 from __future__ import annotations
 
 import math
+from typing import Literal
 
-__all__ = ["plot_sweep", "plot_transient", "plot_forces", "plot_comparison", "plot_study", "plot_periodic",
+__all__ = ["new_panels", "plot_sweep", "plot_transient", "plot_forces", "plot_comparison", "plot_study", "plot_periodic",
            "plot_speed_map", "plot_mode", "plot_modes"]
 
 
-def _figure(figsize):
-    """A new pyplot-free Figure (works on any backend, never switches it)."""
-    from matplotlib.figure import Figure
+def new_panels(fig, rows: int = 1, cols: int = 1, *, caller: str, figsize=(8.0, 6.0),
+               layout: Literal["constrained", "compressed", "tight"] | None = None,
+               **subplots_kw):
+    """The ``rows`` × ``cols`` panels of a plot, on ``fig`` or on a new Figure.
 
-    return Figure(figsize=figsize)
+    The one place a plot function gets its Figure.  Panels are never drawn
+    over the caller's: a Figure (or SubFigure) that already holds Axes or
+    subfigures is refused, since adding the panels would cover them and
+    making room would move or delete them.  A matplotlib user who wants the
+    plot beside their own panels gives it a subfigure (``fig.subfigures()``),
+    matplotlib's own way to compose multi-panel plots.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure or SubFigure or None
+        None: a new pyplot-free Figure (any backend, never switched).
+        Otherwise an empty Figure or SubFigure, which the panels fill; its
+        size and layout engine are left as the caller set them.
+    rows, cols : int
+        The grid of panels.
+    caller : str
+        The plot function, named in the error.
+    figsize : tuple of float
+        Size [in] of a new Figure.
+    layout : str, optional
+        Layout engine of a new Figure (``"constrained"``, ``"tight"``).
+    **subplots_kw
+        Passed to ``Figure.subplots`` (``sharex``, ``gridspec_kw``, ...).
+
+    Returns
+    -------
+    fig : matplotlib.figure.Figure or SubFigure
+        The Figure drawn on.
+    axes : numpy.ndarray of Axes, shape (rows, cols)
+
+    Raises
+    ------
+    InputError
+        ``fig`` already holds Axes or subfigures.
+    """
+    if fig is None:
+        from matplotlib.figure import Figure
+
+        fig = Figure(figsize=figsize, layout=layout)
+    elif fig.axes or fig.subfigs:
+        from .errors import InputError
+
+        raise InputError(
+            f"{caller}: the figure given as fig= already holds {len(fig.axes)} Axes and "
+            f"{len(fig.subfigs)} subfigures; the plot's {rows}×{cols} panels would cover them. "
+            "Pass fig=None (a new Figure), an empty Figure, or an empty subfigure of yours "
+            "(fig.subfigures()); a single panel goes on ax=")
+    return fig, fig.subplots(rows, cols, squeeze=False, **subplots_kw)
 
 
 def _axes(ax, figsize):
     """``(fig, ax, made)``: the given Axes, or one on a new Figure."""
     if ax is not None:
         return ax.figure, ax, False
-    fig = _figure(figsize)
-    return fig, fig.add_subplot(), True
+    fig, axes = new_panels(None, caller="", figsize=figsize)
+    return fig, axes[0, 0], True
 
 
 #: Refinement around each exact root: points at ω_r·(1 ± s·δ) for these s, with
@@ -173,8 +231,8 @@ def plot_sweep(result, title: str | None = None, resonances=(), peak=None, *, ax
     ax : matplotlib Axes, optional
         Draw only |K| (with the flags and resonance lines) on this Axes and
         return it.
-    fig : matplotlib Figure, optional
-        Draw the panels on this (empty) Figure; a new one by default.
+    fig : matplotlib Figure or SubFigure, optional
+        An empty one to fill (see :func:`new_panels`); a new one by default.
     unit : {"rad/s", "Hz", "rpm"}
         Unit of the frequency axis: ω, f = ω/2π or n = 60·ω/2π.
     extra : dict, optional
@@ -217,9 +275,9 @@ def _bode_figure(fig, result, curves, resonances, peak, unit: str, extra: dict, 
     force_drive = getattr(result.drive, "kind", "velocity") == "force"
     omega, _, phase, absR, _ = curves
     positive = omega > 0
-    fig = fig if fig is not None else _figure((7, 8 + 2.2 * len(extra)))
-    axes = fig.subplots(3 + len(extra), 1, sharex=True,
-                        gridspec_kw={"height_ratios": [3, 2, 3] + [2] * len(extra)})
+    fig, axes = new_panels(fig, 3 + len(extra), caller="plot_sweep", figsize=(7, 8 + 2.2 * len(extra)),
+                           sharex=True, gridspec_kw={"height_ratios": [3, 2, 3] + [2] * len(extra)})
+    axes = axes[:, 0]
     ax_k, ax_p, ax_q = axes[:3]
     _draw_K(ax_k, result, curves, resonances, unit)
     ax_p.semilogx(omega[positive], phase[positive], color="C2")
@@ -241,7 +299,7 @@ def _bode_figure(fig, result, curves, resonances, peak, unit: str, extra: dict, 
     # Fixed margins that hold every label (the panels share x: no tick labels
     # between them), so neither tight_layout nor a tight bounding box at
     # saving has to measure every tick label once more (≈ 0.3 s each).
-    height = fig.get_figheight()
+    height = fig.bbox.height / fig.dpi      # [in]; a SubFigure's own, not its parent's
     fig.subplots_adjust(left=0.13, right=0.97, hspace=0.08, top=1 - 0.85 / height,
                         bottom=0.55 / height)
     return fig
@@ -431,14 +489,13 @@ def plot_transient(result, nodes=None, what: str = "x", elements=None, title: st
     title : str, optional
     ax : matplotlib Axes, optional
         Draw only the nodes' panel there and return it.
-    fig : matplotlib Figure, optional
-        Add the panels to this Figure (its axes are kept); a new one by default.
+    fig : matplotlib Figure or SubFigure, optional
+        An empty one to fill (see :func:`new_panels`); a new one by default.
 
     Returns
     -------
     The Axes given as ``ax``, or the Figure of the panels.
     """
-    import numpy as np
 
     if what not in ("x", "v") or (what == "v" and result.v is None):
         from .errors import MechcircError
@@ -457,8 +514,9 @@ def plot_transient(result, nodes=None, what: str = "x", elements=None, title: st
         return ax
     gaps = list(result.clearances.items())[:MAX_CLEARANCE_PANELS]
     n = 1 + bool(forces) + len(gaps)
-    fig = fig if fig is not None else _figure((8, 3 + 2.2 * n))
-    axes = np.atleast_1d(fig.subplots(n, 1, sharex=True, squeeze=False)[:, 0])
+    made = fig is None
+    fig, axes = new_panels(fig, n, caller="plot_transient", figsize=(8, 3 + 2.2 * n), sharex=True)
+    axes = axes[:, 0]
     _nodes_panel(axes[0], result, names, what)
     if forces:
         _forces_panel(axes[1], result, forces)
@@ -468,7 +526,7 @@ def plot_transient(result, nodes=None, what: str = "x", elements=None, title: st
     for a in axes:
         a.grid(True, alpha=0.3)
     fig.suptitle(title)
-    if len(fig.axes) == n:              # a layout of ours only, not of the caller's axes
+    if made:                            # a given figure keeps the caller's layout
         fig.tight_layout()
     return fig
 
@@ -594,7 +652,8 @@ def plot_comparison(comparison, name: str = "circuit", measured: str = "measured
     name, measured : str
         Legend labels.
     title : str, optional
-    fig : matplotlib.figure.Figure, optional
+    fig : matplotlib.figure.Figure or SubFigure, optional
+        An empty one to fill (see :func:`new_panels`); a new one by default.
     units : dict, optional
 
     Returns
@@ -607,8 +666,9 @@ def plot_comparison(comparison, name: str = "circuit", measured: str = "measured
 
     u = units or units_of(None)
 
-    fig = fig if fig is not None else _figure((7, 6))
-    ax_k, ax_p = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [3, 2]})
+    made = fig is None
+    fig, ((ax_k,), (ax_p,)) = new_panels(fig, 2, caller="plot_comparison", figsize=(7, 6), sharex=True,
+                                         gridspec_kw={"height_ratios": [3, 2]})
     w = comparison.omega
     with np.errstate(all="ignore"):
         for K, label, style in ((comparison.K_model, "model", "-"),
@@ -624,7 +684,8 @@ def plot_comparison(comparison, name: str = "circuit", measured: str = "measured
     for ax in (ax_k, ax_p):
         ax.grid(True, which="both", alpha=0.3)
     fig.suptitle(title or f"{name}: model against {measured}")
-    fig.tight_layout()
+    if made:                            # a given figure keeps the caller's layout
+        fig.tight_layout()
     return fig
 
 
@@ -727,7 +788,8 @@ def plot_periodic(result, title: str | None = None, *, fig=None):
     ----------
     result : PeriodicResult
     title : str, optional
-    fig : matplotlib.figure.Figure, optional
+    fig : matplotlib.figure.Figure or SubFigure, optional
+        An empty one to fill (see :func:`new_panels`); a new one by default.
 
     Returns
     -------
@@ -739,8 +801,9 @@ def plot_periodic(result, title: str | None = None, *, fig=None):
 
     u = getattr(result, "units", None) or units_of(None)
     word = "moment" if u["Q"] == "N·m" else "force"
-    fig = fig if fig is not None else _figure((11, 4.2))
-    ax_q, ax_s = fig.subplots(1, 2, gridspec_kw={"width_ratios": [3, 2]})
+    made = fig is None
+    fig, ((ax_q, ax_s),) = new_panels(fig, 1, 2, caller="plot_periodic", figsize=(11, 4.2),
+                                      gridspec_kw={"width_ratios": [3, 2]})
     _periodic_angle_panel(ax_q, result, f"{word} [{u['Q']}]")
     with np.errstate(all="ignore"):
         amp = np.abs(result.amplitude)
@@ -769,7 +832,8 @@ def plot_periodic(result, title: str | None = None, *, fig=None):
     fig.suptitle(title or f"{result.name}: drive {word} over one revolution at "
                           f"{result.rpm:g} rpm ({result.harmonics} harmonics, error "
                           f"{result.error:.1g})")
-    fig.tight_layout()
+    if made:                            # a given figure keeps the caller's layout
+        fig.tight_layout()
     return fig
 
 
@@ -907,7 +971,8 @@ def plot_modes(found, name: str = "circuit", *, fig=None, unit: str = "rad/s"):
     ----------
     found : list of Mode
     name : str
-    fig : matplotlib.figure.Figure, optional
+    fig : matplotlib.figure.Figure or SubFigure, optional
+        An empty one to fill (see :func:`new_panels`); a new one by default.
     unit : {"rad/s", "Hz", "rpm"}
         The frequency unit of the panels' titles (:func:`plot_mode`).
 
@@ -915,11 +980,11 @@ def plot_modes(found, name: str = "circuit", *, fig=None, unit: str = "rad/s"):
     -------
     matplotlib.figure.Figure
     """
-    fig = fig if fig is not None else _figure(
-        (max(6.0, 0.45 * max((len(m.shape) for m in found), default=0) + 2),
-         2.6 * max(len(found), 1)))
-    axes = fig.subplots(max(len(found), 1), 1, squeeze=False)[:, 0]
-    for mode, ax in zip(found, axes):
+    made = fig is None
+    fig, axes = new_panels(fig, max(len(found), 1), caller="plot_modes", figsize=(
+        max(6.0, 0.45 * max((len(m.shape) for m in found), default=0) + 2), 2.6 * max(len(found), 1)))
+    for mode, ax in zip(found, axes[:, 0]):
         plot_mode(mode, name, ax=ax, unit=unit)
-    fig.tight_layout()
+    if made:                            # a given figure keeps the caller's layout
+        fig.tight_layout()
     return fig

@@ -209,7 +209,7 @@ def test_cycle_plot_unit_and_labels():
     scene = load_scene(REPO / "examples" / "heald_scene.toml")
     cmap = cycle_map(scene, points=6, harmonics=3)
     W = cmap.natural_frequencies()
-    for unit, scale in (("rad/s", 1.0), ("Hz", 1 / (2 * np.pi))):
+    for unit, scale in (("rad/s", 1.0), ("Hz", 1 / (2 * np.pi)), ("rpm", 60 / (2 * np.pi))):
         fig = plot_cycle(cmap, fig=Figure(), unit=unit)
         a1 = fig.axes[0]
         assert f"[{unit}]" in a1.get_ylabel()
@@ -218,8 +218,8 @@ def test_cycle_plot_unit_and_labels():
         assert labels == [f"{h}·Ω" for h in cmap.harmonics]
         named = [ln.get_label() for ln in a1.get_legend().get_lines()]
         assert all(f"resonance {k + 1}" in named for k in range(W.shape[1]))
-    with pytest.raises(ValueError):
-        plot_cycle(cmap, unit="rpm")
+    with pytest.raises(ValueError, match="rpm"):
+        plot_cycle(cmap, unit="kHz")
 
 
 def test_short_reprs(stb_sweep):
@@ -367,10 +367,15 @@ def test_transient_plot_units_forces_and_clearance_band(msl_transient):
 def test_transient_plot_keeps_the_callers_axes_and_names_units(msl_transient):
     from matplotlib.figure import Figure
 
+    from mechcirc.errors import MechcircError
+
     fig = Figure()
-    mine = fig.add_subplot(3, 1, 1)
+    top, bottom = fig.subfigures(2, 1)
+    mine = top.add_subplot()
     mine.plot([0, 1], [0, 1])
-    assert msl_transient.plot(fig=fig) is fig
+    with pytest.raises(MechcircError, match="plot_transient.*already holds 1 Axes.*subfigure"):
+        msl_transient.plot(fig=fig)            # its panels would cover the caller's
+    assert msl_transient.plot(fig=bottom) is bottom
     assert mine in fig.axes and len(mine.lines) == 1 and len(fig.axes) == 3
     _, ax = _axes()
     assert msl_transient.plot(ax=ax, what="v") is ax

@@ -2,11 +2,13 @@
 
 matplotlib is imported inside each function (and only its object-oriented
 ``Figure``, never ``pyplot``), so importing this module is cheap and works on
-any backend, Agg included.  Each function draws on ``fig`` when given (the
-convention of :mod:`mechcirc.plotting`: multi-panel plots take ``fig=``,
-single-panel ones also ``ax=``) or on a new ``matplotlib.figure.Figure``, and
-returns what it drew on; saving is the caller's business (the CLI uses
-:func:`mechcirc.cli._common.save_figure`).  Angles are plotted in degrees.
+any backend, Agg included.  The convention of :mod:`mechcirc.plotting`:
+multi-panel plots take ``fig=`` (an empty Figure or SubFigure to fill, see
+:func:`mechcirc.plotting.new_panels`; a new constrained-layout Figure by
+default), single-panel ones also ``ax=``; each returns what it drew on and
+never clears or deletes what the caller drew.  Saving is the caller's
+business (the CLI uses :func:`mechcirc.cli._common.save_figure`).  Angles are
+plotted in degrees.
 """
 
 from __future__ import annotations
@@ -20,18 +22,12 @@ from ..units import convert_frequency
 __all__ = ["plot_fourbar", "plot_synthesis", "draw_design", "plot_frame_loading", "plot_shaking", "plot_linkage"]
 
 
-def _blank(size, fig=None):
-    """``fig``, or a new constrained-layout Figure of ``size`` (no pyplot)."""
-    if fig is None:
-        from matplotlib.figure import Figure
+def _figure(rows, cols, size, fig, caller: str, **subplots_kw):
+    """:func:`mechcirc.plotting.new_panels` with this module's constrained layout."""
+    from ..plotting import new_panels
 
-        fig = Figure(figsize=size, layout="constrained")
-    return fig
-
-
-def _figure(rows, cols, size, fig=None):
-    fig = _blank(size, fig)
-    return fig, fig.subplots(rows, cols, squeeze=False)
+    return new_panels(fig, rows, cols, caller=caller, figsize=size, layout="constrained",
+                      **subplots_kw)
 
 
 def plot_fourbar(fourbar, omega: float | None = None, n: int = 721, *, fig=None):
@@ -46,7 +42,8 @@ def plot_fourbar(fourbar, omega: float | None = None, n: int = 721, *, fig=None)
         Crank speed [rad/s].
     n : int
         Points over a revolution.
-    fig : matplotlib.figure.Figure, optional
+    fig : matplotlib.figure.Figure or SubFigure, optional
+        An empty one to fill; a new one by default.
 
     Returns
     -------
@@ -59,7 +56,7 @@ def plot_fourbar(fourbar, omega: float | None = None, n: int = 721, *, fig=None)
     with np.errstate(all="ignore"):             # 0/0 at a change point's branch crossing
         st = fourbar.evaluate(th)
     deg = np.degrees(th)
-    fig, ax = _figure(4, 1, (7, 9), fig)
+    fig, ax = _figure(4, 1, (7, 9), fig, "plot_fourbar")
     acc = st.nu * omega ** 2 if omega else st.nu
     crossings = fourbar.branch_crossings()
     if crossings:
@@ -146,17 +143,19 @@ def plot_synthesis(designs, n: int = 721, fig=None):
     designs : sequence of Design
     n : int
         Points over a revolution.
-    fig : matplotlib.figure.Figure, optional
+    fig : matplotlib.figure.Figure or SubFigure, optional
+        An empty one to fill; a new one by default.
 
     Returns
     -------
     matplotlib.figure.Figure
     """
-    fig = _blank((12, 7), fig)
-    grid = fig.add_gridspec(2, 2, width_ratios=(1, 1.3))
-    draw_design(designs[0], fig.add_subplot(grid[:, 0]))
-    ax = [fig.add_subplot(grid[0, 1]), None]
-    ax[1] = fig.add_subplot(grid[1, 1], sharex=ax[0])
+    fig, ((left, right),) = _figure(1, 2, (12, 7), fig, "plot_synthesis", width_ratios=(1, 1.3))
+    draw_design(designs[0], left)
+    grid = right.get_subplotspec().subgridspec(2, 1)
+    right.remove()                  # ours, just made: its slot holds two panels
+    ax = [fig.add_subplot(grid[0]), None]
+    ax[1] = fig.add_subplot(grid[1], sharex=ax[0])
     for k, des in enumerate(designs):
         fb = des.fourbar()
         front, _ = fb.dead_centres()
@@ -183,13 +182,14 @@ def plot_frame_loading(result, *, fig=None):
     Parameters
     ----------
     result : FrameLoading
-    fig : matplotlib.figure.Figure, optional
+    fig : matplotlib.figure.Figure or SubFigure, optional
+        An empty one to fill; a new one by default.
 
     Returns
     -------
     matplotlib.figure.Figure
     """
-    fig, ax = _figure(3, 1, (7, 8), fig)
+    fig, ax = _figure(3, 1, (7, 8), fig, "plot_frame_loading")
     deg = np.degrees(result.theta)
     S = result.shaking_force
     ax[0, 0].plot(deg, S[:, 0], label="S_x")
@@ -220,13 +220,14 @@ def plot_shaking(result, fig=None):
     Parameters
     ----------
     result : FrameLoading
-    fig : matplotlib.figure.Figure, optional
+    fig : matplotlib.figure.Figure or SubFigure, optional
+        An empty one to fill; a new one by default.
 
     Returns
     -------
     matplotlib.figure.Figure
     """
-    fig, ax = _figure(2, 2, (10, 8), fig)
+    fig, ax = _figure(2, 2, (10, 8), fig, "plot_shaking")
     deg = np.degrees(result.theta)
     S = result.shaking_force
     mag = result.shaking_force_magnitude
@@ -277,7 +278,8 @@ def plot_linkage(linkage, state, paths=None, *, ax=None, fig=None):
     state : LinkageState
     paths : dict[str, ndarray], optional
     ax : matplotlib.axes.Axes, optional
-    fig : matplotlib.figure.Figure, optional
+    fig : matplotlib.figure.Figure or SubFigure, optional
+        An empty one to fill; a new one by default.
 
     Returns
     -------
@@ -286,7 +288,7 @@ def plot_linkage(linkage, state, paths=None, *, ax=None, fig=None):
     if ax is not None:
         a = ax
     else:
-        fig, axes = _figure(1, 1, (7, 7), fig)
+        fig, axes = _figure(1, 1, (7, 7), fig, "plot_linkage")
         a = axes[0, 0]
     if paths:
         for xy in paths.values():

@@ -327,27 +327,55 @@ def _clear_angles(scene: Scene, m):
 def plot_cycle(cmap: CycleMap, ax=None, *, fig=None, unit: str = "rad/s"):
     """Resonances against crank angle with the harmonic lines, and |Q0| at each harmonic.
 
-    Two stacked panels on ``fig`` (a new ``matplotlib.figure.Figure`` by
-    default; pyplot and the backend are left alone); returns the Figure.
-    ``unit`` is the frequency unit of the upper panel, ``"rad/s"`` (as the
-    table), ``"Hz"`` or ``"rpm"``.  Every line is labelled: each resonance branch, each
-    harmonic line h·Ω and the crossings.  ``ax`` is accepted for the common
-    convention but the plot needs two panels: pass ``fig=`` instead.
+    Every line is labelled: each resonance branch, each harmonic line h·Ω and
+    the crossings.  Nothing the caller drew is deleted or cleared (versions
+    before this one deleted ``ax`` and drew a two-panel Figure in its place).
+
+    Parameters
+    ----------
+    cmap : CycleMap
+        From :func:`cycle_map`.
+    ax : matplotlib Axes, optional
+        Draw only the upper panel (the resonances, the harmonic lines and the
+        crossings) on it and return it, as :func:`mechcirc.plotting.plot_sweep`
+        draws only |K|.
+    fig : matplotlib Figure or SubFigure, optional
+        An empty one to fill with both panels
+        (:func:`mechcirc.plotting.new_panels`); a new Figure by default.
+    unit : {"rad/s", "Hz", "rpm"}
+        Frequency unit of the upper panel.
+
+    Returns
+    -------
+    The Axes given as ``ax``, or the Figure of the two panels.
     """
     from ..units import FREQUENCY_UNITS
 
     if unit not in FREQUENCY_UNITS:
         raise ValueError(f"unit must be one of {', '.join(map(repr, FREQUENCY_UNITS))}, "
                          f"got {unit!r}")
-    if ax is not None and fig is None:
-        fig = ax.figure
-        fig.delaxes(ax)
-    if fig is None:
-        from matplotlib.figure import Figure
-
-        fig = Figure(figsize=(8, 7))
-    a1, a2 = fig.subplots(2, 1, sharex=True)
     deg = np.degrees(cmap.theta)
+    if ax is not None:
+        _resonance_panel(ax, cmap, deg, unit)
+        return ax
+    from ..plotting import new_panels
+
+    made = fig is None
+    fig, ((a1,), (a2,)) = new_panels(fig, 2, caller="plot_cycle", figsize=(8, 7), sharex=True)
+    _resonance_panel(a1, cmap, deg, unit)
+    runit = "N·m" if cmap.rotational else "N"
+    for j, h in enumerate(cmap.harmonics):
+        a2.semilogy(deg, np.abs(cmap.Q0[:, j]), label=f"h = {h}")
+    a2.set_xlabel("crank rotation from the pose θ [deg]")
+    a2.set_ylabel(f"|Q0| at ω = h·Ω [{runit}]")
+    a2.legend(fontsize=7, ncol=3)
+    if made:                            # a given figure keeps the caller's layout
+        fig.tight_layout()
+    return fig
+
+
+def _resonance_panel(a1, cmap: CycleMap, deg, unit: str) -> None:
+    """The upper panel of :func:`plot_cycle` on ``a1``."""
     W = cmap.natural_frequencies()
     for k in range(W.shape[1]):
         a1.plot(deg, in_unit(W[:, k], unit), ".-", ms=3, label=f"resonance {k + 1}")
@@ -357,21 +385,12 @@ def plot_cycle(cmap: CycleMap, ax=None, *, fig=None, unit: str = "rad/s"):
         a1.annotate(f"{h}·Ω", (1.0, line), xycoords=("axes fraction",
                     "data"), xytext=(2, 0), textcoords="offset points", fontsize=7,
                     va="center", color="0.4")
-    crossings = cmap.crossings()
-    for n, c in enumerate(crossings):
+    for n, c in enumerate(cmap.crossings()):
         a1.plot(c["theta_deg"], in_unit(c["omega"], unit), "kx", ms=6,
                 label="resonance = h·Ω" if n == 0 else None)
     a1.set_ylabel(f"natural frequency [{unit}]  (dotted: h·Ω)")
     a1.set_title("resonances (K = 0, drive held) over the cycle; × where one meets h·Ω")
     a1.legend(fontsize=7, loc="upper left")
-    runit = "N·m" if cmap.rotational else "N"
-    for j, h in enumerate(cmap.harmonics):
-        a2.semilogy(deg, np.abs(cmap.Q0[:, j]), label=f"h = {h}")
-    a2.set_xlabel("crank rotation from the pose θ [deg]")
-    a2.set_ylabel(f"|Q0| at ω = h·Ω [{runit}]")
-    a2.legend(fontsize=7, ncol=3)
-    fig.tight_layout()
-    return fig
 
 
 def drive_motion(scene: Scene, theta: float, *, samples: int = DRIVE_SAMPLES) -> Motion:

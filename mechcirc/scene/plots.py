@@ -19,17 +19,15 @@ def plot_motion(result, names=None, fig=None):
     names : list of str, optional
         Outputs to draw (default: every ``BODY.acceleration`` that is not
         identically zero, and every ``ELEMENT.force``).
-    fig : matplotlib Figure, optional
-        Drawn into (cleared); a new one by default.
+    fig : matplotlib Figure or SubFigure, optional
+        An empty one to fill (:func:`mechcirc.plotting.new_panels`); a new one by default.
 
     Returns
     -------
     matplotlib.figure.Figure
     """
-    from matplotlib.figure import Figure
+    from ..plotting import new_panels
 
-    fig = fig or Figure(figsize=(8, 7))
-    fig.clf()
     if names is None:
         names = [k for k, v in result.values.items()
                  if (k.endswith(".acceleration") and np.any(v != 0)) or k.endswith(".force")]
@@ -37,7 +35,7 @@ def plot_motion(result, names=None, fig=None):
     if unknown:
         raise ValueError(f"no output {unknown[0]!r}; outputs: {', '.join(result.values)}")
     deg = np.degrees(result.crank_angle)
-    top, bottom = fig.subplots(2, 1, sharex=True)
+    fig, ((top,), (bottom,)) = new_panels(fig, 2, caller="plot_motion", figsize=(8, 7), sharex=True)
     for n in names:
         ax = bottom if n.endswith((".force", ".moment", ".deformation")) else top
         ax.plot(deg, result.values[n], lw=0.8, label=n)
@@ -96,9 +94,9 @@ def plot_mode(scene, theta: float, n: int = 1, *, kind: str = "resonance", ax=No
     big = max(float(np.hypot(*d)) for d in raw.values())
     k = exaggeration * lk.length_scale() / big if big > 0 else 0.0
     if ax is None:
-        from matplotlib.figure import Figure
+        from ..plotting import new_panels
 
-        ax = Figure(figsize=(7, 6)).add_subplot()
+        ax = new_panels(None, caller="plot_mode", figsize=(7, 6))[1][0, 0]
     _draw_displaced(ax, scene, state, {p: k * np.asarray(d) for p, d in raw.items()})
     r = mode.resonance
     ax.set_title(f"{kind} {n}: ωn = {r.omega:.6g} rad/s, ζ = {r.zeta:.3g}, at θ = "

@@ -13,20 +13,19 @@ def plot_result(result, fig=None):
     Parameters
     ----------
     result : SleyResult
-    fig : matplotlib Figure, optional
-        Drawn into (cleared); a new one by default.
+    fig : matplotlib Figure or SubFigure, optional
+        An empty one to fill (:func:`mechcirc.plotting.new_panels`); a new one by default.
 
     Returns
     -------
     matplotlib.figure.Figure
     """
     import numpy as np
-    from matplotlib.figure import Figure
+    from ..plotting import new_panels
 
-    fig = fig or Figure(figsize=(8, 9))
-    fig.clf()
     both = result.eps5P is not None
-    axes = fig.subplots(3, 1, sharex=True)
+    fig, axes = new_panels(fig, 3, caller="plot_result", figsize=(8, 9), sharex=True)
+    axes = axes[:, 0]
     deg = np.degrees(result.crank_angle)
     ax = axes[0]
     ax.plot(deg, result.eps2P, lw=0.8, label="ε2P (crank 2P)")
