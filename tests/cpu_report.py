@@ -4,7 +4,8 @@
 (tests/conftest.py writes them) and prints the total CPU of the tests (the
 worker processes and the subprocesses they waited for), the CPU of tests
 that spawned subprocesses, the numba compilation and the tests that paid for
-it, and the N (default 20) most expensive tests.
+it, the N (default 20) most expensive tests, and the N most expensive test files
+and test functions (every parametrisation summed), numba compiling left out.
 """
 
 import glob
@@ -37,7 +38,34 @@ def main(path, top=20):
     print(f"top {top} (total = worker + subprocesses, seconds):")
     for cpu, own, kids, node, _ in rows[:top]:
         print(f"{cpu:8.2f} = {own:7.2f} + {kids:7.2f}  {node}")
+    groups(rows, top)
     kernels([n for n in names if n.endswith(".jit")], top)
+
+
+def groups(rows, top):
+    """Print the test files and test functions with the most CPU, numba compiling left out.
+
+    A test function's parametrisations are summed (the node id up to ``[``),
+    so a cheap test run many times shows beside one long test.
+
+    Parameters
+    ----------
+    rows : list of tuple
+        ``(total, worker, subprocesses, node id, compiling)`` of each test.
+    top : int
+        How many files and functions to list.
+    """
+    for what, key in (("files", lambda node: node.split("::")[0]),
+                      ("functions", lambda node: node.split("[")[0])):
+        cpu: dict[str, list] = {}
+        for total, _, _, node, jit in rows:
+            entry = cpu.setdefault(key(node), [0.0, 0])
+            entry[0] += total - jit
+            entry[1] += 1
+        ranked = sorted(cpu.items(), key=lambda kv: -kv[1][0])
+        print(f"top {top} test {what} without compiling (seconds, tests):")
+        for name, (seconds, count) in ranked[:top]:
+            print(f"{seconds:8.2f} {count:5d}  {name}")
 
 
 def kernels(names, top):

@@ -117,9 +117,20 @@ def test_sley_scene_reproduces_sley(drive, variant):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("drive", ["one-side", "both-sides"])
-@pytest.mark.parametrize("variant", [v for v in range(1, 8) if v != 6])
+@pytest.mark.parametrize("variant", [1, 2, 4, 7])
 def test_sley_scene_reproduces_sley_all(drive, variant):
-    """The other twelve variants (variant 6 of both drives is the test above)."""
+    """Each override the preset layer applies to the shipped variant-3 scene, against the
+    equations (variant 6 of both drives is the test above: C, k and the 1024-interval table).
+
+    Variant 1: clearance 0 and M0 = 0; 2: the large clearance, 0.01 rad; 4: I4P and k4
+    (k7) with the beat-up moment on; 7: ω = 40.  Variant 3 is the shipped scene itself
+    (overrides equal to its own values): it is the base every case here overrides, so
+    each of its fields is compared through the cases that keep it (and Table 1's variant
+    3 is compared with the same equations through ``sley.simulate`` in
+    tests/sley/test_simulation_reference.py).  Variant 5 overrides I4P and k4 as
+    variant 4 does and M0 = 0 as variants 1, 2 and 6 do, so it adds no override of its
+    own.  Variants 3 and 5 were 4 of the 14 runs here (about 5 s of CPU at load 10).
+    """
     _compare(drive, variant)
 
 
