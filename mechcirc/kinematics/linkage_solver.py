@@ -799,21 +799,31 @@ def _dyads_compiled(ds, t):
     return Q, QD, QDD, parts, margin
 
 
+#: Inner points per round of the search for where a linkage locks (:func:`_lock_error`).
+_LOCK_GRID = 31
+
+
 def _lock_error(lk, ds, t_good, t_bad):
-    """Bisect to where the dyads stop assembling (or turn singular) and say so."""
+    """Locate where the dyads stop assembling (or turn singular) and say so."""
     w1 = lk.cranks[0].omega
     if t_good == 0.0 and ds.positions(np.array([0.0]))[4][0] <= _SINGULAR:
         raise GeometryError(f"{lk.source}: the linkage is singular in its pose "
                             f"(constraint Jacobian not invertible)")
+    # Narrowed 32-fold per round on a grid of 31 inner points (one vectorised call
+    # each, where bisection spent a call per halving); the first point that does
+    # not assemble bounds the next round, so the earliest lock in [t_good, t_bad]
+    # is the one named.
     lo, hi = t_good, t_bad
-    for _ in range(80):
-        mid = 0.5 * (lo + hi)
-        if ds.positions(np.array([mid]))[4][0] > _SINGULAR:
-            lo = mid
-        else:
-            hi = mid
+    for _ in range(16):
         if abs(hi - lo) * abs(w1) < 1e-12:
             break
+        grid = np.linspace(lo, hi, _LOCK_GRID + 2)[1:-1]
+        bad = ~(ds.positions(grid)[4] > _SINGULAR)
+        if bad.any():
+            k = int(np.argmax(bad))
+            lo, hi = (grid[k - 1] if k else lo), grid[k]
+        else:
+            lo = grid[-1]
     raise _lock(lk, hi * w1)
 
 
