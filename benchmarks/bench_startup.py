@@ -4,15 +4,16 @@ Each command runs in a fresh Python process (``python -m mechcirc ...``, the
 way a user runs it); its CPU time (user + system, from ``resource.getrusage``
 of the finished child) is taken over ``--repeat`` runs (default 7, at least
 5) and the median, lowest and highest are printed with the goal.  In the same
-run, interleaved with the commands, four floors are timed the same way: the
+run, interleaved with the commands, five floors are timed the same way: the
 bare interpreter (``python -c pass``), ``python -c "import numpy"`` — what
 any command of a numpy program pays before it does anything — the same with
 ``OPENBLAS_NUM_THREADS=1``, as the command line starts numpy unless the user
 chose a BLAS thread count (OpenBLAS then starts no pool of threads), and numpy
 with matplotlib's ``Figure`` and Agg canvas (imported, one canvas made), what
-any command that draws a PNG pays.  Each command is printed with its ratio to
-its floor and what it costs beyond it (medians); the sweep also with what it
-costs beyond the one-thread numpy floor.  The BLAS thread variables
+any command that draws a PNG pays (also with one thread).  Each command is
+printed with its ratio to its floor and what it costs beyond it (medians); the
+sweep, with and without a PNG, also with what it costs beyond the one-thread
+floor.  The BLAS thread variables
 (``OPENBLAS_NUM_THREADS``, ``GOTO_NUM_THREADS``, ``OMP_NUM_THREADS``) are
 removed from the environment of every timed process, so each runs as in a
 user's default environment.
@@ -53,6 +54,7 @@ SWEEP = ["sweep", NETLIST, "--omega-min", "10", "--omega-max", "10000", "--point
 PASS, NUMPY, MPL = ("python -c pass (floor)", "python -c 'import numpy' (floor)",
                     "python -c 'import numpy, matplotlib Figure, Agg' (floor)")
 NUMPY1 = "OPENBLAS_NUM_THREADS=1 python -c 'import numpy' (floor)"
+MPL1 = "OPENBLAS_NUM_THREADS=1 python -c 'import numpy, matplotlib Figure, Agg' (floor)"
 #: What OpenBLAS reads for its thread count: taken out of every timed process's environment.
 BLAS_THREADS = ("OPENBLAS_NUM_THREADS", "GOTO_NUM_THREADS", "OMP_NUM_THREADS")
 #: numpy, matplotlib.figure and the Agg canvas, as the PNG command loads them
@@ -70,11 +72,12 @@ def cases(tmp: Path) -> list[tuple[str, list[str], float | None, tuple[str, ...]
         (NUMPY, ["-c", "import numpy"], None, (), {}),
         (NUMPY1, ["-c", "import numpy"], None, (), {"OPENBLAS_NUM_THREADS": "1"}),
         (MPL, ["-c", MPL_CODE], None, (), {}),
+        (MPL1, ["-c", MPL_CODE], None, (), {"OPENBLAS_NUM_THREADS": "1"}),
         ("mechcirc --help", m + ["--help"], 0.15, (PASS,), {}),
         ("mechcirc sweep stb_heald, 400 points, CSV", m + SWEEP + ["-o", str(tmp / "x.csv")],
          0.3, (NUMPY, NUMPY1), {}),
         ("  ... with a PNG", m + SWEEP + ["-o", str(tmp / "x.csv"), "--plot",
-                                          str(tmp / "sweep.png")], 1.0, (MPL,), {}),
+                                          str(tmp / "sweep.png")], 1.0, (MPL, MPL1), {}),
     ]
 
 
