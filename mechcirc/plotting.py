@@ -188,10 +188,10 @@ def _mark_peak(ax, peak, unit: str = "rad/s", force_unit: str = "N") -> None:
     if peak is None or peak.quantity != "Q0":
         return
     if peak.unbounded:
-        for i, w in enumerate(peak.poles):
-            ax.plot([in_unit(w, unit)], [1.0], marker="^", color="C3", ls="none",
-                    transform=ax.get_xaxis_transform(), clip_on=False,
-                    label="|Q0| = ∞ (undamped)" if i == 0 else None)
+        if len(peak.poles):             # one line of markers for all the poles
+            ax.plot([in_unit(w, unit) for w in peak.poles], [1.0] * len(peak.poles),
+                    marker="^", color="C3", ls="none", transform=ax.get_xaxis_transform(),
+                    clip_on=False, label="|Q0| = ∞ (undamped)")
     else:
         ax.plot([in_unit(peak.omega, unit)], [peak.value], marker="o", color="C3", ls="none",
                 label=f"peak {peak.value:.4g} {force_unit} at "

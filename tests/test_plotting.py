@@ -396,3 +396,22 @@ def test_transient_plot_refuses_an_unknown_name(msl_transient):
         msl_transient.plot(elements=["nope"])
     with pytest.raises(MechcircError, match="unknown node 'q'"):
         msl_transient.plot(nodes=["q"])
+
+
+@pytest.mark.parametrize("unit, per_rad_s", [("rad/s", 1.0), ("rpm", 60 / (2 * np.pi))])
+def test_undamped_peak_marks_every_pole_on_one_line(stb_sweep, unit, per_rad_s):
+    """Each undamped resonance in the band gets a triangle at the top of the |Q0|
+    panel, all on one line of markers with one legend entry."""
+    c, s, found = stb_sweep
+    pk = s.peak()
+    assert pk.unbounded and len(pk.poles) >= 2     # stb_heald: three in 10 … 1e4 rad/s
+    fig = plot_sweep(s, resonances=found, peak=pk, unit=unit)
+    ax_q = fig.axes[2]
+    marks = [ln for ln in ax_q.get_lines() if ln.get_marker() == "^"]
+    assert len(marks) == 1
+    np.testing.assert_allclose(marks[0].get_xdata(), np.asarray(pk.poles) * per_rad_s,
+                               rtol=1e-15)
+    assert list(marks[0].get_ydata()) == [1.0] * len(pk.poles)     # the axis's top
+    assert marks[0].get_transform() == ax_q.get_xaxis_transform()
+    labels = [t.get_text() for t in ax_q.get_legend().get_texts()]
+    assert labels.count("|Q0| = ∞ (undamped)") == 1
