@@ -121,12 +121,16 @@ def test_modal_fallback_without_numba_matches(monkeypatch):
     assert np.abs(plain.force - compiled.force).max() <= 1e-12 * np.abs(compiled.force).max()
 
 
-@pytest.mark.parametrize("numba,chunk", [(True, 4096), (True, 333), (False, 4096)])
+@pytest.mark.parametrize("numba,chunk", [(True, None), (True, 333), (False, None)])
 def test_x_only_run_keeps_the_drive_output_exact(numba, chunk, monkeypatch):
     # x only: the recurrence forms x block by block (blocks of `chunk`
-    # samples; 333 puts 12 block boundaries in this run) and the drive's
-    # output (here the force drive's velocity, v of node c) inside the loop
-    monkeypatch.setattr(sim, "CHUNK", chunk)
+    # samples; 333 puts 12 block boundaries in this run, the default block
+    # holds the whole run) and the drive's output (here the force drive's
+    # velocity, v of node c) inside the loop.  Blocks are sized in bytes of
+    # modal signals: 6 columns (Re and Im of 3 modes whose shapes are complex,
+    # the damping not being proportional), 8 bytes each.
+    if chunk is not None:
+        monkeypatch.setattr(sim, "CHUNK_BYTES", chunk * 8 * 6)
     if not numba:
         monkeypatch.setattr(kern, "HAVE_NUMBA", False)       # the lfilter recurrence
     c = mechcirc.parse(CHAIN3)
@@ -150,11 +154,12 @@ def test_x_only_velocity_drive_force_matches_the_full_run():
     assert np.abs(short.drive_force - full.drive_force).max() <= 1e-12 * scale
 
 
-@pytest.mark.parametrize("chunk", [4096, 333])
+@pytest.mark.parametrize("chunk", [None, 333])
 def test_nodes_only_run_in_blocks_matches_the_closed_form(chunk, monkeypatch):
     # x and v without element outputs: formed block by block from the modal
-    # signals (every column, as v needs them all)
-    monkeypatch.setattr(sim, "CHUNK", chunk)
+    # signals (every column, as v needs them all: 6 for the 6 states)
+    if chunk is not None:
+        monkeypatch.setattr(sim, "CHUNK_BYTES", chunk * 8 * 6)
     r = transient(mechcirc.parse(CHAIN3), 4.0, 1e-3, "step", elements=False)
     assert r.v is not None and "modal" in _modal_note(r)
     idx = np.arange(0, r.time.size, 200)
