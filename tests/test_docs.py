@@ -407,6 +407,43 @@ def test_relative_links_resolve():
             assert (page.parent / target).exists(), f"{page.name}: broken link {target}"
 
 
+def _heading_anchors(text: str) -> set[str]:
+    """The anchors GitHub gives a page's headings: lower case, characters other
+    than letters, digits, ``_``, ``-`` and spaces dropped, spaces as ``-``; a
+    repeated heading gets ``-1``, ``-2``, …  Headings inside fenced blocks are not
+    headings."""
+    seen: dict[str, int] = {}
+    anchors = set()
+    fenced = False
+    for line in text.splitlines():
+        if line.startswith("```"):
+            fenced = not fenced
+        m = None if fenced else re.match(r"#{1,6}\s+(.*?)\s*#*\s*$", line)
+        if m:
+            title = re.sub(r"\[([^\]]*)\]\([^)]*\)", r"\1", m.group(1)).replace("`", "")
+            slug = re.sub(r"[^\w\- ]", "", title.replace("*", "").lower()).replace(" ", "-")
+            n = seen.get(slug, 0)
+            seen[slug] = n + 1
+            anchors.add(slug if n == 0 else f"{slug}-{n}")
+    return anchors
+
+
+def test_links_reach_their_anchors():
+    """A link ``page.md#anchor`` (or ``#anchor`` on the same page) names a heading
+    that exists: a renamed heading must not leave links to nowhere."""
+    checked = 0
+    for page in PAGES:
+        text = page.read_text("utf-8")
+        for target, anchor in re.findall(r"\]\(([^)#\s]*)#([^)\s]+)\)", text):
+            dest = page if not target else page.parent / target
+            if "://" in target or dest.suffix != ".md" or not dest.exists():
+                continue
+            checked += 1
+            assert anchor in _heading_anchors(dest.read_text("utf-8")), (
+                f"{page.name}: link to {target or page.name}#{anchor}, no such heading")
+    assert checked > 50, checked       # the pattern still finds the docs' anchored links
+
+
 def test_the_markers_are_known():
     for page in PAGES:
         for line in page.read_text("utf-8").splitlines():
