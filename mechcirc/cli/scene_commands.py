@@ -213,7 +213,7 @@ def _cycle(args, scene) -> int:
     unit = "N·m" if cmap.rotational else "N"
     print(f"{args.file}: scene {scene.name!r}, {len(cmap.theta)} crank angles, shaft "
           f"Ω = {in_unit(cmap.omega_shaft, u):g} {u}")
-    sym = {"rad/s": "ω", "Hz": "f", "rpm": "n"}[u]
+    sym = {"omega": "ω"}.get(name, name)          # the CSV column name, ω spelt out
     head = "  θ [deg]  " + " ".join(f"{sym + '_r' + str(k + 1):>10}" for k in range(W.shape[1])) \
         + "  " + " ".join(f"{'|Q0| h=' + str(h):>11}" for h in cmap.harmonics)
     print(f"resonances [{u}] and |Q0| [{unit}] at h·Ω:")
