@@ -71,6 +71,8 @@ def _lazy(key: str, names: str):
     """A dictionary attribute of :class:`Mode` made from its arrays on first use."""
     def make(self) -> dict:
         values = self._values.get(key)
+        if values is not None and key in ("shape", "velocity"):
+            values = values.astype(complex)     # real for an undamped root: complex as documented
         return {} if values is None else dict(zip(self._names[names], values.tolist()))
     make.__name__ = key
     make.__doc__ = f"See the class docstring ({key})."
@@ -202,7 +204,7 @@ def _normalised(pairs, M, D, Ks, G_held, G_released) -> list:
         s = complex(-r.zeta * r.omega, r.omega_d)
         if v is None:                       # a band root: no vector from the solver
             v = _inverse_iteration(M, D, Ks, G_held if r.kind == "resonance" else G_released, s)
-        v = np.asarray(v, dtype=complex)
+        v = np.asarray(v)                   # real for an undamped root (real arithmetic after)
         top = int(np.argmax(np.abs(v)))
         v = v / v[top]
         v[top] = 1.0                        # exactly (a complex quotient may miss by an ulp)
@@ -215,19 +217,24 @@ def _chunk_values(system, pencil3, pinv, S, V, stamps) -> list:
     vectors ``V`` (columns), one ``(values, param_rel, param_zeta)`` per root."""
     ei, ej, y, power, slopes, mass, spring, damper = stamps
     M, D, Ks = pencil3
-    Ve = np.vstack([V, np.zeros((1, S.size))])
+    # Real vectors (undamped roots) keep every (element × root) array real: the complex
+    # factors depend on the root and the law only, one row per law.
+    Ve = np.vstack([V, np.zeros((1, S.size), V.dtype)])
     dV = Ve[ei] - Ve[ej]
-    dS = _root_sensitivity(system, M, D, Ks, pinv, S, V, dV, y, power)
-    rel, zeta = _omega_zeta(S, dS)
-    p_rel = {p: _omega_zeta(S, row @ dS) for p, row in slopes.items()}
+    ya2 = y[:, None] * (dV.real ** 2 + dV.imag ** 2 if np.iscomplexobj(dV) else dV * dV)
+    rel, zeta = _root_sensitivity(system, M, D, Ks, pinv, S, V, dV, y, power,
+                                  None if np.iscomplexobj(dV) else ya2)
+    # Both are real-linear in ∂s/∂p, and a .param's slope is a real combination of them.
+    p_rel = {p: (row @ rel, row @ zeta) for p, row in slopes.items()}
     wn = np.abs(S)
-    a2 = dV.real ** 2 + dV.imag ** 2
-    stored = np.where(mass[:, None], 0.5 * y[:, None] * a2,
-                      np.where(spring[:, None], 0.5 * y[:, None] * a2 / wn ** 2, 0.0))
+    # Kinetic ½mη|Δv|², potential ½kη|Δv|²/ωₙ², nothing stored in a damper.
+    share = np.vstack([np.full(S.size, 0.5), 0.5 / wn ** 2, np.zeros(S.size)])
+    stored = ya2 * share[np.where(mass, 0, np.where(spring, 1, 2))]
     total = stored.sum(axis=0)
     energy = stored[~damper] / total
-    dissipation = y[damper, None] * a2[damper] / (2 * wn * total)
-    force = y[:, None] * _law_powers(S, -power) * dV
+    dissipation = ya2[damper] / (2 * wn * total)
+    table, which = _law_powers(S, -power)
+    force = (y[:, None] * dV) * table[which]
     return [({"sensitivity": rel[:, c], "zeta_sensitivity": zeta[:, c], "shape": V[:, c],
               "energy": energy[:, c], "dissipation": dissipation[:, c],
               "velocity": dV[:, c], "force": force[:, c]},
@@ -420,15 +427,23 @@ def _adjoint_products(system, x, w, stamps) -> np.ndarray:
         return np.concatenate(parts, axis=1)
 
 
-def _root_sensitivity(system, M, D, Ks, pinv_GT, S, V, dV, y, power) -> np.ndarray:
-    """p·∂s/∂p for every loaded element (value p) and lever (ratio p), in that order, one
-    column a root: ``S`` the roots, ``V`` their vectors (columns), ``dV`` the elements'
-    Δv; ``pinv_GT`` the pseudo-inverse of the transposed constraint rows."""
+def _root_sensitivity(system, M, D, Ks, pinv_GT, S, V, dV, y, power, ya2=None) -> tuple:
+    """(p/ωₙ)·∂ωₙ/∂p and p·∂ζ/∂p (from p·∂s/∂p) for every loaded element (value p) and
+    lever (ratio p), in that order, one column a root: ``S`` the roots, ``V`` their
+    vectors (columns), ``dV`` the elements' Δv; ``pinv_GT`` the pseudo-inverse of the
+    transposed constraint rows; ``ya2`` = y·Δv² when ``dV`` is real (then the
+    element rows are computed in real arithmetic), else None."""
     MV, DV = M @ V, D @ V
     den = np.sum(V * (2 * S * MV + DV), axis=0)
-    dS = -y[:, None] * _law_powers(S, 1.0 - power) * dV * dV / den
+    table, which = _law_powers(S, 1.0 - power)
+    coef = -table / den                     # p·∂s/∂p per unit y·Δv², one row per law
+    if ya2 is not None:
+        rel_law, zeta_law = _omega_zeta(S, coef)
+        rel, zeta = ya2 * rel_law[which], ya2 * zeta_law[which]
+    else:
+        rel, zeta = _omega_zeta(S, y[:, None] * dV * dV * coef[which])
     if not system.levers:
-        return dS
+        return rel, zeta
     # Constraint forces q from the node rows: P(s) v + s Gᵀ q = 0 (exact at an eigenvector).
     q = -(pinv_GT @ (S * S * MV + S * DV + Ks @ V)) / S
     index = {n: i for i, n in enumerate(system.nodes)}
@@ -436,14 +451,15 @@ def _root_sensitivity(system, M, D, Ks, pinv_GT, S, V, dV, y, power) -> np.ndarr
     p1 = [index.get(lv.p1, -1) for lv in system.levers]
     p2 = [index.get(lv.p2, -1) for lv in system.levers]
     ratio = np.array([lv.ratio for lv in system.levers])[:, None]
-    lever = -2 * S * ratio * q[:len(p1)] * (Ve[p1] - Ve[p2]) / den
-    return np.vstack([dS, lever])
+    lever_rel, lever_zeta = _omega_zeta(S, -2 * S * ratio * q[:len(p1)] * (Ve[p1] - Ve[p2]) / den)
+    return np.vstack([rel, lever_rel]), np.vstack([zeta, lever_zeta])
 
 
-def _law_powers(S: np.ndarray, exponent: np.ndarray) -> np.ndarray:
-    """S[r] ** exponent[e] as an (E, R) array, one complex power per distinct exponent."""
+def _law_powers(S: np.ndarray, exponent: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(table, which)``: S[r] ** exponent[e] is ``table[which[e], r]``, one complex
+    power per distinct exponent."""
     values, which = np.unique(np.asarray(exponent, dtype=float), return_inverse=True)
-    return (S[None, :] ** values[:, None])[which]
+    return S[None, :] ** values[:, None], which
 
 
 def _omega_zeta(s, ds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

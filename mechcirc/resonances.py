@@ -601,7 +601,9 @@ def _undamped(M: np.ndarray, K: np.ndarray, vectors: bool = False) -> tuple:
     none = (np.zeros(0), direct, np.zeros((M.shape[0], 0)) if vectors else None)
     if not massive.any():
         return none  # no inertia: no oscillation
-    if V is None:
+    if direct:                       # nothing to condense (no copies of K)
+        Krr, Knn, Knr = K, K[:0, :0], K[:0]
+    elif V is None:
         Krr = K[np.ix_(massive, massive)]
         Knn = K[np.ix_(~massive, ~massive)]
         Knr = K[np.ix_(~massive, massive)]
@@ -609,18 +611,20 @@ def _undamped(M: np.ndarray, K: np.ndarray, vectors: bool = False) -> tuple:
         R, N = V[:, massive], V[:, ~massive]
         Krr, Knn, Knr = R.T @ K @ R, N.T @ K @ N, N.T @ K @ R
     X = np.linalg.lstsq(Knn, Knr, rcond=np.finfo(float).eps)[0] if Knn.size else np.zeros((0, Krr.shape[0]))
-    Kc = Krr - Knr.T @ X
+    Kc = Krr - Knr.T @ X if Knn.size else Krr
     if Kc.shape[0] == 0:
         return none
     # Symmetric scaling by the masses gives a standard symmetric eigenproblem.
     d = 1.0 / np.sqrt(mu[massive])
     A = Kc * d[:, None] * d[None, :]
-    lam = _symmetric_eigvals((A + A.T) / 2)
+    A = (A + A.T) / 2
+    lam = _symmetric_eigvals(A)
     if not vectors:
         return lam, direct, None
     # The vectors by their own call: the roots stay those find_resonances reports, to the bit.
-    Y = np.linalg.eigh((A + A.T) / 2)[1]      # divide and conquer (LAPACK syevd)
-    Ur = Y * d[:, None]
+    Ur = np.linalg.eigh(A)[1] * d[:, None]     # divide and conquer (LAPACK syevd)
+    if direct:
+        return lam, direct, Ur
     Un = -X @ Ur                     # the massless directions follow statically
     if V is None:
         U = np.empty((M.shape[0], lam.size))
