@@ -123,9 +123,17 @@ class Mode:
     energy = _lazy("energy", "stored")
     dissipation = _lazy("dissipation", "dampers")
     velocity = _lazy("velocity", "elements")
-    force = _lazy("force", "elements")
     sensitivity = _lazy("sensitivity", "all")
     zeta_sensitivity = _lazy("zeta_sensitivity", "all")
+
+    @functools.cached_property
+    def force(self) -> dict:
+        """See the class docstring (made from ``velocity`` on first use: Q = y·s^(−power)·Δv)."""
+        v = self._values.get("velocity")
+        if v is None:
+            return {}
+        y, power = self._names["law"]
+        return dict(zip(self._names["elements"], (y * self.s ** -power * v).tolist()))
 
     @property
     def s(self) -> complex:
@@ -173,7 +181,7 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
     el_names = [e.name for e in els]
     shared = {"nodes": list(system.nodes), "elements": el_names, "all": names,
               "stored": [n for n, d in zip(el_names, damper) if not d],
-              "dampers": [n for n, d in zip(el_names, damper) if d]}
+              "dampers": [n for n, d in zip(el_names, damper) if d], "law": (y, power)}
     slopes = _param_slopes(circuit, names)
     # Constraint forces from the node rows, P(s) v + s Gᵀ q = 0: Gᵀ's pseudo-inverse,
     # once per problem (only levers need them).
@@ -213,7 +221,7 @@ def _normalised(pairs, M, D, Ks, G_held, G_released) -> list:
 
 
 def _chunk_values(system, pencil3, pinv, S, V, stamps) -> list:
-    """Sensitivities, energies, element velocities and forces of the roots ``S`` with
+    """Sensitivities, energies and element velocities of the roots ``S`` with
     vectors ``V`` (columns), one ``(values, param_rel, param_zeta)`` per root."""
     ei, ej, y, power, slopes, mass, spring, damper = stamps
     M, D, Ks = pencil3
@@ -231,13 +239,11 @@ def _chunk_values(system, pencil3, pinv, S, V, stamps) -> list:
     share = np.vstack([np.full(S.size, 0.5), 0.5 / wn ** 2, np.zeros(S.size)])
     stored = ya2 * share[np.where(mass, 0, np.where(spring, 1, 2))]
     total = stored.sum(axis=0)
-    energy = stored[~damper] / total
+    energy = (stored[~damper] if damper.any() else stored) / total
     dissipation = ya2[damper] / (2 * wn * total)
-    table, which = _law_powers(S, -power)
-    force = (y[:, None] * dV) * table[which]
     return [({"sensitivity": rel[:, c], "zeta_sensitivity": zeta[:, c], "shape": V[:, c],
               "energy": energy[:, c], "dissipation": dissipation[:, c],
-              "velocity": dV[:, c], "force": force[:, c]},
+              "velocity": dV[:, c]},
              {p: float(x[0][c]) for p, x in p_rel.items()},
              {p: float(x[1][c]) for p, x in p_rel.items()}) for c in range(S.size)]
 

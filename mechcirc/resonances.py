@@ -52,7 +52,8 @@ __all__ = ["Resonance", "Resonances", "find_resonances", "MAX_UNKNOWNS", "MAX_UN
 
 #: Largest eigenproblem solved (unknowns left after the constraints).  The
 #: dense solve costs O(n³): 21.5 s CPU at 1999 unknowns undamped (one BLAS thread;
-#: 80 % polishing the roots on K, docs/reliability.md), and the
+#: 80 % polishing the roots on K, docs/reliability.md; a chain is now banded:
+#: 11.5 s, 93 % polishing, benchmarks/bench_resonances_limit.py), and the
 #: damped 2n linearisation about 10 s at 500 (measured, docs/reliability.md).
 #: Larger networks are refused at once instead of running for hours.
 MAX_UNKNOWNS = 2000
