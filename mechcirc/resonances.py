@@ -660,7 +660,7 @@ def _symmetric_eigvals(A: np.ndarray) -> np.ndarray:
         The n eigenvalues, ascending.
     """
     n = A.shape[0]
-    # The banded reduction costs about 6n²b flops, the dense one 4n³/3 (even at b = n/5);
+    # The banded reduction costs about 6n²b flops, the dense one 4n³/3 (equal at b ≈ 2n/9);
     # a band below n/8 leaves a margin for the reordering and the copies.
     if n >= BANDED_FROM and np.count_nonzero(A) <= n * n // 8:
         import scipy.sparse as sp
