@@ -312,6 +312,41 @@ def count(least: int = 1, most: int | None = None, *, why: str = ""):
     return parse
 
 
+def add_command(sub, name: str, summary: str, description: str, example: str, *,
+                file: str | None = None, raw: bool = True):
+    """Start a command's parser: its name, one-line help, description and example.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The sub-command table the parser joins.
+    name : str
+        The command (``mechcirc NAME``).
+    summary : str
+        Its line in ``mechcirc --help``.
+    description : str
+        The text above its options.
+    example : str
+        The text below them (``Example: mechcirc NAME ...``).
+    file : str, optional
+        Help of a positional ``file`` argument, added first; none by default.
+    raw : bool, optional
+        Print the description and example as written (True) or re-wrapped.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+    """
+    import argparse
+
+    p = sub.add_parser(name, help=summary, description=description, epilog=example,
+                       formatter_class=argparse.RawDescriptionHelpFormatter if raw
+                       else argparse.HelpFormatter)
+    if file:
+        p.add_argument("file", help=file)
+    return p
+
+
 def add_handler(p, func, *, json: bool = True) -> None:
     """End a command's parser: its ``--json`` option (listed last in its help) and its handler.
 

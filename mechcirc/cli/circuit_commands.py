@@ -13,8 +13,8 @@ from ..limits import (
     MAX_PLOT_POINTS,
     MAX_SWEEP_POINTS,
 )
-from ._common import (add_handler, check_output_paths, load_with_warnings, print_json, real,
-                      save_figure, warning_lines)
+from ._common import (add_command, add_handler, check_output_paths, load_with_warnings, print_json,
+                      real, save_figure, warning_lines)
 
 #: argparse type: an angular frequency [rad/s], or with a unit (``50Hz``, ``3000rpm``); the
 #: command checks the range (a sweep's --omega-min/--omega-max together).
@@ -34,13 +34,11 @@ def register(sub) -> None:
 
 
 def _register_check(sub) -> None:
-    p = sub.add_parser(
-        "check", help="parse a netlist and show its elements and reduction tree",
-        description="Parse a netlist, list elements and nodes, warnings, and the "
-                    "series–parallel reduction tree seen from the drive.",
-        epilog="Example: mechcirc check netlists/stb_heald.mcir",
-        formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("file", help="netlist file (.mcir)")
+    p = add_command(
+        sub, "check", "parse a netlist and show its elements and reduction tree",
+        "Parse a netlist, list elements and nodes, warnings, and the series–parallel reduction "
+        "tree seen from the drive.",
+        "Example: mechcirc check netlists/stb_heald.mcir", file="netlist file (.mcir)")
     p.add_argument("--json", action="store_true", help="print one JSON document")
     p.add_argument("--explain", action="store_true",
                    help="write the series–parallel reduction out step by step, with the "
@@ -49,13 +47,12 @@ def _register_check(sub) -> None:
 
 
 def _register_sweep(sub) -> None:
-    p = sub.add_parser(
-        "sweep", help="K(ω) and Q0(ω) over a frequency range",
-        description="Sweep the kinematic characteristic K = v/Q [m/(N·s)] and the "
-                    "force amplitude Q0 = V0/K [N] over ω [rad/s].",
-        epilog="Example: mechcirc sweep netlists/stb_heald.mcir --omega-min 10 "
-               "--omega-max 1e4 --points 400 --log -o K.csv --plot K.png")
-    p.add_argument("file", help="netlist file (.mcir)")
+    p = add_command(
+        sub, "sweep", "K(ω) and Q0(ω) over a frequency range",
+        "Sweep the kinematic characteristic K = v/Q [m/(N·s)] and the force amplitude Q0 = V0/K "
+        "[N] over ω [rad/s].",
+        "Example: mechcirc sweep netlists/stb_heald.mcir --omega-min 10 --omega-max 1e4 --points "
+        "400 --log -o K.csv --plot K.png", file="netlist file (.mcir)", raw=False)
     p.add_argument("--omega-min", type=omega_value, required=True, metavar="W1",
                    help="lowest angular frequency [rad/s]; or with a unit: 5Hz, 300rpm")
     p.add_argument("--omega-max", type=omega_value, required=True, metavar="W2",
@@ -98,14 +95,13 @@ def _register_sweep(sub) -> None:
 
 
 def _register_resonances(sub) -> None:
-    p = sub.add_parser(
-        "resonances", help="exact resonances (K = 0) and anti-resonances (K = ∞)",
-        description="Natural frequencies seen from the drive, from the network's "
-                    "matrices: resonances (K = 0, Q0 → ∞ under kinematic excitation; "
-                    "the drive held) and anti-resonances (K → ∞; the drive released). "
-                    "Damped networks also get the damping ratio.",
-        epilog="Example: mechcirc resonances netlists/stb_heald.mcir --omega-max 5000")
-    p.add_argument("file", help="netlist file (.mcir)")
+    p = add_command(
+        sub, "resonances", "exact resonances (K = 0) and anti-resonances (K = ∞)",
+        "Natural frequencies seen from the drive, from the network's matrices: resonances (K = 0, "
+        "Q0 → ∞ under kinematic excitation; the drive held) and anti-resonances (K → ∞; the drive "
+        "released). Damped networks also get the damping ratio.",
+        "Example: mechcirc resonances netlists/stb_heald.mcir --omega-max 5000",
+        file="netlist file (.mcir)", raw=False)
     p.add_argument("--omega-max", type=positive_omega, metavar="W",
                    help="report only up to this angular frequency [rad/s]; or with a unit: "
                         "50Hz, 3000rpm")

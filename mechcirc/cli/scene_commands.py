@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-import argparse
 import math
 
 from ..limits import MAX_CYCLE_POINTS
-from ._common import add_handler, check_output_paths, count, print_json, real, save_figure
+from ._common import (add_command, add_handler, check_output_paths, count, print_json, real,
+                      save_figure)
 
 
 def register(sub) -> None:
@@ -15,16 +15,14 @@ def register(sub) -> None:
 
 
 def _register_scene(sub) -> None:
-    p = sub.add_parser(
-        "scene", help="a scene (linkage + masses + elastic links) to its mechanical circuit",
-        description="Linearise a scene file at a crank angle into a netlist (--theta),\n"
-                    "or map its resonances and |Q0| at the shaft harmonics over one\n"
-                    "revolution (--cycle).  See docs/scenes.md.",
-        epilog="Examples:\n  mechcirc scene examples/heald_scene.toml --theta 40 -o heald.mcir\n"
-               "  mechcirc scene examples/heald_scene.toml --cycle --points 72 "
-               "--harmonics 8 --plot cycle.png",
-        formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("file", help="scene file (.toml)")
+    p = add_command(
+        sub, "scene", "a scene (linkage + masses + elastic links) to its mechanical circuit",
+        "Linearise a scene file at a crank angle into a netlist (--theta),\n"
+        "or map its resonances and |Q0| at the shaft harmonics over one\n"
+        "revolution (--cycle).  See docs/scenes.md.",
+        "Examples:\n  mechcirc scene examples/heald_scene.toml --theta 40 -o heald.mcir\n"
+        "  mechcirc scene examples/heald_scene.toml --cycle --points 72 --harmonics 8 --plot "
+        "cycle.png", file="scene file (.toml)")
     what = p.add_mutually_exclusive_group()
     what.add_argument("--theta", type=real(most=1e9, unit="deg", role="angle"), metavar="DEG",
                       help="crank rotation from the pose [deg] to linearise at (default: "
@@ -55,15 +53,14 @@ def _register_scene(sub) -> None:
 
 
 def _register_reduce(sub) -> None:
-    p = sub.add_parser(
-        "reduce", help="model only what the output needs in a frequency band",
-        description="Remove or merge elements of a netlist that do not matter for the "
-                    "output in the band [W1, W2] (rigid springs, negligible masses, chains "
-                    "that collapse); report the measured worst relative error of the output "
-                    "over the band (never above --tol) and the shift of each resonance.",
-        epilog="Example: mechcirc reduce netlists/stb_heald.mcir --band 10:2000 --tol 0.01 "
-               "-o reduced.mcir")
-    p.add_argument("file", help="netlist file (.mcir)")
+    p = add_command(
+        sub, "reduce", "model only what the output needs in a frequency band",
+        "Remove or merge elements of a netlist that do not matter for the output in the band [W1, "
+        "W2] (rigid springs, negligible masses, chains that collapse); report the measured worst "
+        "relative error of the output over the band (never above --tol) and the shift of each "
+        "resonance.",
+        "Example: mechcirc reduce netlists/stb_heald.mcir --band 10:2000 --tol 0.01 -o "
+        "reduced.mcir", file="netlist file (.mcir)", raw=False)
     p.add_argument("--band", required=True, metavar="W1:W2",
                    help="angular frequency band [rad/s], W1 < W2")
     p.add_argument("--tol", type=real(above=0.0, most=1.0), required=True, metavar="T",

@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-import argparse
 import math
 
 from ..limits import MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS, MAX_SCIPY_REVOLUTIONS
-from ._common import add_handler, check_output_paths, count, print_json, real, save_figure
+from ._common import (add_command, add_handler, check_output_paths, count, print_json, real,
+                      save_figure)
 
 _METHODS = ("rk4", "rk4-python", "rk8", "DOP853", "RK45", "LSODA")   # = mechcirc.sley.METHODS
 _UNITS = {"eps4T": "1/s^2", "eps2P": "1/s^2", "eps4P": "1/s^2", "eps5P": "1/s^2",
@@ -19,16 +19,15 @@ def register(sub) -> None:
 
 
 def _register_simulate(sub) -> None:
-    p = sub.add_parser(
-        "simulate", help="sley beat-up dynamics (Mrázek, Tables 1 and 2) in the time domain",
-        description="Integrate the sley model (eq. 4 one-side, eq. 9 both-sides; the "
-                    "presets run as their scenes, examples/mrazek_*.toml) from the "
-                    "crank angle of zero sley acceleration over R revolutions and print the "
-                    "min/max of the last one beside the paper's printed values. The beat-up "
-                    "interval alpha is not printed in the paper: default 10 deg, the best fit to the printed cells (sigma = alpha).",
-        epilog="Example: mechcirc simulate --drive one-side --variant 3 --plot sley.png\n"
-               "         mechcirc simulate --variant all --json",
-        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = add_command(
+        sub, "simulate", "sley beat-up dynamics (Mrázek, Tables 1 and 2) in the time domain",
+        "Integrate the sley model (eq. 4 one-side, eq. 9 both-sides; the presets run as their "
+        "scenes, examples/mrazek_*.toml) from the crank angle of zero sley acceleration over R "
+        "revolutions and print the min/max of the last one beside the paper's printed values. The "
+        "beat-up interval alpha is not printed in the paper: default 10 deg, the best fit to the "
+        "printed cells (sigma = alpha).",
+        "Example: mechcirc simulate --drive one-side --variant 3 --plot sley.png\n"
+        "         mechcirc simulate --variant all --json")
     p.add_argument("scene", nargs="?", metavar="SCENE.toml",
                    help="simulate this scene file over whole revolutions (docs/scenes.md); "
                         "without it, the sley presets (--drive, --variant)")
@@ -95,19 +94,18 @@ def _sley_arguments(p) -> None:
 
 
 def _register_crosscheck(sub) -> None:
-    p = sub.add_parser(
-        "crosscheck", help="linearised sley against its mechanical circuit (resonances, Q0)",
-        description="(a) resonances (K = 0) of the sley's netlist at crank angle theta "
-                    "against the eigenfrequencies of the linearised equations; (b) ringing "
-                    "of the sley after the beat-up pulse against the predicted damped "
-                    "frequency; (c) harmonic forcing of the linear model against |Q0|.",
-        epilog="Example: mechcirc crosscheck --drive one-side --variant 3 --theta 60\n"
-               "         mechcirc crosscheck examples/heald_scene.toml --theta 40\n"
-               "         mechcirc crosscheck netlists/stb_heald.mcir --omega-max 5000\n"
-               "(a scene .toml: circuit resonances at --theta against the ringing of its "
-               "time-domain motion, and |Q0| against the forced response to a drive-speed "
-               "ripple; a netlist: see the transient command)",
-        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = add_command(
+        sub, "crosscheck", "linearised sley against its mechanical circuit (resonances, Q0)",
+        "(a) resonances (K = 0) of the sley's netlist at crank angle theta against the "
+        "eigenfrequencies of the linearised equations; (b) ringing of the sley after the beat-up "
+        "pulse against the predicted damped frequency; (c) harmonic forcing of the linear model "
+        "against |Q0|.",
+        "Example: mechcirc crosscheck --drive one-side --variant 3 --theta 60\n"
+        "         mechcirc crosscheck examples/heald_scene.toml --theta 40\n"
+        "         mechcirc crosscheck netlists/stb_heald.mcir --omega-max 5000\n"
+        "(a scene .toml: circuit resonances at --theta against the ringing of its time-domain "
+        "motion, and |Q0| against the forced response to a drive-speed ripple; a netlist: see the "
+        "transient command)")
     p.add_argument("file", nargs="?", metavar="FILE",
                    help="a scene (.toml): cross-check it at --theta; a netlist (.mcir): "
                         "cross-check its resonances and |Q0| against its transients (the "
