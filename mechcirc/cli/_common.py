@@ -490,6 +490,30 @@ def save_figure(fig, path, into=None, tight: bool = True) -> None:
                     **options)
 
 
+def write_columns(path, comment: str, names, cols) -> None:
+    """Write equal-length columns as CSV, whole or not at all: a comment line, the names,
+    then one row of full-precision floats (``repr``) per index.
+
+    Parameters
+    ----------
+    path : str
+        The output file (replaced atomically).
+    comment : str
+        The first line, ``#`` included.
+    names : iterable of str
+        The column names.
+    cols : iterable of array_like
+        The columns, in the order of ``names``.
+    """
+    from ..outputs import atomic_open
+
+    with atomic_open(path, "w", newline="") as fh:
+        fh.write(comment + "\n")
+        fh.write(",".join(names) + "\n")
+        for row in zip(*cols):
+            fh.write(",".join(repr(float(v)) for v in row) + "\n")
+
+
 def load_with_warnings(path):
     """Load and reduce a netlist, returning the circuit and the warnings raised."""
     import warnings

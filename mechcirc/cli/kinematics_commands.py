@@ -8,7 +8,7 @@ import math
 from ..errors import InputError, MechcircError
 from ..units import convert_frequency
 from ._common import (MAX_LENGTH, MAX_OMEGA, add_command, add_handler, check_output_paths, count,
-                      print_json, real, save_figure)
+                      print_json, real, save_figure, write_columns)
 
 
 def register(sub) -> None:
@@ -300,7 +300,9 @@ def cmd_frame(args) -> int:
     cols = res.columns()
     summary = res.summary()
     if args.output:
-        _write_frame_csv(args, res, cols, omega)
+        write_columns(args.output, f"# mechcirc frame: a={args.crank:g} b={args.coupler:g} "
+                      f"c={args.rocker:g} d={args.frame:g} {args.unit}, omega={omega:.10g} "
+                      f"rad/s; {res.CONVENTION}", cols, cols.values())
     if args.plot:
         from ..kinematics.plots import plot_shaking
         save_figure(plot_shaking(res), args.plot)
@@ -337,20 +339,6 @@ def _print_frame(args, fb, res, summary, omega) -> None:
     print(f"  the printed eq. 7's T_d would differ from this T_d by up to "
           f"{summary['T_d_printed_minus_T_d_max_abs_Nm']:.4g} N·m here (column T_d_printed_Nm "
           f"of the CSV).")
-
-
-def _write_frame_csv(args, res, cols, omega) -> None:
-    """Every angle's loads as CSV under a header of the lengths and the sign convention."""
-    from ..outputs import atomic_open
-
-    names = list(cols)
-    with atomic_open(args.output, "w", newline="") as fh:
-        fh.write(f"# mechcirc frame: a={args.crank:g} b={args.coupler:g} c={args.rocker:g} "
-                 f"d={args.frame:g} {args.unit}, omega={omega:.10g} rad/s; "
-                 f"{res.CONVENTION}\n")
-        fh.write(",".join(names) + "\n")
-        for row in zip(*(cols[n] for n in names)):
-            fh.write(",".join(repr(float(v)) for v in row) + "\n")
 
 
 def cmd_synth(args) -> int:

@@ -6,7 +6,7 @@ import math
 
 from ..limits import MAX_CYCLE_POINTS
 from ._common import (add_command, add_handler, check_output_paths, count, print_json, real,
-                      save_figure)
+                      save_figure, write_columns)
 
 
 def register(sub) -> None:
@@ -303,7 +303,7 @@ def cmd_simulate_scene(args) -> int:
         return _shaft(args, scene)
     result = _simulate_with_bar(args, scene)
     if args.output:
-        _write_columns(args.output, f"# {scene.name} ({args.scene}); revolution "
+        write_columns(args.output, f"# {scene.name} ({args.scene}); revolution "
                        f"{result.revolution}; omega = {result.omega!r} rad/s", result.columns(),
                        result.columns().values())
     if args.plot:
@@ -429,17 +429,6 @@ def _with_overrides(args, scene):
     return apply_overrides(scene, over) if over else scene
 
 
-def _write_columns(path, comment: str, names, cols) -> None:
-    """A CSV of equal-length columns (a comment line, the names, rows of repr floats)."""
-    from ..outputs import atomic_open
-
-    with atomic_open(path, "w", newline="") as fh:
-        fh.write(comment + "\n")
-        fh.write(",".join(names) + "\n")
-        for row in zip(*cols):
-            fh.write(",".join(repr(float(v)) for v in row) + "\n")
-
-
 def _quantity_unit(scene, key: str, keys) -> str:
     """The unit of a scene output ``key`` (``BODY.acceleration``, ``ELEMENT.force``, an alias,
     a shaft curve); ``keys`` are all the outputs (a point has ``_x``/``_y`` components)."""
@@ -500,7 +489,7 @@ def _shaft(args, scene) -> int:
               **{f"{b}.acceleration": v for b, v in r.body_accelerations.items()},
               **{a: r.body_accelerations[b] for a, b in aliases.items()}, **r.values}
     if args.output:
-        _write_columns(args.output, f"# {scene.name} ({args.scene}); steady cycle of the "
+        write_columns(args.output, f"# {scene.name} ({args.scene}); steady cycle of the "
                        f"dynamic main shaft, flywheel {r.flywheel!r} kg·m²",
                        ["theta_deg", "time", *curves],
                        [np.degrees(r.theta), r.time, *curves.values()])

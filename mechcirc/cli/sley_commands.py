@@ -6,7 +6,7 @@ import math
 
 from ..limits import MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS, MAX_SCIPY_REVOLUTIONS
 from ._common import (add_command, add_handler, check_output_paths, count, print_json, real,
-                      save_figure)
+                      save_figure, write_columns)
 
 _METHODS = ("rk4", "rk4-python", "rk8", "DOP853", "RK45", "LSODA")   # = mechcirc.sley.METHODS
 _UNITS = {"eps4T": "1/s^2", "eps2P": "1/s^2", "eps4P": "1/s^2", "eps5P": "1/s^2",
@@ -220,19 +220,6 @@ def _table(result, paper_applies: bool = True) -> str:
     return "\n".join(lines)
 
 
-def _write_csv(result, path) -> None:
-    from ..outputs import atomic_open
-
-    cols = result.columns()
-    names = list(cols)
-    with atomic_open(path, "w", newline="") as fh:
-        fh.write(f"# {result.params.label}; revolution {result.revolution}; "
-                 f"alpha = {result.alpha_deg:g} deg; method {result.method}\n")
-        fh.write(",".join(names) + "\n")
-        for row in zip(*(cols[n] for n in names)):
-            fh.write(",".join(repr(float(v)) for v in row) + "\n")
-
-
 # ----------------------------------------------------------------- handlers
 def cmd_simulate(args) -> int:
     if args.scene is not None:
@@ -273,7 +260,10 @@ def cmd_simulate(args) -> int:
     with Progress(0, params.label) as bar:     # total set by the first progress(done, total)
         result = simulate_params(params, args.revolutions, args.method, progress=bar, **opts)
     if args.output:
-        _write_csv(result, args.output)
+        cols = result.columns()
+        write_columns(args.output, f"# {result.params.label}; revolution {result.revolution}; "
+                      f"alpha = {result.alpha_deg:g} deg; method {result.method}", cols,
+                      cols.values())
     if args.plot:
         from ..sley.plots import plot_result
 
