@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .circuit import Circuit, Drive, units_of
-from .errors import InputError, NotSeriesParallelError, TopologyError
+from .errors import InputError, MechcircError, NotSeriesParallelError, TopologyError
 from .reduction import Node, evaluate, push_down
 
 __all__ = ["Sweep", "sweep", "Peak", "peak", "FLAG_OK", "FLAG_SINGULAR", "FLAG_NEAR_SINGULAR",
@@ -293,7 +293,6 @@ class Sweep:
             return []
         import warnings
 
-        from .errors import MechcircError
         from .resonances import find_resonances
 
         try:

@@ -37,6 +37,8 @@ from typing import TYPE_CHECKING, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .errors import NetlistError
+
 if TYPE_CHECKING:  # pragma: no cover - annotations of the delegates only
     from .motion_laws import Motion
     from .nodal import NodalSystem
@@ -315,8 +317,6 @@ class Circuit:
         ``require_drive=False`` fails with a message, not an ``AttributeError``.
         """
         if self.drive is None:
-            from .errors import NetlistError
-
             raise NetlistError(f"circuit {self.name!r} has no drive, and this analysis is "
                                "seen from one", self.source, 0, 0,
                                "one line 'drive NAME N1 N2 velocity=V0' (a netlist without "

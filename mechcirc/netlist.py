@@ -44,7 +44,7 @@ from typing import Mapping, NoReturn
 from pathlib import Path
 
 from .circuit import ELEMENT_UNITS, Circuit, Drive, Element, ElementKind, Lever
-from .errors import NetlistError
+from .errors import NetlistError, UnitMixWarning
 from .expressions import CONSTANTS, FUNCTIONS, Expr, evaluate, parse_expression
 from .sources import did_you_mean, is_name, is_number, read_source, split_lines
 from .units import (UnitError, convert, is_rotational, looks_like_unit, parse_unit,
@@ -732,8 +732,6 @@ class _Parser:
             other = seen.get(not rot)
             if other is not None and rot not in seen:
                 import warnings
-
-                from .errors import UnitMixWarning
 
                 kinds = ("rotational", "translational") if rot else ("translational",
                                                                    "rotational")

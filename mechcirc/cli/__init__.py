@@ -15,6 +15,8 @@ from __future__ import annotations
 import argparse
 import importlib
 
+from ..errors import shorten
+
 __all__ = ["main", "build_parser", "one_blas_thread"]
 
 #: Modules that contribute sub-commands, in the order ``--help`` lists them.
@@ -51,7 +53,6 @@ class _Parser(argparse.ArgumentParser):
     def error(self, message):
         import re
 
-        from ..errors import shorten  # argparse quotes the value given: it may be long
         from ..sources import did_you_mean
 
         # 'invalid choice: 'swep' (choose from 'check', 'sweep', ...)': name the nearest

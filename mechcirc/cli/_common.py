@@ -9,7 +9,9 @@ import signal
 import sys
 import threading
 
-from ..errors import MAX_QUOTED, MechcircError, NetlistError, clip, shorten
+from ..errors import (MAX_QUOTED, MechcircError, MechcircWarning, NetlistError,
+                      NotSeriesParallelError, clip, shorten)
+from ..units import UnitError, parse_omega, parse_quantity, parse_unit, split_quantity
 
 EXIT_OK, EXIT_INTERNAL, EXIT_USER = 0, 1, 2
 #: Exit status after SIGINT and SIGTERM (128 + the signal number, as shells report).
@@ -83,8 +85,6 @@ def run_handler(args) -> int:
     stands alone; otherwise every warning is shown as usual.
     """
     import warnings
-
-    from ..errors import MechcircWarning
 
     _SHOWN.clear()
     with warnings.catch_warnings(record=True) as caught:
@@ -189,8 +189,6 @@ def quantity_type(role: str, default_unit: str | None = None):
     import argparse
 
     def convert(text: str) -> float:
-        from ..units import UnitError, parse_quantity, parse_unit, split_quantity
-
         try:
             value = parse_quantity(text, role)
             parts = split_quantity(text)
@@ -212,8 +210,6 @@ def join_spaced_quantities(argv: list[str]) -> list[str]:
     A number right after an option, followed by a token that the unit grammar
     reads as a unit, is one quantity; anything else is left alone.
     """
-    from ..units import UnitError, parse_unit, split_quantity
-
     out: list[str] = []
     i = 0
     while i < len(argv):
@@ -253,8 +249,6 @@ def real(*, least: float | None = None, above: float | None = None,
 
     def parse(text: str) -> float:
         if omega:
-            from ..units import parse_omega
-
             try:
                 value = parse_omega(text)
             except ValueError as exc:
@@ -519,7 +513,6 @@ def load_with_warnings(path):
     import warnings
 
     from ..circuit import units_of
-    from ..errors import NotSeriesParallelError
     from ..netlist import load
 
     with warnings.catch_warnings(record=True) as caught:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import math
 
+from ..errors import MechcircError, NotSeriesParallelError, SolverError
 from ..limits import (
     MAX_ADAPTIVE_NODAL_POINTS,
     MAX_ADAPTIVE_POINTS,
@@ -13,6 +14,7 @@ from ..limits import (
     MAX_PLOT_POINTS,
     MAX_SWEEP_POINTS,
 )
+from ..units import FREQUENCY_UNITS, in_unit
 from ._common import (add_command, add_handler, check_output_paths, load_with_warnings, print_json,
                       real, save_figure, warning_lines)
 
@@ -129,8 +131,6 @@ def add_unit_option(p) -> None:
 
 def _tree_and_unloaded(circuit) -> tuple[str, tuple[str, ...]]:
     """The reduction tree as text and the unloaded elements, from the method that applies."""
-    from ..errors import NotSeriesParallelError
-
     try:
         return str(circuit.tree), circuit.unloaded
     except NotSeriesParallelError as exc:
@@ -200,8 +200,6 @@ def cmd_check(args) -> int:
 def _omega_grid(args):
     import numpy as np
 
-    from ..errors import MechcircError
-
     lo, hi, n = args.omega_min, args.omega_max, args.points
     if not (np.isfinite(lo) and np.isfinite(hi)) or lo < 0 or hi <= lo:
         raise MechcircError(f"need 0 <= --omega-min < --omega-max (finite), got "
@@ -228,8 +226,6 @@ def _omega_grid(args):
 
 
 def _some_omega(values, limit: int = 5, unit: str = "rad/s") -> str:
-    from ..units import in_unit
-
     text = ", ".join(f"{in_unit(w, unit):.10g}" for w in values[:limit])
     return text + (f" and {len(values) - limit} more" if len(values) > limit else "")
 
@@ -242,8 +238,6 @@ def _peak_doc(pk) -> dict:
 
 
 def _peak_text(pk, units: dict, unit: str = "rad/s") -> str:
-    from ..units import FREQUENCY_UNITS, in_unit
-
     q = {"Q0": units["Q"], "v0": units["v"], "K": units["K"]}[pk.quantity]
     name = FREQUENCY_UNITS[unit][0]
     if pk.unbounded:
@@ -264,8 +258,6 @@ def cmd_sweep(args) -> int:
     extra = _responses(result, args.node, args.element)
     everything = None
     if args.plot or args.json:
-        from ..errors import SolverError
-
         try:
             # The band's top as peak() asks for it (1e-9 above): computed once for both.
             everything = circuit.resonances(omega_max=omega[-1] * (1 + 1e-9))
@@ -284,8 +276,6 @@ def cmd_sweep(args) -> int:
     singular = [float(w) for w in result.omega[result.flags == FLAG_SINGULAR]]
     notes = list(getattr(result, "notes", ()))
     if singular:
-        from ..units import FREQUENCY_UNITS
-
         notes.append(f"{len(singular)} point(s) exactly on a pole or zero of K "
                      f"({FREQUENCY_UNITS[args.unit][0]} = "
                      f"{_some_omega(singular, unit=args.unit)} {args.unit}): there "
@@ -302,8 +292,6 @@ def cmd_sweep(args) -> int:
 def _check_touchstone_name(path) -> None:
     from pathlib import Path
 
-    from ..errors import MechcircError
-
     if path and Path(path).suffix.lower() != ".s1p":
         # K seen by one drive is a one-port: a .s2p name would promise a
         # 2-port file that scikit-rf then cannot read.
@@ -314,8 +302,6 @@ def _check_touchstone_name(path) -> None:
 
 def _run_sweep(args, circuit, omega):
     """The sweep on the grid, or on an adaptive grid from it (``--adaptive``)."""
-    from ..errors import MechcircError
-
     if not args.adaptive:
         return circuit.sweep(omega, method=args.method, refine=args.refine, error=True)
     from ..adaptive import adaptive_sweep
@@ -386,8 +372,6 @@ def _sweep_doc(args, result, extra, sens, found, pk, singular, notes, warns) -> 
 def _print_sweep(args, result, extra, sens, pk, notes, dropped) -> None:
     """The summary ``sweep`` prints without ``--json``."""
     import numpy as np
-
-    from ..units import FREQUENCY_UNITS, in_unit
 
     units, unit = result.units, args.unit
     how = "adaptive grid points" if args.adaptive else "points"
@@ -460,8 +444,6 @@ def _responses(result, nodes, elements) -> dict:
     """``{column: |amplitude|}`` of ``--node`` (v_abs, x_abs) and ``--element`` (Q_abs)."""
     import numpy as np
 
-    from ..errors import MechcircError
-
     out = {}
     with np.errstate(all="ignore"):
         for name in nodes:
@@ -491,7 +473,6 @@ def _panel_label(key: str, units: dict) -> str:
 def cmd_resonances(args) -> int:
     from ..circuit import units_of
     from ..resonances import Resonances
-    from ..units import FREQUENCY_UNITS, in_unit
 
     check_output_paths(plots=(args.plot,))
     circuit, warns = load_with_warnings(args.file)

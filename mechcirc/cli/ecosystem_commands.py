@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ..errors import MechcircError
+from ..limits import FORMULA_SECONDS
 from ._common import (add_command, add_handler, check_output_paths, count, load_with_warnings,
                       print_json, real, save_figure, warning_lines)
 
@@ -186,7 +188,6 @@ def cmd_compare(args) -> int:
 
 def cmd_formula(args) -> int:
     from ..interop.formula import formula_and_values
-    from ..limits import FORMULA_SECONDS
     from ._common import time_limit
 
     circuit, warns = load_with_warnings(args.file)
@@ -210,7 +211,6 @@ def cmd_formula(args) -> int:
 
 
 def cmd_study(args) -> int:
-    from ..errors import MechcircError
     from ..progress import Progress
     from ..study import column_units, load_spec, run_study, sidecar_path
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 
 from ..errors import MechcircError
+from ..units import in_unit
 from ._common import (add_command, add_handler, check_output_paths, count, load_with_warnings,
                       print_json, real, save_figure, warning_lines)
 
@@ -117,7 +118,6 @@ def _one_speed(args, circuit, elements, motion) -> int:
     import numpy as np
 
     from ..periodic import periodic
-    from ..units import in_unit
 
     r = periodic(circuit, args.rpm, motion=motion, tol=args.tol, harmonics=args.harmonics,
                  points=args.angles, elements=elements, near=args.near, method=args.method)
@@ -194,7 +194,6 @@ def _speed_map(args, circuit, elements, motion) -> int:
     import numpy as np
 
     from ..periodic import speed_map
-    from ..units import in_unit
 
     m = speed_map(circuit, args.rpm_min, args.rpm_max, args.points, motion=motion, tol=args.tol,
                   harmonics=args.harmonics, elements=elements, method=args.method)

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import math
 
+from ..errors import MechcircError
 from ..limits import MAX_CYCLE_POINTS
+from ..units import FREQUENCY_UNITS, in_unit
 from ._common import (add_command, add_handler, check_output_paths, count, print_json, real,
                       save_figure, write_columns)
 
@@ -78,8 +80,6 @@ def _register_reduce(sub) -> None:
 
 
 def cmd_scene(args) -> int:
-    from ..errors import MechcircError
-
     plots = (args.plot,) if args.plot else ()
     check_output_paths(args.output, plots=plots, reads=(args.file,))
     if args.plot and not args.cycle and args.mode is None:
@@ -138,8 +138,6 @@ def cmd_scene(args) -> int:
 
 def _print_scene(args, scene, model, found, reduced, drawn: bool) -> None:
     """What ``mechcirc scene --theta`` prints without ``--json``."""
-    from ..units import in_unit
-
     unit = "rad/s" if model.rotational else "m/s"
     print(f"{args.file}: scene {scene.name!r} at θ = {args.theta:g}° "
           f"(drive {unit}, drive ratio r0 = {model.drive_ratio:.6g})")
@@ -173,10 +171,8 @@ def _print_scene(args, scene, model, found, reduced, drawn: bool) -> None:
 def _cycle(args, scene) -> int:
     import numpy as np
 
-    from ..errors import MechcircError
     from ..outputs import OutputSet
     from ..scene.cycle import cycle_map, plot_cycle
-    from ..units import FREQUENCY_UNITS, in_unit
 
     if args.points < 2 or args.points > 100_000:
         raise MechcircError(f"--points must be between 2 and 100000, got {args.points}")
@@ -238,7 +234,6 @@ def _cycle(args, scene) -> int:
 
 
 def cmd_reduce(args) -> int:
-    from ..errors import MechcircError
     from ..netlist import load
     from .._simplify import parse_band, simplify
 
@@ -282,7 +277,6 @@ def cmd_reduce(args) -> int:
 # ------------------------------------------------------------ simulate SCENE.toml
 def cmd_simulate_scene(args) -> int:
     """``mechcirc simulate SCENE.toml``: the scene's motion over whole revolutions."""
-    from ..errors import MechcircError
     from ..scene import load_scene
 
     shaft = getattr(args, "shaft", False) or getattr(args, "flywheel", None) is not None \
@@ -412,7 +406,6 @@ def _print_motion(args, scene, result) -> None:
 
 def _with_overrides(args, scene):
     """``scene`` with ``--set NAME=VALUE`` and ``--omega`` applied."""
-    from ..errors import MechcircError
     from ..scene.simfile import apply_overrides
 
     over = {}
@@ -463,7 +456,6 @@ def _shaft(args, scene) -> int:
 
     import numpy as np
 
-    from ..errors import MechcircError
     from ..scene.shaft import ShaftWarning, simulate_shaft
 
     for flag in ("revolutions", "revolution", "plot"):
@@ -522,8 +514,6 @@ def _shaft(args, scene) -> int:
 # ------------------------------------------------------------- crosscheck SCENE.toml
 def cmd_crosscheck_scene(args) -> int:
     """``mechcirc crosscheck SCENE.toml --theta DEG``."""
-    from ..errors import MechcircError
-
     if not args.file.endswith(".toml"):
         raise MechcircError(f"{args.file}: crosscheck reads a scene file (.toml) here")
     if args.netlist:

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import math
 
+from ..errors import InputError
 from ..limits import MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS, MAX_SCIPY_REVOLUTIONS
+from ..units import UnitError, parse_quantity
 from ._common import (add_command, add_handler, check_output_paths, count, print_json, real,
                       save_figure, write_columns)
 
@@ -143,8 +145,6 @@ def _overrides(args) -> dict:
         if name.strip() in _NOT_NUMBERS:
             raise ParameterError(f"--set {name.strip()}: not a numeric parameter; "
                                  f"{_NOT_NUMBERS[name.strip()]}")
-        from ..units import UnitError, parse_quantity
-
         try:
             out[name.strip()] = parse_quantity(value)   # SI, any unit: omega=3000rpm
         except UnitError as exc:
@@ -160,8 +160,6 @@ def _overrides(args) -> dict:
 def _options(args) -> dict:
     fixed_step = args.method in ("rk4", "rk4-python", "rk8")
     if not fixed_step and args.revolutions > MAX_SCIPY_REVOLUTIONS:
-        from ..errors import InputError
-
         raise InputError(f"--revolutions {args.revolutions} with --method {args.method}: the "
                          f"limit is {MAX_SCIPY_REVOLUTIONS} (a Python right-hand side, ~0.3 s "
                          "a revolution); the compiled rk4 takes up to "
@@ -317,8 +315,6 @@ def _crosscheck_file(args) -> int:
 
         return cmd_crosscheck_scene(args)
     if args.netlist:        # nothing is built from a netlist FILE: refuse, not ignore
-        from ..errors import InputError
-
         raise InputError(f"--netlist writes the netlist built from a scene or a sley "
                          f"preset; '{args.file}' is a netlist already, and it is "
                          "the one checked (leave out --netlist)")

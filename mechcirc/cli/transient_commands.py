@@ -6,6 +6,7 @@ import math
 import sys
 
 from ..errors import MechcircError
+from ..units import parse_omega
 from ._common import add_command, add_handler, check_output_paths, print_json, save_figure
 
 
@@ -137,8 +138,6 @@ def cmd_crosscheck_netlist(args) -> int:
 
     omega_max = None
     if args.omega_max is not None:
-        from ..units import parse_omega
-
         try:
             omega_max = parse_omega(args.omega_max)
         except Exception as exc:  # noqa: BLE001 - a user error, reported as such

@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 from ..batch import Designs, from_circuits, network_shape
 from ..errors import GeometryError, InputError, SolverError
 from ..motion_laws import Motion, motion_table
-from ..units import in_unit
+from ..units import FREQUENCY_UNITS, in_unit
 from .files import Scene
 from .model import (RANK_TOL, ReflectMode, build, drive_ratio, element_ratios, part_singular_values,
                     part_speeds, scaled_motion)
@@ -349,8 +349,6 @@ def plot_cycle(cmap: CycleMap, ax=None, *, fig=None, unit: str = "rad/s"):
     -------
     The Axes given as ``ax``, or the Figure of the two panels.
     """
-    from ..units import FREQUENCY_UNITS
-
     if unit not in FREQUENCY_UNITS:
         raise ValueError(f"unit must be one of {', '.join(map(repr, FREQUENCY_UNITS))}, "
                          f"got {unit!r}")

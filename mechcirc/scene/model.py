@@ -37,7 +37,7 @@ from typing import Literal
 import numpy as np
 
 from ..circuit import Circuit, Drive, Element, Lever
-from ..errors import GeometryError, InputError
+from ..errors import GeometryError, InputError, MechcircError
 from ..sources import is_name
 from .files import Scene
 
@@ -560,7 +560,6 @@ def build_needed(scene: Scene, theta: float | None = None, *,
     GeometryError
         As :func:`build`.
     """
-    from ..errors import MechcircError
     from .._simplify import simplify
 
     a = scene.analysis
