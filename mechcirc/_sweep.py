@@ -291,8 +291,6 @@ class Sweep:
         if self.circuit is None or len(self.circuit.elements) > PLOT_RESONANCES_ELEMENTS \
                 or self.omega.size == 0:
             return []
-        import warnings
-
         from .resonances import find_resonances
 
         try:

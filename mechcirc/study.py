@@ -96,9 +96,12 @@ import math
 import os
 import random
 import re
+import signal
+import sys
+import threading
 import warnings
 import zlib
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import Callable, NoReturn, TextIO
 
@@ -748,8 +751,6 @@ def _check_params(roles: dict, path, names, table: str) -> None:
 
 def _sley_names() -> set[str]:
     """The :class:`~mechcirc.sley.SleyParameters` fields a study may vary."""
-    from dataclasses import fields
-
     from .sley import SleyParameters
 
     return {f.name for f in fields(SleyParameters)} - {"drive", "label", "branch", "beat_sign"}
@@ -1745,10 +1746,6 @@ def _die_with_parent(parent: int) -> None:
     worker also closes its copies of the output lock's descriptor (a flock
     belongs to every copy: the lock would outlive a killed study in its workers).
     """
-    import signal
-    import sys
-    import threading
-
     for fd in _LOCK_FDS:
         with contextlib.suppress(OSError):
             os.close(fd)

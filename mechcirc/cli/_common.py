@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import argparse
 import contextlib
 import math
 import os
 import signal
 import sys
 import threading
+import warnings
+from pathlib import Path
 
 from ..errors import (MAX_QUOTED, MechcircError, MechcircWarning, NetlistError,
                       NotSeriesParallelError, clip, shorten)
@@ -84,8 +87,6 @@ def run_handler(args) -> int:
     of the bad input the message names) are dropped, so the one-line message
     stands alone; otherwise every warning is shown as usual.
     """
-    import warnings
-
     _SHOWN.clear()
     with warnings.catch_warnings(record=True) as caught:
         status = _run(args)
@@ -186,8 +187,6 @@ def quantity_type(role: str, default_unit: str | None = None):
     is converted to ``default_unit`` (``--theta 0.5rad`` → 28.6… when the
     option is in degrees).
     """
-    import argparse
-
     def convert(text: str) -> float:
         try:
             value = parse_quantity(text, role)
@@ -245,8 +244,6 @@ def real(*, least: float | None = None, above: float | None = None,
     grammar (:mod:`mechcirc.units`), converted to ``unit`` (``--theta 0.5rad``
     is 28.6… when ``unit="deg"``).
     """
-    import argparse
-
     def parse(text: str) -> float:
         if omega:
             try:
@@ -282,8 +279,6 @@ def real(*, least: float | None = None, above: float | None = None,
 
 def count(least: int = 1, most: int | None = None, *, why: str = ""):
     """argparse type: an integer in ``least..most`` (``1e6`` accepted); the limit is named."""
-    import argparse
-
     def parse(text: str) -> int:
         try:
             value = int(text)
@@ -331,8 +326,6 @@ def add_command(sub, name: str, summary: str, description: str, example: str, *,
     -------
     argparse.ArgumentParser
     """
-    import argparse
-
     p = sub.add_parser(name, help=summary, description=description, epilog=example,
                        formatter_class=argparse.RawDescriptionHelpFormatter if raw
                        else argparse.HelpFormatter)
@@ -426,8 +419,6 @@ def check_output_paths(*paths, plots=(), reads=()) -> None:
     Links are followed and FIFOs and character devices written in place
     (:func:`mechcirc.outputs.output_target`).
     """
-    from pathlib import Path
-
     from ..outputs import output_target
 
     given = [p for p in (*paths, *plots) if p]
@@ -461,8 +452,6 @@ def save_figure(fig, path, into=None, tight: bool = True) -> None:
     drawn (one more draw of the figure); False for a figure laid out to hold
     its labels.
     """
-    from pathlib import Path
-
     from ..outputs import atomic_path
 
     fmt = Path(path).suffix.lstrip(".").lower() or "png"
@@ -510,8 +499,6 @@ def write_columns(path, comment: str, names, cols) -> None:
 
 def load_with_warnings(path):
     """Load and reduce a netlist, returning the circuit and the warnings raised."""
-    import warnings
-
     from ..circuit import units_of
     from ..netlist import load
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import math
+from pathlib import Path
 
 from ..errors import MechcircError, NotSeriesParallelError, SolverError
 from ..limits import (
@@ -290,8 +291,6 @@ def cmd_sweep(args) -> int:
 
 
 def _check_touchstone_name(path) -> None:
-    from pathlib import Path
-
     if path and Path(path).suffix.lower() != ".s1p":
         # K seen by one drive is a one-port: a .s2p name would promise a
         # 2-port file that scikit-rf then cannot read.
@@ -559,7 +558,6 @@ def _mode_doc(m) -> dict:
 
 def _print_mode(m, kinds, units: dict) -> None:
     import cmath
-    import math
 
     if not m.shape:
         print(f"  no mode shape: {m.note}")

@@ -7,7 +7,7 @@ from pathlib import Path
 from ..errors import MechcircError
 from ..limits import FORMULA_SECONDS
 from ._common import (add_command, add_handler, check_output_paths, count, load_with_warnings,
-                      print_json, real, save_figure, warning_lines)
+                      print_json, real, save_figure, time_limit, warning_lines)
 
 
 def register(sub) -> None:
@@ -188,7 +188,6 @@ def cmd_compare(args) -> int:
 
 def cmd_formula(args) -> int:
     from ..interop.formula import formula_and_values
-    from ._common import time_limit
 
     circuit, warns = load_with_warnings(args.file)
     warning_lines(warns)

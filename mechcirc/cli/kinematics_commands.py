@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
+from pathlib import Path
 
 from ..errors import InputError, MechcircError
 from ..units import convert_frequency
@@ -342,9 +344,6 @@ def _print_frame(args, fb, res, summary, omega) -> None:
 
 
 def cmd_synth(args) -> int:
-    import sys
-    from pathlib import Path
-
     from ..kinematics import synthesize
     from ..kinematics.synthesis_export import SceneOptions, export_designs
 

@@ -3,6 +3,7 @@ the operating-speed map of its peak."""
 
 from __future__ import annotations
 
+import math
 
 from ..errors import MechcircError
 from ..units import in_unit
@@ -97,8 +98,6 @@ def cmd_periodic(args) -> int:
 
 def _scene(args):
     """A scene's circuit at --theta and the motion its rigid linkage imposes on the drive."""
-    import math
-
     from ..scene import build, load_scene
     from ..scene.cycle import drive_motion
 

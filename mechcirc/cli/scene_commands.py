@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import warnings
 
 from ..errors import MechcircError
 from ..limits import MAX_CYCLE_POINTS
@@ -361,8 +362,6 @@ def _print_contact(scene, c: dict) -> None:
 def _simulate_with_bar(args, scene):
     """:func:`simulate_scene` as the options say, with a progress bar on a terminal; the
     accuracy warnings stay in the result's notes."""
-    import warnings
-
     from ..progress import Progress
     from ..scene.simulation import SceneAccuracyWarning, simulate_scene
 
@@ -452,8 +451,6 @@ def _print_extrema(scene, extrema: dict) -> None:
 
 def _shaft(args, scene) -> int:
     """``mechcirc simulate SCENE.toml --shaft``: the dynamic main shaft (docs/scenes.md)."""
-    import warnings
-
     import numpy as np
 
     from ..scene.shaft import ShaftWarning, simulate_shaft

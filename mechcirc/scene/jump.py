@@ -16,7 +16,7 @@ import numpy as np
 
 from ..errors import MechcircError
 from .cam import SPRING, contact_geometry
-from .simulation import flight
+from .simulation import flight, simulate_scene
 
 __all__ = ["ContactReport", "contact_report", "flight", "JumpSpeed", "scene_jump_speed"]
 
@@ -168,7 +168,6 @@ def scene_jump_speed(scene, bracket=None, *, rtol: float = 1e-8, grow: float = 1
         convergence in 20 secant steps.
     """
     from .motion import motion_model
-    from .simulation import simulate_scene
 
     if not (math.isfinite(rtol) and 4 * np.finfo(float).eps <= rtol < 1) or not grow > 1:
         raise MechcircError(f"scene_jump_speed: rtol = {rtol!r} must be in [4 eps, 1) and "

@@ -39,7 +39,7 @@ import numpy as np
 from ..circuit import Circuit, Drive, Element, Lever
 from ..errors import GeometryError, InputError, MechcircError
 from ..sources import is_name
-from .files import Scene
+from .files import Scene, gear_meshes
 
 #: How a lever is reflected into the circuit (see :func:`build`).
 ReflectMode = Literal["eta", "lever"]
@@ -472,8 +472,6 @@ def part_singular_values(scene: Scene, part, m: _Motion):
     """Singular values of a rigid part's joint constraints (pins, sliders, rigid gear
     meshes) on its bodies' velocities (x', y', φ'·Lc each), shape (..., k): rank
     3·len(part) − 1 means one velocity field (one degree of freedom)."""
-    from .files import gear_meshes
-
     lk, bodies, Lc = scene.linkage, scene.bodies, m.Lc
     cols = {b: 3 * i for i, b in enumerate(part)}
     shape = np.shape(next(iter(m.pos.values())))[:-1] + (3 * len(part),)

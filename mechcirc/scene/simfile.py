@@ -43,7 +43,7 @@ from functools import cached_property
 from typing import Any
 
 from ..errors import MechcircError
-from ..sources import brief, checked_number, finite_number, is_name, located
+from ..sources import Table, brief, check_keys, checked_number, finite_number, is_name, located
 
 __all__ = ["Moment", "SimulateSettings", "parse_moments", "parse_simulate",
            "apply_overrides", "Motor", "Shaft", "kloss_motor", "table_motor", "parse_shaft"]
@@ -483,8 +483,6 @@ def parse_shaft(text: str, source: str, table, scene) -> Shaft:
     NetlistError
         An unknown key, a missing or bad value, an inconsistent motor.
     """
-    from ..sources import Table, check_keys
-
     if not isinstance(table, dict):
         raise located(text, source, "shaft must be a table [shaft]", None, "shaft")
     check_keys(text, source, Table("shaft", _KEYS), table)

@@ -43,7 +43,8 @@ from ..circuit import Circuit
 from ..errors import MechcircError
 from ..verdict import DISAGREES, judge, summarise
 from .model import backlash_elements
-from .simulate import transient
+from .simulate import (ROUNDING_PER_STEP, Waveform, drive_map, periodic_start, state_model,
+                       transient, with_oscillator)
 
 __all__ = ["CrossCheck", "crosscheck", "matrix_pencil"]
 
@@ -230,15 +231,6 @@ def _output_rounding(circuit, w, steps, amp):
     weighted small state (a massless damped node, k/c) takes rounding from
     the large modes too.  Bound: 10 · steps · 8ε · Σ_j (Σ_i |row_i||V_ij|) |q_j|.
     """
-    from .simulate import (
-        ROUNDING_PER_STEP,
-        Waveform,
-        drive_map,
-        state_model,
-        periodic_start,
-        with_oscillator,
-    )
-
     ss = state_model(circuit, True)
     z0 = periodic_start(ss, Waveform("harmonic", omega=w), amp, circuit, True)
     aug, z0 = with_oscillator(ss, z0, w, amp)
