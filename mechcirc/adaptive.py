@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import limits
 from .circuit import Circuit
 from ._sweep import UNDAMPED_ZETA, Method, Sweep, sweep
 from .errors import InputError, SolverError
@@ -74,8 +75,6 @@ def adaptive_sweep(circuit: Circuit, omega_min: float, omega_max: float, *,
     :data:`~mechcirc.limits.MAX_ADAPTIVE_NODAL_WORK` (nodal analysis, about
     100 times dearer per element); ``result.notes`` then says so, with the bound.
     """
-    from . import limits
-
     if not 0 < omega_min < omega_max:
         raise InputError(f"need 0 < omega_min < omega_max, got {omega_min} and {omega_max}")
     max_points = limits.MAX_ADAPTIVE_POINTS if max_points is None else max_points
@@ -95,8 +94,6 @@ def adaptive_sweep(circuit: Circuit, omega_min: float, omega_max: float, *,
 
 def _work_bound(circuit: Circuit, method: str, n_start: int) -> tuple[int, str]:
     """``(K evaluations allowed, the bound in words)``; InputError if ``n_start`` is over it."""
-    from . import limits
-
     size = max(1, len(circuit.elements) + len(circuit.levers))
     bound = limits.MAX_ADAPTIVE_WORK if method == "sp" else limits.MAX_ADAPTIVE_NODAL_WORK
     evaluations = bound // size

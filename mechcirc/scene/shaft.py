@@ -52,7 +52,9 @@ import numpy as np
 
 from ..errors import MechcircError, ShaftWarning, SolverError
 from .files import Scene
+from .motion import MotionModel, body_tables, dead_centre, hermite_table, motion_model
 from .simfile import Motor, Shaft, kloss_motor, parse_shaft, table_motor  # noqa: F401
+from .simulation import kernels_for, max_rate
 
 __all__ = ["Motor", "Shaft", "ShaftMotion", "kloss_motor", "table_motor", "parse_shaft",
            "simulate_shaft", "ShaftWarning"]
@@ -157,8 +159,6 @@ class _Rigid:
     """J_red(θ), J_red'(θ) and each body's φ'(θ), φ''(θ) of the rigid mechanism."""
 
     def __init__(self, scene: Scene, N: int = 1024):
-        from .motion import body_tables
-
         (_, ang1, ang2, _, vel, acc), _ = body_tables(scene, N)
         self.cycle = scene.cycle
         nodes = N * scene.cycle_revolutions
@@ -197,8 +197,6 @@ def rigid_model(scene: Scene, N: int = 1024):
     -------
     MotionModel
     """
-    from .motion import body_tables, dead_centre, hermite_table
-
     (ang, ang1, ang2, pos, vel, acc), _ = body_tables(scene, N)
     cyc, nodes = scene.cycle, N * scene.cycle_revolutions
     h = cyc / nodes
@@ -235,8 +233,6 @@ def rigid_model(scene: Scene, N: int = 1024):
 def _one_part_model(scene: Scene, FI, FF, tabs, MI, MW, MOI, MOF):
     """The :class:`~mechcirc.scene.motion.MotionModel` of :func:`rigid_model`'s tables: one
     part (the drive's), no elastic elements."""
-    from .motion import MotionModel
-
     i8 = np.int64
     arrays = {"FI": np.array(FI, i8), "FF": np.array(FF, float), "tabs": np.array(tabs),
               "MI": np.array(MI, i8), "MW": np.array(MW, float),
@@ -259,9 +255,6 @@ class _ElasticShaft:
     elastic elements and moments on it: rows 3–5 of the kernel's work array)."""
 
     def __init__(self, scene: Scene, Jf: float, motor: Motor, model=None):
-        from .motion import motion_model
-        from .simulation import kernels_for
-
         self.model = m = motion_model(scene) if model is None else model
         a = m.arrays
         r = a["PRIG"][0]
@@ -404,7 +397,6 @@ def _shaft_kernels():
     disk cache holds it (or :data:`mechcirc._jit.COMPILED` is True), else the Python copy
     while a detached process compiles it (the no-wait rule of :mod:`mechcirc._jit`)."""
     from .. import _jit
-    from .simulation import kernels_for
 
     if _jit.COMPILED is not False:
         from . import _motion_kernels as k
@@ -755,8 +747,6 @@ def _steady_cycle(scene, eq, req, motor, th0, rtol, scale, mean_load, peak, note
                        _balance(motor, mean_load, scale), fail, 1e-5 if eq.n else 1e-13)
     x0 = np.array([w0])
     if eq.n and spp is not None:
-        from .simulation import max_rate
-
         eq.steps = max(int(math.ceil(cyc * max_rate(eq.model) * spp / (2 * math.pi * w0))), 64)
         backend = "compiled" if getattr(eq.run_kern, "HAVE_NUMBA", False) else "Python copy"
         name = "RK8" if eq.tableau[3] else "RK4"
