@@ -464,7 +464,9 @@ def node_names(elements, levers=()) -> list[str]:
     Parameters
     ----------
     elements : sequence of Element
-    levers : sequence of Lever
+        Their nodes n1, n2 first, in order.
+    levers : sequence of Lever, optional
+        Then their terminals p1, p2, s1, s2.
 
     Returns
     -------

@@ -310,6 +310,7 @@ def parse_spec(data: dict, *, source: str = "<spec>", base: Path | None = None,
     Returns
     -------
     StudySpec
+        Checked, with its canonical form and hash.
 
     Raises
     ------
@@ -789,6 +790,7 @@ def load_spec(path: str | os.PathLike) -> StudySpec:
     Returns
     -------
     StudySpec
+        As :func:`parse_spec` returns it for the file's text.
 
     Raises
     ------
@@ -1438,10 +1440,12 @@ def sidecar_path(output: str | os.PathLike) -> str:
     Parameters
     ----------
     output : str or PathLike
+        The study's CSV table.
 
     Returns
     -------
     str
+        The sidecar's path, beside the table.
     """
     return f"{os.fspath(output)}.meta.json"
 
@@ -1539,10 +1543,12 @@ def journal_path(output: str | os.PathLike) -> str:
     Parameters
     ----------
     output : str or PathLike
+        The study's table (CSV or Parquet).
 
     Returns
     -------
     str
+        The journal's path; it is removed once ``output`` is written.
     """
     return f"{os.fspath(output)}.partial.csv"
 

@@ -390,6 +390,7 @@ def kloss_motor(*, sync_speed: float, breakdown_torque: float,
     Returns
     -------
     Motor
+        A ``"kloss"`` motor, with s_b (given or from the rated point).
 
     Raises
     ------
@@ -431,6 +432,7 @@ def table_motor(speeds, torques) -> Motor:
     Returns
     -------
     Motor
+        A ``"table"`` motor, linear between the points.
 
     Raises
     ------
