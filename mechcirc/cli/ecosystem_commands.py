@@ -216,8 +216,6 @@ def cmd_study(args) -> int:
     check_output_paths(args.output, args.curves, plots=(args.plot,), reads=(args.spec,))
     if args.resume and not args.output:
         raise MechcircError("--resume needs -o FILE (the table to continue)")
-    if args.workers is not None and args.workers < 1:
-        raise MechcircError(f"--workers must be at least 1, got {args.workers}")
     spec = load_spec(args.spec)
     check_output_paths(args.output, args.curves, plots=(args.plot,),
                        reads=(spec.netlist_source,))

@@ -348,8 +348,6 @@ def cmd_synth(args) -> int:
     from ..kinematics.synthesis_export import SceneOptions, export_designs
 
     check_output_paths(plots=(args.plot,))
-    if args.limit < 1:
-        raise MechcircError(f"--limit must be at least 1, got {args.limit}")
     if args.export and not Path(args.export).is_dir():
         raise MechcircError(f"--export {args.export}: no such folder (create it first)")
     fixed = {n: getattr(args, n) for n in ("crank", "coupler", "rocker", "frame")

@@ -279,7 +279,7 @@ def cmd_simulate(args) -> int:
 def cmd_crosscheck(args) -> int:
     if args.file is not None:
         return _crosscheck_file(args)
-    from ..sley import ParameterError, preset
+    from ..sley import preset
     from ..sley.crosscheck import crosscheck_sley
 
     check_output_paths(args.netlist)
@@ -289,8 +289,6 @@ def cmd_crosscheck(args) -> int:
 
         theta0 = start_angle(params)
     else:
-        if not math.isfinite(args.theta):
-            raise ParameterError(f"--theta must be a finite angle [deg], got {args.theta:g}")
         theta0 = math.radians(args.theta)
     from ..progress import Progress
 
