@@ -27,6 +27,7 @@ run the slower path); the test suite sets it, for its subprocesses too.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import sys
 from pathlib import Path
@@ -147,9 +148,7 @@ def warm_in_background(statement: str) -> None:
     sites = {str(Path(d).resolve()) for d in [*site.getsitepackages(), site.getusersitepackages()]}
     if here not in sites:
         env["PYTHONPATH"] = os.pathsep.join(p for p in (here, env.get("PYTHONPATH")) if p)
-    try:
+    with contextlib.suppress(OSError):      # no process to spare: the numpy path goes on
         subprocess.Popen([sys.executable, "-c", statement], env=env,
                          stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
                          stderr=subprocess.DEVNULL, start_new_session=True)
-    except OSError:         # no process to spare: the numpy path goes on regardless
-        pass

@@ -1477,8 +1477,7 @@ def _write_output(output, parquet: bool, spec: StudySpec, journal: str) -> None:
             head = io.StringIO()
             csv.writer(head).writerow(columns)
             fh.write(head.getvalue().encode("utf-8"))
-            for lines in chunks:
-                fh.write(b"".join(lines))
+            fh.writelines(b"".join(lines) for lines in chunks)
             fh.flush()
             os.fsync(fh.fileno())
 

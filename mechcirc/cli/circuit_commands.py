@@ -391,7 +391,7 @@ def _print_sweep(args, result, extra, sens, pk, notes, dropped) -> None:
         for key, values in extra.items():
             label = f"|{key[0]}{key[key.index('('):]}|"
             print(f"  {label:<4} {np.nanmin(values):.4g} .. {np.nanmax(values):.4g} "
-                  f"{_unit_of(key, units)} on the grid")
+                  f"{units[key[0]]} on the grid")
     print(f"  {_peak_text(pk, units, unit)}")
     if sens is not None:
         _print_sweep_sensitivity(sens, result)
@@ -460,13 +460,9 @@ def _responses(result, nodes, elements) -> dict:
     return out
 
 
-def _unit_of(key: str, units: dict) -> str:
-    return units[{"v": "v", "x": "x", "Q": "Q"}[key[0]]]
-
-
 def _panel_label(key: str, units: dict) -> str:
     name = key[key.index("(") + 1:-1]
-    return f"|{key[0]}({name})| [{_unit_of(key, units)}]"
+    return f"|{key[0]}({name})| [{units[key[0]]}]"
 
 
 def cmd_resonances(args) -> int:

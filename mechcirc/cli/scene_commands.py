@@ -308,7 +308,7 @@ def cmd_simulate_scene(args) -> int:
         return 0
     _print_motion(args, scene, result)
     if contact is not None:
-        _print_contact(scene, contact)
+        _print_contact(contact)
     return 0
 
 
@@ -333,7 +333,7 @@ def _cam_contact(scene, result) -> dict | None:
             "separations": [{"angle_deg": a, "duration_deg": d} for a, d in rep.separations]}
 
 
-def _print_contact(scene, c: dict) -> None:
+def _print_contact(c: dict) -> None:
     """The text of the cam contact report (:func:`_cam_contact`)."""
     if "flight" in c:
         print("cam contact: no report (the follower flew across the model's whole gap; see "

@@ -110,12 +110,9 @@ def matrix_pencil(y: np.ndarray, dt: float, rel: float = 1e-9, max_order: int = 
 
 def _variant(circuit: Circuit, kind: Literal["velocity", "force"]) -> Circuit:
     d = circuit.require_drive()
-    if d.kind == kind:
-        new = d
-    else:
-        # the other kind at unit amplitude; rotary stays rotary (its labels), a motion
-        # law belongs to the velocity drive only
-        new = dataclasses.replace(d, kind=kind, amplitude=1.0, motion=None)
+    # the other kind at unit amplitude; rotary stays rotary (its labels), a motion law
+    # belongs to the velocity drive only
+    new = d if d.kind == kind else dataclasses.replace(d, kind=kind, amplitude=1.0, motion=None)
     return dataclasses.replace(circuit, drive=new, initial=())
 
 
