@@ -140,7 +140,10 @@ class Sweep:
         else:
             if self.circuit is None:
                 raise _missing("circuit")
-            err = _nodal_errors(self.circuit.nodal, self.omega)
+            from . import nodal
+
+            # normally cached by _sweep_nodal from the same refined solve
+            err = nodal.mobility_and_error(self.circuit.nodal, self.omega)[1]
         return singular_error(self.K, err)
 
     @cached_property
@@ -580,13 +583,6 @@ def _nodal_singular_limits(system, K, omega, delta: float = 1e-6):
     keep = ~pole & np.isfinite(mean)
     K[np.flatnonzero(bad)[keep]] = mean[keep]
     return K
-
-
-def _nodal_errors(system, omega) -> NDArray[np.float64]:
-    from . import nodal
-
-    # Normally cached by _sweep_nodal from the same refined solve.
-    return nodal.mobility_and_error(system, omega)[1]
 
 
 

@@ -766,17 +766,16 @@ def _sley_settings(table, names, kind: str) -> tuple[str, int, int, int]:
     if not isinstance(drive, str) or drive not in _SLEY_QUANTITIES:
         _fail(("sley", "drive"), f"sley.drive must be 'one-side' or 'both-sides', "
                                  f"got {brief(drive)}")
-    settings = []
-    for key, default, lo, hi in (("variant", 3, 1, 7),
-                                 ("revolutions", 5, 1, MAX_REVOLUTIONS),
-                                 ("points_per_revolution", 7200, 16, MAX_POINTS_PER_REVOLUTION)):
-        settings.append(_integer(("sley", key), table.get(key, default), f"sley.{key}", lo, hi))
+    variant, revolutions, ppr = [
+        _integer(("sley", key), table.get(key, default), f"sley.{key}", lo, hi)
+        for key, default, lo, hi in (("variant", 3, 1, 7), ("revolutions", 5, 1, MAX_REVOLUTIONS),
+                                     ("points_per_revolution", 7200, 16,
+                                      MAX_POINTS_PER_REVOLUTION))]
     known = _sley_names()
     bad = [n for n in names if n not in known]
     if bad:
         _fail((kind,), f"{', '.join(bad)} is not a sley parameter{did_you_mean(bad[0], known)}"
                        f" (expected some of {', '.join(sorted(known))})")
-    variant, revolutions, ppr = settings
     return drive, variant, revolutions, ppr
 
 
@@ -1642,11 +1641,9 @@ def _lock(output):
             except OSError:
                 os.close(fd)
                 raise held(_holder(path)) from None
-            try:            # the holder may have removed the file as we opened it
+            with contextlib.suppress(FileNotFoundError):   # the holder may have removed it
                 if os.path.samestat(os.fstat(fd), os.stat(path)):
                     break
-            except FileNotFoundError:
-                pass
             os.close(fd)
         _LOCK_FDS.add(fd)
         try:

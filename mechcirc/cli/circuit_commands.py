@@ -166,16 +166,14 @@ def cmd_check(args) -> int:
     if args.json:
         print_json(doc)
         return 0
+    print(f"{args.file}: {len(elements)} elements, {len(levers)} levers, "
+          f"{len(circuit.nodes)} nodes")
     if getattr(args, "explain", False):
         from ..explain import explain_lines
 
         warning_lines(warns)
-        print(f"{args.file}: {len(elements)} elements, {len(levers)} levers, "
-              f"{len(circuit.nodes)} nodes")
         print("\n".join(explain_lines(circuit)))
         return 0
-    print(f"{args.file}: {len(elements)} elements, {len(levers)} levers, "
-          f"{len(circuit.nodes)} nodes")
     from ..circuit import units_of
 
     unit = units_of(d)["v" if d.kind == "velocity" else "Q"]

@@ -396,12 +396,9 @@ class _Builder:
                 self.dropped.append((el.name, f"does not deform at this θ ({what} = {c:.3g})"))
                 continue
             kept_edges.append((na, nb))
-            ends = []
-            for side, node in (("a", na), ("b", nb)):
-                if node == "0" or self.reflect == "eta":
-                    ends.append(node)
-                else:
-                    ends.append(self.port(f"{el.name}_{side}", node, c)[0])
+            ends = [node if node == "0" or self.reflect == "eta" else
+                    self.port(f"{el.name}_{side}", node, c)[0]
+                    for side, node in (("a", na), ("b", nb))]
             eta = c * c if self.reflect == "eta" else 1.0
             if el.stiffness > 0:
                 self.elements.append(Element("spring", el.name, ends[0], ends[1], el.stiffness,
