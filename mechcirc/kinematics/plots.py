@@ -186,7 +186,7 @@ def plot_frame_loading(result, *, fig=None):
     result : FrameLoading
         Its shaking force, crank torque and shaking moments are drawn.
     fig : matplotlib.figure.Figure or SubFigure, optional
-        An empty one to fill; a new one by default.
+        An empty one to fill (three panels); a new 7 × 8 in one by default.
 
     Returns
     -------

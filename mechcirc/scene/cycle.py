@@ -410,6 +410,7 @@ def drive_motion(scene: Scene, theta: float, *, samples: int = DRIVE_SAMPLES) ->
     Parameters
     ----------
     scene : Scene
+        The scene; its drive is the motion's output.
     theta : float
         Crank rotation [rad] at which the circuit is linearised.
     samples : int
