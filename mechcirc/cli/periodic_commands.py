@@ -241,8 +241,8 @@ def _write_outputs(args, head: list, cols: list, plot) -> None:
     with OutputSet() as out:
         if args.output:
             with open(out.path(args.output), "w", newline="") as fh:
-                fh.write(",".join(head) + "\n")
-                np.savetxt(fh, np.column_stack(cols), delimiter=",", fmt="%.17g")
+                np.savetxt(fh, np.column_stack(cols), delimiter=",", fmt="%.17g",
+                           header=",".join(head), comments="")
         if args.plot:
             save_figure(plot(), args.plot, out.path(args.plot))
 

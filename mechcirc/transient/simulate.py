@@ -281,9 +281,8 @@ class TransientResult:
         elif self.drive_velocity is not None:
             header.append("v(drive)")
             cols.append(self.drive_velocity)
-        fh.write(",".join(header) + "\n")
-        data = np.column_stack(cols)
-        np.savetxt(fh, data, delimiter=",", fmt="%.12g")
+        np.savetxt(fh, np.column_stack(cols), delimiter=",", fmt="%.12g", header=",".join(header),
+                   comments="")
 
     def plot(self, ax=None, nodes=None, what: str = "x", *, elements=None, fig=None,
              title: str | None = None):
