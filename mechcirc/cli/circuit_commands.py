@@ -334,7 +334,9 @@ def _write_sweep_outputs(args, result, extra, sens, found, pk) -> int:
         if args.plot:
             from ..plotting import plot_sweep
 
-            panels = {_panel_label(key, result.units): values for key, values in extra.items()}
+            # "v_abs(NAME)" -> "|v(NAME)| [m/s]"
+            panels = {f"|{key[0]}{key[key.index('('):]}| [{result.units[key[0]]}]": values
+                      for key, values in extra.items()}
             save_figure(plot_sweep(result, resonances=found, peak=pk, unit=args.unit,
                                    extra=panels), args.plot, out.path(args.plot), tight=False)
     return dropped
@@ -456,11 +458,6 @@ def _responses(result, nodes, elements) -> dict:
             except KeyError as exc:
                 raise MechcircError(f"--element: {exc.args[0]}") from None
     return out
-
-
-def _panel_label(key: str, units: dict) -> str:
-    name = key[key.index("(") + 1:-1]
-    return f"|{key[0]}({name})| [{units[key[0]]}]"
 
 
 def cmd_resonances(args) -> int:

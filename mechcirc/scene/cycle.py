@@ -219,7 +219,8 @@ def _cycle_batches(scene: Scene, theta, motion, reflect: ReflectMode):
         except InputError:
             built = [(from_circuits([c]), np.array([i])) for c, i in zip(circuits, single)]
         for ds, where in built:
-            if parts and _same_network(parts[0][0], ds):    # they join the batch
+            # the same elements, levers and drive (names, kinds, nodes): they join the batch
+            if parts and network_shape(parts[0][0].circuit) == network_shape(ds.circuit):
                 parts[0] = (_joined(parts[0][0], ds), np.concatenate([parts[0][1], where]))
             else:
                 parts.append((ds, where))
@@ -239,11 +240,6 @@ def _joined(a, b):
                    ratios=np.hstack([a.ratios, b.ratios]),
                    amplitude=np.concatenate([a.amplitude, b.amplitude]),
                    valid=np.concatenate([a.valid, b.valid]))
-
-
-def _same_network(a, b) -> bool:
-    """Whether two Designs have the same elements, levers and drive (names, kinds, nodes)."""
-    return network_shape(a.circuit) == network_shape(b.circuit)
 
 
 def _cycle_designs(scene: Scene, motion, reflect: ReflectMode):
