@@ -281,15 +281,11 @@ def cmd_crosscheck(args) -> int:
         return _crosscheck_file(args)
     from ..sley import preset
     from ..sley.crosscheck import crosscheck_sley
+    from ..sley.simulation import start_angle
 
     check_output_paths(args.netlist)
     params = preset(args.drive, args.variant)
-    if args.theta is None:
-        from ..sley.simulation import start_angle
-
-        theta0 = start_angle(params)
-    else:
-        theta0 = math.radians(args.theta)
+    theta0 = start_angle(params) if args.theta is None else math.radians(args.theta)
     from ..progress import Progress
 
     with Progress(4, "crosscheck") as bar:      # drawn on a terminal after 1 s
