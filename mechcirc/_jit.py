@@ -27,6 +27,11 @@ run the slower path); the test suite sets it, for its subprocesses too.
 
 from __future__ import annotations
 
+import contextlib
+import os
+import sys
+from pathlib import Path
+
 __all__ = ["decorators", "COMPILED", "in_cache", "warm_in_background"]
 
 #: None: each caller decides; True: always the kernel; False: never (see above).
@@ -96,8 +101,6 @@ def in_cache(*dispatchers) -> bool:
         be asked (numba's private layout changed) or ``MECHCIRC_NO_WARM`` is
         set: the caller then loads, or compiles, as it would without the check.
     """
-    import os
-
     if os.environ.get("MECHCIRC_NO_WARM", "") not in ("", "0"):
         return True
     try:
@@ -129,11 +132,8 @@ def warm_in_background(statement: str) -> None:
         kernels into numba's disk cache; its output is discarded and nobody
         waits for it.
     """
-    import os
     import site
     import subprocess
-    import sys
-    from pathlib import Path
 
     if (statement in _WARMING or getattr(sys, "frozen", False) or not sys.executable
             or os.environ.get("MECHCIRC_NO_WARM", "") not in ("", "0")):
@@ -148,9 +148,7 @@ def warm_in_background(statement: str) -> None:
     sites = {str(Path(d).resolve()) for d in [*site.getsitepackages(), site.getusersitepackages()]}
     if here not in sites:
         env["PYTHONPATH"] = os.pathsep.join(p for p in (here, env.get("PYTHONPATH")) if p)
-    try:
+    with contextlib.suppress(OSError):      # no process to spare: the numpy path goes on
         subprocess.Popen([sys.executable, "-c", statement], env=env,
                          stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
                          stderr=subprocess.DEVNULL, start_new_session=True)
-    except OSError:         # no process to spare: the numpy path goes on regardless
-        pass

@@ -41,6 +41,7 @@ import numpy as np
 
 from .circuit import FRAME, Circuit, Element
 from .errors import BandError, MechcircError, TopologyError
+from .units import parse_omega
 
 __all__ = ["BandError", "Simplified", "simplify", "parse_band", "check_band", "write_netlist"]
 
@@ -66,8 +67,6 @@ def parse_band(text: str) -> tuple[float, float]:
     parts = str(text).split(":")
     if len(parts) != 2:
         raise BandError(f"band {text!r} is not W1:W2 (two angular frequencies in rad/s)")
-    from .units import parse_omega
-
     try:
         w1, w2 = parse_omega(parts[0]), parse_omega(parts[1])     # 1Hz:50Hz as 10:2000
     except ValueError as exc:

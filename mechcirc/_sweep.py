@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .circuit import Circuit, Drive, units_of
-from .errors import InputError, NotSeriesParallelError, TopologyError
+from .errors import InputError, MechcircError, NotSeriesParallelError, TopologyError
 from .reduction import Node, evaluate, push_down
 
 __all__ = ["Sweep", "sweep", "Peak", "peak", "FLAG_OK", "FLAG_SINGULAR", "FLAG_NEAR_SINGULAR",
@@ -140,7 +140,10 @@ class Sweep:
         else:
             if self.circuit is None:
                 raise _missing("circuit")
-            err = _nodal_errors(self.circuit.nodal, self.omega)
+            from . import nodal
+
+            # normally cached by _sweep_nodal from the same refined solve
+            err = nodal.mobility_and_error(self.circuit.nodal, self.omega)[1]
         return singular_error(self.K, err)
 
     @cached_property
@@ -291,9 +294,6 @@ class Sweep:
         if self.circuit is None or len(self.circuit.elements) > PLOT_RESONANCES_ELEMENTS \
                 or self.omega.size == 0:
             return []
-        import warnings
-
-        from .errors import MechcircError
         from .resonances import find_resonances
 
         try:
@@ -583,13 +583,6 @@ def _nodal_singular_limits(system, K, omega, delta: float = 1e-6):
     keep = ~pole & np.isfinite(mean)
     K[np.flatnonzero(bad)[keep]] = mean[keep]
     return K
-
-
-def _nodal_errors(system, omega) -> NDArray[np.float64]:
-    from . import nodal
-
-    # Normally cached by _sweep_nodal from the same refined solve.
-    return nodal.mobility_and_error(system, omega)[1]
 
 
 

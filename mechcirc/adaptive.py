@@ -22,8 +22,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import limits
 from .circuit import Circuit
 from ._sweep import UNDAMPED_ZETA, Method, Sweep, sweep
+from .errors import InputError, SolverError
 
 __all__ = ["adaptive_sweep", "UNDAMPED_OFFSETS"]
 
@@ -73,9 +75,6 @@ def adaptive_sweep(circuit: Circuit, omega_min: float, omega_max: float, *,
     :data:`~mechcirc.limits.MAX_ADAPTIVE_NODAL_WORK` (nodal analysis, about
     100 times dearer per element); ``result.notes`` then says so, with the bound.
     """
-    from . import limits
-    from .errors import InputError
-
     if not 0 < omega_min < omega_max:
         raise InputError(f"need 0 < omega_min < omega_max, got {omega_min} and {omega_max}")
     max_points = limits.MAX_ADAPTIVE_POINTS if max_points is None else max_points
@@ -95,9 +94,6 @@ def adaptive_sweep(circuit: Circuit, omega_min: float, omega_max: float, *,
 
 def _work_bound(circuit: Circuit, method: str, n_start: int) -> tuple[int, str]:
     """``(K evaluations allowed, the bound in words)``; InputError if ``n_start`` is over it."""
-    from . import limits
-    from .errors import InputError
-
     size = max(1, len(circuit.elements) + len(circuit.levers))
     bound = limits.MAX_ADAPTIVE_WORK if method == "sp" else limits.MAX_ADAPTIVE_NODAL_WORK
     evaluations = bound // size
@@ -114,8 +110,6 @@ def _start_grid(circuit, omega_min, omega_max, initial, notes):
     """The starting grid: ``initial`` log points and points around each resonance
     found below 1.5 ``omega_max``; and the undamped zeros and poles of K (divided
     out of |K| before the grid is refined)."""
-    from .errors import SolverError
-
     grid = [np.geomspace(omega_min, omega_max, initial)]
     try:
         found = circuit.resonances(omega_max=omega_max * 1.5)

@@ -30,6 +30,7 @@ at each crank angle).
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -37,8 +38,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .circuit import Circuit
 from .errors import InputError, MechcircError, NetlistError, NotSeriesParallelError
-from ._sweep import (UNDAMPED_ZETA, drive_force, drive_velocity, point_flags,
-                    singular_error)
+from ._sweep import UNDAMPED_ZETA, drive_force, drive_velocity, peak, point_flags, singular_error
 
 __all__ = ["designs", "from_circuits", "network_shape", "Designs", "DesignSweep", "DesignResonances",
            "DesignExtremes"]
@@ -397,8 +397,6 @@ class Designs:
         held and released problems) go through
         :func:`mechcirc.resonances.find_resonances` one by one (``single``).
         """
-        import warnings
-
         from .resonances import batched_roots, find_resonances
 
         D = self.size
@@ -865,8 +863,6 @@ class DesignExtremes:
 
 def _extremes(ds: Designs, lo: float, hi: float, res: DesignResonances,
               ends: NDArray | None) -> DesignExtremes:
-    from ._sweep import peak
-
     D = ds.size
     out = {k: np.full(D, np.nan) for k in ("K_min", "omega_at_K_min", "K_max",
                                            "omega_at_K_max", "Q0_max", "omega_at_Q0_max")}

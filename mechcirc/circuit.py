@@ -37,6 +37,8 @@ from typing import TYPE_CHECKING, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .errors import NetlistError
+
 if TYPE_CHECKING:  # pragma: no cover - annotations of the delegates only
     from .motion_laws import Motion
     from .nodal import NodalSystem
@@ -315,8 +317,6 @@ class Circuit:
         ``require_drive=False`` fails with a message, not an ``AttributeError``.
         """
         if self.drive is None:
-            from .errors import NetlistError
-
             raise NetlistError(f"circuit {self.name!r} has no drive, and this analysis is "
                                "seen from one", self.source, 0, 0,
                                "one line 'drive NAME N1 N2 velocity=V0' (a netlist without "
@@ -464,7 +464,9 @@ def node_names(elements, levers=()) -> list[str]:
     Parameters
     ----------
     elements : sequence of Element
-    levers : sequence of Lever
+        Their nodes n1, n2 first, in order.
+    levers : sequence of Lever, optional
+        Then their terminals p1, p2, s1, s2.
 
     Returns
     -------

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 from typing import Callable, Mapping, NoReturn, cast
 
 from .errors import NetlistError
+from .units import SPICE_SUFFIXES, UnitError, looks_like_unit, parse_unit
 
 __all__ = ["Expr", "parse_expression", "evaluate", "evaluate_array", "postorder", "FUNCTIONS", "CONSTANTS",
            "OPERATORS", "MAX_LENGTH", "MAX_DEPTH"]
@@ -468,8 +469,6 @@ def _number_hint(bad: str, number: str, glued: str = "") -> str:
     ``glued`` is everything after the number up to the next space, so that a
     compound unit (``5N/mm``) is advised whole, not cut at its first operator.
     """
-    from .units import UnitError, looks_like_unit, parse_unit
-
     for rest in (glued, bad[len(number):]):
         if rest and looks_like_unit(rest):
             try:
@@ -477,8 +476,6 @@ def _number_hint(bad: str, number: str, glued: str = "") -> str:
             except UnitError:
                 continue
             return f"a space between the number and its unit: '{number} {rest}'"
-    from .units import SPICE_SUFFIXES
-
     rest = bad[len(number):]
     if rest.lower() in SPICE_SUFFIXES:
         return (f"no SPICE suffixes in mechcirc: write {number}e3 for {number}k, "

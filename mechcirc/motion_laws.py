@@ -366,12 +366,6 @@ def _check_cycle(law_name, ret_law, rise, dwell, ret, stroke) -> None:
 
 
 # ------------------------------------------------------------------ tables
-def _spline(theta: np.ndarray, x: np.ndarray):
-    from scipy.interpolate import CubicSpline
-
-    return CubicSpline(theta, x, bc_type="periodic")
-
-
 def _hermite(theta, x, dx, ddx) -> tuple:
     """Quintic Hermite pieces (a₀ … a₅ in τ = θ − θᵢ) matching x, x', x'' at both ends."""
     h = np.diff(theta)
@@ -393,8 +387,10 @@ def _table_pieces(theta, x, slope, curvature):
     the periodic cubic spline."""
     if slope is not None:
         return _hermite(theta, x, np.asarray(slope, float), np.asarray(curvature, float)), None
+    from scipy.interpolate import CubicSpline
+
     try:
-        spl = _spline(theta, x)
+        spl = CubicSpline(theta, x, bc_type="periodic")
     except ValueError:                         # scipy: the slopes overflowed
         spl = None
     if spl is None or not np.all(np.isfinite(spl.c)):

@@ -44,7 +44,7 @@ from typing import Mapping, NoReturn
 from pathlib import Path
 
 from .circuit import ELEMENT_UNITS, Circuit, Drive, Element, ElementKind, Lever
-from .errors import NetlistError
+from .errors import NetlistError, UnitMixWarning
 from .expressions import CONSTANTS, FUNCTIONS, Expr, evaluate, parse_expression
 from .sources import did_you_mean, is_name, is_number, read_source, split_lines
 from .units import (UnitError, convert, is_rotational, looks_like_unit, parse_unit,
@@ -270,13 +270,6 @@ def _check_first_keyword(line: _Line) -> None:
                    + ("; the name is a SPICE deck's: " + _SPICE_NOTE if spice else ""))
 
 
-def _unbrace(text: str, col: int) -> tuple[str, int]:
-    """Strip one pair of enclosing braces, moving the column past the '{'."""
-    if text.startswith("{") and text.endswith("}"):
-        return text[1:-1], col + 1
-    return text, col
-
-
 def _check_count(line: _Line, keyword: str, npos: int, positional: list) -> None:
     """A clear error when a statement has fewer or more than ``npos`` positional fields."""
     if len(positional) < npos:
@@ -322,7 +315,8 @@ class _Parser:
     # -- expressions -----------------------------------------------------
     def expr(self, line: _Line, text: str, col: int, *, defined: dict[str, float],
              key: tuple[str, str] | None = None) -> float:
-        text, col = _unbrace(text, col)
+        if text.startswith("{") and text.endswith("}"):      # one pair of enclosing braces
+            text, col = text[1:-1], col + 1
         if not text.strip():
             line.error("empty expression", col, "a number or an expression")
         tree: Expr = parse_expression(text, source=self.source, line=line.lineno, col=col)
@@ -732,8 +726,6 @@ class _Parser:
             other = seen.get(not rot)
             if other is not None and rot not in seen:
                 import warnings
-
-                from .errors import UnitMixWarning
 
                 kinds = ("rotational", "translational") if rot else ("translational",
                                                                    "rotational")

@@ -168,12 +168,11 @@ def atomic_open(path: str | os.PathLike, mode: str = "w", **kwargs):
     ------
     file object
     """
-    with atomic_path(path) as tmp:
-        with open(tmp, mode, **kwargs) as fh:
-            yield fh
-            fh.flush()
-            if stat.S_ISREG(os.fstat(fh.fileno()).st_mode):    # a FIFO cannot be synced
-                os.fsync(fh.fileno())
+    with atomic_path(path) as tmp, open(tmp, mode, **kwargs) as fh:
+        yield fh
+        fh.flush()
+        if stat.S_ISREG(os.fstat(fh.fileno()).st_mode):    # a FIFO cannot be synced
+            os.fsync(fh.fileno())
 
 
 class OutputSet:

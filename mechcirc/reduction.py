@@ -413,10 +413,8 @@ def _secondary_part(lv: Lever, edges: list[_Edge], levers: list[Lever], a: str, 
     for e in edges:
         link(e.n1, e.n2)
     for m in levers:
-        if m is lv:
-            link(m.p1, m.p2)
-        else:
-            link(m.p1, m.p2)
+        link(m.p1, m.p2)
+        if m is not lv:
             link(m.s1, m.s2)
             link(m.p1, m.s1)
     link(a, b)

@@ -96,9 +96,12 @@ import math
 import os
 import random
 import re
+import signal
+import sys
+import threading
 import warnings
 import zlib
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import Callable, NoReturn, TextIO
 
@@ -307,6 +310,7 @@ def parse_spec(data: dict, *, source: str = "<spec>", base: Path | None = None,
     Returns
     -------
     StudySpec
+        Checked, with its canonical form and hash.
 
     Raises
     ------
@@ -748,8 +752,6 @@ def _check_params(roles: dict, path, names, table: str) -> None:
 
 def _sley_names() -> set[str]:
     """The :class:`~mechcirc.sley.SleyParameters` fields a study may vary."""
-    from dataclasses import fields
-
     from .sley import SleyParameters
 
     return {f.name for f in fields(SleyParameters)} - {"drive", "label", "branch", "beat_sign"}
@@ -764,17 +766,16 @@ def _sley_settings(table, names, kind: str) -> tuple[str, int, int, int]:
     if not isinstance(drive, str) or drive not in _SLEY_QUANTITIES:
         _fail(("sley", "drive"), f"sley.drive must be 'one-side' or 'both-sides', "
                                  f"got {brief(drive)}")
-    settings = []
-    for key, default, lo, hi in (("variant", 3, 1, 7),
-                                 ("revolutions", 5, 1, MAX_REVOLUTIONS),
-                                 ("points_per_revolution", 7200, 16, MAX_POINTS_PER_REVOLUTION)):
-        settings.append(_integer(("sley", key), table.get(key, default), f"sley.{key}", lo, hi))
+    variant, revolutions, ppr = [
+        _integer(("sley", key), table.get(key, default), f"sley.{key}", lo, hi)
+        for key, default, lo, hi in (("variant", 3, 1, 7), ("revolutions", 5, 1, MAX_REVOLUTIONS),
+                                     ("points_per_revolution", 7200, 16,
+                                      MAX_POINTS_PER_REVOLUTION))]
     known = _sley_names()
     bad = [n for n in names if n not in known]
     if bad:
         _fail((kind,), f"{', '.join(bad)} is not a sley parameter{did_you_mean(bad[0], known)}"
                        f" (expected some of {', '.join(sorted(known))})")
-    variant, revolutions, ppr = settings
     return drive, variant, revolutions, ppr
 
 
@@ -788,6 +789,7 @@ def load_spec(path: str | os.PathLike) -> StudySpec:
     Returns
     -------
     StudySpec
+        As :func:`parse_spec` returns it for the file's text.
 
     Raises
     ------
@@ -1437,10 +1439,12 @@ def sidecar_path(output: str | os.PathLike) -> str:
     Parameters
     ----------
     output : str or PathLike
+        The study's CSV table.
 
     Returns
     -------
     str
+        The sidecar's path, beside the table.
     """
     return f"{os.fspath(output)}.meta.json"
 
@@ -1472,8 +1476,7 @@ def _write_output(output, parquet: bool, spec: StudySpec, journal: str) -> None:
             head = io.StringIO()
             csv.writer(head).writerow(columns)
             fh.write(head.getvalue().encode("utf-8"))
-            for lines in chunks:
-                fh.write(b"".join(lines))
+            fh.writelines(b"".join(lines) for lines in chunks)
             fh.flush()
             os.fsync(fh.fileno())
 
@@ -1538,10 +1541,12 @@ def journal_path(output: str | os.PathLike) -> str:
     Parameters
     ----------
     output : str or PathLike
+        The study's table (CSV or Parquet).
 
     Returns
     -------
     str
+        The journal's path; it is removed once ``output`` is written.
     """
     return f"{os.fspath(output)}.partial.csv"
 
@@ -1636,11 +1641,9 @@ def _lock(output):
             except OSError:
                 os.close(fd)
                 raise held(_holder(path)) from None
-            try:            # the holder may have removed the file as we opened it
+            with contextlib.suppress(FileNotFoundError):   # the holder may have removed it
                 if os.path.samestat(os.fstat(fd), os.stat(path)):
                     break
-            except FileNotFoundError:
-                pass
             os.close(fd)
         _LOCK_FDS.add(fd)
         try:
@@ -1745,10 +1748,6 @@ def _die_with_parent(parent: int) -> None:
     worker also closes its copies of the output lock's descriptor (a flock
     belongs to every copy: the lock would outlive a killed study in its workers).
     """
-    import signal
-    import sys
-    import threading
-
     for fd in _LOCK_FDS:
         with contextlib.suppress(OSError):
             os.close(fd)

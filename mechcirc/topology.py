@@ -58,7 +58,9 @@ def force_groups(elements, levers) -> list[list[tuple[str, str]]]:
     Parameters
     ----------
     elements : sequence of Element
+        One group each, in order.
     levers : sequence of Lever
+        One group of six pairs each, after the elements'.
 
     Returns
     -------

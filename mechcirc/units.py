@@ -131,6 +131,7 @@ def looks_like_unit(text: str) -> bool:
     Parameters
     ----------
     text : str
+        What follows a number (``"mm"``, ``"N/m"``, or something else).
 
     Returns
     -------
@@ -177,6 +178,7 @@ def parse_unit(text: str) -> Unit:
     Parameters
     ----------
     text : str
+        A unit such as ``"N·m/rad"`` or ``"kg*m^2"``.
 
     Returns
     -------
@@ -234,6 +236,7 @@ def convert(value: float, unit: Unit, role: str) -> float:
     Returns
     -------
     float
+        ``value · unit.factor``.
 
     Raises
     ------
@@ -368,6 +371,7 @@ def parse_quantity(text: str, role: str | None = None, *, what: str = "value") -
     Returns
     -------
     float
+        The value in SI units.
 
     Raises
     ------

@@ -14,6 +14,12 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import re
+import signal
+import sys
+import threading
+
+from ..errors import shorten
 
 __all__ = ["main", "build_parser", "one_blas_thread"]
 
@@ -49,9 +55,6 @@ class _Parser(argparse.ArgumentParser):
     """argparse, with a usage error on one line (the full usage is one ``--help`` away)."""
 
     def error(self, message):
-        import re
-
-        from ..errors import shorten  # argparse quotes the value given: it may be long
         from ..sources import did_you_mean
 
         # 'invalid choice: 'swep' (choose from 'check', 'sweep', ...)': name the nearest
@@ -170,10 +173,6 @@ def main(argv: list[str] | None = None) -> int:
     int
         0 success, 1 internal failure, 2 user error, 130 interrupted.
     """
-    import signal
-    import sys
-    import threading
-
     if argv is None and "numpy" not in sys.modules:
         # The process's own command line (not a program calling main(argv)), and
         # numpy not loaded yet: one BLAS thread unless the user chose.

@@ -2,14 +2,19 @@
 
 from __future__ import annotations
 
+import argparse
 import contextlib
 import math
 import os
 import signal
 import sys
 import threading
+import warnings
+from pathlib import Path
 
-from ..errors import MAX_QUOTED, MechcircError, NetlistError, clip, shorten
+from ..errors import (MAX_QUOTED, MechcircError, MechcircWarning, NetlistError,
+                      NotSeriesParallelError, clip, shorten)
+from ..units import UnitError, parse_omega, parse_quantity, parse_unit, split_quantity
 
 EXIT_OK, EXIT_INTERNAL, EXIT_USER = 0, 1, 2
 #: Exit status after SIGINT and SIGTERM (128 + the signal number, as shells report).
@@ -82,10 +87,6 @@ def run_handler(args) -> int:
     of the bad input the message names) are dropped, so the one-line message
     stands alone; otherwise every warning is shown as usual.
     """
-    import warnings
-
-    from ..errors import MechcircWarning
-
     _SHOWN.clear()
     with warnings.catch_warnings(record=True) as caught:
         status = _run(args)
@@ -186,11 +187,7 @@ def quantity_type(role: str, default_unit: str | None = None):
     is converted to ``default_unit`` (``--theta 0.5rad`` → 28.6… when the
     option is in degrees).
     """
-    import argparse
-
     def convert(text: str) -> float:
-        from ..units import UnitError, parse_quantity, parse_unit, split_quantity
-
         try:
             value = parse_quantity(text, role)
             parts = split_quantity(text)
@@ -212,8 +209,6 @@ def join_spaced_quantities(argv: list[str]) -> list[str]:
     A number right after an option, followed by a token that the unit grammar
     reads as a unit, is one quantity; anything else is left alone.
     """
-    from ..units import UnitError, parse_unit, split_quantity
-
     out: list[str] = []
     i = 0
     while i < len(argv):
@@ -249,12 +244,8 @@ def real(*, least: float | None = None, above: float | None = None,
     grammar (:mod:`mechcirc.units`), converted to ``unit`` (``--theta 0.5rad``
     is 28.6… when ``unit="deg"``).
     """
-    import argparse
-
     def parse(text: str) -> float:
         if omega:
-            from ..units import parse_omega
-
             try:
                 value = parse_omega(text)
             except ValueError as exc:
@@ -288,8 +279,6 @@ def real(*, least: float | None = None, above: float | None = None,
 
 def count(least: int = 1, most: int | None = None, *, why: str = ""):
     """argparse type: an integer in ``least..most`` (``1e6`` accepted); the limit is named."""
-    import argparse
-
     def parse(text: str) -> int:
         try:
             value = int(text)
@@ -310,6 +299,39 @@ def count(least: int = 1, most: int | None = None, *, why: str = ""):
 
     parse.__name__ = "integer"
     return parse
+
+
+def add_command(sub, name: str, summary: str, description: str, example: str, *,
+                file: str | None = None, raw: bool = True):
+    """Start a command's parser: its name, one-line help, description and example.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The sub-command table the parser joins.
+    name : str
+        The command (``mechcirc NAME``).
+    summary : str
+        Its line in ``mechcirc --help``.
+    description : str
+        The text above its options.
+    example : str
+        The text below them (``Example: mechcirc NAME ...``).
+    file : str, optional
+        Help of a positional ``file`` argument, added first; none by default.
+    raw : bool, optional
+        Print the description and example as written (True) or re-wrapped.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+    """
+    p = sub.add_parser(name, help=summary, description=description, epilog=example,
+                       formatter_class=argparse.RawDescriptionHelpFormatter if raw
+                       else argparse.HelpFormatter)
+    if file:
+        p.add_argument("file", help=file)
+    return p
 
 
 def add_handler(p, func, *, json: bool = True) -> None:
@@ -397,8 +419,6 @@ def check_output_paths(*paths, plots=(), reads=()) -> None:
     Links are followed and FIFOs and character devices written in place
     (:func:`mechcirc.outputs.output_target`).
     """
-    from pathlib import Path
-
     from ..outputs import output_target
 
     given = [p for p in (*paths, *plots) if p]
@@ -432,8 +452,6 @@ def save_figure(fig, path, into=None, tight: bool = True) -> None:
     drawn (one more draw of the figure); False for a figure laid out to hold
     its labels.
     """
-    from pathlib import Path
-
     from ..outputs import atomic_path
 
     fmt = Path(path).suffix.lstrip(".").lower() or "png"
@@ -455,12 +473,33 @@ def save_figure(fig, path, into=None, tight: bool = True) -> None:
                     **options)
 
 
+def write_columns(path, comment: str, names, cols) -> None:
+    """Write equal-length columns as CSV, whole or not at all: a comment line, the names,
+    then one row of full-precision floats (``repr``) per index.
+
+    Parameters
+    ----------
+    path : str
+        The output file (replaced atomically).
+    comment : str
+        The first line, ``#`` included.
+    names : iterable of str
+        The column names.
+    cols : iterable of array_like
+        The columns, in the order of ``names``.
+    """
+    from ..outputs import atomic_open
+
+    with atomic_open(path, "w", newline="") as fh:
+        fh.write(comment + "\n")
+        fh.write(",".join(names) + "\n")
+        for row in zip(*cols):
+            fh.write(",".join(repr(float(v)) for v in row) + "\n")
+
+
 def load_with_warnings(path):
     """Load and reduce a netlist, returning the circuit and the warnings raised."""
-    import warnings
-
     from ..circuit import units_of
-    from ..errors import NotSeriesParallelError
     from ..netlist import load
 
     with warnings.catch_warnings(record=True) as caught:

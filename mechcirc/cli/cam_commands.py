@@ -2,31 +2,26 @@
 
 from __future__ import annotations
 
-import argparse
 import math
 
 from ..errors import InputError
-from ._common import (MAX_LENGTH, add_handler, check_output_paths, count, print_json, real,
-                      warning_lines)
+from ._common import (MAX_LENGTH, add_command, add_handler, check_output_paths, count, print_json,
+                      real, warning_lines)
 
 _LAWS = ("harmonic", "cycloidal", "modified_sine", "modified_trapezoid", "polynomial_345")
 
 
 def register(sub) -> None:
-    p = sub.add_parser(
-        "cam", help="disc cam profile, pressure angle, radius of curvature, undercut; CSV/SVG",
-        description="Profile of a disc cam turning counter-clockwise and driving a translating "
-                    "roller, a translating flat face, an oscillating roller or an oscillating "
-                    "flat face (through the arm's pivot) follower, from a "
-                    "motion law cycle (rise, dwell, return, and the rest of the turn dwelling "
-                    "at the bottom) or a lift table. Lengths in mm, angles in degrees; the "
-                    "stroke and a table's lift are in mm, or degrees of the arm for "
-                    "--follower oscillating and oscillating_flat. See docs/kinematics.md, "
-                    "'Cams'.",
-        epilog="Example: mechcirc cam --law cycloidal --rise 120 --dwell 60 --return 120 "
-               "--stroke 20 --base-radius 40 --roller-radius 10 -o profile.csv "
-               "--svg profile.svg",
-        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = add_command(
+        sub, "cam", "disc cam profile, pressure angle, radius of curvature, undercut; CSV/SVG",
+        "Profile of a disc cam turning counter-clockwise and driving a translating roller, a "
+        "translating flat face, an oscillating roller or an oscillating flat face (through the "
+        "arm's pivot) follower, from a motion law cycle (rise, dwell, return, and the rest of the "
+        "turn dwelling at the bottom) or a lift table. Lengths in mm, angles in degrees; the "
+        "stroke and a table's lift are in mm, or degrees of the arm for --follower oscillating "
+        "and oscillating_flat. See docs/kinematics.md, 'Cams'.",
+        "Example: mechcirc cam --law cycloidal --rise 120 --dwell 60 --return 120 --stroke 20 "
+        "--base-radius 40 --roller-radius 10 -o profile.csv --svg profile.svg")
     src = p.add_mutually_exclusive_group(required=True)
     src.add_argument("--law", choices=_LAWS, help="motion law of the rise (and the return)")
     src.add_argument("--motion", metavar="CSV",

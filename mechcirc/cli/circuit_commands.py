@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import argparse
 import math
+from pathlib import Path
 
+from ..errors import MechcircError, NotSeriesParallelError, SolverError
 from ..limits import (
     MAX_ADAPTIVE_NODAL_POINTS,
     MAX_ADAPTIVE_POINTS,
@@ -13,8 +15,9 @@ from ..limits import (
     MAX_PLOT_POINTS,
     MAX_SWEEP_POINTS,
 )
-from ._common import (add_handler, check_output_paths, load_with_warnings, print_json, real,
-                      save_figure, warning_lines)
+from ..units import FREQUENCY_UNITS, in_unit
+from ._common import (add_command, add_handler, check_output_paths, load_with_warnings, print_json,
+                      real, save_figure, warning_lines)
 
 #: argparse type: an angular frequency [rad/s], or with a unit (``50Hz``, ``3000rpm``); the
 #: command checks the range (a sweep's --omega-min/--omega-max together).
@@ -34,13 +37,11 @@ def register(sub) -> None:
 
 
 def _register_check(sub) -> None:
-    p = sub.add_parser(
-        "check", help="parse a netlist and show its elements and reduction tree",
-        description="Parse a netlist, list elements and nodes, warnings, and the "
-                    "series–parallel reduction tree seen from the drive.",
-        epilog="Example: mechcirc check netlists/stb_heald.mcir",
-        formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("file", help="netlist file (.mcir)")
+    p = add_command(
+        sub, "check", "parse a netlist and show its elements and reduction tree",
+        "Parse a netlist, list elements and nodes, warnings, and the series–parallel reduction "
+        "tree seen from the drive.",
+        "Example: mechcirc check netlists/stb_heald.mcir", file="netlist file (.mcir)")
     p.add_argument("--json", action="store_true", help="print one JSON document")
     p.add_argument("--explain", action="store_true",
                    help="write the series–parallel reduction out step by step, with the "
@@ -49,13 +50,12 @@ def _register_check(sub) -> None:
 
 
 def _register_sweep(sub) -> None:
-    p = sub.add_parser(
-        "sweep", help="K(ω) and Q0(ω) over a frequency range",
-        description="Sweep the kinematic characteristic K = v/Q [m/(N·s)] and the "
-                    "force amplitude Q0 = V0/K [N] over ω [rad/s].",
-        epilog="Example: mechcirc sweep netlists/stb_heald.mcir --omega-min 10 "
-               "--omega-max 1e4 --points 400 --log -o K.csv --plot K.png")
-    p.add_argument("file", help="netlist file (.mcir)")
+    p = add_command(
+        sub, "sweep", "K(ω) and Q0(ω) over a frequency range",
+        "Sweep the kinematic characteristic K = v/Q [m/(N·s)] and the force amplitude Q0 = V0/K "
+        "[N] over ω [rad/s].",
+        "Example: mechcirc sweep netlists/stb_heald.mcir --omega-min 10 --omega-max 1e4 --points "
+        "400 --log -o K.csv --plot K.png", file="netlist file (.mcir)", raw=False)
     p.add_argument("--omega-min", type=omega_value, required=True, metavar="W1",
                    help="lowest angular frequency [rad/s]; or with a unit: 5Hz, 300rpm")
     p.add_argument("--omega-max", type=omega_value, required=True, metavar="W2",
@@ -98,14 +98,13 @@ def _register_sweep(sub) -> None:
 
 
 def _register_resonances(sub) -> None:
-    p = sub.add_parser(
-        "resonances", help="exact resonances (K = 0) and anti-resonances (K = ∞)",
-        description="Natural frequencies seen from the drive, from the network's "
-                    "matrices: resonances (K = 0, Q0 → ∞ under kinematic excitation; "
-                    "the drive held) and anti-resonances (K → ∞; the drive released). "
-                    "Damped networks also get the damping ratio.",
-        epilog="Example: mechcirc resonances netlists/stb_heald.mcir --omega-max 5000")
-    p.add_argument("file", help="netlist file (.mcir)")
+    p = add_command(
+        sub, "resonances", "exact resonances (K = 0) and anti-resonances (K = ∞)",
+        "Natural frequencies seen from the drive, from the network's matrices: resonances (K = 0, "
+        "Q0 → ∞ under kinematic excitation; the drive held) and anti-resonances (K → ∞; the drive "
+        "released). Damped networks also get the damping ratio.",
+        "Example: mechcirc resonances netlists/stb_heald.mcir --omega-max 5000",
+        file="netlist file (.mcir)", raw=False)
     p.add_argument("--omega-max", type=positive_omega, metavar="W",
                    help="report only up to this angular frequency [rad/s]; or with a unit: "
                         "50Hz, 3000rpm")
@@ -133,8 +132,6 @@ def add_unit_option(p) -> None:
 
 def _tree_and_unloaded(circuit) -> tuple[str, tuple[str, ...]]:
     """The reduction tree as text and the unloaded elements, from the method that applies."""
-    from ..errors import NotSeriesParallelError
-
     try:
         return str(circuit.tree), circuit.unloaded
     except NotSeriesParallelError as exc:
@@ -169,16 +166,14 @@ def cmd_check(args) -> int:
     if args.json:
         print_json(doc)
         return 0
+    print(f"{args.file}: {len(elements)} elements, {len(levers)} levers, "
+          f"{len(circuit.nodes)} nodes")
     if getattr(args, "explain", False):
         from ..explain import explain_lines
 
         warning_lines(warns)
-        print(f"{args.file}: {len(elements)} elements, {len(levers)} levers, "
-              f"{len(circuit.nodes)} nodes")
         print("\n".join(explain_lines(circuit)))
         return 0
-    print(f"{args.file}: {len(elements)} elements, {len(levers)} levers, "
-          f"{len(circuit.nodes)} nodes")
     from ..circuit import units_of
 
     unit = units_of(d)["v" if d.kind == "velocity" else "Q"]
@@ -203,8 +198,6 @@ def cmd_check(args) -> int:
 
 def _omega_grid(args):
     import numpy as np
-
-    from ..errors import MechcircError
 
     lo, hi, n = args.omega_min, args.omega_max, args.points
     if not (np.isfinite(lo) and np.isfinite(hi)) or lo < 0 or hi <= lo:
@@ -232,8 +225,6 @@ def _omega_grid(args):
 
 
 def _some_omega(values, limit: int = 5, unit: str = "rad/s") -> str:
-    from ..units import in_unit
-
     text = ", ".join(f"{in_unit(w, unit):.10g}" for w in values[:limit])
     return text + (f" and {len(values) - limit} more" if len(values) > limit else "")
 
@@ -246,8 +237,6 @@ def _peak_doc(pk) -> dict:
 
 
 def _peak_text(pk, units: dict, unit: str = "rad/s") -> str:
-    from ..units import FREQUENCY_UNITS, in_unit
-
     q = {"Q0": units["Q"], "v0": units["v"], "K": units["K"]}[pk.quantity]
     name = FREQUENCY_UNITS[unit][0]
     if pk.unbounded:
@@ -268,8 +257,6 @@ def cmd_sweep(args) -> int:
     extra = _responses(result, args.node, args.element)
     everything = None
     if args.plot or args.json:
-        from ..errors import SolverError
-
         try:
             # The band's top as peak() asks for it (1e-9 above): computed once for both.
             everything = circuit.resonances(omega_max=omega[-1] * (1 + 1e-9))
@@ -288,8 +275,6 @@ def cmd_sweep(args) -> int:
     singular = [float(w) for w in result.omega[result.flags == FLAG_SINGULAR]]
     notes = list(getattr(result, "notes", ()))
     if singular:
-        from ..units import FREQUENCY_UNITS
-
         notes.append(f"{len(singular)} point(s) exactly on a pole or zero of K "
                      f"({FREQUENCY_UNITS[args.unit][0]} = "
                      f"{_some_omega(singular, unit=args.unit)} {args.unit}): there "
@@ -304,10 +289,6 @@ def cmd_sweep(args) -> int:
 
 
 def _check_touchstone_name(path) -> None:
-    from pathlib import Path
-
-    from ..errors import MechcircError
-
     if path and Path(path).suffix.lower() != ".s1p":
         # K seen by one drive is a one-port: a .s2p name would promise a
         # 2-port file that scikit-rf then cannot read.
@@ -318,8 +299,6 @@ def _check_touchstone_name(path) -> None:
 
 def _run_sweep(args, circuit, omega):
     """The sweep on the grid, or on an adaptive grid from it (``--adaptive``)."""
-    from ..errors import MechcircError
-
     if not args.adaptive:
         return circuit.sweep(omega, method=args.method, refine=args.refine, error=True)
     from ..adaptive import adaptive_sweep
@@ -355,7 +334,9 @@ def _write_sweep_outputs(args, result, extra, sens, found, pk) -> int:
         if args.plot:
             from ..plotting import plot_sweep
 
-            panels = {_panel_label(key, result.units): values for key, values in extra.items()}
+            # "v_abs(NAME)" -> "|v(NAME)| [m/s]"
+            panels = {f"|{key[0]}{key[key.index('('):]}| [{result.units[key[0]]}]": values
+                      for key, values in extra.items()}
             save_figure(plot_sweep(result, resonances=found, peak=pk, unit=args.unit,
                                    extra=panels), args.plot, out.path(args.plot), tight=False)
     return dropped
@@ -391,8 +372,6 @@ def _print_sweep(args, result, extra, sens, pk, notes, dropped) -> None:
     """The summary ``sweep`` prints without ``--json``."""
     import numpy as np
 
-    from ..units import FREQUENCY_UNITS, in_unit
-
     units, unit = result.units, args.unit
     how = "adaptive grid points" if args.adaptive else "points"
     print(f"{args.file}: {len(result.omega)} {how}, {FREQUENCY_UNITS[unit][0]} {in_unit(result.omega[0], unit):g} .. "
@@ -412,7 +391,7 @@ def _print_sweep(args, result, extra, sens, pk, notes, dropped) -> None:
         for key, values in extra.items():
             label = f"|{key[0]}{key[key.index('('):]}|"
             print(f"  {label:<4} {np.nanmin(values):.4g} .. {np.nanmax(values):.4g} "
-                  f"{_unit_of(key, units)} on the grid")
+                  f"{units[key[0]]} on the grid")
     print(f"  {_peak_text(pk, units, unit)}")
     if sens is not None:
         _print_sweep_sensitivity(sens, result)
@@ -464,8 +443,6 @@ def _responses(result, nodes, elements) -> dict:
     """``{column: |amplitude|}`` of ``--node`` (v_abs, x_abs) and ``--element`` (Q_abs)."""
     import numpy as np
 
-    from ..errors import MechcircError
-
     out = {}
     with np.errstate(all="ignore"):
         for name in nodes:
@@ -483,19 +460,9 @@ def _responses(result, nodes, elements) -> dict:
     return out
 
 
-def _unit_of(key: str, units: dict) -> str:
-    return units[{"v": "v", "x": "x", "Q": "Q"}[key[0]]]
-
-
-def _panel_label(key: str, units: dict) -> str:
-    name = key[key.index("(") + 1:-1]
-    return f"|{key[0]}({name})| [{_unit_of(key, units)}]"
-
-
 def cmd_resonances(args) -> int:
     from ..circuit import units_of
     from ..resonances import Resonances
-    from ..units import FREQUENCY_UNITS, in_unit
 
     check_output_paths(plots=(args.plot,))
     circuit, warns = load_with_warnings(args.file)
@@ -582,7 +549,6 @@ def _mode_doc(m) -> dict:
 
 def _print_mode(m, kinds, units: dict) -> None:
     import cmath
-    import math
 
     if not m.shape:
         print(f"  no mode shape: {m.note}")

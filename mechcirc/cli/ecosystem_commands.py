@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
-import argparse
 from pathlib import Path
 
-from ._common import (add_handler, check_output_paths, count, load_with_warnings, print_json, real,
-                      save_figure, warning_lines)
+from ..errors import MechcircError
+from ..limits import FORMULA_SECONDS
+from ._common import (add_command, add_handler, check_output_paths, count, load_with_warnings,
+                      print_json, real, save_figure, time_limit, warning_lines)
 
 
 def register(sub) -> None:
@@ -17,14 +18,13 @@ def register(sub) -> None:
 def _register_forces(sub) -> None:
     from .circuit_commands import positive_omega
 
-    p = sub.add_parser(
-        "forces", help="force and velocity of every element at one frequency",
-        description="How the drive's force splits through the mechanism: |Q| [N], |v| [m/s] "
-                    "and their phases [deg] (relative to the drive's amplitude) for every "
-                    "element carrying force, at one angular frequency.",
-        epilog="Example: mechcirc forces netlists/stb_heald.mcir --omega 300 --plot forces.png",
-        formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("file", help="netlist file (.mcir)")
+    p = add_command(
+        sub, "forces", "force and velocity of every element at one frequency",
+        "How the drive's force splits through the mechanism: |Q| [N], |v| [m/s] and their phases "
+        "[deg] (relative to the drive's amplitude) for every element carrying force, at one "
+        "angular frequency.",
+        "Example: mechcirc forces netlists/stb_heald.mcir --omega 300 --plot forces.png",
+        file="netlist file (.mcir)")
     p.add_argument("--omega", type=positive_omega, required=True, metavar="W",
                    help="angular frequency: rad/s, or with a unit: 50Hz, 3000rpm")
     _method_plot_json(p, "bar chart of |Q| per element (PNG, SVG, PDF)", cmd_forces)
@@ -42,13 +42,13 @@ def _method_plot_json(p, plot: str, func) -> None:
 def _register_compare(sub) -> None:
     from .circuit_commands import band_omega
 
-    p = sub.add_parser(
-        "compare", help="a measured mobility (Touchstone .s1p) against the model's",
-        description="Read a measured one-port mobility from a Touchstone file (its Z "
-                    "parameter, read with scikit-rf, taken in m/(N·s)), evaluate the netlist "
-                    "at the same frequencies and print the error in the band.",
-        epilog="Example: mechcirc compare netlists/stb_heald.mcir measured.s1p --plot cmp.png")
-    p.add_argument("file", help="netlist file (.mcir)")
+    p = add_command(
+        sub, "compare", "a measured mobility (Touchstone .s1p) against the model's",
+        "Read a measured one-port mobility from a Touchstone file (its Z parameter, read with "
+        "scikit-rf, taken in m/(N·s)), evaluate the netlist at the same frequencies and print the "
+        "error in the band.",
+        "Example: mechcirc compare netlists/stb_heald.mcir measured.s1p --plot cmp.png",
+        file="netlist file (.mcir)", raw=False)
     p.add_argument("measured", help="Touchstone one-port file (.s1p)")
     p.add_argument("--omega-min", type=band_omega, metavar="W1",
                    help="compare only from this angular frequency [rad/s] (or 5Hz, 300rpm)")
@@ -58,14 +58,14 @@ def _register_compare(sub) -> None:
 
 
 def _register_formula(sub) -> None:
-    p = sub.add_parser(
-        "formula", help="K(ω) in closed form (SymPy), nested as the reduction tree",
-        description="The kinematic characteristic K(ω) [m/(N·s)] as a formula built from "
-                    "the series–parallel reduction tree: elements written as plain numbers "
-                    "become symbols named after them, .param names stay symbols; the values "
-                    "are listed below. Needs SymPy (pip install 'mechcirc[formula]').",
-        epilog="Example: mechcirc formula netlists/stb_heald.mcir --latex")
-    p.add_argument("file", help="netlist file (.mcir)")
+    p = add_command(
+        sub, "formula", "K(ω) in closed form (SymPy), nested as the reduction tree",
+        "The kinematic characteristic K(ω) [m/(N·s)] as a formula built from the series–parallel "
+        "reduction tree: elements written as plain numbers become symbols named after them, "
+        ".param names stay symbols; the values are listed below. Needs SymPy (pip install "
+        "'mechcirc[formula]').",
+        "Example: mechcirc formula netlists/stb_heald.mcir --latex",
+        file="netlist file (.mcir)", raw=False)
     p.add_argument("--latex", action="store_true", help="print LaTeX instead of SymPy text")
     p.add_argument("--expand", action="store_true",
                    help="one fraction, numerator and denominator multiplied out")
@@ -75,17 +75,15 @@ def _register_formula(sub) -> None:
 
 
 def _register_study(sub) -> None:
-    p = sub.add_parser(
-        "study", help="a parameter grid or sample, on local cores or a Dask cluster",
-        description="Run a parameter study described by a TOML file (see docs/ecosystem.md): "
-                    "a grid, a random, Latin hypercube or Sobol sample, or the points of a "
-                    "CSV/Parquet file; each point re-parses the netlist with new .param "
-                    "values and records a sweep summary or a resonance table; failed points "
-                    "are rows with their error.  Rows are journalled as they finish (an "
-                    "interrupted study keeps them; --resume runs only the missing points of "
-                    "the same spec).  The output records the spec and every column's unit "
-                    "(CSV: OUTPUT.meta.json beside it).",
-        epilog="Example: mechcirc study examples/study_stb.toml -o results.csv")
+    p = add_command(
+        sub, "study", "a parameter grid or sample, on local cores or a Dask cluster",
+        "Run a parameter study described by a TOML file (see docs/ecosystem.md): a grid, a "
+        "random, Latin hypercube or Sobol sample, or the points of a CSV/Parquet file; each point "
+        "re-parses the netlist with new .param values and records a sweep summary or a resonance "
+        "table; failed points are rows with their error.  Rows are journalled as they finish (an "
+        "interrupted study keeps them; --resume runs only the missing points of the same spec).  "
+        "The output records the spec and every column's unit (CSV: OUTPUT.meta.json beside it).",
+        "Example: mechcirc study examples/study_stb.toml -o results.csv", raw=False)
     p.add_argument("spec", help="study description (.toml)")
     p.add_argument("-o", "--output", metavar="CSV", help="write the table to this CSV file")
     p.add_argument("--scheduler", metavar="ADDRESS",
@@ -190,8 +188,6 @@ def cmd_compare(args) -> int:
 
 def cmd_formula(args) -> int:
     from ..interop.formula import formula_and_values
-    from ..limits import FORMULA_SECONDS
-    from ._common import time_limit
 
     circuit, warns = load_with_warnings(args.file)
     warning_lines(warns)
@@ -214,15 +210,12 @@ def cmd_formula(args) -> int:
 
 
 def cmd_study(args) -> int:
-    from ..errors import MechcircError
     from ..progress import Progress
     from ..study import column_units, load_spec, run_study, sidecar_path
 
     check_output_paths(args.output, args.curves, plots=(args.plot,), reads=(args.spec,))
     if args.resume and not args.output:
         raise MechcircError("--resume needs -o FILE (the table to continue)")
-    if args.workers is not None and args.workers < 1:
-        raise MechcircError(f"--workers must be at least 1, got {args.workers}")
     spec = load_spec(args.spec)
     check_output_paths(args.output, args.curves, plots=(args.plot,),
                        reads=(spec.netlist_source,))

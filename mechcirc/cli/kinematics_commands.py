@@ -4,11 +4,13 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
+from pathlib import Path
 
 from ..errors import InputError, MechcircError
 from ..units import convert_frequency
-from ._common import (MAX_LENGTH, MAX_OMEGA, add_handler, check_output_paths, count, print_json,
-                      real, save_figure)
+from ._common import (MAX_LENGTH, MAX_OMEGA, add_command, add_handler, check_output_paths, count,
+                      print_json, real, save_figure, write_columns)
 
 
 def register(sub) -> None:
@@ -23,15 +25,13 @@ def register(sub) -> None:
 
 def _register_fourbar(sub) -> None:
     """``fourbar``: the closed-form four-bar."""
-    p = sub.add_parser(
-        "fourbar", help="four-bar dead centres, swing, transmission angle and ε4T",
-        description="Closed-form four-bar analysis: Grashof class, dead centres, swing Ψ, "
-                    "transmission angle range and the theoretical rocker acceleration "
-                    "ε4T = ν·ω². Angles are measured counter-clockwise from the frame "
-                    "line A→D; the crank turns with θ increasing.",
-        epilog="Example: mechcirc fourbar --crank 29 --coupler 37 --rocker 188 --frame 189 "
-               "--omega 100 --plot fourbar.png",
-        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = add_command(
+        sub, "fourbar", "four-bar dead centres, swing, transmission angle and ε4T",
+        "Closed-form four-bar analysis: Grashof class, dead centres, swing Ψ, transmission angle "
+        "range and the theoretical rocker acceleration ε4T = ν·ω². Angles are measured "
+        "counter-clockwise from the frame line A→D; the crank turns with θ increasing.",
+        "Example: mechcirc fourbar --crank 29 --coupler 37 --rocker 188 --frame 189 --omega 100 "
+        "--plot fourbar.png")
     for name, what in (("crank", "AB"), ("coupler", "BC"), ("rocker", "CD"), ("frame", "AD")):
         p.add_argument(f"--{name}", type=real(above=0.0, most=MAX_LENGTH), required=True,
                        metavar="L",
@@ -46,21 +46,19 @@ def _register_fourbar(sub) -> None:
 
 def _register_frame(sub) -> None:
     """``frame``: the four-bar's bearing forces and shaking (eq. 7)."""
-    p = sub.add_parser(
-        "frame", help="four-bar frame loading: bearing forces, shaking force and moments (eq. 7)",
-        description="Kineto-static analysis of a four-bar at constant crank speed (patent "
-                    "CN104178888 eq. 7): bearing forces at the crankshaft A and the rocking "
-                    "shaft D, driving torque T, shaking force S = −(F_A + F_D) on the frame and "
-                    "shaking moments T_a, T_d. Lengths and centres of mass in --unit (default "
-                    "mm), masses in kg, inertias in kg·m² about the centre of mass, forces in N. "
-                    "Link frames: crank x along A→B, coupler x along B→C, rocker x along D→C. "
-                    "The reed force is a half sine over a window of crank angle around the "
-                    "front dead centre, given in the rocker's frame.",
-        epilog="Example: mechcirc frame --crank 35 --coupler 57.8 --rocker 155.6 --frame 162.75 "
-               "--rpm 600 --mass 2,1.5,15 --rocker-com 110,30 --rocker-inertia 0.08 "
-               "--reed-force=-50,-500 --reed-point 140,50 --plot frame.png -o frame.csv\n"
-               "(write a value that starts with a minus with '=', as --reed-force=-50,-500)",
-        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = add_command(
+        sub, "frame", "four-bar frame loading: bearing forces, shaking force and moments (eq. 7)",
+        "Kineto-static analysis of a four-bar at constant crank speed (patent CN104178888 eq. 7): "
+        "bearing forces at the crankshaft A and the rocking shaft D, driving torque T, shaking "
+        "force S = −(F_A + F_D) on the frame and shaking moments T_a, T_d. Lengths and centres of "
+        "mass in --unit (default mm), masses in kg, inertias in kg·m² about the centre of mass, "
+        "forces in N. Link frames: crank x along A→B, coupler x along B→C, rocker x along D→C. "
+        "The reed force is a half sine over a window of crank angle around the front dead centre, "
+        "given in the rocker's frame.",
+        "Example: mechcirc frame --crank 35 --coupler 57.8 --rocker 155.6 --frame 162.75 --rpm "
+        "600 --mass 2,1.5,15 --rocker-com 110,30 --rocker-inertia 0.08 --reed-force=-50,-500 "
+        "--reed-point 140,50 --plot frame.png -o frame.csv\n"
+        "(write a value that starts with a minus with '=', as --reed-force=-50,-500)")
     for name, what in (("crank", "AB"), ("coupler", "BC"), ("rocker", "CD"), ("frame", "AD")):
         p.add_argument(f"--{name}", type=real(above=0.0, most=MAX_LENGTH), required=True,
                        metavar="L", help=f"{name} length {what} [--unit]")
@@ -102,15 +100,13 @@ def _register_frame(sub) -> None:
 
 def _register_synth(sub) -> None:
     """``synth``: beat-up four-bar synthesis and export."""
-    p = sub.add_parser(
-        "synth", help="beat-up four-bar synthesis after patent CN104178888",
-        description="Explore crank-rockers meeting every criterion of the patent "
-                    "(γ at the front dead centre > 70°, γmin > 45°, |Φ2''|/|Φ1''| < 0.3, "
-                    "d < 180 mm, eq. (9), swing 23–26°) and rank them. Lengths in mm.",
-        epilog="Example: mechcirc synth --load medium --swing 24 --plot synth.png\n"
-               "         mechcirc synth --load medium --frame 165 --swing-range 24:26 "
-               "--export designs/",
-        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = add_command(
+        sub, "synth", "beat-up four-bar synthesis after patent CN104178888",
+        "Explore crank-rockers meeting every criterion of the patent (γ at the front dead centre "
+        "> 70°, γmin > 45°, |Φ2''|/|Φ1''| < 0.3, d < 180 mm, eq. (9), swing 23–26°) and rank "
+        "them. Lengths in mm.",
+        "Example: mechcirc synth --load medium --swing 24 --plot synth.png\n"
+        "         mechcirc synth --load medium --frame 165 --swing-range 24:26 --export designs/")
     p.add_argument("--load", choices=("light", "medium", "heavy"), default="medium",
                    help="loom class: crank 33–34, 35–36 or 37–38 mm (default medium)")
     p.add_argument("--swing", type=real(above=0.0, most=180.0, unit="deg", role="angle"), metavar="DEG",
@@ -170,15 +166,13 @@ def _register_synth_export(p) -> None:
 
 def _register_linkage(sub) -> None:
     """``linkage``: a TOML linkage at one θ."""
-    p = sub.add_parser(
-        "linkage", help="positions, velocities and conditional-stop velocities of a TOML linkage",
-        description="Solve a planar linkage (revolute joints and sliders) with any number of "
-                    "driving cranks (TOML file, see docs/kinematics.md) at a rotation θ of the first "
-                    "crank from the file's pose; velocities are also split into each "
-                    "crank's contribution with the others stopped.",
-        epilog="Example: mechcirc linkage examples/fnf_sixbar.toml --theta 30 --plot fnf.png",
-        formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("file", help="linkage file (.toml)")
+    p = add_command(
+        sub, "linkage", "positions, velocities and conditional-stop velocities of a TOML linkage",
+        "Solve a planar linkage (revolute joints and sliders) with any number of driving cranks "
+        "(TOML file, see docs/kinematics.md) at a rotation θ of the first crank from the file's "
+        "pose; velocities are also split into each crank's contribution with the others stopped.",
+        "Example: mechcirc linkage examples/fnf_sixbar.toml --theta 30 --plot fnf.png",
+        file="linkage file (.toml)")
     p.add_argument("--theta", type=real(most=1e9, unit="deg", role="angle"), default=0.0, metavar="DEG",
                    help="rotation of the first crank from the pose [deg] (default 0)")
     p.add_argument("--plot", metavar="IMAGE",
@@ -308,7 +302,9 @@ def cmd_frame(args) -> int:
     cols = res.columns()
     summary = res.summary()
     if args.output:
-        _write_frame_csv(args, res, cols, omega)
+        write_columns(args.output, f"# mechcirc frame: a={args.crank:g} b={args.coupler:g} "
+                      f"c={args.rocker:g} d={args.frame:g} {args.unit}, omega={omega:.10g} "
+                      f"rad/s; {res.CONVENTION}", cols, cols.values())
     if args.plot:
         from ..kinematics.plots import plot_shaking
         save_figure(plot_shaking(res), args.plot)
@@ -347,30 +343,11 @@ def _print_frame(args, fb, res, summary, omega) -> None:
           f"of the CSV).")
 
 
-def _write_frame_csv(args, res, cols, omega) -> None:
-    """Every angle's loads as CSV under a header of the lengths and the sign convention."""
-    from ..outputs import atomic_open
-
-    names = list(cols)
-    with atomic_open(args.output, "w", newline="") as fh:
-        fh.write(f"# mechcirc frame: a={args.crank:g} b={args.coupler:g} c={args.rocker:g} "
-                 f"d={args.frame:g} {args.unit}, omega={omega:.10g} rad/s; "
-                 f"{res.CONVENTION}\n")
-        fh.write(",".join(names) + "\n")
-        for row in zip(*(cols[n] for n in names)):
-            fh.write(",".join(repr(float(v)) for v in row) + "\n")
-
-
 def cmd_synth(args) -> int:
-    import sys
-    from pathlib import Path
-
     from ..kinematics import synthesize
     from ..kinematics.synthesis_export import SceneOptions, export_designs
 
     check_output_paths(plots=(args.plot,))
-    if args.limit < 1:
-        raise MechcircError(f"--limit must be at least 1, got {args.limit}")
     if args.export and not Path(args.export).is_dir():
         raise MechcircError(f"--export {args.export}: no such folder (create it first)")
     fixed = {n: getattr(args, n) for n in ("crank", "coupler", "rocker", "frame")

@@ -3,28 +3,26 @@ the operating-speed map of its peak."""
 
 from __future__ import annotations
 
-import argparse
+import math
 
 from ..errors import MechcircError
-from ._common import (add_handler, check_output_paths, count, load_with_warnings, print_json, real,
-                      save_figure, warning_lines)
+from ..units import in_unit
+from ._common import (add_command, add_handler, check_output_paths, count, load_with_warnings,
+                      print_json, real, save_figure, warning_lines)
 
 
 def register(sub) -> None:
-    p = sub.add_parser(
-        "periodic", help="drive force over one revolution at machine speed; speed map",
-        description="Steady-state periodic force of a drive given by its motion over one "
-                    "revolution ('drive ... motion=lift.csv' or 'motion=cycloidal rise=... "
-                    "dwell=... return=... stroke=...'): the harmonics kΩ of the drive's "
-                    "velocity through K(kΩ), as many as the error asked for needs (said). "
-                    "With --rpm: Q(θ) over the crank angle and the harmonics near resonances. "
-                    "With --rpm-min/--rpm-max: the peak |Q(θ)| against machine speed and the "
-                    "speeds where a harmonic meets a resonance (k·Ω = ωn).",
-        epilog="Examples:\n"
-               "  mechcirc periodic docs/examples/cam_drive.mcir --rpm 600 -o Q.csv\n"
-               "  mechcirc periodic docs/examples/cam_drive.mcir --rpm-min 100 --rpm-max 1200\n"
-               "  mechcirc periodic docs/examples/rocker_drive.toml --theta 30 --rpm 300",
-        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = add_command(
+        sub, "periodic", "drive force over one revolution at machine speed; speed map",
+        "Steady-state periodic force of a drive given by its motion over one revolution ('drive "
+        "... motion=lift.csv' or 'motion=cycloidal rise=... dwell=... return=... stroke=...'): "
+        "the harmonics kΩ of the drive's velocity through K(kΩ), as many as the error asked for "
+        "needs (said). With --rpm: Q(θ) over the crank angle and the harmonics near resonances. "
+        "With --rpm-min/--rpm-max: the peak |Q(θ)| against machine speed and the speeds where a "
+        "harmonic meets a resonance (k·Ω = ωn).",
+        "Examples:\n  mechcirc periodic docs/examples/cam_drive.mcir --rpm 600 -o Q.csv\n"
+        "  mechcirc periodic docs/examples/cam_drive.mcir --rpm-min 100 --rpm-max 1200\n"
+        "  mechcirc periodic docs/examples/rocker_drive.toml --theta 30 --rpm 300")
     p.add_argument("file", help="netlist (.mcir) whose drive has motion=, or a scene (.toml): "
                                 "its circuit at --theta driven by the motion its linkage imposes")
     p.add_argument("--theta", type=real(most=1e9, unit="deg", role="angle"), metavar="DEG",
@@ -100,8 +98,6 @@ def cmd_periodic(args) -> int:
 
 def _scene(args):
     """A scene's circuit at --theta and the motion its rigid linkage imposes on the drive."""
-    import math
-
     from ..scene import build, load_scene
     from ..scene.cycle import drive_motion
 
@@ -121,7 +117,6 @@ def _one_speed(args, circuit, elements, motion) -> int:
     import numpy as np
 
     from ..periodic import periodic
-    from ..units import in_unit
 
     r = periodic(circuit, args.rpm, motion=motion, tol=args.tol, harmonics=args.harmonics,
                  points=args.angles, elements=elements, near=args.near, method=args.method)
@@ -198,7 +193,6 @@ def _speed_map(args, circuit, elements, motion) -> int:
     import numpy as np
 
     from ..periodic import speed_map
-    from ..units import in_unit
 
     m = speed_map(circuit, args.rpm_min, args.rpm_max, args.points, motion=motion, tol=args.tol,
                   harmonics=args.harmonics, elements=elements, method=args.method)
@@ -247,8 +241,8 @@ def _write_outputs(args, head: list, cols: list, plot) -> None:
     with OutputSet() as out:
         if args.output:
             with open(out.path(args.output), "w", newline="") as fh:
-                fh.write(",".join(head) + "\n")
-                np.savetxt(fh, np.column_stack(cols), delimiter=",", fmt="%.17g")
+                np.savetxt(fh, np.column_stack(cols), delimiter=",", fmt="%.17g",
+                           header=",".join(head), comments="")
         if args.plot:
             save_figure(plot(), args.plot, out.path(args.plot))
 

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
-import argparse
 import math
 
+from ..errors import InputError
 from ..limits import MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS, MAX_SCIPY_REVOLUTIONS
-from ._common import add_handler, check_output_paths, count, print_json, real, save_figure
+from ..units import UnitError, parse_quantity
+from ._common import (add_command, add_handler, check_output_paths, count, print_json, real,
+                      save_figure, write_columns)
 
 _METHODS = ("rk4", "rk4-python", "rk8", "DOP853", "RK45", "LSODA")   # = mechcirc.sley.METHODS
 _UNITS = {"eps4T": "1/s^2", "eps2P": "1/s^2", "eps4P": "1/s^2", "eps5P": "1/s^2",
@@ -19,16 +21,15 @@ def register(sub) -> None:
 
 
 def _register_simulate(sub) -> None:
-    p = sub.add_parser(
-        "simulate", help="sley beat-up dynamics (Mrázek, Tables 1 and 2) in the time domain",
-        description="Integrate the sley model (eq. 4 one-side, eq. 9 both-sides; the "
-                    "presets run as their scenes, examples/mrazek_*.toml) from the "
-                    "crank angle of zero sley acceleration over R revolutions and print the "
-                    "min/max of the last one beside the paper's printed values. The beat-up "
-                    "interval alpha is not printed in the paper: default 10 deg, the best fit to the printed cells (sigma = alpha).",
-        epilog="Example: mechcirc simulate --drive one-side --variant 3 --plot sley.png\n"
-               "         mechcirc simulate --variant all --json",
-        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = add_command(
+        sub, "simulate", "sley beat-up dynamics (Mrázek, Tables 1 and 2) in the time domain",
+        "Integrate the sley model (eq. 4 one-side, eq. 9 both-sides; the presets run as their "
+        "scenes, examples/mrazek_*.toml) from the crank angle of zero sley acceleration over R "
+        "revolutions and print the min/max of the last one beside the paper's printed values. The "
+        "beat-up interval alpha is not printed in the paper: default 10 deg, the best fit to the "
+        "printed cells (sigma = alpha).",
+        "Example: mechcirc simulate --drive one-side --variant 3 --plot sley.png\n"
+        "         mechcirc simulate --variant all --json")
     p.add_argument("scene", nargs="?", metavar="SCENE.toml",
                    help="simulate this scene file over whole revolutions (docs/scenes.md); "
                         "without it, the sley presets (--drive, --variant)")
@@ -95,19 +96,18 @@ def _sley_arguments(p) -> None:
 
 
 def _register_crosscheck(sub) -> None:
-    p = sub.add_parser(
-        "crosscheck", help="linearised sley against its mechanical circuit (resonances, Q0)",
-        description="(a) resonances (K = 0) of the sley's netlist at crank angle theta "
-                    "against the eigenfrequencies of the linearised equations; (b) ringing "
-                    "of the sley after the beat-up pulse against the predicted damped "
-                    "frequency; (c) harmonic forcing of the linear model against |Q0|.",
-        epilog="Example: mechcirc crosscheck --drive one-side --variant 3 --theta 60\n"
-               "         mechcirc crosscheck examples/heald_scene.toml --theta 40\n"
-               "         mechcirc crosscheck netlists/stb_heald.mcir --omega-max 5000\n"
-               "(a scene .toml: circuit resonances at --theta against the ringing of its "
-               "time-domain motion, and |Q0| against the forced response to a drive-speed "
-               "ripple; a netlist: see the transient command)",
-        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = add_command(
+        sub, "crosscheck", "linearised sley against its mechanical circuit (resonances, Q0)",
+        "(a) resonances (K = 0) of the sley's netlist at crank angle theta against the "
+        "eigenfrequencies of the linearised equations; (b) ringing of the sley after the beat-up "
+        "pulse against the predicted damped frequency; (c) harmonic forcing of the linear model "
+        "against |Q0|.",
+        "Example: mechcirc crosscheck --drive one-side --variant 3 --theta 60\n"
+        "         mechcirc crosscheck examples/heald_scene.toml --theta 40\n"
+        "         mechcirc crosscheck netlists/stb_heald.mcir --omega-max 5000\n"
+        "(a scene .toml: circuit resonances at --theta against the ringing of its time-domain "
+        "motion, and |Q0| against the forced response to a drive-speed ripple; a netlist: see the "
+        "transient command)")
     p.add_argument("file", nargs="?", metavar="FILE",
                    help="a scene (.toml): cross-check it at --theta; a netlist (.mcir): "
                         "cross-check its resonances and |Q0| against its transients (the "
@@ -145,8 +145,6 @@ def _overrides(args) -> dict:
         if name.strip() in _NOT_NUMBERS:
             raise ParameterError(f"--set {name.strip()}: not a numeric parameter; "
                                  f"{_NOT_NUMBERS[name.strip()]}")
-        from ..units import UnitError, parse_quantity
-
         try:
             out[name.strip()] = parse_quantity(value)   # SI, any unit: omega=3000rpm
         except UnitError as exc:
@@ -162,8 +160,6 @@ def _overrides(args) -> dict:
 def _options(args) -> dict:
     fixed_step = args.method in ("rk4", "rk4-python", "rk8")
     if not fixed_step and args.revolutions > MAX_SCIPY_REVOLUTIONS:
-        from ..errors import InputError
-
         raise InputError(f"--revolutions {args.revolutions} with --method {args.method}: the "
                          f"limit is {MAX_SCIPY_REVOLUTIONS} (a Python right-hand side, ~0.3 s "
                          "a revolution); the compiled rk4 takes up to "
@@ -222,19 +218,6 @@ def _table(result, paper_applies: bool = True) -> str:
     return "\n".join(lines)
 
 
-def _write_csv(result, path) -> None:
-    from ..outputs import atomic_open
-
-    cols = result.columns()
-    names = list(cols)
-    with atomic_open(path, "w", newline="") as fh:
-        fh.write(f"# {result.params.label}; revolution {result.revolution}; "
-                 f"alpha = {result.alpha_deg:g} deg; method {result.method}\n")
-        fh.write(",".join(names) + "\n")
-        for row in zip(*(cols[n] for n in names)):
-            fh.write(",".join(repr(float(v)) for v in row) + "\n")
-
-
 # ----------------------------------------------------------------- handlers
 def cmd_simulate(args) -> int:
     if args.scene is not None:
@@ -275,7 +258,10 @@ def cmd_simulate(args) -> int:
     with Progress(0, params.label) as bar:     # total set by the first progress(done, total)
         result = simulate_params(params, args.revolutions, args.method, progress=bar, **opts)
     if args.output:
-        _write_csv(result, args.output)
+        cols = result.columns()
+        write_columns(args.output, f"# {result.params.label}; revolution {result.revolution}; "
+                      f"alpha = {result.alpha_deg:g} deg; method {result.method}", cols,
+                      cols.values())
     if args.plot:
         from ..sley.plots import plot_result
 
@@ -293,19 +279,13 @@ def cmd_simulate(args) -> int:
 def cmd_crosscheck(args) -> int:
     if args.file is not None:
         return _crosscheck_file(args)
-    from ..sley import ParameterError, preset
+    from ..sley import preset
     from ..sley.crosscheck import crosscheck_sley
+    from ..sley.simulation import start_angle
 
     check_output_paths(args.netlist)
     params = preset(args.drive, args.variant)
-    if args.theta is None:
-        from ..sley.simulation import start_angle
-
-        theta0 = start_angle(params)
-    else:
-        if not math.isfinite(args.theta):
-            raise ParameterError(f"--theta must be a finite angle [deg], got {args.theta:g}")
-        theta0 = math.radians(args.theta)
+    theta0 = start_angle(params) if args.theta is None else math.radians(args.theta)
     from ..progress import Progress
 
     with Progress(4, "crosscheck") as bar:      # drawn on a terminal after 1 s
@@ -329,8 +309,6 @@ def _crosscheck_file(args) -> int:
 
         return cmd_crosscheck_scene(args)
     if args.netlist:        # nothing is built from a netlist FILE: refuse, not ignore
-        from ..errors import InputError
-
         raise InputError(f"--netlist writes the netlist built from a scene or a sley "
                          f"preset; '{args.file}' is a netlist already, and it is "
                          "the one checked (leave out --netlist)")

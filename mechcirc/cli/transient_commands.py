@@ -2,29 +2,26 @@
 
 from __future__ import annotations
 
-import argparse
 import math
 import sys
 
 from ..errors import MechcircError
-from ._common import add_handler, check_output_paths, print_json, save_figure
+from ..units import parse_omega
+from ._common import add_command, add_handler, check_output_paths, print_json, save_figure
 
 
 def register(sub) -> None:
-    p = sub.add_parser(
-        "transient", help="time response of a netlist (exact for linear circuits; backlash)",
-        description="Integrate a netlist from its .ic state: node displacements and "
-                    "velocities, every element's force and the drive's force (velocity "
-                    "drive) or velocity (force drive) on the grid 0, dt, ..., t_end. Linear "
-                    "circuits are propagated exactly between drive samples (matrix "
-                    "exponential); springs with backlash= use the Modelica ElastoBacklash law "
-                    "and an adaptive Dormand-Prince 5(4) integrator.",
-        epilog="Examples:\n"
-               "  mechcirc transient examples/msl_backlash.mcir --t-end 1 --dt 1e-3 -o msl.csv\n"
-               "  mechcirc transient netlists/stb_heald.mcir --t-end 0.05 --drive harmonic:300 "
-               "--json",
-        formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("file", help="netlist (.mcir); a drive line is optional")
+    p = add_command(
+        sub, "transient", "time response of a netlist (exact for linear circuits; backlash)",
+        "Integrate a netlist from its .ic state: node displacements and velocities, every "
+        "element's force and the drive's force (velocity drive) or velocity (force drive) on the "
+        "grid 0, dt, ..., t_end. Linear circuits are propagated exactly between drive samples "
+        "(matrix exponential); springs with backlash= use the Modelica ElastoBacklash law and an "
+        "adaptive Dormand-Prince 5(4) integrator.",
+        "Examples:\n"
+        "  mechcirc transient examples/msl_backlash.mcir --t-end 1 --dt 1e-3 -o msl.csv\n"
+        "  mechcirc transient netlists/stb_heald.mcir --t-end 0.05 --drive harmonic:300 --json",
+        file="netlist (.mcir); a drive line is optional")
     p.add_argument("--t-end", type=float, required=True, metavar="T", help="end time [s]")
     p.add_argument("--dt", type=float, metavar="DT",
                    help="output step [s] (default t_end/2000; 40 per period of a harmonic "
@@ -141,8 +138,6 @@ def cmd_crosscheck_netlist(args) -> int:
 
     omega_max = None
     if args.omega_max is not None:
-        from ..units import parse_omega
-
         try:
             omega_max = parse_omega(args.omega_max)
         except Exception as exc:  # noqa: BLE001 - a user error, reported as such

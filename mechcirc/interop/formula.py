@@ -28,7 +28,8 @@ from __future__ import annotations
 from fractions import Fraction
 from typing import TYPE_CHECKING
 
-from ..errors import MechcircError
+from ..errors import MechcircError, NotSeriesParallelError
+from ..limits import MAX_FORMULA_ELEMENTS
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..circuit import Circuit
@@ -135,8 +136,6 @@ class _Builder:
         return value * eta
 
     def build(self):
-        from ..errors import NotSeriesParallelError
-
         try:
             tree = self.circuit.tree
         except NotSeriesParallelError:
@@ -157,8 +156,6 @@ class _Builder:
         sp = self.sp
         w = self.omega
         system = assemble(self.circuit)
-        from ..limits import MAX_FORMULA_ELEMENTS
-
         size = len(system.elements) + len(system.levers)
         if size > MAX_FORMULA_ELEMENTS:
             raise MechcircError(

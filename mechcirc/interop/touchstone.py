@@ -43,11 +43,6 @@ _PARAMS = {"s", "y", "z", "g", "h"}
 _FORMATS = {"ri", "ma", "db"}
 
 
-def _ports_from_name(source: str) -> int | None:
-    match = re.search(r"\.s(\d+)p$", source, flags=re.IGNORECASE)
-    return int(match.group(1)) if match else None
-
-
 def _parse_options(tokens: list[str], source: str, line: int, col: int) -> tuple[float, str, str, float]:
     unit, param, fmt, R = "ghz", "s", "ma", 50.0
     i = 0
@@ -117,10 +112,10 @@ def read_touchstone_one_port(path: str | os.PathLike) -> tuple[NDArray[np.float6
     """
     source = os.fspath(path)
     text = read_source(path, "a Touchstone .s1p file")
-    ports = _ports_from_name(source)
-    if ports is not None and ports != 1:
-        raise NetlistError(f"has {ports} ports (by its extension), expected a one-port",
-                           source, 0, 0, "a .s1p file")
+    match = re.search(r"\.s(\d+)p$", source, flags=re.IGNORECASE)
+    if match and int(match.group(1)) != 1:
+        raise NetlistError(f"has {int(match.group(1))} ports (by its extension), expected a "
+                           "one-port", source, 0, 0, "a .s1p file")
     options = None
     freqs: list[float] = []
     values: list[complex] = []

@@ -375,10 +375,7 @@ def beat_up_force(fourbar: FourBar, peak: tuple[float, float], window_deg: float
         raise GeometryError(f"reed force peak must be two finite numbers [N], got {peak}")
     if not (math.isfinite(window_deg) and 0 < window_deg <= 360):
         raise GeometryError(f"beat-up window must be in (0, 360] degrees, got {window_deg}")
-    if centre_deg is None:
-        centre = fourbar.dead_centres()[0].theta
-    else:
-        centre = math.radians(centre_deg)
+    centre = fourbar.dead_centres()[0].theta if centre_deg is None else math.radians(centre_deg)
     half = math.radians(window_deg) / 2
 
     def force(theta):

@@ -421,10 +421,12 @@ def profile_csv(cam: CamProfile) -> str:
     Parameters
     ----------
     cam : CamProfile
+        Its angles, points, pressure angles and radii of curvature become the rows.
 
     Returns
     -------
     str
+        The CSV text, each line ending in a newline.
 
     Raises
     ------
@@ -452,10 +454,12 @@ def profile_svg(cam: CamProfile) -> str:
     Parameters
     ----------
     cam : CamProfile
+        Its points (taken as mm) and base circle are drawn.
 
     Returns
     -------
     str
+        The SVG document.
 
     Raises
     ------

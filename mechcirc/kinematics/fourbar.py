@@ -276,11 +276,8 @@ class FourBar:
             return ()
         a, b, c, d = self.crank, self.coupler, self.rocker, self.frame
         tol = 1e-9 * max(a, b, c, d)
-        out = []
-        for theta, bd in ((0.0, abs(d - a)), (math.pi, d + a)):
-            if abs(bd - (b + c)) <= tol or abs(bd - abs(b - c)) <= tol:
-                out.append(theta)
-        return tuple(out)
+        return tuple(theta for theta, bd in ((0.0, abs(d - a)), (math.pi, d + a))
+                     if abs(bd - (b + c)) <= tol or abs(bd - abs(b - c)) <= tol)
 
     @property
     def crank_rotates_fully(self) -> bool:

@@ -69,6 +69,7 @@ relative turning, φ_block − φ_guide = 0.
 
 from __future__ import annotations
 
+import itertools
 import math
 import os
 from dataclasses import dataclass
@@ -79,7 +80,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import GeometryError, NetlistError
-from .linkage_solver import MAX_CONTINUATION_STEPS, LinkageMotion, LinkageState  # noqa: F401
+from .linkage_solver import MAX_CONTINUATION_STEPS  # noqa: F401
+from .linkage_solver import LinkageMotion, LinkageState, Newton, motion, plan
 
 __all__ = ["Crank", "Slider", "AssurGroup", "Linkage", "LinkageState", "LinkageMotion",
            "parse_linkage",
@@ -239,8 +241,6 @@ class Linkage:
         GeometryError
             Some links form no group (the structure does not decompose).
         """
-        import itertools
-
         joints = self.pairs()
         known = {"ground"} | {c.link for c in self.cranks}
         remaining = [l for l in self.links if l not in known]
@@ -350,8 +350,6 @@ class Linkage:
 
     @cached_property
     def _plan(self):
-        from .linkage_solver import plan
-
         return plan(self)
 
     @property
@@ -389,8 +387,6 @@ class Linkage:
             A slider passes its ``stroke`` at one of the positions (located
             at the ``stroke`` key in the file).
         """
-        from .linkage_solver import motion
-
         return motion(self, self._plan, theta, max_step_deg=max_step_deg, method=method)
 
     def solve(self, theta: float | NDArray, *, max_step_deg: float = 2.0,
@@ -433,8 +429,6 @@ class Linkage:
         GeometryError
             Newton does not converge (no assembly near ``near``).
         """
-        from .linkage_solver import Newton
-
         local, idx = self.local_offsets(), self._index()
         q = self.q0() if near is None else np.array(near, dtype=float)
         angles = np.array([[float(crank_angles[c.link]) for c in self.cranks]])

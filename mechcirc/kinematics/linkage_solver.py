@@ -36,6 +36,7 @@ Both return a :class:`LinkageMotion` of plain arrays.  The result types
 
 from __future__ import annotations
 
+import contextlib
 import math
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -990,10 +991,8 @@ class Newton:
             except np.linalg.LinAlgError:
                 parts = np.full((N, self.n, nc), np.nan)
                 for i in range(N):
-                    try:
+                    with contextlib.suppress(np.linalg.LinAlgError):
                         parts[i] = np.linalg.solve(J[i], rhs[i])
-                    except np.linalg.LinAlgError:
-                        pass
             qdot = parts.sum(axis=2)
             g = self.gamma(q, qdot, sides)
             qddot = np.full_like(qdot, np.nan)

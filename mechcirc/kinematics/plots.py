@@ -48,6 +48,7 @@ def plot_fourbar(fourbar, omega: float | None = None, n: int = 721, *, fig=None)
     Returns
     -------
     matplotlib.figure.Figure
+        The figure, its four panels stacked.
     """
     lo, hi = fourbar.crank_range()
     th = np.linspace(lo, hi, n)
@@ -142,13 +143,14 @@ def plot_synthesis(designs, n: int = 721, fig=None):
     ----------
     designs : sequence of Design
     n : int
-        Points over a revolution.
+        Points of each design's curves over a revolution.
     fig : matplotlib.figure.Figure or SubFigure, optional
         An empty one to fill; a new one by default.
 
     Returns
     -------
     matplotlib.figure.Figure
+        The figure: the best design on the left, the curves of all on the right.
     """
     fig, ((left, right),) = _figure(1, 2, (12, 7), fig, "plot_synthesis", width_ratios=(1, 1.3))
     draw_design(designs[0], left)
@@ -182,12 +184,14 @@ def plot_frame_loading(result, *, fig=None):
     Parameters
     ----------
     result : FrameLoading
+        Its shaking force, crank torque and shaking moments are drawn.
     fig : matplotlib.figure.Figure or SubFigure, optional
-        An empty one to fill; a new one by default.
+        An empty one to fill (three panels); a new 7 × 8 in one by default.
 
     Returns
     -------
     matplotlib.figure.Figure
+        The figure, its three panels stacked.
     """
     fig, ax = _figure(3, 1, (7, 8), fig, "plot_frame_loading")
     deg = np.degrees(result.theta)
@@ -220,12 +224,14 @@ def plot_shaking(result, fig=None):
     Parameters
     ----------
     result : FrameLoading
+        Its shaking force, bearing forces, torque and moments are drawn.
     fig : matplotlib.figure.Figure or SubFigure, optional
         An empty one to fill; a new one by default.
 
     Returns
     -------
     matplotlib.figure.Figure
+        The figure, its four panels in a 2 × 2 grid.
     """
     fig, ax = _figure(2, 2, (10, 8), fig, "plot_shaking")
     deg = np.degrees(result.theta)

@@ -85,6 +85,7 @@ def crosscheck_scene(scene: Scene, theta: float, *, steps_per_period: float = 40
     Parameters
     ----------
     scene : Scene
+        The scene whose circuit and time-domain motion are compared.
     theta : float
         Crank angle [rad] at which the circuit is built.
     steps_per_period : float

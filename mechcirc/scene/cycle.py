@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 from ..batch import Designs, from_circuits, network_shape
 from ..errors import GeometryError, InputError, SolverError
 from ..motion_laws import Motion, motion_table
-from ..units import in_unit
+from ..units import FREQUENCY_UNITS, in_unit
 from .files import Scene
 from .model import (RANK_TOL, ReflectMode, build, drive_ratio, element_ratios, part_singular_values,
                     part_speeds, scaled_motion)
@@ -219,7 +219,8 @@ def _cycle_batches(scene: Scene, theta, motion, reflect: ReflectMode):
         except InputError:
             built = [(from_circuits([c]), np.array([i])) for c, i in zip(circuits, single)]
         for ds, where in built:
-            if parts and _same_network(parts[0][0], ds):    # they join the batch
+            # the same elements, levers and drive (names, kinds, nodes): they join the batch
+            if parts and network_shape(parts[0][0].circuit) == network_shape(ds.circuit):
                 parts[0] = (_joined(parts[0][0], ds), np.concatenate([parts[0][1], where]))
             else:
                 parts.append((ds, where))
@@ -239,11 +240,6 @@ def _joined(a, b):
                    ratios=np.hstack([a.ratios, b.ratios]),
                    amplitude=np.concatenate([a.amplitude, b.amplitude]),
                    valid=np.concatenate([a.valid, b.valid]))
-
-
-def _same_network(a, b) -> bool:
-    """Whether two Designs have the same elements, levers and drive (names, kinds, nodes)."""
-    return network_shape(a.circuit) == network_shape(b.circuit)
 
 
 def _cycle_designs(scene: Scene, motion, reflect: ReflectMode):
@@ -349,8 +345,6 @@ def plot_cycle(cmap: CycleMap, ax=None, *, fig=None, unit: str = "rad/s"):
     -------
     The Axes given as ``ax``, or the Figure of the two panels.
     """
-    from ..units import FREQUENCY_UNITS
-
     if unit not in FREQUENCY_UNITS:
         raise ValueError(f"unit must be one of {', '.join(map(repr, FREQUENCY_UNITS))}, "
                          f"got {unit!r}")
@@ -412,6 +406,7 @@ def drive_motion(scene: Scene, theta: float, *, samples: int = DRIVE_SAMPLES) ->
     Parameters
     ----------
     scene : Scene
+        The scene; its drive is the motion's output.
     theta : float
         Crank rotation [rad] at which the circuit is linearised.
     samples : int

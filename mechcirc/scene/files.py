@@ -79,6 +79,7 @@ from ..kinematics.linkage import Linkage, parse_linkage
 from ..sources import (Table, brief, check_keys, checked_number, finite_number, load_toml,
                        split_lines)
 from ..sources import TOML_HEADER, is_name, located, read_source
+from ..units import UnitError, parse_quantity, split_quantity
 
 __all__ = ["Scene", "Analysis", "Gear", "SceneMass", "ElasticLink", "Torsion", "Load", "SceneDrive",
            "parse_scene", "load_scene", "LENGTH_UNITS", "SCENE_TABLES"]
@@ -341,8 +342,6 @@ def _named(value, names) -> TypeGuard[str]:
 
 def _number(text, source, value, what, table, key, n, *, positive=True, allow_zero=False):
     if isinstance(value, str):      # "2 kN/mm", "500 g", "30 deg": the one unit grammar
-        from ..units import UnitError, parse_quantity, split_quantity
-
         role = next((r for u, r in _ROLE_OF.items() if what.endswith(u)), None)
         try:
             converted = parse_quantity(value, role, what=what)

@@ -14,8 +14,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..errors import MechcircError
 from .cam import SPRING, contact_geometry
-from .simulation import flight
+from .simulation import flight, simulate_scene
 
 __all__ = ["ContactReport", "contact_report", "flight", "JumpSpeed", "scene_jump_speed"]
 
@@ -69,7 +70,6 @@ def contact_report(scene, sm) -> ContactReport:
         The scene's contact cannot open, or the follower left the cam by the whole
         gap the model gives it (2 × (stroke + preload/spring), see :func:`flight`).
     """
-    from ..errors import MechcircError
     from ..transient.follower import least_sample
 
     lk = scene.linkage
@@ -167,9 +167,7 @@ def scene_jump_speed(scene, bracket=None, *, rtol: float = 1e-8, grow: float = 1
         steps (the contact opens at every speed, or at none up to grow¹⁰⁰ Ω), or no
         convergence in 20 secant steps.
     """
-    from ..errors import MechcircError
     from .motion import motion_model
-    from .simulation import simulate_scene
 
     if not (math.isfinite(rtol) and 4 * np.finfo(float).eps <= rtol < 1) or not grow > 1:
         raise MechcircError(f"scene_jump_speed: rtol = {rtol!r} must be in [4 eps, 1) and "
@@ -202,8 +200,6 @@ def _secant_in_omega_squared(scene, seen, least, lo, hi, rtol):
     far to their least contact force; ``least`` runs one more.  Returns the root
     and the narrowed bracket (lo, hi).
     """
-    from ..errors import MechcircError
-
     w, previous = math.nan, math.inf
     for _ in range(20):
         held = sorted(v for v in seen if seen[v] > 0)
@@ -229,8 +225,6 @@ def _secant_in_omega_squared(scene, seen, least, lo, hi, rtol):
 
 def _jump_bracket(scene, bracket, grow, least):
     """(Ω_lo, Ω_hi) with the contact closed at the first and open at the second."""
-    from ..errors import MechcircError
-
     if bracket is not None:
         lo, hi = (float(w) for w in bracket)
         if not (0 < lo < hi and least(lo) > 0 >= least(hi)):

@@ -37,9 +37,9 @@ from typing import Literal
 import numpy as np
 
 from ..circuit import Circuit, Drive, Element, Lever
-from ..errors import GeometryError, InputError
+from ..errors import GeometryError, InputError, MechcircError
 from ..sources import is_name
-from .files import Scene
+from .files import Scene, gear_meshes
 
 #: How a lever is reflected into the circuit (see :func:`build`).
 ReflectMode = Literal["eta", "lever"]
@@ -396,12 +396,9 @@ class _Builder:
                 self.dropped.append((el.name, f"does not deform at this θ ({what} = {c:.3g})"))
                 continue
             kept_edges.append((na, nb))
-            ends = []
-            for side, node in (("a", na), ("b", nb)):
-                if node == "0" or self.reflect == "eta":
-                    ends.append(node)
-                else:
-                    ends.append(self.port(f"{el.name}_{side}", node, c)[0])
+            ends = [node if node == "0" or self.reflect == "eta" else
+                    self.port(f"{el.name}_{side}", node, c)[0]
+                    for side, node in (("a", na), ("b", nb))]
             eta = c * c if self.reflect == "eta" else 1.0
             if el.stiffness > 0:
                 self.elements.append(Element("spring", el.name, ends[0], ends[1], el.stiffness,
@@ -472,8 +469,6 @@ def part_singular_values(scene: Scene, part, m: _Motion):
     """Singular values of a rigid part's joint constraints (pins, sliders, rigid gear
     meshes) on its bodies' velocities (x', y', φ'·Lc each), shape (..., k): rank
     3·len(part) − 1 means one velocity field (one degree of freedom)."""
-    from .files import gear_meshes
-
     lk, bodies, Lc = scene.linkage, scene.bodies, m.Lc
     cols = {b: 3 * i for i, b in enumerate(part)}
     shape = np.shape(next(iter(m.pos.values())))[:-1] + (3 * len(part),)
@@ -560,7 +555,6 @@ def build_needed(scene: Scene, theta: float | None = None, *,
     GeometryError
         As :func:`build`.
     """
-    from ..errors import MechcircError
     from .._simplify import simplify
 
     a = scene.analysis

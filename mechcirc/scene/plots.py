@@ -7,6 +7,8 @@ import math
 
 import numpy as np
 
+from ..errors import MechcircError
+
 __all__ = ["plot_mode", "plot_motion"]
 
 
@@ -126,7 +128,6 @@ def _draw_displaced(ax, scene, state, moves):
 def _mode_displacements(scene, theta: float, n: int, kind: str):
     """Mode ``n`` of ``kind`` at ``theta``, the linkage's state there, and each point's
     displacement in the mode [linkage units] (see :func:`plot_mode`)."""
-    from ..errors import MechcircError
     from ..modes import modes
     from .model import build
 

@@ -52,7 +52,9 @@ import numpy as np
 
 from ..errors import MechcircError, ShaftWarning, SolverError
 from .files import Scene
+from .motion import MotionModel, body_tables, dead_centre, hermite_table, motion_model
 from .simfile import Motor, Shaft, kloss_motor, parse_shaft, table_motor  # noqa: F401
+from .simulation import kernels_for, max_rate
 
 __all__ = ["Motor", "Shaft", "ShaftMotion", "kloss_motor", "table_motor", "parse_shaft",
            "simulate_shaft", "ShaftWarning"]
@@ -157,8 +159,6 @@ class _Rigid:
     """J_red(θ), J_red'(θ) and each body's φ'(θ), φ''(θ) of the rigid mechanism."""
 
     def __init__(self, scene: Scene, N: int = 1024):
-        from .motion import body_tables
-
         (_, ang1, ang2, _, vel, acc), _ = body_tables(scene, N)
         self.cycle = scene.cycle
         nodes = N * scene.cycle_revolutions
@@ -197,8 +197,6 @@ def rigid_model(scene: Scene, N: int = 1024):
     -------
     MotionModel
     """
-    from .motion import body_tables, dead_centre, hermite_table
-
     (ang, ang1, ang2, pos, vel, acc), _ = body_tables(scene, N)
     cyc, nodes = scene.cycle, N * scene.cycle_revolutions
     h = cyc / nodes
@@ -235,8 +233,6 @@ def rigid_model(scene: Scene, N: int = 1024):
 def _one_part_model(scene: Scene, FI, FF, tabs, MI, MW, MOI, MOF):
     """The :class:`~mechcirc.scene.motion.MotionModel` of :func:`rigid_model`'s tables: one
     part (the drive's), no elastic elements."""
-    from .motion import MotionModel
-
     i8 = np.int64
     arrays = {"FI": np.array(FI, i8), "FF": np.array(FF, float), "tabs": np.array(tabs),
               "MI": np.array(MI, i8), "MW": np.array(MW, float),
@@ -259,9 +255,6 @@ class _ElasticShaft:
     elastic elements and moments on it: rows 3–5 of the kernel's work array)."""
 
     def __init__(self, scene: Scene, Jf: float, motor: Motor, model=None):
-        from .motion import motion_model
-        from .simulation import kernels_for
-
         self.model = m = motion_model(scene) if model is None else model
         a = m.arrays
         r = a["PRIG"][0]
@@ -404,7 +397,6 @@ def _shaft_kernels():
     disk cache holds it (or :data:`mechcirc._jit.COMPILED` is True), else the Python copy
     while a detached process compiles it (the no-wait rule of :mod:`mechcirc._jit`)."""
     from .. import _jit
-    from .simulation import kernels_for
 
     if _jit.COMPILED is not False:
         from . import _motion_kernels as k
@@ -755,8 +747,6 @@ def _steady_cycle(scene, eq, req, motor, th0, rtol, scale, mean_load, peak, note
                        _balance(motor, mean_load, scale), fail, 1e-5 if eq.n else 1e-13)
     x0 = np.array([w0])
     if eq.n and spp is not None:
-        from .simulation import max_rate
-
         eq.steps = max(int(math.ceil(cyc * max_rate(eq.model) * spp / (2 * math.pi * w0))), 64)
         backend = "compiled" if getattr(eq.run_kern, "HAVE_NUMBA", False) else "Python copy"
         name = "RK8" if eq.tableau[3] else "RK4"
@@ -796,7 +786,6 @@ def _startup(scene, eq, shaft, th0, cyc, w0, motion, rtol, scale, peak):
     """The start-up from rest, in time, cycle by cycle until the speed at a cycle's start is
     within 1e-5 ω_mean of the steady cycle's → startup_time, startup_t, startup_speed."""
     from scipy.integrate import solve_ivp
-    from scipy.optimize import brentq
 
     mean, n = motion["omega_mean"], eq.n
     ts, ws, segments = [0.0], [0.0], []
@@ -826,28 +815,12 @@ def _startup(scene, eq, shaft, th0, cyc, w0, motion, rtol, scale, peak):
         segments.append((t, s.sol))
         t, y = float(s.t[-1]), s.y[:, -1]
         if s.status == 1 and s.t_events[1].size:
-            raise MechcircError(
-                f"{scene.source}: the start-up stalls at t = {t:.4g} s, θ = "
-                f"{math.degrees(y[0]):.5g}°: the motor's largest torque "
-                f"{shaft.motor.peak_torque:.6g} N·m is below the peak load torque {peak:.6g} "
-                f"N·m and the flywheel ({motion['flywheel']:g} kg·m²) does not carry it through")
+            raise _stalled(scene, shaft, t, y[0], peak, motion)
         if s.status != 1:
-            raise MechcircError(
-                f"{scene.source}: the start-up did not reach the steady cycle within max_time "
-                f"= {shaft.max_time:g} s (speed {y[1]:.6g} rad/s against the steady "
-                f"{w0:.6g} rad/s at the cycle's start): raise [shaft] max_time")
+            raise _too_slow(scene, shaft, y[1], w0)
         if abs(y[1] - w0) <= 1e-3 * 0.01 * mean:     # settled well inside the band
             break
-    ts, ws = np.array(ts), np.array(ws)
-    band = (motion["omega_min"] - 0.01 * mean, motion["omega_max"] + 0.01 * mean)
-    out = np.flatnonzero((ws < band[0]) | (ws > band[1]))
-    t_up = 0.0
-    if out.size:                  # the last crossing into the band, on the dense output
-        i = int(out[-1])
-        fi = next(sol for t0, sol in reversed(segments) if t0 <= ts[i])
-        bound = band[0] if ws[i] < band[0] else band[1]
-        t_up = float(brentq(lambda x: fi(x)[1] - bound, ts[i], ts[i + 1], xtol=1e-14))
-    return dict(startup_time=t_up, startup_t=ts, startup_speed=ws, cycles=k)
+    return _startup_result(ts, ws, segments, motion, k)
 
 
 def _startup_steps(scene, eq, shaft, th0, cyc, w0, motion, rtol, scale, peak):
@@ -865,11 +838,7 @@ def _startup_steps(scene, eq, shaft, th0, cyc, w0, motion, rtol, scale, peak):
         rec = run.y.T
         runs.append(run)
         if run.status:
-            raise MechcircError(
-                f"{scene.source}: the start-up stalls at t = {run.t[-1]:.4g} s, θ = "
-                f"{math.degrees(rec[-1, 0]):.5g}°: the motor's largest torque "
-                f"{shaft.motor.peak_torque:.6g} N·m is below the peak load torque {peak:.6g} "
-                f"N·m and the flywheel ({motion['flywheel']:g} kg·m²) does not carry it through")
+            raise _stalled(scene, shaft, run.t[-1], rec[-1, 0], peak, motion)
         done = None
         while th0 + (k + 1) * cyc <= rec[-1, 0]:
             k += 1
@@ -887,20 +856,41 @@ def _startup_steps(scene, eq, shaft, th0, cyc, w0, motion, rtol, scale, peak):
             break
         t, Y = float(run.t[-1]), rec[-1]
         if t >= shaft.max_time:
-            raise MechcircError(
-                f"{scene.source}: the start-up did not reach the steady cycle within max_time "
-                f"= {shaft.max_time:g} s (speed {Y[1]:.6g} rad/s against the steady "
-                f"{w0:.6g} rad/s at the cycle's start): raise [shaft] max_time")
-    ts_, ws_ = np.array(ts), np.array(ws)
+            raise _too_slow(scene, shaft, Y[1], w0)
+    return _startup_result(ts, ws, [(r.t[0], r.sol) for r in runs], motion, k)
+
+
+def _stalled(scene, shaft, t: float, theta: float, peak: float, motion) -> MechcircError:
+    return MechcircError(
+        f"{scene.source}: the start-up stalls at t = {t:.4g} s, θ = "
+        f"{math.degrees(theta):.5g}°: the motor's largest torque "
+        f"{shaft.motor.peak_torque:.6g} N·m is below the peak load torque {peak:.6g} "
+        f"N·m and the flywheel ({motion['flywheel']:g} kg·m²) does not carry it through")
+
+
+def _too_slow(scene, shaft, speed: float, w0: float) -> MechcircError:
+    return MechcircError(
+        f"{scene.source}: the start-up did not reach the steady cycle within max_time "
+        f"= {shaft.max_time:g} s (speed {speed:.6g} rad/s against the steady "
+        f"{w0:.6g} rad/s at the cycle's start): raise [shaft] max_time")
+
+
+def _startup_result(ts, ws, segments, motion, k: int) -> dict:
+    """The start-up's record from its samples (``ts``, ``ws``) and ``segments`` (start time,
+    dense solution ``sol(t) -> (θ, ω, ...)``): the time of the last crossing into the band
+    of the steady cycle's speed ±1 % of its mean, located by Brent's method on the solution."""
+    from scipy.optimize import brentq
+
+    ts, ws, mean = np.array(ts), np.array(ws), motion["omega_mean"]
     band = (motion["omega_min"] - 0.01 * mean, motion["omega_max"] + 0.01 * mean)
-    out = np.flatnonzero((ws_ < band[0]) | (ws_ > band[1]))
+    out = np.flatnonzero((ws < band[0]) | (ws > band[1]))
     t_up = 0.0
-    if out.size:                  # the last crossing into the band, on the Hermite
+    if out.size:
         i = int(out[-1])
-        fi = next(r.sol for r in reversed(runs) if r.t[0] <= ts_[i])
-        bound = band[0] if ws_[i] < band[0] else band[1]
-        t_up = float(brentq(lambda x: fi(x)[1] - bound, ts_[i], ts_[i + 1], xtol=1e-14))
-    return dict(startup_time=t_up, startup_t=ts_, startup_speed=ws_, cycles=k)
+        fi = next(sol for t0, sol in reversed(segments) if t0 <= ts[i])
+        bound = band[0] if ws[i] < band[0] else band[1]
+        t_up = float(brentq(lambda x: fi(x)[1] - bound, ts[i], ts[i + 1], xtol=1e-14))
+    return dict(startup_time=t_up, startup_t=ts, startup_speed=ws, cycles=k)
 
 
 def _balance(motor: Motor, torque: float, scale: float) -> float:

@@ -43,7 +43,7 @@ from functools import cached_property
 from typing import Any
 
 from ..errors import MechcircError
-from ..sources import brief, checked_number, finite_number, is_name, located
+from ..sources import Table, brief, check_keys, checked_number, finite_number, is_name, located
 
 __all__ = ["Moment", "SimulateSettings", "parse_moments", "parse_simulate",
            "apply_overrides", "Motor", "Shaft", "kloss_motor", "table_motor", "parse_shaft"]
@@ -390,6 +390,7 @@ def kloss_motor(*, sync_speed: float, breakdown_torque: float,
     Returns
     -------
     Motor
+        A ``"kloss"`` motor, with s_b (given or from the rated point).
 
     Raises
     ------
@@ -431,6 +432,7 @@ def table_motor(speeds, torques) -> Motor:
     Returns
     -------
     Motor
+        A ``"table"`` motor, linear between the points.
 
     Raises
     ------
@@ -483,8 +485,6 @@ def parse_shaft(text: str, source: str, table, scene) -> Shaft:
     NetlistError
         An unknown key, a missing or bad value, an inconsistent motor.
     """
-    from ..sources import Table, check_keys
-
     if not isinstance(table, dict):
         raise located(text, source, "shaft must be a table [shaft]", None, "shaft")
     check_keys(text, source, Table("shaft", _KEYS), table)

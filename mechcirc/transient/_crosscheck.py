@@ -43,7 +43,8 @@ from ..circuit import Circuit
 from ..errors import MechcircError
 from ..verdict import DISAGREES, judge, summarise
 from .model import backlash_elements
-from .simulate import transient
+from .simulate import (ROUNDING_PER_STEP, Waveform, drive_map, periodic_start, state_model,
+                       transient, with_oscillator)
 
 __all__ = ["CrossCheck", "crosscheck", "matrix_pencil"]
 
@@ -109,12 +110,9 @@ def matrix_pencil(y: np.ndarray, dt: float, rel: float = 1e-9, max_order: int = 
 
 def _variant(circuit: Circuit, kind: Literal["velocity", "force"]) -> Circuit:
     d = circuit.require_drive()
-    if d.kind == kind:
-        new = d
-    else:
-        # the other kind at unit amplitude; rotary stays rotary (its labels), a motion
-        # law belongs to the velocity drive only
-        new = dataclasses.replace(d, kind=kind, amplitude=1.0, motion=None)
+    # the other kind at unit amplitude; rotary stays rotary (its labels), a motion law
+    # belongs to the velocity drive only
+    new = d if d.kind == kind else dataclasses.replace(d, kind=kind, amplitude=1.0, motion=None)
     return dataclasses.replace(circuit, drive=new, initial=())
 
 
@@ -230,15 +228,6 @@ def _output_rounding(circuit, w, steps, amp):
     weighted small state (a massless damped node, k/c) takes rounding from
     the large modes too.  Bound: 10 · steps · 8ε · Σ_j (Σ_i |row_i||V_ij|) |q_j|.
     """
-    from .simulate import (
-        ROUNDING_PER_STEP,
-        Waveform,
-        drive_map,
-        state_model,
-        periodic_start,
-        with_oscillator,
-    )
-
     ss = state_model(circuit, True)
     z0 = periodic_start(ss, Waveform("harmonic", omega=w), amp, circuit, True)
     aug, z0 = with_oscillator(ss, z0, w, amp)

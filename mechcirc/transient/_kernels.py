@@ -20,6 +20,7 @@ the force is continuous at first contact (f_c = 0 there).
 from __future__ import annotations
 
 import math
+import sys
 
 import numpy as np
 
@@ -463,7 +464,6 @@ def modal_run(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout, qlast):
 def load_python():
     """A fresh copy of this module that never uses numba (the pure-Python backend)."""
     import importlib.util
-    import sys
 
     spec = importlib.util.find_spec(__name__)
     module = importlib.util.module_from_spec(spec)

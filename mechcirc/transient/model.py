@@ -96,12 +96,6 @@ def backlash_elements(circuit: Circuit) -> list[tuple[Element, Element | None]]:
     return out
 
 
-def _null(G: np.ndarray, n: int) -> np.ndarray:
-    if G.shape[0] == 0:
-        return np.eye(n)
-    return la.null_space(G, rcond=1e-12)
-
-
 def _split(S: np.ndarray, basis: np.ndarray, rel: float = 1e-11):
     """Orthonormal bases of the range and null space of a PSD matrix restricted to ``basis``."""
     if basis.shape[1] == 0:
@@ -142,7 +136,7 @@ def state_space(circuit: Circuit, *, linearise: bool = False) -> StateSpace:
     kind = d.kind if d is not None else None
     vel = kind == "velocity"
     Cons = np.vstack([G, g[None, :]]) if vel else G
-    T = _null(Cons, n)
+    T = np.eye(n) if Cons.shape[0] == 0 else la.null_space(Cons, rcond=1e-12)
     nq = T.shape[1]
     p = _particular(M, Cons, d.name) if vel and d is not None else np.zeros(n)
     Mq, Dq, Kq = (T.T @ X @ T for X in (M, D, K))

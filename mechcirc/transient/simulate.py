@@ -38,7 +38,8 @@ import scipy.linalg as la
 
 from .. import _jit
 from ..circuit import Circuit, units_of
-from ..errors import MechcircError
+from ..errors import MechcircError, NetlistError
+from ..units import parse_omega
 from .model import StateSpace, incidence, backlash_elements, state_space
 
 if TYPE_CHECKING:  # pragma: no cover - annotations only
@@ -140,8 +141,6 @@ def parse_drive(text: str | None) -> Waveform:
     if text in ("step", "impulse"):
         return Waveform(text)
     if text.startswith("harmonic:"):
-        from ..units import parse_omega     # units accepted as in --omega-*
-
         try:
             omega = parse_omega(text[len("harmonic:"):])
         except Exception as exc:  # noqa: BLE001 - reported as a user error
@@ -282,9 +281,8 @@ class TransientResult:
         elif self.drive_velocity is not None:
             header.append("v(drive)")
             cols.append(self.drive_velocity)
-        fh.write(",".join(header) + "\n")
-        data = np.column_stack(cols)
-        np.savetxt(fh, data, delimiter=",", fmt="%.12g")
+        np.savetxt(fh, np.column_stack(cols), delimiter=",", fmt="%.12g", header=",".join(header),
+                   comments="")
 
     def plot(self, ax=None, nodes=None, what: str = "x", *, elements=None, fig=None,
              title: str | None = None):
@@ -575,8 +573,6 @@ def _law_params(spring, comp) -> tuple[float, float, float]:
 
 def _motion_drive(circuit: Circuit, drive, rpm):
     """The waveform of a ``motion=`` drive at ``rpm``, else ``drive`` as given (checked)."""
-    from ..errors import NetlistError
-
     d = circuit.drive
     motion = d.motion if d is not None else None
     if rpm is not None:
