@@ -363,7 +363,8 @@ def simulate_params(params: SleyParameters, revolutions: int = 5, method: str | 
         m = simulate_scene(scene, model=model, revolutions=revolutions,
                            start_deg=math.degrees(theta0), steps_per_period=steps_per_period,
                            points=npts, method=method, rtol=rtol, progress=progress,
-                           error_estimate=error_estimate, exact_rigid=False)
+                           error_estimate=error_estimate, exact_rigid=False,
+                           point_accelerations=False)
     for w in caught:
         if issubclass(w.category, SceneAccuracyWarning):
             text = str(w.message).split(": ", 1)[-1]
