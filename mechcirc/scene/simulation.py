@@ -559,7 +559,7 @@ def _simulate_rk4(ctx, backend, error_estimate, notes, compile_time):
             other, other_ext = main, check
             wall += main[3]
             spp, out, check = 2 * spp, None, None
-            main = _in_order(run(steps(2 * spp), start=start), order)
+            main = _in_order(run(steps(spp), start=start), order)
             n_steps, nfev = n_steps + main[6] * (o.revolutions - first), nfev + main[5]
     if other == "diverged":
         rule.warn.append(f"the error estimate's run at {spp / 2:g} steps per period diverged: "
