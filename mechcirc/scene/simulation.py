@@ -651,8 +651,9 @@ def _paired_runs(run, per_rev, progress, stride, error_estimate):
 
 def _in_order(run, order):
     """:func:`_run`'s tuple with its tabulated times and states put in the crank-angle
-    ``order`` (:func:`_crank_order`)."""
-    return (run[0][order], run[1][order], *run[2:])
+    ``order`` (:func:`_crank_order`; ``np.take``, several times faster here than
+    indexing with the array)."""
+    return (np.take(run[0], order), np.take(run[1], order, axis=0), *run[2:])
 
 
 def _estimate_run_extrema(model, kern, theta_s, ripple, main, other):
@@ -731,7 +732,7 @@ def _finish(scene, model, kern, theta_s, ripple, main, other, counts, notes, war
     n_steps, nfev, method, backend, per_rev, revolutions, compile_time = counts
     crank, order, sub = tab or _crank_order(scene, model, theta_s, ripple, ts)
     if order is not None:                       # None: ``main`` is in that order already
-        ts, ys = ts[order], ys[order]
+        ts, ys = np.take(ts, order), np.take(ys, order, axis=0)
     if out is None:
         out = _outputs(model, kern, theta_s, ripple, ts, ys)
     extrema = _extrema(out)
