@@ -127,7 +127,8 @@ class SleyResult:
         when there is one (None for R = 1).
     scene_extrema : dict
         The scene's own outputs ``BODY.acceleration``, ``ELEMENT.force``,
-        ``ELEMENT.deformation``, ``drive.moment``, ``M4.moment`` -> (min, max).
+        ``ELEMENT.deformation``, ``drive.moment``, ``M4.moment`` -> (min, max) (the
+        points' accelerations, which the result does not return, are not computed).
     """
 
     params: SleyParameters
