@@ -320,13 +320,10 @@ def simulate_scene(scene: Scene, *, omega: float | None = None, revolutions: int
         The revolution tabulated (1 … R: the integration stops there); the ripple (above).
     progress : callable, optional
         ``progress(done, total)`` as the integration advances.
-    exact_rigid : bool
+    exact_rigid, point_accelerations : bool
         Refine the extrema of the ``BODY.rigid_acceleration`` aliases to the exact extreme
-        (Brent on the tables); False: the output samples' extrema (for a caller that takes
-        them from elsewhere, as the sley does from the closed form).
-    point_accelerations : bool
-        Tabulate ``POINT.acceleration`` (and ``_x``, ``_y``) of every moving point; False
-        leaves them out (for a caller that does not return them, as the sley).
+        (Brent on the tables), and tabulate every moving ``POINT.acceleration`` (``_x``,
+        ``_y``); False: the samples' extrema, and no points (the sley's choice for both).
 
     Returns
     -------
