@@ -292,7 +292,7 @@ def simulate_scene(scene: Scene, *, omega: float | None = None, revolutions: int
                    model: MotionModel | None = None, rtol: float | None = None,
                    revolution: int | None = None, omega_ripple: tuple | None = None,
                    progress: Callable[[int, int], None] | None = None,
-                   exact_rigid: bool = True) -> SceneMotion:
+                   exact_rigid: bool = True, point_accelerations: bool = True) -> SceneMotion:
     """Simulate ``scene`` over ``revolutions`` turns of the crank and tabulate the last.
 
     Parameters default to the scene's ``[simulate]`` table, then Ω from its crank, 5
@@ -320,10 +320,10 @@ def simulate_scene(scene: Scene, *, omega: float | None = None, revolutions: int
         The revolution tabulated (1 … R: the integration stops there); the ripple (above).
     progress : callable, optional
         ``progress(done, total)`` as the integration advances.
-    exact_rigid : bool
+    exact_rigid, point_accelerations : bool
         Refine the extrema of the ``BODY.rigid_acceleration`` aliases to the exact extreme
-        (Brent on the tables); False: the output samples' extrema (for a caller that takes
-        them from elsewhere, as the sley does from the closed form).
+        (Brent on the tables), and tabulate every moving ``POINT.acceleration`` (``_x``,
+        ``_y``); False: the samples' extrema, and no points (the sley's choice for both).
 
     Returns
     -------
@@ -343,7 +343,7 @@ def simulate_scene(scene: Scene, *, omega: float | None = None, revolutions: int
         follower that flew across the whole gap of its contact (:func:`flight`).
     """
     o = _options(scene, omega, revolutions, start_deg, steps_per_period, points, method,
-                 rtol, revolution, omega_ripple, exact_rigid)
+                 rtol, revolution, omega_ripple, exact_rigid, point_accelerations)
     model, ripple = _model_at(scene, o, model)
     kern, backend, notes, compile_time = _ready_kernels(method, model)
     ctx = (scene, o, model, kern, math.radians(o.start_deg), ripple, progress)
@@ -429,10 +429,11 @@ class _Options:
     method: str
     rtol: float | None
     exact_rigid: bool = True
+    point_accelerations: bool = True
 
 
 def _options(scene, omega, revolutions, start_deg, spp, npts, method, rtol, revolution,
-             ripple, exact_rigid=True) -> _Options:
+             ripple, exact_rigid=True, point_accelerations=True) -> _Options:
     """Options from the call, else the scene's ``[simulate]`` table, else the defaults;
     each checked (a :class:`MechcircError` names the bad one)."""
     cfg = scene.simulate
@@ -479,7 +480,7 @@ def _options(scene, omega, revolutions, start_deg, spp, npts, method, rtol, revo
         raise MechcircError(f"rtol applies to the scipy methods, not {method}; use "
                             "steps_per_period")
     return _Options(omega, revolutions, start_deg, spp, npts, ripple, method, rtol,
-                    bool(exact_rigid))
+                    bool(exact_rigid), bool(point_accelerations))
 
 
 def _simulate_scipy(ctx, error_estimate, notes, compile_time):
@@ -507,7 +508,7 @@ def _simulate_scipy(ctx, error_estimate, notes, compile_time):
     return _finish(scene, model, kern, theta_s, ripple, (ts, ys, prev, wall, bad),
                    None if coarse is None else coarse[:5],
                    (n_steps, nfev, method, "scipy", 0, o.revolutions, compile_time),
-                   notes + [text], [], exact_rigid=o.exact_rigid)
+                   notes + [text], [], what=(o.exact_rigid, o.point_accelerations))
 
 
 def _simulate_rk4(ctx, backend, error_estimate, notes, compile_time):
@@ -540,10 +541,11 @@ def _simulate_rk4(ctx, backend, error_estimate, notes, compile_time):
     if isinstance(other, tuple):
         n_steps, nfev = n_steps + other[6] * o.revolutions, nfev + other[5]
         wall = other[3]
-    tab = _crank_order(scene, model, theta_s, ripple, main[0], rule.stride)
+    crank, order, sub = _crank_order(scene, model, theta_s, ripple, main[0], rule.stride)
+    main = _in_order(main, order)       # once: the outputs and the result take this order
     out, other_ext, periodicity = _estimate_run_extrema(model, kern, theta_s, ripple, main,
-                                                        other, tab)
-    check = _extrema(out, tab[2])       # the checks' samples of this run, as _finish's
+                                                        other)
+    check = _extrema(out, sub)          # the checks' samples of this run, as _finish's
     if rule.auto and spp == rule.spp:
         est = None if other_ext is None else _rel_change(check, other_ext)
         if (est is None or est > ACCURACY_GOAL) and \
@@ -553,7 +555,8 @@ def _simulate_rk4(ctx, backend, error_estimate, notes, compile_time):
             notes.append(_rerun_note(spp, est))
             other, other_ext = main, check
             wall += main[3]
-            spp, main, out, check = 2 * spp, run(steps(2 * spp), start=start), None, None
+            spp, out, check = 2 * spp, None, None
+            main = _in_order(run(steps(spp), start=start), order)
             n_steps, nfev = n_steps + main[6] * (o.revolutions - first), nfev + main[5]
     if other == "diverged":
         rule.warn.append(f"the error estimate's run at {spp / 2:g} steps per period diverged: "
@@ -562,8 +565,9 @@ def _simulate_rk4(ctx, backend, error_estimate, notes, compile_time):
     main = (*main[:3], wall + main[3], *main[4:])
     return _finish(scene, model, kern, theta_s, ripple, main, other,
                    (n_steps, nfev, o.method, backend, main[6], o.revolutions, compile_time),
-                   notes, rule.warn, out=out, other_extrema=other_ext, tab=tab,
-                   periodicity=periodicity, exact_rigid=o.exact_rigid, check=check)
+                   notes, rule.warn, out=out, other_extrema=other_ext, tab=(crank, None, sub),
+                   periodicity=periodicity, what=(o.exact_rigid, o.point_accelerations),
+                   check=check)
 
 
 @dataclass
@@ -642,13 +646,20 @@ def _paired_runs(run, per_rev, progress, stride, error_estimate):
     return run(per_rev, start=coarse[7]), coarse
 
 
-def _estimate_run_extrema(model, kern, theta_s, ripple, main, other, tab):
-    """The outputs of the run ``main`` in the crank-angle order of ``tab``
-    (:func:`_crank_order`), the extrema of the estimate's run ``other`` on its last
+def _in_order(run, order):
+    """:func:`_run`'s tuple with its tabulated times and states put in the crank-angle
+    ``order`` (:func:`_crank_order`; ``np.take``, several times faster here than
+    indexing with the array)."""
+    return (np.take(run[0], order), np.take(run[1], order, axis=0), *run[2:])
+
+
+def _estimate_run_extrema(model, kern, theta_s, ripple, main, other):
+    """The outputs of the run ``main`` (its samples in crank-angle order,
+    :func:`_in_order`), the extrema of the estimate's run ``other`` on its last
     revolution and its periodicity (the change of its extrema from its previous
     revolution; None with fewer than two), both on the points it was recorded at (None,
     None when it diverged or was not run)."""
-    out = _outputs(model, kern, theta_s, ripple, main[0][tab[1]], main[1][tab[1]])
+    out = _outputs(model, kern, theta_s, ripple, main[0], main[1])
     if not isinstance(other, tuple):
         return out, None, None
     last = _output_extrema(model, kern, theta_s, ripple, *other[:2])
@@ -701,7 +712,7 @@ def _extrema(out: dict, sub=None) -> dict:
 
 
 def _finish(scene, model, kern, theta_s, ripple, main, other, counts, notes, warn, out=None,
-            other_extrema=None, tab=None, periodicity=None, exact_rigid=True, check=None):
+            other_extrema=None, tab=None, periodicity=None, what=(True, True), check=None):
     """Outputs, extrema, the checks and the warnings of one run → :class:`SceneMotion`.
 
     ``main`` is the run (:func:`_run`'s tuple), ``other`` the estimate's (or None, or
@@ -709,13 +720,16 @@ def _finish(scene, model, kern, theta_s, ripple, main, other, counts, notes, war
     revolution, revolutions, compile time); ``out``, ``other_extrema``: this run's outputs
     (in the order of ``tab``) and the other run's extrema when already evaluated,
     ``periodicity`` when measured on the estimate's run (else from ``main``'s previous
-    revolution); ``tab`` (:func:`_crank_order`): the checks compare the extrema on the
+    revolution); ``tab`` (:func:`_crank_order`; its order None when ``main`` is in it
+    already, :func:`_in_order`): the checks compare the extrema on the
     points the other runs were recorded at (``check``: ``out``'s extrema there, when
-    already taken); ``exact_rigid`` as :func:`simulate_scene`."""
+    already taken); ``what``: (``exact_rigid``, ``point_accelerations``) of
+    :func:`simulate_scene`."""
     ts, ys, prev, wall, bad = main[:5]
     n_steps, nfev, method, backend, per_rev, revolutions, compile_time = counts
     crank, order, sub = tab or _crank_order(scene, model, theta_s, ripple, ts)
-    ts, ys = ts[order], ys[order]
+    if order is not None:                       # None: ``main`` is in that order already
+        ts, ys = np.take(ts, order), np.take(ys, order, axis=0)
     if out is None:
         out = _outputs(model, kern, theta_s, ripple, ts, ys)
     extrema = _extrema(out)
@@ -733,7 +747,7 @@ def _finish(scene, model, kern, theta_s, ripple, main, other, counts, notes, war
         bad = bad or other[4]
     values = dict(out)
     _add_points_and_aliases(scene, model, theta_s, ripple, crank, ts, ys, values, extrema,
-                            exact_rigid)
+                            what)
     warn = warn + _check_warnings(bad, est, periodicity)
     for w in warn:
         warnings.warn(f"{scene.source}: {w}", SceneAccuracyWarning, stacklevel=3)
@@ -750,24 +764,40 @@ def _crank_order(scene, model, theta_s, ripple, ts, stride=1):
     """(ascending crank angle mod the cycle, the order of the samples at times ``ts`` that
     gives it, and the positions in that order of every ``stride``-th sample in time, or
     None for every sample)."""
-    crank = crank_angle(model.omega, theta_s, ripple, ts)[0] % scene.cycle
-    wrap = np.flatnonzero(np.diff(crank) < 0)
-    order = np.roll(np.arange(crank.size), -(int(wrap[0]) + 1)) if wrap.size == 1 \
-        else np.argsort(crank, kind="stable")
-    return crank[order], order, (np.flatnonzero(order % stride == 0) if stride > 1 else None)
+    theta = theta_s + model.omega * ts if ripple[0] == 0.0 else \
+        crank_angle(model.omega, theta_s, ripple, ts)[0]
+    crank = theta % scene.cycle
+    n = crank.size
+    wrap = np.flatnonzero(crank[1:] < crank[:-1])
+    if wrap.size != 1:
+        order = np.argsort(crank, kind="stable")
+        return crank[order], order, (np.flatnonzero(order % stride == 0) if stride > 1
+                                     else None)
+    k = int(wrap[0]) + 1                # one wrap: the order is a rotation by k
+    order = np.concatenate((np.arange(k, n), np.arange(k)))
+    if stride == 1:
+        return np.concatenate((crank[k:], crank[:k])), order, None
+    # the positions of the samples k + p (p < n − k) and p − (n − k) that are multiples
+    sub = np.concatenate((np.arange(-(-k // stride) * stride, n, stride) - k,
+                          np.arange(0, k, stride) + (n - k)))
+    return np.concatenate((crank[k:], crank[:k])), order, sub
 
 
 def _add_points_and_aliases(scene, model, theta_s, ripple, crank, ts, ys, values, extrema,
-                            exact_rigid=True):
-    """The points' accelerations and the ``[simulate.aliases]`` added to ``values`` and
-    ``extrema`` (in place; rigid accelerations' extrema refined when ``exact_rigid``);
-    every slider's stroke checked on the samples."""
-    positions: dict = {}
-    for k, v in _point_accelerations(model, theta_s, ripple, ts, ys, values,
-                                     positions).items():
-        values[k] = v
-        extrema[k] = (float(v.min()), float(v.max()))
-    _check_strokes(scene, crank, positions)
+                            what=(True, True)):
+    """The points' accelerations (unless ``what[1]`` is False and no slider has a stroke to
+    check) and the ``[simulate.aliases]`` added to ``values`` and ``extrema`` (in place;
+    rigid accelerations' extrema refined when ``what[0]``); every slider's stroke checked
+    on the samples."""
+    exact_rigid, point_acc = what
+    if point_acc or any(s.stroke for s in scene.linkage.sliders):
+        positions: dict = {}
+        for k, v in _point_accelerations(model, theta_s, ripple, ts, ys, values,
+                                         positions).items():
+            if point_acc:
+                values[k] = v
+                extrema[k] = (float(v.min()), float(v.max()))
+        _check_strokes(scene, crank, positions)
     cfg = scene.simulate
     for alias, target in (dict(cfg.aliases) if cfg is not None else {}).items():
         if target.endswith(".rigid_acceleration"):

@@ -127,7 +127,8 @@ class SleyResult:
         when there is one (None for R = 1).
     scene_extrema : dict
         The scene's own outputs ``BODY.acceleration``, ``ELEMENT.force``,
-        ``ELEMENT.deformation``, ``drive.moment``, ``M4.moment`` -> (min, max).
+        ``ELEMENT.deformation``, ``drive.moment``, ``M4.moment`` -> (min, max) (the
+        points' accelerations, which the result does not return, are not computed).
     """
 
     params: SleyParameters
@@ -363,7 +364,8 @@ def simulate_params(params: SleyParameters, revolutions: int = 5, method: str | 
         m = simulate_scene(scene, model=model, revolutions=revolutions,
                            start_deg=math.degrees(theta0), steps_per_period=steps_per_period,
                            points=npts, method=method, rtol=rtol, progress=progress,
-                           error_estimate=error_estimate, exact_rigid=False)
+                           error_estimate=error_estimate, exact_rigid=False,
+                           point_accelerations=False)
     for w in caught:
         if issubclass(w.category, SceneAccuracyWarning):
             text = str(w.message).split(": ", 1)[-1]

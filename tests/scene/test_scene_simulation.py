@@ -165,6 +165,26 @@ def test_point_acceleration_of_a_crank_pin():
     assert "A.acceleration" not in m.values          # a frame point does not move
 
 
+def test_without_point_accelerations_the_rest_is_unchanged():
+    """``point_accelerations=False`` (what the sley asks for) leaves out exactly the points'
+    ``.acceleration``, ``_x``, ``_y``; every other output, extremum, the estimate and the
+    periodicity are those of the full call, bit for bit."""
+    scene = parse_scene(FLYWHEEL, "<flywheel>")
+    kw = dict(revolutions=2, points=360)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", SceneAccuracyWarning)
+        full = simulate_scene(scene, **kw)
+        lean = simulate_scene(scene, point_accelerations=False, **kw)
+    points = {"B.acceleration", "B.acceleration_x", "B.acceleration_y"}
+    assert set(full.values) - set(lean.values) == points == set(full.extrema) - set(lean.extrema)
+    assert set(lean.values) < set(full.values)
+    for k, v in lean.values.items():
+        assert np.array_equal(v, full.values[k]), k
+        assert lean.extrema[k] == full.extrema[k], k
+    assert (lean.error_estimate, lean.periodicity) == (full.error_estimate, full.periodicity)
+    assert np.array_equal(lean.states, full.states)
+
+
 @pytest.mark.parametrize("name", ["slider_crank_scene", "fnf_sixbar_scene", "cam_heald_scene"])
 def test_rk4_error_estimate_bounds_the_returned_runs_error_on_shipped_scenes(name):
     """The RK4 result is the half-step run; its error_estimate (change from the run at

@@ -362,6 +362,11 @@ def test_sley_without_the_scenes_eps4T_refinement_is_the_scene_call_unchanged():
         assert np.array_equal(col, full.values[name]), name
     for k, v in r.scene_extrema.items():
         assert v == full.extrema[k], k
+    # what the sley leaves out: the points' accelerations (never returned), the aliases
+    # (under the paper's names in r.extrema) and the rigid acceleration's alias
+    left = set(full.extrema) - set(r.scene_extrema)
+    assert {k.split(".")[0] for k in left if "." in k} == {"B", "C"}
+    assert all(k.endswith((".acceleration", "_x", "_y")) or "." not in k for k in left)
     for k in ("eps2P", "eps4P", "M2V"):
         assert r.extrema[k] == full.extrema[k]
     assert (r.error_estimate, r.periodicity) == (full.error_estimate, full.periodicity)
