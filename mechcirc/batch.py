@@ -230,8 +230,8 @@ def _build(circuit: Circuit, text, exprs, arrays: dict, D: int) -> "Designs":
         etas[i] = value((base, "eta"), e.eta)
         if e.kind == "spring" and exprs is not None and (e.name, "damping") in exprs:
             # damping= adds a damper where it is > 0: the topology must not change.
-            companion = any(f.name == f"{e.name}_damping" for f in circuit.elements)
-            bad |= (value((e.name, "damping"), e.damping) > 0) != companion
+            comp = [f.value for f in circuit.elements if f.name == f"{e.name}_damping"]
+            bad |= (value((e.name, "damping"), comp[0] if comp else 0.0) > 0) != bool(comp)
     ratios = np.array([value((lv.name, "ratio"), lv.ratio) for lv in circuit.levers]) \
         .reshape(len(circuit.levers), D)
     d = circuit.drive

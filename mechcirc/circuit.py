@@ -104,9 +104,10 @@ class Element:
         Springs only: total clearance B [m or rad] in series with the spring
         (Modelica ``ElastoBacklash`` law, see :mod:`mechcirc.transient._kernels`);
         0 for none.  The frequency domain takes the contact as closed.
-    damping : float
-        Springs only: damping coefficient [N·s/m] in parallel with the spring
-        (same η), 0 for none.
+
+    A spring's ``damping=D`` in a netlist is not a field: it is the damper
+    element ``NAME_damping`` the parser adds in parallel (same nodes, same η),
+    the one place every analysis and the netlist writer read it from.
     """
 
     kind: ElementKind
@@ -118,7 +119,6 @@ class Element:
     line: int = 0
     col: int = 0
     backlash: float = 0.0
-    damping: float = 0.0
 
     def mobility(self, omega: ArrayLike) -> NDArray[np.complex128]:
         """Kinematic characteristic K(ω) [m/(N·s)] of this element."""
@@ -293,6 +293,11 @@ class Circuit:
     initial : tuple of (str, float, float)
         Initial conditions ``(node, x0, v0)`` [m, m/s] from ``.ic`` lines
         (transients only; unnamed nodes start at rest).
+    expressions : tuple
+        Set by :func:`mechcirc.parse`: ``(elements, levers, drive, params,
+        table)``, the parsed expressions and the objects they were read for;
+        ``()`` for circuits built in code.  Read it through
+        :func:`mechcirc.netlist.expressions_of`.  Not compared, not shown.
 
     Analysis methods (``tree``, ``unloaded``, ``nodal``, ``sweep``,
     ``resonances``, ``two_port``, ``formula``) are one-line delegates to the
@@ -308,6 +313,7 @@ class Circuit:
     source: str = "<string>"
     params: dict = field(default_factory=dict, compare=False)
     initial: tuple = ()
+    expressions: tuple = field(default=(), compare=False, repr=False)
 
     def require_drive(self) -> Drive:
         """The drive; a :class:`~mechcirc.errors.NetlistError` if the circuit has none.

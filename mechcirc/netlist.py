@@ -38,7 +38,6 @@ import gc
 import math
 import os
 import re
-import weakref
 from dataclasses import dataclass, fields
 from typing import Mapping, NoReturn
 from pathlib import Path
@@ -120,13 +119,12 @@ def _element_fast(kind, name, n1, n2, value, eta, line, col) -> Element:
     d["line"] = line
     d["col"] = col
     d["backlash"] = 0.0
-    d["damping"] = 0.0
     return e
 
 
 # Only while Element has exactly these fields; a new field goes through __init__.
 _make_element = _element_fast if tuple(f.name for f in fields(Element)) == (
-    "kind", "name", "n1", "n2", "value", "eta", "line", "col", "backlash", "damping") \
+    "kind", "name", "n1", "n2", "value", "eta", "line", "col", "backlash") \
     else Element
 
 
@@ -468,12 +466,11 @@ class _Parser:
                 kinds = [self.node_kinds.get(n, {}) for n in (drive.n1, drive.n2)]
                 rot = any(True in k for k in kinds) and not any(False in k for k in kinds)
             drive = dataclasses.replace(drive, rotational=rot)
-        circuit = Circuit(elements=tuple(self.elements), drive=drive,
-                          levers=tuple(self.levers), name=name, source=self.source,
-                          params=dict(self.params),
-                          initial=tuple((n, x, v) for n, x, v, _, _ in self.initial))
-        _remember(circuit, self.expressions)
-        return circuit
+        elements, levers, params = tuple(self.elements), tuple(self.levers), dict(self.params)
+        return Circuit(elements=elements, drive=drive, levers=levers, name=name,
+                       source=self.source, params=params,
+                       initial=tuple((n, x, v) for n, x, v, _, _ in self.initial),
+                       expressions=(elements, levers, drive, params, self.expressions))
 
     def with_unit(self, line: _Line, value: float, unit: _Token | None, role: str,
                   key: tuple[str, str] | None = None) -> float:
@@ -685,7 +682,7 @@ class _Parser:
                 spring[key] = x
         backlash, damping = spring["backlash"], spring["damping"]
         self.elements.append(Element(kind, name, n1, n2, value, eta, line.lineno,
-                                     line.tokens[0].col, backlash, damping))
+                                     line.tokens[0].col, backlash))
         if damping > 0:
             # The parallel damper is an ordinary element, so every frequency-domain
             # path (reduction, nodal, resonances) sees the linearised spring ∥ damper.
@@ -863,24 +860,16 @@ class _Parser:
                        "a nonzero stroke")
 
 
-# Parsed expressions of each circuit parse() made, for symbolic formulas
-# (mechcirc.interop.formula).  Circuit is a frozen dataclass without a field
-# for them; keyed by id() and dropped when the circuit is collected.
-_EXPRESSIONS: dict[int, dict] = {}
-
-
-def _remember(circuit: Circuit, expressions: dict) -> None:
-    key = id(circuit)
-    _EXPRESSIONS[key] = expressions
-    weakref.finalize(circuit, _EXPRESSIONS.pop, key, None)
-
-
 def expressions_of(circuit: Circuit) -> dict | None:
     """The parsed expressions behind ``circuit``'s values, if :func:`parse` made it.
 
     Maps ``("param", NAME)`` and ``(ELEMENT, "value" | "eta" | "ratio" |
     "velocity" | "force")`` to ``(Expr, unit factor)``; the SI value is the
-    expression's value times the factor.  ``None`` for circuits built in code.
+    expression's value times the factor.  ``None`` for circuits built in code,
+    and for a parsed circuit whose elements, levers, drive or ``.param`` values
+    were replaced since (``dataclasses.replace(c, name=...)`` keeps them): the
+    table is kept in :attr:`Circuit.expressions` with the very objects it was
+    read for, so an edited circuit never shows a stale formula.
 
     Parameters
     ----------
@@ -890,9 +879,13 @@ def expressions_of(circuit: Circuit) -> dict | None:
     -------
     dict or None
     """
-    expressions = _EXPRESSIONS.get(id(circuit))
-    if expressions is not None:
-        _materialise(expressions)
+    if not circuit.expressions:
+        return None
+    *made_for, expressions = circuit.expressions
+    now = (circuit.elements, circuit.levers, circuit.drive, circuit.params)
+    if any(a is not b for a, b in zip(made_for, now)):
+        return None
+    _materialise(expressions)
     return expressions
 
 

@@ -7,12 +7,10 @@ are those of the new text, the name comes from the source it is parsed as, and
 ``.param`` definitions and expressions are not written (values are written
 evaluated, in SI, with ``repr`` so that they read back exactly).
 
-A spring with ``damping=D`` is written on one line with the damper
-``NAME_damping`` that the parser adds after it (the two come back as they
-were).  A spring whose ``damping`` field has lost that damper (a circuit
-edited in code, e.g. by :func:`mechcirc.simplify`) is written without
-``damping=``: every analysis sees the damper, not the field, so the text
-describes the circuit the analyses saw.
+A spring followed by its damper ``NAME_damping`` (what the parser makes of
+``damping=D``: same nodes, same η) is written on one line with ``damping=``
+and that damper's value, the only place the damping is stored (the two come
+back as they were); a damper of that name elsewhere is written as a damper.
 
 Examples
 --------
@@ -84,9 +82,9 @@ def write(circuit: Circuit, header: tuple[str, ...] | list[str] | str = (),
                 + (f" eta={_number(e.eta)}" if e.eta != 1.0 else ""))
         if e.backlash != 0.0:
             line += f" backlash={_number(e.backlash)}"
-        if e.damping != 0.0 and _is_companion(e, elements[i + 1] if i + 1 < len(elements)
-                                              else None):
-            line += f" damping={_number(e.damping)}"
+        after = elements[i + 1] if i + 1 < len(elements) else None
+        if after is not None and _is_companion(e, after):
+            line += f" damping={_number(after.value)}"
             i += 1                       # the companion is written by damping=
         out.append(noted(e.name, line))
         i += 1
@@ -111,11 +109,11 @@ def _drive_line(d: Drive) -> str:
     return f"drive {_names(d.name, d.n1, d.n2)} {how}"
 
 
-def _is_companion(spring: Element, e: Element | None) -> bool:
+def _is_companion(spring: Element, e: Element) -> bool:
     """Whether ``e`` is the damper the parser adds for ``spring``'s ``damping=``."""
-    return (e is not None and e.kind == "damper" and e.name == f"{spring.name}_damping"
-            and (e.n1, e.n2) == (spring.n1, spring.n2) and e.value == spring.damping
-            and e.eta == spring.eta and e.backlash == 0.0 and e.damping == 0.0)
+    return (spring.kind == "spring" and e.kind == "damper" and e.value > 0
+            and e.name == f"{spring.name}_damping" and (e.n1, e.n2) == (spring.n1, spring.n2)
+            and e.eta == spring.eta and e.backlash == 0.0)
 
 
 def _names(*names: str) -> str:

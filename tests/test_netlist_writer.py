@@ -91,8 +91,7 @@ def circuits(draw):
             damping = draw(st.one_of(st.just(0.0), _positive))
             if damping and name + "_damping" not in used:
                 used.add(name + "_damping")
-                elements += [replace(e, damping=damping),
-                             Element("damper", name + "_damping", n1, n2, damping, eta)]
+                elements += [e, Element("damper", name + "_damping", n1, n2, damping, eta)]
                 continue
         elements.append(e)
     levers = []
@@ -140,15 +139,21 @@ def test_what_text_cannot_hold_is_refused(bad, match):
         write(c)
 
 
-def test_damping_without_its_damper_is_not_written():
-    # what the analyses see: the spring alone (the field names a damper that is gone)
-    c = Circuit((Element("spring", "k", "1", "0", 3.0, damping=2.0),),
-                Drive("V", "1", "0", "velocity", 1.0))
-    text = write(c)
-    assert "damping" not in text
-    back = parse(text)
-    assert [(e.kind, e.name, e.value, e.damping) for e in back.elements] == \
-        [("spring", "k", 3.0, 0.0)]
+def test_a_springs_damping_is_stored_once_in_its_damper():
+    # damping=3 is the damper k_damping and nothing else: editing that damper is
+    # editing the spring's damping, for the analyses and for the text alike
+    c = parse("drive V 1 0 velocity=1\nspring k 1 0 3 damping=3\n")
+    assert not hasattr(c.element("k"), "damping")
+    edited = replace(c, elements=(c.elements[0],
+                                              replace(c.elements[1], value=30.0)))
+    assert "damping=30.0" in write(edited)
+    assert parse(write(edited)).element("k_damping").value == 30.0
+    assert edited.sweep([1.0]).K[0] == pytest.approx(1 / (30 - 3j))
+    # a damper of that name away from its spring is an ordinary damper
+    moved = replace(c, elements=c.elements[::-1])
+    assert "damping=" not in write(moved)
+    assert [(e.kind, e.name, e.value) for e in parse(write(moved)).elements] == \
+        [("damper", "k_damping", 3.0), ("spring", "k", 3.0)]
 
 
 def test_comments_follow_their_lines_and_read_back():

@@ -567,7 +567,7 @@ def _across(Y, index: dict, e) -> np.ndarray:
 
 def _law_params(spring, comp) -> tuple[float, float, float]:
     """(c, d, B) of a clearance spring and its companion damper."""
-    d = comp.value * comp.eta if comp is not None else spring.damping * spring.eta
+    d = comp.value * comp.eta if comp is not None else 0.0
     return spring.value * spring.eta, d, spring.backlash
 
 
