@@ -120,7 +120,7 @@ def cmd_scene(args) -> int:
         from ..scene.plots import plot_mode
 
         drawn = plot_mode(scene, math.radians(theta_deg), args.mode)
-        save_figure(drawn.figure, args.plot)
+        save_figure(drawn, args.plot)
     if args.output:
         from ..outputs import atomic_open
 

@@ -47,7 +47,8 @@ def plot_fourbar(fourbar, omega: float | None = None, n: int = 721, *, fig=None)
 
     Returns
     -------
-    matplotlib.figure.Figure
+    matplotlib.figure.Figure or matplotlib.figure.SubFigure
+        What it drew on: ``fig`` when given (it must be empty), else the new Figure.
     """
     lo, hi = fourbar.crank_range()
     th = np.linspace(lo, hi, n)
@@ -148,7 +149,8 @@ def plot_synthesis(designs, n: int = 721, fig=None):
 
     Returns
     -------
-    matplotlib.figure.Figure
+    matplotlib.figure.Figure or matplotlib.figure.SubFigure
+        What it drew on: ``fig`` when given (it must be empty), else the new Figure.
     """
     fig, ((left, right),) = _figure(1, 2, (12, 7), fig, "plot_synthesis", width_ratios=(1, 1.3))
     draw_design(designs[0], left)
@@ -187,7 +189,8 @@ def plot_frame_loading(result, *, fig=None):
 
     Returns
     -------
-    matplotlib.figure.Figure
+    matplotlib.figure.Figure or matplotlib.figure.SubFigure
+        What it drew on: ``fig`` when given (it must be empty), else the new Figure.
     """
     fig, ax = _figure(3, 1, (7, 8), fig, "plot_frame_loading")
     deg = np.degrees(result.theta)
@@ -225,7 +228,8 @@ def plot_shaking(result, fig=None):
 
     Returns
     -------
-    matplotlib.figure.Figure
+    matplotlib.figure.Figure or matplotlib.figure.SubFigure
+        What it drew on: ``fig`` when given (it must be empty), else the new Figure.
     """
     fig, ax = _figure(2, 2, (10, 8), fig, "plot_shaking")
     deg = np.degrees(result.theta)
@@ -284,6 +288,8 @@ def plot_linkage(linkage, state, paths=None, *, ax=None, fig=None):
     Returns
     -------
     matplotlib.axes.Axes or matplotlib.figure.Figure
+        What it drew on: ``ax`` when given, else ``fig`` (it must be empty) or the
+        new Figure.
     """
     if ax is not None:
         a = ax

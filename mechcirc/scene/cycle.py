@@ -347,7 +347,8 @@ def plot_cycle(cmap: CycleMap, ax=None, *, fig=None, unit: str = "rad/s"):
 
     Returns
     -------
-    The Axes given as ``ax``, or the Figure of the two panels.
+    What it drew on: the Axes given as ``ax``, else ``fig`` (an empty Figure or
+    SubFigure) or the new Figure, holding the two panels.
     """
     from ..units import FREQUENCY_UNITS
 

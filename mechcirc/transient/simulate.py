@@ -290,7 +290,8 @@ class TransientResult:
              title: str | None = None):
         """Plot this transient: :func:`mechcirc.plotting.plot_transient` (``ax=`` the
         nodes' panel only, else the panels on ``fig`` or a new Figure); returns what
-        it drew on."""
+        it drew on.  ``fig`` must be an *empty* Figure or SubFigure (one already
+        holding Axes is refused with an InputError)."""
         from ..plotting import plot_transient
 
         return plot_transient(self, nodes, what, elements, title, ax=ax, fig=fig)
