@@ -133,8 +133,8 @@ def check_elements(circuit, names, option: str = "--element") -> None:
     bad = [n for n in names or () if n not in known]
     if bad:
         more = f", ... ({len(known)} in all)" if len(known) > SHOWN_NAMES else ""
-        raise MechcircError(f"unknown element {bad[0]!r} ({option})"
-                            f"{did_you_mean(bad[0], known)} (the netlist has "
+        raise MechcircError(f"unknown element {bad[0]!r}{did_you_mean(bad[0], known)} "
+                            f"(given to {option}; the netlist has "
                             f"{', '.join(known[:SHOWN_NAMES])}{more})")
 
 

@@ -1,0 +1,71 @@
+"""Slips of a new user answered with what was meant (exit 2, one line, no traceback).
+
+* an option of another command (``forces --element``) says which commands take
+  it, instead of "did you mean '--element'?" (the very word given);
+* a misspelt option suggests the command's own options only;
+* ``transient --drive harmonc:300`` / ``stepp``, ``periodic --elements k44`` and
+  ``reduce --element k44``: "did you mean";
+* ``transient --dt`` longer than ``--t-end`` is refused (it silently ran to t = dt).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from cli_helpers import assert_user_error
+
+REPO = Path(__file__).resolve().parents[1]
+STB = REPO / "netlists" / "stb_heald.mcir"
+
+
+def test_another_commands_option_names_the_commands_that_take_it(capsys):
+    err = assert_user_error(["forces", STB, "--omega", "300", "--element", "k4"], capsys,
+                            "unrecognized arguments: --element k4",
+                            "--element is an option of ", "not of forces")
+    owners = err.split("is an option of ")[1].split(", not of")[0].split(", ")
+    assert {"sweep", "transient", "reduce"} <= set(owners) and "forces" not in owners
+    assert "did you mean '--element'" not in err
+    err = assert_user_error(["linkage", REPO / "examples/fnf_sixbar.toml", "--points", "10"],
+                            capsys, "--points is an option of ", "not of linkage")
+
+
+def test_a_misspelt_option_is_matched_against_the_commands_own_options(capsys):
+    assert_user_error(["sweep", STB, "--omega-min", "10", "--omega-max", "1e4", "--methd",
+                       "nodal"], capsys, "did you mean '--method'?")
+    err = assert_user_error(["forces", STB, "--omega", "300", "--elemnt", "k4"], capsys,
+                            "unrecognized arguments: --elemnt k4")
+    assert "--element" not in err.replace("--elemnt", "")     # not an option of forces
+
+
+@pytest.mark.parametrize("wave, meant", [("harmonc:300", "harmonic"), ("stepp", "step"),
+                                         ("impuls", "impulse")])
+def test_transient_drive_kind_did_you_mean(wave, meant, capsys, tmp_path):
+    out = tmp_path / "t.csv"
+    assert_user_error(["transient", STB, "--t-end", "0.01", "--drive", wave, "-o", out],
+                      capsys, f"--drive {wave!r} is not understood",
+                      f"did you mean {meant!r}?")
+    assert not out.exists()
+
+
+def test_periodic_and_reduce_element_names_did_you_mean(capsys):
+    assert_user_error(["periodic", STB, "--rpm", "600", "--elements", "k44"], capsys,
+                      "no element named 'k44'; did you mean 'k4'?")
+    assert_user_error(["reduce", STB, "--band", "10:2000", "--tol", "0.01", "--element",
+                       "k44"], capsys, "output 'k44': no element of that name; did you mean 'k4'?")
+
+
+def test_transient_step_longer_than_the_run_is_refused(capsys, tmp_path):
+    import mechcirc
+    from mechcirc.errors import MechcircError
+    from mechcirc.transient import transient
+
+    out = tmp_path / "t.csv"
+    assert_user_error(["transient", STB, "--t-end", "0.01", "--dt", "1", "-o", out], capsys,
+                      "--dt 1 s is longer than --t-end 0.01 s")
+    assert not out.exists()
+    c = mechcirc.parse("drive F a 0 force=1\nspring k a 0 100\nmass m a 0 1\n")
+    with pytest.raises(MechcircError, match="longer than --t-end"):
+        transient(c, 0.01, 1.0, "step")
+    r = transient(c, 0.01, 0.01, "step")         # dt = t_end: one step, ends at t_end
+    assert r.time.tolist() == [0.0, 0.01]
