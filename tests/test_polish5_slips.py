@@ -69,3 +69,18 @@ def test_transient_step_longer_than_the_run_is_refused(capsys, tmp_path):
         transient(c, 0.01, 1.0, "step")
     r = transient(c, 0.01, 0.01, "step")         # dt = t_end: one step, ends at t_end
     assert r.time.tolist() == [0.0, 0.01]
+
+
+def test_study_plot_column_did_you_mean_and_needs_plot(tmp_path, capsys):
+    net = tmp_path / "n.mcir"
+    net.write_text(".param m=2\nmass m1 a 0 m\nspring k a 0 100\ndrive V a 0 velocity=1\n")
+    spec = tmp_path / "s.toml"
+    spec.write_text(f'netlist = "{net.as_posix()}"\nanalysis = "sweep"\n'
+                    '[omega]\nmin = 1\nmax = 100\npoints = 5\n[grid]\nm = [1.0, 2.0]\n')
+    out, png = tmp_path / "o.csv", tmp_path / "o.png"
+    assert_user_error(["study", spec, "--workers", "1", "-o", out, "--plot", png,
+                       "--plot-column", "K_abs_mx"], capsys,
+                      "--plot-column 'K_abs_mx' is not a result column; did you mean 'K_abs_max'?")
+    assert_user_error(["study", spec, "--workers", "1", "-o", out, "--plot-column",
+                       "K_abs_max"], capsys, "--plot-column NAME", "give --plot IMAGE too")
+    assert not out.exists() and not png.exists()

@@ -221,15 +221,22 @@ def cmd_study(args) -> int:
     check_output_paths(args.output, args.curves, plots=(args.plot,), reads=(args.spec,))
     if args.resume and not args.output:
         raise MechcircError("--resume needs -o FILE (the table to continue)")
+    if args.plot_column and not args.plot:
+        raise MechcircError("--plot-column NAME chooses the column of the plot: give "
+                            "--plot IMAGE too")
     if args.workers is not None and args.workers < 1:
         raise MechcircError(f"--workers must be at least 1, got {args.workers}")
     spec = load_spec(args.spec)
     check_output_paths(args.output, args.curves, plots=(args.plot,),
                        reads=(spec.netlist_source,))
     column = args.plot_column or ("Q0_abs_max" if spec.analysis == "sweep" else "resonance_1")
-    if args.plot and column not in spec.columns[len(spec.params) + 3:]:
-        raise MechcircError(f"--plot-column {column!r} is not a result column (expected one of "
-                            f"{', '.join(spec.columns[len(spec.params) + 3:])})")
+    results = spec.columns[len(spec.params) + 3:]
+    if args.plot and column not in results:
+        from ..sources import did_you_mean
+
+        raise MechcircError(f"--plot-column {column!r} is not a result column"
+                            f"{did_you_mean(column, results)} (expected one of "
+                            f"{', '.join(results)})")
     with Progress(len(spec.points), "study") as bar:
         result = run_study(spec, output=args.output, scheduler=args.scheduler,
                            workers=args.workers, resume=args.resume,
