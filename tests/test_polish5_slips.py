@@ -84,3 +84,13 @@ def test_study_plot_column_did_you_mean_and_needs_plot(tmp_path, capsys):
     assert_user_error(["study", spec, "--workers", "1", "-o", out, "--plot-column",
                        "K_abs_max"], capsys, "--plot-column NAME", "give --plot IMAGE too")
     assert not out.exists() and not png.exists()
+
+
+def test_a_sliders_misspelt_link_is_named(tmp_path, capsys):
+    """[[sliders]] link = "blok": the error was about the one-point link 'block' only."""
+    text = (REPO / "examples/slider_crank_scene.toml").read_text()
+    assert text.count('link = "block"') == 1
+    f = tmp_path / "s.toml"
+    f.write_text(text.replace('link = "block"', 'link = "blok"'))
+    assert_user_error(["scene", f, "--theta", "60"], capsys, "s.toml:",
+                      "[[sliders]] names 'blok', which is no link; did you mean 'block'?")
