@@ -94,3 +94,19 @@ def test_a_sliders_misspelt_link_is_named(tmp_path, capsys):
     f.write_text(text.replace('link = "block"', 'link = "blok"'))
     assert_user_error(["scene", f, "--theta", "60"], capsys, "s.toml:",
                       "[[sliders]] names 'blok', which is no link; did you mean 'block'?")
+
+
+def test_a_bare_word_that_is_near_an_options_choice(capsys):
+    """``mechcirc synth medum`` meant ``--load medium``."""
+    assert_user_error(["synth", "medum"], capsys, "unrecognized arguments: medum; "
+                      "did you mean '--load medium'?")
+    err = assert_user_error(["check", STB, "extra"], capsys, "unrecognized arguments: extra")
+    assert "did you mean" not in err
+
+
+def test_linkage_on_a_scene_file_points_to_the_scene_commands(capsys):
+    err = assert_user_error(["linkage", REPO / "examples/heald_scene.toml"], capsys,
+                            "heald_scene.toml:", "unknown top-level key 'elastic'",
+                            "[elastic] is a table of a scene: 'mechcirc scene ",
+                            "load_scene(FILE).linkage")
+    assert err.count("(expected ") == 1

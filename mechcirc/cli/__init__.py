@@ -65,6 +65,9 @@ class _Parser(argparse.ArgumentParser):
         m = re.search(r"unrecognized arguments: (--[\w-]+)", message)
         if m:
             message += self._option_hint(m.group(1).split("=")[0])
+        m = re.search(r"unrecognized arguments: ([^-\s]\S*)", message)
+        if m:                           # a bare word: a value of which option?
+            message += self._value_hint(m.group(1))
         self.exit(2, f"{self.prog}: error: {shorten(message)} (see '{self.prog} --help')\n")
 
     def _option_hint(self, word: str) -> str:
@@ -84,6 +87,22 @@ class _Parser(argparse.ArgumentParser):
         hint = did_you_mean(word, sorted(subs[self.given]._option_string_actions))
         return (f"; {word} is an option of {', '.join(owners)}, not of {self.given}"
                 if owners else "") + hint
+
+
+    def _value_hint(self, word: str) -> str:
+        """``"; did you mean '--load medium'?"`` when ``word`` is near a choice of an option
+        of the command given (``mechcirc synth medum``)."""
+        from ..sources import did_you_mean
+
+        for action in self._actions:
+            if isinstance(action, argparse._SubParsersAction) and self.given in action.choices:
+                for opt in action.choices[self.given]._actions:
+                    if opt.option_strings and opt.choices and not isinstance(
+                            opt, argparse._SubParsersAction):
+                        hint = did_you_mean(word, opt.choices)
+                        if hint:
+                            return hint.replace("'", f"'{opt.option_strings[-1]} ", 1)
+        return ""
 
 
 class _Retry(Exception):

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import math
 
-from ..errors import InputError, MechcircError
+from ..errors import InputError, MechcircError, NetlistError
 from ..units import convert_frequency
 from ._common import (MAX_LENGTH, MAX_OMEGA, add_handler, check_output_paths, count, print_json,
                       real, save_figure)
@@ -431,6 +431,20 @@ def _print_designs(args, res, exported) -> None:
                  else "is written as a comment: this scene format has no crank-angle loads)"))
 
 
+def _scene_hint(exc, path: str) -> None:
+    """Add to ``exc`` (an unknown top-level key) that a scene's table means a scene file."""
+    import re
+
+    from ..scene.files import SCENE_TABLES
+
+    m = re.match(r"unknown top-level key '([^']*)'", exc.message)
+    if m and m.group(1) in SCENE_TABLES:
+        exc.message += (f"; [{m.group(1)}] is a table of a scene: 'mechcirc scene {path} "
+                        "--theta DEG' or 'mechcirc simulate' read scene files (in Python, "
+                        "mechcirc.scene.load_scene(FILE).linkage is its linkage)")
+        exc.args = (str(exc),)
+
+
 def cmd_linkage(args) -> int:
     import numpy as np
 
@@ -438,7 +452,11 @@ def cmd_linkage(args) -> int:
 
     check_output_paths(plots=(args.plot,), reads=(args.file,))
 
-    lk = load_linkage(args.file)
+    try:
+        lk = load_linkage(args.file)
+    except NetlistError as exc:
+        _scene_hint(exc, args.file)
+        raise
     theta = math.radians(args.theta)
     state = lk.solve(theta)
     if args.plot:
