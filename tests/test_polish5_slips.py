@@ -110,3 +110,8 @@ def test_linkage_on_a_scene_file_points_to_the_scene_commands(capsys):
                             "[elastic] is a table of a scene: 'mechcirc scene ",
                             "load_scene(FILE).linkage")
     assert err.count("(expected ") == 1
+
+
+def test_simulate_set_unknown_parameter_did_you_mean(capsys):
+    assert_user_error(["simulate", "--revolutions", "1", "--set", "C22=1"], capsys,
+                      "unknown sley parameter(s) C22; did you mean 'C2'?", "(known: C2, C4")
