@@ -245,8 +245,7 @@ def plot_sweep(result, title: str | None = None, resonances=(), peak=None, *, ax
 
     Returns
     -------
-    What it drew on: the Axes given as ``ax``, else ``fig`` (an empty Figure or
-    SubFigure) or the new Figure, holding the panels.
+    The Axes ``ax`` when given, else ``fig`` (empty) or the new Figure (what it drew on).
     """
     curves = _sweep_curves(result, resonances if refine else (), unit)
     if ax is not None:
@@ -495,8 +494,7 @@ def plot_transient(result, nodes=None, what: str = "x", elements=None, title: st
 
     Returns
     -------
-    What it drew on: the Axes given as ``ax``, else ``fig`` (an empty Figure or
-    SubFigure) or the new Figure, holding the panels.
+    The Axes ``ax`` when given, else ``fig`` (empty) or the new Figure (what it drew on).
     """
 
     if what not in ("x", "v") or (what == "v" and result.v is None):

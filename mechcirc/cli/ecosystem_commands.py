@@ -213,6 +213,24 @@ def cmd_formula(args) -> int:
     return 0
 
 
+def _plot_column(args, spec) -> str:
+    """The result column ``--plot`` draws: ``--plot-column`` (checked, with did-you-mean;
+    refused without ``--plot``) or the analysis's default."""
+    from ..errors import MechcircError
+    from ..sources import did_you_mean
+
+    if args.plot_column and not args.plot:
+        raise MechcircError("--plot-column NAME chooses the column of the plot: give "
+                            "--plot IMAGE too")
+    column = args.plot_column or ("Q0_abs_max" if spec.analysis == "sweep" else "resonance_1")
+    results = spec.columns[len(spec.params) + 3:]
+    if args.plot and column not in results:
+        raise MechcircError(f"--plot-column {column!r} is not a result column"
+                            f"{did_you_mean(column, results)} (expected one of "
+                            f"{', '.join(results)})")
+    return column
+
+
 def cmd_study(args) -> int:
     from ..errors import MechcircError
     from ..progress import Progress
@@ -221,22 +239,12 @@ def cmd_study(args) -> int:
     check_output_paths(args.output, args.curves, plots=(args.plot,), reads=(args.spec,))
     if args.resume and not args.output:
         raise MechcircError("--resume needs -o FILE (the table to continue)")
-    if args.plot_column and not args.plot:
-        raise MechcircError("--plot-column NAME chooses the column of the plot: give "
-                            "--plot IMAGE too")
     if args.workers is not None and args.workers < 1:
         raise MechcircError(f"--workers must be at least 1, got {args.workers}")
     spec = load_spec(args.spec)
     check_output_paths(args.output, args.curves, plots=(args.plot,),
                        reads=(spec.netlist_source,))
-    column = args.plot_column or ("Q0_abs_max" if spec.analysis == "sweep" else "resonance_1")
-    results = spec.columns[len(spec.params) + 3:]
-    if args.plot and column not in results:
-        from ..sources import did_you_mean
-
-        raise MechcircError(f"--plot-column {column!r} is not a result column"
-                            f"{did_you_mean(column, results)} (expected one of "
-                            f"{', '.join(results)})")
+    column = _plot_column(args, spec)
     with Progress(len(spec.points), "study") as bar:
         result = run_study(spec, output=args.output, scheduler=args.scheduler,
                            workers=args.workers, resume=args.resume,

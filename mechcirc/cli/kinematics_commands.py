@@ -431,32 +431,32 @@ def _print_designs(args, res, exported) -> None:
                  else "is written as a comment: this scene format has no crank-angle loads)"))
 
 
-def _scene_hint(exc, path: str) -> None:
-    """Add to ``exc`` (an unknown top-level key) that a scene's table means a scene file."""
+def _load_linkage(path: str):
+    """:func:`mechcirc.kinematics.load_linkage`; a scene's table in the file (an unknown
+    top-level key to a linkage) is answered with the commands that read scene files."""
     import re
 
+    from ..kinematics import load_linkage
     from ..scene.files import SCENE_TABLES
 
-    m = re.match(r"unknown top-level key '([^']*)'", exc.message)
-    if m and m.group(1) in SCENE_TABLES:
-        exc.message += (f"; [{m.group(1)}] is a table of a scene: 'mechcirc scene {path} "
-                        "--theta DEG' or 'mechcirc simulate' read scene files (in Python, "
-                        "mechcirc.scene.load_scene(FILE).linkage is its linkage)")
-        exc.args = (str(exc),)
+    try:
+        return load_linkage(path)
+    except NetlistError as exc:
+        m = re.match(r"unknown top-level key '([^']*)'", exc.message)
+        if m and m.group(1) in SCENE_TABLES:
+            exc.message += (f"; [{m.group(1)}] is a table of a scene: 'mechcirc scene {path} "
+                            "--theta DEG' or 'mechcirc simulate' read scene files (in Python, "
+                            "mechcirc.scene.load_scene(FILE).linkage is its linkage)")
+            exc.args = (str(exc),)
+        raise
 
 
 def cmd_linkage(args) -> int:
     import numpy as np
 
-    from ..kinematics import load_linkage
-
     check_output_paths(plots=(args.plot,), reads=(args.file,))
 
-    try:
-        lk = load_linkage(args.file)
-    except NetlistError as exc:
-        _scene_hint(exc, args.file)
-        raise
+    lk = _load_linkage(args.file)
     theta = math.radians(args.theta)
     state = lk.solve(theta)
     if args.plot:

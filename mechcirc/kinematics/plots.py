@@ -52,8 +52,7 @@ def plot_fourbar(fourbar, omega: float | None = None, n: int = 721, *, fig=None)
     """
     lo, hi = fourbar.crank_range()
     th = np.linspace(lo, hi, n)
-    if not fourbar.crank_rotates_fully:
-        th = th[1:-1]
+    th = th if fourbar.crank_rotates_fully else th[1:-1]
     with np.errstate(all="ignore"):             # 0/0 at a change point's branch crossing
         st = fourbar.evaluate(th)
     deg = np.degrees(th)

@@ -347,8 +347,7 @@ def plot_cycle(cmap: CycleMap, ax=None, *, fig=None, unit: str = "rad/s"):
 
     Returns
     -------
-    What it drew on: the Axes given as ``ax``, else ``fig`` (an empty Figure or
-    SubFigure) or the new Figure, holding the two panels.
+    The Axes ``ax`` when given, else ``fig`` (empty) or the new Figure (what it drew on).
     """
     from ..units import FREQUENCY_UNITS
 
