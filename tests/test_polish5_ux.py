@@ -44,22 +44,36 @@ def test_transient_unknown_element_is_refused_before_integrating(tmp_path, capsy
     assert calls == [1] and png.read_bytes()[:4] == b"\x89PNG"
 
 
-def test_check_elements_lists_at_most_twenty_names():
+def test_check_names_lists_at_most_twenty_names():
     import mechcirc
-    from mechcirc.cli.transient_commands import SHOWN_NAMES, check_elements
+    from mechcirc.cli._common import SHOWN_NAMES, check_names
     from mechcirc.errors import MechcircError
 
     text = "drive F n0 0 force=1\n" + "".join(
         f"spring k{i} n{i} n{i + 1} 100\nmass m{i} n{i + 1} 0 1\n" for i in range(30))
-    c = mechcirc.parse(text)
-    check_elements(c, ["k3", "m29"])            # known names pass
-    check_elements(c, None)
+    known = [e.name for e in mechcirc.parse(text).elements]
+    check_names(["k3", "m29"], known)           # known names pass
+    check_names(None, known)
     with pytest.raises(MechcircError) as err:
-        check_elements(c, ["k3", "kk29"])
+        check_names(["k3", "kk29"], known)
     msg = str(err.value)
     assert "unknown element 'kk29'" in msg and "did you mean 'k29'?" in msg
     listed = msg.split("the netlist has ")[1]
     assert listed.count(",") == SHOWN_NAMES and listed.endswith("... (60 in all))")
+
+
+def test_sweep_node_and_element_names_are_checked_before_the_sweep(capsys, monkeypatch):
+    import mechcirc.cli.circuit_commands as cc
+
+    calls = []
+    monkeypatch.setattr(cc, "_run_sweep", lambda *a: calls.append(1))
+    net = REPO / "netlists/stb_heald.mcir"
+    base = ["sweep", net, "--omega-min", "10", "--omega-max", "1e4"]
+    status, _, err = run([*base, "--node", "AA"], capsys)
+    assert status == 2 and "unknown node 'AA'; did you mean 'A'? (given to --node" in err
+    status, _, err = run([*base, "--element", "k44"], capsys)
+    assert status == 2 and "unknown element 'k44'; did you mean 'k4'? (given to --element" in err
+    assert calls == []
 
 
 def test_scene_plot_mode_without_ax_returns_its_figure():

@@ -7,7 +7,7 @@ import math
 import sys
 
 from ..errors import MechcircError
-from ._common import add_handler, check_output_paths, print_json, save_figure
+from ._common import add_handler, check_names, check_output_paths, print_json, save_figure
 
 
 def register(sub) -> None:
@@ -70,7 +70,7 @@ def cmd_transient(args) -> int:
     if args.element and not args.plot:
         raise MechcircError("--element NAME draws a panel of the plot: give --plot IMAGE too")
     circuit = load(args.file, require_drive=False)
-    check_elements(circuit, args.element)         # before the run, not after it
+    check_names(args.element, [e.name for e in circuit.elements])   # before the run
     result = transient(circuit, args.t_end, args.dt, args.drive, amplitude=args.amplitude,
                        rtol=args.rtol, rpm=args.rpm)
     fig = result.plot(elements=args.element) if args.plot else None
@@ -108,38 +108,6 @@ def cmd_transient(args) -> int:
         print(f"drive velocity: max |v| = {abs(result.drive_velocity).max():.6g} {u['v']}")
     _print_separations(result, u)
     return 0
-
-
-def check_elements(circuit, names, option: str = "--element") -> None:
-    """Refuse a name of ``names`` that is no element of ``circuit``, with "did you mean".
-
-    Called before a long computation, so that a typo is told at once.
-
-    Parameters
-    ----------
-    circuit : mechcirc.circuit.Circuit
-    names : sequence of str or None
-    option : str
-        The command-line option that gave the names (for the message).
-
-    Raises
-    ------
-    MechcircError
-        Naming the first unknown name, the nearest element and the circuit's elements.
-    """
-    from ..sources import did_you_mean
-
-    known = [e.name for e in circuit.elements]
-    bad = [n for n in names or () if n not in known]
-    if bad:
-        more = f", ... ({len(known)} in all)" if len(known) > SHOWN_NAMES else ""
-        raise MechcircError(f"unknown element {bad[0]!r}{did_you_mean(bad[0], known)} "
-                            f"(given to {option}; the netlist has "
-                            f"{', '.join(known[:SHOWN_NAMES])}{more})")
-
-
-#: Element names listed in the message of :func:`check_elements`.
-SHOWN_NAMES = 20
 
 
 #: Openings of a contact listed one by one (the rest are counted).
