@@ -66,14 +66,20 @@ def test_sweep_node_and_element_names_are_checked_before_the_sweep(capsys, monke
     import mechcirc.cli.circuit_commands as cc
 
     calls = []
-    monkeypatch.setattr(cc, "_run_sweep", lambda *a: calls.append(1))
+    real = cc._run_sweep
+    monkeypatch.setattr(cc, "_run_sweep", lambda *a: calls.append(1) or real(*a))
     net = REPO / "netlists/stb_heald.mcir"
     base = ["sweep", net, "--omega-min", "10", "--omega-max", "1e4"]
     status, _, err = run([*base, "--node", "AA"], capsys)
     assert status == 2 and "unknown node 'AA'; did you mean 'A'? (given to --node" in err
     status, _, err = run([*base, "--element", "k44"], capsys)
     assert status == 2 and "unknown element 'k44'; did you mean 'k4'? (given to --element" in err
+    status, _, err = run([*base, "--sensitivity", "eta5"], capsys)
+    assert status == 2 and "unknown element, lever or .param 'eta5'; did you mean" in err
     assert calls == []
+    status, _, err = run([*base, "--sensitivity", "etaC", "--sensitivity", "k0", "--points",
+                          "3", "--node", "A", "--element", "k4"], capsys)
+    assert status == 0 and calls == [1], err       # the right names pass, and it sweeps
 
 
 def test_scene_plot_mode_without_ax_returns_its_figure():
