@@ -75,7 +75,7 @@ def test_sweep_node_and_element_names_are_checked_before_the_sweep(capsys, monke
     status, _, err = run([*base, "--element", "k44"], capsys)
     assert status == 2 and "unknown element 'k44'; did you mean 'k4'? (given to --element" in err
     status, _, err = run([*base, "--sensitivity", "eta5"], capsys)
-    assert status == 2 and "unknown element, lever or .param 'eta5'; did you mean" in err
+    assert status == 2 and "no element, lever or .param named 'eta5'; did you mean" in err
     assert calls == []
     status, _, err = run([*base, "--sensitivity", "etaC", "--sensitivity", "k0", "--points",
                           "3", "--node", "A", "--element", "k4"], capsys)
