@@ -115,3 +115,26 @@ def test_linkage_on_a_scene_file_points_to_the_scene_commands(capsys):
 def test_simulate_set_unknown_parameter_did_you_mean(capsys):
     assert_user_error(["simulate", "--revolutions", "1", "--set", "C22=1"], capsys,
                       "unknown sley parameter(s) C22; did you mean 'C2'?", "(known: C2, C4")
+
+
+@pytest.mark.parametrize("argv, what", [
+    (["sweep", STB, "--omega-min", "10", "--omega-max", "1e4", "-o", "{out}.png"], "a CSV table"),
+    (["transient", STB, "--t-end", "0.01", "-o", "{out}.pdf"], "a CSV table"),
+    (["reduce", STB, "--band", "10:2000", "--tol", "0.01", "-o", "{out}.svg"],
+     "the reduced netlist"),
+    (["scene", REPO / "examples/heald_scene.toml", "--theta", "40", "-o", "{out}.png"],
+     "a CSV table (--cycle) or a netlist (--theta)"),
+])
+def test_a_table_output_named_like_an_image_is_refused(argv, what, tmp_path, capsys):
+    """``-o K.png`` wrote CSV text into K.png."""
+    out = tmp_path / "out"
+    argv = [str(a).replace("{out}", str(out)) for a in argv]
+    assert_user_error(argv, capsys, f"-o writes {what}", "not an image", "--plot IMAGE")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_table_output_named_json_points_to_json(tmp_path, capsys):
+    out = tmp_path / "T.json"
+    assert_user_error(["transient", STB, "--t-end", "0.01", "-o", out], capsys,
+                      "-o writes a CSV table, not JSON; --json prints the JSON document")
+    assert not out.exists()

@@ -514,3 +514,32 @@ def check_names(names, known, kind: str = "element", option: str = "--element") 
         raise MechcircError(f"unknown {kind} {bad[0]!r}{did_you_mean(bad[0], known)} "
                             f"(given to {option}; the netlist has "
                             f"{', '.join(known[:SHOWN_NAMES])}{more})")
+
+
+def check_table_path(path, what: str = "a CSV table") -> None:
+    """Refuse a table or netlist output (``-o``) named like an image or a JSON document.
+
+    ``-o K.png`` wrote CSV text into K.png: the image is ``--plot``'s, the JSON
+    document ``--json``'s (on stdout).
+
+    Parameters
+    ----------
+    path : str or None
+        The ``-o`` path (None: no output).
+    what : str
+        What ``-o`` writes, for the message.
+
+    Raises
+    ------
+    MechcircError
+        ``path`` ends in an image format's or ``.json``.
+    """
+    from pathlib import Path
+
+    suffix = Path(path).suffix.lower() if path else ""
+    if suffix.lstrip(".") in PLOT_FORMATS:
+        raise MechcircError(f"{path}: -o writes {what}, not an image (a command that draws "
+                            "writes its plot to --plot IMAGE)")
+    if suffix == ".json":
+        raise MechcircError(f"{path}: -o writes {what}, not JSON; --json prints the JSON "
+                            f"document (--json > {path})")

@@ -13,8 +13,8 @@ from ..limits import (
     MAX_PLOT_POINTS,
     MAX_SWEEP_POINTS,
 )
-from ._common import (add_handler, check_names, check_output_paths, load_with_warnings,
-                      print_json, real, save_figure, warning_lines)
+from ._common import (add_handler, check_names, check_output_paths, check_table_path,
+                      load_with_warnings, print_json, real, save_figure, warning_lines)
 
 #: argparse type: an angular frequency [rad/s], or with a unit (``50Hz``, ``3000rpm``); the
 #: command checks the range (a sweep's --omega-min/--omega-max together).
@@ -261,6 +261,7 @@ def _peak_text(pk, units: dict, unit: str = "rad/s") -> str:
 
 def cmd_sweep(args) -> int:
     check_output_paths(args.output, args.touchstone, plots=(args.plot,), reads=(args.file,))
+    check_table_path(args.output)
     _check_touchstone_name(args.touchstone)
     from ..circuit import node_names
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ._common import (add_handler, check_output_paths, count, load_with_warnings, print_json, real,
-                      save_figure, warning_lines)
+from ._common import (add_handler, check_output_paths, check_table_path, count,
+                      load_with_warnings, print_json, real, save_figure, warning_lines)
 
 
 def register(sub) -> None:
@@ -237,6 +237,7 @@ def cmd_study(args) -> int:
     from ..study import column_units, load_spec, run_study, sidecar_path
 
     check_output_paths(args.output, args.curves, plots=(args.plot,), reads=(args.spec,))
+    check_table_path(args.output, "a CSV or Parquet table")
     if args.resume and not args.output:
         raise MechcircError("--resume needs -o FILE (the table to continue)")
     if args.workers is not None and args.workers < 1:

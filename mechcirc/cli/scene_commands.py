@@ -6,7 +6,8 @@ import argparse
 import math
 
 from ..limits import MAX_CYCLE_POINTS
-from ._common import add_handler, check_output_paths, count, print_json, real, save_figure
+from ._common import (add_handler, check_output_paths, check_table_path, count, print_json,
+                      real, save_figure)
 
 
 def register(sub) -> None:
@@ -85,6 +86,7 @@ def cmd_scene(args) -> int:
 
     plots = (args.plot,) if args.plot else ()
     check_output_paths(args.output, plots=plots, reads=(args.file,))
+    check_table_path(args.output, "a CSV table (--cycle) or a netlist (--theta)")
     if args.plot and not args.cycle and args.mode is None:
         raise MechcircError("--plot draws the --cycle map, or with --mode N a mode at the "
                             "crank angle; with --theta alone use -o and 'mechcirc sweep'")
@@ -246,6 +248,7 @@ def cmd_reduce(args) -> int:
     from .._simplify import parse_band, simplify
 
     check_output_paths(args.out, reads=(args.file,))
+    check_table_path(args.out, "the reduced netlist")
     band = parse_band(args.band)
     if not (math.isfinite(args.tol) and args.tol > 0):
         raise MechcircError(f"--tol must be a positive number, got {args.tol:g}")

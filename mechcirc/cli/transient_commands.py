@@ -7,7 +7,8 @@ import math
 import sys
 
 from ..errors import MechcircError
-from ._common import add_handler, check_names, check_output_paths, print_json, save_figure
+from ._common import (add_handler, check_names, check_output_paths, check_table_path,
+                      print_json, save_figure)
 
 
 def register(sub) -> None:
@@ -62,6 +63,7 @@ def cmd_transient(args) -> int:
     from ..transient import transient
 
     check_output_paths(args.output, plots=(args.plot,), reads=(args.file,))
+    check_table_path(args.output)
     _positive("--t-end", args.t_end)
     _positive("--dt", args.dt)
     _positive("--rtol", args.rtol)
