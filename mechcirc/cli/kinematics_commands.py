@@ -7,8 +7,8 @@ import math
 
 from ..errors import InputError, MechcircError, NetlistError
 from ..units import convert_frequency
-from ._common import (MAX_LENGTH, MAX_OMEGA, add_handler, check_output_paths, count, print_json,
-                      real, save_figure)
+from ._common import (MAX_LENGTH, MAX_OMEGA, add_handler, check_output_paths, check_table_path,
+                      count, print_json, real, save_figure)
 
 
 def register(sub) -> None:
@@ -288,6 +288,7 @@ def cmd_frame(args) -> int:
     from ..kinematics import FourBar, LinkMass, beat_up_force, frame_loading
 
     check_output_paths(args.output, plots=(args.plot,))
+    check_table_path(args.output)
     k = 1e-3 if args.unit == "mm" else 1.0            # to metres
     fb = FourBar(args.crank * k, args.coupler * k, args.rocker * k, args.frame * k,
                  branch=args.branch)
