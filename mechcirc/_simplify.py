@@ -412,7 +412,10 @@ def _check_arguments(circuit: Circuit, band, tol, points, output) -> tuple[tuple
     if output is not None:
         names = {e.name for e in circuit.elements}
         if output not in names:
-            raise MechcircError(f"output {output!r}: no element of that name "
+            from .sources import did_you_mean
+
+            raise MechcircError(f"output {output!r}: no element of that name"
+                                f"{did_you_mean(output, sorted(names))} "
                                 f"(elements: {_some(sorted(names))})")
         protect.add(output)
     return band, protect

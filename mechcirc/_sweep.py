@@ -279,6 +279,9 @@ class Sweep:
         """Plot this sweep: :func:`mechcirc.plotting.plot_sweep` (``ax=`` one panel of |K|,
         else three panels on ``fig`` or a new Figure); returns what it drew on.
 
+        ``fig`` must be an *empty* Figure or SubFigure (one already holding Axes
+        is refused with an InputError; pass ``fig.subfigures()`` beside yours).
+
         ``resonances=None`` marks the circuit's exact resonances in the band
         when that is cheap (at most :data:`PLOT_RESONANCES_ELEMENTS` elements);
         pass a list to choose them, or ``()`` for none.  ``unit``: the frequency

@@ -158,7 +158,11 @@ class PeriodicResult:
         return int(self.k.size)
 
     def plot(self, fig=None):
-        """Q(θ) beside its spectrum with |K| and the resonances: :func:`mechcirc.plotting.plot_periodic`."""
+        """Q(θ) beside its spectrum with |K| and the resonances: :func:`mechcirc.plotting.plot_periodic`.
+
+        Returns the Figure drawn on: ``fig`` (which must be an *empty* Figure or
+        SubFigure; one already holding Axes is refused with an InputError) or a new one.
+        """
         from .plotting import plot_periodic
 
         return plot_periodic(self, fig=fig)
@@ -201,7 +205,8 @@ class SpeedMap:
     units: dict = field(default_factory=lambda: units_of(None))
 
     def plot(self, ax=None):
-        """The map: :func:`mechcirc.plotting.plot_speed_map`."""
+        """The map: :func:`mechcirc.plotting.plot_speed_map`; returns ``ax`` when given,
+        else the new Figure."""
         from .plotting import plot_speed_map
 
         return plot_speed_map(self, ax=ax)

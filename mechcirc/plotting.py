@@ -245,7 +245,7 @@ def plot_sweep(result, title: str | None = None, resonances=(), peak=None, *, ax
 
     Returns
     -------
-    The Axes given as ``ax``, or the Figure of the panels.
+    The Axes ``ax`` when given, else ``fig`` (empty) or the new Figure (what it drew on).
     """
     curves = _sweep_curves(result, resonances if refine else (), unit)
     if ax is not None:
@@ -494,7 +494,7 @@ def plot_transient(result, nodes=None, what: str = "x", elements=None, title: st
 
     Returns
     -------
-    The Axes given as ``ax``, or the Figure of the panels.
+    The Axes ``ax`` when given, else ``fig`` (empty) or the new Figure (what it drew on).
     """
 
     if what not in ("x", "v") or (what == "v" and result.v is None):
@@ -658,7 +658,8 @@ def plot_comparison(comparison, name: str = "circuit", measured: str = "measured
 
     Returns
     -------
-    matplotlib.figure.Figure
+    matplotlib.figure.Figure or matplotlib.figure.SubFigure
+        What it drew on: ``fig`` when given (it must be empty), else the new Figure.
     """
     import numpy as np
 
@@ -793,7 +794,8 @@ def plot_periodic(result, title: str | None = None, *, fig=None):
 
     Returns
     -------
-    matplotlib.figure.Figure
+    matplotlib.figure.Figure or matplotlib.figure.SubFigure
+        What it drew on: ``fig`` when given (it must be empty), else the new Figure.
     """
     import numpy as np
 
@@ -978,7 +980,8 @@ def plot_modes(found, name: str = "circuit", *, fig=None, unit: str = "rad/s"):
 
     Returns
     -------
-    matplotlib.figure.Figure
+    matplotlib.figure.Figure or matplotlib.figure.SubFigure
+        What it drew on: ``fig`` when given (it must be empty), else the new Figure.
     """
     made = fig is None
     fig, axes = new_panels(fig, max(len(found), 1), caller="plot_modes", figsize=(

@@ -54,6 +54,9 @@ COMMANDS: dict[str, str] = {
 class _Parser(argparse.ArgumentParser):
     """argparse, with a usage error on one line (the full usage is one ``--help`` away)."""
 
+    #: The command word of the line (set by :func:`main`), named in a usage error.
+    given: str | None = None
+
     def error(self, message):
         from ..sources import did_you_mean
 
@@ -64,14 +67,45 @@ class _Parser(argparse.ArgumentParser):
             message = message.replace(m.group(0), m.group(0) + hint)
         m = re.search(r"unrecognized arguments: (--[\w-]+)", message)
         if m:
-            # parse_args reports it from the top parser: offer every command's options
-            options = set(self._option_string_actions)
-            for action in self._actions:
-                if isinstance(action, argparse._SubParsersAction):
-                    for p in action.choices.values():
-                        options |= set(p._option_string_actions)
-            message += did_you_mean(m.group(1).split("=")[0], sorted(options))
+            message += self._option_hint(m.group(1).split("=")[0])
+        m = re.search(r"unrecognized arguments: ([^-\s]\S*)", message)
+        if m:                           # a bare word: a value of which option?
+            message += self._value_hint(m.group(1))
         self.exit(2, f"{self.prog}: error: {shorten(message)} (see '{self.prog} --help')\n")
+
+    def _option_hint(self, word: str) -> str:
+        """The nearest option of the command given, or which commands take ``word`` when
+        it is another command's option (any command's nearest when none was given)."""
+        from ..sources import did_you_mean
+
+        subs = {name: p for action in self._actions
+                if isinstance(action, argparse._SubParsersAction)
+                for name, p in action.choices.items()}
+        owners = [name for name, p in subs.items() if word in p._option_string_actions]
+        if self.given not in subs:
+            options = set(self._option_string_actions).union(
+                *(p._option_string_actions for p in subs.values()))
+            return did_you_mean(word, sorted(options)) if not owners else \
+                f"; {word} is an option of {', '.join(owners)}"
+        hint = did_you_mean(word, sorted(subs[self.given]._option_string_actions))
+        return (f"; {word} is an option of {', '.join(owners)}, not of {self.given}"
+                if owners else "") + hint
+
+
+    def _value_hint(self, word: str) -> str:
+        """``"; did you mean '--load medium'?"`` when ``word`` is near a choice of an option
+        of the command given (``mechcirc synth medum``)."""
+        from ..sources import did_you_mean
+
+        for action in self._actions:
+            if isinstance(action, argparse._SubParsersAction) and self.given in action.choices:
+                for opt in action.choices[self.given]._actions:
+                    if opt.option_strings and opt.choices and not isinstance(
+                            opt, argparse._SubParsersAction):
+                        hint = did_you_mean(word, opt.choices)
+                        if hint:
+                            return hint.replace("'", f"'{opt.option_strings[-1]} ", 1)
+        return ""
 
 
 class _Retry(Exception):
@@ -194,6 +228,8 @@ def main(argv: list[str] | None = None) -> int:
             args = parser.parse_args(argv)
         except _Retry:
             parser = build_parser()
+            if isinstance(parser, _Parser):
+                parser.given = command
             args = parser.parse_args(argv)
         if not getattr(args, "func", None):
             parser.print_help()

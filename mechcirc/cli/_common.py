@@ -515,3 +515,70 @@ def load_with_warnings(path):
                  "its contact as closed (linearised); 'mechcirc transient' integrates the gap"
                  for e in circuit.elements if e.kind == "spring" and e.backlash >= 1e-10]
     return circuit, messages
+
+
+#: Names listed in the message of :func:`check_names`.
+SHOWN_NAMES = 20
+
+
+def check_names(names, known, kind: str = "element", option: str = "--element") -> None:
+    """Refuse a name of ``names`` not in ``known``, with "did you mean", before the work.
+
+    A typo in a name given on the command line is told at once, not after a
+    long computation that the name is only looked up at the end of.
+
+    Parameters
+    ----------
+    names : sequence of str or None
+        The names given (None: none).
+    known : sequence of str
+        The names that exist, in the order to list them.
+    kind : str
+        What they name, for the message ("element", "node").
+    option : str
+        The command-line option that gave them.
+
+    Raises
+    ------
+    MechcircError
+        Naming the first unknown name, the nearest known one and at most
+        :data:`SHOWN_NAMES` of the known names.
+    """
+    from ..sources import did_you_mean
+
+    known = list(known)
+    bad = [n for n in names or () if n not in known]
+    if bad:
+        more = f", ... ({len(known)} in all)" if len(known) > SHOWN_NAMES else ""
+        raise MechcircError(f"unknown {kind} {bad[0]!r}{did_you_mean(bad[0], known)} "
+                            f"(given to {option}; the netlist has "
+                            f"{', '.join(known[:SHOWN_NAMES])}{more})")
+
+
+def check_table_path(path, what: str = "a CSV table") -> None:
+    """Refuse a table or netlist output (``-o``) named like an image or a JSON document.
+
+    ``-o K.png`` wrote CSV text into K.png: the image is ``--plot``'s, the JSON
+    document ``--json``'s (on stdout).
+
+    Parameters
+    ----------
+    path : str or None
+        The ``-o`` path (None: no output).
+    what : str
+        What ``-o`` writes, for the message.
+
+    Raises
+    ------
+    MechcircError
+        ``path`` ends in an image format's or ``.json``.
+    """
+    from pathlib import Path
+
+    suffix = Path(path).suffix.lower() if path else ""
+    if suffix.lstrip(".") in PLOT_FORMATS:
+        raise MechcircError(f"{path}: -o writes {what}, not an image (a command that draws "
+                            "writes its plot to --plot IMAGE)")
+    if suffix == ".json":
+        raise MechcircError(f"{path}: -o writes {what}, not JSON; --json prints the JSON "
+                            f"document (--json > {path})")

@@ -16,8 +16,9 @@ from ..limits import (
     MAX_SWEEP_POINTS,
 )
 from ..units import FREQUENCY_UNITS, in_unit
-from ._common import (add_command, add_handler, check_output_paths, load_with_warnings, print_json,
-                      real, save_figure, warning_lines)
+from ._common import (add_command, add_handler, check_names, check_output_paths,
+                      check_table_path, load_with_warnings, print_json, real, save_figure,
+                      warning_lines)
 
 #: argparse type: an angular frequency [rad/s], or with a unit (``50Hz``, ``3000rpm``); the
 #: command checks the range (a sweep's --omega-min/--omega-max together).
@@ -250,8 +251,17 @@ def _peak_text(pk, units: dict, unit: str = "rad/s") -> str:
 
 def cmd_sweep(args) -> int:
     check_output_paths(args.output, args.touchstone, plots=(args.plot,), reads=(args.file,))
+    check_table_path(args.output)
     _check_touchstone_name(args.touchstone)
+    from ..circuit import node_names
+
     circuit, warns = load_with_warnings(args.file)
+    check_names(args.node, node_names(circuit.elements, circuit.levers), "node", "--node")
+    check_names(args.element, [e.name for e in circuit.elements])     # before the sweep
+    if args.sensitivity:                # its names, checked at no ω (no solve)
+        from ..modes import sweep_sensitivity
+
+        sweep_sensitivity(circuit, [], args.sensitivity)
     omega = _omega_grid(args)
     result = _run_sweep(args, circuit, omega)
     extra = _responses(result, args.node, args.element)

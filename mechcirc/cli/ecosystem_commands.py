@@ -6,8 +6,9 @@ from pathlib import Path
 
 from ..errors import MechcircError
 from ..limits import FORMULA_SECONDS
-from ._common import (add_command, add_handler, check_output_paths, count, load_with_warnings,
-                      print_json, real, save_figure, time_limit, warning_lines)
+from ._common import (add_command, add_handler, check_output_paths, check_table_path, count,
+                      load_with_warnings, print_json, real, save_figure, time_limit,
+                      warning_lines)
 
 
 def register(sub) -> None:
@@ -209,20 +210,36 @@ def cmd_formula(args) -> int:
     return 0
 
 
+def _plot_column(args, spec) -> str:
+    """The result column ``--plot`` draws: ``--plot-column`` (checked, with did-you-mean;
+    refused without ``--plot``) or the analysis's default."""
+    from ..errors import MechcircError
+    from ..sources import did_you_mean
+
+    if args.plot_column and not args.plot:
+        raise MechcircError("--plot-column NAME chooses the column of the plot: give "
+                            "--plot IMAGE too")
+    column = args.plot_column or ("Q0_abs_max" if spec.analysis == "sweep" else "resonance_1")
+    results = spec.columns[len(spec.params) + 3:]
+    if args.plot and column not in results:
+        raise MechcircError(f"--plot-column {column!r} is not a result column"
+                            f"{did_you_mean(column, results)} (expected one of "
+                            f"{', '.join(results)})")
+    return column
+
+
 def cmd_study(args) -> int:
     from ..progress import Progress
     from ..study import column_units, load_spec, run_study, sidecar_path
 
     check_output_paths(args.output, args.curves, plots=(args.plot,), reads=(args.spec,))
+    check_table_path(args.output, "a CSV or Parquet table")
     if args.resume and not args.output:
         raise MechcircError("--resume needs -o FILE (the table to continue)")
     spec = load_spec(args.spec)
     check_output_paths(args.output, args.curves, plots=(args.plot,),
                        reads=(spec.netlist_source,))
-    column = args.plot_column or ("Q0_abs_max" if spec.analysis == "sweep" else "resonance_1")
-    if args.plot and column not in spec.columns[len(spec.params) + 3:]:
-        raise MechcircError(f"--plot-column {column!r} is not a result column (expected one of "
-                            f"{', '.join(spec.columns[len(spec.params) + 3:])})")
+    column = _plot_column(args, spec)
     with Progress(len(spec.points), "study") as bar:
         result = run_study(spec, output=args.output, scheduler=args.scheduler,
                            workers=args.workers, resume=args.resume,

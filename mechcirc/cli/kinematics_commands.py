@@ -7,10 +7,10 @@ import math
 import sys
 from pathlib import Path
 
-from ..errors import InputError, MechcircError
+from ..errors import InputError, MechcircError, NetlistError
 from ..units import convert_frequency
-from ._common import (MAX_LENGTH, MAX_OMEGA, add_command, add_handler, check_output_paths, count,
-                      print_json, real, save_figure, write_columns)
+from ._common import (MAX_LENGTH, MAX_OMEGA, add_command, add_handler, check_output_paths,
+                      check_table_path, count, print_json, real, save_figure, write_columns)
 
 
 def register(sub) -> None:
@@ -282,6 +282,7 @@ def cmd_frame(args) -> int:
     from ..kinematics import FourBar, LinkMass, beat_up_force, frame_loading
 
     check_output_paths(args.output, plots=(args.plot,))
+    check_table_path(args.output)
     k = 1e-3 if args.unit == "mm" else 1.0            # to metres
     fb = FourBar(args.crank * k, args.coupler * k, args.rocker * k, args.frame * k,
                  branch=args.branch)
@@ -408,14 +409,32 @@ def _print_designs(args, res, exported) -> None:
                  else "is written as a comment: this scene format has no crank-angle loads)"))
 
 
+def _load_linkage(path: str):
+    """:func:`mechcirc.kinematics.load_linkage`; a scene's table in the file (an unknown
+    top-level key to a linkage) is answered with the commands that read scene files."""
+    import re
+
+    from ..kinematics import load_linkage
+    from ..scene.files import SCENE_TABLES
+
+    try:
+        return load_linkage(path)
+    except NetlistError as exc:
+        m = re.match(r"unknown top-level key '([^']*)'", exc.message)
+        if m and m.group(1) in SCENE_TABLES:
+            exc.message += (f"; [{m.group(1)}] is a table of a scene: 'mechcirc scene {path} "
+                            "--theta DEG' or 'mechcirc simulate' read scene files (in Python, "
+                            "mechcirc.scene.load_scene(FILE).linkage is its linkage)")
+            exc.args = (str(exc),)
+        raise
+
+
 def cmd_linkage(args) -> int:
     import numpy as np
 
-    from ..kinematics import load_linkage
-
     check_output_paths(plots=(args.plot,), reads=(args.file,))
 
-    lk = load_linkage(args.file)
+    lk = _load_linkage(args.file)
     theta = math.radians(args.theta)
     state = lk.solve(theta)
     if args.plot:

@@ -66,8 +66,10 @@ def _elements(args, circuit):
     asked = [n.strip() for n in args.elements.split(",") if n.strip()]
     unknown = [n for n in asked if n not in names]
     if unknown:
-        raise MechcircError(f"--elements: no element named {', '.join(map(repr, unknown))}; "
-                            f"elements: {', '.join(names)}")
+        from ..sources import did_you_mean
+
+        raise MechcircError(f"--elements: no element named {', '.join(map(repr, unknown))}"
+                            f"{did_you_mean(unknown[0], names)} (elements: {', '.join(names)})")
     return asked
 
 

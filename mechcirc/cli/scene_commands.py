@@ -8,8 +8,8 @@ import warnings
 from ..errors import MechcircError
 from ..limits import MAX_CYCLE_POINTS
 from ..units import FREQUENCY_UNITS, in_unit
-from ._common import (add_command, add_handler, check_output_paths, count, print_json, real,
-                      save_figure, write_columns)
+from ._common import (add_command, add_handler, check_output_paths, check_table_path, count,
+                      print_json, real, save_figure, write_columns)
 
 
 def register(sub) -> None:
@@ -83,6 +83,7 @@ def _register_reduce(sub) -> None:
 def cmd_scene(args) -> int:
     plots = (args.plot,) if args.plot else ()
     check_output_paths(args.output, plots=plots, reads=(args.file,))
+    check_table_path(args.output, "a CSV table (--cycle) or a netlist (--theta)")
     if args.plot and not args.cycle and args.mode is None:
         raise MechcircError("--plot draws the --cycle map, or with --mode N a mode at the "
                             "crank angle; with --theta alone use -o and 'mechcirc sweep'")
@@ -116,7 +117,7 @@ def cmd_scene(args) -> int:
         from ..scene.plots import plot_mode
 
         drawn = plot_mode(scene, math.radians(theta_deg), args.mode)
-        save_figure(drawn.figure, args.plot)
+        save_figure(drawn, args.plot)
     if args.output:
         from ..outputs import atomic_open
 
@@ -233,6 +234,7 @@ def cmd_reduce(args) -> int:
     from .._simplify import parse_band, simplify
 
     check_output_paths(args.out, reads=(args.file,))
+    check_table_path(args.out, "the reduced netlist")
     band = parse_band(args.band)
     if args.points < 10 or args.points > 1_000_000:
         raise MechcircError(f"--points must be between 10 and 1000000, got {args.points}")

@@ -7,7 +7,8 @@ import sys
 
 from ..errors import MechcircError
 from ..units import parse_omega
-from ._common import add_command, add_handler, check_output_paths, print_json, save_figure
+from ._common import (add_command, add_handler, check_names, check_output_paths,
+                      check_table_path, print_json, save_figure)
 
 
 def register(sub) -> None:
@@ -59,17 +60,19 @@ def cmd_transient(args) -> int:
     from ..transient import transient
 
     check_output_paths(args.output, plots=(args.plot,), reads=(args.file,))
+    check_table_path(args.output)
     _positive("--t-end", args.t_end)
     _positive("--dt", args.dt)
     _positive("--rtol", args.rtol)
     if args.amplitude is not None and not math.isfinite(args.amplitude):
         raise MechcircError(f"--amplitude must be finite, got {args.amplitude:g}")
-    circuit = load(args.file, require_drive=False)
-    result = transient(circuit, args.t_end, args.dt, args.drive, amplitude=args.amplitude,
-                       rtol=args.rtol, rpm=args.rpm)
     if args.element and not args.plot:
         raise MechcircError("--element NAME draws a panel of the plot: give --plot IMAGE too")
-    fig = result.plot(elements=args.element) if args.plot else None   # names checked here
+    circuit = load(args.file, require_drive=False)
+    check_names(args.element, [e.name for e in circuit.elements])   # before the run
+    result = transient(circuit, args.t_end, args.dt, args.drive, amplitude=args.amplitude,
+                       rtol=args.rtol, rpm=args.rpm)
+    fig = result.plot(elements=args.element) if args.plot else None
     with OutputSet() as out:
         if args.output:
             with open(out.path(args.output), "w", encoding="utf-8") as fh:

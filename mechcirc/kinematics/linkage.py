@@ -573,8 +573,13 @@ def _read_links(table: dict, pose: dict, text: str, source: str,
         least = 1 if lname in sliders else 2
         if not isinstance(pts, list) or len(pts) < least or \
                 not all(isinstance(p, str) for p in pts):
+            from ..sources import did_you_mean
+
+            stray = sorted(s for s in sliders if s not in table)   # a slider's misspelt link
+            why = (f"; [[sliders]] names {stray[0]!r}, which is no link"
+                   f"{did_you_mean(stray[0], table)}") if stray and least == 2 else ""
             raise located(text, source, f"link {lname!r} must list at least two point names "
-                          "(one for a slider's link)",
+                          f"(one for a slider's link){why}",
                        "links", lname, expected='["P1", "P2", …]')
         for p in pts:
             if p not in pose:

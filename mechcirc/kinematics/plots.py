@@ -47,13 +47,13 @@ def plot_fourbar(fourbar, omega: float | None = None, n: int = 721, *, fig=None)
 
     Returns
     -------
-    matplotlib.figure.Figure
-        The figure, its four panels stacked.
+    matplotlib.figure.Figure or matplotlib.figure.SubFigure
+        What it drew on (``fig`` when given, it must be empty; else a new
+        Figure): its four panels stacked.
     """
     lo, hi = fourbar.crank_range()
     th = np.linspace(lo, hi, n)
-    if not fourbar.crank_rotates_fully:
-        th = th[1:-1]
+    th = th if fourbar.crank_rotates_fully else th[1:-1]
     with np.errstate(all="ignore"):             # 0/0 at a change point's branch crossing
         st = fourbar.evaluate(th)
     deg = np.degrees(th)
@@ -149,8 +149,9 @@ def plot_synthesis(designs, n: int = 721, fig=None):
 
     Returns
     -------
-    matplotlib.figure.Figure
-        The figure: the best design on the left, the curves of all on the right.
+    matplotlib.figure.Figure or matplotlib.figure.SubFigure
+        What it drew on (``fig`` when given, it must be empty; else a new
+        Figure): the best design on the left, the curves of all on the right.
     """
     fig, ((left, right),) = _figure(1, 2, (12, 7), fig, "plot_synthesis", width_ratios=(1, 1.3))
     draw_design(designs[0], left)
@@ -190,8 +191,9 @@ def plot_frame_loading(result, *, fig=None):
 
     Returns
     -------
-    matplotlib.figure.Figure
-        The figure, its three panels stacked.
+    matplotlib.figure.Figure or matplotlib.figure.SubFigure
+        What it drew on (``fig`` when given, it must be empty; else a new
+        Figure): its three panels stacked.
     """
     fig, ax = _figure(3, 1, (7, 8), fig, "plot_frame_loading")
     deg = np.degrees(result.theta)
@@ -230,8 +232,9 @@ def plot_shaking(result, fig=None):
 
     Returns
     -------
-    matplotlib.figure.Figure
-        The figure, its four panels in a 2 × 2 grid.
+    matplotlib.figure.Figure or matplotlib.figure.SubFigure
+        What it drew on (``fig`` when given, it must be empty; else a new
+        Figure): its four panels in a 2 × 2 grid.
     """
     fig, ax = _figure(2, 2, (10, 8), fig, "plot_shaking")
     deg = np.degrees(result.theta)
@@ -290,6 +293,8 @@ def plot_linkage(linkage, state, paths=None, *, ax=None, fig=None):
     Returns
     -------
     matplotlib.axes.Axes or matplotlib.figure.Figure
+        What it drew on: ``ax`` when given, else ``fig`` (it must be empty) or the
+        new Figure.
     """
     if ax is not None:
         a = ax

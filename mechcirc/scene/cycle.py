@@ -343,7 +343,7 @@ def plot_cycle(cmap: CycleMap, ax=None, *, fig=None, unit: str = "rad/s"):
 
     Returns
     -------
-    The Axes given as ``ax``, or the Figure of the two panels.
+    The Axes ``ax`` when given, else ``fig`` (empty) or the new Figure (what it drew on).
     """
     if unit not in FREQUENCY_UNITS:
         raise ValueError(f"unit must be one of {', '.join(map(repr, FREQUENCY_UNITS))}, "

@@ -26,7 +26,8 @@ def plot_motion(result, names=None, fig=None):
 
     Returns
     -------
-    matplotlib.figure.Figure
+    matplotlib.figure.Figure or matplotlib.figure.SubFigure
+        What it drew on: ``fig`` when given (it must be empty), else the new Figure.
     """
     from ..plotting import new_panels
 
@@ -82,8 +83,10 @@ def plot_mode(scene, theta: float, n: int = 1, *, kind: str = "resonance", ax=No
 
     Returns
     -------
-    matplotlib.axes.Axes
-        Each line's gid is ``"rigid:LINK"`` or ``"mode:LINK"``.
+    matplotlib.axes.Axes or matplotlib.figure.Figure
+        What it drew on: ``ax`` when given, else the new Figure (the
+        convention of :mod:`mechcirc.plotting`).  Each line's gid is
+        ``"rigid:LINK"`` or ``"mode:LINK"``.
 
     Raises
     ------
@@ -95,17 +98,19 @@ def plot_mode(scene, theta: float, n: int = 1, *, kind: str = "resonance", ax=No
     lk = scene.linkage
     big = max(float(np.hypot(*d)) for d in raw.values())
     k = exaggeration * lk.length_scale() / big if big > 0 else 0.0
+    fig = None
     if ax is None:
         from ..plotting import new_panels
 
-        ax = new_panels(None, caller="plot_mode", figsize=(7, 6))[1][0, 0]
+        fig, axes = new_panels(None, caller="plot_mode", figsize=(7, 6))
+        ax = axes[0, 0]
     _draw_displaced(ax, scene, state, {p: k * np.asarray(d) for p, d in raw.items()})
     r = mode.resonance
     ax.set_title(f"{kind} {n}: ωn = {r.omega:.6g} rad/s, ζ = {r.zeta:.3g}, at θ = "
                  f"{math.degrees(theta):.6g}° (largest displacement drawn "
                  f"{exaggeration:.0%} of the linkage)", fontsize=9)
     ax.set(aspect="equal", xlabel=f"x [{lk.units}]", ylabel=f"y [{lk.units}]")
-    return ax
+    return ax if fig is None else fig
 
 
 def _draw_displaced(ax, scene, state, moves):

@@ -203,8 +203,11 @@ class SleyParameters:
         known = {f.name for f in fields(self)}
         unknown = sorted(set(overrides) - known)
         if unknown:
-            raise ParameterError(f"unknown sley parameter(s) {', '.join(unknown)}; "
-                                 f"known: {', '.join(sorted(known))}")
+            from ..sources import did_you_mean
+
+            raise ParameterError(f"unknown sley parameter(s) {', '.join(unknown)}"
+                                 f"{did_you_mean(unknown[0], sorted(known))} "
+                                 f"(known: {', '.join(sorted(known))})")
         return replace(self, **overrides)
 
     def as_dict(self) -> dict:

@@ -18,7 +18,8 @@ def plot_result(result, fig=None):
 
     Returns
     -------
-    matplotlib.figure.Figure
+    matplotlib.figure.Figure or matplotlib.figure.SubFigure
+        What it drew on: ``fig`` when given (it must be empty), else the new Figure.
     """
     import numpy as np
     from ..plotting import new_panels

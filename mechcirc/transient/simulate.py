@@ -150,8 +150,12 @@ def parse_drive(text: str | None) -> Waveform:
         return Waveform("harmonic", omega=omega)
     if text.startswith("csv:"):
         return read_csv_drive(text[4:])
-    raise MechcircError(f"--drive {text!r} is not understood; expected harmonic:OMEGA, step, "
-                        "impulse, csv:PATH or rest")
+    from ..sources import did_you_mean
+
+    kind = text.partition(":")[0]
+    hint = did_you_mean(kind, ("harmonic", "step", "impulse", "csv", "rest"))
+    raise MechcircError(f"--drive {text!r} is not understood (expected harmonic:OMEGA, "
+                        f"step, impulse, csv:PATH or rest){hint}")
 
 
 def read_csv_drive(path: str) -> Waveform:
@@ -288,7 +292,8 @@ class TransientResult:
              title: str | None = None):
         """Plot this transient: :func:`mechcirc.plotting.plot_transient` (``ax=`` the
         nodes' panel only, else the panels on ``fig`` or a new Figure); returns what
-        it drew on."""
+        it drew on.  ``fig`` must be an *empty* Figure or SubFigure (one already
+        holding Axes is refused with an InputError)."""
         from ..plotting import plot_transient
 
         return plot_transient(self, nodes, what, elements, title, ax=ax, fig=fig)
@@ -305,6 +310,9 @@ def _grid(t_end: float, dt: float | None, waveform: Waveform) -> np.ndarray:
             dt = min(dt, 2 * math.pi / waveform.omega / 720)
     if not (math.isfinite(dt) and dt > 0):
         raise MechcircError(f"--dt must be a finite time > 0 [s], got {dt:g}")
+    if dt > t_end:          # one step of dt would run past t_end (it ran to dt)
+        raise MechcircError(f"--dt {dt:g} s is longer than --t-end {t_end:g} s; give a step "
+                            "dt ≤ t_end (the default is t_end/2000)")
     if dt < MIN_STEP:
         raise MechcircError(f"the step dt = {dt:g} s is below {MIN_STEP:g} s (its multiples "
                             "would lose precision); give a larger --dt or --t-end")
