@@ -74,7 +74,7 @@ def main() -> None:
           f"(median {m_loop * 1e3:.1f} ms)")
     print(f"speed-up vectorised / loop: {t_loop / t_vec:.0f}×; max |difference| {err:.1e}")
     t_one, _ = best_of(lambda: fb.transfer(1.234), 20000)
-    print(f"one scalar FourBar.transfer (φ4, μ, ν) for ODE right-hand sides: {t_one * 1e6:.2f} µs")
+    print(f"one scalar FourBar.transfer (φ4, μ, ν): {t_one * 1e6:.2f} µs")
 
 
 if __name__ == "__main__":
