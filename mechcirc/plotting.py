@@ -371,7 +371,8 @@ def _light_log_axes(axes, max_minor_decades: float = 3.0) -> None:
     """Cheaper log axes: decade labels as plain text, no minor ticks on a y axis
     spanning more than ``max_minor_decades`` decades, major ticks only inside the
     view, and the minor grid of a shared log x axis drawn as one line collection
-    per panel.
+    per panel holding one path (its lines joined by NaN breaks: transformed and
+    drawn once, where a path per line is transformed on its own).
 
     matplotlib's default labels are mathtext (its parser is built on first use)
     and every minor tick is an object drawn with its grid line: on a sweep's
@@ -411,7 +412,7 @@ def _light_log_axes(axes, max_minor_decades: float = 3.0) -> None:
         if a is not axes[-1]:
             # A panel above the last shows no x tick labels: its own Ticker without
             # Tick objects (the limits stay shared); its decades' grid lines join the
-            # collection and their tick marks are one line of tick markers.
+            # grid's path and their tick marks are one line of tick markers.
             a.xaxis.major = Ticker()
             a.xaxis.set_major_locator(NullLocator())
             a.xaxis.set_major_formatter(NullFormatter())
@@ -424,9 +425,10 @@ def _light_log_axes(axes, max_minor_decades: float = 3.0) -> None:
                 markersize=rcParams["xtick.major.size"], color=rcParams["xtick.color"],
                 markeredgewidth=rcParams["xtick.major.width"], clip_on=False, zorder=2.01))
         a.add_collection(LineCollection(
-            [[(x, 0), (x, 1)] for x in grid], transform=a.get_xaxis_transform(),
-            colors=rcParams["grid.color"], linewidths=rcParams["grid.linewidth"],
-            linestyles=rcParams["grid.linestyle"], alpha=0.3, zorder=1.5), autolim=False)
+            [[(v, y) for x in grid for v, y in ((x, 0.0), (x, 1.0), (math.nan, math.nan))]],
+            transform=a.get_xaxis_transform(), colors=rcParams["grid.color"],
+            linewidths=rcParams["grid.linewidth"], linestyles=rcParams["grid.linestyle"],
+            alpha=0.3, zorder=1.5), autolim=False)
 
 
 def _draw_K(ax, result, curves, resonances, unit: str, mark: bool = False):

@@ -50,9 +50,10 @@ def test_sweep_axes_label_decades_in_plain_text(stb_sweep):
     lo, hi = ax_k.get_ylim()
     assert np.log10(hi / lo) > 3 and len(ax_k.yaxis.get_minorticklocs()) == 0
     # The frequency axis keeps its minor grid, as one line collection per panel
-    # at 2…9 × 10ⁿ inside the view; the panels above the last (no x tick labels)
-    # have no x Tick objects: their decades' grid lines are in that collection
-    # and their tick marks one line of markers, at the last panel's ticks.
+    # at 2…9 × 10ⁿ inside the view, its lines one path broken by NaN; the panels
+    # above the last (no x tick labels) have no x Tick objects: their decades'
+    # grid lines are in that path and their tick marks one line of markers, at
+    # the last panel's ticks.
     lo, hi = ax_q.get_xlim()
     want = sorted(x for x in np.outer(np.arange(2, 10), 10.0 ** np.arange(-1, 5)).ravel()
                   if lo <= x <= hi)
@@ -60,7 +61,10 @@ def test_sweep_axes_label_decades_in_plain_text(stb_sweep):
     assert len(want) > 10 and list(ax_q.xaxis.get_majorticklocs()) == decades
     for ax in fig.axes:
         (lc,) = [c for c in ax.collections if type(c).__name__ == "LineCollection"]
-        got = sorted(seg[0, 0] for seg in lc.get_segments())
+        (path,) = (p.vertices for p in lc.get_paths())
+        assert np.array_equal(path[0::3, 0], path[1::3, 0]) and np.isnan(path[2::3]).all()
+        assert (path[0::3, 1] == 0).all() and (path[1::3, 1] == 1).all()
+        got = sorted(path[0::3, 0])
         np.testing.assert_allclose(got, sorted(want + decades * (ax is not ax_q)), rtol=1e-12)
     for ax in (ax_k, ax_p):
         assert len(ax.xaxis.get_majorticklocs()) == 0 and ax.get_xlim() == (lo, hi)
