@@ -105,19 +105,18 @@ class NodalSystem:
         return self.cached("_sparse_" + kind, build)
 
     def dense(self, kind: str) -> NDArray[np.float64]:
-        """The matrix of ``kind`` as a dense array, without scipy (small systems).
-
-        The stamps are summed in their order, as the sparse matrix sums them.
+        """The matrix of ``kind`` (as in :meth:`sparse`) as a dense (n, n) array, without
+        scipy (small systems): equal to ``self.sparse(kind).toarray()``, the stamps
+        summed in their order as the sparse matrix sums them; built once.
 
         Parameters
         ----------
         kind : str
-            ``"mass"``, ``"damper"``, ``"spring"`` or ``"lever"``.
+            As in :meth:`sparse`.
 
         Returns
         -------
-        ndarray, shape (n, n)
-            Equal to ``self.sparse(kind).toarray()``; built once.
+        ndarray
         """
         def build(system):
             # bincount adds each entry's weights in their order from 0.0, as
@@ -130,17 +129,17 @@ class NodalSystem:
         return self.cached("_dense_" + kind, build)
 
     def diagonal(self, kind: str) -> NDArray[np.float64]:
-        """The diagonal of the matrix of ``kind``, summed from the stamps without scipy.
+        """The diagonal of the matrix of ``kind`` (as in :meth:`sparse`), summed from the
+        stamps without scipy: equal to ``self.sparse(kind).diagonal()``, shape (n,).
 
         Parameters
         ----------
         kind : str
-            ``"mass"``, ``"damper"``, ``"spring"`` or ``"lever"``.
+            As in :meth:`sparse`.
 
         Returns
         -------
-        ndarray, shape (n,)
-            Equal to ``self.sparse(kind).diagonal()``.
+        ndarray
         """
         r, c, v = (np.asarray(x) for x in self.stamps[kind])
         on = r == c
