@@ -118,15 +118,8 @@ class NodalSystem:
         -------
         ndarray
         """
-        def build(system):
-            # bincount adds each entry's weights in their order from 0.0, as
-            # np.add.at into zeros does (the same bits), at a fraction of its cost.
-            r, c, v = system.stamps[kind]
-            n = system.n
-            flat = np.asarray(r, dtype=np.intp) * n + np.asarray(c, dtype=np.intp)
-            return np.bincount(flat, np.asarray(v, dtype=float), n * n).reshape(n, n)
-
-        return self.cached("_dense_" + kind, build)
+        return self.cached("_dense_" + kind,
+                           lambda s: s._summed(kind, False).reshape(s.n, s.n))
 
     def diagonal(self, kind: str) -> NDArray[np.float64]:
         """The diagonal of the matrix of ``kind`` (as in :meth:`sparse`), summed from the
@@ -141,11 +134,21 @@ class NodalSystem:
         -------
         ndarray
         """
+        return self._summed(kind, True)
+
+    def _summed(self, kind: str, diagonal: bool) -> NDArray[np.float64]:
+        """The stamps of ``kind`` summed into the flat n × n matrix, or into its diagonal.
+
+        bincount adds each entry's weights in their order from 0.0, as
+        np.add.at into zeros does (the same bits), at a fraction of its cost.
+        """
         r, c, v = (np.asarray(x) for x in self.stamps[kind])
-        on = r == c
-        out = np.zeros(self.n)
-        np.add.at(out, r[on].astype(np.intp), v[on].astype(float))
-        return out
+        r, c, v = r.astype(np.intp), c.astype(np.intp), v.astype(float)
+        n = self.n
+        if diagonal:
+            on = r == c
+            return np.bincount(r[on], v[on], n)
+        return np.bincount(r * n + c, v, n * n)
 
     def cached(self, key: str, build):
         """``build(self)``, built once per system and kept beside the fields under ``key``."""
