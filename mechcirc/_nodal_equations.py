@@ -145,10 +145,9 @@ class NodalSystem:
         r, c, v = (np.asarray(x) for x in self.stamps[kind])
         r, c, v = r.astype(np.intp), c.astype(np.intp), v.astype(float)
         n = self.n
-        if diagonal:
-            on = r == c
-            return np.bincount(r[on], v[on], n)
-        return np.bincount(r * n + c, v, n * n)
+        on = r == c
+        flat = np.bincount(r[on], v[on], n) if diagonal else np.bincount(r * n + c, v, n * n)
+        return np.asarray(flat, dtype=float)            # (float already: no copy)
 
     def cached(self, key: str, build):
         """``build(self)``, built once per system and kept beside the fields under ``key``."""
