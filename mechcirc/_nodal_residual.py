@@ -118,17 +118,16 @@ class Pattern:
     def slot_plan(self) -> tuple[list[NDArray], NDArray]:
         """(slots, buckets): the double-double residual's summation order.
 
-        A bucket is (kind, row), numbered kind·n + row.  Buckets are ranked by their number of terms, so that the s-th terms
+        Buckets are ranked by their number of terms, so that the s-th terms
         of all buckets with more than s terms form one slot (the terms'
         indices, by rank), added in one vectorised double-double step;
         ``buckets`` is the bucket of each rank.
         """
         n = self.n
-        # Bucket kind·n + row: each kind's sums one contiguous block of n.
-        bucket = np.concatenate([self.e_kind * n + self.e_i, self.e_kind * n + self.e_j,
-                                 3 * n + self.s_row])
+        bucket = np.concatenate([self.e_i * 4 + self.e_kind, self.e_j * 4 + self.e_kind,
+                                 self.s_row * 4 + 3])
         term = np.arange(bucket.size)
-        keep = np.concatenate([self.e_i, self.e_j, self.s_row]) < n   # (the reference dropped)
+        keep = bucket < 4 * n                  # rows of the reference dropped
         bucket, term = bucket[keep], term[keep]
         uniq, inv, counts = np.unique(bucket, return_inverse=True, return_counts=True)
         order = np.argsort(-counts, kind="stable")
@@ -223,31 +222,26 @@ class Pattern:
                 acc_h[:, :k] = a
                 acc_l[:, :k] += e + T_l[:, s]
             S_h[:, buckets], S_l[:, buckets] = acc_h, acc_l
-        # The row stage on (re, im) pairs of float64, both parts in one call
-        # (the same real operations as part by part, and as the kernel's).
-        S_h, S_l = S_h.reshape(c, 4, n), S_l.reshape(c, 4, n)
+        S_h, S_l = S_h.reshape(c, n, 4), S_l.reshape(c, n, 4)
         w = np.asarray(omega)[:, None]
-        m_h, m_l = S_h[:, 0], S_l[:, 0]
-        k_h, k_l = S_h[:, 1], S_l[:, 1]
+        m_h, m_l = S_h[..., 0], S_l[..., 0]
+        k_h, k_l = S_h[..., 1], S_l[..., 1]
         if np.iscomplexobj(w):
             wm_re, wm_im, kw_re, kw_im = _complex_omega_terms(m_h, m_l, k_h, k_l, w)
-            sus = [np.stack(p, axis=-1) for p in zip(dd_add(*wm_re, -kw_re[0], -kw_re[1]),
-                                                     dd_add(*wm_im, -kw_im[0], -kw_im[1]))]
         else:
-            # susceptance part: ω S_m − S_k/ω; A x = S_c + S_l + j·sus
             sw = split(w)
-            wm = dd_mul_d(_pairs(m_h), _pairs(m_l), w, *sw)
-            kw = dd_div_d(_pairs(k_h), _pairs(k_l), w, *sw)
-            sus = [p.reshape(c, n, 2) for p in dd_add(*wm, -kw[0], -kw[1])]
-        jsus = [np.empty_like(p) for p in sus]          # j·sus: (−im, re)
-        for js, p in zip(jsus, sus):
-            js[..., 0] = -p[..., 1]
-            js[..., 1] = p[..., 0]
-        g = dd_add(_pairs(S_h[:, 2]), _pairs(S_l[:, 2]), _pairs(S_h[:, 3]), _pairs(S_l[:, 3]))
-        ax_h, ax_l = (p.reshape(c, n, 2) for p in dd_add(
-            *g, jsus[0].reshape(c, 2 * n), jsus[1].reshape(c, 2 * n)))
-        r_re = dd_add(rhs[None, :], 0.0, -ax_h[..., 0], -ax_l[..., 0])
-        r_im = (-ax_h[..., 1], -ax_l[..., 1])
+            wm_re = dd_mul_d(m_h.real, m_l.real, w, *sw)
+            wm_im = dd_mul_d(m_h.imag, m_l.imag, w, *sw)
+            kw_re = dd_div_d(k_h.real, k_l.real, w, *sw)
+            kw_im = dd_div_d(k_h.imag, k_l.imag, w, *sw)
+        # susceptance part: ω S_m − S_k/ω; A x = S_c + S_l + j·sus
+        sus_re = dd_add(*wm_re, -kw_re[0], -kw_re[1])
+        sus_im = dd_add(*wm_im, -kw_im[0], -kw_im[1])
+        g_h, g_l = dd_add(S_h[..., 2], S_l[..., 2], S_h[..., 3], S_l[..., 3])
+        ax_re = dd_add(g_h.real, g_l.real, -sus_im[0], -sus_im[1])
+        ax_im = dd_add(g_h.imag, g_l.imag, *sus_re)
+        r_re = dd_add(rhs[None, :], 0.0, -ax_re[0], -ax_re[1])
+        r_im = (-ax_im[0], -ax_im[1])
         out = np.empty((c, n), dtype=complex)
         for part, (hi, lo) in ((out.real, r_re), (out.imag, r_im)):
             lo = np.where(np.isfinite(lo) | ~np.isfinite(hi), lo, 0.0)
@@ -327,11 +321,6 @@ class Pattern:
                 dl = np.abs(xe[:, self.l_p1] - xe[:, self.l_p2])
                 Sd = Sd + np.sum(2 * self.l_r * dl * ax[:, self.l_col], axis=1)
             return S * f * scale, Sd * f * scale
-
-
-def _pairs(z: NDArray) -> NDArray[np.float64]:
-    """Complex (c, k), its last axis contiguous, as float64 (re, im) pairs (c, 2k): a view."""
-    return z.view(float)
 
 
 def _complex_omega_terms(m_h, m_l, k_h, k_l, w):
