@@ -105,48 +105,49 @@ class NodalSystem:
         return self.cached("_sparse_" + kind, build)
 
     def dense(self, kind: str) -> NDArray[np.float64]:
-        """The matrix of ``kind`` as a dense array, without scipy (small systems).
-
-        The stamps are summed in their order, as the sparse matrix sums them.
+        """The matrix of ``kind`` (as in :meth:`sparse`) as a dense (n, n) array, without
+        scipy (small systems): equal to ``self.sparse(kind).toarray()``, the stamps
+        summed in their order as the sparse matrix sums them; built once.
 
         Parameters
         ----------
         kind : str
-            ``"mass"``, ``"damper"``, ``"spring"`` or ``"lever"``.
+            As in :meth:`sparse`.
 
         Returns
         -------
-        ndarray, shape (n, n)
-            Equal to ``self.sparse(kind).toarray()``; built once.
+        ndarray
         """
-        def build(system):
-            # bincount adds each entry's weights in their order from 0.0, as
-            # np.add.at into zeros does (the same bits), at a fraction of its cost.
-            r, c, v = system.stamps[kind]
-            n = system.n
-            flat = np.asarray(r, dtype=np.intp) * n + np.asarray(c, dtype=np.intp)
-            return np.bincount(flat, np.asarray(v, dtype=float), n * n).reshape(n, n)
-
-        return self.cached("_dense_" + kind, build)
+        return self.cached("_dense_" + kind,
+                           lambda s: s._summed(kind, False).reshape(s.n, s.n))
 
     def diagonal(self, kind: str) -> NDArray[np.float64]:
-        """The diagonal of the matrix of ``kind``, summed from the stamps without scipy.
+        """The diagonal of the matrix of ``kind`` (as in :meth:`sparse`), summed from the
+        stamps without scipy: equal to ``self.sparse(kind).diagonal()``, shape (n,).
 
         Parameters
         ----------
         kind : str
-            ``"mass"``, ``"damper"``, ``"spring"`` or ``"lever"``.
+            As in :meth:`sparse`.
 
         Returns
         -------
-        ndarray, shape (n,)
-            Equal to ``self.sparse(kind).diagonal()``.
+        ndarray
+        """
+        return self._summed(kind, True)
+
+    def _summed(self, kind: str, diagonal: bool) -> NDArray[np.float64]:
+        """The stamps of ``kind`` summed into the flat n × n matrix, or into its diagonal.
+
+        bincount adds each entry's weights in their order from 0.0, as
+        np.add.at into zeros does (the same bits), at a fraction of its cost.
         """
         r, c, v = (np.asarray(x) for x in self.stamps[kind])
+        r, c, v = r.astype(np.intp), c.astype(np.intp), v.astype(float)
+        n = self.n
         on = r == c
-        out = np.zeros(self.n)
-        np.add.at(out, r[on].astype(np.intp), v[on].astype(float))
-        return out
+        flat = np.bincount(r[on], v[on], n) if diagonal else np.bincount(r * n + c, v, n * n)
+        return np.asarray(flat, dtype=float)            # (float already: no copy)
 
     def cached(self, key: str, build):
         """``build(self)``, built once per system and kept beside the fields under ``key``."""

@@ -438,35 +438,26 @@ def refine_dd(solve_fn, residual, omega, rhs, system, refine: bool, steps: int,
             own = eps / 2 * np.sum(np.abs(x0) * np.abs(r), axis=-1) / \
                 np.abs(system.difference(x0))
         return x0, None, est + np.where(np.isnan(own), np.inf, own), rho
-    xh, xl = x0, np.zeros_like(x0)
-    prev = x0
+    xh, xl = np.array(x0), np.zeros_like(x0)       # (both updated in place below)
+    prev = np.array(x0)
     est = np.full(omega.size, np.inf)
     rho = np.zeros(omega.size)
     active = np.arange(omega.size)
     for step in range(steps):
         # Only the points not yet converged take a further step (their
         # factors chosen by ``rows``); while all do, the arrays are used whole
-        # (the same values as indexed by ``active``, without the copies).
-        if active.size == omega.size:
-            xa, xla = xh, (xl if step else None)
-            r = residual(omega, xa, xla, rhs)
-            d = solve_fn(r)
-            est, rho = _estimate(system, xa, xla, d, prev if step else None, r)
-            with np.errstate(all="ignore"):
-                xh, e = two_sum(xa, d)
-            xl = e if xla is None else xla + e
-            prev = d
-        else:
-            xa, xla = xh[active], (xl[active] if step else None)
-            r = residual(omega[active], xa, xla, rhs)
-            d = solve_fn(r, active)
-            est[active], rho[active] = _estimate(system, xa, xla, d,
-                                                 prev[active] if step else None, r)
-            with np.errstate(all="ignore"):
-                s, e = two_sum(xa, d)
-            xh[active] = s
-            xl[active] = e if xla is None else xla + e
-            prev[active] = d
+        # (slices: the same values as indexed by ``active``, without the copies).
+        whole = active.size == omega.size
+        at: Any = slice(None) if whole else active
+        xa, xla = xh[at], (xl[at] if step else None)
+        r = residual(omega[at], xa, xla, rhs)
+        d = solve_fn(r) if whole else solve_fn(r, active)
+        est[at], rho[at] = _estimate(system, xa, xla, d, prev[at] if step else None, r)
+        with np.errstate(all="ignore"):
+            s, e = two_sum(xa, d)
+        xh[at] = s
+        xl[at] = e if xla is None else xla + e
+        prev[at] = d
         # est bounds the error before this correction; after it, the error is
         # smaller still (by the contraction): stop once est is near rounding.
         active = active[est[active] > 16 * eps]
@@ -558,10 +549,8 @@ def solve_unit(system: NodalSystem, omega: ArrayLike, *, refine: bool = True
 
     Parameters
     ----------
-    system : NodalSystem
-    omega : array_like
-        [rad/s].
-    refine : bool
+    system, omega, refine
+        As in :func:`solve`.
 
     Returns
     -------
@@ -601,7 +590,7 @@ def evaluate_complex(system: NodalSystem, s: ArrayLike
 
 
 def mobility(system: NodalSystem, omega: ArrayLike) -> NDArray[np.complex128]:
-    """K(ω) [m/(N·s)] seen by the drive, by nodal analysis.
+    """K(ω) [m/(N·s)] seen by the drive, by nodal analysis: :func:`mobility_and_error`'s K.
 
     Parameters
     ----------
@@ -613,20 +602,18 @@ def mobility(system: NodalSystem, omega: ArrayLike) -> NDArray[np.complex128]:
     -------
     ndarray of complex
     """
-    return solve(system, omega, keep_x=False).K
+    return mobility_and_error(system, omega)[0]
 
 
 def mobility_and_error(system: NodalSystem, omega: ArrayLike
                        ) -> tuple[NDArray[np.complex128], NDArray[np.float64]]:
-    """K(ω) [m/(N·s)] and its estimated relative error, from one refined solve.
-
-    See :class:`Solution` for the estimate and the singular-point convention.
+    """K(ω) [m/(N·s)] and its estimated relative error, from one refined solve
+    (:class:`Solution` tells the estimate and the singular-point convention).
 
     Parameters
     ----------
-    system : NodalSystem
-    omega : array_like
-        [rad/s].
+    system, omega
+        As in :func:`mobility`.
 
     Returns
     -------
