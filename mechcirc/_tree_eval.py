@@ -38,7 +38,7 @@ __all__ = ["evaluate", "evaluate_designs", "push_down", "plan", "Plan", "compile
 # (Σ|tᵢ| ≫ |S|) raises the bound there; the children's errors are weighted by |tᵢ|/|S|, not
 # multiplied down the tree, so a deep ladder with no cancellation keeps a bound of a few
 # hundred u.  A node keeps |Ŝ| and E, the bound of |Ŝ − S|; its parent takes ρ(S) = E/|Ŝ|,
-# and through a reciprocal ρ/(1 − ρ) as E/(|Ŝ| − E) (:meth:`_Value.relative`, :func:`_combine`).
+# and through a reciprocal ρ/(1 − ρ) as E/(|Ŝ| − E) (:meth:`_Value.relative`, :func:`_node_bound`).
 
 #: Unit roundoff of float64 (half the machine epsilon): the relative error of
 #: one correctly rounded operation.
@@ -630,13 +630,6 @@ class _Value:
         out.imag = self.array
         return out
 
-    def reciprocal(self, checked: bool = True) -> "_Value":
-        if self.imaginary:
-            return _Value(True, _MINUS_ONE / self.array)     # 1/(jX) = j(-1/X)
-        if not checked:
-            return _Value(False, np.reciprocal(self.array))
-        return _Value(False, _reciprocal(self.array))
-
 
 def _leaf_value(e: Element, omega, inv_omega, track: bool = False,
                 designs: tuple | None = None) -> _Value:
@@ -730,8 +723,20 @@ def _combine(parts: list, omega, inv_omega, track: bool, keep: bool, checked: bo
         if imag is not None:
             cplx.imag += imag
         total = _Value(False, cplx)
-    if not track:
-        return total if series else total.reciprocal(checked)
+    if track:
+        _node_bound(total, parts, omega, inv_omega, groups)
+    if not series:              # K = 1/S, in place
+        a = total.array
+        total.array = _MINUS_ONE / a if total.imaginary else \
+            _reciprocal(a) if checked else np.reciprocal(a)   # 1/(jX) = j(-1/X)
+    return total
+
+
+def _node_bound(total: _Value, parts: list, omega, inv_omega, groups: list) -> None:
+    """The bound E of |Ŝ − S| of a series or parallel node's sum S (``total``, before
+    the reciprocal of a parallel node) and |Ŝ| into ``total`` (see :func:`evaluate`):
+    Σ |tᵢ| (ρᵢ + m·u) over its leaf groups and its internal children's values ``parts``."""
+    series, sums, counts, has, bterms = groups
     if bterms is None:         # (kept for the next call with one design)
         mu = _node_mu(sums, len(parts))
         # (0-d arrays: see _ZERO)
@@ -763,12 +768,7 @@ def _combine(parts: list, omega, inv_omega, track: bool, keep: bool, checked: bo
         bound = t if bound is None else np.add(bound, t, out=bound)
     total.sum_err = np.zeros(omega.shape) if bound is None else bound
     total.sum_mag = np.abs(total.array)
-    if not series:              # (the reciprocal in place of _Value.reciprocal's new value)
-        a = total.array
-        total.array = _MINUS_ONE / a if total.imaginary else \
-            _reciprocal(a) if checked else np.reciprocal(a)
-        total.recip = True
-    return total
+    total.recip = not series
 
 
 def _leaf_groups(node, designs) -> list:
