@@ -339,10 +339,11 @@ def drive_force(K: NDArray, kind: str, amplitude) -> NDArray[np.complex128]:
     """Q0 from K: V0/K (velocity drive) or F0 (force drive); see :attr:`Sweep.Q0`."""
     amplitude = np.asarray(amplitude, dtype=float)
     if kind == "force":
-        return np.broadcast_to(amplitude, np.broadcast_shapes(K.shape, amplitude.shape)) \
-            .astype(complex)
+        return _constant(amplitude, K.shape)
     with np.errstate(all="ignore"):
         Q0 = amplitude / K
+    if np.isfinite(Q0).all() and np.isfinite(K).all():
+        return Q0           # no zero and no pole of K (the checks below cost twice these)
     # The limits at an exact zero or pole of K (see :func:`sweep`):
     # K = 0 → Q0 = +∞·j·sign(V0); K = ∞·j → Q0 = 0.
     zero = K == 0
@@ -358,8 +359,7 @@ def drive_velocity(K: NDArray, kind: str, amplitude) -> NDArray[np.complex128]:
     """v0 from K: V0 (velocity drive) or F0·K (force drive); see :attr:`Sweep.v0`."""
     amplitude = np.asarray(amplitude, dtype=float)
     if kind == "velocity":
-        return np.broadcast_to(amplitude, np.broadcast_shapes(K.shape, amplitude.shape)) \
-            .astype(complex)
+        return _constant(amplitude, K.shape)
     out = np.empty(K.shape, dtype=complex)
     with np.errstate(all="ignore"):
         # Part by part: a complex product would turn F0 · ∞j into nan + ∞j.
@@ -367,6 +367,14 @@ def drive_velocity(K: NDArray, kind: str, amplitude) -> NDArray[np.complex128]:
         out.imag = amplitude * K.imag
     out.real[np.isinf(K.imag) & (K.real == 0)] = 0.0
     return out
+
+
+def _constant(amplitude: NDArray, shape: tuple) -> NDArray[np.complex128]:
+    """The drive's amplitude as a complex array broadcast against K's ``shape``."""
+    if amplitude.ndim == 0:     # (np.full: a third of broadcast_shapes' cost)
+        return np.full(shape, complex(amplitude))
+    return np.broadcast_to(amplitude, np.broadcast_shapes(shape, amplitude.shape)) \
+        .astype(complex)
 
 
 def singular_error(K: NDArray, err: NDArray) -> NDArray[np.float64]:

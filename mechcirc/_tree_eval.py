@@ -38,7 +38,7 @@ __all__ = ["evaluate", "evaluate_designs", "push_down", "plan", "Plan", "compile
 # (Σ|tᵢ| ≫ |S|) raises the bound there; the children's errors are weighted by |tᵢ|/|S|, not
 # multiplied down the tree, so a deep ladder with no cancellation keeps a bound of a few
 # hundred u.  A node keeps |Ŝ| and E, the bound of |Ŝ − S|; its parent takes ρ(S) = E/|Ŝ|,
-# and through a reciprocal ρ/(1 − ρ) as E/(|Ŝ| − E) (:meth:`_Value.relative`, :func:`_sum_bound`).
+# and through a reciprocal ρ/(1 − ρ) as E/(|Ŝ| − E) (:meth:`_Value.relative`, :func:`_node_bound`).
 
 #: Unit roundoff of float64 (half the machine epsilon): the relative error of
 #: one correctly rounded operation.
@@ -630,13 +630,6 @@ class _Value:
         out.imag = self.array
         return out
 
-    def reciprocal(self, checked: bool = True) -> "_Value":
-        if self.imaginary:
-            return _Value(True, _MINUS_ONE / self.array)     # 1/(jX) = j(-1/X)
-        if not checked:
-            return _Value(False, np.reciprocal(self.array))
-        return _Value(False, _reciprocal(self.array))
-
 
 def _leaf_value(e: Element, omega, inv_omega, track: bool = False,
                 designs: tuple | None = None) -> _Value:
@@ -730,21 +723,52 @@ def _combine(parts: list, omega, inv_omega, track: bool, keep: bool, checked: bo
         if imag is not None:
             cplx.imag += imag
         total = _Value(False, cplx)
-    if not track:
-        return total if series else total.reciprocal(checked)
+    if track:
+        _node_bound(total, parts, omega, inv_omega, groups)
+    if not series:              # K = 1/S, in place
+        a = total.array
+        total.array = _MINUS_ONE / a if total.imaginary else \
+            _reciprocal(a) if checked else np.reciprocal(a)   # 1/(jX) = j(-1/X)
+    return total
+
+
+def _node_bound(total: _Value, parts: list, omega, inv_omega, groups: list) -> None:
+    """The bound E of |Ŝ − S| of a series or parallel node's sum S (``total``, before
+    the reciprocal of a parallel node) and |Ŝ| into ``total`` (see :func:`evaluate`):
+    Σ |tᵢ| (ρᵢ + m·u) over its leaf groups and its internal children's values ``parts``."""
+    series, sums, counts, has, bterms = groups
     if bterms is None:         # (kept for the next call with one design)
         mu = _node_mu(sums, len(parts))
         # (0-d arrays: see _ZERO)
         bterms = groups[4] = (np.asarray(mu), np.asarray(_U_RECIP + mu), tuple(
             np.asarray(t) for t in _leaf_bound_terms(sums, counts, len(parts))))
     mu, c, terms = bterms
-    bound = _sum_bound(series, parts, mu, c, _leaf_bound(terms, has, omega, inv_omega),
-                       omega.shape)
-    mag = np.abs(total.array)
-    if not series:
-        total = total.reciprocal(checked)
-    total.sum_err, total.sum_mag, total.recip = bound, mag, not series
-    return total
+    bound = _leaf_bound(terms, has, omega, inv_omega)
+    for v in parts:             # Σ |tᵢ| (ρᵢ + m·u) of the internal children's terms
+        if v.rho is None and v.recip is series:
+            # The term is 1/S of the child's sum S (a parallel child's K, or the
+            # admittance of a series child): |1/S| (ρ(S)/(1 − ρ(S)) + 4u + m·u), ρ(S)/(1 − ρ(S))
+            # as E/(|S| − E) (:func:`_over_excess` written out: a call costs about as much
+            # as one of its operations on a few hundred points).
+            E, A = v.sum_err, v.sum_mag
+            t = A - E
+            np.maximum(t, _ZERO, out=t)
+            np.divide(E, t, out=t)
+            t += c
+            t /= A
+        else:
+            rho, mag = v.relative()
+            if series:
+                t = rho + mu
+                t *= mag
+            else:
+                t = through_reciprocal(rho)
+                t += c
+                t /= mag
+        bound = t if bound is None else np.add(bound, t, out=bound)
+    total.sum_err = np.zeros(omega.shape) if bound is None else bound
+    total.sum_mag = np.abs(total.array)
+    total.recip = not series
 
 
 def _leaf_groups(node, designs) -> list:
@@ -802,32 +826,6 @@ def _leaf_bound(terms, has, omega, inv_omega):
     if has_real:
         bound = np.full(omega.shape, b_real) if bound is None else np.add(bound, b_real,
                                                                         out=bound)
-    return bound
-
-
-def _sum_bound(series: bool, parts, mu, c, bound, shape):
-    """Σ |tᵢ| (ρᵢ + m·u) of a node's terms (see :func:`evaluate`), before dividing by |S|:
-    ``bound`` (the leaf groups' share, or None) plus that of the internal children
-    (``c`` = 4u + m·u, a reciprocal's rounding and the sum's)."""
-    for v in parts:
-        if v.rho is None and v.recip is series:
-            # The term is 1/S of the child's sum S (a parallel child's K, or the
-            # admittance of a series child): |1/S| (ρ(S)/(1 − ρ(S)) + 4u + m·u).
-            t = _over_excess(v.sum_err, v.sum_mag)
-            t += c
-            t /= v.sum_mag
-        else:
-            rho, mag = v.relative()
-            if series:
-                t = rho + mu
-                t *= mag
-            else:
-                t = through_reciprocal(rho)
-                t += c
-                t /= mag
-        bound = t if bound is None else np.add(bound, t, out=bound)
-    if bound is None:
-        bound = np.zeros(shape)
     return bound
 
 

@@ -339,3 +339,24 @@ def test_complex_omega_with_zero_imaginary_part_is_its_real_part():
         warnings.simplefilter("error")       # no ComplexWarning about a discarded part
         s = c.sweep(np.array([10.0 + 0j, 50.0 + 0j]))
     np.testing.assert_array_equal(s.K, c.sweep([10.0, 50.0]).K)
+
+
+def test_drive_amplitudes_at_zeros_poles_and_between():
+    """Q0 = V0/K where K is finite and nonzero, +∞j·sign(V0) on a zero of K, 0 on a pole;
+    the constant amplitude as a complex array of K's shape (a scalar or one per design)."""
+    from mechcirc._sweep import drive_force, drive_velocity
+
+    regular = np.array([2 + 1j, -0.5j, 3e-300 + 0j])
+    for V0 in (2.0, -2.0):
+        Q0 = drive_force(regular, "velocity", V0)
+        np.testing.assert_allclose(Q0, [V0 / complex(k) for k in regular], rtol=1e-15)
+        Q0 = drive_force(np.array([2 + 1j, 0j, complex(0, np.inf)]), "velocity", V0)
+        assert Q0[0] == pytest.approx(V0 / (2 + 1j), rel=1e-15)
+        assert Q0[1].real == 0 and Q0[1].imag == np.copysign(np.inf, V0)
+        assert Q0[2] == 0
+    for kind, fn in (("velocity", drive_velocity), ("force", drive_force)):
+        out = fn(regular, kind, 3.0)
+        assert out.dtype == complex and out.shape == (3,) and (out == 3.0).all()
+        out[0] = 1.0                       # (a writable array of its own)
+        per_design = fn(np.ones((2, 4), dtype=complex), kind, np.array([[1.0], [2.0]]))
+        assert per_design.shape == (2, 4) and (per_design[1] == 2.0).all()
