@@ -59,9 +59,12 @@ def test_stb_formula_differs_from_eq7_when_eta4_is_not_1(stb):
 
 
 def test_stb_formula_equals_eq7_at_random_rational_points(stb):
+    """Exact values at two random rational points, by substitution (a second route to the
+    identity proven symbolically above: there every point with η4 = 1 is covered, so
+    more points here would check the same path again; five cost 1.5 s of CPU)."""
     F, K7, S = stb
     rng = random.Random(6)
-    for _ in range(5):
+    for _ in range(2):
         point = {S[n]: sp.Rational(rng.randint(1, 400), rng.randint(1, 40)) for n in NAMES}
         point[S["eta4"]] = 1
         point[S["omega"]] = sp.Rational(rng.randint(1, 5000), rng.randint(1, 7))

@@ -12,16 +12,21 @@ def rel_err(a, b, keys=("eps2P", "eps4P", "M2V")):
                for k in keys for i in (0, 1))
 
 
+# The DOP853 references below are the run that simulate(method="DOP853", rtol=R) returns
+# (its run at R/100), asked for directly without the error estimate's second run at R:
+# the same states bit for bit (checked), one DOP853 run instead of two.
 def test_zero_clearance():
     a = simulate("one-side", 1, revolutions=2, points_per_revolution=1440)
-    b = simulate("one-side", 1, revolutions=2, method="DOP853", points_per_revolution=1440)
+    b = simulate("one-side", 1, revolutions=2, method="DOP853", rtol=1e-12,
+                 error_estimate=False, points_per_revolution=1440)
     assert a.params.clearance == 0.0
     assert rel_err(a, b) < 1e-3
 
 
 def test_large_clearance_001():
     a = simulate("one-side", 2, revolutions=2, points_per_revolution=1440)
-    b = simulate("one-side", 2, revolutions=2, method="DOP853", points_per_revolution=1440)
+    b = simulate("one-side", 2, revolutions=2, method="DOP853", rtol=1e-12,
+                 error_estimate=False, points_per_revolution=1440)
     assert a.params.clearance == 0.01
     assert rel_err(a, b) < 1e-3
     # the dead zone is really entered: the rod carries only damping there
@@ -49,7 +54,7 @@ def test_tiny_clearance_neither_chatters_nor_stalls():
 def test_very_stiff_connections_cope():
     kw = dict(C2=1e8, C4=1e8, revolutions=1, points_per_revolution=720)
     a = simulate("one-side", 1, **kw)
-    b = simulate("one-side", 1, method="DOP853", rtol=1e-8, **kw)
+    b = simulate("one-side", 1, method="DOP853", rtol=1e-10, error_estimate=False, **kw)
     assert rel_err(a, b) < 1e-3
     assert a.n_steps > 20 * simulate("one-side", 1, revolutions=1,
                                      points_per_revolution=720).n_steps   # step shrank

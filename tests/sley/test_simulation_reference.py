@@ -39,6 +39,8 @@ def test_presets_agree_with_independent_equations(drive, variant, spp, tol):
                    steps_per_period=spp, error_estimate=False)
     assert set(want) <= set(got.extrema)
     assert rel(got.extrema, want) < tol
+    # the run rtol=1e-11 returns (at 1e-11 / 100) without the estimate's second run: the
+    # same states bit for bit (checked); the estimate is tested in test_simulation.py
     got = simulate(drive, variant, revolutions=2, points_per_revolution=1440,
-                   method="DOP853", rtol=1e-11)
+                   method="DOP853", rtol=1e-11 / 100, error_estimate=False)
     assert rel(got.extrema, want) < 1e-7
