@@ -391,7 +391,8 @@ class SparseSolver:
             from scipy.sparse.csgraph import reverse_cuthill_mckee
 
             A = sp.csr_matrix((np.ones(nnz), pat.indices, pat.indptr), shape=(n, n))
-            p = np.asarray(reverse_cuthill_mckee(A, symmetric_mode=True))
+            # int64 as np.arange's: scipy's int32 would compile the kernels a second time
+            p = np.asarray(reverse_cuthill_mckee(A, symmetric_mode=True), dtype=np.int64)
         q = np.empty_like(p)
         q[p] = np.arange(n)
         cols = np.repeat(np.arange(n), np.diff(pat.indptr))
