@@ -98,16 +98,14 @@ def separations(time, e, w, stiffness, damping, gap, name, omega_shaft=None):
     lo = lo + np.maximum(lo, fd)                  # < 0: contact on the lower flank
     closed = (up > 0) | (lo < 0)
     out = []
-    k = 1
     n = time.size
-    while k < n:
-        if not (closed[k - 1] and not closed[k]):
-            k += 1
-            continue
+    # openings: closed at k-1, open at k; each closes at the first closed sample after it
+    opens = np.flatnonzero(closed[:-1] & ~closed[1:]) + 1
+    closes = np.flatnonzero(~closed[:-1] & closed[1:]) + 1
+    after = np.searchsorted(closes, opens, side="right")
+    for k, a in zip(opens.tolist(), after.tolist()):
+        j = int(closes[a]) if a < closes.size else n
         t_open = _root(time, up if up[k - 1] > 0 else lo, k)[0]
-        j = k + 1
-        while j < n and not closed[j]:
-            j += 1
         t_close, v_imp = math.nan, math.nan
         if j < n:
             t_close, _ = _root(time, up if up[j] > 0 else lo, j)
@@ -122,5 +120,4 @@ def separations(time, e, w, stiffness, damping, gap, name, omega_shaft=None):
             angle = math.degrees(theta - 2 * math.pi * rev)
             dur = math.degrees(omega_shaft * (t_close - t_open))
         out.append(Separation(name, float(t_open), float(t_close), v_imp, angle, dur, rev))
-        k = j + 1
     return out

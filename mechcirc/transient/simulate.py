@@ -556,21 +556,14 @@ def _separations(out: TransientResult, circuit, drive):
     v = out.v
     if v is None:                   # (a run with clearances always forms v)
         raise ValueError("the separations need the node velocities")
-    for e, comp in backlash_elements(circuit):
-        found += separations(out.time, _across(out.x, index, e), _across(v, index, e),
+    clear = backlash_elements(circuit)
+    G = _incidences(index, [e for e, _ in clear], len(index))
+    E, W = (out.x @ G).T, (v @ G).T
+    for j, (e, comp) in enumerate(clear):
+        found += separations(out.time, E[j], W[j],
                              *_law_params(e, comp), e.name,
                              drive.omega if drive.kind == "motion" else None)
     return sorted(found, key=lambda s: s.t_open)
-
-
-def _across(Y, index: dict, e) -> np.ndarray:
-    """Y(n1) − Y(n2) across element ``e`` at every sample (a node not in ``index``: 0)."""
-    out = np.zeros(Y.shape[0])
-    if e.n1 in index:
-        out = out + Y[:, index[e.n1]]
-    if e.n2 in index:
-        out = out - Y[:, index[e.n2]]
-    return out
 
 
 def _law_params(spring, comp) -> tuple[float, float, float]:
@@ -1150,18 +1143,22 @@ def _nonlinear(ss: StateSpace, circuit, z0, t, u, rtol, rate=None):
     u = np.ascontiguousarray(np.vstack([u, rate if rate is not None else np.full(u.size, np.nan)]))
     hmax = min(1.0 / w_max, t[-1]) if w_max > 0 else t[-1]
 
-    def run(tol, atol, hm):
+    def run(tol, atol, hm, locate=True):
         out = np.empty((t.size, N))
         z = z0.astype(float).copy()
         steps = kern.dopri_run(z, 0.0, h, t.size, *mats, u, tol, atol, hm,
                                kern._A, kern._B4, kern._C, kern._D, dense, out,
-                               1e-6 * hm)
+                               1e-6 * hm if locate else math.inf)
         if steps < 0:
             raise MechcircError("the clearance integrator's step fell below 1e-14 s "
                                 "(the network is too stiff for it)")
         return out
 
-    atol = _absolute_tolerance(run, z0, rtol, hmax)
+    # The pilot that scales the absolute tolerance needs the states' peaks
+    # only: it does not locate the kinks (which cost most of its steps: 1455
+    # against 44 for the 10-mass chain of benchmarks/bench_transient.py).
+    atol = _absolute_tolerance(lambda tol, a, hm: run(tol, a, hm, locate=False), z0, rtol,
+                               hmax)
     # Error estimate: the run asked for, and a reference at a REF_TOL× tighter
     # tolerance and 1/REF_H of the largest step (a run whose steps are limited
     # by hmax or by the drive's samples, as at loose tolerances, would
@@ -1194,14 +1191,16 @@ def _nonlinear(ss: StateSpace, circuit, z0, t, u, rtol, rate=None):
 def _absolute_tolerance(run: Callable, z0: np.ndarray, rtol: float, hmax: float) -> np.ndarray:
     """Absolute tolerance scaled to the solution, state by state: rtol × the
     state's peak over the run, from a loose pilot ``run(tol, atol, hmax)``
-    (repeated once if the start's scale was far off: a run from rest has none)."""
+    (repeated once if the solution stayed far below the start's scale, so the
+    pilot's absolute tolerance was too loose for it: a run from rest has no
+    scale; a solution far above it was only integrated more tightly)."""
     N = z0.size
     scale = max(float(np.abs(z0).max()), 0.0) or 1.0
     pilot_tol = max(rtol, 1e-4)
     for _ in range(2):
         peak = np.abs(run(pilot_tol, np.full(N, pilot_tol * scale), hmax)).max(axis=0)
         new = float(peak.max())
-        if not (math.isfinite(new) and new > 0) or 0.1 * scale <= new <= 10 * scale:
+        if not (math.isfinite(new) and new > 0) or 0.1 * scale <= new:
             break
         scale = new
     if math.isfinite(float(peak.max())) and peak.max() > 0:
@@ -1267,16 +1266,20 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, notes, want=Tr
     X = affine(ss.Cx, ss.Dx, cols=nx, Cz=x_ready)
     V = affine(ss.Cv, ss.Dv, ss.Ev, Cz=v_ready) if velocities else None
     index = {n: i for i, n in enumerate(ss.nodes)}
-    law_cache = {name: _law_forces(e, comp, _across(X, index, e), _across(V, index, e))
-                 for name, (e, comp) in clear.items()}
+    if clear:                       # e and w of every clearance: one product each
+        G = _incidences(index, [e for e, _ in clear.values()], len(ss.nodes))
+        Ec, Wc = (X @ G).T, (V @ G).T
+    law_cache = {name: _law_forces(e, comp, Ec[j], Wc[j])
+                 for j, (name, (e, comp)) in enumerate(clear.items())}
     Acc = None
     if (want and any(e.kind == "mass" for e in circuit.elements)) or \
             (ss.kind == "velocity" and bool(clear)):
         # a = C_v ż + D_v u̇, with ż = A z + B u (+ the clearance forces): C_v A is
         # formed once, so the cost is one (n_t × N) · (N × n) product.
         Acc = affine(ss.Cv @ ss.A, ss.Cv @ ss.B, ss.Dv)
-        for j, name in enumerate(clear):        # the clearance forces drive the masses too
-            Acc += np.outer(law_cache[name][0], ss.Cv @ ss.extra[:, j])
+        if clear:                               # the clearance forces drive the masses too
+            F = np.column_stack([law_cache[name][0] for name in clear])
+            Acc += F @ (ss.Cv @ ss.extra[:, :len(clear)]).T
 
     els = circuit.elements if want else ()
     force, dvm = _element_forces(els, index, X, V, Acc, clear, law_cache, t.size)
@@ -1319,28 +1322,17 @@ def _element_forces(els, index: dict, X, V, Acc, clear: dict, law_cache: dict, n
     """(force, velocity difference) of every element in ``els``, (n_t, len(els)) each.
 
     Linear elements: value·η times the difference across them of x (springs),
-    v (dampers) or a (masses), two column gathers for all; clearance springs and
+    v (dampers) or a (masses), one product with the incidences for all; clearance springs and
     their companion dampers: their law's forces ``law_cache[spring name]``.
     """
-    i1 = np.array([index.get(e.n1, -1) for e in els], dtype=int)
-    i2 = np.array([index.get(e.n2, -1) for e in els], dtype=int)
-
-    def across(Y):                          # (n_t, n_elements)
-        out = np.take(Y, np.maximum(i1, 0), axis=1)
-        out[:, i1 < 0] = 0.0
-        second = np.take(Y, np.maximum(i2, 0), axis=1)
-        second[:, i2 < 0] = 0.0
-        out -= second
-        return out
-
-    dvm = across(V) if V is not None else np.zeros((n_t, 0))
+    G = _incidences(index, els, len(index))
+    dvm = V @ G if V is not None else np.zeros((n_t, 0))
     scale = np.array([e.value * e.eta for e in els])
     kinds = np.array([e.kind for e in els])
-    force = np.zeros((n_t, len(els)))
-    for kind, Y in (("spring", X), ("damper", None), ("mass", Acc)):
-        sel = np.flatnonzero(kinds == kind)
-        if sel.size:
-            force[:, sel] = (dvm if Y is None else across(Y))[:, sel] * scale[sel]
+    force = dvm * np.where(kinds == "damper", scale, 0.0)
+    for kind, Y in (("spring", X), ("mass", Acc)):
+        if np.any(kinds == kind):           # value·η folded into the incidences
+            force += Y @ (G * np.where(kinds == kind, scale, 0.0))
     comp_of = {comp.name: e.name for e, comp in clear.values() if comp is not None}
     for j, e in enumerate(els):
         if e.name in clear or e.name in comp_of:
@@ -1348,6 +1340,15 @@ def _element_forces(els, index: dict, X, V, Acc, clear: dict, law_cache: dict, n
             total, spring = law_cache[sp.name]
             force[:, j] = spring if e.name == sp.name else total - spring
     return force, dvm
+
+
+def _incidences(index: dict, els, n: int) -> np.ndarray:
+    """(n, len(els)): column j is e_n1 − e_n2 of element j (:func:`.model.incidence`), so
+    Y @ G is the difference across every element at once (a product, not gathers)."""
+    G = np.zeros((n, len(els)))
+    for j, e in enumerate(els):
+        G[:, j] = incidence(index, e.n1, e.n2, n)
+    return G
 
 
 def _law_forces(spring, comp, e, w):
