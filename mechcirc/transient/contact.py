@@ -6,7 +6,9 @@ apart (spring and damping parts summing to ≤ 0).  For every stretch of
 samples where its force is 0 after a contact, :func:`separations` reports
 when it opened, when it closed again and with which relative velocity (the
 impact), the instants refined between samples by linear interpolation of the
-law's unclipped values (error O(dt²)); the impact velocity is extrapolated
+law's unclipped values (error of order dt, not dt²: the law's slope changes at
+the flank, so the interpolation is only first order there; 1.7e-4 s at
+dt = 1e-3 s on a sampled sine); the impact velocity is extrapolated
 from the open side, where the motion is smooth.  A contact or an opening
 shorter than the output step can fall between two samples and go unseen.  With a drive given by its motion over
 a shaft revolution the instants are also cam angles, θ = Ωt.
