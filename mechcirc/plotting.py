@@ -98,6 +98,14 @@ def _axes(ax, figsize):
     return fig, axes[0, 0], True
 
 
+def _laid_out(made, fig, ax=None):
+    """A Figure made here laid out and returned; a given one (its layout the caller's) or ``ax`` as is."""
+    if made:
+        fig.tight_layout()
+        return fig
+    return fig if ax is None else ax
+
+
 #: Refinement around each exact root: points at ω_r·(1 ± s·δ) for these s, with
 #: δ the root's relative half-width ζ clipped to [REFINE_WIDTH[0], REFINE_WIDTH[1]].
 REFINE_STEPS = (0.02, 0.1, 0.3, 1.0, 3.0)
@@ -528,9 +536,7 @@ def plot_transient(result, nodes=None, what: str = "x", elements=None, title: st
     for a in axes:
         a.grid(True, alpha=0.3)
     fig.suptitle(title)
-    if made:                            # a given figure keeps the caller's layout
-        fig.tight_layout()
-    return fig
+    return _laid_out(made, fig)
 
 
 def _transient_title(result) -> str:
@@ -633,10 +639,7 @@ def plot_forces(rows, omega: float, name: str = "circuit", title: str | None = N
     ax.grid(True, axis="y", which="both", alpha=0.3)
     ax.set_title(title or f"{name}: element forces at ω = {omega:.6g} rad/s "
                           f"({omega / (2 * np.pi):.4g} Hz)")
-    if made:
-        fig.tight_layout()
-        return fig
-    return ax
+    return _laid_out(made, fig, ax)
 
 
 def plot_comparison(comparison, name: str = "circuit", measured: str = "measured",
@@ -687,9 +690,7 @@ def plot_comparison(comparison, name: str = "circuit", measured: str = "measured
     for ax in (ax_k, ax_p):
         ax.grid(True, which="both", alpha=0.3)
     fig.suptitle(title or f"{name}: model against {measured}")
-    if made:                            # a given figure keeps the caller's layout
-        fig.tight_layout()
-    return fig
+    return _laid_out(made, fig)
 
 
 def plot_study(result, params, column: str, name: str = "study", title: str | None = None, *,
@@ -728,10 +729,7 @@ def plot_study(result, params, column: str, name: str = "study", title: str | No
         _study_scatter(fig, ax, ok, bad, params[:2], column, units)
     ax.grid(True, which="both", alpha=0.3)
     ax.set_title(title or f"{name}: {column} over {len(result.rows)} points")
-    if made:
-        fig.tight_layout()
-        return fig
-    return ax
+    return _laid_out(made, fig, ax)
 
 
 def _unit_label(key: str, units) -> str:
@@ -836,9 +834,7 @@ def plot_periodic(result, title: str | None = None, *, fig=None):
     fig.suptitle(title or f"{result.name}: drive {word} over one revolution at "
                           f"{result.rpm:g} rpm ({result.harmonics} harmonics, error "
                           f"{result.error:.1g})")
-    if made:                            # a given figure keeps the caller's layout
-        fig.tight_layout()
-    return fig
+    return _laid_out(made, fig)
 
 
 def _periodic_angle_panel(ax, result, ylabel: str) -> None:
@@ -903,10 +899,7 @@ def plot_speed_map(result, title: str | None = None, *, ax=None, min_weight: flo
     ax.legend(loc="best", fontsize="small")
     ax.set_title(title or f"{result.name}: peak drive {word} vs speed (red: k·Ω = ωₙ)",
                  pad=14)
-    if made:
-        fig.tight_layout()
-        return fig
-    return ax
+    return _laid_out(made, fig, ax)
 
 
 def plot_mode(mode, name: str = "circuit", title: str | None = None, *, ax=None,
@@ -961,10 +954,7 @@ def plot_mode(mode, name: str = "circuit", title: str | None = None, *, ax=None,
     ax.set_xlabel("node")
     ax.set_ylabel("velocity / largest [1]")
     ax.grid(True, alpha=0.3)
-    if made:
-        fig.tight_layout()
-        return fig
-    return ax
+    return _laid_out(made, fig, ax)
 
 
 def plot_modes(found, name: str = "circuit", *, fig=None, unit: str = "rad/s"):
@@ -990,6 +980,4 @@ def plot_modes(found, name: str = "circuit", *, fig=None, unit: str = "rad/s"):
         max(6.0, 0.45 * max((len(m.shape) for m in found), default=0) + 2), 2.6 * max(len(found), 1)))
     for mode, ax in zip(found, axes[:, 0]):
         plot_mode(mode, name, ax=ax, unit=unit)
-    if made:                            # a given figure keeps the caller's layout
-        fig.tight_layout()
-    return fig
+    return _laid_out(made, fig)
