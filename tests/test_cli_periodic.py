@@ -63,7 +63,7 @@ def test_periodic_plot_is_written(tmp_path, capsys):
 def test_a_failing_run_leaves_no_output(tmp_path, capsys):
     out = tmp_path / "q.csv"
     assert_user_error(["periodic", CAM, "--rpm", "600", "-o", out, "--elements", "nope"],
-                      capsys, "no element named 'nope'")
+                      capsys, "unknown element 'nope'")
     assert not out.exists() and not list(tmp_path.iterdir())
 
 

@@ -50,7 +50,7 @@ def test_transient_drive_kind_did_you_mean(wave, meant, capsys, tmp_path):
 
 def test_periodic_and_reduce_element_names_did_you_mean(capsys):
     assert_user_error(["periodic", STB, "--rpm", "600", "--elements", "k44"], capsys,
-                      "no element named 'k44'; did you mean 'k4'?")
+                      "unknown element 'k44'; did you mean 'k4'? (given to --elements")
     assert_user_error(["reduce", STB, "--band", "10:2000", "--tol", "0.01", "--element",
                        "k44"], capsys, "output 'k44': no element of that name; did you mean 'k4'?")
 

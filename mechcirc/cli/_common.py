@@ -573,8 +573,6 @@ def check_table_path(path, what: str = "a CSV table") -> None:
     MechcircError
         ``path`` ends in an image format's or ``.json``.
     """
-    from pathlib import Path
-
     suffix = Path(path).suffix.lower() if path else ""
     if suffix.lstrip(".") in PLOT_FORMATS:
         raise MechcircError(f"{path}: -o writes {what}, not an image (a command that draws "

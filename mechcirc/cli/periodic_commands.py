@@ -7,8 +7,8 @@ import math
 
 from ..errors import MechcircError
 from ..units import in_unit
-from ._common import (add_command, add_handler, check_output_paths, count, load_with_warnings,
-                      print_json, real, save_figure, warning_lines)
+from ._common import (add_command, add_handler, check_names, check_output_paths, count,
+                      load_with_warnings, print_json, real, save_figure, warning_lines)
 
 
 def register(sub) -> None:
@@ -64,12 +64,7 @@ def _elements(args, circuit):
     if args.elements.strip() == "all":
         return names
     asked = [n.strip() for n in args.elements.split(",") if n.strip()]
-    unknown = [n for n in asked if n not in names]
-    if unknown:
-        from ..sources import did_you_mean
-
-        raise MechcircError(f"--elements: no element named {', '.join(map(repr, unknown))}"
-                            f"{did_you_mean(unknown[0], names)} (elements: {', '.join(names)})")
+    check_names(asked, names, "element", "--elements")
     return asked
 
 
