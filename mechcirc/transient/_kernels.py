@@ -253,6 +253,16 @@ def _root_on_dense(k, kind, side, t, hh, z, P, xi, xv, dx, vi, vv, dv, prm, t0, 
 
 
 @_jit_inline
+def branch_changes(t, hh, z, y5, xi, xv, dx, vi, vv, dv, prm, t0, dt, u):
+    """Whether any clearance element's branch code differs between the step's ends."""
+    for k in range(prm.shape[0]):
+        if (switch_state(t, z, xi, xv, dx, vi, vv, dv, prm, t0, dt, u, k)
+                != switch_state(t + hh, y5, xi, xv, dx, vi, vv, dv, prm, t0, dt, u, k)):
+            return True
+    return False
+
+
+@_leaf
 def kink_theta(t, hh, z, y5, K, P, coefD, xi, xv, dx, vi, vv, dv, prm, t0, dt, u):
     """Fraction of the step t → t + hh (states z → y5) at which the first clearance
     element changes branch, or 2.0 if none does.
@@ -400,7 +410,9 @@ def dopri_run(z, t0, dt, nout, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, u
         # (whether or not the step passed: a kink inside it inflates its error),
         # shorten it to end just past the switch, so the law is smooth inside
         # every step; the next step starts again from the size cut short.
-        if hh > kink_tol and err < math.inf:
+        if hh > kink_tol and err < math.inf and branch_changes(t, hh, z, y5, xi, xv, dx, vi, vv,
+                                                               dv, prm, t0, dt, u):
+            # (a separate, not inlined call: rare, and inlined it slowed every step)
             theta = kink_theta(t, hh, z, y5, K, P, coefD, xi, xv, dx, vi, vv, dv, prm, t0, dt, u)
             if theta < 2.0:
                 h_new = hh * min(1.0, theta * (1.0 + KINK_MARGIN) + KINK_MARGIN)
