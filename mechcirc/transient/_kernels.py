@@ -254,17 +254,19 @@ def _root_on_dense(k, kind, side, t, hh, z, P, xi, xv, dx, vi, vv, dv, prm, t0, 
 
 
 @_jit_inline
-def branch_changes(t, hh, z, y5, xi, xv, dx, vi, vv, dv, prm, t0, dt, u):
-    """Whether any clearance element's branch code differs between the step's ends."""
+def branch_changes(t, y5, xi, xv, dx, vi, vv, dv, prm, t0, dt, u, codes0, codes1):
+    """Whether any clearance element's branch code at the step's end (t, y5; written
+    into ``codes1``) differs from its code at the start (``codes0``)."""
+    changed = False
     for k in range(prm.shape[0]):
-        if (switch_state(t, z, xi, xv, dx, vi, vv, dv, prm, t0, dt, u, k)
-                != switch_state(t + hh, y5, xi, xv, dx, vi, vv, dv, prm, t0, dt, u, k)):
-            return True
-    return False
+        codes1[k] = switch_state(t, y5, xi, xv, dx, vi, vv, dv, prm, t0, dt, u, k)
+        changed = changed or codes1[k] != codes0[k]
+    return changed
 
 
 @_leaf
-def kink_theta(t, hh, z, y5, K, P, coefD, xi, xv, dx, vi, vv, dv, prm, t0, dt, u):
+def kink_theta(t, hh, z, y5, K, P, coefD, xi, xv, dx, vi, vv, dv, prm, t0, dt, u, codes0,
+               codes1):
     """Fraction of the step t → t + hh (states z → y5) at which the first clearance
     element changes branch, or 2.0 if none does.
 
@@ -277,8 +279,7 @@ def kink_theta(t, hh, z, y5, K, P, coefD, xi, xv, dx, vi, vv, dv, prm, t0, dt, u
     theta = 2.0
     have_p = False
     for k in range(prm.shape[0]):
-        c0 = switch_state(t, z, xi, xv, dx, vi, vv, dv, prm, t0, dt, u, k)
-        c1 = switch_state(t + hh, y5, xi, xv, dx, vi, vv, dv, prm, t0, dt, u, k)
+        c0, c1 = codes0[k], codes1[k]
         if c0 == c1:
             continue
         if not have_p:
@@ -386,6 +387,12 @@ def dopri_run(z, t0, dt, nout, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, u
     ytmp = np.zeros(N)
     y5 = np.zeros(N)
     P = np.zeros((4, N))
+    # branch codes of the clearance elements at the step's start (kept from the last
+    # accepted step's end) and at a trial step's end
+    codes0 = np.zeros(prm.shape[0], np.int64)
+    codes1 = np.zeros(prm.shape[0], np.int64)
+    for k in range(prm.shape[0]):
+        codes0[k] = switch_state(t0, z, xi, xv, dx, vi, vv, dv, prm, t0, dt, u, k)
     h_resume = 0.0
     t = t0
     for i in range(N):
@@ -411,10 +418,12 @@ def dopri_run(z, t0, dt, nout, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, u
         # (whether or not the step passed: a kink inside it inflates its error),
         # shorten it to end just past the switch, so the law is smooth inside
         # every step; the next step starts again from the size cut short.
-        if hh > kink_tol and err < math.inf and branch_changes(t, hh, z, y5, xi, xv, dx, vi, vv,
-                                                               dv, prm, t0, dt, u):
+        changed = err < math.inf and branch_changes(t + hh, y5, xi, xv, dx, vi, vv, dv, prm,
+                                                     t0, dt, u, codes0, codes1)
+        if changed and hh > kink_tol:
             # (a separate, not inlined call: rare, and inlined it slowed every step)
-            theta = kink_theta(t, hh, z, y5, K, P, coefD, xi, xv, dx, vi, vv, dv, prm, t0, dt, u)
+            theta = kink_theta(t, hh, z, y5, K, P, coefD, xi, xv, dx, vi, vv, dv, prm, t0, dt,
+                               u, codes0, codes1)
             if theta < 2.0:
                 h_new = hh * min(1.0, theta * (1.0 + KINK_MARGIN) + KINK_MARGIN)
                 if h_new < (1.0 - KINK_RECUT) * hh:
@@ -429,6 +438,9 @@ def dopri_run(z, t0, dt, nout, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, u
             if not last or dense:
                 h = min(hmax, max(hh * fac, h_resume))
             h_resume = 0.0
+            if changed:
+                for k in range(prm.shape[0]):
+                    codes0[k] = codes1[k]
             # after a step cut short by an output time, keep the previous h
         else:
             h = hh * max(0.1, 0.9 * err ** -0.2)
