@@ -379,8 +379,10 @@ def dopri_run(z, t0, dt, nout, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, u
     (RMS).  With ``dense`` steps run across output times (which are filled by the
     method's continuous extension) and are limited only by ``hmax``; without it
     they end on every output time, i.e. on every sample of the piecewise-linear
-    drive, so its kinks are always at step boundaries.  Negative return: the
-    step size underflowed.  The matrices come from :func:`kernel_args`.
+    drive, so its kinks are always at step boundaries.  A trial step longer than
+    ``kink_tol`` in which a clearance element changes branch is cut to end just
+    past the switch (:func:`kink_theta`, :data:`KINK_MARGIN`).  Negative return:
+    the step size underflowed.  The matrices come from :func:`kernel_args`.
     """
     N = z.shape[0]
     K = np.zeros((7, N))
