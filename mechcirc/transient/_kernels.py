@@ -202,8 +202,9 @@ _D = np.array([-12715105075 / 11282082432, 0.0, 87487479700 / 32700410799,
 
 @_jit_inline
 def _switch_g(kind, side, e, w, c, d, half):
-    """The switching function of a change of branch (:func:`_switch_kind`) at (e, w):
-    it changes sign exactly where the law's branch does."""
+    """A switching function of the law at (e, w), zero where a branch ends: ``kind`` 0
+    the gap's edge e ∓ b/2, 1 separation f_c + f_d, 2 the damping limit f_c − f_d;
+    ``side`` the wall's sign (±1)."""
     fc = c * (e - side * half)
     if kind == 0:
         return e - side * half
@@ -213,19 +214,24 @@ def _switch_g(kind, side, e, w, c, d, half):
 
 
 @_jit_inline
+def _dense_at(z, P, th, i):
+    """State i at the fraction ``th`` of the step on its continuous extension
+    (coefficients ``P`` from :func:`dense_coefficients`)."""
+    s1 = 1.0 - th
+    return z[i] + th * (P[0, i] + s1 * (P[1, i] + th * (P[2, i] + s1 * P[3, i])))
+
+
+@_jit_inline
 def _switch_on_dense(k, kind, side, th, t, hh, z, P, xi, xv, dx, vi, vv, dv, prm, t0, dt, u):
     """The switching function of clearance element k at the fraction ``th`` of the step,
     on the step's continuous extension (its coefficients in ``P``, :func:`dense_coefficients`)."""
     ut = drive_at(t + th * hh, t0, dt, u)
-    s1 = 1.0 - th
     e = dx[k] * ut
     for j in range(xi.shape[1]):
-        i = xi[k, j]
-        e += xv[k, j] * (z[i] + th * (P[0, i] + s1 * (P[1, i] + th * (P[2, i] + s1 * P[3, i]))))
+        e += xv[k, j] * _dense_at(z, P, th, xi[k, j])
     w = dv[k] * ut
     for j in range(vi.shape[1]):
-        i = vi[k, j]
-        w += vv[k, j] * (z[i] + th * (P[0, i] + s1 * (P[1, i] + th * (P[2, i] + s1 * P[3, i]))))
+        w += vv[k, j] * _dense_at(z, P, th, vi[k, j])
     return _switch_g(kind, side, e, w, prm[k, 0], prm[k, 1], 0.5 * prm[k, 2])
 
 
@@ -358,10 +364,9 @@ def accept_step(t, t_new, hh, z, y5, K, P, t0, dt, nout, k_out, coefD, out):
             dense_coefficients(z, y5, K, hh, coefD, P)
             have_p = True
         th = min((t0 + k_out * dt - t) / hh, 1.0)
-        s1 = 1.0 - th
         row = out[k_out]
         for i in range(z.shape[0]):
-            row[i] = z[i] + th * (P[0, i] + s1 * (P[1, i] + th * (P[2, i] + s1 * P[3, i])))
+            row[i] = _dense_at(z, P, th, i)
         k_out += 1
     for i in range(z.shape[0]):
         z[i] = y5[i]
