@@ -37,8 +37,12 @@ def test_estimate_is_never_zero_and_bounds_the_true_error(rows):
     assert len(rows) == len(NAMES) * len(RTOLS)
     for name, rtol, est, true, spread, _, _ in rows:
         assert est > 0, (name, rtol)
-        assert est >= true, (name, rtol, est, true)
-        # measured on the full corpus: estimate / true 1.4 … 970
+        # (where the true error is below the references' own spread it is not measured:
+        # the sampled drive's 8.4e-14 m against a spread of 5.4e-13 m, a distance that
+        # shrinks as the reference is tightened: 1.4e-12, 4.5e-13, 8.4e-14, 7.0e-14 at
+        # its rtol 1e-11 … 3e-14, while mechcirc's two runs agree to 5.7e-16)
+        assert est >= true or true <= spread, (name, rtol, est, true, spread)
+        # measured on the full corpus: estimate / true 2.9 … 448 where measured
         assert est <= 1e4 * max(true, spread), (name, rtol, est, true)
     # the references are accurate enough to measure most runs (true ≥ 10× their spread)
     assert sum(r[3] >= 10 * r[4] for r in rows) >= len(rows) // 2
@@ -47,8 +51,8 @@ def test_estimate_is_never_zero_and_bounds_the_true_error(rows):
 def test_rtol_not_reached_is_said(rows):
     """A note says "not reached" exactly when the estimate exceeds rtol × max|x|, so
     whenever the true error does: never silently."""
-    for name, rtol, _, true, _, peak, said in rows:
-        if true > rtol * peak:
+    for name, rtol, _, true, spread, peak, said in rows:
+        if true > rtol * peak and true > spread:      # (measured: as in the test above)
             assert said, (name, rtol, true / peak)
 
 
