@@ -112,7 +112,7 @@ def _register_crosscheck(sub) -> None:
                    help="a scene (.toml): cross-check it at --theta; a netlist (.mcir): "
                         "cross-check its resonances and |Q0| against its transients (the "
                         "sley options are then ignored)")
-    p.add_argument("--omega-max", metavar="W",
+    p.add_argument("--omega-max", type=real(above=0.0, omega=True), metavar="W",
                    help="with a netlist FILE: check resonances up to W [rad/s, or 50Hz] "
                         "(default 1.5 x the highest)")
     p.add_argument("--drive", choices=("one-side", "both-sides"), default="one-side")
