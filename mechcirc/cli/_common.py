@@ -521,6 +521,45 @@ def load_with_warnings(path):
 SHOWN_NAMES = 20
 
 
+def set_values(items, not_numbers: dict | None = None) -> dict[str, float]:
+    """``--set NAME=VALUE`` options as ``{NAME: value}``, each value a finite number in SI
+    units or with a unit (``omega=3000rpm``), at most 1e100 in magnitude.
+
+    Parameters
+    ----------
+    items : list of str
+        The options' texts.
+    not_numbers : dict, optional
+        Names that are not numbers, each with what to use instead.
+
+    Returns
+    -------
+    dict[str, float]
+
+    Raises
+    ------
+    MechcircError
+        A text without ``=``, a name of ``not_numbers``, or a value that is not such a number.
+    """
+    out, words = {}, not_numbers or {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        name = name.strip()
+        if not sep:
+            raise MechcircError(f"--set expects NAME=VALUE, got {item!r}")
+        if name in words:
+            raise MechcircError(f"--set {name}: not a numeric parameter; {words[name]}")
+        try:
+            out[name] = v = parse_quantity(value)
+        except UnitError as exc:
+            raise MechcircError(f"--set {name}: {exc.message} (expected {exc.expected})") \
+                from None
+        if not (math.isfinite(v) and abs(v) <= 1e100):    # C2 = 1e308 overflowed
+            raise MechcircError(f"--set {name}: must be finite and at most 1e+100 in "
+                                f"magnitude, got {value!r}")
+    return out
+
+
 def check_names(names, known, kind: str = "element", option: str = "--element") -> None:
     """Refuse a name of ``names`` not in ``known``, with "did you mean", before the work.
 

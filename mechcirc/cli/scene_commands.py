@@ -9,7 +9,7 @@ from ..errors import MechcircError
 from ..limits import MAX_CYCLE_POINTS
 from ..units import FREQUENCY_UNITS, in_unit
 from ._common import (add_command, add_handler, check_output_paths, check_table_path, count,
-                      print_json, real, save_figure, write_columns)
+                      print_json, real, save_figure, set_values, write_columns)
 
 
 def register(sub) -> None:
@@ -401,15 +401,7 @@ def _with_overrides(args, scene):
     """``scene`` with ``--set NAME=VALUE`` and ``--omega`` applied."""
     from ..scene.simfile import apply_overrides
 
-    over = {}
-    for item in args.set:
-        name, sep, value = item.partition("=")
-        if not sep:
-            raise MechcircError(f"--set expects NAME=VALUE, got {item!r}")
-        try:
-            over[name.strip()] = float(value)
-        except ValueError:
-            raise MechcircError(f"--set {name.strip()}: {value!r} is not a number") from None
+    over = set_values(args.set)
     if args.omega is not None:
         over["omega"] = args.omega
     return apply_overrides(scene, over) if over else scene

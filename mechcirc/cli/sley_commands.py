@@ -6,9 +6,8 @@ import math
 
 from ..errors import InputError
 from ..limits import MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS, MAX_SCIPY_REVOLUTIONS
-from ..units import UnitError, parse_quantity
 from ._common import (add_command, add_handler, check_output_paths, count, print_json, real,
-                      save_figure, write_columns)
+                      save_figure, set_values, write_columns)
 
 _METHODS = ("rk4", "rk4-python", "rk8", "DOP853", "RK45", "LSODA")   # = mechcirc.sley.METHODS
 _UNITS = {"eps4T": "1/s^2", "eps2P": "1/s^2", "eps4P": "1/s^2", "eps5P": "1/s^2",
@@ -135,26 +134,8 @@ _NOT_NUMBERS = {"drive": "choose the layout with --drive one-side|both-sides",
 
 
 def _overrides(args) -> dict:
-    from ..sley import ParameterError
-
     out = {"alpha": math.radians(args.alpha), "beat_sign": args.beat_sign}
-    for item in args.set:
-        name, sep, value = item.partition("=")
-        if not sep:
-            raise ParameterError(f"--set expects NAME=VALUE, got {item!r}")
-        if name.strip() in _NOT_NUMBERS:
-            raise ParameterError(f"--set {name.strip()}: not a numeric parameter; "
-                                 f"{_NOT_NUMBERS[name.strip()]}")
-        try:
-            out[name.strip()] = parse_quantity(value)   # SI, any unit: omega=3000rpm
-        except UnitError as exc:
-            raise ParameterError(f"--set {name.strip()}: {exc.message} (expected "
-                                 f"{exc.expected})") from None
-        v = out[name.strip()]
-        if not (math.isfinite(v) and abs(v) <= 1e100):    # C2 = 1e308 overflowed
-            raise ParameterError(f"--set {name.strip()}: must be finite and at most 1e+100 "
-                                 f"in magnitude, got {value!r}")
-    return out
+    return out | set_values(args.set, _NOT_NUMBERS)      # SI, any unit: omega=3000rpm
 
 
 def _options(args) -> dict:
