@@ -521,6 +521,34 @@ def load_with_warnings(path):
 SHOWN_NAMES = 20
 
 
+def scene_theta(args, scene, alternative: str = "") -> float:
+    """The crank rotation [deg] of ``--theta``, or of the scene file's ``[analysis] theta_deg``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        With ``file`` and ``theta``.
+    scene : Scene
+        The scene read from ``args.file``.
+    alternative : str
+        Another option the error message offers (``" or --cycle"``).
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    MechcircError
+        Neither gives a finite angle.
+    """
+    theta = args.theta if args.theta is not None else scene.analysis.theta_deg
+    if theta is None or not math.isfinite(theta):
+        raise MechcircError(f"{args.file}: give --theta DEG{alternative} (a finite crank "
+                            "rotation from the pose; the file has no [analysis] theta_deg)")
+    return theta
+
+
 def set_values(items, not_numbers: dict | None = None) -> dict[str, float]:
     """``--set NAME=VALUE`` options as ``{NAME: value}``, each value a finite number in SI
     units or with a unit (``omega=3000rpm``), at most 1e100 in magnitude.

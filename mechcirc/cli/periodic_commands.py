@@ -8,7 +8,8 @@ import math
 from ..errors import MechcircError
 from ..units import in_unit
 from ._common import (add_command, add_handler, check_names, check_output_paths, count,
-                      load_with_warnings, print_json, real, save_figure, warning_lines)
+                      load_with_warnings, print_json, real, save_figure, scene_theta,
+                      warning_lines)
 
 
 def register(sub) -> None:
@@ -99,10 +100,7 @@ def _scene(args):
     from ..scene.cycle import drive_motion
 
     scene = load_scene(args.file)
-    theta_deg = args.theta if args.theta is not None else scene.analysis.theta_deg
-    if theta_deg is None:
-        raise MechcircError(f"{args.file}: give --theta DEG, the crank rotation at which the "
-                            "scene is linearised (the file has no [analysis] theta_deg)")
+    theta_deg = scene_theta(args, scene)
     if scene.drive.kind != "velocity":
         raise MechcircError(f"{args.file}: the drive is a force; the periodic drive imposes "
                             "the linkage's motion, which needs a velocity drive")

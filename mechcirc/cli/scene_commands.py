@@ -9,7 +9,8 @@ from ..errors import MechcircError
 from ..limits import MAX_CYCLE_POINTS
 from ..units import FREQUENCY_UNITS, in_unit
 from ._common import (add_command, add_handler, check_output_paths, check_table_path, count,
-                      print_json, real, save_figure, set_values, write_columns)
+                      print_json, real, save_figure, scene_theta, set_values,
+                      write_columns)
 
 
 def register(sub) -> None:
@@ -100,10 +101,7 @@ def cmd_scene(args) -> int:
     if args.reduce and scene.analysis.band is None:
         raise MechcircError(f"{args.file}: --reduce needs band = [W1, W2] and tol = T in the "
                             "file's [analysis] table")
-    theta_deg = args.theta if args.theta is not None else scene.analysis.theta_deg
-    if theta_deg is None:
-        raise MechcircError(f"{args.file}: give --theta DEG or --cycle (the file has no "
-                            "[analysis] theta_deg)")
+    theta_deg = scene_theta(args, scene, " or --cycle")
     if args.reduce:
         model, reduced = build_needed(scene, math.radians(theta_deg), reflect=args.reflect)
     else:
@@ -505,10 +503,7 @@ def cmd_crosscheck_scene(args) -> int:
     from ..scene.crosscheck import crosscheck_scene
 
     scene = load_scene(args.file)
-    theta_deg = args.theta if args.theta is not None else scene.analysis.theta_deg
-    if theta_deg is None or not math.isfinite(theta_deg):
-        raise MechcircError(f"{args.file}: give --theta DEG (a finite crank rotation from the "
-                            "pose; the file has no [analysis] theta_deg)")
+    theta_deg = scene_theta(args, scene)
     result = crosscheck_scene(scene, math.radians(theta_deg))
     if args.netlist:
         from ..outputs import atomic_open
