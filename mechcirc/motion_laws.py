@@ -497,22 +497,6 @@ def read_motion_table(path: str | os.PathLike, spec: str | None = None) -> Motio
     return dataclasses.replace(m, path=source)
 
 
-def _cells(line: str, source: str, lineno: int):
-    """The CSV cells of one line and the 1-based column where each value starts."""
-    import csv
-
-    try:
-        cells = next(csv.reader([line]))
-    except csv.Error as exc:                   # a lone carriage return, a stray quote
-        raise NetlistError(f"not a CSV row ({exc})", source, lineno, 1,
-                           "comma-separated numbers") from None
-    cols, pos = [], 1
-    for cell in cells:
-        cols.append(pos + len(cell) - len(cell.lstrip()))
-        pos += len(cell) + 1
-    return cells, cols, pos
-
-
 def _header(cells, source: str, lineno: int) -> tuple:
     """(index of angle_deg, index of displacement, the column names) of the header row."""
     from .sources import brief
@@ -529,14 +513,11 @@ def _header(cells, source: str, lineno: int) -> tuple:
 
 def _table_rows(text: str, source: str):
     """The rows (angle, displacement, line, columns) of a motion table and its header."""
-    from .sources import split_lines
+    from .sources import csv_rows
 
     rows: list[tuple] = []
     header = None
-    for lineno, line in enumerate(split_lines(text), start=1):
-        if not line.strip() or line.lstrip().startswith("#"):
-            continue
-        cells, cols, pos = _cells(line, source, lineno)
+    for lineno, cells, cols, pos in csv_rows(text, source):
         if header is None:
             header = _header(cells, source, lineno)
             continue
