@@ -216,9 +216,7 @@ class Motion:
         i = np.clip(np.searchsorted(start, th, side="right") - 1, 0, start.size - 1)
         t = th - start[i]
         ai = a[i]
-        x = np.zeros_like(t)
-        dx = np.zeros_like(t)
-        ddx = np.zeros_like(t)
+        x = dx = ddx = np.zeros_like(t)              # rebound below, never written in place
         for m in range(_DEG - 1, -1, -1):           # Horner, with its two derivatives
             ddx = ddx * t + 2 * dx
             dx = dx * t + x

@@ -75,7 +75,7 @@ def _register_reduce(sub) -> None:
     # a file here too (the reduced netlist, as -o), so the name means one thing.
     p.add_argument("-o", "--output", dest="out", metavar="FILE",
                    help="write the reduced netlist here")
-    p.add_argument("--points", type=int, default=2000, metavar="N",
+    p.add_argument("--points", type=count(10, 1_000_000), default=2000, metavar="N",
                    help="log-spaced check points over the band (default 2000; two more "
                         "beside each resonance in the band)")
     add_handler(p, cmd_reduce)
@@ -234,8 +234,6 @@ def cmd_reduce(args) -> int:
     check_output_paths(args.out, reads=(args.file,))
     check_table_path(args.out, "the reduced netlist")
     band = parse_band(args.band)
-    if args.points < 10 or args.points > 1_000_000:
-        raise MechcircError(f"--points must be between 10 and 1000000, got {args.points}")
     circuit = load(args.file)
     result = simplify(circuit, band, args.tol, output=args.element, points=args.points)
     if args.out:
