@@ -176,7 +176,7 @@ def _cycle(args, scene) -> int:
 
     with Progress(args.points, "crank angles") as bar:
         cmap = cycle_map(scene, points=args.points, harmonics=args.harmonics,
-                         reflect=args.reflect, progress=lambda done, total: bar.update(1))
+                         reflect=args.reflect, progress=bar)
     W = cmap.natural_frequencies()
     u = args.unit
     name = FREQUENCY_UNITS[u][0]
@@ -355,28 +355,13 @@ def _simulate_with_bar(args, scene):
     from ..progress import Progress
     from ..scene.simulation import SceneAccuracyWarning, simulate_scene
 
-    bar = None
-
-    def progress(done, total):
-        nonlocal bar
-        if bar is None:
-            bar = Progress(total, scene.name)
-        bar.update(done - bar.done)
-
-    with warnings.catch_warnings():
+    # The total is set by the first progress(done, total).
+    with Progress(0, scene.name) as bar, warnings.catch_warnings():
         warnings.simplefilter("ignore", SceneAccuracyWarning)   # kept in notes, printed in the report
-        try:
-            result = simulate_scene(scene, revolutions=args.revolutions,
-                                    start_deg=args.start_deg,
-                                    steps_per_period=args.steps_per_period, points=args.points,
-                                    method=args.method, rtol=args.rtol,
-                                    revolution=args.revolution,
-                                    error_estimate=not args.no_error_estimate,
-                                    progress=progress)
-        finally:
-            if bar is not None:
-                bar.__exit__(None, None, None)
-    return result
+        return simulate_scene(scene, revolutions=args.revolutions, start_deg=args.start_deg,
+                              steps_per_period=args.steps_per_period, points=args.points,
+                              method=args.method, rtol=args.rtol, revolution=args.revolution,
+                              error_estimate=not args.no_error_estimate, progress=bar)
 
 
 def _print_motion(args, scene, result) -> None:
