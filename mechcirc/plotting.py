@@ -130,12 +130,10 @@ def _refined(result, resonances):
         return omega, K, flags, R
     lo, hi = float(np.min(omega)), float(np.max(omega))
     steps = np.array(REFINE_STEPS)
-    new = []
-    for r in resonances:
-        w = r.omega_d or r.omega
-        d = min(max(r.zeta, REFINE_WIDTH[0]), REFINE_WIDTH[1])
-        new.append(w * (1 + d * np.concatenate([-steps[::-1], steps])))
-    new = np.unique(np.concatenate(new))
+    steps = np.concatenate([-steps[::-1], steps])
+    new = np.unique(np.concatenate([
+        (r.omega_d or r.omega) * (1 + min(max(r.zeta, REFINE_WIDTH[0]), REFINE_WIDTH[1]) * steps)
+        for r in resonances]))
     new = new[(new > lo) & (new < hi) & ~np.isin(new, omega)]
     if not new.size:
         return omega, K, flags, R

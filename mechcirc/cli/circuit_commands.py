@@ -252,7 +252,12 @@ def _peak_text(pk, units: dict, unit: str = "rad/s") -> str:
 def cmd_sweep(args) -> int:
     check_output_paths(args.output, args.touchstone, plots=(args.plot,), reads=(args.file,))
     check_table_path(args.output)
-    _check_touchstone_name(args.touchstone)
+    if args.touchstone and Path(args.touchstone).suffix.lower() != ".s1p":
+        # K seen by one drive is a one-port: a .s2p name would promise a
+        # 2-port file that scikit-rf then cannot read.
+        raise MechcircError(
+            f"{args.touchstone}: --touchstone writes K at the drive, a one-port: name "
+            "the file .s1p (a 2-port of two nodes is mechcirc.interop.skrf.two_port)")
     from ..circuit import node_names
 
     circuit, warns = load_with_warnings(args.file)
@@ -296,15 +301,6 @@ def cmd_sweep(args) -> int:
         return 0
     _print_sweep(args, result, extra, sens, pk, notes, dropped)
     return 0
-
-
-def _check_touchstone_name(path) -> None:
-    if path and Path(path).suffix.lower() != ".s1p":
-        # K seen by one drive is a one-port: a .s2p name would promise a
-        # 2-port file that scikit-rf then cannot read.
-        raise MechcircError(
-            f"{path}: --touchstone writes K at the drive, a one-port: name "
-            "the file .s1p (a 2-port of two nodes is mechcirc.interop.skrf.two_port)")
 
 
 def _run_sweep(args, circuit, omega):

@@ -145,12 +145,9 @@ def _options(args) -> dict:
                          f"limit is {MAX_SCIPY_REVOLUTIONS} (a Python right-hand side, ~0.3 s "
                          "a revolution); the compiled rk4 takes up to "
                          f"{MAX_REVOLUTIONS}")
-    opts = {"points_per_revolution": args.points, "revolution": args.revolution}
-    if args.rtol is not None:
-        opts["rtol"] = args.rtol
-    if args.steps_per_period is not None:
-        opts["steps_per_period"] = args.steps_per_period
-    return opts
+    opts = {"points_per_revolution": args.points, "revolution": args.revolution,
+            "rtol": args.rtol, "steps_per_period": args.steps_per_period}
+    return {k: v for k, v in opts.items() if v is not None}     # None: the method's default
 
 
 #: Overrides that change only how the paper is read (the beat-up window it did
@@ -177,10 +174,8 @@ def _table(result, paper_applies: bool = True) -> str:
              f"{result.alpha_deg:g} deg, method {result.method} ({result.backend}), {speed}",
              f"{'quantity':<9} {'unit':<6} {'min':>10} {'max':>10}   {'paper min':>10} "
              f"{'paper max':>10}"]
-    order = ["eps4T", "eps2P", "eps4P", "eps5P", "M2V", "M5V"]
-    for key in order:
-        if key not in result.extrema:
-            continue
+    for key in [k for k in ("eps4T", "eps2P", "eps4P", "eps5P", "M2V", "M5V")
+                if k in result.extrema]:
         lo, hi = result.extrema[key]
         plo, phi = paper.get(key, ("-", "-"))
         lines.append(f"{key:<9} {_UNITS[key]:<6} {lo:>10.0f} {hi:>10.0f}   {plo!s:>10} {phi!s:>10}")
