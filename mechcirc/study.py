@@ -1049,17 +1049,9 @@ def _todo(spec: StudySpec, have: set, size: int):
     """The points not in ``have``, in batches of ``size``, made as they are taken (a
     million points are not held at once): each ``(indices, values)``, two arrays, so
     that a task travels to a worker as a few kilobytes of numbers, not dicts."""
-    index: list[int] = []
-    values: list[tuple[float, ...]] = []
-    for i, p in enumerate(spec.points):
-        if i in have:
-            continue
-        index.append(i)
-        values.append(p)
-        if len(index) == size:
-            yield np.array(index, dtype=np.int64), np.array(values, dtype=float)
-            index, values = [], []
-    if index:
+    todo = ((i, p) for i, p in enumerate(spec.points) if i not in have)
+    while batch := list(itertools.islice(todo, size)):
+        index, values = zip(*batch)
         yield np.array(index, dtype=np.int64), np.array(values, dtype=float)
 
 
