@@ -473,6 +473,22 @@ def save_figure(fig, path, into=None, tight: bool = True) -> None:
                     **options)
 
 
+def write_text(path, text: str) -> None:
+    """Write ``text`` (UTF-8) to ``path``, whole or not at all (:func:`mechcirc.outputs.atomic_open`).
+
+    Parameters
+    ----------
+    path : str
+        The output file (replaced atomically).
+    text : str
+        Its content.
+    """
+    from ..outputs import atomic_open
+
+    with atomic_open(path, "w", encoding="utf-8") as fh:
+        fh.write(text)
+
+
 def write_columns(path, comment: str, names, cols) -> None:
     """Write equal-length columns as CSV, whole or not at all: a comment line, the names,
     then one row of full-precision floats (``repr``) per index.

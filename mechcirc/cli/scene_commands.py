@@ -10,7 +10,7 @@ from ..limits import MAX_CYCLE_POINTS
 from ..units import FREQUENCY_UNITS, in_unit
 from ._common import (add_command, add_handler, check_output_paths, check_table_path, count,
                       print_json, real, save_figure, scene_theta, set_values,
-                      write_columns)
+                      write_columns, write_text)
 
 
 def register(sub) -> None:
@@ -117,10 +117,7 @@ def cmd_scene(args) -> int:
         drawn = plot_mode(scene, math.radians(theta_deg), args.mode)
         save_figure(drawn, args.plot)
     if args.output:
-        from ..outputs import atomic_open
-
-        with atomic_open(args.output, "w", encoding="utf-8") as fh:
-            fh.write(model.netlist if reduced is None else reduced.netlist)
+        write_text(args.output, model.netlist if reduced is None else reduced.netlist)
     if args.json:
         print_json({
             "file": args.file, "theta_deg": args.theta, "drive_ratio": model.drive_ratio,
@@ -237,10 +234,7 @@ def cmd_reduce(args) -> int:
     circuit = load(args.file)
     result = simplify(circuit, band, args.tol, output=args.element, points=args.points)
     if args.out:
-        from ..outputs import atomic_open
-
-        with atomic_open(args.out, "w", encoding="utf-8") as fh:
-            fh.write(result.netlist)
+        write_text(args.out, result.netlist)
     if args.json:
         doc = result.as_dict()
         doc.update({"file": args.file, "written": args.out})
@@ -489,10 +483,7 @@ def cmd_crosscheck_scene(args) -> int:
     theta_deg = scene_theta(args, scene)
     result = crosscheck_scene(scene, math.radians(theta_deg))
     if args.netlist:
-        from ..outputs import atomic_open
-
-        with atomic_open(args.netlist, "w", encoding="utf-8") as fh:
-            fh.write(build(scene, math.radians(theta_deg)).netlist)
+        write_text(args.netlist, build(scene, math.radians(theta_deg)).netlist)
     from ..verdict import summary_line, verdict_text
 
     summary = result.verdict

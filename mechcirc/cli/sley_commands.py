@@ -7,7 +7,7 @@ import math
 from ..errors import InputError
 from ..limits import MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS, MAX_SCIPY_REVOLUTIONS
 from ._common import (add_command, add_handler, check_output_paths, count, print_json, real,
-                      save_figure, set_values, write_columns)
+                      save_figure, set_values, write_columns, write_text)
 
 _METHODS = ("rk4", "rk4-python", "rk8", "DOP853", "RK45", "LSODA")   # = mechcirc.sley.METHODS
 _UNITS = {"eps4T": "1/s^2", "eps2P": "1/s^2", "eps4P": "1/s^2", "eps5P": "1/s^2",
@@ -267,10 +267,7 @@ def cmd_crosscheck(args) -> int:
     with Progress(4, "crosscheck") as bar:      # drawn on a terminal after 1 s
         doc, netlist = crosscheck_sley(params, theta0, on_step=bar.update)
     if args.netlist:
-        from ..outputs import atomic_open
-
-        with atomic_open(args.netlist) as fh:
-            fh.write(netlist)
+        write_text(args.netlist, netlist)
     if args.json:
         print_json(doc)
     else:
