@@ -472,14 +472,10 @@ def cmd_resonances(args) -> int:
 
     check_output_paths(plots=(args.plot,))
     circuit, warns = load_with_warnings(args.file)
-    found = modes = None
-    if args.modes or args.sensitivity or args.plot:
-        from ..modes import modes as find_modes
-
-        modes = find_modes(circuit, omega_max=args.omega_max)
-        found = [m.resonance for m in modes]
-    else:
-        found = circuit.resonances(omega_max=args.omega_max)
+    modes = circuit.modes(omega_max=args.omega_max) if args.modes or args.sensitivity or \
+        args.plot else None
+    found = circuit.resonances(omega_max=args.omega_max) if modes is None else \
+        [m.resonance for m in modes]
     warning_lines(warns)
     if args.plot and modes is not None:     # --plot found the modes above
         _plot_modes(args, circuit, modes, warns)
@@ -511,16 +507,13 @@ def cmd_resonances(args) -> int:
 
 def _plot_modes(args, circuit, modes, warns: list) -> None:
     """``resonances --plot``: the lowest :data:`MAX_MODE_PANELS` mode shapes, one panel each."""
-    from ..outputs import OutputSet
     from ..plotting import plot_modes
 
     if len(modes) > MAX_MODE_PANELS:
         warns.append(f"--plot draws the lowest {MAX_MODE_PANELS} of {len(modes)} modes "
                      "(give --omega-max for fewer)")
         warning_lines(warns[-1:])
-    with OutputSet() as out:
-        save_figure(plot_modes(modes[:MAX_MODE_PANELS], circuit.name, unit=args.unit), args.plot,
-                    out.path(args.plot))
+    save_figure(plot_modes(modes[:MAX_MODE_PANELS], circuit.name, unit=args.unit), args.plot)
 
 
 def _print_resonances_json(args, circuit, found, modes) -> int:
