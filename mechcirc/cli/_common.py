@@ -473,6 +473,36 @@ def save_figure(fig, path, into=None, tight: bool = True) -> None:
                     **options)
 
 
+def write_outputs(args, head: list, cols: list, plot, fmt: str = "%.17g") -> None:
+    """``-o CSV`` (the columns ``cols`` named ``head``, each value as ``fmt``) and ``--plot``
+    (the figure ``plot()`` makes), all or none written.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        With ``output`` and ``plot`` (either may be None).
+    head : list of str
+        The column names.
+    cols : list of array_like
+        The columns (equal lengths).
+    plot : callable
+        Makes the figure, called only for ``--plot``.
+    fmt : str
+        The printf format of a value.
+    """
+    import numpy as np
+
+    from ..outputs import OutputSet
+
+    with OutputSet() as out:
+        if args.output:
+            with open(out.path(args.output), "w", encoding="utf-8", newline="") as fh:
+                np.savetxt(fh, np.column_stack(cols), delimiter=",", fmt=fmt,
+                           header=",".join(head), comments="")
+        if args.plot:
+            save_figure(plot(), args.plot, out.path(args.plot))
+
+
 def write_text(path, text: str) -> None:
     """Write ``text`` (UTF-8) to ``path``, whole or not at all (:func:`mechcirc.outputs.atomic_open`).
 

@@ -10,7 +10,7 @@ from ..limits import MAX_CYCLE_POINTS
 from ..units import FREQUENCY_UNITS, in_unit
 from ._common import (add_command, add_handler, check_output_paths, check_table_path, count,
                       print_json, real, save_figure, scene_theta, set_values,
-                      write_columns, write_text)
+                      write_columns, write_outputs, write_text)
 
 
 def register(sub) -> None:
@@ -166,7 +166,6 @@ def _print_scene(args, scene, model, found, reduced, drawn: bool) -> None:
 def _cycle(args, scene) -> int:
     import numpy as np
 
-    from ..outputs import OutputSet
     from ..scene.cycle import cycle_map, plot_cycle
 
     from ..progress import Progress
@@ -177,18 +176,10 @@ def _cycle(args, scene) -> int:
     W = cmap.natural_frequencies()
     u = args.unit
     name = FREQUENCY_UNITS[u][0]
-    with OutputSet() as out:
-        if args.output:
-            with open(out.path(args.output), "w", encoding="utf-8", newline="") as fh:
-                cols = ["theta_deg"] + [f"{name}_res{k + 1}" for k in range(W.shape[1])] + \
-                    [f"abs_Q0_h{h}" for h in cmap.harmonics]
-                table = np.column_stack([np.degrees(cmap.theta), in_unit(W, args.unit),
-                                         np.abs(cmap.Q0)])
-                np.savetxt(fh, table, delimiter=",", fmt="%.10g", header=",".join(cols),
-                           comments="")
-        if args.plot:
-            fig = plot_cycle(cmap, unit=args.unit)
-            save_figure(fig, args.plot, into=out.path(args.plot))
+    write_outputs(args, ["theta_deg"] + [f"{name}_res{k + 1}" for k in range(W.shape[1])]
+                  + [f"abs_Q0_h{h}" for h in cmap.harmonics],
+                  [np.degrees(cmap.theta), in_unit(W, u), np.abs(cmap.Q0)],
+                  lambda: plot_cycle(cmap, unit=u), "%.10g")
     if args.json:
         doc = cmap.as_dict()
         doc.update({"file": args.file, "output": args.output, "plot": args.plot})
