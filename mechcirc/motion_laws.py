@@ -435,6 +435,7 @@ def motion_table(angle_deg, displacement, spec: str = "motion=<table>", *, slope
     x[-1] = x[0]
     hermite = slope is not None
     poly, spl = _table_pieces(theta, x, slope, curvature)
+    m = Motion(spec, tuple(theta[:-1]), poly, ((0.0, 0.0, 0.0),) * len(poly))
     if np.abs(x).max(initial=0.0) > MAX_LIFT:
         raise ValueError(f"a displacement of {np.abs(x).max():g} is beyond the bound "
                          f"{MAX_LIFT:g} (the drive's velocities and forces would overflow)")
@@ -445,13 +446,11 @@ def motion_table(angle_deg, displacement, spec: str = "motion=<table>", *, slope
                               slope=None if not hermite else np.asarray(slope)[keep],
                               curvature=None if not hermite else np.asarray(curvature)[keep])
         dense = np.linspace(0, _TAU, 16 * ang.size)
-        fine = (Motion("", tuple(theta[:-1]), poly, ((0.0, 0.0, 0.0),) * len(poly))
-                .evaluate(dense)[1] if hermite else spl(dense, 1))
+        fine = m.evaluate(dense)[1] if hermite else spl(dense, 1)
         scale = float(np.max(np.abs(fine)))
         error = float(np.max(np.abs(fine - coarse.evaluate(dense)[1]))) / scale \
             if scale > 0 else 0.0
-    return Motion(spec, tuple(theta[:-1]), poly, ((0.0, 0.0, 0.0),) * len(poly),
-                  error=error, coarse=coarse)
+    return dataclasses.replace(m, error=error, coarse=coarse, _cache={})
 
 
 def read_motion_table(path: str | os.PathLike, spec: str | None = None) -> Motion:
