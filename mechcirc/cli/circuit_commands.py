@@ -161,8 +161,7 @@ def cmd_check(args) -> int:
         from ..explain import explain
 
         steps, root = explain(circuit)
-        doc["steps"] = [{"label": s.label, "kind": s.kind, "operands": list(s.operands),
-                         "text": s.text, "reason": s.reason} for s in steps]
+        doc["steps"] = [dict(vars(s)) for s in steps]     # Step's fields: label, kind, ...
         doc["root"] = root
     if args.json:
         print_json(doc)
