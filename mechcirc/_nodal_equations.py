@@ -254,8 +254,8 @@ def stamps(elements, levers, index: dict[str, int]):
     Yields ``(kind, row, col, sign, source, ratio)``: ``kind`` one of
     :data:`KINDS`; ``source`` the :class:`Element` or :class:`Lever`; the entry
     is ``sign × value × eta`` of an element, and ``sign × ratio`` (``ratio``
-    true) or ``sign × 1`` of a lever.  ``index`` maps node names to rows (−1
-    for the reference node, whose rows are dropped); lever force unknowns
+    true) or ``sign × 1`` of a lever.  ``index`` maps node names to rows (−1,
+    or no entry, for the reference node, whose rows are dropped); lever force unknowns
     follow the ``max(index) + 1`` node rows, in order.  The numeric matrices
     (:func:`assemble`) and the symbolic ones (:mod:`mechcirc.interop.formula`)
     are both built from these entries.
@@ -265,7 +265,7 @@ def stamps(elements, levers, index: dict[str, int]):
     elements : sequence of Element
     levers : sequence of Lever
     index : dict[str, int]
-        Node name → row (−1: the reference).
+        Node name → row (−1 or absent: the reference).
 
     Yields
     ------
@@ -274,7 +274,7 @@ def stamps(elements, levers, index: dict[str, int]):
     """
     n_nodes = sum(1 for i in index.values() if i >= 0)
     for e in elements:
-        i, j = index[e.n1], index[e.n2]
+        i, j = index.get(e.n1, -1), index.get(e.n2, -1)
         for r, c, s in ((i, i, 1.0), (j, j, 1.0), (i, j, -1.0), (j, i, -1.0)):
             if r >= 0 and c >= 0:
                 yield e.kind, r, c, s, e, False
@@ -282,7 +282,7 @@ def stamps(elements, levers, index: dict[str, int]):
         col = n_nodes + k
         for node, s, ratio in ((lv.p1, 1.0, True), (lv.p2, -1.0, True),
                                (lv.s1, -1.0, False), (lv.s2, 1.0, False)):
-            i = index[node]
+            i = index.get(node, -1)
             if i >= 0:
                 yield "lever", i, col, s, lv, ratio
                 yield "lever", col, i, s, lv, ratio

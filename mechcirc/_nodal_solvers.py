@@ -352,6 +352,38 @@ def band_solve_batch(G, piv, x, n, kl):
             x[j] /= G[j, kl]
 
 
+def band_order(indptr, indices, reorder: bool = True) -> tuple:
+    """A symmetric sparsity pattern's reverse Cuthill-McKee order and its band.
+
+    Parameters
+    ----------
+    indptr, indices : ndarray
+        The pattern in compressed form (CSR or CSC: the pattern is symmetric).
+    reorder : bool
+        False keeps the given order (no scipy).
+
+    Returns
+    -------
+    tuple
+        ``(p, ri, ci, kl)``: the order p (int64, as ``np.arange``'s: scipy's int32
+        would compile the kernels a second time), each stored entry's permuted
+        index and permuted compressed-axis position, and the half-bandwidth.
+    """
+    n = len(indptr) - 1
+    if reorder:
+        import scipy.sparse as sp
+        from scipy.sparse.csgraph import reverse_cuthill_mckee
+
+        A = sp.csr_matrix((np.ones(indices.size), indices, indptr), shape=(n, n))
+        p = np.asarray(reverse_cuthill_mckee(A, symmetric_mode=True), dtype=np.int64)
+    else:
+        p = np.arange(n)
+    q = np.empty_like(p)
+    q[p] = np.arange(n)
+    ri, ci = q[indices], q[np.repeat(np.arange(n), np.diff(indptr))]
+    return p, ri, ci, int(np.max(np.abs(ri - ci), initial=0))
+
+
 class SparseSolver:
     """LU of A(ω) on its fixed pattern, with what does not change with ω found once.
 
@@ -379,25 +411,11 @@ class SparseSolver:
         """``band_max``: the widest band solved as one (default :data:`BAND_MAX`); a
         narrower one given leaves ``kind`` "wide" for wider bands (no SuperLU set up)."""
         self.pat = pat
-        n = pat.n
-        nnz = pat.indices.size
-        if n <= DENSE_LIMIT:
-            # Small systems keep their own order: no scipy on a sweep's path for
-            # the ordering alone (a command's start-up), and a band that only
-            # an ordering would make narrow is solved densely (solver()).
-            p = np.arange(n)
-        else:
-            import scipy.sparse as sp
-            from scipy.sparse.csgraph import reverse_cuthill_mckee
-
-            A = sp.csr_matrix((np.ones(nnz), pat.indices, pat.indptr), shape=(n, n))
-            # int64 as np.arange's: scipy's int32 would compile the kernels a second time
-            p = np.asarray(reverse_cuthill_mckee(A, symmetric_mode=True), dtype=np.int64)
-        q = np.empty_like(p)
-        q[p] = np.arange(n)
-        cols = np.repeat(np.arange(n), np.diff(pat.indptr))
-        ri, ci = q[pat.indices], q[cols]                  # permuted positions
-        kl = int(np.max(np.abs(ri - ci), initial=0))
+        n, nnz = pat.n, pat.indices.size
+        # Small systems keep their own order: no scipy on a sweep's path for
+        # the ordering alone (a command's start-up), and a band that only
+        # an ordering would make narrow is solved densely (solver()).
+        p, ri, ci, kl = band_order(pat.indptr, pat.indices, reorder=n > DENSE_LIMIT)
         self.kl = kl
         if band_max is not None and kl > band_max:
             self.kind = "wide"

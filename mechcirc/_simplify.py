@@ -41,6 +41,7 @@ import numpy as np
 
 from .circuit import FRAME, Circuit, Element
 from .errors import BandError, MechcircError, TopologyError
+from .netlist_writer import write as write_netlist      # the package's one netlist writer
 from .units import parse_omega
 
 __all__ = ["BandError", "Simplified", "simplify", "parse_band", "check_band", "write_netlist"]
@@ -158,16 +159,6 @@ class Simplified:
 
 
 # ----------------------------------------------------------------- helpers
-def write_netlist(circuit: Circuit, header: tuple[str, ...] = ()) -> str:
-    """``.mcir`` text of ``circuit`` (values written with full precision).
-
-    The package's one netlist writer, :func:`mechcirc.netlist_writer.write`.
-    """
-    from .netlist_writer import write
-
-    return write(circuit, header)
-
-
 def _output(circuit: Circuit, omega, output):
     s = circuit.sweep(omega)
     with np.errstate(all="ignore"):

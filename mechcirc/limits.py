@@ -1,7 +1,7 @@
 """The bounds on work and memory that mechcirc enforces, in one place.
 
 Each limit is refused *before* the work starts, with the limit named in the
-message (:func:`check_count`).  docs/reliability.md gives the time and peak
+message.  docs/reliability.md gives the time and peak
 memory measured at each limit.  The file-size bound of every input is
 :data:`mechcirc.sources.MAX_INPUT_BYTES`; the netlist's statement and line
 bounds are in :mod:`mechcirc.netlist`.
@@ -9,14 +9,12 @@ bounds are in :mod:`mechcirc.netlist`.
 
 from __future__ import annotations
 
-from .errors import InputError
-
 __all__ = ["MAX_SWEEP_POINTS", "MAX_PLOT_POINTS", "MAX_JSON_POINTS", "MAX_NODAL_POINTS",
            "MAX_ADAPTIVE_POINTS", "MAX_ADAPTIVE_NODAL_POINTS", "MAX_ADAPTIVE_WORK",
            "MAX_ADAPTIVE_NODAL_WORK", "MAX_STUDY_POINTS", "MAX_STUDY_SWEEP_POINTS",
            "MAX_STUDY_WORK", "MAX_REVOLUTIONS", "MAX_SCIPY_REVOLUTIONS",
            "MAX_POINTS_PER_REVOLUTION", "MAX_CYCLE_POINTS", "MAX_FORMULA_ELEMENTS",
-           "FORMULA_SECONDS", "check_count"]
+           "FORMULA_SECONDS"]
 
 #: Frequency points of one sweep (results alone: about 70 bytes a point).
 MAX_SWEEP_POINTS = 10_000_000
@@ -59,36 +57,3 @@ MAX_FORMULA_ELEMENTS = 12
 #: use before it is abandoned (``cli._common.time_limit``).
 FORMULA_SECONDS = 20.0
 
-
-def check_count(value, what: str, limit: int, *, least: int = 1, why: str = "") -> int:
-    """``value`` as an int in ``least..limit``, or :class:`InputError` naming the limit.
-
-    Parameters
-    ----------
-    value : object
-    what : str
-        What it counts (in the message).
-    limit, least : int
-        The bounds.
-    why : str
-        Why the limit (in the message).
-
-    Returns
-    -------
-    int
-    """
-    if isinstance(value, bool) or not isinstance(value, int):
-        try:
-            as_float = float(value)
-        except (TypeError, ValueError, OverflowError):
-            raise InputError(f"{what} must be an integer, got {value!r}") from None
-        if not as_float.is_integer():
-            raise InputError(f"{what} must be an integer, got {value!r}")
-        value = int(as_float)
-    if value < least:
-        raise InputError(f"{what} must be at least {least}, got {value}")
-    if value > limit:
-        shown = f"{value:,}" if value < 10**30 else f"about 1e{len(str(value)) - 1}"
-        raise InputError(f"{what} is {shown}, the limit is {limit:,}" + (f" ({why})" if why
-                                                                           else ""))
-    return value

@@ -216,9 +216,7 @@ class Motion:
         i = np.clip(np.searchsorted(start, th, side="right") - 1, 0, start.size - 1)
         t = th - start[i]
         ai = a[i]
-        x = np.zeros_like(t)
-        dx = np.zeros_like(t)
-        ddx = np.zeros_like(t)
+        x = dx = ddx = np.zeros_like(t)              # rebound below, never written in place
         for m in range(_DEG - 1, -1, -1):           # Horner, with its two derivatives
             ddx = ddx * t + 2 * dx
             dx = dx * t + x
@@ -437,6 +435,7 @@ def motion_table(angle_deg, displacement, spec: str = "motion=<table>", *, slope
     x[-1] = x[0]
     hermite = slope is not None
     poly, spl = _table_pieces(theta, x, slope, curvature)
+    m = Motion(spec, tuple(theta[:-1]), poly, ((0.0, 0.0, 0.0),) * len(poly))
     if np.abs(x).max(initial=0.0) > MAX_LIFT:
         raise ValueError(f"a displacement of {np.abs(x).max():g} is beyond the bound "
                          f"{MAX_LIFT:g} (the drive's velocities and forces would overflow)")
@@ -447,13 +446,11 @@ def motion_table(angle_deg, displacement, spec: str = "motion=<table>", *, slope
                               slope=None if not hermite else np.asarray(slope)[keep],
                               curvature=None if not hermite else np.asarray(curvature)[keep])
         dense = np.linspace(0, _TAU, 16 * ang.size)
-        fine = (Motion("", tuple(theta[:-1]), poly, ((0.0, 0.0, 0.0),) * len(poly))
-                .evaluate(dense)[1] if hermite else spl(dense, 1))
+        fine = m.evaluate(dense)[1] if hermite else spl(dense, 1)
         scale = float(np.max(np.abs(fine)))
         error = float(np.max(np.abs(fine - coarse.evaluate(dense)[1]))) / scale \
             if scale > 0 else 0.0
-    return Motion(spec, tuple(theta[:-1]), poly, ((0.0, 0.0, 0.0),) * len(poly),
-                  error=error, coarse=coarse)
+    return dataclasses.replace(m, error=error, coarse=coarse, _cache={})
 
 
 def read_motion_table(path: str | os.PathLike, spec: str | None = None) -> Motion:
@@ -497,22 +494,6 @@ def read_motion_table(path: str | os.PathLike, spec: str | None = None) -> Motio
     return dataclasses.replace(m, path=source)
 
 
-def _cells(line: str, source: str, lineno: int):
-    """The CSV cells of one line and the 1-based column where each value starts."""
-    import csv
-
-    try:
-        cells = next(csv.reader([line]))
-    except csv.Error as exc:                   # a lone carriage return, a stray quote
-        raise NetlistError(f"not a CSV row ({exc})", source, lineno, 1,
-                           "comma-separated numbers") from None
-    cols, pos = [], 1
-    for cell in cells:
-        cols.append(pos + len(cell) - len(cell.lstrip()))
-        pos += len(cell) + 1
-    return cells, cols, pos
-
-
 def _header(cells, source: str, lineno: int) -> tuple:
     """(index of angle_deg, index of displacement, the column names) of the header row."""
     from .sources import brief
@@ -529,14 +510,11 @@ def _header(cells, source: str, lineno: int) -> tuple:
 
 def _table_rows(text: str, source: str):
     """The rows (angle, displacement, line, columns) of a motion table and its header."""
-    from .sources import split_lines
+    from .sources import csv_rows
 
     rows: list[tuple] = []
     header = None
-    for lineno, line in enumerate(split_lines(text), start=1):
-        if not line.strip() or line.lstrip().startswith("#"):
-            continue
-        cells, cols, pos = _cells(line, source, lineno)
+    for lineno, cells, cols, pos in csv_rows(text, source):
         if header is None:
             header = _header(cells, source, lineno)
             continue

@@ -137,19 +137,8 @@ def atomic_path(path: str | os.PathLike):
     Path
         The temporary file (or the stream) to write.
     """
-    target, stream = output_target(path)
-    if stream:
-        yield target
-        return
-    tmp = _temporary_beside(target, path)
-    try:
-        yield Path(tmp)
-        with _naming(target, path):
-            os.replace(tmp, target)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise
+    with OutputSet() as out:                # a set of one
+        yield out.path(path)
 
 
 @contextlib.contextmanager

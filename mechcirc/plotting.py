@@ -31,7 +31,7 @@ from __future__ import annotations
 import math
 from typing import Literal
 
-__all__ = ["new_panels", "plot_sweep", "plot_transient", "plot_forces", "plot_comparison", "plot_study", "plot_periodic",
+__all__ = ["new_panels", "one_panel", "plot_sweep", "plot_transient", "plot_forces", "plot_comparison", "plot_study", "plot_periodic",
            "plot_speed_map", "plot_mode", "plot_modes"]
 
 
@@ -90,8 +90,22 @@ def new_panels(fig, rows: int = 1, cols: int = 1, *, caller: str, figsize=(8.0, 
     return fig, fig.subplots(rows, cols, squeeze=False, **subplots_kw)
 
 
-def _axes(ax, figsize):
-    """``(fig, ax, made)``: the given Axes, or one on a new Figure."""
+def one_panel(ax, figsize):
+    """The panel of a one-panel plot: the given Axes, or one on a new Figure.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes or None
+        The caller's Axes, drawn on as it is.
+    figsize : tuple of float
+        Size [in] of a new Figure.
+
+    Returns
+    -------
+    tuple
+        ``(fig, ax, made)``: ``made`` is True for a new Figure (the plot then
+        returns it, else ``ax``).
+    """
     if ax is not None:
         return ax.figure, ax, False
     fig, axes = new_panels(None, caller="", figsize=figsize)
@@ -130,12 +144,10 @@ def _refined(result, resonances):
         return omega, K, flags, R
     lo, hi = float(np.min(omega)), float(np.max(omega))
     steps = np.array(REFINE_STEPS)
-    new = []
-    for r in resonances:
-        w = r.omega_d or r.omega
-        d = min(max(r.zeta, REFINE_WIDTH[0]), REFINE_WIDTH[1])
-        new.append(w * (1 + d * np.concatenate([-steps[::-1], steps])))
-    new = np.unique(np.concatenate(new))
+    steps = np.concatenate([-steps[::-1], steps])
+    new = np.unique(np.concatenate([
+        (r.omega_d or r.omega) * (1 + min(max(r.zeta, REFINE_WIDTH[0]), REFINE_WIDTH[1]) * steps)
+        for r in resonances]))
     new = new[(new > lo) & (new < hi) & ~np.isin(new, omega)]
     if not new.size:
         return omega, K, flags, R
@@ -624,7 +636,7 @@ def plot_forces(rows, omega: float, name: str = "circuit", title: str | None = N
 
     u = units or units_of(None)
 
-    fig, ax, made = _axes(ax, (max(5.0, 0.45 * len(rows) + 2), 4))
+    fig, ax, made = one_panel(ax, (max(5.0, 0.45 * len(rows) + 2), 4))
     values = np.array([r.Q_abs for r in rows], dtype=float)
     ax.bar(range(len(rows)), values, color=[KIND_COLOURS.get(r.kind, "C7") for r in rows])
     ax.set_xticks(range(len(rows)), [r.name for r in rows], rotation=45, ha="right")
@@ -722,7 +734,7 @@ def plot_study(result, params, column: str, name: str = "study", title: str | No
     """
     ok = [r for r in result.rows if r["status"] == "ok" and r.get(column, "") != ""]
     bad = [r for r in result.rows if r["status"] != "ok"]
-    fig, ax, made = _axes(ax, (6.5, 4.5))
+    fig, ax, made = one_panel(ax, (6.5, 4.5))
     if len(params) == 1:
         _study_line(ax, ok, bad, params[0], column, units)
     else:
@@ -876,7 +888,7 @@ def plot_speed_map(result, title: str | None = None, *, ax=None, min_weight: flo
 
     u = getattr(result, "units", None) or units_of(None)
     word = "moment" if u["Q"] == "N·m" else "force"
-    fig, ax, made = _axes(ax, (8, 4.5))
+    fig, ax, made = one_panel(ax, (8, 4.5))
     peak = np.where(np.isfinite(result.peak), result.peak, np.nan)
     ax.plot(result.rpm, peak, color="C0", label="max |Q(θ)|, drive")
     for name, p in result.element_peaks.items():
@@ -927,7 +939,7 @@ def plot_mode(mode, name: str = "circuit", title: str | None = None, *, ax=None,
 
     from .units import in_unit
 
-    fig, ax, made = _axes(ax, (max(5.0, 0.45 * len(mode.shape) + 2), 3.5))
+    fig, ax, made = one_panel(ax, (max(5.0, 0.45 * len(mode.shape) + 2), 3.5))
     r = mode.resonance
     at = (f"ω = {r.omega:.6g} rad/s ({r.f_hz:.4g} Hz)" if unit == "rad/s" else
           f"{'f' if unit == 'Hz' else 'n'} = {in_unit(r.omega, unit):.6g} {unit}")

@@ -176,15 +176,12 @@ def _reduce_edges(n1s: list, n2s: list, nodes: list, a: str, b: str, unloaded: l
     stops short.
     """
     found = _series_parallel_runs(n1s, n2s, nodes, a, b)
-    if found is not None:
-        root, dangling = found
-        for node in dangling:
-            unloaded.extend(el.name for el in leaves(_close(node, 1)[0]))
-        return root
-    edges = [_Edge(u, w, node) for u, w, node in zip(n1s, n2s, nodes)]
-    edges = _prune(edges, a, b, unloaded, drive_line, source)
-    root, dangling = _series_parallel_runs([e.n1 for e in edges], [e.n2 for e in edges],
-                                           [e.node for e in edges], a, b, explain=True)
+    if found is None:
+        edges = [_Edge(u, w, node) for u, w, node in zip(n1s, n2s, nodes)]
+        edges = _prune(edges, a, b, unloaded, drive_line, source)
+        found = _series_parallel_runs([e.n1 for e in edges], [e.n2 for e in edges],
+                                      [e.node for e in edges], a, b, explain=True)
+    root, dangling = found
     for node in dangling:
         unloaded.extend(el.name for el in leaves(_close(node, 1)[0]))
     return root
@@ -296,18 +293,14 @@ def _series_parallel_runs(n1s: list, n2s: list, nodes: list, a: str, b: str,
     ids: dict = {}
     U = [ids.setdefault(x, len(ids)) for x in n1s]
     W = [ids.setdefault(x, len(ids)) for x in n2s]
-    if a not in ids or b not in ids or a == b:
-        if explain:
-            raise _not_reducible(list(ids), nodes, a, b)
-        return None
-    ia, ib = ids[a], ids[b]
     E = list(nodes)
-    built = _adjacency(U, W, E, len(ids))
+    built = None if a not in ids or b not in ids or a == b else _adjacency(U, W, E, len(ids))
     if built is None:
         if explain:
             raise _not_reducible(list(ids), nodes, a, b)
         return None
     adj, alive = built
+    ia, ib = ids[a], ids[b]
     dangling: list = []
     queue: deque[int] = deque(range(len(ids)))
     pop, push = queue.popleft, queue.append

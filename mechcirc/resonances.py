@@ -665,16 +665,15 @@ def _symmetric_eigvals(A: np.ndarray) -> np.ndarray:
     if n >= BANDED_FROM and np.count_nonzero(A) <= n * n // 8:
         import scipy.sparse as sp
         from scipy.linalg import eigvals_banded
-        from scipy.sparse.csgraph import reverse_cuthill_mckee
+
+        from ._nodal_solvers import band_order
 
         S = sp.csr_matrix(A)
-        p = reverse_cuthill_mckee(S, symmetric_mode=True)
-        P = S[p][:, p].tocoo()
-        band = int((P.row - P.col).max(initial=0))
+        _, col, row, band = band_order(S.indptr, S.indices)
         if 8 * band <= n:
-            low = P.row >= P.col
+            low = row >= col
             ab = np.zeros((band + 1, n))
-            ab[(P.row - P.col)[low], P.col[low]] = P.data[low]
+            ab[(row - col)[low], col[low]] = S.data[low]
             return eigvals_banded(ab, lower=True, check_finite=False)
     return np.linalg.eigvalsh(A)
 

@@ -131,6 +131,47 @@ def split_lines(text: str) -> list[str]:
     return [ln[:-1] if ln.endswith("\r") else ln for ln in lines]
 
 
+def csv_rows(text: str, source: str, comments: bool = True):
+    """The rows of CSV text, line by line: blank lines (and ``#`` comment lines) skipped.
+
+    Parameters
+    ----------
+    text : str
+        The file's text.
+    source : str
+        The file's name, for the error.
+    comments : bool
+        Skip lines starting with ``#``.
+
+    Yields
+    ------
+    tuple
+        ``(line, cells, columns, end)``: the 1-based line number, the cells as text,
+        the 1-based column where each value starts (1 for all on a line with quotes),
+        and the column after the row.
+
+    Raises
+    ------
+    NetlistError
+        A line that is not a CSV row (a lone carriage return, a stray quote).
+    """
+    import csv
+
+    for lineno, line in enumerate(split_lines(text), start=1):
+        if not line.strip() or (comments and line.lstrip().startswith("#")):
+            continue
+        try:
+            cells = next(csv.reader([line]))
+        except csv.Error as exc:
+            raise NetlistError(f"not a CSV row ({exc})", source, lineno, 1,
+                               "comma-separated values") from None
+        cols, pos = [], 1
+        for cell in cells:
+            cols.append(pos + len(cell) - len(cell.lstrip()))
+            pos += len(cell) + 1
+        yield lineno, cells, ([1] * len(cells) if '"' in line else cols), pos
+
+
 def line_col(text: str, index: int) -> tuple[int, int]:
     """1-based (line, column) of the character at ``index`` (lines as :func:`split_lines`).
 

@@ -111,8 +111,9 @@ from .circuit import ELEMENT_UNITS, Drive, Element, units_of
 from .errors import MechcircError, NetlistError
 from .limits import (MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS, MAX_STUDY_POINTS,
                      MAX_STUDY_SWEEP_POINTS, MAX_STUDY_WORK)
-from .sources import (Table, brief, did_you_mean, finite_number, load_toml, locate_path,
-                      number_error, read_bytes, read_source, split_lines, unknown_key)
+from .sources import (Table, brief, csv_rows, did_you_mean, finite_number, load_toml,
+                      locate_path, number_error, read_bytes, read_source, split_lines,
+                      unknown_key)
 from .netlist import SYNTAX, expressions_of, parse
 from .outputs import OutputSet, atomic_open, atomic_path
 from .units import looks_like_unit, parse_omega
@@ -634,22 +635,9 @@ def _sample_row(cells: list, names: tuple[str, ...], source: str, line: int,
 
 def _csv_records(path):
     """(header, records) of a CSV sample file: [(name, col)], [(line, [(text, col)])]."""
-    lines = split_lines(read_source(path, "a CSV file of parameter columns"))
-    records = []
-    for lineno, line in enumerate(lines, 1):
-        if not line.strip():
-            continue
-        try:
-            fields = next(csv.reader([line]))
-        except csv.Error as exc:
-            raise NetlistError(f"not CSV: {exc}", os.fspath(path), lineno, 1) from None
-        cols, at = [], 1
-        for f in fields:                # columns exact for unquoted fields
-            cols.append(at)
-            at += len(f) + 1
-        if '"' in line:
-            cols = [1] * len(fields)
-        records.append((lineno, [(f.strip(), c) for f, c in zip(fields, cols)]))
+    text = read_source(path, "a CSV file of parameter columns")
+    records = [(lineno, [(f.strip(), c) for f, c in zip(cells, cols)])
+               for lineno, cells, cols, _ in csv_rows(text, os.fspath(path), comments=False)]
     if not records:
         raise NetlistError("is empty", os.fspath(path), 0, 0,
                            "a header row naming the parameters, then a row per point")
@@ -1061,17 +1049,9 @@ def _todo(spec: StudySpec, have: set, size: int):
     """The points not in ``have``, in batches of ``size``, made as they are taken (a
     million points are not held at once): each ``(indices, values)``, two arrays, so
     that a task travels to a worker as a few kilobytes of numbers, not dicts."""
-    index: list[int] = []
-    values: list[tuple[float, ...]] = []
-    for i, p in enumerate(spec.points):
-        if i in have:
-            continue
-        index.append(i)
-        values.append(p)
-        if len(index) == size:
-            yield np.array(index, dtype=np.int64), np.array(values, dtype=float)
-            index, values = [], []
-    if index:
+    todo = ((i, p) for i, p in enumerate(spec.points) if i not in have)
+    while batch := list(itertools.islice(todo, size)):
+        index, values = zip(*batch)
         yield np.array(index, dtype=np.int64), np.array(values, dtype=float)
 
 

@@ -23,21 +23,10 @@ from ..errors import shorten
 
 __all__ = ["main", "build_parser", "one_blas_thread"]
 
-#: Modules that contribute sub-commands, in the order ``--help`` lists them.
-COMMAND_MODULES: list[str] = [
-    "mechcirc.cli.circuit_commands",
-    "mechcirc.cli.kinematics_commands",
-    "mechcirc.cli.sley_commands",
-    "mechcirc.cli.ecosystem_commands",
-    "mechcirc.cli.scene_commands",
-    "mechcirc.cli.transient_commands",
-    "mechcirc.cli.periodic_commands",
-]
-
-#: Each sub-command's module (of :data:`COMMAND_MODULES`): ``mechcirc sweep ...``
+#: Each sub-command's module: ``mechcirc sweep ...``
 #: imports and builds that module's parsers only.  A command missing here, or
 #: registered elsewhere, still works: the full parser takes over (see
-#: :class:`_OneModuleParser`); ``tests/test_cli_common.py`` keeps the table exact.
+#: :class:`_OneModuleParser`); ``tests/test_startup.py`` keeps the table exact.
 COMMANDS: dict[str, str] = {
     **dict.fromkeys(("check", "sweep", "resonances"), "mechcirc.cli.circuit_commands"),
     **dict.fromkeys(("fourbar", "frame", "synth", "linkage", "cam"),
@@ -49,6 +38,9 @@ COMMANDS: dict[str, str] = {
     "transient": "mechcirc.cli.transient_commands",
     "periodic": "mechcirc.cli.periodic_commands",
 }
+
+#: Modules that contribute sub-commands, in the order ``--help`` lists them.
+COMMAND_MODULES: list[str] = list(dict.fromkeys(COMMANDS.values()))
 
 
 class _Parser(argparse.ArgumentParser):

@@ -473,6 +473,52 @@ def save_figure(fig, path, into=None, tight: bool = True) -> None:
                     **options)
 
 
+def write_outputs(args, head: list, cols: list, plot, fmt: str = "%.17g") -> None:
+    """``-o CSV`` (the columns ``cols`` named ``head``, each value as ``fmt``) and ``--plot``
+    (the figure ``plot()`` makes), all or none written.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        With ``output`` and ``plot`` (either may be None).
+    head : list of str
+        The column names.
+    cols : list of array_like
+        The columns (equal lengths).
+    plot : callable
+        Makes the figure, called only for ``--plot``.
+    fmt : str
+        The printf format of a value.
+    """
+    import numpy as np
+
+    from ..outputs import OutputSet
+
+    with OutputSet() as out:
+        if args.output:
+            with open(out.path(args.output), "w", encoding="utf-8", newline="") as fh:
+                np.savetxt(fh, np.column_stack(cols), delimiter=",", fmt=fmt,
+                           header=",".join(head), comments="")
+        if args.plot:
+            save_figure(plot(), args.plot, out.path(args.plot))
+
+
+def write_text(path, text: str) -> None:
+    """Write ``text`` (UTF-8) to ``path``, whole or not at all (:func:`mechcirc.outputs.atomic_open`).
+
+    Parameters
+    ----------
+    path : str
+        The output file (replaced atomically).
+    text : str
+        Its content.
+    """
+    from ..outputs import atomic_open
+
+    with atomic_open(path, "w", encoding="utf-8") as fh:
+        fh.write(text)
+
+
 def write_columns(path, comment: str, names, cols) -> None:
     """Write equal-length columns as CSV, whole or not at all: a comment line, the names,
     then one row of full-precision floats (``repr``) per index.
@@ -519,6 +565,73 @@ def load_with_warnings(path):
 
 #: Names listed in the message of :func:`check_names`.
 SHOWN_NAMES = 20
+
+
+def scene_theta(args, scene, alternative: str = "") -> float:
+    """The crank rotation [deg] of ``--theta``, or of the scene file's ``[analysis] theta_deg``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        With ``file`` and ``theta``.
+    scene : Scene
+        The scene read from ``args.file``.
+    alternative : str
+        Another option the error message offers (``" or --cycle"``).
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    MechcircError
+        Neither gives a finite angle.
+    """
+    theta = args.theta if args.theta is not None else scene.analysis.theta_deg
+    if theta is None or not math.isfinite(theta):
+        raise MechcircError(f"{args.file}: give --theta DEG{alternative} (a finite crank "
+                            "rotation from the pose; the file has no [analysis] theta_deg)")
+    return theta
+
+
+def set_values(items, not_numbers: dict | None = None) -> dict[str, float]:
+    """``--set NAME=VALUE`` options as ``{NAME: value}``, each value a finite number in SI
+    units or with a unit (``omega=3000rpm``), at most 1e100 in magnitude.
+
+    Parameters
+    ----------
+    items : list of str
+        The options' texts.
+    not_numbers : dict, optional
+        Names that are not numbers, each with what to use instead.
+
+    Returns
+    -------
+    dict[str, float]
+
+    Raises
+    ------
+    MechcircError
+        A text without ``=``, a name of ``not_numbers``, or a value that is not such a number.
+    """
+    out, words = {}, not_numbers or {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        name = name.strip()
+        if not sep:
+            raise MechcircError(f"--set expects NAME=VALUE, got {item!r}")
+        if name in words:
+            raise MechcircError(f"--set {name}: not a numeric parameter; {words[name]}")
+        try:
+            out[name] = v = parse_quantity(value)
+        except UnitError as exc:
+            raise MechcircError(f"--set {name}: {exc.message} (expected {exc.expected})") \
+                from None
+        if not (math.isfinite(v) and abs(v) <= 1e100):    # C2 = 1e308 overflowed
+            raise MechcircError(f"--set {name}: must be finite and at most 1e+100 in "
+                                f"magnitude, got {value!r}")
+    return out
 
 
 def check_names(names, known, kind: str = "element", option: str = "--element") -> None:

@@ -161,8 +161,7 @@ def cmd_check(args) -> int:
         from ..explain import explain
 
         steps, root = explain(circuit)
-        doc["steps"] = [{"label": s.label, "kind": s.kind, "operands": list(s.operands),
-                         "text": s.text, "reason": s.reason} for s in steps]
+        doc["steps"] = [dict(vars(s)) for s in steps]     # Step's fields: label, kind, ...
         doc["root"] = root
     if args.json:
         print_json(doc)
@@ -252,7 +251,12 @@ def _peak_text(pk, units: dict, unit: str = "rad/s") -> str:
 def cmd_sweep(args) -> int:
     check_output_paths(args.output, args.touchstone, plots=(args.plot,), reads=(args.file,))
     check_table_path(args.output)
-    _check_touchstone_name(args.touchstone)
+    if args.touchstone and Path(args.touchstone).suffix.lower() != ".s1p":
+        # K seen by one drive is a one-port: a .s2p name would promise a
+        # 2-port file that scikit-rf then cannot read.
+        raise MechcircError(
+            f"{args.touchstone}: --touchstone writes K at the drive, a one-port: name "
+            "the file .s1p (a 2-port of two nodes is mechcirc.interop.skrf.two_port)")
     from ..circuit import node_names
 
     circuit, warns = load_with_warnings(args.file)
@@ -296,15 +300,6 @@ def cmd_sweep(args) -> int:
         return 0
     _print_sweep(args, result, extra, sens, pk, notes, dropped)
     return 0
-
-
-def _check_touchstone_name(path) -> None:
-    if path and Path(path).suffix.lower() != ".s1p":
-        # K seen by one drive is a one-port: a .s2p name would promise a
-        # 2-port file that scikit-rf then cannot read.
-        raise MechcircError(
-            f"{path}: --touchstone writes K at the drive, a one-port: name "
-            "the file .s1p (a 2-port of two nodes is mechcirc.interop.skrf.two_port)")
 
 
 def _run_sweep(args, circuit, omega):
@@ -476,14 +471,10 @@ def cmd_resonances(args) -> int:
 
     check_output_paths(plots=(args.plot,))
     circuit, warns = load_with_warnings(args.file)
-    found = modes = None
-    if args.modes or args.sensitivity or args.plot:
-        from ..modes import modes as find_modes
-
-        modes = find_modes(circuit, omega_max=args.omega_max)
-        found = [m.resonance for m in modes]
-    else:
-        found = circuit.resonances(omega_max=args.omega_max)
+    modes = circuit.modes(omega_max=args.omega_max) if args.modes or args.sensitivity or \
+        args.plot else None
+    found = circuit.resonances(omega_max=args.omega_max) if modes is None else \
+        [m.resonance for m in modes]
     warning_lines(warns)
     if args.plot and modes is not None:     # --plot found the modes above
         _plot_modes(args, circuit, modes, warns)
@@ -515,16 +506,13 @@ def cmd_resonances(args) -> int:
 
 def _plot_modes(args, circuit, modes, warns: list) -> None:
     """``resonances --plot``: the lowest :data:`MAX_MODE_PANELS` mode shapes, one panel each."""
-    from ..outputs import OutputSet
     from ..plotting import plot_modes
 
     if len(modes) > MAX_MODE_PANELS:
         warns.append(f"--plot draws the lowest {MAX_MODE_PANELS} of {len(modes)} modes "
                      "(give --omega-max for fewer)")
         warning_lines(warns[-1:])
-    with OutputSet() as out:
-        save_figure(plot_modes(modes[:MAX_MODE_PANELS], circuit.name, unit=args.unit), args.plot,
-                    out.path(args.plot))
+    save_figure(plot_modes(modes[:MAX_MODE_PANELS], circuit.name, unit=args.unit), args.plot)
 
 
 def _print_resonances_json(args, circuit, found, modes) -> int:

@@ -32,16 +32,21 @@ def _register_fourbar(sub) -> None:
         "counter-clockwise from the frame line A→D; the crank turns with θ increasing.",
         "Example: mechcirc fourbar --crank 29 --coupler 37 --rocker 188 --frame 189 --omega 100 "
         "--plot fourbar.png")
-    for name, what in (("crank", "AB"), ("coupler", "BC"), ("rocker", "CD"), ("frame", "AD")):
-        p.add_argument(f"--{name}", type=real(above=0.0, most=MAX_LENGTH), required=True,
-                       metavar="L",
-                       help=f"{name} length {what} (any unit)")
+    _add_lengths(p, "(any unit)")
     p.add_argument("--omega", type=real(most=MAX_OMEGA, unit="rad/s", omega=True), metavar="W",
                    help="crank speed [rad/s] for ε4T = ν·ω²")
     p.add_argument("--branch", type=int, choices=(1, -1), default=1,
                    help="assembly mode (default +1; see docs/kinematics.md)")
     p.add_argument("--plot", metavar="IMAGE", help="plot φ4, μ, ν (or ε4T) and γ against θ")
     add_handler(p, cmd_fourbar)
+
+
+def _add_lengths(p, unit: str) -> None:
+    """The four-bar's required --crank, --coupler, --rocker and --frame (``unit``: how the
+    help names their unit)."""
+    for name, what in (("crank", "AB"), ("coupler", "BC"), ("rocker", "CD"), ("frame", "AD")):
+        p.add_argument(f"--{name}", type=real(above=0.0, most=MAX_LENGTH), required=True,
+                       metavar="L", help=f"{name} length {what} {unit}")
 
 
 def _register_frame(sub) -> None:
@@ -59,9 +64,7 @@ def _register_frame(sub) -> None:
         "600 --mass 2,1.5,15 --rocker-com 110,30 --rocker-inertia 0.08 --reed-force=-50,-500 "
         "--reed-point 140,50 --plot frame.png -o frame.csv\n"
         "(write a value that starts with a minus with '=', as --reed-force=-50,-500)")
-    for name, what in (("crank", "AB"), ("coupler", "BC"), ("rocker", "CD"), ("frame", "AD")):
-        p.add_argument(f"--{name}", type=real(above=0.0, most=MAX_LENGTH), required=True,
-                       metavar="L", help=f"{name} length {what} [--unit]")
+    _add_lengths(p, "[--unit]")
     p.add_argument("--unit", choices=("mm", "m"), default="mm",
                    help="length unit of lengths, centres of mass and the reed point (default mm)")
     speed = p.add_mutually_exclusive_group(required=True)

@@ -8,7 +8,8 @@ import math
 from ..errors import MechcircError
 from ..units import in_unit
 from ._common import (add_command, add_handler, check_names, check_output_paths, count,
-                      load_with_warnings, print_json, real, save_figure, warning_lines)
+                      load_with_warnings, print_json, real, scene_theta, warning_lines,
+                      write_outputs)
 
 
 def register(sub) -> None:
@@ -99,10 +100,7 @@ def _scene(args):
     from ..scene.cycle import drive_motion
 
     scene = load_scene(args.file)
-    theta_deg = args.theta if args.theta is not None else scene.analysis.theta_deg
-    if theta_deg is None:
-        raise MechcircError(f"{args.file}: give --theta DEG, the crank rotation at which the "
-                            "scene is linearised (the file has no [analysis] theta_deg)")
+    theta_deg = scene_theta(args, scene)
     if scene.drive.kind != "velocity":
         raise MechcircError(f"{args.file}: the drive is a force; the periodic drive imposes "
                             "the linkage's motion, which needs a velocity drive")
@@ -129,7 +127,7 @@ def _one_speed(args, circuit, elements, motion) -> int:
         cols += [r.forces.get(name, np.full_like(r.Q, np.nan)),
                  r.velocities.get(name, np.full_like(r.Q, np.nan))]
         head += [f"F_{name}", f"v_{name}"]
-    _write_outputs(args, head, cols, r.plot)
+    write_outputs(args, head, cols, r.plot)
     if args.json:
         return _print_one_speed_json(args, r)
     d = circuit.drive
@@ -194,7 +192,7 @@ def _speed_map(args, circuit, elements, motion) -> int:
     m = speed_map(circuit, args.rpm_min, args.rpm_max, args.points, motion=motion, tol=args.tol,
                   harmonics=args.harmonics, elements=elements, method=args.method)
     unit = m.units["Q"]
-    _write_outputs(args, ["rpm", "peak_Q", "harmonics", "error"] +
+    write_outputs(args, ["rpm", "peak_Q", "harmonics", "error"] +
                    [f"peak_{name}" for name in elements],
                    [m.rpm, m.peak, m.harmonics, m.error] +
                    [m.element_peaks[name] for name in elements], m.plot)
@@ -226,22 +224,6 @@ def _speed_map(args, circuit, elements, motion) -> int:
     if len(strong) > 30:
         print(f"    ... {len(strong) - 30} more (--json lists all)")
     return _print_notes_and_outputs(m.notes, args)
-
-
-def _write_outputs(args, head: list, cols: list, plot) -> None:
-    """``-o CSV`` (the columns ``cols`` named ``head``, %.17g) and ``--plot`` (the figure
-    ``plot()`` makes), all or none written."""
-    import numpy as np
-
-    from ..outputs import OutputSet
-
-    with OutputSet() as out:
-        if args.output:
-            with open(out.path(args.output), "w", newline="") as fh:
-                np.savetxt(fh, np.column_stack(cols), delimiter=",", fmt="%.17g",
-                           header=",".join(head), comments="")
-        if args.plot:
-            save_figure(plot(), args.plot, out.path(args.plot))
 
 
 def _print_notes_and_outputs(notes, args) -> int:

@@ -9,7 +9,8 @@ from ..errors import MechcircError
 from ..limits import MAX_CYCLE_POINTS
 from ..units import FREQUENCY_UNITS, in_unit
 from ._common import (add_command, add_handler, check_output_paths, check_table_path, count,
-                      print_json, real, save_figure, write_columns)
+                      print_json, real, save_figure, scene_theta, set_values,
+                      write_columns, write_outputs, write_text)
 
 
 def register(sub) -> None:
@@ -74,7 +75,7 @@ def _register_reduce(sub) -> None:
     # a file here too (the reduced netlist, as -o), so the name means one thing.
     p.add_argument("-o", "--output", dest="out", metavar="FILE",
                    help="write the reduced netlist here")
-    p.add_argument("--points", type=int, default=2000, metavar="N",
+    p.add_argument("--points", type=count(10, 1_000_000), default=2000, metavar="N",
                    help="log-spaced check points over the band (default 2000; two more "
                         "beside each resonance in the band)")
     add_handler(p, cmd_reduce)
@@ -100,10 +101,7 @@ def cmd_scene(args) -> int:
     if args.reduce and scene.analysis.band is None:
         raise MechcircError(f"{args.file}: --reduce needs band = [W1, W2] and tol = T in the "
                             "file's [analysis] table")
-    theta_deg = args.theta if args.theta is not None else scene.analysis.theta_deg
-    if theta_deg is None:
-        raise MechcircError(f"{args.file}: give --theta DEG or --cycle (the file has no "
-                            "[analysis] theta_deg)")
+    theta_deg = scene_theta(args, scene, " or --cycle")
     if args.reduce:
         model, reduced = build_needed(scene, math.radians(theta_deg), reflect=args.reflect)
     else:
@@ -119,10 +117,7 @@ def cmd_scene(args) -> int:
         drawn = plot_mode(scene, math.radians(theta_deg), args.mode)
         save_figure(drawn, args.plot)
     if args.output:
-        from ..outputs import atomic_open
-
-        with atomic_open(args.output, "w", encoding="utf-8") as fh:
-            fh.write(model.netlist if reduced is None else reduced.netlist)
+        write_text(args.output, model.netlist if reduced is None else reduced.netlist)
     if args.json:
         print_json({
             "file": args.file, "theta_deg": args.theta, "drive_ratio": model.drive_ratio,
@@ -171,29 +166,20 @@ def _print_scene(args, scene, model, found, reduced, drawn: bool) -> None:
 def _cycle(args, scene) -> int:
     import numpy as np
 
-    from ..outputs import OutputSet
     from ..scene.cycle import cycle_map, plot_cycle
 
     from ..progress import Progress
 
     with Progress(args.points, "crank angles") as bar:
         cmap = cycle_map(scene, points=args.points, harmonics=args.harmonics,
-                         reflect=args.reflect, progress=lambda done, total: bar.update(1))
+                         reflect=args.reflect, progress=bar)
     W = cmap.natural_frequencies()
     u = args.unit
     name = FREQUENCY_UNITS[u][0]
-    with OutputSet() as out:
-        if args.output:
-            with open(out.path(args.output), "w", encoding="utf-8", newline="") as fh:
-                cols = ["theta_deg"] + [f"{name}_res{k + 1}" for k in range(W.shape[1])] + \
-                    [f"abs_Q0_h{h}" for h in cmap.harmonics]
-                table = np.column_stack([np.degrees(cmap.theta), in_unit(W, args.unit),
-                                         np.abs(cmap.Q0)])
-                np.savetxt(fh, table, delimiter=",", fmt="%.10g", header=",".join(cols),
-                           comments="")
-        if args.plot:
-            fig = plot_cycle(cmap, unit=args.unit)
-            save_figure(fig, args.plot, into=out.path(args.plot))
+    write_outputs(args, ["theta_deg"] + [f"{name}_res{k + 1}" for k in range(W.shape[1])]
+                  + [f"abs_Q0_h{h}" for h in cmap.harmonics],
+                  [np.degrees(cmap.theta), in_unit(W, u), np.abs(cmap.Q0)],
+                  lambda: plot_cycle(cmap, unit=u), "%.10g")
     if args.json:
         doc = cmap.as_dict()
         doc.update({"file": args.file, "output": args.output, "plot": args.plot})
@@ -236,15 +222,10 @@ def cmd_reduce(args) -> int:
     check_output_paths(args.out, reads=(args.file,))
     check_table_path(args.out, "the reduced netlist")
     band = parse_band(args.band)
-    if args.points < 10 or args.points > 1_000_000:
-        raise MechcircError(f"--points must be between 10 and 1000000, got {args.points}")
     circuit = load(args.file)
     result = simplify(circuit, band, args.tol, output=args.element, points=args.points)
     if args.out:
-        from ..outputs import atomic_open
-
-        with atomic_open(args.out, "w", encoding="utf-8") as fh:
-            fh.write(result.netlist)
+        write_text(args.out, result.netlist)
     if args.json:
         doc = result.as_dict()
         doc.update({"file": args.file, "written": args.out})
@@ -359,28 +340,13 @@ def _simulate_with_bar(args, scene):
     from ..progress import Progress
     from ..scene.simulation import SceneAccuracyWarning, simulate_scene
 
-    bar = None
-
-    def progress(done, total):
-        nonlocal bar
-        if bar is None:
-            bar = Progress(total, scene.name)
-        bar.update(done - bar.done)
-
-    with warnings.catch_warnings():
+    # The total is set by the first progress(done, total).
+    with Progress(0, scene.name) as bar, warnings.catch_warnings():
         warnings.simplefilter("ignore", SceneAccuracyWarning)   # kept in notes, printed in the report
-        try:
-            result = simulate_scene(scene, revolutions=args.revolutions,
-                                    start_deg=args.start_deg,
-                                    steps_per_period=args.steps_per_period, points=args.points,
-                                    method=args.method, rtol=args.rtol,
-                                    revolution=args.revolution,
-                                    error_estimate=not args.no_error_estimate,
-                                    progress=progress)
-        finally:
-            if bar is not None:
-                bar.__exit__(None, None, None)
-    return result
+        return simulate_scene(scene, revolutions=args.revolutions, start_deg=args.start_deg,
+                              steps_per_period=args.steps_per_period, points=args.points,
+                              method=args.method, rtol=args.rtol, revolution=args.revolution,
+                              error_estimate=not args.no_error_estimate, progress=bar)
 
 
 def _print_motion(args, scene, result) -> None:
@@ -401,15 +367,7 @@ def _with_overrides(args, scene):
     """``scene`` with ``--set NAME=VALUE`` and ``--omega`` applied."""
     from ..scene.simfile import apply_overrides
 
-    over = {}
-    for item in args.set:
-        name, sep, value = item.partition("=")
-        if not sep:
-            raise MechcircError(f"--set expects NAME=VALUE, got {item!r}")
-        try:
-            over[name.strip()] = float(value)
-        except ValueError:
-            raise MechcircError(f"--set {name.strip()}: {value!r} is not a number") from None
+    over = set_values(args.set)
     if args.omega is not None:
         over["omega"] = args.omega
     return apply_overrides(scene, over) if over else scene
@@ -513,16 +471,10 @@ def cmd_crosscheck_scene(args) -> int:
     from ..scene.crosscheck import crosscheck_scene
 
     scene = load_scene(args.file)
-    theta_deg = args.theta if args.theta is not None else scene.analysis.theta_deg
-    if theta_deg is None or not math.isfinite(theta_deg):
-        raise MechcircError(f"{args.file}: give --theta DEG (a finite crank rotation from the "
-                            "pose; the file has no [analysis] theta_deg)")
+    theta_deg = scene_theta(args, scene)
     result = crosscheck_scene(scene, math.radians(theta_deg))
     if args.netlist:
-        from ..outputs import atomic_open
-
-        with atomic_open(args.netlist, "w", encoding="utf-8") as fh:
-            fh.write(build(scene, math.radians(theta_deg)).netlist)
+        write_text(args.netlist, build(scene, math.radians(theta_deg)).netlist)
     from ..verdict import summary_line, verdict_text
 
     summary = result.verdict

@@ -6,9 +6,8 @@ import math
 
 from ..errors import InputError
 from ..limits import MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS, MAX_SCIPY_REVOLUTIONS
-from ..units import UnitError, parse_quantity
 from ._common import (add_command, add_handler, check_output_paths, count, print_json, real,
-                      save_figure, write_columns)
+                      save_figure, set_values, write_columns, write_text)
 
 _METHODS = ("rk4", "rk4-python", "rk8", "DOP853", "RK45", "LSODA")   # = mechcirc.sley.METHODS
 _UNITS = {"eps4T": "1/s^2", "eps2P": "1/s^2", "eps4P": "1/s^2", "eps5P": "1/s^2",
@@ -112,7 +111,7 @@ def _register_crosscheck(sub) -> None:
                    help="a scene (.toml): cross-check it at --theta; a netlist (.mcir): "
                         "cross-check its resonances and |Q0| against its transients (the "
                         "sley options are then ignored)")
-    p.add_argument("--omega-max", metavar="W",
+    p.add_argument("--omega-max", type=real(above=0.0, omega=True), metavar="W",
                    help="with a netlist FILE: check resonances up to W [rad/s, or 50Hz] "
                         "(default 1.5 x the highest)")
     p.add_argument("--drive", choices=("one-side", "both-sides"), default="one-side")
@@ -135,26 +134,8 @@ _NOT_NUMBERS = {"drive": "choose the layout with --drive one-side|both-sides",
 
 
 def _overrides(args) -> dict:
-    from ..sley import ParameterError
-
     out = {"alpha": math.radians(args.alpha), "beat_sign": args.beat_sign}
-    for item in args.set:
-        name, sep, value = item.partition("=")
-        if not sep:
-            raise ParameterError(f"--set expects NAME=VALUE, got {item!r}")
-        if name.strip() in _NOT_NUMBERS:
-            raise ParameterError(f"--set {name.strip()}: not a numeric parameter; "
-                                 f"{_NOT_NUMBERS[name.strip()]}")
-        try:
-            out[name.strip()] = parse_quantity(value)   # SI, any unit: omega=3000rpm
-        except UnitError as exc:
-            raise ParameterError(f"--set {name.strip()}: {exc.message} (expected "
-                                 f"{exc.expected})") from None
-        v = out[name.strip()]
-        if not (math.isfinite(v) and abs(v) <= 1e100):    # C2 = 1e308 overflowed
-            raise ParameterError(f"--set {name.strip()}: must be finite and at most 1e+100 "
-                                 f"in magnitude, got {value!r}")
-    return out
+    return out | set_values(args.set, _NOT_NUMBERS)      # SI, any unit: omega=3000rpm
 
 
 def _options(args) -> dict:
@@ -164,12 +145,9 @@ def _options(args) -> dict:
                          f"limit is {MAX_SCIPY_REVOLUTIONS} (a Python right-hand side, ~0.3 s "
                          "a revolution); the compiled rk4 takes up to "
                          f"{MAX_REVOLUTIONS}")
-    opts = {"points_per_revolution": args.points, "revolution": args.revolution}
-    if args.rtol is not None:
-        opts["rtol"] = args.rtol
-    if args.steps_per_period is not None:
-        opts["steps_per_period"] = args.steps_per_period
-    return opts
+    opts = {"points_per_revolution": args.points, "revolution": args.revolution,
+            "rtol": args.rtol, "steps_per_period": args.steps_per_period}
+    return {k: v for k, v in opts.items() if v is not None}     # None: the method's default
 
 
 #: Overrides that change only how the paper is read (the beat-up window it did
@@ -196,10 +174,8 @@ def _table(result, paper_applies: bool = True) -> str:
              f"{result.alpha_deg:g} deg, method {result.method} ({result.backend}), {speed}",
              f"{'quantity':<9} {'unit':<6} {'min':>10} {'max':>10}   {'paper min':>10} "
              f"{'paper max':>10}"]
-    order = ["eps4T", "eps2P", "eps4P", "eps5P", "M2V", "M5V"]
-    for key in order:
-        if key not in result.extrema:
-            continue
+    for key in [k for k in ("eps4T", "eps2P", "eps4P", "eps5P", "M2V", "M5V")
+                if k in result.extrema]:
         lo, hi = result.extrema[key]
         plo, phi = paper.get(key, ("-", "-"))
         lines.append(f"{key:<9} {_UNITS[key]:<6} {lo:>10.0f} {hi:>10.0f}   {plo!s:>10} {phi!s:>10}")
@@ -291,10 +267,7 @@ def cmd_crosscheck(args) -> int:
     with Progress(4, "crosscheck") as bar:      # drawn on a terminal after 1 s
         doc, netlist = crosscheck_sley(params, theta0, on_step=bar.update)
     if args.netlist:
-        from ..outputs import atomic_open
-
-        with atomic_open(args.netlist) as fh:
-            fh.write(netlist)
+        write_text(args.netlist, netlist)
     if args.json:
         print_json(doc)
     else:

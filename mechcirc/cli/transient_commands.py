@@ -6,9 +6,8 @@ import math
 import sys
 
 from ..errors import MechcircError
-from ..units import parse_omega
 from ._common import (add_command, add_handler, check_names, check_output_paths,
-                      check_table_path, print_json, save_figure)
+                      check_table_path, print_json, real, save_figure)
 
 
 def register(sub) -> None:
@@ -23,8 +22,8 @@ def register(sub) -> None:
         "  mechcirc transient examples/msl_backlash.mcir --t-end 1 --dt 1e-3 -o msl.csv\n"
         "  mechcirc transient netlists/stb_heald.mcir --t-end 0.05 --drive harmonic:300 --json",
         file="netlist (.mcir); a drive line is optional")
-    p.add_argument("--t-end", type=float, required=True, metavar="T", help="end time [s]")
-    p.add_argument("--dt", type=float, metavar="DT",
+    p.add_argument("--t-end", type=real(above=0.0), required=True, metavar="T", help="end time [s]")
+    p.add_argument("--dt", type=real(above=0.0), metavar="DT",
                    help="output step [s] (default t_end/2000; 40 per period of a harmonic "
                         "drive)")
     p.add_argument("--drive", metavar="WAVE",
@@ -35,9 +34,9 @@ def register(sub) -> None:
                    help="shaft speed [rev/min] of a drive given by its motion over a "
                         "revolution (drive ... motion=LAW or motion=TABLE.csv); required "
                         "for such a drive")
-    p.add_argument("--amplitude", type=float, metavar="A",
+    p.add_argument("--amplitude", type=real(), metavar="A",
                    help="amplitude of harmonic/step/impulse (default: the netlist's)")
-    p.add_argument("--rtol", type=float, default=1e-10, metavar="TOL",
+    p.add_argument("--rtol", type=real(above=0.0), default=1e-10, metavar="TOL",
                    help="relative tolerance with clearances, 1e-12 to 0.1 (default 1e-10; "
                         "the absolute one is TOL x each state's peak)")
     p.add_argument("-o", "--output", metavar="CSV", help="write the time series as CSV")
@@ -49,11 +48,6 @@ def register(sub) -> None:
     add_handler(p, cmd_transient)
 
 
-def _positive(name, value):
-    if value is not None and not (math.isfinite(value) and value > 0):
-        raise MechcircError(f"{name} must be a finite number > 0, got {value:g}")
-
-
 def cmd_transient(args) -> int:
     from ..netlist import load
     from ..outputs import OutputSet
@@ -61,11 +55,6 @@ def cmd_transient(args) -> int:
 
     check_output_paths(args.output, plots=(args.plot,), reads=(args.file,))
     check_table_path(args.output)
-    _positive("--t-end", args.t_end)
-    _positive("--dt", args.dt)
-    _positive("--rtol", args.rtol)
-    if args.amplitude is not None and not math.isfinite(args.amplitude):
-        raise MechcircError(f"--amplitude must be finite, got {args.amplitude:g}")
     if args.element and not args.plot:
         raise MechcircError("--element NAME draws a panel of the plot: give --plot IMAGE too")
     circuit = load(args.file, require_drive=False)
@@ -139,19 +128,11 @@ def cmd_crosscheck_netlist(args) -> int:
     from ..netlist import load
     from ..transient import crosscheck
 
-    omega_max = None
-    if args.omega_max is not None:
-        try:
-            omega_max = parse_omega(args.omega_max)
-        except Exception as exc:  # noqa: BLE001 - a user error, reported as such
-
-            raise MechcircError(f"--omega-max {args.omega_max!r}: {exc}") from None
-        _positive("--omega-max", omega_max)
     circuit = load(args.file)
     from ..progress import Progress
 
     with Progress(0, f"{circuit.name}: crosscheck") as bar:   # total set by crosscheck
-        result = crosscheck(circuit, omega_max=omega_max, progress=bar)
+        result = crosscheck(circuit, omega_max=args.omega_max, progress=bar)
     from ..verdict import summary_line, verdict_text
 
     summary = result.verdict

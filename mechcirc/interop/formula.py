@@ -170,11 +170,7 @@ class _Builder:
                 f"a symbolic solution is attempted up to {MAX_NODAL_UNKNOWNS}")
         from ..nodal import stamps
 
-        index = {n: i for i, n in enumerate(system.nodes)}
-        index.update({node: -1 for e in system.elements for node in (e.n1, e.n2)
-                      if node not in index})
-        index.update({node: -1 for lv in system.levers
-                      for node in (lv.p1, lv.p2, lv.s1, lv.s2) if node not in index})
+        index = {n: i for i, n in enumerate(system.nodes)}      # absent: the reference
         n = system.size
         A = sp.zeros(n, n)
         admittance, ratio = {}, {}

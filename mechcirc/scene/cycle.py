@@ -284,9 +284,8 @@ def _cycle_designs(scene: Scene, motion, reflect: ReflectMode):
             return None, every
         ok &= (found[name][1] > m.tiny) == (name not in dropped)  # the same elements left out
     where = np.flatnonzero(ok)
-    source = {}
-    for e in scene.elastic + scene.torsions + scene.loads:
-        source[e.name] = source[e.name + "_d"] = e.name
+    source = {k: e.name for e in scene.elastic + scene.torsions + scene.loads
+              for k in (e.name, e.name + "_d")}
     c = template.circuit
     eta = np.array([found[source.get(e.name, e.name)][0][where] ** 2 for e in c.elements])
     values = np.repeat(np.array([[e.value] for e in c.elements]), where.size, axis=1)

@@ -445,9 +445,11 @@ class _SceneReader:
     def err(self, message, table, key, **kw) -> NetlistError:
         return located(self.text, self.source, message, table, key, **kw)
 
-    def new_name(self, name, table, key, n, default=None) -> str:
-        """A valid element name not used before (``default`` when none is given)."""
-        name = default if name is None else name
+    def new_name(self, entry, table, key, n, default) -> str:
+        """A valid element name not used before: ``entry``'s ``name``, or ``default``
+        (an error then points at ``key``)."""
+        name = entry.get("name", default)
+        key = "name" if "name" in entry else key
         if not is_name(name):
             raise self.err(f"[[{table}]] #{n + 1}: name {name!r} is not a valid "
                            f"element name", table, key, occurrence=n,
@@ -500,8 +502,7 @@ class _SceneReader:
             if any(c.link == lname for c in cranks):
                 raise self.err(f"the crank {lname!r} cannot be an axial spring",
                                "elastic", "link", value=lname, occurrence=n)
-            name = self.new_name(e.get("name"), "elastic", "name" if "name" in e else "link", n,
-                                 lname)
+            name = self.new_name(e, "elastic", "link", n, lname)
             k = self.number(e.get("stiffness"), f"stiffness of {name!r} [N/m]",
                             "elastic", "stiffness" if "stiffness" in e else "link", n)
             c = self.number(e.get("damping", 0.0), f"damping of {name!r} [N·s/m]",
@@ -535,8 +536,7 @@ class _SceneReader:
                                "(not a link or 'ground'; several rods may share one body)",
                                "torsion", "body" if "body" in t else "link", occurrence=n,
                                expected="an identifier for the body beyond the rod")
-            name = self.new_name(t.get("name"), "torsion", "name" if "name" in t else "body", n,
-                                 f"C_{body}")
+            name = self.new_name(t, "torsion", "body", n, f"C_{body}")
             k = self.number(t.get("stiffness"), f"stiffness of {name!r} [N·m/rad]",
                             "torsion", "stiffness" if "stiffness" in t else "link", n)
             c = self.number(t.get("damping", 0.0), f"damping of {name!r} [N·m·s/rad]",
@@ -615,7 +615,7 @@ class _SceneReader:
             raise self.err(f"[[gears]] #{n + 1}: body {body!r} must be a new name",
                            "gears", "body" if "body" in g else "crank", occurrence=n,
                            expected="an identifier for the gear on the crank's shaft")
-        name = self.new_name(None, "gears", "crank", n, f"mesh_{c}")
+        name = self.new_name({}, "gears", "crank", n, f"mesh_{c}")
         k = self.number(g.get("stiffness"), f"mesh stiffness of {c!r} [N·m/rad]",
                         "gears", "stiffness" if "stiffness" in g else "crank", n)
         d = self.number(g.get("damping", 0.0), f"mesh damping of {c!r} [N·m·s/rad]",
@@ -648,8 +648,7 @@ class _SceneReader:
         if "inertia" in m or "mass" not in m:
             raise self.err(f"[[masses]] #{n + 1} at a point takes mass = … [kg]",
                            "masses", "point", occurrence=n)
-        name = self.new_name(m.get("name"), "masses", "name" if "name" in m else "point", n,
-                             f"m_{p}")
+        name = self.new_name(m, "masses", "point", n, f"m_{p}")
         v = self.number(m["mass"], f"mass {name!r} [kg]", "masses", "mass", n)
         return SceneMass(name, "mass", v, point=p)
 
@@ -665,8 +664,7 @@ class _SceneReader:
         if "mass" in m or "inertia" not in m:
             raise self.err(f"[[masses]] #{n + 1} on a link takes inertia = … "
                            "[kg·m²]", "masses", "link", occurrence=n)
-        name = self.new_name(m.get("name"), "masses", "name" if "name" in m else "link", n,
-                             f"J_{lname}")
+        name = self.new_name(m, "masses", "link", n, f"J_{lname}")
         v = self.number(m["inertia"], f"inertia {name!r} [kg·m²]", "masses", "inertia", n)
         return SceneMass(name, "inertia", v, link=lname)
 
@@ -680,8 +678,7 @@ class _SceneReader:
                                "loads", "point", occurrence=n,
                                expected='anchor = "GROUND_POINT" or direction = [dx, dy]')
             anchor, direction = self._load_line(ld, n)
-            name = self.new_name(ld.get("name"), "loads", "name" if "name" in ld else "point",
-                                 n, f"load_{p}")
+            name = self.new_name(ld, "loads", "point", n, f"load_{p}")
             k = self.number(ld.get("stiffness", 0.0), f"stiffness of {name!r} [N/m]",
                             "loads", "stiffness", n, allow_zero=True)
             c = self.number(ld.get("damping", 0.0), f"damping of {name!r} [N·s/m]",

@@ -98,19 +98,16 @@ def plot_mode(scene, theta: float, n: int = 1, *, kind: str = "resonance", ax=No
     lk = scene.linkage
     big = max(float(np.hypot(*d)) for d in raw.values())
     k = exaggeration * lk.length_scale() / big if big > 0 else 0.0
-    fig = None
-    if ax is None:
-        from ..plotting import new_panels
+    from ..plotting import one_panel
 
-        fig, axes = new_panels(None, caller="plot_mode", figsize=(7, 6))
-        ax = axes[0, 0]
+    fig, ax, made = one_panel(ax, (7, 6))
     _draw_displaced(ax, scene, state, {p: k * np.asarray(d) for p, d in raw.items()})
     r = mode.resonance
     ax.set_title(f"{kind} {n}: ωn = {r.omega:.6g} rad/s, ζ = {r.zeta:.3g}, at θ = "
                  f"{math.degrees(theta):.6g}° (largest displacement drawn "
                  f"{exaggeration:.0%} of the linkage)", fontsize=9)
     ax.set(aspect="equal", xlabel=f"x [{lk.units}]", ylabel=f"y [{lk.units}]")
-    return ax if fig is None else fig
+    return fig if made else ax
 
 
 def _draw_displaced(ax, scene, state, moves):

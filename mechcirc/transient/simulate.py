@@ -26,7 +26,6 @@ estimated by its difference from the run at rtol (which errs many times more).
 
 from __future__ import annotations
 
-import csv
 import dataclasses
 import math
 import warnings
@@ -160,14 +159,12 @@ def parse_drive(text: str | None) -> Waveform:
 
 def read_csv_drive(path: str) -> Waveform:
     """Drive samples from a CSV file of two columns, time [s] and value (one header line allowed)."""
-    from ..sources import read_source
+    from ..sources import csv_rows, read_source
 
     text = read_source(path, "a CSV file of drive samples (time,value)")
     times: list[float] = []
     values: list[float] = []
-    for lineno, row in enumerate(csv.reader(text.splitlines()), start=1):
-        if not row or not "".join(row).strip() or row[0].lstrip().startswith("#"):
-            continue
+    for lineno, row, _, _ in csv_rows(text, path):
         if len(row) < 2:
             raise MechcircError(f"{path}:{lineno}: expected two columns time,value, got "
                                 f"{len(row)}")
