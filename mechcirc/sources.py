@@ -339,6 +339,9 @@ def load_toml(text: str, source: str) -> dict:
         m = re.search(r"\(at line (\d+), column (\d+)\)", str(exc))
         line, col = (int(m.group(1)), int(m.group(2))) if m else (0, 0)
         msg = re.sub(r"\s*\(at line \d+, column \d+\)", "", str(exc))
+        if str(source).lower().endswith(".mcir"):
+            msg += ("; this is a netlist (.mcir), read by 'mechcirc check' and 'mechcirc "
+                    "sweep': this command reads a TOML file (a scene or a linkage)")
         raise NetlistError(f"TOML syntax: {msg}", source, line, col) from None
     except ValueError:
         # tomllib converts integers with int(), which refuses more than

@@ -124,6 +124,14 @@ def test_simulate_set_unknown_parameter_did_you_mean(capsys):
      "the reduced netlist"),
     (["scene", REPO / "examples/heald_scene.toml", "--theta", "40", "-o", "{out}.png"],
      "a CSV table (--cycle) or a netlist (--theta)"),
+    # these four wrote their CSV text into the image's name
+    (["simulate", "--variant", "3", "-o", "{out}.png"], "a CSV table"),
+    (["simulate", REPO / "examples/heald_scene.toml", "-o", "{out}.png"], "a CSV table"),
+    (["periodic", REPO / "docs/examples/cam_drive.mcir", "--rpm", "600", "-o", "{out}.png"],
+     "a CSV table"),
+    (["cam", "--law", "cycloidal", "--rise", "120", "--dwell", "60", "--return", "120",
+      "--stroke", "20", "--base-radius", "40", "--roller-radius", "10", "-o", "{out}.png"],
+     "a CSV table"),
 ])
 def test_a_table_output_named_like_an_image_is_refused(argv, what, tmp_path, capsys):
     """``-o K.png`` wrote CSV text into K.png."""
@@ -138,3 +146,17 @@ def test_a_table_output_named_json_points_to_json(tmp_path, capsys):
     assert_user_error(["transient", STB, "--t-end", "0.01", "-o", out], capsys,
                       "-o writes a CSV table, not JSON; --json prints the JSON document")
     assert not out.exists()
+
+
+def test_a_misspelt_required_option_is_named(capsys):
+    """argparse reports the required option missing before the unknown one: the misspelling
+    ('--omga' for '--omega') is named with what was meant."""
+    assert_user_error(["forces", STB, "--omga", "100"], capsys,
+                      "required: --omega", "--omga is not an option; did you mean '--omega'?")
+    err = assert_user_error(["sweep", STB, "--omega-max", "10"], capsys, "required: --omega-min")
+    assert "is not an option" not in err                 # nothing misspelt: nothing said
+
+
+def test_a_netlist_given_for_a_toml_file_says_so(capsys):
+    assert_user_error(["scene", STB, "--theta", "10"], capsys, "stb_heald.mcir:12:1",
+                      "TOML syntax", "this is a netlist (.mcir)", "mechcirc sweep")

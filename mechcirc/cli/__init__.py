@@ -48,6 +48,8 @@ class _Parser(argparse.ArgumentParser):
 
     #: The command word of the line (set by :func:`main`), named in a usage error.
     given: str | None = None
+    #: The line's words (set by :func:`main`): a missing required option may be a misspelt one.
+    words: tuple[str, ...] = ()
 
     def error(self, message):
         from ..sources import did_you_mean
@@ -63,6 +65,13 @@ class _Parser(argparse.ArgumentParser):
         m = re.search(r"unrecognized arguments: ([^-\s]\S*)", message)
         if m:                           # a bare word: a value of which option?
             message += self._value_hint(m.group(1))
+        if message.startswith("the following arguments are required"):
+            # argparse names what is missing before what it did not know: a misspelt
+            # required option ('--omga') is both, and the misspelling is the answer.
+            for word in (w.split("=")[0] for w in self.words if w.startswith("--")):
+                if word not in self._option_string_actions:
+                    hint = did_you_mean(word, sorted(self._option_string_actions))
+                    message += f"; {word} is not an option{hint}"
         self.exit(2, f"{self.prog}: error: {shorten(message)} (see '{self.prog} --help')\n")
 
     def _option_hint(self, word: str) -> str:
@@ -215,6 +224,7 @@ def main(argv: list[str] | None = None) -> int:
         # The command is the first word that is not an option (the top level's
         # options, --help, --version and --debug, take no value).
         command = next((a for a in argv if not a.startswith("-")), None)
+        _Parser.words = tuple(argv)
         try:
             parser = build_parser(command)
             args = parser.parse_args(argv)

@@ -268,6 +268,7 @@ def cmd_simulate_scene(args) -> int:
                             "use --rtol")
     check_output_paths(args.output, plots=(args.plot,) if args.plot else (),
                        reads=(args.scene,))
+    check_table_path(args.output)
     scene = _with_overrides(args, load_scene(args.scene))
     if shaft:
         return _shaft(args, scene)
