@@ -264,6 +264,7 @@ def brief(value) -> str:
     Parameters
     ----------
     value : object
+        Anything; its ``repr`` is shortened.
 
     Returns
     -------

@@ -240,18 +240,22 @@ class Scene:
     Attributes
     ----------
     name : str
+        The scene's name (the file's ``name``, else the linkage's).
     linkage : Linkage
         The rigid mechanism (every elastic element rigid).
     units : str
         Length unit of the points; ``length_scale`` is its size [m].
     masses, elastic, torsions, loads : tuple
+        Its [[masses]], [[elastic]], [[torsion]] and [[loads]] entries, parsed.
     drive : SceneDrive
+        The [drive] table, parsed.
     parts : tuple of tuple of str
         The rigid parts left when the elastic elements are released (bodies:
         links and torsion bodies); the part holding the drive comes first.
         Built from the rest when given as ``()`` (raises GeometryError when
         a part does not have one degree of freedom).
     source : str
+        Where the scene came from (a file name) for messages.
     """
 
     name: str
