@@ -118,7 +118,7 @@ def leaves(root: Node) -> Iterator[Element]:
     Parameters
     ----------
     root : Node
-        The root of a series–parallel tree.
+        The tree whose elements are listed.
 
     Yields
     ------
@@ -141,7 +141,7 @@ def depth(root: Node) -> int:
     Parameters
     ----------
     root : Node
-        The root of a series–parallel tree.
+        The tree measured.
 
     Returns
     -------
@@ -164,7 +164,7 @@ def postorder(root: Node) -> list[Node]:
     Parameters
     ----------
     root : Node
-        The root of a series–parallel tree.
+        The tree walked.
 
     Returns
     -------

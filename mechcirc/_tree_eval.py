@@ -437,7 +437,7 @@ def plan(root: Node) -> Plan:
     Parameters
     ----------
     root : Node
-        The root of a series–parallel tree.
+        The tree compiled.
 
     Returns
     -------
@@ -889,7 +889,7 @@ def push_down(root: Node, values: dict, Q: NDArray, v: NDArray,
     Parameters
     ----------
     root : Node
-        The root of a series–parallel tree.
+        The tree whose root carries ``Q`` and ``v``.
     values : dict
         ``id(node)`` → K, from ``evaluate(root, omega, keep=True)``.
     Q : ndarray

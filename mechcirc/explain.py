@@ -98,7 +98,7 @@ def explain_lines(circuit: Circuit) -> list[str]:
     Parameters
     ----------
     circuit : Circuit
-        The circuit to explain; its network must be series–parallel.
+        As in :func:`explain`.
 
     Returns
     -------
