@@ -116,7 +116,8 @@ class NodalSystem:
 
         Returns
         -------
-        ndarray
+        ndarray, shape (n, n)
+            Shared between calls: not to be written to.
         """
         return self.cached("_dense_" + kind,
                            lambda s: s._summed(kind, False).reshape(s.n, s.n))
@@ -132,7 +133,8 @@ class NodalSystem:
 
         Returns
         -------
-        ndarray
+        ndarray, shape (n,)
+            A new array at each call.
         """
         return self._summed(kind, True)
 

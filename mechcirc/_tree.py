@@ -118,6 +118,7 @@ def leaves(root: Node) -> Iterator[Element]:
     Parameters
     ----------
     root : Node
+        The tree whose elements are listed.
 
     Yields
     ------
@@ -140,6 +141,7 @@ def depth(root: Node) -> int:
     Parameters
     ----------
     root : Node
+        The tree measured.
 
     Returns
     -------
@@ -162,6 +164,7 @@ def postorder(root: Node) -> list[Node]:
     Parameters
     ----------
     root : Node
+        The tree walked.
 
     Returns
     -------

@@ -437,6 +437,7 @@ def plan(root: Node) -> Plan:
     Parameters
     ----------
     root : Node
+        The tree compiled.
 
     Returns
     -------
@@ -888,6 +889,7 @@ def push_down(root: Node, values: dict, Q: NDArray, v: NDArray,
     Parameters
     ----------
     root : Node
+        The tree whose root carries ``Q`` and ``v``.
     values : dict
         ``id(node)`` → K, from ``evaluate(root, omega, keep=True)``.
     Q : ndarray

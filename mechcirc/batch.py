@@ -814,7 +814,9 @@ class DesignResonances:
     omega, omega_d, zeta, error : ndarray, shape (D, R)
         As in :class:`~mechcirc.resonances.Resonance`.
     count : ndarray of int, shape (D,)
+        Number of roots found in each design (the first ``count[d]`` columns).
     omega_max : float or None
+        Upper end of the band searched [rad/s]; None: no upper end.
     single : ndarray of int
         The designs solved one by one by ``find_resonances``.
     failed : dict of int to str

@@ -50,6 +50,7 @@ def explain(circuit: Circuit) -> tuple[list[Step], str]:
     Parameters
     ----------
     circuit : Circuit
+        The circuit to explain; its network must be series–parallel.
 
     Returns
     -------
@@ -97,6 +98,7 @@ def explain_lines(circuit: Circuit) -> list[str]:
     Parameters
     ----------
     circuit : Circuit
+        As in :func:`explain`.
 
     Returns
     -------

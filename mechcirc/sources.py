@@ -305,6 +305,7 @@ def brief(value) -> str:
     Parameters
     ----------
     value : object
+        Anything; its ``repr`` is shortened.
 
     Returns
     -------

@@ -25,9 +25,13 @@ def judge(row: dict, error: float | None, tol: float, why: str | None = None) ->
     Parameters
     ----------
     row : dict
+        One comparison (a dict of the row's columns); it gains the three keys.
     error : float or None
+        Relative difference of the two domains; None or NaN: not measured.
     tol : float
+        Largest relative difference that agrees.
     why : str, optional
+        Why the difference cannot be measured; None when it can.
 
     Returns
     -------
@@ -52,6 +56,7 @@ def summarise(rows) -> dict:
     Parameters
     ----------
     rows : iterable of dict
+        Rows with a ``verdict`` key (as :func:`judge` leaves them).
 
     Returns
     -------
@@ -70,6 +75,7 @@ def verdict_text(row: dict) -> str:
     Parameters
     ----------
     row : dict
+        One row with ``verdict``, ``tol`` and ``why`` (as :func:`judge` leaves it).
 
     Returns
     -------

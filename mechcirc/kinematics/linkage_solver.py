@@ -292,6 +292,7 @@ def plan(lk) -> _Plan:
     Parameters
     ----------
     lk : Linkage
+        The linkage to compile.
 
     Returns
     -------

@@ -69,7 +69,7 @@ from __future__ import annotations
 import math
 import os
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal, TypeGuard
 
@@ -142,8 +142,12 @@ class SceneMass:
 
 
 @dataclass(frozen=True)
-class ElasticLink:
-    """A binary link that is an axial spring ``stiffness`` [N/m] ∥ ``damping`` [N·s/m]."""
+class _Spring:
+    """An elastic element of a scene: ``stiffness`` ∥ ``damping`` on ``link``.
+
+    ``clearance`` is the half-width of a gap in it and ``clearance_law`` how
+    the gap acts (one of CLEARANCE_LAWS); the time domain only.
+    """
 
     name: str
     link: str
@@ -154,21 +158,20 @@ class ElasticLink:
 
 
 @dataclass(frozen=True)
-class Torsion:
+class ElasticLink(_Spring):
+    """A binary link that is an axial spring ``stiffness`` [N/m] ∥ ``damping`` [N·s/m]."""
+
+
+@dataclass(frozen=True)
+class Torsion(_Spring):
     """A torsion rod at ground pivot ``pivot`` between ``link`` and the new ``body``.
 
     ``stiffness`` [N·m/rad], ``damping`` [N·m·s/rad].  In the rigid motion the
-    body turns with the link.
+    body turns with the link.  ``body`` and ``pivot`` are keyword arguments.
     """
 
-    name: str
-    link: str
-    body: str
-    pivot: str
-    stiffness: float
-    damping: float = 0.0
-    clearance: float = 0.0
-    clearance_law: str = "elastobacklash"
+    body: str = field(kw_only=True)
+    pivot: str = field(kw_only=True)
 
 
 @dataclass(frozen=True)
@@ -237,18 +240,22 @@ class Scene:
     Attributes
     ----------
     name : str
+        The scene's name (the file's ``name``, else the linkage's).
     linkage : Linkage
         The rigid mechanism (every elastic element rigid).
     units : str
         Length unit of the points; ``length_scale`` is its size [m].
     masses, elastic, torsions, loads : tuple
+        Its [[masses]], [[elastic]], [[torsion]] and [[loads]] entries, parsed.
     drive : SceneDrive
+        The [drive] table, parsed.
     parts : tuple of tuple of str
         The rigid parts left when the elastic elements are released (bodies:
         links and torsion bodies); the part holding the drive comes first.
         Built from the rest when given as ``()`` (raises GeometryError when
         a part does not have one degree of freedom).
     source : str
+        Where the scene came from (a file name) for messages.
     """
 
     name: str
@@ -503,12 +510,8 @@ class _SceneReader:
                 raise self.err(f"the crank {lname!r} cannot be an axial spring",
                                "elastic", "link", value=lname, occurrence=n)
             name = self.new_name(e, "elastic", "link", n, lname)
-            k = self.number(e.get("stiffness"), f"stiffness of {name!r} [N/m]",
-                            "elastic", "stiffness" if "stiffness" in e else "link", n)
-            c = self.number(e.get("damping", 0.0), f"damping of {name!r} [N·s/m]",
-                            "elastic", "damping", n, allow_zero=True)
-            elastic.append(ElasticLink(name, lname, k, c, *_clearance(
-                self.text, self.source, e, name, "elastic", n, "m")))
+            elastic.append(ElasticLink(name, lname, **self.spring(e, "elastic", n, name, "m",
+                                                                  "N")))
         return elastic
 
     def torsions(self, elastic_links: set) -> list:
@@ -537,13 +540,26 @@ class _SceneReader:
                                "torsion", "body" if "body" in t else "link", occurrence=n,
                                expected="an identifier for the body beyond the rod")
             name = self.new_name(t, "torsion", "body", n, f"C_{body}")
-            k = self.number(t.get("stiffness"), f"stiffness of {name!r} [N·m/rad]",
-                            "torsion", "stiffness" if "stiffness" in t else "link", n)
-            c = self.number(t.get("damping", 0.0), f"damping of {name!r} [N·m·s/rad]",
-                            "torsion", "damping", n, allow_zero=True)
-            torsions.append(Torsion(name, lname, body, pivot, k, c, *_clearance(
-                self.text, self.source, t, name, "torsion", n, "rad")))
+            torsions.append(Torsion(name, lname, body=body, pivot=pivot,
+                                    **self.spring(t, "torsion", n, name, "rad", "N·m")))
         return torsions
+
+    def spring(self, entry, table, n, name, gap, load) -> dict:
+        """stiffness [load/gap], damping [load·s/gap] and clearance of an [[elastic]] or
+        [[torsion]] entry ``n`` named ``name``: the keyword arguments of a :class:`_Spring`."""
+        k = self.number(entry.get("stiffness"), f"stiffness of {name!r} [{load}/{gap}]",
+                        table, "stiffness" if "stiffness" in entry else "link", n)
+        c = self.number(entry.get("damping", 0.0), f"damping of {name!r} [{load}·s/{gap}]",
+                        table, "damping", n, allow_zero=True)
+        b = self.number(entry.get("clearance", 0.0),
+                        f"clearance of {name!r} (half-width of the gap) [{gap}]", table,
+                        "clearance", n, allow_zero=True)
+        law = entry.get("clearance_law", "elastobacklash")        # the time domain only
+        if law not in CLEARANCE_LAWS:
+            raise self.err(f"[[{table}]] #{n + 1}: clearance_law {law!r} is unknown", table,
+                           "clearance_law", occurrence=n,
+                           expected=" or ".join(f'"{x}"' for x in CLEARANCE_LAWS))
+        return {"stiffness": k, "damping": c, "clearance": b, "clearance_law": law}
 
     def gears(self, torsions: list) -> list:
         """[[gears]]: cranks geared to the first; a crank turning at another speed needs one.
@@ -621,7 +637,7 @@ class _SceneReader:
         d = self.number(g.get("damping", 0.0), f"mesh damping of {c!r} [N·m·s/rad]",
                         "gears", "damping", n, allow_zero=True)
         piv = next(x.pivot for x in self.linkage.cranks if x.link == c)
-        torsions.append(Torsion(name, c, body, piv, k, d))
+        torsions.append(Torsion(name, c, k, d, body=body, pivot=piv))
         return body
 
     def masses(self, bodies: set, rigid_points: set, elastic_links: set) -> list:
@@ -755,19 +771,6 @@ class _SceneReader:
                                        "another name")
                 names.add(taken)
         return names
-
-
-def _clearance(text, source, entry, name, table, n, unit):
-    """(clearance, clearance_law) of an [[elastic]] or [[torsion]] entry (time domain only)."""
-    b = _number(text, source, entry.get("clearance", 0.0),
-                f"clearance of {name!r} (half-width of the gap) [{unit}]", table, "clearance",
-                n, allow_zero=True)
-    law = entry.get("clearance_law", "elastobacklash")
-    if law not in CLEARANCE_LAWS:
-        raise located(text, source, f"[[{table}]] #{n + 1}: clearance_law {law!r} is unknown",
-                   table, "clearance_law", occurrence=n,
-                   expected=" or ".join(f'"{x}"' for x in CLEARANCE_LAWS))
-    return b, law
 
 
 def _analysis(text, source, table, circuit_names) -> Analysis:

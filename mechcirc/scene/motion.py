@@ -68,6 +68,7 @@ class MotionModel:
     Attributes
     ----------
     scene : Scene
+        The scene the equations are of.
     omega : float
         Crank shaft speed Ω [rad/s].
     parts : tuple of tuple of str

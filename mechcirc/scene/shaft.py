@@ -67,6 +67,7 @@ class ShaftMotion:
     Attributes
     ----------
     name, source : str
+        The scene's name and where it came from.
     flywheel : float
         J_f [kg·m²].
     theta : ndarray

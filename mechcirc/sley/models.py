@@ -221,6 +221,7 @@ def start_angle(params: SleyParameters) -> float:
     Parameters
     ----------
     params : SleyParameters
+        The sley's parameters.
 
     Returns
     -------

@@ -64,8 +64,8 @@ def sley_scene(params: SleyParameters, *, revolutions: int = 5):
     return Scene(
         name, linkage, "m", 1.0,
         tuple(SceneMass(m, "inertia", float(v), link=link) for m, link, v in masses), (),
-        tuple(Torsion(r, link, body, pivot, float(k), float(c), float(p.clearance),
-                      "dead-zone")
+        tuple(Torsion(r, link, float(k), float(c), float(p.clearance), "dead-zone",
+                      body=body, pivot=pivot)
               for r, link, body, pivot, k, c in rods), (),
         SceneDrive("V", "velocity", float(p.omega), link="shaft"), (), source,
         moments=(Moment("M4", "sley", float(p.beat_sign * p.M0), window, sigma,
