@@ -83,6 +83,7 @@ def element_forces(circuit: Circuit, omega: float, *, method: Method = "auto"
     Parameters
     ----------
     circuit : Circuit
+        The circuit to load by its drive.
     omega : float
         ω [rad/s].
     method : {"auto", "sp", "nodal"}

@@ -18,6 +18,7 @@ def plot_motion(result, names=None, fig=None):
     Parameters
     ----------
     result : SceneMotion
+        A simulated scene (:func:`mechcirc.scene.simulate_scene`).
     names : list of str, optional
         Outputs to draw (default: every ``BODY.acceleration`` that is not
         identically zero, and every ``ELEMENT.force``).

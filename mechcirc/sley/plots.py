@@ -13,6 +13,7 @@ def plot_result(result, fig=None):
     Parameters
     ----------
     result : SleyResult
+        A simulated sley (:func:`mechcirc.sley.simulate`).
     fig : matplotlib Figure or SubFigure, optional
         An empty one to fill (:func:`mechcirc.plotting.new_panels`); a new one by default.
 
