@@ -32,6 +32,7 @@ def read_bytes(path: str | os.PathLike, expected: str) -> bytes:
     Parameters
     ----------
     path : str or PathLike
+        The file to read.
     expected : str
         What the file should be, for messages.
 
@@ -81,7 +82,9 @@ def read_source(path: str | os.PathLike, expected: str) -> str:
     Parameters
     ----------
     path : str or PathLike
+        The file to read.
     expected : str
+        What the file should be, for messages.
 
     Returns
     -------
@@ -120,6 +123,7 @@ def split_lines(text: str) -> list[str]:
     Parameters
     ----------
     text : str
+        The text to split.
 
     Returns
     -------
@@ -178,7 +182,9 @@ def line_col(text: str, index: int) -> tuple[int, int]:
     Parameters
     ----------
     text : str
+        The whole text.
     index : int
+        0-based index of the character in ``text``.
 
     Returns
     -------
@@ -236,6 +242,7 @@ def finite_number(value) -> TypeGuard[float]:
     Parameters
     ----------
     value : object
+        A value as a TOML reader returned it.
 
     Returns
     -------
@@ -257,9 +264,11 @@ def number_error(value, what: str, *, positive: bool = False,
     Parameters
     ----------
     value : object
+        A value as a TOML reader returned it.
     what : str
         The value's name, for the message.
     positive, allow_zero : bool
+        Demand > 0; with ``allow_zero`` too, ≥ 0.
 
     Returns
     -------
@@ -363,10 +372,15 @@ def locate(text: str, section: str | None, key: str, value: str | None = None,
     Parameters
     ----------
     text : str
+        The TOML text.
     section : str or None
+        The table's name; None for the top level.
     key : str
+        The key to find.
     value : str, optional
+        A quoted string on the key's line to point at.
     occurrence : int
+        Which ``[[section]]`` (0-based).
 
     Returns
     -------
@@ -405,7 +419,9 @@ def locate_path(text: str, path: tuple[str, ...]) -> tuple[int, int]:
     Parameters
     ----------
     text : str
+        The TOML text.
     path : tuple of str
+        The dotted key, one name per level.
 
     Returns
     -------
@@ -441,12 +457,16 @@ def located(text: str, source: str, message: str, section: str | None, key: str,
     text, source : str
         The file's text and name, for errors.
     message : str
+        What is wrong.
     section : str or None
+        The table's name; None for the top level.
     key : str
+        The key to point at.
     value : object, optional
         The offending value, looked for on the key's line when it is a str
         (anything else, e.g. a number where a name belongs, is not looked for).
     occurrence : int
+        Which ``[[section]]`` (0-based).
     expected : str, optional
         What would be right.
 
@@ -505,8 +525,11 @@ def unknown_key(table: Table, entry: dict, occurrence: int = 0) -> tuple[str, st
     Parameters
     ----------
     table : Table
+        The declared keys.
     entry : dict
+        The table (or one ``[[table]]`` entry) as read.
     occurrence : int
+        Which ``[[table]]`` entry (0-based), for the message.
 
     Returns
     -------
@@ -531,7 +554,9 @@ def did_you_mean(word: str, choices) -> str:
     Parameters
     ----------
     word : str
+        The unknown word.
     choices : iterable of str
+        The words it could have been.
 
     Returns
     -------
@@ -558,6 +583,7 @@ def check_keys(text: str, source: str, table: Table, entry: dict, occurrence: in
     table : Table
         The declared keys.
     entry : dict
+        The table (or one ``[[table]]`` entry) as read.
     occurrence : int
         Which ``[[table]]`` entry (0-based).
 
