@@ -164,6 +164,7 @@ def from_circuits(circuits) -> "Designs":
     Parameters
     ----------
     circuits : sequence of Circuit
+        The circuits, one per design.
 
     Returns
     -------
@@ -765,6 +766,7 @@ class DesignSweep:
     error : ndarray, shape (D, W)
         Bound of the relative error of K (inf on a pole or zero).
     kind : {"velocity", "force"}
+        The drive's kind (V0 [m/s] or F0 [N]).
     amplitude : ndarray, shape (D, 1)
         The drive's amplitude.
     single : ndarray of int

@@ -31,6 +31,7 @@ class ElementForce:
     Attributes
     ----------
     name, kind, n1, n2 : str
+        The element's name, kind and the nodes it joins, as in the netlist.
     Q : complex
         Force amplitude through the element from n1 to n2 [N].
     v : complex

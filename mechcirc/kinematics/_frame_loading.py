@@ -192,11 +192,13 @@ def link_kinematics(fourbar: FourBar, theta: ArrayLike, omega: float, crank: Lin
     Parameters
     ----------
     fourbar : FourBar
+        The linkage.
     theta : array_like
         Crank angles [rad], shape (n,).
     omega : float
         Crank speed [rad/s].
     crank, coupler, rocker : LinkMass
+        Where each link's centre of mass lies.
     reed_point : tuple of float
         The reed point in the rocker's frame [m].
 

@@ -101,6 +101,7 @@ class CamCheck:
         the smallest radius of curvature of the convex profile, ρ − r_f for a
         roller or r_b + s + s'' for a flat face; undercut where it is ≤ 0).
     ok : bool
+        Whether the check passes.
     value, theta : float
         The worst value and the cam angle [rad] where it occurs.
     limit : float
@@ -494,6 +495,7 @@ def save_profile(cam: CamProfile, csv: str | None = None, svg: str | None = None
     Parameters
     ----------
     cam : CamProfile
+        The profile to write.
     csv, svg : str, optional
         The file paths (None: not written).
 

@@ -172,6 +172,7 @@ class Linkage:
     Attributes
     ----------
     name : str
+        The file's ``name`` (default: the file's stem).
     pose : dict[str, ndarray (2,)]
         Every point in the assembled pose.
     ground : tuple of str
@@ -179,6 +180,7 @@ class Linkage:
     links : dict[str, tuple of str]
         Moving links as point lists (first point = the link frame's origin).
     cranks : tuple of Crank
+        The driven links, the first being the main crank.
     source : str
         File name, for messages.
     units : str
@@ -376,6 +378,7 @@ class Linkage:
             Largest rotation of any crank between two continuation nodes [deg];
             the dyad path checks the assembly at the same spacing.
         method : {"auto", "dyads", "newton"}
+            ``"auto"``: closed form when the linkage is made of dyads, else Newton.
 
         Raises
         ------

@@ -521,9 +521,11 @@ def motion(lk, pl: _Plan, theta, *, max_step_deg: float = 2.0, method: str = "au
     Parameters
     ----------
     lk : Linkage
+        The linkage to solve.
     pl : _Plan
         From :func:`plan`.
     theta : ndarray
+        First-crank rotations from the pose [rad], traversed in order.
     max_step_deg : float
         The largest continuation step [deg].
     method : {"auto", "dyads", "newton"}

@@ -245,6 +245,8 @@ class Scene:
         The rigid mechanism (every elastic element rigid).
     units : str
         Length unit of the points; ``length_scale`` is its size [m].
+    length_scale : float
+        The size of ``units`` [m].
     masses, elastic, torsions, loads : tuple
         Its [[masses]], [[elastic]], [[torsion]] and [[loads]] entries, parsed.
     drive : SceneDrive

@@ -536,10 +536,12 @@ def build_needed(scene: Scene, theta: float | None = None, *,
     Parameters
     ----------
     scene : Scene
+        The scene to model.
     theta : float, optional
         Crank rotation from the pose [rad]; default the file's
         ``[analysis] theta_deg``.
     reflect : {"eta", "lever"}
+        As in :func:`build`.
 
     Returns
     -------

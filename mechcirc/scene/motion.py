@@ -576,7 +576,9 @@ def dead_centre(scene: Scene, kind: str = "front") -> float:
     Parameters
     ----------
     scene : Scene
+        The scene whose first crank is meant.
     kind : {"front", "back"}
+        Extended or folded.
 
     Returns
     -------
