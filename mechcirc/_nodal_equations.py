@@ -265,7 +265,9 @@ def stamps(elements, levers, index: dict[str, int]):
     Parameters
     ----------
     elements : sequence of Element
+        The elements to stamp.
     levers : sequence of Lever
+        The levers to stamp.
     index : dict[str, int]
         Node name → row (−1 or absent: the reference).
 

@@ -38,6 +38,7 @@ def plot_fourbar(fourbar, omega: float | None = None, n: int = 721, *, fig=None)
     Parameters
     ----------
     fourbar : FourBar
+        The linkage to plot.
     omega : float, optional
         Crank speed [rad/s].
     n : int
@@ -101,7 +102,9 @@ def draw_design(design, ax):
     Parameters
     ----------
     design : Design
+        A synthesised design.
     ax : matplotlib.axes.Axes
+        Drawn on.
 
     Returns
     -------
@@ -142,6 +145,7 @@ def plot_synthesis(designs, n: int = 721, fig=None):
     Parameters
     ----------
     designs : sequence of Design
+        The designs, best first.
     n : int
         Points of each design's curves over a revolution.
     fig : matplotlib.figure.Figure or SubFigure, optional
@@ -284,9 +288,13 @@ def plot_linkage(linkage, state, paths=None, *, ax=None, fig=None):
     Parameters
     ----------
     linkage : Linkage
+        The linkage to draw.
     state : LinkageState
+        The position drawn (:meth:`Linkage.solve` at one θ).
     paths : dict[str, ndarray], optional
+        Point name → its traced path, shape (n, 2).
     ax : matplotlib.axes.Axes, optional
+        Drawn on when given.
     fig : matplotlib.figure.Figure or SubFigure, optional
         An empty one to fill; a new one by default.
 

@@ -101,9 +101,11 @@ def linkage_toml(design, k: int = 1, omega: float = 100.0) -> str:
     Parameters
     ----------
     design : Design
+        A synthesised design.
     k : int
         The design's number (in the header).
     omega : float
+        Crank speed [rad/s].
 
     Returns
     -------
@@ -182,8 +184,11 @@ def export_designs(designs, directory, opts: SceneOptions = SceneOptions()) -> l
     Parameters
     ----------
     designs : sequence of Design
+        The designs, numbered from 1 in this order.
     directory : str or Path
+        An existing folder to write into.
     opts : SceneOptions
+        The scenes' dynamic data.
 
     Returns
     -------

@@ -183,6 +183,7 @@ def motion_model(scene: Scene, omega: float | None = None, *,
     Parameters
     ----------
     scene : Scene
+        The scene to model.
     omega : float, optional
         Crank speed Ω [rad/s]; default: |ω| of the scene's first crank.
     table_points : int

@@ -71,6 +71,7 @@ def plot_mode(scene, theta: float, n: int = 1, *, kind: str = "resonance", ax=No
     Parameters
     ----------
     scene : Scene
+        The scene to draw.
     theta : float
         Crank rotation from the pose [rad].
     n : int

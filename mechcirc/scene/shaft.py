@@ -95,6 +95,7 @@ class ShaftMotion:
     startup_t, startup_speed : ndarray
         The start-up curve (empty without one).
     notes : tuple of str
+        How the motion was computed, for the report.
     values : dict[str, ndarray]
         Elastic scenes: ``ELEMENT.force`` [N or N·m], ``ELEMENT.deformation`` [m or rad]
         and ``MOMENT.moment`` [N·m] over the cycle (empty when rigid).
@@ -191,6 +192,7 @@ def rigid_model(scene: Scene, N: int = 1024):
     Parameters
     ----------
     scene : Scene
+        The scene to model.
     N : int
         Table nodes per crank revolution.
 
@@ -639,6 +641,7 @@ def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float 
     Parameters
     ----------
     scene : Scene
+        The scene whose main shaft turns.
     shaft : Shaft, optional
         Default the scene's ``[shaft]`` table.
     flywheel : float, optional
