@@ -168,6 +168,7 @@ class LinkageMotion:
     parts : ndarray (N, 3n, n_cranks)
         q̇ with every crank but one stopped (conditional stop); ``q̇ = Σ parts``.
     point_names, link_names, crank_links : tuple of str
+        Names of the P points, of the n moving links (the order of ``q``) and the cranks' links.
     points, velocities, accelerations : ndarray (N, P, 2)
         Every named point [length], [length/s], [length/s²].
     contributions : ndarray (n_cranks, N, P, 2)

@@ -86,7 +86,9 @@ def circuit_resonances(circuit, omega_max: float):
     Parameters
     ----------
     circuit : Circuit
+        The circuit to solve.
     omega_max : float
+        Upper end of the search [rad/s].
 
     Returns
     -------
@@ -127,8 +129,11 @@ def resonance_check(params: SleyParameters, theta0: float, *,
     Parameters
     ----------
     params : SleyParameters
+        The sley.
     theta0 : float
+        Crank angle [rad].
     damping : bool
+        Compare the damped roots instead of the undamped ones.
 
     Returns
     -------
@@ -165,6 +170,7 @@ class RingingCheck:
     omega_predicted : float
         Damped natural frequency of the sley mode at ``theta_mid`` [rad/s].
     rel_error : float
+        |measured − predicted| / predicted.
     """
 
     theta_mid: float
@@ -189,8 +195,11 @@ def ringing_check(params: SleyParameters, *, half_periods: int = 4, revolutions:
     Parameters
     ----------
     params : SleyParameters
+        The sley.
     half_periods : int
+        Half periods of the ringing measured.
     revolutions : int
+        Revolutions of each simulation.
     method : str, optional
         As :func:`mechcirc.sley.simulate`.
 
@@ -266,7 +275,9 @@ class HarmonicCheck:
         |Q0/V0| = 1/|K| of the netlist (or of :meth:`LinearModel.drive_moment`
         when the netlist core is missing) [N·m·s/rad].
     rel_error : float
+        Largest |q0_time − q0_circuit| / q0_circuit over ``omega``.
     how : str
+        Which netlist path gave ``q0_circuit``.
     """
 
     omega: np.ndarray
@@ -326,6 +337,7 @@ def harmonic_check(params: SleyParameters, theta0: float, omegas) -> HarmonicChe
     Parameters
     ----------
     params : SleyParameters
+        The sley.
     theta0 : float
         Crank angle [rad].
     omegas : array_like

@@ -212,6 +212,7 @@ def linearise(params: SleyParameters, theta0: float, *, mu: float | None = None)
     Parameters
     ----------
     params : SleyParameters
+        The sley.
     theta0 : float
         Crank angle [rad].
     mu : float, optional
@@ -238,6 +239,7 @@ def eigenfrequencies(params: SleyParameters, theta0: float) -> list[SleyMode]:
     Parameters
     ----------
     params : SleyParameters
+        The sley.
     theta0 : float
         Crank angle [rad].
 
@@ -287,6 +289,7 @@ def to_circuit(params: SleyParameters, theta0: float, *, lever: bool = False,
     Parameters
     ----------
     params : SleyParameters
+        The sley.
     theta0 : float
         Crank angle [rad].
     lever : bool
