@@ -62,11 +62,9 @@ def plot_fourbar(fourbar, omega: float | None = None, n: int = 721, *, fig=None)
     acc = st.nu * omega ** 2 if omega else st.nu
     crossings = fourbar.branch_crossings()
     if crossings:
-        # the closed form switches branch at a crossing: μ and ν are not
-        # drawn within 1° of one (they would jump through ±1e15)
-        near = np.zeros(th.shape, dtype=bool)
-        for tc in crossings:
-            near |= np.abs((th - tc + math.pi) % (2 * math.pi) - math.pi) < math.radians(1.0)
+        # the closed form switches branch at a crossing: μ, ν not drawn within 1° (±1e15 jumps)
+        near = np.any([np.abs((th - tc + math.pi) % (2 * math.pi) - math.pi) < math.radians(1.0)
+                       for tc in crossings], axis=0)
         st = type(st)(**{**st.__dict__, "mu": np.where(near, np.nan, st.mu)})
         acc = np.where(near, np.nan, acc)
     panels = [(np.degrees(st.phi4), "φ4 [deg]"), (st.mu, "μ = dφ4/dθ [1]"),

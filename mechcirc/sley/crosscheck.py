@@ -196,10 +196,8 @@ def ringing_check(params: SleyParameters, *, half_periods: int = 4, revolutions:
     ----------
     params : SleyParameters
         The sley.
-    half_periods : int
-        Half periods of the ringing measured.
-    revolutions : int
-        Revolutions of each simulation.
+    half_periods, revolutions : int
+        Half periods of the ringing measured; revolutions of each simulation.
     method : str, optional
         As :func:`mechcirc.sley.simulate`.
 
