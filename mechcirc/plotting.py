@@ -267,7 +267,13 @@ def plot_sweep(result, title: str | None = None, resonances=(), peak=None, *, ax
     -------
     The Axes ``ax`` when given, else ``fig`` (empty) or the new Figure (what it drew on).
     """
-    curves = _sweep_curves(result, resonances if refine else (), unit)
+    import numpy as np
+
+    from .units import in_unit
+
+    w, K, flags, R = _refined(result, resonances if refine else ())
+    with np.errstate(all="ignore"):     # (ω in unit, |K|, arg K [deg], |response|, flags)
+        curves = in_unit(w, unit), np.abs(K), np.degrees(np.angle(K)), np.abs(R), flags
     if ax is not None:
         _draw_K(ax, result, curves, resonances, unit, mark=True)
         ax.set_title(title or f"{result.name}: kinematic characteristic K = v/Q")
@@ -275,19 +281,10 @@ def plot_sweep(result, title: str | None = None, resonances=(), peak=None, *, ax
     return _bode_figure(fig, result, curves, resonances, peak, unit, dict(extra or {}), title)
 
 
-def _sweep_curves(result, resonances, unit: str):
-    """(ω in ``unit``, |K|, arg K [deg], |response|, flags), refined around ``resonances``."""
-    import numpy as np
-
-    from .units import in_unit
-
-    w, K, flags, R = _refined(result, resonances)
-    with np.errstate(all="ignore"):
-        return in_unit(w, unit), np.abs(K), np.degrees(np.angle(K)), np.abs(R), flags
-
-
 def _bode_figure(fig, result, curves, resonances, peak, unit: str, extra: dict, title):
     """The panels of :func:`plot_sweep`: |K|, arg K, the response, ``extra``."""
+    import numpy as np
+
     from .circuit import units_of
     from .units import FREQUENCY_UNITS, in_unit
 
@@ -301,12 +298,14 @@ def _bode_figure(fig, result, curves, resonances, peak, unit: str, extra: dict, 
     ax_k, ax_p, ax_q = axes[:3]
     _draw_K(ax_k, result, curves, resonances, unit)
     ax_p.semilogx(omega[positive], phase[positive], color="C2")
-    ax_p.set_ylabel("arg K [deg]")
-    ax_p.set_ylim(-190, 190)
-    ax_p.set_yticks([-180, -90, 0, 90, 180])
+    ax_p.set(**_PHASE_AXIS)
     ax_q.loglog(omega[positive], absR[positive], color="C1")
     ax_q.set_ylabel(f"|v0| = |F0·K| [{units['v']}]" if force_drive else f"|Q0| [{units['Q']}]")
-    _extra_panels(axes[3:], in_unit(result.omega, unit), extra)
+    own = in_unit(result.omega, unit)             # the extra panels: the sweep's own points
+    for a, (label, values) in zip(axes[3:], extra.items()):
+        with np.errstate(all="ignore"):
+            a.loglog(own[own > 0], np.asarray(values)[own > 0], color="C4")
+        a.set_ylabel(label)
     axes[-1].set_xlabel(_FREQUENCY_LABEL[unit])
     # One legend on the |Q0| panel for the roots' lines and the peak (made once).
     _mark_resonances(tuple(axes), resonances, ax_q, FREQUENCY_UNITS[unit][1],
@@ -314,7 +313,10 @@ def _bode_figure(fig, result, curves, resonances, peak, unit: str, extra: dict, 
     _mark_peak(ax_q, peak, unit, units["Q"])
     for a in axes:
         a.grid(True, which="both", alpha=0.3)
-    fig.suptitle(title or _sweep_title(result, units, force_drive))
+    amp = result.drive.amplitude
+    fig.suptitle(title or f"{result.name}: kinematic characteristic K = v/Q\nand " + (
+        f"velocity response v0 = F0·K to the force drive F0 = {amp:g} {units['Q']}"
+        if force_drive else f"force amplitude Q0 = V0/K, V0 = {amp:g} {units['v']}"))
     _light_log_axes(axes)
     # Fixed margins that hold every label (the panels share x: no tick labels
     # between them), so neither tight_layout nor a tight bounding box at
@@ -325,24 +327,9 @@ def _bode_figure(fig, result, curves, resonances, peak, unit: str, extra: dict, 
     return fig
 
 
+#: The arg K panel's y axis (a sweep's and a comparison's).
+_PHASE_AXIS = {"ylabel": "arg K [deg]", "ylim": (-190, 190), "yticks": [-180, -90, 0, 90, 180]}
 _FREQUENCY_LABEL = {"rad/s": "ω [rad/s]", "Hz": "f [Hz]", "rpm": "n [rpm]"}
-
-
-def _extra_panels(axes, own, extra: dict) -> None:
-    """The ``extra`` panels of :func:`plot_sweep`, on the sweep's own points ``own``."""
-    import numpy as np
-
-    for a, (label, values) in zip(axes, extra.items()):
-        with np.errstate(all="ignore"):
-            a.loglog(own[own > 0], np.asarray(values)[own > 0], color="C4")
-        a.set_ylabel(label)
-
-
-def _sweep_title(result, units: dict, force_drive: bool) -> str:
-    amp = result.drive.amplitude
-    what = (f"velocity response v0 = F0·K to the force drive F0 = {amp:g} {units['Q']}"
-            if force_drive else f"force amplitude Q0 = V0/K, V0 = {amp:g} {units['v']}")
-    return f"{result.name}: kinematic characteristic K = v/Q\nand {what}"
 
 
 _SUPERSCRIPT = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
@@ -694,9 +681,7 @@ def plot_comparison(comparison, name: str = "circuit", measured: str = "measured
             ax_k.loglog(w, np.abs(K), style, label=label, ms=3)
             ax_p.semilogx(w, np.degrees(np.angle(K)), style, ms=3)
     ax_k.set_ylabel(f"|K| [{u['K']}]")
-    ax_p.set_ylabel("arg K [deg]")
-    ax_p.set_ylim(-190, 190)
-    ax_p.set_yticks([-180, -90, 0, 90, 180])
+    ax_p.set(**_PHASE_AXIS)
     ax_p.set_xlabel("ω [rad/s]")
     ax_k.legend(loc="best", fontsize="small")
     for ax in (ax_k, ax_p):
