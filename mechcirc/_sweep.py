@@ -300,8 +300,7 @@ class Sweep:
         from .resonances import find_resonances
 
         try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
+            with warnings.catch_warnings(action="ignore"):
                 found = find_resonances(self.circuit, omega_max=float(np.max(self.omega)))
         except MechcircError:          # too large or ill-scaled: the plot goes without
             return []
@@ -557,8 +556,7 @@ def _tree_where_no_digit(circuit: Circuit, omega, K, err):
     if not lost.any():
         return K, err, ()
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")      # the nodal path already said its warnings
+        with warnings.catch_warnings(action="ignore"):  # the nodal path already said its warnings
             tree = circuit.tree
     except TopologyError:                        # not a tree (or not one seen from the drive)
         return K, err, ()

@@ -400,7 +400,11 @@ def _parse_spec(data: dict, source: str, base: Path) -> StudySpec:
         sley = _sley_settings(data.get("sley", {}), names, kind)
         units = tuple(_SLEY_UNITS.get(n) for n in names)
     else:
-        _check_params(roles, path, names, kind)
+        missing = [n for n in names if n not in roles]     # each a .param, checked once
+        if missing:
+            _fail((kind,), f"{', '.join(missing)} is not a .param of {path}"
+                           f"{did_you_mean(missing[0], roles)} (its parameters: "
+                           f"{', '.join(roles) or 'none'})")
         units = tuple(roles[n][0] for n in names)
     canon = {"analysis": analysis, "sample": canon, "rows": ROWS_VERSION}
     if omega is not None:                       # analysis == "sweep"
@@ -513,8 +517,8 @@ def _sample(table, kind: str) -> tuple[tuple[str, ...], tuple[tuple[float, ...],
 
     from scipy.stats import qmc
 
-    with warnings.catch_warnings():     # Sobol: n not a power of 2 loses balance (docs say so)
-        warnings.simplefilter("ignore")
+    # Sobol: n not a power of 2 loses balance (the docs say so)
+    with warnings.catch_warnings(action="ignore"):
         engine = (qmc.LatinHypercube if method == "latin-hypercube" else qmc.Sobol)(
             d=len(names), seed=seed)
         unit = engine.random(n)
@@ -729,15 +733,6 @@ def _param_roles(text: str, path) -> dict[str, tuple[str | None, str | None]]:
                    reasons.get(name)) for name in circuit.params}
 
 
-def _check_params(roles: dict, path, names, table: str) -> None:
-    """Every varied name is a ``.param`` of the netlist (checked once, not per point)."""
-    missing = [n for n in names if n not in roles]
-    if missing:
-        _fail((table,), f"{', '.join(missing)} is not a .param of {path}"
-                        f"{did_you_mean(missing[0], roles)} (its parameters: "
-                        f"{', '.join(roles) or 'none'})")
-
-
 def _sley_names() -> set[str]:
     """The :class:`~mechcirc.sley.SleyParameters` fields a study may vary."""
     from .sley import SleyParameters
@@ -847,8 +842,7 @@ def _design_rows(spec: StudySpec, rows: list[dict], batch: list[tuple[int, dict[
     (``{row: message}``)."""
     from .batch import designs
 
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
+    with warnings.catch_warnings(action="ignore"):
         ds = designs(spec.netlist_text, {n: [v[n] for _, v in batch] for n in spec.params},
                      source=spec.netlist_source)
         if spec.analysis != "sweep":
@@ -908,8 +902,7 @@ def _simulate_row(spec: StudySpec, row: dict, values: dict) -> dict:
     try:
         from .sley import simulate
 
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
+        with warnings.catch_warnings(action="ignore"):
             drive, variant, revolutions, ppr = _preset(spec)
             result = simulate(drive, variant, revolutions=revolutions,
                               points_per_revolution=ppr, **values)
@@ -944,16 +937,10 @@ class StudyResult:
             self.count = len(self.rows)
 
 
-def _format(value) -> str:
-    if isinstance(value, float):
-        return repr(value) if math.isfinite(value) else ("nan" if math.isnan(value) else
-                                                         ("inf" if value > 0 else "-inf"))
-    return str(value)
-
-
 def _fields(row: dict, columns: list[str]) -> list[str]:
-    """A row's cells as written (journal and CSV table): one line each, no line breaks."""
-    return [_format(row.get(c, "")).replace("\r", " ").replace("\n", " ") for c in columns]
+    """A row's cells as written (journal and CSV table): one line each, no line breaks;
+    a float as its shortest round-trip text (``str``: ``repr``, and nan, inf, -inf)."""
+    return [str(row.get(c, "")).replace("\r", " ").replace("\n", " ") for c in columns]
 
 
 #: The journal's last column: a CRC-32 of the row's other fields, so that a row cut

@@ -39,7 +39,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
-from functools import cached_property
+from functools import cache, cached_property
 from typing import Any
 
 from ..errors import MechcircError
@@ -353,18 +353,13 @@ class Motor:
         return float(max(self.torques))
 
 
-_LAW = None
-
-
+@cache
 def _motor_law():
     """The motor law of the shaft kernel, as plain Python (a scalar call without numba's
     dispatch)."""
-    global _LAW
-    if _LAW is None:
-        from ._motion_kernels import load_python
+    from ._motion_kernels import load_python
 
-        _LAW = load_python().motor_torque
-    return _LAW
+    return load_python().motor_torque
 
 
 def kloss_motor(*, sync_speed: float, breakdown_torque: float,

@@ -290,8 +290,7 @@ def crosscheck(circuit: Circuit, omega_max: float | None = None,
         if modes:
             _ringing(circuit, kind, modes, [r for r in res if r.kind != kind], out, progress)
     # (b) steady state at several ω, one near the first resonance.
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")         # already reported above
+    with warnings.catch_warnings(action="ignore"):  # already reported above
         sweep = circuit.sweep(np.array(omegas))
     _steady(circuit, omegas, sweep, out, progress)
     return out

@@ -633,8 +633,7 @@ def periodic_start(ss: StateSpace, drive: Waveform, amp: float, circuit, lineari
                             "(this one has clearances; linearise them or wait for it)")
     M = 1j * drive.omega * np.eye(ss.size) - ss.A
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("error", la.LinAlgWarning)     # rcond below eps
+        with warnings.catch_warnings(action="error", category=la.LinAlgWarning):  # rcond below eps
             Z = la.solve(M, ss.B.astype(complex))
         if not np.all(np.isfinite(Z)):
             raise la.LinAlgError
@@ -975,8 +974,8 @@ def _modal_plan(A, B, h, Cx):
     if int(real.sum()) + 2 * int(pos.sum()) != N or not np.all(np.isfinite(lam)):
         return "eigenvalues not in conjugate pairs"
     try:
-        with warnings.catch_warnings():         # ill-conditioning is judged just below
-            warnings.simplefilter("ignore", la.LinAlgWarning)
+        # ill-conditioning is judged just below
+        with warnings.catch_warnings(action="ignore", category=la.LinAlgWarning):
             Vinv = la.inv(V)
     except (la.LinAlgError, ValueError):
         return "eigenvector matrix singular"
