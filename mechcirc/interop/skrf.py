@@ -70,9 +70,7 @@ def reference_mobility(Z: ArrayLike) -> float:
 
 
 def _finite_points(omega, Z):
-    keep = np.isfinite(omega) & (omega > 0)
-    keep &= np.isfinite(Z).reshape(Z.shape[0], -1).all(axis=1)
-    return keep
+    return np.isfinite(omega) & (omega > 0) & np.isfinite(Z).reshape(Z.shape[0], -1).all(axis=1)
 
 
 def to_skrf(sweep: "Sweep", *, z0: float | None = None):
@@ -170,10 +168,9 @@ def write_touchstone(path: str | os.PathLike, omega: ArrayLike, Z: ArrayLike, *,
         for w, z in zip(omega[keep], Z[keep] / R):
             # Touchstone v1 order: two-ports N11 N21 N12 N22; larger: row by row.
             entries = z.T.ravel() if p == 2 else z.ravel()
-            fields = [repr(float(in_unit(w, "Hz")))]
-            for value in entries:
-                fields += [repr(float(value.real)), repr(float(value.imag))]
-            fh.write(" ".join(fields) + "\n")
+            fields = [float(in_unit(w, "Hz"))] + [float(x) for v in entries
+                                                  for x in (v.real, v.imag)]
+            fh.write(" ".join(map(repr, fields)) + "\n")
     return dropped
 
 
