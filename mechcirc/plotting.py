@@ -514,7 +514,10 @@ def plot_transient(result, nodes=None, what: str = "x", elements=None, title: st
     names = _known("node", nodes, result.nodes) if nodes is not None \
         else list(result.nodes)[:MAX_NODES]
     forces = _known("element", elements or (), result.elements)
-    title = title or _transient_title(result)
+    wave = getattr(result, "waveform", None)        # the title: the netlist and the drive
+    title = title or f"{result.name}: transient, " + (
+        f"{result.drive_kind} drive {result.drive_name}" + (f", {wave}" if wave else "")
+        if result.drive_name else "no drive")
     if ax is not None:
         _nodes_panel(ax, result, names, what)
         ax.set_xlabel("t [s]")
@@ -536,15 +539,6 @@ def plot_transient(result, nodes=None, what: str = "x", elements=None, title: st
         a.grid(True, alpha=0.3)
     fig.suptitle(title)
     return _laid_out(made, fig)
-
-
-def _transient_title(result) -> str:
-    """The default title of :func:`plot_transient`: the netlist and the drive."""
-    drive = (f"{result.drive_kind} drive {result.drive_name}" if result.drive_name
-             else "no drive")
-    if result.drive_name and getattr(result, "waveform", None):
-        drive += f", {result.waveform}"
-    return f"{result.name}: transient, {drive}"
 
 
 def _nodes_panel(a, result, names, what: str) -> None:

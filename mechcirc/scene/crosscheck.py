@@ -207,9 +207,8 @@ def _forced_rows(built, found, model, kern, theta, free, h) -> list:
     0.5 and 0.9 × the lowest resonance, between resonances and 1.5 × the highest."""
     circuit = built.circuit
     ws = sorted(r.omega for r in found)
-    probe = [0.5 * ws[0], 0.9 * ws[0]]
-    probe += [math.sqrt(a * b) for a, b in zip(ws, ws[1:])]
-    probe.append(1.5 * ws[-1])
+    probe = [0.5 * ws[0], 0.9 * ws[0], *(math.sqrt(a * b) for a, b in zip(ws, ws[1:])),
+             1.5 * ws[-1]]
     sw = circuit.sweep(np.array(probe))
     rows = []
     for w, q0 in zip(probe, sw.Q0):
