@@ -163,7 +163,7 @@ class StudySpec:
         if self.analysis == "sweep":
             return head + _SWEEP_COLUMNS
         if self.analysis == "simulate":
-            return head + [f"{q}_{end}" for q in _SLEY_QUANTITIES[_preset(self)[0]]
+            return head + [f"{q}_{end}" for q in _SLEY_QUANTITIES[_setting(self, "sley")[0]]
                            for end in ("min", "max")]
         n = self.n_resonances
         return head + [f"resonance_{i}" for i in range(1, n + 1)] + \
@@ -856,7 +856,7 @@ def _design_rows(spec: StudySpec, rows: list[dict], batch: list[tuple[int, dict[
         omega = _omega_grid(spec)
         s = ds.sweep(omega)
         flagged = np.count_nonzero(s.flags, axis=1)
-        ex = ds.extremes(omega, ds.resonances(omega_max=_band(spec)[1] * (1 + 1e-9)), s)
+        ex = ds.extremes(omega, ds.resonances(omega_max=_setting(spec, "omega")[1] * (1 + 1e-9)), s)
     for d, row in enumerate(rows):
         # Exact extremes over the band: 0 and inf at a zero or pole of K in it,
         # named by its ω, not the grid's values.
@@ -867,24 +867,19 @@ def _design_rows(spec: StudySpec, rows: list[dict], batch: list[tuple[int, dict[
     return ds, s.K, {**ex.failed, **s.failed}
 
 
-def _band(spec: StudySpec) -> tuple[float, float, int, bool]:
-    """``spec.omega``: (min, max, points, log) of a sweep study's ω grid."""
-    if spec.omega is None:
-        raise MechcircError(f"{spec.spec_source}: analysis {spec.analysis!r} has no omega grid")
-    return spec.omega
-
-
-def _preset(spec: StudySpec) -> tuple[str, int, int, int]:
-    """``spec.sley``: (drive, variant, revolutions, points_per_revolution) of a sley study."""
-    if spec.sley is None:
-        raise MechcircError(f"{spec.spec_source}: analysis {spec.analysis!r} has no [sley] "
-                            "preset")
-    return spec.sley
+def _setting(spec: StudySpec, name: str):
+    """``spec.omega`` (min, max, points, log) of a sweep study's ω grid, or ``spec.sley``
+    (drive, variant, revolutions, points_per_revolution) of a sley study; an error if
+    the analysis has none."""
+    if (value := getattr(spec, name)) is None:
+        what = "omega grid" if name == "omega" else "[sley] preset"
+        raise MechcircError(f"{spec.spec_source}: analysis {spec.analysis!r} has no {what}")
+    return value
 
 
 def _omega_grid(spec: StudySpec):
     """The ω grid of a sweep study [rad/s]: ``spec.omega``'s points, geometric with log."""
-    lo, hi, n, log = _band(spec)
+    lo, hi, n, log = _setting(spec, "omega")
     return np.geomspace(lo, hi, n) if log else np.linspace(lo, hi, n)
 
 
@@ -903,7 +898,7 @@ def _simulate_row(spec: StudySpec, row: dict, values: dict) -> dict:
         from .sley import simulate
 
         with warnings.catch_warnings(action="ignore"):
-            drive, variant, revolutions, ppr = _preset(spec)
+            drive, variant, revolutions, ppr = _setting(spec, "sley")
             result = simulate(drive, variant, revolutions=revolutions,
                               points_per_revolution=ppr, **values)
             for q in _SLEY_QUANTITIES[drive]:
