@@ -520,8 +520,7 @@ def plot_transient(result, nodes=None, what: str = "x", elements=None, title: st
         if result.drive_name else "no drive")
     if ax is not None:
         _nodes_panel(ax, result, names, what)
-        ax.set_xlabel("t [s]")
-        ax.set_title(title)
+        ax.set(xlabel="t [s]", title=title)
         ax.grid(True, alpha=0.3)
         return ax
     gaps = list(result.clearances.items())[:MAX_CLEARANCE_PANELS]
@@ -624,8 +623,7 @@ def plot_forces(rows, omega: float, name: str = "circuit", title: str | None = N
     finite = values[np.isfinite(values) & (values > 0)]
     if finite.size and finite.max() > 100 * finite.min():
         ax.set_yscale("log")
-    ax.set_ylabel(f"|Q| [{u['Q']}]")
-    ax.set_xlabel("element")
+    ax.set(ylabel=f"|Q| [{u['Q']}]", xlabel="element")
     handles = [Patch(facecolor=colour, label=kind) for kind, colour in KIND_COLOURS.items()
                if any(r.kind == kind for r in rows)]
     ax.legend(handles=handles, loc="best", fontsize="small")
@@ -741,8 +739,7 @@ def _study_line(ax, ok, bad, p, column, units) -> None:
             ax.set_yscale("log")
     for r in bad:
         ax.axvline(r[p], color="0.6", lw=0.8, ls=":")
-    ax.set_xlabel(_unit_label(p, units))
-    ax.set_ylabel(_unit_label(column, units))
+    ax.set(xlabel=_unit_label(p, units), ylabel=_unit_label(column, units))
 
 
 def _study_scatter(fig, ax, ok, bad, params, column, units) -> None:
@@ -764,8 +761,7 @@ def _study_scatter(fig, ax, ok, bad, params, column, units) -> None:
         ax.plot([r[px] for r in bad], [r[py] for r in bad], "x", color="0.5",
                 label="failed point")
         ax.legend(loc="best", fontsize="small")
-    ax.set_xlabel(_unit_label(px, units))
-    ax.set_ylabel(_unit_label(py, units))
+    ax.set(xlabel=_unit_label(px, units), ylabel=_unit_label(py, units))
 
 
 def plot_periodic(result, title: str | None = None, *, fig=None):
@@ -805,11 +801,8 @@ def plot_periodic(result, title: str | None = None, *, fig=None):
     ok = np.isfinite(amp) & (amp >= floor)           # the spectrum down to 1e-6 of its top
     colours = np.where(result.near, "C3", "C0")
     ax_s.vlines(result.omega[ok], floor, amp[ok], colors=colours[ok], lw=1.2)
-    ax_s.set_yscale("log")
-    ax_s.set_ylim(floor, 2 * top if top > 0 else 10.0)
-    ax_s.set_xscale("log")
-    ax_s.set_xlabel("ω = kΩ [rad/s]")
-    ax_s.set_ylabel(f"|Q_k| [{u['Q']}]")
+    ax_s.set(yscale="log", ylim=(floor, 2 * top if top > 0 else 10.0), xscale="log",
+             xlabel="ω = kΩ [rad/s]", ylabel=f"|Q_k| [{u['Q']}]")
     ax_k = ax_s.twinx()
     with np.errstate(all="ignore"):
         absK = np.abs(result.K)
@@ -836,9 +829,7 @@ def _periodic_angle_panel(ax, result, ylabel: str) -> None:
     if result.unbounded:
         ax.text(0.5, 0.5, "unbounded: harmonic on an undamped resonance",
                 transform=ax.transAxes, ha="center", color="C3")
-    ax.set_xlabel("crank angle θ [deg]")
-    ax.set_ylabel(ylabel)
-    ax.set_xlim(0, 360)
+    ax.set(xlabel="crank angle θ [deg]", ylabel=ylabel, xlim=(0, 360))
     ax.grid(True, alpha=0.3)
     ax.legend(loc="best", fontsize="small")
 
@@ -884,8 +875,7 @@ def plot_speed_map(result, title: str | None = None, *, ax=None, min_weight: flo
                     va="bottom", fontsize="x-small", color="C3")
     if np.nanmax(peak, initial=0) > 100 * np.nanmin(peak, initial=np.inf):
         ax.set_yscale("log")
-    ax.set_xlabel("machine speed [rpm]")
-    ax.set_ylabel(f"peak {word} over the cycle [{u['Q']}]")
+    ax.set(xlabel="machine speed [rpm]", ylabel=f"peak {word} over the cycle [{u['Q']}]")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(loc="best", fontsize="small")
     ax.set_title(title or f"{result.name}: peak drive {word} vs speed (red: k·Ω = ωₙ)",
@@ -929,8 +919,7 @@ def plot_mode(mode, name: str = "circuit", title: str | None = None, *, ax=None,
 
         ax.text(0.5, 0.5, textwrap.fill(mode.note, 60), ha="center", va="center",
                 transform=ax.transAxes)
-        ax.set_xticks([])
-        ax.set_yticks([])
+        ax.set(xticks=[], yticks=[])
         return fig if made else ax
     v = np.array(list(mode.shape.values()), dtype=complex)
     x = np.arange(v.size)
@@ -941,9 +930,7 @@ def plot_mode(mode, name: str = "circuit", title: str | None = None, *, ax=None,
         ax.legend(loc="best", fontsize="small")
     ax.set_xticks(x, list(mode.shape), rotation=45 if v.size > 8 else 0, ha="right"
                   if v.size > 8 else "center")
-    ax.set_ylim(-1.1, 1.1)
-    ax.set_xlabel("node")
-    ax.set_ylabel("velocity / largest [1]")
+    ax.set(ylim=(-1.1, 1.1), xlabel="node", ylabel="velocity / largest [1]")
     ax.grid(True, alpha=0.3)
     return _laid_out(made, fig, ax)
 
