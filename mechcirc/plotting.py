@@ -673,8 +673,7 @@ def plot_comparison(comparison, name: str = "circuit", measured: str = "measured
             ax_k.loglog(w, np.abs(K), style, label=label, ms=3)
             ax_p.semilogx(w, np.degrees(np.angle(K)), style, ms=3)
     ax_k.set_ylabel(f"|K| [{u['K']}]")
-    ax_p.set(**_PHASE_AXIS)
-    ax_p.set_xlabel("ω [rad/s]")
+    ax_p.set(**_PHASE_AXIS, xlabel="ω [rad/s]")
     ax_k.legend(loc="best", fontsize="small")
     for ax in (ax_k, ax_p):
         ax.grid(True, which="both", alpha=0.3)

@@ -64,9 +64,7 @@ def reference_mobility(Z: ArrayLike) -> float:
     """
     mag = np.abs(np.asarray(Z))
     mag = mag[np.isfinite(mag) & (mag > 0)]
-    if mag.size == 0:
-        return 1.0
-    return float(2.0 ** round(float(np.mean(np.log2(mag)))))
+    return float(2.0 ** round(float(np.mean(np.log2(mag))))) if mag.size else 1.0
 
 
 def _finite_points(omega, Z):
@@ -113,12 +111,10 @@ def _network(omega, Z, z0, name: str, title: str, empty: str, extra: tuple = ())
 
 
 def _comments(name: str, dropped: int, R: float) -> list[str]:
-    lines = [f"mechcirc: {name}", MOBILITY_NOTE,
-             f"reference R = {R!r} m/(N*s) (a power of two, for precision); "
-             "frequency f = omega/(2*pi) in Hz"]
-    if dropped:
-        lines.append(f"{dropped} point(s) with omega <= 0 or a non-finite K left out")
-    return lines
+    return [f"mechcirc: {name}", MOBILITY_NOTE,
+            f"reference R = {R!r} m/(N*s) (a power of two, for precision); "
+            "frequency f = omega/(2*pi) in Hz"] + \
+        ([f"{dropped} point(s) with omega <= 0 or a non-finite K left out"] if dropped else [])
 
 
 def write_touchstone(path: str | os.PathLike, omega: ArrayLike, Z: ArrayLike, *,

@@ -97,10 +97,9 @@ class CycleMap:
                 for i in range(n):
                     j = (i + 1) % n
                     a, b = W[i, k] - target, W[j, k] - target
-                    if not (np.isfinite(a) and np.isfinite(b)) or a * b > 0 or a == b:
+                    # (b = 0: counted at the next interval)
+                    if not (np.isfinite(a) and np.isfinite(b)) or a * b > 0 or a == b or b == 0:
                         continue
-                    if b == 0:
-                        continue                     # counted at the next interval
                     t0 = self.theta[i]
                     step = (self.theta[j] - t0) % self.cycle
                     th = t0 + step * a / (a - b)

@@ -490,10 +490,9 @@ def parse_shaft(text: str, source: str, table, scene) -> Shaft:
                               positive=positive, allow_zero=zero,
                               expected=f"{key} = … ({_KEYS[key]})")
 
-    flywheel = num("flywheel", 0.0, zero=True)
-    motor = _shaft_motor(text, source, table, num)
-    start = num("start_deg", 0.0, positive=False)
-    return Shaft(flywheel, motor, start, num("max_time", 120.0))
+    # checked in this order: the flywheel, the motor, the start angle, max_time
+    return Shaft(num("flywheel", 0.0, zero=True), _shaft_motor(text, source, table, num),
+                 num("start_deg", 0.0, positive=False), num("max_time", 120.0))
 
 
 def _shaft_motor(text: str, source: str, table: dict, num):
