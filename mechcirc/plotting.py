@@ -392,15 +392,13 @@ def _light_log_axes(axes, max_minor_decades: float = 3.0) -> None:
     from matplotlib.ticker import FuncFormatter, NullLocator
 
     for a in axes:
-        if a.get_xscale() == "log":
-            a.xaxis.set_major_formatter(FuncFormatter(_decade_label))
-            a.xaxis.set_major_locator(_in_view(a.xaxis.get_major_locator()))
-        if a.get_yscale() == "log":
-            a.yaxis.set_major_formatter(FuncFormatter(_decade_label))
-            a.yaxis.set_major_locator(_in_view(a.yaxis.get_major_locator()))
-            lo, hi = a.get_ylim()
-            if lo > 0 and math.log10(hi / lo) > max_minor_decades:
-                a.yaxis.set_minor_locator(NullLocator())
+        for axis in (a.xaxis, a.yaxis):
+            if axis.get_scale() == "log":
+                axis.set_major_formatter(FuncFormatter(_decade_label))
+                axis.set_major_locator(_in_view(axis.get_major_locator()))
+        lo, hi = a.get_ylim()
+        if a.get_yscale() == "log" and lo > 0 and math.log10(hi / lo) > max_minor_decades:
+            a.yaxis.set_minor_locator(NullLocator())
     lo, hi = axes[0].get_xlim()
     if axes[0].get_xscale() != "log" or not 0 < lo < hi or math.log10(hi / lo) <= 1:
         return
