@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from typing import Callable, Literal
 
@@ -86,8 +86,7 @@ class Sweep:
 
     def with_notes(self, notes: tuple[str, ...]) -> "Sweep":
         """The same sweep with ``notes`` (e.g. an adaptive grid's budget) added."""
-        return Sweep(self.omega, self.K, self.drive, self.method, self.name, self.tree,
-                     self.circuit, self.notes + tuple(notes), self.refine)
+        return replace(self, notes=self.notes + tuple(notes), _cache={})   # nothing cached
 
     def __getstate__(self):
         # The tree nests as deep as the network (a ladder of 10⁵ elements is
