@@ -1335,9 +1335,9 @@ def _changes(old: dict, new: dict, prefix: str = "") -> list[str]:
 
 
 def _show(value) -> str:
-    if isinstance(value, str) and re.fullmatch(r"[0-9a-f]{64}", value):
-        return value[:12] + "…"            # a SHA-256: the file's content changed
-    return brief(value)
+    # a SHA-256 (the file's content changed) by its first 12 digits
+    return value[:12] + "…" if isinstance(value, str) and re.fullmatch(r"[0-9a-f]{64}", value) \
+        else brief(value)
 
 
 def _journal_spec(journal: str) -> str | None:
@@ -1349,9 +1349,7 @@ def _journal_spec(journal: str) -> str | None:
         return None
     tag, _, rest = first.partition(" ")
     digest, _, canonical = rest.partition(" ")
-    if tag != _SPEC_LINE or digest != "sha256=" + _sha256(canonical):
-        return None
-    return canonical
+    return canonical if tag == _SPEC_LINE and digest == "sha256=" + _sha256(canonical) else None
 
 
 def _open_journal(journal: str, spec: StudySpec, done: list[dict]) -> TextIO:
