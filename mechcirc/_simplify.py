@@ -323,16 +323,13 @@ def _short_circuit(elements, levers, drive, el):
 
 def _check_grid(full: Circuit, band, points, output):
     w1, w2 = band
-    grid = np.geomspace(w1, w2, points)
-    extra = []
     try:
         found = full.resonances(omega_max=w2 * 1.001)
     except MechcircError:
         found = []
     inband = [r for r in found if w1 <= r.omega <= w2]
-    for r in inband:
-        extra += [r.omega * (1 - 1e-3), r.omega * (1 + 1e-3)]
-    grid = np.unique(np.concatenate([grid, np.clip(extra, w1, w2)]))
+    extra = [r.omega * (1 + s) for r in inband for s in (-1e-3, 1e-3)]    # two beside each
+    grid = np.unique(np.concatenate([np.geomspace(w1, w2, points), np.clip(extra, w1, w2)]))
     y = _output(full, grid, output)
     ok = np.isfinite(y) & (y != 0)
     return grid[ok], y[ok], int(np.count_nonzero(~ok)), inband
@@ -520,8 +517,7 @@ def _approximate(search: _Search, current, error: float, taken: set, tol: float,
             break
         current, st, done, error = best
         taken |= {x.name for x in current[0]}
-        steps += _describe(done)
-        steps += st
+        steps += _describe(done) + st
     return current, error
 
 

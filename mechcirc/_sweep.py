@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from typing import Callable, Literal
 
@@ -86,8 +86,7 @@ class Sweep:
 
     def with_notes(self, notes: tuple[str, ...]) -> "Sweep":
         """The same sweep with ``notes`` (e.g. an adaptive grid's budget) added."""
-        return Sweep(self.omega, self.K, self.drive, self.method, self.name, self.tree,
-                     self.circuit, self.notes + tuple(notes), self.refine)
+        return replace(self, notes=self.notes + tuple(notes), _cache={})   # nothing cached
 
     def __getstate__(self):
         # The tree nests as deep as the network (a ladder of 10⁵ elements is
@@ -300,8 +299,7 @@ class Sweep:
         from .resonances import find_resonances
 
         try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
+            with warnings.catch_warnings(action="ignore"):
                 found = find_resonances(self.circuit, omega_max=float(np.max(self.omega)))
         except MechcircError:          # too large or ill-scaled: the plot goes without
             return []
@@ -557,8 +555,7 @@ def _tree_where_no_digit(circuit: Circuit, omega, K, err):
     if not lost.any():
         return K, err, ()
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")      # the nodal path already said its warnings
+        with warnings.catch_warnings(action="ignore"):  # the nodal path already said its warnings
             tree = circuit.tree
     except TopologyError:                        # not a tree (or not one seen from the drive)
         return K, err, ()

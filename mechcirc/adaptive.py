@@ -134,13 +134,9 @@ def _start_grid(circuit, omega_min, omega_max, initial, notes):
 def _smooth(result: Sweep, zeros, poles) -> np.ndarray:
     """log |K| with the undamped zeros and poles divided out."""
     w = result.omega[:, None]
-    with np.errstate(all="ignore"):
-        log = np.log(np.abs(result.K))
-        if poles.size:
-            log = log + np.log(np.abs(1 - (w / poles) ** 2)).sum(axis=1)
-        if zeros.size:
-            log = log - np.log(np.abs(1 - (w / zeros) ** 2)).sum(axis=1)
-    return log
+    with np.errstate(all="ignore"):     # (no poles or zeros: their sums are 0)
+        return (np.log(np.abs(result.K)) + np.log(np.abs(1 - (w / poles) ** 2)).sum(axis=1)
+                - np.log(np.abs(1 - (w / zeros) ** 2)).sum(axis=1))
 
 
 def _refine(omega, values, smooth, tol, budget, notes):

@@ -132,11 +132,8 @@ class _Parser:
                 glued = text[m.end():].split(maxsplit=1)[0]     # e.g. "N/mm" of "5N/mm"
                 self.error(f"malformed number {text[i:end]!r}", i,
                            _number_hint(text[i:end], m.group(), glued))
-            if kind != "ws":
-                tok = m.group()
-                if kind == "op" and tok == "^":
-                    tok = "**"
-                tokens.append((kind, tok, i))
+            if kind != "ws":                    # ^ is **
+                tokens.append((kind, "**" if m.group() == "^" else m.group(), i))
             i = m.end()
         tokens.append(("end", "", len(text)))
         return tokens
@@ -226,8 +223,7 @@ class _Parser:
         self.error(f"unexpected {tok!r}", col, "a number, a name or '('")
 
     def _close(self, open_col: int):
-        kind, tok, col = self.take()
-        if not (kind == "op" and tok == ")"):
+        if self.take()[:2] != ("op", ")"):
             self.error("'(' is never closed", open_col, "')'")
 
 
@@ -294,19 +290,15 @@ def evaluate(expr: Expr, params: Mapping[str, float], *, source: str = "<string>
         raise NetlistError(message, source, line, base + node.col + 1, expected)
 
     values: dict[int, float] = {}
-
-    def ev(node: Expr) -> float:
-        return _node_value(node, params, values, fail)
-
     # Operands first (iteratively: see postorder), so errors come left to right.
     if tangent is None:
         for node in postorder(expr):
-            values[id(node)] = ev(node)
+            values[id(node)] = _node_value(node, params, values, fail)
         return values[id(expr)]
     slopes: dict[int, float] = {}
     for node in postorder(expr):
         args = [values[id(a)] for a in node.args]
-        r = values[id(node)] = ev(node)
+        r = values[id(node)] = _node_value(node, params, values, fail)
         slopes[id(node)] = _slope(node, args, r, [slopes.pop(id(a)) for a in node.args],
                                   tangent)
     return values[id(expr)], slopes[id(expr)]
@@ -389,15 +381,6 @@ def _slope(node: Expr, args: list, r: float, d: list, tangent: Mapping[str, floa
 
 
 
-def _pow(a: float, b: float) -> float:
-    """``a ** b`` as :func:`evaluate` computes it, NaN where it raises or is complex."""
-    try:
-        r = a ** b
-    except (ZeroDivisionError, OverflowError):
-        return math.nan
-    return math.nan if isinstance(r, complex) else r
-
-
 def evaluate_array(expr: Expr, params: Mapping, size: int):
     """``expr`` over ``size`` designs at once: ``params`` maps names to arrays of shape
     (size,) (or floats).  Returns ``(values, bad)``: float64 arrays of shape (size,)
@@ -441,26 +424,26 @@ def evaluate_array(expr: Expr, params: Mapping, size: int):
                 r = _each(FUNCTIONS[v], values.pop(id(node.args[0])))
             else:
                 a, b = values.pop(id(node.args[0])), values.pop(id(node.args[1]))
-                if k == "**":             # Python's pow, as evaluate (numpy's may differ by an ulp)
-                    r = np.frompyfunc(_pow, 2, 1)(a, b).astype(float)
-                else:
-                    r = OPERATORS[k](a, b)
+                # ** as Python's pow, as evaluate (numpy's may differ by an ulp)
+                r = _each(OPERATORS[k], a, b) if k == "**" else OPERATORS[k](a, b)
             bad |= ~np.isfinite(r)
             values[id(node)] = r
     return values[id(expr)], bad
 
 
-def _each(f: Callable[[float], float], x):
-    """``f`` applied value by value to the array ``x``, NaN where it raises."""
+def _each(f: Callable[..., float], *xs):
+    """``f`` applied value by value to the arrays ``xs`` (Python floats, as :func:`evaluate`
+    computes), NaN where it raises or its value is complex."""
     import numpy as np
 
-    r = np.empty(x.size)
-    for i, xi in enumerate(x.tolist()):
+    def value(*x: float) -> float:
         try:
-            r[i] = f(xi)
-        except (ValueError, OverflowError):
-            r[i] = math.nan
-    return r
+            r = f(*x)
+        except (ValueError, OverflowError, ZeroDivisionError):
+            return math.nan
+        return math.nan if isinstance(r, complex) else r
+
+    return np.frompyfunc(value, len(xs), 1)(*xs).astype(float)
 
 
 def _number_hint(bad: str, number: str, glued: str = "") -> str:

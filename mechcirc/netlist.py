@@ -582,10 +582,7 @@ class _Parser:
         if not _NAME.fullmatch(tok.text):
             line.error(f"{tok.text!r} is not a valid {what}", tok.col,
                        "an identifier (letters, digits, '_') or an integer")
-        text = tok.text
-        if text.isdigit():
-            text = str(int(text))
-        return text
+        return str(int(tok.text)) if tok.text.isdigit() else tok.text     # node 00 is 0
 
     def _new_name(self, line: _Line, tok: _Token) -> str:
         name = self._name(line, tok, "element name")

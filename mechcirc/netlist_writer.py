@@ -79,12 +79,10 @@ def write(circuit: Circuit, header: tuple[str, ...] | list[str] | str = (),
     while i < len(elements):
         e = elements[i]
         line = (f"{e.kind} {_names(e.name, e.n1, e.n2)} {_number(e.value)}"
-                + (f" eta={_number(e.eta)}" if e.eta != 1.0 else ""))
-        if e.backlash != 0.0:
-            line += f" backlash={_number(e.backlash)}"
-        after = elements[i + 1] if i + 1 < len(elements) else None
-        if after is not None and _is_companion(e, after):
-            line += f" damping={_number(after.value)}"
+                + (f" eta={_number(e.eta)}" if e.eta != 1.0 else "")
+                + (f" backlash={_number(e.backlash)}" if e.backlash != 0.0 else ""))
+        if i + 1 < len(elements) and _is_companion(e, elements[i + 1]):
+            line += f" damping={_number(elements[i + 1].value)}"
             i += 1                       # the companion is written by damping=
         out.append(noted(e.name, line))
         i += 1

@@ -541,15 +541,11 @@ def _peak_or_inf(Qk, unbounded):
 
 def _crossings(found, motion, kmax: int, rpm_min: float, rpm_max: float) -> list:
     """(rpm, k, ω_n, ζ, weight) where harmonic k of the motion meets a resonance, by speed."""
-    crossings = []
     c = np.abs(motion.fourier(kmax))
     weight = c / c.max() if c.max() > 0 else c
-    for wn, zeta, _ in found:
-        for k in range(1, kmax + 1):
-            r = convert_frequency(wn / k, "rad/s", "rpm")
-            if rpm_min <= r <= rpm_max:
-                crossings.append((r, k, wn, zeta, float(weight[k - 1])))
-    return sorted(crossings)
+    return sorted((r, k, wn, zeta, float(weight[k - 1])) for wn, zeta, _ in found
+                  for k in range(1, kmax + 1)
+                  if rpm_min <= (r := convert_frequency(wn / k, "rad/s", "rpm")) <= rpm_max)
 
 
 def _nearest(found, w, V, Qk):
@@ -625,7 +621,7 @@ def speed_map(circuit: Circuit, rpm_min: float, rpm_max: float, points: int = 20
         notes.append(f"{int(unbounded.sum())} speed(s) put a harmonic exactly on an undamped "
                      "resonance: the peak force is unbounded there (inf)")
     found = _resonances(circuit, kmax * rpm_to_omega(rpm_max) * (1 + 1e-9), notes)
-    crossings = _crossings(found, motion, kmax, rpm_min, rpm_max)
     return SpeedMap(name=circuit.name, rpm=rpm, peak=peak, harmonics=used, error=error,
-                    crossings=tuple(crossings), element_peaks=element_peaks,
+                    crossings=tuple(_crossings(found, motion, kmax, rpm_min, rpm_max)),
+                    element_peaks=element_peaks,
                     notes=tuple(notes), units=units_of(circuit.drive))

@@ -267,7 +267,13 @@ def plot_sweep(result, title: str | None = None, resonances=(), peak=None, *, ax
     -------
     The Axes ``ax`` when given, else ``fig`` (empty) or the new Figure (what it drew on).
     """
-    curves = _sweep_curves(result, resonances if refine else (), unit)
+    import numpy as np
+
+    from .units import in_unit
+
+    w, K, flags, R = _refined(result, resonances if refine else ())
+    with np.errstate(all="ignore"):     # (ω in unit, |K|, arg K [deg], |response|, flags)
+        curves = in_unit(w, unit), np.abs(K), np.degrees(np.angle(K)), np.abs(R), flags
     if ax is not None:
         _draw_K(ax, result, curves, resonances, unit, mark=True)
         ax.set_title(title or f"{result.name}: kinematic characteristic K = v/Q")
@@ -275,19 +281,10 @@ def plot_sweep(result, title: str | None = None, resonances=(), peak=None, *, ax
     return _bode_figure(fig, result, curves, resonances, peak, unit, dict(extra or {}), title)
 
 
-def _sweep_curves(result, resonances, unit: str):
-    """(ω in ``unit``, |K|, arg K [deg], |response|, flags), refined around ``resonances``."""
-    import numpy as np
-
-    from .units import in_unit
-
-    w, K, flags, R = _refined(result, resonances)
-    with np.errstate(all="ignore"):
-        return in_unit(w, unit), np.abs(K), np.degrees(np.angle(K)), np.abs(R), flags
-
-
 def _bode_figure(fig, result, curves, resonances, peak, unit: str, extra: dict, title):
     """The panels of :func:`plot_sweep`: |K|, arg K, the response, ``extra``."""
+    import numpy as np
+
     from .circuit import units_of
     from .units import FREQUENCY_UNITS, in_unit
 
@@ -301,12 +298,14 @@ def _bode_figure(fig, result, curves, resonances, peak, unit: str, extra: dict, 
     ax_k, ax_p, ax_q = axes[:3]
     _draw_K(ax_k, result, curves, resonances, unit)
     ax_p.semilogx(omega[positive], phase[positive], color="C2")
-    ax_p.set_ylabel("arg K [deg]")
-    ax_p.set_ylim(-190, 190)
-    ax_p.set_yticks([-180, -90, 0, 90, 180])
+    ax_p.set(**_PHASE_AXIS)
     ax_q.loglog(omega[positive], absR[positive], color="C1")
     ax_q.set_ylabel(f"|v0| = |F0·K| [{units['v']}]" if force_drive else f"|Q0| [{units['Q']}]")
-    _extra_panels(axes[3:], in_unit(result.omega, unit), extra)
+    own = in_unit(result.omega, unit)             # the extra panels: the sweep's own points
+    for a, (label, values) in zip(axes[3:], extra.items()):
+        with np.errstate(all="ignore"):
+            a.loglog(own[own > 0], np.asarray(values)[own > 0], color="C4")
+        a.set_ylabel(label)
     axes[-1].set_xlabel(_FREQUENCY_LABEL[unit])
     # One legend on the |Q0| panel for the roots' lines and the peak (made once).
     _mark_resonances(tuple(axes), resonances, ax_q, FREQUENCY_UNITS[unit][1],
@@ -314,7 +313,10 @@ def _bode_figure(fig, result, curves, resonances, peak, unit: str, extra: dict, 
     _mark_peak(ax_q, peak, unit, units["Q"])
     for a in axes:
         a.grid(True, which="both", alpha=0.3)
-    fig.suptitle(title or _sweep_title(result, units, force_drive))
+    amp = result.drive.amplitude
+    fig.suptitle(title or f"{result.name}: kinematic characteristic K = v/Q\nand " + (
+        f"velocity response v0 = F0·K to the force drive F0 = {amp:g} {units['Q']}"
+        if force_drive else f"force amplitude Q0 = V0/K, V0 = {amp:g} {units['v']}"))
     _light_log_axes(axes)
     # Fixed margins that hold every label (the panels share x: no tick labels
     # between them), so neither tight_layout nor a tight bounding box at
@@ -325,24 +327,9 @@ def _bode_figure(fig, result, curves, resonances, peak, unit: str, extra: dict, 
     return fig
 
 
+#: The arg K panel's y axis (a sweep's and a comparison's).
+_PHASE_AXIS = {"ylabel": "arg K [deg]", "ylim": (-190, 190), "yticks": [-180, -90, 0, 90, 180]}
 _FREQUENCY_LABEL = {"rad/s": "ω [rad/s]", "Hz": "f [Hz]", "rpm": "n [rpm]"}
-
-
-def _extra_panels(axes, own, extra: dict) -> None:
-    """The ``extra`` panels of :func:`plot_sweep`, on the sweep's own points ``own``."""
-    import numpy as np
-
-    for a, (label, values) in zip(axes, extra.items()):
-        with np.errstate(all="ignore"):
-            a.loglog(own[own > 0], np.asarray(values)[own > 0], color="C4")
-        a.set_ylabel(label)
-
-
-def _sweep_title(result, units: dict, force_drive: bool) -> str:
-    amp = result.drive.amplitude
-    what = (f"velocity response v0 = F0·K to the force drive F0 = {amp:g} {units['Q']}"
-            if force_drive else f"force amplitude Q0 = V0/K, V0 = {amp:g} {units['v']}")
-    return f"{result.name}: kinematic characteristic K = v/Q\nand {what}"
 
 
 _SUPERSCRIPT = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
@@ -405,15 +392,13 @@ def _light_log_axes(axes, max_minor_decades: float = 3.0) -> None:
     from matplotlib.ticker import FuncFormatter, NullLocator
 
     for a in axes:
-        if a.get_xscale() == "log":
-            a.xaxis.set_major_formatter(FuncFormatter(_decade_label))
-            a.xaxis.set_major_locator(_in_view(a.xaxis.get_major_locator()))
-        if a.get_yscale() == "log":
-            a.yaxis.set_major_formatter(FuncFormatter(_decade_label))
-            a.yaxis.set_major_locator(_in_view(a.yaxis.get_major_locator()))
-            lo, hi = a.get_ylim()
-            if lo > 0 and math.log10(hi / lo) > max_minor_decades:
-                a.yaxis.set_minor_locator(NullLocator())
+        for axis in (a.xaxis, a.yaxis):
+            if axis.get_scale() == "log":
+                axis.set_major_formatter(FuncFormatter(_decade_label))
+                axis.set_major_locator(_in_view(axis.get_major_locator()))
+        lo, hi = a.get_ylim()
+        if a.get_yscale() == "log" and lo > 0 and math.log10(hi / lo) > max_minor_decades:
+            a.yaxis.set_minor_locator(NullLocator())
     lo, hi = axes[0].get_xlim()
     if axes[0].get_xscale() != "log" or not 0 < lo < hi or math.log10(hi / lo) <= 1:
         return
@@ -527,11 +512,13 @@ def plot_transient(result, nodes=None, what: str = "x", elements=None, title: st
     names = _known("node", nodes, result.nodes) if nodes is not None \
         else list(result.nodes)[:MAX_NODES]
     forces = _known("element", elements or (), result.elements)
-    title = title or _transient_title(result)
+    wave = getattr(result, "waveform", None)        # the title: the netlist and the drive
+    title = title or f"{result.name}: transient, " + (
+        f"{result.drive_kind} drive {result.drive_name}" + (f", {wave}" if wave else "")
+        if result.drive_name else "no drive")
     if ax is not None:
         _nodes_panel(ax, result, names, what)
-        ax.set_xlabel("t [s]")
-        ax.set_title(title)
+        ax.set(xlabel="t [s]", title=title)
         ax.grid(True, alpha=0.3)
         return ax
     gaps = list(result.clearances.items())[:MAX_CLEARANCE_PANELS]
@@ -549,15 +536,6 @@ def plot_transient(result, nodes=None, what: str = "x", elements=None, title: st
         a.grid(True, alpha=0.3)
     fig.suptitle(title)
     return _laid_out(made, fig)
-
-
-def _transient_title(result) -> str:
-    """The default title of :func:`plot_transient`: the netlist and the drive."""
-    drive = (f"{result.drive_kind} drive {result.drive_name}" if result.drive_name
-             else "no drive")
-    if result.drive_name and getattr(result, "waveform", None):
-        drive += f", {result.waveform}"
-    return f"{result.name}: transient, {drive}"
 
 
 def _nodes_panel(a, result, names, what: str) -> None:
@@ -643,8 +621,7 @@ def plot_forces(rows, omega: float, name: str = "circuit", title: str | None = N
     finite = values[np.isfinite(values) & (values > 0)]
     if finite.size and finite.max() > 100 * finite.min():
         ax.set_yscale("log")
-    ax.set_ylabel(f"|Q| [{u['Q']}]")
-    ax.set_xlabel("element")
+    ax.set(ylabel=f"|Q| [{u['Q']}]", xlabel="element")
     handles = [Patch(facecolor=colour, label=kind) for kind, colour in KIND_COLOURS.items()
                if any(r.kind == kind for r in rows)]
     ax.legend(handles=handles, loc="best", fontsize="small")
@@ -694,10 +671,7 @@ def plot_comparison(comparison, name: str = "circuit", measured: str = "measured
             ax_k.loglog(w, np.abs(K), style, label=label, ms=3)
             ax_p.semilogx(w, np.degrees(np.angle(K)), style, ms=3)
     ax_k.set_ylabel(f"|K| [{u['K']}]")
-    ax_p.set_ylabel("arg K [deg]")
-    ax_p.set_ylim(-190, 190)
-    ax_p.set_yticks([-180, -90, 0, 90, 180])
-    ax_p.set_xlabel("ω [rad/s]")
+    ax_p.set(**_PHASE_AXIS, xlabel="ω [rad/s]")
     ax_k.legend(loc="best", fontsize="small")
     for ax in (ax_k, ax_p):
         ax.grid(True, which="both", alpha=0.3)
@@ -762,8 +736,7 @@ def _study_line(ax, ok, bad, p, column, units) -> None:
             ax.set_yscale("log")
     for r in bad:
         ax.axvline(r[p], color="0.6", lw=0.8, ls=":")
-    ax.set_xlabel(_unit_label(p, units))
-    ax.set_ylabel(_unit_label(column, units))
+    ax.set(xlabel=_unit_label(p, units), ylabel=_unit_label(column, units))
 
 
 def _study_scatter(fig, ax, ok, bad, params, column, units) -> None:
@@ -785,8 +758,7 @@ def _study_scatter(fig, ax, ok, bad, params, column, units) -> None:
         ax.plot([r[px] for r in bad], [r[py] for r in bad], "x", color="0.5",
                 label="failed point")
         ax.legend(loc="best", fontsize="small")
-    ax.set_xlabel(_unit_label(px, units))
-    ax.set_ylabel(_unit_label(py, units))
+    ax.set(xlabel=_unit_label(px, units), ylabel=_unit_label(py, units))
 
 
 def plot_periodic(result, title: str | None = None, *, fig=None):
@@ -826,11 +798,8 @@ def plot_periodic(result, title: str | None = None, *, fig=None):
     ok = np.isfinite(amp) & (amp >= floor)           # the spectrum down to 1e-6 of its top
     colours = np.where(result.near, "C3", "C0")
     ax_s.vlines(result.omega[ok], floor, amp[ok], colors=colours[ok], lw=1.2)
-    ax_s.set_yscale("log")
-    ax_s.set_ylim(floor, 2 * top if top > 0 else 10.0)
-    ax_s.set_xscale("log")
-    ax_s.set_xlabel("ω = kΩ [rad/s]")
-    ax_s.set_ylabel(f"|Q_k| [{u['Q']}]")
+    ax_s.set(yscale="log", ylim=(floor, 2 * top if top > 0 else 10.0), xscale="log",
+             xlabel="ω = kΩ [rad/s]", ylabel=f"|Q_k| [{u['Q']}]")
     ax_k = ax_s.twinx()
     with np.errstate(all="ignore"):
         absK = np.abs(result.K)
@@ -857,9 +826,7 @@ def _periodic_angle_panel(ax, result, ylabel: str) -> None:
     if result.unbounded:
         ax.text(0.5, 0.5, "unbounded: harmonic on an undamped resonance",
                 transform=ax.transAxes, ha="center", color="C3")
-    ax.set_xlabel("crank angle θ [deg]")
-    ax.set_ylabel(ylabel)
-    ax.set_xlim(0, 360)
+    ax.set(xlabel="crank angle θ [deg]", ylabel=ylabel, xlim=(0, 360))
     ax.grid(True, alpha=0.3)
     ax.legend(loc="best", fontsize="small")
 
@@ -905,8 +872,7 @@ def plot_speed_map(result, title: str | None = None, *, ax=None, min_weight: flo
                     va="bottom", fontsize="x-small", color="C3")
     if np.nanmax(peak, initial=0) > 100 * np.nanmin(peak, initial=np.inf):
         ax.set_yscale("log")
-    ax.set_xlabel("machine speed [rpm]")
-    ax.set_ylabel(f"peak {word} over the cycle [{u['Q']}]")
+    ax.set(xlabel="machine speed [rpm]", ylabel=f"peak {word} over the cycle [{u['Q']}]")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(loc="best", fontsize="small")
     ax.set_title(title or f"{result.name}: peak drive {word} vs speed (red: k·Ω = ωₙ)",
@@ -950,8 +916,7 @@ def plot_mode(mode, name: str = "circuit", title: str | None = None, *, ax=None,
 
         ax.text(0.5, 0.5, textwrap.fill(mode.note, 60), ha="center", va="center",
                 transform=ax.transAxes)
-        ax.set_xticks([])
-        ax.set_yticks([])
+        ax.set(xticks=[], yticks=[])
         return fig if made else ax
     v = np.array(list(mode.shape.values()), dtype=complex)
     x = np.arange(v.size)
@@ -962,9 +927,7 @@ def plot_mode(mode, name: str = "circuit", title: str | None = None, *, ax=None,
         ax.legend(loc="best", fontsize="small")
     ax.set_xticks(x, list(mode.shape), rotation=45 if v.size > 8 else 0, ha="right"
                   if v.size > 8 else "center")
-    ax.set_ylim(-1.1, 1.1)
-    ax.set_xlabel("node")
-    ax.set_ylabel("velocity / largest [1]")
+    ax.set(ylim=(-1.1, 1.1), xlabel="node", ylabel="velocity / largest [1]")
     ax.grid(True, alpha=0.3)
     return _laid_out(made, fig, ax)
 

@@ -351,8 +351,7 @@ def _adjacency(U: list, W: list, E: list, N: int):
             _merge_parallel(old, u, E[eid], U, W, E)
             E[eid] = None
             continue
-        au[w] = eid
-        adj[w][u] = eid
+        au[w] = adj[w][u] = eid
         alive += 1
     return adj, alive
 
@@ -376,8 +375,7 @@ def _series_step(n: int, adj: list, U: list, W: list, E: list):
         _merge_parallel(old, start, run, U, W, E)
         return u, w, True
     U[e1], W[e1], E[e1] = start, end, run
-    au[w] = e1
-    aw[u] = e1
+    au[w] = aw[u] = e1
     return u, w, False
 
 
@@ -427,9 +425,7 @@ def _prune(edges: list[_Edge], a: str, b: str, unloaded: list[str], drive_line: 
     """Keep only edges in the biconnected block that holds the drive (they carry force)."""
     kept = set(loaded_groups([[(e.n1, e.n2)] for e in edges], a, b, drive_line=drive_line,
                              source=source))
-    for i, e in enumerate(edges):
-        if i not in kept:
-            unloaded.extend(el.name for el in leaves(e.node))
+    unloaded.extend(el.name for i, e in enumerate(edges) if i not in kept for el in leaves(e.node))
     return [e for i, e in enumerate(edges) if i in kept]
 
 

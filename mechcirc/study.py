@@ -163,7 +163,7 @@ class StudySpec:
         if self.analysis == "sweep":
             return head + _SWEEP_COLUMNS
         if self.analysis == "simulate":
-            return head + [f"{q}_{end}" for q in _SLEY_QUANTITIES[_preset(self)[0]]
+            return head + [f"{q}_{end}" for q in _SLEY_QUANTITIES[_setting(self, "sley")[0]]
                            for end in ("min", "max")]
         n = self.n_resonances
         return head + [f"resonance_{i}" for i in range(1, n + 1)] + \
@@ -400,7 +400,11 @@ def _parse_spec(data: dict, source: str, base: Path) -> StudySpec:
         sley = _sley_settings(data.get("sley", {}), names, kind)
         units = tuple(_SLEY_UNITS.get(n) for n in names)
     else:
-        _check_params(roles, path, names, kind)
+        missing = [n for n in names if n not in roles]     # each a .param, checked once
+        if missing:
+            _fail((kind,), f"{', '.join(missing)} is not a .param of {path}"
+                           f"{did_you_mean(missing[0], roles)} (its parameters: "
+                           f"{', '.join(roles) or 'none'})")
         units = tuple(roles[n][0] for n in names)
     canon = {"analysis": analysis, "sample": canon, "rows": ROWS_VERSION}
     if omega is not None:                       # analysis == "sweep"
@@ -513,8 +517,8 @@ def _sample(table, kind: str) -> tuple[tuple[str, ...], tuple[tuple[float, ...],
 
     from scipy.stats import qmc
 
-    with warnings.catch_warnings():     # Sobol: n not a power of 2 loses balance (docs say so)
-        warnings.simplefilter("ignore")
+    # Sobol: n not a power of 2 loses balance (the docs say so)
+    with warnings.catch_warnings(action="ignore"):
         engine = (qmc.LatinHypercube if method == "latin-hypercube" else qmc.Sobol)(
             d=len(names), seed=seed)
         unit = engine.random(n)
@@ -729,15 +733,6 @@ def _param_roles(text: str, path) -> dict[str, tuple[str | None, str | None]]:
                    reasons.get(name)) for name in circuit.params}
 
 
-def _check_params(roles: dict, path, names, table: str) -> None:
-    """Every varied name is a ``.param`` of the netlist (checked once, not per point)."""
-    missing = [n for n in names if n not in roles]
-    if missing:
-        _fail((table,), f"{', '.join(missing)} is not a .param of {path}"
-                        f"{did_you_mean(missing[0], roles)} (its parameters: "
-                        f"{', '.join(roles) or 'none'})")
-
-
 def _sley_names() -> set[str]:
     """The :class:`~mechcirc.sley.SleyParameters` fields a study may vary."""
     from .sley import SleyParameters
@@ -847,8 +842,7 @@ def _design_rows(spec: StudySpec, rows: list[dict], batch: list[tuple[int, dict[
     (``{row: message}``)."""
     from .batch import designs
 
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
+    with warnings.catch_warnings(action="ignore"):
         ds = designs(spec.netlist_text, {n: [v[n] for _, v in batch] for n in spec.params},
                      source=spec.netlist_source)
         if spec.analysis != "sweep":
@@ -862,7 +856,7 @@ def _design_rows(spec: StudySpec, rows: list[dict], batch: list[tuple[int, dict[
         omega = _omega_grid(spec)
         s = ds.sweep(omega)
         flagged = np.count_nonzero(s.flags, axis=1)
-        ex = ds.extremes(omega, ds.resonances(omega_max=_band(spec)[1] * (1 + 1e-9)), s)
+        ex = ds.extremes(omega, ds.resonances(omega_max=_setting(spec, "omega")[1] * (1 + 1e-9)), s)
     for d, row in enumerate(rows):
         # Exact extremes over the band: 0 and inf at a zero or pole of K in it,
         # named by its ω, not the grid's values.
@@ -873,24 +867,19 @@ def _design_rows(spec: StudySpec, rows: list[dict], batch: list[tuple[int, dict[
     return ds, s.K, {**ex.failed, **s.failed}
 
 
-def _band(spec: StudySpec) -> tuple[float, float, int, bool]:
-    """``spec.omega``: (min, max, points, log) of a sweep study's ω grid."""
-    if spec.omega is None:
-        raise MechcircError(f"{spec.spec_source}: analysis {spec.analysis!r} has no omega grid")
-    return spec.omega
-
-
-def _preset(spec: StudySpec) -> tuple[str, int, int, int]:
-    """``spec.sley``: (drive, variant, revolutions, points_per_revolution) of a sley study."""
-    if spec.sley is None:
-        raise MechcircError(f"{spec.spec_source}: analysis {spec.analysis!r} has no [sley] "
-                            "preset")
-    return spec.sley
+def _setting(spec: StudySpec, name: str):
+    """``spec.omega`` (min, max, points, log) of a sweep study's ω grid, or ``spec.sley``
+    (drive, variant, revolutions, points_per_revolution) of a sley study; an error if
+    the analysis has none."""
+    if (value := getattr(spec, name)) is None:
+        what = "omega grid" if name == "omega" else "[sley] preset"
+        raise MechcircError(f"{spec.spec_source}: analysis {spec.analysis!r} has no {what}")
+    return value
 
 
 def _omega_grid(spec: StudySpec):
     """The ω grid of a sweep study [rad/s]: ``spec.omega``'s points, geometric with log."""
-    lo, hi, n, log = _band(spec)
+    lo, hi, n, log = _setting(spec, "omega")
     return np.geomspace(lo, hi, n) if log else np.linspace(lo, hi, n)
 
 
@@ -908,9 +897,8 @@ def _simulate_row(spec: StudySpec, row: dict, values: dict) -> dict:
     try:
         from .sley import simulate
 
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            drive, variant, revolutions, ppr = _preset(spec)
+        with warnings.catch_warnings(action="ignore"):
+            drive, variant, revolutions, ppr = _setting(spec, "sley")
             result = simulate(drive, variant, revolutions=revolutions,
                               points_per_revolution=ppr, **values)
             for q in _SLEY_QUANTITIES[drive]:
@@ -944,16 +932,10 @@ class StudyResult:
             self.count = len(self.rows)
 
 
-def _format(value) -> str:
-    if isinstance(value, float):
-        return repr(value) if math.isfinite(value) else ("nan" if math.isnan(value) else
-                                                         ("inf" if value > 0 else "-inf"))
-    return str(value)
-
-
 def _fields(row: dict, columns: list[str]) -> list[str]:
-    """A row's cells as written (journal and CSV table): one line each, no line breaks."""
-    return [_format(row.get(c, "")).replace("\r", " ").replace("\n", " ") for c in columns]
+    """A row's cells as written (journal and CSV table): one line each, no line breaks;
+    a float as its shortest round-trip text (``str``: ``repr``, and nan, inf, -inf)."""
+    return [str(row.get(c, "")).replace("\r", " ").replace("\n", " ") for c in columns]
 
 
 #: The journal's last column: a CRC-32 of the row's other fields, so that a row cut
@@ -1353,9 +1335,9 @@ def _changes(old: dict, new: dict, prefix: str = "") -> list[str]:
 
 
 def _show(value) -> str:
-    if isinstance(value, str) and re.fullmatch(r"[0-9a-f]{64}", value):
-        return value[:12] + "…"            # a SHA-256: the file's content changed
-    return brief(value)
+    # a SHA-256 (the file's content changed) by its first 12 digits
+    return value[:12] + "…" if isinstance(value, str) and re.fullmatch(r"[0-9a-f]{64}", value) \
+        else brief(value)
 
 
 def _journal_spec(journal: str) -> str | None:
@@ -1367,9 +1349,7 @@ def _journal_spec(journal: str) -> str | None:
         return None
     tag, _, rest = first.partition(" ")
     digest, _, canonical = rest.partition(" ")
-    if tag != _SPEC_LINE or digest != "sha256=" + _sha256(canonical):
-        return None
-    return canonical
+    return canonical if tag == _SPEC_LINE and digest == "sha256=" + _sha256(canonical) else None
 
 
 def _open_journal(journal: str, spec: StudySpec, done: list[dict]) -> TextIO:

@@ -104,12 +104,9 @@ def loaded_groups(groups: Sequence[Sequence[tuple[str, str]]], a: str, b: str,
     # against networkx.biconnected_component_edges on random graphs.
     adj: dict[str, set[str]] = {}
     for pairs in groups:
-        for u, w in pairs:
-            adj.setdefault(u, set())
-            adj.setdefault(w, set())
-            if u != w:
-                adj[u].add(w)
-                adj[w].add(u)
+        for u, w in pairs:          # (a self-loop u = w: skipped by _block_with)
+            adj.setdefault(u, set()).add(w)
+            adj.setdefault(w, set()).add(u)
     if a not in adj or b not in adj or b not in reachable(adj, a):
         where = f" (line {drive_line})" if drive_line else ""
         exc = TopologyError(

@@ -211,8 +211,7 @@ def parse_unit(text: str) -> Unit:
         f, d = found
         f = Fraction(*f) if isinstance(f, tuple) else f
         factor *= f ** (sign * power)
-        for k in range(3):
-            dim[k] += sign * power * d[k]
+        dim = [x + sign * power * y for x, y in zip(dim, d)]
         i = m.end()
         if i == len(text):
             return Unit(text, float(factor), (dim[0], dim[1], dim[2]))

@@ -103,27 +103,24 @@ class _Builder:
             out[id(node)] = v
         return out[id(tree)]
 
-    def param(self, name: str):
-        if name in self.params:
-            return self.params[name]
-        entry = self.exprs.get(("param", name))
+    def _written(self, key: tuple[str, str]):
+        """The expression written for ``key`` (times its unit's factor), or None for a number."""
+        entry = self.exprs.get(key)
         if entry is None or entry[0].kind == "num":
-            v = self._symbol(name, self.circuit.params[name])
-        else:
-            tree, factor = entry
-            v = self._expr(tree) * _number(self.sp, factor)
-        self.params[name] = v
-        return v
+            return None
+        return self._expr(entry[0]) * _number(self.sp, entry[1])
+
+    def param(self, name: str):
+        if name not in self.params:
+            v = self._written(("param", name))
+            self.params[name] = self._symbol(name, self.circuit.params[name]) if v is None else v
+        return self.params[name]
 
     def field(self, owner: str, field: str, value: float, symbol_name: str | None):
         """A value of an element or lever: its symbol, or the expression written for it."""
-        entry = self.exprs.get((owner, field))
-        if entry is not None and entry[0].kind != "num":
-            tree, factor = entry
-            return self._expr(tree) * _number(self.sp, factor)
-        if symbol_name is None:
-            return _number(self.sp, value)
-        return self._symbol(symbol_name, value)
+        if (v := self._written((owner, field))) is not None:
+            return v
+        return _number(self.sp, value) if symbol_name is None else self._symbol(symbol_name, value)
 
     def element_name(self, name: str, kind: str) -> str:
         base = name if not name.isdigit() else f"{kind[0]}{name}"

@@ -64,15 +64,11 @@ def reference_mobility(Z: ArrayLike) -> float:
     """
     mag = np.abs(np.asarray(Z))
     mag = mag[np.isfinite(mag) & (mag > 0)]
-    if mag.size == 0:
-        return 1.0
-    return float(2.0 ** round(float(np.mean(np.log2(mag)))))
+    return float(2.0 ** round(float(np.mean(np.log2(mag))))) if mag.size else 1.0
 
 
 def _finite_points(omega, Z):
-    keep = np.isfinite(omega) & (omega > 0)
-    keep &= np.isfinite(Z).reshape(Z.shape[0], -1).all(axis=1)
-    return keep
+    return np.isfinite(omega) & (omega > 0) & np.isfinite(Z).reshape(Z.shape[0], -1).all(axis=1)
 
 
 def to_skrf(sweep: "Sweep", *, z0: float | None = None):
@@ -115,12 +111,10 @@ def _network(omega, Z, z0, name: str, title: str, empty: str, extra: tuple = ())
 
 
 def _comments(name: str, dropped: int, R: float) -> list[str]:
-    lines = [f"mechcirc: {name}", MOBILITY_NOTE,
-             f"reference R = {R!r} m/(N*s) (a power of two, for precision); "
-             "frequency f = omega/(2*pi) in Hz"]
-    if dropped:
-        lines.append(f"{dropped} point(s) with omega <= 0 or a non-finite K left out")
-    return lines
+    return [f"mechcirc: {name}", MOBILITY_NOTE,
+            f"reference R = {R!r} m/(N*s) (a power of two, for precision); "
+            "frequency f = omega/(2*pi) in Hz"] + \
+        ([f"{dropped} point(s) with omega <= 0 or a non-finite K left out"] if dropped else [])
 
 
 def write_touchstone(path: str | os.PathLike, omega: ArrayLike, Z: ArrayLike, *,
@@ -170,10 +164,9 @@ def write_touchstone(path: str | os.PathLike, omega: ArrayLike, Z: ArrayLike, *,
         for w, z in zip(omega[keep], Z[keep] / R):
             # Touchstone v1 order: two-ports N11 N21 N12 N22; larger: row by row.
             entries = z.T.ravel() if p == 2 else z.ravel()
-            fields = [repr(float(in_unit(w, "Hz")))]
-            for value in entries:
-                fields += [repr(float(value.real)), repr(float(value.imag))]
-            fh.write(" ".join(fields) + "\n")
+            fields = [float(in_unit(w, "Hz"))] + [float(x) for v in entries
+                                                  for x in (v.real, v.imag)]
+            fh.write(" ".join(map(repr, fields)) + "\n")
     return dropped
 
 

@@ -119,7 +119,6 @@ def read_touchstone_one_port(path: str | os.PathLike) -> tuple[NDArray[np.float6
     options = None
     freqs: list[float] = []
     values: list[complex] = []
-    last_f = -math.inf
     for number, raw in enumerate(split_lines(text), start=1):
         body = raw.split("!", 1)[0]
         stripped = body.strip()
@@ -135,8 +134,8 @@ def read_touchstone_one_port(path: str | os.PathLike) -> tuple[NDArray[np.float6
                                "a Touchstone 1.1 file (option line '# Hz Z RI R 1' and data)")
         if options is None:
             options = _parse_options([], source, number, col)
-        f, K = _data_line(stripped, options, source, number, col, last_f)
-        last_f = f
+        f, K = _data_line(stripped, options, source, number, col,
+                          freqs[-1] if freqs else -math.inf)
         freqs.append(f)
         values.append(K)
     if not freqs:

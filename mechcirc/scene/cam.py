@@ -317,10 +317,8 @@ def aligned_points(cam, n: int) -> int:
     int
     """
     u = np.asarray(cam.start, dtype=float) / (2 * np.pi)
-    for k in range(n, 4 * n + 1):
-        if np.all(np.abs(u * k - np.round(u * k)) <= 1e-9):
-            return k
-    return n
+    return next((k for k in range(n, 4 * n + 1)
+                 if np.all(np.abs(u * k - np.round(u * k)) <= 1e-9)), n)
 
 
 #: The ``[cam]`` table's keys (see docs/scenes.md, "A cam drives the scene").

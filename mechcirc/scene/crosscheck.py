@@ -159,8 +159,7 @@ def _kick_record(model, theta, found, steps_per_period, periods):
     w_min = min(r.omega for r in found)
     h = 2 * math.pi / rate / steps_per_period
     sample = max(1, int(steps_per_period // 16))
-    nsamp = int(math.ceil(periods * 2 * math.pi / w_min / (h * sample))) + 1
-    nsamp = max(nsamp, 4 * n + 4)
+    nsamp = max(int(math.ceil(periods * 2 * math.pi / w_min / (h * sample))) + 1, 4 * n + 4)
     kern, backend = kernels_for("rk4")
     y0 = model.rigid_state(theta)
     kick = 1e-7 * rate * np.array([1.0 + 0.37 * i for i in range(n)])
@@ -207,9 +206,8 @@ def _forced_rows(built, found, model, kern, theta, free, h) -> list:
     0.5 and 0.9 × the lowest resonance, between resonances and 1.5 × the highest."""
     circuit = built.circuit
     ws = sorted(r.omega for r in found)
-    probe = [0.5 * ws[0], 0.9 * ws[0]]
-    probe += [math.sqrt(a * b) for a, b in zip(ws, ws[1:])]
-    probe.append(1.5 * ws[-1])
+    probe = [0.5 * ws[0], 0.9 * ws[0], *(math.sqrt(a * b) for a, b in zip(ws, ws[1:])),
+             1.5 * ws[-1]]
     sw = circuit.sweep(np.array(probe))
     rows = []
     for w, q0 in zip(probe, sw.Q0):

@@ -97,10 +97,9 @@ class CycleMap:
                 for i in range(n):
                     j = (i + 1) % n
                     a, b = W[i, k] - target, W[j, k] - target
-                    if not (np.isfinite(a) and np.isfinite(b)) or a * b > 0 or a == b:
+                    # (b = 0: counted at the next interval)
+                    if not (np.isfinite(a) and np.isfinite(b)) or a * b > 0 or a == b or b == 0:
                         continue
-                    if b == 0:
-                        continue                     # counted at the next interval
                     t0 = self.theta[i]
                     step = (self.theta[j] - t0) % self.cycle
                     th = t0 + step * a / (a - b)
@@ -359,8 +358,7 @@ def plot_cycle(cmap: CycleMap, ax=None, *, fig=None, unit: str = "rad/s"):
     runit = "N·m" if cmap.rotational else "N"
     for j, h in enumerate(cmap.harmonics):
         a2.semilogy(deg, np.abs(cmap.Q0[:, j]), label=f"h = {h}")
-    a2.set_xlabel("crank rotation from the pose θ [deg]")
-    a2.set_ylabel(f"|Q0| at ω = h·Ω [{runit}]")
+    a2.set(xlabel="crank rotation from the pose θ [deg]", ylabel=f"|Q0| at ω = h·Ω [{runit}]")
     a2.legend(fontsize=7, ncol=3)
     if made:                            # a given figure keeps the caller's layout
         fig.tight_layout()
@@ -381,8 +379,8 @@ def _resonance_panel(a1, cmap: CycleMap, deg, unit: str) -> None:
     for n, c in enumerate(cmap.crossings()):
         a1.plot(c["theta_deg"], in_unit(c["omega"], unit), "kx", ms=6,
                 label="resonance = h·Ω" if n == 0 else None)
-    a1.set_ylabel(f"natural frequency [{unit}]  (dotted: h·Ω)")
-    a1.set_title("resonances (K = 0, drive held) over the cycle; × where one meets h·Ω")
+    a1.set(ylabel=f"natural frequency [{unit}]  (dotted: h·Ω)",
+           title="resonances (K = 0, drive held) over the cycle; × where one meets h·Ω")
     a1.legend(fontsize=7, loc="upper left")
 
 

@@ -39,7 +39,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
-from functools import cached_property
+from functools import cache, cached_property
 from typing import Any
 
 from ..errors import MechcircError
@@ -353,18 +353,13 @@ class Motor:
         return float(max(self.torques))
 
 
-_LAW = None
-
-
+@cache
 def _motor_law():
     """The motor law of the shaft kernel, as plain Python (a scalar call without numba's
     dispatch)."""
-    global _LAW
-    if _LAW is None:
-        from ._motion_kernels import load_python
+    from ._motion_kernels import load_python
 
-        _LAW = load_python().motor_torque
-    return _LAW
+    return load_python().motor_torque
 
 
 def kloss_motor(*, sync_speed: float, breakdown_torque: float,
@@ -495,10 +490,9 @@ def parse_shaft(text: str, source: str, table, scene) -> Shaft:
                               positive=positive, allow_zero=zero,
                               expected=f"{key} = … ({_KEYS[key]})")
 
-    flywheel = num("flywheel", 0.0, zero=True)
-    motor = _shaft_motor(text, source, table, num)
-    start = num("start_deg", 0.0, positive=False)
-    return Shaft(flywheel, motor, start, num("max_time", 120.0))
+    # checked in this order: the flywheel, the motor, the start angle, max_time
+    return Shaft(num("flywheel", 0.0, zero=True), _shaft_motor(text, source, table, num),
+                 num("start_deg", 0.0, positive=False), num("max_time", 120.0))
 
 
 def _shaft_motor(text: str, source: str, table: dict, num):

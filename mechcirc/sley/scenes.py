@@ -118,14 +118,12 @@ def scene_overrides(params: SleyParameters) -> dict:
            "C2.stiffness": p.C2, "C2.damping": p.k2, "C4.stiffness": p.C4, "C4.damping": p.k4,
            "M4.amplitude": p.beat_sign * p.M0, "M4.window_deg": math.degrees(p.alpha),
            "M4.sigma_deg": math.degrees(p.sigma)}
-    rods = ["C2", "C4"]
     if p.drive == "both-sides":
         I5P, I7, C5, C7, k5, k7 = p.second_side()
         out.update({"I5P.inertia": I5P, "I7.inertia": I7, "C5.stiffness": C5,
                     "C5.damping": k5, "C7.stiffness": C7, "C7.damping": k7})
-        rods += ["C5", "C7"]
-    for r in rods:
-        out[f"{r}.clearance"] = p.clearance
+    out |= {f"{r}.clearance": p.clearance for r in ("C2", "C4", "C5", "C7")   # every rod's
+            if f"{r}.stiffness" in out}
     return {k: float(v) for k, v in out.items()}
 
 

@@ -35,7 +35,6 @@ import dataclasses
 import math
 import warnings
 from dataclasses import dataclass, field
-from typing import Literal
 
 import numpy as np
 
@@ -108,14 +107,6 @@ def matrix_pencil(y: np.ndarray, dt: float, rel: float = 1e-9, max_order: int = 
     return s, amps
 
 
-def _variant(circuit: Circuit, kind: Literal["velocity", "force"]) -> Circuit:
-    d = circuit.require_drive()
-    # the other kind at unit amplitude; rotary stays rotary (its labels), a motion law
-    # belongs to the velocity drive only
-    new = d if d.kind == kind else dataclasses.replace(d, kind=kind, amplitude=1.0, motion=None)
-    return dataclasses.replace(circuit, drive=new, initial=())
-
-
 def _groups(modes, ratio=GROUP_RATIO):
     """Oscillating modes in groups of frequency spread ≤ ``ratio`` (ascending)."""
     out = []
@@ -157,7 +148,12 @@ def _ringing(circuit, kind, modes, others, out, progress):
     """
     drive_kind, signal = (("velocity", "drive_force") if kind == "resonance"
                           else ("force", "drive_velocity"))
-    variant = _variant(circuit, drive_kind)
+    # the circuit driven by drive_kind: the other kind at unit amplitude; rotary stays
+    # rotary (its labels), a motion law belongs to the velocity drive only
+    d = circuit.require_drive()
+    variant = dataclasses.replace(circuit, initial=(), drive=d if d.kind == drive_kind else
+                                  dataclasses.replace(d, kind=drive_kind, amplitude=1.0,
+                                                      motion=None))
     rows = {}
     for r in modes:
         rows[id(r)] = {"kind": kind, "omega": r.omega, "omega_d": r.omega_d, "zeta": r.zeta,
@@ -290,8 +286,7 @@ def crosscheck(circuit: Circuit, omega_max: float | None = None,
         if modes:
             _ringing(circuit, kind, modes, [r for r in res if r.kind != kind], out, progress)
     # (b) steady state at several ω, one near the first resonance.
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")         # already reported above
+    with warnings.catch_warnings(action="ignore"):  # already reported above
         sweep = circuit.sweep(np.array(omegas))
     _steady(circuit, omegas, sweep, out, progress)
     return out

@@ -68,9 +68,8 @@ def _min_over_angle(f):
     res = minimize_scalar(lambda t: float(f(np.array([t]))[0]),
                           bounds=(grid[i] - step, grid[i] + step), method="bounded",
                           options={"xatol": 1e-13})
-    if res.fun <= values[i]:
-        return float(res.fun), float(res.x) % (2 * math.pi)
-    return float(values[i]), float(grid[i])
+    return (float(res.fun), float(res.x) % (2 * math.pi)) if res.fun <= values[i] else \
+        (float(values[i]), float(grid[i]))
 
 
 def _check(**values):

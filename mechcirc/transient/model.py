@@ -206,11 +206,9 @@ def _node_matrices(work: Circuit, clear: list):
     from ..nodal import assemble
 
     system = assemble(work, whole=True)
-    nodes = list(system.nodes)
-    for e, _ in clear:                      # clearance-only nodes still need a coordinate
-        for nd in (e.n1, e.n2):
-            if nd != "0" and nd not in nodes:
-                nodes.append(nd)
+    # clearance-only nodes still need a coordinate: appended, in order of appearance
+    nodes = list(dict.fromkeys([*system.nodes, *(nd for e, _ in clear for nd in (e.n1, e.n2)
+                                                 if nd != "0")]))
     n = len(nodes)
     nn = len(system.nodes)
     # dense first, then sliced: slicing a scipy sparse matrix costs more than

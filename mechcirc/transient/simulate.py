@@ -633,8 +633,7 @@ def periodic_start(ss: StateSpace, drive: Waveform, amp: float, circuit, lineari
                             "(this one has clearances; linearise them or wait for it)")
     M = 1j * drive.omega * np.eye(ss.size) - ss.A
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("error", la.LinAlgWarning)     # rcond below eps
+        with warnings.catch_warnings(action="error", category=la.LinAlgWarning):  # rcond below eps
             Z = la.solve(M, ss.B.astype(complex))
         if not np.all(np.isfinite(Z)):
             raise la.LinAlgError
@@ -693,9 +692,7 @@ def with_oscillator(ss: StateSpace, z0, omega: float, amp: float):
     Cx = widen(ss.Cx, ss.Dx)
     Cv = widen(ss.Cv, ss.Dv, ss.Ev)
     zero = np.zeros(ss.Cx.shape[0])
-    extra = None
-    if ss.extra is not None:
-        extra = np.vstack([ss.extra, np.zeros((2, ss.extra.shape[1]))])
+    extra = None if ss.extra is None else np.vstack([ss.extra, np.zeros((2, ss.extra.shape[1]))])
     new = dataclasses.replace(ss, A=A, B=np.zeros(N + 2), Cx=Cx, Dx=zero, Cv=Cv, Dv=zero,
                               Ev=zero, extra=extra)
     return new, np.concatenate([z0, [0.0, 1.0]])
@@ -977,8 +974,8 @@ def _modal_plan(A, B, h, Cx):
     if int(real.sum()) + 2 * int(pos.sum()) != N or not np.all(np.isfinite(lam)):
         return "eigenvalues not in conjugate pairs"
     try:
-        with warnings.catch_warnings():         # ill-conditioning is judged just below
-            warnings.simplefilter("ignore", la.LinAlgWarning)
+        # ill-conditioning is judged just below
+        with warnings.catch_warnings(action="ignore", category=la.LinAlgWarning):
             Vinv = la.inv(V)
     except (la.LinAlgError, ValueError):
         return "eigenvector matrix singular"
