@@ -25,7 +25,7 @@ rpm, angle = jump_speed(cam_cycle("cycloidal", 100, 80, 80, 0.02), 0.5, 5e3, 50.
 w = rpm * math.pi / 30
 print(f"jump speed, closed form (rigid follower): {rpm:.6f} rpm, contact force 0 at "
       f"{angle:.3f} deg")
-got = scene_jump_speed(scene, steps_per_period=200)
+got = scene_jump_speed(scene, steps_per_period=100)
 print(f"jump speed, scene (secant, rtol {got.rtol:g}, {got.runs} runs of one turn): "
       f"{got.omega * 30 / math.pi:.6f} rpm")
 print(f"relative difference: {abs(got.omega / w - 1):.0e} (goal 1e-6)")

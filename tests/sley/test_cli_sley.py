@@ -85,11 +85,17 @@ def test_crosscheck_line_that_cannot_be_measured_says_why(cli_once):
                                     "their tolerance, 1 cannot be measured")
 
 
-def test_crosscheck_disagreement_exits_3(monkeypatch, capsys):
+def test_crosscheck_disagreement_exits_3(monkeypatch, capsys, cli_once):
+    """The time-domain amplitudes 1 % off: (c) disagrees, exit 3.  The amplitudes are the
+    real ones of the same command (``cli_once``, shared with test_crosscheck_json) looked
+    up by frequency rather than integrated again (2.6 s of CPU); a frequency not among
+    them is a KeyError, so the patched run must ask for exactly those."""
     import mechcirc.sley.crosscheck as sc
 
-    real = sc.forced_amplitude
-    monkeypatch.setattr(sc, "forced_amplitude", lambda lin, w: 1.01 * real(lin, w))
+    status, out, _ = cli_once(["crosscheck", "--variant", "1", "--json"])
+    assert status == 0
+    real = {r["omega"]: r["q0_time"] for r in json.loads(out)["harmonic"]["rows"]}
+    monkeypatch.setattr(sc, "forced_amplitude", lambda lin, w: 1.01 * real[float(w)])
     assert main(["crosscheck", "--variant", "1", "--json"]) == 3
     doc = json.loads(capsys.readouterr().out)
     assert doc["verdict"] == "disagrees" and doc["summary"]["disagree"] == 3
