@@ -357,9 +357,9 @@ def band_bound_batch(G, piv, x, d, n, kl):
 
     The factors of :func:`band_lu_batch` (``G``, ``piv``; P̃|L| in their factored
     form P₀|L₀|P₁|L₁|…, which has no sums of products: the absolute values of its
-    entries), for :func:`mechcirc.nodal.first_step_bound`.  The one source of
-    this product: the compiled LU's factors are read in this layout too
-    (:meth:`SparseSolver._banded_compiled`).
+    entries), for :func:`mechcirc.nodal.first_step_bound`.  (The compiled LU
+    offers no bound: there the second residual pass, a compiled kernel, costs
+    less than the bound in numpy — 1.09-1.19x the sweep's time with it.)
 
     Parameters
     ----------
@@ -564,19 +564,7 @@ class SparseSolver:
             kern.band_solve_perm(ab, kl, ipiv, rows, p, np.ascontiguousarray(r, dtype=complex),
                                  out)
             return out
-
-        def bound(x, d, rows):
-            """|x|ᵀP̃|L||U||d| at ``rows`` (:func:`band_bound_batch`, the factors
-            moved to its layout: U[j, j + t] = ab[j + t, 2kl − t], L[j + s, j] = ab[j, 2kl + s])."""
-            f, kv = ab[rows], 2 * kl
-            G = np.zeros((n + kl, 3 * kl + 1, rows.size), dtype=complex)
-            for t in range(min(2 * kl, n - 1) + 1):
-                G[:n - t, kl + t] = f[:, t:, kv - t].T
-            for s in range(1, min(kl, n - 1) + 1):
-                G[s:n, kl - s] = f[:, :n - s, kv + s].T
-            piv = (ipiv[rows] - np.arange(n)).T
-            return band_bound_batch(G, piv, x[:, p].T, d[:, p].T, n, kl)
-        return good, _BoundSolve(solve, bound)
+        return good, solve
 
     def _banded(self, data, good):
         """The banded LU in numpy, vectorised over the chunk's ω (:func:`band_lu_batch`),

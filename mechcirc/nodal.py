@@ -74,7 +74,7 @@ class Solution:
         residual's rounding in double-double, floored at the rounding to
         float64 (unrefined on the numpy path: the first correction from a
         float64 residual plus the bound on its rounding,
-        :func:`mechcirc._nodal_residual.residual_rounding`); where a
+        :func:`mechcirc._nodal_residual.residual_rounding`); where numpy's
         banded LU's first correction is bounded below 16 eps, that bound
         (:func:`first_step_bound`; no second step); ``inf`` where the refinement does not contract or stalls
         even with double-double factors (:class:`DDSolver`, up to
@@ -491,9 +491,8 @@ def first_step_bound(system: NodalSystem, omega: NDArray, xh: NDArray, xl: NDArr
     (Σ_e |y_e| (|x_i| + |x_j|)(|d_i| + |d_j|) + Σ_levers |v| |x_r| |d_c|) +
     |x|ᵀ|r₀ − r̂₀|, the last (the double-double residual's rounding) added to every
     estimate (:func:`solve`).  |z| is bounded by |re| + |im| and x by x₁ (first
-    order): the sum is doubled.  Both banded LUs (numpy's and the compiled
-    kernels') give ``lu`` through the one
-    :func:`mechcirc._nodal_solvers.band_bound_batch`.
+    order): the sum is doubled.  Asked where the solver has a ``bound``: numpy's
+    banded LU (:func:`mechcirc._nodal_solvers.band_bound_batch`).
 
     Parameters
     ----------
