@@ -382,21 +382,6 @@ def band_bound_batch(G, piv, x, d, n, kl):
         u = np.zeros(ad.shape)
         for t in range(2 * kl + 1):                 # |U||d|: row j's entry j + t
             u[:n] += (np.abs(G[:n, kl + t].real) + np.abs(G[:n, kl + t].imag)) * ad[t:t + n]
-        ax = np.abs(x.real) + np.abs(x.imag)
-        if kl == 1 and n > 1:
-            # |x|ᵀP̃|L| without a loop: applied to |x| from the left (P₀, then |L₀|ᵀ, ...),
-            # step j swaps slots j, j + 1 and then finishes slot j as w_j + l_j w_{j+1};
-            # so slot j then holds |x| at the start of its run of swaps (c), slot j + 1
-            # holds |x_{j+1}|, the one or the other swapped.
-            sw = piv[:n - 1] == 1
-            start = np.where(np.vstack([np.ones((1, sw.shape[1]), bool), ~sw]),
-                             np.arange(n)[:, None], 0)
-            c = np.take_along_axis(ax, np.maximum.accumulate(start, axis=0), axis=0)
-            lj = np.abs(G[1:n, 0].real) + np.abs(G[1:n, 0].imag)
-            w = np.empty_like(ax)
-            w[:-1] = np.where(sw, ax[1:], c[:-1]) + lj * np.where(sw, c[:-1], ax[1:])
-            w[-1] = c[-1]
-            return np.einsum("ib,ib->b", w, u[:n])
         for j in range(n - 2, -1, -1):              # then |L_j| and P_j, innermost first
             for s in range(1, min(kl, n - 1 - j) + 1):
                 z = G[j + s, kl - s]
@@ -407,7 +392,7 @@ def band_bound_batch(G, piv, x, d, n, kl):
                     keep = u[j].copy()
                     np.copyto(u[j], u[j + s], where=swap)
                     np.copyto(u[j + s], keep, where=swap)
-        return np.einsum("ib,ib->b", ax, u[:n])
+        return np.einsum("ib,ib->b", np.abs(x.real) + np.abs(x.imag), u[:n])
 
 
 class _BoundSolve:

@@ -630,9 +630,7 @@ def test_band_bound_is_the_dense_product_of_the_factors():
 
 @pytest.mark.parametrize("kl", [1, 2])
 def test_band_bound_of_a_band_is_the_factored_product(kl):
-    """band_bound_batch (for a band 1 wide without its loop: slot j holds |x| at the
-    start of its run of row swaps) is |x|ᵀP₀|L₀|P₁|L₁|…|U||d| formed densely, factor by
-    factor: 200 random banded batches of 1-39 unknowns, entries over 6 decades
+    """band_bound_batch is |x|ᵀP₀|L₀|P₁|L₁|…|U||d| formed densely, factor by factor: 200 random banded batches of 1-39 unknowns, entries over 6 decades
     (thousands of row swaps)."""
     rng = np.random.default_rng(1)
     swaps, worst = 0, 0.0
