@@ -30,6 +30,7 @@ Run from the repository root::
 
     python benchmarks/bench_nodal_ngspice.py [--sizes 45,99,999,9999,99999] [--repeats 5]
     python benchmarks/bench_nodal_ngspice.py --breakdown [--sizes 45,99,999]
+    python benchmarks/bench_nodal_ngspice.py --bound-ab [--sizes 45,99] [--repeats 21]
 
 It prints; it asserts nothing.
 """
@@ -168,6 +169,35 @@ def breakdown(sizes, omega, repeats) -> None:
     _jit.COMPILED = None
 
 
+def bound_ab(sizes, omega, repeats) -> None:
+    """The default sweep with and without the solver's first-step bound
+    (``nodal.first_step_bound``: no second pass where it is below 16 eps),
+    alternated in this process, on both paths (CPU medians)."""
+    from mechcirc import _nodal_solvers
+
+    keep = _nodal_solvers._BoundSolve.__init__
+
+    def without(self, solve, bound):
+        self.solve, self.bound = solve, None
+    for n in sizes:
+        text = ladder_netlist(*ladder_numbers(n))
+        for compiled in (False, True):
+            _jit.COMPILED = compiled
+            mechcirc.parse(text).sweep(omega[:3], method="nodal")
+            t: dict = {keep: [], without: []}
+            for _ in range(repeats):
+                for init in t:
+                    _nodal_solvers._BoundSolve.__init__ = init
+                    c = time.process_time()
+                    mechcirc.parse(text).sweep(omega, method="nodal")
+                    t[init].append(time.process_time() - c)
+            _nodal_solvers._BoundSolve.__init__ = keep
+            a, b = (float(np.median(v)) * 1e3 for v in t.values())
+            print(f"{n:,} elements, {'compiled' if compiled else 'numpy'}: with the bound "
+                  f"{a:.1f} ms, without {b:.1f} ms, ratio {a / b:.3f}", flush=True)
+    _jit.COMPILED = None
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", default="45,99,999,9999,99999")
@@ -175,6 +205,8 @@ def main() -> int:
     ap.add_argument("--no-spice", action="store_true", help="mechcirc only")
     ap.add_argument("--breakdown", action="store_true",
                     help="where a default sweep's time goes, by phase (no libngspice)")
+    ap.add_argument("--bound-ab", action="store_true",
+                    help="the default sweep with and without the first-step bound, alternated")
     ap.add_argument("--mp-max", type=int, default=999,
                     help="largest ladder checked against mpmath")
     args = ap.parse_args()
@@ -182,6 +214,9 @@ def main() -> int:
     omega = 2 * np.pi * np.geomspace(0.1, 1e3, 401)
     if args.breakdown:
         breakdown(sizes, omega, args.repeats)
+        return 0
+    if args.bound_ab:
+        bound_ab(sizes, omega, args.repeats)
         return 0
     try:
         if args.no_spice:

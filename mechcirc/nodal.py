@@ -74,7 +74,9 @@ class Solution:
         residual's rounding in double-double, floored at the rounding to
         float64 (unrefined on the numpy path: the first correction from a
         float64 residual plus the bound on its rounding,
-        :func:`mechcirc._nodal_residual.residual_rounding`); ``inf`` where the refinement does not contract or stalls
+        :func:`mechcirc._nodal_residual.residual_rounding`); where numpy's
+        banded LU's first correction is bounded below 16 eps, that bound
+        (:func:`first_step_bound`; no second step); ``inf`` where the refinement does not contract or stalls
         even with double-double factors (:class:`DDSolver`, up to
         :data:`DD_LIMIT` unknowns), or A(ω) is not finite.
     singular : ndarray of bool, shape (n_ω,)
@@ -461,9 +463,70 @@ def refine_dd(solve_fn, residual, omega, rhs, system, refine: bool, steps: int,
         # est bounds the error before this correction; after it, the error is
         # smaller still (by the contraction): stop once est is near rounding.
         active = active[est[active] > 16 * eps]
+        bound = getattr(solve_fn, "bound", None)
+        if step == 0 and bound is not None and active.size:
+            # Or once the error after it is bounded by 16 eps (first_step_bound).
+            first = first_step_bound(system, omega[active], xh[active], xl[active], d[active],
+                                     r[active], bound(xh[active], d[active], active))
+            proven = first <= 16 * eps
+            est[active[proven]] = first[proven]
+            active = active[~proven]
         if not active.size:
             break
     return xh, xl, est, rho
+
+
+def first_step_bound(system: NodalSystem, omega: NDArray, xh: NDArray, xl: NDArray,
+                     d: NDArray, r: NDArray, lu: NDArray) -> NDArray:
+    """A bound on the relative error of K at x₁ = xh + xl = x₀ + d after the first
+    correction d, without the residual of x₁ (that residual pass is then not taken).
+
+    The computed d solves (Â + ΔA) d = r̂ with |ΔA| ≤ γ P̃|L||U| (Higham, Accuracy
+    and Stability of Numerical Algorithms, Thm 9.4: γ₃ₙ for real arithmetic,
+    here 8(n + 2)u ≥ √2·γ₃ₙ₊₆ for complex products; ``lu`` = |x|ᵀP̃|L||U||d|
+    from the factors), where Â is A(ω) rounded to float64: each entry sums at
+    most m stamps (the most of a row) and applies ω, |Â − A| ≤ (m + 4)u Σ|stamp|.
+    So r₁ = b − A x₁ = (r₀ − r̂) + ΔA d + (Â − A) d, and as A is complex symmetric
+    and K = cᵀA⁻¹c, K − K₁ = xᵀr₁: |K − K₁| ≤ γ·lu + u |x|ᵀ|r̂| + (m + 4)u
+    (Σ_e |y_e| (|x_i| + |x_j|)(|d_i| + |d_j|) + Σ_levers |v| |x_r| |d_c|) +
+    |x|ᵀ|r₀ − r̂₀|, the last (the double-double residual's rounding) added to every
+    estimate (:func:`solve`).  |z| is bounded by |re| + |im| and x by x₁ (first
+    order): the sum is doubled.  Asked where the solver has a ``bound``: numpy's
+    banded LU (:func:`mechcirc._nodal_solvers.band_bound_batch`).
+
+    Parameters
+    ----------
+    system : NodalSystem
+    omega : ndarray
+        [rad/s], shape (c,).
+    xh, xl : ndarray of complex, shape (c, n)
+        x₁ in double-double.
+    d, r : ndarray of complex, shape (c, n)
+        The first correction and the residual it was solved from.
+    lu : ndarray, shape (c,)
+        |x|ᵀP̃|L||U||d| (:func:`mechcirc._nodal_solvers.band_bound_batch`).
+
+    Returns
+    -------
+    ndarray, shape (c,)
+    """
+    pat = pattern(system)
+    u = np.finfo(float).eps / 2
+    with np.errstate(all="ignore"):
+        c, n = xh.shape
+        ax = np.zeros((c, n + 1))
+        ax[:, :n] = np.abs(xh.real) + np.abs(xh.imag)
+        ad = np.zeros((c, n + 1))
+        ad[:, :n] = np.abs(d.real) + np.abs(d.imag)
+        y = np.abs(pat.e_c) + np.abs(omega[:, None] * pat.e_m - pat.e_k / omega[:, None])
+        entry = np.einsum("ce,ce->c", y * (ax[:, pat.e_i] + ax[:, pat.e_j]),
+                          ad[:, pat.e_i] + ad[:, pat.e_j])
+        if pat.s_row.size:
+            entry = entry + np.abs(pat.s_val) @ (ax[:, pat.s_row] * ad[:, pat.s_col]).T
+        rounding = np.einsum("ci,ci->c", ax[:, :n], np.abs(r.real) + np.abs(r.imag))
+        gamma = 8.0 * (n + 2) * u
+        return 2.0 * (gamma * lu + u * rounding + (pat.max_row_terms + 4) * u * entry) / \
+            np.abs(difference_dd(system, xh, xl))
 
 
 def _estimate(system, xh, xl, d, prev, r):
