@@ -981,13 +981,7 @@ def element_patterns(system) -> dict[str, np.ndarray]:
     from .nodal import stamps
 
     n_nodes = len(system.nodes)
-    index = {n: i for i, n in enumerate(system.nodes)}
-    for e in system.elements:
-        index.setdefault(e.n1, -1)
-        index.setdefault(e.n2, -1)
-    for lv in system.levers:
-        for n in (lv.p1, lv.p2, lv.s1, lv.s2):
-            index.setdefault(n, -1)
+    index = {n: i for i, n in enumerate(system.nodes)}   # a node not in it: the reference
     E = len(system.elements)
     pos = {e.name: k for k, e in enumerate(system.elements)}
     B = {x: np.zeros((E, n_nodes, n_nodes)) for x in ("mass", "spring", "damper")}
