@@ -410,14 +410,17 @@ def print_json(document) -> None:
 PLOT_FORMATS = ("png", "svg", "pdf", "eps", "ps", "jpg", "jpeg", "tif", "tiff", "webp")
 
 
-def check_output_paths(*paths, plots=(), reads=()) -> None:
+def check_output_paths(*paths, plots=(), reads=(), table: str | None = None) -> None:
     """Refuse, before any work, outputs that cannot or must not be written.
 
     An output into a missing folder (a dangling link's included), onto a
     folder, block device or socket, one named twice, one that is a file the
     command reads (``reads``: its input files), or a plot in an unknown format.
     Links are followed and FIFOs and character devices written in place
-    (:func:`mechcirc.outputs.output_target`).
+    (:func:`mechcirc.outputs.output_target`).  With ``table`` (what ``-o``
+    writes, for the message) the first path is ``-o``: refused if named like
+    an image (``-o K.png`` would write CSV text into K.png: the image is
+    ``--plot``'s) or a JSON document (``--json``'s, on stdout).
     """
     from ..outputs import output_target
 
@@ -441,6 +444,13 @@ def check_output_paths(*paths, plots=(), reads=()) -> None:
             raise MechcircError(
                 f"{path}: unsupported plot format {Path(path).suffix or '(none)'!r} "
                 f"(expected one of {', '.join('.' + f for f in PLOT_FORMATS)})")
+    suffix = Path(paths[0]).suffix.lower() if table and paths[0] else ""
+    if suffix.lstrip(".") in PLOT_FORMATS:
+        raise MechcircError(f"{paths[0]}: -o writes {table}, not an image (a command that "
+                            "draws writes its plot to --plot IMAGE)")
+    if suffix == ".json":
+        raise MechcircError(f"{paths[0]}: -o writes {table}, not JSON; --json prints the "
+                            f"JSON document (--json > {paths[0]})")
 
 
 def save_figure(fig, path, into=None, tight: bool = True) -> None:
@@ -666,30 +676,3 @@ def check_names(names, known, kind: str = "element", option: str = "--element") 
         raise MechcircError(f"unknown {kind} {bad[0]!r}{did_you_mean(bad[0], known)} "
                             f"(given to {option}; the netlist has "
                             f"{', '.join(known[:SHOWN_NAMES])}{more})")
-
-
-def check_table_path(path, what: str = "a CSV table") -> None:
-    """Refuse a table or netlist output (``-o``) named like an image or a JSON document.
-
-    ``-o K.png`` wrote CSV text into K.png: the image is ``--plot``'s, the JSON
-    document ``--json``'s (on stdout).
-
-    Parameters
-    ----------
-    path : str or None
-        The ``-o`` path (None: no output).
-    what : str
-        What ``-o`` writes, for the message.
-
-    Raises
-    ------
-    MechcircError
-        ``path`` ends in an image format's or ``.json``.
-    """
-    suffix = Path(path).suffix.lower() if path else ""
-    if suffix.lstrip(".") in PLOT_FORMATS:
-        raise MechcircError(f"{path}: -o writes {what}, not an image (a command that draws "
-                            "writes its plot to --plot IMAGE)")
-    if suffix == ".json":
-        raise MechcircError(f"{path}: -o writes {what}, not JSON; --json prints the JSON "
-                            f"document (--json > {path})")

@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 
 from ..errors import InputError
-from ._common import (MAX_LENGTH, add_command, add_handler, check_output_paths, check_table_path,
+from ._common import (MAX_LENGTH, add_command, add_handler, check_output_paths,
                       count, print_json, real, warning_lines)
 
 _LAWS = ("harmonic", "cycloidal", "modified_sine", "modified_trapezoid", "polynomial_345")
@@ -128,8 +128,7 @@ def cmd_cam(args) -> int:
 
 def _check_args(args) -> None:
     """The output paths, and the options each follower needs or does not take."""
-    check_output_paths(args.output, args.svg)
-    check_table_path(args.output)
+    check_output_paths(args.output, args.svg, table="a CSV table")
     if args.svg and not args.svg.lower().endswith(".svg"):
         raise InputError(f"--svg {args.svg}: the drawing is SVG; give a file ending in .svg")
     if args.follower not in ("flat", "oscillating_flat") and args.roller_radius is None:

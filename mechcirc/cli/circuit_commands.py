@@ -17,7 +17,7 @@ from ..limits import (
 )
 from ..units import FREQUENCY_UNITS, in_unit
 from ._common import (add_command, add_handler, check_names, check_output_paths,
-                      check_table_path, load_with_warnings, print_json, real, save_figure,
+                      load_with_warnings, print_json, real, save_figure,
                       warning_lines)
 
 #: argparse type: an angular frequency [rad/s], or with a unit (``50Hz``, ``3000rpm``); the
@@ -249,8 +249,8 @@ def _peak_text(pk, units: dict, unit: str = "rad/s") -> str:
 
 
 def cmd_sweep(args) -> int:
-    check_output_paths(args.output, args.touchstone, plots=(args.plot,), reads=(args.file,))
-    check_table_path(args.output)
+    check_output_paths(args.output, args.touchstone, plots=(args.plot,), reads=(args.file,),
+                       table="a CSV table")
     if args.touchstone and Path(args.touchstone).suffix.lower() != ".s1p":
         # K seen by one drive is a one-port: a .s2p name would promise a
         # 2-port file that scikit-rf then cannot read.

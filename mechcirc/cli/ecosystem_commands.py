@@ -6,7 +6,7 @@ from pathlib import Path
 
 from ..errors import MechcircError
 from ..limits import FORMULA_SECONDS
-from ._common import (add_command, add_handler, check_output_paths, check_table_path, count,
+from ._common import (add_command, add_handler, check_output_paths, count,
                       load_with_warnings, print_json, real, save_figure, time_limit,
                       warning_lines)
 
@@ -232,8 +232,8 @@ def cmd_study(args) -> int:
     from ..progress import Progress
     from ..study import column_units, load_spec, run_study, sidecar_path
 
-    check_output_paths(args.output, args.curves, plots=(args.plot,), reads=(args.spec,))
-    check_table_path(args.output, "a CSV or Parquet table")
+    check_output_paths(args.output, args.curves, plots=(args.plot,), reads=(args.spec,),
+                       table="a CSV or Parquet table")
     if args.resume and not args.output:
         raise MechcircError("--resume needs -o FILE (the table to continue)")
     spec = load_spec(args.spec)

@@ -10,7 +10,7 @@ from pathlib import Path
 from ..errors import InputError, MechcircError, NetlistError
 from ..units import convert_frequency
 from ._common import (MAX_LENGTH, MAX_OMEGA, add_command, add_handler, check_output_paths,
-                      check_table_path, count, print_json, real, save_figure, write_columns)
+                      count, print_json, real, save_figure, write_columns)
 
 
 def register(sub) -> None:
@@ -284,8 +284,7 @@ def cmd_frame(args) -> int:
 
     from ..kinematics import FourBar, LinkMass, beat_up_force, frame_loading
 
-    check_output_paths(args.output, plots=(args.plot,))
-    check_table_path(args.output)
+    check_output_paths(args.output, plots=(args.plot,), table="a CSV table")
     k = 1e-3 if args.unit == "mm" else 1.0            # to metres
     fb = FourBar(args.crank * k, args.coupler * k, args.rocker * k, args.frame * k,
                  branch=args.branch)

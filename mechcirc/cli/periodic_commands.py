@@ -7,7 +7,7 @@ import math
 
 from ..errors import MechcircError
 from ..units import in_unit
-from ._common import (add_command, add_handler, check_names, check_output_paths, check_table_path,
+from ._common import (add_command, add_handler, check_names, check_output_paths,
                       count, load_with_warnings, print_json, real, scene_theta, warning_lines,
                       write_outputs)
 
@@ -70,8 +70,7 @@ def _elements(args, circuit):
 
 
 def cmd_periodic(args) -> int:
-    check_output_paths(args.output, plots=(args.plot,), reads=(args.file,))
-    check_table_path(args.output)
+    check_output_paths(args.output, plots=(args.plot,), reads=(args.file,), table="a CSV table")
     single = args.rpm is not None
     ranged = args.rpm_min is not None or args.rpm_max is not None
     if single == ranged:

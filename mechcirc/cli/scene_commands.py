@@ -8,7 +8,7 @@ import warnings
 from ..errors import MechcircError
 from ..limits import MAX_CYCLE_POINTS
 from ..units import FREQUENCY_UNITS, in_unit
-from ._common import (add_command, add_handler, check_output_paths, check_table_path, count,
+from ._common import (add_command, add_handler, check_output_paths, count,
                       print_json, real, save_figure, scene_theta, set_values,
                       write_columns, write_outputs, write_text)
 
@@ -83,8 +83,8 @@ def _register_reduce(sub) -> None:
 
 def cmd_scene(args) -> int:
     plots = (args.plot,) if args.plot else ()
-    check_output_paths(args.output, plots=plots, reads=(args.file,))
-    check_table_path(args.output, "a CSV table (--cycle) or a netlist (--theta)")
+    check_output_paths(args.output, plots=plots, reads=(args.file,),
+                       table="a CSV table (--cycle) or a netlist (--theta)")
     if args.plot and not args.cycle and args.mode is None:
         raise MechcircError("--plot draws the --cycle map, or with --mode N a mode at the "
                             "crank angle; with --theta alone use -o and 'mechcirc sweep'")
@@ -219,8 +219,7 @@ def cmd_reduce(args) -> int:
     from ..netlist import load
     from .._simplify import parse_band, simplify
 
-    check_output_paths(args.out, reads=(args.file,))
-    check_table_path(args.out, "the reduced netlist")
+    check_output_paths(args.out, reads=(args.file,), table="the reduced netlist")
     band = parse_band(args.band)
     circuit = load(args.file)
     result = simplify(circuit, band, args.tol, output=args.element, points=args.points)
@@ -267,8 +266,7 @@ def cmd_simulate_scene(args) -> int:
         raise MechcircError(f"--steps-per-period applies to rk4 and rk8, not {args.method}; "
                             "use --rtol")
     check_output_paths(args.output, plots=(args.plot,) if args.plot else (),
-                       reads=(args.scene,))
-    check_table_path(args.output)
+                       reads=(args.scene,), table="a CSV table")
     scene = _with_overrides(args, load_scene(args.scene))
     if shaft:
         return _shaft(args, scene)

@@ -6,7 +6,7 @@ import math
 
 from ..errors import InputError
 from ..limits import MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS, MAX_SCIPY_REVOLUTIONS
-from ._common import (add_command, add_handler, check_output_paths, check_table_path, count,
+from ._common import (add_command, add_handler, check_output_paths, count,
                       print_json, real, save_figure, set_values, write_columns, write_text)
 
 _METHODS = ("rk4", "rk4-python", "rk8", "DOP853", "RK45", "LSODA")   # = mechcirc.sley.METHODS
@@ -209,8 +209,7 @@ def cmd_simulate(args) -> int:
     args.revolutions = 5 if args.revolutions is None else args.revolutions
     args.points = 7200 if args.points is None else args.points
     args.method = args.method or "rk4"
-    check_output_paths(args.output, plots=(args.plot,))
-    check_table_path(args.output)
+    check_output_paths(args.output, plots=(args.plot,), table="a CSV table")
     over = _overrides(args)
     if args.omega is not None:
         over["omega"] = args.omega

@@ -7,7 +7,7 @@ import sys
 
 from ..errors import MechcircError
 from ._common import (add_command, add_handler, check_names, check_output_paths,
-                      check_table_path, print_json, real, save_figure)
+                      print_json, real, save_figure)
 
 
 def register(sub) -> None:
@@ -53,8 +53,7 @@ def cmd_transient(args) -> int:
     from ..outputs import OutputSet
     from ..transient import transient
 
-    check_output_paths(args.output, plots=(args.plot,), reads=(args.file,))
-    check_table_path(args.output)
+    check_output_paths(args.output, plots=(args.plot,), reads=(args.file,), table="a CSV table")
     if args.element and not args.plot:
         raise MechcircError("--element NAME draws a panel of the plot: give --plot IMAGE too")
     circuit = load(args.file, require_drive=False)
