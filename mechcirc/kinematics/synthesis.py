@@ -56,7 +56,7 @@ from ..errors import GeometryError
 from .fourbar import FourBar
 
 __all__ = [
-    "LOAD_CRANK_MM", "CRITERIA", "Criterion", "Design", "SynthesisResult",
+    "LOAD_CRANK_MM", "Criterion", "Design", "SynthesisResult",
     "dead_centre_angles", "acceleration_ratio_eq5", "solve_eq10",
     "evaluate_design", "synthesize",
 ]
@@ -64,10 +64,6 @@ __all__ = [
 #: Crank length range [mm] by loom class (patent step 1).
 LOAD_CRANK_MM: dict[str, tuple[float, float]] = {
     "light": (33.0, 34.0), "medium": (35.0, 36.0), "heavy": (37.0, 38.0)}
-
-#: Criterion names in report order.
-CRITERIA: tuple[str, ...] = ("crank_length", "front_transmission", "min_transmission",
-                             "acceleration_ratio", "frame_length", "rocker_ratio", "swing")
 
 FRONT_TRANSMISSION_MIN_DEG = 70.0
 MIN_TRANSMISSION_MIN_DEG = 45.0
@@ -90,7 +86,8 @@ class Criterion:
     Attributes
     ----------
     name : str
-        One of :data:`CRITERIA`.
+        ``crank_length``, ``front_transmission``, ``min_transmission``,
+        ``acceleration_ratio``, ``frame_length``, ``rocker_ratio`` or ``swing``.
     value : float
         The design's value (degrees for angles, mm for lengths, 1 for ratios).
     limit : str
@@ -117,7 +114,7 @@ class Design:
     a, b, c, d : float
         Crank, coupler, rocker and frame lengths [mm].
     criteria : dict[str, Criterion]
-        Every criterion of :data:`CRITERIA`, by name.
+        Every criterion (:attr:`Criterion.name`), by name.
     mu1_deg, mu2_deg : float
         Angles BCD at the front and back dead centres, eq. (1) [deg].
     phi1_dd, phi2_dd : float
