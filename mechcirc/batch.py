@@ -615,7 +615,7 @@ def _nodal_roots(ds: Designs, omega_max):
 
 def _nodal_group_roots(ds: Designs, system, held, which: NDArray, omega_max):
     """:func:`_nodal_roots` for one group of designs ``which``."""
-    from .resonances import POLISH_BELOW, constraint_basis, element_patterns, pencil
+    from .resonances import POLISH_BELOW, constraint_basis, element_patterns, pencil, settled
 
     eps = np.finfo(float).eps
     *_, G_released, G_held, damped = pencil(system)
@@ -649,11 +649,7 @@ def _nodal_group_roots(ds: Designs, system, held, which: NDArray, omega_max):
         stacks = [(system, S, parts, 1.0), (held, *_stacked_matrices(ds, held, which), -1.0)]
         s[d, r], err[d, r] = _polish_nodal(stacks, keep[d], s0[d, r], pole[d, r], e0[d, r],
                                            damped)
-    if not damped:
-        s = 1j * np.abs(s.imag)
-    else:
-        s = np.where(np.abs(s.imag) <= err * np.abs(s), s.real + 0j, s)
-    err = np.maximum(err, eps)
+    s, err = settled(s, err, damped), np.maximum(err, eps)
     if omega_max is not None:
         s = np.where(np.abs(s) <= omega_max, s, np.nan)
     return (which[keep], *_sorted_roots(pole, s, err))

@@ -753,11 +753,16 @@ def _polish(system, roots: list, damped: bool) -> list[Resonance]:
         pole = np.array([kinds[i] == "antiresonance" for i in todo])
         s, err = _secant(system, s0[todo], pole, e0[todo], damped)
         s_new[todo], e_new[todo] = s, err
-    if not damped:
-        s_new = 1j * np.abs(s_new.imag)
-    else:
-        s_new = np.where(np.abs(s_new.imag) <= e_new * np.abs(s_new), s_new.real + 0j, s_new)
+    s_new = settled(s_new, e_new, damped)
     return [_make(k, s, max(e, eps)) for k, s, e in zip(kinds, s_new, e_new)]
+
+
+def settled(s: np.ndarray, err: np.ndarray, damped: bool) -> np.ndarray:
+    """Polished roots ``s`` put where they belong: undamped ones on the imaginary axis,
+    damped ones real where within their error ``err`` of the real axis."""
+    if not damped:
+        return 1j * np.abs(s.imag)
+    return np.where(np.abs(s.imag) <= err * np.abs(s), s.real + 0j, s)
 
 
 def _g_and_delta(system, s: np.ndarray, pole: np.ndarray):
