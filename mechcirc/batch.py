@@ -467,6 +467,15 @@ class Designs:
 _STACK_ENTRIES = 2 ** 21
 
 
+def _template_levers(ds: Designs, system, which: NDArray) -> NDArray:
+    """The designs of ``which`` whose lever ratios are the template's ``system``'s (its
+    lever stamps and constraint basis hold for them alone)."""
+    lev = {lv.name: i for i, lv in enumerate(ds.circuit.levers)}
+    for lv in system.levers:
+        which = which[ds.ratios[lev[lv.name], which] == lv.ratio]
+    return which
+
+
 def _nodal_sweep(ds: Designs, which: NDArray, omega: NDArray):
     """K and its error bound of designs ``which`` of a network that is not
     series–parallel, by the nodal path of :func:`mechcirc.nodal.solve` with the
@@ -487,9 +496,7 @@ def _nodal_sweep(ds: Designs, which: NDArray, omega: NDArray):
         system = ds.circuit.nodal
     except MechcircError:                    # each design alone says what is wrong
         return none
-    lev = {lv.name: i for i, lv in enumerate(ds.circuit.levers)}
-    for lv in system.levers:                 # the lever stamps are the template's
-        which = which[ds.ratios[lev[lv.name], which] == lv.ratio]
+    which = _template_levers(ds, system, which)
     n, W = system.size, omega.size
     if solver(system).kind != "dense" or not which.size or not (omega > 0).all():
         return none
@@ -593,10 +600,7 @@ def _nodal_roots(ds: Designs, omega_max):
         held = nodal.held(system)
     except MechcircError:                    # each design alone says what is wrong
         return None
-    which = np.flatnonzero(ds.valid)
-    lev = {lv.name: i for i, lv in enumerate(ds.circuit.levers)}
-    for lv in system.levers:                 # the constraint basis is the template's
-        which = which[ds.ratios[lev[lv.name], which] == lv.ratio]
+    which = _template_levers(ds, system, np.flatnonzero(ds.valid))
     if not which.size or held.size > DENSE_LIMIT:
         return None
     group = max(1, _STACK_ENTRIES // (held.size * held.size))
