@@ -843,7 +843,6 @@ def secant_polish(g_and_delta, s0: np.ndarray, e0: np.ndarray, damped: bool):
     """The roots ``s0`` (eigen-solver's estimate ``e0``) polished by the complex secant
     on ``g_and_delta(s) -> (g, bound of g)``; returns (s, relative error).  Used for one
     circuit (:func:`_secant`) and for the roots of many designs (:mod:`mechcirc.batch`)."""
-    eps = np.finfo(float).eps
     h = np.maximum(np.abs(s0) * np.maximum(e0, 1e-9), 1e-300)
     a, b = s0 - h * (1 if damped else 1j), s0.copy()
     ga, _ = g_and_delta(a)
@@ -857,21 +856,24 @@ def secant_polish(g_and_delta, s0: np.ndarray, e0: np.ndarray, damped: bool):
             c = 1j * c.imag                       # undamped: roots on the jω axis
         return c, np.isfinite(c)
 
-    b, db, step, slope = secant_steps(g_and_delta, admissible, a, ga, b, gb, db, active)
+    return _confirmed(s0, e0, *secant_steps(g_and_delta, admissible, a, ga, b, gb, db, active),
+                      g0, slope0)
+
+
+def _confirmed(s0, e0, b, db, step, slope, g0, slope0):
+    """The secant's root ``b`` and its relative error (from ``db``, ``step``, ``slope``),
+    or the eigen-solver's ``s0`` where the secant wandered off (to another root, or
+    nowhere): farther than 1e-3 relative, or no estimate.  An unconfirmed root keeps
+    its estimate ``e0``, but never below 10 Newton steps |g/g'| at ``s0`` (``g0``,
+    ``slope0``: how far the circuit's own K says the root is)."""
     with np.errstate(all="ignore"):
         err = (db / np.abs(slope) + step) / np.abs(b)
-    # Keep the eigen-solver's root where the secant wandered off (to another root,
-    # or nowhere): farther than 1e-3 relative, or no estimate.
-    moved = np.abs(b - s0) / np.abs(s0)
-    bad = ~np.isfinite(err) | ~np.isfinite(b) | (moved > 1e-3)
-    s = np.where(bad, s0, b)
-    # Unconfirmed: the eigen-solver's estimate, but never below the Newton
-    # step |g/g'| at its root (how far the circuit's own K says the root is).
-    with np.errstate(all="ignore"):
+        moved = np.abs(b - s0) / np.abs(s0)
         newton = np.abs(g0 / slope0) / np.abs(s0)
+    bad = ~np.isfinite(err) | ~np.isfinite(b) | (moved > 1e-3)
     newton = np.where(np.isfinite(newton), 10 * newton, 0.0)
-    err = np.where(bad, np.maximum(e0, newton), np.maximum(err, eps))
-    return s, err
+    err = np.where(bad, np.maximum(e0, newton), np.maximum(err, np.finfo(float).eps))
+    return np.where(bad, s0, b), err
 
 
 # --------------------------------------------------------------------------
@@ -1280,14 +1282,7 @@ def _secant_designs(p, w0: np.ndarray, pole: np.ndarray, e0: np.ndarray):
     with np.errstate(all="ignore"):
         g0, slope0 = gb, (gb - ga) / (b - a)
     active = have & np.isfinite(ga) & np.isfinite(gb)
-    b, db, step, slope = secant_steps(g_and_delta, lambda c: (c, np.isfinite(c) & (c > 0)),
-                                       a, ga, b, gb, db, active)
-    with np.errstate(all="ignore"):
-        err = (db / np.abs(slope) + step) / np.abs(b)
-        moved = np.abs(b - w_safe) / w_safe
-        newton = np.abs(g0 / slope0) / w_safe
-    bad = ~np.isfinite(err) | ~np.isfinite(b) | (moved > 1e-3)
-    w = np.where(bad, w_safe, b)
-    newton = np.where(np.isfinite(newton), 10 * newton, 0.0)
-    err = np.where(bad, np.maximum(np.nan_to_num(e0, nan=0.0), newton), np.maximum(err, eps))
+    w, err = _confirmed(w_safe, np.nan_to_num(e0, nan=0.0),
+                        *secant_steps(g_and_delta, lambda c: (c, np.isfinite(c) & (c > 0)),
+                                      a, ga, b, gb, db, active), g0, slope0)
     return np.where(have, w, np.nan), np.where(have, err, np.nan)
