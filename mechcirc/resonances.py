@@ -799,16 +799,27 @@ def _held(system):
     return _HELD[key][1]
 
 
-def secant_steps(g_and_delta, admissible, a, ga, b, gb, db, active, iterations: int = 12):
-    """Secant steps on g from the points a, b, element-wise over arrays of roots.
+def secant_steps(g_and_delta, admissible, s0, e0, offset, active=True, iterations: int = 12):
+    """Secant steps on g from ``s0`` and ``s0`` less ``offset`` times its error ``e0``,
+    element-wise over arrays of roots; returns (s, relative error).
 
     ``g_and_delta(x)`` gives g and the bound of its error at x; ``admissible(c)``
     the step's point as it may be taken (e.g. projected on the jω axis) and
     whether it may be.  A root stops once its step is within rounding of its
-    own uncertainty.  Returns ``(b, db, step, slope)``: the last iterate, the
-    bound of g there, the last step and the last secant slope.
+    own uncertainty; its error is then (bound of g / slope + last step).  Where
+    the secant wandered off (to another root, or nowhere: farther than 1e-3
+    relative, or no estimate) ``s0`` stands with its estimate ``e0``, but never
+    below 10 Newton steps |g/g'| at ``s0`` (how far the circuit's own K says the
+    root is).
     """
     eps = np.finfo(float).eps
+    h = np.maximum(np.abs(s0) * np.maximum(e0, 1e-9), 1e-300)
+    a, b = s0 - h * offset, s0.copy()
+    ga, _ = g_and_delta(a)
+    gb, db = g_and_delta(b)
+    with np.errstate(all="ignore"):
+        g0, slope0 = gb, (gb - ga) / (b - a)
+    active = active & np.isfinite(ga) & np.isfinite(gb)
     step = np.full(b.shape, np.inf)
     slope = np.full(b.shape, np.nan, dtype=np.result_type(b, ga))
     for _ in range(iterations):
@@ -831,7 +842,13 @@ def secant_steps(g_and_delta, admissible, a, ga, b, gb, db, active, iterations: 
         with np.errstate(all="ignore"):
             done = step <= np.maximum(4 * eps * np.abs(b), db / np.abs(slope))
         active = ok & ~done
-    return b, db, step, slope
+    with np.errstate(all="ignore"):
+        err = (db / np.abs(slope) + step) / np.abs(b)
+        moved = np.abs(b - s0) / np.abs(s0)
+        newton = np.abs(g0 / slope0) / np.abs(s0)
+    bad = ~np.isfinite(err) | ~np.isfinite(b) | (moved > 1e-3)
+    newton = np.where(np.isfinite(newton), 10 * newton, 0.0)
+    return np.where(bad, s0, b), np.where(bad, np.maximum(e0, newton), np.maximum(err, eps))
 
 
 def _secant(system, s0: np.ndarray, pole: np.ndarray, e0: np.ndarray, damped: bool):
@@ -843,37 +860,13 @@ def secant_polish(g_and_delta, s0: np.ndarray, e0: np.ndarray, damped: bool):
     """The roots ``s0`` (eigen-solver's estimate ``e0``) polished by the complex secant
     on ``g_and_delta(s) -> (g, bound of g)``; returns (s, relative error).  Used for one
     circuit (:func:`_secant`) and for the roots of many designs (:mod:`mechcirc.batch`)."""
-    h = np.maximum(np.abs(s0) * np.maximum(e0, 1e-9), 1e-300)
-    a, b = s0 - h * (1 if damped else 1j), s0.copy()
-    ga, _ = g_and_delta(a)
-    gb, db = g_and_delta(b)
-    with np.errstate(all="ignore"):
-        g0, slope0 = gb, (gb - ga) / (b - a)
-    active = np.isfinite(ga) & np.isfinite(gb)
 
     def admissible(c):
         if not damped:
             c = 1j * c.imag                       # undamped: roots on the jω axis
         return c, np.isfinite(c)
 
-    return _confirmed(s0, e0, *secant_steps(g_and_delta, admissible, a, ga, b, gb, db, active),
-                      g0, slope0)
-
-
-def _confirmed(s0, e0, b, db, step, slope, g0, slope0):
-    """The secant's root ``b`` and its relative error (from ``db``, ``step``, ``slope``),
-    or the eigen-solver's ``s0`` where the secant wandered off (to another root, or
-    nowhere): farther than 1e-3 relative, or no estimate.  An unconfirmed root keeps
-    its estimate ``e0``, but never below 10 Newton steps |g/g'| at ``s0`` (``g0``,
-    ``slope0``: how far the circuit's own K says the root is)."""
-    with np.errstate(all="ignore"):
-        err = (db / np.abs(slope) + step) / np.abs(b)
-        moved = np.abs(b - s0) / np.abs(s0)
-        newton = np.abs(g0 / slope0) / np.abs(s0)
-    bad = ~np.isfinite(err) | ~np.isfinite(b) | (moved > 1e-3)
-    newton = np.where(np.isfinite(newton), 10 * newton, 0.0)
-    err = np.where(bad, np.maximum(e0, newton), np.maximum(err, np.finfo(float).eps))
-    return np.where(bad, s0, b), err
+    return secant_steps(g_and_delta, admissible, s0, e0, 1 if damped else 1j)
 
 
 # --------------------------------------------------------------------------
@@ -1275,14 +1268,6 @@ def _secant_designs(p, w0: np.ndarray, pole: np.ndarray, e0: np.ndarray):
             dg = 4 * np.maximum(rho * np.abs(g), eps * np.abs(g))
         return g, dg
 
-    h = np.maximum(w_safe * np.maximum(np.nan_to_num(e0, nan=1e-9), 1e-9), 1e-300)
-    a, b = w_safe - h, w_safe.copy()
-    ga, _ = g_and_delta(a)
-    gb, db = g_and_delta(b)
-    with np.errstate(all="ignore"):
-        g0, slope0 = gb, (gb - ga) / (b - a)
-    active = have & np.isfinite(ga) & np.isfinite(gb)
-    w, err = _confirmed(w_safe, np.nan_to_num(e0, nan=0.0),
-                        *secant_steps(g_and_delta, lambda c: (c, np.isfinite(c) & (c > 0)),
-                                      a, ga, b, gb, db, active), g0, slope0)
+    w, err = secant_steps(g_and_delta, lambda c: (c, np.isfinite(c) & (c > 0)), w_safe,
+                          np.nan_to_num(e0, nan=0.0), 1, have)
     return np.where(have, w, np.nan), np.where(have, err, np.nan)
