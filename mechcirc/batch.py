@@ -650,7 +650,7 @@ def _nodal_group_roots(ds: Designs, system, held, which: NDArray, omega_max):
     s, err = s0.copy(), e0.copy()
     if todo.any():
         d, r = np.nonzero(todo)
-        stacks = [(system, S, parts, 1.0), (held, *_stacked_matrices(ds, held, which), -1.0)]
+        stacks = [(system, S, parts), (held, *_stacked_matrices(ds, held, which))]
         s[d, r], err[d, r] = _polish_nodal(stacks, keep[d], s0[d, r], pole[d, r], e0[d, r],
                                            damped)
     s, err = settled(s, err, damped), np.maximum(err, eps)
@@ -700,32 +700,24 @@ def _polish_nodal(stacks: list, design: NDArray, s0: NDArray, pole: NDArray, e0:
     """:func:`mechcirc.resonances.secant_polish` for roots of many designs: the root ``s0[i]``
     of the design in row ``design[i]`` of the stacks polished by the complex secant on
     its own K(s) (anti-resonances ``pole``: on 1/K = −q of the held system), g and its
-    bound as
-    :func:`mechcirc.resonances._g_and_delta` has them, from :func:`_stacked_solve` at
-    every root at once.  ``stacks``: ``(system, S, parts, sign)`` of the network and of
+    bound by :func:`mechcirc.resonances.g_and_bound`, from :func:`_stacked_solve` at
+    every root at once.  ``stacks``: ``(system, S, parts)`` of the network and of
     its drive-held system (:func:`_stacked_matrices`).  Returns ``(s, relative error)``.
     """
     from ._nodal_residual import residual_rounding, total_error
-    from .resonances import secant_polish
+    from .resonances import g_and_bound, secant_polish
 
-    eps = np.finfo(float).eps
+    def evaluate(x, i, want):
+        sys_, S, parts = stacks[i]
+        K, est, rho, sens, sens_data = _stacked_solve(sys_, S, parts, design[want],
+                                                      -1j * x[want])
+        rounding = residual_rounding(sys_, sens)
+        est = np.where((rho >= 0.5) & (est > 16 * rounding), np.inf, est)
+        with np.errstate(all="ignore"):
+            return K, total_error(sens_data, est + rounding) * np.abs(K)
 
-    def g_and_delta(x):
-        g = np.full(x.shape, np.nan, dtype=complex)
-        dg = np.full(x.shape, np.inf)
-        for want, (sys_, S, parts, sign) in zip((~pole, pole), stacks):
-            if want.any():
-                K, est, rho, sens, sens_data = _stacked_solve(sys_, S, parts, design[want],
-                                                              -1j * x[want])
-                rounding = residual_rounding(sys_, sens)
-                est = np.where((rho >= 0.5) & (est > 16 * rounding), np.inf, est)
-                with np.errstate(all="ignore"):
-                    dK = total_error(sens_data, est + rounding) * np.abs(K)
-                g[want] = sign * K
-                dg[want] = 4 * np.maximum(dK, eps * np.abs(K))
-        return g, dg
-
-    return secant_polish(g_and_delta, s0, e0, damped)
+    return secant_polish(lambda x: g_and_bound(pole, lambda i, want: evaluate(x, i, want)),
+                         s0, e0, damped)
 
 
 def _stacked_matrices(ds: Designs, system, which: NDArray):

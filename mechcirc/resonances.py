@@ -769,18 +769,24 @@ def _g_and_delta(system, s: np.ndarray, pole: np.ndarray):
     """g(s) (K, or 1/K at anti-resonances) and its absolute rounding uncertainty."""
     from . import nodal
 
+    # Anti-resonances on the held system: 1/K = −q there, and A is
+    # singular at the root while the held matrix is not.
+    systems = (system, _held(system))
+    return g_and_bound(pole, lambda i, want: nodal.evaluate_complex(systems[i], s[want]))
+
+
+def g_and_bound(pole: np.ndarray, evaluate):
+    """g (K; −K of the drive-held system at anti-resonances ``pole``) and its bound, from
+    ``evaluate(i, want) -> (K, bound of K)`` at the points ``want`` of system ``i`` (0:
+    the network, 1: held).  The refined value is good to about eps relative at best (its
+    rounding to float64), whatever the estimate of the solve says."""
     eps = np.finfo(float).eps
-    g = np.full(s.shape, np.nan, dtype=complex)
-    dg = np.full(s.shape, np.inf)
-    for want, sys_ in ((~pole, system), (pole, _held(system))):
+    g = np.full(pole.shape, np.nan, dtype=complex)
+    dg = np.full(pole.shape, np.inf)
+    for i, want in enumerate((~pole, pole)):
         if want.any():
-            # Anti-resonances on the held system: 1/K = −q there, and A is
-            # singular at the root while the held matrix is not.
-            K, dK = nodal.evaluate_complex(sys_, s[want])
-            sign = -1.0 if sys_ is not system else 1.0
-            g[want] = sign * K
-            # The refined value is good to about eps relative at best (its
-            # rounding to float64), whatever the estimate of the solve says.
+            K, dK = evaluate(i, want)
+            g[want] = -K if i else K
             dg[want] = 4 * np.maximum(dK, eps * np.abs(K))
     return g, dg
 
