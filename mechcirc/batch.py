@@ -488,7 +488,6 @@ def _nodal_sweep(ds: Designs, which: NDArray, omega: NDArray):
     contracting refinement: the double-double LU; a singular point) is left out.
     Returns ``(designs solved, K, error)``, shapes (D',), (D', W), (D', W).
     """
-    from ._nodal_residual import residual_rounding
     from ._nodal_solvers import solver
 
     none = (which[:0], np.empty((0, omega.size), complex), np.empty((0, omega.size)))
@@ -506,10 +505,8 @@ def _nodal_sweep(ds: Designs, which: NDArray, omega: NDArray):
         return tuple(np.concatenate(x) for x in zip(*out))
     S, parts = _stacked_matrices(ds, system, which)
     design, w = np.repeat(np.arange(which.size), W), np.tile(omega, which.size)
-    K, est, rho, sens, _ = _stacked_solve(system, S, parts, design, w)
+    K, e, rounding, _ = _stacked_solve(system, S, parts, design, w)
     eps = np.finfo(float).eps
-    rounding = residual_rounding(system, sens)
-    e = np.where((rho >= 0.5) & (est > 16 * rounding), np.inf, est)
     with np.errstate(invalid="ignore"):
         done = (e <= np.maximum(16 * eps, 16 * rounding)) & np.isfinite(K)
         e = np.maximum(e + rounding + eps / 2, eps)
@@ -527,15 +524,16 @@ def _stacked_solve(system, S: NDArray, parts: list, design: NDArray, w: NDArray)
     :func:`mechcirc.nodal.refine_dd` with the residual and sensitivities of
     :class:`~mechcirc._nodal_residual.Pattern` at the design's values.
 
-    Returns ``(K, estimate, contraction, S, S_data)`` per point as the single path's
-    ``nodal._sweep`` has them before its singular-point treatment; K NaN where A is
-    exactly singular.
+    Returns ``(K, estimate, rounding, S_data)`` per point as the single path's
+    ``nodal._sweep`` has them before its singular-point treatment (the estimate
+    infinite where the refinement did not contract and it exceeds 16 roundings); K
+    NaN where A is exactly singular.
     """
     from copy import copy
 
     from . import nodal
     from ._dd import split
-    from ._nodal_residual import pattern
+    from ._nodal_residual import pattern, residual_rounding
     from ._nodal_solvers import stacked_inverse
 
     n, m = system.size, design.size
@@ -572,7 +570,8 @@ def _stacked_solve(system, S: NDArray, parts: list, design: NDArray, w: NDArray)
             True, 4)
         K[pts] = nodal.difference_dd(system, xh, xl)
         sens[pts], sens_data[pts] = at(pts).sensitivities(w[pts], xh + xl, K[pts])
-    return K, est, rho, sens, sens_data
+    rounding = residual_rounding(system, sens)
+    return K, np.where((rho >= 0.5) & (est > 16 * rounding), np.inf, est), rounding, sens_data
 
 
 def _nodal_roots(ds: Designs, omega_max):
@@ -704,15 +703,12 @@ def _polish_nodal(stacks: list, design: NDArray, s0: NDArray, pole: NDArray, e0:
     every root at once.  ``stacks``: ``(system, S, parts)`` of the network and of
     its drive-held system (:func:`_stacked_matrices`).  Returns ``(s, relative error)``.
     """
-    from ._nodal_residual import residual_rounding, total_error
+    from ._nodal_residual import total_error
     from .resonances import g_and_bound, secant_polish
 
     def evaluate(x, i, want):
         sys_, S, parts = stacks[i]
-        K, est, rho, sens, sens_data = _stacked_solve(sys_, S, parts, design[want],
-                                                      -1j * x[want])
-        rounding = residual_rounding(sys_, sens)
-        est = np.where((rho >= 0.5) & (est > 16 * rounding), np.inf, est)
+        K, est, rounding, sens_data = _stacked_solve(sys_, S, parts, design[want], -1j * x[want])
         with np.errstate(all="ignore"):
             return K, total_error(sens_data, est + rounding) * np.abs(K)
 
