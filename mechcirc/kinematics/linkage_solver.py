@@ -812,8 +812,7 @@ def _lock_error(lk, ds, t_good, t_bad):
     """Locate where the dyads stop assembling (or turn singular) and say so."""
     w1 = lk.cranks[0].omega
     if t_good == 0.0 and ds.positions(np.array([0.0]))[4][0] <= _SINGULAR:
-        raise GeometryError(f"{lk.source}: the linkage is singular in its pose "
-                            f"(constraint Jacobian not invertible)")
+        raise _singular_pose(lk)
     # Narrowed 32-fold per round on a grid of 31 inner points (one vectorised call
     # each, where bisection spent a call per halving); the first point that does
     # not assemble bounds the next round, so the earliest lock in [t_good, t_bad]
@@ -830,6 +829,12 @@ def _lock_error(lk, ds, t_good, t_bad):
         else:
             lo = grid[-1]
     raise _lock(lk, hi * w1)
+
+
+def _singular_pose(lk):
+    """The error of a linkage whose constraint Jacobian is singular in its pose."""
+    return GeometryError(f"{lk.source}: the linkage is singular in its pose "
+                         "(constraint Jacobian not invertible)")
 
 
 def _lock(lk, theta):
@@ -1130,8 +1135,7 @@ def _solve_newton_compiled(lk, pl, t, dt_max):
                            float(np.max(np.abs(pl.omega))), Q, QD, QDD, parts, info,
                            pl.ga, pl.gb, pl.gs, pl.gu, pl.bs)
     if status == K.SINGULAR_POSE:
-        raise GeometryError(f"{lk.source}: the linkage is singular in its pose "
-                            f"(constraint Jacobian not invertible)")
+        raise _singular_pose(lk)
     if status == K.LOCK:
         raise _lock(lk, info[0] * w1)
     if status == K.BRANCH_JUMP:
@@ -1144,8 +1148,7 @@ def _solve_newton(lk, pl, t, dt_max):
     nodes, at = _path(t, dt_max)
     first = nw.step(pl.q0, pl.omega * 0.0)
     if first is None:
-        raise GeometryError(f"{lk.source}: the linkage is singular in its pose "
-                            f"(constraint Jacobian not invertible)")
+        raise _singular_pose(lk)
     # The sequential continuation visits only the nodes it needs (consecutive
     # kept nodes at most dt_max apart along the path); every other node is
     # solved afterwards in one batch from the kept node before it.
