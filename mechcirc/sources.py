@@ -76,15 +76,12 @@ def read_bytes(path: str | os.PathLike, expected: str) -> bytes:
 def read_source(path: str | os.PathLike, expected: str) -> str:
     """The UTF-8 text of ``path`` (a byte-order mark dropped).
 
-    ``expected`` names what the file should be (e.g. ``"a .mcir netlist"``),
-    for the messages.
-
     Parameters
     ----------
     path : str or PathLike
-        The file to read.
+        The text file, read by :func:`read_bytes`.
     expected : str
-        What the file should be, for messages.
+        What the file should be (e.g. ``"a .mcir netlist"``), for the messages.
 
     Returns
     -------
@@ -579,7 +576,7 @@ def check_keys(text: str, source: str, table: Table, entry: dict, occurrence: in
     Parameters
     ----------
     text, source : str
-        The file's text and name, for errors.
+        The file's text, and its name for the message.
     table : Table
         The declared keys.
     entry : dict
