@@ -23,12 +23,14 @@ def plot_motion(result, names=None, fig=None):
         Outputs to draw (default: every ``BODY.acceleration`` that is not
         identically zero, and every ``ELEMENT.force``).
     fig : matplotlib Figure or SubFigure, optional
-        An empty one to fill (:func:`mechcirc.plotting.new_panels`); a new one by default.
+        An empty figure to draw the panels in (:func:`mechcirc.plotting.new_panels`);
+        by default a new one.
 
     Returns
     -------
     matplotlib.figure.Figure or matplotlib.figure.SubFigure
-        What it drew on: ``fig`` when given (it must be empty), else the new Figure.
+        ``fig`` (it must be empty) or the new Figure: accelerations above, forces and
+        moments below, against the crank angle.
     """
     from ..plotting import new_panels
 
