@@ -44,7 +44,7 @@ def plot_fourbar(fourbar, omega: float | None = None, n: int = 721, *, fig=None)
     n : int
         Points over a revolution.
     fig : matplotlib.figure.Figure or SubFigure, optional
-        An empty one to fill; a new one by default.
+        An empty one to fill with the four panels; a new one by default.
 
     Returns
     -------
@@ -147,7 +147,7 @@ def plot_synthesis(designs, n: int = 721, fig=None):
     n : int
         Points of each design's curves over a revolution.
     fig : matplotlib.figure.Figure or SubFigure, optional
-        An empty one to fill; a new one by default.
+        An empty one to fill with both panels; a new one by default.
 
     Returns
     -------
@@ -230,7 +230,7 @@ def plot_shaking(result, fig=None):
     result : FrameLoading
         Its shaking force, bearing forces, torque and moments are drawn.
     fig : matplotlib.figure.Figure or SubFigure, optional
-        An empty one to fill; a new one by default.
+        An empty one for the four panels (2 × 2); a new one by default.
 
     Returns
     -------
@@ -294,7 +294,7 @@ def plot_linkage(linkage, state, paths=None, *, ax=None, fig=None):
     ax : matplotlib.axes.Axes, optional
         Drawn on when given.
     fig : matplotlib.figure.Figure or SubFigure, optional
-        An empty one to fill; a new one by default.
+        An empty one to draw in (without ``ax``); a new one by default.
 
     Returns
     -------
