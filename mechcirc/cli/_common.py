@@ -513,6 +513,13 @@ def write_outputs(args, head: list, cols: list, plot, fmt: str = "%.17g") -> Non
             save_figure(plot(), args.plot, out.path(args.plot))
 
 
+def print_written(*outputs) -> None:
+    """``  LABEL written to PATH`` for each ``(label, path)`` of ``outputs`` given a path."""
+    for label, path in outputs:
+        if path:
+            print(f"  {label} written to {path}")
+
+
 def write_text(path, text: str) -> None:
     """Write ``text`` (UTF-8) to ``path``, whole or not at all (:func:`mechcirc.outputs.atomic_open`).
 

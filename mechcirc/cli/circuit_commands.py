@@ -17,7 +17,7 @@ from ..limits import (
 )
 from ..units import FREQUENCY_UNITS, in_unit
 from ._common import (add_command, add_handler, check_names, check_output_paths,
-                      load_with_warnings, print_json, real, save_figure,
+                      load_with_warnings, print_json, print_written, real, save_figure,
                       warning_lines)
 
 #: argparse type: an angular frequency [rad/s], or with a unit (``50Hz``, ``3000rpm``); the
@@ -406,10 +406,7 @@ def _print_sweep(args, result, extra, sens, pk, notes, dropped) -> None:
               "(flagged; see the 'flag' column)")
     for note in notes:
         print(f"  note: {note}")
-    for label, path in (("CSV", args.output), ("plot", args.plot),
-                        ("Touchstone", args.touchstone)):
-        if path:
-            print(f"  {label} written to {path}")
+    print_written(("CSV", args.output), ("plot", args.plot), ("Touchstone", args.touchstone))
     if dropped:
         print(f"  {dropped} point(s) with omega = 0 or a non-finite K left out of "
               f"{args.touchstone}")
@@ -499,8 +496,7 @@ def cmd_resonances(args) -> int:
             _print_mode(m, kinds, units_of(circuit.drive))
         if args.sensitivity:
             _print_sensitivity(m, kinds)
-    if args.plot:
-        print(f"  plot written to {args.plot}")
+    print_written(("plot", args.plot))
     return 0
 
 

@@ -7,8 +7,8 @@ from pathlib import Path
 from ..errors import MechcircError
 from ..limits import FORMULA_SECONDS
 from ._common import (add_command, add_handler, check_output_paths, count,
-                      load_with_warnings, print_json, real, save_figure, time_limit,
-                      warning_lines)
+                      load_with_warnings, print_json, print_written, real, save_figure,
+                      time_limit, warning_lines)
 
 
 def register(sub) -> None:
@@ -144,8 +144,7 @@ def cmd_forces(args) -> int:
     for r in rows:
         print(f"  {r.name:<{width}} {r.kind:<6} {r.Q_abs:>12.5g} {_deg(r.Q_phase_deg):>11.2f} "
               f"{r.share:>9.4f} {r.v_abs:>12.5g} {_deg(r.v_phase_deg):>11.2f}")
-    if args.plot:
-        print(f"  plot written to {args.plot}")
+    print_written(("plot", args.plot))
     return 0
 
 
@@ -182,8 +181,7 @@ def cmd_compare(args) -> int:
               f"{summary['rel_median']:.3g}")
         print(f"  magnitude: RMS {summary['db_rms']:.3g} dB, max {summary['db_max']:.3g} dB; "
               f"phase: max {summary['phase_max_deg']:.3g} deg")
-    if args.plot:
-        print(f"  plot written to {args.plot}")
+    print_written(("plot", args.plot))
     return 0
 
 
@@ -277,8 +275,5 @@ def cmd_study(args) -> int:
         meta = "" if args.output.lower().endswith(".parquet") else \
             f" (spec and units in {sidecar_path(args.output)})"
         print(f"  table written to {args.output}{meta}")
-    if args.curves:
-        print(f"  K(omega) of every point written to {args.curves}")
-    if args.plot:
-        print(f"  plot of {column} written to {args.plot}")
+    print_written(("K(omega) of every point", args.curves), (f"plot of {column}", args.plot))
     return 0

@@ -8,8 +8,8 @@ import math
 from ..errors import MechcircError
 from ..units import in_unit
 from ._common import (add_command, add_handler, check_names, check_output_paths,
-                      count, load_with_warnings, print_json, real, scene_theta, warning_lines,
-                      write_outputs)
+                      count, load_with_warnings, print_json, print_written, real, scene_theta,
+                      warning_lines, write_outputs)
 
 
 def register(sub) -> None:
@@ -230,7 +230,5 @@ def _print_notes_and_outputs(notes, args) -> int:
     """The notes of a result and the files written, as both forms of the command end."""
     for note in notes:
         print(f"  note: {note}")
-    for label, path in (("CSV", args.output), ("plot", args.plot)):
-        if path:
-            print(f"  {label} written to {path}")
+    print_written(("CSV", args.output), ("plot", args.plot))
     return 0
