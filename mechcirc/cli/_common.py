@@ -513,8 +513,11 @@ def write_outputs(args, head: list, cols: list, plot, fmt: str = "%.17g") -> Non
             save_figure(plot(), args.plot, out.path(args.plot))
 
 
-def print_written(*outputs) -> None:
-    """``  LABEL written to PATH`` for each ``(label, path)`` of ``outputs`` given a path."""
+def print_written(*outputs, notes=()) -> None:
+    """``  note: NOTE`` for each of ``notes``, then ``  LABEL written to PATH`` for each
+    ``(label, path)`` of ``outputs`` given a path."""
+    for note in notes:
+        print(f"  note: {note}")
     for label, path in outputs:
         if path:
             print(f"  {label} written to {path}")

@@ -404,9 +404,8 @@ def _print_sweep(args, result, extra, sens, pk, notes, dropped) -> None:
     if n_flag:
         print(f"  {n_flag} point(s) on or within rounding of a pole or zero of K "
               "(flagged; see the 'flag' column)")
-    for note in notes:
-        print(f"  note: {note}")
-    print_written(("CSV", args.output), ("plot", args.plot), ("Touchstone", args.touchstone))
+    print_written(("CSV", args.output), ("plot", args.plot), ("Touchstone", args.touchstone),
+                  notes=notes)
     if dropped:
         print(f"  {dropped} point(s) with omega = 0 or a non-finite K left out of "
               f"{args.touchstone}")

@@ -10,7 +10,7 @@ from pathlib import Path
 from ..errors import InputError, MechcircError, NetlistError
 from ..units import convert_frequency
 from ._common import (MAX_LENGTH, MAX_OMEGA, add_command, add_handler, check_output_paths,
-                      count, print_json, real, save_figure, write_columns)
+                      count, print_json, print_written, real, save_figure, write_columns)
 
 
 def register(sub) -> None:
@@ -274,8 +274,7 @@ def cmd_fourbar(args) -> int:
         if args.omega is not None:
             print(f"  ε4T = ν·ω² at ω = {args.omega:g} rad/s: "
                   f"[{doc['eps4T_min']:.1f}, {doc['eps4T_max']:.1f}] 1/s²")
-    for note in doc["notes"]:
-        print(f"  note: {note}")
+    print_written(notes=doc["notes"])
     return 0
 
 

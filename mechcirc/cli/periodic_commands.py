@@ -161,7 +161,8 @@ def _one_speed(args, circuit, elements, motion) -> int:
         f = r.forces.get(name)
         if f is not None:
             print(f"  element {name}: peak |force| {np.max(np.abs(f)):.6g} {unit}")
-    return _print_notes_and_outputs(r.notes, args)
+    print_written(("CSV", args.output), ("plot", args.plot), notes=r.notes)
+    return 0
 
 
 def _print_one_speed_json(args, r) -> int:
@@ -223,12 +224,5 @@ def _speed_map(args, circuit, elements, motion) -> int:
               f"(ζ = {c['zeta']:.3g}, harmonic weight {c['weight']:.2g})")
     if len(strong) > 30:
         print(f"    ... {len(strong) - 30} more (--json lists all)")
-    return _print_notes_and_outputs(m.notes, args)
-
-
-def _print_notes_and_outputs(notes, args) -> int:
-    """The notes of a result and the files written, as both forms of the command end."""
-    for note in notes:
-        print(f"  note: {note}")
-    print_written(("CSV", args.output), ("plot", args.plot))
+    print_written(("CSV", args.output), ("plot", args.plot), notes=m.notes)
     return 0
