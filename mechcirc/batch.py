@@ -215,10 +215,8 @@ def _build(circuit: Circuit, text, exprs, arrays: dict, D: int) -> "Designs":
 
     pvals: dict = {}
     for name in circuit.params:
-        if name in arrays:
-            pvals[name] = np.broadcast_to(arrays[name], (D,)).astype(float)
-        else:
-            pvals[name] = value(("param", name), circuit.params[name])
+        pvals[name] = np.broadcast_to(arrays[name], (D,)).astype(float) if name in arrays \
+            else value(("param", name), circuit.params[name])
     n_el = len(circuit.elements)
     values, etas = np.empty((n_el, D)), np.empty((n_el, D))
     for i, e in enumerate(circuit.elements):

@@ -559,10 +559,8 @@ def _sample_file(table: dict, base: Path, analysis: str, roles: dict):
                            else _csv_records)(path)
     except NetlistError as exc:
         _fail(("sample", "file"), f"sample file {source!r}: {exc.message}")
-    if analysis == "simulate":
-        known, what = _sley_names(), "a sley parameter"
-    else:
-        known, what = set(roles), "a .param of the netlist"
+    known, what = (_sley_names(), "a sley parameter") if analysis == "simulate" else \
+        (set(roles), "a .param of the netlist")
     names = _sample_header(header, source, known, what)
     if not records:
         raise NetlistError("has a header but no rows of values", source, 0, 0,

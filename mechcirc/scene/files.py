@@ -859,10 +859,8 @@ def _parts(scene: Scene) -> tuple:
                 f"{{{', '.join(parts[ends[0]])}}} to itself (it is redundant in a rigid "
                 f"loop); only links between different rigid parts or to the frame are supported")
     d = scene.drive
-    if d.link is not None:
-        first = d.link
-    else:
-        first = next(b for b, pts in bodies.items() if d.point in pts and b not in tbodies)
+    first = d.link if d.link is not None else \
+        next(b for b, pts in bodies.items() if d.point in pts and b not in tbodies)
     parts.sort(key=lambda part: first not in part)
     return tuple(parts)
 

@@ -236,9 +236,6 @@ def _jump_bracket(scene, bracket, grow, least):
     for _ in range(100):
         if least(lo) > 0 >= least(hi) and lo < hi:
             return lo, hi
-        if least(hi) > 0:
-            lo, hi = hi, hi * grow
-        else:
-            lo, hi = lo / grow, lo
+        lo, hi = (hi, hi * grow) if least(hi) > 0 else (lo / grow, lo)
     raise MechcircError(f"{scene.source}: no speed between {lo:g} and {hi:g} rad/s "
                         "where the follower starts to leave the cam")

@@ -701,10 +701,8 @@ def _extrema(out: dict, sub=None) -> dict:
     stacked, so that one reduction of each kind serves them all)."""
     if not out:
         return {}
-    if isinstance(out, _Rows) and len(out) == len(out.rows):
-        rows = out.rows
-    else:
-        rows = np.stack(list(out.values()))
+    rows = out.rows if isinstance(out, _Rows) and len(out) == len(out.rows) else \
+        np.stack(list(out.values()))
     if sub is not None:
         rows = np.take(rows, sub, axis=1)
     lo, hi = rows.min(axis=1).tolist(), rows.max(axis=1).tolist()
