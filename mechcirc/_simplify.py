@@ -500,9 +500,7 @@ def _exact_first(search: _Search, taken: set, tol: float):
     except TopologyError:
         reduced = current
     err = search.measure(reduced)
-    if err <= tol:
-        return reduced, trial_steps, err
-    return current, [], search.measure(current)
+    return (reduced, trial_steps, err) if err <= tol else (current, [], search.measure(current))
 
 
 def _approximate(search: _Search, current, error: float, taken: set, tol: float,

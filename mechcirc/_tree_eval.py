@@ -652,9 +652,7 @@ def _scaled(e: Element, designs: tuple | None = None):
     """value · η as a numpy float, so that 1/0 = ∞ (flagged) instead of ZeroDivisionError
     when the product underflows (a value near 1e-308 times a small η); with
     ``designs`` (see :func:`evaluate`) the designs' values·η, shape (D, 1)."""
-    if designs is not None:
-        return designs[0][e.name]
-    return np.float64(e.value) * np.float64(e.eta)
+    return designs[0][e.name] if designs is not None else np.float64(e.value) * np.float64(e.eta)
 
 
 def _leaf_term(e: Element, series: bool, fast: bool = False,
@@ -874,9 +872,7 @@ def _reciprocal(K: NDArray[np.complex128]) -> NDArray[np.complex128]:
 
 
 def _node_K(node: Node, values: dict, omega) -> NDArray[np.complex128]:
-    if isinstance(node, Leaf):
-        return node.element.mobility(omega)
-    return values[id(node)]
+    return node.element.mobility(omega) if isinstance(node, Leaf) else values[id(node)]
 
 
 def push_down(root: Node, values: dict, Q: NDArray, v: NDArray,

@@ -158,9 +158,7 @@ def law_terms(kind: str, scaled_value, admittance: bool = False) -> tuple:
     # (jω)^1 = j·ω, (jω)^−1 = −j/ω, (jω)^0 = 1.
     if p == 0:
         return c, 0.0, 0.0
-    if p > 0:
-        return 0.0, 0.0, c
-    return 0.0, -c, 0.0
+    return (0.0, 0.0, c) if p > 0 else (0.0, -c, 0.0)
 
 
 def element_mobility(kind: str, scaled_value: float, omega: ArrayLike) -> NDArray[np.complex128]:

@@ -146,9 +146,7 @@ class Resonances(list):
         return [head] + rows
 
     def __repr__(self) -> str:
-        if not self:
-            return "Resonances([])  (none found)"
-        return "\n".join(self.table())
+        return "Resonances([])  (none found)" if not self else "\n".join(self.table())
 
     def _repr_html_(self) -> str:
         import html
@@ -560,9 +558,8 @@ def _negative_pivots(A) -> int | None:
     if not np.array_equal(lu.perm_r, lu.perm_c):
         return None
     d = lu.U.diagonal()
-    if not np.all(np.isfinite(d)) or np.any(d == 0):
-        return None
-    return int(np.count_nonzero(d < 0))
+    ok = np.all(np.isfinite(d)) and not np.any(d == 0)
+    return int(np.count_nonzero(d < 0)) if ok else None
 
 
 def _inertia_counts(M, K, omega_max: float) -> tuple[int, int] | None:
@@ -576,9 +573,7 @@ def _inertia_counts(M, K, omega_max: float) -> tuple[int, int] | None:
     """
     lo = _negative_pivots(K - (1e-6 * omega_max) ** 2 * M)
     hi = _negative_pivots(K - omega_max ** 2 * M)
-    if lo is None or hi is None:
-        return None
-    return lo, hi
+    return None if lo is None or hi is None else (lo, hi)
 
 
 def _undamped(M: np.ndarray, K: np.ndarray, vectors: bool = False) -> tuple:

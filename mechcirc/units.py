@@ -348,9 +348,7 @@ def split_quantity(text: str) -> tuple[str, str] | None:
     if m is None:
         return None
     number, unit = m.group(1), m.group(2) or ""
-    if unit and not (looks_like_unit(unit) or unit == "1/s"):
-        return None
-    return number, unit
+    return None if unit and not (looks_like_unit(unit) or unit == "1/s") else (number, unit)
 
 
 def parse_quantity(text: str, role: str | None = None, *, what: str = "value") -> float:

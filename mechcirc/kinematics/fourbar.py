@@ -252,9 +252,7 @@ class FourBar:
             if (eq(a, b) and eq(c, d)) or (eq(a, d) and eq(b, c)):
                 return "deltoid"
             return "change-point"
-        if self.grashof_class == "non-Grashof":
-            return "triple-rocker"
-        return self._shortest_type()
+        return "triple-rocker" if self.grashof_class == "non-Grashof" else self._shortest_type()
 
     def _shortest_type(self) -> LinkageType:
         lengths = {"crank": self.crank, "frame": self.frame,

@@ -1304,9 +1304,7 @@ def _block(nw, q, qdot, qddot, t_now, T, sign, pl):
                                ((q, Q), (qdot, qd), (qddot, qdd)))
     h = np.diff(np.concatenate(([t_now], T)))[:, None]
     pred = prev_q + prev_d * h + 0.5 * prev_dd * h * h
-    if not np.max(np.abs(pred - Q)) <= 1e-2 * pl.scale:
-        return None
-    return Q, qd, qdd, parts
+    return (Q, qd, qdd, parts) if np.max(np.abs(pred - Q)) <= 1e-2 * pl.scale else None
 
 
 def _continue(lk, nw, q, qdot, qddot, t_now, t_target, dt_max, sign):

@@ -152,9 +152,7 @@ class _Cubic:
         i = np.minimum((u / self.h).astype(int), self.n - 1)
         s = u - i * self.h
         a0, a1, a2, a3 = self.c[i].T
-        if slope:
-            return a1 + s * (2.0 * a2 + s * 3.0 * a3)
-        return a0 + s * (a1 + s * (a2 + s * a3))
+        return a1 + s * (2.0 * a2 + s * 3.0 * a3) if slope else a0 + s * (a1 + s * (a2 + s * a3))
 
 
 class _Rigid:

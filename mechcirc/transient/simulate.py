@@ -667,9 +667,7 @@ def drive_map(ss: StateSpace) -> tuple[np.ndarray, Any, Any] | None:
         a, b, c = ss.M.T @ ss.h, ss.D.T @ ss.h, ss.K.T @ ss.h
         return (a @ (ss.Cv @ ss.A) + b @ ss.Cv + c @ ss.Cx,
                 a @ (ss.Cv @ ss.B) + b @ ss.Dv + c @ ss.Dx, a @ ss.Dv + b @ ss.Ev)
-    if ss.kind == "force":
-        return ss.g @ ss.Cv, ss.g @ ss.Dv, ss.g @ ss.Ev
-    return None
+    return (ss.g @ ss.Cv, ss.g @ ss.Dv, ss.g @ ss.Ev) if ss.kind == "force" else None
 
 
 def with_oscillator(ss: StateSpace, z0, omega: float, amp: float):
