@@ -746,8 +746,8 @@ def _polish(system, roots: list, damped: bool) -> list[Resonance]:
     s_new, e_new = s0.copy(), e0.copy()
     if todo.size:
         pole = np.array([kinds[i] == "antiresonance" for i in todo])
-        s, err = _secant(system, s0[todo], pole, e0[todo], damped)
-        s_new[todo], e_new[todo] = s, err
+        s_new[todo], e_new[todo] = secant_polish(lambda x: _g_and_delta(system, x, pole),
+                                                 s0[todo], e0[todo], damped)
     s_new = settled(s_new, e_new, damped)
     return [_make(k, s, max(e, eps)) for k, s, e in zip(kinds, s_new, e_new)]
 
@@ -852,15 +852,10 @@ def secant_steps(g_and_delta, admissible, s0, e0, offset, active=True, iteration
     return np.where(bad, s0, b), np.where(bad, np.maximum(e0, newton), np.maximum(err, eps))
 
 
-def _secant(system, s0: np.ndarray, pole: np.ndarray, e0: np.ndarray, damped: bool):
-    """Complex secant iteration from the eigen-solver's roots; returns (s, relative error)."""
-    return secant_polish(lambda x: _g_and_delta(system, x, pole), s0, e0, damped)
-
-
 def secant_polish(g_and_delta, s0: np.ndarray, e0: np.ndarray, damped: bool):
     """The roots ``s0`` (eigen-solver's estimate ``e0``) polished by the complex secant
     on ``g_and_delta(s) -> (g, bound of g)``; returns (s, relative error).  Used for one
-    circuit (:func:`_secant`) and for the roots of many designs (:mod:`mechcirc.batch`)."""
+    circuit (:func:`_polish`) and for the roots of many designs (:mod:`mechcirc.batch`)."""
 
     def admissible(c):
         if not damped:
@@ -1244,7 +1239,7 @@ def _undamped_stack(M: np.ndarray, K: np.ndarray, n0: int):
 
 
 def _secant_designs(p, w0: np.ndarray, pole: np.ndarray, e0: np.ndarray):
-    """:func:`_secant` for undamped roots of many designs on their own K(ω) = jX(ω).
+    """:func:`secant_polish` for undamped roots of many designs on their own K(ω) = jX(ω).
 
     ``p`` is the plan of the D designs (:meth:`mechcirc.reduction.Plan.with_values`);
     ``w0`` (D, R) the eigen-solver's roots (NaN: none), ``pole`` whether each is
