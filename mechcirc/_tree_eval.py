@@ -745,8 +745,15 @@ def _node_bound(total: _Value, parts: list, omega, inv_omega, groups: list, zero
         # (0-d arrays: see _ZERO)
         bterms = groups[4] = (np.asarray(mu), np.asarray(_U_RECIP + mu), tuple(
             np.asarray(t) for t in _leaf_bound_terms(sums, counts, len(parts))))
-    mu, c, terms = bterms
-    bound = _leaf_bound(terms, has, omega, inv_omega)
+    mu, c, (b_real, b_inv, b_omega) = bterms
+    bound = None                # the leaf groups' share: b_real + b_inv/ω + b_omega·ω
+    if has[1]:
+        bound = b_inv * inv_omega
+    if has[2]:
+        t = b_omega * omega
+        bound = t if bound is None else np.add(bound, t, bound)
+    if has[0]:
+        bound = np.full(omega.shape, b_real) if bound is None else np.add(bound, b_real, bound)
     spare = None                # a child's |S|, free once its term is formed
     for v in parts:             # Σ |tᵢ| (ρᵢ + m·u) of the internal children's terms
         if v.rho is None and v.recip is series:
@@ -815,23 +822,6 @@ def _leaf_bound_terms(sums, counts, n_parts: int) -> tuple:
     mu = _node_mu(sums, n_parts)
     return tuple(abs(t) * ((n + extra) * _U + mu)
                  for t, n, extra in zip(sums, counts, (2, 4, 4)))
-
-
-def _leaf_bound(terms, has, omega, inv_omega):
-    """The leaf groups' share of a node's bound over ω from :func:`_leaf_bound_terms`
-    (None where the node has no leaves)."""
-    b_real, b_inv, b_omega = terms
-    has_real, has_inv, has_omega = has
-    bound = None
-    if has_inv:
-        bound = b_inv * inv_omega
-    if has_omega:
-        t = b_omega * omega
-        bound = t if bound is None else np.add(bound, t, out=bound)
-    if has_real:
-        bound = np.full(omega.shape, b_real) if bound is None else np.add(bound, b_real,
-                                                                        out=bound)
-    return bound
 
 
 def through_reciprocal(rho: NDArray) -> NDArray:
