@@ -1261,7 +1261,7 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, notes, want=Tr
     X = affine(ss.Cx, ss.Dx, cols=nx, Cz=x_ready)
     V = affine(ss.Cv, ss.Dv, ss.Ev, Cz=v_ready) if velocities else None
     index = {n: i for i, n in enumerate(ss.nodes)}
-    if clear:                       # e and w of every clearance: one product each
+    if clear and V is not None:     # e and w of every clearance (V: formed when clear)
         G = _incidences(index, [e for e, _ in clear.values()], len(ss.nodes))
         Ec, Wc = G.T @ X.T, G.T @ V.T       # (rows contiguous, as the law takes them)
     law_cache = {name: _law_forces(e, comp, Ec[j], Wc[j])
