@@ -234,8 +234,16 @@ def resonance_pairs(circuit: Circuit, omega_max: float | None = None,
     # Small networks: dense matrices from the stamps, and no scipy for undamped ones.
     M, D, Ks, G_released, G_held, damped = pencil(system, dense=system.size <= DENSE_LIMIT)
     released, v_released = _modes(M, D, Ks, G_released, damped, omega_max, vectors)
-    held, v_held = _modes(M, D, Ks, G_held, damped, omega_max, vectors)
+    # Held = released + the drive's row: with every released vector at hand (no lever,
+    # no massless or rigid direction) the held ones follow from them (_held_vectors).
+    whole = vectors and G_released.size == 0 and v_released is not None and \
+        not damped and v_released.shape[1] == M.shape[0]
+    held, v_held = _modes(M, D, Ks, G_held, damped, omega_max, vectors and not whole)
     keep_h, keep_r = _cancel(held, released)
+    if whole:
+        v_held = _held_vectors(v_released, released[:, 0], G_held[-1], held[:, 0], keep_h)
+        if v_held is None:              # not confirmed: the dense solve of the held problem
+            v_held = _modes(M, D, Ks, G_held, damped, omega_max, True)[1]
     roots = [("resonance", s, e, f) for s, e, f in held[keep_h]] + \
         [("antiresonance", s, e, f) for s, e, f in released[keep_r]]
     vecs = [(None if V is None else V[:, i], vectors and _repeats(found[:, 0], int(i)))
@@ -254,6 +262,38 @@ def resonance_pairs(circuit: Circuit, omega_max: float | None = None,
         out = [(r, v) for r, v in out if r.omega <= omega_max]
     out = sorted(out, key=lambda rv: (rv[0].omega, rv[0].kind))
     return [(r, *v) for r, v in out] if vectors else [(r, v[0]) for r, v in out]
+
+
+def _held_vectors(V, s_released, g, s_held, keep) -> np.ndarray | None:
+    """The eigenvectors of the held roots ``s_held[keep]`` (columns; the others 0) from
+    the complete released ones ``V`` (M-orthonormal), or None where not confirmed.
+
+    Held, (K − λM) v = σg with gᵀv = 0 (g the drive's row), so
+    v = Σ vᵢ cᵢ/(μᵢ − λ) with cᵢ = vᵢᵀg, and λ is a root of the secular equation
+    f(λ) = Σ cᵢ²/(μᵢ − λ) = 0: one matrix product instead of a second dense
+    eigen-solve.  λ is refined by Newton steps on f from the eigen-solver's root,
+    held as the offset τ from its nearest pole (the differences μᵢ − λ then
+    carry no cancellation); a vector is confirmed when its angle to the
+    constraint, |gᵀv|/(|g||v|), is at rounding level (64ε).
+    """
+    mu, lam, c = np.abs(s_released) ** 2, np.abs(s_held[keep]) ** 2, V.T @ g
+    live = np.abs(c) > 1e-13 * np.linalg.norm(c)  # cᵢ = 0: a mode the drive does not see
+    c, mu, lam = c[live], mu[live] / mu.max(initial=0.0), lam / mu.max(initial=0.0)
+    pole = np.argmin(np.abs(mu[:, None] - lam[None, :]), axis=0)
+    delta, tau = mu[:, None] - mu[pole], lam - mu[pole]
+    with np.errstate(all="ignore"):
+        for _ in range(4):
+            C = c[:, None] / (delta - tau)
+            tau, at = tau - (c @ C) / np.einsum("ij,ij->j", C, C), tau    # Y is at ``at``
+        Y = V[:, live] @ C
+        t = (g @ Y) / (g @ g)
+        tilt = np.abs(t) * np.linalg.norm(g) / np.linalg.norm(Y, axis=0)
+    eps = np.finfo(float).eps           # and λ within 1e3ε of the solver's (the same root)
+    if not (np.all(tilt <= 64 * eps) and np.all(np.abs(lam - mu[pole] - at) <= 1e3 * eps)):
+        return None
+    out = np.zeros((V.shape[0], s_held.size))
+    out[:, keep] = Y - np.outer(g, t)           # onto the constraint (v_a = 0 when b is 0)
+    return out
 
 
 def _repeats(s: np.ndarray, i: int) -> bool:
