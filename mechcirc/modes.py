@@ -119,12 +119,9 @@ class Mode:
     _values: dict = field(default_factory=dict, repr=False, compare=False)
     _names: dict = field(default_factory=dict, repr=False, compare=False)
 
-    shape = _lazy("shape", "nodes")
-    energy = _lazy("energy", "stored")
-    dissipation = _lazy("dissipation", "dampers")
-    velocity = _lazy("velocity", "elements")
-    sensitivity = _lazy("sensitivity", "all")
-    zeta_sensitivity = _lazy("zeta_sensitivity", "all")
+    shape, energy = _lazy("shape", "nodes"), _lazy("energy", "stored")
+    dissipation, velocity = _lazy("dissipation", "dampers"), _lazy("velocity", "elements")
+    sensitivity, zeta_sensitivity = _lazy("sensitivity", "all"), _lazy("zeta_sensitivity", "all")
 
     @functools.cached_property
     def force(self) -> dict:
@@ -169,8 +166,7 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
     >>> {k: round(v, 12) for k, v in m.sensitivity.items()}
     {'m': -0.5, 'k': 0.5}
     """
-    system = circuit.nodal
-    pairs = resonance_pairs(circuit, omega_max, vectors=True)
+    system, pairs = circuit.nodal, resonance_pairs(circuit, omega_max, vectors=True)
     if not pairs:
         return []
     M, D, Ks, G_released, G_held, _ = pencil(system)
@@ -205,17 +201,13 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
 
 
 def _normalised(pairs, M, D, Ks, G_held, G_released) -> list:
-    """``(root, s, v, repeated)`` of every pair, the vector scaled to 1 at its largest
-    entry (band roots get theirs by inverse iteration)."""
+    """``(root, s, v, repeated)`` of every pair, v as the solver gives it (band roots
+    get theirs by inverse iteration); scaled per chunk in :func:`_chunk_values`."""
     roots = []
     for r, v, repeated in pairs:
         s = complex(-r.zeta * r.omega, r.omega_d)
         if v is None:                       # a band root: no vector from the solver
             v = _inverse_iteration(M, D, Ks, G_held if r.kind == "resonance" else G_released, s)
-        v = np.asarray(v)                   # real for an undamped root (real arithmetic after)
-        top = int(np.argmax(np.abs(v)))
-        v = v / v[top]
-        v[top] = 1.0                        # exactly (a complex quotient may miss by an ulp)
         roots.append((r, s, v, repeated))
     return roots
 
@@ -225,6 +217,9 @@ def _chunk_values(system, pencil3, pinv, S, V, stamps) -> list:
     vectors ``V`` (columns), one ``(values, param_rel, param_zeta)`` per root."""
     ei, ej, y, power, slopes, mass, spring, damper = stamps
     M, D, Ks = pencil3
+    top, col = np.argmax(np.abs(V), axis=0), np.arange(S.size)
+    V = V / V[top, col]                     # 1 at the largest entry (real when undamped),
+    V[top, col] = 1.0                       # exactly (a complex quotient may miss by an ulp)
     # Real vectors (undamped roots) keep every (element × root) array real: the complex
     # factors depend on the root and the law only, one row per law.
     Ve = np.vstack([V, np.zeros((1, S.size), V.dtype)])
@@ -249,8 +244,7 @@ def _chunk_values(system, pencil3, pinv, S, V, stamps) -> list:
 
 
 def _mode(r, repeated, vals, p_rel, p_zeta, shared) -> Mode:
-    common: dict = {"param_sensitivity": p_rel, "param_zeta_sensitivity": p_zeta,
-                    "_names": shared}
+    common: dict = {"param_sensitivity": p_rel, "param_zeta_sensitivity": p_zeta, "_names": shared}
     if r.omega_d == 0:
         return Mode(r, note=f"overdamped (zeta = {r.zeta:.4g} >= 1, omega_d = 0): "
                             "a decaying motion, not a mode of vibration",
@@ -266,8 +260,7 @@ def _mode(r, repeated, vals, p_rel, p_zeta, shared) -> Mode:
 def _stamped(system) -> tuple:
     """(row i, row j (−1 the reference), value·η, law power) of each loaded element,
     and the names: the elements, then the levers."""
-    els = system.elements
-    index = {n: i for i, n in enumerate(system.nodes)}
+    els, index = system.elements, {n: i for i, n in enumerate(system.nodes)}
     ei = np.array([index.get(e.n1, -1) for e in els], dtype=int)
     ej = np.array([index.get(e.n2, -1) for e in els], dtype=int)
     y = np.array([e.value * e.eta for e in els])
@@ -420,8 +413,7 @@ def _adjoint_products(system, x, w, stamps) -> np.ndarray:
     """∂K/∂(value) of every stamped element, then every lever ratio, at the ω ``w``
     from the nodal solutions ``x`` (rows), shape (ω, elements + levers)."""
     ei, ej, y, power = stamps
-    n_nodes = len(system.nodes)
-    index = {nd: i for i, nd in enumerate(system.nodes)}
+    n_nodes, index = len(system.nodes), {nd: i for i, nd in enumerate(system.nodes)}
     xe = np.concatenate([x, np.zeros((w.size, 1), complex)], axis=1)
     with np.errstate(all="ignore"):
         S = y * (1j * w[:, None]) ** (-power.astype(float))
@@ -506,8 +498,7 @@ def _param_slopes(circuit: Circuit, names: list[str]) -> dict[str, np.ndarray]:
     from .expressions import evaluate
     from .netlist import expressions_of
 
-    exprs = expressions_of(circuit)
-    params = dict(circuit.params)
+    exprs, params = expressions_of(circuit), dict(circuit.params)
     if not exprs or not params:
         return {}
     position = {name: k for k, name in enumerate(names)}
@@ -518,16 +509,14 @@ def _param_slopes(circuit: Circuit, names: list[str]) -> dict[str, np.ndarray]:
         if what == "value" or what == "ratio":
             targets[(name, what)] = [(name, x.get(name, math.nan))]
         elif what == "eta":
-            targets[(name, what)] = [(m, eta[name]) for m in (name, f"{name}_damping")
-                                     if m in eta]
+            targets[(name, what)] = [(m, eta[name]) for m in (name, f"{name}_damping") if m in eta]
         elif what == "damping" and f"{name}_damping" in x:
             targets[(name, what)] = [(f"{name}_damping", x[f"{name}_damping"])]
     used = [(key, e, f) for key, (e, f) in exprs.items()
             if e.kind != "num" and (key[0] == "param" or key in targets) and e.names() & params.keys()]
     out = {}
     for p, value in params.items():
-        tangent = {p: 1.0}
-        row = np.zeros(len(names))
+        tangent, row = {p: 1.0}, np.zeros(len(names))
         for key, expr, factor in used:
             if key == ("param", p):
                 continue
