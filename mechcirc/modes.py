@@ -224,7 +224,8 @@ def _chunk_values(system, pencil3, pinv, S, V, stamps) -> list:
     # factors depend on the root and the law only, one row per law.
     Ve = np.vstack([V, np.zeros((1, S.size), V.dtype)])
     dV = Ve[ei] - Ve[ej]
-    ya2 = y[:, None] * (dV.real ** 2 + dV.imag ** 2 if np.iscomplexobj(dV) else dV * dV)
+    ya2 = dV.real ** 2 + dV.imag ** 2 if np.iscomplexobj(dV) else dV * dV
+    ya2 *= y[:, None]                       # in place (fresh E × roots arrays page-fault)
     rel, zeta = _root_sensitivity(system, M, D, Ks, pinv, S, V, dV, y, power,
                                   None if np.iscomplexobj(dV) else ya2)
     # Both are real-linear in ∂s/∂p, and a .param's slope is a real combination of them.
@@ -233,8 +234,8 @@ def _chunk_values(system, pencil3, pinv, S, V, stamps) -> list:
     # Kinetic ½mη|Δv|², potential ½kη|Δv|²/ωₙ², nothing stored in a damper.
     share = np.vstack([np.full(S.size, 0.5), 0.5 / wn ** 2, np.zeros(S.size)])
     stored = ya2 * share[np.where(mass, 0, np.where(spring, 1, 2))]
-    total = stored.sum(axis=0)
-    energy = (stored[~damper] if damper.any() else stored) / total
+    total, energy = stored.sum(axis=0), stored[~damper] if damper.any() else stored
+    energy /= total
     dissipation = ya2[damper] / (2 * wn * total)
     return [({"sensitivity": rel[:, c], "zeta_sensitivity": zeta[:, c], "shape": V[:, c],
               "energy": energy[:, c], "dissipation": dissipation[:, c],
@@ -315,8 +316,7 @@ class SweepSensitivity:
 
     def derivative(self, name: str, quantity: str | None = None) -> np.ndarray:
         """∂|q|/∂p at each ω [unit of q per SI unit of p] (see :meth:`relative`)."""
-        quantity = quantity or self.quantity
-        amp = abs(self.drive.amplitude)
+        quantity, amp = quantity or self.quantity, abs(self.drive.amplitude)
         with np.errstate(all="ignore"):
             mag = {"K": np.abs(self.K), "Q0": amp / np.abs(self.K) if self.drive.kind ==
                    "velocity" else np.full(self.K.shape, amp),
@@ -437,7 +437,9 @@ def _root_sensitivity(system, M, D, Ks, pinv_GT, S, V, dV, y, power, ya2=None) -
     coef = -table / den                     # p·∂s/∂p per unit y·Δv², one row per law
     if ya2 is not None:
         rel_law, zeta_law = _omega_zeta(S, coef)
-        rel, zeta = ya2 * rel_law[which], ya2 * zeta_law[which]
+        # Undamped, ∂s/∂p is imaginary: ζ rows of zeros, left untouched (no page faults).
+        rel = ya2 * rel_law[which]
+        zeta = ya2 * zeta_law[which] if zeta_law.any() else np.zeros(ya2.shape)
     else:
         rel, zeta = _omega_zeta(S, y[:, None] * dV * dV * coef[which])
     if not system.levers:

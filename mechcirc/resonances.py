@@ -356,8 +356,7 @@ def constraint_basis(G: np.ndarray, n: int, dense: bool = False):
 
         _, r, perm = la.qr(G, mode="economic", pivoting=True)
         rank = int(np.sum(np.abs(np.diag(r)) > 1e-12 * np.abs(r).max()))
-    pivots = np.sort(perm[:rank])
-    keep = np.ones(n, dtype=bool)
+    pivots, keep = np.sort(perm[:rank]), np.ones(n, dtype=bool)
     keep[pivots] = False
     free = np.flatnonzero(keep)       # not setdiff1d: its np.unique imports numpy.ma
     # G_p v_p + G_f v_f = 0  ->  v_p = -G_p⁺ G_f v_f (exact for consistent constraints)
@@ -437,7 +436,8 @@ def _modes_unchecked(M, D, Ks, G, damped: bool, omega_max=None, vectors: bool = 
         s, err, U = _damped_roots(scaled, w_ref, vectors)
         must = np.ones(s.size)
     roots = np.column_stack([s, err, must]) if s.size else np.zeros((0, 3), dtype=complex)
-    return roots, (Z @ U if vectors else None)
+    # Z is the identity without constraints: no product (and no fresh n × n array).
+    return roots, (Z @ U if vectors and G.shape[0] else U)
 
 
 def _undamped_roots(M, K, w_ref: float, vectors: bool):
@@ -445,7 +445,7 @@ def _undamped_roots(M, K, w_ref: float, vectors: bool):
     eps = np.finfo(float).eps
     lam, direct, U = _undamped(M, K, vectors)
     up = lam > 1e-11 * max(1.0, lam.max(initial=0.0))
-    lam, U = lam[up], (U[:, up] if vectors else None)
+    lam, U = lam[up], (U[:, up] if vectors and not up.all() else U)
     s, err = 1j * w_ref * np.sqrt(lam), eps * (lam.max(initial=1.0) / lam) * 4
     # Weyl's bound holds for the scaled matrix, not through a static
     # condensation or an eigen-decomposition of M (their rounding is
@@ -662,7 +662,8 @@ def _undamped(M: np.ndarray, K: np.ndarray, vectors: bool = False) -> tuple:
     if not vectors:
         return lam, direct, None
     # The vectors by their own call: the roots stay those find_resonances reports, to the bit.
-    Ur = np.linalg.eigh(A)[1] * d[:, None]     # divide and conquer (LAPACK syevd)
+    Ur = np.linalg.eigh(A)[1]                  # divide and conquer (LAPACK syevd)
+    Ur *= d[:, None]                           # in place: n × n arrays cost page faults
     if direct:
         return lam, direct, Ur
     Un = -X @ Ur                     # the massless directions follow statically
@@ -1137,8 +1138,7 @@ def _stacked_damped(M: np.ndarray, Dm: np.ndarray, K: np.ndarray, omega_max):
     for X in (Ms, Ds, Ks):
         ok &= np.isfinite(X).all(axis=(1, 2))
     eye = np.eye(k)
-    Ms = np.where(ok[:, None, None], Ms, eye)
-    Ds = np.where(ok[:, None, None], Ds, 0.0)
+    Ms, Ds = np.where(ok[:, None, None], Ms, eye), np.where(ok[:, None, None], Ds, 0.0)
     Ks = np.where(ok[:, None, None], Ks, eye)
     Ms, Minv = _stacked_mass_inverse(Ms, ok)
     A = np.zeros((n, 2 * k, 2 * k))
@@ -1245,8 +1245,7 @@ def _undamped_stack(M: np.ndarray, K: np.ndarray, n0: int):
     directions, and the single path takes the design).  One stacked ``eigvalsh``.
     """
     D, k = M.shape[0], M.shape[1]
-    r = k - n0
-    regular = np.ones(D, dtype=bool)
+    r, regular = k - n0, np.ones(D, dtype=bool)
     Mrr, Kc = M[:, :r, :r], K[:, :r, :r]
     if n0:
         Knr, Knn = K[:, r:, :r], K[:, r:, r:]
@@ -1283,8 +1282,7 @@ def _secant_designs(p, w0: np.ndarray, pole: np.ndarray, e0: np.ndarray):
     from ._tree_eval import through_reciprocal
     from .reduction import evaluate_designs
 
-    eps = np.finfo(float).eps
-    have = np.isfinite(w0)
+    eps, have = np.finfo(float).eps, np.isfinite(w0)
     w_safe = np.where(have, w0, 1.0)
 
     def g_and_delta(w):
