@@ -70,7 +70,7 @@ _CHUNK = 128
 def _lazy(key: str, names: str):
     """A dictionary attribute of :class:`Mode` made from its arrays on first use."""
     def make(self) -> dict:
-        values = self._values.get(key)
+        values = self._dv() if key == "velocity" else self._values.get(key)
         if values is not None and key in ("shape", "velocity"):
             values = values.astype(complex)     # real for an undamped root: complex as documented
         return {} if values is None else dict(zip(self._names[names], values.tolist()))
@@ -126,11 +126,19 @@ class Mode:
     @functools.cached_property
     def force(self) -> dict:
         """See the class docstring (made from ``velocity`` on first use: Q = y·s^(−power)·Δv)."""
-        v = self._values.get("velocity")
+        v = self._dv()
         if v is None:
             return {}
         y, power = self._names["law"]
         return dict(zip(self._names["elements"], (y * self.s ** -power * v).tolist()))
+
+    def _dv(self) -> np.ndarray | None:
+        """Δv of every element, from the shape (not kept: elements × roots values)."""
+        v = self._values.get("shape")
+        if v is None:
+            return None
+        ve, (ei, ej) = np.append(v, np.zeros(1, v.dtype)), self._names["ends"]
+        return ve[ei] - ve[ej]
 
     @property
     def s(self) -> complex:
@@ -177,7 +185,8 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
     el_names = [e.name for e in els]
     shared = {"nodes": list(system.nodes), "elements": el_names, "all": names,
               "stored": [n for n, d in zip(el_names, damper) if not d],
-              "dampers": [n for n, d in zip(el_names, damper) if d], "law": (y, power)}
+              "dampers": [n for n, d in zip(el_names, damper) if d], "law": (y, power),
+              "ends": (ei, ej)}
     slopes = _param_slopes(circuit, names)
     # Constraint forces from the node rows, P(s) v + s Gᵀ q = 0: Gᵀ's pseudo-inverse,
     # once per problem (only levers need them).
@@ -229,8 +238,7 @@ def _chunk_values(system, pencil3, pinv, S, V, stamps) -> list:
     rel, zeta = _root_sensitivity(system, M, D, Ks, pinv, S, V, dV, y, power,
                                   None if np.iscomplexobj(dV) else ya2)
     # Both are real-linear in ∂s/∂p, and a .param's slope is a real combination of them.
-    p_rel = {p: (row @ rel, row @ zeta) for p, row in slopes.items()}
-    wn = np.abs(S)
+    p_rel, wn = {p: (row @ rel, row @ zeta) for p, row in slopes.items()}, np.abs(S)
     # Kinetic ½mη|Δv|², potential ½kη|Δv|²/ωₙ², nothing stored in a damper.
     share = np.vstack([np.full(S.size, 0.5), 0.5 / wn ** 2, np.zeros(S.size)])
     stored = ya2 * share[np.where(mass, 0, np.where(spring, 1, 2))]
@@ -238,8 +246,7 @@ def _chunk_values(system, pencil3, pinv, S, V, stamps) -> list:
     energy /= total
     dissipation = ya2[damper] / (2 * wn * total)
     return [({"sensitivity": rel[:, c], "zeta_sensitivity": zeta[:, c], "shape": V[:, c],
-              "energy": energy[:, c], "dissipation": dissipation[:, c],
-              "velocity": dV[:, c]},
+              "energy": energy[:, c], "dissipation": dissipation[:, c]},
              {p: float(x[0][c]) for p, x in p_rel.items()},
              {p: float(x[1][c]) for p, x in p_rel.items()}) for c in range(S.size)]
 

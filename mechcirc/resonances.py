@@ -290,7 +290,7 @@ def _held_vectors(V, s_released, g, s_held, keep) -> np.ndarray | None:
     pole = np.argmin(np.abs(mu[:, None] - lam[None, :]), axis=0)
     delta, tau = mu[:, None] - mu[pole], lam - mu[pole]
     with np.errstate(all="ignore"):
-        for _ in range(4):
+        for _ in range(3):
             C = c[:, None] / (delta - tau)
             tau, at = tau - (c @ C) / np.einsum("ij,ij->j", C, C), tau    # Y is at ``at``
         Y = V[:, live] @ C
@@ -1017,8 +1017,7 @@ def element_patterns(system) -> dict[str, np.ndarray]:
 
     n_nodes = len(system.nodes)
     index = {n: i for i, n in enumerate(system.nodes)}   # a node not in it: the reference
-    E = len(system.elements)
-    pos = {e.name: k for k, e in enumerate(system.elements)}
+    E, pos = len(system.elements), {e.name: k for k, e in enumerate(system.elements)}
     B = {x: np.zeros((E, n_nodes, n_nodes)) for x in ("mass", "spring", "damper")}
     for kind, r, c, sign, source, _ in stamps(system.elements, (), index):
         if kind in B:
@@ -1099,8 +1098,7 @@ def _stacked_modes(M: np.ndarray, K: np.ndarray, n0: int, omega_max):
     ok &= regular
     lam = np.where(np.isfinite(lam), lam, -np.inf)
     top = np.maximum(1.0, lam.max(axis=1, initial=0.0))
-    live = (lam > 1e-11 * top[:, None]) & ok[:, None]
-    eps = np.finfo(float).eps
+    live, eps = (lam > 1e-11 * top[:, None]) & ok[:, None], np.finfo(float).eps
     with np.errstate(all="ignore"):
         w = np.where(live, w_ref[:, None] * np.sqrt(np.where(live, lam, 1.0)), np.nan)
         err = np.where(live, eps * (np.where(live, lam, 1.0).max(axis=1, initial=1.0)[:, None]
@@ -1161,8 +1159,7 @@ def _stacked_damped(M: np.ndarray, Dm: np.ndarray, K: np.ndarray, omega_max):
         # measured 1.5e-13 on a slow overdamped root (tests/test_batch.py).
         top = np.where(live, mag, 0.0).max(axis=1, initial=1.0)[:, None]
         err = np.maximum(np.maximum(step / mag, 1e2 * eps * top / mag), 10 * near)
-    s = np.where(live, sig * w_ref[:, None], np.nan)
-    err = np.where(live, err, np.nan)
+    s, err = np.where(live, sig * w_ref[:, None], np.nan), np.where(live, err, np.nan)
     s = np.where(np.abs(s.imag) <= err * np.abs(s), s.real + 0j, s)
     if omega_max is not None:
         beyond = ~(np.abs(s) <= omega_max)
