@@ -647,10 +647,8 @@ def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_
     ne = EI.shape[0]
     nsw = ne + MOI.shape[0]
     off = BI.shape[0] + ne
-    reg = np.zeros(nsw, np.int64)
-    regn = np.zeros(nsw, np.int64)
-    sw0 = np.empty(nsw + ne)
-    sw1 = np.empty(nsw + ne)
+    reg, regn = np.zeros(nsw, np.int64), np.zeros(nsw, np.int64)
+    sw0, sw1 = np.empty(nsw + ne), np.empty(nsw + ne)
     j, bad = 0, 0.0
     npart = PRIG.shape[0]
     limit = PV[2]
@@ -674,14 +672,16 @@ def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_
                         FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, aux, auxl, work, off, m,
                         zy, zd, first, nsw)
                     nfev += used
-                reg[:] = regn
-                sw0[:] = sw1        # the switches' values and the rates
+                for e in range(nsw + ne):       # the pieces, the switches' values, the rates
+                    sw0[e] = sw1[e]
+                    if e < nsw:
+                        reg[e] = regn[e]
             if aux[naux - 1] > bad:
                 bad = aux[naux - 1]
             j = record_hermite(rec_t, rec_y, j, t_out0, dt_out, tc, hh,
                                full and step == nsteps - 1, y, K[0], ynew, K[s], n, m)
-            y[:] = ynew
-            K[0] = K[s]
+            for i in range(n):
+                y[i], K[0, i] = ynew[i], K[s, i]
             if shaft:
                 if not shaft_speed(y, PV, npart) >= PV[11]:
                     return tc + hh, j, False, bad, nfev
