@@ -479,8 +479,7 @@ def locate(t, hh, y, k1, ynew, k4, tmp, dy, sw0, sw1, reg, regn, PV, FI, FF, tab
     ne = EI.shape[0]
     nsw = reg.shape[0]
     xo = off + ne + 2 + MOI.shape[0]
-    best = 1.0
-    count = 0
+    best, count = 1.0, 0
     for e in range(nsw):
         if reg[e] == regn[e]:
             continue
@@ -507,8 +506,7 @@ def locate(t, hh, y, k1, ynew, k4, tmp, dy, sw0, sw1, reg, regn, PV, FI, FF, tab
                   aux, work, zy, zd)
             count += 1
             if e < ne:
-                v = aux[off + e]
-                vd = aux[xo + e]
+                v, vd = aux[off + e], aux[xo + e]
             else:
                 v = work[6, MOI[e - ne, 0]] - MOF[e - ne, 3] + 0.5 * MOF[e - ne, 1]
             g = edge_gap(e, ne, r0, r1, v, vd, EF, MOF)
@@ -525,8 +523,7 @@ def locate(t, hh, y, k1, ynew, k4, tmp, dy, sw0, sw1, reg, regn, PV, FI, FF, tab
                 if probing:     # not changed by 1 − probe: close enough
                     hi = 1.0
                     break
-        if hi < best:
-            best = hi
+        best = min(best, hi)
     return best, count
 
 
