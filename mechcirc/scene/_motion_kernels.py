@@ -593,7 +593,7 @@ def cut_at_kink(tc, hh, h, y, K, tmp, ynew, sw0, sw1, reg, regn, TA, TB, TC, PV,
         hh = cut * hh
         rk_step(tc, hh, y, K, tmp, ynew, TA, TB, TC, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI,
                 MOF, PRIG, BI, aux, work, zy, zd)
-        used += s - 1
+        used += s          # s - 1 stages and f at the end (rk_step)
         regions(FI, EI, EF, MOI, MOF, aux, work, off, regn, sw1, first)
         if not switched(reg, regn, nsw):     # cut before the kink: the next piece finds it
             break
