@@ -7,7 +7,8 @@ contact force N = F0 + k s + cΩ s' + mΩ² s'' first reaches zero — is compar
 with the simulated onset of separation: the follower on a stiff contact
 (k_c = 1e11 N/m, damping ratio 0.5, the clearance law of ``mechcirc transient``),
 bisected on the shaft speed (brentq on the least contact force over the first
-turn).  Then the netlist runs at 800 rpm and its separations are listed.
+turn, in a bracket of ±0.01 % about the closed form: 9 runs, against 29 from ±0.1 %
+for the same answer within 1e-7).  Then the netlist runs at 800 rpm and its separations are listed.
 
 Run:  python examples/cam_follower_jump.py
 """
@@ -29,7 +30,7 @@ print(f"jump speed, closed form (rigid follower): {rpm:.6f} rpm, contact force 0
       f"{angle:.3f} deg")
 sim = separation_speed(motion, MASS, SPRING, PRELOAD, DAMPING, contact=CONTACT,
                        contact_damping=2 * 0.5 * math.sqrt(CONTACT * MASS),
-                       bracket=(0.999 * rpm, 1.001 * rpm))
+                       bracket=(0.9999 * rpm, 1.0001 * rpm))
 print(f"jump speed, simulated onset of separation: {sim:.6f} rpm")
 print(f"relative difference: {abs(sim / rpm - 1):.1e} (goal 1e-6)")
 

@@ -101,11 +101,11 @@ def in_cache(*dispatchers) -> bool:
         be asked (numba's private layout changed) or ``MECHCIRC_NO_WARM`` is
         set: the caller then loads, or compiles, as it would without the check.
     """
-    if os.environ.get("MECHCIRC_NO_WARM", "") not in ("", "0"):
-        return True
     try:
         for d in dispatchers:
             if d not in _IN_CACHE:      # an index read (~0.1 ms each) once per process
+                if os.environ.get("MECHCIRC_NO_WARM", "") not in ("", "0"):
+                    return True
                 if not d._cache._cache_file._load_index():
                     return False
                 _IN_CACHE.add(d)

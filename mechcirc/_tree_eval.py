@@ -179,6 +179,7 @@ def _postorder_values(root, omega, track: bool, keep: bool, checked: bool, desig
     values of a node's internal children on top of a stack when it is reached."""
     values: dict[int, _Value] = {}
     stack: list[_Value] = []
+    zero = np.zeros(omega.shape) if track else None      # (the bound's, see _node_bound)
     with np.errstate(all="ignore"):
         inv_omega = _ONE / omega
         for node, reflect, n_kids, groups in _internal_postorder(root):
@@ -200,7 +201,7 @@ def _postorder_values(root, omega, track: bool, keep: bool, checked: bool, desig
                     parts = []
                 if designs is not None:
                     groups = _leaf_groups(node, designs)
-                val = _combine(parts, omega, inv_omega, track, keep, checked, groups)
+                val = _combine(parts, omega, inv_omega, zero, keep, checked, groups)
             stack.append(val)
             if keep:
                 values[id(node)] = val
@@ -678,7 +679,7 @@ def _leaf_term(e: Element, series: bool, fast: bool = False,
     return slot, (real if slot == 0 else om if slot > 0 else inv)
 
 
-def _combine(parts: list, omega, inv_omega, track: bool, keep: bool, checked: bool,
+def _combine(parts: list, omega, inv_omega, zero, keep: bool, checked: bool,
              groups: list) -> _Value:
     """Series: K = Σ K_i.  Parallel: 1/K = Σ 1/K_i, over the node's internal children's
     values ``parts`` and its leaf groups ``groups`` (:func:`_leaf_groups`)."""
@@ -722,8 +723,8 @@ def _combine(parts: list, omega, inv_omega, track: bool, keep: bool, checked: bo
         if imag is not None:
             cplx.imag += imag
         total = _Value(False, cplx)
-    if track:
-        _node_bound(total, parts, omega, inv_omega, groups)
+    if zero is not None:
+        _node_bound(total, parts, omega, inv_omega, groups, zero)
     if not series:              # K = 1/S, in place
         a = total.array
         total.array = _MINUS_ONE / a if total.imaginary else \
@@ -731,30 +732,40 @@ def _combine(parts: list, omega, inv_omega, track: bool, keep: bool, checked: bo
     return total
 
 
-def _node_bound(total: _Value, parts: list, omega, inv_omega, groups: list) -> None:
+def _node_bound(total: _Value, parts: list, omega, inv_omega, groups: list, zero) -> None:
     """The bound E of |Ŝ − S| of a series or parallel node's sum S (``total``, before
     the reciprocal of a parallel node) and |Ŝ| into ``total`` (see :func:`evaluate`):
-    Σ |tᵢ| (ρᵢ + m·u) over its leaf groups and its internal children's values ``parts``."""
+    Σ |tᵢ| (ρᵢ + m·u) over its leaf groups and its internal children's values ``parts``;
+    ``zero`` is 0 in ω's shape."""
     series, sums, counts, has, bterms = groups
     if bterms is None:         # (kept for the next call with one design)
         mu = _node_mu(sums, len(parts))
         # (0-d arrays: see _ZERO)
         bterms = groups[4] = (np.asarray(mu), np.asarray(_U_RECIP + mu), tuple(
             np.asarray(t) for t in _leaf_bound_terms(sums, counts, len(parts))))
-    mu, c, terms = bterms
-    bound = _leaf_bound(terms, has, omega, inv_omega)
+    mu, c, (b_real, b_inv, b_omega) = bterms
+    bound = None                # the leaf groups' share: b_real + b_inv/ω + b_omega·ω
+    if has[1]:
+        bound = b_inv * inv_omega
+    if has[2]:
+        t = b_omega * omega
+        bound = t if bound is None else np.add(bound, t, bound)
+    if has[0]:
+        bound = np.full(omega.shape, b_real) if bound is None else np.add(bound, b_real, bound)
+    spare = None                # a child's |S|, free once its term is formed
     for v in parts:             # Σ |tᵢ| (ρᵢ + m·u) of the internal children's terms
         if v.rho is None and v.recip is series:
             # The term is 1/S of the child's sum S (a parallel child's K, or the
             # admittance of a series child): |1/S| (ρ(S)/(1 − ρ(S)) + 4u + m·u), ρ(S)/(1 − ρ(S))
             # as E/(|S| − E) (:func:`_over_excess` written out: a call costs about as much
-            # as one of its operations on a few hundred points).
-            E, A = v.sum_err, v.sum_mag
+            # as one of its operations on a few hundred points).  Outputs positional and
+            # the clamp against ``zero`` (ω's shape): 0.25 against 0.42 µs with a 0-d 0.
+            E, A = spare = v.sum_err, v.sum_mag
             t = A - E
-            np.maximum(t, _ZERO, out=t)
-            np.divide(E, t, out=t)
-            t += c
-            t /= A
+            np.maximum(t, zero, out=t)
+            np.divide(E, t, t)
+            np.add(t, c, t)
+            np.divide(t, A, t)
         else:
             rho, mag = v.relative()
             if series:
@@ -764,9 +775,9 @@ def _node_bound(total: _Value, parts: list, omega, inv_omega, groups: list) -> N
                 t = through_reciprocal(rho)
                 t += c
                 t /= mag
-        bound = t if bound is None else np.add(bound, t, out=bound)
-    total.sum_err = np.zeros(omega.shape) if bound is None else bound
-    total.sum_mag = np.abs(total.array)
+        bound = t if bound is None else np.add(bound, t, bound)
+    total.sum_err = zero.copy() if bound is None else bound
+    total.sum_mag = np.abs(total.array, out=None if spare is None else spare[1])
     total.recip = not series
 
 
@@ -809,23 +820,6 @@ def _leaf_bound_terms(sums, counts, n_parts: int) -> tuple:
     mu = _node_mu(sums, n_parts)
     return tuple(abs(t) * ((n + extra) * _U + mu)
                  for t, n, extra in zip(sums, counts, (2, 4, 4)))
-
-
-def _leaf_bound(terms, has, omega, inv_omega):
-    """The leaf groups' share of a node's bound over ω from :func:`_leaf_bound_terms`
-    (None where the node has no leaves)."""
-    b_real, b_inv, b_omega = terms
-    has_real, has_inv, has_omega = has
-    bound = None
-    if has_inv:
-        bound = b_inv * inv_omega
-    if has_omega:
-        t = b_omega * omega
-        bound = t if bound is None else np.add(bound, t, out=bound)
-    if has_real:
-        bound = np.full(omega.shape, b_real) if bound is None else np.add(bound, b_real,
-                                                                        out=bound)
-    return bound
 
 
 def through_reciprocal(rho: NDArray) -> NDArray:

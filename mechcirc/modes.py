@@ -70,7 +70,7 @@ _CHUNK = 128
 def _lazy(key: str, names: str):
     """A dictionary attribute of :class:`Mode` made from its arrays on first use."""
     def make(self) -> dict:
-        values = self._values.get(key)
+        values = self._dv() if key == "velocity" else self._values.get(key)
         if values is not None and key in ("shape", "velocity"):
             values = values.astype(complex)     # real for an undamped root: complex as documented
         return {} if values is None else dict(zip(self._names[names], values.tolist()))
@@ -119,21 +119,26 @@ class Mode:
     _values: dict = field(default_factory=dict, repr=False, compare=False)
     _names: dict = field(default_factory=dict, repr=False, compare=False)
 
-    shape = _lazy("shape", "nodes")
-    energy = _lazy("energy", "stored")
-    dissipation = _lazy("dissipation", "dampers")
-    velocity = _lazy("velocity", "elements")
-    sensitivity = _lazy("sensitivity", "all")
-    zeta_sensitivity = _lazy("zeta_sensitivity", "all")
+    shape, energy = _lazy("shape", "nodes"), _lazy("energy", "stored")
+    dissipation, velocity = _lazy("dissipation", "dampers"), _lazy("velocity", "elements")
+    sensitivity, zeta_sensitivity = _lazy("sensitivity", "all"), _lazy("zeta_sensitivity", "all")
 
     @functools.cached_property
     def force(self) -> dict:
         """See the class docstring (made from ``velocity`` on first use: Q = y·s^(−power)·Δv)."""
-        v = self._values.get("velocity")
+        v = self._dv()
         if v is None:
             return {}
         y, power = self._names["law"]
         return dict(zip(self._names["elements"], (y * self.s ** -power * v).tolist()))
+
+    def _dv(self) -> np.ndarray | None:
+        """Δv of every element, from the shape (not kept: elements × roots values)."""
+        v = self._values.get("shape")
+        if v is None:
+            return None
+        ve, (ei, ej) = np.append(v, np.zeros(1, v.dtype)), self._names["ends"]
+        return ve[ei] - ve[ej]
 
     @property
     def s(self) -> complex:
@@ -169,8 +174,7 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
     >>> {k: round(v, 12) for k, v in m.sensitivity.items()}
     {'m': -0.5, 'k': 0.5}
     """
-    system = circuit.nodal
-    pairs = resonance_pairs(circuit, omega_max, vectors=True)
+    system, pairs = circuit.nodal, resonance_pairs(circuit, omega_max, vectors=True)
     if not pairs:
         return []
     M, D, Ks, G_released, G_held, _ = pencil(system)
@@ -181,7 +185,8 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
     el_names = [e.name for e in els]
     shared = {"nodes": list(system.nodes), "elements": el_names, "all": names,
               "stored": [n for n, d in zip(el_names, damper) if not d],
-              "dampers": [n for n, d in zip(el_names, damper) if d], "law": (y, power)}
+              "dampers": [n for n, d in zip(el_names, damper) if d], "law": (y, power),
+              "ends": (ei, ej)}
     slopes = _param_slopes(circuit, names)
     # Constraint forces from the node rows, P(s) v + s Gᵀ q = 0: Gᵀ's pseudo-inverse,
     # once per problem (only levers need them).
@@ -205,17 +210,13 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
 
 
 def _normalised(pairs, M, D, Ks, G_held, G_released) -> list:
-    """``(root, s, v, repeated)`` of every pair, the vector scaled to 1 at its largest
-    entry (band roots get theirs by inverse iteration)."""
+    """``(root, s, v, repeated)`` of every pair, v as the solver gives it (band roots
+    get theirs by inverse iteration); scaled per chunk in :func:`_chunk_values`."""
     roots = []
     for r, v, repeated in pairs:
         s = complex(-r.zeta * r.omega, r.omega_d)
         if v is None:                       # a band root: no vector from the solver
             v = _inverse_iteration(M, D, Ks, G_held if r.kind == "resonance" else G_released, s)
-        v = np.asarray(v)                   # real for an undamped root (real arithmetic after)
-        top = int(np.argmax(np.abs(v)))
-        v = v / v[top]
-        v[top] = 1.0                        # exactly (a complex quotient may miss by an ulp)
         roots.append((r, s, v, repeated))
     return roots
 
@@ -225,32 +226,33 @@ def _chunk_values(system, pencil3, pinv, S, V, stamps) -> list:
     vectors ``V`` (columns), one ``(values, param_rel, param_zeta)`` per root."""
     ei, ej, y, power, slopes, mass, spring, damper = stamps
     M, D, Ks = pencil3
+    top, col = np.argmax(np.abs(V), axis=0), np.arange(S.size)
+    V = V / V[top, col]                     # 1 at the largest entry (real when undamped),
+    V[top, col] = 1.0                       # exactly (a complex quotient may miss by an ulp)
     # Real vectors (undamped roots) keep every (element × root) array real: the complex
     # factors depend on the root and the law only, one row per law.
     Ve = np.vstack([V, np.zeros((1, S.size), V.dtype)])
     dV = Ve[ei] - Ve[ej]
-    ya2 = y[:, None] * (dV.real ** 2 + dV.imag ** 2 if np.iscomplexobj(dV) else dV * dV)
+    ya2 = dV.real ** 2 + dV.imag ** 2 if np.iscomplexobj(dV) else dV * dV
+    ya2 *= y[:, None]                       # in place (fresh E × roots arrays page-fault)
     rel, zeta = _root_sensitivity(system, M, D, Ks, pinv, S, V, dV, y, power,
                                   None if np.iscomplexobj(dV) else ya2)
     # Both are real-linear in ∂s/∂p, and a .param's slope is a real combination of them.
-    p_rel = {p: (row @ rel, row @ zeta) for p, row in slopes.items()}
-    wn = np.abs(S)
+    p_rel, wn = {p: (row @ rel, row @ zeta) for p, row in slopes.items()}, np.abs(S)
     # Kinetic ½mη|Δv|², potential ½kη|Δv|²/ωₙ², nothing stored in a damper.
     share = np.vstack([np.full(S.size, 0.5), 0.5 / wn ** 2, np.zeros(S.size)])
     stored = ya2 * share[np.where(mass, 0, np.where(spring, 1, 2))]
-    total = stored.sum(axis=0)
-    energy = (stored[~damper] if damper.any() else stored) / total
+    total, energy = stored.sum(axis=0), stored[~damper] if damper.any() else stored
+    energy /= total
     dissipation = ya2[damper] / (2 * wn * total)
     return [({"sensitivity": rel[:, c], "zeta_sensitivity": zeta[:, c], "shape": V[:, c],
-              "energy": energy[:, c], "dissipation": dissipation[:, c],
-              "velocity": dV[:, c]},
+              "energy": energy[:, c], "dissipation": dissipation[:, c]},
              {p: float(x[0][c]) for p, x in p_rel.items()},
              {p: float(x[1][c]) for p, x in p_rel.items()}) for c in range(S.size)]
 
 
 def _mode(r, repeated, vals, p_rel, p_zeta, shared) -> Mode:
-    common: dict = {"param_sensitivity": p_rel, "param_zeta_sensitivity": p_zeta,
-                    "_names": shared}
+    common: dict = {"param_sensitivity": p_rel, "param_zeta_sensitivity": p_zeta, "_names": shared}
     if r.omega_d == 0:
         return Mode(r, note=f"overdamped (zeta = {r.zeta:.4g} >= 1, omega_d = 0): "
                             "a decaying motion, not a mode of vibration",
@@ -266,8 +268,7 @@ def _mode(r, repeated, vals, p_rel, p_zeta, shared) -> Mode:
 def _stamped(system) -> tuple:
     """(row i, row j (−1 the reference), value·η, law power) of each loaded element,
     and the names: the elements, then the levers."""
-    els = system.elements
-    index = {n: i for i, n in enumerate(system.nodes)}
+    els, index = system.elements, {n: i for i, n in enumerate(system.nodes)}
     ei = np.array([index.get(e.n1, -1) for e in els], dtype=int)
     ej = np.array([index.get(e.n2, -1) for e in els], dtype=int)
     y = np.array([e.value * e.eta for e in els])
@@ -322,8 +323,7 @@ class SweepSensitivity:
 
     def derivative(self, name: str, quantity: str | None = None) -> np.ndarray:
         """∂|q|/∂p at each ω [unit of q per SI unit of p] (see :meth:`relative`)."""
-        quantity = quantity or self.quantity
-        amp = abs(self.drive.amplitude)
+        quantity, amp = quantity or self.quantity, abs(self.drive.amplitude)
         with np.errstate(all="ignore"):
             mag = {"K": np.abs(self.K), "Q0": amp / np.abs(self.K) if self.drive.kind ==
                    "velocity" else np.full(self.K.shape, amp),
@@ -420,8 +420,7 @@ def _adjoint_products(system, x, w, stamps) -> np.ndarray:
     """∂K/∂(value) of every stamped element, then every lever ratio, at the ω ``w``
     from the nodal solutions ``x`` (rows), shape (ω, elements + levers)."""
     ei, ej, y, power = stamps
-    n_nodes = len(system.nodes)
-    index = {nd: i for i, nd in enumerate(system.nodes)}
+    n_nodes, index = len(system.nodes), {nd: i for i, nd in enumerate(system.nodes)}
     xe = np.concatenate([x, np.zeros((w.size, 1), complex)], axis=1)
     with np.errstate(all="ignore"):
         S = y * (1j * w[:, None]) ** (-power.astype(float))
@@ -445,7 +444,9 @@ def _root_sensitivity(system, M, D, Ks, pinv_GT, S, V, dV, y, power, ya2=None) -
     coef = -table / den                     # p·∂s/∂p per unit y·Δv², one row per law
     if ya2 is not None:
         rel_law, zeta_law = _omega_zeta(S, coef)
-        rel, zeta = ya2 * rel_law[which], ya2 * zeta_law[which]
+        # Undamped, ∂s/∂p is imaginary: ζ rows of zeros, left untouched (no page faults).
+        rel = ya2 * rel_law[which]
+        zeta = ya2 * zeta_law[which] if zeta_law.any() else np.zeros(ya2.shape)
     else:
         rel, zeta = _omega_zeta(S, y[:, None] * dV * dV * coef[which])
     if not system.levers:
@@ -506,8 +507,7 @@ def _param_slopes(circuit: Circuit, names: list[str]) -> dict[str, np.ndarray]:
     from .expressions import evaluate
     from .netlist import expressions_of
 
-    exprs = expressions_of(circuit)
-    params = dict(circuit.params)
+    exprs, params = expressions_of(circuit), dict(circuit.params)
     if not exprs or not params:
         return {}
     position = {name: k for k, name in enumerate(names)}
@@ -518,16 +518,14 @@ def _param_slopes(circuit: Circuit, names: list[str]) -> dict[str, np.ndarray]:
         if what == "value" or what == "ratio":
             targets[(name, what)] = [(name, x.get(name, math.nan))]
         elif what == "eta":
-            targets[(name, what)] = [(m, eta[name]) for m in (name, f"{name}_damping")
-                                     if m in eta]
+            targets[(name, what)] = [(m, eta[name]) for m in (name, f"{name}_damping") if m in eta]
         elif what == "damping" and f"{name}_damping" in x:
             targets[(name, what)] = [(f"{name}_damping", x[f"{name}_damping"])]
     used = [(key, e, f) for key, (e, f) in exprs.items()
             if e.kind != "num" and (key[0] == "param" or key in targets) and e.names() & params.keys()]
     out = {}
     for p, value in params.items():
-        tangent = {p: 1.0}
-        row = np.zeros(len(names))
+        tangent, row = {p: 1.0}, np.zeros(len(names))
         for key, expr, factor in used:
             if key == ("param", p):
                 continue

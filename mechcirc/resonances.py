@@ -231,9 +231,8 @@ def resonance_pairs(circuit: Circuit, omega_max: float | None = None,
 
     # Small networks: dense matrices from the stamps, and no scipy for undamped ones.
     M, D, Ks, G_released, G_held, damped = pencil(system, dense=system.size <= DENSE_LIMIT)
-    released, v_released = _modes(M, D, Ks, G_released, damped, omega_max, vectors)
-    held, v_held = _modes(M, D, Ks, G_held, damped, omega_max, vectors)
-    keep_h, keep_r = _cancel(held, released)
+    held, v_held, released, v_released, keep_h, keep_r = _solved(
+        M, D, Ks, G_released, G_held, damped, omega_max, vectors)
     roots = [("resonance", s, e, f) for s, e, f in held[keep_h]] + \
         [("antiresonance", s, e, f) for s, e, f in released[keep_r]]
     vecs = [(None if V is None else V[:, i], vectors and _repeats(found[:, 0], int(i)))
@@ -252,6 +251,55 @@ def resonance_pairs(circuit: Circuit, omega_max: float | None = None,
         out = [(r, v) for r, v in out if r.omega <= omega_max]
     out = sorted(out, key=lambda rv: (rv[0].omega, rv[0].kind))
     return [(r, *v) for r, v in out] if vectors else [(r, v[0]) for r, v in out]
+
+
+def _solved(M, D, Ks, G_released, G_held, damped: bool, omega_max, vectors: bool) -> tuple:
+    """``(held, its vectors, released, its vectors, keep held, keep released)``: both
+    eigenproblems (:func:`_modes`) and which roots survive :func:`_cancel`."""
+    released, v_released = _modes(M, D, Ks, G_released, damped, omega_max, vectors)
+    # Held = released + the drive's row: with every released vector at hand (no lever,
+    # no massless or rigid direction) the held ones follow from them (_held_vectors).
+    whole = vectors and G_released.size == 0 and v_released is not None and \
+        not damped and v_released.shape[1] == M.shape[0]
+    held, v_held = _modes(M, D, Ks, G_held, damped, omega_max, vectors and not whole)
+    keep_h, keep_r = _cancel(held, released)
+    if whole:
+        v_held = _held_vectors(v_released, released[:, 0], G_held[-1], held[:, 0], keep_h)
+        if v_held is None:              # not confirmed: the dense solve of the held problem
+            v_held = _modes(M, D, Ks, G_held, damped, omega_max, True)[1]
+    return held, v_held, released, v_released, keep_h, keep_r
+
+
+def _held_vectors(V, s_released, g, s_held, keep) -> np.ndarray | None:
+    """The eigenvectors of the held roots ``s_held[keep]`` (columns; the others 0) from
+    the complete released ones ``V`` (M-orthonormal), or None where not confirmed.
+
+    Held, (K − λM) v = σg with gᵀv = 0 (g the drive's row), so
+    v = Σ vᵢ cᵢ/(μᵢ − λ) with cᵢ = vᵢᵀg, and λ is a root of the secular equation
+    f(λ) = Σ cᵢ²/(μᵢ − λ) = 0: one matrix product instead of a second dense
+    eigen-solve.  λ is refined by Newton steps on f from the eigen-solver's root,
+    held as the offset τ from its nearest pole (the differences μᵢ − λ then
+    carry no cancellation); a vector is confirmed when its angle to the
+    constraint, |gᵀv|/(|g||v|), is at rounding level (64ε).
+    """
+    mu, lam, c = np.abs(s_released) ** 2, np.abs(s_held[keep]) ** 2, V.T @ g
+    live = np.abs(c) > 1e-13 * np.linalg.norm(c)  # cᵢ = 0: a mode the drive does not see
+    c, mu, lam = c[live], mu[live] / mu.max(initial=0.0), lam / mu.max(initial=0.0)
+    pole = np.argmin(np.abs(mu[:, None] - lam[None, :]), axis=0)
+    delta, tau = mu[:, None] - mu[pole], lam - mu[pole]
+    with np.errstate(all="ignore"):
+        for _ in range(3):
+            C = c[:, None] / (delta - tau)
+            tau, at = tau - (c @ C) / np.einsum("ij,ij->j", C, C), tau    # Y is at ``at``
+        Y = V[:, live] @ C
+        t = (g @ Y) / (g @ g)
+        tilt = np.abs(t) * np.linalg.norm(g) / np.linalg.norm(Y, axis=0)
+    eps = np.finfo(float).eps           # and λ within 1e3ε of the solver's (the same root)
+    if not (np.all(tilt <= 64 * eps) and np.all(np.abs(lam - mu[pole] - at) <= 1e3 * eps)):
+        return None
+    out = np.zeros((V.shape[0], s_held.size))
+    out[:, keep] = Y - np.outer(g, t)           # onto the constraint (v_a = 0 when b is 0)
+    return out
 
 
 def _repeats(s: np.ndarray, i: int) -> bool:
@@ -306,8 +354,7 @@ def constraint_basis(G: np.ndarray, n: int, dense: bool = False):
 
         _, r, perm = la.qr(G, mode="economic", pivoting=True)
         rank = int(np.sum(np.abs(np.diag(r)) > 1e-12 * np.abs(r).max()))
-    pivots = np.sort(perm[:rank])
-    keep = np.ones(n, dtype=bool)
+    pivots, keep = np.sort(perm[:rank]), np.ones(n, dtype=bool)
     keep[pivots] = False
     free = np.flatnonzero(keep)       # not setdiff1d: its np.unique imports numpy.ma
     # G_p v_p + G_f v_f = 0  ->  v_p = -G_p⁺ G_f v_f (exact for consistent constraints)
@@ -363,16 +410,14 @@ def _modes_unchecked(M, D, Ks, G, damped: bool, omega_max=None, vectors: bool = 
             "unless a band omega_max is given; give omega_max, sweep K(ω) instead, or "
             "reduce the network", status="size")
     with np.errstate(all="ignore"):
-        Mr, Dr, Kr = ((Z.T @ X @ Z) if dense else (Z.T @ X @ Z).toarray()
-                      for X in (M, D, Ks))
+        Mr, Dr, Kr = ((Z.T @ X @ Z) if dense else (Z.T @ X @ Z).toarray() for X in (M, D, Ks))
     if Mr.shape[0] == 0:
         return np.zeros((0, 3), dtype=complex), np.zeros((M.shape[0], 0)) if vectors else None
     if not (np.isfinite(Mr).all() and np.isfinite(Dr).all() and np.isfinite(Kr).all()):
         raise SolverError("resonances: the network's matrices overflow float64 (element "
                           "values or lever ratios near 1e308 combine beyond it)",
                           status="overflow")
-    scale_m = np.abs(Mr).max() or 1.0
-    scale_k = np.abs(Kr).max() or 1.0
+    scale_m, scale_k = np.abs(Mr).max() or 1.0, np.abs(Kr).max() or 1.0
     # sqrt of each: the quotient itself can leave float64 (1e-200 / 1e180).
     w_ref = math.sqrt(scale_k) / math.sqrt(scale_m)
     if not (math.isfinite(w_ref) and w_ref > 0):
@@ -389,7 +434,8 @@ def _modes_unchecked(M, D, Ks, G, damped: bool, omega_max=None, vectors: bool = 
         s, err, U = _damped_roots(scaled, w_ref, vectors)
         must = np.ones(s.size)
     roots = np.column_stack([s, err, must]) if s.size else np.zeros((0, 3), dtype=complex)
-    return roots, (Z @ U if vectors else None)
+    # Z is the identity without constraints: no product (and no fresh n × n array).
+    return roots, (Z @ U if vectors and G.shape[0] else U)
 
 
 def _undamped_roots(M, K, w_ref: float, vectors: bool):
@@ -397,9 +443,8 @@ def _undamped_roots(M, K, w_ref: float, vectors: bool):
     eps = np.finfo(float).eps
     lam, direct, U = _undamped(M, K, vectors)
     up = lam > 1e-11 * max(1.0, lam.max(initial=0.0))
-    lam, U = lam[up], (U[:, up] if vectors else None)
-    s = 1j * w_ref * np.sqrt(lam)
-    err = eps * (lam.max(initial=1.0) / lam) * 4
+    lam, U = lam[up], (U[:, up] if vectors and not up.all() else U)
+    s, err = 1j * w_ref * np.sqrt(lam), eps * (lam.max(initial=1.0) / lam) * 4
     # Weyl's bound holds for the scaled matrix, not through a static
     # condensation or an eigen-decomposition of M (their rounding is
     # amplified by the condition of the condensed block): not a bound
@@ -414,10 +459,8 @@ def _damped_roots(scaled: tuple[np.ndarray, np.ndarray, np.ndarray], w_ref: floa
     s_all, U = _damped(*scaled, vectors=vectors)
     s_all = s_all * w_ref
     # Rigid-body (zero) roots come out of QZ split by about sqrt(eps)·w_ref.
-    keep = np.flatnonzero((np.abs(s_all) > 1e-6 * w_ref)
-                          & (s_all.imag >= -1e-12 * np.abs(s_all)))
-    s = s_all[keep]
-    U = U[:, keep] if vectors else None
+    keep = np.flatnonzero((np.abs(s_all) > 1e-6 * w_ref) & (s_all.imag >= -1e-12 * np.abs(s_all)))
+    s, U = s_all[keep], U[:, keep] if vectors else None
     mag = np.abs(s)
     err = eps * 1e2 * (mag.max(initial=1.0) / mag)
     if s.size > 1 or s_all.size > 1:
@@ -482,8 +525,7 @@ def _band_modes(M, D, K, omega_max: float) -> np.ndarray:
         & (s_all.imag >= -1e-9 * np.abs(s_all))
     s = s_all[keep]
     s = np.where(np.abs(s.imag) <= 1e-9 * np.abs(s), s.real + 0j, s)
-    err = np.full(s.size, 1e-8)
-    must = np.ones(s.size)
+    err, must = np.full(s.size, 1e-8), np.ones(s.size)
     return np.column_stack([s, err, must]) if s.size else np.zeros((0, 3), dtype=complex)
 
 
@@ -501,8 +543,7 @@ def _band_modes_undamped(M, K, omega_max: float, v0: np.ndarray) -> np.ndarray |
     """
     from scipy.sparse.linalg import ArpackError, ArpackNoConvergence, eigsh
 
-    n = M.shape[0]
-    counts = _inertia_counts(M, K, omega_max)
+    n, counts = M.shape[0], _inertia_counts(M, K, omega_max)
     if counts is None:
         return None
     below, upto = counts
@@ -588,8 +629,7 @@ def _undamped(M: np.ndarray, K: np.ndarray, vectors: bool = False) -> tuple:
     is handled without an eigen-decomposition of M.
     """
     if not np.any(M - np.diag(np.diag(M))):
-        mu = np.diag(M)
-        V = None
+        mu, V = np.diag(M), None
     else:
         mu, V = np.linalg.eigh(M)
     massive = mu > 1e-13 * max(mu.max(initial=0.0), 1e-300)
@@ -600,8 +640,7 @@ def _undamped(M: np.ndarray, K: np.ndarray, vectors: bool = False) -> tuple:
     if direct:                       # nothing to condense (no copies of K)
         Krr, Knn, Knr = K, K[:0, :0], K[:0]
     elif V is None:
-        Krr = K[np.ix_(massive, massive)]
-        Knn = K[np.ix_(~massive, ~massive)]
+        Krr, Knn = K[np.ix_(massive, massive)], K[np.ix_(~massive, ~massive)]
         Knr = K[np.ix_(~massive, massive)]
     else:
         R, N = V[:, massive], V[:, ~massive]
@@ -618,7 +657,8 @@ def _undamped(M: np.ndarray, K: np.ndarray, vectors: bool = False) -> tuple:
     if not vectors:
         return lam, direct, None
     # The vectors by their own call: the roots stay those find_resonances reports, to the bit.
-    Ur = np.linalg.eigh(A)[1] * d[:, None]     # divide and conquer (LAPACK syevd)
+    Ur = np.linalg.eigh(A)[1]                  # divide and conquer (LAPACK syevd)
+    Ur *= d[:, None]                           # in place: n × n arrays cost page faults
     if direct:
         return lam, direct, Ur
     Un = -X @ Ur                     # the massless directions follow statically
@@ -666,8 +706,7 @@ def _symmetric_eigvals(A: np.ndarray) -> np.ndarray:
         S = sp.csr_matrix(A)
         _, col, row, band = band_order(S.indptr, S.indices)
         if 8 * band <= n:
-            low = row >= col
-            ab = np.zeros((band + 1, n))
+            low, ab = row >= col, np.zeros((band + 1, n))
             ab[(row - col)[low], col[low]] = S.data[low]
             return eigvals_banded(ab, lower=True, check_finite=False)
     return np.linalg.eigvalsh(A)
@@ -680,8 +719,7 @@ def _damped(M, D, K, vectors: bool = False) -> tuple:
     """
     n = M.shape[0]
     eye, zero = np.eye(n), np.zeros((n, n))
-    A = np.block([[zero, eye], [-K, -D]])
-    B = np.block([[eye, zero], [zero, M]])
+    A, B = np.block([[zero, eye], [-K, -D]]), np.block([[eye, zero], [zero, M]])
     from scipy.linalg import eig            # QZ: numpy has no generalised eig
 
     out = eig(A, B, right=vectors, homogeneous_eigvals=True)
@@ -698,8 +736,7 @@ def _damped(M, D, K, vectors: bool = False) -> tuple:
 def _cancel(held: np.ndarray, released: np.ndarray):
     """Which modes to keep (two masks): not those present in both problems (they
     do not appear in K)."""
-    keep_h = np.ones(len(held), bool)
-    keep_r = np.ones(len(released), bool)
+    keep_h, keep_r = np.ones(len(held), bool), np.ones(len(released), bool)
     for i, (s, err, _) in enumerate(held):
         if not len(released):
             break
@@ -776,8 +813,7 @@ def g_and_bound(pole: np.ndarray, evaluate):
     the network, 1: held).  The refined value is good to about eps relative at best (its
     rounding to float64), whatever the estimate of the solve says."""
     eps = np.finfo(float).eps
-    g = np.full(pole.shape, np.nan, dtype=complex)
-    dg = np.full(pole.shape, np.inf)
+    g, dg = np.full(pole.shape, np.nan, dtype=complex), np.full(pole.shape, np.inf)
     for i, want in enumerate((~pole, pole)):
         if want.any():
             K, dK = evaluate(i, want)
@@ -945,8 +981,7 @@ def _without_shared_roots(problems, damped: bool) -> np.ndarray:
 def _polished_designs(ds, which, w_h, e_h, w_r, e_r, omega_max):
     """:func:`batched_roots`' result for undamped designs: the roots of both problems
     merged, polished on each design's K by :func:`_secant_designs` and sorted."""
-    w = np.concatenate([w_h, w_r], axis=1)
-    e0 = np.concatenate([e_h, e_r], axis=1)
+    w, e0 = np.concatenate([w_h, w_r], axis=1), np.concatenate([e_h, e_r], axis=1)
     pole = np.zeros(w.shape, dtype=bool)
     pole[:, w_h.shape[1]:] = True
     # The roots first, the empty slots (beyond omega_max, rigid) last and cut off.
@@ -978,8 +1013,7 @@ def element_patterns(system) -> dict[str, np.ndarray]:
 
     n_nodes = len(system.nodes)
     index = {n: i for i, n in enumerate(system.nodes)}   # a node not in it: the reference
-    E = len(system.elements)
-    pos = {e.name: k for k, e in enumerate(system.elements)}
+    E, pos = len(system.elements), {e.name: k for k, e in enumerate(system.elements)}
     B = {x: np.zeros((E, n_nodes, n_nodes)) for x in ("mass", "spring", "damper")}
     for kind, r, c, sign, source, _ in stamps(system.elements, (), index):
         if kind in B:
@@ -991,8 +1025,7 @@ def stacked_problem(Z, B, S, damped: bool, omega_max):
     """The roots of one stacked eigenproblem (constraint basis ``Z``, patterns ``B``,
     element values ``S`` per design): :func:`_stacked_damped` or :func:`_stacked_modes`."""
     if damped:
-        Mr, Dr, Kr = (_weighted_sum(S, Z.T @ B[x] @ Z)
-                      for x in ("mass", "damper", "spring"))
+        Mr, Dr, Kr = (_weighted_sum(S, Z.T @ B[x] @ Z) for x in ("mass", "damper", "spring"))
         return _stacked_damped(Mr, Dr, Kr, omega_max)
     # The massless directions are those of the pattern: with every value > 0,
     # null(Σ m_e B_e) = ∩ null(B_e) in every design.  Ordered last, they are
@@ -1004,16 +1037,14 @@ def stacked_problem(Z, B, S, damped: bool, omega_max):
         n0 = int(massless.sum())
     else:
         n0 = 0
-    Mr, Kr = (_weighted_sum(S, Z.T @ B[x] @ Z)
-              for x in ("mass", "spring"))
+    Mr, Kr = (_weighted_sum(S, Z.T @ B[x] @ Z) for x in ("mass", "spring"))
     return _stacked_modes(Mr, Kr, n0, omega_max)
 
 
 def _sorted_damped(s_h, s_r, err_h, err_r):
     """(pole, s, error) of damped designs' roots (drive held, released), sorted as
     :func:`find_resonances` sorts, cut to the widest row."""
-    s_ = np.concatenate([s_h, s_r], axis=1)
-    err = np.concatenate([err_h, err_r], axis=1)
+    s_, err = np.concatenate([s_h, s_r], axis=1), np.concatenate([err_h, err_r], axis=1)
     pole = np.zeros(s_.shape, dtype=bool)
     pole[:, s_h.shape[1]:] = True
     mag = np.abs(s_)
@@ -1034,8 +1065,7 @@ def _scaled_stack(M, K):
     """Stacked mass and stiffness matrices scaled to unit largest entry per design,
     and the reference frequency √(max|K| / max|M|) of each: ``(scale_m, w_ref, Ms, Ks)``."""
     with np.errstate(all="ignore"):
-        scale_m = np.abs(M).max(axis=(1, 2))
-        scale_k = np.abs(K).max(axis=(1, 2))
+        scale_m, scale_k = np.abs(M).max(axis=(1, 2)), np.abs(K).max(axis=(1, 2))
         scale_m = np.where(scale_m > 0, scale_m, 1.0)
         scale_k = np.where(scale_k > 0, scale_k, 1.0)
         w_ref = np.sqrt(scale_k) / np.sqrt(scale_m)
@@ -1064,8 +1094,7 @@ def _stacked_modes(M: np.ndarray, K: np.ndarray, n0: int, omega_max):
     ok &= regular
     lam = np.where(np.isfinite(lam), lam, -np.inf)
     top = np.maximum(1.0, lam.max(axis=1, initial=0.0))
-    live = (lam > 1e-11 * top[:, None]) & ok[:, None]
-    eps = np.finfo(float).eps
+    live, eps = (lam > 1e-11 * top[:, None]) & ok[:, None], np.finfo(float).eps
     with np.errstate(all="ignore"):
         w = np.where(live, w_ref[:, None] * np.sqrt(np.where(live, lam, 1.0)), np.nan)
         err = np.where(live, eps * (np.where(live, lam, 1.0).max(axis=1, initial=1.0)[:, None]
@@ -1103,8 +1132,7 @@ def _stacked_damped(M: np.ndarray, Dm: np.ndarray, K: np.ndarray, omega_max):
     for X in (Ms, Ds, Ks):
         ok &= np.isfinite(X).all(axis=(1, 2))
     eye = np.eye(k)
-    Ms = np.where(ok[:, None, None], Ms, eye)
-    Ds = np.where(ok[:, None, None], Ds, 0.0)
+    Ms, Ds = np.where(ok[:, None, None], Ms, eye), np.where(ok[:, None, None], Ds, 0.0)
     Ks = np.where(ok[:, None, None], Ks, eye)
     Ms, Minv = _stacked_mass_inverse(Ms, ok)
     A = np.zeros((n, 2 * k, 2 * k))
@@ -1127,8 +1155,7 @@ def _stacked_damped(M: np.ndarray, Dm: np.ndarray, K: np.ndarray, omega_max):
         # measured 1.5e-13 on a slow overdamped root (tests/test_batch.py).
         top = np.where(live, mag, 0.0).max(axis=1, initial=1.0)[:, None]
         err = np.maximum(np.maximum(step / mag, 1e2 * eps * top / mag), 10 * near)
-    s = np.where(live, sig * w_ref[:, None], np.nan)
-    err = np.where(live, err, np.nan)
+    s, err = np.where(live, sig * w_ref[:, None], np.nan), np.where(live, err, np.nan)
     s = np.where(np.abs(s.imag) <= err * np.abs(s), s.real + 0j, s)
     if omega_max is not None:
         beyond = ~(np.abs(s) <= omega_max)
@@ -1211,12 +1238,10 @@ def _undamped_stack(M: np.ndarray, K: np.ndarray, n0: int):
     directions, and the single path takes the design).  One stacked ``eigvalsh``.
     """
     D, k = M.shape[0], M.shape[1]
-    r = k - n0
-    regular = np.ones(D, dtype=bool)
+    r, regular = k - n0, np.ones(D, dtype=bool)
     Mrr, Kc = M[:, :r, :r], K[:, :r, :r]
     if n0:
-        Knr = K[:, r:, :r]
-        Knn = K[:, r:, r:]
+        Knr, Knn = K[:, r:, :r], K[:, r:, r:]
         try:
             if n0 == 1 and not Knn.all():
                 raise np.linalg.LinAlgError
@@ -1250,8 +1275,7 @@ def _secant_designs(p, w0: np.ndarray, pole: np.ndarray, e0: np.ndarray):
     from ._tree_eval import through_reciprocal
     from .reduction import evaluate_designs
 
-    eps = np.finfo(float).eps
-    have = np.isfinite(w0)
+    eps, have = np.finfo(float).eps, np.isfinite(w0)
     w_safe = np.where(have, w0, 1.0)
 
     def g_and_delta(w):

@@ -209,7 +209,10 @@ def test_example_prints_the_jump_speed_both_ways(capsys, monkeypatch):
     assert status == 0 and err == "", err
     closed = float(re.search(r"closed form \(rigid follower\): (\S+) rpm", out).group(1))
     simulated = float(re.search(r"simulated onset of separation: (\S+) rpm", out).group(1))
-    assert abs(simulated / closed - 1) <= 1e-6                 # achieved 1.1e-7
+    # The example's bracket is ±0.01 % about the closed form (9 runs, 0.5 s; ±0.1 % took
+    # 29 runs, 3.6 s): a simulated onset outside it fails the example's bracket check,
+    # one inside must still be within 1e-6 of the closed form.
+    assert abs(simulated / closed - 1) <= 1e-6                 # achieved 5.7e-8
     assert re.search(r"at 800 rpm the contact opens [1-9]\d* time", out)
 
 

@@ -385,3 +385,60 @@ def test_circuit_delegates_give_the_module_functions():
     a, b = c.modes(), modes(c)
     assert [m.resonance for m in a] == [m.resonance for m in b]
     assert a[0].shape == b[0].shape
+
+
+@pytest.mark.parametrize("frame", [True, False])
+def test_held_vectors_from_the_released_ones_against_mpmath(monkeypatch, frame):
+    """A network with a mass at every node and no lever: the held (resonance) vectors
+    come from the released eigenvectors by the secular equation.  Against an mpmath
+    eigen-solve (30 digits) of the held problem written by hand: the drive to the
+    frame (node a at rest) and between two nodes (v_a = v_b)."""
+    import mechcirc.resonances as res
+
+    rng = np.random.default_rng(11)
+    rows, cols = 3, 4
+    nodes = [f"g{i}_{j}" for i in range(rows) for j in range(cols)]
+    mass, ground = rng.uniform(0.5, 2.0, len(nodes)).tolist(), rng.uniform(1e3, 3e3, 12).tolist()
+    links = [(i * cols + j, i * cols + j + dj * cols + dj2, float(rng.uniform(1e3, 3e3)))
+             for i in range(rows) for j in range(cols)
+             for dj, dj2 in ((1, 0), (0, 1)) if i + dj < rows and j + dj2 < cols]
+    other = 0 if frame else 5
+    lines = [f"drive V g0_0 {'0' if frame else nodes[other]} velocity=1"]
+    lines += [f"mass m{k} {nd} 0 {mass[k]!r}\nspring f{k} {nd} 0 {ground[k]!r}"
+              for k, nd in enumerate(nodes)]
+    lines += [f"spring l{k} {nodes[a]} {nodes[b]} {kv!r}" for k, (a, b, kv) in enumerate(links)]
+    used = []
+    real = res._held_vectors
+    monkeypatch.setattr(res, "_held_vectors", lambda *a: used.append(real(*a)) or used[-1])
+    found = [m for m in modes(mechcirc.parse("\n".join(lines))) if m.resonance.kind == "resonance"]
+    assert len(used) == 1 and used[0] is not None and len(found) == len(nodes) - 1
+    with mpmath.workdps(30):
+        K = mpmath.zeros(len(nodes))
+        for k in range(len(nodes)):
+            K[k, k] += ground[k]
+        for a, b, kv in links:
+            K[a, a] += kv
+            K[b, b] += kv
+            K[a, b] -= kv
+            K[b, a] -= kv
+        # Held: node 0 at rest (row and column out), or merged into node ``other``.
+        Z = mpmath.zeros(len(nodes), len(nodes) - 1)
+        for k in range(1, len(nodes)):
+            Z[k, k - 1] = 1
+        if not frame:
+            Z[0, other - 1] = 1
+        Mh = Z.T * mpmath.diag(list(mass)) * Z
+        d = [1 / mpmath.sqrt(Mh[k, k]) for k in range(Mh.rows)]
+        D = mpmath.diag(d)
+        lam, Q = mpmath.eigsy(D * Z.T * K * Z * D)
+        worst = 0.0
+        for m in found:
+            k = min(range(lam.rows), key=lambda k: abs(lam[k] - m.resonance.omega ** 2))
+            assert abs(mpmath.sqrt(lam[k]) - m.resonance.omega) <= 1e-12 * m.resonance.omega
+            want = np.array([complex(x) for x in Z * D * Q[:, k]])
+            want /= want[np.argmax(np.abs(want))]
+            got = np.array([m.shape[nd] for nd in nodes])
+            worst = max(worst, np.abs(got - want).max())
+    # Achieved 4.7e-15 (drive to the frame) and 7.1e-15 (between two nodes); the dense
+    # eigen-solve of the held problem, the route before, 3.9e-15 and 4.8e-15.  Asserted 2e-14.
+    assert worst <= 2e-14

@@ -54,7 +54,12 @@ def test_shipped_netlist_round_trips(path):
 
 
 # ----------------------------------------------------------------- generated circuits
-_name_text = st.from_regex(r"[A-Za-z_][A-Za-z0-9_]{0,6}|[1-9][0-9]{0,3}", fullmatch=True)
+_name_text = st.from_regex(r"[A-Za-z_][A-Za-z0-9_]{0,6}|[1-9][0-9]{0,3}", fullmatch=True,
+                           alphabet="ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_")
+# alphabet= holds every character the pattern can match, so the names are the same set;
+# without it hypothesis first maps every Unicode code point through the utf-8 codec
+# (about 0.8 s of CPU in each process whose .hypothesis folder lacks that table: a fresh
+# clone, as in CI).
 # The same strategy behind deferred(): fresh() below filters it once per name, and a
 # filter of from_regex(...) itself would rebuild the regex strategy every time (that
 # rebuilding was most of this file's CPU); the names drawn are the same.

@@ -421,6 +421,21 @@ def edge_gap(i, ne, r0, r1, v, vd, EF, MOF):
     return v - TWO_PI * math.floor(v / TWO_PI) - MOF[i - ne, 1]
 
 
+@_jit_inline
+def gap_root(g0, g1, d0, d1, s):
+    """The root in (0, 1) of the cubic Hermite of a gap's values g0, g1 and slopes d0, d1 at
+    the step's ends (Newton from s); s when it leaves the interval."""
+    c2 = 3.0 * (g1 - g0) - 2.0 * d0 - d1
+    c3 = 2.0 * (g0 - g1) + d0 + d1
+    for _ in range(4):
+        a = g0 + s * (d0 + s * (c2 + s * c3))
+        b = d0 + s * (2.0 * c2 + 3.0 * s * c3)
+        if not (b != 0.0 and 0.0 < s - a / b < 1.0):
+            break
+        s -= a / b
+    return s
+
+
 @_leaf
 def rk_step(t, hh, y, K, tmp, ynew, TA, TB, TC, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF,
             PRIG, BI, aux, work, zy, zd):
@@ -451,37 +466,39 @@ def rk_step(t, hh, y, K, tmp, ynew, TA, TB, TC, PV, FI, FF, tabs, MI_, MW, EI, E
 
 @_leaf
 def locate(t, hh, y, k1, ynew, k4, tmp, dy, sw0, sw1, reg, regn, PV, FI, FF, tabs, MI_, MW,
-           EI, EF, MOI, MOF, PRIG, BI, aux, work, off, m, zy, zd):
+           EI, EF, MOI, MOF, PRIG, BI, aux, work, off, m, zy, zd, probe):
     """Earliest fraction s ∈ (0, 1] of the step at which a force law changes piece
     (reg → regn: an element crosses an edge of its clearance gap, a moment's window opens
     or closes), on the step's Hermite interpolant (:func:`mechcirc._ode.hermite_point`,
     quintic in the positions for m > 0; Illinois method, to 1e-9 of the step); the upper
     end of the bracket, so the change has happened; 1 for a switch exactly on its edge at
-    the step's end.  ``sw0``/``sw1``: the switches' values at the ends.  Returns (s,
-    right-hand-side evaluations)."""
+    the step's end, or (``probe`` > 0) one not yet changed at the fraction 1 − ``probe``
+    (tried first: the caller needs no closer location).  ``sw0``/``sw1``: the switches'
+    values at the ends.  Returns (s, right-hand-side evaluations)."""
     n = y.shape[0]
     ne = EI.shape[0]
     nsw = reg.shape[0]
     xo = off + ne + 2 + MOI.shape[0]
-    best = 1.0
-    count = 0
+    best, count = 1.0, 0
     for e in range(nsw):
         if reg[e] == regn[e]:
             continue
-        lo = 0.0
-        hi = 1.0
-        r0 = reg[e]
-        r1 = regn[e]
-        vd = 0.0
+        lo, hi, vd = 0.0, 1.0, 0.0
+        r0, r1 = reg[e], regn[e]
         glo = edge_gap(e, ne, r0, r1, sw0[e], sw0[nsw + e] if e < ne else 0.0, EF, MOF)
         ghi = edge_gap(e, ne, r0, r1, sw1[e], sw1[nsw + e] if e < ne else 0.0, EF, MOF)
         if ghi == 0.0:      # on the edge at the step's end: the change is there, no cut
             continue
-        side = 0
-        for _ in range(60):
+        g0, g1, side = glo, ghi, 0
+        for it in range(60):
             if hi - lo <= 1e-9 or hi <= 0.0:
                 break
             s = hi - ghi * (hi - lo) / (ghi - glo) if ghi != glo else 0.5 * (lo + hi)
+            probing = it == 0 and 0.0 < probe < 1.0
+            if probing:
+                s = 1.0 - probe
+            elif it == (probe > 0.0) and e < ne and r0 * r1 <= 0:
+                s = gap_root(g0, g1, hh * sw0[nsw + e], hh * sw1[nsw + e], s)
             if not lo < s < hi:
                 s = 0.5 * (lo + hi)
             hermite_point(tmp, s, hh, y, k1, ynew, k4, n, m)
@@ -489,25 +506,24 @@ def locate(t, hh, y, k1, ynew, k4, tmp, dy, sw0, sw1, reg, regn, PV, FI, FF, tab
                   aux, work, zy, zd)
             count += 1
             if e < ne:
-                v = aux[off + e]
-                vd = aux[xo + e]
+                v, vd = aux[off + e], aux[xo + e]
             else:
                 v = work[6, MOI[e - ne, 0]] - MOF[e - ne, 3] + 0.5 * MOF[e - ne, 1]
             g = edge_gap(e, ne, r0, r1, v, vd, EF, MOF)
             if (g > 0.0) == (ghi > 0.0) and g != 0.0:
-                hi = s
-                ghi = g
+                hi, ghi = s, g
                 if side == 1:
                     glo *= 0.5
                 side = 1
             else:
-                lo = s
-                glo = g
+                lo, glo = s, g
                 if side == -1:
                     ghi *= 0.5
                 side = -1
-        if hi < best:
-            best = hi
+                if probing:     # not changed by 1 − probe: close enough
+                    hi = 1.0
+                    break
+        best = min(best, hi)
     return best, count
 
 
@@ -554,41 +570,42 @@ def switched(reg, regn, nsw):
 
 @_leaf
 def cut_at_kink(tc, hh, h, y, K, tmp, ynew, sw0, sw1, reg, regn, TA, TB, TC, PV, FI, FF, tabs,
-                MI_, MW, EI, EF, MOI, MOF, PRIG, BI, aux, work, off, m, zy, zd, first, nsw):
+                MI_, MW, EI, EF, MOI, MOF, PRIG, BI, aux, auxl, work, off, m, zy, zd, first, nsw):
     """:func:`rk_run`'s step from ``tc`` of ``hh`` (of the run's ``h``), in which a force law
     changed piece, cut at the kink: located on the step's interpolant (:func:`locate`), then,
     that interpolant being of low order across the kink, again on the cut step's own (smooth
     up to the kink), at most 4 times, until the kink is at the cut step's end (to the first
     cut's tolerance) or that step ends before it (the next piece finds it).  ``ynew``, ``K``
-    and ``regn``/``sw1`` hold the cut step.
+    and ``regn``/``sw1`` hold the cut step, ``aux`` its end's outputs (the locations
+    evaluate into ``auxl``).
 
-    Returns (the cut step's length, whether it is the whole step, whether its end has other
-    pieces than its start, right-hand-side evaluations used).
+    Returns (the cut step's length, whether it is the whole step, right-hand-side evaluations
+    used).
     """
     s = TB.shape[0]
     cut, used = locate(tc, hh, y, K[0], ynew, K[s], tmp, K[1], sw0, sw1, reg, regn, PV, FI, FF,
-                       tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, aux, work, off, m, zy, zd)
+                       tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, auxl, work, off, m, zy, zd,
+                       0.0)
     cut = cut + 1e-7
     if not (cut * hh > 1e-9 * h and cut < 1.0 - 1e-7):
-        return hh, True, True, used
-    changed = True
+        return hh, True, used
     for _ in range(4):
         hh = cut * hh
         rk_step(tc, hh, y, K, tmp, ynew, TA, TB, TC, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI,
                 MOF, PRIG, BI, aux, work, zy, zd)
-        used += s - 1
+        used += s          # s - 1 stages and f at the end (rk_step)
         regions(FI, EI, EF, MOI, MOF, aux, work, off, regn, sw1, first)
-        changed = switched(reg, regn, nsw)
-        if not changed:     # cut before the kink: the next piece finds it
+        if not switched(reg, regn, nsw):     # cut before the kink: the next piece finds it
             break
+        # only whether the kink is within the break's tolerance of the end: tried first
         more, extra = locate(tc, hh, y, K[0], ynew, K[s], tmp, K[1], sw0, sw1, reg, regn, PV,
-                             FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, aux, work, off,
-                             m, zy, zd)
+                             FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, auxl, work, off,
+                             m, zy, zd, 0.99e-7 * (1.0 + h / hh))
         used += extra
         cut = more + 1e-7
         if not ((1.0 - cut) * hh > 1e-7 * h and cut * hh > 1e-9 * h):
             break       # as close as the first cut's own tolerance
-    return hh, False, changed, used
+    return hh, False, used
 
 
 @_jit
@@ -618,6 +635,7 @@ def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_
     tmp = np.empty(n)
     ynew = np.empty(n)
     aux = np.empty(naux + EI.shape[0])     # + the elements' rates, for regions
+    auxl = np.empty(aux.shape[0])          # the cuts' locations' (aux stays at ynew)
     work = np.zeros((9, max(FI.shape[0], PRIG.shape[0])))
     zy = np.empty(2 * PRIG.shape[0] - 2)
     zd = np.empty(zy.shape[0])
@@ -626,21 +644,17 @@ def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_
     ne = EI.shape[0]
     nsw = ne + MOI.shape[0]
     off = BI.shape[0] + ne
-    reg = np.zeros(nsw, np.int64)
-    regn = np.zeros(nsw, np.int64)
-    sw0 = np.empty(nsw + ne)
-    sw1 = np.empty(nsw + ne)
-    j = 0
-    bad = 0.0
+    reg, regn = np.zeros(nsw, np.int64), np.zeros(nsw, np.int64)
+    sw0, sw1 = np.empty(nsw + ne), np.empty(nsw + ne)
+    j, bad = 0, 0.0
     npart = PRIG.shape[0]
     limit = PV[2]
     deriv(t0, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, K[0], aux, work, zy, zd)
     first = 0 if shaft else 1
     gaps = regions(FI, EI, EF, MOI, MOF, aux, work, off, reg, sw0, first)
     for step in range(nsteps):
-        t = t0 + step * h
-        t_end = t + h
-        tc = t
+        tc = t0 + step * h
+        t_end = tc + h
         for sub in range(8):
             hh = t_end - tc
             rk_step(tc, hh, y, K, tmp, ynew, TA, TB, TC, PV, FI, FF, tabs, MI_, MW, EI, EF,
@@ -649,28 +663,22 @@ def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_
             full = True
             if gaps > 0:
                 regions(FI, EI, EF, MOI, MOF, aux, work, off, regn, sw1, first)
-                changed = switched(reg, regn, nsw)
-                if changed and sub < 7:
-                    hh, full, changed, used = cut_at_kink(
+                if switched(reg, regn, nsw) and sub < 7:
+                    hh, full, used = cut_at_kink(
                         tc, hh, h, y, K, tmp, ynew, sw0, sw1, reg, regn, TA, TB, TC, PV, FI,
-                        FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, aux, work, off, m, zy,
-                        zd, first, nsw)
+                        FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, aux, auxl, work, off, m,
+                        zy, zd, first, nsw)
                     nfev += used
-                    if changed:     # at an end of the step, or located again: aux at ynew
-                        nfev += 1
-                        deriv(tc + hh, ynew, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF,
-                              PRIG, BI, K[s], aux, work, zy, zd)
-                for e in range(nsw):
-                    reg[e] = regn[e]
-                for e in range(nsw + ne):       # the switches' values and the rates
+                for e in range(nsw + ne):       # the pieces, the switches' values, the rates
                     sw0[e] = sw1[e]
+                    if e < nsw:
+                        reg[e] = regn[e]
             if aux[naux - 1] > bad:
                 bad = aux[naux - 1]
             j = record_hermite(rec_t, rec_y, j, t_out0, dt_out, tc, hh,
                                full and step == nsteps - 1, y, K[0], ynew, K[s], n, m)
             for i in range(n):
-                y[i] = ynew[i]
-                K[0, i] = K[s, i]
+                y[i], K[0, i] = ynew[i], K[s, i]
             if shaft:
                 if not shaft_speed(y, PV, npart) >= PV[11]:
                     return tc + hh, j, False, bad, nfev

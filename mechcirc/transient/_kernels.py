@@ -43,25 +43,36 @@ KINK_MARGIN, KINK_RECUT = 1e-9, 1e-8
 
 
 @_jit
-def elasto_backlash(e, w, c, d, b):
-    """(total force, spring part) of one clearance element; see the module docstring."""
+def law_branch(e, w, c, d, b):
+    """(total force, spring part, branch code) of one clearance element; see the module
+    docstring.  Branch code: 0 in the gap (and a plain spring); ±1 contact with the damping
+    part limiting (f_d > f_c in magnitude); ±2 contact with the full damping; ±3 at the
+    wall but separating (f = 0).  The law is smooth inside one code; a change of code is a
+    kink (its switching functions: :func:`_switch_g`)."""
     if abs(b) <= B_EPS:
         fc = c * e
-        return fc + d * w, fc
+        return fc + d * w, fc, 0
     half = 0.5 * b
     if e > half:
         fc = c * (e - half)
         fd = d * w
         if fc + fd <= 0.0:
-            return 0.0, 0.0
-        return fc + min(fc, fd), fc
+            return 0.0, 0.0, 3
+        return (fc + fd, fc, 2) if fd <= fc else (fc + fc, fc, 1)
     if e < -half:
         fc = c * (e + half)
         fd = d * w
         if fc + fd >= 0.0:
-            return 0.0, 0.0
-        return fc + max(fc, fd), fc
-    return 0.0, 0.0
+            return 0.0, 0.0, -3
+        return (fc + fd, fc, -2) if fd >= fc else (fc + fc, fc, -1)
+    return 0.0, 0.0, 0
+
+
+@_jit
+def elasto_backlash(e, w, c, d, b):
+    """(total force, spring part) of one clearance element (:func:`law_branch`)."""
+    f, fc, _ = law_branch(e, w, c, d, b)
+    return f, fc
 
 
 @_jit
@@ -138,8 +149,9 @@ def _row_dot(start, val, idx, i, z):
 
 
 @_jit_inline
-def rhs(t, z, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, t0, dt, u, dz):
-    """dz = A z + B u(t) + Σ_e extra[:, e] · f_e(cx_e·z + dx_e u, cv_e·z + dv_e u).
+def rhs(t, z, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, t0, dt, u, dz, codes):
+    """dz = A z + B u(t) + Σ_e extra[:, e] · f_e(cx_e·z + dx_e u, cv_e·z + dv_e u), and the
+    elements' branch codes (:func:`law_branch`) at (t, z) into ``codes``.
 
     A, cx, cv and the columns of extra as :func:`pack_rows` gives them.
     """
@@ -149,34 +161,11 @@ def rhs(t, z, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, t0, dt, u, dz):
     for k in range(prm.shape[0]):
         e = _row_dot(dx[k] * ut, xv, xi, k, z)
         w = _row_dot(dv[k] * ut, vv, vi, k, z)
-        f, fc = elasto_backlash(e, w, prm[k, 0], prm[k, 1], prm[k, 2])
+        f, fc, code = law_branch(e, w, prm[k, 0], prm[k, 1], prm[k, 2])
+        codes[k] = code
         if f != 0.0:
             for j in range(ei.shape[1]):
                 dz[ei[k, j]] += ev[k, j] * f
-
-
-@_jit_inline
-def switch_state(t, z, xi, xv, dx, vi, vv, dv, prm, t0, dt, u, k):
-    """Branch code of clearance element k: 0 in the gap; ±1 contact with the damping
-    part limiting (f_d > f_c in magnitude); ±2 contact with the full damping; ±3 at the
-    wall but separating (f = 0).  The law is smooth inside one code; a change of code
-    is a kink (its switching functions: :func:`_switch_g`)."""
-    ut = drive_at(t, t0, dt, u)
-    e = _row_dot(dx[k] * ut, xv, xi, k, z)
-    w = _row_dot(dv[k] * ut, vv, vi, k, z)
-    c, d, b = prm[k, 0], prm[k, 1], prm[k, 2]
-    half = 0.5 * b
-    if abs(b) <= B_EPS:
-        return 0
-    if e > half:
-        fc = c * (e - half)
-        fd = d * w
-        return 3 if fc + fd <= 0.0 else (2 if fd <= fc else 1)
-    if e < -half:
-        fc = c * (e + half)
-        fd = d * w
-        return -3 if fc + fd >= 0.0 else (-2 if fd >= fc else -1)
-    return 0
 
 
 # Dormand–Prince 5(4) coefficients; the 5th-order weights are the last row of _A (the
@@ -260,14 +249,13 @@ def _root_on_dense(k, kind, side, t, hh, z, P, xi, xv, dx, vi, vv, dv, prm, t0, 
 
 
 @_jit_inline
-def branch_changes(t, y5, xi, xv, dx, vi, vv, dv, prm, t0, dt, u, codes0, codes1):
-    """Whether any clearance element's branch code at the step's end (t, y5; written
-    into ``codes1``) differs from its code at the start (``codes0``)."""
-    changed = False
-    for k in range(prm.shape[0]):
-        codes1[k] = switch_state(t, y5, xi, xv, dx, vi, vv, dv, prm, t0, dt, u, k)
-        changed = changed or codes1[k] != codes0[k]
-    return changed
+def branch_changes(codes0, codes1):
+    """Whether any clearance element's branch code at a step's end (``codes1``, left by
+    its last stage) differs from its code at the start (``codes0``)."""
+    for k in range(codes0.shape[0]):
+        if codes1[k] != codes0[k]:
+            return True
+    return False
 
 
 @_leaf
@@ -276,7 +264,7 @@ def kink_theta(t, hh, z, y5, K, P, coefD, xi, xv, dx, vi, vv, dv, prm, t0, dt, u
     """Fraction of the step t → t + hh (states z → y5) at which the first clearance
     element changes branch, or 2.0 if none does.
 
-    For an element whose branch code (:func:`switch_state`) differs at the ends:
+    For an element whose branch code (:func:`law_branch`) differs at the ends:
     the earliest root of the switching functions that can end its branch (from
     the gap: the wall's edge e ∓ b/2; in contact: separation f_c + f_d and the
     damping limit f_c − f_d; separating at the wall: the edge and f_c + f_d),
@@ -324,9 +312,10 @@ def dense_coefficients(z, y5, K, hh, coefD, P):
 
 @_leaf
 def dopri_stages(t, hh, z, K, ytmp, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, t0, dt, u,
-                 coefA, coefC):
+                 coefA, coefC, codes):
     """Stages 2–7 of a Dormand–Prince step of hh from (t, z; K[0] = f(z)) into K[1 .. 6];
-    ``ytmp`` is left at the 5th-order solution (the last stage is taken there: FSAL)."""
+    ``ytmp`` is left at the 5th-order solution (the last stage is taken there: FSAL), and
+    ``codes`` at the branch codes there."""
     for s in range(1, 7):
         for i in range(z.shape[0]):
             acc = z[i]
@@ -334,7 +323,7 @@ def dopri_stages(t, hh, z, K, ytmp, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, p
                 acc += hh * coefA[s, r] * K[r, i]
             ytmp[i] = acc
         rhs(t + coefC[s] * hh, ytmp, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, t0, dt,
-            u, K[s])
+            u, K[s], codes)
 
 
 @_leaf
@@ -398,8 +387,6 @@ def dopri_run(z, t0, dt, nout, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, u
     # accepted step's end) and at a trial step's end
     codes0 = np.zeros(prm.shape[0], np.int64)
     codes1 = np.zeros(prm.shape[0], np.int64)
-    for k in range(prm.shape[0]):
-        codes0[k] = switch_state(t0, z, xi, xv, dx, vi, vv, dv, prm, t0, dt, u, k)
     h_resume = 0.0
     t = t0
     for i in range(N):
@@ -408,7 +395,7 @@ def dopri_run(z, t0, dt, nout, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, u
     h = min(hmax, dt)
     steps = 0
     k_out = 1
-    rhs(t, z, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, t0, dt, u, K[0])
+    rhs(t, z, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, t0, dt, u, K[0], codes0)
     while k_out < nout:
         stop = t_end if dense else t0 + k_out * dt
         last = False
@@ -418,15 +405,14 @@ def dopri_run(z, t0, dt, nout, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, u
         else:
             hh = h
         dopri_stages(t, hh, z, K, ytmp, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, t0, dt,
-                     u, coefA, coefC)
+                     u, coefA, coefC, codes1)
         err = step_error(z, ytmp, y5, K, hh, coefB4, atol, rtol)
         steps += 1
         # Kink location: if a clearance element changes branch inside the step
         # (whether or not the step passed: a kink inside it inflates its error),
         # shorten it to end just past the switch, so the law is smooth inside
         # every step; the next step starts again from the size cut short.
-        changed = err < math.inf and branch_changes(t + hh, y5, xi, xv, dx, vi, vv, dv, prm,
-                                                     t0, dt, u, codes0, codes1)
+        changed = err < math.inf and branch_changes(codes0, codes1)
         if changed and hh > kink_tol:
             # (a separate, not inlined call: rare, and inlined it slowed every step)
             theta = kink_theta(t, hh, z, y5, K, P, coefD, xi, xv, dx, vi, vv, dv, prm, t0, dt,

@@ -391,16 +391,15 @@ def _clearance_run(ss, circuit, z0, t, us, drive, amp, rtol, notes, elements, ve
         raise MechcircError(f"--rtol must be between {RTOL_RANGE[0]:g} and "
                             f"{RTOL_RANGE[1]:g}, got {rtol:g}")
     u, u_in = us
-    Z, method, err, more = _nonlinear(ss, circuit, z0, t, u_in, rtol,
+    Z, X, method, err, more = _nonlinear(ss, circuit, z0, t, u_in, rtol,
                                       drive.rate(t, amp) if drive.kind == "motion" else None)
     notes.extend(more)
     if _interpolation(t, u, drive, drive.kind == "motion", notes) > 0.0:
         notes.append("the drive's interpolation error is not in the error estimate (the "
                      "clearances make x not linear in the drive)")
     out = _outputs(ss, circuit, t, Z, u, u_in, t[1] - t[0], drive, method, err, notes,
-                   elements, None, velocities)
+                   elements, None, velocities, x_ready=X)
     _require_finite(out)
-    out.separations = _separations(out, circuit, drive)
     return out
 
 
@@ -544,21 +543,14 @@ def _linear(ss: StateSpace, z0, u_in, h, elements, velocities):
     return Z, T, nx, drive_y, x_ready, v_ready, x_bound, err, path
 
 
-def _separations(out: TransientResult, circuit, drive):
-    """Every opening of each clearance's contact (:func:`.contact.separations`)."""
+def _separations(t, E, W, clear: dict, drive) -> list:
+    """Every opening of each clearance's contact (:func:`.contact.separations`), from the
+    relative displacements and velocities ``E``, ``W`` (one row per element of ``clear``)."""
     from .contact import separations
 
     found = []
-    index = {n: i for i, n in enumerate(out.nodes)}
-    v = out.v
-    if v is None:                   # (a run with clearances always forms v)
-        raise ValueError("the separations need the node velocities")
-    clear = backlash_elements(circuit)
-    G = _incidences(index, [e for e, _ in clear], len(index))
-    E, W = (out.x @ G).T, (v @ G).T
-    for j, (e, comp) in enumerate(clear):
-        found += separations(out.time, E[j], W[j],
-                             *_law_params(e, comp), e.name,
+    for j, (e, comp) in enumerate(clear.values()):
+        found += separations(t, E[j], W[j], *_law_params(e, comp), e.name,
                              drive.omega if drive.kind == "motion" else None)
     return sorted(found, key=lambda s: s.t_open)
 
@@ -1135,8 +1127,8 @@ def _nonlinear(ss: StateSpace, circuit, z0, t, u, rtol, rate=None):
     u = np.ascontiguousarray(np.vstack([u, rate if rate is not None else np.full(u.size, np.nan)]))
     hmax = min(1.0 / w_max, t[-1]) if w_max > 0 else t[-1]
 
-    def run(tol, atol, hm, locate=True):
-        out = np.empty((t.size, N))
+    def run(tol, atol, hm, locate=True, out=None):
+        out = np.empty((t.size, N)) if out is None else out
         z = z0.astype(float).copy()
         steps = kern.dopri_run(z, 0.0, h, t.size, *mats, u, tol, atol, hm,
                                kern._A, kern._B4, kern._C, kern._D, dense, out,
@@ -1149,7 +1141,9 @@ def _nonlinear(ss: StateSpace, circuit, z0, t, u, rtol, rate=None):
     # The pilot that scales the absolute tolerance needs the states' peaks
     # only: it does not locate the kinks (which cost most of its steps: 1455
     # against 44 for the 10-mass chain of benchmarks/bench_transient.py).
-    atol = _absolute_tolerance(lambda tol, a, hm: run(tol, a, hm, locate=False), z0, rtol,
+    # (the pilots and the run at rtol share one array: a fresh one costs a page fault per 4 kB)
+    scratch = np.empty((t.size, N))
+    atol = _absolute_tolerance(lambda tol, a, hm: run(tol, a, hm, False, scratch), z0, rtol,
                                hmax)
     # Error estimate: the run asked for, and a reference at a REF_TOL× tighter
     # tolerance and 1/REF_H of the largest step (a run whose steps are limited
@@ -1159,25 +1153,32 @@ def _nonlinear(ss: StateSpace, circuit, z0, t, u, rtol, rate=None):
     # of the run at rtol, which is many times the reference's (on the corpus of
     # tests/test_transient_estimates.py ≥ 4.6× at every rtol from 1e-3 to
     # 1e-10), so it bounds the error of what is returned.
-    Z1 = run(rtol, atol, hmax)
+    Z1 = run(rtol, atol, hmax, out=scratch)
     # (steps that end on every drive sample are limited by the sample step too)
     href = (hmax if dense else min(hmax, h)) / REF_H
     Z = run(rtol / REF_TOL, atol / REF_TOL, href)
     X = Z @ ss.Cx.T
-    err = float(np.abs(X - Z1 @ ss.Cx.T).max())
+    dX = np.subtract(Z1, Z, out=Z1) @ ss.Cx.T
+    err = _peak(dX)
     backend = "numba" if kern.HAVE_NUMBA else "Python"
     method = (f"Dormand-Prince 5(4) ({backend}), clearances in the RHS: rtol "
               f"{rtol / REF_TOL:g} and steps ≤ {href:.3g} s; error estimate = the "
               f"difference from the run at rtol {rtol:g} (absolute tolerance rtol × each "
               "state's peak)")
-    peak_x = float(np.abs(X).max())
+    peak_x = _peak(X)
     notes = []
     if err > rtol * peak_x:
         notes.append(f"the estimated error of x, {err:.2g}, is {err / max(peak_x, 1e-300):.1e} "
                      f"of the largest |x| ({peak_x:.3g}): above --rtol {rtol:g}, which is "
                      "not reached (the error adds up over the steps and contacts); a smaller "
                      "--rtol reduces it")
-    return Z, method, err, notes
+    return Z, X, method, err, notes
+
+
+def _peak(a: np.ndarray, axis=None):
+    """max |a| (over ``axis``) without forming |a| (NaN if a holds one)."""
+    return np.maximum(a.max(axis=axis), -a.min(axis=axis)) if axis is not None else \
+        float(max(a.max(), -a.min()))
 
 
 def _absolute_tolerance(run: Callable, z0: np.ndarray, rtol: float, hmax: float) -> np.ndarray:
@@ -1190,7 +1191,7 @@ def _absolute_tolerance(run: Callable, z0: np.ndarray, rtol: float, hmax: float)
     scale = max(float(np.abs(z0).max()), 0.0) or 1.0
     pilot_tol = max(rtol, 1e-4)
     for _ in range(2):
-        peak = np.abs(run(pilot_tol, np.full(N, pilot_tol * scale), hmax)).max(axis=0)
+        peak = _peak(run(pilot_tol, np.full(N, pilot_tol * scale), hmax), axis=0)
         new = float(peak.max())
         if not (math.isfinite(new) and new > 0) or 0.1 * scale <= new:
             break
@@ -1258,9 +1259,9 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, notes, want=Tr
     X = affine(ss.Cx, ss.Dx, cols=nx, Cz=x_ready)
     V = affine(ss.Cv, ss.Dv, ss.Ev, Cz=v_ready) if velocities else None
     index = {n: i for i, n in enumerate(ss.nodes)}
-    if clear:                       # e and w of every clearance: one product each
+    if clear and V is not None:     # e and w of every clearance (V: formed when clear)
         G = _incidences(index, [e for e, _ in clear.values()], len(ss.nodes))
-        Ec, Wc = (X @ G).T, (V @ G).T
+        Ec, Wc = G.T @ X.T, G.T @ V.T       # (rows contiguous, as the law takes them)
     law_cache = {name: _law_forces(e, comp, Ec[j], Wc[j])
                  for j, (name, (e, comp)) in enumerate(clear.items())}
     Acc = None
@@ -1270,8 +1271,8 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, notes, want=Tr
         # formed once, so the cost is one (n_t × N) · (N × n) product.
         Acc = affine(ss.Cv @ ss.A, ss.Cv @ ss.B, ss.Dv)
         if clear:                               # the clearance forces drive the masses too
-            F = np.column_stack([law_cache[name][0] for name in clear])
-            Acc += F @ (ss.Cv @ ss.extra[:, :len(clear)]).T
+            F = np.array([law_cache[name][0] for name in clear])
+            Acc += F.T @ (ss.Cv @ ss.extra[:, :len(clear)]).T
 
     els = circuit.elements if want else ()
     force, dvm = _element_forces(els, index, X, V, Acc, clear, law_cache, t.size)
@@ -1289,6 +1290,7 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, notes, want=Tr
                            units=units_of(circuit.drive),
                            clearances={e.name: (e.n1, e.n2, e.backlash)
                                        for e, _ in backlash_elements(circuit)},
+                           separations=_separations(t, Ec, Wc, clear, drive) if clear else [],
                            waveform=drive.label if ss.kind is not None else None)
 
 
@@ -1320,12 +1322,17 @@ def _element_forces(els, index: dict, X, V, Acc, clear: dict, law_cache: dict, n
     G = _incidences(index, els, len(index))
     dvm = V @ G if V is not None else np.zeros((n_t, 0))
     scale = np.array([e.value * e.eta for e in els])
-    kinds = np.array([e.kind for e in els])
-    force = dvm * np.where(kinds == "damper", scale, 0.0)
-    for kind, Y in (("spring", X), ("mass", Acc)):
-        if np.any(kinds == kind):           # value·η folded into the incidences
-            force += Y @ (G * np.where(kinds == kind, scale, 0.0))
     comp_of = {comp.name: e.name for e, comp in clear.values() if comp is not None}
+    kinds = np.array([e.kind if e.name not in clear and e.name not in comp_of else "law"
+                      for e in els])
+    force = np.zeros((n_t, len(els)))
+    # each kind's columns only (temporaries as wide as they are: fresh memory costs a
+    # page fault per 4 kB, and a chain's full-width temporaries were half this function)
+    for kind, Y in (("damper", dvm), ("spring", X), ("mass", Acc)):
+        cols = np.flatnonzero(kinds == kind)
+        if cols.size:                       # value·η folded into the incidences
+            force[:, cols] = Y[:, cols] * scale[cols] if kind == "damper" else \
+                Y @ (G[:, cols] * scale[cols])
     for j, e in enumerate(els):
         if e.name in clear or e.name in comp_of:
             sp = clear[e.name][0] if e.name in clear else clear[comp_of[e.name]][0]
