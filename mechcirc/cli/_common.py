@@ -444,7 +444,7 @@ def check_output_paths(*paths, plots=(), reads=(), table: str | None = None) -> 
             raise MechcircError(
                 f"{path}: unsupported plot format {Path(path).suffix or '(none)'!r} "
                 f"(expected one of {', '.join('.' + f for f in PLOT_FORMATS)})")
-    suffix = Path(paths[0]).suffix.lower() if table and paths[0] else ""
+    suffix = Path(paths[0]).suffix.lower() if table and paths and paths[0] else ""
     if suffix.lstrip(".") in PLOT_FORMATS:
         raise MechcircError(f"{paths[0]}: -o writes {table}, not an image (a command that "
                             "draws writes its plot to --plot IMAGE)")
