@@ -628,10 +628,7 @@ def _undamped(M: np.ndarray, K: np.ndarray, vectors: bool = False) -> tuple:
     A diagonal M (every mass to the frame, the usual mobility-analogy layout)
     is handled without an eigen-decomposition of M.
     """
-    if not np.any(M - np.diag(np.diag(M))):
-        mu, V = np.diag(M), None
-    else:
-        mu, V = np.linalg.eigh(M)
+    mu, V = (np.diag(M), None) if not np.any(M - np.diag(np.diag(M))) else np.linalg.eigh(M)
     massive = mu > 1e-13 * max(mu.max(initial=0.0), 1e-300)
     direct = V is None and bool(massive.all())
     none = (np.zeros(0), direct, np.zeros((M.shape[0], 0)) if vectors else None)
