@@ -686,9 +686,7 @@ def _combine(parts: list, omega, inv_omega, zero, keep: bool, checked: bool,
     series, sums, counts, has, bterms = groups
     real, im_inv, im_omega = sums       # leaf terms: real + j(im_inv/ω + im_omega·ω)
     has_real, has_inv, has_omega = has
-    imag = None
-    if has_inv:
-        imag = inv_omega * im_inv
+    imag = inv_omega * im_inv if has_inv else None
     if has_omega:
         imag = omega * im_omega if imag is None else imag + omega * im_omega
     # A parallel node's terms are fresh reciprocals, and without ``keep`` a
