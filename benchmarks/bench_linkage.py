@@ -28,12 +28,15 @@ from __future__ import annotations
 
 import math
 import os
+import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests"))
+from linkage_reference import jac, phi  # noqa: E402  (Φ and its Jacobian, written out)
 
 FOURBAR_TOML = """
 name = "Mrázek beat-up four-bar"
@@ -118,7 +121,7 @@ def old_solve(lk, thetas, max_step_deg=2.0, use_fsolve=False):
         return g
 
     def derivatives(q):
-        J = lk._jac(q, local, idx, rows)
+        J = jac(lk, q, local, idx, rows)
         cond = np.linalg.cond(J)
         if not np.isfinite(cond) or cond > 1e12:
             return J, None, None, None
@@ -131,14 +134,14 @@ def old_solve(lk, thetas, max_step_deg=2.0, use_fsolve=False):
 
     def newton(q, angles):
         if use_fsolve:
-            sol, info, ier, _ = fsolve(lambda x: lk._phi(x, angles, local, idx, rows), q,
-                                       fprime=lambda x: lk._jac(x, local, idx, rows),
+            sol, info, ier, _ = fsolve(lambda x: phi(lk, x, angles, local, idx, rows), q,
+                                       fprime=lambda x: jac(lk, x, local, idx, rows),
                                        full_output=True, xtol=1e-13)
             return sol, ier == 1
         # the first release's Newton (the Linkage method it was, written out here)
         previous = np.inf
         for k in range(30):
-            r = lk._phi(q, angles, local, idx, rows)
+            r = phi(lk, q, angles, local, idx, rows)
             size = np.max(np.abs(r))
             if size < tol:
                 return q, True
@@ -146,12 +149,12 @@ def old_solve(lk, thetas, max_step_deg=2.0, use_fsolve=False):
                 return q, False
             previous = size
             try:
-                q = q - np.linalg.solve(lk._jac(q, local, idx, rows), r)
+                q = q - np.linalg.solve(jac(lk, q, local, idx, rows), r)
             except np.linalg.LinAlgError:
                 return q, False
             if not np.all(np.isfinite(q)):
                 return q, False
-        return q, np.max(np.abs(lk._phi(q, angles, local, idx, rows))) < tol
+        return q, np.max(np.abs(phi(lk, q, angles, local, idx, rows))) < tol
 
     q, t_now = lk.q0(), 0.0
     J, qdot, qddot, parts = derivatives(q)

@@ -10,6 +10,8 @@ for their rows (or a subset ``rows`` of them).
 
 from __future__ import annotations
 
+import contextlib
+
 import numpy as np
 
 from ._dd import cdd_div, cdd_mul, dd_div_d, dd_mul_d, dd_norm, dd_sub, split, two_sum
@@ -240,10 +242,8 @@ def stacked_inverse(A):
     except np.linalg.LinAlgError:
         inv = np.full(A.shape, np.nan, dtype=complex)
         for k in range(A.shape[0]):
-            try:
+            with contextlib.suppress(np.linalg.LinAlgError):
                 inv[k] = np.linalg.inv(A[k])
-            except np.linalg.LinAlgError:
-                pass
         return inv, np.isfinite(inv).all(axis=(1, 2))
 
 

@@ -686,9 +686,7 @@ def _combine(parts: list, omega, inv_omega, zero, keep: bool, checked: bool,
     series, sums, counts, has, bterms = groups
     real, im_inv, im_omega = sums       # leaf terms: real + j(im_inv/ω + im_omega·ω)
     has_real, has_inv, has_omega = has
-    imag = None
-    if has_inv:
-        imag = inv_omega * im_inv
+    imag = inv_omega * im_inv if has_inv else None
     if has_omega:
         imag = omega * im_omega if imag is None else imag + omega * im_omega
     # A parallel node's terms are fresh reciprocals, and without ``keep`` a
@@ -744,9 +742,8 @@ def _node_bound(total: _Value, parts: list, omega, inv_omega, groups: list, zero
         bterms = groups[4] = (np.asarray(mu), np.asarray(_U_RECIP + mu), tuple(
             np.asarray(t) for t in _leaf_bound_terms(sums, counts, len(parts))))
     mu, c, (b_real, b_inv, b_omega) = bterms
-    bound = None                # the leaf groups' share: b_real + b_inv/ω + b_omega·ω
-    if has[1]:
-        bound = b_inv * inv_omega
+    # The leaf groups' share: b_real + b_inv/ω + b_omega·ω.
+    bound = b_inv * inv_omega if has[1] else None
     if has[2]:
         t = b_omega * omega
         bound = t if bound is None else np.add(bound, t, bound)

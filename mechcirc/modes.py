@@ -440,8 +440,9 @@ def _root_sensitivity(system, M, D, Ks, pinv_GT, S, V, dV, y, power, ya2=None) -
     element rows are computed in real arithmetic), else None."""
     MV, DV = M @ V, D @ V
     den = np.sum(V * (2 * S * MV + DV), axis=0)
-    table, which = _law_powers(S, 1.0 - power)
-    coef = -table / den                     # p·∂s/∂p per unit y·Δv², one row per law
+    # The powers S ** (1 - power), one row per distinct exponent (element e's is row which[e]).
+    exponents, which = np.unique(np.asarray(1.0 - power, dtype=float), return_inverse=True)
+    coef = -(S[None, :] ** exponents[:, None]) / den    # p·∂s/∂p per unit y·Δv², a row a law
     if ya2 is not None:
         rel_law, zeta_law = _omega_zeta(S, coef)
         # Undamped, ∂s/∂p is imaginary: ζ rows of zeros, left untouched (no page faults).
@@ -460,13 +461,6 @@ def _root_sensitivity(system, M, D, Ks, pinv_GT, S, V, dV, y, power, ya2=None) -
     ratio = np.array([lv.ratio for lv in system.levers])[:, None]
     lever_rel, lever_zeta = _omega_zeta(S, -2 * S * ratio * q[:len(p1)] * (Ve[p1] - Ve[p2]) / den)
     return np.vstack([rel, lever_rel]), np.vstack([zeta, lever_zeta])
-
-
-def _law_powers(S: np.ndarray, exponent: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``(table, which)``: S[r] ** exponent[e] is ``table[which[e], r]``, one complex
-    power per distinct exponent."""
-    values, which = np.unique(np.asarray(exponent, dtype=float), return_inverse=True)
-    return S[None, :] ** values[:, None], which
 
 
 def _omega_zeta(s, ds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -589,10 +589,8 @@ def _singular_points(system, omega, x, K, err, singular, steps):
                 continue                    # undetermined: NaN, flagged singular
             xi, Ki = s.x[0], s.K[0]
         scale = float(np.max(np.abs(xi)))
-        if abs(Ki) >= 1e-3 * scale:
-            K[i] = complex(0.0, np.inf)     # the tree's convention: +∞·j at a pole
-        else:
-            K[i] = 0.0
+        # The tree's convention: +∞·j at a pole.
+        K[i] = complex(0.0, np.inf) if abs(Ki) >= 1e-3 * scale else 0.0
         err[i] = np.inf
     return K, err
 

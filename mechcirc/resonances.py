@@ -628,10 +628,7 @@ def _undamped(M: np.ndarray, K: np.ndarray, vectors: bool = False) -> tuple:
     A diagonal M (every mass to the frame, the usual mobility-analogy layout)
     is handled without an eigen-decomposition of M.
     """
-    if not np.any(M - np.diag(np.diag(M))):
-        mu, V = np.diag(M), None
-    else:
-        mu, V = np.linalg.eigh(M)
+    mu, V = (np.diag(M), None) if not np.any(M - np.diag(np.diag(M))) else np.linalg.eigh(M)
     massive = mu > 1e-13 * max(mu.max(initial=0.0), 1e-300)
     direct = V is None and bool(massive.all())
     none = (np.zeros(0), direct, np.zeros((M.shape[0], 0)) if vectors else None)
@@ -1134,7 +1131,9 @@ def _stacked_damped(M: np.ndarray, Dm: np.ndarray, K: np.ndarray, omega_max):
     eye = np.eye(k)
     Ms, Ds = np.where(ok[:, None, None], Ms, eye), np.where(ok[:, None, None], Ds, 0.0)
     Ks = np.where(ok[:, None, None], Ks, eye)
-    Ms, Minv = _stacked_mass_inverse(Ms, ok)
+    # M⁻¹ = L⁻ᵀ L⁻¹ by Cholesky; ok loses the designs whose M is not safely definite.
+    Ms, Linv = _stacked_cholesky_inverse(Ms, ok)
+    Minv = np.swapaxes(Linv, 1, 2) @ Linv
     A = np.zeros((n, 2 * k, 2 * k))
     A[:, :k, k:] = eye
     A[:, k:, :k] = -(Minv @ Ks)
@@ -1162,13 +1161,6 @@ def _stacked_damped(M: np.ndarray, Dm: np.ndarray, K: np.ndarray, omega_max):
         s[beyond] = np.nan
         err[beyond] = np.nan
     return s, err, ok
-
-
-def _stacked_mass_inverse(Ms: np.ndarray, ok: np.ndarray) -> tuple:
-    """``(Ms, M⁻¹)`` of a stack of mass matrices by Cholesky; ``ok`` (updated in place)
-    loses the designs whose matrix is not safely definite (replaced by I in Ms)."""
-    Ms, Linv = _stacked_cholesky_inverse(Ms, ok)
-    return Ms, np.swapaxes(Linv, 1, 2) @ Linv
 
 
 def _stacked_cholesky_inverse(Ms: np.ndarray, ok: np.ndarray) -> tuple:

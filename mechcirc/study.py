@@ -278,13 +278,10 @@ def _axis(name, value) -> list[float]:
         return [_number(path, v, f"grid.{name}") for v in value]
     lo = _number((*path, "min"), value["min"], f"grid.{name}.min")
     hi = _number((*path, "max"), value["max"], f"grid.{name}.max")
-    num = value["num"]
-
-    if value.get("log", False):
-        if lo <= 0 or hi <= 0:
-            _fail((*path, "log"), f"grid.{name}: log spacing needs min and max > 0")
-        return [float(x) for x in np.geomspace(lo, hi, num)]
-    return [float(x) for x in np.linspace(lo, hi, num)]
+    log = value.get("log", False)
+    if log and (lo <= 0 or hi <= 0):
+        _fail((*path, "log"), f"grid.{name}: log spacing needs min and max > 0")
+    return [float(x) for x in (np.geomspace if log else np.linspace)(lo, hi, value["num"])]
 
 
 #: The largest number of points (rows) a study may have; each row holds ~1 kB

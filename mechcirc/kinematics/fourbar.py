@@ -514,10 +514,8 @@ class FourBar:
         tmin = tuple(sorted(set().union(*(t for g, t in candidates
                                            if math.isclose(g, gmin, abs_tol=1e-15)))))
         right = math.sqrt(b * b + c * c)
-        if bd_lo <= right <= bd_hi:
-            gmax, tmax = math.pi / 2, thetas_for(right)
-        else:
-            gmax, tmax = max(candidates, key=lambda t: t[0])
+        gmax, tmax = (math.pi / 2, thetas_for(right)) if bd_lo <= right <= bd_hi else \
+            max(candidates, key=lambda t: t[0])
         return TransmissionRange(gmin, tmin, gmax, tmax)
 
     def nu_extrema(self, n: int = 3600) -> tuple[tuple[float, float], tuple[float, float]]:

@@ -159,9 +159,6 @@ def _rot(phi):
     return np.array([[c, -s], [s, c]])
 
 
-_PERP = np.array([[0.0, -1.0], [1.0, 0.0]])
-
-
 
 @dataclass(frozen=True, eq=False)
 class Linkage:
@@ -312,37 +309,6 @@ class Linkage:
     def _point(self, q, link, p, local, idx):
         i = idx[link]
         return q[3 * i:3 * i + 2] + _rot(q[3 * i + 2]) @ local[link][p]
-
-    def _phi(self, q, angles, local, idx, rows):
-        """Constraint residual Φ(q) with the cranks driven to ``angles`` [rad] (crank order)."""
-        out = np.empty(len(q))
-        k = 0
-        for p, a, b in rows:
-            pa = self.pose[p] if a == "ground" else self._point(q, a, p, local, idx)
-            pb = self._point(q, b, p, local, idx)
-            out[k:k + 2] = pa - pb
-            k += 2
-        for c, ang in zip(self.cranks, angles):
-            out[k] = q[3 * idx[c.link] + 2] - ang
-            k += 1
-        return out
-
-    def _jac(self, q, local, idx, rows):
-        n = len(q)
-        J = np.zeros((n, n))
-        k = 0
-        for p, a, b in rows:
-            for body, sign in ((a, 1.0), (b, -1.0)):
-                if body == "ground":
-                    continue
-                i = idx[body]
-                J[k:k + 2, 3 * i:3 * i + 2] += sign * np.eye(2)
-                J[k:k + 2, 3 * i + 2] += sign * (_PERP @ _rot(q[3 * i + 2]) @ local[body][p])
-            k += 2
-        for c in self.cranks:
-            J[k, 3 * idx[c.link] + 2] = 1.0
-            k += 1
-        return J
 
     def length_scale(self) -> float:
         """The larger side of the pose's bounding box [m] (1 if all points coincide)."""

@@ -782,10 +782,8 @@ def _analysis(text, source, table, circuit_names) -> Analysis:
     if not isinstance(table, dict):
         raise located(text, source, "analysis must be a table [analysis]", None, "analysis")
     check_keys(text, source, TABLES["analysis"], table)
-    theta = None
-    if "theta_deg" in table:
-        theta = _number(text, source, table["theta_deg"], "theta_deg [deg]", "analysis",
-                        "theta_deg", 0, positive=False)
+    theta = _number(text, source, table["theta_deg"], "theta_deg [deg]", "analysis",
+                    "theta_deg", 0, positive=False) if "theta_deg" in table else None
     output = table.get("output")
     if output is not None and not _named(output, circuit_names):
         raise located(text, source, f"[analysis] output {output!r} is not an element of the "
@@ -803,9 +801,8 @@ def _analysis(text, source, table, circuit_names) -> Analysis:
         except BandError as exc:
             raise located(text, source, f"[analysis] {exc}", "analysis", "band",
                        expected="band = [W1, W2] with 0 < W1 < W2 [rad/s]") from None
-    tol = None
-    if "tol" in table:
-        tol = _number(text, source, table["tol"], "tol", "analysis", "tol", 0)
+    tol = _number(text, source, table["tol"], "tol", "analysis", "tol", 0) \
+        if "tol" in table else None
     if (band is None) != (tol is None):
         raise located(text, source, "[analysis] needs band and tol together", "analysis",
                    "band" if band is not None else "tol",

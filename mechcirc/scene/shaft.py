@@ -127,14 +127,13 @@ class ShaftMotion:
 
     def summary(self) -> dict:
         """The scalar results and extremes, JSON-ready."""
-        out = {"flywheel": self.flywheel, "omega_min": self.omega_min,
-               "omega_max": self.omega_max, "omega_mean": self.omega_mean,
-               "delta": self.delta, "period": self.period, "startup_time": self.startup_time,
-               "motor_torque": [float(self.motor_torque.min()), float(self.motor_torque.max()),
-                                float(np.mean(self.motor_torque))],
-               "body_accelerations": {b: [float(v.min()), float(v.max())]
-                                      for b, v in self.body_accelerations.items()}}
-        return out
+        return {"flywheel": self.flywheel, "omega_min": self.omega_min,
+                "omega_max": self.omega_max, "omega_mean": self.omega_mean,
+                "delta": self.delta, "period": self.period, "startup_time": self.startup_time,
+                "motor_torque": [float(self.motor_torque.min()), float(self.motor_torque.max()),
+                                 float(np.mean(self.motor_torque))],
+                "body_accelerations": {b: [float(v.min()), float(v.max())]
+                                       for b, v in self.body_accelerations.items()}}
 
 
 class _Cubic:

@@ -48,6 +48,15 @@ from ..sources import Table, brief, check_keys, checked_number, finite_number, i
 __all__ = ["Moment", "SimulateSettings", "parse_moments", "parse_simulate",
            "apply_overrides", "Motor", "Shaft", "kloss_motor", "table_motor", "parse_shaft"]
 
+_RIPPLE_FORM = "omega_ripple = {amplitude = 0.05, harmonic = 2}"
+#: The keys of ``[[moments]]`` and ``[simulate]`` (see :class:`mechcirc.sources.Table`).
+_MOMENTS = Table("moments", {"name": "element name (default M_BODY)",
+                             "body": "a rigid link or torsion body", "amplitude": "[N·m]",
+                             "window_deg": "[deg], < 360", "sigma_deg": "[deg]",
+                             "centre": "a dead centre or a crank rotation [deg]"}, array=True)
+_SIMULATE = Table("simulate", {"omega": "[rad/s]", "revolutions": "≥ 1", "start_deg": "[deg]",
+                               "steps_per_period": "> 0", "points": "≥ 16",
+                               "omega_ripple": _RIPPLE_FORM, "aliases": "[simulate.aliases]"})
 
 
 @dataclass(frozen=True)
@@ -100,11 +109,7 @@ def parse_moments(text, source, table, scene) -> tuple:
                                                                  *scene.loads)}
     out = []
     for n, m in enumerate(table):
-        for k in m:
-            if k not in ("name", "body", "amplitude", "window_deg", "sigma_deg", "centre"):
-                raise located(text, source, f"unknown key {k!r} in [[moments]] #{n + 1}", "moments",
-                           k, occurrence=n,
-                           expected="name, body, amplitude, window_deg, sigma_deg, centre")
+        check_keys(text, source, _MOMENTS, m, n)
         body = m.get("body")
         if not isinstance(body, str) or body not in bodies:
             raise located(text, source, f"[[moments]] #{n + 1}: body {body!r} is not a rigid link "
@@ -158,6 +163,7 @@ def parse_simulate(text, source, table, scene) -> SimulateSettings:
         return SimulateSettings()
     if not isinstance(table, dict):
         raise located(text, source, "simulate must be a table [simulate]", None, "simulate")
+    check_keys(text, source, _SIMULATE, table)
     kw: dict[str, Any] = {}
     for k, v in table.items():
         if k == "aliases":
@@ -181,14 +187,7 @@ def parse_simulate(text, source, table, scene) -> SimulateSettings:
             kw[k] = v
         elif k == "omega_ripple":
             kw[k] = _ripple(text, source, v)
-        else:
-            raise located(text, source, f"unknown key {k!r} in [simulate]", "simulate", k,
-                       expected="omega, revolutions, start_deg, steps_per_period, points, "
-                       "omega_ripple, aliases")
     return SimulateSettings(**kw)
-
-
-_RIPPLE_FORM = "omega_ripple = {amplitude = 0.05, harmonic = 2}"
 
 
 def _ripple(text, source, v):

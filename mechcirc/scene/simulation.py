@@ -265,10 +265,9 @@ def max_rate(model: MotionModel, samples: int = 72) -> float:
     -------
     float
     """
-    key = _RATES.get(model, {})
+    key = _RATES.setdefault(model, {})
     if samples not in key:
         key[samples] = _max_rate(model, samples)
-        _RATES[model] = key
     return key[samples]
 
 

@@ -317,8 +317,7 @@ def _grid(t_end: float, dt: float | None, waveform: Waveform) -> np.ndarray:
     if not ratio + 1 <= MAX_SAMPLES:
         raise MechcircError(f"t_end/dt = {ratio:.3g} samples, the limit is {MAX_SAMPLES}; "
                             "give a larger --dt or a shorter --t-end")
-    n = int(round(ratio))
-    n = max(n, 1)
+    n = max(int(round(ratio)), 1)
     return np.linspace(0.0, n * dt, n + 1)
 
 

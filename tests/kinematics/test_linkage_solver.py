@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from linkage_reference import jac, phi
 from scipy.optimize import fsolve
 
 from mechcirc.errors import GeometryError
@@ -99,8 +100,8 @@ def test_six_bar_against_fsolve_and_finite_differences(backend):
     for k in (0, 97, 400, 1000, 1439):
         angles = [c.omega * m.t[k] for c in lk.cranks]
         guess = m.q[k] + 1e-3                   # fsolve from a perturbed start
-        ref = fsolve(lambda x: lk._phi(x, angles, local, idx, rows), guess,
-                     fprime=lambda x: lk._jac(x, local, idx, rows), xtol=1e-13)
+        ref = fsolve(lambda x: phi(lk, x, angles, local, idx, rows), guess,
+                     fprime=lambda x: jac(lk, x, local, idx, rows), xtol=1e-13)
         np.testing.assert_allclose(m.q[k], ref, rtol=0, atol=3e-13)   # 2.8e-14 achieved
     # 4th-order central differences in time of q and q̇ (0.25° spacing): their
     # truncation leaves 2.4e-10 (q̇) and 6.2e-10 (q̈) of the largest value; 3e-9 asserted
