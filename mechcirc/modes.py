@@ -119,9 +119,12 @@ class Mode:
     _values: dict = field(default_factory=dict, repr=False, compare=False)
     _names: dict = field(default_factory=dict, repr=False, compare=False)
 
-    shape, energy = _lazy("shape", "nodes"), _lazy("energy", "stored")
-    dissipation, velocity = _lazy("dissipation", "dampers"), _lazy("velocity", "elements")
-    sensitivity, zeta_sensitivity = _lazy("sensitivity", "all"), _lazy("zeta_sensitivity", "all")
+    shape = _lazy("shape", "nodes")
+    energy = _lazy("energy", "stored")
+    dissipation = _lazy("dissipation", "dampers")
+    velocity = _lazy("velocity", "elements")
+    sensitivity = _lazy("sensitivity", "all")
+    zeta_sensitivity = _lazy("zeta_sensitivity", "all")
 
     @functools.cached_property
     def force(self) -> dict:
@@ -174,7 +177,8 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
     >>> {k: round(v, 12) for k, v in m.sensitivity.items()}
     {'m': -0.5, 'k': 0.5}
     """
-    system, pairs = circuit.nodal, resonance_pairs(circuit, omega_max, vectors=True)
+    system = circuit.nodal
+    pairs = resonance_pairs(circuit, omega_max, vectors=True)
     if not pairs:
         return []
     M, D, Ks, G_released, G_held, _ = pencil(system)
@@ -226,7 +230,8 @@ def _chunk_values(system, pencil3, pinv, S, V, stamps) -> list:
     vectors ``V`` (columns), one ``(values, param_rel, param_zeta)`` per root."""
     ei, ej, y, power, slopes, mass, spring, damper = stamps
     M, D, Ks = pencil3
-    top, col = np.argmax(np.abs(V), axis=0), np.arange(S.size)
+    top = np.argmax(np.abs(V), axis=0)
+    col = np.arange(S.size)
     V = V / V[top, col]                     # 1 at the largest entry (real when undamped),
     V[top, col] = 1.0                       # exactly (a complex quotient may miss by an ulp)
     # Real vectors (undamped roots) keep every (element × root) array real: the complex
@@ -268,7 +273,8 @@ def _mode(r, repeated, vals, p_rel, p_zeta, shared) -> Mode:
 def _stamped(system) -> tuple:
     """(row i, row j (−1 the reference), value·η, law power) of each loaded element,
     and the names: the elements, then the levers."""
-    els, index = system.elements, {n: i for i, n in enumerate(system.nodes)}
+    els = system.elements
+    index = {n: i for i, n in enumerate(system.nodes)}
     ei = np.array([index.get(e.n1, -1) for e in els], dtype=int)
     ej = np.array([index.get(e.n2, -1) for e in els], dtype=int)
     y = np.array([e.value * e.eta for e in els])
@@ -420,7 +426,8 @@ def _adjoint_products(system, x, w, stamps) -> np.ndarray:
     """∂K/∂(value) of every stamped element, then every lever ratio, at the ω ``w``
     from the nodal solutions ``x`` (rows), shape (ω, elements + levers)."""
     ei, ej, y, power = stamps
-    n_nodes, index = len(system.nodes), {nd: i for i, nd in enumerate(system.nodes)}
+    n_nodes = len(system.nodes)
+    index = {nd: i for i, nd in enumerate(system.nodes)}
     xe = np.concatenate([x, np.zeros((w.size, 1), complex)], axis=1)
     with np.errstate(all="ignore"):
         S = y * (1j * w[:, None]) ** (-power.astype(float))
@@ -501,7 +508,8 @@ def _param_slopes(circuit: Circuit, names: list[str]) -> dict[str, np.ndarray]:
     from .expressions import evaluate
     from .netlist import expressions_of
 
-    exprs, params = expressions_of(circuit), dict(circuit.params)
+    exprs = expressions_of(circuit)
+    params = dict(circuit.params)
     if not exprs or not params:
         return {}
     position = {name: k for k, name in enumerate(names)}
@@ -519,7 +527,8 @@ def _param_slopes(circuit: Circuit, names: list[str]) -> dict[str, np.ndarray]:
             if e.kind != "num" and (key[0] == "param" or key in targets) and e.names() & params.keys()]
     out = {}
     for p, value in params.items():
-        tangent, row = {p: 1.0}, np.zeros(len(names))
+        tangent = {p: 1.0}
+        row = np.zeros(len(names))
         for key, expr, factor in used:
             if key == ("param", p):
                 continue

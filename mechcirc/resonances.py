@@ -417,7 +417,8 @@ def _modes_unchecked(M, D, Ks, G, damped: bool, omega_max=None, vectors: bool = 
         raise SolverError("resonances: the network's matrices overflow float64 (element "
                           "values or lever ratios near 1e308 combine beyond it)",
                           status="overflow")
-    scale_m, scale_k = np.abs(Mr).max() or 1.0, np.abs(Kr).max() or 1.0
+    scale_m = np.abs(Mr).max() or 1.0
+    scale_k = np.abs(Kr).max() or 1.0
     # sqrt of each: the quotient itself can leave float64 (1e-200 / 1e180).
     w_ref = math.sqrt(scale_k) / math.sqrt(scale_m)
     if not (math.isfinite(w_ref) and w_ref > 0):
@@ -444,7 +445,8 @@ def _undamped_roots(M, K, w_ref: float, vectors: bool):
     lam, direct, U = _undamped(M, K, vectors)
     up = lam > 1e-11 * max(1.0, lam.max(initial=0.0))
     lam, U = lam[up], (U[:, up] if vectors and not up.all() else U)
-    s, err = 1j * w_ref * np.sqrt(lam), eps * (lam.max(initial=1.0) / lam) * 4
+    s = 1j * w_ref * np.sqrt(lam)
+    err = eps * (lam.max(initial=1.0) / lam) * 4
     # Weyl's bound holds for the scaled matrix, not through a static
     # condensation or an eigen-decomposition of M (their rounding is
     # amplified by the condition of the condensed block): not a bound
@@ -525,7 +527,8 @@ def _band_modes(M, D, K, omega_max: float) -> np.ndarray:
         & (s_all.imag >= -1e-9 * np.abs(s_all))
     s = s_all[keep]
     s = np.where(np.abs(s.imag) <= 1e-9 * np.abs(s), s.real + 0j, s)
-    err, must = np.full(s.size, 1e-8), np.ones(s.size)
+    err = np.full(s.size, 1e-8)
+    must = np.ones(s.size)
     return np.column_stack([s, err, must]) if s.size else np.zeros((0, 3), dtype=complex)
 
 
@@ -543,7 +546,8 @@ def _band_modes_undamped(M, K, omega_max: float, v0: np.ndarray) -> np.ndarray |
     """
     from scipy.sparse.linalg import ArpackError, ArpackNoConvergence, eigsh
 
-    n, counts = M.shape[0], _inertia_counts(M, K, omega_max)
+    n = M.shape[0]
+    counts = _inertia_counts(M, K, omega_max)
     if counts is None:
         return None
     below, upto = counts
@@ -637,7 +641,8 @@ def _undamped(M: np.ndarray, K: np.ndarray, vectors: bool = False) -> tuple:
     if direct:                       # nothing to condense (no copies of K)
         Krr, Knn, Knr = K, K[:0, :0], K[:0]
     elif V is None:
-        Krr, Knn = K[np.ix_(massive, massive)], K[np.ix_(~massive, ~massive)]
+        Krr = K[np.ix_(massive, massive)]
+        Knn = K[np.ix_(~massive, ~massive)]
         Knr = K[np.ix_(~massive, massive)]
     else:
         R, N = V[:, massive], V[:, ~massive]
@@ -703,7 +708,8 @@ def _symmetric_eigvals(A: np.ndarray) -> np.ndarray:
         S = sp.csr_matrix(A)
         _, col, row, band = band_order(S.indptr, S.indices)
         if 8 * band <= n:
-            low, ab = row >= col, np.zeros((band + 1, n))
+            low = row >= col
+            ab = np.zeros((band + 1, n))
             ab[(row - col)[low], col[low]] = S.data[low]
             return eigvals_banded(ab, lower=True, check_finite=False)
     return np.linalg.eigvalsh(A)
@@ -716,7 +722,8 @@ def _damped(M, D, K, vectors: bool = False) -> tuple:
     """
     n = M.shape[0]
     eye, zero = np.eye(n), np.zeros((n, n))
-    A, B = np.block([[zero, eye], [-K, -D]]), np.block([[eye, zero], [zero, M]])
+    A = np.block([[zero, eye], [-K, -D]])
+    B = np.block([[eye, zero], [zero, M]])
     from scipy.linalg import eig            # QZ: numpy has no generalised eig
 
     out = eig(A, B, right=vectors, homogeneous_eigvals=True)
@@ -733,7 +740,8 @@ def _damped(M, D, K, vectors: bool = False) -> tuple:
 def _cancel(held: np.ndarray, released: np.ndarray):
     """Which modes to keep (two masks): not those present in both problems (they
     do not appear in K)."""
-    keep_h, keep_r = np.ones(len(held), bool), np.ones(len(released), bool)
+    keep_h = np.ones(len(held), bool)
+    keep_r = np.ones(len(released), bool)
     for i, (s, err, _) in enumerate(held):
         if not len(released):
             break
@@ -978,7 +986,8 @@ def _without_shared_roots(problems, damped: bool) -> np.ndarray:
 def _polished_designs(ds, which, w_h, e_h, w_r, e_r, omega_max):
     """:func:`batched_roots`' result for undamped designs: the roots of both problems
     merged, polished on each design's K by :func:`_secant_designs` and sorted."""
-    w, e0 = np.concatenate([w_h, w_r], axis=1), np.concatenate([e_h, e_r], axis=1)
+    w = np.concatenate([w_h, w_r], axis=1)
+    e0 = np.concatenate([e_h, e_r], axis=1)
     pole = np.zeros(w.shape, dtype=bool)
     pole[:, w_h.shape[1]:] = True
     # The roots first, the empty slots (beyond omega_max, rigid) last and cut off.
@@ -1041,7 +1050,8 @@ def stacked_problem(Z, B, S, damped: bool, omega_max):
 def _sorted_damped(s_h, s_r, err_h, err_r):
     """(pole, s, error) of damped designs' roots (drive held, released), sorted as
     :func:`find_resonances` sorts, cut to the widest row."""
-    s_, err = np.concatenate([s_h, s_r], axis=1), np.concatenate([err_h, err_r], axis=1)
+    s_ = np.concatenate([s_h, s_r], axis=1)
+    err = np.concatenate([err_h, err_r], axis=1)
     pole = np.zeros(s_.shape, dtype=bool)
     pole[:, s_h.shape[1]:] = True
     mag = np.abs(s_)
@@ -1062,7 +1072,8 @@ def _scaled_stack(M, K):
     """Stacked mass and stiffness matrices scaled to unit largest entry per design,
     and the reference frequency √(max|K| / max|M|) of each: ``(scale_m, w_ref, Ms, Ks)``."""
     with np.errstate(all="ignore"):
-        scale_m, scale_k = np.abs(M).max(axis=(1, 2)), np.abs(K).max(axis=(1, 2))
+        scale_m = np.abs(M).max(axis=(1, 2))
+        scale_k = np.abs(K).max(axis=(1, 2))
         scale_m = np.where(scale_m > 0, scale_m, 1.0)
         scale_k = np.where(scale_k > 0, scale_k, 1.0)
         w_ref = np.sqrt(scale_k) / np.sqrt(scale_m)
@@ -1233,7 +1244,8 @@ def _undamped_stack(M: np.ndarray, K: np.ndarray, n0: int):
     r, regular = k - n0, np.ones(D, dtype=bool)
     Mrr, Kc = M[:, :r, :r], K[:, :r, :r]
     if n0:
-        Knr, Knn = K[:, r:, :r], K[:, r:, r:]
+        Knr = K[:, r:, :r]
+        Knn = K[:, r:, r:]
         try:
             if n0 == 1 and not Knn.all():
                 raise np.linalg.LinAlgError
