@@ -559,7 +559,7 @@ def tableau(method):
             np.ascontiguousarray(DOP853.C[:s]), True)
 
 
-@_leaf
+@_jit_inline
 def switched(reg, regn, nsw):
     """Whether any of the ``nsw`` force-law pieces in ``regn`` differs from ``reg``."""
     for e in range(nsw):
