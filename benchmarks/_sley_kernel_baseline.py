@@ -198,7 +198,7 @@ def rk4_run(both, p, tab, y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t):
             ynew[i] = y[i] + sixth * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i])
         rhs(both, t + h, ynew, p, tab, k4, aux)       # derivative at the step's end
         j = record_hermite(rec_t, rec_y, j, t_out0, dt_out, t, h, step == nsteps - 1,
-                           y, k1, ynew, k4, n)
+                           y, k1, ynew, k4, n, 0, tmp)
         for i in range(n):
             y[i] = ynew[i]
             k1[i] = k4[i]

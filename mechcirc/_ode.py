@@ -5,6 +5,9 @@ from __future__ import annotations
 from ._jit import decorators
 
 HAVE_NUMBA, _jit, _jit_inline = decorators()
+# called once per step: inlined into a caller that counts references (numba's runtime), its
+# array arguments were counted atomically at every call (compiled apart, without counting)
+_leaf = decorators(nrt=False)[1]
 
 __all__ = ["hermite_point", "record_hermite"]
 
@@ -51,23 +54,25 @@ def hermite_point(out, s, h, y, f0, ynew, f1, n, m):
             h * (da0 * f0[m + i] + da1 * f1[m + i])
 
 
-@_jit_inline
-def record_hermite(rec_t, rec_y, j, t_out0, dt_out, t, h, last, y, f0, ynew, f1, n, m=0):
+@_leaf
+def record_hermite(rec_t, rec_y, j, t_out0, dt_out, t, h, last, y, f0, ynew, f1, n, m, tmp):
     """Record the output times in the step [t, t + h] by Hermite interpolation
-    (:func:`hermite_point`: cubic, or quintic in the positions for ``m > 0``).
+    (:func:`hermite_point`: cubic, or quintic in the positions for ``m > 0``), each through
+    the scratch ``tmp`` (n) (a view ``rec_y[j]`` would cost two atomic reference counts).
 
     ``y``/``f0`` are the state and its derivative at t, ``ynew``/``f1`` at t + h;
     output time j is ``t_out0 + j·dt_out``.  The last step (``last``) also takes a
     time a rounding past its end.  Returns the next j to record.
     """
-    nrec = rec_y.shape[0]
-    while j < nrec:
+    while j < rec_y.shape[0]:
         tj = t_out0 + j * dt_out
         if tj >= t + h and not last:
             break
         if tj > t + h * (1.0 + 1e-9):
             break
-        hermite_point(rec_y[j], (tj - t) / h, h, y, f0, ynew, f1, n, m)
+        hermite_point(tmp, (tj - t) / h, h, y, f0, ynew, f1, n, m)
+        for i in range(n):
+            rec_y[j, i] = tmp[i]
         rec_t[j] = tj
         j += 1
     return j

@@ -927,7 +927,8 @@ def _run(model, kern, theta_s, ripple, per_rev, revolutions, npts, progress, tab
          strides=(1, 1), start=None):
     """R revolutions of RK4 (or the explicit ``tableau``, :func:`~mechcirc.scene._motion_kernels.tableau`) at ``per_rev``
     steps each: (times and states tabulated on the last revolution, the previous one's
-    (times, states) or None, wall time, out-of-range seen, right-hand-side evaluations,
+    (times, states) or None (None from ``start``: the estimate's run measures the
+    periodicity), wall time, out-of-range seen, right-hand-side evaluations,
     ``per_rev``, (r, state) at the start of revolution r = max(R − :data:`ESTIMATE_REVOLUTIONS`,
     0)).  The last revolution is tabulated on every ``strides[0]``-th of the ``npts`` output
     points, the previous one on every ``strides[1]``-th.  ``start`` = (r, state): begin at
@@ -940,9 +941,10 @@ def _run(model, kern, theta_s, ripple, per_rev, revolutions, npts, progress, tab
     h = period / per_rev
     (n_last, dt_last), (n_prev, dt_prev) = ((-(-npts // k), period / npts * k) for k in strides)
     rec = np.empty((n_last, y.size)), np.empty(n_last)
-    prev = (np.empty(n_prev), np.empty((n_prev, y.size))) if revolutions >= 2 else None
+    # a run from ``start`` (the estimate's state) takes its periodicity from the estimate's run
+    prev = (np.empty(n_prev), np.empty((n_prev, y.size))) \
+        if revolutions >= 2 and start is None else None
     dummy = np.empty((0, y.size)), np.empty(0)
-    naux = model.naux()
     bad, nfev = False, 0
     first, keep = 0, max(revolutions - ESTIMATE_REVOLUTIONS, 0)
     if start is not None:
@@ -956,12 +958,12 @@ def _run(model, kern, theta_s, ripple, per_rev, revolutions, npts, progress, tab
         dt = dt_last
         if last:
             ry, rt = rec
-        elif r == revolutions - 2:
+        elif r == revolutions - 2 and prev is not None:
             (rt, ry), dt = prev, dt_prev
         else:
             ry, rt = dummy
         t_end, rows, ok, flag, used = kern.rk_run(y, r * period, h, per_rev, r * period,
-                                                  dt, ry, rt, *args, naux,
+                                                  dt, ry, rt, *args, model.naux(),
                                                   *(tableau or _tableau_of("rk4")))
         bad, nfev = bad or flag > 0, nfev + used
         if not ok:
