@@ -64,7 +64,8 @@ def record_hermite(rec_t, rec_y, j, t_out0, dt_out, t, h, last, y, f0, ynew, f1,
     output time j is ``t_out0 + j·dt_out``.  The last step (``last``) also takes a
     time a rounding past its end.  Returns the next j to record.
     """
-    while j < rec_y.shape[0]:
+    nrec = rec_y.shape[0]
+    while j < nrec:
         tj = t_out0 + j * dt_out
         if tj >= t + h and not last:
             break

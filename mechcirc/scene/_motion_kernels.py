@@ -632,19 +632,23 @@ def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_
     m = n // 2 if quintic else 0
     s = TB.shape[0]
     K = np.zeros((s + 1, n))
-    tmp, ynew = np.empty(n), np.empty(n)
-    # aux: + the elements' rates, for regions; auxl: the cuts' locations' (aux stays at ynew)
-    aux, auxl = np.empty(naux + EI.shape[0]), np.empty(naux + EI.shape[0])
+    tmp = np.empty(n)
+    ynew = np.empty(n)
+    aux = np.empty(naux + EI.shape[0])     # + the elements' rates, for regions
+    auxl = np.empty(aux.shape[0])          # the cuts' locations' (aux stays at ynew)
     work = np.zeros((9, max(FI.shape[0], PRIG.shape[0])))
-    zy, zd = np.empty(2 * PRIG.shape[0] - 2), np.empty(2 * PRIG.shape[0] - 2)
+    zy = np.empty(2 * PRIG.shape[0] - 2)
+    zd = np.empty(zy.shape[0])
     shaft = shaft_mode(PV)
+    nfev = 1
     ne = EI.shape[0]
     nsw = ne + MOI.shape[0]
     off = BI.shape[0] + ne
     reg, regn = np.zeros(nsw, np.int64), np.zeros(nsw, np.int64)
     sw0, sw1 = np.empty(nsw + ne), np.empty(nsw + ne)
-    j, bad, nfev = 0, 0.0, 1
+    j, bad = 0, 0.0
     npart = PRIG.shape[0]
+    limit = PV[2]
     deriv(t0, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, K[0], aux, work, zy, zd)
     first = 0 if shaft else 1
     k0, ks = K[0], K[s]     # the views made once (each made in the loop: two atomic counts)
@@ -681,7 +685,7 @@ def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_
                     return tc + hh, j, False, bad, nfev
             else:
                 for i in range(npart - 1, n):
-                    if not abs(y[i]) <= PV[2]:
+                    if not abs(y[i]) <= limit:
                         return tc + hh, j, False, bad, nfev
             if full:
                 break
@@ -693,7 +697,8 @@ def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_
 def outputs(ts, ys, out, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI):
     """Evaluate aux at each stored state into ``out`` (rows)."""
     n = ys.shape[1]
-    dy, y, aux = np.empty(n), np.empty(n), np.empty(out.shape[1])
+    dy, y = np.empty(n), np.empty(n)
+    aux = np.empty(out.shape[1])
     work = np.zeros((9, max(FI.shape[0], PRIG.shape[0])))
     for i in range(ts.shape[0]):
         for j in range(n):      # a copy, not the view ys[i] (two atomic reference counts)
@@ -708,7 +713,8 @@ def output_extrema(ts, ys, ext, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRI
     """The least (row 0) and largest (row 1) of each aux column over the stored states,
     as :func:`outputs` would give them row by row (a NaN stays NaN)."""
     n = ys.shape[1]
-    dy, y, aux = np.empty(n), np.empty(n), np.empty(ext.shape[1])
+    dy, y = np.empty(n), np.empty(n)
+    aux = np.empty(ext.shape[1])
     work = np.zeros((9, max(FI.shape[0], PRIG.shape[0])))
     for j in range(ext.shape[1]):
         ext[0, j] = np.inf

@@ -945,6 +945,7 @@ def _run(model, kern, theta_s, ripple, per_rev, revolutions, npts, progress, tab
     prev = (np.empty(n_prev), np.empty((n_prev, y.size))) \
         if revolutions >= 2 and start is None else None
     dummy = np.empty((0, y.size)), np.empty(0)
+    naux = model.naux()
     bad, nfev = False, 0
     first, keep = 0, max(revolutions - ESTIMATE_REVOLUTIONS, 0)
     if start is not None:
@@ -963,7 +964,7 @@ def _run(model, kern, theta_s, ripple, per_rev, revolutions, npts, progress, tab
         else:
             ry, rt = dummy
         t_end, rows, ok, flag, used = kern.rk_run(y, r * period, h, per_rev, r * period,
-                                                  dt, ry, rt, *args, model.naux(),
+                                                  dt, ry, rt, *args, naux,
                                                   *(tableau or _tableau_of("rk4")))
         bad, nfev = bad or flag > 0, nfev + used
         if not ok:
