@@ -141,6 +141,20 @@ def test_a_table_output_named_like_an_image_is_refused(argv, what, tmp_path, cap
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.parametrize("argv", [
+    ["crosscheck", "--theta", "60", "--netlist", "{out}.png"],
+    ["crosscheck", REPO / "examples/heald_scene.toml", "--theta", "40", "--netlist",
+     "{out}.png"],
+])
+def test_a_netlist_output_named_like_an_image_is_refused(argv, tmp_path, capsys):
+    """``crosscheck --netlist x.png`` wrote the netlist's text into x.png."""
+    out = tmp_path / "out"
+    argv = [str(a).replace("{out}", str(out)) for a in argv]
+    assert_user_error(argv, capsys, "--netlist writes the netlist", "not an image",
+                      "--plot IMAGE")
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_a_table_output_named_json_points_to_json(tmp_path, capsys):
     out = tmp_path / "T.json"
     assert_user_error(["transient", STB, "--t-end", "0.01", "-o", out], capsys,

@@ -410,17 +410,19 @@ def print_json(document) -> None:
 PLOT_FORMATS = ("png", "svg", "pdf", "eps", "ps", "jpg", "jpeg", "tif", "tiff", "webp")
 
 
-def check_output_paths(*paths, plots=(), reads=(), table: str | None = None) -> None:
+def check_output_paths(*paths, plots=(), reads=(), table: str | None = None,
+                       option: str = "-o") -> None:
     """Refuse, before any work, outputs that cannot or must not be written.
 
     An output into a missing folder (a dangling link's included), onto a
     folder, block device or socket, one named twice, one that is a file the
     command reads (``reads``: its input files), or a plot in an unknown format.
     Links are followed and FIFOs and character devices written in place
-    (:func:`mechcirc.outputs.output_target`).  With ``table`` (what ``-o``
-    writes, for the message) the first path is ``-o``: refused if named like
-    an image (``-o K.png`` would write CSV text into K.png: the image is
-    ``--plot``'s) or a JSON document (``--json``'s, on stdout).
+    (:func:`mechcirc.outputs.output_target`).  With ``table`` (what the
+    option ``option`` writes, for the message) the first path is that option's:
+    refused if named like an image (``-o K.png`` would write CSV text into
+    K.png: the image is ``--plot``'s) or a JSON document (``--json``'s, on
+    stdout).
     """
     from ..outputs import output_target
 
@@ -446,10 +448,10 @@ def check_output_paths(*paths, plots=(), reads=(), table: str | None = None) -> 
                 f"(expected one of {', '.join('.' + f for f in PLOT_FORMATS)})")
     suffix = Path(paths[0]).suffix.lower() if table and paths and paths[0] else ""
     if suffix.lstrip(".") in PLOT_FORMATS:
-        raise MechcircError(f"{paths[0]}: -o writes {table}, not an image (a command that "
+        raise MechcircError(f"{paths[0]}: {option} writes {table}, not an image (a command that "
                             "draws writes its plot to --plot IMAGE)")
     if suffix == ".json":
-        raise MechcircError(f"{paths[0]}: -o writes {table}, not JSON; --json prints the "
+        raise MechcircError(f"{paths[0]}: {option} writes {table}, not JSON; --json prints the "
                             f"JSON document (--json > {paths[0]})")
 
 

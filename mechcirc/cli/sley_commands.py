@@ -259,7 +259,7 @@ def cmd_crosscheck(args) -> int:
     from ..sley.crosscheck import crosscheck_sley
     from ..sley.simulation import start_angle
 
-    check_output_paths(args.netlist)
+    check_output_paths(args.netlist, table="the netlist", option="--netlist")
     params = preset(args.drive, args.variant)
     theta0 = start_angle(params) if args.theta is None else math.radians(args.theta)
     from ..progress import Progress
