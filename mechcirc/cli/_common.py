@@ -485,9 +485,11 @@ def save_figure(fig, path, into=None, tight: bool = True) -> None:
                     **options)
 
 
-def write_outputs(args, head: list, cols: list, plot, fmt: str = "%.17g") -> None:
-    """``-o CSV`` (the columns ``cols`` named ``head``, each value as ``fmt``) and ``--plot``
-    (the figure ``plot()`` makes), all or none written.
+def write_outputs(args, head: list, cols: list, plot=None, comment: str | None = None,
+                  fmt: str = "%.17g") -> None:
+    """``-o CSV`` (a ``comment`` line when given, the column names ``head``, then one row
+    per index, each value as ``fmt``) and ``--plot`` (the figure ``plot()`` makes), all or
+    none written.
 
     Parameters
     ----------
@@ -497,10 +499,13 @@ def write_outputs(args, head: list, cols: list, plot, fmt: str = "%.17g") -> Non
         The column names.
     cols : list of array_like
         The columns (equal lengths).
-    plot : callable
+    plot : callable, optional
         Makes the figure, called only for ``--plot``.
+    comment : str, optional
+        The first line, ``#`` included.
     fmt : str
-        The printf format of a value.
+        The printf format of a value (the default, 17 significant digits, reads back
+        exactly).
     """
     import numpy as np
 
@@ -509,9 +514,11 @@ def write_outputs(args, head: list, cols: list, plot, fmt: str = "%.17g") -> Non
     with OutputSet() as out:
         if args.output:
             with open(out.path(args.output), "w", encoding="utf-8", newline="") as fh:
+                if comment:
+                    fh.write(comment + "\n")
                 np.savetxt(fh, np.column_stack(cols), delimiter=",", fmt=fmt,
                            header=",".join(head), comments="")
-        if args.plot:
+        if plot is not None and args.plot:
             save_figure(plot(), args.plot, out.path(args.plot))
 
 
@@ -539,30 +546,6 @@ def write_text(path, text: str) -> None:
 
     with atomic_open(path, "w", encoding="utf-8") as fh:
         fh.write(text)
-
-
-def write_columns(path, comment: str, names, cols) -> None:
-    """Write equal-length columns as CSV, whole or not at all: a comment line, the names,
-    then one row of full-precision floats (``repr``) per index.
-
-    Parameters
-    ----------
-    path : str
-        The output file (replaced atomically).
-    comment : str
-        The first line, ``#`` included.
-    names : iterable of str
-        The column names.
-    cols : iterable of array_like
-        The columns, in the order of ``names``.
-    """
-    from ..outputs import atomic_open
-
-    with atomic_open(path, "w", newline="") as fh:
-        fh.write(comment + "\n")
-        fh.write(",".join(names) + "\n")
-        for row in zip(*cols):
-            fh.write(",".join(repr(float(v)) for v in row) + "\n")
 
 
 def load_with_warnings(path):

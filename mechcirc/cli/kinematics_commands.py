@@ -10,7 +10,7 @@ from pathlib import Path
 from ..errors import InputError, MechcircError, NetlistError
 from ..units import convert_frequency
 from ._common import (MAX_LENGTH, MAX_OMEGA, add_command, add_handler, check_output_paths,
-                      count, print_json, print_written, real, save_figure, write_columns)
+                      count, print_json, print_written, real, save_figure, write_outputs)
 
 
 def register(sub) -> None:
@@ -303,13 +303,11 @@ def cmd_frame(args) -> int:
                         gravity=(0.0, -9.81) if args.gravity else (0.0, 0.0), **links)
     cols = res.columns()
     summary = res.summary()
-    if args.output:
-        write_columns(args.output, f"# mechcirc frame: a={args.crank:g} b={args.coupler:g} "
-                      f"c={args.rocker:g} d={args.frame:g} {args.unit}, omega={omega:.10g} "
-                      f"rad/s; {res.CONVENTION}", cols, cols.values())
-    if args.plot:
-        from ..kinematics.plots import plot_shaking
-        save_figure(plot_shaking(res), args.plot)
+    from ..kinematics.plots import plot_shaking
+
+    write_outputs(args, list(cols), list(cols.values()), lambda: plot_shaking(res),
+                  f"# mechcirc frame: a={args.crank:g} b={args.coupler:g} c={args.rocker:g} "
+                  f"d={args.frame:g} {args.unit}, omega={omega:.10g} rad/s; {res.CONVENTION}")
     if args.json:
         print_json({"fourbar": {"crank": args.crank, "coupler": args.coupler,
                                 "rocker": args.rocker, "frame": args.frame,

@@ -10,7 +10,7 @@ from ..limits import MAX_CYCLE_POINTS
 from ..units import FREQUENCY_UNITS, in_unit
 from ._common import (add_command, add_handler, check_output_paths, count,
                       print_json, real, save_figure, scene_theta, set_values,
-                      write_columns, write_outputs, write_text)
+                      write_outputs, write_text)
 
 
 def register(sub) -> None:
@@ -179,7 +179,7 @@ def _cycle(args, scene) -> int:
     write_outputs(args, ["theta_deg"] + [f"{name}_res{k + 1}" for k in range(W.shape[1])]
                   + [f"abs_Q0_h{h}" for h in cmap.harmonics],
                   [np.degrees(cmap.theta), in_unit(W, u), np.abs(cmap.Q0)],
-                  lambda: plot_cycle(cmap, unit=u), "%.10g")
+                  lambda: plot_cycle(cmap, unit=u), fmt="%.10g")
     if args.json:
         doc = cmap.as_dict()
         doc.update({"file": args.file, "output": args.output, "plot": args.plot})
@@ -271,14 +271,12 @@ def cmd_simulate_scene(args) -> int:
     if shaft:
         return _shaft(args, scene)
     result = _simulate_with_bar(args, scene)
-    if args.output:
-        write_columns(args.output, f"# {scene.name} ({args.scene}); revolution "
-                       f"{result.revolution}; omega = {result.omega!r} rad/s", result.columns(),
-                       result.columns().values())
-    if args.plot:
-        from ..scene.plots import plot_motion
+    from ..scene.plots import plot_motion
 
-        save_figure(plot_motion(result), args.plot)
+    cols = result.columns()
+    write_outputs(args, list(cols), list(cols.values()), lambda: plot_motion(result),
+                  f"# {scene.name} ({args.scene}); revolution {result.revolution}; "
+                  f"omega = {result.omega!r} rad/s")
     contact = _cam_contact(scene, result)
     if args.json:
         doc = result.summary()
@@ -428,11 +426,10 @@ def _shaft(args, scene) -> int:
               "load_torque": r.load_torque,
               **{f"{b}.acceleration": v for b, v in r.body_accelerations.items()},
               **{a: r.body_accelerations[b] for a, b in aliases.items()}, **r.values}
-    if args.output:
-        write_columns(args.output, f"# {scene.name} ({args.scene}); steady cycle of the "
-                       f"dynamic main shaft, flywheel {r.flywheel!r} kg·m²",
-                       ["theta_deg", "time", *curves],
-                       [np.degrees(r.theta), r.time, *curves.values()])
+    write_outputs(args, ["theta_deg", "time", *curves],
+                  [np.degrees(r.theta), r.time, *curves.values()], comment=(
+                      f"# {scene.name} ({args.scene}); steady cycle of the dynamic main "
+                      f"shaft, flywheel {r.flywheel!r} kg·m²"))
     if args.json:
         doc = r.summary()
         doc.update(file=args.scene, output=args.output, notes=list(r.notes),

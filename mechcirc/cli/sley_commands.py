@@ -7,7 +7,7 @@ import math
 from ..errors import InputError
 from ..limits import MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS, MAX_SCIPY_REVOLUTIONS
 from ._common import (add_command, add_handler, check_output_paths, count,
-                      print_json, real, save_figure, set_values, write_columns, write_text)
+                      print_json, real, set_values, write_outputs, write_text)
 
 _METHODS = ("rk4", "rk4-python", "rk8", "DOP853", "RK45", "LSODA")   # = mechcirc.sley.METHODS
 _UNITS = {"eps4T": "1/s^2", "eps2P": "1/s^2", "eps4P": "1/s^2", "eps5P": "1/s^2",
@@ -233,15 +233,12 @@ def cmd_simulate(args) -> int:
 
     with Progress(0, params.label) as bar:     # total set by the first progress(done, total)
         result = simulate_params(params, args.revolutions, args.method, progress=bar, **opts)
-    if args.output:
-        cols = result.columns()
-        write_columns(args.output, f"# {result.params.label}; revolution {result.revolution}; "
-                      f"alpha = {result.alpha_deg:g} deg; method {result.method}", cols,
-                      cols.values())
-    if args.plot:
-        from ..sley.plots import plot_result
+    from ..sley.plots import plot_result
 
-        save_figure(plot_result(result), args.plot)
+    cols = result.columns()
+    write_outputs(args, list(cols), list(cols.values()), lambda: plot_result(result),
+                  f"# {result.params.label}; revolution {result.revolution}; "
+                  f"alpha = {result.alpha_deg:g} deg; method {result.method}")
     if args.json:
         doc = result.summary()
         if _paper_applies(over):
