@@ -281,7 +281,7 @@ def _axis(name, value) -> list[float]:
     log = value.get("log", False)
     if log and (lo <= 0 or hi <= 0):
         _fail((*path, "log"), f"grid.{name}: log spacing needs min and max > 0")
-    return [float(x) for x in (np.geomspace if log else np.linspace)(lo, hi, value["num"])]
+    return _spaced(lo, hi, value["num"], log).tolist()
 
 
 #: The largest number of points (rows) a study may have; each row holds ~1 kB
@@ -874,8 +874,12 @@ def _setting(spec: StudySpec, name: str):
 
 def _omega_grid(spec: StudySpec):
     """The ω grid of a sweep study [rad/s]: ``spec.omega``'s points, geometric with log."""
-    lo, hi, n, log = _setting(spec, "omega")
-    return np.geomspace(lo, hi, n) if log else np.linspace(lo, hi, n)
+    return _spaced(*_setting(spec, "omega"))
+
+
+def _spaced(lo: float, hi: float, n: int, log: bool):
+    """``n`` points from ``lo`` to ``hi``, geometric with ``log`` (a grid axis, the ω grid)."""
+    return (np.geomspace if log else np.linspace)(lo, hi, n)
 
 
 def _failure(ds, d: int, message: str) -> str:
