@@ -230,13 +230,11 @@ def cmd_study(args) -> int:
     from ..progress import Progress
     from ..study import column_units, load_spec, run_study, sidecar_path
 
-    check_output_paths(args.output, args.curves, plots=(args.plot,), reads=(args.spec,),
-                       table="a CSV or Parquet table")
     if args.resume and not args.output:
         raise MechcircError("--resume needs -o FILE (the table to continue)")
     spec = load_spec(args.spec)
     check_output_paths(args.output, args.curves, plots=(args.plot,),
-                       reads=(spec.netlist_source,))
+                       reads=(args.spec, spec.netlist_source), table="a CSV or Parquet table")
     column = _plot_column(args, spec)
     with Progress(len(spec.points), "study") as bar:
         result = run_study(spec, output=args.output, scheduler=args.scheduler,
