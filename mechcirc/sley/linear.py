@@ -164,32 +164,27 @@ def renamed(name: str, module: str) -> type[SleyMode]:
 
 
 def _mck(p: SleyParameters, mu):
-    """Stacked M, C, K [kg·m², kg·m²/s, N·m/rad], shape (len(mu), n, n), and drive couplings."""
+    """Stacked M, C, K [kg·m², kg·m²/s, N·m/rad], shape (len(mu), n, n), and drive couplings.
+
+    Each crank side (I_crank, I_rod, C_crank, C_rod, k_crank, k_rod) adds its crank's
+    coordinate, joined by its rod (the lever μ) to the sley's, the last.
+    """
     mu = np.atleast_1d(np.asarray(mu, dtype=float))
     m2 = mu * mu
-    one = np.ones_like(mu)
-    if p.drive == "one-side":
-        n = 2
-        M = np.zeros((mu.size, n, n))
-        M[:, 0, 0], M[:, 1, 1] = p.I2P + p.I4 * m2, p.I4P
-        K = np.stack([np.stack([p.C2 + p.C4 * m2, -p.C4 * mu], -1),
-                      np.stack([-p.C4 * mu, p.C4 * one], -1)], -2)
-        C = np.stack([np.stack([p.k2 + p.k4 * m2, -p.k4 * mu], -1),
-                      np.stack([-p.k4 * mu, p.k4 * one], -1)], -2)
-        kd, cd = np.array([p.C2, 0.0]), np.array([p.k2, 0.0])
-    else:
-        n = 3
-        z = np.zeros_like(mu)
-        I5P, I7, C5, C7, k5, k7 = p.second_side()
-        M = np.zeros((mu.size, n, n))
-        M[:, 0, 0], M[:, 1, 1], M[:, 2, 2] = p.I2P + p.I4 * m2, I5P + I7 * m2, p.I4P
-        K = np.stack([np.stack([p.C2 + p.C4 * m2, z, -p.C4 * mu], -1),
-                      np.stack([z, C5 + C7 * m2, -C7 * mu], -1),
-                      np.stack([-p.C4 * mu, -C7 * mu, (p.C4 + C7) * one], -1)], -2)
-        C = np.stack([np.stack([p.k2 + p.k4 * m2, z, -p.k4 * mu], -1),
-                      np.stack([z, k5 + k7 * m2, -k7 * mu], -1),
-                      np.stack([-p.k4 * mu, -k7 * mu, (p.k4 + k7) * one], -1)], -2)
-        kd, cd = np.array([p.C2, C5, 0.0]), np.array([p.k2, k5, 0.0])
+    sides = [(p.I2P, p.I4, p.C2, p.C4, p.k2, p.k4)]
+    if p.drive != "one-side":
+        sides.append(p.second_side())
+    n = len(sides) + 1
+    M, C, K = np.zeros((3, mu.size, n, n))
+    M[:, -1, -1] = p.I4P
+    for i, (inertia, i_rod, c, c_rod, k, k_rod) in enumerate(sides):
+        M[:, i, i] = inertia + i_rod * m2
+        for A, crank, rod in ((K, c, c_rod), (C, k, k_rod)):
+            A[:, i, i] = crank + rod * m2
+            A[:, i, -1] = A[:, -1, i] = -rod * mu
+            A[:, -1, -1] += rod
+    kd = np.array([side[2] for side in sides] + [0.0])
+    cd = np.array([side[4] for side in sides] + [0.0])
     return M, C, K, kd, cd
 
 
