@@ -38,7 +38,7 @@ from __future__ import annotations
 
 import contextlib
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from functools import cached_property
 
 import numpy as np
@@ -115,8 +115,7 @@ class LinkageState:
         }
 
 
-_STATE_FIELDS = ("theta", "t", "q", "qdot", "qddot", "points", "velocities", "accelerations",
-                 "angular_velocities", "contributions")
+_STATE_FIELDS = tuple(f.name for f in fields(LinkageState))
 _LAZY_FIELDS = frozenset(_STATE_FIELDS[5:])
 
 
