@@ -41,13 +41,9 @@ _I4P = {1: 0.35, 2: 0.35, 3: 0.35, 4: 0.45, 5: 0.45, 6: 0.35, 7: 0.35}
 
 
 def _table1(v: int) -> dict:
-    row = dict(I2P=0.005, I4=0.025, I4P=_I4P[v], C2=1e5, C4=5e4, k2=7.0, k4=29.0,
-               omega=_OMEGA[v], clearance=_CLEARANCE[v], M0=_M0[v])
-    if v in (4, 5):
-        row["k4"] = 33.0
-    if v == 6:
-        row.update(C2=5e4, C4=1e4, k2=5.0, k4=13.0)
-    return row
+    """Table 1's row ``v``: Table 2's without the second crank side (the readings of its
+    lost cells, k2 = 7 and variant 6's C4 = 1e4, are Table 2's values)."""
+    return {k: x for k, x in _table2(v).items() if k not in ("I5P", "I7", "C5", "C7", "k5", "k7")}
 
 
 def _table2(v: int) -> dict:
