@@ -51,15 +51,9 @@ def sley_scene(params: SleyParameters, *, revolutions: int = 5):
     from .models import start_angle
 
     p = params
-    both = p.drive == "both-sides"
     name, source = f"mrazek {p.drive}", f"<sley {p.label or p.drive}>"
     linkage = _sley_linkage(p, name, source)
-    rods = [("C2", "crank", "shaft", "A", p.C2, p.k2), ("C4", "rocker", "sley", "D", p.C4, p.k4)]
-    masses = [("I2P", "crank", p.I2P), ("I4", "rocker", p.I4), ("I4P", "sley", p.I4P)]
-    if both:
-        I5P, I7, C5, C7, k5, k7 = p.second_side()
-        rods += [("C5", "crank5", "shaft", "E", C5, k5), ("C7", "rocker7", "sley", "H", C7, k7)]
-        masses += [("I5P", "crank5", I5P), ("I7", "rocker7", I7)]
+    rods, masses = _parts(p)
     window, sigma = (math.radians(math.degrees(a)) for a in (p.alpha, p.sigma))  # as in a file
     return Scene(
         name, linkage, "m", 1.0,
@@ -73,6 +67,18 @@ def sley_scene(params: SleyParameters, *, revolutions: int = 5):
         simulate=SimulateSettings(revolutions=revolutions,
                                   start_deg=math.degrees(start_angle(p)),
                                   aliases=dict(ALIASES[p.drive])))
+
+
+def _parts(p: SleyParameters) -> tuple[list, list]:
+    """The rods (name, link, body, pivot, rigidity, damping) and the inertias (name, link,
+    value) of ``p``'s scene."""
+    rods = [("C2", "crank", "shaft", "A", p.C2, p.k2), ("C4", "rocker", "sley", "D", p.C4, p.k4)]
+    masses = [("I2P", "crank", p.I2P), ("I4", "rocker", p.I4), ("I4P", "sley", p.I4P)]
+    if p.drive == "both-sides":
+        I5P, I7, C5, C7, k5, k7 = p.second_side()
+        rods += [("C5", "crank5", "shaft", "E", C5, k5), ("C7", "rocker7", "sley", "H", C7, k7)]
+        masses += [("I5P", "crank5", I5P), ("I7", "rocker7", I7)]
+    return rods, masses
 
 
 def _sley_linkage(p: SleyParameters, name: str, source: str):
@@ -114,16 +120,12 @@ def scene_overrides(params: SleyParameters) -> dict:
         ``NAME.FIELD`` (and ``omega``) → value in SI units, windows in degrees.
     """
     p = params
-    out = {"omega": p.omega, "I2P.inertia": p.I2P, "I4.inertia": p.I4, "I4P.inertia": p.I4P,
-           "C2.stiffness": p.C2, "C2.damping": p.k2, "C4.stiffness": p.C4, "C4.damping": p.k4,
+    rods, masses = _parts(p)
+    out = {"omega": p.omega, **{f"{m}.inertia": v for m, _, v in masses},
            "M4.amplitude": p.beat_sign * p.M0, "M4.window_deg": math.degrees(p.alpha),
            "M4.sigma_deg": math.degrees(p.sigma)}
-    if p.drive == "both-sides":
-        I5P, I7, C5, C7, k5, k7 = p.second_side()
-        out.update({"I5P.inertia": I5P, "I7.inertia": I7, "C5.stiffness": C5,
-                    "C5.damping": k5, "C7.stiffness": C7, "C7.damping": k7})
-    out |= {f"{r}.clearance": p.clearance for r in ("C2", "C4", "C5", "C7")   # every rod's
-            if f"{r}.stiffness" in out}
+    for r, *_, rigidity, damping in rods:
+        out |= {f"{r}.stiffness": rigidity, f"{r}.damping": damping, f"{r}.clearance": p.clearance}
     return {k: float(v) for k, v in out.items()}
 
 
