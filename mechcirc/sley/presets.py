@@ -86,8 +86,6 @@ def preset(drive: str = "one-side", variant: int = 3, **overrides) -> SleyParame
     >>> p.C4, p.k2, p.omega
     (10000.0, 5.0, 100.0)
     """
-    if drive not in ("one-side", "both-sides"):
-        raise ParameterError(f"drive must be 'one-side' or 'both-sides', got {drive!r}")
     if isinstance(variant, bool) or variant not in VARIANTS:
         raise ParameterError(f"variant must be one of 1..7, got {variant!r}")
     row = _table1(variant) if drive == "one-side" else _table2(variant)
