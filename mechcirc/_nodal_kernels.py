@@ -256,24 +256,24 @@ def sensitivities(omega, x, scale, e_i, e_j, e_m, e_k, e_c, s_row, s_col, s_val,
     ``x`` (complex, shape (n_ω, n)) reads 0 at index n, the reference.
     """
     n_w, n = x.shape
+    mag = np.zeros(n + 1)                   # |x_i|/scale, the reference's 0 at n
     for k in range(n_w):
         w = omega[k]
         f = 1.0 / scale[k]
+        for i in range(n):                  # once per unknown, not per element end
+            mag[i] = _mag(x[k, i] * f)
         acc = 0.0
         accd = 0.0
         for e in range(e_i.size):
             # One of c, m, k is nonzero: |c + j(ωm − k/ω)| without a hypot.
             y = abs(e_c[e]) + abs(w * e_m[e] - e_k[e] / w)
-            xi = _atc(x, k, e_i[e], n) * f
-            xj = _atc(x, k, e_j[e], n) * f
-            a = _mag(xi) + _mag(xj)
-            d = _mag(xi - xj)
-            acc += y * a * d
+            d = _mag(_atc(x, k, e_i[e], n) * f - _atc(x, k, e_j[e], n) * f)
+            acc += y * (mag[e_i[e]] + mag[e_j[e]]) * d
             accd += y * d * d
         for s in range(s_row.size):
-            acc += abs(s_val[s]) * _mag(x[k, s_row[s]] * f) * _mag(x[k, s_col[s]] * f)
+            acc += abs(s_val[s]) * mag[s_row[s]] * mag[s_col[s]]
         for v in range(l_r.size):
             accd += 2 * l_r[v] * _mag(_atc(x, k, l_p1[v], n) * f - _atc(x, k, l_p2[v], n) * f) \
-                * _mag(x[k, l_col[v]] * f)
+                * mag[l_col[v]]
         S[k] = acc
         Sd[k] = accd
