@@ -99,10 +99,14 @@ _STRICT_AFTER = 1e-10
 #: of a 9,999-element one 0.91×).
 _CHUNK_TERMS = 2 ** 15
 #: The same for the compiled kernels, in (ω, unknown) pairs: no (ω, term) temporaries;
-#: each (ω, n) array of a chunk is then 256 kB, and stays in the 1 MB L2 cache with the
-#: others (at 2¹⁶ the compiled sweep of a 999-element ladder took 1.4× as long, of a
-#: 9,999-element one 1.4×; alternated in one process, 27 Nov).
-_KERNEL_CHUNK = 2 ** 14
+#: each (ω, n) array of a chunk is then 64 kB, in the 1 MB L2 cache with the others,
+#: and below the 128 kB from which glibc's malloc maps fresh pages for a block (the
+#: numpy steps between the kernels otherwise fault in every new temporary: 7,000 page
+#: faults per sweep of a 999-element ladder at 2¹⁴, 21 at 2¹²).  Alternated in one
+#: process (27 Nov), the compiled sweep at 2¹⁶ took 1.4× as long at 999 and 9,999
+#: elements, at 2¹⁴ 1.2× (999) and 1.1–1.3× (45, 99); at 9,999 (1 ω per chunk) 2¹²
+#: is 1.1× 2¹⁴.
+_KERNEL_CHUNK = 2 ** 12
 
 
 #: With :data:`mechcirc._jit.COMPILED` None (the default) a sweep of the sparse
