@@ -549,10 +549,8 @@ def _stacked_solve(system, S: NDArray, parts: list, design: NDArray, w: NDArray)
         v.e_vs = (high, low)
         return v
 
-    # Chunks of about 2¹⁵ (ω, term) pairs, as the single path's were before it went to
-    # 2¹⁴ (nodal._CHUNK_TERMS): here the stacked sweep of 1,000 designs took 0.45 ms
-    # per design at 2¹⁵ against 0.54 at 2¹⁴ (bench_batch.py --nodal, 27 Nov).
-    chunk = max(1, min(2 ** 21 // (n * n), 2 ** 15 // (pat.n_terms + n)))
+    # Chunks as the single path's (nodal._sweep): the same memory per chunk.
+    chunk = max(1, min(2 ** 21 // (n * n), nodal._CHUNK_TERMS // (pat.n_terms + n)))
     for start in range(0, m, chunk):
         pts = np.arange(start, min(start + chunk, m))
         dc, ms, ks = (X[design[pts]] for X in parts)

@@ -96,11 +96,8 @@ _STRICT_AFTER = 1e-10
 #: Work per chunk of frequencies on the numpy path: about this many (ω, term)
 #: pairs at once (the residual's temporaries then stay near the caches: at 2¹⁵
 #: the numpy sweep of a 999-element ladder took 0.86× the time it took at 2¹⁷,
-#: of a 9,999-element one 0.91×; at 2¹⁴, 27 Nov, each size in processes of its own
-#: alternated, load 5–7: 0.63–0.70× the time at 2¹⁵ at 45 elements, 0.83–0.90× at 99,
-#: 0.78–0.96× at 999, the page faults of its temporaries 0 against 1,417 per sweep at
-#: 45 elements; 2¹³ was slower at 999; 9,999 takes one ω per chunk at either).
-_CHUNK_TERMS = 2 ** 14
+#: of a 9,999-element one 0.91×).
+_CHUNK_TERMS = 2 ** 15
 #: The same for the compiled kernels, in (ω, unknown) pairs: no (ω, term) temporaries;
 #: each (ω, n) array of a chunk is then 64 kB, in the 1 MB L2 cache with the others,
 #: and below the 128 kB from which glibc's malloc maps fresh pages for a block (the
