@@ -27,13 +27,14 @@ _BIG = 2.0 ** 995                       # above it, SPLITTER·a may overflow
 def split(a):
     """a = hi + lo exactly, hi and lo of 26 significant bits each (real a).
 
-    |a| above 2⁹⁹⁵ is split as a·2⁻²⁸ (exact) and scaled back, so that
+    |a| above 2⁹⁹⁵ is split as a·2⁻²⁸ (exact) and scaled back by 2²⁸ (exact: a
+    power of two, not a division, which costs a dozen multiplications), so that
     SPLITTER·a does not overflow.
     """
-    s = 1.0 + (abs(a) > _BIG) * (2.0 ** -28 - 1.0)
-    b = a * s
+    big = abs(a) > _BIG
+    b = a * (1.0 + big * (2.0 ** -28 - 1.0))
     c = SPLITTER * b
-    hi = (c - (c - b)) / s
+    hi = (c - (c - b)) * (1.0 + big * (2.0 ** 28 - 1.0))
     return hi, a - hi
 
 

@@ -201,43 +201,45 @@ def band_assemble_factor(dc, m, kk, omega, dest_c, dest_r, kl, ab, ipiv, ok):
         ok[k] = fin and _band_lu(a, kl, ipiv[k])
 
 
-@_jit
-def band_solve(ab, kl, ipiv, b):
-    """Solve with the factors of :func:`_band_lu`, each ``b[k]`` in place."""
-    n_w, n, _ = ab.shape
-    kv = 2 * kl
-    for k in range(n_w):
-        a = ab[k]
-        x = b[k]
-        for j in range(n - 1):
-            km = min(kl, n - 1 - j)
-            p = ipiv[k, j]
-            if p != j:
-                tmp = x[p]
-                x[p] = x[j]
-                x[j] = tmp
-            xj = x[j]
-            for t in range(1, km + 1):
-                x[j + t] -= a[j, kv + t] * xj
-        for j in range(n - 1, -1, -1):
-            x[j] /= a[j, kv]
-            xj = x[j]
-            for i in range(max(0, j - kv), j):
-                x[i] -= a[j, kv + i - j] * xj
+#: ω solved side by side by :func:`band_solve_perm`: their substitutions are
+#: independent chains, so the processor overlaps them (one ω's chain waits on
+#: each complex product and division in turn).
+SOLVE_BLOCK = 8
 
 
 @_jit
 def band_solve_perm(ab, kl, ipiv, rows, p, r, out):
-    """out[k, p] = A_p⁻¹ r[k, p] with the factors ``ab[rows[k]]`` (A's rows and columns in the order ``p``)."""
+    """out[k, p] = A_p⁻¹ r[k, p] with the factors ``ab[rows[k]]`` of :func:`_band_lu` (A's rows
+    and columns in the order ``p``): each ω's operations in LAPACK's zgbtrs order, for
+    :data:`SOLVE_BLOCK` ω at a time, column by column."""
     n = ab.shape[1]
-    x = np.empty(n, dtype=np.complex128)
-    for k in range(rows.size):
-        f = rows[k]
-        for i in range(n):
-            x[i] = r[k, p[i]]
-        band_solve(ab[f:f + 1], kl, ipiv[f:f + 1], x.reshape(1, n))
-        for i in range(n):
-            out[k, p[i]] = x[i]
+    kv = 2 * kl
+    x = np.empty((SOLVE_BLOCK, n), dtype=np.complex128)
+    for k0 in range(0, rows.size, SOLVE_BLOCK):
+        nb = min(SOLVE_BLOCK, rows.size - k0)
+        for b in range(nb):
+            for i in range(n):
+                x[b, i] = r[k0 + b, p[i]]
+        for j in range(n - 1):                 # L, with the row swaps
+            km = min(kl, n - 1 - j)
+            for b in range(nb):
+                f = rows[k0 + b]
+                q = ipiv[f, j]
+                xj = x[b, q]
+                x[b, q] = x[b, j]
+                x[b, j] = xj
+                for t in range(1, km + 1):
+                    x[b, j + t] -= ab[f, j, kv + t] * xj
+        for j in range(n - 1, -1, -1):         # U, by columns
+            for b in range(nb):
+                f = rows[k0 + b]
+                xj = x[b, j] / ab[f, j, kv]
+                x[b, j] = xj
+                for i in range(max(0, j - kv), j):
+                    x[b, i] -= ab[f, j, kv + i - j] * xj
+        for b in range(nb):
+            for i in range(n):
+                out[k0 + b, p[i]] = x[b, i]
 
 
 @_jit_inline
@@ -254,24 +256,24 @@ def sensitivities(omega, x, scale, e_i, e_j, e_m, e_k, e_c, s_row, s_col, s_val,
     ``x`` (complex, shape (n_ω, n)) reads 0 at index n, the reference.
     """
     n_w, n = x.shape
+    mag = np.zeros(n + 1)                   # |x_i|/scale, the reference's 0 at n
     for k in range(n_w):
         w = omega[k]
         f = 1.0 / scale[k]
+        for i in range(n):                  # once per unknown, not per element end
+            mag[i] = _mag(x[k, i] * f)
         acc = 0.0
         accd = 0.0
         for e in range(e_i.size):
             # One of c, m, k is nonzero: |c + j(ωm − k/ω)| without a hypot.
             y = abs(e_c[e]) + abs(w * e_m[e] - e_k[e] / w)
-            xi = _atc(x, k, e_i[e], n) * f
-            xj = _atc(x, k, e_j[e], n) * f
-            a = _mag(xi) + _mag(xj)
-            d = _mag(xi - xj)
-            acc += y * a * d
+            d = _mag(_atc(x, k, e_i[e], n) * f - _atc(x, k, e_j[e], n) * f)
+            acc += y * (mag[e_i[e]] + mag[e_j[e]]) * d
             accd += y * d * d
         for s in range(s_row.size):
-            acc += abs(s_val[s]) * _mag(x[k, s_row[s]] * f) * _mag(x[k, s_col[s]] * f)
+            acc += abs(s_val[s]) * mag[s_row[s]] * mag[s_col[s]]
         for v in range(l_r.size):
             accd += 2 * l_r[v] * _mag(_atc(x, k, l_p1[v], n) * f - _atc(x, k, l_p2[v], n) * f) \
-                * _mag(x[k, l_col[v]] * f)
+                * mag[l_col[v]]
         S[k] = acc
         Sd[k] = accd

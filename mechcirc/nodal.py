@@ -98,8 +98,15 @@ _STRICT_AFTER = 1e-10
 #: the numpy sweep of a 999-element ladder took 0.86× the time it took at 2¹⁷,
 #: of a 9,999-element one 0.91×).
 _CHUNK_TERMS = 2 ** 15
-#: The same for the compiled kernels, in (ω, unknown) pairs: no (ω, term) temporaries.
-_KERNEL_CHUNK = 2 ** 16
+#: The same for the compiled kernels, in (ω, unknown) pairs: no (ω, term) temporaries;
+#: each (ω, n) array of a chunk is then 64 kB, in the 1 MB L2 cache with the others,
+#: and below the 128 kB from which glibc's malloc maps fresh pages for a block (the
+#: numpy steps between the kernels otherwise fault in their temporaries: 7,000 page
+#: faults per sweep of a 999-element ladder at 2¹⁴ and 2¹⁶, none at 2¹²).  Each in
+#: processes of its own, alternated (27 Nov, load 3–4), the compiled sweep took at 2¹²
+#: 0.74–0.75× its time at 2¹⁶ at 999 elements, 0.73–0.83× at 45, 0.77× at 9,999 (one ω
+#: per chunk) and 1.03× at 99 (all 401 ω in one chunk at 2¹⁶, without faults there).
+_KERNEL_CHUNK = 2 ** 12
 
 
 #: With :data:`mechcirc._jit.COMPILED` None (the default) a sweep of the sparse
