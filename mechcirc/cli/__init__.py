@@ -72,7 +72,10 @@ class _Parser(argparse.ArgumentParser):
                 if word not in self._option_string_actions:
                     hint = did_you_mean(word, sorted(self._option_string_actions))
                     message += f"; {word} is not an option{hint}"
-        self.exit(2, f"{self.prog}: error: {shorten(message)} (see '{self.prog} --help')\n")
+        prog = self.prog
+        if message.startswith("unrecognized arguments") and self.given in COMMANDS:
+            prog = f"{prog} {self.given}"        # the command's own --help lists its options
+        self.exit(2, f"{prog}: error: {shorten(message)} (see '{prog} --help')\n")
 
     def _option_hint(self, word: str) -> str:
         """The nearest option of the command given, or which commands take ``word`` when
