@@ -695,17 +695,18 @@ def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_
 
 @_jit
 def outputs(ts, ys, out, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI):
-    """Evaluate aux at each stored state into ``out`` (rows)."""
+    """Evaluate aux at each stored state into ``out`` (its column i the state i's aux, so that
+    each output is a contiguous row)."""
     n = ys.shape[1]
     dy, y = np.empty(n), np.empty(n)
-    aux = np.empty(out.shape[1])
+    aux = np.empty(out.shape[0])
     work = np.zeros((9, max(FI.shape[0], PRIG.shape[0])))
     for i in range(ts.shape[0]):
         for j in range(n):      # a copy, not the view ys[i] (two atomic reference counts)
             y[j] = ys[i, j]
         rhs(ts[i], y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, work)
-        for j in range(out.shape[1]):
-            out[i, j] = aux[j]
+        for j in range(out.shape[0]):
+            out[j, i] = aux[j]
 
 
 @_jit
