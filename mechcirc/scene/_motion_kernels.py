@@ -445,23 +445,18 @@ def rk_step(t, hh, y, K, tmp, ynew, TA, TB, TC, PV, FI, FF, tabs, MI_, MW, EI, E
     :func:`deriv` (the scene's :func:`rhs`, or the shaft's; ``zy``, ``zd`` its scratch)."""
     n = y.shape[0]
     s = TB.shape[0]
-    for i in range(1, s):
+    for i in range(1, s + 1):           # the stages, then (i = s) the step's end
         for m in range(n):
             acc = 0.0
             for j in range(i):
-                if TA[i, j] != 0.0:
-                    acc += TA[i, j] * K[j, m]
+                c = TA[i, j] if i < s else TB[j]
+                if c != 0.0:
+                    acc += c * K[j, m]
             tmp[m] = y[m] + hh * acc
-        deriv(t + TC[i] * hh, tmp, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, K[i],
-              aux, work, zy, zd)
+        deriv(t + TC[i] * hh if i < s else t + hh, tmp, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI,
+              MOF, PRIG, BI, K[i], aux, work, zy, zd)
     for m in range(n):
-        acc = 0.0
-        for j in range(s):
-            if TB[j] != 0.0:
-                acc += TB[j] * K[j, m]
-        ynew[m] = y[m] + hh * acc
-    deriv(t + hh, ynew, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, K[s], aux, work,
-          zy, zd)
+        ynew[m] = tmp[m]
 
 
 @_leaf
