@@ -52,7 +52,8 @@ import numpy as np
 
 from ..errors import MechcircError, ShaftWarning, SolverError
 from .files import Scene
-from .motion import MotionModel, body_tables, dead_centre, hermite_table, motion_model
+from .motion import (MotionModel, body_tables, dead_centre, function_rows, hermite_table,
+                     motion_model)
 from .simfile import Motor, Shaft, kloss_motor, parse_shaft, table_motor  # noqa: F401
 from .simulation import kernels_for, max_rate
 
@@ -234,7 +235,7 @@ def _one_part_model(scene: Scene, FI, FF, tabs, MI, MW, MOI, MOF):
     """The :class:`~mechcirc.scene.motion.MotionModel` of :func:`rigid_model`'s tables: one
     part (the drive's), no elastic elements."""
     i8 = np.int64
-    arrays = {"FI": np.array(FI, i8), "FF": np.array(FF, float), "tabs": np.array(tabs),
+    arrays = {"FI": np.array(FI, i8), "FF": function_rows(FI, FF), "tabs": np.array(tabs),
               "MI": np.array(MI, i8), "MW": np.array(MW, float),
               "EI": np.zeros((0, 8), i8), "EF": np.zeros((0, 10)),
               "MOI": np.array(MOI, i8).reshape(-1, 2), "MOF": np.array(MOF).reshape(-1, 4),
@@ -422,7 +423,7 @@ def warm_up() -> None:
 
     i8 = np.int64
     PV = np.concatenate((np.zeros(8), [1.0, 1.0, 1.0, 0.0, 0.0, 10.0, 1.0, 0.2]))
-    arrays = (np.array([[2, -1, 0]], i8), np.array([[0.0, 1.0, 0.0, 0.0, 1.0, 0.0]]),
+    arrays = (np.array([[2, -1, 0]], i8), np.array([[0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0]]),
               np.zeros((1, 2, 6)), np.zeros(0, i8), np.zeros(0), np.zeros((0, 8), i8),
               np.zeros((0, 10)), np.zeros((0, 2), i8), np.zeros((0, 4)), np.array([0], i8),
               np.zeros(0, i8))
