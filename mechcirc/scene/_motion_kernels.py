@@ -43,9 +43,6 @@ HAVE_NUMBA, _jit, _jit_inline = decorators(bool(globals().get("_FORCE_PYTHON")))
 _leaf = decorators(bool(globals().get("_FORCE_PYTHON")), nrt=False)[1]
 
 TWO_PI = 2.0 * math.pi
-#: 1/(2π): the phases are wrapped by a product, not a division (several times faster on the
-#: right-hand side's critical path; the same to a rounding)
-INV_TWO_PI = 1.0 / TWO_PI
 # function columns: FI = [kind, part, table]; FF = [a, b, c, lo, h, w, 1/c, 1/h] (the
 # reciprocals of a table's period and node spacing, 0 where unused: motion.function_rows)
 # element columns: EI = [type, law, fa, fa2, fb, fb2, part_a, part_b]
@@ -98,8 +95,9 @@ def feval(kind, tabs, ti, a, b, c, lo, h, w, ic, ih, q):
 
 @_jit_inline
 def wrap_phase(x):
-    """x mod 2π in [0, 2π) (by the product with 1/(2π): :data:`INV_TWO_PI`)."""
-    return x - TWO_PI * math.floor(x * INV_TWO_PI)
+    """x mod 2π in [0, 2π), by the product with 1/(2π) (a constant the compiler folds), not a
+    division: a division on the right-hand side's critical path costs several products."""
+    return x - TWO_PI * math.floor(x * (1.0 / TWO_PI))
 
 
 @_jit_inline
@@ -428,7 +426,7 @@ def edge_gap(i, ne, r0, r1, v, vd, EF, MOF):
             return fc + fd if abs(r0) == 2 or abs(r1) == 2 else fd - fc
         return v - (cl if (r0 > 0 or (r0 == 0 and r1 > 0)) else -cl)
     if r0 == 0:                  # entering the window: the phase wrapped to [−π, π)
-        return v - TWO_PI * math.floor((v + math.pi) * INV_TWO_PI)
+        return v - TWO_PI * math.floor((v + math.pi) * (1.0 / TWO_PI))
     return wrap_phase(v) - MOF[i - ne, 1]
 
 
