@@ -43,7 +43,8 @@ HAVE_NUMBA, _jit, _jit_inline = decorators(bool(globals().get("_FORCE_PYTHON")))
 _leaf = decorators(bool(globals().get("_FORCE_PYTHON")), nrt=False)[1]
 
 TWO_PI = 2.0 * math.pi
-# function columns: FI = [kind, part, table]; FF = [a, b, c, lo, h, w]
+# function columns: FI = [kind, part, table]; FF = [a, b, c, lo, h, w, 1/c, 1/h] (the
+# reciprocals of a table's period and node spacing, 0 where unused: motion.function_rows)
 # element columns: EI = [type, law, fa, fa2, fb, fb2, part_a, part_b]
 #                  EF = [k, d, clearance, l0, xa, ya, xb, yb, ux, uy]
 # moment columns:  MI = [window fn, body fn]; MF = [amplitude, alpha, sigma, centre]
@@ -53,8 +54,9 @@ TWO_PI = 2.0 * math.pi
 
 
 @_jit_inline
-def feval(kind, tabs, ti, a, b, c, lo, h, w, q):
-    """(value, first, second derivative) of one function at coordinate q; flag out of range."""
+def feval(kind, tabs, ti, a, b, c, lo, h, w, ic, ih, q):
+    """(value, first, second derivative) of one function at coordinate q; flag out of range.
+    ``ic``, ``ih``: 1/c and 1/h (a table's interval by a product, not a division)."""
     if kind == 2:
         return a + b * q, b, 0.0, 0
     if kind == 3:
@@ -65,12 +67,12 @@ def feval(kind, tabs, ti, a, b, c, lo, h, w, q):
     u = q - lo
     bad = 0
     if kind == 0:
-        u = u - c * math.floor(u / c)
-        i = int(u / h)
+        u = u - c * math.floor(u * ic)
+        i = int(u * ih)
         if i >= n:
             i = n - 1
     else:
-        i = int(math.floor(u / h))
+        i = int(math.floor(u * ih))
         if i < 0:
             i = 0
             bad = 1
@@ -92,11 +94,18 @@ def feval(kind, tabs, ti, a, b, c, lo, h, w, q):
 
 
 @_jit_inline
+def wrap_phase(x):
+    """x mod 2π in [0, 2π), by the product with 1/(2π) (a constant the compiler folds), not a
+    division: a division on the right-hand side's critical path costs several products."""
+    return x - TWO_PI * math.floor(x * (1.0 / TWO_PI))
+
+
+@_jit_inline
 def window_moment(amp, alpha, sigma, centre, phi):
     """A crank-angle moment (the beat-up): amp · sin(π x/σ) for x = φ − centre + α/2
     (mod 2π) in [0, α), else 0; φ the crank's rotation from the pose [rad]."""
     x = phi - centre + 0.5 * alpha
-    x = x - TWO_PI * math.floor(x / TWO_PI)
+    x = wrap_phase(x)
     if x < alpha:
         return amp * math.sin(math.pi * x / sigma)
     return 0.0
@@ -122,7 +131,7 @@ def force_law(law, k, d, cl, e, edot):
 def fn_at(f, FI, FF, tabs, q):
     """:func:`feval` of function f (its row of FI and FF) at coordinate q."""
     return feval(FI[f, 0], tabs, FI[f, 2], FF[f, 0], FF[f, 1], FF[f, 2], FF[f, 3], FF[f, 4],
-                 FF[f, 5], q)
+                 FF[f, 5], FF[f, 6], FF[f, 7], q)
 
 
 @_jit_inline
@@ -383,7 +392,7 @@ def regions(FI, EI, EF, MOI, MOF, aux, work, off, reg, sw, first):
         reg[ne + k] = 0
         if FI[MOI[k, 1], 1] < first:
             continue
-        reg[ne + k] = 1 if x - TWO_PI * math.floor(x / TWO_PI) < MOF[k, 1] else 0
+        reg[ne + k] = 1 if wrap_phase(x) < MOF[k, 1] else 0
         count += 1
     return count
 
@@ -417,8 +426,8 @@ def edge_gap(i, ne, r0, r1, v, vd, EF, MOF):
             return fc + fd if abs(r0) == 2 or abs(r1) == 2 else fd - fc
         return v - (cl if (r0 > 0 or (r0 == 0 and r1 > 0)) else -cl)
     if r0 == 0:                  # entering the window: the phase wrapped to [−π, π)
-        return v - TWO_PI * math.floor((v + math.pi) / TWO_PI)
-    return v - TWO_PI * math.floor(v / TWO_PI) - MOF[i - ne, 1]
+        return v - TWO_PI * math.floor((v + math.pi) * (1.0 / TWO_PI))
+    return wrap_phase(v) - MOF[i - ne, 1]
 
 
 @_jit_inline
@@ -445,23 +454,18 @@ def rk_step(t, hh, y, K, tmp, ynew, TA, TB, TC, PV, FI, FF, tabs, MI_, MW, EI, E
     :func:`deriv` (the scene's :func:`rhs`, or the shaft's; ``zy``, ``zd`` its scratch)."""
     n = y.shape[0]
     s = TB.shape[0]
-    for i in range(1, s):
+    for i in range(1, s + 1):           # the stages, then (i = s) the step's end
         for m in range(n):
             acc = 0.0
             for j in range(i):
-                if TA[i, j] != 0.0:
-                    acc += TA[i, j] * K[j, m]
+                c = TA[i, j] if i < s else TB[j]
+                if c != 0.0:
+                    acc += c * K[j, m]
             tmp[m] = y[m] + hh * acc
-        deriv(t + TC[i] * hh, tmp, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, K[i],
-              aux, work, zy, zd)
+        deriv(t + TC[i] * hh if i < s else t + hh, tmp, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI,
+              MOF, PRIG, BI, K[i], aux, work, zy, zd)
     for m in range(n):
-        acc = 0.0
-        for j in range(s):
-            if TB[j] != 0.0:
-                acc += TB[j] * K[j, m]
-        ynew[m] = y[m] + hh * acc
-    deriv(t + hh, ynew, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, K[s], aux, work,
-          zy, zd)
+        ynew[m] = tmp[m]
 
 
 @_leaf
@@ -695,17 +699,18 @@ def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_
 
 @_jit
 def outputs(ts, ys, out, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI):
-    """Evaluate aux at each stored state into ``out`` (rows)."""
+    """Evaluate aux at each stored state into ``out`` (its column i the state i's aux, so that
+    each output is a contiguous row)."""
     n = ys.shape[1]
     dy, y = np.empty(n), np.empty(n)
-    aux = np.empty(out.shape[1])
+    aux = np.empty(out.shape[0])
     work = np.zeros((9, max(FI.shape[0], PRIG.shape[0])))
     for i in range(ts.shape[0]):
         for j in range(n):      # a copy, not the view ys[i] (two atomic reference counts)
             y[j] = ys[i, j]
         rhs(ts[i], y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, work)
-        for j in range(out.shape[1]):
-            out[i, j] = aux[j]
+        for j in range(out.shape[0]):
+            out[j, i] = aux[j]
 
 
 @_jit
@@ -732,21 +737,21 @@ def output_extrema(ts, ys, ext, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRI
 
 
 @_jit
-def eval_many(kind, tabs, ti, a, b, c, lo, h, w, qs, out):
+def eval_many(kind, tabs, ti, a, b, c, lo, h, w, ic, ih, qs, out):
     """One function at many coordinates: out[i] = (value, first, second derivative)."""
     for i in range(qs.shape[0]):
-        v, d1, d2, bad = feval(kind, tabs, ti, a, b, c, lo, h, w, qs[i])
+        v, d1, d2, bad = feval(kind, tabs, ti, a, b, c, lo, h, w, ic, ih, qs[i])
         out[i, 0] = v
         out[i, 1] = d1
         out[i, 2] = d2
 
 
 @_jit
-def point_samples(kind, tabs, ti, a, b, c, lo, h, w, qs, qd, qdd, pos, acc):
+def point_samples(kind, tabs, ti, a, b, c, lo, h, w, ic, ih, qs, qd, qdd, pos, acc):
     """One coordinate of a point at many samples of its part's motion (q, q̇, q̈): its value
     f(q) into pos[i] and its acceleration f''(q) q̇² + f'(q) q̈ into acc[i]."""
     for i in range(qs.shape[0]):
-        v, d1, d2, bad = feval(kind, tabs, ti, a, b, c, lo, h, w, qs[i])
+        v, d1, d2, bad = feval(kind, tabs, ti, a, b, c, lo, h, w, ic, ih, qs[i])
         pos[i] = v
         acc[i] = d2 * qd[i] * qd[i] + d1 * qdd[i]
 

@@ -242,10 +242,10 @@ def _forced_amplitude(model, kern, theta, w, free, h, r0):
     rec_y, rec_t = np.empty((nsamp, 2 * n)), np.empty(nsamp)
     kern.rk_run(y, 0.0, hh, (nsamp - 1) * sample, 0.0, hh * sample, rec_y, rec_t, *args,
                 model.naux(), *_rk4())
-    out = np.empty((nsamp, model.naux()))
+    out = np.empty((model.naux(), nsamp))
     kern.outputs(rec_t, rec_y, out, *model.kernel_args(theta, 1e300, outputs=True,
                                                           ripple=(amp, w), loads_on_mean=True))
-    q = out[:, len(model.bodies) + 2 * len(model.elements)]       # drive.moment
+    q = out[len(model.bodies) + 2 * len(model.elements)]       # drive.moment
     # fit the second half: a strongly damped mode has died out there, and a slight error
     # of its measured damping cannot leak into the ripple's amplitude
     half = nsamp // 2

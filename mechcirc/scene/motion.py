@@ -379,11 +379,22 @@ _ROWS = {"MI": (np.int64, None), "MW": (float, None), "EI": (np.int64, 8), "EF":
          "BI": (np.int64, None)}
 
 
+def function_rows(FI, FF):
+    """The kernel's FF: each function's [a, b, c, lo, h, w] (``FF``, rows of 6) and the
+    reciprocals 1/c of a periodic table's period (0 for the other kinds) and 1/h (a table's
+    node spacing; 1 for a line or a circle), which the kernel multiplies by instead of
+    dividing."""
+    ff = np.array(FF, dtype=float).reshape(-1, 6)
+    periodic = np.asarray(FI).reshape(-1, 3)[:, 0] == 0
+    ic = np.divide(1.0, ff[:, 2], out=np.zeros(len(ff)), where=periodic)
+    return np.column_stack([ff, ic, 1.0 / ff[:, 4]])
+
+
 def _kernel_arrays(B, n_dyn, rows):
     """The kernel's arrays: the functions of ``B``, the ``rows`` as :data:`_ROWS` says, and
     ``n_dyn``, how many functions the dynamics need."""
     arrays = {"FI": np.array(B.FI, dtype=np.int64).reshape(-1, 3),
-              "FF": np.array(B.FF, dtype=float).reshape(-1, 6),
+              "FF": function_rows(B.FI, B.FF),
               "tabs": np.ascontiguousarray(np.array(B.tabs))}
     for k, (dtype, width) in _ROWS.items():
         a = np.array(rows[k], dtype=dtype)

@@ -52,9 +52,10 @@ import numpy as np
 
 from ..errors import MechcircError, ShaftWarning, SolverError
 from .files import Scene
-from .motion import MotionModel, body_tables, dead_centre, hermite_table, motion_model
+from .motion import (MotionModel, body_tables, dead_centre, function_rows, hermite_table,
+                     motion_model)
 from .simfile import Motor, Shaft, kloss_motor, parse_shaft, table_motor  # noqa: F401
-from .simulation import kernels_for, max_rate
+from .simulation import _fargs, kernels_for, max_rate
 
 __all__ = ["Motor", "Shaft", "ShaftMotion", "kloss_motor", "table_motor", "parse_shaft",
            "simulate_shaft", "ShaftWarning"]
@@ -234,7 +235,7 @@ def _one_part_model(scene: Scene, FI, FF, tabs, MI, MW, MOI, MOF):
     """The :class:`~mechcirc.scene.motion.MotionModel` of :func:`rigid_model`'s tables: one
     part (the drive's), no elastic elements."""
     i8 = np.int64
-    arrays = {"FI": np.array(FI, i8), "FF": np.array(FF, float), "tabs": np.array(tabs),
+    arrays = {"FI": np.array(FI, i8), "FF": function_rows(FI, FF), "tabs": np.array(tabs),
               "MI": np.array(MI, i8), "MW": np.array(MW, float),
               "EI": np.zeros((0, 8), i8), "EF": np.zeros((0, 10)),
               "MOI": np.array(MOI, i8).reshape(-1, 2), "MOF": np.array(MOF).reshape(-1, 4),
@@ -336,8 +337,7 @@ class _ElasticShaft:
             if p not in m.point_fn:                       # a ground point: at the pose
                 return np.broadcast_to(np.asarray(lk.pose[p], float), (th.size, 2))
             fx, fy, i = m.point_fn[p]
-            return np.column_stack([[self.kern.feval(a["FI"][f, 0], a["tabs"], a["FI"][f, 2],
-                                                     *a["FF"][f], q)[0] for q in coord[i]]
+            return np.column_stack([[self.kern.feval(*_fargs(a, f), q)[0] for q in coord[i]]
                                     for f in (fx, fy)]) / L
         for sl in lk.sliders:
             if sl.stroke:
@@ -355,8 +355,7 @@ class _ElasticShaft:
             f = m.body_fn[b]
             v = out[:, k].copy()
             if a["FI"][f, 1] == 0:          # on the drive's part: the kernel took θ̈ = 0
-                args = (a["FI"][f, 0], a["tabs"], a["FI"][f, 2], *a["FF"][f])
-                v += np.array([self.kern.feval(*args, c * t)[1] for t in th]) * c * acc
+                v += np.array([self.kern.feval(*_fargs(a, f), c * t)[1] for t in th]) * c * acc
             bodies[b] = v
         values = {f"{e}.{kind}": out[:, nb + j + off].copy() for j, e in enumerate(m.elements)
                   for kind, off in (("force", 0), ("deformation", ne))}
@@ -422,7 +421,7 @@ def warm_up() -> None:
 
     i8 = np.int64
     PV = np.concatenate((np.zeros(8), [1.0, 1.0, 1.0, 0.0, 0.0, 10.0, 1.0, 0.2]))
-    arrays = (np.array([[2, -1, 0]], i8), np.array([[0.0, 1.0, 0.0, 0.0, 1.0, 0.0]]),
+    arrays = (np.array([[2, -1, 0]], i8), np.array([[0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0]]),
               np.zeros((1, 2, 6)), np.zeros(0, i8), np.zeros(0), np.zeros((0, 8), i8),
               np.zeros((0, 10)), np.zeros((0, 2), i8), np.zeros((0, 4)), np.array([0], i8),
               np.zeros(0, i8))

@@ -184,7 +184,7 @@ def _warm_up(model, kern) -> float:
         kern.rk_run(y, 0.0, 1e-9, 2, 0.0, 1e-9, np.empty((1, y.size)), np.empty(1), *args,
                     model.naux(), *_tableau_of(method))
     oargs = model.kernel_args(0.0, 1e300, outputs=True)
-    kern.outputs(np.zeros(1), np.array([y]), np.empty((1, model.naux())), *oargs)
+    kern.outputs(np.zeros(1), np.array([y]), np.empty((model.naux(), 1)), *oargs)
     kern.output_extrema(np.zeros(1), np.array([y]), np.empty((2, model.naux())), *oargs)
     one = np.zeros(1)
     kern.point_samples(*_fargs(model.arrays, model.arrays["PRIG"][0]), one, one, one,
@@ -1062,9 +1062,8 @@ def crank_angle(omega, theta_s, ripple, t):
 
 def _outputs(model, kern, theta_s, ripple, ts, ys):
     args = model.kernel_args(theta_s, 1e300, outputs=True, ripple=ripple)
-    out = np.empty((ts.size, model.naux()))
-    kern.outputs(np.ascontiguousarray(ts), np.ascontiguousarray(ys), out, *args)
-    cols = out.T.copy()             # one copy: each output a contiguous row
+    cols = np.empty((model.naux(), ts.size))        # each output a contiguous row
+    kern.outputs(np.ascontiguousarray(ts), np.ascontiguousarray(ys), cols, *args)
     names = _aux_names(model)
     rows = _Rows(zip(names, cols))
     rows.rows = cols[:len(names)]

@@ -222,16 +222,16 @@ def test_output_extrema_are_the_extrema_of_the_outputs(python):
     rng = np.random.default_rng(3)
     ys = np.array([model.rigid_state(0.0)] * ts.size) + 1e-3 * rng.standard_normal((ts.size, 2 * n))
     args = model.kernel_args(0.0, 1e300, outputs=True)
-    out = np.empty((ts.size, model.naux()))
+    out = np.empty((model.naux(), ts.size))               # an output per row
     kern.outputs(ts, ys, out, *args)
     ext = np.empty((2, model.naux()))
     kern.output_extrema(ts, ys, ext, *args)
-    assert np.array_equal(ext[0], out.min(axis=0)) and np.array_equal(ext[1], out.max(axis=0))
-    assert np.ptp(out[:, :-1], axis=0).max() > 0          # the outputs do vary
+    assert np.array_equal(ext[0], out.min(axis=1)) and np.array_equal(ext[1], out.max(axis=1))
+    assert np.ptp(out[:-1], axis=1).max() > 0             # the outputs do vary
     ys[7, n] = np.nan
     kern.output_extrema(ts, ys, ext, *args)
     kern.outputs(ts, ys, out, *args)
-    nan = np.isnan(out).any(axis=0)
+    nan = np.isnan(out).any(axis=1)
     assert nan.any() and np.array_equal(np.isnan(ext[0]), nan) and np.array_equal(np.isnan(ext[1]), nan)
 
 
@@ -384,7 +384,7 @@ def test_output_pass_skips_the_points_functions():
     every = (args[0].copy(), *args[1:])
     every[0][3] = a["FI"].shape[0]
     kern = kernels_for("rk4")[0]
-    got, full = (np.empty((ts.size, model.naux())) for _ in range(2))
+    got, full = (np.empty((model.naux(), ts.size)) for _ in range(2))
     kern.outputs(ts, ys, got, *args)
     kern.outputs(ts, ys, full, *every)
     np.testing.assert_array_equal(got, full)
