@@ -73,8 +73,11 @@ class _Parser(argparse.ArgumentParser):
                     hint = did_you_mean(word, sorted(self._option_string_actions))
                     message += f"; {word} is not an option{hint}"
         prog = self.prog
-        if message.startswith("unrecognized arguments") and self.given in COMMANDS:
-            prog = f"{prog} {self.given}"        # the command's own --help lists its options
+        # the command named as main() finds it (the first word not an option): its own
+        # --help is the one that lists its options
+        command = next((w for w in self.words if not w.startswith("-")), None)
+        if message.startswith("unrecognized arguments") and command in COMMANDS:
+            prog = f"{prog} {command}"
         self.exit(2, f"{prog}: error: {shorten(message)} (see '{prog} --help')\n")
 
     def _option_hint(self, word: str) -> str:
