@@ -356,6 +356,11 @@ def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, wo
     aux[nb + 2 * ne + 1 + nmo] = bad
 
 
+#: :func:`rhs` inlined where :func:`rk_step` calls it (the same source; compiled in the
+#: step's context the steps run about 10 % faster, for about 9 s more of a cold compile).
+rhs_in_step = _jit_inline(getattr(rhs, "py_func", rhs))
+
+
 @_leaf
 def regions(FI, EI, EF, MOI, MOF, aux, work, off, reg, sw, first):
     """The smooth piece each force law is on, from the last right-hand side evaluated
@@ -462,8 +467,13 @@ def rk_step(t, hh, y, K, tmp, ynew, TA, TB, TC, PV, FI, FF, tabs, MI_, MW, EI, E
                 if c != 0.0:
                     acc += c * K[j, m]
             tmp[m] = y[m] + hh * acc
-        deriv(t + TC[i] * hh if i < s else t + hh, tmp, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI,
-              MOF, PRIG, BI, K[i], aux, work, zy, zd)
+        ti = t + TC[i] * hh if i < s else t + hh
+        if shaft_mode(PV) == 0:     # :func:`deriv`, with the scene's rhs compiled in place
+            rhs_in_step(ti, tmp, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, K[i],
+                        aux, work)
+        else:
+            shaft_rhs(ti, tmp, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, K[i], aux,
+                      work, zy, zd)
     for m in range(n):
         ynew[m] = tmp[m]
 
