@@ -390,6 +390,13 @@ def function_rows(FI, FF):
     return np.column_stack([ff, ic, 1.0 / ff[:, 4]])
 
 
+def function_args(arrays, f) -> tuple:
+    """The arguments of the kernels' ``feval`` (and ``eval_many``, ``point_samples``) for
+    function ``f`` of a model's ``arrays``: its kind, the tables, its table's index and its
+    row of ``FF`` (the layout :func:`function_rows` makes)."""
+    return (arrays["FI"][f, 0], arrays["tabs"], arrays["FI"][f, 2], *arrays["FF"][f])
+
+
 def _kernel_arrays(B, n_dyn, rows):
     """The kernel's arrays: the functions of ``B``, the ``rows`` as :data:`_ROWS` says, and
     ``n_dyn``, how many functions the dynamics need."""

@@ -52,10 +52,10 @@ import numpy as np
 
 from ..errors import MechcircError, ShaftWarning, SolverError
 from .files import Scene
-from .motion import (MotionModel, body_tables, dead_centre, function_rows, hermite_table,
-                     motion_model)
+from .motion import (MotionModel, body_tables, dead_centre, function_args, function_rows,
+                     hermite_table, motion_model)
 from .simfile import Motor, Shaft, kloss_motor, parse_shaft, table_motor  # noqa: F401
-from .simulation import _fargs, kernels_for, max_rate
+from .simulation import kernels_for, max_rate
 
 __all__ = ["Motor", "Shaft", "ShaftMotion", "kloss_motor", "table_motor", "parse_shaft",
            "simulate_shaft", "ShaftWarning"]
@@ -337,7 +337,7 @@ class _ElasticShaft:
             if p not in m.point_fn:                       # a ground point: at the pose
                 return np.broadcast_to(np.asarray(lk.pose[p], float), (th.size, 2))
             fx, fy, i = m.point_fn[p]
-            return np.column_stack([[self.kern.feval(*_fargs(a, f), q)[0] for q in coord[i]]
+            return np.column_stack([[self.kern.feval(*function_args(a, f), q)[0] for q in coord[i]]
                                     for f in (fx, fy)]) / L
         for sl in lk.sliders:
             if sl.stroke:
@@ -355,7 +355,7 @@ class _ElasticShaft:
             f = m.body_fn[b]
             v = out[:, k].copy()
             if a["FI"][f, 1] == 0:          # on the drive's part: the kernel took θ̈ = 0
-                v += np.array([self.kern.feval(*_fargs(a, f), c * t)[1] for t in th]) * c * acc
+                v += np.array([self.kern.feval(*function_args(a, f), c * t)[1] for t in th]) * c * acc
             bodies[b] = v
         values = {f"{e}.{kind}": out[:, nb + j + off].copy() for j, e in enumerate(m.elements)
                   for kind, off in (("force", 0), ("deformation", ne))}

@@ -42,7 +42,7 @@ import numpy as np
 from .. import _jit
 from ..errors import MechcircError, SceneAccuracyWarning, SolverError
 from .files import Scene
-from .motion import MotionModel, motion_model
+from .motion import MotionModel, function_args, motion_model
 
 __all__ = ["SceneMotion", "simulate_scene", "flight", "linear_matrices", "max_rate",
            "ACCURACY_GOAL"]
@@ -187,7 +187,7 @@ def _warm_up(model, kern) -> float:
     kern.outputs(np.zeros(1), np.array([y]), np.empty((model.naux(), 1)), *oargs)
     kern.output_extrema(np.zeros(1), np.array([y]), np.empty((2, model.naux())), *oargs)
     one = np.zeros(1)
-    kern.point_samples(*_fargs(model.arrays, model.arrays["PRIG"][0]), one, one, one,
+    kern.point_samples(*function_args(model.arrays, model.arrays["PRIG"][0]), one, one, one,
                        np.empty(1), np.empty(1))
     _WARM = True
     return time.perf_counter() - t0
@@ -239,13 +239,9 @@ def linear_matrices(model: MotionModel, theta: float):
     m = np.zeros(n + 1)
     for f, w in zip(a["MI"], a["MW"]):
         p = a["FI"][f, 1]
-        q = y0[p - 1] if p > 0 else kern.feval(*_fargs(a, a["PRIG"][0]), theta)[0]
-        m[p] += w * kern.feval(*_fargs(a, f), q)[1] ** 2
+        q = y0[p - 1] if p > 0 else kern.feval(*function_args(a, a["PRIG"][0]), theta)[0]
+        m[p] += w * kern.feval(*function_args(a, f), q)[1] ** 2
     return np.diag(m[1:]), D, K
-
-
-def _fargs(a, f):
-    return (a["FI"][f, 0], a["tabs"], a["FI"][f, 2], *a["FF"][f])
 
 
 _RATES: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
@@ -991,7 +987,7 @@ def _point_accelerations(model, theta_s, ripple, ts, ys, values, positions=None)
     for i in {i for _, _, i in model.point_fn.values()}:     # (q, q̇) of each part, contiguous
         if i == 0:
             q0 = np.empty((ts.size, 3))
-            kern.eval_many(*_fargs(a, a["PRIG"][0]), np.ascontiguousarray(th), q0)
+            kern.eval_many(*function_args(a, a["PRIG"][0]), np.ascontiguousarray(th), q0)
             coord[0] = (q0[:, 0].copy(), q0[:, 1] * w)
         else:
             coord[i] = (np.ascontiguousarray(ys[:, i - 1]),
@@ -1006,7 +1002,7 @@ def _point_accelerations(model, theta_s, ripple, ts, ys, values, positions=None)
         comp = []
         for f in (fx, fy):
             pos, acc = np.empty(ts.size), np.empty(ts.size)
-            kern.point_samples(*_fargs(a, f), q, qd, qdd, pos, acc)
+            kern.point_samples(*function_args(a, f), q, qd, qdd, pos, acc)
             comp.append(acc)
             if positions is not None:
                 positions.setdefault(p, []).append(pos)
@@ -1127,14 +1123,14 @@ def _rigid_acceleration(model, body, crank, ripple=(0.0, 0.0), ts=None, refine=T
     w2 = model.omega ** 2
 
     def acc(th):
-        q, q1, q2, _ = kern.feval(*_fargs(a, r), th)
-        _, g1, g2, _ = kern.feval(*_fargs(a, g), q)
+        q, q1, q2, _ = kern.feval(*function_args(a, r), th)
+        _, g1, g2, _ = kern.feval(*function_args(a, g), q)
         return (g2 * q1 * q1 + g1 * q2) * w2
 
     fast = kernels_for("rk4")[0]
     qv, gv = np.empty((crank.size, 3)), np.empty((crank.size, 3))
-    fast.eval_many(*_fargs(a, r), np.ascontiguousarray(crank), qv)
-    fast.eval_many(*_fargs(a, g), np.ascontiguousarray(qv[:, 0]), gv)
+    fast.eval_many(*function_args(a, r), np.ascontiguousarray(crank), qv)
+    fast.eval_many(*function_args(a, g), np.ascontiguousarray(qv[:, 0]), gv)
     vals = (gv[:, 2] * qv[:, 1] ** 2 + gv[:, 1] * qv[:, 2]) * w2
     if ripple[0] != 0.0:
         # a varying crank speed: (g'' q'² + g' q'') θ̇² + g' q' θ̈ at the samples' times;

@@ -224,7 +224,8 @@ def table_error(params: SleyParameters | None = None, n: int = 1024,
         ``samples`` crank angles (interval midpoints and odd points included), and
         ``nu_rel`` = max |Δν| / max |ν|.
     """
-    from ..scene.simulation import _fargs, kernels_for
+    from ..scene.motion import function_args
+    from ..scene.simulation import kernels_for
 
     params = params or SleyParameters()
     _, model = _model(params, n)
@@ -232,7 +233,7 @@ def table_error(params: SleyParameters | None = None, n: int = 1024,
     f = model.body_fn["rocker"]
     th = np.linspace(0.0, TWO_PI, samples, endpoint=False) + 0.37 * TWO_PI / samples
     got = np.empty((th.size, 3))
-    kernels_for("rk4")[0].eval_many(*_fargs(a, f), th, got)
+    kernels_for("rk4")[0].eval_many(*function_args(a, f), th, got)
     fb = params.fourbar()
     st = fb.evaluate(th)
     phi0 = fb.transfer(0.0)[0]
