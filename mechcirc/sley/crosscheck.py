@@ -129,9 +129,9 @@ def resonance_check(params: SleyParameters, theta0: float, *,
     Parameters
     ----------
     params : SleyParameters
-        The sley.
+        The sley whose netlist resonances are compared with its eigenfrequencies.
     theta0 : float
-        Crank angle [rad].
+        Crank angle [rad] at which the model is linearised and the netlist written.
     damping : bool
         Compare the damped roots instead of the undamped ones.
 
@@ -335,9 +335,9 @@ def harmonic_check(params: SleyParameters, theta0: float, omegas) -> HarmonicChe
     Parameters
     ----------
     params : SleyParameters
-        The sley.
+        The sley forced harmonically, in the time domain and through its netlist.
     theta0 : float
-        Crank angle [rad].
+        Crank angle [rad] at which its coefficients are frozen for both.
     omegas : array_like
         Forcing frequencies [rad/s].
 

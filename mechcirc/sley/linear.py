@@ -207,9 +207,9 @@ def linearise(params: SleyParameters, theta0: float, *, mu: float | None = None)
     Parameters
     ----------
     params : SleyParameters
-        The sley.
+        The sley whose equations of motion (4) or (9) are linearised.
     theta0 : float
-        Crank angle [rad].
+        Crank angle [rad] of the rigid motion about which they are linearised.
     mu : float, optional
         Transmission ratio μ used instead of μ(θ0).
 
@@ -234,9 +234,9 @@ def eigenfrequencies(params: SleyParameters, theta0: float) -> list[SleyMode]:
     Parameters
     ----------
     params : SleyParameters
-        The sley.
+        The sley whose modes are sought.
     theta0 : float
-        Crank angle [rad].
+        Crank angle [rad] at which it is linearised (:func:`linearise`).
 
     Returns
     -------
@@ -284,9 +284,9 @@ def to_circuit(params: SleyParameters, theta0: float, *, lever: bool = False,
     Parameters
     ----------
     params : SleyParameters
-        The sley.
+        The sley whose linearised model the circuit is.
     theta0 : float
-        Crank angle [rad].
+        Crank angle [rad] of the linearisation; μ(θ0) sets the lever ratio or η = μ².
     lever : bool
         Use a ``lever`` element instead of η reflection.
     damping : bool
