@@ -98,11 +98,13 @@ def explain_lines(circuit: Circuit) -> list[str]:
     Parameters
     ----------
     circuit : Circuit
-        As in :func:`explain`.
+        The circuit whose reduction is written out; its network must be series–parallel.
 
     Returns
     -------
     list of str
+        A header naming the drive, each loaded element with its value·η and formula,
+        each step with its reason, and last ``K = `` the root's label.
     """
     steps, root = explain(circuit)
     d = circuit.require_drive()
