@@ -14,7 +14,8 @@ from pathlib import Path
 
 from ..errors import (MAX_QUOTED, MechcircError, MechcircWarning, NetlistError,
                       NotSeriesParallelError, clip, shorten)
-from ..units import UnitError, parse_omega, parse_quantity, parse_unit, split_quantity
+from ..units import (FREQUENCY_UNITS, UnitError, parse_omega, parse_quantity, parse_unit,
+                     split_quantity)
 
 EXIT_OK, EXIT_INTERNAL, EXIT_USER = 0, 1, 2
 #: Exit status after SIGINT and SIGTERM (128 + the signal number, as shells report).
@@ -345,11 +346,49 @@ def add_handler(p, func, *, json: bool = True) -> None:
         The handler: takes the parsed arguments, returns the exit status.
     json : bool, optional
         Add ``--json`` (print one JSON document); False for a command without it,
-        or one that lists ``--json`` before other options (it adds it itself).
+        or one that lists ``--json`` before other options (it calls
+        :func:`add_json_option` itself).
     """
     if json:
-        p.add_argument("--json", action="store_true", help="print one JSON document")
+        add_json_option(p)
     p.set_defaults(func=func)
+
+
+# ------------------------------------------------------------------ shared options
+# The options several commands take, each declared here once; ``what`` is the
+# command's own help text of the option.
+#: Help of the positional ``file`` of a command that reads a netlist (``add_command(file=)``).
+NETLIST_FILE = "netlist file (.mcir)"
+
+
+def add_json_option(p) -> None:
+    """``--json``: print one JSON document (a command that lists it before other options)."""
+    p.add_argument("--json", action="store_true", help="print one JSON document")
+
+
+def add_plot_option(p, what: str) -> None:
+    """``--plot IMAGE``: draw ``what`` into an image file, its format by its extension."""
+    p.add_argument("--plot", metavar="IMAGE", help=what)
+
+
+def add_output_option(p, what: str, metavar: str = "CSV", **options) -> None:
+    """``-o/--output``: write ``what`` to a file (``metavar``: its kind; ``options``: more of
+    argparse's, as ``dest``)."""
+    p.add_argument("-o", "--output", metavar=metavar, help=what, **options)
+
+
+def add_method_option(p, what: str) -> None:
+    """``--method auto|sp|nodal``: how K is evaluated (series–parallel tree or nodal analysis)."""
+    p.add_argument("--method", choices=("auto", "sp", "nodal"), default="auto", help=what)
+
+
+def add_unit_option(p, what: str | None = None) -> None:
+    """``--unit rad/s|Hz|rpm``: the unit of the frequencies a command shows (``what``: which,
+    when not every one)."""
+    p.add_argument("--unit", choices=tuple(FREQUENCY_UNITS), default="rad/s",
+                   help=what or "show frequencies in rad/s (omega, the default), Hz (f = "
+                                "omega/2 pi) or rpm (n = 60 omega/2 pi): tables, CSV columns "
+                                "and plot axes (--json stays in rad/s)")
 
 
 #: The largest angular frequency the command line accepts [rad/s] (ω² stays finite).

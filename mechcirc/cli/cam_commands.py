@@ -5,8 +5,8 @@ from __future__ import annotations
 import math
 
 from ..errors import InputError
-from ._common import (MAX_LENGTH, add_command, add_handler, check_output_paths,
-                      count, print_json, real, warning_lines)
+from ._common import (MAX_LENGTH, add_command, add_handler, add_output_option,
+                      check_output_paths, count, print_json, real, warning_lines)
 
 _LAWS = ("harmonic", "cycloidal", "modified_sine", "modified_trapezoid", "polynomial_345")
 
@@ -58,7 +58,7 @@ def register(sub) -> None:
                                        "translating, 45 oscillating)")
     p.add_argument("--points", type=count(8, 1_000_000), default=721, metavar="N",
                    help="cam angles from 0 to 360° inclusive (default 721)")
-    p.add_argument("-o", "--output", metavar="CSV", help="write the profile as CSV")
+    add_output_option(p, "write the profile as CSV")
     p.add_argument("--svg", metavar="SVG", help="draw the profile as SVG (mm)")
     add_handler(p, cmd_cam)
 

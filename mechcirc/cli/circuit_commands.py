@@ -16,9 +16,10 @@ from ..limits import (
     MAX_SWEEP_POINTS,
 )
 from ..units import FREQUENCY_UNITS, in_unit
-from ._common import (add_command, add_handler, check_names, check_output_paths,
-                      load_with_warnings, print_json, print_written, real, save_figure,
-                      warning_lines)
+from ._common import (NETLIST_FILE, add_command, add_handler, add_json_option,
+                      add_method_option, add_output_option, add_plot_option, add_unit_option,
+                      check_names, check_output_paths, load_with_warnings, print_json,
+                      print_written, real, save_figure, warning_lines)
 
 #: argparse type: an angular frequency [rad/s], or with a unit (``50Hz``, ``3000rpm``); the
 #: command checks the range (a sweep's --omega-min/--omega-max together).
@@ -42,8 +43,8 @@ def _register_check(sub) -> None:
         sub, "check", "parse a netlist and show its elements and reduction tree",
         "Parse a netlist, list elements and nodes, warnings, and the series–parallel reduction "
         "tree seen from the drive.",
-        "Example: mechcirc check netlists/stb_heald.mcir", file="netlist file (.mcir)")
-    p.add_argument("--json", action="store_true", help="print one JSON document")
+        "Example: mechcirc check netlists/stb_heald.mcir", file=NETLIST_FILE)
+    add_json_option(p)
     p.add_argument("--explain", action="store_true",
                    help="write the series–parallel reduction out step by step, with the "
                         "lever reflections (K/r², m·r²) and each element's value·η")
@@ -56,7 +57,7 @@ def _register_sweep(sub) -> None:
         "Sweep the kinematic characteristic K = v/Q [m/(N·s)] and the force amplitude Q0 = V0/K "
         "[N] over ω [rad/s].",
         "Example: mechcirc sweep netlists/stb_heald.mcir --omega-min 10 --omega-max 1e4 --points "
-        "400 --log -o K.csv --plot K.png", file="netlist file (.mcir)", raw=False)
+        "400 --log -o K.csv --plot K.png", file=NETLIST_FILE, raw=False)
     p.add_argument("--omega-min", type=omega_value, required=True, metavar="W1",
                    help="lowest angular frequency [rad/s]; or with a unit: 5Hz, 300rpm")
     p.add_argument("--omega-max", type=omega_value, required=True, metavar="W2",
@@ -64,15 +65,13 @@ def _register_sweep(sub) -> None:
     p.add_argument("--points", type=int, default=200, metavar="N",
                    help="number of frequency points (default 200)")
     p.add_argument("--log", action="store_true", help="space the points logarithmically")
-    p.add_argument("-o", "--output", metavar="CSV",
-                   help="write omega,K_re,K_im,Q0_re,Q0_im to this CSV file")
-    p.add_argument("--plot", metavar="IMAGE", help="plot |K| and |Q0| (PNG, SVG or PDF)")
+    add_output_option(p, "write omega,K_re,K_im,Q0_re,Q0_im to this CSV file")
+    add_plot_option(p, "plot |K| and |Q0| (PNG, SVG or PDF)")
     p.add_argument("--touchstone", metavar="S1P",
                    help="write K as Z parameters in a Touchstone file (.s1p) that scikit-rf "
                         "reads; f = omega/(2 pi) in Hz, K in m/(N·s) (not ohms)")
-    p.add_argument("--method", choices=("auto", "sp", "nodal"), default="auto",
-                   help="series–parallel tree, nodal analysis, or auto (tree where "
-                        "possible; default)")
+    add_method_option(p, "series–parallel tree, nodal analysis, or auto (tree where possible; "
+                         "default)")
     p.add_argument("--adaptive", action="store_true",
                    help="refine the grid around resonances and wherever |K| or |Q0| "
                         "bends (--points is then the starting grid)")
@@ -105,7 +104,7 @@ def _register_resonances(sub) -> None:
         "Q0 → ∞ under kinematic excitation; the drive held) and anti-resonances (K → ∞; the drive "
         "released). Damped networks also get the damping ratio.",
         "Example: mechcirc resonances netlists/stb_heald.mcir --omega-max 5000",
-        file="netlist file (.mcir)", raw=False)
+        file=NETLIST_FILE, raw=False)
     p.add_argument("--omega-max", type=positive_omega, metavar="W",
                    help="report only up to this angular frequency [rad/s]; or with a unit: "
                         "50Hz, 3000rpm")
@@ -117,18 +116,9 @@ def _register_resonances(sub) -> None:
                    help="also the relative sensitivity (p/omega)·d(omega)/dp of each root to "
                         "every element value, lever ratio and .param, ranked, with what "
                         "would raise omega by 10 %% (a linear estimate)")
-    p.add_argument("--plot", metavar="IMAGE",
-                   help="plot the mode shapes (PNG, SVG or PDF)")
+    add_plot_option(p, "plot the mode shapes (PNG, SVG or PDF)")
     add_unit_option(p)
     add_handler(p, cmd_resonances)
-
-
-def add_unit_option(p) -> None:
-    """``--unit rad/s|Hz|rpm``: the unit of every frequency a command shows."""
-    p.add_argument("--unit", choices=("rad/s", "Hz", "rpm"), default="rad/s",
-                   help="show frequencies in rad/s (omega, the default), Hz (f = omega/2 pi) "
-                        "or rpm (n = 60 omega/2 pi): tables, CSV columns and plot axes "
-                        "(--json stays in rad/s)")
 
 
 def _tree_and_unloaded(circuit) -> tuple[str, tuple[str, ...]]:

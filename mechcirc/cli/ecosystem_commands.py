@@ -6,7 +6,8 @@ from pathlib import Path
 
 from ..errors import MechcircError
 from ..limits import FORMULA_SECONDS
-from ._common import (add_command, add_handler, check_output_paths, count,
+from ._common import (NETLIST_FILE, add_command, add_handler, add_method_option,
+                      add_output_option, add_plot_option, check_output_paths, count,
                       load_with_warnings, print_json, print_written, real, save_figure,
                       time_limit, warning_lines)
 
@@ -25,7 +26,7 @@ def _register_forces(sub) -> None:
         "[deg] (relative to the drive's amplitude) for every element carrying force, at one "
         "angular frequency.",
         "Example: mechcirc forces netlists/stb_heald.mcir --omega 300 --plot forces.png",
-        file="netlist file (.mcir)")
+        file=NETLIST_FILE)
     p.add_argument("--omega", type=positive_omega, required=True, metavar="W",
                    help="angular frequency: rad/s, or with a unit: 50Hz, 3000rpm")
     _method_plot_json(p, "bar chart of |Q| per element (PNG, SVG, PDF)", cmd_forces)
@@ -34,9 +35,8 @@ def _register_forces(sub) -> None:
 def _method_plot_json(p, plot: str, func) -> None:
     """The options ``forces`` and ``compare`` end with: --method, --plot (``plot``: what it
     draws), --json; and the command's function."""
-    p.add_argument("--method", choices=("auto", "sp", "nodal"), default="auto",
-                   help="series–parallel tree, nodal analysis, or auto (default)")
-    p.add_argument("--plot", metavar="IMAGE", help=plot)
+    add_method_option(p, "series–parallel tree, nodal analysis, or auto (default)")
+    add_plot_option(p, plot)
     add_handler(p, func)
 
 
@@ -49,7 +49,7 @@ def _register_compare(sub) -> None:
         "scikit-rf, taken in m/(N·s)), evaluate the netlist at the same frequencies and print the "
         "error in the band.",
         "Example: mechcirc compare netlists/stb_heald.mcir measured.s1p --plot cmp.png",
-        file="netlist file (.mcir)", raw=False)
+        file=NETLIST_FILE, raw=False)
     p.add_argument("measured", help="Touchstone one-port file (.s1p)")
     p.add_argument("--omega-min", type=band_omega, metavar="W1",
                    help="compare only from this angular frequency [rad/s] (or 5Hz, 300rpm)")
@@ -66,7 +66,7 @@ def _register_formula(sub) -> None:
         ".param names stay symbols; the values are listed below. Needs SymPy (pip install "
         "'mechcirc[formula]').",
         "Example: mechcirc formula netlists/stb_heald.mcir --latex",
-        file="netlist file (.mcir)", raw=False)
+        file=NETLIST_FILE, raw=False)
     p.add_argument("--latex", action="store_true", help="print LaTeX instead of SymPy text")
     p.add_argument("--expand", action="store_true",
                    help="one fraction, numerator and denominator multiplied out")
@@ -86,7 +86,7 @@ def _register_study(sub) -> None:
         "The output records the spec and every column's unit (CSV: OUTPUT.meta.json beside it).",
         "Example: mechcirc study examples/study_stb.toml -o results.csv", raw=False)
     p.add_argument("spec", help="study description (.toml)")
-    p.add_argument("-o", "--output", metavar="CSV", help="write the table to this CSV file")
+    add_output_option(p, "write the table to this CSV file")
     p.add_argument("--scheduler", metavar="ADDRESS",
                    help="run on an existing Dask cluster (tcp://host:8786); needs "
                         "'mechcirc[study]'")
@@ -103,8 +103,7 @@ def _register_study(sub) -> None:
                    help="also write K(omega) of every point (analysis = \"sweep\") to this "
                         "Parquet file, one row per point and omega: design, omega, K_re, K_im "
                         "(units in its metadata; needs pyarrow)")
-    p.add_argument("--plot", metavar="IMAGE",
-                   help="plot a result column against the parameters (PNG, SVG or PDF)")
+    add_plot_option(p, "plot a result column against the parameters (PNG, SVG or PDF)")
     p.add_argument("--plot-column", metavar="NAME",
                    help="the column to plot (default Q0_abs_max for sweeps, resonance_1 "
                         "for resonance tables)")

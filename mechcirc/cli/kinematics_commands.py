@@ -9,8 +9,9 @@ from pathlib import Path
 
 from ..errors import InputError, MechcircError, NetlistError
 from ..units import convert_frequency
-from ._common import (MAX_LENGTH, MAX_OMEGA, add_command, add_handler, check_output_paths,
-                      count, print_json, print_written, real, save_figure, write_outputs)
+from ._common import (MAX_LENGTH, MAX_OMEGA, add_command, add_handler, add_output_option,
+                      add_plot_option, check_output_paths, count, print_json, print_written,
+                      real, save_figure, write_outputs)
 
 
 def register(sub) -> None:
@@ -37,7 +38,7 @@ def _register_fourbar(sub) -> None:
                    help="crank speed [rad/s] for ε4T = ν·ω²")
     p.add_argument("--branch", type=int, choices=(1, -1), default=1,
                    help="assembly mode (default +1; see docs/kinematics.md)")
-    p.add_argument("--plot", metavar="IMAGE", help="plot φ4, μ, ν (or ε4T) and γ against θ")
+    add_plot_option(p, "plot φ4, μ, ν (or ε4T) and γ against θ")
     add_handler(p, cmd_fourbar)
 
 
@@ -95,9 +96,9 @@ def _register_frame(sub) -> None:
     p.add_argument("--points", type=count(3, 100_000, why="one 9×9 solve per angle"),
                    default=361, metavar="N",
                    help="crank angles over one turn, 0…360° (default 361; 3…100000)")
-    p.add_argument("-o", "--output", metavar="CSV", help="write every angle's loads as CSV")
-    p.add_argument("--plot", metavar="IMAGE", help="shaking force polar curve and magnitude "
-                   "(patent Figs. 5–6), bearing forces, torque and shaking moments")
+    add_output_option(p, "write every angle's loads as CSV")
+    add_plot_option(p, "shaking force polar curve and magnitude (patent Figs. 5–6), bearing "
+                       "forces, torque and shaking moments")
     add_handler(p, cmd_frame)
 
 
@@ -138,9 +139,8 @@ def _register_synth(sub) -> None:
     p.add_argument("--no-refine", action="store_true",
                    help="report the grid's designs without the continuous refinement")
     _register_synth_export(p)
-    p.add_argument("--plot", metavar="IMAGE",
-                   help="the best design drawn at both dead centres with its swing, beside "
-                        "the transmission angle and rocker acceleration against θ")
+    add_plot_option(p, "the best design drawn at both dead centres with its swing, beside the "
+                       "transmission angle and rocker acceleration against θ")
     add_handler(p, cmd_synth)
 
 
@@ -178,8 +178,7 @@ def _register_linkage(sub) -> None:
         file="linkage file (.toml)")
     p.add_argument("--theta", type=real(most=1e9, unit="deg", role="angle"), default=0.0, metavar="DEG",
                    help="rotation of the first crank from the pose [deg] (default 0)")
-    p.add_argument("--plot", metavar="IMAGE",
-                   help="draw the linkage at θ with the paths of its points")
+    add_plot_option(p, "draw the linkage at θ with the paths of its points")
     add_handler(p, cmd_linkage)
 
 

@@ -7,7 +7,8 @@ import math
 
 from ..errors import MechcircError
 from ..units import in_unit
-from ._common import (add_command, add_handler, check_names, check_output_paths,
+from ._common import (add_command, add_handler, add_method_option, add_output_option,
+                      add_plot_option, add_unit_option, check_names, check_output_paths,
                       count, load_with_warnings, print_json, print_written, real, scene_theta,
                       warning_lines, write_outputs)
 
@@ -48,13 +49,11 @@ def register(sub) -> None:
     p.add_argument("--near", type=real(above=0.0, most=1.0), default=0.03, metavar="FRAC",
                    help="name harmonics within this relative distance of a resonance "
                         "(default 0.03)")
-    p.add_argument("--method", choices=("auto", "sp", "nodal"), default="auto",
-                   help="how K is evaluated (default auto)")
-    p.add_argument("-o", "--output", metavar="CSV", help="write the table as CSV")
-    p.add_argument("--plot", metavar="IMAGE", help="plot (PNG, SVG or PDF)")
-    p.add_argument("--unit", choices=("rad/s", "Hz", "rpm"), default="rad/s",
-                   help="unit of the frequencies printed: shaft speed Ω, harmonics kΩ, "
-                        "resonances ωn (default rad/s; --json stays in rad/s)")
+    add_method_option(p, "how K is evaluated (default auto)")
+    add_output_option(p, "write the table as CSV")
+    add_plot_option(p, "plot (PNG, SVG or PDF)")
+    add_unit_option(p, "unit of the frequencies printed: shaft speed Ω, harmonics kΩ, "
+                       "resonances ωn (default rad/s; --json stays in rad/s)")
     add_handler(p, cmd_periodic)
 
 

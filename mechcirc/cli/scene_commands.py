@@ -8,9 +8,9 @@ import warnings
 from ..errors import MechcircError
 from ..limits import MAX_CYCLE_POINTS
 from ..units import FREQUENCY_UNITS, in_unit
-from ._common import (add_command, add_handler, check_output_paths, count,
-                      print_json, real, save_figure, scene_theta, set_values,
-                      write_outputs, write_text)
+from ._common import (NETLIST_FILE, add_command, add_handler, add_output_option,
+                      add_plot_option, add_unit_option, check_output_paths, count, print_json,
+                      real, save_figure, scene_theta, set_values, write_outputs, write_text)
 
 
 def register(sub) -> None:
@@ -33,8 +33,8 @@ def _register_scene(sub) -> None:
                            "theta_deg of the file's [analysis])")
     what.add_argument("--cycle", action="store_true",
                       help="resonances and |Q0| at shaft harmonics over a revolution")
-    p.add_argument("-o", "--output", metavar="FILE",
-                   help="--theta: write the netlist (.mcir); --cycle: write a CSV table")
+    add_output_option(p, "--theta: write the netlist (.mcir); --cycle: write a CSV table",
+                      "FILE")
     p.add_argument("--reflect", choices=("eta", "lever"), default="eta",
                    help="reflect through eta = ratio² (default) or explicit ideal levers")
     p.add_argument("--points", type=count(2, MAX_CYCLE_POINTS, why="10–25 ms each"),
@@ -45,14 +45,13 @@ def _register_scene(sub) -> None:
     p.add_argument("--reduce", action="store_true",
                    help="reduce the circuit to what the file's [analysis] output needs over "
                         "its band, within its tol (-o then writes the reduced netlist)")
-    p.add_argument("--plot", metavar="IMAGE", help="--cycle: plot the map; with --mode: draw "
-                                                   "the mode on the linkage (PNG, SVG or PDF)")
+    add_plot_option(p, "--cycle: plot the map; with --mode: draw the mode on the linkage "
+                       "(PNG, SVG or PDF)")
     p.add_argument("--mode", type=count(1, 10_000), metavar="N",
                    help="--theta: draw resonance N (drive held; 1 = lowest) on the linkage "
                         "into --plot")
-    p.add_argument("--unit", choices=("rad/s", "Hz", "rpm"), default="rad/s",
-                   help="frequency unit of the tables, the --cycle CSV's column names and "
-                        "plot (default rad/s)")
+    add_unit_option(p, "frequency unit of the tables, the --cycle CSV's column names and "
+                       "plot (default rad/s)")
     add_handler(p, cmd_scene)
 
 
@@ -64,7 +63,7 @@ def _register_reduce(sub) -> None:
         "relative error of the output over the band (never above --tol) and the shift of each "
         "resonance.",
         "Example: mechcirc reduce netlists/stb_heald.mcir --band 10:2000 --tol 0.01 -o "
-        "reduced.mcir", file="netlist file (.mcir)", raw=False)
+        "reduced.mcir", file=NETLIST_FILE, raw=False)
     p.add_argument("--band", required=True, metavar="W1:W2",
                    help="angular frequency band [rad/s], W1 < W2")
     p.add_argument("--tol", type=real(above=0.0, most=1.0), required=True, metavar="T",
@@ -73,8 +72,7 @@ def _register_reduce(sub) -> None:
                    help="the force in this element is the output (default: K at the drive)")
     # --output used to name the element; everywhere else it is a file.  It stays
     # a file here too (the reduced netlist, as -o), so the name means one thing.
-    p.add_argument("-o", "--output", dest="out", metavar="FILE",
-                   help="write the reduced netlist here")
+    add_output_option(p, "write the reduced netlist here", "FILE", dest="out")
     p.add_argument("--points", type=count(10, 1_000_000), default=2000, metavar="N",
                    help="log-spaced check points over the band (default 2000; two more "
                         "beside each resonance in the band)")

@@ -6,8 +6,9 @@ import math
 
 from ..errors import InputError
 from ..limits import MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS, MAX_SCIPY_REVOLUTIONS
-from ._common import (add_command, add_handler, check_output_paths, count,
-                      print_json, real, set_values, write_outputs, write_text)
+from ._common import (add_command, add_handler, add_json_option, add_output_option,
+                      add_plot_option, check_output_paths, count, print_json, real, set_values,
+                      write_outputs, write_text)
 
 _METHODS = ("rk4", "rk4-python", "rk8", "DOP853", "RK45", "LSODA")   # = mechcirc.sley.METHODS
 _UNITS = {"eps4T": "1/s^2", "eps2P": "1/s^2", "eps4P": "1/s^2", "eps5P": "1/s^2",
@@ -43,8 +44,8 @@ def _register_simulate(sub) -> None:
                    help="accepted for old scripts and ignored: the presets always run as "
                         "their scenes (examples/mrazek_*.toml plus the variant's values)")
     _sley_arguments(p)
-    p.add_argument("--plot", metavar="IMAGE", help="plot eps2P, eps4P, eps4T, M2V (Figs. 4-9)")
-    p.add_argument("--json", action="store_true", help="print one JSON document")
+    add_plot_option(p, "plot eps2P, eps4P, eps4T, M2V (Figs. 4-9)")
+    add_json_option(p)
     p.add_argument("--shaft", action="store_true",
                    help="scene: the dynamic main shaft of its [shaft] table (flywheel, motor) "
                         "turning the mechanism with its elastic parts: speed fluctuation, "
@@ -91,7 +92,7 @@ def _sley_arguments(p) -> None:
                         "rk4 100, rk8 16)")
     p.add_argument("--points", type=count(16, MAX_POINTS_PER_REVOLUTION), metavar="N",
                    help="output points per revolution (default 7200, i.e. 0.05 deg)")
-    p.add_argument("-o", "--output", metavar="CSV", help="write the curves as CSV")
+    add_output_option(p, "write the curves as CSV")
 
 
 def _register_crosscheck(sub) -> None:

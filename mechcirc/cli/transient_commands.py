@@ -6,8 +6,8 @@ import math
 import sys
 
 from ..errors import MechcircError
-from ._common import (add_command, add_handler, check_names, check_output_paths,
-                      print_json, real, save_figure)
+from ._common import (add_command, add_handler, add_output_option, add_plot_option,
+                      check_names, check_output_paths, print_json, real, save_figure)
 
 
 def register(sub) -> None:
@@ -39,10 +39,9 @@ def register(sub) -> None:
     p.add_argument("--rtol", type=real(above=0.0), default=1e-10, metavar="TOL",
                    help="relative tolerance with clearances, 1e-12 to 0.1 (default 1e-10; "
                         "the absolute one is TOL x each state's peak)")
-    p.add_argument("-o", "--output", metavar="CSV", help="write the time series as CSV")
-    p.add_argument("--plot", metavar="IMAGE",
-                   help="plot node displacements, each clearance's deformation with its "
-                        "band ±B/2 and contact phases, and the --element forces")
+    add_output_option(p, "write the time series as CSV")
+    add_plot_option(p, "plot node displacements, each clearance's deformation with its band "
+                       "±B/2 and contact phases, and the --element forces")
     p.add_argument("--element", action="append", metavar="NAME",
                    help="with --plot: a panel of this element's force (repeatable)")
     add_handler(p, cmd_transient)
