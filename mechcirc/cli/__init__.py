@@ -43,6 +43,10 @@ COMMANDS: dict[str, str] = {
 COMMAND_MODULES: list[str] = list(dict.fromkeys(COMMANDS.values()))
 
 
+#: Options renamed, by command: the old spelling's error names the new one.
+RENAMED: dict[tuple[str, str], str] = {("transient", "--drive"): "--waveform"}
+
+
 class _Parser(argparse.ArgumentParser):
     """argparse, with a usage error on one line (the full usage is one ``--help`` away)."""
 
@@ -89,6 +93,9 @@ class _Parser(argparse.ArgumentParser):
                 if isinstance(action, argparse._SubParsersAction)
                 for name, p in action.choices.items()}
         owners = [name for name, p in subs.items() if word in p._option_string_actions]
+        renamed = RENAMED.get((self.given or "", word))
+        if renamed:
+            return f"; {word} was renamed {renamed}"
         if self.given not in subs:
             options = set(self._option_string_actions).union(
                 *(p._option_string_actions for p in subs.values()))
