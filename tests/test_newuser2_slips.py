@@ -42,7 +42,7 @@ def test_transient_summary_repr_gives_units(tmp_path):
     f.write_text(ROTARY.replace(" backlash=0.5 deg damping=5 N*m*s/rad", ""))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        r = transient(mechcirc.load(f), 0.2, drive="step")
+        r = transient(mechcirc.load(f), 0.2, waveform="step")
     text = repr(r)
     assert "(max |x| 0.4 rad)" in text and "N·m)" in text and len(text) < 400
 

@@ -281,7 +281,7 @@ def test_output_onto_the_commands_own_input_is_refused(tmp_path, capsys, how):
 
 
 @pytest.mark.parametrize("argv", [
-    ["transient", "{in}", "--t-end", "0.01", "--drive", "step", "-o", "{in}"],
+    ["transient", "{in}", "--t-end", "0.01", "--waveform", "step", "-o", "{in}"],
     ["forces", "{in}", "--omega", "10", "--plot", "{in}.png", "--json"],
 ])
 def test_other_commands_refuse_their_input_as_output(tmp_path, capsys, argv):

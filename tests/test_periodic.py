@@ -240,7 +240,7 @@ def test_against_the_transients_steady_state():
     motion = c.drive.motion
     r = periodic(c, rpm, tol=1e-9)
     tr = transient(c, 12 * T, T / 20000,
-                   drive=lambda t: W * motion.evaluate(W * np.asarray(t))[1],
+                   waveform=lambda t: W * motion.evaluate(W * np.asarray(t))[1],
                    elements=False, velocities=False)
     last = tr.time >= 11 * T - 1e-12
     th = (W * tr.time[last]) % (2 * np.pi)

@@ -334,9 +334,9 @@ def test_transient_plot_title_names_the_waveform():
     from mechcirc.transient import transient
 
     c = mechcirc.parse("drive V a 0 velocity=0.1\nmass m a b 1\nspring k b 0 1e4\n")
-    fig = transient(c, 0.02, 1e-4, drive="harmonic:300").plot()
+    fig = transient(c, 0.02, 1e-4, waveform="harmonic:300").plot()
     assert fig._suptitle.get_text() == "circuit: transient, velocity drive V, sin(300 rad/s·t)"
-    step = transient(c, 0.02, 1e-4, drive="step")
+    step = transient(c, 0.02, 1e-4, waveform="step")
     assert step.waveform == "step" and step.plot()._suptitle.get_text().endswith("V, step")
 
 

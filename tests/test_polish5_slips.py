@@ -3,7 +3,7 @@
 * an option of another command (``forces --element``) says which commands take
   it, instead of "did you mean '--element'?" (the very word given);
 * a misspelt option suggests the command's own options only;
-* ``transient --drive harmonc:300`` / ``stepp``, ``periodic --elements k44`` and
+* ``transient --waveform harmonc:300`` / ``stepp``, ``periodic --elements k44`` and
   ``reduce --element k44``: "did you mean";
 * ``transient --dt`` longer than ``--t-end`` is refused (it silently ran to t = dt).
 """
@@ -44,8 +44,8 @@ def test_a_misspelt_option_is_matched_against_the_commands_own_options(capsys):
                                          ("impuls", "impulse")])
 def test_transient_drive_kind_did_you_mean(wave, meant, capsys, tmp_path):
     out = tmp_path / "t.csv"
-    assert_user_error(["transient", STB, "--t-end", "0.01", "--drive", wave, "-o", out],
-                      capsys, f"--drive {wave!r} is not understood",
+    assert_user_error(["transient", STB, "--t-end", "0.01", "--waveform", wave, "-o", out],
+                      capsys, f"--waveform {wave!r} is not understood",
                       f"did you mean {meant!r}?")
     assert not out.exists()
 

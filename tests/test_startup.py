@@ -496,3 +496,17 @@ def test_one_blas_thread_leaves_a_users_choice_and_a_host_program_alone(monkeypa
     assert main() == 0
     capsys.readouterr()
     assert not set(BLAS_THREAD_VARIABLES) & set(os.environ)
+
+
+def test_a_parse_reads_its_own_line_not_the_last_ones(capsys):
+    """The 'is not an option' hint of a missing required argument names the words of the
+    line being parsed: a parser built after main() ran another line does not carry them."""
+    from mechcirc.cli import build_parser, main
+
+    with pytest.raises(SystemExit):
+        main(["forces", "x.mcir", "--omga", "3"])
+    assert "--omga is not an option" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        build_parser().parse_args(["forces", "x.mcir"])
+    err = capsys.readouterr().err
+    assert "required" in err and "--omga" not in err

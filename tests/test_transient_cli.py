@@ -127,27 +127,29 @@ def test_transient_plot_element_panel(tmp_path, capsys):
 def test_transient_drive_waveforms_and_json_drive_key(tmp_path, capsys):
     net = tmp_path / "v.mcir"
     net.write_text("drive V b 0 velocity=0.2\nspring k b a 900\nmass m a 0 4\n")
-    status, out, _ = run(["transient", net, "--t-end", "0.1", "--drive", "harmonic:30",
+    status, out, _ = run(["transient", net, "--t-end", "0.1", "--waveform", "harmonic:30",
                           "--json"], capsys)
     assert status == 0
     assert "force" in json.loads(out)["drive"]
     samples = tmp_path / "d.csv"
     samples.write_text("t,v\n0,0\n0.1,1\n")
-    status, out, _ = run(["transient", net, "--t-end", "0.1", "--drive", f"csv:{samples}",
+    status, out, _ = run(["transient", net, "--t-end", "0.1", "--waveform", f"csv:{samples}",
                           "--json"], capsys)
     assert status == 0
 
 
 @pytest.mark.parametrize("argv, message", [
     (["--t-end", "-1"], "--t-end"),
-    (["--t-end", "1", "--drive", "harmonic:-3"], "ω"),
-    (["--t-end", "1", "--drive", "square"], "not understood"),
-    (["--t-end", "1", "--drive", "csv:/nonexistent.csv"], "nonexistent"),
+    (["--t-end", "1", "--waveform", "harmonic:-3"], "ω"),
+    (["--t-end", "1", "--waveform", "square"], "not understood"),
+    (["--t-end", "1", "--waveform", "csv:/nonexistent.csv"], "nonexistent"),
     (["--t-end", "1", "--dt", "1e-12"], "limit"),
     # issue 23 item 4: OverflowError (exit 1) and NaN labelled "exact" (exit 0) before
     (["--t-end", "1", "--dt", "5e-324"], "below 1e-300 s"),
     (["--t-end", "1e10", "--dt", "1e-300"], "t_end/dt = inf samples, the limit is 2000000"),
-    (["--t-end", "1e300", "--drive", "step"], "the transient is not finite from t = 5e+296 s"),
+    (["--t-end", "1e300", "--waveform", "step"], "the transient is not finite from t = 5e+296 s"),
+    # issue 24: --drive names the sley's side (simulate); the waveform's old spelling says so
+    (["--t-end", "1", "--drive", "step"], "--drive was renamed --waveform"),
 ])
 def test_transient_user_errors_exit_2(argv, message, capsys, tmp_path):
     out_csv = tmp_path / "never.csv"

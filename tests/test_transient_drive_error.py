@@ -45,7 +45,7 @@ def test_function_drive_error_bounds_true_error():
     # error dominates.  Before, error was the rounding estimate only (2.7e-14)
     # while the true error was 1.0e-2; now 0.059, 5.9x the true error.
     for dt, true_expected in ((2e-2, 1.0e-2), (1e-3, 2.56e-5)):
-        r = transient(mechcirc.parse(SDOF), 1.0, dt, drive=_force)
+        r = transient(mechcirc.parse(SDOF), 1.0, dt, waveform=_force)
         true = np.abs(r.node("a")[0] - _sdof_ref(_force, r.time)).max()
         assert math.isclose(true, true_expected, rel_tol=0.01)   # the case is what it says
         assert true <= r.error <= 30 * true                      # bound; 5.9x, 6.2x here
@@ -58,7 +58,7 @@ def test_table_drive_off_grid_error_bounds_true_error():
     knots = np.arange(0.0, 1.0 + 1e-9, 0.013)
     vals = _force(knots)
     wave = Waveform("samples", times=tuple(knots), values=tuple(vals))
-    r = transient(mechcirc.parse(SDOF), 1.0, 1e-2, drive=wave)
+    r = transient(mechcirc.parse(SDOF), 1.0, 1e-2, waveform=wave)
     ref = _sdof_ref(lambda t: float(np.interp(t, knots, vals)), r.time, pieces=list(knots))
     true = np.abs(r.node("a")[0] - ref).max()
     assert true > 1e-5                                           # the drive error dominates
@@ -72,7 +72,7 @@ def test_table_drive_on_grid_error_unchanged():
     knots = np.arange(0.0, 1.0 + 1e-9, 0.05)
     vals = _force(knots)
     wave = Waveform("samples", times=tuple(knots), values=tuple(vals))
-    r = transient(mechcirc.parse(SDOF), 1.0, 1e-2, drive=wave)
+    r = transient(mechcirc.parse(SDOF), 1.0, 1e-2, waveform=wave)
     x = r.node("a")[0]
     rounding = ROUNDING_PER_STEP * (r.time.size - 1) * np.abs(x).max()
     assert r.error == rounding
@@ -90,7 +90,7 @@ def test_velocity_drive_error_bounds_true_error():
     def vel(t):
         return 0.3 * np.sin(2 * math.pi * 4.0 * t) * np.exp(-t)
 
-    r = transient(mechcirc.parse(net), 1.0, 1e-2, drive=vel)
+    r = transient(mechcirc.parse(net), 1.0, 1e-2, waveform=vel)
     sol = solve_ivp(lambda t, z: [vel(t), z[2], (k * (z[0] - z[1]) - c * z[2]) / m],
                     (0, r.time[-1]), [0, 0, 0], method="DOP853", rtol=1e-12, atol=1e-15,
                     t_eval=r.time)
@@ -105,7 +105,7 @@ def test_block_path_error_bounds_true_error():
     # drive's gain is formed by the block fallback too.
     c = 2 * math.sqrt(K * M)
     net = f"mass m1 a 0 {M}\nspring k1 a 0 {K!r}\ndamper c1 a 0 {c!r}\ndrive F a 0 force=1\n"
-    r = transient(mechcirc.parse(net), 1.0, 2e-2, drive=_force)
+    r = transient(mechcirc.parse(net), 1.0, 2e-2, waveform=_force)
     assert any("block propagation" in n for n in r.notes)
     sol = solve_ivp(lambda t, z: [z[1], (_force(t) - K * z[0] - c * z[1]) / M],
                     (0, r.time[-1]), [0, 0], method="DOP853", rtol=1e-12, atol=1e-15,
@@ -119,6 +119,6 @@ def test_clearance_run_says_the_drive_bound_is_not_in_its_error():
     # With a clearance x is not linear in the drive: no gain exists to carry
     # the bound, and the notes say so instead of the error silently leaving it out.
     net = SDOF.replace(f"spring k1 a 0 {K!r}", f"spring k1 a 0 {K!r} backlash=1e-3")
-    r = transient(mechcirc.parse(net), 0.2, 2e-2, drive=_force, rtol=1e-6)
+    r = transient(mechcirc.parse(net), 0.2, 2e-2, waveform=_force, rtol=1e-6)
     assert any("interpolated linearly" in n for n in r.notes)
     assert any("not in the error estimate" in n for n in r.notes)

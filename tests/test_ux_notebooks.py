@@ -241,7 +241,7 @@ def test_transient_table_of_a_rotary_drive_says_rad_and_newton_metres(tmp_path, 
     net = tmp_path / "rot.mcir"
     net.write_text(ROTARY.replace("spring k p 0", "spring k p q").replace("mass J p 0",
                                                                            "mass J q 0"))
-    status, out, _ = run(["transient", net, "--t-end", "0.1", "--drive", "step"], capsys)
+    status, out, _ = run(["transient", net, "--t-end", "0.1", "--waveform", "step"], capsys)
     assert status == 0
     assert "x(end) [rad]" in out and "v(end) [rad/s]" in out and "max|F| [N·m]" in out
     assert "drive moment: max |F|" in out and "[m]" not in out

@@ -43,13 +43,23 @@ COMMANDS: dict[str, str] = {
 COMMAND_MODULES: list[str] = list(dict.fromkeys(COMMANDS.values()))
 
 
+#: Options renamed, by command: the old spelling's error names the new one.
+RENAMED: dict[tuple[str, str], str] = {("transient", "--drive"): "--waveform"}
+
+
 class _Parser(argparse.ArgumentParser):
     """argparse, with a usage error on one line (the full usage is one ``--help`` away)."""
 
     #: The command word of the line (set by :func:`main`), named in a usage error.
     given: str | None = None
-    #: The line's words (set by :func:`main`): a missing required option may be a misspelt one.
+    #: The words of the line being parsed (set by the top-level parser as it starts; its
+    #: commands' parsers read them): a missing required option may be a misspelt one.
     words: tuple[str, ...] = ()
+
+    def parse_known_args(self, args=None, namespace=None):
+        if any(isinstance(a, argparse._SubParsersAction) for a in self._actions):
+            _Parser.words = tuple(sys.argv[1:] if args is None else args)
+        return super().parse_known_args(args, namespace)
 
     def error(self, message):
         from ..sources import did_you_mean
@@ -89,6 +99,9 @@ class _Parser(argparse.ArgumentParser):
                 if isinstance(action, argparse._SubParsersAction)
                 for name, p in action.choices.items()}
         owners = [name for name, p in subs.items() if word in p._option_string_actions]
+        renamed = RENAMED.get((self.given or "", word))
+        if renamed:
+            return f"; {word} was renamed {renamed}"
         if self.given not in subs:
             options = set(self._option_string_actions).union(
                 *(p._option_string_actions for p in subs.values()))
@@ -230,7 +243,6 @@ def main(argv: list[str] | None = None) -> int:
         # The command is the first word that is not an option (the top level's
         # options, --help, --version and --debug, take no value).
         command = next((a for a in argv if not a.startswith("-")), None)
-        _Parser.words = tuple(argv)
         try:
             parser = build_parser(command)
             args = parser.parse_args(argv)

@@ -20,14 +20,14 @@ def register(sub) -> None:
         "adaptive Dormand-Prince 5(4) integrator.",
         "Examples:\n"
         "  mechcirc transient examples/msl_backlash.mcir --t-end 1 --dt 1e-3 -o msl.csv\n"
-        "  mechcirc transient netlists/stb_heald.mcir --t-end 0.05 --drive harmonic:300 --json",
+        "  mechcirc transient netlists/stb_heald.mcir --t-end 0.05 --waveform harmonic:300 --json",
         file="netlist (.mcir); a drive line is optional")
     p.add_argument("--t-end", type=real(above=0.0), required=True, metavar="T", help="end time [s]")
     p.add_argument("--dt", type=real(above=0.0), metavar="DT",
                    help="output step [s] (default t_end/2000; 40 per period of a harmonic "
                         "drive)")
-    p.add_argument("--drive", metavar="WAVE",
-                   help="harmonic:OMEGA (rad/s, or with a unit: 50Hz), step, impulse, "
+    p.add_argument("--waveform", metavar="WAVE",
+                   help="the drive's waveform in time: harmonic:OMEGA (rad/s, or with a unit: 50Hz), step, impulse, "
                         "csv:PATH (time,value samples, interpolated linearly) or rest "
                         "(default: the drive stays at rest)")
     p.add_argument("--rpm", type=float, metavar="RPM",
@@ -57,7 +57,7 @@ def cmd_transient(args) -> int:
         raise MechcircError("--element NAME draws a panel of the plot: give --plot IMAGE too")
     circuit = load(args.file, require_drive=False)
     check_names(args.element, [e.name for e in circuit.elements])   # before the run
-    result = transient(circuit, args.t_end, args.dt, args.drive, amplitude=args.amplitude,
+    result = transient(circuit, args.t_end, args.dt, args.waveform, amplitude=args.amplitude,
                        rtol=args.rtol, rpm=args.rpm)
     fig = result.plot(elements=args.element) if args.plot else None
     with OutputSet() as out:

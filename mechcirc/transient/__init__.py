@@ -9,6 +9,6 @@
 """
 
 from ._crosscheck import CrossCheck, crosscheck
-from .simulate import TransientResult, Waveform, parse_drive, transient
+from .simulate import TransientResult, Waveform, parse_waveform, transient
 
-__all__ = ["transient", "TransientResult", "Waveform", "parse_drive", "crosscheck", "CrossCheck"]
+__all__ = ["transient", "TransientResult", "Waveform", "parse_waveform", "crosscheck", "CrossCheck"]

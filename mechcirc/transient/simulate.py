@@ -44,7 +44,7 @@ from .model import StateSpace, incidence, backlash_elements, state_space
 if TYPE_CHECKING:  # pragma: no cover - annotations only
     from ..motion_laws import Motion
 
-__all__ = ["Waveform", "TransientResult", "transient", "parse_drive", "MAX_SAMPLES"]
+__all__ = ["Waveform", "TransientResult", "transient", "parse_waveform", "MAX_SAMPLES"]
 
 #: Most output samples of one run (each node's x and v are kept for every one).
 MAX_SAMPLES = 2_000_000
@@ -122,13 +122,13 @@ class Waveform:
                 "motion": f"motion of a turn at Ω = {self.omega:.6g} rad/s"}.get(self.kind, self.kind)
 
 
-def parse_drive(text: str | None) -> Waveform:
+def parse_waveform(text: str | None) -> Waveform:
     """``harmonic:OMEGA`` | ``step`` | ``impulse`` | ``csv:PATH`` | ``rest`` (or None) → Waveform.
 
     Parameters
     ----------
     text : str or None
-        The ``--drive`` text.
+        The ``--waveform`` text.
 
     Returns
     -------
@@ -143,9 +143,9 @@ def parse_drive(text: str | None) -> Waveform:
         try:
             omega = parse_omega(text[len("harmonic:"):])
         except Exception as exc:  # noqa: BLE001 - reported as a user error
-            raise MechcircError(f"--drive {text!r}: {exc}") from None
+            raise MechcircError(f"--waveform {text!r}: {exc}") from None
         if not (math.isfinite(omega) and omega > 0):
-            raise MechcircError(f"--drive {text!r}: ω must be a finite number > 0 [rad/s]")
+            raise MechcircError(f"--waveform {text!r}: ω must be a finite number > 0 [rad/s]")
         return Waveform("harmonic", omega=omega)
     if text.startswith("csv:"):
         return read_csv_drive(text[4:])
@@ -153,7 +153,7 @@ def parse_drive(text: str | None) -> Waveform:
 
     kind = text.partition(":")[0]
     hint = did_you_mean(kind, ("harmonic", "step", "impulse", "csv", "rest"))
-    raise MechcircError(f"--drive {text!r} is not understood (expected harmonic:OMEGA, "
+    raise MechcircError(f"--waveform {text!r} is not understood (expected harmonic:OMEGA, "
                         f"step, impulse, csv:PATH or rest){hint}")
 
 
@@ -323,7 +323,7 @@ def _grid(t_end: float, dt: float | None, waveform: Waveform) -> np.ndarray:
 
 @np.errstate(over="ignore", invalid="ignore")     # a non-finite result is refused at the end
 def transient(circuit: Circuit, t_end: float, dt: float | None = None,
-              drive: Waveform | str | Callable | None = None, *,
+              waveform: Waveform | str | Callable | None = None, *,
               amplitude: float | None = None, linearise: bool = False,
               elements: bool = True, velocities: bool = True,
               rtol: float = 1e-10, steady: bool = False,
@@ -337,8 +337,8 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
     t_end, dt : float
         End time and output step [s] (dt default: t_end/2000, and at least 40
         samples per period of a harmonic drive).
-    drive : Waveform, str, callable or None
-        The drive's waveform (see :class:`Waveform` and :func:`parse_drive`);
+    waveform : Waveform, str, callable or None
+        The drive's waveform (see :class:`Waveform` and :func:`parse_waveform`);
         None keeps the drive at rest (velocity drive held, force drive off).
     amplitude : float
         Scales the harmonic, step and impulse waveforms (default: the drive's
@@ -363,7 +363,7 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
         Shaft speed [rev/min] of a drive given by its motion over one revolution
         (netlist ``drive ... motion=``): the drive's velocity is Ω·dx/dθ at θ = Ωt
         (Ω = 2π·rpm/60), from t = 0 at θ = 0.  Required for such a drive unless
-        ``drive`` is given (which then replaces the motion).
+        ``waveform`` is given (which then replaces the motion).
 
     Returns
     -------
@@ -371,7 +371,7 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
         Time, node displacements and velocities, element forces and the drive's
         output on the grid.
     """
-    drive = _waveform(circuit, drive, rpm)
+    drive = _waveform(circuit, waveform, rpm)
     amp = getattr(circuit.drive, "amplitude", 0.0) if amplitude is None else float(amplitude)
     t = _grid(t_end, dt, drive)
     ss = state_model(circuit, linearise)
@@ -478,9 +478,9 @@ def _waveform(circuit: Circuit, drive, rpm) -> Waveform:
     if callable(drive) and not isinstance(drive, Waveform):
         drive = Waveform("callable", func=drive)
     elif not isinstance(drive, Waveform):
-        drive = parse_drive(drive)
+        drive = parse_waveform(drive)
     if circuit.drive is None and drive.kind != "rest":
-        raise MechcircError(f"the netlist has no drive line, so --drive {drive.kind} has "
+        raise MechcircError(f"the netlist has no drive line, so --waveform {drive.kind} has "
                             "nothing to act on (add 'drive NAME N1 N2 force=F0')")
     return drive
 
@@ -574,7 +574,7 @@ def _motion_drive(circuit: Circuit, drive, rpm):
                                 "--rpm sets the shaft speed of a motion= drive; the netlist "
                                 "has no drive")
         if drive is not None:
-            raise MechcircError("give either --drive (a waveform in time) or --rpm (the "
+            raise MechcircError("give either --waveform (a waveform in time) or --rpm (the "
                                 f"shaft speed of the drive's {motion.spec}), not both")
         from ..periodic import rpm_to_omega
 
@@ -584,7 +584,7 @@ def _motion_drive(circuit: Circuit, drive, rpm):
                            "revolution of the shaft, and no shaft speed is given",
                            circuit.source or "<string>", d.line, d.col,
                            "a shaft speed: --rpm RPM (transient(..., rpm=RPM)), or a "
-                           "--drive waveform in time")
+                           "--waveform in time")
     return drive
 
 
@@ -618,7 +618,7 @@ def periodic_start(ss: StateSpace, drive: Waveform, amp: float, circuit, lineari
     """z(0) of the periodic response to u = amp·sin ωt: amp · Im[(iωI − A)⁻¹ B]."""
     if drive.kind != "harmonic":
         raise MechcircError("a periodic steady state needs a harmonic drive "
-                            "(--drive harmonic:OMEGA)")
+                            "(--waveform harmonic:OMEGA)")
     if backlash_elements(circuit) and not linearise:
         raise MechcircError("a periodic steady state is computed for linear circuits only "
                             "(this one has clearances; linearise them or wait for it)")

@@ -1125,7 +1125,7 @@ def all_argv(rng: random.Random, workdir: Path, pools: dict[str, list[str]]) -> 
                             "square", "", "harmonic:-3"])
         argv = ["transient", f, "--t-end", _num(rng, rng.choice(["0.05", "0.2", "1"]), 1 - bad)]
         return argv + _opts(rng, [("--dt", ["1e-3", "1e-4", "0", "5e-324", "1e300", "nan"]),
-                                  ("--drive", [drive]),
+                                  ("--waveform", [drive]),
                                   ("--amplitude", ["1", "0", "-1", "1e308", "nan", "1e-320"]),
                                   ("--rtol", ["1e-6", "1e-3", "1e-10", "1e-13", "0.2", "0"]),
                                   ("-o", [W + "/t.csv", W + "/missing/t.csv", f]),

@@ -117,7 +117,7 @@ def test_periodic_force_against_the_transient_driven_by_the_closed_form():
     # sample takes I4·ω̇4 from a one-sided difference (1e-3 off here), not compared.
     dt = T / 20000
     tr = transient(circuit, 12 * T + 10 * dt, dt,
-                   drive=lambda t: W * fourbar(W * np.asarray(t))[3],
+                   waveform=lambda t: W * fourbar(W * np.asarray(t))[3],
                    elements=False, velocities=False)
     last = (tr.time >= 11 * T - 1e-12) & (tr.time <= 12 * T + 1e-12)
     th = (W * tr.time[last]) % (2 * np.pi)
