@@ -336,21 +336,20 @@ def add_command(sub, name: str, summary: str, description: str, example: str, *,
 
 
 def add_handler(p, func, *, json: bool = True) -> None:
-    """End a command's parser: its ``--json`` option (listed last in its help) and its handler.
+    """A command's handler and its ``--json`` option, listed in its help where this is called:
+    last, after the other options, unless the command adds more after it.
 
     Parameters
     ----------
     p : argparse.ArgumentParser
-        The command's parser, with its other options added.
+        The command's parser.
     func : callable
         The handler: takes the parsed arguments, returns the exit status.
     json : bool, optional
-        Add ``--json`` (print one JSON document); False for a command without it,
-        or one that lists ``--json`` before other options (it calls
-        :func:`add_json_option` itself).
+        Add ``--json`` (print one JSON document); False for a command without it.
     """
     if json:
-        add_json_option(p)
+        p.add_argument("--json", action="store_true", help="print one JSON document")
     p.set_defaults(func=func)
 
 
@@ -359,11 +358,6 @@ def add_handler(p, func, *, json: bool = True) -> None:
 # command's own help text of the option.
 #: Help of the positional ``file`` of a command that reads a netlist (``add_command(file=)``).
 NETLIST_FILE = "netlist file (.mcir)"
-
-
-def add_json_option(p) -> None:
-    """``--json``: print one JSON document (a command that lists it before other options)."""
-    p.add_argument("--json", action="store_true", help="print one JSON document")
 
 
 def add_plot_option(p, what: str) -> None:

@@ -16,10 +16,10 @@ from ..limits import (
     MAX_SWEEP_POINTS,
 )
 from ..units import FREQUENCY_UNITS, in_unit
-from ._common import (NETLIST_FILE, add_command, add_handler, add_json_option,
-                      add_method_option, add_output_option, add_plot_option, add_unit_option,
-                      check_names, check_output_paths, load_with_warnings, print_json,
-                      print_written, real, save_figure, warning_lines)
+from ._common import (NETLIST_FILE, add_command, add_handler, add_method_option,
+                      add_output_option, add_plot_option, add_unit_option, check_names,
+                      check_output_paths, load_with_warnings, print_json, print_written, real,
+                      save_figure, warning_lines)
 
 #: argparse type: an angular frequency [rad/s], or with a unit (``50Hz``, ``3000rpm``); the
 #: command checks the range (a sweep's --omega-min/--omega-max together).
@@ -44,11 +44,10 @@ def _register_check(sub) -> None:
         "Parse a netlist, list elements and nodes, warnings, and the series–parallel reduction "
         "tree seen from the drive.",
         "Example: mechcirc check netlists/stb_heald.mcir", file=NETLIST_FILE)
-    add_json_option(p)
+    add_handler(p, cmd_check)
     p.add_argument("--explain", action="store_true",
                    help="write the series–parallel reduction out step by step, with the "
                         "lever reflections (K/r², m·r²) and each element's value·η")
-    add_handler(p, cmd_check, json=False)
 
 
 def _register_sweep(sub) -> None:

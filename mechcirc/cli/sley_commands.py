@@ -6,9 +6,9 @@ import math
 
 from ..errors import InputError
 from ..limits import MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS, MAX_SCIPY_REVOLUTIONS
-from ._common import (add_command, add_handler, add_json_option, add_output_option,
-                      add_plot_option, check_output_paths, count, print_json, real, set_values,
-                      write_outputs, write_text)
+from ._common import (add_command, add_handler, add_output_option, add_plot_option,
+                      check_output_paths, count, print_json, real, set_values, write_outputs,
+                      write_text)
 
 _METHODS = ("rk4", "rk4-python", "rk8", "DOP853", "RK45", "LSODA")   # = mechcirc.sley.METHODS
 _UNITS = {"eps4T": "1/s^2", "eps2P": "1/s^2", "eps4P": "1/s^2", "eps5P": "1/s^2",
@@ -45,7 +45,7 @@ def _register_simulate(sub) -> None:
                         "their scenes (examples/mrazek_*.toml plus the variant's values)")
     _sley_arguments(p)
     add_plot_option(p, "plot eps2P, eps4P, eps4T, M2V (Figs. 4-9)")
-    add_json_option(p)
+    add_handler(p, cmd_simulate)
     p.add_argument("--shaft", action="store_true",
                    help="scene: the dynamic main shaft of its [shaft] table (flywheel, motor) "
                         "turning the mechanism with its elastic parts: speed fluctuation, "
@@ -54,7 +54,6 @@ def _register_simulate(sub) -> None:
                    help="with --shaft: every elastic element rigid (θ the only DOF)")
     p.add_argument("--flywheel", type=real(least=0.0, unit="kg·m²"), metavar="J",
                    help="with --shaft: the flywheel's inertia [kg·m²] (default the file's)")
-    add_handler(p, cmd_simulate, json=False)
 
 
 def _sley_arguments(p) -> None:
