@@ -34,7 +34,7 @@ def _register_scene(sub) -> None:
     what.add_argument("--cycle", action="store_true",
                       help="resonances and |Q0| at shaft harmonics over a revolution")
     add_output_option(p, "--theta: write the netlist (.mcir); --cycle: write a CSV table",
-                      "FILE")
+                      metavar="FILE")
     p.add_argument("--reflect", choices=("eta", "lever"), default="eta",
                    help="reflect through eta = ratio² (default) or explicit ideal levers")
     p.add_argument("--points", type=count(2, MAX_CYCLE_POINTS, why="10–25 ms each"),
@@ -72,7 +72,7 @@ def _register_reduce(sub) -> None:
                    help="the force in this element is the output (default: K at the drive)")
     # --output used to name the element; everywhere else it is a file.  It stays
     # a file here too (the reduced netlist, as -o), so the name means one thing.
-    add_output_option(p, "write the reduced netlist here", "FILE", dest="out")
+    add_output_option(p, "write the reduced netlist here", metavar="FILE", dest="out")
     p.add_argument("--points", type=count(10, 1_000_000), default=2000, metavar="N",
                    help="log-spaced check points over the band (default 2000; two more "
                         "beside each resonance in the band)")
