@@ -286,7 +286,7 @@ def to_circuit(params: SleyParameters, theta0: float, *, lever: bool = False,
     params : SleyParameters
         The sley whose linearised model the circuit is.
     theta0 : float
-        Crank angle [rad] of the linearisation; μ(θ0) sets the lever ratio or η = μ².
+        Crank angle [rad] of the linearisation; μ(θ0) sets the lever ratio |μ| or η = μ².
     lever : bool
         Use a ``lever`` element instead of η reflection.
     damping : bool
