@@ -110,22 +110,22 @@ def evaluate(root: Node, omega: ArrayLike, *, keep: bool = False, condition: boo
     if not keep and _mode == "auto":
         return _auto(root, omega, error, condition, designs)
     track = error or condition
-    top, values = _postorder_values(root, omega, track, keep, _mode != "fast", designs)
-    K = top.complex()
-    if keep:
-        return K, {k: v.complex() for k, v in values.items()}
-    if track:
-        with np.errstate(all="ignore"):
-            rho = _relative_to_true(top.relative()[0], omega.shape)
-        return K, (rho / _U if condition and not error else rho)
-    return K
+    with np.errstate(all="ignore"):         # (one for the tree and its root's bound)
+        top, values = _postorder_values(root, omega, track, keep, _mode != "fast", designs)
+        K = top.complex()
+        if keep:
+            return K, {k: v.complex() for k, v in values.items()}
+        if not track:
+            return K
+        rho = _relative_to_true(top.relative()[0], omega.shape)
+    return K, (rho / _U if condition and not error else rho)
 
 
 def _relative_to_true(rho, shape) -> NDArray:
     """The bound ``rho`` relative to the computed |K̂| made relative to the true |K|, ∞
     for NaN (the caller holds ``np.errstate(all="ignore")``)."""
-    # relative to the true |K| ≥ |K̂|(1 − ρ) it is ρ / (1 − ρ)
-    rho = through_reciprocal(np.atleast_1d(np.asarray(rho, dtype=float)))
+    # relative to the true |K| ≥ |K̂|(1 − ρ) it is ρ / (1 − ρ) (a scalar ρ made an array there)
+    rho = through_reciprocal(rho)
     if rho.shape != shape:          # (a fresh array of that shape otherwise)
         rho = np.broadcast_to(rho, shape).astype(float)
     return np.fmin(rho, _INF, out=rho)          # (fmin: NaN → ∞)
@@ -176,37 +176,37 @@ def _fast_then_checked(root, omega, error, condition, designs):
 
 def _postorder_values(root, omega, track: bool, keep: bool, checked: bool, designs):
     """``(value of the root, values of the nodes kept)``: the tree evaluated bottom up, the
-    values of a node's internal children on top of a stack when it is reached."""
+    values of a node's internal children on top of a stack when it is reached (the caller
+    holds ``np.errstate(all="ignore")``)."""
     values: dict[int, _Value] = {}
     stack: list[_Value] = []
     zero = np.zeros(omega.shape) if track else None      # (the bound's, see _node_bound)
-    with np.errstate(all="ignore"):
-        inv_omega = _ONE / omega
-        for node, reflect, n_kids, groups in _internal_postorder(root):
-            if reflect:
-                child = stack.pop() if n_kids else \
-                    _leaf_value(node.child.element, omega, inv_omega, track, designs)
-                r = None if designs is None else designs[1][node.lever.name]
-                val = _Value(child.imaginary, node.lever.reflect(child.array, r))
-                if track:
-                    rho, mag = child.relative()
-                    val.mag = node.lever.reflect(mag, r)
-                    # (a full array even over a single leaf, whose ρ is a scalar)
-                    val.rho = np.broadcast_to(rho + 2 * _U, omega.shape).copy()
+    inv_omega = _ONE / omega
+    for node, reflect, n_kids, groups in _internal_postorder(root):
+        if reflect:
+            child = stack.pop() if n_kids else \
+                _leaf_value(node.child.element, omega, inv_omega, track, designs)
+            r = None if designs is None else designs[1][node.lever.name]
+            val = _Value(child.imaginary, node.lever.reflect(child.array, r))
+            if track:
+                rho, mag = child.relative()
+                val.mag = node.lever.reflect(mag, r)
+                # (a full array even over a single leaf, whose ρ is a scalar)
+                val.rho = np.broadcast_to(rho + 2 * _U, omega.shape).copy()
+        else:
+            if n_kids:
+                parts = stack[-n_kids:]
+                del stack[-n_kids:]
             else:
-                if n_kids:
-                    parts = stack[-n_kids:]
-                    del stack[-n_kids:]
-                else:
-                    parts = []
-                if designs is not None:
-                    groups = _leaf_groups(node, designs)
-                val = _combine(parts, omega, inv_omega, zero, keep, checked, groups)
-            stack.append(val)
-            if keep:
-                values[id(node)] = val
-        top = stack[-1] if stack else _leaf_value(root.element, omega, inv_omega, track,
-                                                  designs)
+                parts = []
+            if designs is not None:
+                groups = _leaf_groups(node, designs)
+            val = _combine(parts, omega, inv_omega, zero, keep, checked, groups)
+        stack.append(val)
+        if keep:
+            values[id(node)] = val
+    top = stack[-1] if stack else _leaf_value(root.element, omega, inv_omega, track,
+                                              designs)
     return top, values
 
 
