@@ -756,10 +756,27 @@ def _finish(scene, model, kern, theta_s, ripple, main, other, counts, notes, war
 def _crank_order(scene, model, theta_s, ripple, ts, stride=1):
     """(ascending crank angle mod the cycle, the order of the samples at times ``ts`` that
     gives it, and the positions in that order of every ``stride``-th sample in time, or
-    None for every sample)."""
-    theta = theta_s + model.omega * ts if ripple[0] == 0.0 else \
-        crank_angle(model.omega, theta_s, ripple, ts)[0]
-    crank = theta % scene.cycle
+    None for every sample); the last of each model kept (:data:`_ORDERS`)."""
+    key = (scene.cycle, theta_s, ripple, stride)
+    last = _ORDERS.get(model)
+    if last is None or last[0] != key or not np.array_equal(last[1], ts):
+        last = (key, ts.copy(), _new_crank_order(scene.cycle, model.omega, theta_s, ripple,
+                                                 ts, stride))
+        _ORDERS[model] = last
+    crank, order, sub = last[2]
+    return crank.copy(), order, sub     # (the result's array: the kept one stays as it is)
+
+
+#: :func:`_crank_order`'s last (key, times, result) by model: a repeated call (a preset's,
+#: a study's at the same step) samples the same times, and ``%`` on them is most of its cost.
+_ORDERS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
+def _new_crank_order(cycle, omega, theta_s, ripple, ts, stride):
+    """:func:`_crank_order`, computed."""
+    theta = theta_s + omega * ts if ripple[0] == 0.0 else \
+        crank_angle(omega, theta_s, ripple, ts)[0]
+    crank = theta % cycle
     n = crank.size
     wrap = np.flatnonzero(crank[1:] < crank[:-1])
     if wrap.size != 1:
@@ -1127,20 +1144,27 @@ def _rigid_acceleration(model, body, crank, ripple=(0.0, 0.0), ts=None, refine=T
         _, g1, g2, _ = kern.feval(*function_args(a, g), q)
         return (g2 * q1 * q1 + g1 * q2) * w2
 
-    fast = kernels_for("rk4")[0]
-    qv, gv = np.empty((crank.size, 3)), np.empty((crank.size, 3))
-    fast.eval_many(*function_args(a, r), np.ascontiguousarray(crank), qv)
-    fast.eval_many(*function_args(a, g), np.ascontiguousarray(qv[:, 0]), gv)
-    vals = (gv[:, 2] * qv[:, 1] ** 2 + gv[:, 1] * qv[:, 2]) * w2
-    if ripple[0] != 0.0:
-        # a varying crank speed: (g'' q'² + g' q'') θ̇² + g' q' θ̈ at the samples' times;
-        # its extrema are those of the samples (the output grid sets their accuracy)
-        _, w, dw = crank_angle(model.omega, 0.0, ripple, ts)
-        vals = (gv[:, 2] * qv[:, 1] ** 2 + gv[:, 1] * qv[:, 2]) * w ** 2 + gv[:, 1] * qv[:, 1] * dw
+    memo = _REFINED.setdefault(model, {})
+    last = memo.get(body)           # the samples at the same crank angles (ripple: no)
+    if ripple[0] == 0.0 and last is not None and np.array_equal(last[0], crank):
+        vals = last[1].copy()
+    else:
+        fast = kernels_for("rk4")[0]
+        qv, gv = np.empty((crank.size, 3)), np.empty((crank.size, 3))
+        fast.eval_many(*function_args(a, r), np.ascontiguousarray(crank), qv)
+        fast.eval_many(*function_args(a, g), np.ascontiguousarray(qv[:, 0]), gv)
+        vals = (gv[:, 2] * qv[:, 1] ** 2 + gv[:, 1] * qv[:, 2]) * w2
+        if ripple[0] != 0.0:
+            # a varying crank speed: (g'' q'² + g' q'') θ̇² + g' q' θ̈ at the samples' times;
+            # its extrema are those of the samples (the output grid sets their accuracy)
+            _, w, dw = crank_angle(model.omega, 0.0, ripple, ts)
+            vals = (gv[:, 2] * qv[:, 1] ** 2 + gv[:, 1] * qv[:, 2]) * w ** 2 + \
+                gv[:, 1] * qv[:, 1] * dw
+        else:
+            memo[body] = (crank.copy(), vals.copy())
     if ripple[0] != 0.0 or not refine:
         return vals, (float(vals.min()), float(vals.max()))
     ext = []
-    memo = _REFINED.setdefault(model, {})
     for sgn, i in ((1.0, int(np.argmin(vals))), (-1.0, int(np.argmax(vals)))):
         lo, hi = crank[max(i - 1, 0)], crank[min(i + 1, crank.size - 1)]
         key = (body, sgn, float(lo), float(hi))
@@ -1153,6 +1177,7 @@ def _rigid_acceleration(model, body, crank, ripple=(0.0, 0.0), ts=None, refine=T
     return vals, (float(ext[0]), float(ext[1]))
 
 
-#: :func:`_rigid_acceleration`'s Brent-refined extrema by model, (body, sign, bracket): the
-#: same crank-angle grid of the same model (a repeated or a preset's call) refines once.
+#: :func:`_rigid_acceleration`'s Brent-refined extrema by model, (body, sign, bracket), and
+#: its last samples by body (crank angles, values): the same crank-angle grid of the same
+#: model (a repeated or a preset's call) is sampled and refined once.
 _REFINED: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
