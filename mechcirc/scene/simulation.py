@@ -244,7 +244,18 @@ def linear_matrices(model: MotionModel, theta: float):
     return np.diag(m[1:]), D, K
 
 
-_RATES: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+def _last_of(model, name, key, make):
+    """``make()``, kept for ``model`` (immutable) under ``name`` while ``key`` stays that of
+    the call that made it: a repeated call (a preset's, a study's at the same step) asks
+    again for the same step rate, and at the same times and crank angles."""
+    kept = _LAST.setdefault(model, {})
+    if name not in kept or kept[name][0] != key:
+        kept[name] = (key, make())
+    return kept[name][1]
+
+
+#: :func:`_last_of`'s values by model, then by name: (key, value).
+_LAST: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
 
 
 def max_rate(model: MotionModel, samples: int = 72) -> float:
@@ -261,10 +272,7 @@ def max_rate(model: MotionModel, samples: int = 72) -> float:
     -------
     float
     """
-    key = _RATES.setdefault(model, {})
-    if samples not in key:
-        key[samples] = _max_rate(model, samples)
-    return key[samples]
+    return _last_of(model, "max_rate", samples, lambda: _max_rate(model, samples))
 
 
 def _max_rate(model: MotionModel, samples: int) -> float:
@@ -756,20 +764,12 @@ def _finish(scene, model, kern, theta_s, ripple, main, other, counts, notes, war
 def _crank_order(scene, model, theta_s, ripple, ts, stride=1):
     """(ascending crank angle mod the cycle, the order of the samples at times ``ts`` that
     gives it, and the positions in that order of every ``stride``-th sample in time, or
-    None for every sample); the last of each model kept (:data:`_ORDERS`)."""
-    key = (scene.cycle, theta_s, ripple, stride)
-    last = _ORDERS.get(model)
-    if last is None or last[0] != key or not np.array_equal(last[1], ts):
-        last = (key, ts.copy(), _new_crank_order(scene.cycle, model.omega, theta_s, ripple,
-                                                 ts, stride))
-        _ORDERS[model] = last
-    crank, order, sub = last[2]
+    None for every sample); kept for the same times (``%`` on them is most of its cost)."""
+    crank, order, sub = _last_of(model, "crank_order", (scene.cycle, theta_s, ripple, stride,
+                                                        ts.tobytes()),
+                                 lambda: _new_crank_order(scene.cycle, model.omega, theta_s,
+                                                          ripple, ts, stride))
     return crank.copy(), order, sub     # (the result's array: the kept one stays as it is)
-
-
-#: :func:`_crank_order`'s last (key, times, result) by model: a repeated call (a preset's,
-#: a study's at the same step) samples the same times, and ``%`` on them is most of its cost.
-_ORDERS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
 
 
 def _new_crank_order(cycle, omega, theta_s, ripple, ts, stride):
@@ -1144,40 +1144,31 @@ def _rigid_acceleration(model, body, crank, ripple=(0.0, 0.0), ts=None, refine=T
         _, g1, g2, _ = kern.feval(*function_args(a, g), q)
         return (g2 * q1 * q1 + g1 * q2) * w2
 
-    memo = _REFINED.setdefault(model, {})
-    last = memo.get(body)           # the samples at the same crank angles (ripple: no)
-    if ripple[0] == 0.0 and last is not None and np.array_equal(last[0], crank):
-        vals = last[1].copy()
-    else:
+    def samples():
+        """The acceleration at the samples (at a constant speed, of their crank angles alone)."""
         fast = kernels_for("rk4")[0]
         qv, gv = np.empty((crank.size, 3)), np.empty((crank.size, 3))
         fast.eval_many(*function_args(a, r), np.ascontiguousarray(crank), qv)
         fast.eval_many(*function_args(a, g), np.ascontiguousarray(qv[:, 0]), gv)
-        vals = (gv[:, 2] * qv[:, 1] ** 2 + gv[:, 1] * qv[:, 2]) * w2
-        if ripple[0] != 0.0:
-            # a varying crank speed: (g'' q'² + g' q'') θ̇² + g' q' θ̈ at the samples' times;
-            # its extrema are those of the samples (the output grid sets their accuracy)
-            _, w, dw = crank_angle(model.omega, 0.0, ripple, ts)
-            vals = (gv[:, 2] * qv[:, 1] ** 2 + gv[:, 1] * qv[:, 2]) * w ** 2 + \
-                gv[:, 1] * qv[:, 1] * dw
-        else:
-            memo[body] = (crank.copy(), vals.copy())
+        if ripple[0] == 0.0:
+            return (gv[:, 2] * qv[:, 1] ** 2 + gv[:, 1] * qv[:, 2]) * w2
+        # a varying crank speed: (g'' q'² + g' q'') θ̇² + g' q' θ̈ at the samples' times;
+        # its extrema are those of the samples (the output grid sets their accuracy)
+        _, w, dw = crank_angle(model.omega, 0.0, ripple, ts)
+        return (gv[:, 2] * qv[:, 1] ** 2 + gv[:, 1] * qv[:, 2]) * w ** 2 + gv[:, 1] * qv[:, 1] * dw
+
+    vals = samples() if ripple[0] != 0.0 else \
+        _last_of(model, f"samples {body}", crank.tobytes(), samples).copy()
     if ripple[0] != 0.0 or not refine:
         return vals, (float(vals.min()), float(vals.max()))
     ext = []
     for sgn, i in ((1.0, int(np.argmin(vals))), (-1.0, int(np.argmax(vals)))):
         lo, hi = crank[max(i - 1, 0)], crank[min(i + 1, crank.size - 1)]
-        key = (body, sgn, float(lo), float(hi))
-        if key not in memo:     # a function of the model and the bracket alone
-            if len(memo) > 64:
-                memo.clear()
-            memo[key] = minimize_scalar(lambda t, sgn=sgn: sgn * acc(t), bounds=(lo, hi),
-                                        method="bounded", options={"xatol": 1e-12}).fun
-        ext.append(sgn * min(memo[key], sgn * vals[i]))
+        # a function of the model and the bracket alone: the same crank-angle grid of the
+        # same model (a repeated or a preset's call) refines once
+        best = _last_of(model, f"refined {body} {sgn}", (float(lo), float(hi)),
+                        lambda sgn=sgn, lo=lo, hi=hi: minimize_scalar(
+                            lambda t: sgn * acc(t), bounds=(lo, hi), method="bounded",
+                            options={"xatol": 1e-12}).fun)
+        ext.append(sgn * min(best, sgn * vals[i]))
     return vals, (float(ext[0]), float(ext[1]))
-
-
-#: :func:`_rigid_acceleration`'s Brent-refined extrema by model, (body, sign, bracket), and
-#: its last samples by body (crank angles, values): the same crank-angle grid of the same
-#: model (a repeated or a preset's call) is sampled and refined once.
-_REFINED: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
