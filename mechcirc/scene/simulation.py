@@ -156,9 +156,9 @@ def kernels_for(method):
     here if need be; False always gives the Python copy.
     """
     global _PYK
-    if method != "rk4-python" and _jit.COMPILED is not False:
-        from . import _motion_kernels as k
+    from . import _motion_kernels as k
 
+    if method != "rk4-python" and _jit.COMPILED is not False:
         if k.HAVE_NUMBA and (_jit.COMPILED or _jit.in_cache(
                 k.rk_run, k.outputs, k.output_extrema, k.eval_many, k.point_samples,
                 *((k.rhs,) if method in SCIPY_METHODS else ()))):
@@ -166,8 +166,6 @@ def kernels_for(method):
         if k.HAVE_NUMBA:
             _jit.warm_in_background(_WARM_STATEMENT)
     if _PYK is None:
-        from . import _motion_kernels as k
-
         _PYK = k.load_python()
     return _PYK, "python"
 
@@ -246,8 +244,9 @@ def linear_matrices(model: MotionModel, theta: float):
 
 def _last_of(model, name, key, make):
     """``make()``, kept for ``model`` (immutable) under ``name`` while ``key`` stays that of
-    the call that made it: a repeated call (a preset's, a study's at the same step) asks
-    again for the same step rate, and at the same times and crank angles."""
+    the call that made it (only the last: the memory stays bounded): a repeated call (a
+    preset's, a study's at the same step) asks again for the step rate, the crank-angle
+    order of the same times and the rigid accelerations at the same crank angles."""
     kept = _LAST.setdefault(model, {})
     if name not in kept or kept[name][0] != key:
         kept[name] = (key, make())
