@@ -764,10 +764,9 @@ def _crank_order(scene, model, theta_s, ripple, ts, stride=1):
     """(ascending crank angle mod the cycle, the order of the samples at times ``ts`` that
     gives it, and the positions in that order of every ``stride``-th sample in time, or
     None for every sample); kept for the same times (``%`` on them is most of its cost)."""
-    crank, order, sub = _last_of(model, "crank_order", (scene.cycle, theta_s, ripple, stride,
-                                                        ts.tobytes()),
-                                 lambda: _new_crank_order(scene.cycle, model.omega, theta_s,
-                                                          ripple, ts, stride))
+    crank, order, sub = _last_of(
+        model, "crank_order", (scene.cycle, theta_s, ripple, stride, ts.tobytes()),
+        lambda: _new_crank_order(scene.cycle, model.omega, theta_s, ripple, ts, stride))
     return crank.copy(), order, sub     # (the result's array: the kept one stays as it is)
 
 

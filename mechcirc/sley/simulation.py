@@ -180,21 +180,14 @@ class SleyResult:
 
 
 # --------------------------------------------------------------------- set-up
-_MODELS: dict = {}
-
-
+@lru_cache(maxsize=16)
 def _model(params: SleyParameters, table_points: int):
     """The scene of ``params`` and its motion model (memoised: the tables are the cost)."""
     from ..scene.motion import motion_model
     from .scenes import sley_scene
 
-    key = (params, int(table_points))
-    if key not in _MODELS:
-        if len(_MODELS) > 16:
-            _MODELS.clear()
-        scene = sley_scene(params)
-        _MODELS[key] = (scene, motion_model(scene, table_points=int(table_points)))
-    return _MODELS[key]
+    scene = sley_scene(params)
+    return scene, motion_model(scene, table_points=int(table_points))
 
 
 def table_error(params: SleyParameters | None = None, n: int = 1024,
@@ -410,7 +403,6 @@ def _result(params: SleyParameters, model, m, theta0: float, linkage: tuple,
     """The scene's motion under the paper's names and state convention (``linkage``:
     :func:`_linkage_constants`)."""
     v = m.values
-    crank = m.crank_angle
     both = params.drive == "both-sides"
     w = params.omega
     # the rigid rocker's ν ω² from the scene's tables (within 6e-10 of the closed form's ν,
@@ -437,12 +429,12 @@ def _result(params: SleyParameters, model, m, theta0: float, linkage: tuple,
     cols += [m.states[:, i] + sley_off, m.states[:, n + i]]
     scene_extrema = {k: x for k, x in m.extrema.items()
                      if k not in ALIAS_NAMES and not k.endswith(".rigid_acceleration")}
-    return SleyResult(params=params, crank_angle=crank, eps2P=v["eps2P"], eps4P=v["eps4P"],
-                      eps4T=eps4T, M2V=v["M2V"], M4=v["M4.moment"], eps5P=eps5P, M5V=M5V,
-                      states=np.column_stack(cols), extrema=extrema, revolution=m.revolution,
-                      theta0=theta0, phiP=phiP, method=m.method, backend=m.backend,
-                      wall_time=m.wall_time, compile_time=m.compile_time, n_steps=m.n_steps,
-                      nfev=m.nfev, notes=tuple(notes + list(m.notes)),
+    return SleyResult(params=params, crank_angle=m.crank_angle, eps2P=v["eps2P"],
+                      eps4P=v["eps4P"], eps4T=eps4T, M2V=v["M2V"], M4=v["M4.moment"],
+                      eps5P=eps5P, M5V=M5V, states=np.column_stack(cols), extrema=extrema,
+                      revolution=m.revolution, theta0=theta0, phiP=phiP, method=m.method,
+                      backend=m.backend, wall_time=m.wall_time, compile_time=m.compile_time,
+                      n_steps=m.n_steps, nfev=m.nfev, notes=tuple(notes + list(m.notes)),
                       error_estimate=m.error_estimate, periodicity=m.periodicity,
                       scene_extrema=scene_extrema)
 
