@@ -248,9 +248,10 @@ def _last_of(model, name, key, make):
     preset's, a study's at the same step) asks again for the step rate, the crank-angle
     order of the same times and the rigid accelerations at the same crank angles."""
     kept = _LAST.setdefault(model, {})
-    if name not in kept or kept[name][0] != key:
-        kept[name] = (key, make())
-    return kept[name][1]
+    last = kept.get(name)
+    if last is None or last[0] != key:     # (the value returned is this call's own, even
+        last = kept[name] = (key, make())  # when another thread keeps another meanwhile)
+    return last[1]
 
 
 #: :func:`_last_of`'s values by model, then by name: (key, value).

@@ -408,7 +408,6 @@ def _result(params: SleyParameters, model, m, theta0: float, linkage: tuple,
     # the rigid rocker's ν ω² from the scene's tables (within 6e-10 of the closed form's ν,
     # table_error()); its extrema below from the closed form (the scene is asked not to
     # refine its own: exact_rigid=False)
-    eps4T = v["eps4T"]
     phiP, sley_off, nlo, nhi = linkage
     extrema = {"eps2P": m.extrema["eps2P"], "eps4P": m.extrema["eps4P"],
                "eps4T": (nlo * w ** 2, nhi * w ** 2), "M2V": m.extrema["M2V"]}
@@ -430,7 +429,7 @@ def _result(params: SleyParameters, model, m, theta0: float, linkage: tuple,
     scene_extrema = {k: x for k, x in m.extrema.items()
                      if k not in ALIAS_NAMES and not k.endswith(".rigid_acceleration")}
     return SleyResult(params=params, crank_angle=m.crank_angle, eps2P=v["eps2P"],
-                      eps4P=v["eps4P"], eps4T=eps4T, M2V=v["M2V"], M4=v["M4.moment"],
+                      eps4P=v["eps4P"], eps4T=v["eps4T"], M2V=v["M2V"], M4=v["M4.moment"],
                       eps5P=eps5P, M5V=M5V, states=np.column_stack(cols), extrema=extrema,
                       revolution=m.revolution, theta0=theta0, phiP=phiP, method=m.method,
                       backend=m.backend, wall_time=m.wall_time, compile_time=m.compile_time,
