@@ -156,9 +156,9 @@ def kernels_for(method):
     here if need be; False always gives the Python copy.
     """
     global _PYK
-    if method != "rk4-python" and _jit.COMPILED is not False:
-        from . import _motion_kernels as k
+    from . import _motion_kernels as k
 
+    if method != "rk4-python" and _jit.COMPILED is not False:
         if k.HAVE_NUMBA and (_jit.COMPILED or _jit.in_cache(
                 k.rk_run, k.outputs, k.output_extrema, k.eval_many, k.point_samples,
                 *((k.rhs,) if method in SCIPY_METHODS else ()))):
@@ -166,8 +166,6 @@ def kernels_for(method):
         if k.HAVE_NUMBA:
             _jit.warm_in_background(_WARM_STATEMENT)
     if _PYK is None:
-        from . import _motion_kernels as k
-
         _PYK = k.load_python()
     return _PYK, "python"
 
@@ -244,7 +242,20 @@ def linear_matrices(model: MotionModel, theta: float):
     return np.diag(m[1:]), D, K
 
 
-_RATES: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+def _last_of(model, name, key, make):
+    """``make()``, kept for ``model`` (immutable) under ``name`` while ``key`` stays that of
+    the call that made it (only the last: the memory stays bounded): a repeated call (a
+    preset's, a study's at the same step) asks again for the step rate, the crank-angle
+    order of the same times and the rigid accelerations at the same crank angles."""
+    kept = _LAST.setdefault(model, {})
+    last = kept.get(name)
+    if last is None or last[0] != key:     # (the value returned is this call's own, even
+        last = kept[name] = (key, make())  # when another thread keeps another meanwhile)
+    return last[1]
+
+
+#: :func:`_last_of`'s values by model, then by name: (key, value).
+_LAST: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
 
 
 def max_rate(model: MotionModel, samples: int = 72) -> float:
@@ -261,10 +272,7 @@ def max_rate(model: MotionModel, samples: int = 72) -> float:
     -------
     float
     """
-    key = _RATES.setdefault(model, {})
-    if samples not in key:
-        key[samples] = _max_rate(model, samples)
-    return key[samples]
+    return _last_of(model, "max_rate", samples, lambda: _max_rate(model, samples))
 
 
 def _max_rate(model: MotionModel, samples: int) -> float:
@@ -756,10 +764,18 @@ def _finish(scene, model, kern, theta_s, ripple, main, other, counts, notes, war
 def _crank_order(scene, model, theta_s, ripple, ts, stride=1):
     """(ascending crank angle mod the cycle, the order of the samples at times ``ts`` that
     gives it, and the positions in that order of every ``stride``-th sample in time, or
-    None for every sample)."""
-    theta = theta_s + model.omega * ts if ripple[0] == 0.0 else \
-        crank_angle(model.omega, theta_s, ripple, ts)[0]
-    crank = theta % scene.cycle
+    None for every sample); kept for the same times (``%`` on them is most of its cost)."""
+    crank, order, sub = _last_of(
+        model, "crank_order", (scene.cycle, theta_s, ripple, stride, ts.tobytes()),
+        lambda: _new_crank_order(scene.cycle, model.omega, theta_s, ripple, ts, stride))
+    return crank.copy(), order, sub     # (the result's array: the kept one stays as it is)
+
+
+def _new_crank_order(cycle, omega, theta_s, ripple, ts, stride):
+    """:func:`_crank_order`, computed."""
+    theta = theta_s + omega * ts if ripple[0] == 0.0 else \
+        crank_angle(omega, theta_s, ripple, ts)[0]
+    crank = theta % cycle
     n = crank.size
     wrap = np.flatnonzero(crank[1:] < crank[:-1])
     if wrap.size != 1:
@@ -1127,32 +1143,31 @@ def _rigid_acceleration(model, body, crank, ripple=(0.0, 0.0), ts=None, refine=T
         _, g1, g2, _ = kern.feval(*function_args(a, g), q)
         return (g2 * q1 * q1 + g1 * q2) * w2
 
-    fast = kernels_for("rk4")[0]
-    qv, gv = np.empty((crank.size, 3)), np.empty((crank.size, 3))
-    fast.eval_many(*function_args(a, r), np.ascontiguousarray(crank), qv)
-    fast.eval_many(*function_args(a, g), np.ascontiguousarray(qv[:, 0]), gv)
-    vals = (gv[:, 2] * qv[:, 1] ** 2 + gv[:, 1] * qv[:, 2]) * w2
-    if ripple[0] != 0.0:
+    def samples():
+        """The acceleration at the samples (at a constant speed, of their crank angles alone)."""
+        fast = kernels_for("rk4")[0]
+        qv, gv = np.empty((crank.size, 3)), np.empty((crank.size, 3))
+        fast.eval_many(*function_args(a, r), np.ascontiguousarray(crank), qv)
+        fast.eval_many(*function_args(a, g), np.ascontiguousarray(qv[:, 0]), gv)
+        if ripple[0] == 0.0:
+            return (gv[:, 2] * qv[:, 1] ** 2 + gv[:, 1] * qv[:, 2]) * w2
         # a varying crank speed: (g'' q'² + g' q'') θ̇² + g' q' θ̈ at the samples' times;
         # its extrema are those of the samples (the output grid sets their accuracy)
         _, w, dw = crank_angle(model.omega, 0.0, ripple, ts)
-        vals = (gv[:, 2] * qv[:, 1] ** 2 + gv[:, 1] * qv[:, 2]) * w ** 2 + gv[:, 1] * qv[:, 1] * dw
+        return (gv[:, 2] * qv[:, 1] ** 2 + gv[:, 1] * qv[:, 2]) * w ** 2 + gv[:, 1] * qv[:, 1] * dw
+
+    vals = samples() if ripple[0] != 0.0 else \
+        _last_of(model, f"samples {body}", crank.tobytes(), samples).copy()
     if ripple[0] != 0.0 or not refine:
         return vals, (float(vals.min()), float(vals.max()))
     ext = []
-    memo = _REFINED.setdefault(model, {})
     for sgn, i in ((1.0, int(np.argmin(vals))), (-1.0, int(np.argmax(vals)))):
         lo, hi = crank[max(i - 1, 0)], crank[min(i + 1, crank.size - 1)]
-        key = (body, sgn, float(lo), float(hi))
-        if key not in memo:     # a function of the model and the bracket alone
-            if len(memo) > 64:
-                memo.clear()
-            memo[key] = minimize_scalar(lambda t, sgn=sgn: sgn * acc(t), bounds=(lo, hi),
-                                        method="bounded", options={"xatol": 1e-12}).fun
-        ext.append(sgn * min(memo[key], sgn * vals[i]))
+        # a function of the model and the bracket alone: the same crank-angle grid of the
+        # same model (a repeated or a preset's call) refines once
+        best = _last_of(model, f"refined {body} {sgn}", (float(lo), float(hi)),
+                        lambda sgn=sgn, lo=lo, hi=hi: minimize_scalar(
+                            lambda t: sgn * acc(t), bounds=(lo, hi), method="bounded",
+                            options={"xatol": 1e-12}).fun)
+        ext.append(sgn * min(best, sgn * vals[i]))
     return vals, (float(ext[0]), float(ext[1]))
-
-
-#: :func:`_rigid_acceleration`'s Brent-refined extrema by model, (body, sign, bracket): the
-#: same crank-angle grid of the same model (a repeated or a preset's call) refines once.
-_REFINED: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()

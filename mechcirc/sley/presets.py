@@ -25,6 +25,7 @@ k4 = k7 = 13; ω, ϕ, M0 as in Table 1.
 
 from __future__ import annotations
 
+from functools import lru_cache
 from typing import cast
 
 from .models import Drive, ParameterError, SleyParameters
@@ -88,9 +89,16 @@ def preset(drive: str = "one-side", variant: int = 3, **overrides) -> SleyParame
     """
     if isinstance(variant, bool) or variant not in VARIANTS:
         raise ParameterError(f"variant must be one of 1..7, got {variant!r}")
-    row = _table1(variant) if drive == "one-side" else _table2(variant)
-    params = SleyParameters(drive=cast(Drive, drive), label=f"{drive} variant {variant}", **row)
+    # made once (frozen, so one object serves every call; a drive that is no str, which the
+    # parameters refuse, is not hashed)
+    params = (_preset if isinstance(drive, str) else _preset.__wrapped__)(drive, variant)
     return params.replace(**overrides) if overrides else params
+
+
+@lru_cache(maxsize=32, typed=True)
+def _preset(drive, variant: int) -> SleyParameters:
+    row = _table1(variant) if drive == "one-side" else _table2(variant)
+    return SleyParameters(drive=cast(Drive, drive), label=f"{drive} variant {variant}", **row)
 
 
 def all_presets(**overrides) -> list[SleyParameters]:

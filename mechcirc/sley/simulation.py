@@ -62,17 +62,11 @@ METHODS = ("rk4", "rk4-python", "rk8", "DOP853", "RK45", "LSODA")
 _SCIPY_METHODS = ("DOP853", "RK45", "LSODA")
 TWO_PI = 2.0 * math.pi
 
-#: RK4 steps per period of the fastest linearised mode without the error estimate (with
-#: it, the default is chosen for the accuracy goal: :func:`mechcirc.scene.simulate_scene`).
-DEFAULT_STEPS_PER_PERIOD = 50
 #: Default output points per revolution (0.05° in crank angle).
 DEFAULT_POINTS = 7200
 #: Relative error estimate / periodicity above which a result is flagged (issue 11 §8).
 ACCURACY_GOAL = 1e-3
 
-
-#: Above this many RK4 steps per revolution the run is refused (see the message).
-MAX_STEPS_PER_REV = 20_000_000
 
 @dataclass(frozen=True)
 class SleyResult:
@@ -186,21 +180,14 @@ class SleyResult:
 
 
 # --------------------------------------------------------------------- set-up
-_MODELS: dict = {}
-
-
+@lru_cache(maxsize=16)
 def _model(params: SleyParameters, table_points: int):
     """The scene of ``params`` and its motion model (memoised: the tables are the cost)."""
     from ..scene.motion import motion_model
     from .scenes import sley_scene
 
-    key = (params, int(table_points))
-    if key not in _MODELS:
-        if len(_MODELS) > 16:
-            _MODELS.clear()
-        scene = sley_scene(params)
-        _MODELS[key] = (scene, motion_model(scene, table_points=int(table_points)))
-    return _MODELS[key]
+    scene = sley_scene(params)
+    return scene, motion_model(scene, table_points=int(table_points))
 
 
 def table_error(params: SleyParameters | None = None, n: int = 1024,
@@ -350,7 +337,7 @@ def simulate_params(params: SleyParameters, revolutions: int = 5, method: str | 
     npts = int(points_per_revolution)
     params.fourbar()                            # GeometryError: not a crank-rocker
     theta0 = start_angle(params)
-    phiP = _linkage_constants(params.l2P, params.l3, params.l4, params.d, params.branch)[0]
+    linkage = _linkage_constants(params.l2P, params.l3, params.l4, params.d, params.branch)
     scene, model = _model(params, table_points)
     from ..scene.simulation import SceneAccuracyWarning, simulate_scene
 
@@ -373,7 +360,7 @@ def simulate_params(params: SleyParameters, revolutions: int = 5, method: str | 
                           stacklevel=3)
         else:
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
-    return _result(params, model, m, theta0, phiP, notes)
+    return _result(params, model, m, theta0, linkage, notes)
 
 
 def _checked(method, revolutions, revolution, points_per_revolution, steps_per_period, rtol):
@@ -411,19 +398,17 @@ def _checked(method, revolutions, revolution, points_per_revolution, steps_per_p
     return method, revolutions, steps_per_period, rtol
 
 
-def _result(params: SleyParameters, model, m, theta0: float, phiP: float,
+def _result(params: SleyParameters, model, m, theta0: float, linkage: tuple,
             notes: list) -> SleyResult:
-    """The scene's motion under the paper's names and state convention."""
+    """The scene's motion under the paper's names and state convention (``linkage``:
+    :func:`_linkage_constants`)."""
     v = m.values
-    crank = m.crank_angle
     both = params.drive == "both-sides"
     w = params.omega
     # the rigid rocker's ν ω² from the scene's tables (within 6e-10 of the closed form's ν,
     # table_error()); its extrema below from the closed form (the scene is asked not to
     # refine its own: exact_rigid=False)
-    eps4T = v["eps4T"]
-    _, sley_off, nlo, nhi = _linkage_constants(params.l2P, params.l3, params.l4, params.d,
-                                               params.branch)
+    phiP, sley_off, nlo, nhi = linkage
     extrema = {"eps2P": m.extrema["eps2P"], "eps4P": m.extrema["eps4P"],
                "eps4T": (nlo * w ** 2, nhi * w ** 2), "M2V": m.extrema["M2V"]}
     eps5P = M5V = None
@@ -443,12 +428,12 @@ def _result(params: SleyParameters, model, m, theta0: float, phiP: float,
     cols += [m.states[:, i] + sley_off, m.states[:, n + i]]
     scene_extrema = {k: x for k, x in m.extrema.items()
                      if k not in ALIAS_NAMES and not k.endswith(".rigid_acceleration")}
-    return SleyResult(params=params, crank_angle=crank, eps2P=v["eps2P"], eps4P=v["eps4P"],
-                      eps4T=eps4T, M2V=v["M2V"], M4=v["M4.moment"], eps5P=eps5P, M5V=M5V,
-                      states=np.column_stack(cols), extrema=extrema, revolution=m.revolution,
-                      theta0=theta0, phiP=phiP, method=m.method, backend=m.backend,
-                      wall_time=m.wall_time, compile_time=m.compile_time, n_steps=m.n_steps,
-                      nfev=m.nfev, notes=tuple(notes + list(m.notes)),
+    return SleyResult(params=params, crank_angle=m.crank_angle, eps2P=v["eps2P"],
+                      eps4P=v["eps4P"], eps4T=v["eps4T"], M2V=v["M2V"], M4=v["M4.moment"],
+                      eps5P=eps5P, M5V=M5V, states=np.column_stack(cols), extrema=extrema,
+                      revolution=m.revolution, theta0=theta0, phiP=phiP, method=m.method,
+                      backend=m.backend, wall_time=m.wall_time, compile_time=m.compile_time,
+                      n_steps=m.n_steps, nfev=m.nfev, notes=tuple(notes + list(m.notes)),
                       error_estimate=m.error_estimate, periodicity=m.periodicity,
                       scene_extrema=scene_extrema)
 
