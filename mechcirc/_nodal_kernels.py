@@ -242,6 +242,40 @@ def band_solve_perm(ab, kl, ipiv, rows, p, r, out):
                 out[k0 + b, p[i]] = x[b, i]
 
 
+
+@_jit_inline
+def _l1(z):
+    """|re| + |im| (≥ |z|)."""
+    return abs(z.real) + abs(z.imag)
+
+
+@_jit
+def band_bound(ab, kl, ipiv, rows, p, x, d, out):
+    """out[k] = |x|ᵀP̃|L||U||d| with the factors ``ab[rows[k]]`` of :func:`_band_lu` (|z| as
+    |re| + |im|; x and d in A's order, the factors in the order ``p``): what
+    :func:`mechcirc._nodal_solvers.band_bound_batch` forms from numpy's factors."""
+    n = ab.shape[1]
+    kv = 2 * kl
+    u = np.empty(n)
+    for k in range(rows.size):
+        f = rows[k]
+        for i in range(n):                  # |U||d|: U[i, j] is ab[j, kv + i − j]
+            acc = 0.0
+            for j in range(i, min(n, i + kv + 1)):
+                acc += _l1(ab[f, j, kv + i - j]) * _l1(d[k, p[j]])
+            u[i] = acc
+        for j in range(n - 2, -1, -1):      # then |L_j| and P_j, innermost first
+            for t in range(1, min(kl, n - 1 - j) + 1):
+                u[j + t] += _l1(ab[f, j, kv + t]) * u[j]
+            q = ipiv[f, j]
+            keep = u[j]
+            u[j] = u[q]
+            u[q] = keep
+        acc = 0.0
+        for i in range(n):
+            acc += _l1(x[k, p[i]]) * u[i]
+        out[k] = acc
+
 @_jit_inline
 def _mag(z):
     """|z| for |z| ≤ about 1 (x scaled to max-norm 1): no hypot needed."""

@@ -357,9 +357,8 @@ def band_bound_batch(G, piv, x, d, n, kl):
 
     The factors of :func:`band_lu_batch` (``G``, ``piv``; P̃|L| in their factored
     form P₀|L₀|P₁|L₁|…, which has no sums of products: the absolute values of its
-    entries), for :func:`mechcirc.nodal.first_step_bound`.  (The compiled LU
-    offers no bound: there the second residual pass, a compiled kernel, costs
-    less than the bound in numpy — 1.09-1.19x the sweep's time with it.)
+    entries), for :func:`mechcirc.nodal.first_step_bound`; the compiled LU's factors
+    have theirs in :func:`mechcirc._nodal_kernels.band_bound`.
 
     Parameters
     ----------
@@ -397,8 +396,8 @@ def band_bound_batch(G, piv, x, d, n, kl):
 
 class _BoundSolve:
     """A ``solve(r, rows=None)`` of banded factors with their ``bound(x, d, rows)``
-    (:func:`band_bound_batch`), which :func:`mechcirc.nodal.refine_dd` uses after its
-    first step."""
+    (:func:`band_bound_batch`, or the compiled ``band_bound``), which
+    :func:`mechcirc.nodal.refine_dd` uses after its first step."""
 
     def __init__(self, solve, bound):
         self.solve, self.bound = solve, bound
@@ -549,7 +548,15 @@ class SparseSolver:
             kern.band_solve_perm(ab, kl, ipiv, rows, p, np.ascontiguousarray(r, dtype=complex),
                                  out)
             return out
-        return good, solve
+
+        def bound(x, d, rows):
+            """|x|ᵀP̃|L||U||d| at ``rows`` (:func:`mechcirc._nodal_kernels.band_bound`)."""
+            out = np.empty(rows.size)
+            kern.band_bound(ab, kl, ipiv, np.asarray(rows, dtype=np.int64), p,
+                            np.ascontiguousarray(x, dtype=complex),
+                            np.ascontiguousarray(d, dtype=complex), out)
+            return out
+        return good, _BoundSolve(solve, bound)
 
     def _banded(self, data, good):
         """The banded LU in numpy, vectorised over the chunk's ω (:func:`band_lu_batch`),
