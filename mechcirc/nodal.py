@@ -532,9 +532,11 @@ def first_step_bound(system: NodalSystem, omega: NDArray, xh: NDArray, xl: NDArr
         ax[:, :n] = np.abs(xh.real) + np.abs(xh.imag)
         ad = np.zeros((c, n + 1))
         ad[:, :n] = np.abs(d.real) + np.abs(d.imag)
-        y = np.abs(pat.e_c) + np.abs(omega[:, None] * pat.e_m - pat.e_k / omega[:, None])
-        entry = np.einsum("ce,ce->c", y * (ax[:, pat.e_i] + ax[:, pat.e_j]),
-                          ad[:, pat.e_i] + ad[:, pat.e_j])
+        # |y_e| = |c_e| + ω|m_e| + |k_e|/ω (one of the three is nonzero): by kind, as
+        # one product with the (c, E) array, not an admittance array of its own.
+        by_kind = ((ax[:, pat.e_i] + ax[:, pat.e_j]) * (ad[:, pat.e_i] + ad[:, pat.e_j])) \
+            @ np.abs([pat.e_c, pat.e_m, pat.e_k]).T
+        entry = by_kind[:, 0] + omega * by_kind[:, 1] + by_kind[:, 2] / omega
         if pat.s_row.size:
             entry = entry + np.abs(pat.s_val) @ (ax[:, pat.s_row] * ad[:, pat.s_col]).T
         rounding = np.einsum("ci,ci->c", ax[:, :n], np.abs(r.real) + np.abs(r.imag))
@@ -786,13 +788,13 @@ def _dense_verdict(system: NodalSystem, trial):
     judged, overflow = None, False
     if system.size > DENSE_LIMIT:
         return False, judged, overflow
-    absdiag = [np.abs(system.diagonal("damper") + system.diagonal("lever")),
-               np.abs(system.diagonal("mass")), np.abs(system.diagonal("spring"))]
     for w, A in zip(trial, dense_matrices(system, trial)):
         if not np.isfinite(A).all():
             return True, judged, overflow   # values at float64's edge: the sweep flags them
         if _clearly_regular(A):
             return True, judged, overflow   # (balancing only keeps a regular A from looking singular)
+        absdiag = [np.abs(system.diagonal("damper") + system.diagonal("lever")),
+                   np.abs(system.diagonal("mass")), np.abs(system.diagonal("spring"))]
         # Judge the balanced matrix: a lever of ratio 1e-8 puts entries of 1e-8
         # beside 1, every value scaled by 1e-100 puts admittances of 1e-100 beside
         # the lever's ±1, and the raw singular values then look singular.
