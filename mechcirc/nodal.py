@@ -451,8 +451,8 @@ def refine_dd(solve_fn, residual, omega, rhs, system, refine: bool, steps: int,
             own = eps / 2 * np.sum(np.abs(x0) * np.abs(r), axis=-1) / \
                 np.abs(system.difference(x0))
         return x0, None, est + np.where(np.isnan(own), np.inf, own), rho
-    xh, xl = np.array(x0), np.zeros_like(x0)       # (both updated in place below)
-    prev = np.array(x0)
+    xh, xl = x0, np.zeros_like(x0)      # (both updated in place below; x0 a solve's own)
+    prev = np.empty_like(x0)            # (read from the second step on: the first writes it)
     est = np.full(omega.size, np.inf)
     rho = np.zeros(omega.size)
     active = np.arange(omega.size)
