@@ -413,7 +413,8 @@ def _backward_error(system, omega: float, x: NDArray) -> float:
     pat = pattern(system)
     rhs = system.injection()
     with np.errstate(all="ignore"):
-        ax = rhs - pat.residual(np.array([omega]), x[None, :], None, rhs)[0]
+        ax = rhs - pat.residual(np.array([omega]), x[None, :], None, rhs,
+                                kernels(system.size))[0]      # (the same bits either way)
         xe = np.append(np.asarray(x, dtype=complex), 0.0)
         y = np.abs(combine(pat.e_c, pat.e_m, pat.e_k, omega))
         t = y * np.abs(xe[pat.e_i] - xe[pat.e_j])
