@@ -533,11 +533,12 @@ def first_step_bound(system: NodalSystem, omega: NDArray, xh: NDArray, xl: NDArr
         ax[:, :n] = np.abs(xh.real) + np.abs(xh.imag)
         ad = np.zeros((c, n + 1))
         ad[:, :n] = np.abs(d.real) + np.abs(d.imag)
-        # |y_e| = |c_e| + ω|m_e| + |k_e|/ω (one of the three is nonzero): by kind, as
-        # one product with the (c, E) array, not an admittance array of its own.
+        # |y_e| = |c_e| + |ω||m_e| + |k_e|/|ω| (one of the three is nonzero; ω complex
+        # too): by kind, one product with the (c, E) array, no admittance array.
         by_kind = ((ax[:, pat.e_i] + ax[:, pat.e_j]) * (ad[:, pat.e_i] + ad[:, pat.e_j])) \
             @ np.abs([pat.e_c, pat.e_m, pat.e_k]).T
-        entry = by_kind[:, 0] + omega * by_kind[:, 1] + by_kind[:, 2] / omega
+        w = np.abs(omega)
+        entry = by_kind[:, 0] + w * by_kind[:, 1] + by_kind[:, 2] / w
         if pat.s_row.size:
             entry = entry + np.abs(pat.s_val) @ (ax[:, pat.s_row] * ad[:, pat.s_col]).T
         rounding = np.einsum("ci,ci->c", ax[:, :n], np.abs(r.real) + np.abs(r.imag))
