@@ -80,14 +80,8 @@ def _row_residual(acc, r, w, wh, wl, b):
 
 @_jit_inline
 def _at(x, k, i, n):
-    """x[k, i], and +0.0 for the reference (i = n, a column x does not have)."""
+    """x[k, i] (x real or complex), and +0.0 for the reference (i = n: no such column)."""
     return x[k, i] if i < n else 0.0
-
-
-@_jit_inline
-def _atc(x, k, i, n):
-    """x[k, i] of a complex x, and 0 for the reference (i = n)."""
-    return x[k, i] if i < n else 0j
 
 
 @_jit
@@ -301,13 +295,13 @@ def sensitivities(omega, x, scale, e_i, e_j, e_m, e_k, e_c, s_row, s_col, s_val,
         for e in range(e_i.size):
             # One of c, m, k is nonzero: |c + j(ωm − k/ω)| without a hypot.
             y = abs(e_c[e]) + abs(w * e_m[e] - e_k[e] / w)
-            d = _mag(_atc(x, k, e_i[e], n) * f - _atc(x, k, e_j[e], n) * f)
+            d = _mag(_at(x, k, e_i[e], n) * f - _at(x, k, e_j[e], n) * f)
             acc += y * (mag[e_i[e]] + mag[e_j[e]]) * d
             accd += y * d * d
         for s in range(s_row.size):
             acc += abs(s_val[s]) * mag[s_row[s]] * mag[s_col[s]]
         for v in range(l_r.size):
-            accd += 2 * l_r[v] * _mag(_atc(x, k, l_p1[v], n) * f - _atc(x, k, l_p2[v], n) * f) \
+            accd += 2 * l_r[v] * _mag(_at(x, k, l_p1[v], n) * f - _at(x, k, l_p2[v], n) * f) \
                 * mag[l_col[v]]
         S[k] = acc
         Sd[k] = accd
