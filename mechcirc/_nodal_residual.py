@@ -192,33 +192,33 @@ class Pattern:
         c, n = xh.shape
         z = np.zeros((c, 1), dtype=complex)
         xe = np.concatenate([xh.astype(complex, copy=False), z], axis=1)
-        d_h, d_l = two_sum(xe.take(self.e_i, 1), -xe.take(self.e_j, 1))
-        xs = xe.take(self.s_col, 1)
+        d_h, d_l = two_sum(xe[:, self.e_i], -xe[:, self.e_j])
+        xs = xe[:, self.s_col]
         if xl is not None:
             xle = np.concatenate([xl.astype(complex, copy=False), z], axis=1)
             # Renormalised (TwoSum): where x_i ≈ x_j their low parts (~u|x|)
             # would leave a low part far above u|d|, and every later sum of
             # low parts would round at u²|x| per row instead of u²|y d|.
-            d_h, d_l = two_sum(d_h, d_l + (xle.take(self.e_i, 1) - xle.take(self.e_j, 1)))
+            d_h, d_l = two_sum(d_h, d_l + (xle[:, self.e_i] - xle[:, self.e_j]))
         vh, vl = self.e_vs
         p_h, p_l = two_prod(self.e_val, vh, vl, d_h)
         p_l = p_l + self.e_val * d_l
         sh, sl = self.s_vs
         q_h, q_l = two_prod(self.s_val, sh, sl, xs)
         if xl is not None:
-            q_l = q_l + self.s_val * xle.take(self.s_col, 1)
+            q_l = q_l + self.s_val * xle[:, self.s_col]
         T_h = np.concatenate([p_h, -p_h, q_h], axis=1)
         T_l = np.concatenate([p_l, -p_l, q_l], axis=1)
         S_h = np.zeros((c, 4 * n), dtype=complex)
         S_l = np.zeros((c, 4 * n), dtype=complex)
         slots, buckets = self.slot_plan
         if slots:
-            acc_h, acc_l = T_h.take(slots[0], 1), T_l.take(slots[0], 1)
+            acc_h, acc_l = T_h[:, slots[0]], T_l[:, slots[0]]
             for s in slots[1:]:
                 k = s.size
-                a, e = two_sum(acc_h[:, :k], T_h.take(s, 1))
+                a, e = two_sum(acc_h[:, :k], T_h[:, s])
                 acc_h[:, :k] = a
-                acc_l[:, :k] += e + T_l.take(s, 1)
+                acc_l[:, :k] += e + T_l[:, s]
             S_h[:, buckets], S_l[:, buckets] = acc_h, acc_l
         S_h, S_l = S_h.reshape(c, n, 4), S_l.reshape(c, n, 4)
         w = np.asarray(omega)[:, None]
