@@ -671,3 +671,36 @@ def test_band_bound_of_a_band_is_the_factored_product(kl):
             worst = max(worst, abs(got[b] / ref - 1))
     # Achieved: 6.7e-16 (kl 1, 5,803 swaps), 7.8e-16 (kl 2, 7,597 swaps).
     assert swaps > 1000 and worst <= 1e-14
+
+
+def test_warm_kernels_caches_every_nodal_kernel(tmp_path):
+    """warm_kernels (what the detached process runs before a sweep takes the kernels)
+    leaves every compiled kernel of _nodal_kernels in numba's cache, on an empty cache:
+    a kernel it never calls (the first-step bound, asked only where a first correction
+    is not yet at rounding) would be compiled in the sweep's own process, seconds of the
+    wait that mechcirc._jit's rule avoids."""
+    pytest.importorskip("numba")
+    import json
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    env = {k: v for k, v in os.environ.items() if k != "MECHCIRC_NO_WARM"}
+    env.update(NUMBA_CACHE_DIR=str(tmp_path), PYTHONPATH=str(root))
+    missing = ("import json\n"
+               "from numba.core.registry import CPUDispatcher\n"
+               "from mechcirc import _jit, _nodal_kernels as k\n"
+               "d = [v for v in vars(k).values() if isinstance(v, CPUDispatcher)\n"
+               "     and v.targetoptions.get('inline') != 'always']\n"
+               "print(json.dumps(sorted(v.__name__ for v in d if not _jit.in_cache(v))))")
+
+    def run(code):
+        return subprocess.run([sys.executable, "-c", code], env=env, cwd=root, check=True,
+                              capture_output=True, text=True, timeout=600).stdout
+    kernels = ["band_assemble_factor", "band_bound", "band_solve_perm", "residual",
+               "sensitivities"]
+    assert json.loads(run(missing)) == kernels                # an empty cache: none there
+    run("from mechcirc.nodal import warm_kernels; warm_kernels()")
+    assert json.loads(run(missing)) == []
