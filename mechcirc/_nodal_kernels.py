@@ -1,5 +1,5 @@
 """Compiled kernels of the nodal solve: the residual b − A(ω) x in double-double, the
-banded LU, and the error sensitivities.
+banded LU with its first-step bound, and the error sensitivities.
 
 The residual does the same arithmetic (the double-double functions of
 :mod:`mechcirc._dd`, the one copy, here compiled), operation for operation
@@ -236,7 +236,6 @@ def band_solve_perm(ab, kl, ipiv, rows, p, r, out):
                 out[k0 + b, p[i]] = x[b, i]
 
 
-
 @_jit_inline
 def _l1(z):
     """|re| + |im| (≥ |z|)."""
@@ -269,6 +268,7 @@ def band_bound(ab, kl, ipiv, rows, p, x, d, out):
         for i in range(n):
             acc += _l1(x[k, p[i]]) * u[i]
         out[k] = acc
+
 
 @_jit_inline
 def _mag(z):
