@@ -21,8 +21,8 @@ error of K of each mechcirc variant and of ngspice.
 With ``--breakdown`` it prints instead where one default sweep's CPU time
 goes on each path (medians of ``--repeats``): parsing, assembly, the
 pattern and the regularity check, the factorisations, the solves with their
-factors, the double-double residuals, the error estimates and the
-sensitivities, each timed around its function.  The rest of the total is
+factors, the double-double residuals, the error estimates, the first-step
+bounds (their numpy part) and the sensitivities, each timed around its function.  The rest of the total is
 the Python between them; past 60 unknowns the regularity check's own trial
 solve is counted both in it and in the rows of its phases.
 
@@ -141,6 +141,7 @@ def breakdown(sizes, omega, repeats) -> None:
         return timed_residual(self, omega, xh, xl, *a, **k)
     _nodal_residual.Pattern.residual = counted
     timed(nodal, "_estimate", "estimate")
+    timed(nodal, "first_step_bound", "first-step bound")
     timed(_nodal_residual.Pattern, "sensitivities", "sensitivities")
     for n in sizes:
         text = ladder_netlist(*ladder_numbers(n))

@@ -1,5 +1,5 @@
 """Compiled kernels of the nodal solve: the residual b − A(ω) x in double-double, the
-banded LU, and the error sensitivities.
+banded LU with its first-step bound, and the error sensitivities.
 
 The residual does the same arithmetic (the double-double functions of
 :mod:`mechcirc._dd`, the one copy, here compiled), operation for operation
@@ -80,14 +80,8 @@ def _row_residual(acc, r, w, wh, wl, b):
 
 @_jit_inline
 def _at(x, k, i, n):
-    """x[k, i], and +0.0 for the reference (i = n, a column x does not have)."""
+    """x[k, i] (x real or complex), and +0.0 for the reference (i = n: no such column)."""
     return x[k, i] if i < n else 0.0
-
-
-@_jit_inline
-def _atc(x, k, i, n):
-    """x[k, i] of a complex x, and 0 for the reference (i = n)."""
-    return x[k, i] if i < n else 0j
 
 
 @_jit
@@ -243,6 +237,40 @@ def band_solve_perm(ab, kl, ipiv, rows, p, r, out):
 
 
 @_jit_inline
+def _l1(z):
+    """|re| + |im| (≥ |z|)."""
+    return abs(z.real) + abs(z.imag)
+
+
+@_jit
+def band_bound(ab, kl, ipiv, rows, p, x, d, out):
+    """out[k] = |x|ᵀP̃|L||U||d| with the factors ``ab[rows[k]]`` of :func:`_band_lu` (|z| as
+    |re| + |im|; x and d in A's order, the factors in the order ``p``): what
+    :func:`mechcirc._nodal_solvers.band_bound_batch` forms from numpy's factors."""
+    n = ab.shape[1]
+    kv = 2 * kl
+    u = np.empty(n)
+    for k in range(rows.size):
+        f = rows[k]
+        for i in range(n):                  # |U||d|: U[i, j] is ab[j, kv + i − j]
+            acc = 0.0
+            for j in range(i, min(n, i + kv + 1)):
+                acc += _l1(ab[f, j, kv + i - j]) * _l1(d[k, p[j]])
+            u[i] = acc
+        for j in range(n - 2, -1, -1):      # then |L_j| and P_j, innermost first
+            for t in range(1, min(kl, n - 1 - j) + 1):
+                u[j + t] += _l1(ab[f, j, kv + t]) * u[j]
+            q = ipiv[f, j]
+            keep = u[j]
+            u[j] = u[q]
+            u[q] = keep
+        acc = 0.0
+        for i in range(n):
+            acc += _l1(x[k, p[i]]) * u[i]
+        out[k] = acc
+
+
+@_jit_inline
 def _mag(z):
     """|z| for |z| ≤ about 1 (x scaled to max-norm 1): no hypot needed."""
     return np.sqrt(z.real * z.real + z.imag * z.imag)
@@ -267,13 +295,13 @@ def sensitivities(omega, x, scale, e_i, e_j, e_m, e_k, e_c, s_row, s_col, s_val,
         for e in range(e_i.size):
             # One of c, m, k is nonzero: |c + j(ωm − k/ω)| without a hypot.
             y = abs(e_c[e]) + abs(w * e_m[e] - e_k[e] / w)
-            d = _mag(_atc(x, k, e_i[e], n) * f - _atc(x, k, e_j[e], n) * f)
+            d = _mag(_at(x, k, e_i[e], n) * f - _at(x, k, e_j[e], n) * f)
             acc += y * (mag[e_i[e]] + mag[e_j[e]]) * d
             accd += y * d * d
         for s in range(s_row.size):
             acc += abs(s_val[s]) * mag[s_row[s]] * mag[s_col[s]]
         for v in range(l_r.size):
-            accd += 2 * l_r[v] * _mag(_atc(x, k, l_p1[v], n) * f - _atc(x, k, l_p2[v], n) * f) \
+            accd += 2 * l_r[v] * _mag(_at(x, k, l_p1[v], n) * f - _at(x, k, l_p2[v], n) * f) \
                 * mag[l_col[v]]
         S[k] = acc
         Sd[k] = accd

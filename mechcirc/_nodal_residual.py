@@ -62,13 +62,11 @@ class Pattern:
 
     def _elements(self, system: NodalSystem) -> None:
         index = {n: i for i, n in enumerate(system.nodes)}
+        at = index.get                          # (node, n): the reference, a zero column at n
         n = self.n
-
-        def at(node):
-            return index.get(node, n)         # the reference: a zero column at n
         els = system.elements
-        self.e_i = np.array([at(e.n1) for e in els], dtype=np.int64)
-        self.e_j = np.array([at(e.n2) for e in els], dtype=np.int64)
+        self.e_i = np.array([at(e.n1, n) for e in els], dtype=np.int64)
+        self.e_j = np.array([at(e.n2, n) for e in els], dtype=np.int64)
         self.e_val = np.array([e.value * e.eta for e in els], dtype=float)
         code = {"mass": 0, "spring": 1}
         self.e_kind = np.array([code.get(e.kind, 2) for e in els], dtype=np.int64)
@@ -77,8 +75,8 @@ class Pattern:
         self.e_c = np.where(self.e_kind == 2, self.e_val, 0.0)
         n_nodes = len(system.nodes)
         lv = system.levers
-        self.l_p1 = np.array([at(v.p1) for v in lv], dtype=np.int64)
-        self.l_p2 = np.array([at(v.p2) for v in lv], dtype=np.int64)
+        self.l_p1 = np.array([at(v.p1, n) for v in lv], dtype=np.int64)
+        self.l_p2 = np.array([at(v.p2, n) for v in lv], dtype=np.int64)
         self.l_col = n_nodes + np.arange(len(lv), dtype=np.int64)
         self.l_r = np.array([abs(v.ratio) for v in lv], dtype=float)
         # The lever block's stamps (the held drive's constraint included).

@@ -123,20 +123,14 @@ class DDSolver:
             with np.errstate(all="ignore"):
                 for k in range(self.n - 1):          # L (unit diagonal)
                     t = cdd_mul([f[:, k + 1:, k] for f in F], [v[:, k, None] for v in y])
-                    re = dd_sub(y[0][:, k + 1:], y[1][:, k + 1:], *t[:2])
-                    im = dd_sub(y[2][:, k + 1:], y[3][:, k + 1:], *t[2:])
-                    for v, u in zip(y, (*re, *im)):
-                        v[:, k + 1:] = u
+                    _csub_at(y, (slice(None), slice(k + 1, None)), t)
                 for k in range(self.n - 1, -1, -1):  # U
                     q = cdd_div([v[:, k] for v in y], [f[:, k, k] for f in F])
                     for v, u in zip(y, q):
                         v[:, k] = u
                     if k:
                         t = cdd_mul([f[:, :k, k] for f in F], [u[:, None] for u in q])
-                        re = dd_sub(y[0][:, :k], y[1][:, :k], *t[:2])
-                        im = dd_sub(y[2][:, :k], y[3][:, :k], *t[2:])
-                        for v, u in zip(y, (*re, *im)):
-                            v[:, :k] = u
+                        _csub_at(y, (slice(None), slice(None, k)), t)
             return ((y[0] + y[1]) + 1j * (y[2] + y[3])) * d[rows]
         return good, solve
 
@@ -171,11 +165,16 @@ def _dd_lu(X, good):
         at = (slice(None), ri[:, None], ci[None, :])
         upd = cdd_mul([v[:, ri - k - 1, None] for v in lk],
                        [x[:, None, k, ci] for x in X])
-        re = dd_sub(X[0][at], X[1][at], *upd[:2])
-        im = dd_sub(X[2][at], X[3][at], *upd[2:])
-        for x, v in zip(X, (*re, *im)):
-            x[at] = v
+        _csub_at(X, at, upd)
     return perm
+
+
+def _csub_at(y, at, t) -> None:
+    """y[at] −= t in place in complex double-double (y and t as re hi, re lo, im hi, im lo)."""
+    re = dd_sub(y[0][at], y[1][at], *t[:2])
+    im = dd_sub(y[2][at], y[3][at], *t[2:])
+    for v, u in zip(y, (*re, *im)):
+        v[at] = u
 
 
 def dd_solver(system: NodalSystem) -> DDSolver:
@@ -306,17 +305,21 @@ def band_lu_batch(G, n, kl):
                     pivoted = True
             best[j] = b
             for s in range(1, kl + 1 if pivoted else 1):
-                swap = piv[j] == s
-                if swap.any():
-                    top, low = G[j, kl:], G[j + s, kl - s:e - s]
-                    keep = top.copy()
-                    np.copyto(top, low, where=swap)
-                    np.copyto(low, keep, where=swap)
+                _swap_where(G[j, kl:], G[j + s, kl - s:e - s], piv[j] == s)
             for s in range(1, min(kl, n - 1 - j) + 1):
                 lk = np.divide(G[j + s, kl - s], G[j, kl], out=G[j + s, kl - s])
                 G[j + s, kl - s + 1:e - s] -= lk * G[j, kl + 1:]
     ok = np.all((best != 0) & np.isfinite(best), axis=0) if n else np.ones(B, dtype=bool)
     return piv, ok
+
+
+def _swap_where(a, b, where) -> None:
+    """Swap the entries of the rows ``a`` and ``b`` (views, the batch last) in place where
+    ``where`` (a row swap of :func:`band_lu_batch` in the matrices that took it)."""
+    if where.any():
+        keep = a.copy()
+        np.copyto(a, b, where=where)
+        np.copyto(b, keep, where=where)
 
 
 def band_solve_batch(G, piv, x, n, kl):
@@ -338,11 +341,7 @@ def band_solve_batch(G, piv, x, n, kl):
         for j in range(n - 1):
             pj = piv[j]
             for s in range(1, kl + 1 if swapped[j] else 1):
-                swap = pj == s
-                if swap.any():
-                    keep = x[j].copy()
-                    np.copyto(x[j], x[j + s], where=swap)
-                    np.copyto(x[j + s], keep, where=swap)
+                _swap_where(x[j], x[j + s], pj == s)
             xj = x[j]
             for s in range(1, min(kl, n - 1 - j) + 1):
                 x[j + s] -= G[j + s, kl - s] * xj
@@ -357,9 +356,8 @@ def band_bound_batch(G, piv, x, d, n, kl):
 
     The factors of :func:`band_lu_batch` (``G``, ``piv``; P̃|L| in their factored
     form P₀|L₀|P₁|L₁|…, which has no sums of products: the absolute values of its
-    entries), for :func:`mechcirc.nodal.first_step_bound`.  (The compiled LU
-    offers no bound: there the second residual pass, a compiled kernel, costs
-    less than the bound in numpy — 1.09-1.19x the sweep's time with it.)
+    entries), for :func:`mechcirc.nodal.first_step_bound`; the compiled LU's factors
+    have theirs in :func:`mechcirc._nodal_kernels.band_bound`.
 
     Parameters
     ----------
@@ -387,18 +385,14 @@ def band_bound_batch(G, piv, x, d, n, kl):
                 z = G[j + s, kl - s]
                 u[j + s] += (np.abs(z.real) + np.abs(z.imag)) * u[j]
             for s in range(1, kl + 1):
-                swap = piv[j] == s
-                if swap.any():
-                    keep = u[j].copy()
-                    np.copyto(u[j], u[j + s], where=swap)
-                    np.copyto(u[j + s], keep, where=swap)
+                _swap_where(u[j], u[j + s], piv[j] == s)
         return np.einsum("ib,ib->b", np.abs(x.real) + np.abs(x.imag), u[:n])
 
 
 class _BoundSolve:
     """A ``solve(r, rows=None)`` of banded factors with their ``bound(x, d, rows)``
-    (:func:`band_bound_batch`), which :func:`mechcirc.nodal.refine_dd` uses after its
-    first step."""
+    (:func:`band_bound_batch`, or the compiled ``band_bound``), which
+    :func:`mechcirc.nodal.refine_dd` uses after its first step."""
 
     def __init__(self, solve, bound):
         self.solve, self.bound = solve, bound
@@ -549,7 +543,15 @@ class SparseSolver:
             kern.band_solve_perm(ab, kl, ipiv, rows, p, np.ascontiguousarray(r, dtype=complex),
                                  out)
             return out
-        return good, solve
+
+        def bound(x, d, rows):
+            """|x|ᵀP̃|L||U||d| at ``rows`` (:func:`mechcirc._nodal_kernels.band_bound`)."""
+            out = np.empty(rows.size)
+            kern.band_bound(ab, kl, ipiv, np.asarray(rows, dtype=np.int64), p,
+                            np.ascontiguousarray(x, dtype=complex),
+                            np.ascontiguousarray(d, dtype=complex), out)
+            return out
+        return good, _BoundSolve(solve, bound)
 
     def _banded(self, data, good):
         """The banded LU in numpy, vectorised over the chunk's ω (:func:`band_lu_batch`),

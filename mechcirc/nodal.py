@@ -74,7 +74,7 @@ class Solution:
         residual's rounding in double-double, floored at the rounding to
         float64 (unrefined on the numpy path: the first correction from a
         float64 residual plus the bound on its rounding,
-        :func:`mechcirc._nodal_residual.residual_rounding`); where numpy's
+        :func:`mechcirc._nodal_residual.residual_rounding`); where a
         banded LU's first correction is bounded below 16 eps, that bound
         (:func:`first_step_bound`; no second step); ``inf`` where the refinement does not contract or stalls
         even with double-double factors (:class:`DDSolver`, up to
@@ -138,7 +138,8 @@ def kernels(work: int = 0):
         from . import _nodal_kernels as k
 
         if k.HAVE_NUMBA and _jit.COMPILED is None and not _jit.in_cache(
-                k.residual, k.sensitivities, k.band_assemble_factor, k.band_solve_perm):
+                k.residual, k.sensitivities, k.band_assemble_factor, k.band_solve_perm,
+                k.band_bound):
             # Not compiled yet: numpy now (the same numbers), the kernels compiled
             # into numba's cache by a process of their own for a later sweep.
             _jit.warm_in_background("from mechcirc.nodal import warm_kernels; warm_kernels()")
@@ -162,6 +163,9 @@ def warm_kernels() -> None:
     _jit.COMPILED = True
     try:
         mobility(system, np.array([1.0, 2.0]))
+        # The first-step bound, which those two points need not have asked for.
+        solver(system).factor(np.array([1.0]), kernels())[1].bound(
+            *np.ones((2, 1, system.size), complex), np.arange(1))
     finally:
         _jit.COMPILED = saved
 
@@ -409,7 +413,8 @@ def _backward_error(system, omega: float, x: NDArray) -> float:
     pat = pattern(system)
     rhs = system.injection()
     with np.errstate(all="ignore"):
-        ax = rhs - pat.residual(np.array([omega]), x[None, :], None, rhs)[0]
+        ax = rhs - pat.residual(np.array([omega]), x[None, :], None, rhs,
+                                kernels(system.size))[0]      # (the same bits either way)
         xe = np.append(np.asarray(x, dtype=complex), 0.0)
         y = np.abs(combine(pat.e_c, pat.e_m, pat.e_k, omega))
         t = y * np.abs(xe[pat.e_i] - xe[pat.e_j])
@@ -447,8 +452,8 @@ def refine_dd(solve_fn, residual, omega, rhs, system, refine: bool, steps: int,
             own = eps / 2 * np.sum(np.abs(x0) * np.abs(r), axis=-1) / \
                 np.abs(system.difference(x0))
         return x0, None, est + np.where(np.isnan(own), np.inf, own), rho
-    xh, xl = np.array(x0), np.zeros_like(x0)       # (both updated in place below)
-    prev = np.array(x0)
+    xh, xl = x0, np.zeros_like(x0)      # (both updated in place below; x0 a solve's own)
+    prev = np.empty_like(x0)            # (read from the second step on: the first writes it)
     est = np.full(omega.size, np.inf)
     rho = np.zeros(omega.size)
     active = np.arange(omega.size)
@@ -498,8 +503,11 @@ def first_step_bound(system: NodalSystem, omega: NDArray, xh: NDArray, xl: NDArr
     (Σ_e |y_e| (|x_i| + |x_j|)(|d_i| + |d_j|) + Σ_levers |v| |x_r| |d_c|) +
     |x|ᵀ|r₀ − r̂₀|, the last (the double-double residual's rounding) added to every
     estimate (:func:`solve`).  |z| is bounded by |re| + |im| and x by x₁ (first
-    order): the sum is doubled.  Asked where the solver has a ``bound``: numpy's
-    banded LU (:func:`mechcirc._nodal_solvers.band_bound_batch`).
+    order): the sum is doubled.  Asked where the solver has a ``bound``: the banded
+    LUs (:func:`mechcirc._nodal_solvers.band_bound_batch`, and the compiled
+    :func:`mechcirc._nodal_kernels.band_bound`, whose multipliers, an entry times the
+    pivot's reciprocal, carry a few u more than a quotient: within the (3.7n + 7.5)u
+    that 8(n + 2)u leaves above √2·γ₃ₙ₊₆, over 50u from the 12 unknowns of a band on).
 
     Parameters
     ----------
@@ -525,11 +533,15 @@ def first_step_bound(system: NodalSystem, omega: NDArray, xh: NDArray, xl: NDArr
         ax[:, :n] = np.abs(xh.real) + np.abs(xh.imag)
         ad = np.zeros((c, n + 1))
         ad[:, :n] = np.abs(d.real) + np.abs(d.imag)
-        y = np.abs(pat.e_c) + np.abs(omega[:, None] * pat.e_m - pat.e_k / omega[:, None])
-        entry = np.einsum("ce,ce->c", y * (ax[:, pat.e_i] + ax[:, pat.e_j]),
-                          ad[:, pat.e_i] + ad[:, pat.e_j])
+        # |y_e| = |c_e| + |ω||m_e| + |k_e|/|ω| (one of the three is nonzero; ω complex
+        # too): by kind, one product with the (c, E) array, no admittance array.
+        ends = ax.take(pat.e_i, 1) + ax.take(pat.e_j, 1)     # (take: x[:, idx], faster)
+        by_kind = (ends * (ad.take(pat.e_i, 1) + ad.take(pat.e_j, 1))) \
+            @ np.abs([pat.e_c, pat.e_m, pat.e_k]).T
+        w = np.abs(omega)
+        entry = by_kind[:, 0] + w * by_kind[:, 1] + by_kind[:, 2] / w
         if pat.s_row.size:
-            entry = entry + np.abs(pat.s_val) @ (ax[:, pat.s_row] * ad[:, pat.s_col]).T
+            entry = entry + np.abs(pat.s_val) @ (ax.take(pat.s_row, 1) * ad.take(pat.s_col, 1)).T
         rounding = np.einsum("ci,ci->c", ax[:, :n], np.abs(r.real) + np.abs(r.imag))
         gamma = 8.0 * (n + 2) * u
         return 2.0 * (gamma * lu + u * rounding + (pat.max_row_terms + 4) * u * entry) / \
@@ -779,13 +791,13 @@ def _dense_verdict(system: NodalSystem, trial):
     judged, overflow = None, False
     if system.size > DENSE_LIMIT:
         return False, judged, overflow
-    absdiag = [np.abs(system.diagonal("damper") + system.diagonal("lever")),
-               np.abs(system.diagonal("mass")), np.abs(system.diagonal("spring"))]
     for w, A in zip(trial, dense_matrices(system, trial)):
         if not np.isfinite(A).all():
             return True, judged, overflow   # values at float64's edge: the sweep flags them
         if _clearly_regular(A):
             return True, judged, overflow   # (balancing only keeps a regular A from looking singular)
+        absdiag = [np.abs(system.diagonal("damper") + system.diagonal("lever")),
+                   np.abs(system.diagonal("mass")), np.abs(system.diagonal("spring"))]
         # Judge the balanced matrix: a lever of ratio 1e-8 puts entries of 1e-8
         # beside 1, every value scaled by 1e-100 puts admittances of 1e-100 beside
         # the lever's ±1, and the raw singular values then look singular.

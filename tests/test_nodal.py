@@ -543,12 +543,13 @@ def test_residual_term_counts_are_counted_from_the_stamps():
         assert pat.max_row_terms == max(row.values())
 
 
-def test_second_pass_is_skipped_only_where_the_first_step_bound_holds(monkeypatch):
+@pytest.mark.parametrize("compiled", [False, True])
+def test_second_pass_is_skipped_only_where_the_first_step_bound_holds(compiled, monkeypatch):
     """Where the first correction leaves an estimate above 16 eps, refine_dd skips the
     second residual pass when the bound on the first-corrected K (first_step_bound: the
     banded LU's backward error, the entries' rounding, the residual's rounding to
-    float64) is below 16 eps, on numpy's banded LU (band_bound_batch); the compiled
-    LU offers no bound (its second pass costs less than the bound).
+    float64) is below 16 eps, on numpy's banded LU (band_bound_batch) and on the
+    compiled one (mechcirc._nodal_kernels.band_bound).
 
     The bound must be above the true error of that K in double-double, against a
     50-digit continued fraction (a ladder of 22 sections, 101 ω over 5 decades);
@@ -557,9 +558,11 @@ def test_second_pass_is_skipped_only_where_the_first_step_bound_holds(monkeypatc
     """
     import mpmath
 
-    monkeypatch.setattr(mechcirc._jit, "COMPILED", False)
+    monkeypatch.setattr(mechcirc._jit, "COMPILED", compiled)
     kern = mechcirc.nodal.kernels(10 ** 9)
-    assert kern is None
+    if compiled and kern is None:
+        pytest.skip("numba is not installed")
+    assert (kern is None) != compiled
     rng = np.random.default_rng(12)
     ks, ms = rng.uniform(1e4, 2e4, 22), rng.uniform(0.2, 1.2, 22)
     nodes = ["a"] + [f"n{i}" for i in range(1, 23)]
@@ -603,9 +606,15 @@ def test_second_pass_is_skipped_only_where_the_first_step_bound_holds(monkeypatc
             assert abs(complex(Kdd) / complex(ref) - 1) <= 1.2e-16      # rounded once
 
 
-def test_band_bound_is_the_dense_product_of_the_factors():
-    """numpy's banded LU's |x|ᵀP̃|L||U||d| (band_bound_batch) equals the product formed densely from P, L, U (scipy.linalg.lu: the same
+@pytest.mark.parametrize("compiled", [False, True])
+def test_band_bound_is_the_dense_product_of_the_factors(compiled, monkeypatch):
+    """The banded LU's |x|ᵀP̃|L||U||d| (numpy's band_bound_batch, the compiled band_bound)
+    equals the product formed densely from P, L, U (scipy.linalg.lu: the same
     pivots) to rounding: a ladder with a lever, rows swapped at 4 of 7 ω."""
+    monkeypatch.setattr(mechcirc._jit, "COMPILED", compiled)
+    kern = mechcirc.nodal.kernels(10 ** 9)
+    if compiled and kern is None:
+        pytest.skip("numba is not installed")
     text, _ = _lever_ladder(22, seed=4)
     system = mechcirc.parse(text).nodal
     band = mechcirc._nodal_solvers.solver(system)
@@ -614,7 +623,7 @@ def test_band_bound_is_the_dense_product_of_the_factors():
     rng = np.random.default_rng(3)
     x, d = (rng.standard_normal((7, system.size)) + 1j * rng.standard_normal((7, system.size))
             for _ in range(2))
-    got = band.factor(omega)[1].bound(x, d, np.arange(7))
+    got = band.factor(omega, kern)[1].bound(x, d, np.arange(7))
     pat = mechcirc._nodal_residual.pattern(system)
 
     def mag(z):
@@ -662,3 +671,36 @@ def test_band_bound_of_a_band_is_the_factored_product(kl):
             worst = max(worst, abs(got[b] / ref - 1))
     # Achieved: 6.7e-16 (kl 1, 5,803 swaps), 7.8e-16 (kl 2, 7,597 swaps).
     assert swaps > 1000 and worst <= 1e-14
+
+
+def test_warm_kernels_caches_every_nodal_kernel(tmp_path):
+    """warm_kernels (what the detached process runs before a sweep takes the kernels)
+    leaves every compiled kernel of _nodal_kernels in numba's cache, on an empty cache:
+    a kernel it never calls (the first-step bound, asked only where a first correction
+    is not yet at rounding) would be compiled in the sweep's own process, seconds of the
+    wait that mechcirc._jit's rule avoids."""
+    pytest.importorskip("numba")
+    import json
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    env = {k: v for k, v in os.environ.items() if k != "MECHCIRC_NO_WARM"}
+    env.update(NUMBA_CACHE_DIR=str(tmp_path), PYTHONPATH=str(root))
+    missing = ("import json\n"
+               "from numba.core.registry import CPUDispatcher\n"
+               "from mechcirc import _jit, _nodal_kernels as k\n"
+               "d = [v for v in vars(k).values() if isinstance(v, CPUDispatcher)\n"
+               "     and v.targetoptions.get('inline') != 'always']\n"
+               "print(json.dumps(sorted(v.__name__ for v in d if not _jit.in_cache(v))))")
+
+    def run(code):
+        return subprocess.run([sys.executable, "-c", code], env=env, cwd=root, check=True,
+                              capture_output=True, text=True, timeout=600).stdout
+    kernels = ["band_assemble_factor", "band_bound", "band_solve_perm", "residual",
+               "sensitivities"]
+    assert json.loads(run(missing)) == kernels                # an empty cache: none there
+    run("from mechcirc.nodal import warm_kernels; warm_kernels()")
+    assert json.loads(run(missing)) == []
