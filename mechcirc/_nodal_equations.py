@@ -112,7 +112,7 @@ class NodalSystem:
         Parameters
         ----------
         kind : str
-            As in :meth:`sparse`.
+            Which matrix: ``"mass"``, ``"damper"``, ``"spring"`` or ``"lever"``.
 
         Returns
         -------
@@ -129,7 +129,8 @@ class NodalSystem:
         Parameters
         ----------
         kind : str
-            As in :meth:`sparse`.
+            The matrix whose diagonal is summed: ``"mass"``, ``"damper"``,
+            ``"spring"`` or ``"lever"``.
 
         Returns
         -------
