@@ -673,12 +673,14 @@ def test_band_bound_of_a_band_is_the_factored_product(kl):
     assert swaps > 1000 and worst <= 1e-14
 
 
-def test_warm_kernels_caches_every_nodal_kernel(tmp_path):
+def test_warm_kernels_calls_every_nodal_kernel():
     """warm_kernels (what the detached process runs before a sweep takes the kernels)
-    leaves every compiled kernel of _nodal_kernels in numba's cache, on an empty cache:
-    a kernel it never calls (the first-step bound, asked only where a first correction
-    is not yet at rounding) would be compiled in the sweep's own process, seconds of the
-    wait that mechcirc._jit's rule avoids."""
+    calls every compiled kernel of _nodal_kernels, so each lands in numba's cache: a
+    kernel it never calls (the first-step bound, asked only where a first correction is
+    not yet at rounding) would be compiled in the sweep's own process, seconds of the
+    wait that mechcirc._jit's rule avoids.  The calls are recorded in a process with
+    numba's JIT off (the kernels run as Python: nothing is compiled); the kernels are
+    the module's compiled dispatchers, read here with numba on."""
     pytest.importorskip("numba")
     import json
     import os
@@ -686,21 +688,29 @@ def test_warm_kernels_caches_every_nodal_kernel(tmp_path):
     import sys
     from pathlib import Path
 
-    root = Path(__file__).resolve().parents[1]
-    env = {k: v for k, v in os.environ.items() if k != "MECHCIRC_NO_WARM"}
-    env.update(NUMBA_CACHE_DIR=str(tmp_path), PYTHONPATH=str(root))
-    missing = ("import json\n"
-               "from numba.core.registry import CPUDispatcher\n"
-               "from mechcirc import _jit, _nodal_kernels as k\n"
-               "d = [v for v in vars(k).values() if isinstance(v, CPUDispatcher)\n"
-               "     and v.targetoptions.get('inline') != 'always']\n"
-               "print(json.dumps(sorted(v.__name__ for v in d if not _jit.in_cache(v))))")
+    from numba.core.registry import CPUDispatcher
 
-    def run(code):
-        return subprocess.run([sys.executable, "-c", code], env=env, cwd=root, check=True,
-                              capture_output=True, text=True, timeout=600).stdout
-    kernels = ["band_assemble_factor", "band_bound", "band_solve_perm", "residual",
-               "sensitivities"]
-    assert json.loads(run(missing)) == kernels                # an empty cache: none there
-    run("from mechcirc.nodal import warm_kernels; warm_kernels()")
-    assert json.loads(run(missing)) == []
+    from mechcirc import _nodal_kernels as k
+
+    kernels = sorted(name for name, v in vars(k).items() if isinstance(v, CPUDispatcher)
+                     and v.targetoptions.get("inline") != "always")
+    assert kernels == ["band_assemble_factor", "band_bound", "band_solve_perm", "residual",
+                       "sensitivities"]
+    root = Path(__file__).resolve().parents[1]
+    record = ("import json\n"
+              "from mechcirc import _nodal_kernels as k, nodal\n"
+              "called = set()\n"
+              "def recorder(name, f):\n"
+              "    def call(*a):\n"
+              "        called.add(name)\n"
+              "        return f(*a)\n"
+              "    return call\n"
+              f"for name in {kernels!r}:\n"
+              "    setattr(k, name, recorder(name, getattr(k, name)))\n"
+              "nodal.warm_kernels()\n"
+              "print(json.dumps(sorted(called)))")
+    env = {**os.environ, "NUMBA_DISABLE_JIT": "1", "PYTHONPATH": str(root)}
+    done = subprocess.run([sys.executable, "-c", record], env=env, cwd=root,
+                          capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert json.loads(done.stdout) == kernels
