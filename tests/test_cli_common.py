@@ -323,8 +323,6 @@ def test_a_package_warning_raised_again_during_a_command_is_not_printed_twice(ca
     raw Python warning line (file:line: UnloadedElementWarning: ...) after the output."""
     import warnings
 
-    from cli_helpers import run
-
     def show(message, category, filename, lineno, file=None, line=None):
         # What Python does outside pytest (which records warnings instead of printing).
         sys.stderr.write(warnings.formatwarning(message, category, filename, lineno, line))

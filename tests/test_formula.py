@@ -14,7 +14,7 @@ sp = pytest.importorskip("sympy")
 
 from mechcirc.interop.formula import formula, symbol_values  # noqa: E402
 from bounds import cpu_seconds_below
-from cli_helpers import assert_user_error, run
+from cli_helpers import assert_user_error
 from reference.inputs import STB
 
 REPO = Path(__file__).resolve().parents[1]

@@ -26,7 +26,7 @@ from mechcirc.errors import NetlistError
 from mechcirc.expressions import MAX_DEPTH, MAX_LENGTH, evaluate, parse_expression
 from mechcirc.netlist import MAX_LINE_LENGTH
 from bounds import cpu_seconds_below
-from cli_helpers import assert_user_error, run
+from cli_helpers import assert_user_error
 from reference.inputs import STB
 
 

@@ -19,7 +19,7 @@ import subprocess
 import sys
 import time
 from mechcirc.sources import split_lines
-from cli_helpers import assert_user_error, run
+from cli_helpers import assert_user_error
 from bounds import SUBPROCESS_TIMEOUT
 from reference.inputs import STB
 

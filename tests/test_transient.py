@@ -341,7 +341,6 @@ def _kernel_args(c, ss):
 
 def test_msl_backlash_example_agrees():
     import runpy
-    import sys
 
     mod = runpy.run_path("examples/msl_backlash.py")
     assert mod["main"]() == 0

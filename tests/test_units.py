@@ -217,7 +217,6 @@ def test_cli_frequencies_glued_or_spaced(capsys, w1, w2):
 
 
 def test_cli_band_and_set_take_units(capsys):
-    from mechcirc.cli import main
     from mechcirc import parse_band
 
     assert parse_band("1Hz:50Hz") == pytest.approx((2 * math.pi, 100 * math.pi), rel=1e-15)

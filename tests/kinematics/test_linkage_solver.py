@@ -15,7 +15,7 @@ from linkage_reference import jac, phi
 from scipy.optimize import fsolve
 
 from mechcirc.errors import GeometryError
-from mechcirc.kinematics import FourBar, linkage_solver, load_linkage, parse_linkage
+from mechcirc.kinematics import FourBar, load_linkage, parse_linkage
 
 ROOT = Path(__file__).resolve().parents[2]
 

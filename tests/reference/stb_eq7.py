@@ -5,8 +5,6 @@ with numpy arrays of ω or, given ``j`` and a module ``mp`` of the same
 interface, with mpmath numbers.
 """
 
-import numpy as np
-
 
 def full_K(omega, p):
     """K(ω) by eq. (7); ``p`` maps m1..m12, k0, k4, k5, eta1..eta4 to values (eta4 = 1)."""

@@ -9,7 +9,7 @@ import pytest
 
 from mechcirc.errors import MechcircError, NetlistError
 from mechcirc.sources import split_lines
-from cli_helpers import assert_user_error, run
+from cli_helpers import assert_user_error
 
 
 ROOT = Path(__file__).resolve().parents[2]
