@@ -275,7 +275,7 @@ def test_random_plain_lines_parse_alike_on_both_paths():
         fast_lines += len(a[0])
         return original(self, *a)
 
-    for trial in range(400):
+    for _trial in range(400):
         lines = ["drive V a 0 velocity=1"]
         for _ in range(rng.randint(1, 4)):
             lines.append(rng.choice(["", " ", "\t"]) + " ".join(

@@ -156,7 +156,7 @@ def test_speed_map_matches_periodic_and_marks_crossings():
         assert abs(m.peak[i] - r.peak) <= 1e-6 * r.peak
         assert abs(m.element_peaks["c"][i] - np.max(np.abs(r.forces["c"]))) <= 0.01 * r.peak
     wn = next(r.omega for r in c.resonances() if r.kind == "resonance")
-    for rpm, k, omega_n, zeta, weight in m.crossings:
+    for rpm, k, omega_n, _zeta, _weight in m.crossings:
         assert abs(k * rpm_to_omega(rpm) - omega_n) <= 1e-12 * omega_n
         assert 200 <= rpm <= 1200 and abs(omega_n - wn) <= 1e-9 * wn
     ks = {k for _, k, _, _, _ in m.crossings}

@@ -217,7 +217,7 @@ def cases(size: str = "small", seed: int = 0, keep=None):
             yield "scaled 1e±100", sp_corpus.to_circuit(e2), omega, dist, tree_ref(e2)
 
     # Stiff trees: values over 20 decades, ω over 14.
-    for i in range(30 if full else 3):
+    for _ in range(30 if full else 3):
         expr = sp_corpus.random_tree(rng, int(rng.integers(10, 40)), decades=20.0,
                                      damped=0.0, levers=0.3)
         omega = 10 ** rng.uniform(-6, 8, 12 if full else 5)
