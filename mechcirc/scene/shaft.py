@@ -329,7 +329,7 @@ class _ElasticShaft:
         constant-speed simulation does: its located error where a point is past its stroke."""
         from ..kinematics.linkage_solver import check_stroke
 
-        m, a = self.model, self.model.arrays
+        m = self.model
         lk, L = m.scene.linkage, m.scene.length_scale
         coord = {0: self.c * th, **{i + 1: z[:, i] for i in range(self.n)}}
 
@@ -337,12 +337,19 @@ class _ElasticShaft:
             if p not in m.point_fn:                       # a ground point: at the pose
                 return np.broadcast_to(np.asarray(lk.pose[p], float), (th.size, 2))
             fx, fy, i = m.point_fn[p]
-            return np.column_stack([[self.kern.feval(*function_args(a, f), q)[0] for q in coord[i]]
-                                    for f in (fx, fy)]) / L
+            return np.column_stack([self._function(f, coord[i])[:, 0] for f in (fx, fy)]) / L
         for sl in lk.sliders:
             if sl.stroke:
                 check_stroke(lk, sl, th, *(at(p) for p in (sl.point, *sl.line)),
                              "sample of the shaft's steady cycle")
+
+    def _function(self, f, qs):
+        """Function ``f`` of the model and its two derivatives at the coordinates ``qs``,
+        shape (len(qs), 3): the kernels' ``eval_many``, one call for all samples."""
+        out = np.empty((len(qs), 3))
+        self.kern.eval_many(*function_args(self.model.arrays, f),
+                            np.ascontiguousarray(qs, dtype=float), out)
+        return out
 
     def samples(self, th, w, z, acc, out):
         """(body accelerations, element values) over the cycle's samples (``out``: their
@@ -355,7 +362,7 @@ class _ElasticShaft:
             f = m.body_fn[b]
             v = out[:, k].copy()
             if a["FI"][f, 1] == 0:          # on the drive's part: the kernel took θ̈ = 0
-                v += np.array([self.kern.feval(*function_args(a, f), c * t)[1] for t in th]) * c * acc
+                v += self._function(f, c * th)[:, 1] * c * acc
             bodies[b] = v
         values = {f"{e}.{kind}": out[:, nb + j + off].copy() for j, e in enumerate(m.elements)
                   for kind, off in (("force", 0), ("deformation", ne))}
@@ -376,6 +383,14 @@ class _RigidShaft(_ElasticShaft):
         """The load torque −Q(θ) [N·m] of the moments at crank rotations ``th`` (array)."""
         th = np.asarray(th, float)
         return -self.evaluate(th, 0.0, np.empty((th.size, 0)))[:, -1]
+
+    def _function(self, f, qs):
+        """Function ``f`` of the model and its two derivatives at the coordinates ``qs``,
+        shape (len(qs), 3): the kernels' ``eval_many``, one call for all samples."""
+        out = np.empty((len(qs), 3))
+        self.kern.eval_many(*function_args(self.model.arrays, f),
+                            np.ascontiguousarray(qs, dtype=float), out)
+        return out
 
     def samples(self, th, w, z, acc, out):
         """(body accelerations, element values) over the cycle's samples."""
