@@ -384,14 +384,6 @@ class _RigidShaft(_ElasticShaft):
         th = np.asarray(th, float)
         return -self.evaluate(th, 0.0, np.empty((th.size, 0)))[:, -1]
 
-    def _function(self, f, qs):
-        """Function ``f`` of the model and its two derivatives at the coordinates ``qs``,
-        shape (len(qs), 3): the kernels' ``eval_many``, one call for all samples."""
-        out = np.empty((len(qs), 3))
-        self.kern.eval_many(*function_args(self.model.arrays, f),
-                            np.ascontiguousarray(qs, dtype=float), out)
-        return out
-
     def samples(self, th, w, z, acc, out):
         """(body accelerations, element values) over the cycle's samples."""
         rig = self.rig
