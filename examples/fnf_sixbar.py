@@ -1,6 +1,6 @@
 """The two-crank six-bar of the FNF warp-knitting machine, by "conditional stop".
 
-Seed: Koshel & Koshel (2014), DIGEST §4.  The mechanism has six moving links
+Seed: Koshel & Koshel (2014).  The mechanism has six moving links
 and eight revolute pairs, so W = 3·6 − 2·8 = 2, with a class-III Assur group
 on the ternary link 4.  The paper finds each point's velocity by stopping one
 crank at a time and adding the two velocity plans (eq. 6–8):

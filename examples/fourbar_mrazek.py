@@ -1,11 +1,11 @@
 """Mrázek's beat-up four-bar and the patent's synthesis rules, reproduced.
 
-Seeds: Mrázek, *Theoretical analysis of dynamics of four-bar beat-up
-mechanism* (DIGEST §2) — crank 29, coupler 37, rocker 188, frame 189 mm;
+Sources: Mrázek, *Theoretical analysis of dynamics of four-bar beat-up
+mechanism* — crank 29, coupler 37, rocker 188, frame 189 mm;
 the theoretical rocker acceleration ε4T = ν·ω² of Table 1 is printed as
 −2319 … 2915 s⁻² at ω = 100 s⁻¹ and −371 … 466 s⁻² at ω = 40 s⁻¹, and the
 beat-up angle is φP = arccos(((l2P + l3)² + d² − l4²) / (2 d (l2P + l3))).
-Patent CN104178888 (DIGEST §3): a medium loom has a 35–36 mm crank, a front
+Patent CN104178888: a medium loom has a 35–36 mm crank, a front
 transmission angle > 70°, a minimum one > 45°, |Φ2''|/|Φ1''| < 0.3, d < 180 mm
 and a swing of 23–26°.
 

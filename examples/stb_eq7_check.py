@@ -1,8 +1,8 @@
-"""Reproduce the seed's eq. (7) for the STB heald mechanism with mechcirc.
+"""Reproduce the paper's eq. (7) for the STB heald mechanism with mechcirc.
 
 Grigoriev, Terentiev & Grigoriev (2002) reduce the mechanical circuit of the
 STB heald (shedding) motion, Fig. 3, by hand to one closed form, eq. (7)
-(DIGEST §1).  This script writes eq. (7) out with its own numpy code, not
+(Grigoriev et al. 2002).  This script writes eq. (7) out with its own numpy code, not
 mechcirc's, and compares it with mechcirc's series–parallel reduction of
 
 1. ``netlists/stb_heald.mcir`` at 20,000 frequencies, ω = 1 … 10⁵ rad/s;
@@ -113,7 +113,7 @@ def params_of(circuit):
 
 
 def netlist_text(p, V0):
-    """Fig. 3 as a netlist, with the seed's reflection factors as expressions."""
+    """Fig. 3 as a netlist, with the paper's reflection factors as expressions."""
     r = {k: repr(float(v)) for k, v in p.items()}
     return f"""\
 .param eta1={r['eta1']} eta2={r['eta2']} eta3={r['eta3']} eta4={r['eta4']}

@@ -1,4 +1,4 @@
-"""Model only what the output needs in a band (issue 7 §4): reduce a netlist, measure the error.
+"""Model only what the output needs in a band: reduce a netlist, measure the error.
 
 Given a circuit, a band [W1, W2] [rad/s], a tolerance T and an output (K at
 the drive, or the force in one element), :func:`simplify` removes or merges

@@ -2,7 +2,7 @@
 
 Under kinematic excitation (``drive ... velocity=V0``) the drive imposes the
 velocity amplitude V0 [m/s] and the network answers with the force amplitude
-Q0 = V0 / K (DIGEST §1, eq. 8).  Under force excitation (``force=F0``) the
+Q0 = V0 / K (Grigoriev et al. 2002, eq. 8).  Under force excitation (``force=F0``) the
 velocity amplitude is v0 = F0 · K.
 """
 
@@ -408,7 +408,7 @@ def sweep(circuit: Circuit, omega: ArrayLike, *, method: Method = "auto",
     ----------
     circuit : Circuit
     omega : array_like of float
-        Angular frequencies [rad/s], ≥ 0 (the seeds' main-shaft frequency).
+        Angular frequencies [rad/s], ≥ 0 (the main-shaft frequency of the papers).
     method : {"auto", "sp", "nodal"}
         ``"sp"``: series–parallel reduction tree (raises
         :class:`~mechcirc.errors.NotSeriesParallelError` if the network is not reducible);

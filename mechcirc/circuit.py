@@ -1,13 +1,13 @@
 """Mechanical circuits: two-pole elements, levers, the drive, and the :class:`Circuit`.
 
-Conventions (DIGEST §1, Grigoriev et al. 2002):
+Conventions (Grigoriev et al. 2002):
 
 * Every element is a two-pole between nodes ``n1`` and ``n2``; ``v`` is the
   difference of the nodes' velocities ``v(n1) - v(n2)`` [m/s] and ``Q`` the
   force passing through it from ``n1`` to ``n2`` [N].
 * The complex kinematic characteristic (mobility) is ``K = v / Q`` [m/(N·s)];
   its reciprocal ``S = Q / v`` is the force characteristic [N·s/m].
-* Element characteristics, with ``eta`` the product of lever ratios the seed
+* Element characteristics, with ``eta`` the product of lever ratios the paper
   attaches to the element (its reflection factor, default 1):
 
   ======  =============================  ===========
@@ -97,7 +97,7 @@ class Element:
     value : float
         Mass [kg], stiffness [N/m] or damping coefficient [N·s/m], > 0.
     eta : float
-        Reflection factor η [1], > 0 (the seed's product of lever ratios).
+        Reflection factor η [1], > 0 (the paper's product of lever ratios).
     line, col : int
         Where the element was defined (0 when built in code).
     backlash : float

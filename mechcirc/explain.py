@@ -6,7 +6,7 @@ into numbered steps, innermost first: which elements combine in series
 add), and each lever reflection written out: a sub-network of characteristic
 K behind a lever of ratio r is seen on the primary as K / r², so a mass m
 behind it acts as m·r² and a stiffness k as k·r².  Element values are shown
-with their reflection factor η (DIGEST §1): an element enters as value·η.
+with their reflection factor η (Grigoriev et al. 2002): an element enters as value·η.
 """
 
 from __future__ import annotations

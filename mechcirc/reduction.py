@@ -1,7 +1,7 @@
 """Series–parallel reduction of a mechanical circuit to a tree, and its evaluation.
 
 The network between the drive's terminals is reduced by the two theorems of
-mechanical circuits (DIGEST §1): elements in series add their K, elements in
+mechanical circuits (Grigoriev et al. 2002): elements in series add their K, elements in
 parallel add their 1/K.  A lever whose secondary side closes on a sub-network
 that touches the rest only at the lever (and possibly at one shared node,
 such as the frame) reduces to that sub-network's K / r² on the primary.

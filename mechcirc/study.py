@@ -432,7 +432,7 @@ def _read_netlist(data: dict, base: Path) -> tuple[str, Path]:
 
     A file whose first statement does not begin with a netlist keyword is
     refused without quoting it: it is not a netlist (``/etc/shadow``), and
-    its content is nobody's business (issue 23 §6).
+    its content is nobody's business.
     """
     if "netlist" not in data or not isinstance(data["netlist"], str):
         _fail(("netlist",), "needs netlist = \"PATH\" (relative to the spec file)")

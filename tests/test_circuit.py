@@ -1,6 +1,6 @@
 """mechcirc.circuit: the one table of element laws and what derives from it.
 
-References are the laws written out by hand here (DIGEST §1: mass K = −j/(ωmη),
+References are the laws written out by hand here (Grigoriev et al. 2002: mass K = −j/(ωmη),
 spring jω/(kη), damper 1/(cη)), independent of the table under test.
 """
 

@@ -390,9 +390,19 @@ def test_every_fenced_example_runs(page, tmp_path, capsys, monkeypatch):
     assert not failures, "\n\n".join(failures)
 
 
+#: What a user of a clone reads besides the pages: the package's docstrings (the API
+#: reference and help()), the examples, the bundled netlists and the docs' inputs.
+READ_BY_USERS = PAGES + sorted(
+    path
+    for folder in ("mechcirc", "examples", "netlists", "docs/examples")
+    for path in (REPO / folder).rglob("*")
+    if path.suffix in (".py", ".mcir", ".toml", ".md")
+)
+
+
 def test_docs_stand_alone():
-    """No link to ../shared (a clone does not have it), no 'issue N' references."""
-    for page in PAGES:
+    """No link to ../shared or its digest (a clone has neither), no 'issue N' references."""
+    for page in READ_BY_USERS:
         text = page.read_text(encoding="utf-8")
         assert "../shared" not in text and "DIGEST" not in text, page
         assert not re.search(r"\bissues? \d", text, re.I), (page, re.search(

@@ -1,4 +1,4 @@
-"""Sub-commands of issue 7: ``scene`` (a linkage scene to its circuit) and ``reduce``."""
+"""Sub-commands for scenes: ``scene`` (a linkage scene to its circuit) and ``reduce``."""
 
 from __future__ import annotations
 

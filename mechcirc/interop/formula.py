@@ -8,7 +8,7 @@ series nodes add, parallel nodes add reciprocals, and a lever of ratio r
 divides its secondary's K by r².  A network without a series–parallel tree
 (a bridge) is solved from its nodal equations instead (mobility analogy, as
 in :mod:`mechcirc.nodal`), giving one factored fraction.  The expression is nested exactly as the
-tree is (the factored form the seeds print); ``expand=True`` brings it over
+tree is (the factored form the papers print); ``expand=True`` brings it over
 one common denominator with numerator and denominator multiplied out.
 
 Symbols.  ω is ``omega`` (positive).  An element whose value is written as a

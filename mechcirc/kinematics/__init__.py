@@ -1,6 +1,6 @@
-"""Kinematics of loom mechanisms: four-bar transfer functions (DIGEST §2), the
-beat-up synthesis of patent CN104178888 (DIGEST §3), frame loading, and planar
-linkages with several driving cranks (DIGEST §4); disc cams (:mod:`.cam`).
+"""Kinematics of loom mechanisms: four-bar transfer functions (Mrázek), the
+beat-up synthesis of patent CN104178888, frame loading, and planar
+linkages with several driving cranks (Koshel & Koshel 2014); disc cams (:mod:`.cam`).
 
 numpy and scipy only; nothing here imports matplotlib (see :mod:`.plots`).
 """

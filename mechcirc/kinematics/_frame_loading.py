@@ -1,6 +1,6 @@
 """Kineto-static analysis of the beat-up four-bar: bearing forces, input torque, frame shaking.
 
-Patent CN104178888 eq. (7) (DIGEST §3).  The four-bar of :mod:`.fourbar`
+Patent CN104178888 eq. (7).  The four-bar of :mod:`.fourbar`
 (A at the origin, D at (d, 0); crank AB, coupler BC, rocker CD carrying the
 sley and reed) turns at a constant crank speed ω > 0.  Each moving link has a
 mass, a centre of mass given in the link's own frame and a moment of inertia

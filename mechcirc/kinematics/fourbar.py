@@ -12,14 +12,14 @@ radians, measured counter-clockwise from the direction A→D:
   φ4 ≈ π).
 
 The crank turns with θ increasing (counter-clockwise) at a crank speed ω > 0.
-Loop closure (DIGEST §2, eq. (3); DIGEST §3): ``a e^{iθ} + b e^{iφ3} = d + c e^{iφ4}``
+Loop closure (Mrázek, eq. (3); patent CN104178888): ``a e^{iθ} + b e^{iφ3} = d + c e^{iφ4}``
 with a = crank AB, b = coupler BC, c = rocker CD, d = frame AD.
 
 Branch (assembly mode): with β the direction of D→B and ψ ∈ [0, π] the angle
 BDC, ``φ4 = β − branch·ψ``; ``branch=+1`` puts C clockwise of the ray D→B
 (for a crank-rocker whose rocker leans back over the crank, C above the frame
 line).  For Mrázek's beat-up drive (29/37/188/189 mm,
-DIGEST §2) ``branch=+1`` is the assembly whose theoretical rocker
+Mrázek) ``branch=+1`` is the assembly whose theoretical rocker
 acceleration ε4T = ν·ω² spans [−2319, 2915] s⁻² at ω = 100 s⁻¹, the values
 the paper prints; ``branch=-1`` is its mirror image (ε4T ∈ [−2915, 2319]).
 
@@ -30,7 +30,7 @@ Transfer functions (exact, from the derivatives of loop closure)::
     ν  = d²φ4/dθ² = [a cos(θ − φ3) + b μ3² − c μ² cos(φ4 − φ3)] / (c sin(φ4 − φ3))
     ν3 = d²φ3/dθ² = [a cos(θ − φ4) + b μ3² cos(φ4 − φ3) − c μ²] / (b sin(φ4 − φ3))
 
-so that φ̇4 = μ ω and φ̈4 = ν ω² + μ ω̇ (DIGEST §2, eq. (3)).  The
+so that φ̇4 = μ ω and φ̈4 = ν ω² + μ ω̇ (Mrázek, eq. (3)).  The
 transmission angle γ is the acute angle between the coupler and the rocker
 lines; ``interior_angle`` is the angle BCD in [0, π].
 

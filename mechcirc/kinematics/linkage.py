@@ -1,4 +1,4 @@
-"""Planar linkages (revolute and prismatic joints) with any number of driving cranks (DIGEST §4).
+"""Planar linkages (revolute and prismatic joints) with any number of driving cranks (Koshel & Koshel 2014).
 
 File format (TOML, lengths in any consistent unit, angular velocities in rad/s)::
 
@@ -40,7 +40,7 @@ coincident points of the bodies meeting at each joint (2 rows per pair) and
 * velocity: J q̇ = [0 … 0, ω_1 … ω_k];
 * acceleration: J q̈ = γ with γ = Σ (R(φ_i) s_i φ̇_i² − R(φ_j) s_j φ̇_j²) for
   each joint row (constant crank speeds);
-* "conditional stop" (DIGEST §4, eq. (6)–(8)): the contribution of crank c
+* "conditional stop" (Koshel & Koshel 2014, eq. (6)–(8)): the contribution of crank c
   is J⁻¹ ω_c e_c, the velocity with every other crank stopped; the velocity is
   their sum, exactly, because J q̇ is linear in (ω_1 … ω_k).
 

@@ -1,10 +1,10 @@
-"""Beat-up four-bar synthesis after patent CN104178888 (DIGEST §3).
+"""Beat-up four-bar synthesis after patent CN104178888.
 
 The crank-rocker ABCD has crank AB = a, coupler BC = b, rocker CD = c and
 frame AD = d [mm]; ratios are written β = b/a, κ = c/a, δ = d/a.  The front
 dead centre (beat-up) has crank and coupler extended in line, the back dead
 centre has them folded; Φ1'', Φ2'' are d²Φ/dθ² there [1/rad] and the swing is
-Ψ = |Φ2 − Φ1|.  The patent's criteria, with the equation numbers of the seed:
+Ψ = |Φ2 − Φ1|.  The patent's criteria, with the patent's equation numbers:
 
 =========================  ===============================================  ========
 name                       criterion                                        equation

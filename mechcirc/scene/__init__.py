@@ -1,10 +1,10 @@
-"""Scenes (issue 7): a linkage with lumped masses and elastic elements, at a moment of its cycle.
+"""Scenes: a linkage with lumped masses and elastic elements, at a moment of its cycle.
 
 * :mod:`.files` -- the scene TOML format, :func:`load_scene`, :func:`parse_scene`.
 * :mod:`.model` -- :func:`build`: the mechanical circuit at crank angle θ;
   :func:`build_needed`: that circuit reduced to what the scene's ``[analysis]`` asks for.
 * :mod:`.cycle` -- :func:`cycle_map`: resonances and |Q0| at shaft harmonics over a revolution.
-* :mod:`.simulation` -- :func:`simulate_scene`: the motion over whole revolutions (issue 13);
+* :mod:`.simulation` -- :func:`simulate_scene`: the motion over whole revolutions;
   :mod:`.motion` builds its equations, :mod:`.crosscheck` compares them with the circuit.
 
 Documented in ``docs/scenes.md``.

@@ -1,4 +1,4 @@
-"""Cross-check a scene's circuit at θ against its time-domain motion near θ (issue 13 §2).
+"""Cross-check a scene's circuit at θ against its time-domain motion near θ.
 
 The circuit :func:`mechcirc.scene.build` gives at crank rotation θ predicts
 the resonances (K = 0 with the drive held).  The time-domain model

@@ -1,4 +1,4 @@
-"""A scene over a crank revolution: resonances and |Q0| at the shaft harmonics (issue 7 §3).
+"""A scene over a crank revolution: resonances and |Q0| at the shaft harmonics.
 
 At each of ``points`` crank rotations θ (evenly spaced over 2π, continued
 from the pose by :meth:`Linkage.solve`), the scene is linearised

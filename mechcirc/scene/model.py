@@ -1,7 +1,7 @@
-"""A scene linearised at a crank angle: its mechanical circuit (issue 7 §2).
+"""A scene linearised at a crank angle: its mechanical circuit.
 
-Method (frozen-coefficient linearisation about the rigid motion, as the seed
-does by hand in DIGEST §1 and :mod:`mechcirc.sley.linear` for the sley):
+Method (frozen-coefficient linearisation about the rigid motion, as Grigoriev et al. (2002)
+do by hand and :mod:`mechcirc.sley.linear` for the sley):
 
 1. Solve the rigid linkage (every elastic element rigid) at crank rotation θ
    (:meth:`Linkage.solve`); divide every velocity by the crank speed Ω and by
@@ -23,7 +23,7 @@ does by hand in DIGEST §1 and :mod:`mechcirc.sley.linear` for the sley):
    ``eta = c²`` or a lever of ratio |c| at each end.
 
 Dropped: the velocity-squared (ν) terms and pre-load (geometric) stiffness,
-as in the seed's and the sley's linearisations.  Units: a link drive makes the
+as in the paper's and the sley's linearisations.  Units: a link drive makes the
 circuit rotational (ξ in rad/s, forces in N·m, K in rad/(N·m·s)); a point
 drive translational (m/s, N, m/(N·s)).
 """

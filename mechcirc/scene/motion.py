@@ -1,4 +1,4 @@
-"""A scene over the whole cycle in the time domain (issue 13 §1): :func:`motion_model`.
+"""A scene over the whole cycle in the time domain: :func:`motion_model`.
 
 Each rigid part (the bodies left joined when the elastic links and torsion
 rods are released) keeps its exact kinematics and gets one coordinate: the

@@ -2,7 +2,7 @@
 (the motor and flywheel of :mod:`mechcirc.scene.shaft`, read here).
 
 ``[[moments]]`` -- a moment on a body that depends on the crank angle (the
-beat-up moment of Mrázek's sley, DIGEST §2, eqs. (5)–(7))::
+beat-up moment of Mrázek's sley, eqs. (5)–(7))::
 
     [[moments]]
     name = "beatup"

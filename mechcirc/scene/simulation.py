@@ -9,7 +9,7 @@ period 2π/|λ|max of the fastest mode of the linearised model over the cycle,
 a step cut where a force law changes piece (a clearance gap's edge, a moment's
 window; :func:`mechcirc.scene._motion_kernels.rk_run`).
 
-Every result carries two checks (issue 11 §8):
+Every result carries two checks:
 
 * ``error_estimate`` — the largest change of any tabulated extremum between the
   run at the step (the one returned) and a run at twice the step (half the

@@ -1,4 +1,4 @@
-"""Sley (beat-up) dynamics of Mrázek (DIGEST §2) in the time domain.
+"""Sley (beat-up) dynamics of Mrázek in the time domain.
 
 * :mod:`.models` -- :class:`SleyParameters`, eqs. (4) and (9), clearance and beat-up laws.
 * :mod:`.presets` -- Tables 1 and 2 (variants 1–7) and the paper's printed results.

@@ -1,4 +1,4 @@
-"""Cross-checks of the time-domain sley model against the mechanical circuit (issue 5 §5).
+"""Cross-checks of the time-domain sley model against the mechanical circuit.
 
 (a) :func:`resonance_check` -- the resonances (K = 0) of the netlist from
     :func:`~mechcirc.sley.linear.to_netlist` against the eigenfrequencies of the

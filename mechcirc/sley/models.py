@@ -1,6 +1,6 @@
 """Parameters of Mrázek's sley (beat-up) models and their validation.
 
-The models (DIGEST §2, Mrázek):
+The models (Mrázek):
 
 One-side drive, eq. (4)::
 
@@ -27,7 +27,7 @@ throughout (also inside the dead zone).
 
 Beat-up moment, eqs. (5)–(7): M4 = M0 sin(π (φ2P − φP + α/2) / σ) for
 φP − α/2 < φ2P (mod 2π) < φP + α/2 and 0 elsewhere, φP the crank angle of the
-front dead centre (crank and coupler extended).  Reading (DIGEST §2): σ = α, so
+front dead centre (crank and coupler extended).  Reading (Mrázek): σ = α, so
 M4 is a half sine over the window; α is not printed — default 10°, the best fit to
 the 98 printed cells of Tables 1 and 2 (docs/sley.md, examples/sley_alpha_fit.py).
 
@@ -56,7 +56,7 @@ __all__ = ["SleyParameters", "ParameterError", "Drive", "DEFAULT_ALPHA_DEG", "st
 
 Drive = Literal["one-side", "both-sides"]
 
-#: Default beat-up interval α [deg]; not printed in the paper (DIGEST §2); the median
+#: Default beat-up interval α [deg]; not printed in the paper (Mrázek); the median
 #: difference over the 98 printed cells is smallest at 10° (3.3 %; 40°: 4.6 %).
 DEFAULT_ALPHA_DEG = 10.0
 
@@ -189,7 +189,7 @@ class SleyParameters:
 
     @property
     def sigma(self) -> float:
-        """σ of eq. (7) [rad]; our reading σ = α (DIGEST §2)."""
+        """σ of eq. (7) [rad]; our reading σ = α (Mrázek)."""
         return self.alpha
 
     def replace(self, **overrides) -> "SleyParameters":

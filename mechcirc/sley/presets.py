@@ -1,6 +1,6 @@
-"""Mrázek's Tables 1 and 2 (DIGEST §2): the 14 parameter variants and the printed results.
+"""Mrázek's Tables 1 and 2: the 14 parameter variants and the printed results.
 
-Readings of cells the OCR lost (DIGEST §2), stated once here and in every preset:
+Readings of cells the OCR lost in our copy of the paper, stated once here and in every preset:
 
 * **k2 = 7 kg·m²/s** for Table 1 variants 1–5 and 7 (the cell is missing; Table 2
   gives k2 = 7 with the same C2 = 1e5).

@@ -1,4 +1,4 @@
-"""Mrázek's sley models as scenes (issue 13 §2): :func:`sley_scene`, :func:`preset_scene`.
+"""Mrázek's sley models as scenes: :func:`sley_scene`, :func:`preset_scene`.
 
 One-side (Table 1): the driven shaft -C2∥k2- the four-bar crank 2P (coupler 3,
 rocker 4) -C4∥k4- the sley 4P.  Both-sides (Table 2): a second, identical

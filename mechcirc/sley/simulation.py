@@ -64,7 +64,7 @@ TWO_PI = 2.0 * math.pi
 
 #: Default output points per revolution (0.05° in crank angle).
 DEFAULT_POINTS = 7200
-#: Relative error estimate / periodicity above which a result is flagged (issue 11 §8).
+#: Relative error estimate / periodicity above which a result is flagged.
 ACCURACY_GOAL = 1e-3
 
 

@@ -53,7 +53,7 @@ PENCIL_SAMPLES = 600
 #: (600 samples at 5 per period of the fastest: ≥ 4 periods of the slowest).
 GROUP_RATIO = 25.0
 #: Tolerance of a ringing pole, |s_time − s_freq| / |s_freq| (the samples are
-#: exact: achieved ≤ 1.3e-13 on the shipped netlists and the cases of issue 23;
+#: exact: achieved ≤ 1.3e-13 on the shipped netlists and the regression cases in tests/;
 #: widened to 10× the resonance's own error estimate when that is larger).
 TOL_RINGING = 1e-9
 #: Tolerance of a steady-state amplitude and of the record's departure from a

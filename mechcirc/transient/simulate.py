@@ -253,7 +253,7 @@ class TransientResult:
                                               else ">"))
 
     def to_json(self) -> dict:
-        """The ``--json`` document (issue 12 §4)."""
+        """The ``--json`` document."""
         doc = {"time": self.time,
                "nodes": {n: ({"x": self.x[:, i], "v": self.v[:, i]} if self.v is not None
                              else {"x": self.x[:, i]})
@@ -589,7 +589,7 @@ def _motion_drive(circuit: Circuit, drive, rpm):
 
 
 def _require_finite(r: TransientResult, x_in_error: bool = False) -> None:
-    """A result with a non-finite value is a failure, never a result (issue 23 item 4).
+    """A result with a non-finite value is a failure, never a result.
 
     ``x_in_error``: ``r.error`` is finite only if ``r.x`` is (not looked at again)."""
     arrays = [a for a in (r.v, r.force, r.drive_force, r.drive_velocity) if a is not None]

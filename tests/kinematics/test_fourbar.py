@@ -75,7 +75,7 @@ def test_mu_nu_against_finite_differences(geom, branch):
 
 
 def test_mrazek_theoretical_rocker_acceleration():
-    """DIGEST §2, Table 1: ε4T ∈ [−2319, 2915] s⁻² at ω = 100, [−371, 466] at ω = 40."""
+    """Mrázek, Table 1: ε4T ∈ [−2319, 2915] s⁻² at ω = 100, [−371, 466] at ω = 40."""
     fb = FourBar(*MRAZEK)
     lo, hi = fb.rocker_acceleration_range(100.0)
     assert (round(lo), round(hi)) == (-2319, 2915)

@@ -1,4 +1,4 @@
-"""Tests of the planar multi-crank linkage solver (DIGEST §4).
+"""Tests of the planar multi-crank linkage solver (Koshel & Koshel 2014).
 
 References: finite differences of positions (in time, and with one crank
 stopped), the closed-form FourBar, and hand-placed errors in TOML text.

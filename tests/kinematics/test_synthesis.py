@@ -1,4 +1,4 @@
-"""Tests of the patent CN104178888 synthesis (DIGEST §3).
+"""Tests of the patent CN104178888 synthesis.
 
 References: direct four-bar computation (FourBar, checked separately against
 finite differences), dense grids, and the law of cosines.
@@ -32,7 +32,7 @@ def _random_crank_rockers(n, seed=1):
 
 
 def test_eq5_identity_against_direct_dead_centre_accelerations():
-    """|Φ1''/Φ2''| = ((b/a+1)/(b/a−1))·sin μ2/sin μ1, first power (DIGEST §3)."""
+    """|Φ1''/Φ2''| = ((b/a+1)/(b/a−1))·sin μ2/sin μ1, first power (patent CN104178888)."""
     for fb in _random_crank_rockers(40):
         front, back = fb.dead_centres()
         direct = abs(front.nu / back.nu)

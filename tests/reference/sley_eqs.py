@@ -4,7 +4,7 @@
   g = a² + d² + c² − b² − 2ad cos θ + 2dc cos φ − 2ac cos(θ − φ), solved for φ in
   closed form (P cos φ + Q sin φ = R) on the assembly whose rocker tip lies above
   the frame line; μ and ν by implicit differentiation of g.
-* Eq. (4) of Mrázek written out again from DIGEST §2 with its own clearance law.
+* Eq. (4) of Mrázek written out again from the paper with its own clearance law.
 """
 
 import math

@@ -1,6 +1,6 @@
 """The seed's closed form for the STB heald mechanism, eq. (2)-(7) of Grigoriev et al.
 
-Written from DIGEST §1 without mechcirc, for any positive parameters.  Works
+Written from Grigoriev et al. (2002) without mechcirc, for any positive parameters.  Works
 with numpy arrays of ω or, given ``j`` and a module ``mp`` of the same
 interface, with mpmath numbers.
 """

@@ -26,7 +26,7 @@ def test_stb_heald_mass_chain_collapses_exactly_to_eq6():
     r = simplify(c, (10.0, 3000.0), 1e-12)
     assert r.error <= 1e-12
     assert r.elements_after < r.elements_before
-    # DIGEST §1 eq. (6): K1..K4 in series is one mass M_III (η_B = η1²η2, η_C = η1²η2η3²)
+    # Grigoriev et al. 2002 eq. (6): K1..K4 in series is one mass M_III (η_B = η1²η2, η_C = η1²η2η3²)
     e1, e2, e3 = 0.8, 1.25, 0.9
     m1, m2, m3, m4 = 2.0, 1.5, 1.2, 0.9
     eB, eC = e1 ** 2 * e2, e1 ** 2 * e2 * e3 ** 2

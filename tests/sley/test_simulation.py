@@ -170,7 +170,7 @@ def test_import_does_not_load_numba_or_matplotlib():
     assert out.stdout.split() == ["False", "False"]
 
 
-# --------------------------------------------------- the paper's findings (DIGEST §2)
+# --------------------------------------------------- the paper's findings (Mrázek)
 @pytest.fixture(scope="module")
 def table_runs():
     # The 14 variants through the process pool.  One short run here first loads the
@@ -194,7 +194,7 @@ def test_clearance_raises_moment_and_crank_acceleration(table_runs):
 
 
 def test_sley_peak_about_twice_the_rigid_peak(table_runs):
-    # DIGEST: "ε4P ≈ 2 × ε4T" for one-side variants 1-5; the issue: roughly 1.5-2.5
+    # Mrázek: "ε4P ≈ 2 × ε4T" for one-side variants 1-5; the issue: roughly 1.5-2.5
     for v in range(1, 6):
         r = table_runs["one-side", v]
         ratio = r.extrema["eps4P"][1] / r.extrema["eps4T"][1]
@@ -208,7 +208,7 @@ def test_both_sides_lowers_sley_acceleration(table_runs):
 
 
 def test_digest_orientation_values(table_runs):
-    """DIGEST: eq. (4) as printed with k2 = 7, α = 40°, 5th revolution lands within ~15 %
+    """Mrázek: eq. (4) as printed with k2 = 7, α = 40°, 5th revolution lands within ~15 %
     of the printed M2V of variants 1, 3, 7 and within a few % of ε2P of variant 3."""
     def close(got, printed, tol):
         return all(abs(g - p) <= tol * abs(p) for g, p in zip(got, printed))
