@@ -544,7 +544,9 @@ def unknown_key(table: Table, entry: dict, occurrence: int = 0) -> tuple[str, st
 def did_you_mean(word: str, choices) -> str:
     """``"; did you mean 'x'?"`` for the nearest of ``choices`` (difflib), or ``""``.
 
-    A choice that differs only in case comes first (``b`` → ``B``), then the
+    A choice that differs only in case comes first (``b`` → ``B``), then one
+    that differs only in its separators or in writing ω as ``w``
+    (``--wmax`` → ``--omega-max``, ``omega_max`` → ``omega-max``), then the
     nearest by difflib's ratio, then one that begins ``word`` or that ``word``
     begins (``maximum`` → ``max``).
 
@@ -564,10 +566,16 @@ def did_you_mean(word: str, choices) -> str:
     choices = [str(c) for c in choices]
     word = str(word)[:100]
     close = [c for c in choices if c.lower() == word.lower()] or \
+        [c for c in choices if _spelling(c) == _spelling(word)] or \
         difflib.get_close_matches(word, choices, n=1) or \
         [c for c in choices if len(c) >= 3 and len(word) >= 3
          and (c.startswith(word) or word.startswith(c))][:1]
     return f"; did you mean {close[0]!r}?" if close else ""
+
+
+def _spelling(word: str) -> str:
+    """``word`` without case, ``-`` or ``_``, with ``omega`` written ``w``."""
+    return re.sub(r"[-_]", "", word.lower()).replace("omega", "w")
 
 
 def check_keys(text: str, source: str, table: Table, entry: dict, occurrence: int = 0) -> None:

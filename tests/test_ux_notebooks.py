@@ -286,6 +286,10 @@ def test_did_you_mean():
     assert did_you_mean("maximum", ("min", "max", "num", "log")) == "; did you mean 'max'?"
     assert did_you_mean("b", ("A", "B")) == "; did you mean 'B'?"
     assert did_you_mean("zzz", ("min", "max")) == ""
+    # ω written as w, with or without separators: difflib's ratio alone finds neither
+    options = ("--omega-min", "--omega-max", "--points", "--log")
+    assert did_you_mean("--wmax", options) == "; did you mean '--omega-max'?"
+    assert did_you_mean("--w_min", options) == "; did you mean '--omega-min'?"
 
 
 def _nx_loaded_groups(groups, a, b):
