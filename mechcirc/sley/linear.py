@@ -256,16 +256,6 @@ def eigenfrequencies(params: SleyParameters, theta0: float) -> list[SleyMode]:
             for wn, lm in zip(np.sort(omega_n), lam)]
 
 
-def max_rate(params: SleyParameters, samples: int = 72) -> float:
-    """Largest |λ| of the linearised model over a revolution [1/s] (sets the RK4 step).
-
-    All ``samples`` crank angles in one batched eigenvalue call.
-    """
-    th = np.linspace(0.0, 2 * math.pi, samples, endpoint=False)
-    M, C, K, _, _ = _mck(params, params.fourbar().evaluate(th).mu)
-    return float(np.max(np.abs(np.linalg.eigvals(_state_matrices(M, C, K)))))
-
-
 def to_circuit(params: SleyParameters, theta0: float, *, lever: bool = False,
                damping: bool = True, velocity: float | None = None) -> Circuit:
     """The mechanical circuit of the linearised sley at ``theta0`` [rad], built as objects.
