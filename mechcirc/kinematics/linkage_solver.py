@@ -493,25 +493,21 @@ def _point_kinematics(pl, q, qdot, qddot, parts):
     o = pl.owner
     s = _cplx(pl.offsets)
 
-    def ext(a):                       # (N, nb + 1) with a zero "ground body" last
+    def ext(a):                       # per point, its owner's a (a zero "ground body" last)
         out = np.zeros((N, nb + 1), dtype=a.dtype)
         out[:, :nb] = a
-        return out
+        return out[:, o]
 
-    r = ext(q[:, 0::3] + 1j * q[:, 1::3])[:, o]
-    v = ext(qdot[:, 0::3] + 1j * qdot[:, 1::3])[:, o]
-    a = ext(qddot[:, 0::3] + 1j * qddot[:, 1::3])[:, o]
-    w = ext(qdot[:, 2::3])[:, o]
-    al = ext(qddot[:, 2::3])[:, o]
-    Rs = np.exp(1j * ext(q[:, 2::3])[:, o]) * s
-    pts = r + Rs
-    vel = v + 1j * w * Rs
-    acc = a + (1j * al - w * w) * Rs
-    contrib = []
-    for j in range(parts.shape[2]):
-        pj = parts[:, :, j]
-        contrib.append(ext(pj[:, 0::3] + 1j * pj[:, 1::3])[:, o] +
-                       1j * ext(pj[:, 2::3])[:, o] * Rs)
+    def origin(x):                    # per point, its owner's frame origin x + iy (or a rate)
+        return ext(x[:, 0::3] + 1j * x[:, 1::3])
+
+    w = ext(qdot[:, 2::3])
+    Rs = np.exp(1j * ext(q[:, 2::3])) * s
+    pts = origin(q) + Rs
+    vel = origin(qdot) + 1j * w * Rs
+    acc = origin(qddot) + (1j * ext(qddot[:, 2::3]) - w * w) * Rs
+    contrib = [origin(parts[:, :, j]) + 1j * ext(parts[:, 2::3, j]) * Rs
+               for j in range(parts.shape[2])]
     return _xy(pts), _xy(vel), _xy(acc), _xy(np.array(contrib))
 
 
