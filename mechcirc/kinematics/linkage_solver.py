@@ -720,11 +720,7 @@ _SINGULAR = 1e-10
 def _pack(r, phi):
     """(nb + 1, N) complex origins and angles (the ground last) → q rows (N, 3 nb)."""
     nb, N = r.shape[0] - 1, r.shape[1]
-    out = np.empty((N, nb, 3))
-    out[:, :, 0] = r[:nb].real.T
-    out[:, :, 1] = r[:nb].imag.T
-    out[:, :, 2] = phi[:nb].T
-    return out.reshape(N, 3 * nb)
+    return np.stack([r[:nb].real.T, r[:nb].imag.T, phi[:nb].T], axis=-1).reshape(N, 3 * nb)
 
 
 def _solve_dyads(lk, pl, t, dt_max):
