@@ -486,17 +486,20 @@ def _xy(z):
     return np.stack([z.real, z.imag], axis=-1)
 
 
+def _with_ground(a, ground=0.0):
+    """``a`` (N, nb), one column per moving body, with the ground's column (``ground``) last."""
+    out = np.full((a.shape[0], a.shape[1] + 1), ground, dtype=a.dtype)
+    out[:, :-1] = a
+    return out
+
+
 def _point_kinematics(pl, q, qdot, qddot, parts):
     """Every point's position, velocity, acceleration and conditional-stop velocities."""
-    N = len(q)
-    nb = pl.nb
     o = pl.owner
     s = _cplx(pl.offsets)
 
-    def ext(a):                       # per point, its owner's a (a zero "ground body" last)
-        out = np.zeros((N, nb + 1), dtype=a.dtype)
-        out[:, :nb] = a
-        return out[:, o]
+    def ext(a):                       # per point, its owner's a (0 for the ground)
+        return _with_ground(a)[:, o]
 
     def origin(x):                    # per point, its owner's frame origin x + iy (or a rate)
         return ext(x[:, 0::3] + 1j * x[:, 1::3])
@@ -892,12 +895,8 @@ class Newton:
     def _sides(self, q):
         """(R s, P) of both sides of every joint row, complex (N, m) each."""
         pl = self.pl
-        N = len(q)
-        nb = pl.nb
-        z = np.zeros((N, nb + 1), dtype=complex)
-        z[:, :nb] = q[:, 0::3] + 1j * q[:, 1::3]
-        e = np.ones((N, nb + 1), dtype=complex)
-        e[:, :nb] = np.exp(1j * q[:, 2::3])
+        z = _with_ground(q[:, 0::3] + 1j * q[:, 1::3])
+        e = _with_ground(np.exp(1j * q[:, 2::3]), 1.0)
         Ra = e[:, pl.ia] * self.sa
         Rb = e[:, pl.ib] * self.sb
         return Ra, z[:, pl.ia] + Ra, Rb, z[:, pl.ib] + Rb
@@ -906,11 +905,8 @@ class Newton:
         """Guide direction w, R s of guide and slider points, and d = P_slider − P_guide,
         complex (N, ns) each; and the relative angle φ_slider − φ_guide (N, ns)."""
         pl = self.pl
-        N, nb = len(q), pl.nb
-        phi = np.zeros((N, nb + 1))
-        phi[:, :nb] = q[:, 2::3]
-        z = np.zeros((N, nb + 1), dtype=complex)
-        z[:, :nb] = q[:, 0::3] + 1j * q[:, 1::3]
+        phi = _with_ground(q[:, 2::3])
+        z = _with_ground(q[:, 0::3] + 1j * q[:, 1::3])
         e = np.exp(1j * phi)
         w = e[:, pl.ga] * self.gu
         RA, RB = e[:, pl.ga] * self.gs, e[:, pl.gb] * self.bs
@@ -957,18 +953,15 @@ class Newton:
         Ra, _, Rb, _ = sides if sides is not None else self._sides(q)
         pl = self.pl
         N = len(q)
-        w2 = np.zeros((N, pl.nb + 1))
-        w2[:, :pl.nb] = qdot[:, 2::3] ** 2
+        w2 = _with_ground(qdot[:, 2::3] ** 2)
         g = np.zeros((N, self.n))
         g[:, :2 * self.m] = np.ascontiguousarray(Ra * w2[:, pl.ia] - Rb * w2[:, pl.ib]).view(
             np.float64)
         if self.ns:
             # line row: −(ü × d + 2 u̇ × ḋ + u × d̈) without the q̈ terms, u̇ = iω_a u
             w, RA, RB, d, _ = self._prism(q)
-            om = np.zeros((N, pl.nb + 1))
-            om[:, :pl.nb] = qdot[:, 2::3]
-            v = np.zeros((N, pl.nb + 1), dtype=complex)
-            v[:, :pl.nb] = qdot[:, 0::3] + 1j * qdot[:, 1::3]
+            om = _with_ground(qdot[:, 2::3])
+            v = _with_ground(qdot[:, 0::3] + 1j * qdot[:, 1::3])
             wa, wb = om[:, pl.ga], om[:, pl.gb]
             dd = v[:, pl.gb] + 1j * wb * RB - v[:, pl.ga] - 1j * wa * RA
             g[:, 2 * self.m:2 * self.m + self.ns] = -(
