@@ -1245,8 +1245,8 @@ def _targets(lk, nw, t, nodes, keep, at, kept, sign, dt_max):
     start = np.max(np.abs(nw.residual(guess, angles)), axis=1)
     Q, ok = nw.newton(guess, angles)
     for i in np.flatnonzero(~ok):              # rare: redo from the node, sequentially
-        Q[i] = _continue(lk, nw, Qk[src[i]], Qdk[src[i]], Qddk[src[i]], nodes[keep[src[i]]],
-                         t[i], dt_max, sign)
+        Q[i] = _steps_to(lk, nw, Qk[src[i]], Qdk[src[i]], Qddk[src[i]], nodes[keep[src[i]]],
+                         t[i], sign, dt_max)[0]
     J, qd, qdd, parts = nw.derivatives(Q)
     bad = ~np.all(np.isfinite(qd), axis=1) | ~np.all(np.isfinite(qdd), axis=1)
     if np.any(bad):
@@ -1289,22 +1289,3 @@ def _block(nw, q, qdot, qddot, t_now, T, sign, pl):
     h = np.diff(np.concatenate(([t_now], T)))[:, None]
     pred = prev_q + prev_d * h + 0.5 * prev_dd * h * h
     return (Q, qd, qdd, parts) if np.max(np.abs(pred - Q)) <= 1e-2 * pl.scale else None
-
-
-def _continue(lk, nw, q, qdot, qddot, t_now, t_target, dt_max, sign):
-    """Sequential continuation from a solved node to one target (fallback)."""
-    pl = nw.pl
-    w1 = lk.cranks[0].omega
-    h = dt_max
-    while t_now != t_target:
-        dt = max(-h, min(h, t_target - t_now))
-        res = nw.step(q + qdot * dt + 0.5 * qddot * dt * dt, pl.omega * (t_now + dt))
-        if res is None or res[3] != sign:
-            h *= 0.5
-            if h * float(np.max(np.abs(pl.omega))) < 1e-9:
-                raise GeometryError(f"{lk.source}: no assembly near θ = "
-                                    f"{math.degrees(t_target * w1):.6g}° on this branch")
-            continue
-        q, qdot, qddot, _ = res
-        t_now += dt
-    return q
