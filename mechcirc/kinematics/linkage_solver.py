@@ -471,10 +471,8 @@ def _path(t, dt_max):
     n = np.maximum(1, np.ceil(np.abs(d) / dt_max).astype(int))
     if np.all(n == 1):
         return path, np.arange(1, len(path))
-    pieces = [np.zeros(1)]
-    for k in range(len(d)):
-        pieces.append(path[k] + d[k] * np.arange(1, n[k] + 1) / n[k])
-    return np.concatenate(pieces), np.cumsum(n)
+    pieces = [path[k] + d[k] * np.arange(1, n[k] + 1) / n[k] for k in range(len(d))]
+    return np.concatenate([np.zeros(1), *pieces]), np.cumsum(n)
 
 
 def _cplx(xy):
