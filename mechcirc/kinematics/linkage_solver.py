@@ -471,10 +471,8 @@ def _path(t, dt_max):
     n = np.maximum(1, np.ceil(np.abs(d) / dt_max).astype(int))
     if np.all(n == 1):
         return path, np.arange(1, len(path))
-    pieces = [np.zeros(1)]
-    for k in range(len(d)):
-        pieces.append(path[k] + d[k] * np.arange(1, n[k] + 1) / n[k])
-    return np.concatenate(pieces), np.cumsum(n)
+    pieces = [path[k] + d[k] * np.arange(1, n[k] + 1) / n[k] for k in range(len(d))]
+    return np.concatenate([np.zeros(1), *pieces]), np.cumsum(n)
 
 
 def _cplx(xy):
@@ -486,32 +484,31 @@ def _xy(z):
     return np.stack([z.real, z.imag], axis=-1)
 
 
+def _with_ground(a, ground=0.0):
+    """``a`` (N, nb), one column per moving body, with the ground's column (``ground``) last."""
+    out = np.full((a.shape[0], a.shape[1] + 1), ground, dtype=a.dtype)
+    out[:, :-1] = a
+    return out
+
+
 def _point_kinematics(pl, q, qdot, qddot, parts):
     """Every point's position, velocity, acceleration and conditional-stop velocities."""
-    N = len(q)
-    nb = pl.nb
     o = pl.owner
     s = _cplx(pl.offsets)
 
-    def ext(a):                       # (N, nb + 1) with a zero "ground body" last
-        out = np.zeros((N, nb + 1), dtype=a.dtype)
-        out[:, :nb] = a
-        return out
+    def ext(a):                       # per point, its owner's a (0 for the ground)
+        return _with_ground(a)[:, o]
 
-    r = ext(q[:, 0::3] + 1j * q[:, 1::3])[:, o]
-    v = ext(qdot[:, 0::3] + 1j * qdot[:, 1::3])[:, o]
-    a = ext(qddot[:, 0::3] + 1j * qddot[:, 1::3])[:, o]
-    w = ext(qdot[:, 2::3])[:, o]
-    al = ext(qddot[:, 2::3])[:, o]
-    Rs = np.exp(1j * ext(q[:, 2::3])[:, o]) * s
-    pts = r + Rs
-    vel = v + 1j * w * Rs
-    acc = a + (1j * al - w * w) * Rs
-    contrib = []
-    for j in range(parts.shape[2]):
-        pj = parts[:, :, j]
-        contrib.append(ext(pj[:, 0::3] + 1j * pj[:, 1::3])[:, o] +
-                       1j * ext(pj[:, 2::3])[:, o] * Rs)
+    def origin(x):                    # per point, its owner's frame origin x + iy (or a rate)
+        return ext(x[:, 0::3] + 1j * x[:, 1::3])
+
+    w = ext(qdot[:, 2::3])
+    Rs = np.exp(1j * ext(q[:, 2::3])) * s
+    pts = origin(q) + Rs
+    vel = origin(qdot) + 1j * w * Rs
+    acc = origin(qddot) + (1j * ext(qddot[:, 2::3]) - w * w) * Rs
+    contrib = [origin(parts[:, :, j]) + 1j * ext(parts[:, 2::3, j]) * Rs
+               for j in range(parts.shape[2])]
     return _xy(pts), _xy(vel), _xy(acc), _xy(np.array(contrib))
 
 
@@ -724,11 +721,7 @@ _SINGULAR = 1e-10
 def _pack(r, phi):
     """(nb + 1, N) complex origins and angles (the ground last) → q rows (N, 3 nb)."""
     nb, N = r.shape[0] - 1, r.shape[1]
-    out = np.empty((N, nb, 3))
-    out[:, :, 0] = r[:nb].real.T
-    out[:, :, 1] = r[:nb].imag.T
-    out[:, :, 2] = phi[:nb].T
-    return out.reshape(N, 3 * nb)
+    return np.stack([r[:nb].real.T, r[:nb].imag.T, phi[:nb].T], axis=-1).reshape(N, 3 * nb)
 
 
 def _solve_dyads(lk, pl, t, dt_max):
@@ -900,12 +893,8 @@ class Newton:
     def _sides(self, q):
         """(R s, P) of both sides of every joint row, complex (N, m) each."""
         pl = self.pl
-        N = len(q)
-        nb = pl.nb
-        z = np.zeros((N, nb + 1), dtype=complex)
-        z[:, :nb] = q[:, 0::3] + 1j * q[:, 1::3]
-        e = np.ones((N, nb + 1), dtype=complex)
-        e[:, :nb] = np.exp(1j * q[:, 2::3])
+        z = _with_ground(q[:, 0::3] + 1j * q[:, 1::3])
+        e = _with_ground(np.exp(1j * q[:, 2::3]), 1.0)
         Ra = e[:, pl.ia] * self.sa
         Rb = e[:, pl.ib] * self.sb
         return Ra, z[:, pl.ia] + Ra, Rb, z[:, pl.ib] + Rb
@@ -914,11 +903,8 @@ class Newton:
         """Guide direction w, R s of guide and slider points, and d = P_slider − P_guide,
         complex (N, ns) each; and the relative angle φ_slider − φ_guide (N, ns)."""
         pl = self.pl
-        N, nb = len(q), pl.nb
-        phi = np.zeros((N, nb + 1))
-        phi[:, :nb] = q[:, 2::3]
-        z = np.zeros((N, nb + 1), dtype=complex)
-        z[:, :nb] = q[:, 0::3] + 1j * q[:, 1::3]
+        phi = _with_ground(q[:, 2::3])
+        z = _with_ground(q[:, 0::3] + 1j * q[:, 1::3])
         e = np.exp(1j * phi)
         w = e[:, pl.ga] * self.gu
         RA, RB = e[:, pl.ga] * self.gs, e[:, pl.gb] * self.bs
@@ -965,18 +951,15 @@ class Newton:
         Ra, _, Rb, _ = sides if sides is not None else self._sides(q)
         pl = self.pl
         N = len(q)
-        w2 = np.zeros((N, pl.nb + 1))
-        w2[:, :pl.nb] = qdot[:, 2::3] ** 2
+        w2 = _with_ground(qdot[:, 2::3] ** 2)
         g = np.zeros((N, self.n))
         g[:, :2 * self.m] = np.ascontiguousarray(Ra * w2[:, pl.ia] - Rb * w2[:, pl.ib]).view(
             np.float64)
         if self.ns:
             # line row: −(ü × d + 2 u̇ × ḋ + u × d̈) without the q̈ terms, u̇ = iω_a u
             w, RA, RB, d, _ = self._prism(q)
-            om = np.zeros((N, pl.nb + 1))
-            om[:, :pl.nb] = qdot[:, 2::3]
-            v = np.zeros((N, pl.nb + 1), dtype=complex)
-            v[:, :pl.nb] = qdot[:, 0::3] + 1j * qdot[:, 1::3]
+            om = _with_ground(qdot[:, 2::3])
+            v = _with_ground(qdot[:, 0::3] + 1j * qdot[:, 1::3])
             wa, wb = om[:, pl.ga], om[:, pl.gb]
             dd = v[:, pl.gb] + 1j * wb * RB - v[:, pl.ga] - 1j * wa * RA
             g[:, 2 * self.m:2 * self.m + self.ns] = -(
@@ -1260,8 +1243,8 @@ def _targets(lk, nw, t, nodes, keep, at, kept, sign, dt_max):
     start = np.max(np.abs(nw.residual(guess, angles)), axis=1)
     Q, ok = nw.newton(guess, angles)
     for i in np.flatnonzero(~ok):              # rare: redo from the node, sequentially
-        Q[i] = _continue(lk, nw, Qk[src[i]], Qdk[src[i]], Qddk[src[i]], nodes[keep[src[i]]],
-                         t[i], dt_max, sign)
+        Q[i] = _steps_to(lk, nw, Qk[src[i]], Qdk[src[i]], Qddk[src[i]], nodes[keep[src[i]]],
+                         t[i], sign, dt_max)[0]
     J, qd, qdd, parts = nw.derivatives(Q)
     bad = ~np.all(np.isfinite(qd), axis=1) | ~np.all(np.isfinite(qdd), axis=1)
     if np.any(bad):
@@ -1304,22 +1287,3 @@ def _block(nw, q, qdot, qddot, t_now, T, sign, pl):
     h = np.diff(np.concatenate(([t_now], T)))[:, None]
     pred = prev_q + prev_d * h + 0.5 * prev_dd * h * h
     return (Q, qd, qdd, parts) if np.max(np.abs(pred - Q)) <= 1e-2 * pl.scale else None
-
-
-def _continue(lk, nw, q, qdot, qddot, t_now, t_target, dt_max, sign):
-    """Sequential continuation from a solved node to one target (fallback)."""
-    pl = nw.pl
-    w1 = lk.cranks[0].omega
-    h = dt_max
-    while t_now != t_target:
-        dt = max(-h, min(h, t_target - t_now))
-        res = nw.step(q + qdot * dt + 0.5 * qddot * dt * dt, pl.omega * (t_now + dt))
-        if res is None or res[3] != sign:
-            h *= 0.5
-            if h * float(np.max(np.abs(pl.omega))) < 1e-9:
-                raise GeometryError(f"{lk.source}: no assembly near θ = "
-                                    f"{math.degrees(t_target * w1):.6g}° on this branch")
-            continue
-        q, qdot, qddot, _ = res
-        t_now += dt
-    return q

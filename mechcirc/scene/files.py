@@ -285,10 +285,7 @@ class Scene:
     def cycle_revolutions(self) -> int:
         """Revolutions of the first crank in one cycle of the mechanism (1 without gears;
         the least common multiple of the gear ratios' denominators)."""
-        q = 1
-        for g in self.gears:
-            q = q * g.fraction[1] // math.gcd(q, g.fraction[1])
-        return q
+        return math.lcm(*(g.fraction[1] for g in self.gears))
 
     @property
     def cycle(self) -> float:

@@ -278,15 +278,22 @@ def max_rate(model: MotionModel, samples: int = 72) -> float:
 def _max_rate(model: MotionModel, samples: int) -> float:
     rates = []
     for th in np.linspace(0.0, model.scene.cycle, samples, endpoint=False):
-        M, D, K = linear_matrices(model, th)
-        n = M.shape[0]
-        inv = 1.0 / np.diag(M)[:, None]
-        A = np.zeros((2 * n, 2 * n))
-        A[:n, n:] = np.eye(n)
-        A[n:, :n] = -inv * K
-        A[n:, n:] = -inv * D
+        A = state_matrix(*linear_matrices(model, th))
         rates.append(np.max(np.abs(np.linalg.eigvals(A))))
     return float(max(rates))
+
+
+def state_matrix(M, D, K):
+    """A of ż = A z, z = (x, ẋ), for M ẍ + D ẋ + K x = 0 with M diagonal:
+    [[0, I], [−M⁻¹K, −M⁻¹D]] (the sley's :meth:`~mechcirc.sley.linear.LinearModel.state_matrix`
+    too)."""
+    n = M.shape[0]
+    inv = 1.0 / np.diag(M)[:, None]
+    A = np.zeros((2 * n, 2 * n))
+    A[:n, n:] = np.eye(n)
+    A[n:, :n] = -inv * K
+    A[n:, n:] = -inv * D
+    return A
 
 
 def simulate_scene(scene: Scene, *, omega: float | None = None, revolutions: int | None = None,

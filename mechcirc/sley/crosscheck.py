@@ -53,13 +53,11 @@ class ResonanceCheck:
     circuit : tuple of float
         ω_n = |s| of the netlist's resonances (K = 0) [rad/s].
     circuit_d : tuple of float
-        Their damped frequencies Im s [rad/s] (equal to ``circuit`` in the
-        fallback, which handles undamped circuits only).
+        Their damped frequencies Im s [rad/s].
     rel_error : float
         Largest relative difference over both.
     how : str
-        ``"Circuit.resonances"`` or ``"sweep + brentq"`` (fallback when
-        ``mechcirc.resonances`` is missing).
+        ``"Circuit.resonances"``: what found the netlist's resonances.
     netlist : str
         The netlist used.
     """
@@ -78,10 +76,7 @@ class ResonanceCheck:
 def circuit_resonances(circuit, omega_max: float):
     """Resonances (K = 0) of a circuit below ``omega_max`` [rad/s]: ((ω_n, ω_d), …), how.
 
-    Uses ``circuit.resonances()``; when that module is missing, brackets sign
-    changes of Im K(ω) of an *undamped* circuit on a log grid from
-    ``circuit.sweep`` that are not poles and refines them with
-    ``scipy.optimize.brentq``.
+    Uses ``circuit.resonances()`` (the roots of kind ``"resonance"``, sorted).
 
     Parameters
     ----------
@@ -94,28 +89,9 @@ def circuit_resonances(circuit, omega_max: float):
     -------
     tuple of (tuple, str)
     """
-    try:
-        res = circuit.resonances(omega_max=omega_max)
-    except (ImportError, AttributeError):       # the resonances module has not landed
-        res = None
-    if res is not None:
-        found = [(float(r.omega), float(r.omega_d)) for r in res
-                 if getattr(r, "kind", "resonance") == "resonance"]
-        return tuple(sorted(found)), "Circuit.resonances"
-    from scipy.optimize import brentq
-
-    def k_im(w):
-        return float(np.imag(circuit.sweep(np.array([w])).K[0]))
-
-    grid = np.geomspace(omega_max * 1e-4, omega_max, 20001)
-    k = np.imag(circuit.sweep(grid).K)
-    roots = []
-    for i in np.flatnonzero(np.sign(k[:-1]) != np.sign(k[1:])):
-        if abs(k[i]) + abs(k[i + 1]) > 1e3 * np.median(np.abs(k)):
-            continue                      # a pole (K -> infinity), not a zero
-        w = brentq(k_im, grid[i], grid[i + 1], xtol=1e-14 * grid[i], rtol=4e-16)
-        roots.append((w, w))
-    return tuple(roots), "sweep + brentq"
+    found = [(float(r.omega), float(r.omega_d)) for r in circuit.resonances(omega_max=omega_max)
+             if r.kind == "resonance"]
+    return tuple(sorted(found)), "Circuit.resonances"
 
 
 def resonance_check(params: SleyParameters, theta0: float, *,

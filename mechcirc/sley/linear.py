@@ -66,7 +66,9 @@ class LinearModel:
 
     def state_matrix(self) -> NDArray[np.float64]:
         """A of ż = A z for z = (x, ẋ) with the drive held [1/s]."""
-        return _state_matrices(self.M[None], self.C[None], self.K[None])[0]
+        from ..scene.simulation import state_matrix
+
+        return state_matrix(self.M, self.C, self.K)
 
     def receptance(self, omega) -> NDArray[np.complex128]:
         """Complex amplitude X(ω)/Φ2 of each coordinate for φ2 = Φ2 e^{jωt}, shape (len(omega), n)."""
@@ -188,17 +190,6 @@ def _mck(p: SleyParameters, mu):
     return M, C, K, kd, cd
 
 
-def _state_matrices(M, C, K):
-    """Stacked A = [[0, I], [−M⁻¹K, −M⁻¹C]] for diagonal M, shape (m, 2n, 2n)."""
-    m, n, _ = M.shape
-    inv = 1.0 / np.diagonal(M, axis1=1, axis2=2)[:, :, None]
-    A = np.zeros((m, 2 * n, 2 * n))
-    A[:, :n, n:] = np.eye(n)
-    A[:, n:, :n] = -inv * K
-    A[:, n:, n:] = -inv * C
-    return A
-
-
 def linearise(params: SleyParameters, theta0: float, *, mu: float | None = None) -> LinearModel:
     """The frozen-coefficient linear model of ``params`` at crank angle ``theta0`` [rad].
 
@@ -254,16 +245,6 @@ def eigenfrequencies(params: SleyParameters, theta0: float) -> list[SleyMode]:
     lam = lam[np.argsort(np.abs(lam))]
     return [SleyMode(float(wn), float(lm.imag), float(-lm.real / abs(lm)), complex(lm))
             for wn, lm in zip(np.sort(omega_n), lam)]
-
-
-def max_rate(params: SleyParameters, samples: int = 72) -> float:
-    """Largest |λ| of the linearised model over a revolution [1/s] (sets the RK4 step).
-
-    All ``samples`` crank angles in one batched eigenvalue call.
-    """
-    th = np.linspace(0.0, 2 * math.pi, samples, endpoint=False)
-    M, C, K, _, _ = _mck(params, params.fourbar().evaluate(th).mu)
-    return float(np.max(np.abs(np.linalg.eigvals(_state_matrices(M, C, K)))))
 
 
 def to_circuit(params: SleyParameters, theta0: float, *, lever: bool = False,
