@@ -452,8 +452,8 @@ def refine_dd(solve_fn, residual, omega, rhs, system, refine: bool, steps: int,
             own = eps / 2 * np.sum(np.abs(x0) * np.abs(r), axis=-1) / \
                 np.abs(system.difference(x0))
         return x0, None, est + np.where(np.isnan(own), np.inf, own), rho
-    xh, xl = x0, np.zeros_like(x0)      # (both updated in place below; x0 a solve's own)
-    prev = np.empty_like(x0)            # (read from the second step on: the first writes it)
+    xh, xl = x0, np.zeros_like(x0)      # (updated below; x0 a solve's own)
+    prev = np.empty_like(x0)            # (read from the second step on: the first sets it)
     est = np.full(omega.size, np.inf)
     rho = np.zeros(omega.size)
     active = np.arange(omega.size)
@@ -469,17 +469,27 @@ def refine_dd(solve_fn, residual, omega, rhs, system, refine: bool, steps: int,
         est[at], rho[at] = _estimate(system, xa, xla, d, prev[at] if step else None, r)
         with np.errstate(all="ignore"):
             s, e = two_sum(xa, d)
-        xh[at] = s
-        xl[at] = e if xla is None else xla + e
-        prev[at] = d
+        if xla is not None:
+            e = xla + e
+        if whole:
+            # Every point: the new arrays (each its own) are kept, not copied.
+            xh = s
+            xl = e
+            prev = d
+        else:
+            xh[at] = s
+            xl[at] = e
+            prev[at] = d
         # est bounds the error before this correction; after it, the error is
         # smaller still (by the contraction): stop once est is near rounding.
         active = active[est[active] > 16 * eps]
         bound = getattr(solve_fn, "bound", None)
         if step == 0 and bound is not None and active.size:
             # Or once the error after it is bounded by 16 eps (first_step_bound).
-            first = first_step_bound(system, omega[active], xh[active], xl[active], d[active],
-                                     r[active], bound(xh[active], d[active], active))
+            x1 = xh[active]
+            d1 = d[active]
+            first = first_step_bound(system, omega[active], x1, xl[active], d1, r[active],
+                                     bound(x1, d1, active))
             proven = first <= 16 * eps
             est[active[proven]] = first[proven]
             active = active[~proven]
