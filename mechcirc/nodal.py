@@ -278,6 +278,8 @@ class _Solved:
         # last correction is not a safe estimate: 6.6e-14 for a true
         # 1.7e-13 on a stiff tree): the double-double LU.
         err = self.err[every]
+        if np.all(err <= 16 * np.finfo(float).eps):
+            return                  # (all converged: nothing below would be redone)
         done = np.isfinite(err) & (err <= np.maximum(
             16 * np.finfo(float).eps, 16 * residual_rounding(self.system, self.S[every])))
         todo = every[~done]
@@ -546,8 +548,7 @@ def first_step_bound(system: NodalSystem, omega: NDArray, xh: NDArray, xl: NDArr
         # |y_e| = |c_e| + |ω||m_e| + |k_e|/|ω| (one of the three is nonzero; ω complex
         # too): by kind, one product with the (c, E) array, no admittance array.
         ends = ax.take(pat.e_i, 1) + ax.take(pat.e_j, 1)     # (take: x[:, idx], faster)
-        by_kind = (ends * (ad.take(pat.e_i, 1) + ad.take(pat.e_j, 1))) \
-            @ np.abs([pat.e_c, pat.e_m, pat.e_k]).T
+        by_kind = (ends * (ad.take(pat.e_i, 1) + ad.take(pat.e_j, 1))) @ pat.e_abs
         w = np.abs(omega)
         entry = by_kind[:, 0] + w * by_kind[:, 1] + by_kind[:, 2] / w
         if pat.s_row.size:
