@@ -73,6 +73,8 @@ class Pattern:
         self.e_m = np.where(self.e_kind == 0, self.e_val, 0.0)
         self.e_k = np.where(self.e_kind == 1, self.e_val, 0.0)
         self.e_c = np.where(self.e_kind == 2, self.e_val, 0.0)
+        # |c|, |m|, |k| by element, (E, 3): the first-step bound's sums by kind.
+        self.e_abs = np.abs([self.e_c, self.e_m, self.e_k]).T
         n_nodes = len(system.nodes)
         lv = system.levers
         self.l_p1 = np.array([at(v.p1, n) for v in lv], dtype=np.int64)

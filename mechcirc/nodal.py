@@ -278,6 +278,8 @@ class _Solved:
         # last correction is not a safe estimate: 6.6e-14 for a true
         # 1.7e-13 on a stiff tree): the double-double LU.
         err = self.err[every]
+        if np.all(err <= 16 * np.finfo(float).eps):
+            return                  # (all converged: nothing below would be redone)
         done = np.isfinite(err) & (err <= np.maximum(
             16 * np.finfo(float).eps, 16 * residual_rounding(self.system, self.S[every])))
         todo = every[~done]
@@ -452,8 +454,8 @@ def refine_dd(solve_fn, residual, omega, rhs, system, refine: bool, steps: int,
             own = eps / 2 * np.sum(np.abs(x0) * np.abs(r), axis=-1) / \
                 np.abs(system.difference(x0))
         return x0, None, est + np.where(np.isnan(own), np.inf, own), rho
-    xh, xl = x0, np.zeros_like(x0)      # (both updated in place below; x0 a solve's own)
-    prev = np.empty_like(x0)            # (read from the second step on: the first writes it)
+    xh, xl = x0, np.zeros_like(x0)      # (updated below; x0 a solve's own)
+    prev = np.empty_like(x0)            # (read from the second step on: the first sets it)
     est = np.full(omega.size, np.inf)
     rho = np.zeros(omega.size)
     active = np.arange(omega.size)
@@ -469,17 +471,27 @@ def refine_dd(solve_fn, residual, omega, rhs, system, refine: bool, steps: int,
         est[at], rho[at] = _estimate(system, xa, xla, d, prev[at] if step else None, r)
         with np.errstate(all="ignore"):
             s, e = two_sum(xa, d)
-        xh[at] = s
-        xl[at] = e if xla is None else xla + e
-        prev[at] = d
+        if xla is not None:
+            e = xla + e
+        if whole:
+            # Every point: the new arrays (each its own) are kept, not copied.
+            xh = s
+            xl = e
+            prev = d
+        else:
+            xh[at] = s
+            xl[at] = e
+            prev[at] = d
         # est bounds the error before this correction; after it, the error is
         # smaller still (by the contraction): stop once est is near rounding.
         active = active[est[active] > 16 * eps]
         bound = getattr(solve_fn, "bound", None)
         if step == 0 and bound is not None and active.size:
             # Or once the error after it is bounded by 16 eps (first_step_bound).
-            first = first_step_bound(system, omega[active], xh[active], xl[active], d[active],
-                                     r[active], bound(xh[active], d[active], active))
+            x1 = xh[active]
+            d1 = d[active]
+            first = first_step_bound(system, omega[active], x1, xl[active], d1, r[active],
+                                     bound(x1, d1, active))
             proven = first <= 16 * eps
             est[active[proven]] = first[proven]
             active = active[~proven]
@@ -536,8 +548,7 @@ def first_step_bound(system: NodalSystem, omega: NDArray, xh: NDArray, xl: NDArr
         # |y_e| = |c_e| + |ω||m_e| + |k_e|/|ω| (one of the three is nonzero; ω complex
         # too): by kind, one product with the (c, E) array, no admittance array.
         ends = ax.take(pat.e_i, 1) + ax.take(pat.e_j, 1)     # (take: x[:, idx], faster)
-        by_kind = (ends * (ad.take(pat.e_i, 1) + ad.take(pat.e_j, 1))) \
-            @ np.abs([pat.e_c, pat.e_m, pat.e_k]).T
+        by_kind = (ends * (ad.take(pat.e_i, 1) + ad.take(pat.e_j, 1))) @ pat.e_abs
         w = np.abs(omega)
         entry = by_kind[:, 0] + w * by_kind[:, 1] + by_kind[:, 2] / w
         if pat.s_row.size:
