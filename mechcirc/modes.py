@@ -508,9 +508,10 @@ def _param_slopes(circuit: Circuit, names: list[str]) -> dict[str, np.ndarray]:
     from .expressions import evaluate
     from .netlist import expressions_of
 
-    exprs = expressions_of(circuit)
     params = dict(circuit.params)
-    if not exprs or not params:
+    # No .param: nothing to differentiate (and the expression table is not materialised).
+    exprs = expressions_of(circuit) if params else None
+    if not exprs:
         return {}
     position = {name: k for k, name in enumerate(names)}
     x = {e.name: e.value for e in circuit.elements} | {lv.name: lv.ratio for lv in circuit.levers}
