@@ -63,8 +63,9 @@ from .resonances import Resonance, constraint_basis, pencil, resonance_pairs
 
 __all__ = ["Mode", "SweepSensitivity", "modes", "sweep_sensitivity"]
 
-#: Roots whose vectors are combined in one array operation (bounded memory: E × _CHUNK).
-_CHUNK = 128
+#: Values (elements × roots) combined in one array operation: bounded memory, but not
+#: small chunks, whose many fresh temporaries page-fault (docs/performance.md, modes).
+_CHUNK = 2**21
 
 
 def _lazy(key: str, names: str):
@@ -185,7 +186,7 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
     els = system.elements
     ei, ej, y, power, names = _stamped(system)
     kinds = np.array([e.kind for e in els])
-    mass, spring, damper = (kinds == k for k in ("mass", "spring", "damper"))
+    damper = kinds == "damper"
     el_names = [e.name for e in els]
     shared = {"nodes": list(system.nodes), "elements": el_names, "all": names,
               "stored": [n for n, d in zip(el_names, damper) if not d],
@@ -197,13 +198,18 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
     pinv = {kind: np.linalg.pinv(G.T) if system.levers else None
             for kind, G in (("resonance", G_held), ("antiresonance", G_released))}
     roots = _normalised(pairs, M, D, Ks, G_held, G_released)
-    # The arithmetic for many roots at once: CHUNK roots of one kind (one constraint set).
+    # The arithmetic for many roots at once: roots of one kind (one constraint set), at most
+    # _CHUNK values per elements × roots array.
     values: list = [None] * len(roots)
-    stamps = (ei, ej, y, power, slopes, mass, spring, damper)
+    step = max(1, _CHUNK // max(len(els), 1))
+    # Once, not per chunk: each element's row among the distinct exponents 1 − power, and
+    # in the per-law table of energy shares (mass, spring, damper).
+    stamps = (ei, ej, y, np.unique(1.0 - power, return_inverse=True), slopes,
+              np.where(kinds == "mass", 0, np.where(kinds == "spring", 1, 2)), damper)
     for kind in ("resonance", "antiresonance"):
         idx = [i for i, (r, *_) in enumerate(roots) if r.kind == kind]
-        for lo in range(0, len(idx), _CHUNK):
-            part = idx[lo:lo + _CHUNK]
+        for lo in range(0, len(idx), step):
+            part = idx[lo:lo + step]
             S = np.array([roots[i][1] for i in part])
             V = np.column_stack([roots[i][2] for i in part])
             for i, vals in zip(part, _chunk_values(system, (M, D, Ks), pinv[kind], S, V,
@@ -228,28 +234,32 @@ def _normalised(pairs, M, D, Ks, G_held, G_released) -> list:
 def _chunk_values(system, pencil3, pinv, S, V, stamps) -> list:
     """Sensitivities, energies and element velocities of the roots ``S`` with
     vectors ``V`` (columns), one ``(values, param_rel, param_zeta)`` per root."""
-    ei, ej, y, power, slopes, mass, spring, damper = stamps
+    ei, ej, y, laws, slopes, law_row, damper = stamps
     M, D, Ks = pencil3
     top = np.argmax(np.abs(V), axis=0)
     col = np.arange(S.size)
-    V = V / V[top, col]                     # 1 at the largest entry (real when undamped),
-    V[top, col] = 1.0                       # exactly (a complex quotient may miss by an ulp)
+    V /= V[top, col]                        # 1 at the largest entry (real when undamped; in
+    V[top, col] = 1.0                       # place), exactly (a complex quotient may miss by an ulp)
     # Real vectors (undamped roots) keep every (element × root) array real: the complex
     # factors depend on the root and the law only, one row per law.
     Ve = np.vstack([V, np.zeros((1, S.size), V.dtype)])
-    dV = Ve[ei] - Ve[ej]
-    ya2 = dV.real ** 2 + dV.imag ** 2 if np.iscomplexobj(dV) else dV * dV
-    ya2 *= y[:, None]                       # in place (fresh E × roots arrays page-fault)
-    rel, zeta = _root_sensitivity(system, M, D, Ks, pinv, S, V, dV, y, power,
+    dV = Ve[ei]
+    dV -= Ve[ej]
+    # In place where it can be (fresh E × roots arrays page-fault): a real Δv is not needed
+    # beyond y·Δv², nor y·Δv² beyond the energies.
+    ya2 = dV.real ** 2 + dV.imag ** 2 if np.iscomplexobj(dV) else np.multiply(dV, dV, out=dV)
+    ya2 *= y[:, None]
+    rel, zeta = _root_sensitivity(system, M, D, Ks, pinv, S, V, dV, y, laws,
                                   None if np.iscomplexobj(dV) else ya2)
     # Both are real-linear in ∂s/∂p, and a .param's slope is a real combination of them.
     p_rel, wn = {p: (row @ rel, row @ zeta) for p, row in slopes.items()}, np.abs(S)
     # Kinetic ½mη|Δv|², potential ½kη|Δv|²/ωₙ², nothing stored in a damper.
     share = np.vstack([np.full(S.size, 0.5), 0.5 / wn ** 2, np.zeros(S.size)])
-    stored = ya2 * share[np.where(mass, 0, np.where(spring, 1, 2))]
+    dissipated = ya2[damper]
+    stored = np.multiply(ya2, share[law_row], out=ya2)
     total, energy = stored.sum(axis=0), stored[~damper] if damper.any() else stored
     energy /= total
-    dissipation = ya2[damper] / (2 * wn * total)
+    dissipation = dissipated / (2 * wn * total)
     return [({"sensitivity": rel[:, c], "zeta_sensitivity": zeta[:, c], "shape": V[:, c],
               "energy": energy[:, c], "dissipation": dissipation[:, c]},
              {p: float(x[0][c]) for p, x in p_rel.items()},
@@ -439,16 +449,17 @@ def _adjoint_products(system, x, w, stamps) -> np.ndarray:
         return np.concatenate(parts, axis=1)
 
 
-def _root_sensitivity(system, M, D, Ks, pinv_GT, S, V, dV, y, power, ya2=None) -> tuple:
+def _root_sensitivity(system, M, D, Ks, pinv_GT, S, V, dV, y, laws, ya2=None) -> tuple:
     """(p/ωₙ)·∂ωₙ/∂p and p·∂ζ/∂p (from p·∂s/∂p) for every loaded element (value p) and
     lever (ratio p), in that order, one column a root: ``S`` the roots, ``V`` their
-    vectors (columns), ``dV`` the elements' Δv; ``pinv_GT`` the pseudo-inverse of the
+    vectors (columns), ``dV`` the elements' Δv; ``laws`` the distinct exponents 1 − power
+    and each element's row among them; ``pinv_GT`` the pseudo-inverse of the
     transposed constraint rows; ``ya2`` = y·Δv² when ``dV`` is real (then the
     element rows are computed in real arithmetic), else None."""
     MV, DV = M @ V, D @ V
     den = np.sum(V * (2 * S * MV + DV), axis=0)
     # The powers S ** (1 - power), one row per distinct exponent (element e's is row which[e]).
-    exponents, which = np.unique(np.asarray(1.0 - power, dtype=float), return_inverse=True)
+    exponents, which = laws
     coef = -(S[None, :] ** exponents[:, None]) / den    # p·∂s/∂p per unit y·Δv², a row a law
     if ya2 is not None:
         rel_law, zeta_law = _omega_zeta(S, coef)
