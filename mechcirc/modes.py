@@ -243,8 +243,7 @@ def _chunk_values(system, pencil3, pinv, S, V, stamps) -> list:
     # Real vectors (undamped roots) keep every (element × root) array real: the complex
     # factors depend on the root and the law only, one row per law.
     Ve = np.vstack([V, np.zeros((1, S.size), V.dtype)])
-    dV = Ve[ei]
-    dV -= Ve[ej]
+    dV = Ve[ei] - Ve[ej]
     # In place where it can be (fresh E × roots arrays page-fault): a real Δv is not needed
     # beyond y·Δv², nor y·Δv² beyond the energies.
     ya2 = dV.real ** 2 + dV.imag ** 2 if np.iscomplexobj(dV) else np.multiply(dV, dV, out=dV)
