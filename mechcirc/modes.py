@@ -245,7 +245,7 @@ def _chunk_values(system, pencil3, pinv, S, V, stamps) -> list:
     Ve = np.vstack([V, np.zeros((1, S.size), V.dtype)])
     dV = Ve[ei] - Ve[ej]
     # In place where it can be (fresh E × roots arrays page-fault): a real Δv is not needed
-    # beyond y·Δv², nor y·Δv² beyond the energies.
+    # beyond y·Δv².
     ya2 = dV.real ** 2 + dV.imag ** 2 if np.iscomplexobj(dV) else np.multiply(dV, dV, out=dV)
     ya2 *= y[:, None]
     rel, zeta = _root_sensitivity(system, M, D, Ks, pinv, S, V, dV, y, laws,
@@ -254,11 +254,10 @@ def _chunk_values(system, pencil3, pinv, S, V, stamps) -> list:
     p_rel, wn = {p: (row @ rel, row @ zeta) for p, row in slopes.items()}, np.abs(S)
     # Kinetic ½mη|Δv|², potential ½kη|Δv|²/ωₙ², nothing stored in a damper.
     share = np.vstack([np.full(S.size, 0.5), 0.5 / wn ** 2, np.zeros(S.size)])
-    dissipated = ya2[damper]
-    stored = np.multiply(ya2, share[law_row], out=ya2)
+    stored = ya2 * share[law_row]
     total, energy = stored.sum(axis=0), stored[~damper] if damper.any() else stored
     energy /= total
-    dissipation = dissipated / (2 * wn * total)
+    dissipation = ya2[damper] / (2 * wn * total)
     return [({"sensitivity": rel[:, c], "zeta_sensitivity": zeta[:, c], "shape": V[:, c],
               "energy": energy[:, c], "dissipation": dissipation[:, c]},
              {p: float(x[0][c]) for p, x in p_rel.items()},
