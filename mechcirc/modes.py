@@ -63,9 +63,8 @@ from .resonances import Resonance, constraint_basis, pencil, resonance_pairs
 
 __all__ = ["Mode", "SweepSensitivity", "modes", "sweep_sensitivity"]
 
-#: Values (elements × roots) combined in one array operation: bounded memory, but not
-#: small chunks, whose many fresh temporaries page-fault (docs/performance.md, modes).
-_CHUNK = 2**21
+#: Roots whose vectors are combined in one array operation (bounded memory: E × _CHUNK).
+_CHUNK = 128
 
 
 def _lazy(key: str, names: str):
@@ -198,18 +197,16 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
     pinv = {kind: np.linalg.pinv(G.T) if system.levers else None
             for kind, G in (("resonance", G_held), ("antiresonance", G_released))}
     roots = _normalised(pairs, M, D, Ks, G_held, G_released)
-    # The arithmetic for many roots at once: roots of one kind (one constraint set), at most
-    # _CHUNK values per elements × roots array.
+    # The arithmetic for many roots at once: CHUNK roots of one kind (one constraint set).
     values: list = [None] * len(roots)
-    step = max(1, _CHUNK // max(len(els), 1))
     # Once, not per chunk: each element's row among the distinct exponents 1 − power, and
     # in the per-law table of energy shares (mass, spring, damper).
     stamps = (ei, ej, y, (np.unique(1.0 - power, return_inverse=True), lever_ends), slopes,
               np.where(kinds == "mass", 0, np.where(kinds == "spring", 1, 2)), damper)
     for kind in ("resonance", "antiresonance"):
         idx = [i for i, (r, *_) in enumerate(roots) if r.kind == kind]
-        for lo in range(0, len(idx), step):
-            part = idx[lo:lo + step]
+        for lo in range(0, len(idx), _CHUNK):
+            part = idx[lo:lo + _CHUNK]
             S = np.array([roots[i][1] for i in part])
             V = np.column_stack([roots[i][2] for i in part])
             for i, vals in zip(part, _chunk_values(system, (M, D, Ks), pinv[kind], S, V,
