@@ -230,13 +230,14 @@ def _normalised(pairs, M, D, Ks, G_held, G_released) -> list:
 
 def _chunk_values(system, pencil3, pinv, S, V, stamps) -> list:
     """Sensitivities, energies and element velocities of the roots ``S`` with
-    vectors ``V`` (columns), one ``(values, param_rel, param_zeta)`` per root."""
+    vectors ``V`` (columns; scaled in place), one ``(values, param_rel, param_zeta)``
+    per root."""
     ei, ej, y, laws, slopes, law_row, damper = stamps
     M, D, Ks = pencil3
     top = np.argmax(np.abs(V), axis=0)
     col = np.arange(S.size)
-    V /= V[top, col]                        # 1 at the largest entry (real when undamped; in
-    V[top, col] = 1.0                       # place), exactly (a complex quotient may miss by an ulp)
+    V /= V[top, col]                        # 1 at the largest entry (real when undamped),
+    V[top, col] = 1.0                       # exactly (a complex quotient may miss by an ulp)
     # Real vectors (undamped roots) keep every (element × root) array real: the complex
     # factors depend on the root and the law only, one row per law.
     Ve = np.vstack([V, np.zeros((1, S.size), V.dtype)])
@@ -450,9 +451,9 @@ def _root_sensitivity(system, M, D, Ks, pinv_GT, S, V, dV, y, laws, ya2=None) ->
     lever (ratio p), in that order, one column a root: ``S`` the roots, ``V`` their
     vectors (columns), ``dV`` the elements' Δv; ``laws`` the distinct exponents 1 − power
     and each element's row among them, and the levers' ends (:func:`_stamped`);
-    ``pinv_GT`` the pseudo-inverse of the
-    transposed constraint rows; ``ya2`` = y·Δv² when ``dV`` is real (then the
-    element rows are computed in real arithmetic), else None."""
+    ``pinv_GT`` the pseudo-inverse of the transposed constraint rows; ``ya2`` = y·Δv²
+    when ``dV`` is real (then the element rows are computed in real arithmetic), else
+    None."""
     MV, DV = M @ V, D @ V
     den = np.sum(V * (2 * S * MV + DV), axis=0)
     # The powers S ** (1 - power), one row per distinct exponent (element e's is row which[e]).
