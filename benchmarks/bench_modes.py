@@ -14,6 +14,13 @@ medians, the spread of the per-repetition ratios is printed, and the share of
 ``modes`` that is the eigen-solve with vectors
 (``resonance_pairs(vectors=True)``, the floor of any ``modes``).
 
+``--before PATH`` also times, in the same repetitions and in turn before and
+after this one, the ``modes`` of another copy of ``mechcirc/modes.py`` (e.g.
+``git show main:mechcirc/modes.py > /tmp/m.py``), loaded beside this one with the
+same ``resonances``: on a loaded machine the medians of separate runs move by
+more than a change of a few per cent (an A/A run, the same file twice, gives
+the size of that noise).
+
 Run from the repository root: ``python benchmarks/bench_modes.py`` (on a loaded
 machine with ``OPENBLAS_NUM_THREADS=1``: idle BLAS threads spinning count as CPU time).
 """
@@ -40,13 +47,15 @@ def cpu(fn):
     return time.process_time() - t0, out
 
 
-def compare(label: str, text: str, repeat: int) -> None:
-    t_res, t_modes, t_vec = [], [], []
-    for _ in range(repeat):
+def compare(label: str, text: str, repeat: int, before=None) -> None:
+    t_res, t_modes, t_vec, t_before = [], [], [], []
+    for k in range(repeat):
         t, found = cpu(lambda: mechcirc.parse(text).resonances())
         t_res.append(t)
-        t, _ = cpu(lambda: modes(mechcirc.parse(text)))
-        t_modes.append(t)
+        # With --before, the two modes() in turn first (what runs first pays more faults).
+        for f, out in [(modes, t_modes), (before, t_before)][::1 if k % 2 else -1]:
+            if f is not None:
+                out.append(cpu(lambda f=f: f(mechcirc.parse(text)))[0])
         t, _ = cpu(lambda: resonance_pairs(mechcirc.parse(text), vectors=True))
         t_vec.append(t)
     a, b, c = (statistics.median(x) for x in (t_res, t_modes, t_vec))
@@ -55,15 +64,30 @@ def compare(label: str, text: str, repeat: int) -> None:
           f"sensitivities {b * 1e3:.1f} ms; ratio {b / a:.2f} (per repetition "
           f"{each[0]:.2f}–{each[-1]:.2f}; goal ≤ 2); of which the roots with vectors "
           f"{c * 1e3:.1f} ms ({c / a:.2f}× resonances())")
+    if before is not None:
+        d = statistics.median(t_before)
+        paired = statistics.median(m / o for m, o in zip(t_modes, t_before))
+        print(f"  the modes() before: {d * 1e3:.1f} ms, ratio {d / a:.2f}; now / before "
+              f"{b / d:.3f} (median of the per-repetition ratios {paired:.3f})")
 
 
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--before", type=Path, help="another mechcirc/modes.py to time alongside")
     args = ap.parse_args()
+    before = None
+    if args.before:
+        import importlib.util
+
+        spec = importlib.util.spec_from_file_location("mechcirc._modes_before", args.before)
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[spec.name] = module         # its dataclasses look their module up
+        spec.loader.exec_module(module)
+        before = module.modes
     root = Path(__file__).resolve().parents[1]
-    compare("stb_heald", (root / "netlists" / "stb_heald.mcir").read_text(), args.repeat)
-    compare("30×30 grid", grid(30), args.repeat)
+    compare("stb_heald", (root / "netlists" / "stb_heald.mcir").read_text(), args.repeat, before)
+    compare("30×30 grid", grid(30), args.repeat, before)
 
 
 if __name__ == "__main__":

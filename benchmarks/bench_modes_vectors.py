@@ -12,6 +12,11 @@ within each repetition, on the grid's held problem:
 * ``scipy.linalg.eig_banded(select="i")`` (sbevx: bisection + inverse iteration);
 * the same for the lowest n/10 roots only (a band ``omega_max``);
 * ``scipy.linalg.eigvals_banded`` (the values alone, what ``resonances()`` pays);
+* LAPACK ``dsytrd`` alone (the reduction to tridiagonal inside ``eigh``);
+* inverse iteration on the band, the route that knows the eigenvalues: one
+  shifted banded LU and solve (``dgbtrf`` + ``dgbtrs``, bandwidth b each side)
+  per root, timed on ``--solves`` roots and scaled to all n (one step each, no
+  reorthogonalisation of the grid's equal roots: a lower bound of that route);
 
 and prints each against ``eigh`` with the accuracy of the vectors (residual
 max |A x − λx|/λ_max and max |XᵀX − I|, i.e. M-orthonormality of the
@@ -63,15 +68,39 @@ def band(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return ab, P.toarray()
 
 
+def band_solver(Ap: np.ndarray, b: int, count: int):
+    """A call doing ``count`` steps of inverse iteration on the band of ``Ap``, each at
+    its own shift (an eigenvalue moved by 1e-10): LAPACK dgbtrf + dgbtrs in general
+    band storage (the storage and the shifts made here, outside the timing)."""
+    from scipy.linalg import eigvalsh, lapack
+
+    n = Ap.shape[0]
+    G = np.zeros((3 * b + 1, n), order="F")
+    for d in range(-b, b + 1):                  # A[i, j] at row 2b + i − j, column j
+        G[2 * b - d, max(d, 0):n + min(d, 0)] = np.diagonal(Ap, d)
+    rhs = np.random.default_rng(1).standard_normal(n)
+    shifts = eigvalsh(Ap)[np.linspace(0, n - 1, count).astype(int)] * (1 + 1e-10)
+
+    def solves() -> None:
+        for lam in shifts:
+            shifted = G.copy(order="F")
+            shifted[2 * b] -= lam
+            lu, piv, _ = lapack.dgbtrf(shifted, b, b, overwrite_ab=1)
+            lapack.dgbtrs(lu, b, b, rhs, piv)
+    return solves
+
+
 def main() -> None:
-    from scipy.linalg import eig_banded, eigh, eigvals_banded
+    from scipy.linalg import eig_banded, eigh, eigvals_banded, lapack
 
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--solves", type=int, default=40)
     args = ap.parse_args()
     A = scaled_held(30)
     ab, Ap = band(A)
     n = A.shape[0]
+    solves = band_solver(Ap, ab.shape[0] - 1, args.solves)
     calls = {
         "numpy eigh (syevd)": (A, lambda: np.linalg.eigh(A)),
         "scipy eigh evd": (A, lambda: eigh(A, driver="evd", check_finite=False)),
@@ -82,6 +111,8 @@ def main() -> None:
             ab, lower=True, select="i", select_range=(0, n // 10 - 1), check_finite=False)),
         "eigvals_banded (values only)": (Ap, lambda: (eigvals_banded(
             ab, lower=True, check_finite=False), None)),
+        "dsytrd (eigh's reduction)": (A, lambda: (lapack.dsytrd(A, lower=1), None)),
+        "band inverse iteration, all n": (Ap, lambda: (solves(), None)),
     }
     times: dict[str, list[float]] = {k: [] for k in calls}
     out: dict = {}
@@ -90,6 +121,8 @@ def main() -> None:
             t0 = time.process_time()
             out[name] = fn()
             times[name].append(time.process_time() - t0)
+    times["band inverse iteration, all n"] = [t * n / args.solves
+                                              for t in times["band inverse iteration, all n"]]
     base = statistics.median(times["numpy eigh (syevd)"])
     print(f"30×30 grid, held problem: {n} rows, band {ab.shape[0] - 1}")
     for name, (B, _) in calls.items():

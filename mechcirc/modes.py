@@ -183,9 +183,9 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
         return []
     M, D, Ks, G_released, G_held, _ = pencil(system)
     els = system.elements
-    ei, ej, y, power, names = _stamped(system)
+    ei, ej, y, power, lever_ends, names = _stamped(system)
     kinds = np.array([e.kind for e in els])
-    mass, spring, damper = (kinds == k for k in ("mass", "spring", "damper"))
+    damper = kinds == "damper"
     el_names = [e.name for e in els]
     shared = {"nodes": list(system.nodes), "elements": el_names, "all": names,
               "stored": [n for n, d in zip(el_names, damper) if not d],
@@ -199,7 +199,10 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
     roots = _normalised(pairs, M, D, Ks, G_held, G_released)
     # The arithmetic for many roots at once: CHUNK roots of one kind (one constraint set).
     values: list = [None] * len(roots)
-    stamps = (ei, ej, y, power, slopes, mass, spring, damper)
+    # Once, not per chunk: each element's row among the distinct exponents 1 − power, and
+    # in the per-law table of energy shares (mass, spring, damper).
+    stamps = (ei, ej, y, (np.unique(1.0 - power, return_inverse=True), lever_ends), slopes,
+              np.where(kinds == "mass", 0, np.where(kinds == "spring", 1, 2)), damper)
     for kind in ("resonance", "antiresonance"):
         idx = [i for i, (r, *_) in enumerate(roots) if r.kind == kind]
         for lo in range(0, len(idx), _CHUNK):
@@ -227,26 +230,29 @@ def _normalised(pairs, M, D, Ks, G_held, G_released) -> list:
 
 def _chunk_values(system, pencil3, pinv, S, V, stamps) -> list:
     """Sensitivities, energies and element velocities of the roots ``S`` with
-    vectors ``V`` (columns), one ``(values, param_rel, param_zeta)`` per root."""
-    ei, ej, y, power, slopes, mass, spring, damper = stamps
+    vectors ``V`` (columns; scaled in place), one ``(values, param_rel, param_zeta)``
+    per root."""
+    ei, ej, y, laws, slopes, law_row, damper = stamps
     M, D, Ks = pencil3
     top = np.argmax(np.abs(V), axis=0)
     col = np.arange(S.size)
-    V = V / V[top, col]                     # 1 at the largest entry (real when undamped),
+    V /= V[top, col]                        # 1 at the largest entry (real when undamped),
     V[top, col] = 1.0                       # exactly (a complex quotient may miss by an ulp)
     # Real vectors (undamped roots) keep every (element × root) array real: the complex
     # factors depend on the root and the law only, one row per law.
     Ve = np.vstack([V, np.zeros((1, S.size), V.dtype)])
     dV = Ve[ei] - Ve[ej]
-    ya2 = dV.real ** 2 + dV.imag ** 2 if np.iscomplexobj(dV) else dV * dV
-    ya2 *= y[:, None]                       # in place (fresh E × roots arrays page-fault)
-    rel, zeta = _root_sensitivity(system, M, D, Ks, pinv, S, V, dV, y, power,
+    # In place where it can be (fresh E × roots arrays page-fault): a real Δv is not needed
+    # beyond y·Δv².
+    ya2 = dV.real ** 2 + dV.imag ** 2 if np.iscomplexobj(dV) else np.multiply(dV, dV, out=dV)
+    ya2 *= y[:, None]
+    rel, zeta = _root_sensitivity(system, M, D, Ks, pinv, S, V, dV, y, laws,
                                   None if np.iscomplexobj(dV) else ya2)
     # Both are real-linear in ∂s/∂p, and a .param's slope is a real combination of them.
     p_rel, wn = {p: (row @ rel, row @ zeta) for p, row in slopes.items()}, np.abs(S)
     # Kinetic ½mη|Δv|², potential ½kη|Δv|²/ωₙ², nothing stored in a damper.
     share = np.vstack([np.full(S.size, 0.5), 0.5 / wn ** 2, np.zeros(S.size)])
-    stored = ya2 * share[np.where(mass, 0, np.where(spring, 1, 2))]
+    stored = ya2 * share[law_row]
     total, energy = stored.sum(axis=0), stored[~damper] if damper.any() else stored
     energy /= total
     dissipation = ya2[damper] / (2 * wn * total)
@@ -271,15 +277,18 @@ def _mode(r, repeated, vals, p_rel, p_zeta, shared) -> Mode:
 
 
 def _stamped(system) -> tuple:
-    """(row i, row j (−1 the reference), value·η, law power) of each loaded element,
-    and the names: the elements, then the levers."""
+    """(row i, row j (−1 the reference), value·η, law power) of each loaded element, the
+    rows of each lever's primary ends p1, p2 (shape (2, levers)), and the names: the
+    elements, then the levers."""
     els = system.elements
     index = {n: i for i, n in enumerate(system.nodes)}
     ei = np.array([index.get(e.n1, -1) for e in els], dtype=int)
     ej = np.array([index.get(e.n2, -1) for e in els], dtype=int)
+    ends = np.array([[index.get(lv.p1, -1) for lv in system.levers],
+                     [index.get(lv.p2, -1) for lv in system.levers]], dtype=int)
     y = np.array([e.value * e.eta for e in els])
     power = np.array([LAWS[e.kind].power for e in els])
-    return ei, ej, y, power, [e.name for e in els] + [lv.name for lv in system.levers]
+    return ei, ej, y, power, ends, [e.name for e in els] + [lv.name for lv in system.levers]
 
 
 @dataclass(frozen=True)
@@ -380,7 +389,7 @@ def sweep_sensitivity(circuit: Circuit, omega, names=None) -> SweepSensitivity:
     from . import nodal
 
     system = circuit.nodal
-    ei, ej, y, power, stamped = _stamped(system)
+    ei, ej, y, power, lever_ends, stamped = _stamped(system)
     value, names = _values_named(circuit, names)
     omega = np.atleast_1d(np.asarray(omega, dtype=float))
     column = {name: k for k, name in enumerate(stamped)}
@@ -395,7 +404,7 @@ def sweep_sensitivity(circuit: Circuit, omega, names=None) -> SweepSensitivity:
         sol = nodal.solve(system, w)
         assert sol.x is not None            # kept by default
         K[at:at + w.size] = sol.K
-        dK_all = _adjoint_products(system, sol.x, w, (ei, ej, y, power))
+        dK_all = _adjoint_products(system, sol.x, w, (ei, ej, y, power, lever_ends))
         for name in names:
             if name in column:
                 dK[name][at:at + w.size] = dK_all[:, column[name]]
@@ -425,30 +434,30 @@ def _values_named(circuit: Circuit, names) -> tuple[dict, list]:
 def _adjoint_products(system, x, w, stamps) -> np.ndarray:
     """∂K/∂(value) of every stamped element, then every lever ratio, at the ω ``w``
     from the nodal solutions ``x`` (rows), shape (ω, elements + levers)."""
-    ei, ej, y, power = stamps
+    ei, ej, y, power, ends = stamps
     n_nodes = len(system.nodes)
-    index = {nd: i for i, nd in enumerate(system.nodes)}
     xe = np.concatenate([x, np.zeros((w.size, 1), complex)], axis=1)
+    ratio = np.array([lv.ratio for lv in system.levers])
     with np.errstate(all="ignore"):
         S = y * (1j * w[:, None]) ** (-power.astype(float))
         dv = xe[:, ei] - xe[:, ej]
-        parts = [-S * dv * dv]
-        for k, lv in enumerate(system.levers):
-            dp = xe[:, index.get(lv.p1, -1)] - xe[:, index.get(lv.p2, -1)]
-            parts.append((-2 * lv.ratio * xe[:, n_nodes + k] * dp)[:, None])
-        return np.concatenate(parts, axis=1)
+        # Each lever's force unknown (after the node rows) times its ends' Δv.
+        lever = -2 * ratio * xe[:, n_nodes:n_nodes + ratio.size] * (xe[:, ends[0]] - xe[:, ends[1]])
+        return np.concatenate([-S * dv * dv, lever], axis=1)
 
 
-def _root_sensitivity(system, M, D, Ks, pinv_GT, S, V, dV, y, power, ya2=None) -> tuple:
+def _root_sensitivity(system, M, D, Ks, pinv_GT, S, V, dV, y, laws, ya2=None) -> tuple:
     """(p/ωₙ)·∂ωₙ/∂p and p·∂ζ/∂p (from p·∂s/∂p) for every loaded element (value p) and
     lever (ratio p), in that order, one column a root: ``S`` the roots, ``V`` their
-    vectors (columns), ``dV`` the elements' Δv; ``pinv_GT`` the pseudo-inverse of the
-    transposed constraint rows; ``ya2`` = y·Δv² when ``dV`` is real (then the
-    element rows are computed in real arithmetic), else None."""
+    vectors (columns), ``dV`` the elements' Δv; ``laws`` the distinct exponents 1 − power
+    and each element's row among them, and the levers' ends (:func:`_stamped`);
+    ``pinv_GT`` the pseudo-inverse of the transposed constraint rows; ``ya2`` = y·Δv²
+    when ``dV`` is real (then the element rows are computed in real arithmetic), else
+    None."""
     MV, DV = M @ V, D @ V
     den = np.sum(V * (2 * S * MV + DV), axis=0)
     # The powers S ** (1 - power), one row per distinct exponent (element e's is row which[e]).
-    exponents, which = np.unique(np.asarray(1.0 - power, dtype=float), return_inverse=True)
+    (exponents, which), ends = laws
     coef = -(S[None, :] ** exponents[:, None]) / den    # p·∂s/∂p per unit y·Δv², a row a law
     if ya2 is not None:
         rel_law, zeta_law = _omega_zeta(S, coef)
@@ -461,12 +470,10 @@ def _root_sensitivity(system, M, D, Ks, pinv_GT, S, V, dV, y, power, ya2=None) -
         return rel, zeta
     # Constraint forces q from the node rows: P(s) v + s Gᵀ q = 0 (exact at an eigenvector).
     q = -(pinv_GT @ (S * S * MV + S * DV + Ks @ V)) / S
-    index = {n: i for i, n in enumerate(system.nodes)}
     Ve = np.vstack([V, np.zeros((1, V.shape[1]))])
-    p1 = [index.get(lv.p1, -1) for lv in system.levers]
-    p2 = [index.get(lv.p2, -1) for lv in system.levers]
     ratio = np.array([lv.ratio for lv in system.levers])[:, None]
-    lever_rel, lever_zeta = _omega_zeta(S, -2 * S * ratio * q[:len(p1)] * (Ve[p1] - Ve[p2]) / den)
+    lever_rel, lever_zeta = _omega_zeta(
+        S, -2 * S * ratio * q[:ratio.size] * (Ve[ends[0]] - Ve[ends[1]]) / den)
     return np.vstack([rel, lever_rel]), np.vstack([zeta, lever_zeta])
 
 
@@ -508,9 +515,10 @@ def _param_slopes(circuit: Circuit, names: list[str]) -> dict[str, np.ndarray]:
     from .expressions import evaluate
     from .netlist import expressions_of
 
-    exprs = expressions_of(circuit)
     params = dict(circuit.params)
-    if not exprs or not params:
+    # No .param: nothing to differentiate (and the expression table is not materialised).
+    exprs = expressions_of(circuit) if params else None
+    if not exprs:
         return {}
     position = {name: k for k, name in enumerate(names)}
     x = {e.name: e.value for e in circuit.elements} | {lv.name: lv.ratio for lv in circuit.levers}
