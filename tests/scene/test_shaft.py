@@ -281,3 +281,31 @@ def test_the_sley_flywheel_example_gives_the_numbers_in_the_docs():
         for g, w, d in zip(got, want, digits):
             if g is not None:
                 assert abs(g - w) <= 0.51 * d, (row[0], got, want)
+
+
+@pytest.mark.parametrize("max_time", [None, 0.05])
+def test_dop853_start_up_is_the_closed_form_and_says_when_max_time_is_too_short(max_time):
+    """method="DOP853" (scipy's solve_ivp, cycle by cycle): the linear motor's start-up
+    ω(t) = ω0 (1 − exp(−T0 t / (ω0 J))) and its time into the 1 % band, τ ln 100; a
+    max_time shorter than τ ln 100 (0.074 s here) is refused with the speed reached."""
+    T0, W0 = 20.0, 80.0
+    extra = "" if max_time is None else f"max_time = {max_time}\n"
+    scene = parse_scene(DISC + f"""[shaft]
+flywheel = {JF}
+motor = "table"
+speeds = [0.0, {W0}]
+torques = [{T0}, 0.0]
+{extra}""")
+    tau = (J0 + JF) * W0 / T0
+    if max_time is not None:
+        with pytest.raises(MechcircError, match="did not reach the steady cycle within "
+                                                "max_time = 0.05 s .speed ([0-9.]+) rad/s") as exc:
+            simulate_shaft(scene, method="DOP853")
+        speed = float(str(exc.value).split("(speed ")[1].split(" ")[0])
+        assert abs(speed - W0 * (1 - math.exp(-max_time / tau))) <= 1e-5 * W0
+        return
+    r = simulate_shaft(scene, method="DOP853")
+    want = W0 * (1 - np.exp(-r.startup_t / tau))
+    assert np.max(np.abs(r.startup_speed - want)) <= 1e-8 * W0
+    # the crossing's error is the speed's over the slope 0.01 ω0/τ there: 1.8e-8 τ achieved
+    assert abs(r.startup_time - tau * math.log(100)) <= 1e-7 * tau
