@@ -96,8 +96,9 @@ class Waveform:
             func = self.func
             if func is None:
                 raise ValueError("a 'callable' waveform needs func")
-            out = np.asarray(func(t), dtype=np.float64)
-            if out.shape != t.shape:
+            try:
+                out = np.asarray(func(t), dtype=np.float64).reshape(t.shape)
+            except (TypeError, ValueError):   # a function of one number (math.sin) or a constant
                 out = np.array([float(func(float(s))) for s in t])
             if not np.all(np.isfinite(out)):
                 raise MechcircError("the drive function returned a non-finite value")
