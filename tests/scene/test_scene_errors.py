@@ -1,6 +1,7 @@
 """Bad scene input (issue 7 §5): each a clear error, located where a line is to blame."""
 
 import math
+from pathlib import Path
 
 import pytest
 
@@ -240,3 +241,58 @@ velocity = 1.0
 ''')
     with pytest.raises(GeometryError, match="cannot make a full revolution.*locks near"):
         cycle_map(scene, points=8)
+
+
+FNF = (Path(__file__).resolve().parents[2] / "examples" / "fnf_sixbar_scene.toml").read_text(
+    encoding="utf-8")
+KLOSS = ('motor = "kloss"       # an induction motor, referred to crank 1\'s shaft\n'
+         'sync_speed = 21.0     # [rad/s]\nbreakdown_torque = 2.0\nbreakdown_slip = 0.2\n')
+MOMENT = '[[moments]]\nbody = "organ"\namplitude = 5.0\nwindow_deg = 30.0\n'
+ALIASES = ('[simulate.aliases]\neps_organ = "organ.acceleration"\n'
+           'eps_organ_rigid = "output6.rigid_acceleration"\nM1 = "C1.force"\n')
+TABLE_MOTOR = 'motor = "table"\nspeeds = [0.0, 25.0]\ntorques = [2.0, 0.0]\n'
+
+
+@pytest.mark.parametrize("old, new, needle, fragments", [
+    ('units = "mm"', 'units = "mm"\nmoments = 3', "moments = 3",
+     ["moments must be an array of tables [[moments]]"]),
+    ("[drive]", MOMENT + 'name = "J1"  # taken\n[drive]', 'name = "J1"  # taken',
+     ["[[moments]] #1: name 'J1' is not a valid unused name", "(expected an identifier"]),
+    ("[drive]", MOMENT.replace("30.0", "400.0") + "[drive]", "window_deg = 400",
+     ["window_deg of 'M_organ' must be < 360, got 400.0", "(expected 0 < window_deg < 360)"]),
+    ("[drive]", MOMENT + 'centre = "middle"\n[drive]', 'centre = "middle"',
+     ["centre 'middle' of 'M_organ' is unknown", '(expected "front-dead-centre"']),
+    ('M1 = "C1.force"', 'M1 = "C1force"', "M1 =",
+     ["[simulate.aliases] maps names to \"THING.quantity\" strings, got M1 = 'C1force'",
+      '(expected eps2P = "crank.acceleration")']),
+    (ALIASES, "aliases = 3\n", "aliases = 3",
+     ["[simulate] aliases must be a table [simulate.aliases]"]),
+    ("revolutions = 4 ", "revolutions = 0 ", "revolutions = 0",
+     ["[simulate] revolutions must be an integer ≥ 1, got 0"]),
+    ("revolutions = 4 ", "points = 8\nrevolutions = 4 ", "points = 8",
+     ["[simulate] points must be an integer ≥ 16, got 8"]),
+    ("revolutions = 4 ", "omega = -1.0\nrevolutions = 4 ", "omega = -1.0",
+     ["[simulate] omega must be a finite number > 0, got -1.0"]),
+    (KLOSS, TABLE_MOTOR.replace("speeds = [0.0, 25.0]\n", ""), 'motor = "table"',
+     ["[shaft] a motor table needs speeds = [...]", "(expected speeds = [[rad/s], increasing])"]),
+    (KLOSS, TABLE_MOTOR.replace("[0.0, 25.0]", "[25.0, 0.0]"), 'motor = "table"',
+     ["[shaft] the motor table's speeds must increase, got [25.0, 0.0]"]),
+    ("breakdown_slip = 0.2", "", 'motor = "kloss"',
+     ["[shaft] a Kloss motor needs breakdown_slip, or rated_power and rated_speed"]),
+    ("breakdown_slip = 0.2", "breakdown_slip = -0.2", "breakdown_slip = -0.2",
+     ["[shaft] breakdown_slip must be a finite number > 0, got -0.2"]),
+])
+def test_bad_moments_simulate_and_shaft_tables_exit_2_at_their_line(old, new, needle,
+                                                                     fragments, tmp_path, capsys):
+    """scene/simfile's refusals ([[moments]], [simulate], [shaft] motors) through the CLI:
+    exit 2, one line 'file:line:col: error: …' at the offending key (the line found here),
+    what is wrong and, where a form is expected, what would be right."""
+    from cli_helpers import assert_user_error
+
+    text = FNF.replace(old, new, 1)
+    assert text != FNF
+    f = tmp_path / "s.toml"
+    f.write_text(text, encoding="utf-8")
+    line, col = _where(text, needle)
+    assert_user_error(["scene", f, "--theta", "40"], capsys, f"s.toml:{line}:{col}: error: ",
+                      *fragments)
