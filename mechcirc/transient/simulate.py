@@ -162,7 +162,7 @@ def read_csv_drive(path: str) -> Waveform:
     """Drive samples from a CSV file of two columns, time [s] and value (one header line allowed)."""
     from ..sources import csv_rows, read_source
 
-    text = read_source(path, "a CSV file of drive samples (time,value)")
+    text = read_source(path, "a drive CSV (time,value)")
     times: list[float] = []
     values: list[float] = []
     for lineno, row, _, _ in csv_rows(text, path):
