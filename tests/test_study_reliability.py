@@ -570,12 +570,24 @@ def _importable(name):
     return importlib.util.find_spec(name) is not None
 
 
-def test_a_failed_sweep_batch_gives_each_point_its_curve_or_nan():
-    """run_batch(curves=True) on a batch that one point breaks (a negative mass): each
-    point is run alone, the good one's K(ω) the closed form 1/(jωm + 2k/(jω)), the bad
-    one's row the located error and its curve NaN."""
+@pytest.mark.parametrize("batch_fails", [False, True])
+def test_a_failed_sweep_batch_gives_each_point_its_curve_or_nan(batch_fails, monkeypatch):
+    """run_batch(curves=True) on a batch that one point breaks (a negative mass): the good
+    point's K(ω) is the closed form 1/(jωm + 2k/(jω)), the bad one's row the located
+    error and its curve NaN; the same when the batch as a whole fails (batch.designs made
+    to raise for more than one point), so that each point is run alone (the fallback)."""
+    import mechcirc.batch
     from mechcirc.study import StudySpec, run_batch
 
+    if batch_fails:
+        designs = mechcirc.batch.designs
+
+        def whole_batch_fails(text, params, **kw):
+            if len(next(iter(params.values()))) > 1:
+                raise MemoryError("the batch does not fit")
+            return designs(text, params, **kw)
+
+        monkeypatch.setattr(mechcirc.batch, "designs", whole_batch_fails)
     spec = StudySpec(SIMPLE, "n.mcir", "sweep", ("m",), ((3.0,), (-1.0,)),
                      omega=(1.0, 100.0, 5, True))
     rows, K = run_batch(spec, [(0, {"m": 3.0}), (1, {"m": -1.0})], True)
@@ -583,5 +595,6 @@ def test_a_failed_sweep_batch_gives_each_point_its_curve_or_nan():
     np.testing.assert_allclose(K[0], 1 / (1j * w * 3.0 + 200 / (1j * w)), rtol=1e-14)
     assert np.isnan(K[1]).all() and K.shape == (2, 5)
     assert rows[0]["status"] == "ok" and rows[1]["status"] == "error"
-    assert rows[1]["error"].startswith("NetlistError: n.mcir:2:") and "must be > 0" in rows[1]["error"]
+    assert rows[1]["error"].startswith("NetlistError: n.mcir:2:")
+    assert "must be > 0" in rows[1]["error"]
     assert rows[0]["K_abs_min"] == pytest.approx(np.abs(K[0]).min(), rel=1e-14)
