@@ -566,7 +566,7 @@ def _sample_file(table: dict, base: Path, analysis: str, roles: dict):
         raise NetlistError(f"has {len(records):,} rows, the limit is {MAX_POINTS:,}", source)
     points = tuple(_sample_row(cells, names, source, line, roles) for line, cells in records)
     canon = {"method": "file", "columns": list(names),
-             "file_sha256": _sha256(read_bytes(path, "a sample file"))}
+             "file_sha256": _sha256(read_bytes(path, "a sample"))}
     return names, points, canon
 
 
@@ -634,7 +634,7 @@ def _sample_row(cells: list, names: tuple[str, ...], source: str, line: int,
 
 def _csv_records(path):
     """(header, records) of a CSV sample file: [(name, col)], [(line, [(text, col)])]."""
-    text = read_source(path, "a CSV file of parameter columns")
+    text = read_source(path, "a parameter-column CSV")
     records = [(lineno, [(f.strip(), c) for f, c in zip(cells, cols)])
                for lineno, cells, cols, _ in csv_rows(text, os.fspath(path), comments=False)]
     if not records:
@@ -652,7 +652,7 @@ def _parquet_records(path):
         raise NetlistError("reading Parquet needs pyarrow (pip install pyarrow); or give a "
                            "CSV file", os.fspath(path)) from None
     try:
-        table = pq.read_table(io.BytesIO(read_bytes(path, "a Parquet file")))
+        table = pq.read_table(io.BytesIO(read_bytes(path, "a Parquet")))
     except NetlistError:
         raise
     except Exception as exc:  # noqa: BLE001 - pyarrow's errors have no common base

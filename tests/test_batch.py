@@ -643,3 +643,25 @@ def test_network_shape_ignores_values_and_sees_nodes_names_and_drive():
         assert network_shape(parse(changed)) != network_shape(a)
         with pytest.raises(InputError, match="differs in topology"):
             from_circuits([a, parse(changed)])
+
+
+def test_a_springs_damping_expression_varies_per_design_and_designs_pickle():
+    """spring ... damping={c}: each design's K(ω) is the closed form
+    1/(k/(jω) + c) + 1/(jωm); c = 0 removes the damper (another network), so that
+    design is left to the single path and still right.  A pickled Designs (its
+    compiled plans dropped) gives the same numbers."""
+    import pickle
+
+    text = ".param c=2 m=1\ndrive V a 0 velocity=1\nspring k a b 1e4 damping={c}\n" \
+           "mass m b 0 {m}\n"
+    c, m = np.array([0.5, 20.0, 0.0]), np.array([1.0, 2.0, 1.5])
+    ds = designs(text, {"c": c, "m": m})
+    assert ds.valid.tolist() == [True, True, False]
+    w = np.geomspace(10, 1e3, 9)
+    s = ds.sweep(w)
+    ref = 1 / (1e4 / (1j * w) + c[:, None]) + 1 / (1j * w * m[:, None])
+    np.testing.assert_allclose(s.K, ref, rtol=1e-13)
+    assert s.single.tolist() == [2]
+    again = pickle.loads(pickle.dumps(ds))
+    assert again._plans == {} and ds._plans
+    np.testing.assert_array_equal(again.sweep(w).K, s.K)

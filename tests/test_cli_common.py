@@ -335,3 +335,48 @@ def test_a_package_warning_raised_again_during_a_command_is_not_printed_twice(ca
     lines = [line for line in err.splitlines() if "lie on no path" in line]
     assert len(lines) == 1 and lines[0].startswith("warning: "), err
     assert "UnloadedElementWarning" not in err and ".py:" not in err, err
+
+
+@pytest.mark.parametrize("argv, what", [
+    (["check", "{}"], "a .mcir netlist"),
+    (["linkage", "{}"], "a linkage .toml"),
+    (["scene", "{}", "--theta", "10"], "a scene .toml"),
+    (["study", "{}", "-o", "{out}"], "a study .toml"),
+    (["transient", STB, "--t-end", "1", "--waveform", "csv:{}", "-o", "{out}"],
+     "a drive CSV (time,value)"),
+])
+@pytest.mark.parametrize("kind", ["missing", "folder"])
+def test_an_input_file_missing_or_a_folder_exits_2_naming_it(argv, what, kind, tmp_path, capsys):
+    """Each kind of input file missing, or a folder: exit 2, one line 'PATH: error: no such
+    file (expected the path of …)' / 'is a directory (expected … file)', nothing written
+    (the drive CSV's expectation read '… (time,value) file file' before)."""
+    path = tmp_path / ("nope.txt" if kind == "missing" else "folder")
+    if kind == "folder":
+        path.mkdir()
+    out = tmp_path / "out.csv"
+    argv = [str(a).replace("{}", str(path)).replace("{out}", str(out)) for a in argv]
+    expected = (f"no such file (expected the path of {what})" if kind == "missing"
+                else f"is a directory (expected {what} file)")
+    assert_user_error(argv, capsys, f"{path}: error: {expected}")
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("exc, line", [
+    (FileNotFoundError(2, "No such file or directory", "/p/x.png"), "/p/x.png: error: no such file"),
+    (IsADirectoryError(21, "Is a directory", "/p/d"), "/p/d: error: is a directory, expected a file"),
+])
+def test_a_file_error_a_command_lets_through_is_a_user_error(exc, line, monkeypatch, capsys):
+    """The last guard (cli/_common._run): an OSError naming a file that a command did not
+    turn into a located error still exits 2 with one line naming the file, no traceback."""
+    from mechcirc.cli import circuit_commands
+
+    def handler(args):
+        raise exc
+
+    monkeypatch.setattr(circuit_commands, "cmd_check", handler)
+    assert_user_error(["check", "x.mcir"], capsys, line)
+
+
+def test_set_with_an_unknown_unit_names_the_parameter_and_the_units(capsys):
+    assert_user_error(["simulate", "--set", "omega=3furlong"], capsys,
+                      "--set omega: unknown unit 'furlong' (expected one of kg,")

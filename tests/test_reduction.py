@@ -340,3 +340,29 @@ def test_compiled_plan_matches_mpmath_on_a_ladder(both_paths):
     # Shapes: a 0-d ω and an empty one.
     assert reduction.evaluate(c.tree, np.float64(3.0)).shape == ()
     assert reduction.evaluate(c.tree, np.array([])).shape == (0,)
+
+
+def test_a_long_series_run_grown_at_its_front_keeps_every_spring(monkeypatch):
+    """100 springs in series, written in a shuffled order with random orientations (seed
+    0): a run of more than 64 operands is grown at its front (_Run.prepend's deque path);
+    K = jω Σ 1/k_i + 1/(jω m), the series of the springs' and the mass's mobilities, in
+    mpmath."""
+    grown = []
+    prepend = reduction._Run.prepend
+
+    def spy(self, kids, signs):
+        grown.append(len(self.kids))
+        prepend(self, kids, signs)
+
+    monkeypatch.setattr(reduction._Run, "prepend", spy)
+    n, rng = 100, np.random.default_rng(0)
+    order, flip = rng.permutation(n), rng.integers(0, 2, n)
+    springs = [f"spring s{i} n{i + flip[i]} n{i + 1 - flip[i]} {1000 + i}\n" for i in order]
+    c = mechcirc.parse(f"drive V n0 0 velocity=1\nmass m n{n} 0 2.5\n" + "".join(springs))
+    omega = np.array([0.3, 10.0, 400.0])
+    K = c.sweep(omega).K
+    assert max(grown) > 64
+    compliance = mpmath.fsum(1 / mpmath.mpf(1000 + i) for i in range(n))
+    ref = [complex(1j * mpmath.mpf(w) * compliance + 1 / (1j * mpmath.mpf(w) * 2.5))
+           for w in omega]
+    np.testing.assert_allclose(K, ref, rtol=1e-14)

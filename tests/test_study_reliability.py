@@ -510,3 +510,91 @@ def test_a_sample_file_that_is_not_a_table_is_not_quoted(tmp_path, capsys):
                             "shadow.csv:1:1: error: column 1 (not a parameter name) is not a "
                             ".param of the netlist")
     assert "SECRET" not in err and "19000" not in err
+
+
+# ------------------------------------------------------------------ lock and Parquet refusals
+def test_a_lock_that_cannot_be_created_and_the_lock_without_fcntl(tmp_path, capsys, monkeypatch):
+    """The lock path taken by a folder: exit 2 naming it and the OS's reason, nothing written.
+    Without fcntl (Windows) the lock is an exclusive create: a lock file left by another
+    study is refused with its holder and the hint to delete it."""
+    from mechcirc.study import _lock
+
+    a = spec_file(tmp_path)
+    out = tmp_path / "r.csv"
+    Path(f"{out}.lock").mkdir()
+    assert_user_error(["study", a, "-o", out, "--workers", "1"], capsys,
+                      f"r.csv: cannot create the lock file {out}.lock: Is a directory")
+    assert files(tmp_path) == ["r.csv.lock", "s.toml"]
+    Path(f"{out}.lock").rmdir()
+    monkeypatch.setitem(sys.modules, "fcntl", None)          # import fcntl fails
+    with _lock(out):
+        assert Path(f"{out}.lock").read_text().startswith(f"pid {os.getpid()} on ")
+        with pytest.raises(MechcircError, match=(
+                f"is being written by another study \\(pid {os.getpid()} on .*; wait for it to "
+                f"end, or write another -o \\(if it is no longer running, delete {out}.lock\\)")):
+            with _lock(out):
+                pass
+    assert files(tmp_path) == ["s.toml"]
+
+
+def test_parquet_refusals_say_what_is_wrong_and_write_nothing(tmp_path, capsys, monkeypatch):
+    """A damaged Parquet table to resume, a damaged Parquet sample file: exit 2 with the
+    file and the reason; without pyarrow, Parquet output and a Parquet sample file are
+    refused with the package to install and the CSV alternative."""
+    a = spec_file(tmp_path)
+    (tmp_path / "n.mcir").write_text(SIMPLE)
+    s = tmp_path / "p.toml"
+    s.write_text('netlist = "n.mcir"\nanalysis = "resonances"\n[sample]\nfile = "d.parquet"\n')
+    bad = b"PAR1 not a table"
+    (tmp_path / "d.parquet").write_bytes(bad)
+    (tmp_path / "r.parquet").write_bytes(bad)
+    before = files(tmp_path)
+    if _importable("pyarrow"):
+        assert_user_error(["study", a, "-o", tmp_path / "r.parquet", "--resume", "--workers",
+                           "1"], capsys, "r.parquet: not a Parquet table (", "cannot resume")
+        assert (tmp_path / "r.parquet").read_bytes() == bad
+        assert_user_error(["study", s, "-o", tmp_path / "x.csv"], capsys,
+                          "d.parquet", "not a Parquet file (")
+    monkeypatch.setitem(sys.modules, "pyarrow", None)
+    monkeypatch.setitem(sys.modules, "pyarrow.parquet", None)
+    assert_user_error(["study", a, "-o", tmp_path / "new.parquet", "--workers", "1"], capsys,
+                      "Parquet output needs pyarrow (pip install pyarrow); or write CSV")
+    assert_user_error(["study", s, "-o", tmp_path / "x.csv"], capsys, "d.parquet",
+                      "reading Parquet needs pyarrow (pip install pyarrow); or give a CSV file")
+    assert files(tmp_path) == before
+
+
+def _importable(name):
+    import importlib.util
+
+    return importlib.util.find_spec(name) is not None
+
+
+@pytest.mark.parametrize("batch_fails", [False, True])
+def test_a_failed_sweep_batch_gives_each_point_its_curve_or_nan(batch_fails, monkeypatch):
+    """run_batch(curves=True) on a batch that one point breaks (a negative mass): the good
+    point's K(ω) is the closed form 1/(jωm + 2k/(jω)), the bad one's row the located
+    error and its curve NaN; the same when the batch as a whole fails (batch.designs made
+    to raise for more than one point), so that each point is run alone (the fallback)."""
+    import mechcirc.batch
+    from mechcirc.study import StudySpec, run_batch
+
+    if batch_fails:
+        designs = mechcirc.batch.designs
+
+        def whole_batch_fails(text, params, **kw):
+            if len(next(iter(params.values()))) > 1:
+                raise MemoryError("the batch does not fit")
+            return designs(text, params, **kw)
+
+        monkeypatch.setattr(mechcirc.batch, "designs", whole_batch_fails)
+    spec = StudySpec(SIMPLE, "n.mcir", "sweep", ("m",), ((3.0,), (-1.0,)),
+                     omega=(1.0, 100.0, 5, True))
+    rows, K = run_batch(spec, [(0, {"m": 3.0}), (1, {"m": -1.0})], True)
+    w = np.geomspace(1.0, 100.0, 5)
+    np.testing.assert_allclose(K[0], 1 / (1j * w * 3.0 + 200 / (1j * w)), rtol=1e-14)
+    assert np.isnan(K[1]).all() and K.shape == (2, 5)
+    assert rows[0]["status"] == "ok" and rows[1]["status"] == "error"
+    assert rows[1]["error"].startswith("NetlistError: n.mcir:2:")
+    assert "must be > 0" in rows[1]["error"]
+    assert rows[0]["K_abs_min"] == pytest.approx(np.abs(K[0]).min(), rel=1e-14)

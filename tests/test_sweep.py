@@ -294,3 +294,56 @@ def test_error_bound_through_a_lever_over_one_element():
     s, true = _sweep(expr, omega)
     ok = s.flags != FLAG_SINGULAR
     assert ok.all() and np.all(s.error >= true) and s.error.max() < 1e-13
+
+
+SDOF = "spring k a b 1e4\ndamper c a b 2.0\nmass m b 0 1.0\n"
+
+
+def _sdof_K(w):
+    """K = v/Q of the SDOF above from its closed form, in mpmath at 40 digits."""
+    import mpmath
+
+    with mpmath.workdps(40):
+        jw = 1j * mpmath.mpf(float(w))
+        return complex(1 / (mpmath.mpf(10) ** 4 / jw + 2) + 1 / jw)
+
+
+def test_nodal_error_recomputed_when_not_cached_still_covers_the_true_error():
+    """A nodal sweep given notes (adaptive_sweep's budget) keeps no cache: Sweep.error is
+    solved again (nodal.mobility_and_error) and is the bound the sweep had, ≥ the true
+    relative error of K against the closed form in mpmath."""
+    c = mechcirc.parse("drive V a 0 velocity=1\n" + SDOF)
+    omega = np.geomspace(1.0, 1e3, 30)
+    s = c.sweep(omega, method="nodal")
+    t = s.with_notes(("noted",))
+    assert "error" not in t._cache
+    ref = np.array([_sdof_K(w) for w in omega])
+    assert np.all(np.abs(t.K - ref) / np.abs(ref) <= t.error)
+    np.testing.assert_array_equal(t.error, s.error)
+
+
+def test_to_xarray_holds_the_columns_with_units_or_says_it_needs_xarray(monkeypatch):
+    """A force drive F0 = 2 N: K the closed form's, Q0 = F0, v0 = F0·K, each with its units;
+    without xarray, an ImportError naming the package and the pandas alternative."""
+    import sys
+
+    c = mechcirc.parse("drive F a 0 force=2\n" + SDOF)
+    omega = np.geomspace(1.0, 1e3, 12)
+    s = c.sweep(omega)
+    with monkeypatch.context() as m:
+        m.setitem(sys.modules, "xarray", None)
+        with pytest.raises(ImportError, match=r"needs xarray \(pip install xarray\); "
+                                              "Sweep.to_dataframe needs only pandas"):
+            s.to_xarray()
+    pytest.importorskip("xarray")
+    ds = s.to_xarray()
+    ref = np.array([_sdof_K(w) for w in omega])
+    np.testing.assert_array_equal(ds["omega"].values, omega)
+    np.testing.assert_allclose(ds["K"].values, ref, rtol=1e-14)
+    np.testing.assert_allclose(ds["abs_v0"].values, 2 * np.abs(ref), rtol=1e-14)
+    np.testing.assert_array_equal(ds["Q0"].values, np.full(12, 2.0))
+    assert sorted(ds.data_vars) == ["K", "Q0", "abs_K", "abs_Q0", "abs_v0", "error", "flag",
+                                    "v0"]
+    assert {k: ds[k].attrs["units"] for k in ("omega", "K", "abs_Q0", "v0", "error")} == {
+        "omega": "rad/s", "K": "m/(N·s)", "abs_Q0": "N", "v0": "m/s", "error": "1"}
+    assert ds.attrs == {"name": s.name, "method": "sp", "drive": "force"}

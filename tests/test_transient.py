@@ -531,3 +531,24 @@ def test_separations_of_a_sampled_sine_match_the_closed_form():
             assert s.impact_velocity == pytest.approx(A * w0 * math.cos(w0 * tc), abs=4e-3)
         else:
             assert math.isnan(s.t_close) and math.isnan(s.impact_velocity)
+
+
+def test_a_scalar_only_drive_function_is_sampled_point_by_point_and_checked():
+    """A drive function that takes one float (math.sin) gives the same run as its numpy
+    twin (it raised a TypeError before: only a scalar result was sampled point by point);
+    a constant function the same as its array form; a function returning NaN is refused naming it; the two kinds that need their
+    data (func, motion) say so."""
+    from mechcirc.transient.simulate import Waveform
+
+    c = mechcirc.parse(SDOF_F)
+    scalar = transient(c, 0.2, 1e-3, lambda t: 3.0 * math.sin(40.0 * t))
+    vector = transient(c, 0.2, 1e-3, lambda t: 3.0 * np.sin(40.0 * t))
+    np.testing.assert_array_equal(scalar.x, vector.x)
+    constant = transient(c, 0.2, 1e-3, lambda t: 3.0)
+    np.testing.assert_array_equal(constant.x, transient(c, 0.2, 1e-3, lambda t: 0 * t + 3.0).x)
+    with pytest.raises(MechcircError, match="the drive function returned a non-finite value"):
+        transient(c, 0.2, 1e-3, lambda t: np.where(t > 0.1, np.nan, 1.0))
+    with pytest.raises(ValueError, match="a 'callable' waveform needs func"):
+        Waveform("callable").sample(np.zeros(2), 1.0)
+    with pytest.raises(ValueError, match="a 'motion' waveform needs motion"):
+        Waveform("motion", omega=2.0).sample(np.zeros(2), 1.0)

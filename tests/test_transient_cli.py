@@ -202,3 +202,19 @@ def test_crosscheck_reports_progress_per_transient_run():
     kinds = {r["kind"] for r in result.resonances}         # one record per kind here
     assert bar.total == len(kinds) + len(result.steady_state) == bar.done
     assert "[" in bar.stream.getvalue()            # the bar was drawn
+
+
+@pytest.mark.parametrize("content, message", [
+    ("0\n1\n", "d.csv:1: expected two columns time,value, got 1"),
+    ("time,value\n0,1\nx,2\n", "d.csv:3: 'x','2' are not two numbers (expected time,value)"),
+    ("0,nan\n1,2\n", "d.csv:1: non-finite time or value"),
+    ("time,value\n0,1\n", "d.csv: needs at least two samples (time,value)"),
+])
+def test_bad_drive_csv_files_exit_2_at_their_line(content, message, capsys, tmp_path):
+    from cli_helpers import assert_user_error
+
+    (tmp_path / "d.csv").write_text(content)
+    out_csv = tmp_path / "never.csv"
+    assert_user_error(["transient", REPO / "netlists/stb_heald.mcir", "--t-end", "1",
+                       "--waveform", f"csv:{tmp_path / 'd.csv'}", "-o", out_csv], capsys, message)
+    assert not out_csv.exists()

@@ -181,3 +181,21 @@ def test_node_outputs_take_max_x_from_a_bound_of_the_recurrence():
         base = sim.ROUNDING_PER_STEP * (r.time.size - 1) * np.abs(r.x).max()
         # measured 1.079 × the estimate from max|x| on this chain
         assert base <= r.error <= 2 * base
+
+
+def test_modal_refusals_name_their_reason_and_a_free_mass_takes_the_block_path():
+    """_modal_plan's reasons: no states; NaN in A (eigen-decomposition failed); complex
+    eigenvalues without their conjugates; a free mass (A = [[0, 1], [0, 0]], defective)
+    refused on the eigenvectors' condition, and its step run by block propagation is the
+    closed form x = F t²/(2m), v = F t/m."""
+    assert sim._modal_plan(np.zeros((0, 0)), np.zeros(0), 0.1, None) == "no states"
+    assert sim._modal_plan(np.array([[np.nan]]), np.ones(1), 0.1, None) == \
+        "eigen-decomposition failed"
+    assert sim._modal_plan(np.diag([1j, 2j]), np.ones(2), 0.1, None) == \
+        "eigenvalues not in conjugate pairs"
+    r = transient(mechcirc.parse("mass m a 0 2\ndrive F a 0 force=3\n"), 1.0, 1e-2, "step")
+    assert "block propagation (modal path refused: eigenvector matrix condition number" \
+        in _modal_note(r)
+    x, v = r.node("a")
+    np.testing.assert_allclose(x, 3.0 * r.time ** 2 / 4.0, rtol=1e-13, atol=1e-16)
+    np.testing.assert_allclose(v, 3.0 * r.time / 2.0, rtol=1e-13, atol=1e-16)

@@ -111,7 +111,7 @@ def read_touchstone_one_port(path: str | os.PathLike) -> tuple[NDArray[np.float6
         data lines, a reference R ≤ 0, and files of more than one port).
     """
     source = os.fspath(path)
-    text = read_source(path, "a Touchstone .s1p file")
+    text = read_source(path, "a Touchstone .s1p")
     match = re.search(r"\.s(\d+)p$", source, flags=re.IGNORECASE)
     if match and int(match.group(1)) != 1:
         raise NetlistError(f"has {int(match.group(1))} ports (by its extension), expected a "

@@ -560,8 +560,8 @@ def _read_links(table: dict, pose: dict, text: str, source: str,
             raise located(text, source, "'ground' is reserved for the frame", "links", lname)
         xy = np.array([pose[p] for p in pts])
         if len(pts) > 1 and np.max(np.ptp(xy, axis=0)) == 0.0:
-            raise GeometryError(f"{source}: link {lname!r} has all its points at the same "
-                                f"place {xy[0].tolist()}")
+            raise located(text, source, f"link {lname!r} has all its points at the same place "
+                          f"{xy[0].tolist()}", "links", lname, expected="points at two places")
         links[lname] = tuple(pts)
     return links
 

@@ -661,8 +661,9 @@ class _SceneReader:
                            "only, so it belongs to no rigid part", "masses", "point", value=p,
                            occurrence=n, expected="a point of a rigid link")
         if "inertia" in m or "mass" not in m:
-            raise self.err(f"[[masses]] #{n + 1} at a point takes mass = … [kg]",
-                           "masses", "point", occurrence=n)
+            raise self.err(f"[[masses]] #{n + 1} at a point takes mass = … [kg]"
+                           + (", not inertia" if "inertia" in m else ""), "masses",
+                           "inertia" if "inertia" in m else "point", occurrence=n)
         name = self.new_name(m, "masses", "point", n, f"m_{p}")
         v = self.number(m["mass"], f"mass {name!r} [kg]", "masses", "mass", n)
         return SceneMass(name, "mass", v, point=p)

@@ -167,13 +167,14 @@ def parse_simulate(text, source, table, scene) -> SimulateSettings:
     kw: dict[str, Any] = {}
     for k, v in table.items():
         if k == "aliases":
-            if not isinstance(v, dict) or not all(
-                    is_name(a) and isinstance(b, str)
-                    and "." in b for a, b in v.items()):
+            bad = [a for a, b in v.items() if not (is_name(a) and isinstance(b, str) and "." in b)] \
+                if isinstance(v, dict) else ["aliases"]
+            if bad:     # located at the first bad alias, or at aliases = … when not a table
                 raise located(text, source, "[simulate.aliases] maps names to \"THING.quantity\" "
-                           "strings", "simulate.aliases", next(iter(v), "aliases")
-                           if isinstance(v, dict) else "aliases",
-                           expected='eps2P = "crank.acceleration"')
+                              f"strings, got {bad[0]} = {v.get(bad[0])!r}" if isinstance(v, dict)
+                              else "[simulate] aliases must be a table [simulate.aliases]",
+                              "simulate.aliases" if isinstance(v, dict) else "simulate", bad[0],
+                              expected='eps2P = "crank.acceleration"')
             kw["aliases"] = dict(v)
         elif k in ("omega", "steps_per_period"):
             kw[k] = checked_number(text, source, v, f"[simulate] {k}", "simulate", k, positive=True)

@@ -96,8 +96,9 @@ class Waveform:
             func = self.func
             if func is None:
                 raise ValueError("a 'callable' waveform needs func")
-            out = np.asarray(func(t), dtype=np.float64)
-            if out.shape != t.shape:
+            try:
+                out = np.asarray(func(t), dtype=np.float64).reshape(t.shape)
+            except (TypeError, ValueError):   # a function of one number (math.sin) or a constant
                 out = np.array([float(func(float(s))) for s in t])
             if not np.all(np.isfinite(out)):
                 raise MechcircError("the drive function returned a non-finite value")
@@ -161,7 +162,7 @@ def read_csv_drive(path: str) -> Waveform:
     """Drive samples from a CSV file of two columns, time [s] and value (one header line allowed)."""
     from ..sources import csv_rows, read_source
 
-    text = read_source(path, "a CSV file of drive samples (time,value)")
+    text = read_source(path, "a drive CSV (time,value)")
     times: list[float] = []
     values: list[float] = []
     for lineno, row, _, _ in csv_rows(text, path):

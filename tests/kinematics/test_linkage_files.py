@@ -6,6 +6,8 @@ positions that made the solver hang are refused quickly.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from mechcirc.errors import GeometryError, NetlistError
@@ -116,3 +118,45 @@ def test_locking_linkage_is_reported_quickly():
     with cpu_seconds_below(2.0), \
             pytest.raises(GeometryError, match=r"locks near θ = 14\.4171°"):
         lk.solve(0.3)
+
+
+QUICK = (Path(__file__).resolve().parents[2] / "examples" / "quick_return.toml").read_text(
+    encoding="utf-8")
+
+
+@pytest.mark.parametrize("old, new, needle, fragment", [
+    ('crank  = ["O2", "A"]', 'crank  = ["O2", "A", "A"]', 'crank  = ["O2", "A", "A"]',
+     "link 'crank' lists a point twice"),
+    ('ram    = ["D"]', 'ram    = ["D"]\nground = ["O2", "A"]', 'ground = ["O2", "A"]',
+     "'ground' is reserved for the frame"),
+    ('G2 = [100.0, 125.0]', 'G2 = [100.0, 125.0]\nH = [1.0, 2.0]', "H = [1.0, 2.0]",
+     "point 'H' belongs to no link and is not a ground pivot"),
+    ('link = "crank"\nomega', 'link = "link"\nomega', 'link = "link"',
+     "crank 'link' needs exactly one ground pivot among its points (found none); name it with "
+     'pivot = "…"'),
+    ("omega = 10.0", 'omega = 10.0\n[[cranks]]\nlink = "crank"  # again\nomega = 5.0',
+     'link = "crank"  # again', "link 'crank' is driven twice"),
+    ("[[cranks]]", '[[sliders]]\nlink = "ram"  # again\nguide = "ground"\nline = ["G1", "G2"]\n'
+     "[[cranks]]", 'link = "ram"  # again', "link 'ram' slides twice"),
+    ("G2 = [100.0, 125.0]", "G2 = [-100.0, 125.0]", 'line = ["G1", "G2"]',
+     "slider 'ram': the line's points 'G1' and 'G2' coincide"),
+    ("D  = [59.791303715507, 125.0]    # |BD| = 60", "D  = [59.791303715507, 125.0]\n"
+     "E  = [59.791303715507, 125.0]", 'linkx = ["D", "E"]',
+     "link 'linkx' has all its points at the same place [59.791303715507, 125.0] (expected "
+     "points at two places)"),
+])
+def test_bad_linkage_tables_exit_2_at_their_line(old, new, needle, fragment, tmp_path, capsys):
+    """kinematics/linkage's refusals (run by no test) through `mechcirc linkage`: exit 2,
+    one line at file:line:col of the offending key (found here), what is wrong and what
+    would be right.  A link with all its points at one place was a GeometryError naming
+    only the file; it is now located at the link."""
+    from cli_helpers import assert_user_error
+
+    text = QUICK.replace(old, new, 1)
+    if "linkx" in needle:
+        text = text.replace('link   = ["B", "D"]', 'link   = ["B", "D"]\nlinkx = ["D", "E"]')
+    assert text != QUICK
+    line = next(n for n, ln in enumerate(text.splitlines(), 1) if needle in ln)
+    f = tmp_path / "l.toml"
+    f.write_text(text, encoding="utf-8")
+    assert_user_error(["linkage", f], capsys, f"l.toml:{line}:", ": error: ", fragment)

@@ -232,3 +232,73 @@ def test_targets_newton_misses_are_redone_by_single_steps(monkeypatch):
     np.testing.assert_allclose(got.q, ref.q, rtol=0, atol=1e-12 * lk.length_scale())
     np.testing.assert_allclose(got.qdot, ref.qdot, rtol=0,
                                atol=1e-11 * np.max(np.abs(ref.qdot)))
+
+
+
+def _from_targets():
+    import sys
+
+    return sys._getframe(2).f_code.co_name == "_targets"
+
+
+@pytest.mark.parametrize("fault", ["singular", "mirror"])
+def test_a_target_solved_singular_or_on_the_other_assembly_is_refused_at_its_angle(
+        monkeypatch, fault):
+    """numpy path, targets 1° apart (between the kept nodes, solved in one batch by
+    _targets), the first of that batch made to go wrong: its q̇ not finite (a singular
+    Jacobian) → 'singular position at θ' of that target; its Newton started on the
+    other assembly (C from the closed-form FourBar's branch −1), converged there, from
+    an interpolated guess that was not close (its residual patched up by 1) → 'branch
+    jump near θ' of that target (det J changed sign)."""
+    from mechcirc import _jit
+    from mechcirc.kinematics import linkage_solver
+
+    monkeypatch.setattr(_jit, "COMPILED", False)
+    th0, dims = 0.4, (20.0, 70.0, 60.0, 80.0)
+    lk, _ = fourbar_linkage(*dims, theta0=th0, omega=10.0)
+    theta = np.radians(np.arange(0.0, 40.0, 1.0))
+    solve, derive = linkage_solver.Newton.newton, linkage_solver.Newton.derivatives
+    real_residual = linkage_solver.Newton.residual
+    seen = []
+
+    def derivatives(self, q):
+        J, qd, qdd, parts = derive(self, q)
+        if _from_targets():
+            seen.append(q[0, 2])
+            qd[0] = np.nan
+        return J, qd, qdd, parts
+
+    def newton(self, q, angles, *args, **kwargs):
+        if not _from_targets():
+            return solve(self, q, angles, *args, **kwargs)
+        th = th0 + angles[0, 0]
+        seen.append(angles[0, 0])
+        B = dims[0] * np.array([math.cos(th), math.sin(th)])
+        phi4 = FourBar(*dims, branch=-1).rocker_angle(th)
+        C = np.array([dims[3], 0.0]) + dims[2] * np.array([math.cos(phi4), math.sin(phi4)])
+        pose = lk.pose
+        q = q.copy()
+        q[0, 5] = math.atan2(*(C - B)[::-1]) - math.atan2(*(pose["C"] - pose["B"])[::-1])
+        q[0, 8] = math.atan2(*(C - pose["D"])[::-1]) \
+            - math.atan2(*(pose["C"] - pose["D"])[::-1])
+        q, ok = solve(self, q, angles, *args, **kwargs)
+        assert ok[0] and np.linalg.norm(q[0, 3:5] - B) < 1e-9    # converged, mirrored
+        return q, ok
+
+    def residual(self, q, angles, *args):
+        r = real_residual(self, q, angles, *args)
+        if _from_targets():
+            r[0] += 1.0                 # the interpolated guess of that target was not close
+        return r
+
+    if fault == "singular":
+        monkeypatch.setattr(linkage_solver.Newton, "derivatives", derivatives)
+        message = "singular position at θ = {:.6g}° (constraint Jacobian not invertible)"
+    else:
+        monkeypatch.setattr(linkage_solver.Newton, "newton", newton)
+        monkeypatch.setattr(linkage_solver.Newton, "residual", residual)
+        message = "branch jump near θ = {:.6g}°: the position passed a singular configuration"
+    with pytest.raises(GeometryError) as info:
+        lk.motion(theta, method="newton")
+    assert len(seen) == 1 and np.min(np.abs(theta - seen[0])) < 1e-12
+    assert message.format(math.degrees(seen[0])) in str(info.value)

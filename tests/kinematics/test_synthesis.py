@@ -174,6 +174,38 @@ def test_bad_load():
         synthesize("enormous")
 
 
+@pytest.mark.parametrize("kw, message", [
+    (dict(objective="speed"), "unknown objective 'speed'; expected one of margin, ratio"),
+    (dict(fixed={"link": 100.0}), "unknown fixed length 'link'; expected one of crank, "
+                                      "coupler, rocker, frame"),
+    (dict(fixed={"crank": -5.0}), "fixed crank length must be a positive number of mm, got -5.0"),
+    (dict(fixed={"rocker": float("nan")}), "fixed rocker length must be a positive number"),
+    (dict(swing_range=(10.0, 190.0)), "swing range must be 0 < low ≤ high < 180 degrees, got "
+                                      "(10.0, 190.0)"),
+    (dict(swing=180.0), "swing must be in (0°, 180°), got 180.0°"),
+    (dict(b_a_range=(0.5, 3.0)), "b_a_range must be 1 < low ≤ high < 1000, got (0.5, 3.0)"),
+    (dict(d_a_range=(2.0,)), "d_a_range must be 1 < low ≤ high < 1000, got (2.0,)"),
+    (dict(crank_step=0.0), "step, crank_step and swing_step must be > 0"),
+])
+def test_bad_synthesis_arguments_are_refused_before_the_search(kw, message):
+    """synthesis._checked (run by no test but for the load): each bad argument a
+    GeometryError saying what is wrong and what is allowed, raised before any grid."""
+    swing = kw.pop("swing", None)
+    with pytest.raises(GeometryError) as info:
+        synthesize("medium", swing, **kw)
+    assert message in str(info.value)
+
+
+def test_synth_cli_refuses_ranges_it_cannot_search(capsys):
+    """`mechcirc synth` with a swing range beyond 180° or b/a below 1: exit 2, one line."""
+    from cli_helpers import assert_user_error
+
+    assert_user_error(["synth", "--swing-range", "10:190"], capsys,
+                      "swing range must be 0 < low ≤ high < 180 degrees, got (10.0, 190.0)")
+    assert_user_error(["synth", "--b-a-range", "0.5:3"], capsys,
+                      "b_a_range must be 1 < low ≤ high < 1000, got (0.5, 3.0)")
+
+
 # ----------------------------------------- refinement, shapes, fixed lengths, export
 import itertools as _it
 

@@ -369,3 +369,25 @@ def test_circuit_built_as_objects_equals_its_netlist(path, reflect):
     assert [strip(e) for e in parsed.elements] == list(model.circuit.elements)
     assert [strip(lv) for lv in parsed.levers] == list(model.circuit.levers)
     assert strip(parsed.drive) == model.circuit.drive
+
+
+@pytest.mark.parametrize("setting, message", [
+    ("I2P.inertia=0", "--set I2P.inertia must be > 0, got 0.0"),
+    ("C2.stiffness=-1", "--set C2.stiffness: must be ≥ 0 (and clearance applies to elastic "
+                        "links and torsion rods), got -1.0"),
+    ("omega=-3", "--set omega must be > 0 rad/s, got -3.0"),
+    ("omega_ripple.amplitude=1.5", "--set omega_ripple.amplitude must be in [0, 1), got 1.5"),
+    ("omega_ripple.harmonic=2.5", "--set omega_ripple.harmonic must be a whole number >= 1, "
+                                  "got 2.5"),
+    ("M4.window_deg=400", "--set M4.window_deg must be in (0, 360) deg, got 400.0"),
+    ("M4.sigma_deg=0", "--set M4.sigma_deg must be in (0, 360) deg, got 0.0"),
+    ("I2P.colour=1", "--set I2P.colour: no such parameter; known: omega, "
+                     "omega_ripple.amplitude/harmonic, I2P.inertia/mass"),
+])
+def test_cli_scene_set_refusals_name_the_setting_and_the_range(setting, message, capsys):
+    """scene/simfile.apply_overrides' refusals (run by no test but for an unknown name):
+    exit 2 before any simulation, one line naming the --set, the range and the value."""
+    from cli_helpers import assert_user_error
+
+    assert_user_error(["simulate", "examples/mrazek_one_side.toml", "--set", setting], capsys,
+                      message)

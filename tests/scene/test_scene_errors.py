@@ -1,6 +1,7 @@
 """Bad scene input (issue 7 §5): each a clear error, located where a line is to blame."""
 
 import math
+from pathlib import Path
 
 import pytest
 
@@ -145,7 +146,7 @@ force = 1.0
     ('stiffness = 3.0e5', 'stiffness = -3.0e5', 'stiffness', "must be a finite number > 0"),
     ('[drive]\n', '[drive]\nlinkk = "x"\n', 'linkk', "unknown key 'linkk'"),
     ('velocity = 1.0', 'velocity = 1.0\nforce = 2.0', 'force', "exactly one of velocity"),
-    ('mass = 4.0', 'inertia = 4.0', 'point = "C"', "takes mass"),
+    ('mass = 4.0', 'inertia = 4.0', 'inertia = 4.0', "takes mass = … \\[kg\\], not inertia"),
     ('[[masses]]\npoint = "C"', '[[masses]]\nlink = "rod"  # here', 'link = "rod"  # here',
      "elastic link has no"),
     ('omega = 5.0\n', 'omega = 5.0\n[bogus]\nx = 1\n', 'bogus', "unknown top-level key"),
@@ -240,3 +241,113 @@ velocity = 1.0
 ''')
     with pytest.raises(GeometryError, match="cannot make a full revolution.*locks near"):
         cycle_map(scene, points=8)
+
+
+FNF = (Path(__file__).resolve().parents[2] / "examples" / "fnf_sixbar_scene.toml").read_text(
+    encoding="utf-8")
+KLOSS = ('motor = "kloss"       # an induction motor, referred to crank 1\'s shaft\n'
+         'sync_speed = 21.0     # [rad/s]\nbreakdown_torque = 2.0\nbreakdown_slip = 0.2\n')
+MOMENT = '[[moments]]\nbody = "organ"\namplitude = 5.0\nwindow_deg = 30.0\n'
+ALIASES = ('[simulate.aliases]\neps_organ = "organ.acceleration"\n'
+           'eps_organ_rigid = "output6.rigid_acceleration"\nM1 = "C1.force"\n')
+TABLE_MOTOR = 'motor = "table"\nspeeds = [0.0, 25.0]\ntorques = [2.0, 0.0]\n'
+
+
+@pytest.mark.parametrize("old, new, needle, fragments", [
+    ('units = "mm"', 'units = "mm"\nmoments = 3', "moments = 3",
+     ["moments must be an array of tables [[moments]]"]),
+    ("[drive]", MOMENT + 'name = "J1"  # taken\n[drive]', 'name = "J1"  # taken',
+     ["[[moments]] #1: name 'J1' is not a valid unused name", "(expected an identifier"]),
+    ("[drive]", MOMENT.replace("30.0", "400.0") + "[drive]", "window_deg = 400",
+     ["window_deg of 'M_organ' must be < 360, got 400.0", "(expected 0 < window_deg < 360)"]),
+    ("[drive]", MOMENT + 'centre = "middle"\n[drive]', 'centre = "middle"',
+     ["centre 'middle' of 'M_organ' is unknown", '(expected "front-dead-centre"']),
+    ('M1 = "C1.force"', 'M1 = "C1force"', "M1 =",
+     ["[simulate.aliases] maps names to \"THING.quantity\" strings, got M1 = 'C1force'",
+      '(expected eps2P = "crank.acceleration")']),
+    (ALIASES, "aliases = 3\n", "aliases = 3",
+     ["[simulate] aliases must be a table [simulate.aliases]"]),
+    ("revolutions = 4 ", "revolutions = 0 ", "revolutions = 0",
+     ["[simulate] revolutions must be an integer ≥ 1, got 0"]),
+    ("revolutions = 4 ", "points = 8\nrevolutions = 4 ", "points = 8",
+     ["[simulate] points must be an integer ≥ 16, got 8"]),
+    ("revolutions = 4 ", "omega = -1.0\nrevolutions = 4 ", "omega = -1.0",
+     ["[simulate] omega must be a finite number > 0, got -1.0"]),
+    (KLOSS, TABLE_MOTOR.replace("speeds = [0.0, 25.0]\n", ""), 'motor = "table"',
+     ["[shaft] a motor table needs speeds = [...]", "(expected speeds = [[rad/s], increasing])"]),
+    (KLOSS, TABLE_MOTOR.replace("[0.0, 25.0]", "[25.0, 0.0]"), 'motor = "table"',
+     ["[shaft] the motor table's speeds must increase, got [25.0, 0.0]"]),
+    ("breakdown_slip = 0.2", "", 'motor = "kloss"',
+     ["[shaft] a Kloss motor needs breakdown_slip, or rated_power and rated_speed"]),
+    ("breakdown_slip = 0.2", "breakdown_slip = -0.2", "breakdown_slip = -0.2",
+     ["[shaft] breakdown_slip must be a finite number > 0, got -0.2"]),
+])
+def test_bad_moments_simulate_and_shaft_tables_exit_2_at_their_line(old, new, needle,
+                                                                     fragments, tmp_path, capsys):
+    """scene/simfile's refusals ([[moments]], [simulate], [shaft] motors) through the CLI:
+    exit 2, one line 'file:line:col: error: …' at the offending key (the line found here),
+    what is wrong and, where a form is expected, what would be right."""
+    from cli_helpers import assert_user_error
+
+    text = FNF.replace(old, new, 1)
+    assert text != FNF
+    f = tmp_path / "s.toml"
+    f.write_text(text, encoding="utf-8")
+    line, col = _where(text, needle)
+    assert_user_error(["scene", f, "--theta", "40"], capsys, f"s.toml:{line}:{col}: error: ",
+                      *fragments)
+
+
+@pytest.mark.parametrize("text, needle, fragments", [
+    (BASE.replace('units = "m"', 'units = "m"\nelastic = 3').replace(
+        '[[elastic]]\nlink = "rod"\nstiffness = 3.0e5\n', ""), "elastic = 3",
+     ["elastic must be an array of tables [[elastic]]"]),
+    (BASE.replace('link = "rod"\nstiffness', 'link = "lever1"\nstiffness'), '"lever1"\nstiff',
+     ["the crank 'lever1' cannot be an axial spring"]),
+    (BASE.replace("[[masses]]", '[[elastic]]\nname = "rod2"\nlink = "rod"  # again\n'
+                  "stiffness = 1.0\n[[masses]]"), '"rod"  # again',
+     ["link 'rod' is declared elastic twice"]),
+    (BASE.replace('[drive]\nlink = "lever1"', '[drive]\nlink = "rod"'), 'link = "rod"\nvel',
+     ["[drive] link 'rod' is not a rigid link or torsion body", "(expected one of lever1, lever2)"]),
+    (BASE.replace('[drive]\nlink = "lever1"', '[drive]\npoint = "Z"'), 'point = "Z"',
+     ["[drive] point 'Z' does not exist in [points]", "(expected one of O1, A, B, O2, C)"]),
+    (BASE.replace('[drive]\nlink = "lever1"', '[drive]\nlink = "lever1"\npoint = "C"'),
+     'link = "lever1"\npoint', ["[drive] needs exactly one of link or point",
+                                 '(expected link = "…" or point = "…")']),
+    (BASE.replace("velocity = 1.0", 'velocity = 1.0\nname = "rod"'), 'name = "rod"',
+     ["[drive] name 'rod' is not a valid unused element name"]),
+    (BASE + '[[loads]]\npoint = "C"\nanchor = "A"\nstiffness = 10.0\n', '"A"\nstiff',
+     ["load #1: anchor 'A' is not a ground point", "(expected one of O1, O2)"]),
+    (BASE + '[[loads]]\npoint = "C"\ndirection = [0.0, 0.0]\nstiffness = 10.0\n', "direction",
+     ["load #1: direction must be [dx, dy], not zero, got [0.0, 0.0]"]),
+    (BASE + '[[loads]]\npoint = "C"  # free\ndirection = [0.0, 1.0]\n', 'point = "C"  # free',
+     ["load 'load_C' needs stiffness > 0 or damping > 0"]),
+    (BASE.replace("stiffness = 3.0e5", 'stiffness = 3.0e5\nclearance_law = "foo"'),
+     "clearance_law", ["[[elastic]] #1: clearance_law 'foo' is unknown",
+                       '(expected "elastobacklash" or "dead-zone")']),
+    (FNF.replace('link = "crank1"\nbody = "shaft"', 'link = "crank1"\npivot = "A"\nbody = "shaft"'),
+     'pivot = "A"', ["torsion rod #1 must sit at a ground pivot of link 'crank1' (its ground "
+                     "pivots: ['O1'])", "(expected pivot = one of the link's ground pivots)"]),
+    (FNF.replace('body = "shaft"', 'body = "crank2"'), 'body = "crank2"',
+     ["torsion rod #1: body 'crank2' must be a new name"]),
+    (FNF.replace("ratio = -1.5", "ratio = -2.5"), "ratio = -2.5",
+     ["[[gears]] #1: crank 'crank2' has omega = -30 rad/s in [[cranks]] but the gear ratio "
+      "-2.5 makes it -50 rad/s", "(expected ratio = -1.5, or omega = -50)"]),
+    (FNF.replace('crank = "crank2"', 'crank = "crank1"'), '"crank1"\nratio',
+     ["[[gears]] #1: crank 'crank1' is not a crank after the first", "(expected one of crank2)"]),
+])
+def test_bad_scene_tables_exit_2_at_their_line(text, needle, fragments, tmp_path, capsys):
+    """scene/files' refusals ([[elastic]], [drive], [[loads]], [[torsion]], [[gears]])
+    through the CLI: exit 2, one line at file:line:col of the offending value (its line
+    found here from the text; a needle spanning two lines names the first), what is wrong
+    and what is expected."""
+    from cli_helpers import assert_user_error
+
+    first = needle.split("\n")[0]
+    line = next(n for n, ln in enumerate(text.splitlines(), 1)
+                if first in ln and (needle == first or needle.split("\n")[1]
+                                    in text.splitlines()[n]))
+    f = tmp_path / "s.toml"
+    f.write_text(text, encoding="utf-8")
+    err = assert_user_error(["scene", f, "--theta", "40"], capsys, *fragments)
+    assert f"s.toml:{line}:" in err and ": error: " in err, err

@@ -132,8 +132,8 @@ start_deg = 10.0
 """
 
 
-def sympy_reference():
-    """θ̈(θ, θ̇) of the rigid sley four-bar, derived in SymPy: the rocker angle φ4(θ) in
+def sympy_reference(tb=60.0):
+    """θ̈(θ, θ̇) of the rigid sley four-bar (Kloss motor of breakdown torque ``tb``), derived in SymPy: the rocker angle φ4(θ) in
     closed form (two circles), μ = dφ4/dθ and μ' by SymPy; Lagrange II applied in SymPy
     to T = ½ (J_f + I2) θ̇² + ½ (I4 + I4P) (μ(θ) θ̇)² with the motor torque and the
     beat-up moment's generalised force M4 μ."""
@@ -158,7 +158,7 @@ def sympy_reference():
     acc = sp.solve(sp.Eq(lag, tm + m4 * mu(th)), thdd)[0]
     acc = acc.subs(sp.Derivative(mu(th), th), m1).subs(mu(th), m)
     f = sp.lambdify((thd, tm, m4, m, m1), acc, "math")
-    ws, tb, sb = 104.72, 60.0, 0.2
+    ws, sb = 104.72, 0.2
     centre, alpha = math.radians(150.0), math.radians(40.0)
 
     def rhs(t, y):
@@ -281,3 +281,59 @@ def test_the_sley_flywheel_example_gives_the_numbers_in_the_docs():
         for g, w, d in zip(got, want, digits):
             if g is not None:
                 assert abs(g - w) <= 0.51 * d, (row[0], got, want)
+
+
+@pytest.mark.parametrize("max_time", [None, 0.05])
+def test_dop853_start_up_is_the_closed_form_and_says_when_max_time_is_too_short(max_time):
+    """method="DOP853" (scipy's solve_ivp, cycle by cycle): the linear motor's start-up
+    ω(t) = ω0 (1 − exp(−T0 t / (ω0 J))) and its time into the 1 % band, τ ln 100; a
+    max_time shorter than τ ln 100 (0.074 s here) is refused with the speed reached."""
+    T0, W0 = 20.0, 80.0
+    extra = "" if max_time is None else f"max_time = {max_time}\n"
+    scene = parse_scene(DISC + f"""[shaft]
+flywheel = {JF}
+motor = "table"
+speeds = [0.0, {W0}]
+torques = [{T0}, 0.0]
+{extra}""")
+    tau = (J0 + JF) * W0 / T0
+    if max_time is not None:
+        with pytest.raises(MechcircError, match="did not reach the steady cycle within "
+                                                "max_time = 0.05 s .speed ([0-9.]+) rad/s") as exc:
+            simulate_shaft(scene, method="DOP853")
+        speed = float(str(exc.value).split("(speed ")[1].split(" ")[0])
+        assert abs(speed - W0 * (1 - math.exp(-max_time / tau))) <= 1e-5 * W0
+        return
+    r = simulate_shaft(scene, method="DOP853")
+    want = W0 * (1 - np.exp(-r.startup_t / tau))
+    assert np.max(np.abs(r.startup_speed - want)) <= 1e-8 * W0
+    # the crossing's error is the speed's over the slope 0.01 ω0/τ there: 1.8e-8 τ achieved
+    assert abs(r.startup_time - tau * math.log(100)) <= 1e-7 * tau
+
+
+def test_dop853_start_up_that_stalls_says_where_as_the_sympy_equations():
+    """A Kloss motor of breakdown torque 20 N·m (below the peak load, 57.3 N·m) and the
+    flywheel 0.05 kg·m²: the steady cycle exists, but the start-up from rest by DOP853
+    (scene/shaft._startup, whose stall no test ran) stops; the time and angle it prints
+    are those at which the SymPy-derived equations (integrated by scipy, rtol 1e-12)
+    come to rest, to their printed digits (4 and 5)."""
+    import re
+
+    from scipy.integrate import solve_ivp
+
+    text = FOURBAR.replace("breakdown_torque = 60.0", "breakdown_torque = 20.0")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ShaftWarning)
+        with pytest.raises(MechcircError, match="the start-up stalls at t = ") as info:
+            simulate_shaft(parse_scene(text), rigid=True, method="DOP853", points=90)
+    got = re.search(r"t = ([\d.]+) s, θ = ([\d.]+)°: the motor's largest torque 20 N·m is "
+                    r"below the peak load torque 57.3174 N·m", str(info.value))
+    assert got, str(info.value)
+    rhs = sympy_reference(tb=20.0)
+    rest = lambda t, y: y[1] + 1e-9 * 104.72      # noqa: E731 - as the code: ω below -1e-9 ω_s
+    rest.terminal, rest.direction = True, -1
+    ref = solve_ivp(rhs, (0, 5), [math.radians(10.0), 0.0], method="DOP853", rtol=1e-12,
+                    atol=1e-12, events=rest)
+    t_stop, th_stop = ref.t_events[0][0], ref.y_events[0][0][0]
+    assert float(got.group(1)) == pytest.approx(t_stop, abs=5e-5 * 1.01)
+    assert float(got.group(2)) == pytest.approx(math.degrees(th_stop), abs=5e-3 * 1.01)

@@ -120,3 +120,23 @@ def test_circuits_with_levers_reduce_and_drop_idle_levers():
     assert len(r.circuit.levers) < len(full.levers)
     assert any("nothing on its secondary side" in s for s in r.steps)
     assert _rel_err(full, r.netlist, np.geomspace(30.0, 480.0, 500)) <= r.error * (1 + 1e-9)
+
+
+
+def test_a_stiff_spring_behind_a_lever_is_shorted_and_the_lever_kept():
+    """ks (1e9 N/m) between the lever's secondary b and the mass m2: shorted
+    (_short_circuit renames the lever's nodes too), m2 moves to b and the lever stays,
+    K = 1/(jω(m1 + r² m2)) exactly; the measured error is the closed form's largest
+    |K_red/K_full − 1| on [1, 100] rad/s (reached at 100 rad/s)."""
+    text = ("drive V a 0 velocity=1\nmass m1 a 0 1\nlever L a 0 b 0 ratio=2\n"
+            "spring ks b c 1e9\nmass m2 c 0 3\n")
+    w = np.geomspace(1.0, 100.0, 400)
+    r = simplify(mechcirc.parse(text), (1.0, 100.0), 1e-3, points=50)
+    assert r.steps == ("springs shorted as rigid: ks",)
+    red = mechcirc.parse(r.netlist)
+    [lever] = red.levers
+    assert (lever.p1, lever.p2, lever.s1, lever.s2, lever.ratio) == ("a", "0", "b", "0", 2.0)
+    np.testing.assert_allclose(red.sweep(w).K, 1 / (1j * w * (1 + 4 * 3)), rtol=1e-14)
+    full = 1 / (1j * w + 4 / (1j * w / 1e9 + 1 / (1j * w * 3)))
+    worst = np.max(np.abs((1 / (1j * w * 13)) / full - 1))
+    assert r.error == pytest.approx(worst, rel=1e-6)

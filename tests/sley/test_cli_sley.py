@@ -115,3 +115,34 @@ def test_changed_parameters_drop_the_paper_columns(capsys):
     assert main(["simulate", "--drive", "one-side", "--variant", "1", "--alpha", "40",
                  "--revolutions", "2", "--json"]) == 0
     assert "paper" in json.loads(capsys.readouterr().out)
+
+
+def test_simulate_variant_all_runs_the_fourteen_presets_and_refuses_one_file(tmp_path, capsys,
+                                                                             monkeypatch):
+    """--variant all: the 14 presets (Table 1 then Table 2, variants 1-7) with the
+    overrides applied to each, each result the one-variant API's; -o/--plot (one
+    variant's files) exit 2 and write nothing.  One process (cpu_count patched to 1)."""
+    import math
+
+    import mechcirc.sley.simulation as sim
+    from cli_helpers import assert_user_error, run
+
+    monkeypatch.setattr(sim.os, "cpu_count", lambda: 1)
+    status, out, err = run(["simulate", "--variant", "all", "--revolutions", "1", "--points",
+                            "360", "--alpha", "30", "--no-error-estimate", "--json"], capsys)
+    assert status == 0, err
+    results = json.loads(out)["results"]
+    assert [r["parameters"]["label"] for r in results] == [
+        f"{d} variant {v}" for d in ("one-side", "both-sides") for v in range(1, 8)]
+    assert all(r["parameters"]["alpha"] == pytest.approx(math.radians(30), rel=1e-15)
+               for r in results)
+    for i, drive, variant in ((0, "one-side", 1), (13, "both-sides", 7)):
+        api = simulate(drive, variant, revolutions=1, method="rk4", points_per_revolution=360,
+                       alpha=math.radians(30), error_estimate=False)
+        for k, v in api.extrema.items():
+            assert results[i]["extrema"][k] == pytest.approx(list(v), rel=1e-12)
+    for flag in ("-o", "--plot"):
+        target = tmp_path / ("t.csv" if flag == "-o" else "t.png")
+        assert_user_error(["simulate", "--variant", "all", flag, target], capsys,
+                          "-o/--plot need one variant, not --variant all")
+        assert not target.exists()
