@@ -42,16 +42,13 @@ def _identity(fn):
     return fn
 
 
-def decorators(force_python: bool = False, nrt: bool = True, forceinline: bool = False):
+def decorators(force_python: bool = False, nrt: bool = True):
     """``(have_numba, jit, jit_inline)`` for a kernel module.
 
     ``nrt=False``: for a kernel that allocates nothing and only reads and writes the
     arrays it is given (a right-hand side called millions of times): compiled without
     numba's reference counting, which otherwise costs an atomic increment and decrement
     of every array argument on every call (half the time of the scene's right-hand side).
-    ``forceinline=True``: ``jit`` compiles the function once, and LLVM inlines that
-    compiled body into every compiled caller (numba's ``forceinline``), where ``jit_inline``
-    (``inline="always"``) has numba type and lower its source again at every call site.
     """
     if not force_python:
         try:
@@ -59,7 +56,7 @@ def decorators(force_python: bool = False, nrt: bool = True, forceinline: bool =
         except ImportError:          # the "fast" extra is not installed
             pass
         else:
-            flags = ({} if nrt else {"_nrt": False}) | ({"forceinline": True} if forceinline else {})
+            flags = {} if nrt else {"_nrt": False}
 
             def jit(fn):
                 return njit(cache=True, error_model="numpy", **flags)(fn)
