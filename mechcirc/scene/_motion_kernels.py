@@ -34,7 +34,7 @@ import math
 
 import numpy as np
 
-from .._jit import decorators
+from .._jit import decorators, load
 from .._ode import hermite_point, record_hermite
 from ..transient._kernels import elasto_backlash
 
@@ -769,14 +769,8 @@ def point_samples(kind, tabs, ti, a, b, c, lo, h, w, ic, ih, qs, qd, qdd, pos, a
 
 
 def load_python():
-    """A fresh copy of this module that never uses numba."""
-    import importlib.util
-
-    spec = importlib.util.find_spec(__name__)
-    mod = importlib.util.module_from_spec(spec)
-    mod.__dict__["_FORCE_PYTHON"] = True
-    spec.loader.exec_module(mod)
-    return mod
+    """A fresh copy of this module that never uses numba (:func:`mechcirc._jit.load`)."""
+    return load(__name__, _FORCE_PYTHON=True)
 
 
 # ---------------------------------------------------------------------------------------------

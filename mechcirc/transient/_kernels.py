@@ -239,19 +239,18 @@ def _root_on_dense(k, kind, side, t, hh, z, P, xi, xv, dx, vi, vv, dv, prm, t0, 
                               dt, u)
         if it == 0:
             ga = gc
-            continue
-        if it == 1:
+        elif it == 1:
             gb = gc
             if not ga * gb < 0.0:
                 return 2.0
-            continue
-        if gc * gb < 0.0:
-            a, ga = b, gb
         else:
-            ga *= 0.5
-        b, gb = c, gc
-        if gc == 0.0 or abs(b - a) <= 1e-10:
-            break
+            if gc * gb < 0.0:
+                a, ga = b, gb
+            else:
+                ga *= 0.5
+            b, gb = c, gc
+            if gc == 0.0 or abs(b - a) <= 1e-10:
+                break
     return max(a, b)
 
 
@@ -286,20 +285,16 @@ def kink_theta(t, hh, z, y5, K, P, coefD, xi, xv, dx, vi, vv, dv, prm, t0, dt, u
         if not have_p:
             dense_coefficients(z, y5, K, hh, coefD, P)
             have_p = True
-        # from the gap one switch (the edge), in contact two (separation, then the edge or
-        # the damping limit): one call site in a loop, so numba inlines its body once
-        side = (1.0 if c1 > 0 else -1.0) if c0 == 0 else (1.0 if c0 > 0 else -1.0)
+        # the switches' kinds: from the gap one (kinds[0], the edge), in contact two
+        # (kinds[1:]: separation, then the edge or the damping limit); one call site in a
+        # loop, so numba inlines its body once
+        kinds = (0, 1, 0 if abs(c0) == 3 else 2)
+        side = 1.0 if (c1 if c0 == 0 else c0) > 0 else -1.0
         th = 2.0
-        for j in range(1 if c0 == 0 else 2):
-            if c0 == 0:
-                kind = 0
-            elif j == 0:
-                kind = 1
-            else:
-                kind = 0 if abs(c0) == 3 else 2
-            root = _root_on_dense(k, kind, side, t, hh, z, P, xi, xv, dx, vi, vv, dv, prm, t0,
-                                  dt, u)
-            th = root if j == 0 else min(th, root)
+        for j in range(0 if c0 == 0 else 1, 1 if c0 == 0 else 3):
+            root = _root_on_dense(k, kinds[j], side, t, hh, z, P, xi, xv, dx, vi, vv, dv, prm,
+                                  t0, dt, u)
+            th = root if j < 2 else min(th, root)
         if th > 1.0:                 # no sign change on the extension: halve the step
             th = 0.5
         theta = min(theta, th)
