@@ -373,7 +373,7 @@ def newton_path(q0, targets, ia, ib, sa, sb, crank_idx, omega, tol, dt_max, wmax
     for i in range(n):
         q[i] = trial[i]
     _rates(nb, geo, omega, work, J, piv, qd, qdd, parts, e)
-    k = 0
+    k = int(0)      # not 0: a literal would have numba compile _store_target twice
     while k < targets.shape[0]:
         t_new = targets[k]
         dt = t_new - t_now

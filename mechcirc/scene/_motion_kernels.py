@@ -34,7 +34,7 @@ import math
 
 import numpy as np
 
-from .._jit import decorators
+from .._jit import decorators, load
 from .._ode import hermite_point, record_hermite
 from ..transient._kernels import elasto_backlash
 
@@ -660,7 +660,9 @@ def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_
     off = BI.shape[0] + ne
     reg, regn = np.zeros(nsw, np.int64), np.zeros(nsw, np.int64)
     sw0, sw1 = np.empty(nsw + ne), np.empty(nsw + ne)
-    j, bad = 0, 0.0
+    # int(0), not 0: a literal 0 would have numba compile record_hermite twice (for
+    # Literal[int](0), then for int64)
+    j, bad = int(0), 0.0
     npart = PRIG.shape[0]
     limit = PV[2]
     deriv(t0, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, K[0], aux, work, zy, zd)
@@ -767,14 +769,8 @@ def point_samples(kind, tabs, ti, a, b, c, lo, h, w, ic, ih, qs, qd, qdd, pos, a
 
 
 def load_python():
-    """A fresh copy of this module that never uses numba."""
-    import importlib.util
-
-    spec = importlib.util.find_spec(__name__)
-    mod = importlib.util.module_from_spec(spec)
-    mod.__dict__["_FORCE_PYTHON"] = True
-    spec.loader.exec_module(mod)
-    return mod
+    """A fresh copy of this module that never uses numba (:func:`mechcirc._jit.load`)."""
+    return load(__name__, _FORCE_PYTHON=True)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -230,21 +230,27 @@ def _root_on_dense(k, kind, side, t, hh, z, P, xi, xv, dx, vi, vv, dv, prm, t0, 
     end of the final Illinois bracket on the continuous extension), or 2.0 if its
     switching function keeps its sign from start to end."""
     a, b = 0.0, 1.0
-    ga = _switch_on_dense(k, kind, side, a, t, hh, z, P, xi, xv, dx, vi, vv, dv, prm, t0, dt, u)
-    gb = _switch_on_dense(k, kind, side, b, t, hh, z, P, xi, xv, dx, vi, vv, dv, prm, t0, dt, u)
-    if not ga * gb < 0.0:
-        return 2.0
-    for _ in range(60):
-        c = (a * gb - b * ga) / (gb - ga)
+    ga = gb = 0.0
+    # the ends (it 0, 1), then at most 60 Illinois steps: one call site, which numba
+    # inlines once
+    for it in range(62):
+        c = (a * gb - b * ga) / (gb - ga) if it > 1 else float(it)
         gc = _switch_on_dense(k, kind, side, c, t, hh, z, P, xi, xv, dx, vi, vv, dv, prm, t0,
                               dt, u)
-        if gc * gb < 0.0:
-            a, ga = b, gb
+        if it == 0:
+            ga = gc
+        elif it == 1:
+            gb = gc
+            if not ga * gb < 0.0:
+                return 2.0
         else:
-            ga *= 0.5
-        b, gb = c, gc
-        if gc == 0.0 or abs(b - a) <= 1e-10:
-            break
+            if gc * gb < 0.0:
+                a, ga = b, gb
+            else:
+                ga *= 0.5
+            b, gb = c, gc
+            if gc == 0.0 or abs(b - a) <= 1e-10:
+                break
     return max(a, b)
 
 
@@ -279,15 +285,16 @@ def kink_theta(t, hh, z, y5, K, P, coefD, xi, xv, dx, vi, vv, dv, prm, t0, dt, u
         if not have_p:
             dense_coefficients(z, y5, K, hh, coefD, P)
             have_p = True
-        if c0 == 0:
-            th = _root_on_dense(k, 0, 1.0 if c1 > 0 else -1.0, t, hh, z, P, xi, xv, dx, vi,
-                                vv, dv, prm, t0, dt, u)
-        else:
-            side = 1.0 if c0 > 0 else -1.0
-            th = min(_root_on_dense(k, 1, side, t, hh, z, P, xi, xv, dx, vi, vv, dv, prm, t0,
-                                    dt, u),
-                     _root_on_dense(k, 0 if abs(c0) == 3 else 2, side, t, hh, z, P, xi, xv, dx,
-                                    vi, vv, dv, prm, t0, dt, u))
+        # the switches' kinds: from the gap one (kinds[0], the edge), in contact two
+        # (kinds[1:]: separation, then the edge or the damping limit); one call site in a
+        # loop, so numba inlines its body once
+        kinds = (0, 1, 0 if abs(c0) == 3 else 2)
+        side = 1.0 if (c1 if c0 == 0 else c0) > 0 else -1.0
+        th = 2.0
+        for j in range(0 if c0 == 0 else 1, 1 if c0 == 0 else 3):
+            root = _root_on_dense(k, kinds[j], side, t, hh, z, P, xi, xv, dx, vi, vv, dv, prm,
+                                  t0, dt, u)
+            th = root if j < 2 else min(th, root)
         if th > 1.0:                 # no sign change on the extension: halve the step
             th = 0.5
         theta = min(theta, th)
@@ -394,7 +401,7 @@ def dopri_run(z, t0, dt, nout, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, u
     t_end = t0 + (nout - 1) * dt
     h = min(hmax, dt)
     steps = 0
-    k_out = 1
+    k_out = int(1)         # not 1: a literal would have numba compile accept_step twice
     rhs(t, z, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, t0, dt, u, K[0], codes0)
     while k_out < nout:
         stop = t_end if dense else t0 + k_out * dt
@@ -548,7 +555,7 @@ def modal_run(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout, qlast):
         wr[j] = wout[cre[j]]
         if cim[j] >= 0:
             wi[j] = wout[cim[j]]
-    identity = True
+    identity = bool(True)      # not True: a literal would have numba compile _modal_samples twice
     for j in range(m):
         if cre[j] != j:
             identity = False
