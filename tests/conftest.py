@@ -12,6 +12,17 @@ import os
 import pytest
 from hypothesis import settings
 
+from mechcirc.cli import one_blas_thread
+
+# One OpenBLAS thread unless the user chose a count, as the command line asks for its own
+# process (mechcirc.cli.one_blas_thread), here before anything imports numpy (pytest,
+# hypothesis and mechcirc.cli do not): the tests' arrays are small, and a second OpenBLAS
+# thread only spins beside the first (the resonance and mode tests took 13.9-18.2 s of CPU
+# with it against 7.7 s without, one process each at load 6; more wall time too).  What
+# the tests compute and check is the same; a test that needs a thread count sets the
+# variables itself (tests/test_startup.py).
+one_blas_thread(os.environ)
+
 settings.register_profile("ci", derandomize=True, database=None)
 settings.register_profile("explore", derandomize=False)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
