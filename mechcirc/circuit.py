@@ -47,7 +47,7 @@ if TYPE_CHECKING:  # pragma: no cover - annotations of the delegates only
     from ._sweep import Method, Sweep
 
 __all__ = ["Element", "Lever", "Drive", "Circuit", "element_mobility", "law_terms", "FRAME",
-           "ELEMENT_UNITS", "Law", "LAWS", "node_names", "units_of"]
+           "ELEMENT_UNITS", "Law", "LAWS", "element_unit", "node_names", "units_of"]
 
 FRAME = "0"
 
@@ -70,15 +70,19 @@ class Law:
         nodal matrix A(ω) = G + j(ωM − K/ω) in M (p = −1), G (0) or K (+1).
     unit : str
         SI unit of the value (translational reading).
+    rotary_unit : str
+        SI unit of the value in a rotary circuit (a drive in rad/s or N·m):
+        an inertia, a torsional stiffness or a torsional damping.
     """
 
     power: int
     unit: str
+    rotary_unit: str
 
 
 #: Element kind → its :class:`Law`.
-LAWS: dict[str, Law] = {"mass": Law(-1, "kg"), "spring": Law(+1, "N/m"),
-                        "damper": Law(0, "N·s/m")}
+LAWS: dict[str, Law] = {"mass": Law(-1, "kg", "kg·m²"), "spring": Law(+1, "N/m", "N·m/rad"),
+                        "damper": Law(0, "N·s/m", "N·m·s/rad")}
 
 #: SI unit of each element kind's value (translational reading).
 ELEMENT_UNITS: dict[str, str] = {kind: law.unit for kind, law in LAWS.items()}
@@ -265,6 +269,25 @@ def units_of(drive: Drive | None) -> dict[str, str]:
     if drive is not None and drive.rotational:
         return {"v": "rad/s", "Q": "N·m", "x": "rad", "K": "rad/(N·m·s)"}
     return {"v": "m/s", "Q": "N", "x": "m", "K": "m/(N·s)"}
+
+
+def element_unit(kind: str, drive: Drive | None) -> str:
+    """Unit label of an element's value in a circuit driven by ``drive``.
+
+    ``kg``, ``N/m``, ``N·s/m``; in a rotary circuit (``drive.rotational``)
+    ``kg·m²``, ``N·m/rad``, ``N·m·s/rad`` (:data:`LAWS`).
+
+    Parameters
+    ----------
+    kind : {"mass", "spring", "damper"}
+    drive : Drive or None
+
+    Returns
+    -------
+    str
+    """
+    law = LAWS[kind]
+    return law.rotary_unit if drive is not None and drive.rotational else law.unit
 
 
 @dataclass(frozen=True)

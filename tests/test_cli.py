@@ -119,7 +119,8 @@ def test_check_text(capsys):
     assert lines[-1] == "K = " + str(mechcirc.load(STB).tree)
     assert lines[-1] == ("K = m1 + m2 + m3 + m4 + (k4 | (m5 + k5) | "
                          "(m6 + m7 + m8 + m9 + m10 + m11 + m12 + k0))")
-    assert re.search(r"^\s+spring\s+k4\s+D\s+0\s+2e\+06\s+eta=0\.648$", out, re.M)
+    assert re.search(r"^\s+spring\s+k4\s+D\s+0\s+2e\+06 N/m\s+eta=0\.648$", out, re.M)
+    assert re.search(r"^\s+mass\s+m1\s+T\s+A\s+2 kg$", out, re.M)
     assert err == ""
 
 

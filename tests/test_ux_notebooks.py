@@ -230,10 +230,11 @@ def test_check_columns_fit_long_names_without_trailing_spaces(tmp_path, capsys):
     assert "drive W: velocity 2 rad/s between p and 0" in lines
     assert all(line == line.rstrip() for line in lines)
     rows = [line for line in lines if line.startswith(("  spring", "  mass"))]
-    assert rows[0].split() == ["spring", "k_very_long_name", "p", "q", "100"]
-    assert rows[1].split() == ["mass", "J", "q", "0", "1"]
+    # values with their rotary SI units: torsional stiffness N·m/rad, inertia kg·m²
+    assert rows[0].split() == ["spring", "k_very_long_name", "p", "q", "100", "N·m/rad"]
+    assert rows[1].split() == ["mass", "J", "q", "0", "1", "kg·m²"]
     # the columns line up although one name is longer than the column's default
-    assert rows[0].rindex("100") == rows[1].rindex("1")       # the values
+    assert rows[0].index("100 N·m/rad") == rows[1].index("1 kg·m²")       # the values
     assert rows[0].rindex("q") == rows[1].rindex("0")         # the second nodes
 
 

@@ -163,7 +163,7 @@ def cmd_check(args) -> int:
         warning_lines(warns)
         print("\n".join(explain_lines(circuit)))
         return 0
-    from ..circuit import units_of
+    from ..circuit import element_unit, units_of
 
     unit = units_of(d)["v" if d.kind == "velocity" else "Q"]
     print(f"drive {d.name}: {d.kind} {d.amplitude:g} {unit} between {d.n1} and {d.n2}"
@@ -173,11 +173,12 @@ def cmd_check(args) -> int:
     es = circuit.elements
     wn = max([8] + [len(x.name) for x in es] + [len(lv.name) for lv in circuit.levers])
     wp = max([6] + [len(n) for x in es for n in (x.n1, x.n2)])
-    wv = max([12] + [len(f"{x.value:g}") for x in es])
-    for e in es:
+    values = [f"{x.value:g} {element_unit(x.kind, d)}" for x in es]
+    wv = max([12] + [len(v) for v in values])
+    for e, value in zip(es, values):
         eta = f"  eta={e.eta:g}" if e.eta != 1 else ""
         print(f"  {e.kind:<7} {e.name:<{wn}} {e.n1:>{wp}} {e.n2:>{wp}}  "
-              f"{e.value:<{wv}g}{eta}".rstrip())
+              f"{value:<{wv}}{eta}".rstrip())
     for lv in circuit.levers:
         print(f"  lever   {lv.name:<{wn}} {lv.p1}-{lv.p2} -> {lv.s1}-{lv.s2}  ratio={lv.ratio:g}")
     warning_lines(warns)
