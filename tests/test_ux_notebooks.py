@@ -238,6 +238,19 @@ def test_check_columns_fit_long_names_without_trailing_spaces(tmp_path, capsys):
     assert rows[0].rindex("q") == rows[1].rindex("0")         # the second nodes
 
 
+def test_check_shows_the_backlash_with_the_drive_unit(tmp_path, capsys):
+    """The total gap B in rad for a rotary drive, in m for a translational one."""
+    for text, unit in ((ROTARY.replace("100 N*m/rad", "100 N*m/rad backlash=0.01"), "rad"),
+                       ("drive V p 0 velocity=0.1\nspring k p 0 100 backlash=2e-3\n"
+                        "mass m p 0 1\n", "m")):
+        net = tmp_path / "gap.mcir"
+        net.write_text(text)
+        status, out, _ = run(["check", net], capsys)
+        assert status == 0
+        row = next(line for line in out.splitlines() if line.startswith("  spring"))
+        assert row.endswith(f"backlash={0.01 if unit == 'rad' else 0.002:g} {unit}"), row
+
+
 def test_transient_table_of_a_rotary_drive_says_rad_and_newton_metres(tmp_path, capsys):
     net = tmp_path / "rot.mcir"
     net.write_text(ROTARY.replace("spring k p 0", "spring k p q").replace("mass J p 0",

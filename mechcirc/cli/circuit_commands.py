@@ -177,8 +177,9 @@ def cmd_check(args) -> int:
     wv = max([12] + [len(v) for v in values])
     for e, value in zip(es, values):
         eta = f"  eta={e.eta:g}" if e.eta != 1 else ""
+        gap = f"  backlash={e.backlash:g} {units_of(d)['x']}" if e.backlash else ""
         print(f"  {e.kind:<7} {e.name:<{wn}} {e.n1:>{wp}} {e.n2:>{wp}}  "
-              f"{value:<{wv}}{eta}".rstrip())
+              f"{value:<{wv}}{eta}{gap}".rstrip())
     for lv in circuit.levers:
         print(f"  lever   {lv.name:<{wn}} {lv.p1}-{lv.p2} -> {lv.s1}-{lv.s2}  ratio={lv.ratio:g}")
     warning_lines(warns)
