@@ -244,10 +244,12 @@ def _chunk_values(system, pencil3, pinv, S, V, stamps) -> list:
     dV = Ve[ei] - Ve[ej]
     # In place where it can be (fresh E × roots arrays page-fault): a real Δv is not needed
     # beyond y·Δv².
-    ya2 = dV.real ** 2 + dV.imag ** 2 if np.iscomplexobj(dV) else np.multiply(dV, dV, out=dV)
+    real = not np.iscomplexobj(dV)
+    ya2 = np.multiply(dV, dV, out=dV) if real else dV.real ** 2 + dV.imag ** 2
     ya2 *= y[:, None]
-    rel, zeta = _root_sensitivity(system, M, D, Ks, pinv, S, V, dV, y, laws,
-                                  None if np.iscomplexobj(dV) else ya2)
+    # a real dV now holds y·Δv² (ya2), so only a complex one is handed on as Δv
+    rel, zeta = _root_sensitivity(system, M, D, Ks, pinv, S, V, None if real else dV, y,
+                                  laws, ya2 if real else None)
     # Both are real-linear in ∂s/∂p, and a .param's slope is a real combination of them.
     p_rel, wn = {p: (row @ rel, row @ zeta) for p, row in slopes.items()}, np.abs(S)
     # Kinetic ½mη|Δv|², potential ½kη|Δv|²/ωₙ², nothing stored in a damper.
@@ -449,11 +451,11 @@ def _adjoint_products(system, x, w, stamps) -> np.ndarray:
 def _root_sensitivity(system, M, D, Ks, pinv_GT, S, V, dV, y, laws, ya2=None) -> tuple:
     """(p/ωₙ)·∂ωₙ/∂p and p·∂ζ/∂p (from p·∂s/∂p) for every loaded element (value p) and
     lever (ratio p), in that order, one column a root: ``S`` the roots, ``V`` their
-    vectors (columns), ``dV`` the elements' Δv; ``laws`` the distinct exponents 1 − power
-    and each element's row among them, and the levers' ends (:func:`_stamped`);
-    ``pinv_GT`` the pseudo-inverse of the transposed constraint rows; ``ya2`` = y·Δv²
-    when ``dV`` is real (then the element rows are computed in real arithmetic), else
-    None."""
+    vectors (columns), ``dV`` the elements' Δv (None when ``ya2`` is given); ``laws``
+    the distinct exponents 1 − power and each element's row among them, and the levers'
+    ends (:func:`_stamped`); ``pinv_GT`` the pseudo-inverse of the transposed
+    constraint rows; ``ya2`` = y·Δv² when the vectors are real (then the element rows
+    are computed in real arithmetic), else None."""
     MV, DV = M @ V, D @ V
     den = np.sum(V * (2 * S * MV + DV), axis=0)
     # The powers S ** (1 - power), one row per distinct exponent (element e's is row which[e]).
