@@ -167,14 +167,16 @@ def parse_simulate(text, source, table, scene) -> SimulateSettings:
     kw: dict[str, Any] = {}
     for k, v in table.items():
         if k == "aliases":
-            bad = [a for a, b in v.items() if not (is_name(a) and isinstance(b, str) and "." in b)] \
-                if isinstance(v, dict) else ["aliases"]
-            if bad:     # located at the first bad alias, or at aliases = … when not a table
-                raise located(text, source, "[simulate.aliases] maps names to \"THING.quantity\" "
-                              f"strings, got {bad[0]} = {v.get(bad[0])!r}" if isinstance(v, dict)
-                              else "[simulate] aliases must be a table [simulate.aliases]",
-                              "simulate.aliases" if isinstance(v, dict) else "simulate", bad[0],
+            if not isinstance(v, dict):
+                raise located(text, source, "[simulate] aliases must be a table "
+                              "[simulate.aliases]", "simulate", "aliases",
                               expected='eps2P = "crank.acceleration"')
+            for a, b in v.items():      # located at the first bad alias
+                if not (is_name(a) and isinstance(b, str) and "." in b):
+                    raise located(text, source, "[simulate.aliases] maps names to "
+                                  f"\"THING.quantity\" strings, got {a} = {b!r}",
+                                  "simulate.aliases", a,
+                                  expected='eps2P = "crank.acceleration"')
             kw["aliases"] = dict(v)
         elif k in ("omega", "steps_per_period"):
             kw[k] = checked_number(text, source, v, f"[simulate] {k}", "simulate", k, positive=True)
