@@ -396,16 +396,22 @@ class Linkage:
         Raises
         ------
         GeometryError
-            Newton does not converge (no assembly near ``near``).
+            A crank has no angle, or Newton does not converge (no assembly near ``near``).
         """
         local, idx = self.local_offsets(), self._index()
         q = self.q0() if near is None else np.array(near, dtype=float)
-        angles = np.array([[float(crank_angles[c.link]) for c in self.cranks]])
+        names = [c.link for c in self.cranks]
+        if set(names) - set(crank_angles):
+            raise GeometryError(f"{self.source}: crank_angles {crank_angles} must give an "
+                                f"angle [rad] to every crank: {', '.join(names)}")
+        angles = np.array([[float(crank_angles[c]) for c in names]])
         q, ok = Newton(self._plan).newton(q[None], angles)
         q = q[0]
         if not ok[0]:
             raise GeometryError(f"{self.source}: no assembly near the given coordinates for "
-                                f"crank angles {crank_angles}")
+                                f"crank angles {crank_angles} (the links cannot close "
+                                "there); give angles the linkage reaches, or near= closer "
+                                "to the solution")
         pts = {}
         for p, x in self.pose.items():
             owner = next((l for l, ps in self.links.items() if p in ps), None)

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from cli_helpers import assert_user_error
 
 from mechcirc.errors import GeometryError, NetlistError
 from mechcirc.kinematics import FourBar
@@ -173,7 +174,7 @@ def test_mobility_mismatch_says_W():
         parse_linkage(text)
 
 
-def test_locking_names_theta():
+def test_locking_names_theta(tmp_path, capsys):
     # a double-rocker written as a crank: it cannot turn fully
     fb = FourBar(30.0, 10.0, 30.0, 25.0)
     lo, hi = fb.crank_range()
@@ -189,6 +190,21 @@ def test_locking_names_theta():
     import re
     got = float(re.search(r"θ = ([\d.]+)°", str(info.value)).group(1))
     assert got == pytest.approx(math.degrees(hi - th0), abs=1e-3)
+    # assemble (one Newton solve, no continuation): the closed-form rocker angle inside the
+    # range; beyond it (θ = π from the pose, past hi) no assembly, said with what would do
+    C = lk.assemble({"crank": 0.5 * (hi - th0)})["points"]["C"]
+    assert math.atan2(C[1], C[0] - 25.0) == pytest.approx(fb.rocker_angle(0.5 * (th0 + hi)),
+                                                          abs=1e-12)
+    assert hi < th0 + math.pi < lo + 2 * math.pi       # outside [lo, hi] modulo 2π
+    with pytest.raises(GeometryError, match=r"no assembly .*'crank': 3\.14159.* give angles "
+                                            r"the linkage reaches, or near= closer"):
+        lk.assemble({"crank": math.pi})
+    with pytest.raises(GeometryError, match="must give an angle .* to every crank: crank"):
+        lk.assemble({"rocker": 0.0})
+    # the CLI solves by continuation (it calls no assemble): the lock is a user error, exit 2
+    (tmp_path / "rocker.toml").write_text(text)
+    assert_user_error(["linkage", tmp_path / "rocker.toml", "--theta", "180"], capsys,
+                      "rocker.toml", f"locks near θ = {math.degrees(hi - th0):.1f}")
 
 
 def test_branch_jump_is_reported():
