@@ -199,3 +199,22 @@ def test_modal_refusals_name_their_reason_and_a_free_mass_takes_the_block_path()
     x, v = r.node("a")
     np.testing.assert_allclose(x, 3.0 * r.time ** 2 / 4.0, rtol=1e-13, atol=1e-16)
     np.testing.assert_allclose(v, 3.0 * r.time / 2.0, rtol=1e-13, atol=1e-16)
+
+
+def test_modal_refusal_on_a_singular_eigenvector_matrix():
+    """'eigenvector matrix singular': the 3×3 Jordan block (defective, eig returns parallel
+    eigenvectors); and a circuit: a damper to nothing (c4 to the massless node c) leaves two
+    zero eigenvalues of A = u vᵀ (rank 1, trace −1), whose eigenvectors LAPACK returns
+    equal up to sign.  The block propagation then gives the closed form: c4 carries no force,
+    so k1 ∥ c1 stays undeformed from rest and every node moves at v = F/c3 = 1, x = t."""
+    assert sim._modal_plan(np.diag([1.0, 1.0], 1), np.ones(3), 0.1, None) == \
+        "eigenvector matrix singular"
+    c = mechcirc.parse("spring k1 a b 1\ndamper c1 a b 1\ndamper c3 a 0 1\n"
+                       "damper c4 b c 1\ndrive F a 0 force=1\n")
+    r = transient(c, 1.0, 1e-2, "step")
+    assert "block propagation (modal path refused: eigenvector matrix singular)" \
+        in _modal_note(r)
+    for node in "abc":
+        x, v = r.node(node)
+        np.testing.assert_allclose(x, r.time, rtol=0, atol=1e-14)
+        np.testing.assert_allclose(v, 1.0, rtol=0, atol=1e-14)
