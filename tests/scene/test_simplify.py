@@ -140,3 +140,26 @@ def test_a_stiff_spring_behind_a_lever_is_shorted_and_the_lever_kept():
     full = 1 / (1j * w + 4 / (1j * w / 1e9 + 1 / (1j * w * 3)))
     worst = np.max(np.abs((1 / (1j * w * 13)) / full - 1))
     assert r.error == pytest.approx(worst, rel=1e-6)
+
+
+def test_a_spring_across_a_lever_side_is_not_shorted():
+    """k2 across the lever's primary side c–0: shorting it would make that side one node
+    (_short_circuit refuses: None), so the search keeps k2 and merges it in series with k1
+    once the mass m behind the lever is dropped: K = jω(1/k1 + 1/k2) exactly, and the
+    measured error is the closed form's largest |K_red/K_full − 1| on the 50 check points,
+    K_full = jω/k1 + 1/(k2/(jω) + r² jω m)."""
+    from mechcirc._simplify import _short_circuit
+
+    c = mechcirc.parse("drive V a 0 velocity=1\nspring k1 a c 1e4\nlever L c 0 b 0 ratio=2\n"
+                       "mass m b 0 10\nspring k2 c 0 1e7\n")
+    k2 = next(e for e in c.elements if e.name == "k2")
+    assert _short_circuit(list(c.elements), list(c.levers), c.drive, k2) is None
+    r = simplify(c, (1.0, 10.0), 1e-3, points=50)
+    assert r.steps == ("masses removed as negligible: m",
+                       "removed lever L: nothing on its secondary side",
+                       "merged in series: k1+k2 -> k1_ser")
+    jw = 1j * np.geomspace(1.0, 10.0, 50)
+    red = jw * (1 / 1e4 + 1 / 1e7)
+    np.testing.assert_allclose(mechcirc.parse(r.netlist).sweep(jw.imag).K, red, rtol=1e-14)
+    worst = np.max(np.abs(red / (jw / 1e4 + 1 / (1e7 / jw + 4 * jw * 10)) - 1))
+    assert r.error == pytest.approx(worst, rel=1e-6)
