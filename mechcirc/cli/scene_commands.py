@@ -360,7 +360,7 @@ def _print_motion(args, scene, result) -> None:
 
 def _with_overrides(args, scene):
     """``scene`` with ``--set NAME=VALUE`` and ``--omega`` applied."""
-    from ..scene.simfile import apply_overrides
+    from ..scene.files import apply_overrides
 
     over = set_values(args.set)
     if args.omega is not None:

@@ -137,7 +137,7 @@ def crosscheck_scene(scene: Scene, theta: float, *, steps_per_period: float = 40
 def _clearances_closed(scene):
     """The scene with every clearance closed (the circuit has none) and the notes saying
     so: the scene itself and no note if it has no clearance."""
-    from .simfile import apply_overrides
+    from .files import apply_overrides
 
     gaps = {f"{x.name}.clearance": 0.0 for x in (*scene.elastic, *scene.torsions) if x.clearance}
     if not gaps:

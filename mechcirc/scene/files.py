@@ -69,11 +69,11 @@ from __future__ import annotations
 import math
 import os
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Literal, TypeGuard
 
-from ..errors import GeometryError, NetlistError
+from ..errors import GeometryError, MechcircError, NetlistError
 from ..kinematics.linkage import TABLES as LINKAGE_TABLES
 from ..kinematics.linkage import Linkage, parse_linkage
 from ..sources import (Table, brief, check_keys, checked_number, finite_number, load_toml,
@@ -82,7 +82,7 @@ from ..sources import TOML_HEADER, is_name, located, read_source
 from ..units import UnitError, parse_quantity, split_quantity
 
 __all__ = ["Scene", "Analysis", "Gear", "SceneMass", "ElasticLink", "Torsion", "Load", "SceneDrive",
-           "parse_scene", "load_scene", "LENGTH_UNITS", "SCENE_TABLES"]
+           "parse_scene", "load_scene", "apply_overrides", "LENGTH_UNITS", "SCENE_TABLES"]
 
 #: Length units accepted for ``units`` and their size [m].
 LENGTH_UNITS = {"m": 1.0, "cm": 1e-2, "mm": 1e-3}
@@ -665,8 +665,7 @@ class _SceneReader:
                            + (", not inertia" if "inertia" in m else ""), "masses",
                            "inertia" if "inertia" in m else "point", occurrence=n)
         name = self.new_name(m, "masses", "point", n, f"m_{p}")
-        v = self.number(m["mass"], f"mass {name!r} [kg]", "masses", "mass", n)
-        return SceneMass(name, "mass", v, point=p)
+        return SceneMass(name, "mass", self.mass(m, n, name), point=p)
 
     def _link_inertia(self, m, n, bodies, elastic_links):
         lname = m.get("link")
@@ -681,8 +680,13 @@ class _SceneReader:
             raise self.err(f"[[masses]] #{n + 1} on a link takes inertia = … "
                            "[kg·m²]", "masses", "link", occurrence=n)
         name = self.new_name(m, "masses", "link", n, f"J_{lname}")
-        v = self.number(m["inertia"], f"inertia {name!r} [kg·m²]", "masses", "inertia", n)
-        return SceneMass(name, "inertia", v, link=lname)
+        return SceneMass(name, "inertia", self.mass(m, n, name), link=lname)
+
+    def mass(self, m, n, name) -> float:
+        """``mass`` [kg] or ``inertia`` [kg·m²] of [[masses]] entry ``n`` named ``name``."""
+        key = "mass" if "mass" in m else "inertia"
+        unit = "kg" if key == "mass" else "kg·m²"
+        return self.number(m[key], f"{key} {name!r} [{unit}]", "masses", key, n)
 
     def loads(self) -> list:
         """[[loads]]: a spring/damper from a point to a ground anchor or along a direction."""
@@ -695,15 +699,19 @@ class _SceneReader:
                                expected='anchor = "GROUND_POINT" or direction = [dx, dy]')
             anchor, direction = self._load_line(ld, n)
             name = self.new_name(ld, "loads", "point", n, f"load_{p}")
-            k = self.number(ld.get("stiffness", 0.0), f"stiffness of {name!r} [N/m]",
-                            "loads", "stiffness", n, allow_zero=True)
-            c = self.number(ld.get("damping", 0.0), f"damping of {name!r} [N·s/m]",
-                            "loads", "damping", n, allow_zero=True)
-            if k == 0 and c == 0:
-                raise self.err(f"load {name!r} needs stiffness > 0 or damping > 0",
-                               "loads", "point", occurrence=n)
-            loads.append(Load(name, p, k, c, anchor, direction))
+            loads.append(Load(name, p, *self.load_values(ld, n, name), anchor, direction))
         return loads
+
+    def load_values(self, ld, n, name) -> tuple[float, float]:
+        """stiffness [N/m] and damping [N·s/m] of [[loads]] entry ``n`` named ``name``."""
+        k = self.number(ld.get("stiffness", 0.0), f"stiffness of {name!r} [N/m]",
+                        "loads", "stiffness", n, allow_zero=True)
+        c = self.number(ld.get("damping", 0.0), f"damping of {name!r} [N·s/m]",
+                        "loads", "damping", n, allow_zero=True)
+        if k == 0 and c == 0:
+            raise self.err(f"load {name!r} needs stiffness > 0 or damping > 0",
+                           "loads", "point", occurrence=n)
+        return k, c
 
     def _load_line(self, ld, n):
         """(anchor, direction) of a load: one of them, the other None."""
@@ -910,3 +918,82 @@ def load_scene(path: str | Path) -> Scene:
     """
     text = read_source(path, "a scene .toml")
     return parse_scene(text, os.fspath(path))
+
+
+#: What ``--set NAME.FIELD`` may change, by the kind of element NAME is.
+_FIELDS = {"SceneMass": ("mass", "inertia", "value"), "Load": ("stiffness", "damping"),
+           "ElasticLink": ("stiffness", "damping", "clearance"),
+           "Torsion": ("stiffness", "damping", "clearance"),
+           "Moment": ("amplitude", "window_deg", "sigma_deg")}
+
+
+def apply_overrides(scene: Scene, overrides: dict) -> Scene:
+    """A copy of ``scene`` with ``NAME.FIELD = value`` overrides (``--set``); also ``omega``.
+
+    Fields: ``mass``/``inertia`` (or ``value``) of a mass; ``stiffness``,
+    ``damping``, ``clearance`` of an elastic link or torsion rod, ``stiffness``,
+    ``damping`` of a load; ``amplitude``, ``window_deg``, ``sigma_deg`` of a
+    moment; ``omega`` (the crank speed of the run), ``omega_ripple.amplitude``,
+    ``omega_ripple.harmonic``.  Each value is checked by the file reader's own
+    rule for that key, so what the file refuses ``--set`` refuses, with the same
+    message.
+
+    Parameters
+    ----------
+    scene : Scene
+    overrides : dict[str, float]
+
+    Returns
+    -------
+    Scene
+
+    Raises
+    ------
+    NetlistError
+        A value the scene file would refuse; its source is ``--set NAME.FIELD=VALUE``.
+    MechcircError
+        An unknown name or field.
+    """
+    from .simfile import SimulateSettings, override_run
+
+    found = {x.name: x for x in (*scene.masses, *scene.elastic, *scene.torsions, *scene.loads,
+                                 *scene.moments)}
+    sim = scene.simulate if isinstance(scene.simulate, SimulateSettings) else SimulateSettings()
+    for key, value in overrides.items():
+        source = f"--set {key}={brief(value)}"
+        name, _, fld = key.partition(".")
+        kind = type(found.get(name)).__name__
+        if key in ("omega", "omega_ripple.amplitude", "omega_ripple.harmonic"):
+            sim = override_run(source, sim, key, value)
+        elif fld in _FIELDS.get(kind, ()):
+            found[name] = _override(_SceneReader("", source, {}, scene.linkage), found[name],
+                                    fld, value)
+        else:
+            known = ["omega", "omega_ripple.amplitude/harmonic"] + [
+                f"{n}.{'/'.join(_FIELDS[type(x).__name__])}" for n, x in found.items()]
+            raise MechcircError(f"--set {key}: no such parameter; known: {', '.join(known)}")
+    kept = found.values()
+    return replace(scene, masses=tuple(x for x in kept if isinstance(x, SceneMass)),
+                   elastic=tuple(x for x in kept if isinstance(x, ElasticLink)),
+                   torsions=tuple(x for x in kept if isinstance(x, Torsion)),
+                   loads=tuple(x for x in kept if isinstance(x, Load)),
+                   moments=tuple(x for x in kept if type(x).__name__ == "Moment"), simulate=sim)
+
+
+def _override(reader: _SceneReader, old, fld: str, value):
+    """The mass, spring, load or moment ``old`` with ``fld`` = ``value``, checked by the
+    rule of the reader of its table (``reader``, whose source is the ``--set``)."""
+    if type(old).__name__ == "Moment":
+        from .simfile import override_moment
+
+        return override_moment(reader.source, old, fld, value)
+    if isinstance(old, SceneMass):
+        return replace(old, value=reader.mass({old.kind: value}, 0, old.name))
+    if isinstance(old, Load):
+        k, c = reader.load_values({"stiffness": old.stiffness, "damping": old.damping,
+                                   fld: value}, 0, old.name)
+        return replace(old, stiffness=k, damping=c)
+    gap, load = ("m", "N") if isinstance(old, ElasticLink) else ("rad", "N·m")
+    entry = {"stiffness": old.stiffness, "damping": old.damping, "clearance": old.clearance,
+             "clearance_law": old.clearance_law, fld: value}
+    return replace(old, **reader.spring(entry, "elastic", 0, old.name, gap, load))

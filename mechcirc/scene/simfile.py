@@ -46,7 +46,7 @@ from ..errors import MechcircError
 from ..sources import Table, brief, check_keys, checked_number, finite_number, is_name, located
 
 __all__ = ["Moment", "SimulateSettings", "parse_moments", "parse_simulate",
-           "apply_overrides", "Motor", "Shaft", "kloss_motor", "table_motor", "parse_shaft"]
+           "Motor", "Shaft", "kloss_motor", "table_motor", "parse_shaft"]
 
 _RIPPLE_FORM = "omega_ripple = {amplitude = 0.05, harmonic = 2}"
 #: The keys of ``[[moments]]`` and ``[simulate]`` (see :class:`mechcirc.sources.Table`).
@@ -121,17 +121,7 @@ def parse_moments(text, source, table, scene) -> tuple:
                        "unused name", "moments", "name" if "name" in m else "body",
                        occurrence=n, expected="an identifier not used by another element")
         taken.add(name)
-        amp = checked_number(text, source, m.get("amplitude"), f"amplitude of {name!r} [N·m]",
-                             "moments", "amplitude" if "amplitude" in m else "body", n)
-        alpha = checked_number(text, source, m.get("window_deg"), f"window_deg of {name!r} [deg]",
-                               "moments", "window_deg" if "window_deg" in m else "body", n,
-                               positive=True)
-        if alpha >= 360:
-            raise located(text, source, f"window_deg of {name!r} must be < 360, got {alpha!r}",
-                       "moments", "window_deg", occurrence=n, expected="0 < window_deg < 360")
-        sigma = checked_number(text, source, m.get("sigma_deg", alpha),
-                               f"sigma_deg of {name!r} [deg]", "moments", "sigma_deg", n,
-                               positive=True)
+        amp, alpha, sigma = _moment_numbers(text, source, m, n, name)
         centre = m.get("centre", "front-dead-centre")
         if isinstance(centre, str):
             if centre not in ("front-dead-centre", "back-dead-centre"):
@@ -143,6 +133,23 @@ def parse_moments(text, source, table, scene) -> tuple:
                                                  "moments", "centre", n))
         out.append(Moment(name, body, amp, math.radians(alpha), math.radians(sigma), centre))
     return tuple(out)
+
+
+def _moment_numbers(text, source, m, n, name) -> tuple[float, float, float]:
+    """amplitude [N·m], window_deg and sigma_deg [deg] of [[moments]] entry ``n`` named
+    ``name``, checked."""
+    amp = checked_number(text, source, m.get("amplitude"), f"amplitude of {name!r} [N·m]",
+                         "moments", "amplitude" if "amplitude" in m else "body", n)
+    alpha = checked_number(text, source, m.get("window_deg"), f"window_deg of {name!r} [deg]",
+                           "moments", "window_deg" if "window_deg" in m else "body", n,
+                           positive=True)
+    if alpha >= 360:
+        raise located(text, source, f"window_deg of {name!r} must be < 360, got {alpha!r}",
+                      "moments", "window_deg", occurrence=n, expected="0 < window_deg < 360")
+    sigma = checked_number(text, source, m.get("sigma_deg", alpha),
+                           f"sigma_deg of {name!r} [deg]", "moments", "sigma_deg", n,
+                           positive=True)
+    return amp, alpha, sigma
 
 
 def parse_simulate(text, source, table, scene) -> SimulateSettings:
@@ -216,95 +223,32 @@ def _ripple(text, source, v):
     return float(a), int(k)
 
 
-def apply_overrides(scene, overrides: dict):
-    """A copy of ``scene`` with ``NAME.FIELD = value`` overrides (``--set``); also ``omega``.
-
-    Fields: ``mass``/``inertia`` (or ``value``) of a mass; ``stiffness``,
-    ``damping``, ``clearance`` of an elastic link, torsion rod or load;
-    ``amplitude``, ``window_deg``, ``sigma_deg`` of a moment.  ``omega`` sets the
-    crank speed of the run.
-
-    Parameters
-    ----------
-    scene : Scene
-    overrides : dict[str, float]
-
-    Returns
-    -------
-    Scene
-
-    Raises
-    ------
-    MechcircError
-        An unknown name or field, or a value out of range (named).
-    """
-    masses = {m.name: m for m in scene.masses}
-    groups = {"elastic": {e.name: e for e in scene.elastic},
-              "torsions": {t.name: t for t in scene.torsions},
-              "loads": {ld.name: ld for ld in scene.loads}}
-    moments = {m.name: m for m in scene.moments}
-    sim = scene.simulate if scene.simulate is not None else SimulateSettings()
-    for key, value in overrides.items():
-        if not (isinstance(value, float) and math.isfinite(value)):
-            raise MechcircError(f"--set {key}: the value must be a finite number, got {value!r}")
-        if key in ("omega", "omega_ripple.amplitude", "omega_ripple.harmonic"):
-            sim = _override_run(sim, key, value)
-            continue
-        name, _, fld = key.partition(".")
-        if name in masses and fld in ("mass", "inertia", "value"):
-            if value <= 0:
-                raise MechcircError(f"--set {key} must be > 0, got {value!r}")
-            masses[name] = replace(masses[name], value=value)
-            continue
-        grp = next((g for g in groups.values() if name in g), None)
-        if grp is not None and fld in ("stiffness", "damping", "clearance"):
-            if value < 0 or (fld == "clearance" and not hasattr(grp[name], "clearance")):
-                raise MechcircError(f"--set {key}: must be ≥ 0 (and clearance applies to "
-                                    f"elastic links and torsion rods), got {value!r}")
-            grp[name] = replace(grp[name], **{fld: value})
-            continue
-        if name in moments and fld in ("amplitude", "window_deg", "sigma_deg"):
-            moments[name] = _override_moment(moments[name], key, fld, value)
-            continue
-        known = ["omega", "omega_ripple.amplitude/harmonic"] + [f"{n}.inertia/mass" for n in masses] + \
-            [f"{n}.stiffness/damping/clearance" for g in groups.values() for n in g] + \
-            [f"{n}.amplitude/window_deg/sigma_deg" for n in moments]
-        raise MechcircError(f"--set {key}: no such parameter; known: {', '.join(known)}")
-    return replace(
-        scene, masses=tuple(masses.values()), elastic=tuple(groups["elastic"].values()),
-        torsions=tuple(groups["torsions"].values()), loads=tuple(groups["loads"].values()),
-        moments=tuple(moments.values()), simulate=sim)
-
-
-def _override_run(sim: SimulateSettings, key: str, value: float) -> SimulateSettings:
-    """``sim`` with ``omega``, ``omega_ripple.amplitude`` or ``.harmonic`` set to ``value``."""
+def override_run(source: str, sim: SimulateSettings, key: str, value) -> SimulateSettings:
+    """``sim`` with ``omega``, ``omega_ripple.amplitude`` or ``.harmonic`` set to ``value``
+    (``--set``, named by ``source``), checked by the [simulate] reader's rules."""
     if key == "omega":
-        if value <= 0:
-            raise MechcircError(f"--set omega must be > 0 rad/s, got {value!r}")
-        return replace(sim, omega=value)
+        return replace(sim, omega=parse_simulate("", source, {"omega": value}, None).omega)
     a, k = sim.omega_ripple or (0.0, 1)
-    if key.endswith("amplitude"):
-        if not 0 <= value < 1:
-            raise MechcircError(f"--set {key} must be in [0, 1), got {value!r}")
-        a = value
-    else:
-        if value != int(value) or value < 1:
-            raise MechcircError(f"--set {key} must be a whole number >= 1, got {value!r}")
-        k = int(value)
-    return replace(sim, omega_ripple=(a, k))
+    whole = isinstance(value, float) and value.is_integer()     # the reader takes harmonic = 3
+    ripple = {"amplitude": a, "harmonic": k, key.partition(".")[2]: int(value) if whole else value}
+    return replace(sim, omega_ripple=_ripple("", source, ripple))
 
 
-def _override_moment(old, key: str, fld: str, value: float):
+def override_moment(source: str, old: Moment, fld: str, value) -> Moment:
     """The moment ``old`` with ``amplitude``, ``window_deg`` or ``sigma_deg`` set to ``value``
-    (a window that was its own sigma keeps sigma equal to it)."""
+    (``--set``, named by ``source``), checked by the [[moments]] reader's rules (a window
+    that was its own sigma keeps sigma equal to it)."""
+    tied = old.sigma == old.window
+    entry = {"amplitude": old.amplitude, "window_deg": math.degrees(old.window), fld: value}
+    if not tied:
+        entry.setdefault("sigma_deg", math.degrees(old.sigma))
+    amp, alpha, sigma = _moment_numbers("", source, entry, 0, old.name)
     if fld == "amplitude":
-        return replace(old, amplitude=value)
-    if not 0 < value < 360:
-        raise MechcircError(f"--set {key} must be in (0, 360) deg, got {value!r}")
-    rad = math.radians(value)
+        return replace(old, amplitude=amp)
     if fld == "window_deg":
-        return replace(old, window=rad, sigma=rad if old.sigma == old.window else old.sigma)
-    return replace(old, sigma=rad)
+        return replace(old, window=math.radians(alpha), sigma=math.radians(alpha) if tied
+                       else old.sigma)
+    return replace(old, sigma=math.radians(sigma))
 
 
 # ------------------------------------------------------------------ [shaft]

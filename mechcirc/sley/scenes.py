@@ -147,7 +147,7 @@ def preset_scene(drive: str = "one-side", variant: int = 3, **overrides):
         :func:`sley_scene` of Table 1/2 variant 3 (the shipped file) with
         :func:`scene_overrides` of ``preset(drive, variant, **overrides)``.
     """
-    from ..scene.simfile import apply_overrides
+    from ..scene.files import apply_overrides
     from .presets import preset
 
     base = sley_scene(preset(drive, 3))

@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import functools
 import math
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -11,7 +13,7 @@ import pytest
 from mechcirc.nodal import assemble
 from mechcirc.scene import build, load_scene, parse_scene
 from mechcirc.scene.motion import motion_model
-from mechcirc.scene.simfile import apply_overrides
+from mechcirc.scene.files import apply_overrides
 from mechcirc.scene.simulation import SceneAccuracyWarning, simulate_scene
 
 SCENES = ["examples/heald_scene.toml", "examples/mrazek_one_side.toml",
@@ -262,16 +264,6 @@ velocity = 1.0
     assert np.max(np.abs(force - want)) <= 1e-6 * np.max(np.abs(want))
 
 
-def test_overrides_are_checked():
-    from mechcirc.errors import MechcircError
-
-    scene = load_scene("examples/mrazek_one_side.toml")
-    with pytest.raises(MechcircError, match="no such parameter"):
-        apply_overrides(scene, {"C9.stiffness": 1.0})
-    with pytest.raises(MechcircError, match="omega"):
-        apply_overrides(scene, {"omega": -1.0})
-
-
 @pytest.mark.parametrize("path,deg", [("examples/heald_scene.toml", 40.0),
                                       ("examples/heald_scene.toml", 200.0),
                                       ("examples/mrazek_one_side.toml", 40.0),
@@ -371,23 +363,81 @@ def test_circuit_built_as_objects_equals_its_netlist(path, reflect):
     assert strip(parsed.drive) == model.circuit.drive
 
 
+MRAZEK = Path("examples/mrazek_one_side.toml")
+RIPPLE = "[simulate]\nomega_ripple = {{amplitude = {}, harmonic = {}}}\n"
+
+
+@pytest.mark.parametrize("setting, value, old, new", [
+    ("C2.stiffness", 0.0, "stiffness = 100000.0", "stiffness = 0.0"),
+    ("C2.stiffness", -1.0, "stiffness = 100000.0", "stiffness = -1.0"),
+    ("C2.stiffness", math.nan, "stiffness = 100000.0", "stiffness = nan"),
+    ("C4.damping", -1.0, "damping = 29.0", "damping = -1.0"),
+    ("C2.clearance", -math.inf, "clearance = 0.001", "clearance = -inf"),
+    ("I2P.inertia", 0.0, "inertia = 0.005", "inertia = 0.0"),
+    ("I4.mass", -2.0, "inertia = 0.025", "inertia = -2.0"),
+    ("M4.amplitude", math.inf, "amplitude = -500.0", "amplitude = inf"),
+    ("M4.window_deg", 400.0, "window_deg = 10.0", "window_deg = 400.0"),
+    ("M4.sigma_deg", 0.0, "sigma_deg = 10.0", "sigma_deg = 0.0"),
+    ("omega", -3.0, "[simulate]\n", "[simulate]\nomega = -3.0\n"),
+    ("omega", 0.0, "[simulate]\n", "[simulate]\nomega = 0.0\n"),
+    ("omega_ripple.amplitude", 1.5, "[simulate]\n", RIPPLE.format(1.5, 1)),
+    ("omega_ripple.harmonic", 2.5, "[simulate]\n", RIPPLE.format(0.0, 2.5)),
+    ("omega_ripple.harmonic", 0.0, "[simulate]\n", RIPPLE.format(0.0, 0)),
+])
+def test_set_refuses_what_the_file_refuses_with_its_message(setting, value, old, new):
+    """apply_overrides (--set) checks each value by the scene reader's own rule: the value
+    written in the file (first occurrence: C2's line for C2, I4's for I4) is refused with the
+    same message and expectation, the source being the --set instead of file:line:col."""
+    from mechcirc.errors import NetlistError
+
+    text = MRAZEK.read_text()
+    with pytest.raises(NetlistError) as in_file:
+        parse_scene(text.replace(old, new, 1), "f.toml")
+    with pytest.raises(NetlistError) as by_set:
+        apply_overrides(_mrazek(), {setting: value})
+    assert by_set.value.source == f"--set {setting}={value!r}"
+    assert (by_set.value.message, by_set.value.expected) == \
+        (in_file.value.message, in_file.value.expected)
+    assert in_file.value.line > 0 and by_set.value.line == 0
+
+
+def test_set_takes_what_the_file_takes_and_a_load_keeps_one_of_its_two():
+    """Accepted values give the scene the file gives (a sigma over 360° as the file allows,
+    a window that was its own sigma moves it too); a load may lose its stiffness or its
+    damping, not both (heald's warp: stiffness 4e4, damping 20), as in the file."""
+    from mechcirc.errors import MechcircError, NetlistError
+
+    text = MRAZEK.read_text()
+    for over, old, new in [({"C2.stiffness": 2e5}, "stiffness = 100000.0", "stiffness = 2e5"),
+                           ({"M4.sigma_deg": 400.0}, "sigma_deg = 10.0", "sigma_deg = 400.0"),
+                           ({"M4.window_deg": 20.0}, "window_deg = 10.0\nsigma_deg = 10.0",
+                            "window_deg = 20.0"),
+                           ({"omega_ripple.harmonic": 3.0}, "[simulate]\n", RIPPLE.format(0, 3))]:
+        got, want = apply_overrides(_mrazek(), over), parse_scene(text.replace(old, new, 1))
+        assert (got.torsions, got.moments, got.simulate) == \
+            (want.torsions, want.moments, want.simulate)
+    heald = load_scene("examples/heald_scene.toml")
+    assert apply_overrides(heald, {"warp.damping": 0.0}).loads[0].stiffness == 4e4
+    with pytest.raises(NetlistError, match="load 'warp' needs stiffness > 0 or damping > 0"):
+        apply_overrides(heald, {"warp.stiffness": 0.0, "warp.damping": 0.0})
+    with pytest.raises(MechcircError, match="--set C9.stiffness: no such parameter; known: "
+                                            "omega, .* C2.stiffness/damping/clearance"):
+        apply_overrides(_mrazek(), {"C9.stiffness": 1.0})
+
+
+@functools.cache
+def _mrazek():
+    return load_scene(MRAZEK)
+
+
 @pytest.mark.parametrize("setting, message", [
-    ("I2P.inertia=0", "--set I2P.inertia must be > 0, got 0.0"),
-    ("C2.stiffness=-1", "--set C2.stiffness: must be ≥ 0 (and clearance applies to elastic "
-                        "links and torsion rods), got -1.0"),
-    ("omega=-3", "--set omega must be > 0 rad/s, got -3.0"),
-    ("omega_ripple.amplitude=1.5", "--set omega_ripple.amplitude must be in [0, 1), got 1.5"),
-    ("omega_ripple.harmonic=2.5", "--set omega_ripple.harmonic must be a whole number >= 1, "
-                                  "got 2.5"),
-    ("M4.window_deg=400", "--set M4.window_deg must be in (0, 360) deg, got 400.0"),
-    ("M4.sigma_deg=0", "--set M4.sigma_deg must be in (0, 360) deg, got 0.0"),
+    ("C2.stiffness=0", "--set C2.stiffness=0.0: error: stiffness of 'C2' [N·m/rad] must be a "
+                       "finite number > 0, got 0.0 (expected a finite number > 0)"),
     ("I2P.colour=1", "--set I2P.colour: no such parameter; known: omega, "
-                     "omega_ripple.amplitude/harmonic, I2P.inertia/mass"),
+                     "omega_ripple.amplitude/harmonic, I2P.mass/inertia/value"),
 ])
 def test_cli_scene_set_refusals_name_the_setting_and_the_range(setting, message, capsys):
-    """scene/simfile.apply_overrides' refusals (run by no test but for an unknown name):
-    exit 2 before any simulation, one line naming the --set, the range and the value."""
+    """mechcirc simulate --set: exit 2 before any simulation, one line naming the --set."""
     from cli_helpers import assert_user_error
 
-    assert_user_error(["simulate", "examples/mrazek_one_side.toml", "--set", setting], capsys,
-                      message)
+    assert_user_error(["simulate", MRAZEK, "--set", setting], capsys, message)

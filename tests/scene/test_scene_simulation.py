@@ -140,7 +140,7 @@ def test_ripple_grammar_errors_are_located(value, text):
 
 
 def test_set_overrides_the_ripple():
-    from mechcirc.scene.simfile import apply_overrides
+    from mechcirc.scene.files import apply_overrides
 
     scene = apply_overrides(parse_scene(FLYWHEEL, "<f>"), {"omega_ripple.amplitude": 0.2,
                                                             "omega_ripple.harmonic": 3.0})
