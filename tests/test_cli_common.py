@@ -194,6 +194,7 @@ def test_resonances_omega_max_must_be_positive_and_finite(value, capsys):
 def test_simulate_set_value_is_checked(capsys):
     assert_user_error(["simulate", "--set", "C2=1e308"], capsys, "--set C2")
     assert_user_error(["simulate", "--set", "C2=nan"], capsys, "--set C2")
+    assert_user_error(["simulate", "--set", "=5"], capsys, "--set expects NAME=VALUE, got '=5'")
 
 
 def test_import_mechcirc_installs_no_signal_handler():
@@ -380,3 +381,13 @@ def test_a_file_error_a_command_lets_through_is_a_user_error(exc, line, monkeypa
 def test_set_with_an_unknown_unit_names_the_parameter_and_the_units(capsys):
     assert_user_error(["simulate", "--set", "omega=3furlong"], capsys,
                       "--set omega: unknown unit 'furlong' (expected one of kg,")
+
+
+@pytest.mark.parametrize("argv", [
+    ["sweep", STB, "--omega-min", "1", "--omega-max", "10", "-o", ""],
+    ["scene", "examples/mrazek_one_side.toml", "--cycle", "--plot", ""],
+    ["simulate", "examples/mrazek_one_side.toml", "--plot", ""],
+])
+def test_an_empty_output_name_is_refused(argv, capsys):
+    """-o "$OUT" with OUT unset: exit 2 before any work (it wrote nothing and exited 0)."""
+    assert_user_error(argv, capsys, "an output file name is empty; give a file name")

@@ -459,6 +459,8 @@ def check_output_paths(*paths, plots=(), reads=(), table: str | None = None,
     """
     from ..outputs import output_target
 
+    if "" in (*paths, *plots):      # -o "$OUT" with OUT unset would write nothing, silently
+        raise MechcircError("an output file name is empty; give a file name")
     given = [p for p in (*paths, *plots) if p]
     resolved = [output_target(p)[0] for p in given]
     for i, path in enumerate(resolved):
@@ -657,7 +659,7 @@ def set_values(items, not_numbers: dict | None = None) -> dict[str, float]:
     for item in items:
         name, sep, value = item.partition("=")
         name = name.strip()
-        if not sep:
+        if not (sep and name):
             raise MechcircError(f"--set expects NAME=VALUE, got {item!r}")
         if name in words:
             raise MechcircError(f"--set {name}: not a numeric parameter; {words[name]}")

@@ -80,8 +80,7 @@ def _register_reduce(sub) -> None:
 
 
 def cmd_scene(args) -> int:
-    plots = (args.plot,) if args.plot else ()
-    check_output_paths(args.output, plots=plots, reads=(args.file,),
+    check_output_paths(args.output, plots=(args.plot,), reads=(args.file,),
                        table="a CSV table (--cycle) or a netlist (--theta)")
     if args.plot and not args.cycle and args.mode is None:
         raise MechcircError("--plot draws the --cycle map, or with --mode N a mode at the "
@@ -263,8 +262,8 @@ def cmd_simulate_scene(args) -> int:
     if args.steps_per_period is not None and not fixed:
         raise MechcircError(f"--steps-per-period applies to rk4 and rk8, not {args.method}; "
                             "use --rtol")
-    check_output_paths(args.output, plots=(args.plot,) if args.plot else (),
-                       reads=(args.scene,), table="a CSV table")
+    check_output_paths(args.output, plots=(args.plot,), reads=(args.scene,),
+                       table="a CSV table")
     scene = _with_overrides(args, load_scene(args.scene))
     if shaft:
         return _shaft(args, scene)
@@ -362,7 +361,10 @@ def _with_overrides(args, scene):
     """``scene`` with ``--set NAME=VALUE`` and ``--omega`` applied."""
     from ..scene.files import apply_overrides
 
-    over = set_values(args.set)
+    set_values(args.set)            # each NAME=VALUE with a finite quantity, else refused here
+    # the texts as typed: the scene reader checks each unit against its key (as in the file,
+    # a stiffness in kN is refused)
+    over: dict = {n.strip(): v for n, _, v in (s.partition("=") for s in args.set)}
     if args.omega is not None:
         over["omega"] = args.omega
     return apply_overrides(scene, over) if over else scene

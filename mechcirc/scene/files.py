@@ -936,12 +936,13 @@ def apply_overrides(scene: Scene, overrides: dict) -> Scene:
     moment; ``omega`` (the crank speed of the run), ``omega_ripple.amplitude``,
     ``omega_ripple.harmonic``.  Each value is checked by the file reader's own
     rule for that key, so what the file refuses ``--set`` refuses, with the same
-    message.
+    message; a text (``"2 kN*m/rad"``) is read as the file reads it there (any
+    unit where the file takes none: ``omega = "3000rpm"``).
 
     Parameters
     ----------
     scene : Scene
-    overrides : dict[str, float]
+    overrides : dict[str, float or str]
 
     Returns
     -------
@@ -960,9 +961,11 @@ def apply_overrides(scene: Scene, overrides: dict) -> Scene:
                                  *scene.moments)}
     sim = scene.simulate if isinstance(scene.simulate, SimulateSettings) else SimulateSettings()
     for key, value in overrides.items():
-        source = f"--set {key}={brief(value)}"
+        source = f"--set {key}={value}"
         name, _, fld = key.partition(".")
         kind = type(found.get(name)).__name__
+        if isinstance(value, str) and kind in ("Moment", "NoneType"):
+            value = parse_quantity(value)
         if key in ("omega", "omega_ripple.amplitude", "omega_ripple.harmonic"):
             sim = override_run(source, sim, key, value)
         elif fld in _FIELDS.get(kind, ()):

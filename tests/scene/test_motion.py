@@ -371,6 +371,7 @@ RIPPLE = "[simulate]\nomega_ripple = {{amplitude = {}, harmonic = {}}}\n"
     ("C2.stiffness", 0.0, "stiffness = 100000.0", "stiffness = 0.0"),
     ("C2.stiffness", -1.0, "stiffness = 100000.0", "stiffness = -1.0"),
     ("C2.stiffness", math.nan, "stiffness = 100000.0", "stiffness = nan"),
+    ("C2.stiffness", "2kN", "stiffness = 100000.0", 'stiffness = "2kN"'),    # a force
     ("C4.damping", -1.0, "damping = 29.0", "damping = -1.0"),
     ("C2.clearance", -math.inf, "clearance = 0.001", "clearance = -inf"),
     ("I2P.inertia", 0.0, "inertia = 0.005", "inertia = 0.0"),
@@ -385,8 +386,8 @@ RIPPLE = "[simulate]\nomega_ripple = {{amplitude = {}, harmonic = {}}}\n"
     ("omega_ripple.harmonic", 0.0, "[simulate]\n", RIPPLE.format(0.0, 0)),
 ])
 def test_set_refuses_what_the_file_refuses_with_its_message(setting, value, old, new):
-    """apply_overrides (--set) checks each value by the scene reader's own rule: the value
-    written in the file (first occurrence: C2's line for C2, I4's for I4) is refused with the
+    """apply_overrides (--set) checks each value by the scene reader's own rule (a text by
+    its unit as the file reads it): the value written in the file (first occurrence: C2's line for C2, I4's for I4) is refused with the
     same message and expectation, the source being the --set instead of file:line:col."""
     from mechcirc.errors import NetlistError
 
@@ -395,7 +396,7 @@ def test_set_refuses_what_the_file_refuses_with_its_message(setting, value, old,
         parse_scene(text.replace(old, new, 1), "f.toml")
     with pytest.raises(NetlistError) as by_set:
         apply_overrides(_mrazek(), {setting: value})
-    assert by_set.value.source == f"--set {setting}={value!r}"
+    assert by_set.value.source == f"--set {setting}={value}"
     assert (by_set.value.message, by_set.value.expected) == \
         (in_file.value.message, in_file.value.expected)
     assert in_file.value.line > 0 and by_set.value.line == 0
@@ -431,8 +432,9 @@ def _mrazek():
 
 
 @pytest.mark.parametrize("setting, message", [
-    ("C2.stiffness=0", "--set C2.stiffness=0.0: error: stiffness of 'C2' [N·m/rad] must be a "
+    ("C2.stiffness=0", "--set C2.stiffness=0: error: stiffness of 'C2' [N·m/rad] must be a "
                        "finite number > 0, got 0.0 (expected a finite number > 0)"),
+    ("C2.stiffness=2kN", "--set C2.stiffness=2kN: error: unit 'kN' is a force"),
     ("I2P.colour=1", "--set I2P.colour: no such parameter; known: omega, "
                      "omega_ripple.amplitude/harmonic, I2P.mass/inertia/value"),
 ])
