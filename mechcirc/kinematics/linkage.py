@@ -396,15 +396,11 @@ class Linkage:
         Raises
         ------
         GeometryError
-            A crank has no angle, or Newton does not converge (no assembly near ``near``).
+            Newton does not converge (no assembly near ``near``).
         """
         local, idx = self.local_offsets(), self._index()
         q = self.q0() if near is None else np.array(near, dtype=float)
-        names = [c.link for c in self.cranks]
-        if set(names) - set(crank_angles):
-            raise GeometryError(f"{self.source}: crank_angles {crank_angles} must give an "
-                                f"angle [rad] to every crank: {', '.join(names)}")
-        angles = np.array([[float(crank_angles[c]) for c in names]])
+        angles = np.array([[float(crank_angles[c.link]) for c in self.cranks]])
         q, ok = Newton(self._plan).newton(q[None], angles)
         q = q[0]
         if not ok[0]:

@@ -544,10 +544,12 @@ class _SceneReader:
         return torsions
 
     def spring(self, entry, table, n, name, gap, load) -> dict:
-        """stiffness [load/gap], damping [load·s/gap] and clearance of an [[elastic]] or
-        [[torsion]] entry ``n`` named ``name``: the keyword arguments of a :class:`_Spring`."""
+        """stiffness [load/gap], damping [load·s/gap] and clearance of an [[elastic]],
+        [[torsion]] or [[gears]] (its mesh) entry ``n`` named ``name``: the keyword arguments
+        of a :class:`_Spring`."""
         k = self.number(entry.get("stiffness"), f"stiffness of {name!r} [{load}/{gap}]",
-                        table, "stiffness" if "stiffness" in entry else "link", n)
+                        table, "stiffness" if "stiffness" in entry else "link" if "link" in entry
+                        else "crank", n)      # a gear's mesh is on its crank
         c = self.number(entry.get("damping", 0.0), f"damping of {name!r} [{load}·s/{gap}]",
                         table, "damping", n, allow_zero=True)
         b = self.number(entry.get("clearance", 0.0),
@@ -631,12 +633,9 @@ class _SceneReader:
                            "gears", "body" if "body" in g else "crank", occurrence=n,
                            expected="an identifier for the gear on the crank's shaft")
         name = self.new_name({}, "gears", "crank", n, f"mesh_{c}")
-        k = self.number(g.get("stiffness"), f"mesh stiffness of {c!r} [N·m/rad]",
-                        "gears", "stiffness" if "stiffness" in g else "crank", n)
-        d = self.number(g.get("damping", 0.0), f"mesh damping of {c!r} [N·m·s/rad]",
-                        "gears", "damping", n, allow_zero=True)
         piv = next(x.pivot for x in self.linkage.cranks if x.link == c)
-        torsions.append(Torsion(name, c, k, d, body=body, pivot=piv))
+        torsions.append(Torsion(name, c, body=body, pivot=piv,     # the rules of a torsion rod
+                                **self.spring(g, "gears", n, name, "rad", "N·m")))
         return body
 
     def masses(self, bodies: set, rigid_points: set, elastic_links: set) -> list:
@@ -920,11 +919,13 @@ def load_scene(path: str | Path) -> Scene:
     return parse_scene(text, os.fspath(path))
 
 
-#: What ``--set NAME.FIELD`` may change, by the kind of element NAME is.
-_FIELDS = {"SceneMass": ("mass", "inertia", "value"), "Load": ("stiffness", "damping"),
-           "ElasticLink": ("stiffness", "damping", "clearance"),
-           "Torsion": ("stiffness", "damping", "clearance"),
-           "Moment": ("amplitude", "window_deg", "sigma_deg")}
+#: By the kind of element NAME is: the Scene field holding it, and what
+#: ``--set NAME.FIELD`` may change in it.
+_FIELDS = {"SceneMass": ("masses", ("mass", "inertia", "value")),
+           "ElasticLink": ("elastic", ("stiffness", "damping", "clearance")),
+           "Torsion": ("torsions", ("stiffness", "damping", "clearance")),
+           "Load": ("loads", ("stiffness", "damping")),
+           "Moment": ("moments", ("amplitude", "window_deg", "sigma_deg"))}
 
 
 def apply_overrides(scene: Scene, overrides: dict) -> Scene:
@@ -957,8 +958,7 @@ def apply_overrides(scene: Scene, overrides: dict) -> Scene:
     """
     from .simfile import SimulateSettings, override_run
 
-    found = {x.name: x for x in (*scene.masses, *scene.elastic, *scene.torsions, *scene.loads,
-                                 *scene.moments)}
+    found = {x.name: x for table, _ in _FIELDS.values() for x in getattr(scene, table)}
     sim = scene.simulate if isinstance(scene.simulate, SimulateSettings) else SimulateSettings()
     for key, value in overrides.items():
         source = f"--set {key}={value}"
@@ -968,19 +968,16 @@ def apply_overrides(scene: Scene, overrides: dict) -> Scene:
             value = parse_quantity(value)
         if key in ("omega", "omega_ripple.amplitude", "omega_ripple.harmonic"):
             sim = override_run(source, sim, key, value)
-        elif fld in _FIELDS.get(kind, ()):
+        elif fld in _FIELDS.get(kind, ("", ()))[1]:
             found[name] = _override(_SceneReader("", source, {}, scene.linkage), found[name],
                                     fld, value)
         else:
             known = ["omega", "omega_ripple.amplitude/harmonic"] + [
-                f"{n}.{'/'.join(_FIELDS[type(x).__name__])}" for n, x in found.items()]
+                f"{n}.{'/'.join(_FIELDS[type(x).__name__][1])}" for n, x in found.items()]
             raise MechcircError(f"--set {key}: no such parameter; known: {', '.join(known)}")
-    kept = found.values()
-    return replace(scene, masses=tuple(x for x in kept if isinstance(x, SceneMass)),
-                   elastic=tuple(x for x in kept if isinstance(x, ElasticLink)),
-                   torsions=tuple(x for x in kept if isinstance(x, Torsion)),
-                   loads=tuple(x for x in kept if isinstance(x, Load)),
-                   moments=tuple(x for x in kept if type(x).__name__ == "Moment"), simulate=sim)
+    return replace(scene, simulate=sim, **{table: tuple(x for x in found.values() if
+                                                        type(x).__name__ == kind)
+                                           for kind, (table, _) in _FIELDS.items()})
 
 
 def _override(reader: _SceneReader, old, fld: str, value):
