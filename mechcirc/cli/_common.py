@@ -635,7 +635,7 @@ def scene_theta(args, scene, alternative: str = "") -> float:
     return theta
 
 
-def set_values(items, not_numbers: dict | None = None) -> dict[str, float]:
+def set_values(items, not_numbers: dict | None = None, texts: bool = False) -> dict:
     """``--set NAME=VALUE`` options as ``{NAME: value}``, each value a finite number in SI
     units or with a unit (``omega=3000rpm``), at most 1e100 in magnitude.
 
@@ -645,10 +645,12 @@ def set_values(items, not_numbers: dict | None = None) -> dict[str, float]:
         The options' texts.
     not_numbers : dict, optional
         Names that are not numbers, each with what to use instead.
+    texts : bool
+        Give each value as typed (checked all the same), for a reader that checks its unit.
 
     Returns
     -------
-    dict[str, float]
+    dict[str, float], or dict[str, str] with ``texts``
 
     Raises
     ------
@@ -664,13 +666,14 @@ def set_values(items, not_numbers: dict | None = None) -> dict[str, float]:
         if name in words:
             raise MechcircError(f"--set {name}: not a numeric parameter; {words[name]}")
         try:
-            out[name] = v = parse_quantity(value)
+            v = parse_quantity(value)
         except UnitError as exc:
             raise MechcircError(f"--set {name}: {exc.message} (expected {exc.expected})") \
                 from None
         if not (math.isfinite(v) and abs(v) <= 1e100):    # C2 = 1e308 overflowed
             raise MechcircError(f"--set {name}: must be finite and at most 1e+100 in "
                                 f"magnitude, got {value!r}")
+        out[name] = value.strip() if texts else v
     return out
 
 

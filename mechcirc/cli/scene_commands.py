@@ -361,10 +361,9 @@ def _with_overrides(args, scene):
     """``scene`` with ``--set NAME=VALUE`` and ``--omega`` applied."""
     from ..scene.files import apply_overrides
 
-    set_values(args.set)            # each NAME=VALUE with a finite quantity, else refused here
     # the texts as typed: the scene reader checks each unit against its key (as in the file,
     # a stiffness in kN is refused)
-    over: dict = {n.strip(): v for n, _, v in (s.partition("=") for s in args.set)}
+    over = set_values(args.set, texts=True)
     if args.omega is not None:
         over["omega"] = args.omega
     return apply_overrides(scene, over) if over else scene

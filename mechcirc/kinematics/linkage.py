@@ -404,10 +404,9 @@ class Linkage:
         q, ok = Newton(self._plan).newton(q[None], angles)
         q = q[0]
         if not ok[0]:
-            raise GeometryError(f"{self.source}: no assembly near the given coordinates for "
-                                f"crank angles {crank_angles} (the links cannot close "
-                                "there); give angles the linkage reaches, or near= closer "
-                                "to the solution")
+            raise GeometryError(f"{self.source}: no assembly for crank angles {crank_angles} "
+                                "near the given coordinates (the links cannot close there); "
+                                "give angles the linkage reaches, or near= closer to one")
         pts = {}
         for p, x in self.pose.items():
             owner = next((l for l, ps in self.links.items() if p in ps), None)

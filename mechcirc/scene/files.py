@@ -69,9 +69,9 @@ from __future__ import annotations
 import math
 import os
 import re
-from dataclasses import dataclass, field, replace
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
-from typing import Literal, TypeGuard
+from typing import Any, Literal, TypeGuard
 
 from ..errors import GeometryError, MechcircError, NetlistError
 from ..kinematics.linkage import TABLES as LINKAGE_TABLES
@@ -975,9 +975,9 @@ def apply_overrides(scene: Scene, overrides: dict) -> Scene:
             known = ["omega", "omega_ripple.amplitude/harmonic"] + [
                 f"{n}.{'/'.join(_FIELDS[type(x).__name__][1])}" for n, x in found.items()]
             raise MechcircError(f"--set {key}: no such parameter; known: {', '.join(known)}")
-    return replace(scene, simulate=sim, **{table: tuple(x for x in found.values() if
-                                                        type(x).__name__ == kind)
-                                           for kind, (table, _) in _FIELDS.items()})
+    tables: dict[str, Any] = {table: tuple(x for x in found.values() if type(x).__name__ == kind)
+                              for kind, (table, _) in _FIELDS.items()}
+    return replace(scene, simulate=sim, **tables)
 
 
 def _override(reader: _SceneReader, old, fld: str, value):
@@ -989,11 +989,9 @@ def _override(reader: _SceneReader, old, fld: str, value):
         return override_moment(reader.source, old, fld, value)
     if isinstance(old, SceneMass):
         return replace(old, value=reader.mass({old.kind: value}, 0, old.name))
+    entry = asdict(old) | {fld: value}          # as the file would hold it, with the new value
     if isinstance(old, Load):
-        k, c = reader.load_values({"stiffness": old.stiffness, "damping": old.damping,
-                                   fld: value}, 0, old.name)
+        k, c = reader.load_values(entry, 0, old.name)
         return replace(old, stiffness=k, damping=c)
     gap, load = ("m", "N") if isinstance(old, ElasticLink) else ("rad", "N·m")
-    entry = {"stiffness": old.stiffness, "damping": old.damping, "clearance": old.clearance,
-             "clearance_law": old.clearance_law, fld: value}
     return replace(old, **reader.spring(entry, "elastic", 0, old.name, gap, load))

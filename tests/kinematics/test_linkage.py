@@ -196,8 +196,9 @@ def test_locking_names_theta(tmp_path, capsys):
     assert math.atan2(C[1], C[0] - 25.0) == pytest.approx(fb.rocker_angle(0.5 * (th0 + hi)),
                                                           abs=1e-12)
     assert hi < th0 + math.pi < lo + 2 * math.pi       # outside [lo, hi] modulo 2π
-    with pytest.raises(GeometryError, match=r"no assembly .*'crank': 3\.14159.* give angles "
-                                            r"the linkage reaches, or near= closer"):
+    with pytest.raises(GeometryError, match=r"no assembly for crank angles .*'crank': 3\.14159"
+                                            r".* give angles the linkage reaches, or near= "
+                                            r"closer"):
         lk.assemble({"crank": math.pi})
     # the CLI solves by continuation (it calls no assemble): the lock is a user error, exit 2
     (tmp_path / "rocker.toml").write_text(text)
