@@ -80,6 +80,8 @@ from ..sources import (Table, brief, check_keys, checked_number, finite_number, 
                        split_lines)
 from ..sources import TOML_HEADER, is_name, located, read_source
 from ..units import UnitError, parse_quantity, split_quantity
+from .simfile import (Moment, SimulateSettings, override_moment, override_run, parse_moments,
+                      parse_shaft, parse_simulate)
 
 __all__ = ["Scene", "Analysis", "Gear", "SceneMass", "ElasticLink", "Torsion", "Load", "SceneDrive",
            "parse_scene", "load_scene", "apply_overrides", "LENGTH_UNITS", "SCENE_TABLES"]
@@ -430,14 +432,10 @@ def _length_unit(text: str, source: str, doc: dict) -> str:
 
 def _read_dynamics(scene: Scene, text: str, source: str, doc: dict) -> None:
     """The tables of the time domain into ``scene``: [[moments]], [simulate], [shaft]."""
-    from .simfile import parse_moments, parse_simulate
-
     object.__setattr__(scene, "moments", parse_moments(text, source, doc.get("moments"), scene))
     object.__setattr__(scene, "simulate", parse_simulate(text, source, doc.get("simulate"),
                                                          scene))
     if "shaft" in doc:
-        from .simfile import parse_shaft
-
         object.__setattr__(scene, "shaft", parse_shaft(text, source, doc["shaft"], scene))
 
 
@@ -921,11 +919,12 @@ def load_scene(path: str | Path) -> Scene:
 
 #: By the kind of element NAME is: the Scene field holding it, and what
 #: ``--set NAME.FIELD`` may change in it.
-_FIELDS = {"SceneMass": ("masses", ("mass", "inertia", "value")),
-           "ElasticLink": ("elastic", ("stiffness", "damping", "clearance")),
-           "Torsion": ("torsions", ("stiffness", "damping", "clearance")),
-           "Load": ("loads", ("stiffness", "damping")),
-           "Moment": ("moments", ("amplitude", "window_deg", "sigma_deg"))}
+_FIELDS: dict[type, tuple[str, tuple[str, ...]]] = {
+    SceneMass: ("masses", ("mass", "inertia", "value")),
+    ElasticLink: ("elastic", ("stiffness", "damping", "clearance")),
+    Torsion: ("torsions", ("stiffness", "damping", "clearance")),
+    Load: ("loads", ("stiffness", "damping")),
+    Moment: ("moments", ("amplitude", "window_deg", "sigma_deg"))}
 
 
 def apply_overrides(scene: Scene, overrides: dict) -> Scene:
@@ -956,15 +955,13 @@ def apply_overrides(scene: Scene, overrides: dict) -> Scene:
     MechcircError
         An unknown name or field.
     """
-    from .simfile import SimulateSettings, override_run
-
     found = {x.name: x for table, _ in _FIELDS.values() for x in getattr(scene, table)}
     sim = scene.simulate if isinstance(scene.simulate, SimulateSettings) else SimulateSettings()
     for key, value in overrides.items():
         source = f"--set {key}={value}"
         name, _, fld = key.partition(".")
-        kind = type(found.get(name)).__name__
-        if isinstance(value, str) and kind in ("Moment", "NoneType"):
+        kind = type(found.get(name))
+        if isinstance(value, str) and kind in (Moment, type(None)):
             value = parse_quantity(value)
         if key in ("omega", "omega_ripple.amplitude", "omega_ripple.harmonic"):
             sim = override_run(source, sim, key, value)
@@ -973,9 +970,9 @@ def apply_overrides(scene: Scene, overrides: dict) -> Scene:
                                     fld, value)
         else:
             known = ["omega", "omega_ripple.amplitude/harmonic"] + [
-                f"{n}.{'/'.join(_FIELDS[type(x).__name__][1])}" for n, x in found.items()]
+                f"{n}.{'/'.join(_FIELDS[type(x)][1])}" for n, x in found.items()]
             raise MechcircError(f"--set {key}: no such parameter; known: {', '.join(known)}")
-    tables: dict[str, Any] = {table: tuple(x for x in found.values() if type(x).__name__ == kind)
+    tables: dict[str, Any] = {table: tuple(x for x in found.values() if type(x) is kind)
                               for kind, (table, _) in _FIELDS.items()}
     return replace(scene, simulate=sim, **tables)
 
@@ -983,9 +980,7 @@ def apply_overrides(scene: Scene, overrides: dict) -> Scene:
 def _override(reader: _SceneReader, old, fld: str, value):
     """The mass, spring, load or moment ``old`` with ``fld`` = ``value``, checked by the
     rule of the reader of its table (``reader``, whose source is the ``--set``)."""
-    if type(old).__name__ == "Moment":
-        from .simfile import override_moment
-
+    if isinstance(old, Moment):
         return override_moment(reader.source, old, fld, value)
     if isinstance(old, SceneMass):
         return replace(old, value=reader.mass({old.kind: value}, 0, old.name))
