@@ -39,7 +39,7 @@ import numpy as np
 
 from ..errors import GeometryError, InputError, MechcircWarning, warn
 from ..kinematics.linkage import Linkage, Slider
-from ..sources import Table, brief, check_keys, finite_number, located
+from ..sources import Table, brief, check_keys, checked_number, located
 
 if TYPE_CHECKING:
     from ..motion_laws import Motion
@@ -362,13 +362,9 @@ class _CamReader:
                        expected=expected)
 
     def num(self, key, default=None, positive=True, allow_zero=False):
-        v = self.raw.get(key, default)
-        if not finite_number(v) or (positive and (v < 0 or (v == 0 and not allow_zero))):
-            raise self.err(f"[cam] {key} must be a finite number{' > 0' if positive else ''}"
-                           f"{' or 0' if allow_zero else ''}, got {brief(v)}",
-                           key if key in self.raw else "follower",
-                           expected=f"{key} = {CAM_KEYS[key]}")
-        return float(v)
+        return checked_number(self.text, self.source, self.raw.get(key, default), f"[cam] {key}",
+                              "cam", key if key in self.raw else "follower", positive=positive,
+                              allow_zero=allow_zero, expected=f"{key} = {CAM_KEYS[key]}")
 
     def kind(self) -> str:
         """``follower_type``, and the keys of the other kinds refused."""
