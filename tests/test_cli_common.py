@@ -391,3 +391,11 @@ def test_set_with_an_unknown_unit_names_the_parameter_and_the_units(capsys):
 def test_an_empty_output_name_is_refused(argv, capsys):
     """-o "$OUT" with OUT unset: exit 2 before any work (it wrote nothing and exited 0)."""
     assert_user_error(argv, capsys, "an output file name is empty; give a file name")
+
+
+@pytest.mark.skipif(not Path("/dev/full").exists(), reason="no /dev/full (a device that is full)")
+def test_an_output_with_no_room_is_the_environments_refusal(capsys):
+    """A write the system refuses for room (ENOSPC: a full disk; /dev/full) carries no file
+    name: exit 2 naming the cause, not 'internal error ... a bug in mechcirc' (exit 1)."""
+    assert_user_error(["sweep", STB, "--omega-min", "1", "--omega-max", "10", "-o", "/dev/full"],
+                      capsys, "mechcirc: error: no space left on device")

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import errno
 import math
 import os
 import signal
@@ -141,10 +142,6 @@ def _run(args) -> int:
     except IsADirectoryError as exc:
         print(f"{_name(exc)}: error: is a directory, expected a file", file=sys.stderr)
         return EXIT_USER
-    except PermissionError as exc:
-        print(f"{_name(exc)}: error: {(exc.strerror or 'permission denied').lower()}",
-              file=sys.stderr)
-        return EXIT_USER
     except KeyboardInterrupt:
         print("mechcirc: interrupted", file=sys.stderr)
         return EXIT_SIGINT
@@ -154,14 +151,20 @@ def _run(args) -> int:
     except BrokenPipeError:
         return EXIT_OK
     except OSError as exc:
-        if exc.filename is None or exc.strerror is None:
+        # A file the system would not read or write (a full disk, a read-only file
+        # system, no permission): the environment's refusal, named, not a bug; a
+        # write's refusal (no room on the disk, /dev/full) has no file name.
+        if exc.strerror is None or (exc.filename is None and exc.errno not in _REFUSALS):
             return _internal(args, exc)
-        # A file the system would not read or write (a full disk, a read-only
-        # file system): the environment's refusal, named, not a bug.
-        print(f"{_name(exc)}: error: {exc.strerror.lower()}", file=sys.stderr)
+        where = "mechcirc" if exc.filename is None else _name(exc)
+        print(f"{where}: error: {exc.strerror.lower()}", file=sys.stderr)
         return EXIT_USER
     except Exception as exc:  # noqa: BLE001 - the last line of defence
         return _internal(args, exc)
+
+
+#: The system's refusals of a read or write (OSError.errno), reported as user errors.
+_REFUSALS = {errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EROFS, errno.EACCES, errno.EPERM}
 
 
 def _name(exc: OSError) -> str:
