@@ -645,11 +645,16 @@ def _crossings(ds, t, dt_max):
     the pose; at a sampled minimum that a parabola puts near 0, the minimum is
     narrowed (16-fold per round, 10 rounds).  It is a change point when it is at
     most ``_CROSS`` and the dyad assembles again a ``_ZONE`` beyond (a dead
-    position, where the linkage locks, does not).
+    position, where the linkage locks, does not).  They depend on the linkage
+    only: kept with the range scanned, rescanned when a call reaches beyond it.
     """
+    lo, hi = float(np.min(t, initial=0.0)), float(np.max(t, initial=0.0))
+    kept = ds.__dict__.get("_crossings")
+    if kept is not None and kept[0] == dt_max and kept[1] <= lo and hi <= kept[2]:
+        return kept[3]
     cross: list = []
     dz = _ZONE / abs(float(ds.pl.omega[0]))
-    for end in (float(np.max(t, initial=0.0)), float(np.min(t, initial=0.0))):
+    for end in (hi, lo):
         t0 = 0.0
         while end != 0.0:
             n = int(math.ceil(abs(end - t0) / dt_max)) + 3
@@ -659,6 +664,7 @@ def _crossings(ds, t, dt_max):
                 break
             cross.append(found)
             t0 = found[0] + math.copysign(dz, end)
+    ds._crossings = (dt_max, lo, hi, cross)
     return cross
 
 
