@@ -641,8 +641,8 @@ def _crossings(ds, t, dt_max):
     """The change points the smooth branch meets between the pose and the farthest
     targets on either side: [(time, dyad)], nearest the pose first on each side.
 
-    The sin² of every RRR dyad's inner angle is sampled every ``dt_max`` out from
-    the pose; at a sampled minimum that a parabola puts near 0, the minimum is
+    The sin² of every RRR dyad's inner angle is sampled every ``dt_max`` (at most 2°)
+    out from the pose; at a sampled minimum that a parabola puts near 0, the minimum is
     narrowed (16-fold per round, 10 rounds).  It is a change point when it is at
     most ``_CROSS`` and the dyad assembles again a ``_ZONE`` beyond (a dead
     position, where the linkage locks, does not).  They depend on the linkage
@@ -653,12 +653,14 @@ def _crossings(ds, t, dt_max):
     if kept is not None and kept[0] == dt_max and kept[1] <= lo and hi <= kept[2]:
         return kept[3]
     cross: list = []
-    dz = _ZONE / abs(float(ds.pl.omega[0]))
+    w = abs(float(ds.pl.omega[0]))
+    dz = _ZONE / w
+    step = min(dt_max, math.radians(2.0) / w)      # coarser samples miss minima
     for end in (hi, lo):
         t0 = 0.0
         while end != 0.0:
-            n = int(math.ceil(abs(end - t0) / dt_max)) + 3
-            grid = t0 + math.copysign(dt_max, end) * np.arange(n)
+            n = int(math.ceil(abs(end - t0) / step)) + 3
+            grid = t0 + math.copysign(step, end) * np.arange(n)
             found = _first_crossing(ds, grid, _sin2(ds, grid, cross), cross, dz)
             if found is None:
                 break
