@@ -29,6 +29,12 @@ warm-started from the previous one, q̇ and q̈ from the LU of J at each
 converged q — the same cost per position at 360 positions as at 3,600.
 ``mechcirc._jit.COMPILED = False`` keeps the numpy versions (tests run both).
 
+A change-point linkage (an RRR dyad lining up where its two assembly modes
+cross; one crank) continues on the branch whose velocity is continuous, by
+either solver: the crossings are located once per linkage, the dyad changes
+sides at each, and positions within a small zone around it are interpolated
+from the zone's ends (:func:`_solve`).
+
 Both return a :class:`LinkageMotion` of plain arrays.  The result types
 (:class:`LinkageState`, :class:`LinkageMotion`) live here, below
 :mod:`.linkage`, which re-exports them, so the two modules import one way.
@@ -652,13 +658,13 @@ def _crossings(ds, t, dt_max):
     only: kept with the range scanned, rescanned when a call reaches beyond it.
     """
     lo, hi = float(np.min(t, initial=0.0)), float(np.max(t, initial=0.0))
+    w = abs(float(ds.pl.omega[0]))
+    step = min(dt_max, math.radians(2.0) / w)      # coarser samples miss minima
     kept = ds.__dict__.get("_crossings")
-    if kept is not None and kept[0] == dt_max and kept[1] <= lo and hi <= kept[2]:
+    if kept is not None and kept[0] == step and kept[1] <= lo and hi <= kept[2]:
         return kept[3]
     cross: list = []
-    w = abs(float(ds.pl.omega[0]))
     dz = _ZONE / w
-    step = min(dt_max, math.radians(2.0) / w)      # coarser samples miss minima
     for end in (hi, lo):
         t0 = 0.0
         while end != 0.0:
@@ -669,7 +675,7 @@ def _crossings(ds, t, dt_max):
                 break
             cross.append(found)
             t0 = found[0] + math.copysign(dz, end)
-    ds._crossings = (dt_max, lo, hi, cross)
+    ds._crossings = (step, lo, hi, cross)
     return cross
 
 
