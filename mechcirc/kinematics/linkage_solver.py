@@ -29,8 +29,8 @@ warm-started from the previous one, q̇ and q̈ from the LU of J at each
 converged q — the same cost per position at 360 positions as at 3,600.
 ``mechcirc._jit.COMPILED = False`` keeps the numpy versions (tests run both).
 
-A change-point linkage (an RRR dyad lining up where its two assembly modes
-cross; one crank) continues on the branch whose velocity is continuous, by
+A change-point linkage (an RRR or RRP dyad lining up where its two assembly
+modes cross; one crank) continues on the branch whose velocity is continuous, by
 either solver: the crossings are located once per linkage, the dyad changes
 sides at each, and positions within a small zone around it are interpolated
 from the zone's ends (:func:`_solve`).
@@ -589,8 +589,8 @@ _CROSS = 1e-12
 def _solve(lk, pl, use, t, dt_max):
     """(q, q̇, q̈, parts) at times ``t`` by the solver ``use``.
 
-    A change-point linkage (an RRR dyad that lines up where its two assembly modes
-    cross, :func:`_crossings`; one crank) continues on the branch whose velocity is
+    A change-point linkage (an RRR or RRP dyad that lines up where its two assembly
+    modes cross, :func:`_crossings`; one crank) continues on the branch whose velocity is
     continuous: the dyad changes sides there.  The closed form and Newton are
     ill-conditioned within a rotation ``_ZONE`` of the crossing (positions to about
     √eps, rates 0/0), so the solvers visit the zone's ends instead (Newton steps from
@@ -634,15 +634,20 @@ def _signs(pl, cross, t):
 
 
 def _sin2(ds, t, cross):
-    """sin² of each RRR dyad's inner angle at times ``t`` (n_dyads, N); negative where it
-    cannot assemble, +inf for the other dyads.  Independent of the dyad's own side."""
+    """sin² of each RRR dyad's inner angle, and of the angle between an RRP dyad's rod
+    and its guide, at times ``t`` (n_dyads, N); negative where it cannot assemble, +inf
+    for RPR dyads.  Independent of the dyad's own side."""
     inner = ds.positions(t, _signs(ds.pl, cross, t) if cross else None)[3]
     out = np.full((len(inner), len(t)), np.inf)
     for k, (dy, rates) in enumerate(zip(ds.pl.dyads, inner)):
         if dy.kind == "RRR":
             e = rates[1] - rates[0]
             c = (dy.l1 ** 2 + dy.l2 ** 2 - (e.real ** 2 + e.imag ** 2)) / (2 * dy.l1 * dy.l2)
-            out[k] = 1.0 - c * c
+        elif dy.kind == "RRP":         # the rod's reach across the guide (exact off it too)
+            c = _im_conj(rates[4], rates[5]) / dy.l1
+        else:
+            continue
+        out[k] = 1.0 - c * c
     return out
 
 
@@ -650,7 +655,7 @@ def _crossings(ds, t, dt_max):
     """The change points the smooth branch meets between the pose and the farthest
     targets on either side: [(time, dyad)], nearest the pose first on each side.
 
-    The sin² of every RRR dyad's inner angle is sampled every ``dt_max`` (at most 2°)
+    The sin² of every RRR and RRP dyad's angle (:func:`_sin2`) is sampled every ``dt_max`` (at most 2°)
     out from the pose; at a sampled minimum that a parabola puts near 0, the minimum is
     narrowed (16-fold per round, 10 rounds).  It is a change point when it is at
     most ``_CROSS`` and the dyad assembles again a ``_ZONE`` beyond (a dead
