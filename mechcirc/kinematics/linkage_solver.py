@@ -715,22 +715,29 @@ def _in_zones(t, zones):
 
 def _traverse(t, zones):
     """The traversal 0 → t[0] → t[1] … with every zone it enters replaced by its two
-    ends, in order: (times to solve, row of each target there or −1, its zone or −1)."""
+    ends, in order: (times to solve, row of each target there or −1, its zone or −1).
+    ``zones`` in increasing order."""
+    prev = np.concatenate(([0.0], t[:-1]))
+    za, zb = np.array(zones).T
+    hit = (za[:, None] <= np.maximum(prev, t)) & (zb[:, None] >= np.minimum(prev, t))
     pts: list = []
     where = np.full(len(t), -1)
     zone_of = np.full(len(t), -1)
-    a = 0.0
-    for i, b in enumerate(t.tolist()):
-        lo, hi = min(a, b), max(a, b)
-        for z in sorted((z for z, (za, zb) in enumerate(zones) if za <= hi and zb >= lo),
-                        reverse=b < a):
+    last = 0
+    for i in np.flatnonzero(hit.any(axis=0)).tolist() + [len(t)]:
+        where[last:i] = len(pts) + np.arange(i - last)        # the steps that meet none
+        pts.extend(t[last:i].tolist())
+        if i == len(t):
+            break
+        a, b = float(prev[i]), float(t[i])
+        for z in sorted(np.flatnonzero(hit[:, i]).tolist(), reverse=b < a):
             pts.extend(zones[z] if b >= a else zones[z][::-1])
             if zones[z][0] < b < zones[z][1]:
                 zone_of[i] = z
         if zone_of[i] < 0:
             where[i] = len(pts)
             pts.append(b)
-        a = b
+        last = i + 1
     return np.array(pts), where, zone_of
 
 
