@@ -584,6 +584,8 @@ def check_stroke(lk, s, theta, P, G1, G2, what: str = "position asked") -> None:
 _ZONE = 6e-3
 #: A dyad whose sin² of the inner angle dips to this and opens again crosses a change point.
 _CROSS = 1e-12
+#: Most samples per piece of the scan for crossings.
+_SCAN = 2000
 
 
 def _solve(lk, pl, use, t, dt_max):
@@ -628,8 +630,11 @@ def _signs(pl, cross, t):
     """Each dyad's assembly side at times ``t`` (n_dyads, N): the pose's, changed at each
     change point ``cross`` ((time, dyad) pairs) between the pose (t = 0) and t."""
     s = np.repeat(np.array([[d.sign] for d in pl.dyads], dtype=float), len(t), axis=1)
-    for tc, d in cross:
-        s[d] *= np.where((t > tc) == (tc > 0), -1.0, 1.0)
+    for d in {d for _, d in cross}:
+        tc = np.sort([c for c, k in cross if k == d])
+        up, down = tc[tc > 0], tc[tc < 0]
+        passed = np.searchsorted(up, t) + len(down) - np.searchsorted(down, t, side="right")
+        s[d] *= 1 - 2 * (passed % 2)
     return s
 
 
@@ -673,9 +678,13 @@ def _crossings(ds, t, dt_max):
     for end in (hi, lo):
         t0 = 0.0
         while end != 0.0:
-            n = int(math.ceil(abs(end - t0) / step)) + 3
+            # in pieces of at most _SCAN samples (a long range at large steps)
+            n = min(int(math.ceil(abs(end - t0) / step)) + 3, _SCAN)
             grid = t0 + math.copysign(step, end) * np.arange(n)
             found = _first_crossing(ds, grid, _sin2(ds, grid, cross), cross, dz)
+            if found is None and n == _SCAN:
+                t0 = grid[-3]                   # overlapping: a minimum at the seam
+                continue
             if found is None:
                 break
             cross.append(found)
