@@ -714,14 +714,6 @@ def _first_crossing(ds, grid, s2, cross, dz):
     return None
 
 
-def _in_zones(t, zones):
-    """Whether each time ``t`` lies strictly inside one of the ``zones``."""
-    inside = np.zeros(len(t), dtype=bool)
-    for a, b in zones:
-        inside |= (t > a) & (t < b)
-    return inside
-
-
 def _traverse(t, zones):
     """The traversal 0 → t[0] → t[1] … with every zone it enters replaced by its two
     ends, in order: (times to solve, row of each target there or −1, its zone or −1).
@@ -979,8 +971,8 @@ def _solve_dyads(lk, pl, t, dt_max, cross=(), zones=()):
         nsg = _signs(pl, cross, check_t) if cross else None
         check_m = _dyads_compiled(ds, check_t, nsg)[-1] if compiled else \
             ds.positions(check_t, nsg)[4]
-    # inside a change point's zone the closed form is not used (see _bridged)
-    check_m = np.where(_in_zones(check_t, zones), np.inf, check_m)
+    for a, b in zones:          # inside a change point's zone it is not used (_bridged)
+        check_m = np.where((check_t > a) & (check_t < b), np.inf, check_m)
     if not np.all(check_m > _SINGULAR):
         k = int(np.argmax(~(check_m > _SINGULAR)))
         _lock_error(lk, ds, 0.0 if k == 0 else check_t[k - 1], check_t[k], cross)
