@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 from test_linkage_solver import TEMPLATE as FOURBAR_FILE
+from test_sliders import SLIDER_CRANK
 
 from mechcirc.errors import GeometryError
 from mechcirc.kinematics import parse_linkage
@@ -173,43 +174,26 @@ def test_a_triple_rocker_driven_past_its_limit_still_locks(method, compiled, mon
         _solve(lk, np.radians(np.arange(0.0, 361.0, 1.0)), method, compiled, monkeypatch)
 
 
-ISOSCELES = """
-units = "mm"
-[points]
-O2 = [0.0, 0.0]
-G = [100.0, 0.0]
-A = [21.213203435596427, 21.213203435596427]
-B = [42.42640687119285, 0.0]
-[ground]
-points = ["O2", "G"]
-[links]
-crank = ["O2", "A"]
-rod = ["A", "B"]
-block = ["B"]
-[[sliders]]
-link = "block"
-guide = "ground"
-line = ["O2", "G"]
-[[cranks]]
-link = "crank"
-omega = 2.0
-"""
+# test_sliders' slider-crank (crank 40 mm) with the rod 40 mm and no offset, posed at θ = 0
+ISOSCELES = SLIDER_CRANK.format(omega=2.0)
+for old, new in (("C = [178.5357, -10.0]", "C = [80.0, 0.0]"),
+                 ("G1 = [0.0, -10.0]", "G1 = [-50.0, 0.0]"), ("G2 = [100.0, -10.0]", "G2 = [100.0, 0.0]")):
+    assert old in ISOSCELES
+    ISOSCELES = ISOSCELES.replace(old, new)
 
 
 @pytest.mark.parametrize("method,compiled", SOLVERS)
 def test_isosceles_slider_crank_passes_its_crossing(method, compiled, monkeypatch):
-    # crank = rod = 30 mm, no offset, posed at 45°: the rod lines up across the guide at
-    # 90° and 270° (the block on the crank pivot); on the smooth branch the rod mirrors the
-    # crank, x_B = 60 cos θ
+    # the rod lines up across the guide at θ = 90° and 270° (the block on the crank
+    # pivot); on the smooth branch the rod mirrors the crank, x_C = 80 cos θ
     lk = parse_linkage(ISOSCELES)
     w = 2.0
-    rel = np.radians(np.concatenate([np.arange(0.0, 721.0, 1.0), [45.0, 225.0],
-                                     45.0 + np.array([-1e-12, 1e-12])]))
-    th = rel + math.pi / 4
-    m = _solve(lk, rel, method, compiled, monkeypatch)
-    k = m.point_names.index("B")
-    # measured: ≤ 3e-13 mm, 4.8e-10 mm/s, 5.1e-8 mm/s² (of 60, 120, 240), rod 1.6e-11 rad/s
-    assert np.max(np.abs(m.points[:, k, 0] - 60 * np.cos(th))) < 1e-11
-    assert np.max(np.abs(m.velocities[:, k, 0] + 60 * w * np.sin(th))) < 2e-9
-    assert np.max(np.abs(m.accelerations[:, k, 0] + 60 * w * w * np.cos(th))) < 2e-7
+    th = np.radians(np.concatenate([np.arange(0.0, 721.0, 1.0), [90.0, 270.0],
+                                    90.0 + np.array([-1e-12, 1e-12])]))
+    m = _solve(lk, th, method, compiled, monkeypatch)
+    k = m.point_names.index("C")
+    # measured: ≤ 1.7e-12 mm, 2.9e-10 mm/s, 2.5e-7 mm/s² (of 80, 160, 320), rod 7e-12 rad/s
+    assert np.max(np.abs(m.points[:, k, 0] - 80 * np.cos(th))) < 1e-11
+    assert np.max(np.abs(m.velocities[:, k, 0] + 80 * w * np.sin(th))) < 2e-9
+    assert np.max(np.abs(m.accelerations[:, k, 0] + 80 * w * w * np.cos(th))) < 1e-6
     assert np.max(np.abs(m.angular_velocities[:, 1] + w)) < 1e-10      # the rod: −ω
