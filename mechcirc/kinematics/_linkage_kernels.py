@@ -341,9 +341,9 @@ def _continuation_step(q, qd, qdd, trial, t_now, dt, t_new, nb, geo, crank_idx, 
 
 
 @_jit
-def newton_path(q0, targets, ia, ib, sa, sb, crank_idx, omega, tol, dt_max, wmax,
+def newton_path(q0, t0, targets, ia, ib, sa, sb, crank_idx, omega, tol, dt_max, wmax,
                 Q, QD, QDD, PARTS, info, ga, gb, gs, gu, bs):
-    """Continue from the pose q0 (t = 0) through ``targets`` [s] in order.
+    """Continue from q0 at time t0 (the pose, or past a change point) through ``targets``.
 
     Fills Q, QD, QDD (N, n) and PARTS (N, n, nc).  Returns a status:
     ``OK``; ``SINGULAR_POSE``; ``LOCK`` (info[0] = time of the lock estimate);
@@ -363,11 +363,11 @@ def newton_path(q0, targets, ia, ib, sa, sb, crank_idx, omega, tol, dt_max, wmax
     parts = np.zeros((n, nc))
     trial = np.empty(n)
     e = np.empty(n)
-    t_now = 0.0
-    # the pose itself (t = 0) first: its sign of det J is the branch's
+    t_now = t0
+    # the start itself first: its sign of det J is the branch's
     for i in range(n):
         trial[i] = q[i]
-    sign0 = _converge(trial, 0.0, nb, geo, crank_idx, omega, tol, work, r, J, piv)
+    sign0 = _converge(trial, t0, nb, geo, crank_idx, omega, tol, work, r, J, piv)
     if sign0 == 0.0:
         return SINGULAR_POSE
     for i in range(n):

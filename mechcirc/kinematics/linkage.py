@@ -339,7 +339,9 @@ class Linkage:
         ----------
         theta : float or array_like
             Rotation of the first crank from the pose [rad]; an array is a path
-            traversed in order from the pose (branch continuity).
+            traversed in order from the pose (branch continuity; at a change
+            point, where an RRR or RRP dyad lines up as its two assembly modes
+            cross, the branch whose velocity is continuous).
         max_step_deg : float
             Largest rotation of any crank between two continuation nodes [deg];
             the dyad path checks the assembly at the same spacing.

@@ -29,6 +29,12 @@ warm-started from the previous one, q̇ and q̈ from the LU of J at each
 converged q — the same cost per position at 360 positions as at 3,600.
 ``mechcirc._jit.COMPILED = False`` keeps the numpy versions (tests run both).
 
+A change-point linkage (an RRR or RRP dyad lining up where its two assembly
+modes cross; one crank) continues on the branch whose velocity is continuous, by
+either solver: the crossings are located once per linkage, the dyad changes
+sides at each, and positions within a small zone around it are interpolated
+from the zone's ends (:func:`_solve`).
+
 Both return a :class:`LinkageMotion` of plain arrays.  The result types
 (:class:`LinkageState`, :class:`LinkageMotion`) live here, below
 :mod:`.linkage`, which re-exports them, so the two modules import one way.
@@ -461,18 +467,18 @@ def _times(lk, thetas, max_step_deg):
     return t, math.radians(max_step_deg) / wmax
 
 
-def _path(t, dt_max):
-    """Times along the traversal 0 → t[0] → t[1] …, no two more than dt_max apart.
+def _path(t, dt_max, t0=0.0):
+    """Times along the traversal t0 → t[0] → t[1] …, no two more than dt_max apart.
 
     Returns (nodes, index of each target in nodes).
     """
-    path = np.concatenate(([0.0], t))
+    path = np.concatenate(([t0], t))
     d = np.diff(path)
     n = np.maximum(1, np.ceil(np.abs(d) / dt_max).astype(int))
     if np.all(n == 1):
         return path, np.arange(1, len(path))
     pieces = [path[k] + d[k] * np.arange(1, n[k] + 1) / n[k] for k in range(len(d))]
-    return np.concatenate([np.zeros(1), *pieces]), np.cumsum(n)
+    return np.concatenate([path[:1], *pieces]), np.cumsum(n)
 
 
 def _cplx(xy):
@@ -540,12 +546,7 @@ def motion(lk, pl: _Plan, theta, *, max_step_deg: float = 2.0, method: str = "au
     if use == "dyads" and pl.method != "dyads":
         raise GeometryError(f"{lk.source}: the linkage is not made of RRR dyads only; "
                             f"use method='newton'")
-    if use == "dyads":
-        q, qd, qdd, parts = _solve_dyads(lk, pl, t, dt_max)
-    elif _compiled("newton_path"):
-        q, qd, qdd, parts = _solve_newton_compiled(lk, pl, t, dt_max)
-    else:
-        q, qd, qdd, parts = _solve_newton(lk, pl, t, dt_max)
+    q, qd, qdd, parts = _solve(lk, pl, use, t, dt_max)
     out = LinkageMotion(thetas, t, q, qd, qdd, parts, tuple(lk.pose), lk.link_names,
                         tuple(c.link for c in lk.cranks), use, pl)
     for s in lk.sliders:
@@ -575,6 +576,220 @@ def check_stroke(lk, s, theta, P, G1, G2, what: str = "position asked") -> None:
             lk.source, s.stroke_at[0], s.stroke_at[1],
             expected=f"a stroke containing {along[k]:.6g}, or crank angles that keep "
                      f"{s.point!r} within [{lo:g}, {hi:g}]")
+
+
+# ------------------------------------------------------------- change points
+#: Half-width of the zone around a change point's crossing where positions and rates
+#: are interpolated (see :func:`_solve`), as rotation of the fastest crank [rad].
+_ZONE = 6e-3
+#: A dyad whose sin² of the inner angle dips to this and opens again crosses a change point.
+_CROSS = 1e-12
+#: Most samples per piece of the scan for crossings.
+_SCAN = 2000
+
+
+def _solve(lk, pl, use, t, dt_max):
+    """(q, q̇, q̈, parts) at times ``t`` by the solver ``use``.
+
+    A change-point linkage (an RRR or RRP dyad that lines up where its two assembly
+    modes cross, :func:`_crossings`; one crank) continues on the branch whose velocity is
+    continuous: the dyad changes sides there.  The closed form and Newton are
+    ill-conditioned within a rotation ``_ZONE`` of the crossing (positions to about
+    √eps, rates 0/0), so the solvers visit the zone's ends instead (Newton steps from
+    one to the other as across any step, :func:`_newton_segments`) and every position
+    inside it is the quintic through their q, q̇, q̈ (error ~ (2·_ZONE)⁶ q⁽⁶⁾/46080 in
+    q, ~ (2·_ZONE)⁴ q⁽⁶⁾ in q̈).  The zone's half-width balances that against the
+    ends' own error (~ eps/sin³ in q̈): measured on three change-point four-bars,
+    q̈ to 1.2e-8 ω², q̇ to 4e-11 ω (on 20/60/50/30, q̈ to 1.8e-7 with a zone of
+    ±0.002 rad, 1.1e-8 at ±0.006, 6.4e-8 at ±0.01, 2e-6 at ±0.02).
+    """
+    cross = []
+    if pl.method == "dyads" and len(pl.crank_idx) == 1:
+        cross = _crossings(_dyad_solver(lk, pl), t, dt_max)
+    if not cross:
+        if use == "dyads":
+            return _solve_dyads(lk, pl, t, dt_max)
+        return _newton(lk, pl, t, dt_max)
+    dz = _ZONE / abs(float(pl.omega[0]))
+    zones = [(tc - dz, tc + dz) for tc, _ in sorted(cross)]
+    pts, where, zone_of = _traverse(t, zones)
+    if use == "dyads":
+        got = _solve_dyads(lk, pl, pts, dt_max, cross, zones)
+    else:
+        got = _newton_segments(lk, pl, pts, dt_max, zones)
+    return _bridged(lk, pl, got, t, pts, where, zone_of, zones)
+
+
+def _newton(lk, pl, t, dt_max, start=None):
+    if _compiled("newton_path"):
+        return _solve_newton_compiled(lk, pl, t, dt_max, start)
+    return _solve_newton(lk, pl, t, dt_max, start)
+
+
+def _signs(pl, cross, t):
+    """Each dyad's assembly side at times ``t`` (n_dyads, N): the pose's, changed at each
+    change point ``cross`` ((time, dyad) pairs) between the pose (t = 0) and t."""
+    s = np.repeat(np.array([[d.sign] for d in pl.dyads], dtype=float), len(t), axis=1)
+    for d in {d for _, d in cross}:
+        tc = np.sort([c for c, k in cross if k == d])
+        up, down = tc[tc > 0], tc[tc < 0]
+        passed = np.searchsorted(up, t) + len(down) - np.searchsorted(down, t, side="right")
+        s[d] *= 1 - 2 * (passed % 2)
+    return s
+
+
+def _sin2(ds, t, cross):
+    """sin² of each RRR dyad's inner angle, and of the angle between an RRP dyad's rod
+    and its guide, at times ``t`` (n_dyads, N); negative where it cannot assemble, +inf
+    for RPR dyads.  Independent of the dyad's own side."""
+    inner = ds.positions(t, _signs(ds.pl, cross, t) if cross else None)[3]
+    out = np.full((len(inner), len(t)), np.inf)
+    for k, (dy, rates) in enumerate(zip(ds.pl.dyads, inner)):
+        if dy.kind == "RRR":
+            e = rates[1] - rates[0]
+            c = (dy.l1 ** 2 + dy.l2 ** 2 - (e.real ** 2 + e.imag ** 2)) / (2 * dy.l1 * dy.l2)
+        elif dy.kind == "RRP":         # the rod's reach across the guide (exact off it too)
+            c = _im_conj(rates[4], rates[5]) / dy.l1
+        else:
+            continue
+        out[k] = 1.0 - c * c
+    return out
+
+
+def _crossings(ds, t, dt_max):
+    """The change points the smooth branch meets between the pose and the farthest
+    targets on either side: [(time, dyad)], nearest the pose first on each side.
+
+    The sin² of every RRR and RRP dyad's angle (:func:`_sin2`) is sampled every ``dt_max`` (at most 2°)
+    out from the pose; at a sampled minimum that a parabola puts near 0, the minimum is
+    narrowed (16-fold per round, 10 rounds).  It is a change point when it is at
+    most ``_CROSS`` and the dyad assembles again a ``_ZONE`` beyond (a dead
+    position, where the linkage locks, does not).  They depend on the linkage
+    only: kept with the range scanned, rescanned when a call reaches beyond it.
+    """
+    lo, hi = float(np.min(t, initial=0.0)), float(np.max(t, initial=0.0))
+    w = abs(float(ds.pl.omega[0]))
+    step = min(dt_max, math.radians(2.0) / w)      # coarser samples miss minima
+    kept = ds.__dict__.get("_crossings")
+    if kept is not None and kept[0] == step and kept[1] <= lo and hi <= kept[2]:
+        return kept[3]
+    cross: list = []
+    dz = _ZONE / w
+    for end in (hi, lo):
+        t0 = 0.0
+        while end != 0.0:
+            # in pieces of at most _SCAN samples (a long range at large steps)
+            n = min(int(math.ceil(abs(end - t0) / step)) + 3, _SCAN)
+            grid = t0 + math.copysign(step, end) * np.arange(n)
+            found = _first_crossing(ds, grid, _sin2(ds, grid, cross), cross, dz)
+            if found is None and n == _SCAN:
+                t0 = grid[-3]                   # overlapping: a minimum at the seam
+                continue
+            if found is None:
+                break
+            cross.append(found)
+            t0 = found[0] + math.copysign(dz, end)
+    ds._crossings = (step, lo, hi, cross)
+    return cross
+
+
+def _first_crossing(ds, grid, s2, cross, dz):
+    """The first change point (time, dyad) along ``grid`` (sin² ``s2`` there), or None."""
+    fine = np.all(s2 >= -_CROSS, axis=0)
+    s2 = s2[:, :len(grid) if fine.all() else int(np.argmin(fine))]  # up to a lock
+    lo, mid, hi = s2[:, :-2], s2[:, 1:-1], s2[:, 2:]
+    with np.errstate(all="ignore"):
+        vertex = mid - (hi - lo) ** 2 / (8 * (hi - 2 * mid + lo))
+    cand = (mid <= lo) & (mid <= hi) & ((mid < 1e-6) | (vertex < 0.1 * mid))
+    for k, d in sorted(zip(*np.nonzero(cand.T))):
+        a, b = grid[k], grid[k + 2]
+        for _ in range(10):
+            g = np.linspace(a, b, 33)
+            v = _sin2(ds, g, cross)[d]
+            j = int(np.argmin(v))
+            a, b = g[max(j - 1, 0)], g[min(j + 1, 32)]
+        ends = _sin2(ds, np.array([g[j] - dz, g[j] + dz]), cross)[d]
+        if v[j] <= _CROSS and np.all(ends > _CROSS):
+            return float(g[j]), int(d)
+    return None
+
+
+def _traverse(t, zones):
+    """The traversal 0 → t[0] → t[1] … with every zone it enters replaced by its two
+    ends, in order: (times to solve, row of each target there or −1, its zone or −1).
+    ``zones`` in increasing order."""
+    prev = np.concatenate(([0.0], t[:-1]))
+    za, zb = np.array(zones).T
+    hit = (za[:, None] <= np.maximum(prev, t)) & (zb[:, None] >= np.minimum(prev, t))
+    pts: list = []
+    where = np.full(len(t), -1)
+    zone_of = np.full(len(t), -1)
+    last = 0
+    for i in np.flatnonzero(hit.any(axis=0)).tolist() + [len(t)]:
+        where[last:i] = len(pts) + np.arange(i - last)        # the steps that meet none
+        pts.extend(t[last:i].tolist())
+        if i == len(t):
+            break
+        a, b = float(prev[i]), float(t[i])
+        for z in sorted(np.flatnonzero(hit[:, i]).tolist(), reverse=b < a):
+            pts.extend(zones[z] if b >= a else zones[z][::-1])
+            if zones[z][0] < b < zones[z][1]:
+                zone_of[i] = z
+        if zone_of[i] < 0:
+            where[i] = len(pts)
+            pts.append(b)
+        last = i + 1
+    return np.array(pts), where, zone_of
+
+
+def _newton_segments(lk, pl, pts, dt_max, zones):
+    """Newton's continuation through ``pts``; across a change point's zone (one end to
+    the other) it steps from the Taylor predictor, where det J changes sign."""
+    ends = {z for z in zones} | {z[::-1] for z in zones}
+    cuts = [i + 1 for i in range(len(pts) - 1) if (pts[i], pts[i + 1]) in ends]
+    out = [np.empty((len(pts),) + shape) for shape in
+           ((3 * pl.nb,),) * 3 + ((3 * pl.nb, len(pl.crank_idx)),)]
+    lo, start = 0, None
+    for hi in cuts + [len(pts)]:
+        got = _newton(lk, pl, pts[lo:hi], dt_max, start)
+        for a, b in zip(out, got):
+            a[lo:hi] = b
+        if hi < len(pts):
+            dt = pts[hi] - pts[hi - 1]
+            q, qd, qdd = got[0][-1], got[1][-1], got[2][-1]
+            res = Newton(pl).step(q + qd * dt + 0.5 * qdd * dt * dt, pl.omega * pts[hi])
+            if res is None:
+                raise _branch_jump(lk, pts[hi - 1] * pl.omega[0], pts[hi] * pl.omega[0])
+            start = (res[0], pts[hi])
+        lo = hi
+    return tuple(out)
+
+
+def _bridged(lk, pl, got, t, pts, where, zone_of, zones):
+    """The targets from the solved ``pts``: inside a zone, the quintic through the
+    zone's ends, after checking that the velocity is continuous across it."""
+    Q, QD, QDD = got[:3]
+    w1 = pl.omega[0]
+    out = [a[np.maximum(where, 0)] for a in got]
+    for z, (za, zb) in enumerate(zones):
+        if not np.any(pts == za):
+            continue                                   # not reached
+        ia, ib = int(np.flatnonzero(pts == za)[0]), int(np.flatnonzero(pts == zb)[0])
+        h = zb - za
+        # on the other branch the rates would jump (by 2/3 ω for a parallelogram); the
+        # trapezoid rule's error is h³ q⁗/12, about 1e-7 ω
+        jump = QD[ib] - QD[ia] - 0.5 * (QDD[ia] + QDD[ib]) * h
+        if not np.max(np.abs(jump[2::3])) <= 1e-2 * abs(w1):
+            raise _branch_jump(lk, za * w1, zb * w1)
+        sel = np.flatnonzero(zone_of == z)
+        u = (t[sel] - za) / h
+        qb = Q[ib].copy()              # the angles continuous across (the dyads' wrap)
+        qb[2::3] -= 2 * np.pi * np.round((qb[2::3] - Q[ia, 2::3]) / (2 * np.pi))
+        ends = [(Q[ia][None], QD[ia][None], QDD[ia][None]), (qb[None], QD[ib][None], QDD[ib][None])]
+        for k in range(3):
+            out[k][sel] = _quintic(u, np.full(len(sel), h), *ends, k=k)
+        out[3][sel] = out[1][sel][:, :, None]        # one crank: its part is q̇
+    return tuple(out)
 
 
 # ------------------------------------------------------------ dyads, closed form
@@ -618,7 +833,9 @@ class _DyadSolver:
                    float(np.angle(z3 - self.pose[P2])) if dy.kind == "RRR" else 0.0)
             self.geo.append((X1, X2, ang, -self.local[L1][P1], -self.local[L2][a2]))
 
-    def positions(self, t):
+    def positions(self, t, signs=None):
+        """Every body at times ``t``; ``signs`` (n_dyads, N): each dyad's assembly side per
+        time (default: the pose's, :func:`_signs`)."""
         pl, lk = self.pl, self.lk
         N = len(t)
         E = np.ones((pl.nb + 1, N), dtype=complex)          # e^{iφ}; the ground last
@@ -631,12 +848,13 @@ class _DyadSolver:
             phi[ci] = pl.omega[j] * t
             E[ci] = np.exp(1j * phi[ci])
             r[ci] = self.pose[c.pivot] + E[ci] * self.crank_arm[j]
-        for dy, (X1, X2, ang, arm1, arm2) in zip(pl.dyads, self.geo):
+        for k, (dy, (X1, X2, ang, arm1, arm2)) in enumerate(zip(pl.dyads, self.geo)):
             (L1, L2), (K1, K2) = dy.links, dy.known
+            sign = dy.sign if signs is None else signs[k]
             x1, x2 = r[K1] + E[K1] * X1, r[K2] + E[K2] * X2
             with np.errstate(all="ignore"):
                 if dy.kind == "RPR":
-                    E1, h2 = rpr(x1, x2, dy.h0, dy.u, dy.sign)
+                    E1, h2 = rpr(x1, x2, dy.h0, dy.u, sign)
                     e, u = x2 - x1, E1 * dy.u
                     sin_ = np.abs(_dot(u, e)) / np.abs(e)    # 0: the links across the line
                     phi[L1] = phi[L2] = np.angle(E1)
@@ -644,14 +862,14 @@ class _DyadSolver:
                     rates = (x1, x2, x2, 1j * e, u, e)
                 elif dy.kind == "RRP":
                     u = E[K2] * dy.u
-                    x3, h2 = rrp(x1, dy.l1, x2, u, dy.sign)
+                    x3, h2 = rrp(x1, dy.l1, x2, u, sign)
                     r1 = x3 - x1
                     sin_ = np.abs(_dot(u, r1)) / dy.l1       # 0: the rod across the guide
                     phi[L1], E[L1] = np.angle(r1) - ang[0], r1 * (np.exp(-1j * ang[0]) / dy.l1)
                     phi[L2], E[L2] = phi[K2], E[K2]
                     rates = (x1, x3, x3, 1j * r1, -u, r1)
                 else:
-                    x3, h2 = rrr(x1, x2, dy.l1, dy.l2, dy.sign)
+                    x3, h2 = rrr(x1, x2, dy.l1, dy.l2, sign)
                     r1, r2 = x3 - x1, x3 - x2
                     # sin of the angle between the links at the inner joint: 0 when
                     # the dyad is stretched or folded (its Jacobian is singular there)
@@ -724,31 +942,40 @@ def _pack(r, phi):
     return np.stack([r[:nb].real.T, r[:nb].imag.T, phi[:nb].T], axis=-1).reshape(N, 3 * nb)
 
 
-def _solve_dyads(lk, pl, t, dt_max):
+def _dyad_solver(lk, pl):
     ds = pl.cache.get("dyads")
     if ds is None:
         ds = pl.cache["dyads"] = _DyadSolver(lk, pl)
+    return ds
+
+
+def _solve_dyads(lk, pl, t, dt_max, cross=(), zones=()):
+    """The dyads at times ``t``, each on its side of the change points ``cross`` passed
+    (:func:`_signs`); the path outside ``zones`` must assemble."""
+    ds = _dyad_solver(lk, pl)
+    signs = _signs(pl, cross, t) if cross else None
     # the compiled loop knows RRR dyads only; with sliders the numpy closed form
     compiled = _compiled("dyads_path") and all(d.kind == "RRR" for d in pl.dyads)
     if compiled:
-        out = _dyads_compiled(ds, t)
+        out = _dyads_compiled(ds, t, signs)
         margin = out[-1]
     else:
-        phi, E, r, inner, margin = ds.positions(t)
+        phi, E, r, inner, margin = ds.positions(t, signs)
     # the traversal from the pose must stay assemblable: check the path between
     # the targets too where they are further apart than a continuation step
     nodes, _ = _path(t, dt_max)
     if len(nodes) == len(t) + 1:
         check_t, check_m = t, margin
-    elif compiled:
-        check_t = nodes[1:]
-        check_m = _dyads_compiled(ds, check_t)[-1]
     else:
         check_t = nodes[1:]
-        check_m = ds.positions(check_t)[4]
+        nsg = _signs(pl, cross, check_t) if cross else None
+        check_m = _dyads_compiled(ds, check_t, nsg)[-1] if compiled else \
+            ds.positions(check_t, nsg)[4]
+    for a, b in zones:          # inside a change point's zone it is not used (_bridged)
+        check_m = np.where((check_t > a) & (check_t < b), np.inf, check_m)
     if not np.all(check_m > _SINGULAR):
         k = int(np.argmax(~(check_m > _SINGULAR)))
-        _lock_error(lk, ds, 0.0 if k == 0 else check_t[k - 1], check_t[k])
+        _lock_error(lk, ds, 0.0 if k == 0 else check_t[k - 1], check_t[k], cross)
     if compiled:
         return out[:4]
     nc = len(lk.cranks)
@@ -768,8 +995,9 @@ def _solve_dyads(lk, pl, t, dt_max):
     return _pack(r, phi), qd, _pack(a, al), parts
 
 
-def _dyads_compiled(ds, t):
-    """(q, q̇, q̈, parts, margin) by the compiled dyad loop (:mod:`._linkage_kernels`)."""
+def _dyads_compiled(ds, t, signs=None):
+    """(q, q̇, q̈, parts, margin) by the compiled dyad loop (:mod:`._linkage_kernels`), the
+    dyads on the sides ``signs`` (n_dyads, N; default the pose's): one call per pattern."""
     from . import _linkage_kernels as K
 
     args = ds.__dict__.get("_kernel_args")
@@ -792,7 +1020,17 @@ def _dyads_compiled(ds, t):
     N, n, nc = len(t), 3 * ds.pl.nb, len(ds.pl.crank_idx)
     Q, QD, QDD = np.empty((N, n)), np.empty((N, n)), np.empty((N, n))
     parts, margin = np.empty((N, n, nc)), np.empty(N)
-    K.dyads_path(np.ascontiguousarray(t, dtype=float), *args, Q, QD, QDD, parts, margin)
+    t = np.ascontiguousarray(t, dtype=float)
+    if signs is None:
+        K.dyads_path(t, *args, Q, QD, QDD, parts, margin)
+        return Q, QD, QDD, parts, margin
+    patterns, which = np.unique(signs.T, axis=0, return_inverse=True)
+    for j, pattern in enumerate(patterns):
+        sel = np.flatnonzero(which.reshape(-1) == j)
+        out = [np.empty((len(sel),) + a.shape[1:]) for a in (Q, QD, QDD, parts, margin)]
+        K.dyads_path(t[sel], *args[:8], np.ascontiguousarray(pattern), *args[9:], *out)
+        for a, b in zip((Q, QD, QDD, parts, margin), out):
+            a[sel] = b
     return Q, QD, QDD, parts, margin
 
 
@@ -800,8 +1038,9 @@ def _dyads_compiled(ds, t):
 _LOCK_GRID = 31
 
 
-def _lock_error(lk, ds, t_good, t_bad):
-    """Locate where the dyads stop assembling (or turn singular) and say so."""
+def _lock_error(lk, ds, t_good, t_bad, cross=()):
+    """Locate where the dyads (on the sides of the change points ``cross`` passed) stop
+    assembling (or turn singular) and say so."""
     w1 = lk.cranks[0].omega
     if t_good == 0.0 and ds.positions(np.array([0.0]))[4][0] <= _SINGULAR:
         raise _singular_pose(lk)
@@ -814,7 +1053,8 @@ def _lock_error(lk, ds, t_good, t_bad):
         if abs(hi - lo) * abs(w1) < 1e-12:
             break
         grid = np.linspace(lo, hi, _LOCK_GRID + 2)[1:-1]
-        bad = ~(ds.positions(grid)[4] > _SINGULAR)
+        bad = ~(ds.positions(grid, _signs(ds.pl, cross, grid) if cross else None)[4]
+                > _SINGULAR)
         if bad.any():
             k = int(np.argmax(bad))
             lo, hi = (grid[k - 1] if k else lo), grid[k]
@@ -1103,8 +1343,9 @@ _WARM_STATEMENT = (
     "    lk.motion(np.linspace(0.0, 1.0, 5), method=method)\n")
 
 
-def _solve_newton_compiled(lk, pl, t, dt_max):
-    """The continuation as one compiled loop (:mod:`._linkage_kernels`)."""
+def _solve_newton_compiled(lk, pl, t, dt_max, start=None):
+    """The continuation as one compiled loop (:mod:`._linkage_kernels`), from ``start``
+    ((q, time); default the pose)."""
     from . import _linkage_kernels as K
 
     N, n, nc = len(t), 3 * pl.nb, len(pl.crank_idx)
@@ -1112,7 +1353,8 @@ def _solve_newton_compiled(lk, pl, t, dt_max):
     parts = np.empty((N, n, nc))
     info = np.zeros(2)
     w1 = lk.cranks[0].omega
-    status = K.newton_path(pl.q0, np.ascontiguousarray(t, dtype=float), pl.ia, pl.ib, pl.sa,
+    q0, t0 = (pl.q0, 0.0) if start is None else start
+    status = K.newton_path(q0, float(t0), np.ascontiguousarray(t, dtype=float), pl.ia, pl.ib, pl.sa,
                            pl.sb, pl.crank_idx, pl.omega, 1e-12 * pl.scale, float(dt_max),
                            float(np.max(np.abs(pl.omega))), Q, QD, QDD, parts, info,
                            pl.ga, pl.gb, pl.gs, pl.gu, pl.bs)
@@ -1125,10 +1367,11 @@ def _solve_newton_compiled(lk, pl, t, dt_max):
     return Q, QD, QDD, parts
 
 
-def _solve_newton(lk, pl, t, dt_max):
+def _solve_newton(lk, pl, t, dt_max, start=None):
     nw = Newton(pl)
-    nodes, at = _path(t, dt_max)
-    first = nw.step(pl.q0, pl.omega * 0.0)
+    q0, t0 = (pl.q0, 0.0) if start is None else start
+    nodes, at = _path(t, dt_max, t0)
+    first = nw.step(q0, pl.omega * t0)
     if first is None:
         raise _singular_pose(lk)
     # The sequential continuation visits only the nodes it needs (consecutive
@@ -1159,7 +1402,7 @@ def _kept_nodes(lk, nw, T_keep, first, dt_max):
     # a target on one is taken as it is
     exact = np.zeros(len(T_keep), dtype=bool)
     Pk = np.empty((len(T_keep), nw.n, len(pl.crank_idx)))
-    t_now = 0.0
+    t_now = T_keep[0]
     j, block = 1, 16
     while j < len(T_keep):
         if block > 1:
@@ -1231,14 +1474,7 @@ def _targets(lk, nw, t, nodes, keep, at, kept, sign, dt_max):
     h = t1 - t0
     with np.errstate(all="ignore"):
         u = np.where(h != 0, (nodes[at] - t0) / np.where(h != 0, h, 1.0), 0.0)
-    u2, u3 = u * u, u * u * u
-    u4, u5 = u3 * u, u3 * u2
-    H = np.stack([1 - 10 * u3 + 15 * u4 - 6 * u5, u - 6 * u3 + 8 * u4 - 3 * u5,
-                  0.5 * u2 - 1.5 * u3 + 1.5 * u4 - 0.5 * u5, 0.5 * u3 - u4 + 0.5 * u5,
-                  -4 * u3 + 7 * u4 - 3 * u5, 10 * u3 - 15 * u4 + 6 * u5], axis=1)[:, :, None]
-    hh = h[:, None]
-    guess = (H[:, 0] * Qk[src] + H[:, 1] * hh * Qdk[src] + H[:, 2] * hh * hh * Qddk[src]
-             + H[:, 3] * hh * hh * Qddk[nxt] + H[:, 4] * hh * Qdk[nxt] + H[:, 5] * Qk[nxt])
+    guess = _quintic(u, h, (Qk[src], Qdk[src], Qddk[src]), (Qk[nxt], Qdk[nxt], Qddk[nxt]))
     angles = pl.omega[None, :] * t[:, None]
     start = np.max(np.abs(nw.residual(guess, angles)), axis=1)
     Q, ok = nw.newton(guess, angles)
@@ -1267,6 +1503,25 @@ def _targets(lk, nw, t, nodes, keep, at, kept, sign, dt_max):
         full[done], full[rest] = a, b
         out.append(full)
     return tuple(out)
+
+
+# The quintic Hermite basis in u ∈ [0, 1], coefficients of 1, u, …, u⁵: the weights of
+# y0, h·y0', h²·y0'', h²·y1'', h·y1', y1.
+_QUINTIC = np.array([[1, 0, 0, -10, 15, -6], [0, 1, 0, -6, 8, -3],
+                     [0, 0, 0.5, -1.5, 1.5, -0.5], [0, 0, 0, 0.5, -1, 0.5],
+                     [0, 0, 0, -4, 7, -3], [0, 0, 0, 10, -15, 6]])
+
+
+def _quintic(u, h, a, b, k=0):
+    """The k-th time derivative, at u = (t − t0)/h (N,), of the quintic through the
+    (y, y', y'') of ``a`` at t0 and of ``b`` at t0 + h (h (N,), each y (N, n))."""
+    p = np.arange(6)
+    fall = np.prod([np.maximum(p - j, 0) for j in range(k)], axis=0)   # p!/(p − k)!
+    powers = fall * np.asarray(u)[:, None] ** np.maximum(p - k, 0)
+    H = powers @ _QUINTIC.T / h[:, None] ** k
+    hh = h[:, None]
+    return (H[:, :1] * a[0] + H[:, 1:2] * hh * a[1] + H[:, 2:3] * hh * hh * a[2]
+            + H[:, 3:4] * hh * hh * b[2] + H[:, 4:5] * hh * b[1] + H[:, 5:] * b[0])
 
 
 def _block(nw, q, qdot, qddot, t_now, T, sign, pl):
