@@ -655,11 +655,11 @@ def _undamped(M: np.ndarray, K: np.ndarray, vectors: bool = False) -> tuple:
     d = 1.0 / np.sqrt(mu[massive])
     A = Kc * d[:, None] * d[None, :]
     A = (A + A.T) / 2
-    lam = _symmetric_eigvals(A)
     if not vectors:
-        return lam, direct, None
-    # The vectors by their own call: the roots stay those find_resonances reports, to the bit.
-    Ur = np.linalg.eigh(A)[1]                  # divide and conquer (LAPACK syevd)
+        return _symmetric_eigvals(A), direct, None
+    # The roots from the same call as the vectors (divide and conquer, LAPACK syevd): as
+    # backward stable as _symmetric_eigvals', within eps·λ_max/λ of them, not to the bit.
+    lam, Ur = np.linalg.eigh(A)
     Ur *= d[:, None]                           # in place: n × n arrays cost page faults
     if direct:
         return lam, direct, Ur
