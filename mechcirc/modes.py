@@ -208,7 +208,7 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
         for lo in range(0, len(idx), _CHUNK):
             part = idx[lo:lo + _CHUNK]
             S = np.array([roots[i][1] for i in part])
-            V = np.column_stack([roots[i][2] for i in part])
+            V = np.array([roots[i][2] for i in part]).T     # rows copied: 5× column_stack
             for i, vals in zip(part, _chunk_values(system, (M, D, Ks), pinv[kind], S, V,
                                                    stamps)):
                 values[i] = vals

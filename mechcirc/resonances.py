@@ -235,8 +235,10 @@ def resonance_pairs(circuit: Circuit, omega_max: float | None = None,
         M, D, Ks, G_released, G_held, damped, omega_max, vectors)
     roots = [("resonance", s, e, f) for s, e, f in held[keep_h]] + \
         [("antiresonance", s, e, f) for s, e, f in released[keep_r]]
-    vecs = [(None if V is None else V[:, i], vectors and _repeats(found[:, 0], int(i)))
-            for V, keep, found in ((v_held, keep_h, held), (v_released, keep_r, released))
+    rep = [_repeated(found[:, 0]) if vectors else np.zeros(len(found), bool)
+           for found in (held, released)]
+    vecs = [(None if V is None else V[:, i], bool(r[i]))
+            for V, keep, r in ((v_held, keep_h, rep[0]), (v_released, keep_r, rep[1]))
             for i in np.flatnonzero(keep)]
     if kind is not None:            # root by root: the others' polish changes nothing here
         vecs = [v for v, t in zip(vecs, roots) if t[0] == kind]
@@ -302,9 +304,20 @@ def _held_vectors(V, s_released, g, s_held, keep) -> np.ndarray | None:
     return out
 
 
-def _repeats(s: np.ndarray, i: int) -> bool:
-    """Whether another root of ``s`` lies within 1e-9 (relative) of ``s[i]``."""
-    return int(np.count_nonzero(np.abs(s - s[i]) <= 1e-9 * abs(s[i]))) > 1
+def _repeated(s: np.ndarray) -> np.ndarray:
+    """Whether another root of ``s`` lies within 1e-9 (relative) of each, |s_j − s_i| ≤
+    1e-9·|s_i|.  Such a pair is as near in |s|: sorted by |s|, each root is compared
+    only with those at most ``width`` places on (a window of 2e-9), not with every root."""
+    m = np.abs(s)
+    order = np.argsort(m, kind="stable")
+    m, z, out = m[order], s[order], np.zeros(s.size, bool)
+    width = np.max(np.searchsorted(m, m * (1 + 2e-9), side="right") - np.arange(m.size),
+                   initial=1)
+    for d in range(1, int(width)):
+        gap = np.abs(z[d:] - z[:-d])
+        out[order[:-d]] |= gap <= 1e-9 * m[:-d]
+        out[order[d:]] |= gap <= 1e-9 * m[d:]
+    return out
 
 
 def pencil(system, dense: bool = False) -> tuple:
