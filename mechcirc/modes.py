@@ -201,14 +201,16 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
     values: list = [None] * len(roots)
     # Once, not per chunk: each element's row among the distinct exponents 1 − power, and
     # in the per-law table of energy shares (mass, spring, damper).
-    stamps = (ei, ej, y, (np.unique(1.0 - power, return_inverse=True), lever_ends), slopes,
+    stamps = (_incidence(ei, ej, len(system.nodes)), y,
+              (np.unique(1.0 - power, return_inverse=True), lever_ends), slopes,
               np.where(kinds == "mass", 0, np.where(kinds == "spring", 1, 2)), damper)
     for kind in ("resonance", "antiresonance"):
         idx = [i for i, (r, *_) in enumerate(roots) if r.kind == kind]
         for lo in range(0, len(idx), _CHUNK):
             part = idx[lo:lo + _CHUNK]
             S = np.array([roots[i][1] for i in part])
-            V = np.array([roots[i][2] for i in part]).T     # rows copied: 5× column_stack
+            # Rows copied, then one transposing copy: 3× column_stack's column-wise copies.
+            V = np.ascontiguousarray(np.array([roots[i][2] for i in part]).T)
             for i, vals in zip(part, _chunk_values(system, (M, D, Ks), pinv[kind], S, V,
                                                    stamps)):
                 values[i] = vals
@@ -228,11 +230,24 @@ def _normalised(pairs, M, D, Ks, G_held, G_released) -> list:
     return roots
 
 
+def _incidence(ei: np.ndarray, ej: np.ndarray, n: int):
+    """The sparse E × n matrix of Δv = v(n1) − v(n2) of each element (rows ``ei``, ``ej``;
+    −1 the reference: no entry).  Each row holds +1 then −1, unsorted: a product sums
+    them in that order, 0 + v(n1) − v(n2), as the difference of the two rows does
+    (one pass over E × roots instead of two gathers and a difference)."""
+    import scipy.sparse as sp
+
+    cols = np.column_stack([ei, ej])
+    data = np.broadcast_to(np.array([1.0, -1.0]), cols.shape)[cols >= 0]
+    indptr = np.concatenate([[0], np.cumsum(np.count_nonzero(cols >= 0, axis=1))])
+    return sp.csr_matrix((data, cols[cols >= 0], indptr), shape=(ei.size, n))
+
+
 def _chunk_values(system, pencil3, pinv, S, V, stamps) -> list:
     """Sensitivities, energies and element velocities of the roots ``S`` with
     vectors ``V`` (columns; scaled in place), one ``(values, param_rel, param_zeta)``
     per root."""
-    ei, ej, y, laws, slopes, law_row, damper = stamps
+    incidence, y, laws, slopes, law_row, damper = stamps
     M, D, Ks = pencil3
     top = np.argmax(np.abs(V), axis=0)
     col = np.arange(S.size)
@@ -240,8 +255,7 @@ def _chunk_values(system, pencil3, pinv, S, V, stamps) -> list:
     V[top, col] = 1.0                       # exactly (a complex quotient may miss by an ulp)
     # Real vectors (undamped roots) keep every (element × root) array real: the complex
     # factors depend on the root and the law only, one row per law.
-    Ve = np.vstack([V, np.zeros((1, S.size), V.dtype)])
-    dV = Ve[ei] - Ve[ej]
+    dV = incidence @ V
     # In place where it can be (fresh E × roots arrays page-fault): a real Δv is not needed
     # beyond y·Δv².
     real = not np.iscomplexobj(dV)
@@ -254,7 +268,8 @@ def _chunk_values(system, pencil3, pinv, S, V, stamps) -> list:
     p_rel, wn = {p: (row @ rel, row @ zeta) for p, row in slopes.items()}, np.abs(S)
     # Kinetic ½mη|Δv|², potential ½kη|Δv|²/ωₙ², nothing stored in a damper.
     share = np.vstack([np.full(S.size, 0.5), 0.5 / wn ** 2, np.zeros(S.size)])
-    stored = ya2 * share[law_row]
+    stored = np.take(share, law_row, axis=0)
+    stored *= ya2
     total, energy = stored.sum(axis=0), stored[~damper] if damper.any() else stored
     energy /= total
     dissipation = ya2[damper] / (2 * wn * total)
@@ -457,14 +472,17 @@ def _root_sensitivity(system, M, D, Ks, pinv_GT, S, V, dV, y, laws, ya2=None) ->
     constraint rows; ``ya2`` = y·Δv² when the vectors are real (then the element rows
     are computed in real arithmetic), else None."""
     MV, DV = M @ V, D @ V
-    den = np.sum(V * (2 * S * MV + DV), axis=0)
+    den = 2 * S * MV        # vᵀ(2sM + D)v, in place (fresh n × roots arrays page-fault)
+    den += DV
+    den = np.multiply(V, den, out=den).sum(axis=0)    # V first: the same rounding as V * (…)
     # The powers S ** (1 - power), one row per distinct exponent (element e's is row which[e]).
     (exponents, which), ends = laws
     coef = -(S[None, :] ** exponents[:, None]) / den    # p·∂s/∂p per unit y·Δv², a row a law
     if ya2 is not None:
         rel_law, zeta_law = _omega_zeta(S, coef)
         # Undamped, ∂s/∂p is imaginary: ζ rows of zeros, left untouched (no page faults).
-        rel = ya2 * rel_law[which]
+        rel = np.take(rel_law, which, axis=0)
+        rel *= ya2
         zeta = ya2 * zeta_law[which] if zeta_law.any() else np.zeros(ya2.shape)
     else:
         rel, zeta = _omega_zeta(S, y[:, None] * dV * dV * coef[which])
