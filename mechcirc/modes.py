@@ -154,7 +154,10 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
     """The :class:`Mode` of every resonance and anti-resonance of ``circuit`` up to ``omega_max``.
 
     The roots are those of :func:`~mechcirc.resonances.find_resonances` (same
-    order, same values); see the module docstring for what each mode holds.
+    order), taken from the eigen-solve that gives the vectors: an undamped root
+    not polished on K can differ from ``find_resonances``' in the last bits
+    (both solves backward stable: errors of the order eps·λ_max/λ).  See the
+    module docstring for what each mode holds.
 
     Parameters
     ----------
@@ -209,7 +212,8 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
         for lo in range(0, len(idx), _CHUNK):
             part = idx[lo:lo + _CHUNK]
             S = np.array([roots[i][1] for i in part])
-            # Rows copied, then one transposing copy: 3× column_stack's column-wise copies.
+            # Rows copied, then one transposing copy: faster than column_stack's column-wise
+            # copies (C order: the sparse products would copy F-ordered V).
             V = np.ascontiguousarray(np.array([roots[i][2] for i in part]).T)
             for i, vals in zip(part, _chunk_values(system, (M, D, Ks), pinv[kind], S, V,
                                                    stamps)):
@@ -268,8 +272,7 @@ def _chunk_values(system, pencil3, pinv, S, V, stamps) -> list:
     p_rel, wn = {p: (row @ rel, row @ zeta) for p, row in slopes.items()}, np.abs(S)
     # Kinetic ½mη|Δv|², potential ½kη|Δv|²/ωₙ², nothing stored in a damper.
     share = np.vstack([np.full(S.size, 0.5), 0.5 / wn ** 2, np.zeros(S.size)])
-    stored = np.take(share, law_row, axis=0)
-    stored *= ya2
+    stored = ya2 * share[law_row]
     total, energy = stored.sum(axis=0), stored[~damper] if damper.any() else stored
     energy /= total
     dissipation = ya2[damper] / (2 * wn * total)
@@ -472,17 +475,14 @@ def _root_sensitivity(system, M, D, Ks, pinv_GT, S, V, dV, y, laws, ya2=None) ->
     constraint rows; ``ya2`` = y·Δv² when the vectors are real (then the element rows
     are computed in real arithmetic), else None."""
     MV, DV = M @ V, D @ V
-    den = 2 * S * MV        # vᵀ(2sM + D)v, in place (fresh n × roots arrays page-fault)
-    den += DV
-    den = np.multiply(V, den, out=den).sum(axis=0)    # V first: the same rounding as V * (…)
+    den = np.sum(V * (2 * S * MV + DV), axis=0)
     # The powers S ** (1 - power), one row per distinct exponent (element e's is row which[e]).
     (exponents, which), ends = laws
     coef = -(S[None, :] ** exponents[:, None]) / den    # p·∂s/∂p per unit y·Δv², a row a law
     if ya2 is not None:
         rel_law, zeta_law = _omega_zeta(S, coef)
         # Undamped, ∂s/∂p is imaginary: ζ rows of zeros, left untouched (no page faults).
-        rel = np.take(rel_law, which, axis=0)
-        rel *= ya2
+        rel = ya2 * rel_law[which]
         zeta = ya2 * zeta_law[which] if zeta_law.any() else np.zeros(ya2.shape)
     else:
         rel, zeta = _omega_zeta(S, y[:, None] * dV * dV * coef[which])

@@ -202,10 +202,12 @@ def resonance_pairs(circuit: Circuit, omega_max: float | None = None,
     an anti-resonance; unnormalised); None without ``vectors``, and for roots
     found by the band solver (which computes no vectors).  ``kind`` as in
     :func:`find_resonances` (both eigenproblems are still solved: roots shared
-    by them cancel).  With ``vectors``
-    the pairs are triples ``(Resonance, v, repeated)``, ``repeated`` true
-    where the eigenproblem has another root within 1e-9 (relative) of this
-    one (then v is one vector of a family).
+    by them cancel).  With ``vectors`` the pairs are triples ``(Resonance, v,
+    repeated)``, ``repeated`` true where the eigenproblem has another root
+    within 1e-9 (relative) of this one (then v is one vector of a family), and
+    the undamped roots of a problem solved with its vectors (``eigh``) are that
+    solve's, not the values-only one's (``eigvalsh``, banded): unpolished, they
+    can differ in the last bits (errors of the order eps·λ_max/λ either way).
     """
     if omega_max is not None and not omega_max > 0:     # NaN would report nothing, silently
         raise InputError(f"omega_max must be > 0 rad/s or None, got {omega_max!r}")
@@ -240,14 +242,12 @@ def resonance_pairs(circuit: Circuit, omega_max: float | None = None,
     vecs = [(None if V is None else V[:, i], bool(r[i]))
             for V, keep, r in ((v_held, keep_h, rep[0]), (v_released, keep_r, rep[1]))
             for i in np.flatnonzero(keep)]
-    if kind is not None:            # root by root: the others' polish changes nothing here
-        vecs = [v for v, t in zip(vecs, roots) if t[0] == kind]
-        roots = [t for t in roots if t[0] == kind]
-    if omega_max is not None:
-        # A little beyond the band: polishing may move a root across its edge.
-        inside = [abs(t[1]) <= omega_max * (1 + 1e-6) for t in roots]
-        roots = [t for t, ok in zip(roots, inside) if ok]
-        vecs = [v for v, ok in zip(vecs, inside) if ok]
+    # Of the kind asked (root by root: the others' polish changes nothing here) and in
+    # the band, with a margin (polishing may move a root across its edge).
+    wanted = [(kind is None or t[0] == kind) and
+              (omega_max is None or abs(t[1]) <= omega_max * (1 + 1e-6)) for t in roots]
+    roots = [t for t, ok in zip(roots, wanted) if ok]
+    vecs = [v for v, ok in zip(vecs, wanted) if ok]
     out = list(zip(_polish(system, roots, damped), vecs)) if roots else []
     if omega_max is not None:
         out = [(r, v) for r, v in out if r.omega <= omega_max]
