@@ -670,8 +670,8 @@ def _undamped(M: np.ndarray, K: np.ndarray, vectors: bool = False) -> tuple:
     A = (A + A.T) / 2
     if not vectors:
         return _symmetric_eigvals(A), direct, None
-    # The roots from the same call as the vectors (divide and conquer, LAPACK syevd): as
-    # backward stable as _symmetric_eigvals', within eps·λ_max/λ of them, not to the bit.
+    # The roots from the same call as the vectors (divide and conquer, LAPACK syevd), not
+    # to the bit _symmetric_eigvals': both backward stable, errors of order eps·λ_max/λ.
     lam, Ur = np.linalg.eigh(A)
     Ur *= d[:, None]                           # in place: n × n arrays cost page faults
     if direct:
