@@ -975,7 +975,7 @@ def batched_roots(ds, omega_max: float | None = None):
     if not keep.size:
         return None
     if damped:                        # already polished (on the matrices): sort and go
-        return (which[keep], *_sorted_damped(w_h[keep], w_r[keep], e_h[keep], e_r[keep]))
+        return (which[keep], *_sorted_roots(w_h[keep], w_r[keep], e_h[keep], e_r[keep]))
     return _polished_designs(ds, which[keep], w_h[keep], e_h[keep], w_r[keep], e_r[keep],
                              omega_max)
 
@@ -999,14 +999,7 @@ def _without_shared_roots(problems, damped: bool) -> np.ndarray:
 def _polished_designs(ds, which, w_h, e_h, w_r, e_r, omega_max):
     """:func:`batched_roots`' result for undamped designs: the roots of both problems
     merged, polished on each design's K by :func:`_secant_designs` and sorted."""
-    w = np.concatenate([w_h, w_r], axis=1)
-    e0 = np.concatenate([e_h, e_r], axis=1)
-    pole = np.zeros(w.shape, dtype=bool)
-    pole[:, w_h.shape[1]:] = True
-    # The roots first, the empty slots (beyond omega_max, rigid) last and cut off.
-    order = np.argsort(np.where(np.isfinite(w), w, np.inf), axis=1, kind="stable")
-    width = int(np.isfinite(w).sum(axis=1).max(initial=0))
-    w, e0, pole = (np.take_along_axis(x, order, 1)[:, :width] for x in (w, e0, pole))
+    pole, w, e0 = _sorted_roots(w_h, w_r, e_h, e_r)
     p = ds.plan(which)
     if p is None:
         return None
@@ -1060,9 +1053,10 @@ def stacked_problem(Z, B, S, damped: bool, omega_max):
     return _stacked_modes(Mr, Kr, n0, omega_max)
 
 
-def _sorted_damped(s_h, s_r, err_h, err_r):
-    """(pole, s, error) of damped designs' roots (drive held, released), sorted as
-    :func:`find_resonances` sorts, cut to the widest row."""
+def _sorted_roots(s_h, s_r, err_h, err_r):
+    """(pole, s, error) of designs' roots (drive held, released; s complex, or ω),
+    sorted as :func:`find_resonances` sorts (by |s|, held first), the empty slots
+    (NaN: beyond omega_max, rigid) last and cut off at the widest row."""
     s_ = np.concatenate([s_h, s_r], axis=1)
     err = np.concatenate([err_h, err_r], axis=1)
     pole = np.zeros(s_.shape, dtype=bool)
