@@ -204,8 +204,7 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
     values: list = [None] * len(roots)
     # Once, not per chunk: each element's row among the distinct exponents 1 − power, and
     # in the per-law table of energy shares (mass, spring, damper).
-    stamps = (_incidence(ei, ej, len(system.nodes)), y,
-              (np.unique(1.0 - power, return_inverse=True), lever_ends), slopes,
+    stamps = (ei, ej, y, (np.unique(1.0 - power, return_inverse=True), lever_ends), slopes,
               np.where(kinds == "mass", 0, np.where(kinds == "spring", 1, 2)), damper)
     for kind in ("resonance", "antiresonance"):
         idx = [i for i, (r, *_) in enumerate(roots) if r.kind == kind]
@@ -234,24 +233,11 @@ def _normalised(pairs, M, D, Ks, G_held, G_released) -> list:
     return roots
 
 
-def _incidence(ei: np.ndarray, ej: np.ndarray, n: int):
-    """The sparse E × n matrix of Δv = v(n1) − v(n2) of each element (rows ``ei``, ``ej``;
-    −1 the reference: no entry).  Each row holds +1 then −1, unsorted: a product sums
-    them in that order, 0 + v(n1) − v(n2), as the difference of the two rows does
-    (one pass over E × roots instead of two gathers and a difference)."""
-    import scipy.sparse as sp
-
-    cols = np.column_stack([ei, ej])
-    data = np.broadcast_to(np.array([1.0, -1.0]), cols.shape)[cols >= 0]
-    indptr = np.concatenate([[0], np.cumsum(np.count_nonzero(cols >= 0, axis=1))])
-    return sp.csr_matrix((data, cols[cols >= 0], indptr), shape=(ei.size, n))
-
-
 def _chunk_values(system, pencil3, pinv, S, V, stamps) -> list:
     """Sensitivities, energies and element velocities of the roots ``S`` with
     vectors ``V`` (columns; scaled in place), one ``(values, param_rel, param_zeta)``
     per root."""
-    incidence, y, laws, slopes, law_row, damper = stamps
+    ei, ej, y, laws, slopes, law_row, damper = stamps
     M, D, Ks = pencil3
     top = np.argmax(np.abs(V), axis=0)
     col = np.arange(S.size)
@@ -259,7 +245,8 @@ def _chunk_values(system, pencil3, pinv, S, V, stamps) -> list:
     V[top, col] = 1.0                       # exactly (a complex quotient may miss by an ulp)
     # Real vectors (undamped roots) keep every (element × root) array real: the complex
     # factors depend on the root and the law only, one row per law.
-    dV = incidence @ V
+    Ve = np.vstack([V, np.zeros((1, S.size), V.dtype)])
+    dV = Ve[ei] - Ve[ej]
     # In place where it can be (fresh E × roots arrays page-fault): a real Δv is not needed
     # beyond y·Δv².
     real = not np.iscomplexobj(dV)
