@@ -211,9 +211,7 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
         for lo in range(0, len(idx), _CHUNK):
             part = idx[lo:lo + _CHUNK]
             S = np.array([roots[i][1] for i in part])
-            # Rows copied, viewed transposed: 5× column_stack's column-wise copies (the
-            # sparse products copy it to C order; still 2 % of modes()' own work less).
-            V = np.array([roots[i][2] for i in part]).T
+            V = np.column_stack([roots[i][2] for i in part])
             for i, vals in zip(part, _chunk_values(system, (M, D, Ks), pinv[kind], S, V,
                                                    stamps)):
                 values[i] = vals
