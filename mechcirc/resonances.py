@@ -310,7 +310,8 @@ def _repeated(s: np.ndarray) -> np.ndarray:
     only with those at most ``width`` places on (a window of 2e-9), not with every root."""
     m = np.abs(s)
     order = np.argsort(m, kind="stable")
-    m, z, out = m[order], s[order], np.zeros(s.size, bool)
+    m, z = m[order], s[order]
+    out = np.zeros(s.size, bool)
     width = np.max(np.searchsorted(m, m * (1 + 2e-9), side="right") - np.arange(m.size),
                    initial=1)
     for d in range(1, int(width)):
@@ -1077,14 +1078,21 @@ def _weighted_sum(S: np.ndarray, P: np.ndarray) -> np.ndarray:
 
 def _scaled_stack(M, K):
     """Stacked mass and stiffness matrices scaled to unit largest entry per design,
-    and the reference frequency √(max|K| / max|M|) of each: ``(scale_m, w_ref, Ms, Ks)``."""
+    the reference frequency √(max|K| / max|M|) of each, and which designs are within
+    float64's range (a positive, finite w_ref and scaled matrices; the others' matrices
+    replaced by I): ``(scale_m, w_ref, Ms, Ks, ok)``."""
     with np.errstate(all="ignore"):
         scale_m = np.abs(M).max(axis=(1, 2))
         scale_k = np.abs(K).max(axis=(1, 2))
         scale_m = np.where(scale_m > 0, scale_m, 1.0)
         scale_k = np.where(scale_k > 0, scale_k, 1.0)
         w_ref = np.sqrt(scale_k) / np.sqrt(scale_m)
-        return scale_m, w_ref, M / scale_m[:, None, None], K / scale_k[:, None, None]
+        Ms, Ks = M / scale_m[:, None, None], K / scale_k[:, None, None]
+    ok = np.isfinite(w_ref) & (w_ref > 0) & np.isfinite(Ms).all(axis=(1, 2)) & \
+        np.isfinite(Ks).all(axis=(1, 2))
+    if not ok.all():
+        Ms, Ks = (np.where(ok[:, None, None], X, np.eye(M.shape[1])) for X in (Ms, Ks))
+    return scale_m, w_ref, Ms, Ks, ok
 
 
 def _stacked_modes(M: np.ndarray, K: np.ndarray, n0: int, omega_max):
@@ -1099,12 +1107,7 @@ def _stacked_modes(M: np.ndarray, K: np.ndarray, n0: int, omega_max):
     D, k = M.shape[0], M.shape[1]
     if k == 0:
         return np.zeros((D, 0)), np.zeros((D, 0)), np.ones(D, dtype=bool)
-    scale_m, w_ref, Ms, Ks = _scaled_stack(M, K)
-    ok = np.isfinite(w_ref) & (w_ref > 0) & np.isfinite(Ms).all(axis=(1, 2)) & \
-        np.isfinite(Ks).all(axis=(1, 2))
-    if not ok.all():
-        Ms = np.where(ok[:, None, None], Ms, np.eye(k))
-        Ks = np.where(ok[:, None, None], Ks, np.eye(k))
+    scale_m, w_ref, Ms, Ks, ok = _scaled_stack(M, K)
     lam, regular = _undamped_stack(Ms, Ks, n0)
     ok &= regular
     lam = np.where(np.isfinite(lam), lam, -np.inf)
@@ -1140,12 +1143,10 @@ def _stacked_damped(M: np.ndarray, Dm: np.ndarray, K: np.ndarray, omega_max):
     eps = np.finfo(float).eps
     if k == 0:
         return np.zeros((n, 0), dtype=complex), np.zeros((n, 0)), np.ones(n, dtype=bool)
-    scale_m, w_ref, Ms, Ks = _scaled_stack(M, K)
+    scale_m, w_ref, Ms, Ks, ok = _scaled_stack(M, K)
     with np.errstate(all="ignore"):
         Ds = Dm / (scale_m * w_ref)[:, None, None]
-    ok = np.isfinite(w_ref) & (w_ref > 0)
-    for X in (Ms, Ds, Ks):
-        ok &= np.isfinite(X).all(axis=(1, 2))
+    ok &= np.isfinite(Ds).all(axis=(1, 2))
     eye = np.eye(k)
     Ms, Ds = np.where(ok[:, None, None], Ms, eye), np.where(ok[:, None, None], Ds, 0.0)
     Ks = np.where(ok[:, None, None], Ks, eye)
