@@ -202,10 +202,12 @@ def resonance_pairs(circuit: Circuit, omega_max: float | None = None,
     an anti-resonance; unnormalised); None without ``vectors``, and for roots
     found by the band solver (which computes no vectors).  ``kind`` as in
     :func:`find_resonances` (both eigenproblems are still solved: roots shared
-    by them cancel).  With ``vectors``
-    the pairs are triples ``(Resonance, v, repeated)``, ``repeated`` true
-    where the eigenproblem has another root within 1e-9 (relative) of this
-    one (then v is one vector of a family).
+    by them cancel).  With ``vectors`` the pairs are triples ``(Resonance, v,
+    repeated)``, ``repeated`` true where the eigenproblem has another root
+    within 1e-9 (relative) of this one (then v is one vector of a family), and
+    the undamped roots of a problem solved with its vectors (``eigh``) are that
+    solve's, not the values-only one's (``eigvalsh``, banded): unpolished, they
+    can differ in the last bits (errors of the order eps·λ_max/λ either way).
     """
     if omega_max is not None and not omega_max > 0:     # NaN would report nothing, silently
         raise InputError(f"omega_max must be > 0 rad/s or None, got {omega_max!r}")
@@ -235,17 +237,17 @@ def resonance_pairs(circuit: Circuit, omega_max: float | None = None,
         M, D, Ks, G_released, G_held, damped, omega_max, vectors)
     roots = [("resonance", s, e, f) for s, e, f in held[keep_h]] + \
         [("antiresonance", s, e, f) for s, e, f in released[keep_r]]
-    vecs = [(None if V is None else V[:, i], vectors and _repeats(found[:, 0], int(i)))
-            for V, keep, found in ((v_held, keep_h, held), (v_released, keep_r, released))
+    rep = [_repeated(found[:, 0]) if vectors else np.zeros(len(found), bool)
+           for found in (held, released)]
+    vecs = [(None if V is None else V[:, i], bool(r[i]))
+            for V, keep, r in ((v_held, keep_h, rep[0]), (v_released, keep_r, rep[1]))
             for i in np.flatnonzero(keep)]
-    if kind is not None:            # root by root: the others' polish changes nothing here
-        vecs = [v for v, t in zip(vecs, roots) if t[0] == kind]
-        roots = [t for t in roots if t[0] == kind]
-    if omega_max is not None:
-        # A little beyond the band: polishing may move a root across its edge.
-        inside = [abs(t[1]) <= omega_max * (1 + 1e-6) for t in roots]
-        roots = [t for t, ok in zip(roots, inside) if ok]
-        vecs = [v for v, ok in zip(vecs, inside) if ok]
+    # Of the kind asked (root by root: the others' polish changes nothing here) and in
+    # the band, with a margin (polishing may move a root across its edge).
+    wanted = [(kind is None or t[0] == kind) and
+              (omega_max is None or abs(t[1]) <= omega_max * (1 + 1e-6)) for t in roots]
+    roots = [t for t, ok in zip(roots, wanted) if ok]
+    vecs = [v for v, ok in zip(vecs, wanted) if ok]
     out = list(zip(_polish(system, roots, damped), vecs)) if roots else []
     if omega_max is not None:
         out = [(r, v) for r, v in out if r.omega <= omega_max]
@@ -302,9 +304,21 @@ def _held_vectors(V, s_released, g, s_held, keep) -> np.ndarray | None:
     return out
 
 
-def _repeats(s: np.ndarray, i: int) -> bool:
-    """Whether another root of ``s`` lies within 1e-9 (relative) of ``s[i]``."""
-    return int(np.count_nonzero(np.abs(s - s[i]) <= 1e-9 * abs(s[i]))) > 1
+def _repeated(s: np.ndarray) -> np.ndarray:
+    """Whether another root of ``s`` lies within 1e-9 (relative) of each, |s_j − s_i| ≤
+    1e-9·|s_i|.  Such a pair is as near in |s|: sorted by |s|, each root is compared
+    only with those at most ``width`` places on (a window of 2e-9), not with every root."""
+    m = np.abs(s)
+    order = np.argsort(m, kind="stable")
+    m, z = m[order], s[order]
+    out = np.zeros(s.size, bool)
+    width = np.max(np.searchsorted(m, m * (1 + 2e-9), side="right") - np.arange(m.size),
+                   initial=1)
+    for d in range(1, int(width)):
+        gap = np.abs(z[d:] - z[:-d])
+        out[order[:-d]] |= gap <= 1e-9 * m[:-d]
+        out[order[d:]] |= gap <= 1e-9 * m[d:]
+    return out
 
 
 def pencil(system, dense: bool = False) -> tuple:
@@ -655,11 +669,11 @@ def _undamped(M: np.ndarray, K: np.ndarray, vectors: bool = False) -> tuple:
     d = 1.0 / np.sqrt(mu[massive])
     A = Kc * d[:, None] * d[None, :]
     A = (A + A.T) / 2
-    lam = _symmetric_eigvals(A)
     if not vectors:
-        return lam, direct, None
-    # The vectors by their own call: the roots stay those find_resonances reports, to the bit.
-    Ur = np.linalg.eigh(A)[1]                  # divide and conquer (LAPACK syevd)
+        return _symmetric_eigvals(A), direct, None
+    # The roots from the same call as the vectors (divide and conquer, LAPACK syevd), not
+    # to the bit _symmetric_eigvals': both backward stable, errors of order eps·λ_max/λ.
+    lam, Ur = np.linalg.eigh(A)
     Ur *= d[:, None]                           # in place: n × n arrays cost page faults
     if direct:
         return lam, direct, Ur
@@ -962,7 +976,7 @@ def batched_roots(ds, omega_max: float | None = None):
     if not keep.size:
         return None
     if damped:                        # already polished (on the matrices): sort and go
-        return (which[keep], *_sorted_damped(w_h[keep], w_r[keep], e_h[keep], e_r[keep]))
+        return (which[keep], *_sorted_roots(w_h[keep], w_r[keep], e_h[keep], e_r[keep]))
     return _polished_designs(ds, which[keep], w_h[keep], e_h[keep], w_r[keep], e_r[keep],
                              omega_max)
 
@@ -986,14 +1000,7 @@ def _without_shared_roots(problems, damped: bool) -> np.ndarray:
 def _polished_designs(ds, which, w_h, e_h, w_r, e_r, omega_max):
     """:func:`batched_roots`' result for undamped designs: the roots of both problems
     merged, polished on each design's K by :func:`_secant_designs` and sorted."""
-    w = np.concatenate([w_h, w_r], axis=1)
-    e0 = np.concatenate([e_h, e_r], axis=1)
-    pole = np.zeros(w.shape, dtype=bool)
-    pole[:, w_h.shape[1]:] = True
-    # The roots first, the empty slots (beyond omega_max, rigid) last and cut off.
-    order = np.argsort(np.where(np.isfinite(w), w, np.inf), axis=1, kind="stable")
-    width = int(np.isfinite(w).sum(axis=1).max(initial=0))
-    w, e0, pole = (np.take_along_axis(x, order, 1)[:, :width] for x in (w, e0, pole))
+    pole, w, e0 = _sorted_roots(w_h, w_r, e_h, e_r)
     p = ds.plan(which)
     if p is None:
         return None
@@ -1047,9 +1054,10 @@ def stacked_problem(Z, B, S, damped: bool, omega_max):
     return _stacked_modes(Mr, Kr, n0, omega_max)
 
 
-def _sorted_damped(s_h, s_r, err_h, err_r):
-    """(pole, s, error) of damped designs' roots (drive held, released), sorted as
-    :func:`find_resonances` sorts, cut to the widest row."""
+def _sorted_roots(s_h, s_r, err_h, err_r):
+    """(pole, s, error) of designs' roots (drive held, released; s complex, or ω),
+    sorted as :func:`find_resonances` sorts (by |s|, held first), the empty slots
+    (NaN: beyond omega_max, rigid) last and cut off at the widest row."""
     s_ = np.concatenate([s_h, s_r], axis=1)
     err = np.concatenate([err_h, err_r], axis=1)
     pole = np.zeros(s_.shape, dtype=bool)
@@ -1070,14 +1078,21 @@ def _weighted_sum(S: np.ndarray, P: np.ndarray) -> np.ndarray:
 
 def _scaled_stack(M, K):
     """Stacked mass and stiffness matrices scaled to unit largest entry per design,
-    and the reference frequency √(max|K| / max|M|) of each: ``(scale_m, w_ref, Ms, Ks)``."""
+    the reference frequency √(max|K| / max|M|) of each, and which designs are within
+    float64's range (a positive, finite w_ref and scaled matrices; the others' matrices
+    replaced by I): ``(scale_m, w_ref, Ms, Ks, ok)``."""
     with np.errstate(all="ignore"):
         scale_m = np.abs(M).max(axis=(1, 2))
         scale_k = np.abs(K).max(axis=(1, 2))
         scale_m = np.where(scale_m > 0, scale_m, 1.0)
         scale_k = np.where(scale_k > 0, scale_k, 1.0)
         w_ref = np.sqrt(scale_k) / np.sqrt(scale_m)
-        return scale_m, w_ref, M / scale_m[:, None, None], K / scale_k[:, None, None]
+        Ms, Ks = M / scale_m[:, None, None], K / scale_k[:, None, None]
+    ok = np.isfinite(w_ref) & (w_ref > 0) & np.isfinite(Ms).all(axis=(1, 2)) & \
+        np.isfinite(Ks).all(axis=(1, 2))
+    if not ok.all():
+        Ms, Ks = (np.where(ok[:, None, None], X, np.eye(M.shape[1])) for X in (Ms, Ks))
+    return scale_m, w_ref, Ms, Ks, ok
 
 
 def _stacked_modes(M: np.ndarray, K: np.ndarray, n0: int, omega_max):
@@ -1092,12 +1107,7 @@ def _stacked_modes(M: np.ndarray, K: np.ndarray, n0: int, omega_max):
     D, k = M.shape[0], M.shape[1]
     if k == 0:
         return np.zeros((D, 0)), np.zeros((D, 0)), np.ones(D, dtype=bool)
-    scale_m, w_ref, Ms, Ks = _scaled_stack(M, K)
-    ok = np.isfinite(w_ref) & (w_ref > 0) & np.isfinite(Ms).all(axis=(1, 2)) & \
-        np.isfinite(Ks).all(axis=(1, 2))
-    if not ok.all():
-        Ms = np.where(ok[:, None, None], Ms, np.eye(k))
-        Ks = np.where(ok[:, None, None], Ks, np.eye(k))
+    scale_m, w_ref, Ms, Ks, ok = _scaled_stack(M, K)
     lam, regular = _undamped_stack(Ms, Ks, n0)
     ok &= regular
     lam = np.where(np.isfinite(lam), lam, -np.inf)
@@ -1133,12 +1143,10 @@ def _stacked_damped(M: np.ndarray, Dm: np.ndarray, K: np.ndarray, omega_max):
     eps = np.finfo(float).eps
     if k == 0:
         return np.zeros((n, 0), dtype=complex), np.zeros((n, 0)), np.ones(n, dtype=bool)
-    scale_m, w_ref, Ms, Ks = _scaled_stack(M, K)
+    scale_m, w_ref, Ms, Ks, ok = _scaled_stack(M, K)
     with np.errstate(all="ignore"):
         Ds = Dm / (scale_m * w_ref)[:, None, None]
-    ok = np.isfinite(w_ref) & (w_ref > 0)
-    for X in (Ms, Ds, Ks):
-        ok &= np.isfinite(X).all(axis=(1, 2))
+    ok &= np.isfinite(Ds).all(axis=(1, 2))
     eye = np.eye(k)
     Ms, Ds = np.where(ok[:, None, None], Ms, eye), np.where(ok[:, None, None], Ds, 0.0)
     Ks = np.where(ok[:, None, None], Ks, eye)
