@@ -260,6 +260,23 @@ def test_grid_anti_resonances_against_the_closed_form():
     assert all(r.error <= 1e-13 for r in found)
 
 
+@pytest.mark.parametrize("n", [15, 30])
+def test_grid_anti_resonances_within_their_reported_error(n):
+    """The banded solver's roots (225 and 900 unknowns) against the closed form above: the
+    reported ``error`` covers the actual one (with the factor 4 it did not: 3.1× over on
+    the 30×30 grid; now at most 0.41 of it, asserted ≤ 1)."""
+    k, m = 1e4, 1.0
+    found = [r for r in mechcirc.parse(grid_text(n, k, m)).resonances()
+             if r.kind == "antiresonance"]
+    lam = 2 - 2 * np.cos(np.pi * np.arange(n) / n)
+    w2 = np.sort((k / m) * (1 + lam[:, None] + lam[None, :]).ravel())
+    w = np.sqrt(w2[np.r_[True, np.diff(w2) > 1e-9 * w2[1:]]])
+    found.sort(key=lambda r: r.omega)
+    assert len(found) == w.size
+    actual = np.abs([r.omega for r in found] - w) / w
+    assert np.all(actual <= [r.error for r in found])
+
+
 def test_resonances_of_an_overflowing_product_name_the_element():
     c = mechcirc.parse("drive V a 0 velocity=1\nmass m a b 1e308 eta=1e5\nspring k b 0 1\n")
     with pytest.raises(NetlistError, match="value × eta .* overflows float64") as err:
