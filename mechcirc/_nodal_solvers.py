@@ -540,8 +540,9 @@ class SparseSolver:
         def solve(r, rows=None):
             rows = every if rows is None else np.asarray(rows, dtype=np.int64)
             out = np.empty((rows.size, n), dtype=complex)
-            kern.band_solve_perm(ab, kl, ipiv, rows, p, np.ascontiguousarray(r, dtype=complex),
-                                 out)
+            # writeable too: a read-only r (a broadcast b at one ω) would have numba compile
+            # the kernel a second time, for that flag
+            kern.band_solve_perm(ab, kl, ipiv, rows, p, np.require(r, complex, ("C", "W")), out)
             return out
 
         def bound(x, d, rows):
