@@ -243,9 +243,22 @@ def load_element(e, EI, EF, FI, FF, tabs, th_load, w_load, work):
     functions at the part's rigid coordinate (function fa of θ) at the loads' reference."""
     fx = EI[e, 4]
     fy = EI[e, 5]
-    qr, qr1, qr2, bb = fn_at(EI[e, 2], FI, FF, tabs, th_load)
-    xr, xr1, xr2, bb = fn_at(fx, FI, FF, tabs, qr)
-    yr, yr1, yr2, bb = fn_at(fy, FI, FF, tabs, qr)
+    # the part's rigid coordinate (function fa of θ), then x and y of P_rig there, from one
+    # fn_at site: numba's inline="always" copies the callee at every site (2.4 s of compile)
+    qr = th_load
+    qr1 = 0.0
+    xr = 0.0
+    xr1 = 0.0
+    for r in range(3):
+        v, v1, v2, bb = fn_at(EI[e, r + 3 if r else 2], FI, FF, tabs, qr)
+        if r == 0:
+            qr = v
+            qr1 = v1
+        elif r == 1:
+            xr = v
+            xr1 = v1
+    yr = v
+    yr1 = v1
     vxr = xr1 * qr1 * w_load
     vyr = yr1 * qr1 * w_load
     if EI[e, 0] == 2:
