@@ -609,7 +609,7 @@ def _solve(lk, pl, use, t, dt_max):
     if not cross:
         if use == "dyads":
             return _solve_dyads(lk, pl, t, dt_max)
-        return _newton(lk, pl, t, dt_max)
+        return _solve_newton(lk, pl, t, dt_max)
     dz = _ZONE / abs(float(pl.omega[0]))
     zones = [(tc - dz, tc + dz) for tc, _ in sorted(cross)]
     pts, where, zone_of = _traverse(t, zones)
@@ -618,12 +618,6 @@ def _solve(lk, pl, use, t, dt_max):
     else:
         got = _newton_segments(lk, pl, pts, dt_max, zones)
     return _bridged(lk, pl, got, t, pts, where, zone_of, zones)
-
-
-def _newton(lk, pl, t, dt_max, start=None):
-    if _compiled("newton_path"):
-        return _solve_newton_compiled(lk, pl, t, dt_max, start)
-    return _solve_newton(lk, pl, t, dt_max, start)
 
 
 def _signs(pl, cross, t):
@@ -751,7 +745,7 @@ def _newton_segments(lk, pl, pts, dt_max, zones):
            ((3 * pl.nb,),) * 3 + ((3 * pl.nb, len(pl.crank_idx)),)]
     lo, start = 0, None
     for hi in cuts + [len(pts)]:
-        got = _newton(lk, pl, pts[lo:hi], dt_max, start)
+        got = _solve_newton(lk, pl, pts[lo:hi], dt_max, start)
         for a, b in zip(out, got):
             a[lo:hi] = b
         if hi < len(pts):
@@ -1368,6 +1362,10 @@ def _solve_newton_compiled(lk, pl, t, dt_max, start=None):
 
 
 def _solve_newton(lk, pl, t, dt_max, start=None):
+    """Newton's continuation from ``start`` ((q, time); default the pose) through times
+    ``t``: the compiled loop when it is loaded, else in numpy."""
+    if _compiled("newton_path"):
+        return _solve_newton_compiled(lk, pl, t, dt_max, start)
     nw = Newton(pl)
     q0, t0 = (pl.q0, 0.0) if start is None else start
     nodes, at = _path(t, dt_max, t0)

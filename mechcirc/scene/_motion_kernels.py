@@ -249,16 +249,14 @@ def load_element(e, EI, EF, FI, FF, tabs, th_load, w_load, work):
     qr1 = 0.0
     xr = 0.0
     xr1 = 0.0
-    for r in range(3):
-        v, v1, v2, bb = fn_at(EI[e, r + 3 if r else 2], FI, FF, tabs, qr)
+    for r in range(3):              # the last pass leaves y's value and rate in yr, yr1
+        yr, yr1, v2, bb = fn_at(EI[e, r + 3 if r else 2], FI, FF, tabs, qr)
         if r == 0:
-            qr = v
-            qr1 = v1
+            qr = yr
+            qr1 = yr1
         elif r == 1:
-            xr = v
-            xr1 = v1
-    yr = v
-    yr1 = v1
+            xr = yr
+            xr1 = yr1
     vxr = xr1 * qr1 * w_load
     vyr = yr1 * qr1 * w_load
     if EI[e, 0] == 2:

@@ -56,7 +56,7 @@ from ..errors import SleyAccuracyWarning
 from .models import ParameterError, SleyParameters, start_angle
 
 __all__ = ["SleyResult", "simulate", "simulate_params", "simulate_batch", "METHODS",
-           "table_error", "start_angle", "SleyAccuracyWarning", "ACCURACY_GOAL"]
+           "table_error", "start_angle", "SleyAccuracyWarning"]
 
 METHODS = ("rk4", "rk4-python", "rk8", "DOP853", "RK45", "LSODA")
 _SCIPY_METHODS = ("DOP853", "RK45", "LSODA")
@@ -64,8 +64,6 @@ TWO_PI = 2.0 * math.pi
 
 #: Default output points per revolution (0.05° in crank angle).
 DEFAULT_POINTS = 7200
-#: Relative error estimate / periodicity above which a result is flagged.
-ACCURACY_GOAL = 1e-3
 
 
 @dataclass(frozen=True)
@@ -254,7 +252,7 @@ def simulate(drive: str = "one-side", variant: int = 3, revolutions: int = 5,
         Uniform output grid in crank angle (default 7200, i.e. 0.05°).
     steps_per_period : float, optional
         RK4 steps per period 2π/|λ|max of the fastest linearised mode (default: 25 when
-        the error estimate is then at most :data:`ACCURACY_GOAL`, else 50; 50 without it).
+        the estimate is then ≤ the scenes' ``ACCURACY_GOAL``, 1e-3, else 50; 50 without it).
     rtol : float, optional
         Relative tolerance of the scipy methods (default 1e-10).
     table_points : int
