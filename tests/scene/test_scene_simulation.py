@@ -1,7 +1,6 @@
 """mechcirc.scene.simulation: a crank speed profile (``omega_ripple``) against an independent
 solution, and the scipy methods on a scene."""
 
-import functools
 import math
 import warnings
 
@@ -9,6 +8,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
+import _scene_helpers as helpers
 from mechcirc.scene import parse_scene
 from mechcirc.scene.simulation import SceneAccuracyWarning, simulate_scene
 
@@ -186,23 +186,6 @@ def test_without_point_accelerations_the_rest_is_unchanged():
     assert np.array_equal(lean.states, full.states)
 
 
-@functools.cache
-def _shipped_and_reference(name):
-    """The shipped scene ``name`` and its run by DOP853 at rtol 1e-12 (2 revolutions, 720
-    points): the reference of the RK4 and the rk8 test below, computed once for both (the
-    same call in each was 0.46 s of CPU for the six-bar)."""
-    from pathlib import Path
-
-    from mechcirc.scene import load_scene
-
-    scene = load_scene(Path(__file__).resolve().parents[2] / "examples" / f"{name}.toml")
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        ref = simulate_scene(scene, revolutions=2, points=720, method="DOP853", rtol=1e-12,
-                             error_estimate=False)
-    return scene, ref
-
-
 @pytest.mark.parametrize("name", ["slider_crank_scene", "fnf_sixbar_scene", "cam_heald_scene"])
 def test_rk4_error_estimate_bounds_the_returned_runs_error_on_shipped_scenes(name):
     """The RK4 result is the half-step run; its error_estimate (change from the run at
@@ -211,7 +194,7 @@ def test_rk4_error_estimate_bounds_the_returned_runs_error_on_shipped_scenes(nam
     steps per period: slider-crank 15.4, 15.2; geared six-bar 15.7, 15.4; cam 5.7, 7.8."""
     from mechcirc.scene.simulation import _rel_change
 
-    scene, ref = _shipped_and_reference(name)
+    scene, ref = helpers.shipped_and_reference(name)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         for spp in (6, 20):
@@ -258,7 +241,7 @@ def test_rk8_is_accurate_and_its_error_estimate_bounds_its_error(name):
     19, 148.  With cubic output, as RK4's, the cam was 6.3e-6 at 16 steps)."""
     from mechcirc.scene.simulation import _rel_change
 
-    scene, ref = _shipped_and_reference(name)
+    scene, ref = helpers.shipped_and_reference(name)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         for spp in (8, 16):
