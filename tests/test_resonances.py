@@ -153,7 +153,9 @@ def test_damped_ladder_roots_are_within_their_error_of_mpmath():
     spec = _spec(lines)
     real = [r for r in found if r.omega_d == 0]
     assert real, "the ladder has an overdamped root"
-    checked = real + found[::4]
+    # every 4th root besides the real ones, each once (found[0] is the real root: it was
+    # solved to 30 digits twice, 0.2 s of CPU)
+    checked = real + [r for r in found[::4] if r.omega_d != 0]
     for r in checked:
         s = complex(-r.zeta * r.omega, r.omega_d)
         exact = mp_nodal.root(spec, s, r.kind == "antiresonance", 30)

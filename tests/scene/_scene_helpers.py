@@ -1,6 +1,9 @@
 """Scene texts shared by the scene tests (built here, not by the code under test)."""
 
+import functools
 import math
+import warnings
+from pathlib import Path
 
 from mechcirc.kinematics.fourbar import FourBar
 
@@ -60,3 +63,20 @@ inertia = {p.I4P!r}
 link = "shaft"
 velocity = {p.omega!r}
 '''
+
+
+@functools.cache
+def shipped_and_reference(name: str):
+    """The shipped scene ``examples/<name>.toml`` and its run by DOP853 at rtol 1e-12 (2
+    revolutions, 720 points): the reference of test_scene_simulation.py's RK4 and rk8
+    tests and of test_sim_default_step.py (the six-bar), computed once for all three (the
+    same call in each was 0.46 s of CPU for the six-bar)."""
+    from mechcirc.scene import load_scene
+    from mechcirc.scene.simulation import simulate_scene
+
+    scene = load_scene(Path(__file__).resolve().parents[2] / "examples" / f"{name}.toml")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ref = simulate_scene(scene, revolutions=2, points=720, method="DOP853", rtol=1e-12,
+                             error_estimate=False)
+    return scene, ref

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
+import _scene_helpers as helpers
 from mechcirc.scene import parse_scene
 from mechcirc.scene.simulation import SceneAccuracyWarning, simulate_scene
 
@@ -191,16 +192,11 @@ def test_rk4_error_estimate_bounds_the_returned_runs_error_on_shipped_scenes(nam
     the step) must be >= its true error, measured against DOP853 at rtol 1e-12 on the
     same equations (an independent integrator).  Measured estimate / true at 6 and 20
     steps per period: slider-crank 15.4, 15.2; geared six-bar 15.7, 15.4; cam 5.7, 7.8."""
-    from pathlib import Path
-
-    from mechcirc.scene import load_scene
     from mechcirc.scene.simulation import _rel_change
 
-    scene = load_scene(Path(__file__).resolve().parents[2] / "examples" / f"{name}.toml")
+    scene, ref = helpers.shipped_and_reference(name)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        ref = simulate_scene(scene, revolutions=2, points=720, method="DOP853", rtol=1e-12,
-                             error_estimate=False)
         for spp in (6, 20):
             r = simulate_scene(scene, revolutions=2, points=720, steps_per_period=spp)
             true = _rel_change(r.extrema, ref.extrema)
@@ -243,16 +239,11 @@ def test_rk8_is_accurate_and_its_error_estimate_bounds_its_error(name):
     within 1e-7 (measured, 2 revolutions, at 8 / 16 steps: slider-crank 5.1e-9 / 3.1e-11,
     six-bar 3.5e-8 / 1.3e-9, cam 1.7e-6 / 7.9e-9; estimate / true 233, 165; 349, 11.4;
     19, 148.  With cubic output, as RK4's, the cam was 6.3e-6 at 16 steps)."""
-    from pathlib import Path
-
-    from mechcirc.scene import load_scene
     from mechcirc.scene.simulation import _rel_change
 
-    scene = load_scene(Path(__file__).resolve().parents[2] / "examples" / f"{name}.toml")
+    scene, ref = helpers.shipped_and_reference(name)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        ref = simulate_scene(scene, revolutions=2, points=720, method="DOP853", rtol=1e-12,
-                             error_estimate=False)
         for spp in (8, 16):
             r = simulate_scene(scene, revolutions=2, points=720, steps_per_period=spp,
                                method="rk8")

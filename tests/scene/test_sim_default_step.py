@@ -10,6 +10,7 @@ import warnings
 
 import pytest
 
+import _scene_helpers as helpers
 from mechcirc.scene import load_scene
 from mechcirc.scene.simulation import ACCURACY_GOAL, _rel_change, simulate_scene
 from mechcirc.sley import preset
@@ -37,7 +38,7 @@ def test_sley_default_is_the_run_at_25_and_its_estimate_bounds_its_error():
 def test_default_takes_twice_the_steps_when_the_estimate_at_25_is_too_large():
     scene = load_scene("examples/fnf_sixbar_scene.toml")   # estimate at 25: ~5e-3
     kw = dict(revolutions=2, points=PTS)
-    ref = simulate_scene(scene, method="DOP853", rtol=1e-12, error_estimate=False, **kw)
+    _, ref = helpers.shipped_and_reference("fnf_sixbar_scene")     # the same run, shared
     at25 = simulate_scene(scene, steps_per_period=25, **kw)
     assert at25.error_estimate > ACCURACY_GOAL
     r = simulate_scene(scene, **kw)
