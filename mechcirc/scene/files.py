@@ -972,7 +972,10 @@ def apply_overrides(scene: Scene, overrides: dict) -> Scene:
             known = ["omega", "omega_ripple.amplitude/harmonic"] + [
                 f"{n}.{'/'.join(_FIELDS[type(x)][1])}" for n, x in found.items()]
             raise MechcircError(f"--set {key}: no such parameter; known: {', '.join(known)}")
-    tables: dict[str, Any] = {table: tuple(x for x in found.values() if type(x) is kind)
+    # each table rebuilt from its own entries (a scene made in Python may repeat a name
+    # across tables: one name, one entry of ``found``)
+    tables: dict[str, Any] = {table: tuple(found[x.name] if type(found[x.name]) is kind else x
+                                           for x in getattr(scene, table))
                               for kind, (table, _) in _FIELDS.items()}
     return replace(scene, simulate=sim, **tables)
 

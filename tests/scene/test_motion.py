@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 import warnings
@@ -424,6 +425,20 @@ def test_set_takes_what_the_file_takes_and_a_load_keeps_one_of_its_two():
     with pytest.raises(MechcircError, match="--set C9.stiffness: no such parameter; known: "
                                             "omega, .* C2.stiffness/damping/clearance"):
         apply_overrides(_mrazek(), {"C9.stiffness": 1.0})
+
+
+def test_set_keeps_every_entry_of_a_scene_that_repeats_a_name_across_tables():
+    """A scene made in Python (no reader to keep names unique) with a mass named as a torsion
+    rod: each table keeps its own entries (one of them was dropped before), and an override
+    of the rod leaves the mass as it was."""
+    sc = _mrazek()
+    rod = sc.torsions[0]
+    twin = dataclasses.replace(sc.masses[0], name=rod.name)
+    scene = dataclasses.replace(sc, masses=(twin, *sc.masses[1:]))
+    got = apply_overrides(scene, {"omega": 100.0})
+    assert (got.masses, got.torsions) == (scene.masses, scene.torsions)
+    got = apply_overrides(scene, {f"{rod.name}.stiffness": 2e5})
+    assert got.masses == scene.masses and got.torsions[0].stiffness == 2e5
 
 
 @functools.cache
