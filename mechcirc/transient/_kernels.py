@@ -267,7 +267,8 @@ def kink_theta(t, hh, z, y5, K, P, coefD, xi, xv, dx, vi, vv, dv, prm, t0, dt, u
     the gap: the wall's edge e ∓ b/2; in contact: separation f_c + f_d and the
     damping limit f_c − f_d; separating at the wall: the edge and f_c + f_d),
     found on the step's continuous extension (no right-hand sides); 0.5 if none
-    changes sign."""
+    changes sign.  A first switch within the step's first KINK_RECUT is at its
+    start: then the element's next root, of any of its switching functions, or none."""
     theta = 2.0
     have_p = False
     for k in range(prm.shape[0]):
