@@ -285,16 +285,16 @@ def test_elasto_backlash_law_properties():
     c, d, b = 100.0, 10.0, 0.2
     rng = np.random.default_rng(1)
     for e, w in rng.normal(0, 0.3, (2000, 2)) * [1, 20]:
-        f, fc = kern.elasto_backlash(e, w, c, d, b)
+        f, fc, _ = kern.law_branch(e, w, c, d, b)
         if abs(e) <= b / 2:
             assert f == 0.0
         else:
             assert f * np.sign(e) >= 0                      # never pulls
             assert abs(f - fc) <= abs(fc) + 1e-12           # |f_d| ≤ |f_c|
     # tiny gap: plain spring-damper
-    assert kern.elasto_backlash(0.3, 2.0, c, d, 1e-11) == (c * 0.3 + d * 2.0, c * 0.3)
+    assert kern.law_branch(0.3, 2.0, c, d, 1e-11)[:2] == (c * 0.3 + d * 2.0, c * 0.3)
     # continuous at first contact: f → 0 as e → b/2 from outside
-    assert kern.elasto_backlash(b / 2 + 1e-12, 50.0, c, d, b)[0] <= 2.01 * c * 1e-12
+    assert kern.law_branch(b / 2 + 1e-12, 50.0, c, d, b)[0] <= 2.01 * c * 1e-12
 
 
 def test_python_backend_matches_compiled():

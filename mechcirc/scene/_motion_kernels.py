@@ -36,7 +36,7 @@ import numpy as np
 
 from .._jit import decorators, load
 from .._ode import hermite_point, record_hermite
-from ..transient._kernels import elasto_backlash
+from ..transient._kernels import law_branch
 
 HAVE_NUMBA, _jit, _jit_inline = decorators(bool(globals().get("_FORCE_PYTHON")))
 # the kernels that allocate nothing, called per step or per evaluation: no reference counting
@@ -118,7 +118,7 @@ def force_law(law, k, d, cl, e, edot):
         return k * e + d * edot
     if law == 1:
         # ElastoBacklash, written once (mechcirc.transient._kernels); cl is half the gap
-        return elasto_backlash(e, edot, k, d, 2.0 * cl)[0]
+        return law_branch(e, edot, k, d, 2.0 * cl)[0]
     # Mrázek's dead zone: the damper acts inside the gap too
     if e > cl:
         return k * (e - cl) + d * edot

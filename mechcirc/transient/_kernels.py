@@ -69,17 +69,11 @@ def law_branch(e, w, c, d, b):
 
 
 @_jit
-def elasto_backlash(e, w, c, d, b):
-    """(total force, spring part) of one clearance element (:func:`law_branch`)."""
-    f, fc, _ = law_branch(e, w, c, d, b)
-    return f, fc
-
-
-@_jit
 def law_many(e, w, c, d, b, total, spring):
-    """:func:`elasto_backlash` on arrays (outputs written into ``total`` and ``spring``)."""
+    """:func:`law_branch` on arrays (force and spring part written into ``total`` and
+    ``spring``)."""
     for i in range(e.shape[0]):
-        total[i], spring[i] = elasto_backlash(e[i], w[i], c, d, b)
+        total[i], spring[i], _ = law_branch(e[i], w[i], c, d, b)
 
 
 @_jit
@@ -194,12 +188,10 @@ def _switch_g(kind, side, e, w, c, d, half):
     """A switching function of the law at (e, w), zero where a branch ends: ``kind`` 0
     the gap's edge e ∓ b/2, 1 separation f_c + f_d, 2 the damping limit f_c − f_d;
     ``side`` the wall's sign (±1)."""
-    fc = c * (e - side * half)
+    g = e - side * half
     if kind == 0:
-        return e - side * half
-    if kind == 1:
-        return fc + d * w
-    return fc - d * w
+        return g
+    return c * g + (d * w if kind == 1 else -d * w)
 
 
 @_jit_inline
@@ -275,7 +267,8 @@ def kink_theta(t, hh, z, y5, K, P, coefD, xi, xv, dx, vi, vv, dv, prm, t0, dt, u
     the gap: the wall's edge e ∓ b/2; in contact: separation f_c + f_d and the
     damping limit f_c − f_d; separating at the wall: the edge and f_c + f_d),
     found on the step's continuous extension (no right-hand sides); 0.5 if none
-    changes sign."""
+    changes sign.  A first switch within the step's first KINK_RECUT is at its
+    start: then the element's next root, of any of its switching functions, or none."""
     theta = 2.0
     have_p = False
     for k in range(prm.shape[0]):
@@ -290,13 +283,23 @@ def kink_theta(t, hh, z, y5, K, P, coefD, xi, xv, dx, vi, vv, dv, prm, t0, dt, u
         # loop, so numba inlines its body once
         kinds = (0, 1, 0 if abs(c0) == 3 else 2)
         side = 1.0 if (c1 if c0 == 0 else c0) > 0 else -1.0
+        hi = 1 if c0 == 0 else 3
         th = 2.0
-        for j in range(0 if c0 == 0 else 1, 1 if c0 == 0 else 3):
-            root = _root_on_dense(k, kinds[j], side, t, hh, z, P, xi, xv, dx, vi, vv, dv, prm,
-                                  t0, dt, u)
-            th = root if j < 2 else min(th, root)
+        for j in range(0 if c0 == 0 else 1, hi + 3):
+            # a first switch in the step's first KINK_RECUT is at its start, within rounding
+            # (the cam follower's e − b/2 at 1 ulp after a cut: cut there, 53,914 steps of
+            # 4e-14 s in a row as its root stayed a rounding ahead): the step is cut at the
+            # element's next switch instead, the first later root of any kind (4: none)
+            if j == hi:
+                if th > KINK_RECUT:
+                    break
+                th = 4.0
+            root = _root_on_dense(k, kinds[j] if j < hi else j - hi, side, t, hh, z, P, xi, xv,
+                                  dx, vi, vv, dv, prm, t0, dt, u)
+            if j < hi or KINK_RECUT < root <= 1.0:
+                th = min(th, root)
         if th > 1.0:                 # no sign change on the extension: halve the step
-            th = 0.5
+            th = 0.5 if th < 3.0 else 2.0
         theta = min(theta, th)
     return theta
 
@@ -396,8 +399,7 @@ def dopri_run(z, t0, dt, nout, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, u
     codes1 = np.zeros(prm.shape[0], np.int64)
     h_resume = 0.0
     t = t0
-    for i in range(N):
-        out[0, i] = z[i]
+    out[0, :] = z
     t_end = t0 + (nout - 1) * dt
     h = min(hmax, dt)
     steps = 0
@@ -439,8 +441,7 @@ def dopri_run(z, t0, dt, nout, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, u
                 h = min(hmax, max(hh * fac, h_resume))
             h_resume = 0.0
             if changed:
-                for k in range(prm.shape[0]):
-                    codes0[k] = codes1[k]
+                codes0[:] = codes1
             # after a step cut short by an output time, keep the previous h
         else:
             h = hh * max(0.1, 0.9 * err ** -0.2)
