@@ -961,7 +961,10 @@ def apply_overrides(scene: Scene, overrides: dict) -> Scene:
         source = f"--set {key}={value}"
         name, _, fld = key.partition(".")
         kind = type(found.get(name))
-        if isinstance(value, str) and kind in (Moment, type(None)):
+        # a bare number (no unit: split_quantity's last part "") is read here, a text with a
+        # unit only for omega and the ripple (any unit); the others go to their reader as typed
+        # (a moment's, as the file's [[moments]], takes no unit and refuses one)
+        if isinstance(value, str) and (name not in found or not (split_quantity(value) or "?")[-1]):
             value = parse_quantity(value)
         if key in ("omega", "omega_ripple.amplitude", "omega_ripple.harmonic"):
             sim = override_run(source, sim, key, value)

@@ -378,6 +378,7 @@ RIPPLE = "[simulate]\nomega_ripple = {{amplitude = {}, harmonic = {}}}\n"
     ("I2P.inertia", 0.0, "inertia = 0.005", "inertia = 0.0"),
     ("I4.mass", -2.0, "inertia = 0.025", "inertia = -2.0"),
     ("M4.amplitude", math.inf, "amplitude = -500.0", "amplitude = inf"),
+    ("M4.amplitude", "2kN", "amplitude = -500.0", 'amplitude = "2kN"'),    # no unit there
     ("M4.window_deg", 400.0, "window_deg = 10.0", "window_deg = 400.0"),
     ("M4.sigma_deg", 0.0, "sigma_deg = 10.0", "sigma_deg = 0.0"),
     ("omega", -3.0, "[simulate]\n", "[simulate]\nomega = -3.0\n"),
