@@ -94,6 +94,10 @@ ROLES: dict[str, dict[tuple[int, int, int], str]] = {
     "angle": {(0, 0, 0): "angle (rad, deg)"},
     "time": {(0, 0, 1): "time (s, ms, min)"},
     "displacement": {(0, 1, 0): "length (m, mm)", (0, 0, 0): "angle (rad, deg)"},
+    "rotary inertia": {(1, 2, 0): "moment of inertia (kg*m^2)"},
+    "rotary spring": {(1, 2, -2): "torsional rigidity (N*m/rad)"},
+    "rotary damper": {(1, 2, -1): "rotary damping (N*m*s/rad, kg*m^2/s)"},
+    "moment": {(1, 2, -2): "moment (N*m)"},
 }
 
 #: Dimensions of the rotational member of each translational/rotational pair
@@ -245,7 +249,8 @@ def convert(value: float, unit: Unit, role: str) -> float:
     allowed = ROLES.get(role)
     if allowed is not None and unit.dim not in allowed:
         what = " or ".join(v.split(" (")[0] for v in allowed.values())
-        noun = {"omega": "an angular frequency", "eta": "an eta"}.get(role, f"a {role}")
+        article = "an" if role[0] in "aeiou" else "a"
+        noun = "an angular frequency" if role == "omega" else f"{article} {role}"
         raise UnitError(f"unit {unit.text!r} is {unit.describe()}; {noun} value needs {what}",
                         0, " or ".join(allowed.values()))
     return value * unit.factor

@@ -223,10 +223,10 @@ def test_cli_band_and_set_take_units(capsys):
     assert parse_band("10:2000") == (10.0, 2000.0)
     from mechcirc.cli.sley_commands import _overrides
     import argparse
-    ns = argparse.Namespace(alpha=40.0, beat_sign=-1, set=["omega=3000rpm", "clearance=2 mm"])
+    ns = argparse.Namespace(alpha=40.0, beat_sign=-1, set=["omega=3000rpm", "clearance=0.1 deg"])
     out = _overrides(ns)
     assert out["omega"] == pytest.approx(100 * math.pi, rel=1e-15)
-    assert out["clearance"] == pytest.approx(0.002, rel=1e-15)
+    assert out["clearance"] == pytest.approx(math.pi / 1800, rel=1e-15)   # an angle [rad]
 
 
 def test_cli_spaced_unit_is_not_taken_from_a_file_name():

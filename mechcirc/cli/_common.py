@@ -638,7 +638,8 @@ def scene_theta(args, scene, alternative: str = "") -> float:
     return theta
 
 
-def set_values(items, not_numbers: dict | None = None, texts: bool = False) -> dict:
+def set_values(items, not_numbers: dict | None = None, texts: bool = False,
+               roles: dict | None = None) -> dict:
     """``--set NAME=VALUE`` options as ``{NAME: value}``, each value a finite number in SI
     units or with a unit (``omega=3000rpm``), at most 1e100 in magnitude.
 
@@ -650,6 +651,9 @@ def set_values(items, not_numbers: dict | None = None, texts: bool = False) -> d
         Names that are not numbers, each with what to use instead.
     texts : bool
         Give each value as typed (checked all the same), for a reader that checks its unit.
+    roles : dict, optional
+        The names there are, each with the unit role (:data:`mechcirc.units.ROLES`) its
+        value is read in; None: any name, any unit.
 
     Returns
     -------
@@ -658,8 +662,11 @@ def set_values(items, not_numbers: dict | None = None, texts: bool = False) -> d
     Raises
     ------
     MechcircError
-        A text without ``=``, a name of ``not_numbers``, or a value that is not such a number.
+        A text without ``=``, a name of ``not_numbers`` or not of ``roles``, or a value
+        that is not such a number (in its role's unit).
     """
+    from ..sources import did_you_mean
+
     out, words = {}, not_numbers or {}
     for item in items:
         name, sep, value = item.partition("=")
@@ -668,8 +675,11 @@ def set_values(items, not_numbers: dict | None = None, texts: bool = False) -> d
             raise MechcircError(f"--set expects NAME=VALUE, got {item!r}")
         if name in words:
             raise MechcircError(f"--set {name}: not a numeric parameter; {words[name]}")
+        if roles is not None and name not in roles:
+            raise MechcircError(f"--set {name}: no such parameter{did_you_mean(name, roles)} "
+                                f"(there are {', '.join(sorted(roles))})")
         try:
-            v = parse_quantity(value)
+            v = parse_quantity(value, roles[name] if roles else None, what=name)
         except UnitError as exc:
             raise MechcircError(f"--set {name}: {exc.message} (expected {exc.expected})") \
                 from None

@@ -76,8 +76,8 @@ def _sley_arguments(p) -> None:
                    help="sign of M4 in the sley equation: -1 as eq. (4) prints it (default), "
                         "+1 along the rigid acceleration at beat-up (see docs/sley.md)")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
-                   help="override a parameter in SI units, e.g. --set clearance=0.002 "
-                        "(repeatable)")
+                   help="override a parameter, in SI or a unit of its kind, e.g. --set "
+                        "clearance=0.002 or clearance=0.1deg (repeatable)")
     p.add_argument("--method", choices=_METHODS,
                    help="integrator (default rk4, and rk8 for a rigid --shaft; numba if "
                         "installed, else pure Python; "
@@ -134,8 +134,11 @@ _NOT_NUMBERS = {"drive": "choose the layout with --drive one-side|both-sides",
 
 
 def _overrides(args) -> dict:
+    from ..sley.models import UNIT_ROLES
+
     out = {"alpha": math.radians(args.alpha), "beat_sign": args.beat_sign}
-    return out | set_values(args.set, _NOT_NUMBERS)      # SI, any unit: omega=3000rpm
+    # SI, or in a unit of the parameter's kind: omega=3000rpm, clearance=0.1deg
+    return out | set_values(args.set, _NOT_NUMBERS, roles=UNIT_ROLES)
 
 
 def _options(args) -> dict:

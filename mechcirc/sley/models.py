@@ -65,6 +65,15 @@ _POSITIVE = ("I2P", "I4", "I4P", "C2", "C4", "omega", "alpha", "l2P", "l3", "l4"
 _NONNEGATIVE = ("k2", "k4", "clearance", "M0")
 _BOTH_POSITIVE = ("I5P", "I7", "C5", "C7")
 _BOTH_NONNEGATIVE = ("k5", "k7")
+#: The unit each parameter is read in (a key of :data:`mechcirc.units.ROLES`): ``--set
+#: clearance=0.1deg`` is 0.1° in rad, ``--set clearance=2kN`` is refused.
+UNIT_ROLES = {**dict.fromkeys(("I2P", "I4", "I4P", "I5P", "I7"), "rotary inertia"),
+              **dict.fromkeys(("C2", "C4", "C5", "C7"), "rotary spring"),
+              **dict.fromkeys(("k2", "k4", "k5", "k7"), "rotary damper"),
+              **dict.fromkeys(("l2P", "l3", "l4", "d"), "length"),
+              **dict.fromkeys(("clearance", "alpha"), "angle"),
+              **dict.fromkeys(("branch", "beat_sign"), "ratio"),
+              "omega": "omega", "M0": "moment"}
 
 
 @dataclass(frozen=True)

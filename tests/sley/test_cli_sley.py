@@ -2,6 +2,7 @@
 
 import csv
 import json
+import math
 
 import numpy as np
 import pytest
@@ -56,12 +57,36 @@ def test_simulate_csv_and_plot(tmp_path, capsys):
     (["simulate", "--set", "variant=2"], ("--set variant: not a numeric parameter; choose "
                                           "the table row with --variant")),
     (["simulate", "--set", "label=1"], "--set label: not a numeric parameter"),
+    # each value is read in its parameter's unit, and a name must be one
+    (["simulate", "--set", "clearance=2kN"], ("--set clearance: unit 'kN' is a force; an "
+                                              "angle value needs angle")),
+    (["simulate", "--set", "I4=25kg"], "unit 'kg' is a mass; a rotary inertia value"),
+    (["simulate", "--set", "C2=1e5N/m"], "a rotary spring value needs torsional rigidity"),
+    (["simulate", "--set", "i4=3"], "--set i4: no such parameter; did you mean 'I4'?"),
     (["crosscheck", "--theta", "79.0638705730987"], "dead centre"),
 ])
 def test_user_errors_exit_2(argv, text, capsys, tmp_path):
     assert main(argv + ["-o", str(tmp_path / "x.csv")] if argv[0] == "simulate" else argv) == 2
     assert text in capsys.readouterr().err
     assert not list(tmp_path.iterdir())
+
+
+def test_set_reads_each_value_in_its_parameters_unit():
+    """--set converts a unit of the parameter's kind to SI (independent factors here)."""
+    import argparse
+
+    from mechcirc.cli.sley_commands import _overrides
+
+    args = argparse.Namespace(alpha=10.0, beat_sign=-1, set=[
+        "clearance=0.1deg", "omega=3000rpm", "I4=2500kg*cm^2", "k2=7kg*m^2/s", "l3=37mm",
+        "M0=2kN*m", "C4=5e4"])
+    got = _overrides(args)
+    want = {"alpha": math.pi / 18, "beat_sign": -1, "clearance": math.pi / 1800,
+            "omega": 100 * math.pi, "I4": 0.25, "k2": 7.0, "l3": 0.037, "M0": 2000.0,
+            "C4": 5e4}
+    assert got.keys() == want.keys()
+    for name, value in want.items():
+        assert got[name] == pytest.approx(value, rel=1e-15), name
 
 
 def test_crosscheck_json(cli_once):
