@@ -205,9 +205,9 @@ def resonance_pairs(circuit: Circuit, omega_max: float | None = None,
     by them cancel).  With ``vectors`` the pairs are triples ``(Resonance, v,
     repeated)``, ``repeated`` true where the eigenproblem has another root
     within 1e-9 (relative) of this one (then v is one vector of a family), and
-    the undamped roots of a problem solved with its vectors (``eigh``) are that
-    solve's, not the values-only one's (``eigvalsh``, banded): unpolished, they
-    can differ in the last bits (errors of the order eps·λ_max/λ either way).
+    the undamped roots are those of the solve with vectors (``eigh``; the held ones
+    by :func:`_secular_held` where it applies), not the values-only one's (banded):
+    unpolished, they can differ in the last bits (errors of order eps·λ_max/λ).
     """
     if omega_max is not None and not omega_max > 0:     # NaN would report nothing, silently
         raise InputError(f"omega_max must be > 0 rad/s or None, got {omega_max!r}")
