@@ -526,3 +526,24 @@ def test_secular_held_roots_against_mpmath(other):
     # Achieved 3.5 and 3.6 eps·λ_max (the dense eigen-solve of the held problem: 3.1
     # and 5.5); asserted 8.
     assert np.max(np.abs(got - want)) <= 8 * np.finfo(float).eps * want[-1]
+
+
+def test_secular_route_falls_back_to_the_held_eigen_solve(monkeypatch):
+    """Where dlasd4 does not converge (info ≠ 0) the held problem is solved densely, as for
+    every other network: the same resonances within their errors, with their shapes."""
+    import scipy.linalg.lapack as lapack
+
+    import mechcirc.resonances as res
+    from reference.networks import grid_text
+
+    text = grid_text(6).replace("g0_0 0", "g0_0 g2_3", 1)
+    want = [m for m in modes(mechcirc.parse(text)) if m.resonance.kind == "resonance"]
+    real, secular, used = lapack.dlasd4, res._secular_held, []
+    monkeypatch.setattr(lapack, "dlasd4", lambda *a, **k: (*real(*a, **k)[:3], 1))
+    monkeypatch.setattr(res, "_secular_held", lambda *a: used.append(secular(*a)) or used[-1])
+    got = [m for m in modes(mechcirc.parse(text)) if m.resonance.kind == "resonance"]
+    assert used == [None] and len(got) == len(want) > 0
+    for g, w in zip(got, want):
+        assert abs(g.resonance.omega - w.resonance.omega) <= \
+            (g.resonance.error + w.resonance.error) * w.resonance.omega
+        assert g.shape.keys() == w.shape.keys()
