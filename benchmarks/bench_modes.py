@@ -5,9 +5,10 @@ CPU seconds, median of ``--repeat``, each from a fresh parse (nothing cached):
 * the STB heald netlist (13 nodes, 5 roots, 6 ``.param``): the goal is modes +
   sensitivities ≤ 2× the cost of ``resonances`` alone;
 * the 30×30 spring–mass grid of bench_resonances (900 unknowns, 817 roots),
-  where the eigenvectors (one dense ``eigh`` of the released problem beside
-  the banded eigenvalue solve of ``resonances``; the held vectors follow from
-  it by the secular equation) and the per-root work show.
+  where the eigenvectors (one dense ``eigh`` of the released problem; the held
+  roots and vectors follow from it by the secular equation, where
+  ``resonances`` solves the held problem's eigenvalues by a banded solver) and
+  the per-root work show.
 
 The three calls alternate within each repetition; besides the ratio of the
 medians, the spread of the per-repetition ratios is printed, and the share of

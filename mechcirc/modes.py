@@ -154,9 +154,11 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
     """The :class:`Mode` of every resonance and anti-resonance of ``circuit`` up to ``omega_max``.
 
     The roots are those of :func:`~mechcirc.resonances.find_resonances` (same
-    order), taken from the eigen-solve that gives the vectors: an undamped root
-    not polished on K can differ from ``find_resonances``' in the last bits
-    (both solves backward stable: errors of the order eps·λ_max/λ).  See the
+    order), taken from the eigen-solve that gives the vectors (the held ones, where
+    every node has mass and there is no lever, from the released modes' secular
+    equation): an undamped root not polished on K can differ from
+    ``find_resonances``' in the last bits (both backward stable: errors of the
+    order eps·λ_max/λ).  See the
     module docstring for what each mode holds.
 
     Parameters

@@ -205,9 +205,9 @@ def resonance_pairs(circuit: Circuit, omega_max: float | None = None,
     by them cancel).  With ``vectors`` the pairs are triples ``(Resonance, v,
     repeated)``, ``repeated`` true where the eigenproblem has another root
     within 1e-9 (relative) of this one (then v is one vector of a family), and
-    the undamped roots of a problem solved with its vectors (``eigh``) are that
-    solve's, not the values-only one's (``eigvalsh``, banded): unpolished, they
-    can differ in the last bits (errors of the order eps·λ_max/λ either way).
+    the undamped roots are those of the solve with vectors (``eigh``; the held ones
+    by :func:`_secular_held` where it applies), not the values-only one's (banded):
+    unpolished, they can differ in the last bits (errors of order eps·λ_max/λ).
     """
     if omega_max is not None and not omega_max > 0:     # NaN would report nothing, silently
         raise InputError(f"omega_max must be > 0 rad/s or None, got {omega_max!r}")
@@ -260,48 +260,68 @@ def _solved(M, D, Ks, G_released, G_held, damped: bool, omega_max, vectors: bool
     eigenproblems (:func:`_modes`) and which roots survive :func:`_cancel`."""
     released, v_released = _modes(M, D, Ks, G_released, damped, omega_max, vectors)
     # Held = released + the drive's row: with every released vector at hand (no lever,
-    # no massless or rigid direction) the held ones follow from them (_held_vectors).
-    whole = vectors and G_released.size == 0 and v_released is not None and \
-        not damped and v_released.shape[1] == M.shape[0]
-    held, v_held = _modes(M, D, Ks, G_held, damped, omega_max, vectors and not whole)
-    keep_h, keep_r = _cancel(held, released)
-    if whole:
-        v_held = _held_vectors(v_released, released[:, 0], G_held[-1], held[:, 0], keep_h)
-        if v_held is None:              # not confirmed: the dense solve of the held problem
-            v_held = _modes(M, D, Ks, G_held, damped, omega_max, True)[1]
-    return held, v_held, released, v_released, keep_h, keep_r
+    # no massless or rigid direction) the held roots and vectors follow from them.
+    if vectors and G_released.size == 0 and v_released is not None and not damped and \
+            v_released.shape[1] == M.shape[0] and \
+            (found := _secular_held(v_released, released, G_held[-1])) is not None:
+        return found[0], found[1], released, v_released, *found[2]
+    held, v_held = _modes(M, D, Ks, G_held, damped, omega_max, vectors)
+    return held, v_held, released, v_released, *_cancel(held, released)
 
 
-def _held_vectors(V, s_released, g, s_held, keep) -> np.ndarray | None:
-    """The eigenvectors of the held roots ``s_held[keep]`` (columns; the others 0) from
-    the complete released ones ``V`` (M-orthonormal), or None where not confirmed.
+def _secular_held(V, released: np.ndarray, g: np.ndarray) -> tuple | None:
+    """``(held, its vectors, (keep held, keep released))`` as :func:`_solved` gives them,
+    from the complete released modes ``V`` (M-orthonormal) and roots ``released``; None
+    where not confirmed.
 
     Held, (K − λM) v = σg with gᵀv = 0 (g the drive's row), so
     v = Σ vᵢ cᵢ/(μᵢ − λ) with cᵢ = vᵢᵀg, and λ is a root of the secular equation
-    f(λ) = Σ cᵢ²/(μᵢ − λ) = 0: one matrix product instead of a second dense
-    eigen-solve.  λ is refined by Newton steps on f from the eigen-solver's root,
-    held as the offset τ from its nearest pole (the differences μᵢ − λ then
-    carry no cancellation); a vector is confirmed when its angle to the
-    constraint, |gᵀv|/(|g||v|), is at rounding level (64ε).
+    Σ cᵢ²/(μᵢ − λ) = 0, one between each two released roots μᵢ the drive sees.
+    Each released root the drive does not see (cᵢ = 0) is a held one, and so is
+    each repeat of a released root (within 8ε·μ_max; the repeats are deflated as
+    LAPACK's divide and conquer deflates them, their cᵢ² summed).  The roots are
+    LAPACK's ``dlasd4``'s (the safeguarded rational-interpolation solver of the
+    divide-and-conquer SVD, in the singular values √μᵢ and √λ, with 1/ρ = 0),
+    which also gives each μᵢ − λ without cancellation for the vectors.  Their error
+    estimate is the released roots' (eps·λ_max/λ·√n, λ_max the released one, at
+    least the held one) and so is the polish flag; a vector is kept when its angle
+    to the constraint, |gᵀv|/(|g||v|), is at rounding level (64ε): otherwise (or
+    where ``dlasd4`` fails) None.
     """
-    mu, lam, c = np.abs(s_released) ** 2, np.abs(s_held[keep]) ** 2, V.T @ g
+    from scipy.linalg.lapack import dlasd4
+
+    eps = np.finfo(float).eps
+    top = np.abs(released[:, 0]).max(initial=0.0)
+    w = np.abs(released[:, 0]) / top                # ω/ω_max: dlasd4's singular values
+    c = V.T @ g
     live = np.abs(c) > 1e-13 * np.linalg.norm(c)  # cᵢ = 0: a mode the drive does not see
-    c, mu, lam = c[live], mu[live] / mu.max(initial=0.0), lam / mu.max(initial=0.0)
-    pole = np.argmin(np.abs(mu[:, None] - lam[None, :]), axis=0)
-    delta, tau = mu[:, None] - mu[pole], lam - mu[pole]
+    first = np.r_[True, np.diff(w[live] ** 2) > 8 * eps]
+    cluster = np.cumsum(first) - 1
+    z = np.sqrt(np.bincount(cluster, c[live] ** 2) / np.sum(c[live] ** 2))
+    found = [dlasd4(i, w[live][first], z, rho=np.inf) for i in range(cluster[-1])]
+    if any(info for *_, info in found):
+        return None
+    w = np.concatenate([w[~live], w[live][~first], [x[1] for x in found]])
+    order = np.argsort(w, kind="stable")
+    w = w[order]
+    # The released roots' estimate eps·λ_max/λ·√n (_undamped_roots) at λ_max, carried to λ.
+    err = released[-1, 1].real / w ** 2
+    held = np.column_stack([1j * top * w, err, np.full(w.size, released[0, 2])])
+    keep = _cancel(held, released)
+    which = order[keep[0]] - (w.size - len(found))          # among dlasd4's roots
+    if np.any(which < 0):
+        return None
+    # (μᵢ − λ)/μ_max = (dᵢ − σ)(dᵢ + σ), dlasd4's delta and work, of each kept root.
+    gaps = np.array([found[i][0] * found[i][2] for i in which]).reshape(-1, first.sum()).T
     with np.errstate(all="ignore"):
-        for _ in range(3):
-            C = c[:, None] / (delta - tau)
-            tau, at = tau - (c @ C) / np.einsum("ij,ij->j", C, C), tau    # Y is at ``at``
-        Y = V[:, live] @ C
+        Y = V[:, live] @ (c[live, None] / gaps[cluster])
         t = (g @ Y) / (g @ g)
         tilt = np.abs(t) * np.linalg.norm(g) / np.linalg.norm(Y, axis=0)
-    eps = np.finfo(float).eps           # and λ within 1e3ε of the solver's (the same root)
-    if not (np.all(tilt <= 64 * eps) and np.all(np.abs(lam - mu[pole] - at) <= 1e3 * eps)):
+    if not np.all(tilt <= 64 * eps):
         return None
-    out = np.zeros((V.shape[0], s_held.size))
-    out[:, keep] = Y - np.outer(g, t)           # onto the constraint (v_a = 0 when b is 0)
-    return out
+    out = np.zeros((V.shape[0], w.size))
+    out[:, keep[0]] = Y - np.outer(g, t)        # onto the constraint (v_a = 0 when b is 0)
+    return held, out, keep
 
 
 def _repeated(s: np.ndarray) -> np.ndarray:
@@ -545,13 +565,8 @@ def _band_modes(M, D, K, omega_max: float) -> np.ndarray:
             # 10 rad/s: > 5 min).  Refuse with the count found so far.
             _refuse_band(k // 2, omega_max, n, exact=False)
         k = min(2 * k, 2 * n - 2)
-    keep = (np.abs(s_all) > 1e-6 * omega_max) & (np.abs(s_all) <= omega_max * (1 + 1e-6)) \
-        & (s_all.imag >= -1e-9 * np.abs(s_all))
-    s = s_all[keep]
-    s = np.where(np.abs(s.imag) <= 1e-9 * np.abs(s), s.real + 0j, s)
-    err = np.full(s.size, 1e-8)
-    must = np.ones(s.size)
-    return np.column_stack([s, err, must]) if s.size else np.zeros((0, 3), dtype=complex)
+    s = s_all[s_all.imag >= -1e-9 * np.abs(s_all)]
+    return _in_band(np.where(np.abs(s.imag) <= 1e-9 * np.abs(s), s.real + 0j, s), omega_max)
 
 
 def _band_modes_undamped(M, K, omega_max: float, v0: np.ndarray) -> np.ndarray | None:
@@ -591,11 +606,15 @@ def _band_modes_undamped(M, K, omega_max: float, v0: np.ndarray) -> np.ndarray |
         # Lanczos and the count disagree (a count spoiled by rounding in an
         # unpivoted factorisation): trust neither, take the general path.
         return None
-    w = np.sqrt(np.sort(lam[lam > 0]))
-    w = w[(w > 1e-6 * omega_max) & (w <= omega_max * (1 + 1e-6))]
-    s = 1j * w
-    return np.column_stack([s, np.full(s.size, 1e-8), np.ones(s.size)]) if s.size \
-        else np.zeros((0, 3), dtype=complex)
+    return _in_band(1j * np.sqrt(np.sort(lam[lam > 0])), omega_max)
+
+
+def _in_band(s: np.ndarray, omega_max: float) -> np.ndarray:
+    """The band solver's roots ``s`` with 1e-6·``omega_max`` < |s| ≤ ``omega_max`` (a
+    margin of 1e-6 for the polish), as :func:`_modes` gives them: a first estimate
+    of their error (1e-8), each to be polished on K."""
+    s = s[(np.abs(s) > 1e-6 * omega_max) & (np.abs(s) <= omega_max * (1 + 1e-6))]
+    return np.column_stack([s, np.full(s.size, 1e-8), np.ones(s.size)])
 
 
 def _refuse_band(count: int, omega_max: float, n: int, exact: bool):
@@ -828,9 +847,9 @@ def _g_and_delta(system, s: np.ndarray, pole: np.ndarray):
     """g(s) (K, or 1/K at anti-resonances) and its absolute rounding uncertainty."""
     from . import nodal
 
-    # Anti-resonances on the held system: 1/K = −q there, and A is
-    # singular at the root while the held matrix is not.
-    systems = (system, _held(system))
+    # Anti-resonances on the held system (built once per system): 1/K = −q there, and A
+    # is singular at the root while the held matrix is not.
+    systems = (system, system.cached("_held", nodal.held))
     return g_and_bound(pole, lambda i, want: nodal.evaluate_complex(systems[i], s[want]))
 
 
@@ -847,20 +866,6 @@ def g_and_bound(pole: np.ndarray, evaluate):
             g[want] = -K if i else K
             dg[want] = 4 * np.maximum(dK, eps * np.abs(K))
     return g, dg
-
-
-_HELD: dict = {}
-
-
-def _held(system):
-    """nodal.held(system), built once per system."""
-    from . import nodal
-
-    key = id(system)
-    if key not in _HELD or _HELD[key][0] is not system:
-        _HELD.clear()
-        _HELD[key] = (system, nodal.held(system))
-    return _HELD[key][1]
 
 
 def secant_steps(g_and_delta, admissible, s0, e0, offset, active=True, iterations: int = 12):
