@@ -607,16 +607,12 @@ def _solve(lk, pl, use, t, dt_max):
     if pl.method == "dyads" and len(pl.crank_idx) == 1:
         cross = _crossings(_dyad_solver(lk, pl), t, dt_max)
     if not cross:
-        if use == "dyads":
-            return _solve_dyads(lk, pl, t, dt_max)
-        return _solve_newton(lk, pl, t, dt_max)
+        return (_solve_dyads if use == "dyads" else _solve_newton)(lk, pl, t, dt_max)
     dz = _ZONE / abs(float(pl.omega[0]))
     zones = [(tc - dz, tc + dz) for tc, _ in sorted(cross)]
     pts, where, zone_of = _traverse(t, zones)
-    if use == "dyads":
-        got = _solve_dyads(lk, pl, pts, dt_max, cross, zones)
-    else:
-        got = _newton_segments(lk, pl, pts, dt_max, zones)
+    got = _solve_dyads(lk, pl, pts, dt_max, cross, zones) if use == "dyads" else \
+        _newton_segments(lk, pl, pts, dt_max, zones)
     return _bridged(lk, pl, got, t, pts, where, zone_of, zones)
 
 
