@@ -126,10 +126,8 @@ def resonance_check(params: SleyParameters, theta0: float, *,
     found, how = circuit_resonances(circuit, 4.0 * max(eigen))
     wn = tuple(w for w, _ in found)
     wd = tuple(w for _, w in found)
-    if len(found) != len(eigen):
-        rel = math.inf
-    else:
-        rel = max(abs(a - b) / b for a, b in zip(wn + wd, eigen + eigen_d))
+    rel = math.inf if len(found) != len(eigen) else \
+        max(abs(a - b) / b for a, b in zip(wn + wd, eigen + eigen_d))
     return ResonanceCheck(float(theta0), damping, eigen, eigen_d, wn, wd, rel, how, text)
 
 
