@@ -225,11 +225,9 @@ def _with_and_without_pulse(params: SleyParameters, revolutions: int, method):
     # the difference of two runs with the same transient: periodicity is not needed here
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SleyAccuracyWarning)
-        a = simulate_params(params, revolutions, method, points_per_revolution=npts,
-                            error_estimate=False)
-        b = simulate_params(params.replace(M0=0.0), revolutions, method,
-                            points_per_revolution=npts, error_estimate=False)
-    return a, b
+        return tuple(simulate_params(p, revolutions, method, points_per_revolution=npts,
+                                     error_estimate=False)
+                     for p in (params, params.replace(M0=0.0)))
 
 
 @dataclass(frozen=True)
