@@ -868,10 +868,6 @@ def _run_scipy(model, kern, theta_s, revolutions, npts, method, rtol, progress, 
     qs[[i for i, _, _ in lines]] = 1e-4         # a twist
     scale = np.concatenate([qs, 0.1 * np.maximum(np.abs(y0[n:]), omega)])
     period = model.scene.cycle / omega
-
-    def t_of(r):
-        return (r * period) + np.arange(npts) * (period / npts)
-
     e = y0 - rigid(0.0)[0]
     n_steps = nfev = 0
     out, prev = None, None
@@ -886,7 +882,7 @@ def _run_scipy(model, kern, theta_s, revolutions, npts, method, rtol, progress, 
         n_steps += len(sol.t) - 1
         nfev += sol.nfev
         if keep:
-            ts = t_of(r)
+            ts = (r * period) + np.arange(npts) * (period / npts)
             ys = sol.sol(ts).T + np.array([rigid(t)[0] for t in ts])
             if r == revolutions - 1:
                 out = (ts, np.ascontiguousarray(ys))
