@@ -519,11 +519,8 @@ def _sample(table, kind: str) -> tuple[tuple[str, ...], tuple[tuple[float, ...],
         engine = (qmc.LatinHypercube if method == "latin-hypercube" else qmc.Sobol)(
             d=len(names), seed=seed)
         unit = engine.random(n)
-    cols = []
-    for j, (lo, hi, log) in enumerate(bounds):
-        u = unit[:, j]
-        cols.append(np.exp(np.log(lo) + u * (np.log(hi) - np.log(lo))) if log
-                    else lo + u * (hi - lo))
+    cols = [np.exp(np.log(lo) + u * (np.log(hi) - np.log(lo))) if log else lo + u * (hi - lo)
+            for u, (lo, hi, log) in zip(unit.T, bounds)]
     return names, tuple(tuple(float(x) for x in row) for row in zip(*cols)), canon
 
 

@@ -276,11 +276,8 @@ def max_rate(model: MotionModel, samples: int = 72) -> float:
 
 
 def _max_rate(model: MotionModel, samples: int) -> float:
-    rates = []
-    for th in np.linspace(0.0, model.scene.cycle, samples, endpoint=False):
-        A = state_matrix(*linear_matrices(model, th))
-        rates.append(np.max(np.abs(np.linalg.eigvals(A))))
-    return float(max(rates))
+    return float(max(np.max(np.abs(np.linalg.eigvals(state_matrix(*linear_matrices(model, th)))))
+                     for th in np.linspace(0.0, model.scene.cycle, samples, endpoint=False)))
 
 
 def state_matrix(M, D, K):
