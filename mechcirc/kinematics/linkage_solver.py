@@ -138,7 +138,8 @@ class _StateRows:
 
     def _fill(self):
         m = self._motion
-        self.P, self.V, self.A = m.points.copy(), m.velocities.copy(), m.accelerations.copy()
+        self.arrays = {"points": m.points.copy(), "velocities": m.velocities.copy(),
+                       "accelerations": m.accelerations.copy()}
         self.C = np.moveaxis(m.contributions, 0, 1).copy()
         self.w = m.qdot[:, 2::3].tolist()
         self._motion = None
@@ -146,17 +147,12 @@ class _StateRows:
     def field(self, name, i):
         if self._motion is not None:
             self._fill()
-        names = self.names
-        if name == "points":
-            return dict(zip(names, self.P[i]))
-        if name == "velocities":
-            return dict(zip(names, self.V[i]))
-        if name == "accelerations":
-            return dict(zip(names, self.A[i]))
+        if name in self.arrays:
+            return dict(zip(self.names, self.arrays[name][i]))
         if name == "angular_velocities":
             return dict(zip(self.links, self.w[i]))
         C = self.C[i]
-        return {c: dict(zip(names, C[j])) for j, c in enumerate(self.cranks)}
+        return {c: dict(zip(self.names, C[j])) for j, c in enumerate(self.cranks)}
 
 
 @dataclass(frozen=True)
