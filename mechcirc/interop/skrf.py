@@ -67,8 +67,14 @@ def reference_mobility(Z: ArrayLike) -> float:
     return float(2.0 ** round(float(np.mean(np.log2(mag))))) if mag.size else 1.0
 
 
-def _finite_points(omega, Z):
-    return np.isfinite(omega) & (omega > 0) & np.isfinite(Z).reshape(Z.shape[0], -1).all(axis=1)
+def _kept(omega, Z, R, empty: str):
+    """The points with ω > 0 and finite Z (a mask), the reference mobility (``R``, else
+    :func:`reference_mobility` of those points) and how many points are left out;
+    ``empty`` is the error's message when none is kept."""
+    keep = np.isfinite(omega) & (omega > 0) & np.isfinite(Z).reshape(Z.shape[0], -1).all(axis=1)
+    if not keep.any():
+        raise MechcircError(empty)
+    return keep, reference_mobility(Z[keep]) if R is None else float(R), int((~keep).sum())
 
 
 def to_skrf(sweep: "Sweep", *, z0: float | None = None):
@@ -100,11 +106,8 @@ def _network(omega, Z, z0, name: str, title: str, empty: str, extra: tuple = ())
     message when there is none."""
     import skrf
 
-    keep = _finite_points(omega, Z)
-    if not keep.any():
-        raise MechcircError(empty)
-    R = reference_mobility(Z[keep]) if z0 is None else float(z0)
-    comments = [*_comments(name, int((~keep).sum()), R), *extra]
+    keep, R, dropped = _kept(omega, Z, z0, empty)
+    comments = [*_comments(name, dropped, R), *extra]
     freq = skrf.Frequency.from_f(in_unit(omega[keep], "Hz"), unit="hz")
     return skrf.Network.from_z(Z[keep], frequency=freq, z0=R, name=title,
                                comments="\n".join(comments))
@@ -151,11 +154,7 @@ def write_touchstone(path: str | os.PathLike, omega: ArrayLike, Z: ArrayLike, *,
     Z = np.asarray(Z, dtype=complex)
     if Z.ndim == 1:
         Z = Z.reshape(-1, 1, 1)
-    keep = _finite_points(omega, Z)
-    if not keep.any():
-        raise MechcircError("no point has ω > 0 and a finite K; nothing to write")
-    R = reference_mobility(Z[keep]) if R is None else float(R)
-    dropped = int((~keep).sum())
+    keep, R, dropped = _kept(omega, Z, R, "no point has ω > 0 and a finite K; nothing to write")
     p = Z.shape[1]
     with atomic_open(path, "w", encoding="ascii") as fh:
         for line in _comments(name, dropped, R):
