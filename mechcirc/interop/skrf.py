@@ -238,6 +238,7 @@ def _port_incidence(circuit, system, P1, P2, S1, S2) -> NDArray[np.float64]:
     nodal ``system``'s unknowns (the frame has none); a TopologyError for bad ports."""
     from ..circuit import FRAME
     from ..topology import node_names
+    from ..transient.model import incidence
 
     names = set(system.nodes) | set(node_names(circuit.elements, circuit.levers))
     for port in (P1, P2, S1, S2):
@@ -248,15 +249,8 @@ def _port_incidence(circuit, system, P1, P2, S1, S2) -> NDArray[np.float64]:
         raise TopologyError("each port needs two different nodes", nodes=(P1, P2, S1, S2))
     if FRAME not in names:
         raise TopologyError("the circuit has no frame node '0' to refer velocities to")
-    index = {n: i for i, n in enumerate(system.nodes)}
-    index[FRAME] = -1
-    rhs = np.zeros((2, system.size))
-    for j, (a, b) in enumerate(((P1, P2), (S1, S2))):
-        if index[a] >= 0:
-            rhs[j, index[a]] += 1.0
-        if index[b] >= 0:
-            rhs[j, index[b]] -= 1.0
-    return rhs
+    index = {n: i for i, n in enumerate(system.nodes)}      # (no frame: it is not an unknown)
+    return np.array([incidence(index, a, b, system.size) for a, b in ((P1, P2), (S1, S2))])
 
 
 def two_port(circuit: "Circuit", P1: str, P2: str, S1: str, S2: str, omega: ArrayLike, *,
