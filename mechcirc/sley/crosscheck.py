@@ -269,7 +269,8 @@ def forced_amplitude(lin, omega: float, cycles_settle: int | None = None,
 
     n = lin.M.shape[0]
     minv = 1.0 / np.diag(lin.M)
-    slow = min(abs(lm.real) for lm in _eigenvalues(lin))
+    lam = np.linalg.eigvals(lin.state_matrix())         # of ż = A z [1/s]
+    slow = min(abs(lm.real) for lm in lam[lam.imag > 0])   # one per oscillating mode
     period = 2 * math.pi / omega
     if cycles_settle is None:           # transient below e^-12 of its start
         cycles_settle = int(math.ceil(12.0 / max(slow, 1e-9) / period))
@@ -293,12 +294,6 @@ def forced_amplitude(lin, omega: float, cycles_settle: int | None = None,
         q += lin.K_drive[i] * (ph2 - x[i]) + lin.C_drive[i] * (w2 - v[i])
     c = 2.0 * np.mean(q * np.exp(-1j * omega * t_eval))
     return float(abs(c))
-
-
-def _eigenvalues(lin):
-    """The eigenvalues λ of ż = A z with Im λ > 0 [1/s]: one per oscillating mode."""
-    lam = np.linalg.eigvals(lin.state_matrix())
-    return lam[lam.imag > 0]
 
 
 def harmonic_check(params: SleyParameters, theta0: float, omegas) -> HarmonicCheck:
