@@ -180,7 +180,7 @@ def _warm_up(model, kern) -> float:
     args = model.kernel_args(0.0, 1e300)
     for method in ("rk4", "rk8"):           # (one compiled signature for both)
         kern.rk_run(y, 0.0, 1e-9, 2, 0.0, 1e-9, np.empty((1, y.size)), np.empty(1), *args,
-                    model.naux(), *_tableau_of(method))
+                    model.naux(), *kern.tableau(method))
     oargs = model.kernel_args(0.0, 1e300, outputs=True)
     kern.outputs(np.zeros(1), np.array([y]), np.empty((model.naux(), 1)), *oargs)
     kern.output_extrema(np.zeros(1), np.array([y]), np.empty((2, model.naux())), *oargs)
@@ -532,7 +532,7 @@ def _simulate_rk4(ctx, backend, error_estimate, notes, compile_time):
     """
     scene, o, model, kern, theta_s, ripple, progress = ctx
     rule = _step_rule(scene, o, model, error_estimate)
-    tableau = _tableau_of(o.method)
+    tableau = kern.tableau(o.method)
 
     def run(per_rev, prog=None, last=1, start=None):
         return _run(model, kern, theta_s, ripple, per_rev, o.revolutions, o.npts, prog,
@@ -928,13 +928,6 @@ def _deviation_rhs(model, kern, theta_s, ripple):
     return f, rigid, lines, bad
 
 
-def _tableau_of(method):
-    """:func:`mechcirc.scene._motion_kernels.tableau` (imported when first needed)."""
-    from ._motion_kernels import tableau
-
-    return tableau(method)
-
-
 def _run(model, kern, theta_s, ripple, per_rev, revolutions, npts, progress, tableau=None,
          strides=(1, 1), start=None):
     """R revolutions of RK4 (or the explicit ``tableau``, :func:`~mechcirc.scene._motion_kernels.tableau`) at ``per_rev``
@@ -977,7 +970,7 @@ def _run(model, kern, theta_s, ripple, per_rev, revolutions, npts, progress, tab
             ry, rt = dummy
         t_end, rows, ok, flag, used = kern.rk_run(y, r * period, h, per_rev, r * period,
                                                   dt, ry, rt, *args, naux,
-                                                  *(tableau or _tableau_of("rk4")))
+                                                  *(tableau or kern.tableau("rk4")))
         bad, nfev = bad or flag > 0, nfev + used
         if not ok:
             raise SolverError(f"RK4 diverged at t = {t_end:.6g} s (revolution {r + 1}) with "
