@@ -194,11 +194,9 @@ def _postorder_values(root, omega, track: bool, keep: bool, checked: bool, desig
                 # (a full array even over a single leaf, whose ρ is a scalar)
                 val.rho = np.broadcast_to(rho + 2 * _U, omega.shape).copy()
         else:
-            if n_kids:
-                parts = stack[-n_kids:]
-                del stack[-n_kids:]
-            else:
-                parts = []
+            cut = len(stack) - n_kids           # (not -n_kids: stack[-0:] is all of it)
+            parts = stack[cut:]
+            del stack[cut:]
             if designs is not None:
                 groups = _leaf_groups(node, designs)
             val = _combine(parts, omega, inv_omega, zero, keep, checked, groups)

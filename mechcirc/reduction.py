@@ -28,7 +28,7 @@ from ._tree_eval import (KERNEL_MIN_WORK, Plan, compiled_evaluator, evaluate, ev
                          plan, push_down)
 from .circuit import Circuit, Lever
 from .errors import NotSeriesParallelError, TopologyError, UnloadedElementWarning, warn
-from .topology import check_frame_paths, loaded_groups, reachable
+from .topology import adjacency, check_frame_paths, loaded_groups, reachable
 
 __all__ = ["Leaf", "Series", "Parallel", "Reflect", "Node", "Reduction",
            "reduce_circuit", "reduce_network", "evaluate", "push_down", "leaves", "depth",
@@ -395,20 +395,12 @@ def _secondary_part(lv: Lever, edges: list[_Edge], levers: list[Lever], a: str, 
     ``t`` and ``s`` and touches the rest of the network at most at ``s``;
     ``None`` if the secondary side is entangled with the primary side.
     """
-    adj: dict[str, set[str]] = {}
-
-    def link(u, w):
-        adj.setdefault(u, set()).add(w)
-        adj.setdefault(w, set()).add(u)
-
-    for e in edges:
-        link(e.n1, e.n2)
+    pairs = [(e.n1, e.n2) for e in edges]
     for m in levers:
-        link(m.p1, m.p2)
+        pairs.append((m.p1, m.p2))
         if m is not lv:
-            link(m.s1, m.s2)
-            link(m.p1, m.s1)
-    link(a, b)
+            pairs += [(m.s1, m.s2), (m.p1, m.s1)]
+    adj = adjacency([*pairs, (a, b)])
     for t, s in ((lv.s1, lv.s2), (lv.s2, lv.s1)):
         comp = reachable(adj, t, blocked=s)
         if comp & ({lv.p1, lv.p2, a, b} - {s}):

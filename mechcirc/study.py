@@ -519,11 +519,8 @@ def _sample(table, kind: str) -> tuple[tuple[str, ...], tuple[tuple[float, ...],
         engine = (qmc.LatinHypercube if method == "latin-hypercube" else qmc.Sobol)(
             d=len(names), seed=seed)
         unit = engine.random(n)
-    cols = []
-    for j, (lo, hi, log) in enumerate(bounds):
-        u = unit[:, j]
-        cols.append(np.exp(np.log(lo) + u * (np.log(hi) - np.log(lo))) if log
-                    else lo + u * (hi - lo))
+    cols = [np.exp(np.log(lo) + u * (np.log(hi) - np.log(lo))) if log else lo + u * (hi - lo)
+            for u, (lo, hi, log) in zip(unit.T, bounds)]
     return names, tuple(tuple(float(x) for x in row) for row in zip(*cols)), canon
 
 
@@ -931,10 +928,11 @@ class StudyResult:
             self.count = len(self.rows)
 
 
-def _fields(row: dict, columns: list[str]) -> list[str]:
-    """A row's cells as written (journal and CSV table): one line each, no line breaks;
-    a float as its shortest round-trip text (``str``: ``repr``, and nan, inf, -inf)."""
-    return [str(row.get(c, "")).replace("\r", " ").replace("\n", " ") for c in columns]
+def _journal_record(row: dict, columns: list[str]) -> list[str]:
+    """A row's cells as the journal writes them, its CRC-32 last: one line each, no line
+    breaks; a float as its shortest round-trip text (``str``: ``repr``, and nan, inf, -inf)."""
+    fields = [str(row.get(c, "")).replace("\r", " ").replace("\n", " ") for c in columns]
+    return [*fields, _crc(fields)]
 
 
 #: The journal's last column: a CRC-32 of the row's other fields, so that a row cut
@@ -1059,10 +1057,7 @@ def _run_task(spec: StudySpec, points, curves: bool, keep: bool, lines: bool) ->
     text = ""
     if lines:
         buf = io.StringIO()
-        w = csv.writer(buf)
-        for r in rows:
-            fields = _fields(r, spec.columns)
-            w.writerow([*fields, _crc(fields)])
+        csv.writer(buf).writerows(_journal_record(r, spec.columns) for r in rows)
         text = buf.getvalue()
     bad = [r for r in rows if r["status"] != "ok"]
     return _TaskOut(text, len(rows), bad, rows if keep or curves else None, K)
@@ -1362,9 +1357,7 @@ def _open_journal(journal: str, spec: StudySpec, done: list[dict]) -> TextIO:
         fh.write(f"{_SPEC_LINE} sha256={spec.sha256} {spec.canonical}\n")
         w = csv.writer(fh)
         w.writerow([*columns, _CHECK])
-        for r in done:
-            fields = _fields(r, columns)
-            w.writerow([*fields, _crc(fields)])
+        w.writerows(_journal_record(r, columns) for r in done)
     return open(journal, "a", newline="", encoding="utf-8")
 
 
@@ -1460,7 +1453,7 @@ def _journal_in_order(journal: str, width: int, chunk: int = 65536):
     Only the index and the byte offset of each row are held (16 bytes a row):
     the rows are read back in order (by seeking, unless the journal is already in
     order), so writing a million rows takes no more memory than a chunk of them.
-    Each row is one line (:func:`_fields`), and is checked against its CRC again.
+    Each row is one line (:func:`_journal_record`), and is checked against its CRC again.
     """
     from array import array
 

@@ -17,6 +17,15 @@ from .errors import TopologyError
 __all__ = ["loaded_groups", "force_groups", "node_names", "check_frame_paths", "reachable"]
 
 
+def adjacency(pairs) -> dict[str, set[str]]:
+    """The undirected adjacency sets of the node pairs ``pairs`` (each pair both ways)."""
+    adj: dict[str, set[str]] = {}
+    for u, w in pairs:
+        adj.setdefault(u, set()).add(w)
+        adj.setdefault(w, set()).add(u)
+    return adj
+
+
 def reachable(adj: dict[str, set[str]], start: str, blocked: str | None = None) -> set[str]:
     """Nodes reachable from ``start`` in the adjacency map ``adj``, never entering ``blocked``.
 
@@ -102,11 +111,7 @@ def loaded_groups(groups: Sequence[Sequence[tuple[str, str]]], a: str, b: str,
     # sweep and resonance paths of the command line then do not import it
     # (≈ 0.1–0.15 s of start-up); tests/test_ux_notebooks.py checks the block
     # against networkx.biconnected_component_edges on random graphs.
-    adj: dict[str, set[str]] = {}
-    for pairs in groups:
-        for u, w in pairs:          # (a self-loop u = w: skipped by _block_with)
-            adj.setdefault(u, set()).add(w)
-            adj.setdefault(w, set()).add(u)
+    adj = adjacency(p for pairs in groups for p in pairs)  # (a self-loop: skipped by _block_with)
     if a not in adj or b not in adj or b not in reachable(adj, a):
         where = f" (line {drive_line})" if drive_line else ""
         exc = TopologyError(

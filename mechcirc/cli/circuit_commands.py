@@ -269,9 +269,7 @@ def cmd_sweep(args) -> int:
             warns.append(f"resonance markers left out: {exc}")
     found = [r for r in everything or () if omega[0] <= r.omega <= omega[-1]]
     sens = None
-    if args.sensitivity:
-        from ..modes import sweep_sensitivity
-
+    if args.sensitivity:            # (imported above, where the names were checked)
         sens = sweep_sensitivity(circuit, result.omega, args.sensitivity)
     from .._sweep import FLAG_SINGULAR, PEAK_RESONANCE_LIMIT, peak
 

@@ -243,7 +243,6 @@ def cmd_study(args) -> int:
                            curves=args.curves)
     if args.plot:
         from ..plotting import plot_study
-        from ..study import column_units
 
         save_figure(plot_study(result, spec.params, column, name=Path(args.spec).stem,
                                units=column_units(spec)), args.plot)

@@ -364,9 +364,8 @@ def cmd_synth(args) -> int:
     exported = export_designs(res.designs, args.export, scene) if args.export and \
         res.designs else []
     if args.json:
-        doc = res.as_dict()
-        doc["exported"] = [{"linkage": str(lk), "scene": str(sc)} for lk, sc in exported]
-        print_json(doc)
+        print_json({**res.as_dict(),
+                    "exported": [{"linkage": str(lk), "scene": str(sc)} for lk, sc in exported]})
         return 0 if res.designs else 2
     if not res.designs:
         print(f"mechcirc: error: {res.message}", file=sys.stderr)

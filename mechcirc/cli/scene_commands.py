@@ -178,9 +178,7 @@ def _cycle(args, scene) -> int:
                   [np.degrees(cmap.theta), in_unit(W, u), np.abs(cmap.Q0)],
                   lambda: plot_cycle(cmap, unit=u), fmt="%.10g")
     if args.json:
-        doc = cmap.as_dict()
-        doc.update({"file": args.file, "output": args.output, "plot": args.plot})
-        print_json(doc)
+        print_json({**cmap.as_dict(), "file": args.file, "output": args.output, "plot": args.plot})
         return 0
     unit = "N·m" if cmap.rotational else "N"
     print(f"{args.file}: scene {scene.name!r}, {len(cmap.theta)} crank angles, shaft "
@@ -223,9 +221,7 @@ def cmd_reduce(args) -> int:
     if args.out:
         write_text(args.out, result.netlist)
     if args.json:
-        doc = result.as_dict()
-        doc.update({"file": args.file, "written": args.out})
-        print_json(doc)
+        print_json({**result.as_dict(), "file": args.file, "written": args.out})
         return 0
     print(f"{args.file}: {result.elements_before} elements -> {result.elements_after} "
           f"over ω ∈ [{band[0]:g}, {band[1]:g}] rad/s, output "
@@ -276,12 +272,8 @@ def cmd_simulate_scene(args) -> int:
                   f"omega = {result.omega!r} rad/s")
     contact = _cam_contact(scene, result)
     if args.json:
-        doc = result.summary()
-        doc["file"] = args.scene
-        doc["output"] = args.output
-        if contact is not None:
-            doc["cam_contact"] = contact
-        print_json(doc)
+        print_json({**result.summary(), "file": args.scene, "output": args.output,
+                    **({} if contact is None else {"cam_contact": contact})})
         return 0
     _print_motion(args, scene, result)
     if contact is not None:
@@ -430,10 +422,9 @@ def _shaft(args, scene) -> int:
                       f"# {scene.name} ({args.scene}); steady cycle of the dynamic main "
                       f"shaft, flywheel {r.flywheel!r} kg·m²"))
     if args.json:
-        doc = r.summary()
-        doc.update(file=args.scene, output=args.output, notes=list(r.notes),
-                   extrema={k: [float(v.min()), float(v.max())] for k, v in curves.items()})
-        print_json(doc)
+        print_json({**r.summary(), "file": args.scene, "output": args.output,
+                    "notes": list(r.notes),
+                    "extrema": {k: [float(v.min()), float(v.max())] for k, v in curves.items()}})
         return 0
     m = scene.shaft.motor
     what = (f"Kloss, ω_s = {m.sync_speed:g} rad/s, T_b = {m.breakdown_torque:g} N·m, "

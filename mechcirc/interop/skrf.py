@@ -67,8 +67,14 @@ def reference_mobility(Z: ArrayLike) -> float:
     return float(2.0 ** round(float(np.mean(np.log2(mag))))) if mag.size else 1.0
 
 
-def _finite_points(omega, Z):
-    return np.isfinite(omega) & (omega > 0) & np.isfinite(Z).reshape(Z.shape[0], -1).all(axis=1)
+def _kept(omega, Z, R, empty: str):
+    """The points with ω > 0 and finite Z (a mask), the reference mobility (``R``, else
+    :func:`reference_mobility` of those points) and how many points are left out;
+    ``empty`` is the error's message when none is kept."""
+    keep = np.isfinite(omega) & (omega > 0) & np.isfinite(Z).reshape(Z.shape[0], -1).all(axis=1)
+    if not keep.any():
+        raise MechcircError(empty)
+    return keep, reference_mobility(Z[keep]) if R is None else float(R), int((~keep).sum())
 
 
 def to_skrf(sweep: "Sweep", *, z0: float | None = None):
@@ -100,11 +106,8 @@ def _network(omega, Z, z0, name: str, title: str, empty: str, extra: tuple = ())
     message when there is none."""
     import skrf
 
-    keep = _finite_points(omega, Z)
-    if not keep.any():
-        raise MechcircError(empty)
-    R = reference_mobility(Z[keep]) if z0 is None else float(z0)
-    comments = [*_comments(name, int((~keep).sum()), R), *extra]
+    keep, R, dropped = _kept(omega, Z, z0, empty)
+    comments = [*_comments(name, dropped, R), *extra]
     freq = skrf.Frequency.from_f(in_unit(omega[keep], "Hz"), unit="hz")
     return skrf.Network.from_z(Z[keep], frequency=freq, z0=R, name=title,
                                comments="\n".join(comments))
@@ -151,11 +154,7 @@ def write_touchstone(path: str | os.PathLike, omega: ArrayLike, Z: ArrayLike, *,
     Z = np.asarray(Z, dtype=complex)
     if Z.ndim == 1:
         Z = Z.reshape(-1, 1, 1)
-    keep = _finite_points(omega, Z)
-    if not keep.any():
-        raise MechcircError("no point has ω > 0 and a finite K; nothing to write")
-    R = reference_mobility(Z[keep]) if R is None else float(R)
-    dropped = int((~keep).sum())
+    keep, R, dropped = _kept(omega, Z, R, "no point has ω > 0 and a finite K; nothing to write")
     p = Z.shape[1]
     with atomic_open(path, "w", encoding="ascii") as fh:
         for line in _comments(name, dropped, R):
@@ -239,6 +238,7 @@ def _port_incidence(circuit, system, P1, P2, S1, S2) -> NDArray[np.float64]:
     nodal ``system``'s unknowns (the frame has none); a TopologyError for bad ports."""
     from ..circuit import FRAME
     from ..topology import node_names
+    from ..transient.model import incidence
 
     names = set(system.nodes) | set(node_names(circuit.elements, circuit.levers))
     for port in (P1, P2, S1, S2):
@@ -249,15 +249,8 @@ def _port_incidence(circuit, system, P1, P2, S1, S2) -> NDArray[np.float64]:
         raise TopologyError("each port needs two different nodes", nodes=(P1, P2, S1, S2))
     if FRAME not in names:
         raise TopologyError("the circuit has no frame node '0' to refer velocities to")
-    index = {n: i for i, n in enumerate(system.nodes)}
-    index[FRAME] = -1
-    rhs = np.zeros((2, system.size))
-    for j, (a, b) in enumerate(((P1, P2), (S1, S2))):
-        if index[a] >= 0:
-            rhs[j, index[a]] += 1.0
-        if index[b] >= 0:
-            rhs[j, index[b]] -= 1.0
-    return rhs
+    index = {n: i for i, n in enumerate(system.nodes)}      # (no frame: it is not an unknown)
+    return np.array([incidence(index, a, b, system.size) for a, b in ((P1, P2), (S1, S2))])
 
 
 def two_port(circuit: "Circuit", P1: str, P2: str, S1: str, S2: str, omega: ArrayLike, *,

@@ -307,9 +307,7 @@ def _reed_in_world(reed_force, theta, phi4):
         if F_local.shape != (n, 2):
             raise GeometryError(f"reed_force(theta) must return an array of shape ({n}, 2) "
                                 f"[N, rocker frame], got {F_local.shape}")
-    c4, s4 = np.cos(phi4), np.sin(phi4)
-    return np.stack([c4 * F_local[:, 0] - s4 * F_local[:, 1],
-                     s4 * F_local[:, 0] + c4 * F_local[:, 1]], axis=-1)
+    return _rot(phi4, F_local.T)        # turned from the rocker's frame by φ4
 
 
 def _equilibrium(k, crank, coupler, rocker, F, g):

@@ -337,10 +337,7 @@ class FourBar:
         lo, hi = self.crank_range()
         span = hi - lo
         th = np.linspace(lo + 1e-9 * span, hi - 1e-9 * span, 1441)
-        raw = self._rocker(*self._raw(th)[:2])
-        if self._turns:
-            raw = raw - th
-        un = np.unwrap(raw)
+        un = np.unwrap(self._rocker(*self._raw(th)[:2]) - (th if self._turns else 0.0))
         return float(_wrap(0.5 * (un.max() + un.min())))
 
     def evaluate(self, theta: ArrayLike) -> FourBarState:

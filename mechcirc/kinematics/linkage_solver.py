@@ -138,7 +138,8 @@ class _StateRows:
 
     def _fill(self):
         m = self._motion
-        self.P, self.V, self.A = m.points.copy(), m.velocities.copy(), m.accelerations.copy()
+        self.arrays = {"points": m.points.copy(), "velocities": m.velocities.copy(),
+                       "accelerations": m.accelerations.copy()}
         self.C = np.moveaxis(m.contributions, 0, 1).copy()
         self.w = m.qdot[:, 2::3].tolist()
         self._motion = None
@@ -146,17 +147,12 @@ class _StateRows:
     def field(self, name, i):
         if self._motion is not None:
             self._fill()
-        names = self.names
-        if name == "points":
-            return dict(zip(names, self.P[i]))
-        if name == "velocities":
-            return dict(zip(names, self.V[i]))
-        if name == "accelerations":
-            return dict(zip(names, self.A[i]))
+        if name in self.arrays:
+            return dict(zip(self.names, self.arrays[name][i]))
         if name == "angular_velocities":
             return dict(zip(self.links, self.w[i]))
         C = self.C[i]
-        return {c: dict(zip(names, C[j])) for j, c in enumerate(self.cranks)}
+        return {c: dict(zip(self.names, C[j])) for j, c in enumerate(self.cranks)}
 
 
 @dataclass(frozen=True)
@@ -607,16 +603,12 @@ def _solve(lk, pl, use, t, dt_max):
     if pl.method == "dyads" and len(pl.crank_idx) == 1:
         cross = _crossings(_dyad_solver(lk, pl), t, dt_max)
     if not cross:
-        if use == "dyads":
-            return _solve_dyads(lk, pl, t, dt_max)
-        return _solve_newton(lk, pl, t, dt_max)
+        return (_solve_dyads if use == "dyads" else _solve_newton)(lk, pl, t, dt_max)
     dz = _ZONE / abs(float(pl.omega[0]))
     zones = [(tc - dz, tc + dz) for tc, _ in sorted(cross)]
     pts, where, zone_of = _traverse(t, zones)
-    if use == "dyads":
-        got = _solve_dyads(lk, pl, pts, dt_max, cross, zones)
-    else:
-        got = _newton_segments(lk, pl, pts, dt_max, zones)
+    got = _solve_dyads(lk, pl, pts, dt_max, cross, zones) if use == "dyads" else \
+        _newton_segments(lk, pl, pts, dt_max, zones)
     return _bridged(lk, pl, got, t, pts, where, zone_of, zones)
 
 

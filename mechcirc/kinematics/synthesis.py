@@ -288,9 +288,7 @@ def _eq10_roots_squared(psi, b_a, other):
         sq = np.sqrt(disc)
         u1 = (-B + sq) / (2 * A)
         u2 = (-B - sq) / (2 * A)
-    u1 = np.where(u1 > 0, u1, np.nan)
-    u2 = np.where(u2 > 0, u2, np.nan)
-    return u1, u2
+    return tuple(np.where(u > 0, u, np.nan) for u in (u1, u2))
 
 
 def solve_eq10(swing: float, b_a: float, *, c_a: float | None = None,
@@ -702,23 +700,18 @@ class _Space:
         free, x0, bounds = self.free_parameters(base)
         if not free:
             return None
-        f = self.fixed
-        (b0, b1), (d0, d1) = self.b_a_range, self.d_a_range
 
         def cost(x):
             # the objective of _screen, in plain floats (one point: numpy's
             # per-call cost would dominate)
             p = dict(base, **dict(zip(free, x)))
             a_, psi_ = p["a"], p["psi"]
-            ba_ = f["coupler"] / a_ if "coupler" in f else p["ba"]
-            other_ = (f["frame"] / a_ if "frame" in f else
-                      f["rocker"] / a_ if "rocker" in f else p["other"])
+            ba_, other_ = self.ratios(a_, p["ba"], p["other"])
             u = _eq10_root_scalar(psi_, ba_, other_, root)
             if u is None:
                 return 1e6
-            ca_, da_ = (other_, math.sqrt(u)) if self.solve_d else (math.sqrt(u), other_)
-            if self.limits_in_ratio and not (b0 - 1e-12 <= ba_ <= b1 + 1e-12
-                                             and d0 - 1e-12 <= da_ <= d1 + 1e-12):
+            ca_, da_ = self.split(math.sqrt(u), other_)
+            if self.limits_in_ratio and not self.in_ranges(ba_, da_):
                 return 1e6
             got = _screen_scalar(a_, psi_, ba_, ca_, da_)
             if got is None:

@@ -169,15 +169,8 @@ def _kick_record(model, theta, found, steps_per_period, periods):
     rec_y = np.empty((nsamp, 2 * n))
     rec_t = np.empty(nsamp)
     kern.rk_run(y, 0.0, h, (nsamp - 1) * sample, 0.0, h * sample, rec_y, rec_t, *args,
-                model.naux(), *_rk4())
+                model.naux(), *kern.tableau("rk4"))
     return rec_y - y0[None, :], h * sample, h, nsamp, kern, backend
-
-
-def _rk4():
-    """The classical RK4 tableau for the kernels' ``rk_run`` (imported when first needed)."""
-    from ._motion_kernels import tableau
-
-    return tableau("rk4")
 
 
 def _ringing_rows(found, dev, dt, n) -> list:
@@ -241,7 +234,7 @@ def _forced_amplitude(model, kern, theta, w, free, h, r0):
     args = model.kernel_args(theta, 1e300, ripple=(amp, w), loads_on_mean=True)
     rec_y, rec_t = np.empty((nsamp, 2 * n)), np.empty(nsamp)
     kern.rk_run(y, 0.0, hh, (nsamp - 1) * sample, 0.0, hh * sample, rec_y, rec_t, *args,
-                model.naux(), *_rk4())
+                model.naux(), *kern.tableau("rk4"))
     out = np.empty((model.naux(), nsamp))
     kern.outputs(rec_t, rec_y, out, *model.kernel_args(theta, 1e300, outputs=True,
                                                           ripple=(amp, w), loads_on_mean=True))

@@ -640,9 +640,6 @@ def _dead_centre(scene: Scene, kind: str) -> float:
         b = s.points[far] - s.points[tip]
         return float(a[0] * b[1] - a[1] * b[0]), float(a @ b)
 
-    def cross_dot(theta):
-        return cd(lk.solve(theta))
-
     th = np.linspace(0.0, TWO_PI, 361)
     vals = [cd(s) for s in lk.solve(th)]
     want = 1.0 if kind == "front" else -1.0
@@ -651,6 +648,6 @@ def _dead_centre(scene: Scene, kind: str) -> float:
         if c0 == 0 and d0 * want > 0:
             return float(th[k])
         if c0 * c1 < 0 and d0 * want > 0:
-            return float(brentq(lambda t: cross_dot(t)[0], th[k], th[k + 1], xtol=1e-14))
+            return float(brentq(lambda t: cd(lk.solve(t))[0], th[k], th[k + 1], xtol=1e-14))
     raise GeometryError(f"{scene.source}: the crank {crank!r} and coupler {coupler!r} never "
                         f"line up {'extended' if kind == 'front' else 'folded'}")

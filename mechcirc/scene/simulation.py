@@ -180,7 +180,7 @@ def _warm_up(model, kern) -> float:
     args = model.kernel_args(0.0, 1e300)
     for method in ("rk4", "rk8"):           # (one compiled signature for both)
         kern.rk_run(y, 0.0, 1e-9, 2, 0.0, 1e-9, np.empty((1, y.size)), np.empty(1), *args,
-                    model.naux(), *_tableau_of(method))
+                    model.naux(), *kern.tableau(method))
     oargs = model.kernel_args(0.0, 1e300, outputs=True)
     kern.outputs(np.zeros(1), np.array([y]), np.empty((model.naux(), 1)), *oargs)
     kern.output_extrema(np.zeros(1), np.array([y]), np.empty((2, model.naux())), *oargs)
@@ -276,11 +276,8 @@ def max_rate(model: MotionModel, samples: int = 72) -> float:
 
 
 def _max_rate(model: MotionModel, samples: int) -> float:
-    rates = []
-    for th in np.linspace(0.0, model.scene.cycle, samples, endpoint=False):
-        A = state_matrix(*linear_matrices(model, th))
-        rates.append(np.max(np.abs(np.linalg.eigvals(A))))
-    return float(max(rates))
+    return float(max(np.max(np.abs(np.linalg.eigvals(state_matrix(*linear_matrices(model, th)))))
+                     for th in np.linspace(0.0, model.scene.cycle, samples, endpoint=False)))
 
 
 def state_matrix(M, D, K):
@@ -535,7 +532,7 @@ def _simulate_rk4(ctx, backend, error_estimate, notes, compile_time):
     """
     scene, o, model, kern, theta_s, ripple, progress = ctx
     rule = _step_rule(scene, o, model, error_estimate)
-    tableau = _tableau_of(o.method)
+    tableau = kern.tableau(o.method)
 
     def run(per_rev, prog=None, last=1, start=None):
         return _run(model, kern, theta_s, ripple, per_rev, o.revolutions, o.npts, prog,
@@ -868,10 +865,6 @@ def _run_scipy(model, kern, theta_s, revolutions, npts, method, rtol, progress, 
     qs[[i for i, _, _ in lines]] = 1e-4         # a twist
     scale = np.concatenate([qs, 0.1 * np.maximum(np.abs(y0[n:]), omega)])
     period = model.scene.cycle / omega
-
-    def t_of(r):
-        return (r * period) + np.arange(npts) * (period / npts)
-
     e = y0 - rigid(0.0)[0]
     n_steps = nfev = 0
     out, prev = None, None
@@ -886,7 +879,7 @@ def _run_scipy(model, kern, theta_s, revolutions, npts, method, rtol, progress, 
         n_steps += len(sol.t) - 1
         nfev += sol.nfev
         if keep:
-            ts = t_of(r)
+            ts = (r * period) + np.arange(npts) * (period / npts)
             ys = sol.sol(ts).T + np.array([rigid(t)[0] for t in ts])
             if r == revolutions - 1:
                 out = (ts, np.ascontiguousarray(ys))
@@ -935,13 +928,6 @@ def _deviation_rhs(model, kern, theta_s, ripple):
     return f, rigid, lines, bad
 
 
-def _tableau_of(method):
-    """:func:`mechcirc.scene._motion_kernels.tableau` (imported when first needed)."""
-    from ._motion_kernels import tableau
-
-    return tableau(method)
-
-
 def _run(model, kern, theta_s, ripple, per_rev, revolutions, npts, progress, tableau=None,
          strides=(1, 1), start=None):
     """R revolutions of RK4 (or the explicit ``tableau``, :func:`~mechcirc.scene._motion_kernels.tableau`) at ``per_rev``
@@ -984,7 +970,7 @@ def _run(model, kern, theta_s, ripple, per_rev, revolutions, npts, progress, tab
             ry, rt = dummy
         t_end, rows, ok, flag, used = kern.rk_run(y, r * period, h, per_rev, r * period,
                                                   dt, ry, rt, *args, naux,
-                                                  *(tableau or _tableau_of("rk4")))
+                                                  *(tableau or kern.tableau("rk4")))
         bad, nfev = bad or flag > 0, nfev + used
         if not ok:
             raise SolverError(f"RK4 diverged at t = {t_end:.6g} s (revolution {r + 1}) with "

@@ -126,10 +126,8 @@ def resonance_check(params: SleyParameters, theta0: float, *,
     found, how = circuit_resonances(circuit, 4.0 * max(eigen))
     wn = tuple(w for w, _ in found)
     wd = tuple(w for _, w in found)
-    if len(found) != len(eigen):
-        rel = math.inf
-    else:
-        rel = max(abs(a - b) / b for a, b in zip(wn + wd, eigen + eigen_d))
+    rel = math.inf if len(found) != len(eigen) else \
+        max(abs(a - b) / b for a, b in zip(wn + wd, eigen + eigen_d))
     return ResonanceCheck(float(theta0), damping, eigen, eigen_d, wn, wd, rel, how, text)
 
 
@@ -227,11 +225,9 @@ def _with_and_without_pulse(params: SleyParameters, revolutions: int, method):
     # the difference of two runs with the same transient: periodicity is not needed here
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SleyAccuracyWarning)
-        a = simulate_params(params, revolutions, method, points_per_revolution=npts,
-                            error_estimate=False)
-        b = simulate_params(params.replace(M0=0.0), revolutions, method,
-                            points_per_revolution=npts, error_estimate=False)
-    return a, b
+        return tuple(simulate_params(p, revolutions, method, points_per_revolution=npts,
+                                     error_estimate=False)
+                     for p in (params, params.replace(M0=0.0)))
 
 
 @dataclass(frozen=True)
@@ -273,7 +269,8 @@ def forced_amplitude(lin, omega: float, cycles_settle: int | None = None,
 
     n = lin.M.shape[0]
     minv = 1.0 / np.diag(lin.M)
-    slow = min(abs(lm.real) for lm in _eigenvalues(lin))
+    lam = np.linalg.eigvals(lin.state_matrix())         # of ż = A z [1/s]
+    slow = min(abs(lm.real) for lm in lam[lam.imag > 0])   # one per oscillating mode
     period = 2 * math.pi / omega
     if cycles_settle is None:           # transient below e^-12 of its start
         cycles_settle = int(math.ceil(12.0 / max(slow, 1e-9) / period))
@@ -297,12 +294,6 @@ def forced_amplitude(lin, omega: float, cycles_settle: int | None = None,
         q += lin.K_drive[i] * (ph2 - x[i]) + lin.C_drive[i] * (w2 - v[i])
     c = 2.0 * np.mean(q * np.exp(-1j * omega * t_eval))
     return float(abs(c))
-
-
-def _eigenvalues(lin):
-    """The eigenvalues λ of ż = A z with Im λ > 0 [1/s]: one per oscillating mode."""
-    lam = np.linalg.eigvals(lin.state_matrix())
-    return lam[lam.imag > 0]
 
 
 def harmonic_check(params: SleyParameters, theta0: float, omegas) -> HarmonicCheck:

@@ -155,13 +155,11 @@ class SleyResult:
 
     def columns(self) -> dict[str, NDArray[np.float64]]:
         """Output arrays by name, crank angle in degrees first (for CSV)."""
-        cols = {"crank_angle_deg": np.degrees(self.crank_angle), "eps2P": self.eps2P,
-                "eps4P": self.eps4P, "eps4T": self.eps4T, "M2V": self.M2V}
-        for name, col in (("eps5P", self.eps5P), ("M5V", self.M5V)):
-            if col is not None:             # the second crank's side (variants with one)
-                cols[name] = col
-        cols["M4"] = self.M4
-        return cols
+        second = {name: col for name, col in (("eps5P", self.eps5P), ("M5V", self.M5V))
+                  if col is not None}       # the second crank's side (variants with one)
+        return {"crank_angle_deg": np.degrees(self.crank_angle), "eps2P": self.eps2P,
+                "eps4P": self.eps4P, "eps4T": self.eps4T, "M2V": self.M2V, **second,
+                "M4": self.M4}
 
     def summary(self) -> dict:
         """Plain-data summary for JSON output."""
@@ -408,12 +406,8 @@ def _result(params: SleyParameters, model, m, theta0: float, linkage: tuple,
     # refine its own: exact_rigid=False)
     phiP, sley_off, nlo, nhi = linkage
     extrema = {"eps2P": m.extrema["eps2P"], "eps4P": m.extrema["eps4P"],
-               "eps4T": (nlo * w ** 2, nhi * w ** 2), "M2V": m.extrema["M2V"]}
-    eps5P = M5V = None
-    if both:
-        eps5P, M5V = v["eps5P"], v["M5V"]
-        extrema["eps5P"] = m.extrema["eps5P"]
-        extrema["M5V"] = m.extrema["M5V"]
+               "eps4T": (nlo * w ** 2, nhi * w ** 2), "M2V": m.extrema["M2V"],
+               **{k: m.extrema[k] for k in ("eps5P", "M5V") if both}}
     # states in the paper's convention: [δ2, ω2P, (δ5, ω5P,) φ4P − φ̄4, ω4P]
     coord = list(model.coordinate[1:])
     n = len(coord)
@@ -428,7 +422,8 @@ def _result(params: SleyParameters, model, m, theta0: float, linkage: tuple,
                      if k not in ALIAS_NAMES and not k.endswith(".rigid_acceleration")}
     return SleyResult(params=params, crank_angle=m.crank_angle, eps2P=v["eps2P"],
                       eps4P=v["eps4P"], eps4T=v["eps4T"], M2V=v["M2V"], M4=v["M4.moment"],
-                      eps5P=eps5P, M5V=M5V, states=np.column_stack(cols), extrema=extrema,
+                      eps5P=v["eps5P"] if both else None, M5V=v["M5V"] if both else None,
+                      states=np.column_stack(cols), extrema=extrema,
                       revolution=m.revolution, theta0=theta0, phiP=phiP, method=m.method,
                       backend=m.backend, wall_time=m.wall_time, compile_time=m.compile_time,
                       n_steps=m.n_steps, nfev=m.nfev, notes=tuple(notes + list(m.notes)),

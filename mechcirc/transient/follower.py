@@ -49,14 +49,6 @@ __all__ = ["FollowerResult", "follower", "follower_circuit", "jump_speed", "sepa
 GRID = 4096
 
 
-def _contact_need(motion, mass, spring, preload, damping):
-    """N(θ; Ω) = F₀ + k s + cΩ s' + mΩ² s'' as a function of (θ, Ω)."""
-    def need(theta, omega):
-        s, ds, dds = motion.evaluate(theta)
-        return preload + spring * s + damping * omega * ds + mass * omega ** 2 * dds
-    return need
-
-
 def _min_over_angle(f):
     """(min f(θ), θ) over one turn: a grid of GRID points, then bounded Brent around the best."""
     from scipy.optimize import minimize_scalar
@@ -109,7 +101,11 @@ def jump_speed(motion, mass: float, spring: float, preload: float,
     from scipy.optimize import brentq
 
     _check(mass=mass, spring=spring, preload=preload, damping=damping)
-    need = _contact_need(motion, mass, spring, preload, damping)
+
+    def need(theta, omega):     # N(θ; Ω) = F₀ + k s + cΩ s' + mΩ² s''
+        s, ds, dds = motion.evaluate(theta)
+        return preload + spring * s + damping * omega * ds + mass * omega ** 2 * dds
+
     low, _ = _min_over_angle(lambda t: need(t, 0.0))
     if low <= 0:
         raise MechcircError(f"the contact force is {low:g} N at rest: the preload does not "

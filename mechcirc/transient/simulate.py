@@ -1207,19 +1207,12 @@ def _clearance_setup(ss: StateSpace, circuit):
     kern = _kernels()
 
     clear = backlash_elements(circuit)
-    index = {n: i for i, n in enumerate(ss.nodes)}
-    E = len(clear)
     N = ss.size
-    cx = np.zeros((E, N))
-    dx = np.zeros(E)
-    cv = np.zeros((E, N))
-    dv = np.zeros(E)
-    prm = np.zeros((E, 3))
-    for k, (e, comp) in enumerate(clear):
-        ge = incidence(index, e.n1, e.n2, len(ss.nodes))
-        cx[k], dx[k] = ge @ ss.Cx, ge @ ss.Dx
-        cv[k], dv[k] = ge @ ss.Cv, ge @ ss.Dv
-        prm[k] = _law_params(e, comp)
+    # each clearance's relative displacement and velocity from z and u (a row each)
+    G = _incidences({n: i for i, n in enumerate(ss.nodes)}, [e for e, _ in clear],
+                    len(ss.nodes)).T
+    cx, dx, cv, dv = (G @ C for C in (ss.Cx, ss.Dx, ss.Cv, ss.Dv))
+    prm = np.array([_law_params(e, comp) for e, comp in clear], dtype=float).reshape(-1, 3)
     extra = ss.extra
     if extra is None:
         raise ValueError("the model was built without its clearance elements' force map")
