@@ -399,11 +399,9 @@ def _print_designs(args, res, exported) -> None:
         print("exported:")
         for lk, sc in exported:
             print(f"  {lk}\n  {sc}")
-        from ..kinematics.synthesis_export import reader_takes_moments
-
-        print("  (the scene has the sley inertia and the torsion rods; the beat-up moment "
-              + ("is its [[moments]] table)" if args.beat_moment and reader_takes_moments()
-                 else "is written as a comment: this scene format has no crank-angle loads)"))
+        print("  (the scene has the sley inertia and the torsion rods; "
+              + ("the beat-up moment is its [[moments]] table)" if args.beat_moment
+                 else "no beat-up moment: give --beat-moment M0 for one)"))
 
 
 def _load_linkage(path: str):

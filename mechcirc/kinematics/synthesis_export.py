@@ -27,7 +27,7 @@ from pathlib import Path
 
 from ..errors import GeometryError
 
-__all__ = ["SceneOptions", "linkage_toml", "scene_toml", "export_designs", "reader_takes_moments"]
+__all__ = ["SceneOptions", "linkage_toml", "scene_toml", "export_designs"]
 
 
 @dataclass(frozen=True)
@@ -222,28 +222,10 @@ centre = "front-dead-centre"
 
 
 def _beat_up(o, front):
-    """The beat-up moment as a ``[[moments]]`` table if the scene reader has one, else a comment.
-
-    The table is the time-domain scene format's (``[[moments]]`` in
-    ``docs/scenes.md`` once it lands); whether the installed reader knows it is
-    read from :data:`mechcirc.scene.files.SCENE_TABLES`, so the export follows
-    the reader.  A zero moment is only a comment.
-    """
-    if o.M0 != 0 and reader_takes_moments():
+    """The beat-up moment as the scene's ``[[moments]]`` table (``docs/scenes.md``); a zero
+    moment is only a comment."""
+    if o.M0 != 0:
         return _MOMENTS.format(M0=float(o.M0), alpha=float(o.alpha_deg))
-    return (f"\n# Beat-up moment (today's scene format has no crank-angle loads): a half sine "
-            f"of amplitude\n# M0 = {o.M0!r} N·m over alpha = {o.alpha_deg!r}° of crank, "
-            f"centred on the front dead centre\n# at theta = "
-            f"{math.degrees(front.theta):.6f}° from the pose.\n")
-
-
-def reader_takes_moments() -> bool:
-    """Whether the scene reader takes a ``[[moments]]`` table.
-
-    Returns
-    -------
-    bool
-    """
-    from ..scene.files import SCENE_TABLES
-
-    return "moments" in SCENE_TABLES
+    return (f"\n# No beat-up moment (M0 = 0); a half sine of amplitude M0 [N·m] over "
+            f"alpha = {o.alpha_deg!r}° of crank,\n# centred on the front dead centre at theta = "
+            f"{math.degrees(front.theta):.6f}° from the pose, would be a [[moments]] table.\n")

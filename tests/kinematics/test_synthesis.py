@@ -287,22 +287,17 @@ def test_exported_files_load_and_build(tmp_path):
         assert "C2" in model.ratios and "C4" in model.ratios
 
 
-def test_beat_up_moment_follows_the_scene_reader(monkeypatch):
+def test_beat_up_moment_is_a_moments_table_and_none_without_one():
     import tomllib
 
     from mechcirc.kinematics import synthesis_export as E
-    from mechcirc.scene import files
 
     des = synthesize("light", limit=1).designs[0]
-    opts = E.SceneOptions(M0=-500.0, alpha_deg=10.0)
-    monkeypatch.setattr(files, "SCENE_TABLES", tuple(t for t in files.SCENE_TABLES
-                                                     if t != "moments"))
-    doc = tomllib.loads(E.scene_toml(des, 1, opts))
-    assert "moments" not in doc          # a comment only: today's reader would refuse it
-    monkeypatch.setattr(files, "SCENE_TABLES", files.SCENE_TABLES + ("moments",))
-    doc = tomllib.loads(E.scene_toml(des, 1, opts))
+    doc = tomllib.loads(E.scene_toml(des, 1, E.SceneOptions(M0=-500.0, alpha_deg=10.0)))
     assert doc["moments"] == [{"name": "beatup", "body": "sley", "amplitude": -500.0,
                                "window_deg": 10.0, "centre": "front-dead-centre"}]
+    text = E.scene_toml(des, 1, E.SceneOptions(M0=0.0, alpha_deg=10.0))
+    assert "moments" not in tomllib.loads(text) and "# No beat-up moment (M0 = 0)" in text
 
 
 def test_a_grid_too_fine_is_refused_before_it_is_built():
