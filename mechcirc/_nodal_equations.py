@@ -167,13 +167,16 @@ class NodalSystem:
             rhs[self.b] -= 1.0
         return rhs
 
-    def difference(self, x: NDArray) -> NDArray:
-        """Velocity difference v_a − v_b from solutions ``x`` of shape (..., n)."""
+    def difference(self, x: NDArray, a: int | None = None, b: int | None = None) -> NDArray:
+        """Velocity difference v_a − v_b from solutions ``x`` of shape (..., n): of the
+        drive's nodes, or of the rows ``a`` and ``b`` given (−1: the reference)."""
+        a = self.a if a is None else a
+        b = self.b if b is None else b
         out = np.zeros(x.shape[:-1], dtype=x.dtype)
-        if self.a >= 0:
-            out = out + x[..., self.a]
-        if self.b >= 0:
-            out = out - x[..., self.b]
+        if a >= 0:
+            out = out + x[..., a]
+        if b >= 0:
+            out = out - x[..., b]
         return out
 
 

@@ -18,7 +18,20 @@ from numpy.typing import NDArray
 from ._dd import dd_add, dd_div_d, dd_div_dd, dd_mul_d, split, two_prod, two_sum
 from ._nodal_equations import KINDS, NodalSystem, combine
 
-__all__ = ["Pattern", "pattern", "residual_rounding", "total_error"]
+__all__ = ["Pattern", "pattern", "residual_rounding", "total_error", "row_max"]
+
+
+def row_max(a: NDArray) -> NDArray:
+    """The largest entry of each row of the 2-D ``a`` (at least 0.0: for |values|).
+
+    By columns over a transposed copy where the rows are the shorter side: numpy
+    reduces each short row on its own (9 µs for 178 rows of 23, 3 µs by columns;
+    the other way round for 8 rows of 500, 2 against 15 µs).  A maximum is exact:
+    the same values either way.
+    """
+    if a.shape[0] > a.shape[1]:
+        return np.ascontiguousarray(a.T).max(axis=0, initial=0.0)
+    return a.max(axis=-1, initial=0.0)
 
 
 class Pattern:
@@ -70,9 +83,9 @@ class Pattern:
         self.e_val = np.array([e.value * e.eta for e in els], dtype=float)
         code = {"mass": 0, "spring": 1}
         self.e_kind = np.array([code.get(e.kind, 2) for e in els], dtype=np.int64)
-        self.e_m = np.where(self.e_kind == 0, self.e_val, 0.0)
-        self.e_k = np.where(self.e_kind == 1, self.e_val, 0.0)
-        self.e_c = np.where(self.e_kind == 2, self.e_val, 0.0)
+        # Each element's value under its kind (mass, spring, damper), 0 under the others.
+        self.e_m, self.e_k, self.e_c = (np.where(self.e_kind == i, self.e_val, 0.0)
+                                        for i in range(3))
         # |c|, |m|, |k| by element, (E, 3): the first-step bound's sums by kind.
         self.e_abs = np.abs([self.e_c, self.e_m, self.e_k]).T
         n_nodes = len(system.nodes)
@@ -111,8 +124,8 @@ class Pattern:
         count = np.bincount(np.concatenate([self.k_bi, self.k_bj, self.k_bs]),
                             minlength=4 * n + 1)
         self.max_terms = int(count[:4 * n].max(initial=0))     # (not the reference's)
-        rows = np.concatenate([self.e_i, self.e_j, self.s_row])
-        self.max_row_terms = int(np.bincount(rows, minlength=n + 1)[:n].max(initial=0))
+        self.term_rows = np.concatenate([self.e_i, self.e_j, self.s_row])   # each term's row
+        self.max_row_terms = int(np.bincount(self.term_rows, minlength=n + 1)[:n].max(initial=0))
 
     @cached_property
     def slot_plan(self) -> tuple[list[NDArray], NDArray]:
@@ -124,8 +137,7 @@ class Pattern:
         ``buckets`` is the bucket of each rank.
         """
         n = self.n
-        bucket = np.concatenate([self.e_i * 4 + self.e_kind, self.e_j * 4 + self.e_kind,
-                                 self.s_row * 4 + 3])
+        bucket = np.concatenate([self.k_bi, self.k_bj, self.k_bs])   # (the reference's: 4n)
         term = np.arange(bucket.size)
         keep = bucket < 4 * n                  # rows of the reference dropped
         bucket, term = bucket[keep], term[keep]
@@ -148,9 +160,8 @@ class Pattern:
     def row_plan(self) -> tuple[NDArray, NDArray, NDArray]:
         """(order, rows, start): the float64 residual (:meth:`residual` with ``exact=False``)
         sums each row's terms at once: the terms sorted by row, the rows, where each starts."""
-        rows = np.concatenate([self.e_i, self.e_j, self.s_row])
-        order = np.argsort(rows, kind="stable")
-        f_rows, f_start = np.unique(rows[order], return_index=True)
+        order = np.argsort(self.term_rows, kind="stable")
+        f_rows, f_start = np.unique(self.term_rows[order], return_index=True)
         return order, f_rows, f_start
 
     def residual(self, omega: NDArray, xh: NDArray, xl: NDArray | None,
@@ -286,13 +297,13 @@ class Pattern:
         cancellation that a bound stamp by stamp would count many times over.
         Both are computed with x scaled to max-norm 1 (no overflow where x
         and K are near float64's limits), and divided by |K|.  With ``kern``
-        and real ω, by the compiled kernel.  ``data=False``: S alone (S_data None
-        on the numpy path; a sweep's error needs only S).
+        and real ω, by the compiled kernel.  ``data=False``: S alone (S_data None;
+        a sweep's error needs only S).
         """
         w = np.asarray(omega)[:, None]
         c = x.shape[0]
         with np.errstate(all="ignore"):
-            scale = np.max(np.abs(x), axis=1, initial=0.0)
+            scale = row_max(np.abs(x))
             scale = np.where((scale > 0) & np.isfinite(scale), scale, 1.0)
             if kern is not None and not np.iscomplexobj(omega):
                 S, Sd = np.empty(c), np.empty(c)
@@ -302,7 +313,7 @@ class Pattern:
                                    self.s_col, self.s_val, self.l_p1, self.l_p2, self.l_col,
                                    self.l_r, S, Sd)
                 f = scale / np.abs(K)
-                return S * f * scale, Sd * f * scale
+                return S * f * scale, (Sd * f * scale if data else None)
             xe = np.concatenate([np.asarray(x, dtype=complex) / scale[:, None],
                                  np.zeros((c, 1), complex)], axis=1)
             y = np.abs(combine(self.e_c, self.e_m, self.e_k, w))

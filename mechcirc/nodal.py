@@ -29,7 +29,7 @@ from . import _jit
 from ._dd import two_sum
 from ._nodal_equations import (KINDS, NodalSystem, assemble, combine, dense_matrices, held,
                                stamps)
-from ._nodal_residual import pattern, residual_rounding, total_error
+from ._nodal_residual import pattern, residual_rounding, row_max, total_error
 from ._nodal_solvers import DD_LIMIT, DENSE_LIMIT, balance, dd_solver, solver
 from .errors import TopologyError
 
@@ -248,10 +248,11 @@ class _Solved:
 
     def store(self, sel, xh, xl, est, rho) -> None:
         """K, its sensitivities and error estimate, and x, at the points ``sel``."""
-        self.K[sel] = difference_dd(self.system, xh, xl)
+        K = difference_dd(self.system, xh, xl)
+        self.K[sel] = K
         x = xh + xl if xl is not None else xh
-        self.S[sel], Sd = self.pat.sensitivities(self.omega[sel], x, self.K[sel], self.kern,
-                                                 self.data)
+        S, Sd = self.pat.sensitivities(self.omega[sel], x, K, self.kern, self.data)
+        self.S[sel] = S
         if Sd is not None:
             self.Sd[sel] = Sd
         # A refinement that stalls (corrections not shrinking: the factors
@@ -259,15 +260,16 @@ class _Solved:
         # stalls at the residual's own rounding: its last correction says
         # nothing of the error (seen: 2.8e-9 and 2.8e-12 with corrections of
         # 1e-11 and 2.6e-16 on a stiff tree, cond(A) ≈ 1e17).  No estimate: inf.
-        floor = 16 * residual_rounding(self.system, self.S[sel])
+        floor = 16 * residual_rounding(self.system, S)
         if self.float64_residual:
-            est = est + residual_rounding(self.system, self.S[sel], double=False)
-        self.err[sel] = np.where((rho >= 0.5) & (est > floor), np.inf, est)
+            est = est + residual_rounding(self.system, S, double=False)
+        err = np.where((rho >= 0.5) & (est > floor), np.inf, est)
+        self.err[sel] = err
         if self.x_all is not None:
             self.x_all[sel] = x
         elif self.keep is not None:
             # Only the rows :func:`solve` may need: where no digit of K is known.
-            maybe = self.keep[sel] & ~(np.isfinite(self.K[sel]) & (self.err[sel] < 1.0))
+            maybe = self.keep[sel] & ~(np.isfinite(K) & (err < 1.0))
             for k in np.flatnonzero(maybe):
                 self.kept[int(sel[k])] = x[k]
 
@@ -316,13 +318,14 @@ def _strict_retry(solve_with, kern, omega, refined, refine):
 def difference_dd(system, xh, xl):
     """K = x_a − x_b from x = xh + xl, rounded once."""
     zero = np.zeros(xh.shape[0], dtype=complex)
-    ah = xh[:, system.a] if system.a >= 0 else zero
-    bh = xh[:, system.b] if system.b >= 0 else zero
+
+    def ends(x):                    # (x_a, x_b), the reference's 0
+        return [x[:, i] if i >= 0 else zero for i in (system.a, system.b)]
+    ah, bh = ends(xh)
     with np.errstate(all="ignore"):
         s, e = two_sum(ah, -bh)
         if xl is not None:
-            al = xl[:, system.a] if system.a >= 0 else zero
-            bl = xl[:, system.b] if system.b >= 0 else zero
+            al, bl = ends(xl)
             e = e + (al - bl)
         return np.asarray(s + e, dtype=complex)
 
@@ -438,7 +441,7 @@ def refine_dd(solve_fn, residual, omega, rhs, system, refine: bool, steps: int,
     (that of the terms is added by the caller, which has S).
     """
     eps = np.finfo(float).eps
-    b = np.broadcast_to(rhs.astype(complex), (omega.size, rhs.size))
+    b = np.repeat(rhs.astype(complex)[None, :], omega.size, axis=0)  # (solves take it as it is)
     x0 = solve_fn(b)
     if not refine:
         # No refinement: the first correction is still the error estimate, from
@@ -454,8 +457,11 @@ def refine_dd(solve_fn, residual, omega, rhs, system, refine: bool, steps: int,
             own = eps / 2 * np.sum(np.abs(x0) * np.abs(r), axis=-1) / \
                 np.abs(system.difference(x0))
         return x0, None, est + np.where(np.isnan(own), np.inf, own), rho
-    xh, xl = x0, np.zeros_like(x0)      # (updated below; x0 a solve's own)
-    prev = np.empty_like(x0)            # (read from the second step on: the first sets it)
+    # x0 a solve's own; the first step, over every point, sets xl and prev (read only
+    # from the second step on), unless there is no step.
+    xh = x0
+    xl: Any = np.zeros_like(x0) if steps < 1 else None
+    prev: Any = None
     est = np.full(omega.size, np.inf)
     rho = np.zeros(omega.size)
     active = np.arange(omega.size)
@@ -541,10 +547,9 @@ def first_step_bound(system: NodalSystem, omega: NDArray, xh: NDArray, xl: NDArr
     u = np.finfo(float).eps / 2
     with np.errstate(all="ignore"):
         c, n = xh.shape
-        ax = np.zeros((c, n + 1))
-        ax[:, :n] = np.abs(xh.real) + np.abs(xh.imag)
-        ad = np.zeros((c, n + 1))
-        ad[:, :n] = np.abs(d.real) + np.abs(d.imag)
+        zero = np.zeros((c, 1))                 # (the reference's column)
+        ax = np.concatenate([np.abs(xh.real) + np.abs(xh.imag), zero], axis=1)
+        ad = np.concatenate([np.abs(d.real) + np.abs(d.imag), zero], axis=1)
         # |y_e| = |c_e| + |ω||m_e| + |k_e|/|ω| (one of the three is nonzero; ω complex
         # too): by kind, one product with the (c, E) array, no admittance array.
         ends = ax.take(pat.e_i, 1) + ax.take(pat.e_j, 1)     # (take: x[:, idx], faster)
@@ -575,9 +580,9 @@ def _estimate(system, xh, xl, d, prev, r):
     """
     tiny = np.finfo(float).eps ** 2
     with np.errstate(all="ignore"):
-        nd = np.max(np.abs(d), axis=-1)
-        nx = np.max(np.abs(xh), axis=-1)
-        npv = np.maximum(nx if prev is None else np.max(np.abs(prev), axis=-1), tiny * nx)
+        nd = row_max(np.abs(d))
+        nx = row_max(np.abs(xh))
+        npv = np.maximum(nx if prev is None else row_max(np.abs(prev)), tiny * nx)
         rho = np.where(npv > 0, nd / npv, 0.0)
         own = np.minimum(rho, 1.0) if prev is not None else 1.0
         K = np.abs(difference_dd(system, xh, xl))
@@ -732,12 +737,7 @@ def element_response(system: NodalSystem, omega: ArrayLike, scale: NDArray, *,
     out = {}
     with np.errstate(all="ignore"):
         for e in system.elements:
-            v = np.zeros(omega.shape, dtype=complex)
-            if e.n1 in index:
-                v = v + x[:, index[e.n1]]
-            if e.n2 in index:
-                v = v - x[:, index[e.n2]]
-            v = v.astype(complex) * scale
+            v = system.difference(x, index.get(e.n1, -1), index.get(e.n2, -1)) * scale
             out[e.name] = (v / e.mobility(omega), v)
     return out
 

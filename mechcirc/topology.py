@@ -125,14 +125,15 @@ def loaded_groups(groups: Sequence[Sequence[tuple[str, str]]], a: str, b: str,
     block = _block_with(adj, a, b)
     # A lever whose sides share a node (p2 = s2 = '0') has a pair (u, u) in its
     # clique: it couples nothing and belongs to no block, so it is not asked for.
+    # A pair (an edge) lies in the block when both its nodes do: two blocks share
+    # at most one node, so an edge between two of a block's nodes is the block's.
     return [i for i, pairs in enumerate(groups)
-            if all(frozenset(p) in block for p in pairs if p[0] != p[1])]
+            if all(u in block and w in block for u, w in pairs if u != w)]
 
 
-def _block_with(adj: dict[str, set[str]], a: str, b: str) -> set[frozenset]:
-    """The edges (as frozensets of their two nodes) of the biconnected block of the
-    simple graph ``adj`` that holds the edge a–b (Tarjan's lowpoints, iterative;
-    self-loops belong to no block)."""
+def _block_with(adj: dict[str, set[str]], a: str, b: str) -> set[str]:
+    """The nodes of the biconnected block of the simple graph ``adj`` that holds the
+    edge a–b (Tarjan's lowpoints, iterative; self-loops belong to no block)."""
     disc = {a: 0}
     low = {a: 0}
     edges: list[tuple[str, str]] = []
@@ -157,13 +158,13 @@ def _block_with(adj: dict[str, set[str]], a: str, b: str) -> set[frozenset]:
             p = stack[-1][0]
             low[p] = min(low[p], low[u])
             if low[u] >= disc[p]:           # p separates u's subtree: a block ends
-                block = set()
+                block: set[str] = set()
                 while True:
                     e = edges.pop()
-                    block.add(frozenset(e))
+                    block.update(e)
                     if e == (p, u):
                         break
-                if frozenset((a, b)) in block:
+                if a in block and b in block:
                     return block
     return set()
 
