@@ -116,7 +116,7 @@ def test_linkage_on_a_scene_file_points_to_the_scene_commands(capsys):
 
 def test_simulate_set_unknown_parameter_did_you_mean(capsys):
     assert_user_error(["simulate", "--revolutions", "1", "--set", "C22=1"], capsys,
-                      "unknown sley parameter(s) C22; did you mean 'C2'?", "(known: C2, C4")
+                      "--set C22: no such parameter; did you mean 'C2'?", "(there are C2, C4")
 
 
 @pytest.mark.parametrize("argv, what", [
