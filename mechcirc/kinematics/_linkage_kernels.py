@@ -35,7 +35,7 @@ from .._jit import decorators
 from . import _dyad_forms
 
 HAVE_NUMBA, _jit, _jit_inline = decorators(bool(globals().get("_FORCE_PYTHON")))
-# A piece that allocates nothing (a pass over the positions, a step of the continuation):
+# A piece that allocates nothing (Newton's loop of a step, a target's row):
 # compiled without reference counting, which inlined into a loop would cost an atomic
 # increment and decrement of every array argument per call (dyads_path measured 3x slower).
 _leaf = decorators(bool(globals().get("_FORCE_PYTHON")), nrt=False)[1]
@@ -223,7 +223,7 @@ def _lu_solve(A, piv, b):
         b[i] = s / A[i, i]
 
 
-@_jit
+@_leaf
 def _converge(trial, t_new, nb, geo, crank_idx, omega, tol, work, r, J, piv):
     """Newton from ``trial`` (in place) at time ``t_new``.
 
@@ -319,7 +319,7 @@ def _store_target(k, q, qd, qdd, parts, Q, QD, QDD, PARTS):
             PARTS[k, i, c] = parts[i, c]
 
 
-@_leaf
+@_jit_inline     # its one site: compiled apart, LLVM optimised and emitted _converge's code again
 def _continuation_step(q, qd, qdd, trial, t_now, dt, t_new, nb, geo, crank_idx, omega, tol,
                        wmax, work, r, J, piv):
     """One continuation step of dt from (t_now, q) to t_new: Taylor predictor from q, q̇, q̈
@@ -406,7 +406,9 @@ def _im_conj(a, b):
     return a.real * b.imag - a.imag * b.real
 
 
-@_jit
+# The three passes of dyads_path, each inlined at its one site: compiled apart, each one's
+# code was optimised and emitted again in dyads_path (0.4 s of a cold compile).
+@_jit_inline
 def _dyads_accelerations(crank_idx, crank_arm, L, K, X, arm, EK, R1, R2, QD, QDD):
     """Fill QDD: the dyads' accelerations at every position k, from its unit vectors
     EK[k] (e^{iφ} of each body), inner-joint vectors R1[k], R2[k] and total speeds
@@ -439,7 +441,7 @@ def _dyads_accelerations(crank_idx, crank_arm, L, K, X, arm, EK, R1, R2, QD, QDD
             QDD[k, 3 * i + 2] = al[i]
 
 
-@_leaf
+@_jit_inline
 def _dyads_positions(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, rot, arm,
                      E, r, phi, Q, EK, R1, R2, margin):
     """The positions of :func:`dyads_path` at every time t[k]: the cranks, then each dyad by
@@ -482,7 +484,7 @@ def _dyads_positions(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, a
             Q[k, 3 * i + 2] = phi[i]
 
 
-@_leaf
+@_jit_inline
 def _dyads_velocities(crank_idx, omega, crank_arm, L, K, X, arm, EK, R1, R2, w, v, QD, PARTS):
     """The velocities of :func:`dyads_path` at every position k (unit vectors EK[k],
     inner-joint vectors R1[k], R2[k]), one crank at a time (conditional stop:
