@@ -35,7 +35,7 @@ from .._jit import decorators
 from . import _dyad_forms
 
 HAVE_NUMBA, _jit, _jit_inline = decorators(bool(globals().get("_FORCE_PYTHON")))
-# A piece that allocates nothing (Newton's loop of a step, a target's row):
+# A piece that allocates nothing (the continuation's loop, a target's row):
 # compiled without reference counting, which inlined into a loop would cost an atomic
 # increment and decrement of every array argument per call (dyads_path measured 3x slower).
 _leaf = decorators(bool(globals().get("_FORCE_PYTHON")), nrt=False)[1]
@@ -223,7 +223,7 @@ def _lu_solve(A, piv, b):
         b[i] = s / A[i, i]
 
 
-@_leaf
+@_jit_inline     # two sites in newton_path, which counts no references: no layer of its own
 def _converge(trial, t_new, nb, geo, crank_idx, omega, tol, work, r, J, piv):
     """Newton from ``trial`` (in place) at time ``t_new``.
 
@@ -340,29 +340,23 @@ def _continuation_step(q, qd, qdd, trial, t_now, dt, t_new, nb, geo, crank_idx, 
             return 0.0, t_now + 2.0 * dt
 
 
-@_jit
-def newton_path(q0, t0, targets, ia, ib, sa, sb, crank_idx, omega, tol, dt_max, wmax,
-                Q, QD, QDD, PARTS, info, ga, gb, gs, gu, bs):
-    """Continue from q0 at time t0 (the pose, or past a change point) through ``targets``.
+@_leaf
+def newton_path(t0, targets, ia, ib, sa, sb, crank_idx, omega, tol, dt_max, wmax,
+                Q, QD, QDD, PARTS, info, ga, gb, gs, gu, bs, work, J, piv, vec, parts):
+    """Continue from q (``vec[0]``) at time t0 (the pose, or past a change point) through
+    ``targets``.
 
-    Fills Q, QD, QDD (N, n) and PARTS (N, n, nc).  Returns a status:
+    Fills Q, QD, QDD (N, n) and PARTS (N, n, nc).  Its scratch comes from the caller (it
+    allocates nothing, so it runs without reference counting): ``work`` (cs, sn of the
+    bodies, R (m, 4), P (slider, 8)), J (n, n), piv (n), ``vec`` rows q (the start), q̇,
+    q̈ (zeros), the trial, e, r; ``parts`` (n, nc) zeros.  Returns a status:
     ``OK``; ``SINGULAR_POSE``; ``LOCK`` (info[0] = time of the lock estimate);
     ``BRANCH_JUMP`` (info[0], info[1] = the step's ends).
     """
-    n = q0.shape[0]
+    n = vec.shape[1]
     nb = n // 3
-    nc = crank_idx.shape[0]
     geo = (ia, ib, sa, sb, ga, gb, gs, gu, bs)
-    work = (np.empty(nb), np.empty(nb), np.empty((ia.shape[0], 4)), np.empty((ga.shape[0], 8)))
-    J = np.empty((n, n))
-    piv = np.empty(n, dtype=np.int64)
-    r = np.empty(n)
-    q = q0.copy()
-    qd = np.zeros(n)
-    qdd = np.zeros(n)
-    parts = np.zeros((n, nc))
-    trial = np.empty(n)
-    e = np.empty(n)
+    q, qd, qdd, trial, e, r = vec[0], vec[1], vec[2], vec[3], vec[4], vec[5]
     t_now = t0
     # the start itself first: its sign of det J is the branch's
     for i in range(n):
