@@ -35,7 +35,7 @@ from .._jit import decorators
 from . import _dyad_forms
 
 HAVE_NUMBA, _jit, _jit_inline = decorators(bool(globals().get("_FORCE_PYTHON")))
-# A piece that allocates nothing (the continuation's loop, a target's row):
+# A kernel or piece that allocates nothing (its scratch from the caller, or none):
 # compiled without reference counting, which inlined into a loop would cost an atomic
 # increment and decrement of every array argument per call (dyads_path measured 3x slower).
 _leaf = decorators(bool(globals().get("_FORCE_PYTHON")), nrt=False)[1]
@@ -403,13 +403,11 @@ def _im_conj(a, b):
 # The three passes of dyads_path, each inlined at its one site: compiled apart, each one's
 # code was optimised and emitted again in dyads_path (0.4 s of a cold compile).
 @_jit_inline
-def _dyads_accelerations(crank_idx, crank_arm, L, K, X, arm, EK, R1, R2, QD, QDD):
+def _dyads_accelerations(crank_idx, crank_arm, L, K, X, arm, EK, R1, R2, QD, QDD, al, a):
     """Fill QDD: the dyads' accelerations at every position k, from its unit vectors
     EK[k] (e^{iφ} of each body), inner-joint vectors R1[k], R2[k] and total speeds
-    (the φ columns of QD[k])."""
+    (the φ columns of QD[k]); ``al``, ``a``: scratch of nb."""
     nb = EK.shape[1]
-    al = np.empty(nb)
-    a = np.empty(nb, dtype=np.complex128)
     for k in range(EK.shape[0]):
         E = EK[k]
         for i in range(nb):
@@ -516,9 +514,17 @@ def _dyads_velocities(crank_idx, omega, crank_arm, L, K, X, arm, EK, R1, R2, w, 
                 QD[k, 3 * i + 2] += w[i]
 
 
-@_jit
+def dyads_scratch(N, nb, nd):
+    """:func:`dyads_path`'s scratch for N positions, nb bodies and nd dyads: EK (N, nb), R1
+    and R2 (N, nd), four complex rows of nb (E, r, v, a) and three real ones (φ, w, α)."""
+    return (np.empty((N, nb), dtype=np.complex128), np.empty((N, nd), dtype=np.complex128),
+            np.empty((N, nd), dtype=np.complex128), np.empty((4, nb), dtype=np.complex128),
+            np.empty((3, nb)))
+
+
+@_leaf
 def dyads_path(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, rot, arm,
-               Q, QD, QDD, PARTS, margin):
+               Q, QD, QDD, PARTS, margin, EK, R1, R2, cvec, fvec):
     """Closed-form RRR dyads at every time in ``t``, one position at a time.
 
     The closed forms of :mod:`._dyad_forms` (RRR only), compiled, as the
@@ -528,23 +534,17 @@ def dyads_path(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, ro
     rot[d] = e^{−i·pose angle}/length, arm[d] = the link frame's origin from
     its outer joint in the link's frame, ang[d] = the links' pose angles.
     Fills Q, QD, QDD, PARTS and margin (the smallest |sin| of a dyad's inner
-    angle, −1 where it cannot assemble).  The accelerations come after the loop,
+    angle, −1 where it cannot assemble); EK … fvec are its scratch
+    (:func:`dyads_scratch`: it allocates nothing, so it counts no references).  The accelerations come after the loop,
     in one call over all positions (:func:`_dyads_accelerations`, from the
     unit vectors and inner-joint vectors kept per position): a compiled helper
     called once per position, or inlined, measured slower; so are the positions
     and the velocities (:func:`_dyads_positions`, :func:`_dyads_velocities`).
     """
-    N = t.shape[0]
-    nb = Q.shape[1] // 3
-    nd = L.shape[0]
-    E = np.empty(nb, dtype=np.complex128)
-    r = np.empty(nb, dtype=np.complex128)
-    phi = np.empty(nb)
-    EK = np.empty((N, nb), dtype=np.complex128)         # per position, for the accelerations
-    R1 = np.empty((N, nd), dtype=np.complex128)
-    R2 = np.empty((N, nd), dtype=np.complex128)
+    E, r, v = cvec[0], cvec[1], cvec[2]
+    phi, w = fvec[0], fvec[1]
     _dyads_positions(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, rot, arm,
                      E, r, phi, Q, EK, R1, R2, margin)
-    _dyads_velocities(crank_idx, omega, crank_arm, L, K, X, arm, EK, R1, R2, np.empty(nb),
-                      np.empty(nb, dtype=np.complex128), QD, PARTS)
-    _dyads_accelerations(crank_idx, crank_arm, L, K, X, arm, EK, R1, R2, QD, QDD)
+    _dyads_velocities(crank_idx, omega, crank_arm, L, K, X, arm, EK, R1, R2, w, v, QD, PARTS)
+    _dyads_accelerations(crank_idx, crank_arm, L, K, X, arm, EK, R1, R2, QD, QDD, fvec[2],
+                         cvec[3])

@@ -1016,13 +1016,14 @@ def _dyads_compiled(ds, t, signs=None):
     parts, margin = np.empty((N, n, nc)), np.empty(N)
     t = np.ascontiguousarray(t, dtype=float)
     if signs is None:
-        K.dyads_path(t, *args, Q, QD, QDD, parts, margin)
+        K.dyads_path(t, *args, Q, QD, QDD, parts, margin, *K.dyads_scratch(N, ds.pl.nb, len(args[4])))
         return Q, QD, QDD, parts, margin
     patterns, which = np.unique(signs.T, axis=0, return_inverse=True)
     for j, pattern in enumerate(patterns):
         sel = np.flatnonzero(which.reshape(-1) == j)
         out = [np.empty((len(sel),) + a.shape[1:]) for a in (Q, QD, QDD, parts, margin)]
-        K.dyads_path(t[sel], *args[:8], np.ascontiguousarray(pattern), *args[9:], *out)
+        K.dyads_path(t[sel], *args[:8], np.ascontiguousarray(pattern), *args[9:], *out,
+                     *K.dyads_scratch(len(sel), ds.pl.nb, len(args[4])))
         for a, b in zip((Q, QD, QDD, parts, margin), out):
             a[sel] = b
     return Q, QD, QDD, parts, margin
