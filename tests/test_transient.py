@@ -313,6 +313,7 @@ def test_python_backend_matches_compiled():
         steps = mod.dopri_run(z0.copy(), 0.0, 2e-3, 51, *args, 1e-9, np.full(ss.size, 1e-9),
                               2e-3,
                               mod._A, mod._B4, mod._C, mod._D, True, out,
+                              *mod.scratch(ss.size, args[-1].shape[0]),
                               0.0)    # kink_tol's default, passed: the library's signature
         assert steps > 0
         outs.append(out)

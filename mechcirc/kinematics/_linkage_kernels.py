@@ -35,7 +35,7 @@ from .._jit import decorators
 from . import _dyad_forms
 
 HAVE_NUMBA, _jit, _jit_inline = decorators(bool(globals().get("_FORCE_PYTHON")))
-# A piece that allocates nothing (a pass over the positions, a step of the continuation):
+# A kernel or piece that allocates nothing (its scratch from the caller, or none):
 # compiled without reference counting, which inlined into a loop would cost an atomic
 # increment and decrement of every array argument per call (dyads_path measured 3x slower).
 _leaf = decorators(bool(globals().get("_FORCE_PYTHON")), nrt=False)[1]
@@ -223,7 +223,7 @@ def _lu_solve(A, piv, b):
         b[i] = s / A[i, i]
 
 
-@_jit
+@_jit_inline     # two sites in newton_path, which counts no references: no layer of its own
 def _converge(trial, t_new, nb, geo, crank_idx, omega, tol, work, r, J, piv):
     """Newton from ``trial`` (in place) at time ``t_new``.
 
@@ -319,7 +319,7 @@ def _store_target(k, q, qd, qdd, parts, Q, QD, QDD, PARTS):
             PARTS[k, i, c] = parts[i, c]
 
 
-@_leaf
+@_jit_inline     # its one site: compiled apart, LLVM optimised and emitted _converge's code again
 def _continuation_step(q, qd, qdd, trial, t_now, dt, t_new, nb, geo, crank_idx, omega, tol,
                        wmax, work, r, J, piv):
     """One continuation step of dt from (t_now, q) to t_new: Taylor predictor from q, q̇, q̈
@@ -340,29 +340,23 @@ def _continuation_step(q, qd, qdd, trial, t_now, dt, t_new, nb, geo, crank_idx, 
             return 0.0, t_now + 2.0 * dt
 
 
-@_jit
-def newton_path(q0, t0, targets, ia, ib, sa, sb, crank_idx, omega, tol, dt_max, wmax,
-                Q, QD, QDD, PARTS, info, ga, gb, gs, gu, bs):
-    """Continue from q0 at time t0 (the pose, or past a change point) through ``targets``.
+@_leaf
+def newton_path(t0, targets, ia, ib, sa, sb, crank_idx, omega, tol, dt_max, wmax,
+                Q, QD, QDD, PARTS, info, ga, gb, gs, gu, bs, work, J, piv, vec, parts):
+    """Continue from q (``vec[0]``) at time t0 (the pose, or past a change point) through
+    ``targets``.
 
-    Fills Q, QD, QDD (N, n) and PARTS (N, n, nc).  Returns a status:
+    Fills Q, QD, QDD (N, n) and PARTS (N, n, nc).  Its scratch comes from the caller (it
+    allocates nothing, so it runs without reference counting): ``work`` (cs, sn of the
+    bodies, R (m, 4), P (slider, 8)), J (n, n), piv (n), ``vec`` rows q (the start), q̇,
+    q̈ (zeros), the trial, e, r; ``parts`` (n, nc) zeros.  Returns a status:
     ``OK``; ``SINGULAR_POSE``; ``LOCK`` (info[0] = time of the lock estimate);
     ``BRANCH_JUMP`` (info[0], info[1] = the step's ends).
     """
-    n = q0.shape[0]
+    n = vec.shape[1]
     nb = n // 3
-    nc = crank_idx.shape[0]
     geo = (ia, ib, sa, sb, ga, gb, gs, gu, bs)
-    work = (np.empty(nb), np.empty(nb), np.empty((ia.shape[0], 4)), np.empty((ga.shape[0], 8)))
-    J = np.empty((n, n))
-    piv = np.empty(n, dtype=np.int64)
-    r = np.empty(n)
-    q = q0.copy()
-    qd = np.zeros(n)
-    qdd = np.zeros(n)
-    parts = np.zeros((n, nc))
-    trial = np.empty(n)
-    e = np.empty(n)
+    q, qd, qdd, trial, e, r = vec[0], vec[1], vec[2], vec[3], vec[4], vec[5]
     t_now = t0
     # the start itself first: its sign of det J is the branch's
     for i in range(n):
@@ -406,14 +400,14 @@ def _im_conj(a, b):
     return a.real * b.imag - a.imag * b.real
 
 
-@_jit
-def _dyads_accelerations(crank_idx, crank_arm, L, K, X, arm, EK, R1, R2, QD, QDD):
+# The three passes of dyads_path, each inlined at its one site: compiled apart, each one's
+# code was optimised and emitted again in dyads_path (0.4 s of a cold compile).
+@_jit_inline
+def _dyads_accelerations(crank_idx, crank_arm, L, K, X, arm, EK, R1, R2, QD, QDD, al, a):
     """Fill QDD: the dyads' accelerations at every position k, from its unit vectors
     EK[k] (e^{iφ} of each body), inner-joint vectors R1[k], R2[k] and total speeds
-    (the φ columns of QD[k])."""
+    (the φ columns of QD[k]); ``al``, ``a``: scratch of nb."""
     nb = EK.shape[1]
-    al = np.empty(nb)
-    a = np.empty(nb, dtype=np.complex128)
     for k in range(EK.shape[0]):
         E = EK[k]
         for i in range(nb):
@@ -439,7 +433,7 @@ def _dyads_accelerations(crank_idx, crank_arm, L, K, X, arm, EK, R1, R2, QD, QDD
             QDD[k, 3 * i + 2] = al[i]
 
 
-@_leaf
+@_jit_inline
 def _dyads_positions(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, rot, arm,
                      E, r, phi, Q, EK, R1, R2, margin):
     """The positions of :func:`dyads_path` at every time t[k]: the cranks, then each dyad by
@@ -482,7 +476,7 @@ def _dyads_positions(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, a
             Q[k, 3 * i + 2] = phi[i]
 
 
-@_leaf
+@_jit_inline
 def _dyads_velocities(crank_idx, omega, crank_arm, L, K, X, arm, EK, R1, R2, w, v, QD, PARTS):
     """The velocities of :func:`dyads_path` at every position k (unit vectors EK[k],
     inner-joint vectors R1[k], R2[k]), one crank at a time (conditional stop:
@@ -520,9 +514,17 @@ def _dyads_velocities(crank_idx, omega, crank_arm, L, K, X, arm, EK, R1, R2, w, 
                 QD[k, 3 * i + 2] += w[i]
 
 
-@_jit
+def dyads_scratch(N, nb, nd):
+    """:func:`dyads_path`'s scratch for N positions, nb bodies and nd dyads: EK (N, nb), R1
+    and R2 (N, nd), four complex rows of nb (E, r, v, a) and three real ones (φ, w, α)."""
+    return (np.empty((N, nb), dtype=np.complex128), np.empty((N, nd), dtype=np.complex128),
+            np.empty((N, nd), dtype=np.complex128), np.empty((4, nb), dtype=np.complex128),
+            np.empty((3, nb)))
+
+
+@_leaf
 def dyads_path(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, rot, arm,
-               Q, QD, QDD, PARTS, margin):
+               Q, QD, QDD, PARTS, margin, EK, R1, R2, cvec, fvec):
     """Closed-form RRR dyads at every time in ``t``, one position at a time.
 
     The closed forms of :mod:`._dyad_forms` (RRR only), compiled, as the
@@ -532,23 +534,17 @@ def dyads_path(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, ro
     rot[d] = e^{−i·pose angle}/length, arm[d] = the link frame's origin from
     its outer joint in the link's frame, ang[d] = the links' pose angles.
     Fills Q, QD, QDD, PARTS and margin (the smallest |sin| of a dyad's inner
-    angle, −1 where it cannot assemble).  The accelerations come after the loop,
+    angle, −1 where it cannot assemble); EK … fvec are its scratch
+    (:func:`dyads_scratch`: it allocates nothing, so it counts no references).  The accelerations come after the loop,
     in one call over all positions (:func:`_dyads_accelerations`, from the
     unit vectors and inner-joint vectors kept per position): a compiled helper
     called once per position, or inlined, measured slower; so are the positions
     and the velocities (:func:`_dyads_positions`, :func:`_dyads_velocities`).
     """
-    N = t.shape[0]
-    nb = Q.shape[1] // 3
-    nd = L.shape[0]
-    E = np.empty(nb, dtype=np.complex128)
-    r = np.empty(nb, dtype=np.complex128)
-    phi = np.empty(nb)
-    EK = np.empty((N, nb), dtype=np.complex128)         # per position, for the accelerations
-    R1 = np.empty((N, nd), dtype=np.complex128)
-    R2 = np.empty((N, nd), dtype=np.complex128)
+    E, r, v = cvec[0], cvec[1], cvec[2]
+    phi, w = fvec[0], fvec[1]
     _dyads_positions(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, rot, arm,
                      E, r, phi, Q, EK, R1, R2, margin)
-    _dyads_velocities(crank_idx, omega, crank_arm, L, K, X, arm, EK, R1, R2, np.empty(nb),
-                      np.empty(nb, dtype=np.complex128), QD, PARTS)
-    _dyads_accelerations(crank_idx, crank_arm, L, K, X, arm, EK, R1, R2, QD, QDD)
+    _dyads_velocities(crank_idx, omega, crank_arm, L, K, X, arm, EK, R1, R2, w, v, QD, PARTS)
+    _dyads_accelerations(crank_idx, crank_arm, L, K, X, arm, EK, R1, R2, QD, QDD, fvec[2],
+                         cvec[3])

@@ -1008,13 +1008,14 @@ def _dyads_compiled(ds, t, signs=None):
     parts, margin = np.empty((N, n, nc)), np.empty(N)
     t = np.ascontiguousarray(t, dtype=float)
     if signs is None:
-        K.dyads_path(t, *args, Q, QD, QDD, parts, margin)
+        K.dyads_path(t, *args, Q, QD, QDD, parts, margin, *K.dyads_scratch(N, ds.pl.nb, len(args[4])))
         return Q, QD, QDD, parts, margin
     patterns, which = np.unique(signs.T, axis=0, return_inverse=True)
     for j, pattern in enumerate(patterns):
         sel = np.flatnonzero(which.reshape(-1) == j)
         out = [np.empty((len(sel),) + a.shape[1:]) for a in (Q, QD, QDD, parts, margin)]
-        K.dyads_path(t[sel], *args[:8], np.ascontiguousarray(pattern), *args[9:], *out)
+        K.dyads_path(t[sel], *args[:8], np.ascontiguousarray(pattern), *args[9:], *out,
+                     *K.dyads_scratch(len(sel), ds.pl.nb, len(args[4])))
         for a, b in zip((Q, QD, QDD, parts, margin), out):
             a[sel] = b
     return Q, QD, QDD, parts, margin
@@ -1340,10 +1341,14 @@ def _solve_newton_compiled(lk, pl, t, dt_max, start=None):
     info = np.zeros(2)
     w1 = lk.cranks[0].omega
     q0, t0 = (pl.q0, 0.0) if start is None else start
-    status = K.newton_path(q0, float(t0), np.ascontiguousarray(t, dtype=float), pl.ia, pl.ib, pl.sa,
+    vec = np.zeros((6, n))          # the kernel's scratch: it allocates nothing
+    vec[0] = q0
+    work = (np.empty(pl.nb), np.empty(pl.nb), np.empty((len(pl.ia), 4)), np.empty((len(pl.ga), 8)))
+    status = K.newton_path(float(t0), np.ascontiguousarray(t, dtype=float), pl.ia, pl.ib, pl.sa,
                            pl.sb, pl.crank_idx, pl.omega, 1e-12 * pl.scale, float(dt_max),
                            float(np.max(np.abs(pl.omega))), Q, QD, QDD, parts, info,
-                           pl.ga, pl.gb, pl.gs, pl.gu, pl.bs)
+                           pl.ga, pl.gb, pl.gs, pl.gu, pl.bs, work, np.empty((n, n)),
+                           np.empty(n, np.int64), vec, np.zeros((n, nc)))
     if status == K.SINGULAR_POSE:
         raise _singular_pose(lk)
     if status == K.LOCK:

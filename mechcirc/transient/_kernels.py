@@ -320,7 +320,10 @@ def dense_coefficients(z, y5, K, hh, coefD, P):
         P[3, i] = hh * r5
 
 
-@_leaf
+# dopri_stages, step_error, accept_step: inlined at their one site in dopri_run, which
+# counts no references (its scratch is the caller's): compiled apart, each was a layer
+# whose code LLVM optimised and emitted again in dopri_run
+@_jit_inline
 def dopri_stages(t, hh, z, K, ytmp, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, t0, dt, u,
                  coefA, coefC, codes):
     """Stages 2–7 of a Dormand–Prince step of hh from (t, z; K[0] = f(z)) into K[1 .. 6];
@@ -336,7 +339,7 @@ def dopri_stages(t, hh, z, K, ytmp, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, p
             u, K[s], codes)
 
 
-@_leaf
+@_jit_inline
 def step_error(z, ytmp, y5, K, hh, coefB4, atol, rtol):
     """The step's embedded error: RMS of (5th − 4th-order solution) scaled by
     atol_i + rtol max(|z_i|, |ŷ_i|); copies the 5th-order solution ``ytmp`` into ``y5``."""
@@ -353,7 +356,7 @@ def step_error(z, ytmp, y5, K, hh, coefB4, atol, rtol):
     return math.sqrt(err / N)
 
 
-@_leaf
+@_jit_inline
 def accept_step(t, t_new, hh, z, y5, K, P, t0, dt, nout, k_out, coefD, out):
     """Take the step t → t_new: the outputs inside (t, t_new] by the continuous extension
     (from row ``k_out`` on), then z ← y5 and K[0] ← K[6] (FSAL).  Returns the next output row."""
@@ -373,9 +376,9 @@ def accept_step(t, t_new, hh, z, y5, K, P, t0, dt, nout, k_out, coefD, out):
     return k_out
 
 
-@_jit
+@_leaf
 def dopri_run(z, t0, dt, nout, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, u, rtol, atol,
-              hmax, coefA, coefB4, coefC, coefD, dense, out, kink_tol=0.0):
+              hmax, coefA, coefB4, coefC, coefD, dense, out, K, V, P, codes, kink_tol=0.0):
     """Integrate from t0 and store z at t0 + k dt (k < nout) in ``out``; returns the step count.
 
     A step is accepted when the embedded error, scaled by atol_i + rtol |z_i|
@@ -386,17 +389,14 @@ def dopri_run(z, t0, dt, nout, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, u
     drive, so its kinks are always at step boundaries.  A trial step longer than
     ``kink_tol`` in which a clearance element changes branch is cut to end just
     past the switch (:func:`kink_theta`, :data:`KINK_MARGIN`).  Negative return:
-    the step size underflowed.  The matrices come from :func:`kernel_args`.
+    the step size underflowed.  The matrices come from :func:`kernel_args`; the scratch
+    (zeros) from :func:`scratch`: it allocates nothing, so it runs without reference counts.
     """
     N = z.shape[0]
-    K = np.zeros((7, N))
-    ytmp = np.zeros(N)
-    y5 = np.zeros(N)
-    P = np.zeros((4, N))
+    ytmp, y5 = V[0], V[1]
     # branch codes of the clearance elements at the step's start (kept from the last
     # accepted step's end) and at a trial step's end
-    codes0 = np.zeros(prm.shape[0], np.int64)
-    codes1 = np.zeros(prm.shape[0], np.int64)
+    codes0, codes1 = codes[0], codes[1]
     h_resume = 0.0
     t = t0
     for i in range(N):          # loops, not slices: numba compiles a slice's setitem
@@ -450,6 +450,13 @@ def dopri_run(z, t0, dt, nout, Ai, Av, B, xi, xv, dx, vi, vv, dv, ei, ev, prm, u
             if h < 1e-14 * max(1.0, abs(t)):
                 return -steps
     return steps
+
+
+def scratch(N, nprm):
+    """:func:`dopri_run`'s scratch for N states and nprm clearance elements: the stages K
+    (7, N), its 5th-order solutions (2, N), the continuous extension's P (4, N) and the
+    branch codes (2, nprm)."""
+    return np.zeros((7, N)), np.zeros((2, N)), np.zeros((4, N)), np.zeros((2, nprm), np.int64)
 
 
 def _wdot(wr, qr, wi, qi):

@@ -1132,6 +1132,7 @@ def _nonlinear(ss: StateSpace, circuit, z0, t, u, rtol, rate=None):
         z = z0.astype(float).copy()
         steps = kern.dopri_run(z, 0.0, h, t.size, *mats, u, tol, atol, hm,
                                kern._A, kern._B4, kern._C, kern._D, dense, out,
+                               *kern.scratch(N, mats[-1].shape[0]),
                                1e-6 * hm if locate else math.inf)
         if steps < 0:
             raise MechcircError("the clearance integrator's step fell below 1e-14 s "
