@@ -19,6 +19,8 @@ it takes a kernel only when numba's disk cache holds it (:func:`in_cache`;
 loading takes about 1 s, compiling 4–11 s of CPU), and otherwise runs its
 numpy path while a detached Python process compiles the kernel into the
 cache (:func:`warm_in_background`), for the next call or the next process.
+A kernel found there has the compiled functions it calls loaded from the cache
+first (:func:`_load_callees`), as an in-process compile has them.
 The environment variable ``MECHCIRC_NO_WARM=1`` turns that rule off: no
 detached process, and a kernel is compiled in-process on its first use, as
 numba does by default (a cluster, or a run that would rather wait once than
@@ -32,7 +34,7 @@ import os
 import sys
 from pathlib import Path
 
-__all__ = ["decorators", "COMPILED", "in_cache", "warm_in_background"]
+__all__ = ["decorators", "COMPILED", "use", "in_cache", "warm_in_background"]
 
 #: None: each caller decides; True: always the kernel; False: never (see above).
 COMPILED: bool | None = None
@@ -56,14 +58,9 @@ def decorators(force_python: bool = False, nrt: bool = True):
         except ImportError:          # the "fast" extra is not installed
             pass
         else:
-            flags = {} if nrt else {"_nrt": False}
-
-            def jit(fn):
-                return njit(cache=True, error_model="numpy", **flags)(fn)
-
-            def jit_inline(fn):
-                return njit(cache=True, error_model="numpy", inline="always")(fn)
-
+            flags: dict = {} if nrt else {"_nrt": False}
+            jit = njit(cache=True, error_model="numpy", **flags)     # (njit's decorators)
+            jit_inline = njit(cache=True, error_model="numpy", inline="always")
             return True, jit, jit_inline
     return False, _identity, _identity
 
@@ -86,13 +83,27 @@ def load(name: str, **flags):
     return module
 
 
+def use(statement: str, *dispatchers) -> bool:
+    """Whether a caller runs these compiled kernels (numba installed) rather than its other path.
+
+    True where :data:`COMPILED` is True, False where it is False; where it is None
+    (default), whether numba's disk cache holds them (:func:`in_cache`), and where it
+    does not, ``statement`` compiles them in a detached process (:func:`warm_in_background`).
+    """
+    if COMPILED is not None or in_cache(*dispatchers):
+        return COMPILED is not False
+    warm_in_background(statement)
+    return False
+
+
 def in_cache(*dispatchers) -> bool:
     """Whether numba's disk cache holds each of these compiled functions for its current source.
 
     Parameters
     ----------
     *dispatchers : numba Dispatcher
-        Functions decorated with ``njit(cache=True)``; nothing is compiled or loaded.
+        Functions decorated with ``njit(cache=True)``; nothing is compiled.  Those
+        found there have the functions they call loaded first (:func:`_load_callees`).
 
     Returns
     -------
@@ -104,14 +115,30 @@ def in_cache(*dispatchers) -> bool:
     try:
         for d in dispatchers:
             if d not in _IN_CACHE:      # an index read (~0.1 ms each) once per process
-                if os.environ.get("MECHCIRC_NO_WARM", "") not in ("", "0"):
-                    return True
-                if not d._cache._cache_file._load_index():
-                    return False
+                if not d._cache._cache_file._load_index():     # (with the rule off: compile)
+                    return os.environ.get("MECHCIRC_NO_WARM", "") not in ("", "0")
                 _IN_CACHE.add(d)
+                _load_callees(d)
         return True
     except Exception:
         return True
+
+
+def _load_callees(caller) -> None:
+    """Load from numba's cache the compiled functions ``caller`` calls, each before its callers.
+
+    A cached kernel's object code holds its own copies of the functions it calls
+    (weak symbols), used unless the process already holds those functions: loaded
+    alone it ran them from there, up to 1.4x slower than compiled in the process
+    (which calls each function's own library) by where they fell; see
+    docs/performance.md, "a kernel loaded from the cache".
+    """
+    for d in map(caller.py_func.__globals__.get, caller.py_func.__code__.co_names):
+        if isinstance(d, type(caller)) and not d.overloads:     # (loaded: so are its callees)
+            _load_callees(d)
+            for key in d._cache._cache_file._load_index():
+                if key == d._cache._index_key(key[0], d.targetctx.codegen()):   # this machine's
+                    d.compile(key[0])
 
 
 #: The dispatchers :func:`in_cache` has found in the cache (their source cannot change

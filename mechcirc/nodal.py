@@ -137,12 +137,11 @@ def kernels(work: int = 0):
     if not _KERNELS:
         from . import _nodal_kernels as k
 
-        if k.HAVE_NUMBA and _jit.COMPILED is None and not _jit.in_cache(
-                k.residual, k.sensitivities, k.band_assemble_factor, k.band_solve_perm,
-                k.band_bound):
+        if k.HAVE_NUMBA and not _jit.use(
+                "from mechcirc.nodal import warm_kernels; warm_kernels()", k.residual,
+                k.sensitivities, k.band_assemble_factor, k.band_solve_perm, k.band_bound):
             # Not compiled yet: numpy now (the same numbers), the kernels compiled
             # into numba's cache by a process of their own for a later sweep.
-            _jit.warm_in_background("from mechcirc.nodal import warm_kernels; warm_kernels()")
             return None
         _KERNELS.append(k if k.HAVE_NUMBA else None)
     return _KERNELS[0]

@@ -1312,10 +1312,9 @@ def _compiled(kernel: str) -> bool:
         return False
     from . import _linkage_kernels as K
 
-    if not K.HAVE_NUMBA or _jit.COMPILED or _jit.in_cache(getattr(K, kernel)):
-        return K.HAVE_NUMBA or bool(_jit.COMPILED)
-    _jit.warm_in_background(_WARM_STATEMENT)
-    return False
+    if not K.HAVE_NUMBA:
+        return bool(_jit.COMPILED)
+    return _jit.use(_WARM_STATEMENT, getattr(K, kernel))
 
 
 # Compiles both loops into numba's disk cache: a four-bar solved by each method.

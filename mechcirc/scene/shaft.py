@@ -404,14 +404,10 @@ def _shaft_kernels():
     while a detached process compiles it (the no-wait rule of :mod:`mechcirc._jit`)."""
     from .. import _jit
 
-    if _jit.COMPILED is not False:
-        from . import _motion_kernels as k
+    from . import _motion_kernels as k
 
-        if k.HAVE_NUMBA and (_jit.COMPILED or _jit.in_cache(k.rk_run, k.shaft_eval,
-                                                                   k.shaft_rhs)):
-            return k
-        if k.HAVE_NUMBA:
-            _jit.warm_in_background(_WARM_STATEMENT)
+    if k.HAVE_NUMBA and _jit.use(_WARM_STATEMENT, k.rk_run, k.shaft_eval, k.shaft_rhs):
+        return k
     return kernels_for("rk4-python")[0]
 
 

@@ -158,13 +158,10 @@ def kernels_for(method):
     global _PYK
     from . import _motion_kernels as k
 
-    if method != "rk4-python" and _jit.COMPILED is not False:
-        if k.HAVE_NUMBA and (_jit.COMPILED or _jit.in_cache(
-                k.rk_run, k.outputs, k.output_extrema, k.eval_many, k.point_samples,
-                *((k.rhs,) if method in SCIPY_METHODS else ()))):
-            return k, "numba"
-        if k.HAVE_NUMBA:
-            _jit.warm_in_background(_WARM_STATEMENT)
+    if method != "rk4-python" and k.HAVE_NUMBA and _jit.use(
+            _WARM_STATEMENT, k.rk_run, k.outputs, k.output_extrema, k.eval_many,
+            k.point_samples, *((k.rhs,) if method in SCIPY_METHODS else ())):
+        return k, "numba"
     if _PYK is None:
         _PYK = k.load_python()
     return _PYK, "python"

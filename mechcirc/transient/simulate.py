@@ -1055,11 +1055,9 @@ def _kernels():
     """
     from . import _kernels as kern
 
-    if not kern.HAVE_NUMBA or _jit.COMPILED or (_jit.COMPILED is None and _jit.in_cache(
-            kern.dopri_run, kern.modal_run, kern.law_many)):
+    if not kern.HAVE_NUMBA or _jit.use(_WARM_STATEMENT, kern.dopri_run, kern.modal_run,
+                                       kern.law_many):
         return kern
-    if _jit.COMPILED is None:
-        _jit.warm_in_background(_WARM_STATEMENT)
     if not _PYTHON_KERNELS:
         _PYTHON_KERNELS.append(kern.load_python())
     return _PYTHON_KERNELS[0]
