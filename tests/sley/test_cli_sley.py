@@ -80,6 +80,13 @@ def test_set_reads_each_value_in_its_parameters_unit():
     args = argparse.Namespace(alpha=10.0, beat_sign=-1, set=[
         "clearance=0.1deg", "omega=3000rpm", "I4=2500kg*cm^2", "k2=7kg*m^2/s", "l3=37mm",
         "M0=2kN*m", "C4=5e4"])
+    from dataclasses import fields
+
+    from mechcirc.sley import SleyParameters
+    from mechcirc.sley.models import UNIT_ROLES
+
+    # every numeric parameter has its unit (the text ones are set by --drive/--variant)
+    assert set(UNIT_ROLES) | {"drive", "label"} == {f.name for f in fields(SleyParameters)}
     got = _overrides(args)
     want = {"alpha": math.pi / 18, "beat_sign": -1, "clearance": math.pi / 1800,
             "omega": 100 * math.pi, "I4": 0.25, "k2": 7.0, "l3": 0.037, "M0": 2000.0,
