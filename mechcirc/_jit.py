@@ -89,9 +89,12 @@ def use(statement: str, *dispatchers) -> bool:
     True where :data:`COMPILED` is True, False where it is False; where it is None
     (default), whether numba's disk cache holds them (:func:`in_cache`), and where it
     does not, ``statement`` compiles them in a detached process (:func:`warm_in_background`).
+    Where they are used and cached, their callees are loaded first (:func:`in_cache`).
     """
-    if COMPILED is not None or in_cache(*dispatchers):
-        return COMPILED is not False
+    if COMPILED is False:
+        return False
+    if in_cache(*dispatchers) or COMPILED:
+        return True
     warm_in_background(statement)
     return False
 

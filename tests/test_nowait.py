@@ -148,3 +148,48 @@ def test_the_time_domain_warm_up_statements_run():
     done = subprocess.run([sys.executable, "-c", statements], cwd=ROOT, env=env,
                           capture_output=True, text=True, timeout=600)
     assert done.returncode == 0 and done.stdout == "ran\n", done.stderr[-2000:]
+
+
+_CHAIN = '''
+from numba import njit
+
+@njit(cache=True)
+def inner(x):
+    return 2.0 * x
+
+@njit(cache=True)
+def outer(x):
+    return inner(x) + 1.0
+'''
+
+_LOAD = '''
+import json, sys
+sys.path.insert(0, sys.argv[1])
+import chain
+from mechcirc import _jit
+_jit.COMPILED = {compiled}
+before = len(chain.inner.overloads)
+used = _jit.use("pass", chain.outer)
+stats = chain.inner.stats
+print(json.dumps([before, len(chain.inner.overloads), sum(stats.cache_hits.values()),
+                  sum(stats.cache_misses.values()), used, chain.outer(1.5)]))
+'''
+
+
+@pytest.mark.parametrize("compiled", [None, True])
+def test_a_cached_kernel_has_its_callees_loaded_from_the_cache_first(tmp_path, compiled):
+    """A kernel found in numba's cache gets the compiled functions it calls loaded from
+    the cache before it runs (as an in-process compile has them: docs/performance.md,
+    "a kernel loaded from the cache"); nothing is compiled for that."""
+    pytest.importorskip("numba")
+    (tmp_path / "chain.py").write_text(_CHAIN, encoding="utf-8")
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache"),
+           "PYTHONPATH": str(ROOT)}
+    env.pop("MECHCIRC_NO_WARM", None)
+    subprocess.run([sys.executable, "-c", f"import sys; sys.path.insert(0, {str(tmp_path)!r});"
+                    " import chain; chain.outer(1.0)"], env=env, check=True, timeout=600)
+    out = subprocess.run([sys.executable, "-c", _LOAD.format(compiled=compiled),
+                          str(tmp_path)], env=env, check=True, capture_output=True, text=True,
+                         timeout=600).stdout
+    before, after, hits, misses, used, value = __import__("json").loads(out)
+    assert (before, after, hits, misses, used, value) == (0, 1, 1, 0, True, 4.0)
