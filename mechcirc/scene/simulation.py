@@ -273,8 +273,11 @@ def max_rate(model: MotionModel, samples: int = 72) -> float:
 
 
 def _max_rate(model: MotionModel, samples: int) -> float:
-    return float(max(np.max(np.abs(np.linalg.eigvals(state_matrix(*linear_matrices(model, th)))))
-                     for th in np.linspace(0.0, model.scene.cycle, samples, endpoint=False)))
+    def rate(th):               # the fastest mode's |λ| of the linearised motion at θ
+        return np.max(np.abs(np.linalg.eigvals(state_matrix(*linear_matrices(model, th)))))
+
+    return float(max(rate(th) for th in np.linspace(0.0, model.scene.cycle, samples,
+                                                    endpoint=False)))
 
 
 def state_matrix(M, D, K):
