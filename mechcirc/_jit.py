@@ -19,8 +19,10 @@ it takes a kernel only when numba's disk cache holds it (:func:`in_cache`;
 loading takes about 1 s, compiling 4–11 s of CPU), and otherwise runs its
 numpy path while a detached Python process compiles the kernel into the
 cache (:func:`warm_in_background`), for the next call or the next process.
-A kernel found there has the compiled functions it calls loaded from the cache
-first (:func:`_load_callees`), as an in-process compile has them.
+A kernel counts as found there when the functions it calls are too, compiled on
+this machine with their data files present (else its first call would compile
+them in the process); they are loaded from the cache before it, as an
+in-process compile has them.
 The environment variable ``MECHCIRC_NO_WARM=1`` turns that rule off: no
 detached process, and a kernel is compiled in-process on its first use, as
 numba does by default (a cluster, or a run that would rather wait once than
@@ -106,42 +108,62 @@ def in_cache(*dispatchers) -> bool:
     ----------
     *dispatchers : numba Dispatcher
         Functions decorated with ``njit(cache=True)``; nothing is compiled.  Those
-        found there have the functions they call loaded first (:func:`_load_callees`).
+        found there have the functions they call loaded first.
 
     Returns
     -------
     bool
-        True if every one is in the cache; True also where the cache cannot
-        be asked (numba's private layout changed) or ``MECHCIRC_NO_WARM`` is
-        set: the caller then loads, or compiles, as it would without the check.
+        True if every one, and every function it calls, is in the cache for this
+        machine with its data file (or already in the process); True also where
+        the cache cannot be asked (numba's private layout changed) or
+        ``MECHCIRC_NO_WARM`` is set: the caller then loads, or compiles, as it
+        would without the check.
     """
     try:
         for d in dispatchers:
-            if d not in _IN_CACHE:      # an index read (~0.1 ms each) once per process
-                if not d._cache._cache_file._load_index():     # (with the rule off: compile)
+            if d not in _IN_CACHE:      # index reads (~0.1 ms each) once per process
+                todo = [(c, _held(c)) for c in [*_callees(d), d]
+                        if not (c.overloads or _inlined(c))]
+                if not all(sigs for _, sigs in todo):
                     return os.environ.get("MECHCIRC_NO_WARM", "") not in ("", "0")
+                # A cached kernel's object code holds its own copies of the functions it
+                # calls (weak symbols), used unless the process already holds them: loaded
+                # alone it ran them from there, up to 1.4x slower than compiled in the
+                # process (docs/performance.md, "a kernel loaded from the cache").  So its
+                # callees are loaded first, each after its own.
+                for c, sigs in todo:
+                    for sig in sigs if c is not d else ():
+                        c.compile(sig)
                 _IN_CACHE.add(d)
-                _load_callees(d)
         return True
     except Exception:
         return True
 
 
-def _load_callees(caller) -> None:
-    """Load from numba's cache the compiled functions ``caller`` calls, each before its callers.
-
-    A cached kernel's object code holds its own copies of the functions it calls
-    (weak symbols), used unless the process already holds those functions: loaded
-    alone it ran them from there, up to 1.4x slower than compiled in the process
-    (which calls each function's own library) by where they fell; see
-    docs/performance.md, "a kernel loaded from the cache".
-    """
+def _callees(caller) -> list:
+    """The compiled functions ``caller`` calls, directly or not, each after its own callees."""
+    found: list = []
     for d in map(caller.py_func.__globals__.get, caller.py_func.__code__.co_names):
-        if isinstance(d, type(caller)) and not d.overloads:     # (loaded: so are its callees)
-            _load_callees(d)
-            for key in d._cache._cache_file._load_index():
-                if key == d._cache._index_key(key[0], d.targetctx.codegen()):   # this machine's
-                    d.compile(key[0])
+        if isinstance(d, type(caller)) and d not in found:
+            found += [c for c in _callees(d) if c not in found] + [d]
+    return found
+
+
+def _inlined(d) -> bool:
+    """Whether ``d`` is only copied into its callers (``inline="always"``): never cached alone."""
+    return d.targetoptions.get("inline") == "always"
+
+
+def _held(d) -> list:
+    """The signatures numba's cache holds for ``d`` compiled on this machine, data file present.
+
+    An index entry whose data file is gone (or another machine's entry) would have
+    ``d`` compiled in the process on its first call: the wait :func:`use` avoids.
+    """
+    index, codegen = d._cache._cache_file, d.targetctx.codegen()
+    return [key[0] for key, name in index._load_index().items()
+            if key == d._cache._index_key(key[0], codegen)
+            and os.path.exists(index._data_path(name))]
 
 
 #: The dispatchers :func:`in_cache` has found in the cache (their source cannot change

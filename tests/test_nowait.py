@@ -176,6 +176,9 @@ for name, compiled in (("chain_none", None), ("chain_true", True)):
     stats = chain.inner.stats
     out.append([before, len(chain.inner.overloads), sum(stats.cache_hits.values()),
                 sum(stats.cache_misses.values()), used, chain.outer(1.5)])
+gone = __import__("chain_gone")         # its callee's data file deleted: not to be waited for
+_jit.COMPILED, _jit.warm_in_background = None, out.append
+out.append([_jit.use("warm", gone.outer), len(gone.inner.overloads), len(gone.outer.overloads)])
 print(json.dumps(out))
 """
 
@@ -184,22 +187,27 @@ def test_a_cached_kernel_has_its_callees_loaded_from_the_cache_first(tmp_path):
     """A kernel found in numba's cache gets the compiled functions it calls loaded from
     the cache before it runs (as an in-process compile has them: docs/performance.md,
     "a kernel loaded from the cache"), with ``COMPILED`` None and True; nothing is
-    compiled for that.  The chains are compiled into the cache here, and loaded in a
-    fresh process (one, to keep the suite's CPU down)."""
+    compiled for that.  Where a callee's data file is gone from the cache, the kernel
+    counts as not cached (its first call would compile that callee in the process).
+    The chains are compiled into the cache here, and loaded in a fresh process (one,
+    to keep the suite's CPU down)."""
     pytest.importorskip("numba")
     import importlib
 
     sys.path.insert(0, str(tmp_path))
     try:
-        for name in ("chain_none", "chain_true"):
+        for name in ("chain_none", "chain_true", "chain_gone"):
             (tmp_path / f"{name}.py").write_text(_CHAIN, encoding="utf-8")
             importlib.import_module(name).outer(1.0)    # compiled here, into numba's cache
     finally:
         sys.path.remove(str(tmp_path))
-        for name in ("chain_none", "chain_true"):
+        for name in ("chain_none", "chain_true", "chain_gone"):
             sys.modules.pop(name, None)
+    gone = [p for p in tmp_path.rglob("chain_gone.inner-*.nbc")]
+    assert len(gone) == 1
+    gone[0].unlink()
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     env.pop("MECHCIRC_NO_WARM", None)
     out = subprocess.run([sys.executable, "-c", _LOAD, str(tmp_path)], env=env, check=True,
                          capture_output=True, text=True, timeout=600).stdout
-    assert __import__("json").loads(out) == [[0, 1, 1, 0, True, 4.0]] * 2
+    assert __import__("json").loads(out) == [[0, 1, 1, 0, True, 4.0]] * 2 + ["warm", [False, 0, 0]]
