@@ -1466,10 +1466,7 @@ def _journal_in_order(journal: str, width: int, chunk: int = 65536):
             pos += len(line)
         idx = np.frombuffer(index, dtype=np.int64) if index else np.zeros(0, np.int64)
         offs = np.frombuffer(offset, dtype=np.int64) if offset else np.zeros(0, np.int64)
-        order = np.argsort(idx, kind="stable")
-        idx, offs = idx[order], offs[order]
-        first = np.ones(idx.size, dtype=bool)
-        first[1:] = idx[1:] != idx[:-1]
+        _, first = np.unique(idx, return_index=True)   # each point's first row, by index
         offs = offs[first]
         in_order = bool(np.all(np.diff(offs) > 0))
         for start in range(0, offs.size, chunk):
