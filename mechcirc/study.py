@@ -101,7 +101,7 @@ import sys
 import threading
 import warnings
 import zlib
-from dataclasses import dataclass, field, fields, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Callable, NoReturn, TextIO
 
@@ -177,12 +177,9 @@ _UNITS = {"index": "1", "status": "", "error": "", "K_abs_min": "m/(N·s)",
           "n_flagged": "1", "resonance": "rad/s", "antiresonance": "rad/s",
           "eps2P": "1/s²", "eps4P": "1/s²", "eps4T": "1/s²", "eps5P": "1/s²",
           "M2V": "N·m", "M5V": "N·m"}
-#: Units of the sley parameters a study may vary (:class:`mechcirc.sley.SleyParameters`).
-_SLEY_UNITS = {"I2P": "kg·m²", "I4": "kg·m²", "I4P": "kg·m²", "I5P": "kg·m²", "I7": "kg·m²",
-               "C2": "N·m/rad", "C4": "N·m/rad", "C5": "N·m/rad", "C7": "N·m/rad",
-               "k2": "kg·m²/s", "k4": "kg·m²/s", "k5": "kg·m²/s", "k7": "kg·m²/s",
-               "omega": "rad/s", "clearance": "rad", "M0": "N·m", "alpha": "rad",
-               "l2P": "m", "l3": "m", "l4": "m", "d": "m"}
+#: The SI unit of each unit role of a sley parameter (:data:`mechcirc.sley.models.UNIT_ROLES`).
+_ROLE_UNITS = {"rotary inertia": "kg·m²", "rotary spring": "N·m/rad", "rotary damper": "kg·m²/s",
+               "length": "m", "angle": "rad", "omega": "rad/s", "moment": "N·m"}
 
 
 def column_units(spec: StudySpec) -> dict[str, str | None]:
@@ -395,7 +392,7 @@ def _parse_spec(data: dict, source: str, base: Path) -> StudySpec:
     sley: tuple[str, int, int, int] | None = None
     if analysis == "simulate":
         sley = _sley_settings(data.get("sley", {}), names, kind)
-        units = tuple(_SLEY_UNITS.get(n) for n in names)
+        units = tuple(map(_sley_units().get, names))
     else:
         missing = [n for n in names if n not in roles]     # each a .param, checked once
         if missing:
@@ -553,7 +550,7 @@ def _sample_file(table: dict, base: Path, analysis: str, roles: dict):
                            else _csv_records)(path)
     except NetlistError as exc:
         _fail(("sample", "file"), f"sample file {source!r}: {exc.message}")
-    known, what = (_sley_names(), "a sley parameter") if analysis == "simulate" else \
+    known, what = (set(_sley_units()), "a sley parameter") if analysis == "simulate" else \
         (set(roles), "a .param of the netlist")
     names = _sample_header(header, source, known, what)
     if not records:
@@ -725,11 +722,12 @@ def _param_roles(text: str, path) -> dict[str, tuple[str | None, str | None]]:
                    reasons.get(name)) for name in circuit.params}
 
 
-def _sley_names() -> set[str]:
-    """The :class:`~mechcirc.sley.SleyParameters` fields a study may vary."""
-    from .sley import SleyParameters
+def _sley_units() -> dict[str, str]:
+    """The unit of each :class:`~mechcirc.sley.SleyParameters` field a study may vary, from
+    its role in :data:`mechcirc.sley.models.UNIT_ROLES`."""
+    from .sley.models import UNIT_ROLES
 
-    return {f.name for f in fields(SleyParameters)} - {"drive", "label", "branch", "beat_sign"}
+    return {n: _ROLE_UNITS[r] for n, r in UNIT_ROLES.items() if n not in ("branch", "beat_sign")}
 
 
 def _sley_settings(table, names, kind: str) -> tuple[str, int, int, int]:
@@ -746,7 +744,7 @@ def _sley_settings(table, names, kind: str) -> tuple[str, int, int, int]:
         for key, default, lo, hi in (("variant", 3, 1, 7), ("revolutions", 5, 1, MAX_REVOLUTIONS),
                                      ("points_per_revolution", 7200, 16,
                                       MAX_POINTS_PER_REVOLUTION))]
-    known = _sley_names()
+    known = _sley_units()
     bad = [n for n in names if n not in known]
     if bad:
         _fail((kind,), f"{', '.join(bad)} is not a sley parameter{did_you_mean(bad[0], known)}"
@@ -1468,10 +1466,7 @@ def _journal_in_order(journal: str, width: int, chunk: int = 65536):
             pos += len(line)
         idx = np.frombuffer(index, dtype=np.int64) if index else np.zeros(0, np.int64)
         offs = np.frombuffer(offset, dtype=np.int64) if offset else np.zeros(0, np.int64)
-        order = np.argsort(idx, kind="stable")
-        idx, offs = idx[order], offs[order]
-        first = np.ones(idx.size, dtype=bool)
-        first[1:] = idx[1:] != idx[:-1]
+        _, first = np.unique(idx, return_index=True)   # each point's first row, by index
         offs = offs[first]
         in_order = bool(np.all(np.diff(offs) > 0))
         for start in range(0, offs.size, chunk):

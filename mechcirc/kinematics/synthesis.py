@@ -702,24 +702,17 @@ class _Space:
             return None
 
         def cost(x):
-            # the objective of _screen, in plain floats (one point: numpy's
-            # per-call cost would dominate)
             p = dict(base, **dict(zip(free, x)))
-            a_, psi_ = p["a"], p["psi"]
-            ba_, other_ = self.ratios(a_, p["ba"], p["other"])
-            u = _eq10_root_scalar(psi_, ba_, other_, root)
-            if u is None:
+            shape = self.shape(p, root)
+            if self.limits_in_ratio and not self.in_ranges(shape[2], shape[4]):
                 return 1e6
-            ca_, da_ = self.split(math.sqrt(u), other_)
-            if self.limits_in_ratio and not self.in_ranges(ba_, da_):
+            cols = _screen(*shape)
+            if not cols["_valid"]:
                 return 1e6
-            got = _screen_scalar(a_, psi_, ba_, ca_, da_)
-            if got is None:
-                return 1e6
-            worst, ratio = got
+            worst = float(min(cols[n][1] for n in _SHAPE_CRITERIA))
             if objective == "margin":
                 return -worst
-            return ratio if worst > 0 else 1e3 - worst
+            return float(cols["acceleration_ratio"][2]) if worst > 0 else 1e3 - worst
 
         res = minimize(cost, np.array(x0), method="Nelder-Mead", bounds=bounds,
                        options={"xatol": 1e-8, "fatol": 1e-11, "maxiter": 2000})
@@ -743,65 +736,21 @@ class _Space:
                 bounds.append(rng)
         return free, x0, bounds
 
+    def shape(self, p, root):
+        """(a, ψ, b/a, c/a, d/a) at the parameters ``p``, c/a or d/a from root ``root`` of
+        eq. (10) (NaN where it has none)."""
+        a, psi = p["a"], p["psi"]
+        ba, other = self.ratios(a, p["ba"], p["other"])
+        u = _eq10_roots_squared(psi, ba, other)[root]
+        with np.errstate(invalid="ignore"):
+            ca, da = self.split(np.sqrt(u), other)
+        return a, psi, ba, ca, da
+
     def lengths(self, p, root):
         """Lengths (a, b, c, d) [mm] at the parameters ``p``, c/a or d/a from root
         ``root`` of eq. (10)."""
-        A = np.array([p["a"]])
-        BA, OTHER = self.ratios(A, np.array([p["ba"]]), np.array([p["other"]]))
-        u = _eq10_roots_squared(np.array([p["psi"]]), BA, OTHER)[root]
-        with np.errstate(invalid="ignore"):
-            CA, DA = self.split(np.sqrt(u), OTHER)
-        a = float(A[0])
-        return a, a * float(BA[0]), a * float(CA[0]), a * float(DA[0])
-
-
-def _eq10_root_scalar(psi, b_a, other, which):
-    """Root ``which`` (0 larger, 1 smaller) u > 0 of eq. (10) as in :func:`_eq10_roots_squared`."""
-    A, B, disc = _eq10_quadratic(math.cos(psi), math.sin(psi) ** 2, b_a, other)
-    if not disc >= 0 or A == 0:
-        return None
-    sq = math.sqrt(disc)
-    u = (-B + sq) / (2 * A) if which == 0 else (-B - sq) / (2 * A)
-    return u if u > 0 else None
-
-
-def _screen_scalar(a, psi, ba, ca, da):
-    """(smallest shape margin, |Φ2''|/|Φ1''|) of one design as :func:`_screen` computes them.
-
-    None where the screen marks the design invalid.
-    """
-    try:
-        longest = max(ba, ca, da)
-        if not (1 + longest < ba + ca + da - longest and ba > 1 and ca > 1 and da > 1):
-            return None
-        c1 = (ca ** 2 + (1 + ba) ** 2 - da ** 2) / (2 * (1 + ba) * ca)
-        c2 = (ca ** 2 + (ba - 1) ** 2 - da ** 2) / (2 * (ba - 1) * ca)
-        if not (-1 <= c1 <= 1 and -1 <= c2 <= 1):
-            return None
-        mu1, mu2 = math.acos(c1), math.acos(c2)
-        cf = (ca ** 2 + da ** 2 - (ba + 1) ** 2) / (2 * ca * da)
-        cb = (ca ** 2 + da ** 2 - (ba - 1) ** 2) / (2 * ca * da)
-        if not (-1 <= cf <= 1 and -1 <= cb <= 1):
-            return None
-        if not abs(abs(math.acos(cf) - math.acos(cb)) - psi) < 1e-7:
-            return None
-        g1 = math.degrees(min(mu1, math.pi - mu1))
-
-        def acute_at(bd):
-            ang = math.acos(max(-1.0, min(1.0, (ba ** 2 + ca ** 2 - bd ** 2) / (2 * ba * ca))))
-            return min(ang, math.pi - ang)
-
-        gmin = math.degrees(min(acute_at(da - 1), acute_at(da + 1)))
-        ratio = 1.0 / ((ba + 1) / (ba - 1) * math.sin(mu2) / math.sin(mu1))
-        bound = ba / psi
-        margins = ((g1 - FRONT_TRANSMISSION_MIN_DEG) / FRONT_TRANSMISSION_MIN_DEG,
-                   (gmin - MIN_TRANSMISSION_MIN_DEG) / MIN_TRANSMISSION_MIN_DEG,
-                   (ACCELERATION_RATIO_MAX - ratio) / ACCELERATION_RATIO_MAX,
-                   (FRAME_MAX_MM - a * da) / FRAME_MAX_MM,
-                   (ca - bound) / bound)
-        return min(margins), ratio
-    except (ZeroDivisionError, ValueError):
-        return None
+        a, _, ba, ca, da = (float(x) for x in self.shape(p, root))
+        return a, a * ba, a * ca, a * da
 
 
 def _screen(A, PSI, BA, CA, DA):
