@@ -17,7 +17,8 @@ its K is from the package's) and its solve, in two layouts —
 
 Each kernel is called over the whole 401 ω at once and, for the factor and
 solve, also in the sweep's own chunks (``nodal._KERNEL_CHUNK`` (ω, unknown)
-pairs: 8 ω at 500 unknowns, 1 at 5,000), which is what a sweep pays.  CPU
+pairs, at least ``nodal._KERNEL_MIN_OMEGA`` ω: 16 ω at 500 and at 5,000 unknowns;
+before the seventh session 8 and 1), which is what a sweep pays.  CPU
 medians of ``--repeats``, in ns per unknown per ω.
 
 Run from the repository root::
@@ -32,7 +33,6 @@ from __future__ import annotations
 import argparse
 import os
 import sys
-import time
 from pathlib import Path
 
 import numba
@@ -41,6 +41,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from bench_sp_sweep import ladder_netlist, ladder_numbers  # noqa: E402
+from bench_sp_sweep import median_time as cpu  # noqa: E402
 
 import mechcirc  # noqa: E402
 from mechcirc import _jit, nodal  # noqa: E402
@@ -112,15 +113,6 @@ def floor_omega(dr, di, lr, li, ur, ui, br, bi):
             bi[j, k] = tr * di[j, k] + ti * dr[j, k]
 
 
-def cpu(fn, repeats):
-    times = []
-    for _ in range(repeats):
-        t0 = time.process_time()
-        fn()
-        times.append(time.process_time() - t0)
-    return float(np.median(times))
-
-
 def run(n_el, omega, repeats):
     from mechcirc import _nodal_kernels as kern
 
@@ -129,15 +121,16 @@ def run(n_el, omega, repeats):
     n, kl, nw = pat.n, sol.kl, omega.size
     assert sol.kind == "band", sol.kind
     rhs = system.injection()
-    chunk = max(1, nodal._KERNEL_CHUNK // n)
+    chunk = max(nodal._KERNEL_MIN_OMEGA, nodal._KERNEL_CHUNK // n)
     rows = 3 * kl + 1
+    work = np.empty((2 * n * rows + 4) * nw)          # reused, as the solver does
     ab = np.empty((nw, n, rows), complex)
     ipiv = np.empty((nw, n), np.int64)
     ok = np.ones(nw, bool)
 
     def factor_all():
         kern.band_assemble_factor(pat.dc, pat.m, pat.k, omega, sol.dest[0], sol.dest[1],
-                                  kl, ab, ipiv, ok)
+                                  kl, ab, ipiv, ok, work)
 
     def factor_chunks():                        # as a sweep does: fresh arrays per chunk
         for s in range(0, nw, chunk):
@@ -145,7 +138,7 @@ def run(n_el, omega, repeats):
             a = np.empty((w.size, n, rows), complex)
             kern.band_assemble_factor(pat.dc, pat.m, pat.k, w, sol.dest[0], sol.dest[1],
                                       kl, a, np.empty((w.size, n), np.int64),
-                                      np.ones(w.size, bool))
+                                      np.ones(w.size, bool), work)
     factor_all()
     r = np.require(np.broadcast_to(rhs, (nw, n)), complex, ("C", "W"))
     every = np.arange(nw)

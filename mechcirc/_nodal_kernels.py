@@ -134,65 +134,127 @@ def residual(omega, xr, xi, xlr, xli, has_lo, rhs, b_i, b_j, b_s,
 
 
 @_jit_inline
-def _band_lu(a, kl, ipiv):
-    """LU with partial pivoting of one banded matrix in place (LAPACK's zgbtf2); False if singular.
+def _recip(br, bi, live):
+    """1/(br + j bi), the bits of numba's (CPython's) complex division, which branches on
+    the larger part; here both cases are formed and one is selected, so that the loop
+    over ω vectorises (br + j bi finite and nonzero; where not ``live``, 1).
 
-    ``a[c, 2·kl + i − c]`` holds A[i, c] (kl = ku; the first kl of the
-    3·kl + 1 places of a column are room for the fill).  The pivot is the
-    largest |re| + |im| in the column, as LAPACK's izamax picks it.
+    With a = 1: case |br| ≥ |bi|: ((1 + 0·ρ) / δ, (0 − 1·ρ) / δ), ρ = bi/br,
+    δ = br + bi·ρ; otherwise ((1·ρ + 0) / δ, (0·ρ − 1) / δ), ρ = br/bi,
+    δ = br·ρ + bi — for a finite ρ, the numerators 1, 0 − ρ, ρ + 0 and −1 exactly.
     """
-    n = a.shape[0]
+    s = abs(br) < abs(bi)
+    p = bi if s else br
+    q = br if s else bi
+    p = p if live else 1.0
+    ratio = q / p
+    denom = p + q * ratio
+    return (ratio + 0.0 if s else 1.0) / denom, (-1.0 if s else 0.0 - ratio) / denom
+
+
+@_jit_inline
+def _band_lu(re, im, kl, ipiv, ok, best, jp, rr, ri):
+    """LU with partial pivoting of banded matrices in place (LAPACK's zgbtf2), ω innermost.
+
+    ``re[c, 2·kl + i − c, k]`` + j ``im[…]`` holds A_k[i, c] (kl = ku; the first kl of
+    the 3·kl + 1 places of a column are room for the fill).  Each ω's operations are
+    those of the LU one ω at a time (the pivot the largest |re| + |im| in the column,
+    as LAPACK's izamax picks it; the multipliers an entry times the pivot's reciprocal;
+    complex products as numba forms them), done for all ω of a column at once with
+    selects instead of branches, so that the loops over ω vectorise: the rows are
+    swapped and the columns updated up to j + 2·kl, past each ω's own fill (zeros
+    there: swapped with zeros, and a zero multiplier's update not applied).
+    ``ok[k]`` is cleared where a pivot is 0 or not finite; that ω's factors are then
+    not used.  ``best``, ``jp``, ``rr``, ``ri``: work arrays of the ω.
+    """
+    n, _, nw = re.shape
     kv = 2 * kl
-    ju = 0
     for j in range(n):
         km = min(kl, n - 1 - j)
-        jp = 0
-        best = -1.0
+        ju = min(j + kv, n - 1)
+        best[:] = -1.0
+        jp[:] = 0
         for t in range(km + 1):
-            z = a[j, kv + t]
-            m = abs(z.real) + abs(z.imag)
-            if m > best:
-                best = m
-                jp = t
-        ipiv[j] = j + jp
-        if best == 0.0 or not np.isfinite(best):
-            return False
-        ju = max(ju, min(j + kl + jp, n - 1))
-        if jp != 0:
-            for c in range(j, ju + 1):
-                tmp = a[c, kv + j - c]
-                a[c, kv + j - c] = a[c, kv + j + jp - c]
-                a[c, kv + j + jp - c] = tmp
-        if km > 0:
-            recip = 1.0 / a[j, kv]
+            pr, pi = re[j, kv + t], im[j, kv + t]
+            for k in range(nw):
+                m = abs(pr[k]) + abs(pi[k])
+                g = m > best[k]
+                best[k] = m if g else best[k]
+                jp[k] = t if g else jp[k]
+        for k in range(nw):
+            ipiv[k, j] = j + jp[k]
+            ok[k] = ok[k] and best[k] != 0.0 and np.isfinite(best[k])
+        for c in range(j, ju + 1):
+            d = kv + j - c
+            xr, xi = re[c, d], im[c, d]
             for t in range(1, km + 1):
-                a[j, kv + t] *= recip
+                yr, yi = re[c, d + t], im[c, d + t]
+                for k in range(nw):
+                    sw = jp[k] == t
+                    a, b = xr[k], yr[k]
+                    xr[k] = b if sw else a
+                    yr[k] = a if sw else b
+                    a, b = xi[k], yi[k]
+                    xi[k] = b if sw else a
+                    yi[k] = a if sw else b
+        if km > 0:
+            for k in range(nw):
+                rr[k], ri[k] = _recip(re[j, kv, k], im[j, kv, k], ok[k])
+            for t in range(1, km + 1):
+                lr, li = re[j, kv + t], im[j, kv + t]
+                for k in range(nw):
+                    a, b = lr[k], li[k]
+                    lr[k] = a * rr[k] - b * ri[k]
+                    li[k] = a * ri[k] + b * rr[k]
             for c in range(j + 1, ju + 1):
-                u = a[c, kv + j - c]
-                if u != 0:
-                    for t in range(1, km + 1):
-                        a[c, kv + j + t - c] -= a[j, kv + t] * u
-    return True
+                d = kv + j - c
+                ur, ui = re[c, d], im[c, d]
+                for t in range(1, km + 1):
+                    lr, li = re[j, kv + t], im[j, kv + t]
+                    vr, vi = re[c, d + t], im[c, d + t]
+                    for k in range(nw):
+                        nz = ur[k] != 0.0 or ui[k] != 0.0
+                        a = vr[k] - (lr[k] * ur[k] - li[k] * ui[k])
+                        b = vi[k] - (lr[k] * ui[k] + li[k] * ur[k])
+                        vr[k] = a if nz else vr[k]
+                        vi[k] = b if nz else vi[k]
 
 
 @_jit
-def band_assemble_factor(dc, m, kk, omega, dest_c, dest_r, kl, ab, ipiv, ok):
-    """Form A(ω_k) = dc + j(ω_k m − kk/ω_k) (:func:`mechcirc.nodal.combine`) in band
-    storage ``ab[k, dest_c, dest_r]`` and factorise it at once (while it is in cache).
+def band_assemble_factor(dc, m, kk, omega, dest_c, dest_r, kl, ab, ipiv, ok, work):
+    """Form A(ω_k) = dc + j(ω_k m − kk/ω_k) (:func:`mechcirc.nodal.combine`) and factorise
+    it (:func:`_band_lu`), all ω of the call together, into band storage ``ab[k, dest_c,
+    dest_r]``.
 
-    ``ok[k]`` is cleared where an entry is not finite or A is singular.
+    ``work``: float64, at least (2·n·(3·kl + 1) + 4)·n_ω long, reused from call to call
+    (the ω-innermost real and imaginary parts; fresh arrays of this size would be fresh
+    pages).  ``ok[k]`` is cleared where an entry is not finite or A is singular.
     """
-    for k in range(omega.size):
-        w = omega[k]
-        a = ab[k]
-        a[:, :] = 0
-        fin = True
-        for t in range(dc.size):
-            z = complex(dc[t], w * m[t] - kk[t] / w)
-            if not (np.isfinite(z.real) and np.isfinite(z.imag)):
-                fin = False
-            a[dest_c[t], dest_r[t]] = z
-        ok[k] = fin and _band_lu(a, kl, ipiv[k])
+    nw = omega.size
+    n, rows = ab.shape[1], ab.shape[2]
+    size = n * rows * nw
+    re = work[:size].reshape((n, rows, nw))
+    im = work[size:2 * size].reshape((n, rows, nw))
+    re[:] = 0.0
+    im[:] = 0.0
+    ok[:] = True
+    for t in range(dc.size):
+        zr, zi = re[dest_c[t], dest_r[t]], im[dest_c[t], dest_r[t]]
+        for k in range(nw):
+            zr[k] = dc[t]
+            zi[k] = omega[k] * m[t] - kk[t] / omega[k]
+    for t in range(dc.size):                # (a loop of its own: the one above vectorises)
+        zr, zi = re[dest_c[t], dest_r[t]], im[dest_c[t], dest_r[t]]
+        for k in range(nw):
+            ok[k] &= np.isfinite(zr[k]) & np.isfinite(zi[k])
+    v = work[2 * size:2 * size + 4 * nw]
+    _band_lu(re, im, kl, ipiv, ok, v[:nw], np.zeros(nw, dtype=np.int64), v[nw:2 * nw],
+             v[2 * nw:3 * nw])
+    for c in range(n):
+        for r in range(rows):
+            zr, zi = re[c, r], im[c, r]
+            for k in range(nw):
+                ab[k, c, r] = complex(zr[k], zi[k])
 
 
 #: ω solved side by side by :func:`band_solve_perm`: their substitutions are

@@ -472,6 +472,7 @@ class SparseSolver:
             self.kind = "band"
             self.p = p
             self.band_rows = 3 * kl + 1
+            self._work = np.empty(0)                # the compiled LU's (_banded_compiled)
             self.dest = (ci, 2 * kl + ri - ci)            # in the (n, rows) C-order array
             self.max_chunk = max(1, min(512, 2 ** 22 // max(1, n * self.band_rows)))
             # The numpy path: the matrices by rows, rb[i, t] = A[i, i − kl + t].
@@ -529,8 +530,11 @@ class SparseSolver:
         ab = np.empty((omega.size, n, self.band_rows), dtype=complex)
         ipiv = np.empty((omega.size, n), dtype=np.int64)
         good = np.ones(omega.size, dtype=bool)
+        need = (2 * n * self.band_rows + 4) * omega.size
+        if self._work.size < need:          # kept for the next chunks: no fresh pages
+            self._work = np.empty(need)
         kern.band_assemble_factor(pat.dc, pat.m, pat.k, omega, self.dest[0], self.dest[1],
-                                  kl, ab, ipiv, good)
+                                  kl, ab, ipiv, good, self._work)
         if not good.all():
             ab, ipiv = ab[good], ipiv[good]
         p = self.p
