@@ -123,8 +123,7 @@ def breakdown(sizes, omega, repeats) -> None:
         good, fn = out
         box = type("Solves", (), {"solve": staticmethod(fn)})
         timed(box, "solve", "solves")
-        # (a _BoundSolve again: its bound, and the rows of a block of factors)
-        return good, _nodal_solvers._BoundSolve(box.solve, getattr(fn, "bound", None))
+        return good, box.solve
 
     timed(mechcirc, "parse", "parse")
     timed(_nodal_equations, "assemble", "assemble")
