@@ -52,7 +52,7 @@ from mechcirc._nodal_solvers import solver  # noqa: E402
 @numba.njit(cache=True)
 def floor_node(ab, kl, r, x):
     """LU without pivoting and one solve, per ω, nodes innermost (band storage as the
-    package's: ``ab[k, c, 2·kl + i − c]`` = A[i, c]); x = A⁻¹ r."""
+    package's before its seventh session: ``ab[k, c, 2·kl + i − c]`` = A[i, c]); x = A⁻¹ r."""
     n_w, n = x.shape
     kv = 2 * kl
     for k in range(n_w):
@@ -123,22 +123,20 @@ def run(n_el, omega, repeats):
     rhs = system.injection()
     chunk = max(nodal._KERNEL_MIN_OMEGA, nodal._KERNEL_CHUNK // n)
     rows = 3 * kl + 1
-    work = np.empty((2 * n * rows + 4) * nw)          # reused, as the solver does
-    ab = np.empty((nw, n, rows), complex)
-    ipiv = np.empty((nw, n), np.int64)
+    ab = np.empty((2, n, rows, nw))
+    ipiv = np.empty((n, nw), np.int64)
     ok = np.ones(nw, bool)
 
     def factor_all():
         kern.band_assemble_factor(pat.dc, pat.m, pat.k, omega, sol.dest[0], sol.dest[1],
-                                  kl, ab, ipiv, ok, work)
+                                  kl, ab, ipiv, ok)
 
     def factor_chunks():                        # as a sweep does: fresh arrays per chunk
         for s in range(0, nw, chunk):
             w = omega[s:s + chunk]
-            a = np.empty((w.size, n, rows), complex)
             kern.band_assemble_factor(pat.dc, pat.m, pat.k, w, sol.dest[0], sol.dest[1],
-                                      kl, a, np.empty((w.size, n), np.int64),
-                                      np.ones(w.size, bool), work)
+                                      kl, np.empty((2, n, rows, w.size)),
+                                      np.empty((n, w.size), np.int64), np.ones(w.size, bool))
     factor_all()
     r = np.require(np.broadcast_to(rhs, (nw, n)), complex, ("C", "W"))
     every = np.arange(nw)

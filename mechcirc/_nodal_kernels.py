@@ -134,14 +134,12 @@ def residual(omega, xr, xi, xlr, xli, has_lo, rhs, b_i, b_j, b_s,
 
 
 @_jit_inline
-def _recip(br, bi, live):
-    """1/(br + j bi), the bits of numba's (CPython's) complex division, which branches on
-    the larger part; here both cases are formed and one is selected, so that the loop
-    over ω vectorises (br + j bi finite and nonzero; where not ``live``, 1).
-
-    With a = 1: case |br| ≥ |bi|: ((1 + 0·ρ) / δ, (0 − 1·ρ) / δ), ρ = bi/br,
-    δ = br + bi·ρ; otherwise ((1·ρ + 0) / δ, (0·ρ − 1) / δ), ρ = br/bi,
-    δ = br·ρ + bi — for a finite ρ, the numerators 1, 0 − ρ, ρ + 0 and −1 exactly.
+def _cdiv(ar, ai, br, bi, live):
+    """(ar + j ai)/(br + j bi) with the bits of numba's (CPython's) complex division, which
+    branches on the larger part of the divisor; here both cases are formed and one is
+    selected, so that a loop over ω vectorises (the divisor finite and nonzero; where
+    not ``live``, 1).  Case |br| ≥ |bi|: ρ = bi/br, δ = br + bi·ρ, ((ar + ai·ρ)/δ,
+    (ai − ar·ρ)/δ); otherwise ρ = br/bi, δ = br·ρ + bi, ((ar·ρ + ai)/δ, (ai·ρ − ar)/δ).
     """
     s = abs(br) < abs(bi)
     p = bi if s else br
@@ -149,7 +147,8 @@ def _recip(br, bi, live):
     p = p if live else 1.0
     ratio = q / p
     denom = p + q * ratio
-    return (ratio + 0.0 if s else 1.0) / denom, (-1.0 if s else 0.0 - ratio) / denom
+    re = ((ai if s else ar) + (ar if s else ai) * ratio) / denom
+    return re, ((ai * ratio if s else ai) - (ar if s else ar * ratio)) / denom
 
 
 @_jit_inline
@@ -182,7 +181,7 @@ def _band_lu(re, im, kl, ipiv, ok, best, jp, rr, ri):
                 best[k] = m if g else best[k]
                 jp[k] = t if g else jp[k]
         for k in range(nw):
-            ipiv[k, j] = j + jp[k]
+            ipiv[j, k] = j + jp[k]
             ok[k] = ok[k] and best[k] != 0.0 and np.isfinite(best[k])
         for c in range(j, ju + 1):
             d = kv + j - c
@@ -199,7 +198,7 @@ def _band_lu(re, im, kl, ipiv, ok, best, jp, rr, ri):
                     yi[k] = a if sw else b
         if km > 0:
             for k in range(nw):
-                rr[k], ri[k] = _recip(re[j, kv, k], im[j, kv, k], ok[k])
+                rr[k], ri[k] = _cdiv(1.0, 0.0, re[j, kv, k], im[j, kv, k], ok[k])
             for t in range(1, km + 1):
                 lr, li = re[j, kv + t], im[j, kv + t]
                 for k in range(nw):
@@ -221,20 +220,15 @@ def _band_lu(re, im, kl, ipiv, ok, best, jp, rr, ri):
 
 
 @_jit
-def band_assemble_factor(dc, m, kk, omega, dest_c, dest_r, kl, ab, ipiv, ok, work):
+def band_assemble_factor(dc, m, kk, omega, dest_c, dest_r, kl, F, ipiv, ok):
     """Form A(ω_k) = dc + j(ω_k m − kk/ω_k) (:func:`mechcirc.nodal.combine`) and factorise
-    it (:func:`_band_lu`), all ω of the call together, into band storage ``ab[k, dest_c,
-    dest_r]``.
+    it (:func:`_band_lu`), all ω of the call together: A_k[i, c] at ``F[:, c, 2·kl + i − c,
+    k]`` (real and imaginary parts, shape (2, n, 3·kl + 1, n_ω)), its pivots ``ipiv[:, k]``.
 
-    ``work``: float64, at least (2·n·(3·kl + 1) + 4)·n_ω long, reused from call to call
-    (the ω-innermost real and imaginary parts; fresh arrays of this size would be fresh
-    pages).  ``ok[k]`` is cleared where an entry is not finite or A is singular.
+    ``ok[k]`` is cleared where an entry is not finite or A is singular.
     """
     nw = omega.size
-    n, rows = ab.shape[1], ab.shape[2]
-    size = n * rows * nw
-    re = work[:size].reshape((n, rows, nw))
-    im = work[size:2 * size].reshape((n, rows, nw))
+    re, im = F[0], F[1]
     re[:] = 0.0
     im[:] = 0.0
     ok[:] = True
@@ -247,55 +241,56 @@ def band_assemble_factor(dc, m, kk, omega, dest_c, dest_r, kl, ab, ipiv, ok, wor
         zr, zi = re[dest_c[t], dest_r[t]], im[dest_c[t], dest_r[t]]
         for k in range(nw):
             ok[k] &= np.isfinite(zr[k]) & np.isfinite(zi[k])
-    v = work[2 * size:2 * size + 4 * nw]
-    _band_lu(re, im, kl, ipiv, ok, v[:nw], np.zeros(nw, dtype=np.int64), v[nw:2 * nw],
-             v[2 * nw:3 * nw])
-    for c in range(n):
-        for r in range(rows):
-            zr, zi = re[c, r], im[c, r]
-            for k in range(nw):
-                ab[k, c, r] = complex(zr[k], zi[k])
+    _band_lu(re, im, kl, ipiv, ok, np.empty(nw), np.empty(nw, dtype=np.int64), np.empty(nw),
+             np.empty(nw))
 
 
-#: ω solved side by side by :func:`band_solve_perm`: their substitutions are
-#: independent chains, so the processor overlaps them (one ω's chain waits on
-#: each complex product and division in turn).
-SOLVE_BLOCK = 8
+#: ω solved side by side by :func:`band_solve_perm`, innermost (the loops over them vectorise).
+SOLVE_BLOCK = 16
 
 
 @_jit
-def band_solve_perm(ab, kl, ipiv, rows, p, r, out):
-    """out[k, p] = A_p⁻¹ r[k, p] with the factors ``ab[rows[k]]`` of :func:`_band_lu` (A's rows
-    and columns in the order ``p``): each ω's operations in LAPACK's zgbtrs order, for
-    :data:`SOLVE_BLOCK` ω at a time, column by column."""
-    n = ab.shape[1]
+def band_solve_perm(F, kl, ipiv, rows, p, r, out):
+    """out[k, p] = A_p⁻¹ r[k, p] with the factors ``F[..., rows[k]]`` of :func:`_band_lu` (A's
+    rows and columns in the order ``p``): each ω's operations in LAPACK's zgbtrs order
+    (complex products and quotients as numba forms them), for :data:`SOLVE_BLOCK` ω at a
+    time, ω innermost and the row swaps by selects (as :func:`_band_lu`)."""
+    n = F.shape[1]
     kv = 2 * kl
-    x = np.empty((SOLVE_BLOCK, n), dtype=np.complex128)
+    fr, fi = F[0], F[1]
+    xr, xi = np.empty((n, SOLVE_BLOCK)), np.empty((n, SOLVE_BLOCK))
     for k0 in range(0, rows.size, SOLVE_BLOCK):
         nb = min(SOLVE_BLOCK, rows.size - k0)
-        for b in range(nb):
-            for i in range(n):
-                x[b, i] = r[k0 + b, p[i]]
+        w = rows[k0:k0 + nb]
+        for i in range(n):
+            for b in range(nb):
+                xr[i, b], xi[i, b] = r[k0 + b, p[i]].real, r[k0 + b, p[i]].imag
         for j in range(n - 1):                 # L, with the row swaps
             km = min(kl, n - 1 - j)
-            for b in range(nb):
-                f = rows[k0 + b]
-                q = ipiv[f, j]
-                xj = x[b, q]
-                x[b, q] = x[b, j]
-                x[b, j] = xj
-                for t in range(1, km + 1):
-                    x[b, j + t] -= ab[f, j, kv + t] * xj
+            for t in range(1, km + 1):
+                for b in range(nb):
+                    sw = ipiv[j, w[b]] - j == t
+                    a, c = xr[j, b], xr[j + t, b]
+                    xr[j, b], xr[j + t, b] = (c, a) if sw else (a, c)
+                    a, c = xi[j, b], xi[j + t, b]
+                    xi[j, b], xi[j + t, b] = (c, a) if sw else (a, c)
+            for t in range(1, km + 1):
+                for b in range(nb):
+                    lr, li, ar, ai = fr[j, kv + t, w[b]], fi[j, kv + t, w[b]], xr[j, b], xi[j, b]
+                    xr[j + t, b] -= lr * ar - li * ai
+                    xi[j + t, b] -= lr * ai + li * ar
         for j in range(n - 1, -1, -1):         # U, by columns
             for b in range(nb):
-                f = rows[k0 + b]
-                xj = x[b, j] / ab[f, j, kv]
-                x[b, j] = xj
-                for i in range(max(0, j - kv), j):
-                    x[b, i] -= ab[f, j, kv + i - j] * xj
+                xr[j, b], xi[j, b] = _cdiv(xr[j, b], xi[j, b], fr[j, kv, w[b]], fi[j, kv, w[b]],
+                                           True)
+            for i in range(max(0, j - kv), j):
+                for b in range(nb):
+                    ur, ui = fr[j, kv + i - j, w[b]], fi[j, kv + i - j, w[b]]
+                    xr[i, b] -= ur * xr[j, b] - ui * xi[j, b]
+                    xi[i, b] -= ur * xi[j, b] + ui * xr[j, b]
         for b in range(nb):
             for i in range(n):
-                out[k0 + b, p[i]] = x[b, i]
+                out[k0 + b, p[i]] = complex(xr[i, b], xi[i, b])
 
 
 @_jit_inline
@@ -304,25 +299,31 @@ def _l1(z):
     return abs(z.real) + abs(z.imag)
 
 
+@_jit_inline
+def _l1f(F, j, t, f):
+    """_l1 of the factors' entry ``F[:, j, t, f]``."""
+    return abs(F[0, j, t, f]) + abs(F[1, j, t, f])
+
+
 @_jit
-def band_bound(ab, kl, ipiv, rows, p, x, d, out):
-    """out[k] = |x|ᵀP̃|L||U||d| with the factors ``ab[rows[k]]`` of :func:`_band_lu` (|z| as
+def band_bound(F, kl, ipiv, rows, p, x, d, out):
+    """out[k] = |x|ᵀP̃|L||U||d| with the factors ``F[..., rows[k]]`` of :func:`_band_lu` (|z| as
     |re| + |im|; x and d in A's order, the factors in the order ``p``): what
     :func:`mechcirc._nodal_solvers.band_bound_batch` forms from numpy's factors."""
-    n = ab.shape[1]
+    n = F.shape[1]
     kv = 2 * kl
     u = np.empty(n)
     for k in range(rows.size):
         f = rows[k]
-        for i in range(n):                  # |U||d|: U[i, j] is ab[j, kv + i − j]
+        for i in range(n):                  # |U||d|: U[i, j] is F[:, j, kv + i − j]
             acc = 0.0
             for j in range(i, min(n, i + kv + 1)):
-                acc += _l1(ab[f, j, kv + i - j]) * _l1(d[k, p[j]])
+                acc += _l1f(F, j, kv + i - j, f) * _l1(d[k, p[j]])
             u[i] = acc
         for j in range(n - 2, -1, -1):      # then |L_j| and P_j, innermost first
             for t in range(1, min(kl, n - 1 - j) + 1):
-                u[j + t] += _l1(ab[f, j, kv + t]) * u[j]
-            q = ipiv[f, j]
+                u[j + t] += _l1f(F, j, kv + t, f) * u[j]
+            q = ipiv[j, f]
             keep = u[j]
             u[j] = u[q]
             u[q] = keep
