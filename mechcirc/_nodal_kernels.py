@@ -190,12 +190,8 @@ def _band_lu(re, im, kl, ipiv, ok, best, jp, rr, ri):
                 yr, yi = re[c, d + t], im[c, d + t]
                 for k in range(nw):
                     sw = jp[k] == t
-                    a, b = xr[k], yr[k]
-                    xr[k] = b if sw else a
-                    yr[k] = a if sw else b
-                    a, b = xi[k], yi[k]
-                    xi[k] = b if sw else a
-                    yi[k] = a if sw else b
+                    xr[k], yr[k] = (yr[k], xr[k]) if sw else (xr[k], yr[k])
+                    xi[k], yi[k] = (yi[k], xi[k]) if sw else (xi[k], yi[k])
         if km > 0:
             for k in range(nw):
                 rr[k], ri[k] = _cdiv(1.0, 0.0, re[j, kv, k], im[j, kv, k], ok[k])
@@ -270,10 +266,8 @@ def band_solve_perm(F, kl, ipiv, rows, p, r, out):
             for t in range(1, km + 1):
                 for b in range(nb):
                     sw = ipiv[j, w[b]] - j == t
-                    a, c = xr[j, b], xr[j + t, b]
-                    xr[j, b], xr[j + t, b] = (c, a) if sw else (a, c)
-                    a, c = xi[j, b], xi[j + t, b]
-                    xi[j, b], xi[j + t, b] = (c, a) if sw else (a, c)
+                    xr[j, b], xr[j + t, b] = (xr[j + t, b], xr[j, b]) if sw else (xr[j, b], xr[j + t, b])
+                    xi[j, b], xi[j + t, b] = (xi[j + t, b], xi[j, b]) if sw else (xi[j, b], xi[j + t, b])
             for t in range(1, km + 1):
                 for b in range(nb):
                     lr, li, ar, ai = fr[j, kv + t, w[b]], fi[j, kv + t, w[b]], xr[j, b], xi[j, b]
