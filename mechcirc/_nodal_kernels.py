@@ -293,12 +293,6 @@ def _l1(z):
     return abs(z.real) + abs(z.imag)
 
 
-@_jit_inline
-def _l1f(F, j, t, f):
-    """_l1 of the factors' entry ``F[:, j, t, f]``."""
-    return abs(F[0, j, t, f]) + abs(F[1, j, t, f])
-
-
 @_jit
 def band_bound(F, kl, ipiv, rows, p, x, d, out):
     """out[k] = |x|ᵀP̃|L||U||d| with the factors ``F[..., rows[k]]`` of :func:`_band_lu` (|z| as
@@ -312,11 +306,12 @@ def band_bound(F, kl, ipiv, rows, p, x, d, out):
         for i in range(n):                  # |U||d|: U[i, j] is F[:, j, kv + i − j]
             acc = 0.0
             for j in range(i, min(n, i + kv + 1)):
-                acc += _l1f(F, j, kv + i - j, f) * _l1(d[k, p[j]])
+                acc += _l1(complex(F[0, j, kv + i - j, f], F[1, j, kv + i - j, f])) \
+                    * _l1(d[k, p[j]])
             u[i] = acc
         for j in range(n - 2, -1, -1):      # then |L_j| and P_j, innermost first
             for t in range(1, min(kl, n - 1 - j) + 1):
-                u[j + t] += _l1f(F, j, kv + t, f) * u[j]
+                u[j + t] += _l1(complex(F[0, j, kv + t, f], F[1, j, kv + t, f])) * u[j]
             q = ipiv[j, f]
             keep = u[j]
             u[j] = u[q]
