@@ -157,14 +157,12 @@ def _band_lu(re, im, kl, ipiv, ok, best, jp, rr, ri):
 
     ``re[c, 2·kl + i − c, k]`` + j ``im[…]`` holds A_k[i, c] (kl = ku; the first kl of
     the 3·kl + 1 places of a column are room for the fill).  Each ω's operations are
-    those of the LU one ω at a time (the pivot the largest |re| + |im| in the column,
-    as LAPACK's izamax picks it; the multipliers an entry times the pivot's reciprocal;
-    complex products as numba forms them), done for all ω of a column at once with
-    selects instead of branches, so that the loops over ω vectorise: the rows are
-    swapped and the columns updated up to j + 2·kl, past each ω's own fill (zeros
-    there: swapped with zeros, and a zero multiplier's update not applied).
-    ``ok[k]`` is cleared where a pivot is 0 or not finite; that ω's factors are then
-    not used.  ``best``, ``jp``, ``rr``, ``ri``: work arrays of the ω.
+    those of the LU one ω at a time (the pivot the largest |re| + |im|, as LAPACK's
+    izamax; the multipliers an entry times the pivot's reciprocal; complex products as
+    numba's), for all ω of a column at once with selects instead of branches, so that
+    the loops over ω vectorise: rows swapped and columns updated up to j + 2·kl, past an
+    ω's own fill (zeros: swapped with zeros, a zero multiplier's update not applied).
+    ``ok[k]`` cleared where a pivot is 0 or not finite (its factors then unused).
     """
     n, _, nw = re.shape
     kv = 2 * kl
