@@ -107,10 +107,11 @@ _CHUNK_TERMS = 2 ** 15
 #: 0.74–0.75× its time at 2¹⁶ at 999 elements, 0.73–0.83× at 45, 0.77× at 9,999 (one ω
 #: per chunk) and 1.03× at 99 (all 401 ω in one chunk at 2¹⁶, without faults there).
 _KERNEL_CHUNK = 2 ** 12
-#: But at least this many ω per chunk of a band: the compiled banded LU's loops over ω vectorise
-#: (at 500 unknowns it factorises 16 ω in 0.55× the time of 8, at 5,000 in 0.78× the
-#: time of 1 ω at a time, 27 Nov, seventh session), which outweighs the page faults of
-#: the larger chunks at 999 and 9,999 elements (0.95× and 0.97× the sweep's time).
+#: But at least this many ω per chunk of a band: the compiled banded LU's loops over ω
+#: vectorise (at 500 unknowns it factorises 16 ω in 0.55× the time of 8, at 5,000 in
+#: 0.78× the time of 1 ω at a time; 27 Nov, seventh session), more than the larger
+#: chunks' page faults cost (sweeps of 999 and 9,999 elements 0.94× and 0.96× the time
+#: of the former chunks of 8 and 1 ω each solving with its part of 16 ω factorised).
 _KERNEL_MIN_OMEGA = 16
 
 
