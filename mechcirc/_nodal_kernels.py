@@ -134,106 +134,155 @@ def residual(omega, xr, xi, xlr, xli, has_lo, rhs, b_i, b_j, b_s,
 
 
 @_jit_inline
-def _band_lu(a, kl, ipiv):
-    """LU with partial pivoting of one banded matrix in place (LAPACK's zgbtf2); False if singular.
-
-    ``a[c, 2·kl + i − c]`` holds A[i, c] (kl = ku; the first kl of the
-    3·kl + 1 places of a column are room for the fill).  The pivot is the
-    largest |re| + |im| in the column, as LAPACK's izamax picks it.
+def _cdiv(ar, ai, br, bi, live):
+    """(ar + j ai)/(br + j bi) with the bits of numba's (CPython's) complex division, which
+    branches on the larger part of the divisor; here both cases are formed and one is
+    selected, so that a loop over ω vectorises (the divisor finite and nonzero; where
+    not ``live``, 1).  Case |br| ≥ |bi|: ρ = bi/br, δ = br + bi·ρ, ((ar + ai·ρ)/δ,
+    (ai − ar·ρ)/δ); otherwise ρ = br/bi, δ = br·ρ + bi, ((ar·ρ + ai)/δ, (ai·ρ − ar)/δ).
     """
-    n = a.shape[0]
+    s = abs(br) < abs(bi)
+    p = bi if s else br
+    q = br if s else bi
+    p = p if live else 1.0
+    ratio = q / p
+    denom = p + q * ratio
+    re = ((ai if s else ar) + (ar if s else ai) * ratio) / denom
+    return re, ((ai * ratio if s else ai) - (ar if s else ar * ratio)) / denom
+
+
+@_jit_inline
+def _band_lu(re, im, kl, ipiv, ok, best, jp, rr, ri):
+    """LU with partial pivoting of banded matrices in place (LAPACK's zgbtf2), ω innermost.
+
+    ``re[c, 2·kl + i − c, k]`` + j ``im[…]`` holds A_k[i, c] (kl = ku; the first kl of
+    the 3·kl + 1 places of a column are room for the fill).  Each ω's operations are
+    those of the LU one ω at a time (the pivot the largest |re| + |im|, as LAPACK's
+    izamax; the multipliers an entry times the pivot's reciprocal; complex products as
+    numba's), for all ω of a column at once with selects instead of branches, so that
+    the loops over ω vectorise: rows swapped and columns updated up to j + 2·kl, past an
+    ω's own fill (zeros: swapped with zeros, a zero multiplier's update not applied).
+    ``ok[k]`` cleared where a pivot is 0 or not finite (its factors then unused).
+    """
+    n, _, nw = re.shape
     kv = 2 * kl
-    ju = 0
     for j in range(n):
         km = min(kl, n - 1 - j)
-        jp = 0
-        best = -1.0
+        ju = min(j + kv, n - 1)
+        best[:] = -1.0
+        jp[:] = 0
         for t in range(km + 1):
-            z = a[j, kv + t]
-            m = abs(z.real) + abs(z.imag)
-            if m > best:
-                best = m
-                jp = t
-        ipiv[j] = j + jp
-        if best == 0.0 or not np.isfinite(best):
-            return False
-        ju = max(ju, min(j + kl + jp, n - 1))
-        if jp != 0:
-            for c in range(j, ju + 1):
-                tmp = a[c, kv + j - c]
-                a[c, kv + j - c] = a[c, kv + j + jp - c]
-                a[c, kv + j + jp - c] = tmp
-        if km > 0:
-            recip = 1.0 / a[j, kv]
+            pr, pi = re[j, kv + t], im[j, kv + t]
+            for k in range(nw):
+                m = abs(pr[k]) + abs(pi[k])
+                g = m > best[k]
+                best[k] = m if g else best[k]
+                jp[k] = t if g else jp[k]
+        for k in range(nw):
+            ipiv[j, k] = j + jp[k]
+            ok[k] = ok[k] and best[k] != 0.0 and np.isfinite(best[k])
+        for c in range(j, ju + 1):
+            d = kv + j - c
+            xr, xi = re[c, d], im[c, d]
             for t in range(1, km + 1):
-                a[j, kv + t] *= recip
+                yr, yi = re[c, d + t], im[c, d + t]
+                for k in range(nw):
+                    sw = jp[k] == t
+                    xr[k], yr[k] = (yr[k], xr[k]) if sw else (xr[k], yr[k])
+                    xi[k], yi[k] = (yi[k], xi[k]) if sw else (xi[k], yi[k])
+        if km > 0:
+            for k in range(nw):
+                rr[k], ri[k] = _cdiv(1.0, 0.0, re[j, kv, k], im[j, kv, k], ok[k])
+            for t in range(1, km + 1):
+                lr, li = re[j, kv + t], im[j, kv + t]
+                for k in range(nw):
+                    a, b = lr[k], li[k]
+                    lr[k] = a * rr[k] - b * ri[k]
+                    li[k] = a * ri[k] + b * rr[k]
             for c in range(j + 1, ju + 1):
-                u = a[c, kv + j - c]
-                if u != 0:
-                    for t in range(1, km + 1):
-                        a[c, kv + j + t - c] -= a[j, kv + t] * u
-    return True
+                d = kv + j - c
+                ur, ui = re[c, d], im[c, d]
+                for t in range(1, km + 1):
+                    lr, li = re[j, kv + t], im[j, kv + t]
+                    vr, vi = re[c, d + t], im[c, d + t]
+                    for k in range(nw):
+                        nz = ur[k] != 0.0 or ui[k] != 0.0
+                        a = vr[k] - (lr[k] * ur[k] - li[k] * ui[k])
+                        b = vi[k] - (lr[k] * ui[k] + li[k] * ur[k])
+                        vr[k] = a if nz else vr[k]
+                        vi[k] = b if nz else vi[k]
 
 
 @_jit
-def band_assemble_factor(dc, m, kk, omega, dest_c, dest_r, kl, ab, ipiv, ok):
-    """Form A(ω_k) = dc + j(ω_k m − kk/ω_k) (:func:`mechcirc.nodal.combine`) in band
-    storage ``ab[k, dest_c, dest_r]`` and factorise it at once (while it is in cache).
+def band_assemble_factor(dc, m, kk, omega, dest_c, dest_r, kl, F, ipiv, ok):
+    """Form A(ω_k) = dc + j(ω_k m − kk/ω_k) (:func:`mechcirc.nodal.combine`) and factorise
+    it (:func:`_band_lu`), all ω of the call together: A_k[i, c] at ``F[:, c, 2·kl + i − c,
+    k]`` (real and imaginary parts, shape (2, n, 3·kl + 1, n_ω)), its pivots ``ipiv[:, k]``.
 
     ``ok[k]`` is cleared where an entry is not finite or A is singular.
     """
-    for k in range(omega.size):
-        w = omega[k]
-        a = ab[k]
-        a[:, :] = 0
-        fin = True
-        for t in range(dc.size):
-            z = complex(dc[t], w * m[t] - kk[t] / w)
-            if not (np.isfinite(z.real) and np.isfinite(z.imag)):
-                fin = False
-            a[dest_c[t], dest_r[t]] = z
-        ok[k] = fin and _band_lu(a, kl, ipiv[k])
+    nw = omega.size
+    re, im = F[0], F[1]
+    re[:] = 0.0
+    im[:] = 0.0
+    ok[:] = True
+    for t in range(dc.size):
+        zr, zi = re[dest_c[t], dest_r[t]], im[dest_c[t], dest_r[t]]
+        for k in range(nw):
+            zr[k] = dc[t]
+            zi[k] = omega[k] * m[t] - kk[t] / omega[k]
+    for t in range(dc.size):                # (a loop of its own: the one above vectorises)
+        zr, zi = re[dest_c[t], dest_r[t]], im[dest_c[t], dest_r[t]]
+        for k in range(nw):
+            ok[k] &= np.isfinite(zr[k]) & np.isfinite(zi[k])
+    _band_lu(re, im, kl, ipiv, ok, np.empty(nw), np.empty(nw, dtype=np.int64), np.empty(nw),
+             np.empty(nw))
 
 
-#: ω solved side by side by :func:`band_solve_perm`: their substitutions are
-#: independent chains, so the processor overlaps them (one ω's chain waits on
-#: each complex product and division in turn).
-SOLVE_BLOCK = 8
+#: ω solved side by side by :func:`band_solve_perm`, innermost (the loops over them vectorise).
+SOLVE_BLOCK = 16
 
 
 @_jit
-def band_solve_perm(ab, kl, ipiv, rows, p, r, out):
-    """out[k, p] = A_p⁻¹ r[k, p] with the factors ``ab[rows[k]]`` of :func:`_band_lu` (A's rows
-    and columns in the order ``p``): each ω's operations in LAPACK's zgbtrs order, for
-    :data:`SOLVE_BLOCK` ω at a time, column by column."""
-    n = ab.shape[1]
+def band_solve_perm(F, kl, ipiv, rows, p, r, out):
+    """out[k, p] = A_p⁻¹ r[k, p] with the factors ``F[..., rows[k]]`` of :func:`_band_lu` (A's
+    rows and columns in the order ``p``): each ω's operations in LAPACK's zgbtrs order
+    (complex products and quotients as numba forms them), for :data:`SOLVE_BLOCK` ω at a
+    time, ω innermost and the row swaps by selects (as :func:`_band_lu`)."""
+    n = F.shape[1]
     kv = 2 * kl
-    x = np.empty((SOLVE_BLOCK, n), dtype=np.complex128)
+    fr, fi = F[0], F[1]
+    xr, xi = np.empty((n, SOLVE_BLOCK)), np.empty((n, SOLVE_BLOCK))
     for k0 in range(0, rows.size, SOLVE_BLOCK):
         nb = min(SOLVE_BLOCK, rows.size - k0)
-        for b in range(nb):
-            for i in range(n):
-                x[b, i] = r[k0 + b, p[i]]
+        w = rows[k0:k0 + nb]
+        for i in range(n):
+            for b in range(nb):
+                xr[i, b], xi[i, b] = r[k0 + b, p[i]].real, r[k0 + b, p[i]].imag
         for j in range(n - 1):                 # L, with the row swaps
             km = min(kl, n - 1 - j)
-            for b in range(nb):
-                f = rows[k0 + b]
-                q = ipiv[f, j]
-                xj = x[b, q]
-                x[b, q] = x[b, j]
-                x[b, j] = xj
-                for t in range(1, km + 1):
-                    x[b, j + t] -= ab[f, j, kv + t] * xj
+            for t in range(1, km + 1):
+                for b in range(nb):
+                    sw = ipiv[j, w[b]] - j == t
+                    xr[j, b], xr[j + t, b] = (xr[j + t, b], xr[j, b]) if sw else (xr[j, b], xr[j + t, b])
+                    xi[j, b], xi[j + t, b] = (xi[j + t, b], xi[j, b]) if sw else (xi[j, b], xi[j + t, b])
+            for t in range(1, km + 1):
+                for b in range(nb):
+                    lr, li, ar, ai = fr[j, kv + t, w[b]], fi[j, kv + t, w[b]], xr[j, b], xi[j, b]
+                    xr[j + t, b] -= lr * ar - li * ai
+                    xi[j + t, b] -= lr * ai + li * ar
         for j in range(n - 1, -1, -1):         # U, by columns
             for b in range(nb):
-                f = rows[k0 + b]
-                xj = x[b, j] / ab[f, j, kv]
-                x[b, j] = xj
-                for i in range(max(0, j - kv), j):
-                    x[b, i] -= ab[f, j, kv + i - j] * xj
+                xr[j, b], xi[j, b] = _cdiv(xr[j, b], xi[j, b], fr[j, kv, w[b]], fi[j, kv, w[b]],
+                                           True)
+            for i in range(max(0, j - kv), j):
+                for b in range(nb):
+                    ur, ui = fr[j, kv + i - j, w[b]], fi[j, kv + i - j, w[b]]
+                    xr[i, b] -= ur * xr[j, b] - ui * xi[j, b]
+                    xi[i, b] -= ur * xi[j, b] + ui * xr[j, b]
         for b in range(nb):
             for i in range(n):
-                out[k0 + b, p[i]] = x[b, i]
+                out[k0 + b, p[i]] = complex(xr[i, b], xi[i, b])
 
 
 @_jit_inline
@@ -243,24 +292,25 @@ def _l1(z):
 
 
 @_jit
-def band_bound(ab, kl, ipiv, rows, p, x, d, out):
-    """out[k] = |x|ᵀP̃|L||U||d| with the factors ``ab[rows[k]]`` of :func:`_band_lu` (|z| as
+def band_bound(F, kl, ipiv, rows, p, x, d, out):
+    """out[k] = |x|ᵀP̃|L||U||d| with the factors ``F[..., rows[k]]`` of :func:`_band_lu` (|z| as
     |re| + |im|; x and d in A's order, the factors in the order ``p``): what
     :func:`mechcirc._nodal_solvers.band_bound_batch` forms from numpy's factors."""
-    n = ab.shape[1]
+    n = F.shape[1]
     kv = 2 * kl
     u = np.empty(n)
     for k in range(rows.size):
         f = rows[k]
-        for i in range(n):                  # |U||d|: U[i, j] is ab[j, kv + i − j]
+        for i in range(n):                  # |U||d|: U[i, j] is F[:, j, kv + i − j]
             acc = 0.0
             for j in range(i, min(n, i + kv + 1)):
-                acc += _l1(ab[f, j, kv + i - j]) * _l1(d[k, p[j]])
+                acc += _l1(complex(F[0, j, kv + i - j, f], F[1, j, kv + i - j, f])) \
+                    * _l1(d[k, p[j]])
             u[i] = acc
         for j in range(n - 2, -1, -1):      # then |L_j| and P_j, innermost first
             for t in range(1, min(kl, n - 1 - j) + 1):
-                u[j + t] += _l1(ab[f, j, kv + t]) * u[j]
-            q = ipiv[f, j]
+                u[j + t] += _l1(complex(F[0, j, kv + t, f], F[1, j, kv + t, f])) * u[j]
+            q = ipiv[j, f]
             keep = u[j]
             u[j] = u[q]
             u[q] = keep

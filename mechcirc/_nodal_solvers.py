@@ -526,29 +526,29 @@ class SparseSolver:
         which on a band 1–2 wide cost many times the arithmetic.
         """
         pat, n, kl = self.pat, self.pat.n, self.kl
-        ab = np.empty((omega.size, n, self.band_rows), dtype=complex)
-        ipiv = np.empty((omega.size, n), dtype=np.int64)
+        F = np.empty((2, n, self.band_rows, omega.size))
+        ipiv = np.empty((n, omega.size), dtype=np.int64)
         good = np.ones(omega.size, dtype=bool)
         kern.band_assemble_factor(pat.dc, pat.m, pat.k, omega, self.dest[0], self.dest[1],
-                                  kl, ab, ipiv, good)
+                                  kl, F, ipiv, good)
         if not good.all():
-            ab, ipiv = ab[good], ipiv[good]
+            F, ipiv = np.ascontiguousarray(F[..., good]), np.ascontiguousarray(ipiv[:, good])
         p = self.p
 
-        every = np.arange(ab.shape[0])
+        every = np.arange(F.shape[3])
 
         def solve(r, rows=None):
             rows = every if rows is None else np.asarray(rows, dtype=np.int64)
             out = np.empty((rows.size, n), dtype=complex)
             # writeable too: a read-only r (a broadcast b at one ω) would have numba compile
             # the kernel a second time, for that flag
-            kern.band_solve_perm(ab, kl, ipiv, rows, p, np.require(r, complex, ("C", "W")), out)
+            kern.band_solve_perm(F, kl, ipiv, rows, p, np.require(r, complex, ("C", "W")), out)
             return out
 
         def bound(x, d, rows):
             """|x|ᵀP̃|L||U||d| at ``rows`` (:func:`mechcirc._nodal_kernels.band_bound`)."""
             out = np.empty(rows.size)
-            kern.band_bound(ab, kl, ipiv, np.asarray(rows, dtype=np.int64), p,
+            kern.band_bound(F, kl, ipiv, np.asarray(rows, dtype=np.int64), p,
                             np.ascontiguousarray(x, dtype=complex),
                             np.ascontiguousarray(d, dtype=complex), out)
             return out

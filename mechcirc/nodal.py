@@ -107,6 +107,12 @@ _CHUNK_TERMS = 2 ** 15
 #: 0.74–0.75× its time at 2¹⁶ at 999 elements, 0.73–0.83× at 45, 0.77× at 9,999 (one ω
 #: per chunk) and 1.03× at 99 (all 401 ω in one chunk at 2¹⁶, without faults there).
 _KERNEL_CHUNK = 2 ** 12
+#: But at least this many ω per chunk of a band: the compiled banded LU's loops over ω
+#: vectorise (at 500 unknowns it factorises 16 ω in 0.55× the time of 8, at 5,000 in
+#: 0.78× the time of 1 ω at a time; 27 Nov, seventh session), more than the larger
+#: chunks' page faults cost (sweeps of 999 and 9,999 elements 0.94× and 0.96× the time
+#: of the former chunks of 8 and 1 ω each solving with its part of 16 ω factorised).
+_KERNEL_MIN_OMEGA = 16
 
 
 #: With :data:`mechcirc._jit.COMPILED` None (the default) a sweep of the sparse
@@ -195,7 +201,8 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
 
     # Compiled: no (ω, term) temporaries; the chunk's (ω, n) arrays stay in cache.
     # numpy: the residual's (ω, term) temporaries bound its pieces.
-    terms = max(1, _KERNEL_CHUNK // max(1, system.size) if kern is not None
+    least = _KERNEL_MIN_OMEGA if kern is not None and solve_with.kind == "band" else 1
+    terms = max(least, _KERNEL_CHUNK // max(1, system.size) if kern is not None
                 else _CHUNK_TERMS // max(1, pat.n_terms + system.size))
 
     def residual(w, xh, xl, rhs, exact=True):
