@@ -338,44 +338,10 @@ def body_outputs(nf, ne, FI, BI, aux, work):
             aux[k] = 0.0
 
 
-def equations(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, work):
-    """Derivatives of y = [q_1..q_n, q̇_1..q̇_n] into dy; outputs into aux.
-
-    aux = [body accelerations (B) | element forces (E) | deformations (E) |
-    drive moment | moments (Mo) | out-of-range flag].  work rows: 0 q, 1 q̇, 2 q̈, 3 m,
-    4 m', 5 Q, then 6–8 each function's value and first and second derivatives.
-    """
-    npart = PRIG.shape[0]
-    n = npart - 1
-    nf = int(PV[3])
-    want = PV[4] != 0.0
-    nb = BI.shape[0]
-    ne = EI.shape[0]
-    nmo = MOI.shape[0]
-    theta, omega, accel, th_load, w_load = crank_motion(PV, t)
-    bad = part_kinematics(y, theta, omega, accel, nf, FI, FF, tabs, MI_, MW, PRIG, work)
-    element_forces(want, nb, EI, EF, FI, FF, tabs, th_load, w_load, aux, work,
-                   nb + 2 * ne + 2 + nmo)
-    window_moments(nb + 2 * ne + 1, FI, MOI, MOF, aux, work)
-    for i in range(1, npart):
-        work[2, i] = (work[5, i] - 0.5 * work[4, i] * work[1, i] * work[1, i]) / work[3, i]
-        dy[i - 1] = work[1, i]
-        dy[n + i - 1] = work[2, i]
-    if want:
-        body_outputs(nf, ne, FI, BI, aux, work)
-    aux[nb + 2 * ne + 1 + nmo] = bad
-
-
-#: :func:`equations` compiled in place in :func:`rk_step` (the steps run 11-20 % faster than
-#: calling a copy compiled apart), the one compiled copy: every other evaluation is a step of
-#: length 0 (:func:`rhs`).
-rhs_in_step = _jit_inline(equations)
-
-
 @_jit
 def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, work):
-    """dy = f(t, y) and the outputs into aux: the scene's :func:`equations`, or the shaft's
-    (PV[8] ≠ 0, :func:`shaft_in`), by :func:`rk_step` (for a caller in Python)."""
+    """dy = f(t, y) and the outputs into aux: the scene's equations, or the shaft's (PV[8] ≠ 0,
+    :func:`shaft_in`), by :func:`rk_step` (for a caller in Python)."""
     K, tmp, Z, zy, zd = evaluation_scratch(y.shape[0], PRIG)
     rk_step(t, 0.0, y, K, tmp, tmp, Z, Z[0], Z[0], PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG,
             BI, aux, work, zy, zd)
@@ -447,7 +413,9 @@ def contact_piece(side, e, edot, k, d, cl):
     return 1
 
 
-@_jit_inline
+# edge_gap and gap_root are compiled apart, called only at a kink: each typed once (locate
+# calls edge_gap from three sites, each inlined a copy to type and lower)
+@_leaf
 def edge_gap(i, ne, r0, r1, v, vd, EF, MOF):
     """Signed distance of switch i (value v, rate vd, see :func:`regions`) from the edge it
     crossed going from piece r0 to r1: a gap's edge ±cl, a window's start (phase 0) or end
@@ -466,7 +434,7 @@ def edge_gap(i, ne, r0, r1, v, vd, EF, MOF):
     return wrap_phase(v) - MOF[i - ne, 1]
 
 
-@_jit_inline
+@_leaf
 def gap_root(g0, g1, d0, d1, s):
     """The root in (0, 1) of the cubic Hermite of a gap's values g0, g1 and slopes d0, d1 at
     the step's ends (Newton from s); s when it leaves the interval."""
@@ -486,13 +454,25 @@ def rk_step(t, hh, y, K, tmp, ynew, TA, TB, TC, PV, FI, FF, tabs, MI_, MW, EI, E
             PRIG, BI, aux, work, zy, zd):
     """One explicit Runge-Kutta step of size hh from (t, y, K[0] = f(y)) into ynew, with the
     Butcher tableau (TA, TB, TC) of s stages (RK4, or the 8th-order one of DOP853 run at a
-    fixed step); K[1 .. s-1] the stages, K[s] = f(ynew) and aux are left at ynew.  f is
-    the scene's :func:`equations`, or the shaft's when PV says so (:func:`shaft_in`; ``zy``,
-    ``zd`` its scratch).  With hh = 0 and the one-stage tableau of weight 0 it is f(t, y) into
-    K[1] (:func:`evaluation_scratch`): every evaluation runs this one compiled copy of f."""
+    fixed step); K[1 .. s-1] the stages, K[s] = f(ynew) and aux are left at ynew.  With hh = 0
+    and the one-stage tableau of weight 0 it is f(t, y) into K[1] (:func:`evaluation_scratch`):
+    every evaluation runs this one compiled copy of the equations (each helper inlined once).
+
+    f: the scene's y = [q_1..q_n, q̇_1..q̇_n] → [q̇, q̈], or the shaft's when PV says so
+    (:func:`shaft_in`, :func:`shaft_out`; ``zy``, ``zd`` its scratch), with outputs into
+    aux = [body accelerations (B) | element forces (E) | deformations (E) | drive moment |
+    moments (Mo) | out-of-range flag].  work rows: 0 q, 1 q̇, 2 q̈, 3 m, 4 m', 5 Q, then 6–8
+    each function's value and first and second derivatives.
+    """
     n = y.shape[0]
     s = TB.shape[0]
     shaft = shaft_mode(PV) != 0
+    npart = PRIG.shape[0]
+    nf = int(PV[3])
+    want = PV[4] != 0.0
+    nb = BI.shape[0]
+    ne = EI.shape[0]
+    nmo = MOI.shape[0]
     for i in range(1, s + 1):           # the stages, then (i = s) the step's end
         for m in range(n):
             acc = 0.0
@@ -503,12 +483,23 @@ def rk_step(t, hh, y, K, tmp, ynew, TA, TB, TC, PV, FI, FF, tabs, MI_, MW, EI, E
             tmp[m] = y[m] + hh * acc
         ti = t + TC[i] * hh if i < s else t + hh
         ye = tmp            # the equations' state and derivative: the stage's, or the free
-        de = K[i]           # parts' inside the shaft's (one site: rhs_in_step is compiled once)
+        de = K[i]           # parts' inside the shaft's
         if shaft:
             ti = shaft_in(ti, tmp, PV, zy)
             ye = zy
             de = zd
-        rhs_in_step(ti, ye, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, de, aux, work)
+        theta, omega, accel, th_load, w_load = crank_motion(PV, ti)
+        bad = part_kinematics(ye, theta, omega, accel, nf, FI, FF, tabs, MI_, MW, PRIG, work)
+        element_forces(want, nb, EI, EF, FI, FF, tabs, th_load, w_load, aux, work,
+                       nb + 2 * ne + 2 + nmo)
+        window_moments(nb + 2 * ne + 1, FI, MOI, MOF, aux, work)
+        for p in range(1, npart):
+            work[2, p] = (work[5, p] - 0.5 * work[4, p] * work[1, p] * work[1, p]) / work[3, p]
+            de[p - 1] = work[1, p]
+            de[npart + p - 2] = work[2, p]
+        if want:
+            body_outputs(nf, ne, FI, BI, aux, work)
+        aux[nb + 2 * ne + 1 + nmo] = bad
         if shaft:
             shaft_out(tmp, PV, K[i], work, zy, zd)
     for m in range(n):
@@ -859,8 +850,8 @@ def shaft_speed(Y, PV, npart):
 @_jit_inline
 def shaft_in(t, Y, PV, zy):
     """The shaft's state Y → the crank's angle PV[1] and speed PV[0] and the free parts' state
-    z = [q, q̇] into ``zy``, at which :func:`equations` (at time 0) then gives the forces on the
-    shaft (:func:`shaft_out`).  Returns 0.0, that time.
+    z = [q, q̇] into ``zy``, at which the scene's equations (:func:`rk_step`, at time 0) then
+    give the forces on the shaft (:func:`shaft_out`).  Returns 0.0, that time.
 
     In time (PV[8] = 2): Y = [θ, q, θ̇, q̇].  In θ (PV[8] = 1, θ = t the independent
     variable): Y = [t, q, t', q'] with ' = d/dθ (t' = 1/θ̇, q' = q̇/θ̇): positions and their
