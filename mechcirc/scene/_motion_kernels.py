@@ -338,11 +338,46 @@ def body_outputs(nf, ne, FI, BI, aux, work):
             aux[k] = 0.0
 
 
-@_jit
+@_leaf
 def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, work):
-    """dy = f(t, y) and the outputs into aux: the scene's equations, or the shaft's (PV[8] ≠ 0,
-    :func:`shaft_in`), by :func:`rk_step` (for a caller in Python)."""
-    K, tmp, Z, zy, zd = evaluation_scratch(y.shape[0], PRIG)
+    """Derivatives of y = [q_1..q_n, q̇_1..q̇_n] into dy; outputs into aux.
+
+    aux = [body accelerations (B) | element forces (E) | deformations (E) |
+    drive moment | moments (Mo) | out-of-range flag].  work rows: 0 q, 1 q̇, 2 q̈, 3 m,
+    4 m', 5 Q, then 6–8 each function's value and first and second derivatives.
+    """
+    npart = PRIG.shape[0]
+    n = npart - 1
+    nf = int(PV[3])
+    want = PV[4] != 0.0
+    nb = BI.shape[0]
+    ne = EI.shape[0]
+    nmo = MOI.shape[0]
+    theta, omega, accel, th_load, w_load = crank_motion(PV, t)
+    bad = part_kinematics(y, theta, omega, accel, nf, FI, FF, tabs, MI_, MW, PRIG, work)
+    element_forces(want, nb, EI, EF, FI, FF, tabs, th_load, w_load, aux, work,
+                   nb + 2 * ne + 2 + nmo)
+    window_moments(nb + 2 * ne + 1, FI, MOI, MOF, aux, work)
+    for i in range(1, npart):
+        work[2, i] = (work[5, i] - 0.5 * work[4, i] * work[1, i] * work[1, i]) / work[3, i]
+        dy[i - 1] = work[1, i]
+        dy[n + i - 1] = work[2, i]
+    if want:
+        body_outputs(nf, ne, FI, BI, aux, work)
+    aux[nb + 2 * ne + 1 + nmo] = bad
+
+
+#: :func:`rhs` inlined where :func:`rk_step` calls it (the same source; compiled in the
+#: step's context the steps run 11-20 % faster): the one copy in :func:`rk_run`, whose other
+#: evaluations are steps of length 0 (:func:`evaluation_scratch`).
+rhs_in_step = _jit_inline(getattr(rhs, "py_func", rhs))
+
+
+@_jit
+def shaft_rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, work):
+    """dy = f(t, y) and the outputs into aux by :func:`rk_step`: the shaft's equations
+    (:func:`shaft_in`; for a caller in Python)."""
+    K, tmp, Z, zy, zd = evaluation_scratch(y.shape[0])
     rk_step(t, 0.0, y, K, tmp, tmp, Z, Z[0], Z[0], PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG,
             BI, aux, work, zy, zd)
     for i in range(y.shape[0]):
@@ -350,12 +385,11 @@ def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, wo
 
 
 @_jit_inline
-def evaluation_scratch(n, PRIG):
+def evaluation_scratch(n):
     """Scratch for an evaluation of f at one state by :func:`rk_step` (a step of length 0 with
     the one-stage tableau of weight 0: its stage is f(t, y), into K[1]): (K, tmp, Z, zy, zd),
     Z = [[0]] the tableau (A = Z, b = c = Z[0])."""
-    zy = np.empty(2 * PRIG.shape[0] - 2)
-    return np.empty((2, n)), np.empty(n), np.zeros((1, 1)), zy, np.empty(zy.shape[0])
+    return np.empty((2, n)), np.empty(n), np.zeros((1, 1)), np.empty(n), np.empty(n)
 
 
 @_leaf
@@ -454,25 +488,13 @@ def rk_step(t, hh, y, K, tmp, ynew, TA, TB, TC, PV, FI, FF, tabs, MI_, MW, EI, E
             PRIG, BI, aux, work, zy, zd):
     """One explicit Runge-Kutta step of size hh from (t, y, K[0] = f(y)) into ynew, with the
     Butcher tableau (TA, TB, TC) of s stages (RK4, or the 8th-order one of DOP853 run at a
-    fixed step); K[1 .. s-1] the stages, K[s] = f(ynew) and aux are left at ynew.  With hh = 0
-    and the one-stage tableau of weight 0 it is f(t, y) into K[1] (:func:`evaluation_scratch`):
-    every evaluation runs this one compiled copy of the equations (each helper inlined once).
-
-    f: the scene's y = [q_1..q_n, q̇_1..q̇_n] → [q̇, q̈], or the shaft's when PV says so
-    (:func:`shaft_in`, :func:`shaft_out`; ``zy``, ``zd`` its scratch), with outputs into
-    aux = [body accelerations (B) | element forces (E) | deformations (E) | drive moment |
-    moments (Mo) | out-of-range flag].  work rows: 0 q, 1 q̇, 2 q̈, 3 m, 4 m', 5 Q, then 6–8
-    each function's value and first and second derivatives.
-    """
+    fixed step); K[1 .. s-1] the stages, K[s] = f(ynew) and aux are left at ynew.  f is the
+    scene's :func:`rhs`, or the shaft's when PV says so (:func:`shaft_in`; ``zy``, ``zd`` its
+    scratch).  With hh = 0 and the one-stage tableau of weight 0 it is f(t, y) into K[1]
+    (:func:`evaluation_scratch`)."""
     n = y.shape[0]
     s = TB.shape[0]
     shaft = shaft_mode(PV) != 0
-    npart = PRIG.shape[0]
-    nf = int(PV[3])
-    want = PV[4] != 0.0
-    nb = BI.shape[0]
-    ne = EI.shape[0]
-    nmo = MOI.shape[0]
     for i in range(1, s + 1):           # the stages, then (i = s) the step's end
         for m in range(n):
             acc = 0.0
@@ -482,26 +504,12 @@ def rk_step(t, hh, y, K, tmp, ynew, TA, TB, TC, PV, FI, FF, tabs, MI_, MW, EI, E
                     acc += c * K[j, m]
             tmp[m] = y[m] + hh * acc
         ti = t + TC[i] * hh if i < s else t + hh
-        ye = tmp            # the equations' state and derivative: the stage's, or the free
-        de = K[i]           # parts' inside the shaft's
-        if shaft:
+        if shaft:       # the free parts' state in tmp for rhs (one site, the same arrays)
             ti = shaft_in(ti, tmp, PV, zy)
-            ye = zy
-            de = zd
-        theta, omega, accel, th_load, w_load = crank_motion(PV, ti)
-        bad = part_kinematics(ye, theta, omega, accel, nf, FI, FF, tabs, MI_, MW, PRIG, work)
-        element_forces(want, nb, EI, EF, FI, FF, tabs, th_load, w_load, aux, work,
-                       nb + 2 * ne + 2 + nmo)
-        window_moments(nb + 2 * ne + 1, FI, MOI, MOF, aux, work)
-        for p in range(1, npart):
-            work[2, p] = (work[5, p] - 0.5 * work[4, p] * work[1, p] * work[1, p]) / work[3, p]
-            de[p - 1] = work[1, p]
-            de[npart + p - 2] = work[2, p]
-        if want:
-            body_outputs(nf, ne, FI, BI, aux, work)
-        aux[nb + 2 * ne + 1 + nmo] = bad
+        rhs_in_step(ti, tmp, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, K[i], aux,
+                    work)
         if shaft:
-            shaft_out(tmp, PV, K[i], work, zy, zd)
+            shaft_out(PV, K[i], work, zy, tmp, zd)
     for m in range(n):
         ynew[m] = tmp[m]
 
@@ -680,8 +688,8 @@ def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_
     aux = np.empty(naux + EI.shape[0])     # + the elements' rates, for regions
     auxl = np.empty(aux.shape[0])          # the cuts' locations' (aux stays at ynew)
     work = np.zeros((9, max(FI.shape[0], PRIG.shape[0])))
-    zy = np.empty(2 * PRIG.shape[0] - 2)
-    zd = np.empty(zy.shape[0])
+    zy = np.empty(n)
+    zd = np.empty(n)
     shaft = shaft_mode(PV)
     nfev = 1
     ne = EI.shape[0]
@@ -747,14 +755,13 @@ def outputs(ts, ys, out, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI):
     """Evaluate aux at each stored state into ``out`` (its column i the state i's aux, so that
     each output is a contiguous row)."""
     n = ys.shape[1]
-    K, y, Z, zy, zd = evaluation_scratch(n, PRIG)
+    dy, y = np.empty(n), np.empty(n)
     aux = np.empty(out.shape[0])
     work = np.zeros((9, max(FI.shape[0], PRIG.shape[0])))
     for i in range(ts.shape[0]):
         for j in range(n):      # a copy, not the view ys[i] (two atomic reference counts)
             y[j] = ys[i, j]
-        rk_step(ts[i], 0.0, y, K, y, y, Z, Z[0], Z[0], PV, FI, FF, tabs, MI_, MW, EI, EF, MOI,
-                MOF, PRIG, BI, aux, work, zy, zd)
+        rhs(ts[i], y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, work)
         for j in range(out.shape[0]):
             out[j, i] = aux[j]
 
@@ -764,7 +771,7 @@ def output_extrema(ts, ys, ext, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRI
     """The least (row 0) and largest (row 1) of each aux column over the stored states,
     as :func:`outputs` would give them row by row (a NaN stays NaN)."""
     n = ys.shape[1]
-    K, y, Z, zy, zd = evaluation_scratch(n, PRIG)
+    dy, y = np.empty(n), np.empty(n)
     aux = np.empty(ext.shape[1])
     work = np.zeros((9, max(FI.shape[0], PRIG.shape[0])))
     for j in range(ext.shape[1]):
@@ -773,8 +780,7 @@ def output_extrema(ts, ys, ext, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRI
     for i in range(ts.shape[0]):
         for j in range(n):      # as in outputs
             y[j] = ys[i, j]
-        rk_step(ts[i], 0.0, y, K, y, y, Z, Z[0], Z[0], PV, FI, FF, tabs, MI_, MW, EI, EF, MOI,
-                MOF, PRIG, BI, aux, work, zy, zd)
+        rhs(ts[i], y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, work)
         for j in range(ext.shape[1]):
             v = aux[j]
             if v < ext[0, j] or math.isnan(v):
@@ -849,9 +855,9 @@ def shaft_speed(Y, PV, npart):
 
 @_jit_inline
 def shaft_in(t, Y, PV, zy):
-    """The shaft's state Y → the crank's angle PV[1] and speed PV[0] and the free parts' state
-    z = [q, q̇] into ``zy``, at which the scene's equations (:func:`rk_step`, at time 0) then
-    give the forces on the shaft (:func:`shaft_out`).  Returns 0.0, that time.
+    """The shaft's state Y → the crank's angle PV[1] and speed PV[0], Y kept in ``zy`` and the
+    free parts' state z = [q, q̇] written over Y's start, at which :func:`rhs` (at time 0) then
+    gives the forces on the shaft (:func:`shaft_out`).  Returns 0.0, that time.
 
     In time (PV[8] = 2): Y = [θ, q, θ̇, q̇].  In θ (PV[8] = 1, θ = t the independent
     variable): Y = [t, q, t', q'] with ' = d/dθ (t' = 1/θ̇, q' = q̇/θ̇): positions and their
@@ -860,23 +866,27 @@ def shaft_in(t, Y, PV, zy):
     npart = Y.shape[0] // 2
     nf = npart - 1
     in_theta = PV[8] == 1.0
+    for i in range(2 * npart):
+        zy[i] = Y[i]
     if in_theta:
         PV[1] = t
-        w = 1.0 / Y[npart]
+        w = 1.0 / zy[npart]
     else:
-        PV[1] = Y[0]
-        w = Y[npart]
+        PV[1] = zy[0]
+        w = zy[npart]
     PV[0] = w
     for i in range(nf):
-        zy[i] = Y[1 + i]
-        zy[nf + i] = Y[npart + 1 + i] * w if in_theta else Y[npart + 1 + i]
+        Y[i] = zy[1 + i]
+        Y[nf + i] = zy[npart + 1 + i] * w if in_theta else zy[npart + 1 + i]
     return 0.0
 
 
 @_jit_inline
-def shaft_out(Y, PV, dY, work, zy, zd):
-    """dY of the shaft's state Y (:func:`shaft_in`) from the free parts' ż (``zd``) and the
-    drive's m₀, m₀', Q₀ (work rows 3–5, column 0), q₀ = c θ the drive's coordinate:
+def shaft_out(PV, dY, work, Y, z, zd):
+    """dY of the shaft's state Y (kept by :func:`shaft_in`; put back into ``z``, which held the
+    free parts' state) from the free parts' ż (written by :func:`rhs` over dY's start, copied
+    into ``zd``) and the drive's m₀, m₀', Q₀ (work rows 3–5, column 0), q₀ = c θ the drive's
+    coordinate:
 
         (J_f + c² m₀) θ̈ = T_motor(θ̇) + c Q₀ − ½ c³ m₀' θ̇²;
 
@@ -885,6 +895,8 @@ def shaft_out(Y, PV, dY, work, zy, zd):
     nf = npart - 1
     w = PV[0]
     c = PV[10]
+    for i in range(2 * nf):
+        zd[i] = dY[i]
     acc = (motor_torque(PV, w, 12) + c * work[5, 0] - 0.5 * work[4, 0] * c * c * c * w * w) / \
         (PV[9] + c * c * work[3, 0])
     if PV[8] == 1.0:
@@ -899,15 +911,17 @@ def shaft_out(Y, PV, dY, work, zy, zd):
         dY[0] = w
         dY[npart] = acc
         for i in range(nf):
-            dY[1 + i] = zy[nf + i]
+            dY[1 + i] = z[nf + i]
             dY[npart + 1 + i] = zd[nf + i]
+    for i in range(2 * npart):
+        z[i] = Y[i]
 
 
 @_jit
 def shaft_eval(ys, out, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, naux):
     """The shaft's equations (:func:`shaft_out` in time, PV[8] = 2) at the states ys[i] =
     [θ, q, θ̇, q̇]: out[i] = [aux (naux), θ̈, T_motor(θ̇), m₀, m₀', Q₀]."""
-    K, tmp, Z, zy, zd = evaluation_scratch(ys.shape[1], PRIG)
+    K, tmp, Z, zy, zd = evaluation_scratch(ys.shape[1])
     aux = np.empty(naux)
     work = np.zeros((9, max(FI.shape[0], PRIG.shape[0])))
     for i in range(ys.shape[0]):

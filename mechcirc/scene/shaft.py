@@ -277,11 +277,11 @@ class _ElasticShaft:
                                      np.zeros(n)])
 
     def deriv(self, theta, w, z, dz=None):
-        """θ̈ at θ, θ̇ = w and the free parts' state z (the kernel's ``rhs`` in time);
+        """θ̈ at θ, θ̇ = w and the free parts' state z (the kernel's ``shaft_rhs`` in time);
         ż into ``dz`` when given."""
         n, Y, dY = self.n, self.Y, self.dY
         Y[0], Y[1:1 + n], Y[1 + n], Y[2 + n:] = theta, z[:n], w, z[n:]
-        self.run_kern.rhs(0.0, Y, self.PVt, *self.args[1:], dY, self.aux, self.work)
+        self.run_kern.shaft_rhs(0.0, Y, self.PVt, *self.args[1:], dY, self.aux, self.work)
         if dz is not None:
             dz[:n], dz[n:] = dY[1:1 + n], dY[2 + n:]
         return float(dY[1 + n])
@@ -396,7 +396,7 @@ _WARM_STATEMENT = ("import mechcirc._jit as j; j.COMPILED = True; "
 
 
 def _shaft_kernels():
-    """The kernel module whose ``rk_run``, ``shaft_eval`` and ``rhs`` the shaft calls:
+    """The kernel module whose ``rk_run``, ``shaft_eval`` and ``shaft_rhs`` the shaft calls:
     compiled when numba's
     disk cache holds it (or :data:`mechcirc._jit.COMPILED` is True), else the Python copy
     while a detached process compiles it (the no-wait rule of :mod:`mechcirc._jit`)."""
@@ -404,13 +404,13 @@ def _shaft_kernels():
 
     from . import _motion_kernels as k
 
-    if k.HAVE_NUMBA and _jit.use(_WARM_STATEMENT, k.rk_run, k.shaft_eval, k.rhs):
+    if k.HAVE_NUMBA and _jit.use(_WARM_STATEMENT, k.rk_run, k.shaft_eval, k.shaft_rhs):
         return k
     return kernels_for("rk4-python")[0]
 
 
 def warm_up() -> None:
-    """Compile the shaft's kernels (the scene's ``rk_run``, ``shaft_eval`` and ``rhs``)
+    """Compile the shaft's kernels (the scene's ``rk_run``, ``shaft_eval`` and ``shaft_rhs``)
     into numba's disk cache on a two-step run of a shaft with nothing on it (the arguments'
     types are those of every scene and method).
 
@@ -430,7 +430,7 @@ def warm_up() -> None:
              *arrays, 4, *k.tableau("rk4"))
     PV[8] = 2.0
     k.shaft_eval(np.array([[0.0, 1.0]]), np.empty((1, 9)), PV, *arrays, 4)
-    k.rhs(0.0, np.array([0.0, 1.0]), PV, *arrays, np.empty(2), np.empty(4), np.zeros((9, 1)))
+    k.shaft_rhs(0.0, np.array([0.0, 1.0]), PV, *arrays, np.empty(2), np.empty(4), np.zeros((9, 1)))
 
 
 def _prepare(scene: Scene, shaft, flywheel, points, rigid):
