@@ -368,28 +368,8 @@ def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, wo
 
 
 #: :func:`rhs` inlined where :func:`rk_step` calls it (the same source; compiled in the
-#: step's context the steps run 11-20 % faster): the one copy in :func:`rk_run`, whose other
-#: evaluations are steps of length 0 (:func:`evaluation_scratch`).
+#: step's context the steps run about 10 % faster, for about 9 s more of a cold compile).
 rhs_in_step = _jit_inline(getattr(rhs, "py_func", rhs))
-
-
-@_jit
-def shaft_rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, work):
-    """dy = f(t, y) and the outputs into aux by :func:`rk_step`: the shaft's equations
-    (:func:`shaft_in`; for a caller in Python)."""
-    K, tmp, Z, zy, zd = evaluation_scratch(y.shape[0])
-    rk_step(t, 0.0, y, K, tmp, tmp, Z, Z[0], Z[0], PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG,
-            BI, aux, work, zy, zd)
-    for i in range(y.shape[0]):
-        dy[i] = K[1, i]
-
-
-@_jit_inline
-def evaluation_scratch(n):
-    """Scratch for an evaluation of f at one state by :func:`rk_step` (a step of length 0 with
-    the one-stage tableau of weight 0: its stage is f(t, y), into K[1]): (K, tmp, Z, zy, zd),
-    Z = [[0]] the tableau (A = Z, b = c = Z[0])."""
-    return np.empty((2, n)), np.empty(n), np.zeros((1, 1)), np.empty(n), np.empty(n)
 
 
 @_leaf
@@ -447,9 +427,7 @@ def contact_piece(side, e, edot, k, d, cl):
     return 1
 
 
-# edge_gap and gap_root are compiled apart, called only at a kink: each typed once (locate
-# calls edge_gap from three sites, each inlined a copy to type and lower)
-@_leaf
+@_jit_inline
 def edge_gap(i, ne, r0, r1, v, vd, EF, MOF):
     """Signed distance of switch i (value v, rate vd, see :func:`regions`) from the edge it
     crossed going from piece r0 to r1: a gap's edge ±cl, a window's start (phase 0) or end
@@ -468,7 +446,7 @@ def edge_gap(i, ne, r0, r1, v, vd, EF, MOF):
     return wrap_phase(v) - MOF[i - ne, 1]
 
 
-@_leaf
+@_jit_inline
 def gap_root(g0, g1, d0, d1, s):
     """The root in (0, 1) of the cubic Hermite of a gap's values g0, g1 and slopes d0, d1 at
     the step's ends (Newton from s); s when it leaves the interval."""
@@ -488,13 +466,10 @@ def rk_step(t, hh, y, K, tmp, ynew, TA, TB, TC, PV, FI, FF, tabs, MI_, MW, EI, E
             PRIG, BI, aux, work, zy, zd):
     """One explicit Runge-Kutta step of size hh from (t, y, K[0] = f(y)) into ynew, with the
     Butcher tableau (TA, TB, TC) of s stages (RK4, or the 8th-order one of DOP853 run at a
-    fixed step); K[1 .. s-1] the stages, K[s] = f(ynew) and aux are left at ynew.  f is the
-    scene's :func:`rhs`, or the shaft's when PV says so (:func:`shaft_in`; ``zy``, ``zd`` its
-    scratch).  With hh = 0 and the one-stage tableau of weight 0 it is f(t, y) into K[1]
-    (:func:`evaluation_scratch`)."""
+    fixed step); K[1 .. s-1] the stages, K[s] = f(ynew) and aux are left at ynew.  f is
+    :func:`deriv` (the scene's :func:`rhs`, or the shaft's; ``zy``, ``zd`` its scratch)."""
     n = y.shape[0]
     s = TB.shape[0]
-    shaft = shaft_mode(PV) != 0
     for i in range(1, s + 1):           # the stages, then (i = s) the step's end
         for m in range(n):
             acc = 0.0
@@ -504,18 +479,18 @@ def rk_step(t, hh, y, K, tmp, ynew, TA, TB, TC, PV, FI, FF, tabs, MI_, MW, EI, E
                     acc += c * K[j, m]
             tmp[m] = y[m] + hh * acc
         ti = t + TC[i] * hh if i < s else t + hh
-        if shaft:       # the free parts' state in tmp for rhs (one site, the same arrays)
-            ti = shaft_in(ti, tmp, PV, zy)
-        rhs_in_step(ti, tmp, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, K[i], aux,
-                    work)
-        if shaft:
-            shaft_out(PV, K[i], work, zy, tmp, zd)
+        if shaft_mode(PV) == 0:     # :func:`deriv`, with the scene's rhs compiled in place
+            rhs_in_step(ti, tmp, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, K[i],
+                        aux, work)
+        else:
+            shaft_rhs(ti, tmp, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, K[i], aux,
+                      work, zy, zd)
     for m in range(n):
         ynew[m] = tmp[m]
 
 
 @_leaf
-def locate(t, hh, y, k1, ynew, k4, tmp, K, Z, sw0, sw1, reg, regn, PV, FI, FF, tabs, MI_, MW,
+def locate(t, hh, y, k1, ynew, k4, tmp, dy, sw0, sw1, reg, regn, PV, FI, FF, tabs, MI_, MW,
            EI, EF, MOI, MOF, PRIG, BI, aux, work, off, m, zy, zd, probe):
     """Earliest fraction s ∈ (0, 1] of the step at which a force law changes piece
     (reg → regn: an element crosses an edge of its clearance gap, a moment's window opens
@@ -552,8 +527,8 @@ def locate(t, hh, y, k1, ynew, k4, tmp, K, Z, sw0, sw1, reg, regn, PV, FI, FF, t
             if not lo < s < hi:
                 s = 0.5 * (lo + hi)
             hermite_point(tmp, s, hh, y, k1, ynew, k4, n, m)
-            rk_step(t + s * hh, 0.0, tmp, K, tmp, tmp, Z, Z[0], Z[0], PV, FI, FF, tabs, MI_, MW,
-                    EI, EF, MOI, MOF, PRIG, BI, aux, work, zy, zd)      # f there, into K[1]
+            deriv(t + s * hh, tmp, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy,
+                  aux, work, zy, zd)
             count += 1
             if e < ne:
                 v, vd = aux[off + e], aux[xo + e]
@@ -619,9 +594,8 @@ def switched(reg, regn, nsw):
 
 
 @_leaf
-def cut_at_kink(tc, hh, h, y, K, Z, tmp, ynew, sw0, sw1, reg, regn, TA, TB, TC, PV, FI, FF,
-                tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, aux, auxl, work, off, m, zy, zd, first,
-                nsw):
+def cut_at_kink(tc, hh, h, y, K, tmp, ynew, sw0, sw1, reg, regn, TA, TB, TC, PV, FI, FF, tabs,
+                MI_, MW, EI, EF, MOI, MOF, PRIG, BI, aux, auxl, work, off, m, zy, zd, first, nsw):
     """:func:`rk_run`'s step from ``tc`` of ``hh`` (of the run's ``h``), in which a force law
     changed piece, cut at the kink: located on the step's interpolant (:func:`locate`), then,
     that interpolant being of low order across the kink, again on the cut step's own (smooth
@@ -634,7 +608,7 @@ def cut_at_kink(tc, hh, h, y, K, Z, tmp, ynew, sw0, sw1, reg, regn, TA, TB, TC, 
     used).
     """
     s = TB.shape[0]
-    cut, used = locate(tc, hh, y, K[0], ynew, K[s], tmp, K, Z, sw0, sw1, reg, regn, PV, FI, FF,
+    cut, used = locate(tc, hh, y, K[0], ynew, K[s], tmp, K[1], sw0, sw1, reg, regn, PV, FI, FF,
                        tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, auxl, work, off, m, zy, zd,
                        0.0)
     cut = cut + 1e-7
@@ -649,7 +623,7 @@ def cut_at_kink(tc, hh, h, y, K, Z, tmp, ynew, sw0, sw1, reg, regn, TA, TB, TC, 
         if not switched(reg, regn, nsw):     # cut before the kink: the next piece finds it
             break
         # only whether the kink is within the break's tolerance of the end: tried first
-        more, extra = locate(tc, hh, y, K[0], ynew, K[s], tmp, K, Z, sw0, sw1, reg, regn, PV,
+        more, extra = locate(tc, hh, y, K[0], ynew, K[s], tmp, K[1], sw0, sw1, reg, regn, PV,
                              FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, auxl, work, off,
                              m, zy, zd, 0.99e-7 * (1.0 + h / hh))
         used += extra
@@ -672,7 +646,7 @@ def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_
     finished from there, at most 8 pieces per step, so that the method keeps its order
     through impacts and the beat-up.
 
-    The same loop runs the dynamic main shaft's equations (:func:`shaft_in`, PV[8] ≠ 0): its
+    The same loop runs the dynamic main shaft's equations (:func:`shaft_rhs`, PV[8] ≠ 0): its
     state [positions, their rates] as the scene's, and it stops at a step's end where the
     shaft's speed is not ≥ PV[11] (a stall) instead of the scene's speed limit PV[2].
 
@@ -688,8 +662,8 @@ def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_
     aux = np.empty(naux + EI.shape[0])     # + the elements' rates, for regions
     auxl = np.empty(aux.shape[0])          # the cuts' locations' (aux stays at ynew)
     work = np.zeros((9, max(FI.shape[0], PRIG.shape[0])))
-    zy = np.empty(n)
-    zd = np.empty(n)
+    zy = np.empty(2 * PRIG.shape[0] - 2)
+    zd = np.empty(zy.shape[0])
     shaft = shaft_mode(PV)
     nfev = 1
     ne = EI.shape[0]
@@ -702,11 +676,7 @@ def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_
     j, bad = int(0), 0.0
     npart = PRIG.shape[0]
     limit = PV[2]
-    Z = np.zeros((1, 1))        # an evaluation's tableau (evaluation_scratch)
-    rk_step(t0, 0.0, y, K, tmp, tmp, Z, Z[0], Z[0], PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF,
-            PRIG, BI, aux, work, zy, zd)
-    for i in range(n):
-        K[0, i] = K[1, i]
+    deriv(t0, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, K[0], aux, work, zy, zd)
     first = 0 if shaft else 1
     k0, ks = K[0], K[s]     # the views made once (each made in the loop: two atomic counts)
     gaps = regions(FI, EI, EF, MOI, MOF, aux, work, off, reg, sw0, first)
@@ -723,7 +693,7 @@ def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_
                 regions(FI, EI, EF, MOI, MOF, aux, work, off, regn, sw1, first)
                 if switched(reg, regn, nsw) and sub < 7:
                     hh, full, used = cut_at_kink(
-                        tc, hh, h, y, K, Z, tmp, ynew, sw0, sw1, reg, regn, TA, TB, TC, PV, FI,
+                        tc, hh, h, y, K, tmp, ynew, sw0, sw1, reg, regn, TA, TB, TC, PV, FI,
                         FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, aux, auxl, work, off, m,
                         zy, zd, first, nsw)
                     nfev += used
@@ -854,53 +824,50 @@ def shaft_speed(Y, PV, npart):
 
 
 @_jit_inline
-def shaft_in(t, Y, PV, zy):
-    """The shaft's state Y → the crank's angle PV[1] and speed PV[0], Y kept in ``zy`` and the
-    free parts' state z = [q, q̇] written over Y's start, at which :func:`rhs` (at time 0) then
-    gives the forces on the shaft (:func:`shaft_out`).  Returns 0.0, that time.
+def deriv(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, work, zy, zd):
+    """The derivatives :func:`rk_run` integrates: the scene's :func:`rhs`, or the shaft's
+    :func:`shaft_rhs` when PV says so (``zy``, ``zd``: its scratch).  Inlined into its
+    callers, so the scene's steps call :func:`rhs` as directly as before."""
+    if shaft_mode(PV) == 0:
+        rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, work)
+    else:
+        shaft_rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, work,
+                  zy, zd)
 
-    In time (PV[8] = 2): Y = [θ, q, θ̇, q̇].  In θ (PV[8] = 1, θ = t the independent
-    variable): Y = [t, q, t', q'] with ' = d/dθ (t' = 1/θ̇, q' = q̇/θ̇): positions and their
-    rates in both, so that the step's output is quintic in the positions
-    (:func:`mechcirc._ode.hermite_point`)."""
-    npart = Y.shape[0] // 2
+
+@_leaf
+def shaft_rhs(t, Y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dY, aux, work, zy,
+              zd):
+    """dY of the shaft and the free parts (q, q̇ = z, :func:`rhs` at the crank's θ, θ̇ with
+    t = 0), q₀ = c θ the drive's coordinate and
+
+        (J_f + c² m₀) θ̈ = T_motor(θ̇) + c Q₀ − ½ c³ m₀' θ̇²    (work rows 3–5, column 0).
+
+    In time (PV[8] = 2): Y = [θ, q, θ̇, q̇] and dY/dt.  In θ (PV[8] = 1, θ = t the
+    independent variable): Y = [t, q, t', q'] with ' = d/dθ (t' = 1/θ̇, q' = q̇/θ̇) and
+    dY/dθ = [t', q', −θ̈ t'³, t'² (q̈ − θ̈ q')]: positions and their rates in both, so that
+    the step's output is quintic in the positions (:func:`mechcirc._ode.hermite_point`).
+    ``zy``, ``zd``: scratch for z and ż.  Returns θ̈."""
+    npart = PRIG.shape[0]
     nf = npart - 1
     in_theta = PV[8] == 1.0
-    for i in range(2 * npart):
-        zy[i] = Y[i]
     if in_theta:
         PV[1] = t
-        w = 1.0 / zy[npart]
+        u = Y[npart]
+        w = 1.0 / u
     else:
-        PV[1] = zy[0]
-        w = zy[npart]
+        PV[1] = Y[0]
+        w = Y[npart]
+        u = 1.0
     PV[0] = w
     for i in range(nf):
-        Y[i] = zy[1 + i]
-        Y[nf + i] = zy[npart + 1 + i] * w if in_theta else zy[npart + 1 + i]
-    return 0.0
-
-
-@_jit_inline
-def shaft_out(PV, dY, work, Y, z, zd):
-    """dY of the shaft's state Y (kept by :func:`shaft_in`; put back into ``z``, which held the
-    free parts' state) from the free parts' ż (written by :func:`rhs` over dY's start, copied
-    into ``zd``) and the drive's m₀, m₀', Q₀ (work rows 3–5, column 0), q₀ = c θ the drive's
-    coordinate:
-
-        (J_f + c² m₀) θ̈ = T_motor(θ̇) + c Q₀ − ½ c³ m₀' θ̇²;
-
-    in θ dY/dθ = [t', q', −θ̈ t'³, t'² (q̈ − θ̈ q')], in time dY/dt = [θ̇, q̇, θ̈, q̈]."""
-    npart = Y.shape[0] // 2
-    nf = npart - 1
-    w = PV[0]
+        zy[i] = Y[1 + i]
+        zy[nf + i] = Y[npart + 1 + i] * w if in_theta else Y[npart + 1 + i]
+    rhs(0.0, zy, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, zd, aux, work)
     c = PV[10]
-    for i in range(2 * nf):
-        zd[i] = dY[i]
     acc = (motor_torque(PV, w, 12) + c * work[5, 0] - 0.5 * work[4, 0] * c * c * c * w * w) / \
         (PV[9] + c * c * work[3, 0])
-    if PV[8] == 1.0:
-        u = Y[npart]
+    if in_theta:
         u2 = u * u
         dY[0] = u
         dY[npart] = -acc * u2 * u
@@ -911,25 +878,27 @@ def shaft_out(PV, dY, work, Y, z, zd):
         dY[0] = w
         dY[npart] = acc
         for i in range(nf):
-            dY[1 + i] = z[nf + i]
+            dY[1 + i] = zy[nf + i]
             dY[npart + 1 + i] = zd[nf + i]
-    for i in range(2 * npart):
-        z[i] = Y[i]
+    return acc
 
 
 @_jit
 def shaft_eval(ys, out, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, naux):
-    """The shaft's equations (:func:`shaft_out` in time, PV[8] = 2) at the states ys[i] =
+    """The shaft's equations (:func:`shaft_rhs` in time, PV[8] = 2) at the states ys[i] =
     [θ, q, θ̇, q̇]: out[i] = [aux (naux), θ̈, T_motor(θ̇), m₀, m₀', Q₀]."""
-    K, tmp, Z, zy, zd = evaluation_scratch(ys.shape[1])
+    n = ys.shape[1]
+    dY = np.empty(n)
     aux = np.empty(naux)
     work = np.zeros((9, max(FI.shape[0], PRIG.shape[0])))
+    zy = np.empty(2 * PRIG.shape[0] - 2)
+    zd = np.empty(zy.shape[0])
     for i in range(ys.shape[0]):
-        rk_step(0.0, 0.0, ys[i], K, tmp, tmp, Z, Z[0], Z[0], PV, FI, FF, tabs, MI_, MW, EI, EF, MOI,
-                MOF, PRIG, BI, aux, work, zy, zd)
+        acc = shaft_rhs(0.0, ys[i], PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dY,
+                        aux, work, zy, zd)
         for j in range(naux):
             out[i, j] = aux[j]
-        out[i, naux] = K[1, PRIG.shape[0]]         # θ̈ (in time)
+        out[i, naux] = acc
         out[i, naux + 1] = motor_torque(PV, PV[0], 12)
         out[i, naux + 2] = work[3, 0]
         out[i, naux + 3] = work[4, 0]

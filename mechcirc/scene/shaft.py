@@ -273,6 +273,7 @@ class _ElasticShaft:
         self.PVt = np.concatenate((self.args[0], [2.0, Jf, self.c, -math.inf], self.MP))
         self.aux, self.dY, self.Y = np.empty(m.naux()), np.empty(2 * n + 2), np.empty(2 * n + 2)
         self.work = np.zeros((9, max(a["FI"].shape[0], a["PRIG"].shape[0])))
+        self.zy, self.zd = np.empty(2 * n), np.empty(2 * n)
         self.shift = np.concatenate([m.rigid_state(scene.cycle)[:n] - m.rigid_state(0.0)[:n],
                                      np.zeros(n)])
 
@@ -281,10 +282,11 @@ class _ElasticShaft:
         ż into ``dz`` when given."""
         n, Y, dY = self.n, self.Y, self.dY
         Y[0], Y[1:1 + n], Y[1 + n], Y[2 + n:] = theta, z[:n], w, z[n:]
-        self.run_kern.shaft_rhs(0.0, Y, self.PVt, *self.args[1:], dY, self.aux, self.work)
+        acc = self.run_kern.shaft_rhs(0.0, Y, self.PVt, *self.args[1:], dY, self.aux,
+                                      self.work, self.zy, self.zd)
         if dz is not None:
             dz[:n], dz[n:] = dY[1:1 + n], dY[2 + n:]
-        return float(dY[1 + n])
+        return acc
 
     def run(self, Y, in_theta, s0, h, nsteps, floor, record=True, every=1):
         """``nsteps`` steps of h of the shaft and free parts from s0 (Y = [θ̇, t, z] in θ, or
@@ -430,7 +432,8 @@ def warm_up() -> None:
              *arrays, 4, *k.tableau("rk4"))
     PV[8] = 2.0
     k.shaft_eval(np.array([[0.0, 1.0]]), np.empty((1, 9)), PV, *arrays, 4)
-    k.shaft_rhs(0.0, np.array([0.0, 1.0]), PV, *arrays, np.empty(2), np.empty(4), np.zeros((9, 1)))
+    k.shaft_rhs(0.0, np.array([0.0, 1.0]), PV, *arrays, np.empty(2), np.empty(4),
+                np.zeros((9, 1)), np.empty(0), np.empty(0))
 
 
 def _prepare(scene: Scene, shaft, flywheel, points, rigid):
@@ -490,7 +493,7 @@ MAX_CALLS = 200_000
 
 
 def _to_kernel(Y, in_theta, n):
-    """A shaft state as :func:`._motion_kernels.shaft_in` takes it, from [θ̇, t, q, q̇] (in θ)
+    """A shaft state as :func:`._motion_kernels.shaft_rhs` takes it, from [θ̇, t, q, q̇] (in θ)
     or [θ, θ̇, q, q̇] (in time); rows for a 2-d ``Y``."""
     Y = np.asarray(Y, float)
     if not in_theta:
