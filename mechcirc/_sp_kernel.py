@@ -131,17 +131,17 @@ def _children_with_error(i, nb, series, m_u, kstart, kids, slot, cplx, re, im, m
                     tr = 0.0
                     ti = -1.0 / im[c, j]
                 t = (_through_reciprocal(rh[c, j]) + (_U_RECIP + m_u)) * ig[c, j]
+            # The sums read before they are written and the first term a select: as
+            # branches, LLVM stored with a mask and read the same address back with one,
+            # which does not forward (a stall per point, a third of this loop's time).
             if cc:
-                if first_c:
-                    cr[j] = tr
-                    ci[j] = ti
-                else:
-                    cr[j] += tr
-                    ci[j] += ti
-            elif first_i:
-                ai[j] = ti
+                sr = cr[j]
+                si = ci[j]
+                cr[j] = tr if first_c else sr + tr
+                ci[j] = ti if first_c else si + ti
             else:
-                ai[j] += ti
+                si = ai[j]
+                ai[j] = ti if first_i else si + ti
             bb[j] = bb[j] + t if have_b else t
         have_b = True
         if cc:
