@@ -21,8 +21,11 @@ import numpy as np
 
 from ._jit import decorators
 
-# Plain @jit for the helpers too: numba-level forced inlining made the cold compile
-# 5.8 s instead of 4.1 s (CPU) for no measurable gain; LLVM inlines them anyway.
+# The helpers are compiled apart (inlined at numba's level into the plan's loop, the cold
+# compile took 5.8 s instead of 4.1 s of CPU and the bound's loops ran up to 2.4x slower)
+# and without numba's reference counting: an atomic increment and decrement of every array
+# argument at every call, which waits for the divisions in flight (half of K's time on the
+# 999-element ladder).  Each is called once per node and block of ω, not inlined by LLVM.
 HAVE_NUMBA, jit, jit_inline = decorators()
 _leaf = decorators(nrt=False)[1]
 
