@@ -70,44 +70,29 @@ def _children(i, nb, series, kstart, kids, slot, cplx, re, im, ai, cr, ci, has_i
     """Add node i's internal children (impedances in series, admittances in
     parallel) to the complex sum (cr, ci) or the imaginary one (ai)."""
     for q in range(kstart[i], kstart[i + 1]):
-        cn = kids[q]
-        c = slot[cn]
-        if cplx[cn]:
+        c = slot[kids[q]]
+        cc = cplx[kids[q]]
+        first_c = cc and not has_c
+        first_i = not cc and not has_i
+        for j in range(nb):
             if series:
-                if has_c:
-                    for j in range(nb):
-                        cr[j] += re[c, j]
-                        ci[j] += im[c, j]
-                else:
-                    for j in range(nb):
-                        cr[j] = re[c, j]
-                        ci[j] = im[c, j]
+                tr = re[c, j]
+                ti = im[c, j]
+            elif cc:
+                tr, ti = _recip(re[c, j], im[c, j])
             else:
-                if has_c:
-                    for j in range(nb):
-                        tr, ti = _recip(re[c, j], im[c, j])
-                        cr[j] += tr
-                        ci[j] += ti
-                else:
-                    for j in range(nb):
-                        cr[j], ci[j] = _recip(re[c, j], im[c, j])
-            has_c = True
-        else:
-            if series:
-                if has_i:
-                    for j in range(nb):
-                        ai[j] += im[c, j]
-                else:
-                    for j in range(nb):
-                        ai[j] = im[c, j]
+                tr = 0.0
+                ti = -1.0 / im[c, j]
+            if cc:          # (selects: see _children_with_error)
+                sr = cr[j]
+                si = ci[j]
+                cr[j] = tr if first_c else sr + tr
+                ci[j] = ti if first_c else si + ti
             else:
-                if has_i:
-                    for j in range(nb):
-                        ai[j] += -1.0 / im[c, j]
-                else:
-                    for j in range(nb):
-                        ai[j] = -1.0 / im[c, j]
-            has_i = True
+                si = ai[j]
+                ai[j] = ti if first_i else si + ti
+        has_c = has_c or cc
+        has_i = has_i or not cc
     return has_i, has_c
 
 
