@@ -21,31 +21,36 @@ import numpy as np
 
 from ._jit import decorators
 
-# Plain @jit for the helpers too: numba-level forced inlining made the cold compile
-# 5.8 s instead of 4.1 s (CPU) for no measurable gain; LLVM inlines them anyway.
+# The helpers are compiled apart (inlined at numba's level into the plan's loop, the cold
+# compile took 5.8 s instead of 4.1 s of CPU and the bound's loops ran up to 2.4x slower)
+# and without numba's reference counting: an atomic increment and decrement of every array
+# argument at every call, which waits for the divisions in flight (half of K's time on the
+# 999-element ladder).  Each is called once per node and block of ω, not inlined by LLVM.
 HAVE_NUMBA, jit, jit_inline = decorators()
+_leaf = decorators(nrt=False)[1]
 
 _U = np.finfo(float).eps / 2
 _U_RECIP = 4 * _U
 
 
-@jit
+@_leaf
 def _recip(a, b):
     """1/(a + jb) with 1/0 = ∞, 1/∞ = 0 (Smith's algorithm otherwise, as numpy's)."""
     if math.isinf(a) or math.isinf(b):
         return 0.0, 0.0
     if a == 0.0 and b == 0.0:
         return math.inf, 0.0
-    if abs(a) >= abs(b):
-        r = b / a
-        d = a + b * r
-        return 1.0 / d, -r / d
-    r = a / b
-    d = a * r + b
-    return r / d, -1.0 / d
+    # Smith's two branches as one, selecting operands (3 divisions where a vectorised
+    # loop computed both branches, 6): p the part of the larger magnitude.
+    big = abs(a) >= abs(b)
+    p = a if big else b
+    q = b if big else a
+    r = q / p
+    d = p + q * r
+    return (1.0 if big else r) / d, -(r if big else 1.0) / d
 
 
-@jit
+@_leaf
 def _through_reciprocal(rho):
     """A bound of the relative error of 1/x̂ given that of x̂, ρ/(1 − ρ), ∞ from
     ρ ≥ 1 on and for NaN."""
@@ -60,53 +65,38 @@ def _through_reciprocal(rho):
 _ABS_LO, _ABS_HI = 1e-150, 1e150
 
 
-@jit
+@_leaf
 def _children(i, nb, series, kstart, kids, slot, cplx, re, im, ai, cr, ci, has_i, has_c):
     """Add node i's internal children (impedances in series, admittances in
     parallel) to the complex sum (cr, ci) or the imaginary one (ai)."""
     for q in range(kstart[i], kstart[i + 1]):
-        cn = kids[q]
-        c = slot[cn]
-        if cplx[cn]:
+        c = slot[kids[q]]
+        cc = cplx[kids[q]]
+        first_c = cc and not has_c
+        first_i = not cc and not has_i
+        for j in range(nb):
             if series:
-                if has_c:
-                    for j in range(nb):
-                        cr[j] += re[c, j]
-                        ci[j] += im[c, j]
-                else:
-                    for j in range(nb):
-                        cr[j] = re[c, j]
-                        ci[j] = im[c, j]
+                tr = re[c, j]
+                ti = im[c, j]
+            elif cc:
+                tr, ti = _recip(re[c, j], im[c, j])
             else:
-                if has_c:
-                    for j in range(nb):
-                        tr, ti = _recip(re[c, j], im[c, j])
-                        cr[j] += tr
-                        ci[j] += ti
-                else:
-                    for j in range(nb):
-                        cr[j], ci[j] = _recip(re[c, j], im[c, j])
-            has_c = True
-        else:
-            if series:
-                if has_i:
-                    for j in range(nb):
-                        ai[j] += im[c, j]
-                else:
-                    for j in range(nb):
-                        ai[j] = im[c, j]
+                tr = 0.0
+                ti = -1.0 / im[c, j]
+            if cc:          # (selects: see _children_with_error)
+                sr = cr[j]
+                si = ci[j]
+                cr[j] = tr if first_c else sr + tr
+                ci[j] = ti if first_c else si + ti
             else:
-                if has_i:
-                    for j in range(nb):
-                        ai[j] += -1.0 / im[c, j]
-                else:
-                    for j in range(nb):
-                        ai[j] = -1.0 / im[c, j]
-            has_i = True
+                si = ai[j]
+                ai[j] = ti if first_i else si + ti
+        has_c = has_c or cc
+        has_i = has_i or not cc
     return has_i, has_c
 
 
-@jit
+@_leaf
 def _children_with_error(i, nb, series, m_u, kstart, kids, slot, cplx, re, im, mg, ig, rh,
                          ai, cr, ci, bb, has_i, has_c, have_b):
     """:func:`_children` and, in the same loop, each child's term of the error
@@ -129,17 +119,17 @@ def _children_with_error(i, nb, series, m_u, kstart, kids, slot, cplx, re, im, m
                     tr = 0.0
                     ti = -1.0 / im[c, j]
                 t = (_through_reciprocal(rh[c, j]) + (_U_RECIP + m_u)) * ig[c, j]
+            # The sums read before they are written and the first term a select: as
+            # branches, LLVM stored with a mask and read the same address back with one,
+            # which does not forward (a stall per point, a third of this loop's time).
             if cc:
-                if first_c:
-                    cr[j] = tr
-                    ci[j] = ti
-                else:
-                    cr[j] += tr
-                    ci[j] += ti
-            elif first_i:
-                ai[j] = ti
+                sr = cr[j]
+                si = ci[j]
+                cr[j] = tr if first_c else sr + tr
+                ci[j] = ti if first_c else si + ti
             else:
-                ai[j] += ti
+                si = ai[j]
+                ai[j] = ti if first_i else si + ti
             bb[j] = bb[j] + t if have_b else t
         have_b = True
         if cc:
@@ -151,11 +141,14 @@ def _children_with_error(i, nb, series, m_u, kstart, kids, slot, cplx, re, im, m
 
 #: Points per block: every node is evaluated over a block of ω at once, so the
 #: iterations of the inner loop are independent (a ladder's nodes form one long
-#: chain of divisions; node by node at one ω the loop would wait on each).
-BLOCK = 128
+#: chain of divisions; node by node at one ω the loop would wait on each).  A sweep of
+#: 401 points is one block: each node's helper calls and loop set-ups cost per block
+#: (512 against 128: K 0.58–0.89x, K + bound 0.69–0.91x at 401 points, 0.68–0.89x and
+#: 0.77–0.93x at 4001; 1024 no faster than 512).
+BLOCK = 512
 
 
-@jit
+@_leaf
 def _reflect(s, c, r, nb, want_error, re, im, mg, ig, rh):
     """A lever node: its child's value (slot ``c``) reflected by the ratio ``r``."""
     for j in range(nb):
@@ -168,7 +161,7 @@ def _reflect(s, c, r, nb, want_error, re, im, mg, ig, rh):
             rh[s, j] = rh[c, j] + 2 * _U
 
 
-@jit
+@_leaf
 def _leaf_terms(nb, a_inv, a_om, b_inv, b_om, want_error, w, iw, ai, bb):
     """A node's leaf terms a_inv/ω + a_om·ω into ``ai`` (and their error terms into
     ``bb``); True if there is one."""
@@ -195,7 +188,7 @@ def _leaf_terms(nb, a_inv, a_om, b_inv, b_om, want_error, w, iw, ai, bb):
     return a_inv != 0.0 or a_om != 0.0
 
 
-@jit
+@_leaf
 def _store(s, nb, series, has_c, re, im, cr, ci, ai):
     """A node's value into slot ``s``: the sum (series), or its reciprocal (parallel)."""
     if has_c:
@@ -217,7 +210,7 @@ def _store(s, nb, series, has_c, re, im, cr, ci, ai):
                 im[s, j] = -1.0 / ai[j]
 
 
-@jit
+@_leaf
 def _merge(nb, real, has_c, has_i, cr, ci, ai):
     """A node's sums made one: its real leaf term ``real`` (if any: nonzero or NaN) into the
     complex sum (cr, ci), then the imaginary sum ``ai`` into ci where both exist; a node
@@ -242,7 +235,7 @@ def _merge(nb, real, has_c, has_i, cr, ci, ai):
     return has_c, has_i, with_real
 
 
-@jit
+@_leaf
 def _node_bound(leaf, series, b, mag):
     """``(|K|, 1/|K|, ρ)`` of a node from the bound ``b`` of its sum's error and the
     sum's magnitude ``mag`` (scalars only: a helper taking the arrays cost a
@@ -256,16 +249,42 @@ def _node_bound(leaf, series, b, mag):
     return inv, mag, _through_reciprocal(rho) + _U_RECIP
 
 
-@jit
+@_leaf
 def _store_with_error(s, leaf, nb, series, has_c, have_b, with_real, extra, re, im, mg, ig,
                       rh, cr, ci, ai, bb):
     """:func:`_store` with the node's magnitude, its reciprocal and its error bound ρ.
 
     |S| is √(a² + b²) in the loop over the block, without a branch (a branch to
     hypot there cost about as much as the rest of the bound: 1.6–1.8x K on ladders
-    against 1.4–1.5x with this second pass); a second pass redoes, with hypot, the points where the larger part
-    is outside [``_ABS_LO``, ``_ABS_HI``] (where a square could overflow or
-    underflow).  The same numbers as one pass that branches."""
+    against 1.4–1.5x with this second pass); a second pass redoes, with hypot, the points
+    where the larger part is outside [``_ABS_LO``, ``_ABS_HI``] (where a square could
+    overflow or underflow), if the first pass counted any.  The same numbers as one
+    pass that branches.  One loop per case (:func:`_store_case`)."""
+    if not has_c:
+        wide = _store_case(series, False, s, leaf, nb, have_b, with_real, extra, re, im, mg,
+                           ig, rh, cr, ci, ai, bb)
+    elif series:
+        wide = _store_case(True, True, s, leaf, nb, have_b, with_real, extra, re, im, mg, ig,
+                           rh, cr, ci, ai, bb)
+    else:
+        wide = _store_case(False, True, s, leaf, nb, have_b, with_real, extra, re, im, mg,
+                           ig, rh, cr, ci, ai, bb)
+    if wide:
+        for j in range(nb):
+            big = max(abs(cr[j]), abs(ci[j]))
+            if not (_ABS_LO < big < _ABS_HI):
+                b = bb[j] if have_b else 0.0
+                if with_real:
+                    b += extra
+                mg[s, j], ig[s, j], rh[s, j] = _node_bound(leaf, series, b,
+                                                           math.hypot(cr[j], ci[j]))
+
+
+@jit_inline     # its sites pass series and has_c as constants: a loop without their branches
+def _store_case(series, has_c, s, leaf, nb, have_b, with_real, extra, re, im, mg, ig, rh,
+                cr, ci, ai, bb):
+    """The first pass of :func:`_store_with_error`; returns the number of wide points."""
+    wide = 0
     for j in range(nb):
         b = bb[j] if have_b else 0.0
         if with_real:
@@ -274,6 +293,7 @@ def _store_with_error(s, leaf, nb, series, has_c, have_b, with_real, extra, re, 
             sr = cr[j]
             si = ci[j]
             mag = math.sqrt(sr * sr + si * si)
+            wide += not (_ABS_LO < max(abs(sr), abs(si)) < _ABS_HI)
         else:
             sr = 0.0
             si = ai[j]
@@ -287,15 +307,7 @@ def _store_with_error(s, leaf, nb, series, has_c, have_b, with_real, extra, re, 
             re[s, j] = 0.0
             im[s, j] = -1.0 / si
         mg[s, j], ig[s, j], rh[s, j] = _node_bound(leaf, series, b, mag)
-    if has_c:
-        for j in range(nb):
-            big = max(abs(cr[j]), abs(ci[j]))
-            if not (_ABS_LO < big < _ABS_HI):
-                b = bb[j] if have_b else 0.0
-                if with_real:
-                    b += extra
-                mg[s, j], ig[s, j], rh[s, j] = _node_bound(leaf, series, b,
-                                                           math.hypot(cr[j], ci[j]))
+    return wide
 
 
 @jit
