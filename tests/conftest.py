@@ -250,6 +250,70 @@ def warm_up_run(tmp_path_factory):
     return _once_per_run(tmp_path_factory, "warm-up", compute)
 
 
+# The steps of ``light_imports``, in this order, ``sys.modules`` read after each.
+_LIGHT_IMPORTS = """
+import json, signal, sys
+sys.argv = ["mechcirc", "check"]          # the process named mechcirc (the signal check)
+before = [repr(signal.getsignal(s)) for s in (signal.SIGINT, signal.SIGTERM)]
+out = {}
+import argparse
+from mechcirc.cli import kinematics_commands
+kinematics_commands.register(argparse.ArgumentParser().add_subparsers())
+out["register kinematics"] = sorted(sys.modules)
+import mechcirc, mechcirc.netlist, mechcirc.units
+from mechcirc import cli
+cli.build_parser()
+out["build_parser"] = sorted(sys.modules)
+out["mechcirc.__file__"] = mechcirc.__file__
+import numpy as np
+s = mechcirc.load("netlists/stb_heald.mcir").sweep(np.linspace(10, 1000, 400))
+s.flags, s.error
+out["sweep with flags"] = sorted(sys.modules)
+import mechcirc.sley
+out["import mechcirc.sley"] = sorted(sys.modules)
+import mechcirc.kinematics
+out["import mechcirc.kinematics"] = sorted(sys.modules)
+[getattr(mechcirc, name) for name in mechcirc.__all__]
+cli.build_parser()
+out["signals"] = [before, [repr(signal.getsignal(s)) for s in (signal.SIGINT, signal.SIGTERM)]]
+print(json.dumps(out))
+"""
+
+
+@pytest.fixture(scope="session")
+def light_imports(tmp_path_factory):
+    """What a fresh ``python`` process has imported after each step of ``_LIGHT_IMPORTS``
+    (``{step: sorted sys.modules}``), and its SIGINT and SIGTERM handlers before any
+    import and after the last step (``"signals"``), one process for the run.
+
+    The steps, in turn: register the kinematics commands on a parser; import mechcirc
+    (netlist, units) and build the command line's parser; load and sweep the bundled
+    netlist with its flags and error bound; import mechcirc.sley; import
+    mechcirc.kinematics; every public name of mechcirc and the parser again.  Modules
+    only accumulate, so each list holds all its step imported, and what earlier steps
+    imported is allowed for each later test: a test checks what a step does not load,
+    and every step before it checks at least as much.  Seven processes before
+    (tests/test_cli.py, test_cli_ux.py, test_interop_skrf.py, test_cli_common.py,
+    test_startup.py, sley/test_simulation.py, two in kinematics/test_cli_kinematics.py),
+    each paying the interpreter and numpy's import: 1.1 s of CPU here, more in CI.
+    """
+    import json
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    from bounds import SUBPROCESS_TIMEOUT
+
+    def compute():
+        done = subprocess.run([sys.executable, "-c", _LIGHT_IMPORTS], capture_output=True,
+                              text=True, cwd=Path(__file__).resolve().parents[1],
+                              timeout=SUBPROCESS_TIMEOUT)
+        assert done.returncode == 0, done.stderr[-2000:]
+        return json.loads(done.stdout)
+
+    return _once_per_run(tmp_path_factory, "light-imports", compute)
+
+
 @contextlib.contextmanager
 def _exclusive(lock_path):
     """Hold an exclusive lock on ``lock_path`` (one xdist worker at a time; none off POSIX)."""

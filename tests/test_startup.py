@@ -25,16 +25,10 @@ ROOT = Path(__file__).resolve().parents[1]
 STB = ROOT / "netlists" / "stb_heald.mcir"
 
 
-def test_a_sweep_with_flags_loads_no_scipy_matplotlib_or_numba():
-    # load + sweep + error bound + flags: the frequency-domain core is numpy only.
-    code = (
-        "import sys, json, numpy as np, mechcirc\n"
-        f"c = mechcirc.load({str(STB)!r})\n"
-        "s = c.sweep(np.linspace(10, 1000, 400)); s.flags; s.error\n"
-        "print(json.dumps(sorted({m.split('.')[0] for m in sys.modules})))\n")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         check=True, cwd=ROOT, timeout=600)
-    loaded = set(json.loads(out.stdout))
+def test_a_sweep_with_flags_loads_no_scipy_matplotlib_or_numba(light_imports):
+    # load + sweep + error bound + flags: the frequency-domain core is numpy only
+    # (one process with the other light-import checks: tests/conftest.py, light_imports).
+    loaded = {m.split(".")[0] for m in light_imports["sweep with flags"]}
     assert not loaded & {"scipy", "matplotlib", "numba", "networkx", "pandas"}, loaded
 
 
