@@ -205,26 +205,6 @@ def round_workdir(tmp_path_factory):
     return work, h.round_files(work)
 
 
-#: The outcome of each of this round's inputs run, by (kind, seed, work folder).
-_ROUND_OUTCOMES: dict = {}
-
-
-def _round_outcome(kind, seed, work, files):
-    """``cli_property`` of the input of ``kind`` drawn from ``seed`` in ``work``, run once.
-
-    The property below and the generators' test after it draw the same seeds (hypothesis
-    tries 0 first; the test runs 0-11) in the same module folder: an input both reach
-    is the same command line on the same files (``round_argv`` writes them from the
-    seed), and its outcome is the one the first run found (a failure raises there).
-    Seed 0 of periodic_table alone was a 0.9 s speed map run twice.
-    """
-    key = (kind, seed, str(work))
-    if key not in _ROUND_OUTCOMES:
-        _ROUND_OUTCOMES[key] = h.cli_property(h.round_argv(random.Random(seed), kind, work,
-                                                           files))
-    return _ROUND_OUTCOMES[key]
-
-
 @pytest.mark.parametrize("kind", [k for k in h.ROUND_KINDS if k != "crosscheck"])
 @fast(100)
 @given(seed=seeds)
@@ -233,7 +213,7 @@ def test_fuzz_this_rounds_commands(round_workdir, kind, seed):
     --sensitivity/--node/--element/--unit and study sample files: exit 0 or 2, never 1,
     a traceback or a hang."""
     work, files = round_workdir
-    _round_outcome(kind, seed, work, files)
+    h.cli_property(h.round_argv(random.Random(seed), kind, work, files))
 
 
 @fast(20)
@@ -244,14 +224,15 @@ def test_fuzz_crosscheck_verdicts(round_workdir, seed):
     h.cli_property(h.round_argv(random.Random(seed), "crosscheck", work, files))
 
 
-def test_round_generators_reach_results_and_errors(round_workdir):
+def test_round_generators_reach_results_and_errors(tmp_path):
     """Each kind of this round's inputs ends both ways (not stuck in the argument parser):
     on seeds 0-11 every kind has at least one result and at least two user errors."""
-    work, files = round_workdir
+    files = h.round_files(tmp_path)
     for kind in h.ROUND_KINDS:
         if kind == "crosscheck":
             continue                    # seconds per input; covered by the property above
-        seen = _reach(lambda i, kind=kind: _round_outcome(kind, i, work, files),
+        seen = _reach(lambda i, kind=kind: h.cli_property(h.round_argv(random.Random(i), kind,
+                                                                       tmp_path, files)),
                       range(12), {"result": 1, "error": 2})
         assert seen["result"] >= 1 and seen["error"] >= 2, (kind, seen)
 
