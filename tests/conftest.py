@@ -99,6 +99,27 @@ def _cwd_is_kept():
         pytest.fail(f"the test left the working directory at {after} (was {before})")
 
 
+def _once_per_run(tmp_path_factory, name, compute):
+    """``compute()`` (JSON data) run once for the whole run, under xdist too.
+
+    The first caller runs it and writes the result to ``cli-once-NAME.json`` in
+    the run's base temporary folder; a worker that finds another computing it
+    waits (a file lock) and reads that result instead of computing it again.
+    """
+    import json
+
+    shared = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        shared = shared.parent                  # the folder every worker of this run sees
+    path = shared / f"cli-once-{name}.json"
+    with _exclusive(shared / f"cli-once-{name}.lock"):
+        if path.exists():
+            return json.loads(path.read_text(encoding="utf-8"))
+        done = compute()
+        path.write_text(json.dumps(done), encoding="utf-8")
+        return done
+
+
 @pytest.fixture(scope="session")
 def cli_once(tmp_path_factory):
     """``cli_once(argv)``: (status, stdout, stderr) of ``mechcirc ARGV`` in-process, run once.
@@ -118,9 +139,6 @@ def cli_once(tmp_path_factory):
     from mechcirc.cli import main
 
     done: dict[tuple[str, ...], tuple[int, str, str]] = {}
-    shared = tmp_path_factory.getbasetemp()
-    if os.environ.get("PYTEST_XDIST_WORKER"):
-        shared = shared.parent                  # the folder every worker of this run sees
 
     def execute(key):
         out, err = io.StringIO(), io.StringIO()
@@ -135,16 +153,165 @@ def cli_once(tmp_path_factory):
         key = tuple(map(str, argv))
         if key not in done:
             name = hashlib.sha256(json.dumps(key).encode()).hexdigest()[:16]
-            path = shared / f"cli-once-{name}.json"
-            with _exclusive(shared / f"cli-once-{name}.lock"):
-                if path.exists():
-                    done[key] = tuple(json.loads(path.read_text(encoding="utf-8")))
-                else:
-                    done[key] = execute(key)
-                    path.write_text(json.dumps(done[key]), encoding="utf-8")
+            done[key] = tuple(_once_per_run(tmp_path_factory, name, lambda: execute(key)))
         return done[key]
 
     return run
+
+
+#: The statements a kernel module hands to ``mechcirc._jit.warm_in_background`` that are
+#: not a module constant (``_WARM_STATEMENT``): the nodal and the tree kernels'.
+WARM_NODAL = "from mechcirc.nodal import warm_kernels; warm_kernels()"
+WARM_TREE = "from mechcirc._tree_eval import warm_kernel; warm_kernel()"
+
+#: The key of ``warm_up_run`` under which the recording below is found.
+RECORDED_NODAL = "nodal.warm_kernels, its kernel calls recorded"
+# Run in the warm-up process before the statements: nodal.warm_kernels with every
+# function of mechcirc._nodal_kernels recorded when called (the names, in RESULT);
+# the functions are put back afterwards.
+_RECORD_NODAL = """
+from mechcirc import _nodal_kernels as k, nodal
+called = set()
+def recorder(name, f):
+    def call(*a):
+        called.add(name)
+        return f(*a)
+    return call
+saved = {n: f for n, f in vars(k).items()
+         if isinstance(f, type(recorder)) and f.__module__ == k.__name__}
+for name, f in saved.items():
+    setattr(k, name, recorder(name, f))
+try:
+    nodal.warm_kernels()
+finally:
+    for name, f in saved.items():
+        setattr(k, name, f)
+RESULT = sorted(called)
+"""
+
+# Each statement in a namespace of its own, its output captured; then the results as JSON.
+_RUN_EACH = """
+import contextlib, io, json, sys, traceback
+out = {}
+for statement in json.loads(sys.stdin.read()):
+    namespace, shown = {"__name__": "__main__"}, io.StringIO()
+    try:
+        with contextlib.redirect_stdout(shown):
+            exec(compile(statement, "<warm-up statement>", "exec"), namespace)
+        error = None
+    except BaseException:
+        error = traceback.format_exc()[-2000:]
+    out[statement] = {"error": error, "stdout": shown.getvalue(),
+                      "result": namespace.get("RESULT")}
+sys.stdout.write("\\n" + json.dumps(out))
+"""
+
+
+@pytest.fixture(scope="session")
+def warm_up_run(tmp_path_factory):
+    """``{statement: {"error", "stdout", "result"}}``: every warm-up statement run as the
+    detached warm-up process runs it, with numba's JIT off (the same calls as plain Python,
+    nothing compiled), all in one process for the run.
+
+    Each statement runs in a fresh namespace, in turn, after the recording of
+    nodal.warm_kernels' kernel calls (``_RECORD_NODAL``, under the key
+    :data:`RECORDED_NODAL`, whose ``result`` is the names called); ``error`` is its
+    traceback or None, ``stdout`` what it printed.  One process instead of five: each
+    imported numpy, SciPy, numba and mechcirc again (about 0.4 s of CPU with .pyc files, more under the README's ``--no-compile``),
+    and the statements' own work is small (all six in one process took 1.9 s of CPU,
+    one at a time 5.0 s; load 4, 27 Nov).  A statement that needs an import it does
+    not make could pass here after another statement made it: each statement imports
+    what it calls (``from mechcirc.X import f; f()``), as the one process the warm-up
+    statements of the time-domain kernels shared before did.
+    """
+    import json
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    from mechcirc.kinematics import linkage_solver
+    from mechcirc.scene import shaft
+    from mechcirc.scene import simulation as scene_sim
+    from mechcirc.transient import simulate as transient_sim
+
+    root = Path(__file__).resolve().parents[1]
+    statements = [_RECORD_NODAL, scene_sim._WARM_STATEMENT, linkage_solver._WARM_STATEMENT,
+                  transient_sim._WARM_STATEMENT, shaft._WARM_STATEMENT, WARM_NODAL, WARM_TREE]
+
+    def compute():
+        env = {**os.environ, "NUMBA_DISABLE_JIT": "1", "PYTHONPATH": str(root)}
+        done = subprocess.run([sys.executable, "-c", _RUN_EACH], input=json.dumps(statements),
+                              cwd=root, env=env, capture_output=True, text=True, timeout=600)
+        assert done.returncode == 0, done.stderr[-2000:]
+        out = json.loads(done.stdout.rsplit("\n", 1)[-1])
+        out[RECORDED_NODAL] = out.pop(_RECORD_NODAL)
+        return out
+
+    return _once_per_run(tmp_path_factory, "warm-up", compute)
+
+
+# The steps of ``light_imports``, in this order, ``sys.modules`` read after each.
+_LIGHT_IMPORTS = """
+import json, signal, sys
+sys.argv = ["mechcirc", "check"]          # the process named mechcirc (the signal check)
+before = [repr(signal.getsignal(s)) for s in (signal.SIGINT, signal.SIGTERM)]
+out = {}
+import argparse
+from mechcirc.cli import kinematics_commands
+kinematics_commands.register(argparse.ArgumentParser().add_subparsers())
+out["register kinematics"] = sorted(sys.modules)
+import mechcirc, mechcirc.netlist, mechcirc.units
+from mechcirc import cli
+cli.build_parser()
+out["build_parser"] = sorted(sys.modules)
+out["mechcirc.__file__"] = mechcirc.__file__
+import numpy as np
+s = mechcirc.load("netlists/stb_heald.mcir").sweep(np.linspace(10, 1000, 400))
+s.flags, s.error
+out["sweep with flags"] = sorted(sys.modules)
+import mechcirc.sley
+out["import mechcirc.sley"] = sorted(sys.modules)
+import mechcirc.kinematics
+out["import mechcirc.kinematics"] = sorted(sys.modules)
+[getattr(mechcirc, name) for name in mechcirc.__all__]
+cli.build_parser()
+out["signals"] = [before, [repr(signal.getsignal(s)) for s in (signal.SIGINT, signal.SIGTERM)]]
+print(json.dumps(out))
+"""
+
+
+@pytest.fixture(scope="session")
+def light_imports(tmp_path_factory):
+    """What a fresh ``python`` process has imported after each step of ``_LIGHT_IMPORTS``
+    (``{step: sorted sys.modules}``), and its SIGINT and SIGTERM handlers before any
+    import and after the last step (``"signals"``), one process for the run.
+
+    The steps, in turn: register the kinematics commands on a parser; import mechcirc
+    (netlist, units) and build the command line's parser; load and sweep the bundled
+    netlist with its flags and error bound; import mechcirc.sley; import
+    mechcirc.kinematics; every public name of mechcirc and the parser again.  Modules
+    only accumulate, so each list holds all its step imported, and what earlier steps
+    imported is allowed for each later test: a test checks what a step does not load,
+    and every step before it checks at least as much.  Seven processes before
+    (tests/test_cli.py, test_cli_ux.py, test_interop_skrf.py, test_cli_common.py,
+    test_startup.py, sley/test_simulation.py, two in kinematics/test_cli_kinematics.py),
+    each paying the interpreter and numpy's import: 1.1 s of CPU here, more in CI.
+    """
+    import json
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    from bounds import SUBPROCESS_TIMEOUT
+
+    def compute():
+        done = subprocess.run([sys.executable, "-c", _LIGHT_IMPORTS], capture_output=True,
+                              text=True, cwd=Path(__file__).resolve().parents[1],
+                              timeout=SUBPROCESS_TIMEOUT)
+        assert done.returncode == 0, done.stderr[-2000:]
+        return json.loads(done.stdout)
+
+    return _once_per_run(tmp_path_factory, "light-imports", compute)
 
 
 @contextlib.contextmanager

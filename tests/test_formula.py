@@ -21,6 +21,22 @@ REPO = Path(__file__).resolve().parents[1]
 NAMES = [f"m{i}" for i in range(1, 13)] + ["k0", "k4", "k5", "eta1", "eta2", "eta3", "eta4"]
 
 
+def is_zero_polynomial(expr) -> bool:
+    """Whether the polynomial ``expr`` (numbers in Q(i), its symbols the variables) is 0.
+
+    Built term by term in sympy's sparse polynomial ring over the Gaussian rationals
+    (``PolyRing.from_expr``: sums and products of exact dicts of monomials), so the
+    answer is exact, as ``sympy.expand(expr) == 0`` was, in about a twentieth of its
+    CPU (the identities below: 0.05-0.07 s against 0.95-1.24 s).  Anything not a
+    polynomial in the symbols is a ValueError, never a zero.
+    """
+    from sympy.polys.domains import QQ_I
+    from sympy.polys.rings import ring
+
+    R, *_ = ring(sorted(expr.free_symbols, key=str), QQ_I)
+    return R.from_expr(expr) == 0
+
+
 @pytest.fixture(scope="module")
 def stb():
     F = formula(mechcirc.load(STB))
@@ -40,7 +56,7 @@ def test_stb_formula_is_eq7_symbolically(stb):
     F, K7, S = stb
     diff = (F - K7).subs(S["eta4"], 1)
     num, _ = sp.fraction(sp.together(diff))
-    assert sp.expand(num) == 0
+    assert is_zero_polynomial(num)
 
 
 def test_stb_formula_differs_from_eq7_when_eta4_is_not_1(stb):
@@ -88,7 +104,7 @@ def test_expand_is_the_same_function_as_one_fraction():
     num, den = sp.fraction(flat)
     omega = sp.Symbol("omega", positive=True)
     assert num.is_polynomial(omega) and den.is_polynomial(omega)
-    assert sp.expand(sp.fraction(sp.together(nested - flat))[0]) == 0
+    assert is_zero_polynomial(sp.fraction(sp.together(nested - flat))[0])
 
 
 def test_lever_and_damper():
@@ -121,7 +137,7 @@ def test_bridge_without_a_tree_comes_from_the_nodal_equations():
     k_eq = (g1 * g2 * (g4 + g5) + g4 * g5 * (g1 + g2) + g3 * (g1 + g2) * (g4 + g5)) / \
         ((g1 + g4) * (g2 + g5) + g3 * (g1 + g2 + g4 + g5))
     expected = 1 / (sp.I * w * m + k_eq / (sp.I * w))
-    assert sp.expand(sp.fraction(sp.together(F - expected))[0]) == 0
+    assert is_zero_polynomial(sp.fraction(sp.together(F - expected))[0])
 
 
 def _ladder(n):

@@ -702,21 +702,17 @@ def test_lu_division_is_pythons_complex_division(compiled):
                 == np.float64(z.real).tobytes() + np.float64(z.imag).tobytes(), (num, a, b)
 
 
-def test_warm_kernels_calls_every_nodal_kernel():
+def test_warm_kernels_calls_every_nodal_kernel(warm_up_run):
     """warm_kernels (what the detached process runs before a sweep takes the kernels)
     calls every compiled kernel of _nodal_kernels, so each lands in numba's cache: a
     kernel it never calls (the first-step bound, asked only where a first correction is
     not yet at rounding) would be compiled in the sweep's own process, seconds of the
     wait that mechcirc._jit's rule avoids.  The calls are recorded in a process with
-    numba's JIT off (the kernels run as Python: nothing is compiled); the kernels are
-    the module's compiled dispatchers, read here with numba on."""
+    numba's JIT off (the kernels run as Python: nothing is compiled; the process of
+    every warm-up statement, tests/conftest.py, warm_up_run, where each function of the
+    module is recorded); the kernels are the module's compiled dispatchers, read here
+    with numba on."""
     pytest.importorskip("numba")
-    import json
-    import os
-    import subprocess
-    import sys
-    from pathlib import Path
-
     from numba.core.registry import CPUDispatcher
 
     from mechcirc import _nodal_kernels as k
@@ -725,21 +721,6 @@ def test_warm_kernels_calls_every_nodal_kernel():
                      and v.targetoptions.get("inline") != "always")
     assert kernels == ["band_assemble_factor", "band_bound", "band_solve_perm", "residual",
                        "sensitivities"]
-    root = Path(__file__).resolve().parents[1]
-    record = ("import json\n"
-              "from mechcirc import _nodal_kernels as k, nodal\n"
-              "called = set()\n"
-              "def recorder(name, f):\n"
-              "    def call(*a):\n"
-              "        called.add(name)\n"
-              "        return f(*a)\n"
-              "    return call\n"
-              f"for name in {kernels!r}:\n"
-              "    setattr(k, name, recorder(name, getattr(k, name)))\n"
-              "nodal.warm_kernels()\n"
-              "print(json.dumps(sorted(called)))")
-    env = {**os.environ, "NUMBA_DISABLE_JIT": "1", "PYTHONPATH": str(root)}
-    done = subprocess.run([sys.executable, "-c", record], env=env, cwd=root,
-                          capture_output=True, text=True, timeout=600)
-    assert done.returncode == 0, done.stderr[-2000:]
-    assert json.loads(done.stdout) == kernels
+    done = warm_up_run["nodal.warm_kernels, its kernel calls recorded"]
+    assert done["error"] is None, done
+    assert set(kernels) <= set(done["result"]), done["result"]

@@ -8,6 +8,7 @@ path gives the numpy path's numbers, bit for bit, while numba's cache is cold.
 
 from __future__ import annotations
 
+import csv
 import json
 import os
 import subprocess
@@ -24,16 +25,10 @@ ROOT = Path(__file__).resolve().parents[1]
 STB = ROOT / "netlists" / "stb_heald.mcir"
 
 
-def test_a_sweep_with_flags_loads_no_scipy_matplotlib_or_numba():
-    # load + sweep + error bound + flags: the frequency-domain core is numpy only.
-    code = (
-        "import sys, json, numpy as np, mechcirc\n"
-        f"c = mechcirc.load({str(STB)!r})\n"
-        "s = c.sweep(np.linspace(10, 1000, 400)); s.flags; s.error\n"
-        "print(json.dumps(sorted({m.split('.')[0] for m in sys.modules})))\n")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         check=True, cwd=ROOT, timeout=600)
-    loaded = set(json.loads(out.stdout))
+def test_a_sweep_with_flags_loads_no_scipy_matplotlib_or_numba(light_imports):
+    # load + sweep + error bound + flags: the frequency-domain core is numpy only
+    # (one process with the other light-import checks: tests/conftest.py, light_imports).
+    loaded = {m.split(".")[0] for m in light_imports["sweep with flags"]}
     assert not loaded & {"scipy", "matplotlib", "numba", "networkx", "pandas"}, loaded
 
 
@@ -141,7 +136,7 @@ def test_a_cold_nodal_sweep_runs_numpy(cold_kernel):
     assert nodal._KERNELS == []
 
 
-def test_the_warm_up_statements_run(cold_kernel):
+def test_the_warm_up_statements_run(cold_kernel, warm_up_run):
     pytest.importorskip("numba")
     from mechcirc import nodal
 
@@ -153,12 +148,11 @@ def test_the_warm_up_statements_run(cold_kernel):
     nodal.mobility(mechcirc.parse("\n".join(lines)).nodal, np.array([1.0, 2.0]))
     assert len(set(cold_kernel)) == 2
     # Each as the detached process runs it, here with numba's JIT off (the same
-    # calls as plain Python, no compile): they import and run without error.
-    env = {**os.environ, "NUMBA_DISABLE_JIT": "1", "PYTHONPATH": str(ROOT)}
+    # calls as plain Python, no compile), in the one process of every warm-up
+    # statement (tests/conftest.py, warm_up_run; a statement missing there is a
+    # KeyError: add it to the list): they import and run without error.
     for statement in sorted(set(cold_kernel)):
-        done = subprocess.run([sys.executable, "-c", statement], cwd=ROOT, env=env,
-                              capture_output=True, text=True, timeout=600)
-        assert done.returncode == 0, done.stderr[-2000:]
+        assert warm_up_run[statement]["error"] is None, warm_up_run[statement]
 
 
 def test_a_cold_kernel_batch_of_designs_runs_numpy(cold_kernel):
@@ -249,10 +243,20 @@ def test_the_sweep_command_with_its_exact_peak_loads_no_scipy(tmp_path):
 
 
 def test_the_sweep_plot_uses_no_pyplot_and_no_scipy(tmp_path):
+    """``python -m mechcirc sweep ... -o CSV --plot PNG`` in a process of its own (its
+    start-up as the command's): exit 0, the CSV's columns the API's sweep to the bit, a
+    PNG, drawn without pyplot or SciPy.  (The CSV and PNG checks were a second process,
+    tests/test_cli.py's test_sweep_by_subprocess_writes_csv_and_png: 1.3 s of CPU in CI.)"""
     status, modules, _ = _cli_modules(tmp_path, "--plot", str(tmp_path / "x.png"))
     assert status == 0 and (tmp_path / "x.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "matplotlib.backends.backend_agg" in modules
     assert not {"matplotlib.pyplot", "scipy"} & modules
+    with open(tmp_path / "x.csv", newline="") as fh:
+        header, *rows = list(csv.reader(fh))
+    table = np.array(rows, dtype=float)
+    assert ",".join(header) == "omega,K_re,K_im,Q0_re,Q0_im,flag" and table.shape == (400, 6)
+    s = mechcirc.load(STB).sweep(np.geomspace(10, 1e4, 400))
+    np.testing.assert_array_equal(table[:, 1] + 1j * table[:, 2], s.K)
 
 
 def _systems():

@@ -56,7 +56,11 @@ def _reference(B, v, theta):
     kappa = -(x1 * y2 - y1 * x2) / (x1 ** 2 + y1 ** 2) ** sp.Rational(3, 2)  # runs clockwise
     nx, ny = -y1, x1                                   # outward normal (unnormalised)
     phi = sp.atan2(vx * ny - vy * nx, vx * nx + vy * ny)
-    f = sp.lambdify(TH, [x, y, phi, kappa], "mpmath")
+    # cse: the four expressions' common subexpressions (the derivatives repeat the
+    # lift's terms) evaluated once per point: the same 30-digit values, bit for bit
+    # as floats, in about a seventh of the CPU (0.05 against 0.33 s for the oscillating
+    # roller's 120 points).
+    f = sp.lambdify(TH, [x, y, phi, kappa], "mpmath", cse=True)
     with mpmath.workdps(30):
         return np.array([[float(val) for val in f(mpmath.mpf(float(t)))] for t in theta]).T
 

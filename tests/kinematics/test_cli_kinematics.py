@@ -2,8 +2,6 @@
 
 import json
 import math
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -84,18 +82,12 @@ def test_linkage_file_error_is_located(capsys, tmp_path):
     assert err.startswith(f"{bad}:{line}:") and "unknown point 'Z'" in err
 
 
-def test_registering_the_commands_imports_nothing_heavy():
-    # (whether `import mechcirc` loads numpy is the package's business, not ours)
-    code = ("import sys, argparse; from mechcirc.cli import kinematics_commands as k; "
-            "p = argparse.ArgumentParser(); k.register(p.add_subparsers()); "
-            "print(*[m in sys.modules for m in ('mechcirc.kinematics', 'scipy', 'matplotlib')])")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         check=True).stdout
-    assert out.split() == ["False", "False", "False"]
-    code = "import sys, mechcirc.kinematics; print('matplotlib' in sys.modules)"
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         check=True).stdout
-    assert out.strip() == "False"
+def test_registering_the_commands_imports_nothing_heavy(light_imports):
+    # (whether `import mechcirc` loads numpy is the package's business, not ours;
+    # one process with the other light-import checks: tests/conftest.py, light_imports)
+    loaded = set(light_imports["register kinematics"])
+    assert not loaded & {"mechcirc.kinematics", "scipy", "matplotlib"}, loaded
+    assert "matplotlib" not in light_imports["import mechcirc.kinematics"]
 
 
 @pytest.mark.parametrize("cmd", ["fourbar", "synth", "linkage"])

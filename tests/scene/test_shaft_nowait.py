@@ -2,9 +2,6 @@
 cold the Python copy of the kernels runs and one background warm-up is asked for; cached,
 the compiled module; the warm-up statement itself runs (numba's JIT off, as plain Python)."""
 
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -36,9 +33,9 @@ def test_a_cached_kernel_is_taken_compiled(started, monkeypatch):
     assert shaft._shaft_kernels() is _motion_kernels and started == []
 
 
-def test_the_warm_up_statement_runs():
+def test_the_warm_up_statement_runs(warm_up_run):
+    # With numba's JIT off (plain Python), with the other warm-up statements in one
+    # process (tests/conftest.py, warm_up_run): it runs without error and prints nothing.
     pytest.importorskip("numba")
-    env = {**os.environ, "NUMBA_DISABLE_JIT": "1", "PYTHONPATH": str(ROOT)}
-    done = subprocess.run([sys.executable, "-c", shaft._WARM_STATEMENT + "; print('ran')"],
-                          cwd=ROOT, env=env, capture_output=True, text=True, timeout=600)
-    assert done.returncode == 0 and done.stdout == "ran\n", done.stderr[-2000:]
+    done = warm_up_run[shaft._WARM_STATEMENT]
+    assert done["error"] is None and done["stdout"] == "", done
