@@ -49,6 +49,7 @@ def test_ci_status_follows_pytest_and_mypy_and_no_tests_collected_fails(
     assert args[:2] == ["-m", "mypy"] and args[-1] == "mechcirc"
     cache = Path(args[args.index("--cache-dir") + 1])
     assert cache.parent.parent == tmp_path and not cache.exists()
+    assert not cache.parent.exists()        # the run's temp dir (its virtualenv) removed
 
 
 def test_no_two_test_files_share_a_name():
