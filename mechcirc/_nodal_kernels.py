@@ -295,29 +295,40 @@ def _l1(z):
 def band_bound(F, kl, ipiv, rows, p, x, d, out):
     """out[k] = |x|ᵀP̃|L||U||d| with the factors ``F[..., rows[k]]`` of :func:`_band_lu` (|z| as
     |re| + |im|; x and d in A's order, the factors in the order ``p``): what
-    :func:`mechcirc._nodal_solvers.band_bound_batch` forms from numpy's factors."""
+    :func:`mechcirc._nodal_solvers.band_bound_batch` forms from numpy's factors, for
+    :data:`SOLVE_BLOCK` ω at a time, ω innermost (each ω's sums in the same order)."""
     n = F.shape[1]
     kv = 2 * kl
-    u = np.empty(n)
-    for k in range(rows.size):
-        f = rows[k]
+    fr, fi = F[0], F[1]
+    u = np.empty((n, SOLVE_BLOCK))
+    ad = np.empty((n, SOLVE_BLOCK))         # |d| in the order p
+    acc = np.empty(SOLVE_BLOCK)
+    for k0 in range(0, rows.size, SOLVE_BLOCK):
+        nb = min(SOLVE_BLOCK, rows.size - k0)
+        w = rows[k0:k0 + nb]
+        for j in range(n):
+            for b in range(nb):
+                ad[j, b] = _l1(d[k0 + b, p[j]])
         for i in range(n):                  # |U||d|: U[i, j] is F[:, j, kv + i − j]
-            acc = 0.0
+            u[i, :nb] = 0.0
             for j in range(i, min(n, i + kv + 1)):
-                acc += _l1(complex(F[0, j, kv + i - j, f], F[1, j, kv + i - j, f])) \
-                    * _l1(d[k, p[j]])
-            u[i] = acc
+                for b in range(nb):
+                    u[i, b] += (abs(fr[j, kv + i - j, w[b]]) + abs(fi[j, kv + i - j, w[b]])) \
+                        * ad[j, b]
         for j in range(n - 2, -1, -1):      # then |L_j| and P_j, innermost first
             for t in range(1, min(kl, n - 1 - j) + 1):
-                u[j + t] += _l1(complex(F[0, j, kv + t, f], F[1, j, kv + t, f])) * u[j]
-            q = ipiv[j, f]
-            keep = u[j]
-            u[j] = u[q]
-            u[q] = keep
-        acc = 0.0
+                for b in range(nb):
+                    u[j + t, b] += (abs(fr[j, kv + t, w[b]]) + abs(fi[j, kv + t, w[b]])) * u[j, b]
+            for b in range(nb):
+                q = ipiv[j, w[b]]
+                keep = u[j, b]
+                u[j, b] = u[q, b]
+                u[q, b] = keep
+        acc[:nb] = 0.0
         for i in range(n):
-            acc += _l1(x[k, p[i]]) * u[i]
-        out[k] = acc
+            for b in range(nb):
+                acc[b] += _l1(x[k0 + b, p[i]]) * u[i, b]
+        out[k0:k0 + nb] = acc[:nb]
 
 
 @_jit_inline
