@@ -340,29 +340,41 @@ def _mag(z):
 @_jit
 def sensitivities(omega, x, scale, e_i, e_j, e_m, e_k, e_c, s_row, s_col, s_val,
                   l_p1, l_p2, l_col, l_r, S, Sd):
-    """S and S_data of :meth:`mechcirc._nodal_residual.Pattern.sensitivities` for x/scale (real ω).
+    """S and S_data of :meth:`mechcirc._nodal_residual.Pattern.sensitivities` for x/scale (real ω),
+    for :data:`SOLVE_BLOCK` ω at a time, ω innermost (each ω's sums in the same order).
 
     ``x`` (complex, shape (n_ω, n)) reads 0 at index n, the reference.
     """
     n_w, n = x.shape
-    mag = np.zeros(n + 1)                   # |x_i|/scale, the reference's 0 at n
-    for k in range(n_w):
-        w = omega[k]
-        f = 1.0 / scale[k]
+    nb = SOLVE_BLOCK
+    xs = np.zeros((2, n + 1, nb))           # x/scale by unknown, the reference's 0 at n
+    mag = np.zeros((n + 1, nb))             # |x_i|/scale
+    acc = np.empty((2, nb))
+    for k0 in range(0, n_w, nb):
+        m = min(nb, n_w - k0)
         for i in range(n):                  # once per unknown, not per element end
-            mag[i] = _mag(x[k, i] * f)
-        acc = 0.0
-        accd = 0.0
+            for b in range(m):
+                z = x[k0 + b, i] * (1.0 / scale[k0 + b])
+                xs[0, i, b] = z.real
+                xs[1, i, b] = z.imag
+                mag[i, b] = _mag(z)
+        acc[:] = 0.0
         for e in range(e_i.size):
-            # One of c, m, k is nonzero: |c + j(ωm − k/ω)| without a hypot.
-            y = abs(e_c[e]) + abs(w * e_m[e] - e_k[e] / w)
-            d = _mag(_at(x, k, e_i[e], n) * f - _at(x, k, e_j[e], n) * f)
-            acc += y * (mag[e_i[e]] + mag[e_j[e]]) * d
-            accd += y * d * d
+            i, j = e_i[e], e_j[e]
+            for b in range(m):
+                w = omega[k0 + b]
+                # One of c, m, k is nonzero: |c + j(ωm − k/ω)| without a hypot.
+                y = abs(e_c[e]) + abs(w * e_m[e] - e_k[e] / w)
+                d = _mag(complex(xs[0, i, b] - xs[0, j, b], xs[1, i, b] - xs[1, j, b]))
+                acc[0, b] += y * (mag[i, b] + mag[j, b]) * d
+                acc[1, b] += y * d * d
         for s in range(s_row.size):
-            acc += abs(s_val[s]) * mag[s_row[s]] * mag[s_col[s]]
+            for b in range(m):
+                acc[0, b] += abs(s_val[s]) * mag[s_row[s], b] * mag[s_col[s], b]
         for v in range(l_r.size):
-            accd += 2 * l_r[v] * _mag(_at(x, k, l_p1[v], n) * f - _at(x, k, l_p2[v], n) * f) \
-                * mag[l_col[v]]
-        S[k] = acc
-        Sd[k] = accd
+            p1, p2 = l_p1[v], l_p2[v]
+            for b in range(m):
+                d = _mag(complex(xs[0, p1, b] - xs[0, p2, b], xs[1, p1, b] - xs[1, p2, b]))
+                acc[1, b] += 2 * l_r[v] * d * mag[l_col[v], b]
+        S[k0:k0 + m] = acc[0, :m]
+        Sd[k0:k0 + m] = acc[1, :m]
