@@ -347,17 +347,15 @@ def sensitivities(omega, x, scale, e_i, e_j, e_m, e_k, e_c, s_row, s_col, s_val,
     """
     n_w, n = x.shape
     nb = SOLVE_BLOCK
-    xs = np.zeros((2, n + 1, nb))           # x/scale by unknown, the reference's 0 at n
+    xs = np.zeros((n + 1, nb), dtype=np.complex128)     # x/scale, the reference's 0 at n
     mag = np.zeros((n + 1, nb))             # |x_i|/scale
     acc = np.empty((2, nb))
     for k0 in range(0, n_w, nb):
         m = min(nb, n_w - k0)
         for i in range(n):                  # once per unknown, not per element end
             for b in range(m):
-                z = x[k0 + b, i] * (1.0 / scale[k0 + b])
-                xs[0, i, b] = z.real
-                xs[1, i, b] = z.imag
-                mag[i, b] = _mag(z)
+                xs[i, b] = x[k0 + b, i] * (1.0 / scale[k0 + b])
+                mag[i, b] = _mag(xs[i, b])
         acc[:] = 0.0
         for e in range(e_i.size):
             i, j = e_i[e], e_j[e]
@@ -365,16 +363,15 @@ def sensitivities(omega, x, scale, e_i, e_j, e_m, e_k, e_c, s_row, s_col, s_val,
                 w = omega[k0 + b]
                 # One of c, m, k is nonzero: |c + j(ωm − k/ω)| without a hypot.
                 y = abs(e_c[e]) + abs(w * e_m[e] - e_k[e] / w)
-                d = _mag(complex(xs[0, i, b] - xs[0, j, b], xs[1, i, b] - xs[1, j, b]))
+                d = _mag(xs[i, b] - xs[j, b])
                 acc[0, b] += y * (mag[i, b] + mag[j, b]) * d
                 acc[1, b] += y * d * d
         for s in range(s_row.size):
             for b in range(m):
                 acc[0, b] += abs(s_val[s]) * mag[s_row[s], b] * mag[s_col[s], b]
         for v in range(l_r.size):
-            p1, p2 = l_p1[v], l_p2[v]
             for b in range(m):
-                d = _mag(complex(xs[0, p1, b] - xs[0, p2, b], xs[1, p1, b] - xs[1, p2, b]))
+                d = _mag(xs[l_p1[v], b] - xs[l_p2[v], b])
                 acc[1, b] += 2 * l_r[v] * d * mag[l_col[v], b]
         S[k0:k0 + m] = acc[0, :m]
         Sd[k0:k0 + m] = acc[1, :m]
