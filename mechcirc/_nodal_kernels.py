@@ -295,29 +295,40 @@ def _l1(z):
 def band_bound(F, kl, ipiv, rows, p, x, d, out):
     """out[k] = |x|ᵀP̃|L||U||d| with the factors ``F[..., rows[k]]`` of :func:`_band_lu` (|z| as
     |re| + |im|; x and d in A's order, the factors in the order ``p``): what
-    :func:`mechcirc._nodal_solvers.band_bound_batch` forms from numpy's factors."""
+    :func:`mechcirc._nodal_solvers.band_bound_batch` forms from numpy's factors, for
+    :data:`SOLVE_BLOCK` ω at a time, ω innermost (each ω's sums in the same order)."""
     n = F.shape[1]
     kv = 2 * kl
-    u = np.empty(n)
-    for k in range(rows.size):
-        f = rows[k]
+    fr, fi = F[0], F[1]
+    u = np.empty((n, SOLVE_BLOCK))
+    ad = np.empty((n, SOLVE_BLOCK))         # |d| in the order p
+    acc = np.empty(SOLVE_BLOCK)
+    for k0 in range(0, rows.size, SOLVE_BLOCK):
+        nb = min(SOLVE_BLOCK, rows.size - k0)
+        w = rows[k0:k0 + nb]
+        for j in range(n):
+            for b in range(nb):
+                ad[j, b] = _l1(d[k0 + b, p[j]])
         for i in range(n):                  # |U||d|: U[i, j] is F[:, j, kv + i − j]
-            acc = 0.0
+            u[i, :nb] = 0.0
             for j in range(i, min(n, i + kv + 1)):
-                acc += _l1(complex(F[0, j, kv + i - j, f], F[1, j, kv + i - j, f])) \
-                    * _l1(d[k, p[j]])
-            u[i] = acc
+                for b in range(nb):
+                    u[i, b] += (abs(fr[j, kv + i - j, w[b]]) + abs(fi[j, kv + i - j, w[b]])) \
+                        * ad[j, b]
         for j in range(n - 2, -1, -1):      # then |L_j| and P_j, innermost first
             for t in range(1, min(kl, n - 1 - j) + 1):
-                u[j + t] += _l1(complex(F[0, j, kv + t, f], F[1, j, kv + t, f])) * u[j]
-            q = ipiv[j, f]
-            keep = u[j]
-            u[j] = u[q]
-            u[q] = keep
-        acc = 0.0
+                for b in range(nb):
+                    u[j + t, b] += (abs(fr[j, kv + t, w[b]]) + abs(fi[j, kv + t, w[b]])) * u[j, b]
+            for b in range(nb):
+                q = ipiv[j, w[b]]
+                keep = u[j, b]
+                u[j, b] = u[q, b]
+                u[q, b] = keep
+        acc[:nb] = 0.0
         for i in range(n):
-            acc += _l1(x[k, p[i]]) * u[i]
-        out[k] = acc
+            for b in range(nb):
+                acc[b] += _l1(x[k0 + b, p[i]]) * u[i, b]
+        out[k0:k0 + nb] = acc[:nb]
 
 
 @_jit_inline
@@ -329,29 +340,38 @@ def _mag(z):
 @_jit
 def sensitivities(omega, x, scale, e_i, e_j, e_m, e_k, e_c, s_row, s_col, s_val,
                   l_p1, l_p2, l_col, l_r, S, Sd):
-    """S and S_data of :meth:`mechcirc._nodal_residual.Pattern.sensitivities` for x/scale (real ω).
+    """S and S_data of :meth:`mechcirc._nodal_residual.Pattern.sensitivities` for x/scale (real ω),
+    for :data:`SOLVE_BLOCK` ω at a time, ω innermost (each ω's sums in the same order).
 
     ``x`` (complex, shape (n_ω, n)) reads 0 at index n, the reference.
     """
     n_w, n = x.shape
-    mag = np.zeros(n + 1)                   # |x_i|/scale, the reference's 0 at n
-    for k in range(n_w):
-        w = omega[k]
-        f = 1.0 / scale[k]
+    nb = SOLVE_BLOCK
+    xs = np.zeros((n + 1, nb), dtype=np.complex128)     # x/scale, the reference's 0 at n
+    mag = np.zeros((n + 1, nb))             # |x_i|/scale
+    acc = np.empty((2, nb))
+    for k0 in range(0, n_w, nb):
+        m = min(nb, n_w - k0)
         for i in range(n):                  # once per unknown, not per element end
-            mag[i] = _mag(x[k, i] * f)
-        acc = 0.0
-        accd = 0.0
+            for b in range(m):
+                xs[i, b] = x[k0 + b, i] * (1.0 / scale[k0 + b])
+                mag[i, b] = _mag(xs[i, b])
+        acc[:] = 0.0
         for e in range(e_i.size):
-            # One of c, m, k is nonzero: |c + j(ωm − k/ω)| without a hypot.
-            y = abs(e_c[e]) + abs(w * e_m[e] - e_k[e] / w)
-            d = _mag(_at(x, k, e_i[e], n) * f - _at(x, k, e_j[e], n) * f)
-            acc += y * (mag[e_i[e]] + mag[e_j[e]]) * d
-            accd += y * d * d
+            i, j = e_i[e], e_j[e]
+            for b in range(m):
+                w = omega[k0 + b]
+                # One of c, m, k is nonzero: |c + j(ωm − k/ω)| without a hypot.
+                y = abs(e_c[e]) + abs(w * e_m[e] - e_k[e] / w)
+                d = _mag(xs[i, b] - xs[j, b])
+                acc[0, b] += y * (mag[i, b] + mag[j, b]) * d
+                acc[1, b] += y * d * d
         for s in range(s_row.size):
-            acc += abs(s_val[s]) * mag[s_row[s]] * mag[s_col[s]]
+            for b in range(m):
+                acc[0, b] += abs(s_val[s]) * mag[s_row[s], b] * mag[s_col[s], b]
         for v in range(l_r.size):
-            accd += 2 * l_r[v] * _mag(_at(x, k, l_p1[v], n) * f - _at(x, k, l_p2[v], n) * f) \
-                * mag[l_col[v]]
-        S[k] = acc
-        Sd[k] = accd
+            for b in range(m):
+                d = _mag(xs[l_p1[v], b] - xs[l_p2[v], b])
+                acc[1, b] += 2 * l_r[v] * d * mag[l_col[v], b]
+        S[k0:k0 + m] = acc[0, :m]
+        Sd[k0:k0 + m] = acc[1, :m]
