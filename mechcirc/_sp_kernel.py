@@ -3,10 +3,12 @@
 One loop over ω, and inside it one pass over the plan's nodes in postorder,
 with K and the running error bound of each node kept in scalars: no
 temporary arrays, and the bound costs a few flops per node in the same pass.
-It computes exactly what :func:`mechcirc.reduction.evaluate`'s numpy path
-computes, operation for operation and in the same order (the leaf laws enter
+It computes K exactly as :func:`mechcirc.reduction.evaluate`'s numpy path
+does, operation for operation and in the same order (the leaf laws enter
 only as the plan's coefficients, built from :func:`mechcirc.circuit.law_terms`;
-a lever node divides by its ratio twice, :meth:`mechcirc.circuit.Lever.reflect`).
+a lever node divides by its ratio twice, :meth:`mechcirc.circuit.Lever.reflect`),
+and the same error bound with fewer divisions, so rounded otherwise (within 1e-13
+of the numpy path's: :func:`_children_bound`).
 
 Compiled with numba when it is installed (:mod:`mechcirc._jit`); numba is
 imported only when the first sweep asks for this module.  Without numba the
@@ -83,7 +85,10 @@ def _children(i, nb, series, kstart, kids, slot, cplx, re, im, ai, cr, ci, has_i
             else:
                 tr = 0.0
                 ti = -1.0 / im[c, j]
-            if cc:          # (selects: see _children_with_error)
+            # The sums read before they are written and the first term a select: as
+            # branches, LLVM stored with a mask and read the same address back with one,
+            # which does not forward (a stall per point, a third of the bound's loop).
+            if cc:
                 sr = cr[j]
                 si = ci[j]
                 cr[j] = tr if first_c else sr + tr
@@ -96,47 +101,80 @@ def _children(i, nb, series, kstart, kids, slot, cplx, re, im, ai, cr, ci, has_i
     return has_i, has_c
 
 
+#: A child's term through the one division E + c(|S| − E) over |S|(|S| − E) (see
+#: :func:`_children_bound`) where that product lies in this range, else the two-division
+#: form (:func:`_old_term`): nothing overflows or underflows, and E ≥ |S|, 0, ∞ and NaN
+#: give what they gave before.
+_P_LO, _P_HI = 1e-300, 1e300
+
+
 @_leaf
-def _children_with_error(i, nb, series, m_u, kstart, kids, slot, cplx, re, im, mg, ig, rh,
-                         ai, cr, ci, bb, has_i, has_c, have_b):
-    """:func:`_children` and, in the same loop, each child's term of the error
-    bound: |tᵢ|(ρᵢ + m·u) in series, |1/Kᵢ|(ρᵢ/(1 − ρᵢ) + 4u + m·u) in parallel."""
+def _triple(ck, mg, ig, rh):
+    """``(|K|, 1/|K|, ρ)`` of a node of kind ``ck`` from its row of (``mg``, ``ig``,
+    ``rh``): a lever's as stored; a series or parallel node, or a single leaf, keeps its
+    sum's (|S|, E) in (``mg``, ``rh``) (:func:`_node_bound`)."""
+    if ck == 2:
+        return mg, ig, rh
+    return _node_bound(ck == 3, ck != 1, rh, mg)
+
+
+@_leaf
+def _old_term(series, ck, m_u, mg, ig, rh):
+    """A child's term of its parent's error bound from its (|K|, 1/|K|, ρ) (:func:`_triple`)."""
+    mg, ig, rh = _triple(ck, mg, ig, rh)
+    if series:
+        return (rh + m_u) * mg
+    return (_through_reciprocal(rh) + (_U_RECIP + m_u)) * ig
+
+
+@_leaf
+def _children_bound(i, nb, series, m_u, kind, kstart, kids, slot, mg, ig, rh, bb, tv, have_b):
+    """Each internal child's term of node i's error bound, added to ``bb``.
+
+    A series or parallel child keeps its sum's |S| and E ≥ |Ŝ − S| (not ρ and 1/|K|: each
+    costs a division).  Its term t = K (a series parent, K = S) or t = 1/K (a parallel one,
+    K = 1/S) is bounded by
+
+    - S itself (series in series): |t̂ − t| ≤ E, plus m·u·|S| for the parent's additions:
+      E + m·u·|S|, no division;
+    - 1/S (a series child in parallel, a parallel child in series): |1/Ŝ − 1/S| =
+      |S − Ŝ|/(|Ŝ||S|) ≤ E/(|S|(|S| − E)) as |S| ≥ |Ŝ| − E, plus (4u + m·u)/|S| for the
+      reciprocal's rounding and the parent's additions: one division,
+      (E + (4u + m·u)(|S| − E)) / (|S|(|S| − E)), where before 1/|S| and ρ/(1 − ρ) were
+      two (the same bound, (ρ/(1 − ρ) + 4u + m·u)/|S| with ρ = E/|S|, rounded otherwise);
+    - 1/(1/S) and a lever's or a single leaf's K: from (|K|, 1/|K|, ρ) (:func:`_old_term`).
+
+    Where |S|(|S| − E) is outside [``_P_LO``, ``_P_HI``] (E ≥ |S|, |S| 0 or ∞, a sum near
+    the ends of the exponent range) a second pass takes :func:`_old_term`."""
     for q in range(kstart[i], kstart[i + 1]):
         cn = kids[q]
         c = slot[cn]
-        cc = cplx[cn]
-        first_c = cc and not has_c
-        first_i = not cc and not has_i
-        for j in range(nb):
-            if series:
-                tr = re[c, j]
-                ti = im[c, j]
-                t = (rh[c, j] + m_u) * mg[c, j]
-            else:
-                if cc:
-                    tr, ti = _recip(re[c, j], im[c, j])
-                else:
-                    tr = 0.0
-                    ti = -1.0 / im[c, j]
-                t = (_through_reciprocal(rh[c, j]) + (_U_RECIP + m_u)) * ig[c, j]
-            # The sums read before they are written and the first term a select: as
-            # branches, LLVM stored with a mask and read the same address back with one,
-            # which does not forward (a stall per point, a third of this loop's time).
-            if cc:
-                sr = cr[j]
-                si = ci[j]
-                cr[j] = tr if first_c else sr + tr
-                ci[j] = ti if first_c else si + ti
-            else:
-                si = ai[j]
-                ai[j] = ti if first_i else si + ti
-            bb[j] = bb[j] + t if have_b else t
-        have_b = True
-        if cc:
-            has_c = True
+        ck = kind[cn]
+        wide = 0
+        if ck > 1 or (ck == 1 and not series):
+            for j in range(nb):
+                tv[j] = _old_term(series, ck, m_u, mg[c, j], ig[c, j], rh[c, j])
         else:
-            has_i = True
-    return has_i, has_c
+            direct = series and ck == 0
+            cj = _U_RECIP + m_u
+            for j in range(nb):         # (LLVM makes it two loops, on ``direct``)
+                e = rh[c, j]
+                a = mg[c, j]
+                x = a - e
+                p = a * x
+                wide += not (_P_LO < p < _P_HI)
+                if direct:
+                    tv[j] = e + m_u * a
+                else:
+                    tv[j] = (e + cj * x) / p if p != 0.0 else 0.0    # (0: redone below)
+        if wide:
+            for j in range(nb):
+                a = mg[c, j]
+                if not (_P_LO < a * (a - rh[c, j]) < _P_HI):
+                    tv[j] = _old_term(series, ck, m_u, a, ig[c, j], rh[c, j])
+        for j in range(nb):
+            bb[j] = bb[j] + tv[j] if have_b else tv[j]
+        have_b = True
 
 
 #: Points per block: every node is evaluated over a block of ω at once, so the
@@ -149,42 +187,32 @@ BLOCK = 512
 
 
 @_leaf
-def _reflect(s, c, r, nb, want_error, re, im, mg, ig, rh):
-    """A lever node: its child's value (slot ``c``) reflected by the ratio ``r``."""
+def _reflect(s, c, ck, r, nb, want_error, re, im, mg, ig, rh):
+    """A lever node: its child's value (slot ``c``, kind ``ck``) reflected by the ratio ``r``."""
     for j in range(nb):
         re[s, j] = re[c, j] / r / r
         im[s, j] = im[c, j] / r / r
     if want_error:
         for j in range(nb):
-            mg[s, j] = mg[c, j] / r / r
-            ig[s, j] = ig[c, j] * r * r
-            rh[s, j] = rh[c, j] + 2 * _U
+            m, g, h = _triple(ck, mg[c, j], ig[c, j], rh[c, j])
+            mg[s, j] = m / r / r
+            ig[s, j] = g * r * r
+            rh[s, j] = h + 2 * _U
 
 
 @_leaf
 def _leaf_terms(nb, a_inv, a_om, b_inv, b_om, want_error, w, iw, ai, bb):
     """A node's leaf terms a_inv/ω + a_om·ω into ``ai`` (and their error terms into
     ``bb``); True if there is one."""
-    if a_inv != 0.0:
-        for j in range(nb):
-            ai[j] = iw[j] * a_inv
-        if want_error:
-            for j in range(nb):
-                bb[j] = b_inv * iw[j]
-    if a_om != 0.0:
+    for j in range(nb):             # (LLVM makes it one loop per case)
         if a_inv != 0.0:
-            for j in range(nb):
-                ai[j] += w[j] * a_om
-        else:
-            for j in range(nb):
-                ai[j] = w[j] * a_om
-        if want_error:
-            if a_inv != 0.0:
-                for j in range(nb):
-                    bb[j] += b_om * w[j]
-            else:
-                for j in range(nb):
-                    bb[j] = b_om * w[j]
+            ai[j] = iw[j] * a_inv
+            if want_error:
+                bb[j] = b_inv * iw[j]
+        if a_om != 0.0:
+            ai[j] = ai[j] + w[j] * a_om if a_inv != 0.0 else w[j] * a_om
+            if want_error:
+                bb[j] = bb[j] + b_om * w[j] if a_inv != 0.0 else b_om * w[j]
     return a_inv != 0.0 or a_om != 0.0
 
 
@@ -250,9 +278,9 @@ def _node_bound(leaf, series, b, mag):
 
 
 @_leaf
-def _store_with_error(s, leaf, nb, series, has_c, have_b, with_real, extra, re, im, mg, ig,
-                      rh, cr, ci, ai, bb):
-    """:func:`_store` with the node's magnitude, its reciprocal and its error bound ρ.
+def _store_with_error(s, nb, series, has_c, have_b, with_real, extra, re, im, mg, rh, cr, ci,
+                      ai, bb):
+    """:func:`_store` with its sum's magnitude |Ŝ| and the bound E of |Ŝ − S| (:func:`_triple`).
 
     |S| is √(a² + b²) in the loop over the block, without a branch (a branch to
     hypot there cost about as much as the rest of the bound: 1.6–1.8x K on ladders
@@ -261,28 +289,23 @@ def _store_with_error(s, leaf, nb, series, has_c, have_b, with_real, extra, re, 
     overflow or underflow), if the first pass counted any.  The same numbers as one
     pass that branches.  One loop per case (:func:`_store_case`)."""
     if not has_c:
-        wide = _store_case(series, False, s, leaf, nb, have_b, with_real, extra, re, im, mg,
-                           ig, rh, cr, ci, ai, bb)
+        wide = _store_case(series, False, s, nb, have_b, with_real, extra, re, im, mg, rh, cr,
+                           ci, ai, bb)
     elif series:
-        wide = _store_case(True, True, s, leaf, nb, have_b, with_real, extra, re, im, mg, ig,
-                           rh, cr, ci, ai, bb)
+        wide = _store_case(True, True, s, nb, have_b, with_real, extra, re, im, mg, rh, cr, ci,
+                           ai, bb)
     else:
-        wide = _store_case(False, True, s, leaf, nb, have_b, with_real, extra, re, im, mg,
-                           ig, rh, cr, ci, ai, bb)
+        wide = _store_case(False, True, s, nb, have_b, with_real, extra, re, im, mg, rh, cr, ci,
+                           ai, bb)
     if wide:
         for j in range(nb):
-            big = max(abs(cr[j]), abs(ci[j]))
-            if not (_ABS_LO < big < _ABS_HI):
-                b = bb[j] if have_b else 0.0
-                if with_real:
-                    b += extra
-                mg[s, j], ig[s, j], rh[s, j] = _node_bound(leaf, series, b,
-                                                           math.hypot(cr[j], ci[j]))
+            if not (_ABS_LO < max(abs(cr[j]), abs(ci[j])) < _ABS_HI):
+                mg[s, j] = math.hypot(cr[j], ci[j])
 
 
 @jit_inline     # its sites pass series and has_c as constants: a loop without their branches
-def _store_case(series, has_c, s, leaf, nb, have_b, with_real, extra, re, im, mg, ig, rh,
-                cr, ci, ai, bb):
+def _store_case(series, has_c, s, nb, have_b, with_real, extra, re, im, mg, rh, cr, ci, ai,
+                bb):
     """The first pass of :func:`_store_with_error`; returns the number of wide points."""
     wide = 0
     for j in range(nb):
@@ -306,7 +329,8 @@ def _store_case(series, has_c, s, leaf, nb, have_b, with_real, extra, re, im, mg
         else:
             re[s, j] = 0.0
             im[s, j] = -1.0 / si
-        mg[s, j], ig[s, j], rh[s, j] = _node_bound(leaf, series, b, mag)
+        mg[s, j] = mag
+        rh[s, j] = b
     return wide
 
 
@@ -331,7 +355,7 @@ def evaluate_plan(omega, kind, cplx, c_real, c_inv, c_om, e_real, e_inv, e_om, m
     # Per node: re, im, |K|, 1/|K| (a parallel parent's weight) and ρ over a block
     # of ω; per block: the sums and ω, 1/ω.  Allocated once for all designs.
     work = np.empty((5, n_slots, BLOCK))
-    vec = np.empty((6, BLOCK))
+    vec = np.empty((7, BLOCK))
     for d in range(K.shape[0]):
         dw = d if omega.shape[0] > 1 else 0
         rd = d if want_error else 0
@@ -347,7 +371,7 @@ def _evaluate_design(omega, kind, cplx, c_real, c_inv, c_om, e_real, e_inv, e_om
     n = omega.shape[0]
     B = BLOCK
     re, im, mg, ig, rh = work[0], work[1], work[2], work[3], work[4]
-    ai, cr, ci, bb, iw, w = vec[0], vec[1], vec[2], vec[3], vec[4], vec[5]
+    ai, cr, ci, bb, iw, w, tv = vec[0], vec[1], vec[2], vec[3], vec[4], vec[5], vec[6]
     for j0 in range(0, n, B):
         nb = min(B, n - j0)
         for j in range(nb):
@@ -357,7 +381,8 @@ def _evaluate_design(omega, kind, cplx, c_real, c_inv, c_om, e_real, e_inv, e_om
             k = kind[i]
             s = slot[i]
             if k == 2:
-                _reflect(s, slot[kids[kstart[i]]], ratio[i], nb, want_error, re, im, mg, ig, rh)
+                cn = kids[kstart[i]]
+                _reflect(s, slot[cn], kind[cn], ratio[i], nb, want_error, re, im, mg, ig, rh)
                 continue
             series = k != 1           # 0 series, 3 a single leaf
             m_u = mu[i]
@@ -367,19 +392,17 @@ def _evaluate_design(omega, kind, cplx, c_real, c_inv, c_om, e_real, e_inv, e_om
             has_i = _leaf_terms(nb, c_inv[i], c_om[i], e_inv[i], e_om[i], want_error, w, iw,
                                 ai, bb)
             have_b = want_error and has_i
+            has_i, has_c = _children(i, nb, series, kstart, kids, slot, cplx, re, im, ai, cr,
+                                     ci, has_i, has_c)
             if want_error:
-                has_i, has_c = _children_with_error(
-                    i, nb, series, m_u, kstart, kids, slot, cplx, re, im, mg, ig, rh,
-                    ai, cr, ci, bb, has_i, has_c, have_b)
+                _children_bound(i, nb, series, m_u, kind, kstart, kids, slot, mg, ig, rh, bb,
+                                tv, have_b)
                 have_b = have_b or kstart[i + 1] > kstart[i]
-            else:
-                has_i, has_c = _children(i, nb, series, kstart, kids, slot, cplx, re, im,
-                                         ai, cr, ci, has_i, has_c)
             has_c, has_i, with_real = _merge(nb, c_real[i], has_c, has_i, cr, ci, ai)
             if want_error:
-                _store_with_error(s, k == 3, nb, series, has_c, have_b, with_real,
-                                  e_real[i] if with_real else 0.0, re, im, mg, ig, rh, cr, ci,
-                                  ai, bb)
+                _store_with_error(s, nb, series, has_c, have_b, with_real,
+                                  e_real[i] if with_real else 0.0, re, im, mg, rh, cr, ci, ai,
+                                  bb)
             else:
                 _store(s, nb, series, has_c, re, im, cr, ci, ai)
         top = slot[M - 1]
@@ -387,5 +410,6 @@ def _evaluate_design(omega, kind, cplx, c_real, c_inv, c_om, e_real, e_inv, e_om
             K[j0 + j] = complex(re[top, j], im[top, j])
         if want_error:
             for j in range(nb):
-                r = _through_reciprocal(rh[top, j])
+                h = _triple(kind[M - 1], mg[top, j], ig[top, j], rh[top, j])[2]
+                r = _through_reciprocal(h)
                 rho_out[j0 + j] = math.inf if math.isnan(r) else r
