@@ -421,8 +421,9 @@ def _longest_list(obj, depth: int = 0) -> int:
     return 0
 
 
-def print_json(document) -> None:
-    """Print one JSON document on stdout (non-finite floats as Infinity, -Infinity, NaN).
+def print_json(document) -> int:
+    """Print one JSON document on stdout (non-finite floats as Infinity, -Infinity, NaN);
+    return :data:`EXIT_OK`, so a handler's ``--json`` branch ends ``return print_json(doc)``.
 
     The bare tokens are the --json convention for non-finite numbers (docs/cli.md):
     Python's json module writes and reads them, ``json.loads`` and
@@ -440,6 +441,7 @@ def print_json(document) -> None:
     else:
         json.dump(doc, sys.stdout, indent=2, allow_nan=True)
     sys.stdout.write("\n")
+    return EXIT_OK
 
 
 #: Image formats the plots can be written in (by file extension).

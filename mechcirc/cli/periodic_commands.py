@@ -173,15 +173,14 @@ def _print_one_speed_json(args, r) -> int:
              "nearest_resonance": float(n), "distance": float(d), "near": bool(nr)}
             for k, w, v, q, n, d, nr in zip(r.k, r.omega, r.V, r.amplitude, r.nearest,
                                             r.distance, r.near)]
-    print_json({"file": args.file, "name": r.name, "unit": r.units["Q"], "rpm": r.rpm,
-                "omega_shaft": r.omega_shaft, "angle_deg": r.angle_deg, "x": r.x,
-                "v": r.v, "Q": r.Q, "peak": r.peak, "peak_angle_deg": r.peak_angle_deg,
-                "error": r.error, "tol": r.tol, "n_harmonics": r.harmonics,
-                "harmonics": rows,
-                "resonances": [{"omega": w, "zeta": z} for w, z in r.resonances],
-                "unbounded": list(r.unbounded), "forces": r.forces,
-                "velocities": r.velocities, "notes": list(r.notes)})
-    return 0
+    return print_json({"file": args.file, "name": r.name, "unit": r.units["Q"], "rpm": r.rpm,
+                       "omega_shaft": r.omega_shaft, "angle_deg": r.angle_deg, "x": r.x,
+                       "v": r.v, "Q": r.Q, "peak": r.peak, "peak_angle_deg": r.peak_angle_deg,
+                       "error": r.error, "tol": r.tol, "n_harmonics": r.harmonics,
+                       "harmonics": rows,
+                       "resonances": [{"omega": w, "zeta": z} for w, z in r.resonances],
+                       "unbounded": list(r.unbounded), "forces": r.forces,
+                       "velocities": r.velocities, "notes": list(r.notes)})
 
 
 def _speed_map(args, circuit, elements, motion) -> int:
@@ -199,11 +198,10 @@ def _speed_map(args, circuit, elements, motion) -> int:
     crossings = [{"rpm": r, "k": k, "omega_n": w, "zeta": z, "weight": wt}
                  for r, k, w, z, wt in m.crossings]
     if args.json:
-        print_json({"file": args.file, "name": m.name, "unit": unit, "rpm": m.rpm,
-                    "peak": m.peak,
-                    "harmonics": m.harmonics, "error": m.error, "crossings": crossings,
-                    "element_peaks": m.element_peaks, "notes": list(m.notes)})
-        return 0
+        return print_json({"file": args.file, "name": m.name, "unit": unit, "rpm": m.rpm,
+                           "peak": m.peak,
+                           "harmonics": m.harmonics, "error": m.error, "crossings": crossings,
+                           "element_peaks": m.element_peaks, "notes": list(m.notes)})
     finite = np.isfinite(m.peak)
     print(f"{args.file}: peak drive force over the cycle at {m.rpm.size} speeds, "
           f"{m.rpm[0]:g} .. {m.rpm[-1]:g} rpm ({int(m.harmonics.min())} .. "

@@ -116,14 +116,13 @@ def cmd_scene(args) -> int:
     if args.output:
         write_text(args.output, model.netlist if reduced is None else reduced.netlist)
     if args.json:
-        print_json({
+        return print_json({
             "file": args.file, "theta_deg": args.theta, "drive_ratio": model.drive_ratio,
             "rotational": model.rotational, "parts": {k: list(v) for k, v in model.parts.items()},
             "ratios": model.ratios, "dropped": [{"name": n, "why": w} for n, w in model.dropped],
             "resonances": [r.as_dict() for r in found],
             "netlist": model.netlist, "output": args.output,
             "reduced": None if reduced is None else reduced.as_dict()})
-        return 0
     _print_scene(args, scene, model, found, reduced, drawn is not None)
     return 0
 
@@ -178,8 +177,8 @@ def _cycle(args, scene) -> int:
                   [np.degrees(cmap.theta), in_unit(W, u), np.abs(cmap.Q0)],
                   lambda: plot_cycle(cmap, unit=u), fmt="%.10g")
     if args.json:
-        print_json({**cmap.as_dict(), "file": args.file, "output": args.output, "plot": args.plot})
-        return 0
+        return print_json({**cmap.as_dict(), "file": args.file, "output": args.output,
+                           "plot": args.plot})
     unit = "N·m" if cmap.rotational else "N"
     print(f"{args.file}: scene {scene.name!r}, {len(cmap.theta)} crank angles, shaft "
           f"Ω = {in_unit(cmap.omega_shaft, u):g} {u}")
@@ -221,8 +220,7 @@ def cmd_reduce(args) -> int:
     if args.out:
         write_text(args.out, result.netlist)
     if args.json:
-        print_json({**result.as_dict(), "file": args.file, "written": args.out})
-        return 0
+        return print_json({**result.as_dict(), "file": args.file, "written": args.out})
     print(f"{args.file}: {result.elements_before} elements -> {result.elements_after} "
           f"over ω ∈ [{band[0]:g}, {band[1]:g}] rad/s, output "
           f"{'K at the drive' if args.element is None else 'force in ' + args.element}")
@@ -272,9 +270,8 @@ def cmd_simulate_scene(args) -> int:
                   f"omega = {result.omega!r} rad/s")
     contact = _cam_contact(scene, result)
     if args.json:
-        print_json({**result.summary(), "file": args.scene, "output": args.output,
-                    **({} if contact is None else {"cam_contact": contact})})
-        return 0
+        return print_json({**result.summary(), "file": args.scene, "output": args.output,
+                           **({} if contact is None else {"cam_contact": contact})})
     _print_motion(args, scene, result)
     if contact is not None:
         _print_contact(contact)
@@ -422,10 +419,9 @@ def _shaft(args, scene) -> int:
                       f"# {scene.name} ({args.scene}); steady cycle of the dynamic main "
                       f"shaft, flywheel {r.flywheel!r} kg·m²"))
     if args.json:
-        print_json({**r.summary(), "file": args.scene, "output": args.output,
-                    "notes": list(r.notes),
-                    "extrema": {k: [float(v.min()), float(v.max())] for k, v in curves.items()}})
-        return 0
+        return print_json({**r.summary(), "file": args.scene, "output": args.output,
+                           "notes": list(r.notes), "extrema": {
+                               k: [float(v.min()), float(v.max())] for k, v in curves.items()}})
     m = scene.shaft.motor
     what = (f"Kloss, ω_s = {m.sync_speed:g} rad/s, T_b = {m.breakdown_torque:g} N·m, "
             f"s_b = {m.breakdown_slip:.4g}") if m.kind == "kloss" else \

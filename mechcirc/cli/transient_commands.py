@@ -67,8 +67,7 @@ def cmd_transient(args) -> int:
         if fig is not None:
             save_figure(fig, args.plot, into=out.path(args.plot))
     if args.json:
-        print_json(result.to_json())
-        return 0
+        return print_json(result.to_json())
     for n in result.notes:
         print(f"note: {n}", file=sys.stderr)
     print(f"{circuit.name}: {result.time.size} samples, t = 0 .. {result.time[-1]:.6g} s; "
