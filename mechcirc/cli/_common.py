@@ -525,20 +525,19 @@ def save_figure(fig, path, into=None, tight: bool = True) -> None:
                     **options)
 
 
-def write_outputs(args, head: list, cols: list, plot=None, comment: str | None = None,
+def write_outputs(args, columns, plot=None, comment: str | None = None,
                   fmt: str = "%.17g") -> None:
-    """``-o CSV`` (a ``comment`` line when given, the column names ``head``, then one row
-    per index, each value as ``fmt``) and ``--plot`` (the figure ``plot()`` makes), all or
+    """``-o CSV`` (a ``comment`` line when given, the column names, then one row per
+    index, each value as ``fmt``) and ``--plot`` (the figure ``plot()`` makes), all or
     none written.
 
     Parameters
     ----------
     args : argparse.Namespace
         With ``output`` and ``plot`` (either may be None).
-    head : list of str
-        The column names.
-    cols : list of array_like
-        The columns (equal lengths).
+    columns : iterable of (str, array_like)
+        The columns (equal lengths), each with its name, in order (a result's
+        ``columns().items()``; a name may repeat).
     plot : callable, optional
         Makes the figure, called only for ``--plot``.
     comment : str, optional
@@ -556,8 +555,9 @@ def write_outputs(args, head: list, cols: list, plot=None, comment: str | None =
             with open(out.path(args.output), "w", encoding="utf-8", newline="") as fh:
                 if comment:
                     fh.write(comment + "\n")
+                names, cols = zip(*columns)
                 np.savetxt(fh, np.column_stack(cols), delimiter=",", fmt=fmt,
-                           header=",".join(head), comments="")
+                           header=",".join(names), comments="")
         if plot is not None and args.plot:
             save_figure(plot(), args.plot, out.path(args.plot))
 

@@ -303,7 +303,7 @@ def cmd_frame(args) -> int:
     summary = res.summary()
     from ..kinematics.plots import plot_shaking
 
-    write_outputs(args, list(cols), list(cols.values()), lambda: plot_shaking(res),
+    write_outputs(args, cols.items(), lambda: plot_shaking(res),
                   f"# mechcirc frame: a={args.crank:g} b={args.coupler:g} c={args.rocker:g} "
                   f"d={args.frame:g} {args.unit}, omega={omega:.10g} rad/s; {res.CONVENTION}")
     if args.json:

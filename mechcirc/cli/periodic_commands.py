@@ -120,13 +120,11 @@ def _one_speed(args, circuit, elements, motion) -> int:
     def inu(w):
         return in_unit(w, fu)
 
-    cols = [r.angle_deg, r.x, r.v, r.Q]
-    head = ["angle_deg", "x", "v", "Q"]
+    cols = [("angle_deg", r.angle_deg), ("x", r.x), ("v", r.v), ("Q", r.Q)]
     for name in elements:
-        cols += [r.forces.get(name, np.full_like(r.Q, np.nan)),
-                 r.velocities.get(name, np.full_like(r.Q, np.nan))]
-        head += [f"F_{name}", f"v_{name}"]
-    write_outputs(args, head, cols, r.plot)
+        cols += [(f"F_{name}", r.forces.get(name, np.full_like(r.Q, np.nan))),
+                 (f"v_{name}", r.velocities.get(name, np.full_like(r.Q, np.nan)))]
+    write_outputs(args, cols, r.plot)
     if args.json:
         return _print_one_speed_json(args, r)
     d = circuit.drive
@@ -191,10 +189,9 @@ def _speed_map(args, circuit, elements, motion) -> int:
     m = speed_map(circuit, args.rpm_min, args.rpm_max, args.points, motion=motion, tol=args.tol,
                   harmonics=args.harmonics, elements=elements, method=args.method)
     unit = m.units["Q"]
-    write_outputs(args, ["rpm", "peak_Q", "harmonics", "error"] +
-                   [f"peak_{name}" for name in elements],
-                   [m.rpm, m.peak, m.harmonics, m.error] +
-                   [m.element_peaks[name] for name in elements], m.plot)
+    write_outputs(args, [("rpm", m.rpm), ("peak_Q", m.peak), ("harmonics", m.harmonics),
+                         ("error", m.error)]
+                  + [(f"peak_{name}", m.element_peaks[name]) for name in elements], m.plot)
     crossings = [{"rpm": r, "k": k, "omega_n": w, "zeta": z, "weight": wt}
                  for r, k, w, z, wt in m.crossings]
     if args.json:

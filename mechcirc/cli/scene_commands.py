@@ -172,9 +172,9 @@ def _cycle(args, scene) -> int:
     W = cmap.natural_frequencies()
     u = args.unit
     name = FREQUENCY_UNITS[u][0]
-    write_outputs(args, ["theta_deg"] + [f"{name}_res{k + 1}" for k in range(W.shape[1])]
-                  + [f"abs_Q0_h{h}" for h in cmap.harmonics],
-                  [np.degrees(cmap.theta), in_unit(W, u), np.abs(cmap.Q0)],
+    write_outputs(args, [("theta_deg", np.degrees(cmap.theta))]
+                  + [(f"{name}_res{k + 1}", w) for k, w in enumerate(in_unit(W, u).T)]
+                  + [(f"abs_Q0_h{h}", q) for h, q in zip(cmap.harmonics, np.abs(cmap.Q0).T)],
                   lambda: plot_cycle(cmap, unit=u), fmt="%.10g")
     if args.json:
         return print_json({**cmap.as_dict(), "file": args.file, "output": args.output,
@@ -264,8 +264,7 @@ def cmd_simulate_scene(args) -> int:
     result = _simulate_with_bar(args, scene)
     from ..scene.plots import plot_motion
 
-    cols = result.columns()
-    write_outputs(args, list(cols), list(cols.values()), lambda: plot_motion(result),
+    write_outputs(args, result.columns().items(), lambda: plot_motion(result),
                   f"# {scene.name} ({args.scene}); revolution {result.revolution}; "
                   f"omega = {result.omega!r} rad/s")
     contact = _cam_contact(scene, result)
@@ -414,10 +413,9 @@ def _shaft(args, scene) -> int:
               "load_torque": r.load_torque,
               **{f"{b}.acceleration": v for b, v in r.body_accelerations.items()},
               **{a: r.body_accelerations[b] for a, b in aliases.items()}, **r.values}
-    write_outputs(args, ["theta_deg", "time", *curves],
-                  [np.degrees(r.theta), r.time, *curves.values()], comment=(
-                      f"# {scene.name} ({args.scene}); steady cycle of the dynamic main "
-                      f"shaft, flywheel {r.flywheel!r} kg·m²"))
+    write_outputs(args, [("theta_deg", np.degrees(r.theta)), ("time", r.time), *curves.items()],
+                  comment=f"# {scene.name} ({args.scene}); steady cycle of the dynamic main "
+                          f"shaft, flywheel {r.flywheel!r} kg·m²")
     if args.json:
         return print_json({**r.summary(), "file": args.scene, "output": args.output,
                            "notes": list(r.notes), "extrema": {

@@ -238,8 +238,7 @@ def cmd_simulate(args) -> int:
         result = simulate_params(params, args.revolutions, args.method, progress=bar, **opts)
     from ..sley.plots import plot_result
 
-    cols = result.columns()
-    write_outputs(args, list(cols), list(cols.values()), lambda: plot_result(result),
+    write_outputs(args, result.columns().items(), lambda: plot_result(result),
                   f"# {result.params.label}; revolution {result.revolution}; "
                   f"alpha = {result.alpha_deg:g} deg; method {result.method}")
     if args.json:
