@@ -562,11 +562,11 @@ def write_outputs(args, columns, plot=None, comment: str | None = None,
             save_figure(plot(), args.plot, out.path(args.plot))
 
 
-def print_written(*outputs, notes=()) -> None:
-    """``  note: NOTE`` for each of ``notes``, then ``  LABEL written to PATH`` for each
-    ``(label, path)`` of ``outputs`` given a path."""
+def print_written(*outputs, notes=(), indent: str = "  ") -> None:
+    """``  note: NOTE`` for each of ``notes`` (``indent`` before it), then ``  LABEL written
+    to PATH`` for each ``(label, path)`` of ``outputs`` given a path."""
     for note in notes:
-        print(f"  note: {note}")
+        print(f"{indent}note: {note}")
     for label, path in outputs:
         if path:
             print(f"  {label} written to {path}")

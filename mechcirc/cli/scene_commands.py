@@ -10,7 +10,8 @@ from ..limits import MAX_CYCLE_POINTS
 from ..units import FREQUENCY_UNITS, in_unit
 from ._common import (NETLIST_FILE, add_command, add_handler, add_output_option,
                       add_plot_option, add_unit_option, check_output_paths, count, print_json,
-                      real, save_figure, scene_theta, set_values, write_outputs, write_text)
+                      print_written, real, save_figure, scene_theta, set_values, write_outputs,
+                      write_text)
 
 
 def register(sub) -> None:
@@ -341,8 +342,7 @@ def _print_motion(args, scene, result) -> None:
     print(f"error estimate {est}, periodicity {per} (relative change of the extrema at twice "
           f"the step / from the previous revolution)")
     _print_extrema(scene, result.extrema)
-    for n in result.notes:
-        print(f"note: {n}")
+    print_written(notes=result.notes, indent="")
 
 
 def _with_overrides(args, scene):
@@ -435,8 +435,7 @@ def _shaft(args, scene) -> int:
         print(f"start-up from rest: within 1 % of ω_mean of the steady band after "
               f"{r.startup_time:.4g} s")
     _print_extrema(scene, {k: (float(v.min()), float(v.max())) for k, v in curves.items()})
-    for n in r.notes:
-        print(f"note: {n}")
+    print_written(notes=r.notes, indent="")
     return 0
 
 
@@ -478,7 +477,6 @@ def cmd_crosscheck_scene(args) -> int:
         for f in result.forced:
             print(f"{f['omega']:>14.6g} {f['Q0_circuit']:>16.8g} {f['Q0_time']:>16.8g} "
                   f"{f['rel_error']:>10.2e}  {verdict_text(f)}")
-    for n in result.notes:
-        print(f"note: {n}")
+    print_written(notes=result.notes, indent="")
     print(summary_line(summary))
     return summary["exit"]
