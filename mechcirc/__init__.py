@@ -67,28 +67,23 @@ from .errors import (BandError, GeometryError, MechcircError, MechcircWarning, N
                      NotSeriesParallelError, SolverError, TopologyError, UnitMixWarning,
                      UnloadedElementWarning)
 
-__all__ = [
-    "parse", "load", "Circuit", "Element", "Lever", "Drive", "Sweep", "sweep",
-    "FLAG_OK", "FLAG_SINGULAR", "FLAG_NEAR_SINGULAR", "peak", "Peak",
-    "adaptive_sweep", "find_resonances", "Resonance", "simplify", "parse_band", "designs",
-    "MechcircError", "NetlistError", "TopologyError", "NotSeriesParallelError",
-    "GeometryError", "SolverError", "BandError", "MechcircWarning", "UnloadedElementWarning",
-    "UnitMixWarning",
-]
-
 __version__ = "0.1.0"
 
-#: Public names loaded on first use: name -> (module, attribute).
+#: Public names loaded on first use: name -> (module, attribute), in the order of __all__.
 _LAZY = {"parse": ("netlist", "parse"), "load": ("netlist", "load"),
          "Circuit": ("circuit", "Circuit"), "Element": ("circuit", "Element"),
          "Lever": ("circuit", "Lever"), "Drive": ("circuit", "Drive"),
-         **{name: ("_sweep", name) for name in ("Sweep", "sweep", "peak", "Peak", "FLAG_OK",
-                                                 "FLAG_SINGULAR", "FLAG_NEAR_SINGULAR")},
+         **{name: ("_sweep", name) for name in ("Sweep", "sweep", "FLAG_OK", "FLAG_SINGULAR",
+                                                 "FLAG_NEAR_SINGULAR", "peak", "Peak")},
+         "adaptive_sweep": ("adaptive", "adaptive_sweep"),
          "find_resonances": ("resonances", "find_resonances"),
          "Resonance": ("resonances", "Resonance"),
-         "adaptive_sweep": ("adaptive", "adaptive_sweep"),
          "simplify": ("_simplify", "simplify"), "parse_band": ("_simplify", "parse_band"),
          "designs": ("batch", "designs")}
+
+__all__ = [*_LAZY, "MechcircError", "NetlistError", "TopologyError", "NotSeriesParallelError",
+           "GeometryError", "SolverError", "BandError", "MechcircWarning",
+           "UnloadedElementWarning", "UnitMixWarning"]
 
 
 def __getattr__(name):

@@ -421,8 +421,9 @@ def _longest_list(obj, depth: int = 0) -> int:
     return 0
 
 
-def print_json(document) -> None:
-    """Print one JSON document on stdout (non-finite floats as Infinity, -Infinity, NaN).
+def print_json(document) -> int:
+    """Print one JSON document on stdout (non-finite floats as Infinity, -Infinity, NaN);
+    return :data:`EXIT_OK`, so a handler's ``--json`` branch ends ``return print_json(doc)``.
 
     The bare tokens are the --json convention for non-finite numbers (docs/cli.md):
     Python's json module writes and reads them, ``json.loads`` and
@@ -440,6 +441,7 @@ def print_json(document) -> None:
     else:
         json.dump(doc, sys.stdout, indent=2, allow_nan=True)
     sys.stdout.write("\n")
+    return EXIT_OK
 
 
 #: Image formats the plots can be written in (by file extension).
@@ -523,20 +525,19 @@ def save_figure(fig, path, into=None, tight: bool = True) -> None:
                     **options)
 
 
-def write_outputs(args, head: list, cols: list, plot=None, comment: str | None = None,
+def write_outputs(args, columns, plot=None, comment: str | None = None,
                   fmt: str = "%.17g") -> None:
-    """``-o CSV`` (a ``comment`` line when given, the column names ``head``, then one row
-    per index, each value as ``fmt``) and ``--plot`` (the figure ``plot()`` makes), all or
+    """``-o CSV`` (a ``comment`` line when given, the column names, then one row per
+    index, each value as ``fmt``) and ``--plot`` (the figure ``plot()`` makes), all or
     none written.
 
     Parameters
     ----------
     args : argparse.Namespace
         With ``output`` and ``plot`` (either may be None).
-    head : list of str
-        The column names.
-    cols : list of array_like
-        The columns (equal lengths).
+    columns : iterable of (str, array_like)
+        The columns (equal lengths), each with its name, in order (a result's
+        ``columns().items()``; a name may repeat).
     plot : callable, optional
         Makes the figure, called only for ``--plot``.
     comment : str, optional
@@ -554,17 +555,18 @@ def write_outputs(args, head: list, cols: list, plot=None, comment: str | None =
             with open(out.path(args.output), "w", encoding="utf-8", newline="") as fh:
                 if comment:
                     fh.write(comment + "\n")
+                names, cols = zip(*columns)
                 np.savetxt(fh, np.column_stack(cols), delimiter=",", fmt=fmt,
-                           header=",".join(head), comments="")
+                           header=",".join(names), comments="")
         if plot is not None and args.plot:
             save_figure(plot(), args.plot, out.path(args.plot))
 
 
-def print_written(*outputs, notes=()) -> None:
-    """``  note: NOTE`` for each of ``notes``, then ``  LABEL written to PATH`` for each
-    ``(label, path)`` of ``outputs`` given a path."""
+def print_written(*outputs, notes=(), indent: str = "  ") -> None:
+    """``  note: NOTE`` for each of ``notes`` (``indent`` before it), then ``  LABEL written
+    to PATH`` for each ``(label, path)`` of ``outputs`` given a path."""
     for note in notes:
-        print(f"  note: {note}")
+        print(f"{indent}note: {note}")
     for label, path in outputs:
         if path:
             print(f"  {label} written to {path}")

@@ -153,8 +153,7 @@ def cmd_check(args) -> int:
         doc["steps"] = [dict(vars(s)) for s in steps]     # Step's fields: label, kind, ...
         doc["root"] = root
     if args.json:
-        print_json(doc)
-        return 0
+        return print_json(doc)
     print(f"{args.file}: {len(elements)} elements, {len(levers)} levers, "
           f"{len(circuit.nodes)} nodes")
     if getattr(args, "explain", False):
@@ -285,8 +284,7 @@ def cmd_sweep(args) -> int:
     warning_lines(warns)
     dropped = _write_sweep_outputs(args, result, extra, sens, found, pk)
     if args.json:
-        print_json(_sweep_doc(args, result, extra, sens, found, pk, singular, notes, warns))
-        return 0
+        return print_json(_sweep_doc(args, result, extra, sens, found, pk, singular, notes, warns))
     _print_sweep(args, result, extra, sens, pk, notes, dropped)
     return 0
 
@@ -511,8 +509,7 @@ def _print_resonances_json(args, circuit, found, modes) -> int:
                        param_zeta_sensitivity=m.param_zeta_sensitivity)
         if m.note:
             row["note"] = m.note
-    print_json({"file": args.file, "name": circuit.name, "resonances": rows})
-    return 0
+    return print_json({"file": args.file, "name": circuit.name, "resonances": rows})
 
 
 #: The most mode shapes one ``resonances --plot`` draws (one panel each).

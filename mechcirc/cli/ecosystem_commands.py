@@ -123,14 +123,13 @@ def cmd_forces(args) -> int:
         save_figure(plot_forces(rows, omega=args.omega, name=circuit.name,
                                 units=units_of(circuit.drive)), args.plot)
     if args.json:
-        print_json({
+        return print_json({
             "file": args.file, "name": circuit.name, "omega": args.omega, "K": K, "Q0": Q0,
             "flag": flag,
             "elements": [{"name": r.name, "kind": r.kind, "n1": r.n1, "n2": r.n2,
                           "Q": r.Q, "Q_abs": r.Q_abs, "Q_phase_deg": r.Q_phase_deg,
                           "v": r.v, "v_abs": r.v_abs, "v_phase_deg": r.v_phase_deg,
                           "share": r.share} for r in rows]})
-        return 0
     u = units_of(circuit.drive)
     print(f"{args.file}: omega = {args.omega:.6g} rad/s ({args.omega / 6.283185307179586:.6g} Hz)"
           f", K = {K.real:.6g}{K.imag:+.6g}j {u['K']}, |Q0| = {abs(Q0):.6g} {u['Q']}")
@@ -167,8 +166,7 @@ def cmd_compare(args) -> int:
         save_figure(plot_comparison(result, name=circuit.name, measured=args.measured,
                                     units=units_of(circuit.drive)), args.plot)
     if args.json:
-        print_json({"file": args.file, "measured": args.measured, **summary})
-        return 0
+        return print_json({"file": args.file, "measured": args.measured, **summary})
     print(f"{args.file} against {args.measured}: {summary['points']} measured points, "
           f"omega {summary['omega_min']:.6g} .. {summary['omega_max']:.6g} rad/s")
     if summary["compared"] < summary["points"]:
@@ -247,14 +245,14 @@ def cmd_study(args) -> int:
         save_figure(plot_study(result, spec.params, column, name=Path(args.spec).stem,
                                units=column_units(spec)), args.plot)
     if args.json:
-        print_json({"spec": args.spec, "spec_sha256": spec.sha256,
-                    "netlist": spec.netlist_source,
-                    "analysis": spec.analysis, "executor": result.executor,
-                    "workers": result.workers, "points": result.count,
-                    "resumed": result.skipped, "failed": result.failed,
-                    "columns": result.columns, "units": column_units(spec),
-                    "rows": [[r.get(c, None) for c in result.columns] for r in result.rows]})
-        return 0
+        return print_json({"spec": args.spec, "spec_sha256": spec.sha256,
+                           "netlist": spec.netlist_source, "analysis": spec.analysis,
+                           "executor": result.executor, "workers": result.workers,
+                           "points": result.count, "resumed": result.skipped,
+                           "failed": result.failed, "columns": result.columns,
+                           "units": column_units(spec),
+                           "rows": [[r.get(c, None) for c in result.columns]
+                                    for r in result.rows]})
     where = {"dask": f"Dask cluster {args.scheduler} ({result.workers} threads)",
              "local": f"{result.workers} local processes",
              "inline": "this process"}[result.executor]

@@ -240,8 +240,7 @@ def cmd_fourbar(args) -> int:
         from ..kinematics.plots import plot_fourbar
         save_figure(plot_fourbar(fb, args.omega), args.plot)
     if args.json:
-        print_json(doc)
-        return 0
+        return print_json(doc)
     kind = (f"change-point (Grashof equality s + l = p + q): {fb.linkage_type}"
             if fb.grashof_class == "change-point" else f"{fb.grashof_class} {fb.linkage_type}")
     print(f"four-bar a={fb.crank:g} b={fb.coupler:g} c={fb.rocker:g} d={fb.frame:g}, "
@@ -304,17 +303,16 @@ def cmd_frame(args) -> int:
     summary = res.summary()
     from ..kinematics.plots import plot_shaking
 
-    write_outputs(args, list(cols), list(cols.values()), lambda: plot_shaking(res),
+    write_outputs(args, cols.items(), lambda: plot_shaking(res),
                   f"# mechcirc frame: a={args.crank:g} b={args.coupler:g} c={args.rocker:g} "
                   f"d={args.frame:g} {args.unit}, omega={omega:.10g} rad/s; {res.CONVENTION}")
     if args.json:
-        print_json({"fourbar": {"crank": args.crank, "coupler": args.coupler,
-                                "rocker": args.rocker, "frame": args.frame,
-                                "unit": args.unit, "branch": fb.branch},
-                    "omega": omega, "rpm": convert_frequency(omega, "rad/s", "rpm"),
-                    "convention": res.CONVENTION, "summary": summary,
-                    "columns": {n: v.tolist() for n, v in cols.items()}})
-        return 0
+        return print_json({"fourbar": {"crank": args.crank, "coupler": args.coupler,
+                                       "rocker": args.rocker, "frame": args.frame,
+                                       "unit": args.unit, "branch": fb.branch},
+                           "omega": omega, "rpm": convert_frequency(omega, "rad/s", "rpm"),
+                           "convention": res.CONVENTION, "summary": summary,
+                           "columns": {n: v.tolist() for n, v in cols.items()}})
     _print_frame(args, fb, res, summary, omega)
     return 0
 
@@ -451,8 +449,7 @@ def cmd_linkage(args) -> int:
            "cranks": [{"link": c.link, "pivot": c.pivot, "omega": c.omega} for c in lk.cranks],
            **state.as_dict()}
     if args.json:
-        print_json(doc)
-        return 0
+        return print_json(doc)
     prism = f", {len(lk.sliders)} prismatic" if lk.sliders else ""
     print(f"{lk.name}: {len(lk.links)} moving links, {lk.revolute_pairs} revolute pairs{prism}, "
           f"W = {lk.mobility}; cranks "

@@ -120,13 +120,11 @@ def _one_speed(args, circuit, elements, motion) -> int:
     def inu(w):
         return in_unit(w, fu)
 
-    cols = [r.angle_deg, r.x, r.v, r.Q]
-    head = ["angle_deg", "x", "v", "Q"]
+    cols = [("angle_deg", r.angle_deg), ("x", r.x), ("v", r.v), ("Q", r.Q)]
     for name in elements:
-        cols += [r.forces.get(name, np.full_like(r.Q, np.nan)),
-                 r.velocities.get(name, np.full_like(r.Q, np.nan))]
-        head += [f"F_{name}", f"v_{name}"]
-    write_outputs(args, head, cols, r.plot)
+        cols += [(f"F_{name}", r.forces.get(name, np.full_like(r.Q, np.nan))),
+                 (f"v_{name}", r.velocities.get(name, np.full_like(r.Q, np.nan)))]
+    write_outputs(args, cols, r.plot)
     if args.json:
         return _print_one_speed_json(args, r)
     d = circuit.drive
@@ -173,15 +171,14 @@ def _print_one_speed_json(args, r) -> int:
              "nearest_resonance": float(n), "distance": float(d), "near": bool(nr)}
             for k, w, v, q, n, d, nr in zip(r.k, r.omega, r.V, r.amplitude, r.nearest,
                                             r.distance, r.near)]
-    print_json({"file": args.file, "name": r.name, "unit": r.units["Q"], "rpm": r.rpm,
-                "omega_shaft": r.omega_shaft, "angle_deg": r.angle_deg, "x": r.x,
-                "v": r.v, "Q": r.Q, "peak": r.peak, "peak_angle_deg": r.peak_angle_deg,
-                "error": r.error, "tol": r.tol, "n_harmonics": r.harmonics,
-                "harmonics": rows,
-                "resonances": [{"omega": w, "zeta": z} for w, z in r.resonances],
-                "unbounded": list(r.unbounded), "forces": r.forces,
-                "velocities": r.velocities, "notes": list(r.notes)})
-    return 0
+    return print_json({"file": args.file, "name": r.name, "unit": r.units["Q"], "rpm": r.rpm,
+                       "omega_shaft": r.omega_shaft, "angle_deg": r.angle_deg, "x": r.x,
+                       "v": r.v, "Q": r.Q, "peak": r.peak, "peak_angle_deg": r.peak_angle_deg,
+                       "error": r.error, "tol": r.tol, "n_harmonics": r.harmonics,
+                       "harmonics": rows,
+                       "resonances": [{"omega": w, "zeta": z} for w, z in r.resonances],
+                       "unbounded": list(r.unbounded), "forces": r.forces,
+                       "velocities": r.velocities, "notes": list(r.notes)})
 
 
 def _speed_map(args, circuit, elements, motion) -> int:
@@ -192,18 +189,16 @@ def _speed_map(args, circuit, elements, motion) -> int:
     m = speed_map(circuit, args.rpm_min, args.rpm_max, args.points, motion=motion, tol=args.tol,
                   harmonics=args.harmonics, elements=elements, method=args.method)
     unit = m.units["Q"]
-    write_outputs(args, ["rpm", "peak_Q", "harmonics", "error"] +
-                   [f"peak_{name}" for name in elements],
-                   [m.rpm, m.peak, m.harmonics, m.error] +
-                   [m.element_peaks[name] for name in elements], m.plot)
+    write_outputs(args, [("rpm", m.rpm), ("peak_Q", m.peak), ("harmonics", m.harmonics),
+                         ("error", m.error)]
+                  + [(f"peak_{name}", m.element_peaks[name]) for name in elements], m.plot)
     crossings = [{"rpm": r, "k": k, "omega_n": w, "zeta": z, "weight": wt}
                  for r, k, w, z, wt in m.crossings]
     if args.json:
-        print_json({"file": args.file, "name": m.name, "unit": unit, "rpm": m.rpm,
-                    "peak": m.peak,
-                    "harmonics": m.harmonics, "error": m.error, "crossings": crossings,
-                    "element_peaks": m.element_peaks, "notes": list(m.notes)})
-        return 0
+        return print_json({"file": args.file, "name": m.name, "unit": unit, "rpm": m.rpm,
+                           "peak": m.peak,
+                           "harmonics": m.harmonics, "error": m.error, "crossings": crossings,
+                           "element_peaks": m.element_peaks, "notes": list(m.notes)})
     finite = np.isfinite(m.peak)
     print(f"{args.file}: peak drive force over the cycle at {m.rpm.size} speeds, "
           f"{m.rpm[0]:g} .. {m.rpm[-1]:g} rpm ({int(m.harmonics.min())} .. "

@@ -10,7 +10,8 @@ from ..limits import MAX_CYCLE_POINTS
 from ..units import FREQUENCY_UNITS, in_unit
 from ._common import (NETLIST_FILE, add_command, add_handler, add_output_option,
                       add_plot_option, add_unit_option, check_output_paths, count, print_json,
-                      real, save_figure, scene_theta, set_values, write_outputs, write_text)
+                      print_written, real, save_figure, scene_theta, set_values, write_outputs,
+                      write_text)
 
 
 def register(sub) -> None:
@@ -116,14 +117,13 @@ def cmd_scene(args) -> int:
     if args.output:
         write_text(args.output, model.netlist if reduced is None else reduced.netlist)
     if args.json:
-        print_json({
+        return print_json({
             "file": args.file, "theta_deg": args.theta, "drive_ratio": model.drive_ratio,
             "rotational": model.rotational, "parts": {k: list(v) for k, v in model.parts.items()},
             "ratios": model.ratios, "dropped": [{"name": n, "why": w} for n, w in model.dropped],
             "resonances": [r.as_dict() for r in found],
             "netlist": model.netlist, "output": args.output,
             "reduced": None if reduced is None else reduced.as_dict()})
-        return 0
     _print_scene(args, scene, model, found, reduced, drawn is not None)
     return 0
 
@@ -173,13 +173,13 @@ def _cycle(args, scene) -> int:
     W = cmap.natural_frequencies()
     u = args.unit
     name = FREQUENCY_UNITS[u][0]
-    write_outputs(args, ["theta_deg"] + [f"{name}_res{k + 1}" for k in range(W.shape[1])]
-                  + [f"abs_Q0_h{h}" for h in cmap.harmonics],
-                  [np.degrees(cmap.theta), in_unit(W, u), np.abs(cmap.Q0)],
+    write_outputs(args, [("theta_deg", np.degrees(cmap.theta))]
+                  + [(f"{name}_res{k + 1}", w) for k, w in enumerate(in_unit(W, u).T)]
+                  + [(f"abs_Q0_h{h}", q) for h, q in zip(cmap.harmonics, np.abs(cmap.Q0).T)],
                   lambda: plot_cycle(cmap, unit=u), fmt="%.10g")
     if args.json:
-        print_json({**cmap.as_dict(), "file": args.file, "output": args.output, "plot": args.plot})
-        return 0
+        return print_json({**cmap.as_dict(), "file": args.file, "output": args.output,
+                           "plot": args.plot})
     unit = "N·m" if cmap.rotational else "N"
     print(f"{args.file}: scene {scene.name!r}, {len(cmap.theta)} crank angles, shaft "
           f"Ω = {in_unit(cmap.omega_shaft, u):g} {u}")
@@ -221,8 +221,7 @@ def cmd_reduce(args) -> int:
     if args.out:
         write_text(args.out, result.netlist)
     if args.json:
-        print_json({**result.as_dict(), "file": args.file, "written": args.out})
-        return 0
+        return print_json({**result.as_dict(), "file": args.file, "written": args.out})
     print(f"{args.file}: {result.elements_before} elements -> {result.elements_after} "
           f"over ω ∈ [{band[0]:g}, {band[1]:g}] rad/s, output "
           f"{'K at the drive' if args.element is None else 'force in ' + args.element}")
@@ -266,15 +265,13 @@ def cmd_simulate_scene(args) -> int:
     result = _simulate_with_bar(args, scene)
     from ..scene.plots import plot_motion
 
-    cols = result.columns()
-    write_outputs(args, list(cols), list(cols.values()), lambda: plot_motion(result),
+    write_outputs(args, result.columns().items(), lambda: plot_motion(result),
                   f"# {scene.name} ({args.scene}); revolution {result.revolution}; "
                   f"omega = {result.omega!r} rad/s")
     contact = _cam_contact(scene, result)
     if args.json:
-        print_json({**result.summary(), "file": args.scene, "output": args.output,
-                    **({} if contact is None else {"cam_contact": contact})})
-        return 0
+        return print_json({**result.summary(), "file": args.scene, "output": args.output,
+                           **({} if contact is None else {"cam_contact": contact})})
     _print_motion(args, scene, result)
     if contact is not None:
         _print_contact(contact)
@@ -345,8 +342,7 @@ def _print_motion(args, scene, result) -> None:
     print(f"error estimate {est}, periodicity {per} (relative change of the extrema at twice "
           f"the step / from the previous revolution)")
     _print_extrema(scene, result.extrema)
-    for n in result.notes:
-        print(f"note: {n}")
+    print_written(notes=result.notes, indent="")
 
 
 def _with_overrides(args, scene):
@@ -417,15 +413,13 @@ def _shaft(args, scene) -> int:
               "load_torque": r.load_torque,
               **{f"{b}.acceleration": v for b, v in r.body_accelerations.items()},
               **{a: r.body_accelerations[b] for a, b in aliases.items()}, **r.values}
-    write_outputs(args, ["theta_deg", "time", *curves],
-                  [np.degrees(r.theta), r.time, *curves.values()], comment=(
-                      f"# {scene.name} ({args.scene}); steady cycle of the dynamic main "
-                      f"shaft, flywheel {r.flywheel!r} kg·m²"))
+    write_outputs(args, [("theta_deg", np.degrees(r.theta)), ("time", r.time), *curves.items()],
+                  comment=f"# {scene.name} ({args.scene}); steady cycle of the dynamic main "
+                          f"shaft, flywheel {r.flywheel!r} kg·m²")
     if args.json:
-        print_json({**r.summary(), "file": args.scene, "output": args.output,
-                    "notes": list(r.notes),
-                    "extrema": {k: [float(v.min()), float(v.max())] for k, v in curves.items()}})
-        return 0
+        return print_json({**r.summary(), "file": args.scene, "output": args.output,
+                           "notes": list(r.notes), "extrema": {
+                               k: [float(v.min()), float(v.max())] for k, v in curves.items()}})
     m = scene.shaft.motor
     what = (f"Kloss, ω_s = {m.sync_speed:g} rad/s, T_b = {m.breakdown_torque:g} N·m, "
             f"s_b = {m.breakdown_slip:.4g}") if m.kind == "kloss" else \
@@ -441,8 +435,7 @@ def _shaft(args, scene) -> int:
         print(f"start-up from rest: within 1 % of ω_mean of the steady band after "
               f"{r.startup_time:.4g} s")
     _print_extrema(scene, {k: (float(v.min()), float(v.max())) for k, v in curves.items()})
-    for n in r.notes:
-        print(f"note: {n}")
+    print_written(notes=r.notes, indent="")
     return 0
 
 
@@ -484,7 +477,6 @@ def cmd_crosscheck_scene(args) -> int:
         for f in result.forced:
             print(f"{f['omega']:>14.6g} {f['Q0_circuit']:>16.8g} {f['Q0_time']:>16.8g} "
                   f"{f['rel_error']:>10.2e}  {verdict_text(f)}")
-    for n in result.notes:
-        print(f"note: {n}")
+    print_written(notes=result.notes, indent="")
     print(summary_line(summary))
     return summary["exit"]

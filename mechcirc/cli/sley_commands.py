@@ -7,8 +7,8 @@ import math
 from ..errors import InputError
 from ..limits import MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS, MAX_SCIPY_REVOLUTIONS
 from ._common import (add_command, add_handler, add_output_option, add_plot_option,
-                      check_output_paths, count, print_json, real, set_values, write_outputs,
-                      write_text)
+                      check_output_paths, count, print_json, print_written, real, set_values,
+                      write_outputs, write_text)
 
 _METHODS = ("rk4", "rk4-python", "rk8", "DOP853", "RK45", "LSODA")   # = mechcirc.sley.METHODS
 _UNITS = {"eps4T": "1/s^2", "eps2P": "1/s^2", "eps4P": "1/s^2", "eps5P": "1/s^2",
@@ -238,8 +238,7 @@ def cmd_simulate(args) -> int:
         result = simulate_params(params, args.revolutions, args.method, progress=bar, **opts)
     from ..sley.plots import plot_result
 
-    cols = result.columns()
-    write_outputs(args, list(cols), list(cols.values()), lambda: plot_result(result),
+    write_outputs(args, result.columns().items(), lambda: plot_result(result),
                   f"# {result.params.label}; revolution {result.revolution}; "
                   f"alpha = {result.alpha_deg:g} deg; method {result.method}")
     if args.json:
@@ -310,8 +309,7 @@ def _print_sley_crosscheck(doc: dict) -> None:
         print(f"(b) ringing after beat-up at {ring['theta_mid_deg']:.1f} deg: measured "
               f"{ring['omega_measured']:.3f} rad/s, predicted {ring['omega_predicted']:.3f} "
               f"rad/s, difference {ring['rel_error']:.2e}: {verdict_text(ring)}")
-    for n in ring["notes"]:
-        print(f"    note: {n}")
+    print_written(notes=ring["notes"], indent="    ")
     print("(c) harmonic forcing of the linear model, |Q0|/V0 [N m s/rad]")
     for row in doc["harmonic"]["rows"]:
         print(f"    omega {row['omega']:10.3f}: time domain {row['q0_time']:.6g}, circuit "

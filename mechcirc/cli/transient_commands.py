@@ -7,7 +7,8 @@ import sys
 
 from ..errors import MechcircError
 from ._common import (add_command, add_handler, add_output_option, add_plot_option,
-                      check_names, check_output_paths, print_json, real, save_figure)
+                      check_names, check_output_paths, print_json, print_written, real,
+                      save_figure)
 
 
 def register(sub) -> None:
@@ -67,8 +68,7 @@ def cmd_transient(args) -> int:
         if fig is not None:
             save_figure(fig, args.plot, into=out.path(args.plot))
     if args.json:
-        print_json(result.to_json())
-        return 0
+        return print_json(result.to_json())
     for n in result.notes:
         print(f"note: {n}", file=sys.stderr)
     print(f"{circuit.name}: {result.time.size} samples, t = 0 .. {result.time[-1]:.6g} s; "
@@ -137,8 +137,7 @@ def cmd_crosscheck_netlist(args) -> int:
     if args.json:
         print_json(result.to_json())
         return summary["exit"]
-    for n in result.notes:
-        print(f"note: {n}")
+    print_written(notes=result.notes, indent="")
     print(f"{circuit.name}: {result.drive_kind} drive")
     print("(a) resonances / anti-resonances vs ringing of the impulse response [rad/s]; "
           "rel. diff = |s_time − s_freq| / |s_freq| of the pole s = −σ + iω_d")

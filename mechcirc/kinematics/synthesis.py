@@ -478,7 +478,7 @@ def synthesize(load: Literal["light", "medium", "heavy"] = "medium", swing: floa
     Raises
     ------
     GeometryError
-        Unknown load, a swing outside (0°, 180°), a bad fixed length, an empty grid.
+        Unknown load, a swing outside (0°, 180°), a bad fixed length, a grid too large.
     """
     fixed, s_range, crank_range = _checked(load, objective, fixed, swing, swing_range, b_a_range,
                                            d_a_range, step, crank_step, swing_step)
@@ -530,32 +530,29 @@ def _checked(load, objective, fixed, swing, swing_range, b_a_range, d_a_range, s
 
 def _grid_axes(fixed, swing, s_range, crank_range, b_a_range, d_a_range, step, crank_step,
                swing_step):
-    """The grid's cranks [mm], swings [deg], b/a and d/a, refused when empty or too large."""
+    """The grid's cranks [mm], swings [deg], b/a and d/a, refused when too large.
+
+    Each axis holds at least its low end (:func:`_checked` has low ≤ high), so the grid
+    is never empty; its size is counted before any array is made, as ``np.arange``
+    counts (ceil((stop − start)/step)).
+    """
     lo, hi = crank_range
 
     def size(a, b, h):
-        return math.floor((b - a + 1e-9) / h) + 1
+        return math.ceil((b + 1e-9 - a) / h)
 
     n_grid = size(lo, hi, crank_step) * \
         (1 if swing is not None else size(s_range[0], s_range[1], swing_step)) * \
         (1 if "coupler" in fixed else size(*b_a_range, step)) * \
         (1 if {"rocker", "frame"} & set(fixed) else size(*d_a_range, step))
-    if n_grid > 20_000_000:          # counted before any array is made
-        raise GeometryError(f"synthesis grid of {n_grid:.3g} points is too large (limit 2e7); "
-                            f"use larger steps or narrower ranges")
-    cranks = np.arange(lo, hi + 1e-9, crank_step)
-    swings = (np.array([float(swing)]) if swing is not None else
-              np.arange(s_range[0], s_range[1] + 1e-9, swing_step))
-    b_as = np.arange(b_a_range[0], b_a_range[1] + 1e-9, step)
-    d_as = np.arange(d_a_range[0], d_a_range[1] + 1e-9, step)
-    n_grid = cranks.size * swings.size * (1 if "coupler" in fixed else b_as.size) * \
-        (1 if {"rocker", "frame"} & set(fixed) else d_as.size)
-    if n_grid == 0:
-        raise GeometryError("empty synthesis grid: check b_a_range, d_a_range and step")
     if n_grid > 20_000_000:
         raise GeometryError(f"synthesis grid of {n_grid:.3g} points is too large (limit 2e7); "
                             f"use larger steps or narrower ranges")
-    return cranks, swings, b_as, d_as
+    swings = (np.array([float(swing)]) if swing is not None else
+              np.arange(s_range[0], s_range[1] + 1e-9, swing_step))
+    return (np.arange(lo, hi + 1e-9, crank_step), swings,
+            np.arange(b_a_range[0], b_a_range[1] + 1e-9, step),
+            np.arange(d_a_range[0], d_a_range[1] + 1e-9, step))
 
 
 def _screened_grid(space, fixed, s_range, cranks, swings, b_as, d_as):
