@@ -52,6 +52,7 @@ from numpy.typing import NDArray
 
 from .. import _jit
 from ..errors import GeometryError, NetlistError
+from ..motion_laws import quintic
 from ._dyad_forms import rpr, rrp, rrr, solve2
 
 __all__ = ["LinkageMotion", "LinkageState", "MAX_CONTINUATION_STEPS", "plan", "motion"]
@@ -1465,9 +1466,8 @@ def _targets(lk, nw, t, nodes, keep, at, kept, sign, dt_max):
     src, at, t = src[rest], at[rest], t[rest]
     nxt = np.minimum(src + 1, len(keep) - 1)
     t0, t1 = nodes[keep[src]], nodes[keep[nxt]]
-    h = t1 - t0
-    with np.errstate(all="ignore"):
-        u = np.where(h != 0, (nodes[at] - t0) / np.where(h != 0, h, 1.0), 0.0)
+    h = np.where(t1 != t0, t1 - t0, 1.0)       # past the last node: u = 0, at its values
+    u = np.where(t1 != t0, (nodes[at] - t0) / h, 0.0)
     guess = _quintic(u, h, (Qk[src], Qdk[src], Qddk[src]), (Qk[nxt], Qdk[nxt], Qddk[nxt]))
     angles = pl.omega[None, :] * t[:, None]
     start = np.max(np.abs(nw.residual(guess, angles)), axis=1)
@@ -1499,23 +1499,12 @@ def _targets(lk, nw, t, nodes, keep, at, kept, sign, dt_max):
     return tuple(out)
 
 
-# The quintic Hermite basis in u ∈ [0, 1], coefficients of 1, u, …, u⁵: the weights of
-# y0, h·y0', h²·y0'', h²·y1'', h·y1', y1.
-_QUINTIC = np.array([[1, 0, 0, -10, 15, -6], [0, 1, 0, -6, 8, -3],
-                     [0, 0, 0.5, -1.5, 1.5, -0.5], [0, 0, 0, 0.5, -1, 0.5],
-                     [0, 0, 0, -4, 7, -3], [0, 0, 0, 10, -15, 6]])
-
-
 def _quintic(u, h, a, b, k=0):
     """The k-th time derivative, at u = (t − t0)/h (N,), of the quintic through the
     (y, y', y'') of ``a`` at t0 and of ``b`` at t0 + h (h (N,), each y (N, n))."""
-    p = np.arange(6)
-    fall = np.prod([np.maximum(p - j, 0) for j in range(k)], axis=0)   # p!/(p − k)!
-    powers = fall * np.asarray(u)[:, None] ** np.maximum(p - k, 0)
-    H = powers @ _QUINTIC.T / h[:, None] ** k
-    hh = h[:, None]
-    return (H[:, :1] * a[0] + H[:, 1:2] * hh * a[1] + H[:, 2:3] * hh * hh * a[2]
-            + H[:, 3:4] * hh * hh * b[2] + H[:, 4:5] * hh * b[1] + H[:, 5:] * b[0])
+    c = quintic(h[:, None], a, b)
+    tau = np.asarray(u)[:, None] * h[:, None]
+    return sum(math.perm(p, k) * c[p] * tau ** (p - k) for p in range(k, 6))
 
 
 def _block(nw, q, qdot, qddot, t_now, T, sign, pl):
