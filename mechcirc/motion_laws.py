@@ -378,9 +378,8 @@ def quintic(h, a, b) -> list:
                   [6 * h, 12 * h ** 2, 20 * h ** 3]])
     if A.ndim == 2:                      # one width: one matrix, each piece a column
         return [a0, a1, a2, *np.linalg.solve(A, r)]
-    A = np.moveaxis(A, (0, 1), (-2, -1))
-    return [a0, a1, a2, *np.moveaxis(np.linalg.solve(A, np.moveaxis(r, 0, -1)[..., None])[..., 0],
-                                     -1, 0)]
+    inv = np.linalg.inv(np.moveaxis(A, (0, 1), (-2, -1)))      # one per width
+    return [a0, a1, a2, *(sum(inv[..., i, j] * r[j] for j in range(3)) for i in range(3))]
 
 
 def hermite_table(h, f, f1, f2) -> np.ndarray:
