@@ -210,11 +210,15 @@ def link_kinematics(fourbar: FourBar, theta: ArrayLike, omega: float, crank: Lin
     crank_turn = (theta, w2, al2)                     # each link's angle, rate, acceleration
     coupler_turn = (st.phi3, w3, al3)
     rocker_turn = (st.phi4, w4, al4)
-    B = rigid_points((0.0, 0.0, 0.0), crank_turn, a)
-    G2, G3, G4, P = (rigid_points(origin, turn, complex(*uv)) for origin, turn, uv in (
+
+    def point(origin, turn, s):
+        return rigid_points(origin, turn[1:], np.exp(1j * turn[0]) * s)
+
+    B = point((0.0, 0.0, 0.0), crank_turn, a)
+    G2, G3, G4, P = (point(origin, turn, complex(*uv)) for origin, turn, uv in (
         ((0.0, 0.0, 0.0), crank_turn, crank.com), (B, coupler_turn, coupler.com),
         ((d, 0.0, 0.0), rocker_turn, rocker.com), ((d, 0.0, 0.0), rocker_turn, reed_point)))
-    return dict(A=np.zeros((n, 2)), B=_xy(B[0]), C=_xy(rigid_points(B, coupler_turn, b)[0]),
+    return dict(A=np.zeros((n, 2)), B=_xy(B[0]), C=_xy(point(B, coupler_turn, b)[0]),
                 D=np.tile([d, 0.0], (n, 1)), G2=_xy(G2[0]), G3=_xy(G3[0]), G4=_xy(G4[0]),
                 P=_xy(P[0]), vG2=_xy(G2[1]), vG3=_xy(G3[1]), vG4=_xy(G4[1]), vP=_xy(P[1]),
                 aG2=_xy(G2[2]), aG3=_xy(G3[2]), aG4=_xy(G4[2]), phi2=theta, phi3=st.phi3,

@@ -505,21 +505,21 @@ def _point_kinematics(pl, q, qdot, qddot, parts):
     def origin(x):                    # per point, its owner's frame origin x + iy (or a rate)
         return ext(x[:, 0::3] + 1j * x[:, 1::3])
 
-    phi = ext(q[:, 2::3])
+    Rs = np.exp(1j * ext(q[:, 2::3])) * s
     pts, vel, acc = rigid_points((origin(q), origin(qdot), origin(qddot)),
-                                 (phi, ext(qdot[:, 2::3]), ext(qddot[:, 2::3])), s)
+                                 (ext(qdot[:, 2::3]), ext(qddot[:, 2::3])), Rs)
     # each crank's part of the velocity: the velocity at its part of the rates
-    contrib = [rigid_points((0, origin(parts[:, :, j]), 0), (phi, ext(parts[:, 2::3, j]), 0), s)[1]
+    contrib = [rigid_points((0, origin(parts[:, :, j]), 0), (ext(parts[:, 2::3, j]), 0), Rs)[1]
                for j in range(parts.shape[2])]
     return _xy(pts), _xy(vel), _xy(acc), _xy(np.array(contrib))
 
 
-def rigid_points(origin, turn, s):
+def rigid_points(origin, rates, Rs):
     """Position, velocity and acceleration (x + iy) of points fixed in moving bodies: at
-    ``s`` (x + iy in the body's frame) from the frame's origin, whose position, velocity
-    and acceleration are ``origin``, the frame turned by φ at rate ω, ω̇ (``turn``)."""
-    phi, w, al = turn
-    Rs = np.exp(1j * phi) * s
+    ``Rs`` = e^{iφ}·s (s in the body's frame, turned by the body's angle φ) from the
+    frame's origin, whose position, velocity and acceleration are ``origin``, the body
+    turning at ω with ω̇ (``rates``)."""
+    w, al = rates
     return origin[0] + Rs, origin[1] + 1j * w * Rs, origin[2] + (1j * al - w * w) * Rs
 
 
