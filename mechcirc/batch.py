@@ -616,7 +616,8 @@ def _nodal_roots(ds: Designs, omega_max):
 
 def _nodal_group_roots(ds: Designs, system, held, which: NDArray, omega_max):
     """:func:`_nodal_roots` for one group of designs ``which``."""
-    from .resonances import POLISH_BELOW, constraint_basis, element_patterns, pencil, settled
+    from .resonances import (POLISH_BELOW, constraint_basis, element_patterns, held_and_released,
+                             pencil, settled, sorted_roots)
 
     eps = np.finfo(float).eps
     *_, G_released, G_held, damped = pencil(system)
@@ -636,10 +637,7 @@ def _nodal_group_roots(ds: Designs, system, held, which: NDArray, omega_max):
     keep = np.flatnonzero(ok_h & ok_r & ~close.any(axis=(1, 2)))
     if not keep.size:
         return None
-    s0 = np.concatenate([s_h[keep], s_r[keep]], axis=1)
-    e0 = np.concatenate([e_h[keep], e_r[keep]], axis=1)
-    pole = np.zeros(s0.shape, dtype=bool)
-    pole[:, s_h.shape[1]:] = True
+    pole, s0, e0 = held_and_released(s_h[keep], s_r[keep], e_h[keep], e_r[keep])
     must = np.concatenate([np.repeat(must_h[keep, None], s_h.shape[1], 1),
                            np.repeat(must_r[keep, None], s_r.shape[1], 1)], axis=1)
     have = np.isfinite(s0)
@@ -653,7 +651,7 @@ def _nodal_group_roots(ds: Designs, system, held, which: NDArray, omega_max):
     s, err = settled(s, err, damped), np.maximum(err, eps)
     if omega_max is not None:
         s = np.where(np.abs(s) <= omega_max, s, np.nan)
-    return (which[keep], *_sorted_roots(pole, s, err))
+    return (which[keep], *sorted_roots(pole, s, err))
 
 
 def _pencil_roots(Z, B: dict, S, damped: bool, omega_max):
@@ -679,17 +677,6 @@ def _pencil_roots(Z, B: dict, S, damped: bool, omega_max):
     mass = S @ P[:, np.arange(k), np.arange(k)] if k else np.ones((S.shape[0], 1))
     must = ~(diagonal & (mass > 1e-13 * mass.max(axis=1, initial=0.0)[:, None]).all(axis=1))
     return 1j * x, e, e, ok, must
-
-
-def _sorted_roots(pole, s, err) -> tuple:
-    """``(pole, s, err)`` per design in find_resonances' order (ω, antiresonance first)."""
-    mag = np.abs(s)
-    live = np.isfinite(mag)
-    order = np.lexsort((~pole, np.where(live, mag, np.inf)), axis=-1)
-    width = int(live.sum(axis=1).max(initial=0))
-    pole, s, err, live = (np.take_along_axis(x, order, 1)[:, :width]
-                          for x in (pole, s, err, live))
-    return pole, s, np.where(live, err, np.nan)
 
 
 def _polish_nodal(stacks: list, design: NDArray, s0: NDArray, pole: NDArray, e0: NDArray,

@@ -364,27 +364,53 @@ def _check_cycle(law_name, ret_law, rise, dwell, ret, stroke) -> None:
 
 
 # ------------------------------------------------------------------ tables
-def _hermite(theta, x, dx, ddx) -> tuple:
-    """Quintic Hermite pieces (a₀ … a₅ in τ = θ − θᵢ) matching x, x', x'' at both ends."""
-    h = np.diff(theta)
-    d0, d1 = dx[:-1] * h, dx[1:] * h                  # derivatives in t = τ/h
-    a0, a1 = ddx[:-1] * h * h, ddx[1:] * h * h
-    dp = x[1:] - x[:-1]
-    c = np.array([x[:-1], d0, a0 / 2,
-                  10 * dp - 6 * d0 - 4 * d1 - (3 * a0 - a1) / 2,
-                  -15 * dp + 8 * d0 + 7 * d1 + (3 * a0 - 2 * a1) / 2,
-                  6 * dp - 3 * (d0 + d1) - (a0 - a1) / 2])
-    c = c / h[None, :] ** np.arange(_DEG)[:, None]
-    if not np.all(np.isfinite(c)):
-        raise ValueError("the interpolant through the samples is not finite in float64")
-    return tuple(map(tuple, c.T.tolist()))
+def quintic(h, a, b) -> list:
+    """The quintic Hermite piece through the (y, y', y'') ``a`` at the left end of an
+    interval of width ``h`` and ``b`` at its right end: its coefficients of τ⁰ … τ⁵ (τ
+    the offset from the left end), arrays of the y's shape (h: one, or broadcast with them).
+
+    a₀, a₁, a₂ are the left end's; a₃, a₄, a₅ solve the 3 × 3 system of the right end's.
+    """
+    a0, a1, a2 = a[0], a[1], 0.5 * a[2]
+    r = np.stack(np.broadcast_arrays(b[0] - (a0 + a1 * h + a2 * h * h), b[1] - (a1 + 2 * a2 * h),
+                                     b[2] - 2 * a2))
+    A = np.array([[h ** 3, h ** 4, h ** 5], [3 * h ** 2, 4 * h ** 3, 5 * h ** 4],
+                  [6 * h, 12 * h ** 2, 20 * h ** 3]])
+    if A.ndim == 2:                      # one width: one matrix, each piece a column
+        return [a0, a1, a2, *np.linalg.solve(A, r)]
+    inv = np.linalg.inv(np.moveaxis(A, (0, 1), (-2, -1)))      # one per width
+    return [a0, a1, a2, *(sum(inv[..., i, j] * r[j] for j in range(3)) for i in range(3))]
+
+
+def hermite_table(h, f, f1, f2) -> np.ndarray:
+    """Quintic Hermite pieces (n, 6) through values, slopes and curvatures at n + 1 nodes
+    (:func:`quintic`).
+
+    Parameters
+    ----------
+    h : float or ndarray
+        The interval width, or each of the n.
+    f, f1, f2 : ndarray
+        Values, first and second derivatives at the nodes, shape (n + 1,).
+
+    Returns
+    -------
+    ndarray, shape (n, 6)
+        a0 … a5 of each piece, in powers of the offset from its left node.
+    """
+    f, f1, f2 = (np.asarray(a, float) for a in (f, f1, f2))
+    return np.ascontiguousarray(np.column_stack(quintic(h, (f[:-1], f1[:-1], f2[:-1]),
+                                                        (f[1:], f1[1:], f2[1:]))))
 
 
 def _table_pieces(theta, x, slope, curvature):
     """(polynomial pieces, the scipy spline or None): quintic Hermite with ``slope``, else
     the periodic cubic spline."""
     if slope is not None:
-        return _hermite(theta, x, np.asarray(slope, float), np.asarray(curvature, float)), None
+        c = hermite_table(np.diff(theta), x, slope, curvature)
+        if not np.all(np.isfinite(c)):
+            raise ValueError("the interpolant through the samples is not finite in float64")
+        return tuple(map(tuple, c.tolist())), None
     from scipy.interpolate import CubicSpline
 
     try:

@@ -989,7 +989,8 @@ def batched_roots(ds, omega_max: float | None = None):
     if not keep.size:
         return None
     if damped:                        # already polished (on the matrices): sort and go
-        return (which[keep], *_sorted_roots(w_h[keep], w_r[keep], e_h[keep], e_r[keep]))
+        return (which[keep], *sorted_roots(*held_and_released(w_h[keep], w_r[keep], e_h[keep],
+                                                              e_r[keep])))
     return _polished_designs(ds, which[keep], w_h[keep], e_h[keep], w_r[keep], e_r[keep],
                              omega_max)
 
@@ -1013,20 +1014,14 @@ def _without_shared_roots(problems, damped: bool) -> np.ndarray:
 def _polished_designs(ds, which, w_h, e_h, w_r, e_r, omega_max):
     """:func:`batched_roots`' result for undamped designs: the roots of both problems
     merged, polished on each design's K by :func:`_secant_designs` and sorted."""
-    pole, w, e0 = _sorted_roots(w_h, w_r, e_h, e_r)
+    pole, w, e0 = sorted_roots(*held_and_released(w_h, w_r, e_h, e_r))
     p = ds.plan(which)
     if p is None:
         return None
     w, err = _secant_designs(p, w, pole, e0)
     if omega_max is not None:
         w = np.where(w <= omega_max, w, np.nan)
-    err = np.maximum(err, np.finfo(float).eps)
-    # Sorted as find_resonances sorts (by ω, then kind), the missing roots last.
-    order = np.lexsort((pole, np.where(np.isfinite(w), w, np.inf)), axis=-1)
-    take = np.take_along_axis
-    w, pole, err = take(w, order, 1), take(pole, order, 1), take(err, order, 1)
-    err = np.where(np.isfinite(w), err, np.nan)
-    return which, pole, 1j * w, err
+    return (which, *sorted_roots(pole, 1j * w, np.maximum(err, np.finfo(float).eps)))
 
 
 def element_patterns(system) -> dict[str, np.ndarray]:
@@ -1067,18 +1062,26 @@ def stacked_problem(Z, B, S, damped: bool, omega_max):
     return _stacked_modes(Mr, Kr, n0, omega_max)
 
 
-def _sorted_roots(s_h, s_r, err_h, err_r):
-    """(pole, s, error) of designs' roots (drive held, released; s complex, or ω),
-    sorted as :func:`find_resonances` sorts (by |s|, held first), the empty slots
-    (NaN: beyond omega_max, rigid) last and cut off at the widest row."""
-    s_ = np.concatenate([s_h, s_r], axis=1)
-    err = np.concatenate([err_h, err_r], axis=1)
-    pole = np.zeros(s_.shape, dtype=bool)
+def held_and_released(s_h, s_r, err_h, err_r) -> tuple:
+    """``(pole, s, err)``: designs' roots with the drive held (resonances) then released
+    (anti-resonances, ``pole`` true), side by side in each row."""
+    pole = np.zeros((s_h.shape[0], s_h.shape[1] + s_r.shape[1]), dtype=bool)
     pole[:, s_h.shape[1]:] = True
-    mag = np.abs(s_)
-    order = np.lexsort((pole, np.where(np.isfinite(mag), mag, np.inf)), axis=-1)
-    width = int(np.isfinite(mag).sum(axis=1).max(initial=0))
-    return tuple(np.take_along_axis(x, order, 1)[:, :width] for x in (pole, s_, err))
+    return pole, np.concatenate([s_h, s_r], axis=1), np.concatenate([err_h, err_r], axis=1)
+
+
+def sorted_roots(pole, s, err) -> tuple:
+    """``(pole, s, err)`` of designs' roots (s complex or ω; NaN: an empty slot, beyond
+    omega_max or rigid), each row sorted as :func:`find_resonances` sorts (by |s|, and
+    on a tie by kind: the anti-resonance first), the empty slots last (their err NaN)
+    and cut off at the widest row."""
+    mag = np.abs(s)
+    live = np.isfinite(mag)
+    order = np.lexsort((~pole, np.where(live, mag, np.inf)), axis=-1)
+    width = int(live.sum(axis=1).max(initial=0))
+    pole, s, err, live = (np.take_along_axis(x, order, 1)[:, :width]
+                          for x in (pole, s, err, live))
+    return pole, s, np.where(live, err, np.nan)
 
 
 def _weighted_sum(S: np.ndarray, P: np.ndarray) -> np.ndarray:

@@ -406,12 +406,15 @@ def locate(text: str, section: str | None, key: str, value: str | None = None,
     return 0, 0
 
 
-def locate_path(text: str, path: tuple[str, ...]) -> tuple[int, int]:
+def locate_path(text: str, path: tuple[str, ...], value: str | None = None,
+                occurrence: int = 0) -> tuple[int, int]:
     """(line, col) of the TOML key ``path`` (e.g. ``("grid", "eta2", "num")``), however written.
 
-    Tries ``[a.b]`` then ``c = …``; ``[a]`` then ``b = {c = …}`` (the column of
-    ``c`` on that line when it is there); the header ``[a.b.c]`` itself (or
-    the first ``[a.b.c.x]``); and so on up to the top level.  (0, 0) when nothing matches.
+    Tries ``[a.b]`` then ``c = …`` (:func:`locate`, with ``value`` and ``occurrence``);
+    ``[a]`` then ``b = {c = …}`` (the column of ``c`` on that line when it is there);
+    the header ``[a.b.c]`` itself (or the first ``[a.b.c.x]``); the header ``[a.b]``
+    (its ``occurrence``-th ``[[a.b]]``); and so on up to the top level.  (0, 0) when
+    nothing matches.
 
     Parameters
     ----------
@@ -419,6 +422,10 @@ def locate_path(text: str, path: tuple[str, ...]) -> tuple[int, int]:
         The TOML text.
     path : tuple of str
         The dotted key, one name per level.
+    value : str, optional
+        A quoted string on the key's line to point at.
+    occurrence : int
+        Which ``[[table]]`` holds the key (0-based).
 
     Returns
     -------
@@ -427,7 +434,9 @@ def locate_path(text: str, path: tuple[str, ...]) -> tuple[int, int]:
     path = tuple(str(p) for p in path)
     for cut in range(len(path) - 1, -1, -1):
         section = ".".join(path[:cut]) or None
-        line, col = locate(text, section, path[cut])
+        full = cut == len(path) - 1
+        line, col = locate(text, section, path[cut], value if full else None,
+                           occurrence if full else 0)
         if line:
             rest = path[cut + 1:]
             if rest:
@@ -437,17 +446,18 @@ def locate_path(text: str, path: tuple[str, ...]) -> tuple[int, int]:
                     col = m.start() + 2
             return line, col
         name = ".".join(path[:cut + 1])
-        for n, ln in enumerate(split_lines(text), start=1):
-            m = TOML_HEADER.match(ln)
-            # [a.b] itself, or the first [a.b.x] (which makes [a.b] without a header)
-            if m and (m.group(1).replace(" ", "") + ".").startswith(name + "."):
-                return n, ln.index("[") + 1
+        # [a.b] itself, or the first [a.b.x] (which makes [a.b] without a header): its name
+        heads = [(n, m.start(1) + 1) for n, ln in enumerate(split_lines(text), start=1)
+                 if (m := TOML_HEADER.match(ln))
+                 and (m.group(1).replace(" ", "") + ".").startswith(name + ".")]
+        if heads:
+            return heads[min(occurrence if cut == len(path) - 2 else 0, len(heads) - 1)]
     return 0, 0
 
 
 def located(text: str, source: str, message: str, section: str | None, key: str,
             value=None, occurrence: int = 0, expected: str | None = None) -> NetlistError:
-    """A :class:`NetlistError` placed at ``key`` of ``[section]`` (see :func:`locate`).
+    """A :class:`NetlistError` placed at ``key`` of ``[section]`` (see :func:`locate_path`).
 
     Parameters
     ----------
@@ -456,7 +466,7 @@ def located(text: str, source: str, message: str, section: str | None, key: str,
     message : str
         What is wrong.
     section : str or None
-        The table's name; None for the top level.
+        The table's name (dotted for a sub-table); None for the top level.
     key : str
         The key to point at.
     value : object, optional
@@ -471,8 +481,8 @@ def located(text: str, source: str, message: str, section: str | None, key: str,
     -------
     NetlistError
     """
-    line, col = locate(text, section, key, value if isinstance(value, str) else None,
-                       occurrence)
+    path = (*section.split("."), key) if section else (key,)
+    line, col = locate_path(text, path, value if isinstance(value, str) else None, occurrence)
     return NetlistError(message, source, line, col, expected)
 
 
@@ -602,12 +612,5 @@ def check_keys(text: str, source: str, table: Table, entry: dict, occurrence: in
     if found is None:
         return
     key, message = found
-    err = located(text, source, message, table.name, key, occurrence=occurrence,
+    raise located(text, source, message, table.name, key, occurrence=occurrence,
                   expected=table.expected)
-    if not err.line and table.name is None:          # a table: point at its header
-        header = re.compile(r"^\s*\[\[?\s*" + re.escape(key) + r"\s*[\].]")
-        for n, line in enumerate(split_lines(text), start=1):
-            if header.match(line):
-                err = NetlistError(message, source, n, line.index(key) + 1, table.expected)
-                break
-    raise err

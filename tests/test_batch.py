@@ -307,6 +307,30 @@ def test_batched_damped_resonances_against_mpmath():
             assert r.omega_d == pytest.approx(float(abs(mpmath.im(s))), rel=1e-12, abs=1e-12)
 
 
+def test_batched_roots_of_equal_omega_are_sorted_as_find_resonances_sorts():
+    # The network above with c²(1/m2 − 1/m1) = k: the released cubic factors as
+    # (s + c/m1)(s² + (k/c) s + k/m2), so a released pair has |s|² = k/m2, the held
+    # pair's: a resonance and an anti-resonance of equal ω (distinct s: not merged).
+    # find_resonances sorts by (ω, kind): the anti-resonance first.
+    text = ".param m1=1 m2=0.5 k=1e4 c=3\ndrive V a 0 velocity=1\nmass ma a 0 m1\n" \
+           "spring ka a b k\nmass mb b 0 m2\ndamper cb b 0 c\n"
+    m2 = np.array([1.0, 1.0, 0.5, 1.0, 2.0, 1.0, 0.25])
+    c = np.array([10.0, 20.0, 10.0, 4.0, 8.0, 2.0, 1.0])
+    params = {"m1": 2 * m2, "m2": m2, "c": c, "k": c ** 2 / (2 * m2)}
+    res = designs(text, params).resonances()
+    assert res.single.size == 0
+    ties = 0
+    for d in range(c.size):
+        got = res.list(d)
+        wn = math.sqrt(params["k"][d] / m2[d])
+        assert [r.kind for r in got] == ["antiresonance", "antiresonance", "resonance"]
+        assert [r.omega for r in got] == pytest.approx([c[d] / (2 * m2[d]), wn, wn],
+                                                       rel=1e-14)
+        assert [r.kind for r in got] == [r.kind for r in find_resonances(one(text, params, d))]
+        ties += got[1].omega == got[2].omega
+    assert ties            # some designs' ω are equal to the bit: the tie is tested
+
+
 @pytest.fixture
 def numpy_only():
     """The numpy paths only (``mechcirc._jit.COMPILED`` False), as without numba."""

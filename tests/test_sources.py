@@ -6,8 +6,8 @@ from __future__ import annotations
 import pytest
 
 from mechcirc.errors import NetlistError
-from mechcirc.sources import (Table, check_keys, line_col, load_toml, locate_path, split_lines,
-                              unknown_key)
+from mechcirc.sources import (Table, check_keys, line_col, load_toml, locate_path, located,
+                              split_lines, unknown_key)
 
 TOP = Table(None, {"name": "a name", "omega": "[omega]"})
 OMEGA = Table("omega", {"min": "lowest", "max": "highest"})
@@ -43,10 +43,26 @@ def test_an_undeclared_top_level_table_is_placed_at_its_header():
     assert (info.value.line, info.value.col) == (3, 2)
 
 
+def test_one_placement_for_every_reader():
+    """The study reader (locate_path) and the scene and linkage readers (located) place an
+    error the same way: at a table's header they pointed at '[' and at the name (now the
+    name), and located did not look past [section] key = … (now also a key in an inline
+    table, and the n-th [[section]]'s header when its key is missing)."""
+    text = "name = 'x'\n\n[bogus.sub]\nx = 1\n"
+    with pytest.raises(NetlistError) as info:
+        check_keys(text, "f.toml", TOP, load_toml(text, "f.toml"))
+    assert (info.value.line, info.value.col) == locate_path(text, ("bogus",)) == (3, 2)
+    text = "grid = {eta = {min = 1, max = 2}}\n[[m]]\nk = 1\n[[m]]\nj = 2\n"
+    assert located(text, "f", "x", "grid.eta", "max").col == 25 == \
+        locate_path(text, ("grid", "eta", "max"))[1]
+    assert (located(text, "f", "x", "m", "k", occurrence=1).line,
+            located(text, "f", "x", "m", "k", occurrence=1).col) == (4, 3)
+
+
 def test_locate_path_falls_back_to_a_sub_table_header():
     # [random] has no header of its own when only [random.params] is written
     text = "netlist = 'a'\n[random.params]\neta = {min = 1, max = 2}\n"
-    assert locate_path(text, ("random", "n")) == (2, 1)
+    assert locate_path(text, ("random", "n")) == (2, 2)      # the header's name
     assert locate_path(text, ("random", "params", "eta", "max")) == (3, 17)
     assert locate_path(text, ("nothing",)) == (0, 0)
 
@@ -85,7 +101,7 @@ def test_locate_path_finds_inline_table_keys():
     text = "[grid]\neta1 = [1, 2]\neta2 = {min = 1, max = 2, num = 6}\n[omega]\nmin = 1\n"
     assert locate_path(text, ("grid", "eta2", "num")) == (3, 27)
     assert locate_path(text, ("omega", "min")) == (5, 1)
-    assert locate_path(text, ("omega",)) == (4, 1)
+    assert locate_path(text, ("omega",)) == (4, 2)
 
 
 def test_number_error_is_one_message_for_every_reader():

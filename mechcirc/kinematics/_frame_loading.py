@@ -50,6 +50,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import GeometryError
 from .fourbar import FourBar
+from .linkage_solver import _cplx, _xy, rigid_points
 
 __all__ = ["LinkMass", "FrameLoading", "frame_loading", "link_kinematics", "beat_up_force"]
 
@@ -171,12 +172,6 @@ class FrameLoading:
         return out
 
 
-def _rot(phi, uv):
-    """Rotate link-frame vectors ``uv`` (2,) by angles ``phi`` (n,) -> (n, 2)."""
-    c, s = np.cos(phi), np.sin(phi)
-    return np.stack([c * uv[0] - s * uv[1], s * uv[0] + c * uv[1]], axis=-1)
-
-
 def _cross(r, f):
     return r[..., 0] * f[..., 1] - r[..., 1] * f[..., 0]
 
@@ -212,30 +207,22 @@ def link_kinematics(fourbar: FourBar, theta: ArrayLike, omega: float, crank: Lin
     n = theta.size
     w2, w3, w4 = np.full(n, float(omega)), st.mu3 * omega, st.mu * omega
     al2, al3, al4 = np.zeros(n), st.nu3 * omega ** 2, st.nu * omega ** 2
-    A = np.zeros((n, 2))
-    D = np.tile([d, 0.0], (n, 1))
-    e2 = np.stack([np.cos(theta), np.sin(theta)], axis=-1)
-    B = a * e2
-    vB = a * omega * np.stack([-np.sin(theta), np.cos(theta)], axis=-1)
-    aB = -a * omega ** 2 * e2
-    C = B + b * np.stack([np.cos(st.phi3), np.sin(st.phi3)], axis=-1)
+    crank_turn = (theta, w2, al2)                     # each link's angle, rate, acceleration
+    coupler_turn = (st.phi3, w3, al3)
+    rocker_turn = (st.phi4, w4, al4)
 
-    def point(origin, v_origin, a_origin, phi, w, al, uv):
-        r = _rot(phi, uv)
-        perp = np.stack([-r[:, 1], r[:, 0]], axis=-1)          # k × r
-        pos = origin + r
-        vel = v_origin + w[:, None] * perp
-        acc = a_origin + al[:, None] * perp - (w * w)[:, None] * r
-        return pos, vel, acc
+    def point(origin, turn, s):
+        return rigid_points(origin, turn[1:], np.exp(1j * turn[0]) * s)
 
-    zero = np.zeros((n, 2))
-    G2, vG2, aG2 = point(A, zero, zero, theta, w2, al2, crank.com)
-    G3, vG3, aG3 = point(B, vB, aB, st.phi3, w3, al3, coupler.com)
-    G4, vG4, aG4 = point(D, zero, zero, st.phi4, w4, al4, rocker.com)
-    P, vP, _ = point(D, zero, zero, st.phi4, w4, al4, tuple(float(x) for x in reed_point))
-    return dict(A=A, B=B, C=C, D=D, G2=G2, G3=G3, G4=G4, P=P, vG2=vG2, vG3=vG3, vG4=vG4,
-                vP=vP, aG2=aG2, aG3=aG3, aG4=aG4, phi2=theta, phi3=st.phi3, phi4=st.phi4,
-                w2=w2, w3=w3, w4=w4, al2=al2, al3=al3, al4=al4)
+    B = point((0.0, 0.0, 0.0), crank_turn, a)
+    G2, G3, G4, P = (point(origin, turn, complex(*uv)) for origin, turn, uv in (
+        ((0.0, 0.0, 0.0), crank_turn, crank.com), (B, coupler_turn, coupler.com),
+        ((d, 0.0, 0.0), rocker_turn, rocker.com), ((d, 0.0, 0.0), rocker_turn, reed_point)))
+    return dict(A=np.zeros((n, 2)), B=_xy(B[0]), C=_xy(point(B, coupler_turn, b)[0]),
+                D=np.tile([d, 0.0], (n, 1)), G2=_xy(G2[0]), G3=_xy(G3[0]), G4=_xy(G4[0]),
+                P=_xy(P[0]), vG2=_xy(G2[1]), vG3=_xy(G3[1]), vG4=_xy(G4[1]), vP=_xy(P[1]),
+                aG2=_xy(G2[2]), aG3=_xy(G3[2]), aG4=_xy(G4[2]), phi2=theta, phi3=st.phi3,
+                phi4=st.phi4, w2=w2, w3=w3, w4=w4, al2=al2, al3=al3, al4=al4)
 
 
 def frame_loading(fourbar: FourBar, theta: ArrayLike, omega: float, *,
@@ -307,7 +294,7 @@ def _reed_in_world(reed_force, theta, phi4):
         if F_local.shape != (n, 2):
             raise GeometryError(f"reed_force(theta) must return an array of shape ({n}, 2) "
                                 f"[N, rocker frame], got {F_local.shape}")
-    return _rot(phi4, F_local.T)        # turned from the rocker's frame by φ4
+    return _xy(np.exp(1j * phi4) * _cplx(F_local))     # turned from the rocker's frame by φ4
 
 
 def _equilibrium(k, crank, coupler, rocker, F, g):

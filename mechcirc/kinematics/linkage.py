@@ -474,9 +474,8 @@ def parse_linkage(text: str, source: str = "<string>") -> Linkage:
     ground_pts = _read_ground(doc["ground"], pose, text, source)
     raw_sliders = doc.get("sliders", [])
     if not isinstance(raw_sliders, list) or not all(isinstance(x, dict) for x in raw_sliders):
-        line, col = locate(text, None, "sliders")
-        raise NetlistError(f"'sliders' must be a [[sliders]] table, got {brief(raw_sliders)}",
-                           source, line, col, "[[sliders]]")
+        raise located(text, source, f"'sliders' must be a [[sliders]] table, got "
+                      f"{brief(raw_sliders)}", None, "sliders", expected="[[sliders]]")
     slider_links = {x.get("link") for x in raw_sliders if isinstance(x.get("link"), str)}
     links = _read_links(doc["links"], pose, text, source, slider_links)
     _check_every_point_used(pose, ground_pts, links, text, source)
@@ -504,9 +503,8 @@ def _check_tables(doc: dict, text: str, source: str) -> None:
         kind = list if table == "cranks" else dict
         if not isinstance(doc[table], kind) or (
                 table == "cranks" and not all(isinstance(c, dict) for c in doc[table])):
-            line, col = locate(text, None, table)
-            raise NetlistError(f"{table!r} must be a {header} table, got "
-                               f"{brief(doc[table])}", source, line, col, header)
+            raise located(text, source, f"{table!r} must be a {header} table, got "
+                          f"{brief(doc[table])}", None, table, expected=header)
     check_keys(text, source, TABLES[None], doc)
 
 

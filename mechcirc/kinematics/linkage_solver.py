@@ -52,6 +52,7 @@ from numpy.typing import NDArray
 
 from .. import _jit
 from ..errors import GeometryError, NetlistError
+from ..motion_laws import quintic
 from ._dyad_forms import rpr, rrp, rrr, solve2
 
 __all__ = ["LinkageMotion", "LinkageState", "MAX_CONTINUATION_STEPS", "plan", "motion"]
@@ -504,14 +505,22 @@ def _point_kinematics(pl, q, qdot, qddot, parts):
     def origin(x):                    # per point, its owner's frame origin x + iy (or a rate)
         return ext(x[:, 0::3] + 1j * x[:, 1::3])
 
-    w = ext(qdot[:, 2::3])
     Rs = np.exp(1j * ext(q[:, 2::3])) * s
-    pts = origin(q) + Rs
-    vel = origin(qdot) + 1j * w * Rs
-    acc = origin(qddot) + (1j * ext(qddot[:, 2::3]) - w * w) * Rs
-    contrib = [origin(parts[:, :, j]) + 1j * ext(parts[:, 2::3, j]) * Rs
+    pts, vel, acc = rigid_points((origin(q), origin(qdot), origin(qddot)),
+                                 (ext(qdot[:, 2::3]), ext(qddot[:, 2::3])), Rs)
+    # each crank's part of the velocity: the velocity at its part of the rates
+    contrib = [rigid_points((0, origin(parts[:, :, j]), 0), (ext(parts[:, 2::3, j]), 0), Rs)[1]
                for j in range(parts.shape[2])]
     return _xy(pts), _xy(vel), _xy(acc), _xy(np.array(contrib))
+
+
+def rigid_points(origin, rates, Rs):
+    """Position, velocity and acceleration (x + iy) of points fixed in moving bodies: at
+    ``Rs`` = e^{iφ}·s (s in the body's frame, turned by the body's angle φ) from the
+    frame's origin, whose position, velocity and acceleration are ``origin``, the body
+    turning at ω with ω̇ (``rates``)."""
+    w, al = rates
+    return origin[0] + Rs, origin[1] + 1j * w * Rs, origin[2] + (1j * al - w * w) * Rs
 
 
 def motion(lk, pl: _Plan, theta, *, max_step_deg: float = 2.0, method: str = "auto"):
@@ -1465,9 +1474,8 @@ def _targets(lk, nw, t, nodes, keep, at, kept, sign, dt_max):
     src, at, t = src[rest], at[rest], t[rest]
     nxt = np.minimum(src + 1, len(keep) - 1)
     t0, t1 = nodes[keep[src]], nodes[keep[nxt]]
-    h = t1 - t0
-    with np.errstate(all="ignore"):
-        u = np.where(h != 0, (nodes[at] - t0) / np.where(h != 0, h, 1.0), 0.0)
+    h = np.where(t1 != t0, t1 - t0, 1.0)       # past the last node: u = 0, at its values
+    u = np.where(t1 != t0, (nodes[at] - t0) / h, 0.0)
     guess = _quintic(u, h, (Qk[src], Qdk[src], Qddk[src]), (Qk[nxt], Qdk[nxt], Qddk[nxt]))
     angles = pl.omega[None, :] * t[:, None]
     start = np.max(np.abs(nw.residual(guess, angles)), axis=1)
@@ -1499,23 +1507,12 @@ def _targets(lk, nw, t, nodes, keep, at, kept, sign, dt_max):
     return tuple(out)
 
 
-# The quintic Hermite basis in u ∈ [0, 1], coefficients of 1, u, …, u⁵: the weights of
-# y0, h·y0', h²·y0'', h²·y1'', h·y1', y1.
-_QUINTIC = np.array([[1, 0, 0, -10, 15, -6], [0, 1, 0, -6, 8, -3],
-                     [0, 0, 0.5, -1.5, 1.5, -0.5], [0, 0, 0, 0.5, -1, 0.5],
-                     [0, 0, 0, -4, 7, -3], [0, 0, 0, 10, -15, 6]])
-
-
 def _quintic(u, h, a, b, k=0):
     """The k-th time derivative, at u = (t − t0)/h (N,), of the quintic through the
     (y, y', y'') of ``a`` at t0 and of ``b`` at t0 + h (h (N,), each y (N, n))."""
-    p = np.arange(6)
-    fall = np.prod([np.maximum(p - j, 0) for j in range(k)], axis=0)   # p!/(p − k)!
-    powers = fall * np.asarray(u)[:, None] ** np.maximum(p - k, 0)
-    H = powers @ _QUINTIC.T / h[:, None] ** k
-    hh = h[:, None]
-    return (H[:, :1] * a[0] + H[:, 1:2] * hh * a[1] + H[:, 2:3] * hh * hh * a[2]
-            + H[:, 3:4] * hh * hh * b[2] + H[:, 4:5] * hh * b[1] + H[:, 5:] * b[0])
+    c = quintic(h[:, None], a, b)
+    tau = np.asarray(u)[:, None] * h[:, None]
+    return sum(math.perm(p, k) * c[p] * tau ** (p - k) for p in range(k, 6))
 
 
 def _block(nw, q, qdot, qddot, t_now, T, sign, pl):

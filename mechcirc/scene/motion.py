@@ -25,6 +25,7 @@ import numpy as np
 
 from ..errors import GeometryError
 from ..kinematics.linkage import Crank, Linkage
+from ..motion_laws import hermite_table
 from .files import Scene
 
 __all__ = ["MotionModel", "motion_model", "hermite_table", "dead_centre"]
@@ -33,32 +34,6 @@ TWO_PI = 2.0 * math.pi
 #: Intervals of every kinematic table (per revolution or per tabulated range).
 TABLE_POINTS = 1024
 _LAWS = {"elastobacklash": 1, "dead-zone": 2}
-
-
-def hermite_table(h, f, f1, f2):
-    """Quintic Hermite pieces (n, 6) through values, slopes and curvatures at n + 1 nodes.
-
-    Parameters
-    ----------
-    h : float
-        The (uniform) interval width.
-    f, f1, f2 : ndarray
-        Values, first and second derivatives at the nodes, shape (n + 1,).
-
-    Returns
-    -------
-    ndarray, shape (n, 6)
-        a0 … a5 of each piece, in powers of the offset from its left node.
-    """
-    f, f1, f2 = (np.asarray(a, float) for a in (f, f1, f2))
-    a0, a1, a2 = f[:-1], f1[:-1], 0.5 * f2[:-1]
-    r0 = f[1:] - (a0 + a1 * h + a2 * h * h)
-    r1 = f1[1:] - (a1 + 2 * a2 * h)
-    r2 = f2[1:] - 2 * a2
-    A = np.array([[h ** 3, h ** 4, h ** 5], [3 * h ** 2, 4 * h ** 3, 5 * h ** 4],
-                  [6 * h, 12 * h ** 2, 20 * h ** 3]])
-    a345 = np.linalg.solve(A, np.vstack([r0, r1, r2]))
-    return np.ascontiguousarray(np.column_stack([a0, a1, a2, a345[0], a345[1], a345[2]]))
 
 
 @dataclass(frozen=True, eq=False)

@@ -160,3 +160,18 @@ def test_bad_linkage_tables_exit_2_at_their_line(old, new, needle, fragment, tmp
     f = tmp_path / "l.toml"
     f.write_text(text, encoding="utf-8")
     assert_user_error(["linkage", f], capsys, f"l.toml:{line}:", ": error: ", fragment)
+
+
+def test_a_key_of_an_inline_table_and_a_missing_key_are_located():
+    # Each was placed nowhere (file: error) before the readers placed errors as the
+    # study reader does (mechcirc.sources.locate_path).
+    text = 'ground = { points = ["O1", "O2", "O9"] }\n' + \
+        FNF.replace('[ground]\npoints = ["O1", "O2", "O6"]\n', '')
+    with pytest.raises(NetlistError, match="unknown point 'O9' in") as err:
+        parse_linkage(text, "fnf.toml")
+    assert (err.value.line, err.value.col) == (1, 12)           # at points
+    text = FNF.replace('[[cranks]]\nlink = "crank2"\n', '[[cranks]]\n')
+    with pytest.raises(NetlistError, match=r"in \[\[cranks\]\] #2") as err:
+        parse_linkage(text, "fnf.toml")
+    assert (err.value.line, err.value.col) == (23, 3)           # the second [[cranks]]
+    assert text.splitlines()[22] == "[[cranks]]"
