@@ -97,9 +97,10 @@ def main() -> int:
                 t = time.process_time()
                 k(omega, *p.arrays(), True, K, rho)
                 times[i, 1, r] = time.process_time() - t
-        for c, (k_alone, k_bound) in zip(args.checkouts, np.median(times, axis=2) * 1e3):
-            print(f"{name:>9} {str(c):<30} K {k_alone:.4f}  K+bound {k_bound:.4f}  "
-                  f"({k_bound / k_alone:.3f}x K)")
+        medians = np.median(times, axis=2) * 1e3
+        for c, (k_alone, k_bound) in zip(args.checkouts, medians):
+            ratio = k_bound / k_alone
+            print(f"{name:>9} {str(c):<30} K {k_alone:.4f}  K+bound {k_bound:.4f}  ({ratio:.3f}x K)")
     print(f"load average after: {os.getloadavg()[0]:.1f}")
     return 0
 
