@@ -3,13 +3,16 @@ independent SymPy derivation, and the kinks inside the shaft's steps located (th
 across impacts of a clearance gap)."""
 
 
+import math
+
 import numpy as np
 import pytest
 
 from mechcirc.errors import MechcircError
 from mechcirc.scene import parse_scene
-from mechcirc.scene.shaft import simulate_shaft
-from test_shaft_elastic import EXTRA, WS, reference_cycle, scene, sympy_reference
+from mechcirc.scene.shaft import _prepare, simulate_shaft
+from test_shaft_elastic import (CENTRE, EXTRA, L0, R, START, WIN, WS, X_C0, Y_G, reference_cycle,
+                                scene, sympy_reference)
 
 
 @pytest.mark.slow
@@ -36,6 +39,73 @@ def gap_scene():
     text = open("examples/slider_crank_scene.toml", encoding="utf-8").read().replace(
         "damping = 300.0", 'damping = 300.0\nclearance = 2e-6\nclearance_law = "dead-zone"')
     return parse_scene(text + EXTRA, "slider_crank_gap.toml")
+
+
+def located_cycle(scene, theta, rigid=False, clearance=0.0, rtol=3e-14):
+    """The steady cycle of :func:`simulate_shaft`'s equations (its kernel's right-hand side;
+    not its steppers, which are under test) at θ0 + ``theta`` by scipy's DOP853 at ``rtol``,
+    every kink at a step's end: the integration stops at the moment window's edges (θ = 75°,
+    165°) and, where a step crossed an edge of the rod's dead zone (|δ| = ``clearance``, δ
+    from the closed-form geometry), bisects the edge on that step's interpolant and takes the
+    step again up to it.  Three cycles from the rigid rest at ω_s settle the cycle (the map
+    shrinks a start's error ~1e-6 a cycle with the elastic rod, to the noise in one rigid); the
+    fourth is the reference.  Returns (its [θ̇, t, z] at ``theta`` (rows), the change of θ̇
+    from its start to its end / ω_s)."""
+    from scipy.integrate import DOP853
+
+    eq = _prepare(scene, None, None, 16, rigid)[3]
+    th0 = math.radians(START)
+    ends = sorted((math.radians(CENTRE + k * WIN / 2) - th0) % (2 * math.pi) + th0
+                  for k in (-1, 1)) + [th0 + 2 * math.pi]
+    atol = 1e-3 * rtol * np.array([WS, 2 * math.pi / WS, R, R * WS])[:2 + 2 * eq.n]
+
+    def f(th, Y):
+        out = np.empty(Y.size)
+        out[0], out[1] = eq.deriv(th, Y[0], Y[2:], out[2:]), 1.0
+        return out / Y[0]
+
+    def side(th, Y):        # the rod's piece of the dead zone: −1, 0, 1
+        d = math.hypot(X_C0 + Y[2] - R * math.cos(th), Y_G - R * math.sin(th)) - L0 \
+            if clearance else 0.0
+        return (d > clearance) - (d < -clearance)
+
+    def run(t, y, tb, pieces, on=None):
+        """From (t, y) to tb, the steps' interpolants into ``pieces``; where a step leaves the
+        piece ``on``: (its start, its state, its interpolant, its end), else (tb, y(tb))."""
+        s = DOP853(f, t, y, tb, rtol=rtol, atol=atol)
+        while s.status == "running":
+            t, y = s.t, s.y.copy()
+            s.step()
+            if on is not None and side(s.t, s.y) != on:
+                return t, y, s.dense_output(), s.t
+            pieces.append((t, s.dense_output()))
+        assert s.status == "finished", s.status
+        return s.t, s.y, None, None
+
+    def cycle(y):
+        t, pieces = th0, []
+        for tb in ends:
+            while t < tb:
+                t, y, interp, hi = run(t, y, tb, pieces, side(t, y))
+                if interp is not None:
+                    lo, on = t, side(t, y)
+                    for _ in range(60):
+                        mid = 0.5 * (lo + hi)
+                        if side(mid, interp(mid)) == on:
+                            lo = mid
+                        else:
+                            hi = mid
+                    t, y, _, _ = run(t, y, hi, pieces)
+        return np.concatenate(([y[0], 0.0], y[2:])), pieces
+
+    x = np.concatenate(([WS, 0.0], eq.rest(th0, 0.0)))
+    for _ in range(3):
+        x, _ = cycle(x)
+    y, pieces = cycle(x)
+    starts = np.array([p[0] for p in pieces])
+    th = th0 + np.asarray(theta)
+    idx = np.searchsorted(starts, th, "right") - 1
+    return np.column_stack([pieces[i][1](v) for i, v in zip(idx, th)]), abs(y[0] - x[0]) / WS
 
 
 def test_the_kinks_of_a_clearance_are_located_inside_the_shaft_steps():
@@ -91,16 +161,20 @@ def test_cli_takes_the_method_and_refuses_what_does_not_apply(tmp_path, capsys):
 def test_the_default_method_is_rk8_for_the_rigid_and_the_elastic_shaft():
     """Without ``method``: the rigid shaft runs rk8 (16 × 16 = 256 steps a cycle), the
     elastic one rk8 at 16 steps per period (its accuracy: the SymPy test above; across a
-    clearance gap: test_rk8_clearance.py).  The rigid default's speed against DOP853
-    at rtol 1e-12 on the same equations (those are checked against SymPy in test_shaft.py):
-    measured 3.6e-11 of the mean speed (RK4 at 100 steps per period, the default before:
-    3.7e-11, in 1.5-1.9x the CPU); asserted at 1e-9."""
+    clearance gap: test_rk8_clearance.py).  The rigid default's speed against DOP853 on the
+    same equations (those are checked against SymPy in test_shaft.py) with the window's kinks
+    at step ends (:func:`located_cycle`, rtol 3e-14): measured 8.2e-12 of ω_s (RK4 at 100
+    steps per period, the default before: 4.6e-11); over 16 draws of the motion tables'
+    coefficients moved by ±1 ulp at most 1.4e-11, a floor that moves the reference itself by
+    1.3e-11 (rk8 moved 5e-16; the unlocated DOP853 at rtol 1e-12 used before moved 2.0e-10
+    and gave 1.8e-11 to 2.1e-10).  Asserted at 5e-11 (3.6x margin), the reference's cycle
+    repeating to 2e-12 (measured ≤ 4.5e-13)."""
     rigid = simulate_shaft(scene(), points=90, startup=False, rigid=True)
     assert any(n.startswith("steady cycle by shooting (RK8 in θ, 256 steps a cycle")
                for n in simulate_shaft(scene(), points=90, rigid=True).notes)
-    ref = simulate_shaft(scene(), points=90, startup=False, rigid=True, method="DOP853",
-                         rtol=1e-12)
-    assert np.max(np.abs(rigid.speed - ref.speed)) <= 1e-9 * ref.omega_mean
+    ref, repeat = located_cycle(scene(), rigid.theta, rigid=True)
+    assert repeat <= 2e-12
+    assert np.max(np.abs(rigid.speed - ref[0])) <= 5e-11 * WS
     elastic = simulate_shaft(scene(), points=90, startup=False)
     assert any("RK8 in θ with the elastic parts" in n and "(16 per period" in n
                for n in elastic.notes)
