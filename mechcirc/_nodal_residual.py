@@ -56,8 +56,8 @@ class Pattern:
         self.s_row = r[-1]
         self.s_col = c[-1]
         self.s_val = v[-1]
-        rows, cols, vals = np.concatenate(r), np.concatenate(c), np.concatenate(v)
-        kind = np.concatenate([np.full(len(x), i) for i, x in enumerate(r)])
+        rows, cols = np.concatenate(r), np.concatenate(c)
+        ends = np.cumsum([0] + [len(x) for x in r])        # each kind's stamps, in order
         self.n = n
         key = cols * n + rows
         uniq, inv = np.unique(key, return_inverse=True)
@@ -65,8 +65,8 @@ class Pattern:
         self.indices = (uniq % n).astype(np.int32)
         self.indptr = np.searchsorted(uniq // n, np.arange(n + 1)).astype(np.int32)
         nnz = uniq.size
-        parts = [np.bincount(inv, weights=np.where(kind == i, vals, 0.0), minlength=nnz)
-                 for i in range(4)]
+        parts = [np.bincount(inv[ends[i]:ends[i + 1]], weights=v[i], minlength=nnz)
+                 .astype(float, copy=False) for i in range(4)]     # (int where no stamps)
         self.m, self.k, self.dc = parts[0], parts[2], parts[1] + parts[3]
         self._elements(system)
         self._plan()
