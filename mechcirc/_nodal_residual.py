@@ -52,16 +52,21 @@ class Pattern:
         r = [np.asarray(system.stamps[k][0], dtype=np.int64) for k in KINDS]
         c = [np.asarray(system.stamps[k][1], dtype=np.int64) for k in KINDS]
         v = [np.asarray(system.stamps[k][2], dtype=float) for k in KINDS]
-        rows, cols, vals = np.concatenate(r), np.concatenate(c), np.concatenate(v)
-        kind = np.concatenate([np.full(len(x), i) for i, x in enumerate(r)])
+        # The lever block's stamps (KINDS' last; the held drive's constraint included).
+        self.s_row = r[-1]
+        self.s_col = c[-1]
+        self.s_val = v[-1]
+        rows, cols = np.concatenate(r), np.concatenate(c)
+        ends = np.cumsum([0] + [len(x) for x in r])        # each kind's stamps, in order
         self.n = n
         key = cols * n + rows
         uniq, inv = np.unique(key, return_inverse=True)
+        self.key = uniq                         # col·n + row of each nonzero
         self.indices = (uniq % n).astype(np.int32)
         self.indptr = np.searchsorted(uniq // n, np.arange(n + 1)).astype(np.int32)
         nnz = uniq.size
-        parts = [np.bincount(inv, weights=np.where(kind == i, vals, 0.0), minlength=nnz)
-                 for i in range(4)]
+        parts = [np.bincount(inv[ends[i]:ends[i + 1]], weights=v[i], minlength=nnz)
+                 .astype(float, copy=False) for i in range(4)]     # (int where no stamps)
         self.m, self.k, self.dc = parts[0], parts[2], parts[1] + parts[3]
         self._elements(system)
         self._plan()
@@ -72,6 +77,13 @@ class Pattern:
 
         data = combine(self.dc, self.m, self.k, omega)
         return sp.csc_matrix((data, self.indices, self.indptr), shape=(self.n, self.n))
+
+    def dense(self, omega: float) -> NDArray[np.complex128]:
+        """A(ω) as a dense (n, n) array, the bits of :func:`mechcirc.nodal.dense_matrices`
+        (the same stamps summed in the same order into each entry), without its dense sums."""
+        flat = np.zeros(self.n * self.n, dtype=complex)
+        flat[self.key] = combine(self.dc, self.m, self.k, omega)
+        return flat.reshape(self.n, self.n).T           # (keys col·n + row: Aᵀ by rows)
 
     def _elements(self, system: NodalSystem) -> None:
         index = {n: i for i, n in enumerate(system.nodes)}
@@ -94,11 +106,6 @@ class Pattern:
         self.l_p2 = np.array([at(v.p2, n) for v in lv], dtype=np.int64)
         self.l_col = n_nodes + np.arange(len(lv), dtype=np.int64)
         self.l_r = np.array([abs(v.ratio) for v in lv], dtype=float)
-        # The lever block's stamps (the held drive's constraint included).
-        lr, lc, lval = (np.asarray(a) for a in system.stamps["lever"])
-        self.s_row = lr.astype(np.int64)
-        self.s_col = lc.astype(np.int64)
-        self.s_val = lval.astype(float)
 
     def _plan(self) -> None:
         """What every residual needs: the split values, the compiled kernel's buckets, and

@@ -99,14 +99,15 @@ _STRICT_AFTER = 1e-10
 #: of a 9,999-element one 0.91×).
 _CHUNK_TERMS = 2 ** 15
 #: The same for the compiled kernels, in (ω, unknown) pairs: no (ω, term) temporaries;
-#: each (ω, n) array of a chunk is then 64 kB, in the 1 MB L2 cache with the others,
-#: and below the 128 kB from which glibc's malloc maps fresh pages for a block (the
-#: numpy steps between the kernels otherwise fault in their temporaries: 7,000 page
-#: faults per sweep of a 999-element ladder at 2¹⁴ and 2¹⁶, none at 2¹²).  Each in
-#: processes of its own, alternated (27 Nov, load 3–4), the compiled sweep took at 2¹²
-#: 0.74–0.75× its time at 2¹⁶ at 999 elements, 0.73–0.83× at 45, 0.77× at 9,999 (one ω
-#: per chunk) and 1.03× at 99 (all 401 ω in one chunk at 2¹⁶, without faults there).
-_KERNEL_CHUNK = 2 ** 12
+#: each complex (ω, n) array of a chunk is then below 128 kB, from which glibc's malloc
+#: maps fresh pages for a block (the numpy steps between the kernels otherwise fault in
+#: their temporaries: 7,000 page faults per sweep of a 999-element ladder at 2¹⁴ and
+#: 2¹⁶, none at 2¹²; 572 per sweep at 99 elements at 10,100, none at 8,000).  The ω are
+#: shared out evenly over the fewest chunks.  Each in processes of its own, alternated
+#: (27 Nov, load 3–4), the compiled sweep took at 2¹² 0.74–0.75× its time at 2¹⁶ at
+#: 999 elements, 0.73–0.83× at 45, 0.77× at 9,999 (one ω per chunk); at 8,000 (eighth
+#: session, load 2) 0.91× its time at 2¹² at 99 elements (3 chunks, not 5).
+_KERNEL_CHUNK = 8000
 #: But at least this many ω per chunk of a band: the compiled banded LU's loops over ω
 #: vectorise (at 500 unknowns it factorises 16 ω in 0.55× the time of 8, at 5,000 in
 #: 0.78× the time of 1 ω at a time; 27 Nov, seventh session), more than the larger
@@ -220,6 +221,7 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
     # as its memory bound allows (the residual goes in pieces, above).
     chunk = solve_with.batch_chunk if kern is None and solve_with.kind == "band" \
         and solve_with.batch_chunk else min(solve_with.max_chunk, terms)
+    chunk = -(-at.size // -(-at.size // chunk)) if at.size else chunk    # even shares
     use_dd = refine and system.size <= DD_LIMIT and not np.iscomplexobj(omega)
     for start in range(0, at.size, chunk):
         every = at[start:start + chunk]
@@ -808,7 +810,8 @@ def _dense_verdict(system: NodalSystem, trial):
     judged, overflow = None, False
     if system.size > DENSE_LIMIT:
         return False, judged, overflow
-    for w, A in zip(trial, dense_matrices(system, trial)):
+    for w in trial:
+        A = pattern(system).dense(w)        # (dense_matrices' bits, without its four sums)
         if not np.isfinite(A).all():
             return True, judged, overflow   # values at float64's edge: the sweep flags them
         if _clearly_regular(A):
