@@ -369,17 +369,16 @@ def quintic(h, a, b) -> list:
     interval of width ``h`` and ``b`` at its right end: its coefficients of τ⁰ … τ⁵ (τ
     the offset from the left end), arrays of the y's shape (h: one, or broadcast with them).
 
-    a₀, a₁, a₂ are the left end's; a₃, a₄, a₅ solve the 3 × 3 system of the right end's.
+    a₀, a₁, a₂ are the left end's; a₃h³, a₄h⁴, a₅h⁵ solve the right end's 3 × 3 system
+    [[1, 1, 1], [3, 4, 5], [6, 12, 20]] with the residuals scaled by 1, h, h², whose
+    inverse is [[10, −4, ½], [−15, 7, −1], [6, −3, ½]] (one formula for any h).
     """
     a0, a1, a2 = a[0], a[1], 0.5 * a[2]
-    r = np.stack(np.broadcast_arrays(b[0] - (a0 + a1 * h + a2 * h * h), b[1] - (a1 + 2 * a2 * h),
-                                     b[2] - 2 * a2))
-    A = np.array([[h ** 3, h ** 4, h ** 5], [3 * h ** 2, 4 * h ** 3, 5 * h ** 4],
-                  [6 * h, 12 * h ** 2, 20 * h ** 3]])
-    if A.ndim == 2:                      # one width: one matrix, each piece a column
-        return [a0, a1, a2, *np.linalg.solve(A, r)]
-    inv = np.linalg.inv(np.moveaxis(A, (0, 1), (-2, -1)))      # one per width
-    return [a0, a1, a2, *(sum(inv[..., i, j] * r[j] for j in range(3)) for i in range(3))]
+    s0 = b[0] - (a0 + a1 * h + a2 * h * h)
+    s1 = (b[1] - (a1 + 2 * a2 * h)) * h
+    s2 = (b[2] - 2 * a2) * h * h
+    return [a0, a1, a2, (10 * s0 - 4 * s1 + 0.5 * s2) / h ** 3,
+            (-15 * s0 + 7 * s1 - s2) / h ** 4, (6 * s0 - 3 * s1 + 0.5 * s2) / h ** 5]
 
 
 def hermite_table(h, f, f1, f2) -> np.ndarray:
