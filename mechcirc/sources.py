@@ -411,7 +411,8 @@ def locate_path(text: str, path: tuple[str, ...], value: str | None = None,
     """(line, col) of the TOML key ``path`` (e.g. ``("grid", "eta2", "num")``), however written.
 
     Tries ``[a.b]`` then ``c = …`` (:func:`locate`, with ``value`` and ``occurrence``);
-    ``[a]`` then ``b = {c = …}`` (the column of ``c`` on that line when it is there);
+    ``[a]`` then the dotted key ``b.c = …`` (at ``c``), or ``b = {c = …}`` (the column of
+    ``c`` on that line when it is there);
     the header ``[a.b.c]`` itself (or the first ``[a.b.c.x]``); the header ``[a.b]``
     (its ``occurrence``-th ``[[a.b]]``); and so on up to the top level.  (0, 0) when
     nothing matches.
@@ -437,6 +438,11 @@ def locate_path(text: str, path: tuple[str, ...], value: str | None = None,
         full = cut == len(path) - 1
         line, col = locate(text, section, path[cut], value if full else None,
                            occurrence if full else 0)
+        if not line and not full:       # a dotted key, ``b.c = …`` in [a]
+            dotted = ".".join(path[cut:])
+            line, col = locate(text, section, dotted)
+            if line:
+                return line, col + len(dotted) - len(path[-1])
         if line:
             rest = path[cut + 1:]
             if rest:

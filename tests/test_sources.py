@@ -104,6 +104,14 @@ def test_locate_path_finds_inline_table_keys():
     assert locate_path(text, ("omega",)) == (4, 2)
 
 
+def test_locate_path_finds_dotted_keys():
+    # Placed nowhere (0, 0) before: a dotted key is neither a header nor ``name =``.
+    text = 'name = "x"\nground.points = ["a"]\n[grid]\neta2.num = 6\n'
+    assert locate_path(text, ("ground", "points")) == (2, 8)
+    assert locate_path(text, ("grid", "eta2", "num")) == (4, 6)
+    assert locate_path(text, ("name",)) == (1, 1)
+
+
 def test_number_error_is_one_message_for_every_reader():
     from mechcirc.sources import number_error
 

@@ -170,6 +170,10 @@ def test_a_key_of_an_inline_table_and_a_missing_key_are_located():
     with pytest.raises(NetlistError, match="unknown point 'O9' in") as err:
         parse_linkage(text, "fnf.toml")
     assert (err.value.line, err.value.col) == (1, 12)           # at points
+    with pytest.raises(NetlistError, match="unknown point 'O9' in") as err:
+        parse_linkage(text.replace('ground = { points =', 'ground.points =').replace(' }', '', 1),
+                      "fnf.toml")
+    assert (err.value.line, err.value.col) == (1, 8)            # the dotted key's points
     text = FNF.replace('[[cranks]]\nlink = "crank2"\n', '[[cranks]]\n')
     with pytest.raises(NetlistError, match=r"in \[\[cranks\]\] #2") as err:
         parse_linkage(text, "fnf.toml")
