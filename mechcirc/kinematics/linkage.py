@@ -576,6 +576,13 @@ def _check_every_point_used(pose, ground_pts, links, text: str, source: str) -> 
                        "points", p)
 
 
+def _unknown(key: str, entry: dict, where: str) -> str:
+    """The message for a missing or unknown name under ``key`` of a table's ``entry``."""
+    if key not in entry:
+        return f"{where} has no {key}"
+    return f"unknown {key} {entry[key]!r} in {where}"
+
+
 def _read_cranks(raw_cranks: list, links, ground_pts, text: str, source: str) -> list[Crank]:
     """[[cranks]]: each a known link, driven once, about one ground pivot, at omega ≠ 0."""
     if not isinstance(raw_cranks, list) or not raw_cranks:
@@ -585,7 +592,7 @@ def _read_cranks(raw_cranks: list, links, ground_pts, text: str, source: str) ->
         check_keys(text, source, TABLES["cranks"], c, n)
         lname = c.get("link")
         if not isinstance(lname, str) or lname not in links:
-            raise located(text, source, f"unknown link {lname!r} in [[cranks]] #{n + 1}", "cranks",
+            raise located(text, source, _unknown("link", c, f"[[cranks]] #{n + 1}"), "cranks",
                        "link", value=lname, occurrence=n,
                        expected=f"one of {', '.join(links)}")
         pivots = [p for p in links[lname] if p in ground_pts]
@@ -615,7 +622,7 @@ def _read_sliders(raw: list, pose, links, ground_pts, text: str, source: str) ->
         check_keys(text, source, TABLES["sliders"], x, n)
         lname, guide = x.get("link"), x.get("guide")
         if not isinstance(lname, str) or lname not in links:
-            raise located(text, source, f"unknown link {lname!r} in [[sliders]] #{n + 1}",
+            raise located(text, source, _unknown("link", x, f"[[sliders]] #{n + 1}"),
                           "sliders", "link", value=lname, occurrence=n,
                           expected=f"one of {', '.join(links)}")
         if any(s.link == lname for s in out):
@@ -623,7 +630,7 @@ def _read_sliders(raw: list, pose, links, ground_pts, text: str, source: str) ->
                           value=lname, occurrence=n)
         if guide != "ground" and (not isinstance(guide, str) or guide not in links
                                   or guide == lname):
-            raise located(text, source, f"unknown guide {guide!r} in [[sliders]] #{n + 1}",
+            raise located(text, source, _unknown("guide", x, f"[[sliders]] #{n + 1}"),
                           "sliders", "guide" if "guide" in x else "link", occurrence=n,
                           expected="\"ground\" or another link: "
                                    f"{', '.join(k for k in links if k != lname)}")

@@ -175,7 +175,7 @@ def test_a_key_of_an_inline_table_and_a_missing_key_are_located():
                       "fnf.toml")
     assert (err.value.line, err.value.col) == (1, 8)            # the dotted key's points
     text = FNF.replace('[[cranks]]\nlink = "crank2"\n', '[[cranks]]\n')
-    with pytest.raises(NetlistError, match=r"in \[\[cranks\]\] #2") as err:
+    with pytest.raises(NetlistError, match=r"\[\[cranks\]\] #2 has no link") as err:
         parse_linkage(text, "fnf.toml")
     assert (err.value.line, err.value.col) == (23, 3)           # the second [[cranks]]
     assert text.splitlines()[22] == "[[cranks]]"

@@ -164,6 +164,7 @@ def test_slider_off_its_guide_is_located():
 
 @pytest.mark.parametrize("change, words", [
     (('guide = "ground"', 'guide = "nowhere"'), "unknown guide 'nowhere'"),
+    (('guide = "ground"', ''), "[[sliders]] #1 has no guide"),      # was "unknown guide None"
     (('line = ["G1", "G2"]', 'line = ["G1", "B"]'), "line must name two points"),
     (('link = "block"\nguide', 'link = ["block"]\nguide'), "link 'block' must list at least"),
     (('line = ["G1", "G2"]', 'line = ["G1", "G2"]\npoint = ["C"]'), "point must be one of"),
