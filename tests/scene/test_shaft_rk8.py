@@ -19,18 +19,21 @@ from test_shaft_elastic import (CENTRE, EXTRA, L0, R, START, WIN, WS, X_C0, Y_G,
 def test_rk8_steady_cycle_matches_the_sympy_derivation():
     """The elastic slider-crank's steady cycle by rk8 (16 steps per period of the rod's mode,
     420 a cycle) against the SymPy equations integrated by DOP853 at rtol 1e-12 from the
-    state the code found: the speed and time over the cycle, and that state repeating.
-    Achieved 9.1e-12 of ω_s (speed), 1.7e-13 of the period (time), 1.9e-14 of ω_s (the
-    state's repeat); asserted at 1e-10 (11x margin on the speed) — the default rk4 (2,625
-    steps) reaches 1.3e-9 here."""
+    state the code found, stopping at the moment window's edges (its own error ≤ 3.2e-13 of
+    ω_s against rtol 3e-14): the speed and time over the cycle, and that state repeating.
+    Over 12 draws of the motion tables' coefficients moved by ±1 ulp at most 3.0e-13 of ω_s
+    (speed), 1.1e-14 of the period (time), 4.2e-14 of ω_s (the state's repeat), 9.8e-15 of
+    the period (its length); the reference not stopping at the window's edges gave
+    0.7e-12 … 2.3e-11 for the speed on the same draws.  Asserted 2e-12, 1e-13, 2e-13, 1e-13
+    (≥ 4.8x margins) — RK4 at 100 steps per period (2,625 steps) reaches 1.1e-9 here."""
     rhs, _ = sympy_reference()
     r = simulate_shaft(scene(), points=90, startup=False, method="rk8")
     assert any("RK8" in n for n in r.notes)
-    ref, x0, Y = reference_cycle(rhs, r)
-    assert np.max(np.abs(Y[0] - r.speed)) <= 1e-10 * WS
-    assert np.max(np.abs(Y[3] - r.time)) <= 1e-10 * r.period
-    assert abs(ref.y[0, -1] - x0[0]) <= 1e-10 * WS
-    assert abs(ref.y[3, -1] - r.period) <= 1e-10 * r.period
+    end, x0, Y = reference_cycle(rhs, r)
+    assert np.max(np.abs(Y[0] - r.speed)) <= 2e-12 * WS
+    assert np.max(np.abs(Y[3] - r.time)) <= 1e-13 * r.period
+    assert abs(end[0] - x0[0]) <= 2e-13 * WS
+    assert abs(end[3] - r.period) <= 1e-13 * r.period
 
 
 def gap_scene():
@@ -41,18 +44,58 @@ def gap_scene():
     return parse_scene(text + EXTRA, "slider_crank_gap.toml")
 
 
-def located_cycle(scene, theta, rigid=False, clearance=0.0, rtol=3e-14):
-    """The steady cycle of :func:`simulate_shaft`'s equations (its kernel's right-hand side;
-    not its steppers, which are under test) at θ0 + ``theta`` by scipy's DOP853 at ``rtol``,
-    every kink at a step's end: the integration stops at the moment window's edges (θ = 75°,
-    165°) and, where a step crossed an edge of the rod's dead zone (|δ| = ``clearance``, δ
-    from the closed-form geometry), bisects the edge on that step's interpolant and takes the
-    step again up to it.  Three cycles from the rigid rest at ω_s settle the cycle (the map
-    shrinks a start's error ~1e-6 a cycle with the elastic rod, to the noise in one rigid); the
-    fourth is the reference.  Returns (its [θ̇, t, z] at ``theta`` (rows), the change of θ̇
-    from its start to its end / ω_s)."""
+def located(f, t, y, ends, side, rtol, atol):
+    """``y' = f(t, y)`` from (t, y) through ``ends`` (increasing) by scipy's DOP853 at
+    ``rtol``/``atol``, every kink at a step's end: the integration stops at each of ``ends``
+    and, where a step changed ``side(t, y)`` (the piece of the right-hand side), bisects the
+    switch on that step's interpolant and takes the step again up to it.  Returns (y at the
+    last end, the steps' (start, interpolant) in order)."""
     from scipy.integrate import DOP853
 
+    def run(t, y, tb, pieces, on=None):
+        """From (t, y) to tb, the steps' interpolants into ``pieces``; where a step leaves the
+        piece ``on``: (its start, its state, its interpolant, its end), else (tb, y(tb))."""
+        s = DOP853(f, t, y, tb, rtol=rtol, atol=atol)
+        while s.status == "running":
+            t, y = s.t, s.y.copy()
+            s.step()
+            if on is not None and side(s.t, s.y) != on:
+                return t, y, s.dense_output(), s.t
+            pieces.append((t, s.dense_output()))
+        assert s.status == "finished", s.status
+        return s.t, s.y, None, None
+
+    pieces = []
+    for tb in ends:
+        while t < tb:
+            t, y, interp, hi = run(t, y, tb, pieces, side(t, y))
+            if interp is not None:
+                lo, on = t, side(t, y)
+                for _ in range(60):
+                    mid = 0.5 * (lo + hi)
+                    if side(mid, interp(mid)) == on:
+                        lo = mid
+                    else:
+                        hi = mid
+                t, y, _, _ = run(t, y, hi, pieces)
+    return y, pieces
+
+
+def at(pieces, t):
+    """The solution of :func:`located`'s ``pieces`` at each of ``t`` (rows: components)."""
+    idx = np.searchsorted([p[0] for p in pieces], t, "right") - 1
+    return np.column_stack([pieces[i][1](v) for i, v in zip(idx, t)])
+
+
+def located_cycle(scene, theta, rigid=False, clearance=0.0, rtol=3e-14):
+    """The steady cycle of :func:`simulate_shaft`'s equations (its kernel's right-hand side;
+    not its steppers, which are under test) at θ0 + ``theta`` by :func:`located`: the
+    integration stops at the moment window's edges (θ = 75°, 165°) and locates the edges of
+    the rod's dead zone (|δ| = ``clearance``, δ from the closed-form geometry).  Three cycles
+    from the rigid rest at ω_s settle the cycle (the map shrinks a start's error ~1e-6 a
+    cycle with the elastic rod, to the noise in one rigid); the fourth is the reference.
+    Returns (its [θ̇, t, z] at ``theta`` (rows), the change of θ̇ from its start to its end /
+    ω_s)."""
     eq = _prepare(scene, None, None, 16, rigid)[3]
     th0 = math.radians(START)
     ends = sorted((math.radians(CENTRE + k * WIN / 2) - th0) % (2 * math.pi) + th0
@@ -69,59 +112,36 @@ def located_cycle(scene, theta, rigid=False, clearance=0.0, rtol=3e-14):
             if clearance else 0.0
         return (d > clearance) - (d < -clearance)
 
-    def run(t, y, tb, pieces, on=None):
-        """From (t, y) to tb, the steps' interpolants into ``pieces``; where a step leaves the
-        piece ``on``: (its start, its state, its interpolant, its end), else (tb, y(tb))."""
-        s = DOP853(f, t, y, tb, rtol=rtol, atol=atol)
-        while s.status == "running":
-            t, y = s.t, s.y.copy()
-            s.step()
-            if on is not None and side(s.t, s.y) != on:
-                return t, y, s.dense_output(), s.t
-            pieces.append((t, s.dense_output()))
-        assert s.status == "finished", s.status
-        return s.t, s.y, None, None
-
     def cycle(y):
-        t, pieces = th0, []
-        for tb in ends:
-            while t < tb:
-                t, y, interp, hi = run(t, y, tb, pieces, side(t, y))
-                if interp is not None:
-                    lo, on = t, side(t, y)
-                    for _ in range(60):
-                        mid = 0.5 * (lo + hi)
-                        if side(mid, interp(mid)) == on:
-                            lo = mid
-                        else:
-                            hi = mid
-                    t, y, _, _ = run(t, y, hi, pieces)
+        y, pieces = located(f, th0, y, ends, side, rtol, atol)
         return np.concatenate(([y[0], 0.0], y[2:])), pieces
 
     x = np.concatenate(([WS, 0.0], eq.rest(th0, 0.0)))
     for _ in range(3):
         x, _ = cycle(x)
     y, pieces = cycle(x)
-    starts = np.array([p[0] for p in pieces])
-    th = th0 + np.asarray(theta)
-    idx = np.searchsorted(starts, th, "right") - 1
-    return np.column_stack([pieces[i][1](v) for i, v in zip(idx, th)]), abs(y[0] - x[0]) / WS
+    return at(pieces, th0 + np.asarray(theta)), abs(y[0] - x[0]) / WS
 
 
 def test_the_kinks_of_a_clearance_are_located_inside_the_shaft_steps():
-    """RK4 at 50 and 100 steps per period against DOP853 at rtol 1e-12 on the same
-    equations: the error falls as h⁴ (measured 1.1e-8 → 7.1e-10 of ω_s, ×15.3) although each
-    cycle crosses the gap's edges four times and the moment window's twice.  A step that
-    straddled a kink unlocated would lose the order there: the same runs (at 90 samples, in
-    the kernel's Python copy with ``regions`` replaced by one that reports no switch) gave
-    2.0e-7 → 1.0e-7, ×1.9.  Asserted ×12, i.e. order > 3.5."""
-    ref = simulate_shaft(gap_scene(), points=90, startup=False, method="DOP853", rtol=1e-12)
-    d = ref.values["k_rod.deformation"]
+    """RK4 at 50 and 100 steps per period against :func:`located_cycle` (DOP853 at rtol
+    3e-14, the kinks located): the error falls as h⁴ (measured 1.1e-8 → 7.1e-10 of ω_s,
+    ×15.3) although each cycle crosses the gap's edges four times and the moment window's
+    twice.  Over 16 draws of the motion tables' coefficients moved by ±1 ulp at most 7.1e-10,
+    ×15.3 at least, as against the unlocated DOP853 at rtol 1e-12 used before, whose
+    error can move by 1.2e-9 with such draws (the same call at 360 samples, one draw in 16,
+    test_rk8_clearance); this reference is also cheaper (0.65 s of CPU, that one 1.0-2.0 s).
+    A step that straddled a kink unlocated would lose the order there: the same runs (at
+    90 samples, in the kernel's Python copy with ``regions`` replaced by one that reports no
+    switch) gave 2.0e-7 → 1.0e-7, ×1.9.  Asserted ×12, i.e. order > 3.5, and 2e-9."""
+    runs = [simulate_shaft(gap_scene(), points=90, startup=False, method="rk4",
+                           steps_per_period=s) for s in (50, 100)]
+    ref, _ = located_cycle(gap_scene(), runs[0].theta, clearance=2e-6)
+    th = math.radians(START) + runs[0].theta
+    d = np.hypot(X_C0 + ref[2] - R * np.cos(th), Y_G - R * np.sin(th)) - L0
     # the rod passes through its gap twice a cycle: four edges crossed (the impacts)
     assert np.sum(np.diff(np.sign(d)) != 0) >= 2
-    err = [np.max(np.abs(simulate_shaft(gap_scene(), points=90, startup=False, method="rk4",
-                                        steps_per_period=s).speed - ref.speed)) / WS
-           for s in (50, 100)]
+    err = [np.max(np.abs(r.speed - ref[0])) / WS for r in runs]
     assert err[0] / err[1] >= 12.0
     assert err[1] <= 2e-9
 
