@@ -112,7 +112,7 @@ def one_panel(ax, figsize):
     return fig, axes[0, 0], True
 
 
-def _laid_out(made, fig, ax=None):
+def laid_out(made, fig, ax=None):
     """A Figure made here laid out and returned; a given one (its layout the caller's) or ``ax`` as is."""
     if made:
         fig.tight_layout()
@@ -535,7 +535,7 @@ def plot_transient(result, nodes=None, what: str = "x", elements=None, title: st
     for a in axes:
         a.grid(True, alpha=0.3)
     fig.suptitle(title)
-    return _laid_out(made, fig)
+    return laid_out(made, fig)
 
 
 def _nodes_panel(a, result, names, what: str) -> None:
@@ -628,7 +628,7 @@ def plot_forces(rows, omega: float, name: str = "circuit", title: str | None = N
     ax.grid(True, axis="y", which="both", alpha=0.3)
     ax.set_title(title or f"{name}: element forces at ω = {omega:.6g} rad/s "
                           f"({omega / (2 * np.pi):.4g} Hz)")
-    return _laid_out(made, fig, ax)
+    return laid_out(made, fig, ax)
 
 
 def plot_comparison(comparison, name: str = "circuit", measured: str = "measured",
@@ -676,7 +676,7 @@ def plot_comparison(comparison, name: str = "circuit", measured: str = "measured
     for ax in (ax_k, ax_p):
         ax.grid(True, which="both", alpha=0.3)
     fig.suptitle(title or f"{name}: model against {measured}")
-    return _laid_out(made, fig)
+    return laid_out(made, fig)
 
 
 def plot_study(result, params, column: str, name: str = "study", title: str | None = None, *,
@@ -715,7 +715,7 @@ def plot_study(result, params, column: str, name: str = "study", title: str | No
         _study_scatter(fig, ax, ok, bad, params[:2], column, units)
     ax.grid(True, which="both", alpha=0.3)
     ax.set_title(title or f"{name}: {column} over {len(result.rows)} points")
-    return _laid_out(made, fig, ax)
+    return laid_out(made, fig, ax)
 
 
 def _unit_label(key: str, units) -> str:
@@ -815,7 +815,7 @@ def plot_periodic(result, title: str | None = None, *, fig=None):
     fig.suptitle(title or f"{result.name}: drive {word} over one revolution at "
                           f"{result.rpm:g} rpm ({result.harmonics} harmonics, error "
                           f"{result.error:.1g})")
-    return _laid_out(made, fig)
+    return laid_out(made, fig)
 
 
 def _periodic_angle_panel(ax, result, ylabel: str) -> None:
@@ -877,7 +877,7 @@ def plot_speed_map(result, title: str | None = None, *, ax=None, min_weight: flo
     ax.legend(loc="best", fontsize="small")
     ax.set_title(title or f"{result.name}: peak drive {word} vs speed (red: k·Ω = ωₙ)",
                  pad=14)
-    return _laid_out(made, fig, ax)
+    return laid_out(made, fig, ax)
 
 
 def plot_mode(mode, name: str = "circuit", title: str | None = None, *, ax=None,
@@ -929,7 +929,7 @@ def plot_mode(mode, name: str = "circuit", title: str | None = None, *, ax=None,
                   if v.size > 8 else "center")
     ax.set(ylim=(-1.1, 1.1), xlabel="node", ylabel="velocity / largest [1]")
     ax.grid(True, alpha=0.3)
-    return _laid_out(made, fig, ax)
+    return laid_out(made, fig, ax)
 
 
 def plot_modes(found, name: str = "circuit", *, fig=None, unit: str = "rad/s"):
@@ -955,4 +955,4 @@ def plot_modes(found, name: str = "circuit", *, fig=None, unit: str = "rad/s"):
         max(6.0, 0.45 * max((len(m.shape) for m in found), default=0) + 2), 2.6 * max(len(found), 1)))
     for mode, ax in zip(found, axes[:, 0]):
         plot_mode(mode, name, ax=ax, unit=unit)
-    return _laid_out(made, fig)
+    return laid_out(made, fig)

@@ -50,7 +50,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import GeometryError
 from .fourbar import FourBar
-from .linkage_solver import _cplx, _xy, rigid_points
+from .linkage_solver import rigid_points, to_complex, to_xy
 
 __all__ = ["LinkMass", "FrameLoading", "frame_loading", "link_kinematics", "beat_up_force"]
 
@@ -218,10 +218,10 @@ def link_kinematics(fourbar: FourBar, theta: ArrayLike, omega: float, crank: Lin
     G2, G3, G4, P = (point(origin, turn, complex(*uv)) for origin, turn, uv in (
         ((0.0, 0.0, 0.0), crank_turn, crank.com), (B, coupler_turn, coupler.com),
         ((d, 0.0, 0.0), rocker_turn, rocker.com), ((d, 0.0, 0.0), rocker_turn, reed_point)))
-    return dict(A=np.zeros((n, 2)), B=_xy(B[0]), C=_xy(point(B, coupler_turn, b)[0]),
-                D=np.tile([d, 0.0], (n, 1)), G2=_xy(G2[0]), G3=_xy(G3[0]), G4=_xy(G4[0]),
-                P=_xy(P[0]), vG2=_xy(G2[1]), vG3=_xy(G3[1]), vG4=_xy(G4[1]), vP=_xy(P[1]),
-                aG2=_xy(G2[2]), aG3=_xy(G3[2]), aG4=_xy(G4[2]), phi2=theta, phi3=st.phi3,
+    return dict(A=np.zeros((n, 2)), B=to_xy(B[0]), C=to_xy(point(B, coupler_turn, b)[0]),
+                D=np.tile([d, 0.0], (n, 1)), G2=to_xy(G2[0]), G3=to_xy(G3[0]), G4=to_xy(G4[0]),
+                P=to_xy(P[0]), vG2=to_xy(G2[1]), vG3=to_xy(G3[1]), vG4=to_xy(G4[1]), vP=to_xy(P[1]),
+                aG2=to_xy(G2[2]), aG3=to_xy(G3[2]), aG4=to_xy(G4[2]), phi2=theta, phi3=st.phi3,
                 phi4=st.phi4, w2=w2, w3=w3, w4=w4, al2=al2, al3=al3, al4=al4)
 
 
@@ -294,7 +294,7 @@ def _reed_in_world(reed_force, theta, phi4):
         if F_local.shape != (n, 2):
             raise GeometryError(f"reed_force(theta) must return an array of shape ({n}, 2) "
                                 f"[N, rocker frame], got {F_local.shape}")
-    return _xy(np.exp(1j * phi4) * _cplx(F_local))     # turned from the rocker's frame by φ4
+    return to_xy(np.exp(1j * phi4) * to_complex(F_local))     # turned from the rocker's frame by φ4
 
 
 def _equilibrium(k, crank, coupler, rocker, F, g):

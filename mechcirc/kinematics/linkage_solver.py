@@ -478,12 +478,14 @@ def _path(t, dt_max, t0=0.0):
     return np.concatenate([path[:1], *pieces]), np.cumsum(n)
 
 
-def _cplx(xy):
+def to_complex(xy):
+    """Points (..., 2) as x + iy (...,)."""
     xy = np.asarray(xy, dtype=float)
     return xy[..., 0] + 1j * xy[..., 1]
 
 
-def _xy(z):
+def to_xy(z):
+    """x + iy (...,) as points (..., 2)."""
     return np.stack([z.real, z.imag], axis=-1)
 
 
@@ -497,7 +499,7 @@ def _with_ground(a, ground=0.0):
 def _point_kinematics(pl, q, qdot, qddot, parts):
     """Every point's position, velocity, acceleration and conditional-stop velocities."""
     o = pl.owner
-    s = _cplx(pl.offsets)
+    s = to_complex(pl.offsets)
 
     def ext(a):                       # per point, its owner's a (0 for the ground)
         return _with_ground(a)[:, o]
@@ -511,7 +513,7 @@ def _point_kinematics(pl, q, qdot, qddot, parts):
     # each crank's part of the velocity: the velocity at its part of the rates
     contrib = [rigid_points((0, origin(parts[:, :, j]), 0), (ext(parts[:, 2::3, j]), 0), Rs)[1]
                for j in range(parts.shape[2])]
-    return _xy(pts), _xy(vel), _xy(acc), _xy(np.array(contrib))
+    return to_xy(pts), to_xy(vel), to_xy(acc), to_xy(np.array(contrib))
 
 
 def rigid_points(origin, rates, Rs):
@@ -1114,7 +1116,7 @@ class Newton:
                 J0[2 * m + ns + k, 3 * pl.ga[k] + 2] = -1.0
         for j, ci in enumerate(pl.crank_idx):
             J0[self.c0 + j, 3 * ci + 2] = 1.0
-        self.gu, self.gs, self.bs = _cplx(pl.gu), _cplx(pl.gs), _cplx(pl.bs)
+        self.gu, self.gs, self.bs = to_complex(pl.gu), to_complex(pl.gs), to_complex(pl.bs)
         self.J0 = J0
         self.ka, self.kb = ka, kb
         # flat indices of the φ-column entries, rows (2k, 2k+1) interleaved
@@ -1122,7 +1124,7 @@ class Newton:
                                axis=-1).reshape(-1)
         self.flat_b = np.stack([(2 * kb) * n + 3 * ib + 2, (2 * kb + 1) * n + 3 * ib + 2],
                                axis=-1).reshape(-1)
-        self.sa, self.sb = _cplx(pl.sa), _cplx(pl.sb)
+        self.sa, self.sb = to_complex(pl.sa), to_complex(pl.sb)
         self.cphi = 3 * pl.crank_idx + 2
         self.tol = 1e-12 * pl.scale
 

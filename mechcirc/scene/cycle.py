@@ -350,7 +350,7 @@ def plot_cycle(cmap: CycleMap, ax=None, *, fig=None, unit: str = "rad/s"):
     if ax is not None:
         _resonance_panel(ax, cmap, deg, unit)
         return ax
-    from ..plotting import _laid_out, new_panels
+    from ..plotting import laid_out, new_panels
 
     made = fig is None
     fig, ((a1,), (a2,)) = new_panels(fig, 2, caller="plot_cycle", figsize=(8, 7), sharex=True)
@@ -360,7 +360,7 @@ def plot_cycle(cmap: CycleMap, ax=None, *, fig=None, unit: str = "rad/s"):
         a2.semilogy(deg, np.abs(cmap.Q0[:, j]), label=f"h = {h}")
     a2.set(xlabel="crank rotation from the pose θ [deg]", ylabel=f"|Q0| at ω = h·Ω [{runit}]")
     a2.legend(fontsize=7, ncol=3)
-    return _laid_out(made, fig)         # a given figure keeps the caller's layout
+    return laid_out(made, fig)         # a given figure keeps the caller's layout
 
 
 def _resonance_panel(a1, cmap: CycleMap, deg, unit: str) -> None:
