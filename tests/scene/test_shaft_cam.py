@@ -24,7 +24,7 @@ import pytest
 from mechcirc.scene import parse_scene
 from mechcirc.scene.shaft import simulate_shaft
 
-from _scene_helpers import at, located
+from reference.located import at, located
 from reference.cam_lift import cycloidal_cycle
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -85,7 +85,7 @@ def in_theta(th, Y):
 
 def located_reference(r, rtol=3e-12):
     """The hand equations over the cycle from the run ``r``'s own state at θ = 0, by
-    DOP853 at ``rtol`` with every kink at a step's end (:func:`_scene_helpers.located`):
+    DOP853 at ``rtol`` with every kink at a step's end (:func:`reference.located.located`):
     the contact's switches (:func:`side`) bisected, the law's joints (rise, dwell, return)
     stops.  Returns ([θ̇, t, y, ẏ] at ``r.theta`` (rows), the state after the cycle)."""
     x0 = np.array([r.speed[0], 0.0, r.states[0, 0], r.states[0, 1]])

@@ -11,7 +11,7 @@ import pytest
 from mechcirc.errors import MechcircError
 from mechcirc.scene import parse_scene
 from mechcirc.scene.shaft import _prepare, simulate_shaft
-from _scene_helpers import at, located
+from reference.located import at, located
 from test_shaft_elastic import (CENTRE, EXTRA, L0, R, START, WIN, WS, X_C0, Y_G, reference_cycle,
                                 scene, sympy_reference)
 
