@@ -80,3 +80,4 @@ def shipped_and_reference(name: str):
         ref = simulate_scene(scene, revolutions=2, points=720, method="DOP853", rtol=1e-12,
                              error_estimate=False)
     return scene, ref
+

@@ -7,39 +7,21 @@ decides the contact's piece by those signs and ``locate`` finds the switch on th
 interpolant, so the 8th-order stepper keeps a high order over the cycle.  The reference is
 the hand-written equations of test_shaft_cam.py integrated by DOP853 at rtol 3e-12 over the
 revolution from each run's own steady state, with the contact's switches located
-(test_shaft_rk8.located): unlocated, its error moved with the last bits of the state it
-starts from by more than the 16-step error asserted.
+(test_shaft_cam.located_reference): unlocated, its error moved with the last bits of the
+state it starts from by more than the 16-step error asserted.
 """
-
-import math
 
 import numpy as np
 from mechcirc.scene.shaft import simulate_shaft
 
-from test_shaft_cam import DC, DWELL, F0, H, KC, RET, RISE, WS, in_theta, lift, scene
-from test_shaft_rk8 import at, located
-
-
-def side(th, Y):
-    """The contact's piece of :func:`test_shaft_cam.push` at [θ̇, t, y, ẏ]: 0 no push, 1
-    k_c c + d_c ċ, 2 its damping part capped (2 k_c c)."""
-    s, s1 = lift(th)
-    c, cdot = s + F0 / KC - Y[2], s1 * Y[0] - Y[3]
-    if c <= 0 or KC * c + DC * cdot <= 0:
-        return 0
-    return 1 if DC * cdot < KC * c else 2
+from test_shaft_cam import WS, located_reference, scene
 
 
 def _speed_error(r) -> float:
     """Largest error of the shaft's speed over the cycle ``r``, relative to ω_s, against
-    the hand equations from the run's own state at θ = 0 by :func:`located` at rtol 3e-12:
-    the contact's switches bisected and the law's joints (rise, dwell, return) step ends."""
-    x0 = np.array([r.speed[0], 0.0, r.states[0, 0], r.states[0, 1]])
-    atol = 3e-15 * np.array([WS, 2 * math.pi / WS, H, H * WS])
-    ends = [RISE, RISE + DWELL, RISE + DWELL + RET, 2 * math.pi]
-    _, pieces = located(lambda th, Y: np.array(in_theta(th, Y)), 0.0, x0, ends, side,
-                        3e-12, atol)
-    return float(np.max(np.abs(at(pieces, r.theta)[0] - r.speed))) / WS
+    :func:`test_shaft_cam.located_reference` (the hand equations from the run's own state at
+    θ = 0, DOP853 at rtol 3e-12, the contact's switches located)."""
+    return float(np.max(np.abs(located_reference(r)[0][0] - r.speed))) / WS
 
 
 def test_rk8_converges_through_the_contact_release():
