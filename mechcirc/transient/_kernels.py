@@ -36,8 +36,9 @@ _leaf = decorators(bool(globals().get("_FORCE_PYTHON")), nrt=False)[1]
 B_EPS = 1e-10
 #: A step cut at a kink ends KINK_MARGIN (relative) past the root found, and is cut again
 #: if the kink lies more than KINK_RECUT of it before its end, so the law's kink stays
-#: within the last 1e-8 of a step (the MSL example's x error at rtol 1e-10: 3.9e-11
-#: against an event-located reference; 2.7e-10 with 1e-5, about 4.6e-10 with 1e-3).
+#: within the last 1e-8 of a step (the MSL example's x error at rtol 1e-10 against an
+#: event-located reference: 3.9e-11 … 1.1e-10 as the inputs' last bits move the steps,
+#: tests/test_transient_kinks.py; 2.7e-10 with 1e-5, about 4.6e-10 with 1e-3, one draw).
 #: The root is bracketed to 1e-10 of the step.
 KINK_MARGIN, KINK_RECUT = 1e-9, 1e-8
 
