@@ -55,7 +55,7 @@ from .files import Scene
 from .motion import (MotionModel, body_tables, dead_centre, function_args, function_rows,
                      hermite_table, motion_model)
 from .simfile import Motor, Shaft, kloss_motor, parse_shaft, table_motor  # noqa: F401
-from .simulation import kernels_for, max_rate
+from .simulation import _check_strokes, kernels_for, max_rate
 
 __all__ = ["Motor", "Shaft", "ShaftMotion", "kloss_motor", "table_motor", "parse_shaft",
            "simulate_shaft", "ShaftWarning"]
@@ -327,21 +327,13 @@ class _ElasticShaft:
         """Every slider with a ``stroke`` checked at every sample of the cycle (crank rotations
         ``th``, free parts' states ``z``) by the linkage's ``check_stroke``, as the
         constant-speed simulation does: its located error where a point is past its stroke."""
-        from ..kinematics.linkage_solver import check_stroke
-
         m = self.model
-        lk, L = m.scene.linkage, m.scene.length_scale
         coord = {0: self.c * th, **{i + 1: z[:, i] for i in range(self.n)}}
-
-        def at(p):
-            if p not in m.point_fn:                       # a ground point: at the pose
-                return np.broadcast_to(np.asarray(lk.pose[p], float), (th.size, 2))
-            fx, fy, i = m.point_fn[p]
-            return np.column_stack([self._function(f, coord[i])[:, 0] for f in (fx, fy)]) / L
-        for sl in lk.sliders:
-            if sl.stroke:
-                check_stroke(lk, sl, th, *(at(p) for p in (sl.point, *sl.line)),
-                             "sample of the shaft's steady cycle")
+        stroked = [sl for sl in m.scene.linkage.sliders if sl.stroke]
+        positions = {p: [self._function(f, coord[i])[:, 0] for f in (fx, fy)]
+                     for p, (fx, fy, i) in m.point_fn.items()
+                     if any(p in (sl.point, *sl.line) for sl in stroked)}
+        _check_strokes(m.scene, th, positions, "sample of the shaft's steady cycle")
 
     def _function(self, f, qs):
         """Function ``f`` of the model and its two derivatives at the coordinates ``qs``,

@@ -1021,7 +1021,8 @@ def _point_accelerations(model, theta_s, ripple, ts, ys, values, positions=None)
     return out
 
 
-def _check_strokes(scene, crank, positions: dict) -> None:
+def _check_strokes(scene, crank, positions: dict,
+                   what: str = "output sample of the simulation") -> None:
     """Every slider with a ``stroke`` checked at every output sample of the simulated
     (elastic) motion: the located error of the linkage's stroke check at the first
     crank angle where its point is past it (ground points stay at the pose)."""
@@ -1033,7 +1034,7 @@ def _check_strokes(scene, crank, positions: dict) -> None:
             P, G1, G2 = (np.column_stack(positions[p]) / L if p in positions else
                          np.broadcast_to(np.asarray(lk.pose[p], float), (crank.size, 2))
                          for p in (s.point, *s.line))
-            check_stroke(lk, s, crank, P, G1, G2, "output sample of the simulation")
+            check_stroke(lk, s, crank, P, G1, G2, what)
 
 
 def crank_angle(omega, theta_s, ripple, t):
