@@ -52,8 +52,8 @@ import numpy as np
 
 from ..errors import MechcircError, ShaftWarning, SolverError
 from .files import Scene
-from .motion import (MotionModel, body_tables, dead_centre, function_args, function_rows,
-                     hermite_table, motion_model)
+from .motion import (MotionModel, body_tables, function_args, function_rows, hermite_table,
+                     moment_centre, motion_model)
 from .simfile import Motor, Shaft, kloss_motor, parse_shaft, table_motor  # noqa: F401
 from .simulation import _check_strokes, kernels_for, max_rate
 
@@ -221,13 +221,10 @@ def rigid_model(scene: Scene, N: int = 1024):
             MW.append(m.value)
     MOI, MOF = [], []
     for mo in scene.moments:
-        c = mo.centre
-        if isinstance(c, str):
-            c = dead_centre(scene, "front" if c.startswith("front") else "back")
         FI.append([2, 0, 0])                    # the window's angle: θ itself
         FF.append([0.0, 1.0, 0.0, 0.0, 1.0, 0.0])
         MOI.append([len(FI) - 1, table(ang[mo.body], ang1[mo.body], ang2[mo.body], True)])
-        MOF.append([mo.amplitude, mo.window, mo.sigma, float(c)])
+        MOF.append([mo.amplitude, mo.window, mo.sigma, float(moment_centre(scene, mo))])
     return _one_part_model(scene, FI, FF, tabs, MI, MW, MOI, MOF)
 
 
