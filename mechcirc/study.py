@@ -165,9 +165,8 @@ class StudySpec:
         if self.analysis == "simulate":
             return head + [f"{q}_{end}" for q in _SLEY_QUANTITIES[_setting(self, "sley")[0]]
                            for end in ("min", "max")]
-        n = self.n_resonances
-        return head + [f"resonance_{i}" for i in range(1, n + 1)] + \
-            [f"antiresonance_{i}" for i in range(1, n + 1)]
+        return head + [f"{kind}_{i}" for kind in ("resonance", "antiresonance")
+                       for i in range(1, self.n_resonances + 1)]
 
 
 #: Units of the result columns [SI]; a parameter's unit is in ``StudySpec.param_units``.
