@@ -409,8 +409,7 @@ class Designs:
         alone: dict[int, list] = {}
         for d in single.tolist():
             try:
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore")
+                with warnings.catch_warnings(action="ignore"):
                     alone[d] = find_resonances(self.design(d), omega_max)
             except MechcircError as exc:
                 failed[d] = str(exc)
