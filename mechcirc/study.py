@@ -1700,7 +1700,7 @@ def _die_with_parent(parent: int) -> None:
     _LOCK_FDS.clear()
 
     if sys.platform.startswith("linux"):
-        try:
+        with contextlib.suppress(OSError, AttributeError):     # no libc or prctl: poll
             import ctypes
 
             libc = ctypes.CDLL(None, use_errno=True)
@@ -1709,8 +1709,6 @@ def _die_with_parent(parent: int) -> None:
                 if os.getppid() != parent:      # the parent died before prctl took hold
                     os._exit(1)
                 return
-        except (OSError, AttributeError):
-            pass
 
     def watch():
         import time
