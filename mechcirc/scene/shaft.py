@@ -55,7 +55,7 @@ from .files import Scene
 from .motion import (MotionModel, body_tables, function_args, function_rows, hermite_table,
                      moment_centre, motion_model)
 from .simfile import Motor, Shaft, kloss_motor, parse_shaft, table_motor  # noqa: F401
-from .simulation import _check_strokes, kernels_for, max_rate
+from .simulation import _check_strokes, kernels_for, max_rate, refined_extremes
 
 __all__ = ["Motor", "Shaft", "ShaftMotion", "kloss_motor", "table_motor", "parse_shaft",
            "simulate_shaft", "ShaftWarning"]
@@ -765,7 +765,7 @@ def _tabulate(scene, eq, sol, th0, cyc, points, Jf, motor):
     out = eq.evaluate(th, w, z)
     acc = out[:, -5]
     bodies, values = eq.samples(th, w, z, acc, out)
-    wmin, wmax = _extremes(lambda x: sol.sol(x)[0], th, w)
+    wmin, wmax = refined_extremes(lambda x: sol.sol(x)[0], th, w)
     mean = cyc / period
     return dict(name=scene.name, source=scene.source, flywheel=Jf, theta=th - th0, time=tt,
                 speed=w, acceleration=acc, motor_torque=out[:, -4].copy(),
@@ -897,16 +897,3 @@ def _balance(motor: Motor, torque: float, scale: float) -> float:
         if tq[j] > 0 >= tq[j + 1]:
             return float(brentq(lambda w: float(motor.torque(w)) - torque, ws[j], ws[j + 1]))
     return 0.5 * scale
-
-
-def _extremes(f, th, w):
-    """(min, max) of f on the samples, refined by a bounded search between neighbours."""
-    from scipy.optimize import minimize_scalar
-
-    out = []
-    for sgn, i in ((1.0, int(np.argmin(w))), (-1.0, int(np.argmax(w)))):
-        a, b = th[max(i - 1, 0)], th[min(i + 1, th.size - 1)]
-        r = minimize_scalar(lambda x, sgn=sgn: sgn * float(f(x)), bounds=(a, b), method="bounded",
-                            options={"xatol": 1e-12})
-        out.append(sgn * min(r.fun, sgn * w[i]))
-    return float(out[0]), float(out[1])
