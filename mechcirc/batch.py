@@ -616,7 +616,7 @@ def _nodal_roots(ds: Designs, omega_max):
 def _nodal_group_roots(ds: Designs, system, held, which: NDArray, omega_max):
     """:func:`_nodal_roots` for one group of designs ``which``."""
     from .resonances import (POLISH_BELOW, constraint_basis, element_patterns, held_and_released,
-                             pencil, settled, sorted_roots)
+                             pencil, settled, shared_roots_free, sorted_roots)
 
     eps = np.finfo(float).eps
     *_, G_released, G_held, damped = pencil(system)
@@ -628,12 +628,9 @@ def _nodal_group_roots(ds: Designs, system, held, which: NDArray, omega_max):
         if found is None:
             return None
         roots.append(found)
-    (s_h, e_h, c_h, ok_h, must_h), (s_r, e_r, c_r, ok_r, must_r) = roots
+    (s_h, e_h, ok_h, must_h), (s_r, e_r, ok_r, must_r) = roots
     # A mode in both problems cancels in K (resonances._cancel): the single path's.
-    with np.errstate(all="ignore"):
-        close = np.abs(s_r[:, None, :] - s_h[:, :, None]) / np.abs(s_h[:, :, None]) < \
-            1e3 * (c_h[:, :, None] + c_r[:, None, :])
-    keep = np.flatnonzero(ok_h & ok_r & ~close.any(axis=(1, 2)))
+    keep = np.flatnonzero(shared_roots_free(((s_h, e_h, ok_h), (s_r, e_r, ok_r)), damped))
     if not keep.size:
         return None
     pole, s0, e0 = held_and_released(s_h[keep], s_r[keep], e_h[keep], e_r[keep])
@@ -654,20 +651,14 @@ def _nodal_group_roots(ds: Designs, system, held, which: NDArray, omega_max):
 
 
 def _pencil_roots(Z, B: dict, S, damped: bool, omega_max):
-    """``(roots, errors, errors to compare, ok, must polish)`` on basis ``Z``; None: too big."""
+    """``(roots, errors, ok, must polish)`` on basis ``Z``; None: too big."""
     from .resonances import MAX_UNKNOWNS, MAX_UNKNOWNS_DAMPED, stacked_problem
 
     if Z.shape[1] > (MAX_UNKNOWNS_DAMPED if damped else MAX_UNKNOWNS):
         return None
     x, e, ok = stacked_problem(Z, B, S, damped, omega_max)
-    if damped:
-        # find_resonances polishes every damped root
-        must = np.ones(S.shape[0], dtype=bool)
-        # and compares held and released with the eigen-solver's estimates
-        with np.errstate(all="ignore"):
-            e_cmp = np.maximum(e, 1e2 * np.finfo(float).eps
-                               * np.nanmax(np.abs(x), axis=1, initial=1.0)[:, None] / np.abs(x))
-        return x, e, e_cmp, ok, must
+    if damped:                      # find_resonances polishes every damped root
+        return x, e, ok, np.ones(S.shape[0], dtype=bool)
     # _undamped's bound eps·λmax/λ stands (no polishing below POLISH_BELOW)
     # only for a diagonal mass matrix without massless directions.
     P = Z.T @ B["mass"] @ Z
@@ -675,7 +666,7 @@ def _pencil_roots(Z, B: dict, S, damped: bool, omega_max):
     diagonal = not np.any(P * (1 - np.eye(k)))
     mass = S @ P[:, np.arange(k), np.arange(k)] if k else np.ones((S.shape[0], 1))
     must = ~(diagonal & (mass > 1e-13 * mass.max(axis=1, initial=0.0)[:, None]).all(axis=1))
-    return 1j * x, e, e, ok, must
+    return 1j * x, e, ok, must
 
 
 def _polish_nodal(stacks: list, design: NDArray, s0: NDArray, pole: NDArray, e0: NDArray,

@@ -985,7 +985,7 @@ def batched_roots(ds, omega_max: float | None = None):
                                 omega_max)
                 for G in (G_held, G_released)]
     (w_h, e_h, _), (w_r, e_r, _) = problems
-    keep = np.flatnonzero(_without_shared_roots(problems, damped))
+    keep = np.flatnonzero(shared_roots_free(problems, damped))
     if not keep.size:
         return None
     if damped:                        # already polished (on the matrices): sort and go
@@ -995,9 +995,10 @@ def batched_roots(ds, omega_max: float | None = None):
                              omega_max)
 
 
-def _without_shared_roots(problems, damped: bool) -> np.ndarray:
-    """The designs solved in both stacked problems with no mode in both (it cancels in
-    K, :func:`_cancel`: left to the single path)."""
+def shared_roots_free(problems, damped: bool) -> np.ndarray:
+    """The designs solved in both stacked problems ((roots, errors, ok) each: held,
+    released) with no mode in both (it cancels in K, :func:`_cancel`: left to the single
+    path); undamped roots may be ω or jω alike."""
     (w_h, e_h, ok_h), (w_r, e_r, ok_r) = problems
     # Damped roots are compared with the eigen-solver's estimates
     # (eps·1e2·|s|max/|s|), as find_resonances compares them before polishing.
