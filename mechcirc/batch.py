@@ -39,6 +39,7 @@ from numpy.typing import ArrayLike, NDArray
 from .circuit import Circuit
 from .errors import InputError, MechcircError, NetlistError, NotSeriesParallelError
 from ._sweep import UNDAMPED_ZETA, drive_force, drive_velocity, peak, point_flags, singular_error
+from .resonances import design_values, template_levers
 
 __all__ = ["designs", "from_circuits", "network_shape", "Designs", "DesignSweep", "DesignResonances",
            "DesignExtremes"]
@@ -464,15 +465,6 @@ class Designs:
 _STACK_ENTRIES = 2 ** 21
 
 
-def _template_levers(ds: Designs, system, which: NDArray) -> NDArray:
-    """The designs of ``which`` whose lever ratios are the template's ``system``'s (its
-    lever stamps and constraint basis hold for them alone)."""
-    lev = {lv.name: i for i, lv in enumerate(ds.circuit.levers)}
-    for lv in system.levers:
-        which = which[ds.ratios[lev[lv.name], which] == lv.ratio]
-    return which
-
-
 def _nodal_sweep(ds: Designs, which: NDArray, omega: NDArray):
     """K and its error bound of designs ``which`` of a network that is not
     series–parallel, by the nodal path of :func:`mechcirc.nodal.solve` with the
@@ -492,7 +484,7 @@ def _nodal_sweep(ds: Designs, which: NDArray, omega: NDArray):
         system = ds.circuit.nodal
     except MechcircError:                    # each design alone says what is wrong
         return none
-    which = _template_levers(ds, system, which)
+    which = template_levers(ds, system, which)
     n, W = system.size, omega.size
     if solver(system).kind != "dense" or not which.size or not (omega > 0).all():
         return none
@@ -596,7 +588,7 @@ def _nodal_roots(ds: Designs, omega_max):
         held = nodal.held(system)
     except MechcircError:                    # each design alone says what is wrong
         return None
-    which = _template_levers(ds, system, np.flatnonzero(ds.valid))
+    which = template_levers(ds, system, np.flatnonzero(ds.valid))
     if not which.size or held.size > DENSE_LIMIT:
         return None
     group = max(1, _STACK_ENTRIES // (held.size * held.size))
@@ -696,14 +688,12 @@ def _stacked_matrices(ds: Designs, system, which: NDArray):
     D + C, M and Kₛ as dense stacks (D', n, n), from the element stamp patterns."""
     from .resonances import element_patterns
 
-    row = {e.name: i for i, e in enumerate(ds.circuit.elements)}
-    el = np.array([row[e.name] for e in system.elements], dtype=np.int64)
-    S = (ds.values[el][:, which] * ds.eta[el][:, which]).T
+    S = design_values(ds, system, which)
     B, n, nn = element_patterns(system), system.size, len(system.nodes)
     parts = []
     for kind in ("damper", "mass", "spring"):
         X = np.zeros((which.size, n, n))
-        X[:, :nn, :nn] = (S @ B[kind].reshape(len(el), -1)).reshape(-1, nn, nn)
+        X[:, :nn, :nn] = (S @ B[kind].reshape(S.shape[1], -1)).reshape(-1, nn, nn)
         parts.append(X)
     parts[0] += system.C.toarray()
     return S, parts
