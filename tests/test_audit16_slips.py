@@ -1,0 +1,28 @@
+"""Slips of a new user trying the CLI from the docs (audit16), each answered with
+what would be right (exit 2, one line, no traceback, no output file):
+
+* ``transient --waveform harmonic`` (the frequency left out) said "did you mean
+  'harmonic'?", the very word given: it now says how the kind is written.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from cli_helpers import assert_user_error
+
+REPO = Path(__file__).resolve().parents[1]
+STB = REPO / "netlists" / "stb_heald.mcir"
+
+
+@pytest.mark.parametrize("wave, form", [("harmonic", "harmonic:OMEGA"),
+                                        ("harmonic:", "harmonic:OMEGA"),
+                                        ("csv", "csv:PATH"), ("step:2", "step")])
+def test_waveform_kind_without_its_argument_says_how_it_is_written(wave, form, capsys,
+                                                                    tmp_path):
+    out = tmp_path / "t.csv"
+    err = assert_user_error(["transient", STB, "--t-end", "0.01", "--waveform", wave,
+                             "-o", out], capsys, f"--waveform {wave!r}", f"write it as {form}")
+    assert "did you mean" not in err
+    assert not out.exists()
