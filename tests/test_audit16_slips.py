@@ -2,7 +2,9 @@
 what would be right (exit 2, one line, no traceback, no output file):
 
 * ``transient --waveform harmonic`` (the frequency left out) said "did you mean
-  'harmonic'?", the very word given: it now says how the kind is written.
+  'harmonic'?", the very word given: it now says how the kind is written;
+* a massless piece nothing holds (``spring k2 B C``, B and C used by nothing else):
+  ``transient`` and ``crosscheck`` said "some nodes ..." without naming B and C.
 """
 
 from __future__ import annotations
@@ -26,3 +28,20 @@ def test_waveform_kind_without_its_argument_says_how_it_is_written(wave, form, c
                              "-o", out], capsys, f"--waveform {wave!r}", f"write it as {form}")
     assert "did you mean" not in err
     assert not out.exists()
+
+
+FLOATING = """drive V0 T 0 velocity=0.1
+mass m1 T A 2
+spring k1 A 0 1e5
+spring k2 B C 1e4
+"""
+
+
+@pytest.mark.parametrize("cmd", [["transient", "--t-end", "0.1"], ["crosscheck"]])
+def test_massless_floating_nodes_are_named(cmd, capsys, tmp_path):
+    """A spring between two nodes nothing else touches: check and sweep warn that it
+    carries no force; the time domain refused it without saying which nodes."""
+    f = tmp_path / "float.mcir"
+    f.write_text(FLOATING)
+    err = assert_user_error([cmd[0], f, *cmd[1:]], capsys, "node(s) B, C carry neither mass")
+    assert "undetermined" in err
