@@ -4,7 +4,10 @@ what would be right (exit 2, one line, no traceback, no output file):
 * ``transient --waveform harmonic`` (the frequency left out) said "did you mean
   'harmonic'?", the very word given: it now says how the kind is written;
 * a massless piece nothing holds (``spring k2 B C``, B and C used by nothing else):
-  ``transient`` and ``crosscheck`` said "some nodes ..." without naming B and C.
+  ``transient`` and ``crosscheck`` said "some nodes ..." without naming B and C;
+* ``--t-end 50ms`` and ``--rpm 600rpm`` were "not a number" (and ``transient --rpm``
+  took any float), ``frame``/``synth --omega 10Hz`` too: times, shaft speeds and
+  every ``--omega`` read the one unit grammar, as docs/units.md promises.
 """
 
 from __future__ import annotations
@@ -45,3 +48,36 @@ def test_massless_floating_nodes_are_named(cmd, capsys, tmp_path):
     f.write_text(FLOATING)
     err = assert_user_error([cmd[0], f, *cmd[1:]], capsys, "node(s) B, C carry neither mass")
     assert "undetermined" in err
+
+
+def _json(argv, capsys):
+    import json
+
+    from cli_helpers import run
+
+    status, out, err = run([*argv, "--json"], capsys)
+    assert status == 0, err
+    return json.loads(out)
+
+
+def test_times_take_units_as_frequencies_do(capsys):
+    """``--t-end 50ms`` was refused ("'50ms' is not a number") though the options that
+    take a frequency or an angle read the one unit grammar."""
+    plain = _json(["transient", STB, "--t-end", "0.05", "--dt", "0.0005"], capsys)
+    units = _json(["transient", STB, "--t-end", "50ms", "--dt", "0.5 ms"], capsys)
+    assert units["time"] == plain["time"] and len(plain["time"]) == 101
+    assert_user_error(["transient", STB, "--t-end", "50kg"], capsys, "argument --t-end",
+                      "time (s, ms, min)")
+
+
+CAM = REPO / "docs" / "examples" / "cam_drive.mcir"
+
+
+@pytest.mark.parametrize("speed", ["600rpm", "10Hz", "10 Hz"])
+def test_shaft_speeds_take_units(speed, capsys):
+    """``--rpm 600rpm`` was 'not a number' (periodic) or 'invalid float value'
+    (transient, whose --rpm 1e300 then failed on its step instead of the option)."""
+    for cmd in (["periodic", CAM], ["transient", CAM, "--t-end", "0.2"]):
+        assert _json([*cmd, "--rpm", speed], capsys) == _json([*cmd, "--rpm", "600"], capsys)
+    assert_user_error(["transient", CAM, "--t-end", "0.2", "--rpm", "1e300"], capsys,
+                      "argument --rpm: must be at most 1e+09 rpm")

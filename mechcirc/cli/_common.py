@@ -281,6 +281,10 @@ def real(*, least: float | None = None, above: float | None = None,
     return parse
 
 
+#: A shaft speed option [rev/min]: ``600``, or with a unit of frequency (``600rpm``, ``10Hz``).
+shaft_speed = real(above=0.0, most=1e9, unit="rpm", role="omega")
+
+
 def count(least: int = 1, most: int | None = None, *, why: str = ""):
     """argparse type: an integer in ``least..most`` (``1e6`` accepted); the limit is named."""
     def parse(text: str) -> int:
