@@ -7,7 +7,8 @@ what would be right (exit 2, one line, no traceback, no output file):
   ``transient`` and ``crosscheck`` said "some nodes ..." without naming B and C;
 * ``--t-end 50ms`` and ``--rpm 600rpm`` were "not a number" (and ``transient --rpm``
   took any float), ``frame``/``synth --omega 10Hz`` too: times, shaft speeds and
-  every ``--omega`` read the one unit grammar, as docs/units.md promises.
+  every ``--omega`` read the one unit grammar, as docs/units.md promises;
+* a scene's crank speed ``omega = "573 rpm"`` ([[cranks]], [simulate]) was refused.
 """
 
 from __future__ import annotations
@@ -81,3 +82,25 @@ def test_shaft_speeds_take_units(speed, capsys):
         assert _json([*cmd, "--rpm", speed], capsys) == _json([*cmd, "--rpm", "600"], capsys)
     assert_user_error(["transient", CAM, "--t-end", "0.2", "--rpm", "1e300"], capsys,
                       "argument --rpm: must be at most 1e+09 rpm")
+
+
+HEALD = (REPO / "examples" / "heald_scene.toml").read_text()
+
+
+def test_scene_shaft_speeds_take_units(capsys, tmp_path):
+    """A loom designer writes the crank speed in rpm: ``omega = "573 rpm"`` in
+    [[cranks]] and [simulate] were refused ("must be a nonzero number [rad/s]")
+    though docs/units.md says a scene value may carry a unit."""
+    from mechcirc.errors import NetlistError
+    from mechcirc.scene import parse_scene
+
+    text = HEALD.replace("omega = 60.0 ", 'omega = "600 rpm"') + '\n[simulate]\nomega = "10 Hz"\n'
+    scene = parse_scene(text, "h.toml")
+    assert scene.linkage.cranks[0].omega == scene.simulate.omega == 20 * 3.141592653589793
+    bad = HEALD.replace("omega = 60.0 ", 'omega = "600 rmp"')
+    with pytest.raises(NetlistError, match="did you mean 'rpm'") as exc:
+        parse_scene(bad, "h.toml")
+    assert exc.value.line == 60
+    f = tmp_path / "h.toml"
+    f.write_text(text.replace('"10 Hz"', '"10 kg"'))
+    assert_user_error(["scene", f, "--theta", "10"], capsys, "h.toml:", "angular frequency")
