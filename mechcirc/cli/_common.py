@@ -15,7 +15,7 @@ from pathlib import Path
 
 from ..errors import (MAX_QUOTED, MechcircError, MechcircWarning, NetlistError,
                       NotSeriesParallelError, clip, shorten)
-from ..units import (FREQUENCY_UNITS, UnitError, parse_omega, parse_quantity, parse_unit,
+from ..units import (FREQUENCY_UNITS, UnitError, parse_quantity, parse_unit,
                      split_quantity)
 
 EXIT_OK, EXIT_INTERNAL, EXIT_USER = 0, 1, 2
@@ -199,8 +199,10 @@ def quantity_type(role: str, default_unit: str | None = None):
                 value /= parse_unit(default_unit).factor
             return value
         except UnitError as exc:
+            noun = "frequency" if role == "omega" else role   # "unknown frequency unit 'x'"
+            message = exc.message.replace("unknown unit", f"unknown {noun} unit")
             raise argparse.ArgumentTypeError(
-                f"{exc.message} (expected {exc.expected}"
+                f"{message} (expected {exc.expected}"
                 + (f"; no unit means {default_unit}" if default_unit else "") + ")") from None
 
     convert.__name__ = role     # argparse names the type in its messages
@@ -237,9 +239,9 @@ def join_spaced_quantities(argv: list[str]) -> list[str]:
 # One validator for every number the command line takes: argparse calls it,
 # so a bad value is a usage error (exit 2) naming the option, before any work.
 def real(*, least: float | None = None, above: float | None = None,
-         most: float | None = None, unit: str = "", omega: bool = False,
-         finite: bool = True, role: str | None = None):
-    """argparse type: a finite number (``omega``: also ``50Hz``, ``3000rpm``) in range.
+         most: float | None = None, unit: str = "", finite: bool = True,
+         role: str | None = None):
+    """argparse type: a finite number (``role="omega"``: also ``50Hz``, ``3000rpm``) in range.
 
     ``least`` ≤ x, ``above`` < x, x ≤ ``most``; ``nan``, ``inf`` and
     overflowing literals such as ``1e400`` are refused (``finite=False``: let
@@ -249,12 +251,7 @@ def real(*, least: float | None = None, above: float | None = None,
     is 28.6… when ``unit="deg"``).
     """
     def parse(text: str) -> float:
-        if omega:
-            try:
-                value = parse_omega(text)
-            except ValueError as exc:
-                raise argparse.ArgumentTypeError(str(exc)) from None
-        elif role is not None:
+        if role is not None:
             value = quantity_type(role, unit or None)(text)
         else:
             try:

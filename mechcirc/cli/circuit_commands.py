@@ -23,11 +23,11 @@ from ._common import (NETLIST_FILE, add_command, add_handler, add_method_option,
 
 #: argparse type: an angular frequency [rad/s], or with a unit (``50Hz``, ``3000rpm``); the
 #: command checks the range (a sweep's --omega-min/--omega-max together).
-omega_value = real(omega=True, finite=False)
+omega_value = real(unit="rad/s", role="omega", finite=False)
 #: A finite angular frequency ≥ 0 (bounds of a band).
-band_omega = real(omega=True, least=0.0, unit="rad/s")
+band_omega = real(least=0.0, unit="rad/s", role="omega")
 #: The same, > 0 (one frequency at which to evaluate).
-positive_omega = real(omega=True, above=0.0, unit="rad/s")
+positive_omega = real(above=0.0, unit="rad/s", role="omega")
 
 
 omega_value.__name__ = "frequency"

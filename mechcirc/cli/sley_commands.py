@@ -33,7 +33,7 @@ def _register_simulate(sub) -> None:
     p.add_argument("scene", nargs="?", metavar="SCENE.toml",
                    help="simulate this scene file over whole revolutions (docs/scenes.md); "
                         "without it, the sley presets (--drive, --variant)")
-    p.add_argument("--omega", type=real(above=0.0, unit="rad/s", omega=True), metavar="W",
+    p.add_argument("--omega", type=real(above=0.0, unit="rad/s", role="omega"), metavar="W",
                    help="crank shaft speed [rad/s] (default the file's or the preset's)")
     p.add_argument("--start-deg", type=real(most=1e9, unit="deg", role="angle"), metavar="DEG",
                    help="scene: crank rotation from the pose at t = 0 (default the file's, "
@@ -111,7 +111,7 @@ def _register_crosscheck(sub) -> None:
                    help="a scene (.toml): cross-check it at --theta; a netlist (.mcir): "
                         "cross-check its resonances and |Q0| against its transients (the "
                         "sley options are then ignored)")
-    p.add_argument("--omega-max", type=real(above=0.0, omega=True), metavar="W",
+    p.add_argument("--omega-max", type=real(above=0.0, unit="rad/s", role="omega"), metavar="W",
                    help="with a netlist FILE: check resonances up to W [rad/s, or 50Hz] "
                         "(default 1.5 x the highest)")
     p.add_argument("--drive", choices=("one-side", "both-sides"), default="one-side")
