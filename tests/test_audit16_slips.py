@@ -8,7 +8,9 @@ what would be right (exit 2, one line, no traceback, no output file):
 * ``--t-end 50ms`` and ``--rpm 600rpm`` were "not a number" (and ``transient --rpm``
   took any float), ``frame``/``synth --omega 10Hz`` too: times, shaft speeds and
   every ``--omega`` read the one unit grammar, as docs/units.md promises;
-* a scene's crank speed ``omega = "573 rpm"`` ([[cranks]], [simulate]) was refused.
+* a scene's crank speed ``omega = "573 rpm"`` ([[cranks]], [simulate]) was refused;
+* ``crosscheck NETLIST --theta 20`` (or ``--variant``, ``--drive``; ``--omega-max``
+  with a scene or a preset) ran as if the option were not there.
 """
 
 from __future__ import annotations
@@ -104,3 +106,19 @@ def test_scene_shaft_speeds_take_units(capsys, tmp_path):
     f = tmp_path / "h.toml"
     f.write_text(text.replace('"10 Hz"', '"10 kg"'))
     assert_user_error(["scene", f, "--theta", "10"], capsys, "h.toml:", "angular frequency")
+
+
+@pytest.mark.parametrize("file, extra, needle", [
+    (STB, ["--theta", "20"], "--theta applies to a scene or a sley preset"),
+    (STB, ["--variant", "2"], "--variant applies to a sley preset"),
+    (STB, ["--drive", "both-sides"], "--drive applies to a sley preset"),
+    (REPO / "examples" / "heald_scene.toml", ["--theta", "40", "--omega-max", "500"],
+     "--omega-max applies to a netlist FILE"),
+    (REPO / "examples" / "heald_scene.toml", ["--theta", "40", "--variant", "2"],
+     "--variant applies to a sley preset"),
+    (None, ["--omega-max", "500"], "--omega-max applies to a netlist FILE")])
+def test_crosscheck_refuses_options_its_input_does_not_use(file, extra, needle, capsys):
+    """``crosscheck NETLIST --theta 20`` ran at no angle, without a word: an option
+    that does not apply to the input is refused, not ignored."""
+    assert_user_error(["crosscheck", *([file] if file else []), *extra], capsys, needle,
+                      "leave --")
