@@ -183,32 +183,6 @@ def _internal(args, exc: Exception) -> int:
     return EXIT_INTERNAL
 
 
-def quantity_type(role: str, default_unit: str | None = None):
-    """An argparse ``type=`` that reads a quantity in the one unit grammar (:mod:`mechcirc.units`).
-
-    ``role`` is what the value is (``"omega"``, ``"angle"``, ...).  Without a
-    unit the number is taken in ``default_unit`` (SI when None); with one it
-    is converted to ``default_unit`` (``--theta 0.5rad`` → 28.6… when the
-    option is in degrees).
-    """
-    def convert(text: str) -> float:
-        try:
-            value = parse_quantity(text, role)
-            parts = split_quantity(text)
-            if default_unit and parts and parts[1]:
-                value /= parse_unit(default_unit).factor
-            return value
-        except UnitError as exc:
-            noun = "frequency" if role == "omega" else role   # "unknown frequency unit 'x'"
-            message = exc.message.replace("unknown unit", f"unknown {noun} unit")
-            raise argparse.ArgumentTypeError(
-                f"{message} (expected {exc.expected}"
-                + (f"; no unit means {default_unit}" if default_unit else "") + ")") from None
-
-    convert.__name__ = role     # argparse names the type in its messages
-    return convert
-
-
 def join_spaced_quantities(argv: list[str]) -> list[str]:
     """Join ``--opt 50 Hz`` into ``--opt "50 Hz"`` so options take spaced units as netlists do.
 
@@ -246,18 +220,22 @@ def real(*, least: float | None = None, above: float | None = None,
     ``least`` ≤ x, ``above`` < x, x ≤ ``most``; ``nan``, ``inf`` and
     overflowing literals such as ``1e400`` are refused (``finite=False``: let
     the command check the range itself, with its own message).  ``role``
-    (``"angle"``, ``"length"``, ...): the value may carry a unit of the one
-    grammar (:mod:`mechcirc.units`), converted to ``unit`` (``--theta 0.5rad``
-    is 28.6… when ``unit="deg"``).
+    (``"omega"``, ``"angle"``, ``"time"``, ...): the value may carry a unit of
+    the one grammar (:mod:`mechcirc.units`), converted to ``unit``
+    (``--theta 0.5rad`` is 28.6… when ``unit="deg"``); without one it is in ``unit``.
     """
     def parse(text: str) -> float:
-        if role is not None:
-            value = quantity_type(role, unit or None)(text)
-        else:
-            try:
-                value = float(text)
-            except ValueError:
-                raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+        try:
+            value = parse_quantity(text, role) if role else float(text)
+            if role and unit and (split_quantity(text) or "?")[-1]:    # to the option's unit
+                value /= parse_unit(unit).factor
+        except UnitError as exc:
+            noun = "frequency" if role == "omega" else role    # "unknown frequency unit 'x'"
+            message = exc.message.replace("unknown unit", f"unknown {noun} unit")
+            raise argparse.ArgumentTypeError(f"{message} (expected {exc.expected}" + (
+                f"; no unit means {unit}" if unit else "") + ")") from None
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
         u = f" {unit}" if unit else ""
         if not finite:
             return value
