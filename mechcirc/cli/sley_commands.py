@@ -251,19 +251,17 @@ def cmd_simulate(args) -> int:
     return 0
 
 
-#: crosscheck's options that apply to some inputs only: (to what, the kinds of input).
-_CROSSCHECK_APPLIES = {"drive": ("a sley preset", "preset"), "variant": ("a sley preset", "preset"),
-                       "theta": ("a scene or a sley preset", "preset scene"),
-                       "netlist": ("a scene or a sley preset", "preset scene"),
-                       "omega_max": ("a netlist FILE", "netlist")}
+#: crosscheck's options that apply to some inputs only (the input's kind is a word of it).
+_CROSSCHECK_APPLIES = {"drive": "a sley preset", "variant": "a sley preset", "omega_max":
+                       "a netlist FILE", **dict.fromkeys(("theta", "netlist"), "a scene or a sley preset")}
 
 
 def cmd_crosscheck(args) -> int:
     kind = "preset" if args.file is None else "scene" if args.file.endswith(".toml") else "netlist"
     given = {"preset": "without a FILE a sley preset is checked", "scene":
              f"'{args.file}' is a scene", "netlist": f"'{args.file}' is a netlist already"}[kind]
-    for key, (where, kinds) in _CROSSCHECK_APPLIES.items():
-        if getattr(args, key) is not None and kind not in kinds:    # refused, not ignored
+    for key, where in _CROSSCHECK_APPLIES.items():
+        if getattr(args, key) is not None and kind not in where:    # refused, not ignored
             opt = "--" + key.replace("_", "-")
             raise InputError(f"{opt} applies to {where}; {given} (leave {opt} out)")
     if args.file is not None:
