@@ -10,7 +10,8 @@ what would be right (exit 2, one line, no traceback, no output file):
   every ``--omega`` read the one unit grammar, as docs/units.md promises;
 * a scene's crank speed ``omega = "573 rpm"`` ([[cranks]], [simulate]) was refused;
 * ``crosscheck NETLIST --theta 20`` (or ``--variant``, ``--drive``; ``--omega-max``
-  with a scene or a preset) ran as if the option were not there.
+  with a scene or a preset) ran as if the option were not there;
+* ``TransientResult.node("Q")`` raised "tuple.index(x): x not in tuple".
 """
 
 from __future__ import annotations
@@ -122,3 +123,17 @@ def test_crosscheck_refuses_options_its_input_does_not_use(file, extra, needle, 
     that does not apply to the input is refused, not ignored."""
     assert_user_error(["crosscheck", *([file] if file else []), *extra], capsys, needle,
                       "leave --")
+
+
+def test_transient_result_names_a_missing_node_or_element():
+    """``r.node("Q")`` raised "tuple.index(x): x not in tuple"; a Sweep says which names
+    exist and the nearest: so does a TransientResult now."""
+    import mechcirc
+    from mechcirc.transient import transient
+
+    r = transient(mechcirc.load(STB), 0.001)
+    with pytest.raises(KeyError, match=r"no node named 'Mm'; did you mean 'M'\? \(nodes: "):
+        r.node("Mm")
+    with pytest.raises(KeyError, match=r"no element named 'k44'; did you mean 'k4'\?"):
+        r.element_force("k44")
+    assert r.node("M")[0].shape == r.element_force("k4").shape == r.time.shape

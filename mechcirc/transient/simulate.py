@@ -38,6 +38,7 @@ import scipy.linalg as la
 from .. import _jit
 from ..circuit import Circuit, units_of
 from ..errors import MechcircError, NetlistError
+from ..sources import name_index
 from ..units import parse_omega
 from .model import StateSpace, incidence, backlash_elements, state_space
 
@@ -234,12 +235,12 @@ class TransientResult:
 
     def node(self, name: str) -> tuple[np.ndarray, np.ndarray | None]:
         """(x, v) of node ``name``."""
-        i = self.nodes.index(name)
+        i = name_index(name, self.nodes, "node")
         return self.x[:, i], (self.v[:, i] if self.v is not None else None)
 
     def element_force(self, name: str) -> np.ndarray:
         """Force [N] through element ``name`` (n1 → n2)."""
-        return self.force[:, self.elements.index(name)]
+        return self.force[:, name_index(name, self.elements)]
 
     def __repr__(self) -> str:
         """A short summary (the arrays are in the attributes, not in the repr)."""
