@@ -11,13 +11,16 @@ what would be right (exit 2, one line, no traceback, no output file):
 * a scene's crank speed ``omega = "573 rpm"`` ([[cranks]], [simulate]) was refused;
 * ``crosscheck NETLIST --theta 20`` (or ``--variant``, ``--drive``; ``--omega-max``
   with a scene or a preset) ran as if the option were not there;
-* ``TransientResult.node("Q")`` raised "tuple.index(x): x not in tuple".
+* ``TransientResult.node("Q")`` raised "tuple.index(x): x not in tuple";
+* ``load(params={"eta1": "abc"})`` and ``resonances(omega_max="5000")`` raised
+  Python's own ValueError/TypeError from deep inside.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 from cli_helpers import assert_user_error
 
@@ -137,3 +140,21 @@ def test_transient_result_names_a_missing_node_or_element():
     with pytest.raises(KeyError, match=r"no element named 'k44'; did you mean 'k4'\?"):
         r.element_force("k44")
     assert r.node("M")[0].shape == r.element_force("k4").shape == r.time.shape
+
+
+def test_notebook_values_of_the_wrong_type_are_named():
+    """``load(..., params={"eta1": "abc"})`` raised "could not convert string to float"
+    from inside the parser, ``resonances(omega_max="5000")`` "'>' not supported"."""
+    import mechcirc
+    from mechcirc.errors import InputError, NetlistError
+
+    with pytest.raises(NetlistError, match=r"stb_heald.mcir:\d+:\d+: error: parameter "
+                                           r"'eta1' set to 'abc' \(expected a finite number"):
+        mechcirc.load(STB, params={"eta1": "abc"})
+    with pytest.raises(NetlistError, match="parameter 'eta1' set to None"):
+        mechcirc.load(STB, params={"eta1": None})
+    c = mechcirc.load(STB, params={"eta1": "0.7"})          # a number's text, as float() reads
+    assert c.params["eta1"] == 0.7
+    with pytest.raises(InputError, match="omega_max must be > 0 rad/s or None, got '5000'"):
+        c.resonances(omega_max="5000")
+    assert len(c.resonances(omega_max=np.float32(800.0))) == 2
