@@ -264,8 +264,14 @@ def cmd_crosscheck(args) -> int:
         if getattr(args, key) is not None and kind not in where:    # refused, not ignored
             opt = "--" + key.replace("_", "-")
             raise InputError(f"{opt} applies to {where}; {given} (leave {opt} out)")
-    if args.file is not None:
-        return _crosscheck_file(args)
+    if kind == "scene":
+        from .scene_commands import cmd_crosscheck_scene
+
+        return cmd_crosscheck_scene(args)
+    if kind == "netlist":
+        from .transient_commands import cmd_crosscheck_netlist
+
+        return cmd_crosscheck_netlist(args)
     from ..sley import preset
     from ..sley.crosscheck import crosscheck_sley
     from ..sley.simulation import start_angle
@@ -284,17 +290,6 @@ def cmd_crosscheck(args) -> int:
     else:
         _print_sley_crosscheck(doc)
     return doc["summary"]["exit"]
-
-
-def _crosscheck_file(args) -> int:
-    """``crosscheck FILE``: a scene (``.toml``) or a netlist."""
-    if str(args.file).endswith(".toml"):
-        from .scene_commands import cmd_crosscheck_scene
-
-        return cmd_crosscheck_scene(args)
-    from .transient_commands import cmd_crosscheck_netlist
-
-    return cmd_crosscheck_netlist(args)
 
 
 def _print_sley_crosscheck(doc: dict) -> None:
