@@ -280,21 +280,6 @@ def number_error(value, what: str, *, positive: bool = False,
     return f"{what} must be {need}, got {brief(value)}", need
 
 
-def in_si(text: str, source: str, value, role: str | None, section: str | None, key: str,
-          occurrence: int = 0, what: str = "value"):
-    """A TOML string such as ``"600 rpm"`` read in the one unit grammar (:mod:`mechcirc.units`)
-    as ``role`` and converted to SI, or its error :func:`located`; any other value as it is."""
-    if not isinstance(value, str):
-        return value
-    from .units import UnitError, parse_quantity
-
-    try:
-        return parse_quantity(value, role, what=what)
-    except UnitError as exc:
-        raise located(text, source, exc.message, section, key, occurrence=occurrence,
-                      expected=exc.expected) from None
-
-
 def checked_number(text: str, source: str, value, what: str, section: str | None, key: str,
                    occurrence: int = 0, *, positive: bool = False, allow_zero: bool = False,
                    expected: str | None = None) -> float:

@@ -419,7 +419,8 @@ class Linkage:
 # ------------------------------------------------------------------ parsing
 # The located-TOML helpers are shared with the scene and study readers.
 from ..sources import Table, check_keys, load_toml  # noqa: E402
-from ..sources import brief, finite_number, in_si, locate, located, read_source  # noqa: E402
+from ..sources import brief, finite_number, locate, located, read_source  # noqa: E402
+from ..units import in_si  # noqa: E402
 
 #: The tables of a linkage file, declared once (see :class:`mechcirc.sources.Table`);
 #: ``[points]`` and ``[links]`` map names of the user's choice.

@@ -78,8 +78,8 @@ from ..kinematics.linkage import TABLES as LINKAGE_TABLES
 from ..kinematics.linkage import Linkage, parse_linkage
 from ..sources import (Table, brief, check_keys, checked_number, finite_number, load_toml,
                        split_lines)
-from ..sources import TOML_HEADER, in_si, is_name, located, read_source
-from ..units import parse_quantity, split_quantity
+from ..sources import TOML_HEADER, is_name, located, read_source
+from ..units import in_si, parse_quantity, split_quantity
 from .simfile import (Moment, SimulateSettings, override_moment, override_run, parse_moments,
                       parse_shaft, parse_simulate)
 

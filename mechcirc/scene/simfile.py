@@ -43,8 +43,8 @@ from functools import cache, cached_property
 from typing import Any
 
 from ..errors import MechcircError
-from ..sources import (Table, brief, check_keys, checked_number, finite_number, in_si, is_name,
-                       located)
+from ..sources import Table, brief, check_keys, checked_number, finite_number, is_name, located
+from ..units import in_si
 
 __all__ = ["Moment", "SimulateSettings", "parse_moments", "parse_simulate",
            "Motor", "Shaft", "kloss_motor", "table_motor", "parse_shaft"]
