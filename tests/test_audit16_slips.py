@@ -13,7 +13,8 @@ what would be right (exit 2, one line, no traceback, no output file):
   with a scene or a preset) ran as if the option were not there;
 * ``TransientResult.node("Q")`` raised "tuple.index(x): x not in tuple";
 * ``load(params={"eta1": "abc"})`` and ``resonances(omega_max="5000")`` raised
-  Python's own ValueError/TypeError from deep inside.
+  Python's own ValueError/TypeError from deep inside;
+* ``sweep --adaptive --points 100000`` silently started from the 20,000-point budget.
 """
 
 from __future__ import annotations
@@ -158,3 +159,13 @@ def test_notebook_values_of_the_wrong_type_are_named():
     with pytest.raises(InputError, match="omega_max must be > 0 rad/s or None, got '5000'"):
         c.resonances(omega_max="5000")
     assert len(c.resonances(omega_max=np.float32(800.0))) == 2
+
+
+def test_adaptive_starting_grid_over_the_budget_is_refused_not_cut(capsys, tmp_path):
+    """``sweep --adaptive --points 100000`` silently started from 20,000 points (the
+    budget) and printed 20070 points without a word about the 100,000 asked."""
+    out = tmp_path / "K.csv"
+    assert_user_error(["sweep", STB, "--omega-min", "10", "--omega-max", "1e4", "--adaptive",
+                       "--points", "100000", "-o", out], capsys,
+                      "--points 100000 with --adaptive", "budget of 20,000 points")
+    assert not out.exists()

@@ -302,9 +302,12 @@ def _run_sweep(args, circuit, omega):
     # By nodal analysis a point costs ~0.1 ms or more, so its budget is smaller;
     # the work (points × elements) is bounded in adaptive_sweep on either path.
     budget = MAX_ADAPTIVE_NODAL_POINTS if args.method == "nodal" else MAX_ADAPTIVE_POINTS
-    return adaptive_sweep(circuit, omega[0], omega[-1], tol=args.tol,
-                          initial=max(2, min(args.points, budget)), method=args.method,
-                          max_points=budget)
+    if args.points > budget:        # refused, not cut to the budget without a word
+        raise MechcircError(f"--points {args.points} with --adaptive is the starting grid, over "
+                            f"the adaptive budget of {budget:,} points (give fewer, or leave "
+                            f"out --adaptive for a fixed grid of up to {MAX_SWEEP_POINTS:,})")
+    return adaptive_sweep(circuit, omega[0], omega[-1], tol=args.tol, initial=args.points,
+                          method=args.method, max_points=budget)
 
 
 def _write_sweep_outputs(args, result, extra, sens, found, pk) -> int:
