@@ -14,7 +14,9 @@ what would be right (exit 2, one line, no traceback, no output file):
 * ``TransientResult.node("Q")`` raised "tuple.index(x): x not in tuple";
 * ``load(params={"eta1": "abc"})`` and ``resonances(omega_max="5000")`` raised
   Python's own ValueError/TypeError from deep inside;
-* ``sweep --adaptive --points 100000`` silently started from the 20,000-point budget.
+* ``sweep --adaptive --points 100000`` silently started from the 20,000-point budget;
+* a rotary netlist: ``check --explain`` labelled its values kg and N/m, ``formula``
+  said 'K in m/(N·s)' (``check``, ``sweep``, ``forces`` say kg·m², rad/(N·m·s)).
 """
 
 from __future__ import annotations
@@ -169,3 +171,21 @@ def test_adaptive_starting_grid_over_the_budget_is_refused_not_cut(capsys, tmp_p
                        "--points", "100000", "-o", out], capsys,
                       "--points 100000 with --adaptive", "budget of 20,000 points")
     assert not out.exists()
+
+
+ROTARY = "drive V0 T 0 velocity=2rad/s\nmass m1 T A 0.01kg*m^2\nspring k1 A 0 1e3 N*m/rad\n"
+
+
+def test_rotary_units_in_formula_and_explain(capsys, tmp_path):
+    """A rotary drive: ``check`` says kg·m² and N·m/rad, but ``check --explain`` said
+    kg and N/m and ``formula`` 'K in m/(N·s)'."""
+    from cli_helpers import run
+
+    f = tmp_path / "rot.mcir"
+    f.write_text(ROTARY)
+    status, out, err = run(["check", f, "--explain"], capsys)
+    assert status == 0, err
+    assert "0.01 kg·m²" in out and "1000 N·m/rad" in out and " N/m " not in out
+    pytest.importorskip("sympy")
+    status, out, err = run(["formula", f], capsys)
+    assert status == 0 and "K in rad/(N·m·s)" in out and "m/(N·s)" not in out, out + err
