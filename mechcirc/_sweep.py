@@ -174,13 +174,13 @@ class Sweep:
         system = self.circuit.nodal
         if name == "0":
             return np.zeros(self.omega.shape, dtype=complex)
-        name_index(name, system.nodes, "node", " on a path of the drive")
+        i = name_index(name, system.nodes, "node", " on a path of the drive")
         if "nodes" not in self._cache:
             from .nodal import solve_unit
 
             with np.errstate(all="ignore"):
                 self._cache["nodes"] = solve_unit(system, self.omega, refine=self.refine) * self.Q0[:, None]
-        return self._cache["nodes"][:, list(system.nodes).index(name)]
+        return self._cache["nodes"][:, i]
 
     def peak(self, quantity: str | None = None) -> "Peak":
         """The largest |``quantity``| over the band, located exactly; see :func:`peak`."""
