@@ -472,11 +472,11 @@ class Circuit:
         return "<pre>" + html.escape(repr(self)) + "</pre>"
 
     def element(self, name: str) -> Element | Lever:
-        """The element or lever called ``name`` (KeyError if none, naming the nearest)."""
-        from .sources import name_index
-
-        both = self.elements + self.levers
-        return both[name_index(name, [e.name for e in both])]
+        """The element or lever called ``name`` (KeyError if none)."""
+        for e in self.elements + self.levers:
+            if e.name == name:
+                return e
+        raise KeyError(f"no element named {name!r}")
 
     @property
     def nodes(self) -> list[str]:
