@@ -261,9 +261,9 @@ def _condense(Kq, Fu, Fx, Y, Bs, where):
         except la.LinAlgError:
             loose = where[0] @ Bs @ la.svd(Kss)[2][-1]     # the least stiff motion
             names = [where[1][i] for i in np.flatnonzero(abs(loose) > 1e-6 * abs(loose).max())]
-            raise TopologyError(f"node(s) {', '.join(names)} carry neither mass nor damping "
-                                "and are not held by springs (their motion is undetermined); "
-                                "give them a mass, or a spring to the frame") from None
+            raise TopologyError(f"node(s) {', '.join(names)} can move with no mass, damping or "
+                                "spring resisting (their motion is undetermined): join them to "
+                                "the frame '0' or the drive's part, or remove them") from None
         S_y = -Kss_inv @ (Bs.T @ Kq @ Y)
         S_u = Kss_inv @ (Bs.T @ Fu)
         S_x = Kss_inv @ (Bs.T @ Fx)
