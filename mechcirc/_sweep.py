@@ -167,23 +167,20 @@ class Sweep:
         By nodal analysis (:func:`mechcirc.nodal.solve_unit`, scaled by :attr:`Q0`),
         whichever method computed K; needs :attr:`circuit`.
         """
-        from .sources import did_you_mean
+        from .sources import name_index
 
         if self.circuit is None:
             raise ValueError("node_velocity needs the sweep's circuit (Sweep.circuit is None)")
         system = self.circuit.nodal
         if name == "0":
             return np.zeros(self.omega.shape, dtype=complex)
-        if name not in system.nodes:
-            raise KeyError(f"no node named {name!r} on a path of the drive"
-                           f"{did_you_mean(name, system.nodes)} (nodes: "
-                           f"{', '.join(sorted(system.nodes)[:20])})")
+        i = name_index(name, system.nodes, "node", " on a path of the drive")
         if "nodes" not in self._cache:
             from .nodal import solve_unit
 
             with np.errstate(all="ignore"):
                 self._cache["nodes"] = solve_unit(system, self.omega, refine=self.refine) * self.Q0[:, None]
-        return self._cache["nodes"][:, list(system.nodes).index(name)]
+        return self._cache["nodes"][:, i]
 
     def peak(self, quantity: str | None = None) -> "Peak":
         """The largest |``quantity``| over the band, located exactly; see :func:`peak`."""
@@ -310,11 +307,9 @@ class Sweep:
         if "elements" not in self._cache:
             self._cache["elements"] = self._element_responses()
         elements = self._cache["elements"]
-        if name not in elements:
-            from .sources import did_you_mean
+        from .sources import name_index
 
-            raise KeyError(f"no loaded element named {name!r}{did_you_mean(name, elements)} "
-                           f"(elements: {', '.join(sorted(elements))})")
+        name_index(name, elements, "loaded element")     # a KeyError naming the nearest
         return elements[name]
 
     def _element_responses(self) -> dict:

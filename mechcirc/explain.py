@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .circuit import LAWS, Circuit
+from .circuit import LAWS, Circuit, element_unit
 from .reduction import Leaf, Node, Parallel, Reflect, Series, leaves, postorder
 
 __all__ = ["Step", "explain", "explain_lines"]
@@ -116,7 +116,7 @@ def explain_lines(circuit: Circuit) -> list[str]:
     for e in circuit.elements:
         if e.name not in loaded:
             continue
-        unit = LAWS[e.kind].unit
+        unit = element_unit(e.kind, d)
         value = f"{e.value:.6g} {unit}"
         if e.eta != 1:
             value += f" · η {e.eta:.6g} = {e.value * e.eta:.6g} {unit}"

@@ -526,9 +526,13 @@ class _Parser:
                                                    ("param", name))
                 previous = None
             if name in self.overrides:
-                value = float(self.overrides[name])
+                given = self.overrides[name]
+                try:
+                    value = float(given)
+                except (TypeError, ValueError):
+                    value = math.nan        # refused below, naming what was given
                 if not math.isfinite(value):
-                    line.error(f"parameter {name!r} set to {value!r}", tok.col,
+                    line.error(f"parameter {name!r} set to {given!r}", tok.col,
                                "a finite number")
                 self.params[name] = value
                 self.expressions[("param", name)] = (Expr("num", 0, value), 1.0)

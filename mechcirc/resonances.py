@@ -209,7 +209,7 @@ def resonance_pairs(circuit: Circuit, omega_max: float | None = None,
     by :func:`_secular_held` where it applies), not the values-only one's (banded):
     unpolished, they can differ in the last bits (errors of order eps·λ_max/λ).
     """
-    if omega_max is not None and not omega_max > 0:     # NaN would report nothing, silently
+    if not (omega_max is None or isinstance(omega_max, (int, float, np.number)) and omega_max > 0):
         raise InputError(f"omega_max must be > 0 rad/s or None, got {omega_max!r}")
     if kind not in (None, "resonance", "antiresonance"):
         raise InputError(f"kind must be 'resonance', 'antiresonance' or None, got {kind!r}")

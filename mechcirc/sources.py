@@ -557,6 +557,16 @@ def unknown_key(table: Table, entry: dict, occurrence: int = 0) -> tuple[str, st
     return None
 
 
+def name_index(name: str, names, what: str = "element", where: str = "") -> int:
+    """The index of ``name`` in ``names``, else a KeyError: "no node named 'Mm' [where]; did
+    you mean 'M'? (nodes: ...)" (``what`` the kind of name, at most 20 listed)."""
+    names = list(names)
+    if name in names:
+        return names.index(name)
+    raise KeyError(f"no {what} named {name!r}{where}{did_you_mean(name, names)} ({what}s: "
+                   f"{', '.join(sorted(names)[:20])})")
+
+
 def did_you_mean(word: str, choices) -> str:
     """``"; did you mean 'x'?"`` for the nearest of ``choices`` (difflib), or ``""``.
 

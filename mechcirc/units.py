@@ -440,3 +440,18 @@ def parse_omega(text: str) -> float:
     except UnitError as exc:
         message = exc.message.replace("unknown unit", "unknown frequency unit")
         raise ValueError(f"{message} (expected {exc.expected}; no unit means rad/s)") from None
+
+
+def in_si(text: str, source: str, value, role: str | None, section: str | None, key: str,
+          occurrence: int = 0, what: str = "value"):
+    """A TOML string such as ``"600 rpm"`` read in this grammar as ``role`` and converted
+    to SI, or its error :func:`~mechcirc.sources.located` at ``key``; other values as they are."""
+    if not isinstance(value, str):
+        return value
+    from .sources import located
+
+    try:
+        return parse_quantity(value, role, what=what)
+    except UnitError as exc:
+        raise located(text, source, exc.message, section, key, occurrence=occurrence,
+                      expected=exc.expected) from None

@@ -15,7 +15,7 @@ from pathlib import Path
 
 from ..errors import (MAX_QUOTED, MechcircError, MechcircWarning, NetlistError,
                       NotSeriesParallelError, clip, shorten)
-from ..units import (FREQUENCY_UNITS, UnitError, parse_omega, parse_quantity, parse_unit,
+from ..units import (FREQUENCY_UNITS, UnitError, parse_quantity, parse_unit,
                      split_quantity)
 
 EXIT_OK, EXIT_INTERNAL, EXIT_USER = 0, 1, 2
@@ -183,30 +183,6 @@ def _internal(args, exc: Exception) -> int:
     return EXIT_INTERNAL
 
 
-def quantity_type(role: str, default_unit: str | None = None):
-    """An argparse ``type=`` that reads a quantity in the one unit grammar (:mod:`mechcirc.units`).
-
-    ``role`` is what the value is (``"omega"``, ``"angle"``, ...).  Without a
-    unit the number is taken in ``default_unit`` (SI when None); with one it
-    is converted to ``default_unit`` (``--theta 0.5rad`` → 28.6… when the
-    option is in degrees).
-    """
-    def convert(text: str) -> float:
-        try:
-            value = parse_quantity(text, role)
-            parts = split_quantity(text)
-            if default_unit and parts and parts[1]:
-                value /= parse_unit(default_unit).factor
-            return value
-        except UnitError as exc:
-            raise argparse.ArgumentTypeError(
-                f"{exc.message} (expected {exc.expected}"
-                + (f"; no unit means {default_unit}" if default_unit else "") + ")") from None
-
-    convert.__name__ = role     # argparse names the type in its messages
-    return convert
-
-
 def join_spaced_quantities(argv: list[str]) -> list[str]:
     """Join ``--opt 50 Hz`` into ``--opt "50 Hz"`` so options take spaced units as netlists do.
 
@@ -237,30 +213,29 @@ def join_spaced_quantities(argv: list[str]) -> list[str]:
 # One validator for every number the command line takes: argparse calls it,
 # so a bad value is a usage error (exit 2) naming the option, before any work.
 def real(*, least: float | None = None, above: float | None = None,
-         most: float | None = None, unit: str = "", omega: bool = False,
-         finite: bool = True, role: str | None = None):
-    """argparse type: a finite number (``omega``: also ``50Hz``, ``3000rpm``) in range.
+         most: float | None = None, unit: str = "", finite: bool = True,
+         role: str | None = None):
+    """argparse type: a finite number (``role="omega"``: also ``50Hz``, ``3000rpm``) in range.
 
     ``least`` ≤ x, ``above`` < x, x ≤ ``most``; ``nan``, ``inf`` and
     overflowing literals such as ``1e400`` are refused (``finite=False``: let
     the command check the range itself, with its own message).  ``role``
-    (``"angle"``, ``"length"``, ...): the value may carry a unit of the one
-    grammar (:mod:`mechcirc.units`), converted to ``unit`` (``--theta 0.5rad``
-    is 28.6… when ``unit="deg"``).
+    (``"omega"``, ``"angle"``, ``"time"``, ...): the value may carry a unit of
+    the one grammar (:mod:`mechcirc.units`), converted to ``unit``
+    (``--theta 0.5rad`` is 28.6… when ``unit="deg"``); without one it is in ``unit``.
     """
     def parse(text: str) -> float:
-        if omega:
-            try:
-                value = parse_omega(text)
-            except ValueError as exc:
-                raise argparse.ArgumentTypeError(str(exc)) from None
-        elif role is not None:
-            value = quantity_type(role, unit or None)(text)
-        else:
-            try:
-                value = float(text)
-            except ValueError:
-                raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+        try:
+            value = parse_quantity(text, role) if role else float(text)
+            if role and unit and (split_quantity(text) or "?")[-1]:    # to the option's unit
+                value /= parse_unit(unit).factor
+        except UnitError as exc:
+            noun = "frequency" if role == "omega" else role    # "unknown frequency unit 'x'"
+            message = exc.message.replace("unknown unit", f"unknown {noun} unit")
+            raise argparse.ArgumentTypeError(f"{message} (expected {exc.expected}" + (
+                f"; no unit means {unit}" if unit else "") + ")") from None
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
         u = f" {unit}" if unit else ""
         if not finite:
             return value
@@ -279,6 +254,10 @@ def real(*, least: float | None = None, above: float | None = None,
 
     parse.__name__ = "number"          # argparse names the type in its messages
     return parse
+
+
+#: A shaft speed option [rev/min]: ``600``, or with a unit of frequency (``600rpm``, ``10Hz``).
+shaft_speed = real(above=0.0, most=1e9, unit="rpm", role="omega")
 
 
 def count(least: int = 1, most: int | None = None, *, why: str = ""):

@@ -23,11 +23,11 @@ from ._common import (NETLIST_FILE, add_command, add_handler, add_method_option,
 
 #: argparse type: an angular frequency [rad/s], or with a unit (``50Hz``, ``3000rpm``); the
 #: command checks the range (a sweep's --omega-min/--omega-max together).
-omega_value = real(omega=True, finite=False)
+omega_value = real(unit="rad/s", role="omega", finite=False)
 #: A finite angular frequency ≥ 0 (bounds of a band).
-band_omega = real(omega=True, least=0.0, unit="rad/s")
+band_omega = real(least=0.0, unit="rad/s", role="omega")
 #: The same, > 0 (one frequency at which to evaluate).
-positive_omega = real(omega=True, above=0.0, unit="rad/s")
+positive_omega = real(above=0.0, unit="rad/s", role="omega")
 
 
 omega_value.__name__ = "frequency"
@@ -302,9 +302,12 @@ def _run_sweep(args, circuit, omega):
     # By nodal analysis a point costs ~0.1 ms or more, so its budget is smaller;
     # the work (points × elements) is bounded in adaptive_sweep on either path.
     budget = MAX_ADAPTIVE_NODAL_POINTS if args.method == "nodal" else MAX_ADAPTIVE_POINTS
-    return adaptive_sweep(circuit, omega[0], omega[-1], tol=args.tol,
-                          initial=max(2, min(args.points, budget)), method=args.method,
-                          max_points=budget)
+    if args.points > budget:        # refused, not cut to the budget without a word
+        raise MechcircError(f"--points {args.points} with --adaptive is the starting grid, over "
+                            f"the adaptive budget of {budget:,} points (give fewer, or leave "
+                            f"out --adaptive for a fixed grid of up to {MAX_SWEEP_POINTS:,})")
+    return adaptive_sweep(circuit, omega[0], omega[-1], tol=args.tol, initial=args.points,
+                          method=args.method, max_points=budget)
 
 
 def _write_sweep_outputs(args, result, extra, sens, found, pk) -> int:

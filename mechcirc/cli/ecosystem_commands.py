@@ -183,6 +183,7 @@ def cmd_compare(args) -> int:
 
 
 def cmd_formula(args) -> int:
+    from ..circuit import units_of
     from ..interop.formula import formula_and_values
 
     circuit, warns = load_with_warnings(args.file)
@@ -199,7 +200,7 @@ def cmd_formula(args) -> int:
             text = f"K(omega) = {K}"
     print(text)
     if not args.numeric and values:
-        print("where (SI values; K in m/(N·s), omega in rad/s):")
+        print(f"where (SI values; K in {units_of(circuit.drive)['K']}, omega in rad/s):")
         for sym in sorted(values, key=lambda s: s.name):
             print(f"  {sym.name} = {values[sym]} ({float(values[sym]):g})")
     return 0

@@ -11,7 +11,7 @@ from ..errors import InputError, MechcircError, NetlistError
 from ..units import convert_frequency
 from ._common import (MAX_LENGTH, MAX_OMEGA, add_command, add_handler, add_output_option,
                       add_plot_option, check_output_paths, count, print_json, print_written,
-                      real, save_figure, write_outputs)
+                      real, save_figure, shaft_speed, write_outputs)
 
 
 def register(sub) -> None:
@@ -34,7 +34,7 @@ def _register_fourbar(sub) -> None:
         "Example: mechcirc fourbar --crank 29 --coupler 37 --rocker 188 --frame 189 --omega 100 "
         "--plot fourbar.png")
     _add_lengths(p, "(any unit)")
-    p.add_argument("--omega", type=real(most=MAX_OMEGA, unit="rad/s", omega=True), metavar="W",
+    p.add_argument("--omega", type=real(most=MAX_OMEGA, unit="rad/s", role="omega"), metavar="W",
                    help="crank speed [rad/s] for ε4T = ν·ω²")
     p.add_argument("--branch", type=int, choices=(1, -1), default=1,
                    help="assembly mode (default +1; see docs/kinematics.md)")
@@ -69,9 +69,9 @@ def _register_frame(sub) -> None:
     p.add_argument("--unit", choices=("mm", "m"), default="mm",
                    help="length unit of lengths, centres of mass and the reed point (default mm)")
     speed = p.add_mutually_exclusive_group(required=True)
-    speed.add_argument("--rpm", type=real(above=0.0, most=1e9, unit="rpm"), metavar="N",
+    speed.add_argument("--rpm", type=shaft_speed, metavar="N",
                        help="crank speed [rev/min]")
-    speed.add_argument("--omega", type=real(above=0.0, most=MAX_OMEGA, unit="rad/s"),
+    speed.add_argument("--omega", type=real(above=0.0, most=MAX_OMEGA, unit="rad/s", role="omega"),
                        metavar="W", help="crank speed [rad/s]")
     p.add_argument("--mass", type=_vector("--mass", 3, nonneg=True), default=(0.0, 0.0, 0.0),
                    metavar="M2,M3,M4", help="masses of crank, coupler, rocker (with sley and "
@@ -148,7 +148,7 @@ def _register_synth_export(p) -> None:
     """``synth --export``: the directory and what goes into the exported files."""
     p.add_argument("--export", metavar="DIR",
                    help="write DIR/design_K.linkage.toml and DIR/design_K.scene.toml per design")
-    p.add_argument("--omega", type=real(above=0.0, most=MAX_OMEGA, unit="rad/s"),
+    p.add_argument("--omega", type=real(above=0.0, most=MAX_OMEGA, unit="rad/s", role="omega"),
                    default=100.0, metavar="W", help="crank speed in exported files [rad/s] "
                    "(default 100)")
     for name, what, default in (("sley-inertia", "I4P, sley [kg·m²]", 0.35),

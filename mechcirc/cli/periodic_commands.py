@@ -10,7 +10,7 @@ from ..units import in_unit
 from ._common import (add_command, add_handler, add_method_option, add_output_option,
                       add_plot_option, add_unit_option, check_names, check_output_paths,
                       count, load_with_warnings, print_json, print_written, real, scene_theta,
-                      warning_lines, write_outputs)
+                      shaft_speed, warning_lines, write_outputs)
 
 
 def register(sub) -> None:
@@ -30,11 +30,11 @@ def register(sub) -> None:
     p.add_argument("--theta", type=real(most=1e9, unit="deg", role="angle"), metavar="DEG",
                    help="scene: the crank rotation [deg] at which it is linearised "
                         "(default: the file's [analysis] theta_deg)")
-    p.add_argument("--rpm", type=real(above=0.0, most=1e9, unit="rpm"), metavar="RPM",
+    p.add_argument("--rpm", type=shaft_speed, metavar="RPM",
                    help="machine speed [rev/min]")
-    p.add_argument("--rpm-min", type=real(above=0.0, most=1e9, unit="rpm"), metavar="A",
+    p.add_argument("--rpm-min", type=shaft_speed, metavar="A",
                    help="lowest speed of the speed map [rev/min]")
-    p.add_argument("--rpm-max", type=real(above=0.0, most=1e9, unit="rpm"), metavar="B",
+    p.add_argument("--rpm-max", type=shaft_speed, metavar="B",
                    help="highest speed of the speed map [rev/min]")
     p.add_argument("--points", type=count(2, 100_000), default=200, metavar="N",
                    help="speeds of the map (default 200)")

@@ -130,9 +130,10 @@ def cmd_scene(args) -> int:
 
 def _print_scene(args, scene, model, found, reduced, drawn: bool) -> None:
     """What ``mechcirc scene --theta`` prints without ``--json``."""
-    unit = "rad/s" if model.rotational else "m/s"
+    units = "rotary drive: v in rad/s, Q in N·m" if model.rotational else \
+        "translational drive: v in m/s, Q in N"
     print(f"{args.file}: scene {scene.name!r} at θ = {args.theta:g}° "
-          f"(drive {unit}, drive ratio r0 = {model.drive_ratio:.6g})")
+          f"({units}; drive ratio r0 = {model.drive_ratio:.6g})")
     for node, part in model.parts.items():
         print(f"  node {node}: {', '.join(part)}")
     print("velocity ratios to the drive:")
@@ -442,11 +443,7 @@ def _shaft(args, scene) -> int:
 # ------------------------------------------------------------- crosscheck SCENE.toml
 def cmd_crosscheck_scene(args) -> int:
     """``mechcirc crosscheck SCENE.toml --theta DEG``."""
-    if not args.file.endswith(".toml"):
-        raise MechcircError(f"{args.file}: crosscheck reads a scene file (.toml) here")
-    if args.netlist:
-        check_output_paths(args.netlist, reads=(args.file,), table="the netlist",
-                           option="--netlist")
+    check_output_paths(args.netlist, reads=(args.file,), table="the netlist", option="--netlist")
     from ..scene import build, load_scene
     from ..scene.crosscheck import crosscheck_scene
 

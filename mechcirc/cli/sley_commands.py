@@ -33,7 +33,7 @@ def _register_simulate(sub) -> None:
     p.add_argument("scene", nargs="?", metavar="SCENE.toml",
                    help="simulate this scene file over whole revolutions (docs/scenes.md); "
                         "without it, the sley presets (--drive, --variant)")
-    p.add_argument("--omega", type=real(above=0.0, unit="rad/s", omega=True), metavar="W",
+    p.add_argument("--omega", type=real(above=0.0, unit="rad/s", role="omega"), metavar="W",
                    help="crank shaft speed [rad/s] (default the file's or the preset's)")
     p.add_argument("--start-deg", type=real(most=1e9, unit="deg", role="angle"), metavar="DEG",
                    help="scene: crank rotation from the pose at t = 0 (default the file's, "
@@ -96,7 +96,7 @@ def _sley_arguments(p) -> None:
 
 def _register_crosscheck(sub) -> None:
     p = add_command(
-        sub, "crosscheck", "linearised sley against its mechanical circuit (resonances, Q0)",
+        sub, "crosscheck", "a netlist, scene or sley preset's circuit against its time domain",
         "(a) resonances (K = 0) of the sley's netlist at crank angle theta against the "
         "eigenfrequencies of the linearised equations; (b) ringing of the sley after the beat-up "
         "pulse against the predicted damped frequency; (c) harmonic forcing of the linear model "
@@ -109,14 +109,14 @@ def _register_crosscheck(sub) -> None:
         "transient command)")
     p.add_argument("file", nargs="?", metavar="FILE",
                    help="a scene (.toml): cross-check it at --theta; a netlist (.mcir): "
-                        "cross-check its resonances and |Q0| against its transients (the "
-                        "sley options are then ignored)")
-    p.add_argument("--omega-max", type=real(above=0.0, omega=True), metavar="W",
+                        "cross-check its resonances and |Q0| against its transients")
+    p.add_argument("--omega-max", type=real(above=0.0, unit="rad/s", role="omega"), metavar="W",
                    help="with a netlist FILE: check resonances up to W [rad/s, or 50Hz] "
                         "(default 1.5 x the highest)")
-    p.add_argument("--drive", choices=("one-side", "both-sides"), default="one-side")
-    p.add_argument("--variant", type=int, default=3, choices=range(1, 8), metavar="N",
-                   help="variant 1-7 (default 3)")
+    p.add_argument("--drive", choices=("one-side", "both-sides"),
+                   help="sley preset: the drive's layout (default one-side)")
+    p.add_argument("--variant", type=int, choices=range(1, 8), metavar="N",
+                   help="sley preset: variant 1-7 (default 3)")
     p.add_argument("--theta", type=real(most=1e9, unit="deg", role="angle"), metavar="DEG",
                    help="crank angle of the linearisation [deg] (default: the start angle, "
                         "where the sley's rigid acceleration is zero)")
@@ -251,15 +251,33 @@ def cmd_simulate(args) -> int:
     return 0
 
 
+#: crosscheck's options that apply to some inputs only (the input's kind is a word of it).
+_CROSSCHECK_APPLIES = {"drive": "a sley preset", "variant": "a sley preset", "omega_max":
+                       "a netlist FILE", **dict.fromkeys(("theta", "netlist"), "a scene or a sley preset")}
+
+
 def cmd_crosscheck(args) -> int:
-    if args.file is not None:
-        return _crosscheck_file(args)
+    kind = "preset" if args.file is None else "scene" if args.file.endswith(".toml") else "netlist"
+    given = {"preset": "without a FILE a sley preset is checked", "scene":
+             f"'{args.file}' is a scene", "netlist": f"'{args.file}' is a netlist already"}[kind]
+    for key, where in _CROSSCHECK_APPLIES.items():
+        if getattr(args, key) is not None and kind not in where:    # refused, not ignored
+            opt = "--" + key.replace("_", "-")
+            raise InputError(f"{opt} applies to {where}; {given} (leave {opt} out)")
+    if kind == "scene":
+        from .scene_commands import cmd_crosscheck_scene
+
+        return cmd_crosscheck_scene(args)
+    if kind == "netlist":
+        from .transient_commands import cmd_crosscheck_netlist
+
+        return cmd_crosscheck_netlist(args)
     from ..sley import preset
     from ..sley.crosscheck import crosscheck_sley
     from ..sley.simulation import start_angle
 
     check_output_paths(args.netlist, table="the netlist", option="--netlist")
-    params = preset(args.drive, args.variant)
+    params = preset(args.drive or "one-side", args.variant or 3)
     theta0 = start_angle(params) if args.theta is None else math.radians(args.theta)
     from ..progress import Progress
 
@@ -272,21 +290,6 @@ def cmd_crosscheck(args) -> int:
     else:
         _print_sley_crosscheck(doc)
     return doc["summary"]["exit"]
-
-
-def _crosscheck_file(args) -> int:
-    """``crosscheck FILE``: a scene (``.toml``) or a netlist."""
-    if str(args.file).endswith(".toml"):
-        from .scene_commands import cmd_crosscheck_scene
-
-        return cmd_crosscheck_scene(args)
-    if args.netlist:        # nothing is built from a netlist FILE: refuse, not ignore
-        raise InputError(f"--netlist writes the netlist built from a scene or a sley "
-                         f"preset; '{args.file}' is a netlist already, and it is "
-                         "the one checked (leave out --netlist)")
-    from .transient_commands import cmd_crosscheck_netlist
-
-    return cmd_crosscheck_netlist(args)
 
 
 def _print_sley_crosscheck(doc: dict) -> None:

@@ -8,7 +8,9 @@ import sys
 from ..errors import MechcircError
 from ._common import (add_command, add_handler, add_output_option, add_plot_option,
                       check_names, check_output_paths, print_json, print_written, real,
-                      save_figure)
+                      save_figure, shaft_speed)
+
+seconds = real(above=0.0, unit="s", role="time")
 
 
 def register(sub) -> None:
@@ -23,15 +25,16 @@ def register(sub) -> None:
         "  mechcirc transient examples/msl_backlash.mcir --t-end 1 --dt 1e-3 -o msl.csv\n"
         "  mechcirc transient netlists/stb_heald.mcir --t-end 0.05 --waveform harmonic:300 --json",
         file="netlist (.mcir); a drive line is optional")
-    p.add_argument("--t-end", type=real(above=0.0), required=True, metavar="T", help="end time [s]")
-    p.add_argument("--dt", type=real(above=0.0), metavar="DT",
+    p.add_argument("--t-end", type=seconds, required=True, metavar="T",
+                   help="end time [s]; or with a unit: 50ms")
+    p.add_argument("--dt", type=seconds, metavar="DT",
                    help="output step [s] (default t_end/2000; 40 per period of a harmonic "
                         "drive)")
     p.add_argument("--waveform", metavar="WAVE",
                    help="the drive's waveform in time: harmonic:OMEGA (rad/s, or with a unit: 50Hz), step, impulse, "
                         "csv:PATH (time,value samples, interpolated linearly) or rest "
                         "(default: the drive stays at rest)")
-    p.add_argument("--rpm", type=float, metavar="RPM",
+    p.add_argument("--rpm", type=shaft_speed, metavar="RPM",
                    help="shaft speed [rev/min] of a drive given by its motion over a "
                         "revolution (drive ... motion=LAW or motion=TABLE.csv); required "
                         "for such a drive")

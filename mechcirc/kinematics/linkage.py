@@ -420,6 +420,7 @@ class Linkage:
 # The located-TOML helpers are shared with the scene and study readers.
 from ..sources import Table, check_keys, load_toml  # noqa: E402
 from ..sources import brief, finite_number, locate, located, read_source  # noqa: E402
+from ..units import in_si  # noqa: E402
 
 #: The tables of a linkage file, declared once (see :class:`mechcirc.sources.Table`);
 #: ``[points]`` and ``[links]`` map names of the user's choice.
@@ -601,7 +602,7 @@ def _read_cranks(raw_cranks: list, links, ground_pts, text: str, source: str) ->
             raise located(text, source, f"crank {lname!r} needs exactly one ground pivot among its "
                        f"points (found {pivots or 'none'}); name it with pivot = \"…\"",
                        "cranks", "pivot" if "pivot" in c else "link", occurrence=n)
-        omega = c.get("omega")
+        omega = in_si(text, source, c.get("omega"), "omega", "cranks", "omega", n)
         if not finite_number(omega) or omega == 0:
             raise located(text, source, f"crank {lname!r}: omega must be a nonzero number "
                        f"[rad/s], got {brief(omega)}", "cranks", "omega" if "omega" in c else "link",

@@ -79,7 +79,7 @@ from ..kinematics.linkage import Linkage, parse_linkage
 from ..sources import (Table, brief, check_keys, checked_number, finite_number, load_toml,
                        split_lines)
 from ..sources import TOML_HEADER, is_name, located, read_source
-from ..units import UnitError, parse_quantity, split_quantity
+from ..units import in_si, parse_quantity, split_quantity
 from .simfile import (Moment, SimulateSettings, override_moment, override_run, parse_moments,
                       parse_shaft, parse_simulate)
 
@@ -349,18 +349,11 @@ def _named(value, names) -> TypeGuard[str]:
 
 
 def _number(text, source, value, what, table, key, n, *, positive=True, allow_zero=False):
-    if isinstance(value, str):      # "2 kN/mm", "500 g", "30 deg": the one unit grammar
-        role = next((r for u, r in _ROLE_OF.items() if what.endswith(u)), None)
-        try:
-            converted = parse_quantity(value, role, what=what)
-        except UnitError as exc:
-            raise located(text, source, exc.message, table, key, occurrence=n,
-                       expected=exc.expected) from None
-        parts = split_quantity(value)
-        if role == "angle" and parts and parts[1]:
-            converted = math.degrees(converted)
-        value = converted
-    return checked_number(text, source, value, what, table, key, n, positive=positive,
+    role = next((r for u, r in _ROLE_OF.items() if what.endswith(u)), None)
+    converted = in_si(text, source, value, role, table, key, n, what)   # "2 kN/mm", "30 deg"
+    if role == "angle" and isinstance(value, str) and (split_quantity(value) or "?")[-1]:
+        converted = math.degrees(converted)
+    return checked_number(text, source, converted, what, table, key, n, positive=positive,
                           allow_zero=allow_zero)
 
 

@@ -44,6 +44,7 @@ from typing import Any
 
 from ..errors import MechcircError
 from ..sources import Table, brief, check_keys, checked_number, finite_number, is_name, located
+from ..units import in_si
 
 __all__ = ["Moment", "SimulateSettings", "parse_moments", "parse_simulate",
            "Motor", "Shaft", "kloss_motor", "table_motor", "parse_shaft"]
@@ -186,6 +187,8 @@ def parse_simulate(text, source, table, scene) -> SimulateSettings:
                                   expected='eps2P = "crank.acceleration"')
             kw["aliases"] = dict(v)
         elif k in ("omega", "steps_per_period"):
+            if k == "omega":        # "600 rpm", "10 Hz"
+                v = in_si(text, source, v, "omega", "simulate", k)
             kw[k] = checked_number(text, source, v, f"[simulate] {k}", "simulate", k, positive=True)
         elif k == "start_deg":
             kw[k] = checked_number(text, source, v, "[simulate] start_deg", "simulate", k)

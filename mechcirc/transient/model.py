@@ -151,7 +151,7 @@ def state_space(circuit: Circuit, *, linearise: bool = False) -> StateSpace:
     Bd, Bs = _split(Dq, B0)
     n1, n0, ns = B1.shape[1], Bd.shape[1], Bs.shape[1]
     Y = np.hstack([B1, Bd])
-    Ky, Fyu, Fyx, S_y, S_u, S_x = _condense(Kq, Fu, Fx, Y, Bs)
+    Ky, Fyu, Fyx, S_y, S_u, S_x = _condense(Kq, Fu, Fx, Y, Bs, (T, nodes))
     My = Y.T @ Mq @ Y
     Dy = Y.T @ Dq @ Y
     A, Bv, M11_inv = _dynamics(My, Dy, Ky, Fyu, Fyx, n1, n0, vel)
@@ -246,10 +246,11 @@ def _particular(M: np.ndarray, Cons: np.ndarray, name: str) -> np.ndarray:
     return p
 
 
-def _condense(Kq, Fu, Fx, Y, Bs):
+def _condense(Kq, Fu, Fx, Y, Bs, where):
     """Static condensation of the coordinates ``Bs`` (neither mass nor damping).
 
-    Returns Ky, Fyu, Fyx on the kept coordinates ``Y`` and s = S_y y + S_u u + S_x X.
+    Returns Ky, Fyu, Fyx on the kept coordinates ``Y`` and s = S_y y + S_u u + S_x X;
+    ``where`` = (T, nodes) maps coordinates to node names for the error.
     """
     if Bs.shape[1]:
         Kss = Bs.T @ Kq @ Bs
@@ -258,8 +259,11 @@ def _condense(Kq, Fu, Fx, Y, Bs):
             if not np.all(np.isfinite(Kss_inv)) or np.linalg.cond(Kss) > 1e13:
                 raise la.LinAlgError
         except la.LinAlgError:
-            raise TopologyError("some nodes carry neither mass nor damping and are not held "
-                                "by springs (their motion is undetermined)") from None
+            loose = where[0] @ Bs @ la.svd(Kss)[2][-1]     # the least stiff motion
+            names = [where[1][i] for i in np.flatnonzero(abs(loose) > 1e-6 * abs(loose).max())]
+            raise TopologyError(f"node(s) {', '.join(names)} can move with no mass, damping or "
+                                "spring resisting (their motion is undetermined): join them to "
+                                "the frame '0' or the drive's part, or remove them") from None
         S_y = -Kss_inv @ (Bs.T @ Kq @ Y)
         S_u = Kss_inv @ (Bs.T @ Fu)
         S_x = Kss_inv @ (Bs.T @ Fx)

@@ -38,6 +38,7 @@ import scipy.linalg as la
 from .. import _jit
 from ..circuit import Circuit, units_of
 from ..errors import MechcircError, NetlistError
+from ..sources import name_index
 from ..units import parse_omega
 from .model import StateSpace, incidence, backlash_elements, state_space
 
@@ -140,20 +141,22 @@ def parse_waveform(text: str | None) -> Waveform:
         return Waveform("rest")
     if text in ("step", "impulse"):
         return Waveform(text)
-    if text.startswith("harmonic:"):
+    kind, _, arg = text.partition(":")
+    if kind == "harmonic" and arg:
         try:
-            omega = parse_omega(text[len("harmonic:"):])
+            omega = parse_omega(arg)
         except Exception as exc:  # noqa: BLE001 - reported as a user error
             raise MechcircError(f"--waveform {text!r}: {exc}") from None
         if not (math.isfinite(omega) and omega > 0):
             raise MechcircError(f"--waveform {text!r}: ω must be a finite number > 0 [rad/s]")
         return Waveform("harmonic", omega=omega)
-    if text.startswith("csv:"):
-        return read_csv_drive(text[4:])
+    if kind == "csv" and arg:
+        return read_csv_drive(arg)
     from ..sources import did_you_mean
 
-    kind = text.partition(":")[0]
-    hint = did_you_mean(kind, ("harmonic", "step", "impulse", "csv", "rest"))
+    forms = {"harmonic": "harmonic:OMEGA (rad/s, or with a unit: harmonic:50Hz)",
+             "csv": "csv:PATH", "step": "step", "impulse": "impulse", "rest": "rest"}
+    hint = f"; write it as {forms[kind]}" if kind in forms else did_you_mean(kind, forms)
     raise MechcircError(f"--waveform {text!r} is not understood (expected harmonic:OMEGA, "
                         f"step, impulse, csv:PATH or rest){hint}")
 
@@ -232,12 +235,12 @@ class TransientResult:
 
     def node(self, name: str) -> tuple[np.ndarray, np.ndarray | None]:
         """(x, v) of node ``name``."""
-        i = self.nodes.index(name)
+        i = name_index(name, self.nodes, "node")
         return self.x[:, i], (self.v[:, i] if self.v is not None else None)
 
     def element_force(self, name: str) -> np.ndarray:
         """Force [N] through element ``name`` (n1 → n2)."""
-        return self.force[:, self.elements.index(name)]
+        return self.force[:, name_index(name, self.elements)]
 
     def __repr__(self) -> str:
         """A short summary (the arrays are in the attributes, not in the repr)."""
