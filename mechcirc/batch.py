@@ -39,6 +39,7 @@ from numpy.typing import ArrayLike, NDArray
 from .circuit import Circuit
 from .errors import InputError, MechcircError, NetlistError, NotSeriesParallelError
 from ._sweep import UNDAMPED_ZETA, drive_force, drive_velocity, peak, point_flags, singular_error
+from .resonances import design_values, template_levers
 
 __all__ = ["designs", "from_circuits", "network_shape", "Designs", "DesignSweep", "DesignResonances",
            "DesignExtremes"]
@@ -409,8 +410,7 @@ class Designs:
         alone: dict[int, list] = {}
         for d in single.tolist():
             try:
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore")
+                with warnings.catch_warnings(action="ignore"):
                     alone[d] = find_resonances(self.design(d), omega_max)
             except MechcircError as exc:
                 failed[d] = str(exc)
@@ -465,15 +465,6 @@ class Designs:
 _STACK_ENTRIES = 2 ** 21
 
 
-def _template_levers(ds: Designs, system, which: NDArray) -> NDArray:
-    """The designs of ``which`` whose lever ratios are the template's ``system``'s (its
-    lever stamps and constraint basis hold for them alone)."""
-    lev = {lv.name: i for i, lv in enumerate(ds.circuit.levers)}
-    for lv in system.levers:
-        which = which[ds.ratios[lev[lv.name], which] == lv.ratio]
-    return which
-
-
 def _nodal_sweep(ds: Designs, which: NDArray, omega: NDArray):
     """K and its error bound of designs ``which`` of a network that is not
     series–parallel, by the nodal path of :func:`mechcirc.nodal.solve` with the
@@ -493,7 +484,7 @@ def _nodal_sweep(ds: Designs, which: NDArray, omega: NDArray):
         system = ds.circuit.nodal
     except MechcircError:                    # each design alone says what is wrong
         return none
-    which = _template_levers(ds, system, which)
+    which = template_levers(ds, system, which)
     n, W = system.size, omega.size
     if solver(system).kind != "dense" or not which.size or not (omega > 0).all():
         return none
@@ -597,7 +588,7 @@ def _nodal_roots(ds: Designs, omega_max):
         held = nodal.held(system)
     except MechcircError:                    # each design alone says what is wrong
         return None
-    which = _template_levers(ds, system, np.flatnonzero(ds.valid))
+    which = template_levers(ds, system, np.flatnonzero(ds.valid))
     if not which.size or held.size > DENSE_LIMIT:
         return None
     group = max(1, _STACK_ENTRIES // (held.size * held.size))
@@ -617,7 +608,7 @@ def _nodal_roots(ds: Designs, omega_max):
 def _nodal_group_roots(ds: Designs, system, held, which: NDArray, omega_max):
     """:func:`_nodal_roots` for one group of designs ``which``."""
     from .resonances import (POLISH_BELOW, constraint_basis, element_patterns, held_and_released,
-                             pencil, settled, sorted_roots)
+                             pencil, settled, shared_roots_free, sorted_roots)
 
     eps = np.finfo(float).eps
     *_, G_released, G_held, damped = pencil(system)
@@ -629,12 +620,9 @@ def _nodal_group_roots(ds: Designs, system, held, which: NDArray, omega_max):
         if found is None:
             return None
         roots.append(found)
-    (s_h, e_h, c_h, ok_h, must_h), (s_r, e_r, c_r, ok_r, must_r) = roots
+    (s_h, e_h, ok_h, must_h), (s_r, e_r, ok_r, must_r) = roots
     # A mode in both problems cancels in K (resonances._cancel): the single path's.
-    with np.errstate(all="ignore"):
-        close = np.abs(s_r[:, None, :] - s_h[:, :, None]) / np.abs(s_h[:, :, None]) < \
-            1e3 * (c_h[:, :, None] + c_r[:, None, :])
-    keep = np.flatnonzero(ok_h & ok_r & ~close.any(axis=(1, 2)))
+    keep = np.flatnonzero(shared_roots_free(((s_h, e_h, ok_h), (s_r, e_r, ok_r)), damped))
     if not keep.size:
         return None
     pole, s0, e0 = held_and_released(s_h[keep], s_r[keep], e_h[keep], e_r[keep])
@@ -655,20 +643,14 @@ def _nodal_group_roots(ds: Designs, system, held, which: NDArray, omega_max):
 
 
 def _pencil_roots(Z, B: dict, S, damped: bool, omega_max):
-    """``(roots, errors, errors to compare, ok, must polish)`` on basis ``Z``; None: too big."""
+    """``(roots, errors, ok, must polish)`` on basis ``Z``; None: too big."""
     from .resonances import MAX_UNKNOWNS, MAX_UNKNOWNS_DAMPED, stacked_problem
 
     if Z.shape[1] > (MAX_UNKNOWNS_DAMPED if damped else MAX_UNKNOWNS):
         return None
     x, e, ok = stacked_problem(Z, B, S, damped, omega_max)
-    if damped:
-        # find_resonances polishes every damped root
-        must = np.ones(S.shape[0], dtype=bool)
-        # and compares held and released with the eigen-solver's estimates
-        with np.errstate(all="ignore"):
-            e_cmp = np.maximum(e, 1e2 * np.finfo(float).eps
-                               * np.nanmax(np.abs(x), axis=1, initial=1.0)[:, None] / np.abs(x))
-        return x, e, e_cmp, ok, must
+    if damped:                      # find_resonances polishes every damped root
+        return x, e, ok, np.ones(S.shape[0], dtype=bool)
     # _undamped's bound eps·λmax/λ stands (no polishing below POLISH_BELOW)
     # only for a diagonal mass matrix without massless directions.
     P = Z.T @ B["mass"] @ Z
@@ -676,7 +658,7 @@ def _pencil_roots(Z, B: dict, S, damped: bool, omega_max):
     diagonal = not np.any(P * (1 - np.eye(k)))
     mass = S @ P[:, np.arange(k), np.arange(k)] if k else np.ones((S.shape[0], 1))
     must = ~(diagonal & (mass > 1e-13 * mass.max(axis=1, initial=0.0)[:, None]).all(axis=1))
-    return 1j * x, e, e, ok, must
+    return 1j * x, e, ok, must
 
 
 def _polish_nodal(stacks: list, design: NDArray, s0: NDArray, pole: NDArray, e0: NDArray,
@@ -706,14 +688,12 @@ def _stacked_matrices(ds: Designs, system, which: NDArray):
     D + C, M and Kₛ as dense stacks (D', n, n), from the element stamp patterns."""
     from .resonances import element_patterns
 
-    row = {e.name: i for i, e in enumerate(ds.circuit.elements)}
-    el = np.array([row[e.name] for e in system.elements], dtype=np.int64)
-    S = (ds.values[el][:, which] * ds.eta[el][:, which]).T
+    S = design_values(ds, system, which)
     B, n, nn = element_patterns(system), system.size, len(system.nodes)
     parts = []
     for kind in ("damper", "mass", "spring"):
         X = np.zeros((which.size, n, n))
-        X[:, :nn, :nn] = (S @ B[kind].reshape(len(el), -1)).reshape(-1, nn, nn)
+        X[:, :nn, :nn] = (S @ B[kind].reshape(S.shape[1], -1)).reshape(-1, nn, nn)
         parts.append(X)
     parts[0] += system.C.toarray()
     return S, parts

@@ -967,25 +967,19 @@ def batched_roots(ds, omega_max: float | None = None):
         system = ds.circuit.nodal
     except (NotSeriesParallelError, TopologyError):
         return None
-    cand = ds.valid.copy()
-    row = {e.name: i for i, e in enumerate(ds.circuit.elements)}
-    for lv in system.levers:                          # the projection depends on them
-        i = next(j for j, m in enumerate(ds.circuit.levers) if m.name == lv.name)
-        cand &= ds.ratios[i] == lv.ratio
-    which = np.flatnonzero(cand)
+    which = template_levers(ds, system, np.flatnonzero(ds.valid))   # the projection needs them
     if not which.size:
         return None
     n_nodes = len(system.nodes)
     # Dense, as element_patterns: without scipy when no lever needs a pivoted QR.
     *_, G_released, G_held, damped = pencil(system, dense=True)
     B = element_patterns(system)
-    el_rows = np.array([row[e.name] for e in system.elements], dtype=np.int64)
-    S = (ds.values[el_rows][:, which] * ds.eta[el_rows][:, which]).T      # (D', E)
+    S = design_values(ds, system, which)
     problems = [stacked_problem(constraint_basis(G, n_nodes, dense=True), B, S, damped,
                                 omega_max)
                 for G in (G_held, G_released)]
     (w_h, e_h, _), (w_r, e_r, _) = problems
-    keep = np.flatnonzero(_without_shared_roots(problems, damped))
+    keep = np.flatnonzero(shared_roots_free(problems, damped))
     if not keep.size:
         return None
     if damped:                        # already polished (on the matrices): sort and go
@@ -995,9 +989,26 @@ def batched_roots(ds, omega_max: float | None = None):
                              omega_max)
 
 
-def _without_shared_roots(problems, damped: bool) -> np.ndarray:
-    """The designs solved in both stacked problems with no mode in both (it cancels in
-    K, :func:`_cancel`: left to the single path)."""
+def template_levers(ds, system, which: np.ndarray) -> np.ndarray:
+    """The designs of ``which`` whose lever ratios are the template's ``system``'s (its
+    lever stamps and constraint basis hold for them alone)."""
+    lev = {lv.name: i for i, lv in enumerate(ds.circuit.levers)}
+    for lv in system.levers:
+        which = which[ds.ratios[lev[lv.name], which] == lv.ratio]
+    return which
+
+
+def design_values(ds, system, which: np.ndarray) -> np.ndarray:
+    """The value·η of ``system``'s elements in the designs ``which`` of ``ds``, (D', E)."""
+    row = {e.name: i for i, e in enumerate(ds.circuit.elements)}
+    el = np.array([row[e.name] for e in system.elements], dtype=np.int64)
+    return (ds.values[el][:, which] * ds.eta[el][:, which]).T
+
+
+def shared_roots_free(problems, damped: bool) -> np.ndarray:
+    """The designs solved in both stacked problems ((roots, errors, ok) each: held,
+    released) with no mode in both (it cancels in K, :func:`_cancel`: left to the single
+    path); undamped roots may be ω or jω alike."""
     (w_h, e_h, ok_h), (w_r, e_r, ok_r) = problems
     # Damped roots are compared with the eigen-solver's estimates
     # (eps·1e2·|s|max/|s|), as find_resonances compares them before polishing.

@@ -165,9 +165,8 @@ class StudySpec:
         if self.analysis == "simulate":
             return head + [f"{q}_{end}" for q in _SLEY_QUANTITIES[_setting(self, "sley")[0]]
                            for end in ("min", "max")]
-        n = self.n_resonances
-        return head + [f"resonance_{i}" for i in range(1, n + 1)] + \
-            [f"antiresonance_{i}" for i in range(1, n + 1)]
+        return head + [f"{kind}_{i}" for kind in ("resonance", "antiresonance")
+                       for i in range(1, self.n_resonances + 1)]
 
 
 #: Units of the result columns [SI]; a parameter's unit is in ``StudySpec.param_units``.
@@ -1701,7 +1700,7 @@ def _die_with_parent(parent: int) -> None:
     _LOCK_FDS.clear()
 
     if sys.platform.startswith("linux"):
-        try:
+        with contextlib.suppress(OSError, AttributeError):     # no libc or prctl: poll
             import ctypes
 
             libc = ctypes.CDLL(None, use_errno=True)
@@ -1710,8 +1709,6 @@ def _die_with_parent(parent: int) -> None:
                 if os.getppid() != parent:      # the parent died before prctl took hold
                     os._exit(1)
                 return
-        except (OSError, AttributeError):
-            pass
 
     def watch():
         import time

@@ -307,11 +307,6 @@ def plan(lk) -> _Plan:
     nb = len(names)
     local = lk.local_offsets()
     points = tuple(lk.pose)
-    owner, offsets = [], []
-    for p in points:
-        o = next((l for l, ps in lk.links.items() if p in ps), None)
-        owner.append(nb if o is None else idx[o])
-        offsets.append(lk.pose[p] if o is None else local[o][p])
     crank_idx = np.array([idx[c.link] for c in lk.cranks])
     omega = np.array([c.omega for c in lk.cranks], dtype=float)
     pivot = np.array([lk.pose[c.pivot] for c in lk.cranks])
@@ -324,8 +319,11 @@ def plan(lk) -> _Plan:
     def off(b, p):
         return lk.pose[p] if b == "ground" else local[b][p]
 
-    common = dict(nb=nb, offsets=np.array(offsets, dtype=float).reshape(-1, 2),
-                  owner=np.array(owner), crank_idx=crank_idx, omega=omega, pivot=pivot,
+    # each point's owner: the first link holding it, else the ground
+    owner = [next((l for l, ps in lk.links.items() if p in ps), "ground") for p in points]
+    common = dict(nb=nb, crank_idx=crank_idx, omega=omega, pivot=pivot,
+                  owner=np.array([body(o) for o in owner]),
+                  offsets=np.array(list(map(off, owner, points)), dtype=float).reshape(-1, 2),
                   ia=np.array([body(a) for _, a, _ in rows], dtype=int).reshape(m),
                   ib=np.array([body(b) for _, _, b in rows], dtype=int).reshape(m),
                   sa=np.array([off(a, p) for p, a, _ in rows], dtype=float).reshape(m, 2),

@@ -503,15 +503,12 @@ def _moments(scene, B, part_of, angle_fn, crank0, cam):
     MOF = [amplitude, alpha, sigma, centre], names, and each one's centre [rad]."""
     MOI, MOF, mnames, centres = [], [], [], {}
     for m in scene.moments:
-        c = m.centre
-        if isinstance(c, str):
-            c = dead_centre(scene, "front" if c.startswith("front") else "back")
-        centres[m.name] = c
+        centres[m.name] = moment_centre(scene, m)
         # the window is in shaft angle: with a cam the crank (its follower) swings, so θ
         # is the drive part's coordinate itself
         MOI.append([B.line(part_of[crank0], 0.0, 1.0) if cam else angle_fn(crank0),
                     angle_fn(m.body)])
-        MOF.append([m.amplitude, m.window, m.sigma, c])
+        MOF.append([m.amplitude, m.window, m.sigma, centres[m.name]])
         mnames.append(m.name)
     return MOI, MOF, mnames, centres
 
@@ -585,6 +582,14 @@ def dead_centre(scene: Scene, kind: str = "front") -> float:
         lines up with it.
     """
     return _memo(_signature(scene, "dead", kind), lambda: _dead_centre(scene, kind))
+
+
+def moment_centre(scene: Scene, moment) -> float:
+    """The centre [rad] of a crank-angle moment's window: its rotation, or the dead centre
+    it names (``"front-dead-centre"``, ``"back-dead-centre"``)."""
+    c = moment.centre
+    return dead_centre(scene, "front" if c.startswith("front") else "back") \
+        if isinstance(c, str) else c
 
 
 def _dead_centre(scene: Scene, kind: str) -> float:

@@ -52,10 +52,10 @@ import numpy as np
 
 from ..errors import MechcircError, ShaftWarning, SolverError
 from .files import Scene
-from .motion import (MotionModel, body_tables, dead_centre, function_args, function_rows,
-                     hermite_table, motion_model)
+from .motion import (MotionModel, body_tables, function_args, function_rows, hermite_table,
+                     moment_centre, motion_model)
 from .simfile import Motor, Shaft, kloss_motor, parse_shaft, table_motor  # noqa: F401
-from .simulation import kernels_for, max_rate
+from .simulation import _check_strokes, kernels_for, max_rate, refined_extremes
 
 __all__ = ["Motor", "Shaft", "ShaftMotion", "kloss_motor", "table_motor", "parse_shaft",
            "simulate_shaft", "ShaftWarning"]
@@ -221,13 +221,10 @@ def rigid_model(scene: Scene, N: int = 1024):
             MW.append(m.value)
     MOI, MOF = [], []
     for mo in scene.moments:
-        c = mo.centre
-        if isinstance(c, str):
-            c = dead_centre(scene, "front" if c.startswith("front") else "back")
         FI.append([2, 0, 0])                    # the window's angle: θ itself
         FF.append([0.0, 1.0, 0.0, 0.0, 1.0, 0.0])
         MOI.append([len(FI) - 1, table(ang[mo.body], ang1[mo.body], ang2[mo.body], True)])
-        MOF.append([mo.amplitude, mo.window, mo.sigma, float(c)])
+        MOF.append([mo.amplitude, mo.window, mo.sigma, float(moment_centre(scene, mo))])
     return _one_part_model(scene, FI, FF, tabs, MI, MW, MOI, MOF)
 
 
@@ -327,21 +324,13 @@ class _ElasticShaft:
         """Every slider with a ``stroke`` checked at every sample of the cycle (crank rotations
         ``th``, free parts' states ``z``) by the linkage's ``check_stroke``, as the
         constant-speed simulation does: its located error where a point is past its stroke."""
-        from ..kinematics.linkage_solver import check_stroke
-
         m = self.model
-        lk, L = m.scene.linkage, m.scene.length_scale
         coord = {0: self.c * th, **{i + 1: z[:, i] for i in range(self.n)}}
-
-        def at(p):
-            if p not in m.point_fn:                       # a ground point: at the pose
-                return np.broadcast_to(np.asarray(lk.pose[p], float), (th.size, 2))
-            fx, fy, i = m.point_fn[p]
-            return np.column_stack([self._function(f, coord[i])[:, 0] for f in (fx, fy)]) / L
-        for sl in lk.sliders:
-            if sl.stroke:
-                check_stroke(lk, sl, th, *(at(p) for p in (sl.point, *sl.line)),
-                             "sample of the shaft's steady cycle")
+        stroked = [sl for sl in m.scene.linkage.sliders if sl.stroke]
+        positions = {p: [self._function(f, coord[i])[:, 0] for f in (fx, fy)]
+                     for p, (fx, fy, i) in m.point_fn.items()
+                     if any(p in (sl.point, *sl.line) for sl in stroked)}
+        _check_strokes(m.scene, th, positions, "sample of the shaft's steady cycle")
 
     def _function(self, f, qs):
         """Function ``f`` of the model and its two derivatives at the coordinates ``qs``,
@@ -776,7 +765,7 @@ def _tabulate(scene, eq, sol, th0, cyc, points, Jf, motor):
     out = eq.evaluate(th, w, z)
     acc = out[:, -5]
     bodies, values = eq.samples(th, w, z, acc, out)
-    wmin, wmax = _extremes(lambda x: sol.sol(x)[0], th, w)
+    wmin, wmax = refined_extremes(lambda x: sol.sol(x)[0], th, w)
     mean = cyc / period
     return dict(name=scene.name, source=scene.source, flywheel=Jf, theta=th - th0, time=tt,
                 speed=w, acceleration=acc, motor_torque=out[:, -4].copy(),
@@ -908,16 +897,3 @@ def _balance(motor: Motor, torque: float, scale: float) -> float:
         if tq[j] > 0 >= tq[j + 1]:
             return float(brentq(lambda w: float(motor.torque(w)) - torque, ws[j], ws[j + 1]))
     return 0.5 * scale
-
-
-def _extremes(f, th, w):
-    """(min, max) of f on the samples, refined by a bounded search between neighbours."""
-    from scipy.optimize import minimize_scalar
-
-    out = []
-    for sgn, i in ((1.0, int(np.argmin(w))), (-1.0, int(np.argmax(w)))):
-        a, b = th[max(i - 1, 0)], th[min(i + 1, th.size - 1)]
-        r = minimize_scalar(lambda x, sgn=sgn: sgn * float(f(x)), bounds=(a, b), method="bounded",
-                            options={"xatol": 1e-12})
-        out.append(sgn * min(r.fun, sgn * w[i]))
-    return float(out[0]), float(out[1])

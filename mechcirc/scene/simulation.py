@@ -1021,7 +1021,8 @@ def _point_accelerations(model, theta_s, ripple, ts, ys, values, positions=None)
     return out
 
 
-def _check_strokes(scene, crank, positions: dict) -> None:
+def _check_strokes(scene, crank, positions: dict,
+                   what: str = "output sample of the simulation") -> None:
     """Every slider with a ``stroke`` checked at every output sample of the simulated
     (elastic) motion: the located error of the linkage's stroke check at the first
     crank angle where its point is past it (ground points stay at the pose)."""
@@ -1033,7 +1034,7 @@ def _check_strokes(scene, crank, positions: dict) -> None:
             P, G1, G2 = (np.column_stack(positions[p]) / L if p in positions else
                          np.broadcast_to(np.asarray(lk.pose[p], float), (crank.size, 2))
                          for p in (s.point, *s.line))
-            check_stroke(lk, s, crank, P, G1, G2, "output sample of the simulation")
+            check_stroke(lk, s, crank, P, G1, G2, what)
 
 
 def crank_angle(omega, theta_s, ripple, t):
@@ -1121,8 +1122,6 @@ def _rel_change(a: dict, b: dict) -> float:
 def _rigid_acceleration(model, body, crank, ripple=(0.0, 0.0), ts=None, refine=True):
     """Angular acceleration of ``body`` in the rigid motion at the crank angles, and its
     exact extrema (grid, then Brent-refined on the tables; without ``refine``, the grid's)."""
-    from scipy.optimize import minimize_scalar
-
     kern = kernels_for("rk4-python")[0]
     a = model.arrays
     if body not in model.body_fn:
@@ -1153,14 +1152,25 @@ def _rigid_acceleration(model, body, crank, ripple=(0.0, 0.0), ts=None, refine=T
         _last_of(model, f"samples {body}", crank.tobytes(), samples).copy()
     if ripple[0] != 0.0 or not refine:
         return vals, (float(vals.min()), float(vals.max()))
+    # a function of the model and the bracket alone: the same crank-angle grid of the
+    # same model (a repeated or a preset's call) refines once
+    return vals, refined_extremes(acc, crank, vals, lambda sgn, lo, hi, search: _last_of(
+        model, f"refined {body} {sgn}", (float(lo), float(hi)), search))
+
+
+def refined_extremes(f, x, values, keep=None) -> tuple[float, float]:
+    """(min, max) of ``f`` from its ``values`` at the ascending ``x``: each extreme sample
+    refined by a bounded search between its neighbours (``keep(sign, lo, hi, search)``,
+    if given, returns ``search()`` or a kept result of it)."""
+    from scipy.optimize import minimize_scalar
+
     ext = []
-    for sgn, i in ((1.0, int(np.argmin(vals))), (-1.0, int(np.argmax(vals)))):
-        lo, hi = crank[max(i - 1, 0)], crank[min(i + 1, crank.size - 1)]
-        # a function of the model and the bracket alone: the same crank-angle grid of the
-        # same model (a repeated or a preset's call) refines once
-        best = _last_of(model, f"refined {body} {sgn}", (float(lo), float(hi)),
-                        lambda sgn=sgn, lo=lo, hi=hi: minimize_scalar(
-                            lambda t: sgn * acc(t), bounds=(lo, hi), method="bounded",
-                            options={"xatol": 1e-12}).fun)
-        ext.append(sgn * min(best, sgn * vals[i]))
-    return vals, (float(ext[0]), float(ext[1]))
+    for sgn, i in ((1.0, int(np.argmin(values))), (-1.0, int(np.argmax(values)))):
+        lo, hi = x[max(i - 1, 0)], x[min(i + 1, x.size - 1)]
+
+        def search(sgn=sgn, lo=lo, hi=hi):
+            return minimize_scalar(lambda t: sgn * float(f(t)), bounds=(lo, hi),
+                                   method="bounded", options={"xatol": 1e-12}).fun
+        ext.append(sgn * min(search() if keep is None else keep(sgn, lo, hi, search),
+                             sgn * values[i]))
+    return float(ext[0]), float(ext[1])

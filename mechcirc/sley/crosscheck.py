@@ -223,8 +223,7 @@ def _with_and_without_pulse(params: SleyParameters, revolutions: int, method):
 
     npts = 14400
     # the difference of two runs with the same transient: periodicity is not needed here
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", SleyAccuracyWarning)
+    with warnings.catch_warnings(action="ignore", category=SleyAccuracyWarning):
         return tuple(simulate_params(p, revolutions, method, points_per_revolution=npts,
                                      error_estimate=False)
                      for p in (params, params.replace(M0=0.0)))

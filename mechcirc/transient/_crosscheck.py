@@ -265,8 +265,7 @@ def crosscheck(circuit: Circuit, omega_max: float | None = None,
     if backlash_elements(circuit):
         out.notes.append("clearances (backlash=) taken as closed in both domains: the "
                          "frequency domain is linearised with contact closed")
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
+    with warnings.catch_warnings(record=True, action="always") as caught:
         res = circuit.resonances(None)
     out.notes.extend(str(w.message) for w in caught)
     ringing = [r.omega for r in res if r.omega_d > 0] or [r.omega for r in res if r.omega > 0]

@@ -596,16 +596,13 @@ def _require_finite(r: TransientResult, x_in_error: bool = False) -> None:
     """A result with a non-finite value is a failure, never a result.
 
     ``x_in_error``: ``r.error`` is finite only if ``r.x`` is (not looked at again)."""
-    arrays = [a for a in (r.v, r.force, r.drive_force, r.drive_velocity) if a is not None]
-    if not x_in_error:
-        arrays.append(r.x)
+    arrays = [a for a in (r.x, r.v, r.force, r.drive_force, r.drive_velocity) if a is not None]
     # An array is finite where its max and min are (NaN and ±inf propagate to one of
     # them): two reductions instead of a boolean array as large as the outputs.
     if math.isfinite(r.error) and all(
             not a.size or (math.isfinite(float(a.max())) and math.isfinite(float(a.min())))
-            for a in arrays):
+            for a in (arrays[1:] if x_in_error else arrays)):   # r.x first
         return
-    arrays = [a for a in (r.x, r.v, r.force, r.drive_force, r.drive_velocity) if a is not None]
     bad = [np.flatnonzero(~np.isfinite(a).reshape(a.shape[0], -1).all(axis=1)) for a in arrays]
     first = min((int(b[0]) for b in bad if b.size), default=None)
     if first is None and math.isfinite(r.error):
