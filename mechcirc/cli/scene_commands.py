@@ -10,7 +10,7 @@ from ..limits import MAX_CYCLE_POINTS
 from ..units import FREQUENCY_UNITS, in_unit
 from ._common import (NETLIST_FILE, add_command, add_handler, add_output_option,
                       add_plot_option, add_unit_option, check_output_paths, count, print_json,
-                      print_written, real, save_figure, scene_theta, set_values, write_outputs,
+                      print_written, real, refuse_ignored, save_figure, scene_theta, set_values, write_outputs,
                       write_text)
 
 
@@ -39,9 +39,8 @@ def _register_scene(sub) -> None:
     p.add_argument("--reflect", choices=("eta", "lever"), default="eta",
                    help="reflect through eta = ratio² (default) or explicit ideal levers")
     p.add_argument("--points", type=count(2, MAX_CYCLE_POINTS, why="10–25 ms each"),
-                   default=72, metavar="N",
-                   help="--cycle: crank angles over the revolution (default 72)")
-    p.add_argument("--harmonics", type=count(1, 1000), default=5, metavar="H",
+                   metavar="N", help="--cycle: crank angles over the revolution (default 72)")
+    p.add_argument("--harmonics", type=count(1, 1000), metavar="H",
                    help="--cycle: shaft harmonics h = 1..H for |Q0| (default 5)")
     p.add_argument("--reduce", action="store_true",
                    help="reduce the circuit to what the file's [analysis] output needs over "
@@ -83,6 +82,8 @@ def _register_reduce(sub) -> None:
 def cmd_scene(args) -> int:
     check_output_paths(args.output, plots=(args.plot,), reads=(args.file,),
                        table="a CSV table (--cycle) or a netlist (--theta)")
+    refuse_ignored(args, {"--points": (args.cycle, "--cycle", "add --cycle", 72),
+                          "--harmonics": (args.cycle, "--cycle", "add --cycle", 5)})
     if args.plot and not args.cycle and args.mode is None:
         raise MechcircError("--plot draws the --cycle map, or with --mode N a mode at the "
                             "crank angle; with --theta alone use -o and 'mechcirc sweep'")

@@ -7,8 +7,8 @@ import math
 from ..errors import InputError
 from ..limits import MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS, MAX_SCIPY_REVOLUTIONS
 from ._common import (add_command, add_handler, add_output_option, add_plot_option,
-                      check_output_paths, count, print_json, print_written, real, set_values,
-                      write_outputs, write_text)
+                      check_output_paths, count, print_json, print_written, real,
+                      refuse_ignored, set_values, write_outputs, write_text)
 
 _METHODS = ("rk4", "rk4-python", "rk8", "DOP853", "RK45", "LSODA")   # = mechcirc.sley.METHODS
 _UNITS = {"eps4T": "1/s^2", "eps2P": "1/s^2", "eps4P": "1/s^2", "eps5P": "1/s^2",
@@ -252,18 +252,17 @@ def cmd_simulate(args) -> int:
 
 
 #: crosscheck's options that apply to some inputs only (the input's kind is a word of it).
-_CROSSCHECK_APPLIES = {"drive": "a sley preset", "variant": "a sley preset", "omega_max":
-                       "a netlist FILE", **dict.fromkeys(("theta", "netlist"), "a scene or a sley preset")}
+_CROSSCHECK_APPLIES = {"--drive": "a sley preset", "--variant": "a sley preset",
+                       "--omega-max": "a netlist FILE", "--theta": "a scene or a sley preset",
+                       "--netlist": "a scene or a sley preset"}
 
 
 def cmd_crosscheck(args) -> int:
     kind = "preset" if args.file is None else "scene" if args.file.endswith(".toml") else "netlist"
     given = {"preset": "without a FILE a sley preset is checked", "scene":
              f"'{args.file}' is a scene", "netlist": f"'{args.file}' is a netlist already"}[kind]
-    for key, where in _CROSSCHECK_APPLIES.items():
-        if getattr(args, key) is not None and kind not in where:    # refused, not ignored
-            opt = "--" + key.replace("_", "-")
-            raise InputError(f"{opt} applies to {where}; {given} (leave {opt} out)")
+    refuse_ignored(args, {opt: (kind in where, f"{where}; {given}", "", None)
+                          for opt, where in _CROSSCHECK_APPLIES.items()})
     if kind == "scene":
         from .scene_commands import cmd_crosscheck_scene
 

@@ -8,7 +8,7 @@ import sys
 from ..errors import MechcircError
 from ._common import (add_command, add_handler, add_output_option, add_plot_option,
                       check_names, check_output_paths, print_json, print_written, real,
-                      save_figure, shaft_speed)
+                      refuse_ignored, save_figure, shaft_speed)
 
 seconds = real(above=0.0, unit="s", role="time")
 
@@ -57,6 +57,10 @@ def cmd_transient(args) -> int:
     from ..transient import transient
 
     check_output_paths(args.output, plots=(args.plot,), reads=(args.file,), table="a CSV table")
+    shaped = args.rpm is not None or (args.waveform or "rest").split(":")[0] not in ("rest", "csv")
+    refuse_ignored(args, {"--amplitude": (shaped, "a harmonic, step or impulse --waveform or a "
+                                          "motion= drive at --rpm", "add --waveform "
+                                          "harmonic:OMEGA, step or impulse", None)})
     if args.element and not args.plot:
         raise MechcircError("--element NAME draws a panel of the plot: give --plot IMAGE too")
     circuit = load(args.file, require_drive=False)

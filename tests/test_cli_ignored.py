@@ -1,0 +1,42 @@
+"""Options the CLI read only with another option (or for some inputs), and ignored
+without a word otherwise (audit17): each is refused, exit 2, one line, saying to
+what it applies and how to leave it out or make it apply."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from cli_helpers import assert_user_error
+
+REPO = Path(__file__).resolve().parents[1]
+STB = str(REPO / "netlists" / "stb_heald.mcir")
+CAM = str(REPO / "docs" / "examples" / "cam_drive.mcir")
+SCENE = str(REPO / "examples" / "heald_scene.toml")
+
+
+@pytest.mark.parametrize("argv, needle, hint", [
+    (["sweep", STB, "--omega-min", "10", "--omega-max", "1e4", "--tol", "1e-3"],
+     "--tol applies to --adaptive sweeps", "add --adaptive"),
+    (["periodic", CAM, "--rpm", "600", "--points", "50"],
+     "--points applies to a speed map", "add --rpm-min"),
+    (["periodic", CAM, "--rpm-min", "100", "--rpm-max", "1200", "--angles", "90"],
+     "--angles applies to one speed", "give --rpm"),
+    (["periodic", CAM, "--rpm-min", "100", "--rpm-max", "1200", "--near", "0.1"],
+     "--near applies to one speed", "give --rpm"),
+    (["transient", STB, "--t-end", "0.01", "--amplitude", "2"],
+     "--amplitude applies to", "add --waveform"),
+    (["transient", STB, "--t-end", "0.01", "--waveform", "rest", "--amplitude", "2"],
+     "--amplitude applies to", "add --waveform"),
+    (["scene", SCENE, "--theta", "40", "--points", "10"],
+     "--points applies to --cycle", "add --cycle"),
+    (["scene", SCENE, "--theta", "40", "--harmonics", "3"],
+     "--harmonics applies to --cycle", "add --cycle"),
+])
+def test_an_option_that_would_be_ignored_is_refused(argv, needle, hint, capsys, tmp_path):
+    """``sweep --tol 1e-3`` (no --adaptive) ran the fixed grid, ``periodic --rpm 600
+    --points 50`` one speed, ``transient --amplitude 2`` (no waveform) left the drive at
+    rest, ``scene --theta 40 --points 10`` wrote the netlist: the value went unread."""
+    assert_user_error([*argv, "-o", str(tmp_path / "out.csv")], capsys, needle, hint,
+                      f"leave {needle.split()[0]} out")
+    assert not (tmp_path / "out.csv").exists()
