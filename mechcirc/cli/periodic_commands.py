@@ -79,15 +79,15 @@ def cmd_periodic(args) -> int:
                    or not args.rpm_min < args.rpm_max):
         raise MechcircError("the speed map needs both --rpm-min and --rpm-max, with "
                             "--rpm-min < --rpm-max")
+    scene = args.file.lower().endswith(".toml")
     one = (single, "one speed", "give --rpm instead of --rpm-min/--rpm-max")
     refuse_ignored(args, {"--points": (ranged, "a speed map", "add --rpm-min and --rpm-max "
                                        "instead of --rpm", 200),
-                          "--angles": (*one, 360), "--near": (*one, 0.03)})
-    if args.file.lower().endswith(".toml"):
+                          "--angles": (*one, 360), "--near": (*one, 0.03),
+                          "--theta": (scene, "a scene (.toml), not to a netlist", "", None)})
+    if scene:
         circuit, motion = _scene(args)
     else:
-        if args.theta is not None:
-            raise MechcircError("--theta applies to a scene (.toml), not to a netlist")
         circuit, warns = load_with_warnings(args.file)
         motion = None
         warning_lines(warns)

@@ -253,12 +253,10 @@ def cmd_simulate_scene(args) -> int:
     if args.method is None and not shaft:       # the shaft's default is the library's (rk8)
         args.method = "rk4"
     fixed = args.method in (None, "rk4", "rk4-python", "rk8")
-    if args.rtol is not None and fixed:
-        raise MechcircError(f"--rtol applies to the scipy methods (DOP853, RK45, LSODA), not "
-                            f"{args.method or 'the default rk8'}; use --steps-per-period")
-    if args.steps_per_period is not None and not fixed:
-        raise MechcircError(f"--steps-per-period applies to rk4 and rk8, not {args.method}; "
-                            "use --rtol")
+    refuse_ignored(args, {
+        "--rtol": (not fixed, "the scipy methods (DOP853, RK45, LSODA), not "
+                   f"{args.method or 'the default rk8'}", "use --steps-per-period", None),
+        "--steps-per-period": (fixed, f"rk4 and rk8, not {args.method}", "use --rtol", None)})
     check_output_paths(args.output, plots=(args.plot,), reads=(args.scene,),
                        table="a CSV table")
     scene = _with_overrides(args, load_scene(args.scene))
