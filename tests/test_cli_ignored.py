@@ -13,6 +13,7 @@ REPO = Path(__file__).resolve().parents[1]
 STB = str(REPO / "netlists" / "stb_heald.mcir")
 CAM = str(REPO / "docs" / "examples" / "cam_drive.mcir")
 SCENE = str(REPO / "examples" / "heald_scene.toml")
+STUDY = str(REPO / "examples" / "study_stb.toml")
 
 
 @pytest.mark.parametrize("argv, needle, hint", [
@@ -32,11 +33,24 @@ SCENE = str(REPO / "examples" / "heald_scene.toml")
      "--points applies to --cycle", "add --cycle"),
     (["scene", SCENE, "--theta", "40", "--harmonics", "3"],
      "--harmonics applies to --cycle", "add --cycle"),
+    (["study", STUDY, "--connect-timeout", "5"],
+     "--connect-timeout applies to a --scheduler", "add --scheduler"),
+    (["study", STUDY, "--scheduler", "tcp://127.0.0.1:9", "--workers", "2"],
+     "--workers applies to local processes", ""),
+    (["study", STUDY, "--plot-column", "Q0_abs_max"],
+     "--plot-column applies to the --plot", "add --plot IMAGE"),
+    (["synth", "--swing", "25", "--omega", "50"], "--omega applies to the files --export writes",
+     "add --export DIR"),
+    (["synth", "--swing", "25", "--c4", "1e4"], "--c4 applies to the files --export writes",
+     "add --export DIR"),
+    (["synth", "--swing", "25", "--swing-step", "0.1"], "--swing-step applies to", ""),
 ])
 def test_an_option_that_would_be_ignored_is_refused(argv, needle, hint, capsys, tmp_path):
     """``sweep --tol 1e-3`` (no --adaptive) ran the fixed grid, ``periodic --rpm 600
     --points 50`` one speed, ``transient --amplitude 2`` (no waveform) left the drive at
-    rest, ``scene --theta 40 --points 10`` wrote the netlist: the value went unread."""
-    assert_user_error([*argv, "-o", str(tmp_path / "out.csv")], capsys, needle, hint,
-                      f"leave {needle.split()[0]} out")
+    rest, ``scene --theta 40 --points 10`` wrote the netlist, ``study --workers 2`` ran on
+    the --scheduler's cluster, ``synth --c4 1e4`` (no --export) wrote nothing: the value
+    went unread."""
+    out = [] if argv[0] == "synth" else ["-o", str(tmp_path / "out.csv")]   # synth: no -o
+    assert_user_error([*argv, *out], capsys, needle, hint, f"leave {needle.split()[0]} out")
     assert not (tmp_path / "out.csv").exists()
