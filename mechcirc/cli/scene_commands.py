@@ -82,14 +82,13 @@ def _register_reduce(sub) -> None:
 def cmd_scene(args) -> int:
     check_output_paths(args.output, plots=(args.plot,), reads=(args.file,),
                        table="a CSV table (--cycle) or a netlist (--theta)")
+    one = args.plot and not (args.cycle or args.reduce)
     refuse_ignored(args, {"--points": (args.cycle, "--cycle", "add --cycle", 72),
-                          "--harmonics": (args.cycle, "--cycle", "add --cycle", 5)})
-    if args.plot and not args.cycle and args.mode is None:
-        raise MechcircError("--plot draws the --cycle map, or with --mode N a mode at the "
-                            "crank angle; with --theta alone use -o and 'mechcirc sweep'")
-    if args.mode is not None and (args.cycle or args.reduce or not args.plot):
-        raise MechcircError("--mode N draws a mode at one crank angle: give it with --plot "
-                            "IMAGE, without --cycle or --reduce")
+                          "--harmonics": (args.cycle, "--cycle", "add --cycle", 5),
+                          "--plot": (args.cycle or args.mode is not None, "the --cycle map or a "
+                                     "--mode N drawing", "add --cycle or --mode N", None),
+                          "--mode": (one, "one crank angle drawn into --plot, without --cycle "
+                                     "or --reduce", "add --plot IMAGE", None)})
     from ..scene import build_needed, load_scene
 
     scene = load_scene(args.file)
