@@ -348,9 +348,9 @@ def cmd_synth(args) -> int:
     from ..kinematics.synthesis_export import SceneOptions, export_designs
 
     check_output_paths(plots=(args.plot,))
-    exported = (bool(args.export), "the files --export writes", "add --export DIR")
-    rules = {f"--{n}": (*exported, d) for n, _, d in _SCENE_OPTIONS}
-    refuse_ignored(args, {**rules, "--omega": (*exported, 100.0), "--swing-step": (
+    export_only = (bool(args.export), "the files --export writes", "add --export DIR")
+    rules = {f"--{n}": (*export_only, d) for n, _, d in _SCENE_OPTIONS}
+    refuse_ignored(args, {**rules, "--omega": (*export_only, 100.0), "--swing-step": (
         args.swing is None, "the swings explored, not a fixed --swing", "", 0.5)})
     if args.export and not Path(args.export).is_dir():
         raise MechcircError(f"--export {args.export}: no such folder (create it first)")
