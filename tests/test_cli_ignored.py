@@ -13,7 +13,8 @@ REPO = Path(__file__).resolve().parents[1]
 FILES = {"STB": str(REPO / "netlists" / "stb_heald.mcir"),
          "CAM": str(REPO / "docs" / "examples" / "cam_drive.mcir"),
          "SCENE": str(REPO / "examples" / "heald_scene.toml"),
-         "STUDY": str(REPO / "examples" / "study_stb.toml")}
+         "STUDY": str(REPO / "examples" / "study_stb.toml"),
+         "SLEY": str(REPO / "docs" / "examples" / "sley_scene.toml")}
 
 #: command line (FILES by their key) | what its error line says | how to make it apply
 CASES = """\
@@ -30,7 +31,11 @@ study STUDY --scheduler tcp://127.0.0.1:9 --workers 2 | --workers applies to loc
 study STUDY --plot-column Q0_abs_max | --plot-column applies to the --plot | add --plot IMAGE
 synth --swing 25 --omega 50 | --omega applies to the files --export writes | add --export DIR
 synth --swing 25 --c4 1e4 | --c4 applies to the files --export writes | add --export DIR
-synth --swing 25 --swing-step 0.1 | --swing-step applies to |"""
+synth --swing 25 --swing-step 0.1 | --swing-step applies to |
+simulate SLEY --alpha 20 | --alpha applies to a sley preset |
+simulate SLEY --variant 2 | --variant applies to a sley preset |
+simulate SLEY --beat-sign 1 | --beat-sign applies to a sley preset |
+simulate --start-deg 10 | --start-deg applies to a scene file |"""
 
 
 @pytest.mark.parametrize("case", CASES.splitlines())
