@@ -35,7 +35,11 @@ synth --swing 25 --swing-step 0.1 | --swing-step applies to |
 simulate SLEY --alpha 20 | --alpha applies to a sley preset |
 simulate SLEY --variant 2 | --variant applies to a sley preset |
 simulate SLEY --beat-sign 1 | --beat-sign applies to a sley preset |
-simulate --start-deg 10 | --start-deg applies to a scene file |"""
+simulate --start-deg 10 | --start-deg applies to a scene file |
+frame --crank 35 --coupler 120 --rocker 100 --frame 140 --rpm 300 --reed-point 10,5 \
+| --reed-point applies to the --reed-force | add --reed-force
+frame --crank 35 --coupler 120 --rocker 100 --frame 140 --rpm 300 --beat-window 30 \
+| --beat-window applies to the --reed-force | add --reed-force"""
 
 
 @pytest.mark.parametrize("case", CASES.splitlines())

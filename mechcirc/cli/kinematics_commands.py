@@ -83,12 +83,12 @@ def _register_frame(sub) -> None:
         p.add_argument(f"--{link}-inertia", type=real(least=0.0, most=1e30, unit="kg·m²"),
                        default=0.0, metavar="J", help=f"{link} inertia about its centre of "
                        f"mass [kg·m²]")
-    p.add_argument("--reed-force", type=_vector("--reed-force", 2), default=(0.0, 0.0),
+    p.add_argument("--reed-force", type=_vector("--reed-force", 2),
                    metavar="FX,FY", help="peak cloth force on the reed, rocker frame [N] "
                    "(--reed-force=-50,-500 when it starts with a minus)")
-    p.add_argument("--reed-point", type=_vector("--reed-point", 2), default=(0.0, 0.0),
+    p.add_argument("--reed-point", type=_vector("--reed-point", 2),
                    metavar="X,Y", help="where it acts, rocker frame [--unit]")
-    p.add_argument("--beat-window", type=real(above=0.0, most=360.0, unit="deg"), default=40.0,
+    p.add_argument("--beat-window", type=real(above=0.0, most=360.0, unit="deg"),
                    metavar="DEG", help="crank window of the half-sine reed force [deg] "
                    "(default 40, centred on the front dead centre)")
     p.add_argument("--gravity", action="store_true", help="add gravity, 9.81 m/s² along −y")
@@ -285,6 +285,9 @@ def cmd_frame(args) -> int:
     from ..kinematics import FourBar, LinkMass, beat_up_force, frame_loading
 
     check_output_paths(args.output, plots=(args.plot,), table="a CSV table")
+    reed = (args.reed_force is not None, "the --reed-force", "add --reed-force FX,FY")
+    refuse_ignored(args, {"--reed-point": (*reed, (0.0, 0.0)), "--beat-window": (*reed, 40.0),
+                          "--reed-force": (True, "", "", (0.0, 0.0))})     # (its default)
     k = 1e-3 if args.unit == "mm" else 1.0            # to metres
     fb = FourBar(args.crank * k, args.coupler * k, args.rocker * k, args.frame * k,
                  branch=args.branch)
