@@ -285,8 +285,8 @@ def cmd_frame(args) -> int:
     from ..kinematics import FourBar, LinkMass, beat_up_force, frame_loading
 
     check_output_paths(args.output, plots=(args.plot,), table="a CSV table")
-    reed = (args.reed_force is not None, "the --reed-force", "add --reed-force FX,FY")
-    refuse_ignored(args, {"--reed-point": (*reed, (0.0, 0.0)), "--beat-window": (*reed, 40.0),
+    shaped = (args.reed_force is not None, "the --reed-force", "add --reed-force FX,FY")
+    refuse_ignored(args, {"--reed-point": (*shaped, (0.0, 0.0)), "--beat-window": (*shaped, 40.0),
                           "--reed-force": (True, "", "", (0.0, 0.0))})     # (its default)
     k = 1e-3 if args.unit == "mm" else 1.0            # to metres
     fb = FourBar(args.crank * k, args.coupler * k, args.rocker * k, args.frame * k,
