@@ -84,7 +84,7 @@ def test_study_plot_column_did_you_mean_and_needs_plot(tmp_path, capsys):
                        "--plot-column", "K_abs_mx"], capsys,
                       "--plot-column 'K_abs_mx' is not a result column; did you mean 'K_abs_max'?")
     assert_user_error(["study", spec, "--workers", "1", "-o", out, "--plot-column",
-                       "K_abs_max"], capsys, "--plot-column NAME", "give --plot IMAGE too")
+                       "K_abs_max"], capsys, "--plot-column applies to the --plot", "add --plot IMAGE")
     assert not out.exists() and not png.exists()
 
 

@@ -13,7 +13,7 @@ import threading
 import warnings
 from pathlib import Path
 
-from ..errors import (MAX_QUOTED, MechcircError, MechcircWarning, NetlistError,
+from ..errors import (MAX_QUOTED, InputError, MechcircError, MechcircWarning, NetlistError,
                       NotSeriesParallelError, clip, shorten)
 from ..units import (FREQUENCY_UNITS, UnitError, parse_quantity, parse_unit,
                      split_quantity)
@@ -669,6 +669,33 @@ def set_values(items, not_numbers: dict | None = None, texts: bool = False,
                                 f"magnitude, got {value!r}")
         out[name] = value.strip() if texts else v
     return out
+
+
+def refuse_ignored(args, rules) -> None:
+    """Refuse an option given where its value would not be read; default the others.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed options; an option is given when it is not None (its argparse
+        default is None, and its default is given here).
+    rules : dict
+        ``"--opt": (applies, to_what, hint, default)``: whether the option is read
+        with the other options and the input given; to what it applies, and how to
+        make it apply ("" for no way) for the message; its value when not given.
+
+    Raises
+    ------
+    InputError
+        "--tol applies to --adaptive sweeps (leave --tol out, or add --adaptive)".
+    """
+    for option, (applies, to_what, hint, default) in rules.items():
+        dest = option[2:].replace("-", "_")
+        if getattr(args, dest) is None:
+            setattr(args, dest, default)
+        elif not applies:
+            raise InputError(f"{option} applies to {to_what} (leave {option} out"
+                             f"{', or ' + hint if hint else ''})")
 
 
 def check_names(names, known, kind: str = "element", option: str = "--element") -> None:

@@ -6,7 +6,8 @@ import math
 
 from ..errors import InputError
 from ._common import (MAX_LENGTH, add_command, add_handler, add_output_option,
-                      check_output_paths, count, print_json, real, warning_lines)
+                      check_output_paths, count, print_json, real, refuse_ignored,
+                      warning_lines)
 
 _LAWS = ("harmonic", "cycloidal", "modified_sine", "modified_trapezoid", "polynomial_345")
 
@@ -137,13 +138,13 @@ def _check_args(args) -> None:
         raise InputError("an oscillating follower needs --arm and --pivot")
     if args.follower == "oscillating_flat" and args.pivot is None:
         raise InputError("an oscillating_flat follower needs --pivot (the face turns about it)")
-    unused = {"flat": ("roller_radius", "arm", "pivot"), "roller": ("arm", "pivot"),
-              "oscillating": ("offset",),
-              "oscillating_flat": ("roller_radius", "arm", "offset")}[args.follower]
-    for name in unused:
-        if getattr(args, name) is not None:
-            raise InputError(f"--{name.replace('_', '-')} does not apply to a {args.follower} "
-                             "follower (see 'mechcirc cam --help')")
+    f = args.follower
+    osc = f.startswith("oscillating")
+    rules = (("--roller-radius", f in ("roller", "oscillating"), "a roller"),
+             ("--arm", f == "oscillating", "an oscillating roller"),
+             ("--pivot", osc, "an oscillating"), ("--offset", not osc, "a translating"))
+    refuse_ignored(args, {key: (takes, f"{which} follower, not --follower {f}", "", None)
+                          for key, takes, which in rules})
 
 
 def _warnings(cam) -> list:

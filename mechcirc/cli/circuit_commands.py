@@ -19,7 +19,7 @@ from ..units import FREQUENCY_UNITS, in_unit
 from ._common import (NETLIST_FILE, add_command, add_handler, add_method_option,
                       add_output_option, add_plot_option, add_unit_option, check_names,
                       check_output_paths, load_with_warnings, print_json, print_written, real,
-                      save_figure, warning_lines)
+                      refuse_ignored, save_figure, warning_lines)
 
 #: argparse type: an angular frequency [rad/s], or with a unit (``50Hz``, ``3000rpm``); the
 #: command checks the range (a sweep's --omega-min/--omega-max together).
@@ -79,7 +79,7 @@ def _register_sweep(sub) -> None:
                         "double (the default, K to about its rounding); --no-refine: one "
                         "plain solve per point, faster, error about eps·cond(A) (the "
                         "'error' estimate says how large); no effect on the tree")
-    p.add_argument("--tol", type=real(above=0.0, most=1.0), default=0.005,
+    p.add_argument("--tol", type=real(above=0.0, most=1.0),
                    help="adaptive: largest relative midpoint deviation (default 0.005)")
     p.add_argument("--sensitivity", action="append", metavar="NAME", default=[],
                    help="also the exact derivative of |Q0| (|v0| under a force drive) with "
@@ -241,6 +241,7 @@ def _peak_text(pk, units: dict, unit: str = "rad/s") -> str:
 def cmd_sweep(args) -> int:
     check_output_paths(args.output, args.touchstone, plots=(args.plot,), reads=(args.file,),
                        table="a CSV table")
+    refuse_ignored(args, {"--tol": (args.adaptive, "--adaptive sweeps", "add --adaptive", 0.005)})
     if args.touchstone and Path(args.touchstone).suffix.lower() != ".s1p":
         # K seen by one drive is a one-port: a .s2p name would promise a
         # 2-port file that scikit-rf then cannot read.

@@ -8,8 +8,8 @@ from ..errors import MechcircError
 from ..limits import FORMULA_SECONDS
 from ._common import (NETLIST_FILE, add_command, add_handler, add_method_option,
                       add_output_option, add_plot_option, check_output_paths, count,
-                      load_with_warnings, print_json, print_written, real, save_figure,
-                      time_limit, warning_lines)
+                      load_with_warnings, print_json, print_written, real, refuse_ignored,
+                      save_figure, time_limit, warning_lines)
 
 
 def register(sub) -> None:
@@ -95,7 +95,7 @@ def _register_study(sub) -> None:
     p.add_argument("--resume", action="store_true",
                    help="keep the rows already in -o and run only the missing points "
                         "(refused if -o was made from another spec)")
-    p.add_argument("--connect-timeout", type=real(above=0, most=3600, unit="s"), default=10.0,
+    p.add_argument("--connect-timeout", type=real(above=0, most=3600, unit="s"),
                    metavar="SECONDS",
                    help="with --scheduler: wait this long for the scheduler, then as long "
                         "for its first worker (default 10)")
@@ -212,9 +212,6 @@ def _plot_column(args, spec) -> str:
     from ..errors import MechcircError
     from ..sources import did_you_mean
 
-    if args.plot_column and not args.plot:
-        raise MechcircError("--plot-column NAME chooses the column of the plot: give "
-                            "--plot IMAGE too")
     column = args.plot_column or ("Q0_abs_max" if spec.analysis == "sweep" else "resonance_1")
     results = spec.columns[len(spec.params) + 3:]
     if args.plot and column not in results:
@@ -228,6 +225,11 @@ def cmd_study(args) -> int:
     from ..progress import Progress
     from ..study import column_units, load_spec, run_study, sidecar_path
 
+    refuse_ignored(args, {"--workers": (not args.scheduler, "local processes, not a "
+                                        "--scheduler's cluster", "", None),
+                          "--connect-timeout": (args.scheduler, "a --scheduler",
+                                                "add --scheduler ADDRESS", 10.0),
+                          "--plot-column": (args.plot, "the --plot", "add --plot IMAGE", None)})
     if args.resume and not args.output:
         raise MechcircError("--resume needs -o FILE (the table to continue)")
     spec = load_spec(args.spec)

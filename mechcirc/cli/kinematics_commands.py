@@ -11,7 +11,7 @@ from ..errors import InputError, MechcircError, NetlistError
 from ..units import convert_frequency
 from ._common import (MAX_LENGTH, MAX_OMEGA, add_command, add_handler, add_output_option,
                       add_plot_option, check_output_paths, count, print_json, print_written,
-                      real, save_figure, shaft_speed, write_outputs)
+                      real, refuse_ignored, save_figure, shaft_speed, write_outputs)
 
 
 def register(sub) -> None:
@@ -83,12 +83,12 @@ def _register_frame(sub) -> None:
         p.add_argument(f"--{link}-inertia", type=real(least=0.0, most=1e30, unit="kg·m²"),
                        default=0.0, metavar="J", help=f"{link} inertia about its centre of "
                        f"mass [kg·m²]")
-    p.add_argument("--reed-force", type=_vector("--reed-force", 2), default=(0.0, 0.0),
+    p.add_argument("--reed-force", type=_vector("--reed-force", 2),
                    metavar="FX,FY", help="peak cloth force on the reed, rocker frame [N] "
                    "(--reed-force=-50,-500 when it starts with a minus)")
-    p.add_argument("--reed-point", type=_vector("--reed-point", 2), default=(0.0, 0.0),
+    p.add_argument("--reed-point", type=_vector("--reed-point", 2),
                    metavar="X,Y", help="where it acts, rocker frame [--unit]")
-    p.add_argument("--beat-window", type=real(above=0.0, most=360.0, unit="deg"), default=40.0,
+    p.add_argument("--beat-window", type=real(above=0.0, most=360.0, unit="deg"),
                    metavar="DEG", help="crank window of the half-sine reed force [deg] "
                    "(default 40, centred on the front dead centre)")
     p.add_argument("--gravity", action="store_true", help="add gravity, 9.81 m/s² along −y")
@@ -134,8 +134,8 @@ def _register_synth(sub) -> None:
                    metavar="S", help="grid step of b/a and d/a (default 0.05)")
     p.add_argument("--crank-step", type=real(above=0.0, most=1e3, unit="mm"), default=0.5,
                    metavar="MM", help="grid step of the crank length (default 0.5 mm)")
-    p.add_argument("--swing-step", type=real(above=0.0, most=180.0, unit="deg"), default=0.5,
-                   metavar="DEG", help="grid step of the swing (default 0.5°)")
+    p.add_argument("--swing-step", type=real(above=0.0, most=180.0, unit="deg"),
+                   metavar="DEG", help="grid step of the swings explored without --swing (default 0.5°)")
     p.add_argument("--no-refine", action="store_true",
                    help="report the grid's designs without the continuous refinement")
     _register_synth_export(p)
@@ -144,25 +144,28 @@ def _register_synth(sub) -> None:
     add_handler(p, cmd_synth)
 
 
+#: ``synth --export``'s options of the exported scene: (name, what, default).
+_SCENE_OPTIONS = (("sley-inertia", "I4P, sley [kg·m²]", 0.35),
+                  ("rocker-inertia", "I4, rocker [kg·m²]", 0.025),
+                  ("crank-inertia", "I2P, crank side [kg·m²]", 0.005),
+                  ("c2", "C2, torsion rod shaft–crank [N·m/rad]", 1e5),
+                  ("c4", "C4, torsion rod rocker–sley [N·m/rad]", 5e4),
+                  ("k2", "k2, damping of C2 [N·m·s/rad]", 7.0),
+                  ("k4", "k4, damping of C4 [N·m·s/rad]", 29.0),
+                  ("beat-moment", "M0, beat-up moment [N·m], + counter-clockwise "
+                   "on the sley (--beat-moment=-500 for a negative one)", 0.0),
+                  ("beat-window", "α, beat-up window [deg]", 10.0))
+
+
 def _register_synth_export(p) -> None:
     """``synth --export``: the directory and what goes into the exported files."""
     p.add_argument("--export", metavar="DIR",
                    help="write DIR/design_K.linkage.toml and DIR/design_K.scene.toml per design")
     p.add_argument("--omega", type=real(above=0.0, most=MAX_OMEGA, unit="rad/s", role="omega"),
-                   default=100.0, metavar="W", help="crank speed in exported files [rad/s] "
-                   "(default 100)")
-    for name, what, default in (("sley-inertia", "I4P, sley [kg·m²]", 0.35),
-                                ("rocker-inertia", "I4, rocker [kg·m²]", 0.025),
-                                ("crank-inertia", "I2P, crank side [kg·m²]", 0.005),
-                                ("c2", "C2, torsion rod shaft–crank [N·m/rad]", 1e5),
-                                ("c4", "C4, torsion rod rocker–sley [N·m/rad]", 5e4),
-                                ("k2", "k2, damping of C2 [N·m·s/rad]", 7.0),
-                                ("k4", "k4, damping of C4 [N·m·s/rad]", 29.0),
-                                ("beat-moment", "M0, beat-up moment [N·m], + counter-clockwise "
-                                 "on the sley (--beat-moment=-500 for a negative one)", 0.0),
-                                ("beat-window", "α, beat-up window [deg]", 10.0)):
+                   metavar="W", help="crank speed in exported files [rad/s] (default 100)")
+    for name, what, default in _SCENE_OPTIONS:
         p.add_argument(f"--{name}", type=real(least=None if name == "beat-moment" else 0.0,
-                                              most=1e30), default=default,
+                                              most=1e30),
                        metavar="X", help=f"exported scene: {what} (default {default:g}, "
                        f"Mrázek's one-side variant 1)")
 
@@ -282,6 +285,9 @@ def cmd_frame(args) -> int:
     from ..kinematics import FourBar, LinkMass, beat_up_force, frame_loading
 
     check_output_paths(args.output, plots=(args.plot,), table="a CSV table")
+    shaped = (args.reed_force is not None, "the --reed-force", "add --reed-force FX,FY")
+    refuse_ignored(args, {"--reed-point": (*shaped, (0.0, 0.0)), "--beat-window": (*shaped, 40.0),
+                          "--reed-force": (True, "", "", (0.0, 0.0))})     # (its default)
     k = 1e-3 if args.unit == "mm" else 1.0            # to metres
     fb = FourBar(args.crank * k, args.coupler * k, args.rocker * k, args.frame * k,
                  branch=args.branch)
@@ -345,6 +351,10 @@ def cmd_synth(args) -> int:
     from ..kinematics.synthesis_export import SceneOptions, export_designs
 
     check_output_paths(plots=(args.plot,))
+    export_only = (bool(args.export), "the files --export writes", "add --export DIR")
+    rules = {f"--{n}": (*export_only, d) for n, _, d in _SCENE_OPTIONS}
+    refuse_ignored(args, {**rules, "--omega": (*export_only, 100.0), "--swing-step": (
+        args.swing is None, "the swings explored, not a fixed --swing", "", 0.5)})
     if args.export and not Path(args.export).is_dir():
         raise MechcircError(f"--export {args.export}: no such folder (create it first)")
     fixed = {n: getattr(args, n) for n in ("crank", "coupler", "rocker", "frame")

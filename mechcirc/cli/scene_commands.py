@@ -10,7 +10,7 @@ from ..limits import MAX_CYCLE_POINTS
 from ..units import FREQUENCY_UNITS, in_unit
 from ._common import (NETLIST_FILE, add_command, add_handler, add_output_option,
                       add_plot_option, add_unit_option, check_output_paths, count, print_json,
-                      print_written, real, save_figure, scene_theta, set_values, write_outputs,
+                      print_written, real, refuse_ignored, save_figure, scene_theta, set_values, write_outputs,
                       write_text)
 
 
@@ -39,9 +39,8 @@ def _register_scene(sub) -> None:
     p.add_argument("--reflect", choices=("eta", "lever"), default="eta",
                    help="reflect through eta = ratio² (default) or explicit ideal levers")
     p.add_argument("--points", type=count(2, MAX_CYCLE_POINTS, why="10–25 ms each"),
-                   default=72, metavar="N",
-                   help="--cycle: crank angles over the revolution (default 72)")
-    p.add_argument("--harmonics", type=count(1, 1000), default=5, metavar="H",
+                   metavar="N", help="--cycle: crank angles over the revolution (default 72)")
+    p.add_argument("--harmonics", type=count(1, 1000), metavar="H",
                    help="--cycle: shaft harmonics h = 1..H for |Q0| (default 5)")
     p.add_argument("--reduce", action="store_true",
                    help="reduce the circuit to what the file's [analysis] output needs over "
@@ -83,12 +82,13 @@ def _register_reduce(sub) -> None:
 def cmd_scene(args) -> int:
     check_output_paths(args.output, plots=(args.plot,), reads=(args.file,),
                        table="a CSV table (--cycle) or a netlist (--theta)")
-    if args.plot and not args.cycle and args.mode is None:
-        raise MechcircError("--plot draws the --cycle map, or with --mode N a mode at the "
-                            "crank angle; with --theta alone use -o and 'mechcirc sweep'")
-    if args.mode is not None and (args.cycle or args.reduce or not args.plot):
-        raise MechcircError("--mode N draws a mode at one crank angle: give it with --plot "
-                            "IMAGE, without --cycle or --reduce")
+    one = args.plot and not (args.cycle or args.reduce)
+    refuse_ignored(args, {"--points": (args.cycle, "--cycle", "add --cycle", 72),
+                          "--harmonics": (args.cycle, "--cycle", "add --cycle", 5),
+                          "--plot": (args.cycle or args.mode is not None, "the --cycle map or a "
+                                     "--mode N drawing", "add --cycle or --mode N", None),
+                          "--mode": (one, "one crank angle drawn into --plot, without --cycle "
+                                     "or --reduce", "add --plot IMAGE", None)})
     from ..scene import build_needed, load_scene
 
     scene = load_scene(args.file)
@@ -252,12 +252,10 @@ def cmd_simulate_scene(args) -> int:
     if args.method is None and not shaft:       # the shaft's default is the library's (rk8)
         args.method = "rk4"
     fixed = args.method in (None, "rk4", "rk4-python", "rk8")
-    if args.rtol is not None and fixed:
-        raise MechcircError(f"--rtol applies to the scipy methods (DOP853, RK45, LSODA), not "
-                            f"{args.method or 'the default rk8'}; use --steps-per-period")
-    if args.steps_per_period is not None and not fixed:
-        raise MechcircError(f"--steps-per-period applies to rk4 and rk8, not {args.method}; "
-                            "use --rtol")
+    refuse_ignored(args, {
+        "--rtol": (not fixed, "the scipy methods (DOP853, RK45, LSODA), not "
+                   f"{args.method or 'the default rk8'}", "use --steps-per-period", None),
+        "--steps-per-period": (fixed, f"rk4 and rk8, not {args.method}", "use --rtol", None)})
     check_output_paths(args.output, plots=(args.plot,), reads=(args.scene,),
                        table="a CSV table")
     scene = _with_overrides(args, load_scene(args.scene))

@@ -7,8 +7,8 @@ import math
 from ..errors import InputError
 from ..limits import MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS, MAX_SCIPY_REVOLUTIONS
 from ._common import (add_command, add_handler, add_output_option, add_plot_option,
-                      check_output_paths, count, print_json, print_written, real, set_values,
-                      write_outputs, write_text)
+                      check_output_paths, count, print_json, print_written, real,
+                      refuse_ignored, set_values, write_outputs, write_text)
 
 _METHODS = ("rk4", "rk4-python", "rk8", "DOP853", "RK45", "LSODA")   # = mechcirc.sley.METHODS
 _UNITS = {"eps4T": "1/s^2", "eps2P": "1/s^2", "eps4P": "1/s^2", "eps5P": "1/s^2",
@@ -58,9 +58,9 @@ def _register_simulate(sub) -> None:
 
 def _sley_arguments(p) -> None:
     """simulate's options for the sley presets and the integration."""
-    p.add_argument("--drive", choices=("one-side", "both-sides"), default="one-side",
+    p.add_argument("--drive", choices=("one-side", "both-sides"),
                    help="Table 1 (one-side, default) or Table 2 (both-sides)")
-    p.add_argument("--variant", default="3", metavar="N",
+    p.add_argument("--variant", metavar="N",
                    help="variant 1-7 (default 3), or 'all' for all 14 of both tables "
                         "on every core")
     p.add_argument("--revolutions", type=count(1, MAX_REVOLUTIONS), metavar="R",
@@ -68,11 +68,10 @@ def _sley_arguments(p) -> None:
     p.add_argument("--revolution", type=count(1, MAX_REVOLUTIONS), metavar="K",
                    help="tabulate revolution K (1..R) instead of the last")
     p.add_argument("--alpha", type=real(above=0.0, most=360.0, unit="deg", role="angle"),
-                   default=10.0,
                    metavar="DEG",
                    help="beat-up interval alpha [deg] (default 10, the best fit to the "
                         "printed cells; not printed in the paper)")
-    p.add_argument("--beat-sign", type=int, choices=(-1, 1), default=-1,
+    p.add_argument("--beat-sign", type=int, choices=(-1, 1),
                    help="sign of M4 in the sley equation: -1 as eq. (4) prints it (default), "
                         "+1 along the rigid acceleration at beat-up (see docs/sley.md)")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
@@ -199,6 +198,12 @@ def _table(result, paper_applies: bool = True) -> str:
 
 # ----------------------------------------------------------------- handlers
 def cmd_simulate(args) -> int:
+    preset_only = (args.scene is None, f"a sley preset, not to the scene {args.scene}", "")
+    refuse_ignored(args, {"--drive": (*preset_only, "one-side"), "--variant": (*preset_only, "3"),
+                          "--alpha": (*preset_only, 10.0), "--beat-sign": (*preset_only, -1),
+                          "--start-deg": (args.scene is not None, "a scene file; the presets "
+                                          "start where the rigid sley acceleration is zero, as "
+                                          "the paper", "", None)})
     if args.scene is not None:
         from .scene_commands import cmd_simulate_scene
 
@@ -206,9 +211,6 @@ def cmd_simulate(args) -> int:
     from ..sley import (PAPER, ParameterError, all_presets, preset, simulate_batch,
                         simulate_params)
 
-    if args.start_deg is not None:
-        raise ParameterError("--start-deg applies to a scene file; the presets start where "
-                             "the rigid sley acceleration is zero, as the paper")
     args.revolutions = 5 if args.revolutions is None else args.revolutions
     args.points = 7200 if args.points is None else args.points
     args.method = args.method or "rk4"
@@ -252,18 +254,17 @@ def cmd_simulate(args) -> int:
 
 
 #: crosscheck's options that apply to some inputs only (the input's kind is a word of it).
-_CROSSCHECK_APPLIES = {"drive": "a sley preset", "variant": "a sley preset", "omega_max":
-                       "a netlist FILE", **dict.fromkeys(("theta", "netlist"), "a scene or a sley preset")}
+_CROSSCHECK_APPLIES = {"--drive": "a sley preset", "--variant": "a sley preset",
+                       "--omega-max": "a netlist FILE", "--theta": "a scene or a sley preset",
+                       "--netlist": "a scene or a sley preset"}
 
 
 def cmd_crosscheck(args) -> int:
     kind = "preset" if args.file is None else "scene" if args.file.endswith(".toml") else "netlist"
     given = {"preset": "without a FILE a sley preset is checked", "scene":
              f"'{args.file}' is a scene", "netlist": f"'{args.file}' is a netlist already"}[kind]
-    for key, where in _CROSSCHECK_APPLIES.items():
-        if getattr(args, key) is not None and kind not in where:    # refused, not ignored
-            opt = "--" + key.replace("_", "-")
-            raise InputError(f"{opt} applies to {where}; {given} (leave {opt} out)")
+    refuse_ignored(args, {opt: (kind in where, f"{where}; {given}", "", None)
+                          for opt, where in _CROSSCHECK_APPLIES.items()})
     if kind == "scene":
         from .scene_commands import cmd_crosscheck_scene
 

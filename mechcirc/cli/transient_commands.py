@@ -5,10 +5,9 @@ from __future__ import annotations
 import math
 import sys
 
-from ..errors import MechcircError
 from ._common import (add_command, add_handler, add_output_option, add_plot_option,
                       check_names, check_output_paths, print_json, print_written, real,
-                      save_figure, shaft_speed)
+                      refuse_ignored, save_figure, shaft_speed)
 
 seconds = real(above=0.0, unit="s", role="time")
 
@@ -57,8 +56,12 @@ def cmd_transient(args) -> int:
     from ..transient import transient
 
     check_output_paths(args.output, plots=(args.plot,), reads=(args.file,), table="a CSV table")
-    if args.element and not args.plot:
-        raise MechcircError("--element NAME draws a panel of the plot: give --plot IMAGE too")
+    shaped = args.rpm is not None or (args.waveform or "rest").split(":")[0] not in ("rest", "csv")
+    refuse_ignored(args, {"--amplitude": (shaped, "a harmonic, step or impulse --waveform or a "
+                                          "motion= drive at --rpm", "add --waveform "
+                                          "harmonic:OMEGA, step or impulse", None),
+                          "--element": (args.plot, "a panel of the --plot", "add --plot IMAGE",
+                                        None)})
     circuit = load(args.file, require_drive=False)
     check_names(args.element, [e.name for e in circuit.elements])   # before the run
     result = transient(circuit, args.t_end, args.dt, args.waveform, amplitude=args.amplitude,

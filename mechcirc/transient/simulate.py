@@ -289,6 +289,28 @@ class TransientResult:
         np.savetxt(fh, np.column_stack(cols), delimiter=",", fmt="%.12g", header=",".join(header),
                    comments="")
 
+    def to_dataframe(self):
+        """The run as a ``pandas.DataFrame``, one row per time step, in the columns of
+        :meth:`write_csv`: ``t`` [s], ``x(NODE)`` [m or rad], ``v(NODE)`` [m/s or rad/s]
+        when the run kept velocities, ``F(ELEMENT)`` [N or N·m], and ``F(drive)`` (a
+        velocity drive) or ``v(drive)`` (a force drive); ``attrs["units"]`` names the
+        units.  pandas is imported here only (an ImportError says so without it)."""
+        try:
+            import pandas as pd
+        except ImportError:
+            raise ImportError("TransientResult.to_dataframe needs pandas (pip install "
+                              "pandas); the arrays and write_csv do not") from None
+        cols = {"t": self.time}
+        for kind, names, values in (("x", self.nodes, self.x), ("v", self.nodes, self.v),
+                                    ("F", self.elements, self.force)):
+            cols.update({f"{kind}({n})": values[:, i] for i, n in enumerate(names)}
+                        if values is not None else {})
+        drive = {"F(drive)": self.drive_force, "v(drive)": self.drive_velocity}
+        cols.update({k: v for k, v in drive.items() if v is not None})
+        df = pd.DataFrame(cols)
+        df.attrs["units"] = {"t": "s", **self.units}
+        return df
+
     def plot(self, ax=None, nodes=None, what: str = "x", *, elements=None, fig=None,
              title: str | None = None):
         """Plot this transient: :func:`mechcirc.plotting.plot_transient` (``ax=`` the

@@ -76,8 +76,8 @@ def test_undercut_and_pressure_angle_warn_with_their_values(capsys):
 @pytest.mark.parametrize("extra,needles", [
     (["--low-dwell", "30"], ("= 330°, not 360°",)),
     (["--low-dwell", "60"], ()),
-    (["--pivot", "80"], ("--pivot does not apply to a roller follower",)),
-    (["--follower", "flat"], ("--roller-radius does not apply to a flat follower",)),
+    (["--pivot", "80"], ("--pivot applies to an oscillating follower, not --follower roller",)),
+    (["--follower", "flat"], ("--roller-radius applies to a roller follower, not --follower flat",)),
 ])
 def test_cycle_sum_and_options_that_do_not_apply(extra, needles, capsys):
     if needles:
@@ -164,8 +164,8 @@ def test_an_oscillating_flat_face_reports_the_curvature_written_out_here(capsys)
 
 @pytest.mark.parametrize("extra, needle", [
     ([], "needs --pivot"),
-    (["--pivot", "130", "--arm", "50"], "--arm does not apply"),
-    (["--pivot", "130", "--roller-radius", "5"], "--roller-radius does not apply"),
+    (["--pivot", "130", "--arm", "50"], "--arm applies to an oscillating roller follower"),
+    (["--pivot", "130", "--roller-radius", "5"], "--roller-radius applies to a roller follower"),
     (["--pivot", "30"], "must be more than the base radius"),
 ])
 def test_an_oscillating_flat_face_refuses_bad_options(extra, needle, capsys):

@@ -1,0 +1,51 @@
+"""TransientResult.to_dataframe (audit17): the run as a table, as Sweep.to_dataframe."""
+
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+import pytest
+from reference.inputs import STB
+
+from mechcirc.netlist import load, parse
+from mechcirc.transient import transient
+
+
+@pytest.mark.parametrize("velocities", [True, False])
+def test_columns_are_the_arrays_of_the_result(velocities):
+    """Every column is the result's own array, bit for bit, under write_csv's name
+    (without velocities and element forces when the run did not keep them)."""
+    r = transient(load(STB), 0.01, 1e-4, "harmonic:300", velocities=velocities,
+                  elements=velocities)
+    assert (r.v is None) != velocities
+    df = r.to_dataframe()
+    assert len(df) == r.time.size == 101
+    np.testing.assert_array_equal(df["t"], r.time)
+    for i, n in enumerate(r.nodes):
+        np.testing.assert_array_equal(df[f"x({n})"], r.x[:, i])
+        if velocities:
+            np.testing.assert_array_equal(df[f"v({n})"], r.v[:, i])
+    for j, e in enumerate(r.elements):
+        np.testing.assert_array_equal(df[f"F({e})"], r.force[:, j])
+    np.testing.assert_array_equal(df["F(drive)"], r.drive_force)     # a velocity drive
+    assert len(df.columns) == 1 + len(r.nodes) * (2 if velocities else 1) \
+        + r.force.shape[1] + 1
+    assert not any(c.startswith("v(") for c in df.columns) or velocities
+    assert df.attrs["units"] == {"t": "s", **r.units}
+
+
+def test_force_drive_gives_the_drive_velocity():
+    r = transient(parse("mass m1 A 0 2\nspring k1 A 0 800\ndrive Q A 0 force=1\n"), 0.1,
+                  1e-3, "step")
+    df = r.to_dataframe()
+    np.testing.assert_array_equal(df["v(drive)"], r.drive_velocity)
+    assert "F(drive)" not in df.columns
+
+
+def test_without_pandas_the_error_says_what_is_needed(monkeypatch):
+    r = transient(parse("mass m1 A 0 2\nspring k1 A 0 800\ndrive Q A 0 force=1\n"), 0.01,
+                  1e-3, "step")
+    monkeypatch.setitem(sys.modules, "pandas", None)       # import pandas raises ImportError
+    with pytest.raises(ImportError, match=r"to_dataframe needs pandas \(pip install pandas\)"):
+        r.to_dataframe()
