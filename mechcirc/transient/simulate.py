@@ -273,21 +273,26 @@ class TransientResult:
             doc["separations"] = [dataclasses.asdict(s) for s in self.separations]
         return doc
 
+    def _columns(self) -> dict:
+        """The run's columns by name, in order: ``t``, ``x(NODE)``, ``v(NODE)`` when the run
+        kept velocities, ``F(ELEMENT)``, then ``F(drive)`` (a velocity drive) or ``v(drive)``
+        (a force drive): what :meth:`write_csv` writes and :meth:`to_dataframe` holds."""
+        cols = {"t": self.time}
+        for kind, names, values in (("x", self.nodes, self.x), ("v", self.nodes, self.v),
+                                    ("F", self.elements, self.force)):
+            if values is not None:
+                cols.update({f"{kind}({n})": values[:, i] for i, n in enumerate(names)})
+        if self.drive_force is not None:
+            cols["F(drive)"] = self.drive_force
+        elif self.drive_velocity is not None:
+            cols["v(drive)"] = self.drive_velocity
+        return cols
+
     def write_csv(self, fh) -> None:
         """Columns: t, x(node), v(node) for each node, F(element) for each element, drive."""
-        vs = self.v if self.v is not None else np.zeros((self.time.size, 0))
-        header = ["t"] + [f"x({n})" for n in self.nodes] \
-            + [f"v({n})" for n in self.nodes if self.v is not None] \
-            + [f"F({e})" for e in self.elements]
-        cols = [self.time, *self.x.T, *vs.T, *self.force.T]
-        if self.drive_force is not None:
-            header.append("F(drive)")
-            cols.append(self.drive_force)
-        elif self.drive_velocity is not None:
-            header.append("v(drive)")
-            cols.append(self.drive_velocity)
-        np.savetxt(fh, np.column_stack(cols), delimiter=",", fmt="%.12g", header=",".join(header),
-                   comments="")
+        cols = self._columns()
+        np.savetxt(fh, np.column_stack(list(cols.values())), delimiter=",", fmt="%.12g",
+                   header=",".join(cols), comments="")
 
     def to_dataframe(self):
         """The run as a ``pandas.DataFrame``, one row per time step, in the columns of
@@ -300,14 +305,7 @@ class TransientResult:
         except ImportError:
             raise ImportError("TransientResult.to_dataframe needs pandas (pip install "
                               "pandas); the arrays and write_csv do not") from None
-        cols = {"t": self.time}
-        for kind, names, values in (("x", self.nodes, self.x), ("v", self.nodes, self.v),
-                                    ("F", self.elements, self.force)):
-            cols.update({f"{kind}({n})": values[:, i] for i, n in enumerate(names)}
-                        if values is not None else {})
-        drive = {"F(drive)": self.drive_force, "v(drive)": self.drive_velocity}
-        cols.update({k: v for k, v in drive.items() if v is not None})
-        df = pd.DataFrame(cols)
+        df = pd.DataFrame(self._columns())
         df.attrs["units"] = {"t": "s", **self.units}
         return df
 
