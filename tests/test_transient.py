@@ -29,6 +29,23 @@ def _sdof():
     return m, k, c, F, wn, z, wn * math.sqrt(1 - z * z)
 
 
+def test_a_run_where_nothing_moves_says_so():
+    """No waveform (or amplitude 0) and no .ic: every output is 0, and a note says why
+    and what would excite the circuit; any excitation or initial state: no such note."""
+    def quiet(r):
+        return [n for n in r.notes if n.startswith("nothing moves")]
+
+    c = mechcirc.parse(SDOF_F)
+    for r in (transient(c, 0.1, 1e-3), transient(c, 0.1, 1e-3, "rest"),
+              transient(c, 0.1, 1e-3, "harmonic:20", amplitude=0.0)):
+        assert not np.any(r.x) and len(quiet(r)) == 1, r.notes
+        assert "harmonic:OMEGA" in quiet(r)[0] and ".ic" in quiet(r)[0]
+    moving = (transient(c, 0.1, 1e-3, "step"), transient(c, 0.1, 1e-3, "impulse"),
+              transient(mechcirc.parse(SDOF_F + ".ic a x=1e-3\n"), 0.1, 1e-3))
+    for r in moving:
+        assert np.any(r.x) and not quiet(r), r.notes
+
+
 def test_sdof_step_response_closed_form():
     m, k, c, F, wn, z, wd = _sdof()
     r = transient(mechcirc.parse(SDOF_F), 2.0, 1e-3, "step")

@@ -520,6 +520,10 @@ def _start(ss: StateSpace, drive: Waveform, amp: float, u, steady: bool, circuit
         # damped node; a velocity impulse moves the drive by amp·1 s (X jumps)
         # and its dampers pass momentum on.
         z0 = z0 + ss.B * amp
+    if not z0.any() and not np.any(u):
+        notes.append("nothing moves: the drive is at rest and every initial state is 0 "
+                     "(give a waveform: harmonic:OMEGA, step, impulse or csv:PATH, an "
+                     "amplitude other than 0, or .ic lines)")
     if drive.kind == "step" and ss.kind == "velocity":
         notes.append("a velocity step makes the drive's nodes jump in velocity: the force "
                      "through the drive has an impulse at t = 0 that samples cannot show")
