@@ -14,11 +14,17 @@ FILES = {"STB": str(REPO / "netlists" / "stb_heald.mcir"),
          "CAM": str(REPO / "docs" / "examples" / "cam_drive.mcir"),
          "SCENE": str(REPO / "examples" / "heald_scene.toml"),
          "STUDY": str(REPO / "examples" / "study_stb.toml"),
-         "SLEY": str(REPO / "docs" / "examples" / "sley_scene.toml")}
+         "SLEY": str(REPO / "docs" / "examples" / "sley_scene.toml"),
+         "LIFT": str(REPO / "docs" / "examples" / "lift.csv")}
 
 #: command line (FILES by their key) | what its error line says | how to make it apply
 CASES = """\
 sweep STB --omega-min 10 --omega-max 1e4 --tol 1e-3 | --tol applies to --adaptive sweeps | add --adaptive
+sweep STB --omega-min 10 --omega-max 1e4 --adaptive --no-refine | --no-refine applies to a fixed \
+grid | leave out --adaptive
+cam --motion LIFT --return 90 --base-radius 30 --roller-radius 5 | --return applies to a --law cycle |
+cam --motion LIFT --return-law harmonic --base-radius 30 --roller-radius 5 | --return-law applies to |
+scene SCENE --cycle --reduce | --reduce applies to one crank angle, not to --cycle |
 periodic CAM --rpm 600 --points 50 | --points applies to a speed map | add --rpm-min
 periodic CAM --rpm-min 100 --rpm-max 1200 --angles 90 | --angles applies to one speed | give --rpm
 periodic CAM --rpm-min 100 --rpm-max 1200 --near 0.1 | --near applies to one speed | give --rpm

@@ -683,6 +683,8 @@ def refuse_ignored(args, rules) -> None:
         ``"--opt": (applies, to_what, hint, default)``: whether the option is read
         with the other options and the input given; to what it applies, and how to
         make it apply ("" for no way) for the message; its value when not given.
+        ``"--no-opt"`` is the off side of the on/off flag ``--opt`` (dest ``opt``):
+        its ``applies`` must hold when the value given is on.
 
     Raises
     ------
@@ -690,7 +692,7 @@ def refuse_ignored(args, rules) -> None:
         "--tol applies to --adaptive sweeps (leave --tol out, or add --adaptive)".
     """
     for option, (applies, to_what, hint, default) in rules.items():
-        dest = option[2:].replace("-", "_")
+        dest = option[2:].removeprefix("no-").replace("-", "_")
         if getattr(args, dest) is None:
             setattr(args, dest, default)
         elif not applies:

@@ -42,7 +42,7 @@ def _register_scene(sub) -> None:
                    metavar="N", help="--cycle: crank angles over the revolution (default 72)")
     p.add_argument("--harmonics", type=count(1, 1000), metavar="H",
                    help="--cycle: shaft harmonics h = 1..H for |Q0| (default 5)")
-    p.add_argument("--reduce", action="store_true",
+    p.add_argument("--reduce", action="store_true", default=None,
                    help="reduce the circuit to what the file's [analysis] output needs over "
                         "its band, within its tol (-o then writes the reduced netlist)")
     add_plot_option(p, "--cycle: plot the map; with --mode: draw the mode on the linkage "
@@ -88,13 +88,13 @@ def cmd_scene(args) -> int:
                           "--plot": (args.cycle or args.mode is not None, "the --cycle map or a "
                                      "--mode N drawing", "add --cycle or --mode N", None),
                           "--mode": (one, "one crank angle drawn into --plot, without --cycle "
-                                     "or --reduce", "add --plot IMAGE", None)})
+                                     "or --reduce", "add --plot IMAGE", None),
+                          "--reduce": (not args.cycle, "one crank angle, not to --cycle", "",
+                                       False)})
     from ..scene import build_needed, load_scene
 
     scene = load_scene(args.file)
     if args.cycle:
-        if args.reduce:
-            raise MechcircError("--reduce applies to one crank angle, not to --cycle")
         return _cycle(args, scene)
     if args.reduce and scene.analysis.band is None:
         raise MechcircError(f"{args.file}: --reduce needs band = [W1, W2] and tol = T in the "
