@@ -63,6 +63,11 @@ __all__ = ["LinkageMotion", "LinkageState", "MAX_CONTINUATION_STEPS", "plan", "m
 MAX_CONTINUATION_STEPS = 100_000
 
 
+class OutOfReach(GeometryError):
+    """θ farther from the pose than :data:`MAX_CONTINUATION_STEPS` steps go (the
+    linkage itself may be fine there)."""
+
+
 @dataclass(frozen=True)
 class LinkageState:
     """Positions, velocities and accelerations at one drive position.
@@ -455,10 +460,12 @@ def _times(lk, thetas, max_step_deg):
         path = np.concatenate(([0.0], t))
         steps = float(np.sum(np.abs(np.diff(path)))) * wmax / math.radians(max_step_deg)
     if not steps <= MAX_CONTINUATION_STEPS:
-        raise GeometryError(
-            f"{lk.source}: reaching θ needs about {steps:.3g} continuation steps of "
-            f"{max_step_deg:g}° of the fastest crank (|ω| = {wmax:g} rad/s against the "
-            f"first crank's {abs(w1):g} rad/s); the limit is {MAX_CONTINUATION_STEPS}")
+        far = float(np.max(np.abs(np.degrees(thetas))))
+        raise OutOfReach(
+            f"{lk.source}: reaching θ = {far:.6g}° needs about {steps:.3g} continuation steps "
+            f"of {max_step_deg:g}° of the fastest crank (|ω| = {wmax:g} rad/s against the "
+            f"first crank's {abs(w1):g} rad/s); the limit is {MAX_CONTINUATION_STEPS}, a path "
+            f"of {MAX_CONTINUATION_STEPS * max_step_deg * abs(w1) / wmax:.6g}° from the pose")
     return t, math.radians(max_step_deg) / wmax
 
 

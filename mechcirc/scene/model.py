@@ -39,6 +39,7 @@ import numpy as np
 from ..circuit import Circuit, Drive, Element, Lever
 from ..errors import GeometryError, InputError, MechcircError
 from ..sources import is_name
+from ..kinematics.linkage_solver import OutOfReach
 from .files import Scene, gear_meshes
 
 #: How a lever is reflected into the circuit (see :func:`build`).
@@ -211,6 +212,8 @@ def _motion(scene: Scene, theta: float, state) -> _Motion:
     if state is None:
         try:
             state = lk.solve(theta)
+        except OutOfReach:
+            raise                   # the step limit, not the linkage: its own message
         except GeometryError as exc:
             raise GeometryError(
                 f"{scene.source}: at crank rotation θ = {deg:.6g}° the rigid mechanism "
