@@ -586,9 +586,8 @@ def load_with_warnings(path):
                  for e in circuit.elements if e.kind == "spring" and e.backlash >= 1e-10]
     d = circuit.drive
     if d.amplitude == 0:        # a value not filled in: everything but K would read 0
-        messages.append(f"{path}:{d.line}:{d.col}: drive {d.name!r} has amplitude 0 ({d.kind}): "
-                        f"K does not depend on it, but {'Q0' if d.kind == 'velocity' else 'v0'} "
-                        "and every element force are 0 at every frequency")
+        messages.append(f"{path}:{d.line}:{d.col}: drive {d.name!r} has amplitude 0: Q0, v0 "
+                        "and every element force are 0 at every frequency (K does not depend on it)")
     return circuit, messages
 
 
