@@ -15,7 +15,8 @@ FILES = {"STB": str(REPO / "netlists" / "stb_heald.mcir"),
          "SCENE": str(REPO / "examples" / "heald_scene.toml"),
          "STUDY": str(REPO / "examples" / "study_stb.toml"),
          "SLEY": str(REPO / "docs" / "examples" / "sley_scene.toml"),
-         "LIFT": str(REPO / "docs" / "examples" / "lift.csv")}
+         "LIFT": str(REPO / "docs" / "examples" / "lift.csv"),
+         "SHAFT": str(REPO / "examples" / "fnf_sixbar_scene.toml")}
 
 #: command line (FILES by their key) | what its error line says | how to make it apply
 CASES = """\
@@ -42,6 +43,11 @@ simulate SLEY --alpha 20 | --alpha applies to a sley preset |
 simulate SLEY --variant 2 | --variant applies to a sley preset |
 simulate SLEY --beat-sign 1 | --beat-sign applies to a sley preset |
 simulate --start-deg 10 | --start-deg applies to a scene file |
+simulate --shaft | --shaft applies to a scene file's [shaft] table |
+simulate --rigid | --rigid applies to --shaft | add --shaft
+simulate --flywheel 0.1 | --flywheel applies to --shaft | add --shaft
+simulate SHAFT --shaft --revolutions 2 | --revolutions applies to a fixed crank speed |
+simulate SHAFT --shaft --plot p.png | --plot applies to a fixed crank speed |
 frame --crank 35 --coupler 120 --rocker 100 --frame 140 --rpm 300 --reed-point 10,5 \
 | --reed-point applies to the --reed-force | add --reed-force
 frame --crank 35 --coupler 120 --rocker 100 --frame 140 --rpm 300 --beat-window 30 \

@@ -247,9 +247,7 @@ def cmd_simulate_scene(args) -> int:
     """``mechcirc simulate SCENE.toml``: the scene's motion over whole revolutions."""
     from ..scene import load_scene
 
-    shaft = getattr(args, "shaft", False) or getattr(args, "flywheel", None) is not None \
-        or getattr(args, "rigid", False)
-    if args.method is None and not shaft:       # the shaft's default is the library's (rk8)
+    if args.method is None and not args.shaft:  # the shaft's default is the library's (rk8)
         args.method = "rk4"
     fixed = args.method in (None, "rk4", "rk4-python", "rk8")
     refuse_ignored(args, {
@@ -259,7 +257,7 @@ def cmd_simulate_scene(args) -> int:
     check_output_paths(args.output, plots=(args.plot,), reads=(args.scene,),
                        table="a CSV table")
     scene = _with_overrides(args, load_scene(args.scene))
-    if shaft:
+    if args.shaft:
         return _shaft(args, scene)
     result = _simulate_with_bar(args, scene)
     from ..scene.plots import plot_motion
@@ -390,11 +388,6 @@ def _shaft(args, scene) -> int:
 
     from ..scene.shaft import ShaftWarning, simulate_shaft
 
-    for flag in ("revolutions", "revolution", "plot"):
-        if getattr(args, flag, None) is not None:
-            raise MechcircError(f"--{flag.replace('_', '-')} does not apply to --shaft")
-    if not args.shaft:
-        raise MechcircError(f"--{'rigid' if args.rigid else 'flywheel'} applies with --shaft")
     if args.method not in (None, "rk4", "rk8", "DOP853"):
         raise MechcircError(f"--method {args.method} does not apply to --shaft: use rk4, rk8 "
                             "(fixed steps, --steps-per-period) or DOP853 (--rtol)")
