@@ -197,7 +197,9 @@ def _table(result, paper_applies: bool = True) -> str:
 
 
 # ----------------------------------------------------------------- handlers
-def cmd_simulate(args) -> int:
+def _refuse_unread(args) -> None:
+    """simulate's options that the input (a sley preset or a scene file) or --shaft leaves
+    unread are refused (:func:`refuse_ignored`)."""
     preset_only = (args.scene is None, f"a sley preset, not to the scene {args.scene}", "")
     with_shaft = (args.shaft, "--shaft", "add --shaft")
     refuse_ignored(args, {"--drive": (*preset_only, "one-side"), "--variant": (*preset_only, "3"),
@@ -211,6 +213,10 @@ def cmd_simulate(args) -> int:
                           **{o: (not args.shaft, "a fixed crank speed, not to --shaft's steady "
                                  "cycle", "", None) for o in ("--revolutions", "--revolution",
                                                               "--plot")}})
+
+
+def cmd_simulate(args) -> int:
+    _refuse_unread(args)
     if args.scene is not None:
         from .scene_commands import cmd_simulate_scene
 

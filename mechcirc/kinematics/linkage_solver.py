@@ -51,7 +51,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .. import _jit
-from ..errors import GeometryError, NetlistError
+from ..errors import GeometryError, NetlistError, OutOfReach
 from ..motion_laws import quintic
 from ._dyad_forms import rpr, rrp, rrr, solve2
 
@@ -61,11 +61,6 @@ __all__ = ["LinkageMotion", "LinkageState", "MAX_CONTINUATION_STEPS", "plan", "m
 #: Most continuation steps :meth:`Linkage.solve` takes (about 20 s of work);
 #: more is refused at once with the number needed.
 MAX_CONTINUATION_STEPS = 100_000
-
-
-class OutOfReach(GeometryError):
-    """θ farther from the pose than :data:`MAX_CONTINUATION_STEPS` steps go (the
-    linkage itself may be fine there)."""
 
 
 @dataclass(frozen=True)

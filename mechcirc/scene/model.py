@@ -37,9 +37,8 @@ from typing import Literal
 import numpy as np
 
 from ..circuit import Circuit, Drive, Element, Lever
-from ..errors import GeometryError, InputError, MechcircError
+from ..errors import GeometryError, InputError, MechcircError, OutOfReach
 from ..sources import is_name
-from ..kinematics.linkage_solver import OutOfReach
 from .files import Scene, gear_meshes
 
 #: How a lever is reflected into the circuit (see :func:`build`).
