@@ -20,6 +20,7 @@ __all__ = [
     "TopologyError",
     "NotSeriesParallelError",
     "GeometryError",
+    "OutOfReach",
     "SolverError",
     "MechcircWarning",
     "UnloadedElementWarning",
@@ -178,6 +179,11 @@ class NotSeriesParallelError(TopologyError):
 
 class GeometryError(MechcircError, ValueError):
     """A linkage that cannot be assembled, locks, or is singular where asked."""
+
+
+class OutOfReach(GeometryError):
+    """A crank angle farther from the pose than the continuation's step limit goes
+    (``linkage.MAX_CONTINUATION_STEPS``); the linkage itself may be fine there."""
 
 
 class SolverError(MechcircError, RuntimeError):

@@ -14,11 +14,18 @@ FILES = {"STB": str(REPO / "netlists" / "stb_heald.mcir"),
          "CAM": str(REPO / "docs" / "examples" / "cam_drive.mcir"),
          "SCENE": str(REPO / "examples" / "heald_scene.toml"),
          "STUDY": str(REPO / "examples" / "study_stb.toml"),
-         "SLEY": str(REPO / "docs" / "examples" / "sley_scene.toml")}
+         "SLEY": str(REPO / "docs" / "examples" / "sley_scene.toml"),
+         "LIFT": str(REPO / "docs" / "examples" / "lift.csv"),
+         "SHAFT": str(REPO / "examples" / "fnf_sixbar_scene.toml")}
 
 #: command line (FILES by their key) | what its error line says | how to make it apply
 CASES = """\
 sweep STB --omega-min 10 --omega-max 1e4 --tol 1e-3 | --tol applies to --adaptive sweeps | add --adaptive
+sweep STB --omega-min 10 --omega-max 1e4 --adaptive --no-refine | --no-refine applies to a fixed \
+grid | leave out --adaptive
+cam --motion LIFT --return 90 --base-radius 30 --roller-radius 5 | --return applies to a --law cycle |
+cam --motion LIFT --return-law harmonic --base-radius 30 --roller-radius 5 | --return-law applies to |
+scene SCENE --cycle --reduce | --reduce applies to one crank angle, not to --cycle |
 periodic CAM --rpm 600 --points 50 | --points applies to a speed map | add --rpm-min
 periodic CAM --rpm-min 100 --rpm-max 1200 --angles 90 | --angles applies to one speed | give --rpm
 periodic CAM --rpm-min 100 --rpm-max 1200 --near 0.1 | --near applies to one speed | give --rpm
@@ -36,6 +43,11 @@ simulate SLEY --alpha 20 | --alpha applies to a sley preset |
 simulate SLEY --variant 2 | --variant applies to a sley preset |
 simulate SLEY --beat-sign 1 | --beat-sign applies to a sley preset |
 simulate --start-deg 10 | --start-deg applies to a scene file |
+simulate --shaft | --shaft applies to a scene file's [shaft] table |
+simulate --rigid | --rigid applies to --shaft | add --shaft
+simulate --flywheel 0.1 | --flywheel applies to --shaft | add --shaft
+simulate SHAFT --shaft --revolutions 2 | --revolutions applies to a fixed crank speed |
+simulate SHAFT --shaft --plot p.png | --plot applies to a fixed crank speed |
 frame --crank 35 --coupler 120 --rocker 100 --frame 140 --rpm 300 --reed-point 10,5 \
 | --reed-point applies to the --reed-force | add --reed-force
 frame --crank 35 --coupler 120 --rocker 100 --frame 140 --rpm 300 --beat-window 30 \

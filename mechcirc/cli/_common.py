@@ -584,6 +584,10 @@ def load_with_warnings(path):
     messages += [f"spring {e.name!r} has backlash={e.backlash:g} {x}: the frequency domain takes "
                  "its contact as closed (linearised); 'mechcirc transient' integrates the gap"
                  for e in circuit.elements if e.kind == "spring" and e.backlash >= 1e-10]
+    d = circuit.drive
+    if d.amplitude == 0:        # a value not filled in: everything but K would read 0
+        messages.append(f"{path}:{d.line}:{d.col}: drive {d.name!r} has amplitude 0: Q0, v0 "
+                        "and every element force are 0 at every frequency (K does not depend on it)")
     return circuit, messages
 
 
@@ -683,6 +687,8 @@ def refuse_ignored(args, rules) -> None:
         ``"--opt": (applies, to_what, hint, default)``: whether the option is read
         with the other options and the input given; to what it applies, and how to
         make it apply ("" for no way) for the message; its value when not given.
+        ``"--no-opt"`` is the off side of the on/off flag ``--opt`` (dest ``opt``):
+        its ``applies`` must hold when the value given is on.
 
     Raises
     ------
@@ -690,7 +696,7 @@ def refuse_ignored(args, rules) -> None:
         "--tol applies to --adaptive sweeps (leave --tol out, or add --adaptive)".
     """
     for option, (applies, to_what, hint, default) in rules.items():
-        dest = option[2:].replace("-", "_")
+        dest = option[2:].removeprefix("no-").replace("-", "_")
         if getattr(args, dest) is None:
             setattr(args, dest, default)
         elif not applies:

@@ -29,8 +29,7 @@ def register(sub) -> None:
                      help="lift table: columns angle_deg,displacement over one turn")
     for name, what in (("rise", "rise"), ("dwell", "dwell at the top (default 0)"),
                        ("return", "return")):
-        p.add_argument(f"--{name}", type=real(least=0.0, most=360.0, unit="deg"),
-                       dest="ret" if name == "return" else name, metavar="DEG",
+        p.add_argument(f"--{name}", type=real(least=0.0, most=360.0, unit="deg"), metavar="DEG",
                        help=f"cam angle of the {what} [deg]")
     p.add_argument("--low-dwell", type=real(least=0.0, most=360.0, unit="deg"), metavar="DEG",
                    help="dwell at the bottom [deg] (default: the rest of 360°; given, the four "
@@ -70,35 +69,33 @@ def _motion(args):
     osc = args.follower.startswith("oscillating")
     scale = math.pi / 180 if osc else 1.0
     unit = "°" if osc else " mm"
+    refuse_ignored(args, {f"--{o}": (not args.motion, "a --law cycle, not to a --motion table",
+                                      "", None)
+                          for o in ("rise", "dwell", "return", "low-dwell", "stroke", "return-law")})
     if args.motion:
-        given = [o for o in ("rise", "dwell", "ret", "low_dwell", "stroke", "return_law")
-                 if getattr(args, o) is not None]
-        if given:
-            name = "return" if given[0] == "ret" else given[0].replace("_", "-")
-            raise InputError(f"--motion gives the whole lift; drop --{name}")
         m = read_motion_table(args.motion)
         note = (f" (periodic spline; its slope uncertain by ~{m.error:.1g} of its peak)"
                 if math.isfinite(m.error) else " (periodic spline; under 9 rows: no error "
                 "estimate)")
         return m.scaled(scale), f"lift table {args.motion}{note}"
-    missing = [o for o in ("rise", "ret", "stroke") if getattr(args, o) is None]
+    missing = [o for o in ("rise", "return", "stroke") if getattr(args, o) is None]
     if missing:
-        raise InputError(f"--law {args.law} needs --{'return' if missing[0] == 'ret' else missing[0]}"
-                         " (a law cycle takes --rise, --return and --stroke; --dwell defaults to 0)")
+        raise InputError(f"--law {args.law} needs --{missing[0]} (a law cycle takes --rise, "
+                         "--return and --stroke; --dwell defaults to 0)")
     dwell = args.dwell or 0.0
-    total = args.rise + dwell + args.ret
+    ret = getattr(args, "return")       # (a keyword: no args.return)
+    total = args.rise + dwell + ret
     if args.low_dwell is not None and abs(total + args.low_dwell - 360.0) > 1e-9:
         raise InputError(f"rise + dwell + return + low dwell = {args.rise:g} + {dwell:g} + "
-                         f"{args.ret:g} + {args.low_dwell:g} = {total + args.low_dwell:g}°, "
+                         f"{ret:g} + {args.low_dwell:g} = {total + args.low_dwell:g}°, "
                          "not 360° (one turn)")
     try:
-        m = cam_cycle(args.law, args.rise, dwell, args.ret, args.stroke * scale,
-                      args.return_law)
+        m = cam_cycle(args.law, args.rise, dwell, ret, args.stroke * scale, args.return_law)
     except ValueError as exc:
         raise InputError(str(exc)) from None
     text = (f"{args.law} rise {args.rise:g}° dwell {dwell:g}° "
-            + (f"return {args.ret:g}° ({args.return_law})" if args.return_law
-               else f"return {args.ret:g}°")
+            + (f"return {ret:g}° ({args.return_law})" if args.return_law
+               else f"return {ret:g}°")
             + f", low dwell {360 - total:g}°, stroke {args.stroke:g}{unit}")
     return m, text
 

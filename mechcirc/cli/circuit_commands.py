@@ -74,7 +74,7 @@ def _register_sweep(sub) -> None:
     p.add_argument("--adaptive", action="store_true",
                    help="refine the grid around resonances and wherever |K| or |Q0| "
                         "bends (--points is then the starting grid)")
-    p.add_argument("--refine", action=argparse.BooleanOptionalAction, default=True,
+    p.add_argument("--refine", action=argparse.BooleanOptionalAction,
                    help="nodal analysis: refine each solution with residuals in double-"
                         "double (the default, K to about its rounding); --no-refine: one "
                         "plain solve per point, faster, error about eps·cond(A) (the "
@@ -241,7 +241,9 @@ def _peak_text(pk, units: dict, unit: str = "rad/s") -> str:
 def cmd_sweep(args) -> int:
     check_output_paths(args.output, args.touchstone, plots=(args.plot,), reads=(args.file,),
                        table="a CSV table")
-    refuse_ignored(args, {"--tol": (args.adaptive, "--adaptive sweeps", "add --adaptive", 0.005)})
+    refuse_ignored(args, {"--tol": (args.adaptive, "--adaptive sweeps", "add --adaptive", 0.005),
+                          "--no-refine": (not args.adaptive or args.refine, "a fixed grid, not "
+                                          "--adaptive", "leave out --adaptive", True)})
     if args.touchstone and Path(args.touchstone).suffix.lower() != ".s1p":
         # K seen by one drive is a one-port: a .s2p name would promise a
         # 2-port file that scikit-rf then cannot read.
@@ -298,8 +300,6 @@ def _run_sweep(args, circuit, omega):
 
     if omega[0] <= 0:
         raise MechcircError("--adaptive needs --omega-min > 0")
-    if not args.refine:
-        raise MechcircError("--no-refine applies to a fixed grid, not with --adaptive")
     # By nodal analysis a point costs ~0.1 ms or more, so its budget is smaller;
     # the work (points × elements) is bounded in adaptive_sweep on either path.
     budget = MAX_ADAPTIVE_NODAL_POINTS if args.method == "nodal" else MAX_ADAPTIVE_POINTS

@@ -42,7 +42,7 @@ def _register_scene(sub) -> None:
                    metavar="N", help="--cycle: crank angles over the revolution (default 72)")
     p.add_argument("--harmonics", type=count(1, 1000), metavar="H",
                    help="--cycle: shaft harmonics h = 1..H for |Q0| (default 5)")
-    p.add_argument("--reduce", action="store_true",
+    p.add_argument("--reduce", action="store_true", default=None,
                    help="reduce the circuit to what the file's [analysis] output needs over "
                         "its band, within its tol (-o then writes the reduced netlist)")
     add_plot_option(p, "--cycle: plot the map; with --mode: draw the mode on the linkage "
@@ -88,13 +88,13 @@ def cmd_scene(args) -> int:
                           "--plot": (args.cycle or args.mode is not None, "the --cycle map or a "
                                      "--mode N drawing", "add --cycle or --mode N", None),
                           "--mode": (one, "one crank angle drawn into --plot, without --cycle "
-                                     "or --reduce", "add --plot IMAGE", None)})
+                                     "or --reduce", "add --plot IMAGE", None),
+                          "--reduce": (not args.cycle, "one crank angle, not to --cycle", "",
+                                       False)})
     from ..scene import build_needed, load_scene
 
     scene = load_scene(args.file)
     if args.cycle:
-        if args.reduce:
-            raise MechcircError("--reduce applies to one crank angle, not to --cycle")
         return _cycle(args, scene)
     if args.reduce and scene.analysis.band is None:
         raise MechcircError(f"{args.file}: --reduce needs band = [W1, W2] and tol = T in the "
@@ -247,9 +247,7 @@ def cmd_simulate_scene(args) -> int:
     """``mechcirc simulate SCENE.toml``: the scene's motion over whole revolutions."""
     from ..scene import load_scene
 
-    shaft = getattr(args, "shaft", False) or getattr(args, "flywheel", None) is not None \
-        or getattr(args, "rigid", False)
-    if args.method is None and not shaft:       # the shaft's default is the library's (rk8)
+    if args.method is None and not args.shaft:  # the shaft's default is the library's (rk8)
         args.method = "rk4"
     fixed = args.method in (None, "rk4", "rk4-python", "rk8")
     refuse_ignored(args, {
@@ -259,7 +257,7 @@ def cmd_simulate_scene(args) -> int:
     check_output_paths(args.output, plots=(args.plot,), reads=(args.scene,),
                        table="a CSV table")
     scene = _with_overrides(args, load_scene(args.scene))
-    if shaft:
+    if args.shaft:
         return _shaft(args, scene)
     result = _simulate_with_bar(args, scene)
     from ..scene.plots import plot_motion
@@ -390,11 +388,6 @@ def _shaft(args, scene) -> int:
 
     from ..scene.shaft import ShaftWarning, simulate_shaft
 
-    for flag in ("revolutions", "revolution", "plot"):
-        if getattr(args, flag, None) is not None:
-            raise MechcircError(f"--{flag.replace('_', '-')} does not apply to --shaft")
-    if not args.shaft:
-        raise MechcircError(f"--{'rigid' if args.rigid else 'flywheel'} applies with --shaft")
     if args.method not in (None, "rk4", "rk8", "DOP853"):
         raise MechcircError(f"--method {args.method} does not apply to --shaft: use rk4, rk8 "
                             "(fixed steps, --steps-per-period) or DOP853 (--rtol)")

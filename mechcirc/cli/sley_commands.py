@@ -46,11 +46,11 @@ def _register_simulate(sub) -> None:
     _sley_arguments(p)
     add_plot_option(p, "plot eps2P, eps4P, eps4T, M2V (Figs. 4-9)")
     add_handler(p, cmd_simulate)
-    p.add_argument("--shaft", action="store_true",
+    p.add_argument("--shaft", action="store_true", default=None,
                    help="scene: the dynamic main shaft of its [shaft] table (flywheel, motor) "
                         "turning the mechanism with its elastic parts: speed fluctuation, "
                         "motor torque, elastic forces, start-up")
-    p.add_argument("--rigid", action="store_true",
+    p.add_argument("--rigid", action="store_true", default=None,
                    help="with --shaft: every elastic element rigid (θ the only DOF)")
     p.add_argument("--flywheel", type=real(least=0.0, unit="kg·m²"), metavar="J",
                    help="with --shaft: the flywheel's inertia [kg·m²] (default the file's)")
@@ -197,13 +197,26 @@ def _table(result, paper_applies: bool = True) -> str:
 
 
 # ----------------------------------------------------------------- handlers
-def cmd_simulate(args) -> int:
+def _refuse_unread(args) -> None:
+    """simulate's options that the input (a sley preset or a scene file) or --shaft leaves
+    unread are refused (:func:`refuse_ignored`)."""
     preset_only = (args.scene is None, f"a sley preset, not to the scene {args.scene}", "")
+    with_shaft = (args.shaft, "--shaft", "add --shaft")
     refuse_ignored(args, {"--drive": (*preset_only, "one-side"), "--variant": (*preset_only, "3"),
                           "--alpha": (*preset_only, 10.0), "--beat-sign": (*preset_only, -1),
                           "--start-deg": (args.scene is not None, "a scene file; the presets "
                                           "start where the rigid sley acceleration is zero, as "
-                                          "the paper", "", None)})
+                                          "the paper", "", None),
+                          "--shaft": (args.scene is not None, "a scene file's [shaft] table, "
+                                      "not to a sley preset", "", False),
+                          "--rigid": (*with_shaft, False), "--flywheel": (*with_shaft, None),
+                          **{o: (not args.shaft, "a fixed crank speed, not to --shaft's steady "
+                                 "cycle", "", None) for o in ("--revolutions", "--revolution",
+                                                              "--plot")}})
+
+
+def cmd_simulate(args) -> int:
+    _refuse_unread(args)
     if args.scene is not None:
         from .scene_commands import cmd_simulate_scene
 

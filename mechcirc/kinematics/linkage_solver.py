@@ -51,7 +51,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .. import _jit
-from ..errors import GeometryError, NetlistError
+from ..errors import GeometryError, NetlistError, OutOfReach
 from ..motion_laws import quintic
 from ._dyad_forms import rpr, rrp, rrr, solve2
 
@@ -455,10 +455,12 @@ def _times(lk, thetas, max_step_deg):
         path = np.concatenate(([0.0], t))
         steps = float(np.sum(np.abs(np.diff(path)))) * wmax / math.radians(max_step_deg)
     if not steps <= MAX_CONTINUATION_STEPS:
-        raise GeometryError(
-            f"{lk.source}: reaching θ needs about {steps:.3g} continuation steps of "
-            f"{max_step_deg:g}° of the fastest crank (|ω| = {wmax:g} rad/s against the "
-            f"first crank's {abs(w1):g} rad/s); the limit is {MAX_CONTINUATION_STEPS}")
+        far = float(np.max(np.abs(np.degrees(thetas))))
+        raise OutOfReach(
+            f"{lk.source}: reaching θ = {far:.6g}° needs about {steps:.3g} continuation steps "
+            f"of {max_step_deg:g}° of the fastest crank (|ω| = {wmax:g} rad/s against the "
+            f"first crank's {abs(w1):g} rad/s); the limit is {MAX_CONTINUATION_STEPS}, a path "
+            f"of {MAX_CONTINUATION_STEPS * max_step_deg * abs(w1) / wmax:.6g}° from the pose")
     return t, math.radians(max_step_deg) / wmax
 
 

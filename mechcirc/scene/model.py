@@ -37,7 +37,7 @@ from typing import Literal
 import numpy as np
 
 from ..circuit import Circuit, Drive, Element, Lever
-from ..errors import GeometryError, InputError, MechcircError
+from ..errors import GeometryError, InputError, MechcircError, OutOfReach
 from ..sources import is_name
 from .files import Scene, gear_meshes
 
@@ -211,6 +211,8 @@ def _motion(scene: Scene, theta: float, state) -> _Motion:
     if state is None:
         try:
             state = lk.solve(theta)
+        except OutOfReach:
+            raise                   # the step limit, not the linkage: its own message
         except GeometryError as exc:
             raise GeometryError(
                 f"{scene.source}: at crank rotation θ = {deg:.6g}° the rigid mechanism "

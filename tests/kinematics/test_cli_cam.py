@@ -111,7 +111,7 @@ def test_table_errors_are_located(tmp_path, capsys):
     assert_user_error(["cam", "--motion", table, "--base-radius", "30", "--roller-radius",
                        "5"], capsys, f"{table}:4:5", "'x' is not a number")
     assert_user_error(["cam", "--motion", table, "--rise", "30", "--base-radius", "30",
-                       "--roller-radius", "5"], capsys, "drop --rise")
+                       "--roller-radius", "5"], capsys, "--rise applies to a --law cycle")
 
 
 def test_no_output_file_on_error(tmp_path, capsys):

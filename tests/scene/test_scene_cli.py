@@ -136,3 +136,15 @@ def test_scene_reduce_without_a_band_exits_2(tmp_path, capsys):
     assert status == 2 and "needs band" in err
     status, _, err = run(["scene", bare], capsys)
     assert status == 2 and "give --theta" in err
+
+
+def test_a_theta_beyond_the_continuation_limit_says_so_not_that_the_linkage_fails(capsys):
+    """``scene HEALD --theta 1e9`` said the linkage "cannot be assembled there or passes a
+    position where its velocity ratios ... are infinite", then the step limit: the file's
+    one crank turns at 60 rad/s, so 100,000 steps of 2° reach 200,000° from the pose; the
+    message names θ and that reach, and nothing about assembly."""
+    from cli_helpers import assert_user_error
+
+    err = assert_user_error(["scene", HEALD, "--theta", "1e9"], capsys, "θ = 1e+09°",
+                            "the limit is 100000", "a path of 200000° from the pose")
+    assert "assembled" not in err and "linearised" not in err

@@ -254,7 +254,7 @@ def test_cli_prints_the_fluctuation_and_refuses_a_motor_that_cannot_start(tmp_pa
                       "cannot start the mechanism", "57.3174 N·m")
     assert not out_csv.exists()
     assert_user_error(["simulate", "examples/fnf_sixbar_scene.toml", "--flywheel", "0.1"],
-                      capsys, "--flywheel applies with --shaft")
+                      capsys, "--flywheel applies to --shaft")
 
 
 def test_the_sley_flywheel_example_gives_the_numbers_in_the_docs():

@@ -210,7 +210,7 @@ def test_cli_prints_the_elastic_forces_with_units(tmp_path, capsys):
     assert rows["speed"][-1] == "rad/s" and rows["motor_torque"][-1] == "N·m"
     assert rows["block.travel.acceleration"][-1] == "m/s²"
     assert 0 < float(rows["k_rod.force"][2]) < 300          # about 227 N (docs)
-    assert_user_error(["simulate", str(path), "--rigid"], capsys, "--rigid applies with --shaft")
+    assert_user_error(["simulate", str(path), "--rigid"], capsys, "--rigid applies to --shaft")
 
 
 @pytest.mark.slow
