@@ -273,10 +273,11 @@ class TransientResult:
             doc["separations"] = [dataclasses.asdict(s) for s in self.separations]
         return doc
 
-    def _columns(self) -> dict:
+    def columns(self) -> dict:
         """The run's columns by name, in order: ``t``, ``x(NODE)``, ``v(NODE)`` when the run
         kept velocities, ``F(ELEMENT)``, then ``F(drive)`` (a velocity drive) or ``v(drive)``
-        (a force drive): what :meth:`write_csv` writes and :meth:`to_dataframe` holds."""
+        (a force drive): what :meth:`write_csv` and ``mechcirc transient -o`` write and
+        :meth:`to_dataframe` holds."""
         cols = {"t": self.time}
         for kind, names, values in (("x", self.nodes, self.x), ("v", self.nodes, self.v),
                                     ("F", self.elements, self.force)):
@@ -290,7 +291,7 @@ class TransientResult:
 
     def write_csv(self, fh) -> None:
         """Columns: t, x(node), v(node) for each node, F(element) for each element, drive."""
-        cols = self._columns()
+        cols = self.columns()
         np.savetxt(fh, np.column_stack(list(cols.values())), delimiter=",", fmt="%.12g",
                    header=",".join(cols), comments="")
 
@@ -305,7 +306,7 @@ class TransientResult:
         except ImportError:
             raise ImportError("TransientResult.to_dataframe needs pandas (pip install "
                               "pandas); the arrays and write_csv do not") from None
-        df = pd.DataFrame(self._columns())
+        df = pd.DataFrame(self.columns())
         df.attrs["units"] = {"t": "s", **self.units}
         return df
 
