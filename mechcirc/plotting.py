@@ -783,9 +783,7 @@ def plot_periodic(result, title: str | None = None, *, fig=None):
     """
     import numpy as np
 
-    from .circuit import units_of
-
-    u = getattr(result, "units", None) or units_of(None)
+    u = result.units
     word = "moment" if u["Q"] == "N·m" else "force"
     made = fig is None
     fig, ((ax_q, ax_s),) = new_panels(fig, 1, 2, caller="plot_periodic", figsize=(11, 4.2),
@@ -851,9 +849,7 @@ def plot_speed_map(result, title: str | None = None, *, ax=None, min_weight: flo
     """
     import numpy as np
 
-    from .circuit import units_of
-
-    u = getattr(result, "units", None) or units_of(None)
+    u = result.units
     word = "moment" if u["Q"] == "N·m" else "force"
     fig, ax, made = one_panel(ax, (8, 4.5))
     peak = np.where(np.isfinite(result.peak), result.peak, np.nan)
