@@ -66,7 +66,7 @@ def cmd_transient(args) -> int:
     result = transient(circuit, args.t_end, args.dt, args.waveform, amplitude=args.amplitude,
                        rtol=args.rtol, rpm=args.rpm)
     write_outputs(args, result.columns().items(), lambda: result.plot(elements=args.element),
-                  fmt="%.12g")
+                  fmt=result.CSV_FORMAT)
     if args.json:
         return print_json(result.to_json())
     for n in result.notes:

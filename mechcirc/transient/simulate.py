@@ -232,6 +232,8 @@ class TransientResult:
     clearances: dict = field(default_factory=dict)
     separations: list = field(default_factory=list)
     waveform: str | None = None
+    #: The CSV's number format (:meth:`write_csv`, ``mechcirc transient -o``): 12 digits.
+    CSV_FORMAT = "%.12g"
 
     def node(self, name: str) -> tuple[np.ndarray, np.ndarray | None]:
         """(x, v) of node ``name``."""
@@ -292,7 +294,7 @@ class TransientResult:
     def write_csv(self, fh) -> None:
         """Columns: t, x(node), v(node) for each node, F(element) for each element, drive."""
         cols = self.columns()
-        np.savetxt(fh, np.column_stack(list(cols.values())), delimiter=",", fmt="%.12g",
+        np.savetxt(fh, np.column_stack(list(cols.values())), delimiter=",", fmt=self.CSV_FORMAT,
                    header=",".join(cols), comments="")
 
     def to_dataframe(self):
