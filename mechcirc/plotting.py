@@ -31,6 +31,9 @@ from __future__ import annotations
 import math
 from typing import Literal
 
+from .errors import InputError, MechcircError
+from .units import FREQUENCY_UNITS, in_unit
+
 __all__ = ["new_panels", "one_panel", "plot_sweep", "plot_transient", "plot_forces", "plot_comparison", "plot_study", "plot_periodic",
            "plot_speed_map", "plot_mode", "plot_modes"]
 
@@ -80,8 +83,6 @@ def new_panels(fig, rows: int = 1, cols: int = 1, *, caller: str, figsize=(8.0, 
 
         fig = Figure(figsize=figsize, layout=layout)
     elif fig.axes or fig.subfigs:
-        from .errors import InputError
-
         raise InputError(
             f"{caller}: the figure given as fig= already holds {len(fig.axes)} Axes and "
             f"{len(fig.subfigs)} subfigures; the plot's {rows}×{cols} panels would cover them. "
@@ -203,8 +204,6 @@ def _mark_resonances(axes, resonances, legend_ax, per_unit: float = 1.0,
 def _mark_peak(ax, peak, unit: str = "rad/s", force_unit: str = "N") -> None:
     """The exact peak of |Q0| (a :class:`mechcirc.Peak`): a dot at the located
     maximum, or a triangle at the top of the axis at every undamped resonance (∞)."""
-    from .units import in_unit
-
     if peak is None or peak.quantity != "Q0":
         return
     if peak.unbounded:
@@ -269,8 +268,6 @@ def plot_sweep(result, title: str | None = None, resonances=(), peak=None, *, ax
     """
     import numpy as np
 
-    from .units import in_unit
-
     w, K, flags, R = _refined(result, resonances if refine else ())
     with np.errstate(all="ignore"):     # (ω in unit, |K|, arg K [deg], |response|, flags)
         curves = in_unit(w, unit), np.abs(K), np.degrees(np.angle(K)), np.abs(R), flags
@@ -286,7 +283,6 @@ def _bode_figure(fig, result, curves, resonances, peak, unit: str, extra: dict, 
     import numpy as np
 
     from .circuit import units_of
-    from .units import FREQUENCY_UNITS, in_unit
 
     units = units_of(getattr(result, "drive", None))
     force_drive = getattr(result.drive, "kind", "velocity") == "force"
@@ -441,7 +437,6 @@ def _draw_K(ax, result, curves, resonances, unit: str, mark: bool = False):
     import numpy as np
 
     from .circuit import units_of
-    from .units import FREQUENCY_UNITS
 
     omega, absK, _, _, flags = curves
     positive = omega > 0
@@ -465,7 +460,6 @@ MAX_CLEARANCE_PANELS, MAX_NODES = 4, 8
 
 def _known(kind: str, names, known) -> list:
     """``names`` (checked against ``known``, a clear error naming them otherwise)."""
-    from .errors import MechcircError
     from .sources import did_you_mean
 
     names = list(names)
@@ -505,8 +499,6 @@ def plot_transient(result, nodes=None, what: str = "x", elements=None, title: st
     """
 
     if what not in ("x", "v") or (what == "v" and result.v is None):
-        from .errors import MechcircError
-
         raise MechcircError(f"what={what!r}: expected 'x' or 'v' (v only when the transient "
                             "kept velocities)")
     names = _known("node", nodes, result.nodes) if nodes is not None \
@@ -783,9 +775,7 @@ def plot_periodic(result, title: str | None = None, *, fig=None):
     """
     import numpy as np
 
-    from .circuit import units_of
-
-    u = getattr(result, "units", None) or units_of(None)
+    u = result.units
     word = "moment" if u["Q"] == "N·m" else "force"
     made = fig is None
     fig, ((ax_q, ax_s),) = new_panels(fig, 1, 2, caller="plot_periodic", figsize=(11, 4.2),
@@ -851,9 +841,7 @@ def plot_speed_map(result, title: str | None = None, *, ax=None, min_weight: flo
     """
     import numpy as np
 
-    from .circuit import units_of
-
-    u = getattr(result, "units", None) or units_of(None)
+    u = result.units
     word = "moment" if u["Q"] == "N·m" else "force"
     fig, ax, made = one_panel(ax, (8, 4.5))
     peak = np.where(np.isfinite(result.peak), result.peak, np.nan)
@@ -902,8 +890,6 @@ def plot_mode(mode, name: str = "circuit", title: str | None = None, *, ax=None,
     matplotlib.axes.Axes or matplotlib.figure.Figure
     """
     import numpy as np
-
-    from .units import in_unit
 
     fig, ax, made = one_panel(ax, (max(5.0, 0.45 * len(mode.shape) + 2), 3.5))
     r = mode.resonance

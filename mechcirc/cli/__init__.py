@@ -120,8 +120,7 @@ class _Parser(argparse.ArgumentParser):
         for action in self._actions:
             if isinstance(action, argparse._SubParsersAction) and self.given in action.choices:
                 for opt in action.choices[self.given]._actions:
-                    if opt.option_strings and opt.choices and not isinstance(
-                            opt, argparse._SubParsersAction):
+                    if opt.option_strings and opt.choices:      # (a sub-parser has none)
                         hint = did_you_mean(word, opt.choices)
                         if hint:
                             return hint.replace("'", f"'{opt.option_strings[-1]} ", 1)

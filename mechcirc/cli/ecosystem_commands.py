@@ -209,7 +209,6 @@ def cmd_formula(args) -> int:
 def _plot_column(args, spec) -> str:
     """The result column ``--plot`` draws: ``--plot-column`` (checked, with did-you-mean;
     refused without ``--plot``) or the analysis's default."""
-    from ..errors import MechcircError
     from ..sources import did_you_mean
 
     column = args.plot_column or ("Q0_abs_max" if spec.analysis == "sweep" else "resonance_1")

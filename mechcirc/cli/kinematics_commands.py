@@ -213,10 +213,6 @@ def _range(option):
     return parse
 
 
-def _deg(x):
-    return f"{math.degrees(x):.3f}°"
-
-
 #: The longest link may be at most this many times the shortest (float64 keeps ~16 digits).
 MAX_LENGTH_RATIO = 1e6
 

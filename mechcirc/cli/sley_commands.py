@@ -238,9 +238,8 @@ def cmd_simulate(args) -> int:
             raise ParameterError("-o/--plot need one variant, not --variant all")
         results = simulate_batch(all_presets(**over), args.revolutions, args.method, **opts)
         if args.json:
-            print_json({"results": [r.summary() for r in results]})
-        else:
-            print("\n\n".join(_table(r, _paper_applies(over)) for r in results))
+            return print_json({"results": [r.summary() for r in results]})
+        print("\n\n".join(_table(r, _paper_applies(over)) for r in results))
         return 0
     try:
         variant = int(args.variant)
@@ -260,9 +259,8 @@ def cmd_simulate(args) -> int:
         doc = result.summary()
         if _paper_applies(over):
             doc["paper"] = {k: list(v) for k, v in PAPER[params.drive][variant].items()}
-        print_json(doc)
-    else:
-        print(_table(result, _paper_applies(over)))
+        return print_json(doc)
+    print(_table(result, _paper_applies(over)))
     return 0
 
 

@@ -7,7 +7,7 @@ import sys
 
 from ._common import (add_command, add_handler, add_output_option, add_plot_option,
                       check_names, check_output_paths, print_json, print_written, real,
-                      refuse_ignored, save_figure, shaft_speed)
+                      refuse_ignored, shaft_speed, write_outputs)
 
 seconds = real(above=0.0, unit="s", role="time")
 
@@ -52,7 +52,6 @@ def register(sub) -> None:
 
 def cmd_transient(args) -> int:
     from ..netlist import load
-    from ..outputs import OutputSet
     from ..transient import transient
 
     check_output_paths(args.output, plots=(args.plot,), reads=(args.file,), table="a CSV table")
@@ -66,13 +65,8 @@ def cmd_transient(args) -> int:
     check_names(args.element, [e.name for e in circuit.elements])   # before the run
     result = transient(circuit, args.t_end, args.dt, args.waveform, amplitude=args.amplitude,
                        rtol=args.rtol, rpm=args.rpm)
-    fig = result.plot(elements=args.element) if args.plot else None
-    with OutputSet() as out:
-        if args.output:
-            with open(out.path(args.output), "w", encoding="utf-8") as fh:
-                result.write_csv(fh)
-        if fig is not None:
-            save_figure(fig, args.plot, into=out.path(args.plot))
+    write_outputs(args, result.columns().items(), lambda: result.plot(elements=args.element),
+                  fmt=result.CSV_FORMAT)
     if args.json:
         return print_json(result.to_json())
     for n in result.notes:

@@ -411,13 +411,11 @@ class FourBar:
         return self.nu(theta) * (omega * omega)
 
     def _out(self, theta, name):
-        """Field ``name`` of :meth:`evaluate`; at one angle a float, φ4, μ and ν from
-        :meth:`transfer` (which refuses the singular positions)."""
+        """Field ``name`` (``phi4``, ``mu`` or ``nu``) of :meth:`evaluate`; at one angle a
+        float from :meth:`transfer` (which refuses the singular positions)."""
         if not isinstance(theta, (float, int)):
             return getattr(self.evaluate(theta), name)
-        if name in ("phi4", "mu", "nu"):
-            return self.transfer(theta)[("phi4", "mu", "nu").index(name)]
-        return float(getattr(self.evaluate(theta), name))
+        return self.transfer(theta)[("phi4", "mu", "nu").index(name)]
 
     def transfer(self, theta: float) -> tuple[float, float, float]:
         """(φ4 [rad], μ [1], ν [1/rad]) at one crank angle ``theta`` [rad], as floats.

@@ -232,6 +232,8 @@ class TransientResult:
     clearances: dict = field(default_factory=dict)
     separations: list = field(default_factory=list)
     waveform: str | None = None
+    #: The CSV's number format (:meth:`write_csv`, ``mechcirc transient -o``): 12 digits.
+    CSV_FORMAT = "%.12g"
 
     def node(self, name: str) -> tuple[np.ndarray, np.ndarray | None]:
         """(x, v) of node ``name``."""
@@ -273,10 +275,11 @@ class TransientResult:
             doc["separations"] = [dataclasses.asdict(s) for s in self.separations]
         return doc
 
-    def _columns(self) -> dict:
+    def columns(self) -> dict:
         """The run's columns by name, in order: ``t``, ``x(NODE)``, ``v(NODE)`` when the run
         kept velocities, ``F(ELEMENT)``, then ``F(drive)`` (a velocity drive) or ``v(drive)``
-        (a force drive): what :meth:`write_csv` writes and :meth:`to_dataframe` holds."""
+        (a force drive): what :meth:`write_csv` and ``mechcirc transient -o`` write and
+        :meth:`to_dataframe` holds."""
         cols = {"t": self.time}
         for kind, names, values in (("x", self.nodes, self.x), ("v", self.nodes, self.v),
                                     ("F", self.elements, self.force)):
@@ -290,8 +293,8 @@ class TransientResult:
 
     def write_csv(self, fh) -> None:
         """Columns: t, x(node), v(node) for each node, F(element) for each element, drive."""
-        cols = self._columns()
-        np.savetxt(fh, np.column_stack(list(cols.values())), delimiter=",", fmt="%.12g",
+        cols = self.columns()
+        np.savetxt(fh, np.column_stack(list(cols.values())), delimiter=",", fmt=self.CSV_FORMAT,
                    header=",".join(cols), comments="")
 
     def to_dataframe(self):
@@ -305,7 +308,7 @@ class TransientResult:
         except ImportError:
             raise ImportError("TransientResult.to_dataframe needs pandas (pip install "
                               "pandas); the arrays and write_csv do not") from None
-        df = pd.DataFrame(self._columns())
+        df = pd.DataFrame(self.columns())
         df.attrs["units"] = {"t": "s", **self.units}
         return df
 
