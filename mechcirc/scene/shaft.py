@@ -55,7 +55,7 @@ from .files import Scene
 from .motion import (MotionModel, body_tables, function_args, function_rows, hermite_table,
                      moment_centre, motion_model)
 from .simfile import Motor, Shaft, kloss_motor, parse_shaft, table_motor  # noqa: F401
-from .simulation import _check_strokes, kernels_for, max_rate, refined_extremes
+from .simulation import check_strokes, kernels_for, max_rate, refined_extremes
 
 __all__ = ["Motor", "Shaft", "ShaftMotion", "kloss_motor", "table_motor", "parse_shaft",
            "simulate_shaft", "ShaftWarning"]
@@ -330,7 +330,7 @@ class _ElasticShaft:
         positions = {p: [self._function(f, coord[i])[:, 0] for f in (fx, fy)]
                      for p, (fx, fy, i) in m.point_fn.items()
                      if any(p in (sl.point, *sl.line) for sl in stroked)}
-        _check_strokes(m.scene, th, positions, "sample of the shaft's steady cycle")
+        check_strokes(m.scene, th, positions, "sample of the shaft's steady cycle")
 
     def _function(self, f, qs):
         """Function ``f`` of the model and its two derivatives at the coordinates ``qs``,

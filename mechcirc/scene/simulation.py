@@ -810,7 +810,7 @@ def _add_points_and_aliases(scene, model, theta_s, ripple, crank, ts, ys, values
             if point_acc:
                 values[k] = v
                 extrema[k] = (float(v.min()), float(v.max()))
-        _check_strokes(scene, crank, positions)
+        check_strokes(scene, crank, positions)
     cfg = scene.simulate
     for alias, target in (dict(cfg.aliases) if cfg is not None else {}).items():
         if target.endswith(".rigid_acceleration"):
@@ -1021,7 +1021,7 @@ def _point_accelerations(model, theta_s, ripple, ts, ys, values, positions=None)
     return out
 
 
-def _check_strokes(scene, crank, positions: dict,
+def check_strokes(scene, crank, positions: dict,
                    what: str = "output sample of the simulation") -> None:
     """Every slider with a ``stroke`` checked at every output sample of the simulated
     (elastic) motion: the located error of the linkage's stroke check at the first
