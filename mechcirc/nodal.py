@@ -763,11 +763,21 @@ def require_nonsingular(system: NodalSystem) -> None:
     ω if the solve gives a finite K and its solution's element-wise backward
     error as a null vector is above rounding (:func:`_backward_error`) — so a
     stiff network (cond(A) of 1e20, K well conditioned) is not refused.
+
+    A network without levers whose elements' values v·η are all finite and
+    positive is regular without a trial: its unknowns are the nodes of the
+    connected block that holds the drive (:func:`assemble`), so A(s) =
+    D + sM + Kₛ/s at real s > 0 is a weighted Laplacian of a connected graph
+    with the reference's row dropped, positive definite; det A(s) is then not
+    identically zero and vanishes at finitely many s only.
     """
     if system.size == 0:
         raise TopologyError(
             "nothing between the drive's nodes carries force (no unknowns left; unloaded: "
             f"{', '.join(system.unloaded[:12]) or 'none'})", elements=system.unloaded)
+    values = pattern(system).e_val
+    if not system.levers and ((values > 0) & (values < np.inf)).all():
+        return
     scale = _frequency_scale(system)
     trial = [0.731 * scale, 1.913 * scale]
     regular, judged, overflow = _dense_verdict(system, trial)

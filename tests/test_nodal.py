@@ -169,6 +169,17 @@ spring k s 0 5
     assert set(info.value.elements) == {"L1", "L2"}
 
 
+def test_lever_free_network_is_checked_unless_every_value_is_positive():
+    """Without levers only positive values make A(ω) regular without a trial: a spring of
+    −k beside +k (built in code; the parser refuses it) leaves A(ω) = 0 at every ω."""
+    from mechcirc.circuit import Circuit, Drive, Element
+
+    springs = (Element("spring", "k1", "a", "0", 1e4), Element("spring", "k2", "a", "0", -1e4))
+    c = Circuit(springs, Drive("V", "a", "0", "velocity", 1.0))
+    with pytest.raises(TopologyError, match="singular at every frequency"):
+        c.sweep([1.0], method="nodal")
+
+
 def test_large_networks_use_sparse_solves_and_agree_with_the_tree():
     # A ladder with 400 nodes is reducible: compare the sparse nodal path with the tree.
     lines = ["drive V n0 0 velocity=1"]
