@@ -264,18 +264,20 @@ def cmd_simulate(args) -> int:
     return 0
 
 
-#: crosscheck's options that apply to some inputs only (the input's kind is a word of it).
-_CROSSCHECK_APPLIES = {"--drive": "a sley preset", "--variant": "a sley preset",
-                       "--omega-max": "a netlist FILE", "--theta": "a scene or a sley preset",
-                       "--netlist": "a scene or a sley preset"}
+#: crosscheck's options that apply to some inputs only (the input's kind is a word of the
+#: first), with their defaults.
+_CROSSCHECK_APPLIES = {"--drive": ("a sley preset", "one-side"), "--variant": ("a sley preset", 3),
+                       "--omega-max": ("a netlist FILE", None),
+                       "--theta": ("a scene or a sley preset", None),
+                       "--netlist": ("a scene or a sley preset", None)}
 
 
 def cmd_crosscheck(args) -> int:
     kind = "preset" if args.file is None else "scene" if args.file.endswith(".toml") else "netlist"
     given = {"preset": "without a FILE a sley preset is checked", "scene":
              f"'{args.file}' is a scene", "netlist": f"'{args.file}' is a netlist already"}[kind]
-    refuse_ignored(args, {opt: (kind in where, f"{where}; {given}", "", None)
-                          for opt, where in _CROSSCHECK_APPLIES.items()})
+    refuse_ignored(args, {opt: (kind in where, f"{where}; {given}", "", default)
+                          for opt, (where, default) in _CROSSCHECK_APPLIES.items()})
     if kind == "scene":
         from .scene_commands import cmd_crosscheck_scene
 
@@ -289,7 +291,7 @@ def cmd_crosscheck(args) -> int:
     from ..sley.simulation import start_angle
 
     check_output_paths(args.netlist, table="the netlist", option="--netlist")
-    params = preset(args.drive or "one-side", args.variant or 3)
+    params = preset(args.drive, args.variant)
     theta0 = start_angle(params) if args.theta is None else math.radians(args.theta)
     from ..progress import Progress
 
