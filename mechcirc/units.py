@@ -39,7 +39,7 @@ from dataclasses import dataclass
 from .errors import UnitError
 
 __all__ = ["Unit", "UnitError", "ATOMS", "PREFIXES", "PREFIXABLE", "ROLES", "parse_unit",
-           "looks_like_unit", "convert", "parse_quantity", "split_quantity", "parse_omega",
+           "looks_like_unit", "convert", "parse_quantity", "split_quantity", "is_bare_number", "parse_omega",
            "OMEGA_UNITS", "is_rotational", "SPICE_SUFFIXES", "FREQUENCY_UNITS", "in_unit",
            "convert_frequency"]
 
@@ -354,6 +354,22 @@ def split_quantity(text: str) -> tuple[str, str] | None:
         return None
     number, unit = m.group(1), m.group(2) or ""
     return None if unit and not (looks_like_unit(unit) or unit == "1/s") else (number, unit)
+
+
+def is_bare_number(text: str) -> bool:
+    """Whether ``text`` is a number with no unit (``"500"``, not ``"500 g"`` or ``"abc"``).
+
+    Parameters
+    ----------
+    text : str
+
+    Returns
+    -------
+    bool
+        True for a bare number; False for a quantity with a unit or for no quantity at all.
+    """
+    parts = split_quantity(text)
+    return parts is not None and not parts[1]
 
 
 def parse_quantity(text: str, role: str | None = None, *, what: str = "value") -> float:

@@ -15,8 +15,7 @@ from pathlib import Path
 
 from ..errors import (MAX_QUOTED, InputError, MechcircError, MechcircWarning, NetlistError,
                       NotSeriesParallelError, clip, shorten)
-from ..units import (FREQUENCY_UNITS, UnitError, parse_quantity, parse_unit,
-                     split_quantity)
+from ..units import FREQUENCY_UNITS, UnitError, is_bare_number, parse_quantity, parse_unit
 
 EXIT_OK, EXIT_INTERNAL, EXIT_USER = 0, 1, 2
 #: Exit status after SIGINT and SIGTERM (128 + the signal number, as shells report).
@@ -195,7 +194,7 @@ def join_spaced_quantities(argv: list[str]) -> list[str]:
         tok = argv[i]
         out.append(tok)
         if (i + 1 < len(argv) and out[:-1] and out[-2].startswith("--") and "=" not in out[-2]
-                and (split_quantity(tok) or ("", "x"))[1] == ""):
+                and is_bare_number(tok)):
             unit = argv[i + 1]
             try:
                 ok = unit in ("1/s",) or (not unit.startswith("-") and parse_unit(unit) and
@@ -227,7 +226,7 @@ def real(*, least: float | None = None, above: float | None = None,
     def parse(text: str) -> float:
         try:
             value = parse_quantity(text, role) if role else float(text)
-            if role and unit and (split_quantity(text) or "?")[-1]:    # to the option's unit
+            if role and unit and not is_bare_number(text):      # to the option's unit
                 value /= parse_unit(unit).factor
         except UnitError as exc:
             noun = "frequency" if role == "omega" else role    # "unknown frequency unit 'x'"

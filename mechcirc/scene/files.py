@@ -79,7 +79,7 @@ from ..kinematics.linkage import Linkage, parse_linkage
 from ..sources import (Table, brief, check_keys, checked_number, finite_number, load_toml,
                        split_lines)
 from ..sources import TOML_HEADER, is_name, located, read_source
-from ..units import in_si, parse_quantity, split_quantity
+from ..units import in_si, is_bare_number, parse_quantity
 from .simfile import (Moment, SimulateSettings, override_moment, override_run, parse_moments,
                       parse_shaft, parse_simulate)
 
@@ -351,7 +351,7 @@ def _named(value, names) -> TypeGuard[str]:
 def _number(text, source, value, what, table, key, n, *, positive=True, allow_zero=False):
     role = next((r for u, r in _ROLE_OF.items() if what.endswith(u)), None)
     converted = in_si(text, source, value, role, table, key, n, what)   # "2 kN/mm", "30 deg"
-    if role == "angle" and isinstance(value, str) and (split_quantity(value) or "?")[-1]:
+    if role == "angle" and isinstance(value, str) and not is_bare_number(value):
         converted = math.degrees(converted)
     return checked_number(text, source, converted, what, table, key, n, positive=positive,
                           allow_zero=allow_zero)
@@ -954,10 +954,10 @@ def apply_overrides(scene: Scene, overrides: dict) -> Scene:
         source = f"--set {key}={value}"
         name, _, fld = key.partition(".")
         kind = type(found.get(name))
-        # a bare number (no unit: split_quantity's last part "") is read here, a text with a
-        # unit only for omega and the ripple (any unit); the others go to their reader as typed
-        # (a moment's, as the file's [[moments]], takes no unit and refuses one)
-        if isinstance(value, str) and (name not in found or not (split_quantity(value) or "?")[-1]):
+        # a bare number is read here, a text with a unit only for omega and the ripple (any
+        # unit); the others go to their reader as typed (a moment's, as the file's
+        # [[moments]], takes no unit and refuses one)
+        if isinstance(value, str) and (name not in found or is_bare_number(value)):
             value = parse_quantity(value)
         if key in ("omega", "omega_ripple.amplitude", "omega_ripple.harmonic"):
             sim = override_run(source, sim, key, value)
