@@ -218,24 +218,14 @@ def _leaf_terms(nb, a_inv, a_om, b_inv, b_om, want_error, w, iw, ai, bb):
 
 @_leaf
 def _store(s, nb, series, has_c, re, im, cr, ci, ai):
-    """A node's value into slot ``s``: the sum (series), or its reciprocal (parallel)."""
-    if has_c:
-        if series:
-            for j in range(nb):
-                re[s, j] = cr[j]
-                im[s, j] = ci[j]
-        else:
-            for j in range(nb):
-                re[s, j], im[s, j] = _recip(cr[j], ci[j])
+    """A node's value into slot ``s``: the sum (series), or its reciprocal (parallel).
+    :func:`_store_case` without the bound (its ``mg``, ``rh`` and ``bb`` not read)."""
+    if not has_c:
+        _store_case(series, False, False, s, nb, False, False, 0.0, re, im, re, im, cr, ci, ai, ai)
+    elif series:
+        _store_case(True, True, False, s, nb, False, False, 0.0, re, im, re, im, cr, ci, ai, ai)
     else:
-        if series:
-            for j in range(nb):
-                re[s, j] = 0.0
-                im[s, j] = ai[j]
-        else:
-            for j in range(nb):
-                re[s, j] = 0.0
-                im[s, j] = -1.0 / ai[j]
+        _store_case(False, True, False, s, nb, False, False, 0.0, re, im, re, im, cr, ci, ai, ai)
 
 
 @_leaf
@@ -289,24 +279,25 @@ def _store_with_error(s, nb, series, has_c, have_b, with_real, extra, re, im, mg
     overflow or underflow), if the first pass counted any.  The same numbers as one
     pass that branches.  One loop per case (:func:`_store_case`)."""
     if not has_c:
-        wide = _store_case(series, False, s, nb, have_b, with_real, extra, re, im, mg, rh, cr,
-                           ci, ai, bb)
+        wide = _store_case(series, False, True, s, nb, have_b, with_real, extra, re, im, mg, rh,
+                           cr, ci, ai, bb)
     elif series:
-        wide = _store_case(True, True, s, nb, have_b, with_real, extra, re, im, mg, rh, cr, ci,
-                           ai, bb)
+        wide = _store_case(True, True, True, s, nb, have_b, with_real, extra, re, im, mg, rh, cr,
+                           ci, ai, bb)
     else:
-        wide = _store_case(False, True, s, nb, have_b, with_real, extra, re, im, mg, rh, cr, ci,
-                           ai, bb)
+        wide = _store_case(False, True, True, s, nb, have_b, with_real, extra, re, im, mg, rh, cr,
+                           ci, ai, bb)
     if wide:
         for j in range(nb):
             if not (_ABS_LO < max(abs(cr[j]), abs(ci[j])) < _ABS_HI):
                 mg[s, j] = math.hypot(cr[j], ci[j])
 
 
-@jit_inline     # its sites pass series and has_c as constants: a loop without their branches
-def _store_case(series, has_c, s, nb, have_b, with_real, extra, re, im, mg, rh, cr, ci, ai,
-                bb):
-    """The first pass of :func:`_store_with_error`; returns the number of wide points."""
+@jit_inline     # its sites pass series, has_c and bound as constants: loops without their branches
+def _store_case(series, has_c, bound, s, nb, have_b, with_real, extra, re, im, mg, rh, cr, ci,
+                ai, bb):
+    """The first pass of :func:`_store_with_error` (``bound``), or :func:`_store`; returns the
+    number of wide points."""
     wide = 0
     for j in range(nb):
         b = bb[j] if have_b else 0.0
@@ -329,8 +320,9 @@ def _store_case(series, has_c, s, nb, have_b, with_real, extra, re, im, mg, rh, 
         else:
             re[s, j] = 0.0
             im[s, j] = -1.0 / si
-        mg[s, j] = mag
-        rh[s, j] = b
+        if bound:
+            mg[s, j] = mag
+            rh[s, j] = b
     return wide
 
 
