@@ -88,10 +88,6 @@ def test_sley_attribute_errors_name_the_module_looked_in():
         with pytest.raises(AttributeError, match=r"^module 'mechcirc\.sley' has no "
                                                  r"attribute 'Modes'$"):
             mechcirc.sley.Modes                     # noqa: B018
-    for module in ("mechcirc.sley", "mechcirc.sley.linear"):
-        with pytest.warns(DeprecationWarning, match=rf"^{module}\.Mode is renamed") as caught:
-            importlib.import_module(module).Mode    # noqa: B018
-        assert caught[0].filename == __file__
 
 
 def _python_copy():

@@ -20,10 +20,3 @@ from .simulation import METHODS, SleyResult, simulate, simulate_batch, simulate_
 __all__ = ["SleyParameters", "ParameterError", "DEFAULT_ALPHA_DEG", "preset", "all_presets",
            "PAPER", "simulate", "simulate_params", "simulate_batch", "SleyResult", "METHODS",
            "linearise", "eigenfrequencies", "to_circuit", "to_netlist", "LinearModel", "SleyMode"]
-
-
-def __getattr__(name: str):
-    """``mechcirc.sley.Mode``, the former name of :class:`SleyMode` (see :mod:`.linear`)."""
-    from . import linear
-
-    return linear.renamed(name, __name__)

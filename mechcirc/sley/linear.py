@@ -22,7 +22,6 @@ side.  Its resonances (K = 0 with the drive held) are the eigenfrequencies.
 from __future__ import annotations
 
 import math
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -103,8 +102,7 @@ class SleyMode:
     ``omega_n`` is the frequency of the undamped problem K v = ω² M v (the
     dampers removed), while ``Resonance.omega`` is |s| of the damped root,
     here ``abs(eigenvalue)``; the two differ by up to 0.23 % over the 14
-    presets and the crank circle.  Formerly named ``Mode``: that name still
-    works for one release, with a DeprecationWarning.
+    presets and the crank circle.
 
     Attributes
     ----------
@@ -127,42 +125,6 @@ class SleyMode:
     def f_hz(self) -> float:
         """Undamped natural frequency [Hz]."""
         return convert_frequency(self.omega_n, "rad/s", "Hz")
-
-
-def __getattr__(name: str):
-    """``Mode``, the former name of :class:`SleyMode`, for one release (a DeprecationWarning)."""
-    return renamed(name, __name__)
-
-
-def renamed(name: str, module: str) -> type[SleyMode]:
-    """A module ``__getattr__``'s answer for ``name`` (this module's and the package's).
-
-    Parameters
-    ----------
-    name : str
-        The attribute asked for: ``Mode``, the former name of :class:`SleyMode`, gives
-        that class with a DeprecationWarning (one release); any other name raises.
-    module : str
-        The module asked (``mechcirc.sley`` or ``mechcirc.sley.linear``): the one the
-        warning and the AttributeError name.
-
-    Returns
-    -------
-    type
-        :class:`SleyMode`.
-
-    Raises
-    ------
-    AttributeError
-        For any other name.
-    """
-    stacklevel = 3          # the caller of the module's __getattr__
-    if name != "Mode":
-        raise AttributeError(f"module {module!r} has no attribute {name!r}")
-    warnings.warn(f"{module}.Mode is renamed SleyMode (a mode of the linearised sley; "
-                  "mechcirc.modes.Mode is a circuit's mode with its shape); the old name goes "
-                  "in the next release", DeprecationWarning, stacklevel=stacklevel)
-    return SleyMode
 
 
 def _mck(p: SleyParameters, mu):

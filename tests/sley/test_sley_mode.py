@@ -1,6 +1,5 @@
-"""The linearised sley's modes (SleyMode): their frequencies and the former name Mode."""
+"""The linearised sley's modes (SleyMode): their frequencies; the former name Mode is gone."""
 
-import importlib
 import math
 import warnings
 
@@ -11,22 +10,13 @@ import mechcirc.sley
 from mechcirc.sley import SleyMode, eigenfrequencies, linearise, preset
 
 
-def test_former_name_warns_and_is_the_same_class():
-    for module in ("mechcirc.sley", "mechcirc.sley.linear"):
-        with pytest.warns(DeprecationWarning, match="renamed SleyMode") as caught:
-            cls = importlib.import_module(module).Mode
-        assert cls is SleyMode
-        assert caught[0].filename == __file__          # points at the caller's line
-    with pytest.warns(DeprecationWarning):
-        from mechcirc.sley import Mode
-    assert Mode is SleyMode
-
-
-def test_other_missing_names_are_attribute_errors():
+def test_missing_names_and_the_former_name_are_attribute_errors():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         with pytest.raises(AttributeError, match="has no attribute 'Modes'"):
             mechcirc.sley.Modes                     # noqa: B018
+        with pytest.raises(AttributeError, match="has no attribute 'Mode'"):
+            mechcirc.sley.Mode                      # noqa: B018
 
 
 @pytest.mark.parametrize("drive", ["one-side", "both-sides"])
