@@ -40,9 +40,6 @@ def _register_simulate(sub) -> None:
                         "else 0)")
     p.add_argument("--no-error-estimate", action="store_true",
                    help="skip the half-step rerun that estimates the error")
-    p.add_argument("--via-scene", action="store_true",
-                   help="accepted for old scripts and ignored: the presets always run as "
-                        "their scenes (examples/mrazek_*.toml plus the variant's values)")
     _sley_arguments(p)
     add_plot_option(p, "plot eps2P, eps4P, eps4T, M2V (Figs. 4-9)")
     add_handler(p, cmd_simulate)

@@ -307,15 +307,15 @@ def test_cli_simulate_and_crosscheck_scene_json(capsys):
     assert main(["simulate", "examples/mrazek_one_side.toml", "--set", "nope=1"]) == 2
 
 
-def test_cli_via_scene_is_an_alias_of_the_preset(capsys):
-    """`simulate --drive D --variant V --via-scene` (kept for old scripts; the presets are
-    scenes now) = the sley preset, with the paper's and the scene's output names."""
+def test_cli_preset_is_the_api_preset_with_both_names(capsys):
+    """`simulate --drive D --variant V` runs the preset's scene = the sley preset, with the
+    paper's and the scene's output names."""
     import json
 
     from mechcirc.cli import main
     from mechcirc.sley import simulate
 
-    assert main(["simulate", "--drive", "one-side", "--variant", "4", "--via-scene",
+    assert main(["simulate", "--drive", "one-side", "--variant", "4",
                  "--revolutions", "2", "--points", "720", "--no-error-estimate",
                  "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
