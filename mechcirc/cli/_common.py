@@ -15,7 +15,8 @@ from pathlib import Path
 
 from ..errors import (MAX_QUOTED, InputError, MechcircError, MechcircWarning, NetlistError,
                       NotSeriesParallelError, clip, shorten)
-from ..units import FREQUENCY_UNITS, UnitError, is_bare_number, parse_quantity, parse_unit
+from ..units import (FREQUENCY_UNITS, UnitError, in_unit_of, is_bare_number, parse_quantity,
+                     parse_unit)
 
 EXIT_OK, EXIT_INTERNAL, EXIT_USER = 0, 1, 2
 #: Exit status after SIGINT and SIGTERM (128 + the signal number, as shells report).
@@ -225,9 +226,7 @@ def real(*, least: float | None = None, above: float | None = None,
     """
     def parse(text: str) -> float:
         try:
-            value = parse_quantity(text, role) if role else float(text)
-            if role and unit and not is_bare_number(text):      # to the option's unit
-                value /= parse_unit(unit).factor
+            value = in_unit_of(text, role, unit) if role else float(text)   # in the option's unit
         except UnitError as exc:
             noun = "frequency" if role == "omega" else role    # "unknown frequency unit 'x'"
             message = exc.message.replace("unknown unit", f"unknown {noun} unit")
