@@ -39,6 +39,7 @@ modes are not reported.
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 from typing import Literal
 
@@ -209,7 +210,8 @@ def resonance_pairs(circuit: Circuit, omega_max: float | None = None,
     by :func:`_secular_held` where it applies), not the values-only one's (banded):
     unpolished, they can differ in the last bits (errors of order eps·λ_max/λ).
     """
-    if not (omega_max is None or isinstance(omega_max, (int, float, np.number)) and omega_max > 0):
+    if not (omega_max is None or isinstance(omega_max, numbers.Real)    # as periodic's rpm,
+            and not isinstance(omega_max, bool) and omega_max > 0):     # but a bool is no number
         raise InputError(f"omega_max must be > 0 rad/s or None, got {omega_max!r}")
     if kind not in (None, "resonance", "antiresonance"):
         raise InputError(f"kind must be 'resonance', 'antiresonance' or None, got {kind!r}")
