@@ -673,31 +673,45 @@ def set_values(items, not_numbers: dict | None = None, texts: bool = False,
     return out
 
 
+class Default:
+    """The registered default of an option :func:`refuse_ignored` governs: it marks the
+    option as not given, and ``value`` is what the option then is (the one place the
+    default is written, next to its help).  False when its value is (for tests of
+    ``args.opt`` before the rules are applied)."""
+
+    def __init__(self, value):
+        self.value = value
+
+    def __bool__(self) -> bool:
+        return bool(self.value)
+
+
 def refuse_ignored(args, rules) -> None:
     """Refuse an option given where its value would not be read; default the others.
 
     Parameters
     ----------
     args : argparse.Namespace
-        The parsed options; an option is given when it is not None (its argparse
-        default is None, and its default is given here).
+        The parsed options; an option is given when it is neither None nor the
+        :class:`Default` it was registered with (which is replaced by its value here).
     rules : dict
-        ``"--opt": (applies, to_what, hint, default)``: whether the option is read
-        with the other options and the input given; to what it applies, and how to
-        make it apply ("" for no way) for the message; its value when not given.
-        ``"--no-opt"`` is the off side of the on/off flag ``--opt`` (dest ``opt``):
-        its ``applies`` must hold when the value given is on.
+        ``"--opt": (applies, to_what, hint)``: whether the option is read with the
+        other options and the input given; to what it applies, and how to make it
+        apply ("" for no way) for the message.  ``"--no-opt"`` is the off side of
+        the on/off flag ``--opt`` (dest ``opt``): its ``applies`` must hold when
+        the value given is on.
 
     Raises
     ------
     InputError
         "--tol applies to --adaptive sweeps (leave --tol out, or add --adaptive)".
     """
-    for option, (applies, to_what, hint, default) in rules.items():
+    for option, (applies, to_what, hint) in rules.items():
         dest = option[2:].removeprefix("no-").replace("-", "_")
-        if getattr(args, dest) is None:
-            setattr(args, dest, default)
-        elif not applies:
+        value = getattr(args, dest)
+        if isinstance(value, Default):
+            setattr(args, dest, value.value)
+        elif value is not None and not applies:
             raise InputError(f"{option} applies to {to_what} (leave {option} out"
                              f"{', or ' + hint if hint else ''})")
 

@@ -79,8 +79,7 @@ def _motion(args):
     osc = args.follower.startswith("oscillating")
     scale = math.pi / 180 if osc else 1.0
     unit = "°" if osc else " mm"
-    refuse_ignored(args, {f"--{o}": (not args.motion, "a --law cycle, not to a --motion table",
-                                      "", None)
+    refuse_ignored(args, {f"--{o}": (not args.motion, "a --law cycle, not to a --motion table", "")
                           for o in ("rise", "dwell", "return", "low-dwell", "stroke", "return-law")})
     if args.motion:
         m = read_motion_table(args.motion)
@@ -155,7 +154,7 @@ def _check_args(args) -> None:
     rules = (("--roller-radius", f in ("roller", "oscillating"), "a roller"),
              ("--arm", f == "oscillating", "an oscillating roller"),
              ("--pivot", osc, "an oscillating"), ("--offset", not osc, "a translating"))
-    refuse_ignored(args, {key: (takes, f"{which} follower, not --follower {f}", "", None)
+    refuse_ignored(args, {key: (takes, f"{which} follower, not --follower {f}", "")
                           for key, takes, which in rules})
 
 

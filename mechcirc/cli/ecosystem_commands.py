@@ -6,7 +6,7 @@ from pathlib import Path
 
 from ..errors import MechcircError
 from ..limits import FORMULA_SECONDS
-from ._common import (NETLIST_FILE, add_command, add_handler, add_method_option,
+from ._common import (NETLIST_FILE, Default, add_command, add_handler, add_method_option,
                       add_output_option, add_plot_option, check_output_paths, count,
                       load_with_warnings, print_json, print_written, real, refuse_ignored,
                       save_figure, time_limit, warning_lines)
@@ -96,7 +96,7 @@ def _register_study(sub) -> None:
                    help="keep the rows already in -o and run only the missing points "
                         "(refused if -o was made from another spec)")
     p.add_argument("--connect-timeout", type=real(above=0, most=3600, unit="s"),
-                   metavar="SECONDS",
+                   default=Default(10.0), metavar="SECONDS",
                    help="with --scheduler: wait this long for the scheduler, then as long "
                         "for its first worker (default 10)")
     p.add_argument("--curves", metavar="PARQUET",
@@ -225,10 +225,10 @@ def cmd_study(args) -> int:
     from ..study import column_units, load_spec, run_study, sidecar_path
 
     refuse_ignored(args, {"--workers": (not args.scheduler, "local processes, not a "
-                                        "--scheduler's cluster", "", None),
+                                        "--scheduler's cluster", ""),
                           "--connect-timeout": (args.scheduler, "a --scheduler",
-                                                "add --scheduler ADDRESS", 10.0),
-                          "--plot-column": (args.plot, "the --plot", "add --plot IMAGE", None)})
+                                                "add --scheduler ADDRESS"),
+                          "--plot-column": (args.plot, "the --plot", "add --plot IMAGE")})
     if args.resume and not args.output:
         raise MechcircError("--resume needs -o FILE (the table to continue)")
     spec = load_spec(args.spec)

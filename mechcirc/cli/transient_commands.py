@@ -59,9 +59,8 @@ def cmd_transient(args) -> int:
     shaped = args.rpm is not None or getattr(wave, "kind", "") in ("harmonic", "step", "impulse")
     refuse_ignored(args, {"--amplitude": (shaped, "a harmonic, step or impulse --waveform or a "
                                           "motion= drive at --rpm", "add --waveform "
-                                          "harmonic:OMEGA, step or impulse", None),
-                          "--element": (args.plot, "a panel of the --plot", "add --plot IMAGE",
-                                        None)})
+                                          "harmonic:OMEGA, step or impulse"),
+                          "--element": (args.plot, "a panel of the --plot", "add --plot IMAGE")})
     circuit = load(args.file, require_drive=False)
     check_names(args.element, [e.name for e in circuit.elements])   # before the run
     result = transient(circuit, args.t_end, args.dt, wave, amplitude=args.amplitude,
