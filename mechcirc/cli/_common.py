@@ -15,8 +15,8 @@ from pathlib import Path
 
 from ..errors import (MAX_QUOTED, InputError, MechcircError, MechcircWarning, NetlistError,
                       NotSeriesParallelError, clip, shorten)
-from ..units import (FREQUENCY_UNITS, UnitError, in_unit_of, is_bare_number, parse_quantity,
-                     parse_unit)
+from ..units import (FREQUENCY_UNITS, UnitError, in_unit, in_unit_of, is_bare_number,
+                     parse_quantity, parse_unit)
 
 EXIT_OK, EXIT_INTERNAL, EXIT_USER = 0, 1, 2
 #: Exit status after SIGINT and SIGTERM (128 + the signal number, as shells report).
@@ -363,6 +363,13 @@ def add_unit_option(p, what: str | None = None) -> None:
                    help=what or "show frequencies in rad/s (omega, the default), Hz (f = "
                                 "omega/2 pi) or rpm (n = 60 omega/2 pi): tables, CSV columns "
                                 "and plot axes (--json stays in rad/s)")
+
+
+def frequency_text(omega: float, unit: str = "rad/s", digits: int = 6) -> str:
+    """``omega = 300 rad/s (47.7465 Hz)``, or in ``unit`` of --unit: ``f = 47.7465 Hz``."""
+    if unit == "rad/s":
+        return f"omega = {omega:.{digits}g} rad/s ({in_unit(omega, 'Hz'):.6g} Hz)"
+    return f"{FREQUENCY_UNITS[unit][0]} = {in_unit(omega, unit):.{digits}g} {unit}"
 
 
 #: The largest angular frequency the command line accepts [rad/s] (ω² stays finite).

@@ -18,8 +18,8 @@ from ..limits import (
 from ..units import FREQUENCY_UNITS, in_unit
 from ._common import (NETLIST_FILE, Default, add_command, add_handler, add_method_option,
                       add_output_option, add_plot_option, add_unit_option, check_names,
-                      check_output_paths, load_with_warnings, print_json, print_written, real,
-                      refuse_ignored, save_figure, warning_lines)
+                      check_output_paths, frequency_text, load_with_warnings, print_json,
+                      print_written, real, refuse_ignored, save_figure, warning_lines)
 
 #: argparse type: an angular frequency [rad/s], or with a unit (``50Hz``, ``3000rpm``); the
 #: command checks the range (a sweep's --omega-min/--omega-max together).
@@ -476,10 +476,8 @@ def cmd_resonances(args) -> int:
     kinds = {e.name: e.kind for e in circuit.elements} | {lv.name: "lever" for lv in circuit.levers}
     for i, m in enumerate(modes or (), 1):
         r = m.resonance
-        where = (f"omega = {r.omega:.10g} rad/s ({r.f_hz:.6g} Hz)" if args.unit == "rad/s"
-                 else f"{FREQUENCY_UNITS[args.unit][0]} = {in_unit(r.omega, args.unit):.10g} "
-                      f"{args.unit}")
-        print(f"\n{i}: {r.kind} {where}" + (f", zeta = {r.zeta:.4g}" if r.zeta else ""))
+        print(f"\n{i}: {r.kind} {frequency_text(r.omega, args.unit, 10)}"
+              + (f", zeta = {r.zeta:.4g}" if r.zeta else ""))
         if m.note and (m.shape or not args.modes):   # else the mode table says it
             print(f"  note: {m.note}")
         if args.modes:

@@ -7,9 +7,9 @@ from pathlib import Path
 from ..errors import MechcircError
 from ..limits import FORMULA_SECONDS
 from ._common import (NETLIST_FILE, Default, add_command, add_handler, add_method_option,
-                      add_output_option, add_plot_option, check_output_paths, count,
-                      load_with_warnings, print_json, print_written, real, refuse_ignored,
-                      save_figure, time_limit, warning_lines)
+                      add_output_option, add_plot_option, add_unit_option, check_output_paths,
+                      count, frequency_text, load_with_warnings, print_json, print_written, real,
+                      refuse_ignored, save_figure, time_limit, warning_lines)
 
 
 def register(sub) -> None:
@@ -29,6 +29,8 @@ def _register_forces(sub) -> None:
         file=NETLIST_FILE)
     p.add_argument("--omega", type=positive_omega, required=True, metavar="W",
                    help="angular frequency: rad/s, or with a unit: 50Hz, 3000rpm")
+    add_unit_option(p, "show the frequency in rad/s (omega, the default), Hz or rpm (--json "
+                       "stays in rad/s)")
     _method_plot_json(p, "bar chart of |Q| per element (PNG, SVG, PDF)", cmd_forces)
 
 
@@ -131,8 +133,7 @@ def cmd_forces(args) -> int:
                           "v": r.v, "v_abs": r.v_abs, "v_phase_deg": r.v_phase_deg,
                           "share": r.share} for r in rows]})
     u = units_of(circuit.drive)
-    print(f"{args.file}: omega = {args.omega:.6g} rad/s ({args.omega / 6.283185307179586:.6g} Hz)"
-          f", K = {K.real:.6g}{K.imag:+.6g}j {u['K']}, |Q0| = {abs(Q0):.6g} {u['Q']}")
+    print(f"{args.file}: {frequency_text(args.omega, args.unit)}, K = {K.real:.6g}{K.imag:+.6g}j {u['K']}, |Q0| = {abs(Q0):.6g} {u['Q']}")
     if flag:
         print("  this omega is on or within rounding of a pole or zero of K (flagged)")
     width = max([len(r.name) for r in rows] + [7])

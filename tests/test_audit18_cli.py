@@ -1,0 +1,20 @@
+"""A new user's pass over the command line (audit18): every frequency shown in --unit."""
+
+import math
+from pathlib import Path
+
+import pytest
+from cli_helpers import run
+
+STB = Path(__file__).resolve().parents[1] / "netlists" / "stb_heald.mcir"
+
+
+@pytest.mark.parametrize("unit, head", [
+    ("rad/s", f"omega = 300 rad/s ({300 / (2 * math.pi):.6g} Hz)"),
+    ("Hz", f"f = {300 / (2 * math.pi):.6g} Hz"),
+    ("rpm", f"n = {300 * 60 / (2 * math.pi):.6g} rpm"),
+])
+def test_forces_shows_its_frequency_in_unit(unit, head, capsys):
+    status, out, err = run(["forces", STB, "--omega", "300", "--unit", unit], capsys)
+    assert status == 0, err                    # main: unrecognized arguments: --unit
+    assert out.splitlines()[0].startswith(f"{STB}: {head}, K = "), out
