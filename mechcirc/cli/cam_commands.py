@@ -11,9 +11,13 @@ from ._common import (MAX_LENGTH, add_command, add_handler, add_output_option,
                       warning_lines)
 
 _LAWS = ("harmonic", "cycloidal", "modified_sine", "modified_trapezoid", "polynomial_345")
-#: Lengths in mm and cam angles in degrees, or with a unit of the one grammar (40mm, 4cm, 2rad).
-_MM = {"unit": "mm", "role": "length"}
+#: Cam angles in degrees, or with a unit of the one grammar (2rad).
 _ANGLE = real(least=0.0, most=360.0, unit="deg", role="angle")
+
+
+def _length(least: float | None = None, above: float | None = None):
+    """argparse type: a length in mm, or with a unit of the one grammar (40mm, 4cm)."""
+    return real(least=least, above=above, most=MAX_LENGTH, unit="mm", role="length")
 
 
 def _stroke(text: str) -> str:
@@ -48,20 +52,20 @@ def register(sub) -> None:
     p.add_argument("--stroke", type=_stroke, metavar="H",
                    help="lift [mm; deg for an oscillating follower; or with a unit: 20mm, "
                         "2cm, 15deg] (--stroke=-20: the follower falls first)")
-    p.add_argument("--base-radius", type=real(above=0.0, most=MAX_LENGTH, **_MM),
-                   required=True, metavar="MM", help="base circle radius r_b [mm]")
+    p.add_argument("--base-radius", type=_length(above=0.0), required=True, metavar="MM",
+                   help="base circle radius r_b [mm]")
     p.add_argument("--follower", choices=("roller", "flat", "oscillating", "oscillating_flat"),
                    default="roller", help="translating roller (default), translating flat "
                    "face, oscillating roller, oscillating flat face (needs --pivot)")
-    p.add_argument("--roller-radius", type=real(least=0.0, most=MAX_LENGTH, **_MM),
-                   metavar="MM", help="roller radius r_f [mm] (0: a knife edge)")
-    p.add_argument("--offset", type=real(most=MAX_LENGTH, **_MM), metavar="MM",
+    p.add_argument("--roller-radius", type=_length(least=0.0), metavar="MM",
+                   help="roller radius r_f [mm] (0: a knife edge)")
+    p.add_argument("--offset", type=_length(), metavar="MM",
                    help="offset e of a translating follower's axis [mm] (default 0; a "
                         "positive one lowers the rise's pressure angle, the cam turning "
                         "counter-clockwise; --offset=-5 for a negative one)")
-    p.add_argument("--arm", type=real(above=0.0, most=MAX_LENGTH, **_MM), metavar="MM",
+    p.add_argument("--arm", type=_length(above=0.0), metavar="MM",
                    help="oscillating follower: arm length, pivot to roller centre [mm]")
-    p.add_argument("--pivot", type=real(above=0.0, most=MAX_LENGTH, **_MM), metavar="MM",
+    p.add_argument("--pivot", type=_length(above=0.0), metavar="MM",
                    help="oscillating follower: distance from the cam's centre to the pivot [mm]")
     p.add_argument("--pressure-limit", type=real(above=0.0, most=90.0, unit="deg", role="angle"),
                    metavar="DEG", help="largest admissible pressure angle [deg] (default 30 "
