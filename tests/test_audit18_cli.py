@@ -18,3 +18,12 @@ def test_forces_shows_its_frequency_in_unit(unit, head, capsys):
     status, out, err = run(["forces", STB, "--omega", "300", "--unit", unit], capsys)
     assert status == 0, err                    # main: unrecognized arguments: --unit
     assert out.splitlines()[0].startswith(f"{STB}: {head}, K = "), out
+
+
+def test_fourbar_dead_centres_label_nu(capsys):
+    status, out, err = run(["fourbar", "--crank", "29", "--coupler", "37", "--rocker", "188",
+                            "--frame", "189"], capsys)
+    assert status == 0, err
+    centres = [ln for ln in out.splitlines() if "dead centre" in ln]
+    assert len(centres) == 2
+    assert all(ln.endswith(" 1/rad") for ln in centres), centres    # main: 'ν = +0.278765'

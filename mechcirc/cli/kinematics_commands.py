@@ -258,7 +258,7 @@ def cmd_fourbar(args) -> int:
     if "dead_centres" in doc:
         for dc in doc["dead_centres"]:
             line = (f"  {dc['kind']:5s} dead centre: θ = {dc['theta_deg']:8.3f}°  "
-                    f"φ4 = {dc['phi4_deg']:8.3f}°  ν = {dc['nu']:+.6f}")
+                    f"φ4 = {dc['phi4_deg']:8.3f}°  ν = {dc['nu']:+.6f} 1/rad")
             if args.omega is not None:
                 line += f"  ε4 = {dc['rocker_acceleration']:+.1f} 1/s²"
             print(line)
