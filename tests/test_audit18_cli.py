@@ -27,3 +27,12 @@ def test_fourbar_dead_centres_label_nu(capsys):
     centres = [ln for ln in out.splitlines() if "dead centre" in ln]
     assert len(centres) == 2
     assert all(ln.endswith(" 1/rad") for ln in centres), centres    # main: 'ν = +0.278765'
+
+
+def test_ic_on_an_unknown_node_says_did_you_mean(tmp_path, capsys):
+    net = tmp_path / "ic.mcir"
+    net.write_text("mass m1 phi 0 1 kg*m^2\nspring k1 phi 0 1000 N*m/rad\n.ic phii x=5 deg\n")
+    status, _, err = run(["transient", net, "--t-end", "0.01"], capsys)
+    assert status == 2
+    assert "ic.mcir:3:5: error: .ic names node 'phii', which no element uses; did you mean " \
+           "'phi'?" in err                                   # main: no 'did you mean'
