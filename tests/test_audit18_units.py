@@ -87,3 +87,12 @@ def test_scene_cam_unit_of_the_wrong_kind_is_located(tmp_path, capsys):
                          ["unit 'mm' is a length", "angle (rad, deg)"], tmp_path, capsys)
     assert_cam_key_error(_with(text, "pivot", '"130 deg"'), "pivot",
                          ["unit 'deg'", "length (m, mm, cm)"], tmp_path, capsys)
+
+
+def test_scene_cam_names_say_did_you_mean(tmp_path, capsys):
+    text = (EXAMPLES / "cam_heald_scene.toml").read_text()
+    assert_cam_key_error(_with(text, "law", '"cycloidl"'), "law",
+                         ["not a motion law; did you mean 'cycloidal'?"], tmp_path, capsys)
+    typo = _with(text, "follower", '"lever"\nfollower_type = "oscilating"')
+    assert_cam_key_error(typo, "follower_type", ["did you mean 'oscillating'?"], tmp_path,
+                         capsys)

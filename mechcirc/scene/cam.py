@@ -39,7 +39,7 @@ import numpy as np
 
 from ..errors import GeometryError, InputError, MechcircWarning, warn
 from ..kinematics.linkage import Linkage, Slider
-from ..sources import Table, brief, check_keys, checked_number, located
+from ..sources import Table, brief, check_keys, checked_number, did_you_mean, located
 from ..units import in_si
 
 if TYPE_CHECKING:
@@ -378,7 +378,8 @@ class _CamReader:
         """``follower_type``, and the keys of the other kinds refused."""
         kind = self.raw.get("follower_type", "oscillating")
         if kind not in KINDS:
-            raise self.err(f"[cam] follower_type {brief(kind)} is not a follower type",
+            raise self.err(f"[cam] follower_type {brief(kind)} is not a follower type"
+                           + did_you_mean(str(kind), KINDS),
                            "follower_type", expected=" | ".join(KINDS),
                            value=kind)
         for key, (what, kinds) in _ONLY.items():
@@ -439,7 +440,8 @@ class _CamReader:
                             motion.sine)
         for key in ("law", "return_law"):
             if key in raw and raw[key] not in LAWS:
-                raise self.err(f"[cam] {key} {brief(raw[key])} is not a motion law", key,
+                raise self.err(f"[cam] {key} {brief(raw[key])} is not a motion law"
+                               + did_you_mean(str(raw[key]), LAWS), key,
                                expected=" | ".join(LAWS), value=raw[key])
         osc = kind.startswith("oscillating")
         skey = "stroke_deg" if osc else "stroke"
