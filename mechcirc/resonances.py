@@ -248,7 +248,7 @@ def resonance_pairs(circuit: Circuit, omega_max: float | None = None,
     return [(r, *v) for r, v in out] if vectors else [(r, v[0]) for r, v in out]
 
 
-def _check_arguments(circuit: Circuit, omega_max, kind) -> None:
+def _check_arguments(circuit: Circuit, omega_max: float | None, kind) -> None:
     """Refuse an ``omega_max`` that is not a real number > 0 or None (a bool is no number,
     though an int), a ``kind`` not known, and an element whose value × eta overflows."""
     if not (omega_max is None or isinstance(omega_max, numbers.Real)

@@ -11,6 +11,7 @@ import signal
 import sys
 import threading
 import warnings
+from dataclasses import dataclass
 from pathlib import Path
 
 from ..errors import (MAX_QUOTED, InputError, MechcircError, MechcircWarning, NetlistError,
@@ -680,14 +681,14 @@ def set_values(items, not_numbers: dict | None = None, texts: bool = False,
     return out
 
 
+@dataclass(frozen=True)
 class Default:
     """The registered default of an option :func:`refuse_ignored` governs: it marks the
     option as not given, and ``value`` is what the option then is (the one place the
     default is written, next to its help).  False when its value is (for tests of
-    ``args.opt`` before the rules are applied)."""
+    ``args.opt`` before the rules are applied); equal when the values are."""
 
-    def __init__(self, value):
-        self.value = value
+    value: object
 
     def __bool__(self) -> bool:
         return bool(self.value)
