@@ -448,9 +448,10 @@ class _Parser:
                 raise NetlistError("the frame '0' cannot have an initial state", self.source,
                                    lineno, col, "a node other than 0")
             if node not in known:
-                raise NetlistError(f".ic names node {node!r}, which no element uses",
-                                   self.source, lineno, col,
-                                   "one of " + ", ".join(sorted(known - {"0"})[:20]))
+                nodes = sorted(known - {"0"})
+                raise NetlistError(f".ic names node {node!r}, which no element uses"
+                                   f"{did_you_mean(node, nodes)}", self.source, lineno, col,
+                                   "one of " + ", ".join(nodes[:20]))
             if node in seen_ic:
                 raise NetlistError(f"node {node!r} has a second .ic (first on line "
                                    f"{seen_ic[node]})", self.source, lineno, col,

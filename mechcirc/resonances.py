@@ -39,6 +39,7 @@ modes are not reported.
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 from typing import Literal
 
@@ -209,15 +210,7 @@ def resonance_pairs(circuit: Circuit, omega_max: float | None = None,
     by :func:`_secular_held` where it applies), not the values-only one's (banded):
     unpolished, they can differ in the last bits (errors of order eps·λ_max/λ).
     """
-    if not (omega_max is None or isinstance(omega_max, (int, float, np.number)) and omega_max > 0):
-        raise InputError(f"omega_max must be > 0 rad/s or None, got {omega_max!r}")
-    if kind not in (None, "resonance", "antiresonance"):
-        raise InputError(f"kind must be 'resonance', 'antiresonance' or None, got {kind!r}")
-    for e in circuit.elements:
-        if not math.isfinite(e.value * e.eta):
-            raise NetlistError(f"{e.kind} {e.name!r}: value × eta = {e.value:g} × {e.eta:g} "
-                               "overflows float64", circuit.source, e.line, e.col,
-                               "a product below 1.8e308")
+    _check_arguments(circuit, omega_max, kind)
     system = circuit.nodal
     if system.unloaded:
         import warnings
@@ -253,6 +246,21 @@ def resonance_pairs(circuit: Circuit, omega_max: float | None = None,
         out = [(r, v) for r, v in out if r.omega <= omega_max]
     out = sorted(out, key=lambda rv: (rv[0].omega, rv[0].kind))
     return [(r, *v) for r, v in out] if vectors else [(r, v[0]) for r, v in out]
+
+
+def _check_arguments(circuit: Circuit, omega_max: float | None, kind) -> None:
+    """Refuse an ``omega_max`` that is not a real number > 0 or None (a bool is no number,
+    though an int), a ``kind`` not known, and an element whose value × eta overflows."""
+    if not (omega_max is None or isinstance(omega_max, numbers.Real)
+            and not isinstance(omega_max, bool) and omega_max > 0):
+        raise InputError(f"omega_max must be > 0 rad/s or None, got {omega_max!r}")
+    if kind not in (None, "resonance", "antiresonance"):
+        raise InputError(f"kind must be 'resonance', 'antiresonance' or None, got {kind!r}")
+    for e in circuit.elements:
+        if not math.isfinite(e.value * e.eta):
+            raise NetlistError(f"{e.kind} {e.name!r}: value × eta = {e.value:g} × {e.eta:g} "
+                               "overflows float64", circuit.source, e.line, e.col,
+                               "a product below 1.8e308")
 
 
 def _solved(M, D, Ks, G_released, G_held, damped: bool, omega_max, vectors: bool) -> tuple:

@@ -41,7 +41,7 @@ from .errors import UnitError
 __all__ = ["Unit", "UnitError", "ATOMS", "PREFIXES", "PREFIXABLE", "ROLES", "parse_unit",
            "looks_like_unit", "convert", "parse_quantity", "split_quantity", "is_bare_number", "parse_omega",
            "OMEGA_UNITS", "is_rotational", "SPICE_SUFFIXES", "FREQUENCY_UNITS", "in_unit",
-           "convert_frequency"]
+           "convert_frequency", "in_unit_of"]
 
 # Dimensions are exponents of (kg, m, s).
 _MASS, _LENGTH, _TIME = (1, 0, 0), (0, 1, 0), (0, 0, 1)
@@ -458,16 +458,45 @@ def parse_omega(text: str) -> float:
         raise ValueError(f"{message} (expected {exc.expected}; no unit means rad/s)") from None
 
 
+def in_unit_of(text: str, role: str | None, unit: str = "", *, what: str = "value") -> float:
+    """A quantity ``text`` read as ``role`` (:func:`parse_quantity`) and given in ``unit``.
+
+    A bare number already is in ``unit`` ("" : SI); a number with a unit is converted
+    by the ratio of the two units, so ``"120 deg"`` in ``"deg"`` is exactly 120 and
+    ``"2 cm"`` in ``"mm"`` is 20.
+
+    Parameters
+    ----------
+    text : str
+    role : str or None
+        As :func:`parse_quantity`.
+    unit : str
+        The unit of the result and of a bare number ("" : SI).
+    what : str
+        What the value is, for messages.
+
+    Returns
+    -------
+    float
+    """
+    value = parse_quantity(text, role, what=what)       # the number, its unit checked
+    number, given = split_quantity(str(text)) or ("", "")
+    if unit and given:
+        value = float(number) * (parse_quantity("1 " + given, role) / parse_unit(unit).factor)
+    return value
+
+
 def in_si(text: str, source: str, value, role: str | None, section: str | None, key: str,
-          occurrence: int = 0, what: str = "value"):
+          occurrence: int = 0, what: str = "value", unit: str = ""):
     """A TOML string such as ``"600 rpm"`` read in this grammar as ``role`` and converted
-    to SI, or its error :func:`~mechcirc.sources.located` at ``key``; other values as they are."""
+    to SI (to ``unit`` if given: :func:`in_unit_of`), or its error
+    :func:`~mechcirc.sources.located` at ``key``; other values as they are."""
     if not isinstance(value, str):
         return value
     from .sources import located
 
     try:
-        return parse_quantity(value, role, what=what)
+        return in_unit_of(value, role, unit, what=what)
     except UnitError as exc:
         raise located(text, source, exc.message, section, key, occurrence=occurrence,
                       expected=exc.expected) from None

@@ -11,11 +11,13 @@ import signal
 import sys
 import threading
 import warnings
+from dataclasses import dataclass
 from pathlib import Path
 
 from ..errors import (MAX_QUOTED, InputError, MechcircError, MechcircWarning, NetlistError,
                       NotSeriesParallelError, clip, shorten)
-from ..units import FREQUENCY_UNITS, UnitError, is_bare_number, parse_quantity, parse_unit
+from ..units import (FREQUENCY_UNITS, UnitError, in_unit, in_unit_of, is_bare_number,
+                     parse_quantity, parse_unit)
 
 EXIT_OK, EXIT_INTERNAL, EXIT_USER = 0, 1, 2
 #: Exit status after SIGINT and SIGTERM (128 + the signal number, as shells report).
@@ -225,9 +227,7 @@ def real(*, least: float | None = None, above: float | None = None,
     """
     def parse(text: str) -> float:
         try:
-            value = parse_quantity(text, role) if role else float(text)
-            if role and unit and not is_bare_number(text):      # to the option's unit
-                value /= parse_unit(unit).factor
+            value = in_unit_of(text, role, unit) if role else float(text)   # in the option's unit
         except UnitError as exc:
             noun = "frequency" if role == "omega" else role    # "unknown frequency unit 'x'"
             message = exc.message.replace("unknown unit", f"unknown {noun} unit")
@@ -364,6 +364,13 @@ def add_unit_option(p, what: str | None = None) -> None:
                    help=what or "show frequencies in rad/s (omega, the default), Hz (f = "
                                 "omega/2 pi) or rpm (n = 60 omega/2 pi): tables, CSV columns "
                                 "and plot axes (--json stays in rad/s)")
+
+
+def frequency_text(omega: float, unit: str = "rad/s", digits: int = 6) -> str:
+    """``omega = 300 rad/s (47.7465 Hz)``, or in ``unit`` of --unit: ``f = 47.7465 Hz``."""
+    if unit == "rad/s":
+        return f"omega = {omega:.{digits}g} rad/s ({in_unit(omega, 'Hz'):.6g} Hz)"
+    return f"{FREQUENCY_UNITS[unit][0]} = {in_unit(omega, unit):.{digits}g} {unit}"
 
 
 #: The largest angular frequency the command line accepts [rad/s] (ω² stays finite).
@@ -674,31 +681,45 @@ def set_values(items, not_numbers: dict | None = None, texts: bool = False,
     return out
 
 
+@dataclass(frozen=True)
+class Default:
+    """The registered default of an option :func:`refuse_ignored` governs: it marks the
+    option as not given, and ``value`` is what the option then is (the one place the
+    default is written, next to its help).  False when its value is (for tests of
+    ``args.opt`` before the rules are applied); equal when the values are."""
+
+    value: object
+
+    def __bool__(self) -> bool:
+        return bool(self.value)
+
+
 def refuse_ignored(args, rules) -> None:
     """Refuse an option given where its value would not be read; default the others.
 
     Parameters
     ----------
     args : argparse.Namespace
-        The parsed options; an option is given when it is not None (its argparse
-        default is None, and its default is given here).
+        The parsed options; an option is given when it is neither None nor the
+        :class:`Default` it was registered with (which is replaced by its value here).
     rules : dict
-        ``"--opt": (applies, to_what, hint, default)``: whether the option is read
-        with the other options and the input given; to what it applies, and how to
-        make it apply ("" for no way) for the message; its value when not given.
-        ``"--no-opt"`` is the off side of the on/off flag ``--opt`` (dest ``opt``):
-        its ``applies`` must hold when the value given is on.
+        ``"--opt": (applies, to_what, hint)``: whether the option is read with the
+        other options and the input given; to what it applies, and how to make it
+        apply ("" for no way) for the message.  ``"--no-opt"`` is the off side of
+        the on/off flag ``--opt`` (dest ``opt``): its ``applies`` must hold when
+        the value given is on.
 
     Raises
     ------
     InputError
         "--tol applies to --adaptive sweeps (leave --tol out, or add --adaptive)".
     """
-    for option, (applies, to_what, hint, default) in rules.items():
+    for option, (applies, to_what, hint) in rules.items():
         dest = option[2:].removeprefix("no-").replace("-", "_")
-        if getattr(args, dest) is None:
-            setattr(args, dest, default)
-        elif not applies:
+        value = getattr(args, dest)
+        if isinstance(value, Default):
+            setattr(args, dest, value.value)
+        elif value is not None and not applies:
             raise InputError(f"{option} applies to {to_what} (leave {option} out"
                              f"{', or ' + hint if hint else ''})")
 

@@ -5,11 +5,25 @@ from __future__ import annotations
 import math
 
 from ..errors import InputError
+from ..units import UnitError, in_unit_of
 from ._common import (MAX_LENGTH, add_command, add_handler, add_output_option,
                       check_output_paths, count, print_json, real, refuse_ignored,
                       warning_lines)
 
 _LAWS = ("harmonic", "cycloidal", "modified_sine", "modified_trapezoid", "polynomial_345")
+#: Cam angles in degrees, or with a unit of the one grammar (2rad).
+_ANGLE = real(least=0.0, most=360.0, unit="deg", role="angle")
+
+
+def _length(least: float | None = None, above: float | None = None):
+    """argparse type: a length in mm, or with a unit of the one grammar (40mm, 4cm)."""
+    return real(least=least, above=above, most=MAX_LENGTH, unit="mm", role="length")
+
+
+def _stroke(text: str) -> str:
+    """``--stroke``: checked as a length or an angle (the follower decides which: _motion)."""
+    real(most=MAX_LENGTH, role="displacement")(text)
+    return text
 
 
 def register(sub) -> None:
@@ -18,9 +32,9 @@ def register(sub) -> None:
         "Profile of a disc cam turning counter-clockwise and driving a translating roller, a "
         "translating flat face, an oscillating roller or an oscillating flat face (through the "
         "arm's pivot) follower, from a motion law cycle (rise, dwell, return, and the rest of the "
-        "turn dwelling at the bottom) or a lift table. Lengths in mm, angles in degrees; the "
-        "stroke and a table's lift are in mm, or degrees of the arm for --follower oscillating "
-        "and oscillating_flat. See docs/kinematics.md, 'Cams'.",
+        "turn dwelling at the bottom) or a lift table. Lengths in mm, angles in degrees, or with "
+        "a unit (4cm, 2rad); the stroke and a table's lift are in mm, or degrees of the arm for "
+        "--follower oscillating and oscillating_flat. See docs/kinematics.md, 'Cams'.",
         "Example: mechcirc cam --law cycloidal --rise 120 --dwell 60 --return 120 --stroke 20 "
         "--base-radius 40 --roller-radius 10 -o profile.csv --svg profile.svg")
     src = p.add_mutually_exclusive_group(required=True)
@@ -29,31 +43,31 @@ def register(sub) -> None:
                      help="lift table: columns angle_deg,displacement over one turn")
     for name, what in (("rise", "rise"), ("dwell", "dwell at the top (default 0)"),
                        ("return", "return")):
-        p.add_argument(f"--{name}", type=real(least=0.0, most=360.0, unit="deg"), metavar="DEG",
+        p.add_argument(f"--{name}", type=_ANGLE, metavar="DEG",
                        help=f"cam angle of the {what} [deg]")
-    p.add_argument("--low-dwell", type=real(least=0.0, most=360.0, unit="deg"), metavar="DEG",
+    p.add_argument("--low-dwell", type=_ANGLE, metavar="DEG",
                    help="dwell at the bottom [deg] (default: the rest of 360°; given, the four "
                         "angles must sum to 360°)")
     p.add_argument("--return-law", choices=_LAWS, help="law of the return (default --law)")
-    p.add_argument("--stroke", type=real(most=MAX_LENGTH), metavar="H",
-                   help="lift [mm; deg for an oscillating follower] (--stroke=-20: the "
-                        "follower falls first)")
-    p.add_argument("--base-radius", type=real(above=0.0, most=MAX_LENGTH, unit="mm"),
-                   required=True, metavar="MM", help="base circle radius r_b [mm]")
+    p.add_argument("--stroke", type=_stroke, metavar="H",
+                   help="lift [mm; deg for an oscillating follower; or with a unit: 20mm, "
+                        "2cm, 15deg] (--stroke=-20: the follower falls first)")
+    p.add_argument("--base-radius", type=_length(above=0.0), required=True, metavar="MM",
+                   help="base circle radius r_b [mm]")
     p.add_argument("--follower", choices=("roller", "flat", "oscillating", "oscillating_flat"),
                    default="roller", help="translating roller (default), translating flat "
                    "face, oscillating roller, oscillating flat face (needs --pivot)")
-    p.add_argument("--roller-radius", type=real(least=0.0, most=MAX_LENGTH, unit="mm"),
-                   metavar="MM", help="roller radius r_f [mm] (0: a knife edge)")
-    p.add_argument("--offset", type=real(most=MAX_LENGTH), metavar="MM",
+    p.add_argument("--roller-radius", type=_length(least=0.0), metavar="MM",
+                   help="roller radius r_f [mm] (0: a knife edge)")
+    p.add_argument("--offset", type=_length(), metavar="MM",
                    help="offset e of a translating follower's axis [mm] (default 0; a "
                         "positive one lowers the rise's pressure angle, the cam turning "
                         "counter-clockwise; --offset=-5 for a negative one)")
-    p.add_argument("--arm", type=real(above=0.0, most=MAX_LENGTH, unit="mm"), metavar="MM",
+    p.add_argument("--arm", type=_length(above=0.0), metavar="MM",
                    help="oscillating follower: arm length, pivot to roller centre [mm]")
-    p.add_argument("--pivot", type=real(above=0.0, most=MAX_LENGTH, unit="mm"), metavar="MM",
+    p.add_argument("--pivot", type=_length(above=0.0), metavar="MM",
                    help="oscillating follower: distance from the cam's centre to the pivot [mm]")
-    p.add_argument("--pressure-limit", type=real(above=0.0, most=90.0, unit="deg"),
+    p.add_argument("--pressure-limit", type=real(above=0.0, most=90.0, unit="deg", role="angle"),
                    metavar="DEG", help="largest admissible pressure angle [deg] (default 30 "
                                        "translating, 45 oscillating)")
     p.add_argument("--points", type=count(8, 1_000_000), default=721, metavar="N",
@@ -69,8 +83,7 @@ def _motion(args):
     osc = args.follower.startswith("oscillating")
     scale = math.pi / 180 if osc else 1.0
     unit = "°" if osc else " mm"
-    refuse_ignored(args, {f"--{o}": (not args.motion, "a --law cycle, not to a --motion table",
-                                      "", None)
+    refuse_ignored(args, {f"--{o}": (not args.motion, "a --law cycle, not to a --motion table", "")
                           for o in ("rise", "dwell", "return", "low-dwell", "stroke", "return-law")})
     if args.motion:
         m = read_motion_table(args.motion)
@@ -90,13 +103,18 @@ def _motion(args):
                          f"{ret:g} + {args.low_dwell:g} = {total + args.low_dwell:g}°, "
                          "not 360° (one turn)")
     try:
-        m = cam_cycle(args.law, args.rise, dwell, ret, args.stroke * scale, args.return_law)
+        stroke = in_unit_of(args.stroke, "angle" if osc else "length", "deg" if osc else "mm")
+        m = cam_cycle(args.law, args.rise, dwell, ret, stroke * scale, args.return_law)
+    except UnitError as exc:
+        raise InputError(f"--stroke {args.stroke}: the stroke of --follower {args.follower} is "
+                         + ("the arm's swing, an angle" if osc else "a lift, a length")
+                         + f" ({exc.expected}; no unit means {'deg' if osc else 'mm'})") from None
     except ValueError as exc:
         raise InputError(str(exc)) from None
     text = (f"{args.law} rise {args.rise:g}° dwell {dwell:g}° "
             + (f"return {ret:g}° ({args.return_law})" if args.return_law
                else f"return {ret:g}°")
-            + f", low dwell {360 - total:g}°, stroke {args.stroke:g}{unit}")
+            + f", low dwell {360 - total:g}°, stroke {stroke:g}{unit}")
     return m, text
 
 
@@ -140,7 +158,7 @@ def _check_args(args) -> None:
     rules = (("--roller-radius", f in ("roller", "oscillating"), "a roller"),
              ("--arm", f == "oscillating", "an oscillating roller"),
              ("--pivot", osc, "an oscillating"), ("--offset", not osc, "a translating"))
-    refuse_ignored(args, {key: (takes, f"{which} follower, not --follower {f}", "", None)
+    refuse_ignored(args, {key: (takes, f"{which} follower, not --follower {f}", "")
                           for key, takes, which in rules})
 
 

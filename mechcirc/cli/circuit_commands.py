@@ -16,10 +16,10 @@ from ..limits import (
     MAX_SWEEP_POINTS,
 )
 from ..units import FREQUENCY_UNITS, in_unit
-from ._common import (NETLIST_FILE, add_command, add_handler, add_method_option,
+from ._common import (NETLIST_FILE, Default, add_command, add_handler, add_method_option,
                       add_output_option, add_plot_option, add_unit_option, check_names,
-                      check_output_paths, load_with_warnings, print_json, print_written, real,
-                      refuse_ignored, save_figure, warning_lines)
+                      check_output_paths, frequency_text, load_with_warnings, print_json,
+                      print_written, real, refuse_ignored, save_figure, warning_lines)
 
 #: argparse type: an angular frequency [rad/s], or with a unit (``50Hz``, ``3000rpm``); the
 #: command checks the range (a sweep's --omega-min/--omega-max together).
@@ -74,12 +74,12 @@ def _register_sweep(sub) -> None:
     p.add_argument("--adaptive", action="store_true",
                    help="refine the grid around resonances and wherever |K| or |Q0| "
                         "bends (--points is then the starting grid)")
-    p.add_argument("--refine", action=argparse.BooleanOptionalAction,
+    p.add_argument("--refine", action=argparse.BooleanOptionalAction, default=Default(True),
                    help="nodal analysis: refine each solution with residuals in double-"
                         "double (the default, K to about its rounding); --no-refine: one "
                         "plain solve per point, faster, error about eps·cond(A) (the "
                         "'error' estimate says how large); no effect on the tree")
-    p.add_argument("--tol", type=real(above=0.0, most=1.0),
+    p.add_argument("--tol", type=real(above=0.0, most=1.0), default=Default(0.005),
                    help="adaptive: largest relative midpoint deviation (default 0.005)")
     p.add_argument("--sensitivity", action="append", metavar="NAME", default=[],
                    help="also the exact derivative of |Q0| (|v0| under a force drive) with "
@@ -241,9 +241,9 @@ def _peak_text(pk, units: dict, unit: str = "rad/s") -> str:
 def cmd_sweep(args) -> int:
     check_output_paths(args.output, args.touchstone, plots=(args.plot,), reads=(args.file,),
                        table="a CSV table")
-    refuse_ignored(args, {"--tol": (args.adaptive, "--adaptive sweeps", "add --adaptive", 0.005),
+    refuse_ignored(args, {"--tol": (args.adaptive, "--adaptive sweeps", "add --adaptive"),
                           "--no-refine": (not args.adaptive or args.refine, "a fixed grid, not "
-                                          "--adaptive", "leave out --adaptive", True)})
+                                          "--adaptive", "leave out --adaptive")})
     if args.touchstone and Path(args.touchstone).suffix.lower() != ".s1p":
         # K seen by one drive is a one-port: a .s2p name would promise a
         # 2-port file that scikit-rf then cannot read.
@@ -476,10 +476,8 @@ def cmd_resonances(args) -> int:
     kinds = {e.name: e.kind for e in circuit.elements} | {lv.name: "lever" for lv in circuit.levers}
     for i, m in enumerate(modes or (), 1):
         r = m.resonance
-        where = (f"omega = {r.omega:.10g} rad/s ({r.f_hz:.6g} Hz)" if args.unit == "rad/s"
-                 else f"{FREQUENCY_UNITS[args.unit][0]} = {in_unit(r.omega, args.unit):.10g} "
-                      f"{args.unit}")
-        print(f"\n{i}: {r.kind} {where}" + (f", zeta = {r.zeta:.4g}" if r.zeta else ""))
+        print(f"\n{i}: {r.kind} {frequency_text(r.omega, args.unit, 10)}"
+              + (f", zeta = {r.zeta:.4g}" if r.zeta else ""))
         if m.note and (m.shape or not args.modes):   # else the mode table says it
             print(f"  note: {m.note}")
         if args.modes:

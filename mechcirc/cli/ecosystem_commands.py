@@ -6,10 +6,10 @@ from pathlib import Path
 
 from ..errors import MechcircError
 from ..limits import FORMULA_SECONDS
-from ._common import (NETLIST_FILE, add_command, add_handler, add_method_option,
-                      add_output_option, add_plot_option, check_output_paths, count,
-                      load_with_warnings, print_json, print_written, real, refuse_ignored,
-                      save_figure, time_limit, warning_lines)
+from ._common import (NETLIST_FILE, Default, add_command, add_handler, add_method_option,
+                      add_output_option, add_plot_option, add_unit_option, check_output_paths,
+                      count, frequency_text, load_with_warnings, print_json, print_written, real,
+                      refuse_ignored, save_figure, time_limit, warning_lines)
 
 
 def register(sub) -> None:
@@ -29,6 +29,8 @@ def _register_forces(sub) -> None:
         file=NETLIST_FILE)
     p.add_argument("--omega", type=positive_omega, required=True, metavar="W",
                    help="angular frequency: rad/s, or with a unit: 50Hz, 3000rpm")
+    add_unit_option(p, "show the frequency in rad/s (omega, the default), Hz or rpm (--json "
+                       "stays in rad/s)")
     _method_plot_json(p, "bar chart of |Q| per element (PNG, SVG, PDF)", cmd_forces)
 
 
@@ -96,7 +98,7 @@ def _register_study(sub) -> None:
                    help="keep the rows already in -o and run only the missing points "
                         "(refused if -o was made from another spec)")
     p.add_argument("--connect-timeout", type=real(above=0, most=3600, unit="s"),
-                   metavar="SECONDS",
+                   default=Default(10.0), metavar="SECONDS",
                    help="with --scheduler: wait this long for the scheduler, then as long "
                         "for its first worker (default 10)")
     p.add_argument("--curves", metavar="PARQUET",
@@ -131,8 +133,7 @@ def cmd_forces(args) -> int:
                           "v": r.v, "v_abs": r.v_abs, "v_phase_deg": r.v_phase_deg,
                           "share": r.share} for r in rows]})
     u = units_of(circuit.drive)
-    print(f"{args.file}: omega = {args.omega:.6g} rad/s ({args.omega / 6.283185307179586:.6g} Hz)"
-          f", K = {K.real:.6g}{K.imag:+.6g}j {u['K']}, |Q0| = {abs(Q0):.6g} {u['Q']}")
+    print(f"{args.file}: {frequency_text(args.omega, args.unit)}, K = {K.real:.6g}{K.imag:+.6g}j {u['K']}, |Q0| = {abs(Q0):.6g} {u['Q']}")
     if flag:
         print("  this omega is on or within rounding of a pole or zero of K (flagged)")
     width = max([len(r.name) for r in rows] + [7])
@@ -225,10 +226,10 @@ def cmd_study(args) -> int:
     from ..study import column_units, load_spec, run_study, sidecar_path
 
     refuse_ignored(args, {"--workers": (not args.scheduler, "local processes, not a "
-                                        "--scheduler's cluster", "", None),
+                                        "--scheduler's cluster", ""),
                           "--connect-timeout": (args.scheduler, "a --scheduler",
-                                                "add --scheduler ADDRESS", 10.0),
-                          "--plot-column": (args.plot, "the --plot", "add --plot IMAGE", None)})
+                                                "add --scheduler ADDRESS"),
+                          "--plot-column": (args.plot, "the --plot", "add --plot IMAGE")})
     if args.resume and not args.output:
         raise MechcircError("--resume needs -o FILE (the table to continue)")
     spec = load_spec(args.spec)

@@ -9,7 +9,7 @@ from pathlib import Path
 
 from ..errors import InputError, MechcircError, NetlistError
 from ..units import convert_frequency
-from ._common import (MAX_LENGTH, MAX_OMEGA, add_command, add_handler, add_output_option,
+from ._common import (MAX_LENGTH, MAX_OMEGA, Default, add_command, add_handler, add_output_option,
                       add_plot_option, check_output_paths, count, print_json, print_written,
                       real, refuse_ignored, save_figure, shaft_speed, write_outputs)
 
@@ -83,13 +83,13 @@ def _register_frame(sub) -> None:
         p.add_argument(f"--{link}-inertia", type=real(least=0.0, most=1e30, unit="kg·m²"),
                        default=0.0, metavar="J", help=f"{link} inertia about its centre of "
                        f"mass [kg·m²]")
-    p.add_argument("--reed-force", type=_vector("--reed-force", 2),
+    p.add_argument("--reed-force", type=_vector("--reed-force", 2), default=Default((0.0, 0.0)),
                    metavar="FX,FY", help="peak cloth force on the reed, rocker frame [N] "
                    "(--reed-force=-50,-500 when it starts with a minus)")
-    p.add_argument("--reed-point", type=_vector("--reed-point", 2),
+    p.add_argument("--reed-point", type=_vector("--reed-point", 2), default=Default((0.0, 0.0)),
                    metavar="X,Y", help="where it acts, rocker frame [--unit]")
     p.add_argument("--beat-window", type=real(above=0.0, most=360.0, unit="deg"),
-                   metavar="DEG", help="crank window of the half-sine reed force [deg] "
+                   default=Default(40.0), metavar="DEG", help="crank window of the half-sine reed force [deg] "
                    "(default 40, centred on the front dead centre)")
     p.add_argument("--gravity", action="store_true", help="add gravity, 9.81 m/s² along −y")
     p.add_argument("--branch", type=int, choices=(1, -1), default=1, help="assembly mode")
@@ -135,7 +135,7 @@ def _register_synth(sub) -> None:
     p.add_argument("--crank-step", type=real(above=0.0, most=1e3, unit="mm"), default=0.5,
                    metavar="MM", help="grid step of the crank length (default 0.5 mm)")
     p.add_argument("--swing-step", type=real(above=0.0, most=180.0, unit="deg"),
-                   metavar="DEG", help="grid step of the swings explored without --swing (default 0.5°)")
+                   default=Default(0.5), metavar="DEG", help="grid step of the swings explored without --swing (default 0.5°)")
     p.add_argument("--no-refine", action="store_true",
                    help="report the grid's designs without the continuous refinement")
     _register_synth_export(p)
@@ -162,11 +162,13 @@ def _register_synth_export(p) -> None:
     p.add_argument("--export", metavar="DIR",
                    help="write DIR/design_K.linkage.toml and DIR/design_K.scene.toml per design")
     p.add_argument("--omega", type=real(above=0.0, most=MAX_OMEGA, unit="rad/s", role="omega"),
-                   metavar="W", help="crank speed in exported files [rad/s] (default 100)")
+                   default=Default(100.0), metavar="W",
+                   help="crank speed in exported files [rad/s] (default 100)")
     for name, what, default in _SCENE_OPTIONS:
         p.add_argument(f"--{name}", type=real(least=None if name == "beat-moment" else 0.0,
                                               most=1e30),
-                       metavar="X", help=f"exported scene: {what} (default {default:g}, "
+                       default=Default(default), metavar="X",
+                       help=f"exported scene: {what} (default {default:g}, "
                        f"Mrázek's one-side variant 1)")
 
 
@@ -256,7 +258,7 @@ def cmd_fourbar(args) -> int:
     if "dead_centres" in doc:
         for dc in doc["dead_centres"]:
             line = (f"  {dc['kind']:5s} dead centre: θ = {dc['theta_deg']:8.3f}°  "
-                    f"φ4 = {dc['phi4_deg']:8.3f}°  ν = {dc['nu']:+.6f}")
+                    f"φ4 = {dc['phi4_deg']:8.3f}°  ν = {dc['nu']:+.6f} 1/rad")
             if args.omega is not None:
                 line += f"  ε4 = {dc['rocker_acceleration']:+.1f} 1/s²"
             print(line)
@@ -281,9 +283,10 @@ def cmd_frame(args) -> int:
     from ..kinematics import FourBar, LinkMass, beat_up_force, frame_loading
 
     check_output_paths(args.output, plots=(args.plot,), table="a CSV table")
-    shaped = (args.reed_force is not None, "the --reed-force", "add --reed-force FX,FY")
-    refuse_ignored(args, {"--reed-point": (*shaped, (0.0, 0.0)), "--beat-window": (*shaped, 40.0),
-                          "--reed-force": (True, "", "", (0.0, 0.0))})     # (its default)
+    shaped = (not isinstance(args.reed_force, Default), "the --reed-force",
+              "add --reed-force FX,FY")
+    refuse_ignored(args, {"--reed-point": shaped, "--beat-window": shaped,
+                          "--reed-force": (True, "", "")})     # (its default)
     k = 1e-3 if args.unit == "mm" else 1.0            # to metres
     fb = FourBar(args.crank * k, args.coupler * k, args.rocker * k, args.frame * k,
                  branch=args.branch)
@@ -348,9 +351,9 @@ def cmd_synth(args) -> int:
 
     check_output_paths(plots=(args.plot,))
     export_only = (bool(args.export), "the files --export writes", "add --export DIR")
-    rules = {f"--{n}": (*export_only, d) for n, _, d in _SCENE_OPTIONS}
-    refuse_ignored(args, {**rules, "--omega": (*export_only, 100.0), "--swing-step": (
-        args.swing is None, "the swings explored, not a fixed --swing", "", 0.5)})
+    rules = {f"--{n}": export_only for n, _, _ in _SCENE_OPTIONS}
+    refuse_ignored(args, {**rules, "--omega": export_only, "--swing-step": (
+        args.swing is None, "the swings explored, not a fixed --swing", "")})
     if args.export and not Path(args.export).is_dir():
         raise MechcircError(f"--export {args.export}: no such folder (create it first)")
     fixed = {n: getattr(args, n) for n in ("crank", "coupler", "rocker", "frame")

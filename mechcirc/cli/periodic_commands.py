@@ -7,7 +7,7 @@ import math
 
 from ..errors import MechcircError
 from ..units import in_unit
-from ._common import (add_command, add_handler, add_method_option, add_output_option,
+from ._common import (Default, add_command, add_handler, add_method_option, add_output_option,
                       add_plot_option, add_unit_option, check_names, check_output_paths,
                       count, load_with_warnings, print_json, print_written, real, refuse_ignored,
                       scene_theta, shaft_speed, warning_lines, write_outputs)
@@ -36,9 +36,9 @@ def register(sub) -> None:
                    help="lowest speed of the speed map [rev/min]")
     p.add_argument("--rpm-max", type=shaft_speed, metavar="B",
                    help="highest speed of the speed map [rev/min]")
-    p.add_argument("--points", type=count(2, 100_000), metavar="N",
+    p.add_argument("--points", type=count(2, 100_000), default=Default(200), metavar="N",
                    help="speed map: its speeds (default 200)")
-    p.add_argument("--angles", type=count(4, 1_000_000), metavar="N",
+    p.add_argument("--angles", type=count(4, 1_000_000), default=Default(360), metavar="N",
                    help="--rpm: crank angles per revolution in the outputs (default 360)")
     p.add_argument("--tol", type=real(above=0.0, most=0.5), default=1e-4, metavar="TOL",
                    help="error asked for, relative to the peak force (default 1e-4)")
@@ -46,7 +46,7 @@ def register(sub) -> None:
                    help="use exactly N harmonics (the error is still estimated)")
     p.add_argument("--elements", metavar="NAMES",
                    help="comma-separated elements whose force (and velocity) to add, or 'all'")
-    p.add_argument("--near", type=real(above=0.0, most=1.0), metavar="FRAC",
+    p.add_argument("--near", type=real(above=0.0, most=1.0), default=Default(0.03), metavar="FRAC",
                    help="--rpm: name harmonics within this relative distance of a resonance "
                         "(default 0.03)")
     add_method_option(p, "how K is evaluated (default auto)")
@@ -82,9 +82,8 @@ def cmd_periodic(args) -> int:
     scene = args.file.lower().endswith(".toml")
     one = (single, "one speed", "give --rpm instead of --rpm-min/--rpm-max")
     refuse_ignored(args, {"--points": (ranged, "a speed map", "add --rpm-min and --rpm-max "
-                                       "instead of --rpm", 200),
-                          "--angles": (*one, 360), "--near": (*one, 0.03),
-                          "--theta": (scene, "a scene (.toml), not to a netlist", "", None)})
+                                       "instead of --rpm"), "--angles": one, "--near": one,
+                          "--theta": (scene, "a scene (.toml), not to a netlist", "")})
     if scene:
         circuit, motion = _scene(args)
     else:

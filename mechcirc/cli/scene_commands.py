@@ -8,7 +8,7 @@ import warnings
 from ..errors import MechcircError
 from ..limits import MAX_CYCLE_POINTS
 from ..units import FREQUENCY_UNITS, in_unit
-from ._common import (NETLIST_FILE, add_command, add_handler, add_output_option,
+from ._common import (NETLIST_FILE, Default, add_command, add_handler, add_output_option,
                       add_plot_option, add_unit_option, check_output_paths, count, print_json,
                       print_written, real, refuse_ignored, save_figure, scene_theta, set_values, write_outputs,
                       write_text)
@@ -39,10 +39,10 @@ def _register_scene(sub) -> None:
     p.add_argument("--reflect", choices=("eta", "lever"), default="eta",
                    help="reflect through eta = ratio² (default) or explicit ideal levers")
     p.add_argument("--points", type=count(2, MAX_CYCLE_POINTS, why="10–25 ms each"),
-                   metavar="N", help="--cycle: crank angles over the revolution (default 72)")
-    p.add_argument("--harmonics", type=count(1, 1000), metavar="H",
+                   default=Default(72), metavar="N", help="--cycle: crank angles over the revolution (default 72)")
+    p.add_argument("--harmonics", type=count(1, 1000), default=Default(5), metavar="H",
                    help="--cycle: shaft harmonics h = 1..H for |Q0| (default 5)")
-    p.add_argument("--reduce", action="store_true", default=None,
+    p.add_argument("--reduce", action="store_true", default=Default(False),
                    help="reduce the circuit to what the file's [analysis] output needs over "
                         "its band, within its tol (-o then writes the reduced netlist)")
     add_plot_option(p, "--cycle: plot the map; with --mode: draw the mode on the linkage "
@@ -83,14 +83,13 @@ def cmd_scene(args) -> int:
     check_output_paths(args.output, plots=(args.plot,), reads=(args.file,),
                        table="a CSV table (--cycle) or a netlist (--theta)")
     one = args.plot and not (args.cycle or args.reduce)
-    refuse_ignored(args, {"--points": (args.cycle, "--cycle", "add --cycle", 72),
-                          "--harmonics": (args.cycle, "--cycle", "add --cycle", 5),
+    refuse_ignored(args, {"--points": (args.cycle, "--cycle", "add --cycle"),
+                          "--harmonics": (args.cycle, "--cycle", "add --cycle"),
                           "--plot": (args.cycle or args.mode is not None, "the --cycle map or a "
-                                     "--mode N drawing", "add --cycle or --mode N", None),
+                                     "--mode N drawing", "add --cycle or --mode N"),
                           "--mode": (one, "one crank angle drawn into --plot, without --cycle "
-                                     "or --reduce", "add --plot IMAGE", None),
-                          "--reduce": (not args.cycle, "one crank angle, not to --cycle", "",
-                                       False)})
+                                     "or --reduce", "add --plot IMAGE"),
+                          "--reduce": (not args.cycle, "one crank angle, not to --cycle", "")})
     from ..scene import build_needed, load_scene
 
     scene = load_scene(args.file)
@@ -252,8 +251,8 @@ def cmd_simulate_scene(args) -> int:
     fixed = args.method in (None, "rk4", "rk4-python", "rk8")
     refuse_ignored(args, {
         "--rtol": (not fixed, "the scipy methods (DOP853, RK45, LSODA), not "
-                   f"{args.method or 'the default rk8'}", "use --steps-per-period", None),
-        "--steps-per-period": (fixed, f"rk4 and rk8, not {args.method}", "use --rtol", None)})
+                   f"{args.method or 'the default rk8'}", "use --steps-per-period"),
+        "--steps-per-period": (fixed, f"rk4 and rk8, not {args.method}", "use --rtol")})
     check_output_paths(args.output, plots=(args.plot,), reads=(args.scene,),
                        table="a CSV table")
     scene = _with_overrides(args, load_scene(args.scene))

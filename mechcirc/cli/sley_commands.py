@@ -6,7 +6,7 @@ import math
 
 from ..errors import InputError
 from ..limits import MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS, MAX_SCIPY_REVOLUTIONS
-from ._common import (add_command, add_handler, add_output_option, add_plot_option,
+from ._common import (Default, add_command, add_handler, add_output_option, add_plot_option,
                       check_output_paths, count, print_json, print_written, real,
                       refuse_ignored, set_values, write_outputs, write_text)
 
@@ -43,11 +43,11 @@ def _register_simulate(sub) -> None:
     _sley_arguments(p)
     add_plot_option(p, "plot eps2P, eps4P, eps4T, M2V (Figs. 4-9)")
     add_handler(p, cmd_simulate)
-    p.add_argument("--shaft", action="store_true", default=None,
+    p.add_argument("--shaft", action="store_true", default=Default(False),
                    help="scene: the dynamic main shaft of its [shaft] table (flywheel, motor) "
                         "turning the mechanism with its elastic parts: speed fluctuation, "
                         "motor torque, elastic forces, start-up")
-    p.add_argument("--rigid", action="store_true", default=None,
+    p.add_argument("--rigid", action="store_true", default=Default(False),
                    help="with --shaft: every elastic element rigid (θ the only DOF)")
     p.add_argument("--flywheel", type=real(least=0.0, unit="kg·m²"), metavar="J",
                    help="with --shaft: the flywheel's inertia [kg·m²] (default the file's)")
@@ -55,9 +55,9 @@ def _register_simulate(sub) -> None:
 
 def _sley_arguments(p) -> None:
     """simulate's options for the sley presets and the integration."""
-    p.add_argument("--drive", choices=("one-side", "both-sides"),
+    p.add_argument("--drive", choices=("one-side", "both-sides"), default=Default("one-side"),
                    help="Table 1 (one-side, default) or Table 2 (both-sides)")
-    p.add_argument("--variant", metavar="N",
+    p.add_argument("--variant", metavar="N", default=Default("3"),
                    help="variant 1-7 (default 3), or 'all' for all 14 of both tables "
                         "on every core")
     p.add_argument("--revolutions", type=count(1, MAX_REVOLUTIONS), metavar="R",
@@ -65,10 +65,10 @@ def _sley_arguments(p) -> None:
     p.add_argument("--revolution", type=count(1, MAX_REVOLUTIONS), metavar="K",
                    help="tabulate revolution K (1..R) instead of the last")
     p.add_argument("--alpha", type=real(above=0.0, most=360.0, unit="deg", role="angle"),
-                   metavar="DEG",
+                   default=Default(10.0), metavar="DEG",
                    help="beat-up interval alpha [deg] (default 10, the best fit to the "
                         "printed cells; not printed in the paper)")
-    p.add_argument("--beat-sign", type=int, choices=(-1, 1),
+    p.add_argument("--beat-sign", type=int, choices=(-1, 1), default=Default(-1),
                    help="sign of M4 in the sley equation: -1 as eq. (4) prints it (default), "
                         "+1 along the rigid acceleration at beat-up (see docs/sley.md)")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
@@ -109,9 +109,9 @@ def _register_crosscheck(sub) -> None:
     p.add_argument("--omega-max", type=real(above=0.0, unit="rad/s", role="omega"), metavar="W",
                    help="with a netlist FILE: check resonances up to W [rad/s, or 50Hz] "
                         "(default 1.5 x the highest)")
-    p.add_argument("--drive", choices=("one-side", "both-sides"),
+    p.add_argument("--drive", choices=("one-side", "both-sides"), default=Default("one-side"),
                    help="sley preset: the drive's layout (default one-side)")
-    p.add_argument("--variant", type=int, choices=range(1, 8), metavar="N",
+    p.add_argument("--variant", type=int, choices=range(1, 8), default=Default(3), metavar="N",
                    help="sley preset: variant 1-7 (default 3)")
     p.add_argument("--theta", type=real(most=1e9, unit="deg", role="angle"), metavar="DEG",
                    help="crank angle of the linearisation [deg] (default: the start angle, "
@@ -199,17 +199,17 @@ def _refuse_unread(args) -> None:
     unread are refused (:func:`refuse_ignored`)."""
     preset_only = (args.scene is None, f"a sley preset, not to the scene {args.scene}", "")
     with_shaft = (args.shaft, "--shaft", "add --shaft")
-    refuse_ignored(args, {"--drive": (*preset_only, "one-side"), "--variant": (*preset_only, "3"),
-                          "--alpha": (*preset_only, 10.0), "--beat-sign": (*preset_only, -1),
+    refuse_ignored(args, {"--drive": preset_only, "--variant": preset_only,
+                          "--alpha": preset_only, "--beat-sign": preset_only,
                           "--start-deg": (args.scene is not None, "a scene file; the presets "
                                           "start where the rigid sley acceleration is zero, as "
-                                          "the paper", "", None),
+                                          "the paper", ""),
                           "--shaft": (args.scene is not None, "a scene file's [shaft] table, "
-                                      "not to a sley preset", "", False),
-                          "--rigid": (*with_shaft, False), "--flywheel": (*with_shaft, None),
+                                      "not to a sley preset", ""),
+                          "--rigid": with_shaft, "--flywheel": with_shaft,
                           **{o: (not args.shaft, "a fixed crank speed, not to --shaft's steady "
-                                 "cycle", "", None) for o in ("--revolutions", "--revolution",
-                                                              "--plot")}})
+                                 "cycle", "") for o in ("--revolutions", "--revolution",
+                                                        "--plot")}})
 
 
 def cmd_simulate(args) -> int:
@@ -261,20 +261,18 @@ def cmd_simulate(args) -> int:
     return 0
 
 
-#: crosscheck's options that apply to some inputs only (the input's kind is a word of the
-#: first), with their defaults.
-_CROSSCHECK_APPLIES = {"--drive": ("a sley preset", "one-side"), "--variant": ("a sley preset", 3),
-                       "--omega-max": ("a netlist FILE", None),
-                       "--theta": ("a scene or a sley preset", None),
-                       "--netlist": ("a scene or a sley preset", None)}
+#: crosscheck's options that apply to some inputs only (the input's kind is a word of it).
+_CROSSCHECK_APPLIES = {"--drive": "a sley preset", "--variant": "a sley preset",
+                       "--omega-max": "a netlist FILE", "--theta": "a scene or a sley preset",
+                       "--netlist": "a scene or a sley preset"}
 
 
 def cmd_crosscheck(args) -> int:
     kind = "preset" if args.file is None else "scene" if args.file.endswith(".toml") else "netlist"
     given = {"preset": "without a FILE a sley preset is checked", "scene":
              f"'{args.file}' is a scene", "netlist": f"'{args.file}' is a netlist already"}[kind]
-    refuse_ignored(args, {opt: (kind in where, f"{where}; {given}", "", default)
-                          for opt, (where, default) in _CROSSCHECK_APPLIES.items()})
+    refuse_ignored(args, {opt: (kind in where, f"{where}; {given}", "")
+                          for opt, where in _CROSSCHECK_APPLIES.items()})
     if kind == "scene":
         from .scene_commands import cmd_crosscheck_scene
 

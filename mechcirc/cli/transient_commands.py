@@ -52,18 +52,18 @@ def register(sub) -> None:
 
 def cmd_transient(args) -> int:
     from ..netlist import load
-    from ..transient import transient
+    from ..transient import parse_waveform, transient
 
     check_output_paths(args.output, plots=(args.plot,), reads=(args.file,), table="a CSV table")
-    shaped = args.rpm is not None or (args.waveform or "rest").split(":")[0] not in ("rest", "csv")
+    wave = None if args.waveform is None else parse_waveform(args.waveform)   # read once
+    shaped = args.rpm is not None or getattr(wave, "kind", "") in ("harmonic", "step", "impulse")
     refuse_ignored(args, {"--amplitude": (shaped, "a harmonic, step or impulse --waveform or a "
                                           "motion= drive at --rpm", "add --waveform "
-                                          "harmonic:OMEGA, step or impulse", None),
-                          "--element": (args.plot, "a panel of the --plot", "add --plot IMAGE",
-                                        None)})
+                                          "harmonic:OMEGA, step or impulse"),
+                          "--element": (args.plot, "a panel of the --plot", "add --plot IMAGE")})
     circuit = load(args.file, require_drive=False)
     check_names(args.element, [e.name for e in circuit.elements])   # before the run
-    result = transient(circuit, args.t_end, args.dt, args.waveform, amplitude=args.amplitude,
+    result = transient(circuit, args.t_end, args.dt, wave, amplitude=args.amplitude,
                        rtol=args.rtol, rpm=args.rpm)
     write_outputs(args, result.columns().items(), lambda: result.plot(elements=args.element),
                   fmt=result.CSV_FORMAT)

@@ -39,7 +39,8 @@ import numpy as np
 
 from ..errors import GeometryError, InputError, MechcircWarning, warn
 from ..kinematics.linkage import Linkage, Slider
-from ..sources import Table, brief, check_keys, checked_number, located
+from ..sources import Table, brief, check_keys, checked_number, did_you_mean, located
+from ..units import in_si
 
 if TYPE_CHECKING:
     from ..motion_laws import Motion
@@ -347,6 +348,10 @@ _ONLY = {"stroke_deg": ("oscillating", ("oscillating", "oscillating_flat")),
          "pivot": ("oscillating", ("oscillating", "oscillating_flat")),
          "stroke": ("translating", ("roller", "flat")), "offset": ("roller", ("roller",)),
          "roller_radius": ("roller", ("oscillating", "roller", "flat"))}
+#: The role and unit of each key with no bare-degree reading ("": the scene's ``units``);
+#: the others (rise, dwell, return, stroke_deg, pressure_limit_deg) are angles in degrees.
+_UNIT_OF = {**dict.fromkeys(("stroke", "base_radius", "roller_radius", "arm", "pivot", "offset"),
+                            ("length", "")), "spring": ("spring", "N/m"), "preload": ("force", "N")}
 #: The follower types of a scene's [cam].
 KINDS = ("oscillating", "oscillating_flat", "roller", "flat")
 
@@ -362,7 +367,10 @@ class _CamReader:
                        expected=expected)
 
     def num(self, key, default=None, positive=True, allow_zero=False):
-        return checked_number(self.text, self.source, self.raw.get(key, default), f"[cam] {key}",
+        role, unit = _UNIT_OF.get(key, ("angle", "deg"))
+        value = in_si(self.text, self.source, self.raw.get(key, default), role, "cam", key,
+                      what=f"[cam] {key}", unit=unit or self.lk.units)   # "20 mm", "2 rad"
+        return checked_number(self.text, self.source, value, f"[cam] {key}",
                               "cam", key if key in self.raw else "follower", positive=positive,
                               allow_zero=allow_zero, expected=f"{key} = {CAM_KEYS[key]}")
 
@@ -370,7 +378,8 @@ class _CamReader:
         """``follower_type``, and the keys of the other kinds refused."""
         kind = self.raw.get("follower_type", "oscillating")
         if kind not in KINDS:
-            raise self.err(f"[cam] follower_type {brief(kind)} is not a follower type",
+            raise self.err(f"[cam] follower_type {brief(kind)} is not a follower type"
+                           + did_you_mean(str(kind), KINDS),
                            "follower_type", expected=" | ".join(KINDS),
                            value=kind)
         for key, (what, kinds) in _ONLY.items():
@@ -431,7 +440,8 @@ class _CamReader:
                             motion.sine)
         for key in ("law", "return_law"):
             if key in raw and raw[key] not in LAWS:
-                raise self.err(f"[cam] {key} {brief(raw[key])} is not a motion law", key,
+                raise self.err(f"[cam] {key} {brief(raw[key])} is not a motion law"
+                               + did_you_mean(str(raw[key]), LAWS), key,
                                expected=" | ".join(LAWS), value=raw[key])
         osc = kind.startswith("oscillating")
         skey = "stroke_deg" if osc else "stroke"

@@ -350,9 +350,8 @@ def _named(value, names) -> TypeGuard[str]:
 
 def _number(text, source, value, what, table, key, n, *, positive=True, allow_zero=False):
     role = next((r for u, r in _ROLE_OF.items() if what.endswith(u)), None)
-    converted = in_si(text, source, value, role, table, key, n, what)   # "2 kN/mm", "30 deg"
-    if role == "angle" and isinstance(value, str) and not is_bare_number(value):
-        converted = math.degrees(converted)
+    converted = in_si(text, source, value, role, table, key, n, what,   # "2 kN/mm", "30 deg"
+                      unit="deg" if role == "angle" else "")
     return checked_number(text, source, converted, what, table, key, n, positive=positive,
                           allow_zero=allow_zero)
 

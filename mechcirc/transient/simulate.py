@@ -564,7 +564,8 @@ def _linear(ss: StateSpace, z0, u_in, h, elements, velocities):
     path = why
     if Z is None and x_ready is None:
         Z = _propagate(ss.A, ss.B, z0, u_in, h)
-        path = f"block propagation (modal path refused: {why})"
+        path = (f"block propagation (exact; the modal path needs independent mode shapes and "
+                f"is not used here: {why})")
     err = 0.0
     if (x_ready is not None or (Z is not None and T is not None)) and dropped > 0 and x_only:
         err = dropped           # x formed without the shapes' rounding-level imaginary parts
