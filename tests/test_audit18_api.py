@@ -1,6 +1,7 @@
 """Public functions refuse what is not meant (audit18): ``resonance_pairs`` and
 ``find_resonances`` take ``omega_max`` as a real number > 0 or None; a bool is no number
-(``True`` was read as 1 rad/s, an empty answer with no word of why)."""
+(``True`` was read as 1 rad/s, an empty answer with no word of why); ``periodic`` takes
+``rpm`` likewise (``True`` ran at 1 rev/min)."""
 
 from pathlib import Path
 
@@ -27,3 +28,13 @@ def test_omega_max_numpy_numbers_still_taken():
     assert len(want) >= 2
     for value in (np.int64(2000), np.float32(2000.0), 2000):
         assert [r.omega for r in find_resonances(c, value)] == want
+
+
+@pytest.mark.parametrize("bad", [True, np.bool_(True)])
+def test_periodic_rpm_bool_refused(bad):
+    """``periodic(c, rpm=True)`` ran at 1 rev/min; a speed is a number, not a flag."""
+    from mechcirc.errors import MechcircError
+    from mechcirc.periodic import periodic
+
+    with pytest.raises(MechcircError, match=r"machine speed must be a finite number > 0"):
+        periodic(mechcirc.load(STB), bad)
