@@ -303,6 +303,4 @@ def symbol_values(circuit: "Circuit") -> dict:
     -------
     dict[sympy.Symbol, sympy.Rational]
     """
-    b = _Builder(circuit)
-    b.build()
-    return dict(b.values)
+    return formula_and_values(circuit)[1]
