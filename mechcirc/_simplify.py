@@ -165,15 +165,6 @@ def _output(circuit: Circuit, omega, output):
         return s.K if output is None else s.force(output)
 
 
-def _loaded(elements, levers, drive) -> tuple[set, set]:
-    """Indices of the elements and of the levers that carry force."""
-    from .topology import force_groups, loaded_groups
-
-    kept = set(loaded_groups(force_groups(elements, levers), drive.n1, drive.n2))
-    n = len(elements)
-    return {i for i in range(n) if i in kept}, {i - n for i in kept if i >= n}
-
-
 def _unique(name, taken):
     n, k = name, 1
     while n in taken:
@@ -227,15 +218,19 @@ def _drop_idle_levers(elements, levers, drive, steps):
 
 def _drop_unloaded(elements, levers, drive, protect, steps):
     """Remove the elements and levers on no path of the drive (they carry no force)."""
-    idx, lidx = _loaded(elements, levers, drive)
-    gone = [e.name for i, e in enumerate(elements) if i not in idx and e.name not in protect]
-    gone_l = [lv.name for i, lv in enumerate(levers) if i not in lidx]
+    from .topology import force_groups, loaded_groups
+
+    # The groups' indices: the elements', then the levers' from len(elements) on.
+    kept = set(loaded_groups(force_groups(elements, levers), drive.n1, drive.n2))
+    first_lever = len(elements)
+    gone = [e.name for i, e in enumerate(elements) if i not in kept and e.name not in protect]
+    gone_l = [lv.name for i, lv in enumerate(levers, first_lever) if i not in kept]
     if not (gone or gone_l):
         return elements, levers, False
     steps.append(f"removed {_some(gone + gone_l)}: on no path of the drive "
                  "(carry no force)")
-    elements = [e for i, e in enumerate(elements) if i in idx or e.name in protect]
-    levers = [lv for i, lv in enumerate(levers) if i in lidx]
+    elements = [e for i, e in enumerate(elements) if i in kept or e.name in protect]
+    levers = [lv for i, lv in enumerate(levers, first_lever) if i in kept]
     return elements, levers, True
 
 

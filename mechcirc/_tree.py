@@ -9,7 +9,7 @@ evaluated by :mod:`mechcirc._tree_eval` (both re-exported by
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Iterator, Union
+from typing import Union
 
 from .circuit import Element, Lever
 
@@ -112,27 +112,19 @@ def _format(root: _Printed) -> str:
     return "".join(out)
 
 
-def leaves(root: Node) -> Iterator[Element]:
-    """The elements under ``root``, left to right.
+def leaves(root: Node) -> list[Element]:
+    """The elements under ``root``, left to right (the leaves of :func:`postorder`).
 
     Parameters
     ----------
     root : Node
         The tree whose elements are listed.
 
-    Yields
-    ------
-    Element
+    Returns
+    -------
+    list of Element
     """
-    stack = [root]
-    while stack:
-        node = stack.pop()
-        if isinstance(node, Leaf):
-            yield node.element
-        elif isinstance(node, Reflect):
-            stack.append(node.child)
-        else:
-            stack.extend(reversed(node.children))
+    return [node.element for node in postorder(root) if isinstance(node, Leaf)]
 
 
 def depth(root: Node) -> int:

@@ -739,13 +739,11 @@ class _Parser:
     def lever(self, line: _Line, kind: str):
         pos, opts, units = self._fields(line, kind, 5, ("ratio",))
         name = self._new_name(line, pos[0])
-        p1, p2, s1, s2 = nodes = [self._name(line, t, "node name") for t in pos[1:5]]
-        if nodes[0] == nodes[1]:
-            line.error(f"both primary ends of lever {name!r} are node {nodes[0]!r}",
-                       pos[2].col, "two different nodes")
-        if nodes[2] == nodes[3]:
-            line.error(f"both secondary ends of lever {name!r} are node {nodes[2]!r}",
-                       pos[4].col, "two different nodes")
+        p1, p2, s1, s2 = [self._name(line, t, "node name") for t in pos[1:5]]
+        for side, a, b, tok in (("primary", p1, p2, pos[2]), ("secondary", s1, s2, pos[4])):
+            if a == b:
+                line.error(f"both {side} ends of lever {name!r} are node {a!r}", tok.col,
+                           "two different nodes")
         if "ratio" not in opts:
             line.error(f"lever {name!r} needs ratio=EXPR", line.tokens[-1].col, SYNTAX["lever"])
         ratio = self._positive(line, opts["ratio"], f"ratio of lever {name!r}", "",

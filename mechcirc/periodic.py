@@ -238,11 +238,13 @@ def _prepared(circuit: Circuit, motion):
 
 def _on_grid(Qk: np.ndarray, n: int) -> np.ndarray:
     """Σ_{k=1}^{N} Re(Q_k e^{jkθ}) at θ = 2πi/n, i < n, by one inverse FFT on a grid
-    fine enough for N (every m-th point of n·m > 2N points: no aliasing)."""
-    m = -(-(2 * Qk.size + 1) // n)
-    X = np.zeros(n * m // 2 + 1, dtype=complex)
-    X[1:Qk.size + 1] = Qk * (n * m / 2)
-    return np.fft.irfft(X, n * m)[::m]
+    fine enough for N (every m-th point of n·m > 2N points: no aliasing); Q_k on the
+    last axis (each row of a 2-D ``Qk`` on its own)."""
+    N = Qk.shape[-1]
+    m = -(-(2 * N + 1) // n)
+    X = np.zeros(Qk.shape[:-1] + (n * m // 2 + 1,), dtype=complex)
+    X[..., 1:N + 1] = Qk * (n * m / 2)
+    return np.fft.irfft(X, n * m)[..., ::m]
 
 
 def _peaks(Qk: np.ndarray, fine: bool = True) -> tuple[np.ndarray, np.ndarray]:
@@ -256,9 +258,7 @@ def _peaks(Qk: np.ndarray, fine: bool = True) -> tuple[np.ndarray, np.ndarray]:
         return np.zeros(rows), np.zeros(rows)
     per = 4                                 # grid points per period of the highest harmonic
     n = 1 << max(10 if fine else 6, math.ceil(math.log2(per * n_k + 1)))
-    X = np.zeros((rows, n // 2 + 1), dtype=complex)
-    X[:, 1:n_k + 1] = Qk * (n / 2)
-    y = np.fft.irfft(X, n, axis=1)
+    y = _on_grid(Qk, n)         # (n > 4 n_k: no finer grid needed)
     i = np.argmax(np.abs(y), axis=1)
     best = np.abs(y[np.arange(rows), i])
     theta = 2 * np.pi * i / n

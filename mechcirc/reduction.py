@@ -201,7 +201,11 @@ class _Run:
         self.kids: Any = kids              # list, or deque once grown at the front
         self.signs: Any = signs
 
-    def prepend(self, kids: list, signs: list) -> None:
+    def extend(self, kids: tuple, signs: tuple) -> None:
+        self.kids.extend(kids)
+        self.signs.extend(signs)
+
+    def prepend(self, kids: tuple, signs: tuple) -> None:
         if type(self.kids) is list:
             if len(self.kids) < 64:
                 self.kids[:0] = kids
@@ -212,34 +216,34 @@ class _Run:
         self.signs.extendleft(reversed(signs))
 
 
+def _oriented(run: _Run, sign: int) -> tuple[tuple, tuple]:
+    """The operands of ``run`` and their signs, turned to the orientation ``sign``
+    (a series run reversed runs its operands in the opposite order)."""
+    if sign > 0:
+        return tuple(run.kids), tuple(run.signs)
+    if run.series:
+        return tuple(reversed(run.kids)), tuple(-s for s in reversed(run.signs))
+    return tuple(run.kids), tuple(-s for s in run.signs)
+
+
 def _close(node, sign: int):
     """``(node, sign)`` as a finished child: a run becomes a flat Series/Parallel
     turned to the parent's orientation (so that only leaves and lever
     reflections carry signs), leaves keep theirs."""
     if type(node) is not _Run:
         return node, sign
-    if node.series:
-        if sign > 0:
-            return Series(tuple(node.kids), tuple(node.signs)), 1
-        return Series(tuple(reversed(node.kids)), tuple(-s for s in reversed(node.signs))), 1
-    if sign > 0:
-        return Parallel(tuple(node.kids), tuple(node.signs)), 1
-    return Parallel(tuple(node.kids), tuple(-s for s in node.signs)), 1
+    return (Series if node.series else Parallel)(*_oriented(node, sign)), 1
 
 
 def _operands(node, sign: int, series: bool):
     """The operands ``node`` contributes to a run of kind ``series``, oriented by ``sign``:
     its own operands when it is a run of the same kind, else itself closed."""
     if type(node) is not _Run:
-        return [node], [sign]
+        return (node,), (sign,)
     if node.series == series:
-        if sign > 0:
-            return list(node.kids), list(node.signs)
-        if series:
-            return list(reversed(node.kids)), [-s for s in reversed(node.signs)]
-        return list(node.kids), [-s for s in node.signs]
+        return _oriented(node, sign)
     c, s = _close(node, sign)
-    return [c], [s]
+    return (c,), (s,)
 
 
 def _join(x, sx: int, y, sy: int, series: bool):
@@ -254,27 +258,17 @@ def _join(x, sx: int, y, sy: int, series: bool):
     xr = type(x) is _Run and x.series == series
     yr = type(y) is _Run and y.series == series
     if xr and (not yr or len(x.kids) >= len(y.kids)):
-        if not series:
-            kids, signs = _operands(y, sy * sx, False)
-            x.kids.extend(kids)
-            x.signs.extend(signs)
-        elif sx > 0:
-            kids, signs = _operands(y, sy, True)
-            x.kids.extend(kids)
-            x.signs.extend(signs)
+        if not series or sx > 0:
+            x.extend(*_operands(y, sy * sx, series))
         else:
             # x runs against the path: in x's orientation y (reversed) comes first.
             x.prepend(*_operands(y, -sy, True))
         return x, sx < 0
     if yr:
-        if not series:
-            y.prepend(*_operands(x, sx * sy, False))
-        elif sy > 0:
-            y.prepend(*_operands(x, sx, True))
+        if not series or sy > 0:
+            y.prepend(*_operands(x, sx * sy, series))
         else:
-            kids, signs = _operands(x, -sx, True)
-            y.kids.extend(kids)
-            y.signs.extend(signs)
+            y.extend(*_operands(x, -sx, True))
         return y, sy < 0
     if type(x) is _Run:
         x, sx = _close(x, sx)

@@ -183,23 +183,19 @@ def check_frame_paths(circuit: Circuit) -> None:
     """
     if not circuit.levers:
         return          # only a lever can leave a node unreferenced
-    import networkx as nx
-
-    g = nx.Graph()
-    g.add_edges_from((e.n1, e.n2) for e in circuit.elements)
-    g.add_edges_from(p for lv in circuit.levers for p in ((lv.p1, lv.p2), (lv.s1, lv.s2)))
     d = circuit.require_drive()
-    g.add_edge(d.n1, d.n2)
-    referenced = nx.node_connected_component(g, FRAME if FRAME in g else d.n1)
+    adj = adjacency([(e.n1, e.n2) for e in circuit.elements] + [(d.n1, d.n2)]
+                    + [p for lv in circuit.levers for p in ((lv.p1, lv.p2), (lv.s1, lv.s2))])
+    referenced = reachable(adj, FRAME if FRAME in adj else d.n1)
     lever_nodes = {n for lv in circuit.levers for n in (lv.p1, lv.p2, lv.s1, lv.s2)}
     # Islands without levers are merely unloaded (they carry no force); ones
     # reached through a lever are singular.
-    floating = [n for comp in nx.connected_components(g)
-                if comp & lever_nodes and not comp & referenced
-                for n in comp]
+    floating: set[str] = set()
+    for n in lever_nodes - referenced:
+        if n not in floating:
+            floating |= reachable(adj, n)
     if floating:
-        via = [lv.name for lv in circuit.levers
-               if {lv.p1, lv.p2, lv.s1, lv.s2} & set(floating)]
+        via = [lv.name for lv in circuit.levers if {lv.p1, lv.p2, lv.s1, lv.s2} & floating]
         line = next((lv.line for lv in circuit.levers if lv.name in via), 0)
         exc = TopologyError(
             f"node(s) {', '.join(sorted(floating)[:12])} have no path to the frame "

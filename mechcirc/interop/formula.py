@@ -122,6 +122,10 @@ class _Builder:
             return v
         return _number(self.sp, value) if symbol_name is None else self._symbol(symbol_name, value)
 
+    def ratio(self, lever):
+        """A lever's ratio: its symbol ``r_NAME``, or the expression written for it."""
+        return self.field(lever.name, "ratio", lever.ratio, f"r_{lever.name}")
+
     def element_name(self, name: str, kind: str) -> str:
         base = name if not name.isdigit() else f"{kind[0]}{name}"
         return base if base not in self.taken else f"{base}_{kind}"
@@ -170,17 +174,11 @@ class _Builder:
         index = {n: i for i, n in enumerate(system.nodes)}      # absent: the reference
         n = system.size
         A = sp.zeros(n, n)
-        admittance, ratio = {}, {}
         for kind, i, j, sign, source, uses_ratio in stamps(system.elements, system.levers, index):
             if kind == "lever":
-                if source.name not in ratio:
-                    ratio[source.name] = self.field(source.name, "ratio", source.ratio,
-                                                    f"r_{source.name}")
-                y = ratio[source.name] if uses_ratio else 1
+                y = self.ratio(source) if uses_ratio else 1
             else:
-                if source.name not in admittance:
-                    admittance[source.name] = 1 / self.leaf(source)     # Q/v = 1/K
-                y = admittance[source.name]
+                y = 1 / self.leaf(source)     # Q/v = 1/K
             A[i, j] += y if sign > 0 else -y
         rhs = sp.Matrix(system.injection().astype(int).tolist())
         # Cramer's rule on B = jω·A, whose entries are polynomials (no 1/ω):
@@ -218,9 +216,7 @@ class _Builder:
             elif isinstance(node, Parallel):
                 K = 1 / sp.Add(*(1 / out[id(c)] for c in node.children))
             else:
-                lv = node.lever
-                r = self.field(lv.name, "ratio", lv.ratio, f"r_{lv.name}")
-                K = out[id(node.child)] / r ** 2
+                K = out[id(node.child)] / self.ratio(node.lever) ** 2
             out[id(node)] = K
         return out[id(tree)]
 
@@ -307,6 +303,4 @@ def symbol_values(circuit: "Circuit") -> dict:
     -------
     dict[sympy.Symbol, sympy.Rational]
     """
-    b = _Builder(circuit)
-    b.build()
-    return dict(b.values)
+    return formula_and_values(circuit)[1]
