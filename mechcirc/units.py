@@ -234,7 +234,7 @@ def convert(value: float, unit: Unit, role: str) -> float:
     value : float
     unit : Unit
     role : str
-        A key of :data:`ROLES`.
+        A key of :data:`ROLES`; a name with no entry (``""``) accepts any unit.
 
     Returns
     -------
@@ -244,7 +244,8 @@ def convert(value: float, unit: Unit, role: str) -> float:
     Raises
     ------
     UnitError
-        If the unit measures something else than ``role`` expects (offset 0).
+        If the unit measures something else than ``role`` expects (offset 0), or the
+        SI value overflows float64.
     """
     allowed = ROLES.get(role)
     if allowed is not None and unit.dim not in allowed:
@@ -253,7 +254,11 @@ def convert(value: float, unit: Unit, role: str) -> float:
         noun = "an angular frequency" if role == "omega" else f"{article} {role}"
         raise UnitError(f"unit {unit.text!r} is {unit.describe()}; {noun} value needs {what}",
                         0, " or ".join(allowed.values()))
-    return value * unit.factor
+    si = value * unit.factor
+    if math.isinf(si) and math.isfinite(value):     # 1e306 km: not a number float64 holds
+        raise UnitError(f"{value:g} {unit.text} is {si} in SI units (float64 ends at 1.8e308)",
+                        0, "a value within float64's range once converted")
+    return si
 
 
 #: Units accepted for angular frequencies (a subset of the grammar, quoted in messages).
@@ -427,7 +432,7 @@ def parse_quantity(text: str, role: str | None = None, *, what: str = "value") -
                         f"or a unit such as {number} kN/m")
             raise UnitError(exc.message, text.index(unit) + exc.offset, hint) from None
     try:
-        return convert(value, u, role) if role else value * u.factor
+        return convert(value, u, role or "")
     except UnitError as exc:
         raise UnitError(exc.message, text.index(unit), exc.expected) from None
 
