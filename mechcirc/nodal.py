@@ -557,8 +557,9 @@ def first_step_bound(system: NodalSystem, omega: NDArray, xh: NDArray, xl: NDArr
     pat = pattern(system)
     if kern is not None:
         out = np.empty(omega.size)
-        kern.step_bound(omega, xh, xl, d, r, lu, *_ends(system), pat.e_i, pat.e_j,
-                        pat.e_abs, pat.s_row, pat.s_col, pat.s_abs, pat.max_row_terms, out)
+        kern.step_bound(*map(np.ascontiguousarray, (omega, xh, xl, d, r, lu)), *_ends(system),
+                        pat.e_i, pat.e_j, pat.e_abs, pat.s_row, pat.s_col, pat.s_abs,
+                        pat.max_row_terms, out)
         return out
     with np.errstate(all="ignore"):
         c, n = xh.shape
@@ -596,9 +597,10 @@ def _estimate(system, xh, xl, d, prev, r, kern=None):
     as large as x itself that does not contract means A is numerically
     singular: inf.
     """
-    if kern is not None:
+    if kern is not None:            # (C arrays: the one signature warm_kernels compiles)
         est, rho = np.empty(xh.shape[0]), np.empty(xh.shape[0])
-        kern.estimate(xh, xh if xl is None else xl, d, xh if prev is None else prev, r,
+        kern.estimate(*map(np.ascontiguousarray, (xh, xh if xl is None else xl, d,
+                                                  xh if prev is None else prev, r)),
                       *_ends(system), xl is not None, prev is None, est, rho)
         return est, rho
     with np.errstate(all="ignore"):
