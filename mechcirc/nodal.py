@@ -125,7 +125,8 @@ _KERNEL_MIN_OMEGA = 16
 #: per sweep from its size, so the same call always takes the same path and
 #: gives the same bits: the residual kernel computes the numpy residual to the
 #: bit, but the banded LUs differ in rounding (the kernel's against numpy's or
-#: LAPACK's), so that K can differ in its last bit and the error estimate, which
+#: LAPACK's), and so do the error estimate's row sums and moduli (one source,
+#: :mod:`mechcirc._nodal_steps`), so that K can differ in its last bit and the error estimate, which
 #: starts from the first solve's error, by up to 16× (seen on ladders of 45 … 999
 #: elements, the estimates between 2.2e-16 and 3.6e-15 on both); until numba's cache
 #: holds them (compiling takes 7–12 s) the sweep runs numpy and a process of its
