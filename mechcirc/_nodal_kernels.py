@@ -17,15 +17,19 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import _dd
+from . import _dd, _nodal_steps
 from ._jit import decorators, load
 
 HAVE_NUMBA, _jit, _jit_inline = decorators(bool(globals().get("_FORCE_PYTHON")))
 
 if HAVE_NUMBA:        # the one double-double source (:mod:`mechcirc._dd`), compiled
     _dd = load("mechcirc._dd", _COMPILE=True)
+    # and the refinement's arithmetic between the kernels, point by point
+    _nodal_steps = load("mechcirc._nodal_steps", _COMPILE=True)
+_estimate_point, _bound_point = _nodal_steps.estimate_point, _nodal_steps.bound_point
 _split, _two_sum, _two_prod = _dd.split, _dd.two_sum, _dd.two_prod
 _dd_add, _dd_mul_d, _dd_div_d = _dd.dd_add, _dd.dd_mul_d, _dd.dd_div_d
+_dd_difference = _dd.dd_difference
 
 
 @_jit_inline
@@ -131,6 +135,63 @@ def residual(omega, xr, xi, xlr, xli, has_lo, rhs, b_i, b_j, b_s,
         for r in range(n):
             re, im = _row_residual(acc, r, w, wh, wl, rhs[r])
             out[k, r] = complex(re + (0.0 * im - 0.0), 0.0 + (0.0 + im))
+
+
+@_jit_inline
+def _abs_max(x, k):
+    """max |x[k, i]| over i (≥ 0.0; NaN if one is): numba's |z| (a hypot) only where
+    |re| + |im| may be above the largest so far (|z| ≥ (|re| + |im|)/√2)."""
+    m = 0.0
+    for i in range(x.shape[1]):
+        z = x[k, i]
+        if not (abs(z.real) + abs(z.imag) < 1.5 * m):
+            v = abs(z)
+            if v > m or np.isnan(v):
+                m = v
+    return m
+
+
+@_jit
+def estimate(xh, xl, d, prev, r, a, b, lo, first, est, rho):
+    """:func:`mechcirc._nodal_steps.estimate_point` at each ω (rows of xh + xl, the
+    correction ``d``, the one before it ``prev`` unless ``first``, the residual ``r``; the
+    drive's ends ``a``, ``b``, n for the reference) into ``est`` and ``rho``:
+    :func:`mechcirc.nodal._estimate`'s reductions by loops."""
+    n = xh.shape[1]
+    for k in range(est.size):
+        K = abs(_dd_difference(_at(xh, k, a, n), _at(xh, k, b, n), _at(xl, k, a, n),
+                               _at(xl, k, b, n), lo))
+        da, db = _at(d, k, a, n), _at(d, k, b, n)
+        xr = 0j
+        for i in range(n):
+            xr += xh[k, i] * r[k, i]
+        nx = _abs_max(xh, k)
+        est[k], rho[k] = _estimate_point(_abs_max(d, k), nx, nx if first else _abs_max(prev, k),
+                                         K, abs(da - db), abs(da), abs(db), abs(xr), first)
+
+
+@_jit
+def step_bound(omega, xh, xl, d, r, lu, a, b, e_i, e_j, e_abs, s_row, s_col, s_abs, m, out):
+    """:func:`mechcirc._nodal_steps.bound_point` at each ω into ``out``: the sums of
+    :func:`mechcirc.nodal.first_step_bound` by loops (|z| as |re| + |im|; index n, the
+    reference, reads 0: ``a``, ``b`` too)."""
+    c, n = xh.shape
+    for k in range(c):
+        by_c = by_m = by_k = lever = rounding = 0.0
+        for e in range(e_i.size):
+            i, j = e_i[e], e_j[e]
+            t = (_l1(_at(xh, k, i, n)) + _l1(_at(xh, k, j, n))) * \
+                (_l1(_at(d, k, i, n)) + _l1(_at(d, k, j, n)))
+            by_c += t * e_abs[e, 0]
+            by_m += t * e_abs[e, 1]
+            by_k += t * e_abs[e, 2]
+        for s in range(s_row.size):
+            lever += _l1(_at(xh, k, s_row[s], n)) * _l1(_at(d, k, s_col[s], n)) * s_abs[s]
+        for i in range(n):
+            rounding += _l1(xh[k, i]) * _l1(r[k, i])
+        K = abs(_dd_difference(_at(xh, k, a, n), _at(xh, k, b, n), _at(xl, k, a, n),
+                               _at(xl, k, b, n), True))
+        out[k] = _bound_point(lu[k], rounding, by_c, by_m, by_k, lever, abs(omega[k]), K, n, m)
 
 
 @_jit_inline

@@ -106,6 +106,7 @@ class Pattern:
         self.l_p2 = np.array([at(v.p2, n) for v in lv], dtype=np.int64)
         self.l_col = n_nodes + np.arange(len(lv), dtype=np.int64)
         self.l_r = np.array([abs(v.ratio) for v in lv], dtype=float)
+        self.s_abs = np.abs(self.s_val)
 
     def _plan(self) -> None:
         """What every residual needs: the split values, the compiled kernel's buckets, and
