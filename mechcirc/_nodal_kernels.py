@@ -32,15 +32,20 @@ _dd_add, _dd_mul_d, _dd_div_d = _dd.dd_add, _dd.dd_mul_d, _dd.dd_div_d
 _dd_difference = _dd.dd_difference
 
 
+#: ω handled side by side by :func:`residual` and :func:`band_solve_perm`, innermost (the
+#: loops over them vectorise).
+SOLVE_BLOCK = 16
+
+
 @_jit_inline
-def _add(acc, bk, th_r, tl_r, th_i, tl_i):
-    """Add the term (th_r + tl_r) + j(th_i + tl_i) to bucket ``bk`` by TwoSum."""
-    a, ea = _two_sum(acc[bk, 0], th_r)
-    acc[bk, 0] = a
-    acc[bk, 1] += ea + tl_r
-    a, ea = _two_sum(acc[bk, 2], th_i)
-    acc[bk, 2] = a
-    acc[bk, 3] += ea + tl_i
+def _add(acc, bk, b, th_r, tl_r, th_i, tl_i):
+    """Add the term (th_r + tl_r) + j(th_i + tl_i) to bucket ``bk`` at ω ``b`` by TwoSum."""
+    a, ea = _two_sum(acc[bk, 0, b], th_r)
+    acc[bk, 0, b] = a
+    acc[bk, 1, b] += ea + tl_r
+    a, ea = _two_sum(acc[bk, 2, b], th_i)
+    acc[bk, 2, b] = a
+    acc[bk, 3, b] += ea + tl_i
 
 
 @_jit_inline
@@ -59,27 +64,31 @@ def _element_term(v, vh, vl, ar, ai, br, bi, alr, ali, blr, bli, has_lo):
 
 
 @_jit_inline
-def _row_residual(acc, r, w, wh, wl, b):
-    """b − (A x)_r rounded to complex parts, from row r's sums by kind in ``acc``:
-    (A x)_r = S_c + S_l + j(ω S_m − S_k/ω) in double-double."""
+def _row_residual(acc, r, b, w, wh, wl, rhs):
+    """b − (A x)_r at ω ``b`` rounded to (re + (0·im − 0), 0 + (0 + im)), numpy's
+    ``re + 1j * im``, from row r's sums by kind in ``acc``: (A x)_r = S_c + S_l +
+    j(ω S_m − S_k/ω) in double-double."""
     m_ = 4 * r
-    wm_rh, wm_rl = _dd_mul_d(acc[m_, 0], acc[m_, 1], w, wh, wl)
-    wm_ih, wm_il = _dd_mul_d(acc[m_, 2], acc[m_, 3], w, wh, wl)
-    kw_rh, kw_rl = _dd_div_d(acc[m_ + 1, 0], acc[m_ + 1, 1], w, wh, wl)
-    kw_ih, kw_il = _dd_div_d(acc[m_ + 1, 2], acc[m_ + 1, 3], w, wh, wl)
+    wm_rh, wm_rl = _dd_mul_d(acc[m_, 0, b], acc[m_, 1, b], w, wh, wl)
+    wm_ih, wm_il = _dd_mul_d(acc[m_, 2, b], acc[m_, 3, b], w, wh, wl)
+    kw_rh, kw_rl = _dd_div_d(acc[m_ + 1, 0, b], acc[m_ + 1, 1, b], w, wh, wl)
+    kw_ih, kw_il = _dd_div_d(acc[m_ + 1, 2, b], acc[m_ + 1, 3, b], w, wh, wl)
     su_rh, su_rl = _dd_add(wm_rh, wm_rl, -kw_rh, -kw_rl)
     su_ih, su_il = _dd_add(wm_ih, wm_il, -kw_ih, -kw_il)
-    g_rh, g_rl = _dd_add(acc[m_ + 2, 0], acc[m_ + 2, 1], acc[m_ + 3, 0], acc[m_ + 3, 1])
-    g_ih, g_il = _dd_add(acc[m_ + 2, 2], acc[m_ + 2, 3], acc[m_ + 3, 2], acc[m_ + 3, 3])
+    g_rh, g_rl = _dd_add(acc[m_ + 2, 0, b], acc[m_ + 2, 1, b], acc[m_ + 3, 0, b],
+                         acc[m_ + 3, 1, b])
+    g_ih, g_il = _dd_add(acc[m_ + 2, 2, b], acc[m_ + 2, 3, b], acc[m_ + 3, 2, b],
+                         acc[m_ + 3, 3, b])
     ax_rh, ax_rl = _dd_add(g_rh, g_rl, -su_ih, -su_il)
     ax_ih, ax_il = _dd_add(g_ih, g_il, su_rh, su_rl)
-    rr_h, rr_l = _dd_add(b, 0.0, -ax_rh, -ax_rl)
+    rr_h, rr_l = _dd_add(rhs, 0.0, -ax_rh, -ax_rl)
     ri_h, ri_l = -ax_ih, -ax_il
     if not np.isfinite(rr_l) and np.isfinite(rr_h):
         rr_l = 0.0
     if not np.isfinite(ri_l) and np.isfinite(ri_h):
         ri_l = 0.0
-    return rr_h + rr_l, ri_h + ri_l
+    im = ri_h + ri_l
+    return (rr_h + rr_l) + (0.0 * im - 0.0), 0.0 + (0.0 + im)
 
 
 @_jit_inline
@@ -90,51 +99,70 @@ def _at(x, k, i, n):
 
 @_jit
 def residual(omega, xr, xi, xlr, xli, has_lo, rhs, b_i, b_j, b_s,
-             e_i, e_j, e_val, e_vh, e_vl, s_col, s_val, s_vh, s_vl, acc, out):
+             e_i, e_j, e_val, e_vh, e_vl, s_col, s_val, s_vh, s_vl, out):
     """b − A(ω) x into ``out`` (complex, shape (n_ω, n)); x = (xr + j xi) + (xlr + j xli).
 
-    ``x*`` (real, shape (n_ω, n), any strides: the parts of complex arrays)
-    read +0.0 at index n, the reference.  ``b_i``,
-    ``b_j``, ``b_s`` are the buckets 4·row + kind (kind: mass, spring,
-    damper, lever) of +element e, −element e and lever stamp s (4·n: the
-    reference's row, dropped).  Each bucket receives its terms in the numpy
-    code's order — the + terms by element, then the − terms, then the lever
-    stamps — and adds them by TwoSum into ``acc`` (4·n + 4 rows of
-    re_hi, re_lo, im_hi, im_lo).  Each residual, rounded to its real parts
-    re and im, is stored as numpy forms ``re + 1j * im`` (re + (0·im − 0),
-    0 + (0 + im)), so a signed zero or a NaN comes out as the numpy code's.
+    ``x*`` (real, shape (n_ω, n), any strides: the parts of complex arrays) are
+    copied :data:`SOLVE_BLOCK` ω at a time with ω innermost (``X``, the
+    reference's row n kept at +0.0), and each ω's operations run for the block
+    at once, so that the loops over ω vectorise.  ``b_i``, ``b_j``, ``b_s`` are
+    the buckets 4·row + kind (kind: mass, spring, damper, lever) of +element e,
+    −element e and lever stamp s (4·n: the reference's row, dropped).  Each
+    bucket receives its terms in the numpy code's order — the + terms by
+    element, then the − terms, then the lever stamps — and adds them by TwoSum
+    into ``acc`` (re_hi, re_lo, im_hi, im_lo by bucket).  Each residual,
+    rounded to its real parts re and im, is stored as numpy forms
+    ``re + 1j * im``, so a signed zero or a NaN comes out as the numpy code's.
     """
     n_w, n = out.shape
-    drop = 4 * n
-    t = np.empty((e_i.size, 4))
-    for k in range(n_w):
-        w = omega[k]
-        wh, wl = _split(w)
+    nb, drop = SOLVE_BLOCK, 4 * n
+    X = np.zeros((4, n + 1, nb))
+    T = np.empty((e_i.size, 4, nb))             # +y·(x_i − x_j), formed once
+    acc = np.empty((4 * n + 4, 4, nb))
+    W = np.ones((3, nb))                        # ω, split
+    R = np.empty((2, n, nb))
+    for k0 in range(0, n_w, nb):
+        m = min(nb, n_w - k0)                   # (past m, the last block's stale ω: unused)
+        for b in range(m):
+            W[0, b] = omega[k0 + b]
+            W[1, b], W[2, b] = _split(W[0, b])
+            for i in range(n):
+                X[0, i, b], X[1, i, b] = xr[k0 + b, i], xi[k0 + b, i]
+                X[2, i, b], X[3, i, b] = xlr[k0 + b, i], xli[k0 + b, i]
         acc[:] = 0.0
-        for e in range(e_i.size):               # +y·(x_i − x_j), formed once
-            i, j = e_i[e], e_j[e]
-            t[e, 0], t[e, 1], t[e, 2], t[e, 3] = _element_term(
-                e_val[e], e_vh[e], e_vl[e], _at(xr, k, i, n), _at(xi, k, i, n),
-                _at(xr, k, j, n), _at(xi, k, j, n), _at(xlr, k, i, n), _at(xli, k, i, n),
-                _at(xlr, k, j, n), _at(xli, k, j, n), has_lo)
-            if b_i[e] != drop:
-                _add(acc, b_i[e], t[e, 0], t[e, 1], t[e, 2], t[e, 3])
+        for e in range(e_i.size):
+            i, j, bk = e_i[e], e_j[e], b_i[e]
+            v, vh, vl = e_val[e], e_vh[e], e_vl[e]
+            for b in range(nb):
+                T[e, 0, b], T[e, 1, b], T[e, 2, b], T[e, 3, b] = _element_term(
+                    v, vh, vl, X[0, i, b], X[1, i, b], X[0, j, b], X[1, j, b], X[2, i, b],
+                    X[3, i, b], X[2, j, b], X[3, j, b], has_lo)
+            if bk != drop:
+                for b in range(nb):
+                    _add(acc, bk, b, T[e, 0, b], T[e, 1, b], T[e, 2, b], T[e, 3, b])
         for e in range(e_i.size):               # −y·(x_i − x_j) into the second row
-            if b_j[e] != drop:
-                _add(acc, b_j[e], -t[e, 0], -t[e, 1], -t[e, 2], -t[e, 3])
+            bk = b_j[e]
+            if bk != drop:
+                for b in range(nb):
+                    _add(acc, bk, b, -T[e, 0, b], -T[e, 1, b], -T[e, 2, b], -T[e, 3, b])
         for s in range(s_col.size):
-            c = s_col[s]
-            if b_s[s] != drop:
-                v = s_val[s]
-                th_r, tl_r = _two_prod(v, s_vh[s], s_vl[s], xr[k, c])
-                th_i, tl_i = _two_prod(v, s_vh[s], s_vl[s], xi[k, c])
-                if has_lo:
-                    tl_r = tl_r + v * xlr[k, c]
-                    tl_i = tl_i + v * xli[k, c]
-                _add(acc, b_s[s], th_r, tl_r, th_i, tl_i)
+            c, bk = s_col[s], b_s[s]
+            v, vh, vl = s_val[s], s_vh[s], s_vl[s]
+            if bk != drop:
+                for b in range(nb):
+                    th_r, tl_r = _two_prod(v, vh, vl, X[0, c, b])
+                    th_i, tl_i = _two_prod(v, vh, vl, X[1, c, b])
+                    if has_lo:
+                        tl_r = tl_r + v * X[2, c, b]
+                        tl_i = tl_i + v * X[3, c, b]
+                    _add(acc, bk, b, th_r, tl_r, th_i, tl_i)
         for r in range(n):
-            re, im = _row_residual(acc, r, w, wh, wl, rhs[r])
-            out[k, r] = complex(re + (0.0 * im - 0.0), 0.0 + (0.0 + im))
+            for b in range(nb):
+                R[0, r, b], R[1, r, b] = _row_residual(acc, r, b, W[0, b], W[1, b], W[2, b],
+                                                       rhs[r])
+        for b in range(m):
+            for r in range(n):
+                out[k0 + b, r] = complex(R[0, r, b], R[1, r, b])
 
 
 @_jit_inline
@@ -298,10 +326,6 @@ def band_assemble_factor(dc, m, kk, omega, dest_c, dest_r, kl, F, ipiv, ok):
             ok[k] &= np.isfinite(zr[k]) & np.isfinite(zi[k])
     _band_lu(re, im, kl, ipiv, ok, np.empty(nw), np.empty(nw, dtype=np.int64), np.empty(nw),
              np.empty(nw))
-
-
-#: ω solved side by side by :func:`band_solve_perm`, innermost (the loops over them vectorise).
-SOLVE_BLOCK = 16
 
 
 @_jit
