@@ -107,10 +107,8 @@ _CHUNK_TERMS = 2 ** 15
 #: shared out evenly over the fewest chunks.  Each in processes of its own, alternated
 #: (27 Nov, load 3–4), the compiled sweep took at 2¹² 0.74–0.75× its time at 2¹⁶ at
 #: 999 elements, 0.73–0.83× at 45, 0.77× at 9,999 (one ω per chunk); at 8,000 (eighth
-#: session, load 2) 0.91× its time at 2¹² at 99 elements (3 chunks, not 5); at 10,000,
-#: the ω of a band a multiple of 16 (tenth session), the 45-element ladder's 401 ω go in one
-#: chunk (9,223 pairs), about 0.93× the time of two, and the others as at 8,000.
-_KERNEL_CHUNK = 10_000
+#: session, load 2) 0.91× its time at 2¹² at 99 elements (3 chunks, not 5).
+_KERNEL_CHUNK = 8000
 #: But at least this many ω per chunk of a band: the compiled banded LU's loops over ω
 #: vectorise (at 500 unknowns it factorises 16 ω in 0.55× the time of 8, at 5,000 in
 #: 0.78× the time of 1 ω at a time; 27 Nov, seventh session), more than the larger
@@ -209,7 +207,7 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
     # Compiled: no (ω, term) temporaries; the chunk's (ω, n) arrays stay in cache.
     # numpy: the residual's (ω, term) temporaries bound its pieces.
     least = _KERNEL_MIN_OMEGA if kern is not None and solve_with.kind == "band" else 1
-    terms = max(least, _KERNEL_CHUNK // max(1, system.size) // least * least if kern is not None
+    terms = max(least, _KERNEL_CHUNK // max(1, system.size) if kern is not None
                 else _CHUNK_TERMS // max(1, pat.n_terms + system.size))
 
     def residual(w, xh, xl, rhs, exact=True):
