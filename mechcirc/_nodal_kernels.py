@@ -97,6 +97,17 @@ def _at(x, k, i, n):
     return x[k, i] if i < n else 0.0
 
 
+@_jit_inline
+def _block_in(omega, xr, xi, xlr, xli, k0, m, W, X):
+    """ω ``k0`` … ``k0 + m − 1`` into ``W`` (ω, split) and x's parts into ``X``, ω innermost."""
+    for b in range(m):
+        W[0, b] = omega[k0 + b]
+        W[1, b], W[2, b] = _split(W[0, b])
+        for i in range(X.shape[1] - 1):
+            X[0, i, b], X[1, i, b] = xr[k0 + b, i], xi[k0 + b, i]
+            X[2, i, b], X[3, i, b] = xlr[k0 + b, i], xli[k0 + b, i]
+
+
 @_jit
 def residual(omega, xr, xi, xlr, xli, has_lo, rhs, b_i, b_j, b_s,
              e_i, e_j, e_val, e_vh, e_vl, s_col, s_val, s_vh, s_vl, out):
@@ -123,12 +134,7 @@ def residual(omega, xr, xi, xlr, xli, has_lo, rhs, b_i, b_j, b_s,
     R = np.empty((2, n, nb))
     for k0 in range(0, n_w, nb):
         m = min(nb, n_w - k0)                   # (past m, the last block's stale ω: unused)
-        for b in range(m):
-            W[0, b] = omega[k0 + b]
-            W[1, b], W[2, b] = _split(W[0, b])
-            for i in range(n):
-                X[0, i, b], X[1, i, b] = xr[k0 + b, i], xi[k0 + b, i]
-                X[2, i, b], X[3, i, b] = xlr[k0 + b, i], xli[k0 + b, i]
+        _block_in(omega, xr, xi, xlr, xli, k0, m, W, X)
         acc[:] = 0.0
         for e in range(e_i.size):
             i, j, bk = e_i[e], e_j[e], b_i[e]
