@@ -423,9 +423,9 @@ def band_bound(F, kl, ipiv, rows, p, x, d, out):
 
 
 @_jit_inline
-def _mag(z):
-    """|z| for |z| ≤ about 1 (x scaled to max-norm 1): no hypot needed."""
-    return np.sqrt(z.real * z.real + z.imag * z.imag)
+def _hypot2(re, im):
+    """|re + j im| for |z| ≤ about 1 (x scaled to max-norm 1): no hypot needed."""
+    return np.sqrt(re * re + im * im)
 
 
 @_jit
@@ -438,31 +438,37 @@ def sensitivities(omega, x, scale, e_i, e_j, e_m, e_k, e_c, s_row, s_col, s_val,
     """
     n_w, n = x.shape
     nb = SOLVE_BLOCK
-    xs = np.zeros((n + 1, nb), dtype=np.complex128)     # x/scale, the reference's 0 at n
+    xr, xi = np.zeros((n + 1, nb)), np.zeros((n + 1, nb))   # x/scale, the reference's 0 at n
     mag = np.zeros((n + 1, nb))             # |x_i|/scale
+    W = np.ones(nb)
     acc = np.empty((2, nb))
     for k0 in range(0, n_w, nb):
-        m = min(nb, n_w - k0)
-        for i in range(n):                  # once per unknown, not per element end
-            for b in range(m):
-                xs[i, b] = x[k0 + b, i] * (1.0 / scale[k0 + b])
-                mag[i, b] = _mag(xs[i, b])
+        m = min(nb, n_w - k0)               # (past m, the last block's stale ω: unused)
+        for b in range(m):                  # once per unknown, not per element end
+            W[b] = omega[k0 + b]
+            f = 1.0 / scale[k0 + b]
+            for i in range(n):              # x·f as numba's complex × real: (a + jb)(f + j0)
+                z = x[k0 + b, i]
+                xr[i, b], xi[i, b] = z.real * f - z.imag * 0.0, z.real * 0.0 + z.imag * f
+                mag[i, b] = np.sqrt(xr[i, b] * xr[i, b] + xi[i, b] * xi[i, b])
         acc[:] = 0.0
         for e in range(e_i.size):
             i, j = e_i[e], e_j[e]
-            for b in range(m):
-                w = omega[k0 + b]
+            c, mm, k = abs(e_c[e]), e_m[e], e_k[e]
+            for b in range(nb):
                 # One of c, m, k is nonzero: |c + j(ωm − k/ω)| without a hypot.
-                y = abs(e_c[e]) + abs(w * e_m[e] - e_k[e] / w)
-                d = _mag(xs[i, b] - xs[j, b])
+                y = c + abs(W[b] * mm - k / W[b])
+                d = _hypot2(xr[i, b] - xr[j, b], xi[i, b] - xi[j, b])
                 acc[0, b] += y * (mag[i, b] + mag[j, b]) * d
                 acc[1, b] += y * d * d
         for s in range(s_row.size):
-            for b in range(m):
-                acc[0, b] += abs(s_val[s]) * mag[s_row[s], b] * mag[s_col[s], b]
+            v, r, c = abs(s_val[s]), s_row[s], s_col[s]
+            for b in range(nb):
+                acc[0, b] += v * mag[r, b] * mag[c, b]
         for v in range(l_r.size):
-            for b in range(m):
-                d = _mag(xs[l_p1[v], b] - xs[l_p2[v], b])
-                acc[1, b] += 2 * l_r[v] * d * mag[l_col[v], b]
+            p1, p2, c, lr = l_p1[v], l_p2[v], l_col[v], 2 * l_r[v]
+            for b in range(nb):
+                d = _hypot2(xr[p1, b] - xr[p2, b], xi[p1, b] - xi[p2, b])
+                acc[1, b] += lr * d * mag[c, b]
         S[k0:k0 + m] = acc[0, :m]
         Sd[k0:k0 + m] = acc[1, :m]
