@@ -145,13 +145,12 @@ def run(n_el, omega, repeats):
     def solve_all():
         kern.band_solve_perm(ab, kl, ipiv, every, sol.p, r, x)
     solve_all()
-    acc = np.zeros((4 * n + 4, 4))
     res = np.empty((nw, n), complex)
 
     def residual():
         kern.residual(omega, x.real, x.imag, x.real, x.imag, False, rhs, pat.k_bi, pat.k_bj,
                       pat.k_bs, pat.e_i, pat.e_j, pat.e_val, pat.e_vs[0], pat.e_vs[1],
-                      pat.s_col, pat.s_val, pat.s_vs[0], pat.s_vs[1], acc, res)
+                      pat.s_col, pat.s_val, pat.s_vs[0], pat.s_vs[1], res)
     # The floor's inputs: A(ω) in the package's band storage, before factorisation.
     a0 = np.zeros((nw, n, rows), complex)
     for k, w in enumerate(omega):

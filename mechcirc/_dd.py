@@ -62,6 +62,15 @@ def dd_add(ah, al, bh, bl):
 
 
 @_inline
+def dd_difference(ah, bh, al, bl, lo):
+    """(ah + al) − (bh + bl) rounded once (al and bl read only where ``lo``)."""
+    s, e = two_sum(ah, -bh)
+    if lo:
+        e = e + (al - bl)
+    return s + e
+
+
+@_inline
 def dd_mul_d(h, lo, w, wh, wl):
     """(h + lo)·w for a real double w split beforehand as wh + wl."""
     p, e = two_prod(w, wh, wl, h)

@@ -17,26 +17,35 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import _dd
+from . import _dd, _nodal_steps
 from ._jit import decorators, load
 
 HAVE_NUMBA, _jit, _jit_inline = decorators(bool(globals().get("_FORCE_PYTHON")))
 
 if HAVE_NUMBA:        # the one double-double source (:mod:`mechcirc._dd`), compiled
     _dd = load("mechcirc._dd", _COMPILE=True)
+    # and the refinement's arithmetic between the kernels, point by point
+    _nodal_steps = load("mechcirc._nodal_steps", _COMPILE=True)
+_estimate_point, _bound_point = _nodal_steps.estimate_point, _nodal_steps.bound_point
 _split, _two_sum, _two_prod = _dd.split, _dd.two_sum, _dd.two_prod
 _dd_add, _dd_mul_d, _dd_div_d = _dd.dd_add, _dd.dd_mul_d, _dd.dd_div_d
+_dd_difference = _dd.dd_difference
+
+
+#: ω handled side by side by :func:`residual` and :func:`band_solve_perm`, innermost (the
+#: loops over them vectorise).
+SOLVE_BLOCK = 16
 
 
 @_jit_inline
-def _add(acc, bk, th_r, tl_r, th_i, tl_i):
-    """Add the term (th_r + tl_r) + j(th_i + tl_i) to bucket ``bk`` by TwoSum."""
-    a, ea = _two_sum(acc[bk, 0], th_r)
-    acc[bk, 0] = a
-    acc[bk, 1] += ea + tl_r
-    a, ea = _two_sum(acc[bk, 2], th_i)
-    acc[bk, 2] = a
-    acc[bk, 3] += ea + tl_i
+def _add(acc, bk, b, th_r, tl_r, th_i, tl_i):
+    """Add the term (th_r + tl_r) + j(th_i + tl_i) to bucket ``bk`` at ω ``b`` by TwoSum."""
+    a, ea = _two_sum(acc[bk, 0, b], th_r)
+    acc[bk, 0, b] = a
+    acc[bk, 1, b] += ea + tl_r
+    a, ea = _two_sum(acc[bk, 2, b], th_i)
+    acc[bk, 2, b] = a
+    acc[bk, 3, b] += ea + tl_i
 
 
 @_jit_inline
@@ -55,27 +64,31 @@ def _element_term(v, vh, vl, ar, ai, br, bi, alr, ali, blr, bli, has_lo):
 
 
 @_jit_inline
-def _row_residual(acc, r, w, wh, wl, b):
-    """b − (A x)_r rounded to complex parts, from row r's sums by kind in ``acc``:
-    (A x)_r = S_c + S_l + j(ω S_m − S_k/ω) in double-double."""
+def _row_residual(acc, r, b, w, wh, wl, rhs):
+    """b − (A x)_r at ω ``b`` rounded to (re + (0·im − 0), 0 + (0 + im)), numpy's
+    ``re + 1j * im``, from row r's sums by kind in ``acc``: (A x)_r = S_c + S_l +
+    j(ω S_m − S_k/ω) in double-double."""
     m_ = 4 * r
-    wm_rh, wm_rl = _dd_mul_d(acc[m_, 0], acc[m_, 1], w, wh, wl)
-    wm_ih, wm_il = _dd_mul_d(acc[m_, 2], acc[m_, 3], w, wh, wl)
-    kw_rh, kw_rl = _dd_div_d(acc[m_ + 1, 0], acc[m_ + 1, 1], w, wh, wl)
-    kw_ih, kw_il = _dd_div_d(acc[m_ + 1, 2], acc[m_ + 1, 3], w, wh, wl)
+    wm_rh, wm_rl = _dd_mul_d(acc[m_, 0, b], acc[m_, 1, b], w, wh, wl)
+    wm_ih, wm_il = _dd_mul_d(acc[m_, 2, b], acc[m_, 3, b], w, wh, wl)
+    kw_rh, kw_rl = _dd_div_d(acc[m_ + 1, 0, b], acc[m_ + 1, 1, b], w, wh, wl)
+    kw_ih, kw_il = _dd_div_d(acc[m_ + 1, 2, b], acc[m_ + 1, 3, b], w, wh, wl)
     su_rh, su_rl = _dd_add(wm_rh, wm_rl, -kw_rh, -kw_rl)
     su_ih, su_il = _dd_add(wm_ih, wm_il, -kw_ih, -kw_il)
-    g_rh, g_rl = _dd_add(acc[m_ + 2, 0], acc[m_ + 2, 1], acc[m_ + 3, 0], acc[m_ + 3, 1])
-    g_ih, g_il = _dd_add(acc[m_ + 2, 2], acc[m_ + 2, 3], acc[m_ + 3, 2], acc[m_ + 3, 3])
+    g_rh, g_rl = _dd_add(acc[m_ + 2, 0, b], acc[m_ + 2, 1, b], acc[m_ + 3, 0, b],
+                         acc[m_ + 3, 1, b])
+    g_ih, g_il = _dd_add(acc[m_ + 2, 2, b], acc[m_ + 2, 3, b], acc[m_ + 3, 2, b],
+                         acc[m_ + 3, 3, b])
     ax_rh, ax_rl = _dd_add(g_rh, g_rl, -su_ih, -su_il)
     ax_ih, ax_il = _dd_add(g_ih, g_il, su_rh, su_rl)
-    rr_h, rr_l = _dd_add(b, 0.0, -ax_rh, -ax_rl)
+    rr_h, rr_l = _dd_add(rhs, 0.0, -ax_rh, -ax_rl)
     ri_h, ri_l = -ax_ih, -ax_il
     if not np.isfinite(rr_l) and np.isfinite(rr_h):
         rr_l = 0.0
     if not np.isfinite(ri_l) and np.isfinite(ri_h):
         ri_l = 0.0
-    return rr_h + rr_l, ri_h + ri_l
+    im = ri_h + ri_l
+    return (rr_h + rr_l) + (0.0 * im - 0.0), 0.0 + (0.0 + im)
 
 
 @_jit_inline
@@ -84,53 +97,135 @@ def _at(x, k, i, n):
     return x[k, i] if i < n else 0.0
 
 
+@_jit_inline
+def _block_in(omega, xr, xi, xlr, xli, k0, m, W, X):
+    """ω ``k0`` … ``k0 + m − 1`` into ``W`` (ω, split) and x's parts into ``X``, ω innermost."""
+    for b in range(m):
+        W[0, b] = omega[k0 + b]
+        W[1, b], W[2, b] = _split(W[0, b])
+        for i in range(X.shape[1] - 1):
+            X[0, i, b], X[1, i, b] = xr[k0 + b, i], xi[k0 + b, i]
+            X[2, i, b], X[3, i, b] = xlr[k0 + b, i], xli[k0 + b, i]
+
+
 @_jit
 def residual(omega, xr, xi, xlr, xli, has_lo, rhs, b_i, b_j, b_s,
-             e_i, e_j, e_val, e_vh, e_vl, s_col, s_val, s_vh, s_vl, acc, out):
+             e_i, e_j, e_val, e_vh, e_vl, s_col, s_val, s_vh, s_vl, out):
     """b − A(ω) x into ``out`` (complex, shape (n_ω, n)); x = (xr + j xi) + (xlr + j xli).
 
-    ``x*`` (real, shape (n_ω, n), any strides: the parts of complex arrays)
-    read +0.0 at index n, the reference.  ``b_i``,
-    ``b_j``, ``b_s`` are the buckets 4·row + kind (kind: mass, spring,
-    damper, lever) of +element e, −element e and lever stamp s (4·n: the
-    reference's row, dropped).  Each bucket receives its terms in the numpy
-    code's order — the + terms by element, then the − terms, then the lever
-    stamps — and adds them by TwoSum into ``acc`` (4·n + 4 rows of
-    re_hi, re_lo, im_hi, im_lo).  Each residual, rounded to its real parts
-    re and im, is stored as numpy forms ``re + 1j * im`` (re + (0·im − 0),
-    0 + (0 + im)), so a signed zero or a NaN comes out as the numpy code's.
+    ``x*`` (real, shape (n_ω, n), any strides: the parts of complex arrays) are
+    copied :data:`SOLVE_BLOCK` ω at a time with ω innermost (``X``, the
+    reference's row n kept at +0.0), and each ω's operations run for the block
+    at once, so that the loops over ω vectorise.  ``b_i``, ``b_j``, ``b_s`` are
+    the buckets 4·row + kind (kind: mass, spring, damper, lever) of +element e,
+    −element e and lever stamp s (4·n: the reference's row, dropped).  Each
+    bucket receives its terms in the numpy code's order — the + terms by
+    element, then the − terms, then the lever stamps — and adds them by TwoSum
+    into ``acc`` (re_hi, re_lo, im_hi, im_lo by bucket).  Each residual,
+    rounded to its real parts re and im, is stored as numpy forms
+    ``re + 1j * im``, so a signed zero or a NaN comes out as the numpy code's.
     """
     n_w, n = out.shape
-    drop = 4 * n
-    t = np.empty((e_i.size, 4))
-    for k in range(n_w):
-        w = omega[k]
-        wh, wl = _split(w)
+    nb, drop = SOLVE_BLOCK, 4 * n
+    X = np.zeros((4, n + 1, nb))
+    T = np.empty((e_i.size, 4, nb))             # +y·(x_i − x_j), formed once
+    acc = np.empty((4 * n + 4, 4, nb))
+    W = np.ones((3, nb))                        # ω, split
+    R = np.empty((2, n, nb))
+    for k0 in range(0, n_w, nb):
+        m = min(nb, n_w - k0)                   # (past m, the last block's stale ω: unused)
+        _block_in(omega, xr, xi, xlr, xli, k0, m, W, X)
         acc[:] = 0.0
-        for e in range(e_i.size):               # +y·(x_i − x_j), formed once
-            i, j = e_i[e], e_j[e]
-            t[e, 0], t[e, 1], t[e, 2], t[e, 3] = _element_term(
-                e_val[e], e_vh[e], e_vl[e], _at(xr, k, i, n), _at(xi, k, i, n),
-                _at(xr, k, j, n), _at(xi, k, j, n), _at(xlr, k, i, n), _at(xli, k, i, n),
-                _at(xlr, k, j, n), _at(xli, k, j, n), has_lo)
-            if b_i[e] != drop:
-                _add(acc, b_i[e], t[e, 0], t[e, 1], t[e, 2], t[e, 3])
+        for e in range(e_i.size):
+            i, j, bk = e_i[e], e_j[e], b_i[e]
+            v, vh, vl = e_val[e], e_vh[e], e_vl[e]
+            for b in range(nb):
+                T[e, 0, b], T[e, 1, b], T[e, 2, b], T[e, 3, b] = _element_term(
+                    v, vh, vl, X[0, i, b], X[1, i, b], X[0, j, b], X[1, j, b], X[2, i, b],
+                    X[3, i, b], X[2, j, b], X[3, j, b], has_lo)
+            if bk != drop:
+                for b in range(nb):
+                    _add(acc, bk, b, T[e, 0, b], T[e, 1, b], T[e, 2, b], T[e, 3, b])
         for e in range(e_i.size):               # −y·(x_i − x_j) into the second row
-            if b_j[e] != drop:
-                _add(acc, b_j[e], -t[e, 0], -t[e, 1], -t[e, 2], -t[e, 3])
+            bk = b_j[e]
+            if bk != drop:
+                for b in range(nb):
+                    _add(acc, bk, b, -T[e, 0, b], -T[e, 1, b], -T[e, 2, b], -T[e, 3, b])
         for s in range(s_col.size):
-            c = s_col[s]
-            if b_s[s] != drop:
-                v = s_val[s]
-                th_r, tl_r = _two_prod(v, s_vh[s], s_vl[s], xr[k, c])
-                th_i, tl_i = _two_prod(v, s_vh[s], s_vl[s], xi[k, c])
-                if has_lo:
-                    tl_r = tl_r + v * xlr[k, c]
-                    tl_i = tl_i + v * xli[k, c]
-                _add(acc, b_s[s], th_r, tl_r, th_i, tl_i)
+            c, bk = s_col[s], b_s[s]
+            v, vh, vl = s_val[s], s_vh[s], s_vl[s]
+            if bk != drop:
+                for b in range(nb):
+                    th_r, tl_r = _two_prod(v, vh, vl, X[0, c, b])
+                    th_i, tl_i = _two_prod(v, vh, vl, X[1, c, b])
+                    if has_lo:
+                        tl_r = tl_r + v * X[2, c, b]
+                        tl_i = tl_i + v * X[3, c, b]
+                    _add(acc, bk, b, th_r, tl_r, th_i, tl_i)
         for r in range(n):
-            re, im = _row_residual(acc, r, w, wh, wl, rhs[r])
-            out[k, r] = complex(re + (0.0 * im - 0.0), 0.0 + (0.0 + im))
+            for b in range(nb):
+                R[0, r, b], R[1, r, b] = _row_residual(acc, r, b, W[0, b], W[1, b], W[2, b],
+                                                       rhs[r])
+        for b in range(m):
+            for r in range(n):
+                out[k0 + b, r] = complex(R[0, r, b], R[1, r, b])
+
+
+@_jit_inline
+def _abs_max(x, k):
+    """max |x[k, i]| over i (≥ 0.0; NaN if one is): numba's |z| (a hypot) only where
+    |re| + |im| may be above the largest so far (|z| ≥ (|re| + |im|)/√2)."""
+    m = 0.0
+    for i in range(x.shape[1]):
+        z = x[k, i]
+        if not (abs(z.real) + abs(z.imag) < 1.5 * m):
+            v = abs(z)
+            if v > m or np.isnan(v):
+                m = v
+    return m
+
+
+@_jit
+def estimate(xh, xl, d, prev, r, a, b, lo, first, est, rho):
+    """:func:`mechcirc._nodal_steps.estimate_point` at each ω (rows of xh + xl, the
+    correction ``d``, the one before it ``prev`` unless ``first``, the residual ``r``; the
+    drive's ends ``a``, ``b``, n for the reference) into ``est`` and ``rho``:
+    :func:`mechcirc.nodal._estimate`'s reductions by loops."""
+    n = xh.shape[1]
+    for k in range(est.size):
+        K = abs(_dd_difference(_at(xh, k, a, n), _at(xh, k, b, n), _at(xl, k, a, n),
+                               _at(xl, k, b, n), lo))
+        da, db = _at(d, k, a, n), _at(d, k, b, n)
+        xr = 0j
+        for i in range(n):
+            xr += xh[k, i] * r[k, i]
+        nx = _abs_max(xh, k)
+        est[k], rho[k] = _estimate_point(_abs_max(d, k), nx, nx if first else _abs_max(prev, k),
+                                         K, abs(da - db), abs(da), abs(db), abs(xr), first)
+
+
+@_jit
+def step_bound(omega, xh, xl, d, r, lu, a, b, e_i, e_j, e_abs, s_row, s_col, s_abs, m, out):
+    """:func:`mechcirc._nodal_steps.bound_point` at each ω into ``out``: the sums of
+    :func:`mechcirc.nodal.first_step_bound` by loops (|z| as |re| + |im|; index n, the
+    reference, reads 0: ``a``, ``b`` too)."""
+    c, n = xh.shape
+    for k in range(c):
+        by_c = by_m = by_k = lever = rounding = 0.0
+        for e in range(e_i.size):
+            i, j = e_i[e], e_j[e]
+            t = (_l1(_at(xh, k, i, n)) + _l1(_at(xh, k, j, n))) * \
+                (_l1(_at(d, k, i, n)) + _l1(_at(d, k, j, n)))
+            by_c += t * e_abs[e, 0]
+            by_m += t * e_abs[e, 1]
+            by_k += t * e_abs[e, 2]
+        for s in range(s_row.size):
+            lever += _l1(_at(xh, k, s_row[s], n)) * _l1(_at(d, k, s_col[s], n)) * s_abs[s]
+        for i in range(n):
+            rounding += _l1(xh[k, i]) * _l1(r[k, i])
+        K = abs(_dd_difference(_at(xh, k, a, n), _at(xh, k, b, n), _at(xl, k, a, n),
+                               _at(xl, k, b, n), True))
+        out[k] = _bound_point(lu[k], rounding, by_c, by_m, by_k, lever, abs(omega[k]), K, n, m)
 
 
 @_jit_inline
@@ -239,10 +334,6 @@ def band_assemble_factor(dc, m, kk, omega, dest_c, dest_r, kl, F, ipiv, ok):
              np.empty(nw))
 
 
-#: ω solved side by side by :func:`band_solve_perm`, innermost (the loops over them vectorise).
-SOLVE_BLOCK = 16
-
-
 @_jit
 def band_solve_perm(F, kl, ipiv, rows, p, r, out):
     """out[k, p] = A_p⁻¹ r[k, p] with the factors ``F[..., rows[k]]`` of :func:`_band_lu` (A's
@@ -332,9 +423,9 @@ def band_bound(F, kl, ipiv, rows, p, x, d, out):
 
 
 @_jit_inline
-def _mag(z):
-    """|z| for |z| ≤ about 1 (x scaled to max-norm 1): no hypot needed."""
-    return np.sqrt(z.real * z.real + z.imag * z.imag)
+def _hypot2(re, im):
+    """|re + j im| for |z| ≤ about 1 (x scaled to max-norm 1): no hypot needed."""
+    return np.sqrt(re * re + im * im)
 
 
 @_jit
@@ -347,31 +438,37 @@ def sensitivities(omega, x, scale, e_i, e_j, e_m, e_k, e_c, s_row, s_col, s_val,
     """
     n_w, n = x.shape
     nb = SOLVE_BLOCK
-    xs = np.zeros((n + 1, nb), dtype=np.complex128)     # x/scale, the reference's 0 at n
+    xr, xi = np.zeros((n + 1, nb)), np.zeros((n + 1, nb))   # x/scale, the reference's 0 at n
     mag = np.zeros((n + 1, nb))             # |x_i|/scale
+    W = np.ones(nb)
     acc = np.empty((2, nb))
     for k0 in range(0, n_w, nb):
-        m = min(nb, n_w - k0)
-        for i in range(n):                  # once per unknown, not per element end
-            for b in range(m):
-                xs[i, b] = x[k0 + b, i] * (1.0 / scale[k0 + b])
-                mag[i, b] = _mag(xs[i, b])
+        m = min(nb, n_w - k0)               # (past m, the last block's stale ω: unused)
+        for b in range(m):                  # once per unknown, not per element end
+            W[b] = omega[k0 + b]
+            f = 1.0 / scale[k0 + b]
+            for i in range(n):              # x·f as numba's complex × real: (a + jb)(f + j0)
+                z = x[k0 + b, i]
+                xr[i, b], xi[i, b] = z.real * f - z.imag * 0.0, z.real * 0.0 + z.imag * f
+                mag[i, b] = np.sqrt(xr[i, b] * xr[i, b] + xi[i, b] * xi[i, b])
         acc[:] = 0.0
         for e in range(e_i.size):
             i, j = e_i[e], e_j[e]
-            for b in range(m):
-                w = omega[k0 + b]
+            c, mm, k = abs(e_c[e]), e_m[e], e_k[e]
+            for b in range(nb):
                 # One of c, m, k is nonzero: |c + j(ωm − k/ω)| without a hypot.
-                y = abs(e_c[e]) + abs(w * e_m[e] - e_k[e] / w)
-                d = _mag(xs[i, b] - xs[j, b])
+                y = c + abs(W[b] * mm - k / W[b])
+                d = _hypot2(xr[i, b] - xr[j, b], xi[i, b] - xi[j, b])
                 acc[0, b] += y * (mag[i, b] + mag[j, b]) * d
                 acc[1, b] += y * d * d
         for s in range(s_row.size):
-            for b in range(m):
-                acc[0, b] += abs(s_val[s]) * mag[s_row[s], b] * mag[s_col[s], b]
+            v, r, c = abs(s_val[s]), s_row[s], s_col[s]
+            for b in range(nb):
+                acc[0, b] += v * mag[r, b] * mag[c, b]
         for v in range(l_r.size):
-            for b in range(m):
-                d = _mag(xs[l_p1[v], b] - xs[l_p2[v], b])
-                acc[1, b] += 2 * l_r[v] * d * mag[l_col[v], b]
+            p1, p2, c, lr = l_p1[v], l_p2[v], l_col[v], 2 * l_r[v]
+            for b in range(nb):
+                d = _hypot2(xr[p1, b] - xr[p2, b], xi[p1, b] - xi[p2, b])
+                acc[1, b] += lr * d * mag[c, b]
         S[k0:k0 + m] = acc[0, :m]
         Sd[k0:k0 + m] = acc[1, :m]

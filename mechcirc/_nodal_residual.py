@@ -106,6 +106,7 @@ class Pattern:
         self.l_p2 = np.array([at(v.p2, n) for v in lv], dtype=np.int64)
         self.l_col = n_nodes + np.arange(len(lv), dtype=np.int64)
         self.l_r = np.array([abs(v.ratio) for v in lv], dtype=float)
+        self.s_abs = np.abs(self.s_val)
 
     def _plan(self) -> None:
         """What every residual needs: the split values, the compiled kernel's buckets, and
@@ -277,8 +278,7 @@ class Pattern:
         kern.residual(np.ascontiguousarray(omega, dtype=float), xh.real, xh.imag, low.real,
                       low.imag, xl is not None, np.asarray(rhs, dtype=float), self.k_bi,
                       self.k_bj, self.k_bs, self.e_i, self.e_j, self.e_val, self.e_vs[0],
-                      self.e_vs[1], self.s_col, self.s_val, self.s_vs[0], self.s_vs[1],
-                      np.zeros((4 * n + 4, 4)), out)
+                      self.e_vs[1], self.s_col, self.s_val, self.s_vs[0], self.s_vs[1], out)
         return out
 
     def sensitivities(self, omega: NDArray, x: NDArray, K: NDArray,

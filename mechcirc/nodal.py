@@ -26,10 +26,11 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from . import _jit
-from ._dd import two_sum
+from ._dd import dd_difference, two_sum
 from ._nodal_equations import (KINDS, NodalSystem, assemble, combine, dense_matrices, held,
                                stamps)
 from ._nodal_residual import pattern, residual_rounding, row_max, total_error
+from ._nodal_steps import bound_point, estimate_point
 from ._nodal_solvers import DD_LIMIT, DENSE_LIMIT, balance, dd_solver, solver
 from .errors import TopologyError
 
@@ -124,7 +125,8 @@ _KERNEL_MIN_OMEGA = 16
 #: per sweep from its size, so the same call always takes the same path and
 #: gives the same bits: the residual kernel computes the numpy residual to the
 #: bit, but the banded LUs differ in rounding (the kernel's against numpy's or
-#: LAPACK's), so that K can differ in its last bit and the error estimate, which
+#: LAPACK's), and so do the error estimate's row sums and moduli (one source,
+#: :mod:`mechcirc._nodal_steps`), so that K can differ in its last bit and the error estimate, which
 #: starts from the first solve's error, by up to 16× (seen on ladders of 45 … 999
 #: elements, the estimates between 2.2e-16 and 3.6e-15 on both); until numba's cache
 #: holds them (compiling takes 7–12 s) the sweep runs numpy and a process of its
@@ -146,7 +148,8 @@ def kernels(work: int = 0):
 
         if k.HAVE_NUMBA and not _jit.use(
                 "from mechcirc.nodal import warm_kernels; warm_kernels()", k.residual,
-                k.sensitivities, k.band_assemble_factor, k.band_solve_perm, k.band_bound):
+                k.sensitivities, k.estimate, k.step_bound,
+                k.band_assemble_factor, k.band_solve_perm, k.band_bound):
             # Not compiled yet: numpy now (the same numbers), the kernels compiled
             # into numba's cache by a process of their own for a later sweep.
             return None
@@ -170,8 +173,9 @@ def warm_kernels() -> None:
     try:
         mobility(system, np.array([1.0, 2.0]))
         # The first-step bound, which those two points need not have asked for.
-        solver(system).factor(np.array([1.0]), kernels())[1].bound(
-            *np.ones((2, 1, system.size), complex), np.arange(1))
+        one = np.ones((1, system.size), complex)
+        lu = solver(system).factor(np.array([1.0]), kernels())[1].bound(one, one, np.arange(1))
+        first_step_bound(system, np.array([1.0]), one, one, one, one, lu, kernels())
     finally:
         _jit.COMPILED = saved
 
@@ -215,7 +219,8 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
                                for i in range(0, w.size, terms)])
 
     def refined(solve_fn, w):
-        return refine_dd(solve_fn, residual, w, rhs, system, refine, steps, float64=float64)
+        return refine_dd(solve_fn, residual, w, rhs, system, refine, steps, float64=float64,
+                         kern=kern)
 
     # The numpy banded LU loops over the columns in Python: as many ω at once
     # as its memory bound allows (the residual goes in pieces, above).
@@ -324,18 +329,14 @@ def _strict_retry(solve_with, kern, omega, refined, refine):
 
 
 def difference_dd(system, xh, xl):
-    """K = x_a − x_b from x = xh + xl, rounded once."""
+    """K = x_a − x_b from x = xh + xl, rounded once (:func:`mechcirc._dd.dd_difference`)."""
     zero = np.zeros(xh.shape[0], dtype=complex)
 
     def ends(x):                    # (x_a, x_b), the reference's 0
         return [x[:, i] if i >= 0 else zero for i in (system.a, system.b)]
-    ah, bh = ends(xh)
     with np.errstate(all="ignore"):
-        s, e = two_sum(ah, -bh)
-        if xl is not None:
-            al, bl = ends(xl)
-            e = e + (al - bl)
-        return np.asarray(s + e, dtype=complex)
+        return np.asarray(dd_difference(*ends(xh), *(ends(xl) if xl is not None else (0, 0)),
+                                        xl is not None), dtype=complex)
 
 
 def solve(system: NodalSystem, omega: ArrayLike, *, refine: bool = True,
@@ -439,14 +440,15 @@ def _backward_error(system, omega: float, x: NDArray) -> float:
 
 
 def refine_dd(solve_fn, residual, omega, rhs, system, refine: bool, steps: int,
-              float64: bool = False):
+              float64: bool = False, kern=None):
     """x from one solve and up to ``steps`` refinement steps.
 
     Returns (xh, xl, relative error of K, contraction of the last step):
     x = xh + xl in double-double (xl None without refinement).  ``float64``:
     without refinement, the estimate from a float64 residual
     (``residual(..., exact=False)``), the rounding of b − A x̂ included
-    (that of the terms is added by the caller, which has S).
+    (that of the terms is added by the caller, which has S).  ``kern``: the
+    compiled kernels (:func:`kernels`), which run the steps between them too.
     """
     eps = np.finfo(float).eps
     b = np.repeat(rhs.astype(complex)[None, :], omega.size, axis=0)  # (solves take it as it is)
@@ -458,7 +460,7 @@ def refine_dd(solve_fn, residual, omega, rhs, system, refine: bool, steps: int,
         # double=False) and here (that of b − A x̂ itself, u |x̂|ᵀ|r̂| / |K|).
         if not float64:
             r = residual(omega, x0, None, rhs)
-            return (x0, None, *_estimate(system, x0, None, solve_fn(r), None, r))
+            return (x0, None, *_estimate(system, x0, None, solve_fn(r), None, r, kern))
         r = residual(omega, x0, None, rhs, exact=False)
         est, rho = _estimate(system, x0, None, solve_fn(r), None, r)
         with np.errstate(all="ignore"):
@@ -482,7 +484,7 @@ def refine_dd(solve_fn, residual, omega, rhs, system, refine: bool, steps: int,
         xa, xla = xh[at], (xl[at] if step else None)
         r = residual(omega[at], xa, xla, rhs)
         d = solve_fn(r) if whole else solve_fn(r, active)
-        est[at], rho[at] = _estimate(system, xa, xla, d, prev[at] if step else None, r)
+        est[at], rho[at] = _estimate(system, xa, xla, d, prev[at] if step else None, r, kern)
         with np.errstate(all="ignore"):
             s, e = two_sum(xa, d)
         if xla is not None:
@@ -505,7 +507,7 @@ def refine_dd(solve_fn, residual, omega, rhs, system, refine: bool, steps: int,
             x1 = xh[active]
             d1 = d[active]
             first = first_step_bound(system, omega[active], x1, xl[active], d1, r[active],
-                                     bound(x1, d1, active))
+                                     bound(x1, d1, active), kern)
             proven = first <= 16 * eps
             est[active[proven]] = first[proven]
             active = active[~proven]
@@ -515,7 +517,7 @@ def refine_dd(solve_fn, residual, omega, rhs, system, refine: bool, steps: int,
 
 
 def first_step_bound(system: NodalSystem, omega: NDArray, xh: NDArray, xl: NDArray,
-                     d: NDArray, r: NDArray, lu: NDArray) -> NDArray:
+                     d: NDArray, r: NDArray, lu: NDArray, kern=None) -> NDArray:
     """A bound on the relative error of K at x₁ = xh + xl = x₀ + d after the first
     correction d, without the residual of x₁ (that residual pass is then not taken).
 
@@ -546,13 +548,20 @@ def first_step_bound(system: NodalSystem, omega: NDArray, xh: NDArray, xl: NDArr
         The first correction and the residual it was solved from.
     lu : ndarray, shape (c,)
         |x|ᵀP̃|L||U||d| (:func:`mechcirc._nodal_solvers.band_bound_batch`).
+    kern : module or None
+        The compiled kernels (:func:`kernels`) or None.
 
     Returns
     -------
     ndarray, shape (c,)
     """
     pat = pattern(system)
-    u = np.finfo(float).eps / 2
+    if kern is not None:
+        out = np.empty(omega.size)
+        kern.step_bound(*map(np.ascontiguousarray, (omega, xh, xl, d, r, lu)), *_ends(system),
+                        pat.e_i, pat.e_j, pat.e_abs, pat.s_row, pat.s_col, pat.s_abs,
+                        pat.max_row_terms, out)
+        return out
     with np.errstate(all="ignore"):
         c, n = xh.shape
         zero = np.zeros((c, 1))                 # (the reference's column)
@@ -562,17 +571,20 @@ def first_step_bound(system: NodalSystem, omega: NDArray, xh: NDArray, xl: NDArr
         # too): by kind, one product with the (c, E) array, no admittance array.
         ends = ax.take(pat.e_i, 1) + ax.take(pat.e_j, 1)     # (take: x[:, idx], faster)
         by_kind = (ends * (ad.take(pat.e_i, 1) + ad.take(pat.e_j, 1))) @ pat.e_abs
-        w = np.abs(omega)
-        entry = by_kind[:, 0] + w * by_kind[:, 1] + by_kind[:, 2] / w
-        if pat.s_row.size:
-            entry = entry + np.abs(pat.s_val) @ (ax.take(pat.s_row, 1) * ad.take(pat.s_col, 1)).T
+        lever = pat.s_abs @ (ax.take(pat.s_row, 1) * ad.take(pat.s_col, 1)).T \
+            if pat.s_row.size else 0.0
         rounding = np.einsum("ci,ci->c", ax[:, :n], np.abs(r.real) + np.abs(r.imag))
-        gamma = 8.0 * (n + 2) * u
-        return 2.0 * (gamma * lu + u * rounding + (pat.max_row_terms + 4) * u * entry) / \
-            np.abs(difference_dd(system, xh, xl))
+        return bound_point(lu, rounding, *by_kind.T, lever, np.abs(omega),
+                           np.abs(difference_dd(system, xh, xl)), n, pat.max_row_terms)
 
 
-def _estimate(system, xh, xl, d, prev, r):
+def _ends(system) -> tuple[int, int]:
+    """The drive's rows a, b for the compiled kernels: n (a column of zeros) for the reference."""
+    n = system.size
+    return (system.a if system.a >= 0 else n, system.b if system.b >= 0 else n)
+
+
+def _estimate(system, xh, xl, d, prev, r, kern=None):
     """(Relative error of K = x_a − x_b before applying the correction ``d``, contraction ρ).
 
     |d_a − d_b| estimates the error of K; ``d`` itself is wrong by about the
@@ -586,27 +598,20 @@ def _estimate(system, xh, xl, d, prev, r):
     as large as x itself that does not contract means A is numerically
     singular: inf.
     """
-    tiny = np.finfo(float).eps ** 2
+    if kern is not None:            # (C arrays: the one signature warm_kernels compiles)
+        est, rho = np.empty(xh.shape[0]), np.empty(xh.shape[0])
+        kern.estimate(*map(np.ascontiguousarray, (xh, xh if xl is None else xl, d,
+                                                  xh if prev is None else prev, r)),
+                      *_ends(system), xl is not None, prev is None, est, rho)
+        return est, rho
     with np.errstate(all="ignore"):
-        nd = row_max(np.abs(d))
         nx = row_max(np.abs(xh))
-        npv = np.maximum(nx if prev is None else row_max(np.abs(prev)), tiny * nx)
-        rho = np.where(npv > 0, nd / npv, 0.0)
-        own = np.minimum(rho, 1.0) if prev is not None else 1.0
-        K = np.abs(difference_dd(system, xh, xl))
-        dK = np.abs(system.difference(d))
-        # The drive's own components: a norm over all of d would mix scales
-        # (a lever of ratio 1e150 puts velocities 1e150 apart).
         da = np.abs(d[..., system.a]) if system.a >= 0 else 0.0
         db = np.abs(d[..., system.b]) if system.b >= 0 else 0.0
-        est = (dK + own * (da + db)) / K
-        est = np.maximum(est, np.abs(np.sum(xh * r, axis=-1)) / K)
-        # Stagnation at the residual's own rounding level is not divergence:
-        # only corrections of the size of x itself that do not shrink mean a
-        # singular A.
-        diverged = (rho >= 0.5) & (nd > 1e-2 * nx)
-        est = np.where(diverged | np.isnan(est), np.inf, est)
-    return est, rho
+        return estimate_point(row_max(np.abs(d)), nx, nx if prev is None else
+                              row_max(np.abs(prev)), np.abs(difference_dd(system, xh, xl)),
+                              np.abs(system.difference(d)), da, db,
+                              np.abs(np.sum(xh * r, axis=-1)), prev is None)
 
 
 def _singular_points(system, omega, x, K, err, singular, steps):

@@ -129,3 +129,67 @@ def test_exactly_singular_float_matrix_is_still_a_pole():
     c = mechcirc.parse("drive V a 0 velocity=1\nspring k a 0 1e4\nmass m a 0 1\n")
     s = c.sweep([100.0], method="nodal")
     assert s.flags[0] == FLAG_SINGULAR and s.K[0] == complex(0, np.inf)
+
+
+def _ladder(sections: int, seed: int) -> str:
+    rng = np.random.default_rng(seed)
+    nodes = ["a"] + [f"n{i}" for i in range(1, sections + 1)]
+    lines = ["drive V a 0 velocity=1"]
+    for i in range(sections):
+        lines += [f"spring k{i} {nodes[i]} {nodes[i + 1]} {rng.uniform(1e4, 2e4)!r}",
+                  f"mass m{i} {nodes[i + 1]} 0 {rng.uniform(0.2, 1.2)!r}"]
+    return "\n".join([*lines, f"damper r {nodes[-1]} 0 0.001"])
+
+
+def _agree(a, b):
+    """K of the two paths within the larger of their relative errors (the same singular
+    points, and K there); how many points differ in K's or the error's bits.  (Flag 2 may
+    differ: unrefined, the numpy path's estimate is from a float64 residual.)"""
+    one = a.flags == FLAG_SINGULAR
+    assert np.array_equal(one, b.flags == FLAG_SINGULAR)
+    assert a.K[one].tobytes() == b.K[one].tobytes()
+    scale = np.maximum(np.abs(a.K), np.abs(b.K))[~one]
+    assert np.all(np.abs(a.K - b.K)[~one] <= np.maximum(a.error, b.error)[~one] * scale)
+    return int(np.sum((a.K != b.K) | (a.error != b.error)))
+
+
+def test_compiled_and_numpy_paths_agree_within_their_errors(monkeypatch):
+    """The compiled sweep (numba's kernels, the error estimate's steps compiled from the one
+    source of mechcirc._nodal_steps) and the numpy one round differently (|z|, complex
+    products, the order of a row's sums, the banded LUs), and the estimate steers the
+    refinement, so their bits may differ.  On the small corpus, the defect networks and
+    ladders of 45, 99 and 201 elements (refined and plain), their K agree within the larger
+    of the two reported relative errors, with the same singular points; each path gives the same bits
+    when run again; and the compiled estimate is above the true error wherever it claims a
+    digit on the corpus (the numpy path: the tests above and tests/test_nodal_plain.py)."""
+    pytest.importorskip("numba")
+    nets = [(mechcirc.load(HERE / name), np.geomspace(1e-6, 1e8, 57)) for name in
+            ("defect_nodal_flag1_regular.mcir", "defect_nodal_scaled_1e-100.mcir")]
+    nets += [(mechcirc.parse(_ladder(n, n)), 2 * np.pi * np.geomspace(0.1, 1e3, 401))
+             for n in (22, 49, 100)]
+    differ = 0
+    for refine in (True, False):
+        runs: dict = {}
+        for compiled in (False, True, False, True):
+            monkeypatch.setattr(mechcirc._jit, "COMPILED", compiled)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                got = ([c.sweep(w, method="nodal", refine=refine) for c, w in nets],
+                       nodal_corpus.measure("small", refine=refine))
+            if compiled in runs:                    # deterministic
+                assert all(a.K.tobytes() == b.K.tobytes() and a.error.tobytes()
+                           == b.error.tobytes() for a, b in zip(got[0], runs[compiled][0]))
+                assert got[1] == runs[compiled][1]
+            runs[compiled] = got
+        for a, b in zip(runs[False][0], runs[True][0]):
+            differ += _agree(a, b)
+        npy, com = runs[False][1], runs[True][1]
+        for a, b in zip(npy, com):
+            assert a[:2] == b[:2] and (a[4] == 1) == (b[4] == 1), (a, b)
+            if a[4] != FLAG_SINGULAR:
+                assert abs(a[2] - b[2]) <= max(a[3], b[3]) * max(abs(a[2]), abs(b[2])), (a, b)
+            differ += a[2:4] != b[2:4]
+        t = nodal_corpus.statistics(com)["all"]
+        assert t["misses"] == 0 and t["flag1 regular"] == 0
+        assert all(r[3] >= r[5] for r in com if r[4] != 1 and r[3] < 1 and not np.isnan(r[5]))
+    assert differ > 0           # (not the same bits: the comparison is not vacuous)
