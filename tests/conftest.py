@@ -109,6 +109,20 @@ def pytest_collection_finish(session):
     a frozen object is never freed, as none of these would be before exit.
     """
     gc.freeze()
+
+
+def pytest_sessionfinish(session, exitstatus):
+    """Collect the run's garbage once, then freeze what is left alive, as after collection.
+
+    At exit pytest collects twice (its unraisable-exception check, in
+    cleanup and in ``pytest_unconfigure``), and each full collection walked
+    every object the tests left alive: 0.95 s of CPU each after the whole
+    suite (cProfile).  One collection here, while pytest's hook for
+    unraisable exceptions is still in place (what a ``__del__`` raises is
+    reported as before), then the two find only what was made since.
+    """
+    gc.collect()
+    gc.freeze()
 # The no-wait rule off (mechcirc._jit): no detached numba warm-up processes (they would
 # load the machine outside the suite's own accounting), and the kernels compiled
 # in-process on first use, under the lock below, in the CLI subprocesses too;
