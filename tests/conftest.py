@@ -24,19 +24,28 @@ def _one_bytecode_cache_for_the_run():
     imports them and sweeps, 0.55 s with their bytecode; 30 tests start
     one).  Here this process and its children share one bytecode cache in
     a temporary folder of the run's own (``PYTHONPYCACHEPREFIX``), removed
-    at exit: nothing is written beside the sources or into the environment,
-    and what every process imports and runs is the same.  A prefix the user
-    chose is kept; without the flag nothing changes (bytecode is written as usual).
+    at exit (or by the next run, when this one was killed): nothing is
+    written beside the sources or into the environment, and what every
+    process imports and runs is the same.  A prefix the user chose is kept;
+    without the flag nothing changes (bytecode is written as usual).
     """
     import sys
 
     if os.environ.get("PYTHONPYCACHEPREFIX") or not os.environ.get("PYTHONDONTWRITEBYTECODE"):
         return
     import atexit
+    import glob
     import shutil
     import tempfile
 
-    prefix = tempfile.mkdtemp(prefix="mechcirc-tests-pyc-")
+    for stale in glob.glob(os.path.join(tempfile.gettempdir(), "mechcirc-tests-pyc-*-*")):
+        try:                                    # a run killed before its exit (SIGTERM, SIGKILL)
+            os.kill(int(stale.split("-")[-2]), 0)
+        except ProcessLookupError:
+            shutil.rmtree(stale, ignore_errors=True)
+        except (ValueError, OSError):           # not a number, or another user's process
+            pass
+    prefix = tempfile.mkdtemp(prefix=f"mechcirc-tests-pyc-{os.getpid()}-")
     atexit.register(shutil.rmtree, prefix, ignore_errors=True)
     os.environ["PYTHONPYCACHEPREFIX"] = prefix
     del os.environ["PYTHONDONTWRITEBYTECODE"]
