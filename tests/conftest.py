@@ -27,12 +27,18 @@ def _one_bytecode_cache_for_the_run():
     at exit (or by the next run, when this one was killed): nothing is
     written beside the sources or into the environment, and what every
     process imports and runs is the same.  A prefix the user chose is kept;
-    without the flag nothing changes (bytecode is written as usual).
+    without the flag nothing changes (bytecode is written as usual), nor where
+    the packages were installed with their bytecode (numpy's is looked for:
+    a prefix would hide it, and every module would be compiled again).
     """
+    import importlib.util
     import sys
 
     if os.environ.get("PYTHONPYCACHEPREFIX") or not os.environ.get("PYTHONDONTWRITEBYTECODE"):
         return
+    numpy = importlib.util.find_spec("numpy")
+    if numpy is None or numpy.cached is None or os.path.exists(numpy.cached):
+        return                                  # installed with its bytecode: read it as it is
     import atexit
     import glob
     import shutil
