@@ -44,14 +44,18 @@ def _one_bytecode_cache_for_the_run():
     import shutil
     import tempfile
 
-    for stale in glob.glob(os.path.join(tempfile.gettempdir(), "mechcirc-tests-pyc-*-*")):
+    # In memory where there is a tmpfs: on disk the test process's 2,800 files cost about
+    # 1 s of system time more (1,714 of them: 1.0-1.5 s on disk, 0.1 s in /dev/shm).
+    shm = "/dev/shm"
+    where = shm if os.path.isdir(shm) and os.access(shm, os.W_OK) else tempfile.gettempdir()
+    for stale in glob.glob(os.path.join(where, "mechcirc-tests-pyc-*-*")):
         try:                                    # a run killed before its exit (SIGTERM, SIGKILL)
             os.kill(int(stale.split("-")[-2]), 0)
         except ProcessLookupError:
             shutil.rmtree(stale, ignore_errors=True)
         except (ValueError, OSError):           # not a number, or another user's process
             pass
-    prefix = tempfile.mkdtemp(prefix=f"mechcirc-tests-pyc-{os.getpid()}-")
+    prefix = tempfile.mkdtemp(prefix=f"mechcirc-tests-pyc-{os.getpid()}-", dir=where)
     atexit.register(shutil.rmtree, prefix, ignore_errors=True)
     os.environ["PYTHONPYCACHEPREFIX"] = prefix
     del os.environ["PYTHONDONTWRITEBYTECODE"]
