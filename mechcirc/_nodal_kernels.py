@@ -174,11 +174,11 @@ def residual(omega, xr, xi, xlr, xli, has_lo, rhs, b_i, b_j, b_s,
 @_jit_inline
 def _abs_max(x, k):
     """max |x[k, i]| over i (≥ 0.0; NaN if one is): numba's |z| (a hypot) only where
-    |re| + |im| may be above the largest so far (|z| ≥ (|re| + |im|)/√2)."""
+    |re| + |im| is not below the largest so far (|z| ≤ |re| + |im|: elsewhere |z| < m)."""
     m = 0.0
     for i in range(x.shape[1]):
         z = x[k, i]
-        if not (abs(z.real) + abs(z.imag) < 1.5 * m):
+        if not (abs(z.real) + abs(z.imag) < m):
             v = abs(z)
             if v > m or np.isnan(v):
                 m = v
