@@ -373,6 +373,11 @@ def frequency_text(omega: float, unit: str = "rad/s", digits: int = 6) -> str:
     return f"{FREQUENCY_UNITS[unit][0]} = {in_unit(omega, unit):.{digits}g} {unit}"
 
 
+def frequency_symbol(unit: str) -> str:
+    """The symbol of a frequency shown in ``unit`` of --unit: ω (rad/s), f (Hz) or n (rpm)."""
+    return {"rad/s": "ω"}.get(unit, FREQUENCY_UNITS[unit][0])
+
+
 #: The largest angular frequency the command line accepts [rad/s] (ω² stays finite).
 MAX_OMEGA = 1e100
 #: The largest length the command line accepts (products of four stay finite).

@@ -9,9 +9,9 @@ from ..errors import MechcircError
 from ..limits import MAX_CYCLE_POINTS
 from ..units import FREQUENCY_UNITS, in_unit
 from ._common import (NETLIST_FILE, Default, add_command, add_handler, add_output_option,
-                      add_plot_option, add_unit_option, check_output_paths, count, print_json,
-                      print_written, real, refuse_ignored, save_figure, scene_theta, set_values, write_outputs,
-                      write_text)
+                      add_plot_option, add_unit_option, check_output_paths, count, frequency_symbol,
+                      print_json, print_written, real, refuse_ignored, save_figure, scene_theta,
+                      set_values, write_outputs, write_text)
 
 
 def register(sub) -> None:
@@ -183,7 +183,7 @@ def _cycle(args, scene) -> int:
     unit = "N·m" if cmap.rotational else "N"
     print(f"{args.file}: scene {scene.name!r}, {len(cmap.theta)} crank angles, shaft "
           f"Ω = {in_unit(cmap.omega_shaft, u):g} {u}")
-    sym = {"omega": "ω"}.get(name, name)          # the CSV column name, ω spelt out
+    sym = frequency_symbol(u)
     head = "  θ [deg]  " + " ".join(f"{sym + '_r' + str(k + 1):>10}" for k in range(W.shape[1])) \
         + "  " + " ".join(f"{'|Q0| h=' + str(h):>11}" for h in cmap.harmonics)
     print(f"resonances [{u}] and |Q0| [{unit}] at h·Ω:")
@@ -448,22 +448,27 @@ def cmd_crosscheck_scene(args) -> int:
     if args.json:
         print_json(result.summary())
         return summary["exit"]
+    u = args.unit
+    sym = frequency_symbol(u)
     print(f"{args.file}: scene {scene.name!r} at θ = {theta_deg:g}°: resonances of the circuit "
-          "against the ringing of the time-domain motion after a kick")
-    print(f"{'circuit ω_n':>14} {'ζ':>9} {'ringing ω_n':>14} {'ζ':>9} {'rel. diff':>10}  verdict")
+          "against the ringing of the time-domain motion after a kick"
+          + ("" if u == "rad/s" else f" (frequencies {sym} in {u})"))
+    print(f"{'circuit ' + sym + '_n':>14} {'ζ':>9} {'ringing ' + sym + '_n':>14} {'ζ':>9} "
+          f"{'rel. diff':>10}  verdict")
     for r in result.resonances:
         if r["ringing_omega"] is None:
-            print(f"{r['omega']:>14.6g} {r['zeta']:>9.4g}  {verdict_text(r)}")
+            print(f"{in_unit(r['omega'], u):>14.6g} {r['zeta']:>9.4g}  {verdict_text(r)}")
             continue
-        print(f"{r['omega']:>14.6g} {r['zeta']:>9.4g} {r['ringing_omega']:>14.6g} "
-              f"{r['ringing_zeta']:>9.4g} {r['rel_error']:>10.2e}  {verdict_text(r)}")
+        print(f"{in_unit(r['omega'], u):>14.6g} {r['zeta']:>9.4g} "
+              f"{in_unit(r['ringing_omega'], u):>14.6g} {r['ringing_zeta']:>9.4g} "
+              f"{r['rel_error']:>10.2e}  {verdict_text(r)}")
     if result.forced:
         print("forced response to a drive-speed ripple: |Q0| of the circuit against the "
               "time domain")
-        print(f"{'ω':>14} {'|Q0| circuit':>16} {'|Q0| time':>16} {'rel. diff':>10}  verdict")
+        print(f"{sym:>14} {'|Q0| circuit':>16} {'|Q0| time':>16} {'rel. diff':>10}  verdict")
         for f in result.forced:
-            print(f"{f['omega']:>14.6g} {f['Q0_circuit']:>16.8g} {f['Q0_time']:>16.8g} "
-                  f"{f['rel_error']:>10.2e}  {verdict_text(f)}")
+            print(f"{in_unit(f['omega'], u):>14.6g} {f['Q0_circuit']:>16.8g} "
+                  f"{f['Q0_time']:>16.8g} {f['rel_error']:>10.2e}  {verdict_text(f)}")
     print_written(notes=result.notes, indent="")
     print(summary_line(summary))
     return summary["exit"]

@@ -6,9 +6,10 @@ import math
 
 from ..errors import InputError
 from ..limits import MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS, MAX_SCIPY_REVOLUTIONS
+from ..units import FREQUENCY_UNITS, in_unit
 from ._common import (Default, add_command, add_handler, add_output_option, add_plot_option,
-                      check_output_paths, count, print_json, print_written, real,
-                      refuse_ignored, set_values, write_outputs, write_text)
+                      add_unit_option, check_output_paths, count, print_json, print_written,
+                      real, refuse_ignored, set_values, write_outputs, write_text)
 
 _METHODS = ("rk4", "rk4-python", "rk8", "DOP853", "RK45", "LSODA")   # = mechcirc.sley.METHODS
 _UNITS = {"eps4T": "1/s^2", "eps2P": "1/s^2", "eps4P": "1/s^2", "eps5P": "1/s^2",
@@ -119,6 +120,8 @@ def _register_crosscheck(sub) -> None:
     p.add_argument("--netlist", metavar="FILE",
                    help="also write the netlist built from the scene or the sley preset "
                         "(refused with a netlist FILE: that file is the netlist used)")
+    add_unit_option(p, "show frequencies in rad/s (omega, the default), Hz (f = omega/2 pi) "
+                       "or rpm (n = 60 omega/2 pi); --json stays in rad/s")
     add_handler(p, cmd_crosscheck)
 
 
@@ -297,21 +300,21 @@ def cmd_crosscheck(args) -> int:
     if args.json:
         print_json(doc)
     else:
-        _print_sley_crosscheck(doc)
+        _print_sley_crosscheck(doc, args.unit)
     return doc["summary"]["exit"]
 
 
-def _print_sley_crosscheck(doc: dict) -> None:
+def _print_sley_crosscheck(doc: dict, u: str = "rad/s") -> None:
     from ..verdict import summary_line, verdict_text
 
     print(f"{doc['label']}, linearised at crank angle {doc['theta_deg']:.4f} deg")
-    print("(a) resonances K = 0 of the netlist against the eigenfrequencies [rad/s]")
+    print(f"(a) resonances K = 0 of the netlist against the eigenfrequencies [{u}]")
     for row in doc["resonances"]:
         tag = "damped  " if row["damping"] else "undamped"
         for e, ed, w, wd in zip(row["eigen_omega"], row["eigen_omega_d"],
                                 row["circuit_omega"], row["circuit_omega_d"]):
-            print(f"    {tag} eigen {e:14.8f} (d {ed:12.6f})   circuit {w:14.8f} "
-                  f"(d {wd:12.6f})")
+            print(f"    {tag} eigen {in_unit(e, u):14.8f} (d {in_unit(ed, u):12.6f})   circuit "
+                  f"{in_unit(w, u):14.8f} (d {in_unit(wd, u):12.6f})")
         print(f"    {tag} largest relative difference {row['rel_error']:.2e} "
               f"({row['how']}): {verdict_text(row)}")
     ring = doc["ringing"]
@@ -319,13 +322,15 @@ def _print_sley_crosscheck(doc: dict) -> None:
         print(f"(b) ringing after beat-up: {verdict_text(ring)}")
     else:
         print(f"(b) ringing after beat-up at {ring['theta_mid_deg']:.1f} deg: measured "
-              f"{ring['omega_measured']:.3f} rad/s, predicted {ring['omega_predicted']:.3f} "
-              f"rad/s, difference {ring['rel_error']:.2e}: {verdict_text(ring)}")
+              f"{in_unit(ring['omega_measured'], u):.3f} {u}, predicted "
+              f"{in_unit(ring['omega_predicted'], u):.3f} {u}, difference "
+              f"{ring['rel_error']:.2e}: {verdict_text(ring)}")
     print_written(notes=ring["notes"], indent="    ")
-    print("(c) harmonic forcing of the linear model, |Q0|/V0 [N m s/rad]")
+    print("(c) harmonic forcing of the linear model, |Q0|/V0 [N m s/rad]"
+          + ("" if u == "rad/s" else f" at {FREQUENCY_UNITS[u][0]} [{u}]"))
     for row in doc["harmonic"]["rows"]:
-        print(f"    omega {row['omega']:10.3f}: time domain {row['q0_time']:.6g}, circuit "
-              f"{row['q0_circuit']:.6g}, difference {row['rel_error']:.2e}: "
-              f"{verdict_text(row)}")
+        print(f"    {FREQUENCY_UNITS[u][0]} {in_unit(row['omega'], u):10.3f}: time domain "
+              f"{row['q0_time']:.6g}, circuit {row['q0_circuit']:.6g}, difference "
+              f"{row['rel_error']:.2e}: {verdict_text(row)}")
     print(f"    ({doc['harmonic']['how']})")
     print(summary_line(doc["summary"]))

@@ -5,9 +5,10 @@ from __future__ import annotations
 import math
 import sys
 
+from ..units import in_unit
 from ._common import (add_command, add_handler, add_output_option, add_plot_option,
-                      check_names, check_output_paths, print_json, print_written, real,
-                      refuse_ignored, shaft_speed, write_outputs)
+                      check_names, check_output_paths, frequency_symbol, print_json,
+                      print_written, real, refuse_ignored, shaft_speed, write_outputs)
 
 seconds = real(above=0.0, unit="s", role="time")
 
@@ -139,28 +140,30 @@ def cmd_crosscheck_netlist(args) -> int:
         return summary["exit"]
     print_written(notes=result.notes, indent="")
     print(f"{circuit.name}: {result.drive_kind} drive")
-    print("(a) resonances / anti-resonances vs ringing of the impulse response [rad/s]; "
+    fu = args.unit
+    sym = frequency_symbol(fu)
+    print(f"(a) resonances / anti-resonances vs ringing of the impulse response [{fu}]; "
           "rel. diff = |s_time − s_freq| / |s_freq| of the pole s = −σ + iω_d")
     for r in result.resonances:
-        head = f"    {r['kind']:>13} ω_d {r['omega_d']:12.6g}"
+        head = f"    {r['kind']:>13} {sym}_d {in_unit(r['omega_d'], fu):12.6g}"
         if r["ringing_omega"] is None:
             print(f"{head}: {verdict_text(r)}")
             continue
-        print(f"{head}  ringing {r['ringing_omega']:12.6g}  decay {r['decay']:.5g} 1/s "
-              f"(expected {r['decay_expected']:.5g})  rel. diff {r['rel_error']:.2e}: "
+        print(f"{head}  ringing {in_unit(r['ringing_omega'], fu):12.6g}  decay {r['decay']:.5g} "
+              f"1/s (expected {r['decay_expected']:.5g})  rel. diff {r['rel_error']:.2e}: "
               f"{verdict_text(r)}")
     from ..circuit import units_of
 
     u = units_of(circuit.drive)
     label = f"|Q0| [{u['Q']}]" if result.drive_kind == "velocity" else f"|v0| [{u['v']}]"
     print(f"(b) {label} from the sweep vs the harmonic transient started in its periodic "
-          "steady state, at ω [rad/s]")
+          f"steady state, at {sym} [{fu}]")
     for s in result.steady_state:
         if s["measured"] is None:
-            print(f"    ω {s['omega']:12.6g}: {verdict_text(s)}")
+            print(f"    {sym} {in_unit(s['omega'], fu):12.6g}: {verdict_text(s)}")
             continue
-        print(f"    ω {s['omega']:12.6g}: sweep {s['expected']:.8g}  transient "
-              f"{s['measured']:.8g}  rel. diff {s['rel_error']:.2e} (departure from a "
-              f"sinusoid {s['periodic_deviation']:.1e}): {verdict_text(s)}")
+        print(f"    {sym} {in_unit(s['omega'], fu):12.6g}: sweep {s['expected']:.8g}  "
+              f"transient {s['measured']:.8g}  rel. diff {s['rel_error']:.2e} (departure from "
+              f"a sinusoid {s['periodic_deviation']:.1e}): {verdict_text(s)}")
     print(summary_line(summary))
     return summary["exit"]
