@@ -19,6 +19,8 @@ it takes a kernel only when numba's disk cache holds it (:func:`in_cache`;
 loading takes about 1 s, compiling 4–11 s of CPU), and otherwise runs its
 numpy path while a detached Python process compiles the kernel into the
 cache (:func:`warm_in_background`), for the next call or the next process.
+A run far longer as Python than compiling (a scene's crosscheck:
+``scene.simulation.kernels_for(long=True)``) takes the compiled kernels anyway.
 A kernel counts as found there when the functions it calls are too, compiled on
 this machine with their data files present (else its first call would compile
 them in the process); they are loaded from the cache before it, as an

@@ -106,6 +106,34 @@ def test_a_cached_scene_kernel_is_compiled(cache):
     assert started == []                    # forced: compiled here, nothing started
 
 
+def test_a_long_scene_run_takes_the_compiled_kernels_cold(cache, monkeypatch):
+    """A crosscheck's records (650,000 RK4 steps for the heald scene) ran as Python with a
+    cold cache: 268 s of CPU against 18 s compiling first.  ``long=True`` takes the compiled
+    kernels, cold or not, and starts no warm-up; ``COMPILED = False`` still gives Python;
+    the crosscheck asks for it."""
+    import math
+
+    from mechcirc.scene import _motion_kernels
+    from mechcirc.scene.crosscheck import crosscheck_scene
+
+    started = cache(False)
+    assert scene_sim.kernels_for("rk4", long=True) == (_motion_kernels, "numba")
+    assert scene_sim.kernels_for("rk4")[1] == "python"          # a short run: not waited for
+    assert started == [scene_sim._WARM_STATEMENT]               # (by the short one only)
+    assert _with_compiled(False, lambda: scene_sim.kernels_for("rk4", long=True))[1] == "python"
+    asked = []
+
+    def stop(method, **kw):                 # what the crosscheck asks for, then no run
+        asked.append(kw)
+        raise RuntimeError("stop")
+
+    monkeypatch.setattr(scene_sim, "kernels_for", stop)
+    cache(True)     # what runs before the stop (the rigid motion) on its usual, compiled path
+    with pytest.raises(RuntimeError, match="stop"):
+        crosscheck_scene(load_scene(ROOT / "examples" / "heald_scene.toml"), math.radians(40))
+    assert asked == [{"long": True}]
+
+
 @pytest.mark.parametrize("method", ["dyads", "newton"])
 def test_a_cold_linkage_kernel_runs_numpy(cache, method):
     started = cache(False)

@@ -160,7 +160,7 @@ def _kick_record(model, theta, found, steps_per_period, periods):
     h = 2 * math.pi / rate / steps_per_period
     sample = max(1, int(steps_per_period // 16))
     nsamp = max(int(math.ceil(periods * 2 * math.pi / w_min / (h * sample))) + 1, 4 * n + 4)
-    kern, backend = kernels_for("rk4")
+    kern, backend = kernels_for("rk4", long=True)     # the forced records take it too
     y0 = model.rigid_state(theta)
     kick = 1e-7 * rate * np.array([1.0 + 0.37 * i for i in range(n)])
     y = y0.copy()
