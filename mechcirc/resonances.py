@@ -39,7 +39,6 @@ modes are not reported.
 from __future__ import annotations
 
 import math
-import numbers
 from dataclasses import dataclass
 from typing import Literal
 
@@ -47,6 +46,7 @@ import numpy as np
 
 from .circuit import Circuit
 from .errors import InputError, NetlistError, SolverError
+from .sources import real_number
 from .units import FREQUENCY_UNITS, in_unit
 
 __all__ = ["Resonance", "Resonances", "find_resonances", "MAX_UNKNOWNS", "MAX_UNKNOWNS_DAMPED"]
@@ -251,8 +251,7 @@ def resonance_pairs(circuit: Circuit, omega_max: float | None = None,
 def _check_arguments(circuit: Circuit, omega_max: float | None, kind) -> None:
     """Refuse an ``omega_max`` that is not a real number > 0 or None (a bool is no number,
     though an int), a ``kind`` not known, and an element whose value × eta overflows."""
-    if not (omega_max is None or isinstance(omega_max, numbers.Real)
-            and not isinstance(omega_max, bool) and omega_max > 0):
+    if not (omega_max is None or real_number(omega_max) and omega_max > 0):
         raise InputError(f"omega_max must be > 0 rad/s or None, got {omega_max!r}")
     if kind not in (None, "resonance", "antiresonance"):
         raise InputError(f"kind must be 'resonance', 'antiresonance' or None, got {kind!r}")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import numbers
 import os
 import re
 import stat
@@ -251,6 +252,21 @@ def finite_number(value) -> TypeGuard[float]:
         return math.isfinite(value)
     except OverflowError:              # an integer beyond float64's range
         return False
+
+
+def real_number(value) -> bool:
+    """Whether an argument given in code is a real number: an int, a float or a numpy
+    number, but not a bool (an int to Python, ``True`` would read as 1).
+
+    Parameters
+    ----------
+    value : object
+
+    Returns
+    -------
+    bool
+    """
+    return isinstance(value, numbers.Real) and not isinstance(value, bool)
 
 
 def number_error(value, what: str, *, positive: bool = False,
