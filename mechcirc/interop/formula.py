@@ -41,10 +41,12 @@ __all__ = ["formula", "formula_and_values", "symbol_values", "OMEGA", "MAX_NODAL
 OMEGA = "omega"
 #: Largest nodal system solved symbolically for networks without a tree.
 MAX_NODAL_UNKNOWNS = 12
-#: Deepest reduction tree turned into a formula: SymPy's constructors and
-#: printers recurse once per level and exhaust Python's recursion limit at
-#: about 150 levels (a 75-rung ladder); beyond that the error says so.
-MAX_TREE_DEPTH = 120
+#: Deepest reduction tree turned into a formula.  SymPy's printers recurse
+#: about 7 frames per level on a cold cache (a 120-level tree took 857 of
+#: Python's default 1,000, so it failed under pytest with coverage); at 64
+#: levels (a 32-rung ladder) ``str`` and ``latex`` take about 470, which leaves
+#: half the limit to the caller (a notebook, a debugger, a test runner).
+MAX_TREE_DEPTH = 64
 
 
 def _sympy():
