@@ -43,7 +43,7 @@ def main() -> None:
         print(f"   {r.kind:<14} {r.omega:9.2f} rad/s ({r.f_hz:7.2f} Hz), zeta {r.zeta:.4f}")
 
     # 2. reflected inertia of the drive's rigid part by central differences of positions
-    first = model.drive_node
+    first = model.circuit.drive.n1
     h = 1e-5
     lo, hi = scene.linkage.solve(np.array([theta - h, theta + h]))
     L = scene.length_scale

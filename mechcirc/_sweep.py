@@ -214,6 +214,13 @@ class Sweep:
             cols |= {"v0": self.v0, "|v0|": np.abs(self.v0)}
         return cols | {"flag": self.flags, "error": self.error}
 
+    def _column_units(self, columns) -> dict[str, str]:
+        """The unit of each of the ``columns`` of :meth:`_columns` (from :attr:`units`)."""
+        u = self.units
+        units = {"omega": "rad/s", "K": u["K"], "Q0": u["Q"], "v0": u["v"], "flag": "",
+                 "error": "1"}
+        return {c: units[c.strip("|")] for c in columns}
+
     def to_dataframe(self):
         """The sweep as a ``pandas.DataFrame``, one row per frequency point.
 
@@ -225,11 +232,14 @@ class Sweep:
         rad/s] and ``|v0|``; ``flag`` 0 regular, 1 on a pole or zero of K, 2
         within rounding of one (:attr:`flags`); ``error`` the bound of the
         relative rounding error of K [1] (:attr:`error`).  The values are those
-        of the attributes of the same names.  pandas is imported here only.
+        of the attributes of the same names; ``attrs["units"]`` maps each column
+        to its unit (as :meth:`to_xarray`).  pandas is imported here only.
         """
         import pandas as pd
 
-        return pd.DataFrame(self._columns())
+        df = pd.DataFrame(self._columns())
+        df.attrs["units"] = self._column_units(df.columns)
+        return df
 
     def to_xarray(self):
         """The sweep as an ``xarray.Dataset`` on the dimension ``omega`` [rad/s].
@@ -244,15 +254,13 @@ class Sweep:
         except ImportError:
             raise ImportError("Sweep.to_xarray needs xarray (pip install xarray); "
                               "Sweep.to_dataframe needs only pandas") from None
-        u = self.units
-        units = {"K": u["K"], "Q0": u["Q"], "v0": u["v"], "flag": "", "error": "1"}
         cols = self._columns()
+        units = self._column_units(cols)
         omega = cols.pop("omega")
         return xr.Dataset(
-            {k.replace("|", "abs_", 1).rstrip("|"): ("omega", v,
-                                                      {"units": units[k.strip("|")]})
+            {k.replace("|", "abs_", 1).rstrip("|"): ("omega", v, {"units": units[k]})
              for k, v in cols.items()},
-            coords={"omega": ("omega", omega, {"units": "rad/s"})},
+            coords={"omega": ("omega", omega, {"units": units["omega"]})},
             attrs={"name": self.name, "method": self.method, "drive": self.drive.kind})
 
     def _repr_html_(self) -> str:

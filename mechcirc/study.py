@@ -61,7 +61,7 @@ or ``inf`` with the ω of the first zero or pole of K when the band holds an
 undamped one — and the number of flagged grid points; for resonances
 ``resonance_1..N`` and ``antiresonance_1..N`` [rad/s]
 (empty where there are fewer), for a sley simulation the minimum and maximum
-over the tabulated revolution of ``eps2P eps4P eps4T`` [1/s²] and ``M2V``
+over the tabulated revolution of ``eps2P eps4P eps4T`` [rad/s²] and ``M2V``
 [N·m] (both-sides drive: also ``eps5P M5V``), e.g. ``eps4P_min``.
 
 Execution: all local cores (``concurrent.futures.ProcessPoolExecutor``) by
@@ -174,7 +174,7 @@ _UNITS = {"index": "1", "status": "", "error": "", "K_abs_min": "m/(N·s)",
           "K_abs_max": "m/(N·s)", "Q0_abs_max": "N", "omega_at_Q0_max": "rad/s",
           "omega_at_K_min": "rad/s", "omega_at_K_max": "rad/s",
           "n_flagged": "1", "resonance": "rad/s", "antiresonance": "rad/s",
-          "eps2P": "1/s²", "eps4P": "1/s²", "eps4T": "1/s²", "eps5P": "1/s²",
+          "eps2P": "rad/s²", "eps4P": "rad/s²", "eps4T": "rad/s²", "eps5P": "rad/s²",
           "M2V": "N·m", "M5V": "N·m"}
 #: The SI unit of each unit role of a sley parameter (:data:`mechcirc.sley.models.UNIT_ROLES`).
 _ROLE_UNITS = {"rotary inertia": "kg·m²", "rotary spring": "N·m/rad", "rotary damper": "kg·m²/s",

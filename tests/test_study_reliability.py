@@ -247,7 +247,7 @@ def test_every_column_of_every_analysis_has_a_unit(data):
     assert None not in [units[c] for c in spec.columns if c not in spec.params]
     if data["analysis"] == "simulate":
         assert units["omega"] == "rad/s" and units["C2"] == "N·m/rad"
-        assert units["eps4T_min"] == "1/s²" and units["M2V_max"] == "N·m"
+        assert units["eps4T_min"] == "rad/s²" and units["M2V_max"] == "N·m"
     else:
         assert units["resonance_2"] == units["antiresonance_1"] == "rad/s"
 

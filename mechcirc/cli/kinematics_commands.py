@@ -35,7 +35,7 @@ def _register_fourbar(sub) -> None:
         "--plot fourbar.png")
     _add_lengths(p, "(any unit)")
     p.add_argument("--omega", type=real(most=MAX_OMEGA, unit="rad/s", role="omega"), metavar="W",
-                   help="crank speed [rad/s] for ε4T = ν·ω²")
+                   help="crank speed [rad/s; or with a unit: 955rpm] for ε4T = ν·ω²")
     p.add_argument("--branch", type=int, choices=(1, -1), default=1,
                    help="assembly mode (default +1; see docs/kinematics.md)")
     add_plot_option(p, "plot φ4, μ, ν (or ε4T) and γ against θ")
@@ -72,7 +72,7 @@ def _register_frame(sub) -> None:
     speed.add_argument("--rpm", type=shaft_speed, metavar="N",
                        help="crank speed [rev/min]")
     speed.add_argument("--omega", type=real(above=0.0, most=MAX_OMEGA, unit="rad/s", role="omega"),
-                       metavar="W", help="crank speed [rad/s]")
+                       metavar="W", help="crank speed [rad/s; or with a unit: 600rpm]")
     p.add_argument("--mass", type=_vector("--mass", 3, nonneg=True), default=(0.0, 0.0, 0.0),
                    metavar="M2,M3,M4", help="masses of crank, coupler, rocker (with sley and "
                    "reed) [kg] (default 0,0,0)")
@@ -260,7 +260,7 @@ def cmd_fourbar(args) -> int:
             line = (f"  {dc['kind']:5s} dead centre: θ = {dc['theta_deg']:8.3f}°  "
                     f"φ4 = {dc['phi4_deg']:8.3f}°  ν = {dc['nu']:+.6f} 1/rad")
             if args.omega is not None:
-                line += f"  ε4 = {dc['rocker_acceleration']:+.1f} 1/s²"
+                line += f"  ε4 = {dc['rocker_acceleration']:+.1f} rad/s²"
             print(line)
         print(f"  swing Ψ = {doc['swing_deg']:.4f}°")
     tmin = ", ".join(f"{t:.2f}°" for t in doc["theta_at_gamma_min_deg"])
@@ -271,8 +271,9 @@ def cmd_fourbar(args) -> int:
         print(f"  ν range: [{doc['nu_min']:+.6f}, {doc['nu_max']:+.6f}] 1/rad at θ = "
               f"{doc['theta_at_nu_min_deg']:.2f}°, {doc['theta_at_nu_max_deg']:.2f}°")
         if args.omega is not None:
-            print(f"  ε4T = ν·ω² at ω = {args.omega:g} rad/s: "
-                  f"[{doc['eps4T_min']:.1f}, {doc['eps4T_max']:.1f}] 1/s²")
+            print(f"  ε4T = ν·ω² at ω = {args.omega:g} rad/s "
+                  f"({convert_frequency(args.omega, 'rad/s', 'rpm'):.6g} rpm): "
+                  f"[{doc['eps4T_min']:.1f}, {doc['eps4T_max']:.1f}] rad/s²")
     print_written(notes=doc["notes"])
     return 0
 
@@ -462,7 +463,8 @@ def cmd_linkage(args) -> int:
     prism = f", {len(lk.sliders)} prismatic" if lk.sliders else ""
     print(f"{lk.name}: {len(lk.links)} moving links, {lk.revolute_pairs} revolute pairs{prism}, "
           f"W = {lk.mobility}; cranks "
-          + ", ".join(f"{c.link} (ω = {c.omega:g} rad/s)" for c in lk.cranks))
+          + ", ".join(f"{c.link} (ω = {c.omega:g} rad/s, "
+                      f"{convert_frequency(c.omega, 'rad/s', 'rpm'):.6g} rpm)" for c in lk.cranks))
     for g in groups:
         cls = {2: "class-II dyad", 3: "class-III group"}.get(g.group_class, "group")
         base = f" on base {g.base}" if g.base else ""

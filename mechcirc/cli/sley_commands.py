@@ -12,7 +12,7 @@ from ._common import (Default, add_command, add_handler, add_output_option, add_
                       real, refuse_ignored, set_values, write_outputs, write_text)
 
 _METHODS = ("rk4", "rk4-python", "rk8", "DOP853", "RK45", "LSODA")   # = mechcirc.sley.METHODS
-_UNITS = {"eps4T": "1/s^2", "eps2P": "1/s^2", "eps4P": "1/s^2", "eps5P": "1/s^2",
+_UNITS = {"eps4T": "rad/s^2", "eps2P": "rad/s^2", "eps4P": "rad/s^2", "eps5P": "rad/s^2",
           "M2V": "N m", "M5V": "N m"}
 
 
@@ -35,7 +35,7 @@ def _register_simulate(sub) -> None:
                    help="simulate this scene file over whole revolutions (docs/scenes.md); "
                         "without it, the sley presets (--drive, --variant)")
     p.add_argument("--omega", type=real(above=0.0, unit="rad/s", role="omega"), metavar="W",
-                   help="crank shaft speed [rad/s] (default the file's or the preset's)")
+                   help="crank shaft speed [rad/s; or 955rpm] (default the file's or the preset's)")
     p.add_argument("--start-deg", type=real(most=1e9, unit="deg", role="angle"), metavar="DEG",
                    help="scene: crank rotation from the pose at t = 0 (default the file's, "
                         "else 0)")
@@ -174,17 +174,17 @@ def _table(result, paper_applies: bool = True) -> str:
         speed += f" + {result.compile_time:.2f} s compile/cache load"
     lines = [f"{p.label or p.drive}: revolution {result.revolution}, alpha = "
              f"{result.alpha_deg:g} deg, method {result.method} ({result.backend}), {speed}",
-             f"{'quantity':<9} {'unit':<6} {'min':>10} {'max':>10}   {'paper min':>10} "
+             f"{'quantity':<9} {'unit':<7} {'min':>10} {'max':>10}   {'paper min':>10} "
              f"{'paper max':>10}"]
     for key in [k for k in ("eps4T", "eps2P", "eps4P", "eps5P", "M2V", "M5V")
                 if k in result.extrema]:
         lo, hi = result.extrema[key]
         plo, phi = paper.get(key, ("-", "-"))
-        lines.append(f"{key:<9} {_UNITS[key]:<6} {lo:>10.0f} {hi:>10.0f}   {plo!s:>10} {phi!s:>10}")
+        lines.append(f"{key:<9} {_UNITS[key]:<7} {lo:>10.0f} {hi:>10.0f}   {plo!s:>10} {phi!s:>10}")
     total = result.M2V if result.M5V is None else result.M2V + result.M5V
     name = "-M2V*" if result.M5V is None else "-(M2+M5)*"
     plo, phi = paper.get("M2V", ("-", "-"))
-    lines.append(f"{name:<9} {'N m':<6} {-total.max():>10.0f} {-total.min():>10.0f}   "
+    lines.append(f"{name:<9} {'N m':<7} {-total.max():>10.0f} {-total.min():>10.0f}   "
                  f"{plo!s:>10} {phi!s:>10}")
     if paper_applies:
         lines.append("* the paper's printed moments fit this sign"

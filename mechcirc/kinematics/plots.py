@@ -68,7 +68,7 @@ def plot_fourbar(fourbar, omega: float | None = None, n: int = 721, *, fig=None)
         st = type(st)(**{**st.__dict__, "mu": np.where(near, np.nan, st.mu)})
         acc = np.where(near, np.nan, acc)
     panels = [(np.degrees(st.phi4), "φ4 [deg]"), (st.mu, "μ = dφ4/dθ [1]"),
-              (acc, "ε4T = ν·ω² [1/s²]" if omega else "ν = d²φ4/dθ² [1/rad]"),
+              (acc, "ε4T = ν·ω² [rad/s²]" if omega else "ν = d²φ4/dθ² [1/rad]"),
               (np.degrees(st.gamma), "γ [deg]")]
     for a, (y, label) in zip(ax[:, 0], panels):
         a.plot(deg, y, lw=1.4)

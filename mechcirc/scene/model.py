@@ -87,10 +87,6 @@ class SceneCircuit:
     drive_ratio: float
     rotational: bool
 
-    @property
-    def drive_node(self) -> str:
-        return next(iter(self.parts))
-
 
 def build(scene: Scene, theta: float, *, reflect: ReflectMode = "eta",
           state=None) -> SceneCircuit:

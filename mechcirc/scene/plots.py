@@ -45,7 +45,7 @@ def plot_motion(result, names=None, fig=None):
     for n in names:
         ax = bottom if n.endswith((".force", ".moment", ".deformation")) else top
         ax.plot(deg, result.values[n], lw=0.8, label=n)
-    top.set_ylabel("angular acceleration [1/s²]")
+    top.set_ylabel("angular acceleration [rad/s²]")
     bottom.set_ylabel("force [N] or moment [N·m]")
     bottom.set_xlabel("crank angle [deg]")
     for ax in (top, bottom):

@@ -33,14 +33,14 @@ def plot_result(result, fig=None):
     ax.plot(deg, result.eps2P, lw=0.8, label="ε2P (crank 2P)")
     if both:
         ax.plot(deg, result.eps5P, lw=0.8, label="ε5P (crank 5P)")
-    ax.set_ylabel("crank acceleration [1/s²]")
+    ax.set_ylabel("crank acceleration [rad/s²]")
     ax = axes[1]
     ax.plot(deg, result.eps4P, lw=0.8, label="ε4P (sley)")
     ax.plot(deg, result.eps4T, lw=1.2, ls="--", color="k", label="ε4T = ν ω² (rigid)")
     ax.axvspan(math.degrees(result.phiP - result.params.alpha / 2),
                math.degrees(result.phiP + result.params.alpha / 2), color="0.9",
                label=f"beat-up window (α = {result.alpha_deg:g}°)")
-    ax.set_ylabel("sley acceleration [1/s²]")
+    ax.set_ylabel("sley acceleration [rad/s²]")
     ax = axes[2]
     ax.plot(deg, result.M2V, lw=0.8, label="M2V")
     if both:
@@ -49,7 +49,7 @@ def plot_result(result, fig=None):
     ax.set_xlabel("crank angle φ2 [deg]")
     ax.set_xlim(0, 360)
     p = result.params
-    fig.suptitle(f"{p.label or p.drive}: revolution {result.revolution}, ω = {p.omega:g} 1/s, "
+    fig.suptitle(f"{p.label or p.drive}: revolution {result.revolution}, ω = {p.omega:g} rad/s, "
                  f"ϕ = {p.clearance:g} rad, M0 = {p.M0:g} N·m, α = {result.alpha_deg:g}°",
                  fontsize=10)
     for a in axes:

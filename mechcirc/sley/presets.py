@@ -119,7 +119,7 @@ def all_presets(**overrides) -> list[SleyParameters]:
 
 
 #: The paper's printed results: PAPER[drive][variant][quantity] = (min, max).
-#: Units: accelerations [1/s²], moments [N·m].  Lost minus signs restored as
+#: Units: accelerations [rad/s²], moments [N·m].  Lost minus signs restored as
 #: described in the module docstring (M2V of Table 1 variant 6 read as −279 / 101).
 PAPER = {
     "one-side": {

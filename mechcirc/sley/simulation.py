@@ -328,9 +328,8 @@ def simulate_params(params: SleyParameters, revolutions: int = 5, method: str | 
     SleyResult
         The last (or the chosen) revolution, tabulated.
     """
-    method, revolutions, steps_per_period, rtol = _checked(
-        method, revolutions, revolution, points_per_revolution, steps_per_period, rtol)
-    npts = int(points_per_revolution)
+    method = _checked(method, revolutions, revolution, points_per_revolution, steps_per_period,
+                      rtol)
     params.fourbar()                            # GeometryError: not a crank-rocker
     theta0 = start_angle(params)
     linkage = _linkage_constants(params.l2P, params.l3, params.l4, params.d, params.branch)
@@ -344,10 +343,10 @@ def simulate_params(params: SleyParameters, revolutions: int = 5, method: str | 
                       "+M4 (beat_sign=+1: along the rigid acceleration at beat-up)"))
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", SceneAccuracyWarning)
-        m = simulate_scene(scene, model=model, revolutions=revolutions,
+        m = simulate_scene(scene, model=model, revolutions=revolutions, revolution=revolution,
                            start_deg=math.degrees(theta0), steps_per_period=steps_per_period,
-                           points=npts, method=method, rtol=rtol, progress=progress,
-                           error_estimate=error_estimate, exact_rigid=False,
+                           points=points_per_revolution, method=method, rtol=rtol,
+                           progress=progress, error_estimate=error_estimate, exact_rigid=False,
                            point_accelerations=False)
     for w in caught:
         if issubclass(w.category, SceneAccuracyWarning):
@@ -360,8 +359,11 @@ def simulate_params(params: SleyParameters, revolutions: int = 5, method: str | 
 
 
 def _checked(method, revolutions, revolution, points_per_revolution, steps_per_period, rtol):
-    """The options of :func:`simulate_params`, checked (:class:`ParameterError` names the bad
-    one): (method, revolutions to integrate, steps per period or None, rtol or None)."""
+    """The options of :func:`simulate_params` checked under their names here
+    (:class:`ParameterError` names the bad one, before the model is built); the method.
+
+    The scene's run checks the same again (its own names and error class) and makes the
+    conversions: the revolutions it integrates (``revolution``), rtol's default, floats."""
     method = "rk4" if method is None else method
     if method not in METHODS:
         raise ParameterError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
@@ -373,25 +375,19 @@ def _checked(method, revolutions, revolution, points_per_revolution, steps_per_p
                 or not 1 <= revolution <= revolutions:
             raise ParameterError(f"revolution must be an integer in 1..{revolutions}, "
                                  f"got {revolution!r}")
-        revolutions = int(revolution)       # later revolutions cannot change this one
     if int(points_per_revolution) < 16:
         raise ParameterError(f"points_per_revolution must be >= 16, got {points_per_revolution!r}")
     if method in _SCIPY_METHODS:
         if steps_per_period is not None:
             raise ParameterError(f"steps_per_period applies to rk4 and rk8, not {method}")
-        rtol = 1e-10 if rtol is None else float(rtol)
-        if not 1e-14 <= rtol < 1:
-            raise ParameterError(f"rtol must be in [1e-14, 1), got {rtol!r}")
-    else:
-        if rtol is not None:
-            raise ParameterError(f"rtol applies to the scipy methods, not {method}; "
-                                 "use steps_per_period")
-        if steps_per_period is not None:        # None: the scene's default step rule
-            steps_per_period = float(steps_per_period)
-            if not steps_per_period >= 1:
-                raise ParameterError(f"steps_per_period must be >= 1, got "
-                                     f"{steps_per_period!r}")
-    return method, revolutions, steps_per_period, rtol
+        if rtol is not None and not 1e-14 <= float(rtol) < 1:
+            raise ParameterError(f"rtol must be in [1e-14, 1), got {float(rtol)!r}")
+    elif rtol is not None:
+        raise ParameterError(f"rtol applies to the scipy methods, not {method}; "
+                             "use steps_per_period")
+    elif steps_per_period is not None and not float(steps_per_period) >= 1:
+        raise ParameterError(f"steps_per_period must be >= 1, got {float(steps_per_period)!r}")
+    return method
 
 
 def _result(params: SleyParameters, model, m, theta0: float, linkage: tuple,
