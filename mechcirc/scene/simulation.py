@@ -42,7 +42,7 @@ import numpy as np
 from .. import _jit
 from ..errors import MechcircError, SceneAccuracyWarning, SolverError
 from .files import Scene
-from .motion import MotionModel, function_args, motion_model
+from .motion import MotionModel, function_args, motion_model, python_kernels
 
 __all__ = ["SceneMotion", "simulate_scene", "flight", "linear_matrices", "max_rate",
            "ACCURACY_GOAL"]
@@ -129,7 +129,6 @@ class SceneMotion:
         return {"crank_angle_deg": np.degrees(self.crank_angle), **self.values}
 
 
-_PYK = None
 #: Methods of :func:`simulate_scene`: the fixed-step RK4 kernel, and scipy's adaptive ones.
 METHODS = ("rk4", "rk4-python", "rk8", "DOP853", "RK45", "LSODA")
 SCIPY_METHODS = ("DOP853", "RK45", "LSODA")
@@ -158,7 +157,6 @@ def kernels_for(method, *, long=False):
     of CPU as Python, 18 s with the compile here first), given the compiled kernels unless
     ``COMPILED`` is False.
     """
-    global _PYK
     from . import _motion_kernels as k
 
     kernels = (k.rk_run, k.outputs, k.output_extrema, k.eval_many, k.point_samples,
@@ -169,9 +167,7 @@ def kernels_for(method, *, long=False):
             return k, "numba"
         if _jit.use(_WARM_STATEMENT, *kernels):
             return k, "numba"
-    if _PYK is None:
-        _PYK = k.load_python()
-    return _PYK, "python"
+    return python_kernels(), "python"
 
 
 def _warm_up(model, kern) -> float:
@@ -784,9 +780,7 @@ def _crank_order(scene, model, theta_s, ripple, ts, stride=1):
 
 def _new_crank_order(cycle, omega, theta_s, ripple, ts, stride):
     """:func:`_crank_order`, computed."""
-    theta = theta_s + omega * ts if ripple[0] == 0.0 else \
-        crank_angle(omega, theta_s, ripple, ts)[0]
-    crank = theta % cycle
+    crank = crank_angle(omega, theta_s, ripple, ts)[0] % cycle
     n = crank.size
     wrap = np.flatnonzero(crank[1:] < crank[:-1])
     if wrap.size != 1:

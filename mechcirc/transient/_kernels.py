@@ -20,11 +20,10 @@ the force is continuous at first contact (f_c = 0 there).
 from __future__ import annotations
 
 import math
-import sys
 
 import numpy as np
 
-from .._jit import decorators
+from .._jit import decorators, load
 
 HAVE_NUMBA, _jit, _jit_inline = decorators(bool(globals().get("_FORCE_PYTHON")))
 # A piece of a kernel that allocates nothing (a loop, or a step of one): compiled without
@@ -579,12 +578,5 @@ def modal_run(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout, qlast):
 
 
 def load_python():
-    """A fresh copy of this module that never uses numba (the pure-Python backend)."""
-    import importlib.util
-
-    spec = importlib.util.find_spec(__name__)
-    module = importlib.util.module_from_spec(spec)
-    module._FORCE_PYTHON = True
-    sys.modules.setdefault(__name__ + "_python", module)
-    spec.loader.exec_module(module)
-    return module
+    """A fresh copy of this module that never uses numba (:func:`mechcirc._jit.load`)."""
+    return load(__name__, _FORCE_PYTHON=True)
