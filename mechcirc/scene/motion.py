@@ -96,7 +96,9 @@ class MotionModel:
     def rigid_state(self, theta: float, speed: float | None = None):
         """y = [q, q̇] of the free parts in the rigid motion at crank rotation θ, the crank
         turning at ``speed`` [rad/s] (default Ω)."""
-        kern = python_kernels()
+        from ._motion_kernels import load_python
+
+        kern = load_python()
         a = self.arrays
         w = self.omega if speed is None else float(speed)
         q, qd = [], []
@@ -105,20 +107,6 @@ class MotionModel:
             q.append(v)
             qd.append(d * w)
         return np.array(q + qd)
-
-
-_PY = None
-
-
-def python_kernels():
-    """The kernels run as plain Python (:func:`._motion_kernels.load_python`), loaded once
-    per process (the rigid states, and every run without numba's compiled kernels)."""
-    global _PY
-    if _PY is None:
-        from . import _motion_kernels
-
-        _PY = _motion_kernels.load_python()
-    return _PY
 
 
 class _Builder:

@@ -305,7 +305,7 @@ class Motor:
 @cache
 def _motor_law():
     """The motor law of the shaft kernel, as plain Python (a scalar call without numba's
-    dispatch)."""
+    dispatch; the kernels' one Python copy, :func:`._motion_kernels.load_python`)."""
     from ._motion_kernels import load_python
 
     return load_python().motor_torque

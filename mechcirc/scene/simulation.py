@@ -42,7 +42,7 @@ import numpy as np
 from .. import _jit
 from ..errors import MechcircError, SceneAccuracyWarning, SolverError
 from .files import Scene
-from .motion import MotionModel, function_args, motion_model, python_kernels
+from .motion import MotionModel, function_args, motion_model
 
 __all__ = ["SceneMotion", "simulate_scene", "flight", "linear_matrices", "max_rate",
            "ACCURACY_GOAL"]
@@ -167,7 +167,7 @@ def kernels_for(method, *, long=False):
             return k, "numba"
         if _jit.use(_WARM_STATEMENT, *kernels):
             return k, "numba"
-    return python_kernels(), "python"
+    return k.load_python(), "python"
 
 
 def _warm_up(model, kern) -> float:
@@ -627,16 +627,13 @@ def _first_runs(run, steps, rule, progress, notes, error_estimate):
     step over the last :data:`ESTIMATE_REVOLUTIONS` from the first's state at their start;
     without it, the one run (the estimate's run None).  In the automatic rule a run that
     diverges is repeated at twice as many steps (noted)."""
-    try:
-        return (rule.spp, *_paired_runs(run, steps(rule.spp), progress, rule.stride,
-                                        error_estimate))
-    except SolverError:
-        if not rule.auto:
-            raise
-        notes.append(f"the run at {rule.spp:g} steps per period diverged: run at "
-                     f"{2 * rule.spp:g}")
-        return (2 * rule.spp, *_paired_runs(run, steps(2 * rule.spp), progress, rule.stride,
-                                            error_estimate))
+    for spp in (rule.spp, 2 * rule.spp):
+        try:
+            return (spp, *_paired_runs(run, steps(spp), progress, rule.stride, error_estimate))
+        except SolverError:
+            if not rule.auto or spp != rule.spp:
+                raise
+            notes.append(f"the run at {spp:g} steps per period diverged: run at {2 * spp:g}")
 
 
 def _paired_runs(run, per_rev, progress, stride, error_estimate):

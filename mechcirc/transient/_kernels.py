@@ -19,6 +19,7 @@ the force is continuous at first contact (f_c = 0 there).
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -577,6 +578,8 @@ def modal_run(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout, qlast):
         qlast[j] = complex(qr[j], qi[j])
 
 
+@functools.cache
 def load_python():
-    """A fresh copy of this module that never uses numba (:func:`mechcirc._jit.load`)."""
+    """A copy of this module that never uses numba (:func:`mechcirc._jit.load`), loaded once
+    per process."""
     return load(__name__, _FORCE_PYTHON=True)

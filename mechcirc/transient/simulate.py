@@ -1061,7 +1061,6 @@ def _real_columns(Vk: np.ndarray, is_c: np.ndarray, late: np.ndarray):
     return cre, cim, nx, T
 
 
-_PYTHON_KERNELS: list = []
 # Compiles the kernels into numba's disk cache: a clearance run (dopri_run, law_many)
 # and a driven linear one (modal_run).
 _WARM_STATEMENT = (
@@ -1086,9 +1085,7 @@ def _kernels():
     if not kern.HAVE_NUMBA or _jit.use(_WARM_STATEMENT, kern.dopri_run, kern.modal_run,
                                        kern.law_many):
         return kern
-    if not _PYTHON_KERNELS:
-        _PYTHON_KERNELS.append(kern.load_python())
-    return _PYTHON_KERNELS[0]
+    return kern.load_python()
 
 
 def _modal_deviation(A, B, h, lam, V, Vinv, Vk, cplx, g1, g2) -> float:
