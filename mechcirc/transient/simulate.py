@@ -137,10 +137,8 @@ def parse_waveform(text: str | None) -> Waveform:
     Waveform
         The waveform named by ``text``.
     """
-    if text is None or text == "rest":
-        return Waveform("rest")
-    if text in ("step", "impulse"):
-        return Waveform(text)
+    if text is None or text in ("rest", "step", "impulse"):
+        return Waveform(text or "rest")
     kind, _, arg = text.partition(":")
     if kind == "harmonic" and arg:
         try:
@@ -328,10 +326,9 @@ def _grid(t_end: float, dt: float | None, waveform: Waveform) -> np.ndarray:
         raise MechcircError(f"--t-end must be a finite time > 0 [s], got {t_end:g}")
     if dt is None:
         dt = t_end / 2000
-        if waveform.kind == "harmonic":
-            dt = min(dt, 2 * math.pi / waveform.omega / 40)
-        elif waveform.kind == "motion":         # 0.5 degree of the shaft
-            dt = min(dt, 2 * math.pi / waveform.omega / 720)
+        per_period = {"harmonic": 40, "motion": 720}.get(waveform.kind)  # motion: 0.5° of the shaft
+        if per_period:
+            dt = min(dt, 2 * math.pi / waveform.omega / per_period)
     if not (math.isfinite(dt) and dt > 0):
         raise MechcircError(f"--dt must be a finite time > 0 [s], got {dt:g}")
     if dt > t_end:          # one step of dt would run past t_end (it ran to dt)
