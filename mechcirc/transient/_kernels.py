@@ -124,14 +124,11 @@ def pack_rows(M):
 
 def kernel_args(A, B, cx, dx, cv, dv, extra, prm):
     """The matrices of ż = A z + B u + Σ_e extra_e f_e as :func:`dopri_run` takes them."""
-    Ai, Av = pack_rows(A)
-    xi, xv = pack_rows(cx)
-    vi, vv = pack_rows(cv)
-    ei, ev = pack_rows(np.asarray(extra).T)
-    return (Ai, Av, np.ascontiguousarray(B, dtype=float), xi, xv,
-            np.ascontiguousarray(dx, dtype=float), vi, vv,
-            np.ascontiguousarray(dv, dtype=float), ei, ev,
-            np.ascontiguousarray(prm, dtype=float))
+    def flat(a):
+        return np.ascontiguousarray(a, dtype=float)
+
+    return (*pack_rows(A), flat(B), *pack_rows(cx), flat(dx), *pack_rows(cv), flat(dv),
+            *pack_rows(np.asarray(extra).T), flat(prm))
 
 
 @_jit_inline
