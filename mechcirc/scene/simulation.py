@@ -181,9 +181,8 @@ def _warm_up(model, kern) -> float:
     for method in ("rk4", "rk8"):           # (one compiled signature for both)
         kern.rk_run(y, 0.0, 1e-9, 2, 0.0, 1e-9, np.empty((1, y.size)), np.empty(1), *args,
                     model.naux(), *kern.tableau(method))
-    oargs = model.kernel_args(0.0, 1e300, outputs=True)
-    kern.outputs(np.zeros(1), np.array([y]), np.empty((model.naux(), 1)), *oargs)
-    kern.output_extrema(np.zeros(1), np.array([y]), np.empty((2, model.naux())), *oargs)
+    _outputs(model, kern, 0.0, (0.0, 0.0), np.zeros(1), np.array([y]))
+    _output_extrema(model, kern, 0.0, (0.0, 0.0), np.zeros(1), np.array([y]))
     one = np.zeros(1)
     kern.point_samples(*function_args(model.arrays, model.arrays["PRIG"][0]), one, one, one,
                        np.empty(1), np.empty(1))
