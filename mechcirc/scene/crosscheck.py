@@ -187,15 +187,11 @@ def _ringing_rows(found, dev, dt, n) -> list:
         # died out later), at least enough samples for the 2n-dimensional map
         m = min(len(dev), max(4 * n + 4, int(math.ceil(3 * 2 * math.pi / r.omega / dt)) + 1))
         modes = _modes(dev[:m], dt)
-        if not modes:
-            rows.append(judge({"omega": r.omega, "zeta": r.zeta, "ringing_omega": None,
-                               "ringing_zeta": None, "rel_error": None}, None, TOL_RINGING,
-                              "no underdamped mode in the recorded motion"))
-            continue
-        w, z = min(modes, key=lambda md: abs(md[0] - r.omega))
-        rel = float(abs(w - r.omega) / r.omega)
-        rows.append(judge({"omega": r.omega, "zeta": r.zeta, "ringing_omega": float(w),
-                           "ringing_zeta": float(z), "rel_error": rel}, rel, TOL_RINGING))
+        w, z = min(modes, key=lambda md: abs(md[0] - r.omega), default=(None, None))
+        rel = None if w is None else abs(w - r.omega) / r.omega
+        rows.append(judge({"omega": r.omega, "zeta": r.zeta, "ringing_omega": w,
+                           "ringing_zeta": z, "rel_error": rel}, rel, TOL_RINGING,
+                          None if modes else "no underdamped mode in the recorded motion"))
     return rows
 
 
@@ -261,4 +257,4 @@ def _modes(dev, dt):
     Z = dev / scale
     A = Z[1:].T @ np.linalg.pinv(Z[:-1].T, rcond=1e-13)
     s = np.log(np.linalg.eigvals(A).astype(complex)) / dt
-    return sorted((abs(x), -x.real / abs(x)) for x in s if x.imag > 0)
+    return sorted((float(abs(x)), float(-x.real / abs(x))) for x in s if x.imag > 0)
