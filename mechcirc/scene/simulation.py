@@ -878,10 +878,7 @@ def _run_scipy(model, kern, theta_s, revolutions, npts, method, rtol, progress, 
         if keep:
             ts = (r * period) + np.arange(npts) * (period / npts)
             ys = sol.sol(ts).T + np.array([rigid(t)[0] for t in ts])
-            if r == revolutions - 1:
-                out = (ts, np.ascontiguousarray(ys))
-            else:
-                prev = (ts, np.ascontiguousarray(ys))
+            prev, out = out, (ts, np.ascontiguousarray(ys))     # the last two revolutions
         e = sol.y[:, -1].copy()
         if progress is not None:
             progress(r + 1, revolutions)
