@@ -30,6 +30,7 @@ without functions is a fixed point); 2 load along u: δ = u·(P − P_rig(θ));
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -779,8 +780,11 @@ def point_samples(kind, tabs, ti, a, b, c, lo, h, w, ic, ih, qs, qd, qdd, pos, a
         acc[i] = d2 * qd[i] * qd[i] + d1 * qdd[i]
 
 
+@functools.cache
 def load_python():
-    """A fresh copy of this module that never uses numba (:func:`mechcirc._jit.load`)."""
+    """A copy of this module that never uses numba (:func:`mechcirc._jit.load`), loaded once
+    per process: the rigid states, the motor law and every run without the compiled kernels
+    share it."""
     return load(__name__, _FORCE_PYTHON=True)
 
 

@@ -165,12 +165,17 @@ def _kick_record(model, theta, found, steps_per_period, periods):
     kick = 1e-7 * rate * np.array([1.0 + 0.37 * i for i in range(n)])
     y = y0.copy()
     y[n:] += kick
-    args = model.kernel_args(theta, 1e300)
-    rec_y = np.empty((nsamp, 2 * n))
-    rec_t = np.empty(nsamp)
+    rec_y = _record(model, kern, y, h, sample, nsamp, model.kernel_args(theta, 1e300))[0]
+    return rec_y - y0[None, :], h * sample, h, nsamp, kern, backend
+
+
+def _record(model, kern, y, h, sample, nsamp, args):
+    """RK4 from the state ``y`` at t = 0 (``args``: the model's kernel arguments) with step
+    ``h``, the state recorded every ``sample`` steps, ``nsamp`` times: (states, times)."""
+    rec_y, rec_t = np.empty((nsamp, y.size)), np.empty(nsamp)
     kern.rk_run(y, 0.0, h, (nsamp - 1) * sample, 0.0, h * sample, rec_y, rec_t, *args,
                 model.naux(), *kern.tableau("rk4"))
-    return rec_y - y0[None, :], h * sample, h, nsamp, kern, backend
+    return rec_y, rec_t
 
 
 def _ringing_rows(found, dev, dt, n) -> list:
@@ -182,15 +187,11 @@ def _ringing_rows(found, dev, dt, n) -> list:
         # died out later), at least enough samples for the 2n-dimensional map
         m = min(len(dev), max(4 * n + 4, int(math.ceil(3 * 2 * math.pi / r.omega / dt)) + 1))
         modes = _modes(dev[:m], dt)
-        if not modes:
-            rows.append(judge({"omega": r.omega, "zeta": r.zeta, "ringing_omega": None,
-                               "ringing_zeta": None, "rel_error": None}, None, TOL_RINGING,
-                              "no underdamped mode in the recorded motion"))
-            continue
-        w, z = min(modes, key=lambda md: abs(md[0] - r.omega))
-        rel = float(abs(w - r.omega) / r.omega)
-        rows.append(judge({"omega": r.omega, "zeta": r.zeta, "ringing_omega": float(w),
-                           "ringing_zeta": float(z), "rel_error": rel}, rel, TOL_RINGING))
+        w, z = min(modes, key=lambda md: abs(md[0] - r.omega), default=(None, None))
+        rel = None if w is None else abs(w - r.omega) / r.omega
+        rows.append(judge({"omega": r.omega, "zeta": r.zeta, "ringing_omega": w,
+                           "ringing_zeta": z, "rel_error": rel}, rel, TOL_RINGING,
+                          None if modes else "no underdamped mode in the recorded motion"))
     return rows
 
 
@@ -220,7 +221,6 @@ def _forced_amplitude(model, kern, theta, w, free, h, r0):
     angle, is r0 times the drive's force (virtual work), so the ratio is
     |drive.moment| / (|ripple| r0²), with r0 the circuit's drive ratio at θ.
     """
-    n = model.n_free
     amp = 1e-7 * w                          # the crank swings ±1e-7 rad
     # the step resolves both the fastest mode and the ripple; the record spans 40 periods
     # of the beat between the ripple and the nearest free mode (at least 30 ripple periods)
@@ -231,10 +231,8 @@ def _forced_amplitude(model, kern, theta, w, free, h, r0):
     sample = max(1, int(round(2 * math.pi / w / hh / 24)))
     nsamp = int(span / (hh * sample)) + 1
     y = model.rigid_state(theta, model.omega + amp)
-    args = model.kernel_args(theta, 1e300, ripple=(amp, w), loads_on_mean=True)
-    rec_y, rec_t = np.empty((nsamp, 2 * n)), np.empty(nsamp)
-    kern.rk_run(y, 0.0, hh, (nsamp - 1) * sample, 0.0, hh * sample, rec_y, rec_t, *args,
-                model.naux(), *kern.tableau("rk4"))
+    rec_y, rec_t = _record(model, kern, y, hh, sample, nsamp, model.kernel_args(
+        theta, 1e300, ripple=(amp, w), loads_on_mean=True))
     out = np.empty((model.naux(), nsamp))
     kern.outputs(rec_t, rec_y, out, *model.kernel_args(theta, 1e300, outputs=True,
                                                           ripple=(amp, w), loads_on_mean=True))
@@ -259,4 +257,4 @@ def _modes(dev, dt):
     Z = dev / scale
     A = Z[1:].T @ np.linalg.pinv(Z[:-1].T, rcond=1e-13)
     s = np.log(np.linalg.eigvals(A).astype(complex)) / dt
-    return sorted((abs(x), -x.real / abs(x)) for x in s if x.imag > 0)
+    return sorted((float(abs(x)), float(-x.real / abs(x))) for x in s if x.imag > 0)

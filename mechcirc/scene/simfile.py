@@ -186,12 +186,11 @@ def parse_simulate(text, source, table, scene) -> SimulateSettings:
                                   "simulate.aliases", a,
                                   expected='eps2P = "crank.acceleration"')
             kw["aliases"] = dict(v)
-        elif k in ("omega", "steps_per_period"):
+        elif k in ("omega", "steps_per_period", "start_deg"):
             if k == "omega":        # "600 rpm", "10 Hz"
                 v = in_si(text, source, v, "omega", "simulate", k)
-            kw[k] = checked_number(text, source, v, f"[simulate] {k}", "simulate", k, positive=True)
-        elif k == "start_deg":
-            kw[k] = checked_number(text, source, v, "[simulate] start_deg", "simulate", k)
+            kw[k] = checked_number(text, source, v, f"[simulate] {k}", "simulate", k,
+                                   positive=k != "start_deg")
         elif k in ("revolutions", "points"):
             if isinstance(v, bool) or not isinstance(v, int) or v < (1 if k == "revolutions"
                                                                       else 16):
@@ -305,7 +304,7 @@ class Motor:
 @cache
 def _motor_law():
     """The motor law of the shaft kernel, as plain Python (a scalar call without numba's
-    dispatch)."""
+    dispatch; the kernels' one Python copy, :func:`._motion_kernels.load_python`)."""
     from ._motion_kernels import load_python
 
     return load_python().motor_torque

@@ -129,7 +129,6 @@ class SceneMotion:
         return {"crank_angle_deg": np.degrees(self.crank_angle), **self.values}
 
 
-_PYK = None
 #: Methods of :func:`simulate_scene`: the fixed-step RK4 kernel, and scipy's adaptive ones.
 METHODS = ("rk4", "rk4-python", "rk8", "DOP853", "RK45", "LSODA")
 SCIPY_METHODS = ("DOP853", "RK45", "LSODA")
@@ -158,7 +157,6 @@ def kernels_for(method, *, long=False):
     of CPU as Python, 18 s with the compile here first), given the compiled kernels unless
     ``COMPILED`` is False.
     """
-    global _PYK
     from . import _motion_kernels as k
 
     kernels = (k.rk_run, k.outputs, k.output_extrema, k.eval_many, k.point_samples,
@@ -169,9 +167,7 @@ def kernels_for(method, *, long=False):
             return k, "numba"
         if _jit.use(_WARM_STATEMENT, *kernels):
             return k, "numba"
-    if _PYK is None:
-        _PYK = k.load_python()
-    return _PYK, "python"
+    return k.load_python(), "python"
 
 
 def _warm_up(model, kern) -> float:
@@ -185,9 +181,8 @@ def _warm_up(model, kern) -> float:
     for method in ("rk4", "rk8"):           # (one compiled signature for both)
         kern.rk_run(y, 0.0, 1e-9, 2, 0.0, 1e-9, np.empty((1, y.size)), np.empty(1), *args,
                     model.naux(), *kern.tableau(method))
-    oargs = model.kernel_args(0.0, 1e300, outputs=True)
-    kern.outputs(np.zeros(1), np.array([y]), np.empty((model.naux(), 1)), *oargs)
-    kern.output_extrema(np.zeros(1), np.array([y]), np.empty((2, model.naux())), *oargs)
+    _outputs(model, kern, 0.0, (0.0, 0.0), np.zeros(1), np.array([y]))
+    _output_extrema(model, kern, 0.0, (0.0, 0.0), np.zeros(1), np.array([y]))
     one = np.zeros(1)
     kern.point_samples(*function_args(model.arrays, model.arrays["PRIG"][0]), one, one, one,
                        np.empty(1), np.empty(1))
@@ -631,16 +626,13 @@ def _first_runs(run, steps, rule, progress, notes, error_estimate):
     step over the last :data:`ESTIMATE_REVOLUTIONS` from the first's state at their start;
     without it, the one run (the estimate's run None).  In the automatic rule a run that
     diverges is repeated at twice as many steps (noted)."""
-    try:
-        return (rule.spp, *_paired_runs(run, steps(rule.spp), progress, rule.stride,
-                                        error_estimate))
-    except SolverError:
-        if not rule.auto:
-            raise
-        notes.append(f"the run at {rule.spp:g} steps per period diverged: run at "
-                     f"{2 * rule.spp:g}")
-        return (2 * rule.spp, *_paired_runs(run, steps(2 * rule.spp), progress, rule.stride,
-                                            error_estimate))
+    for spp in (rule.spp, 2 * rule.spp):
+        try:
+            return (spp, *_paired_runs(run, steps(spp), progress, rule.stride, error_estimate))
+        except SolverError:
+            if not rule.auto or spp != rule.spp:
+                raise
+            notes.append(f"the run at {spp:g} steps per period diverged: run at {2 * spp:g}")
 
 
 def _paired_runs(run, per_rev, progress, stride, error_estimate):
@@ -784,9 +776,7 @@ def _crank_order(scene, model, theta_s, ripple, ts, stride=1):
 
 def _new_crank_order(cycle, omega, theta_s, ripple, ts, stride):
     """:func:`_crank_order`, computed."""
-    theta = theta_s + omega * ts if ripple[0] == 0.0 else \
-        crank_angle(omega, theta_s, ripple, ts)[0]
-    crank = theta % cycle
+    crank = crank_angle(omega, theta_s, ripple, ts)[0] % cycle
     n = crank.size
     wrap = np.flatnonzero(crank[1:] < crank[:-1])
     if wrap.size != 1:
@@ -888,10 +878,7 @@ def _run_scipy(model, kern, theta_s, revolutions, npts, method, rtol, progress, 
         if keep:
             ts = (r * period) + np.arange(npts) * (period / npts)
             ys = sol.sol(ts).T + np.array([rigid(t)[0] for t in ts])
-            if r == revolutions - 1:
-                out = (ts, np.ascontiguousarray(ys))
-            else:
-                prev = (ts, np.ascontiguousarray(ys))
+            prev, out = out, (ts, np.ascontiguousarray(ys))     # the last two revolutions
         e = sol.y[:, -1].copy()
         if progress is not None:
             progress(r + 1, revolutions)

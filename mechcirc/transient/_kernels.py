@@ -19,12 +19,12 @@ the force is continuous at first contact (f_c = 0 there).
 
 from __future__ import annotations
 
+import functools
 import math
-import sys
 
 import numpy as np
 
-from .._jit import decorators
+from .._jit import decorators, load
 
 HAVE_NUMBA, _jit, _jit_inline = decorators(bool(globals().get("_FORCE_PYTHON")))
 # A piece of a kernel that allocates nothing (a loop, or a step of one): compiled without
@@ -124,14 +124,11 @@ def pack_rows(M):
 
 def kernel_args(A, B, cx, dx, cv, dv, extra, prm):
     """The matrices of ż = A z + B u + Σ_e extra_e f_e as :func:`dopri_run` takes them."""
-    Ai, Av = pack_rows(A)
-    xi, xv = pack_rows(cx)
-    vi, vv = pack_rows(cv)
-    ei, ev = pack_rows(np.asarray(extra).T)
-    return (Ai, Av, np.ascontiguousarray(B, dtype=float), xi, xv,
-            np.ascontiguousarray(dx, dtype=float), vi, vv,
-            np.ascontiguousarray(dv, dtype=float), ei, ev,
-            np.ascontiguousarray(prm, dtype=float))
+    def flat(a):
+        return np.ascontiguousarray(a, dtype=float)
+
+    return (*pack_rows(A), flat(B), *pack_rows(cx), flat(dx), *pack_rows(cv), flat(dv),
+            *pack_rows(np.asarray(extra).T), flat(prm))
 
 
 @_jit_inline
@@ -578,13 +575,8 @@ def modal_run(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout, qlast):
         qlast[j] = complex(qr[j], qi[j])
 
 
+@functools.cache
 def load_python():
-    """A fresh copy of this module that never uses numba (the pure-Python backend)."""
-    import importlib.util
-
-    spec = importlib.util.find_spec(__name__)
-    module = importlib.util.module_from_spec(spec)
-    module._FORCE_PYTHON = True
-    sys.modules.setdefault(__name__ + "_python", module)
-    spec.loader.exec_module(module)
-    return module
+    """A copy of this module that never uses numba (:func:`mechcirc._jit.load`), loaded once
+    per process."""
+    return load(__name__, _FORCE_PYTHON=True)

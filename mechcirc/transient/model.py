@@ -369,10 +369,9 @@ def _initial(circuit, nodes, index, Cx, Cv, N, vel):
         Nn = Nn @ la.null_space(Ag) if Ag.size else Nn
     z0[cols] = zp
     resid = Mat @ z0 - rhs
-    named = {nd for nd, _, _ in circuit.initial}
     bad = [nodes[i] for i in range(n)
-           if nodes[i] in named and i in named_idx and (abs(resid[i]) > 1e-9 * (1 + abs(x0[i]))
-                                     or abs(resid[n + i]) > 1e-9 * (1 + abs(v0[i])))]
+           if i in named_idx and (abs(resid[i]) > 1e-9 * (1 + abs(x0[i]))
+                                  or abs(resid[n + i]) > 1e-9 * (1 + abs(v0[i])))]
     if bad:
         notes.append("initial state of node(s) " + ", ".join(bad) + " is not attainable "
                      "(levers, the drive or massless nodes fix it); the closest attainable "

@@ -137,10 +137,8 @@ def parse_waveform(text: str | None) -> Waveform:
     Waveform
         The waveform named by ``text``.
     """
-    if text is None or text == "rest":
-        return Waveform("rest")
-    if text in ("step", "impulse"):
-        return Waveform(text)
+    if text is None or text in ("rest", "step", "impulse"):
+        return Waveform(text or "rest")
     kind, _, arg = text.partition(":")
     if kind == "harmonic" and arg:
         try:
@@ -328,10 +326,9 @@ def _grid(t_end: float, dt: float | None, waveform: Waveform) -> np.ndarray:
         raise MechcircError(f"--t-end must be a finite time > 0 [s], got {t_end:g}")
     if dt is None:
         dt = t_end / 2000
-        if waveform.kind == "harmonic":
-            dt = min(dt, 2 * math.pi / waveform.omega / 40)
-        elif waveform.kind == "motion":         # 0.5 degree of the shaft
-            dt = min(dt, 2 * math.pi / waveform.omega / 720)
+        per_period = {"harmonic": 40, "motion": 720}.get(waveform.kind)  # motion: 0.5° of the shaft
+        if per_period:
+            dt = min(dt, 2 * math.pi / waveform.omega / per_period)
     if not (math.isfinite(dt) and dt > 0):
         raise MechcircError(f"--dt must be a finite time > 0 [s], got {dt:g}")
     if dt > t_end:          # one step of dt would run past t_end (it ran to dt)
@@ -1061,7 +1058,6 @@ def _real_columns(Vk: np.ndarray, is_c: np.ndarray, late: np.ndarray):
     return cre, cim, nx, T
 
 
-_PYTHON_KERNELS: list = []
 # Compiles the kernels into numba's disk cache: a clearance run (dopri_run, law_many)
 # and a driven linear one (modal_run).
 _WARM_STATEMENT = (
@@ -1086,9 +1082,7 @@ def _kernels():
     if not kern.HAVE_NUMBA or _jit.use(_WARM_STATEMENT, kern.dopri_run, kern.modal_run,
                                        kern.law_many):
         return kern
-    if not _PYTHON_KERNELS:
-        _PYTHON_KERNELS.append(kern.load_python())
-    return _PYTHON_KERNELS[0]
+    return kern.load_python()
 
 
 def _modal_deviation(A, B, h, lam, V, Vinv, Vk, cplx, g1, g2) -> float:
