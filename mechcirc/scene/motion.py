@@ -125,10 +125,14 @@ class _Builder:
         self.FF.append((0.0, 0.0, (period or self.period) if periodic else 0.0, lo, h, w))
         return len(self.FI) - 1
 
-    def line(self, part, a, b, c=None):
-        """The line a + b q (kind 2), or with ``c`` the circle a + b cos(q + c) (kind 3)."""
-        self.FI.append((2 if c is None else 3, part, 0))
-        self.FF.append((a, b, 0.0 if c is None else c, 0.0, 1.0, 0.0))
+    def line(self, part, a, b):
+        self.FI.append((2, part, 0))
+        self.FF.append((a, b, 0.0, 0.0, 1.0, 0.0))
+        return len(self.FI) - 1
+
+    def circle(self, part, a, b, c):
+        self.FI.append((3, part, 0))
+        self.FF.append((a, b, c, 0.0, 1.0, 0.0))
         return len(self.FI) - 1
 
 
@@ -294,7 +298,7 @@ def _pivoted_part(scene, B, h, i, b, tables):
         r = lk.pose[name] * L - o
         rad, a0 = float(np.hypot(*r)), float(math.atan2(r[1], r[0]))
         k = "xy".index(kind)
-        return B.line(i, float(o[k]), rad, a0 - k * 0.5 * math.pi)
+        return B.circle(i, float(o[k]), rad, a0 - k * 0.5 * math.pi)
     return b, rig, make
 
 
