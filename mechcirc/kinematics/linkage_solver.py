@@ -268,9 +268,7 @@ class _Plan:
     owner: NDArray                       # (P,): owner link index, nb for a ground point
     crank_idx: NDArray                   # (nc,)
     omega: NDArray                       # (nc,)
-    pivot: NDArray                       # (nc, 2): crank ground pivots
     dyads: tuple = ()
-    order: tuple = ()                    # ("crank", j) / ("dyad", k) in solving order
     # newton
     ia: NDArray | None = None            # (m,) body index of side a (nb = ground)
     ib: NDArray | None = None
@@ -309,7 +307,6 @@ def plan(lk) -> _Plan:
     points = tuple(lk.pose)
     crank_idx = np.array([idx[c.link] for c in lk.cranks])
     omega = np.array([c.omega for c in lk.cranks], dtype=float)
-    pivot = np.array([lk.pose[c.pivot] for c in lk.cranks])
     rows = lk.constraint_rows()
     m = len(rows)
 
@@ -321,7 +318,7 @@ def plan(lk) -> _Plan:
 
     # each point's owner: the first link holding it, else the ground
     owner = [next((l for l, ps in lk.links.items() if p in ps), "ground") for p in points]
-    common = dict(nb=nb, crank_idx=crank_idx, omega=omega, pivot=pivot,
+    common = dict(nb=nb, crank_idx=crank_idx, omega=omega,
                   owner=np.array([body(o) for o in owner]),
                   offsets=np.array(list(map(off, owner, points)), dtype=float).reshape(-1, 2),
                   ia=np.array([body(a) for _, a, _ in rows], dtype=int).reshape(m),
@@ -341,9 +338,7 @@ def plan(lk) -> _Plan:
     dyads = _dyads(lk, idx)
     if dyads is None:
         return _Plan("newton", **common)
-    order = tuple(("crank", j) for j in range(len(lk.cranks))) + \
-        tuple(("dyad", k) for k in range(len(dyads)))
-    return _Plan("dyads", dyads=dyads, order=order, **common)
+    return _Plan("dyads", dyads=dyads, **common)
 
 
 @dataclass(frozen=True)
@@ -1074,12 +1069,13 @@ def _lock(lk, theta):
         f"rotation from the pose): no assembly beyond it on this branch")
 
 
-def _branch_jump(lk, theta0, theta1):
+def _branch_jump(lk, theta0, theta1=None):
     """The error of a position that changed branch between crank rotations ``theta0`` and
-    ``theta1`` [rad]."""
+    ``theta1`` [rad] (None: near ``theta0``)."""
+    where = f"near θ = {math.degrees(theta0):.6g}°" if theta1 is None else \
+        f"between θ = {math.degrees(theta0):.6g}° and {math.degrees(theta1):.6g}°"
     return GeometryError(
-        f"{lk.source}: branch jump between θ = {math.degrees(theta0):.6g}° "
-        f"and {math.degrees(theta1):.6g}°: the position passed a "
+        f"{lk.source}: branch jump {where}: the position passed a "
         f"singular configuration (det J changed sign); reduce max_step_deg "
         f"or the linkage reaches a change point there")
 
@@ -1103,10 +1099,9 @@ class Newton:
         a_mov, b_mov = pl.ia < nb, pl.ib < nb
         ka, kb = k[a_mov], k[b_mov]
         ia, ib = pl.ia[a_mov], pl.ib[b_mov]
-        J0[2 * ka, 3 * ia] = 1.0
-        J0[2 * ka + 1, 3 * ia + 1] = 1.0
-        J0[2 * kb, 3 * ib] = -1.0
-        J0[2 * kb + 1, 3 * ib + 1] = -1.0
+        for rows, cols, sign in ((ka, ia, 1.0), (kb, ib, -1.0)):      # ±1 on the (x, y) columns
+            J0[2 * rows, 3 * cols] = sign
+            J0[2 * rows + 1, 3 * cols + 1] = sign
         # prismatic rows after the joint rows: ns line rows, then ns angle rows
         self.ns = ns = len(pl.ga)
         self.c0 = 2 * m + 2 * ns                 # the first crank row
@@ -1120,10 +1115,9 @@ class Newton:
         self.J0 = J0
         self.ka, self.kb = ka, kb
         # flat indices of the φ-column entries, rows (2k, 2k+1) interleaved
-        self.flat_a = np.stack([(2 * ka) * n + 3 * ia + 2, (2 * ka + 1) * n + 3 * ia + 2],
-                               axis=-1).reshape(-1)
-        self.flat_b = np.stack([(2 * kb) * n + 3 * ib + 2, (2 * kb + 1) * n + 3 * ib + 2],
-                               axis=-1).reshape(-1)
+        self.flat_a, self.flat_b = (
+            np.stack([(2 * rows) * n + 3 * cols + 2, (2 * rows + 1) * n + 3 * cols + 2],
+                     axis=-1).reshape(-1) for rows, cols in ((ka, ia), (kb, ib)))
         self.sa, self.sb = to_complex(pl.sa), to_complex(pl.sb)
         self.cphi = 3 * pl.crank_idx + 2
         self.tol = 1e-12 * pl.scale
@@ -1497,10 +1491,7 @@ def _targets(lk, nw, t, nodes, keep, at, kept, sign, dt_max):
     if far.size:
         sgn = np.sign(np.linalg.det(J[far]))
         if np.any(sgn != sign):
-            th = math.degrees(t[far[int(np.argmax(sgn != sign))]] * w1)
-            raise GeometryError(f"{lk.source}: branch jump near θ = {th:.6g}°: the position "
-                                f"passed a singular configuration (det J changed sign); reduce "
-                                f"max_step_deg or the linkage reaches a change point there")
+            raise _branch_jump(lk, t[far[int(np.argmax(sgn != sign))]] * w1)
     out = []
     for a, b in zip(final, (Q, qd, qdd, parts)):
         full = np.empty((len(done),) + a.shape[1:])
