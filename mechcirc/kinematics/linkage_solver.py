@@ -53,7 +53,7 @@ from numpy.typing import NDArray
 from .. import _jit
 from ..errors import GeometryError, NetlistError, OutOfReach
 from ..motion_laws import quintic
-from ._dyad_forms import rpr, rrp, rrr, solve2
+from ._dyad_forms import im_conj, rpr, rrp, rrr, solve2
 
 __all__ = ["LinkageMotion", "LinkageState", "MAX_CONTINUATION_STEPS", "plan", "motion"]
 
@@ -641,7 +641,7 @@ def _sin2(ds, t, cross):
             e = rates[1] - rates[0]
             c = (dy.l1 ** 2 + dy.l2 ** 2 - (e.real ** 2 + e.imag ** 2)) / (2 * dy.l1 * dy.l2)
         elif dy.kind == "RRP":         # the rod's reach across the guide (exact off it too)
-            c = _im_conj(rates[4], rates[5]) / dy.l1
+            c = im_conj(rates[4], rates[5]) / dy.l1
         else:
             continue
         out[k] = 1.0 - c * c
@@ -785,11 +785,6 @@ def _bridged(lk, pl, got, t, pts, where, zone_of, zones):
 
 
 # ------------------------------------------------------------ dyads, closed form
-def _im_conj(a, b):
-    """Im(conj(a)·b) = a × b (the 2-D cross product)."""
-    return a.real * b.imag - a.imag * b.real
-
-
 def _dot(a, b):
     """Re(conj(a)·b) = a · b."""
     return a.real * b.real + a.imag * b.imag
@@ -865,7 +860,7 @@ class _DyadSolver:
                     r1, r2 = x3 - x1, x3 - x2
                     # sin of the angle between the links at the inner joint: 0 when
                     # the dyad is stretched or folded (its Jacobian is singular there)
-                    sin_ = np.abs(_im_conj(r1, r2)) / (dy.l1 * dy.l2)
+                    sin_ = np.abs(im_conj(r1, r2)) / (dy.l1 * dy.l2)
                     # |r1|, |r2| are the links' lengths by construction (to rounding)
                     phi[L1], E[L1] = np.angle(r1) - ang[0], r1 * (np.exp(-1j * ang[0]) / dy.l1)
                     phi[L2], E[L2] = np.angle(r2) - ang[1], r2 * (np.exp(-1j * ang[1]) / dy.l2)
@@ -1150,7 +1145,7 @@ class Newton:
         r[:, :m2] = np.ascontiguousarray(Pa - Pb).view(np.float64)
         if ns:
             w, _, _, d, dphi = self._prism(q)
-            r[:, m2:m2 + ns] = _im_conj(w, d)
+            r[:, m2:m2 + ns] = im_conj(w, d)
             r[:, m2 + ns:self.c0] = dphi
         r[:, self.c0:] = q[:, self.cphi] - angles
         return r
@@ -1195,8 +1190,8 @@ class Newton:
             wa, wb = om[:, pl.ga], om[:, pl.gb]
             dd = v[:, pl.gb] + 1j * wb * RB - v[:, pl.ga] - 1j * wa * RA
             g[:, 2 * self.m:2 * self.m + self.ns] = -(
-                _im_conj(-wa * wa * w, d) + 2 * _im_conj(1j * wa * w, dd)
-                + _im_conj(w, wa * wa * RA - wb * wb * RB))
+                im_conj(-wa * wa * w, d) + 2 * im_conj(1j * wa * w, dd)
+                + im_conj(w, wa * wa * RA - wb * wb * RB))
         return g
 
     def derivatives(self, q):
