@@ -113,9 +113,8 @@ class LinkageState:
         """Plain data for JSON output."""
         return {
             "theta_deg": math.degrees(self.theta), "t": self.t,
-            "points": {k: v.tolist() for k, v in self.points.items()},
-            "velocities": {k: v.tolist() for k, v in self.velocities.items()},
-            "accelerations": {k: v.tolist() for k, v in self.accelerations.items()},
+            **{f: {k: v.tolist() for k, v in getattr(self, f).items()}
+               for f in ("points", "velocities", "accelerations")},
             "angular_velocities": dict(self.angular_velocities),
             "conditional_stop": {c: {k: v.tolist() for k, v in d.items()}
                                  for c, d in self.contributions.items()},
@@ -1329,9 +1328,8 @@ _WARM_STATEMENT = (
     "    lk.motion(np.linspace(0.0, 1.0, 5), method=method)\n")
 
 
-def _solve_newton_compiled(lk, pl, t, dt_max, start=None):
-    """The continuation as one compiled loop (:mod:`._linkage_kernels`), from ``start``
-    ((q, time); default the pose)."""
+def _solve_newton_compiled(lk, pl, t, dt_max, q0, t0):
+    """The continuation as one compiled loop (:mod:`._linkage_kernels`), from q0 at time t0."""
     from . import _linkage_kernels as K
 
     N, n, nc = len(t), 3 * pl.nb, len(pl.crank_idx)
@@ -1339,7 +1337,6 @@ def _solve_newton_compiled(lk, pl, t, dt_max, start=None):
     parts = np.empty((N, n, nc))
     info = np.zeros(2)
     w1 = lk.cranks[0].omega
-    q0, t0 = (pl.q0, 0.0) if start is None else start
     vec = np.zeros((6, n))          # the kernel's scratch: it allocates nothing
     vec[0] = q0
     work = (np.empty(pl.nb), np.empty(pl.nb), np.empty((len(pl.ia), 4)), np.empty((len(pl.ga), 8)))
@@ -1360,10 +1357,10 @@ def _solve_newton_compiled(lk, pl, t, dt_max, start=None):
 def _solve_newton(lk, pl, t, dt_max, start=None):
     """Newton's continuation from ``start`` ((q, time); default the pose) through times
     ``t``: the compiled loop when it is loaded, else in numpy."""
-    if _compiled("newton_path"):
-        return _solve_newton_compiled(lk, pl, t, dt_max, start)
-    nw = Newton(pl)
     q0, t0 = (pl.q0, 0.0) if start is None else start
+    if _compiled("newton_path"):
+        return _solve_newton_compiled(lk, pl, t, dt_max, q0, t0)
+    nw = Newton(pl)
     nodes, at = _path(t, dt_max, t0)
     first = nw.step(q0, pl.omega * t0)
     if first is None:
