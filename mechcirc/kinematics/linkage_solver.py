@@ -126,22 +126,23 @@ _LAZY_FIELDS = frozenset(_STATE_FIELDS[5:])
 
 
 class _StateRows:
-    """Private copies of a motion's point arrays, from which states build their dicts.
+    """Private copies of a motion's point arrays (its positions ``rows``), from which states
+    build their dicts.
 
     The point kinematics are computed (and copied) when the first state's
     first dictionary is asked for.
     """
 
-    def __init__(self, m):
+    def __init__(self, m, rows=slice(None)):
         self.names, self.links, self.cranks = m.point_names, m.link_names, m.crank_links
-        self._motion = m
+        self._motion, self.rows = m, rows
 
     def _fill(self):
-        m = self._motion
-        self.arrays = {"points": m.points.copy(), "velocities": m.velocities.copy(),
-                       "accelerations": m.accelerations.copy()}
-        self.C = np.moveaxis(m.contributions, 0, 1).copy()
-        self.w = m.qdot[:, 2::3].tolist()
+        m, rows = self._motion, self.rows
+        self.arrays = {"points": m.points[rows].copy(), "velocities": m.velocities[rows].copy(),
+                       "accelerations": m.accelerations[rows].copy()}
+        self.C = np.moveaxis(m.contributions[:, rows], 0, 1).copy()
+        self.w = m.qdot[rows, 2::3].tolist()
         self._motion = None
 
     def field(self, name, i):
@@ -245,17 +246,10 @@ class LinkageMotion:
 
     def state(self, i: int):
         """The :class:`~.linkage.LinkageState` of position ``i``."""
-        names = self.point_names
-        # one copy per array, then per-point views into it
-        pts = dict(zip(names, self.points[i].copy()))
-        vel = dict(zip(names, self.velocities[i].copy()))
-        acc = dict(zip(names, self.accelerations[i].copy()))
-        con = self.contributions[:, i].copy()
-        contrib = {c: dict(zip(names, con[j])) for j, c in enumerate(self.crank_links)}
-        omegas = dict(zip(self.link_names, self.qdot[i, 2::3].tolist()))
+        rows = _StateRows(self, slice(i, i + 1 or None))      # one copy of position i's rows
         return LinkageState(float(self.theta[i]), float(self.t[i]), self.q[i].copy(),
-                            self.qdot[i].copy(), self.qddot[i].copy(), pts, vel, acc, omegas,
-                            contrib)
+                            self.qdot[i].copy(), self.qddot[i].copy(),
+                            *(rows.field(f, 0) for f in _STATE_FIELDS[5:]))
 
 
 # ------------------------------------------------------------------- structure
