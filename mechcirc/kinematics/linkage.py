@@ -651,15 +651,14 @@ def _read_sliders(raw: list, pose, links, ground_pts, text: str, source: str) ->
                           f"(got {brief(point)})", "sliders", "point" if "point" in x else
                           "link", occurrence=n, expected=f"one of {', '.join(own)}")
         u = u / size
-        off = float(u[0] * (pose[point] - pose[line[0]])[1] - u[1] * (pose[point] -
-                                                                 pose[line[0]])[0])
+        d = pose[point] - pose[line[0]]                # the point from the line's first point
+        off = float(u[0] * d[1] - u[1] * d[0])
         if abs(off) > 1e-9 * scale:
             raise located(text, source, f"slider {lname!r} is off its guide: point {point!r} is "
                           f"{abs(off):.6g} from the line {line[0]}–{line[1]} in the pose",
                           "sliders", "point" if "point" in x else "line", occurrence=n,
                           expected=f"{point!r} on the line through {line[0]!r} and {line[1]!r}")
-        stroke, at = _read_stroke(x, n, float(u @ (pose[point] - pose[line[0]])), lname,
-                                  text, source)
+        stroke, at = _read_stroke(x, n, float(u @ d), lname, text, source)
         out.append(Slider(lname, guide, point, (float(u[0]), float(u[1])), tuple(line),
                           stroke, at))
     return out
