@@ -492,17 +492,11 @@ def synthesize(load: Literal["light", "medium", "heavy"] = "medium", swing: floa
 def _checked(load, objective, fixed, swing, swing_range, b_a_range, d_a_range, step,
              crank_step, swing_step):
     """The arguments of :func:`synthesize` checked: (fixed lengths, swing range, crank range)."""
-    if load not in LOAD_CRANK_MM:
-        raise GeometryError(f"unknown load {load!r}; expected one of "
-                            f"{', '.join(LOAD_CRANK_MM)}")
-    if objective not in _OBJECTIVES:
-        raise GeometryError(f"unknown objective {objective!r}; expected one of "
-                            f"{', '.join(_OBJECTIVES)}")
+    _known("load", load, LOAD_CRANK_MM)
+    _known("objective", objective, _OBJECTIVES)
     fixed = dict(fixed or {})
     for name, value in fixed.items():
-        if name not in _FIXABLE:
-            raise GeometryError(f"unknown fixed length {name!r}; expected one of "
-                                f"{', '.join(_FIXABLE)}")
+        _known("fixed length", name, _FIXABLE)
         if not (isinstance(value, (int, float)) and math.isfinite(value) and 0 < value < 1e6):
             raise GeometryError(f"fixed {name} length must be a positive number of mm, got "
                                 f"{value!r}")
@@ -520,6 +514,12 @@ def _checked(load, objective, fixed, swing, swing_range, b_a_range, d_a_range, s
     if not (step > 0 and crank_step > 0 and swing_step > 0):
         raise GeometryError("step, crank_step and swing_step must be > 0")
     return fixed, s_range, (fixed["crank"],) * 2 if "crank" in fixed else LOAD_CRANK_MM[load]
+
+
+def _known(what: str, value, known) -> None:
+    """Refuse a ``value`` not among the names ``known``."""
+    if value not in known:
+        raise GeometryError(f"unknown {what} {value!r}; expected one of {', '.join(known)}")
 
 
 def _grid_axes(fixed, swing, s_range, crank_range, b_a_range, d_a_range, step, crank_step,
