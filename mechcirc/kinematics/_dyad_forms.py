@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["rrr", "rrp", "rpr", "solve2"]
+__all__ = ["rrr", "rrp", "rpr", "solve2", "im_conj"]
 
 
 def rrr(x1, x2, l1, l2, sign):
@@ -60,3 +60,8 @@ def solve2(c1, c2, b):
     D = c1.real * c2.imag - c1.imag * c2.real
     return ((b.real * c2.imag - b.imag * c2.real) / D,
             (c1.real * b.imag - c1.imag * b.real) / D)
+
+
+def im_conj(a, b):
+    """Im(conj(a)·b) = a × b (the 2-D cross product)."""
+    return a.real * b.imag - a.imag * b.real

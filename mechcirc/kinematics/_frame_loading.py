@@ -309,30 +309,20 @@ def _equilibrium(k, crank, coupler, rocker, F, g):
         M[:, row, col] += -r[:, 1]
         M[:, row, col + 1] += r[:, 0]
 
-    m2, m3, m4 = crank.mass, coupler.mass, rocker.mass
-    # crank
-    M[:, 0, 0], M[:, 0, 2] = 1, -1
-    M[:, 1, 1], M[:, 1, 3] = 1, -1
-    rhs[:, 0:2] = m2 * (k["aG2"] - g)
-    moment_row(2, 0, k["A"] - k["G2"])
-    moment_row(2, 2, -(k["B"] - k["G2"]))
-    M[:, 2, 8] = 1
-    rhs[:, 2] = crank.inertia * k["al2"]
-    # coupler
-    M[:, 3, 2], M[:, 3, 4] = 1, -1
-    M[:, 4, 3], M[:, 4, 5] = 1, -1
-    rhs[:, 3:5] = m3 * (k["aG3"] - g)
-    moment_row(5, 2, k["B"] - k["G3"])
-    moment_row(5, 4, -(k["C"] - k["G3"]))
-    rhs[:, 5] = coupler.inertia * k["al3"]
-    # rocker
-    M[:, 6, 4], M[:, 6, 6] = 1, 1
-    M[:, 7, 5], M[:, 7, 7] = 1, 1
-    rhs[:, 6:8] = m4 * (k["aG4"] - g) - F
-    moment_row(8, 4, k["C"] - k["G4"])
-    moment_row(8, 6, k["D"] - k["G4"])
-    rhs[:, 8] = rocker.inertia * k["al4"] - _cross(k["P"] - k["G4"], F)
-
+    # per link: rows r, r + 1 its force balance, r + 2 its moments about its centre of
+    # mass G; its two joint forces (columns c, c + 1) act on it with the sign given
+    for r, link, G, joints in ((0, crank, "G2", ((0, 1, "A"), (2, -1, "B"))),
+                               (3, coupler, "G3", ((2, 1, "B"), (4, -1, "C"))),
+                               (6, rocker, "G4", ((4, 1, "C"), (6, 1, "D")))):
+        for c, sign, P in joints:
+            M[:, r, c] = sign
+            M[:, r + 1, c + 1] = sign
+            moment_row(r + 2, c, sign * (k[P] - k[G]))
+        rhs[:, r:r + 2] = link.mass * (k["a" + G] - g)
+        rhs[:, r + 2] = link.inertia * k["al" + G[1]]
+    M[:, 2, 8] = 1                      # the driving torque on the crank
+    rhs[:, 6:8] -= F                    # the reed force on the rocker, at P
+    rhs[:, 8] -= _cross(k["P"] - k["G4"], F)
     return M, rhs
 
 

@@ -42,6 +42,7 @@ _leaf = decorators(bool(globals().get("_FORCE_PYTHON")), nrt=False)[1]
 # the dyads' closed forms, written once for numpy and compiled here
 _rrr = _jit_inline(_dyad_forms.rrr)
 _solve2 = _jit_inline(_dyad_forms.solve2)
+_im_conj = _jit(_dyad_forms.im_conj)
 
 #: Status codes of :func:`newton_path`.
 OK, SINGULAR_POSE, LOCK, BRANCH_JUMP = 0, 1, 2, 3
@@ -394,12 +395,6 @@ def newton_path(t0, targets, ia, ib, sa, sb, crank_idx, omega, tol, dt_max, wmax
     return OK
 
 
-@_jit
-def _im_conj(a, b):
-    """Im(conj(a)·b) = a × b."""
-    return a.real * b.imag - a.imag * b.real
-
-
 # The three passes of dyads_path, each inlined at its one site: compiled apart, each one's
 # code was optimised and emitted again in dyads_path (0.4 s of a cold compile).
 @_jit_inline
@@ -484,10 +479,8 @@ def _dyads_velocities(crank_idx, omega, crank_arm, L, K, X, arm, EK, R1, R2, w, 
     nb = EK.shape[1]
     nc = crank_idx.shape[0]
     for k in range(EK.shape[0]):
-        for i in range(nb):
-            QD[k, 3 * i] = 0.0
-            QD[k, 3 * i + 1] = 0.0
-            QD[k, 3 * i + 2] = 0.0
+        for i in range(3 * nb):
+            QD[k, i] = 0.0
         for c in range(nc):
             for i in range(nb):
                 w[i] = 0.0

@@ -285,10 +285,8 @@ def cam_profile(motion, base_radius: float, follower: str = "roller", *,
     geo = partial(_geometry, motion, follower=follower, rb=rb, rf=rf, e=e, arm=arm, pivot=pivot,
                   x0=float(np.min(motion.evaluate(theta)[0])))    # of the cam angle(s) t
     s, ds, dds, P, C, phi, kappa, rho = geo(theta)
-    if follower == "oscillating":
+    if follower.startswith("oscillating"):        # the flat face: r_f = L = 0 (_inputs)
         _check_swing(theta, s, rb + rf, arm, pivot)
-    elif follower == "oscillating_flat":
-        _check_swing(theta, s, rb, 0.0, pivot)
     checks = _checks(geo, theta, follower, phi, kappa, rho, rf, pressure_limit)
     return CamProfile(follower, rb, rf, e, float(arm), float(pivot), theta, s, ds, dds,
                       None if P is None else P[0], None if P is None else P[1], C[0], C[1],

@@ -306,10 +306,6 @@ class Linkage:
             q[3 * i:3 * i + 2] = self.pose[pts[0]]
         return q
 
-    def _point(self, q, link, p, local, idx):
-        i = idx[link]
-        return q[3 * i:3 * i + 2] + _rot(q[3 * i + 2]) @ local[link][p]
-
     def length_scale(self) -> float:
         """The larger side of the pose's bounding box [m] (1 if all points coincide)."""
         pts = np.array(list(self.pose.values()))
@@ -400,7 +396,6 @@ class Linkage:
         GeometryError
             Newton does not converge (no assembly near ``near``).
         """
-        local, idx = self.local_offsets(), self._index()
         q = self.q0() if near is None else np.array(near, dtype=float)
         angles = np.array([[float(crank_angles[c.link]) for c in self.cranks]])
         q, ok = Newton(self._plan).newton(q[None], angles)
@@ -410,9 +405,10 @@ class Linkage:
                                 "near the given coordinates (the links cannot close there); "
                                 "give angles the linkage reaches, or near= closer to one")
         pts = {}
-        for p, x in self.pose.items():
-            owner = next((l for l, ps in self.links.items() if p in ps), None)
-            pts[p] = x.copy() if owner is None else self._point(q, owner, p, local, idx)
+        # each point on its owner's frame (the plan's: its first link), or on the ground
+        for (p, x), o, s in zip(self.pose.items(), self._plan.owner, self._plan.offsets):
+            pts[p] = x.copy() if o == len(self.links) else \
+                q[3 * o:3 * o + 2] + _rot(q[3 * o + 2]) @ s
         return {"q": q, "points": pts}
 
 
@@ -655,15 +651,14 @@ def _read_sliders(raw: list, pose, links, ground_pts, text: str, source: str) ->
                           f"(got {brief(point)})", "sliders", "point" if "point" in x else
                           "link", occurrence=n, expected=f"one of {', '.join(own)}")
         u = u / size
-        off = float(u[0] * (pose[point] - pose[line[0]])[1] - u[1] * (pose[point] -
-                                                                 pose[line[0]])[0])
+        d = pose[point] - pose[line[0]]                # the point from the line's first point
+        off = float(u[0] * d[1] - u[1] * d[0])
         if abs(off) > 1e-9 * scale:
             raise located(text, source, f"slider {lname!r} is off its guide: point {point!r} is "
                           f"{abs(off):.6g} from the line {line[0]}–{line[1]} in the pose",
                           "sliders", "point" if "point" in x else "line", occurrence=n,
                           expected=f"{point!r} on the line through {line[0]!r} and {line[1]!r}")
-        stroke, at = _read_stroke(x, n, float(u @ (pose[point] - pose[line[0]])), lname,
-                                  text, source)
+        stroke, at = _read_stroke(x, n, float(u @ d), lname, text, source)
         out.append(Slider(lname, guide, point, (float(u[0]), float(u[1])), tuple(line),
                           stroke, at))
     return out

@@ -53,7 +53,7 @@ from numpy.typing import NDArray
 from .. import _jit
 from ..errors import GeometryError, NetlistError, OutOfReach
 from ..motion_laws import quintic
-from ._dyad_forms import rpr, rrp, rrr, solve2
+from ._dyad_forms import im_conj, rpr, rrp, rrr, solve2
 
 __all__ = ["LinkageMotion", "LinkageState", "MAX_CONTINUATION_STEPS", "plan", "motion"]
 
@@ -113,9 +113,8 @@ class LinkageState:
         """Plain data for JSON output."""
         return {
             "theta_deg": math.degrees(self.theta), "t": self.t,
-            "points": {k: v.tolist() for k, v in self.points.items()},
-            "velocities": {k: v.tolist() for k, v in self.velocities.items()},
-            "accelerations": {k: v.tolist() for k, v in self.accelerations.items()},
+            **{f: {k: v.tolist() for k, v in getattr(self, f).items()}
+               for f in ("points", "velocities", "accelerations")},
             "angular_velocities": dict(self.angular_velocities),
             "conditional_stop": {c: {k: v.tolist() for k, v in d.items()}
                                  for c, d in self.contributions.items()},
@@ -127,22 +126,23 @@ _LAZY_FIELDS = frozenset(_STATE_FIELDS[5:])
 
 
 class _StateRows:
-    """Private copies of a motion's point arrays, from which states build their dicts.
+    """Private copies of a motion's point arrays (its positions ``rows``), from which states
+    build their dicts.
 
     The point kinematics are computed (and copied) when the first state's
     first dictionary is asked for.
     """
 
-    def __init__(self, m):
+    def __init__(self, m, rows=slice(None)):
         self.names, self.links, self.cranks = m.point_names, m.link_names, m.crank_links
-        self._motion = m
+        self._motion, self.rows = m, rows
 
     def _fill(self):
-        m = self._motion
-        self.arrays = {"points": m.points.copy(), "velocities": m.velocities.copy(),
-                       "accelerations": m.accelerations.copy()}
-        self.C = np.moveaxis(m.contributions, 0, 1).copy()
-        self.w = m.qdot[:, 2::3].tolist()
+        m, rows = self._motion, self.rows
+        self.arrays = {"points": m.points[rows].copy(), "velocities": m.velocities[rows].copy(),
+                       "accelerations": m.accelerations[rows].copy()}
+        self.C = np.moveaxis(m.contributions[:, rows], 0, 1).copy()
+        self.w = m.qdot[rows, 2::3].tolist()
         self._motion = None
 
     def field(self, name, i):
@@ -246,17 +246,10 @@ class LinkageMotion:
 
     def state(self, i: int):
         """The :class:`~.linkage.LinkageState` of position ``i``."""
-        names = self.point_names
-        # one copy per array, then per-point views into it
-        pts = dict(zip(names, self.points[i].copy()))
-        vel = dict(zip(names, self.velocities[i].copy()))
-        acc = dict(zip(names, self.accelerations[i].copy()))
-        con = self.contributions[:, i].copy()
-        contrib = {c: dict(zip(names, con[j])) for j, c in enumerate(self.crank_links)}
-        omegas = dict(zip(self.link_names, self.qdot[i, 2::3].tolist()))
+        rows = _StateRows(self, slice(i, i + 1 or None))      # one copy of position i's rows
         return LinkageState(float(self.theta[i]), float(self.t[i]), self.q[i].copy(),
-                            self.qdot[i].copy(), self.qddot[i].copy(), pts, vel, acc, omegas,
-                            contrib)
+                            self.qdot[i].copy(), self.qddot[i].copy(),
+                            *(rows.field(f, 0) for f in _STATE_FIELDS[5:]))
 
 
 # ------------------------------------------------------------------- structure
@@ -268,9 +261,7 @@ class _Plan:
     owner: NDArray                       # (P,): owner link index, nb for a ground point
     crank_idx: NDArray                   # (nc,)
     omega: NDArray                       # (nc,)
-    pivot: NDArray                       # (nc, 2): crank ground pivots
     dyads: tuple = ()
-    order: tuple = ()                    # ("crank", j) / ("dyad", k) in solving order
     # newton
     ia: NDArray | None = None            # (m,) body index of side a (nb = ground)
     ib: NDArray | None = None
@@ -309,7 +300,6 @@ def plan(lk) -> _Plan:
     points = tuple(lk.pose)
     crank_idx = np.array([idx[c.link] for c in lk.cranks])
     omega = np.array([c.omega for c in lk.cranks], dtype=float)
-    pivot = np.array([lk.pose[c.pivot] for c in lk.cranks])
     rows = lk.constraint_rows()
     m = len(rows)
 
@@ -321,7 +311,7 @@ def plan(lk) -> _Plan:
 
     # each point's owner: the first link holding it, else the ground
     owner = [next((l for l, ps in lk.links.items() if p in ps), "ground") for p in points]
-    common = dict(nb=nb, crank_idx=crank_idx, omega=omega, pivot=pivot,
+    common = dict(nb=nb, crank_idx=crank_idx, omega=omega,
                   owner=np.array([body(o) for o in owner]),
                   offsets=np.array(list(map(off, owner, points)), dtype=float).reshape(-1, 2),
                   ia=np.array([body(a) for _, a, _ in rows], dtype=int).reshape(m),
@@ -341,9 +331,7 @@ def plan(lk) -> _Plan:
     dyads = _dyads(lk, idx)
     if dyads is None:
         return _Plan("newton", **common)
-    order = tuple(("crank", j) for j in range(len(lk.cranks))) + \
-        tuple(("dyad", k) for k in range(len(dyads)))
-    return _Plan("dyads", dyads=dyads, order=order, **common)
+    return _Plan("dyads", dyads=dyads, **common)
 
 
 @dataclass(frozen=True)
@@ -646,7 +634,7 @@ def _sin2(ds, t, cross):
             e = rates[1] - rates[0]
             c = (dy.l1 ** 2 + dy.l2 ** 2 - (e.real ** 2 + e.imag ** 2)) / (2 * dy.l1 * dy.l2)
         elif dy.kind == "RRP":         # the rod's reach across the guide (exact off it too)
-            c = _im_conj(rates[4], rates[5]) / dy.l1
+            c = im_conj(rates[4], rates[5]) / dy.l1
         else:
             continue
         out[k] = 1.0 - c * c
@@ -790,11 +778,6 @@ def _bridged(lk, pl, got, t, pts, where, zone_of, zones):
 
 
 # ------------------------------------------------------------ dyads, closed form
-def _im_conj(a, b):
-    """Im(conj(a)·b) = a × b (the 2-D cross product)."""
-    return a.real * b.imag - a.imag * b.real
-
-
 def _dot(a, b):
     """Re(conj(a)·b) = a · b."""
     return a.real * b.real + a.imag * b.imag
@@ -870,7 +853,7 @@ class _DyadSolver:
                     r1, r2 = x3 - x1, x3 - x2
                     # sin of the angle between the links at the inner joint: 0 when
                     # the dyad is stretched or folded (its Jacobian is singular there)
-                    sin_ = np.abs(_im_conj(r1, r2)) / (dy.l1 * dy.l2)
+                    sin_ = np.abs(im_conj(r1, r2)) / (dy.l1 * dy.l2)
                     # |r1|, |r2| are the links' lengths by construction (to rounding)
                     phi[L1], E[L1] = np.angle(r1) - ang[0], r1 * (np.exp(-1j * ang[0]) / dy.l1)
                     phi[L2], E[L2] = np.angle(r2) - ang[1], r2 * (np.exp(-1j * ang[1]) / dy.l2)
@@ -1074,12 +1057,13 @@ def _lock(lk, theta):
         f"rotation from the pose): no assembly beyond it on this branch")
 
 
-def _branch_jump(lk, theta0, theta1):
+def _branch_jump(lk, theta0, theta1=None):
     """The error of a position that changed branch between crank rotations ``theta0`` and
-    ``theta1`` [rad]."""
+    ``theta1`` [rad] (None: near ``theta0``)."""
+    where = f"near θ = {math.degrees(theta0):.6g}°" if theta1 is None else \
+        f"between θ = {math.degrees(theta0):.6g}° and {math.degrees(theta1):.6g}°"
     return GeometryError(
-        f"{lk.source}: branch jump between θ = {math.degrees(theta0):.6g}° "
-        f"and {math.degrees(theta1):.6g}°: the position passed a "
+        f"{lk.source}: branch jump {where}: the position passed a "
         f"singular configuration (det J changed sign); reduce max_step_deg "
         f"or the linkage reaches a change point there")
 
@@ -1103,10 +1087,9 @@ class Newton:
         a_mov, b_mov = pl.ia < nb, pl.ib < nb
         ka, kb = k[a_mov], k[b_mov]
         ia, ib = pl.ia[a_mov], pl.ib[b_mov]
-        J0[2 * ka, 3 * ia] = 1.0
-        J0[2 * ka + 1, 3 * ia + 1] = 1.0
-        J0[2 * kb, 3 * ib] = -1.0
-        J0[2 * kb + 1, 3 * ib + 1] = -1.0
+        for rows, cols, sign in ((ka, ia, 1.0), (kb, ib, -1.0)):      # ±1 on the (x, y) columns
+            J0[2 * rows, 3 * cols] = sign
+            J0[2 * rows + 1, 3 * cols + 1] = sign
         # prismatic rows after the joint rows: ns line rows, then ns angle rows
         self.ns = ns = len(pl.ga)
         self.c0 = 2 * m + 2 * ns                 # the first crank row
@@ -1120,10 +1103,9 @@ class Newton:
         self.J0 = J0
         self.ka, self.kb = ka, kb
         # flat indices of the φ-column entries, rows (2k, 2k+1) interleaved
-        self.flat_a = np.stack([(2 * ka) * n + 3 * ia + 2, (2 * ka + 1) * n + 3 * ia + 2],
-                               axis=-1).reshape(-1)
-        self.flat_b = np.stack([(2 * kb) * n + 3 * ib + 2, (2 * kb + 1) * n + 3 * ib + 2],
-                               axis=-1).reshape(-1)
+        self.flat_a, self.flat_b = (
+            np.stack([(2 * rows) * n + 3 * cols + 2, (2 * rows + 1) * n + 3 * cols + 2],
+                     axis=-1).reshape(-1) for rows, cols in ((ka, ia), (kb, ib)))
         self.sa, self.sb = to_complex(pl.sa), to_complex(pl.sb)
         self.cphi = 3 * pl.crank_idx + 2
         self.tol = 1e-12 * pl.scale
@@ -1156,7 +1138,7 @@ class Newton:
         r[:, :m2] = np.ascontiguousarray(Pa - Pb).view(np.float64)
         if ns:
             w, _, _, d, dphi = self._prism(q)
-            r[:, m2:m2 + ns] = _im_conj(w, d)
+            r[:, m2:m2 + ns] = im_conj(w, d)
             r[:, m2 + ns:self.c0] = dphi
         r[:, self.c0:] = q[:, self.cphi] - angles
         return r
@@ -1201,8 +1183,8 @@ class Newton:
             wa, wb = om[:, pl.ga], om[:, pl.gb]
             dd = v[:, pl.gb] + 1j * wb * RB - v[:, pl.ga] - 1j * wa * RA
             g[:, 2 * self.m:2 * self.m + self.ns] = -(
-                _im_conj(-wa * wa * w, d) + 2 * _im_conj(1j * wa * w, dd)
-                + _im_conj(w, wa * wa * RA - wb * wb * RB))
+                im_conj(-wa * wa * w, d) + 2 * im_conj(1j * wa * w, dd)
+                + im_conj(w, wa * wa * RA - wb * wb * RB))
         return g
 
     def derivatives(self, q):
@@ -1340,9 +1322,8 @@ _WARM_STATEMENT = (
     "    lk.motion(np.linspace(0.0, 1.0, 5), method=method)\n")
 
 
-def _solve_newton_compiled(lk, pl, t, dt_max, start=None):
-    """The continuation as one compiled loop (:mod:`._linkage_kernels`), from ``start``
-    ((q, time); default the pose)."""
+def _solve_newton_compiled(lk, pl, t, dt_max, q0, t0):
+    """The continuation as one compiled loop (:mod:`._linkage_kernels`), from q0 at time t0."""
     from . import _linkage_kernels as K
 
     N, n, nc = len(t), 3 * pl.nb, len(pl.crank_idx)
@@ -1350,7 +1331,6 @@ def _solve_newton_compiled(lk, pl, t, dt_max, start=None):
     parts = np.empty((N, n, nc))
     info = np.zeros(2)
     w1 = lk.cranks[0].omega
-    q0, t0 = (pl.q0, 0.0) if start is None else start
     vec = np.zeros((6, n))          # the kernel's scratch: it allocates nothing
     vec[0] = q0
     work = (np.empty(pl.nb), np.empty(pl.nb), np.empty((len(pl.ia), 4)), np.empty((len(pl.ga), 8)))
@@ -1371,10 +1351,10 @@ def _solve_newton_compiled(lk, pl, t, dt_max, start=None):
 def _solve_newton(lk, pl, t, dt_max, start=None):
     """Newton's continuation from ``start`` ((q, time); default the pose) through times
     ``t``: the compiled loop when it is loaded, else in numpy."""
-    if _compiled("newton_path"):
-        return _solve_newton_compiled(lk, pl, t, dt_max, start)
-    nw = Newton(pl)
     q0, t0 = (pl.q0, 0.0) if start is None else start
+    if _compiled("newton_path"):
+        return _solve_newton_compiled(lk, pl, t, dt_max, q0, t0)
+    nw = Newton(pl)
     nodes, at = _path(t, dt_max, t0)
     first = nw.step(q0, pl.omega * t0)
     if first is None:
@@ -1497,10 +1477,7 @@ def _targets(lk, nw, t, nodes, keep, at, kept, sign, dt_max):
     if far.size:
         sgn = np.sign(np.linalg.det(J[far]))
         if np.any(sgn != sign):
-            th = math.degrees(t[far[int(np.argmax(sgn != sign))]] * w1)
-            raise GeometryError(f"{lk.source}: branch jump near θ = {th:.6g}°: the position "
-                                f"passed a singular configuration (det J changed sign); reduce "
-                                f"max_step_deg or the linkage reaches a change point there")
+            raise _branch_jump(lk, t[far[int(np.argmax(sgn != sign))]] * w1)
     out = []
     for a, b in zip(final, (Q, qd, qdd, parts)):
         full = np.empty((len(done),) + a.shape[1:])

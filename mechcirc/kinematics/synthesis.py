@@ -397,23 +397,17 @@ def _criteria(a, b, c, d, gamma1, gmin, ratio, swing, crank_range, swing_range):
     lo, hi = crank_range
     s_lo, s_hi = swing_range
     bound = (b / a) * (360.0 / swing) / (2 * math.pi)
-    crit = {
-        "crank_length": _crit("crank_length", a, f"{lo:g}–{hi:g} mm",
-                              min(a - lo, hi - a) / (hi - lo) if hi > lo else 0.0),
-        "front_transmission": _crit("front_transmission", gamma1,
-                                    f"> {FRONT_TRANSMISSION_MIN_DEG:g}°",
-                                    (gamma1 - FRONT_TRANSMISSION_MIN_DEG) / FRONT_TRANSMISSION_MIN_DEG),
-        "min_transmission": _crit("min_transmission", gmin, f"> {MIN_TRANSMISSION_MIN_DEG:g}°",
-                                  (gmin - MIN_TRANSMISSION_MIN_DEG) / MIN_TRANSMISSION_MIN_DEG),
-        "acceleration_ratio": _crit("acceleration_ratio", ratio, f"< {ACCELERATION_RATIO_MAX:g}",
-                                    (ACCELERATION_RATIO_MAX - ratio) / ACCELERATION_RATIO_MAX),
-        "frame_length": _crit("frame_length", d, f"< {FRAME_MAX_MM:g} mm",
-                              (FRAME_MAX_MM - d) / FRAME_MAX_MM),
-        "rocker_ratio": _crit("rocker_ratio", c / a, f"> {bound:.4g}", (c / a - bound) / bound),
-        "swing": _crit("swing", swing, f"{s_lo:g}–{s_hi:g}°",
-                       min(swing - s_lo, s_hi - swing) / (s_hi - s_lo) if s_hi > s_lo
-                       else -abs(swing - s_lo) / s_lo),
-    }
+    limits = {"front_transmission": f"> {FRONT_TRANSMISSION_MIN_DEG:g}°",
+              "min_transmission": f"> {MIN_TRANSMISSION_MIN_DEG:g}°",
+              "acceleration_ratio": f"< {ACCELERATION_RATIO_MAX:g}",
+              "frame_length": f"< {FRAME_MAX_MM:g} mm", "rocker_ratio": f"> {bound:.4g}"}
+    crit = {"crank_length": _crit("crank_length", a, f"{lo:g}–{hi:g} mm",
+                                  min(a - lo, hi - a) / (hi - lo) if hi > lo else 0.0)}
+    for name, (value, margin) in _shape_margins(gamma1, gmin, ratio, d, c / a, bound).items():
+        crit[name] = _crit(name, value, limits[name], margin)
+    crit["swing"] = _crit("swing", swing, f"{s_lo:g}–{s_hi:g}°",
+                          min(swing - s_lo, s_hi - swing) / (s_hi - s_lo) if s_hi > s_lo
+                          else -abs(swing - s_lo) / s_lo)
     # crank_length and swing: a value exactly on the closed range is allowed
     for name in ("crank_length", "swing"):
         cr = crit[name]
@@ -498,17 +492,11 @@ def synthesize(load: Literal["light", "medium", "heavy"] = "medium", swing: floa
 def _checked(load, objective, fixed, swing, swing_range, b_a_range, d_a_range, step,
              crank_step, swing_step):
     """The arguments of :func:`synthesize` checked: (fixed lengths, swing range, crank range)."""
-    if load not in LOAD_CRANK_MM:
-        raise GeometryError(f"unknown load {load!r}; expected one of "
-                            f"{', '.join(LOAD_CRANK_MM)}")
-    if objective not in _OBJECTIVES:
-        raise GeometryError(f"unknown objective {objective!r}; expected one of "
-                            f"{', '.join(_OBJECTIVES)}")
+    _known("load", load, LOAD_CRANK_MM)
+    _known("objective", objective, _OBJECTIVES)
     fixed = dict(fixed or {})
     for name, value in fixed.items():
-        if name not in _FIXABLE:
-            raise GeometryError(f"unknown fixed length {name!r}; expected one of "
-                                f"{', '.join(_FIXABLE)}")
+        _known("fixed length", name, _FIXABLE)
         if not (isinstance(value, (int, float)) and math.isfinite(value) and 0 < value < 1e6):
             raise GeometryError(f"fixed {name} length must be a positive number of mm, got "
                                 f"{value!r}")
@@ -526,6 +514,12 @@ def _checked(load, objective, fixed, swing, swing_range, b_a_range, d_a_range, s
     if not (step > 0 and crank_step > 0 and swing_step > 0):
         raise GeometryError("step, crank_step and swing_step must be > 0")
     return fixed, s_range, (fixed["crank"],) * 2 if "crank" in fixed else LOAD_CRANK_MM[load]
+
+
+def _known(what: str, value, known) -> None:
+    """Refuse a ``value`` not among the names ``known``."""
+    if value not in known:
+        raise GeometryError(f"unknown {what} {value!r}; expected one of {', '.join(known)}")
 
 
 def _grid_axes(fixed, swing, s_range, crank_range, b_a_range, d_a_range, step, crank_step,
@@ -775,15 +769,22 @@ def _screen(A, PSI, BA, CA, DA):
         d_mm = A * DA
         bound = BA / PSI
     out = {"_valid": valid}
-    for name, value, margin in (
-            ("front_transmission", g1, (g1 - FRONT_TRANSMISSION_MIN_DEG) / FRONT_TRANSMISSION_MIN_DEG),
-            ("min_transmission", gmin, (gmin - MIN_TRANSMISSION_MIN_DEG) / MIN_TRANSMISSION_MIN_DEG),
-            ("acceleration_ratio", ratio, (ACCELERATION_RATIO_MAX - ratio) / ACCELERATION_RATIO_MAX),
-            ("frame_length", d_mm, (FRAME_MAX_MM - d_mm) / FRAME_MAX_MM),
-            ("rocker_ratio", CA, (CA - bound) / bound)):
+    for name, (value, margin) in _shape_margins(g1, gmin, ratio, d_mm, CA, bound).items():
         margin = np.where(valid, margin, -np.inf)
         out[name] = (margin > 0, margin, value)
     return out
+
+
+def _shape_margins(gamma1, gmin, ratio, d, c_a, bound):
+    """The shape criteria (:data:`_SHAPE_CRITERIA`) on floats or arrays: name -> (value, relative
+    margin), from the front and least transmission angles [deg], |Φ2''|/|Φ1''|, the frame [mm],
+    c/a and the least c/a of eq. (9)."""
+    return {"front_transmission": (gamma1, (gamma1 - FRONT_TRANSMISSION_MIN_DEG)
+                                   / FRONT_TRANSMISSION_MIN_DEG),
+            "min_transmission": (gmin, (gmin - MIN_TRANSMISSION_MIN_DEG) / MIN_TRANSMISSION_MIN_DEG),
+            "acceleration_ratio": (ratio, (ACCELERATION_RATIO_MAX - ratio) / ACCELERATION_RATIO_MAX),
+            "frame_length": (d, (FRAME_MAX_MM - d) / FRAME_MAX_MM),
+            "rocker_ratio": (c_a, (c_a - bound) / bound)}
 
 
 def _conflicts(passes: dict, valid) -> tuple[tuple[str, ...], ...]:

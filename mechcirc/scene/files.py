@@ -569,7 +569,7 @@ class _SceneReader:
                                "crank" if "crank" in g else next(iter(g), "crank"),
                                value=c, occurrence=n,
                                expected=f"one of {', '.join(names[1:]) or '(none: one crank)'}")
-            ratio, frac = self.gear_ratio(n, g, c)
+            ratio, frac = self.gear_ratio(n, g, c, w1, names[0])
             body = self.gear_mesh(n, g, c, torsions)
             gears[c] = Gear(c, float(ratio), (frac.numerator, frac.denominator), body)
         for n, cr in enumerate(cranks[1:], start=1):
@@ -582,14 +582,12 @@ class _SceneReader:
                                         f"{cr.omega / w1:g}")
         return list(gears.values())
 
-    def gear_ratio(self, n: int, g: dict, c: str) -> tuple:
-        """Gear #n's ratio ω_c/ω_main, a ratio of tooth counts that agrees with the cranks'
-        omegas, and that ratio as a fraction."""
+    def gear_ratio(self, n: int, g: dict, c: str, w1: float, main: str) -> tuple:
+        """Gear #n's ratio ω_c/ω_main (``w1``, the crank ``main``'s), a ratio of tooth counts
+        that agrees with the cranks' omegas, and that ratio as a fraction."""
         from fractions import Fraction
 
-        cranks = self.linkage.cranks
-        w1, names = cranks[0].omega, [x.link for x in cranks]
-        ratio = self.number(g.get("ratio"), f"gear ratio of {c!r} (ω_{c}/ω_{names[0]})",
+        ratio = self.number(g.get("ratio"), f"gear ratio of {c!r} (ω_{c}/ω_{main})",
                             "gears", "ratio" if "ratio" in g else "crank", n,
                             positive=False)
         if ratio == 0:
@@ -602,7 +600,7 @@ class _SceneReader:
                            "whole numbers (tooth counts) with a denominator ≤ 1000, so the "
                            "mechanism would never repeat its cycle", "gears", "ratio",
                            occurrence=n, expected="e.g. ratio = -1.5 (z1/z2 = 30/20)")
-        w = next(x.omega for x in cranks if x.link == c)
+        w = next(x.omega for x in self.linkage.cranks if x.link == c)
         if abs(w - ratio * w1) > 1e-12 * abs(w):
             raise self.err(f"[[gears]] #{n + 1}: crank {c!r} has omega = {w:g} rad/s in "
                            f"[[cranks]] but the gear ratio {ratio:g} makes it "

@@ -86,20 +86,12 @@ def contact_report(scene, sm) -> ContactReport:
     deg = np.degrees(sm.crank_angle)
     step = 360.0 / deg.size
     open_ = sm.values[f"{el.name}.force"] >= 0.0
-    seps = []
-    if open_.any() and not open_.all():
-        k0 = int(np.argmin(open_))                 # start the scan where the contact is closed
-        run = None
-        for k in range(k0, k0 + deg.size + 1):
-            o = open_[k % deg.size]
-            if o and run is None:
-                run = k
-            elif not o and run is not None:
-                seps.append((float(deg[run % deg.size]), (k - run) * step))
-                run = None
-        seps.sort()
-    elif open_.all():
-        seps.append((0.0, 360.0))
+    k0 = int(np.argmin(open_))                 # the runs of open samples from a closed one
+    edges = np.diff(np.concatenate(([0], np.roll(open_, -k0), [0])))
+    seps = sorted((float(deg[(s + k0) % deg.size]), (e - s) * step) for s, e in
+                  zip(np.flatnonzero(edges > 0).tolist(), np.flatnonzero(edges < 0).tolist()))
+    if open_.all():
+        seps = [(0.0, 360.0)]
     return ContactReport(deg, -sm.values[f"{el.name}.force"],
                          -sm.values[f"{SPRING}.deformation"] - lk.preload / lk.spring, lo,
                          float((deg[0] + at * step) % 360.0), tuple(seps))

@@ -156,24 +156,19 @@ class _Cubic:
 
 
 class _Rigid:
-    """J_red(θ), J_red'(θ) and each body's φ'(θ), φ''(θ) of the rigid mechanism."""
+    """The range of J_red(θ) and each body's φ'(θ), φ''(θ) of the rigid mechanism."""
 
     def __init__(self, scene: Scene, N: int = 1024):
-        (_, ang1, ang2, _, vel, acc), _ = body_tables(scene, N)
+        (_, ang1, ang2, _, vel, _), _ = body_tables(scene, N)
         self.cycle = scene.cycle
         nodes = N * scene.cycle_revolutions
         h = self.cycle / nodes
         J = np.zeros(nodes + 1)
-        dJ = np.zeros(nodes + 1)
         for m in scene.masses:
             if m.kind == "mass":
-                v, a = vel[m.point], acc[m.point]
-                J += m.value * np.sum(v * v, axis=1)
-                dJ += 2.0 * m.value * np.sum(v * a, axis=1)
+                J += m.value * np.sum(vel[m.point] ** 2, axis=1)
             else:
                 J += m.value * ang1[m.link] ** 2
-                dJ += 2.0 * m.value * ang1[m.link] * ang2[m.link]
-        self.J = _Cubic(h, J, dJ)
         self.bodies = tuple(scene.bodies)
         self.rate = {b: _Cubic(h, ang1[b], ang2[b]) for b in self.bodies}
         self.J_range = (float(J.min()), float(J.max()))
@@ -559,11 +554,16 @@ def _over_cycle(eq, th0, cycle, x0, rtol, scale, dense=False, floor=1e-6):
     def stall(th, Y):
         return Y[0] - floor * scale
     stall.terminal = True
-    n = eq.n
-    atol = rtol * 1e-3 * np.concatenate((
-        [scale, scale], np.full(n, 1e-2), np.full(n, 1e-2 * scale)))
+    atol = _atol(rtol, scale, eq.n)
     return solve_ivp(f, (th0, th0 + cycle), np.concatenate(([x0[0], 0.0], x0[1:])),
                      method="DOP853", rtol=rtol, atol=atol, events=stall, dense_output=dense)
+
+
+def _atol(rtol, scale, n):
+    """DOP853's absolute tolerances of the shaft's state with n free coordinates: speed and
+    time (or angle) on the motor's speed ``scale``, then the coordinates and their rates."""
+    return rtol * 1e-3 * np.concatenate(([scale, scale], np.full(n, 1e-2),
+                                         np.full(n, 1e-2 * scale)))
 
 
 def _steady_speed(eq, th0, cycle, rtol, scale, guess, fail, xtol=1e-13):
@@ -779,11 +779,10 @@ def _startup(scene, eq, shaft, th0, cyc, w0, motion, rtol, scale, peak):
     within 1e-5 ω_mean of the steady cycle's → startup_time, startup_t, startup_speed."""
     from scipy.integrate import solve_ivp
 
-    mean, n = motion["omega_mean"], eq.n
+    mean = motion["omega_mean"]
     ts, ws, segments = [0.0], [0.0], []
     t, y, k = 0.0, np.concatenate(([th0, 0.0], eq.rest(th0))), 0
-    atol = rtol * 1e-3 * np.concatenate(([scale, scale], np.full(n, 1e-2),
-                                         np.full(n, 1e-2 * scale)))
+    atol = _atol(rtol, scale, eq.n)
 
     def f(_, y):
         out = np.empty(y.size)
