@@ -187,8 +187,7 @@ def from_circuits(circuits) -> "Designs":
                              f"({first.name}): not designs of one network")
     values = np.array([[e.value for e in c.elements] for c in circuits], dtype=float).T
     etas = np.array([[e.eta for e in c.elements] for c in circuits], dtype=float).T
-    ratios = np.array([[lv.ratio for lv in c.levers] for c in circuits], dtype=float).T \
-        .reshape(len(first.levers), len(circuits))
+    ratios = np.array([[lv.ratio for lv in c.levers] for c in circuits], dtype=float).T
     amplitude = np.array([c.require_drive().amplitude for c in circuits], dtype=float)
     with np.errstate(all="ignore"):
         scaled = values * etas
@@ -201,9 +200,10 @@ def _build(circuit: Circuit, text, exprs, arrays: dict, D: int) -> "Designs":
     """Every value of the circuit over the D designs, with the designs it cannot form."""
     from .expressions import evaluate_array
 
+    arrays = {n: np.broadcast_to(a, (D,)).astype(float) for n, a in arrays.items()}
     bad = np.zeros(D, dtype=bool)
     for a in arrays.values():
-        bad |= ~np.isfinite(np.broadcast_to(a, (D,)))
+        bad |= ~np.isfinite(a)
 
     def value(key, default):
         nonlocal bad
@@ -216,8 +216,8 @@ def _build(circuit: Circuit, text, exprs, arrays: dict, D: int) -> "Designs":
 
     pvals: dict = {}
     for name in circuit.params:
-        pvals[name] = np.broadcast_to(arrays[name], (D,)).astype(float) if name in arrays \
-            else value(("param", name), circuit.params[name])
+        pvals[name] = arrays[name] if name in arrays else value(("param", name),
+                                                                 circuit.params[name])
     n_el = len(circuit.elements)
     values, etas = np.empty((n_el, D)), np.empty((n_el, D))
     for i, e in enumerate(circuit.elements):
@@ -242,9 +242,7 @@ def _build(circuit: Circuit, text, exprs, arrays: dict, D: int) -> "Designs":
     bad |= ~ok.all(axis=0)
     bad |= ~(np.isfinite(ratios) & (ratios > 0)).all(axis=0)
     bad |= ~np.isfinite(amplitude)
-    return Designs(circuit, {n: np.broadcast_to(a, (D,)).astype(float)
-                             for n, a in arrays.items()},
-                   values, etas, ratios, amplitude, ~bad, text)
+    return Designs(circuit, arrays, values, etas, ratios, amplitude, ~bad, text)
 
 
 @dataclass(frozen=True, eq=False)
@@ -329,7 +327,6 @@ class Designs:
         rows = np.array([row[e.name] for e in p.leaves], dtype=np.int64)
         scaled = self.values[rows][:, which] * self.eta[rows][:, which]
         ratios = self.ratios[[lev[lv.name] for lv in p.levers]][:, which]
-        ratios = ratios.reshape(len(p.levers), which.size)
         p = replace(p.with_values(scaled, ratios), numpy=(
             tree, {e.name: scaled[i][:, None] for i, e in enumerate(p.leaves)},
             {lv.name: ratios[i][:, None] for i, lv in enumerate(p.levers)}))
@@ -354,17 +351,15 @@ class Designs:
         D, W = self.size, omega.size
         batched = np.flatnonzero(self.valid)
         p = self.plan(batched) if batched.size else None
+        K, err = np.empty((D, W), dtype=complex), np.empty((D, W))
         if p is None:                   # not series–parallel: the nodal path, stacked
-            K, err = np.empty((D, W), dtype=complex), np.empty((D, W))
             batched, K[batched], err[batched] = _nodal_sweep(self, batched, omega) \
                 if batched.size else (batched, K[:0], err[:0])
         else:
             from .reduction import evaluate_designs
 
-            K, err = evaluate_designs(p, omega, error=True)
-            K = singular_limits(K, omega[None, :])
-            if batched.size < D:
-                K, err = _spread(K, batched, D), _spread(err, batched, D)
+            Kb, err[batched] = evaluate_designs(p, omega, error=True)
+            K[batched] = singular_limits(Kb, omega[None, :])
         single = np.setdiff1d(np.arange(D), batched)
         failed: dict[int, str] = {}
         for d in single.tolist():
@@ -699,13 +694,6 @@ def _stacked_matrices(ds: Designs, system, which: NDArray):
     return S, parts
 
 
-def _spread(rows: NDArray, where: NDArray, D: int) -> NDArray:
-    """``rows`` placed at rows ``where`` of a (D, ...) array (the others unset)."""
-    out = np.empty((D, *rows.shape[1:]), dtype=rows.dtype)
-    out[where] = rows
-    return out
-
-
 @dataclass(frozen=True, eq=False)
 class DesignSweep:
     """K and the drive's quantities of D designs on W frequencies (plain data).
@@ -823,12 +811,11 @@ def _extremes(ds: Designs, lo: float, hi: float, res: DesignResonances,
     D = ds.size
     out = {k: np.full(D, np.nan) for k in ("K_min", "omega_at_K_min", "K_max",
                                            "omega_at_K_max", "Q0_max", "omega_at_Q0_max")}
-    lossless = res.count >= 0
-    lossless &= ~np.isin(np.arange(D), res.single)
+    batched = ~np.isin(np.arange(D), res.single)
     with np.errstate(invalid="ignore"):
         undamped = np.where(res.count[:, None] > np.arange(res.omega.shape[1])[None, :],
                             res.zeta <= UNDAMPED_ZETA, True).all(axis=1)
-    fast = np.flatnonzero(lossless & undamped)
+    fast = np.flatnonzero(batched & undamped)
     failed = dict(res.failed)
     if fast.size:
         if ends is None:
