@@ -351,15 +351,16 @@ class Designs:
         D, W = self.size, omega.size
         batched = np.flatnonzero(self.valid)
         p = self.plan(batched) if batched.size else None
-        K, err = np.empty((D, W), dtype=complex), np.empty((D, W))
         if p is None:                   # not series–parallel: the nodal path, stacked
-            batched, K[batched], err[batched] = _nodal_sweep(self, batched, omega) \
-                if batched.size else (batched, K[:0], err[:0])
+            batched, K, err = _nodal_sweep(self, batched, omega) if batched.size else \
+                (batched, np.empty((0, W), dtype=complex), np.empty((0, W)))
         else:
             from .reduction import evaluate_designs
 
-            Kb, err[batched] = evaluate_designs(p, omega, error=True)
-            K[batched] = singular_limits(Kb, omega[None, :])
+            K, err = evaluate_designs(p, omega, error=True)
+            K = singular_limits(K, omega[None, :])
+        if batched.size < D:            # rows for the designs evaluated one by one below
+            K, err = _spread(K, batched, D), _spread(err, batched, D)
         single = np.setdiff1d(np.arange(D), batched)
         failed: dict[int, str] = {}
         for d in single.tolist():
@@ -692,6 +693,13 @@ def _stacked_matrices(ds: Designs, system, which: NDArray):
         parts.append(X)
     parts[0] += system.C.toarray()
     return S, parts
+
+
+def _spread(rows: NDArray, where: NDArray, D: int) -> NDArray:
+    """``rows`` placed at rows ``where`` of a (D, ...) array (the others unset)."""
+    out = np.empty((D, *rows.shape[1:]), dtype=rows.dtype)
+    out[where] = rows
+    return out
 
 
 @dataclass(frozen=True, eq=False)
