@@ -1211,9 +1211,8 @@ def _execute(spec: StudySpec, done: list, dask: tuple, workers: int | None,
     client = _dask_client(*dask) if dask[0] else None
     try:
         if client is not None:
-            return "dask", _run_dask(spec, have, n_todo, client, batch_size, take, take.task)
-        return _run_local(spec, have, n_todo, workers or os.cpu_count() or 1, batch_size, take,
-                          take.task)
+            return "dask", _run_dask(spec, have, n_todo, client, batch_size, take)
+        return _run_local(spec, have, n_todo, workers or os.cpu_count() or 1, batch_size, take)
     finally:
         take.close()
 
@@ -1546,6 +1545,7 @@ def _read_parquet(path):
     return recorded, table
 
 
+@contextlib.contextmanager
 def _lock(output):
     """Hold ``OUTPUT.lock`` while a study writes ``output`` (a context manager).
 
@@ -1565,44 +1565,39 @@ def _lock(output):
                              f"({holder or 'pid unknown'}, per {path}); wait for it to end, "
                              f"or write another -o{hint}")
 
-    @contextlib.contextmanager
-    def hold():
+    try:
+        import fcntl
+    except ImportError:
+        fcntl = None
+    while True:
         try:
-            import fcntl
-        except ImportError:
-            fcntl = None
-        while True:
-            try:
-                fd = os.open(path, os.O_RDWR | os.O_CREAT | (0 if fcntl else os.O_EXCL), 0o644)
-            except FileExistsError:
-                raise held(_holder(path), f" (if it is no longer running, delete {path})") \
-                    from None
-            except OSError as exc:
-                raise MechcircError(f"{os.fspath(output)}: cannot create the lock file {path}: "
-                                    f"{exc.strerror}") from None
-            if fcntl is None:
+            fd = os.open(path, os.O_RDWR | os.O_CREAT | (0 if fcntl else os.O_EXCL), 0o644)
+        except FileExistsError:
+            raise held(_holder(path), f" (if it is no longer running, delete {path})") from None
+        except OSError as exc:
+            raise MechcircError(f"{os.fspath(output)}: cannot create the lock file {path}: "
+                                f"{exc.strerror}") from None
+        if fcntl is None:
+            break
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            os.close(fd)
+            raise held(_holder(path)) from None
+        with contextlib.suppress(FileNotFoundError):   # the holder may have removed it
+            if os.path.samestat(os.fstat(fd), os.stat(path)):
                 break
-            try:
-                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except OSError:
-                os.close(fd)
-                raise held(_holder(path)) from None
-            with contextlib.suppress(FileNotFoundError):   # the holder may have removed it
-                if os.path.samestat(os.fstat(fd), os.stat(path)):
-                    break
-            os.close(fd)
-        _LOCK_FDS.add(fd)
-        try:
-            os.ftruncate(fd, 0)
-            os.write(fd, f"{me}\n".encode())
-            yield
-        finally:
-            with contextlib.suppress(OSError):
-                os.unlink(path)         # before the lock goes: see the samestat check
-            _LOCK_FDS.discard(fd)
-            os.close(fd)
-
-    return hold()
+        os.close(fd)
+    _LOCK_FDS.add(fd)
+    try:
+        os.ftruncate(fd, 0)
+        os.write(fd, f"{me}\n".encode())
+        yield
+    finally:
+        with contextlib.suppress(OSError):
+            os.unlink(path)         # before the lock goes: see the samestat check
+        _LOCK_FDS.discard(fd)
+        os.close(fd)
 
 
 #: Descriptors of the output locks this process holds: a forked worker closes its
@@ -1650,33 +1645,31 @@ def task_size(spec: StudySpec, n_points: int, n_workers: int,
     return max(1, min(fit, share))
 
 
-def _run_local(spec, have, n_todo, n_workers, batch_size, take,
-               task: tuple) -> tuple[str, int]:
+def _run_local(spec, have, n_todo, n_workers, batch_size, take) -> tuple[str, int]:
     size = task_size(spec, n_todo, n_workers, batch_size)
     if n_workers <= 1 or n_todo <= size:
         # One batch or one worker: starting processes would cost more than it saves.
         for batch in _todo(spec, have, size):
-            take(_run_task(spec, batch, *task))
+            take(_run_task(spec, batch, *take.task))
         return "inline", 1
     from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
     with ProcessPoolExecutor(max_workers=n_workers, initializer=_die_with_parent,
                              initargs=(os.getpid(),)) as pool:
         light = _for_workers(spec)
+        batches = _todo(spec, have, size)
         pending: set = set()
         try:
             # A few tasks per worker in flight, the next made as one finishes: the
             # points of a large study are never all in memory as tasks.
-            for batch in _todo(spec, have, size):
-                pending.add(pool.submit(_run_task, light, batch, *task))
-                if len(pending) >= 2 * n_workers:
-                    finished, pending = wait(pending, return_when=FIRST_COMPLETED)
-                    for fut in finished:
-                        take(fut.result())
+            pending.update(pool.submit(_run_task, light, batch, *take.task)
+                           for batch in itertools.islice(batches, 2 * n_workers))
             while pending:
                 finished, pending = wait(pending, return_when=FIRST_COMPLETED)
                 for fut in finished:
                     take(fut.result())
+                    if (batch := next(batches, None)) is not None:
+                        pending.add(pool.submit(_run_task, light, batch, *take.task))
         except BaseException:
             for fut in pending:
                 fut.cancel()
@@ -1745,7 +1738,7 @@ def _dask_client(scheduler: str, timeout: float):
     return client
 
 
-def _run_dask(spec, have, n_todo, client, batch_size, take, task: tuple) -> int:
+def _run_dask(spec, have, n_todo, client, batch_size, take) -> int:
     from distributed import as_completed
 
     try:
@@ -1759,13 +1752,13 @@ def _run_dask(spec, have, n_todo, client, batch_size, take, task: tuple) -> int:
                                 "started") from None
         # A few tasks per worker thread in flight, the next submitted as one finishes.
         batches = _todo(spec, have, size)
-        futures = as_completed([client.submit(_run_task, spec_future, batch, *task, pure=False)
+        futures = as_completed([client.submit(_run_task, spec_future, batch, *take.task,
+                                              pure=False)
                                 for batch in itertools.islice(batches, 4 * n_workers)])
         for fut in futures:
             take(fut.result())
-            batch = next(batches, None)
-            if batch is not None:
-                futures.add(client.submit(_run_task, spec_future, batch, *task, pure=False))
+            if (batch := next(batches, None)) is not None:
+                futures.add(client.submit(_run_task, spec_future, batch, *take.task, pure=False))
         return n_workers
     finally:
         client.close()
