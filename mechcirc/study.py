@@ -272,8 +272,7 @@ def _axis(name, value) -> list[float]:
     path = ("grid", name)
     if isinstance(value, list):
         return [_number(path, v, f"grid.{name}") for v in value]
-    lo = _number((*path, "min"), value["min"], f"grid.{name}.min")
-    hi = _number((*path, "max"), value["max"], f"grid.{name}.max")
+    lo, hi = (_number((*path, end), value[end], f"grid.{name}.{end}") for end in ("min", "max"))
     log = value.get("log", False)
     if log and (lo <= 0 or hi <= 0):
         _fail((*path, "log"), f"grid.{name}: log spacing needs min and max > 0")
@@ -529,8 +528,8 @@ def _random_range(kind, name, r) -> tuple[float, float, bool]:
         _fail(where, f"{kind}.params.{name} must be {{min, max[, log]}}"
                      + (f": unknown key {extra[0]!r}"
                         f"{did_you_mean(extra[0], ('min', 'max', 'log'))}" if extra else ""))
-    lo = _number((*where, "min"), r["min"], f"{kind}.params.{name}.min")
-    hi = _number((*where, "max"), r["max"], f"{kind}.params.{name}.max")
+    lo, hi = (_number((*where, end), r[end], f"{kind}.params.{name}.{end}")
+              for end in ("min", "max"))
     if not lo <= hi or (r.get("log") and lo <= 0):
         _fail(where, f"{kind}.params.{name}: need min <= max (and > 0 with log)")
     return lo, hi, bool(r.get("log", False))
@@ -665,8 +664,7 @@ def _sweep_omega(o, n_points: int) -> tuple[float, float, int, bool]:
         _fail(("omega",), "analysis 'sweep' needs an [omega] table with min and max "
                           "(and points, log)")
     _check_keys("omega", o)
-    lo = _omega(("omega", "min"), o["min"], "omega.min")
-    hi = _omega(("omega", "max"), o["max"], "omega.max")
+    lo, hi = (_omega(("omega", end), o[end], f"omega.{end}") for end in ("min", "max"))
     npts = _integer(("omega", "points"), o.get("points", 200), "omega.points", 1,
                     MAX_STUDY_SWEEP_POINTS)
     log = bool(o.get("log", False))
@@ -1051,13 +1049,16 @@ def _run_task(spec: StudySpec, points, curves: bool, keep: bool, lines: bool) ->
     batch = [(int(i), dict(zip(spec.params, v))) for i, v in zip(index.tolist(),
                                                                   values.tolist())]
     rows, K = run_batch(spec, batch, curves) if curves else (run_batch(spec, batch), None)
-    text = ""
-    if lines:
-        buf = io.StringIO()
-        csv.writer(buf).writerows(_journal_record(r, spec.columns) for r in rows)
-        text = buf.getvalue()
+    text = _csv_text(_journal_record(r, spec.columns) for r in rows) if lines else ""
     bad = [r for r in rows if r["status"] != "ok"]
     return _TaskOut(text, len(rows), bad, rows if keep or curves else None, K)
+
+
+def _csv_text(records) -> str:
+    """CSV lines of ``records`` (lists of cells) as the csv module writes them."""
+    buf = io.StringIO()
+    csv.writer(buf).writerows(records)
+    return buf.getvalue()
 
 
 def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
@@ -1421,9 +1422,7 @@ def _write_output(output, parquet: bool, spec: StudySpec, journal: str) -> None:
             json.dump(record, fh, indent=1, ensure_ascii=False)
             fh.write("\n")
         with open(out.path(output), "wb") as fh:
-            head = io.StringIO()
-            csv.writer(head).writerow(columns)
-            fh.write(head.getvalue().encode("utf-8"))
+            fh.write(_csv_text([columns]).encode("utf-8"))
             fh.writelines(b"".join(lines) for lines in chunks)
             fh.flush()
             os.fsync(fh.fileno())
