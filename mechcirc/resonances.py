@@ -133,18 +133,13 @@ class Resonances(list):
         (f and f_d) or ``"rpm"`` (n and n_d); then ζ [1] and the relative error.
         """
         name, _ = FREQUENCY_UNITS[unit]
-        if unit == "rad/s":
-            head = (f"{'kind':<14} {'omega [rad/s]':>17} {'f [Hz]':>14} {'omega_d [rad/s]':>17} "
-                    f"{'zeta':>10} {'rel. error':>10}")
-            rows = [f"{r.kind:<14} {r.omega:>17.10g} {r.f_hz:>14.8g} {r.omega_d:>17.10g} "
-                    f"{r.zeta:>10.4g} {r.error:>10.1e}" for r in self]
-        else:
-            head = (f"{'kind':<14} {f'{name} [{unit}]':>17} {f'{name}_d [{unit}]':>17} "
-                    f"{'zeta':>10} {'rel. error':>10}")
-            rows = [f"{r.kind:<14} {in_unit(r.omega, unit):>17.10g} "
-                    f"{in_unit(r.omega_d, unit):>17.10g} {r.zeta:>10.4g} {r.error:>10.1e}"
-                    for r in self]
-        return [head] + rows
+        hz = unit == "rad/s"            # omega in rad/s has f in Hz beside it
+        head = (f"{'kind':<14} {f'{name} [{unit}]':>17}" + (f" {'f [Hz]':>14}" if hz else "")
+                + f" {f'{name}_d [{unit}]':>17} {'zeta':>10} {'rel. error':>10}")
+        return [head] + [f"{r.kind:<14} {in_unit(r.omega, unit):>17.10g}"
+                         + (f" {r.f_hz:>14.8g}" if hz else "")
+                         + f" {in_unit(r.omega_d, unit):>17.10g} {r.zeta:>10.4g} {r.error:>10.1e}"
+                         for r in self]
 
     def __repr__(self) -> str:
         return "Resonances([])  (none found)" if not self else "\n".join(self.table())
