@@ -944,11 +944,9 @@ def _row(columns: list[str], rec: list[str]) -> dict | None:
     row: dict[str, str | int | float] = {}
     try:
         for name, text in zip(columns, rec, strict=True):
-            if name == "status":
-                if text not in ("ok", "error"):
+            if name in ("status", "error"):
+                if name == "status" and text not in ("ok", "error"):
                     return None
-                row[name] = text
-            elif name == "error":
                 row[name] = text
             elif name in ("index", "n_flagged"):
                 if name == "index" and (not text or int(text) < 0):
