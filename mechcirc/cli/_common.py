@@ -368,9 +368,8 @@ def add_unit_option(p, what: str | None = None) -> None:
 
 def frequency_text(omega: float, unit: str = "rad/s", digits: int = 6) -> str:
     """``omega = 300 rad/s (47.7465 Hz)``, or in ``unit`` of --unit: ``f = 47.7465 Hz``."""
-    if unit == "rad/s":
-        return f"omega = {omega:.{digits}g} rad/s ({in_unit(omega, 'Hz'):.6g} Hz)"
-    return f"{FREQUENCY_UNITS[unit][0]} = {in_unit(omega, unit):.{digits}g} {unit}"
+    hz = f" ({in_unit(omega, 'Hz'):.6g} Hz)" if unit == "rad/s" else ""     # f beside omega
+    return f"{FREQUENCY_UNITS[unit][0]} = {in_unit(omega, unit):.{digits}g} {unit}{hz}"
 
 
 def frequency_symbol(unit: str) -> str:

@@ -143,10 +143,8 @@ def _print_scene(args, scene, model, found, reduced, drawn: bool) -> None:
     print("resonances (K = 0) and anti-resonances (K = ∞):")
     for r in found:
         z = f"  zeta={r.zeta:.4g}" if r.zeta else ""
-        if args.unit == "rad/s":
-            print(f"  {r.kind:<14} {r.omega:12.6g} rad/s  {r.f_hz:10.5g} Hz{z}")
-        else:
-            print(f"  {r.kind:<14} {in_unit(r.omega, args.unit):12.6g} {args.unit}{z}")
+        hz = f"  {r.f_hz:10.5g} Hz" if args.unit == "rad/s" else ""      # f beside omega
+        print(f"  {r.kind:<14} {in_unit(r.omega, args.unit):12.6g} {args.unit}{hz}{z}")
     if reduced is not None:
         what = "K at the drive" if reduced.output is None else f"the force in {reduced.output}"
         print(f"reduced for {what} over ω ∈ [{reduced.band[0]:g}, {reduced.band[1]:g}] rad/s: "
