@@ -454,12 +454,10 @@ def cmd_crosscheck_scene(args) -> int:
     print(f"{'circuit ' + sym + '_n':>14} {'ζ':>9} {'ringing ' + sym + '_n':>14} {'ζ':>9} "
           f"{'rel. diff':>10}  verdict")
     for r in result.resonances:
-        if r["ringing_omega"] is None:
-            print(f"{in_unit(r['omega'], u):>14.6g} {r['zeta']:>9.4g}  {verdict_text(r)}")
-            continue
-        print(f"{in_unit(r['omega'], u):>14.6g} {r['zeta']:>9.4g} "
-              f"{in_unit(r['ringing_omega'], u):>14.6g} {r['ringing_zeta']:>9.4g} "
-              f"{r['rel_error']:>10.2e}  {verdict_text(r)}")
+        ringing = "" if r["ringing_omega"] is None else (
+            f" {in_unit(r['ringing_omega'], u):>14.6g} {r['ringing_zeta']:>9.4g} "
+            f"{r['rel_error']:>10.2e}")
+        print(f"{in_unit(r['omega'], u):>14.6g} {r['zeta']:>9.4g}{ringing}  {verdict_text(r)}")
     if result.forced:
         print("forced response to a drive-speed ripple: |Q0| of the circuit against the "
               "time domain")
