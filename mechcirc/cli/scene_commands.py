@@ -187,12 +187,10 @@ def _cycle(args, scene) -> int:
     print(f"resonances [{u}] and |Q0| [{unit}] at h·Ω:")
     print(head)
     for i, th in enumerate(cmap.theta):
-        if i in cmap.skipped:
-            print(f"  {math.degrees(th):7.2f}  skipped: {cmap.skipped[i]}")
-            continue
-        print(f"  {math.degrees(th):7.2f}  " + " ".join(f"{w:10.5g}" for w in in_unit(W[i], u))
-              + "  "
-              + " ".join(f"{abs(q):11.4g}" for q in cmap.Q0[i]))
+        row = f"skipped: {cmap.skipped[i]}" if i in cmap.skipped else \
+            " ".join(f"{w:10.5g}" for w in in_unit(W[i], u)) + "  " + \
+            " ".join(f"{abs(q):11.4g}" for q in cmap.Q0[i])
+        print(f"  {math.degrees(th):7.2f}  {row}")
     cross = cmap.crossings()
     if cross:
         print("a resonance meets a shaft harmonic at:")

@@ -112,12 +112,10 @@ def _print_separations(result, u) -> None:
         for s in seps[:SHOWN]:
             when = (f"at θ = {s.angle_deg:.4f} deg (revolution {s.revolution + 1}), "
                     if s.revolution >= 0 else "") + f"t = {s.t_open:.6g} s"
-            if math.isnan(s.t_close):
-                print(f"  {when}: still open at the end")
-                continue
             span = (f"{s.duration_deg:.4f} deg, " if s.revolution >= 0 else "") + \
                 f"{s.duration:.4g} s"
-            print(f"  {when}: open {span}; impact velocity {s.impact_velocity:.6g} {u['v']}")
+            print(f"  {when}: " + ("still open at the end" if math.isnan(s.t_close) else
+                                   f"open {span}; impact velocity {s.impact_velocity:.6g} {u['v']}"))
         if len(seps) > SHOWN:
             print(f"  ... {len(seps) - SHOWN} more (--json lists all)")
 
