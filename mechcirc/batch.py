@@ -362,14 +362,9 @@ class Designs:
         if batched.size < D:            # rows for the designs evaluated one by one below
             K, err = _spread(K, batched, D), _spread(err, batched, D)
         single = np.setdiff1d(np.arange(D), batched)
-        failed: dict[int, str] = {}
+        alone, failed = _alone(self, single, lambda d, c: sweep_one(c, omega))
         for d in single.tolist():
-            try:
-                s = sweep_one(self.design(d), omega)
-                K[d], err[d] = s.K, s.error
-            except MechcircError as exc:
-                K[d], err[d] = np.nan, np.inf
-                failed[d] = str(exc)
+            K[d], err[d] = (alone[d].K, alone[d].error) if d in alone else (np.nan, np.inf)
         err = singular_error(K, err)
         kind = self.circuit.require_drive().kind
         return DesignSweep(omega, K, err, kind, self.amplitude[:, None], single, failed)
@@ -400,14 +395,8 @@ class Designs:
         none: NDArray = np.zeros(0, dtype=np.int64)
         which, pole, w, err = found if found is not None else (none,) * 4
         single = np.setdiff1d(np.arange(D), which)
-        failed: dict[int, str] = {}
-        alone: dict[int, list] = {}
-        for d in single.tolist():
-            try:
-                with warnings.catch_warnings(action="ignore"):
-                    alone[d] = find_resonances(self.design(d), omega_max)
-            except MechcircError as exc:
-                failed[d] = str(exc)
+        with warnings.catch_warnings(action="ignore"):
+            alone, failed = _alone(self, single, lambda d, c: find_resonances(c, omega_max))
         R = max([w.shape[1] if w.ndim == 2 else 0] + [len(v) for v in alone.values()])
         live = np.isfinite(w)
         kind = np.full((D, R), "", dtype="<U13")
@@ -693,6 +682,19 @@ def _stacked_matrices(ds: Designs, system, which: NDArray):
     return S, parts
 
 
+def _alone(ds: Designs, which: NDArray, compute) -> tuple[dict, dict[int, str]]:
+    """``compute(d, circuit)`` of each design ``d`` of ``which`` on the single-design path
+    (:meth:`Designs.design`): the results and the messages of those that fail, by design."""
+    results: dict = {}
+    failed: dict[int, str] = {}
+    for d in which.tolist():
+        try:
+            results[d] = compute(d, ds.design(d))
+        except MechcircError as exc:
+            failed[d] = str(exc)
+    return results, failed
+
+
 def _spread(rows: NDArray, where: NDArray, D: int) -> NDArray:
     """``rows`` placed at rows ``where`` of a (D, ...) array (the others unset)."""
     out = np.empty((D, *rows.shape[1:]), dtype=rows.dtype)
@@ -852,17 +854,15 @@ def _extremes(ds: Designs, lo: float, hi: float, res: DesignResonances,
                 out["Q0_max"][fast] = amp / out["K_min"][fast]
             out["omega_at_Q0_max"][fast] = out["omega_at_K_min"][fast]
     rest = np.setdiff1d(np.flatnonzero(~np.isin(np.arange(D), list(res.failed))), fast)
-    for d in rest.tolist():
-        try:
-            c = ds.design(d)
-            # The design's resonances once (find_resonances, as peak would) for all three.
-            found = res.list(d) if res.omega_max is not None and res.omega_max >= hi \
-                else None
-            kmax, smax, qmax = (peak(c, lo, hi, quantity=q, resonances=found)
-                                for q in ("K", "S", "Q0"))
-        except MechcircError as exc:
-            failed[d] = str(exc)
-            continue
+
+    def peaks(d, c):
+        # The design's resonances once (find_resonances, as peak would) for all three.
+        found = res.list(d) if res.omega_max is not None and res.omega_max >= hi else None
+        return [peak(c, lo, hi, quantity=q, resonances=found) for q in ("K", "S", "Q0")]
+
+    done, more = _alone(ds, rest, peaks)
+    failed.update(more)
+    for d, (kmax, smax, qmax) in done.items():
         out["K_max"][d], out["omega_at_K_max"][d] = kmax.value, kmax.omega
         with np.errstate(divide="ignore"):
             out["K_min"][d] = 1.0 / smax.value if smax.value else math.inf
