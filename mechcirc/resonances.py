@@ -692,8 +692,6 @@ def _undamped(M: np.ndarray, K: np.ndarray, vectors: bool = False) -> tuple:
         Krr, Knn, Knr = R.T @ K @ R, N.T @ K @ N, N.T @ K @ R
     X = np.linalg.lstsq(Knn, Knr, rcond=np.finfo(float).eps)[0] if Knn.size else np.zeros((0, Krr.shape[0]))
     Kc = Krr - Knr.T @ X if Knn.size else Krr
-    if Kc.shape[0] == 0:
-        return none
     # Symmetric scaling by the masses gives a standard symmetric eigenproblem.
     d = 1.0 / np.sqrt(mu[massive])
     A = Kc * d[:, None] * d[None, :]
@@ -984,11 +982,16 @@ def batched_roots(ds, omega_max: float | None = None):
     keep = np.flatnonzero(shared_roots_free(problems, damped))
     if not keep.size:
         return None
-    if damped:                        # already polished (on the matrices): sort and go
-        return (which[keep], *sorted_roots(*held_and_released(w_h[keep], w_r[keep], e_h[keep],
-                                                              e_r[keep])))
-    return _polished_designs(ds, which[keep], w_h[keep], e_h[keep], w_r[keep], e_r[keep],
-                             omega_max)
+    pole, s, err = sorted_roots(*held_and_released(w_h[keep], w_r[keep], e_h[keep], e_r[keep]))
+    if damped:                        # already polished (on the matrices)
+        return which[keep], pole, s, err
+    p = ds.plan(which[keep])
+    if p is None:
+        return None
+    w, err = _secant_designs(p, s, pole, err)       # undamped: polished on each design's K
+    if omega_max is not None:
+        w = np.where(w <= omega_max, w, np.nan)
+    return (which[keep], *sorted_roots(pole, 1j * w, np.maximum(err, np.finfo(float).eps)))
 
 
 def template_levers(ds, system, which: np.ndarray) -> np.ndarray:
@@ -1022,19 +1025,6 @@ def shared_roots_free(problems, damped: bool) -> np.ndarray:
         close = np.abs(w_r[:, None, :] - w_h[:, :, None]) / np.abs(w_h[:, :, None]) < \
             1e3 * (e_h[:, :, None] + e_r[:, None, :])
     return ok_h & ok_r & ~close.any(axis=(1, 2))
-
-
-def _polished_designs(ds, which, w_h, e_h, w_r, e_r, omega_max):
-    """:func:`batched_roots`' result for undamped designs: the roots of both problems
-    merged, polished on each design's K by :func:`_secant_designs` and sorted."""
-    pole, w, e0 = sorted_roots(*held_and_released(w_h, w_r, e_h, e_r))
-    p = ds.plan(which)
-    if p is None:
-        return None
-    w, err = _secant_designs(p, w, pole, e0)
-    if omega_max is not None:
-        w = np.where(w <= omega_max, w, np.nan)
-    return (which, *sorted_roots(pole, 1j * w, np.maximum(err, np.finfo(float).eps)))
 
 
 def element_patterns(system) -> dict[str, np.ndarray]:
