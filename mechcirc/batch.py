@@ -29,6 +29,7 @@ at each crank angle).
 
 from __future__ import annotations
 
+import functools
 import math
 import warnings
 from dataclasses import dataclass, field, replace
@@ -43,12 +44,6 @@ from .resonances import design_values, template_levers
 
 __all__ = ["designs", "from_circuits", "network_shape", "Designs", "DesignSweep", "DesignResonances",
            "DesignExtremes"]
-
-
-#: The last few netlists parsed by :func:`designs` (text, source) → Circuit: the chunks
-#: of a study or a benchmark repeat one netlist, and a Circuit is immutable, so its
-#: reduction, nodal system and plan (cached on it) are built once per process.
-_PARSED: dict = {}
 
 
 def designs(netlist: "str | Circuit", params: dict | None = None, *,
@@ -107,17 +102,14 @@ def designs(netlist: "str | Circuit", params: dict | None = None, *,
     return _build(circuit, text, exprs, arrays, D)
 
 
+@functools.lru_cache(maxsize=8)
 def _parsed(text: str, source: str) -> Circuit:
-    """The circuit of a netlist text, parsed once for the last few texts (:data:`_PARSED`)."""
+    """The circuit of a netlist text, parsed once for the last few texts: the chunks of a
+    study or a benchmark repeat one netlist, and a Circuit is immutable, so its
+    reduction, nodal system and plan (cached on it) are built once per process."""
     from .netlist import parse
 
-    circuit = _PARSED.get((text, source))
-    if circuit is None:
-        circuit = parse(text, source=source)
-        if len(_PARSED) >= 8:
-            _PARSED.pop(next(iter(_PARSED)))
-        _PARSED[text, source] = circuit
-    return circuit
+    return parse(text, source=source)
 
 
 def _param_arrays(params: dict) -> tuple[dict, int]:
