@@ -270,8 +270,9 @@ def cmd_sweep(args) -> int:
         except SolverError as exc:      # too large for the eigenproblem: sweep anyway
             warns.append(f"resonance markers left out: {exc}")
     found = [r for r in everything or () if omega[0] <= r.omega <= omega[-1]]
-    # (sweep_sensitivity imported above, where the names were checked)
-    sens = sweep_sensitivity(circuit, result.omega, args.sensitivity) if args.sensitivity else None
+    sens = None
+    if args.sensitivity:            # (imported above, where the names were checked)
+        sens = sweep_sensitivity(circuit, result.omega, args.sensitivity)
     from .._sweep import FLAG_SINGULAR, PEAK_RESONANCE_LIMIT, peak
 
     pk = peak(result, resonances=everything if len(circuit.elements) <= PEAK_RESONANCE_LIMIT
