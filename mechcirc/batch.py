@@ -383,7 +383,9 @@ class Designs:
         from .resonances import batched_roots, find_resonances
 
         D = self.size
-        found = batched_roots(self, omega_max) or _nodal_roots(self, omega_max)
+        found = batched_roots(self, omega_max)
+        if found is None:
+            found = _nodal_roots(self, omega_max)
         none: NDArray = np.zeros(0, dtype=np.int64)
         which, pole, w, err = found if found is not None else (none,) * 4
         single = np.setdiff1d(np.arange(D), which)
