@@ -181,11 +181,18 @@ def from_circuits(circuits) -> "Designs":
     etas = np.array([[e.eta for e in c.elements] for c in circuits], dtype=float).T
     ratios = np.array([[lv.ratio for lv in c.levers] for c in circuits], dtype=float).T
     amplitude = np.array([c.require_drive().amplitude for c in circuits], dtype=float)
+    return Designs(first, {}, values, etas, ratios, amplitude,
+                   _valid(values, etas, ratios, amplitude), None)
+
+
+def _valid(values: NDArray, etas: NDArray, ratios: NDArray, amplitude: NDArray) -> NDArray:
+    """The designs whose values form the template's network: every value, η, value·η and
+    lever ratio positive and finite, and the drive's amplitude finite."""
     with np.errstate(all="ignore"):
         scaled = values * etas
-        valid = (np.isfinite(scaled) & (scaled > 0)).all(axis=0) & \
-            (np.isfinite(ratios) & (ratios > 0)).all(axis=0) & np.isfinite(amplitude)
-    return Designs(first, {}, values, etas, ratios, amplitude, valid, None)
+        ok = np.isfinite(scaled) & (scaled > 0) & (values > 0) & (etas > 0)
+    return ok.all(axis=0) & (np.isfinite(ratios) & (ratios > 0)).all(axis=0) & \
+        np.isfinite(amplitude)
 
 
 def _build(circuit: Circuit, text, exprs, arrays: dict, D: int) -> "Designs":
@@ -228,12 +235,7 @@ def _build(circuit: Circuit, text, exprs, arrays: dict, D: int) -> "Designs":
         .reshape(len(circuit.levers), D)
     d = circuit.drive
     amplitude = value((d.name, d.kind), d.amplitude) if d is not None else np.zeros(D)
-    with np.errstate(all="ignore"):
-        scaled = values * etas
-        ok = np.isfinite(scaled) & (scaled > 0) & (values > 0) & (etas > 0)
-    bad |= ~ok.all(axis=0)
-    bad |= ~(np.isfinite(ratios) & (ratios > 0)).all(axis=0)
-    bad |= ~np.isfinite(amplitude)
+    bad |= ~_valid(values, etas, ratios, amplitude)
     return Designs(circuit, arrays, values, etas, ratios, amplitude, ~bad, text)
 
 
