@@ -985,10 +985,8 @@ def batched_roots(ds, omega_max: float | None = None):
     pole, s, err = sorted_roots(*held_and_released(w_h[keep], w_r[keep], e_h[keep], e_r[keep]))
     if damped:                        # already polished (on the matrices)
         return which[keep], pole, s, err
-    p = ds.plan(which[keep])
-    if p is None:
-        return None
-    w, err = _secant_designs(p, s, pole, err)       # undamped: polished on each design's K
+    # Undamped: polished on each design's K (the plan is there: the tree is, above).
+    w, err = _secant_designs(ds.plan(which[keep]), s, pole, err)
     if omega_max is not None:
         w = np.where(w <= omega_max, w, np.nan)
     return (which[keep], *sorted_roots(pole, 1j * w, np.maximum(err, np.finfo(float).eps)))
