@@ -107,12 +107,10 @@ def cmd_scene(args) -> int:
         model, reduced = build(scene, math.radians(theta_deg), reflect=args.reflect), None
     args.theta = theta_deg
     found = model.circuit.resonances()
-    drawn = None
     if args.mode is not None:
         from ..scene.plots import plot_mode
 
-        drawn = plot_mode(scene, math.radians(theta_deg), args.mode)
-        save_figure(drawn, args.plot)
+        save_figure(plot_mode(scene, math.radians(theta_deg), args.mode), args.plot)
     if args.output:
         write_text(args.output, model.netlist if reduced is None else reduced.netlist)
     if args.json:
@@ -123,11 +121,11 @@ def cmd_scene(args) -> int:
             "resonances": [r.as_dict() for r in found],
             "netlist": model.netlist, "output": args.output,
             "reduced": None if reduced is None else reduced.as_dict()})
-    _print_scene(args, scene, model, found, reduced, drawn is not None)
+    _print_scene(args, scene, model, found, reduced)
     return 0
 
 
-def _print_scene(args, scene, model, found, reduced, drawn: bool) -> None:
+def _print_scene(args, scene, model, found, reduced) -> None:
     """What ``mechcirc scene --theta`` prints without ``--json``."""
     units = "rotary drive: v in rad/s, Q in N·m" if model.rotational else \
         "translational drive: v in m/s, Q in N"
@@ -154,7 +152,7 @@ def _print_scene(args, scene, model, found, reduced, drawn: bool) -> None:
             print(f"  {step}")
     if args.output:
         print(f"wrote {args.output}" + (" (reduced)" if reduced is not None else ""))
-    if drawn:
+    if args.mode is not None:
         print(f"resonance {args.mode} drawn on the linkage into {args.plot}")
 
 
