@@ -265,10 +265,9 @@ def count(least: int = 1, most: int | None = None, *, why: str = ""):
         try:
             value = int(text)
         except ValueError:
-            try:
+            number = math.nan                   # not a number either: not an integer
+            with contextlib.suppress(ValueError):
                 number = float(text)
-            except ValueError:
-                raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
             if not (math.isfinite(number) and number.is_integer()):
                 raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
             value = int(number)
