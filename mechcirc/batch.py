@@ -29,6 +29,7 @@ at each crank angle).
 
 from __future__ import annotations
 
+import functools
 import math
 import warnings
 from dataclasses import dataclass, field, replace
@@ -43,12 +44,6 @@ from .resonances import design_values, template_levers
 
 __all__ = ["designs", "from_circuits", "network_shape", "Designs", "DesignSweep", "DesignResonances",
            "DesignExtremes"]
-
-
-#: The last few netlists parsed by :func:`designs` (text, source) → Circuit: the chunks
-#: of a study or a benchmark repeat one netlist, and a Circuit is immutable, so its
-#: reduction, nodal system and plan (cached on it) are built once per process.
-_PARSED: dict = {}
 
 
 def designs(netlist: "str | Circuit", params: dict | None = None, *,
@@ -107,17 +102,14 @@ def designs(netlist: "str | Circuit", params: dict | None = None, *,
     return _build(circuit, text, exprs, arrays, D)
 
 
+@functools.lru_cache(maxsize=8)
 def _parsed(text: str, source: str) -> Circuit:
-    """The circuit of a netlist text, parsed once for the last few texts (:data:`_PARSED`)."""
+    """The circuit of a netlist text, parsed once for the last few texts: the chunks of a
+    study or a benchmark repeat one netlist, and a Circuit is immutable, so its
+    reduction, nodal system and plan (cached on it) are built once per process."""
     from .netlist import parse
 
-    circuit = _PARSED.get((text, source))
-    if circuit is None:
-        circuit = parse(text, source=source)
-        if len(_PARSED) >= 8:
-            _PARSED.pop(next(iter(_PARSED)))
-        _PARSED[text, source] = circuit
-    return circuit
+    return parse(text, source=source)
 
 
 def _param_arrays(params: dict) -> tuple[dict, int]:
@@ -187,23 +179,30 @@ def from_circuits(circuits) -> "Designs":
                              f"({first.name}): not designs of one network")
     values = np.array([[e.value for e in c.elements] for c in circuits], dtype=float).T
     etas = np.array([[e.eta for e in c.elements] for c in circuits], dtype=float).T
-    ratios = np.array([[lv.ratio for lv in c.levers] for c in circuits], dtype=float).T \
-        .reshape(len(first.levers), len(circuits))
+    ratios = np.array([[lv.ratio for lv in c.levers] for c in circuits], dtype=float).T
     amplitude = np.array([c.require_drive().amplitude for c in circuits], dtype=float)
+    return Designs(first, {}, values, etas, ratios, amplitude,
+                   _valid(values, etas, ratios, amplitude), None)
+
+
+def _valid(values: NDArray, etas: NDArray, ratios: NDArray, amplitude: NDArray) -> NDArray:
+    """The designs whose values form the template's network: every value, η, value·η and
+    lever ratio positive and finite, and the drive's amplitude finite."""
     with np.errstate(all="ignore"):
         scaled = values * etas
-        valid = (np.isfinite(scaled) & (scaled > 0)).all(axis=0) & \
-            (np.isfinite(ratios) & (ratios > 0)).all(axis=0) & np.isfinite(amplitude)
-    return Designs(first, {}, values, etas, ratios, amplitude, valid, None)
+        ok = np.isfinite(scaled) & (scaled > 0) & (values > 0) & (etas > 0)
+    return ok.all(axis=0) & (np.isfinite(ratios) & (ratios > 0)).all(axis=0) & \
+        np.isfinite(amplitude)
 
 
 def _build(circuit: Circuit, text, exprs, arrays: dict, D: int) -> "Designs":
     """Every value of the circuit over the D designs, with the designs it cannot form."""
     from .expressions import evaluate_array
 
+    arrays = {n: np.broadcast_to(a, (D,)).astype(float) for n, a in arrays.items()}
     bad = np.zeros(D, dtype=bool)
     for a in arrays.values():
-        bad |= ~np.isfinite(np.broadcast_to(a, (D,)))
+        bad |= ~np.isfinite(a)
 
     def value(key, default):
         nonlocal bad
@@ -216,8 +215,8 @@ def _build(circuit: Circuit, text, exprs, arrays: dict, D: int) -> "Designs":
 
     pvals: dict = {}
     for name in circuit.params:
-        pvals[name] = np.broadcast_to(arrays[name], (D,)).astype(float) if name in arrays \
-            else value(("param", name), circuit.params[name])
+        pvals[name] = arrays[name] if name in arrays else value(("param", name),
+                                                                 circuit.params[name])
     n_el = len(circuit.elements)
     values, etas = np.empty((n_el, D)), np.empty((n_el, D))
     for i, e in enumerate(circuit.elements):
@@ -236,15 +235,8 @@ def _build(circuit: Circuit, text, exprs, arrays: dict, D: int) -> "Designs":
         .reshape(len(circuit.levers), D)
     d = circuit.drive
     amplitude = value((d.name, d.kind), d.amplitude) if d is not None else np.zeros(D)
-    with np.errstate(all="ignore"):
-        scaled = values * etas
-        ok = np.isfinite(scaled) & (scaled > 0) & (values > 0) & (etas > 0)
-    bad |= ~ok.all(axis=0)
-    bad |= ~(np.isfinite(ratios) & (ratios > 0)).all(axis=0)
-    bad |= ~np.isfinite(amplitude)
-    return Designs(circuit, {n: np.broadcast_to(a, (D,)).astype(float)
-                             for n, a in arrays.items()},
-                   values, etas, ratios, amplitude, ~bad, text)
+    bad |= ~_valid(values, etas, ratios, amplitude)
+    return Designs(circuit, arrays, values, etas, ratios, amplitude, ~bad, text)
 
 
 @dataclass(frozen=True, eq=False)
@@ -329,7 +321,6 @@ class Designs:
         rows = np.array([row[e.name] for e in p.leaves], dtype=np.int64)
         scaled = self.values[rows][:, which] * self.eta[rows][:, which]
         ratios = self.ratios[[lev[lv.name] for lv in p.levers]][:, which]
-        ratios = ratios.reshape(len(p.levers), which.size)
         p = replace(p.with_values(scaled, ratios), numpy=(
             tree, {e.name: scaled[i][:, None] for i, e in enumerate(p.leaves)},
             {lv.name: ratios[i][:, None] for i, lv in enumerate(p.levers)}))
@@ -355,25 +346,19 @@ class Designs:
         batched = np.flatnonzero(self.valid)
         p = self.plan(batched) if batched.size else None
         if p is None:                   # not series–parallel: the nodal path, stacked
-            K, err = np.empty((D, W), dtype=complex), np.empty((D, W))
-            batched, K[batched], err[batched] = _nodal_sweep(self, batched, omega) \
-                if batched.size else (batched, K[:0], err[:0])
+            batched, K, err = _nodal_sweep(self, batched, omega) if batched.size else \
+                (batched, np.empty((0, W), dtype=complex), np.empty((0, W)))
         else:
             from .reduction import evaluate_designs
 
             K, err = evaluate_designs(p, omega, error=True)
             K = singular_limits(K, omega[None, :])
-            if batched.size < D:
-                K, err = _spread(K, batched, D), _spread(err, batched, D)
+        if batched.size < D:            # rows for the designs evaluated one by one below
+            K, err = _spread(K, batched, D), _spread(err, batched, D)
         single = np.setdiff1d(np.arange(D), batched)
-        failed: dict[int, str] = {}
+        alone, failed = _alone(self, single, lambda d, c: sweep_one(c, omega))
         for d in single.tolist():
-            try:
-                s = sweep_one(self.design(d), omega)
-                K[d], err[d] = s.K, s.error
-            except MechcircError as exc:
-                K[d], err[d] = np.nan, np.inf
-                failed[d] = str(exc)
+            K[d], err[d] = (alone[d].K, alone[d].error) if d in alone else (np.nan, np.inf)
         err = singular_error(K, err)
         kind = self.circuit.require_drive().kind
         return DesignSweep(omega, K, err, kind, self.amplitude[:, None], single, failed)
@@ -406,14 +391,8 @@ class Designs:
         none: NDArray = np.zeros(0, dtype=np.int64)
         which, pole, w, err = found if found is not None else (none,) * 4
         single = np.setdiff1d(np.arange(D), which)
-        failed: dict[int, str] = {}
-        alone: dict[int, list] = {}
-        for d in single.tolist():
-            try:
-                with warnings.catch_warnings(action="ignore"):
-                    alone[d] = find_resonances(self.design(d), omega_max)
-            except MechcircError as exc:
-                failed[d] = str(exc)
+        with warnings.catch_warnings(action="ignore"):
+            alone, failed = _alone(self, single, lambda d, c: find_resonances(c, omega_max))
         R = max([w.shape[1] if w.ndim == 2 else 0] + [len(v) for v in alone.values()])
         live = np.isfinite(w)
         kind = np.full((D, R), "", dtype="<U13")
@@ -699,6 +678,19 @@ def _stacked_matrices(ds: Designs, system, which: NDArray):
     return S, parts
 
 
+def _alone(ds: Designs, which: NDArray, compute) -> tuple[dict, dict[int, str]]:
+    """``compute(d, circuit)`` of each design ``d`` of ``which`` on the single-design path
+    (:meth:`Designs.design`): the results and the messages of those that fail, by design."""
+    results: dict = {}
+    failed: dict[int, str] = {}
+    for d in which.tolist():
+        try:
+            results[d] = compute(d, ds.design(d))
+        except MechcircError as exc:
+            failed[d] = str(exc)
+    return results, failed
+
+
 def _spread(rows: NDArray, where: NDArray, D: int) -> NDArray:
     """``rows`` placed at rows ``where`` of a (D, ...) array (the others unset)."""
     out = np.empty((D, *rows.shape[1:]), dtype=rows.dtype)
@@ -823,12 +815,11 @@ def _extremes(ds: Designs, lo: float, hi: float, res: DesignResonances,
     D = ds.size
     out = {k: np.full(D, np.nan) for k in ("K_min", "omega_at_K_min", "K_max",
                                            "omega_at_K_max", "Q0_max", "omega_at_Q0_max")}
-    lossless = res.count >= 0
-    lossless &= ~np.isin(np.arange(D), res.single)
+    batched = ~np.isin(np.arange(D), res.single)
     with np.errstate(invalid="ignore"):
         undamped = np.where(res.count[:, None] > np.arange(res.omega.shape[1])[None, :],
                             res.zeta <= UNDAMPED_ZETA, True).all(axis=1)
-    fast = np.flatnonzero(lossless & undamped)
+    fast = np.flatnonzero(batched & undamped)
     failed = dict(res.failed)
     if fast.size:
         if ends is None:
@@ -859,17 +850,15 @@ def _extremes(ds: Designs, lo: float, hi: float, res: DesignResonances,
                 out["Q0_max"][fast] = amp / out["K_min"][fast]
             out["omega_at_Q0_max"][fast] = out["omega_at_K_min"][fast]
     rest = np.setdiff1d(np.flatnonzero(~np.isin(np.arange(D), list(res.failed))), fast)
-    for d in rest.tolist():
-        try:
-            c = ds.design(d)
-            # The design's resonances once (find_resonances, as peak would) for all three.
-            found = res.list(d) if res.omega_max is not None and res.omega_max >= hi \
-                else None
-            kmax, smax, qmax = (peak(c, lo, hi, quantity=q, resonances=found)
-                                for q in ("K", "S", "Q0"))
-        except MechcircError as exc:
-            failed[d] = str(exc)
-            continue
+
+    def peaks(d, c):
+        # The design's resonances once (find_resonances, as peak would) for all three.
+        found = res.list(d) if res.omega_max is not None and res.omega_max >= hi else None
+        return [peak(c, lo, hi, quantity=q, resonances=found) for q in ("K", "S", "Q0")]
+
+    done, more = _alone(ds, rest, peaks)
+    failed.update(more)
+    for d, (kmax, smax, qmax) in done.items():
         out["K_max"][d], out["omega_at_K_max"][d] = kmax.value, kmax.omega
         with np.errstate(divide="ignore"):
             out["K_min"][d] = 1.0 / smax.value if smax.value else math.inf

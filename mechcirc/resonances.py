@@ -133,18 +133,13 @@ class Resonances(list):
         (f and f_d) or ``"rpm"`` (n and n_d); then ζ [1] and the relative error.
         """
         name, _ = FREQUENCY_UNITS[unit]
-        if unit == "rad/s":
-            head = (f"{'kind':<14} {'omega [rad/s]':>17} {'f [Hz]':>14} {'omega_d [rad/s]':>17} "
-                    f"{'zeta':>10} {'rel. error':>10}")
-            rows = [f"{r.kind:<14} {r.omega:>17.10g} {r.f_hz:>14.8g} {r.omega_d:>17.10g} "
-                    f"{r.zeta:>10.4g} {r.error:>10.1e}" for r in self]
-        else:
-            head = (f"{'kind':<14} {f'{name} [{unit}]':>17} {f'{name}_d [{unit}]':>17} "
-                    f"{'zeta':>10} {'rel. error':>10}")
-            rows = [f"{r.kind:<14} {in_unit(r.omega, unit):>17.10g} "
-                    f"{in_unit(r.omega_d, unit):>17.10g} {r.zeta:>10.4g} {r.error:>10.1e}"
-                    for r in self]
-        return [head] + rows
+        hz = unit == "rad/s"            # omega in rad/s has f in Hz beside it
+        head = (f"{'kind':<14} {f'{name} [{unit}]':>17}" + (f" {'f [Hz]':>14}" if hz else "")
+                + f" {f'{name}_d [{unit}]':>17} {'zeta':>10} {'rel. error':>10}")
+        return [head] + [f"{r.kind:<14} {in_unit(r.omega, unit):>17.10g}"
+                         + (f" {r.f_hz:>14.8g}" if hz else "")
+                         + f" {in_unit(r.omega_d, unit):>17.10g} {r.zeta:>10.4g} {r.error:>10.1e}"
+                         for r in self]
 
     def __repr__(self) -> str:
         return "Resonances([])  (none found)" if not self else "\n".join(self.table())
@@ -697,8 +692,6 @@ def _undamped(M: np.ndarray, K: np.ndarray, vectors: bool = False) -> tuple:
         Krr, Knn, Knr = R.T @ K @ R, N.T @ K @ N, N.T @ K @ R
     X = np.linalg.lstsq(Knn, Knr, rcond=np.finfo(float).eps)[0] if Knn.size else np.zeros((0, Krr.shape[0]))
     Kc = Krr - Knr.T @ X if Knn.size else Krr
-    if Kc.shape[0] == 0:
-        return none
     # Symmetric scaling by the masses gives a standard symmetric eigenproblem.
     d = 1.0 / np.sqrt(mu[massive])
     A = Kc * d[:, None] * d[None, :]
@@ -989,11 +982,14 @@ def batched_roots(ds, omega_max: float | None = None):
     keep = np.flatnonzero(shared_roots_free(problems, damped))
     if not keep.size:
         return None
-    if damped:                        # already polished (on the matrices): sort and go
-        return (which[keep], *sorted_roots(*held_and_released(w_h[keep], w_r[keep], e_h[keep],
-                                                              e_r[keep])))
-    return _polished_designs(ds, which[keep], w_h[keep], e_h[keep], w_r[keep], e_r[keep],
-                             omega_max)
+    pole, s, err = sorted_roots(*held_and_released(w_h[keep], w_r[keep], e_h[keep], e_r[keep]))
+    if damped:                        # already polished (on the matrices)
+        return which[keep], pole, s, err
+    # Undamped: polished on each design's K (the plan is there: the tree is, above).
+    w, err = _secant_designs(ds.plan(which[keep]), s, pole, err)
+    if omega_max is not None:
+        w = np.where(w <= omega_max, w, np.nan)
+    return (which[keep], *sorted_roots(pole, 1j * w, np.maximum(err, np.finfo(float).eps)))
 
 
 def template_levers(ds, system, which: np.ndarray) -> np.ndarray:
@@ -1027,19 +1023,6 @@ def shared_roots_free(problems, damped: bool) -> np.ndarray:
         close = np.abs(w_r[:, None, :] - w_h[:, :, None]) / np.abs(w_h[:, :, None]) < \
             1e3 * (e_h[:, :, None] + e_r[:, None, :])
     return ok_h & ok_r & ~close.any(axis=(1, 2))
-
-
-def _polished_designs(ds, which, w_h, e_h, w_r, e_r, omega_max):
-    """:func:`batched_roots`' result for undamped designs: the roots of both problems
-    merged, polished on each design's K by :func:`_secant_designs` and sorted."""
-    pole, w, e0 = sorted_roots(*held_and_released(w_h, w_r, e_h, e_r))
-    p = ds.plan(which)
-    if p is None:
-        return None
-    w, err = _secant_designs(p, w, pole, e0)
-    if omega_max is not None:
-        w = np.where(w <= omega_max, w, np.nan)
-    return (which, *sorted_roots(pole, 1j * w, np.maximum(err, np.finfo(float).eps)))
 
 
 def element_patterns(system) -> dict[str, np.ndarray]:

@@ -272,8 +272,7 @@ def _axis(name, value) -> list[float]:
     path = ("grid", name)
     if isinstance(value, list):
         return [_number(path, v, f"grid.{name}") for v in value]
-    lo = _number((*path, "min"), value["min"], f"grid.{name}.min")
-    hi = _number((*path, "max"), value["max"], f"grid.{name}.max")
+    lo, hi = (_number((*path, end), value[end], f"grid.{name}.{end}") for end in ("min", "max"))
     log = value.get("log", False)
     if log and (lo <= 0 or hi <= 0):
         _fail((*path, "log"), f"grid.{name}: log spacing needs min and max > 0")
@@ -529,8 +528,8 @@ def _random_range(kind, name, r) -> tuple[float, float, bool]:
         _fail(where, f"{kind}.params.{name} must be {{min, max[, log]}}"
                      + (f": unknown key {extra[0]!r}"
                         f"{did_you_mean(extra[0], ('min', 'max', 'log'))}" if extra else ""))
-    lo = _number((*where, "min"), r["min"], f"{kind}.params.{name}.min")
-    hi = _number((*where, "max"), r["max"], f"{kind}.params.{name}.max")
+    lo, hi = (_number((*where, end), r[end], f"{kind}.params.{name}.{end}")
+              for end in ("min", "max"))
     if not lo <= hi or (r.get("log") and lo <= 0):
         _fail(where, f"{kind}.params.{name}: need min <= max (and > 0 with log)")
     return lo, hi, bool(r.get("log", False))
@@ -665,8 +664,7 @@ def _sweep_omega(o, n_points: int) -> tuple[float, float, int, bool]:
         _fail(("omega",), "analysis 'sweep' needs an [omega] table with min and max "
                           "(and points, log)")
     _check_keys("omega", o)
-    lo = _omega(("omega", "min"), o["min"], "omega.min")
-    hi = _omega(("omega", "max"), o["max"], "omega.max")
+    lo, hi = (_omega(("omega", end), o[end], f"omega.{end}") for end in ("min", "max"))
     npts = _integer(("omega", "points"), o.get("points", 200), "omega.points", 1,
                     MAX_STUDY_SWEEP_POINTS)
     log = bool(o.get("log", False))
@@ -946,11 +944,9 @@ def _row(columns: list[str], rec: list[str]) -> dict | None:
     row: dict[str, str | int | float] = {}
     try:
         for name, text in zip(columns, rec, strict=True):
-            if name == "status":
-                if text not in ("ok", "error"):
+            if name in ("status", "error"):
+                if name == "status" and text not in ("ok", "error"):
                     return None
-                row[name] = text
-            elif name == "error":
                 row[name] = text
             elif name in ("index", "n_flagged"):
                 if name == "index" and (not text or int(text) < 0):
@@ -1051,13 +1047,16 @@ def _run_task(spec: StudySpec, points, curves: bool, keep: bool, lines: bool) ->
     batch = [(int(i), dict(zip(spec.params, v))) for i, v in zip(index.tolist(),
                                                                   values.tolist())]
     rows, K = run_batch(spec, batch, curves) if curves else (run_batch(spec, batch), None)
-    text = ""
-    if lines:
-        buf = io.StringIO()
-        csv.writer(buf).writerows(_journal_record(r, spec.columns) for r in rows)
-        text = buf.getvalue()
+    text = _csv_text(_journal_record(r, spec.columns) for r in rows) if lines else ""
     bad = [r for r in rows if r["status"] != "ok"]
     return _TaskOut(text, len(rows), bad, rows if keep or curves else None, K)
+
+
+def _csv_text(records) -> str:
+    """CSV lines of ``records`` (lists of cells) as the csv module writes them."""
+    buf = io.StringIO()
+    csv.writer(buf).writerows(records)
+    return buf.getvalue()
 
 
 def run_study(spec: StudySpec, *, output: str | os.PathLike | None = None,
@@ -1211,9 +1210,8 @@ def _execute(spec: StudySpec, done: list, dask: tuple, workers: int | None,
     client = _dask_client(*dask) if dask[0] else None
     try:
         if client is not None:
-            return "dask", _run_dask(spec, have, n_todo, client, batch_size, take, take.task)
-        return _run_local(spec, have, n_todo, workers or os.cpu_count() or 1, batch_size, take,
-                          take.task)
+            return "dask", _run_dask(spec, have, n_todo, client, batch_size, take)
+        return _run_local(spec, have, n_todo, workers or os.cpu_count() or 1, batch_size, take)
     finally:
         take.close()
 
@@ -1422,9 +1420,7 @@ def _write_output(output, parquet: bool, spec: StudySpec, journal: str) -> None:
             json.dump(record, fh, indent=1, ensure_ascii=False)
             fh.write("\n")
         with open(out.path(output), "wb") as fh:
-            head = io.StringIO()
-            csv.writer(head).writerow(columns)
-            fh.write(head.getvalue().encode("utf-8"))
+            fh.write(_csv_text([columns]).encode("utf-8"))
             fh.writelines(b"".join(lines) for lines in chunks)
             fh.flush()
             os.fsync(fh.fileno())
@@ -1546,6 +1542,7 @@ def _read_parquet(path):
     return recorded, table
 
 
+@contextlib.contextmanager
 def _lock(output):
     """Hold ``OUTPUT.lock`` while a study writes ``output`` (a context manager).
 
@@ -1565,44 +1562,39 @@ def _lock(output):
                              f"({holder or 'pid unknown'}, per {path}); wait for it to end, "
                              f"or write another -o{hint}")
 
-    @contextlib.contextmanager
-    def hold():
+    try:
+        import fcntl
+    except ImportError:
+        fcntl = None
+    while True:
         try:
-            import fcntl
-        except ImportError:
-            fcntl = None
-        while True:
-            try:
-                fd = os.open(path, os.O_RDWR | os.O_CREAT | (0 if fcntl else os.O_EXCL), 0o644)
-            except FileExistsError:
-                raise held(_holder(path), f" (if it is no longer running, delete {path})") \
-                    from None
-            except OSError as exc:
-                raise MechcircError(f"{os.fspath(output)}: cannot create the lock file {path}: "
-                                    f"{exc.strerror}") from None
-            if fcntl is None:
+            fd = os.open(path, os.O_RDWR | os.O_CREAT | (0 if fcntl else os.O_EXCL), 0o644)
+        except FileExistsError:
+            raise held(_holder(path), f" (if it is no longer running, delete {path})") from None
+        except OSError as exc:
+            raise MechcircError(f"{os.fspath(output)}: cannot create the lock file {path}: "
+                                f"{exc.strerror}") from None
+        if fcntl is None:
+            break
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            os.close(fd)
+            raise held(_holder(path)) from None
+        with contextlib.suppress(FileNotFoundError):   # the holder may have removed it
+            if os.path.samestat(os.fstat(fd), os.stat(path)):
                 break
-            try:
-                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except OSError:
-                os.close(fd)
-                raise held(_holder(path)) from None
-            with contextlib.suppress(FileNotFoundError):   # the holder may have removed it
-                if os.path.samestat(os.fstat(fd), os.stat(path)):
-                    break
-            os.close(fd)
-        _LOCK_FDS.add(fd)
-        try:
-            os.ftruncate(fd, 0)
-            os.write(fd, f"{me}\n".encode())
-            yield
-        finally:
-            with contextlib.suppress(OSError):
-                os.unlink(path)         # before the lock goes: see the samestat check
-            _LOCK_FDS.discard(fd)
-            os.close(fd)
-
-    return hold()
+        os.close(fd)
+    _LOCK_FDS.add(fd)
+    try:
+        os.ftruncate(fd, 0)
+        os.write(fd, f"{me}\n".encode())
+        yield
+    finally:
+        with contextlib.suppress(OSError):
+            os.unlink(path)         # before the lock goes: see the samestat check
+        _LOCK_FDS.discard(fd)
+        os.close(fd)
 
 
 #: Descriptors of the output locks this process holds: a forked worker closes its
@@ -1650,33 +1642,31 @@ def task_size(spec: StudySpec, n_points: int, n_workers: int,
     return max(1, min(fit, share))
 
 
-def _run_local(spec, have, n_todo, n_workers, batch_size, take,
-               task: tuple) -> tuple[str, int]:
+def _run_local(spec, have, n_todo, n_workers, batch_size, take) -> tuple[str, int]:
     size = task_size(spec, n_todo, n_workers, batch_size)
     if n_workers <= 1 or n_todo <= size:
         # One batch or one worker: starting processes would cost more than it saves.
         for batch in _todo(spec, have, size):
-            take(_run_task(spec, batch, *task))
+            take(_run_task(spec, batch, *take.task))
         return "inline", 1
     from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
     with ProcessPoolExecutor(max_workers=n_workers, initializer=_die_with_parent,
                              initargs=(os.getpid(),)) as pool:
         light = _for_workers(spec)
+        batches = _todo(spec, have, size)
         pending: set = set()
         try:
             # A few tasks per worker in flight, the next made as one finishes: the
             # points of a large study are never all in memory as tasks.
-            for batch in _todo(spec, have, size):
-                pending.add(pool.submit(_run_task, light, batch, *task))
-                if len(pending) >= 2 * n_workers:
-                    finished, pending = wait(pending, return_when=FIRST_COMPLETED)
-                    for fut in finished:
-                        take(fut.result())
+            pending.update(pool.submit(_run_task, light, batch, *take.task)
+                           for batch in itertools.islice(batches, 2 * n_workers))
             while pending:
                 finished, pending = wait(pending, return_when=FIRST_COMPLETED)
                 for fut in finished:
                     take(fut.result())
+                    if (batch := next(batches, None)) is not None:
+                        pending.add(pool.submit(_run_task, light, batch, *take.task))
         except BaseException:
             for fut in pending:
                 fut.cancel()
@@ -1745,7 +1735,7 @@ def _dask_client(scheduler: str, timeout: float):
     return client
 
 
-def _run_dask(spec, have, n_todo, client, batch_size, take, task: tuple) -> int:
+def _run_dask(spec, have, n_todo, client, batch_size, take) -> int:
     from distributed import as_completed
 
     try:
@@ -1759,13 +1749,13 @@ def _run_dask(spec, have, n_todo, client, batch_size, take, task: tuple) -> int:
                                 "started") from None
         # A few tasks per worker thread in flight, the next submitted as one finishes.
         batches = _todo(spec, have, size)
-        futures = as_completed([client.submit(_run_task, spec_future, batch, *task, pure=False)
+        futures = as_completed([client.submit(_run_task, spec_future, batch, *take.task,
+                                              pure=False)
                                 for batch in itertools.islice(batches, 4 * n_workers)])
         for fut in futures:
             take(fut.result())
-            batch = next(batches, None)
-            if batch is not None:
-                futures.add(client.submit(_run_task, spec_future, batch, *task, pure=False))
+            if (batch := next(batches, None)) is not None:
+                futures.add(client.submit(_run_task, spec_future, batch, *take.task, pure=False))
         return n_workers
     finally:
         client.close()

@@ -265,10 +265,9 @@ def count(least: int = 1, most: int | None = None, *, why: str = ""):
         try:
             value = int(text)
         except ValueError:
-            try:
+            number = math.nan                   # not a number either: not an integer
+            with contextlib.suppress(ValueError):
                 number = float(text)
-            except ValueError:
-                raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
             if not (math.isfinite(number) and number.is_integer()):
                 raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
             value = int(number)
@@ -368,9 +367,8 @@ def add_unit_option(p, what: str | None = None) -> None:
 
 def frequency_text(omega: float, unit: str = "rad/s", digits: int = 6) -> str:
     """``omega = 300 rad/s (47.7465 Hz)``, or in ``unit`` of --unit: ``f = 47.7465 Hz``."""
-    if unit == "rad/s":
-        return f"omega = {omega:.{digits}g} rad/s ({in_unit(omega, 'Hz'):.6g} Hz)"
-    return f"{FREQUENCY_UNITS[unit][0]} = {in_unit(omega, unit):.{digits}g} {unit}"
+    hz = f" ({in_unit(omega, 'Hz'):.6g} Hz)" if unit == "rad/s" else ""     # f beside omega
+    return f"{FREQUENCY_UNITS[unit][0]} = {in_unit(omega, unit):.{digits}g} {unit}{hz}"
 
 
 def frequency_symbol(unit: str) -> str:

@@ -372,22 +372,19 @@ def _print_sweep(args, result, extra, sens, pk, notes, dropped) -> None:
     how = "adaptive grid points" if args.adaptive else "points"
     print(f"{args.file}: {len(result.omega)} {how}, {FREQUENCY_UNITS[unit][0]} {in_unit(result.omega[0], unit):g} .. "
           f"{in_unit(result.omega[-1], unit):g} {unit}, method {result.method}")
+    ranges = [("|K|", result.K, units["K"], "")]
+    if result.drive.kind == "force":    # Q0 is the prescribed F0: show the response
+        ranges.append(("|v0|", result.v0, units["v"], " (velocity response v0 = F0·K to the "
+                       f"force drive F0 = {result.drive.amplitude:g} {units['Q']})"))
+    else:
+        ranges.append(("|Q0|", result.Q0, units["Q"], ""))
+    ranges += [(f"|{key[0]}{key[key.index('('):]}|", values, units[key[0]], "")
+               for key, values in extra.items()]
     with np.errstate(all="ignore"):
-        absK = np.abs(result.K)
-        print(f"  |K|  {np.nanmin(absK):.4g} .. {np.nanmax(absK):.4g} {units['K']} on the grid")
-        if result.drive.kind == "force":    # Q0 is the prescribed F0: show the response
-            absV = np.abs(result.v0)
-            print(f"  |v0| {np.nanmin(absV):.4g} .. {np.nanmax(absV):.4g} {units['v']} on the "
-                  f"grid (velocity response v0 = F0·K to the force drive F0 = "
-                  f"{result.drive.amplitude:g} {units['Q']})")
-        else:
-            absQ = np.abs(result.Q0)
-            print(f"  |Q0| {np.nanmin(absQ):.4g} .. {np.nanmax(absQ):.4g} {units['Q']} on the "
-                  "grid")
-        for key, values in extra.items():
-            label = f"|{key[0]}{key[key.index('('):]}|"
-            print(f"  {label:<4} {np.nanmin(values):.4g} .. {np.nanmax(values):.4g} "
-                  f"{units[key[0]]} on the grid")
+        for label, values, its_unit, more in ranges:
+            size = np.abs(values)
+            print(f"  {label:<4} {np.nanmin(size):.4g} .. {np.nanmax(size):.4g} {its_unit} on "
+                  f"the grid{more}")
     print(f"  {_peak_text(pk, units, unit)}")
     if sens is not None:
         _print_sweep_sensitivity(sens, result)

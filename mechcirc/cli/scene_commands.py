@@ -107,12 +107,10 @@ def cmd_scene(args) -> int:
         model, reduced = build(scene, math.radians(theta_deg), reflect=args.reflect), None
     args.theta = theta_deg
     found = model.circuit.resonances()
-    drawn = None
     if args.mode is not None:
         from ..scene.plots import plot_mode
 
-        drawn = plot_mode(scene, math.radians(theta_deg), args.mode)
-        save_figure(drawn, args.plot)
+        save_figure(plot_mode(scene, math.radians(theta_deg), args.mode), args.plot)
     if args.output:
         write_text(args.output, model.netlist if reduced is None else reduced.netlist)
     if args.json:
@@ -123,11 +121,11 @@ def cmd_scene(args) -> int:
             "resonances": [r.as_dict() for r in found],
             "netlist": model.netlist, "output": args.output,
             "reduced": None if reduced is None else reduced.as_dict()})
-    _print_scene(args, scene, model, found, reduced, drawn is not None)
+    _print_scene(args, scene, model, found, reduced)
     return 0
 
 
-def _print_scene(args, scene, model, found, reduced, drawn: bool) -> None:
+def _print_scene(args, scene, model, found, reduced) -> None:
     """What ``mechcirc scene --theta`` prints without ``--json``."""
     units = "rotary drive: v in rad/s, Q in N·m" if model.rotational else \
         "translational drive: v in m/s, Q in N"
@@ -143,10 +141,8 @@ def _print_scene(args, scene, model, found, reduced, drawn: bool) -> None:
     print("resonances (K = 0) and anti-resonances (K = ∞):")
     for r in found:
         z = f"  zeta={r.zeta:.4g}" if r.zeta else ""
-        if args.unit == "rad/s":
-            print(f"  {r.kind:<14} {r.omega:12.6g} rad/s  {r.f_hz:10.5g} Hz{z}")
-        else:
-            print(f"  {r.kind:<14} {in_unit(r.omega, args.unit):12.6g} {args.unit}{z}")
+        hz = f"  {r.f_hz:10.5g} Hz" if args.unit == "rad/s" else ""      # f beside omega
+        print(f"  {r.kind:<14} {in_unit(r.omega, args.unit):12.6g} {args.unit}{hz}{z}")
     if reduced is not None:
         what = "K at the drive" if reduced.output is None else f"the force in {reduced.output}"
         print(f"reduced for {what} over ω ∈ [{reduced.band[0]:g}, {reduced.band[1]:g}] rad/s: "
@@ -156,7 +152,7 @@ def _print_scene(args, scene, model, found, reduced, drawn: bool) -> None:
             print(f"  {step}")
     if args.output:
         print(f"wrote {args.output}" + (" (reduced)" if reduced is not None else ""))
-    if drawn:
+    if args.mode is not None:
         print(f"resonance {args.mode} drawn on the linkage into {args.plot}")
 
 
@@ -189,12 +185,10 @@ def _cycle(args, scene) -> int:
     print(f"resonances [{u}] and |Q0| [{unit}] at h·Ω:")
     print(head)
     for i, th in enumerate(cmap.theta):
-        if i in cmap.skipped:
-            print(f"  {math.degrees(th):7.2f}  skipped: {cmap.skipped[i]}")
-            continue
-        print(f"  {math.degrees(th):7.2f}  " + " ".join(f"{w:10.5g}" for w in in_unit(W[i], u))
-              + "  "
-              + " ".join(f"{abs(q):11.4g}" for q in cmap.Q0[i]))
+        row = f"skipped: {cmap.skipped[i]}" if i in cmap.skipped else \
+            " ".join(f"{w:10.5g}" for w in in_unit(W[i], u)) + "  " + \
+            " ".join(f"{abs(q):11.4g}" for q in cmap.Q0[i])
+        print(f"  {math.degrees(th):7.2f}  {row}")
     cross = cmap.crossings()
     if cross:
         print("a resonance meets a shaft harmonic at:")
@@ -456,12 +450,10 @@ def cmd_crosscheck_scene(args) -> int:
     print(f"{'circuit ' + sym + '_n':>14} {'ζ':>9} {'ringing ' + sym + '_n':>14} {'ζ':>9} "
           f"{'rel. diff':>10}  verdict")
     for r in result.resonances:
-        if r["ringing_omega"] is None:
-            print(f"{in_unit(r['omega'], u):>14.6g} {r['zeta']:>9.4g}  {verdict_text(r)}")
-            continue
-        print(f"{in_unit(r['omega'], u):>14.6g} {r['zeta']:>9.4g} "
-              f"{in_unit(r['ringing_omega'], u):>14.6g} {r['ringing_zeta']:>9.4g} "
-              f"{r['rel_error']:>10.2e}  {verdict_text(r)}")
+        ringing = "" if r["ringing_omega"] is None else (
+            f" {in_unit(r['ringing_omega'], u):>14.6g} {r['ringing_zeta']:>9.4g} "
+            f"{r['rel_error']:>10.2e}")
+        print(f"{in_unit(r['omega'], u):>14.6g} {r['zeta']:>9.4g}{ringing}  {verdict_text(r)}")
     if result.forced:
         print("forced response to a drive-speed ripple: |Q0| of the circuit against the "
               "time domain")

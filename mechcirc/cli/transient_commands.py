@@ -112,12 +112,10 @@ def _print_separations(result, u) -> None:
         for s in seps[:SHOWN]:
             when = (f"at θ = {s.angle_deg:.4f} deg (revolution {s.revolution + 1}), "
                     if s.revolution >= 0 else "") + f"t = {s.t_open:.6g} s"
-            if math.isnan(s.t_close):
-                print(f"  {when}: still open at the end")
-                continue
             span = (f"{s.duration_deg:.4f} deg, " if s.revolution >= 0 else "") + \
                 f"{s.duration:.4g} s"
-            print(f"  {when}: open {span}; impact velocity {s.impact_velocity:.6g} {u['v']}")
+            print(f"  {when}: " + ("still open at the end" if math.isnan(s.t_close) else
+                                   f"open {span}; impact velocity {s.impact_velocity:.6g} {u['v']}"))
         if len(seps) > SHOWN:
             print(f"  ... {len(seps) - SHOWN} more (--json lists all)")
 
@@ -145,12 +143,10 @@ def cmd_crosscheck_netlist(args) -> int:
     print(f"(a) resonances / anti-resonances vs ringing of the impulse response [{fu}]; "
           "rel. diff = |s_time − s_freq| / |s_freq| of the pole s = −σ + iω_d")
     for r in result.resonances:
-        head = f"    {r['kind']:>13} {sym}_d {in_unit(r['omega_d'], fu):12.6g}"
-        if r["ringing_omega"] is None:
-            print(f"{head}: {verdict_text(r)}")
-            continue
-        print(f"{head}  ringing {in_unit(r['ringing_omega'], fu):12.6g}  decay {r['decay']:.5g} "
-              f"1/s (expected {r['decay_expected']:.5g})  rel. diff {r['rel_error']:.2e}: "
+        ringing = "" if r["ringing_omega"] is None else (
+            f"  ringing {in_unit(r['ringing_omega'], fu):12.6g}  decay {r['decay']:.5g} 1/s "
+            f"(expected {r['decay_expected']:.5g})  rel. diff {r['rel_error']:.2e}")
+        print(f"    {r['kind']:>13} {sym}_d {in_unit(r['omega_d'], fu):12.6g}{ringing}: "
               f"{verdict_text(r)}")
     from ..circuit import units_of
 
@@ -159,11 +155,9 @@ def cmd_crosscheck_netlist(args) -> int:
     print(f"(b) {label} from the sweep vs the harmonic transient started in its periodic "
           f"steady state, at {sym} [{fu}]")
     for s in result.steady_state:
-        if s["measured"] is None:
-            print(f"    {sym} {in_unit(s['omega'], fu):12.6g}: {verdict_text(s)}")
-            continue
-        print(f"    {sym} {in_unit(s['omega'], fu):12.6g}: sweep {s['expected']:.8g}  "
-              f"transient {s['measured']:.8g}  rel. diff {s['rel_error']:.2e} (departure from "
-              f"a sinusoid {s['periodic_deviation']:.1e}): {verdict_text(s)}")
+        measured = "" if s["measured"] is None else (
+            f" sweep {s['expected']:.8g}  transient {s['measured']:.8g}  rel. diff "
+            f"{s['rel_error']:.2e} (departure from a sinusoid {s['periodic_deviation']:.1e}):")
+        print(f"    {sym} {in_unit(s['omega'], fu):12.6g}:{measured} {verdict_text(s)}")
     print(summary_line(summary))
     return summary["exit"]
