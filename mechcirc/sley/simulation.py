@@ -53,7 +53,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import SleyAccuracyWarning
-from .models import ParameterError, SleyParameters, start_angle
+from .models import ParameterError, SleyParameters, linkage_constants, start_angle
 
 __all__ = ["SleyResult", "simulate", "simulate_params", "simulate_batch", "METHODS",
            "table_error", "start_angle", "SleyAccuracyWarning"]
@@ -331,8 +331,8 @@ def simulate_params(params: SleyParameters, revolutions: int = 5, method: str | 
     method = _checked(method, revolutions, revolution, points_per_revolution, steps_per_period,
                       rtol)
     params.fourbar()                            # GeometryError: not a crank-rocker
-    theta0 = start_angle(params)
-    linkage = _linkage_constants(params.l2P, params.l3, params.l4, params.d, params.branch)
+    theta0, *linkage = linkage_constants(params.l2P, params.l3, params.l4, params.d,
+                                         params.branch)
     scene, model = _model(params, table_points)
     from ..scene.simulation import SceneAccuracyWarning, simulate_scene
 
@@ -390,10 +390,10 @@ def _checked(method, revolutions, revolution, points_per_revolution, steps_per_p
     return method
 
 
-def _result(params: SleyParameters, model, m, theta0: float, linkage: tuple,
+def _result(params: SleyParameters, model, m, theta0: float, linkage: list,
             notes: list) -> SleyResult:
     """The scene's motion under the paper's names and state convention (``linkage``:
-    :func:`_linkage_constants`)."""
+    :func:`~mechcirc.sley.models.linkage_constants` but θ0)."""
     v = m.values
     both = params.drive == "both-sides"
     w = params.omega
@@ -429,19 +429,6 @@ def _result(params: SleyParameters, model, m, theta0: float, linkage: tuple,
 
 #: The paper's output names (aliases in the scene).
 ALIAS_NAMES = ("eps2P", "eps4P", "eps5P", "eps4T", "M2V", "M5V")
-
-
-@lru_cache(maxsize=64)
-def _linkage_constants(l2P, l3, l4, d, branch):
-    """(beat-up crank angle φP, offset of the sley's mid-swing from its pose angle, the
-    extrema of ν) of the four-bar: what each call would otherwise recompute."""
-    from .models import fourbar_of_lengths
-
-    fb = fourbar_of_lengths(l2P, l3, l4, d, branch)
-    (_, lo), (_, hi) = fb.nu_extrema()
-    ph = fb.evaluate(np.linspace(0.0, TWO_PI, 721)).phi4
-    sley_off = fb.transfer(0.0)[0] - 0.5 * (ph.max() + ph.min())
-    return fb.dead_centres()[0].theta, sley_off, lo, hi
 
 
 # -------------------------------------------------------------------- batch
