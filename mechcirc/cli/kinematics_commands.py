@@ -296,10 +296,9 @@ def cmd_frame(args) -> int:
             f"frame loading needs a crank-rocker whose crank turns fully; this four-bar is a "
             f"{fb.grashof_class} {fb.linkage_type} (see mechcirc fourbar)")
     omega = args.omega if args.omega is not None else convert_frequency(args.rpm, "rpm", "rad/s")
-    m2, m3, m4 = args.mass
     links = {name: LinkMass(m, tuple(x * k for x in getattr(args, f"{name}_com")),
                             getattr(args, f"{name}_inertia"))
-             for name, m in (("crank", m2), ("coupler", m3), ("rocker", m4))}
+             for name, m in zip(("crank", "coupler", "rocker"), args.mass)}
     theta = np.radians(np.linspace(0.0, 360.0, args.points))
     reed = beat_up_force(fb, args.reed_force, args.beat_window)
     res = frame_loading(fb, theta, omega, reed_force=reed,
