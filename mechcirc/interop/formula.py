@@ -154,7 +154,7 @@ class _Builder:
 
     def build_nodal(self):
         """K from the nodal equations, solved symbolically (networks without a tree)."""
-        from ..nodal import assemble
+        from ..nodal import assemble, stamps
 
         sp = self.sp
         w = self.omega
@@ -171,8 +171,6 @@ class _Builder:
             raise MechcircError(
                 f"the network has no series–parallel tree and {system.size} nodal unknowns; "
                 f"a symbolic solution is attempted up to {MAX_NODAL_UNKNOWNS}")
-        from ..nodal import stamps
-
         index = {n: i for i, n in enumerate(system.nodes)}      # absent: the reference
         n = system.size
         A = sp.zeros(n, n)

@@ -171,13 +171,12 @@ def _data_line(stripped: str, options, source: str, number: int, col: int,
         raise NetlistError(f"frequency {fields[0]} does not increase", source, number, col,
                            "frequencies in strictly increasing order")
     value = _complex(a, b, fmt)
-    with np.errstate(all="ignore"):
-        if param == "s":
-            K = R * (1 + value) / (1 - value) if value != 1 else complex(math.inf)
-        elif param == "z":
-            K = R * value
-        else:
-            K = R / value if value != 0 else complex(math.inf)
+    if param == "s":
+        K = R * (1 + value) / (1 - value) if value != 1 else complex(math.inf)
+    elif param == "z":
+        K = R * value
+    else:
+        K = R / value if value != 0 else complex(math.inf)
     if not (math.isfinite(K.real) and math.isfinite(K.imag)):
         raise NetlistError("the value gives an infinite mobility K", source, number, col,
                            "a finite value")
