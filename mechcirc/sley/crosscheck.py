@@ -221,10 +221,9 @@ def _with_and_without_pulse(params: SleyParameters, revolutions: int, method):
 
     from .simulation import SleyAccuracyWarning, simulate_params
 
-    npts = 14400
     # the difference of two runs with the same transient: periodicity is not needed here
     with warnings.catch_warnings(action="ignore", category=SleyAccuracyWarning):
-        return tuple(simulate_params(p, revolutions, method, points_per_revolution=npts,
+        return tuple(simulate_params(p, revolutions, method, points_per_revolution=14400,
                                      error_estimate=False)
                      for p in (params, params.replace(M0=0.0)))
 
@@ -371,11 +370,10 @@ def crosscheck_sley(params: SleyParameters, theta0: float, *, on_step=None):
 
     step = on_step or (lambda: None)
     checks = {}
-    for damping in (False, True):
-        checks[damping] = resonance_check(params, theta0, damping=damping)
-        step()
     res_rows = []
-    for d, c in checks.items():
+    for d in (False, True):
+        c = checks[d] = resonance_check(params, theta0, damping=d)
+        step()
         row = {"damping": d, "eigen_omega": list(c.eigen), "eigen_omega_d": list(c.eigen_d),
                "circuit_omega": list(c.circuit), "circuit_omega_d": list(c.circuit_d),
                "rel_error": c.rel_error, "how": c.how}
