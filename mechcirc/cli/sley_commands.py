@@ -141,8 +141,7 @@ def _overrides(args) -> dict:
 
 
 def _options(args) -> dict:
-    fixed_step = args.method in ("rk4", "rk4-python", "rk8")
-    if not fixed_step and args.revolutions > MAX_SCIPY_REVOLUTIONS:
+    if args.method in ("DOP853", "RK45", "LSODA") and args.revolutions > MAX_SCIPY_REVOLUTIONS:
         raise InputError(f"--revolutions {args.revolutions} with --method {args.method}: the "
                          f"limit is {MAX_SCIPY_REVOLUTIONS} (a Python right-hand side, ~0.3 s "
                          "a revolution); the compiled rk4 takes up to "
