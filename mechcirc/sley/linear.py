@@ -29,7 +29,7 @@ from numpy.typing import NDArray
 
 from ..circuit import Circuit, Drive, Element, Lever
 from ..units import convert_frequency
-from .models import SleyParameters
+from .models import ParameterError, SleyParameters
 
 __all__ = ["LinearModel", "linearise", "eigenfrequencies", "to_circuit", "to_netlist", "SleyMode"]
 
@@ -317,8 +317,6 @@ def _coupling(p: SleyParameters, theta0: float) -> float:
     """μ(θ0) [1], refused at a dead centre."""
     mu = float(p.fourbar().transfer(float(theta0))[1])
     if abs(mu) < 1e-9:
-        from .models import ParameterError
-
         raise ParameterError(
             f"at crank angle {math.degrees(theta0):.6g} deg the four-bar is at a dead centre "
             f"(mu = {mu:.3g}): the sley is decoupled from the drive and the circuit would "
