@@ -54,6 +54,7 @@ from numpy.typing import NDArray
 
 from ..errors import SleyAccuracyWarning
 from .models import ParameterError, SleyParameters, linkage_constants, start_angle
+from .presets import all_presets, preset
 
 __all__ = ["SleyResult", "simulate", "simulate_params", "simulate_batch", "METHODS",
            "table_error", "start_angle", "SleyAccuracyWarning"]
@@ -294,8 +295,6 @@ def _parameters(drive: str, variant: int, params: SleyParameters | None,
                 overrides: dict) -> SleyParameters:
     """``params`` or else the preset ``drive``/``variant``, with the ``overrides``."""
     if params is None:
-        from .presets import preset
-
         return preset(drive, variant, **overrides)
     return params.replace(**overrides) if overrides else params
 
@@ -460,8 +459,6 @@ def simulate_batch(params_list: list[SleyParameters] | None = None, revolutions:
     from concurrent.futures import ProcessPoolExecutor
 
     if params_list is None:
-        from .presets import all_presets
-
         params_list = all_presets()
     jobs = [(p, revolutions, method, kwargs) for p in params_list]
     processes = processes or os.cpu_count() or 1
