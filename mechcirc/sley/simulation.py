@@ -55,6 +55,7 @@ from numpy.typing import NDArray
 from ..errors import SleyAccuracyWarning
 from .models import ParameterError, SleyParameters, linkage_constants, start_angle
 from .presets import all_presets, preset
+from .scenes import ALIASES, sley_scene
 
 __all__ = ["SleyResult", "simulate", "simulate_params", "simulate_batch", "METHODS",
            "table_error", "start_angle", "SleyAccuracyWarning"]
@@ -181,7 +182,6 @@ class SleyResult:
 def _model(params: SleyParameters, table_points: int):
     """The scene of ``params`` and its motion model (memoised: the tables are the cost)."""
     from ..scene.motion import motion_model
-    from .scenes import sley_scene
 
     scene = sley_scene(params)
     return scene, motion_model(scene, table_points=int(table_points))
@@ -414,7 +414,7 @@ def _result(params: SleyParameters, model, m, theta0: float, linkage: list,
     i = coord.index("sley")
     cols += [m.states[:, i] + sley_off, m.states[:, n + i]]
     scene_extrema = {k: x for k, x in m.extrema.items()
-                     if k not in ALIAS_NAMES and not k.endswith(".rigid_acceleration")}
+                     if k not in ALIASES["both-sides"] and not k.endswith(".rigid_acceleration")}
     return SleyResult(params=params, crank_angle=m.crank_angle, eps2P=v["eps2P"],
                       eps4P=v["eps4P"], eps4T=v["eps4T"], M2V=v["M2V"], M4=v["M4.moment"],
                       eps5P=v["eps5P"] if both else None, M5V=v["M5V"] if both else None,
@@ -424,10 +424,6 @@ def _result(params: SleyParameters, model, m, theta0: float, linkage: list,
                       n_steps=m.n_steps, nfev=m.nfev, notes=tuple(notes + list(m.notes)),
                       error_estimate=m.error_estimate, periodicity=m.periodicity,
                       scene_extrema=scene_extrema)
-
-
-#: The paper's output names (aliases in the scene).
-ALIAS_NAMES = ("eps2P", "eps4P", "eps5P", "eps4T", "M2V", "M5V")
 
 
 # -------------------------------------------------------------------- batch
