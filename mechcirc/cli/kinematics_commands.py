@@ -187,28 +187,26 @@ def _register_linkage(sub) -> None:
     add_handler(p, cmd_linkage)
 
 
-def _vector(option, n, *, nonneg=False):
-    """argparse type: ``n`` finite numbers separated by commas (each as :func:`real` checks)."""
+def _vector(option, n, *, nonneg=False, sep=",", wants=None):
+    """argparse type: ``n`` finite numbers separated by commas (each as :func:`real` checks;
+    ``sep`` and ``wants``, what the message says is wanted, for other forms)."""
     single = real(least=0.0 if nonneg else None, most=1e30)
+    wants = wants or f"{n} numbers separated by commas (no spaces)"
 
     def parse(text):
-        parts = text.split(",")
+        parts = text.split(sep)
         if len(parts) != n:
-            raise argparse.ArgumentTypeError(
-                f"{option} wants {n} numbers separated by commas (no spaces), got {text!r}")
+            raise argparse.ArgumentTypeError(f"{option} wants {wants}, got {text!r}")
         return tuple(single(x.strip()) for x in parts)
     return parse
 
 
 def _range(option):
     """argparse type: ``LO:HI``, two finite numbers with LO ≤ HI."""
-    single = real(most=1e30)
+    pair = _vector(option, 2, sep=":", wants="LO:HI")
 
     def parse(text):
-        parts = text.split(":")
-        if len(parts) != 2:
-            raise argparse.ArgumentTypeError(f"{option} wants LO:HI, got {text!r}")
-        lo, hi = (single(x.strip()) for x in parts)
+        lo, hi = pair(text)
         if not lo <= hi:
             raise argparse.ArgumentTypeError(f"{option}: LO must not exceed HI, got {text!r}")
         return lo, hi
@@ -296,10 +294,9 @@ def cmd_frame(args) -> int:
             f"frame loading needs a crank-rocker whose crank turns fully; this four-bar is a "
             f"{fb.grashof_class} {fb.linkage_type} (see mechcirc fourbar)")
     omega = args.omega if args.omega is not None else convert_frequency(args.rpm, "rpm", "rad/s")
-    m2, m3, m4 = args.mass
     links = {name: LinkMass(m, tuple(x * k for x in getattr(args, f"{name}_com")),
                             getattr(args, f"{name}_inertia"))
-             for name, m in (("crank", m2), ("coupler", m3), ("rocker", m4))}
+             for name, m in zip(("crank", "coupler", "rocker"), args.mass)}
     theta = np.radians(np.linspace(0.0, 360.0, args.points))
     reed = beat_up_force(fb, args.reed_force, args.beat_window)
     res = frame_loading(fb, theta, omega, reed_force=reed,

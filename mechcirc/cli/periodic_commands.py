@@ -119,10 +119,6 @@ def _one_speed(args, circuit, elements, motion) -> int:
                  points=args.angles, elements=elements, near=args.near, method=args.method)
     unit, vu = r.units["Q"], r.units["v"]
     fu = args.unit
-
-    def inu(w):
-        return in_unit(w, fu)
-
     cols = [("angle_deg", r.angle_deg), ("x", r.x), ("v", r.v), ("Q", r.Q)]
     for name in elements:
         cols += [(f"F_{name}", r.forces.get(name, np.full_like(r.Q, np.nan))),
@@ -132,7 +128,7 @@ def _one_speed(args, circuit, elements, motion) -> int:
         return _print_one_speed_json(args, r)
     d = circuit.drive
     print(f"{args.file}: drive {d.name} {(motion or d.motion).spec} at {r.rpm:g} rpm "
-          f"(Ω = {inu(r.omega_shaft):.6g} {fu})")
+          f"(Ω = {in_unit(r.omega_shaft, fu):.6g} {fu})")
     print(f"  {r.harmonics} harmonics; estimated error {r.error:.2g} of the peak "
           f"(asked {r.tol:g})")
     if r.unbounded:
@@ -144,8 +140,8 @@ def _one_speed(args, circuit, elements, motion) -> int:
     if near.size:
         print(f"  harmonics within {args.near:.0%} of a resonance:")
         for i in near:
-            print(f"    k = {r.k[i]}: kΩ = {inu(r.omega[i]):.6g} {fu}, resonance "
-                  f"ωn = {inu(r.nearest[i]):.6g} {fu} ({r.distance[i]:+.2%}), "
+            print(f"    k = {r.k[i]}: kΩ = {in_unit(r.omega[i], fu):.6g} {fu}, resonance "
+                  f"ωn = {in_unit(r.nearest[i], fu):.6g} {fu} ({r.distance[i]:+.2%}), "
                   f"|Q_k| = {abs(r.amplitude[i]):.4g} {unit}")
     else:
         print(f"  no harmonic within {args.near:.0%} of a resonance")
@@ -153,8 +149,9 @@ def _one_speed(args, circuit, elements, motion) -> int:
     print(f"  {'k':>5} {f'kΩ [{fu}]':>12} {f'|V_k| [{vu}]':>12} {f'|Q_k| [{unit}]':>12} "
           f"{'nearest ωn':>12} {'distance':>9}")
     for i in sorted(top):
-        print(f"  {r.k[i]:>5} {inu(r.omega[i]):>12.6g} {abs(r.V[i]):>12.4g} "
-              f"{abs(r.amplitude[i]):>12.4g} {inu(r.nearest[i]):>12.6g} {r.distance[i]:>+9.2%}")
+        print(f"  {r.k[i]:>5} {in_unit(r.omega[i], fu):>12.6g} {abs(r.V[i]):>12.4g} "
+              f"{abs(r.amplitude[i]):>12.4g} {in_unit(r.nearest[i], fu):>12.6g} "
+              f"{r.distance[i]:>+9.2%}")
     if r.harmonics > top.size:
         print(f"  (the {top.size} largest of {r.harmonics} harmonics; --json lists all)")
     for name in elements:

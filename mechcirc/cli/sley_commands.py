@@ -141,15 +141,15 @@ def _overrides(args) -> dict:
 
 
 def _options(args) -> dict:
-    fixed_step = args.method in ("rk4", "rk4-python", "rk8")
-    if not fixed_step and args.revolutions > MAX_SCIPY_REVOLUTIONS:
+    if args.method in ("DOP853", "RK45", "LSODA") and args.revolutions > MAX_SCIPY_REVOLUTIONS:
         raise InputError(f"--revolutions {args.revolutions} with --method {args.method}: the "
                          f"limit is {MAX_SCIPY_REVOLUTIONS} (a Python right-hand side, ~0.3 s "
                          "a revolution); the compiled rk4 takes up to "
                          f"{MAX_REVOLUTIONS}")
-    opts = {"points_per_revolution": args.points, "revolution": args.revolution,
-            "rtol": args.rtol, "steps_per_period": args.steps_per_period}
-    return {k: v for k, v in opts.items() if v is not None}     # None: the method's default
+    # None (rtol, steps_per_period, revolution): the method's default
+    return {"points_per_revolution": args.points, "revolution": args.revolution,
+            "rtol": args.rtol, "steps_per_period": args.steps_per_period,
+            "error_estimate": not args.no_error_estimate}
 
 
 #: Overrides that change only how the paper is read (the beat-up window it did
@@ -176,8 +176,7 @@ def _table(result, paper_applies: bool = True) -> str:
              f"{result.alpha_deg:g} deg, method {result.method} ({result.backend}), {speed}",
              f"{'quantity':<9} {'unit':<7} {'min':>10} {'max':>10}   {'paper min':>10} "
              f"{'paper max':>10}"]
-    for key in [k for k in ("eps4T", "eps2P", "eps4P", "eps5P", "M2V", "M5V")
-                if k in result.extrema]:
+    for key in [k for k in _UNITS if k in result.extrema]:
         lo, hi = result.extrema[key]
         plo, phi = paper.get(key, ("-", "-"))
         lines.append(f"{key:<9} {_UNITS[key]:<7} {lo:>10.0f} {hi:>10.0f}   {plo!s:>10} {phi!s:>10}")
@@ -232,7 +231,6 @@ def cmd_simulate(args) -> int:
     if args.omega is not None:
         over["omega"] = args.omega
     opts = _options(args)
-    opts["error_estimate"] = not args.no_error_estimate
     if args.variant == "all":
         if args.output or args.plot:
             raise ParameterError("-o/--plot need one variant, not --variant all")

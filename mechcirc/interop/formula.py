@@ -28,6 +28,7 @@ from __future__ import annotations
 from fractions import Fraction
 from typing import TYPE_CHECKING
 
+from .. import reduction
 from ..errors import MechcircError, NotSeriesParallelError
 from ..limits import MAX_FORMULA_ELEMENTS
 
@@ -143,8 +144,6 @@ class _Builder:
             tree = self.circuit.tree
         except NotSeriesParallelError:
             return self.build_nodal()
-        from .. import reduction
-
         depth = reduction.depth(tree)
         if depth > MAX_TREE_DEPTH:
             raise MechcircError(
@@ -154,7 +153,7 @@ class _Builder:
 
     def build_nodal(self):
         """K from the nodal equations, solved symbolically (networks without a tree)."""
-        from ..nodal import assemble
+        from ..nodal import assemble, stamps
 
         sp = self.sp
         w = self.omega
@@ -171,8 +170,6 @@ class _Builder:
             raise MechcircError(
                 f"the network has no series–parallel tree and {system.size} nodal unknowns; "
                 f"a symbolic solution is attempted up to {MAX_NODAL_UNKNOWNS}")
-        from ..nodal import stamps
-
         index = {n: i for i, n in enumerate(system.nodes)}      # absent: the reference
         n = system.size
         A = sp.zeros(n, n)
@@ -206,16 +203,14 @@ class _Builder:
         return (self.sp.I * self.omega) ** LAWS[e.kind].power / self.element_value(e)
 
     def build_tree(self, tree):
-        from ..reduction import Leaf, Parallel, Series, postorder
-
         sp = self.sp
         out: dict[int, object] = {}
-        for node in postorder(tree):
-            if isinstance(node, Leaf):
+        for node in reduction.postorder(tree):
+            if isinstance(node, reduction.Leaf):
                 K = self.leaf(node.element)
-            elif isinstance(node, Series):
+            elif isinstance(node, reduction.Series):
                 K = sp.Add(*(out[id(c)] for c in node.children))
-            elif isinstance(node, Parallel):
+            elif isinstance(node, reduction.Parallel):
                 K = 1 / sp.Add(*(1 / out[id(c)] for c in node.children))
             else:
                 K = out[id(node.child)] / self.ratio(node.lever) ** 2

@@ -350,16 +350,12 @@ def compare(circuit: "Circuit", path: str | os.PathLike, *, method: "Method" = "
         ω, model and measured K, their relative difference, dB and phase, flags.
     """
     omega, K_meas, _ = read_mobility(path)
-    keep = np.ones(omega.shape, dtype=bool)
-    if omega_min is not None:
-        keep &= omega >= omega_min
-    if omega_max is not None:
-        keep &= omega <= omega_max
+    lo = 0 if omega_min is None else omega_min          # (the file's ω are ≥ 0)
+    hi = math.inf if omega_max is None else omega_max
+    keep = (omega >= lo) & (omega <= hi)
     if not keep.any():
-        raise MechcircError(f"{os.fspath(path)}: no measured point between "
-                            f"{omega_min if omega_min is not None else 0:g} and "
-                            f"{omega_max if omega_max is not None else math.inf:g} rad/s "
-                            f"(the file spans {omega.min():g} .. {omega.max():g} rad/s)")
+        raise MechcircError(f"{os.fspath(path)}: no measured point between {lo:g} and {hi:g} "
+                            f"rad/s (the file spans {omega.min():g} .. {omega.max():g} rad/s)")
     omega, K_meas = omega[keep], K_meas[keep]
     result = circuit.sweep(omega, method=method)
     K = result.K

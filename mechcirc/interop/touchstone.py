@@ -45,9 +45,9 @@ _FORMATS = {"ri", "ma", "db"}
 
 def _parse_options(tokens: list[str], source: str, line: int, col: int) -> tuple[float, str, str, float]:
     unit, param, fmt, R = "ghz", "s", "ma", 50.0
-    i = 0
-    while i < len(tokens):
-        tok = tokens[i].lower()
+    rest = iter(tokens)
+    for token in rest:
+        tok = token.lower()
         if tok in _FREQ_UNITS:
             unit = tok
         elif tok in _PARAMS:
@@ -55,23 +55,22 @@ def _parse_options(tokens: list[str], source: str, line: int, col: int) -> tuple
         elif tok in _FORMATS:
             fmt = tok
         elif tok == "r":
-            if i + 1 >= len(tokens):
+            value = next(rest, None)
+            if value is None:
                 raise NetlistError("option 'R' has no reference value", source, line, col,
                                    "'R <positive number>'")
             try:
-                R = float(tokens[i + 1])
+                R = float(value)
             except ValueError:
-                raise NetlistError(f"reference {tokens[i + 1]!r} is not a number", source, line,
+                raise NetlistError(f"reference {value!r} is not a number", source, line,
                                    col, "'R <positive number>'") from None
             if not (math.isfinite(R) and R > 0):
-                raise NetlistError(f"reference R = {tokens[i + 1]} must be finite and positive",
+                raise NetlistError(f"reference R = {value} must be finite and positive",
                                    source, line, col, "'R <positive number>'")
-            i += 1
         else:
-            raise NetlistError(f"unknown option {tokens[i]!r} in the option line", source, line,
+            raise NetlistError(f"unknown option {token!r} in the option line", source, line,
                                col, "a frequency unit (Hz, kHz, MHz, GHz), a parameter (S, Y, Z), "
                                "a format (RI, MA, DB) or 'R <reference>'")
-        i += 1
     if param in ("g", "h"):
         raise NetlistError(f"{param.upper()} parameters are not supported", source, line, col,
                            "S, Y or Z parameters")
@@ -171,13 +170,12 @@ def _data_line(stripped: str, options, source: str, number: int, col: int,
         raise NetlistError(f"frequency {fields[0]} does not increase", source, number, col,
                            "frequencies in strictly increasing order")
     value = _complex(a, b, fmt)
-    with np.errstate(all="ignore"):
-        if param == "s":
-            K = R * (1 + value) / (1 - value) if value != 1 else complex(math.inf)
-        elif param == "z":
-            K = R * value
-        else:
-            K = R / value if value != 0 else complex(math.inf)
+    if param == "s":
+        K = R * (1 + value) / (1 - value) if value != 1 else complex(math.inf)
+    elif param == "z":
+        K = R * value
+    else:
+        K = R / value if value != 0 else complex(math.inf)
     if not (math.isfinite(K.real) and math.isfinite(K.imag)):
         raise NetlistError("the value gives an infinite mobility K", source, number, col,
                            "a finite value")

@@ -17,8 +17,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..errors import SolverError
+from ..verdict import judge, summarise
 from .linear import eigenfrequencies, linearise, to_circuit, to_netlist
-from .models import SleyParameters
+from .models import ParameterError, SleyParameters
 
 #: Tolerances of the three checks' verdicts (:func:`mechcirc.verdict.judge`):
 #: (a) exact algebra on both sides, achieved ≤ 1.5e-15 over every preset;
@@ -186,9 +188,6 @@ def ringing_check(params: SleyParameters, *, half_periods: int = 4, revolutions:
     SolverError
         Fewer than ``half_periods + 1`` zero crossings follow the window.
     """
-    from ..errors import SolverError
-    from .models import ParameterError
-
     if params.M0 <= 0:
         raise ParameterError("the ringing check needs a beat-up moment M0 > 0")
     a, b = _with_and_without_pulse(params, revolutions, method)
@@ -221,10 +220,9 @@ def _with_and_without_pulse(params: SleyParameters, revolutions: int, method):
 
     from .simulation import SleyAccuracyWarning, simulate_params
 
-    npts = 14400
     # the difference of two runs with the same transient: periodicity is not needed here
     with warnings.catch_warnings(action="ignore", category=SleyAccuracyWarning):
-        return tuple(simulate_params(p, revolutions, method, points_per_revolution=npts,
+        return tuple(simulate_params(p, revolutions, method, points_per_revolution=14400,
                                      error_estimate=False)
                      for p in (params, params.replace(M0=0.0)))
 
@@ -323,9 +321,6 @@ def _ringing_row(params: SleyParameters) -> dict:
     """Check (b) as a judged row; a variant without beat-up pulse gets :data:`RINGING_M0`,
     and the clearance is closed (with it the motion is nonlinear and rings below the
     linear prediction); both said in ``notes``."""
-    from ..errors import SolverError
-    from ..verdict import judge
-
     notes = []
     if params.M0 <= 0:
         params = params.replace(M0=RINGING_M0)
@@ -367,15 +362,12 @@ def crosscheck_sley(params: SleyParameters, theta0: float, *, on_step=None):
     netlist : str
         The damped netlist whose resonances were compared in (a).
     """
-    from ..verdict import judge, summarise
-
     step = on_step or (lambda: None)
     checks = {}
-    for damping in (False, True):
-        checks[damping] = resonance_check(params, theta0, damping=damping)
-        step()
     res_rows = []
-    for d, c in checks.items():
+    for d in (False, True):
+        c = checks[d] = resonance_check(params, theta0, damping=d)
+        step()
         row = {"damping": d, "eigen_omega": list(c.eigen), "eigen_omega_d": list(c.eigen_d),
                "circuit_omega": list(c.circuit), "circuit_omega_d": list(c.circuit_d),
                "rel_error": c.rel_error, "how": c.how}

@@ -29,7 +29,7 @@ from numpy.typing import NDArray
 
 from ..circuit import Circuit, Drive, Element, Lever
 from ..units import convert_frequency
-from .models import SleyParameters
+from .models import ParameterError, SleyParameters
 
 __all__ = ["LinearModel", "linearise", "eigenfrequencies", "to_circuit", "to_netlist", "SleyMode"]
 
@@ -135,9 +135,7 @@ def _mck(p: SleyParameters, mu):
     """
     mu = np.atleast_1d(np.asarray(mu, dtype=float))
     m2 = mu * mu
-    sides = [(p.I2P, p.I4, p.C2, p.C4, p.k2, p.k4)]
-    if p.drive != "one-side":
-        sides.append(p.second_side())
+    sides = _sides(p)
     n = len(sides) + 1
     M, C, K = np.zeros((3, mu.size, n, n))
     M[:, -1, -1] = p.I4P
@@ -150,6 +148,13 @@ def _mck(p: SleyParameters, mu):
     kd = np.array([side[2] for side in sides] + [0.0])
     cd = np.array([side[4] for side in sides] + [0.0])
     return M, C, K, kd, cd
+
+
+def _sides(p: SleyParameters) -> list:
+    """Each crank side's (I_crank, I_rod, C_crank, C_rod, k_crank, k_rod): crank 2P with
+    rocker 4, and on both sides crank 5P with rocker 7."""
+    return [(p.I2P, p.I4, p.C2, p.C4, p.k2, p.k4)] + \
+        ([p.second_side()] if p.drive == "both-sides" else [])
 
 
 def linearise(params: SleyParameters, theta0: float, *, mu: float | None = None) -> LinearModel:
@@ -256,32 +261,19 @@ def to_circuit(params: SleyParameters, theta0: float, *, lever: bool = False,
     mu = _coupling(p, theta0)
     mu2 = mu * mu
     v = p.omega if velocity is None else velocity
-    elements, levers = _drive_side(("2", "4"), ("crank", "rocker"), p.I2P + p.I4 * mu2,
-                                   (p.C2, p.k2, p.C4, p.k4), mu, lever, damping)
-    if p.drive == "both-sides":
-        I5P, I7, C5, C7, k5, k7 = p.second_side()
-        more = _drive_side(("5", "7"), ("crank5", "rocker7"), I5P + I7 * mu2,
-                           (C5, k5, C7, k7), mu, lever, damping)
-        elements, levers = elements + more[0], levers + more[1]
+    elements: list = []
+    levers = []
+    for (a, b, crank, rocker), (inertia, i_rod, c, c_rod, k, k_rod) in zip(
+            (("2", "4", "crank", "rocker"), ("5", "7", "crank5", "rocker7")), _sides(p)):
+        elements += _rod(a, "shaft", crank, c, k, 1.0, damping)
+        elements.append(Element("mass", f"J{a}", crank, "0", inertia + i_rod * mu2))
+        levers += [Lever(f"L{b}", crank, "0", rocker, "0", abs(mu))] if lever else []
+        elements += _rod(b, rocker if lever else crank, "sley", c_rod, k_rod,
+                         1.0 if lever else mu2, damping)
     elements.append(Element("mass", "I4P", "sley", "0", p.I4P, 1.0 if lever else mu2))
     return Circuit(tuple(elements),
                    Drive("V", "shaft", "0", "velocity", float(v), rotational=True),
                    tuple(levers), name="sley", source=f"<sley {p.label or p.drive}>")
-
-
-def _drive_side(tags, nodes, inertia, rods, mu, lever, damping):
-    """One side of the drive: rod ``tags[0]`` from the shaft to the crank node
-    ``nodes[0]``, its inertia J (crank plus reflected rocker) to the frame, and rod
-    ``tags[1]`` on to the sley, behind an ideal lever of ratio |μ| at the rocker node
-    ``nodes[1]`` (``lever``) or reflected through η = μ²; ``rods`` = (C, k) of both.
-    Returns (elements, levers)."""
-    (crank, rocker), (c, k, c_r, k_r) = nodes, rods
-    elements = _rod(tags[0], "shaft", crank, c, k, 1.0, damping)
-    elements.append(Element("mass", f"J{tags[0]}", crank, "0", inertia))
-    levers = [Lever(f"L{tags[1]}", crank, "0", rocker, "0", abs(mu))] if lever else []
-    elements += _rod(tags[1], rocker if lever else crank, "sley", c_r, k_r,
-                     1.0 if lever else mu * mu, damping)
-    return elements, levers
 
 
 def _rod(tag: str, a: str, b: str, c: float, k: float, eta: float, damping: bool) -> list:
@@ -325,8 +317,6 @@ def _coupling(p: SleyParameters, theta0: float) -> float:
     """μ(θ0) [1], refused at a dead centre."""
     mu = float(p.fourbar().transfer(float(theta0))[1])
     if abs(mu) < 1e-9:
-        from .models import ParameterError
-
         raise ParameterError(
             f"at crank angle {math.degrees(theta0):.6g} deg the four-bar is at a dead centre "
             f"(mu = {mu:.3g}): the sley is decoupled from the drive and the circuit would "

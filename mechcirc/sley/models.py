@@ -236,19 +236,24 @@ def start_angle(params: SleyParameters) -> float:
     -------
     float
     """
-    return _start_angle(params.l2P, params.l3, params.l4, params.d, params.branch)
+    return linkage_constants(params.l2P, params.l3, params.l4, params.d, params.branch)[0]
 
 
 @lru_cache(maxsize=64)
-def _start_angle(l2P, l3, l4, d, branch) -> float:
+def linkage_constants(l2P, l3, l4, d, branch) -> tuple[float, float, float, float, float]:
+    """The four-bar's (start angle θ0 of :func:`start_angle`, beat-up crank angle φP,
+    offset of the sley's mid-swing from its pose angle, ν min, ν max), once a geometry."""
     import numpy as np
     from scipy.optimize import brentq
 
     fb = fourbar_of_lengths(l2P, l3, l4, d, branch)
     th = np.linspace(0.0, 2.0 * math.pi, 721)
-    nu = fb.evaluate(th).nu
-    idx = np.flatnonzero(np.sign(nu[:-1]) * np.sign(nu[1:]) <= 0)
+    st = fb.evaluate(th)
+    idx = np.flatnonzero(np.sign(st.nu[:-1]) * np.sign(st.nu[1:]) <= 0)
     i = int(idx[0])
-    if nu[i] == 0.0:
-        return float(th[i])
-    return float(brentq(lambda t: fb.transfer(t)[2], th[i], th[i + 1], xtol=1e-14))
+    theta0 = float(th[i])
+    if st.nu[i] != 0.0:
+        theta0 = float(brentq(lambda t: fb.transfer(t)[2], th[i], th[i + 1], xtol=1e-14))
+    (_, lo), (_, hi) = fb.nu_extrema()
+    sley_off = fb.transfer(0.0)[0] - 0.5 * (st.phi4.max() + st.phi4.min())
+    return theta0, fb.dead_centres()[0].theta, sley_off, lo, hi

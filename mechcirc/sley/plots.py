@@ -25,15 +25,18 @@ def plot_result(result, fig=None):
     import numpy as np
     from ..plotting import new_panels
 
-    both = result.eps5P is not None
     fig, axes = new_panels(fig, 3, caller="plot_result", figsize=(8, 9), sharex=True)
     axes = axes[:, 0]
     deg = np.degrees(result.crank_angle)
-    ax = axes[0]
-    ax.plot(deg, result.eps2P, lw=0.8, label="ε2P (crank 2P)")
-    if both:
-        ax.plot(deg, result.eps5P, lw=0.8, label="ε5P (crank 5P)")
-    ax.set_ylabel("crank acceleration [rad/s²]")
+    # the cranks' panels: crank 2P, and crank 5P when there is one (both sides)
+    for ax, ylabel, curves in (
+            (axes[0], "crank acceleration [rad/s²]",
+             (("ε2P (crank 2P)", result.eps2P), ("ε5P (crank 5P)", result.eps5P))),
+            (axes[2], "driving moment [N·m]", (("M2V", result.M2V), ("M5V", result.M5V)))):
+        for label, y in curves:
+            if y is not None:
+                ax.plot(deg, y, lw=0.8, label=label)
+        ax.set_ylabel(ylabel)
     ax = axes[1]
     ax.plot(deg, result.eps4P, lw=0.8, label="ε4P (sley)")
     ax.plot(deg, result.eps4T, lw=1.2, ls="--", color="k", label="ε4T = ν ω² (rigid)")
@@ -41,13 +44,8 @@ def plot_result(result, fig=None):
                math.degrees(result.phiP + result.params.alpha / 2), color="0.9",
                label=f"beat-up window (α = {result.alpha_deg:g}°)")
     ax.set_ylabel("sley acceleration [rad/s²]")
-    ax = axes[2]
-    ax.plot(deg, result.M2V, lw=0.8, label="M2V")
-    if both:
-        ax.plot(deg, result.M5V, lw=0.8, label="M5V")
-    ax.set_ylabel("driving moment [N·m]")
-    ax.set_xlabel("crank angle φ2 [deg]")
-    ax.set_xlim(0, 360)
+    axes[2].set_xlabel("crank angle φ2 [deg]")
+    axes[2].set_xlim(0, 360)
     p = result.params
     fig.suptitle(f"{p.label or p.drive}: revolution {result.revolution}, ω = {p.omega:g} rad/s, "
                  f"ϕ = {p.clearance:g} rad, M0 = {p.M0:g} N·m, α = {result.alpha_deg:g}°",

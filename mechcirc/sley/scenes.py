@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 
-from .models import SleyParameters
+from .models import SleyParameters, start_angle
 
 __all__ = ["sley_scene", "scene_overrides", "preset_scene", "ALIASES"]
 
@@ -48,7 +48,6 @@ def sley_scene(params: SleyParameters, *, revolutions: int = 5):
     """
     from ..scene.files import Scene, SceneDrive, SceneMass, Torsion
     from ..scene.simfile import Moment, SimulateSettings
-    from .models import start_angle
 
     p = params
     name, source = f"mrazek {p.drive}", f"<sley {p.label or p.drive}>"

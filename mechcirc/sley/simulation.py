@@ -53,7 +53,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import SleyAccuracyWarning
-from .models import ParameterError, SleyParameters, start_angle
+from .models import ParameterError, SleyParameters, linkage_constants, start_angle
+from .presets import all_presets, preset
+from .scenes import ALIASES, sley_scene
 
 __all__ = ["SleyResult", "simulate", "simulate_params", "simulate_batch", "METHODS",
            "table_error", "start_angle", "SleyAccuracyWarning"]
@@ -180,7 +182,6 @@ class SleyResult:
 def _model(params: SleyParameters, table_points: int):
     """The scene of ``params`` and its motion model (memoised: the tables are the cost)."""
     from ..scene.motion import motion_model
-    from .scenes import sley_scene
 
     scene = sley_scene(params)
     return scene, motion_model(scene, table_points=int(table_points))
@@ -294,8 +295,6 @@ def _parameters(drive: str, variant: int, params: SleyParameters | None,
                 overrides: dict) -> SleyParameters:
     """``params`` or else the preset ``drive``/``variant``, with the ``overrides``."""
     if params is None:
-        from .presets import preset
-
         return preset(drive, variant, **overrides)
     return params.replace(**overrides) if overrides else params
 
@@ -331,8 +330,8 @@ def simulate_params(params: SleyParameters, revolutions: int = 5, method: str | 
     method = _checked(method, revolutions, revolution, points_per_revolution, steps_per_period,
                       rtol)
     params.fourbar()                            # GeometryError: not a crank-rocker
-    theta0 = start_angle(params)
-    linkage = _linkage_constants(params.l2P, params.l3, params.l4, params.d, params.branch)
+    theta0, *linkage = linkage_constants(params.l2P, params.l3, params.l4, params.d,
+                                         params.branch)
     scene, model = _model(params, table_points)
     from ..scene.simulation import SceneAccuracyWarning, simulate_scene
 
@@ -390,10 +389,10 @@ def _checked(method, revolutions, revolution, points_per_revolution, steps_per_p
     return method
 
 
-def _result(params: SleyParameters, model, m, theta0: float, linkage: tuple,
+def _result(params: SleyParameters, model, m, theta0: float, linkage: list,
             notes: list) -> SleyResult:
     """The scene's motion under the paper's names and state convention (``linkage``:
-    :func:`_linkage_constants`)."""
+    :func:`~mechcirc.sley.models.linkage_constants` but θ0)."""
     v = m.values
     both = params.drive == "both-sides"
     w = params.omega
@@ -415,7 +414,7 @@ def _result(params: SleyParameters, model, m, theta0: float, linkage: tuple,
     i = coord.index("sley")
     cols += [m.states[:, i] + sley_off, m.states[:, n + i]]
     scene_extrema = {k: x for k, x in m.extrema.items()
-                     if k not in ALIAS_NAMES and not k.endswith(".rigid_acceleration")}
+                     if k not in ALIASES["both-sides"] and not k.endswith(".rigid_acceleration")}
     return SleyResult(params=params, crank_angle=m.crank_angle, eps2P=v["eps2P"],
                       eps4P=v["eps4P"], eps4T=v["eps4T"], M2V=v["M2V"], M4=v["M4.moment"],
                       eps5P=v["eps5P"] if both else None, M5V=v["M5V"] if both else None,
@@ -425,23 +424,6 @@ def _result(params: SleyParameters, model, m, theta0: float, linkage: tuple,
                       n_steps=m.n_steps, nfev=m.nfev, notes=tuple(notes + list(m.notes)),
                       error_estimate=m.error_estimate, periodicity=m.periodicity,
                       scene_extrema=scene_extrema)
-
-
-#: The paper's output names (aliases in the scene).
-ALIAS_NAMES = ("eps2P", "eps4P", "eps5P", "eps4T", "M2V", "M5V")
-
-
-@lru_cache(maxsize=64)
-def _linkage_constants(l2P, l3, l4, d, branch):
-    """(beat-up crank angle φP, offset of the sley's mid-swing from its pose angle, the
-    extrema of ν) of the four-bar: what each call would otherwise recompute."""
-    from .models import fourbar_of_lengths
-
-    fb = fourbar_of_lengths(l2P, l3, l4, d, branch)
-    (_, lo), (_, hi) = fb.nu_extrema()
-    ph = fb.evaluate(np.linspace(0.0, TWO_PI, 721)).phi4
-    sley_off = fb.transfer(0.0)[0] - 0.5 * (ph.max() + ph.min())
-    return fb.dead_centres()[0].theta, sley_off, lo, hi
 
 
 # -------------------------------------------------------------------- batch
@@ -473,8 +455,6 @@ def simulate_batch(params_list: list[SleyParameters] | None = None, revolutions:
     from concurrent.futures import ProcessPoolExecutor
 
     if params_list is None:
-        from .presets import all_presets
-
         params_list = all_presets()
     jobs = [(p, revolutions, method, kwargs) for p in params_list]
     processes = processes or os.cpu_count() or 1
