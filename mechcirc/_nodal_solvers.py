@@ -621,10 +621,8 @@ class SparseSolver:
             A = sp.csc_matrix((data[k, self.take], self.indices_p, self.indptr_p),
                               shape=(n, n))
             try:
-                factors.append(
-                    splu(A, permc_spec="NATURAL", diag_pivot_thresh=1.0) if strict else
-                    splu(A, permc_spec="NATURAL", diag_pivot_thresh=DIAG_PIVOT_THRESH,
-                         options={"SymmetricMode": True}))
+                factors.append(splu(A, permc_spec="NATURAL", options={"SymmetricMode": True},
+                                    diag_pivot_thresh=1.0 if strict else DIAG_PIVOT_THRESH))
             except RuntimeError:            # exactly singular at this frequency
                 good[k] = False
         perm, iperm = self.perm, self.iperm

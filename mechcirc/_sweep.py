@@ -12,12 +12,12 @@ import math
 import warnings
 from dataclasses import dataclass, field, replace
 from functools import cached_property
-from typing import Callable, Literal
+from typing import Any, Callable, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .circuit import Circuit, Drive, units_of
+from .circuit import Circuit, Drive, repr_html, units_of
 from .errors import InputError, MechcircError, NotSeriesParallelError, TopologyError
 from .reduction import Node, evaluate, push_down
 
@@ -133,16 +133,13 @@ class Sweep:
         if "error" in self._cache:
             return self._cache["error"]
         if self.method == "sp":
-            if (tree := self.tree) is None:
-                raise _missing("reduction tree")
+            tree = _required(self.tree, "reduction tree")
             err = _chunked(lambda w: evaluate(tree, w, error=True)[1], self.omega, float)
         else:
-            if self.circuit is None:
-                raise _missing("circuit")
             from . import nodal
 
             # normally cached by _sweep_nodal from the same refined solve
-            err = nodal.mobility_and_error(self.circuit.nodal, self.omega)[1]
+            err = nodal.mobility_and_error(_required(self.circuit, "circuit").nodal, self.omega)[1]
         return singular_error(self.K, err)
 
     @cached_property
@@ -263,11 +260,7 @@ class Sweep:
             coords={"omega": ("omega", omega, {"units": units["omega"]})},
             attrs={"name": self.name, "method": self.method, "drive": self.drive.kind})
 
-    def _repr_html_(self) -> str:
-        """The summary as a small table for notebooks."""
-        import html
-
-        return "<pre>" + html.escape(repr(self)) + "</pre>"
+    _repr_html_ = repr_html     # the summary for notebooks
 
     def to_skrf(self, **kwargs):
         """K as a one-port ``skrf.Network`` (Z parameters [m/(N·s)]).
@@ -322,15 +315,13 @@ class Sweep:
 
     def _element_responses(self) -> dict:
         if self.method == "sp":
-            if (tree := self.tree) is None:
-                raise _missing("reduction tree")
+            tree = _required(self.tree, "reduction tree")
             _, values = evaluate(tree, self.omega, keep=True)
             return push_down(tree, values, self.Q0, self.v0, self.omega)
         from . import nodal
 
-        if self.circuit is None:
-            raise _missing("circuit")
-        return nodal.element_response(self.circuit.nodal, self.omega, self.Q0, refine=self.refine)
+        return nodal.element_response(_required(self.circuit, "circuit").nodal, self.omega,
+                                      self.Q0, refine=self.refine)
 
 
 # The per-point quantities of a sweep from K, written once for a sweep (shape (n,),
@@ -398,9 +389,12 @@ def point_flags(K, Q0, v0, error) -> NDArray[np.int8]:
     return flags
 
 
-def _missing(what: str) -> InputError:
-    """The error for a :class:`Sweep` built by hand without the ``what`` a query needs."""
-    return InputError(f"this Sweep was built without its {what}, which this query needs")
+def _required(value: Any, what: str) -> Any:
+    """``value``, or the error for a :class:`Sweep` built by hand without the ``what`` a
+    query needs."""
+    if value is None:
+        raise InputError(f"this Sweep was built without its {what}, which this query needs")
+    return value
 
 
 def sweep(circuit: Circuit, omega: ArrayLike, *, method: Method = "auto",
@@ -533,10 +527,7 @@ def _sweep_nodal(circuit: Circuit, omega, refine: bool = True) -> Sweep:
     # nodal.solve already applies the singular-point convention, and the
     # neighbours decide any point it left undetermined.
     solved = nodal.solve(circuit.nodal, omega, refine=refine, keep_x=False)
-    K, err = solved.K, solved.error
-    singular = ~np.isfinite(K) & (omega > 0)
-    K = _nodal_singular_limits(circuit.nodal, K, omega)
-    err = np.where(singular, np.inf, err)
+    K, err = _nodal_singular_limits(circuit.nodal, solved.K, solved.error, omega)
     K, err, notes = _tree_where_no_digit(circuit, omega, K, err)
     result = Sweep(omega=omega, K=K, drive=circuit.require_drive(), method="nodal",
                    name=circuit.name, circuit=circuit, notes=notes, refine=refine)
@@ -569,8 +560,9 @@ def _tree_where_no_digit(circuit: Circuit, omega, K, err):
                     "knows no digit there (A(ω) beyond its double-double LU)",)
 
 
-def _nodal_singular_limits(system, K, omega, delta: float = 1e-6):
-    """The singular-point convention of :func:`sweep` for nodal analysis.
+def _nodal_singular_limits(system, K, err, omega, delta: float = 1e-6):
+    """The singular-point convention of :func:`sweep` for nodal analysis: (K, err), err
+    infinite where K was not finite.
 
     Where A(ω) is singular the solve gives NaN.  K just below and above tells
     what the point is: a pole (K changes sign through it, K(ω⁻) ≈ −K(ω⁺)) gets
@@ -582,7 +574,7 @@ def _nodal_singular_limits(system, K, omega, delta: float = 1e-6):
 
     bad = ~np.isfinite(K) & (omega > 0)
     if not bad.any():
-        return K
+        return K, err
     w = omega[bad]
     with np.errstate(all="ignore"):
         below = nodal.mobility(system, w * (1 - delta))
@@ -593,7 +585,7 @@ def _nodal_singular_limits(system, K, omega, delta: float = 1e-6):
     mean = (below + above) / 2
     keep = ~pole & np.isfinite(mean)
     K[np.flatnonzero(bad)[keep]] = mean[keep]
-    return K
+    return K, np.where(bad, np.inf, err)
 
 
 

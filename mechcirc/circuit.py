@@ -290,6 +290,13 @@ def element_unit(kind: str, drive: Drive | None) -> str:
     return law.rotary_unit if drive is not None and drive.rotational else law.unit
 
 
+def repr_html(obj) -> str:
+    """``repr(obj)`` as preformatted HTML (the ``_repr_html_`` of notebooks)."""
+    import html
+
+    return "<pre>" + html.escape(repr(obj)) + "</pre>"
+
+
 @dataclass(frozen=True)
 class Circuit:
     """A mechanical circuit: elements, levers and one drive.
@@ -466,10 +473,7 @@ class Circuit:
             f"{d.kind} drive {d.name!r} {d.amplitude:g} between {d.n1!r} and {d.n2!r}"
         return f"<Circuit {self.name!r}: {', '.join(parts) or 'no elements'}; {driven}>"
 
-    def _repr_html_(self) -> str:
-        import html
-
-        return "<pre>" + html.escape(repr(self)) + "</pre>"
+    _repr_html_ = repr_html
 
     def element(self, name: str) -> Element | Lever:
         """The element or lever called ``name`` (KeyError if none)."""
@@ -499,11 +503,6 @@ def node_names(elements, levers=()) -> list[str]:
     -------
     list of str
     """
-    seen: dict[str, None] = {}
-    for e in elements:
-        seen.setdefault(e.n1)
-        seen.setdefault(e.n2)
-    for lv in levers:
-        for n in (lv.p1, lv.p2, lv.s1, lv.s2):
-            seen.setdefault(n)
-    return list(seen)
+    names = [n for e in elements for n in (e.n1, e.n2)]
+    names += [n for lv in levers for n in (lv.p1, lv.p2, lv.s1, lv.s2)]
+    return list(dict.fromkeys(names))

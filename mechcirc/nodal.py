@@ -827,10 +827,10 @@ def _dense_verdict(system: NodalSystem, trial):
         return False, judged, overflow
     for w in trial:
         A = pattern(system).dense(w)        # (dense_matrices' bits, without its four sums)
-        if not np.isfinite(A).all():
-            return True, judged, overflow   # values at float64's edge: the sweep flags them
-        if _clearly_regular(A):
-            return True, judged, overflow   # (balancing only keeps a regular A from looking singular)
+        # Values at float64's edge: the sweep flags them (balancing only keeps a regular A
+        # from looking singular).
+        if not np.isfinite(A).all() or _clearly_regular(A):
+            return True, judged, overflow
         absdiag = [np.abs(system.diagonal("damper") + system.diagonal("lever")),
                    np.abs(system.diagonal("mass")), np.abs(system.diagonal("spring"))]
         # Judge the balanced matrix: a lever of ratio 1e-8 puts entries of 1e-8
