@@ -381,11 +381,7 @@ def point_flags(K, Q0, v0, error) -> NDArray[np.int8]:
     ``Q0`` or ``v0`` may be given as anything that broadcasts against K (the
     drive's amplitude where the quantity is that constant)."""
     flags = (error > NEAR_SINGULAR_ERROR).view(np.int8) * np.int8(FLAG_NEAR_SINGULAR)
-    exact = ~np.isfinite(K)
-    exact |= K == 0
-    exact |= ~np.isfinite(Q0)
-    exact |= ~np.isfinite(v0)
-    flags[exact] = FLAG_SINGULAR
+    flags[~np.isfinite(K) | (K == 0) | ~np.isfinite(Q0) | ~np.isfinite(v0)] = FLAG_SINGULAR
     return flags
 
 

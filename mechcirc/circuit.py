@@ -30,6 +30,7 @@ Conventions (Grigoriev et al. 2002):
 
 from __future__ import annotations
 
+from collections import Counter
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import TYPE_CHECKING, Literal
@@ -461,9 +462,7 @@ class Circuit:
     def __repr__(self) -> str:
         """A one-line summary; the elements are in ``.elements`` (a netlist of 10⁵ elements
         would otherwise print megabytes)."""
-        kinds: dict[str, int] = {}
-        for e in self.elements:
-            kinds[e.kind] = kinds.get(e.kind, 0) + 1
+        kinds = Counter(e.kind for e in self.elements)
         parts = [f"{n} {k}{'es' if k == 'mass' and n != 1 else '' if n == 1 else 's'}"
                  for k, n in kinds.items()]
         if self.levers:

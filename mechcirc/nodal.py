@@ -458,11 +458,10 @@ def refine_dd(solve_fn, residual, omega, rhs, system, refine: bool, steps: int,
         # a double-double residual or a float64 one (a sixth of its work); the
         # latter's rounding is bounded in _Solved.store (residual_rounding,
         # double=False) and here (that of b − A x̂ itself, u |x̂|ᵀ|r̂| / |K|).
+        r = residual(omega, x0, None, rhs, exact=not float64)
+        est, rho = _estimate(system, x0, None, solve_fn(r), None, r, kern)   # (kern None if float64)
         if not float64:
-            r = residual(omega, x0, None, rhs)
-            return (x0, None, *_estimate(system, x0, None, solve_fn(r), None, r, kern))
-        r = residual(omega, x0, None, rhs, exact=False)
-        est, rho = _estimate(system, x0, None, solve_fn(r), None, r)
+            return x0, None, est, rho
         with np.errstate(all="ignore"):
             own = eps / 2 * np.sum(np.abs(x0) * np.abs(r), axis=-1) / \
                 np.abs(system.difference(x0))
