@@ -20,6 +20,7 @@ from numpy.typing import ArrayLike, NDArray
 from .circuit import Circuit, Drive, repr_html, units_of
 from .errors import InputError, MechcircError, NotSeriesParallelError, TopologyError
 from .reduction import Node, evaluate, push_down
+from .sources import name_index
 
 __all__ = ["Sweep", "sweep", "Peak", "peak", "FLAG_OK", "FLAG_SINGULAR", "FLAG_NEAR_SINGULAR",
            "NEAR_SINGULAR_ERROR", "Method"]
@@ -164,8 +165,6 @@ class Sweep:
         By nodal analysis (:func:`mechcirc.nodal.solve_unit`, scaled by :attr:`Q0`),
         whichever method computed K; needs :attr:`circuit`.
         """
-        from .sources import name_index
-
         if self.circuit is None:
             raise ValueError("node_velocity needs the sweep's circuit (Sweep.circuit is None)")
         system = self.circuit.nodal
@@ -308,8 +307,6 @@ class Sweep:
         if "elements" not in self._cache:
             self._cache["elements"] = self._element_responses()
         elements = self._cache["elements"]
-        from .sources import name_index
-
         name_index(name, elements, "loaded element")     # a KeyError naming the nearest
         return elements[name]
 
