@@ -17,7 +17,7 @@ from typing import Any, Callable, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .circuit import Circuit, Drive, repr_html, units_of
+from .circuit import Circuit, Drive, units_of
 from .errors import InputError, MechcircError, NotSeriesParallelError, TopologyError
 from .reduction import Node, evaluate, push_down
 from .sources import name_index
@@ -259,7 +259,11 @@ class Sweep:
             coords={"omega": ("omega", omega, {"units": units["omega"]})},
             attrs={"name": self.name, "method": self.method, "drive": self.drive.kind})
 
-    _repr_html_ = repr_html     # the summary for notebooks
+    def _repr_html_(self) -> str:
+        """The summary as a small table for notebooks."""
+        import html
+
+        return "<pre>" + html.escape(repr(self)) + "</pre>"
 
     def to_skrf(self, **kwargs):
         """K as a one-port ``skrf.Network`` (Z parameters [m/(N·s)]).

@@ -291,13 +291,6 @@ def element_unit(kind: str, drive: Drive | None) -> str:
     return law.rotary_unit if drive is not None and drive.rotational else law.unit
 
 
-def repr_html(obj) -> str:
-    """``repr(obj)`` as preformatted HTML (the ``_repr_html_`` of notebooks)."""
-    import html
-
-    return "<pre>" + html.escape(repr(obj)) + "</pre>"
-
-
 @dataclass(frozen=True)
 class Circuit:
     """A mechanical circuit: elements, levers and one drive.
@@ -472,7 +465,10 @@ class Circuit:
             f"{d.kind} drive {d.name!r} {d.amplitude:g} between {d.n1!r} and {d.n2!r}"
         return f"<Circuit {self.name!r}: {', '.join(parts) or 'no elements'}; {driven}>"
 
-    _repr_html_ = repr_html
+    def _repr_html_(self) -> str:
+        import html
+
+        return "<pre>" + html.escape(repr(self)) + "</pre>"
 
     def element(self, name: str) -> Element | Lever:
         """The element or lever called ``name`` (KeyError if none)."""
