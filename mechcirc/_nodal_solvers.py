@@ -218,8 +218,7 @@ class DenseSolver:
     def __init__(self, system: NodalSystem):
         self.dc = system.dense("damper") + system.dense("lever")
         self.m, self.k = system.dense("mass"), system.dense("spring")
-        n = system.size
-        self.max_chunk = max(1, _CHUNK_BYTES // (16 * n * n))
+        self.max_chunk = max(1, _CHUNK_BYTES // (16 * system.size ** 2))
 
     def factor(self, omega, kern=None):
         A = combine(self.dc, self.m, self.k, np.asarray(omega)[:, None, None])
