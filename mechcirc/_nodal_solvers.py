@@ -218,8 +218,7 @@ class DenseSolver:
     def __init__(self, system: NodalSystem):
         self.dc = system.dense("damper") + system.dense("lever")
         self.m, self.k = system.dense("mass"), system.dense("spring")
-        n = system.size
-        self.max_chunk = max(1, _CHUNK_BYTES // (16 * n * n))
+        self.max_chunk = max(1, _CHUNK_BYTES // (16 * system.size ** 2))
 
     def factor(self, omega, kern=None):
         A = combine(self.dc, self.m, self.k, np.asarray(omega)[:, None, None])
@@ -621,10 +620,8 @@ class SparseSolver:
             A = sp.csc_matrix((data[k, self.take], self.indices_p, self.indptr_p),
                               shape=(n, n))
             try:
-                factors.append(
-                    splu(A, permc_spec="NATURAL", diag_pivot_thresh=1.0) if strict else
-                    splu(A, permc_spec="NATURAL", diag_pivot_thresh=DIAG_PIVOT_THRESH,
-                         options={"SymmetricMode": True}))
+                factors.append(splu(A, permc_spec="NATURAL", options={"SymmetricMode": True},
+                                    diag_pivot_thresh=1.0 if strict else DIAG_PIVOT_THRESH))
             except RuntimeError:            # exactly singular at this frequency
                 good[k] = False
         perm, iperm = self.perm, self.iperm

@@ -12,7 +12,7 @@ import math
 import warnings
 from dataclasses import dataclass, field, replace
 from functools import cached_property
-from typing import Callable, Literal
+from typing import Any, Callable, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -20,6 +20,7 @@ from numpy.typing import ArrayLike, NDArray
 from .circuit import Circuit, Drive, units_of
 from .errors import InputError, MechcircError, NotSeriesParallelError, TopologyError
 from .reduction import Node, evaluate, push_down
+from .sources import name_index
 
 __all__ = ["Sweep", "sweep", "Peak", "peak", "FLAG_OK", "FLAG_SINGULAR", "FLAG_NEAR_SINGULAR",
            "NEAR_SINGULAR_ERROR", "Method"]
@@ -133,16 +134,13 @@ class Sweep:
         if "error" in self._cache:
             return self._cache["error"]
         if self.method == "sp":
-            if (tree := self.tree) is None:
-                raise _missing("reduction tree")
+            tree = _required(self.tree, "reduction tree")
             err = _chunked(lambda w: evaluate(tree, w, error=True)[1], self.omega, float)
         else:
-            if self.circuit is None:
-                raise _missing("circuit")
             from . import nodal
 
             # normally cached by _sweep_nodal from the same refined solve
-            err = nodal.mobility_and_error(self.circuit.nodal, self.omega)[1]
+            err = nodal.mobility_and_error(_required(self.circuit, "circuit").nodal, self.omega)[1]
         return singular_error(self.K, err)
 
     @cached_property
@@ -167,8 +165,6 @@ class Sweep:
         By nodal analysis (:func:`mechcirc.nodal.solve_unit`, scaled by :attr:`Q0`),
         whichever method computed K; needs :attr:`circuit`.
         """
-        from .sources import name_index
-
         if self.circuit is None:
             raise ValueError("node_velocity needs the sweep's circuit (Sweep.circuit is None)")
         system = self.circuit.nodal
@@ -315,22 +311,18 @@ class Sweep:
         if "elements" not in self._cache:
             self._cache["elements"] = self._element_responses()
         elements = self._cache["elements"]
-        from .sources import name_index
-
         name_index(name, elements, "loaded element")     # a KeyError naming the nearest
         return elements[name]
 
     def _element_responses(self) -> dict:
         if self.method == "sp":
-            if (tree := self.tree) is None:
-                raise _missing("reduction tree")
+            tree = _required(self.tree, "reduction tree")
             _, values = evaluate(tree, self.omega, keep=True)
             return push_down(tree, values, self.Q0, self.v0, self.omega)
         from . import nodal
 
-        if self.circuit is None:
-            raise _missing("circuit")
-        return nodal.element_response(self.circuit.nodal, self.omega, self.Q0, refine=self.refine)
+        return nodal.element_response(_required(self.circuit, "circuit").nodal, self.omega,
+                                      self.Q0, refine=self.refine)
 
 
 # The per-point quantities of a sweep from K, written once for a sweep (shape (n,),
@@ -390,17 +382,16 @@ def point_flags(K, Q0, v0, error) -> NDArray[np.int8]:
     ``Q0`` or ``v0`` may be given as anything that broadcasts against K (the
     drive's amplitude where the quantity is that constant)."""
     flags = (error > NEAR_SINGULAR_ERROR).view(np.int8) * np.int8(FLAG_NEAR_SINGULAR)
-    exact = ~np.isfinite(K)
-    exact |= K == 0
-    exact |= ~np.isfinite(Q0)
-    exact |= ~np.isfinite(v0)
-    flags[exact] = FLAG_SINGULAR
+    flags[~np.isfinite(K) | (K == 0) | ~np.isfinite(Q0) | ~np.isfinite(v0)] = FLAG_SINGULAR
     return flags
 
 
-def _missing(what: str) -> InputError:
-    """The error for a :class:`Sweep` built by hand without the ``what`` a query needs."""
-    return InputError(f"this Sweep was built without its {what}, which this query needs")
+def _required(value: Any, what: str) -> Any:
+    """``value``, or the error for a :class:`Sweep` built by hand without the ``what`` a
+    query needs."""
+    if value is None:
+        raise InputError(f"this Sweep was built without its {what}, which this query needs")
+    return value
 
 
 def sweep(circuit: Circuit, omega: ArrayLike, *, method: Method = "auto",
@@ -533,10 +524,7 @@ def _sweep_nodal(circuit: Circuit, omega, refine: bool = True) -> Sweep:
     # nodal.solve already applies the singular-point convention, and the
     # neighbours decide any point it left undetermined.
     solved = nodal.solve(circuit.nodal, omega, refine=refine, keep_x=False)
-    K, err = solved.K, solved.error
-    singular = ~np.isfinite(K) & (omega > 0)
-    K = _nodal_singular_limits(circuit.nodal, K, omega)
-    err = np.where(singular, np.inf, err)
+    K, err = _nodal_singular_limits(circuit.nodal, solved.K, solved.error, omega)
     K, err, notes = _tree_where_no_digit(circuit, omega, K, err)
     result = Sweep(omega=omega, K=K, drive=circuit.require_drive(), method="nodal",
                    name=circuit.name, circuit=circuit, notes=notes, refine=refine)
@@ -569,8 +557,9 @@ def _tree_where_no_digit(circuit: Circuit, omega, K, err):
                     "knows no digit there (A(ω) beyond its double-double LU)",)
 
 
-def _nodal_singular_limits(system, K, omega, delta: float = 1e-6):
-    """The singular-point convention of :func:`sweep` for nodal analysis.
+def _nodal_singular_limits(system, K, err, omega, delta: float = 1e-6):
+    """The singular-point convention of :func:`sweep` for nodal analysis: (K, err), err
+    infinite where K was not finite.
 
     Where A(ω) is singular the solve gives NaN.  K just below and above tells
     what the point is: a pole (K changes sign through it, K(ω⁻) ≈ −K(ω⁺)) gets
@@ -582,7 +571,7 @@ def _nodal_singular_limits(system, K, omega, delta: float = 1e-6):
 
     bad = ~np.isfinite(K) & (omega > 0)
     if not bad.any():
-        return K
+        return K, err
     w = omega[bad]
     with np.errstate(all="ignore"):
         below = nodal.mobility(system, w * (1 - delta))
@@ -593,7 +582,7 @@ def _nodal_singular_limits(system, K, omega, delta: float = 1e-6):
     mean = (below + above) / 2
     keep = ~pole & np.isfinite(mean)
     K[np.flatnonzero(bad)[keep]] = mean[keep]
-    return K
+    return K, np.where(bad, np.inf, err)
 
 
 

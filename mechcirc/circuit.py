@@ -30,6 +30,7 @@ Conventions (Grigoriev et al. 2002):
 
 from __future__ import annotations
 
+from collections import Counter
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import TYPE_CHECKING, Literal
@@ -454,9 +455,7 @@ class Circuit:
     def __repr__(self) -> str:
         """A one-line summary; the elements are in ``.elements`` (a netlist of 10⁵ elements
         would otherwise print megabytes)."""
-        kinds: dict[str, int] = {}
-        for e in self.elements:
-            kinds[e.kind] = kinds.get(e.kind, 0) + 1
+        kinds = Counter(e.kind for e in self.elements)
         parts = [f"{n} {k}{'es' if k == 'mass' and n != 1 else '' if n == 1 else 's'}"
                  for k, n in kinds.items()]
         if self.levers:
@@ -499,11 +498,6 @@ def node_names(elements, levers=()) -> list[str]:
     -------
     list of str
     """
-    seen: dict[str, None] = {}
-    for e in elements:
-        seen.setdefault(e.n1)
-        seen.setdefault(e.n2)
-    for lv in levers:
-        for n in (lv.p1, lv.p2, lv.s1, lv.s2):
-            seen.setdefault(n)
-    return list(seen)
+    names = [n for e in elements for n in (e.n1, e.n2)]
+    names += [n for lv in levers for n in (lv.p1, lv.p2, lv.s1, lv.s2)]
+    return list(dict.fromkeys(names))

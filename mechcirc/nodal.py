@@ -458,11 +458,10 @@ def refine_dd(solve_fn, residual, omega, rhs, system, refine: bool, steps: int,
         # a double-double residual or a float64 one (a sixth of its work); the
         # latter's rounding is bounded in _Solved.store (residual_rounding,
         # double=False) and here (that of b − A x̂ itself, u |x̂|ᵀ|r̂| / |K|).
+        r = residual(omega, x0, None, rhs, exact=not float64)
+        est, rho = _estimate(system, x0, None, solve_fn(r), None, r, kern)   # (kern None if float64)
         if not float64:
-            r = residual(omega, x0, None, rhs)
-            return (x0, None, *_estimate(system, x0, None, solve_fn(r), None, r, kern))
-        r = residual(omega, x0, None, rhs, exact=False)
-        est, rho = _estimate(system, x0, None, solve_fn(r), None, r)
+            return x0, None, est, rho
         with np.errstate(all="ignore"):
             own = eps / 2 * np.sum(np.abs(x0) * np.abs(r), axis=-1) / \
                 np.abs(system.difference(x0))
@@ -827,10 +826,10 @@ def _dense_verdict(system: NodalSystem, trial):
         return False, judged, overflow
     for w in trial:
         A = pattern(system).dense(w)        # (dense_matrices' bits, without its four sums)
-        if not np.isfinite(A).all():
-            return True, judged, overflow   # values at float64's edge: the sweep flags them
-        if _clearly_regular(A):
-            return True, judged, overflow   # (balancing only keeps a regular A from looking singular)
+        # Values at float64's edge: the sweep flags them (balancing only keeps a regular A
+        # from looking singular).
+        if not np.isfinite(A).all() or _clearly_regular(A):
+            return True, judged, overflow
         absdiag = [np.abs(system.diagonal("damper") + system.diagonal("lever")),
                    np.abs(system.diagonal("mass")), np.abs(system.diagonal("spring"))]
         # Judge the balanced matrix: a lever of ratio 1e-8 puts entries of 1e-8

@@ -101,16 +101,16 @@ def _naming(target: Path, given):
                         os.fspath(given)) from None
 
 
-def _temporary_beside(target: Path, given=None) -> str:
-    """Create an empty temporary file next to ``target``, with the suffix kept.
+def _temporary_beside(target: Path, given) -> str:
+    """Create an empty temporary file next to ``target`` (a real path from
+    :func:`output_target`, absolute), with the suffix kept; errors name ``given``.
 
     ``mkstemp`` makes it mode 0600; it gets the mode a newly created file
     would have (0666 less the umask), since it becomes the output itself.
     """
-    folder = target.parent if str(target.parent) else Path(".")
-    with _naming(target, target if given is None else given):
+    with _naming(target, given):
         fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=f".tmp{target.suffix}",
-                                   dir=folder)
+                                   dir=target.parent)
     os.close(fd)
     umask = os.umask(0)
     os.umask(umask)

@@ -152,9 +152,7 @@ def _atom(name: str):
     for prefix, pf in PREFIXES.items():
         base = name[len(prefix):]
         if name.startswith(prefix) and base in PREFIXABLE:
-            bf, dim = ATOMS["kg" if base == "g" else base]
-            if base == "g":
-                bf = (1, 1000)
+            bf, dim = ATOMS[base]
             if isinstance(bf, tuple):
                 return (pf[0] * bf[0], pf[1] * bf[1]), dim
             return pf[0] / pf[1] * bf, dim

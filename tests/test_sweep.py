@@ -348,3 +348,17 @@ def test_to_xarray_holds_the_columns_with_units_or_says_it_needs_xarray(monkeypa
     assert {k: ds[k].attrs["units"] for k in ("omega", "K", "abs_Q0", "v0", "error")} == {
         "omega": "rad/s", "K": "m/(N·s)", "abs_Q0": "N", "v0": "m/s", "error": "1"}
     assert ds.attrs == {"name": s.name, "method": "sp", "drive": "force"}
+
+
+@pytest.mark.parametrize("method", ["sp", "nodal"])
+def test_a_sweep_built_by_hand_names_what_a_query_lacks(method):
+    """A Sweep made from K alone (no tree, no circuit) answers K but refuses the error
+    bound and the element forces with an InputError naming what it was built without."""
+    c = mechcirc.parse("mass m a 0 2\ndrive V a 0 velocity=0.1")
+    s = c.sweep([10.0], method=method)
+    bare = mechcirc.Sweep(omega=s.omega, K=s.K, drive=s.drive, method=method)
+    lacks = "reduction tree" if method == "sp" else "circuit"
+    for query in (lambda: bare.error, lambda: bare.force("m")):
+        with pytest.raises(mechcirc.errors.InputError, match=f"without its {lacks}"):
+            query()
+    assert bare.K[0] == s.K[0]
