@@ -340,8 +340,7 @@ def cam_cycle(law_name: str, rise: float, dwell: float, ret: float, stroke: floa
     spec = (f"motion={law_name} rise={float(rise)!r} dwell={float(dwell)!r} "
             f"return={float(ret)!r} stroke={float(stroke)!r}"
             + (f" return_law={ret_law}" if return_law else ""))
-    return Motion(spec, tuple(p[0] for p in pieces), tuple(p[1] for p in pieces),
-                  tuple(p[2] for p in pieces))
+    return Motion(spec, *zip(*pieces))          # the pieces' starts, polynomials, sinusoids
 
 
 def _check_cycle(law_name, ret_law, rise, dwell, ret, stroke) -> None:
