@@ -136,13 +136,12 @@ def _reduce(edges: list[_Edge], levers: list[Lever], a: str, b: str,
             sub_ids, sub_levers, t, s = part
             sub_edges = [edges[i] for i in sub_ids]
             if not sub_edges:
-                exc = TopologyError(
+                where = f"{source}:{lv.line}:{lv.col or 1}"
+                raise TopologyError(
                     f"lever {lv.name!r} (line {lv.line}): its secondary side {lv.s1!r}–"
                     f"{lv.s2!r} is left floating (no element closes it)",
-                    nodes=(lv.s1, lv.s2), elements=(lv.name,))
-                if lv.line and source != "<string>":
-                    exc.location = f"{source}:{lv.line}:{lv.col or 1}"
-                raise exc
+                    nodes=(lv.s1, lv.s2), elements=(lv.name,),
+                    location=where if lv.line and source != "<string>" else None)
             child = _reduce(sub_edges, sub_levers, t, s, unloaded, lv.line, source)
             sign = 1 if (t, s) == (lv.s1, lv.s2) else -1
             keep = set(range(len(edges))) - set(sub_ids)
