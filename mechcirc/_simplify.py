@@ -202,18 +202,16 @@ def _drop_self_loops(elements, protect, steps):
 
 def _drop_idle_levers(elements, levers, drive, steps):
     """Remove each lever with nothing on one side: it transmits no force (Q_P = r·Q_S = 0)."""
-    levers = list(levers)
-    changed = False
-    for lv in list(levers):
+    kept = list(levers)
+    for lv in levers:
         used = {drive.n1, drive.n2} | {n for e in elements for n in (e.n1, e.n2)} | \
-            {n for x in levers if x is not lv for n in (x.p1, x.p2, x.s1, x.s2)}
+            {n for x in kept if x is not lv for n in (x.p1, x.p2, x.s1, x.s2)}
         for side, nodes in (("primary", (lv.p1, lv.p2)), ("secondary", (lv.s1, lv.s2))):
             if not any(n in used for n in nodes if n != FRAME):
                 steps.append(f"removed lever {lv.name}: nothing on its {side} side")
-                levers.remove(lv)
-                changed = True
+                kept.remove(lv)
                 break
-    return levers, changed
+    return kept, len(kept) < len(levers)
 
 
 def _drop_unloaded(elements, levers, drive, protect, steps):
