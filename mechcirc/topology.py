@@ -194,12 +194,11 @@ def check_frame_paths(circuit: Circuit) -> None:
             floating |= reachable(adj, n)
     if floating:
         via = [lv.name for lv in circuit.levers if {lv.p1, lv.p2, lv.s1, lv.s2} & floating]
-        line = next((lv.line for lv in circuit.levers if lv.name in via), 0)
-        col = next((lv.col for lv in circuit.levers if lv.name in via), 1) or 1
-        where = f"{circuit.source}:{line}:{col}"     # FILE:LINE:COL for the CLI
+        first = next(lv for lv in circuit.levers if lv.name in via)     # via names one at least
+        where = f"{circuit.source}:{first.line}:{first.col or 1}"     # FILE:LINE:COL for the CLI
         raise TopologyError(
             f"node(s) {', '.join(sorted(floating)[:12])} have no path to the frame "
             f"(reached only through lever(s) {', '.join(via) or '—'}"
-            f"{f', line {line}' if line else ''}); the network is singular: "
+            f"{f', line {first.line}' if first.line else ''}); the network is singular: "
             "join the lever's secondary side to node 0", nodes=sorted(floating), elements=via,
-            location=where if line and circuit.source != "<string>" else None)
+            location=where if first.line and circuit.source != "<string>" else None)
