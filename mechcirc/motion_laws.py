@@ -142,8 +142,9 @@ def law(name: str, u) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     >>> [round(float(x), 12) for x in ds]     # peak velocity 2 at u = 1/2
     [1.0, 2.0]
     """
-    m = Motion("", *zip(*_law_pieces(name)), period=1.0)   # starts, polynomials, sinusoids
-    return m.evaluate(np.clip(np.asarray(u, dtype=float), 0.0, 1.0))
+    start, poly, sine = zip(*_law_pieces(name))
+    u = np.clip(np.asarray(u, dtype=float), 0.0, 1.0)
+    return Motion("", start, poly, sine, period=1.0).evaluate(u)
 
 
 # ------------------------------------------------------------------ the motion
@@ -337,7 +338,8 @@ def cam_cycle(law_name: str, rise: float, dwell: float, ret: float, stroke: floa
     spec = (f"motion={law_name} rise={float(rise)!r} dwell={float(dwell)!r} "
             f"return={float(ret)!r} stroke={float(stroke)!r}"
             + (f" return_law={ret_law}" if return_law else ""))
-    return Motion(spec, *zip(*pieces))          # the pieces' starts, polynomials, sinusoids
+    start, poly, sine = zip(*pieces)
+    return Motion(spec, start, poly, sine)
 
 
 def _check_cycle(law_name, ret_law, rise, dwell, ret, stroke) -> None:
