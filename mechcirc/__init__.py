@@ -69,17 +69,13 @@ from .errors import (BandError, GeometryError, MechcircError, MechcircWarning, N
 
 __version__ = "0.1.0"
 
-#: Public names loaded on first use: name -> (module, attribute), in the order of __all__.
-_LAZY = {"parse": ("netlist", "parse"), "load": ("netlist", "load"),
-         "Circuit": ("circuit", "Circuit"), "Element": ("circuit", "Element"),
-         "Lever": ("circuit", "Lever"), "Drive": ("circuit", "Drive"),
-         **{name: ("_sweep", name) for name in ("Sweep", "sweep", "FLAG_OK", "FLAG_SINGULAR",
-                                                 "FLAG_NEAR_SINGULAR", "peak", "Peak")},
-         "adaptive_sweep": ("adaptive", "adaptive_sweep"),
-         "find_resonances": ("resonances", "find_resonances"),
-         "Resonance": ("resonances", "Resonance"),
-         "simplify": ("_simplify", "simplify"), "parse_band": ("_simplify", "parse_band"),
-         "designs": ("batch", "designs")}
+#: Public names loaded on first use: name -> its module, in the order of __all__.
+_LAZY = {name: module for module, names in (
+    ("netlist", ("parse", "load")), ("circuit", ("Circuit", "Element", "Lever", "Drive")),
+    ("_sweep", ("Sweep", "sweep", "FLAG_OK", "FLAG_SINGULAR", "FLAG_NEAR_SINGULAR", "peak",
+                "Peak")),
+    ("adaptive", ("adaptive_sweep",)), ("resonances", ("find_resonances", "Resonance")),
+    ("_simplify", ("simplify", "parse_band")), ("batch", ("designs",))) for name in names}
 
 __all__ = [*_LAZY, "MechcircError", "NetlistError", "TopologyError", "NotSeriesParallelError",
            "GeometryError", "SolverError", "BandError", "MechcircWarning",
@@ -89,8 +85,7 @@ __all__ = [*_LAZY, "MechcircError", "NetlistError", "TopologyError", "NotSeriesP
 def __getattr__(name):
     """A public name or a submodule, imported on first use (PEP 562)."""
     if name in _LAZY:
-        module, attr = _LAZY[name]
-        value = getattr(_importlib.import_module(f"{__name__}.{module}"), attr)
+        value = getattr(_importlib.import_module(f"{__name__}.{_LAZY[name]}"), name)
     elif not name.startswith("__") and _importlib_util.find_spec(f"{__name__}.{name}"):
         value = _importlib.import_module(f"{__name__}.{name}")       # a submodule
     else:

@@ -202,18 +202,16 @@ def _drop_self_loops(elements, protect, steps):
 
 def _drop_idle_levers(elements, levers, drive, steps):
     """Remove each lever with nothing on one side: it transmits no force (Q_P = r·Q_S = 0)."""
-    levers = list(levers)
-    changed = False
-    for lv in list(levers):
+    kept = list(levers)
+    for lv in levers:
         used = {drive.n1, drive.n2} | {n for e in elements for n in (e.n1, e.n2)} | \
-            {n for x in levers if x is not lv for n in (x.p1, x.p2, x.s1, x.s2)}
+            {n for x in kept if x is not lv for n in (x.p1, x.p2, x.s1, x.s2)}
         for side, nodes in (("primary", (lv.p1, lv.p2)), ("secondary", (lv.s1, lv.s2))):
             if not any(n in used for n in nodes if n != FRAME):
                 steps.append(f"removed lever {lv.name}: nothing on its {side} side")
-                levers.remove(lv)
-                changed = True
+                kept.remove(lv)
                 break
-    return levers, changed
+    return kept, len(kept) < len(levers)
 
 
 def _drop_unloaded(elements, levers, drive, protect, steps):
@@ -318,11 +316,7 @@ def _short_circuit(elements, levers, drive, el):
 
 def _check_grid(full: Circuit, band, points, output):
     w1, w2 = band
-    try:
-        found = full.resonances(omega_max=w2 * 1.001)
-    except MechcircError:
-        found = []
-    inband = [r for r in found if w1 <= r.omega <= w2]
+    inband = [r for r in _resonances(full, w2 * 1.001) if w1 <= r.omega <= w2]
     extra = [r.omega * (1 + s) for r in inband for s in (-1e-3, 1e-3)]    # two beside each
     grid = np.unique(np.concatenate([np.geomspace(w1, w2, points), np.clip(extra, w1, w2)]))
     y = _output(full, grid, output)
@@ -546,11 +540,16 @@ def _describe(done) -> list[str]:
     return lines
 
 
-def _shifts(inband, reduced: Circuit, band) -> list[dict]:
+def _resonances(circuit: Circuit, omega_max: float) -> list:
+    """The resonances of ``circuit`` up to ``omega_max``; none where they cannot be found."""
     try:
-        found = [r for r in reduced.resonances(omega_max=band[1] * 1.5)]
+        return list(circuit.resonances(omega_max=omega_max))
     except MechcircError:
-        found = []
+        return []
+
+
+def _shifts(inband, reduced: Circuit, band) -> list[dict]:
+    found = _resonances(reduced, band[1] * 1.5)
     out, used = [], set()
     for r in inband:
         cands = [(abs(q.omega - r.omega), i) for i, q in enumerate(found)

@@ -98,17 +98,11 @@ def _format(root: _Printed) -> str:
             out.append(f"{item.lever.name}[")
             continue
         sep = " + " if isinstance(item, Series) else " | "
-        wrap = parent is not None
-        parts: list = []
-        if wrap:
-            parts.append(("(", None))
-        for i, child in enumerate(item.children):
-            if i:
-                parts.append((sep, None))
-            parts.append((child, item))
-        if wrap:
-            parts.append((")", None))
-        stack.extend(reversed(parts))
+        wrap = parent is not None       # a nested series or parallel run: in parentheses
+        stack.append((")" if wrap else "", None))
+        for i in range(len(item.children) - 1, -1, -1):     # pushed last to first
+            stack.append((item.children[i], item))
+            stack.append((sep if i else "(" if wrap else "", None))
     return "".join(out)
 
 

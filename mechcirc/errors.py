@@ -158,15 +158,17 @@ class ParameterError(MechcircError, ValueError):
 
 
 class TopologyError(MechcircError, ValueError):
-    """The network cannot be analysed as asked; names the blocking nodes/elements."""
+    """The network cannot be analysed as asked; names the blocking nodes/elements.
 
-    #: ``FILE:LINE:COL`` of the statement at fault, when known (the CLI shows it).
-    location: str | None = None
+    ``location`` is ``FILE:LINE:COL`` of the statement at fault, when known (the CLI
+    shows it).
+    """
 
-    def __init__(self, message: str, nodes=(), elements=()):
+    def __init__(self, message: str, nodes=(), elements=(), location: str | None = None):
         self.message = message
         self.nodes = tuple(nodes)
         self.elements = tuple(elements)
+        self.location = location
         super().__init__(message)
 
 

@@ -284,10 +284,8 @@ def evaluate(expr: Expr, params: Mapping[str, float], *, source: str = "<string>
     float or tuple of (float, float)
         The value, or ``(value, derivative)`` with ``tangent``.
     """
-    base = col - 1
-
     def fail(message: str, node: Expr, expected: str | None = None) -> NoReturn:
-        raise NetlistError(message, source, line, base + node.col + 1, expected)
+        raise NetlistError(message, source, line, col + node.col, expected)    # node.col: 0-based
 
     values: dict[int, float] = {}
     # Operands first (iteratively: see postorder), so errors come left to right.

@@ -97,10 +97,10 @@ def _integrate(pieces) -> tuple[list, float]:
 
 @functools.cache
 def _law_pieces(name: str) -> tuple:
-    """The normalised rise of law ``name`` as displacement pieces ``(u0, a, B, w, φ)``."""
+    """The normalised rise of law ``name`` as displacement pieces ``(u0, a, (B, w, φ))``."""
     pi, h = math.pi, math.pi / 2
     if name == "polynomial_345":
-        return ((0.0, (0.0, 0.0, 0.0, 10.0, -15.0, 6.0), 0.0, 0.0, 0.0),)
+        return ((0.0, (0.0, 0.0, 0.0, 10.0, -15.0, 6.0), (0.0, 0.0, 0.0)),)
     accel = {
         "harmonic": [(0, 1, (), pi ** 2 / 2, pi, h)],
         "cycloidal": [(0, 1, (), 2 * pi, 2 * pi, 0.0)],
@@ -117,7 +117,7 @@ def _law_pieces(name: str) -> tuple:
         raise ValueError(f"unknown motion law {name!r}; expected one of {', '.join(LAWS)}")
     pieces, end = _integrate(accel)
     # Harmonic and cycloidal end at 1 by construction; the modified laws fix C = 1/s(1).
-    return tuple((u0, tuple(am / end for am in a), b / end, w, phi)
+    return tuple((u0, tuple(am / end for am in a), (b / end, w, phi))
                  for u0, a, b, w, phi in pieces)
 
 
@@ -142,11 +142,9 @@ def law(name: str, u) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     >>> [round(float(x), 12) for x in ds]     # peak velocity 2 at u = 1/2
     [1.0, 2.0]
     """
-    pieces = _law_pieces(name)
+    start, poly, sine = zip(*_law_pieces(name))
     u = np.clip(np.asarray(u, dtype=float), 0.0, 1.0)
-    m = Motion("", tuple(p[0] for p in pieces), tuple(p[1] for p in pieces),
-               tuple(p[2:] for p in pieces), period=1.0)
-    return m.evaluate(u)
+    return Motion("", start, poly, sine, period=1.0).evaluate(u)
 
 
 # ------------------------------------------------------------------ the motion
@@ -284,7 +282,7 @@ class Motion:
 def _piece_map(pieces, theta0: float, beta: float, h: float, rising: bool):
     """The normalised law pieces placed at θ₀ over β, stroke h, rising or returning."""
     out = []
-    for u0, a, b, w, phi in pieces:
+    for u0, a, (b, w, phi) in pieces:
         sc = h if rising else -h
         poly = [sc * am / beta ** m for m, am in enumerate(a)]
         if not rising:
@@ -340,8 +338,8 @@ def cam_cycle(law_name: str, rise: float, dwell: float, ret: float, stroke: floa
     spec = (f"motion={law_name} rise={float(rise)!r} dwell={float(dwell)!r} "
             f"return={float(ret)!r} stroke={float(stroke)!r}"
             + (f" return_law={ret_law}" if return_law else ""))
-    return Motion(spec, tuple(p[0] for p in pieces), tuple(p[1] for p in pieces),
-                  tuple(p[2] for p in pieces))
+    start, poly, sine = zip(*pieces)
+    return Motion(spec, start, poly, sine)
 
 
 def _check_cycle(law_name, ret_law, rise, dwell, ret, stroke) -> None:

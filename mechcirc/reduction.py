@@ -136,13 +136,12 @@ def _reduce(edges: list[_Edge], levers: list[Lever], a: str, b: str,
             sub_ids, sub_levers, t, s = part
             sub_edges = [edges[i] for i in sub_ids]
             if not sub_edges:
-                exc = TopologyError(
+                where = f"{source}:{lv.line}:{lv.col or 1}"
+                raise TopologyError(
                     f"lever {lv.name!r} (line {lv.line}): its secondary side {lv.s1!r}–"
                     f"{lv.s2!r} is left floating (no element closes it)",
-                    nodes=(lv.s1, lv.s2), elements=(lv.name,))
-                if lv.line and source != "<string>":
-                    exc.location = f"{source}:{lv.line}:{lv.col or 1}"
-                raise exc
+                    nodes=(lv.s1, lv.s2), elements=(lv.name,),
+                    location=where if lv.line and source != "<string>" else None)
             child = _reduce(sub_edges, sub_levers, t, s, unloaded, lv.line, source)
             sign = 1 if (t, s) == (lv.s1, lv.s2) else -1
             keep = set(range(len(edges))) - set(sub_ids)
@@ -177,10 +176,14 @@ def _reduce_edges(n1s: list, n2s: list, nodes: list, a: str, b: str, unloaded: l
     """
     found = _series_parallel_runs(n1s, n2s, nodes, a, b)
     if found is None:
-        edges = [_Edge(u, w, node) for u, w, node in zip(n1s, n2s, nodes)]
-        edges = _prune(edges, a, b, unloaded, drive_line, source)
-        found = _series_parallel_runs([e.n1 for e in edges], [e.n2 for e in edges],
-                                      [e.node for e in edges], a, b, explain=True)
+        # Only the edges in the biconnected block that holds the drive carry force.
+        kept = loaded_groups([[pair] for pair in zip(n1s, n2s)], a, b, drive_line=drive_line,
+                             source=source)
+        keep = set(kept)
+        unloaded.extend(el.name for i, node in enumerate(nodes) if i not in keep
+                        for el in leaves(node))
+        found = _series_parallel_runs([n1s[i] for i in kept], [n2s[i] for i in kept],
+                                      [nodes[i] for i in kept], a, b, explain=True)
     root, dangling = found
     for node in dangling:
         unloaded.extend(el.name for el in leaves(_close(node, 1)[0]))
@@ -404,15 +407,6 @@ def _secondary_part(lv: Lever, edges: list[_Edge], levers: list[Lever], a: str, 
                 ({m.p1, m.p2, m.s1, m.s2} & comp)]
         return ids, subs, t, s
     return None
-
-
-def _prune(edges: list[_Edge], a: str, b: str, unloaded: list[str], drive_line: int,
-           source: str) -> list[_Edge]:
-    """Keep only edges in the biconnected block that holds the drive (they carry force)."""
-    kept = set(loaded_groups([[(e.n1, e.n2)] for e in edges], a, b, drive_line=drive_line,
-                             source=source))
-    unloaded.extend(el.name for i, e in enumerate(edges) if i not in kept for el in leaves(e.node))
-    return [e for i, e in enumerate(edges) if i in kept]
 
 
 def _not_reducible(nodes: list[str], parts: list, a: str, b: str) -> NotSeriesParallelError:

@@ -114,12 +114,10 @@ def loaded_groups(groups: Sequence[Sequence[tuple[str, str]]], a: str, b: str,
     adj = adjacency(p for pairs in groups for p in pairs)  # (a self-loop: skipped by _block_with)
     if a not in adj or b not in adj or b not in reachable(adj, a):
         where = f" (line {drive_line})" if drive_line else ""
-        exc = TopologyError(
+        raise TopologyError(
             f"the drive's nodes {a!r} and {b!r}{where} are not connected by any path "
-            "of elements", nodes=(a, b))
-        if source and drive_line:
-            exc.location = f"{source}:{drive_line}:1"     # FILE:LINE:COL for the CLI
-        raise exc
+            "of elements", nodes=(a, b),
+            location=f"{source}:{drive_line}:1" if source and drive_line else None)
     adj[a].add(b)
     adj[b].add(a)
     block = _block_with(adj, a, b)
@@ -196,14 +194,11 @@ def check_frame_paths(circuit: Circuit) -> None:
             floating |= reachable(adj, n)
     if floating:
         via = [lv.name for lv in circuit.levers if {lv.p1, lv.p2, lv.s1, lv.s2} & floating]
-        line = next((lv.line for lv in circuit.levers if lv.name in via), 0)
-        exc = TopologyError(
+        first = next(lv for lv in circuit.levers if lv.name in via)     # via names one at least
+        where = f"{circuit.source}:{first.line}:{first.col or 1}"     # FILE:LINE:COL for the CLI
+        raise TopologyError(
             f"node(s) {', '.join(sorted(floating)[:12])} have no path to the frame "
             f"(reached only through lever(s) {', '.join(via) or '—'}"
-            f"{f', line {line}' if line else ''}); the network is singular: "
-            "join the lever's secondary side to node 0",
-            nodes=sorted(floating), elements=via)
-        col = next((lv.col for lv in circuit.levers if lv.name in via), 1) or 1
-        if line and circuit.source != "<string>":
-            exc.location = f"{circuit.source}:{line}:{col}"     # FILE:LINE:COL for the CLI
-        raise exc
+            f"{f', line {first.line}' if first.line else ''}); the network is singular: "
+            "join the lever's secondary side to node 0", nodes=sorted(floating), elements=via,
+            location=where if first.line and circuit.source != "<string>" else None)

@@ -165,17 +165,16 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     from .. import __version__
 
     parser.add_argument("--version", action="version", version=f"mechcirc {__version__}")
-    parser.add_argument("--debug", action="store_true",
-                        help="show the full traceback of an internal error")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in modules:
         importlib.import_module(name).register(sub)
     # --debug is global, but the internal-error hint says "run again with --debug",
     # which users append after the command: each command takes it too.  SUPPRESS
-    # keeps a command's parser from resetting a --debug given before the command.
-    for each in {id(p): p for p in sub.choices.values()}.values():
+    # keeps a command's parser from resetting a --debug given before the command
+    # (absent, it is False: cli._common reads it with getattr).
+    for each in [parser, *{id(p): p for p in sub.choices.values()}.values()]:
         each.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
-                             help="show the full traceback of an internal error")
+                          help="show the full traceback of an internal error")
     return parser
 
 
