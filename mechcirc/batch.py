@@ -41,6 +41,7 @@ from .circuit import Circuit
 from .errors import InputError, MechcircError, NetlistError, NotSeriesParallelError
 from ._sweep import UNDAMPED_ZETA, drive_force, drive_velocity, peak, point_flags, singular_error
 from .resonances import design_values, template_levers
+from .sources import summary_repr
 
 __all__ = ["designs", "from_circuits", "network_shape", "Designs", "DesignSweep", "DesignResonances",
            "DesignExtremes"]
@@ -260,6 +261,8 @@ class Designs:
         positive and finite); the others are evaluated one by one
         (:meth:`design`), where parsing reports what is wrong.
     """
+
+    __repr__ = summary_repr
 
     circuit: Circuit
     params: dict
@@ -720,6 +723,8 @@ class DesignSweep:
         Designs that could not be evaluated, with the error message.
     """
 
+    __repr__ = summary_repr
+
     omega: NDArray[np.float64]
     K: NDArray[np.complex128]
     error: NDArray[np.float64]
@@ -770,6 +775,8 @@ class DesignResonances:
         Designs whose resonances could not be found, with the message.
     """
 
+    __repr__ = summary_repr
+
     kind: NDArray
     omega: NDArray[np.float64]
     omega_d: NDArray[np.float64]
@@ -799,6 +806,8 @@ class DesignExtremes:
     band), ``omega_at_*`` where they occur [rad/s] (the first resonance or
     anti-resonance when the value is 0 or inf); NaN for ``failed`` designs.
     """
+
+    __repr__ = summary_repr
 
     K_min: NDArray[np.float64]
     omega_at_K_min: NDArray[np.float64]

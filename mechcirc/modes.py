@@ -60,6 +60,7 @@ import numpy as np
 
 from .circuit import LAWS, Circuit, Drive
 from .resonances import Resonance, constraint_basis, pencil, resonance_pairs
+from .sources import summary_repr
 
 __all__ = ["Mode", "SweepSensitivity", "modes", "sweep_sensitivity"]
 
@@ -108,6 +109,8 @@ class Mode:
     note : str
         Why there is no shape (overdamped root), else empty.
     """
+
+    __repr__ = summary_repr
 
     resonance: Resonance
     param_sensitivity: dict = field(default_factory=dict)
@@ -317,6 +320,8 @@ class SweepSensitivity:
         Name → p·∂K/∂p [m/(N·s)] at each ω (0 for an element that carries no force;
         an element's η has the same derivative as its value).
     """
+
+    __repr__ = summary_repr
 
     omega: np.ndarray
     K: np.ndarray

@@ -42,7 +42,7 @@ import numpy as np
 
 from .circuit import Circuit, units_of
 from .errors import MechcircError
-from .sources import real_number
+from .sources import real_number, summary_repr
 from .units import convert_frequency
 
 __all__ = ["PeriodicResult", "SpeedMap", "periodic", "rpm_to_omega", "speed_map"]
@@ -126,6 +126,8 @@ class PeriodicResult:
         units written above in brackets are the translational ones).
     """
 
+    __repr__ = summary_repr
+
     name: str
     rpm: float
     omega_shaft: float
@@ -194,6 +196,8 @@ class SpeedMap:
     units : dict of str to str
         The drive's unit labels (:func:`mechcirc.circuit.units_of`; N·m for a rotary drive).
     """
+
+    __repr__ = summary_repr
 
     name: str
     rpm: np.ndarray

@@ -7,7 +7,7 @@ import numbers
 import os
 import re
 import stat
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import TypeGuard
 
 from .errors import NetlistError
@@ -15,7 +15,7 @@ from .errors import NetlistError
 __all__ = ["read_source", "read_bytes", "MAX_INPUT_BYTES", "split_lines", "line_col",
            "finite_number", "brief", "load_toml", "locate", "locate_path", "located", "Table",
            "unknown_key", "check_keys", "number_error", "checked_number", "did_you_mean",
-           "is_number"]
+           "is_number", "summary_repr"]
 
 #: The largest input file mechcirc reads [bytes].  A netlist of the statement
 #: limit is far below this; anything larger is refused before it is read.
@@ -335,6 +335,28 @@ def brief(value) -> str:
     """
     text = repr(value)
     return text if len(text) <= 60 else text[:57] + "..."
+
+
+def summary_repr(result) -> str:
+    """``Name(field=value, ...)`` of a dataclass ``result``: an array as its shape, any other
+    value :func:`brief`: what a notebook shows of a result, not thousands of numbers.
+
+    Parameters
+    ----------
+    result : dataclass instance
+        The result shown (its fields with ``repr=True``).
+
+    Returns
+    -------
+    str
+    """
+    parts = []
+    for f in fields(result):
+        if f.repr:
+            value = getattr(result, f.name)
+            shape = "×".join(map(str, getattr(value, "shape", ())))
+            parts.append(f"{f.name}=" + (f"<array {shape}>" if shape else brief(value)))
+    return f"{type(result).__name__}({', '.join(parts)})"
 
 
 # ------------------------------------------------------------------ TOML with places

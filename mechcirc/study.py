@@ -113,7 +113,7 @@ from .limits import (MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS, MAX_STUDY_POINT
                      MAX_STUDY_SWEEP_POINTS, MAX_STUDY_WORK)
 from .sources import (Table, brief, csv_rows, did_you_mean, finite_number, load_toml,
                       locate_path, number_error, read_bytes, read_source, split_lines,
-                      unknown_key)
+                      summary_repr, unknown_key)
 from .netlist import SYNTAX, expressions_of, parse
 from .outputs import OutputSet, atomic_open, atomic_path
 from .units import looks_like_unit, parse_omega
@@ -131,6 +131,8 @@ _SLEY_QUANTITIES = {"one-side": ["eps2P", "eps4P", "eps4T", "M2V"],
 @dataclass(frozen=True)
 class StudySpec:
     """A parsed study: the netlist text, the analysis and the points' parameter values."""
+
+    __repr__ = summary_repr
 
     netlist_text: str
     netlist_source: str
@@ -909,6 +911,8 @@ class StudyResult:
     failed ones (the table is in the output file); ``count`` is the number of
     rows of the table either way.
     """
+
+    __repr__ = summary_repr
 
     columns: list[str]
     rows: list[dict]

@@ -49,6 +49,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import GeometryError
+from ..sources import summary_repr
 from .fourbar import FourBar
 from .linkage_solver import rigid_points, to_complex, to_xy
 
@@ -106,6 +107,8 @@ class FrameLoading:
     T_a, T_d : ndarray, shape (n,)
         Shaking moments on the frame about A and about D [N·m].
     """
+
+    __repr__ = summary_repr
 
     theta: NDArray[np.float64]
     omega: float

@@ -70,6 +70,7 @@ from functools import partial
 import numpy as np
 
 from ..errors import InputError
+from ..sources import summary_repr
 
 __all__ = [
     "FOLLOWERS",
@@ -146,6 +147,8 @@ class CamProfile:
         ``pressure_angle`` and ``undercut``, over the whole turn (the extremes
         are refined between the grid points).
     """
+
+    __repr__ = summary_repr
 
     follower: str
     base_radius: float

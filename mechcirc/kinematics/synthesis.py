@@ -53,6 +53,7 @@ from typing import Literal
 import numpy as np
 
 from ..errors import GeometryError
+from ..sources import summary_repr
 from .fourbar import FourBar
 
 __all__ = [
@@ -123,6 +124,8 @@ class Design:
         Swing Ψ computed from the linkage [deg].
     """
 
+    __repr__ = summary_repr
+
     a: float
     b: float
     c: float
@@ -188,6 +191,8 @@ class SynthesisResult:
         When no design is feasible: the smallest sets of criteria that no
         examined design meets together.
     """
+
+    __repr__ = summary_repr
 
     designs: tuple
     objective: str

@@ -38,7 +38,7 @@ import numpy as np
 
 from ..circuit import Circuit, Drive, Element, Lever
 from ..errors import GeometryError, InputError, MechcircError, OutOfReach
-from ..sources import is_name
+from ..sources import is_name, summary_repr
 from .files import Scene, gear_meshes
 
 #: How a lever is reflected into the circuit (see :func:`build`).
@@ -77,6 +77,8 @@ class SceneCircuit:
     rotational : bool
         True for a link drive (rad/s, N·m), False for a point drive (m/s, N).
     """
+
+    __repr__ = summary_repr
 
     theta: float
     circuit: Circuit

@@ -26,6 +26,7 @@ import numpy as np
 from ..errors import GeometryError
 from ..kinematics.linkage import Crank, Linkage
 from ..motion_laws import hermite_table
+from ..sources import summary_repr
 from .files import Scene
 
 __all__ = ["MotionModel", "motion_model", "hermite_table", "dead_centre"]
@@ -57,6 +58,8 @@ class MotionModel:
     body_fn : dict
         Body → its rotation function index (for the rigid accelerations).
     """
+
+    __repr__ = summary_repr
 
     scene: Scene
     omega: float

@@ -41,6 +41,7 @@ import numpy as np
 
 from .. import _jit
 from ..errors import MechcircError, SceneAccuracyWarning, SolverError
+from ..sources import summary_repr
 from .files import Scene
 from .motion import MotionModel, function_args, motion_model
 
@@ -90,6 +91,8 @@ class SceneMotion:
     method, backend : str
     notes : tuple of str
     """
+
+    __repr__ = summary_repr
 
     name: str
     source: str

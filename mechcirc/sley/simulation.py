@@ -53,6 +53,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import SleyAccuracyWarning
+from ..sources import summary_repr
 from .models import ParameterError, SleyParameters, start_angle
 
 __all__ = ["SleyResult", "simulate", "simulate_params", "simulate_batch", "METHODS",
@@ -122,6 +123,8 @@ class SleyResult:
         ``ELEMENT.deformation``, ``drive.moment``, ``M4.moment`` -> (min, max) (the
         points' accelerations, which the result does not return, are not computed).
     """
+
+    __repr__ = summary_repr
 
     params: SleyParameters
     crank_angle: NDArray[np.float64]

@@ -40,6 +40,7 @@ import numpy as np
 
 from ..circuit import Circuit
 from ..errors import MechcircError
+from ..sources import summary_repr
 from ..verdict import DISAGREES, judge, summarise
 from .model import backlash_elements
 from .simulate import (ROUNDING_PER_STEP, Waveform, drive_map, periodic_start, state_model,
@@ -69,6 +70,8 @@ MAX_SPREAD = 1e-3
 class CrossCheck:
     """Result of :func:`crosscheck` (plain data); ``verdict`` as
     :func:`mechcirc.verdict.summarise`."""
+
+    __repr__ = summary_repr
 
     name: str
     drive_kind: str
