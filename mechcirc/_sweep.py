@@ -19,6 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .circuit import Circuit, Drive, units_of
 from .errors import InputError, MechcircError, NotSeriesParallelError, TopologyError
+from .sources import brief
 from .reduction import Node, evaluate, push_down
 
 __all__ = ["Sweep", "sweep", "Peak", "peak", "FLAG_OK", "FLAG_SINGULAR", "FLAG_NEAR_SINGULAR",
@@ -482,8 +483,7 @@ def _real_omega(omega: ArrayLike) -> NDArray[np.float64]:
     try:
         values = values.astype(float)
     except (TypeError, ValueError):
-        raise InputError(f"omega must be numbers [rad/s], got values of dtype "
-                         f"{values.dtype}") from None
+        raise InputError(f"omega must be numbers [rad/s], got {brief(omega)}") from None
     if values.ndim != 1:
         raise InputError(f"omega must be one-dimensional, got shape {values.shape}")
     return values

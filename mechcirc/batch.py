@@ -39,7 +39,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from .circuit import Circuit
 from .errors import InputError, MechcircError, NetlistError, NotSeriesParallelError
-from ._sweep import UNDAMPED_ZETA, drive_force, drive_velocity, peak, point_flags, singular_error
+from ._sweep import (UNDAMPED_ZETA, _real_omega, drive_force, drive_velocity, peak, point_flags,
+                     singular_error)
 from .resonances import design_values, template_levers
 from .sources import summary_repr
 
@@ -342,8 +343,8 @@ class Designs:
         """
         from ._sweep import singular_limits, sweep as sweep_one
 
-        omega = np.atleast_1d(np.asarray(omega, dtype=float))
-        if omega.ndim != 1 or not np.isfinite(omega).all() or (omega < 0).any():
+        omega = _real_omega(omega)
+        if not np.isfinite(omega).all() or (omega < 0).any():
             raise InputError("omega must be a one-dimensional array of finite values >= 0")
         D, W = self.size, omega.size
         batched = np.flatnonzero(self.valid)
@@ -430,7 +431,11 @@ class Designs:
         ``sweep``, this band's :meth:`sweep` already made, gives K at the band's
         ends (else they are evaluated).
         """
-        omega = np.atleast_1d(np.asarray(omega, dtype=float))
+        if not isinstance(resonances, (DesignResonances, type(None))):
+            raise TypeError(f"extremes(omega, resonances=None, sweep=None): resonances must be "
+                            f"a DesignResonances (.resonances()), got {resonances!r}; the band "
+                            "is omega: extremes([lo, hi])")
+        omega = _real_omega(omega)
         lo, hi = float(omega.min()), float(omega.max())
         if resonances is None:
             resonances = self.resonances(omega_max=hi * (1 + 1e-9))

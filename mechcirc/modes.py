@@ -58,6 +58,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ._sweep import _real_omega
 from .circuit import LAWS, Circuit, Drive
 from .resonances import Resonance, constraint_basis, pencil, resonance_pairs
 from .sources import summary_repr
@@ -403,7 +404,7 @@ def sweep_sensitivity(circuit: Circuit, omega, names=None) -> SweepSensitivity:
     system = circuit.nodal
     ei, ej, y, power, lever_ends, stamped = _stamped(system)
     value, names = _values_named(circuit, names)
-    omega = np.atleast_1d(np.asarray(omega, dtype=float))
+    omega = _real_omega(omega)
     column = {name: k for k, name in enumerate(stamped)}
     slopes = _param_slopes(circuit, stamped) if set(names) & circuit.params.keys() else {}
     m = omega.size

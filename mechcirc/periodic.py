@@ -470,8 +470,8 @@ def periodic(circuit: Circuit, rpm: float, *, motion=None, tol: float = TOL,
         Use exactly this many harmonics instead (the error is still estimated).
     points : int
         Output angles, θ = 360°·i/points.
-    elements : sequence of str or True
-        Elements whose force and velocity to return (True: all loaded elements).
+    elements : str, sequence of str or True
+        Element (or elements) whose force and velocity to return (True: all loaded elements).
     near : float
         A harmonic within this relative distance of a resonance is named near it.
     method : {"auto", "sp", "nodal"}
@@ -496,6 +496,7 @@ def periodic(circuit: Circuit, rpm: float, *, motion=None, tol: float = TOL,
         raise MechcircError(f"points must be an integer from 4 to 1000000, got {points!r}")
     circuit, motion, amp = _prepared(circuit, motion)
     solved = _solve(circuit, motion, amp, rpm_to_omega(rpm), tol, harmonics, method)
+    elements = (elements,) if isinstance(elements, str) else elements      # one name
     return _at_angles(circuit, motion, rpm, solved, points, elements, near, tol)
 
 
@@ -585,7 +586,7 @@ def speed_map(circuit: Circuit, rpm_min: float, rpm_max: float, points: int = 20
         The speed range [rev/min], 0 < rpm_min < rpm_max.
     points : int
         Speeds, evenly spaced.
-    elements : sequence of str
+    elements : str or sequence of str
         Elements whose peak force to map as well.
 
     Returns
@@ -599,6 +600,7 @@ def speed_map(circuit: Circuit, rpm_min: float, rpm_max: float, points: int = 20
     if not (isinstance(points, numbers.Integral) and 2 <= points <= 100_000):
         raise MechcircError(f"points must be an integer from 2 to 100000, got {points!r}")
     circuit, motion, amp = _prepared(circuit, motion)
+    elements = (elements,) if isinstance(elements, str) else elements      # one name
     rpm = np.linspace(rpm_min, rpm_max, points)
     used = np.zeros(points, dtype=int)
     error = np.zeros(points)

@@ -246,8 +246,7 @@ def resonance_pairs(circuit: Circuit, omega_max: float | None = None,
 def _check_arguments(circuit: Circuit, omega_max: float | None, kind) -> None:
     """Refuse an ``omega_max`` that is not a real number > 0 or None (a bool is no number,
     though an int), a ``kind`` not known, and an element whose value × eta overflows."""
-    if not (omega_max is None or real_number(omega_max) and omega_max > 0):
-        raise InputError(f"omega_max must be > 0 rad/s or None, got {omega_max!r}")
+    check_omega_max(omega_max)
     if kind not in (None, "resonance", "antiresonance"):
         raise InputError(f"kind must be 'resonance', 'antiresonance' or None, got {kind!r}")
     for e in circuit.elements:
@@ -255,6 +254,18 @@ def _check_arguments(circuit: Circuit, omega_max: float | None, kind) -> None:
             raise NetlistError(f"{e.kind} {e.name!r}: value × eta = {e.value:g} × {e.eta:g} "
                                "overflows float64", circuit.source, e.line, e.col,
                                "a product below 1.8e308")
+
+
+def check_omega_max(omega_max) -> None:
+    """Refuse an ``omega_max`` [rad/s] that is not a real number > 0 or None (InputError).
+
+    Parameters
+    ----------
+    omega_max : object
+        The argument given.
+    """
+    if not (omega_max is None or real_number(omega_max) and omega_max > 0):
+        raise InputError(f"omega_max must be > 0 rad/s or None, got {omega_max!r}")
 
 
 def _solved(M, D, Ks, G_released, G_held, damped: bool, omega_max, vectors: bool) -> tuple:
@@ -960,6 +971,7 @@ def batched_roots(ds, omega_max: float | None = None):
     anti-resonances; None when it solves none (the caller solves the others
     one by one).
     """
+    check_omega_max(omega_max)
     from .errors import NotSeriesParallelError, TopologyError
 
     try:

@@ -70,7 +70,7 @@ from functools import partial
 import numpy as np
 
 from ..errors import InputError
-from ..sources import summary_repr
+from ..sources import did_you_mean, summary_repr
 
 __all__ = [
     "FOLLOWERS",
@@ -301,7 +301,8 @@ def _inputs(motion, follower, base_radius, roller_radius, offset, arm, pivot, po
     """The checked (r_b, r_f, e, L, D, pressure limit [rad]) of :func:`cam_profile`."""
     if follower not in FOLLOWERS + ("oscillating_flat",):
         raise InputError(f"unknown follower {follower!r}; expected one of "
-                         f"{', '.join(FOLLOWERS)}, oscillating_flat")
+                         f"{', '.join(FOLLOWERS)}, oscillating_flat"
+                         f"{did_you_mean(str(follower), FOLLOWERS + ('oscillating_flat',))}")
     if getattr(motion, "period", None) != 2 * math.pi:
         raise InputError("the motion must be a Motion over one turn of the cam (period 2π; "
                          "build it with cam_cycle, motion_table or read_motion_table)")

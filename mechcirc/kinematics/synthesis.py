@@ -53,7 +53,7 @@ from typing import Literal
 import numpy as np
 
 from ..errors import GeometryError
-from ..sources import summary_repr
+from ..sources import did_you_mean, summary_repr
 from .fourbar import FourBar
 
 __all__ = [
@@ -524,7 +524,8 @@ def _checked(load, objective, fixed, swing, swing_range, b_a_range, d_a_range, s
 def _known(what: str, value, known) -> None:
     """Refuse a ``value`` not among the names ``known``."""
     if value not in known:
-        raise GeometryError(f"unknown {what} {value!r}; expected one of {', '.join(known)}")
+        raise GeometryError(f"unknown {what} {value!r}; expected one of {', '.join(known)}"
+                            f"{did_you_mean(str(value), known)}")
 
 
 def _grid_axes(fixed, swing, s_range, crank_range, b_a_range, d_a_range, step, crank_step,

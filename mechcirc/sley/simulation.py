@@ -53,7 +53,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import SleyAccuracyWarning
-from ..sources import summary_repr
+from ..sources import did_you_mean, summary_repr
 from .models import ParameterError, SleyParameters, start_angle
 
 __all__ = ["SleyResult", "simulate", "simulate_params", "simulate_batch", "METHODS",
@@ -369,7 +369,8 @@ def _checked(method, revolutions, revolution, points_per_revolution, steps_per_p
     conversions: the revolutions it integrates (``revolution``), rtol's default, floats."""
     method = "rk4" if method is None else method
     if method not in METHODS:
-        raise ParameterError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
+        raise ParameterError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}"
+                             f"{did_you_mean(str(method), METHODS)}")
     if isinstance(revolutions, bool) or not isinstance(revolutions, (int, np.integer)) \
             or revolutions < 1:
         raise ParameterError(f"revolutions must be an integer >= 1, got {revolutions!r}")

@@ -38,7 +38,7 @@ import scipy.linalg as la
 from .. import _jit
 from ..circuit import Circuit, units_of
 from ..errors import MechcircError, NetlistError
-from ..sources import name_index
+from ..sources import name_index, real_number
 from ..units import parse_omega
 from .model import StateSpace, incidence, backlash_elements, state_space
 
@@ -322,15 +322,15 @@ class TransientResult:
 
 
 def _grid(t_end: float, dt: float | None, waveform: Waveform) -> np.ndarray:
-    if not (math.isfinite(t_end) and t_end > 0):
-        raise MechcircError(f"--t-end must be a finite time > 0 [s], got {t_end:g}")
+    if not (real_number(t_end) and math.isfinite(t_end) and t_end > 0):
+        raise MechcircError(f"--t-end must be a finite time > 0 [s], got {t_end}")
     if dt is None:
         dt = t_end / 2000
         per_period = {"harmonic": 40, "motion": 720}.get(waveform.kind)  # motion: 0.5° of the shaft
         if per_period:
             dt = min(dt, 2 * math.pi / waveform.omega / per_period)
-    if not (math.isfinite(dt) and dt > 0):
-        raise MechcircError(f"--dt must be a finite time > 0 [s], got {dt:g}")
+    if not (real_number(dt) and math.isfinite(dt) and dt > 0):
+        raise MechcircError(f"--dt must be a finite time > 0 [s], got {dt}")
     if dt > t_end:          # one step of dt would run past t_end (it ran to dt)
         raise MechcircError(f"--dt {dt:g} s is longer than --t-end {t_end:g} s; give a step "
                             "dt ≤ t_end (the default is t_end/2000)")
