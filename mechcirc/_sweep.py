@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .circuit import Circuit, Drive, units_of
 from .errors import InputError, MechcircError, NotSeriesParallelError, TopologyError
-from .sources import brief
+from .sources import brief, data_frame
 from .reduction import Node, evaluate, push_down
 
 __all__ = ["Sweep", "sweep", "Peak", "peak", "FLAG_OK", "FLAG_SINGULAR", "FLAG_NEAR_SINGULAR",
@@ -236,11 +236,8 @@ class Sweep:
         of the attributes of the same names; ``attrs["units"]`` maps each column
         to its unit (as :meth:`to_xarray`).  pandas is imported here only.
         """
-        import pandas as pd
-
-        df = pd.DataFrame(self._columns())
-        df.attrs["units"] = self._column_units(df.columns)
-        return df
+        cols = self._columns()
+        return data_frame(cols, self._column_units(cols))
 
     def to_xarray(self):
         """The sweep as an ``xarray.Dataset`` on the dimension ``omega`` [rad/s].

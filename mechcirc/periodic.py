@@ -42,7 +42,7 @@ import numpy as np
 
 from .circuit import Circuit, units_of
 from .errors import MechcircError
-from .sources import real_number, summary_repr
+from .sources import data_frame, real_number, summary_repr
 from .units import convert_frequency
 
 __all__ = ["PeriodicResult", "SpeedMap", "periodic", "rpm_to_omega", "speed_map"]
@@ -160,6 +160,17 @@ class PeriodicResult:
         """N, the number of harmonics summed."""
         return int(self.k.size)
 
+    def to_dataframe(self):
+        """One row per angle: ``angle_deg`` [deg], the drive's ``Q`` [N], ``x`` [m], ``v`` [m/s]
+        (N·m, rad, rad/s for a rotary drive), then ``F(NAME)`` and ``dv(NAME)`` of each element
+        asked for; ``attrs["units"]`` the unit of each column (as :meth:`mechcirc.Sweep.to_dataframe`)."""
+        u = self.units
+        cols = {"angle_deg": self.angle_deg, "Q": self.Q, "x": self.x, "v": self.v,
+                **{f"F({n})": f for n, f in self.forces.items()},
+                **{f"dv({n})": dv for n, dv in self.velocities.items()}}
+        unit = {"angle_deg": "deg", "Q": u["Q"], "x": u["x"], "v": u["v"], "F": u["Q"], "dv": u["v"]}
+        return data_frame(cols, {c: unit[c.partition("(")[0]] for c in cols})
+
     def plot(self, fig=None):
         """Q(θ) beside its spectrum with |K| and the resonances: :func:`mechcirc.plotting.plot_periodic`.
 
@@ -208,6 +219,15 @@ class SpeedMap:
     element_peaks: dict = field(default_factory=dict)
     notes: tuple = ()
     units: dict = field(default_factory=lambda: units_of(None))
+
+    def to_dataframe(self):
+        """One row per speed: ``rpm`` [rev/min], ``peak`` drive force [N, N·m for a rotary
+        drive], ``harmonics`` N used, ``error`` [1], then ``peak(NAME)`` [N] of each element
+        asked for; ``attrs["units"]`` the unit of each column."""
+        cols = {"rpm": self.rpm, "peak": self.peak, "harmonics": self.harmonics,
+                "error": self.error, **{f"peak({n})": p for n, p in self.element_peaks.items()}}
+        units = {"rpm": "rpm", "harmonics": "", "error": "1"}
+        return data_frame(cols, {c: units.get(c, self.units["Q"]) for c in cols})
 
     def plot(self, ax=None):
         """The map: :func:`mechcirc.plotting.plot_speed_map`; returns ``ax`` when given,

@@ -46,7 +46,7 @@ import numpy as np
 
 from .circuit import Circuit
 from .errors import InputError, NetlistError, SolverError
-from .sources import real_number
+from .sources import data_frame, real_number
 from .units import FREQUENCY_UNITS, in_unit
 
 __all__ = ["Resonance", "Resonances", "find_resonances", "MAX_UNKNOWNS", "MAX_UNKNOWNS_DAMPED"]
@@ -140,6 +140,13 @@ class Resonances(list):
                          + (f" {r.f_hz:>14.8g}" if hz else "")
                          + f" {in_unit(r.omega_d, unit):>17.10g} {r.zeta:>10.4g} {r.error:>10.1e}"
                          for r in self]
+
+    def to_dataframe(self):
+        """One row per root, the columns of :meth:`Resonance.as_dict` (``kind``, ``omega``
+        [rad/s], ``f_hz`` [Hz], ``omega_d`` [rad/s], ``zeta`` [1], ``error`` [1]);
+        ``attrs["units"]`` the unit of each column (as :meth:`mechcirc.Sweep.to_dataframe`)."""
+        return data_frame([r.as_dict() for r in self], {"kind": "", "omega": "rad/s", "f_hz": "Hz",
+                                                        "omega_d": "rad/s", "zeta": "1", "error": "1"})
 
     def __repr__(self) -> str:
         return "Resonances([])  (none found)" if not self else "\n".join(self.table())

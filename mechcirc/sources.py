@@ -15,7 +15,7 @@ from .errors import NetlistError
 __all__ = ["read_source", "read_bytes", "MAX_INPUT_BYTES", "split_lines", "line_col",
            "finite_number", "brief", "load_toml", "locate", "locate_path", "located", "Table",
            "unknown_key", "check_keys", "number_error", "checked_number", "did_you_mean",
-           "is_number", "summary_repr"]
+           "is_number", "summary_repr", "data_frame"]
 
 #: The largest input file mechcirc reads [bytes].  A netlist of the statement
 #: limit is far below this; anything larger is refused before it is read.
@@ -357,6 +357,32 @@ def summary_repr(result) -> str:
             shape = "×".join(map(str, getattr(value, "shape", ())))
             parts.append(f"{f.name}=" + (f"<array {shape}>" if shape else brief(value)))
     return f"{type(result).__name__}({', '.join(parts)})"
+
+
+def data_frame(rows, units: dict[str, str]):
+    """The ``pandas.DataFrame`` of every ``to_dataframe``: ``rows`` (columns by name, or one
+    dict a row) in the columns of ``units``, ``attrs["units"]`` the unit of each column.
+
+    Parameters
+    ----------
+    rows : dict of str to array, or list of dict
+        The table, as pandas reads it.
+    units : dict of str to str
+        Column name -> its unit ("" for a flag or a name), in the columns' order.
+
+    Returns
+    -------
+    pandas.DataFrame
+        pandas is imported here only (an ImportError says so without it).
+    """
+    try:
+        import pandas as pd
+    except ImportError:
+        raise ImportError("to_dataframe needs pandas (pip install pandas); the result's "
+                          "arrays do not") from None
+    df = pd.DataFrame(rows, columns=list(units))
+    df.attrs["units"] = dict(units)
+    return df
 
 
 # ------------------------------------------------------------------ TOML with places

@@ -38,7 +38,7 @@ import scipy.linalg as la
 from .. import _jit
 from ..circuit import Circuit, units_of
 from ..errors import MechcircError, NetlistError
-from ..sources import name_index, real_number
+from ..sources import data_frame, name_index, real_number
 from ..units import parse_omega
 from .model import StateSpace, incidence, backlash_elements, state_space
 
@@ -299,16 +299,12 @@ class TransientResult:
         """The run as a ``pandas.DataFrame``, one row per time step, in the columns of
         :meth:`write_csv`: ``t`` [s], ``x(NODE)`` [m or rad], ``v(NODE)`` [m/s or rad/s]
         when the run kept velocities, ``F(ELEMENT)`` [N or N·m], and ``F(drive)`` (a
-        velocity drive) or ``v(drive)`` (a force drive); ``attrs["units"]`` names the
-        units.  pandas is imported here only (an ImportError says so without it)."""
-        try:
-            import pandas as pd
-        except ImportError:
-            raise ImportError("TransientResult.to_dataframe needs pandas (pip install "
-                              "pandas); the arrays and write_csv do not") from None
-        df = pd.DataFrame(self.columns())
-        df.attrs["units"] = {"t": "s", **self.units}
-        return df
+        velocity drive) or ``v(drive)`` (a force drive); ``attrs["units"]`` maps each column
+        to its unit (as :meth:`mechcirc.Sweep.to_dataframe`).  pandas is imported here only
+        (an ImportError says so without it)."""
+        cols = self.columns()
+        unit = {"t": "s", "x": self.units["x"], "v": self.units["v"], "F": self.units["Q"]}
+        return data_frame(cols, {c: unit[c.partition("(")[0]] for c in cols})
 
     def plot(self, ax=None, nodes=None, what: str = "x", *, elements=None, fig=None,
              title: str | None = None):
