@@ -38,7 +38,6 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .errors import NetlistError
-from .sources import name_index
 
 if TYPE_CHECKING:  # pragma: no cover - annotations of the delegates only
     from .motion_laws import Motion
@@ -474,8 +473,10 @@ class Circuit:
 
     def element(self, name: str) -> Element | Lever:
         """The element or lever called ``name`` (KeyError if none)."""
-        items = self.elements + self.levers
-        return items[name_index(name, [e.name for e in items])]
+        for e in self.elements + self.levers:
+            if e.name == name:
+                return e
+        raise KeyError(f"no element named {name!r}")
 
     @property
     def nodes(self) -> list[str]:
