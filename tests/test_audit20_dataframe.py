@@ -54,3 +54,20 @@ def test_resonances_frame():
     assert df.attrs["units"]["omega"] == "rad/s" and df.attrs["units"]["f_hz"] == "Hz"
     empty = mechcirc.parse("drive V a 0 velocity=1\ndamper c a 0 1\n").resonances().to_dataframe()
     assert len(empty) == 0 and list(empty.columns) == list(df.columns)
+
+
+def test_frame_loading_and_sley_frames():
+    from mechcirc.kinematics import FourBar, frame_loading
+    from mechcirc.sley import simulate
+
+    fl = frame_loading(FourBar(35, 62.8, 170.1, 170.65), np.linspace(0, 6.28, 37), 20.0)
+    df = fl.to_dataframe()
+    assert list(df.columns) == list(fl.columns()) and len(df) == 37
+    np.testing.assert_array_equal(df["T_Nm"], fl.torque)
+    u = df.attrs["units"]
+    assert (u["theta_deg"], u["F_Ax_N"], u["S_abs_N"], u["T_Nm"]) == ("deg", "N", "N", "N·m")
+    r = simulate("one-side", 3, 1, points_per_revolution=90, error_estimate=False)
+    df = r.to_dataframe()
+    np.testing.assert_array_equal(df["M4"], r.M4)
+    assert df.attrs["units"] == {"crank_angle_deg": "deg", "eps2P": "rad/s²", "eps4P": "rad/s²",
+                                 "eps4T": "rad/s²", "M2V": "N·m", "M4": "N·m"}

@@ -49,7 +49,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import GeometryError
-from ..sources import summary_repr
+from ..sources import data_frame, summary_repr
 from .fourbar import FourBar
 from .linkage_solver import rigid_points, to_complex, to_xy
 
@@ -158,6 +158,13 @@ class FrameLoading:
         cols["T_a_Nm"], cols["T_d_Nm"] = self.T_a, self.T_d
         cols["T_d_printed_Nm"] = self.T_d_printed
         return cols
+
+    def to_dataframe(self):
+        """:meth:`columns` as a ``pandas.DataFrame``, a row per crank angle; ``attrs["units"]``
+        the unit of each column, as its name ends: deg, N, N·m."""
+        cols = self.columns()
+        return data_frame(cols, {c: {"deg": "deg", "N": "N", "Nm": "N·m"}[c.rpartition("_")[2]]
+                                 for c in cols})
 
     def summary(self) -> dict:
         """Extremes (value and crank angle in degrees) of the main quantities, plain data."""

@@ -53,7 +53,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import SleyAccuracyWarning
-from ..sources import did_you_mean, summary_repr
+from ..sources import data_frame, did_you_mean, summary_repr
 from .models import ParameterError, SleyParameters, start_angle
 
 __all__ = ["SleyResult", "simulate", "simulate_params", "simulate_batch", "METHODS",
@@ -163,6 +163,12 @@ class SleyResult:
         return {"crank_angle_deg": np.degrees(self.crank_angle), "eps2P": self.eps2P,
                 "eps4P": self.eps4P, "eps4T": self.eps4T, "M2V": self.M2V, **second,
                 "M4": self.M4}
+
+    def to_dataframe(self):
+        """:meth:`columns` as a ``pandas.DataFrame``, a row per sample; ``attrs["units"]``
+        the unit of each column: deg, rad/s² (``eps*``), N·m (``M*``)."""
+        cols = self.columns()
+        return data_frame(cols, {c: {"c": "deg", "e": "rad/s²", "M": "N·m"}[c[0]] for c in cols})
 
     def summary(self) -> dict:
         """Plain-data summary for JSON output."""
