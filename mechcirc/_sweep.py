@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .circuit import Circuit, Drive, units_of
 from .errors import InputError, MechcircError, NotSeriesParallelError, TopologyError
-from .sources import brief, data_frame
+from .sources import brief, data_frame, did_you_mean
 from .reduction import Node, evaluate, push_down
 
 __all__ = ["Sweep", "sweep", "Peak", "peak", "FLAG_OK", "FLAG_SINGULAR", "FLAG_NEAR_SINGULAR",
@@ -457,7 +457,8 @@ def sweep(circuit: Circuit, omega: ArrayLike, *, method: Method = "auto",
     """
     omega = _real_omega(omega)
     if method not in ("auto", "sp", "nodal"):
-        raise InputError(f"method must be 'auto', 'sp' or 'nodal', got {method!r}")
+        raise InputError(f"method must be 'auto', 'sp' or 'nodal', got {method!r}"
+                         f"{did_you_mean(str(method), ('auto', 'sp', 'nodal'))}")
     if method != "nodal":
         try:
             tree = circuit.tree
@@ -688,7 +689,8 @@ def peak(result: "Sweep | Circuit", omega_min: float | None = None,
     if quantity is None:
         quantity = "v0" if circuit.drive.kind == "force" else "Q0"
     if quantity not in ("Q0", "v0", "K", "S"):
-        raise ValueError(f"quantity must be 'Q0', 'v0', 'K' or 'S', got {quantity!r}")
+        raise ValueError(f"quantity must be 'Q0', 'v0', 'K' or 'S', got {quantity!r}"
+                         f"{did_you_mean(str(quantity), ('Q0', 'v0', 'K', 'S'))}")
     if quantity == "Q0" and circuit.drive.kind == "force":
         # Q0 is the applied force: constant.
         return Peak(quantity, abs(circuit.drive.amplitude), lo, False, (),

@@ -42,7 +42,7 @@ from .errors import InputError, MechcircError, NetlistError, NotSeriesParallelEr
 from ._sweep import (UNDAMPED_ZETA, _real_omega, drive_force, drive_velocity, peak, point_flags,
                      singular_error)
 from .resonances import design_values, template_levers
-from .sources import summary_repr
+from .sources import brief, summary_repr
 
 __all__ = ["designs", "from_circuits", "network_shape", "Designs", "DesignSweep", "DesignResonances",
            "DesignExtremes"]
@@ -118,10 +118,12 @@ def _param_arrays(params: dict) -> tuple[dict, int]:
     """The ``params=`` values as float arrays, and D; one-dimensional, of one length."""
     arrays = {}
     for name, v in params.items():
-        a = np.asarray(v, dtype=float)
+        a = np.asarray(v)
+        if a.dtype.kind not in "biuf":
+            raise InputError(f"params[{name!r}] must be numbers, got {brief(v)}")
         if a.ndim > 1:
             raise InputError(f"params[{name!r}] must be one-dimensional, got shape {a.shape}")
-        arrays[name] = a
+        arrays[name] = a.astype(float)
     sizes = {a.size for a in arrays.values() if a.ndim == 1}
     if len(sizes) > 1:
         raise InputError("params= arrays have different lengths: " + ", ".join(

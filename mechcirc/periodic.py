@@ -42,7 +42,7 @@ import numpy as np
 
 from .circuit import Circuit, units_of
 from .errors import MechcircError
-from .sources import data_frame, real_number, summary_repr
+from .sources import brief, data_frame, real_number, summary_repr
 from .units import convert_frequency
 
 __all__ = ["PeriodicResult", "SpeedMap", "periodic", "rpm_to_omega", "speed_map"]
@@ -252,6 +252,9 @@ def _prepared(circuit: Circuit, motion):
                 f"drive {drive.name!r} has no motion over the revolution; give it one: "
                 "'drive NAME N1 N2 motion=lift.csv' or 'motion=cycloidal rise=120 dwell=60 "
                 "return=120 stroke=0.05' (docs/netlist.md)")
+    if not hasattr(motion, "fourier"):
+        raise MechcircError(f"motion must be a Motion (mechcirc.motion_laws.cam_cycle or "
+                            f"read_motion_table), got {brief(motion)}")
     if drive.kind != "velocity":
         raise MechcircError(f"drive {drive.name!r} is a force drive; a motion is imposed "
                             "by a velocity drive")
@@ -462,7 +465,7 @@ def _resonances(circuit, omega_max, notes):
 def _validate(rpm, tol, harmonics):
     if not (real_number(rpm) and math.isfinite(rpm) and rpm > 0):
         raise MechcircError(f"the machine speed must be a finite number > 0 rev/min, got {rpm!r}")
-    if not (0 < tol < 1):
+    if not (real_number(tol) and 0 < tol < 1):
         raise MechcircError(f"tol must be between 0 and 1, got {tol!r}")
     if harmonics is not None and not (isinstance(harmonics, numbers.Integral)
                                       and 1 <= harmonics <= MAX_HARMONICS):

@@ -46,7 +46,7 @@ import numpy as np
 
 from .circuit import Circuit
 from .errors import InputError, NetlistError, SolverError
-from .sources import data_frame, real_number
+from .sources import data_frame, did_you_mean, real_number
 from .units import FREQUENCY_UNITS, in_unit
 
 __all__ = ["Resonance", "Resonances", "find_resonances", "MAX_UNKNOWNS", "MAX_UNKNOWNS_DAMPED"]
@@ -132,6 +132,9 @@ class Resonances(list):
         ``unit`` is ``"rad/s"`` (ωₙ, f = ωₙ/2π [Hz] and ω_d columns), ``"Hz"``
         (f and f_d) or ``"rpm"`` (n and n_d); then ζ [1] and the relative error.
         """
+        if unit not in FREQUENCY_UNITS:
+            raise InputError(f"unit must be 'rad/s', 'Hz' or 'rpm', got {unit!r}"
+                             f"{did_you_mean(str(unit), FREQUENCY_UNITS)}")
         name, _ = FREQUENCY_UNITS[unit]
         hz = unit == "rad/s"            # omega in rad/s has f in Hz beside it
         head = (f"{'kind':<14} {f'{name} [{unit}]':>17}" + (f" {'f [Hz]':>14}" if hz else "")

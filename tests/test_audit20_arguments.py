@@ -91,3 +91,33 @@ def test_times_and_angles_as_text_are_named():
         transient(mechcirc.parse(CAM), "x", 1e-3)
     with pytest.raises(MechcircError, match=r"theta must be a finite angle \[rad\], got 'x'"):
         build(load_scene(REPO / "examples" / "heald_scene.toml"), "x")
+
+
+def test_more_wrong_arguments_are_named(heald, designs):
+    from mechcirc.motion_laws import law
+    from mechcirc.transient import crosscheck
+
+    # on main: each of these was silent, or a TypeError/AttributeError/ValueError from deep
+    # inside naming no argument
+    with pytest.raises(TypeError, match=r"elements must be True or False, got \['k4'\]"):
+        transient(heald, 0.01, 1e-4, "harmonic:300", elements=["k4"])   # ran as True
+    with pytest.raises(MechcircError, match="omega_max must be > 0 rad/s or None, got 'x'"):
+        crosscheck(heald, "x")
+    with pytest.raises(MechcircError, match="motion must be a Motion .* got 'x'"):
+        periodic(heald, 600, motion="x")
+    with pytest.raises(MechcircError, match="tol must be between 0 and 1, got 'x'"):
+        periodic(heald, 600, tol="x")
+    with pytest.raises(MechcircError, match=r"params\['eta1'\] must be numbers, got 'x'"):
+        mechcirc.designs(HEALD.read_text(), {"eta1": "x"})
+    with pytest.raises(MechcircError, match="got 'hz'; did you mean 'Hz'"):
+        heald.resonances().table("hz")
+    with pytest.raises(MechcircError, match="got 'SP'; did you mean 'sp'"):
+        heald.sweep([1.0], method="SP")
+    with pytest.raises(ValueError, match="got 'q0'; did you mean 'Q0'"):
+        heald.sweep([1.0, 2.0]).peak("q0")
+    with pytest.raises(ValueError, match="'cycloidl'.*did you mean 'cycloidal'"):
+        law("cycloidl", np.linspace(0, 1, 3))
+    with pytest.raises(ValueError, match="'cycloidl'.*did you mean 'cycloidal'"):
+        cam_cycle("cycloidl", 100, 80, 80, 0.02)
+    with pytest.raises(ValueError, match="omega must be a finite number > 0 rad/s, got 'x'"):
+        simulate_scene(load_scene(REPO / "examples" / "slider_crank_scene.toml"), omega="x")

@@ -40,6 +40,7 @@ import numpy as np
 
 from ..circuit import Circuit
 from ..errors import MechcircError
+from ..resonances import check_omega_max
 from ..sources import summary_repr
 from ..verdict import DISAGREES, judge, summarise
 from .model import backlash_elements
@@ -264,6 +265,7 @@ def crosscheck(circuit: Circuit, omega_max: float | None = None,
     if circuit.drive is None:
         raise MechcircError("crosscheck needs a drive line in the netlist (the port whose "
                             "K(ω) is checked); 'mechcirc transient' runs without one")
+    check_omega_max(omega_max)
     out = CrossCheck(circuit.name, circuit.drive.kind)
     if backlash_elements(circuit):
         out.notes.append("clearances (backlash=) taken as closed in both domains: the "

@@ -391,6 +391,9 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
         Time, node displacements and velocities, element forces and the drive's
         output on the grid.
     """
+    for flag, value in (("elements", elements), ("velocities", velocities)):
+        if not isinstance(value, (bool, np.bool_)):    # a list of names would read as True
+            raise TypeError(f"{flag} must be True or False, got {value!r}")
     drive = _waveform(circuit, waveform, rpm)
     amp = getattr(circuit.drive, "amplitude", 0.0) if amplitude is None else float(amplitude)
     t = _grid(t_end, dt, drive)
