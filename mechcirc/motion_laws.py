@@ -43,7 +43,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import NetlistError
-from .sources import did_you_mean
+from .sources import did_you_mean, summary_repr
 
 __all__ = [
     "LAWS",
@@ -182,6 +182,8 @@ class Motion:
     path : str
         The table file it was read from ("" for a law or a table built in code).
     """
+
+    __repr__ = summary_repr
 
     spec: str = field(compare=False)
     start: tuple

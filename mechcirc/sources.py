@@ -338,8 +338,9 @@ def brief(value) -> str:
 
 
 def summary_repr(result) -> str:
-    """``Name(field=value, ...)`` of a dataclass ``result``: an array as its shape, any other
-    value :func:`brief`: what a notebook shows of a result, not thousands of numbers.
+    """``Name(field=value, ...)`` of a dataclass ``result``: an array as its shape, a tuple
+    or list of more than 8 items as its length, any other value :func:`brief`: what a
+    notebook shows of a result, not thousands of numbers.
 
     Parameters
     ----------
@@ -355,7 +356,13 @@ def summary_repr(result) -> str:
         if f.repr:
             value = getattr(result, f.name)
             shape = "×".join(map(str, getattr(value, "shape", ())))
-            parts.append(f"{f.name}=" + (f"<array {shape}>" if shape else brief(value)))
+            if shape:
+                text = f"<array {shape}>"
+            elif isinstance(value, (tuple, list)) and len(value) > 8:
+                text = f"<{type(value).__name__} of {len(value)}>"
+            else:
+                text = brief(value)
+            parts.append(f"{f.name}={text}")
     return f"{type(result).__name__}({', '.join(parts)})"
 
 

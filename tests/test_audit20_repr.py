@@ -1,6 +1,7 @@
 """Results shown in a notebook (issue 26): a result's repr is a summary, each array as its
 shape, not the thousands of numbers it holds (on main PeriodicResult printed 96,880
-characters, CamProfile 138,338, FrameLoading 49,856, SweepSensitivity 44,706)."""
+characters, CamProfile 138,338, FrameLoading 49,856, SweepSensitivity 44,706, a Motion
+read from a table 67,135)."""
 
 from pathlib import Path
 
@@ -10,7 +11,7 @@ import pytest
 import mechcirc
 from mechcirc.kinematics import FourBar, cam_profile, frame_loading
 from mechcirc.modes import modes, sweep_sensitivity
-from mechcirc.motion_laws import cam_cycle
+from mechcirc.motion_laws import cam_cycle, read_motion_table
 from mechcirc.periodic import periodic, speed_map
 from mechcirc.sley import linearise, preset
 
@@ -36,6 +37,9 @@ def _results():
         "FrameLoading": (frame_loading(fb, np.linspace(0, 6.28, 361), 20.0),
                          "F_A=<array 361×2>"),
         "LinearModel": (linearise(preset(), 0.3), "M=<array 2×2>"),
+        # a motion read from a table: 67,135 characters of coefficients on main
+        "Motion": (read_motion_table(HEALD.parents[1] / "docs" / "examples" / "lift.csv"),
+                   "poly=<tuple of 360>"),
     }
 
 
@@ -47,7 +51,7 @@ def results():
 @pytest.mark.parametrize("name", ["PeriodicResult", "SpeedMap", "SweepSensitivity", "Mode",
                                   "Designs", "DesignSweep", "DesignResonances",
                                   "DesignExtremes", "CamProfile", "FrameLoading",
-                                  "LinearModel"])
+                                  "LinearModel", "Motion"])
 def test_repr_is_a_short_summary_with_array_shapes(results, name):
     result, shown = results[name]
     text = repr(result)
