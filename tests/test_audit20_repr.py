@@ -57,3 +57,12 @@ def test_repr_is_a_short_summary_with_array_shapes(results, name):
     text = repr(result)
     assert text.startswith(f"{name}(") and shown in text
     assert len(text) < 700 and "\n" not in text      # one line, no array dumped
+
+
+def test_modes_show_as_the_table_of_their_roots():
+    # on main: a list of Mode dataclass reprs, 3,360 characters for the heald's six roots
+    c = mechcirc.load(HEALD)
+    found = modes(c)
+    assert repr(found) == repr(c.resonances())
+    assert found._repr_html_() == c.resonances()._repr_html_()
+    assert isinstance(found, list) and found[0].resonance == c.resonances()[0]
