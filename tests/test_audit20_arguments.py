@@ -101,6 +101,9 @@ def test_more_wrong_arguments_are_named(heald, designs):
     # inside naming no argument
     with pytest.raises(TypeError, match=r"elements must be True or False, got \['k4'\]"):
         transient(heald, 0.01, 1e-4, "harmonic:300", elements=["k4"])   # ran as True
+    with pytest.raises(TypeError, match=r"velocities must be True or False, got 'no'"):
+        transient(mechcirc.load(REPO / "examples" / "cam_follower.mcir"), 1e-3, 1e-5, rpm=800,
+                  velocities="no")                      # a run with clearances
     with pytest.raises(MechcircError, match="omega_max must be > 0 rad/s or None, got 'x'"):
         crosscheck(heald, "x")
     with pytest.raises(MechcircError, match="motion must be a Motion .* got 'x'"):

@@ -391,9 +391,6 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
         Time, node displacements and velocities, element forces and the drive's
         output on the grid.
     """
-    for flag, value in (("elements", elements), ("velocities", velocities)):
-        if not isinstance(value, (bool, np.bool_)):    # a list of names would read as True
-            raise TypeError(f"{flag} must be True or False, got {value!r}")
     drive = _waveform(circuit, waveform, rpm)
     amp = getattr(circuit.drive, "amplitude", 0.0) if amplitude is None else float(amplitude)
     t = _grid(t_end, dt, drive)
@@ -407,8 +404,17 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
     return _linear_run(ss, circuit, z0, t, (u, u_in), drive, notes, elements, velocities)
 
 
+def _flags(**flags) -> None:
+    """Refuse a flag of :func:`transient` that is not True or False (a list of element names
+    would read as True)."""
+    for name, value in flags.items():
+        if not isinstance(value, (bool, np.bool_)):
+            raise TypeError(f"{name} must be True or False, got {value!r}")
+
+
 def _clearance_run(ss, circuit, z0, t, us, drive, amp, rtol, notes, elements, velocities):
     """A run with clearances: the adaptive integrator, its outputs and separations."""
+    _flags(elements=elements, velocities=velocities)
     if not RTOL_RANGE[0] <= rtol <= RTOL_RANGE[1]:
         raise MechcircError(f"--rtol must be between {RTOL_RANGE[0]:g} and "
                             f"{RTOL_RANGE[1]:g}, got {rtol:g}")
@@ -427,6 +433,7 @@ def _clearance_run(ss, circuit, z0, t, us, drive, amp, rtol, notes, elements, ve
 
 def _linear_run(ss, circuit, z0, t, us, drive, notes, elements, velocities):
     """A linear run: exact propagation, its outputs and their error."""
+    _flags(elements=elements, velocities=velocities)
     u, u_in = us
     h = t[1] - t[0]
     Z, T, nx, drive_y, x_ready, v_ready, x_bound, err, path = _linear(
