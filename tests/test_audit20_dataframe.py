@@ -71,3 +71,15 @@ def test_frame_loading_and_sley_frames():
     np.testing.assert_array_equal(df["M4"], r.M4)
     assert df.attrs["units"] == {"crank_angle_deg": "deg", "eps2P": "rad/s²", "eps4P": "rad/s²",
                                  "eps4T": "rad/s²", "M2V": "N·m", "M4": "N·m"}
+
+
+def test_study_result_frame():
+    from mechcirc.study import load_spec, run_study
+
+    r = run_study(load_spec(HEALD.parents[1] / "examples" / "study_stb.toml"), workers=1)
+    df = r.to_dataframe()
+    assert list(df.columns) == r.columns and len(df) == r.count == 18
+    assert df["eta2"].tolist() == [row["eta2"] for row in r.rows]
+    u = df.attrs["units"]       # stb_heald.mcir has a velocity drive: K in m/(N·s), Q0 in N
+    assert (u["K_abs_min"], u["Q0_abs_max"], u["omega_at_K_max"], u["eta1"]) == \
+        ("m/(N·s)", "N", "rad/s", "")
