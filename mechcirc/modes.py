@@ -58,7 +58,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._sweep import _real_omega
 from .circuit import LAWS, Circuit, Drive
 from .resonances import Resonance, Resonances, constraint_basis, pencil, resonance_pairs
 from .sources import summary_repr
@@ -412,6 +411,7 @@ def sweep_sensitivity(circuit: Circuit, omega, names=None) -> SweepSensitivity:
     (0.5, 0.5)
     """
     from . import nodal
+    from ._sweep import _real_omega
 
     system = circuit.nodal
     ei, ej, y, power, lever_ends, stamped = _stamped(system)

@@ -40,7 +40,6 @@ import numpy as np
 
 from ..circuit import Circuit
 from ..errors import MechcircError
-from ..resonances import check_omega_max
 from ..sources import summary_repr
 from ..verdict import DISAGREES, judge, summarise
 from .model import backlash_elements
@@ -265,6 +264,8 @@ def crosscheck(circuit: Circuit, omega_max: float | None = None,
     if circuit.drive is None:
         raise MechcircError("crosscheck needs a drive line in the netlist (the port whose "
                             "K(ω) is checked); 'mechcirc transient' runs without one")
+    from ..resonances import check_omega_max      # (the analysis needs it anyway)
+
     check_omega_max(omega_max)
     out = CrossCheck(circuit.name, circuit.drive.kind)
     if backlash_elements(circuit):
