@@ -124,3 +124,14 @@ def test_more_wrong_arguments_are_named(heald, designs):
         cam_cycle("cycloidl", 100, 80, 80, 0.02)
     with pytest.raises(ValueError, match="omega must be a finite number > 0 rad/s, got 'x'"):
         simulate_scene(load_scene(REPO / "examples" / "slider_crank_scene.toml"), omega="x")
+
+
+def test_kinematics_numbers_as_text_are_named():
+    from mechcirc.kinematics import FourBar, frame_loading
+
+    # on main: "must be real number, not str" (math.isfinite) and "could not convert
+    # string to float" (float()), naming no argument
+    with pytest.raises(MechcircError, match="crank speed ω must be finite and > 0 rad/s, got x"):
+        frame_loading(FourBar(35, 62.8, 170.1, 170.65), [0.1], "x")
+    with pytest.raises(MechcircError, match="the base radius must be a finite number, got 'x'"):
+        cam_profile(cam_cycle("cycloidal", 100, 80, 80, 0.02), "x")
