@@ -42,6 +42,7 @@ import numpy as np
 from .circuit import FRAME, Circuit, Element
 from .errors import BandError, MechcircError, TopologyError
 from .netlist_writer import write as write_netlist      # the package's one netlist writer
+from .sources import summary_repr
 from .units import parse_omega
 
 __all__ = ["BandError", "Simplified", "simplify", "parse_band", "check_band", "write_netlist"]
@@ -126,6 +127,8 @@ class Simplified:
     seconds : float
         Time spent [s].
     """
+
+    __repr__ = summary_repr
 
     circuit: Circuit
     full: Circuit

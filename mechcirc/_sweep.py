@@ -19,6 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .circuit import Circuit, Drive, units_of
 from .errors import InputError, MechcircError, NotSeriesParallelError, TopologyError
+from .sources import brief, data_frame, did_you_mean
 from .reduction import Node, evaluate, push_down
 from .sources import name_index
 
@@ -231,11 +232,8 @@ class Sweep:
         of the attributes of the same names; ``attrs["units"]`` maps each column
         to its unit (as :meth:`to_xarray`).  pandas is imported here only.
         """
-        import pandas as pd
-
-        df = pd.DataFrame(self._columns())
-        df.attrs["units"] = self._column_units(df.columns)
-        return df
+        cols = self._columns()
+        return data_frame(cols, self._column_units(cols))
 
     def to_xarray(self):
         """The sweep as an ``xarray.Dataset`` on the dimension ``omega`` [rad/s].
@@ -448,9 +446,10 @@ def sweep(circuit: Circuit, omega: ArrayLike, *, method: Method = "auto",
     >>> float(s.Q0[0].imag), float(abs(s.Q0[0].real))   # V0 / K = V0 · jωm
     (2.0, 0.0)
     """
-    omega = _real_omega(omega)
+    omega = real_omega(omega)
     if method not in ("auto", "sp", "nodal"):
-        raise InputError(f"method must be 'auto', 'sp' or 'nodal', got {method!r}")
+        raise InputError(f"method must be 'auto', 'sp' or 'nodal', got {method!r}"
+                         f"{did_you_mean(str(method), ('auto', 'sp', 'nodal'))}")
     if method != "nodal":
         try:
             tree = circuit.tree
@@ -462,7 +461,7 @@ def sweep(circuit: Circuit, omega: ArrayLike, *, method: Method = "auto",
     return _sweep_nodal(circuit, omega, refine)
 
 
-def _real_omega(omega: ArrayLike) -> NDArray[np.float64]:
+def real_omega(omega: ArrayLike) -> NDArray[np.float64]:
     """``omega`` as a 1-D float array, or :class:`InputError` saying why it is not one."""
     values = np.atleast_1d(np.asarray(omega))
     if values.dtype.kind == "c":
@@ -473,8 +472,7 @@ def _real_omega(omega: ArrayLike) -> NDArray[np.float64]:
     try:
         values = values.astype(float)
     except (TypeError, ValueError):
-        raise InputError(f"omega must be numbers [rad/s], got values of dtype "
-                         f"{values.dtype}") from None
+        raise InputError(f"omega must be numbers [rad/s], got {brief(omega)}") from None
     if values.ndim != 1:
         raise InputError(f"omega must be one-dimensional, got shape {values.shape}")
     return values
@@ -680,7 +678,8 @@ def peak(result: "Sweep | Circuit", omega_min: float | None = None,
     if quantity is None:
         quantity = "v0" if circuit.drive.kind == "force" else "Q0"
     if quantity not in ("Q0", "v0", "K", "S"):
-        raise ValueError(f"quantity must be 'Q0', 'v0', 'K' or 'S', got {quantity!r}")
+        raise ValueError(f"quantity must be 'Q0', 'v0', 'K' or 'S', got {quantity!r}"
+                         f"{did_you_mean(str(quantity), ('Q0', 'v0', 'K', 'S'))}")
     if quantity == "Q0" and circuit.drive.kind == "force":
         # Q0 is the applied force: constant.
         return Peak(quantity, abs(circuit.drive.amplitude), lo, False, (),

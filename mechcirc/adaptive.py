@@ -26,6 +26,7 @@ from . import limits
 from .circuit import Circuit
 from ._sweep import UNDAMPED_ZETA, Method, Sweep, sweep
 from .errors import InputError, SolverError
+from .sources import real_number
 
 __all__ = ["adaptive_sweep", "UNDAMPED_OFFSETS"]
 
@@ -75,7 +76,7 @@ def adaptive_sweep(circuit: Circuit, omega_min: float, omega_max: float, *,
     :data:`~mechcirc.limits.MAX_ADAPTIVE_NODAL_WORK` (nodal analysis, about
     100 times dearer per element); ``result.notes`` then says so, with the bound.
     """
-    if not 0 < omega_min < omega_max:
+    if not (real_number(omega_min) and real_number(omega_max) and 0 < omega_min < omega_max):
         raise InputError(f"need 0 < omega_min < omega_max, got {omega_min} and {omega_max}")
     max_points = limits.MAX_ADAPTIVE_POINTS if max_points is None else max_points
     notes: list[str] = []

@@ -39,8 +39,10 @@ from numpy.typing import ArrayLike, NDArray
 
 from .circuit import Circuit
 from .errors import InputError, MechcircError, NetlistError, NotSeriesParallelError
-from ._sweep import UNDAMPED_ZETA, drive_force, drive_velocity, peak, point_flags, singular_error
+from ._sweep import (UNDAMPED_ZETA, real_omega, drive_force, drive_velocity, peak, point_flags,
+                     singular_error)
 from .resonances import design_values, template_levers
+from .sources import brief, summary_repr
 
 __all__ = ["designs", "from_circuits", "network_shape", "Designs", "DesignSweep", "DesignResonances",
            "DesignExtremes"]
@@ -116,10 +118,12 @@ def _param_arrays(params: dict) -> tuple[dict, int]:
     """The ``params=`` values as float arrays, and D; one-dimensional, of one length."""
     arrays = {}
     for name, v in params.items():
-        a = np.asarray(v, dtype=float)
+        a = np.asarray(v)
+        if a.dtype.kind not in "biuf":
+            raise InputError(f"params[{name!r}] must be numbers, got {brief(v)}")
         if a.ndim > 1:
             raise InputError(f"params[{name!r}] must be one-dimensional, got shape {a.shape}")
-        arrays[name] = a
+        arrays[name] = a.astype(float)
     sizes = {a.size for a in arrays.values() if a.ndim == 1}
     if len(sizes) > 1:
         raise InputError("params= arrays have different lengths: " + ", ".join(
@@ -261,6 +265,8 @@ class Designs:
         (:meth:`design`), where parsing reports what is wrong.
     """
 
+    __repr__ = summary_repr
+
     circuit: Circuit
     params: dict
     values: NDArray[np.float64]
@@ -339,8 +345,8 @@ class Designs:
         """
         from ._sweep import singular_limits, sweep as sweep_one
 
-        omega = np.atleast_1d(np.asarray(omega, dtype=float))
-        if omega.ndim != 1 or not np.isfinite(omega).all() or (omega < 0).any():
+        omega = real_omega(omega)
+        if not np.isfinite(omega).all() or (omega < 0).any():
             raise InputError("omega must be a one-dimensional array of finite values >= 0")
         D, W = self.size, omega.size
         batched = np.flatnonzero(self.valid)
@@ -427,7 +433,11 @@ class Designs:
         ``sweep``, this band's :meth:`sweep` already made, gives K at the band's
         ends (else they are evaluated).
         """
-        omega = np.atleast_1d(np.asarray(omega, dtype=float))
+        if not isinstance(resonances, (DesignResonances, type(None))):
+            raise TypeError(f"extremes(omega, resonances=None, sweep=None): resonances must be "
+                            f"a DesignResonances (.resonances()), got {resonances!r}; the band "
+                            "is omega: extremes([lo, hi])")
+        omega = real_omega(omega)
         lo, hi = float(omega.min()), float(omega.max())
         if resonances is None:
             resonances = self.resonances(omega_max=hi * (1 + 1e-9))
@@ -720,6 +730,8 @@ class DesignSweep:
         Designs that could not be evaluated, with the error message.
     """
 
+    __repr__ = summary_repr
+
     omega: NDArray[np.float64]
     K: NDArray[np.complex128]
     error: NDArray[np.float64]
@@ -770,6 +782,8 @@ class DesignResonances:
         Designs whose resonances could not be found, with the message.
     """
 
+    __repr__ = summary_repr
+
     kind: NDArray
     omega: NDArray[np.float64]
     omega_d: NDArray[np.float64]
@@ -799,6 +813,8 @@ class DesignExtremes:
     band), ``omega_at_*`` where they occur [rad/s] (the first resonance or
     anti-resonance when the value is 0 or inf); NaN for ``failed`` designs.
     """
+
+    __repr__ = summary_repr
 
     K_min: NDArray[np.float64]
     omega_at_K_min: NDArray[np.float64]

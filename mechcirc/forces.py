@@ -17,6 +17,7 @@ import numpy as np
 
 from .circuit import Circuit
 from .errors import InputError
+from .sources import real_number
 
 if TYPE_CHECKING:  # pragma: no cover
     from ._sweep import Method
@@ -101,9 +102,9 @@ def element_forces(circuit: Circuit, omega: float, *, method: Method = "auto"
     flag : int
         The sweep flag of this ω (0 regular, 1 on a pole/zero, 2 near one).
     """
+    if not (real_number(omega) and math.isfinite(omega) and omega > 0):
+        raise InputError(f"omega must be a finite number > 0 rad/s, got {omega!r}")
     omega = float(omega)
-    if not (math.isfinite(omega) and omega > 0):
-        raise InputError(f"omega must be finite and > 0 rad/s, got {omega!r}")
     result = circuit.sweep(np.array([omega]), method=method)
     Q0 = complex(result.Q0[0])
     rows = []

@@ -59,9 +59,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .circuit import LAWS, Circuit, Drive
-from .resonances import Resonance, constraint_basis, pencil, resonance_pairs
+from .resonances import Resonance, Resonances, constraint_basis, pencil, resonance_pairs
+from .sources import summary_repr
 
-__all__ = ["Mode", "SweepSensitivity", "modes", "sweep_sensitivity"]
+__all__ = ["Mode", "Modes", "SweepSensitivity", "modes", "sweep_sensitivity"]
 
 #: Roots whose vectors are combined in one array operation (bounded memory: E × _CHUNK).
 _CHUNK = 128
@@ -109,6 +110,8 @@ class Mode:
         Why there is no shape (overdamped root), else empty.
     """
 
+    __repr__ = summary_repr
+
     resonance: Resonance
     param_sensitivity: dict = field(default_factory=dict)
     param_zeta_sensitivity: dict = field(default_factory=dict)
@@ -150,7 +153,18 @@ class Mode:
         return complex(-r.zeta * r.omega, r.omega_d)
 
 
-def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
+class Modes(list):
+    """A list of :class:`Mode` that shows itself as the table of its roots
+    (:class:`~mechcirc.resonances.Resonances`: ``repr`` and an HTML table in notebooks)."""
+
+    def __repr__(self) -> str:
+        return repr(Resonances(m.resonance for m in self))
+
+    def _repr_html_(self) -> str:
+        return Resonances(m.resonance for m in self)._repr_html_()
+
+
+def modes(circuit: Circuit, omega_max: float | None = None) -> Modes:
     """The :class:`Mode` of every resonance and anti-resonance of ``circuit`` up to ``omega_max``.
 
     The roots are those of :func:`~mechcirc.resonances.find_resonances` (same
@@ -169,7 +183,8 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
 
     Returns
     -------
-    list of Mode
+    Modes
+        A list of Mode, shown as the table of their roots.
 
     Examples
     --------
@@ -185,7 +200,7 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
     system = circuit.nodal
     pairs = resonance_pairs(circuit, omega_max, vectors=True)
     if not pairs:
-        return []
+        return Modes()
     M, D, Ks, G_released, G_held, _ = pencil(system)
     els = system.elements
     ei, ej, y, power, lever_ends, names = _stamped(system)
@@ -217,8 +232,8 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> list[Mode]:
             for i, vals in zip(part, _chunk_values(system, (M, D, Ks), pinv[kind], S, V,
                                                    stamps)):
                 values[i] = vals
-    return [_mode(r, repeated, vals, p_rel, p_zeta, shared)
-            for (r, _, _, repeated), (vals, p_rel, p_zeta) in zip(roots, values)]
+    return Modes(_mode(r, repeated, vals, p_rel, p_zeta, shared)
+                 for (r, _, _, repeated), (vals, p_rel, p_zeta) in zip(roots, values))
 
 
 def _normalised(pairs, M, D, Ks, G_held, G_released) -> list:
@@ -318,6 +333,8 @@ class SweepSensitivity:
         an element's η has the same derivative as its value).
     """
 
+    __repr__ = summary_repr
+
     omega: np.ndarray
     K: np.ndarray
     drive: Drive
@@ -394,11 +411,12 @@ def sweep_sensitivity(circuit: Circuit, omega, names=None) -> SweepSensitivity:
     (0.5, 0.5)
     """
     from . import nodal
+    from ._sweep import real_omega
 
     system = circuit.nodal
     ei, ej, y, power, lever_ends, stamped = _stamped(system)
     value, names = _values_named(circuit, names)
-    omega = np.atleast_1d(np.asarray(omega, dtype=float))
+    omega = real_omega(omega)
     column = {name: k for k, name in enumerate(stamped)}
     slopes = _param_slopes(circuit, stamped) if set(names) & circuit.params.keys() else {}
     m = omega.size

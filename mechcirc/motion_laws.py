@@ -43,6 +43,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import NetlistError
+from .sources import did_you_mean, summary_repr
 
 __all__ = [
     "LAWS",
@@ -114,7 +115,8 @@ def _law_pieces(name: str) -> tuple:
                                (7 / 8, 1, (), 1.0, 4 * pi, -h)],
     }.get(name)
     if accel is None:
-        raise ValueError(f"unknown motion law {name!r}; expected one of {', '.join(LAWS)}")
+        raise ValueError(f"unknown motion law {name!r}; expected one of {', '.join(LAWS)}"
+                         f"{did_you_mean(str(name), LAWS)}")
     pieces, end = _integrate(accel)
     # Harmonic and cycloidal end at 1 by construction; the modified laws fix C = 1/s(1).
     return tuple((u0, tuple(am / end for am in a), (b / end, w, phi))
@@ -178,6 +180,8 @@ class Motion:
     path : str
         The table file it was read from ("" for a law or a table built in code).
     """
+
+    __repr__ = summary_repr
 
     spec: str = field(compare=False)
     start: tuple
@@ -346,7 +350,8 @@ def _check_cycle(law_name, ret_law, rise, dwell, ret, stroke) -> None:
     """The laws known, the angles fit one revolution, the stroke finite and nonzero."""
     for name in (law_name, ret_law):
         if name not in LAWS:
-            raise ValueError(f"unknown motion law {name!r}; expected one of {', '.join(LAWS)}")
+            raise ValueError(f"unknown motion law {name!r}; expected one of {', '.join(LAWS)}"
+                             f"{did_you_mean(str(name), LAWS)}")
     if not (math.isfinite(rise) and rise > 0 and math.isfinite(ret) and ret > 0
             and math.isfinite(dwell) and dwell >= 0):
         raise ValueError(f"rise and return must be > 0 and dwell >= 0 degrees, got "

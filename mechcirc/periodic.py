@@ -42,7 +42,7 @@ import numpy as np
 
 from .circuit import Circuit, units_of
 from .errors import MechcircError
-from .sources import real_number
+from .sources import brief, data_frame, real_number, summary_repr
 from .units import convert_frequency
 
 __all__ = ["PeriodicResult", "SpeedMap", "periodic", "rpm_to_omega", "speed_map"]
@@ -126,6 +126,8 @@ class PeriodicResult:
         units written above in brackets are the translational ones).
     """
 
+    __repr__ = summary_repr
+
     name: str
     rpm: float
     omega_shaft: float
@@ -157,6 +159,17 @@ class PeriodicResult:
     def harmonics(self) -> int:
         """N, the number of harmonics summed."""
         return int(self.k.size)
+
+    def to_dataframe(self):
+        """One row per angle: ``angle_deg`` [deg], the drive's ``Q`` [N], ``x`` [m], ``v`` [m/s]
+        (N·m, rad, rad/s for a rotary drive), then ``F(NAME)`` and ``dv(NAME)`` of each element
+        asked for; ``attrs["units"]`` the unit of each column (as :meth:`mechcirc.Sweep.to_dataframe`)."""
+        u = self.units
+        cols = {"angle_deg": self.angle_deg, "Q": self.Q, "x": self.x, "v": self.v,
+                **{f"F({n})": f for n, f in self.forces.items()},
+                **{f"dv({n})": dv for n, dv in self.velocities.items()}}
+        unit = {"angle_deg": "deg", "Q": u["Q"], "x": u["x"], "v": u["v"], "F": u["Q"], "dv": u["v"]}
+        return data_frame(cols, {c: unit[c.partition("(")[0]] for c in cols})
 
     def plot(self, fig=None):
         """Q(θ) beside its spectrum with |K| and the resonances: :func:`mechcirc.plotting.plot_periodic`.
@@ -195,6 +208,8 @@ class SpeedMap:
         The drive's unit labels (:func:`mechcirc.circuit.units_of`; N·m for a rotary drive).
     """
 
+    __repr__ = summary_repr
+
     name: str
     rpm: np.ndarray
     peak: np.ndarray
@@ -204,6 +219,15 @@ class SpeedMap:
     element_peaks: dict = field(default_factory=dict)
     notes: tuple = ()
     units: dict = field(default_factory=lambda: units_of(None))
+
+    def to_dataframe(self):
+        """One row per speed: ``rpm`` [rev/min], ``peak`` drive force [N, N·m for a rotary
+        drive], ``harmonics`` N used, ``error`` [1], then ``peak(NAME)`` [N] of each element
+        asked for; ``attrs["units"]`` the unit of each column."""
+        cols = {"rpm": self.rpm, "peak": self.peak, "harmonics": self.harmonics,
+                "error": self.error, **{f"peak({n})": p for n, p in self.element_peaks.items()}}
+        units = {"rpm": "rpm", "harmonics": "", "error": "1"}
+        return data_frame(cols, {c: units.get(c, self.units["Q"]) for c in cols})
 
     def plot(self, ax=None):
         """The map: :func:`mechcirc.plotting.plot_speed_map`; returns ``ax`` when given,
@@ -228,6 +252,9 @@ def _prepared(circuit: Circuit, motion):
                 f"drive {drive.name!r} has no motion over the revolution; give it one: "
                 "'drive NAME N1 N2 motion=lift.csv' or 'motion=cycloidal rise=120 dwell=60 "
                 "return=120 stroke=0.05' (docs/netlist.md)")
+    if not hasattr(motion, "fourier"):
+        raise MechcircError(f"motion must be a Motion (mechcirc.motion_laws.cam_cycle or "
+                            f"read_motion_table), got {brief(motion)}")
     if drive.kind != "velocity":
         raise MechcircError(f"drive {drive.name!r} is a force drive; a motion is imposed "
                             "by a velocity drive")
@@ -438,7 +465,7 @@ def _resonances(circuit, omega_max, notes):
 def _validate(rpm, tol, harmonics):
     if not (real_number(rpm) and math.isfinite(rpm) and rpm > 0):
         raise MechcircError(f"the machine speed must be a finite number > 0 rev/min, got {rpm!r}")
-    if not (0 < tol < 1):
+    if not (real_number(tol) and 0 < tol < 1):
         raise MechcircError(f"tol must be between 0 and 1, got {tol!r}")
     if harmonics is not None and not (isinstance(harmonics, numbers.Integral)
                                       and 1 <= harmonics <= MAX_HARMONICS):
@@ -466,8 +493,8 @@ def periodic(circuit: Circuit, rpm: float, *, motion=None, tol: float = TOL,
         Use exactly this many harmonics instead (the error is still estimated).
     points : int
         Output angles, θ = 360°·i/points.
-    elements : sequence of str or True
-        Elements whose force and velocity to return (True: all loaded elements).
+    elements : str, sequence of str or True
+        Element (or elements) whose force and velocity to return (True: all loaded elements).
     near : float
         A harmonic within this relative distance of a resonance is named near it.
     method : {"auto", "sp", "nodal"}
@@ -492,6 +519,7 @@ def periodic(circuit: Circuit, rpm: float, *, motion=None, tol: float = TOL,
         raise MechcircError(f"points must be an integer from 4 to 1000000, got {points!r}")
     circuit, motion, amp = _prepared(circuit, motion)
     solved = _solve(circuit, motion, amp, rpm_to_omega(rpm), tol, harmonics, method)
+    elements = (elements,) if isinstance(elements, str) else elements      # one name
     return _at_angles(circuit, motion, rpm, solved, points, elements, near, tol)
 
 
@@ -581,7 +609,7 @@ def speed_map(circuit: Circuit, rpm_min: float, rpm_max: float, points: int = 20
         The speed range [rev/min], 0 < rpm_min < rpm_max.
     points : int
         Speeds, evenly spaced.
-    elements : sequence of str
+    elements : str or sequence of str
         Elements whose peak force to map as well.
 
     Returns
@@ -595,6 +623,7 @@ def speed_map(circuit: Circuit, rpm_min: float, rpm_max: float, points: int = 20
     if not (isinstance(points, numbers.Integral) and 2 <= points <= 100_000):
         raise MechcircError(f"points must be an integer from 2 to 100000, got {points!r}")
     circuit, motion, amp = _prepared(circuit, motion)
+    elements = (elements,) if isinstance(elements, str) else elements      # one name
     rpm = np.linspace(rpm_min, rpm_max, points)
     used = np.zeros(points, dtype=int)
     error = np.zeros(points)

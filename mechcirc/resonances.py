@@ -46,7 +46,7 @@ import numpy as np
 
 from .circuit import Circuit
 from .errors import InputError, NetlistError, SolverError
-from .sources import real_number
+from .sources import data_frame, did_you_mean, real_number
 from .units import FREQUENCY_UNITS, in_unit
 
 __all__ = ["Resonance", "Resonances", "find_resonances", "MAX_UNKNOWNS", "MAX_UNKNOWNS_DAMPED"]
@@ -132,6 +132,9 @@ class Resonances(list):
         ``unit`` is ``"rad/s"`` (ωₙ, f = ωₙ/2π [Hz] and ω_d columns), ``"Hz"``
         (f and f_d) or ``"rpm"`` (n and n_d); then ζ [1] and the relative error.
         """
+        if unit not in FREQUENCY_UNITS:
+            raise InputError(f"unit must be 'rad/s', 'Hz' or 'rpm', got {unit!r}"
+                             f"{did_you_mean(str(unit), FREQUENCY_UNITS)}")
         name, _ = FREQUENCY_UNITS[unit]
         hz = unit == "rad/s"            # omega in rad/s has f in Hz beside it
         head = (f"{'kind':<14} {f'{name} [{unit}]':>17}" + (f" {'f [Hz]':>14}" if hz else "")
@@ -140,6 +143,13 @@ class Resonances(list):
                          + (f" {r.f_hz:>14.8g}" if hz else "")
                          + f" {in_unit(r.omega_d, unit):>17.10g} {r.zeta:>10.4g} {r.error:>10.1e}"
                          for r in self]
+
+    def to_dataframe(self):
+        """One row per root, the columns of :meth:`Resonance.as_dict` (``kind``, ``omega``
+        [rad/s], ``f_hz`` [Hz], ``omega_d`` [rad/s], ``zeta`` [1], ``error`` [1]);
+        ``attrs["units"]`` the unit of each column (as :meth:`mechcirc.Sweep.to_dataframe`)."""
+        return data_frame([r.as_dict() for r in self], {"kind": "", "omega": "rad/s", "f_hz": "Hz",
+                                                        "omega_d": "rad/s", "zeta": "1", "error": "1"})
 
     def __repr__(self) -> str:
         return "Resonances([])  (none found)" if not self else "\n".join(self.table())
@@ -246,8 +256,7 @@ def resonance_pairs(circuit: Circuit, omega_max: float | None = None,
 def _check_arguments(circuit: Circuit, omega_max: float | None, kind) -> None:
     """Refuse an ``omega_max`` that is not a real number > 0 or None (a bool is no number,
     though an int), a ``kind`` not known, and an element whose value × eta overflows."""
-    if not (omega_max is None or real_number(omega_max) and omega_max > 0):
-        raise InputError(f"omega_max must be > 0 rad/s or None, got {omega_max!r}")
+    check_omega_max(omega_max)
     if kind not in (None, "resonance", "antiresonance"):
         raise InputError(f"kind must be 'resonance', 'antiresonance' or None, got {kind!r}")
     for e in circuit.elements:
@@ -255,6 +264,18 @@ def _check_arguments(circuit: Circuit, omega_max: float | None, kind) -> None:
             raise NetlistError(f"{e.kind} {e.name!r}: value × eta = {e.value:g} × {e.eta:g} "
                                "overflows float64", circuit.source, e.line, e.col,
                                "a product below 1.8e308")
+
+
+def check_omega_max(omega_max) -> None:
+    """Refuse an ``omega_max`` [rad/s] that is not a real number > 0 or None (InputError).
+
+    Parameters
+    ----------
+    omega_max : object
+        The argument given.
+    """
+    if not (omega_max is None or real_number(omega_max) and omega_max > 0):
+        raise InputError(f"omega_max must be > 0 rad/s or None, got {omega_max!r}")
 
 
 def _solved(M, D, Ks, G_released, G_held, damped: bool, omega_max, vectors: bool) -> tuple:
@@ -960,6 +981,7 @@ def batched_roots(ds, omega_max: float | None = None):
     anti-resonances; None when it solves none (the caller solves the others
     one by one).
     """
+    check_omega_max(omega_max)
     from .errors import NotSeriesParallelError, TopologyError
 
     try:

@@ -7,7 +7,7 @@ import numbers
 import os
 import re
 import stat
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import TypeGuard
 
 from .errors import NetlistError
@@ -15,7 +15,7 @@ from .errors import NetlistError
 __all__ = ["read_source", "read_bytes", "MAX_INPUT_BYTES", "split_lines", "line_col",
            "finite_number", "brief", "load_toml", "locate", "locate_path", "located", "Table",
            "unknown_key", "check_keys", "number_error", "checked_number", "did_you_mean",
-           "is_number"]
+           "is_number", "summary_repr", "data_frame"]
 
 #: The largest input file mechcirc reads [bytes].  A netlist of the statement
 #: limit is far below this; anything larger is refused before it is read.
@@ -335,6 +335,61 @@ def brief(value) -> str:
     """
     text = repr(value)
     return text if len(text) <= 60 else text[:57] + "..."
+
+
+def summary_repr(result) -> str:
+    """``Name(field=value, ...)`` of a dataclass ``result``: an array as its shape, a tuple
+    or list of more than 8 items as its length, any other value :func:`brief`: what a
+    notebook shows of a result, not thousands of numbers.
+
+    Parameters
+    ----------
+    result : dataclass instance
+        The result shown (its fields with ``repr=True``).
+
+    Returns
+    -------
+    str
+    """
+    parts = []
+    for f in fields(result):
+        if f.repr:
+            value = getattr(result, f.name)
+            shape = "×".join(map(str, getattr(value, "shape", ())))
+            if shape:
+                text = f"<array {shape}>"
+            elif isinstance(value, (tuple, list)) and len(value) > 8:
+                text = f"<{type(value).__name__} of {len(value)}>"
+            else:
+                text = brief(value)
+            parts.append(f"{f.name}={text}")
+    return f"{type(result).__name__}({', '.join(parts)})"
+
+
+def data_frame(rows, units: dict[str, str]):
+    """The ``pandas.DataFrame`` of every ``to_dataframe``: ``rows`` (columns by name, or one
+    dict a row) in the columns of ``units``, ``attrs["units"]`` the unit of each column.
+
+    Parameters
+    ----------
+    rows : dict of str to array, or list of dict
+        The table, as pandas reads it.
+    units : dict of str to str
+        Column name -> its unit ("" for a flag or a name), in the columns' order.
+
+    Returns
+    -------
+    pandas.DataFrame
+        pandas is imported here only (an ImportError says so without it).
+    """
+    try:
+        import pandas as pd
+    except ImportError:
+        raise ImportError("to_dataframe needs pandas (pip install pandas); the result's "
+                          "arrays do not") from None
+    df = pd.DataFrame(rows, columns=list(units))
+    df.attrs["units"] = dict(units)
+    return df
 
 
 # ------------------------------------------------------------------ TOML with places

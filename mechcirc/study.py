@@ -111,9 +111,9 @@ from .circuit import ELEMENT_UNITS, Drive, Element, units_of
 from .errors import MechcircError, NetlistError
 from .limits import (MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS, MAX_STUDY_POINTS,
                      MAX_STUDY_SWEEP_POINTS, MAX_STUDY_WORK)
-from .sources import (Table, brief, csv_rows, did_you_mean, finite_number, load_toml,
-                      locate_path, number_error, read_bytes, read_source, split_lines,
-                      unknown_key)
+from .sources import (Table, brief, csv_rows, data_frame, did_you_mean, finite_number,
+                      load_toml, locate_path, number_error, read_bytes, read_source,
+                      split_lines, summary_repr, unknown_key)
 from .netlist import SYNTAX, expressions_of, parse
 from .outputs import OutputSet, atomic_open, atomic_path
 from .units import looks_like_unit, parse_omega
@@ -131,6 +131,8 @@ _SLEY_QUANTITIES = {"one-side": ["eps2P", "eps4P", "eps4T", "M2V"],
 @dataclass(frozen=True)
 class StudySpec:
     """A parsed study: the netlist text, the analysis and the points' parameter values."""
+
+    __repr__ = summary_repr
 
     netlist_text: str
     netlist_source: str
@@ -907,8 +909,11 @@ class StudyResult:
 
     ``rows`` holds every row, or with ``run_study(keep_rows=False)`` only the
     failed ones (the table is in the output file); ``count`` is the number of
-    rows of the table either way.
+    rows of the table either way.  ``units`` maps each column to its unit
+    (:func:`column_units`).
     """
+
+    __repr__ = summary_repr
 
     columns: list[str]
     rows: list[dict]
@@ -917,10 +922,16 @@ class StudyResult:
     skipped: int = 0
     failed: int = field(default=0)
     count: int = -1
+    units: dict = field(default_factory=dict, repr=False)
 
     def __post_init__(self):
         if self.count < 0:
             self.count = len(self.rows)
+
+    def to_dataframe(self):
+        """:attr:`rows` as a ``pandas.DataFrame`` in :attr:`columns`; ``attrs["units"]`` the
+        unit of each column ("" where it has none)."""
+        return data_frame(self.rows, {c: self.units.get(c) or "" for c in self.columns})
 
 
 def _journal_record(row: dict, columns: list[str]) -> list[str]:
@@ -1196,7 +1207,7 @@ class _Take:
     def result(self, executor: str, n_workers: int) -> StudyResult:
         self.rows.sort(key=lambda r: r["index"])
         return StudyResult(self.spec.columns, self.rows, executor, n_workers, len(self.done),
-                           self.failed, self.count)
+                           self.failed, self.count, column_units(self.spec))
 
 
 def _execute(spec: StudySpec, done: list, dask: tuple, workers: int | None,

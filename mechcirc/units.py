@@ -300,8 +300,11 @@ def convert_frequency(value, from_unit: str = "rad/s", to_unit: str = "rad/s"):
     try:
         (_, a), (_, b) = FREQUENCY_UNITS[from_unit], FREQUENCY_UNITS[to_unit]
     except KeyError:
+        from .sources import did_you_mean
+
         bad = to_unit if from_unit in FREQUENCY_UNITS else from_unit
-        raise UnitError(f"unknown frequency unit {bad!r}", 0, "rad/s, Hz or rpm") from None
+        raise UnitError(f"unknown frequency unit {bad!r}{did_you_mean(str(bad), FREQUENCY_UNITS)}",
+                        0, "rad/s, Hz or rpm") from None
     return value * a / b
 
 

@@ -49,6 +49,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import GeometryError
+from ..sources import data_frame, real_number, summary_repr
 from .fourbar import FourBar
 from .linkage_solver import rigid_points, to_complex, to_xy
 
@@ -107,6 +108,8 @@ class FrameLoading:
         Shaking moments on the frame about A and about D [N·m].
     """
 
+    __repr__ = summary_repr
+
     theta: NDArray[np.float64]
     omega: float
     F_A: NDArray[np.float64]
@@ -155,6 +158,13 @@ class FrameLoading:
         cols["T_a_Nm"], cols["T_d_Nm"] = self.T_a, self.T_d
         cols["T_d_printed_Nm"] = self.T_d_printed
         return cols
+
+    def to_dataframe(self):
+        """:meth:`columns` as a ``pandas.DataFrame``, a row per crank angle; ``attrs["units"]``
+        the unit of each column, as its name ends: deg, N, N·m."""
+        cols = self.columns()
+        return data_frame(cols, {c: {"deg": "deg", "N": "N", "Nm": "N·m"}[c.rpartition("_")[2]]
+                                 for c in cols})
 
     def summary(self) -> dict:
         """Extremes (value and crank angle in degrees) of the main quantities, plain data."""
@@ -267,7 +277,7 @@ def frame_loading(fourbar: FourBar, theta: ArrayLike, omega: float, *,
     One batched 9×9 linear solve per angle; the matrix is singular only where
     the coupler and rocker are in line (γ = 0), which a crank-rocker never reaches.
     """
-    if not (math.isfinite(omega) and omega > 0):
+    if not (real_number(omega) and math.isfinite(omega) and omega > 0):
         raise GeometryError(f"crank speed ω must be finite and > 0 rad/s, got {omega}")
     theta = np.atleast_1d(np.asarray(theta, dtype=float))
     k = link_kinematics(fourbar, theta, omega, crank, coupler, rocker, reed_point)

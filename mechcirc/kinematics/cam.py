@@ -70,6 +70,7 @@ from functools import partial
 import numpy as np
 
 from ..errors import InputError
+from ..sources import did_you_mean, real_number, summary_repr
 
 __all__ = [
     "FOLLOWERS",
@@ -146,6 +147,8 @@ class CamProfile:
         ``pressure_angle`` and ``undercut``, over the whole turn (the extremes
         are refined between the grid points).
     """
+
+    __repr__ = summary_repr
 
     follower: str
     base_radius: float
@@ -298,15 +301,17 @@ def _inputs(motion, follower, base_radius, roller_radius, offset, arm, pivot, po
     """The checked (r_b, r_f, e, L, D, pressure limit [rad]) of :func:`cam_profile`."""
     if follower not in FOLLOWERS + ("oscillating_flat",):
         raise InputError(f"unknown follower {follower!r}; expected one of "
-                         f"{', '.join(FOLLOWERS)}, oscillating_flat")
+                         f"{', '.join(FOLLOWERS)}, oscillating_flat"
+                         f"{did_you_mean(str(follower), FOLLOWERS + ('oscillating_flat',))}")
     if getattr(motion, "period", None) != 2 * math.pi:
         raise InputError("the motion must be a Motion over one turn of the cam (period 2π; "
                          "build it with cam_cycle, motion_table or read_motion_table)")
-    rb, rf, e = float(base_radius), float(roller_radius), float(offset)
-    values = {"base radius": rb, "roller radius": rf, "offset": e, "arm": arm, "pivot": pivot}
+    values = {"base radius": base_radius, "roller radius": roller_radius, "offset": offset,
+              "arm": arm, "pivot": pivot}
     for name, val in values.items():
-        if not math.isfinite(val):
+        if not (real_number(val) and math.isfinite(val)):
             raise InputError(f"the {name} must be a finite number, got {val!r}")
+    rb, rf, e = float(base_radius), float(roller_radius), float(offset)
     if rb <= 0:
         raise InputError(f"the base radius must be > 0, got {rb:g}")
     if rf < 0:

@@ -53,6 +53,7 @@ from numpy.typing import NDArray
 from .. import _jit
 from ..errors import GeometryError, NetlistError, OutOfReach
 from ..motion_laws import quintic
+from ..sources import summary_repr
 from ._dyad_forms import im_conj, rpr, rrp, rrr, solve2
 
 __all__ = ["LinkageMotion", "LinkageState", "MAX_CONTINUATION_STEPS", "plan", "motion"]
@@ -82,6 +83,8 @@ class LinkageState:
     contributions : dict[str, dict[str, ndarray (2,)]]
         Crank name → point → velocity with every other crank stopped [length/s].
     """
+
+    __repr__ = summary_repr
 
     theta: float
     t: float

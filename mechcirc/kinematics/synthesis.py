@@ -53,6 +53,7 @@ from typing import Literal
 import numpy as np
 
 from ..errors import GeometryError
+from ..sources import did_you_mean, summary_repr
 from .fourbar import FourBar
 
 __all__ = [
@@ -123,6 +124,8 @@ class Design:
         Swing Ψ computed from the linkage [deg].
     """
 
+    __repr__ = summary_repr
+
     a: float
     b: float
     c: float
@@ -188,6 +191,8 @@ class SynthesisResult:
         When no design is feasible: the smallest sets of criteria that no
         examined design meets together.
     """
+
+    __repr__ = summary_repr
 
     designs: tuple
     objective: str
@@ -519,7 +524,8 @@ def _checked(load, objective, fixed, swing, swing_range, b_a_range, d_a_range, s
 def _known(what: str, value, known) -> None:
     """Refuse a ``value`` not among the names ``known``."""
     if value not in known:
-        raise GeometryError(f"unknown {what} {value!r}; expected one of {', '.join(known)}")
+        raise GeometryError(f"unknown {what} {value!r}; expected one of {', '.join(known)}"
+                            f"{did_you_mean(str(value), known)}")
 
 
 def _grid_axes(fixed, swing, s_range, crank_range, b_a_range, d_a_range, step, crank_step,

@@ -35,6 +35,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import MechcircError
+from ..sources import summary_repr
 from ..verdict import judge, summarise
 from .files import Scene
 
@@ -58,6 +59,8 @@ class SceneCrosscheck:
     ``rel_error``.  Every row also has ``verdict``, ``tol`` and ``why``
     (:func:`mechcirc.verdict.judge`).
     """
+
+    __repr__ = summary_repr
 
     source: str
     theta_deg: float

@@ -24,6 +24,7 @@ from numpy.typing import NDArray
 from ..batch import Designs, from_circuits, network_shape
 from ..errors import GeometryError, InputError, SolverError
 from ..motion_laws import Motion, motion_table
+from ..sources import summary_repr
 from ..units import FREQUENCY_UNITS, in_unit
 from .files import Scene
 from .model import (RANK_TOL, ReflectMode, build, drive_ratio, element_ratios, part_singular_values,
@@ -60,6 +61,8 @@ class CycleMap:
         The span of ``theta`` [rad]: 2π, or the cycle of geared cranks (then
         ``omega_shaft`` is the cycle's fundamental |Ω|/revolutions).
     """
+
+    __repr__ = summary_repr
 
     theta: NDArray[np.float64]
     resonances: list

@@ -78,7 +78,7 @@ from ..kinematics.linkage import TABLES as LINKAGE_TABLES
 from ..kinematics.linkage import Linkage, parse_linkage
 from ..sources import (Table, brief, check_keys, checked_number, finite_number, load_toml,
                        split_lines)
-from ..sources import TOML_HEADER, is_name, located, read_source
+from ..sources import TOML_HEADER, is_name, located, read_source, summary_repr
 from ..units import in_si, is_bare_number, parse_quantity
 from .simfile import (Moment, SimulateSettings, override_moment, override_run, parse_moments,
                       parse_shaft, parse_simulate)
@@ -261,6 +261,8 @@ class Scene:
     source : str
         Where the scene came from (a file name) for messages.
     """
+
+    __repr__ = summary_repr
 
     name: str
     linkage: Linkage

@@ -38,7 +38,7 @@ import numpy as np
 
 from ..circuit import Circuit, Drive, Element, Lever
 from ..errors import GeometryError, InputError, MechcircError, OutOfReach
-from ..sources import is_name
+from ..sources import is_name, real_number, summary_repr
 from .files import Scene, gear_meshes
 
 #: How a lever is reflected into the circuit (see :func:`build`).
@@ -77,6 +77,8 @@ class SceneCircuit:
     rotational : bool
         True for a link drive (rad/s, N·m), False for a point drive (m/s, N).
     """
+
+    __repr__ = summary_repr
 
     theta: float
     circuit: Circuit
@@ -119,9 +121,9 @@ def build(scene: Scene, theta: float, *, reflect: ReflectMode = "eta",
     """
     if reflect not in ("eta", "lever"):
         raise ValueError(f"reflect must be 'eta' or 'lever', got {reflect!r}")
+    if not (real_number(theta) and math.isfinite(theta)):
+        raise InputError(f"theta must be a finite angle [rad], got {theta!r}")
     theta = float(theta)
-    if not math.isfinite(theta):
-        raise InputError(f"theta must be finite, got {theta!r}")
     m = _motion(scene, theta, state)
     r0, r0_text = _drive_ratio(scene, m)
     node_of_part, parts = _part_nodes(scene, m)

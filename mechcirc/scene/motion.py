@@ -26,6 +26,7 @@ import numpy as np
 from ..errors import GeometryError
 from ..kinematics.linkage import Crank, Linkage
 from ..motion_laws import hermite_table
+from ..sources import real_number, summary_repr
 from .files import Scene
 
 __all__ = ["MotionModel", "motion_model", "hermite_table", "dead_centre"]
@@ -57,6 +58,8 @@ class MotionModel:
     body_fn : dict
         Body → its rotation function index (for the rigid accelerations).
     """
+
+    __repr__ = summary_repr
 
     scene: Scene
     omega: float
@@ -166,9 +169,10 @@ def motion_model(scene: Scene, omega: float | None = None, *,
         kinematics cannot be tabulated.
     """
     lk = scene.linkage
-    omega = abs(lk.cranks[0].omega) if omega is None else float(omega)
-    if not (math.isfinite(omega) and omega > 0):
+    omega = abs(lk.cranks[0].omega) if omega is None else omega
+    if not (real_number(omega) and math.isfinite(omega) and omega > 0):
         raise ValueError(f"omega must be a finite number > 0 rad/s, got {omega!r}")
+    omega = float(omega)
     cam = getattr(lk, "cam", None) is not None    # a cam swings the crank: tabulate it too
     N = _table_points(lk, int(table_points))
     h = TWO_PI / N

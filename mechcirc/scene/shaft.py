@@ -51,6 +51,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import MechcircError, ShaftWarning, SolverError
+from ..sources import summary_repr
 from .files import Scene
 from .motion import (MotionModel, body_tables, function_args, function_rows, hermite_table,
                      moment_centre, motion_model)
@@ -103,6 +104,8 @@ class ShaftMotion:
     states : ndarray
         Elastic scenes: the free parts' [q, q̇] at each θ (rows); shape (points, 0) rigid.
     """
+
+    __repr__ = summary_repr
 
     name: str
     source: str

@@ -41,6 +41,7 @@ import numpy as np
 
 from .. import _jit
 from ..errors import MechcircError, SceneAccuracyWarning, SolverError
+from ..sources import did_you_mean, summary_repr
 from .files import Scene
 from .motion import MotionModel, function_args, motion_model
 
@@ -90,6 +91,8 @@ class SceneMotion:
     method, backend : str
     notes : tuple of str
     """
+
+    __repr__ = summary_repr
 
     name: str
     source: str
@@ -467,7 +470,8 @@ def _options(scene, omega, revolutions, start_deg, spp, npts, method, rtol, revo
             raise MechcircError(f"omega_ripple harmonic must be a whole number >= 1, got "
                                 f"{harmonic!r}")
     if method not in METHODS:
-        raise MechcircError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
+        raise MechcircError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}"
+                            f"{did_you_mean(str(method), METHODS)}")
     if revolutions < 1:
         raise MechcircError(f"revolutions must be ≥ 1, got {revolutions}")
     if revolution is not None:

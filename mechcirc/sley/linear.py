@@ -28,6 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..circuit import Circuit, Drive, Element, Lever
+from ..sources import summary_repr
 from ..units import convert_frequency
 from .models import ParameterError, SleyParameters
 
@@ -53,6 +54,8 @@ class LinearModel:
     names : tuple of str
         Coordinate names.
     """
+
+    __repr__ = summary_repr
 
     theta0: float
     mu: float

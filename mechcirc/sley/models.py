@@ -44,6 +44,7 @@ from dataclasses import asdict, dataclass, fields, replace
 from typing import Literal
 
 from ..errors import GeometryError, ParameterError
+from ..sources import did_you_mean
 
 @lru_cache(maxsize=64)
 def fourbar_of_lengths(l2P, l3, l4, d, branch):
@@ -152,7 +153,8 @@ class SleyParameters:
 
     def __post_init__(self):
         if self.drive not in ("one-side", "both-sides"):
-            raise ParameterError(f"drive must be 'one-side' or 'both-sides', got {self.drive!r}")
+            raise ParameterError(f"drive must be 'one-side' or 'both-sides', got {self.drive!r}"
+                                 f"{did_you_mean(str(self.drive), ('one-side', 'both-sides'))}")
         if isinstance(self.omega, (int, float)) and math.isfinite(self.omega) and self.omega <= 0:
             raise ParameterError(
                 f"crank speed omega must be > 0 rad/s, got {self.omega!r}: the model "
@@ -212,8 +214,6 @@ class SleyParameters:
         known = {f.name for f in fields(self)}
         unknown = sorted(set(overrides) - known)
         if unknown:
-            from ..sources import did_you_mean
-
             raise ParameterError(f"unknown sley parameter(s) {', '.join(unknown)}"
                                  f"{did_you_mean(unknown[0], sorted(known))} "
                                  f"(known: {', '.join(sorted(known))})")

@@ -53,6 +53,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import SleyAccuracyWarning
+from ..sources import data_frame, did_you_mean, summary_repr
 from .models import ParameterError, SleyParameters, linkage_constants, start_angle
 from .presets import all_presets, preset
 from .scenes import ALIASES, sley_scene
@@ -125,6 +126,8 @@ class SleyResult:
         points' accelerations, which the result does not return, are not computed).
     """
 
+    __repr__ = summary_repr
+
     params: SleyParameters
     crank_angle: NDArray[np.float64]
     eps2P: NDArray[np.float64]
@@ -162,6 +165,12 @@ class SleyResult:
         return {"crank_angle_deg": np.degrees(self.crank_angle), "eps2P": self.eps2P,
                 "eps4P": self.eps4P, "eps4T": self.eps4T, "M2V": self.M2V, **second,
                 "M4": self.M4}
+
+    def to_dataframe(self):
+        """:meth:`columns` as a ``pandas.DataFrame``, a row per sample; ``attrs["units"]``
+        the unit of each column: deg, rad/s² (``eps*``), N·m (``M*``)."""
+        cols = self.columns()
+        return data_frame(cols, {c: {"c": "deg", "e": "rad/s²", "M": "N·m"}[c[0]] for c in cols})
 
     def summary(self) -> dict:
         """Plain-data summary for JSON output."""
@@ -365,7 +374,8 @@ def _checked(method, revolutions, revolution, points_per_revolution, steps_per_p
     conversions: the revolutions it integrates (``revolution``), rtol's default, floats."""
     method = "rk4" if method is None else method
     if method not in METHODS:
-        raise ParameterError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
+        raise ParameterError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}"
+                             f"{did_you_mean(str(method), METHODS)}")
     if isinstance(revolutions, bool) or not isinstance(revolutions, (int, np.integer)) \
             or revolutions < 1:
         raise ParameterError(f"revolutions must be an integer >= 1, got {revolutions!r}")

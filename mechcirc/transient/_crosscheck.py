@@ -40,6 +40,7 @@ import numpy as np
 
 from ..circuit import Circuit
 from ..errors import MechcircError
+from ..sources import summary_repr
 from ..verdict import DISAGREES, judge, summarise
 from .model import backlash_elements
 from .simulate import (ROUNDING_PER_STEP, Waveform, drive_map, periodic_start, state_model,
@@ -69,6 +70,8 @@ MAX_SPREAD = 1e-3
 class CrossCheck:
     """Result of :func:`crosscheck` (plain data); ``verdict`` as
     :func:`mechcirc.verdict.summarise`."""
+
+    __repr__ = summary_repr
 
     name: str
     drive_kind: str
@@ -261,6 +264,9 @@ def crosscheck(circuit: Circuit, omega_max: float | None = None,
     if circuit.drive is None:
         raise MechcircError("crosscheck needs a drive line in the netlist (the port whose "
                             "K(ω) is checked); 'mechcirc transient' runs without one")
+    from ..resonances import check_omega_max      # (the analysis needs it anyway)
+
+    check_omega_max(omega_max)
     out = CrossCheck(circuit.name, circuit.drive.kind)
     if backlash_elements(circuit):
         out.notes.append("clearances (backlash=) taken as closed in both domains: the "

@@ -38,7 +38,7 @@ import scipy.linalg as la
 from .. import _jit
 from ..circuit import Circuit, units_of
 from ..errors import MechcircError, NetlistError
-from ..sources import name_index
+from ..sources import data_frame, name_index, real_number
 from ..units import parse_omega
 from .model import StateSpace, incidence, backlash_elements, state_space
 
@@ -299,16 +299,12 @@ class TransientResult:
         """The run as a ``pandas.DataFrame``, one row per time step, in the columns of
         :meth:`write_csv`: ``t`` [s], ``x(NODE)`` [m or rad], ``v(NODE)`` [m/s or rad/s]
         when the run kept velocities, ``F(ELEMENT)`` [N or N·m], and ``F(drive)`` (a
-        velocity drive) or ``v(drive)`` (a force drive); ``attrs["units"]`` names the
-        units.  pandas is imported here only (an ImportError says so without it)."""
-        try:
-            import pandas as pd
-        except ImportError:
-            raise ImportError("TransientResult.to_dataframe needs pandas (pip install "
-                              "pandas); the arrays and write_csv do not") from None
-        df = pd.DataFrame(self.columns())
-        df.attrs["units"] = {"t": "s", **self.units}
-        return df
+        velocity drive) or ``v(drive)`` (a force drive); ``attrs["units"]`` maps each column
+        to its unit (as :meth:`mechcirc.Sweep.to_dataframe`).  pandas is imported here only
+        (an ImportError says so without it)."""
+        cols = self.columns()
+        unit = {"t": "s", "x": self.units["x"], "v": self.units["v"], "F": self.units["Q"]}
+        return data_frame(cols, {c: unit[c.partition("(")[0]] for c in cols})
 
     def plot(self, ax=None, nodes=None, what: str = "x", *, elements=None, fig=None,
              title: str | None = None):
@@ -322,15 +318,15 @@ class TransientResult:
 
 
 def _grid(t_end: float, dt: float | None, waveform: Waveform) -> np.ndarray:
-    if not (math.isfinite(t_end) and t_end > 0):
-        raise MechcircError(f"--t-end must be a finite time > 0 [s], got {t_end:g}")
+    if not (real_number(t_end) and math.isfinite(t_end) and t_end > 0):
+        raise MechcircError(f"--t-end must be a finite time > 0 [s], got {t_end}")
     if dt is None:
         dt = t_end / 2000
         per_period = {"harmonic": 40, "motion": 720}.get(waveform.kind)  # motion: 0.5° of the shaft
         if per_period:
             dt = min(dt, 2 * math.pi / waveform.omega / per_period)
-    if not (math.isfinite(dt) and dt > 0):
-        raise MechcircError(f"--dt must be a finite time > 0 [s], got {dt:g}")
+    if not (real_number(dt) and math.isfinite(dt) and dt > 0):
+        raise MechcircError(f"--dt must be a finite time > 0 [s], got {dt}")
     if dt > t_end:          # one step of dt would run past t_end (it ran to dt)
         raise MechcircError(f"--dt {dt:g} s is longer than --t-end {t_end:g} s; give a step "
                             "dt ≤ t_end (the default is t_end/2000)")
@@ -408,8 +404,17 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
     return _linear_run(ss, circuit, z0, t, (u, u_in), drive, notes, elements, velocities)
 
 
+def _flags(**flags) -> None:
+    """Refuse a flag of :func:`transient` that is not True or False (a list of element names
+    would read as True)."""
+    for name, value in flags.items():
+        if not isinstance(value, (bool, np.bool_)):
+            raise TypeError(f"{name} must be True or False, got {value!r}")
+
+
 def _clearance_run(ss, circuit, z0, t, us, drive, amp, rtol, notes, elements, velocities):
     """A run with clearances: the adaptive integrator, its outputs and separations."""
+    _flags(elements=elements, velocities=velocities)
     if not RTOL_RANGE[0] <= rtol <= RTOL_RANGE[1]:
         raise MechcircError(f"--rtol must be between {RTOL_RANGE[0]:g} and "
                             f"{RTOL_RANGE[1]:g}, got {rtol:g}")
@@ -428,6 +433,7 @@ def _clearance_run(ss, circuit, z0, t, us, drive, amp, rtol, notes, elements, ve
 
 def _linear_run(ss, circuit, z0, t, us, drive, notes, elements, velocities):
     """A linear run: exact propagation, its outputs and their error."""
+    _flags(elements=elements, velocities=velocities)
     u, u_in = us
     h = t[1] - t[0]
     Z, T, nx, drive_y, x_ready, v_ready, x_bound, err, path = _linear(
