@@ -345,8 +345,9 @@ def simulate_scene(scene: Scene, *, omega: float | None = None, revolutions: int
     Raises
     ------
     MechcircError, GeometryError, SolverError
-        A bad option (named); a mechanism that cannot turn a revolution; a run that
-        diverged or needs too many steps.
+        A bad option (named, :func:`check_run`: e.g. a ``steps_per_period`` given with a
+        scipy method, or a count that is not an integer); a mechanism that cannot turn a
+        revolution; a run that diverged or needs too many steps.
 
     Warns
     -----
@@ -456,10 +457,11 @@ def _options(scene, omega, revolutions, start_deg, spp, npts, method, rtol, revo
         return getattr(cfg, k) if cfg is not None and getattr(cfg, k) is not None else d
 
     omega = pick(omega, "omega", None)
-    revolutions = int(pick(revolutions, "revolutions", DEFAULT_REVOLUTIONS))
+    revolutions = pick(revolutions, "revolutions", DEFAULT_REVOLUTIONS)
     start_deg = float(pick(start_deg, "start_deg", 0.0))
-    spp = pick(spp, "steps_per_period", None)          # None: chosen for the accuracy goal
-    npts = int(pick(npts, "points", DEFAULT_POINTS))
+    # the file's steps_per_period is a default of the fixed-step methods, not the scipy ones'
+    spp = spp if method in SCIPY_METHODS else pick(spp, "steps_per_period", None)
+    npts = pick(npts, "points", DEFAULT_POINTS)
     ripple = pick(ripple, "omega_ripple", None)
     if ripple is not None:
         amp_rel, harmonic = ripple
@@ -469,31 +471,44 @@ def _options(scene, omega, revolutions, start_deg, spp, npts, method, rtol, revo
         if isinstance(harmonic, bool) or int(harmonic) != harmonic or not harmonic >= 1:
             raise MechcircError(f"omega_ripple harmonic must be a whole number >= 1, got "
                                 f"{harmonic!r}")
-    if method not in METHODS:
-        raise MechcircError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}"
-                            f"{did_you_mean(str(method), METHODS)}")
-    if revolutions < 1:
-        raise MechcircError(f"revolutions must be ≥ 1, got {revolutions}")
-    if revolution is not None:
-        if not 1 <= revolution <= revolutions:
-            raise MechcircError(f"revolution must be an integer in 1..{revolutions}, "
-                                f"got {revolution!r}")
-        revolutions = int(revolution)       # later revolutions cannot change this one
-    if spp is not None:
-        spp = float(spp)
-        if not spp >= 1:
-            raise MechcircError(f"steps_per_period must be ≥ 1, got {spp!r}")
-    if npts < 16:
-        raise MechcircError(f"points must be ≥ 16, got {npts}")
+    check_run(method, revolutions, revolution, npts, spp, rtol)
     if method in SCIPY_METHODS:
         rtol = 1e-10 if rtol is None else float(rtol)
-        if not 1e-14 <= rtol < 1:
-            raise MechcircError(f"rtol must be in [1e-14, 1), got {rtol!r}")
-    elif rtol is not None:
-        raise MechcircError(f"rtol applies to the scipy methods, not {method}; use "
-                            "steps_per_period")
-    return _Options(omega, revolutions, start_deg, spp, npts, ripple, method, rtol,
+    # the run stops at the tabulated revolution: later ones cannot change it
+    return _Options(omega, int(revolution or revolutions), start_deg,
+                    None if spp is None else float(spp), int(npts), ripple, method, rtol,
                     bool(exact_rigid), bool(point_accelerations))
+
+
+def check_run(method, revolutions, revolution, points, spp, rtol, error=MechcircError,
+              points_name="points") -> None:
+    """The run options of :func:`simulate_scene` checked, and those of the sley's
+    :func:`~mechcirc.sley.simulate_params` (its ``error`` class, its ``points_name``):
+    one set of rules, the bad option named as its caller's user wrote it."""
+    if method not in METHODS:
+        raise error(f"unknown method {method!r}; choose one of {', '.join(METHODS)}"
+                    f"{did_you_mean(str(method), METHODS)}")
+    if not _whole(revolutions, 1):
+        raise error(f"revolutions must be an integer ≥ 1, got {revolutions!r}")
+    if revolution is not None and not (_whole(revolution, 1) and revolution <= revolutions):
+        raise error(f"revolution must be an integer in 1..{revolutions}, got {revolution!r}")
+    if not _whole(points, 16):
+        raise error(f"{points_name} must be an integer ≥ 16, got {points!r}")
+    if method in SCIPY_METHODS:
+        if spp is not None:
+            raise error(f"steps_per_period applies to rk4 and rk8, not {method}; use rtol")
+        if rtol is not None and not 1e-14 <= float(rtol) < 1:
+            raise error(f"rtol must be in [1e-14, 1), got {float(rtol)!r}")
+    elif rtol is not None:
+        raise error(f"rtol applies to the scipy methods, not {method}; use steps_per_period")
+    elif spp is not None and not float(spp) >= 1:
+        raise error(f"steps_per_period must be ≥ 1, got {float(spp)!r}")
+
+
+def _whole(value, least) -> bool:
+    """``value`` is an integer (a numpy one too, not a bool) ≥ ``least``."""
+    return isinstance(value, (int, np.integer)) and not isinstance(value, bool) \
+        and value >= least
 
 
 def _simulate_scipy(ctx, error_estimate, notes, compile_time):

@@ -53,7 +53,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import SleyAccuracyWarning
-from ..sources import data_frame, did_you_mean, summary_repr
+from ..sources import data_frame, summary_repr
 from .models import ParameterError, SleyParameters, linkage_constants, start_angle
 from .presets import all_presets, preset
 from .scenes import ALIASES, sley_scene
@@ -61,8 +61,9 @@ from .scenes import ALIASES, sley_scene
 __all__ = ["SleyResult", "simulate", "simulate_params", "simulate_batch", "METHODS",
            "table_error", "start_angle", "SleyAccuracyWarning"]
 
+#: = mechcirc.scene.simulation.METHODS, which checks the method (a copy: importing the scene
+#: package here would add ~30 ms to ``import mechcirc.sley``)
 METHODS = ("rk4", "rk4-python", "rk8", "DOP853", "RK45", "LSODA")
-_SCIPY_METHODS = ("DOP853", "RK45", "LSODA")
 TWO_PI = 2.0 * math.pi
 
 #: Default output points per revolution (0.05° in crank angle).
@@ -336,14 +337,15 @@ def simulate_params(params: SleyParameters, revolutions: int = 5, method: str | 
     SleyResult
         The last (or the chosen) revolution, tabulated.
     """
-    method = _checked(method, revolutions, revolution, points_per_revolution, steps_per_period,
-                      rtol)
+    from ..scene.simulation import SceneAccuracyWarning, check_run, simulate_scene
+
+    method = "rk4" if method is None else method
+    check_run(method, revolutions, revolution, points_per_revolution, steps_per_period, rtol,
+              ParameterError, "points_per_revolution")     # before the model is built
     params.fourbar()                            # GeometryError: not a crank-rocker
     theta0, *linkage = linkage_constants(params.l2P, params.l3, params.l4, params.d,
                                          params.branch)
     scene, model = _model(params, table_points)
-    from ..scene.simulation import SceneAccuracyWarning, simulate_scene
-
     notes = [f"alpha = {math.degrees(params.alpha):g} deg (beat-up interval; sigma = alpha)"]
     if params.M0 > 0:
         notes.append("beat-up moment enters the sley equation as " +
@@ -364,39 +366,6 @@ def simulate_params(params: SleyParameters, revolutions: int = 5, method: str | 
         else:
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     return _result(params, model, m, theta0, linkage, notes)
-
-
-def _checked(method, revolutions, revolution, points_per_revolution, steps_per_period, rtol):
-    """The options of :func:`simulate_params` checked under their names here
-    (:class:`ParameterError` names the bad one, before the model is built); the method.
-
-    The scene's run checks the same again (its own names and error class) and makes the
-    conversions: the revolutions it integrates (``revolution``), rtol's default, floats."""
-    method = "rk4" if method is None else method
-    if method not in METHODS:
-        raise ParameterError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}"
-                             f"{did_you_mean(str(method), METHODS)}")
-    if isinstance(revolutions, bool) or not isinstance(revolutions, (int, np.integer)) \
-            or revolutions < 1:
-        raise ParameterError(f"revolutions must be an integer >= 1, got {revolutions!r}")
-    if revolution is not None:
-        if isinstance(revolution, bool) or not isinstance(revolution, (int, np.integer)) \
-                or not 1 <= revolution <= revolutions:
-            raise ParameterError(f"revolution must be an integer in 1..{revolutions}, "
-                                 f"got {revolution!r}")
-    if int(points_per_revolution) < 16:
-        raise ParameterError(f"points_per_revolution must be >= 16, got {points_per_revolution!r}")
-    if method in _SCIPY_METHODS:
-        if steps_per_period is not None:
-            raise ParameterError(f"steps_per_period applies to rk4 and rk8, not {method}")
-        if rtol is not None and not 1e-14 <= float(rtol) < 1:
-            raise ParameterError(f"rtol must be in [1e-14, 1), got {float(rtol)!r}")
-    elif rtol is not None:
-        raise ParameterError(f"rtol applies to the scipy methods, not {method}; "
-                             "use steps_per_period")
-    elif steps_per_period is not None and not float(steps_per_period) >= 1:
-        raise ParameterError(f"steps_per_period must be >= 1, got {float(steps_per_period)!r}")
-    return method
 
 
 def _result(params: SleyParameters, model, m, theta0: float, linkage: list,

@@ -1,5 +1,5 @@
 """mechcirc.scene.simulation: a crank speed profile (``omega_ripple``) against an independent
-solution, and the scipy methods on a scene."""
+solution, the scipy methods on a scene, and the run options' one check (with the sley's)."""
 
 import math
 import warnings
@@ -9,8 +9,11 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import _scene_helpers as helpers
+import mechcirc.sley.simulation as sley_simulation
+from mechcirc.errors import MechcircError, ParameterError
 from mechcirc.scene import parse_scene
-from mechcirc.scene.simulation import SceneAccuracyWarning, simulate_scene
+from mechcirc.scene.simulation import METHODS, SceneAccuracyWarning, simulate_scene
+from mechcirc.sley import preset, simulate_params
 
 J, K, D, OMEGA, A, H = 0.01, 1000.0, 0.5, 50.0, 0.1, 2
 
@@ -379,3 +382,93 @@ def test_output_pass_skips_the_points_functions():
     kern.outputs(ts, ys, got, *args)
     kern.outputs(ts, ys, full, *every)
     np.testing.assert_array_equal(got, full)
+
+
+# The run options of ``simulate_scene`` and of the sley's ``simulate_params`` are checked by
+# one function (``check_run``, issue 24): the same rules, each message naming the option as
+# its caller's user wrote it (the sley's ``points_per_revolution``, the scene's ``points``),
+# in the caller's error class.  Before, the scene took ``revolutions=2.5`` (or ``True``, or
+# ``points=720.5``) and int()'d it, and ignored a ``steps_per_period`` given with a scipy
+# method; the sley int()'d a non-integer ``points_per_revolution``.
+
+#: (scene keywords, sley keywords, the scene's message, the sley's message)
+CASES = [
+    (dict(revolutions=2.5), dict(revolutions=2.5),
+     "revolutions must be an integer ≥ 1, got 2.5",
+     "revolutions must be an integer ≥ 1, got 2.5"),
+    (dict(revolutions=True), dict(revolutions=True),
+     "revolutions must be an integer ≥ 1, got True",
+     "revolutions must be an integer ≥ 1, got True"),
+    (dict(revolutions=0), dict(revolutions=0),
+     "revolutions must be an integer ≥ 1, got 0", "revolutions must be an integer ≥ 1, got 0"),
+    (dict(revolutions=2, revolution=True), dict(revolutions=2, revolution=True),
+     "revolution must be an integer in 1..2, got True",
+     "revolution must be an integer in 1..2, got True"),
+    (dict(revolutions=2, revolution=3), dict(revolutions=2, revolution=3),
+     "revolution must be an integer in 1..2, got 3",
+     "revolution must be an integer in 1..2, got 3"),
+    (dict(points=720.5), dict(points_per_revolution=720.5),
+     "points must be an integer ≥ 16, got 720.5",
+     "points_per_revolution must be an integer ≥ 16, got 720.5"),
+    (dict(points=np.bool_(True)), dict(points_per_revolution=np.bool_(True)),
+     "points must be an integer ≥ 16, got ", "points_per_revolution must be an integer ≥ 16"),
+    (dict(points=8), dict(points_per_revolution=8),
+     "points must be an integer ≥ 16, got 8",
+     "points_per_revolution must be an integer ≥ 16, got 8"),
+    (dict(method="DOP853", steps_per_period=50), dict(method="DOP853", steps_per_period=50),
+     "steps_per_period applies to rk4 and rk8, not DOP853; use rtol",
+     "steps_per_period applies to rk4 and rk8, not DOP853; use rtol"),
+    (dict(rtol=1e-6), dict(rtol=1e-6),
+     "rtol applies to the scipy methods, not rk4; use steps_per_period",
+     "rtol applies to the scipy methods, not rk4; use steps_per_period"),
+    (dict(method="LSODA", rtol=1.0), dict(method="LSODA", rtol=1.0),
+     "rtol must be in [1e-14, 1), got 1.0", "rtol must be in [1e-14, 1), got 1.0"),
+    (dict(steps_per_period=0.5), dict(steps_per_period=0.5),
+     "steps_per_period must be ≥ 1, got 0.5", "steps_per_period must be ≥ 1, got 0.5"),
+    (dict(method="Euler"), dict(method="Euler"),
+     "unknown method 'Euler'; choose one of rk4, rk4-python, rk8, DOP853, RK45, LSODA",
+     "unknown method 'Euler'; choose one of rk4, rk4-python, rk8, DOP853, RK45, LSODA"),
+]
+
+
+@pytest.mark.parametrize("scene_kw, sley_kw, scene_msg, sley_msg", CASES)
+def test_one_rule_two_names(scene_kw, sley_kw, scene_msg, sley_msg, monkeypatch):
+    scene = parse_scene(FLYWHEEL, "<flywheel>")
+    with pytest.raises(MechcircError) as info:
+        simulate_scene(scene, **scene_kw)
+    assert str(info.value).startswith(scene_msg)
+    assert not isinstance(info.value, ParameterError)       # the scene's class
+
+    def no_model(*args):
+        raise AssertionError("the model was built before the options were checked")
+
+    monkeypatch.setattr(sley_simulation, "_model", no_model)
+    with pytest.raises(ParameterError) as info:
+        simulate_params(preset("one-side", 1), **sley_kw)
+    assert str(info.value).startswith(sley_msg)
+
+
+def test_numpy_integers_still_taken():
+    """np.int64 counts (a value from an array) pass the check as ints do."""
+    from mechcirc.scene.simulation import check_run
+
+    check_run("rk4", np.int64(3), np.int64(2), np.int64(720), np.float64(25.0), None)
+    check_run("DOP853", 3, None, 720, None, np.float32(1e-8), ParameterError,
+              "points_per_revolution")
+
+
+def test_file_steps_per_period_is_not_refused_with_a_scipy_method():
+    """The file's ``steps_per_period`` is the fixed-step methods' default: a scipy method
+    asked for in the call runs (only a steps_per_period in the call itself is refused)."""
+    text = FLYWHEEL.replace("[simulate]\n", "[simulate]\nsteps_per_period = 50\n")
+    m = simulate_scene(parse_scene(text, "<flywheel>"), method="RK45", rtol=1e-6,
+                       error_estimate=False)
+    assert m.method == "RK45" and m.revolution == 3 and m.crank_angle.size == 720
+
+
+def test_methods_spelt_alike():
+    """The sley's public METHODS (a copy, so that ``import mechcirc.sley`` does not import
+    the scene package) and the CLI's are the scene's, which the check uses."""
+    from mechcirc.cli.sley_commands import _METHODS
+
+    assert sley_simulation.METHODS == METHODS == _METHODS
