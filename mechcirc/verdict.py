@@ -10,8 +10,10 @@ from __future__ import annotations
 
 import math
 
+from .sources import summary_repr
+
 __all__ = ["AGREES", "DISAGREES", "UNMEASURED", "judge", "summarise", "summary_line",
-           "verdict_text"]
+           "verdict_text", "checked_repr"]
 
 AGREES, DISAGREES, UNMEASURED = "agrees", "disagrees", "cannot be measured"
 
@@ -105,3 +107,19 @@ def summary_line(s: dict) -> str:
     return (f"verdict: {word[s['verdict']]} — {s['agree']} of {total} checks agree, "
             f"{s['disagree']} disagree beyond their tolerance, {s['unmeasured']} cannot be "
             "measured")
+
+
+def checked_repr(result) -> str:
+    """The repr of a cross-check's result: its :func:`summary_line` (the verdict and the
+    counts), then its fields as :func:`mechcirc.sources.summary_repr`.
+
+    Parameters
+    ----------
+    result : dataclass instance
+        A cross-check's result with a ``verdict`` (:func:`summarise`).
+
+    Returns
+    -------
+    str
+    """
+    return f"{summary_line(result.verdict)}\n{summary_repr(result)}"

@@ -66,3 +66,20 @@ def test_modes_show_as_the_table_of_their_roots():
     assert repr(found) == repr(c.resonances())
     assert found._repr_html_() == c.resonances()._repr_html_()
     assert isinstance(found, list) and found[0].resonance == c.resonances()[0]
+
+
+def test_a_crosscheck_shows_its_verdict_first():
+    """A cross-check's repr opens with the verdict line the CLI prints last, so a notebook
+    shows whether the domains agree (the summary repr alone hid it among the rows)."""
+    from mechcirc.scene.crosscheck import SceneCrosscheck
+    from mechcirc.transient import CrossCheck
+    from mechcirc.verdict import judge
+
+    rows = [judge({"omega": 10.0}, 1e-12, 1e-9), judge({"omega": 20.0}, 0.5, 1e-9),
+            judge({"omega": 30.0}, None, 1e-9, "no ringing")]
+    for result in (SceneCrosscheck("x.toml", 40.0, rows[:2], forced=rows[2:]),
+                   CrossCheck("net", "velocity", rows[:1], rows[1:])):
+        first, rest = repr(result).split("\n")
+        assert first == ("verdict: DISAGREES — 1 of 3 checks agree, 1 disagree beyond their "
+                         "tolerance, 1 cannot be measured")
+        assert rest.startswith(type(result).__name__ + "(") and len(rest) < 600

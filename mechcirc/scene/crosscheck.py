@@ -35,8 +35,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import MechcircError
-from ..sources import summary_repr
-from ..verdict import judge, summarise
+from ..verdict import checked_repr, judge, summarise
 from .files import Scene
 
 #: Tolerances of the verdicts: the ringing's ω_n (RK4 record fitted by a
@@ -60,7 +59,7 @@ class SceneCrosscheck:
     (:func:`mechcirc.verdict.judge`).
     """
 
-    __repr__ = summary_repr
+    __repr__ = checked_repr
 
     source: str
     theta_deg: float

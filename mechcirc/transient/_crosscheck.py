@@ -40,8 +40,7 @@ import numpy as np
 
 from ..circuit import Circuit
 from ..errors import MechcircError
-from ..sources import summary_repr
-from ..verdict import DISAGREES, judge, summarise
+from ..verdict import DISAGREES, checked_repr, judge, summarise
 from .model import backlash_elements
 from .simulate import (ROUNDING_PER_STEP, Waveform, drive_map, periodic_start, state_model,
                        transient, with_oscillator)
@@ -71,7 +70,7 @@ class CrossCheck:
     """Result of :func:`crosscheck` (plain data); ``verdict`` as
     :func:`mechcirc.verdict.summarise`."""
 
-    __repr__ = summary_repr
+    __repr__ = checked_repr
 
     name: str
     drive_kind: str
