@@ -19,9 +19,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from .circuit import Circuit, Drive, units_of
 from .errors import InputError, MechcircError, NotSeriesParallelError, TopologyError
-from .sources import brief, data_frame, did_you_mean
 from .reduction import Node, evaluate, push_down
-from .sources import name_index
+from .sources import brief, data_frame, did_you_mean, name_index
 
 __all__ = ["Sweep", "sweep", "Peak", "peak", "FLAG_OK", "FLAG_SINGULAR", "FLAG_NEAR_SINGULAR",
            "NEAR_SINGULAR_ERROR", "Method"]
