@@ -41,7 +41,7 @@ import numpy as np
 
 from .. import _jit
 from ..errors import MechcircError, SceneAccuracyWarning, SolverError
-from ..sources import did_you_mean, summary_repr
+from ..sources import brief, did_you_mean, real_number, summary_repr
 from .files import Scene
 from .motion import MotionModel, function_args, motion_model
 
@@ -497,12 +497,12 @@ def check_run(method, revolutions, revolution, points, spp, rtol, error=Mechcirc
     if method in SCIPY_METHODS:
         if spp is not None:
             raise error(f"steps_per_period applies to rk4 and rk8, not {method}; use rtol")
-        if rtol is not None and not 1e-14 <= float(rtol) < 1:
-            raise error(f"rtol must be in [1e-14, 1), got {float(rtol)!r}")
+        if rtol is not None and not (real_number(rtol) and 1e-14 <= rtol < 1):
+            raise error(f"rtol must be in [1e-14, 1), got {brief(rtol)}")
     elif rtol is not None:
         raise error(f"rtol applies to the scipy methods, not {method}; use steps_per_period")
-    elif spp is not None and not float(spp) >= 1:
-        raise error(f"steps_per_period must be ≥ 1, got {float(spp)!r}")
+    elif spp is not None and not (real_number(spp) and spp >= 1):
+        raise error(f"steps_per_period must be ≥ 1, got {brief(spp)}")
 
 
 def _whole(value, least) -> bool:
