@@ -17,7 +17,7 @@ import numpy as np
 
 from .circuit import Circuit
 from .errors import InputError
-from .sources import real_number
+from .sources import positive_number
 
 if TYPE_CHECKING:  # pragma: no cover
     from ._sweep import Method
@@ -102,7 +102,7 @@ def element_forces(circuit: Circuit, omega: float, *, method: Method = "auto"
     flag : int
         The sweep flag of this ω (0 regular, 1 on a pole/zero, 2 near one).
     """
-    if not (real_number(omega) and math.isfinite(omega) and omega > 0):
+    if not (positive_number(omega)):
         raise InputError(f"omega must be a finite number > 0 rad/s, got {omega!r}")
     omega = float(omega)
     result = circuit.sweep(np.array([omega]), method=method)

@@ -42,7 +42,7 @@ import numpy as np
 
 from .circuit import Circuit, units_of
 from .errors import MechcircError
-from .sources import brief, data_frame, real_number, summary_repr
+from .sources import brief, data_frame, positive_number, real_number, summary_repr
 from .units import convert_frequency
 
 __all__ = ["PeriodicResult", "SpeedMap", "periodic", "rpm_to_omega", "speed_map"]
@@ -463,7 +463,7 @@ def _resonances(circuit, omega_max, notes):
 
 
 def _validate(rpm, tol, harmonics):
-    if not (real_number(rpm) and math.isfinite(rpm) and rpm > 0):
+    if not (positive_number(rpm)):
         raise MechcircError(f"the machine speed must be a finite number > 0 rev/min, got {rpm!r}")
     if not (real_number(tol) and 0 < tol < 1):
         raise MechcircError(f"tol must be between 0 and 1, got {tol!r}")

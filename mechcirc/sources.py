@@ -15,7 +15,7 @@ from .errors import NetlistError
 __all__ = ["read_source", "read_bytes", "MAX_INPUT_BYTES", "split_lines", "line_col",
            "finite_number", "brief", "load_toml", "locate", "locate_path", "located", "Table",
            "unknown_key", "check_keys", "number_error", "checked_number", "did_you_mean",
-           "is_number", "summary_repr", "data_frame"]
+           "is_number", "positive_number", "summary_repr", "data_frame"]
 
 #: The largest input file mechcirc reads [bytes].  A netlist of the statement
 #: limit is far below this; anything larger is refused before it is read.
@@ -267,6 +267,21 @@ def real_number(value) -> bool:
     bool
     """
     return isinstance(value, numbers.Real) and not isinstance(value, bool)
+
+
+def positive_number(value) -> bool:
+    """Whether an argument given in code is a :func:`real_number` that is finite and > 0
+    (a speed, a time, a step).
+
+    Parameters
+    ----------
+    value : object
+
+    Returns
+    -------
+    bool
+    """
+    return real_number(value) and math.isfinite(value) and value > 0
 
 
 def number_error(value, what: str, *, positive: bool = False,

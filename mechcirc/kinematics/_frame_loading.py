@@ -49,7 +49,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import GeometryError
-from ..sources import data_frame, real_number, summary_repr
+from ..sources import data_frame, positive_number, summary_repr
 from .fourbar import FourBar
 from .linkage_solver import rigid_points, to_complex, to_xy
 
@@ -277,7 +277,7 @@ def frame_loading(fourbar: FourBar, theta: ArrayLike, omega: float, *,
     One batched 9×9 linear solve per angle; the matrix is singular only where
     the coupler and rocker are in line (γ = 0), which a crank-rocker never reaches.
     """
-    if not (real_number(omega) and math.isfinite(omega) and omega > 0):
+    if not (positive_number(omega)):
         raise GeometryError(f"crank speed ω must be finite and > 0 rad/s, got {omega}")
     theta = np.atleast_1d(np.asarray(theta, dtype=float))
     k = link_kinematics(fourbar, theta, omega, crank, coupler, rocker, reed_point)

@@ -26,7 +26,7 @@ import numpy as np
 from ..errors import GeometryError
 from ..kinematics.linkage import Crank, Linkage
 from ..motion_laws import hermite_table
-from ..sources import real_number, summary_repr
+from ..sources import positive_number, summary_repr
 from .files import Scene
 
 __all__ = ["MotionModel", "motion_model", "hermite_table", "dead_centre"]
@@ -170,7 +170,7 @@ def motion_model(scene: Scene, omega: float | None = None, *,
     """
     lk = scene.linkage
     omega = abs(lk.cranks[0].omega) if omega is None else omega
-    if not (real_number(omega) and math.isfinite(omega) and omega > 0):
+    if not (positive_number(omega)):
         raise ValueError(f"omega must be a finite number > 0 rad/s, got {omega!r}")
     omega = float(omega)
     cam = getattr(lk, "cam", None) is not None    # a cam swings the crank: tabulate it too

@@ -38,7 +38,7 @@ import scipy.linalg as la
 from .. import _jit
 from ..circuit import Circuit, units_of
 from ..errors import MechcircError, NetlistError
-from ..sources import data_frame, name_index, real_number
+from ..sources import data_frame, name_index, positive_number
 from ..units import parse_omega
 from .model import StateSpace, incidence, backlash_elements, state_space
 
@@ -318,14 +318,14 @@ class TransientResult:
 
 
 def _grid(t_end: float, dt: float | None, waveform: Waveform) -> np.ndarray:
-    if not (real_number(t_end) and math.isfinite(t_end) and t_end > 0):
+    if not (positive_number(t_end)):
         raise MechcircError(f"--t-end must be a finite time > 0 [s], got {t_end}")
     if dt is None:
         dt = t_end / 2000
         per_period = {"harmonic": 40, "motion": 720}.get(waveform.kind)  # motion: 0.5° of the shaft
         if per_period:
             dt = min(dt, 2 * math.pi / waveform.omega / per_period)
-    if not (real_number(dt) and math.isfinite(dt) and dt > 0):
+    if not (positive_number(dt)):
         raise MechcircError(f"--dt must be a finite time > 0 [s], got {dt}")
     if dt > t_end:          # one step of dt would run past t_end (it ran to dt)
         raise MechcircError(f"--dt {dt:g} s is longer than --t-end {t_end:g} s; give a step "
