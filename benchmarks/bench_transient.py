@@ -102,7 +102,7 @@ def linear(n=100, steps=100_000, dt=1e-3, repeat=3):
     t_end = steps * dt
     transient(circuit, 10 * dt, dt, "step")          # warm: numba kernel loaded/compiled
     from mechcirc.transient.model import state_space
-    from mechcirc.transient.simulate import _propagate, _propagate_modal
+    from mechcirc.transient.propagate import propagate_blocks, propagate_modal
 
     ss = state_space(circuit)
     u = np.ones(steps + 1)
@@ -140,9 +140,9 @@ def linear(n=100, steps=100_000, dt=1e-3, repeat=3):
                                      elements=False, velocities=False),
         "nodes": lambda: transient(circuit, t_end, dt, "step", elements=False),
         "all": lambda: transient(circuit, t_end, dt, "step"),
-        "modal": lambda: _propagate_modal(ss.A, ss.B, ss.initial[0], u, dt, ss.Cx,
+        "modal": lambda: propagate_modal(ss.A, ss.B, ss.initial[0], u, dt, ss.Cx,
                                           ss.g @ ss.Cv, True),
-        "block": lambda: _propagate(ss.A, ss.B, ss.initial[0], u, dt),
+        "block": lambda: propagate_blocks(ss.A, ss.B, ss.initial[0], u, dt),
         "lsim": lambda: signal.lsim(sys_, np.ones_like(t), t, interp=True),
         "dop": lambda: solve_ivp(rhs, (0, t_end), np.zeros(2 * n), method="DOP853",
                                  rtol=1e-10, atol=1e-14, t_eval=t),

@@ -298,7 +298,7 @@ def warm_up_run(tmp_path_factory):
     from mechcirc.kinematics import linkage_solver
     from mechcirc.scene import shaft
     from mechcirc.scene import simulation as scene_sim
-    from mechcirc.transient import simulate as transient_sim
+    from mechcirc.transient import propagate as transient_sim
 
     root = Path(__file__).resolve().parents[1]
     statements = [_RECORD_NODAL, scene_sim._WARM_STATEMENT, linkage_solver._WARM_STATEMENT,

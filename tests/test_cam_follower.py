@@ -181,7 +181,7 @@ def test_a_switch_at_a_steps_start_is_not_cut_over_and_over(tmp_path, capsys, mo
     # since, 33,574 before kinks were located on the continuous extension)
     from mechcirc.transient import simulate
 
-    kern = simulate._kernels()
+    kern = simulate.kernels()
     steps = []
     dopri_run = kern.dopri_run
 
@@ -189,7 +189,7 @@ def test_a_switch_at_a_steps_start_is_not_cut_over_and_over(tmp_path, capsys, mo
         steps.append(dopri_run(*args))
         return steps[-1]
 
-    monkeypatch.setattr(simulate, "_kernels", lambda: kern)
+    monkeypatch.setattr(simulate, "kernels", lambda: kern)
     monkeypatch.setattr(kern, "dopri_run", counted)
     path = tmp_path / "f.mcir"
     path.write_text(NETLIST)

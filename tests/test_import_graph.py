@@ -143,7 +143,7 @@ def test_delegates_are_one_call_and_listed():
                          ("reduction", "nodal", "_sweep", "resonances", "modes", "periodic", "interop.skrf",
                           "interop.formula")} | {("mechcirc._sweep", "mechcirc.interop.skrf"),
                                                    ("mechcirc.periodic", "mechcirc.plotting"),
-                                                   ("mechcirc.transient.simulate",
+                                                   ("mechcirc.transient.result",
                                                     "mechcirc.plotting")}
     assert not _is_delegate(ast.parse("def f(self):\n    from .x import g\n    return h(self)\n")
                             .body[0], ast.ClassDef("C", [], [], [], []))

@@ -22,7 +22,7 @@ from mechcirc import _jit
 from mechcirc.kinematics import linkage_solver, parse_linkage
 from mechcirc.scene import load_scene, simulate_scene
 from mechcirc.scene import simulation as scene_sim
-from mechcirc.transient import simulate as transient_sim
+from mechcirc.transient import propagate as transient_sim
 from mechcirc.transient.simulate import transient
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -161,9 +161,9 @@ def test_a_cold_transient_kernel_runs_python(cache, net):
     assert r.node("a")[0].tobytes() == ref.node("a")[0].tobytes()
     assert r.node("a")[1].tobytes() == ref.node("a")[1].tobytes()
     assert set(started) == {transient_sim._WARM_STATEMENT}
-    assert transient_sim._kernels() is not _kernels and not transient_sim._kernels().HAVE_NUMBA
+    assert transient_sim.kernels() is not _kernels and not transient_sim.kernels().HAVE_NUMBA
     cache(True)
-    assert transient_sim._kernels() is _kernels
+    assert transient_sim.kernels() is _kernels
 
 
 def test_the_time_domain_warm_up_statements_run(warm_up_run):

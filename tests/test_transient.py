@@ -571,7 +571,7 @@ def test_a_scalar_only_drive_function_is_sampled_point_by_point_and_checked():
     twin (it raised a TypeError before: only a scalar result was sampled point by point);
     a constant function the same as its array form; a function returning NaN is refused naming it; the two kinds that need their
     data (func, motion) say so."""
-    from mechcirc.transient.simulate import Waveform
+    from mechcirc.transient.waveform import Waveform
 
     c = mechcirc.parse(SDOF_F)
     scalar = transient(c, 0.2, 1e-3, lambda t: 3.0 * math.sin(40.0 * t))

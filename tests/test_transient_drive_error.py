@@ -15,7 +15,8 @@ from scipy.integrate import solve_ivp
 
 import mechcirc
 from mechcirc.transient import transient
-from mechcirc.transient.simulate import ROUNDING_PER_STEP, Waveform
+from mechcirc.transient.propagate import ROUNDING_PER_STEP
+from mechcirc.transient.waveform import Waveform
 
 M, K, C = 1.0, (2 * math.pi * 5) ** 2, 0.5          # a 5 Hz SDOF, lightly damped
 SDOF = f"mass m1 a 0 {M}\nspring k1 a 0 {K!r}\ndamper c1 a 0 {C}\ndrive F a 0 force=1\n"

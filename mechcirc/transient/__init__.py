@@ -9,6 +9,8 @@
 """
 
 from ._crosscheck import CrossCheck, crosscheck
-from .simulate import TransientResult, Waveform, parse_waveform, transient
+from .result import TransientResult
+from .simulate import transient
+from .waveform import Waveform, parse_waveform
 
 __all__ = ["transient", "TransientResult", "Waveform", "parse_waveform", "crosscheck", "CrossCheck"]

@@ -41,9 +41,10 @@ import numpy as np
 from ..circuit import Circuit
 from ..errors import MechcircError
 from ..verdict import DISAGREES, checked_repr, judge, summarise
-from .model import backlash_elements
-from .simulate import (ROUNDING_PER_STEP, Waveform, drive_map, periodic_start, state_model,
-                       transient, with_oscillator)
+from .model import backlash_elements, drive_map
+from .propagate import ROUNDING_PER_STEP
+from .simulate import periodic_start, state_model, transient, with_oscillator
+from .waveform import Waveform
 
 __all__ = ["CrossCheck", "crosscheck", "matrix_pencil"]
 

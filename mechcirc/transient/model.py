@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import scipy.linalg as la
@@ -377,3 +378,15 @@ def _initial(circuit, nodes, index, Cx, Cv, N, vel):
                      "(levers, the drive or massless nodes fix it); the closest attainable "
                      "state was used")
     return z0, notes
+
+
+def drive_map(ss: StateSpace) -> tuple[np.ndarray, Any, Any] | None:
+    """(w, Du, Dud): the drive's output (velocity of a force drive, force of a
+    velocity drive) is w·z + Du·u + Dud·u̇ when the network is linear; None
+    without a drive."""
+    if ss.kind == "velocity":
+        # Q = h·(M a + D v + K x), contracted with h first (vectors only)
+        a, b, c = ss.M.T @ ss.h, ss.D.T @ ss.h, ss.K.T @ ss.h
+        return (a @ (ss.Cv @ ss.A) + b @ ss.Cv + c @ ss.Cx,
+                a @ (ss.Cv @ ss.B) + b @ ss.Dv + c @ ss.Dx, a @ ss.Dv + b @ ss.Ev)
+    return (ss.g @ ss.Cv, ss.g @ ss.Dv, ss.g @ ss.Ev) if ss.kind == "force" else None
