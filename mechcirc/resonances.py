@@ -62,6 +62,9 @@ MAX_UNKNOWNS = 2000
 MAX_UNKNOWNS_DAMPED = 500
 #: The most eigenvalues the band solver asks ARPACK for (roots and their mirror images).
 MAX_BAND_ROOTS = 192
+#: Roots whose ω differ by at most this (relative) are sorted as equal: the
+#: anti-resonance first (:func:`tie_order`).
+TIE_RTOL = 1e-14
 
 
 #: The two kinds of root of K: a zero and a pole.
@@ -250,6 +253,9 @@ def resonance_pairs(circuit: Circuit, omega_max: float | None = None,
     if omega_max is not None:
         out = [(r, v) for r, v in out if r.omega <= omega_max]
     out = sorted(out, key=lambda rv: (rv[0].omega, rv[0].kind))
+    ties = tie_order(np.array([[r.kind == "antiresonance" for r, _ in out]], bool),
+                     np.array([[r.omega for r, _ in out]], float))[0]
+    out = [out[i] for i in ties]
     return [(r, *v) for r, v in out] if vectors else [(r, v[0]) for r, v in out]
 
 
@@ -1093,6 +1099,23 @@ def held_and_released(s_h, s_r, err_h, err_r) -> tuple:
     return pole, np.concatenate([s_h, s_r], axis=1), np.concatenate([err_h, err_r], axis=1)
 
 
+def tie_order(pole, mag) -> np.ndarray:
+    """The order of each row of roots sorted by ω (``mag``) that puts an anti-resonance
+    (``pole``) before a resonance whose ω it equals to ``TIE_RTOL``: one rounding of a
+    shared ω, so that two computations of it (batched and single) sort alike."""
+    idx = np.broadcast_to(np.arange(pole.shape[1]), pole.shape).copy()
+    pole, mag = pole.copy(), mag.copy()
+    with np.errstate(invalid="ignore"):     # (empty slots: NaN, or inf − inf)
+        for _ in range(pole.shape[1]):      # swaps of one pass never overlap
+            rows, j = np.nonzero(~pole[:, :-1] & pole[:, 1:] &
+                                 (mag[:, 1:] - mag[:, :-1] <= TIE_RTOL * mag[:, 1:]))
+            if not rows.size:
+                break
+            for a in (idx, pole, mag):
+                a[rows, j], a[rows, j + 1] = a[rows, j + 1], a[rows, j].copy()
+    return idx
+
+
 def sorted_roots(pole, s, err) -> tuple:
     """``(pole, s, err)`` of designs' roots (s complex or ω; NaN: an empty slot, beyond
     omega_max or rigid), each row sorted as :func:`find_resonances` sorts (by |s|, and
@@ -1101,6 +1124,8 @@ def sorted_roots(pole, s, err) -> tuple:
     mag = np.abs(s)
     live = np.isfinite(mag)
     order = np.lexsort((~pole, np.where(live, mag, np.inf)), axis=-1)
+    order = np.take_along_axis(order, tie_order(np.take_along_axis(pole, order, 1),
+                                                np.take_along_axis(mag, order, 1)), 1)
     width = int(live.sum(axis=1).max(initial=0))
     pole, s, err, live = (np.take_along_axis(x, order, 1)[:, :width]
                           for x in (pole, s, err, live))

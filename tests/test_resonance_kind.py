@@ -92,3 +92,19 @@ def test_peak_uses_its_kind_only():
     fast = peak(s)
     full = peak(s, resonances=c.resonances(omega_max=omega[-1] * (1 + 1e-9)))
     assert repr(fast) == repr(full)
+
+
+def test_a_resonance_and_an_antiresonance_one_rounding_apart_sort_as_a_tie():
+    """ω equal to 1e-14 (one rounding of a shared ω: the batched path's roots may differ
+    from the single path's in the last bit) sort as a tie, the anti-resonance first; a
+    real gap, or NaN and inf slots, keep their order."""
+    import numpy as np
+
+    from mechcirc.resonances import tie_order
+
+    w = 14.142135623730951
+    pole = np.array([[False, True, False, True], [False, True, True, False],
+                     [False, True, False, False]])
+    mag = np.array([[w * (1 - 2e-16), w, 2 * w, 2 * w * (1 + 1e-12)],
+                    [1.0, 1.0, 1.0, np.nan], [np.inf, np.inf, np.nan, np.nan]])
+    assert tie_order(pole, mag).tolist() == [[1, 0, 2, 3], [1, 2, 0, 3], [0, 1, 2, 3]]
