@@ -257,6 +257,12 @@ def real(*, least: float | None = None, above: float | None = None,
 
 #: A shaft speed option [rev/min]: ``600``, or with a unit of frequency (``600rpm``, ``10Hz``).
 shaft_speed = real(above=0.0, most=1e9, unit="rpm", role="omega")
+#: An angular frequency ≥ 0 [rad/s], or with a unit (``50Hz``, ``3000rpm``): a band's bound.
+band_omega = real(least=0.0, unit="rad/s", role="omega")
+#: The same, > 0: one frequency at which to evaluate, a crank shaft's speed.
+positive_omega = real(above=0.0, unit="rad/s", role="omega")
+#: A crank rotation [deg], or with a unit (``0.5rad``).
+crank_angle = real(most=1e9, unit="deg", role="angle")
 
 
 def count(least: int = 1, most: int | None = None, *, why: str = ""):

@@ -18,18 +18,12 @@ from ..limits import (
 from ..units import FREQUENCY_UNITS, in_unit
 from ._common import (NETLIST_FILE, Default, add_command, add_handler, add_method_option,
                       add_output_option, add_plot_option, add_unit_option, check_names,
-                      check_output_paths, frequency_text, load_with_warnings, print_json,
-                      print_written, real, refuse_ignored, save_figure, warning_lines)
+                      check_output_paths, frequency_text, load_with_warnings, positive_omega,
+                      print_json, print_written, real, refuse_ignored, save_figure, warning_lines)
 
 #: argparse type: an angular frequency [rad/s], or with a unit (``50Hz``, ``3000rpm``); the
 #: command checks the range (a sweep's --omega-min/--omega-max together).
 omega_value = real(unit="rad/s", role="omega", finite=False)
-#: A finite angular frequency ≥ 0 (bounds of a band).
-band_omega = real(least=0.0, unit="rad/s", role="omega")
-#: The same, > 0 (one frequency at which to evaluate).
-positive_omega = real(above=0.0, unit="rad/s", role="omega")
-
-
 omega_value.__name__ = "frequency"
 
 

@@ -7,9 +7,10 @@ from pathlib import Path
 from ..errors import MechcircError
 from ..limits import FORMULA_SECONDS
 from ._common import (NETLIST_FILE, Default, add_command, add_handler, add_method_option,
-                      add_output_option, add_plot_option, add_unit_option, check_output_paths,
-                      count, frequency_text, load_with_warnings, print_json, print_written, real,
-                      refuse_ignored, save_figure, time_limit, warning_lines)
+                      add_output_option, add_plot_option, add_unit_option, band_omega,
+                      check_output_paths, count, frequency_text, load_with_warnings,
+                      positive_omega, print_json, print_written, real, refuse_ignored,
+                      save_figure, time_limit, warning_lines)
 
 
 def register(sub) -> None:
@@ -18,8 +19,6 @@ def register(sub) -> None:
 
 
 def _register_forces(sub) -> None:
-    from .circuit_commands import positive_omega
-
     p = add_command(
         sub, "forces", "force and velocity of every element at one frequency",
         "How the drive's force splits through the mechanism: |Q| [N], |v| [m/s] and their phases "
@@ -43,8 +42,6 @@ def _method_plot_json(p, plot: str, func) -> None:
 
 
 def _register_compare(sub) -> None:
-    from .circuit_commands import band_omega
-
     p = add_command(
         sub, "compare", "a measured mobility (Touchstone .s1p) against the model's",
         "Read a measured one-port mobility from a Touchstone file (its Z parameter, read with "

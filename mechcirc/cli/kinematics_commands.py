@@ -10,8 +10,11 @@ from pathlib import Path
 from ..errors import InputError, MechcircError, NetlistError
 from ..units import convert_frequency
 from ._common import (MAX_LENGTH, MAX_OMEGA, Default, add_command, add_handler, add_output_option,
-                      add_plot_option, check_output_paths, count, print_json, print_written,
-                      real, refuse_ignored, save_figure, shaft_speed, write_outputs)
+                      add_plot_option, check_output_paths, count, crank_angle, print_json,
+                      print_written, real, refuse_ignored, save_figure, shaft_speed, write_outputs)
+
+#: A crank speed > 0 [rad/s], or with a unit (``600rpm``).
+crank_omega = real(above=0.0, most=MAX_OMEGA, unit="rad/s", role="omega")
 
 
 def register(sub) -> None:
@@ -71,8 +74,7 @@ def _register_frame(sub) -> None:
     speed = p.add_mutually_exclusive_group(required=True)
     speed.add_argument("--rpm", type=shaft_speed, metavar="N",
                        help="crank speed [rev/min]")
-    speed.add_argument("--omega", type=real(above=0.0, most=MAX_OMEGA, unit="rad/s", role="omega"),
-                       metavar="W", help="crank speed [rad/s; or with a unit: 600rpm]")
+    speed.add_argument("--omega", type=crank_omega, metavar="W", help="crank speed [rad/s; or with a unit: 600rpm]")
     p.add_argument("--mass", type=_vector("--mass", 3, nonneg=True), default=(0.0, 0.0, 0.0),
                    metavar="M2,M3,M4", help="masses of crank, coupler, rocker (with sley and "
                    "reed) [kg] (default 0,0,0)")
@@ -161,8 +163,7 @@ def _register_synth_export(p) -> None:
     """``synth --export``: the directory and what goes into the exported files."""
     p.add_argument("--export", metavar="DIR",
                    help="write DIR/design_K.linkage.toml and DIR/design_K.scene.toml per design")
-    p.add_argument("--omega", type=real(above=0.0, most=MAX_OMEGA, unit="rad/s", role="omega"),
-                   default=Default(100.0), metavar="W",
+    p.add_argument("--omega", type=crank_omega, default=Default(100.0), metavar="W",
                    help="crank speed in exported files [rad/s] (default 100)")
     for name, what, default in _SCENE_OPTIONS:
         p.add_argument(f"--{name}", type=real(least=None if name == "beat-moment" else 0.0,
@@ -181,7 +182,7 @@ def _register_linkage(sub) -> None:
         "pose; velocities are also split into each crank's contribution with the others stopped.",
         "Example: mechcirc linkage examples/fnf_sixbar.toml --theta 30 --plot fnf.png",
         file="linkage file (.toml)")
-    p.add_argument("--theta", type=real(most=1e9, unit="deg", role="angle"), default=0.0, metavar="DEG",
+    p.add_argument("--theta", type=crank_angle, default=0.0, metavar="DEG",
                    help="rotation of the first crank from the pose [deg] (default 0)")
     add_plot_option(p, "draw the linkage at θ with the paths of its points")
     add_handler(p, cmd_linkage)

@@ -9,8 +9,8 @@ from ..errors import MechcircError
 from ..units import in_unit
 from ._common import (Default, add_command, add_handler, add_method_option, add_output_option,
                       add_plot_option, add_unit_option, check_names, check_output_paths,
-                      count, load_with_warnings, print_json, print_written, real, refuse_ignored,
-                      scene_theta, shaft_speed, warning_lines, write_outputs)
+                      count, crank_angle, load_with_warnings, print_json, print_written, real,
+                      refuse_ignored, scene_theta, shaft_speed, warning_lines, write_outputs)
 
 
 def register(sub) -> None:
@@ -27,7 +27,7 @@ def register(sub) -> None:
         "  mechcirc periodic docs/examples/rocker_drive.toml --theta 30 --rpm 300")
     p.add_argument("file", help="netlist (.mcir) whose drive has motion=, or a scene (.toml): "
                                 "its circuit at --theta driven by the motion its linkage imposes")
-    p.add_argument("--theta", type=real(most=1e9, unit="deg", role="angle"), metavar="DEG",
+    p.add_argument("--theta", type=crank_angle, metavar="DEG",
                    help="scene: the crank rotation [deg] at which it is linearised "
                         "(default: the file's [analysis] theta_deg)")
     p.add_argument("--rpm", type=shaft_speed, metavar="RPM",

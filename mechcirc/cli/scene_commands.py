@@ -9,9 +9,9 @@ from ..errors import MechcircError
 from ..limits import MAX_CYCLE_POINTS
 from ..units import FREQUENCY_UNITS, in_unit
 from ._common import (NETLIST_FILE, Default, add_command, add_handler, add_output_option,
-                      add_plot_option, add_unit_option, check_output_paths, count, frequency_symbol,
-                      print_json, print_written, real, refuse_ignored, save_figure, scene_theta,
-                      set_values, write_outputs, write_text)
+                      add_plot_option, add_unit_option, check_output_paths, count, crank_angle,
+                      frequency_symbol, print_json, print_written, real, refuse_ignored,
+                      save_figure, scene_theta, set_values, write_outputs, write_text)
 
 
 def register(sub) -> None:
@@ -29,7 +29,7 @@ def _register_scene(sub) -> None:
         "  mechcirc scene examples/heald_scene.toml --cycle --points 72 --harmonics 8 --plot "
         "cycle.png", file="scene file (.toml)")
     what = p.add_mutually_exclusive_group()
-    what.add_argument("--theta", type=real(most=1e9, unit="deg", role="angle"), metavar="DEG",
+    what.add_argument("--theta", type=crank_angle, metavar="DEG",
                       help="crank rotation from the pose [deg] to linearise at (default: "
                            "theta_deg of the file's [analysis])")
     what.add_argument("--cycle", action="store_true",

@@ -8,8 +8,9 @@ from ..errors import InputError
 from ..limits import MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS, MAX_SCIPY_REVOLUTIONS
 from ..units import FREQUENCY_UNITS, in_unit
 from ._common import (Default, add_command, add_handler, add_output_option, add_plot_option,
-                      add_unit_option, check_output_paths, count, print_json, print_written,
-                      real, refuse_ignored, set_values, write_outputs, write_text)
+                      add_unit_option, check_output_paths, count, crank_angle, positive_omega,
+                      print_json, print_written, real, refuse_ignored, set_values, write_outputs,
+                      write_text)
 
 _METHODS = ("rk4", "rk4-python", "rk8", "DOP853", "RK45", "LSODA")   # = mechcirc.sley.METHODS
 _UNITS = {"eps4T": "rad/s^2", "eps2P": "rad/s^2", "eps4P": "rad/s^2", "eps5P": "rad/s^2",
@@ -34,9 +35,9 @@ def _register_simulate(sub) -> None:
     p.add_argument("scene", nargs="?", metavar="SCENE.toml",
                    help="simulate this scene file over whole revolutions (docs/scenes.md); "
                         "without it, the sley presets (--drive, --variant)")
-    p.add_argument("--omega", type=real(above=0.0, unit="rad/s", role="omega"), metavar="W",
+    p.add_argument("--omega", type=positive_omega, metavar="W",
                    help="crank shaft speed [rad/s; or 955rpm] (default the file's or the preset's)")
-    p.add_argument("--start-deg", type=real(most=1e9, unit="deg", role="angle"), metavar="DEG",
+    p.add_argument("--start-deg", type=crank_angle, metavar="DEG",
                    help="scene: crank rotation from the pose at t = 0 (default the file's, "
                         "else 0)")
     p.add_argument("--no-error-estimate", action="store_true",
@@ -107,14 +108,14 @@ def _register_crosscheck(sub) -> None:
     p.add_argument("file", nargs="?", metavar="FILE",
                    help="a scene (.toml): cross-check it at --theta; a netlist (.mcir): "
                         "cross-check its resonances and |Q0| against its transients")
-    p.add_argument("--omega-max", type=real(above=0.0, unit="rad/s", role="omega"), metavar="W",
+    p.add_argument("--omega-max", type=positive_omega, metavar="W",
                    help="with a netlist FILE: check resonances up to W [rad/s, or 50Hz] "
                         "(default 1.5 x the highest)")
     p.add_argument("--drive", choices=("one-side", "both-sides"), default=Default("one-side"),
                    help="sley preset: the drive's layout (default one-side)")
     p.add_argument("--variant", type=int, choices=range(1, 8), default=Default(3), metavar="N",
                    help="sley preset: variant 1-7 (default 3)")
-    p.add_argument("--theta", type=real(most=1e9, unit="deg", role="angle"), metavar="DEG",
+    p.add_argument("--theta", type=crank_angle, metavar="DEG",
                    help="crank angle of the linearisation [deg] (default: the start angle, "
                         "where the sley's rigid acceleration is zero)")
     p.add_argument("--netlist", metavar="FILE",
