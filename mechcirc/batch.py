@@ -37,12 +37,12 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .circuit import Circuit
+from .circuit import Circuit, units_of
 from .errors import InputError, MechcircError, NetlistError, NotSeriesParallelError
 from ._sweep import (UNDAMPED_ZETA, real_omega, drive_force, drive_velocity, peak, point_flags,
                      singular_error)
 from .resonances import design_values, template_levers
-from .sources import brief, summary_repr
+from .sources import brief, data_frame, summary_repr
 
 __all__ = ["designs", "from_circuits", "network_shape", "Designs", "DesignSweep", "DesignResonances",
            "DesignExtremes"]
@@ -811,7 +811,8 @@ class DesignExtremes:
     ``K_min``/``K_max`` [m/(N·s)] and ``Q0_max`` [N] are the true values over
     [``omega_min``, ``omega_max``] (0 or inf where K has a zero or pole in the
     band), ``omega_at_*`` where they occur [rad/s] (the first resonance or
-    anti-resonance when the value is 0 or inf); NaN for ``failed`` designs.
+    anti-resonance when the value is 0 or inf); NaN for ``failed`` designs.  ``units``:
+    the drive's unit labels (:func:`mechcirc.circuit.units_of`; N·m for a rotary drive).
     """
 
     __repr__ = summary_repr
@@ -824,13 +825,27 @@ class DesignExtremes:
     omega_at_Q0_max: NDArray[np.float64]
     single: NDArray[np.int64]
     failed: dict
+    units: dict = field(default_factory=lambda: units_of(None))
+
+    def to_dataframe(self):
+        """One row per design: ``K_min``, ``K_max`` [m/(N·s)], ``Q0_max`` [N] (rad/(N·m·s),
+        N·m for a rotary drive), each ``omega_at_*`` [rad/s], and ``failed``, why the
+        design failed ("" if it did not); ``attrs["units"]`` the unit of each column."""
+        cols = {name: getattr(self, name) for name in _EXTREMES}
+        cols["failed"] = [self.failed.get(d, "") for d in range(len(self.K_min))]
+        units = {"K_min": self.units["K"], "K_max": self.units["K"], "Q0_max": self.units["Q"],
+                 "failed": ""}
+        return data_frame(cols, {c: units.get(c, "rad/s") for c in cols})
+
+
+#: The arrays of :class:`DesignExtremes`, one value per design.
+_EXTREMES = ("K_min", "omega_at_K_min", "K_max", "omega_at_K_max", "Q0_max", "omega_at_Q0_max")
 
 
 def _extremes(ds: Designs, lo: float, hi: float, res: DesignResonances,
               ends: NDArray | None) -> DesignExtremes:
     D = ds.size
-    out = {k: np.full(D, np.nan) for k in ("K_min", "omega_at_K_min", "K_max",
-                                           "omega_at_K_max", "Q0_max", "omega_at_Q0_max")}
+    out = {k: np.full(D, np.nan) for k in _EXTREMES}
     batched = ~np.isin(np.arange(D), res.single)
     with np.errstate(invalid="ignore"):
         undamped = np.where(res.count[:, None] > np.arange(res.omega.shape[1])[None, :],
@@ -880,4 +895,5 @@ def _extremes(ds: Designs, lo: float, hi: float, res: DesignResonances,
             out["K_min"][d] = 1.0 / smax.value if smax.value else math.inf
         out["omega_at_K_min"][d] = smax.omega
         out["Q0_max"][d], out["omega_at_Q0_max"][d] = qmax.value, qmax.omega
-    return DesignExtremes(**out, single=rest, failed=failed)
+    return DesignExtremes(**out, single=rest, failed=failed,
+                          units=units_of(ds.circuit.require_drive()))

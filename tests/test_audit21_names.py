@@ -90,6 +90,17 @@ def test_linkage_assemble_names_an_unknown_or_missing_crank():
     assert set(lk.assemble({"crank": 0.1})["points"]) == set(lk.pose)
 
 
+def test_cycle_map_refuses_an_unknown_kind():
+    # on main: any kind but "resonance" silently gave the antiresonances
+    from mechcirc.scene.cycle import CycleMap
+
+    cm = CycleMap(np.zeros(1), [()], [()], np.array([1]), 1.0, np.zeros((1, 1), complex),
+                  {}, True)
+    raises(InputError, "kind must be 'resonance' or 'antiresonance', got 'resonanse'; did you "
+                       "mean 'resonance'?", lambda: cm.natural_frequencies("resonanse"))
+    assert cm.natural_frequencies("antiresonance").shape == (1, 0)
+
+
 # ------------------------------------------------------------------ names in files
 @pytest.mark.parametrize("old, new, message", [
     ('points = ["O2", "O4"', 'points = ["O2", "O44"',
@@ -199,6 +210,79 @@ def test_the_numbers_still_work(sley):
     assert len(load_linkage(QUICK).motion(np.array([0.1, 0.2]))) == 2
 
 
+# ------------------------------------------------------------------ tables
+def test_design_extremes_frame():
+    # on main: DesignExtremes had no to_dataframe
+    pytest.importorskip("pandas")
+    text = (REPO / "netlists" / "heald_damped.mcir").read_text()
+    e = mechcirc.designs(text, {"eta1": np.linspace(0.7, 0.9, 3)}).extremes([100, 2000])
+    df = e.to_dataframe()
+    names = ["K_min", "omega_at_K_min", "K_max", "omega_at_K_max", "Q0_max", "omega_at_Q0_max"]
+    assert list(df.columns) == names + ["failed"] and len(df) == 3
+    for name in names:
+        np.testing.assert_array_equal(df[name], getattr(e, name))
+    assert df["failed"].tolist() == ["", "", ""]
+    assert df.attrs["units"] == {"K_min": "m/(N·s)", "omega_at_K_min": "rad/s",
+                                 "K_max": "m/(N·s)", "omega_at_K_max": "rad/s", "Q0_max": "N",
+                                 "omega_at_Q0_max": "rad/s", "failed": ""}
+
+
+def test_cycle_map_frame_has_the_cli_csv_columns():
+    # on main: CycleMap had no to_dataframe
+    pytest.importorskip("pandas")
+    from mechcirc.scene import cycle_map, load_scene
+
+    cm = cycle_map(load_scene(SLIDER), points=8, harmonics=3)
+    df = cm.to_dataframe()
+    assert list(df.columns) == ["theta_deg", "omega_res1", "abs_Q0_h1", "abs_Q0_h2", "abs_Q0_h3"]
+    np.testing.assert_array_equal(df["theta_deg"], np.degrees(cm.theta))
+    np.testing.assert_array_equal(df["omega_res1"], cm.natural_frequencies()[:, 0])
+    np.testing.assert_array_equal(df["abs_Q0_h2"], np.abs(cm.Q0[:, 1]))
+    # the drive is on the crank (a link): |Q0| is a moment
+    assert df.attrs["units"] == {"theta_deg": "deg", "omega_res1": "rad/s", "abs_Q0_h1": "N·m",
+                                 "abs_Q0_h2": "N·m", "abs_Q0_h3": "N·m"}
+
+
+def test_scene_motion_frame_units_by_output():
+    # on main: SceneMotion had no to_dataframe
+    pytest.importorskip("pandas")
+    from mechcirc.scene import load_scene, simulate_scene
+
+    r = simulate_scene(load_scene(SLIDER))
+    df = r.to_dataframe()
+    assert list(df.columns) == list(r.columns()) and len(df) == r.crank_angle.size
+    for name, arr in r.values.items():
+        np.testing.assert_array_equal(df[name], arr)
+    # the crank turns (rad/s²), the block slides (its travel in m/s²), the rod is an
+    # elastic link (N, m), the drive is on a link (N·m), points accelerate in m/s²
+    assert df.attrs["units"] == {
+        "crank_angle_deg": "deg", "crank.acceleration": "rad/s²",
+        "block.acceleration": "rad/s²", "block.travel.acceleration": "m/s²",
+        "k_rod.force": "N", "k_rod.deformation": "m", "drive.moment": "N·m",
+        **{f"{p}.acceleration{s}": "m/s²" for p in "BC" for s in ("", "_x", "_y")}}
+
+
+def test_shaft_motion_frame_units_of_torsion_rods():
+    # on main: ShaftMotion had no to_dataframe
+    pytest.importorskip("pandas")
+    from mechcirc.scene import load_scene
+    from mechcirc.scene.shaft import simulate_shaft
+
+    m = simulate_shaft(load_scene(REPO / "examples" / "fnf_sixbar_scene.toml"), points=64)
+    df = m.to_dataframe()
+    bodies = ["crank1", "crank2", "coupler3", "link4", "coupler5", "output6", "shaft", "organ"]
+    assert list(df.columns) == ["theta", "time", "speed", "acceleration", "motor_torque",
+                                "load_torque", *(f"{b}.acceleration" for b in bodies),
+                                "C1.force", "C1.deformation", "C6.force", "C6.deformation"]
+    np.testing.assert_array_equal(df["speed"], m.speed)
+    np.testing.assert_array_equal(df["organ.acceleration"], m.body_accelerations["organ"])
+    np.testing.assert_array_equal(df["C6.force"], m.values["C6.force"])
+    assert df.attrs["units"] == {
+        "theta": "rad", "time": "s", "speed": "rad/s", "acceleration": "rad/s²",
+        "motor_torque": "N·m", "load_torque": "N·m",
+        **{f"{b}.acceleration": "rad/s²" for b in bodies},
+        "C1.force": "N·m", "C1.deformation": "rad", "C6.force": "N·m", "C6.deformation": "rad"}
+
 
 def test_plot_motion_names_the_nearest_output():
     # on main: ValueError "no output 'k_rod.forse'; outputs: ..." (no hint)
@@ -209,3 +293,15 @@ def test_plot_motion_names_the_nearest_output():
     r = simulate_scene(load_scene(SLIDER))
     raises(InputError, "no output 'k_rod.forse'; did you mean 'k_rod.force'? (outputs: "
                        + ", ".join(r.values) + ")", lambda: plot_motion(r, ["k_rod.forse"]))
+
+
+def test_scene_alias_of_a_misspelt_output_names_the_nearest():
+    # on main: "... which is not an output (outputs: ...)" (no hint)
+    from mechcirc.scene import simulate_scene
+
+    text = SLIDER.read_text().replace("[simulate]\nrevolutions = 4", "[simulate]\nrevolutions = "
+                                      "4\n[simulate.aliases]\nF = \"k_rod.forse\"")
+    with pytest.raises(MechcircError, match=re.escape(
+            "<string>: alias 'F' names 'k_rod.forse', which is not an output; did you mean "
+            "'k_rod.force'? (outputs: crank.acceleration, ")):
+        simulate_scene(parse_scene(text))
