@@ -200,8 +200,8 @@ def did_you_mean(word: str, choices) -> str:
     A choice that differs only in case comes first (``b`` → ``B``), then one
     that differs only in its separators or in writing ω as ``w``
     (``--wmax`` → ``--omega-max``, ``omega_max`` → ``omega-max``), then the
-    nearest by difflib's ratio, then one that begins ``word`` or that ``word``
-    begins (``maximum`` → ``max``).
+    nearest by difflib's ratio (an option's leading dashes left out), then one that
+    begins ``word`` or that ``word`` begins (``maximum`` → ``max``).
 
     Parameters
     ----------
@@ -218,9 +218,12 @@ def did_you_mean(word: str, choices) -> str:
 
     choices = [str(c) for c in choices]
     word = str(word)[:100]
+    # an option's leading dashes, which every option shares, do not make two alike
+    # ('--node' is not near '--debug')
+    bare = {c.lstrip("-"): c for c in reversed(choices)}
     close = [c for c in choices if c.lower() == word.lower()] or \
         [c for c in choices if _spelling(c) == _spelling(word)] or \
-        difflib.get_close_matches(word, choices, n=1) or \
+        [bare[c] for c in difflib.get_close_matches(word.lstrip("-"), list(bare), n=1)] or \
         [c for c in choices if len(c) >= 3 and len(word) >= 3
          and (c.startswith(word) or word.startswith(c))][:1]
     return f"; did you mean {close[0]!r}?" if close else ""

@@ -305,3 +305,19 @@ def test_scene_alias_of_a_misspelt_output_names_the_nearest():
             "<string>: alias 'F' names 'k_rod.forse', which is not an output; did you mean "
             "'k_rod.force'? (outputs: crank.acceleration, ")):
         simulate_scene(parse_scene(text))
+
+
+def test_an_option_of_another_command_is_not_near_an_unrelated_one(capsys):
+    # on main: "--node is an option of sweep, not of transient; did you mean '--debug'?":
+    # difflib counted the two dashes every option shares
+    from mechcirc.cli import main
+    from mechcirc.errors import did_you_mean
+
+    assert did_you_mean("--node", ["--debug", "--t-end"]) == ""
+    assert did_you_mean("--omga", ["--debug", "--omega"]) == "; did you mean '--omega'?"
+    with pytest.raises(SystemExit) as info:
+        main(["transient", str(STB), "--t-end", "0.01", "--node", "M"])
+    assert info.value.code == 2
+    assert capsys.readouterr().err == (
+        "mechcirc transient: error: unrecognized arguments: --node M; --node is an option of "
+        "sweep, not of transient (see 'mechcirc transient --help')\n")
