@@ -38,7 +38,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .circuit import Circuit, units_of
-from .errors import InputError, MechcircError, NetlistError, NotSeriesParallelError
+from .errors import InputError, MechcircError, NotSeriesParallelError
 from ._sweep import (UNDAMPED_ZETA, real_omega, drive_force, drive_velocity, peak, point_flags,
                      singular_error)
 from .resonances import design_values, template_levers
@@ -86,7 +86,7 @@ def designs(netlist: "str | Circuit", params: dict | None = None, *,
     >>> [round(r.omega, 9) for r in d.resonances().list(1)]
     [20.0]
     """
-    from .netlist import expressions_of
+    from .netlist import check_param_names, expressions_of
 
     circuit, text = (netlist, None) if isinstance(netlist, Circuit) \
         else (_parsed(netlist, source), netlist)
@@ -95,11 +95,7 @@ def designs(netlist: "str | Circuit", params: dict | None = None, *,
     if params and exprs is None:
         raise InputError("params= needs a circuit made by mechcirc.parse or mechcirc.load "
                          "(its .param expressions); this one was built in code")
-    unknown = sorted(set(params) - set(circuit.params))
-    if unknown:
-        raise NetlistError(f"no .param named {', '.join(map(repr, unknown))} to set",
-                           circuit.source, 0, 0,
-                           "one of " + (", ".join(circuit.params) or "(none defined)"))
+    check_param_names(params, circuit.params, circuit.source)
     arrays, D = _param_arrays(params)
     return _build(circuit, text, exprs, arrays, D)
 
@@ -292,6 +288,9 @@ class Designs:
         design's ``params=``, so an invalid design raises its located error),
         else the template with the design's values.
         """
+        if not (isinstance(d, (int, np.integer)) and -self.size <= d < self.size):
+            raise InputError(f"design must be an index 0..{self.size - 1} of the {self.size} "
+                             f"designs (a negative one counts from the end), got {brief(d)}")
         if self.text is not None:
             from .netlist import parse
 

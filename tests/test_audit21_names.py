@@ -321,3 +321,26 @@ def test_an_option_of_another_command_is_not_near_an_unrelated_one(capsys):
     assert capsys.readouterr().err == (
         "mechcirc transient: error: unrecognized arguments: --node M; --node is an option of "
         "sweep, not of transient (see 'mechcirc transient --help')\n")
+
+
+def test_params_two_port_method_and_design_index_are_named(stb):
+    # on main: no hint for a misspelt .param (load and designs) or port node; a ValueError
+    # with no hint for the linkage's method; IndexError "index 5 is out of bounds for axis 0"
+    heald = REPO / "netlists" / "heald_damped.mcir"
+    params = "; did you mean 'eta1'? (expected one of eta1, eta2, eta3, eta4, etaB, etaC)"
+    raises(NetlistError, f"{heald}: error: no .param named 'eta11' to set" + params,
+           lambda: mechcirc.load(heald, params={"eta11": 0.8}))
+    ds = mechcirc.designs(heald.read_text(), {"eta1": [0.7, 0.8]})
+    raises(NetlistError, "<string>: error: no .param named 'eta11' to set" + params,
+           lambda: mechcirc.designs(heald.read_text(), {"eta11": [0.7, 0.8]}))
+    raises(InputError, "design must be an index 0..1 of the 2 designs (a negative one counts "
+                       "from the end), got 5", lambda: ds.design(5))
+    assert ds.design(-1).params["eta1"] == 0.8
+    raises(InputError, "method must be 'auto', 'dyads' or 'newton', got 'dyad'; did you mean "
+                       "'dyads'?", lambda: load_linkage(QUICK).motion(0.1, method="dyad"))
+    pytest.importorskip("skrf")
+    from mechcirc.errors import TopologyError
+
+    raises(TopologyError, "port node 'Mm' is not a node of the circuit; did you mean 'M'? "
+                          "(nodes: 0, A, B, C, D, E, F, G, H, I, J, L, M, T)",
+           lambda: stb.two_port("Mm", "0", "A", "0", [100.0]))

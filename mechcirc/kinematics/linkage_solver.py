@@ -51,7 +51,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .. import _jit
-from ..errors import GeometryError, InputError, NetlistError, OutOfReach
+from ..errors import GeometryError, InputError, NetlistError, OutOfReach, did_you_mean
 from ..motion_laws import quintic
 from ..sources import brief, positive_number, real_values, summary_repr
 from ._dyad_forms import im_conj, rpr, rrp, rrr, solve2
@@ -540,7 +540,8 @@ def motion(lk, pl: _Plan, theta, *, max_step_deg: float = 2.0, method: str = "au
     t, dt_max = _times(lk, thetas, max_step_deg)
     use = pl.method if method == "auto" else method
     if use not in ("dyads", "newton"):
-        raise ValueError(f"method must be 'auto', 'dyads' or 'newton', got {method!r}")
+        raise InputError(f"method must be 'auto', 'dyads' or 'newton', got {brief(method)}"
+                         f"{did_you_mean(str(method), ('auto', 'dyads', 'newton'))}")
     if use == "dyads" and pl.method != "dyads":
         raise GeometryError(f"{lk.source}: the linkage is not made of RRR dyads only; "
                             f"use method='newton'")
