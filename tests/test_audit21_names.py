@@ -344,3 +344,22 @@ def test_params_two_port_method_and_design_index_are_named(stb):
     raises(TopologyError, "port node 'Mm' is not a node of the circuit; did you mean 'M'? "
                           "(nodes: 0, A, B, C, D, E, F, G, H, I, J, L, M, T)",
            lambda: stb.two_port("Mm", "0", "A", "0", [100.0]))
+
+
+def test_cam_cycle_and_plot_cycle_name_the_argument():
+    # on main: cam_cycle("cycloidal", 100, 80, 80, "x"): TypeError "must be real number, not
+    # str" (which argument?); an unknown law a plain ValueError; plot_cycle(unit="hz") a
+    # ValueError with no hint
+    from mechcirc.scene.cycle import CycleMap, plot_cycle
+
+    raises(InputError, "stroke must be a number [m or rad], got 'x'",
+           lambda: cam_cycle("cycloidal", 100, 80, 80, "x"))
+    raises(InputError, "dwell must be a number [deg], got None",
+           lambda: cam_cycle("cycloidal", 100, None, 80, 0.02))
+    with pytest.raises(InputError, match="unknown motion law 'cycloidl'; .* did you mean "
+                                         "'cycloidal'\\?"):
+        cam_cycle("cycloidl", 100, 80, 80, 0.02)
+    cm = CycleMap(np.zeros(1), [()], [()], np.array([1]), 1.0, np.zeros((1, 1), complex),
+                  {}, True)
+    raises(InputError, "unit must be one of 'rad/s', 'Hz', 'rpm', got 'hz'; did you mean "
+                       "'Hz'?", lambda: plot_cycle(cm, unit="hz"))

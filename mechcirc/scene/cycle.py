@@ -363,8 +363,8 @@ def plot_cycle(cmap: CycleMap, ax=None, *, fig=None, unit: str = "rad/s"):
     The Axes ``ax`` when given, else ``fig`` (empty) or the new Figure (what it drew on).
     """
     if unit not in FREQUENCY_UNITS:
-        raise ValueError(f"unit must be one of {', '.join(map(repr, FREQUENCY_UNITS))}, "
-                         f"got {unit!r}")
+        raise InputError(f"unit must be one of {', '.join(map(repr, FREQUENCY_UNITS))}, "
+                         f"got {brief(unit)}{did_you_mean(str(unit), FREQUENCY_UNITS)}")
     deg = np.degrees(cmap.theta)
     if ax is not None:
         _resonance_panel(ax, cmap, deg, unit)
