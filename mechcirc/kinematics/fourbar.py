@@ -422,7 +422,8 @@ class FourBar:
 
     def rocker_acceleration(self, theta: ArrayLike, omega: float):
         """Theoretical rocker acceleration ε4T = ν·ω² [rad/s²] at constant crank speed ``omega`` [rad/s]."""
-        return self.nu(theta) * _crank_speed(omega) ** 2
+        w = _crank_speed(omega)
+        return self.nu(theta) * (w * w)
 
     def _out(self, theta, name):
         """Field ``name`` (``phi4``, ``mu`` or ``nu``) of :meth:`evaluate`; at one angle a
@@ -558,13 +559,15 @@ class FourBar:
 
     def rocker_acceleration_range(self, omega: float) -> tuple[float, float]:
         """(min, max) of ε4T = ν·ω² [rad/s²] over a revolution at crank speed ``omega`` [rad/s]."""
-        w2 = _crank_speed(omega) ** 2
+        w = _crank_speed(omega)
+        w2 = w * w
         (_, nmin), (_, nmax) = self.nu_extrema()
         return nmin * w2, nmax * w2
 
     def summary(self, omega: float | None = None) -> dict:
         """Plain-data summary (angles in degrees) for reports and ``--json``."""
-        omega = None if omega is None else _crank_speed(omega)
+        if omega is not None:
+            _crank_speed(omega)
         doc: dict[str, Any] = {
             "crank": self.crank, "coupler": self.coupler, "rocker": self.rocker,
             "frame": self.frame, "branch": self.branch,

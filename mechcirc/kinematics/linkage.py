@@ -400,11 +400,13 @@ class Linkage:
             an angle is no finite number.
         """
         links = [c.link for c in self.cranks]
-        for name in [*crank_angles, *links]:
-            if name not in links or name not in crank_angles:
-                raise unknown_name(name, links, "crank link") if name not in links else \
-                    InputError(f"crank_angles has no angle for crank link {name!r}: give "
-                               f"one for each of {', '.join(map(repr, links))} [rad]")
+        stray = [k for k in crank_angles if k not in links]
+        if stray:
+            raise unknown_name(stray[0], links, "crank link")
+        missing = [k for k in links if k not in crank_angles]
+        if missing:
+            raise InputError(f"crank_angles has no angle for crank link {missing[0]!r}: give "
+                             f"one for each of {', '.join(map(repr, links))} [rad]")
         q = self.q0() if near is None else np.array(near, dtype=float)
         angles = real_values([crank_angles[k] for k in links], "crank_angles", "rad")[None]
         q, ok = Newton(self._plan).newton(q[None], angles)
