@@ -37,12 +37,12 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .circuit import Circuit
-from .errors import InputError, MechcircError, NetlistError, NotSeriesParallelError
+from .circuit import Circuit, units_of
+from .errors import InputError, MechcircError, NotSeriesParallelError
 from ._sweep import (UNDAMPED_ZETA, real_omega, drive_force, drive_velocity, peak, point_flags,
                      singular_error)
 from .resonances import design_values, template_levers
-from .sources import brief, summary_repr
+from .sources import brief, data_frame, summary_repr
 
 __all__ = ["designs", "from_circuits", "network_shape", "Designs", "DesignSweep", "DesignResonances",
            "DesignExtremes"]
@@ -86,7 +86,7 @@ def designs(netlist: "str | Circuit", params: dict | None = None, *,
     >>> [round(r.omega, 9) for r in d.resonances().list(1)]
     [20.0]
     """
-    from .netlist import expressions_of
+    from .netlist import check_param_names, expressions_of
 
     circuit, text = (netlist, None) if isinstance(netlist, Circuit) \
         else (_parsed(netlist, source), netlist)
@@ -95,11 +95,7 @@ def designs(netlist: "str | Circuit", params: dict | None = None, *,
     if params and exprs is None:
         raise InputError("params= needs a circuit made by mechcirc.parse or mechcirc.load "
                          "(its .param expressions); this one was built in code")
-    unknown = sorted(set(params) - set(circuit.params))
-    if unknown:
-        raise NetlistError(f"no .param named {', '.join(map(repr, unknown))} to set",
-                           circuit.source, 0, 0,
-                           "one of " + (", ".join(circuit.params) or "(none defined)"))
+    check_param_names(params, circuit.params, circuit.source)
     arrays, D = _param_arrays(params)
     return _build(circuit, text, exprs, arrays, D)
 
@@ -292,6 +288,9 @@ class Designs:
         design's ``params=``, so an invalid design raises its located error),
         else the template with the design's values.
         """
+        if not (isinstance(d, (int, np.integer)) and -self.size <= d < self.size):
+            raise InputError(f"design must be an index 0..{self.size - 1} of the {self.size} "
+                             f"designs (a negative one counts from the end), got {brief(d)}")
         if self.text is not None:
             from .netlist import parse
 
@@ -811,7 +810,8 @@ class DesignExtremes:
     ``K_min``/``K_max`` [m/(N·s)] and ``Q0_max`` [N] are the true values over
     [``omega_min``, ``omega_max``] (0 or inf where K has a zero or pole in the
     band), ``omega_at_*`` where they occur [rad/s] (the first resonance or
-    anti-resonance when the value is 0 or inf); NaN for ``failed`` designs.
+    anti-resonance when the value is 0 or inf); NaN for ``failed`` designs.  ``units``:
+    the drive's unit labels (:func:`mechcirc.circuit.units_of`; N·m for a rotary drive).
     """
 
     __repr__ = summary_repr
@@ -824,13 +824,27 @@ class DesignExtremes:
     omega_at_Q0_max: NDArray[np.float64]
     single: NDArray[np.int64]
     failed: dict
+    units: dict = field(default_factory=lambda: units_of(None))
+
+    def to_dataframe(self):
+        """One row per design: ``K_min``, ``K_max`` [m/(N·s)], ``Q0_max`` [N] (rad/(N·m·s),
+        N·m for a rotary drive), each ``omega_at_*`` [rad/s], and ``failed``, why the
+        design failed ("" if it did not); ``attrs["units"]`` the unit of each column."""
+        cols = {name: getattr(self, name) for name in _EXTREMES}
+        cols["failed"] = [self.failed.get(d, "") for d in range(len(self.K_min))]
+        units = {"K_min": self.units["K"], "K_max": self.units["K"], "Q0_max": self.units["Q"],
+                 "failed": ""}
+        return data_frame(cols, {c: units.get(c, "rad/s") for c in cols})
+
+
+#: The arrays of :class:`DesignExtremes`, one value per design.
+_EXTREMES = ("K_min", "omega_at_K_min", "K_max", "omega_at_K_max", "Q0_max", "omega_at_Q0_max")
 
 
 def _extremes(ds: Designs, lo: float, hi: float, res: DesignResonances,
               ends: NDArray | None) -> DesignExtremes:
     D = ds.size
-    out = {k: np.full(D, np.nan) for k in ("K_min", "omega_at_K_min", "K_max",
-                                           "omega_at_K_max", "Q0_max", "omega_at_Q0_max")}
+    out = {k: np.full(D, np.nan) for k in _EXTREMES}
     batched = ~np.isin(np.arange(D), res.single)
     with np.errstate(invalid="ignore"):
         undamped = np.where(res.count[:, None] > np.arange(res.omega.shape[1])[None, :],
@@ -880,4 +894,5 @@ def _extremes(ds: Designs, lo: float, hi: float, res: DesignResonances,
             out["K_min"][d] = 1.0 / smax.value if smax.value else math.inf
         out["omega_at_K_min"][d] = smax.omega
         out["Q0_max"][d], out["omega_at_Q0_max"][d] = qmax.value, qmax.omega
-    return DesignExtremes(**out, single=rest, failed=failed)
+    return DesignExtremes(**out, single=rest, failed=failed,
+                          units=units_of(ds.circuit.require_drive()))

@@ -38,7 +38,7 @@ from typing import TYPE_CHECKING, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .errors import NetlistError
+from .errors import NetlistError, unknown_name
 
 if TYPE_CHECKING:  # pragma: no cover - annotations of the delegates only
     from .motion_laws import Motion
@@ -471,11 +471,12 @@ class Circuit:
         return "<pre>" + html.escape(repr(self)) + "</pre>"
 
     def element(self, name: str) -> Element | Lever:
-        """The element or lever called ``name`` (KeyError if none)."""
+        """The element or lever called ``name``; an :class:`~mechcirc.errors.UnknownNameError`
+        (a KeyError) naming the nearest if none."""
         for e in self.elements + self.levers:
             if e.name == name:
                 return e
-        raise KeyError(f"no element named {name!r}")
+        raise unknown_name(name, [e.name for e in self.elements + self.levers])
 
     @property
     def nodes(self) -> list[str]:

@@ -17,6 +17,7 @@ __all__ = [
     "UnitError",
     "BandError",
     "ParameterError",
+    "UnknownNameError",
     "TopologyError",
     "NotSeriesParallelError",
     "GeometryError",
@@ -32,6 +33,8 @@ __all__ = [
     "MAX_QUOTED",
     "clip",
     "shorten",
+    "did_you_mean",
+    "unknown_name",
 ]
 
 
@@ -155,6 +158,80 @@ class BandError(MechcircError, ValueError):
 class ParameterError(MechcircError, ValueError):
     """A sley parameter is out of range (names the parameter, its value, what is allowed),
     or an unknown preset, method or option."""
+
+
+class UnknownNameError(MechcircError, KeyError):
+    """A name looked up that is not there (a node, an element, a crank, a column): the message
+    names the nearest and those there are (:func:`unknown_name`).  A ``KeyError`` too, as a
+    dictionary's look-up is, so ``except KeyError`` still catches it."""
+
+    def __str__(self) -> str:
+        # KeyError's str() is the repr of its key: the message would print in quotes.
+        return shorten(str(self.args[0])) if self.args else ""
+
+
+def unknown_name(name, names, what: str = "element", where: str = "") -> UnknownNameError:
+    """The error for ``name`` not among ``names``: "no node named 'Mm'[ where]; did you mean
+    'M'? (nodes: ...)" (``what`` the kind of name; at most 20 listed).
+
+    Parameters
+    ----------
+    name : object
+        The name asked for.
+    names : iterable of str
+        The names there are.
+    what, where : str
+        The kind of name, and where it was looked for (" on a path of the drive").
+
+    Returns
+    -------
+    UnknownNameError
+        To raise.
+    """
+    names = sorted(map(str, names))
+    listed = ", ".join(names[:20]) + (f", … ({len(names)} in all)" if len(names) > 20 else "")
+    return UnknownNameError(f"no {what} named {name!r}{where}{did_you_mean(str(name), names)} "
+                            f"({what}s: {listed or 'none'})")
+
+
+def did_you_mean(word: str, choices) -> str:
+    """``"; did you mean 'x'?"`` for the nearest of ``choices`` (difflib), or ``""``.
+
+    A choice that differs only in case comes first (``b`` → ``B``), then one
+    that differs only in its separators or in writing ω as ``w``
+    (``--wmax`` → ``--omega-max``, ``omega_max`` → ``omega-max``), then the
+    nearest by difflib's ratio (an option's leading dashes left out), then one that
+    begins ``word`` or that ``word`` begins (``maximum`` → ``max``).
+
+    Parameters
+    ----------
+    word : str
+        The unknown word.
+    choices : iterable of str
+        The words it could have been.
+
+    Returns
+    -------
+    str
+    """
+    import difflib
+
+    choices = [str(c) for c in choices]
+    word = str(word)[:100]
+    # an option's leading dashes, which every option shares, do not make two alike
+    # ('--node' is not near '--debug')
+    bare = {c.lstrip("-"): c for c in reversed(choices)}
+    close = [c for c in choices if c.lower() == word.lower()] or \
+        [c for c in choices if _spelling(c) == _spelling(word)] or \
+        [bare[c] for c in difflib.get_close_matches(word.lstrip("-"), list(bare), n=1)] or \
+        [c for c in choices if len(c) >= 3 and len(word) >= 3
+         and (c.startswith(word) or word.startswith(c))][:1]
+    return f"; did you mean {close[0]!r}?" if close else ""
+
+
+def _spelling(word: str) -> str:
+    """``word`` without case, ``-`` or ``_``, with ``omega`` written ``w``."""
+    return re.sub(r"[-_]", "", word.lower()).replace("omega", "w")
 
 
 class TopologyError(MechcircError, ValueError):

@@ -60,6 +60,7 @@ import numpy as np
 
 from .circuit import LAWS, Circuit, Drive
 from .resonances import Resonance, Resonances, constraint_basis, pencil, resonance_pairs
+from .errors import unknown_name
 from .sources import summary_repr
 
 __all__ = ["Mode", "Modes", "SweepSensitivity", "modes", "sweep_sensitivity"]
@@ -372,8 +373,7 @@ class SweepSensitivity:
 
     def _key(self, name: str) -> str:
         if name not in self.dK:
-            raise KeyError(f"no sensitivity to {name!r} computed; computed: "
-                           f"{', '.join(self.dK)}")
+            raise unknown_name(name, self.dK, "parameter", " among the sensitivities computed")
         return name
 
 

@@ -42,8 +42,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .errors import NetlistError
-from .sources import did_you_mean, summary_repr
+from .errors import InputError, NetlistError
+from .sources import brief, did_you_mean, real_number, summary_repr
 
 __all__ = [
     "LAWS",
@@ -350,8 +350,12 @@ def _check_cycle(law_name, ret_law, rise, dwell, ret, stroke) -> None:
     """The laws known, the angles fit one revolution, the stroke finite and nonzero."""
     for name in (law_name, ret_law):
         if name not in LAWS:
-            raise ValueError(f"unknown motion law {name!r}; expected one of {', '.join(LAWS)}"
+            raise InputError(f"unknown motion law {name!r}; expected one of {', '.join(LAWS)}"
                              f"{did_you_mean(str(name), LAWS)}")
+    for what, value in (("rise", rise), ("dwell", dwell), ("return", ret), ("stroke", stroke)):
+        if not real_number(value):
+            unit = "m or rad" if what == "stroke" else "deg"
+            raise InputError(f"{what} must be a number [{unit}], got {brief(value)}")
     if not (math.isfinite(rise) and rise > 0 and math.isfinite(ret) and ret > 0
             and math.isfinite(dwell) and dwell >= 0):
         raise ValueError(f"rise and return must be > 0 and dwell >= 0 degrees, got "

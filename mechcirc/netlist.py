@@ -49,7 +49,7 @@ from .sources import did_you_mean, is_name, is_number, read_source, split_lines
 from .units import (UnitError, convert, is_rotational, looks_like_unit, parse_unit,
                     split_quantity)
 
-__all__ = ["parse", "load", "expressions_of", "MAX_LINE_LENGTH", "MAX_STATEMENTS", "SYNTAX"]
+__all__ = ["parse", "load", "expressions_of", "check_param_names", "MAX_LINE_LENGTH", "MAX_STATEMENTS", "SYNTAX"]
 
 #: Longest line accepted [characters]; longer lines are refused at once.
 MAX_LINE_LENGTH = 100_000
@@ -355,11 +355,7 @@ class _Parser:
                                f"{MAX_STATEMENTS}", self.source, 0, 0,
                                "a smaller network (see 'mechcirc reduce')")
         parsed = self._split(lines)
-        unknown = sorted(set(self.overrides) - set(self.param_lines))
-        if unknown:
-            raise NetlistError(f"no .param named {', '.join(map(repr, unknown))} to set",
-                               self.source, 0, 0,
-                               "one of " + (", ".join(self.param_lines) or "(none defined)"))
+        check_param_names(self.overrides, self.param_lines, self.source)
         self._build(parsed)
         self._check_complete(parsed)
         self._check_initial()
@@ -858,6 +854,25 @@ class _Parser:
             line.error(str(exc), opts[bad].col if bad in opts else tok.col,
                        "rise + dwell + return <= 360 degrees, rise and return > 0, "
                        "a nonzero stroke")
+
+
+def check_param_names(given, known, source: str) -> None:
+    """Refuse a name of ``given`` (``params=``) that is no ``.param`` of ``known``: a
+    :class:`NetlistError` naming them, the nearest, and the netlist's parameters.
+
+    Parameters
+    ----------
+    given, known : iterable of str
+        The names to set, and the ``.param`` names of the netlist.
+    source : str
+        The netlist's file name, for the message.
+    """
+    known = list(known)
+    unknown = sorted(set(given) - set(known))
+    if unknown:
+        raise NetlistError(f"no .param named {', '.join(map(repr, unknown))} to set"
+                           f"{did_you_mean(unknown[0], known)}", source, 0, 0,
+                           "one of " + (", ".join(known) or "(none defined)"))
 
 
 def expressions_of(circuit: Circuit) -> dict | None:

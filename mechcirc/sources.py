@@ -8,14 +8,17 @@ import os
 import re
 import stat
 from dataclasses import dataclass, fields
-from typing import TypeGuard
+from typing import TYPE_CHECKING, TypeGuard
 
-from .errors import NetlistError
+from .errors import InputError, NetlistError, did_you_mean, unknown_name
+
+if TYPE_CHECKING:  # pragma: no cover - annotations only (numpy is imported where used)
+    from numpy.typing import NDArray
 
 __all__ = ["read_source", "read_bytes", "MAX_INPUT_BYTES", "split_lines", "line_col",
            "finite_number", "brief", "load_toml", "locate", "locate_path", "located", "Table",
            "unknown_key", "check_keys", "number_error", "checked_number", "did_you_mean",
-           "is_number", "positive_number", "summary_repr", "data_frame"]
+           "is_number", "positive_number", "real_values", "summary_repr", "data_frame"]
 
 #: The largest input file mechcirc reads [bytes].  A netlist of the statement
 #: limit is far below this; anything larger is refused before it is read.
@@ -284,6 +287,39 @@ def positive_number(value) -> bool:
     return real_number(value) and math.isfinite(value) and value > 0
 
 
+def real_values(value, what: str, unit: str,
+                error: type[Exception] = InputError) -> NDArray:
+    """``value`` (a number or an array of them) as a float ndarray of its shape, else ``error``
+    naming the argument: "theta must be a finite number [rad], got 'x'" (text, None, a
+    complex, a bool, NaN or ±inf; "finite numbers" for a sequence).
+
+    Parameters
+    ----------
+    value : object
+        The argument as given in code.
+    what, unit : str
+        Its name and unit, for the message.
+    error : exception class
+        What to raise (:class:`~mechcirc.errors.InputError`, or the module's own).
+
+    Returns
+    -------
+    numpy.ndarray of float
+    """
+    import numpy as np
+
+    try:
+        a = np.asarray(value)
+        ok = a.dtype.kind in "iuf" and bool(np.all(np.isfinite(a)))
+    except (TypeError, ValueError, OverflowError):      # a ragged list, an int past float64
+        a, ok = None, False
+    if a is None or not ok:
+        many = isinstance(value, (list, tuple, np.ndarray)) and (a is None or a.ndim > 0)
+        kind = "finite numbers" if many else "a finite number"
+        raise error(f"{what} must be {kind} [{unit}], got {brief(value)}")
+    return a.astype(float)
+
+
 def number_error(value, what: str, *, positive: bool = False,
                  allow_zero: bool = False) -> tuple[str, str] | None:
     """None for a finite number (> 0 with ``positive``, ≥ 0 with ``allow_zero`` too),
@@ -548,7 +584,8 @@ def locate_path(text: str, path: tuple[str, ...], value: str | None = None,
 
 
 def located(text: str, source: str, message: str, section: str | None, key: str,
-            value=None, occurrence: int = 0, expected: str | None = None) -> NetlistError:
+            value=None, occurrence: int = 0, expected: str | None = None,
+            choices=None) -> NetlistError:
     """A :class:`NetlistError` placed at ``key`` of ``[section]`` (see :func:`locate_path`).
 
     Parameters
@@ -568,11 +605,18 @@ def located(text: str, source: str, message: str, section: str | None, key: str,
         Which ``[[section]]`` (0-based).
     expected : str, optional
         What would be right.
+    choices : sequence of str, optional
+        The names ``value`` could have been: the nearest is said ("did you mean") and
+        ``expected`` is "one of" them unless given.
 
     Returns
     -------
     NetlistError
     """
+    if choices is not None:
+        choices = [str(c) for c in choices]
+        message += did_you_mean(value, choices) if isinstance(value, str) else ""
+        expected = expected or f"one of {', '.join(choices) or '(none)'}"
     path = (*section.split("."), key) if section else (key,)
     line, col = locate_path(text, path, value if isinstance(value, str) else None, occurrence)
     return NetlistError(message, source, line, col, expected)
@@ -644,50 +688,13 @@ def unknown_key(table: Table, entry: dict, occurrence: int = 0) -> tuple[str, st
 
 
 def name_index(name: str, names, what: str = "element", where: str = "") -> int:
-    """The index of ``name`` in ``names``, else a KeyError: "no node named 'Mm' [where]; did
-    you mean 'M'? (nodes: ...)" (``what`` the kind of name, at most 20 listed)."""
+    """The index of ``name`` in ``names``, else an :class:`~mechcirc.errors.UnknownNameError`
+    (a KeyError): "no node named 'Mm' [where]; did you mean 'M'? (nodes: ...)" (``what`` the
+    kind of name; see :func:`mechcirc.errors.unknown_name`)."""
     names = list(names)
     if name in names:
         return names.index(name)
-    raise KeyError(f"no {what} named {name!r}{where}{did_you_mean(name, names)} ({what}s: "
-                   f"{', '.join(sorted(names)[:20])})")
-
-
-def did_you_mean(word: str, choices) -> str:
-    """``"; did you mean 'x'?"`` for the nearest of ``choices`` (difflib), or ``""``.
-
-    A choice that differs only in case comes first (``b`` → ``B``), then one
-    that differs only in its separators or in writing ω as ``w``
-    (``--wmax`` → ``--omega-max``, ``omega_max`` → ``omega-max``), then the
-    nearest by difflib's ratio, then one that begins ``word`` or that ``word``
-    begins (``maximum`` → ``max``).
-
-    Parameters
-    ----------
-    word : str
-        The unknown word.
-    choices : iterable of str
-        The words it could have been.
-
-    Returns
-    -------
-    str
-    """
-    import difflib
-
-    choices = [str(c) for c in choices]
-    word = str(word)[:100]
-    close = [c for c in choices if c.lower() == word.lower()] or \
-        [c for c in choices if _spelling(c) == _spelling(word)] or \
-        difflib.get_close_matches(word, choices, n=1) or \
-        [c for c in choices if len(c) >= 3 and len(word) >= 3
-         and (c.startswith(word) or word.startswith(c))][:1]
-    return f"; did you mean {close[0]!r}?" if close else ""
-
-
-def _spelling(word: str) -> str:
-    """``word`` without case, ``-`` or ``_``, with ``omega`` written ``w``."""
-    return re.sub(r"[-_]", "", word.lower()).replace("omega", "w")
+    raise unknown_name(name, names, what, where)
 
 
 def check_keys(text: str, source: str, table: Table, entry: dict, occurrence: int = 0) -> None:

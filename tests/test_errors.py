@@ -18,9 +18,10 @@ def test_errors_form_one_tree():
     assert len(classes) > 10
     for c in classes:
         assert issubclass(c, (errors.MechcircError, errors.MechcircWarning)), c
-    # Beside the classes, errors.py exports how messages quote user text.
-    assert set(errors.__all__) == {c.__name__ for c in classes} | {"MAX_QUOTED", "clip",
-                                                                   "shorten"}
+    # Beside the classes, errors.py exports how messages quote user text and name the
+    # nearest of the names there are.
+    assert set(errors.__all__) == {c.__name__ for c in classes} | {
+        "MAX_QUOTED", "clip", "shorten", "did_you_mean", "unknown_name"}
     assert issubclass(errors.UnitError, ValueError)            # callers may catch either
 
 

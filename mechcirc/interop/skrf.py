@@ -31,7 +31,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import MechcircError, TopologyError
+from ..errors import MechcircError, TopologyError, did_you_mean
 from ..units import in_unit
 from .touchstone import read_touchstone_one_port
 
@@ -243,8 +243,9 @@ def _port_incidence(circuit, system, P1, P2, S1, S2) -> NDArray[np.float64]:
     names = set(system.nodes) | set(node_names(circuit.elements, circuit.levers))
     for port in (P1, P2, S1, S2):
         if port not in names:
-            raise TopologyError(f"port node {port!r} is not a node of the circuit "
-                                f"(nodes: {', '.join(sorted(names))})", nodes=(port,))
+            raise TopologyError(f"port node {port!r} is not a node of the circuit"
+                                f"{did_you_mean(str(port), names)} (nodes: "
+                                f"{', '.join(sorted(names))})", nodes=(port,))
     if P1 == P2 or S1 == S2:
         raise TopologyError("each port needs two different nodes", nodes=(P1, P2, S1, S2))
     if FRAME not in names:

@@ -69,7 +69,7 @@ from functools import partial
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, unknown_name
 from ..sources import did_you_mean, real_number, summary_repr
 
 __all__ = [
@@ -171,7 +171,10 @@ class CamProfile:
 
     def check(self, name: str) -> CamCheck:
         """The check called ``name`` (``"pressure_angle"`` or ``"undercut"``)."""
-        return next(c for c in self.checks if c.name == name)
+        for c in self.checks:
+            if c.name == name:
+                return c
+        raise unknown_name(name, [c.name for c in self.checks], "check")
 
 
 def _geometry(motion, theta, follower, rb, rf, e, arm, pivot, x0):

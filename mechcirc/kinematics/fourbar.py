@@ -48,6 +48,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import GeometryError
+from ..sources import brief, finite_number, real_number, real_values
 from ._dyad_forms import rrr
 
 __all__ = ["FourBar", "FourBarState", "DeadCentre", "TransmissionRange"]
@@ -136,6 +137,19 @@ class TransmissionRange:
     theta_at_min: tuple[float, ...]
     gamma_max: float
     theta_at_max: tuple[float, ...]
+
+
+def _crank_speed(omega) -> float:
+    """``omega`` [rad/s] if it is a finite number whose square is finite, else a
+    :class:`GeometryError` saying so."""
+    try:
+        ok = real_number(omega) and math.isfinite(float(omega) * float(omega))
+    except OverflowError:                  # an integer past float64
+        ok = False
+    if not ok:
+        raise GeometryError(f"crank speed ω must be a finite number whose square is "
+                            f"finite [rad/s], got {brief(omega)}")
+    return float(omega)
 
 
 def _acute(angle):
@@ -363,7 +377,7 @@ class FourBar:
         -----
         Closed form, O(n); about 30 numpy passes for n angles.
         """
-        theta = np.asarray(theta, dtype=float)
+        theta = real_values(theta, "theta", "rad")
         a, b, c = self.crank, self.coupler, self.rocker
         bx, by, cos_psi = self._raw(theta)
         self._check(theta, cos_psi)
@@ -408,7 +422,8 @@ class FourBar:
 
     def rocker_acceleration(self, theta: ArrayLike, omega: float):
         """Theoretical rocker acceleration ε4T = ν·ω² [rad/s²] at constant crank speed ``omega`` [rad/s]."""
-        return self.nu(theta) * (omega * omega)
+        w = _crank_speed(omega)
+        return self.nu(theta) * (w * w)
 
     def _out(self, theta, name):
         """Field ``name`` (``phi4``, ``mu`` or ``nu``) of :meth:`evaluate`; at one angle a
@@ -429,7 +444,7 @@ class FourBar:
             The linkage locks at ``theta``, or is at such a singular position.
         """
         with np.errstate(divide="ignore", invalid="ignore"):
-            s = self.evaluate(float(theta))
+            s = self.evaluate(theta if finite_number(theta) else real_values(theta, "theta", "rad"))
         if math.sin(float(s.phi4) - float(s.phi3)) == 0.0:
             raise GeometryError(
                 f"four-bar at a singular position at θ = {math.degrees(theta):.6g}°: coupler and "
@@ -544,12 +559,15 @@ class FourBar:
 
     def rocker_acceleration_range(self, omega: float) -> tuple[float, float]:
         """(min, max) of ε4T = ν·ω² [rad/s²] over a revolution at crank speed ``omega`` [rad/s]."""
+        w = _crank_speed(omega)
+        w2 = w * w
         (_, nmin), (_, nmax) = self.nu_extrema()
-        w2 = omega * omega
         return nmin * w2, nmax * w2
 
     def summary(self, omega: float | None = None) -> dict:
         """Plain-data summary (angles in degrees) for reports and ``--json``."""
+        if omega is not None:
+            _crank_speed(omega)
         doc: dict[str, Any] = {
             "crank": self.crank, "coupler": self.coupler, "rocker": self.rocker,
             "frame": self.frame, "branch": self.branch,
@@ -578,10 +596,6 @@ class FourBar:
         doc["branch_crossings_deg"] = [math.degrees(t) for t in crossings]
         doc["notes"] = []
         if omega is not None:
-            if not (isinstance(omega, (int, float)) and math.isfinite(omega)
-                    and math.isfinite(omega * omega)):
-                raise GeometryError(f"crank speed ω must be a finite number whose square is "
-                                    f"finite [rad/s], got {omega!r}")
             doc["omega"] = omega
         if crossings:
             where = " and ".join(f"{math.degrees(t):g}°" for t in crossings)

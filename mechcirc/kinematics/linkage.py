@@ -79,7 +79,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import GeometryError, NetlistError
+from ..errors import GeometryError, InputError, NetlistError, unknown_name
 from .linkage_solver import MAX_CONTINUATION_STEPS  # noqa: F401
 from .linkage_solver import LinkageMotion, LinkageState, Newton, motion, plan
 
@@ -395,9 +395,20 @@ class Linkage:
         ------
         GeometryError
             Newton does not converge (no assembly near ``near``).
+        UnknownNameError, InputError
+            A key of ``crank_angles`` is no crank's link, a crank's link has no angle, or
+            an angle is no finite number.
         """
+        links = [c.link for c in self.cranks]
+        stray = [k for k in crank_angles if k not in links]
+        if stray:
+            raise unknown_name(stray[0], links, "crank link")
+        missing = [k for k in links if k not in crank_angles]
+        if missing:
+            raise InputError(f"crank_angles has no angle for crank link {missing[0]!r}: give "
+                             f"one for each of {', '.join(map(repr, links))} [rad]")
         q = self.q0() if near is None else np.array(near, dtype=float)
-        angles = np.array([[float(crank_angles[c.link]) for c in self.cranks]])
+        angles = real_values([crank_angles[k] for k in links], "crank_angles", "rad")[None]
         q, ok = Newton(self._plan).newton(q[None], angles)
         q = q[0]
         if not ok[0]:
@@ -415,7 +426,7 @@ class Linkage:
 # ------------------------------------------------------------------ parsing
 # The located-TOML helpers are shared with the scene and study readers.
 from ..sources import Table, check_keys, load_toml  # noqa: E402
-from ..sources import brief, finite_number, locate, located, read_source  # noqa: E402
+from ..sources import brief, finite_number, locate, located, read_source, real_values  # noqa: E402
 from ..units import in_si  # noqa: E402
 
 #: The tables of a linkage file, declared once (see :class:`mechcirc.sources.Table`);
@@ -527,7 +538,7 @@ def _read_ground(table: dict, pose: dict, text: str, source: str) -> list[str]:
     for p in ground_pts:
         if not isinstance(p, str) or p not in pose:
             raise located(text, source, f"unknown point {p!r} in [ground]", "ground", "points",
-                       value=p, expected=f"one of {', '.join(pose)}")
+                       value=p, choices=pose)
     return ground_pts
 
 
@@ -551,7 +562,7 @@ def _read_links(table: dict, pose: dict, text: str, source: str,
         for p in pts:
             if p not in pose:
                 raise located(text, source, f"unknown point {p!r} in link {lname!r}", "links",
-                           lname, value=p, expected=f"one of {', '.join(pose)}")
+                           lname, value=p, choices=pose)
         if len(set(pts)) != len(pts):
             raise located(text, source, f"link {lname!r} lists a point twice", "links", lname)
         if lname == "ground":
@@ -590,8 +601,7 @@ def _read_cranks(raw_cranks: list, links, ground_pts, text: str, source: str) ->
         lname = c.get("link")
         if not isinstance(lname, str) or lname not in links:
             raise located(text, source, _unknown("link", c, f"[[cranks]] #{n + 1}"), "cranks",
-                       "link", value=lname, occurrence=n,
-                       expected=f"one of {', '.join(links)}")
+                       "link", value=lname, occurrence=n, choices=links)
         pivots = [p for p in links[lname] if p in ground_pts]
         pivot = c.get("pivot", pivots[0] if len(pivots) == 1 else None)
         if pivot not in pivots:
@@ -620,8 +630,7 @@ def _read_sliders(raw: list, pose, links, ground_pts, text: str, source: str) ->
         lname, guide = x.get("link"), x.get("guide")
         if not isinstance(lname, str) or lname not in links:
             raise located(text, source, _unknown("link", x, f"[[sliders]] #{n + 1}"),
-                          "sliders", "link", value=lname, occurrence=n,
-                          expected=f"one of {', '.join(links)}")
+                          "sliders", "link", value=lname, occurrence=n, choices=links)
         if any(s.link == lname for s in out):
             raise located(text, source, f"link {lname!r} slides twice", "sliders", "link",
                           value=lname, occurrence=n)
@@ -649,7 +658,7 @@ def _read_sliders(raw: list, pose, links, ground_pts, text: str, source: str) ->
         if point not in own:
             raise located(text, source, f"slider {lname!r}: point must be one of its points "
                           f"(got {brief(point)})", "sliders", "point" if "point" in x else
-                          "link", occurrence=n, expected=f"one of {', '.join(own)}")
+                          "link", occurrence=n, value=point, choices=own)
         u = u / size
         d = pose[point] - pose[line[0]]                # the point from the line's first point
         off = float(u[0] * d[1] - u[1] * d[0])

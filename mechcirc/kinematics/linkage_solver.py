@@ -51,9 +51,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .. import _jit
-from ..errors import GeometryError, NetlistError, OutOfReach
+from ..errors import GeometryError, InputError, NetlistError, OutOfReach, did_you_mean
 from ..motion_laws import quintic
-from ..sources import summary_repr
+from ..sources import brief, positive_number, real_values, summary_repr
 from ._dyad_forms import im_conj, rpr, rrp, rrr, solve2
 
 __all__ = ["LinkageMotion", "LinkageState", "MAX_CONTINUATION_STEPS", "plan", "motion"]
@@ -437,8 +437,8 @@ def _dyad(lk, slides, P3, links, o1, o2):
 # perpendicular (−y, x) of a vector is i times it.
 
 def _times(lk, thetas, max_step_deg):
-    if not max_step_deg > 0:
-        raise ValueError(f"max_step_deg must be > 0, got {max_step_deg}")
+    if not positive_number(max_step_deg):
+        raise InputError(f"max_step_deg must be a finite number > 0 [deg], got {brief(max_step_deg)}")
     w1 = lk.cranks[0].omega
     wmax = max(abs(c.omega) for c in lk.cranks)
     with np.errstate(all="ignore"):
@@ -536,11 +536,12 @@ def motion(lk, pl: _Plan, theta, *, max_step_deg: float = 2.0, method: str = "au
     -------
     LinkageMotion
     """
-    thetas = np.asarray(theta, dtype=float).reshape(-1)
+    thetas = real_values(theta, "theta", "rad").reshape(-1)
     t, dt_max = _times(lk, thetas, max_step_deg)
     use = pl.method if method == "auto" else method
     if use not in ("dyads", "newton"):
-        raise ValueError(f"method must be 'auto', 'dyads' or 'newton', got {method!r}")
+        raise InputError(f"method must be 'auto', 'dyads' or 'newton', got {brief(method)}"
+                         f"{did_you_mean(str(method), ('auto', 'dyads', 'newton'))}")
     if use == "dyads" and pl.method != "dyads":
         raise GeometryError(f"{lk.source}: the linkage is not made of RRR dyads only; "
                             f"use method='newton'")

@@ -22,9 +22,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..batch import Designs, from_circuits, network_shape
-from ..errors import GeometryError, InputError, SolverError
+from ..errors import GeometryError, InputError, SolverError, did_you_mean
 from ..motion_laws import Motion, motion_table
-from ..sources import summary_repr
+from ..sources import brief, data_frame, summary_repr
 from ..units import FREQUENCY_UNITS, in_unit
 from .files import Scene
 from .model import (RANK_TOL, ReflectMode, build, drive_ratio, element_ratios, part_singular_values,
@@ -75,7 +75,11 @@ class CycleMap:
     cycle: float = 2 * math.pi
 
     def natural_frequencies(self, kind: str = "resonance") -> NDArray[np.float64]:
-        """Array (n, m) of ωₙ [rad/s] of the underdamped modes, NaN-padded (m the most at any θ)."""
+        """Array (n, m) of ωₙ [rad/s] of the underdamped modes, NaN-padded (m the most at any θ);
+        ``kind`` ``"resonance"`` (of :attr:`resonances`) or ``"antiresonance"`` (:attr:`antiresonances`)."""
+        if kind not in ("resonance", "antiresonance"):
+            raise InputError(f"kind must be 'resonance' or 'antiresonance', got {brief(kind)}"
+                             f"{did_you_mean(str(kind), ('resonance', 'antiresonance'))}")
         rows = [[r.omega for r in row if r.zeta < 1.0]
                 for row in (self.resonances if kind == "resonance" else self.antiresonances)]
         m = max((len(r) for r in rows), default=0)
@@ -109,6 +113,18 @@ class CycleMap:
                     out.append({"mode": k, "harmonic": int(h),
                                 "theta_deg": math.degrees(th % self.cycle), "omega": float(target)})
         return sorted(out, key=lambda c: (c["theta_deg"], c["harmonic"]))
+
+    def to_dataframe(self):
+        """One row per crank angle, the columns of ``mechcirc cycle``'s CSV: ``theta_deg``
+        [deg], ``omega_res1``… the underdamped resonances [rad/s] (NaN where fewer, and
+        where skipped), ``abs_Q0_h1``… |Q0| at each harmonic h·Ω [N, N·m when rotational];
+        ``attrs["units"]`` the unit of each column."""
+        cols = {"theta_deg": np.degrees(self.theta),
+                **{f"omega_res{k + 1}": w for k, w in enumerate(self.natural_frequencies().T)},
+                **{f"abs_Q0_h{h}": q for h, q in zip(self.harmonics, np.abs(self.Q0).T)}}
+        force = "N·m" if self.rotational else "N"
+        return data_frame(cols, {c: "deg" if c == "theta_deg" else "rad/s" if c[0] == "o"
+                                 else force for c in cols})
 
     def as_dict(self) -> dict:
         """Plain data for JSON output."""
@@ -347,8 +363,8 @@ def plot_cycle(cmap: CycleMap, ax=None, *, fig=None, unit: str = "rad/s"):
     The Axes ``ax`` when given, else ``fig`` (empty) or the new Figure (what it drew on).
     """
     if unit not in FREQUENCY_UNITS:
-        raise ValueError(f"unit must be one of {', '.join(map(repr, FREQUENCY_UNITS))}, "
-                         f"got {unit!r}")
+        raise InputError(f"unit must be one of {', '.join(map(repr, FREQUENCY_UNITS))}, "
+                         f"got {brief(unit)}{did_you_mean(str(unit), FREQUENCY_UNITS)}")
     deg = np.degrees(cmap.theta)
     if ax is not None:
         _resonance_panel(ax, cmap, deg, unit)

@@ -73,7 +73,7 @@ from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any, Literal, TypeGuard
 
-from ..errors import GeometryError, MechcircError, NetlistError
+from ..errors import GeometryError, MechcircError, NetlistError, did_you_mean
 from ..kinematics.linkage import TABLES as LINKAGE_TABLES
 from ..kinematics.linkage import Linkage, parse_linkage
 from ..sources import (Table, brief, check_keys, checked_number, finite_number, load_toml,
@@ -473,8 +473,7 @@ class _SceneReader:
         p = entry.get(key)
         if not _named(p, points):
             raise self.err(f"[[{table}]] #{n + 1}: {key} {p!r} does not exist in "
-                           f"[points]", table, key, value=p, occurrence=n,
-                           expected=f"one of {', '.join(points)}")
+                           f"[points]", table, key, value=p, occurrence=n, choices=points)
         return p
 
     def number(self, value, what, table, key, n, **kw) -> float:
@@ -488,8 +487,7 @@ class _SceneReader:
             lname = e.get("link")
             if not _named(lname, links):
                 raise self.err(f"elastic link {lname!r} is not in the linkage's [links]",
-                               "elastic", "link", value=lname, occurrence=n,
-                               expected=f"one of {', '.join(links)}")
+                               "elastic", "link", value=lname, occurrence=n, choices=links)
             if len(links[lname]) != 2:
                 raise self.err(f"elastic link {lname!r} has {len(links[lname])} points; "
                                "only a binary link can be an axial spring", "elastic", "link",
@@ -515,7 +513,7 @@ class _SceneReader:
                 raise self.err(
                     f"torsion rod #{n + 1}: link {lname!r} is not a rigid link of [links]",
                     "torsion", "link", value=lname, occurrence=n,
-                    expected=f"one of {', '.join(l for l in links if l not in elastic_links)}")
+                    choices=[lk for lk in links if lk not in elastic_links])
             pivots = [p for p in links[lname] if p in ground]
             pivot = t.get("pivot", pivots[0] if len(pivots) == 1 else None)
             if pivot not in pivots:
@@ -569,8 +567,8 @@ class _SceneReader:
                 raise self.err(f"[[gears]] #{n + 1}: crank {c!r} is not a crank after the first "
                                "(the main shaft) or is geared twice", "gears",
                                "crank" if "crank" in g else next(iter(g), "crank"),
-                               value=c, occurrence=n,
-                               expected=f"one of {', '.join(names[1:]) or '(none: one crank)'}")
+                               value=c, occurrence=n, choices=names[1:],
+                               expected=None if names[1:] else "one of (none: one crank)")
             ratio, frac = self.gear_ratio(n, g, c, w1, names[0])
             body = self.gear_mesh(n, g, c, torsions)
             gears[c] = Gear(c, float(ratio), (frac.numerator, frac.denominator), body)
@@ -663,8 +661,7 @@ class _SceneReader:
                     "its end points)") if _named(lname, elastic_links) else ""
             raise self.err(f"[[masses]] #{n + 1}: link {lname!r} is not a rigid "
                            f"link or torsion body{hint}", "masses", "link",
-                           value=lname, occurrence=n,
-                           expected=f"one of {', '.join(sorted(bodies))}")
+                           value=lname, occurrence=n, choices=sorted(bodies))
         if "mass" in m or "inertia" not in m:
             raise self.err(f"[[masses]] #{n + 1} on a link takes inertia = … "
                            "[kg·m²]", "masses", "link", occurrence=n)
@@ -709,7 +706,7 @@ class _SceneReader:
             if not _named(anchor, self.linkage.ground):
                 raise self.err(f"load #{n + 1}: anchor {anchor!r} is not a ground "
                                "point", "loads", "anchor", occurrence=n, value=anchor,
-                               expected=f"one of {', '.join(self.linkage.ground)}")
+                               choices=self.linkage.ground)
             return anchor, None
         d = ld["direction"]
         ok = isinstance(d, list) and len(d) == 2 and all(finite_number(x) for x in d) \
@@ -732,11 +729,11 @@ class _SceneReader:
                            next(iter(dr), "link"), expected='link = "…" or point = "…"')
         if "link" in dr and not _named(dr["link"], bodies):
             raise self.err(f"[drive] link {dr['link']!r} is not a rigid link or torsion "
-                           "body", "drive", "link", expected=f"one of {', '.join(sorted(bodies))}")
+                           "body", "drive", "link", value=dr["link"], choices=sorted(bodies))
         if "point" in dr:
             if not _named(dr["point"], points):
                 raise self.err(f"[drive] point {dr['point']!r} does not exist in [points]",
-                               "drive", "point", expected=f"one of {', '.join(points)}")
+                               "drive", "point", value=dr["point"], choices=points)
             if dr["point"] not in rigid_points:
                 raise self.err(f"[drive] point {dr['point']!r} is on no rigid link",
                                "drive", "point")
@@ -783,7 +780,7 @@ def _analysis(text, source, table, circuit_names) -> Analysis:
     if output is not None and not _named(output, circuit_names):
         raise located(text, source, f"[analysis] output {output!r} is not an element of the "
                    "scene's circuit", "analysis", "output", value=output,
-                   expected=f"one of {', '.join(sorted(circuit_names))}")
+                   choices=sorted(circuit_names))
     band = None
     if "band" in table:
         from .._simplify import BandError, check_band
@@ -966,7 +963,10 @@ def apply_overrides(scene: Scene, overrides: dict) -> Scene:
         else:
             known = ["omega", "omega_ripple.amplitude/harmonic"] + [
                 f"{n}.{'/'.join(_FIELDS[type(x)][1])}" for n, x in found.items()]
-            raise MechcircError(f"--set {key}: no such parameter; known: {', '.join(known)}")
+            every = ["omega", "omega_ripple.amplitude", "omega_ripple.harmonic"] + [
+                f"{n}.{f}" for n, x in found.items() for f in _FIELDS[type(x)][1]]
+            raise MechcircError(f"--set {key}: no such parameter{did_you_mean(key, every)} "
+                                f"(known: {', '.join(known)})")
     # each table rebuilt from its own entries (a scene made in Python may repeat a name
     # across tables: one name, one entry of ``found``)
     tables: dict[str, Any] = {table: tuple(found[x.name] if type(found[x.name]) is kind else x

@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from ..errors import MechcircError
+from ..errors import InputError, MechcircError, did_you_mean
 
 __all__ = ["plot_mode", "plot_motion"]
 
@@ -39,7 +39,8 @@ def plot_motion(result, names=None, fig=None):
                  if (k.endswith(".acceleration") and np.any(v != 0)) or k.endswith(".force")]
     unknown = [n for n in names if n not in result.values]
     if unknown:
-        raise ValueError(f"no output {unknown[0]!r}; outputs: {', '.join(result.values)}")
+        raise InputError(f"no output {unknown[0]!r}{did_you_mean(unknown[0], result.values)} "
+                         f"(outputs: {', '.join(result.values)})")
     deg = np.degrees(result.crank_angle)
     fig, ((top,), (bottom,)) = new_panels(fig, 2, caller="plot_motion", figsize=(8, 7), sharex=True)
     for n in names:

@@ -51,12 +51,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import MechcircError, ShaftWarning, SolverError
-from ..sources import summary_repr
+from ..sources import data_frame, summary_repr
 from .files import Scene
 from .motion import (MotionModel, body_tables, function_args, function_rows, hermite_table,
                      moment_centre, motion_model)
 from .simfile import Motor, Shaft, kloss_motor, parse_shaft, table_motor  # noqa: F401
-from .simulation import check_strokes, kernels_for, max_rate, refined_extremes
+from .simulation import check_strokes, kernels_for, max_rate, output_units, refined_extremes
 
 __all__ = ["Motor", "Shaft", "ShaftMotion", "kloss_motor", "table_motor", "parse_shaft",
            "simulate_shaft", "ShaftWarning"]
@@ -103,6 +103,8 @@ class ShaftMotion:
         and ``MOMENT.moment`` [N·m] over the cycle (empty when rigid).
     states : ndarray
         Elastic scenes: the free parts' [q, q̇] at each θ (rows); shape (points, 0) rigid.
+    units : dict[str, str]
+        The unit of each column of :meth:`to_dataframe` past the shaft's own.
     """
 
     __repr__ = summary_repr
@@ -128,6 +130,21 @@ class ShaftMotion:
     notes: tuple = ()
     values: dict = field(default_factory=dict)
     states: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
+    units: dict = field(default_factory=dict)
+
+    def to_dataframe(self):
+        """One row per θ of the steady cycle: ``theta`` [rad], ``time`` [s], ``speed``
+        [rad/s], ``acceleration`` [rad/s²], ``motor_torque`` and ``load_torque`` [N·m], each
+        body's ``BODY.acceleration`` and each of ``values``; ``attrs["units"]`` the unit of
+        each column (:func:`~mechcirc.scene.simulation.output_units`)."""
+        cols = {"theta": self.theta, "time": self.time, "speed": self.speed,
+                "acceleration": self.acceleration, "motor_torque": self.motor_torque,
+                "load_torque": self.load_torque,
+                **{f"{b}.acceleration": a for b, a in self.body_accelerations.items()},
+                **self.values}
+        units = {"theta": "rad", "time": "s", "speed": "rad/s", "acceleration": "rad/s²",
+                 "motor_torque": "N·m", "load_torque": "N·m", **self.units}
+        return data_frame(cols, {c: units.get(c, "") for c in cols})
 
     def summary(self) -> dict:
         """The scalar results and extremes, JSON-ready."""
@@ -774,7 +791,8 @@ def _tabulate(scene, eq, sol, th0, cyc, points, Jf, motor):
                 speed=w, acceleration=acc, motor_torque=out[:, -4].copy(),
                 load_torque=-eq.c * out[:, -1], body_accelerations=bodies, omega_min=wmin, omega_max=wmax,
                 omega_mean=mean, delta=(wmax - wmin) / mean, period=period, values=values,
-                states=np.ascontiguousarray(z))
+                states=np.ascontiguousarray(z),
+                units=output_units(scene, [f"{b}.acceleration" for b in bodies] + list(values)))
 
 
 def _startup(scene, eq, shaft, th0, cyc, w0, motion, rtol, scale, peak):

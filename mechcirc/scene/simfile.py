@@ -115,7 +115,7 @@ def parse_moments(text, source, table, scene) -> tuple:
         if not isinstance(body, str) or body not in bodies:
             raise located(text, source, f"[[moments]] #{n + 1}: body {body!r} is not a rigid link "
                        "or torsion body", "moments", "body" if "body" in m else "amplitude",
-                       occurrence=n, expected=f"one of {', '.join(bodies)}")
+                       occurrence=n, value=body, choices=bodies)
         name = m.get("name", f"M_{body}")
         if not is_name(name) or name in taken:
             raise located(text, source, f"[[moments]] #{n + 1}: name {name!r} is not a valid "

@@ -41,7 +41,7 @@ import numpy as np
 
 from .. import _jit
 from ..errors import MechcircError, SceneAccuracyWarning, SolverError
-from ..sources import brief, did_you_mean, real_number, summary_repr
+from ..sources import brief, data_frame, did_you_mean, real_number, summary_repr
 from .files import Scene
 from .motion import MotionModel, function_args, motion_model
 
@@ -116,6 +116,8 @@ class SceneMotion:
     states: np.ndarray | None = None
     #: numba compilation or cache load of the first call in a process [s], else 0.
     compile_time: float = 0.0
+    #: The unit of each output of ``values`` (:func:`output_units`).
+    units: dict = field(default_factory=dict)
 
     def summary(self) -> dict:
         """Plain-data summary for JSON."""
@@ -130,6 +132,46 @@ class SceneMotion:
     def columns(self) -> dict:
         """Output arrays by name, crank angle in degrees first (for CSV)."""
         return {"crank_angle_deg": np.degrees(self.crank_angle), **self.values}
+
+    def to_dataframe(self):
+        """One row per tabulated point, the columns of :meth:`columns` (``crank_angle_deg``
+        [deg], then every output); ``attrs["units"]`` the unit of each column
+        (:func:`output_units`)."""
+        return data_frame(self.columns(), {"crank_angle_deg": "deg",
+                                           **{k: self.units.get(k, "") for k in self.values}})
+
+
+def output_units(scene: Scene, names) -> dict[str, str]:
+    """The unit of each output name of a scene's motion, an alias as its target's.
+
+    ``BODY.acceleration`` rad/s² (a block's ``BODY.travel.acceleration`` and a point's
+    ``P.acceleration``, ``_x``, ``_y`` m/s²); ``ELEMENT.force`` N (N·m for a torsion rod)
+    and ``ELEMENT.deformation`` m (rad); ``MOMENT.moment`` N·m; ``drive.moment`` N·m on a
+    link, N at a point.
+
+    Parameters
+    ----------
+    scene : Scene
+    names : iterable of str
+
+    Returns
+    -------
+    dict of str to str
+    """
+    aliases = dict(getattr(scene.simulate, "aliases", None) or {})
+    torsions = {t.name for t in scene.torsions}
+    out = {}
+    for name in names:
+        owner, _, what = aliases.get(name, name).rpartition(".")
+        if what == "moment":
+            out[name] = "N" if owner == "drive" and scene.drive.link is None else "N·m"
+        elif what in ("force", "deformation"):
+            out[name] = {"force": "N", "deformation": "m"}[what] if owner not in torsions \
+                else {"force": "N·m", "deformation": "rad"}[what]
+        else:               # an acceleration: of a point or a block's travel, or a body's turn
+            linear = owner in scene.linkage.pose or owner.endswith(".travel")
+            out[name] = "m/s²" if linear else "rad/s²"
+    return out
 
 
 #: Methods of :func:`simulate_scene`: the fixed-step RK4 kernel, and scipy's adaptive ones.
@@ -777,7 +819,7 @@ def _finish(scene, model, kern, theta_s, ripple, main, other, counts, notes, war
     result = SceneMotion(scene.name, scene.source, model.omega, crank, values, extrema,
                          revolutions, est, periodicity, n_steps, nfev, wall, method, backend,
                          per_rev, tuple(notes + [f"warning: {w}" for w in warn]), ts, ys,
-                         compile_time)
+                         compile_time, output_units(scene, values))
     if getattr(scene.linkage, "contact", ""):          # a cam follower that can jump
         flight(scene, result, warn=True)               # (at the caller's line)
     return result
@@ -838,7 +880,8 @@ def _add_points_and_aliases(scene, model, theta_s, ripple, crank, ts, ys, values
             extrema[alias] = extrema[target]
         else:
             raise MechcircError(f"{scene.source}: alias {alias!r} names {target!r}, which is "
-                                f"not an output (outputs: {', '.join(values)})")
+                                f"not an output{did_you_mean(target, values)} (outputs: "
+                                f"{', '.join(values)})")
 
 
 def _check_warnings(bad, est, periodicity) -> list:

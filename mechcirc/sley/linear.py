@@ -28,7 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..circuit import Circuit, Drive, Element, Lever
-from ..sources import summary_repr
+from ..sources import real_values, summary_repr
 from ..units import convert_frequency
 from .models import ParameterError, SleyParameters
 
@@ -179,8 +179,9 @@ def linearise(params: SleyParameters, theta0: float, *, mu: float | None = None)
     LinearModel
         M, C, K and the drive's coefficients at θ0.
     """
-    if mu is None:
-        mu = float(params.fourbar().transfer(float(theta0))[1])
+    theta0 = _angle(theta0)
+    mu = float(params.fourbar().transfer(theta0)[1]) if mu is None else \
+        float(real_values(mu, "mu", "1", ParameterError))
     M, C, K, kd, cd = _mck(params, mu)
     names = ("phi2P", "phi4P") if params.drive == "one-side" else ("phi2P", "phi5P", "phi4P")
     return LinearModel(float(theta0), float(mu), M[0], C[0], K[0], kd, cd, names)
@@ -263,7 +264,7 @@ def to_circuit(params: SleyParameters, theta0: float, *, lever: bool = False,
     p = params
     mu = _coupling(p, theta0)
     mu2 = mu * mu
-    v = p.omega if velocity is None else velocity
+    v = p.omega if velocity is None else real_values(velocity, "velocity", "rad/s", ParameterError)
     elements: list = []
     levers = []
     for (a, b, crank, rocker), (inertia, i_rod, c, c_rod, k, k_rod) in zip(
@@ -318,10 +319,16 @@ def to_netlist(params: SleyParameters, theta0: float, *, lever: bool = False,
 
 def _coupling(p: SleyParameters, theta0: float) -> float:
     """μ(θ0) [1], refused at a dead centre."""
-    mu = float(p.fourbar().transfer(float(theta0))[1])
+    theta0 = _angle(theta0)
+    mu = float(p.fourbar().transfer(theta0)[1])
     if abs(mu) < 1e-9:
         raise ParameterError(
             f"at crank angle {math.degrees(theta0):.6g} deg the four-bar is at a dead centre "
             f"(mu = {mu:.3g}): the sley is decoupled from the drive and the circuit would "
             "be singular; choose a crank angle away from the dead centres")
     return mu
+
+
+def _angle(theta0) -> float:
+    """``theta0`` [rad] as a float; a :class:`ParameterError` naming it if it is no finite number."""
+    return float(real_values(theta0, "theta0", "rad", ParameterError))

@@ -423,8 +423,9 @@ def test_set_takes_what_the_file_takes_and_a_load_keeps_one_of_its_two():
     assert apply_overrides(heald, {"warp.damping": 0.0}).loads[0].stiffness == 4e4
     with pytest.raises(NetlistError, match="load 'warp' needs stiffness > 0 or damping > 0"):
         apply_overrides(heald, {"warp.stiffness": 0.0, "warp.damping": 0.0})
-    with pytest.raises(MechcircError, match="--set C9.stiffness: no such parameter; known: "
-                                            "omega, .* C2.stiffness/damping/clearance"):
+    with pytest.raises(MechcircError, match=r"--set C9.stiffness: no such parameter; did you "
+                                            r"mean 'C4.stiffness'\? \(known: omega, .* "
+                                            r"C2.stiffness/damping/clearance"):
         apply_overrides(_mrazek(), {"C9.stiffness": 1.0})
 
 
@@ -451,7 +452,8 @@ def _mrazek():
     ("C2.stiffness=0", "--set C2.stiffness=0: error: stiffness of 'C2' [N·m/rad] must be a "
                        "finite number > 0, got 0.0 (expected a finite number > 0)"),
     ("C2.stiffness=2kN", "--set C2.stiffness=2kN: error: unit 'kN' is a force"),
-    ("I2P.colour=1", "--set I2P.colour: no such parameter; known: omega, "
+    ("I2P.colour=1", "--set I2P.colour: no such parameter; did you mean 'I2P.value'? "
+                     "(known: omega, "
                      "omega_ripple.amplitude/harmonic, I2P.mass/inertia/value"),
 ])
 def test_cli_scene_set_refusals_name_the_setting_and_the_range(setting, message, capsys):
