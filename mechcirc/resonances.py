@@ -45,7 +45,7 @@ from typing import Literal
 import numpy as np
 
 from .circuit import Circuit
-from .errors import InputError, NetlistError, SolverError
+from .errors import InputError, NetlistError, SolverError, UnloadedElementWarning, warn
 from .sources import data_frame, did_you_mean, real_number
 from .units import FREQUENCY_UNITS, in_unit
 
@@ -218,15 +218,10 @@ def resonance_pairs(circuit: Circuit, omega_max: float | None = None,
     _check_arguments(circuit, omega_max, kind)
     system = circuit.nodal
     if system.unloaded:
-        import warnings
-
-        from .errors import UnloadedElementWarning
-
         d = circuit.require_drive()
-        warnings.warn(
-            f"{len(system.unloaded)} element(s) lie on no path between the drive's nodes "
-            f"{d.n1!r} and {d.n2!r} and carry no force: {', '.join(system.unloaded)}",
-            UnloadedElementWarning, stacklevel=3)
+        warn(f"{len(system.unloaded)} element(s) lie on no path between the drive's nodes "
+             f"{d.n1!r} and {d.n2!r} and carry no force: {', '.join(system.unloaded)}",
+             UnloadedElementWarning)
     from .nodal import DENSE_LIMIT
 
     # Small networks: dense matrices from the stamps, and no scipy for undamped ones.
