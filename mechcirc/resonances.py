@@ -692,9 +692,8 @@ def _undamped(M: np.ndarray, K: np.ndarray, vectors: bool = False) -> tuple:
     mu, V = (np.diag(M), None) if not np.any(M - np.diag(np.diag(M))) else np.linalg.eigh(M)
     massive = mu > 1e-13 * max(mu.max(initial=0.0), 1e-300)
     direct = V is None and bool(massive.all())
-    none = (np.zeros(0), direct, np.zeros((M.shape[0], 0)) if vectors else None)
-    if not massive.any():
-        return none  # no inertia: no oscillation
+    if not massive.any():          # no inertia: no oscillation
+        return np.zeros(0), direct, np.zeros((M.shape[0], 0)) if vectors else None
     if direct:                       # nothing to condense (no copies of K)
         Krr, Knn, Knr = K, K[:0, :0], K[:0]
     elif V is None:
@@ -794,11 +793,8 @@ def _damped(M, D, K, vectors: bool = False) -> tuple:
 def _cancel(held: np.ndarray, released: np.ndarray):
     """Which modes to keep (two masks): not those present in both problems (they
     do not appear in K)."""
-    keep_h = np.ones(len(held), bool)
-    keep_r = np.ones(len(released), bool)
-    for i, (s, err, _) in enumerate(held):
-        if not len(released):
-            break
+    keep_h, keep_r = np.ones(len(held), bool), np.ones(len(released), bool)
+    for i, (s, err, _) in enumerate(held if len(released) else ()):
         d = np.abs(released[:, 0] - s) / abs(s)
         d[~keep_r] = np.inf
         j = int(np.argmin(d))

@@ -524,9 +524,8 @@ def _sample(table, kind: str) -> tuple[tuple[str, ...], tuple[tuple[float, ...],
 def _random_range(kind, name, r) -> tuple[float, float, bool]:
     """KIND.params.NAME = {min, max[, log]} as (min, max, log)."""
     where = (kind, "params", name)
-    if not isinstance(r, dict) or not {"min", "max"} <= set(r) or \
-            set(r) - {"min", "max", "log"}:
-        extra = sorted(map(str, set(r) - {"min", "max", "log"})) if isinstance(r, dict) else []
+    extra = sorted(map(str, set(r) - {"min", "max", "log"})) if isinstance(r, dict) else []
+    if extra or not isinstance(r, dict) or not {"min", "max"} <= set(r):
         _fail(where, f"{kind}.params.{name} must be {{min, max[, log]}}"
                      + (f": unknown key {extra[0]!r}"
                         f"{did_you_mean(extra[0], ('min', 'max', 'log'))}" if extra else ""))
@@ -1560,7 +1559,6 @@ def _lock(output):
     import socket
 
     path = f"{os.fspath(output)}.lock"
-    me = f"pid {os.getpid()} on {socket.gethostname()}"
 
     def held(holder: str, hint: str = ""):
         return MechcircError(f"{os.fspath(output)} is being written by another study "
@@ -1593,7 +1591,7 @@ def _lock(output):
     _LOCK_FDS.add(fd)
     try:
         os.ftruncate(fd, 0)
-        os.write(fd, f"{me}\n".encode())
+        os.write(fd, f"pid {os.getpid()} on {socket.gethostname()}\n".encode())
         yield
     finally:
         with contextlib.suppress(OSError):
