@@ -1238,9 +1238,8 @@ def _curve_writer(path, spec: StudySpec):
     record["curves"] = ("long format: one row per design and omega; design is the "
                         "table's index; K = K_re + j K_im")
     schema = pa.schema([pa.field("design", pa.int64()),
-                        pa.field("omega", pa.float64(), metadata={"unit": "rad/s"}),
-                        pa.field("K_re", pa.float64(), metadata={"unit": k_unit}),
-                        pa.field("K_im", pa.float64(), metadata={"unit": k_unit})],
+                        *(pa.field(name, pa.float64(), metadata={"unit": unit}) for name, unit in
+                          (("omega", "rad/s"), ("K_re", k_unit), ("K_im", k_unit)))],
                        metadata={"mechcirc": json.dumps(record, ensure_ascii=False)})
     with atomic_path(path) as tmp, pq.ParquetWriter(tmp, schema) as writer:
         def write(rows, K):
