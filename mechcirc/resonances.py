@@ -45,7 +45,7 @@ from typing import Literal
 import numpy as np
 
 from .circuit import Circuit
-from .errors import InputError, NetlistError, SolverError
+from .errors import InputError, NetlistError, SolverError, UnloadedElementWarning, warn
 from .sources import data_frame, did_you_mean, real_number
 from .units import FREQUENCY_UNITS, in_unit
 
@@ -221,35 +221,28 @@ def resonance_pairs(circuit: Circuit, omega_max: float | None = None,
     _check_arguments(circuit, omega_max, kind)
     system = circuit.nodal
     if system.unloaded:
-        import warnings
-
-        from .errors import UnloadedElementWarning
-
         d = circuit.require_drive()
-        warnings.warn(
-            f"{len(system.unloaded)} element(s) lie on no path between the drive's nodes "
-            f"{d.n1!r} and {d.n2!r} and carry no force: {', '.join(system.unloaded)}",
-            UnloadedElementWarning, stacklevel=3)
+        warn(f"{len(system.unloaded)} element(s) lie on no path between the drive's nodes "
+             f"{d.n1!r} and {d.n2!r} and carry no force: {', '.join(system.unloaded)}",
+             UnloadedElementWarning)
     from .nodal import DENSE_LIMIT
 
     # Small networks: dense matrices from the stamps, and no scipy for undamped ones.
     M, D, Ks, G_released, G_held, damped = pencil(system, dense=system.size <= DENSE_LIMIT)
     held, v_held, released, v_released, keep_h, keep_r = _solved(
         M, D, Ks, G_released, G_held, damped, omega_max, vectors)
-    roots = [("resonance", s, e, f) for s, e, f in held[keep_h]] + \
-        [("antiresonance", s, e, f) for s, e, f in released[keep_r]]
-    rep = [_repeated(found[:, 0]) if vectors else np.zeros(len(found), bool)
-           for found in (held, released)]
-    vecs = [(None if V is None else V[:, i], bool(r[i]))
-            for V, keep, r in ((v_held, keep_h, rep[0]), (v_released, keep_r, rep[1]))
-            for i in np.flatnonzero(keep)]
+    pairs = []          # ((kind, s, error, must polish), (vector, repeated)) of each root
+    for name, found, V, keep in (("resonance", held, v_held, keep_h),
+                                 ("antiresonance", released, v_released, keep_r)):
+        rep = _repeated(found[:, 0]) if vectors else np.zeros(len(found), bool)
+        pairs += [((name, *found[i]), (None if V is None else V[:, i], bool(rep[i])))
+                  for i in np.flatnonzero(keep)]
     # Of the kind asked (root by root: the others' polish changes nothing here) and in
     # the band, with a margin (polishing may move a root across its edge).
-    wanted = [(kind is None or t[0] == kind) and
-              (omega_max is None or abs(t[1]) <= omega_max * (1 + 1e-6)) for t in roots]
-    roots = [t for t, ok in zip(roots, wanted) if ok]
-    vecs = [v for v, ok in zip(vecs, wanted) if ok]
-    out = list(zip(_polish(system, roots, damped), vecs)) if roots else []
+    pairs = [(t, v) for t, v in pairs if (kind is None or t[0] == kind) and
+             (omega_max is None or abs(t[1]) <= omega_max * (1 + 1e-6))]
+    roots = [t for t, _ in pairs]
+    out = list(zip(_polish(system, roots, damped), [v for _, v in pairs])) if roots else []
     if omega_max is not None:
         out = [(r, v) for r, v in out if r.omega <= omega_max]
     out = sorted(out, key=lambda rv: (rv[0].omega, rv[0].kind))
@@ -705,15 +698,13 @@ def _undamped(M: np.ndarray, K: np.ndarray, vectors: bool = False) -> tuple:
     mu, V = (np.diag(M), None) if not np.any(M - np.diag(np.diag(M))) else np.linalg.eigh(M)
     massive = mu > 1e-13 * max(mu.max(initial=0.0), 1e-300)
     direct = V is None and bool(massive.all())
-    none = (np.zeros(0), direct, np.zeros((M.shape[0], 0)) if vectors else None)
-    if not massive.any():
-        return none  # no inertia: no oscillation
+    if not massive.any():          # no inertia: no oscillation
+        return np.zeros(0), direct, np.zeros((M.shape[0], 0)) if vectors else None
     if direct:                       # nothing to condense (no copies of K)
         Krr, Knn, Knr = K, K[:0, :0], K[:0]
     elif V is None:
-        Krr = K[np.ix_(massive, massive)]
-        Knn = K[np.ix_(~massive, ~massive)]
-        Knr = K[np.ix_(~massive, massive)]
+        Krr, Knn, Knr = (K[np.ix_(rows, cols)] for rows, cols in
+                         ((massive, massive), (~massive, ~massive), (~massive, massive)))
     else:
         R, N = V[:, massive], V[:, ~massive]
         Krr, Knn, Knr = R.T @ K @ R, N.T @ K @ N, N.T @ K @ R
@@ -808,11 +799,8 @@ def _damped(M, D, K, vectors: bool = False) -> tuple:
 def _cancel(held: np.ndarray, released: np.ndarray):
     """Which modes to keep (two masks): not those present in both problems (they
     do not appear in K)."""
-    keep_h = np.ones(len(held), bool)
-    keep_r = np.ones(len(released), bool)
-    for i, (s, err, _) in enumerate(held):
-        if not len(released):
-            break
+    keep_h, keep_r = np.ones(len(held), bool), np.ones(len(released), bool)
+    for i, (s, err, _) in enumerate(held if len(released) else ()):
         d = np.abs(released[:, 0] - s) / abs(s)
         d[~keep_r] = np.inf
         j = int(np.argmin(d))
@@ -1080,13 +1068,12 @@ def stacked_problem(Z, B, S, damped: bool, omega_max):
     # The massless directions are those of the pattern: with every value > 0,
     # null(Σ m_e B_e) = ∩ null(B_e) in every design.  Ordered last, they are
     # condensed out statically (_undamped_stack), as _undamped does per design.
+    n0 = 0
     if Z.shape[1]:
         mu, V = np.linalg.eigh(Z.T @ B["mass"].sum(axis=0) @ Z)
         massless = mu <= 1e-10 * max(mu.max(), 1e-300)
         Z = Z @ np.concatenate([V[:, ~massless], V[:, massless]], axis=1)
         n0 = int(massless.sum())
-    else:
-        n0 = 0
     Mr, Kr = (_weighted_sum(S, Z.T @ B[x] @ Z) for x in ("mass", "spring"))
     return _stacked_modes(Mr, Kr, n0, omega_max)
 
@@ -1146,10 +1133,8 @@ def _scaled_stack(M, K):
     float64's range (a positive, finite w_ref and scaled matrices; the others' matrices
     replaced by I): ``(scale_m, w_ref, Ms, Ks, ok)``."""
     with np.errstate(all="ignore"):
-        scale_m = np.abs(M).max(axis=(1, 2))
-        scale_k = np.abs(K).max(axis=(1, 2))
-        scale_m = np.where(scale_m > 0, scale_m, 1.0)
-        scale_k = np.where(scale_k > 0, scale_k, 1.0)
+        scale_m, scale_k = (np.where(top > 0, top, 1.0)
+                            for top in (np.abs(X).max(axis=(1, 2)) for X in (M, K)))
         w_ref = np.sqrt(scale_k) / np.sqrt(scale_m)
         Ms, Ks = M / scale_m[:, None, None], K / scale_k[:, None, None]
     ok = np.isfinite(w_ref) & (w_ref > 0) & np.isfinite(Ms).all(axis=(1, 2)) & \
@@ -1183,8 +1168,7 @@ def _stacked_modes(M: np.ndarray, K: np.ndarray, n0: int, omega_max):
                                     / np.where(live, lam, 1.0)) * _rounding_factor(k), np.nan)
     if omega_max is not None:
         beyond = w > omega_max * (1 + 1e-6)
-        w[beyond] = np.nan
-        err[beyond] = np.nan
+        w[beyond] = err[beyond] = np.nan
     return w, err, ok
 
 
@@ -1241,8 +1225,7 @@ def _stacked_damped(M: np.ndarray, Dm: np.ndarray, K: np.ndarray, omega_max):
     s = np.where(np.abs(s.imag) <= err * np.abs(s), s.real + 0j, s)
     if omega_max is not None:
         beyond = ~(np.abs(s) <= omega_max)
-        s[beyond] = np.nan
-        err[beyond] = np.nan
+        s[beyond] = err[beyond] = np.nan
     return s, err, ok
 
 
@@ -1316,8 +1299,7 @@ def _undamped_stack(M: np.ndarray, K: np.ndarray, n0: int):
     r, regular = k - n0, np.ones(D, dtype=bool)
     Mrr, Kc = M[:, :r, :r], K[:, :r, :r]
     if n0:
-        Knr = K[:, r:, :r]
-        Knn = K[:, r:, r:]
+        Knr, Knn = K[:, r:, :r], K[:, r:, r:]
         try:
             if n0 == 1 and not Knn.all():
                 raise np.linalg.LinAlgError
@@ -1330,8 +1312,7 @@ def _undamped_stack(M: np.ndarray, K: np.ndarray, n0: int):
     _, Linv = _stacked_cholesky_inverse(Mrr, regular)
     regular &= np.isfinite(Kc).all(axis=(1, 2)) & np.isfinite(Linv).all(axis=(1, 2))
     if not regular.all():
-        Kc = np.where(regular[:, None, None], Kc, 0.0)
-        Linv = np.where(regular[:, None, None], Linv, 0.0)
+        Kc, Linv = (np.where(regular[:, None, None], X, 0.0) for X in (Kc, Linv))
     A = Linv @ Kc @ np.swapaxes(Linv, 1, 2)
     A += np.swapaxes(A, 1, 2)
     A *= 0.5

@@ -524,9 +524,8 @@ def _sample(table, kind: str) -> tuple[tuple[str, ...], tuple[tuple[float, ...],
 def _random_range(kind, name, r) -> tuple[float, float, bool]:
     """KIND.params.NAME = {min, max[, log]} as (min, max, log)."""
     where = (kind, "params", name)
-    if not isinstance(r, dict) or not {"min", "max"} <= set(r) or \
-            set(r) - {"min", "max", "log"}:
-        extra = sorted(map(str, set(r) - {"min", "max", "log"})) if isinstance(r, dict) else []
+    extra = sorted(map(str, set(r) - {"min", "max", "log"})) if isinstance(r, dict) else []
+    if extra or not isinstance(r, dict) or not {"min", "max"} <= set(r):
         _fail(where, f"{kind}.params.{name} must be {{min, max[, log]}}"
                      + (f": unknown key {extra[0]!r}"
                         f"{did_you_mean(extra[0], ('min', 'max', 'log'))}" if extra else ""))
@@ -645,10 +644,9 @@ def _parquet_records(path):
     except ImportError:
         raise NetlistError("reading Parquet needs pyarrow (pip install pyarrow); or give a "
                            "CSV file", os.fspath(path)) from None
+    data = read_bytes(path, "a Parquet")
     try:
-        table = pq.read_table(io.BytesIO(read_bytes(path, "a Parquet")))
-    except NetlistError:
-        raise
+        table = pq.read_table(io.BytesIO(data))
     except Exception as exc:  # noqa: BLE001 - pyarrow's errors have no common base
         raise NetlistError(f"not a Parquet file ({type(exc).__name__})", os.fspath(path)) \
             from None
@@ -846,13 +844,12 @@ def _design_rows(spec: StudySpec, rows: list[dict], batch: list[tuple[int, dict[
         s = ds.sweep(omega)
         flagged = np.count_nonzero(s.flags, axis=1)
         ex = ds.extremes(omega, ds.resonances(omega_max=_setting(spec, "omega")[1] * (1 + 1e-9)), s)
+    # Exact extremes over the band: 0 and inf at a zero or pole of K in it, named by
+    # its ω, not the grid's values; in the order of _SWEEP_COLUMNS.
+    found = (ex.K_min, ex.omega_at_K_min, ex.K_max, ex.omega_at_K_max, ex.Q0_max,
+             ex.omega_at_Q0_max)
     for d, row in enumerate(rows):
-        # Exact extremes over the band: 0 and inf at a zero or pole of K in it,
-        # named by its ω, not the grid's values.
-        row.update(K_abs_min=float(ex.K_min[d]), omega_at_K_min=float(ex.omega_at_K_min[d]),
-                   K_abs_max=float(ex.K_max[d]), omega_at_K_max=float(ex.omega_at_K_max[d]),
-                   Q0_abs_max=float(ex.Q0_max[d]),
-                   omega_at_Q0_max=float(ex.omega_at_Q0_max[d]), n_flagged=int(flagged[d]))
+        row.update(zip(_SWEEP_COLUMNS, [*(float(x[d]) for x in found), int(flagged[d])]))
     return ds, s.K, {**ex.failed, **s.failed}
 
 
@@ -898,8 +895,7 @@ def _simulate_row(spec: StudySpec, row: dict, values: dict) -> dict:
                 lo, hi = result.extrema[q]
                 row[f"{q}_min"], row[f"{q}_max"] = float(lo), float(hi)
     except Exception as exc:  # noqa: BLE001 - a study records every failure
-        row["status"] = "error"
-        row["error"] = f"{type(exc).__name__}: {exc}".replace("\n", " ")
+        row.update(status="error", error=f"{type(exc).__name__}: {exc}".replace("\n", " "))
     return row
 
 
@@ -950,21 +946,22 @@ def _crc(fields: list[str]) -> str:
     return f"{zlib.crc32(chr(31).join(fields).encode('utf-8')):08x}"
 
 
+def _cell_type(column: str) -> type:
+    """The type of a column's cells: text (status, error), int (index, n_flagged), else float."""
+    return str if column in ("status", "error") else int if column in ("index", "n_flagged") \
+        else float
+
+
 def _row(columns: list[str], rec: list[str]) -> dict | None:
     """The row of a CSV record, or None if a field does not have its column's syntax."""
     row: dict[str, str | int | float] = {}
     try:
         for name, text in zip(columns, rec, strict=True):
-            if name in ("status", "error"):
-                if name == "status" and text not in ("ok", "error"):
-                    return None
-                row[name] = text
-            elif name in ("index", "n_flagged"):
-                if name == "index" and (not text or int(text) < 0):
-                    return None
-                row[name] = int(text) if text else ""
-            else:
-                row[name] = float(text) if text else ""
+            if (name == "status" and text not in ("ok", "error")) or \
+                    (name == "index" and (not text or int(text) < 0)):
+                return None
+            kind = _cell_type(name)
+            row[name] = kind(text) if text or kind is str else ""
     except ValueError:
         return None
     return row
@@ -1008,19 +1005,15 @@ def read_rows(path: str | os.PathLike, columns: list[str]) -> list[dict]:
             if header != columns and not journal:
                 raise MechcircError(f"{source}: its columns ({', '.join(header)}) are not "
                                     "this study's; cannot resume (use another -o)")
-            rows, seen = [], set()
-            width = len(header)
+            rows: dict[int, dict] = {}          # each point's first complete row
             for rec in reader:
-                if len(rec) != width:
-                    continue        # cut short by an interruption: run that point again
-                if journal and (rec[-1] != _crc(rec[:-1])):
-                    continue        # cut inside its last field, or damaged
-                row = _row(columns, rec[:len(columns)])
-                if row is None or row["index"] in seen:
+                # Cut short by an interruption, cut inside its last field, or damaged:
+                # that point runs again.
+                if len(rec) != len(header) or (journal and rec[-1] != _crc(rec[:-1])):
                     continue
-                seen.add(row["index"])
-                rows.append(row)
-            return rows
+                if (row := _row(columns, rec[:len(columns)])) is not None:
+                    rows.setdefault(row["index"], row)
+            return list(rows.values())
     except UnicodeDecodeError:
         raise MechcircError(f"{source}: not a study's table (not UTF-8 text); cannot resume "
                             "(use another -o)") from None
@@ -1245,9 +1238,8 @@ def _curve_writer(path, spec: StudySpec):
     record["curves"] = ("long format: one row per design and omega; design is the "
                         "table's index; K = K_re + j K_im")
     schema = pa.schema([pa.field("design", pa.int64()),
-                        pa.field("omega", pa.float64(), metadata={"unit": "rad/s"}),
-                        pa.field("K_re", pa.float64(), metadata={"unit": k_unit}),
-                        pa.field("K_im", pa.float64(), metadata={"unit": k_unit})],
+                        *(pa.field(name, pa.float64(), metadata={"unit": unit}) for name, unit in
+                          (("omega", "rad/s"), ("K_re", k_unit), ("K_im", k_unit)))],
                        metadata={"mechcirc": json.dumps(record, ensure_ascii=False)})
     with atomic_path(path) as tmp, pq.ParquetWriter(tmp, schema) as writer:
         def write(rows, K):
@@ -1521,8 +1513,8 @@ def _write_parquet(path, columns: list[str], chunks, record: dict) -> None:
     import pyarrow.csv as pcsv
     import pyarrow.parquet as pq
 
-    types = {c: pa.string() if c in ("status", "error") else
-             pa.int64() if c in ("index", "n_flagged") else pa.float64() for c in columns}
+    arrow = {str: pa.string(), int: pa.int64(), float: pa.float64()}
+    types = {c: arrow[_cell_type(c)] for c in columns}
     units = record["units"]
     schema = pa.schema([pa.field(c, types[c], metadata=None if units[c] is None else
                                  {"unit": units[c]}) for c in columns],
@@ -1566,7 +1558,6 @@ def _lock(output):
     import socket
 
     path = f"{os.fspath(output)}.lock"
-    me = f"pid {os.getpid()} on {socket.gethostname()}"
 
     def held(holder: str, hint: str = ""):
         return MechcircError(f"{os.fspath(output)} is being written by another study "
@@ -1599,7 +1590,7 @@ def _lock(output):
     _LOCK_FDS.add(fd)
     try:
         os.ftruncate(fd, 0)
-        os.write(fd, f"{me}\n".encode())
+        os.write(fd, f"pid {os.getpid()} on {socket.gethostname()}\n".encode())
         yield
     finally:
         with contextlib.suppress(OSError):

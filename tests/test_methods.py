@@ -47,9 +47,10 @@ def test_method_is_documented_and_listed(cls, name):
 
 
 def test_a_warning_points_at_the_callers_line():
-    """UnloadedElementWarning from ``c.tree`` / ``c.sweep`` names this file and line."""
+    """UnloadedElementWarning from ``c.tree`` / ``c.sweep`` / ``c.resonances()`` names this
+    file and line."""
     text = "drive V a 0 velocity=1\nmass m a 0 1\nspring k a 0 100\nmass lone x y 2\n"
-    for use in (lambda c: c.tree, lambda c: c.sweep([1.0, 2.0])):
+    for use in (lambda c: c.tree, lambda c: c.sweep([1.0, 2.0]), lambda c: c.resonances()):
         c = mechcirc.parse(text)
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
