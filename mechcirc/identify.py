@@ -7,8 +7,9 @@ records their own way:
 * :func:`poles` -- the damped exponentials y_k ≈ Σ c_i exp(s_i k Δt) of a record of
   one or several channels, by the matrix pencil (Hua & Sarkar 1990) of its block
   Hankel matrix: the record's delays span the modes' subspace, whose shift gives
-  exp(s_i Δt).  A record of a whole state (the scene's kick) needs one delay; one
-  signal (a netlist's drive output) n/3.
+  exp(s_i Δt).  One signal (a netlist's drive output): n/3 delays, the order set
+  by the singular values; a whole state (a scene's kick): a few delays and the
+  order known.  :func:`pole_weights`: how much of each pole the record holds.
 * :func:`fit_sinusoid` -- the least-squares fit of a record to a sinusoid at ω
   (plus a constant and, optionally, the free modes, so the start transient need not
   have died out), its amplitude and the record's largest departure from the fit.
@@ -26,12 +27,12 @@ import numpy as np
 
 from .verdict import judge
 
-__all__ = ["poles", "fit_sinusoid", "pole_of", "nearest_pole", "judge_pole"]
+__all__ = ["poles", "pole_weights", "fit_sinusoid", "pole_of", "nearest_pole", "judge_pole"]
 
 
 def poles(record, dt: float, *, delays: int | None = None, order: int | None = None,
-          rel: float = 1e-9, max_order: int = 60):
-    """Poles s [1/s] of a sampled record and the weight of each in it.
+          rel: float = 1e-9, max_order: int = 60) -> np.ndarray:
+    """Poles s [1/s] of a sampled record (:func:`pole_weights`: how much of each it holds).
 
     Parameters
     ----------
@@ -53,11 +54,8 @@ def poles(record, dt: float, *, delays: int | None = None, order: int | None = N
 
     Returns
     -------
-    s : ndarray of complex
+    ndarray of complex
         The poles, all of them (both signs of Im s; sampled, so |Im s| < π/Δt).
-    weight : ndarray of float
-        The norm of each pole's least-squares amplitude over the channels (a noise
-        pole has ~0).
     """
     Y = np.asarray(record, float)
     Y = Y[:, None] if Y.ndim == 1 else Y
@@ -69,16 +67,37 @@ def poles(record, dt: float, *, delays: int | None = None, order: int | None = N
     R = np.linalg.qr(H, mode="r")          # same right singular vectors, cheaper SVD
     _, sv, Vh = np.linalg.svd(R, full_matrices=False)
     if sv[0] == 0:
-        return np.zeros(0, complex), np.zeros(0)
+        return np.zeros(0, complex)
     if order is None:
         order = int(min(max_order, np.sum(sv > rel * sv[0])))
     V = Vh[:order].T                                          # ((L + 1) p, order)
     z = np.linalg.eigvals(np.linalg.pinv(V[:-p]) @ V[p:])
     z = z[np.abs(z) > 1e-12]
-    s = np.log(z.astype(complex)) / dt
-    k = np.arange(n)
+    return np.log(z.astype(complex)) / dt
+
+
+def pole_weights(record, dt: float, s) -> np.ndarray:
+    """How much of each pole of ``s`` the record holds: the norm over the channels of its
+    least-squares amplitude in y_k = Σ c_i exp(s_i k Δt) (a noise pole has ~0).
+
+    Parameters
+    ----------
+    record : array_like
+        Samples, one per row (as :func:`poles`).
+    dt : float
+        Sample interval [s].
+    s : array_like of complex
+        Poles [1/s], e.g. from :func:`poles`.
+
+    Returns
+    -------
+    ndarray of float
+    """
+    Y = np.asarray(record, float)
+    Y = Y[:, None] if Y.ndim == 1 else Y
+    k = np.arange(Y.shape[0])
     amps = np.linalg.lstsq(np.exp(np.outer(k * dt, s)), Y.astype(complex), rcond=None)[0]
-    return s, np.linalg.norm(amps, axis=1)
+    return np.linalg.norm(amps, axis=1)
 
 
 def fit_sinusoid(t, y, omega: float, free=()) -> tuple[float, float]:

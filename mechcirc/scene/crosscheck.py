@@ -252,4 +252,4 @@ def _modes(dev, dt):
     """Poles [1/s] of the sampled motion ``dev`` (rows: samples of the 2n free coordinates
     and rates): its 2n modes and the double pole near 0 of the crank's slow drift, by the
     matrix pencil of four delays."""
-    return poles(dev, dt, delays=4, order=dev.shape[1] + 2)[0]
+    return poles(dev, dt, delays=4, order=dev.shape[1] + 2)

@@ -40,7 +40,7 @@ import numpy as np
 
 from ..circuit import Circuit
 from ..errors import MechcircError
-from ..identify import fit_sinusoid, judge_pole, nearest_pole, pole_of, poles
+from ..identify import fit_sinusoid, judge_pole, nearest_pole, pole_of, pole_weights, poles
 from ..verdict import DISAGREES, checked_repr, judge, summarise
 from .model import backlash_elements, drive_map
 from .propagate import ROUNDING_PER_STEP
@@ -106,7 +106,8 @@ def _poles(rec, dt):
     """Oscillating poles that carry amplitude (noise poles have ~0) in the record ``rec``."""
     if not np.any(rec):
         return np.zeros(0, complex)
-    s, weight = poles(rec, dt)
+    s = poles(rec, dt)
+    weight = pole_weights(rec, dt, s)
     return s[(weight > 1e-8 * (weight.max() if weight.size else 1.0)) & (s.imag > 0)]
 
 
