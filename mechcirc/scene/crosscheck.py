@@ -6,9 +6,11 @@ the resonances (K = 0 with the drive held).  The time-domain model
 Lagrange II, RK4) is started in its rigid state at θ with the crank all but
 stopped (Ω = 1e-9 of the shaft speed, so the coefficients stay those at θ),
 every free part is kicked, and the ringing is recorded.  Its natural
-frequencies and damping ratios come from the recorded states by a least-squares
-fit of the one-sample map y_{k+1} = A y_k (exact for a linear motion): the
-eigenvalues μ of A give s = log(μ)/Δt, ω_n = |s|, ζ = −Re s/|s|.
+frequencies and damping ratios come from the recorded states by the matrix pencil
+of four delays (:func:`mechcirc.identify.poles`) with 2n + 2 poles: the 2n modes
+of the n free coordinates and a double pole near 0, the crank's slow drift (a
+one-sample map y_{k+1} = A y_k has no room for it and was up to 3e-4 off); each
+resonance is matched to the nearest pole s, ω_n = |s|, ζ = −Re s/|s|.
 
 Forced response: the circuit's |Q0(ω)| (the drive's force amplitude for its
 velocity amplitude V0) against the time domain with the drive speed rippled,
@@ -35,13 +37,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import MechcircError
+from ..identify import fit_sinusoid, judge_pole, nearest_pole, pole_of, poles
 from ..verdict import checked_repr, judge, summarise
 from .files import Scene
 
-#: Tolerances of the verdicts: the ringing's ω_n (RK4 record fitted by a
-#: one-sample map; achieved ≤ 1.7e-4 on the heald and Mrázek scenes) and the
-#: forced |Q0| (achieved ≤ 5.6e-7).  ζ is shown, not judged.
-TOL_RINGING, TOL_FORCED = 1e-3, 1e-5
+#: Tolerances of the verdicts: the ringing's ω_n (RK4 record, its modes by the matrix
+#: pencil; achieved ≤ 6.9e-7 on the heald, Mrázek, rocker, cam and slider scenes) and
+#: the forced |Q0| (achieved ≤ 1.9e-6).  ζ is shown, not judged.
+TOL_RINGING, TOL_FORCED = 1e-5, 1e-5
 
 __all__ = ["SceneCrosscheck", "crosscheck_scene"]
 
@@ -129,7 +132,9 @@ def crosscheck_scene(scene: Scene, theta: float, *, steps_per_period: float = 40
     frows = []
     if forced:
         # free modes of the time-domain motion (for the fit), from the whole kick record
-        frows = _forced_rows(built, found, model, kern, theta, _modes(dev, dt), h)
+        whole = _modes(dev, dt)
+        frows = _forced_rows(built, found, model, kern, theta,
+                             [nearest_pole(whole, pole_of(r), dt) for r in found], h)
         notes.append("forced: drive speed rippled by A cos(ω t) (A/ω = 1e-7 rad) at 0.5 and "
                      "0.9 × the lowest resonance, between resonances and 1.5 × the highest; "
                      "the drive's force fitted to the ripple plus the ringing's free modes")
@@ -181,19 +186,17 @@ def _record(model, kern, y, h, sample, nsamp, args):
 
 
 def _ringing_rows(found, dev, dt, n) -> list:
-    """One judged row per resonance of ``found``: its ω and ζ against the nearest
-    underdamped mode fitted to the kick's record ``dev`` (step ``dt``, ``n`` parts)."""
+    """One judged row per resonance of ``found``: its ω_n and ζ against the nearest
+    mode identified in the kick's record ``dev`` (step ``dt``, ``n`` parts)."""
     rows = []
     for r in found:
         # fit over three periods of this resonance from the kick (a fast, damped mode has
-        # died out later), at least enough samples for the 2n-dimensional map
+        # died out later), at least enough samples for the 2n + 2 poles
         m = min(len(dev), max(4 * n + 4, int(math.ceil(3 * 2 * math.pi / r.omega / dt)) + 1))
-        modes = _modes(dev[:m], dt)
-        w, z = min(modes, key=lambda md: abs(md[0] - r.omega), default=(None, None))
-        rel = None if w is None else abs(w - r.omega) / r.omega
-        rows.append(judge({"omega": r.omega, "zeta": r.zeta, "ringing_omega": w,
-                           "ringing_zeta": z, "rel_error": rel}, rel, TOL_RINGING,
-                          None if modes else "no underdamped mode in the recorded motion"))
+        rows.append(judge_pole({"omega": r.omega, "zeta": r.zeta, "ringing_omega": None,
+                                "ringing_zeta": None, "rel_error": None}, pole_of(r),
+                               _modes(dev[:m], dt), dt, TOL_RINGING, measure="omega_n",
+                               why=None))
     return rows
 
 
@@ -227,7 +230,7 @@ def _forced_amplitude(model, kern, theta, w, free, h, r0):
     # the step resolves both the fastest mode and the ripple; the record spans 40 periods
     # of the beat between the ripple and the nearest free mode (at least 30 ripple periods)
     hh = min(h, 2 * math.pi / w / 400.0)
-    gap = min([abs(w - fw * math.sqrt(max(1 - z * z, 0.0))) for fw, z in free] + [w])
+    gap = min([abs(w - s.imag) for s in free] + [w])
     span = max(60 * 2 * math.pi / w, 20 * 2 * math.pi / max(gap, 1e-300))
     span = min(span, 2e6 * hh)
     sample = max(1, int(round(2 * math.pi / w / hh / 24)))
@@ -242,21 +245,11 @@ def _forced_amplitude(model, kern, theta, w, free, h, r0):
     # fit the second half: a strongly damped mode has died out there, and a slight error
     # of its measured damping cannot leak into the ripple's amplitude
     half = nsamp // 2
-    q, t = q[half:], rec_t[half:]
-    cols = [np.ones_like(t), np.cos(w * t), np.sin(w * t)]
-    for fw, z in free:
-        sig, wd = -z * fw, fw * math.sqrt(max(1 - z * z, 0.0))
-        env = np.exp(sig * t)
-        cols += [env * np.cos(wd * t), env * np.sin(wd * t)]
-    B = np.column_stack(cols)
-    coef, *_ = np.linalg.lstsq(B, q, rcond=None)
-    return math.hypot(coef[1], coef[2]) / (amp * r0 * r0)
+    return fit_sinusoid(rec_t[half:], q[half:], w, free)[0] / (amp * r0 * r0)
 
 
 def _modes(dev, dt):
-    """(ω_n, ζ) of the underdamped modes of the sampled motion ``dev`` (rows: samples)."""
-    scale = np.maximum(np.std(dev, axis=0), 1e-300)
-    Z = dev / scale
-    A = Z[1:].T @ np.linalg.pinv(Z[:-1].T, rcond=1e-13)
-    s = np.log(np.linalg.eigvals(A).astype(complex)) / dt
-    return sorted((float(abs(x)), float(-x.real / abs(x))) for x in s if x.imag > 0)
+    """Poles [1/s] of the sampled motion ``dev`` (rows: samples of the 2n free coordinates
+    and rates): its 2n modes and the double pole near 0 of the crank's slow drift, by the
+    matrix pencil of four delays."""
+    return poles(dev, dt, delays=4, order=dev.shape[1] + 2)

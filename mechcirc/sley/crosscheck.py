@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import SolverError
+from ..identify import fit_sinusoid
 from ..verdict import judge, summarise
 from .linear import eigenfrequencies, linearise, to_circuit, to_netlist
 from .models import ParameterError, SleyParameters
@@ -259,8 +260,8 @@ def forced_amplitude(lin, omega: float, cycles_settle: int | None = None,
     """Shaft-moment amplitude of the linear model under φ̇2 = cos(ω t), integrated in time.
 
     The moment is Σ_rods C (φ2 − φ_i) + k (φ̇2 − φ̇_i) over the rods the shaft
-    drives; the amplitude is the Fourier coefficient at ω over whole periods
-    after the transient has decayed.
+    drives; its amplitude is fitted (:func:`mechcirc.identify.fit_sinusoid`) over
+    whole periods after the transient has decayed.
     """
     from scipy.integrate import solve_ivp
 
@@ -289,8 +290,7 @@ def forced_amplitude(lin, omega: float, cycles_settle: int | None = None,
     q = np.zeros_like(t_eval)
     for i in np.flatnonzero(lin.K_drive):
         q += lin.K_drive[i] * (ph2 - x[i]) + lin.C_drive[i] * (w2 - v[i])
-    c = 2.0 * np.mean(q * np.exp(-1j * omega * t_eval))
-    return float(abs(c))
+    return fit_sinusoid(t_eval, q, omega)[0]
 
 
 def harmonic_check(params: SleyParameters, theta0: float, omegas) -> HarmonicCheck:

@@ -40,15 +40,16 @@ import numpy as np
 
 from ..circuit import Circuit
 from ..errors import MechcircError
+from ..identify import fit_sinusoid, judge_pole, nearest_pole, pole_of, pole_weights, poles
 from ..verdict import DISAGREES, checked_repr, judge, summarise
 from .model import backlash_elements, drive_map
 from .propagate import ROUNDING_PER_STEP
 from .simulate import periodic_start, state_model, transient, with_oscillator
 from .waveform import Waveform
 
-__all__ = ["CrossCheck", "crosscheck", "matrix_pencil"]
+__all__ = ["CrossCheck", "crosscheck"]
 
-#: Samples handed to the matrix pencil (its SVD costs O(n³)).
+#: Samples handed to the matrix pencil (:func:`mechcirc.identify.poles`; its SVD costs O(n³)).
 PENCIL_SAMPLES = 600
 #: Largest ratio of the fastest to the slowest mode checked on one record
 #: (600 samples at 5 per period of the fastest: ≥ 4 periods of the slowest).
@@ -90,26 +91,6 @@ class CrossCheck:
                 "notes": self.notes}
 
 
-def matrix_pencil(y: np.ndarray, dt: float, rel: float = 1e-9, max_order: int = 60):
-    """Poles s [1/s] and complex amplitudes of y_k ≈ Σ c_i exp(s_i k dt) (Hua & Sarkar)."""
-    y = np.asarray(y, float)
-    n = y.size
-    L = n // 3
-    H = np.lib.stride_tricks.sliding_window_view(y, L + 1)       # (n − L, L + 1)
-    R = np.linalg.qr(H, mode="r")          # same right singular vectors, cheaper SVD
-    _, sv, Vh = np.linalg.svd(R, full_matrices=False)
-    if sv[0] == 0:
-        return np.zeros(0, complex), np.zeros(0, complex)
-    order = int(min(max_order, np.sum(sv > rel * sv[0])))
-    V = Vh[:order].T                                                 # (L + 1, order)
-    z = np.linalg.eigvals(np.linalg.pinv(V[:-1]) @ V[1:])
-    z = z[np.abs(z) > 1e-12]
-    s = np.log(z) / dt
-    k = np.arange(y.size)
-    amps = np.linalg.lstsq(np.exp(np.outer(k * dt, s)), y.astype(complex), rcond=None)[0]
-    return s, amps
-
-
 def _groups(modes, ratio=GROUP_RATIO):
     """Oscillating modes in groups of frequency spread ≤ ``ratio`` (ascending)."""
     out = []
@@ -121,22 +102,13 @@ def _groups(modes, ratio=GROUP_RATIO):
     return out
 
 
-def _pole(r) -> complex:
-    return complex(-r.zeta * r.omega, r.omega_d)
-
-
 def _poles(rec, dt):
     """Oscillating poles that carry amplitude (noise poles have ~0) in the record ``rec``."""
     if not np.any(rec):
         return np.zeros(0, complex)
-    s, amps = matrix_pencil(rec, dt)
-    weight = np.abs(amps)
+    s = poles(rec, dt)
+    weight = pole_weights(rec, dt, s)
     return s[(weight > 1e-8 * (weight.max() if weight.size else 1.0)) & (s.imag > 0)]
-
-
-def _nearest(cand, expected, dt):
-    """The pole of ``cand`` nearest ``expected`` in the sampled (z) domain (aliases apart)."""
-    return cand[np.argmin(np.abs(np.exp(cand * dt) - np.exp(expected * dt)))]
 
 
 def _ringing(circuit, kind, modes, others, out, progress):
@@ -189,8 +161,8 @@ def _ringing(circuit, kind, modes, others, out, progress):
 
 def _judge_mode(row: dict, r, others, s: np.ndarray, parts: tuple, dt: float) -> None:
     """Judge mode ``r`` by the poles ``s`` of the whole record and ``parts`` of its thirds."""
-    expected = _pole(r)
-    near = min((abs(_pole(o) - expected) for o in others), default=math.inf)
+    expected = pole_of(r)
+    near = min((abs(pole_of(o) - expected) for o in others), default=math.inf)
     if near < CANCEL * abs(expected):
         judge(row, None, TOL_RINGING,
               f"an anti-resonance/resonance {near / abs(expected):.1e} away (relative)"
@@ -201,21 +173,16 @@ def _judge_mode(row: dict, r, others, s: np.ndarray, parts: tuple, dt: float) ->
         # the frequency domain has a mode at the port; the record shows no ringing
         row.update(verdict=DISAGREES, tol=tol, why="no ringing at all in the impulse response")
         return
-    best = _nearest(s, expected, dt)
-    spread = max((abs(_nearest(p, expected, dt) - best) if p.size else math.inf)
+    best = nearest_pole(s, expected, dt)
+    spread = max((abs(nearest_pole(p, expected, dt) - best) if p.size else math.inf)
                  for p in parts) / abs(expected)
-    row["ringing_omega"] = float(best.imag)
-    row["decay"] = float(-best.real)
-    rel = row["rel_error"] = float(abs(best - expected) / abs(expected))
+    why = None if spread <= MAX_SPREAD else (
+        f"too weak in the record to be measured: its pole moves by {spread:.1e} (relative) "
+        "between the whole record and its first or last two thirds")
+    judge_pole(row, expected, s, dt, tol, spread=0.0 if why else spread, why=why)
     sigma = r.zeta * r.omega
     if sigma > 0:
-        row["decay_rel_error"] = float(abs(-best.real - sigma) / sigma)
-    if not spread <= MAX_SPREAD:
-        judge(row, None, tol, f"too weak in the record to be measured: its pole moves "
-                              f"by {spread:.1e} (relative) between the whole record "
-                              "and its first or last two thirds")
-        return
-    judge(row, rel, max(tol, 100 * spread))
+        row["decay_rel_error"] = float(abs(row["decay"] - sigma) / sigma)
 
 
 def _output_rounding(circuit, w, steps, amp):
@@ -327,10 +294,8 @@ def _steady(circuit: Circuit, omegas: list, sweep, out: CrossCheck, progress) ->
         t = run.time
         # the time domain's own rounding of y (heavily weighted small states)
         tol = max(tol, _output_rounding(circuit, w, t.size - 1, d.amplitude) / exp)
-        basis = np.column_stack([np.sin(w * t), np.cos(w * t), np.ones_like(t)])
-        c = np.linalg.lstsq(basis, y, rcond=None)[0]
-        measured = math.hypot(c[0], c[1])
+        measured, departure = fit_sinusoid(t, y, w)
         row["measured"] = float(measured)
         rel = row["rel_error"] = float(abs(measured - exp) / exp)
-        dev = row["periodic_deviation"] = float(np.abs(y - basis @ c).max() / max(measured, 1e-300))
+        dev = row["periodic_deviation"] = departure / max(measured, 1e-300)
         judge(row, max(rel, dev), tol)
