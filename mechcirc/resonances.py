@@ -257,7 +257,8 @@ def _check_arguments(circuit: Circuit, omega_max: float | None, kind) -> None:
     though an int), a ``kind`` not known, and an element whose value × eta overflows."""
     check_omega_max(omega_max)
     if kind not in (None, "resonance", "antiresonance"):
-        raise InputError(f"kind must be 'resonance', 'antiresonance' or None, got {kind!r}")
+        raise InputError(f"kind must be 'resonance', 'antiresonance' or None, got {kind!r}"
+                         f"{did_you_mean(str(kind), ('resonance', 'antiresonance'))}")
     for e in circuit.elements:
         if not math.isfinite(e.value * e.eta):
             raise NetlistError(f"{e.kind} {e.name!r}: value × eta = {e.value:g} × {e.eta:g} "

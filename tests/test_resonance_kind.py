@@ -108,3 +108,14 @@ def test_a_resonance_and_an_antiresonance_one_rounding_apart_sort_as_a_tie():
     mag = np.array([[w * (1 - 2e-16), w, 2 * w, 2 * w * (1 + 1e-12)],
                     [1.0, 1.0, 1.0, np.nan], [np.inf, np.inf, np.nan, np.nan]])
     assert tie_order(pole, mag).tolist() == [[1, 0, 2, 3], [1, 2, 0, 3], [0, 1, 2, 3]]
+
+
+@pytest.mark.parametrize("kind, hint", [("resonanse", "; did you mean 'resonance'?"),
+                                        ("anti", "; did you mean 'antiresonance'?"),
+                                        ("zzz", "")])
+def test_an_unknown_kind_names_the_nearest(kind, hint):
+    c = mechcirc.load(NETLISTS / "stb_heald.mcir")
+    with pytest.raises(InputError) as got:
+        c.resonances(kind=kind)
+    assert str(got.value) == ("kind must be 'resonance', 'antiresonance' or None, got "
+                              f"{kind!r}{hint}")
