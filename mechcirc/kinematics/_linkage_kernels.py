@@ -122,10 +122,7 @@ def _residual(q, t, nb, ia, ib, R, crank_idx, omega, r, ga, gb, P):
 def _jacobian(nb, ia, ib, R, crank_idx, J, ga, gb, P):
     m = ia.shape[0]
     ns = ga.shape[0]
-    n = J.shape[0]
-    for i in range(n):
-        for j in range(n):
-            J[i, j] = 0.0
+    J[:, :] = 0.0
     for k in range(m):
         a, b = ia[k], ib[k]
         if a < nb:
@@ -178,9 +175,7 @@ def _lu(A, piv):
         if p != k:
             sign = -sign
             for j in range(n):
-                tmp = A[k, j]
-                A[k, j] = A[p, j]
-                A[p, j] = tmp
+                A[k, j], A[p, j] = A[p, j], A[k, j]
         inv = 1.0 / A[k, k]
         for i in range(k + 1, n):
             f = A[i, k]
@@ -209,9 +204,7 @@ def _lu_solve(A, piv, b):
     for k in range(n):
         p = piv[k]
         if p != k:
-            tmp = b[k]
-            b[k] = b[p]
-            b[p] = tmp
+            b[k], b[p] = b[p], b[k]
     for i in range(n):
         s = b[i]
         for j in range(i):
@@ -266,29 +259,24 @@ def _rates(nb, geo, omega, work, J, piv, qd, qdd, parts, e):
     n = qd.shape[0]
     m = ia.shape[0]
     ns = ga.shape[0]
-    for i in range(n):
-        qd[i] = 0.0
+    qd[:] = 0.0
     for c in range(omega.shape[0]):
-        for i in range(n):
-            e[i] = 0.0
+        e[:] = 0.0
         e[2 * m + 2 * ns + c] = omega[c]
         _lu_solve(J, piv, e)
         for i in range(n):
             parts[i, c] = e[i]
             qd[i] += e[i]
-    for i in range(n):
-        e[i] = 0.0
+    e[:] = 0.0
     for kk in range(m):
-        a = ia[kk]
-        b = ib[kk]
+        a, b = ia[kk], ib[kk]
         wa = qd[3 * a + 2] ** 2 if a < nb else 0.0
         wb = qd[3 * b + 2] ** 2 if b < nb else 0.0
         e[2 * kk] = R[kk, 0] * wa - R[kk, 2] * wb
         e[2 * kk + 1] = R[kk, 1] * wa - R[kk, 3] * wb
     for kk in range(ns):
         # −(ü × d + 2 u̇ × ḋ + u × d̈) without q̈: u̇ = ω_a i u, ü = −ω_a² u
-        a = ga[kk]
-        b = gb[kk]
+        a, b = ga[kk], gb[kk]
         wa = qd[3 * a + 2] if a < nb else 0.0
         wb = qd[3 * b + 2]
         ux, uy, dx, dy = P[kk, 0], P[kk, 1], P[kk, 6], P[kk, 7]
@@ -405,9 +393,8 @@ def _dyads_accelerations(crank_idx, crank_arm, L, K, X, arm, EK, R1, R2, QD, QDD
     nb = EK.shape[1]
     for k in range(EK.shape[0]):
         E = EK[k]
-        for i in range(nb):
-            al[i] = 0.0
-            a[i] = 0.0
+        al[:] = 0.0
+        a[:] = 0.0
         for j in range(crank_idx.shape[0]):
             ci = crank_idx[j]
             a[ci] = -QD[k, 3 * ci + 2] ** 2 * E[ci] * crank_arm[j]
@@ -479,12 +466,10 @@ def _dyads_velocities(crank_idx, omega, crank_arm, L, K, X, arm, EK, R1, R2, w, 
     nb = EK.shape[1]
     nc = crank_idx.shape[0]
     for k in range(EK.shape[0]):
-        for i in range(3 * nb):
-            QD[k, i] = 0.0
+        QD[k, :] = 0.0
         for c in range(nc):
-            for i in range(nb):
-                w[i] = 0.0
-                v[i] = 0.0
+            w[:] = 0.0
+            v[:] = 0.0
             for j in range(nc):
                 ci = crank_idx[j]
                 wj = omega[j] if j == c else 0.0
