@@ -373,8 +373,7 @@ def newton_path(t0, targets, ia, ib, sa, sb, crank_idx, omega, tol, dt_max, wmax
             info[0] = t_new
             return LOCK
         if sgn != sign0:
-            info[0] = t_now
-            info[1] = t_new
+            info[0], info[1] = t_now, t_new
             return BRANCH_JUMP
         t_now = t_new
         for i in range(n):
@@ -404,8 +403,7 @@ def _dyads_accelerations(crank_idx, crank_arm, L, K, X, arm, EK, R1, R2, QD, QDD
             w1, w2 = QD[k, 3 * L1 + 2], QD[k, 3 * L2 + 2]
             a1 = 0j if K1 < 0 else a[K1] + (1j * al[K1] - QD[k, 3 * K1 + 2] ** 2) * E[K1] * X[d, 0]
             a2 = 0j if K2 < 0 else a[K2] + (1j * al[K2] - QD[k, 3 * K2 + 2] ** 2) * E[K2] * X[d, 1]
-            r1 = R1[k, d]
-            r2 = R2[k, d]
+            r1, r2 = R1[k, d], R2[k, d]
             al[L1], al[L2] = _solve2(1j * r1, -1j * r2, a2 - a1 + w1 ** 2 * r1 - w2 ** 2 * r2)
             a[L1] = a1 + (1j * al[L1] - w1 ** 2) * E[L1] * arm[d, 0]
             a[L2] = a2 + (1j * al[L2] - w2 ** 2) * E[L2] * arm[d, 1]
@@ -435,14 +433,12 @@ def _dyads_positions(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, a
             x2 = X[d, 1] if K2 < 0 else r[K2] + E[K2] * X[d, 1]
             l1, l2 = ln[d, 0], ln[d, 1]
             x3, h2 = _rrr(x1, x2, l1, l2, sign[d])
-            r1 = x3 - x1
-            r2 = x3 - x2
+            r1, r2 = x3 - x1, x3 - x2
             s = abs(_im_conj(r1, r2)) / (l1 * l2)
             if not (h2 >= 0.0 and s < math.inf):
                 s = -1.0
             mg = min(mg, s)
-            R1[k, d] = r1
-            R2[k, d] = r2
+            R1[k, d], R2[k, d] = r1, r2
             for side in range(2):
                 Ls = L[d, side]
                 rr = r1 if side == 0 else r2
@@ -487,9 +483,8 @@ def _dyads_velocities(crank_idx, omega, crank_arm, L, K, X, arm, EK, R1, R2, w, 
                 PARTS[k, 3 * i, c] = v[i].real
                 PARTS[k, 3 * i + 1, c] = v[i].imag
                 PARTS[k, 3 * i + 2, c] = w[i]
-                QD[k, 3 * i] += v[i].real
-                QD[k, 3 * i + 1] += v[i].imag
-                QD[k, 3 * i + 2] += w[i]
+            for i in range(3 * nb):
+                QD[k, i] += PARTS[k, i, c]
 
 
 def dyads_scratch(N, nb, nd):
