@@ -91,8 +91,7 @@ def _prism(q, nb, ga, gb, gs, gu, bs, cs, sn, P):
 @_jit
 def _residual(q, t, nb, ia, ib, R, crank_idx, omega, r, ga, gb, P):
     """Φ(q, t) into r; returns max |Φ|."""
-    m = ia.shape[0]
-    ns = ga.shape[0]
+    m, ns = ia.shape[0], ga.shape[0]
     for k in range(m):
         a, b = ia[k], ib[k]
         xa, ya = R[k, 0], R[k, 1]
@@ -120,8 +119,7 @@ def _residual(q, t, nb, ia, ib, R, crank_idx, omega, r, ga, gb, P):
 
 @_jit
 def _jacobian(nb, ia, ib, R, crank_idx, J, ga, gb, P):
-    m = ia.shape[0]
-    ns = ga.shape[0]
+    m, ns = ia.shape[0], ga.shape[0]
     J[:, :] = 0.0
     for k in range(m):
         a, b = ia[k], ib[k]
@@ -162,13 +160,11 @@ def _lu(A, piv):
     n = A.shape[0]
     sign = 1.0
     for k in range(n):
-        p = k
-        big = abs(A[k, k])
+        p, big = k, abs(A[k, k])
         for i in range(k + 1, n):
             v = abs(A[i, k])
             if v > big:
-                big = v
-                p = i
+                big, p = v, i
         piv[k] = p
         if not big > 0.0:
             return 0.0
@@ -184,8 +180,7 @@ def _lu(A, piv):
                 A[i, k] = f
                 for j in range(k + 1, n):
                     A[i, j] -= f * A[k, j]
-    lo = math.inf
-    hi = 0.0
+    lo, hi = math.inf, 0.0
     for k in range(n):
         v = abs(A[k, k])
         lo = min(lo, v)
@@ -256,9 +251,7 @@ def _rates(nb, geo, omega, work, J, piv, qd, qdd, parts, e):
     """q̇ = Σ_c J⁻¹ ω_c e_c (the parts) and q̈ = J⁻¹ γ from the LU of J (see the module)."""
     ia, ib, sa, sb, ga, gb, gs, gu, bs = geo
     R, P = work[2], work[3]
-    n = qd.shape[0]
-    m = ia.shape[0]
-    ns = ga.shape[0]
+    n, m, ns = qd.shape[0], ia.shape[0], ga.shape[0]
     qd[:] = 0.0
     for c in range(omega.shape[0]):
         e[:] = 0.0
@@ -459,8 +452,7 @@ def _dyads_velocities(crank_idx, omega, crank_arm, L, K, X, arm, EK, R1, R2, w, 
     """The velocities of :func:`dyads_path` at every position k (unit vectors EK[k],
     inner-joint vectors R1[k], R2[k]), one crank at a time (conditional stop:
     PARTS[k, :, c]), and their sum QD[k].  w, v: work (n bodies)."""
-    nb = EK.shape[1]
-    nc = crank_idx.shape[0]
+    nb, nc = EK.shape[1], crank_idx.shape[0]
     for k in range(EK.shape[0]):
         QD[k, :] = 0.0
         for c in range(nc):
