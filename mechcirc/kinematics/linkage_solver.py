@@ -332,9 +332,7 @@ def plan(lk) -> _Plan:
                   gu=u / np.hypot(u[:, 0], u[:, 1])[:, None] if len(sl) else u,
                   bs=np.array([local[s.link][s.point] for s in sl], dtype=float).reshape(-1, 2))
     dyads = _dyads(lk, idx)
-    if dyads is None:
-        return _Plan("newton", **common)
-    return _Plan("dyads", dyads=dyads, **common)
+    return _Plan("newton" if dyads is None else "dyads", dyads=dyads or (), **common)
 
 
 @dataclass(frozen=True)
@@ -419,8 +417,7 @@ def _dyad(lk, slides, P3, links, o1, o2):
         along = complex(*(x3 - x1)) / u
         if l1 == 0 or abs(along.real) <= 1e-9 * l1:
             return None
-        name = lk.link_names[K2] if K2 >= 0 else "ground"
-        at = x3 - (lk.pose[lk.links[name][0]] if K2 >= 0 else 0.0)
+        at = x3 - (lk.pose[lk.links[lk.link_names[K2]][0]] if K2 >= 0 else 0.0)
         return _Dyad("RRP", links, P3, (P1, P2), (K1, K2), l1, 0.0,
                      math.copysign(1.0, along.real), u, complex(*at))
     x2 = lk.pose[P2]
