@@ -871,18 +871,7 @@ class _DyadSolver:
         for j, (c, ci) in enumerate(zip(lk.cranks, pl.crank_idx)):
             w[ci] = w_cranks[j]
             v[ci] = 1j * w_cranks[j] * (r[ci] - self.pose[c.pivot])
-        sdot = []
-        for dy, (x1, y2, o2, c1, c2, *_) in zip(pl.dyads, inner):
-            (L1, L2), (K1, K2) = dy.links, dy.known
-            v1 = v[K1] + 1j * w[K1] * (x1 - r[K1])
-            x, y = solve2(c1, c2, v[K2] + 1j * w[K2] * (y2 - r[K2]) - v1)
-            w[L1], w[L2] = x, (y if dy.kind == "RRR" else x if dy.kind == "RPR" else w[K2])
-            sdot.append(y)
-            v[L1] = v1 + 1j * w[L1] * (r[L1] - x1)
-            vo2 = v1 + 1j * x * (o2 - x1) if dy.kind == "RRP" else \
-                v[K2] + 1j * w[K2] * (o2 - r[K2])
-            v[L2] = vo2 + 1j * w[L2] * (r[L2] - o2)
-        return w, v, sdot
+        return self._rates(r, inner, w, v, np.zeros(E.shape))
 
     def accelerations(self, E, r, inner, w, sdot):
         pl, lk = self.pl, self.lk
@@ -890,23 +879,35 @@ class _DyadSolver:
         a = np.zeros(E.shape, dtype=complex)
         for c, ci in zip(lk.cranks, pl.crank_idx):
             a[ci] = -w[ci] ** 2 * (r[ci] - self.pose[c.pivot])
-        for dy, (x1, y2, o2, c1, c2, *rr), s in zip(pl.dyads, inner, sdot):
+        return self._rates(r, inner, al, a, w ** 2, w, sdot)[:2]
+
+    def _rates(self, r, inner, ang, lin, sq, w=None, sdot=None):
+        """The dyads' angular rates ``ang`` and their origins' linear ones ``lin`` (complex),
+        both given for the cranks, and the slides' rates: the velocities (ω, v, σ̇) with
+        ``sq`` zero; with ``sq`` = ω² and the velocities' ω ``w`` and σ̇ ``sdot``, the
+        accelerations (α, a, σ̈).  A point p of body K moves at
+        lin[K] + (i·ang[K] − sq[K])·(p − r[K]).
+        """
+        slides = []
+        for k, (dy, (x1, y2, o2, c1, c2, *rr)) in enumerate(zip(self.pl.dyads, inner)):
             (L1, L2), (K1, K2) = dy.links, dy.known
-            a1 = a[K1] + (1j * al[K1] - w[K1] ** 2) * (x1 - r[K1])
-            b = a[K2] + (1j * al[K2] - w[K2] ** 2) * (y2 - r[K2]) - a1
-            if dy.kind == "RRR":        # i(α1 r1 − α2 r2) = a2 − a1 + ω1² r1 − ω2² r2
-                b = b + w[L1] ** 2 * rr[0] - w[L2] ** 2 * rr[1]
-            elif dy.kind == "RRP":      # iα1 r1 − σ̈u = a_K − a1 + ω1² r1 + 2iω_K σ̇ u
-                b = b + w[L1] ** 2 * rr[0] - 2j * w[K2] * s * c2
-            else:                       # iα e + σ̈u = a2 − a1 + ω² e − 2iω σ̇ u
-                b = b + w[L1] ** 2 * rr[0] - 2j * w[L1] * s * c2
+            l1 = lin[K1] + (1j * ang[K1] - sq[K1]) * (x1 - r[K1])
+            b = lin[K2] + (1j * ang[K2] - sq[K2]) * (y2 - r[K2]) - l1
+            if sdot is not None:
+                if dy.kind == "RRR":    # i(α1 r1 − α2 r2) = a2 − a1 + ω1² r1 − ω2² r2
+                    b = b + w[L1] ** 2 * rr[0] - w[L2] ** 2 * rr[1]
+                elif dy.kind == "RRP":  # iα1 r1 − σ̈u = a_K − a1 + ω1² r1 + 2iω_K σ̇ u
+                    b = b + w[L1] ** 2 * rr[0] - 2j * w[K2] * sdot[k] * c2
+                else:                   # iα e + σ̈u = a2 − a1 + ω² e − 2iω σ̇ u
+                    b = b + w[L1] ** 2 * rr[0] - 2j * w[L1] * sdot[k] * c2
             x, y = solve2(c1, c2, b)
-            al[L1], al[L2] = x, (y if dy.kind == "RRR" else x if dy.kind == "RPR" else al[K2])
-            a[L1] = a1 + (1j * al[L1] - w[L1] ** 2) * (r[L1] - x1)
-            ao2 = a1 + (1j * x - w[L1] ** 2) * (o2 - x1) if dy.kind == "RRP" else \
-                a[K2] + (1j * al[K2] - w[K2] ** 2) * (o2 - r[K2])
-            a[L2] = ao2 + (1j * al[L2] - w[L2] ** 2) * (r[L2] - o2)
-        return al, a
+            ang[L1], ang[L2] = x, (y if dy.kind == "RRR" else x if dy.kind == "RPR" else ang[K2])
+            slides.append(y)
+            lin[L1] = l1 + (1j * ang[L1] - sq[L1]) * (r[L1] - x1)
+            lo2 = l1 + (1j * x - sq[L1]) * (o2 - x1) if dy.kind == "RRP" else \
+                lin[K2] + (1j * ang[K2] - sq[K2]) * (o2 - r[K2])
+            lin[L2] = lo2 + (1j * ang[L2] - sq[L2]) * (r[L2] - o2)
+        return ang, lin, slides
 
 
 _SINGULAR = 1e-10
