@@ -865,19 +865,17 @@ class _DyadSolver:
 
     def velocities(self, E, r, inner, w_cranks):
         """(ω, origin velocity (complex), σ̇ per dyad), for crank speeds ``w_cranks``."""
-        pl, lk = self.pl, self.lk
         w = np.zeros(E.shape)
         v = np.zeros(E.shape, dtype=complex)
-        for j, (c, ci) in enumerate(zip(lk.cranks, pl.crank_idx)):
-            w[ci] = w_cranks[j]
-            v[ci] = 1j * w_cranks[j] * (r[ci] - self.pose[c.pivot])
+        for c, ci, wc in zip(self.lk.cranks, self.pl.crank_idx, w_cranks):
+            w[ci] = wc
+            v[ci] = 1j * wc * (r[ci] - self.pose[c.pivot])
         return self._rates(r, inner, w, v, np.zeros(E.shape))
 
     def accelerations(self, E, r, inner, w, sdot):
-        pl, lk = self.pl, self.lk
         al = np.zeros(E.shape)
         a = np.zeros(E.shape, dtype=complex)
-        for c, ci in zip(lk.cranks, pl.crank_idx):
+        for c, ci in zip(self.lk.cranks, self.pl.crank_idx):
             a[ci] = -w[ci] ** 2 * (r[ci] - self.pose[c.pivot])
         return self._rates(r, inner, al, a, w ** 2, w, sdot)[:2]
 
