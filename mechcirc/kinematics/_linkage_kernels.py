@@ -91,8 +91,7 @@ def _prism(q, nb, ga, gb, gs, gu, bs, cs, sn, P):
 @_jit
 def _residual(q, t, nb, ia, ib, R, crank_idx, omega, r, ga, gb, P):
     """Φ(q, t) into r; returns max |Φ|."""
-    m = ia.shape[0]
-    ns = ga.shape[0]
+    m, ns = ia.shape[0], ga.shape[0]
     for k in range(m):
         a, b = ia[k], ib[k]
         xa, ya = R[k, 0], R[k, 1]
@@ -120,12 +119,8 @@ def _residual(q, t, nb, ia, ib, R, crank_idx, omega, r, ga, gb, P):
 
 @_jit
 def _jacobian(nb, ia, ib, R, crank_idx, J, ga, gb, P):
-    m = ia.shape[0]
-    ns = ga.shape[0]
-    n = J.shape[0]
-    for i in range(n):
-        for j in range(n):
-            J[i, j] = 0.0
+    m, ns = ia.shape[0], ga.shape[0]
+    J[:, :] = 0.0
     for k in range(m):
         a, b = ia[k], ib[k]
         if a < nb:
@@ -165,22 +160,18 @@ def _lu(A, piv):
     n = A.shape[0]
     sign = 1.0
     for k in range(n):
-        p = k
-        big = abs(A[k, k])
+        p, big = k, abs(A[k, k])
         for i in range(k + 1, n):
             v = abs(A[i, k])
             if v > big:
-                big = v
-                p = i
+                big, p = v, i
         piv[k] = p
         if not big > 0.0:
             return 0.0
         if p != k:
             sign = -sign
             for j in range(n):
-                tmp = A[k, j]
-                A[k, j] = A[p, j]
-                A[p, j] = tmp
+                A[k, j], A[p, j] = A[p, j], A[k, j]
         inv = 1.0 / A[k, k]
         for i in range(k + 1, n):
             f = A[i, k]
@@ -189,8 +180,7 @@ def _lu(A, piv):
                 A[i, k] = f
                 for j in range(k + 1, n):
                     A[i, j] -= f * A[k, j]
-    lo = math.inf
-    hi = 0.0
+    lo, hi = math.inf, 0.0
     for k in range(n):
         v = abs(A[k, k])
         lo = min(lo, v)
@@ -209,9 +199,7 @@ def _lu_solve(A, piv, b):
     for k in range(n):
         p = piv[k]
         if p != k:
-            tmp = b[k]
-            b[k] = b[p]
-            b[p] = tmp
+            b[k], b[p] = b[p], b[k]
     for i in range(n):
         s = b[i]
         for j in range(i):
@@ -263,32 +251,25 @@ def _rates(nb, geo, omega, work, J, piv, qd, qdd, parts, e):
     """q̇ = Σ_c J⁻¹ ω_c e_c (the parts) and q̈ = J⁻¹ γ from the LU of J (see the module)."""
     ia, ib, sa, sb, ga, gb, gs, gu, bs = geo
     R, P = work[2], work[3]
-    n = qd.shape[0]
-    m = ia.shape[0]
-    ns = ga.shape[0]
-    for i in range(n):
-        qd[i] = 0.0
+    n, m, ns = qd.shape[0], ia.shape[0], ga.shape[0]
+    qd[:] = 0.0
     for c in range(omega.shape[0]):
-        for i in range(n):
-            e[i] = 0.0
+        e[:] = 0.0
         e[2 * m + 2 * ns + c] = omega[c]
         _lu_solve(J, piv, e)
         for i in range(n):
             parts[i, c] = e[i]
             qd[i] += e[i]
-    for i in range(n):
-        e[i] = 0.0
+    e[:] = 0.0
     for kk in range(m):
-        a = ia[kk]
-        b = ib[kk]
+        a, b = ia[kk], ib[kk]
         wa = qd[3 * a + 2] ** 2 if a < nb else 0.0
         wb = qd[3 * b + 2] ** 2 if b < nb else 0.0
         e[2 * kk] = R[kk, 0] * wa - R[kk, 2] * wb
         e[2 * kk + 1] = R[kk, 1] * wa - R[kk, 3] * wb
     for kk in range(ns):
         # −(ü × d + 2 u̇ × ḋ + u × d̈) without q̈: u̇ = ω_a i u, ü = −ω_a² u
-        a = ga[kk]
-        b = gb[kk]
+        a, b = ga[kk], gb[kk]
         wa = qd[3 * a + 2] if a < nb else 0.0
         wb = qd[3 * b + 2]
         ux, uy, dx, dy = P[kk, 0], P[kk, 1], P[kk, 6], P[kk, 7]
@@ -385,8 +366,7 @@ def newton_path(t0, targets, ia, ib, sa, sb, crank_idx, omega, tol, dt_max, wmax
             info[0] = t_new
             return LOCK
         if sgn != sign0:
-            info[0] = t_now
-            info[1] = t_new
+            info[0], info[1] = t_now, t_new
             return BRANCH_JUMP
         t_now = t_new
         for i in range(n):
@@ -405,9 +385,8 @@ def _dyads_accelerations(crank_idx, crank_arm, L, K, X, arm, EK, R1, R2, QD, QDD
     nb = EK.shape[1]
     for k in range(EK.shape[0]):
         E = EK[k]
-        for i in range(nb):
-            al[i] = 0.0
-            a[i] = 0.0
+        al[:] = 0.0
+        a[:] = 0.0
         for j in range(crank_idx.shape[0]):
             ci = crank_idx[j]
             a[ci] = -QD[k, 3 * ci + 2] ** 2 * E[ci] * crank_arm[j]
@@ -417,8 +396,7 @@ def _dyads_accelerations(crank_idx, crank_arm, L, K, X, arm, EK, R1, R2, QD, QDD
             w1, w2 = QD[k, 3 * L1 + 2], QD[k, 3 * L2 + 2]
             a1 = 0j if K1 < 0 else a[K1] + (1j * al[K1] - QD[k, 3 * K1 + 2] ** 2) * E[K1] * X[d, 0]
             a2 = 0j if K2 < 0 else a[K2] + (1j * al[K2] - QD[k, 3 * K2 + 2] ** 2) * E[K2] * X[d, 1]
-            r1 = R1[k, d]
-            r2 = R2[k, d]
+            r1, r2 = R1[k, d], R2[k, d]
             al[L1], al[L2] = _solve2(1j * r1, -1j * r2, a2 - a1 + w1 ** 2 * r1 - w2 ** 2 * r2)
             a[L1] = a1 + (1j * al[L1] - w1 ** 2) * E[L1] * arm[d, 0]
             a[L2] = a2 + (1j * al[L2] - w2 ** 2) * E[L2] * arm[d, 1]
@@ -448,14 +426,12 @@ def _dyads_positions(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, a
             x2 = X[d, 1] if K2 < 0 else r[K2] + E[K2] * X[d, 1]
             l1, l2 = ln[d, 0], ln[d, 1]
             x3, h2 = _rrr(x1, x2, l1, l2, sign[d])
-            r1 = x3 - x1
-            r2 = x3 - x2
+            r1, r2 = x3 - x1, x3 - x2
             s = abs(_im_conj(r1, r2)) / (l1 * l2)
             if not (h2 >= 0.0 and s < math.inf):
                 s = -1.0
             mg = min(mg, s)
-            R1[k, d] = r1
-            R2[k, d] = r2
+            R1[k, d], R2[k, d] = r1, r2
             for side in range(2):
                 Ls = L[d, side]
                 rr = r1 if side == 0 else r2
@@ -476,15 +452,12 @@ def _dyads_velocities(crank_idx, omega, crank_arm, L, K, X, arm, EK, R1, R2, w, 
     """The velocities of :func:`dyads_path` at every position k (unit vectors EK[k],
     inner-joint vectors R1[k], R2[k]), one crank at a time (conditional stop:
     PARTS[k, :, c]), and their sum QD[k].  w, v: work (n bodies)."""
-    nb = EK.shape[1]
-    nc = crank_idx.shape[0]
+    nb, nc = EK.shape[1], crank_idx.shape[0]
     for k in range(EK.shape[0]):
-        for i in range(3 * nb):
-            QD[k, i] = 0.0
+        QD[k, :] = 0.0
         for c in range(nc):
-            for i in range(nb):
-                w[i] = 0.0
-                v[i] = 0.0
+            w[:] = 0.0
+            v[:] = 0.0
             for j in range(nc):
                 ci = crank_idx[j]
                 wj = omega[j] if j == c else 0.0
@@ -502,9 +475,8 @@ def _dyads_velocities(crank_idx, omega, crank_arm, L, K, X, arm, EK, R1, R2, w, 
                 PARTS[k, 3 * i, c] = v[i].real
                 PARTS[k, 3 * i + 1, c] = v[i].imag
                 PARTS[k, 3 * i + 2, c] = w[i]
-                QD[k, 3 * i] += v[i].real
-                QD[k, 3 * i + 1] += v[i].imag
-                QD[k, 3 * i + 2] += w[i]
+            for i in range(3 * nb):
+                QD[k, i] += PARTS[k, i, c]
 
 
 def dyads_scratch(N, nb, nd):

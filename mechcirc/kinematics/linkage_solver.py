@@ -142,8 +142,7 @@ class _StateRows:
 
     def _fill(self):
         m, rows = self._motion, self.rows
-        self.arrays = {"points": m.points[rows].copy(), "velocities": m.velocities[rows].copy(),
-                       "accelerations": m.accelerations[rows].copy()}
+        self.arrays = {f: getattr(m, f)[rows].copy() for f in ("points", "velocities", "accelerations")}
         self.C = np.moveaxis(m.contributions[:, rows], 0, 1).copy()
         self.w = m.qdot[rows, 2::3].tolist()
         self._motion = None
@@ -157,6 +156,11 @@ class _StateRows:
             return dict(zip(self.links, self.w[i]))
         C = self.C[i]
         return {c: dict(zip(self.names, C[j])) for j, c in enumerate(self.cranks)}
+
+
+def _derived(k: int, doc: str) -> property:
+    """The k-th of a motion's point kinematics (see ``LinkageMotion._points``)."""
+    return property(lambda self: self._points[k], doc=doc)
 
 
 @dataclass(frozen=True)
@@ -200,15 +204,11 @@ class LinkageMotion:
     def _points(self):
         return _point_kinematics(self._plan, self.q, self.qdot, self.qddot, self.parts)
 
-    points = property(lambda self: self._points[0],
-                      doc="Every named point, shape (N, P, 2) [length].")
-    velocities = property(lambda self: self._points[1],
-                          doc="Point velocities, shape (N, P, 2) [length/s].")
-    accelerations = property(lambda self: self._points[2],
-                             doc="Point accelerations, shape (N, P, 2) [length/s²].")
-    contributions = property(lambda self: self._points[3],
-                             doc="Point velocities with every other crank stopped, "
-                                 "(n_cranks, N, P, 2) [length/s].")
+    points = _derived(0, "Every named point, shape (N, P, 2) [length].")
+    velocities = _derived(1, "Point velocities, shape (N, P, 2) [length/s].")
+    accelerations = _derived(2, "Point accelerations, shape (N, P, 2) [length/s²].")
+    contributions = _derived(3, "Point velocities with every other crank stopped, "
+                                "(n_cranks, N, P, 2) [length/s].")
 
     def __len__(self) -> int:
         return len(self.theta)
@@ -332,9 +332,7 @@ def plan(lk) -> _Plan:
                   gu=u / np.hypot(u[:, 0], u[:, 1])[:, None] if len(sl) else u,
                   bs=np.array([local[s.link][s.point] for s in sl], dtype=float).reshape(-1, 2))
     dyads = _dyads(lk, idx)
-    if dyads is None:
-        return _Plan("newton", **common)
-    return _Plan("dyads", dyads=dyads, **common)
+    return _Plan("newton" if dyads is None else "dyads", dyads=dyads or (), **common)
 
 
 @dataclass(frozen=True)
@@ -419,8 +417,7 @@ def _dyad(lk, slides, P3, links, o1, o2):
         along = complex(*(x3 - x1)) / u
         if l1 == 0 or abs(along.real) <= 1e-9 * l1:
             return None
-        name = lk.link_names[K2] if K2 >= 0 else "ground"
-        at = x3 - (lk.pose[lk.links[name][0]] if K2 >= 0 else 0.0)
+        at = x3 - (lk.pose[lk.links[lk.link_names[K2]][0]] if K2 >= 0 else 0.0)
         return _Dyad("RRP", links, P3, (P1, P2), (K1, K2), l1, 0.0,
                      math.copysign(1.0, along.real), u, complex(*at))
     x2 = lk.pose[P2]
@@ -602,9 +599,8 @@ def _solve(lk, pl, use, t, dt_max):
     q̈ to 1.2e-8 ω², q̇ to 4e-11 ω (on 20/60/50/30, q̈ to 1.8e-7 with a zone of
     ±0.002 rad, 1.1e-8 at ±0.006, 6.4e-8 at ±0.01, 2e-6 at ±0.02).
     """
-    cross = []
-    if pl.method == "dyads" and len(pl.crank_idx) == 1:
-        cross = _crossings(_dyad_solver(lk, pl), t, dt_max)
+    one_crank_dyads = pl.method == "dyads" and len(pl.crank_idx) == 1
+    cross = _crossings(_dyad_solver(lk, pl), t, dt_max) if one_crank_dyads else []
     if not cross:
         return (_solve_dyads if use == "dyads" else _solve_newton)(lk, pl, t, dt_max)
     dz = _ZONE / abs(float(pl.omega[0]))
@@ -827,8 +823,7 @@ class _DyadSolver:
         r = np.zeros((pl.nb + 1, N), dtype=complex)
         inner = []
         margin = np.full(N, np.inf)
-        for j, c in enumerate(lk.cranks):
-            ci = pl.crank_idx[j]
+        for j, (c, ci) in enumerate(zip(lk.cranks, pl.crank_idx)):
             phi[ci] = pl.omega[j] * t
             E[ci] = np.exp(1j * phi[ci])
             r[ci] = self.pose[c.pivot] + E[ci] * self.crank_arm[j]
@@ -871,50 +866,47 @@ class _DyadSolver:
 
     def velocities(self, E, r, inner, w_cranks):
         """(ω, origin velocity (complex), σ̇ per dyad), for crank speeds ``w_cranks``."""
-        pl, lk = self.pl, self.lk
         w = np.zeros(E.shape)
         v = np.zeros(E.shape, dtype=complex)
-        for j in range(len(lk.cranks)):
-            ci = pl.crank_idx[j]
-            w[ci] = w_cranks[j]
-            v[ci] = 1j * w_cranks[j] * (r[ci] - self.pose[lk.cranks[j].pivot])
-        sdot = []
-        for dy, (x1, y2, o2, c1, c2, *_) in zip(pl.dyads, inner):
-            (L1, L2), (K1, K2) = dy.links, dy.known
-            v1 = v[K1] + 1j * w[K1] * (x1 - r[K1])
-            x, y = solve2(c1, c2, v[K2] + 1j * w[K2] * (y2 - r[K2]) - v1)
-            w[L1], w[L2] = x, (y if dy.kind == "RRR" else x if dy.kind == "RPR" else w[K2])
-            sdot.append(y)
-            v[L1] = v1 + 1j * w[L1] * (r[L1] - x1)
-            vo2 = v1 + 1j * x * (o2 - x1) if dy.kind == "RRP" else \
-                v[K2] + 1j * w[K2] * (o2 - r[K2])
-            v[L2] = vo2 + 1j * w[L2] * (r[L2] - o2)
-        return w, v, sdot
+        for c, ci, wc in zip(self.lk.cranks, self.pl.crank_idx, w_cranks):
+            w[ci] = wc
+            v[ci] = 1j * wc * (r[ci] - self.pose[c.pivot])
+        return self._rates(r, inner, w, v, np.zeros(E.shape))
 
     def accelerations(self, E, r, inner, w, sdot):
-        pl, lk = self.pl, self.lk
         al = np.zeros(E.shape)
         a = np.zeros(E.shape, dtype=complex)
-        for j in range(len(lk.cranks)):
-            ci = pl.crank_idx[j]
-            a[ci] = -w[ci] ** 2 * (r[ci] - self.pose[lk.cranks[j].pivot])
-        for dy, (x1, y2, o2, c1, c2, *rr), s in zip(pl.dyads, inner, sdot):
+        for c, ci in zip(self.lk.cranks, self.pl.crank_idx):
+            a[ci] = -w[ci] ** 2 * (r[ci] - self.pose[c.pivot])
+        return self._rates(r, inner, al, a, w ** 2, w, sdot)[:2]
+
+    def _rates(self, r, inner, ang, lin, sq, w=None, sdot=None):
+        """The dyads' angular rates ``ang`` and their origins' linear ones ``lin`` (complex),
+        both given for the cranks, and the slides' rates: the velocities (ω, v, σ̇) with
+        ``sq`` zero; with ``sq`` = ω² and the velocities' ω ``w`` and σ̇ ``sdot``, the
+        accelerations (α, a, σ̈).  A point p of body K moves at
+        lin[K] + (i·ang[K] − sq[K])·(p − r[K]).
+        """
+        slides = []
+        for k, (dy, (x1, y2, o2, c1, c2, *rr)) in enumerate(zip(self.pl.dyads, inner)):
             (L1, L2), (K1, K2) = dy.links, dy.known
-            a1 = a[K1] + (1j * al[K1] - w[K1] ** 2) * (x1 - r[K1])
-            b = a[K2] + (1j * al[K2] - w[K2] ** 2) * (y2 - r[K2]) - a1
-            if dy.kind == "RRR":        # i(α1 r1 − α2 r2) = a2 − a1 + ω1² r1 − ω2² r2
-                b = b + w[L1] ** 2 * rr[0] - w[L2] ** 2 * rr[1]
-            elif dy.kind == "RRP":      # iα1 r1 − σ̈u = a_K − a1 + ω1² r1 + 2iω_K σ̇ u
-                b = b + w[L1] ** 2 * rr[0] - 2j * w[K2] * s * c2
-            else:                       # iα e + σ̈u = a2 − a1 + ω² e − 2iω σ̇ u
-                b = b + w[L1] ** 2 * rr[0] - 2j * w[L1] * s * c2
+            l1 = lin[K1] + (1j * ang[K1] - sq[K1]) * (x1 - r[K1])
+            b = lin[K2] + (1j * ang[K2] - sq[K2]) * (y2 - r[K2]) - l1
+            if sdot is not None:
+                if dy.kind == "RRR":    # i(α1 r1 − α2 r2) = a2 − a1 + ω1² r1 − ω2² r2
+                    b = b + w[L1] ** 2 * rr[0] - w[L2] ** 2 * rr[1]
+                elif dy.kind == "RRP":  # iα1 r1 − σ̈u = a_K − a1 + ω1² r1 + 2iω_K σ̇ u
+                    b = b + w[L1] ** 2 * rr[0] - 2j * w[K2] * sdot[k] * c2
+                else:                   # iα e + σ̈u = a2 − a1 + ω² e − 2iω σ̇ u
+                    b = b + w[L1] ** 2 * rr[0] - 2j * w[L1] * sdot[k] * c2
             x, y = solve2(c1, c2, b)
-            al[L1], al[L2] = x, (y if dy.kind == "RRR" else x if dy.kind == "RPR" else al[K2])
-            a[L1] = a1 + (1j * al[L1] - w[L1] ** 2) * (r[L1] - x1)
-            ao2 = a1 + (1j * x - w[L1] ** 2) * (o2 - x1) if dy.kind == "RRP" else \
-                a[K2] + (1j * al[K2] - w[K2] ** 2) * (o2 - r[K2])
-            a[L2] = ao2 + (1j * al[L2] - w[L2] ** 2) * (r[L2] - o2)
-        return al, a
+            ang[L1], ang[L2] = x, (y if dy.kind == "RRR" else x if dy.kind == "RPR" else ang[K2])
+            slides.append(y)
+            lin[L1] = l1 + (1j * ang[L1] - sq[L1]) * (r[L1] - x1)
+            lo2 = l1 + (1j * x - sq[L1]) * (o2 - x1) if dy.kind == "RRP" else \
+                lin[K2] + (1j * ang[K2] - sq[K2]) * (o2 - r[K2])
+            lin[L2] = lo2 + (1j * ang[L2] - sq[L2]) * (r[L2] - o2)
+        return ang, lin, slides
 
 
 _SINGULAR = 1e-10
@@ -963,16 +955,13 @@ def _solve_dyads(lk, pl, t, dt_max, cross=(), zones=()):
     if compiled:
         return out[:4]
     nc = len(lk.cranks)
-    N = len(t)
     w, v, sdot = ds.velocities(E, r, inner, pl.omega)
     qd = _pack(v, w)
     if nc == 1:                     # one crank: its part is the whole velocity
         parts = qd[:, :, None]
     else:
-        parts = np.empty((N, 3 * pl.nb, nc))
-        for j in range(nc):
-            wc = np.zeros(nc)
-            wc[j] = pl.omega[j]
+        parts = np.empty((len(t), 3 * pl.nb, nc))
+        for j, wc in enumerate(np.diag(pl.omega)):     # crank j turning, the others stopped
             wj, vj, _ = ds.velocities(E, r, inner, wc)
             parts[:, :, j] = _pack(vj, wj)
     al, a = ds.accelerations(E, r, inner, w, sdot)
@@ -986,8 +975,7 @@ def _dyads_compiled(ds, t, signs=None):
 
     args = ds.__dict__.get("_kernel_args")
     if args is None:
-        pl, lk = ds.pl, ds.lk
-        dy = pl.dyads
+        pl, lk, dy = ds.pl, ds.lk, ds.pl.dyads
         X = np.array([[g[0], g[1]] for g in ds.geo], dtype=complex)
         ang = np.array([g[2] for g in ds.geo])
         ln = np.array([[d.l1, d.l2] for d in dy])
@@ -1086,10 +1074,10 @@ class Newton:
         nb = pl.nb
         self.n = n = 3 * nb
         self.m = m = len(pl.ia)
-        J0 = np.zeros((n, n))
+        self.J0 = J0 = np.zeros((n, n))
         k = np.arange(m)
         a_mov, b_mov = pl.ia < nb, pl.ib < nb
-        ka, kb = k[a_mov], k[b_mov]
+        self.ka, self.kb = ka, kb = k[a_mov], k[b_mov]
         ia, ib = pl.ia[a_mov], pl.ib[b_mov]
         for rows, cols, sign in ((ka, ia, 1.0), (kb, ib, -1.0)):      # ±1 on the (x, y) columns
             J0[2 * rows, 3 * cols] = sign
@@ -1104,8 +1092,6 @@ class Newton:
         for j, ci in enumerate(pl.crank_idx):
             J0[self.c0 + j, 3 * ci + 2] = 1.0
         self.gu, self.gs, self.bs = to_complex(pl.gu), to_complex(pl.gs), to_complex(pl.bs)
-        self.J0 = J0
-        self.ka, self.kb = ka, kb
         # flat indices of the φ-column entries, rows (2k, 2k+1) interleaved
         self.flat_a, self.flat_b = (
             np.stack([(2 * rows) * n + 3 * cols + 2, (2 * rows + 1) * n + 3 * cols + 2],
@@ -1384,8 +1370,7 @@ def _kept_nodes(lk, nw, T_keep, first, dt_max):
     """
     pl = nw.pl
     q, qdot, qddot, sign = first
-    Qk = np.empty((len(T_keep), nw.n))
-    Qdk, Qddk = np.empty_like(Qk), np.empty_like(Qk)
+    Qk, Qdk, Qddk = (np.empty((len(T_keep), nw.n)) for _ in range(3))
     Qk[0], Qdk[0], Qddk[0] = q, qdot, qddot
     # nodes solved by a block are final (polished, with batched derivatives):
     # a target on one is taken as it is
@@ -1402,8 +1387,7 @@ def _kept_nodes(lk, nw, T_keep, first, dt_max):
             # away); otherwise the block shrinks down to single steps.
             jj = min(len(T_keep), j + block)
             T = T_keep[j:jj]
-            got = _block(nw, q, qdot, qddot, t_now, T, sign, pl)
-            if got is not None:
+            if (got := _block(nw, q, qdot, qddot, t_now, T, sign, pl)) is not None:
                 Qk[j:jj], Qdk[j:jj], Qddk[j:jj], Pk[j:jj] = got
                 exact[j:jj] = True
                 q, qdot, qddot, t_now = got[0][-1], got[1][-1], got[2][-1], T[-1]

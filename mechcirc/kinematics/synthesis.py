@@ -269,28 +269,20 @@ def acceleration_ratio_eq5(b_a, mu1, mu2):
 
 
 
-def _eq10_quadratic(cp, sp2, b_a, other):
-    """(A, B, B² − 4AC) of eq. (10) as a quadratic A·u² + B·u + C = 0 in u = κ² (or δ²).
-
-    ``cp`` = cos ψ and ``sp2`` = sin² ψ; floats or arrays alike.
-    """
-    o2 = other * other
-    k1 = o2 - (b_a + 1) ** 2
-    k2 = o2 - (b_a - 1) ** 2
-    A = 2 - 2 * cp
-    B = 2 * (k1 + k2) * (1 - cp) - 4 * o2 * sp2
-    C = k1 * k1 + k2 * k2 - 2 * cp * k1 * k2
-    return A, B, B * B - 4 * A * C
-
-
 def _eq10_roots_squared(psi, b_a, other):
-    """Positive roots u = κ² (or δ²) of eq. (10) as a quadratic; vectorised, NaN if none.
+    """Positive roots u = κ² (or δ²) of eq. (10) as a quadratic A·u² + B·u + C = 0 in
+    u = κ² (or δ²); vectorised, NaN if none.
 
     Returns two arrays (larger root, smaller root).
     """
-    A, B, disc = _eq10_quadratic(np.cos(psi), np.sin(psi) ** 2, b_a, other)
+    cp, o2 = np.cos(psi), other * other
+    k1 = o2 - (b_a + 1) ** 2
+    k2 = o2 - (b_a - 1) ** 2
+    A = 2 - 2 * cp
+    B = 2 * (k1 + k2) * (1 - cp) - 4 * o2 * np.sin(psi) ** 2
+    C = k1 * k1 + k2 * k2 - 2 * cp * k1 * k2
     with np.errstate(invalid="ignore"):
-        sq = np.sqrt(disc)
+        sq = np.sqrt(B * B - 4 * A * C)
         u1 = (-B + sq) / (2 * A)
         u2 = (-B - sq) / (2 * A)
     return tuple(np.where(u > 0, u, np.nan) for u in (u1, u2))
@@ -649,8 +641,7 @@ SAME_SHAPE_REL = 1e-3
 
 def _same_shape(d1: Design, d2: Design, rel: float = SAME_SHAPE_REL) -> bool:
     """Equal b/a, c/a, d/a to ``rel`` (scaled copies of one linkage)."""
-    r1 = (d1.b / d1.a, d1.c / d1.a, d1.d / d1.a)
-    r2 = (d2.b / d2.a, d2.c / d2.a, d2.d / d2.a)
+    r1, r2 = ((d.b / d.a, d.c / d.a, d.d / d.a) for d in (d1, d2))
     return all(abs(x - y) <= rel * abs(y) for x, y in zip(r1, r2))
 
 
@@ -665,9 +656,7 @@ class _Space:
     def __init__(self, fixed, b_a_range, d_a_range, crank_range, swing_range, swing):
         self.fixed = fixed
         self.b_a_range, self.d_a_range = tuple(b_a_range), tuple(d_a_range)
-        self.crank_range = crank_range
-        self.swing_range = swing_range
-        self.swing = swing
+        self.crank_range, self.swing_range, self.swing = crank_range, swing_range, swing
         self.solve_d = "rocker" in fixed
         self.limits_in_ratio = bool({"coupler", "frame"} & set(fixed))
 
