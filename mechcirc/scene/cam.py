@@ -113,9 +113,12 @@ class CamLinkage(Linkage):
         u, p0 = np.array(sl.direction, dtype=float), self.pose[sl.point]
 
         def travel(alpha):
-            m = Linkage.motion(self, alpha, **kw)
-            i = m.point_names.index(sl.point)
-            return m, (m.points[:, i] - p0) @ u, (m.velocities[:, i] @ u) / w, i
+            # a trial past the lock (where the dyads' determinant is 0) gives NaN rates,
+            # which the search below rejects: numpy's divide warnings would only be noise
+            with np.errstate(divide="ignore", invalid="ignore"):
+                m = Linkage.motion(self, alpha, **kw)
+                i = m.point_names.index(sl.point)
+                return m, (m.points[:, i] - p0) @ u, (m.velocities[:, i] @ u) / w, i
 
         alpha = np.zeros_like(s)
         m, tau, slope, i = travel(alpha)
