@@ -179,6 +179,12 @@ def sley():
      "crank speed ω must be a finite number whose square is finite [rad/s], got None"),
     (lambda: FourBar(0.029, 0.037, 0.188, 0.189).summary("100"), GeometryError,
      "crank speed ω must be a finite number whose square is finite [rad/s], got '100'"),
+    # (these two: TypeError "unsupported operand" and "can't multiply sequence" before)
+    (lambda: FourBar(0.029, 0.037, 0.188, 0.189).nu_extrema("x"), InputError,
+     "n must be a whole number of angles from 3 to 1,000,000, got 'x'"),
+    (lambda: FourBar(0.029, 0.037, 0.188, 0.189).dead_centres()[0].rocker_acceleration("x"),
+     GeometryError,
+     "crank speed ω must be a finite number whose square is finite [rad/s], got 'x'"),
 ])
 def test_kinematics_numbers_given_as_text_are_named(call, error, message):
     # on main: "could not convert string to float: 'x'", "'>' not supported between

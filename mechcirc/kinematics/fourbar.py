@@ -47,7 +47,7 @@ from typing import Any, Literal, cast
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import GeometryError
+from ..errors import GeometryError, InputError
 from ..sources import brief, finite_number, real_number, real_values
 from ._dyad_forms import rrr
 
@@ -118,7 +118,8 @@ class DeadCentre:
 
     def rocker_acceleration(self, omega: float) -> float:
         """Rocker angular acceleration ν·ω² [rad/s²] at crank speed ``omega`` [rad/s]."""
-        return self.nu * omega * omega
+        w = _crank_speed(omega)
+        return self.nu * w * w
 
 
 @dataclass(frozen=True)
@@ -536,6 +537,9 @@ class FourBar:
         """
         from scipy.optimize import minimize_scalar
 
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not 3 <= n <= 10**6:
+            raise InputError(f"n must be a whole number of angles from 3 to 1,000,000, got "
+                             f"{brief(n)}")
         lo, hi = self.crank_range()
         th = np.linspace(lo, hi, n + 1)
         if not self.crank_rotates_fully:
