@@ -239,8 +239,7 @@ def _omega(path, value, what) -> float:
 
 
 def _number(path, value, what) -> float:
-    bad = number_error(value, what)
-    if bad:
+    if bad := number_error(value, what):
         _fail(path, bad[0])
     return float(value)
 
@@ -275,8 +274,7 @@ def _axis(name, value) -> list[float]:
     if isinstance(value, list):
         return [_number(path, v, f"grid.{name}") for v in value]
     lo, hi = (_number((*path, end), value[end], f"grid.{name}.{end}") for end in ("min", "max"))
-    log = value.get("log", False)
-    if log and (lo <= 0 or hi <= 0):
+    if (log := value.get("log", False)) and (lo <= 0 or hi <= 0):
         _fail((*path, "log"), f"grid.{name}: log spacing needs min and max > 0")
     return _spaced(lo, hi, value["num"], log).tolist()
 
@@ -359,8 +357,7 @@ _ANALYSES = ("sweep", "resonances", "simulate")
 
 def _check_keys(table: str | None, entry: dict) -> None:
     """Refuse a key ``TABLES[table]`` does not declare, at its key path."""
-    found = unknown_key(TABLES[table], entry)
-    if found is not None:
+    if (found := unknown_key(TABLES[table], entry)) is not None:
         key, message = found
         _fail((key,) if table is None else (table, key),
               f"{message} (expected {TABLES[table].expected})")
@@ -394,8 +391,7 @@ def _parse_spec(data: dict, source: str, base: Path) -> StudySpec:
         sley = _sley_settings(data.get("sley", {}), names, kind)
         units = tuple(map(_sley_units().get, names))
     else:
-        missing = [n for n in names if n not in roles]     # each a .param, checked once
-        if missing:
+        if missing := [n for n in names if n not in roles]:     # each a .param, checked once
             _fail((kind,), f"{', '.join(missing)} is not a .param of {path}"
                            f"{did_you_mean(missing[0], roles)} (its parameters: "
                            f"{', '.join(roles) or 'none'})")
@@ -494,8 +490,7 @@ def _sample(table, kind: str) -> tuple[tuple[str, ...], tuple[tuple[float, ...],
             _fail((kind, "seed"), f"{kind}.seed must be an integer, got {brief(seed)}")
     else:
         seed = _integer((kind, "seed"), seed, f"{kind}.seed", 0, 2**63 - 1)
-    ranges = table.get("params")
-    if not isinstance(ranges, dict) or not ranges:
+    if not isinstance(ranges := table.get("params"), dict) or not ranges:
         _fail((kind, "params"), f"[{kind}.params] must give {{min, max}} for at least one "
                                 "parameter")
     names = tuple(ranges)
@@ -565,8 +560,7 @@ def _sample_file(table: dict, base: Path, analysis: str, roles: dict):
 
 def _sample_path(table: dict, base: Path) -> Path:
     """The path of ``[sample] file`` (relative to the spec file), a .csv or .parquet."""
-    extra = sorted(set(table) - {"file"})
-    if extra:
+    if extra := sorted(set(table) - {"file"}):
         _fail(("sample", extra[0]), f"[sample] with file takes no {extra[0]!r} (the file "
                                     "holds the points)")
     if not isinstance(table["file"], str):
@@ -742,8 +736,7 @@ def _sley_settings(table, names, kind: str) -> tuple[str, int, int, int]:
                                      ("points_per_revolution", 7200, 16,
                                       MAX_POINTS_PER_REVOLUTION))]
     known = _sley_units()
-    bad = [n for n in names if n not in known]
-    if bad:
+    if bad := [n for n in names if n not in known]:
         _fail((kind,), f"{', '.join(bad)} is not a sley parameter{did_you_mean(bad[0], known)}"
                        f" (expected some of {', '.join(sorted(known))})")
     return drive, variant, revolutions, ppr
@@ -1141,8 +1134,7 @@ def _check_run(spec: StudySpec, output, scheduler, connect_timeout, resume: bool
                curves) -> bool:
     """Refuse :func:`run_study` settings that cannot work, before anything is written;
     whether the output is Parquet."""
-    parquet = bool(output) and str(output).lower().endswith(".parquet")
-    if parquet:
+    if parquet := bool(output) and str(output).lower().endswith(".parquet"):
         _require_pyarrow()
     if scheduler and not (isinstance(connect_timeout, (int, float)) and
                           0 < connect_timeout <= 3600):
@@ -1265,14 +1257,13 @@ def _resumed_rows(spec: StudySpec, output, journal: str, parquet: bool) -> list[
     The file's recorded spec must be ``spec``'s (else an error naming what
     changed); a row whose parameter values are not its point's is run again.
     """
-    columns = spec.columns
     if Path(journal).exists():
         _same_spec(journal, _journal_spec(journal), spec)
-        done = read_rows(journal, columns)
+        done = read_rows(journal, spec.columns)
     elif Path(output).exists() and parquet:
         recorded, table = _read_parquet(output)
         _same_spec(os.fspath(output), recorded, spec)
-        if table.column_names != columns:
+        if table.column_names != spec.columns:
             raise MechcircError(f"{os.fspath(output)}: its columns "
                                 f"({', '.join(table.column_names)}) are not this study's; "
                                 "cannot resume (use another -o)")
@@ -1280,7 +1271,7 @@ def _resumed_rows(spec: StudySpec, output, journal: str, parquet: bool) -> list[
                 for row in table.to_pylist()]
     elif Path(output).exists():
         _same_spec(os.fspath(output), _sidecar_spec(output), spec)
-        done = read_rows(output, columns)
+        done = read_rows(output, spec.columns)
     else:
         return []
     n, k = len(spec.points), len(spec.params)
@@ -1462,8 +1453,7 @@ def _journal_in_order(journal: str, width: int, chunk: int = 65536):
             index.append(int(line[:line.index(b",")]))
             offset.append(pos)
             pos += len(line)
-        idx = np.frombuffer(index, dtype=np.int64) if index else np.zeros(0, np.int64)
-        offs = np.frombuffer(offset, dtype=np.int64) if offset else np.zeros(0, np.int64)
+        idx, offs = np.asarray(index), np.asarray(offset)     # int64 views, empty or not
         _, first = np.unique(idx, return_index=True)   # each point's first row, by index
         offs = offs[first]
         in_order = bool(np.all(np.diff(offs) > 0))
@@ -1612,13 +1602,6 @@ def _holder(path: str) -> str:
         return ""
 
 
-def _for_workers(spec: StudySpec) -> StudySpec:
-    """The spec without its point list: each batch carries its own points, and the
-    spec is pickled once per batch (a million points would otherwise travel with
-    every batch)."""
-    return replace(spec, points=())
-
-
 #: Memory a task may fill with its arrays (bytes): the batch's K, error bound,
 #: Q0 and flags on the designs × ω grid and its stacked nodal matrices.
 TASK_BYTES = 64 * 2 ** 20
@@ -1655,7 +1638,10 @@ def _run_local(spec, have, n_todo, n_workers, batch_size, take) -> tuple[str, in
 
     with ProcessPoolExecutor(max_workers=n_workers, initializer=_die_with_parent,
                              initargs=(os.getpid(),)) as pool:
-        light = _for_workers(spec)
+        # The spec without its point list: each batch carries its own points, and the
+        # spec is pickled once per batch (a million points would otherwise travel with
+        # every batch).
+        light = replace(spec, points=())
         batches = _todo(spec, have, size)
         pending: set = set()
         try:
@@ -1745,7 +1731,7 @@ def _run_dask(spec, have, n_todo, client, batch_size, take) -> int:
                                client.scheduler_info()["workers"].values()))
         size = task_size(spec, n_todo, n_workers, batch_size)
         try:
-            spec_future = client.scatter(_for_workers(spec), broadcast=True)
+            spec_future = client.scatter(replace(spec, points=()), broadcast=True)   # as local
         except TimeoutError:
             raise MechcircError("the Dask cluster's workers left before the study "
                                 "started") from None
