@@ -103,7 +103,7 @@ def test_resume_refuses_a_table_without_a_spec_record(tmp_path):
 
 
 def test_a_journal_row_with_other_parameter_values_is_run_again(tmp_path):
-    from mechcirc.study import _crc
+    from mechcirc.study.journal import _crc
 
     spec = load_spec(spec_file(tmp_path, "eta1 = [0.7, 0.8, 0.9]"))
     out = tmp_path / "r.csv"
@@ -134,7 +134,7 @@ def test_a_journal_row_with_other_parameter_values_is_run_again(tmp_path):
 # ------------------------------------------------------------------ the output lock
 HOLD = """
 import sys
-from mechcirc.study import _lock
+from mechcirc.study.executors import _lock
 with _lock(sys.argv[1]):
     print("held", flush=True)
     sys.stdin.read()
@@ -484,7 +484,7 @@ def test_a_parameters_unit_is_the_one_written_after_it(tmp_path):
 
 
 def test_rows_of_another_computation_are_not_resumed(tmp_path, monkeypatch):
-    from mechcirc import study
+    from mechcirc.study import spec as study
 
     a = spec_file(tmp_path)
     out = tmp_path / "r.csv"
@@ -517,7 +517,7 @@ def test_a_lock_that_cannot_be_created_and_the_lock_without_fcntl(tmp_path, caps
     """The lock path taken by a folder: exit 2 naming it and the OS's reason, nothing written.
     Without fcntl (Windows) the lock is an exclusive create: a lock file left by another
     study is refused with its holder and the hint to delete it."""
-    from mechcirc.study import _lock
+    from mechcirc.study.executors import _lock
 
     a = spec_file(tmp_path)
     out = tmp_path / "r.csv"

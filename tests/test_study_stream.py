@@ -8,8 +8,9 @@ import pytest
 
 import mechcirc
 from mechcirc.errors import MechcircError
-from mechcirc.study import (TASK_BYTES, _journal_in_order, journal_path, parse_spec,
-                            run_study, task_size)
+from mechcirc.study import journal_path, parse_spec, run_study
+from mechcirc.study.executors import TASK_BYTES, task_size
+from mechcirc.study.journal import _journal_in_order
 
 NET = ".param m=2\nmass m1 a 0 m\nspring k a 0 100\ndamper c a 0 3\ndrive V a 0 velocity=1\n"
 
