@@ -311,20 +311,21 @@ class _Parser:
         self.node_kinds: dict[str, dict[bool, tuple[str, str, int]]] = {}
 
     # -- expressions -----------------------------------------------------
-    def expr(self, line: _Line, text: str, col: int, *, defined: dict[str, float],
-             key: tuple[str, str] | None = None) -> float:
+    def expr(self, line: _Line, tok: _Token, key: tuple[str, str] | None = None) -> float:
+        """The value of the expression ``tok`` over the parameters defined so far."""
+        text, col = tok.text, tok.col
         if text.startswith("{") and text.endswith("}"):      # one pair of enclosing braces
             text, col = text[1:-1], col + 1
         if not text.strip():
             line.error("empty expression", col, "a number or an expression")
         tree: Expr = parse_expression(text, source=self.source, line=line.lineno, col=col)
         for name in sorted(tree.names()):
-            if name not in defined and name not in CONSTANTS and name in self.param_lines:
+            if name not in self.params and name not in CONSTANTS and name in self.param_lines:
                 where = col + text.find(name)
                 line.error(f"parameter {name!r} is used before it is defined "
                            f"(on line {self.param_lines[name]})", where,
                            "parameters defined on earlier .param lines or earlier on this line")
-        value = evaluate(tree, defined, source=self.source, line=line.lineno, col=col)
+        value = evaluate(tree, self.params, source=self.source, line=line.lineno, col=col)
         if key is not None:
             self.expressions[key] = (tree, 1.0)
         if not math.isfinite(value):
@@ -515,8 +516,7 @@ class _Parser:
                 line.error(f"parameter {name!r} is defined twice "
                            f"(first on line {self.param_lines[name]})", tok.col)
             value_tok, unit_tok = _glued(_Token(rhs, tok.col + len(name) + 1))
-            self.params[name] = self.expr(line, value_tok.text, value_tok.col,
-                                          defined=self.params, key=("param", name))
+            self.params[name] = self.expr(line, value_tok, ("param", name))
             previous = name
             if unit_tok is not None:
                 self.params[name] = self.with_unit(line, self.params[name], unit_tok, "param",
@@ -603,15 +603,14 @@ class _Parser:
                        "two different nodes")
         return name, n1, n2
 
-    def _positive(self, line: _Line, tok: _Token, what: str, unit: str, *,
-                  unit_tok: _Token | None = None, role: str | None = None,
-                  key: tuple[str, str] | None = None) -> float:
-        value = self.expr(line, tok.text, tok.col, defined=self.params, key=key)
-        if role is not None:
-            value = self.with_unit(line, value, unit_tok, role, key)
-        if not value > 0:
-            line.error(f"{what} must be > 0{' ' + unit if unit else ''}, got {value:g}",
-                       tok.col, "a positive value")
+    def _value(self, line: _Line, tok: _Token, what: str, unit_tok: _Token | None, role: str,
+               key: tuple[str, str], *, unit: str = "", zero: bool = False,
+               expected: str = "a positive value") -> float:
+        """The value of ``tok`` in SI (by its unit), refused unless > 0 (>= 0 with ``zero``)."""
+        value = self.with_unit(line, self.expr(line, tok, key), unit_tok, role, key)
+        if not (value >= 0 if zero else value > 0):
+            line.error(f"{what} must be {'>=' if zero else '>'} 0{unit}, got {value:g}", tok.col,
+                       expected)
         return value
 
     def fast_elements(self, run: list) -> None:
@@ -624,12 +623,9 @@ class _Parser:
         append, unit_of, inf, make = elements.append, _unit, _INF, _make_element
         for lineno, kind, m in run:
             indent, _, name, n1, n2, number, unit, eta_text = m.groups()
-            if name.isdigit():
-                name = str(int(name))
-            if n1.isdigit():
-                n1 = str(int(n1))
-            if n2.isdigit():
-                n2 = str(int(n2))
+            name = str(int(name)) if name.isdigit() else name
+            n1 = str(int(n1)) if n1.isdigit() else n1
+            n2 = str(int(n2)) if n2.isdigit() else n2
             value = raw = float(number)
             eta = 1.0 if eta_text is None else float(eta_text)
             u = None
@@ -657,27 +653,22 @@ class _Parser:
         allowed = ("eta", "backlash", "damping") if kind == "spring" else ("eta",)
         pos, opts, units = self._fields(line, kind, 4, allowed)
         name, n1, n2 = self._two_ends(line, pos, kind)
-        value = self._positive(line, pos[3], f"{kind} {name!r}", ELEMENT_UNITS[kind],
-                               unit_tok=units.get("value"), role=kind, key=(name, "value"))
+        value = self._value(line, pos[3], f"{kind} {name!r}", units.get("value"), kind,
+                            (name, "value"), unit=" " + ELEMENT_UNITS[kind])
         if "value" in units:
             unit_tok = units["value"]
             self._note_kind(line.lineno, name, _unit(unit_tok.text), unit_tok.text,
                             unit_tok.col, (n1, n2))
-        eta = self._positive(line, opts["eta"], f"eta of {name!r}", "",
-                             unit_tok=units.get("eta"), role="eta", key=(name, "eta")) \
-            if "eta" in opts else 1.0
+        eta = self._value(line, opts["eta"], f"eta of {name!r}", units.get("eta"), "eta",
+                          (name, "eta")) if "eta" in opts else 1.0
         spring = {"backlash": 0.0, "damping": 0.0}
         for key, role, unit, expected in (
                 ("backlash", "displacement", "", "a total clearance >= 0 (length or angle)"),
                 ("damping", "damper", " N·s/m", "a damping coefficient >= 0")):
             if key in opts:
-                tok = opts[key]
-                x = self.expr(line, tok.text, tok.col, defined=self.params, key=(name, key))
-                x = self.with_unit(line, x, units.get(key), role, (name, key))
-                if not x >= 0:
-                    line.error(f"{key} of {name!r} must be >= 0{unit}, got {x:g}", tok.col,
-                               expected)
-                spring[key] = x
+                spring[key] = self._value(line, opts[key], f"{key} of {name!r}", units.get(key),
+                                          role, (name, key), unit=unit, zero=True,
+                                          expected=expected)
         backlash, damping = spring["backlash"], spring["damping"]
         self.elements.append(Element(kind, name, n1, n2, value, eta, line.lineno,
                                      line.tokens[0].col, backlash))
@@ -699,9 +690,7 @@ class _Parser:
         values = {}
         for key, role in (("x", "displacement"), ("v", "velocity")):
             if key in opts:
-                tok = opts[key]
-                value = self.expr(line, tok.text, tok.col, defined=self.params)
-                values[key] = self.with_unit(line, value, units.get(key), role)
+                values[key] = self.with_unit(line, self.expr(line, opts[key]), units.get(key), role)
         if not values:
             line.error(f".ic for node {node!r} gives neither x= nor v=",
                        line.tokens[-1].col + len(line.tokens[-1].text), SYNTAX[".ic"])
@@ -742,8 +731,8 @@ class _Parser:
                            "two different nodes")
         if "ratio" not in opts:
             line.error(f"lever {name!r} needs ratio=EXPR", line.tokens[-1].col, SYNTAX["lever"])
-        ratio = self._positive(line, opts["ratio"], f"ratio of lever {name!r}", "",
-                               unit_tok=units.get("ratio"), role="ratio", key=(name, "ratio"))
+        ratio = self._value(line, opts["ratio"], f"ratio of lever {name!r}", units.get("ratio"),
+                            "ratio", (name, "ratio"))
         self.levers.append(Lever(name, p1, p2, s1, s2, ratio, line.lineno, line.tokens[0].col))
 
     def drive(self, line: _Line, kind: str):
@@ -770,7 +759,7 @@ class _Parser:
             line.error("a drive needs exactly one of velocity=EXPR, force=EXPR or motion=",
                        where, SYNTAX["drive"])
         (key, tok), = opts.items()
-        amplitude = self.expr(line, tok.text, tok.col, defined=self.params, key=(name, key))
+        amplitude = self.expr(line, tok, (name, key))
         amplitude = self.with_unit(line, amplitude, units.get(key), key, (name, key))
         # rad/s or N·m: a rotary drive (no unit: decided by its nodes' elements, in build)
         self.drive_rotational = None if units.get(key) is None else \
@@ -831,8 +820,7 @@ class _Parser:
                     values[key] = 0.0
                     continue
                 line.error(f"motion={text} needs {key}=", tok.col, SYNTAX["drive"])
-            t = opts[key]
-            v = self.expr(line, t.text, t.col, defined=self.params)
+            v = self.expr(line, opts[key])
             if key == "stroke":
                 v = self.with_unit(line, v, units.get(key), "displacement")
                 if key in units:    # an angle: a rotary drive (a length: translational)
