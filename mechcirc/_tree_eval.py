@@ -486,12 +486,9 @@ def _fold_values(kind, kstart, kids, slot, n_slots, leaves, levers, fold, scaled
         acc = np.zeros((3, M, D))
         np.add.at(acc, (col, owner), term)
         real, om, inv = acc[0], acc[1], acc[2]
-        U = float(_U)
-        n_kids = np.diff(kstart)[:, None]
-        m_u = (n_kids + (real != 0) + (inv != 0) + (om != 0)) * U
-        e_real = np.abs(real) * ((count[:, 0:1] + 2) * U + m_u)
-        e_inv = np.abs(inv) * ((count[:, 2:3] + 4) * U + m_u)
-        e_om = np.abs(om) * ((count[:, 1:2] + 4) * U + m_u)
+        m_u = _node_mu((real, inv, om), np.diff(kstart)[:, None])
+        e_real, e_inv, e_om = _leaf_bound_terms((real, inv, om), (
+            count[:, 0:1], count[:, 2:3], count[:, 1:2]), m_u)
     lever = kind == 2
     m_u[lever] = 0.0
     ratio = np.zeros((M, D))
@@ -499,12 +496,9 @@ def _fold_values(kind, kstart, kids, slot, n_slots, leaves, levers, fold, scaled
     # A node has a real part if its leaves give one (in any design) or any child has one.
     has = ((real != 0) | np.isnan(real)).any(axis=1).tolist()
     ks, kd = kstart.tolist(), kids.tolist()
-    for i in range(M):
+    for i in range(M):      # (children first: their has[] is final)
         if not has[i]:
-            for q in range(ks[i], ks[i + 1]):
-                if has[kd[q]]:
-                    has[i] = True
-                    break
+            has[i] = any(has[kd[q]] for q in range(ks[i], ks[i + 1]))
 
     def rows(x):                  # one contiguous row of M values per design
         return np.ascontiguousarray(x.T)
@@ -738,7 +732,7 @@ def _node_bound(total: _Value, parts: list, omega, inv_omega, groups: list, zero
         mu = _node_mu(sums, len(parts))
         # (0-d arrays: see _ZERO)
         bterms = groups[4] = (np.asarray(mu), np.asarray(_U_RECIP + mu), tuple(
-            np.asarray(t) for t in _leaf_bound_terms(sums, counts, len(parts))))
+            np.asarray(t) for t in _leaf_bound_terms(sums, counts, mu)))
     mu, c, (b_real, b_inv, b_omega) = bterms
     # The leaf groups' share: b_real + b_inv/ω + b_omega·ω.
     bound = b_inv * inv_omega if has[1] else None
@@ -782,22 +776,17 @@ def _leaf_groups(node, designs) -> list:
     leaves), which of the three take part, and ``(m·u, 4u + m·u, the leaves' share of
     the bound)`` (:func:`_leaf_bound_terms`), None until :func:`_combine` first needs it."""
     series = isinstance(node, Series)
-    sums, counts = _fold_leaves(node, series, designs, fast=designs is None)
-    has = tuple(n > 0 for n in counts) if designs is not None else \
-        tuple(bool(t) for t in sums)
-    return [series, sums, counts, has, None]
-
-
-def _fold_leaves(node, series: bool, designs, fast: bool = False) -> tuple[list, list]:
     sums: list = [0.0, 0.0, 0.0]
     counts = [0, 0, 0]
     for c in node.children:
         if isinstance(c, Leaf):
-            slot, term = _leaf_term(c.element, series, fast, designs)
+            slot, term = _leaf_term(c.element, series, designs is None, designs)
             i = 0 if slot == 0 else (2 if slot > 0 else 1)
             sums[i] += term
             counts[i] += 1
-    return sums, counts
+    has = tuple(n > 0 for n in counts) if designs is not None else \
+        tuple(bool(t) for t in sums)
+    return [series, sums, counts, has, None]
 
 
 def _node_mu(sums, n_parts: int):
@@ -806,13 +795,13 @@ def _node_mu(sums, n_parts: int):
     return (n_parts + (real != 0) + (im_inv != 0) + (im_omega != 0)) * _U
 
 
-def _leaf_bound_terms(sums, counts, n_parts: int) -> tuple:
+def _leaf_bound_terms(sums, counts, mu) -> tuple:
     """``(real, inv, omega)`` coefficients of the leaf groups' share of Σ |tᵢ| (ρᵢ + m·u)
-    (see :func:`evaluate`): the share is real + inv/ω + omega·ω.
+    (see :func:`evaluate`), ``mu`` = m·u (:func:`_node_mu`): the share is real + inv/ω +
+    omega·ω; scalars for a node of :func:`evaluate`, arrays for :func:`plan`'s nodes.
 
     A group of n same-signed scalars summed has ρ = n·u, and 2u more for value·η and 1/s,
     and 2u more (the imaginary groups) for the product with ω or 1/ω."""
-    mu = _node_mu(sums, n_parts)
     return tuple(abs(t) * ((n + extra) * _U + mu)
                  for t, n, extra in zip(sums, counts, (2, 4, 4)))
 
