@@ -38,6 +38,7 @@ import gc
 import math
 import os
 import re
+import warnings
 from dataclasses import dataclass, fields
 from typing import Mapping, NoReturn
 from pathlib import Path
@@ -403,22 +404,19 @@ class _Parser:
             if type(line) is _Line and line.tokens[0].text.lower() == ".param":
                 self.param(line)
         handlers = {"mass": self.element, "spring": self.element, "damper": self.element,
-                    "lever": self.lever, "drive": self.drive, ".ic": self.ic}
+                    "lever": self.lever, "drive": self.drive, ".ic": self.ic,
+                    ".param": lambda line, keyword: None}       # (read above)
         for line in parsed:
             if type(line) is list:
                 self.fast_elements(line)
                 continue
             keyword = line.tokens[0].text.lower()
-            if keyword == ".param":
-                continue
-            handler = handlers.get(keyword)
-            if handler is None:
+            if keyword not in handlers:
                 word = line.tokens[0].text
                 line.error(f"unknown keyword {word!r}{did_you_mean(word.lower(), KEYWORDS)}",
                            line.tokens[0].col,
                            "one of .param, .ic, mass, spring, damper, lever, drive")
-            else:
-                handler(line, keyword)
+            handlers[keyword](line, keyword)
 
     def _check_complete(self, parsed: list) -> None:
         if not parsed:
@@ -709,10 +707,7 @@ class _Parser:
             seen = self.node_kinds.setdefault(node, {})
             other = seen.get(not rot)
             if other is not None and rot not in seen:
-                import warnings
-
-                kinds = ("rotational", "translational") if rot else ("translational",
-                                                                   "rotational")
+                kinds = ("rotational", "translational")[::1 if rot else -1]
                 warnings.warn(UnitMixWarning(
                     f"{self.source}:{lineno}:{col}: node {node!r} gets a "
                     f"{kinds[0]} unit ({unit_text!r} of {name!r}) and a {kinds[1]} one "
@@ -813,11 +808,10 @@ class _Parser:
                            f"got {units[key].text!r} after it", units[key].col,
                            "the stroke's unit after stroke= (stroke=20 mm, stroke=30 deg); "
                            "the angles after rise=, dwell=, return= (degrees by default)")
-        values = {}
+        values = {"dwell": 0.0}
         for key in ("rise", "dwell", "return", "stroke"):
             if key not in opts:
                 if key == "dwell":
-                    values[key] = 0.0
                     continue
                 line.error(f"motion={text} needs {key}=", tok.col, SYNTAX["drive"])
             v = self.expr(line, opts[key])
