@@ -11,7 +11,7 @@ Re-exported by :mod:`mechcirc.reduction`.
 from __future__ import annotations
 
 import weakref
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
@@ -326,9 +326,9 @@ class Plan:
     numpy: tuple | None = None
 
     def arrays(self) -> tuple:
-        return (self.kind, self.cplx, self.c_real, self.c_inv, self.c_om, self.e_real,
-                self.e_inv, self.e_om, self.mu, self.kstart, self.kids, self.ratio,
-                self.slot, self.n_slots)
+        """The arguments of :func:`mechcirc._sp_kernel.evaluate_plan` after ω: the fields
+        from ``kind`` to ``n_slots``, in order."""
+        return tuple(getattr(self, f.name) for f in fields(self)[:14])
 
     @property
     def designs(self) -> int:
@@ -352,6 +352,13 @@ _PLANS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
 _KIND_CODE = {kind: i for i, kind in enumerate(LAWS)}
 
 
+def _slot_term(kind: str, series, real, inv, om) -> tuple[int, Any]:
+    """``(slot, coefficient)`` of an element of ``kind`` whose law gives ``real + j(inv/ω +
+    om·ω)`` in a series node (``series``) or a parallel one (see :func:`_leaf_term`)."""
+    slot = LAWS[kind].power if series else -LAWS[kind].power
+    return slot, (real if slot == 0 else om if slot > 0 else inv)
+
+
 def _leaf_table() -> tuple:
     """Arrays indexed ``[kind code, series]`` of slot, coefficient and ``divides``,
     read off :func:`~mechcirc.circuit.law_terms` at unit value: a leaf's term is
@@ -361,12 +368,9 @@ def _leaf_table() -> tuple:
     slot = np.zeros((len(_KIND_CODE), 2), dtype=np.int64)
     coef = np.zeros((len(_KIND_CODE), 2))
     for kind, code in _KIND_CODE.items():
-        p = LAWS[kind].power
         for series in (0, 1):
-            sl = p if series else -p
-            real, inv, om = law_terms(kind, 1.0, admittance=not series)
-            slot[code, series] = sl
-            coef[code, series] = real if sl == 0 else om if sl > 0 else inv
+            slot[code, series], coef[code, series] = _slot_term(
+                kind, series, *law_terms(kind, 1.0, admittance=not series))
     return slot, coef
 
 
@@ -402,23 +406,20 @@ def _flat_nodes(root: Node) -> tuple:
             continue
         if cls is Reflect:
             c = node.child
-            ci = lone_leaf(c.element) if type(c) is Leaf else index[id(c)]
+            kids.append(lone_leaf(c.element) if type(c) is Leaf else index[id(c)])
             kind.append(2)
-            kids.append(ci)
-            kstart.append(len(kids))
             levers.append(node.lever)
-            index[id(node)] = len(kind) - 1
-            continue
-        me = len(kind)
-        kind.append(0 if cls is Series else 1)
-        for c in node.children:
-            if type(c) is Leaf:
-                leaf_of.append(me)
-                leaf_el.append(c.element)
-            else:
-                kids.append(index[id(c)])
+        else:
+            me = len(kind)
+            kind.append(0 if cls is Series else 1)
+            for c in node.children:
+                if type(c) is Leaf:
+                    leaf_of.append(me)
+                    leaf_el.append(c.element)
+                else:
+                    kids.append(index[id(c)])
         kstart.append(len(kids))
-        index[id(node)] = me
+        index[id(node)] = len(kind) - 1
     if type(root) is Leaf:
         lone_leaf(root.element)
     return kind, kids, kstart, leaf_of, leaf_el, levers
@@ -666,9 +667,8 @@ def _leaf_term(e: Element, series: bool, fast: bool = False,
                                  law_terms(e.kind, _scaled(e), admittance=not series))
     else:
         real, inv, om = law_terms(e.kind, _scaled(e, designs), admittance=not series)
-    p = LAWS[e.kind].power
-    slot = p if series else -p
-    return slot, (real if slot == 0 else om if slot > 0 else inv)
+    return _slot_term(e.kind, series, real, inv, om)
+
 
 
 def _combine(parts: list, omega, inv_omega, zero, keep: bool, checked: bool,

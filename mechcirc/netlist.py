@@ -376,14 +376,12 @@ class _Parser:
                 raise NetlistError(f"line is {len(raw)} characters long, the limit is "
                                    f"{MAX_LINE_LENGTH}", self.source, lineno, 1)
             m = fast(raw)
-            if m is not None:
-                kind = _FAST_KINDS.get(m.group(2).lower())
-                if kind is not None:
-                    if run is None:
-                        run = []
-                        parsed.append(run)
-                    run.append((lineno, kind, m))
-                    continue
+            if m is not None and (kind := _FAST_KINDS.get(m.group(2).lower())) is not None:
+                if run is None:
+                    run = []
+                    parsed.append(run)
+                run.append((lineno, kind, m))
+                continue
             run = None
             line = _Line(raw, self.source, lineno)
             if not line.tokens:
@@ -515,11 +513,10 @@ class _Parser:
                            f"(first on line {self.param_lines[name]})", tok.col)
             value_tok, unit_tok = _glued(_Token(rhs, tok.col + len(name) + 1))
             self.params[name] = self.expr(line, value_tok, ("param", name))
-            previous = name
+            previous = name if unit_tok is None else None       # a unit may follow
             if unit_tok is not None:
                 self.params[name] = self.with_unit(line, self.params[name], unit_tok, "param",
                                                    ("param", name))
-                previous = None
             if name in self.overrides:
                 given = self.overrides[name]
                 try:
@@ -557,13 +554,11 @@ class _Parser:
                                else f"no options: {SYNTAX[keyword]}")
                 if head in options:
                     line.error(f"option {head!r} given twice", tok.col)
-                value_tok, unit_tok = _glued(_Token(tok.text[len(head) + 1:],
-                                                    tok.col + len(head) + 1))
-                options[head] = value_tok
-                previous = head
+                options[head], unit_tok = _glued(_Token(tok.text[len(head) + 1:],
+                                                        tok.col + len(head) + 1))
+                previous = head if unit_tok is None else None       # a unit may follow
                 if unit_tok is not None:
                     units[head] = unit_tok
-                    previous = None
             else:
                 if options:
                     line.error(f"{tok.text!r} after the options", tok.col, SYNTAX[keyword])
