@@ -555,13 +555,14 @@ def evaluate_designs(p: Plan, omega: NDArray, error: bool = False, kernel=None):
     D = p.designs
     if omega.shape[0] not in (1, D):
         raise ValueError(f"omega must have 1 or {D} rows, got shape {omega.shape}")
-    if kernel is None:
-        if p.numpy is None:
-            raise RuntimeError("evaluating this plan needs numba (pip install numba)")
-        return _evaluate_numpy(p.numpy, omega, D, error)
+    if kernel is None and p.numpy is None:
+        raise RuntimeError("evaluating this plan needs numba (pip install numba)")
     K = np.empty((D, omega.shape[1]), dtype=complex)
     rho = np.empty(K.shape if error else (D, 0))
-    kernel(omega, *p.arrays(), error, K, rho)
+    if kernel is None:
+        _evaluate_numpy(p.numpy, omega, error, K, rho)
+    else:
+        kernel(omega, *p.arrays(), error, K, rho)
     return K, (rho if error else None)
 
 
@@ -569,12 +570,11 @@ def evaluate_designs(p: Plan, omega: NDArray, error: bool = False, kernel=None):
 _NUMPY_CHUNK = 1 << 16
 
 
-def _evaluate_numpy(numpy: tuple, omega: NDArray, D: int, error: bool):
-    """:func:`evaluate_designs` by :func:`evaluate` over rows of designs."""
+def _evaluate_numpy(numpy, omega: NDArray, error: bool, K: NDArray, rho: NDArray) -> None:
+    """:func:`evaluate_designs` by :func:`evaluate` over rows of designs, into ``K`` and
+    ``rho`` (``numpy`` is :attr:`Plan.numpy`)."""
     root, scaled, ratios = numpy
-    W = omega.shape[1]
-    K = np.empty((D, W), dtype=complex)
-    rho = np.empty(K.shape if error else (D, 0))
+    D, W = K.shape
     step = max(1, _NUMPY_CHUNK // max(W, 1))
     for lo in range(0, D, step):
         part = slice(lo, lo + step)
@@ -585,7 +585,6 @@ def _evaluate_numpy(numpy: tuple, omega: NDArray, D: int, error: bool):
             K[part], rho[part] = out
         else:
             K[part] = out
-    return K, (rho if error else None)
 
 
 class _Value:

@@ -564,11 +564,10 @@ class _Parser:
                     line.error(f"{tok.text!r} after the options", tok.col, SYNTAX[keyword])
                 if len(positional) == _VALUE_INDEX.get(keyword):
                     tok, unit_tok = _glued(tok)
+                    previous = "value" if unit_tok is None else None    # a unit may follow
                     if unit_tok is not None:
                         units["value"] = unit_tok
                 positional.append(tok)
-                if len(positional) - 1 == _VALUE_INDEX.get(keyword) and "value" not in units:
-                    previous = "value"
         _check_count(line, keyword, npos, positional)
         return positional, options, units
 
@@ -589,8 +588,7 @@ class _Parser:
     def _two_ends(self, line: _Line, pos: list[_Token], what: str) -> tuple[str, str, str]:
         """The new name and the two nodes (they must differ) of an element or drive line."""
         name = self._new_name(line, pos[0])
-        n1 = self._name(line, pos[1], "node name")
-        n2 = self._name(line, pos[2], "node name")
+        n1, n2 = [self._name(line, t, "node name") for t in pos[1:3]]
         if n1 == n2:
             line.error(f"both ends of {what} {name!r} are node {n1!r}", pos[2].col,
                        "two different nodes")
