@@ -339,8 +339,9 @@ class Plan:
         """The same plan for D designs: ``scaled[l, d]`` is value·η of leaf ``leaves[l]``
         in design d, ``ratios[r, d]`` the ratio of lever ``levers[r]`` (default: its own)."""
         scaled = np.asarray(scaled, dtype=float)
-        if ratios is None:
-            ratios = np.array([[lv.ratio] for lv in self.levers], dtype=float).reshape(-1, 1)
+        if ratios is None:          # each lever's own ratio in every design
+            ratios = np.array([[lv.ratio] for lv in self.levers], dtype=float).reshape(-1, 1) \
+                .repeat(scaled.shape[-1], axis=1)
         return _fold_values(self.kind, self.kstart, self.kids, self.slot, self.n_slots,
                             self.leaves, self.levers, self._fold, scaled,
                             np.asarray(ratios, dtype=float))
