@@ -145,8 +145,6 @@ if tuple(f.name for f in fields(Expr)) != ("kind", "col", "value", "args"):
         return Expr("num", 0, value)
 
 
-_INF = math.inf
-
 #: Units are few and parsed again on every line: memoise the one grammar's result
 #: (a Unit is immutable; a failing unit raises each time, uncached).
 _unit = functools.lru_cache(maxsize=1024)(parse_unit)
@@ -170,12 +168,12 @@ class _Line:
 
     def _split(self, text: str) -> list[_Token]:
         tokens: list[_Token] = []
-        i, n = 0, len(text)
+        end = len(text)         # where a comment starts, or the line's end
         start = None
         brace = None
-        while i < n:
-            c = text[i]
+        for i, c in enumerate(text):
             if brace is None and c in "#;":
+                end = i
                 break
             if c == "{":
                 if brace is not None:
@@ -193,11 +191,10 @@ class _Line:
                     start = None
             elif start is None:
                 start = i
-            i += 1
         if brace is not None:
             self.error("'{' is never closed", brace + 1, "'}' at the end of the expression")
         if start is not None:
-            tokens.append(_Token(text[start:i], start + 1))
+            tokens.append(_Token(text[start:end], start + 1))
         return tokens
 
 
@@ -611,7 +608,7 @@ class _Parser:
         One loop over the run with everything bound locally: per line, this is most
         of the parse time of a large netlist."""
         names, expressions, elements = self.names, self.expressions, self.elements
-        append, unit_of, inf, make = elements.append, _unit, _INF, _make_element
+        append, unit_of, inf, make = elements.append, _unit, math.inf, _make_element
         for lineno, kind, m in run:
             indent, _, name, n1, n2, number, unit, eta_text = m.groups()
             name = str(int(name)) if name.isdigit() else name
