@@ -389,8 +389,7 @@ class _Parser:
             parsed.append(line)
             if line.tokens[0].text.lower() == ".param":
                 for tok in line.tokens[1:]:
-                    name = tok.text.split("=", 1)[0]
-                    self.param_lines.setdefault(name, lineno)
+                    self.param_lines.setdefault(tok.text.split("=", 1)[0], lineno)
         return parsed
 
     def _build(self, parsed: list) -> None:
@@ -427,11 +426,10 @@ class _Parser:
 
     def _check_initial(self) -> None:
         """Each ``.ic`` names a node some element uses, other than the frame, once."""
-        known: set[str] = set()
-        if self.initial:
-            known = {n for e in self.elements for n in (e.n1, e.n2)}
-            known |= {n for lv in self.levers for n in (lv.p1, lv.p2, lv.s1, lv.s2)}
-            known |= {n for d in self.drives for n in (d.n1, d.n2)}
+        # (the elements' nodes only when needed: a netlist may have 10⁶ elements)
+        known = {n for e in self.elements for n in (e.n1, e.n2)} if self.initial else set()
+        known |= {n for lv in self.levers for n in (lv.p1, lv.p2, lv.s1, lv.s2)}
+        known |= {n for d in self.drives for n in (d.n1, d.n2)}
         seen_ic: dict[str, int] = {}
         for node, _, _, lineno, col in self.initial:
             if node == "0":
