@@ -11,7 +11,7 @@ Re-exported by :mod:`mechcirc.reduction`.
 from __future__ import annotations
 
 import weakref
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
@@ -326,9 +326,9 @@ class Plan:
     numpy: tuple | None = None
 
     def arrays(self) -> tuple:
-        return (self.kind, self.cplx, self.c_real, self.c_inv, self.c_om, self.e_real,
-                self.e_inv, self.e_om, self.mu, self.kstart, self.kids, self.ratio,
-                self.slot, self.n_slots)
+        """The arguments of :func:`mechcirc._sp_kernel.evaluate_plan` after ω: the fields
+        from ``kind`` to ``n_slots``, in order."""
+        return tuple(getattr(self, f.name) for f in fields(self)[:14])
 
     @property
     def designs(self) -> int:
@@ -339,8 +339,9 @@ class Plan:
         """The same plan for D designs: ``scaled[l, d]`` is value·η of leaf ``leaves[l]``
         in design d, ``ratios[r, d]`` the ratio of lever ``levers[r]`` (default: its own)."""
         scaled = np.asarray(scaled, dtype=float)
-        if ratios is None:
-            ratios = np.array([[lv.ratio] for lv in self.levers], dtype=float).reshape(-1, 1)
+        if ratios is None:          # each lever's own ratio in every design
+            ratios = np.array([[lv.ratio] for lv in self.levers], dtype=float).reshape(-1, 1) \
+                .repeat(scaled.shape[-1], axis=1)
         return _fold_values(self.kind, self.kstart, self.kids, self.slot, self.n_slots,
                             self.leaves, self.levers, self._fold, scaled,
                             np.asarray(ratios, dtype=float))
@@ -352,6 +353,13 @@ _PLANS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
 _KIND_CODE = {kind: i for i, kind in enumerate(LAWS)}
 
 
+def _slot_term(kind: str, series, real, inv, om) -> tuple[int, Any]:
+    """``(slot, coefficient)`` of an element of ``kind`` whose law gives ``real + j(inv/ω +
+    om·ω)`` in a series node (``series``) or a parallel one (see :func:`_leaf_term`)."""
+    slot = LAWS[kind].power if series else -LAWS[kind].power
+    return slot, (real if slot == 0 else om if slot > 0 else inv)
+
+
 def _leaf_table() -> tuple:
     """Arrays indexed ``[kind code, series]`` of slot, coefficient and ``divides``,
     read off :func:`~mechcirc.circuit.law_terms` at unit value: a leaf's term is
@@ -361,12 +369,9 @@ def _leaf_table() -> tuple:
     slot = np.zeros((len(_KIND_CODE), 2), dtype=np.int64)
     coef = np.zeros((len(_KIND_CODE), 2))
     for kind, code in _KIND_CODE.items():
-        p = LAWS[kind].power
         for series in (0, 1):
-            sl = p if series else -p
-            real, inv, om = law_terms(kind, 1.0, admittance=not series)
-            slot[code, series] = sl
-            coef[code, series] = real if sl == 0 else om if sl > 0 else inv
+            slot[code, series], coef[code, series] = _slot_term(
+                kind, series, *law_terms(kind, 1.0, admittance=not series))
     return slot, coef
 
 
@@ -402,23 +407,20 @@ def _flat_nodes(root: Node) -> tuple:
             continue
         if cls is Reflect:
             c = node.child
-            ci = lone_leaf(c.element) if type(c) is Leaf else index[id(c)]
+            kids.append(lone_leaf(c.element) if type(c) is Leaf else index[id(c)])
             kind.append(2)
-            kids.append(ci)
-            kstart.append(len(kids))
             levers.append(node.lever)
-            index[id(node)] = len(kind) - 1
-            continue
-        me = len(kind)
-        kind.append(0 if cls is Series else 1)
-        for c in node.children:
-            if type(c) is Leaf:
-                leaf_of.append(me)
-                leaf_el.append(c.element)
-            else:
-                kids.append(index[id(c)])
+        else:
+            me = len(kind)
+            kind.append(0 if cls is Series else 1)
+            for c in node.children:
+                if type(c) is Leaf:
+                    leaf_of.append(me)
+                    leaf_el.append(c.element)
+                else:
+                    kids.append(index[id(c)])
         kstart.append(len(kids))
-        index[id(node)] = me
+        index[id(node)] = len(kind) - 1
     if type(root) is Leaf:
         lone_leaf(root.element)
     return kind, kids, kstart, leaf_of, leaf_el, levers
@@ -486,12 +488,9 @@ def _fold_values(kind, kstart, kids, slot, n_slots, leaves, levers, fold, scaled
         acc = np.zeros((3, M, D))
         np.add.at(acc, (col, owner), term)
         real, om, inv = acc[0], acc[1], acc[2]
-        U = float(_U)
-        n_kids = np.diff(kstart)[:, None]
-        m_u = (n_kids + (real != 0) + (inv != 0) + (om != 0)) * U
-        e_real = np.abs(real) * ((count[:, 0:1] + 2) * U + m_u)
-        e_inv = np.abs(inv) * ((count[:, 2:3] + 4) * U + m_u)
-        e_om = np.abs(om) * ((count[:, 1:2] + 4) * U + m_u)
+        m_u = _node_mu((real, inv, om), np.diff(kstart)[:, None])
+        e_real, e_inv, e_om = _leaf_bound_terms((real, inv, om), (
+            count[:, 0:1], count[:, 2:3], count[:, 1:2]), m_u)
     lever = kind == 2
     m_u[lever] = 0.0
     ratio = np.zeros((M, D))
@@ -499,12 +498,9 @@ def _fold_values(kind, kstart, kids, slot, n_slots, leaves, levers, fold, scaled
     # A node has a real part if its leaves give one (in any design) or any child has one.
     has = ((real != 0) | np.isnan(real)).any(axis=1).tolist()
     ks, kd = kstart.tolist(), kids.tolist()
-    for i in range(M):
+    for i in range(M):      # (children first: their has[] is final)
         if not has[i]:
-            for q in range(ks[i], ks[i + 1]):
-                if has[kd[q]]:
-                    has[i] = True
-                    break
+            has[i] = any(has[kd[q]] for q in range(ks[i], ks[i + 1]))
 
     def rows(x):                  # one contiguous row of M values per design
         return np.ascontiguousarray(x.T)
@@ -560,13 +556,14 @@ def evaluate_designs(p: Plan, omega: NDArray, error: bool = False, kernel=None):
     D = p.designs
     if omega.shape[0] not in (1, D):
         raise ValueError(f"omega must have 1 or {D} rows, got shape {omega.shape}")
-    if kernel is None:
-        if p.numpy is None:
-            raise RuntimeError("evaluating this plan needs numba (pip install numba)")
-        return _evaluate_numpy(p.numpy, omega, D, error)
+    if kernel is None and p.numpy is None:
+        raise RuntimeError("evaluating this plan needs numba (pip install numba)")
     K = np.empty((D, omega.shape[1]), dtype=complex)
     rho = np.empty(K.shape if error else (D, 0))
-    kernel(omega, *p.arrays(), error, K, rho)
+    if kernel is None:
+        _evaluate_numpy(p.numpy, omega, error, K, rho)
+    else:
+        kernel(omega, *p.arrays(), error, K, rho)
     return K, (rho if error else None)
 
 
@@ -574,12 +571,11 @@ def evaluate_designs(p: Plan, omega: NDArray, error: bool = False, kernel=None):
 _NUMPY_CHUNK = 1 << 16
 
 
-def _evaluate_numpy(numpy: tuple, omega: NDArray, D: int, error: bool):
-    """:func:`evaluate_designs` by :func:`evaluate` over rows of designs."""
+def _evaluate_numpy(numpy, omega: NDArray, error: bool, K: NDArray, rho: NDArray) -> None:
+    """:func:`evaluate_designs` by :func:`evaluate` over rows of designs, into ``K`` and
+    ``rho`` (``numpy`` is :attr:`Plan.numpy`)."""
     root, scaled, ratios = numpy
-    W = omega.shape[1]
-    K = np.empty((D, W), dtype=complex)
-    rho = np.empty(K.shape if error else (D, 0))
+    D, W = K.shape
     step = max(1, _NUMPY_CHUNK // max(W, 1))
     for lo in range(0, D, step):
         part = slice(lo, lo + step)
@@ -590,7 +586,6 @@ def _evaluate_numpy(numpy: tuple, omega: NDArray, D: int, error: bool):
             K[part], rho[part] = out
         else:
             K[part] = out
-    return K, (rho if error else None)
 
 
 class _Value:
@@ -672,9 +667,8 @@ def _leaf_term(e: Element, series: bool, fast: bool = False,
                                  law_terms(e.kind, _scaled(e), admittance=not series))
     else:
         real, inv, om = law_terms(e.kind, _scaled(e, designs), admittance=not series)
-    p = LAWS[e.kind].power
-    slot = p if series else -p
-    return slot, (real if slot == 0 else om if slot > 0 else inv)
+    return _slot_term(e.kind, series, real, inv, om)
+
 
 
 def _combine(parts: list, omega, inv_omega, zero, keep: bool, checked: bool,
@@ -738,7 +732,7 @@ def _node_bound(total: _Value, parts: list, omega, inv_omega, groups: list, zero
         mu = _node_mu(sums, len(parts))
         # (0-d arrays: see _ZERO)
         bterms = groups[4] = (np.asarray(mu), np.asarray(_U_RECIP + mu), tuple(
-            np.asarray(t) for t in _leaf_bound_terms(sums, counts, len(parts))))
+            np.asarray(t) for t in _leaf_bound_terms(sums, counts, mu)))
     mu, c, (b_real, b_inv, b_omega) = bterms
     # The leaf groups' share: b_real + b_inv/ω + b_omega·ω.
     bound = b_inv * inv_omega if has[1] else None
@@ -782,22 +776,17 @@ def _leaf_groups(node, designs) -> list:
     leaves), which of the three take part, and ``(m·u, 4u + m·u, the leaves' share of
     the bound)`` (:func:`_leaf_bound_terms`), None until :func:`_combine` first needs it."""
     series = isinstance(node, Series)
-    sums, counts = _fold_leaves(node, series, designs, fast=designs is None)
-    has = tuple(n > 0 for n in counts) if designs is not None else \
-        tuple(bool(t) for t in sums)
-    return [series, sums, counts, has, None]
-
-
-def _fold_leaves(node, series: bool, designs, fast: bool = False) -> tuple[list, list]:
     sums: list = [0.0, 0.0, 0.0]
     counts = [0, 0, 0]
     for c in node.children:
         if isinstance(c, Leaf):
-            slot, term = _leaf_term(c.element, series, fast, designs)
+            slot, term = _leaf_term(c.element, series, designs is None, designs)
             i = 0 if slot == 0 else (2 if slot > 0 else 1)
             sums[i] += term
             counts[i] += 1
-    return sums, counts
+    has = tuple(n > 0 for n in counts) if designs is not None else \
+        tuple(bool(t) for t in sums)
+    return [series, sums, counts, has, None]
 
 
 def _node_mu(sums, n_parts: int):
@@ -806,13 +795,13 @@ def _node_mu(sums, n_parts: int):
     return (n_parts + (real != 0) + (im_inv != 0) + (im_omega != 0)) * _U
 
 
-def _leaf_bound_terms(sums, counts, n_parts: int) -> tuple:
+def _leaf_bound_terms(sums, counts, mu) -> tuple:
     """``(real, inv, omega)`` coefficients of the leaf groups' share of Σ |tᵢ| (ρᵢ + m·u)
-    (see :func:`evaluate`): the share is real + inv/ω + omega·ω.
+    (see :func:`evaluate`), ``mu`` = m·u (:func:`_node_mu`): the share is real + inv/ω +
+    omega·ω; scalars for a node of :func:`evaluate`, arrays for :func:`plan`'s nodes.
 
     A group of n same-signed scalars summed has ρ = n·u, and 2u more for value·η and 1/s,
     and 2u more (the imaginary groups) for the product with ω or 1/ω."""
-    mu = _node_mu(sums, n_parts)
     return tuple(abs(t) * ((n + extra) * _U + mu)
                  for t, n, extra in zip(sums, counts, (2, 4, 4)))
 

@@ -38,6 +38,7 @@ import gc
 import math
 import os
 import re
+import warnings
 from dataclasses import dataclass, fields
 from typing import Mapping, NoReturn
 from pathlib import Path
@@ -144,8 +145,6 @@ if tuple(f.name for f in fields(Expr)) != ("kind", "col", "value", "args"):
         return Expr("num", 0, value)
 
 
-_INF = math.inf
-
 #: Units are few and parsed again on every line: memoise the one grammar's result
 #: (a Unit is immutable; a failing unit raises each time, uncached).
 _unit = functools.lru_cache(maxsize=1024)(parse_unit)
@@ -169,12 +168,12 @@ class _Line:
 
     def _split(self, text: str) -> list[_Token]:
         tokens: list[_Token] = []
-        i, n = 0, len(text)
+        end = len(text)         # where a comment starts, or the line's end
         start = None
         brace = None
-        while i < n:
-            c = text[i]
+        for i, c in enumerate(text):
             if brace is None and c in "#;":
+                end = i
                 break
             if c == "{":
                 if brace is not None:
@@ -192,11 +191,10 @@ class _Line:
                     start = None
             elif start is None:
                 start = i
-            i += 1
         if brace is not None:
             self.error("'{' is never closed", brace + 1, "'}' at the end of the expression")
         if start is not None:
-            tokens.append(_Token(text[start:i], start + 1))
+            tokens.append(_Token(text[start:end], start + 1))
         return tokens
 
 
@@ -311,20 +309,21 @@ class _Parser:
         self.node_kinds: dict[str, dict[bool, tuple[str, str, int]]] = {}
 
     # -- expressions -----------------------------------------------------
-    def expr(self, line: _Line, text: str, col: int, *, defined: dict[str, float],
-             key: tuple[str, str] | None = None) -> float:
+    def expr(self, line: _Line, tok: _Token, key: tuple[str, str] | None = None) -> float:
+        """The value of the expression ``tok`` over the parameters defined so far."""
+        text, col = tok.text, tok.col
         if text.startswith("{") and text.endswith("}"):      # one pair of enclosing braces
             text, col = text[1:-1], col + 1
         if not text.strip():
             line.error("empty expression", col, "a number or an expression")
         tree: Expr = parse_expression(text, source=self.source, line=line.lineno, col=col)
         for name in sorted(tree.names()):
-            if name not in defined and name not in CONSTANTS and name in self.param_lines:
+            if name not in self.params and name not in CONSTANTS and name in self.param_lines:
                 where = col + text.find(name)
                 line.error(f"parameter {name!r} is used before it is defined "
                            f"(on line {self.param_lines[name]})", where,
                            "parameters defined on earlier .param lines or earlier on this line")
-        value = evaluate(tree, defined, source=self.source, line=line.lineno, col=col)
+        value = evaluate(tree, self.params, source=self.source, line=line.lineno, col=col)
         if key is not None:
             self.expressions[key] = (tree, 1.0)
         if not math.isfinite(value):
@@ -374,14 +373,12 @@ class _Parser:
                 raise NetlistError(f"line is {len(raw)} characters long, the limit is "
                                    f"{MAX_LINE_LENGTH}", self.source, lineno, 1)
             m = fast(raw)
-            if m is not None:
-                kind = _FAST_KINDS.get(m.group(2).lower())
-                if kind is not None:
-                    if run is None:
-                        run = []
-                        parsed.append(run)
-                    run.append((lineno, kind, m))
-                    continue
+            if m is not None and (kind := _FAST_KINDS.get(m.group(2).lower())) is not None:
+                if run is None:
+                    run = []
+                    parsed.append(run)
+                run.append((lineno, kind, m))
+                continue
             run = None
             line = _Line(raw, self.source, lineno)
             if not line.tokens:
@@ -392,8 +389,7 @@ class _Parser:
             parsed.append(line)
             if line.tokens[0].text.lower() == ".param":
                 for tok in line.tokens[1:]:
-                    name = tok.text.split("=", 1)[0]
-                    self.param_lines.setdefault(name, lineno)
+                    self.param_lines.setdefault(tok.text.split("=", 1)[0], lineno)
         return parsed
 
     def _build(self, parsed: list) -> None:
@@ -402,22 +398,19 @@ class _Parser:
             if type(line) is _Line and line.tokens[0].text.lower() == ".param":
                 self.param(line)
         handlers = {"mass": self.element, "spring": self.element, "damper": self.element,
-                    "lever": self.lever, "drive": self.drive, ".ic": self.ic}
+                    "lever": self.lever, "drive": self.drive, ".ic": self.ic,
+                    ".param": lambda line, keyword: None}       # (read above)
         for line in parsed:
             if type(line) is list:
                 self.fast_elements(line)
                 continue
             keyword = line.tokens[0].text.lower()
-            if keyword == ".param":
-                continue
-            handler = handlers.get(keyword)
-            if handler is None:
+            if keyword not in handlers:
                 word = line.tokens[0].text
                 line.error(f"unknown keyword {word!r}{did_you_mean(word.lower(), KEYWORDS)}",
                            line.tokens[0].col,
                            "one of .param, .ic, mass, spring, damper, lever, drive")
-            else:
-                handler(line, keyword)
+            handlers[keyword](line, keyword)
 
     def _check_complete(self, parsed: list) -> None:
         if not parsed:
@@ -433,11 +426,10 @@ class _Parser:
 
     def _check_initial(self) -> None:
         """Each ``.ic`` names a node some element uses, other than the frame, once."""
-        known: set[str] = set()
-        if self.initial:
-            known = {n for e in self.elements for n in (e.n1, e.n2)}
-            known |= {n for lv in self.levers for n in (lv.p1, lv.p2, lv.s1, lv.s2)}
-            known |= {n for d in self.drives for n in (d.n1, d.n2)}
+        # (the elements' nodes only when needed: a netlist may have 10⁶ elements)
+        known = {n for e in self.elements for n in (e.n1, e.n2)} if self.initial else set()
+        known |= {n for lv in self.levers for n in (lv.p1, lv.p2, lv.s1, lv.s2)}
+        known |= {n for d in self.drives for n in (d.n1, d.n2)}
         seen_ic: dict[str, int] = {}
         for node, _, _, lineno, col in self.initial:
             if node == "0":
@@ -515,13 +507,11 @@ class _Parser:
                 line.error(f"parameter {name!r} is defined twice "
                            f"(first on line {self.param_lines[name]})", tok.col)
             value_tok, unit_tok = _glued(_Token(rhs, tok.col + len(name) + 1))
-            self.params[name] = self.expr(line, value_tok.text, value_tok.col,
-                                          defined=self.params, key=("param", name))
-            previous = name
+            self.params[name] = self.expr(line, value_tok, ("param", name))
+            previous = name if unit_tok is None else None       # a unit may follow
             if unit_tok is not None:
                 self.params[name] = self.with_unit(line, self.params[name], unit_tok, "param",
                                                    ("param", name))
-                previous = None
             if name in self.overrides:
                 given = self.overrides[name]
                 try:
@@ -559,23 +549,20 @@ class _Parser:
                                else f"no options: {SYNTAX[keyword]}")
                 if head in options:
                     line.error(f"option {head!r} given twice", tok.col)
-                value_tok, unit_tok = _glued(_Token(tok.text[len(head) + 1:],
-                                                    tok.col + len(head) + 1))
-                options[head] = value_tok
-                previous = head
+                options[head], unit_tok = _glued(_Token(tok.text[len(head) + 1:],
+                                                        tok.col + len(head) + 1))
+                previous = head if unit_tok is None else None       # a unit may follow
                 if unit_tok is not None:
                     units[head] = unit_tok
-                    previous = None
             else:
                 if options:
                     line.error(f"{tok.text!r} after the options", tok.col, SYNTAX[keyword])
                 if len(positional) == _VALUE_INDEX.get(keyword):
                     tok, unit_tok = _glued(tok)
+                    previous = "value" if unit_tok is None else None    # a unit may follow
                     if unit_tok is not None:
                         units["value"] = unit_tok
                 positional.append(tok)
-                if len(positional) - 1 == _VALUE_INDEX.get(keyword) and "value" not in units:
-                    previous = "value"
         _check_count(line, keyword, npos, positional)
         return positional, options, units
 
@@ -596,22 +583,20 @@ class _Parser:
     def _two_ends(self, line: _Line, pos: list[_Token], what: str) -> tuple[str, str, str]:
         """The new name and the two nodes (they must differ) of an element or drive line."""
         name = self._new_name(line, pos[0])
-        n1 = self._name(line, pos[1], "node name")
-        n2 = self._name(line, pos[2], "node name")
+        n1, n2 = [self._name(line, t, "node name") for t in pos[1:3]]
         if n1 == n2:
             line.error(f"both ends of {what} {name!r} are node {n1!r}", pos[2].col,
                        "two different nodes")
         return name, n1, n2
 
-    def _positive(self, line: _Line, tok: _Token, what: str, unit: str, *,
-                  unit_tok: _Token | None = None, role: str | None = None,
-                  key: tuple[str, str] | None = None) -> float:
-        value = self.expr(line, tok.text, tok.col, defined=self.params, key=key)
-        if role is not None:
-            value = self.with_unit(line, value, unit_tok, role, key)
-        if not value > 0:
-            line.error(f"{what} must be > 0{' ' + unit if unit else ''}, got {value:g}",
-                       tok.col, "a positive value")
+    def _value(self, line: _Line, tok: _Token, what: str, unit_tok: _Token | None, role: str,
+               key: tuple[str, str], *, unit: str = "", zero: bool = False,
+               expected: str = "a positive value") -> float:
+        """The value of ``tok`` in SI (by its unit), refused unless > 0 (>= 0 with ``zero``)."""
+        value = self.with_unit(line, self.expr(line, tok, key), unit_tok, role, key)
+        if not (value >= 0 if zero else value > 0):
+            line.error(f"{what} must be {'>=' if zero else '>'} 0{unit}, got {value:g}", tok.col,
+                       expected)
         return value
 
     def fast_elements(self, run: list) -> None:
@@ -621,15 +606,12 @@ class _Parser:
         One loop over the run with everything bound locally: per line, this is most
         of the parse time of a large netlist."""
         names, expressions, elements = self.names, self.expressions, self.elements
-        append, unit_of, inf, make = elements.append, _unit, _INF, _make_element
+        append, unit_of, inf, make = elements.append, _unit, math.inf, _make_element
         for lineno, kind, m in run:
             indent, _, name, n1, n2, number, unit, eta_text = m.groups()
-            if name.isdigit():
-                name = str(int(name))
-            if n1.isdigit():
-                n1 = str(int(n1))
-            if n2.isdigit():
-                n2 = str(int(n2))
+            name = str(int(name)) if name.isdigit() else name
+            n1 = str(int(n1)) if n1.isdigit() else n1
+            n2 = str(int(n2)) if n2.isdigit() else n2
             value = raw = float(number)
             eta = 1.0 if eta_text is None else float(eta_text)
             u = None
@@ -657,27 +639,22 @@ class _Parser:
         allowed = ("eta", "backlash", "damping") if kind == "spring" else ("eta",)
         pos, opts, units = self._fields(line, kind, 4, allowed)
         name, n1, n2 = self._two_ends(line, pos, kind)
-        value = self._positive(line, pos[3], f"{kind} {name!r}", ELEMENT_UNITS[kind],
-                               unit_tok=units.get("value"), role=kind, key=(name, "value"))
+        value = self._value(line, pos[3], f"{kind} {name!r}", units.get("value"), kind,
+                            (name, "value"), unit=" " + ELEMENT_UNITS[kind])
         if "value" in units:
             unit_tok = units["value"]
             self._note_kind(line.lineno, name, _unit(unit_tok.text), unit_tok.text,
                             unit_tok.col, (n1, n2))
-        eta = self._positive(line, opts["eta"], f"eta of {name!r}", "",
-                             unit_tok=units.get("eta"), role="eta", key=(name, "eta")) \
-            if "eta" in opts else 1.0
+        eta = self._value(line, opts["eta"], f"eta of {name!r}", units.get("eta"), "eta",
+                          (name, "eta")) if "eta" in opts else 1.0
         spring = {"backlash": 0.0, "damping": 0.0}
         for key, role, unit, expected in (
                 ("backlash", "displacement", "", "a total clearance >= 0 (length or angle)"),
                 ("damping", "damper", " N·s/m", "a damping coefficient >= 0")):
             if key in opts:
-                tok = opts[key]
-                x = self.expr(line, tok.text, tok.col, defined=self.params, key=(name, key))
-                x = self.with_unit(line, x, units.get(key), role, (name, key))
-                if not x >= 0:
-                    line.error(f"{key} of {name!r} must be >= 0{unit}, got {x:g}", tok.col,
-                               expected)
-                spring[key] = x
+                spring[key] = self._value(line, opts[key], f"{key} of {name!r}", units.get(key),
+                                          role, (name, key), unit=unit, zero=True,
+                                          expected=expected)
         backlash, damping = spring["backlash"], spring["damping"]
         self.elements.append(Element(kind, name, n1, n2, value, eta, line.lineno,
                                      line.tokens[0].col, backlash))
@@ -699,9 +676,7 @@ class _Parser:
         values = {}
         for key, role in (("x", "displacement"), ("v", "velocity")):
             if key in opts:
-                tok = opts[key]
-                value = self.expr(line, tok.text, tok.col, defined=self.params)
-                values[key] = self.with_unit(line, value, units.get(key), role)
+                values[key] = self.with_unit(line, self.expr(line, opts[key]), units.get(key), role)
         if not values:
             line.error(f".ic for node {node!r} gives neither x= nor v=",
                        line.tokens[-1].col + len(line.tokens[-1].text), SYNTAX[".ic"])
@@ -720,10 +695,7 @@ class _Parser:
             seen = self.node_kinds.setdefault(node, {})
             other = seen.get(not rot)
             if other is not None and rot not in seen:
-                import warnings
-
-                kinds = ("rotational", "translational") if rot else ("translational",
-                                                                   "rotational")
+                kinds = ("rotational", "translational")[::1 if rot else -1]
                 warnings.warn(UnitMixWarning(
                     f"{self.source}:{lineno}:{col}: node {node!r} gets a "
                     f"{kinds[0]} unit ({unit_text!r} of {name!r}) and a {kinds[1]} one "
@@ -742,8 +714,8 @@ class _Parser:
                            "two different nodes")
         if "ratio" not in opts:
             line.error(f"lever {name!r} needs ratio=EXPR", line.tokens[-1].col, SYNTAX["lever"])
-        ratio = self._positive(line, opts["ratio"], f"ratio of lever {name!r}", "",
-                               unit_tok=units.get("ratio"), role="ratio", key=(name, "ratio"))
+        ratio = self._value(line, opts["ratio"], f"ratio of lever {name!r}", units.get("ratio"),
+                            "ratio", (name, "ratio"))
         self.levers.append(Lever(name, p1, p2, s1, s2, ratio, line.lineno, line.tokens[0].col))
 
     def drive(self, line: _Line, kind: str):
@@ -770,7 +742,7 @@ class _Parser:
             line.error("a drive needs exactly one of velocity=EXPR, force=EXPR or motion=",
                        where, SYNTAX["drive"])
         (key, tok), = opts.items()
-        amplitude = self.expr(line, tok.text, tok.col, defined=self.params, key=(name, key))
+        amplitude = self.expr(line, tok, (name, key))
         amplitude = self.with_unit(line, amplitude, units.get(key), key, (name, key))
         # rad/s or N·m: a rotary drive (no unit: decided by its nodes' elements, in build)
         self.drive_rotational = None if units.get(key) is None else \
@@ -824,15 +796,13 @@ class _Parser:
                            f"got {units[key].text!r} after it", units[key].col,
                            "the stroke's unit after stroke= (stroke=20 mm, stroke=30 deg); "
                            "the angles after rise=, dwell=, return= (degrees by default)")
-        values = {}
+        values = {"dwell": 0.0}
         for key in ("rise", "dwell", "return", "stroke"):
             if key not in opts:
                 if key == "dwell":
-                    values[key] = 0.0
                     continue
                 line.error(f"motion={text} needs {key}=", tok.col, SYNTAX["drive"])
-            t = opts[key]
-            v = self.expr(line, t.text, t.col, defined=self.params)
+            v = self.expr(line, opts[key])
             if key == "stroke":
                 v = self.with_unit(line, v, units.get(key), "displacement")
                 if key in units:    # an angle: a rotary drive (a length: translational)

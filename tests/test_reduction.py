@@ -366,3 +366,21 @@ def test_a_long_series_run_grown_at_its_front_keeps_every_spring(monkeypatch):
     ref = [complex(1j * mpmath.mpf(w) * compliance + 1 / (1j * mpmath.mpf(w) * 2.5))
            for w in omega]
     np.testing.assert_allclose(K, ref, rtol=1e-14)
+
+
+def test_plan_with_values_defaults_to_each_levers_own_ratio_for_many_designs():
+    """``Plan.with_values(scaled)`` without ``ratios`` gives every design the levers'
+    own ratios (its docstring), for D > 1 as for D = 1: the same plan as with those
+    ratios written out (it raised a shape error for D > 1)."""
+    from mechcirc import _tree_eval
+
+    c = mechcirc.parse("drive V a 0 velocity=1\nmass m a 0 2\nlever L a 0 b 0 ratio=3\n"
+                       "spring k b 0 50\ndamper c b 0 0.5\n")
+    p = _tree_eval.plan(c.tree)
+    assert len(p.levers) == 1 and len(p.leaves) == 3
+    scaled = np.array([[e.value * e.eta] for e in p.leaves]) * np.array([[1.0, 2.0, 0.5]])
+    got = p.with_values(scaled)
+    want = p.with_values(scaled, np.full((1, 3), 3.0))
+    assert got.designs == 3
+    for a, b in zip(got.arrays(), want.arrays()):
+        np.testing.assert_array_equal(a, b)
