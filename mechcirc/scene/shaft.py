@@ -53,8 +53,8 @@ import numpy as np
 from ..errors import MechcircError, ShaftWarning, SolverError
 from ..sources import data_frame, summary_repr
 from .files import Scene
-from .motion import (MotionModel, body_tables, function_args, function_rows, hermite_table,
-                     moment_centre, motion_model)
+from .motion import (Builder, MotionModel, body_tables, function_args, hermite_table,
+                     kernel_arrays, moment_centre, motion_model)
 from .simfile import Motor, Shaft, kloss_motor, parse_shaft, table_motor  # noqa: F401
 from .simulation import check_strokes, kernels_for, max_rate, output_units, refined_extremes
 
@@ -216,15 +216,16 @@ def rigid_model(scene: Scene, N: int = 1024):
     (ang, ang1, ang2, pos, vel, acc), _ = body_tables(scene, N)
     cyc, nodes = scene.cycle, N * scene.cycle_revolutions
     h = cyc / nodes
-    FI, FF, tabs = [[2, -1, 0]], [[0.0, 1.0, 0.0, 0.0, 1.0, 0.0]], [np.zeros((nodes, 6))]
+    B = Builder(nodes, cyc)
+    B.line(-1, 0.0, 1.0)                        # the drive's part: θ itself
 
     def table(f, f1, f2, turns=False):
         w = round((f[-1] - f[0]) / (2 * math.pi)) * 2 * math.pi / cyc if turns else 0.0
         q = h * np.arange(f.size)
-        tabs.append(hermite_table(h, f - w * q, f1 - w, f2))
-        FI.append([0, 0, len(tabs) - 1])
-        FF.append([0.0, 0.0, cyc, 0.0, h, w])
-        return len(FI) - 1
+        B.tabs.append(hermite_table(h, f - w * q, f1 - w, f2))
+        B.FI.append([0, 0, len(B.tabs) - 1])
+        B.FF.append([0.0, 0.0, cyc, 0.0, h, w])
+        return len(B.FI) - 1
     MI, MW = [], []
     for m in scene.masses:
         if m.kind == "mass":
@@ -235,23 +236,12 @@ def rigid_model(scene: Scene, N: int = 1024):
             MI.append(table(ang[m.link], ang1[m.link], ang2[m.link], True))
             MW.append(m.value)
     MOI, MOF = [], []
-    for mo in scene.moments:
-        FI.append([2, 0, 0])                    # the window's angle: θ itself
-        FF.append([0.0, 1.0, 0.0, 0.0, 1.0, 0.0])
-        MOI.append([len(FI) - 1, table(ang[mo.body], ang1[mo.body], ang2[mo.body], True)])
+    for mo in scene.moments:                    # the window's angle: θ itself
+        MOI.append([B.line(0, 0.0, 1.0), table(ang[mo.body], ang1[mo.body], ang2[mo.body], True)])
         MOF.append([mo.amplitude, mo.window, mo.sigma, float(moment_centre(scene, mo))])
-    return _one_part_model(scene, FI, FF, tabs, MI, MW, MOI, MOF)
-
-
-def _one_part_model(scene: Scene, FI, FF, tabs, MI, MW, MOI, MOF):
-    """The :class:`~mechcirc.scene.motion.MotionModel` of :func:`rigid_model`'s tables: one
-    part (the drive's), no elastic elements."""
-    i8 = np.int64
-    arrays = {"FI": np.array(FI, i8), "FF": function_rows(FI, FF), "tabs": np.array(tabs),
-              "MI": np.array(MI, i8), "MW": np.array(MW, float),
-              "EI": np.zeros((0, 8), i8), "EF": np.zeros((0, 10)),
-              "MOI": np.array(MOI, i8).reshape(-1, 2), "MOF": np.array(MOF).reshape(-1, 4),
-              "PRIG": np.array([0], i8), "BI": np.zeros(0, i8), "n_dyn": len(FI)}
+    # one part (the drive's), no elastic elements
+    arrays = kernel_arrays(B, len(B.FI), dict(MI=MI, MW=MW, EI=[], EF=[], MOI=MOI, MOF=MOF,
+                                              PRIG=[0], BI=[]))
     return MotionModel(scene=scene, omega=abs(scene.linkage.cranks[0].omega),
                        parts=((),), coordinate=("",), bodies=(), elements=(),
                        moments=tuple(mo.name for mo in scene.moments), arrays=arrays,
@@ -555,9 +545,9 @@ def _over_cycle(eq, th0, cycle, x0, rtol, scale, dense=False, floor=1e-6):
     where θ̇ falls to ``floor`` × the motor's speed scale (a stall)."""
     from scipy.integrate import solve_ivp
 
+    Y0 = np.concatenate(([x0[0], 0.0], x0[1:]))       # [θ̇, t, z]
     if eq.steps:
-        return eq.run(np.concatenate(([x0[0], 0.0], x0[1:])), True, th0, cycle / eq.steps,
-                      eq.steps, floor * scale, record=dense)
+        return eq.run(Y0, True, th0, cycle / eq.steps, eq.steps, floor * scale, record=dense)
     calls = [0]
 
     def f(th, Y):
@@ -574,9 +564,8 @@ def _over_cycle(eq, th0, cycle, x0, rtol, scale, dense=False, floor=1e-6):
     def stall(th, Y):
         return Y[0] - floor * scale
     stall.terminal = True
-    atol = _atol(rtol, scale, eq.n)
-    return solve_ivp(f, (th0, th0 + cycle), np.concatenate(([x0[0], 0.0], x0[1:])),
-                     method="DOP853", rtol=rtol, atol=atol, events=stall, dense_output=dense)
+    return solve_ivp(f, (th0, th0 + cycle), Y0, method="DOP853", rtol=rtol,
+                     atol=_atol(rtol, scale, eq.n), events=stall, dense_output=dense)
 
 
 def _atol(rtol, scale, n):
