@@ -272,11 +272,9 @@ def linear_matrices(model: MotionModel, theta: float):
         yp[i] += step
         ym[i] -= step
         G[:, i] = (deformations(yp) - deformations(ym)) / (2 * step)
-    k = args[7][:, 0]
-    d = args[7][:, 1]
-    # element gradients w.r.t. the prescribed part do not enter; loads are linear anyway
-    K = G.T @ (k[:, None] * G)
-    D = G.T @ (d[:, None] * G)
+    # Σ k ∇δ ∇δᵀ and Σ d ∇δ ∇δᵀ (columns 0, 1 of EF); element gradients w.r.t. the
+    # prescribed part do not enter; loads are linear anyway
+    K, D = (G.T @ (args[7][:, j, None] * G) for j in (0, 1))
     a = model.arrays
     m = np.zeros(n + 1)
     for f, w in zip(a["MI"], a["MW"]):
@@ -316,15 +314,10 @@ def max_rate(model: MotionModel, samples: int = 72) -> float:
     -------
     float
     """
-    return _last_of(model, "max_rate", samples, lambda: _max_rate(model, samples))
-
-
-def _max_rate(model: MotionModel, samples: int) -> float:
-    def rate(th):               # the fastest mode's |λ| of the linearised motion at θ
-        return np.max(np.abs(np.linalg.eigvals(state_matrix(*linear_matrices(model, th)))))
-
-    return float(max(rate(th) for th in np.linspace(0.0, model.scene.cycle, samples,
-                                                    endpoint=False)))
+    # the fastest mode's |λ| of the linearised motion at each θ
+    return _last_of(model, "max_rate", samples, lambda: float(max(
+        np.max(np.abs(np.linalg.eigvals(state_matrix(*linear_matrices(model, th)))))
+        for th in np.linspace(0.0, model.scene.cycle, samples, endpoint=False))))
 
 
 def state_matrix(M, D, K):
@@ -562,9 +555,8 @@ def _simulate_scipy(ctx, error_estimate, notes, compile_time):
     ref_tol = max(rtol / 100, SCIPY_RTOL_FLOOR)
     if not error_estimate or ref_tol > rtol / 10:
         ref_tol = rtol
-    run = _run_scipy(model, kern, theta_s, o.revolutions, o.npts, method, ref_tol, progress,
-                     ripple)
-    ts, ys, prev, wall, bad, n_steps, nfev = run
+    ts, ys, prev, wall, bad, n_steps, nfev = _run_scipy(model, kern, theta_s, o.revolutions,
+                                                       o.npts, method, ref_tol, progress, ripple)
     coarse, text = None, f"{method}, rtol {rtol:g}"
     if ref_tol < rtol:
         coarse = _run_scipy(model, kern, theta_s, o.revolutions, o.npts, method, rtol, None,
@@ -601,10 +593,7 @@ def _simulate_rk4(ctx, backend, error_estimate, notes, compile_time):
         return _run(model, kern, theta_s, ripple, per_rev, o.revolutions, o.npts, prog,
                     tableau, (last, rule.stride), start)
 
-    def steps(spp):
-        return _steps_per_cycle(rule.period, rule.rate, spp)
-
-    spp, main, other = _first_runs(run, steps, rule, progress, notes, error_estimate)
+    spp, main, other = _first_runs(run, rule, progress, notes, error_estimate)
     start = other[7] if isinstance(other, tuple) else None
     first = start[0] if start else 0
     n_steps, nfev, wall = main[6] * (o.revolutions - first), main[5], 0.0
@@ -626,7 +615,7 @@ def _simulate_rk4(ctx, backend, error_estimate, notes, compile_time):
             other, other_ext = main, check
             wall += main[3]
             spp, out, check = 2 * spp, None, None
-            main = _in_order(run(steps(spp), start=start), order)
+            main = _in_order(run(_steps_per_cycle(rule, spp), start=start), order)
             n_steps, nfev = n_steps + main[6] * (o.revolutions - first), nfev + main[5]
     if other == "diverged":
         rule.warn.append(f"the error estimate's run at {spp / 2:g} steps per period diverged: "
@@ -681,7 +670,7 @@ def _step_rule(scene, o, model, error_estimate) -> _StepRule:
     return _StepRule(period, rate, spp, auto, stride, warn)
 
 
-def _first_runs(run, steps, rule, progress, notes, error_estimate):
+def _first_runs(run, rule, progress, notes, error_estimate):
     """(steps per period, the run returned, the estimate's run): with the estimate, the run
     at half the steps over every revolution (the estimate's run), then the run at the
     step over the last :data:`ESTIMATE_REVOLUTIONS` from the first's state at their start;
@@ -689,7 +678,8 @@ def _first_runs(run, steps, rule, progress, notes, error_estimate):
     diverges is repeated at twice as many steps (noted)."""
     for spp in (rule.spp, 2 * rule.spp):
         try:
-            return (spp, *_paired_runs(run, steps(spp), progress, rule.stride, error_estimate))
+            return (spp, *_paired_runs(run, _steps_per_cycle(rule, spp), progress, rule.stride,
+                                       error_estimate))
         except SolverError:
             if not rule.auto or spp != rule.spp:
                 raise
@@ -750,15 +740,16 @@ def _step_note(period, per_rev, spp, rate, error_estimate, method="rk4"):
                if error_estimate else ""))
 
 
-def _steps_per_cycle(period, rate, spp):
-    """RK4 steps per cycle at ``spp`` steps per period of the fastest mode (even, so that
-    the estimate's run has half as many; at least 16); refused above the limit."""
-    need = period * rate * spp / TWO_PI
+def _steps_per_cycle(rule, spp):
+    """RK4 steps per cycle at ``spp`` steps per period of the fastest mode (``rule``'s
+    period and rate; even, so that the estimate's run has half as many; at least 16);
+    refused above the limit."""
+    need = rule.period * rule.rate * spp / TWO_PI
     if need > MAX_STEPS_PER_REV:
-        raise SolverError(f"the stiffest linearised mode (|λ| = {rate:.4g} 1/s) needs {need:.3g} "
-                          f"RK4 steps per revolution at steps_per_period={spp:g}, more than "
-                          f"the limit {MAX_STEPS_PER_REV:.0e}: lower the stiffest rigidity "
-                          "(stiffness), raise the inertias, or use method='LSODA'",
+        raise SolverError(f"the stiffest linearised mode (|λ| = {rule.rate:.4g} 1/s) needs "
+                          f"{need:.3g} RK4 steps per revolution at steps_per_period={spp:g}, "
+                          f"more than the limit {MAX_STEPS_PER_REV:.0e}: lower the stiffest "
+                          "rigidity (stiffness), raise the inertias, or use method='LSODA'",
                           status="too-stiff")
     return max(2 * int(math.ceil(need / 2)), 16)
 
@@ -1071,9 +1062,8 @@ def _point_accelerations(model, theta_s, ripple, ts, ys, values, positions=None)
             comp.append(acc)
             if positions is not None:
                 positions.setdefault(p, []).append(pos)
-        out[f"{p}.acceleration"] = np.hypot(comp[0], comp[1])
-        out[f"{p}.acceleration_x"] = comp[0]
-        out[f"{p}.acceleration_y"] = comp[1]
+        out.update({f"{p}.acceleration": np.hypot(comp[0], comp[1]),
+                    f"{p}.acceleration_x": comp[0], f"{p}.acceleration_y": comp[1]})
     return out
 
 
