@@ -486,10 +486,9 @@ def _options(scene, omega, revolutions, start_deg, spp, npts, method, rtol, revo
     each checked (a :class:`MechcircError` names the bad one)."""
     cfg = scene.simulate
 
-    def pick(v, k, d):
-        if v is not None:
-            return v
-        return getattr(cfg, k) if cfg is not None and getattr(cfg, k) is not None else d
+    def pick(v, k, d):          # the call's value, else the file's, else the default
+        v = getattr(cfg, k, None) if v is None else v
+        return d if v is None else v
 
     omega = pick(omega, "omega", None)
     revolutions = pick(revolutions, "revolutions", DEFAULT_REVOLUTIONS)
@@ -567,10 +566,8 @@ def _simulate_scipy(ctx, error_estimate, notes, compile_time):
     elif error_estimate:
         notes.append(f"no error estimate: rtol {rtol:g} leaves no tighter reference "
                      f"(solve_ivp's floor is {SCIPY_RTOL_FLOOR:g})")
-    return _finish(scene, model, kern, theta_s, ripple, (ts, ys, prev, wall, bad),
-                   None if coarse is None else coarse[:5],
-                   (n_steps, nfev, method, "scipy", 0, o.revolutions, compile_time),
-                   notes + [text], [], what=(o.exact_rigid, o.point_accelerations))
+    return _finish(ctx, (ts, ys, prev, wall, bad), None if coarse is None else coarse[:5],
+                   (n_steps, nfev, "scipy", 0, compile_time), notes + [text], [])
 
 
 def _simulate_rk4(ctx, backend, error_estimate, notes, compile_time):
@@ -622,11 +619,9 @@ def _simulate_rk4(ctx, backend, error_estimate, notes, compile_time):
                          "no estimate; raise steps_per_period")
     notes.append(_step_note(rule.period, main[6], spp, rule.rate, error_estimate, o.method))
     main = (*main[:3], wall + main[3], *main[4:])
-    return _finish(scene, model, kern, theta_s, ripple, main, other,
-                   (n_steps, nfev, o.method, backend, main[6], o.revolutions, compile_time),
-                   notes, rule.warn, out=out, other_extrema=other_ext, tab=(crank, None, sub),
-                   periodicity=periodicity, what=(o.exact_rigid, o.point_accelerations),
-                   check=check)
+    return _finish(ctx, main, other, (n_steps, nfev, backend, main[6], compile_time), notes,
+                   rule.warn, out=out, other_extrema=other_ext, tab=(crank, None, sub),
+                   periodicity=periodicity, check=check)
 
 
 @dataclass
@@ -767,22 +762,23 @@ def _extrema(out: dict, sub=None) -> dict:
     return {k: (a, b) for k, a, b in zip(out, lo, hi)}
 
 
-def _finish(scene, model, kern, theta_s, ripple, main, other, counts, notes, warn, out=None,
-            other_extrema=None, tab=None, periodicity=None, what=(True, True), check=None):
+def _finish(ctx, main, other, counts, notes, warn, out=None, other_extrema=None, tab=None,
+            periodicity=None, check=None):
     """Outputs, extrema, the checks and the warnings of one run → :class:`SceneMotion`.
 
-    ``main`` is the run (:func:`_run`'s tuple), ``other`` the estimate's (or None, or
-    ``"diverged"``), ``counts`` = (steps, evaluations, method, backend, steps per
-    revolution, revolutions, compile time); ``out``, ``other_extrema``: this run's outputs
+    ``ctx`` is the call's (scene, options, model, kernels, start angle, ripple, progress),
+    ``main`` the run (:func:`_run`'s tuple), ``other`` the estimate's (or None, or
+    ``"diverged"``), ``counts`` = (steps, evaluations, backend, steps per revolution,
+    compile time); ``out``, ``other_extrema``: this run's outputs
     (in the order of ``tab``) and the other run's extrema when already evaluated,
     ``periodicity`` when measured on the estimate's run (else from ``main``'s previous
     revolution); ``tab`` (:func:`_crank_order`; its order None when ``main`` is in it
     already, :func:`_in_order`): the checks compare the extrema on the
     points the other runs were recorded at (``check``: ``out``'s extrema there, when
-    already taken); ``what``: (``exact_rigid``, ``point_accelerations``) of
-    :func:`simulate_scene`."""
+    already taken)."""
+    scene, o, model, kern, theta_s, ripple, _ = ctx
     ts, ys, prev, wall, bad = main[:5]
-    n_steps, nfev, method, backend, per_rev, revolutions, compile_time = counts
+    n_steps, nfev, backend, per_rev, compile_time = counts
     crank, order, sub = tab or _crank_order(scene, model, theta_s, ripple, ts)
     if order is not None:                       # None: ``main`` is in that order already
         ts, ys = np.take(ts, order), np.take(ys, order, axis=0)
@@ -803,12 +799,12 @@ def _finish(scene, model, kern, theta_s, ripple, main, other, counts, notes, war
         bad = bad or other[4]
     values = dict(out)
     _add_points_and_aliases(scene, model, theta_s, ripple, crank, ts, ys, values, extrema,
-                            what)
+                            (o.exact_rigid, o.point_accelerations))
     warn = warn + _check_warnings(bad, est, periodicity)
     for w in warn:
         warnings.warn(f"{scene.source}: {w}", SceneAccuracyWarning, stacklevel=3)
     result = SceneMotion(scene.name, scene.source, model.omega, crank, values, extrema,
-                         revolutions, est, periodicity, n_steps, nfev, wall, method, backend,
+                         o.revolutions, est, periodicity, n_steps, nfev, wall, o.method, backend,
                          per_rev, tuple(notes + [f"warning: {w}" for w in warn]), ts, ys,
                          compile_time, output_units(scene, values))
     if getattr(scene.linkage, "contact", ""):          # a cam follower that can jump
@@ -935,8 +931,7 @@ def _run_scipy(model, kern, theta_s, revolutions, npts, method, rtol, progress, 
         e = sol.y[:, -1].copy()
         if progress is not None:
             progress(r + 1, revolutions)
-    wall = time.perf_counter() - t0
-    return out[0], out[1], prev, wall, bad[0] > 0, n_steps, nfev
+    return out[0], out[1], prev, time.perf_counter() - t0, bad[0] > 0, n_steps, nfev
 
 
 def _deviation_rhs(model, kern, theta_s, ripple):
@@ -997,7 +992,6 @@ def _run(model, kern, theta_s, ripple, per_rev, revolutions, npts, progress, tab
     prev = (np.empty(n_prev), np.empty((n_prev, y.size))) \
         if revolutions >= 2 and start is None else None
     dummy = np.empty((0, y.size)), np.empty(0)
-    naux = model.naux()
     bad, nfev = False, 0
     first, keep = 0, max(revolutions - ESTIMATE_REVOLUTIONS, 0)
     if start is not None:
@@ -1007,16 +1001,15 @@ def _run(model, kern, theta_s, ripple, per_rev, revolutions, npts, progress, tab
     for r in range(first, revolutions):
         if r == keep:
             kept = (keep, y.copy())
-        last = r == revolutions - 1
         dt = dt_last
-        if last:
+        if r == revolutions - 1:
             ry, rt = rec
         elif r == revolutions - 2 and prev is not None:
             (rt, ry), dt = prev, dt_prev
         else:
             ry, rt = dummy
         t_end, rows, ok, flag, used = kern.rk_run(y, r * period, h, per_rev, r * period,
-                                                  dt, ry, rt, *args, naux,
+                                                  dt, ry, rt, *args, model.naux(),
                                                   *(tableau or kern.tableau("rk4")))
         bad, nfev = bad or flag > 0, nfev + used
         if not ok:
@@ -1024,8 +1017,7 @@ def _run(model, kern, theta_s, ripple, per_rev, revolutions, npts, progress, tab
                               f"step {h:.3g} s: raise steps_per_period", status="diverged")
         if progress is not None:
             progress(r + 1, revolutions)
-    wall = time.perf_counter() - t0
-    return rec[1], rec[0], prev, wall, bad, nfev, per_rev, kept
+    return rec[1], rec[0], prev, time.perf_counter() - t0, bad, nfev, per_rev, kept
 
 
 def _point_accelerations(model, theta_s, ripple, ts, ys, values, positions=None):
