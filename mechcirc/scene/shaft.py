@@ -400,9 +400,8 @@ def _shaft_kernels():
 
     from . import _motion_kernels as k
 
-    if k.HAVE_NUMBA and _jit.use(_WARM_STATEMENT, k.rk_run, k.shaft_eval, k.shaft_rhs):
-        return k
-    return kernels_for("rk4-python")[0]
+    return k if k.HAVE_NUMBA and _jit.use(_WARM_STATEMENT, k.rk_run, k.shaft_eval,
+                                          k.shaft_rhs) else k.load_python()
 
 
 def warm_up() -> None:
@@ -522,12 +521,9 @@ class _Run:
         idx = np.clip(np.searchsorted(self.t, x.ravel(), "right") - 1, 0, self.t.size - 1)
         for c, (xi, i) in enumerate(zip(x.ravel(), idx)):
             h = xi - self.t[i]
-            if h == 0.0:
-                out[:, c] = self.y[:, i]
-                continue
-            r = self.eq.run(_from_kernel(self._yk[i], self.in_theta, self.eq.n),
-                            self.in_theta, self.t[i], h, 1, -math.inf, record=False)
-            out[:, c] = r.y[:, -1]
+            out[:, c] = self.y[:, i] if h == 0.0 else self.eq.run(
+                _from_kernel(self._yk[i], self.in_theta, self.eq.n), self.in_theta, self.t[i], h,
+                1, -math.inf, record=False).y[:, -1]
         return out.reshape((-1,) + x.shape)
 
     def grid(self, cycle, points):
@@ -686,7 +682,7 @@ def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float 
     if method != "DOP853":
         eq.tableau = eq.run_kern.tableau(method)
     x0, sol = _steady_cycle(scene, eq, req, motor, th0, rtol, scale, mean_load, peak, notes, spp)
-    motion = _tabulate(scene, eq, sol, th0, cyc, points, Jf, motor)
+    motion = _tabulate(scene, eq, sol, th0, cyc, points)
     if not startup:
         return ShaftMotion(**motion, notes=tuple(notes))
     up = (_startup_steps if eq.steps else _startup)(scene, eq, shaft, th0, cyc, x0[0], motion,
@@ -764,7 +760,7 @@ def _steady_cycle(scene, eq, req, motor, th0, rtol, scale, mean_load, peak, note
     return x0, sol
 
 
-def _tabulate(scene, eq, sol, th0, cyc, points, Jf, motor):
+def _tabulate(scene, eq, sol, th0, cyc, points):
     """The steady cycle on ``points`` uniform θ samples → ShaftMotion's fields."""
     th = th0 + np.linspace(0.0, cyc, points + 1)
     Y = sol.grid(cyc, points) if isinstance(sol, _Run) else sol.sol(th)
@@ -776,7 +772,7 @@ def _tabulate(scene, eq, sol, th0, cyc, points, Jf, motor):
     bodies, values = eq.samples(th, w, z, acc, out)
     wmin, wmax = refined_extremes(lambda x: sol.sol(x)[0], th, w)
     mean = cyc / period
-    return dict(name=scene.name, source=scene.source, flywheel=Jf, theta=th - th0, time=tt,
+    return dict(name=scene.name, source=scene.source, flywheel=eq.Jf, theta=th - th0, time=tt,
                 speed=w, acceleration=acc, motor_torque=out[:, -4].copy(),
                 load_torque=-eq.c * out[:, -1], body_accelerations=bodies, omega_min=wmin, omega_max=wmax,
                 omega_mean=mean, delta=(wmax - wmin) / mean, period=period, values=values,
