@@ -104,12 +104,8 @@ class MotionModel:
         kern = load_python()
         a = self.arrays
         w = self.omega if speed is None else float(speed)
-        q, qd = [], []
-        for r in a["PRIG"][1:]:
-            v, d, _, _ = kern.feval(a["FI"][r, 0], a["tabs"], a["FI"][r, 2], *a["FF"][r], theta)
-            q.append(v)
-            qd.append(d * w)
-        return np.array(q + qd)
+        vd = [kern.feval(*function_args(a, r), theta)[:2] for r in a["PRIG"][1:]]
+        return np.array([v for v, _ in vd] + [d * w for _, d in vd])
 
 
 class Builder:
@@ -406,7 +402,6 @@ def _linkage_part(scene, B, h, i, part, tables, tlink):
                   (Crank(cb, piv, 1.0),), scene.source,
                   sliders=tuple(x for x in lk.sliders if x.link in plinks))
     sidx = sub._index()
-    sub_states = None
     for _ in range(6):
         grid = np.linspace(lo - margin, hi + margin, B.n + 1)
         try:
@@ -414,7 +409,7 @@ def _linkage_part(scene, B, h, i, part, tables, tlink):
             break
         except GeometryError:
             margin *= 0.5
-    if sub_states is None:
+    else:
         raise GeometryError(f"{scene.source}: the rigid part {{{', '.join(part)}}} cannot "
                             f"be tabulated against the rotation of {cb!r}")
     sh = (grid[-1] - grid[0]) / B.n
