@@ -175,26 +175,6 @@ class _Cubic:
         return a1 + s * (2.0 * a2 + s * 3.0 * a3) if slope else a0 + s * (a1 + s * (a2 + s * a3))
 
 
-class _Rigid:
-    """The range of J_red(θ) and each body's φ'(θ), φ''(θ) of the rigid mechanism."""
-
-    def __init__(self, scene: Scene, N: int = 1024):
-        (_, ang1, ang2, _, vel, _), _ = body_tables(scene, N)
-        self.cycle = scene.cycle
-        nodes = N * scene.cycle_revolutions
-        h = self.cycle / nodes
-        J = np.zeros(nodes + 1)
-        for m in scene.masses:
-            if m.kind == "mass":
-                J += m.value * np.sum(vel[m.point] ** 2, axis=1)
-            else:
-                J += m.value * ang1[m.link] ** 2
-        self.bodies = tuple(scene.bodies)
-        self.rate = {b: _Cubic(h, ang1[b], ang2[b]) for b in self.bodies}
-        self.J_range = (float(J.min()), float(J.max()))
-
-
-
 def rigid_model(scene: Scene, N: int = 1024):
     """The rigid mechanism as the scene kernel's model of one part, the drive's, whose
     coordinate is the shaft's θ: every mass's x(θ), y(θ) and every inertia's rotation φ(θ)
@@ -369,9 +349,22 @@ class _RigidShaft(_ElasticShaft):
     """The shaft's equation on the rigid mechanism: the kernel's on :func:`rigid_model` (no
     state beyond θ, θ̇: z is empty)."""
 
-    def __init__(self, scene: Scene, rig: _Rigid, Jf: float, motor: Motor):
+    def __init__(self, scene: Scene, Jf: float, motor: Motor, N: int = 1024):
+        (_, ang1, ang2, _, vel, _), _ = body_tables(scene, N)
+        nodes = N * scene.cycle_revolutions
+        J = np.zeros(nodes + 1)                 # J_red(θ) of the rigid mechanism
+        for m in scene.masses:
+            if m.kind == "mass":
+                J += m.value * np.sum(vel[m.point] ** 2, axis=1)
+            else:
+                J += m.value * ang1[m.link] ** 2
+        if float(J.min()) + Jf <= 0:
+            raise MechcircError(f"{scene.source}: the shaft has no inertia (flywheel 0 and no "
+                                "mass of the mechanism moves with the crank)")
         super().__init__(scene, Jf, motor, rigid_model(scene))
-        self.rig = rig
+        self.cycle = scene.cycle
+        #: Each body's φ'(θ) (its slope φ''(θ)) of the rigid mechanism.
+        self.rate = {b: _Cubic(self.cycle / nodes, ang1[b], ang2[b]) for b in scene.bodies}
 
     def load(self, th):
         """The load torque −Q(θ) [N·m] of the moments at crank rotations ``th`` (array)."""
@@ -380,10 +373,8 @@ class _RigidShaft(_ElasticShaft):
 
     def samples(self, th, w, z, acc, out):
         """(body accelerations, element values) over the cycle's samples."""
-        rig = self.rig
-        u = th - rig.cycle * np.floor(th / rig.cycle)
-        bodies = {b: rig.rate[b](u, slope=True) * w * w + rig.rate[b](u) * acc
-                  for b in rig.bodies}
+        u = th - self.cycle * np.floor(th / self.cycle)
+        bodies = {b: r(u, slope=True) * w * w + r(u) * acc for b, r in self.rate.items()}
         return bodies, {}
 
 
@@ -430,7 +421,7 @@ def warm_up() -> None:
 
 
 def _prepare(scene: Scene, shaft, flywheel, points, rigid):
-    """Checks of the options → (shaft, J_f, rigid tables, equations, the rigid ones, peak
+    """Checks of the options → (shaft, J_f, the rigid shaft's equations, the equations, peak
     load, mean load, notes)."""
     shaft = shaft or scene.shaft
     if shaft is None:
@@ -441,12 +432,8 @@ def _prepare(scene: Scene, shaft, flywheel, points, rigid):
         raise MechcircError(f"flywheel must be a number ≥ 0 kg·m², got {flywheel!r}")
     if isinstance(points, bool) or not isinstance(points, int) or points < 16:
         raise MechcircError(f"points must be an integer ≥ 16, got {points!r}")
-    rig = _Rigid(scene)
-    if rig.J_range[0] + Jf <= 0:
-        raise MechcircError(f"{scene.source}: the shaft has no inertia (flywheel 0 and no mass "
-                            "of the mechanism moves with the crank)")
     motor = shaft.motor
-    req = _RigidShaft(scene, rig, Jf, motor)
+    req = _RigidShaft(scene, Jf, motor)         # (refuses a shaft with no inertia)
     eq: _ElasticShaft = req
     if not rigid and scene.parts and len(scene.parts) > 1:
         eq = _ElasticShaft(scene, Jf, motor)
@@ -456,7 +443,7 @@ def _prepare(scene: Scene, shaft, flywheel, points, rigid):
         if eq.Jf + eq.c ** 2 * float(m0.min()) <= 0:
             raise MechcircError(f"{scene.source}: the shaft has no inertia of its own (flywheel "
                                 "0 and no mass on the drive's part): give [shaft] flywheel > 0")
-    grid = np.linspace(0.0, rig.cycle, 4 * points, endpoint=False)
+    grid = np.linspace(0.0, req.cycle, 4 * points, endpoint=False)
     load = req.load(grid)
     peak = float(load.max())
     if motor.peak_torque < peak:
@@ -465,8 +452,8 @@ def _prepare(scene: Scene, shaft, flywheel, points, rigid):
                 f"{math.degrees(grid[int(load.argmax())]):.4g}°: only the flywheel and the "
                 "mechanism's inertia carry the shaft through it")
         warnings.warn(f"{scene.source}: {text}", ShaftWarning, stacklevel=3)
-        return shaft, Jf, rig, eq, req, peak, float(np.mean(load)), ["warning: " + text]
-    return shaft, Jf, rig, eq, req, peak, float(np.mean(load)), []
+        return shaft, Jf, req, eq, peak, float(np.mean(load)), ["warning: " + text]
+    return shaft, Jf, req, eq, peak, float(np.mean(load)), []
 
 
 #: Steps per period of the fastest linearised mode of the elastic shaft, by method.
@@ -670,12 +657,11 @@ def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float 
         or stalls during the start-up or the steady cycle (the message gives the torques);
         the start-up did not reach the steady cycle within ``max_time``.
     """
-    shaft, Jf, rig, eq, req, peak, mean_load, notes = _prepare(scene, shaft, flywheel, points,
-                                                               rigid)
+    shaft, Jf, req, eq, peak, mean_load, notes = _prepare(scene, shaft, flywheel, points, rigid)
     method = method or DEFAULT_METHOD
     spp = _checked_method(method, steps_per_period)       # None for DOP853
     motor = shaft.motor
-    th0, cyc = math.radians(shaft.start_deg), rig.cycle
+    th0, cyc = math.radians(shaft.start_deg), req.cycle
     scale = max(abs(motor.sync_speed) if motor.kind == "kloss" else max(motor.speeds), 1e-300)
     if startup:
         _require_start(scene, shaft, req, th0)
@@ -729,7 +715,7 @@ def _steady_cycle(scene, eq, req, motor, th0, rtol, scale, mean_load, peak, note
     """The steady cycle from θ0: ([θ̇, z] at θ0, its dense solution over the cycle); elastic
     with ``spp`` given: by the compiled stepper (``eq.tableau``) at ``spp`` steps per period
     of the fastest mode.  ``req``: the rigid shaft's equations (the elastic's first guess)."""
-    cyc = req.rig.cycle
+    cyc = req.cycle
 
     def fail():
         raise MechcircError(
