@@ -485,7 +485,7 @@ def _elements(scene, prig, point_fns, angle_fn, part_of):
 def _moments(scene, B, part_of, angle_fn, crank0, cam):
     """The crank-angle moments' kernel rows: MOI = [window fn, body fn],
     MOF = [amplitude, alpha, sigma, centre], names, and each one's centre [rad]."""
-    MOI, MOF, mnames, centres = [], [], [], {}
+    MOI, MOF, centres = [], [], {}
     for m in scene.moments:
         centres[m.name] = moment_centre(scene, m)
         # the window is in shaft angle: with a cam the crank (its follower) swings, so θ
@@ -493,8 +493,7 @@ def _moments(scene, B, part_of, angle_fn, crank0, cam):
         MOI.append([B.line(part_of[crank0], 0.0, 1.0) if cam else angle_fn(crank0),
                     angle_fn(m.body)])
         MOF.append([m.amplitude, m.window, m.sigma, centres[m.name]])
-        mnames.append(m.name)
-    return MOI, MOF, mnames, centres
+    return MOI, MOF, [m.name for m in scene.moments], centres
 
 
 _CACHE: dict = {}
@@ -523,8 +522,7 @@ def rigid_tables(scene: Scene, N: int):
         lk = scene.linkage
         L = scene.length_scale
         w1 = lk.cranks[0].omega
-        nq = scene.cycle_revolutions
-        th = np.linspace(0.0, scene.cycle, N * nq + 1)
+        th = np.linspace(0.0, scene.cycle, N * scene.cycle_revolutions + 1)
         try:
             states = lk.solve(th)
         except GeometryError as exc:

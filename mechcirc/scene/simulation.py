@@ -40,7 +40,8 @@ from typing import Callable
 import numpy as np
 
 from .. import _jit
-from ..errors import MechcircError, SceneAccuracyWarning, SolverError
+from ..errors import FollowerFlightWarning, MechcircError, SceneAccuracyWarning, SolverError
+from ..errors import warn as issue
 from ..sources import brief, data_frame, did_you_mean, real_number, summary_repr
 from .files import Scene
 from .motion import MotionModel, function_args, motion_model
@@ -256,11 +257,10 @@ def linear_matrices(model: MotionModel, theta: float):
     y0 = model.rigid_state(theta)
     args = model.kernel_args(0.0, 1e300, outputs=True)
     args[0][1] = theta
-    naux = model.naux()
     nb, ne = len(model.bodies), len(model.elements)
 
     def deformations(y):
-        aux = np.empty(naux)
+        aux = np.empty(model.naux())
         kern.rhs(0.0, y, *args, np.empty(2 * n), aux,
                  np.zeros((9, max(args[1].shape[0], args[10].shape[0]))))
         return aux[nb + ne:nb + 2 * ne].copy()
@@ -423,8 +423,6 @@ def flight(scene, sm, warn: bool = False) -> str:
         The message (the largest departure from the cam, the gap, the cam angle), or
         "" when the follower stayed within the gap.
     """
-    from ..errors import FollowerFlightWarning
-    from ..errors import warn as issue
     from .cam import contact_geometry
 
     el, _, _, _, half = contact_geometry(scene)
@@ -856,8 +854,7 @@ def _add_points_and_aliases(scene, model, theta_s, ripple, crank, ts, ys, values
                 values[k] = v
                 extrema[k] = (float(v.min()), float(v.max()))
         check_strokes(scene, crank, positions)
-    cfg = scene.simulate
-    for alias, target in (dict(cfg.aliases) if cfg is not None else {}).items():
+    for alias, target in dict(getattr(scene.simulate, "aliases", None) or {}).items():
         if target.endswith(".rigid_acceleration"):
             body = target.rsplit(".", 1)[0]
             values[alias], extrema[alias] = _rigid_acceleration(model, body, crank,
@@ -981,8 +978,7 @@ def _run(model, kern, theta_s, ripple, per_rev, revolutions, npts, progress, tab
     points, the previous one on every ``strides[1]``-th.  ``start`` = (r, state): begin at
     the start of revolution r (0-based) in that state instead of the rigid start."""
     y = model.rigid_state(theta_s, model.omega + ripple[0])
-    n = model.n_free
-    limit = 1e3 * model.omega * max(1.0, float(np.max(np.abs(y[n:]))) / model.omega)
+    limit = 1e3 * model.omega * max(1.0, float(np.max(np.abs(y[model.n_free:]))) / model.omega)
     args = model.kernel_args(theta_s, limit, ripple=ripple)
     period = model.scene.cycle / model.omega
     h = period / per_rev
