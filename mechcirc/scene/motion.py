@@ -104,15 +104,14 @@ class MotionModel:
         kern = load_python()
         a = self.arrays
         w = self.omega if speed is None else float(speed)
-        q, qd = [], []
-        for r in a["PRIG"][1:]:
-            v, d, _, _ = kern.feval(a["FI"][r, 0], a["tabs"], a["FI"][r, 2], *a["FF"][r], theta)
-            q.append(v)
-            qd.append(d * w)
-        return np.array(q + qd)
+        vd = [kern.feval(*function_args(a, r), theta)[:2] for r in a["PRIG"][1:]]
+        return np.array([v for v, _ in vd] + [d * w for _, d in vd])
 
 
-class _Builder:
+class Builder:
+    """The kernel's functions of the parts' coordinates as they are made: FI, FF rows and the
+    tables (the first a dummy of n rows)."""
+
     def __init__(self, n, period=TWO_PI):
         self.FI, self.FF, self.tabs = [], [], [np.zeros((n, 6))]
         self.n, self.period = n, period
@@ -128,13 +127,10 @@ class _Builder:
         self.FF.append((0.0, 0.0, (period or self.period) if periodic else 0.0, lo, h, w))
         return len(self.FI) - 1
 
-    def line(self, part, a, b):
-        self.FI.append((2, part, 0))
-        self.FF.append((a, b, 0.0, 0.0, 1.0, 0.0))
-        return len(self.FI) - 1
-
-    def circle(self, part, a, b, c):
-        self.FI.append((3, part, 0))
+    def line(self, part, a, b, c=0.0, kind=2):
+        """A function a + b q of part's coordinate q; ``kind`` 3: a circle's coordinate
+        a + b cos(q + c) (the kernel's kinds)."""
+        self.FI.append((kind, part, 0))
         self.FF.append((a, b, c, 0.0, 1.0, 0.0))
         return len(self.FI) - 1
 
@@ -175,12 +171,11 @@ def motion_model(scene: Scene, omega: float | None = None, *,
     omega = float(omega)
     cam = getattr(lk, "cam", None) is not None    # a cam swings the crank: tabulate it too
     N = _table_points(lk, int(table_points))
-    h = TWO_PI / N
     tables, tlink = body_tables(scene, N)
-    B = _Builder(N * scene.cycle_revolutions, scene.cycle)
+    B = Builder(N * scene.cycle_revolutions, scene.cycle)
     crank = lk.cranks[0].link
-    coords, prig, makers = zip(*[_part_functions(scene, B, h, i, part, tables, tlink, cam)
-                                 for i, part in enumerate(scene.parts)])
+    coords, prig, makers = zip(*[_part_functions(scene, B, TWO_PI / N, i, part, tables, tlink,
+                                                 cam) for i, part in enumerate(scene.parts)])
     bodies = scene.bodies
     travel = {c: i for i, c in enumerate(coords) if c not in bodies}   # "BLOCK.travel" [m]
     fns = _OnDemand(scene, makers)
@@ -192,7 +187,7 @@ def motion_model(scene: Scene, omega: float | None = None, *,
     BI = [fns.angle(b) if b in bodies else B.line(travel[b], 0.0, 1.0) for b in body_names]
     n_out = len(B.FI)          # and the bodies' outputs; the points' are evaluated apart
     pfn = {p: pf for p in lk.pose if (pf := fns.point(p)) is not None}   # output-only
-    arrays = _kernel_arrays(B, n_dyn, dict(MI=MI, MW=MW, EI=EI, EF=EF, MOI=MOI, MOF=MOF,
+    arrays = kernel_arrays(B, n_dyn, dict(MI=MI, MW=MW, EI=EI, EF=EF, MOI=MOI, MOF=MOF,
                                            PRIG=prig, BI=BI))
     arrays["n_out"] = n_out
     return MotionModel(scene, omega, scene.parts, tuple(coords), body_names, tuple(enames),
@@ -302,7 +297,7 @@ def _pivoted_part(scene, B, h, i, b, tables):
         r = lk.pose[name] * L - o
         rad, a0 = float(np.hypot(*r)), float(math.atan2(r[1], r[0]))
         k = "xy".index(kind)
-        return B.circle(i, float(o[k]), rad, a0 - k * 0.5 * math.pi)
+        return B.line(i, float(o[k]), rad, a0 - k * 0.5 * math.pi, kind=3)
     return b, rig, make
 
 
@@ -366,7 +361,7 @@ def function_args(arrays, f) -> tuple:
     return (arrays["FI"][f, 0], arrays["tabs"], arrays["FI"][f, 2], *arrays["FF"][f])
 
 
-def _kernel_arrays(B, n_dyn, rows):
+def kernel_arrays(B, n_dyn, rows):
     """The kernel's arrays: the functions of ``B``, the ``rows`` as :data:`_ROWS` says, and
     ``n_dyn``, how many functions the dynamics need."""
     arrays = {"FI": np.array(B.FI, dtype=np.int64).reshape(-1, 3),
@@ -388,16 +383,14 @@ def _linkage_part(scene, B, h, i, part, tables, tlink):
     tbodies = set(tlink)
     lk = scene.linkage
     L = scene.length_scale
-    bodies = scene.bodies
-    cranks = [c.link for c in lk.cranks]
-    nq = scene.cycle_revolutions
     cb = next((b for b in part if b not in tbodies
-               and any(p in lk.ground for p in bodies[b])), None)
+               and any(p in lk.ground for p in scene.bodies[b])), None)
     if cb is None:
         raise GeometryError(f"{scene.source}: the rigid part {{{', '.join(part)}}} has no "
                             "link pinned to the frame to serve as its coordinate")
-    rig = B.table(-1, 0.0, h, ang[cb], ang1[cb], ang2[cb], True, _winding(ang[cb], nq))
-    turns = cb in cranks          # a geared crank: its part repeats every turn of it
+    rig = B.table(-1, 0.0, h, ang[cb], ang1[cb], ang2[cb], True,
+                  _winding(ang[cb], scene.cycle_revolutions))
+    turns = cb in [c.link for c in lk.cranks]   # a geared crank: its part repeats every turn
     lo, hi = (0.0, TWO_PI) if turns else (float(ang[cb].min()), float(ang[cb].max()))
     margin = 0.0 if turns else max(0.25 * (hi - lo), 0.05)
     plinks = {b: lk.links[b] for b in part if b not in tbodies}
@@ -409,7 +402,6 @@ def _linkage_part(scene, B, h, i, part, tables, tlink):
                   (Crank(cb, piv, 1.0),), scene.source,
                   sliders=tuple(x for x in lk.sliders if x.link in plinks))
     sidx = sub._index()
-    sub_states = None
     for _ in range(6):
         grid = np.linspace(lo - margin, hi + margin, B.n + 1)
         try:
@@ -417,7 +409,7 @@ def _linkage_part(scene, B, h, i, part, tables, tlink):
             break
         except GeometryError:
             margin *= 0.5
-    if sub_states is None:
+    else:
         raise GeometryError(f"{scene.source}: the rigid part {{{', '.join(part)}}} cannot "
                             f"be tabulated against the rotation of {cb!r}")
     sh = (grid[-1] - grid[0]) / B.n
@@ -451,6 +443,11 @@ def _elements(scene, prig, point_fns, angle_fn, part_of):
     def law_of(el):
         return 0 if getattr(el, "clearance", 0.0) == 0 else _LAWS[el.clearance_law]
 
+    def add(row, fl, name):
+        EI.append(row)
+        EF.append(fl)
+        enames.append(name)
+
     for e in scene.elastic:
         a, b = lk.links[e.link]
         row, fl = [1, law_of(e), -1, -1, -1, -1, 0, 0], [e.stiffness, e.damping,
@@ -463,28 +460,21 @@ def _elements(scene, prig, point_fns, angle_fn, part_of):
             else:
                 row[2 + 2 * side], row[3 + 2 * side], row[6 + side] = pf
         fl[3] = float(np.hypot(*(lk.pose[b] - lk.pose[a]))) * L
-        EI.append(row)
-        EF.append(fl)
-        enames.append(e.name)
+        add(row, fl, e.name)
     for t in scene.torsions:
-        EI.append([0, law_of(t), angle_fn(t.link), -1, angle_fn(t.body), -1,
-                   part_of[t.link], part_of[t.body]])
-        EF.append([t.stiffness, t.damping, t.clearance, 0, 0, 0, 0, 0, 0, 0])
-        enames.append(t.name)
+        add([0, law_of(t), angle_fn(t.link), -1, angle_fn(t.body), -1, part_of[t.link],
+             part_of[t.body]], [t.stiffness, t.damping, t.clearance, 0, 0, 0, 0, 0, 0, 0], t.name)
     for ld in scene.loads:
         fx, fy, i = point_fns(ld.point)
-        if ld.anchor is not None:
+        fl = [ld.stiffness, ld.damping, 0, 0, 0, 0, 0, 0, 0, 0]
+        if ld.anchor is not None:           # a spring to a frame point x: EF[4:6]
             x = lk.pose[ld.anchor] * L
-            row, fl = [3, 0, prig[i], -1, fx, fy, i, i], [ld.stiffness, ld.damping, 0, 0,
-                                                           float(x[0]), float(x[1]), 0, 0, 0, 0]
-        else:
+            fl[4], fl[5] = float(x[0]), float(x[1])
+        else:                               # along a fixed unit direction u: EF[8:10]
             u = np.array(ld.direction, float)
             u = u / np.hypot(*u)
-            row, fl = [2, 0, prig[i], -1, fx, fy, i, i], [ld.stiffness, ld.damping, 0, 0, 0, 0,
-                                                           0, 0, float(u[0]), float(u[1])]
-        EI.append(row)
-        EF.append(fl)
-        enames.append(ld.name)
+            fl[8], fl[9] = float(u[0]), float(u[1])
+        add([2 if ld.anchor is None else 3, 0, prig[i], -1, fx, fy, i, i], fl, ld.name)
     if getattr(lk, "contact", ""):        # a cam contact that can open (scene/cam.py)
         from .cam import open_contact_rows
 
@@ -495,7 +485,7 @@ def _elements(scene, prig, point_fns, angle_fn, part_of):
 def _moments(scene, B, part_of, angle_fn, crank0, cam):
     """The crank-angle moments' kernel rows: MOI = [window fn, body fn],
     MOF = [amplitude, alpha, sigma, centre], names, and each one's centre [rad]."""
-    MOI, MOF, mnames, centres = [], [], [], {}
+    MOI, MOF, centres = [], [], {}
     for m in scene.moments:
         centres[m.name] = moment_centre(scene, m)
         # the window is in shaft angle: with a cam the crank (its follower) swings, so θ
@@ -503,8 +493,7 @@ def _moments(scene, B, part_of, angle_fn, crank0, cam):
         MOI.append([B.line(part_of[crank0], 0.0, 1.0) if cam else angle_fn(crank0),
                     angle_fn(m.body)])
         MOF.append([m.amplitude, m.window, m.sigma, centres[m.name]])
-        mnames.append(m.name)
-    return MOI, MOF, mnames, centres
+    return MOI, MOF, [m.name for m in scene.moments], centres
 
 
 _CACHE: dict = {}
@@ -533,8 +522,7 @@ def rigid_tables(scene: Scene, N: int):
         lk = scene.linkage
         L = scene.length_scale
         w1 = lk.cranks[0].omega
-        nq = scene.cycle_revolutions
-        th = np.linspace(0.0, scene.cycle, N * nq + 1)
+        th = np.linspace(0.0, scene.cycle, N * scene.cycle_revolutions + 1)
         try:
             states = lk.solve(th)
         except GeometryError as exc:

@@ -53,8 +53,8 @@ import numpy as np
 from ..errors import MechcircError, ShaftWarning, SolverError
 from ..sources import data_frame, summary_repr
 from .files import Scene
-from .motion import (MotionModel, body_tables, function_args, function_rows, hermite_table,
-                     moment_centre, motion_model)
+from .motion import (Builder, MotionModel, body_tables, function_args, hermite_table,
+                     kernel_arrays, moment_centre, motion_model)
 from .simfile import Motor, Shaft, kloss_motor, parse_shaft, table_motor  # noqa: F401
 from .simulation import check_strokes, kernels_for, max_rate, output_units, refined_extremes
 
@@ -175,26 +175,6 @@ class _Cubic:
         return a1 + s * (2.0 * a2 + s * 3.0 * a3) if slope else a0 + s * (a1 + s * (a2 + s * a3))
 
 
-class _Rigid:
-    """The range of J_red(θ) and each body's φ'(θ), φ''(θ) of the rigid mechanism."""
-
-    def __init__(self, scene: Scene, N: int = 1024):
-        (_, ang1, ang2, _, vel, _), _ = body_tables(scene, N)
-        self.cycle = scene.cycle
-        nodes = N * scene.cycle_revolutions
-        h = self.cycle / nodes
-        J = np.zeros(nodes + 1)
-        for m in scene.masses:
-            if m.kind == "mass":
-                J += m.value * np.sum(vel[m.point] ** 2, axis=1)
-            else:
-                J += m.value * ang1[m.link] ** 2
-        self.bodies = tuple(scene.bodies)
-        self.rate = {b: _Cubic(h, ang1[b], ang2[b]) for b in self.bodies}
-        self.J_range = (float(J.min()), float(J.max()))
-
-
-
 def rigid_model(scene: Scene, N: int = 1024):
     """The rigid mechanism as the scene kernel's model of one part, the drive's, whose
     coordinate is the shaft's θ: every mass's x(θ), y(θ) and every inertia's rotation φ(θ)
@@ -216,15 +196,16 @@ def rigid_model(scene: Scene, N: int = 1024):
     (ang, ang1, ang2, pos, vel, acc), _ = body_tables(scene, N)
     cyc, nodes = scene.cycle, N * scene.cycle_revolutions
     h = cyc / nodes
-    FI, FF, tabs = [[2, -1, 0]], [[0.0, 1.0, 0.0, 0.0, 1.0, 0.0]], [np.zeros((nodes, 6))]
+    B = Builder(nodes, cyc)
+    B.line(-1, 0.0, 1.0)                        # the drive's part: θ itself
 
     def table(f, f1, f2, turns=False):
         w = round((f[-1] - f[0]) / (2 * math.pi)) * 2 * math.pi / cyc if turns else 0.0
         q = h * np.arange(f.size)
-        tabs.append(hermite_table(h, f - w * q, f1 - w, f2))
-        FI.append([0, 0, len(tabs) - 1])
-        FF.append([0.0, 0.0, cyc, 0.0, h, w])
-        return len(FI) - 1
+        B.tabs.append(hermite_table(h, f - w * q, f1 - w, f2))
+        B.FI.append([0, 0, len(B.tabs) - 1])
+        B.FF.append([0.0, 0.0, cyc, 0.0, h, w])
+        return len(B.FI) - 1
     MI, MW = [], []
     for m in scene.masses:
         if m.kind == "mass":
@@ -235,23 +216,12 @@ def rigid_model(scene: Scene, N: int = 1024):
             MI.append(table(ang[m.link], ang1[m.link], ang2[m.link], True))
             MW.append(m.value)
     MOI, MOF = [], []
-    for mo in scene.moments:
-        FI.append([2, 0, 0])                    # the window's angle: θ itself
-        FF.append([0.0, 1.0, 0.0, 0.0, 1.0, 0.0])
-        MOI.append([len(FI) - 1, table(ang[mo.body], ang1[mo.body], ang2[mo.body], True)])
+    for mo in scene.moments:                    # the window's angle: θ itself
+        MOI.append([B.line(0, 0.0, 1.0), table(ang[mo.body], ang1[mo.body], ang2[mo.body], True)])
         MOF.append([mo.amplitude, mo.window, mo.sigma, float(moment_centre(scene, mo))])
-    return _one_part_model(scene, FI, FF, tabs, MI, MW, MOI, MOF)
-
-
-def _one_part_model(scene: Scene, FI, FF, tabs, MI, MW, MOI, MOF):
-    """The :class:`~mechcirc.scene.motion.MotionModel` of :func:`rigid_model`'s tables: one
-    part (the drive's), no elastic elements."""
-    i8 = np.int64
-    arrays = {"FI": np.array(FI, i8), "FF": function_rows(FI, FF), "tabs": np.array(tabs),
-              "MI": np.array(MI, i8), "MW": np.array(MW, float),
-              "EI": np.zeros((0, 8), i8), "EF": np.zeros((0, 10)),
-              "MOI": np.array(MOI, i8).reshape(-1, 2), "MOF": np.array(MOF).reshape(-1, 4),
-              "PRIG": np.array([0], i8), "BI": np.zeros(0, i8), "n_dyn": len(FI)}
+    # one part (the drive's), no elastic elements
+    arrays = kernel_arrays(B, len(B.FI), dict(MI=MI, MW=MW, EI=[], EF=[], MOI=MOI, MOF=MOF,
+                                              PRIG=[0], BI=[]))
     return MotionModel(scene=scene, omega=abs(scene.linkage.cranks[0].omega),
                        parts=((),), coordinate=("",), bodies=(), elements=(),
                        moments=tuple(mo.name for mo in scene.moments), arrays=arrays,
@@ -379,9 +349,22 @@ class _RigidShaft(_ElasticShaft):
     """The shaft's equation on the rigid mechanism: the kernel's on :func:`rigid_model` (no
     state beyond θ, θ̇: z is empty)."""
 
-    def __init__(self, scene: Scene, rig: _Rigid, Jf: float, motor: Motor):
+    def __init__(self, scene: Scene, Jf: float, motor: Motor, N: int = 1024):
+        (_, ang1, ang2, _, vel, _), _ = body_tables(scene, N)
+        nodes = N * scene.cycle_revolutions
+        J = np.zeros(nodes + 1)                 # J_red(θ) of the rigid mechanism
+        for m in scene.masses:
+            if m.kind == "mass":
+                J += m.value * np.sum(vel[m.point] ** 2, axis=1)
+            else:
+                J += m.value * ang1[m.link] ** 2
+        if float(J.min()) + Jf <= 0:
+            raise MechcircError(f"{scene.source}: the shaft has no inertia (flywheel 0 and no "
+                                "mass of the mechanism moves with the crank)")
         super().__init__(scene, Jf, motor, rigid_model(scene))
-        self.rig = rig
+        self.cycle = scene.cycle
+        #: Each body's φ'(θ) (its slope φ''(θ)) of the rigid mechanism.
+        self.rate = {b: _Cubic(self.cycle / nodes, ang1[b], ang2[b]) for b in scene.bodies}
 
     def load(self, th):
         """The load torque −Q(θ) [N·m] of the moments at crank rotations ``th`` (array)."""
@@ -390,10 +373,8 @@ class _RigidShaft(_ElasticShaft):
 
     def samples(self, th, w, z, acc, out):
         """(body accelerations, element values) over the cycle's samples."""
-        rig = self.rig
-        u = th - rig.cycle * np.floor(th / rig.cycle)
-        bodies = {b: rig.rate[b](u, slope=True) * w * w + rig.rate[b](u) * acc
-                  for b in rig.bodies}
+        u = th - self.cycle * np.floor(th / self.cycle)
+        bodies = {b: r(u, slope=True) * w * w + r(u) * acc for b, r in self.rate.items()}
         return bodies, {}
 
 
@@ -410,9 +391,8 @@ def _shaft_kernels():
 
     from . import _motion_kernels as k
 
-    if k.HAVE_NUMBA and _jit.use(_WARM_STATEMENT, k.rk_run, k.shaft_eval, k.shaft_rhs):
-        return k
-    return kernels_for("rk4-python")[0]
+    return k if k.HAVE_NUMBA and _jit.use(_WARM_STATEMENT, k.rk_run, k.shaft_eval,
+                                          k.shaft_rhs) else k.load_python()
 
 
 def warm_up() -> None:
@@ -441,7 +421,7 @@ def warm_up() -> None:
 
 
 def _prepare(scene: Scene, shaft, flywheel, points, rigid):
-    """Checks of the options → (shaft, J_f, rigid tables, equations, the rigid ones, peak
+    """Checks of the options → (shaft, J_f, the rigid shaft's equations, the equations, peak
     load, mean load, notes)."""
     shaft = shaft or scene.shaft
     if shaft is None:
@@ -452,12 +432,8 @@ def _prepare(scene: Scene, shaft, flywheel, points, rigid):
         raise MechcircError(f"flywheel must be a number ≥ 0 kg·m², got {flywheel!r}")
     if isinstance(points, bool) or not isinstance(points, int) or points < 16:
         raise MechcircError(f"points must be an integer ≥ 16, got {points!r}")
-    rig = _Rigid(scene)
-    if rig.J_range[0] + Jf <= 0:
-        raise MechcircError(f"{scene.source}: the shaft has no inertia (flywheel 0 and no mass "
-                            "of the mechanism moves with the crank)")
     motor = shaft.motor
-    req = _RigidShaft(scene, rig, Jf, motor)
+    req = _RigidShaft(scene, Jf, motor)         # (refuses a shaft with no inertia)
     eq: _ElasticShaft = req
     if not rigid and scene.parts and len(scene.parts) > 1:
         eq = _ElasticShaft(scene, Jf, motor)
@@ -467,7 +443,7 @@ def _prepare(scene: Scene, shaft, flywheel, points, rigid):
         if eq.Jf + eq.c ** 2 * float(m0.min()) <= 0:
             raise MechcircError(f"{scene.source}: the shaft has no inertia of its own (flywheel "
                                 "0 and no mass on the drive's part): give [shaft] flywheel > 0")
-    grid = np.linspace(0.0, rig.cycle, 4 * points, endpoint=False)
+    grid = np.linspace(0.0, req.cycle, 4 * points, endpoint=False)
     load = req.load(grid)
     peak = float(load.max())
     if motor.peak_torque < peak:
@@ -476,8 +452,8 @@ def _prepare(scene: Scene, shaft, flywheel, points, rigid):
                 f"{math.degrees(grid[int(load.argmax())]):.4g}°: only the flywheel and the "
                 "mechanism's inertia carry the shaft through it")
         warnings.warn(f"{scene.source}: {text}", ShaftWarning, stacklevel=3)
-        return shaft, Jf, rig, eq, req, peak, float(np.mean(load)), ["warning: " + text]
-    return shaft, Jf, rig, eq, req, peak, float(np.mean(load)), []
+        return shaft, Jf, req, eq, peak, float(np.mean(load)), ["warning: " + text]
+    return shaft, Jf, req, eq, peak, float(np.mean(load)), []
 
 
 #: Steps per period of the fastest linearised mode of the elastic shaft, by method.
@@ -532,12 +508,9 @@ class _Run:
         idx = np.clip(np.searchsorted(self.t, x.ravel(), "right") - 1, 0, self.t.size - 1)
         for c, (xi, i) in enumerate(zip(x.ravel(), idx)):
             h = xi - self.t[i]
-            if h == 0.0:
-                out[:, c] = self.y[:, i]
-                continue
-            r = self.eq.run(_from_kernel(self._yk[i], self.in_theta, self.eq.n),
-                            self.in_theta, self.t[i], h, 1, -math.inf, record=False)
-            out[:, c] = r.y[:, -1]
+            out[:, c] = self.y[:, i] if h == 0.0 else self.eq.run(
+                _from_kernel(self._yk[i], self.in_theta, self.eq.n), self.in_theta, self.t[i], h,
+                1, -math.inf, record=False).y[:, -1]
         return out.reshape((-1,) + x.shape)
 
     def grid(self, cycle, points):
@@ -555,9 +528,9 @@ def _over_cycle(eq, th0, cycle, x0, rtol, scale, dense=False, floor=1e-6):
     where θ̇ falls to ``floor`` × the motor's speed scale (a stall)."""
     from scipy.integrate import solve_ivp
 
+    Y0 = np.concatenate(([x0[0], 0.0], x0[1:]))       # [θ̇, t, z]
     if eq.steps:
-        return eq.run(np.concatenate(([x0[0], 0.0], x0[1:])), True, th0, cycle / eq.steps,
-                      eq.steps, floor * scale, record=dense)
+        return eq.run(Y0, True, th0, cycle / eq.steps, eq.steps, floor * scale, record=dense)
     calls = [0]
 
     def f(th, Y):
@@ -574,9 +547,8 @@ def _over_cycle(eq, th0, cycle, x0, rtol, scale, dense=False, floor=1e-6):
     def stall(th, Y):
         return Y[0] - floor * scale
     stall.terminal = True
-    atol = _atol(rtol, scale, eq.n)
-    return solve_ivp(f, (th0, th0 + cycle), np.concatenate(([x0[0], 0.0], x0[1:])),
-                     method="DOP853", rtol=rtol, atol=atol, events=stall, dense_output=dense)
+    return solve_ivp(f, (th0, th0 + cycle), Y0, method="DOP853", rtol=rtol,
+                     atol=_atol(rtol, scale, eq.n), events=stall, dense_output=dense)
 
 
 def _atol(rtol, scale, n):
@@ -685,19 +657,18 @@ def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float 
         or stalls during the start-up or the steady cycle (the message gives the torques);
         the start-up did not reach the steady cycle within ``max_time``.
     """
-    shaft, Jf, rig, eq, req, peak, mean_load, notes = _prepare(scene, shaft, flywheel, points,
-                                                               rigid)
+    shaft, Jf, req, eq, peak, mean_load, notes = _prepare(scene, shaft, flywheel, points, rigid)
     method = method or DEFAULT_METHOD
     spp = _checked_method(method, steps_per_period)       # None for DOP853
     motor = shaft.motor
-    th0, cyc = math.radians(shaft.start_deg), rig.cycle
+    th0, cyc = math.radians(shaft.start_deg), req.cycle
     scale = max(abs(motor.sync_speed) if motor.kind == "kloss" else max(motor.speeds), 1e-300)
     if startup:
         _require_start(scene, shaft, req, th0)
     if method != "DOP853":
         eq.tableau = eq.run_kern.tableau(method)
     x0, sol = _steady_cycle(scene, eq, req, motor, th0, rtol, scale, mean_load, peak, notes, spp)
-    motion = _tabulate(scene, eq, sol, th0, cyc, points, Jf, motor)
+    motion = _tabulate(scene, eq, sol, th0, cyc, points)
     if not startup:
         return ShaftMotion(**motion, notes=tuple(notes))
     up = (_startup_steps if eq.steps else _startup)(scene, eq, shaft, th0, cyc, x0[0], motion,
@@ -744,7 +715,7 @@ def _steady_cycle(scene, eq, req, motor, th0, rtol, scale, mean_load, peak, note
     """The steady cycle from θ0: ([θ̇, z] at θ0, its dense solution over the cycle); elastic
     with ``spp`` given: by the compiled stepper (``eq.tableau``) at ``spp`` steps per period
     of the fastest mode.  ``req``: the rigid shaft's equations (the elastic's first guess)."""
-    cyc = req.rig.cycle
+    cyc = req.cycle
 
     def fail():
         raise MechcircError(
@@ -775,7 +746,7 @@ def _steady_cycle(scene, eq, req, motor, th0, rtol, scale, mean_load, peak, note
     return x0, sol
 
 
-def _tabulate(scene, eq, sol, th0, cyc, points, Jf, motor):
+def _tabulate(scene, eq, sol, th0, cyc, points):
     """The steady cycle on ``points`` uniform θ samples → ShaftMotion's fields."""
     th = th0 + np.linspace(0.0, cyc, points + 1)
     Y = sol.grid(cyc, points) if isinstance(sol, _Run) else sol.sol(th)
@@ -787,7 +758,7 @@ def _tabulate(scene, eq, sol, th0, cyc, points, Jf, motor):
     bodies, values = eq.samples(th, w, z, acc, out)
     wmin, wmax = refined_extremes(lambda x: sol.sol(x)[0], th, w)
     mean = cyc / period
-    return dict(name=scene.name, source=scene.source, flywheel=Jf, theta=th - th0, time=tt,
+    return dict(name=scene.name, source=scene.source, flywheel=eq.Jf, theta=th - th0, time=tt,
                 speed=w, acceleration=acc, motor_torque=out[:, -4].copy(),
                 load_torque=-eq.c * out[:, -1], body_accelerations=bodies, omega_min=wmin, omega_max=wmax,
                 omega_mean=mean, delta=(wmax - wmin) / mean, period=period, values=values,

@@ -40,7 +40,8 @@ from typing import Callable
 import numpy as np
 
 from .. import _jit
-from ..errors import MechcircError, SceneAccuracyWarning, SolverError
+from ..errors import FollowerFlightWarning, MechcircError, SceneAccuracyWarning, SolverError
+from ..errors import warn as issue
 from ..sources import brief, data_frame, did_you_mean, real_number, summary_repr
 from .files import Scene
 from .motion import MotionModel, function_args, motion_model
@@ -256,11 +257,10 @@ def linear_matrices(model: MotionModel, theta: float):
     y0 = model.rigid_state(theta)
     args = model.kernel_args(0.0, 1e300, outputs=True)
     args[0][1] = theta
-    naux = model.naux()
     nb, ne = len(model.bodies), len(model.elements)
 
     def deformations(y):
-        aux = np.empty(naux)
+        aux = np.empty(model.naux())
         kern.rhs(0.0, y, *args, np.empty(2 * n), aux,
                  np.zeros((9, max(args[1].shape[0], args[10].shape[0]))))
         return aux[nb + ne:nb + 2 * ne].copy()
@@ -272,11 +272,9 @@ def linear_matrices(model: MotionModel, theta: float):
         yp[i] += step
         ym[i] -= step
         G[:, i] = (deformations(yp) - deformations(ym)) / (2 * step)
-    k = args[7][:, 0]
-    d = args[7][:, 1]
-    # element gradients w.r.t. the prescribed part do not enter; loads are linear anyway
-    K = G.T @ (k[:, None] * G)
-    D = G.T @ (d[:, None] * G)
+    # Σ k ∇δ ∇δᵀ and Σ d ∇δ ∇δᵀ (columns 0, 1 of EF); element gradients w.r.t. the
+    # prescribed part do not enter; loads are linear anyway
+    K, D = (G.T @ (args[7][:, j, None] * G) for j in (0, 1))
     a = model.arrays
     m = np.zeros(n + 1)
     for f, w in zip(a["MI"], a["MW"]):
@@ -316,15 +314,10 @@ def max_rate(model: MotionModel, samples: int = 72) -> float:
     -------
     float
     """
-    return _last_of(model, "max_rate", samples, lambda: _max_rate(model, samples))
-
-
-def _max_rate(model: MotionModel, samples: int) -> float:
-    def rate(th):               # the fastest mode's |λ| of the linearised motion at θ
-        return np.max(np.abs(np.linalg.eigvals(state_matrix(*linear_matrices(model, th)))))
-
-    return float(max(rate(th) for th in np.linspace(0.0, model.scene.cycle, samples,
-                                                    endpoint=False)))
+    # the fastest mode's |λ| of the linearised motion at each θ
+    return _last_of(model, "max_rate", samples, lambda: float(max(
+        np.max(np.abs(np.linalg.eigvals(state_matrix(*linear_matrices(model, th)))))
+        for th in np.linspace(0.0, model.scene.cycle, samples, endpoint=False))))
 
 
 def state_matrix(M, D, K):
@@ -430,8 +423,6 @@ def flight(scene, sm, warn: bool = False) -> str:
         The message (the largest departure from the cam, the gap, the cam angle), or
         "" when the follower stayed within the gap.
     """
-    from ..errors import FollowerFlightWarning
-    from ..errors import warn as issue
     from .cam import contact_geometry
 
     el, _, _, _, half = contact_geometry(scene)
@@ -493,10 +484,9 @@ def _options(scene, omega, revolutions, start_deg, spp, npts, method, rtol, revo
     each checked (a :class:`MechcircError` names the bad one)."""
     cfg = scene.simulate
 
-    def pick(v, k, d):
-        if v is not None:
-            return v
-        return getattr(cfg, k) if cfg is not None and getattr(cfg, k) is not None else d
+    def pick(v, k, d):          # the call's value, else the file's, else the default
+        v = getattr(cfg, k, None) if v is None else v
+        return d if v is None else v
 
     omega = pick(omega, "omega", None)
     revolutions = pick(revolutions, "revolutions", DEFAULT_REVOLUTIONS)
@@ -562,9 +552,8 @@ def _simulate_scipy(ctx, error_estimate, notes, compile_time):
     ref_tol = max(rtol / 100, SCIPY_RTOL_FLOOR)
     if not error_estimate or ref_tol > rtol / 10:
         ref_tol = rtol
-    run = _run_scipy(model, kern, theta_s, o.revolutions, o.npts, method, ref_tol, progress,
-                     ripple)
-    ts, ys, prev, wall, bad, n_steps, nfev = run
+    ts, ys, prev, wall, bad, n_steps, nfev = _run_scipy(model, kern, theta_s, o.revolutions,
+                                                       o.npts, method, ref_tol, progress, ripple)
     coarse, text = None, f"{method}, rtol {rtol:g}"
     if ref_tol < rtol:
         coarse = _run_scipy(model, kern, theta_s, o.revolutions, o.npts, method, rtol, None,
@@ -575,10 +564,8 @@ def _simulate_scipy(ctx, error_estimate, notes, compile_time):
     elif error_estimate:
         notes.append(f"no error estimate: rtol {rtol:g} leaves no tighter reference "
                      f"(solve_ivp's floor is {SCIPY_RTOL_FLOOR:g})")
-    return _finish(scene, model, kern, theta_s, ripple, (ts, ys, prev, wall, bad),
-                   None if coarse is None else coarse[:5],
-                   (n_steps, nfev, method, "scipy", 0, o.revolutions, compile_time),
-                   notes + [text], [], what=(o.exact_rigid, o.point_accelerations))
+    return _finish(ctx, (ts, ys, prev, wall, bad), None if coarse is None else coarse[:5],
+                   (n_steps, nfev, "scipy", 0, compile_time), notes + [text], [])
 
 
 def _simulate_rk4(ctx, backend, error_estimate, notes, compile_time):
@@ -601,10 +588,7 @@ def _simulate_rk4(ctx, backend, error_estimate, notes, compile_time):
         return _run(model, kern, theta_s, ripple, per_rev, o.revolutions, o.npts, prog,
                     tableau, (last, rule.stride), start)
 
-    def steps(spp):
-        return _steps_per_cycle(rule.period, rule.rate, spp)
-
-    spp, main, other = _first_runs(run, steps, rule, progress, notes, error_estimate)
+    spp, main, other = _first_runs(run, rule, progress, notes, error_estimate)
     start = other[7] if isinstance(other, tuple) else None
     first = start[0] if start else 0
     n_steps, nfev, wall = main[6] * (o.revolutions - first), main[5], 0.0
@@ -626,18 +610,16 @@ def _simulate_rk4(ctx, backend, error_estimate, notes, compile_time):
             other, other_ext = main, check
             wall += main[3]
             spp, out, check = 2 * spp, None, None
-            main = _in_order(run(steps(spp), start=start), order)
+            main = _in_order(run(_steps_per_cycle(rule, spp), start=start), order)
             n_steps, nfev = n_steps + main[6] * (o.revolutions - first), nfev + main[5]
     if other == "diverged":
         rule.warn.append(f"the error estimate's run at {spp / 2:g} steps per period diverged: "
                          "no estimate; raise steps_per_period")
     notes.append(_step_note(rule.period, main[6], spp, rule.rate, error_estimate, o.method))
     main = (*main[:3], wall + main[3], *main[4:])
-    return _finish(scene, model, kern, theta_s, ripple, main, other,
-                   (n_steps, nfev, o.method, backend, main[6], o.revolutions, compile_time),
-                   notes, rule.warn, out=out, other_extrema=other_ext, tab=(crank, None, sub),
-                   periodicity=periodicity, what=(o.exact_rigid, o.point_accelerations),
-                   check=check)
+    return _finish(ctx, main, other, (n_steps, nfev, backend, main[6], compile_time), notes,
+                   rule.warn, out=out, other_extrema=other_ext, tab=(crank, None, sub),
+                   periodicity=periodicity, check=check)
 
 
 @dataclass
@@ -681,7 +663,7 @@ def _step_rule(scene, o, model, error_estimate) -> _StepRule:
     return _StepRule(period, rate, spp, auto, stride, warn)
 
 
-def _first_runs(run, steps, rule, progress, notes, error_estimate):
+def _first_runs(run, rule, progress, notes, error_estimate):
     """(steps per period, the run returned, the estimate's run): with the estimate, the run
     at half the steps over every revolution (the estimate's run), then the run at the
     step over the last :data:`ESTIMATE_REVOLUTIONS` from the first's state at their start;
@@ -689,7 +671,8 @@ def _first_runs(run, steps, rule, progress, notes, error_estimate):
     diverges is repeated at twice as many steps (noted)."""
     for spp in (rule.spp, 2 * rule.spp):
         try:
-            return (spp, *_paired_runs(run, steps(spp), progress, rule.stride, error_estimate))
+            return (spp, *_paired_runs(run, _steps_per_cycle(rule, spp), progress, rule.stride,
+                                       error_estimate))
         except SolverError:
             if not rule.auto or spp != rule.spp:
                 raise
@@ -750,15 +733,16 @@ def _step_note(period, per_rev, spp, rate, error_estimate, method="rk4"):
                if error_estimate else ""))
 
 
-def _steps_per_cycle(period, rate, spp):
-    """RK4 steps per cycle at ``spp`` steps per period of the fastest mode (even, so that
-    the estimate's run has half as many; at least 16); refused above the limit."""
-    need = period * rate * spp / TWO_PI
+def _steps_per_cycle(rule, spp):
+    """RK4 steps per cycle at ``spp`` steps per period of the fastest mode (``rule``'s
+    period and rate; even, so that the estimate's run has half as many; at least 16);
+    refused above the limit."""
+    need = rule.period * rule.rate * spp / TWO_PI
     if need > MAX_STEPS_PER_REV:
-        raise SolverError(f"the stiffest linearised mode (|λ| = {rate:.4g} 1/s) needs {need:.3g} "
-                          f"RK4 steps per revolution at steps_per_period={spp:g}, more than "
-                          f"the limit {MAX_STEPS_PER_REV:.0e}: lower the stiffest rigidity "
-                          "(stiffness), raise the inertias, or use method='LSODA'",
+        raise SolverError(f"the stiffest linearised mode (|λ| = {rule.rate:.4g} 1/s) needs "
+                          f"{need:.3g} RK4 steps per revolution at steps_per_period={spp:g}, "
+                          f"more than the limit {MAX_STEPS_PER_REV:.0e}: lower the stiffest "
+                          "rigidity (stiffness), raise the inertias, or use method='LSODA'",
                           status="too-stiff")
     return max(2 * int(math.ceil(need / 2)), 16)
 
@@ -776,22 +760,23 @@ def _extrema(out: dict, sub=None) -> dict:
     return {k: (a, b) for k, a, b in zip(out, lo, hi)}
 
 
-def _finish(scene, model, kern, theta_s, ripple, main, other, counts, notes, warn, out=None,
-            other_extrema=None, tab=None, periodicity=None, what=(True, True), check=None):
+def _finish(ctx, main, other, counts, notes, warn, out=None, other_extrema=None, tab=None,
+            periodicity=None, check=None):
     """Outputs, extrema, the checks and the warnings of one run → :class:`SceneMotion`.
 
-    ``main`` is the run (:func:`_run`'s tuple), ``other`` the estimate's (or None, or
-    ``"diverged"``), ``counts`` = (steps, evaluations, method, backend, steps per
-    revolution, revolutions, compile time); ``out``, ``other_extrema``: this run's outputs
+    ``ctx`` is the call's (scene, options, model, kernels, start angle, ripple, progress),
+    ``main`` the run (:func:`_run`'s tuple), ``other`` the estimate's (or None, or
+    ``"diverged"``), ``counts`` = (steps, evaluations, backend, steps per revolution,
+    compile time); ``out``, ``other_extrema``: this run's outputs
     (in the order of ``tab``) and the other run's extrema when already evaluated,
     ``periodicity`` when measured on the estimate's run (else from ``main``'s previous
     revolution); ``tab`` (:func:`_crank_order`; its order None when ``main`` is in it
     already, :func:`_in_order`): the checks compare the extrema on the
     points the other runs were recorded at (``check``: ``out``'s extrema there, when
-    already taken); ``what``: (``exact_rigid``, ``point_accelerations``) of
-    :func:`simulate_scene`."""
+    already taken)."""
+    scene, o, model, kern, theta_s, ripple, _ = ctx
     ts, ys, prev, wall, bad = main[:5]
-    n_steps, nfev, method, backend, per_rev, revolutions, compile_time = counts
+    n_steps, nfev, backend, per_rev, compile_time = counts
     crank, order, sub = tab or _crank_order(scene, model, theta_s, ripple, ts)
     if order is not None:                       # None: ``main`` is in that order already
         ts, ys = np.take(ts, order), np.take(ys, order, axis=0)
@@ -812,12 +797,12 @@ def _finish(scene, model, kern, theta_s, ripple, main, other, counts, notes, war
         bad = bad or other[4]
     values = dict(out)
     _add_points_and_aliases(scene, model, theta_s, ripple, crank, ts, ys, values, extrema,
-                            what)
+                            (o.exact_rigid, o.point_accelerations))
     warn = warn + _check_warnings(bad, est, periodicity)
     for w in warn:
         warnings.warn(f"{scene.source}: {w}", SceneAccuracyWarning, stacklevel=3)
     result = SceneMotion(scene.name, scene.source, model.omega, crank, values, extrema,
-                         revolutions, est, periodicity, n_steps, nfev, wall, method, backend,
+                         o.revolutions, est, periodicity, n_steps, nfev, wall, o.method, backend,
                          per_rev, tuple(notes + [f"warning: {w}" for w in warn]), ts, ys,
                          compile_time, output_units(scene, values))
     if getattr(scene.linkage, "contact", ""):          # a cam follower that can jump
@@ -869,8 +854,7 @@ def _add_points_and_aliases(scene, model, theta_s, ripple, crank, ts, ys, values
                 values[k] = v
                 extrema[k] = (float(v.min()), float(v.max()))
         check_strokes(scene, crank, positions)
-    cfg = scene.simulate
-    for alias, target in (dict(cfg.aliases) if cfg is not None else {}).items():
+    for alias, target in dict(getattr(scene.simulate, "aliases", None) or {}).items():
         if target.endswith(".rigid_acceleration"):
             body = target.rsplit(".", 1)[0]
             values[alias], extrema[alias] = _rigid_acceleration(model, body, crank,
@@ -944,8 +928,7 @@ def _run_scipy(model, kern, theta_s, revolutions, npts, method, rtol, progress, 
         e = sol.y[:, -1].copy()
         if progress is not None:
             progress(r + 1, revolutions)
-    wall = time.perf_counter() - t0
-    return out[0], out[1], prev, wall, bad[0] > 0, n_steps, nfev
+    return out[0], out[1], prev, time.perf_counter() - t0, bad[0] > 0, n_steps, nfev
 
 
 def _deviation_rhs(model, kern, theta_s, ripple):
@@ -995,8 +978,7 @@ def _run(model, kern, theta_s, ripple, per_rev, revolutions, npts, progress, tab
     points, the previous one on every ``strides[1]``-th.  ``start`` = (r, state): begin at
     the start of revolution r (0-based) in that state instead of the rigid start."""
     y = model.rigid_state(theta_s, model.omega + ripple[0])
-    n = model.n_free
-    limit = 1e3 * model.omega * max(1.0, float(np.max(np.abs(y[n:]))) / model.omega)
+    limit = 1e3 * model.omega * max(1.0, float(np.max(np.abs(y[model.n_free:]))) / model.omega)
     args = model.kernel_args(theta_s, limit, ripple=ripple)
     period = model.scene.cycle / model.omega
     h = period / per_rev
@@ -1006,7 +988,6 @@ def _run(model, kern, theta_s, ripple, per_rev, revolutions, npts, progress, tab
     prev = (np.empty(n_prev), np.empty((n_prev, y.size))) \
         if revolutions >= 2 and start is None else None
     dummy = np.empty((0, y.size)), np.empty(0)
-    naux = model.naux()
     bad, nfev = False, 0
     first, keep = 0, max(revolutions - ESTIMATE_REVOLUTIONS, 0)
     if start is not None:
@@ -1016,16 +997,15 @@ def _run(model, kern, theta_s, ripple, per_rev, revolutions, npts, progress, tab
     for r in range(first, revolutions):
         if r == keep:
             kept = (keep, y.copy())
-        last = r == revolutions - 1
         dt = dt_last
-        if last:
+        if r == revolutions - 1:
             ry, rt = rec
         elif r == revolutions - 2 and prev is not None:
             (rt, ry), dt = prev, dt_prev
         else:
             ry, rt = dummy
         t_end, rows, ok, flag, used = kern.rk_run(y, r * period, h, per_rev, r * period,
-                                                  dt, ry, rt, *args, naux,
+                                                  dt, ry, rt, *args, model.naux(),
                                                   *(tableau or kern.tableau("rk4")))
         bad, nfev = bad or flag > 0, nfev + used
         if not ok:
@@ -1033,8 +1013,7 @@ def _run(model, kern, theta_s, ripple, per_rev, revolutions, npts, progress, tab
                               f"step {h:.3g} s: raise steps_per_period", status="diverged")
         if progress is not None:
             progress(r + 1, revolutions)
-    wall = time.perf_counter() - t0
-    return rec[1], rec[0], prev, wall, bad, nfev, per_rev, kept
+    return rec[1], rec[0], prev, time.perf_counter() - t0, bad, nfev, per_rev, kept
 
 
 def _point_accelerations(model, theta_s, ripple, ts, ys, values, positions=None):
@@ -1071,9 +1050,8 @@ def _point_accelerations(model, theta_s, ripple, ts, ys, values, positions=None)
             comp.append(acc)
             if positions is not None:
                 positions.setdefault(p, []).append(pos)
-        out[f"{p}.acceleration"] = np.hypot(comp[0], comp[1])
-        out[f"{p}.acceleration_x"] = comp[0]
-        out[f"{p}.acceleration_y"] = comp[1]
+        out.update({f"{p}.acceleration": np.hypot(comp[0], comp[1]),
+                    f"{p}.acceleration_x": comp[0], f"{p}.acceleration_y": comp[1]})
     return out
 
 
