@@ -127,10 +127,15 @@ class Builder:
         self.FF.append((0.0, 0.0, (period or self.period) if periodic else 0.0, lo, h, w))
         return len(self.FI) - 1
 
-    def line(self, part, a, b, c=0.0, kind=2):
-        """A function a + b q of part's coordinate q; ``kind`` 3: a circle's coordinate
-        a + b cos(q + c) (the kernel's kinds)."""
-        self.FI.append((kind, part, 0))
+    def line(self, part, a, b):
+        """A function a + b q of part's coordinate q."""
+        self.FI.append((2, part, 0))
+        self.FF.append((a, b, 0.0, 0.0, 1.0, 0.0))
+        return len(self.FI) - 1
+
+    def circle(self, part, a, b, c):
+        """A circle's coordinate a + b cos(q + c) of part's angle q."""
+        self.FI.append((3, part, 0))
         self.FF.append((a, b, c, 0.0, 1.0, 0.0))
         return len(self.FI) - 1
 
@@ -297,7 +302,7 @@ def _pivoted_part(scene, B, h, i, b, tables):
         r = lk.pose[name] * L - o
         rad, a0 = float(np.hypot(*r)), float(math.atan2(r[1], r[0]))
         k = "xy".index(kind)
-        return B.line(i, float(o[k]), rad, a0 - k * 0.5 * math.pi, kind=3)
+        return B.circle(i, float(o[k]), rad, a0 - k * 0.5 * math.pi)
     return b, rig, make
 
 
