@@ -117,8 +117,8 @@ class SceneMotion:
     states: np.ndarray | None = None
     #: numba compilation or cache load of the first call in a process [s], else 0.
     compile_time: float = 0.0
-    #: The unit of each output of ``values`` (:func:`output_units`).
-    units: dict = field(default_factory=dict)
+    #: The unit of each output of ``values`` (:func:`output_units`); a required keyword.
+    units: dict = field(kw_only=True)
 
     def summary(self) -> dict:
         """Plain-data summary for JSON."""
@@ -804,7 +804,7 @@ def _finish(ctx, main, other, counts, notes, warn, out=None, other_extrema=None,
     result = SceneMotion(scene.name, scene.source, model.omega, crank, values, extrema,
                          o.revolutions, est, periodicity, n_steps, nfev, wall, o.method, backend,
                          per_rev, tuple(notes + [f"warning: {w}" for w in warn]), ts, ys,
-                         compile_time, output_units(scene, values))
+                         compile_time, units=output_units(scene, values))
     if getattr(scene.linkage, "contact", ""):          # a cam follower that can jump
         flight(scene, result, warn=True)               # (at the caller's line)
     return result
