@@ -19,7 +19,7 @@ __all__ = ["read_source", "read_bytes", "MAX_INPUT_BYTES", "split_lines", "line_
            "finite_number", "brief", "load_toml", "locate", "locate_path", "located", "Table",
            "unknown_key", "check_keys", "number_error", "checked_number", "did_you_mean",
            "is_number", "positive_number", "real_values", "summary_repr", "data_frame",
-           "NamedValues"]
+           "quantity_frame", "NamedValues"]
 
 #: The largest input file mechcirc reads [bytes].  A netlist of the statement
 #: limit is far below this; anything larger is refused before it is read.
@@ -442,6 +442,24 @@ def data_frame(rows, units: dict[str, str]):
     df = pd.DataFrame(rows, columns=list(units))
     df.attrs["units"] = dict(units)
     return df
+
+
+def quantity_frame(columns: dict, unit: dict[str, str]):
+    """:func:`data_frame` of ``columns`` named ``QUANTITY`` or ``QUANTITY(NAME)`` (``Q``,
+    ``F(k1)``, ``dv(m2)``), each column the unit ``unit[QUANTITY]``.
+
+    Parameters
+    ----------
+    columns : dict of str to array
+        The table's columns by name.
+    unit : dict of str to str
+        Quantity (the name before any ``(``) -> its unit.
+
+    Returns
+    -------
+    pandas.DataFrame
+    """
+    return data_frame(columns, {c: unit[c.partition("(")[0]] for c in columns})
 
 
 # ------------------------------------------------------------------ TOML with places
