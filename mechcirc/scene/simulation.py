@@ -42,6 +42,7 @@ import numpy as np
 from .. import _jit
 from ..errors import FollowerFlightWarning, MechcircError, SceneAccuracyWarning, SolverError
 from ..errors import warn as issue
+from ..limits import METHODS, SCIPY_METHODS
 from ..sources import brief, data_frame, did_you_mean, real_number, summary_repr
 from .files import Scene
 from .motion import MotionModel, function_args, motion_model
@@ -175,9 +176,6 @@ def output_units(scene: Scene, names) -> dict[str, str]:
     return out
 
 
-#: Methods of :func:`simulate_scene`: the fixed-step RK4 kernel, and scipy's adaptive ones.
-METHODS = ("rk4", "rk4-python", "rk8", "DOP853", "RK45", "LSODA")
-SCIPY_METHODS = ("DOP853", "RK45", "LSODA")
 NO_NUMBA_NOTE = ("numba is not importable (install the 'fast' extra: pip install "
                  "'mechcirc[fast]'); ran the same RK4 as pure Python, about 100x slower")
 COLD_NOTE = ("numba's cache does not hold the compiled kernels yet: ran the same RK4 as "
