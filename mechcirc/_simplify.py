@@ -183,7 +183,7 @@ def _exact(elements, levers, drive, protect, steps, taken):
     changed = True
     while changed:
         fixed = {FRAME, drive.n1, drive.n2} | {n for lv in levers
-                                              for n in (lv.p1, lv.p2, lv.s1, lv.s2)}
+                                              for n in lv.terminals}
         elements, c1 = _drop_self_loops(elements, protect, steps)
         levers, c2 = _drop_idle_levers(elements, levers, drive, steps)
         elements, levers, c3 = _drop_unloaded(elements, levers, drive, protect, steps)
@@ -208,7 +208,7 @@ def _drop_idle_levers(elements, levers, drive, steps):
     kept = list(levers)
     for lv in levers:
         used = {drive.n1, drive.n2} | {n for e in elements for n in (e.n1, e.n2)} | \
-            {n for x in kept if x is not lv for n in (x.p1, x.p2, x.s1, x.s2)}
+            {n for x in kept if x is not lv for n in x.terminals}
         for side, nodes in (("primary", (lv.p1, lv.p2)), ("secondary", (lv.s1, lv.s2))):
             if not any(n in used for n in nodes if n != FRAME):
                 steps.append(f"removed lever {lv.name}: nothing on its {side} side")

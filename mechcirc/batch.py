@@ -145,7 +145,7 @@ def network_shape(circuit: Circuit) -> tuple:
     """
     d = circuit.require_drive()
     return ([(e.kind, e.name, e.n1, e.n2) for e in circuit.elements],
-            [(lv.name, lv.p1, lv.p2, lv.s1, lv.s2) for lv in circuit.levers],
+            [(lv.name, *lv.terminals) for lv in circuit.levers],
             (d.name, d.n1, d.n2, d.kind))
 
 

@@ -221,6 +221,11 @@ class Lever:
     line: int = 0
     col: int = 0
 
+    @property
+    def terminals(self) -> tuple[str, str, str, str]:
+        """The four nodes ``(p1, p2, s1, s2)``."""
+        return self.p1, self.p2, self.s1, self.s2
+
     def reflect(self, K, ratio=None):
         """K [m/(N·s)] of a sub-network on the secondary, seen from the primary: K / r²
         (r the lever's ratio, or ``ratio``: an array of them over designs).
@@ -500,5 +505,5 @@ def node_names(elements, levers=()) -> list[str]:
     list of str
     """
     names = [n for e in elements for n in (e.n1, e.n2)]
-    names += [n for lv in levers for n in (lv.p1, lv.p2, lv.s1, lv.s2)]
+    names += [n for lv in levers for n in lv.terminals]
     return list(dict.fromkeys(names))

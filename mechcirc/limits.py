@@ -14,7 +14,7 @@ __all__ = ["MAX_SWEEP_POINTS", "MAX_PLOT_POINTS", "MAX_JSON_POINTS", "MAX_NODAL_
            "MAX_ADAPTIVE_NODAL_WORK", "MAX_STUDY_POINTS", "MAX_STUDY_SWEEP_POINTS",
            "MAX_STUDY_WORK", "MAX_REVOLUTIONS", "MAX_SCIPY_REVOLUTIONS",
            "MAX_POINTS_PER_REVOLUTION", "MAX_CYCLE_POINTS", "MAX_FORMULA_ELEMENTS",
-           "FORMULA_SECONDS"]
+           "FORMULA_SECONDS", "METHODS", "SCIPY_METHODS"]
 
 #: Frequency points of one sweep (results alone: about 70 bytes a point).
 MAX_SWEEP_POINTS = 10_000_000
@@ -42,6 +42,10 @@ MAX_STUDY_POINTS = 1_000_000
 MAX_STUDY_SWEEP_POINTS = 100_000
 #: Study points × sweep points (the whole study's frequency evaluations).
 MAX_STUDY_WORK = 1_000_000_000
+#: The integrators of a time-domain simulation (scene, sley): the fixed-step RK4 kernel
+#: (numba, or pure Python), RK8, and scipy's adaptive ones, whose bound below is lower.
+METHODS = ("rk4", "rk4-python", "rk8", "DOP853", "RK45", "LSODA")
+SCIPY_METHODS = ("DOP853", "RK45", "LSODA")
 #: Revolutions a time-domain simulation integrates (compiled RK4).
 MAX_REVOLUTIONS = 1_000
 #: Revolutions with the scipy integrators (Python right-hand side: 100 took 31 s here).

@@ -61,7 +61,7 @@ import numpy as np
 from .circuit import LAWS, Circuit, Drive
 from .resonances import Resonance, Resonances, constraint_basis, pencil, resonance_pairs
 from .errors import unknown_name
-from .sources import summary_repr
+from .sources import NamedValues, summary_repr
 
 __all__ = ["Mode", "Modes", "SweepSensitivity", "modes", "sweep_sensitivity"]
 
@@ -75,7 +75,10 @@ def _lazy(key: str, names: str):
         values = self._dv() if key == "velocity" else self._values.get(key)
         if values is not None and key in ("shape", "velocity"):
             values = values.astype(complex)     # real for an undamped root: complex as documented
-        return {} if values is None else dict(zip(self._names[names], values.tolist()))
+        what, where = ("node", " in this mode's shape") if names == "nodes" else \
+            ("element", f" in this mode's {key}")
+        return NamedValues(() if values is None else zip(self._names[names], values.tolist()),
+                           what, where)
     make.__name__ = key
     make.__doc__ = f"See the class docstring ({key})."
     return functools.cached_property(make)
@@ -135,9 +138,10 @@ class Mode:
         """See the class docstring (made from ``velocity`` on first use: Q = y·s^(−power)·Δv)."""
         v = self._dv()
         if v is None:
-            return {}
+            return NamedValues((), "element", " in this mode's force")
         y, power = self._names["law"]
-        return dict(zip(self._names["elements"], (y * self.s ** -power * v).tolist()))
+        return NamedValues(zip(self._names["elements"], (y * self.s ** -power * v).tolist()),
+                           "element", " in this mode's force")
 
     def _dv(self) -> np.ndarray | None:
         """Δv of every element, from the shape (not kept: elements × roots values)."""

@@ -428,7 +428,7 @@ class _Parser:
         """Each ``.ic`` names a node some element uses, other than the frame, once."""
         # (the elements' nodes only when needed: a netlist may have 10⁶ elements)
         known = {n for e in self.elements for n in (e.n1, e.n2)} if self.initial else set()
-        known |= {n for lv in self.levers for n in (lv.p1, lv.p2, lv.s1, lv.s2)}
+        known |= {n for lv in self.levers for n in lv.terminals}
         known |= {n for d in self.drives for n in (d.n1, d.n2)}
         seen_ic: dict[str, int] = {}
         for node, _, _, lineno, col in self.initial:

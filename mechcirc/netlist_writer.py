@@ -86,7 +86,7 @@ def write(circuit: Circuit, header: tuple[str, ...] | list[str] | str = (),
             i += 1                       # the companion is written by damping=
         out.append(noted(e.name, line))
         i += 1
-    out += [noted(lv.name, f"lever {_names(lv.name, lv.p1, lv.p2, lv.s1, lv.s2)} "
+    out += [noted(lv.name, f"lever {_names(lv.name, *lv.terminals)} "
                            f"ratio={_number(lv.ratio)}") for lv in circuit.levers]
     out += [f".ic {_names(node)} x={_number(x0)} v={_number(v0)}"
             for node, x0, v0 in circuit.initial]

@@ -42,7 +42,7 @@ import numpy as np
 
 from .circuit import Circuit, units_of
 from .errors import MechcircError
-from .sources import brief, data_frame, positive_number, real_number, summary_repr
+from .sources import brief, positive_number, quantity_frame, real_number, summary_repr
 from .units import convert_frequency
 
 __all__ = ["PeriodicResult", "SpeedMap", "periodic", "rpm_to_omega", "speed_map"]
@@ -169,7 +169,7 @@ class PeriodicResult:
                 **{f"F({n})": f for n, f in self.forces.items()},
                 **{f"dv({n})": dv for n, dv in self.velocities.items()}}
         unit = {"angle_deg": "deg", "Q": u["Q"], "x": u["x"], "v": u["v"], "F": u["Q"], "dv": u["v"]}
-        return data_frame(cols, {c: unit[c.partition("(")[0]] for c in cols})
+        return quantity_frame(cols, unit)
 
     def plot(self, fig=None):
         """Q(θ) beside its spectrum with |K| and the resonances: :func:`mechcirc.plotting.plot_periodic`.
@@ -226,8 +226,8 @@ class SpeedMap:
         asked for; ``attrs["units"]`` the unit of each column."""
         cols = {"rpm": self.rpm, "peak": self.peak, "harmonics": self.harmonics,
                 "error": self.error, **{f"peak({n})": p for n, p in self.element_peaks.items()}}
-        units = {"rpm": "rpm", "harmonics": "", "error": "1"}
-        return data_frame(cols, {c: units.get(c, self.units["Q"]) for c in cols})
+        return quantity_frame(cols, {"rpm": "rpm", "peak": self.units["Q"], "harmonics": "",
+                                     "error": "1"})
 
     def plot(self, ax=None):
         """The map: :func:`mechcirc.plotting.plot_speed_map`; returns ``ax`` when given,

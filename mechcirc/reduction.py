@@ -153,7 +153,7 @@ def _reduce(edges: list[_Edge], levers: list[Lever], a: str, b: str,
             break
     if levers:
         names = [lv.name for lv in levers]
-        nodes = sorted({n for lv in levers for n in (lv.p1, lv.p2, lv.s1, lv.s2)})
+        nodes = sorted({n for lv in levers for n in lv.terminals})
         raise NotSeriesParallelError(
             f"lever(s) {', '.join(names)} couple parts of the network that are not "
             f"series–parallel reducible (secondary sides are not closed sub-networks); "
@@ -403,8 +403,7 @@ def _secondary_part(lv: Lever, edges: list[_Edge], levers: list[Lever], a: str, 
         if comp & ({lv.p1, lv.p2, a, b} - {s}):
             continue
         ids = [i for i, e in enumerate(edges) if e.n1 in comp or e.n2 in comp]
-        subs = [m for m in levers if m is not lv and
-                ({m.p1, m.p2, m.s1, m.s2} & comp)]
+        subs = [m for m in levers if m is not lv and set(m.terminals) & comp]
         return ids, subs, t, s
     return None
 

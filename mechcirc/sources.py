@@ -18,7 +18,8 @@ if TYPE_CHECKING:  # pragma: no cover - annotations only (numpy is imported wher
 __all__ = ["read_source", "read_bytes", "MAX_INPUT_BYTES", "split_lines", "line_col",
            "finite_number", "brief", "load_toml", "locate", "locate_path", "located", "Table",
            "unknown_key", "check_keys", "number_error", "checked_number", "did_you_mean",
-           "is_number", "positive_number", "real_values", "summary_repr", "data_frame"]
+           "is_number", "positive_number", "real_values", "summary_repr", "data_frame",
+           "quantity_frame", "NamedValues"]
 
 #: The largest input file mechcirc reads [bytes].  A netlist of the statement
 #: limit is far below this; anything larger is refused before it is read.
@@ -443,6 +444,24 @@ def data_frame(rows, units: dict[str, str]):
     return df
 
 
+def quantity_frame(columns: dict, unit: dict[str, str]):
+    """:func:`data_frame` of ``columns`` named ``QUANTITY`` or ``QUANTITY(NAME)`` (``Q``,
+    ``F(k1)``, ``dv(m2)``), each column the unit ``unit[QUANTITY]``.
+
+    Parameters
+    ----------
+    columns : dict of str to array
+        The table's columns by name.
+    unit : dict of str to str
+        Quantity (the name before any ``(``) -> its unit.
+
+    Returns
+    -------
+    pandas.DataFrame
+    """
+    return data_frame(columns, {c: unit[c.partition("(")[0]] for c in columns})
+
+
 # ------------------------------------------------------------------ TOML with places
 #: A TOML table header line, ``[a.b]`` or ``[[a]]`` (group 1: its name), with a comment.
 TOML_HEADER = re.compile(r"^\s*\[\[?\s*([^\]]+?)\s*\]\]?\s*(#.*)?$")
@@ -695,6 +714,20 @@ def name_index(name: str, names, what: str = "element", where: str = "") -> int:
     if name in names:
         return names.index(name)
     raise unknown_name(name, names, what, where)
+
+
+class NamedValues(dict):
+    """A plain dictionary of values by name whose look-up of a name not there raises
+    :func:`~mechcirc.errors.unknown_name` ("no element named 'k44' in ...; did you mean
+    'k4'?"), an UnknownNameError and so still a KeyError; ``get`` and ``in`` as a dict's.
+    Pickles as a dict with its two words."""
+
+    def __init__(self, items=(), what: str = "element", where: str = ""):
+        super().__init__(items)
+        self.what, self.where = what, where
+
+    def __missing__(self, name):
+        raise unknown_name(name, self, self.what, self.where)
 
 
 def check_keys(text: str, source: str, table: Table, entry: dict, occurrence: int = 0) -> None:

@@ -77,7 +77,7 @@ def force_groups(elements, levers) -> list[list[tuple[str, str]]]:
     """
     groups = [[(e.n1, e.n2)] for e in elements]
     for lv in levers:
-        t = (lv.p1, lv.p2, lv.s1, lv.s2)
+        t = lv.terminals
         groups.append([(t[i], t[j]) for i in range(4) for j in range(i + 1, 4)])
     return groups
 
@@ -185,7 +185,7 @@ def check_frame_paths(circuit: Circuit) -> None:
     adj = adjacency([(e.n1, e.n2) for e in circuit.elements] + [(d.n1, d.n2)]
                     + [p for lv in circuit.levers for p in ((lv.p1, lv.p2), (lv.s1, lv.s2))])
     referenced = reachable(adj, FRAME if FRAME in adj else d.n1)
-    lever_nodes = {n for lv in circuit.levers for n in (lv.p1, lv.p2, lv.s1, lv.s2)}
+    lever_nodes = {n for lv in circuit.levers for n in lv.terminals}
     # Islands without levers are merely unloaded (they carry no force); ones
     # reached through a lever are singular.
     floating: set[str] = set()
@@ -193,7 +193,7 @@ def check_frame_paths(circuit: Circuit) -> None:
         if n not in floating:
             floating |= reachable(adj, n)
     if floating:
-        via = [lv.name for lv in circuit.levers if {lv.p1, lv.p2, lv.s1, lv.s2} & floating]
+        via = [lv.name for lv in circuit.levers if set(lv.terminals) & floating]
         first = next(lv for lv in circuit.levers if lv.name in via)     # via names one at least
         where = f"{circuit.source}:{first.line}:{first.col or 1}"     # FILE:LINE:COL for the CLI
         raise TopologyError(

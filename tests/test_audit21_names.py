@@ -268,6 +268,23 @@ def test_scene_motion_frame_units_by_output():
         **{f"{p}.acceleration{s}": "m/s²" for p in "BC" for s in ("", "_x", "_y")}}
 
 
+def test_a_hand_built_scene_motion_must_say_its_units():
+    # on main: SceneMotion(...) without units built, and its frame said "" (no unit) for
+    # every output; the units are now a required keyword (output_units gives them)
+    import dataclasses
+
+    from mechcirc.scene import load_scene, simulate_scene
+    from mechcirc.scene.simulation import SceneMotion, output_units
+
+    scene = load_scene(SLIDER)
+    r = simulate_scene(scene, revolutions=1)
+    given = {f.name: getattr(r, f.name) for f in dataclasses.fields(r) if f.name != "units"}
+    with pytest.raises(TypeError, match="units"):
+        SceneMotion(**given)
+    built = SceneMotion(**given, units=output_units(scene, r.values))
+    assert built.units == r.units and "" not in built.units.values()
+
+
 def test_shaft_motion_frame_units_of_torsion_rods():
     # on main: ShaftMotion had no to_dataframe
     pytest.importorskip("pandas")

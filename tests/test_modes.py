@@ -131,6 +131,29 @@ def test_single_degree_of_freedom_closed_forms():
                                                   abs=1e-12)
 
 
+def test_an_unknown_name_in_a_modes_dictionaries_is_answered_with_did_you_mean():
+    """energy['k44'] says which names there are (UnknownNameError, still a KeyError), as
+    every other look-up by name does; the dictionaries stay plain picklable data."""
+    import pickle
+
+    from mechcirc.errors import UnknownNameError
+
+    (mode,) = modes(mechcirc.parse("drive F a 0 force=1\nmass m a 0 2\n"
+                                   "spring k4 a 0 800\ndamper c a 0 4\n"))
+    for table, wrong, right in ((mode.energy, "k44", "k4"), (mode.shape, "aa", "a"),
+                                (mode.dissipation, "cc", "c"), (mode.force, "mm", "m"),
+                                (mode.velocity, "k44", "k4"), (mode.sensitivity, "k44", "k4"),
+                                (mode.zeta_sensitivity, "k44", "k4")):
+        with pytest.raises(UnknownNameError, match=f"did you mean '{right}'") as err:
+            table[wrong]
+        assert isinstance(err.value, KeyError)
+        back = pickle.loads(pickle.dumps(table))
+        assert isinstance(back, dict) and back == table
+        with pytest.raises(UnknownNameError):
+            back[wrong]
+    assert "k4" in mode.energy and "c" not in mode.energy and mode.energy.get("c") is None
+
+
 def test_overdamped_root_has_no_mode():
     found = modes(mechcirc.load("docs/examples/drive.mcir"))
     over = [m for m in found if m.resonance.omega_d == 0]

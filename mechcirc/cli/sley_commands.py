@@ -5,14 +5,14 @@ from __future__ import annotations
 import math
 
 from ..errors import InputError
-from ..limits import MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS, MAX_SCIPY_REVOLUTIONS
+from ..limits import (MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS, MAX_SCIPY_REVOLUTIONS,
+                      METHODS, SCIPY_METHODS)
 from ..units import FREQUENCY_UNITS, in_unit
 from ._common import (Default, add_command, add_handler, add_output_option, add_plot_option,
                       add_unit_option, check_output_paths, count, crank_angle, positive_omega,
                       print_json, print_written, real, refuse_ignored, set_values, write_outputs,
                       write_text)
 
-_METHODS = ("rk4", "rk4-python", "rk8", "DOP853", "RK45", "LSODA")   # = mechcirc.sley.METHODS
 _UNITS = {"eps4T": "rad/s^2", "eps2P": "rad/s^2", "eps4P": "rad/s^2", "eps5P": "rad/s^2",
           "M2V": "N m", "M5V": "N m"}
 
@@ -76,7 +76,7 @@ def _sley_arguments(p) -> None:
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="override a parameter, in SI or a unit of its kind, e.g. --set "
                         "clearance=0.002 or clearance=0.1deg (repeatable)")
-    p.add_argument("--method", choices=_METHODS,
+    p.add_argument("--method", choices=METHODS,
                    help="integrator (default rk4, and rk8 for a rigid --shaft; numba if "
                         "installed, else pure Python; "
                         "rk8: DOP853's 8th-order formula at a fixed step; "
@@ -142,7 +142,7 @@ def _overrides(args) -> dict:
 
 
 def _options(args) -> dict:
-    if args.method in ("DOP853", "RK45", "LSODA") and args.revolutions > MAX_SCIPY_REVOLUTIONS:
+    if args.method in SCIPY_METHODS and args.revolutions > MAX_SCIPY_REVOLUTIONS:
         raise InputError(f"--revolutions {args.revolutions} with --method {args.method}: the "
                          f"limit is {MAX_SCIPY_REVOLUTIONS} (a Python right-hand side, ~0.3 s "
                          "a revolution); the compiled rk4 takes up to "

@@ -140,6 +140,11 @@ class TransmissionRange:
     theta_at_max: tuple[float, ...]
 
 
+#: Least distance [rad] from a branch crossing at which :meth:`FourBar.nu_extrema` evaluates
+#: the closed form (0/0 at the crossing: digits lost as the distance shrinks).
+CROSSING_GAP = 1e-3
+
+
 def _crank_speed(omega) -> float:
     """``omega`` [rad/s] if it is a finite number whose square is finite, else a
     :class:`GeometryError` saying so."""
@@ -534,6 +539,13 @@ class FourBar:
 
         A grid of ``n`` angles brackets each extremum, then a bounded Brent
         search on the closed-form ν refines it to rounding.
+
+        A change-point linkage's closed form switches assembly mode at each
+        branch crossing (:meth:`branch_crossings`): the rocker angle has a kink
+        there, μ jumps, and ν is unbounded, ``-inf`` at that θ when μ jumps down
+        (``+inf`` up).  The other extremum is the finite one of the smooth
+        pieces; grid and search keep :data:`CROSSING_GAP` off a crossing, where
+        the closed form is 0/0 and loses digits.
         """
         from scipy.optimize import minimize_scalar
 
@@ -544,14 +556,28 @@ class FourBar:
         th = np.linspace(lo, hi, n + 1)
         if not self.crank_rotates_fully:
             th = th[1:-1]
-        nu = self.evaluate(th).nu
-        step = th[1] - th[0]
+        step, gap = th[1] - th[0], CROSSING_GAP
+        jumps = self._mu_jumps(gap)
+        for tc in jumps:
+            th = th[np.abs(_wrap(th - tc)) >= gap]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            nu = self.evaluate(th).nu
         out = []
         for sign, idx in ((1.0, int(np.argmin(nu))), (-1.0, int(np.argmax(nu)))):
+            kinks = [tc for tc, jump in jumps.items() if sign * jump < 0]
+            if kinks:                                 # a kink of this sign: unbounded
+                out.append((kinks[0], -sign * math.inf))
+                continue
             t0 = th[idx]
             left, right = t0 - step, t0 + step
             if not self.crank_rotates_fully:
                 left, right = max(left, th[0]), min(right, th[-1])
+            for tc in jumps:                          # the bracket stays off a crossing
+                off = _wrap(tc - t0)
+                if 0 < off < right - t0 + gap:
+                    right = t0 + off - gap
+                elif 0 > off > left - t0 - gap:
+                    left = t0 + off + gap
             res = minimize_scalar(lambda t, sign=sign: sign * self.transfer(float(t))[2],
                                   bounds=(left, right), method="bounded",
                                   options={"xatol": 1e-12})
@@ -560,6 +586,18 @@ class FourBar:
                 t_best, v_best = float(t0), float(nu[idx])
             out.append((t_best % TWO_PI if self.crank_rotates_fully else t_best, v_best))
         return out[0], out[1]
+
+    def _mu_jumps(self, gap: float) -> dict[float, float]:
+        """Crossing θ → μ(θ+) − μ(θ−) of the closed form at each branch crossing (empty for
+        other linkages): each side's limit extrapolated from ``gap`` and 2·``gap`` away."""
+        out = {}
+        for tc in self.branch_crossings():
+            t = tc + gap * np.array([-2.0, -1.0, 1.0, 2.0])
+            mu = self.evaluate(t).mu
+            before, after = 2 * mu[1] - mu[0], 2 * mu[2] - mu[3]
+            if abs(after - before) > 1e-6 * (1.0 + abs(before) + abs(after)):
+                out[tc] = float(after - before)
+        return out
 
     def rocker_acceleration_range(self, omega: float) -> tuple[float, float]:
         """(min, max) of ε4T = ν·ω² [rad/s²] over a revolution at crank speed ``omega`` [rad/s]."""

@@ -421,8 +421,8 @@ def warm_up() -> None:
 
 
 def _prepare(scene: Scene, shaft, flywheel, points, rigid):
-    """Checks of the options → (shaft, J_f, the rigid shaft's equations, the equations, peak
-    load, mean load, notes)."""
+    """Checks of the options → (shaft, the rigid shaft's equations, the equations (each with
+    its J_f), peak load, mean load, notes)."""
     shaft = shaft or scene.shaft
     if shaft is None:
         raise MechcircError(f"{scene.source}: no [shaft] table: give the flywheel and motor "
@@ -452,8 +452,8 @@ def _prepare(scene: Scene, shaft, flywheel, points, rigid):
                 f"{math.degrees(grid[int(load.argmax())]):.4g}°: only the flywheel and the "
                 "mechanism's inertia carry the shaft through it")
         warnings.warn(f"{scene.source}: {text}", ShaftWarning, stacklevel=3)
-        return shaft, Jf, req, eq, peak, float(np.mean(load)), ["warning: " + text]
-    return shaft, Jf, req, eq, peak, float(np.mean(load)), []
+        return shaft, req, eq, peak, float(np.mean(load)), ["warning: " + text]
+    return shaft, req, eq, peak, float(np.mean(load)), []
 
 
 #: Steps per period of the fastest linearised mode of the elastic shaft, by method.
@@ -657,7 +657,7 @@ def simulate_shaft(scene: Scene, shaft: Shaft | None = None, *, flywheel: float 
         or stalls during the start-up or the steady cycle (the message gives the torques);
         the start-up did not reach the steady cycle within ``max_time``.
     """
-    shaft, Jf, req, eq, peak, mean_load, notes = _prepare(scene, shaft, flywheel, points, rigid)
+    shaft, req, eq, peak, mean_load, notes = _prepare(scene, shaft, flywheel, points, rigid)
     method = method or DEFAULT_METHOD
     spp = _checked_method(method, steps_per_period)       # None for DOP853
     motor = shaft.motor

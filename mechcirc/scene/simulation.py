@@ -42,6 +42,7 @@ import numpy as np
 from .. import _jit
 from ..errors import FollowerFlightWarning, MechcircError, SceneAccuracyWarning, SolverError
 from ..errors import warn as issue
+from ..limits import METHODS, SCIPY_METHODS
 from ..sources import brief, data_frame, did_you_mean, real_number, summary_repr
 from .files import Scene
 from .motion import MotionModel, function_args, motion_model
@@ -117,8 +118,8 @@ class SceneMotion:
     states: np.ndarray | None = None
     #: numba compilation or cache load of the first call in a process [s], else 0.
     compile_time: float = 0.0
-    #: The unit of each output of ``values`` (:func:`output_units`).
-    units: dict = field(default_factory=dict)
+    #: The unit of each output of ``values`` (:func:`output_units`); a required keyword.
+    units: dict = field(kw_only=True)
 
     def summary(self) -> dict:
         """Plain-data summary for JSON."""
@@ -175,9 +176,6 @@ def output_units(scene: Scene, names) -> dict[str, str]:
     return out
 
 
-#: Methods of :func:`simulate_scene`: the fixed-step RK4 kernel, and scipy's adaptive ones.
-METHODS = ("rk4", "rk4-python", "rk8", "DOP853", "RK45", "LSODA")
-SCIPY_METHODS = ("DOP853", "RK45", "LSODA")
 NO_NUMBA_NOTE = ("numba is not importable (install the 'fast' extra: pip install "
                  "'mechcirc[fast]'); ran the same RK4 as pure Python, about 100x slower")
 COLD_NOTE = ("numba's cache does not hold the compiled kernels yet: ran the same RK4 as "
@@ -804,7 +802,7 @@ def _finish(ctx, main, other, counts, notes, warn, out=None, other_extrema=None,
     result = SceneMotion(scene.name, scene.source, model.omega, crank, values, extrema,
                          o.revolutions, est, periodicity, n_steps, nfev, wall, o.method, backend,
                          per_rev, tuple(notes + [f"warning: {w}" for w in warn]), ts, ys,
-                         compile_time, output_units(scene, values))
+                         compile_time, units=output_units(scene, values))
     if getattr(scene.linkage, "contact", ""):          # a cam follower that can jump
         flight(scene, result, warn=True)               # (at the caller's line)
     return result

@@ -53,6 +53,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import SleyAccuracyWarning
+from ..limits import METHODS
 from ..sources import data_frame, summary_repr
 from .models import ParameterError, SleyParameters, linkage_constants, start_angle
 from .presets import all_presets, preset
@@ -61,9 +62,6 @@ from .scenes import ALIASES, sley_scene
 __all__ = ["SleyResult", "simulate", "simulate_params", "simulate_batch", "METHODS",
            "table_error", "start_angle", "SleyAccuracyWarning"]
 
-#: = mechcirc.scene.simulation.METHODS, which checks the method (a copy: importing the scene
-#: package here would add ~30 ms to ``import mechcirc.sley``)
-METHODS = ("rk4", "rk4-python", "rk8", "DOP853", "RK45", "LSODA")
 TWO_PI = 2.0 * math.pi
 
 #: Default output points per revolution (0.05° in crank angle).

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..circuit import units_of
-from ..sources import data_frame, name_index
+from ..sources import name_index, quantity_frame
 
 __all__ = ["TransientResult"]
 
@@ -133,7 +133,7 @@ class TransientResult:
         (an ImportError says so without it)."""
         cols = self.columns()
         unit = {"t": "s", "x": self.units["x"], "v": self.units["v"], "F": self.units["Q"]}
-        return data_frame(cols, {c: unit[c.partition("(")[0]] for c in cols})
+        return quantity_frame(cols, unit)
 
     def plot(self, ax=None, nodes=None, what: str = "x", *, elements=None, fig=None,
              title: str | None = None):

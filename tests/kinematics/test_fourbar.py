@@ -5,6 +5,7 @@ intersection for C, the law of cosines, and Mrázek's printed ε4T range.
 """
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -239,6 +240,54 @@ def test_change_point_summary_withholds_nu_and_says_why():
     assert "dead_centres" not in doc          # no longer called a crank-rocker
     with pytest.raises(GeometryError, match="branch crossing"):
         FourBar(30, 100, 30, 100).transfer(0.0)
+
+
+def _fd_nu(fb, th, h=1e-4):
+    """ν by second differences of the rocker angle (positions only), unwrapped."""
+    phi = np.unwrap(np.array([fb.rocker_angle(np.asarray(th) + k * h) for k in (-1, 0, 1)]),
+                    axis=0)
+    return (phi[0] - 2 * phi[1] + phi[2]) / (h * h)
+
+
+@pytest.mark.parametrize("dims", [(60, 40, 50, 30), (30, 40, 50, 60), (30, 50, 20, 60),
+                                  (40, 30, 40, 30), (30, 30, 50, 50), (20, 50, 60, 30)])
+def test_change_point_nu_extrema_say_unbounded_at_the_crossing(dims):
+    """The closed form switches assembly mode at a branch crossing, so the rocker angle has a
+    kink there: μ jumps and ν is ±inf (the jump's sign), found from the rocker angle's slopes
+    on each side (positions only, not the ν formula).  The other extremum is the finite one
+    of the smooth pieces, checked against second differences of the rocker angle on a dense
+    grid.  On main: ν ≈ ±2e15 at the crossing, of either sign, or the crossing's NaN taken as
+    the extremum, and numpy's RuntimeWarnings."""
+    fb = FourBar(*dims)
+    lo, hi = fb.crank_range()
+    jumps = {}
+    for tc in fb.branch_crossings():
+        h = 1e-5
+        slope = [(fb.rocker_angle(t + h) - fb.rocker_angle(t - h)) / (2 * h)
+                 for t in (tc - 1e-3, tc + 1e-3)]
+        jumps[tc] = slope[1] - slope[0]
+        assert abs(jumps[tc]) > 0.1               # a kink: the closed form switches branch
+    th = np.linspace(lo, hi, 200_001) if fb.crank_rotates_fully else \
+        np.linspace(lo + 1e-3, hi - 1e-3, 200_001)        # second differences inside the range
+    far = np.all([np.abs((th - tc + np.pi) % (2 * np.pi) - np.pi) > 1e-2 for tc in jumps],
+                 axis=0)
+    with np.errstate(all="ignore"):
+        ref = _fd_nu(fb, th[far])
+    ref = ref[np.isfinite(ref)]
+    for n in (3, 4, 7, 3600):
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            (tmin, nmin), (tmax, nmax) = fb.nu_extrema(n)
+        for value, where, sign, best in ((nmin, tmin, -1, ref.min()), (nmax, tmax, 1, ref.max())):
+            down = [tc for tc, j in jumps.items() if sign * j > 0]
+            if down:
+                assert value == sign * math.inf
+                assert where in down
+                continue
+            assert math.isfinite(value)
+            if n == 3600:
+                assert value == pytest.approx(best, rel=1e-4, abs=1e-6)
+                assert sign * (value - best) >= -1e-6 * max(1.0, abs(best))
 
 
 def test_grashof_linkage_has_no_crossings():

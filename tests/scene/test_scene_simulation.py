@@ -471,8 +471,10 @@ def test_file_steps_per_period_is_not_refused_with_a_scipy_method():
 
 
 def test_methods_spelt_alike():
-    """The sley's public METHODS (a copy, so that ``import mechcirc.sley`` does not import
-    the scene package) and the CLI's are the scene's, which the check uses."""
-    from mechcirc.cli.sley_commands import _METHODS
+    """The sley's public METHODS and the CLI's choices are the scene's, which the check
+    uses: one tuple (mechcirc.limits, which ``import mechcirc.sley`` loads without the
+    scene package)."""
+    from mechcirc import limits
+    from mechcirc.cli import sley_commands
 
-    assert sley_simulation.METHODS == METHODS == _METHODS
+    assert sley_simulation.METHODS is METHODS is sley_commands.METHODS is limits.METHODS

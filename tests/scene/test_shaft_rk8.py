@@ -54,7 +54,8 @@ def located_cycle(scene, theta, rigid=False, clearance=0.0, rtol=3e-14):
     cycle with the elastic rod, to the noise in one rigid); the fourth is the reference.
     Returns (its [θ̇, t, z] at ``theta`` (rows), the change of θ̇ from its start to its end /
     ω_s)."""
-    eq = _prepare(scene, None, None, 16, rigid)[3]
+    _, req, eq, *_ = _prepare(scene, None, None, 16, rigid)
+    assert eq is req if rigid else eq.Jf == req.Jf == scene.shaft.flywheel
     th0 = math.radians(START)
     ends = sorted((math.radians(CENTRE + k * WIN / 2) - th0) % (2 * math.pi) + th0
                   for k in (-1, 1)) + [th0 + 2 * math.pi]
