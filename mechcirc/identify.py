@@ -173,7 +173,7 @@ def judge_pole(row: dict, expected: complex, found, dt: float, tol: float, *,
                measure: str = "pole", spread: float = 0.0, why: str | None = None) -> dict:
     """Judge the predicted pole ``expected`` against the nearest identified one.
 
-    ``measure="pole"`` (a netlist's rows): the row gains ``ringing_omega`` (ω_d =
+    ``measure="pole"`` (a netlist's rows): the row gains ``ringing_omega_d`` (ω_d =
     Im s of the match [rad/s]), ``decay`` (−Re s [1/s]) and ``rel_error`` =
     |s − s_expected| / |s_expected|.  ``measure="omega_n"`` (a scene's rows):
     ``ringing_omega`` (ω_n = |s|), ``ringing_zeta`` (−Re s / |s|) and ``rel_error``
@@ -209,7 +209,7 @@ def judge_pole(row: dict, expected: complex, found, dt: float, tol: float, *,
         return judge(row, None, tol, why or "no underdamped mode in the recorded motion")
     best = nearest_pole(found, expected, dt)
     if measure == "pole":
-        row.update(ringing_omega=best.imag, decay=-best.real,
+        row.update(ringing_omega_d=best.imag, decay=-best.real,
                    rel_error=abs(best - expected) / abs(expected))
     else:
         row.update(ringing_omega=abs(best), ringing_zeta=-best.real / abs(best),

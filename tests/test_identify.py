@@ -71,7 +71,7 @@ def test_judge_pole_matches_in_the_sampled_domain_and_judges():
     dt = 1e-3
     alias = complex(S1.real, S1.imag + 2 * math.pi / dt)     # the same samples as S1
     row = judge_pole({}, alias, [S1, S2], dt, 1e-9)
-    assert row["ringing_omega"] == S1.imag and row["verdict"] == "disagrees"
+    assert row["ringing_omega_d"] == S1.imag and row["verdict"] == "disagrees"
     row = judge_pole({}, S1 * (1 + 1e-7), [S1, S2], dt, 1e-6, measure="omega_n")
     assert row["rel_error"] == pytest.approx(1e-7, rel=1e-6) and row["verdict"] == "agrees"
     assert row["ringing_zeta"] == pytest.approx(-S1.real / abs(S1), rel=1e-14)

@@ -39,7 +39,7 @@ def test_every_shipped_netlist_runs_transient_and_crosscheck(path, capsys):
     assert doc["verdict"] == "agrees" and doc["summary"]["disagree"] == 0
     assert doc["resonances"] and doc["steady_state"]
     for r in doc["resonances"]:
-        assert set(r) >= {"kind", "omega", "ringing_omega", "rel_error", "verdict", "tol"}
+        assert set(r) >= {"kind", "omega", "ringing_omega_d", "rel_error", "verdict", "tol"}
         # A mode that has faded out of the record (heald_damped's 3066 rad/s, decay
         # 408 1/s) is "cannot be measured", with why; every measured one agrees.
         assert r["verdict"] in ("agrees", "cannot be measured")

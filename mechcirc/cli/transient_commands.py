@@ -143,8 +143,8 @@ def cmd_crosscheck_netlist(args) -> int:
     print(f"(a) resonances / anti-resonances vs ringing of the impulse response [{fu}]; "
           "rel. diff = |s_time − s_freq| / |s_freq| of the pole s = −σ + iω_d")
     for r in result.resonances:
-        ringing = "" if r["ringing_omega"] is None else (
-            f"  ringing {in_unit(r['ringing_omega'], fu):12.6g}  decay {r['decay']:.5g} 1/s "
+        ringing = "" if r["ringing_omega_d"] is None else (
+            f"  ringing {in_unit(r['ringing_omega_d'], fu):12.6g}  decay {r['decay']:.5g} 1/s "
             f"(expected {r['decay_expected']:.5g})  rel. diff {r['rel_error']:.2e}")
         print(f"    {r['kind']:>13} {sym}_d {in_unit(r['omega_d'], fu):12.6g}{ringing}: "
               f"{verdict_text(r)}")

@@ -132,7 +132,7 @@ def _ringing(circuit, kind, modes, others, out, progress):
     rows = {}
     for r in modes:
         rows[id(r)] = {"kind": kind, "omega": r.omega, "omega_d": r.omega_d, "zeta": r.zeta,
-                       "ringing_omega": None, "decay": None, "decay_expected": r.zeta * r.omega,
+                       "ringing_omega_d": None, "decay": None, "decay_expected": r.zeta * r.omega,
                        "rel_error": None, "decay_rel_error": None}
         if r.omega_d <= 0:
             judge(rows[id(r)], None, TOL_RINGING,
