@@ -3,8 +3,15 @@
 One source, two backends, as :mod:`mechcirc.scene._motion_kernels`: compiled with
 numba's ``@njit(cache=True)`` when numba is importable (the ``fast`` extra),
 plain Python otherwise.  :mod:`.linkage_solver` uses :func:`newton_path` only
-when it is compiled (``HAVE_NUMBA``); without numba it keeps its batched numpy
-Newton, which is faster than this loop run as Python.
+when it is compiled (``HAVE_NUMBA``, and in numba's cache); otherwise its batched
+numpy ``Newton`` runs.  That twin stays by measurement (28 Nov,
+``benchmarks/bench_linkage_newton.py``; docs/performance.md, "The numpy Newton
+beside newton_path"): run as Python this loop costs 240–12,000 µs per position
+(the FNF six-bar 880 µs at 361 and 3,601 positions), 6–66× the numpy Newton's
+time on the shipped linkages at 37–3,601 positions (the six-bar 3.1–3.2 s against
+0.05 s at 3,601), and ``mechcirc simulate examples/fnf_sixbar_scene.toml``
+without numba would take 1.8 s (1.5×) more.  Single positions are the
+exception (the numpy path imports scipy.linalg, 0.2 s): not worth a third route.
 
 The equations are those of :mod:`.linkage` (Φ(q, t) = 0: coincident joint
 points, 2 rows per revolute pair, then φ_c − ω_c t for each crank), written on

@@ -28,6 +28,9 @@ position (with sliders the numpy form above runs), and Newton as a sequential co
 warm-started from the previous one, q̇ and q̈ from the LU of J at each
 converged q — the same cost per position at 360 positions as at 3,600.
 ``mechcirc._jit.COMPILED = False`` keeps the numpy versions (tests run both).
+The numpy Newton is kept beside the kernel on purpose, by measurement: the
+kernel run as Python, without numba, is 6–66× slower on the shipped linkages
+(:mod:`._linkage_kernels`, docs/performance.md).
 
 A change-point linkage (an RRR or RRP dyad lining up where its two assembly
 modes cross; one crank) continues on the branch whose velocity is continuous, by
@@ -1063,6 +1066,10 @@ def _branch_jump(lk, theta0, theta1=None):
 # ------------------------------------------------------------------ Newton
 class Newton:
     """Residual, Jacobian and γ of Φ(q, t) = 0, batched over positions (first axis).
+
+    The path without numba (and before the compiled ``newton_path`` is cached):
+    the twin of :func:`._linkage_kernels.newton_path`, kept because that loop run
+    as Python costs 6–66× more (measured: see :mod:`._linkage_kernels`).
 
     Joint rows are computed as complex numbers whose float view is the
     interleaved (x, y) rows; the Jacobian is a constant template with the
