@@ -327,12 +327,20 @@ class FourBar:
     # -------------------------------------------------------------- positions
     def _raw(self, theta):
         """Unwrapped-by-branch rocker angle and the cosine of angle BDC (vectorised)."""
-        a, b, c, d = self.crank, self.coupler, self.rocker, self.frame
+        a, d = self.crank, self.frame
         bx = a * np.cos(theta) - d
         by = a * np.sin(theta)
-        e2 = bx * bx + by * by
-        cos_psi = (c * c + e2 - b * b) / (2.0 * c * np.sqrt(e2))
-        return bx, by, cos_psi
+        return bx, by, self._cos_bdc(bx * bx + by * by)
+
+    def _cos_bdc(self, e2):
+        """cos ψ, ψ the angle BDC, from BD² = ``e2`` (vectorised).  B on D (crank = frame,
+        at θ = 0) is assembled when coupler = rocker, the deltoid's singular position: its
+        limit cos ψ = BD / 2c → 0 is returned there, for :meth:`_check`; the rocker angle
+        itself is undefined (NaN) there."""
+        b, c = self.coupler, self.rocker
+        with np.errstate(divide="ignore", invalid="ignore"):
+            cos_psi = (c * c + e2 - b * b) / (2.0 * c * np.sqrt(e2))
+        return np.where(e2 == 0.0, 0.0, cos_psi) if b == c else cos_psi
 
     def _rocker(self, bx, by):
         """Rocker angle (wrapped) with B at (bx, by) from D: C is the inner joint of the
@@ -357,7 +365,8 @@ class FourBar:
         lo, hi = self.crank_range()
         span = hi - lo
         th = np.linspace(lo + 1e-9 * span, hi - 1e-9 * span, 1441)
-        un = np.unwrap(self._rocker(*self._raw(th)[:2]) - (th if self._turns else 0.0))
+        raw = self._rocker(*self._raw(th)[:2]) - (th if self._turns else 0.0)
+        un = np.unwrap(raw[np.isfinite(raw)])       # without a deltoid's B = D (NaN)
         return float(_wrap(0.5 * (un.max() + un.min())))
 
     def evaluate(self, theta: ArrayLike) -> FourBarState:
@@ -381,7 +390,10 @@ class FourBar:
 
         Notes
         -----
-        Closed form, O(n); about 30 numpy passes for n angles.
+        Closed form, O(n); about 30 numpy passes for n angles.  At a singular position
+        (a lock end, a branch crossing) the rates are 0/0 or huge; where B lies on D (a
+        deltoid with crank = frame and coupler = rocker, at θ = 0) the angles and rates are
+        NaN: coupler and rocker lie on each other and may turn freely.
         """
         theta = real_values(theta, "theta", "rad")
         a, b, c = self.crank, self.coupler, self.rocker
@@ -394,10 +406,11 @@ class FourBar:
         phi3 = np.arctan2(c * np.sin(phi4) - by, c * np.cos(phi4) - bx)
         s43 = np.sin(phi4 - phi3)
         c43 = np.cos(phi4 - phi3)
-        mu = a * np.sin(theta - phi3) / (c * s43)
-        mu3 = a * np.sin(theta - phi4) / (b * s43)
-        nu = (a * np.cos(theta - phi3) + b * mu3 * mu3 - c * mu * mu * c43) / (c * s43)
-        nu3 = (a * np.cos(theta - phi4) + b * mu3 * mu3 * c43 - c * mu * mu) / (b * s43)
+        with np.errstate(divide="ignore", invalid="ignore"):     # s43 = 0: a singular position
+            mu = a * np.sin(theta - phi3) / (c * s43)
+            mu3 = a * np.sin(theta - phi4) / (b * s43)
+            nu = (a * np.cos(theta - phi3) + b * mu3 * mu3 - c * mu * mu * c43) / (c * s43)
+            nu3 = (a * np.cos(theta - phi4) + b * mu3 * mu3 * c43 - c * mu * mu) / (b * s43)
         gamma = np.arctan2(np.abs(s43), np.abs(c43))
         return FourBarState(theta, phi3, phi4, mu, nu, mu3, nu3, gamma)
 
@@ -422,7 +435,7 @@ class FourBar:
         th = np.asarray(theta, dtype=float)
         bd2 = a * a + d * d - 2 * a * d * np.cos(th)
         cos_d = (b * b + c * c - bd2) / (2 * b * c)
-        self._check(th, (c * c + bd2 - b * b) / (2 * c * np.sqrt(bd2)))
+        self._check(th, self._cos_bdc(bd2))
         out = np.arccos(np.clip(cos_d, -1.0, 1.0))
         return float(out) if np.ndim(out) == 0 and isinstance(theta, (float, int)) else out
 
@@ -449,9 +462,8 @@ class FourBar:
         GeometryError
             The linkage locks at ``theta``, or is at such a singular position.
         """
-        with np.errstate(divide="ignore", invalid="ignore"):
-            s = self.evaluate(theta if finite_number(theta) else real_values(theta, "theta", "rad"))
-        if math.sin(float(s.phi4) - float(s.phi3)) == 0.0:
+        s = self.evaluate(theta if finite_number(theta) else real_values(theta, "theta", "rad"))
+        if not abs(math.sin(float(s.phi4) - float(s.phi3))) > 0.0:    # 0, or NaN where B = D
             raise GeometryError(
                 f"four-bar at a singular position at θ = {math.degrees(theta):.6g}°: coupler and "
                 f"rocker in line, μ and ν undefined"

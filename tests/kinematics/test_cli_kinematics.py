@@ -2,6 +2,7 @@
 
 import json
 import math
+import warnings
 from pathlib import Path
 
 import pytest
@@ -107,6 +108,23 @@ def test_fourbar_change_point_is_named_and_nu_withheld(capsys):
     assert "branches cross at θ = 0°, 180°" in out
     assert "ν range: [" not in out and "e+15" not in out and "e15" not in out
     assert "RuntimeWarning" not in captured.err
+
+
+@pytest.mark.parametrize("dims", [("50", "30", "30", "50"), ("30", "100", "100", "30")])
+def test_fourbar_deltoid_with_crank_equal_frame_reports_and_plots(capsys, tmp_path, dims):
+    """B lies on D at θ = 0.  On main: 50/30/30/50 a RuntimeWarning (an internal error
+    under -W error), 30/100/100/30 with --plot exit 2, 'locks at θ = 0° (the crank reaches
+    θ ∈ [0°, 360°] only)'."""
+    png = tmp_path / "deltoid.png"
+    argv = ["fourbar"] + [x for pair in zip(("--crank", "--coupler", "--rocker", "--frame"),
+                                            dims) for x in pair]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert main(argv + ["--omega", "10", "--plot", str(png)]) == 0
+    out = capsys.readouterr().out
+    assert "deltoid" in out and "branches cross at θ = 0°" in out
+    assert "cannot be assembled" not in out
+    assert png.stat().st_size > 0
 
 
 @pytest.mark.parametrize("extra,what", [(["--omega", "1e300"], "at most"),

@@ -250,7 +250,8 @@ def _fd_nu(fb, th, h=1e-4):
 
 
 @pytest.mark.parametrize("dims", [(60, 40, 50, 30), (30, 40, 50, 60), (30, 50, 20, 60),
-                                  (40, 30, 40, 30), (30, 30, 50, 50), (20, 50, 60, 30)])
+                                  (40, 30, 40, 30), (30, 30, 50, 50), (20, 50, 60, 30),
+                                  (30, 100, 100, 30)])
 def test_change_point_nu_extrema_say_unbounded_at_the_crossing(dims):
     """The closed form switches assembly mode at a branch crossing, so the rocker angle has a
     kink there: μ jumps and ν is ±inf (the jump's sign), found from the rocker angle's slopes
@@ -288,6 +289,95 @@ def test_change_point_nu_extrema_say_unbounded_at_the_crossing(dims):
             if n == 3600:
                 assert value == pytest.approx(best, rel=1e-4, abs=1e-6)
                 assert sign * (value - best) >= -1e-6 * max(1.0, abs(best))
+
+
+# A deltoid with crank = frame and coupler = rocker: at θ = 0 the joint B lies on D, the
+# coupler lies on the rocker and both may turn freely there (the rocker angle is undefined).
+# Elsewhere it moves as a kite: C stays on the perpendicular bisector of BD, which passes
+# through A, so C = s·e^{iθ/2} with |C − D| = c, s = a cos(θ/2) ± √(c² − a² sin²(θ/2)).
+B_ON_D = [(50.0, 30.0, 30.0, 50.0), (5.0, 4.0, 4.0, 5.0), (2.0, 1.0, 1.0, 2.0),
+          (30.0, 100.0, 100.0, 30.0), (3.0, 3.0, 3.0, 3.0)]
+
+
+def _kite_rocker_angles(a, c, th):
+    """Both rocker angles φ4 = arg(C − D) of the kite at crank angles ``th`` (D = (a, 0))."""
+    root = np.sqrt(c * c - (a * np.sin(th / 2)) ** 2)
+    return [np.angle(s * np.exp(0.5j * th) - a) for s in (a * np.cos(th / 2) + root,
+                                                            a * np.cos(th / 2) - root)]
+
+
+@pytest.mark.parametrize("branch", [1, -1])
+@pytest.mark.parametrize("dims", B_ON_D)
+def test_deltoid_with_b_on_d_moves_where_it_is_assembled(dims, branch):
+    """On main the closed form's reference angle was taken from a grid through θ = 0, where
+    B = D gives 0/0: φ4, μ and ν came out NaN at every crank angle, θ = 0 was reported as a
+    lock and nu_extrema raised or returned NaN."""
+    a, b, c, d = dims
+    fb = FourBar(*dims, branch=branch)
+    lo, hi = fb.crank_range()
+    th = np.linspace(lo, hi, 2001)[1:-1] if not fb.crank_rotates_fully else \
+        np.linspace(0.0, 2 * np.pi, 2001)[1:-1]
+    th = th[np.abs(th) > 1e-6]                     # off the singular position θ = 0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        s = fb.evaluate(th)
+    assert np.all(np.isfinite(s.phi4)) and np.all(np.isfinite(s.mu))
+    # positions: one of the kite's two rocker angles; μ: central differences of that one
+    ref = _kite_rocker_angles(a, c, th)
+    err = np.min([np.abs(_wrap(s.phi4 - r)) for r in ref], axis=0)
+    assert np.max(err) < 1e-12
+    h = 1e-6
+    k = np.argmin([np.abs(_wrap(s.phi4 - r)) for r in ref], axis=0)
+    fd = np.choose(k, [_wrap(p - m) / (2 * h) for p, m in zip(_kite_rocker_angles(a, c, th + h),
+                                                             _kite_rocker_angles(a, c, th - h))])
+    far = np.abs(s.gamma) > 1e-2                   # off the lock ends, where μ → ∞
+    assert np.max(np.abs(fd - s.mu)[far] / (1 + np.abs(s.mu[far]))) < 1e-6
+    # θ = 0: assembled (no lock), but B = D, so the rocker angle is undefined
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        at0 = fb.evaluate(np.array([0.0]))
+        assert np.isnan(at0.phi4[0]) and np.isnan(at0.mu[0])
+        assert fb.interior_angle(0.0) == 0.0       # B = D: the angle BCD closes
+        with pytest.raises(GeometryError, match="singular position at θ = 0°"):
+            fb.transfer(0.0)
+        extrema = fb.nu_extrema()
+        doc = fb.summary(10.0)
+    assert doc["branch_crossings_deg"] in ([0.0], [0.0, 180.0])
+    # ν: ±inf at θ = 0 where the closed form's μ jumps (its sign), else the extremum of
+    # second differences of the kite's rocker angle, CROSSING_GAP = 1e-3 off θ = 0 and
+    # (a rocking crank) off the lock ends
+    # (the rhombus a = b = c = d is also a parallelogram, its joints in line at θ = π too)
+    crossings = (0.0, math.pi) if a == b else (0.0,)
+    hi = math.pi - (1e-3 if a == b else 0.0) if fb.crank_rotates_fully else hi - 1e-3
+    side = np.linspace(1e-3, hi, 100_001)
+    grid = np.concatenate([-side[::-1], side])
+    h = 1e-5
+    branch_of = _kite_branch(fb, grid)
+    phi = [np.choose(branch_of, _kite_rocker_angles(a, c, grid + k * h)) for k in (-1, 0, 1)]
+    nu_ref = (_wrap(phi[2] - phi[1]) - _wrap(phi[1] - phi[0])) / (h * h)
+    jumps = {}
+    for tc in crossings:
+        t = tc + np.array([-1e-3, 1e-3])
+        mu_at = np.choose(_kite_branch(fb, t), [_wrap(p - m) / 2e-6 for p, m in zip(
+            _kite_rocker_angles(a, c, t + 1e-6), _kite_rocker_angles(a, c, t - 1e-6))])
+        jumps[tc] = mu_at[1] - mu_at[0]
+    for (where, value), sign, best in zip(extrema, (-1, 1), (nu_ref.min(), nu_ref.max())):
+        down = [tc for tc, jump in jumps.items() if abs(jump) > 1e-3 and sign * jump > 0]
+        if down:
+            assert where in down and value == sign * math.inf
+        else:
+            assert value == pytest.approx(best, rel=1e-4, abs=1e-5)
+
+
+def _kite_branch(fb, th):
+    """Which of :func:`_kite_rocker_angles` the closed form's φ4 is at ``th`` (0 or 1)."""
+    a, c = fb.crank, fb.rocker
+    phi4 = fb.evaluate(th).phi4
+    return np.argmin([np.abs(_wrap(phi4 - r)) for r in _kite_rocker_angles(a, c, th)], axis=0)
+
+
+def _wrap(x):
+    return np.angle(np.exp(1j * np.asarray(x, dtype=float)))
 
 
 def test_grashof_linkage_has_no_crossings():
