@@ -572,8 +572,7 @@ class FourBar:
         jumps = self._mu_jumps(gap)
         for tc in jumps:
             th = th[np.abs(_wrap(th - tc)) >= gap]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            nu = self.evaluate(th).nu
+        nu = self.evaluate(th).nu
         out = []
         for sign, idx in ((1.0, int(np.argmin(nu))), (-1.0, int(np.argmax(nu)))):
             kinks = [tc for tc, jump in jumps.items() if sign * jump < 0]

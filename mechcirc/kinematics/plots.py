@@ -55,8 +55,7 @@ def plot_fourbar(fourbar, omega: float | None = None, n: int = 721, *, fig=None)
     lo, hi = fourbar.crank_range()
     th = np.linspace(lo, hi, n)
     th = th if fourbar.crank_rotates_fully else th[1:-1]
-    with np.errstate(all="ignore"):             # 0/0 at a change point's branch crossing
-        st = fourbar.evaluate(th)
+    st = fourbar.evaluate(th)              # (no warning at a crossing's 0/0: evaluate's own)
     deg = np.degrees(th)
     fig, ax = _figure(4, 1, (7, 9), fig, "plot_fourbar")
     acc = st.nu * omega ** 2 if omega else st.nu
