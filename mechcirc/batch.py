@@ -388,9 +388,7 @@ class Designs:
         from .resonances import batched_roots, find_resonances
 
         D = self.size
-        found = batched_roots(self, omega_max)
-        if found is None:
-            found = _nodal_roots(self, omega_max)
+        found = batched_roots(self, omega_max) or _nodal_roots(self, omega_max)
         none: NDArray = np.zeros(0, dtype=np.int64)
         which, pole, w, err = found if found is not None else (none,) * 4
         single = np.setdiff1d(np.arange(D), which)
@@ -599,12 +597,10 @@ def _nodal_group_roots(ds: Designs, system, held, which: NDArray, omega_max):
     *_, G_released, G_held, damped = pencil(system)
     B, nn = element_patterns(system), len(system.nodes)
     S, parts = _stacked_matrices(ds, system, which)
-    roots = []
-    for G in (G_held, G_released):
-        found = _pencil_roots(constraint_basis(G, nn).toarray(), B, S, damped, omega_max)
-        if found is None:
-            return None
-        roots.append(found)
+    roots = [_pencil_roots(constraint_basis(G, nn).toarray(), B, S, damped, omega_max)
+             for G in (G_held, G_released)]
+    if None in roots:
+        return None
     (s_h, e_h, ok_h, must_h), (s_r, e_r, ok_r, must_r) = roots
     # A mode in both problems cancels in K (resonances._cancel): the single path's.
     keep = np.flatnonzero(shared_roots_free(((s_h, e_h, ok_h), (s_r, e_r, ok_r)), damped))
@@ -885,8 +881,7 @@ def _extremes(ds: Designs, lo: float, hi: float, res: DesignResonances,
     failed.update(more)
     for d, (kmax, smax, qmax) in done.items():
         out["K_max"][d], out["omega_at_K_max"][d] = kmax.value, kmax.omega
-        with np.errstate(divide="ignore"):
-            out["K_min"][d] = 1.0 / smax.value if smax.value else math.inf
+        out["K_min"][d] = 1.0 / smax.value if smax.value else math.inf
         out["omega_at_K_min"][d] = smax.omega
         out["Q0_max"][d], out["omega_at_Q0_max"][d] = qmax.value, qmax.omega
     return DesignExtremes(**out, single=rest, failed=failed,
