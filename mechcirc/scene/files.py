@@ -795,10 +795,8 @@ def _parts(scene: Scene) -> tuple:
     parts = _rigid_parts(lk, bodies, tbodies, meshes)
     for part in parts:
         n = len(part)
-        pairs = 0
-        for p in {p for b in part for p in bodies[b]}:
-            k = sum(1 for b in part if p in bodies[b]) + (1 if p in lk.ground else 0)
-            pairs += max(k - 1, 0)
+        pairs = sum(max(sum(p in bodies[b] for b in part) + (p in lk.ground) - 1, 0)
+                    for p in {p for b in part for p in bodies[b]})
         # a slider in the part on a guide in the part or the frame
         pairs += sum(1 for x in lk.sliders if x.link in part and (x.guide in part
                                                                    or x.guide == "ground"))
@@ -856,9 +854,7 @@ def _rigid_parts(lk, bodies: dict, tbodies: set, meshes=()) -> list[tuple]:
 
     g = nx.Graph()
     g.add_nodes_from(bodies)
-    for p in lk.pose:
-        if p in lk.ground:
-            continue
+    for p in (p for p in lk.pose if p not in lk.ground):
         on = [b for b, pts in bodies.items() if p in pts and b not in tbodies]
         g.add_edges_from((on[0], b) for b in on[1:])
     g.add_edges_from((x.guide, x.link) for x in lk.sliders if x.guide in bodies)
