@@ -383,7 +383,7 @@ def _light_log_axes(axes, max_minor_decades: float = 3.0) -> None:
     positions and style); only the short minor tick marks go.  Minor labels of
     an axis spanning less than a decade are left as they are.
     """
-    from matplotlib.ticker import FuncFormatter, NullLocator
+    from matplotlib.ticker import FuncFormatter, NullFormatter, NullLocator
 
     for a in axes:
         for axis in (a.xaxis, a.yaxis):
@@ -400,7 +400,6 @@ def _light_log_axes(axes, max_minor_decades: float = 3.0) -> None:
     from matplotlib.axis import Ticker
     from matplotlib.collections import LineCollection
     from matplotlib.lines import Line2D
-    from matplotlib.ticker import NullFormatter
 
     at = [k * 10.0 ** e for e in range(math.floor(math.log10(lo)), math.ceil(math.log10(hi)))
           for k in range(2, 10) if lo <= k * 10.0 ** e <= hi]
@@ -736,9 +735,7 @@ def _study_scatter(fig, ax, ok, bad, params, column, units) -> None:
     from matplotlib.colors import LogNorm
 
     px, py = params
-    x = np.array([r[px] for r in ok], dtype=float)
-    y = np.array([r[py] for r in ok], dtype=float)
-    c = np.array([r[column] for r in ok], dtype=float)
+    x, y, c = (np.array([r[key] for r in ok], dtype=float) for key in (px, py, column))
     finite = np.isfinite(c)
     norm = LogNorm() if finite.any() and np.all(c[finite] > 0) and \
         c[finite].max() > 100 * c[finite].min() else None
