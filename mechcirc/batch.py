@@ -403,11 +403,8 @@ class Designs:
             r = w.shape[1]
             count[which] = live.sum(axis=1)
             kind[which, :r] = np.where(live, np.where(pole, "antiresonance", "resonance"), "")
-            with np.errstate(all="ignore"):
-                out[0, which, :r] = np.abs(w)           # w: the roots s, as _make reads them
-                out[1, which, :r] = np.abs(w.imag)
-                out[2, which, :r] = -w.real / np.abs(w) + 0.0
-            out[3, which, :r] = err
+            with np.errstate(all="ignore"):             # w: the roots s, as _make reads them
+                out[:, which, :r] = np.abs(w), np.abs(w.imag), -w.real / np.abs(w) + 0.0, err
         for d, roots in alone.items():
             count[d] = len(roots)
             for i, x in enumerate(roots):
@@ -560,15 +557,12 @@ def _nodal_roots(ds: Designs, omega_max):
     from ._nodal_solvers import DENSE_LIMIT
 
     try:
-        _ = ds.circuit.tree
-        return None                          # series–parallel: batched_roots takes it
-    except NotSeriesParallelError:
-        pass
-    except MechcircError:
-        return None
-    try:
-        system = ds.circuit.nodal
-        held = nodal.held(system)
+        try:
+            _ = ds.circuit.tree
+            return None                      # series–parallel: batched_roots takes it
+        except NotSeriesParallelError:
+            system = ds.circuit.nodal
+            held = nodal.held(system)
     except MechcircError:                    # each design alone says what is wrong
         return None
     which = template_levers(ds, system, np.flatnonzero(ds.valid))
@@ -858,11 +852,9 @@ def _extremes(ds: Designs, lo: float, hi: float, res: DesignResonances,
                 first = np.where(hit.any(axis=1), np.argmax(hit, axis=1), -1)
                 w_first = np.where(first >= 0, res.omega[fast, np.maximum(first, 0)], np.nan)
             pick = np.argmin(Ke, axis=1) if name == "min" else np.argmax(Ke, axis=1)
-            edge_v = Ke[np.arange(fast.size), pick]
-            edge_w = np.array([lo, hi])[pick]
             singular = 0.0 if name == "min" else np.inf
-            out[f"K_{name}"][fast] = np.where(first >= 0, singular, edge_v)
-            out[f"omega_at_K_{name}"][fast] = np.where(first >= 0, w_first, edge_w)
+            out[f"K_{name}"][fast] = np.where(first >= 0, singular, Ke[np.arange(fast.size), pick])
+            out[f"omega_at_K_{name}"][fast] = np.where(first >= 0, w_first, np.where(pick, hi, lo))
         if ds.circuit.require_drive().kind == "force":
             out["Q0_max"][fast] = amp
             out["omega_at_Q0_max"][fast] = lo
