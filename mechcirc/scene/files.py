@@ -556,9 +556,9 @@ class _SceneReader:
             c = g.get("crank")
             if not _named(c, names[1:]) or c in gears:
                 raise self.err(f"[[gears]] #{n + 1}: crank {c!r} is not a crank after the first "
-                               "(the main shaft) or is geared twice", "gears", "crank" if
-                               "crank" in g else next(iter(g), "crank"), value=c, occurrence=n,
-                               choices=names[1:],
+                               "(the main shaft) or is geared twice", "gears",
+                               "crank" if "crank" in g else next(iter(g), "crank"),
+                               value=c, occurrence=n, choices=names[1:],
                                expected=None if names[1:] else "one of (none: one crank)")
             ratio, frac = self.gear_ratio(n, g, c, w1, names[0])
             body = self.gear_mesh(n, g, c, torsions)
@@ -622,10 +622,8 @@ class _SceneReader:
                 raise self.err(f"[[masses]] #{n + 1} needs exactly one of point or link",
                                "masses", next(iter(m), "name"), occurrence=n, expected='point = '
                                '"P" with mass = …, or link = "L" with inertia = …')
-            if "point" in m:
-                masses.append(self._point_mass(m, n, rigid_points))
-            else:
-                masses.append(self._link_inertia(m, n, bodies, elastic_links))
+            masses.append(self._point_mass(m, n, rigid_points) if "point" in m
+                          else self._link_inertia(m, n, bodies, elastic_links))
         return masses
 
     def _point_mass(self, m, n, rigid_points):
@@ -696,9 +694,8 @@ class _SceneReader:
                                choices=self.linkage.ground)
             return anchor, None
         d = ld["direction"]
-        ok = isinstance(d, list) and len(d) == 2 and all(finite_number(x) for x in d) \
-            and any(x != 0 for x in d)
-        if not ok:
+        if not (isinstance(d, list) and len(d) == 2 and all(finite_number(x) for x in d)
+                and any(x != 0 for x in d)):
             raise self.err(f"load #{n + 1}: direction must be [dx, dy], not zero, "
                            f"got {brief(d)}", "loads", "direction", occurrence=n)
         return None, (float(d[0]), float(d[1]))
@@ -746,8 +743,8 @@ class _SceneReader:
                     where = next(((n, ln.index(f'"{taken}"') + 1) for n, ln in enumerate(
                         split_lines(self.text), start=1) if f'"{taken}"' in ln), (0, 0))
                     raise NetlistError(f"{el.name!r} has a damper, named {taken!r} in the "
-                                       "circuit, but that name is taken", self.source,
-                                       *where, "another name")
+                                       "circuit, but that name is taken", self.source, *where,
+                                       "another name")
                 names.add(taken)
         return names
 
