@@ -143,16 +143,15 @@ def _refined(result, resonances):
     if circuit is None or not len(resonances) or omega.size < 2:
         return omega, K, flags, R
     lo, hi = float(np.min(omega)), float(np.max(omega))
-    steps = np.array(REFINE_STEPS)
-    steps = np.concatenate([-steps[::-1], steps])
+    steps = np.concatenate([-np.array(REFINE_STEPS[::-1]), REFINE_STEPS])
     new = np.unique(np.concatenate([
         (r.omega_d or r.omega) * (1 + min(max(r.zeta, REFINE_WIDTH[0]), REFINE_WIDTH[1]) * steps)
         for r in resonances]))
     new = new[(new > lo) & (new < hi) & ~np.isin(new, omega)]
     if not new.size:
         return omega, K, flags, R
-    extra = circuit.sweep(new, method=result.method,     # the circuit's own delegate
-                          refine=getattr(result, "refine", True))
+    # the circuit's own delegate
+    extra = circuit.sweep(new, method=result.method, refine=getattr(result, "refine", True))
     order = np.argsort(np.concatenate([omega, new]), kind="stable")
     return tuple(np.concatenate([a, b])[order] for a, b in
                  ((omega, new), (K, extra.K), (flags, extra.flags),
@@ -415,11 +414,10 @@ def _light_log_axes(axes, max_minor_decades: float = 3.0) -> None:
             a.xaxis.set_major_locator(NullLocator())
             a.xaxis.set_major_formatter(NullFormatter())
             grid = at + decades
-            direction = rcParams["xtick.direction"]
             a.add_artist(Line2D(
                 decades, [0] * len(decades), ls="none", transform=a.get_xaxis_transform(),
                 # matplotlib's TICKUP (2), "|" or TICKDOWN (3), as its ticks use them
-                marker=2 if direction == "in" else "|" if direction == "inout" else 3,
+                marker={"in": 2, "inout": "|"}.get(rcParams["xtick.direction"], 3),
                 markersize=rcParams["xtick.major.size"], color=rcParams["xtick.color"],
                 markeredgewidth=rcParams["xtick.major.width"], clip_on=False, zorder=2.01))
         a.add_collection(LineCollection(
