@@ -220,8 +220,7 @@ def _build(circuit: Circuit, text, exprs, arrays: dict, D: int) -> "Designs":
     n_el = len(circuit.elements)
     values, etas = np.empty((n_el, D)), np.empty((n_el, D))
     for i, e in enumerate(circuit.elements):
-        base = e.name
-        key = (e.name, "value")
+        base, key = e.name, (e.name, "value")
         if exprs is not None and key not in exprs and e.name.endswith("_damping") \
                 and (e.name[:-8], "damping") in exprs:
             base, key = e.name[:-8], (e.name[:-8], "damping")      # a spring's damping=
