@@ -302,10 +302,8 @@ class Scene:
     def bodies(self) -> dict:
         """Rigid body → its points: links that are not elastic, and torsion bodies."""
         el = {e.link for e in self.elastic}
-        out = {l: pts for l, pts in self.linkage.links.items() if l not in el}
-        for t in self.torsions:
-            out[t.body] = (t.pivot,)
-        return out
+        return {**{l: pts for l, pts in self.linkage.links.items() if l not in el},
+                **{t.body: (t.pivot,) for t in self.torsions}}
 
     def part_of_body(self) -> dict:
         """Body → index of its rigid part."""
@@ -315,10 +313,9 @@ class Scene:
         """Index of the rigid part a point moves with, None for a ground point."""
         if point in self.linkage.ground:
             return None
-        for b, pts in self.bodies.items():
-            if point in pts and b not in {t.body for t in self.torsions}:
-                return self.part_of_body()[b]
-        return None
+        torsion_bodies = {t.body for t in self.torsions}
+        return next((self.part_of_body()[b] for b, pts in self.bodies.items()
+                     if point in pts and b not in torsion_bodies), None)
 
 
 def _hide_scene_tables(text: str) -> str:
