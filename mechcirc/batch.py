@@ -361,9 +361,8 @@ class Designs:
         alone, failed = _alone(self, single, lambda d, c: sweep_one(c, omega))
         for d in single.tolist():
             K[d], err[d] = (alone[d].K, alone[d].error) if d in alone else (np.nan, np.inf)
-        err = singular_error(K, err)
-        kind = self.circuit.require_drive().kind
-        return DesignSweep(omega, K, err, kind, self.amplitude[:, None], single, failed)
+        return DesignSweep(omega, K, singular_error(K, err), self.circuit.require_drive().kind,
+                           self.amplitude[:, None], single, failed)
 
     def resonances(self, omega_max: float | None = None) -> "DesignResonances":
         """Resonances and anti-resonances of every design up to ``omega_max`` [rad/s].
@@ -830,11 +829,10 @@ def _extremes(ds: Designs, lo: float, hi: float, res: DesignResonances,
               ends: NDArray | None) -> DesignExtremes:
     D = ds.size
     out = {k: np.full(D, np.nan) for k in _EXTREMES}
-    batched = ~np.isin(np.arange(D), res.single)
     with np.errstate(invalid="ignore"):
         undamped = np.where(res.count[:, None] > np.arange(res.omega.shape[1])[None, :],
                             res.zeta <= UNDAMPED_ZETA, True).all(axis=1)
-    fast = np.flatnonzero(batched & undamped)
+    fast = np.flatnonzero(~np.isin(np.arange(D), res.single) & undamped)
     failed = dict(res.failed)
     if fast.size:
         if ends is None:
