@@ -323,13 +323,11 @@ def _hide_scene_tables(text: str) -> str:
     key = re.compile(r'^\s*"?([A-Za-z0-9_-]+)"?\s*=')
     out, hiding, top = [], False, True
     for line in split_lines(text):
-        m = TOML_HEADER.match(line)
-        if m:
+        if m := TOML_HEADER.match(line):
             top = False
             hiding = m.group(1).split(".")[0].strip('"') in SCENE_TABLES
         elif top:
-            k = key.match(line)
-            hiding = k is not None and k.group(1) in SCENE_TABLES
+            hiding = (k := key.match(line)) is not None and k.group(1) in SCENE_TABLES
         out.append("" if hiding else line)
     return "\n".join(out) + "\n"
 
@@ -461,11 +459,10 @@ class _SceneReader:
             yield n, entry
 
     def point_ref(self, entry, table, n, key="point"):
-        points = self.linkage.pose
         p = entry.get(key)
-        if not _named(p, points):
-            raise self.err(f"[[{table}]] #{n + 1}: {key} {p!r} does not exist in "
-                           f"[points]", table, key, value=p, occurrence=n, choices=points)
+        if not _named(p, self.linkage.pose):
+            raise self.err(f"[[{table}]] #{n + 1}: {key} {p!r} does not exist in [points]", table,
+                           key, value=p, occurrence=n, choices=self.linkage.pose)
         return p
 
     def number(self, value, what, table, key, n, **kw) -> float:
