@@ -414,10 +414,11 @@ def _light_log_axes(axes, max_minor_decades: float = 3.0) -> None:
             a.xaxis.set_major_locator(NullLocator())
             a.xaxis.set_major_formatter(NullFormatter())
             grid = at + decades
+            direction = rcParams["xtick.direction"]
             a.add_artist(Line2D(
                 decades, [0] * len(decades), ls="none", transform=a.get_xaxis_transform(),
                 # matplotlib's TICKUP (2), "|" or TICKDOWN (3), as its ticks use them
-                marker={"in": 2, "inout": "|"}.get(rcParams["xtick.direction"], 3),
+                marker=2 if direction == "in" else "|" if direction == "inout" else 3,
                 markersize=rcParams["xtick.major.size"], color=rcParams["xtick.color"],
                 markeredgewidth=rcParams["xtick.major.width"], clip_on=False, zorder=2.01))
         a.add_collection(LineCollection(
