@@ -585,7 +585,6 @@ def _nodal_group_roots(ds: Designs, system, held, which: NDArray, omega_max):
     from .resonances import (POLISH_BELOW, constraint_basis, element_patterns, held_and_released,
                              pencil, settled, shared_roots_free, sorted_roots)
 
-    eps = np.finfo(float).eps
     *_, G_released, G_held, damped = pencil(system)
     B, nn = element_patterns(system), len(system.nodes)
     S, parts = _stacked_matrices(ds, system, which)
@@ -608,7 +607,7 @@ def _nodal_group_roots(ds: Designs, system, held, which: NDArray, omega_max):
         d, r = np.nonzero(todo)
         stacks = [(system, S, parts), (held, *_stacked_matrices(ds, held, which))]
         s[d, r], err[d, r] = _polish_nodal(stacks, keep[d], s0[d, r], pole[d, r], e0[d, r], damped)
-    s, err = settled(s, err, damped), np.maximum(err, eps)
+    s, err = settled(s, err, damped), np.maximum(err, np.finfo(float).eps)
     if omega_max is not None:
         s = np.where(np.abs(s) <= omega_max, s, np.nan)
     return (which[keep], *sorted_roots(pole, s, err))
