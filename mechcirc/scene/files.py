@@ -697,7 +697,6 @@ class _SceneReader:
     def drive(self, bodies: set, rigid_points: set) -> "SceneDrive":
         """[drive]: a velocity or force on a rigid link or a point of one."""
         dr = self.doc.get("drive")
-        points = self.linkage.pose
         if not isinstance(dr, dict):
             raise NetlistError("a scene needs a [drive] table", self.source, 0, 0,
                                '[drive] with link = "…" (or point = "…") and velocity = V0')
@@ -709,9 +708,9 @@ class _SceneReader:
             raise self.err(f"[drive] link {dr['link']!r} is not a rigid link or torsion "
                            "body", "drive", "link", value=dr["link"], choices=sorted(bodies))
         if "point" in dr:
-            if not _named(dr["point"], points):
+            if not _named(dr["point"], self.linkage.pose):
                 raise self.err(f"[drive] point {dr['point']!r} does not exist in [points]",
-                               "drive", "point", value=dr["point"], choices=points)
+                               "drive", "point", value=dr["point"], choices=self.linkage.pose)
             if dr["point"] not in rigid_points:
                 raise self.err(f"[drive] point {dr['point']!r} is on no rigid link",
                                "drive", "point")
