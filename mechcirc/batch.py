@@ -297,11 +297,13 @@ class Designs:
                          params={n: float(a[d]) for n, a in self.params.items()})
         c = self.circuit
         return replace(
-            c, elements=tuple(replace(e, value=float(self.values[i, d]), eta=float(self.eta[i, d]))
+            c, elements=tuple(replace(e, value=float(self.values[i, d]),
+                                      eta=float(self.eta[i, d]))
                               for i, e in enumerate(c.elements)),
             levers=tuple(replace(lv, ratio=float(self.ratios[i, d]))
                          for i, lv in enumerate(c.levers)),
-            drive=None if c.drive is None else replace(c.drive, amplitude=float(self.amplitude[d])))
+            drive=None if c.drive is None else replace(c.drive,
+                                                       amplitude=float(self.amplitude[d])))
 
     # -- the batched series–parallel plan ----------------------------------
     def plan(self, which: NDArray):
@@ -534,7 +536,8 @@ def _stacked_solve(system, S: NDArray, parts: list, design: NDArray, w: NDArray)
                 continue
         xh, xl, est[pts], rho[pts] = nodal.refine_dd(
             lambda r, rows=slice(None), inv=inv: np.einsum("kij,kj->ki", inv[rows], r),
-            lambda p, xh, xl, rhs: at(p).residual(w[p], xh, xl, rhs), pts, rhs, system, True, 4)
+            lambda p, xh, xl, rhs: at(p).residual(w[p], xh, xl, rhs), pts, rhs, system,
+            True, 4)
         K[pts] = nodal.difference_dd(system, xh, xl)
         sens[pts], sens_data[pts] = at(pts).sensitivities(w[pts], xh + xl, K[pts])
     rounding = residual_rounding(system, sens)
@@ -606,7 +609,8 @@ def _nodal_group_roots(ds: Designs, system, held, which: NDArray, omega_max):
     if todo.any():
         d, r = np.nonzero(todo)
         stacks = [(system, S, parts), (held, *_stacked_matrices(ds, held, which))]
-        s[d, r], err[d, r] = _polish_nodal(stacks, keep[d], s0[d, r], pole[d, r], e0[d, r], damped)
+        s[d, r], err[d, r] = _polish_nodal(stacks, keep[d], s0[d, r], pole[d, r], e0[d, r],
+                                           damped)
     s, err = settled(s, err, damped), np.maximum(err, np.finfo(float).eps)
     if omega_max is not None:
         s = np.where(np.abs(s) <= omega_max, s, np.nan)
@@ -839,7 +843,8 @@ def _extremes(ds: Designs, lo: float, hi: float, res: DesignResonances,
         Ke = np.abs(ends[fast])
         amp = np.abs(ds.amplitude[fast])
         with np.errstate(invalid="ignore"):
-            in_band = (res.omega[fast] >= lo * (1 - 1e-12)) & (res.omega[fast] <= hi * (1 + 1e-9))
+            in_band = (res.omega[fast] >= lo * (1 - 1e-12)) & \
+                (res.omega[fast] <= hi * (1 + 1e-9))
         for kind, name in (("resonance", "min"), ("antiresonance", "max")):
             hit = in_band & (res.kind[fast] == kind)
             if hit.shape[1] == 0:                     # no design has a root at all

@@ -83,10 +83,11 @@ def new_panels(fig, rows: int = 1, cols: int = 1, *, caller: str, figsize=(8.0, 
 
         fig = Figure(figsize=figsize, layout=layout)
     elif fig.axes or fig.subfigs:
-        raise InputError(f"{caller}: the figure given as fig= already holds {len(fig.axes)} Axes "
-                         f"and {len(fig.subfigs)} subfigures; the plot's {rows}×{cols} panels "
-                         "would cover them. Pass fig=None (a new Figure), an empty Figure, or an "
-                         "empty subfigure of yours (fig.subfigures()); a single panel goes on ax=")
+        raise InputError(
+            f"{caller}: the figure given as fig= already holds {len(fig.axes)} Axes and "
+            f"{len(fig.subfigs)} subfigures; the plot's {rows}×{cols} panels would cover them. "
+            "Pass fig=None (a new Figure), an empty Figure, or an empty subfigure of yours "
+            "(fig.subfigures()); a single panel goes on ax=")
     return fig, fig.subplots(rows, cols, squeeze=False, **subplots_kw)
 
 
@@ -178,7 +179,8 @@ def _label_resonances(ax, resonances, per_unit: float) -> None:
                 bbox={"boxstyle": "round,pad=0.15", "fc": "white", "ec": "none", "alpha": 0.8})
 
 
-def _mark_resonances(axes, resonances, legend_ax, per_unit: float = 1.0, legend: bool = True):
+def _mark_resonances(axes, resonances, legend_ax, per_unit: float = 1.0,
+                     legend: bool = True):
     """Vertical lines at each root's ω (``per_unit`` rad/s per unit of the x axis), one
     line per kind and panel (the roots' lines joined by NaN breaks, as ``axvline``
     would draw each); ``legend=False`` leaves ``legend_ax``'s legend to the caller
@@ -741,7 +743,8 @@ def _study_scatter(fig, ax, ok, bad, params, column, units) -> None:
     sc = ax.scatter(x[finite], y[finite], c=c[finite], norm=norm, s=18, cmap="viridis")
     fig.colorbar(sc, ax=ax, label=_unit_label(column, units))
     if bad:
-        ax.plot([r[px] for r in bad], [r[py] for r in bad], "x", color="0.5", label="failed point")
+        ax.plot([r[px] for r in bad], [r[py] for r in bad], "x", color="0.5",
+                label="failed point")
         ax.legend(loc="best", fontsize="small")
     ax.set(xlabel=_unit_label(px, units), ylabel=_unit_label(py, units))
 
@@ -790,12 +793,14 @@ def plot_periodic(result, title: str | None = None, *, fig=None):
     ax_k.loglog(result.omega[good], absK[good], color="0.4", lw=0.9, label="|K(kΩ)|")
     ax_k.set_ylabel(f"|K| [{u['K']}]")
     for i, (wn, _) in enumerate(result.resonances):
-        ax_s.axvline(wn, color="C3", lw=0.8, ls="--", label="resonance (K = 0)" if i == 0 else None)
+        ax_s.axvline(wn, color="C3", lw=0.8, ls="--",
+                     label="resonance (K = 0)" if i == 0 else None)
     if result.resonances:
         ax_s.legend(loc="lower left", fontsize="small")
     ax_s.grid(True, which="both", alpha=0.3)
-    fig.suptitle(title or f"{result.name}: drive {word} over one revolution at {result.rpm:g} "
-                          f"rpm ({result.harmonics} harmonics, error {result.error:.1g})")
+    fig.suptitle(title or f"{result.name}: drive {word} over one revolution at "
+                          f"{result.rpm:g} rpm ({result.harmonics} harmonics, error "
+                          f"{result.error:.1g})")
     return laid_out(made, fig)
 
 
@@ -854,7 +859,8 @@ def plot_speed_map(result, title: str | None = None, *, ax=None, min_weight: flo
     ax.set(xlabel="machine speed [rpm]", ylabel=f"peak {word} over the cycle [{u['Q']}]")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(loc="best", fontsize="small")
-    ax.set_title(title or f"{result.name}: peak drive {word} vs speed (red: k·Ω = ωₙ)", pad=14)
+    ax.set_title(title or f"{result.name}: peak drive {word} vs speed (red: k·Ω = ωₙ)",
+                 pad=14)
     return laid_out(made, fig, ax)
 
 

@@ -96,23 +96,26 @@ _CLEARANCE = {"clearance": "half-width of the gap [m or rad], 0 for none",
 #: The tables of a scene file, declared once (see :class:`mechcirc.sources.Table`);
 #: [moments] and [simulate] keep their own key lists in :mod:`mechcirc.scene.simfile`.
 TABLES = {
-    None: Table(None, dict(sorted({**LINKAGE_TABLES[None].keys, **{
-        t: f"[{t}] (a scene table)" for t in SCENE_TABLES}}.items()))),
+    None: Table(None, dict(sorted({**LINKAGE_TABLES[None].keys,
+                                   **{t: f"[{t}] (a scene table)" for t in SCENE_TABLES}
+                                   }.items()))),
     "elastic": Table("elastic", {"name": "element name (default: the link)",
-                                 "link": "a binary link of [links]", "stiffness": "[N/m]",
-                                 "damping": "[N·s/m], default 0", **_CLEARANCE}, array=True),
-    "torsion": Table("torsion", {"name": "element name (default C_BODY)", "link": "a rigid link",
-                                 "body": "the new body beyond the rod",
-                                 "pivot": "a ground pivot of the link", "stiffness": "[N·m/rad]",
-                                 "damping": "[N·m·s/rad], default 0", **_CLEARANCE}, array=True),
+                                 "link": "a binary link of [links]",
+                                 "stiffness": "[N/m]", "damping": "[N·s/m], default 0",
+                                 **_CLEARANCE}, array=True),
+    "torsion": Table("torsion", {"name": "element name (default C_BODY)",
+                                 "link": "a rigid link", "body": "the new body beyond the rod",
+                                 "pivot": "a ground pivot of the link",
+                                 "stiffness": "[N·m/rad]", "damping": "[N·m·s/rad], default 0",
+                                 **_CLEARANCE}, array=True),
     "masses": Table("masses", {"name": "element name (default m_POINT or J_LINK)",
                                "point": "a point of a rigid link", "link": "a rigid link or body",
                                "mass": "[kg], with point", "inertia": "[kg·m²], with link"},
                     array=True),
     "loads": Table("loads", {"name": "element name (default load_POINT)",
                              "point": "the loaded point", "anchor": "a ground point",
-                             "direction": "[dx, dy]", "stiffness": "[N/m]", "damping": "[N·s/m]"},
-                   array=True),
+                             "direction": "[dx, dy]", "stiffness": "[N/m]",
+                             "damping": "[N·s/m]"}, array=True),
     "drive": Table("drive", {"name": "element name (default V)", "link": "a rigid link or body",
                              "point": "a point of a rigid link", "velocity": "amplitude V0",
                              "force": "amplitude F0"}),
@@ -419,7 +422,8 @@ def _length_unit(text: str, source: str, doc: dict) -> str:
 def _read_dynamics(scene: Scene, text: str, source: str, doc: dict) -> None:
     """The tables of the time domain into ``scene``: [[moments]], [simulate], [shaft]."""
     object.__setattr__(scene, "moments", parse_moments(text, source, doc.get("moments"), scene))
-    object.__setattr__(scene, "simulate", parse_simulate(text, source, doc.get("simulate"), scene))
+    object.__setattr__(scene, "simulate", parse_simulate(text, source, doc.get("simulate"),
+                                                         scene))
     if "shaft" in doc:
         object.__setattr__(scene, "shaft", parse_shaft(text, source, doc["shaft"], scene))
 
@@ -444,8 +448,9 @@ class _SceneReader:
                            f"element name", table, key, occurrence=n,
                            expected="letters, digits and '_', not starting with a digit")
         if name in self.names:
-            raise self.err(f"element name {name!r} is already used in [[{self.names[name]}]]",
-                           table, key, occurrence=n, expected="a unique name")
+            raise self.err(f"element name {name!r} is already used in "
+                           f"[[{self.names[name]}]]", table, key, occurrence=n,
+                           expected="a unique name")
         self.names[name] = table
         return name
 
@@ -488,7 +493,8 @@ class _SceneReader:
                 raise self.err(f"the crank {lname!r} cannot be an axial spring",
                                "elastic", "link", value=lname, occurrence=n)
             name = self.new_name(e, "elastic", "link", n, lname)
-            elastic.append(ElasticLink(name, lname, **self.spring(e, "elastic", n, name, "m", "N")))
+            elastic.append(ElasticLink(name, lname, **self.spring(e, "elastic", n, name, "m",
+                                                                  "N")))
         return elastic
 
     def torsions(self, elastic_links: set) -> list:
@@ -498,9 +504,10 @@ class _SceneReader:
         for n, t in self.entries("torsion"):
             lname = t.get("link")
             if not _named(lname, links) or lname in elastic_links:
-                raise self.err(f"torsion rod #{n + 1}: link {lname!r} is not a rigid link of "
-                               "[links]", "torsion", "link", value=lname, occurrence=n,
-                               choices=[lk for lk in links if lk not in elastic_links])
+                raise self.err(
+                    f"torsion rod #{n + 1}: link {lname!r} is not a rigid link of [links]",
+                    "torsion", "link", value=lname, occurrence=n,
+                    choices=[lk for lk in links if lk not in elastic_links])
             pivots = [p for p in links[lname] if p in ground]
             pivot = t.get("pivot", pivots[0] if len(pivots) == 1 else None)
             if pivot not in pivots:
@@ -509,7 +516,8 @@ class _SceneReader:
                                "pivot" if "pivot" in t else "link", occurrence=n,
                                expected="pivot = one of the link's ground pivots")
             body = t.get("body")
-            if not is_name(body) or body in links or body == "ground":
+            if not is_name(body) or body in links \
+                    or body == "ground":
                 raise self.err(f"torsion rod #{n + 1}: body {body!r} must be a new name "
                                "(not a link or 'ground'; several rods may share one body)",
                                "torsion", "body" if "body" in t else "link", occurrence=n,
@@ -528,8 +536,9 @@ class _SceneReader:
                         else "crank", n)      # a gear's mesh is on its crank
         c = self.number(entry.get("damping", 0.0), f"damping of {name!r} [{load}·s/{gap}]",
                         table, "damping", n, allow_zero=True)
-        b = self.number(entry.get("clearance", 0.0), f"clearance of {name!r} (half-width of the "
-                        f"gap) [{gap}]", table, "clearance", n, allow_zero=True)
+        b = self.number(entry.get("clearance", 0.0),
+                        f"clearance of {name!r} (half-width of the gap) [{gap}]", table,
+                        "clearance", n, allow_zero=True)
         law = entry.get("clearance_law", "elastobacklash")        # the time domain only
         if law not in CLEARANCE_LAWS:
             raise self.err(f"[[{table}]] #{n + 1}: clearance_law {law!r} is unknown", table,
@@ -562,8 +571,9 @@ class _SceneReader:
                 raise self.err(f"crank {cr.link!r} turns at {cr.omega:g} rad/s and the first "
                                f"crank {names[0]!r} at {w1:g}: cranks on one shaft need the "
                                "same omega, a crank at another speed needs a [[gears]] entry",
-                               "cranks", "omega", occurrence=n, expected=f'[[gears]] crank = '
-                               f'"{cr.link}", ratio = {cr.omega / w1:g}')
+                               "cranks", "omega", occurrence=n,
+                               expected=f'[[gears]] crank = "{cr.link}", ratio = '
+                                        f"{cr.omega / w1:g}")
         return list(gears.values())
 
     def gear_ratio(self, n: int, g: dict, c: str, w1: float, main: str) -> tuple:
@@ -571,8 +581,9 @@ class _SceneReader:
         that agrees with the cranks' omegas, and that ratio as a fraction."""
         from fractions import Fraction
 
-        ratio = self.number(g.get("ratio"), f"gear ratio of {c!r} (ω_{c}/ω_{main})", "gears",
-                            "ratio" if "ratio" in g else "crank", n, positive=False)
+        ratio = self.number(g.get("ratio"), f"gear ratio of {c!r} (ω_{c}/ω_{main})",
+                            "gears", "ratio" if "ratio" in g else "crank", n,
+                            positive=False)
         if ratio == 0:
             raise self.err(f"[[gears]] #{n + 1}: gear ratio 0 would stop crank {c!r}",
                            "gears", "ratio", occurrence=n,
@@ -597,7 +608,8 @@ class _SceneReader:
         if not ("stiffness" in g or "body" in g or "damping" in g):
             return None
         body = g.get("body", f"gear_{c}")
-        if not is_name(body) or body in self.linkage.links or body == "ground" \
+        if not is_name(body) \
+                or body in self.linkage.links or body == "ground" \
                 or body in {t.body for t in torsions}:
             raise self.err(f"[[gears]] #{n + 1}: body {body!r} must be a new name",
                            "gears", "body" if "body" in g else "crank", occurrence=n,
@@ -614,8 +626,9 @@ class _SceneReader:
         for n, m in self.entries("masses"):
             if ("point" in m) == ("link" in m):
                 raise self.err(f"[[masses]] #{n + 1} needs exactly one of point or link",
-                               "masses", next(iter(m), "name"), occurrence=n, expected='point = '
-                               '"P" with mass = …, or link = "L" with inertia = …')
+                               "masses", next(iter(m), "name"), occurrence=n,
+                               expected='point = "P" with mass = …, or link = "L" with '
+                                        'inertia = …')
             masses.append(self._point_mass(m, n, rigid_points) if "point" in m
                           else self._link_inertia(m, n, bodies, elastic_links))
         return masses
@@ -683,8 +696,8 @@ class _SceneReader:
         if "anchor" in ld:
             anchor = ld["anchor"]
             if not _named(anchor, self.linkage.ground):
-                raise self.err(f"load #{n + 1}: anchor {anchor!r} is not a ground point",
-                               "loads", "anchor", occurrence=n, value=anchor,
+                raise self.err(f"load #{n + 1}: anchor {anchor!r} is not a ground "
+                               "point", "loads", "anchor", occurrence=n, value=anchor,
                                choices=self.linkage.ground)
             return anchor, None
         d = ld["direction"]
@@ -718,7 +731,8 @@ class _SceneReader:
             raise self.err("[drive] needs exactly one of velocity = V0 or force = F0",
                            "drive", "force" if "force" in dr else next(iter(dr), "link"))
         kind: Literal["velocity", "force"] = "velocity" if "velocity" in dr else "force"
-        amp = self.number(dr[kind], f"drive {kind} amplitude", "drive", kind, 0, positive=False)
+        amp = self.number(dr[kind], f"drive {kind} amplitude", "drive", kind, 0,
+                          positive=False)
         dname = dr.get("name", "V")
         if not is_name(dname) or dname in self.names:
             raise self.err(f"[drive] name {dname!r} is not a valid unused element name",
@@ -733,8 +747,9 @@ class _SceneReader:
             if el.damping > 0 and el.stiffness > 0:
                 taken = el.name + "_d"
                 if taken in self.names:
-                    where = next(((n, ln.index(f'"{taken}"') + 1) for n, ln in enumerate(
-                        split_lines(self.text), start=1) if f'"{taken}"' in ln), (0, 0))
+                    where = next(((n, ln.index(f'"{taken}"') + 1) for n, ln in
+                                  enumerate(split_lines(self.text), start=1)
+                                  if f'"{taken}"' in ln), (0, 0))
                     raise NetlistError(f"{el.name!r} has a damper, named {taken!r} in the "
                                        "circuit, but that name is taken", self.source, *where,
                                        "another name")
@@ -772,7 +787,8 @@ def _analysis(text, source, table, circuit_names) -> Analysis:
         if "tol" in table else None
     if (band is None) != (tol is None):
         raise located(text, source, "[analysis] needs band and tol together", "analysis",
-                   "band" if band is not None else "tol", expected="band = [W1, W2] and tol = T")
+                   "band" if band is not None else "tol",
+                   expected="band = [W1, W2] and tol = T")
     return Analysis(theta, output, band, tol)
 
 
