@@ -220,8 +220,7 @@ def _build(circuit: Circuit, text, exprs, arrays: dict, D: int) -> "Designs":
     n_el = len(circuit.elements)
     values, etas = np.empty((n_el, D)), np.empty((n_el, D))
     for i, e in enumerate(circuit.elements):
-        base = e.name
-        key = (e.name, "value")
+        base, key = e.name, (e.name, "value")
         if exprs is not None and key not in exprs and e.name.endswith("_damping") \
                 and (e.name[:-8], "damping") in exprs:
             base, key = e.name[:-8], (e.name[:-8], "damping")      # a spring's damping=
@@ -364,9 +363,8 @@ class Designs:
         alone, failed = _alone(self, single, lambda d, c: sweep_one(c, omega))
         for d in single.tolist():
             K[d], err[d] = (alone[d].K, alone[d].error) if d in alone else (np.nan, np.inf)
-        err = singular_error(K, err)
-        kind = self.circuit.require_drive().kind
-        return DesignSweep(omega, K, err, kind, self.amplitude[:, None], single, failed)
+        return DesignSweep(omega, K, singular_error(K, err), self.circuit.require_drive().kind,
+                           self.amplitude[:, None], single, failed)
 
     def resonances(self, omega_max: float | None = None) -> "DesignResonances":
         """Resonances and anti-resonances of every design up to ``omega_max`` [rad/s].
@@ -390,9 +388,7 @@ class Designs:
         from .resonances import batched_roots, find_resonances
 
         D = self.size
-        found = batched_roots(self, omega_max)
-        if found is None:
-            found = _nodal_roots(self, omega_max)
+        found = batched_roots(self, omega_max) or _nodal_roots(self, omega_max)
         none: NDArray = np.zeros(0, dtype=np.int64)
         which, pole, w, err = found if found is not None else (none,) * 4
         single = np.setdiff1d(np.arange(D), which)
@@ -407,11 +403,8 @@ class Designs:
             r = w.shape[1]
             count[which] = live.sum(axis=1)
             kind[which, :r] = np.where(live, np.where(pole, "antiresonance", "resonance"), "")
-            with np.errstate(all="ignore"):
-                out[0, which, :r] = np.abs(w)           # w: the roots s, as _make reads them
-                out[1, which, :r] = np.abs(w.imag)
-                out[2, which, :r] = -w.real / np.abs(w) + 0.0
-            out[3, which, :r] = err
+            with np.errstate(all="ignore"):             # w: the roots s, as _make reads them
+                out[:, which, :r] = np.abs(w), np.abs(w.imag), -w.real / np.abs(w) + 0.0, err
         for d, roots in alone.items():
             count[d] = len(roots)
             for i, x in enumerate(roots):
@@ -565,15 +558,12 @@ def _nodal_roots(ds: Designs, omega_max):
     from ._nodal_solvers import DENSE_LIMIT
 
     try:
-        _ = ds.circuit.tree
-        return None                          # series–parallel: batched_roots takes it
-    except NotSeriesParallelError:
-        pass
-    except MechcircError:
-        return None
-    try:
-        system = ds.circuit.nodal
-        held = nodal.held(system)
+        try:
+            _ = ds.circuit.tree
+            return None                      # series–parallel: batched_roots takes it
+        except NotSeriesParallelError:
+            system = ds.circuit.nodal
+            held = nodal.held(system)
     except MechcircError:                    # each design alone says what is wrong
         return None
     which = template_levers(ds, system, np.flatnonzero(ds.valid))
@@ -598,16 +588,13 @@ def _nodal_group_roots(ds: Designs, system, held, which: NDArray, omega_max):
     from .resonances import (POLISH_BELOW, constraint_basis, element_patterns, held_and_released,
                              pencil, settled, shared_roots_free, sorted_roots)
 
-    eps = np.finfo(float).eps
     *_, G_released, G_held, damped = pencil(system)
     B, nn = element_patterns(system), len(system.nodes)
     S, parts = _stacked_matrices(ds, system, which)
-    roots = []
-    for G in (G_held, G_released):
-        found = _pencil_roots(constraint_basis(G, nn).toarray(), B, S, damped, omega_max)
-        if found is None:
-            return None
-        roots.append(found)
+    roots = [_pencil_roots(constraint_basis(G, nn).toarray(), B, S, damped, omega_max)
+             for G in (G_held, G_released)]
+    if None in roots:
+        return None
     (s_h, e_h, ok_h, must_h), (s_r, e_r, ok_r, must_r) = roots
     # A mode in both problems cancels in K (resonances._cancel): the single path's.
     keep = np.flatnonzero(shared_roots_free(((s_h, e_h, ok_h), (s_r, e_r, ok_r)), damped))
@@ -624,7 +611,7 @@ def _nodal_group_roots(ds: Designs, system, held, which: NDArray, omega_max):
         stacks = [(system, S, parts), (held, *_stacked_matrices(ds, held, which))]
         s[d, r], err[d, r] = _polish_nodal(stacks, keep[d], s0[d, r], pole[d, r], e0[d, r],
                                            damped)
-    s, err = settled(s, err, damped), np.maximum(err, eps)
+    s, err = settled(s, err, damped), np.maximum(err, np.finfo(float).eps)
     if omega_max is not None:
         s = np.where(np.abs(s) <= omega_max, s, np.nan)
     return (which[keep], *sorted_roots(pole, s, err))
@@ -845,11 +832,10 @@ def _extremes(ds: Designs, lo: float, hi: float, res: DesignResonances,
               ends: NDArray | None) -> DesignExtremes:
     D = ds.size
     out = {k: np.full(D, np.nan) for k in _EXTREMES}
-    batched = ~np.isin(np.arange(D), res.single)
     with np.errstate(invalid="ignore"):
         undamped = np.where(res.count[:, None] > np.arange(res.omega.shape[1])[None, :],
                             res.zeta <= UNDAMPED_ZETA, True).all(axis=1)
-    fast = np.flatnonzero(batched & undamped)
+    fast = np.flatnonzero(~np.isin(np.arange(D), res.single) & undamped)
     failed = dict(res.failed)
     if fast.size:
         if ends is None:
@@ -867,11 +853,9 @@ def _extremes(ds: Designs, lo: float, hi: float, res: DesignResonances,
                 first = np.where(hit.any(axis=1), np.argmax(hit, axis=1), -1)
                 w_first = np.where(first >= 0, res.omega[fast, np.maximum(first, 0)], np.nan)
             pick = np.argmin(Ke, axis=1) if name == "min" else np.argmax(Ke, axis=1)
-            edge_v = Ke[np.arange(fast.size), pick]
-            edge_w = np.array([lo, hi])[pick]
             singular = 0.0 if name == "min" else np.inf
-            out[f"K_{name}"][fast] = np.where(first >= 0, singular, edge_v)
-            out[f"omega_at_K_{name}"][fast] = np.where(first >= 0, w_first, edge_w)
+            out[f"K_{name}"][fast] = np.where(first >= 0, singular, Ke[np.arange(fast.size), pick])
+            out[f"omega_at_K_{name}"][fast] = np.where(first >= 0, w_first, np.where(pick, hi, lo))
         if ds.circuit.require_drive().kind == "force":
             out["Q0_max"][fast] = amp
             out["omega_at_Q0_max"][fast] = lo
@@ -890,8 +874,7 @@ def _extremes(ds: Designs, lo: float, hi: float, res: DesignResonances,
     failed.update(more)
     for d, (kmax, smax, qmax) in done.items():
         out["K_max"][d], out["omega_at_K_max"][d] = kmax.value, kmax.omega
-        with np.errstate(divide="ignore"):
-            out["K_min"][d] = 1.0 / smax.value if smax.value else math.inf
+        out["K_min"][d] = 1.0 / smax.value if smax.value else math.inf
         out["omega_at_K_min"][d] = smax.omega
         out["Q0_max"][d], out["omega_at_Q0_max"][d] = qmax.value, qmax.omega
     return DesignExtremes(**out, single=rest, failed=failed,

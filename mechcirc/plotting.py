@@ -144,16 +144,15 @@ def _refined(result, resonances):
     if circuit is None or not len(resonances) or omega.size < 2:
         return omega, K, flags, R
     lo, hi = float(np.min(omega)), float(np.max(omega))
-    steps = np.array(REFINE_STEPS)
-    steps = np.concatenate([-steps[::-1], steps])
+    steps = np.concatenate([-np.array(REFINE_STEPS[::-1]), REFINE_STEPS])
     new = np.unique(np.concatenate([
         (r.omega_d or r.omega) * (1 + min(max(r.zeta, REFINE_WIDTH[0]), REFINE_WIDTH[1]) * steps)
         for r in resonances]))
     new = new[(new > lo) & (new < hi) & ~np.isin(new, omega)]
     if not new.size:
         return omega, K, flags, R
-    extra = circuit.sweep(new, method=result.method,     # the circuit's own delegate
-                          refine=getattr(result, "refine", True))
+    # the circuit's own delegate
+    extra = circuit.sweep(new, method=result.method, refine=getattr(result, "refine", True))
     order = np.argsort(np.concatenate([omega, new]), kind="stable")
     return tuple(np.concatenate([a, b])[order] for a, b in
                  ((omega, new), (K, extra.K), (flags, extra.flags),
@@ -385,7 +384,7 @@ def _light_log_axes(axes, max_minor_decades: float = 3.0) -> None:
     positions and style); only the short minor tick marks go.  Minor labels of
     an axis spanning less than a decade are left as they are.
     """
-    from matplotlib.ticker import FuncFormatter, NullLocator
+    from matplotlib.ticker import FuncFormatter, NullFormatter, NullLocator
 
     for a in axes:
         for axis in (a.xaxis, a.yaxis):
@@ -402,7 +401,6 @@ def _light_log_axes(axes, max_minor_decades: float = 3.0) -> None:
     from matplotlib.axis import Ticker
     from matplotlib.collections import LineCollection
     from matplotlib.lines import Line2D
-    from matplotlib.ticker import NullFormatter
 
     at = [k * 10.0 ** e for e in range(math.floor(math.log10(lo)), math.ceil(math.log10(hi)))
           for k in range(2, 10) if lo <= k * 10.0 ** e <= hi]
@@ -738,9 +736,7 @@ def _study_scatter(fig, ax, ok, bad, params, column, units) -> None:
     from matplotlib.colors import LogNorm
 
     px, py = params
-    x = np.array([r[px] for r in ok], dtype=float)
-    y = np.array([r[py] for r in ok], dtype=float)
-    c = np.array([r[column] for r in ok], dtype=float)
+    x, y, c = (np.array([r[key] for r in ok], dtype=float) for key in (px, py, column))
     finite = np.isfinite(c)
     norm = LogNorm() if finite.any() and np.all(c[finite] > 0) and \
         c[finite].max() > 100 * c[finite].min() else None

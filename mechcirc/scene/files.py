@@ -305,10 +305,8 @@ class Scene:
     def bodies(self) -> dict:
         """Rigid body → its points: links that are not elastic, and torsion bodies."""
         el = {e.link for e in self.elastic}
-        out = {l: pts for l, pts in self.linkage.links.items() if l not in el}
-        for t in self.torsions:
-            out[t.body] = (t.pivot,)
-        return out
+        return {**{l: pts for l, pts in self.linkage.links.items() if l not in el},
+                **{t.body: (t.pivot,) for t in self.torsions}}
 
     def part_of_body(self) -> dict:
         """Body → index of its rigid part."""
@@ -318,10 +316,9 @@ class Scene:
         """Index of the rigid part a point moves with, None for a ground point."""
         if point in self.linkage.ground:
             return None
-        for b, pts in self.bodies.items():
-            if point in pts and b not in {t.body for t in self.torsions}:
-                return self.part_of_body()[b]
-        return None
+        torsion_bodies = {t.body for t in self.torsions}
+        return next((self.part_of_body()[b] for b, pts in self.bodies.items()
+                     if point in pts and b not in torsion_bodies), None)
 
 
 def _hide_scene_tables(text: str) -> str:
@@ -329,13 +326,11 @@ def _hide_scene_tables(text: str) -> str:
     key = re.compile(r'^\s*"?([A-Za-z0-9_-]+)"?\s*=')
     out, hiding, top = [], False, True
     for line in split_lines(text):
-        m = TOML_HEADER.match(line)
-        if m:
+        if m := TOML_HEADER.match(line):
             top = False
             hiding = m.group(1).split(".")[0].strip('"') in SCENE_TABLES
         elif top:
-            k = key.match(line)
-            hiding = k is not None and k.group(1) in SCENE_TABLES
+            hiding = (k := key.match(line)) is not None and k.group(1) in SCENE_TABLES
         out.append("" if hiding else line)
     return "\n".join(out) + "\n"
 
@@ -469,11 +464,10 @@ class _SceneReader:
             yield n, entry
 
     def point_ref(self, entry, table, n, key="point"):
-        points = self.linkage.pose
         p = entry.get(key)
-        if not _named(p, points):
-            raise self.err(f"[[{table}]] #{n + 1}: {key} {p!r} does not exist in "
-                           f"[points]", table, key, value=p, occurrence=n, choices=points)
+        if not _named(p, self.linkage.pose):
+            raise self.err(f"[[{table}]] #{n + 1}: {key} {p!r} does not exist in [points]", table,
+                           key, value=p, occurrence=n, choices=self.linkage.pose)
         return p
 
     def number(self, value, what, table, key, n, **kw) -> float:
@@ -635,10 +629,8 @@ class _SceneReader:
                                "masses", next(iter(m), "name"), occurrence=n,
                                expected='point = "P" with mass = …, or link = "L" with '
                                         'inertia = …')
-            if "point" in m:
-                masses.append(self._point_mass(m, n, rigid_points))
-            else:
-                masses.append(self._link_inertia(m, n, bodies, elastic_links))
+            masses.append(self._point_mass(m, n, rigid_points) if "point" in m
+                          else self._link_inertia(m, n, bodies, elastic_links))
         return masses
 
     def _point_mass(self, m, n, rigid_points):
@@ -709,9 +701,8 @@ class _SceneReader:
                                choices=self.linkage.ground)
             return anchor, None
         d = ld["direction"]
-        ok = isinstance(d, list) and len(d) == 2 and all(finite_number(x) for x in d) \
-            and any(x != 0 for x in d)
-        if not ok:
+        if not (isinstance(d, list) and len(d) == 2 and all(finite_number(x) for x in d)
+                and any(x != 0 for x in d)):
             raise self.err(f"load #{n + 1}: direction must be [dx, dy], not zero, "
                            f"got {brief(d)}", "loads", "direction", occurrence=n)
         return None, (float(d[0]), float(d[1]))
@@ -719,7 +710,6 @@ class _SceneReader:
     def drive(self, bodies: set, rigid_points: set) -> "SceneDrive":
         """[drive]: a velocity or force on a rigid link or a point of one."""
         dr = self.doc.get("drive")
-        points = self.linkage.pose
         if not isinstance(dr, dict):
             raise NetlistError("a scene needs a [drive] table", self.source, 0, 0,
                                '[drive] with link = "…" (or point = "…") and velocity = V0')
@@ -731,9 +721,9 @@ class _SceneReader:
             raise self.err(f"[drive] link {dr['link']!r} is not a rigid link or torsion "
                            "body", "drive", "link", value=dr["link"], choices=sorted(bodies))
         if "point" in dr:
-            if not _named(dr["point"], points):
+            if not _named(dr["point"], self.linkage.pose):
                 raise self.err(f"[drive] point {dr['point']!r} does not exist in [points]",
-                               "drive", "point", value=dr["point"], choices=points)
+                               "drive", "point", value=dr["point"], choices=self.linkage.pose)
             if dr["point"] not in rigid_points:
                 raise self.err(f"[drive] point {dr['point']!r} is on no rigid link",
                                "drive", "point")
@@ -811,10 +801,8 @@ def _parts(scene: Scene) -> tuple:
     parts = _rigid_parts(lk, bodies, tbodies, meshes)
     for part in parts:
         n = len(part)
-        pairs = 0
-        for p in {p for b in part for p in bodies[b]}:
-            k = sum(1 for b in part if p in bodies[b]) + (1 if p in lk.ground else 0)
-            pairs += max(k - 1, 0)
+        pairs = sum(max(sum(p in bodies[b] for b in part) + (p in lk.ground) - 1, 0)
+                    for p in {p for b in part for p in bodies[b]})
         # a slider in the part on a guide in the part or the frame
         pairs += sum(1 for x in lk.sliders if x.link in part and (x.guide in part
                                                                    or x.guide == "ground"))
@@ -872,9 +860,7 @@ def _rigid_parts(lk, bodies: dict, tbodies: set, meshes=()) -> list[tuple]:
 
     g = nx.Graph()
     g.add_nodes_from(bodies)
-    for p in lk.pose:
-        if p in lk.ground:
-            continue
+    for p in (p for p in lk.pose if p not in lk.ground):
         on = [b for b, pts in bodies.items() if p in pts and b not in tbodies]
         g.add_edges_from((on[0], b) for b in on[1:])
     g.add_edges_from((x.guide, x.link) for x in lk.sliders if x.guide in bodies)
