@@ -28,14 +28,12 @@ This script measures, in one run, what that would cost:
 The result, and the decision it led to (the numpy ``Newton`` stays): docs/performance.md,
 "The numpy Newton beside newton_path".
 
-The same for the closed-form dyads (``--dyads-only``: these two sections alone):
-
-4. ``Linkage.motion(θ)`` of every shipped dyad linkage by the numpy ``_DyadSolver``
-   (``COMPILED = False``), by ``dyads_path`` run as Python and compiled (RRR dyads
-   only; with sliders the numpy form is the only one), 37/361/3,601 positions, and
-   the largest differences compiled against numpy;
-5. whole commands with numba and its cache filled, the dyads by numpy or by
-   ``dyads_path``, and what compiling ``dyads_path`` costs a fresh cache.
+The same was measured for the closed-form dyads (28 Nov, sections 4–5 of this script
+at commit 486231a: ``git show 486231a:benchmarks/bench_linkage_newton.py``, run with
+``--dyads-only``): the numpy ``_DyadSolver`` against ``dyads_path`` as Python and
+compiled, and whole commands with numba cached.  The compiled loop made no command
+faster and was removed with those sections (docs/performance.md, "The dyads: one
+source").
 
 Each child's CPU is its user + system time (``os.wait4``), medians of
 ``--repeat`` runs (default 3).  The machine is shared: read the ratios.
@@ -204,148 +202,17 @@ def command_table(repeat, quick, long):
             print(f"{' '.join(argv):58s} " + " ".join(f"{g:7.2f}" for g in got), flush=True)
 
 
-# ------------------------------------------------------------------ the dyads' twin
-#: Child process for the dyads: argv[1] "numpy" (the numpy ``_DyadSolver`` for every
-#: linkage), "compiled" (``dyads_path`` for RRR-only linkages, from numba's cache) or
-#: "cold" ("compiled" on an empty cache: compiled in the process), the rest a command.
-DYAD_CHILD = r"""
-import sys, contextlib, io
-from mechcirc import _jit
-_jit.warm_in_background = lambda statement: None
-from mechcirc.kinematics import linkage_solver as L
-variant, argv = sys.argv[1], sys.argv[2:]
-real = L._compiled
-L._compiled = lambda kernel: (variant != "numpy") if kernel == "dyads_path" else real(kernel)
-from mechcirc.cli import main
-with contextlib.redirect_stdout(io.StringIO()):
-    rc = main(argv)
-sys.exit(rc)
-"""
-
-
-def dyad_linkages():
-    from mechcirc.kinematics import load_linkage
-    from mechcirc.scene import load_scene
-
-    def scene(path):
-        return load_scene(ROOT / path).linkage
-
-    return {
-        "heald_scene (5 RRR)": scene("examples/heald_scene.toml"),
-        "sley_scene (RRR)": scene("docs/examples/sley_scene.toml"),
-        "mrazek_one_side (RRR)": scene("examples/mrazek_one_side.toml"),
-        "mrazek_both_sides (2 RRR)": scene("examples/mrazek_both_sides.toml"),
-        "rocker_drive (RRR)": scene("docs/examples/rocker_drive.toml"),
-        "quick_return (RPR, RRP)": load_linkage(ROOT / "examples" / "quick_return.toml"),
-        "slider_crank_scene (RRP)": scene("examples/slider_crank_scene.toml"),
-    }
-
-
-def dyad_table(sizes, repeat):
-    """Section 4: ``Linkage.motion`` by the dyads, three backends, in this process."""
-    import mechcirc.kinematics as kin
-    from mechcirc import _jit
-    from mechcirc.kinematics import _linkage_kernels as compiled_module
-    from mechcirc.kinematics.linkage_solver import plan
-
-    python_module = _jit.load("mechcirc.kinematics._linkage_kernels", _FORCE_PYTHON=True)
-
-    def use(backend):
-        _jit.COMPILED = backend != "numpy"
-        K = python_module if backend == "python" else compiled_module
-        kin._linkage_kernels = sys.modules["mechcirc.kinematics._linkage_kernels"] = K
-
-    print("\n4. Linkage.motion(θ) by the dyads, one turn, CPU median [ms]: numpy _DyadSolver, "
-          "dyads_path as Python, compiled (RRR only: with sliders the numpy form runs)")
-    print(f"{'linkage':26s} {'N':>5s} {'numpy':>8s} {'Python':>8s} {'compiled':>8s} "
-          f"{'Py/numpy':>8s} {'np/comp':>7s} {'|Δq|/size':>9s} {'|Δq̇|/max':>9s} {'|Δq̈|/max':>9s}")
-    try:
-        for name, lk in dyad_linkages().items():
-            rrr = all(d.kind == "RRR" for d in plan(lk).dyads)
-            for N in sizes:
-                th = np.linspace(0.0, 2 * math.pi, N)
-                row, out = {}, {}
-                for backend in ("numpy", "python", "compiled") if rrr else ("numpy",):
-                    use(backend)
-                    lk.motion(th[:3])
-                    row[backend] = cpu_median(lambda lk=lk, th=th: lk.motion(th), repeat)
-                    out[backend] = lk.motion(th)
-                if not rrr:
-                    print(f"{name:26s} {N:5d} {row['numpy'] * 1e3:8.2f} {'-':>8s} {'-':>8s}",
-                          flush=True)
-                    continue
-                a, b = out["compiled"], out["numpy"]
-                d = [np.max(np.abs(a.q - b.q)) / lk.length_scale()] + \
-                    [np.max(np.abs(x - y)) / np.max(np.abs(y))
-                     for x, y in ((a.qdot, b.qdot), (a.qddot, b.qddot))]
-                print(f"{name:26s} {N:5d} {row['numpy'] * 1e3:8.2f} {row['python'] * 1e3:8.1f} "
-                      f"{row['compiled'] * 1e3:8.2f} {row['python'] / row['numpy']:8.1f} "
-                      f"{row['numpy'] / row['compiled']:7.1f} " +
-                      " ".join(f"{x:9.1e}" for x in d), flush=True)
-    finally:
-        _jit.COMPILED = None
-        kin._linkage_kernels = sys.modules["mechcirc.kinematics._linkage_kernels"] = \
-            compiled_module
-
-
-DYAD_COMMANDS = [
-    ["scene", "examples/heald_scene.toml", "--theta", "40"],
-    ["scene", "examples/heald_scene.toml", "--cycle"],
-    ["scene", "docs/examples/sley_scene.toml", "--cycle"],
-    ["simulate", "examples/heald_scene.toml"],
-    ["simulate", "docs/examples/sley_scene.toml"],
-    ["simulate", "examples/mrazek_both_sides.toml"],
-]
-
-
-def dyad_commands(repeat, quick):
-    """Section 5: whole commands with numba, the dyads by numpy or by ``dyads_path``."""
-    def cpu(variant, argv, fresh=False):
-        env = dict(os.environ, PYTHONPATH=os.pathsep.join(
-            p for p in (str(ROOT), os.environ.get("PYTHONPATH")) if p))
-        env.pop("MECHCIRC_NO_WARM", None)
-        times = []
-        for _ in range(repeat):
-            with tempfile.TemporaryDirectory(prefix="dy36-cache-") as cache:
-                if fresh:
-                    env["NUMBA_CACHE_DIR"] = cache
-                p = subprocess.Popen([sys.executable, "-c", DYAD_CHILD, variant, *argv],
-                                     cwd=ROOT, env=env, stdout=subprocess.DEVNULL,
-                                     stderr=subprocess.DEVNULL)
-                _, status, ru = os.wait4(p.pid, 0)
-                if os.waitstatus_to_exitcode(status) != 0:
-                    raise SystemExit(f"{variant} {' '.join(argv)} failed")
-            times.append(ru.ru_utime + ru.ru_stime)
-        return float(np.median(times))
-
-    cpu("compiled", DYAD_COMMANDS[0])       # dyads_path into numba's cache, if not there
-    print("\n5. with numba (kernels in its cache): command CPU [s], median of", repeat)
-    print(f"{'command':48s} {'numpy':>7s} {'compiled':>8s} {'numpy-comp':>10s}")
-    for argv in DYAD_COMMANDS[:2] if quick else DYAD_COMMANDS:
-        a, b = cpu("numpy", argv), cpu("compiled", argv)
-        print(f"{' '.join(argv):48s} {a:7.2f} {b:8.2f} {a - b:+10.2f}", flush=True)
-    argv = DYAD_COMMANDS[0]
-    a, b = cpu("numpy", argv, fresh=True), cpu("cold", argv, fresh=True)
-    print(f"compiling dyads_path (and what it calls) on an empty cache, in the command "
-          f"'{' '.join(argv)}': {b:.2f} s CPU against {a:.2f} s with numpy: +{b - a:.2f} s")
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--quick", action="store_true", help="fewer sizes and commands")
     ap.add_argument("--long", action="store_true",
                     help="also the cam-jump scene's simulate without numba (minutes)")
-    ap.add_argument("--dyads-only", action="store_true", help="sections 4 and 5 only")
     args = ap.parse_args()
     print(f"load average at start: {os.getloadavg()[0]:.2f} (2 shared cores); python "
           f"{sys.version.split()[0]}, numpy {np.__version__}")
-    sizes = (37, 361) if args.quick else (37, 361, 3601)
-    if not args.dyads_only:
-        solve_table(sizes, args.repeat)
-        command_table(args.repeat, args.quick, args.long)
-    dyad_table(sizes, args.repeat)
-    dyad_commands(args.repeat, args.quick)
+    solve_table((37, 361) if args.quick else (37, 361, 3601), args.repeat)
+    command_table(args.repeat, args.quick, args.long)
     print(f"\nload average at end: {os.getloadavg()[0]:.2f}")
 
 
