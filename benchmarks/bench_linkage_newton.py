@@ -28,6 +28,13 @@ This script measures, in one run, what that would cost:
 The result, and the decision it led to (the numpy ``Newton`` stays): docs/performance.md,
 "The numpy Newton beside newton_path".
 
+The same was measured for the closed-form dyads (28 Nov, sections 4–5 of this script
+at commit 486231a: ``git show 486231a:benchmarks/bench_linkage_newton.py``, run with
+``--dyads-only``): the numpy ``_DyadSolver`` against ``dyads_path`` as Python and
+compiled, and whole commands with numba cached.  The compiled loop made no command
+faster and was removed with those sections (docs/performance.md, "The dyads: one
+source").
+
 Each child's CPU is its user + system time (``os.wait4``), medians of
 ``--repeat`` runs (default 3).  The machine is shared: read the ratios.
 

@@ -203,7 +203,7 @@ def test_the_check_sees_a_renamed_name():
                                 "mechcirc.scene.cycle._NO_SUCH_SWITCH"]
     calls = ast.parse("from mechcirc.kinematics import linkage_solver\n"
                       "import mechcirc.reduction as red\n"
-                      "linkage_solver._compiled()\nlinkage_solver._compiled('dyads_path')\n"
+                      "linkage_solver._compiled()\nlinkage_solver._compiled('newton_path')\n"
                       "red.reduce_circuit(c, no_such_keyword=1)\nred.reduce_circuit(*a)\n")
     found = bad_calls(calls)
     assert [f.split(":")[0] for f in found] == ["line 3", "line 5"], found

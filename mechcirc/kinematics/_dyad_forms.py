@@ -1,10 +1,10 @@
 """The closed forms of the dyads (RRR, RRP, RPR) and their 2×2 rate systems, written once.
 
 Points and vectors are complex numbers x + iy.  Each function uses arithmetic,
-``np.sqrt`` and ``np.maximum`` only, so one text runs on numpy arrays (the
-vectorised solver of :mod:`.linkage_solver`, :meth:`.FourBar.evaluate`) and,
-compiled by numba, on scalars (:mod:`._linkage_kernels`).  Nothing here imports
-numba: the kernel module compiles these functions itself.
+``np.sqrt`` and ``np.maximum`` only, on numpy arrays (the vectorised solver of
+:mod:`.linkage_solver`, :meth:`.FourBar.evaluate`) or on scalars alike.  No
+compiled copy of the dyads exists: a numba loop over the positions measured no
+faster on any shipped command (:mod:`._linkage_kernels`, docs/performance.md).
 """
 
 from __future__ import annotations

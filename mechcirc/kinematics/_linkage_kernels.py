@@ -13,6 +13,13 @@ time on the shipped linkages at 37–3,601 positions (the six-bar 3.1–3.2 s ag
 without numba would take 1.8 s (1.5×) more.  Single positions are the
 exception (the numpy path imports scipy.linalg, 0.2 s): not worth a third route.
 
+The closed-form dyads have no kernel here, by the same measurement (28 Nov,
+sections 4–5 of that script; docs/performance.md, "The dyads: one source"): a
+compiled RRR loop (``dyads_path``, removed) was faster in the solve (the numpy
+``_DyadSolver`` took 0.9–3.8× its time, up to 4.4 ms more a call) but made no
+shipped command faster, and run as Python it was 14–47× slower than numpy; the
+numpy form alone also serves sliders, crossings and lock searches.
+
 The equations are those of :mod:`.linkage` (Φ(q, t) = 0: coincident joint
 points, 2 rows per revolute pair, then φ_c − ω_c t for each crank), written on
 the index arrays of :func:`.linkage_solver.plan`:
@@ -36,20 +43,13 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
 from .._jit import decorators
-from . import _dyad_forms
 
 HAVE_NUMBA, _jit, _jit_inline = decorators(bool(globals().get("_FORCE_PYTHON")))
 # A kernel or piece that allocates nothing (its scratch from the caller, or none):
 # compiled without reference counting, which inlined into a loop would cost an atomic
-# increment and decrement of every array argument per call (dyads_path measured 3x slower).
+# increment and decrement of every array argument per call (newton_path +25 %).
 _leaf = decorators(bool(globals().get("_FORCE_PYTHON")), nrt=False)[1]
-# the dyads' closed forms, written once for numpy and compiled here
-_rrr = _jit_inline(_dyad_forms.rrr)
-_solve2 = _jit_inline(_dyad_forms.solve2)
-_im_conj = _jit(_dyad_forms.im_conj)
 
 #: Status codes of :func:`newton_path`.
 OK, SINGULAR_POSE, LOCK, BRANCH_JUMP = 0, 1, 2, 3
@@ -380,143 +380,3 @@ def newton_path(t0, targets, ia, ib, sa, sb, crank_idx, omega, tol, dt_max, wmax
             q[i] = trial[i]
         _rates(nb, geo, omega, work, J, piv, qd, qdd, parts, e)
     return OK
-
-
-# The three passes of dyads_path, each inlined at its one site: compiled apart, each one's
-# code was optimised and emitted again in dyads_path (0.4 s of a cold compile).
-@_jit_inline
-def _dyads_accelerations(crank_idx, crank_arm, L, K, X, arm, EK, R1, R2, QD, QDD, al, a):
-    """Fill QDD: the dyads' accelerations at every position k, from its unit vectors
-    EK[k] (e^{iφ} of each body), inner-joint vectors R1[k], R2[k] and total speeds
-    (the φ columns of QD[k]); ``al``, ``a``: scratch of nb."""
-    nb = EK.shape[1]
-    for k in range(EK.shape[0]):
-        E = EK[k]
-        al[:] = 0.0
-        a[:] = 0.0
-        for j in range(crank_idx.shape[0]):
-            ci = crank_idx[j]
-            a[ci] = -QD[k, 3 * ci + 2] ** 2 * E[ci] * crank_arm[j]
-        for d in range(L.shape[0]):
-            K1, K2 = K[d, 0], K[d, 1]
-            L1, L2 = L[d, 0], L[d, 1]
-            w1, w2 = QD[k, 3 * L1 + 2], QD[k, 3 * L2 + 2]
-            a1 = 0j if K1 < 0 else a[K1] + (1j * al[K1] - QD[k, 3 * K1 + 2] ** 2) * E[K1] * X[d, 0]
-            a2 = 0j if K2 < 0 else a[K2] + (1j * al[K2] - QD[k, 3 * K2 + 2] ** 2) * E[K2] * X[d, 1]
-            r1, r2 = R1[k, d], R2[k, d]
-            al[L1], al[L2] = _solve2(1j * r1, -1j * r2, a2 - a1 + w1 ** 2 * r1 - w2 ** 2 * r2)
-            a[L1] = a1 + (1j * al[L1] - w1 ** 2) * E[L1] * arm[d, 0]
-            a[L2] = a2 + (1j * al[L2] - w2 ** 2) * E[L2] * arm[d, 1]
-        for i in range(nb):
-            QDD[k, 3 * i] = a[i].real
-            QDD[k, 3 * i + 1] = a[i].imag
-            QDD[k, 3 * i + 2] = al[i]
-
-
-@_jit_inline
-def _dyads_positions(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, rot, arm,
-                     E, r, phi, Q, EK, R1, R2, margin):
-    """The positions of :func:`dyads_path` at every time t[k]: the cranks, then each dyad by
-    its closed form, into Q[k] and margin[k], with the unit vectors e^{iφ} of the bodies
-    (EK[k]) and the inner-joint vectors (R1[k], R2[k]) the rates are computed from.
-    E, r, phi: work (n bodies)."""
-    for k in range(t.shape[0]):
-        for j in range(crank_idx.shape[0]):
-            ci = crank_idx[j]
-            phi[ci] = omega[j] * t[k]
-            E[ci] = complex(math.cos(phi[ci]), math.sin(phi[ci]))
-            r[ci] = pivot[j] + E[ci] * crank_arm[j]
-        mg = math.inf
-        for d in range(L.shape[0]):
-            K1, K2 = K[d, 0], K[d, 1]
-            x1 = X[d, 0] if K1 < 0 else r[K1] + E[K1] * X[d, 0]
-            x2 = X[d, 1] if K2 < 0 else r[K2] + E[K2] * X[d, 1]
-            l1, l2 = ln[d, 0], ln[d, 1]
-            x3, h2 = _rrr(x1, x2, l1, l2, sign[d])
-            r1, r2 = x3 - x1, x3 - x2
-            s = abs(_im_conj(r1, r2)) / (l1 * l2)
-            if not (h2 >= 0.0 and s < math.inf):
-                s = -1.0
-            mg = min(mg, s)
-            R1[k, d], R2[k, d] = r1, r2
-            for side in range(2):
-                Ls = L[d, side]
-                rr = r1 if side == 0 else r2
-                xp = x1 if side == 0 else x2
-                phi[Ls] = math.atan2(rr.imag, rr.real) - ang[d, side]
-                E[Ls] = rr * rot[d, side]
-                r[Ls] = xp + E[Ls] * arm[d, side]
-        margin[k] = mg
-        for i in range(E.shape[0]):
-            EK[k, i] = E[i]
-            Q[k, 3 * i] = r[i].real
-            Q[k, 3 * i + 1] = r[i].imag
-            Q[k, 3 * i + 2] = phi[i]
-
-
-@_jit_inline
-def _dyads_velocities(crank_idx, omega, crank_arm, L, K, X, arm, EK, R1, R2, w, v, QD, PARTS):
-    """The velocities of :func:`dyads_path` at every position k (unit vectors EK[k],
-    inner-joint vectors R1[k], R2[k]), one crank at a time (conditional stop:
-    PARTS[k, :, c]), and their sum QD[k].  w, v: work (n bodies)."""
-    nb, nc = EK.shape[1], crank_idx.shape[0]
-    for k in range(EK.shape[0]):
-        QD[k, :] = 0.0
-        for c in range(nc):
-            w[:] = 0.0
-            v[:] = 0.0
-            for j in range(nc):
-                ci = crank_idx[j]
-                wj = omega[j] if j == c else 0.0
-                w[ci] = wj
-                v[ci] = 1j * wj * EK[k, ci] * crank_arm[j]
-            for d in range(L.shape[0]):
-                K1, K2 = K[d, 0], K[d, 1]
-                v1 = 0j if K1 < 0 else v[K1] + 1j * w[K1] * EK[k, K1] * X[d, 0]
-                v2 = 0j if K2 < 0 else v[K2] + 1j * w[K2] * EK[k, K2] * X[d, 1]
-                L1, L2 = L[d, 0], L[d, 1]
-                w[L1], w[L2] = _solve2(1j * R1[k, d], -1j * R2[k, d], v2 - v1)
-                v[L1] = v1 + 1j * w[L1] * EK[k, L1] * arm[d, 0]
-                v[L2] = v2 + 1j * w[L2] * EK[k, L2] * arm[d, 1]
-            for i in range(nb):
-                PARTS[k, 3 * i, c] = v[i].real
-                PARTS[k, 3 * i + 1, c] = v[i].imag
-                PARTS[k, 3 * i + 2, c] = w[i]
-            for i in range(3 * nb):
-                QD[k, i] += PARTS[k, i, c]
-
-
-def dyads_scratch(N, nb, nd):
-    """:func:`dyads_path`'s scratch for N positions, nb bodies and nd dyads: EK (N, nb), R1
-    and R2 (N, nd), four complex rows of nb (E, r, v, a) and three real ones (φ, w, α)."""
-    return (np.empty((N, nb), dtype=np.complex128), np.empty((N, nd), dtype=np.complex128),
-            np.empty((N, nd), dtype=np.complex128), np.empty((4, nb), dtype=np.complex128),
-            np.empty((3, nb)))
-
-
-@_leaf
-def dyads_path(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, rot, arm,
-               Q, QD, QDD, PARTS, margin, EK, R1, R2, cvec, fvec):
-    """Closed-form RRR dyads at every time in ``t``, one position at a time.
-
-    The closed forms of :mod:`._dyad_forms` (RRR only), compiled, as the
-    vectorised :class:`.linkage_solver._DyadSolver` runs them on arrays.  Per
-    dyad d: links L[d], carriers K[d] (−1: the ground), outer joints X[d] (the
-    pose point for the ground, else the offset in the carrier's frame), lengths ln[d], assembly side sign[d],
-    rot[d] = e^{−i·pose angle}/length, arm[d] = the link frame's origin from
-    its outer joint in the link's frame, ang[d] = the links' pose angles.
-    Fills Q, QD, QDD, PARTS and margin (the smallest |sin| of a dyad's inner
-    angle, −1 where it cannot assemble); EK … fvec are its scratch
-    (:func:`dyads_scratch`: it allocates nothing, so it counts no references).  The accelerations come after the loop,
-    in one call over all positions (:func:`_dyads_accelerations`, from the
-    unit vectors and inner-joint vectors kept per position): a compiled helper
-    called once per position, or inlined, measured slower; so are the positions
-    and the velocities (:func:`_dyads_positions`, :func:`_dyads_velocities`).
-    """
-    E, r, v = cvec[0], cvec[1], cvec[2]
-    phi, w = fvec[0], fvec[1]
-    _dyads_positions(t, crank_idx, omega, pivot, crank_arm, L, K, X, ln, sign, ang, rot, arm,
-                     E, r, phi, Q, EK, R1, R2, margin)
-    _dyads_velocities(crank_idx, omega, crank_arm, L, K, X, arm, EK, R1, R2, w, v, QD, PARTS)
-    _dyads_accelerations(crank_idx, crank_arm, L, K, X, arm, EK, R1, R2, QD, QDD, fvec[2],
-                         cvec[3])

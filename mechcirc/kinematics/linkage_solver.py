@@ -22,15 +22,16 @@ Two solvers, chosen per linkage once (:func:`plan`):
   started from the Taylor predictor of the node just before it, and their
   velocities and accelerations come from two batched linear solves.
 
-With numba installed (the ``fast`` extra) both run as one compiled loop over
-the positions instead (:mod:`._linkage_kernels`): the RRR dyads' closed form per
-position (with sliders the numpy form above runs), and Newton as a sequential continuation through every target,
-warm-started from the previous one, q̇ and q̈ from the LU of J at each
-converged q — the same cost per position at 360 positions as at 3,600.
-``mechcirc._jit.COMPILED = False`` keeps the numpy versions (tests run both).
-The numpy Newton is kept beside the kernel on purpose, by measurement: the
-kernel run as Python, without numba, is 6–66× slower on the shipped linkages
-(:mod:`._linkage_kernels`, docs/performance.md).
+With numba installed (the ``fast`` extra) Newton runs as one compiled loop over
+the positions instead (:mod:`._linkage_kernels`): a sequential continuation
+through every target, warm-started from the previous one, q̇ and q̈ from the LU
+of J at each converged q — the same cost per position at 360 positions as at
+3,600.  ``mechcirc._jit.COMPILED = False`` keeps the numpy Newton (tests run
+both).  The numpy Newton is kept beside the kernel on purpose, by measurement:
+the kernel run as Python, without numba, is 6–66× slower on the shipped
+linkages.  The dyads are written once, in numpy, by the same measurement: a
+compiled loop beside them made no shipped command faster, and as Python it was
+14–47× slower (:mod:`._linkage_kernels`, docs/performance.md).
 
 A change-point linkage (an RRR or RRP dyad lining up where its two assembly
 modes cross; one crank) continues on the branch whose velocity is continuous, by
@@ -918,7 +919,9 @@ _SINGULAR = 1e-10
 def _pack(r, phi):
     """(nb + 1, N) complex origins and angles (the ground last) → q rows (N, 3 nb)."""
     nb, N = r.shape[0] - 1, r.shape[1]
-    return np.stack([r[:nb].real.T, r[:nb].imag.T, phi[:nb].T], axis=-1).reshape(N, 3 * nb)
+    q = np.empty((3 * nb, N))       # rows filled as they lie, then one transposed copy
+    q[0::3], q[1::3], q[2::3] = r[:nb].real, r[:nb].imag, phi[:nb]
+    return q.T.copy()               # 6x faster than stacking the transposes (3,600 × 3)
 
 
 def _dyad_solver(lk, pl):
@@ -933,13 +936,7 @@ def _solve_dyads(lk, pl, t, dt_max, cross=(), zones=()):
     (:func:`_signs`); the path outside ``zones`` must assemble."""
     ds = _dyad_solver(lk, pl)
     signs = _signs(pl, cross, t) if cross else None
-    # the compiled loop knows RRR dyads only; with sliders the numpy closed form
-    compiled = _compiled("dyads_path") and all(d.kind == "RRR" for d in pl.dyads)
-    if compiled:
-        out = _dyads_compiled(ds, t, signs)
-        margin = out[-1]
-    else:
-        phi, E, r, inner, margin = ds.positions(t, signs)
+    phi, E, r, inner, margin = ds.positions(t, signs)
     # the traversal from the pose must stay assemblable: check the path between
     # the targets too where they are further apart than a continuation step
     nodes, _ = _path(t, dt_max)
@@ -947,16 +944,12 @@ def _solve_dyads(lk, pl, t, dt_max, cross=(), zones=()):
         check_t, check_m = t, margin
     else:
         check_t = nodes[1:]
-        nsg = _signs(pl, cross, check_t) if cross else None
-        check_m = _dyads_compiled(ds, check_t, nsg)[-1] if compiled else \
-            ds.positions(check_t, nsg)[4]
+        check_m = ds.positions(check_t, _signs(pl, cross, check_t) if cross else None)[4]
     for a, b in zones:          # inside a change point's zone it is not used (_bridged)
         check_m = np.where((check_t > a) & (check_t < b), np.inf, check_m)
     if not np.all(check_m > _SINGULAR):
         k = int(np.argmax(~(check_m > _SINGULAR)))
         _lock_error(lk, ds, 0.0 if k == 0 else check_t[k - 1], check_t[k], cross)
-    if compiled:
-        return out[:4]
     nc = len(lk.cranks)
     w, v, sdot = ds.velocities(E, r, inner, pl.omega)
     qd = _pack(v, w)
@@ -969,45 +962,6 @@ def _solve_dyads(lk, pl, t, dt_max, cross=(), zones=()):
             parts[:, :, j] = _pack(vj, wj)
     al, a = ds.accelerations(E, r, inner, w, sdot)
     return _pack(r, phi), qd, _pack(a, al), parts
-
-
-def _dyads_compiled(ds, t, signs=None):
-    """(q, q̇, q̈, parts, margin) by the compiled dyad loop (:mod:`._linkage_kernels`), the
-    dyads on the sides ``signs`` (n_dyads, N; default the pose's): one call per pattern."""
-    from . import _linkage_kernels as K
-
-    args = ds.__dict__.get("_kernel_args")
-    if args is None:
-        pl, lk, dy = ds.pl, ds.lk, ds.pl.dyads
-        X = np.array([[g[0], g[1]] for g in ds.geo], dtype=complex)
-        ang = np.array([g[2] for g in ds.geo])
-        ln = np.array([[d.l1, d.l2] for d in dy])
-        rot = (np.cos(ang) - 1j * np.sin(ang)) / ln
-        args = ds._kernel_args = (
-            np.asarray(pl.crank_idx, dtype=np.int64), pl.omega,
-            np.array([ds.pose[c.pivot] for c in lk.cranks], dtype=complex),
-            np.array(ds.crank_arm, dtype=complex),
-            np.array([d.links for d in dy], dtype=np.int64).reshape(-1, 2),
-            np.array([d.known for d in dy], dtype=np.int64).reshape(-1, 2), X.reshape(-1, 2),
-            ln.reshape(-1, 2), np.array([d.sign for d in dy]), ang.reshape(-1, 2),
-            rot.reshape(-1, 2), np.array([[g[3], g[4]] for g in ds.geo],
-                                         dtype=complex).reshape(-1, 2))
-    N, n, nc = len(t), 3 * ds.pl.nb, len(ds.pl.crank_idx)
-    Q, QD, QDD = np.empty((N, n)), np.empty((N, n)), np.empty((N, n))
-    parts, margin = np.empty((N, n, nc)), np.empty(N)
-    t = np.ascontiguousarray(t, dtype=float)
-    if signs is None:
-        K.dyads_path(t, *args, Q, QD, QDD, parts, margin, *K.dyads_scratch(N, ds.pl.nb, len(args[4])))
-        return Q, QD, QDD, parts, margin
-    patterns, which = np.unique(signs.T, axis=0, return_inverse=True)
-    for j, pattern in enumerate(patterns):
-        sel = np.flatnonzero(which.reshape(-1) == j)
-        out = [np.empty((len(sel),) + a.shape[1:]) for a in (Q, QD, QDD, parts, margin)]
-        K.dyads_path(t[sel], *args[:8], np.ascontiguousarray(pattern), *args[9:], *out,
-                     *K.dyads_scratch(len(sel), ds.pl.nb, len(args[4])))
-        for a, b in zip((Q, QD, QDD, parts, margin), out):
-            a[sel] = b
-    return Q, QD, QDD, parts, margin
 
 
 #: Inner points per round of the search for where a linkage locks (:func:`_lock_error`).
@@ -1296,8 +1250,9 @@ def _compiled(kernel: str) -> bool:
     """Whether to run the compiled loop ``kernel`` of :mod:`._linkage_kernels` (numba;
     plain Python without it when ``mechcirc._jit.COMPILED`` is True) rather than the
     batched numpy path.  With COMPILED None (default) only once numba's disk cache holds
-    it: until then numpy runs while a detached process compiles both loops
-    (:func:`mechcirc._jit.warm_in_background`); False: numpy."""
+    it: until then numpy runs while a detached process compiles it
+    (:func:`mechcirc._jit.warm_in_background`); False: numpy.  The one such loop is
+    ``newton_path`` (the dyads have none: see :mod:`._linkage_kernels`)."""
     if _jit.COMPILED is False:
         return False
     from . import _linkage_kernels as K
@@ -1307,7 +1262,7 @@ def _compiled(kernel: str) -> bool:
     return _jit.use(_WARM_STATEMENT, getattr(K, kernel))
 
 
-# Compiles both loops into numba's disk cache: a four-bar solved by each method.
+# Compiles newton_path into numba's disk cache: a four-bar solved by Newton.
 _WARM_STATEMENT = (
     "import numpy as np, mechcirc._jit as j; j.COMPILED = True\n"
     "from mechcirc.kinematics import parse_linkage\n"
@@ -1315,8 +1270,7 @@ _WARM_STATEMENT = (
     "D = [4.0, 0.0]\\n[ground]\\npoints = [\"A\", \"D\"]\\n[links]\\ncrank = [\"A\", \"B\"]\\n"
     "coupler = [\"B\", \"C\"]\\nrocker = [\"D\", \"C\"]\\n[[cranks]]\\nlink = \"crank\"\\n"
     "omega = 10.0\\n')\n"
-    "for method in ('dyads', 'newton'):\n"
-    "    lk.motion(np.linspace(0.0, 1.0, 5), method=method)\n")
+    "lk.motion(np.linspace(0.0, 1.0, 5), method='newton')\n")
 
 
 def _solve_newton_compiled(lk, pl, t, dt_max, q0, t0):

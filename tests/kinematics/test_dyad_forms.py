@@ -1,12 +1,12 @@
-"""The dyads' closed forms (mechcirc.kinematics._dyad_forms), written once for numpy and numba.
+"""The dyads' closed forms (mechcirc.kinematics._dyad_forms), written once (numpy).
 
 * each form against an independent construction in mpmath (50 digits): the
   RRR inner joint by the law of cosines, the RRP one as a root of the
   quadratic |g + σu − x1|² = l1², the RPR rotation as the angle between the
   pose's and the current outer-joint vectors; Cramer's rule against numpy.
 
-The kernel (``_linkage_kernels``) compiles these very functions; the compiled
-dyads are compared with the numpy ones and with FourBar in test_linkage_solver.
+The linkage solver's dyads and FourBar.evaluate run these very functions; the
+dyads are compared with Newton and with FourBar in test_linkage_solver.
 """
 
 import math

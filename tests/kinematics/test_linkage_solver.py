@@ -177,35 +177,6 @@ def test_states_fill_their_dicts_on_access_and_pickle_as_plain_data():
         s1.no_such_field
 
 
-def test_dyads_kernel_run_as_python_agrees_with_the_compiled_loop(monkeypatch):
-    """The one source of the dyad loop, run as plain Python (no numba), fills the same
-    positions, rates and margins as the compiled loop (to 1e-14 of each array's
-    largest value; 1e-16 relative achieved), accelerations included."""
-    from mechcirc import _jit
-    from mechcirc.kinematics import _linkage_kernels as K
-
-    py = _jit.load("mechcirc.kinematics._linkage_kernels", _FORCE_PYTHON=True)
-    assert not py.HAVE_NUMBA
-    calls = []
-    real = K.dyads_path
-
-    def spy(*args):
-        calls.append(args)
-        return real(*args)
-
-    monkeypatch.setattr(_jit, "COMPILED", True)
-    monkeypatch.setattr(K, "dyads_path", spy)
-    lk, _ = fourbar_linkage(29.0, 37.0, 188.0, 189.0, theta0=0.4)
-    lk.motion(np.linspace(0.0, 2 * math.pi, 40), method="dyads")
-    assert calls
-    for args in calls:
-        again = [np.full_like(a, np.nan) if i >= 13 else a for i, a in enumerate(args)]
-        py.dyads_path(*again)
-        for got, want in zip(again[13:18], args[13:18]):      # Q, QD, QDD, PARTS, margin
-            assert np.isfinite(got).all()
-            np.testing.assert_allclose(got, want, rtol=0, atol=1e-14 * np.max(np.abs(want)))
-
-
 def test_targets_newton_misses_are_redone_by_single_steps(monkeypatch):
     """numpy path: when the batched Newton from the interpolated guess fails for a target,
     the target is reached by single continuation steps from the kept node before it
